@@ -1,0 +1,131 @@
+"""From requirement entries (``fretish.files``) to compiled requirements: the parsed sentence,
+its formalization and every printed form, or the error that stopped it. One requirement's
+failure never stops the others."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+from typing import Iterable, List, Optional
+
+from fretish.errors import FretishError
+
+from .printers import to_smv, to_spot
+from .semantics import Formalization, SemanticsError, formalize
+
+PT_FTP = "(Z FALSE)"
+
+
+@dataclass
+class Compiled:
+    """One requirement after compilation.
+
+    ``entry`` is the :class:`fretish.files.RequirementEntry`; ``formalization`` is set when
+    it formalized, ``error`` (a :class:`FretishError`) otherwise; free-form requirements
+    have neither.
+    """
+
+    entry: object
+    formalization: Optional[Formalization] = None
+    error: Optional[FretishError] = None
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def id(self) -> str:
+        return self.entry.id
+
+    @property
+    def text(self) -> str:
+        return self.entry.text
+
+    @property
+    def requirement(self):
+        return self.entry.requirement
+
+    @property
+    def freeform(self) -> bool:
+        r = self.entry.requirement
+        return bool(r is not None and r.freeform)
+
+    @property
+    def ok(self) -> bool:
+        return self.formalization is not None
+
+    @property
+    def source_hash(self) -> str:
+        """SHA-256 of the requirement's identity and text (id, text, tick period), hex."""
+        period = self.entry.tick_period
+        blob = f"{self.id}\n{self.text}\n{period if period is not None else ''}"
+        return hashlib.sha256(blob.encode("utf-8")).hexdigest()
+
+    def smv(self, which: str) -> str:
+        """FRET/SMV text of ``ft``, ``ft_inf`` or ``pt``."""
+        key = ("smv", which)
+        if key not in self._cache:
+            node = getattr(self.formalization, which)
+            self._cache[key] = to_smv(node, ftp=PT_FTP if which == "pt" else "FTP")
+        return self._cache[key]
+
+    def spot(self, which: str) -> str:
+        """Spot text of ``ft`` or ``ft_inf``."""
+        key = ("spot", which)
+        if key not in self._cache:
+            self._cache[key] = to_spot(getattr(self.formalization, which))
+        return self._cache[key]
+
+    def location(self) -> str:
+        return f"{self.entry.source}:{self.entry.line}"
+
+    def to_json(self) -> dict:
+        """The ``--json`` object: ``id``, ``text``, ``source``, ``key``, ``ft``, ``ft_inf``,
+        ``pt`` (FRET syntax), ``ft_spot``, ``ft_inf_spot``, ``variables``, ``warnings``,
+        and ``error`` (``message``, ``line``, ``column``) when it failed."""
+        e = self.entry
+        out = {"id": e.id, "text": e.text, "source": e.source, "line": e.line,
+               "parent": e.parent, "rationale": e.rationale}
+        if self.formalization is not None:
+            f = self.formalization
+            out.update({
+                "key": f.key, "ft": self.smv("ft"), "ft_inf": self.smv("ft_inf"),
+                "pt": self.smv("pt"), "ft_spot": self.spot("ft"),
+                "ft_inf_spot": self.spot("ft_inf"), "variables": f.variables,
+                "ticks": f.ticks, "warnings": f.warnings, "pt_causal": f.pt_causal,
+            })
+        elif self.freeform:
+            out.update({"key": None, "freeform": True})
+        if self.error is not None:
+            err = self.error
+            out["error"] = {"message": getattr(err, "message", str(err)),
+                            "line": getattr(err, "line", e.line),
+                            "column": getattr(err, "column", e.column),
+                            "text": str(err)}
+        return out
+
+
+def compile_entry(entry) -> Compiled:
+    """Formalize one :class:`fretish.files.RequirementEntry` (never raises for bad input)."""
+    if entry.error is not None:
+        return Compiled(entry, error=entry.error)
+    req = entry.requirement
+    if req is None or req.freeform:
+        return Compiled(entry)
+    try:
+        return Compiled(entry, formalization=formalize(req, entry.tick_period))
+    except SemanticsError as exc:
+        return Compiled(entry, error=_locate(exc, entry))
+
+
+def compile_entries(entries: Iterable) -> List[Compiled]:
+    return [compile_entry(e) for e in entries]
+
+
+def _locate(exc: SemanticsError, entry) -> FretishError:
+    """Give a semantics error the file position of the span it names."""
+    from fretish.errors import render_diagnostic
+
+    span = exc.span
+    line = span.line if span is not None and span.line else entry.line
+    column = span.column if span is not None and span.line else entry.column
+    exc.source, exc.line, exc.column = entry.source, line, column
+    exc.args = (render_diagnostic(entry.source, line, column, exc.message),)
+    return exc

@@ -1,0 +1,444 @@
+"""Code generation of standalone Python runtime monitors (``fretc FILE --emit monitor``).
+
+One module per requirement file, rendered from ``templates/monitor_module.py.j2``. The module
+imports only the standard library and exposes ``MONITORS: dict[str, type]``; each monitor
+class has ``VARIABLES``, ``step(sample) -> bool``, ``status``, ``finish() -> bool`` and
+``reset()`` (see the template's docstring).
+
+* ``step`` evaluates the pt formula with the Havelund-Rosu dynamic-programming scheme
+  (Havelund & Rosu, "Synthesizing monitors for safety properties", TACAS 2002): the formula's
+  sub-formulas in post-order, each computed from this tick's values and its own value at the
+  previous tick, so time and memory per tick are constant whatever the trace length.
+  Bounded past operators keep a counter (``O[0,h]``) or a bit history of ``h + 1`` ticks
+  (``O[l,h]``, ``H[l,h]``): memory sized by the bound.
+* ``status`` follows two deterministic monitors Spot builds from ft_inf and from its
+  negation (``spot.translate(f, 'monitor', 'det')``): a prefix with no run in the first is a
+  bad prefix (no infinite continuation satisfies ft_inf: *violated*), a prefix with no run in
+  the second a good prefix (*satisfied*); otherwise *unknown* (LTL3; Bauer, Leucker &
+  Schallhart, TOSEM 2011).
+
+Hostile input: requirement ids, texts and variable names reach the module only as Python
+string literals made by ``repr``; identifiers in the code are generated (``v0``, ``n3``,
+``Monitor_R1_0``), never copied from the requirement file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Tuple
+
+from fretish.errors import FretishError
+
+from . import ir
+from .ir import Node
+from .printers import spot_ap, to_smv, to_spot
+
+#: Above this many atomic propositions the automaton step uses condition chains instead of a
+#: letter-indexed table.
+TABLE_MAX_APS = 10
+#: Above this many states a Spot monitor is not embedded (status stays "unknown").
+MAX_AUTOMATON_STATES = 5000
+
+
+class CodegenError(FretishError):
+    """A requirement that has no monitor (e.g. its pt needs future values)."""
+
+
+# --------------------------------------------------------------------------- pt -> code
+_PY_CMP = {"=": "==", "!=": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
+
+
+@dataclass
+class _StepCode:
+    """Straight-line code of one tick: ``lines`` compute locals from ``sample`` and the
+    previous state; ``slots`` are (initial value literal, local holding the next value)."""
+
+    lines: List[str] = field(default_factory=list)
+    slots: List[Tuple[str, str]] = field(default_factory=list)
+    variables: Dict[str, str] = field(default_factory=dict)  # FRET name -> local
+    locals: Dict[Node, str] = field(default_factory=dict)
+    uses_first: bool = False
+    counter: int = 0
+    numeric_reads: set = field(default_factory=set)
+    bool_reads: set = field(default_factory=set)
+
+    def new(self, prefix: str = "n") -> str:
+        self.counter += 1
+        return f"{prefix}{self.counter}"
+
+    def slot(self, init: str) -> Tuple[str, int]:
+        """Reserve a state slot; returns (name of the local holding its previous value,
+        index)."""
+        idx = len(self.slots)
+        self.slots.append((init, ""))
+        return f"s{idx}", idx
+
+    def set_slot(self, idx: int, local: str) -> None:
+        self.slots[idx] = (self.slots[idx][0], local)
+
+
+def _compile_nodes(roots: List[Node], code: _StepCode) -> List[str]:
+    """Emit code for ``roots`` (sharing common sub-formulas); returns their locals."""
+    post: List[Node] = []
+    seen = set()
+
+    def visit(n: Node) -> None:
+        stack = [(n, False)]
+        while stack:
+            node, done = stack.pop()
+            if node in seen or node in code.locals:
+                continue
+            if done:
+                seen.add(node)
+                post.append(node)
+                continue
+            stack.append((node, True))
+            for a in reversed(node.args):
+                stack.append((a, False))
+
+    for r in roots:
+        visit(r)
+    deferred: List[Tuple[int, str]] = []  # slots whose next value is a child's value
+    for n in post:
+        code.locals[n] = _emit(n, code, deferred)
+    for idx, local in deferred:
+        code.set_slot(idx, local)
+    return [code.locals[r] for r in roots]
+
+
+def _emit(n: Node, code: _StepCode, deferred) -> str:
+    op = n.op
+    L = code.locals
+    a = [L[x] for x in n.args]
+    out = code.new()
+    line = None
+    if op == "true":
+        return "True"
+    if op == "false":
+        return "False"
+    if op == "FTP":
+        code.uses_first = True
+        return "first"
+    if op in ("ap", "var"):
+        return _read(n.name, code, numeric=op == "var")
+    if op == "num":
+        return repr(float(n.name)) if any(c in n.name for c in ".eE") else str(int(n.name))
+    if op == "cmp":
+        line = f"{out} = {a[0]} {_PY_CMP[n.name]} {a[1]}"
+    elif op == "arith":
+        if n.name in ("+", "-", "*"):
+            line = f"{out} = {a[0]} {n.name} {a[1]}"
+        else:
+            fn = {"/": "_div", "mod": "_mod", "^": "_pow"}[n.name]
+            line = f"{out} = {fn}({a[0]}, {a[1]})"
+    elif op == "neg":
+        line = f"{out} = -{a[0]}"
+    elif op == "fn":
+        fn = {"absReal": "abs", "absInt": "abs", "minReal": "min", "minInt": "min",
+              "maxReal": "max", "maxInt": "max"}.get(n.name)
+        if fn is None:
+            return _opaque(n, code, numeric=True)
+        line = f"{out} = {fn}({', '.join(a)})"
+    elif op == "ite":
+        line = f"{out} = {a[1]} if {a[0]} else {a[2]}"
+    elif op == "pre":
+        prev, idx = code.slot("0")
+        code.uses_first = True
+        line = f"{out} = {a[0]} if first else {prev}"
+        deferred.append((idx, a[1]))
+    elif op == "call":
+        return _opaque(n, code, numeric=False)
+    elif op == "past":
+        return a[0]
+    elif op == "future":
+        raise CodegenError(
+            f"the pt formula needs the future-time function {n.name}, which a tick-by-tick "
+            "monitor cannot know yet; write the requirement with past-time functions "
+            "(persisted, occurred) or audit it offline")
+    elif op == "!":
+        line = f"{out} = not {a[0]}"
+    elif op == "&":
+        line = f"{out} = {a[0]} and {a[1]}"
+    elif op == "|":
+        line = f"{out} = {a[0]} or {a[1]}"
+    elif op == "xor":
+        line = f"{out} = {a[0]} != {a[1]}"
+    elif op == "->":
+        line = f"{out} = (not {a[0]}) or {a[1]}"
+    elif op == "<->":
+        line = f"{out} = {a[0]} == {a[1]}"
+    elif op in ("Y", "Z"):
+        prev, idx = code.slot("False" if op == "Y" else "True")
+        deferred.append((idx, a[0]))
+        return prev
+    elif op in ("O", "H") and n.hi is None:
+        prev, idx = code.slot("False" if op == "O" else "True")
+        line = (f"{out} = {a[0]} or {prev}" if op == "O" else f"{out} = {a[0]} and {prev}")
+        code.set_slot(idx, out)
+    elif op in ("O", "H"):
+        lo, hi = n.lo, n.hi
+        if op == "O" and lo == 0:
+            # ticks since the argument last held, capped at hi + 1
+            prev, idx = code.slot(str(hi + 1))
+            cnt = code.new("c")
+            code.lines.append(f"{cnt} = 0 if {a[0]} else ({prev} + 1 if {prev} <= {hi} "
+                              f"else {hi + 1})")
+            code.set_slot(idx, cnt)
+            line = f"{out} = {cnt} <= {hi}"
+        else:
+            # bit history of the last hi+1 ticks (bit k = k ticks ago); for H, of "not arg"
+            prev, idx = code.slot("0")
+            hist = code.new("h")
+            bit = a[0] if op == "O" else f"not {a[0]}"
+            mask = (1 << (hi + 1)) - 1
+            code.lines.append(f"{hist} = (({prev} << 1) | ({bit})) & {mask}")
+            code.set_slot(idx, hist)
+            test = "!= 0" if op == "O" else "== 0"
+            line = f"{out} = ({hist} >> {lo}) {test}" if lo else f"{out} = {hist} {test}"
+    elif op in ("S", "T"):
+        prev, idx = code.slot("False" if op == "S" else "True")
+        if op == "S":
+            line = f"{out} = {a[1]} or ({a[0]} and {prev})"
+        else:
+            line = f"{out} = {a[1]} and ({a[0]} or {prev})"
+        code.set_slot(idx, out)
+    else:
+        raise CodegenError(f"no monitor code for the future-time operator {op!r} in pt")
+    code.lines.append(line)
+    return out
+
+
+def _opaque(n: Node, code: _StepCode, numeric: bool) -> str:
+    """An uninterpreted function: read from the sample under its printed name."""
+    return _read(to_smv(n), code, numeric)
+
+
+def _read(name: str, code: _StepCode, numeric: bool) -> str:
+    """The local holding sample[name] (numeric) or bool(sample[name])."""
+    if name not in code.variables:
+        code.variables[name] = f"v{len(code.variables)}"
+    v = code.variables[name]
+    if numeric:
+        code.numeric_reads.add(v)
+        return v
+    code.bool_reads.add(v)
+    return f"b_{v}"
+
+
+# --------------------------------------------------------------------------- automata
+@dataclass
+class _Automaton:
+    """A deterministic Spot monitor as tables: ``table[state][letter]`` (letter = bits of the
+    atoms, -1 = no transition) or ``chains[state]`` = [(condition code, destination)]."""
+
+    atoms: List[Node]
+    initial: int
+    table: Optional[List[List[int]]]
+    chains: Optional[List[List[Tuple[str, int]]]]
+    empty: bool  # the automaton accepts nothing at all
+    sub_code: str = "0"  # Python expression of the letter, set once atoms have locals
+    complete: bool = False  # every state has a transition for every letter: never rejects
+
+
+def _build_automaton(f: Node, atoms_by_name: Dict[str, Node]) -> Optional[_Automaton]:
+    import spot
+
+    formula = spot.formula(to_spot(f))
+    aut = spot.translate(formula, "monitor", "det")
+    if aut.num_states() > MAX_AUTOMATON_STATES:
+        return None
+    d = aut.get_dict()
+    aps = [str(p.ap_name()) for p in aut.ap()]
+    atoms = [atoms_by_name[p] for p in aps]
+    empty = aut.is_empty()
+    if len(aps) <= TABLE_MAX_APS:
+        table = []
+        for s in range(aut.num_states()):
+            row = [-1] * (1 << len(aps))
+            for e in aut.out(s):
+                for letter in range(1 << len(aps)):
+                    if _bdd_letter(e.cond, d, aps, letter):
+                        row[letter] = e.dst
+            table.append(row)
+        complete = all(x >= 0 for row in table for x in row)
+        return _Automaton(atoms, aut.get_init_state_number(), table, None, empty,
+                          complete=complete and not empty)
+    chains = []
+    for s in range(aut.num_states()):
+        chains.append([(_bdd_code(spot.bdd_to_formula(e.cond, d), aps), e.dst)
+                       for e in aut.out(s)])
+    return _Automaton(atoms, aut.get_init_state_number(), None, chains, empty)
+
+
+def _bdd_letter(cond, d, aps: List[str], letter: int) -> bool:
+    """Does the edge condition ``cond`` (a BDD) hold for the letter whose bit ``i`` is the
+    value of ``aps[i]``?"""
+    import buddy
+    import spot
+
+    c = cond
+    for i, name in enumerate(aps):
+        v = d.varnum(spot.formula.ap(name))
+        lit = buddy.bdd_ithvar(v) if (letter >> i) & 1 else buddy.bdd_nithvar(v)
+        c = buddy.bdd_restrict(c, lit)
+    return c == buddy.bddtrue
+
+
+def _bdd_code(f, aps: List[str]) -> str:
+    """Python code of a Spot Boolean formula over the letter bits ``a[i]``."""
+    import spot
+
+    k = f.kind()
+    if k == spot.op_tt:
+        return "True"
+    if k == spot.op_ff:
+        return "False"
+    if k == spot.op_ap:
+        return f"(sub >> {aps.index(f.ap_name())} & 1)"
+    if k == spot.op_Not:
+        return f"(not {_bdd_code(f[0], aps)})"
+    if k == spot.op_And:
+        return "(" + " and ".join(_bdd_code(x, aps) for x in f) + ")"
+    if k == spot.op_Or:
+        return "(" + " or ".join(_bdd_code(x, aps) for x in f) + ")"
+    raise CodegenError(f"unexpected Boolean operator in an automaton edge: {f}")
+
+
+# --------------------------------------------------------------------------- per requirement
+@dataclass
+class MonitorSource:
+    """Everything the template needs for one requirement's monitor class."""
+
+    index: int
+    class_name: str
+    id: str
+    text: str
+    key: str
+    ft: str
+    ft_inf: str
+    pt: str
+    source_hash: str
+    variables: List[str]
+    var_locals: List[Tuple[str, str, bool, bool]]
+    slots_init: str
+    slots_unpack: str
+    slots_next: str
+    step_lines: List[str]
+    verdict: str
+    atom_locals: List[str]
+    good: Optional[_Automaton]
+    bad: Optional[_Automaton]
+    uses_first: bool
+    status_note: str
+
+    @property
+    def status_live(self) -> bool:
+        """Can the status still change after reset()? (some automaton can reject)"""
+        return any(a is not None and not a.complete for a in (self.good, self.bad))
+
+
+def _class_name(rid: str, index: int) -> str:
+    safe = re.sub(r"[^A-Za-z0-9_]", "_", rid)[:40]
+    return f"Monitor_{safe}_{index}"
+
+
+def monitor_source(compiled, index: int) -> MonitorSource:
+    """Generate the code pieces of one compiled requirement (``compiler.build.Compiled``).
+    Raises :class:`CodegenError` when no monitor can be built."""
+    f = compiled.formalization
+    code = _StepCode()
+    # atoms of ft_inf that the automata read
+    atoms_by_name: Dict[str, Node] = {}
+    for n in ir.walk(f.ft_inf):
+        if n.op == "ap":
+            atoms_by_name[mangled_ap(n)] = n
+        elif n.op in ("cmp", "call", "past", "FTP"):
+            atoms_by_name[to_smv(n)] = n
+    from .ir import not_
+    bad = _build_automaton(f.ft_inf, atoms_by_name)
+    good = _build_automaton(not_(f.ft_inf), atoms_by_name)
+    atom_nodes: List[Node] = []
+    for aut in (bad, good):
+        if aut is not None:
+            for a in aut.atoms:
+                if a not in atom_nodes:
+                    atom_nodes.append(a)
+    roots = [f.pt] + atom_nodes
+    locals_ = _compile_nodes(roots, code)
+    verdict, atom_locals = locals_[0], locals_[1:]
+    # map automata atoms to indices in atom_locals
+    for aut in (bad, good):
+        if aut is not None:
+            idx = [atom_nodes.index(a) for a in aut.atoms]
+            aut.sub_code = " | ".join(f"({1 << j} if {atom_locals[b]} else 0)"
+                                      for j, b in enumerate(idx)) or "0"
+    var_locals = [(name, local, local in code.numeric_reads, local in code.bool_reads)
+                  for name, local in code.variables.items()]
+    slots_init = "(" + "".join(f"{init}, " for init, _ in code.slots) + ")"
+    slots_next = "(" + "".join(f"{nxt}, " for _, nxt in code.slots) + ")"
+    note = "" if bad is not None and good is not None else (
+        f"Spot's deterministic monitor exceeds {MAX_AUTOMATON_STATES} states: no early verdict")
+    return MonitorSource(
+        index=index, class_name=_class_name(compiled.id, index), id=compiled.id,
+        text=compiled.text, key=f.key, ft=compiled.smv("ft"), ft_inf=compiled.smv("ft_inf"),
+        pt=compiled.smv("pt"), source_hash=compiled.source_hash,
+        variables=[v[0] for v in var_locals], var_locals=var_locals,
+        slots_init=slots_init,
+        slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))).rstrip(),
+        slots_next=slots_next, step_lines=code.lines,
+        verdict=verdict, atom_locals=atom_locals, good=good, bad=bad,
+        uses_first=code.uses_first, status_note=note)
+
+
+def mangled_ap(n: Node) -> str:
+    """The name Spot reports for a boolean variable's atomic proposition."""
+    from .printers import mangle
+    return mangle(n.name)
+
+
+# --------------------------------------------------------------------------- modules
+def _env():
+    import jinja2
+
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("templates", ""),
+        keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
+        undefined=jinja2.StrictUndefined, autoescape=False)
+    env.filters["py"] = repr
+    return env
+
+
+def render_module(compiled_list, module_name: str) -> str:
+    """The text of one generated monitor module for a list of compiled requirements
+    (``compiler.build.Compiled``); requirements that failed or have no monitor are listed
+    in ``SKIPPED`` with the reason."""
+    monitors: List[MonitorSource] = []
+    skipped: List[Tuple[str, str]] = []
+    for i, c in enumerate(compiled_list):
+        if c.formalization is None:
+            reason = "free-form" if c.freeform else getattr(c.error, "message", str(c.error))
+            skipped.append((c.id, reason))
+            continue
+        try:
+            monitors.append(monitor_source(c, i))
+        except CodegenError as exc:
+            skipped.append((c.id, str(exc)))
+    digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
+                            .encode()).hexdigest()
+    return _env().get_template("monitor_module.py.j2").render(
+        module_name=module_name, monitors=monitors, skipped=skipped, digest=digest)
+
+
+def emit_monitors(compiled) -> Dict[str, str]:
+    """One module per requirement file: ``{module stem: source text}``, in input order."""
+    groups: Dict[str, list] = {}
+    for c in compiled:
+        groups.setdefault(c.entry.source, []).append(c)
+    out: Dict[str, str] = {}
+    for source, items in groups.items():
+        stem = re.sub(r"[^A-Za-z0-9_]", "_", source.rsplit("/", 1)[-1].rsplit(".", 1)[0])
+        stem = f"{stem}_monitors" if stem and not stem[0].isdigit() else f"m_{stem}_monitors"
+        out[stem] = render_module(items, stem)
+    return out

@@ -1,0 +1,210 @@
+"""Reference evaluator of IR formulas on finite traces - the oracle the monitors and the
+semantics are tested against. Written for clarity, not speed.
+
+Trace model (FRET's own NuSMV tests; ``shared/fretish/README.md`` section 6): a finite trace
+``s0 .. s(L-1)`` (a sequence of mappings from variable name to bool or number) is followed by
+one absorbing state, repeated forever, in which every variable is false (numbers are 0) and
+``LAST`` is false. ``LAST`` holds exactly at ``s(L-1)``. Future operators read that infinite
+word; past operators read the finite prefix (``Y`` is false and ``Z`` true at position 0;
+bounded ``O[l,h]``/``H[l,h]`` look at positions ``i-h .. i-l`` that are >= 0).
+
+Derived atoms: a ``past`` node inside a future formula is its past-time expansion evaluated
+at each position (false in the absorbing state); a ``future`` node inside a past formula is
+its future-time expansion evaluated at each position.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from typing import Any, Dict, List, Mapping, Sequence
+
+from .ir import Node
+
+Trace = Sequence[Mapping[str, Any]]
+
+_CMP = {"=": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le,
+        ">": operator.gt, ">=": operator.ge}
+
+
+def _arith(op: str, a: float, b: float) -> float:
+    try:
+        if op == "+":
+            return a + b
+        if op == "-":
+            return a - b
+        if op == "*":
+            return a * b
+        if op == "/":
+            return a / b
+        if op == "mod":
+            return math.fmod(a, b)
+        if op == "^":
+            return a ** b
+    except (ZeroDivisionError, OverflowError, ValueError):
+        return math.nan
+    raise ValueError(f"unknown arithmetic operator {op}")
+
+
+_FUNCS = {
+    "absReal": abs, "absInt": abs, "minReal": min, "minInt": min, "maxReal": max,
+    "maxInt": max,
+}
+
+
+class _Evaluator:
+    """Series of truth values of every sub-formula over positions ``0..L`` (``L`` = the
+    absorbing state)."""
+
+    def __init__(self, trace: Trace):
+        self.trace = trace
+        self.L = len(trace)
+        self.memo: Dict[Node, List[Any]] = {}
+
+    def value(self, name: str, i: int, numeric: bool):
+        if i >= self.L:
+            return 0 if numeric else False
+        v = self.trace[i].get(name, 0 if numeric else False)
+        return v if numeric else bool(v)
+
+    def series(self, n: Node) -> List[Any]:
+        got = self.memo.get(n)
+        if got is None:
+            got = self._compute(n)
+            self.memo[n] = got
+        return got
+
+    def _compute(self, n: Node) -> List[Any]:
+        L = self.L
+        rng = range(L + 1)
+        op = n.op
+        a = n.args
+        if op == "true":
+            return [True] * (L + 1)
+        if op == "false":
+            return [False] * (L + 1)
+        if op == "LAST":
+            return [i == L - 1 for i in rng]
+        if op == "FTP":
+            return [i == 0 for i in rng]
+        if op == "ap":
+            return [self.value(n.name, i, False) for i in rng]
+        if op == "var":
+            return [self.value(n.name, i, True) for i in rng]
+        if op == "num":
+            v = float(n.name) if any(c in n.name for c in ".eE") else int(n.name)
+            return [v] * (L + 1)
+        if op == "cmp":
+            x, y, f = self.series(a[0]), self.series(a[1]), _CMP[n.name]
+            return [bool(f(x[i], y[i])) for i in rng]
+        if op == "arith":
+            x, y = self.series(a[0]), self.series(a[1])
+            return [_arith(n.name, x[i], y[i]) for i in rng]
+        if op == "neg":
+            return [-v for v in self.series(a[0])]
+        if op == "fn":
+            args = [self.series(x) for x in a]
+            f = _FUNCS.get(n.name)
+            if f is None:  # uninterpreted: read the trace under its printed name
+                from .printers import to_smv
+                key = to_smv(n)
+                return [self.value(key, i, True) for i in rng]
+            return [f(*(s[i] for s in args)) for i in rng]
+        if op == "ite":
+            c, x, y = (self.series(s) for s in a)
+            return [x[i] if c[i] else y[i] for i in rng]
+        if op == "pre":
+            init, x = self.series(a[0]), self.series(a[1])
+            return [init[i] if i == 0 else x[i - 1] for i in rng]
+        if op == "call":
+            from .printers import to_smv
+            key = to_smv(n)
+            return [self.value(key, i, False) for i in rng]
+        if op in ("past", "future"):
+            s = self.series(a[0])
+            return s[:L] + [False]
+        if op == "!":
+            return [not v for v in self.series(a[0])]
+        if op in ("&", "|", "xor", "->", "<->"):
+            x, y = self.series(a[0]), self.series(a[1])
+            if op == "&":
+                return [p and q for p, q in zip(x, y)]
+            if op == "|":
+                return [p or q for p, q in zip(x, y)]
+            if op == "xor":
+                return [p != q for p, q in zip(x, y)]
+            if op == "->":
+                return [(not p) or q for p, q in zip(x, y)]
+            return [p == q for p, q in zip(x, y)]
+        # ---- future: backward over positions, absorbing state first
+        if op == "X":
+            x = self.series(a[0])
+            return [x[min(i + 1, L)] for i in rng]
+        if op in ("F", "G"):
+            x = self.series(a[0])
+            agg = any if op == "F" else all
+            if n.hi is None:
+                out = [False] * (L + 1)
+                out[L] = x[L]
+                for i in range(L - 1, -1, -1):
+                    out[i] = (x[i] or out[i + 1]) if op == "F" else (x[i] and out[i + 1])
+                return out
+            return [agg(x[min(j, L)] for j in range(i + n.lo, i + n.hi + 1)) for i in rng]
+        if op in ("U", "V"):
+            x, y = self.series(a[0]), self.series(a[1])
+            out = [False] * (L + 1)
+            out[L] = y[L]
+            for i in range(L - 1, -1, -1):
+                if op == "U":
+                    out[i] = y[i] or (x[i] and out[i + 1])
+                else:
+                    out[i] = y[i] and (x[i] or out[i + 1])
+            return out
+        # ---- past: forward over positions 0..L-1 (the absorbing state reads as false)
+        if op in ("Y", "Z"):
+            x = self.series(a[0])
+            first = op == "Z"
+            return [first if i == 0 else x[i - 1] for i in range(L)] + [False]
+        if op in ("O", "H"):
+            x = self.series(a[0])
+            if n.hi is None:
+                out = []
+                acc = op == "H"
+                for i in range(L):
+                    acc = (acc or x[i]) if op == "O" else (acc and x[i])
+                    out.append(acc)
+                return out + [False]
+            agg = any if op == "O" else all
+            return [agg(x[j] for j in range(max(0, i - n.hi), i - n.lo + 1))
+                    for i in range(L)] + [False]
+        if op in ("S", "T"):
+            x, y = self.series(a[0]), self.series(a[1])
+            out = []
+            prev = op == "T"
+            for i in range(L):
+                if op == "S":
+                    prev = y[i] or (x[i] and prev)
+                else:
+                    prev = y[i] and (x[i] or prev)
+                out.append(prev)
+            return out + [False]
+        raise ValueError(f"cannot evaluate IR node {op!r}")
+
+
+def ft_at(node: Node, trace: Trace, pos: int = 0) -> bool:
+    """Truth of a future-time formula at ``pos`` (default 0) of ``trace`` + absorbing state."""
+    return bool(_Evaluator(trace).series(node)[pos])
+
+
+def pt_at(node: Node, trace: Trace, pos: int = -1) -> bool:
+    """Truth of a past-time formula at ``pos`` (default the last position). An empty trace
+    has no last position: raises ``ValueError``."""
+    if not trace:
+        raise ValueError("a past-time formula needs a non-empty trace")
+    ev = _Evaluator(trace)
+    return bool(ev.series(node)[pos if pos >= 0 else len(trace) + pos])
+
+
+def series(node: Node, trace: Trace) -> List[Any]:
+    """Values of ``node`` at positions ``0..L-1``."""
+    return _Evaluator(trace).series(node)[: len(trace)]

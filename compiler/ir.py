@@ -1,0 +1,358 @@
+"""The formula IR: one tree type for future-time LTL (ft, ft_inf), past-time LTL (pt) and the
+arithmetic terms inside comparisons. Every printer, evaluator and code generator reads it;
+nothing re-parses printed text (DESIGN.md, "One IR, many back ends").
+
+A node is ``Node(op, args, name, lo, hi)``:
+
+========================  ==========================================================
+``op``                    meaning
+========================  ==========================================================
+``true`` ``false``        constants
+``ap``                    boolean variable ``name``
+``LAST``                  true exactly at the last position of a finite trace (FRET)
+``FTP``                   true exactly at the first position (FRET's first timepoint)
+``cmp``                   comparison ``name`` in ``= != < <= > >=`` of two terms
+``call``                  boolean function ``name(args)`` left uninterpreted
+``!`` ``&`` ``|``         not, and, or (``&``/``|`` are binary)
+``xor`` ``->`` ``<->``    exclusive or, implication, equivalence
+``X``                     next (strong: false at the last position of a finite word)
+``F`` ``G``               eventually / globally, optional bounds ``[lo, hi]`` in ticks
+``U`` ``V``               until, release (``a V b`` = ``!(!a U !b)``)
+``Y`` ``Z``               previous (strong, false at 0) / weak previous (true at 0)
+``O`` ``H``               once / historically, optional bounds ``[lo, hi]`` in ticks
+``S`` ``T``               since, trigger (``a T b`` = ``!(!a S !b)``)
+``var`` ``num``           numeric variable ``name``; numeric literal (text in ``name``)
+``arith``                 ``name`` in ``+ - * / mod ^`` on two terms; ``neg`` unary minus
+``fn``                    numeric function ``name(args)`` (``absReal``, ``preReal`` ...)
+``ite``                   numeric if-then-else ``(cond, then, else)``
+========================  ==========================================================
+
+Nodes are immutable and hashable, so evaluators can memoize on them. The constructors below
+apply only simplifications that preserve meaning on every trace (constant folding, double
+negation, and the identities FRET's own optimizer uses, e.g. ``p S (p & FTP) = H p``).
+"""
+
+from __future__ import annotations
+
+from typing import Iterator, Optional, Tuple
+
+BOOL_BINARY = ("&", "|", "xor", "->", "<->")
+FUTURE_UNARY = ("X", "F", "G")
+FUTURE_BINARY = ("U", "V")
+PAST_UNARY = ("Y", "Z", "O", "H")
+PAST_BINARY = ("S", "T")
+TERM_OPS = ("var", "num", "arith", "neg", "fn", "ite")
+ATOM_OPS = ("true", "false", "ap", "LAST", "FTP", "cmp", "call")
+
+
+class Node:
+    """One IR node; see the module docstring for ``op``. ``lo``/``hi`` are tick bounds of
+    ``F G O H`` (``None`` = unbounded)."""
+
+    __slots__ = ("op", "args", "name", "lo", "hi", "_hash")
+
+    def __init__(self, op: str, args: Tuple["Node", ...] = (), name: Optional[str] = None,
+                 lo: Optional[int] = None, hi: Optional[int] = None):
+        self.op = op
+        self.args = args
+        self.name = name
+        self.lo = lo
+        self.hi = hi
+        self._hash = hash((op, args, name, lo, hi))
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    def __eq__(self, other) -> bool:
+        if self is other:
+            return True
+        return (isinstance(other, Node) and self._hash == other._hash and self.op == other.op
+                and self.name == other.name and self.lo == other.lo and self.hi == other.hi
+                and self.args == other.args)
+
+    def __repr__(self) -> str:
+        from .printers import to_smv
+        return f"Node<{to_smv(self)}>"
+
+    @property
+    def bounded(self) -> bool:
+        return self.hi is not None
+
+
+TRUE = Node("true")
+FALSE = Node("false")
+LAST = Node("LAST")
+FTP = Node("FTP")
+
+
+def const(value: bool) -> Node:
+    return TRUE if value else FALSE
+
+
+def ap(name: str) -> Node:
+    """A boolean variable."""
+    return Node("ap", name=name)
+
+
+# --------------------------------------------------------------------------- boolean
+def not_(a: Node) -> Node:
+    if a is TRUE or a.op == "true":
+        return FALSE
+    if a.op == "false":
+        return TRUE
+    if a.op == "!":
+        return a.args[0]
+    return Node("!", (a,))
+
+
+def and_(a: Node, b: Node) -> Node:
+    if a.op == "false" or b.op == "false":
+        return FALSE
+    if a.op == "true":
+        return b
+    if b.op == "true":
+        return a
+    if a == b:
+        return a
+    return Node("&", (a, b))
+
+
+def or_(a: Node, b: Node) -> Node:
+    if a.op == "true" or b.op == "true":
+        return TRUE
+    if a.op == "false":
+        return b
+    if b.op == "false":
+        return a
+    if a == b:
+        return a
+    return Node("|", (a, b))
+
+
+def and_all(*xs: Node) -> Node:
+    out = TRUE
+    for x in xs:
+        out = and_(out, x)
+    return out
+
+
+def or_all(*xs: Node) -> Node:
+    out = FALSE
+    for x in xs:
+        out = or_(out, x)
+    return out
+
+
+def implies(a: Node, b: Node) -> Node:
+    if a.op == "false" or b.op == "true":
+        return TRUE
+    if a.op == "true":
+        return b
+    if b.op == "false":
+        return not_(a)
+    return Node("->", (a, b))
+
+
+def xor(a: Node, b: Node) -> Node:
+    return Node("xor", (a, b))
+
+
+def iff(a: Node, b: Node) -> Node:
+    return Node("<->", (a, b))
+
+
+# --------------------------------------------------------------------------- future time
+def X(a: Node) -> Node:
+    return Node("X", (a,))
+
+
+def F(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+    """Eventually; bounded ``F[lo,hi]`` when ``hi`` is given (an empty window is FALSE)."""
+    if hi is not None:
+        lo = lo or 0
+        if hi < lo or a.op == "false":
+            return FALSE
+        if a.op == "true":
+            return TRUE
+        if hi == 0:
+            return a
+        return Node("F", (a,), lo=lo, hi=hi)
+    if a.op in ("true", "false"):
+        return a
+    return Node("F", (a,))
+
+
+def G(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+    """Globally; bounded ``G[lo,hi]`` when ``hi`` is given (an empty window is TRUE)."""
+    if hi is not None:
+        lo = lo or 0
+        if hi < lo or a.op == "true":
+            return TRUE
+        if hi == 0 and lo == 0:
+            return a
+        return Node("G", (a,), lo=lo, hi=hi)
+    if a.op in ("true", "false"):
+        return a
+    return Node("G", (a,))
+
+
+def U(a: Node, b: Node) -> Node:
+    if b.op in ("true", "false"):
+        return b
+    if a.op == "false":
+        return b
+    return Node("U", (a, b))
+
+
+def V(a: Node, b: Node) -> Node:
+    """Release: ``b`` holds up to and including the first point where ``a`` holds, or
+    forever."""
+    if b.op in ("true", "false"):
+        return b
+    if a.op == "true":
+        return b
+    return Node("V", (a, b))
+
+
+# --------------------------------------------------------------------------- past time
+def Y(a: Node) -> Node:
+    return Node("Y", (a,))
+
+
+def Z(a: Node) -> Node:
+    return Node("Z", (a,))
+
+
+def O(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+    """Once; bounded ``O[lo,hi]`` (``O[=n]`` is ``O[n,n]``) when ``hi`` is given."""
+    if hi is not None:
+        lo = lo or 0
+        if hi < lo or a.op == "false":
+            return FALSE
+        if hi == 0:
+            return a
+        return Node("O", (a,), lo=lo, hi=hi)
+    if a.op == "false":
+        return a
+    if a.op == "FTP" or a.op == "true":
+        return TRUE
+    return Node("O", (a,))
+
+
+def H(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+    """Historically; bounded ``H[lo,hi]`` when ``hi`` is given (empty window: TRUE).
+    ``H[l,h] p`` at i: p at every j in [i-h, i-l] with j >= 0 (FRET/SALT convention)."""
+    if hi is not None:
+        lo = lo or 0
+        if hi < lo or a.op == "true":
+            return TRUE
+        if hi == 0:
+            return a
+        return Node("H", (a,), lo=lo, hi=hi)
+    if a.op == "true":
+        return a
+    return Node("H", (a,))
+
+
+def S(a: Node, b: Node) -> Node:
+    """Since. Simplifies FRET's identities ``a S (a & FTP) = H a`` and ``a S FTP`` forms."""
+    if b.op == "false":
+        return FALSE
+    if b.op == "&" and b.args[1].op == "FTP" and b.args[0] == a:
+        return H(a)
+    if b.op == "&" and b.args[0].op == "FTP" and b.args[1] == a:
+        return H(a)
+    if a.op == "true":
+        return O(b)
+    return Node("S", (a, b))
+
+
+def T(a: Node, b: Node) -> Node:
+    return Node("T", (a, b))
+
+
+# --------------------------------------------------------------------------- terms
+def var(name: str) -> Node:
+    return Node("var", name=name)
+
+
+def num(text: str) -> Node:
+    return Node("num", name=text)
+
+
+def cmp(op: str, a: Node, b: Node) -> Node:
+    return Node("cmp", (a, b), name=op)
+
+
+def arith(op: str, a: Node, b: Node) -> Node:
+    return Node("arith", (a, b), name=op)
+
+
+# --------------------------------------------------------------------------- queries
+def walk(node: Node) -> Iterator[Node]:
+    """Pre-order traversal (each distinct sub-node may be visited more than once)."""
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        yield n
+        stack.extend(reversed(n.args))
+
+
+def variables(node: Node) -> list:
+    """Names of boolean and numeric variables, in order of first appearance."""
+    seen = {}
+    for n in walk(node):
+        if n.op in ("ap", "var") and n.name not in seen:
+            seen[n.name] = None
+    return list(seen)
+
+
+def has_op(node: Node, ops) -> bool:
+    return any(n.op in ops for n in walk(node))
+
+
+def is_past(node: Node) -> bool:
+    return has_op(node, PAST_UNARY + PAST_BINARY + ("FTP",))
+
+
+def is_future(node: Node) -> bool:
+    return has_op(node, FUTURE_UNARY + FUTURE_BINARY + ("LAST",))
+
+
+def substitute(node: Node, mapping: dict) -> Node:
+    """Replace sub-nodes equal to a key of ``mapping`` by its value, rebuilding bottom-up
+    through the simplifying constructors."""
+    memo: dict = {}
+
+    def go(n: Node) -> Node:
+        if n in mapping:
+            return mapping[n]
+        if not n.args:
+            return n
+        got = memo.get(n)
+        if got is not None:
+            return got
+        args = tuple(go(a) for a in n.args)
+        out = n if args == n.args else rebuild(n, args)
+        memo[n] = out
+        return out
+
+    return go(node)
+
+
+_REBUILD = {
+    "!": lambda n, a: not_(a[0]), "&": lambda n, a: and_(*a), "|": lambda n, a: or_(*a),
+    "->": lambda n, a: implies(*a), "X": lambda n, a: X(a[0]),
+    "F": lambda n, a: F(a[0], n.lo, n.hi), "G": lambda n, a: G(a[0], n.lo, n.hi),
+    "U": lambda n, a: U(*a), "V": lambda n, a: V(*a), "Y": lambda n, a: Y(a[0]),
+    "Z": lambda n, a: Z(a[0]), "O": lambda n, a: O(a[0], n.lo, n.hi),
+    "H": lambda n, a: H(a[0], n.lo, n.hi), "S": lambda n, a: S(*a),
+}
+
+
+def rebuild(n: Node, args: Tuple[Node, ...]) -> Node:
+    """``n`` with new children, simplified where a constructor applies."""
+    f = _REBUILD.get(n.op)
+    if f is not None:
+        return f(n, args)
+    return Node(n.op, args, n.name, n.lo, n.hi)

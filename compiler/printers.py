@@ -1,0 +1,151 @@
+"""Printers of the formula IR.
+
+* :func:`to_smv` - FRET's own SMV-flavoured syntax, so our formulas read next to FRET's:
+  every binary operation and every unary operator application in parentheses,
+  ``! & | xor -> <->``, ``X F G U V``, ``Y Z O H S T``, bounds ``[l,h]``, ``TRUE FALSE LAST``,
+  identifiers mangled as FRET does (``a.b`` -> ``a_DOT_b``, ``x%`` -> ``x_PRC_``).
+* :func:`to_spot` - Spot's LTL syntax (``R`` for release, ``F[l..h]``), for ft and ft_inf;
+  atoms that are not plain identifiers (comparisons, calls, derived past atoms, ``LAST``)
+  become double-quoted atomic propositions. Spot has no past operators: a pt formula raises
+  ``ValueError``.
+* :func:`expr_text` - a FRETish AST expression in FRET's printed form (for derived atoms).
+"""
+
+from __future__ import annotations
+
+import re
+
+from fretish import ast as A
+
+from .ir import Node
+
+_FRET_SPECIAL = {".": "_DOT_", "%": "_PRC_"}
+_PLAIN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def mangle(name: str) -> str:
+    """FRET's identifier mangling for SMV output; characters other than letters, digits and
+    ``_`` that FRET has no name for become ``_Uxxxx_`` (their code point)."""
+    if _PLAIN.match(name):
+        return name
+    out = []
+    for ch in name:
+        if ch.isalnum() and ch.isascii() or ch == "_":
+            out.append(ch)
+        else:
+            out.append(_FRET_SPECIAL.get(ch, f"_U{ord(ch):04X}_"))
+    s = "".join(out)
+    return s if s and not s[0].isdigit() else "_" + s
+
+
+def _bounds(n: Node, sep: str) -> str:
+    return "" if n.hi is None else f"[{n.lo},{n.hi}]" if sep == "," else f"[{n.lo}..{n.hi}]"
+
+
+def to_smv(node: Node, ftp: str = "FTP") -> str:
+    """FRET/SMV text of ``node``. ``ftp`` is how the first-timepoint atom prints: FRET writes
+    ``FTP`` in ft formulas and ``(Z FALSE)`` in pt formulas (pass ``"(Z FALSE)"``)."""
+    memo: dict = {}
+
+    def go(n: Node) -> str:
+        got = memo.get(n)
+        if got is not None:
+            return got
+        op = n.op
+        if op == "true":
+            s = "TRUE"
+        elif op == "false":
+            s = "FALSE"
+        elif op == "LAST":
+            s = "LAST"
+        elif op == "FTP":
+            s = ftp
+        elif op in ("ap", "var"):
+            s = mangle(n.name)
+        elif op == "num":
+            s = n.name
+        elif op in ("cmp", "arith"):
+            s = f"({go(n.args[0])} {n.name} {go(n.args[1])})"
+        elif op == "neg":
+            s = f"(- {go(n.args[0])})"
+        elif op in ("call", "fn", "pre"):
+            s = f"{mangle(n.name)}({','.join(go(a) for a in n.args)})"
+        elif op == "ite":
+            s = f"ite({','.join(go(a) for a in n.args)})"
+        elif op in ("past", "future"):
+            s = n.name if n.name else go(n.args[0])
+        elif op == "!":
+            s = f"(! {go(n.args[0])})"
+        elif len(n.args) == 2:
+            s = f"({go(n.args[0])} {op} {go(n.args[1])})"
+        else:
+            s = f"({op}{_bounds(n, ',')} {go(n.args[0])})"
+        memo[n] = s
+        return s
+
+    return go(node)
+
+
+_SPOT_OP = {"&": "&", "|": "|", "xor": "xor", "->": "->", "<->": "<->", "U": "U", "V": "R"}
+_SPOT_KEYWORDS = {"true", "false", "xor", "and", "or", "not", "implies", "equiv", "t", "f"}
+
+
+def spot_ap(text: str) -> str:
+    """An atomic proposition in Spot syntax: bare when it is a lower-case identifier Spot
+    cannot mistake for an operator, otherwise double-quoted (``"x > 3"``)."""
+    if re.match(r"^[a-z_][a-z0-9_]*$", text) and text not in _SPOT_KEYWORDS:
+        return text
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def to_spot(node: Node) -> str:
+    """Spot LTL text of a future-time formula. Raises ``ValueError`` on past operators."""
+    memo: dict = {}
+
+    def go(n: Node) -> str:
+        got = memo.get(n)
+        if got is not None:
+            return got
+        op = n.op
+        if op == "true":
+            s = "true"
+        elif op == "false":
+            s = "false"
+        elif op == "ap":
+            s = spot_ap(mangle(n.name))
+        elif op in ("LAST", "FTP", "cmp", "call", "past", "future"):
+            s = spot_ap(to_smv(n))
+        elif op == "!":
+            s = f"!{go(n.args[0])}"
+        elif op in _SPOT_OP:
+            s = f"({go(n.args[0])} {_SPOT_OP[op]} {go(n.args[1])})"
+        elif op in ("X", "F", "G"):
+            s = f"{op}{_bounds(n, '..')} {go(n.args[0])}"
+            s = f"({s})"
+        elif op in ("Y", "Z", "O", "H", "S", "T"):
+            raise ValueError("Spot has no past-time operators: a pt formula cannot be printed "
+                             "in Spot syntax")
+        else:
+            raise ValueError(f"no Spot form for IR node {op!r}")
+        memo[n] = s
+        return s
+
+    return go(node)
+
+
+def expr_text(e: A.Expr) -> str:
+    """FRET's printed form of an AST expression: binary operations parenthesized, calls as
+    ``f(a,b)``, identifiers mangled."""
+    if isinstance(e, A.Var):
+        return mangle(e.name)
+    if isinstance(e, A.BoolLit):
+        return "TRUE" if e.value else "FALSE"
+    if isinstance(e, A.NumLit):
+        return e.text
+    if isinstance(e, A.Unary):
+        return f"(! {expr_text(e.operand)})" if e.op == "!" else f"(- {expr_text(e.operand)})"
+    if isinstance(e, A.Binary):
+        return f"({expr_text(e.left)} {e.op} {expr_text(e.right)})"
+    if isinstance(e, A.Call):
+        return f"{mangle(e.name)}({','.join(expr_text(a) for a in e.args)})"
+    raise TypeError(type(e))

@@ -1,0 +1,628 @@
+"""FRET's semantics: a FRETish :class:`~fretish.ast.Requirement` to its three formulas.
+
+For each of FRET's 288 template keys (8 scopes x 3 condition kinds x 12 timings) this module
+builds, in the formula IR (:mod:`compiler.ir`):
+
+* **ft** - future-time LTL over finite traces, evaluated at position 0, with ``LAST`` true
+  exactly at the last position;
+* **ft_inf** - ft with ``LAST`` false everywhere (infinite traces), simplified;
+* **pt** - past-time LTL evaluated at the last position.
+
+The meaning is FRET's interval semantics (Giannakopoulou et al., "Automated formalization of
+structured natural language requirements", IST 2021; FRET's ``fretishSemantics`` manual;
+``shared/fretish/README.md`` sections 2-4): the scope selects intervals of the run, the
+condition selects trigger points inside each interval, and the timing says what the response
+must do from each trigger until the interval ends. ``only*`` scopes negate the timing and
+apply it to the complement intervals. The construction here is compositional - scope
+wrapper (condition wrapper (timing)) - in the style of FRET's own templates, and is checked
+on traces against FRET's formulas and FRET's interval verdicts in the tests.
+
+FRET defects fixed here (README section 7): units are converted with the declared tick
+period instead of being dropped; decimal or inexact durations are rejected; ``preBool`` with
+a non-boolean initial value is an error; ``if A then B`` is ``A -> B`` everywhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Callable, List, Optional
+
+from fretish import ast as A
+try:
+    from fretish.errors import FretishError
+except ImportError:  # pragma: no cover - during bootstrap
+    FretishError = Exception
+
+from . import ir
+from .ir import (FALSE, FTP, LAST, TRUE, F, G, H, Node, O, S, U, V, X, Y, Z, and_, and_all,
+                 implies, not_, or_)
+
+
+class SemanticsError(FretishError):
+    """A requirement that parses but cannot be formalized (bad duration, bad function
+    argument). ``span`` points at the offending part of the sentence."""
+
+    def __init__(self, message: str, span: Optional[A.Span] = None):
+        super().__init__(message)
+        self.message = message
+        self.span = span
+
+
+@dataclass
+class Formalization:
+    """The formulas of one requirement.
+
+    ``ft``/``ft_inf``/``pt`` are IR nodes; ``variables`` the FRET variable names in order of
+    appearance; ``durations`` maps each duration phrase to its tick count; ``warnings``
+    human-readable notes (e.g. units read as ticks for lack of a tick period);
+    ``pt_causal`` is False when the pt formula refers to a future-time function (FRET leaves
+    those unexpanded in pt), so pt cannot be computed online tick by tick.
+    """
+
+    key: str
+    ft: Node
+    ft_inf: Node
+    pt: Node
+    variables: List[str]
+    warnings: List[str] = field(default_factory=list)
+    ticks: Optional[int] = None
+    pt_causal: bool = True
+
+
+# --------------------------------------------------------------------------- durations
+def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
+                   warnings: List[str]) -> int:
+    """Number of ticks of a duration.
+
+    With ``tick_period`` (seconds, exact) a time unit converts exactly; an amount that is not
+    a whole number of ticks raises :class:`SemanticsError`. Without one, FRET's behaviour is
+    kept (``N unit`` means N ticks) and a warning is recorded; a fractional amount is then
+    an error (FRET would print ``F[<=2.5]``, a defect, README section 7.5).
+    """
+    amount = d.value
+    if d.unit == "ticks":
+        ticks = amount
+    elif tick_period is None:
+        ticks = amount
+        warnings.append(
+            f"'{d.amount} {d.unit}' read as {d.amount} ticks (FRET ignores units); declare a "
+            "tick period (tick_period: 100 ms) to convert time units exactly")
+    else:
+        ticks = amount * A.UNIT_SECONDS[d.unit] / tick_period
+    if ticks.denominator != 1:
+        if d.unit != "ticks" and tick_period is not None:
+            raise SemanticsError(
+                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of {_fmt_period(tick_period)}: "
+                "not a whole number of ticks; change the duration or the tick period", d.span)
+        raise SemanticsError(
+            f"duration '{d.amount} {d.unit}' is not a whole number of ticks"
+            + ("" if tick_period else "; declare a tick period to use time units"), d.span)
+    if ticks < 0:
+        raise SemanticsError("a duration cannot be negative", d.span)
+    return int(ticks)
+
+
+def _fmt_period(p: Fraction) -> str:
+    ms = p * 1000
+    return f"{float(ms):g} ms" if ms < 1000 else f"{float(p):g} s"
+
+
+# --------------------------------------------------------------------------- expressions
+_NUMERIC_FUNCS = {"absReal", "absInt", "minReal", "minInt", "maxReal", "maxInt",
+                  "preInt", "preReal"}
+_PAST_FUNCS = {"persisted", "occurred", "preBool", "prevOcc", "preInt", "preReal"}
+_FUTURE_FUNCS = {"persists", "occurs", "nextOcc"}
+
+
+class _Expander:
+    """Turns AST expressions into IR for one formula kind.
+
+    ``kind`` is ``"ft"`` or ``"pt"``. Temporal functions of the formula's own direction are
+    expanded with the scope's interval endpoints (FRET: ``$Left$`` for past functions in pt,
+    ``$Right$`` for future ones in ft); functions of the other direction become *derived
+    atoms*: IR nodes ``past``/``future`` whose name is the printed call and whose single
+    argument is the expansion, which evaluators compute pointwise.
+    """
+
+    def __init__(self, kind: str, left_pt: Node, right_ft: Node):
+        self.kind = kind
+        self.left_pt = left_pt
+        self.right_ft = right_ft
+        self.has_future_atom = False
+
+    # boolean context
+    def bool(self, e: A.Expr) -> Node:
+        if isinstance(e, A.Var):
+            if e.name == "FTP":
+                return FTP
+            return ir.ap(e.name)
+        if isinstance(e, A.BoolLit):
+            return TRUE if e.value else FALSE
+        if isinstance(e, A.Unary):
+            if e.op == "!":
+                return not_(self.bool(e.operand))
+            raise SemanticsError("arithmetic minus where a condition is expected", e.span)
+        if isinstance(e, A.Binary):
+            op = e.op
+            if op in A.COMPARISON_OPS:
+                return self._atom(ir.cmp(op, self.term(e.left), self.term(e.right)))
+            if op in A.ARITH_OPS:
+                raise SemanticsError(f"arithmetic '{op}' where a condition is expected", e.span)
+            a, b = self.bool(e.left), self.bool(e.right)
+            if op == "&":
+                return Node("&", (a, b))
+            if op == "|":
+                return Node("|", (a, b))
+            if op == "->":
+                return Node("->", (a, b))
+            if op == "xor":
+                return ir.xor(a, b)
+            if op == "<->":
+                return ir.iff(a, b)
+        if isinstance(e, A.Call):
+            return self._bool_call(e)
+        raise SemanticsError(f"cannot formalize {type(e).__name__}", getattr(e, "span", None))
+
+    def _atom(self, node: Node) -> Node:
+        """A comparison whose terms contain past values (``preReal``) is a derived atom in
+        ft."""
+        if self.kind == "ft" and ir.has_op(node, ("pre",)):
+            return Node("past", (node,), name=None)
+        return node
+
+    def _bool_call(self, e: A.Call) -> Node:
+        name, args = e.name, e.args
+        if name == "ite" and len(args) == 3:
+            c, a, b = (self.bool(x) for x in args)
+            return Node("|", (Node("&", (c, a)), Node("&", (not_(c), b))))
+        if name in _PAST_FUNCS and name not in ("preInt", "preReal"):
+            expansion = self._past_function(e)
+            if self.kind == "pt":
+                return expansion
+            return Node("past", (expansion,), name=_call_text(e))
+        if name in _FUTURE_FUNCS:
+            expansion = self._future_function(e)
+            if self.kind == "ft":
+                return expansion
+            self.has_future_atom = True
+            return Node("future", (expansion,), name=_call_text(e))
+        if name in _NUMERIC_FUNCS:
+            raise SemanticsError(f"'{name}' gives a number where a condition is expected",
+                                 e.span)
+        return Node("call", tuple(self._arg(a) for a in args), name=name)
+
+    def _arg(self, a: A.Expr) -> Node:
+        return self.term(a) if _looks_numeric(a) else self.bool(a)
+
+    def _int_arg(self, e: A.Call, a: A.Expr) -> int:
+        if isinstance(a, A.NumLit) and isinstance(a.value, int) and a.value >= 0:
+            return a.value
+        raise SemanticsError(f"{e.name}: the bound must be a non-negative integer literal",
+                             getattr(a, "span", e.span))
+
+    def _past_function(self, e: A.Call) -> Node:
+        """FRET's past-time functions (FRET ``xform.js`` rules, restated):
+        persisted(n,p) = H[0,n] p & H[0,n-1] !Left; persisted(m,n,p) = H[m,n] p &
+        H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) & O[0,n] p (occurred(m,n,p) with
+        O[m,n]); preBool(b,p) = (FTP & b) | (!FTP & Y p); prevOcc(p,q) =
+        Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q)))."""
+        name, args = e.name, e.args
+        # Function expansions are built in a pt expander whatever the formula kind.
+        px = _Expander("pt", self.left_pt, self.right_ft)
+        left = self.left_pt
+        if name in ("persisted", "occurred"):
+            if len(args) == 2:
+                m, n, p = 0, self._int_arg(e, args[0]), px.bool(args[1])
+            elif len(args) == 3:
+                m, n, p = self._int_arg(e, args[0]), self._int_arg(e, args[1]), px.bool(args[2])
+                if m > n:
+                    raise SemanticsError(f"{name}: lower bound {m} above upper bound {n}",
+                                         e.span)
+            else:
+                raise SemanticsError(f"{name} takes (n, p) or (m, n, p)", e.span)
+            if name == "persisted":
+                return and_(H(p, m, n), H(not_(left), 0, n - 1))
+            return and_(S(not_(left), p), O(p, m, n))
+        if name == "preBool":
+            if len(args) != 2:
+                raise SemanticsError("preBool takes (initial value, p)", e.span)
+            init = args[0]
+            if not isinstance(init, A.BoolLit):
+                raise SemanticsError(
+                    "preBool: the initial value must be true or false (FRET would print "
+                    "'undefined' here)", getattr(init, "span", e.span))
+            p = px.bool(args[1])
+            return or_(and_(FTP, ir.const(init.value)), and_(not_(FTP), Y(p)))
+        if name == "prevOcc":
+            if len(args) != 2:
+                raise SemanticsError("prevOcc takes (p, q)", e.span)
+            p, q = px.bool(args[0]), px.bool(args[1])
+            guard = and_(not_(left), not_(p))
+            return Y(implies(S(guard, p), S(guard, and_(p, q))))
+        raise SemanticsError(f"unknown past-time function {name}", e.span)
+
+    def _future_function(self, e: A.Call) -> Node:
+        """FRET's future-time functions: persists(n,p) = G[0,n] p & G[0,n-1] !Right;
+        occurs(n,p) = ((!Right) U p) & F[0,n] p; nextOcc(p,q) = X(((!p & !Right) U p) ->
+        ((!p & !Right) U (p & q)))."""
+        name, args = e.name, e.args
+        fx = _Expander("ft", self.left_pt, self.right_ft)
+        right = self.right_ft
+        if name in ("persists", "occurs"):
+            if len(args) != 2:
+                raise SemanticsError(f"{name} takes (n, p)", e.span)
+            n, p = self._int_arg(e, args[0]), fx.bool(args[1])
+            if name == "persists":
+                return and_(G(p, 0, n), G(not_(right), 0, n - 1))
+            return and_(U(not_(right), p), F(p, 0, n))
+        if name == "nextOcc":
+            if len(args) != 2:
+                raise SemanticsError("nextOcc takes (p, q)", e.span)
+            p, q = fx.bool(args[0]), fx.bool(args[1])
+            guard = and_(not_(p), not_(right))
+            return X(implies(U(guard, p), U(guard, and_(p, q))))
+        raise SemanticsError(f"unknown future-time function {name}", e.span)
+
+    # numeric context
+    def term(self, e: A.Expr) -> Node:
+        if isinstance(e, A.Var):
+            return ir.var(e.name)
+        if isinstance(e, A.NumLit):
+            return ir.num(e.text)
+        if isinstance(e, A.Unary) and e.op == "-":
+            inner = self.term(e.operand)
+            if inner.op == "num" and not inner.name.startswith("-"):
+                return ir.num("-" + inner.name)
+            return Node("neg", (inner,))
+        if isinstance(e, A.Binary) and e.op in A.ARITH_OPS:
+            return ir.arith(e.op, self.term(e.left), self.term(e.right))
+        if isinstance(e, A.Call):
+            if e.name == "ite" and len(e.args) == 3:
+                return Node("ite", (self.bool(e.args[0]), self.term(e.args[1]),
+                                    self.term(e.args[2])))
+            if e.name in ("preInt", "preReal"):
+                if len(e.args) != 2 or not _looks_numeric(e.args[0]):
+                    raise SemanticsError(f"{e.name} takes (numeric initial value, x)", e.span)
+                return Node("pre", (self.term(e.args[0]), self.term(e.args[1])), name=e.name)
+            return Node("fn", tuple(self.term(a) for a in e.args), name=e.name)
+        if isinstance(e, A.BoolLit):
+            raise SemanticsError("a truth value where a number is expected", e.span)
+        raise SemanticsError("a condition where a number is expected",
+                             getattr(e, "span", None))
+
+
+def _looks_numeric(e: A.Expr) -> bool:
+    if isinstance(e, A.NumLit):
+        return True
+    if isinstance(e, A.Unary):
+        return e.op == "-"
+    if isinstance(e, A.Binary):
+        return e.op in A.ARITH_OPS
+    if isinstance(e, A.Call):
+        return e.name in _NUMERIC_FUNCS
+    return False
+
+
+def _call_text(e: A.Call) -> str:
+    from .printers import expr_text
+    return expr_text(e)
+
+
+# --------------------------------------------------------------------------- timings
+def _ft_timing(kind: str, negate: bool, R: Node, right: Node, n: Optional[int],
+               stop: Optional[Node]) -> Node:
+    """What must hold at a trigger point (ft), with ``right`` marking the interval's last
+    point (README section 4; FRET ``formalizations_future`` building blocks)."""
+    nR = not_(R)
+
+    def within(r: Node, k: int) -> Node:
+        return or_(F(r, 0, k), F(right, 0, k - 1))
+
+    def for_(r: Node, k: int) -> Node:
+        return or_(G(r, 0, k), V(right, r))
+
+    def until(r: Node) -> Node:
+        return or_(V(stop, or_(r, stop)), V(right, r))
+
+    def before(r: Node) -> Node:
+        return V(or_(r, right), not_(stop))
+
+    def eventually(r: Node) -> Node:
+        return U(not_(right), r)
+
+    if kind == "immediately":
+        return nR if negate else R
+    if kind == "next":
+        return or_(right, X(nR if negate else R))
+    if kind == "finally":
+        return V(right, implies(right, nR if negate else R))
+    if kind in ("eventually", "null"):
+        return V(right, nR) if negate else eventually(R)
+    if kind == "always":
+        return eventually(nR) if negate else V(right, R)
+    if kind == "never":
+        return eventually(R) if negate else V(right, nR)
+    if kind == "within":
+        return for_(nR, n) if negate else within(R, n)
+    if kind == "for":
+        return within(nR, n) if negate else for_(R, n)
+    if kind == "after":
+        if negate:
+            return or_(within(R, n), for_(nR, n + 1))
+        return and_(for_(nR, n), within(R, n + 1))
+    if kind == "until":
+        return before(nR) if negate else until(R)
+    if kind == "before":
+        return until(nR) if negate else before(R)
+    raise AssertionError(kind)
+
+
+def _pt_timing(kind: str, negate: bool, R: Node, left: Node, trig: Optional[Node],
+               no_cond: Optional[Node], n: Optional[int], stop: Optional[Node]) -> Node:
+    """``baseform@`` of FRET's past-time construction: true at position j iff every trigger
+    in the interval [left .. j] met its obligation, reading j as the interval's end.
+    ``trig`` is the trigger formula (None: the interval start is the only trigger) and
+    ``no_cond`` says no condition has held since the interval started."""
+
+    def since_left(f: Node) -> Node:  # f held at every point of the current interval
+        return S(f, and_(f, left))
+
+    def occurs_by(r: Node, start: Node) -> Node:  # r held since the latest start
+        return not_(S(not_(r), and_(not_(r), start)))
+
+    def vac(f: Node) -> Node:  # no trigger yet in this interval, or f
+        return f if trig is None else or_(no_cond, f)
+
+    focus = left if trig is None else trig
+
+    def immediately(r: Node) -> Node:
+        return since_left(implies(focus, r))
+
+    def next_(r: Node) -> Node:
+        return since_left(implies(Y(focus), or_(r, left) if trig is not None else r))
+
+    def always(r: Node) -> Node:
+        return since_left(vac(r))
+
+    def eventually(r: Node) -> Node:
+        return vac(occurs_by(r, focus))
+
+    def finally_(r: Node) -> Node:
+        return vac(r)
+
+    def for_(r: Node, k: int) -> Node:
+        return since_left(implies(O(focus, 0, k), vac(r)))
+
+    def within(r: Node, k: int) -> Node:
+        if trig is None:
+            return since_left(implies(S(not_(r), and_(not_(r), left)), O(left, 0, k - 1)))
+        return since_left(implies(O(and_(trig, not_(r)), k, k), O(or_(left, r), 0, k - 1)))
+
+    def until(r: Node) -> Node:
+        not_stopped = S(not_(stop), and_(not_(stop), focus))
+        return since_left(vac(implies(not_stopped, r)))
+
+    def before(r: Node) -> Node:
+        if trig is None:
+            enforce = and_(not_(left), Y(occurs_by(r, left)))
+        else:
+            enforce = or_(no_cond, and_(and_(not_(left), not_(trig)), Y(occurs_by(r, trig))))
+        return since_left(implies(stop, enforce))
+
+    def not_after(r: Node, k: int) -> Node:
+        # FRET: checked at exactly k+1 after each trigger, pointwise (formalizations_past)
+        if trig is None:
+            focus_pt = O(left, k + 1, k + 1)
+            ok = or_(or_(O(left, 0, k), not_(r)), Y(occurs_by(r, left)))
+        else:
+            focus_pt = O(trig, k + 1, k + 1)
+            ok = or_(or_(O(left, 0, k), not_(r)), Y(O(r, 0, k)))
+        return since_left(implies(focus_pt, ok))
+
+    nR = not_(R)
+    if kind == "immediately":
+        return immediately(nR if negate else R)
+    if kind == "next":
+        return next_(nR if negate else R)
+    if kind == "finally":
+        return finally_(nR if negate else R)
+    if kind in ("eventually", "null"):
+        return always(nR) if negate else eventually(R)
+    if kind == "always":
+        return eventually(nR) if negate else always(R)
+    if kind == "never":
+        return eventually(R) if negate else always(nR)
+    if kind == "within":
+        return for_(nR, n) if negate else within(R, n)
+    if kind == "for":
+        return within(nR, n) if negate else for_(R, n)
+    if kind == "after":
+        if negate:
+            return not_after(R, n)
+        return and_(for_(nR, n), within(R, n + 1))
+    if kind == "until":
+        return before(nR) if negate else until(R)
+    if kind == "before":
+        return until(nR) if negate else before(R)
+    raise AssertionError(kind)
+
+
+# --------------------------------------------------------------------------- scopes
+@dataclass
+class _Endpoints:
+    """Scope interval markers. ft: ``right`` is true at an interval's last point. pt:
+    ``left`` is true at an interval's first point, ``right`` at the first point after it
+    (``LAST`` when intervals run to the end of the trace)."""
+
+    ft_right: Node
+    pt_left: Node
+    pt_right: Node
+
+
+def _ft_markers(m: Node):
+    """ft: the point just before M starts (FiM) and M's last point before it stops (LiM)."""
+    nl = not_(LAST)
+    return (and_all(not_(m), nl, X(m)), and_all(m, nl, X(not_(m))))
+
+
+def _pt_markers(m: Node):
+    """pt: first point of an M interval, first point after it (FRET endpoint rules)."""
+    start = and_(m, or_(FTP, Y(not_(m))))  # FiM
+    end = and_(not_(m), Y(m))  # LiM
+    return start, end
+
+
+def _endpoints(kind: str, m_ft: Optional[Node], m_pt: Optional[Node]) -> _Endpoints:
+    if kind == "null":
+        return _Endpoints(LAST, FTP, LAST)
+    fim_ft, lim_ft = _ft_markers(m_ft)
+    nfim_ft, nlim_ft = _ft_markers(not_(m_ft))
+    fim_pt, lim_pt = _pt_markers(m_pt)
+    fnim_pt, lnim_pt = _pt_markers(not_(m_pt))
+    # first M point ever (pt) and first point after the first M interval (pt)
+    ffim_pt = and_(fim_pt, or_(FTP, Y(H(not_(m_pt)))))
+    flim_pt = and_(lim_pt, Y(H(not_(lim_pt))))
+    if kind == "in":
+        return _Endpoints(or_(lim_ft, LAST), fim_pt, lim_pt)
+    if kind in ("notin", "onlyIn"):
+        return _Endpoints(or_(nlim_ft, LAST), fnim_pt, lnim_pt)
+    if kind == "before":
+        return _Endpoints(or_(fim_ft, LAST), FTP, ffim_pt)
+    if kind == "after":
+        return _Endpoints(LAST, flim_pt, LAST)
+    if kind == "onlyBefore":
+        return _Endpoints(LAST, ffim_pt, LAST)
+    if kind == "onlyAfter":
+        return _Endpoints(or_(lim_ft, LAST), FTP, flim_pt)
+    raise AssertionError(kind)
+
+
+def _ft_scope(kind: str, body: Node, m: Optional[Node]) -> Node:
+    """Wrap the interval formula ``body`` (true at an interval's first point) by the scope."""
+    if kind == "null":
+        return body
+    fim, lim = _ft_markers(m)
+    if kind == "in":
+        return and_(V(LAST, implies(fim, X(body))), implies(m, body))
+    if kind in ("notin", "onlyIn"):
+        nfim, _ = _ft_markers(not_(m))
+        return and_(V(LAST, implies(nfim, X(body))), implies(not_(m), body))
+    if kind == "before":
+        return or_(body, m)
+    if kind == "onlyAfter":
+        return body
+    if kind == "after":
+        return or_(U(not_(lim), and_(lim, X(body))), V(LAST, not_(lim)))
+    if kind == "onlyBefore":
+        first = or_(U(not_(fim), and_(fim, X(body))), V(LAST, not_(fim)))
+        return and_(implies(not_(m), first), implies(m, body))
+    raise AssertionError(kind)
+
+
+def _pt_scope(kind: str, base: Node, ep: _Endpoints) -> Node:
+    """FRET's past-time scope construction: intervals closed by ``right`` are checked one
+    step after they end; an interval still open at the end of the trace is checked now."""
+    left, right = ep.pt_left, ep.pt_right
+    if right is LAST:
+        return implies(O(left), base) if left is not FTP else base
+    closed = H(implies(and_(right, not_(FTP)), Y(base)))
+    still_open = implies(S(not_(right), and_(not_(right), left)), base)
+    return and_(closed, still_open)
+
+
+# --------------------------------------------------------------------------- entry point
+def formalize(req: A.Requirement, tick_period: Optional[Fraction] = None) -> Formalization:
+    """ft, ft_inf and pt of a parsed requirement.
+
+    ``tick_period`` is the duration of one tick in seconds (``None``: units are read as
+    ticks, as FRET does, with a warning). Raises :class:`SemanticsError` for a free-form
+    requirement, a bad duration or a bad temporal-function argument.
+    """
+    if req.freeform:
+        raise SemanticsError("a free-form requirement has no formalization")
+    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
+    negate = scope.startswith("only")
+    warnings: List[str] = []
+    n = None
+    if timing in A.DURATION_TIMINGS:
+        n = duration_ticks(timing_duration(req), tick_period, warnings)
+
+    # Mode formulas: functions inside a mode are expanded w.r.t. the whole run.
+    m_ft = m_pt = None
+    if scope != "null":
+        m_ft = _Expander("ft", FTP, LAST).bool(req.scope.mode)
+        m_pt = _Expander("pt", FTP, LAST).bool(req.scope.mode)
+    ep = _endpoints(scope, m_ft, m_pt)
+
+    fx = _Expander("ft", ep.pt_left, ep.ft_right)
+    px = _Expander("pt", ep.pt_left, ep.ft_right)
+
+    def fields(x: _Expander):
+        R = x.bool(req.response)
+        c = x.bool(req.condition.expr) if cond != "null" else None
+        s = x.bool(req.timing.stop) if timing in A.STOP_TIMINGS else None
+        return R, c, s
+
+    # ---- ft
+    R, c, s = fields(fx)
+    right = ep.ft_right
+    T = _ft_timing(timing, negate, R, right, n, s)
+    if cond == "null":
+        body = T
+    elif cond == "holding":
+        body = V(right, implies(c, T))
+    else:
+        rise = and_all(not_(c), not_(right), X(c))
+        body = and_(V(right, implies(rise, X(T))), implies(c, T))
+    ft = _ft_scope(scope, body, m_ft)
+    ft_inf = finite_to_infinite(ft)
+
+    # ---- pt
+    R, c, s = fields(px)
+    left = ep.pt_left
+    if cond == "null":
+        trig = no_cond = None
+    else:
+        trig = c if cond == "holding" else and_(c, or_(Y(not_(c)), left))
+        no_cond = S(not_(c), and_(not_(c), left))
+    base = _pt_timing(timing, negate, R, left, trig, no_cond, n, s)
+    pt = _pt_scope(scope, base, ep)
+
+    variables = ir.variables(and_all(*(x for x in (m_ft, *fields(fx)) if x is not None)))
+    return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
+                         pt_causal=not px.has_future_atom)
+
+
+def timing_duration(req: A.Requirement) -> A.Duration:
+    if req.timing.duration is None:
+        raise SemanticsError(f"timing '{req.timing.kind}' needs a duration", req.timing.span)
+    return req.timing.duration
+
+
+def finite_to_infinite(ft: Node) -> Node:
+    """ft_inf: ``LAST`` replaced by FALSE and the result simplified (FRET does the same).
+    ``FALSE V p`` is ``G p`` and ``TRUE U p`` is ``F p``."""
+    memo: dict = {}
+
+    def go(n: Node) -> Node:
+        if n.op == "LAST":
+            return FALSE
+        if not n.args or n.op in ("past", "future"):
+            return n
+        got = memo.get(n)
+        if got is not None:
+            return got
+        args = tuple(go(a) for a in n.args)
+        if n.op == "V" and args[0].op == "false":
+            out = G(args[1])
+        elif n.op == "U" and args[0].op == "true":
+            out = F(args[1])
+        elif n.op == "X" and args[0].op in ("true", "false"):
+            out = args[0]
+        else:
+            out = ir.rebuild(n, args)
+        memo[n] = out
+        return out
+
+    return go(ft)

@@ -1,0 +1,4 @@
+"""``python -m fretc`` is the ``fretc`` command."""
+from .cli import main
+
+main()
