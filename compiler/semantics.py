@@ -589,7 +589,8 @@ def formalize(req: A.Requirement, tick_period: Optional[Fraction] = None) -> For
     base = _pt_timing(timing, negate, R, left, trig, no_cond, n, s)
     pt = _pt_scope(scope, base, ep)
 
-    variables = ir.variables(and_all(*(x for x in (m_ft, *fields(fx)) if x is not None)))
+    R, c, s = fields(fx)  # variables in sentence order: mode, condition, stop, response
+    variables = ir.variables(Node("vars", tuple(x for x in (m_ft, c, s, R) if x is not None)))
     return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
                          pt_causal=not px.has_future_atom)
 

@@ -1,0 +1,195 @@
+"""AJPF property files (``fretc FILE --emit psl``) for the MCAPL/AJPF model checker of
+Gwendolen BDI agents (Dennis et al., "Practical verification of decision-making in agent-based
+autonomous systems", ASE 2016; the MCAPL manual's property specification language).
+
+One ``label: formula`` line per requirement, from its ft_inf. AJPF syntax: ``[]`` (always),
+``<>`` (eventually), ``U``, ``R``, ``~``, ``&``, ``||``, ``->``; atoms ``B(agent, belief)``,
+``P(percept)``, ``D(agent, action)``. AJPF's operator precedence differs from LTL's, so every
+binary sub-formula is parenthesized. ``<->`` and ``xor`` are rewritten with ``->``, ``&`` and
+``||``. What AJPF cannot express (next, bounded and past operators, a comparison with no
+belief name, the constants TRUE/FALSE) is refused with the reason and what to write instead.
+
+Variable mapping (TOML, ``--psl-map``)::
+
+    agent = "agilex_agent"          # default agent (otherwise the requirement's component)
+    [variables.too_close]
+    kind = "belief"                 # belief (default) | percept | action
+    name = "too_close"              # Gwendolen term (lower-case first letter)
+    agent = "agilex_agent"          # optional, for belief and action
+    [comparisons]
+    "(alt > 100)" = "high_altitude" # a comparison, as FRET prints it, becomes this belief
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Dict, List, Optional
+
+from fretish.errors import FretishError
+
+from .ir import Node
+from .printers import mangle, to_smv
+
+_TERM = re.compile(r"^[a-z][A-Za-z0-9_]*$")
+
+
+class AjpfError(FretishError):
+    """A requirement or mapping AJPF cannot take; the message says why and what to do."""
+
+
+def load_mapping(path: Optional[str]) -> dict:
+    """Read a ``--psl-map`` TOML file. Raises :class:`AjpfError` naming the file."""
+    if path is None:
+        return {}
+    import tomllib
+
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise AjpfError(f"{path}: cannot read the AJPF mapping: {exc}") from None
+    for var, spec in data.get("variables", {}).items():
+        if not isinstance(spec, dict):
+            raise AjpfError(f"{path}: variables.{var} must be a table")
+        kind = spec.get("kind", "belief")
+        if kind not in ("belief", "percept", "action"):
+            raise AjpfError(f"{path}: variables.{var}.kind must be belief, percept or action, "
+                            f"not {kind!r}")
+    return data
+
+
+def _label(rid: str, used: set) -> str:
+    base = re.sub(r"[^A-Za-z0-9_]", "_", rid) or "req"
+    label, k = base, 2
+    while label in used:
+        label, k = f"{base}_{k}", k + 1
+    used.add(label)
+    return label
+
+
+def _term(name: str, what: str) -> str:
+    if not _TERM.match(name):
+        raise AjpfError(
+            f"{what} '{name}' is not a Gwendolen term (it must start with a lower-case letter "
+            "and hold only letters, digits and '_'); give it a name in the --psl-map file")
+    return name
+
+
+def to_ajpf(node: Node, agent: str, mapping: dict) -> str:
+    """AJPF text of an ft_inf formula. Raises :class:`AjpfError` for what AJPF cannot
+    express."""
+    variables = mapping.get("variables", {})
+    comparisons = mapping.get("comparisons", {})
+
+    def atom_for_var(name: str) -> str:
+        spec = variables.get(name, {})
+        kind = spec.get("kind", "belief")
+        term = _term(spec.get("name", mangle(name)), "variable")
+        ag = _term(spec.get("agent", agent), "agent")
+        if kind == "percept":
+            return f"P({term})"
+        if kind == "action":
+            return f"D({ag},{term})"
+        return f"B({ag},{term})"
+
+    def go(n: Node) -> str:
+        op = n.op
+        if op == "ap":
+            return atom_for_var(n.name)
+        if op == "cmp":
+            text = to_smv(n)
+            if text not in comparisons:
+                raise AjpfError(
+                    f"the comparison {text} has no belief name: AJPF checks beliefs, not "
+                    f"numbers; map it in the --psl-map file ([comparisons] \"{text}\" = "
+                    "\"some_belief\")")
+            return f"B({_term(agent, 'agent')},{_term(comparisons[text], 'belief')})"
+        if op == "!":
+            return f"~{go(n.args[0])}"
+        if op == "&":
+            return f"({go(n.args[0])} & {go(n.args[1])})"
+        if op == "|":
+            return f"({go(n.args[0])} || {go(n.args[1])})"
+        if op == "->":
+            return f"({go(n.args[0])} -> {go(n.args[1])})"
+        if op == "<->":
+            a, b = go(n.args[0]), go(n.args[1])
+            return f"(({a} -> {b}) & ({b} -> {a}))"
+        if op == "xor":
+            a, b = go(n.args[0]), go(n.args[1])
+            return f"(({a} & ~{b}) || (~{a} & {b}))"
+        if op in ("G", "F"):
+            if n.hi is not None:
+                raise AjpfError(
+                    f"AJPF has no bounded operators ({op}[{n.lo},{n.hi}] here, from a "
+                    "'within/for/after N' timing); state the property without a deadline "
+                    "(e.g. 'eventually') for model checking and keep the deadline for the "
+                    "runtime monitor")
+            return ("[] " if op == "G" else "<> ") + go(n.args[0])
+        if op == "U":
+            return f"({go(n.args[0])} U {go(n.args[1])})"
+        if op == "V":
+            return f"({go(n.args[0])} R {go(n.args[1])})"
+        if op == "X":
+            raise AjpfError(
+                "AJPF has no next operator (X here, from a regular condition 'upon/when/if', "
+                "a mode scope or 'at the next timepoint'); use 'whenever' with a null scope, "
+                "or check this requirement with the runtime monitor")
+        if op in ("true", "false"):
+            raise AjpfError(
+                f"the infinite-trace formula is {op.upper()}: there is nothing for AJPF to "
+                "check (e.g. 'finally' only speaks of the last point of a finite run)")
+        if op in ("past", "FTP"):
+            raise AjpfError(f"AJPF has no past-time operators ({to_smv(n)}); express the "
+                            "condition as a belief the agent maintains")
+        if op == "call":
+            raise AjpfError(f"the function {to_smv(n)} has no AJPF form")
+        raise AjpfError(f"no AJPF form for {to_smv(n)}")
+
+    return go(node)
+
+
+def emit_psl(compiled, mapping_path: Optional[str] = None) -> Dict[str, str]:
+    """One ``.psl`` text per requirement file: ``{file stem: text}``. Requirements AJPF
+    cannot take appear as ``//`` comment lines with the reason (and so do failed ones)."""
+    mapping = load_mapping(mapping_path)
+    groups: Dict[str, List] = {}
+    for c in compiled:
+        groups.setdefault(c.entry.source, []).append(c)
+    out: Dict[str, str] = {}
+    for source, items in groups.items():
+        used: set = set()
+        lines = [f"// AJPF properties generated by fretc from {_comment(source)}"]
+        for c in items:
+            lines.append(f"// {_comment(c.id)}: {_comment(c.text)}")
+            if c.formalization is None:
+                lines.append("//   not formalized: " + _comment(
+                    getattr(c.error, "message", "free-form requirement")))
+                continue
+            agent = mapping.get("agent") or c.requirement.component
+            try:
+                formula = to_ajpf(c.formalization.ft_inf, agent, mapping)
+            except AjpfError as exc:
+                lines.append("//   no AJPF property: " + _comment(str(exc)))
+                continue
+            lines.append(f"{_label(c.id, used)}: {formula}")
+        stem = re.sub(r"[^A-Za-z0-9_]", "_", source.rsplit("/", 1)[-1].rsplit(".", 1)[0])
+        out[stem] = "\n".join(lines) + "\n"
+    return out
+
+
+def psl_label_and_formula(compiled, mapping: Optional[dict] = None):
+    """``(label, formula)`` of one compiled requirement, or ``(None, reason)``."""
+    if compiled.formalization is None:
+        return None, "not formalized"
+    mapping = mapping or {}
+    try:
+        agent = mapping.get("agent") or compiled.requirement.component
+        return _label(compiled.id, set()), to_ajpf(compiled.formalization.ft_inf, agent,
+                                                    mapping)
+    except AjpfError as exc:
+        return None, str(exc)
+
+
+def _comment(text: str) -> str:
+    return " ".join(str(text).split())
