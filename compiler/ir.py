@@ -49,7 +49,7 @@ class Node:
     """One IR node; see the module docstring for ``op``. ``lo``/``hi`` are tick bounds of
     ``F G O H`` (``None`` = unbounded)."""
 
-    __slots__ = ("op", "args", "name", "lo", "hi", "_hash")
+    __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text")
 
     def __init__(self, op: str, args: Tuple["Node", ...] = (), name: Optional[str] = None,
                  lo: Optional[int] = None, hi: Optional[int] = None):
@@ -59,6 +59,7 @@ class Node:
         self.lo = lo
         self.hi = hi
         self._hash = hash((op, args, name, lo, hi))
+        self.text = None  # printers cache the FRET/SMV text of a node here
 
     def __hash__(self) -> int:
         return self._hash

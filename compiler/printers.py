@@ -46,8 +46,11 @@ def to_smv(node: Node, ftp: str = "FTP") -> str:
     """FRET/SMV text of ``node``. ``ftp`` is how the first-timepoint atom prints: FRET writes
     ``FTP`` in ft formulas and ``(Z FALSE)`` in pt formulas (pass ``"(Z FALSE)"``)."""
     memo: dict = {}
+    cache = ftp == "FTP"  # the FRET text of a node without FTP is the same in every formula
 
     def go(n: Node) -> str:
+        if cache and n.text is not None:
+            return n.text
         got = memo.get(n)
         if got is not None:
             return got
@@ -80,7 +83,10 @@ def to_smv(node: Node, ftp: str = "FTP") -> str:
             s = f"({go(n.args[0])} {op} {go(n.args[1])})"
         else:
             s = f"({op}{_bounds(n, ',')} {go(n.args[0])})"
-        memo[n] = s
+        if cache:
+            n.text = s
+        else:
+            memo[n] = s
         return s
 
     return go(node)

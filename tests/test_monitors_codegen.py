@@ -1,0 +1,240 @@
+"""Generated runtime monitors (``--emit monitor``) against the reference evaluator, FRET's
+verdicts and Spot; determinism, isolation (``python -I``) and hostile input."""
+
+from __future__ import annotations
+
+import json
+import random
+import subprocess
+import sys
+import types
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+import spot
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from compiler.build import compile_entry
+from compiler.codegen import render_module
+from compiler.evaluate import ft_at, series
+from compiler.printers import to_spot
+from fretish import ast as A
+from fretish import parse
+
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
+
+
+def entry(rid: str, text: str, tick_period=None):
+    """A requirement entry as fretish.files makes them (without a file)."""
+    return SimpleNamespace(id=rid, text=text, source="test.fret", line=1, column=1,
+                           rationale=None, parent=None, tick_period=tick_period,
+                           requirement=parse(text), error=None, extra={})
+
+
+def load(source: str):
+    mod = types.ModuleType("generated")
+    exec(compile(source, "generated.py", "exec"), mod.__dict__)
+    return mod
+
+
+def template_requirement(scope, cond, timing, n):
+    return A.Requirement(
+        "generated", A.Scope(scope, A.Var("m")) if scope != "null" else A.Scope(),
+        A.Condition(cond, A.Var("c")) if cond != "null" else A.Condition(), "sw", None,
+        A.Timing(timing, duration=A.Duration(str(n), "ticks")
+                 if timing in A.DURATION_TIMINGS else None,
+                 stop=A.Var("s") if timing in A.STOP_TIMINGS else None), A.Var("r"))
+
+
+KEYS = [(s, c, t) for s in A.SCOPE_KINDS for c in A.CONDITION_KINDS for t in A.TIMING_KINDS]
+
+
+@pytest.fixture(scope="module")
+def all_templates():
+    """One generated module with a monitor for each of the 288 keys (bounds 0..4)."""
+    rnd = random.Random(7)
+    compiled = []
+    for s, c, t in KEYS:
+        req = template_requirement(s, c, t, rnd.randint(0, 4))
+        e = SimpleNamespace(id=f"{s},{c},{t}", text=req.key, source="all.fret", line=1,
+                            column=1, rationale=None, parent=None, tick_period=None,
+                            requirement=req, error=None, extra={})
+        compiled.append(compile_entry(e))
+    return compiled, load(render_module(compiled, "all_templates"))
+
+
+traces = st.lists(st.fixed_dictionaries({v: st.booleans() for v in "mcrs"}),
+                  min_size=1, max_size=14)
+
+
+@settings(max_examples=300, deadline=None)
+@given(data=st.data())
+def test_monitors_agree_with_reference_evaluator(all_templates, data):
+    compiled, mod = all_templates
+    c = data.draw(st.sampled_from(compiled))
+    trace = data.draw(traces)
+    m = mod.MONITORS[c.id]()
+    got = [m.step(state) for state in trace]
+    assert got == [bool(x) for x in series(c.formalization.pt, trace)]
+    assert m.finish() == ft_at(c.formalization.ft, trace)
+    m.reset()
+    assert [m.step(state) for state in trace] == got
+
+
+def test_every_template_on_random_traces(all_templates):
+    compiled, mod = all_templates
+    rnd = random.Random(3)
+    for c in compiled:
+        M = mod.MONITORS[c.id]
+        for _ in range(30):
+            trace = [{v: rnd.random() < 0.5 for v in "mcrs"} for _ in range(rnd.randint(1, 12))]
+            m = M()
+            assert [m.step(s) for s in trace] == [bool(x) for x in
+                                                  series(c.formalization.pt, trace)], c.id
+            assert m.finish() == ft_at(c.formalization.ft, trace), c.id
+
+
+def test_fret_trace_verdicts_with_finish():
+    sentences = {}
+    for case in VERDICTS:
+        for c in case["cases"]:
+            sentences.setdefault(c["sentence"], f"R{len(sentences)}")
+    compiled = [compile_entry(entry(rid, text)) for text, rid in sentences.items()]
+    mod = load(render_module(compiled, "verdicts"))
+    for case in VERDICTS:
+        L = case["length"]
+        trace = [{v: any(a <= i <= b for a, b in iv) for v, iv in case["intervals"].items()}
+                 for i in range(L)]
+        for c in case["cases"]:
+            m = mod.MONITORS[sentences[c["sentence"]]]()
+            for state in trace:
+                m.step(state)
+            assert m.finish() == c["expected"], (case["trace"], c["sentence"])
+
+
+# --------------------------------------------------------------------------- LTL3 status
+def _prefix_formula(prefix, variables):
+    """Spot formula fixing the first len(prefix) letters."""
+    f = spot.formula.tt()
+    for state in reversed(prefix):
+        lits = [spot.formula.ap(v) if state[v] else spot.formula.Not(spot.formula.ap(v))
+                for v in variables]
+        f = spot.formula.And(lits + [spot.formula.X(f)])
+    return f
+
+
+def _satisfiable(f) -> bool:
+    return not spot.translate(f).is_empty()
+
+
+def test_status_is_never_contradicted(all_templates):
+    compiled, mod = all_templates
+    rnd = random.Random(11)
+    checked = {"violated": 0, "satisfied": 0}
+    for c in compiled:
+        phi = spot.formula(to_spot(c.formalization.ft_inf))
+        names = [str(a) for a in spot.atomic_prop_collect(phi)]
+        for _ in range(4):
+            trace = [{v: rnd.random() < 0.5 for v in "mcrs"} for _ in range(rnd.randint(1, 8))]
+            m = mod.MONITORS[c.id]()
+            for t, state in enumerate(trace):
+                m.step(state)
+                if m.status == "unknown":
+                    continue
+                assert m.status_tick is None or m.status_tick <= t
+                prefix = _prefix_formula(trace[: t + 1], names)
+                if m.status == "violated":
+                    assert not _satisfiable(spot.formula.And([prefix, phi])), (c.id, trace)
+                else:
+                    assert not _satisfiable(spot.formula.And([prefix, spot.formula.Not(phi)])), \
+                        (c.id, trace)
+                checked[m.status] += 1
+                break
+    assert checked["violated"] > 50 and checked["satisfied"] > 20, checked
+
+
+def test_status_finds_bad_prefix_early():
+    mod = load(render_module([compile_entry(entry(
+        "R", "in m upon p the sw shall within 10 ticks satisfy q"))], "early"))
+    m = mod.MONITORS["R"]()
+    trace = [{"m": True, "p": False, "q": False}] + [{"m": True, "p": True, "q": False}] * 12
+    for state in trace:
+        m.step(state)
+    assert m.status == "violated" and m.status_tick == 11
+    assert m.finish() is False
+
+
+# --------------------------------------------------------------------------- properties
+def test_generated_module_is_deterministic():
+    es = [entry("R1", "whenever too_close agilex_agent shall eventually satisfy stopped"),
+          entry("R2", "in m upon p the sw shall within 10 ticks satisfy q"),
+          entry("R3", "the sw shall always satisfy x + 2 * y ^ 2 <= z mod 3")]
+    a = render_module([compile_entry(e) for e in es], "det")
+    b = render_module([compile_entry(e) for e in es], "det")
+    assert a == b
+
+
+def test_generated_module_runs_isolated(tmp_path):
+    es = [entry("R1", "whenever too_close agilex_agent shall eventually satisfy stopped"),
+          entry("R2", "upon persisted(3, p) the sw shall immediately satisfy absReal(x) < 5"),
+          entry("R3", "after m the sw shall always satisfy x > -3.0e2 & y / 0 != 1")]
+    (tmp_path / "gen_monitors.py").write_text(render_module([compile_entry(e) for e in es],
+                                                            "gen_monitors"))
+    script = (
+        "import sys\n"
+        "for name in ('numpy', 'spot', 'jinja2', 'lark', 'compiler', 'fretish'):\n"
+        "    try:\n"
+        "        __import__(name)\n"
+        "    except ImportError:\n"
+        "        pass\n"
+        "    else:\n"
+        "        raise SystemExit('importable: ' + name)\n"
+        "sys.path.insert(0, '.')\n"
+        "import gen_monitors as g\n"
+        "m = g.MONITORS['R1']()\n"
+        "print([m.step({'too_close': a, 'stopped': b}) for a, b in [(0,0),(1,0),(0,1)]])\n"
+        "m = g.MONITORS['R3']()\n"
+        "print(m.step({'m': True, 'x': 1.5, 'y': 2}), m.status)\n"
+        "print(sorted(sys.modules.keys() & {'numpy', 'spot', 'jinja2'}))\n")
+    out = subprocess.run([sys.executable, "-I", "-S", "-c", script], cwd=tmp_path,
+                         capture_output=True, text=True, check=True).stdout.splitlines()
+    assert out == ["[True, False, True]", "True unknown", "[]"]
+
+
+HOSTILE_IDS = ["R1'); import os; os.system('touch PWNED'); ('",
+               'x"""\nimport os\nos.system("touch PWNED")\n"""',
+               "__import__('os').system('touch PWNED')", "tab\there", "ünïcödé-id"]
+
+
+def test_hostile_input_cannot_inject_code(tmp_path):
+    es = []
+    for i, rid in enumerate(HOSTILE_IDS):
+        text = ('the sw shall always satisfy "a\'b; __import__(\\"os\\").system(\\"touch PWNED\\")"'
+                if i == 0 else 'the sw shall always satisfy "x\\nimport os"')
+        try:
+            req = parse(text)
+        except Exception:
+            req = parse('the sw shall always satisfy "q\'\\"; import os"')
+        es.append(SimpleNamespace(id=rid, text=text, source="h.fret", line=1, column=1,
+                                  rationale=None, parent=None, tick_period=None,
+                                  requirement=req, error=None, extra={}))
+    src = render_module([compile_entry(e) for e in es], "hostile")
+    path = tmp_path / "hostile.py"
+    path.write_text(src)
+    subprocess.run([sys.executable, "-I", "-S", "-c",
+                    "import sys; sys.path.insert(0, '.')\n"
+                    "import hostile\n"
+                    "for rid, M in hostile.MONITORS.items():\n"
+                    "    m = M(); m.step({v: True for v in M.VARIABLES})\n"
+                    "print(sorted(hostile.MONITORS))"], cwd=tmp_path, check=True,
+                   capture_output=True)
+    assert not (tmp_path / "PWNED").exists()
+    mod = load(src)
+    assert sorted(mod.MONITORS) == sorted(HOSTILE_IDS)
+    for M in mod.MONITORS.values():
+        assert M.__name__.isidentifier() and M.__name__.startswith("Monitor_")
+        for v in M.VARIABLES:
+            assert isinstance(v, str)
