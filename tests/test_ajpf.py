@@ -1,0 +1,68 @@
+"""AJPF property files (--emit psl)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from compiler.ajpf import AjpfError, emit_psl, to_ajpf
+from compiler.build import compile_entry
+from compiler.semantics import formalize
+from fretish import parse
+
+
+def compiled(rid: str, text: str):
+    return compile_entry(SimpleNamespace(
+        id=rid, text=text, source="req.fret", line=1, column=1, rationale=None, parent=None,
+        tick_period=None, requirement=parse(text), error=None, extra={}))
+
+
+def test_r1_is_the_property_safe_ros_verified():
+    out = emit_psl([compiled("R1", "whenever too_close agilex_agent shall eventually "
+                                   "satisfy stopped")])
+    lines = [l for l in out["req"].splitlines() if not l.startswith("//")]
+    assert lines == ["R1: [] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))"]
+
+
+def test_iff_and_xor_are_rewritten_and_binary_parenthesized():
+    f = formalize(parse("the sw shall always satisfy (a <-> b) | (c xor d)")).ft_inf
+    text = to_ajpf(f, "ag", {})
+    assert "<->" not in text and "xor" not in text
+    assert text == ("[] (((B(ag,a) -> B(ag,b)) & (B(ag,b) -> B(ag,a))) || "
+                    "((B(ag,c) & ~B(ag,d)) || (~B(ag,c) & B(ag,d))))")
+
+
+@pytest.mark.parametrize("text,reason", [
+    ("upon p the sw shall eventually satisfy q", "next operator"),
+    ("whenever p the sw shall within 3 ticks satisfy q", "bounded"),
+    ("the sw shall always satisfy alt > 100", "comparison"),
+    ("the sw shall finally satisfy q", "nothing for AJPF"),
+    ("whenever persisted(2, p) the sw shall eventually satisfy q", "past-time"),
+    ("the sw shall always satisfy Q_high", "Gwendolen term"),
+])
+def test_refusals_say_why(text, reason):
+    with pytest.raises(AjpfError, match=reason):
+        to_ajpf(formalize(parse(text)).ft_inf, "sw", {})
+
+
+def test_mapping_makes_percepts_actions_and_named_comparisons(tmp_path):
+    m = tmp_path / "map.toml"
+    m.write_text('agent = "robot"\n[variables.obstacle]\nkind = "percept"\n'
+                 'name = "obstacle_seen"\n[variables.halt]\nkind = "action"\nname = "stop"\n'
+                 '[comparisons]\n"(alt > 100)" = "high"\n')
+    out = emit_psl([compiled("S-1.a", "whenever obstacle sw shall eventually satisfy halt"),
+                    compiled("S-2", "the sw shall always satisfy alt > 100")],
+                   mapping_path=str(m))
+    lines = [l for l in out["req"].splitlines() if not l.startswith("//")]
+    assert lines == ["S_1_a: [] (P(obstacle_seen) -> <> D(robot,stop))", "S_2: [] B(robot,high)"]
+
+
+def test_unsupported_requirements_become_comments_and_labels_are_unique():
+    out = emit_psl([compiled("A", "whenever p sw shall eventually satisfy q"),
+                    compiled("A", "upon p sw shall eventually satisfy q"),
+                    compiled("A", "whenever q sw shall eventually satisfy p")])["req"]
+    labels = [l.split(":")[0] for l in out.splitlines() if not l.startswith("//")]
+    assert labels == ["A", "A_2"]
+    assert "// A: upon p sw shall eventually satisfy q" in out
+    assert "no AJPF property" in out

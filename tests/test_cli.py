@@ -1,0 +1,77 @@
+"""The fretc command line: --emit ltl/monitor/psl, JSON output, errors and exit codes."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from fretc.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+R1 = str(ROOT / "requirements" / "r1.fret")
+
+
+def run(*args):
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+
+
+def test_emit_ltl_r1():
+    res = run(R1, "--emit", "ltl")
+    assert res.exit_code == 0
+    assert "key     null,holding,eventually,satisfaction" in res.output
+    assert "ft_inf  (G (too_close -> (F stopped)))" in res.output
+    assert "pt      ((H (! too_close)) | (! ((! stopped) S ((! stopped) & too_close))))" \
+        in res.output
+
+
+def test_json_and_errors_do_not_stop_the_others(tmp_path):
+    f = tmp_path / "reqs.fret"
+    f.write_text("A: the sw shall always satisfy p and q\n"
+                 "B: upon p the sw shall within 3 ticks satisfy q\n"
+                 "C: globally the sw shall always satisfy p\n")
+    res = CliRunner().invoke(main, [str(f), "--emit", "ltl", "--json"])
+    assert res.exit_code == 1
+    data = json.loads(res.stdout)
+    assert [d["id"] for d in data] == ["A", "B", "C"]
+    assert data[0]["error"]["line"] == 1 and data[0]["error"]["column"] == 34
+    assert "'&'" in data[0]["error"]["text"]  # the hint
+    assert "globally" in data[2]["error"]["text"]
+    b = data[1]
+    assert set(b) >= {"id", "text", "key", "ft", "ft_inf", "pt", "variables"}
+    assert b["key"] == "null,regular,within,satisfaction" and b["variables"] == ["p", "q"]
+
+
+def test_emit_monitor_writes_an_importable_module(tmp_path):
+    out = tmp_path / "r1_monitors.py"
+    res = run(R1, "--emit", "monitor", "-o", str(out))
+    assert res.exit_code == 0
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import r1_monitors as m; "
+            "M = m.MONITORS['R1'](); "
+            "print([M.step({'too_close': a, 'stopped': b}) for a, b in [(0, 0), (1, 0), (1, 1)]])")
+    got = subprocess.run([sys.executable, "-I", "-S", "-c", code, str(tmp_path)],
+                         capture_output=True, text=True, check=True).stdout.strip()
+    assert got == "[True, False, True]"
+    again = tmp_path / "again.py"
+    run(R1, "--emit", "monitor", "-o", str(again))
+    assert again.read_bytes() == out.read_bytes()
+
+
+def test_emit_psl():
+    res = run(R1, "--emit", "psl")
+    assert "R1: [] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))" in res.output
+
+
+def test_missing_file_is_a_usage_error():
+    res = CliRunner().invoke(main, ["no/such.fret", "--emit", "ltl"])
+    assert res.exit_code == 2
+
+
+def test_console_script_runs_as_users_wrote_it():
+    got = subprocess.run([sys.executable, "-m", "fretc", "requirements/r1.fret", "--emit", "ltl"],
+                         cwd=ROOT, capture_output=True, text=True)
+    assert got.returncode == 0, got.stderr
+    assert "R1" in got.stdout
