@@ -49,7 +49,7 @@ class Node:
     """One IR node; see the module docstring for ``op``. ``lo``/``hi`` are tick bounds of
     ``F G O H`` (``None`` = unbounded)."""
 
-    __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text")
+    __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext")
 
     def __init__(self, op: str, args: Tuple["Node", ...] = (), name: Optional[str] = None,
                  lo: Optional[int] = None, hi: Optional[int] = None):
@@ -59,7 +59,8 @@ class Node:
         self.lo = lo
         self.hi = hi
         self._hash = hash((op, args, name, lo, hi))
-        self.text = None  # printers cache the FRET/SMV text of a node here
+        self.text = None  # printers cache the FRET/SMV text of a node here (FTP as FTP)
+        self.ztext = None  # ... and with FTP printed as (Z FALSE), as FRET's pt formulas do
 
     def __hash__(self) -> int:
         return self._hash
@@ -164,6 +165,10 @@ def iff(a: Node, b: Node) -> Node:
 
 # --------------------------------------------------------------------------- future time
 def X(a: Node) -> Node:
+    """Next. ``X TRUE = TRUE`` and ``X FALSE = FALSE`` hold on infinite words and on FRET's
+    finite-trace model (a finite trace continues in an absorbing state)."""
+    if a.op in ("true", "false"):
+        return a
     return Node("X", (a,))
 
 
@@ -198,10 +203,13 @@ def G(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
 
 
 def U(a: Node, b: Node) -> Node:
+    """Until; ``TRUE U b`` is ``F b``."""
     if b.op in ("true", "false"):
         return b
     if a.op == "false":
         return b
+    if a.op == "true":
+        return F(b)
     return Node("U", (a, b))
 
 
@@ -212,6 +220,8 @@ def V(a: Node, b: Node) -> Node:
         return b
     if a.op == "true":
         return b
+    if a.op == "false":
+        return G(b)
     return Node("V", (a, b))
 
 

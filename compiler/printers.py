@@ -45,13 +45,12 @@ def _bounds(n: Node, sep: str) -> str:
 def to_smv(node: Node, ftp: str = "FTP") -> str:
     """FRET/SMV text of ``node``. ``ftp`` is how the first-timepoint atom prints: FRET writes
     ``FTP`` in ft formulas and ``(Z FALSE)`` in pt formulas (pass ``"(Z FALSE)"``)."""
-    memo: dict = {}
-    cache = ftp == "FTP"  # the FRET text of a node without FTP is the same in every formula
+    if ftp not in ("FTP", "(Z FALSE)"):
+        raise ValueError("ftp must be 'FTP' or '(Z FALSE)'")
+    slot = "text" if ftp == "FTP" else "ztext"  # node-level caches, one per spelling
 
     def go(n: Node) -> str:
-        if cache and n.text is not None:
-            return n.text
-        got = memo.get(n)
+        got = getattr(n, slot)
         if got is not None:
             return got
         op = n.op
@@ -83,10 +82,7 @@ def to_smv(node: Node, ftp: str = "FTP") -> str:
             s = f"({go(n.args[0])} {op} {go(n.args[1])})"
         else:
             s = f"({op}{_bounds(n, ',')} {go(n.args[0])})"
-        if cache:
-            n.text = s
-        else:
-            memo[n] = s
+        setattr(n, slot, s)
         return s
 
     return go(node)

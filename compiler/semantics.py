@@ -449,81 +449,73 @@ def _pt_timing(kind: str, negate: bool, R: Node, left: Node, trig: Optional[Node
 
 
 # --------------------------------------------------------------------------- scopes
-@dataclass
-class _Endpoints:
-    """Scope interval markers. ft: ``right`` is true at an interval's last point. pt:
-    ``left`` is true at an interval's first point, ``right`` at the first point after it
-    (``LAST`` when intervals run to the end of the trace)."""
-
-    ft_right: Node
-    pt_left: Node
-    pt_right: Node
-
-
-def _ft_markers(m: Node):
-    """ft: the point just before M starts (FiM) and M's last point before it stops (LiM)."""
-    nl = not_(LAST)
+def _ft_markers(m: Node, last: Node = LAST):
+    """ft: the point just before M starts (FiM) and M's last point before it stops (LiM).
+    ``last`` is ``LAST`` (finite traces) or FALSE (infinite traces, ft_inf)."""
+    nl = not_(last)
     return (and_all(not_(m), nl, X(m)), and_all(m, nl, X(not_(m))))
 
 
 def _pt_markers(m: Node):
-    """pt: first point of an M interval, first point after it (FRET endpoint rules)."""
-    start = and_(m, or_(FTP, Y(not_(m))))  # FiM
-    end = and_(not_(m), Y(m))  # LiM
+    """pt: first point of an M interval (FiM), first point after it (LiM)."""
+    start = and_(m, or_(FTP, Y(not_(m))))
+    end = and_(not_(m), Y(m))
     return start, end
 
 
-def _endpoints(kind: str, m_ft: Optional[Node], m_pt: Optional[Node]) -> _Endpoints:
-    if kind == "null":
-        return _Endpoints(LAST, FTP, LAST)
-    fim_ft, lim_ft = _ft_markers(m_ft)
-    nfim_ft, nlim_ft = _ft_markers(not_(m_ft))
-    fim_pt, lim_pt = _pt_markers(m_pt)
-    fnim_pt, lnim_pt = _pt_markers(not_(m_pt))
-    # first M point ever (pt) and first point after the first M interval (pt)
-    ffim_pt = and_(fim_pt, or_(FTP, Y(H(not_(m_pt)))))
-    flim_pt = and_(lim_pt, Y(H(not_(lim_pt))))
-    if kind == "in":
-        return _Endpoints(or_(lim_ft, LAST), fim_pt, lim_pt)
+def _ft_right(kind: str, m: Optional[Node], last: Node) -> Node:
+    """ft: true at the last point of a scope interval (``last`` = LAST, or FALSE for
+    ft_inf)."""
+    if kind in ("null", "after", "onlyBefore"):
+        return last
     if kind in ("notin", "onlyIn"):
-        return _Endpoints(or_(nlim_ft, LAST), fnim_pt, lnim_pt)
-    if kind == "before":
-        return _Endpoints(or_(fim_ft, LAST), FTP, ffim_pt)
-    if kind == "after":
-        return _Endpoints(LAST, flim_pt, LAST)
-    if kind == "onlyBefore":
-        return _Endpoints(LAST, ffim_pt, LAST)
-    if kind == "onlyAfter":
-        return _Endpoints(or_(lim_ft, LAST), FTP, flim_pt)
-    raise AssertionError(kind)
+        m = not_(m)
+    fim, lim = _ft_markers(m, last)
+    return or_(fim if kind == "before" else lim, last)
 
 
-def _ft_scope(kind: str, body: Node, m: Optional[Node]) -> Node:
+def _pt_endpoints(kind: str, m: Optional[Node]):
+    """pt: (left, right) with ``left`` true at an interval's first point and ``right`` at
+    the first point after it (``LAST`` when intervals run to the end of the trace); FRET's
+    past-time endpoint rules (FiM, LiM, FNiM, LNiM, FFiM, FLiM)."""
+    if kind == "null":
+        return FTP, LAST
+    if kind in ("in", "notin", "onlyIn"):
+        return _pt_markers(m if kind == "in" else not_(m))
+    if kind in ("before", "onlyBefore"):
+        fim, _ = _pt_markers(m)
+        ffim = and_(fim, or_(FTP, Y(H(not_(m)))))  # first M point ever
+        return (FTP, ffim) if kind == "before" else (ffim, LAST)
+    _, lim = _pt_markers(m)
+    flim = and_(lim, Y(H(not_(lim))))  # first point after the first M interval
+    return (flim, LAST) if kind == "after" else (FTP, flim)
+
+
+def _ft_scope(kind: str, body: Node, m: Optional[Node], last: Node = LAST) -> Node:
     """Wrap the interval formula ``body`` (true at an interval's first point) by the scope."""
     if kind == "null":
         return body
-    fim, lim = _ft_markers(m)
+    fim, lim = _ft_markers(m, last)
     if kind == "in":
-        return and_(V(LAST, implies(fim, X(body))), implies(m, body))
+        return and_(V(last, implies(fim, X(body))), implies(m, body))
     if kind in ("notin", "onlyIn"):
-        nfim, _ = _ft_markers(not_(m))
-        return and_(V(LAST, implies(nfim, X(body))), implies(not_(m), body))
+        nfim, _ = _ft_markers(not_(m), last)
+        return and_(V(last, implies(nfim, X(body))), implies(not_(m), body))
     if kind == "before":
         return or_(body, m)
     if kind == "onlyAfter":
         return body
     if kind == "after":
-        return or_(U(not_(lim), and_(lim, X(body))), V(LAST, not_(lim)))
+        return or_(U(not_(lim), and_(lim, X(body))), V(last, not_(lim)))
     if kind == "onlyBefore":
-        first = or_(U(not_(fim), and_(fim, X(body))), V(LAST, not_(fim)))
+        first = or_(U(not_(fim), and_(fim, X(body))), V(last, not_(fim)))
         return and_(implies(not_(m), first), implies(m, body))
     raise AssertionError(kind)
 
 
-def _pt_scope(kind: str, base: Node, ep: _Endpoints) -> Node:
+def _pt_scope(base: Node, left: Node, right: Node) -> Node:
     """FRET's past-time scope construction: intervals closed by ``right`` are checked one
     step after they end; an interval still open at the end of the trace is checked now."""
-    left, right = ep.pt_left, ep.pt_right
     if right is LAST:
         return implies(O(left), base) if left is not FTP else base
     closed = H(implies(and_(right, not_(FTP)), Y(base)))
@@ -548,49 +540,47 @@ def formalize(req: A.Requirement, tick_period: Optional[Fraction] = None) -> For
     if timing in A.DURATION_TIMINGS:
         n = duration_ticks(timing_duration(req), tick_period, warnings)
 
-    # Mode formulas: functions inside a mode are expanded w.r.t. the whole run.
-    m_ft = m_pt = None
-    if scope != "null":
-        m_ft = _Expander("ft", FTP, LAST).bool(req.scope.mode)
-        m_pt = _Expander("pt", FTP, LAST).bool(req.scope.mode)
-    ep = _endpoints(scope, m_ft, m_pt)
-
-    fx = _Expander("ft", ep.pt_left, ep.ft_right)
-    px = _Expander("pt", ep.pt_left, ep.ft_right)
-
     def fields(x: _Expander):
         R = x.bool(req.response)
         c = x.bool(req.condition.expr) if cond != "null" else None
         s = x.bool(req.timing.stop) if timing in A.STOP_TIMINGS else None
         return R, c, s
 
-    # ---- ft
-    R, c, s = fields(fx)
-    right = ep.ft_right
-    T = _ft_timing(timing, negate, R, right, n, s)
-    if cond == "null":
-        body = T
-    elif cond == "holding":
-        body = V(right, implies(c, T))
-    else:
-        rise = and_all(not_(c), not_(right), X(c))
-        body = and_(V(right, implies(rise, X(T))), implies(c, T))
-    ft = _ft_scope(scope, body, m_ft)
-    ft_inf = finite_to_infinite(ft)
+    # Mode formulas: functions inside a mode are expanded w.r.t. the whole run.
+    m_pt = None if scope == "null" else _Expander("pt", FTP, LAST).bool(req.scope.mode)
+    left, right_pt = _pt_endpoints(scope, m_pt)
+
+    # ---- ft (last = LAST) and ft_inf (last = FALSE): the same construction
+    def future(last: Node):
+        m = None if scope == "null" else _Expander("ft", FTP, last).bool(req.scope.mode)
+        right = _ft_right(scope, m, last)
+        R, c, s = fields(_Expander("ft", left, right))
+        T = _ft_timing(timing, negate, R, right, n, s)
+        if cond == "null":
+            body = T
+        elif cond == "holding":
+            body = V(right, implies(c, T))
+        else:
+            rise = and_all(not_(c), not_(right), X(c))
+            body = and_(V(right, implies(rise, X(T))), implies(c, T))
+        return _ft_scope(scope, body, m, last), (m, c, s, R)
+
+    ft, used = future(LAST)
+    ft_inf, _ = future(FALSE)
 
     # ---- pt
+    px = _Expander("pt", left, LAST)
     R, c, s = fields(px)
-    left = ep.pt_left
     if cond == "null":
         trig = no_cond = None
     else:
         trig = c if cond == "holding" else and_(c, or_(Y(not_(c)), left))
         no_cond = S(not_(c), and_(not_(c), left))
     base = _pt_timing(timing, negate, R, left, trig, no_cond, n, s)
-    pt = _pt_scope(scope, base, ep)
+    pt = _pt_scope(base, left, right_pt)
 
-    R, c, s = fields(fx)  # variables in sentence order: mode, condition, stop, response
-    variables = ir.variables(Node("vars", tuple(x for x in (m_ft, c, s, R) if x is not None)))
+    # variables in sentence order: mode, condition, stop, response
+    variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
     return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
                          pt_causal=not px.has_future_atom)
 
@@ -599,31 +589,3 @@ def timing_duration(req: A.Requirement) -> A.Duration:
     if req.timing.duration is None:
         raise SemanticsError(f"timing '{req.timing.kind}' needs a duration", req.timing.span)
     return req.timing.duration
-
-
-def finite_to_infinite(ft: Node) -> Node:
-    """ft_inf: ``LAST`` replaced by FALSE and the result simplified (FRET does the same).
-    ``FALSE V p`` is ``G p`` and ``TRUE U p`` is ``F p``."""
-    memo: dict = {}
-
-    def go(n: Node) -> Node:
-        if n.op == "LAST":
-            return FALSE
-        if not n.args or n.op in ("past", "future"):
-            return n
-        got = memo.get(n)
-        if got is not None:
-            return got
-        args = tuple(go(a) for a in n.args)
-        if n.op == "V" and args[0].op == "false":
-            out = G(args[1])
-        elif n.op == "U" and args[0].op == "true":
-            out = F(args[1])
-        elif n.op == "X" and args[0].op in ("true", "false"):
-            out = args[0]
-        else:
-            out = ir.rebuild(n, args)
-        memo[n] = out
-        return out
-
-    return go(ft)
