@@ -1,0 +1,89 @@
+"""Command line: ``python -m sim record|list|verdicts`` (see ``python -m sim --help``)."""
+
+from __future__ import annotations
+
+import time
+
+import click
+
+from .scenarios import SCENARIOS
+
+
+@click.group()
+def main():
+    """Simulated Safe-ROS robot: record Scout Mini inspection runs as MCAP."""
+
+
+@main.command("list")
+def list_scenarios():
+    """List the scenarios."""
+    for name, sc in SCENARIOS.items():
+        click.echo(f"{name:20s} {sc.description}")
+
+
+@main.command()
+@click.option("--scenario", "-s", type=click.Choice(list(SCENARIOS)), default="nominal",
+              show_default=True, help="Scenario to simulate.")
+@click.option("--seed", type=int, default=1, show_default=True, help="Random seed.")
+@click.option("--output", "-o", type=click.Path(dir_okay=False), required=True,
+              help="MCAP file to write.")
+@click.option("--ros1", is_flag=True, help="ROS 1 messages (profile ros1) instead of ROS 2 (cdr).")
+@click.option("--png", type=click.Path(dir_okay=False), default=None,
+              help="Also draw the run to this PNG.")
+@click.option("--threshold", type=float, default=0.9, show_default=True,
+              help="SIF minimum-range threshold [m].")
+@click.option("--stop-delay", type=float, default=None,
+              help="Delay of /gwendolen_control [s] in the stop_delay scenario (default 2.0).")
+@click.option("--compression", type=click.Choice(["zstd", "lz4"]), default="zstd",
+              show_default=True, help="MCAP chunk compression.")
+def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression):
+    """Record one scenario to an MCAP file."""
+    from .run import record as do_record
+
+    t0 = time.perf_counter()
+    res = do_record(scenario, seed=seed, output=output, ros1=ros1, png=png,
+                    threshold=threshold, stop_delay=stop_delay, compression=compression)
+    wall = time.perf_counter() - t0
+    reached = ", ".join(f"goal {g + 1} at {t:.1f} s" for g, t, _, _ in res.reached)
+    clr = ("<= 0 (contact)" if res.min_clearance <= 0 else f"{res.min_clearance:.3f} m")
+    click.echo(f"{output}: {scenario} seed {seed}: {res.outcome}; {res.duration:.2f} s sim "
+               f"in {wall:.1f} s wall; reached: {reached or 'none'}; min clearance {clr}")
+
+
+@main.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
+@click.option("--threshold", type=float, default=0.9, show_default=True)
+@click.option("--markdown", is_flag=True, help="Print Markdown tables.")
+def verdicts(files, threshold, markdown):
+    """Evaluate R1-R6 on recorded runs with the reference evaluator (sim.logs)."""
+    from pathlib import Path
+
+    from .logs import REQUIREMENTS, counts, expected_verdicts, read_log
+
+    rows = []
+    for f in files:
+        log = read_log(f)
+        v = expected_verdicts(log, threshold)
+        dur = (log.end_ns - log.start_ns) / 1e9
+        rows.append((Path(f).name, log.profile, dur, Path(f).stat().st_size, counts(f), v))
+    if markdown:
+        click.echo("| log | " + " | ".join(REQUIREMENTS) + " |")
+        click.echo("|---|" + "---|" * len(REQUIREMENTS))
+        for name, _, _, _, _, v in rows:
+            click.echo(f"| {name} | " + " | ".join(v[r].text() for r in REQUIREMENTS) + " |")
+        click.echo()
+        topics = sorted({t for r in rows for t in r[4]})
+        click.echo("| log | profile | duration [s] | size [bytes] | " + " | ".join(topics) + " |")
+        click.echo("|---|---|---|---|" + "---|" * len(topics))
+        for name, prof, dur, size, cnt, _ in rows:
+            click.echo(f"| {name} | {prof} | {dur:.2f} | {size} | "
+                       + " | ".join(str(cnt.get(t, 0)) for t in topics) + " |")
+    else:
+        for name, prof, dur, size, cnt, v in rows:
+            click.echo(f"{name} ({prof}, {dur:.2f} s, {size} bytes)")
+            for r in REQUIREMENTS:
+                click.echo(f"  {r}: {v[r].text()}  [{v[r].triggers} triggering ticks]")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,44 @@
+"""Record one scenario to an MCAP file (the library entry point behind ``python -m sim record``)."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Optional, Union
+
+from .recording import McapRecorder
+from .scenarios import get_scenario
+from .simulation import RunResult, Simulation
+
+
+def record(scenario: str, seed: int = 1, output: Union[str, Path, io.BufferedIOBase, None] = None,
+           ros1: bool = False, png: Union[str, Path, None] = None, threshold: float = 0.9,
+           stop_delay: Optional[float] = None, compression: str = "zstd") -> RunResult:
+    """Simulate ``scenario`` with ``seed`` and write the run to ``output`` (a path or a binary
+    stream; ``None`` discards it), as ROS 2 (CDR) or, with ``ros1``, ROS 1 messages; draw it to
+    ``png`` if given. ``threshold`` m is the SIF threshold, ``stop_delay`` s overrides the
+    ``stop_delay`` scenario's delay. Returns the :class:`~sim.simulation.RunResult`.
+
+    Raises ``KeyError`` for an unknown scenario, ``ValueError`` for bad parameters and
+    ``OSError`` if the output cannot be written.
+    """
+    sc = get_scenario(scenario, stop_delay)
+    sim = Simulation(sc, seed=seed, threshold=threshold)
+    if output is None:
+        stream, close = io.BytesIO(), True
+    elif isinstance(output, (str, Path)):
+        Path(output).parent.mkdir(parents=True, exist_ok=True)
+        stream, close = open(output, "wb"), True
+    else:
+        stream, close = output, False
+    try:
+        rec = McapRecorder(stream, ros1=ros1, compression=compression)
+        result = sim.run(rec)
+        rec.finish()
+    finally:
+        if close:
+            stream.close()
+    if png is not None:
+        from .plot import draw_run
+        draw_run(result, png)
+    return result

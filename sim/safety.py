@@ -1,0 +1,168 @@
+"""The Safety System: the Gwendolen agent's SIF and the ``cmd_vel_interceptor``.
+
+SIF (Safe-ROS, FMAS 2025; property ``[] (B(agilex_agent,too_close) -> <> B(agilex_agent,
+stopped))``): on every ``/scan`` the agent computes the minimum *valid* range (finite, within
+``[range_min, range_max]``; ``-inf`` counts as ``range_min``; ``+inf``/NaN ignored, REP 117).
+Below ``threshold`` (0.9 m in Safe-ROS) it publishes ``true`` on ``/gwendolen_control``
+(std_msgs/Bool); once clear it publishes ``false``. It publishes on changes only (plus one
+``false`` at start-up).
+
+Recovery (our design; the paper leaves it open). Inspection point 3 is ~0.62 m from a wall,
+closer than the threshold, so a plain SIF would hold the robot there for ever. The agent is a
+state machine over three states:
+
+``ARMED``
+    stop not requested. ``min_range < threshold`` -> publish ``true``, go ``STOPPED``.
+``STOPPED``
+    stop requested. ``min_range >= threshold + hysteresis`` -> publish ``false``, ``ARMED``.
+    Otherwise, once the base has been at rest (odometry ``|v| < stopped_eps`` m/s and
+    ``|w| < stopped_eps`` rad/s) for ``hold`` s, and ``min_range >= release_floor``, the agent
+    *releases* the stop for a monitored move: publish ``false``, remember ``r0 = min_range``,
+    go ``MONITORED``. Below ``release_floor`` it never releases (a person must intervene).
+``MONITORED``
+    stop not requested, but the SRAS may only move slowly: if ``min_range < r0 - margin``
+    (each release buys at most ``margin`` = 5 cm of approach), or, after the range has been
+    back at or above ``threshold``, ``min_range < threshold`` again, or the odometry speed
+    exceeds ``slow_speed + speed_tolerance`` -> publish ``true``, ``STOPPED``.
+    ``min_range >= threshold + hysteresis`` -> ``ARMED`` (nothing published: it is already
+    ``false``).
+
+The release floor (0.45 m by default) keeps the LiDAR, which sits at the footprint centre, at
+least ``release_floor - margin`` = 0.40 m from anything while the SIF is in charge, so even the
+footprint corner (0.267 m from the centre) keeps >= 0.13 m of clearance, turning included.
+Every rising edge of ``too_close`` while the agent is not already requesting a stop leads to an
+immediate stop, so ``upon too_close ... within 1 second ... stopped`` holds.
+
+Fault injections: ``enabled=False`` (sif_disabled: the agent only publishes its start-up
+``false``); ``delay`` s (stop_delay: every decision reaches ``/gwendolen_control`` late). The
+agent has no fail-safe for stale scans: without a scan it keeps its last decision
+(lidar_dropout).
+
+cmd_vel_interceptor (Safe-ROS ``cmd_vel_interceptor_node.py``, property proved in Dafny: while
+``/gwendolen_control`` is true only zero velocity is forwarded): forwards each ``/cmd_vel`` to
+``/cmd_vel_filtered``, or a zero Twist while stop is requested; when a stop request arrives it
+publishes a zero Twist at once. ``faulty=True`` (interceptor_fault) forwards everything.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import List, Optional, Tuple
+
+ARMED, STOPPED, MONITORED = "ARMED", "STOPPED", "MONITORED"
+
+
+@dataclass(frozen=True)
+class SafetyParams:
+    """SIF settings (see the module docstring); distances in m, times in s, speeds in m/s
+    and rad/s."""
+
+    threshold: float = 0.9
+    hysteresis: float = 0.05
+    hold: float = 1.0
+    stopped_eps: float = 0.01
+    margin: float = 0.05
+    release_floor: float = 0.45
+    slow_speed: float = 0.1
+    speed_tolerance: float = 0.02
+    enabled: bool = True
+    delay: float = 0.0
+
+
+@dataclass
+class SifEvent:
+    """One decision of the agent: sim time ``t`` s of the decision, the published value,
+    the state entered, the ``min_range`` m it was based on and why."""
+
+    t: float
+    stop: bool
+    state: str
+    min_range: float
+    reason: str
+
+
+class SafetyAgent:
+    """The Gwendolen agent's SIF with the monitored-release recovery."""
+
+    def __init__(self, params: SafetyParams = SafetyParams()):
+        self.p = params
+        self.state = ARMED
+        self.release_range = math.inf
+        self.was_clear = False
+        self.rest_since: Optional[float] = None
+        self.events: List[SifEvent] = []
+
+    @property
+    def stop_requested(self) -> bool:
+        """The agent's current decision (before any publication delay)."""
+        return self.state == STOPPED
+
+    def on_scan(self, t: float, min_range: float, v_odom: float, w_odom: float,
+                ) -> Optional[bool]:
+        """Process one scan at sim time ``t`` s with its minimum valid range (m) and the
+        latest odometry twist; returns the Bool to publish, or ``None``."""
+        p = self.p
+        if not p.enabled:
+            return None
+        at_rest = abs(v_odom) < p.stopped_eps and abs(w_odom) < p.stopped_eps
+        clear = min_range >= p.threshold + p.hysteresis
+        if self.state == ARMED:
+            if min_range < p.threshold:
+                return self._go(t, STOPPED, min_range, "too close")
+        elif self.state == STOPPED:
+            if clear:
+                return self._go(t, ARMED, min_range, "clear")
+            if at_rest:
+                if self.rest_since is None:
+                    self.rest_since = t
+            else:
+                self.rest_since = None
+            if (self.rest_since is not None and t - self.rest_since >= p.hold - 1e-9
+                    and min_range >= p.release_floor):
+                self.release_range = min_range
+                self.was_clear = min_range >= p.threshold
+                return self._go(t, MONITORED, min_range, "monitored release")
+        else:  # MONITORED
+            if clear:
+                self.state = ARMED
+                self.events.append(SifEvent(t, False, ARMED, min_range, "re-armed"))
+                return None
+            if min_range >= p.threshold:
+                self.was_clear = True
+            if min_range < self.release_range - p.margin:
+                return self._go(t, STOPPED, min_range, "approached during release")
+            if self.was_clear and min_range < p.threshold:
+                return self._go(t, STOPPED, min_range, "too close again")
+            if abs(v_odom) > p.slow_speed + p.speed_tolerance:
+                return self._go(t, STOPPED, min_range, "too fast during release")
+        return None
+
+    def _go(self, t, state, min_range, reason) -> bool:
+        self.state = state
+        self.rest_since = None
+        stop = state == STOPPED
+        self.events.append(SifEvent(t, stop, state, min_range, reason))
+        return stop
+
+
+class CmdVelInterceptor:
+    """Safe-ROS's ``cmd_vel_interceptor`` (see the module docstring)."""
+
+    def __init__(self, faulty: bool = False):
+        self.faulty = faulty
+        self.stop_requested = False
+
+    def on_control(self, stop: bool) -> Optional[Tuple[float, float]]:
+        """A ``/gwendolen_control`` message arrived; returns the Twist ``(v, w)`` to publish
+        on ``/cmd_vel_filtered`` at once (a zero Twist on a stop request), or ``None``."""
+        self.stop_requested = bool(stop)
+        if stop and not self.faulty:
+            return (0.0, 0.0)
+        return None
+
+    def on_cmd_vel(self, v: float, w: float) -> Tuple[float, float]:
+        """A ``/cmd_vel`` arrived; returns the Twist to forward on ``/cmd_vel_filtered``."""
+        if self.stop_requested and not self.faulty:
+            return (0.0, 0.0)
+        return (v, w)

@@ -1,0 +1,112 @@
+"""The recorded scenarios (issue #4). Each is a world (unmapped obstacles) plus fault injections.
+
+========================  ======================================================================
+``nominal``               the paper's mission in the mapped room; the SIF fires near walls
+                          (point 3 is ~0.62 m from one) and the monitored release lets the
+                          robot finish; ends home, stopped.
+``unmapped_obstacles``    a drum moved from its mapped place (4.80, -3.55) onto the route
+                          between points 1 and 2 (the SRAS plans through it); the SIF stops the
+                          robot before contact, monitored releases creep up to the release
+                          floor, then the SIF holds the stop; the SRAS makes no progress, aborts
+                          the mission and the run ends stopped. A second drum is moved off the
+                          route.
+``dynamic_obstacle``      a person (r = 0.25 m) crosses the route between points 1 and 2 at
+                          0.5 m/s; the SIF stops the robot, clears once the person has passed,
+                          and the mission completes.
+``sif_disabled``          the ``unmapped_obstacles`` world with the SIF switched off: the robot
+                          drives into the drum (ground-truth clearance reaches 0); the run ends
+                          at contact, the robot still commanding motion.
+``interceptor_fault``     the mapped room; the interceptor forwards ``/cmd_vel`` even while
+                          stop is requested, so the robot goes closer than the threshold and
+                          keeps moving.
+``stop_delay``            the mapped room; every ``/gwendolen_control`` decision is published
+                          ``stop_delay`` s late (default 2.0 s).
+``lidar_dropout``         the mapped room; no ``/scan`` for ``dropout_duration`` s (3 s) while
+                          the robot heads for the gap near point 3; the SIF has no fail-safe for
+                          stale scans and keeps its last decision (no stop).
+========================  ======================================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Dict, Optional, Tuple
+
+from .world import Barrel, MovingObstacle, RemovedObject
+
+#: The mapped drum at (4.80, -3.55), 0.30 m across (measured on the map), and its twin.
+DRUM_RADIUS = 0.15
+MAPPED_DRUM_A = (4.80, -3.55)
+MAPPED_DRUM_B = (4.80, -6.35)
+
+_MOVED = (RemovedObject(*MAPPED_DRUM_A, 0.25, "drum A (moved)"),
+          RemovedObject(*MAPPED_DRUM_B, 0.25, "drum B (moved)"))
+_DRUMS = (Barrel(1.25, -0.60, DRUM_RADIUS, "drum A"),
+          Barrel(-2.30, -2.20, DRUM_RADIUS, "drum B"))
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A world and its fault injections.
+
+    ``barrels``/``movers``/``removed``: unmapped objects (see :mod:`sim.world`);
+    ``sif_enabled``: the SIF runs; ``interceptor_faulty``: the interceptor ignores stops;
+    ``stop_delay`` s: delay of every ``/gwendolen_control`` decision; ``dropout_start`` /
+    ``dropout_duration`` s: no scans in ``[start, start + duration)`` (sim time from the start
+    of the run); ``home``: start and final pose ``(x, y, yaw)`` in m, rad.
+    """
+
+    name: str
+    description: str
+    barrels: Tuple[Barrel, ...] = ()
+    movers: Tuple[MovingObstacle, ...] = ()
+    removed: Tuple[RemovedObject, ...] = ()
+    sif_enabled: bool = True
+    interceptor_faulty: bool = False
+    stop_delay: float = 0.0
+    dropout_start: Optional[float] = None
+    dropout_duration: float = 0.0
+    home: Tuple[float, float, float] = (-1.2, -0.8, 0.0)
+
+
+SCENARIOS: Dict[str, Scenario] = {s.name: s for s in (
+    Scenario("nominal", "The inspection mission in the mapped reactor room."),
+    Scenario("unmapped_obstacles",
+             "Drum A moved from its mapped place onto the route between points 1 and 2; "
+             "drum B moved off the route.",
+             barrels=_DRUMS, removed=_MOVED),
+    Scenario("dynamic_obstacle",
+             "A person crosses the route between points 1 and 2.",
+             movers=(MovingObstacle(((1.6, 0.6), (1.6, -2.25), (-1.5, -2.25)), 0.5, 0.25,
+                                    6.8, "person"),)),
+    Scenario("sif_disabled",
+             "The unmapped_obstacles world with the SIF switched off.",
+             barrels=_DRUMS, removed=_MOVED, sif_enabled=False),
+    Scenario("interceptor_fault",
+             "The interceptor forwards /cmd_vel even while stop is requested.",
+             interceptor_faulty=True),
+    Scenario("stop_delay",
+             "Every /gwendolen_control decision is published late.",
+             stop_delay=2.0),
+    Scenario("lidar_dropout",
+             "No /scan for 3 s while the robot heads for the gap near point 3; the SIF has "
+             "no fail-safe for stale scans.",
+             dropout_start=27.0, dropout_duration=3.0),
+)}
+
+
+def get_scenario(name: str, stop_delay: Optional[float] = None) -> Scenario:
+    """The scenario called ``name``; ``stop_delay`` (s) overrides the delay of
+    ``stop_delay``-type injections (it applies to the ``stop_delay`` scenario only).
+
+    Raises ``KeyError`` (listing the known names) for an unknown scenario and ``ValueError``
+    for a negative delay."""
+    if name not in SCENARIOS:
+        raise KeyError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}")
+    sc = SCENARIOS[name]
+    if stop_delay is not None:
+        if stop_delay < 0:
+            raise ValueError("stop_delay must be >= 0")
+        if name == "stop_delay":
+            sc = replace(sc, stop_delay=float(stop_delay))
+    return sc

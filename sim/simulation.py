@@ -1,0 +1,338 @@
+"""The simulation loop: world, robot, SRAS and Safety System on one fixed-step sim clock.
+
+Clock: integer milliseconds from the start of the run, physics step 10 ms; the time written to
+the log is ``EPOCH_NS + t`` (1_700_000_000 s, so stamps look like real ROS time). Within one
+step the order is fixed:
+
+1. physics (the base executes the last ``/cmd_vel_filtered``), contact check;
+2. delayed ``/gwendolen_control`` decisions falling due (stop_delay);
+3. every 50 ms: ``/odom``, ``/tf`` (odom -> base_link), ``/ground_truth/pose``,
+   ``/ground_truth/clearance``;
+4. every 100 ms: ``/scan`` (unless dropped), ``/tf`` (map -> odom, AMCL-like localization);
+   the agent's SIF reads the scan and may publish ``/gwendolen_control`` (and the interceptor
+   its zero Twist), all at the scan's log time;
+5. every 100 ms, 50 ms after the scan: the SRAS (mission, ``/goal``, ``/cmd_vel``) and the
+   interceptor's ``/cmd_vel_filtered``, same log time.
+
+Randomness comes from one ``numpy.random.Generator`` per noise source, spawned from
+``SeedSequence(seed)``: same seed, same run, byte-identical MCAP.
+
+Run end: the mission ends home or is aborted (no progress for ``stuck_timeout`` s, or the
+mission time limit); the SRAS then publishes a final zero ``/cmd_vel`` and the run goes on for
+``final_linger`` s with the robot stopped. A contact (ground-truth clearance <= 0) is a mission
+abort like a Gazebo collision: the base is blocked where it is, nobody stops it, and the run
+ends ``contact_linger`` s later with the SRAS still commanding motion.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .navigation import (INSPECTION_POINTS, ControllerParams, GlobalPlanner, LocalController,
+                         Mission, PlannerParams)
+from .recording import McapRecorder
+from .robot import (Lidar, LidarParams, OdometryNoise, ScoutMini, ScoutMiniParams,
+                    WheelOdometry, min_valid_range, wrap_angle)
+from .safety import CmdVelInterceptor, SafetyAgent, SafetyParams
+from .scenarios import Scenario
+from .world import OccupancyMap, World
+
+#: Sim clock epoch (ns since the Unix epoch): 2023-11-14T22:13:20Z.
+EPOCH_NS = 1_700_000_000 * 1_000_000_000
+STEP_MS = 10
+
+
+@dataclass(frozen=True)
+class SimParams:
+    """Run-level settings: ``mission_start`` s (first goal), ``max_time`` s (mission time
+    limit), ``final_linger`` / ``contact_linger`` s of recording after the end,
+    ``loc_sigma_xy`` m / ``loc_sigma_yaw`` rad (localization noise, per scan)."""
+
+    mission_start: float = 1.0
+    max_time: float = 110.0
+    final_linger: float = 2.0
+    contact_linger: float = 0.5
+    loc_sigma_xy: float = 0.01
+    loc_sigma_yaw: float = 0.005
+    dwell: float = 1.0
+
+
+@dataclass
+class Trace:
+    """What happened, sampled by the simulator for plots and summaries (not the log)."""
+
+    t: List[float] = field(default_factory=list)            # s, 20 Hz
+    x: List[float] = field(default_factory=list)            # m, ground truth
+    y: List[float] = field(default_factory=list)
+    yaw: List[float] = field(default_factory=list)
+    v: List[float] = field(default_factory=list)            # m/s, ground truth
+    clearance: List[float] = field(default_factory=list)    # m
+    scan_t: List[float] = field(default_factory=list)       # s, 10 Hz
+    scan_min: List[float] = field(default_factory=list)     # m, min valid range
+    control: List[Tuple[float, bool]] = field(default_factory=list)  # published Bools
+    cmd_t: List[float] = field(default_factory=list)
+    cmd_v: List[float] = field(default_factory=list)        # /cmd_vel_filtered linear.x
+    cmd_w: List[float] = field(default_factory=list)
+
+
+@dataclass
+class RunResult:
+    """Outcome of one run."""
+
+    scenario: Scenario
+    seed: int
+    threshold: float
+    duration: float                      # s of sim time (first to last message)
+    counts: Dict[str, int]               # messages per topic
+    outcome: str                         # "completed", "aborted: ...", "contact"
+    reached: List[Tuple[int, float, float, float]]  # (goal index, t s, x m, y m) ground truth
+    min_clearance: float
+    contact: Optional[Tuple[float, float, float]]   # (t, x, y)
+    sif_events: list
+    trace: Trace
+    world: World
+    goals: List[Tuple[float, float]]
+
+
+class Simulation:
+    """One run of a scenario. ``threshold`` m is the SIF's (Safe-ROS: 0.9 m); component
+    parameters can be replaced for experiments. By default the SRAS's speed-limit zone is
+    ``threshold + 0.05`` m, the agent's re-arm distance, so the robot is slow exactly while the
+    SIF may be in its monitored release.
+
+    Raises ``ValueError`` for a non-positive threshold."""
+
+    def __init__(self, scenario: Scenario, seed: int = 1, threshold: float = 0.9,
+                 omap: Optional[OccupancyMap] = None, sim: SimParams = SimParams(),
+                 robot: ScoutMiniParams = ScoutMiniParams(), lidar: LidarParams = LidarParams(),
+                 odom_noise: OdometryNoise = OdometryNoise(),
+                 planner: PlannerParams = PlannerParams(),
+                 controller: Optional[ControllerParams] = None,
+                 safety: Optional[SafetyParams] = None):
+        if not threshold > 0:
+            raise ValueError("threshold must be > 0")
+        self.scenario = scenario
+        self.seed = int(seed)
+        self.threshold = float(threshold)
+        self.sim = sim
+        self.omap = omap if omap is not None else OccupancyMap.load()
+        self.world = World(self.omap, scenario.barrels, scenario.movers, scenario.removed)
+        ss = np.random.SeedSequence(self.seed)
+        g_odom, g_lidar, g_loc = (np.random.Generator(np.random.PCG64(s)) for s in ss.spawn(3))
+        hx, hy, hyaw = scenario.home
+        self.base = ScoutMini(robot, hx, hy, hyaw)
+        self.odom = WheelOdometry(odom_noise, g_odom)
+        self.lidar = Lidar(lidar, g_lidar)
+        self.loc_rng = g_loc
+        self.planner = GlobalPlanner(self.omap, planner)
+        ctrl = controller or ControllerParams(slow_range=self.threshold + 0.05)
+        self.controller = LocalController(ctrl)
+        self.safety = SafetyAgent(safety or SafetyParams(
+            threshold=self.threshold, enabled=scenario.sif_enabled, delay=scenario.stop_delay))
+        self.interceptor = CmdVelInterceptor(faulty=scenario.interceptor_faulty)
+        self.mission = Mission(INSPECTION_POINTS, (hx, hy), dwell=sim.dwell)
+
+    # ------------------------------------------------------------------ helpers
+    def _loc_estimate(self):
+        """AMCL-like estimate of map -> odom: true pose plus noise, composed with odom."""
+        s = self.base.state
+        ex = s.x + self.loc_rng.normal(0.0, self.sim.loc_sigma_xy)
+        ey = s.y + self.loc_rng.normal(0.0, self.sim.loc_sigma_xy)
+        eyaw = s.yaw + self.loc_rng.normal(0.0, self.sim.loc_sigma_yaw)
+        o = self.odom
+        tyaw = wrap_angle(eyaw - o.yaw)
+        c, sn = math.cos(tyaw), math.sin(tyaw)
+        tx = ex - (c * o.x - sn * o.y)
+        ty = ey - (sn * o.x + c * o.y)
+        return tx, ty, tyaw
+
+    def _pose_estimate(self):
+        tx, ty, tyaw = self.map_odom
+        o = self.odom
+        c, sn = math.cos(tyaw), math.sin(tyaw)
+        return tx + c * o.x - sn * o.y, ty + sn * o.x + c * o.y, wrap_angle(tyaw + o.yaw)
+
+    # ------------------------------------------------------------------ run
+    def run(self, rec: McapRecorder) -> RunResult:
+        """Simulate until the run ends, writing every message to ``rec`` (not finished here)."""
+        f = rec.factory
+        sc, sim, base, lid = self.scenario, self.sim, self.base, self.lidar.p
+        trace = Trace()
+        half_l, half_w = base.p.half_length, base.p.half_width
+        ns = lambda t_ms: EPOCH_NS + t_ms * 1_000_000  # noqa: E731
+
+        def publish_control(t_ms, stop):
+            rec.write("/gwendolen_control", ns(t_ms), f.bool(stop))
+            trace.control.append((t_ms / 1000.0, bool(stop)))
+            out = self.interceptor.on_control(stop)
+            if out is not None:
+                publish_filtered(t_ms, *out)
+
+        def publish_filtered(t_ms, v, w):
+            self.cmd_filtered = (v, w)
+            rec.write("/cmd_vel_filtered", ns(t_ms), f.twist(v, w))
+            trace.cmd_t.append(t_ms / 1000.0)
+            trace.cmd_v.append(v)
+            trace.cmd_w.append(w)
+
+        def publish_cmd(t_ms, v, w):
+            rec.write("/cmd_vel", ns(t_ms), f.twist(v, w))
+            publish_filtered(t_ms, *self.interceptor.on_cmd_vel(v, w))
+
+        self.cmd_filtered = (0.0, 0.0)
+        self.map_odom = self._loc_estimate()
+        pending = deque()
+        delay_ms = int(round(self.safety.p.delay * 1000))
+        last_min = math.inf
+        contact = None
+        blocked = False
+        end_ms: Optional[int] = None
+        outcome = ""
+        dwell_until: Optional[int] = None
+        goal_active = False
+        start_ms = int(round(sim.mission_start * 1000))
+        start_ms += (50 - start_ms % 100) % 100  # first SRAS tick at or after mission_start
+        drop = None
+        if sc.dropout_start is not None:
+            drop = (int(round(sc.dropout_start * 1000)),
+                    int(round((sc.dropout_start + sc.dropout_duration) * 1000)))
+        max_ms = int(round(sim.max_time * 1000))
+        min_clear = math.inf
+        m = self.omap
+
+        # start-up: the map (latched) and the agent's initial decision
+        rec.write("/map", ns(0), f.occupancy_grid(ns(0), m.resolution, m.width, m.height,
+                                                  m.origin_x, m.origin_y, m.grid))
+        publish_control(0, False)
+
+        t_ms = 0
+        while True:
+            t = t_ms / 1000.0
+            s = base.state
+            # 1. physics
+            if t_ms > 0:
+                if not blocked:
+                    base.step(*self.cmd_filtered, STEP_MS / 1000.0)
+                self.odom.update(s.v, s.w, STEP_MS / 1000.0)
+                if contact is None:
+                    lb = self.world.clearance_lower_bound(s.x, s.y, t, base.p.circumradius)
+                    if lb < 0.02:
+                        c = self.world.clearance(s.x, s.y, s.yaw, t, half_l, half_w)
+                        if c <= 0.0:
+                            contact = (t, s.x, s.y)
+                            blocked = True
+                            base.halt()
+                            outcome = "contact"
+                            end_ms = t_ms + int(round(sim.contact_linger * 1000))
+                            end_ms += (100 - end_ms % 100) % 100
+            # 2. delayed decisions
+            while pending and pending[0][0] <= t_ms:
+                publish_control(t_ms, pending.popleft()[1])
+            # 3. 20 Hz: odometry, tf, ground truth
+            if t_ms % 50 == 0 or (contact is not None and contact[0] == t):
+                o = self.odom
+                if t_ms % 50 == 0:
+                    rec.write("/odom", ns(t_ms), f.odometry(
+                        ns(t_ms), o.x, o.y, o.yaw, o.v, o.w, _POSE_COV, _TWIST_COV))
+                    rec.write("/tf", ns(t_ms), f.tf([f.transform(
+                        ns(t_ms), "odom", "base_link", o.x, o.y, o.yaw)]))
+                clr = self.world.clearance(s.x, s.y, s.yaw, t, half_l, half_w)
+                min_clear = min(min_clear, clr)
+                rec.write("/ground_truth/pose", ns(t_ms),
+                          f.pose_stamped(ns(t_ms), "map", s.x, s.y, s.yaw, "/ground_truth/pose"))
+                rec.write("/ground_truth/clearance", ns(t_ms), f.float64(clr))
+                trace.t.append(t)
+                trace.x.append(s.x)
+                trace.y.append(s.y)
+                trace.yaw.append(s.yaw)
+                trace.v.append(s.v)
+                trace.clearance.append(clr)
+            # 4. 10 Hz: scan, localization, SIF
+            if t_ms % 100 == 0 and not (drop and drop[0] <= t_ms < drop[1]):
+                ranges = self.lidar.scan(self.world, s.x, s.y, s.yaw, t)
+                rec.write("/scan", ns(t_ms), f.laser_scan(
+                    ns(t_ms), "base_link", lid.angle_min, lid.angle_max, lid.angle_increment,
+                    lid.scan_time, lid.range_min, lid.range_max, ranges))
+                self.map_odom = self._loc_estimate()
+                rec.write("/tf", ns(t_ms), f.tf([f.transform(ns(t_ms), "map", "odom",
+                                                            *self.map_odom)]))
+                last_min = min_valid_range(ranges, lid.range_min, lid.range_max)
+                trace.scan_t.append(t)
+                trace.scan_min.append(last_min)
+                decision = self.safety.on_scan(t, last_min, self.odom.v, self.odom.w)
+                if decision is not None:
+                    if delay_ms > 0:
+                        pending.append((t_ms + delay_ms, decision))
+                    else:
+                        publish_control(t_ms, decision)
+            # 5. 10 Hz, 50 ms after the scan: the SRAS
+            if t_ms % 100 == 50:
+                v = w = 0.0
+                mis = self.mission
+                if end_ms is None and t_ms >= start_ms:
+                    if not goal_active and dwell_until is None and not mis.done:
+                        goal_active = self._send_goal(rec, t_ms)
+                    elif goal_active:
+                        ex, ey, eyaw = self._pose_estimate()
+                        if self.controller.goal_reached(ex, ey):
+                            mis.reached.append((mis.index, t, s.x, s.y))
+                            goal_active = False
+                            dwell_until = t_ms + int(round(mis.dwell * 1000))
+                        elif self.controller.stuck(t) or t_ms >= max_ms:
+                            mis.aborted = True
+                            mis.abort_reason = ("no progress" if t_ms < max_ms
+                                                else "time limit")
+                            outcome = f"aborted: {mis.abort_reason}"
+                            goal_active = False
+                            end_ms = t_ms + int(round(sim.final_linger * 1000))
+                        else:
+                            v, w = self.controller.compute(ex, ey, eyaw, self.odom.v,
+                                                           self.odom.w, last_min, t)
+                    if dwell_until is not None and t_ms >= dwell_until:
+                        dwell_until = None
+                        if mis.index + 1 >= len(mis.goals):
+                            mis.done = True
+                            outcome = "completed"
+                            end_ms = t_ms + int(round(sim.final_linger * 1000))
+                        else:
+                            mis.index += 1
+                            goal_active = self._send_goal(rec, t_ms)
+                            if goal_active:
+                                ex, ey, eyaw = self._pose_estimate()
+                                v, w = self.controller.compute(ex, ey, eyaw, self.odom.v,
+                                                               self.odom.w, last_min, t)
+                elif end_ms is not None and contact is not None and goal_active:
+                    # after a contact nobody stops the robot: the SRAS keeps commanding
+                    ex, ey, eyaw = self._pose_estimate()
+                    v, w = self.controller.compute(ex, ey, eyaw, self.odom.v, self.odom.w,
+                                                   last_min, t)
+                publish_cmd(t_ms, v, w)
+            if end_ms is not None and t_ms >= end_ms:
+                break
+            t_ms += STEP_MS
+
+        duration = t_ms / 1000.0
+        return RunResult(
+            scenario=sc, seed=self.seed, threshold=self.threshold, duration=duration,
+            counts=dict(rec.counts), outcome=outcome, reached=list(self.mission.reached),
+            min_clearance=min_clear, contact=contact, sif_events=list(self.safety.events),
+            trace=trace, world=self.world, goals=self.mission.goals)
+
+    def _send_goal(self, rec: McapRecorder, t_ms: int) -> bool:
+        gx, gy = self.mission.current
+        f = rec.factory
+        ns = EPOCH_NS + t_ms * 1_000_000
+        rec.write("/goal", ns, f.pose_stamped(ns, "map", gx, gy, 0.0, "/goal"))
+        self.controller.set_goal(self.planner.plan((gx, gy)), t_ms / 1000.0)
+        return True
+
+
+#: Odometry covariances (row-major 6x6, x y z roll pitch yaw): planar pose and twist; the
+#: unused dimensions get a large variance, as ROS drivers for planar bases do.
+_POSE_COV = np.diag([1e-3, 1e-3, 1e6, 1e6, 1e6, 3e-3]).ravel()
+_TWIST_COV = np.diag([4e-4, 1e-6, 1e6, 1e6, 1e6, 2e-3]).ravel()
