@@ -1,0 +1,385 @@
+"""Requirement files: fretc's ``.fret`` text format and FRET's JSON exports.
+
+``.fret`` format (one requirement per line, line-oriented, UTF-8)::
+
+    # full-line comment
+    @tick_period 100 ms                     file directive: default tick period
+    R1: whenever too_close agilex_agent shall eventually satisfy stopped   # comment
+        rationale: the robot stops when an obstacle is too close
+        parent: SAFE-ROS-1
+        tick_period: 50 ms
+    R2: in landing mode upon wind > 20 the controller
+        shall within 2 seconds satisfy abort
+
+* ``ID: sentence`` starts a requirement at column 1. An id is ``[A-Za-z0-9_.-]+``; ids are
+  unique within a file. The sentence may be empty on the id line and start on the next
+  (indented) line.
+* ``#`` starts a comment, on its own line or after text, except inside a double-quoted
+  string (``"..."``, with ``\\"`` escapes), so quoted names and free-form requirements may
+  contain ``#``.
+* An indented line belongs to the requirement above it. ``rationale:``, ``parent:`` and
+  ``tick_period:`` lines (lower case) are attributes, each at most once; any other indented
+  line continues the sentence, and must come before the attributes. An indented line
+  after a ``rationale:`` line that is not an attribute continues the rationale (joined with
+  one space).
+* ``@tick_period <number> <unit>`` (at most once, anywhere in the file) is the tick period
+  of every requirement of the file that has no ``tick_period:`` attribute. Units: the
+  FRETish ones (``microsec[ond][s]``, ``millisec[ond][s]``, ``sec[ond][s]``,
+  ``minute[s]``, ``hour[s]``) and ``us``, ``µs``, ``ms``, ``s``, ``min``, ``h``. The period
+  is stored in seconds as an exact :class:`~fractions.Fraction` of the decimal text.
+* Blank lines are ignored.
+
+The sentence text handed to the parser keeps the file's geometry: continuation lines keep
+their line breaks and indentation (comments removed), so every span and error position is
+a file position.
+
+FRET exports (``.json``): a list of requirement objects, or an object whose
+``"requirements"`` member is that list (FRET's combined export; its ``"variables"`` are
+not read here). Per object: ``reqid`` (required), ``fulltext`` (required),
+``rationale``, ``parent_reqid``; all other members go to :attr:`RequirementEntry.extra`.
+Duplicate ``(project, reqid)`` pairs are an error. Positions point at the ``fulltext``
+string in the file (exact unless the string holds JSON escapes); error lines show the
+sentence itself.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Dict, Iterable, List, Optional, Tuple, Union
+
+from .ast import UNIT_SECONDS, Requirement
+from .errors import FretishError, FretishFileError, FretishSyntaxError
+from .parser import parse
+
+__all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+@dataclass
+class RequirementEntry:
+    """One requirement read from a file.
+
+    ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
+    it starts (1-based). ``tick_period`` is in seconds (None: not declared). Exactly one
+    of ``requirement`` (the parsed AST) and ``error`` (why it does not parse) is set.
+    ``extra`` holds the other members of a FRET JSON object.
+    """
+
+    id: str
+    text: str
+    source: str
+    line: int
+    column: int
+    rationale: Optional[str] = None
+    parent: Optional[str] = None
+    tick_period: Optional[Fraction] = None
+    requirement: Optional[Requirement] = None
+    error: Optional[FretishError] = None
+    extra: dict = field(default_factory=dict)
+
+
+# --------------------------------------------------------------------------- durations
+_PERIOD_UNITS = {"us": "microseconds", "µs": "microseconds", "ms": "milliseconds",
+                 "s": "seconds", "min": "minutes", "h": "hours"}
+_FRETISH_UNIT = re.compile(
+    r"(?:(microsec(?:ond)?s?)|(millisec(?:ond)?s?)|(sec(?:ond)?s?)|(minutes?)|(hours?))\Z",
+    re.IGNORECASE)
+_PERIOD = re.compile(r"\s*([0-9]+(?:\.[0-9]+)?)\s*([^\s0-9]+)\s*\Z")
+
+
+def parse_tick_period(text: str) -> Fraction:
+    """``"<number> <unit>"`` (e.g. ``"100 ms"``, ``"0.05 seconds"``) -> seconds, exactly.
+
+    Units: FRETish time units (README section 4) and the abbreviations us, µs, ms, s,
+    min, h. Raises :class:`ValueError` (with a readable message) for anything else, for
+    ``ticks`` (a tick period must be a time) and for a zero period.
+    """
+    m = _PERIOD.match(text)
+    if not m:
+        raise ValueError(f"expected '<number> <unit>' such as '100 ms', got '{text.strip()}'")
+    amount, unit = m.group(1), m.group(2)
+    canon = _PERIOD_UNITS.get(unit) or _PERIOD_UNITS.get(unit.lower())
+    if canon is None:
+        u = _FRETISH_UNIT.match(unit)
+        if u:
+            canon = ("microseconds", "milliseconds", "seconds", "minutes",
+                     "hours")[u.lastindex - 1]
+    if canon is None:
+        if re.fullmatch(r"ticks?", unit, re.IGNORECASE):
+            raise ValueError("a tick period must be a time (e.g. '100 ms'), not ticks")
+        raise ValueError(f"unknown time unit '{unit}' (use us, ms, s, min, h or the "
+                         "FRETish units microseconds ... hours)")
+    seconds = Fraction(amount) * UNIT_SECONDS[canon]
+    if seconds <= 0:
+        raise ValueError("a tick period must be positive")
+    return seconds
+
+
+# --------------------------------------------------------------------------- .fret files
+_ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
+_ATTRIBUTE = re.compile(r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z")
+_DIRECTIVE = re.compile(r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z")
+
+
+def _strip_comment(line: str) -> str:
+    """``line`` without its ``#`` comment (a ``#`` inside double quotes is text) and
+    without trailing whitespace."""
+    if "#" not in line:
+        return line.rstrip()
+    quoted = False
+    i, n = 0, len(line)
+    while i < n:
+        ch = line[i]
+        if quoted and ch == "\\":
+            i += 2
+            continue
+        if ch == '"':
+            quoted = not quoted
+        elif ch == "#" and not quoted:
+            return line[:i].rstrip()
+        i += 1
+    return line.rstrip()
+
+
+class _Pending:
+    """A requirement being read from a .fret file."""
+
+    def __init__(self, rid: str, line: int):
+        self.id = rid
+        self.id_line = line
+        self.pieces: List[Tuple[int, int, str]] = []   # (line, column, text from column)
+        self.attrs: Dict[str, Tuple[str, int, int]] = {}
+        self.last_attr: Optional[str] = None
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise FretishFileError(f"not UTF-8 text ({e.reason})", source=str(path)) from None
+    except OSError as e:
+        raise FretishFileError(f"cannot read: {e.strerror}", source=str(path)) from None
+
+
+def _load_fret(path: Path) -> List[RequirementEntry]:
+    source = str(path)
+    lines = _read_text(path).split("\n")
+    pending: List[_Pending] = []
+    seen: Dict[str, int] = {}
+    file_period: Optional[Fraction] = None
+    period_line = 0
+    current: Optional[_Pending] = None
+
+    def fail(msg, ln, col=1, hint=None):
+        raise FretishFileError(msg, source=source, line=ln, column=col,
+                               text_line=lines[ln - 1].rstrip("\r"), hint=hint)
+
+    for ln, raw in enumerate(lines, start=1):
+        content = _strip_comment(raw.rstrip("\r"))
+        if not content.strip():
+            continue
+        if content[0] in " \t":                               # indented: belongs above
+            if current is None:
+                fail("indented line outside a requirement", ln,
+                     len(content) - len(content.lstrip()) + 1,
+                     "start a requirement with 'ID: sentence' at column 1")
+            m = _ATTRIBUTE.match(content)
+            if m:
+                key, value = m.group(1), m.group(2).strip()
+                if key in current.attrs:
+                    fail(f"duplicate attribute '{key}' for requirement {current.id}", ln,
+                         m.start(1) + 1)
+                current.attrs[key] = (value, ln, m.start(2) + 1)
+                current.last_attr = key
+            elif current.last_attr == "rationale":
+                value, aln, acol = current.attrs["rationale"]
+                current.attrs["rationale"] = (f"{value} {content.strip()}".strip(), aln, acol)
+            elif current.last_attr is not None:
+                col = len(content) - len(content.lstrip()) + 1
+                fail(f"the sentence of {current.id} must come before its attributes", ln,
+                     col, "put continuation lines right under the 'ID:' line")
+            elif current.pieces:
+                current.pieces.append((ln, 1, content))
+            else:                                             # sentence starts here
+                col = len(content) - len(content.lstrip()) + 1
+                current.pieces.append((ln, col, content[col - 1:]))
+            continue
+        if content.startswith("@"):
+            m = _DIRECTIVE.match(content)
+            if not m or m.group(1) != "tick_period":
+                fail(f"unknown directive '{content.split()[0]}'", ln, 1,
+                     "the only directive is '@tick_period <number> <unit>'")
+            if period_line:
+                fail(f"second @tick_period (the first is on line {period_line})", ln)
+            try:
+                file_period = parse_tick_period(m.group(2) or "")
+            except ValueError as e:
+                fail(f"bad @tick_period: {e}", ln, (m.start(2) + 1) if m.group(2) else 1)
+            period_line = ln
+            current = None
+            continue
+        m = _ID_LINE.match(content)
+        if not m:
+            fail("expected 'ID: requirement' (an id of letters, digits, '_', '.' or '-', "
+                 "then ':')", ln, 1,
+                 "begin each requirement with its id, e.g. 'R1: the sw shall ...'; indent "
+                 "continuation lines")
+        rid = m.group(1)
+        if rid in seen:
+            fail(f"duplicate requirement id '{rid}' (first defined on line {seen[rid]})",
+                 ln, 1)
+        seen[rid] = ln
+        current = _Pending(rid, ln)
+        pending.append(current)
+        rest = content[m.end():]
+        if rest.strip():
+            col = m.end() + (len(rest) - len(rest.lstrip())) + 1
+            current.pieces.append((ln, col, content[col - 1:]))
+
+    entries = []
+    for p in pending:
+        period = file_period
+        if "tick_period" in p.attrs:
+            value, aln, acol = p.attrs["tick_period"]
+            try:
+                period = parse_tick_period(value)
+            except ValueError as e:
+                raise FretishFileError(f"bad tick_period for {p.id}: {e}", source=source,
+                                       line=aln, column=acol,
+                                       text_line=lines[aln - 1].rstrip("\r")) from None
+        if p.pieces:
+            line0, col0, _ = p.pieces[0]
+            chunks, prev = [], line0
+            for ln, _col, piece in p.pieces:
+                chunks.append("\n" * (ln - prev) + piece)
+                prev = ln
+            text = "".join(chunks)
+        else:
+            line0, col0, text = p.id_line, len(lines[p.id_line - 1].rstrip()) + 2, ""
+        entry = RequirementEntry(
+            id=p.id, text=text, source=source, line=line0, column=col0,
+            rationale=p.attrs["rationale"][0] if "rationale" in p.attrs else None,
+            parent=(p.attrs["parent"][0] or None) if "parent" in p.attrs else None,
+            tick_period=period)
+        try:
+            entry.requirement = parse(text, source=source, line=line0, column=col0)
+        except FretishSyntaxError as e:
+            if 0 < e.line <= len(lines):                      # show the whole file line
+                e.text_line = lines[e.line - 1].rstrip("\r")
+                e.text_line_column = 1
+            entry.error = e
+        entries.append(entry)
+    return entries
+
+
+# --------------------------------------------------------------------------- JSON exports
+_FULLTEXT = re.compile(r'"fulltext"\s*:\s*"')
+_KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
+
+
+def _line_col(raw: str, offset: int) -> Tuple[int, int]:
+    line = raw.count("\n", 0, offset) + 1
+    return line, offset - (raw.rfind("\n", 0, offset) + 1) + 1
+
+
+def _load_json(path: Path) -> List[RequirementEntry]:
+    source = str(path)
+    raw = _read_text(path)
+    try:
+        data = json.loads(raw)
+    except json.JSONDecodeError as e:
+        lines = raw.split("\n")
+        raise FretishFileError(f"invalid JSON: {e.msg}", source=source, line=e.lineno,
+                               column=e.colno,
+                               text_line=lines[e.lineno - 1] if e.lineno <= len(lines)
+                               else None) from None
+    if isinstance(data, dict) and isinstance(data.get("requirements"), list):
+        reqs = data["requirements"]
+    elif isinstance(data, list):
+        reqs = data
+    else:
+        raise FretishFileError("expected a list of FRET requirements or an object with a "
+                               "\"requirements\" list", source=source)
+    starts = [m.end() for m in _FULLTEXT.finditer(raw)]
+    exact_positions = len(starts) == len(reqs)
+    entries = []
+    seen: Dict[Tuple[object, str], int] = {}
+    for k, obj in enumerate(reqs):
+        where = f"requirement #{k + 1}"
+        line, col = _line_col(raw, starts[k]) if exact_positions else (1, 1)
+        if not isinstance(obj, dict):
+            raise FretishFileError(f"{where} is not a JSON object", source=source,
+                                   line=line, column=col)
+        rid = obj.get("reqid")
+        if not isinstance(rid, str) or not rid.strip():
+            raise FretishFileError(f"{where} has no \"reqid\"", source=source, line=line,
+                                   column=col)
+        text = obj.get("fulltext")
+        if not isinstance(text, str):
+            raise FretishFileError(f"requirement {rid} has no \"fulltext\" string",
+                                   source=source, line=line, column=col)
+        key = (obj.get("project"), rid)
+        if key in seen:
+            raise FretishFileError(
+                f"duplicate requirement id '{rid}'"
+                + (f" in project '{key[0]}'" if key[0] is not None else "")
+                + f" (first: requirement #{seen[key] + 1})", source=source, line=line,
+                column=col)
+        seen[key] = k
+        rationale = obj.get("rationale")
+        parent = obj.get("parent_reqid")
+        entry = RequirementEntry(
+            id=rid, text=text, source=source, line=line, column=col,
+            rationale=rationale if isinstance(rationale, str) and rationale else None,
+            parent=parent if isinstance(parent, str) and parent else None,
+            extra={k2: v for k2, v in obj.items() if k2 not in _KNOWN})
+        try:
+            entry.requirement = parse(text, source=source, line=line, column=col)
+        except FretishSyntaxError as e:
+            entry.error = e
+        entries.append(entry)
+    return entries
+
+
+# --------------------------------------------------------------------------- entry point
+def _files_of(paths) -> List[Path]:
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    out: List[Path] = []
+    for p in paths:
+        path = Path(p)
+        if path.is_dir():
+            out.extend(sorted((f for f in path.iterdir()
+                               if f.is_file() and f.suffix in (".fret", ".json")),
+                              key=lambda f: f.name))
+        elif path.is_file():
+            out.append(path)
+        else:
+            raise FretishFileError("no such file or folder", source=str(path), line=1,
+                                   column=1)
+    return out
+
+
+def load_requirements(paths: Union[PathLike, Iterable[PathLike]]) -> List[RequirementEntry]:
+    """Read requirements from files and folders, in the order given.
+
+    ``paths`` is one path or an iterable of paths; a folder contributes its ``*.fret`` and
+    ``*.json`` files (not recursively) sorted by name; a file is read as JSON if its name
+    ends in ``.json`` and as ``.fret`` otherwise (formats: module docstring).
+
+    Returns one :class:`RequirementEntry` per requirement. A sentence that does not parse
+    gives an entry with ``error`` set (a :class:`FretishSyntaxError` in file coordinates)
+    and reading goes on. Structural problems (unreadable file, bad JSON, a line without
+    ``ID:``, a duplicate id, a bad tick period, a missing path) raise
+    :class:`FretishFileError` naming ``file:line:column``.
+    """
+    entries: List[RequirementEntry] = []
+    for f in _files_of(paths):
+        entries.extend(_load_json(f) if f.suffix.lower() == ".json" else _load_fret(f))
+    return entries

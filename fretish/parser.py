@@ -1,0 +1,739 @@
+"""FRETish sentence -> :class:`fretish.ast.Requirement`.
+
+The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
+phrasings and the expression precedence. The Lark parser is built once per process and
+applies the AST builder while it parses (no intermediate parse tree).
+
+Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, restated;
+``shared/fretish/README.md`` sections 1-5 and 7):
+
+* Scope: ``in/during/when in/if in M`` and ``while C`` are ``in``; ``when not in/if not
+  in/unless in/except in/except during/except when in/except if in M`` and ``except while
+  C`` are ``notin``; ``only`` + an ``in`` phrase is ``onlyIn``; ``[only] after/before`` take
+  a mode (``mode M``/``M mode``) or a condition (a bare name is a condition: ``Var`` either
+  way). ``Scope.mode`` is the ``Var`` or the expression.
+* Condition: parts ``[and|or] qualifier P [is true|is false]`` with optional commas; a
+  part negates P when exactly one of "qualifier is unless" and "is false" holds (so
+  ``unless P is false`` is P, as in FRET). A later part without ``and``/``or`` is a
+  conjunction and records ``connective="and"``; the first part has ``connective=None``.
+  Parts fold left (``and`` -> ``&``, ``or`` -> ``|``); ``holding`` iff every part is
+  ``whenever``.
+* ``is true``/``is false``, ``true``/``false`` in any letter case (FRET defect 4 fixed);
+  ``~`` is negation (defect 1); ``if A then B`` is ``A -> B`` everywhere (defect 2);
+  ``preBool`` with a numeric initial value is an error (defect 3).
+* A minus sign written against a number literal, in operand position, is part of the
+  literal, as in FRET's lexer: ``-3.0e2`` is ``NumLit("-3.0e2")`` and ``-3 ^ 2`` is
+  ``(-3) ^ 2``; ``- 3``, ``-(3)`` and ``-x`` are ``Unary("-")``, which binds looser than
+  ``^`` (``-x ^ 2`` is ``-(x ^ 2)``). After an operand, ``-`` is subtraction (``x -3`` is
+  ``x - 3``; FRET's lexer would read a number ``-3`` there and reject the sentence).
+* Spans: ``line``/``column`` in file coordinates (``parse(..., line=, column=)`` give where
+  the text starts), ``start``/``end`` 0-based offsets into the text. A ``Scope``,
+  ``Condition``, ``Timing`` or ``Probability`` span covers its words without the optional
+  commas; ``Requirement.component_span`` covers ``[the] name`` and ``response_span``
+  covers ``satisfy R`` (FRET's text ranges). A parenthesized expression's span includes
+  its parentheses.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from dataclasses import replace
+from fractions import Fraction
+from pathlib import Path
+from typing import List, Optional, Tuple
+
+from lark import Lark, Token, Transformer
+from lark.exceptions import (LarkError, UnexpectedCharacters, UnexpectedEOF,
+                             UnexpectedInput, UnexpectedToken)
+
+from . import ast as A
+from .errors import FretishSyntaxError
+
+__all__ = ["parse", "parse_expression", "build_lark", "RESERVED_WORDS", "RESERVED_LETTERS"]
+
+_GRAMMAR_FILE = Path(__file__).with_name("grammar.lark")
+
+#: FRETish keywords (case-insensitive); none of them can name a variable (FRET 3.x
+#: ``Requirement.g4`` lexer rules). Unit words also take their plural and short forms.
+RESERVED_WORDS = frozenset("""
+    after always and at before during eventually except false finally first for hour hours
+    if immediately in initially is last microsec microsecs microsecond microseconds
+    millisec millisecs millisecond milliseconds minute minutes mod mode never next not
+    occurrence of only or previous probability same satisfy sec secs second seconds shall
+    the then tick ticks timepoint true unless until upon what when whenever where while
+    with within xor""".split())
+#: Operators of FRET's printed formulas (README section 6); reserved, case-sensitive.
+RESERVED_LETTERS = frozenset("XFGUVYZHOST")
+
+_UNITS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "milliseconds",
+          "SECOND": "seconds", "MINUTE": "minutes", "HOUR": "hours"}
+_BINOPS = {"AMP": "&", "BAR": "|", "XOR": "xor", "IMPLIES": "->", "IFF": "<->",
+           "EQ": "=", "NE": "!=", "LT": "<", "LE": "<=", "GT": ">", "GE": ">=",
+           "PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "mod",
+           "CARET": "^"}
+_SIMPLE_TIMINGS = {"IMMEDIATELY": "immediately", "INITIALLY": "immediately",
+                   "FINALLY": "finally", "EVENTUALLY": "eventually", "ALWAYS": "always",
+                   "NEVER": "never", "WITHIN": "within", "FOR": "for", "AFTER": "after",
+                   "UNTIL": "until", "BEFORE": "before"}
+_AT_TIMINGS = {"FIRST": "immediately", "SAME": "immediately", "NEXT": "next",
+               "LAST": "finally"}
+_DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
+
+
+# --------------------------------------------------------------------------- positions
+class _Ctx(threading.local):
+    """Per-parse state read by the AST builder (the Lark parser is shared)."""
+    text = ""
+    dl = 0   # file line of the text's line 1, minus 1
+    dc = 0   # file column of the text's first character, minus 1
+
+
+_ctx = _Ctx()
+
+
+def _span_of(x) -> A.Span:
+    if isinstance(x, Token):
+        dl, dc = _ctx.dl, _ctx.dc
+        return A.Span(x.line + dl, x.column + dc if x.line == 1 else x.column,
+                      x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
+                      x.start_pos, x.end_pos)
+    return x.span
+
+
+def _join(a, b) -> A.Span:
+    """Span from the start of ``a`` to the end of ``b`` (tokens or nodes)."""
+    if type(a) is Token:
+        line = a.line
+        start = (line + _ctx.dl, a.column + _ctx.dc if line == 1 else a.column, a.start_pos)
+    else:
+        s = a.span
+        start = (s.line, s.column, s.start)
+    if type(b) is Token:
+        line = b.end_line
+        return A.Span(start[0], start[1], line + _ctx.dl,
+                      b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
+                      b.end_pos)
+    e = b.span
+    return A.Span(start[0], start[1], e.end_line, e.end_column, start[2], e.end)
+
+
+class _Fail(Exception):
+    """A rule the grammar accepts but FRETish forbids, found while building the AST."""
+
+    def __init__(self, where, message: str, hint: Optional[str] = None):
+        super().__init__(message)
+        self.span = _span_of(where)
+        self.message = message
+        self.hint = hint
+
+
+class _Subject:
+    __slots__ = ("name", "span")
+
+    def __init__(self, name: str, span: A.Span):
+        self.name, self.span = name, span
+
+
+class _Response:
+    __slots__ = ("expr", "span")
+
+    def __init__(self, expr, span: A.Span):
+        self.expr, self.span = expr, span
+
+
+class _ExplicitMode:
+    """``mode M`` / ``M mode``: the mode variable and the phrase's span."""
+    __slots__ = ("var", "span")
+
+    def __init__(self, var: A.Var, span: A.Span):
+        self.var, self.span = var, span
+
+
+def _unquote(tok: Token) -> str:
+    body = tok.value[1:-1]
+    if "\\" in body:
+        body = body.replace('\\"', '"').replace("\\\\", "\\")
+    return body
+
+
+def _name_of(tok: Token) -> str:
+    if tok.type == "STRING":
+        name = _unquote(tok)
+        if not name.strip():
+            raise _Fail(tok, "an empty quoted name", "write a name between the quotes")
+        return name
+    return tok.value
+
+
+def _is_numeric_literal(e) -> bool:
+    if isinstance(e, A.NumLit):
+        return True
+    if isinstance(e, A.Unary):
+        return e.op == "-"
+    return isinstance(e, A.Binary) and e.op in A.ARITH_OPS
+
+
+# --------------------------------------------------------------------------- precedence
+#: Binary operators: (precedence, right-associative); higher binds tighter (README
+#: section 5, FRET's LTL grammar): <-> 1, -> 2 (right), xor 3, | 4, & 5, comparisons 7
+#: (non-associative), + - 8, * / mod 9, ^ 11 (right). Prefix "!" takes an operand of
+#: precedence >= 6 (a comparison or arithmetic), prefix "-" one of precedence >= 10 (^).
+_PREC = {"IFF": (1, False), "IMPLIES": (2, True), "XOR": (3, False), "BAR": (4, False),
+         "AMP": (5, False), "EQ": (7, False), "NE": (7, False), "LT": (7, False),
+         "LE": (7, False), "GT": (7, False), "GE": (7, False), "PLUS": (8, False),
+         "MINUS": (8, False), "STAR": (9, False), "SLASH": (9, False), "MOD": (9, False),
+         "CARET": (11, True)}
+_CMP = 7
+_NOT_OPERAND = 6
+_NEG_OPERAND = 10
+
+
+def _climb(c: list, i: int, min_prec: int):
+    """Precedence climbing over a flat chain ``c`` of operands and binary-operator tokens
+    (grammar rule ``chain_ops``), from index ``i``, folding the operators of precedence
+    >= ``min_prec``. Returns (node, next index). ``c`` is modified."""
+    left, i = _operand(c, i, min_prec)
+    n = len(c)
+    while i < n:
+        op = c[i]
+        prec, right_assoc = _PREC[op.type]
+        if prec < min_prec:
+            break
+        right, i = _climb(c, i + 1, prec if right_assoc else prec + 1)
+        left = A.Binary(_BINOPS[op.type], left, right, _join(left, right))
+        if prec == _CMP and i < n and _PREC[c[i].type][0] == _CMP:
+            raise _Fail(c[i], f"comparisons do not chain: unexpected '{c[i].value}' after "
+                        "a comparison",
+                        "compare twice and join with '&': 'a < b & b < c'")
+    return left, i
+
+
+def _operand(c: list, i: int, min_prec: int):
+    """The operand at ``c[i]``. A negation or unary minus written without parentheses
+    (built by rule ``prefixed`` as if it stood alone) is re-attached here to everything
+    it governs in the chain: "!" takes operators of precedence >= 6, "-" only "^"."""
+    x = c[i]
+    if type(x) is not A.Unary or _ctx.text[x.span.start] == "(":
+        return x, i + 1
+    if x.op == "!":
+        if min_prec > _NOT_OPERAND:
+            raise _not_here(x)
+        c[i] = x.operand
+        operand, i = _climb(c, i, _NOT_OPERAND)
+    else:
+        c[i] = x.operand
+        operand, i = _climb(c, i, _NEG_OPERAND)
+    return A.Unary(x.op, operand, _join(x, operand)), i
+
+
+def _not_here(x) -> "_Fail":
+    bang = _ctx.text[x.span.start]
+    return _Fail(x, f"unexpected '{bang}' in an expression: a negation cannot be an operand "
+                 "of an arithmetic or comparison operator",
+                 f"put the negated part in parentheses: '({bang}p)'")
+
+
+# --------------------------------------------------------------------------- AST builder
+class _Builder(Transformer):
+    """Lark callbacks, one per grammar rule or alias; each gets the rule's children (AST
+    nodes, helper objects and the named keyword tokens)."""
+
+    # ---- expressions
+    def number(self, c):
+        t = c[0]
+        return A.NumLit(t.value, _span_of(t))
+
+    def var(self, c):
+        t = c[0]
+        return A.Var(_name_of(t), _span_of(t))
+
+    def boolean(self, c):
+        t = c[0]
+        return A.BoolLit(t.type == "TRUE", _span_of(t))
+
+    def reserved(self, c):
+        t = c[0]
+        w = t.value
+        if w.lower() == "what":
+            raise _Fail(t, "'what' is a reserved word in FRETish (probability queries)",
+                        f"quote it (\"{w}\") or rename the variable")
+        raise _Fail(t, f"'{w}' is reserved: it is a temporal operator of FRET's formulas",
+                    f"quote it (\"{w}\") or rename the variable")
+
+    def paren(self, c):
+        # the parentheses belong to the expression's span
+        return replace(c[1], span=_join(c[0], c[2]))
+
+    def call(self, c):
+        name, rpar = c[0], c[-1]
+        args = tuple(c[2:-1])
+        if name.value == "preBool" and args and _is_numeric_literal(args[0]):
+            init = args[0]
+            shown = _ctx.text[init.span.start:init.span.end]
+            raise _Fail(init, f"preBool's initial value must be true or false, not '{shown}'",
+                        "preBool(init, p) is init at the first step and p one step earlier "
+                        "afterwards; write preBool(false, p) or preBool(true, p) (FRET "
+                        "prints 'undefined' for a numeric initial value)")
+        return A.Call(name.value, args, _join(name, rpar))
+
+    def prefixed(self, c):               # ! p, ~ p, - x (as if standing alone)
+        op, x = c
+        if op.type == "BANG":
+            return A.Unary("!", x, _join(op, x))
+        if type(x) is A.Unary and x.op == "!" and _ctx.text[x.span.start] != "(":
+            raise _not_here(x)
+        if type(x) is A.NumLit and x.span.start == op.end_pos \
+                and _ctx.text[op.end_pos] != "(" and not x.text.startswith("-"):
+            # a minus written against a number literal is part of it, as in FRET's
+            # lexer: -3 ^ 2 is (-3) ^ 2, while - 3 ^ 2 and -x ^ 2 negate the power
+            return A.NumLit("-" + x.text, _join(op, x))
+        return A.Unary("-", x, _join(op, x))
+
+    def chain_ops(self, c):              # operands and operators, collected left to right
+        first = c[0]
+        if type(first) is list:
+            first.extend(c[1:])
+            return first
+        return c
+
+    def climb(self, c):
+        node, _ = _climb(c[0], 0, 1)
+        return node
+
+    def if_then(self, c):
+        return A.Binary("->", c[1], c[3], _join(c[0], c[3]))
+
+    def occurrence(self, c):
+        name = "prevOcc" if c[2].type == "PREVIOUS" else "nextOcc"
+        return A.Call(name, (c[5], c[6]), _join(c[0], c[6]))
+
+    # ---- scope
+    def mode_name(self, c):
+        t = c[0]
+        return A.Var(_name_of(t), _span_of(t))
+
+    def explicit_mode(self, c):
+        t = c[1] if c[0].type == "MODE" else c[0]
+        return _ExplicitMode(A.Var(_name_of(t), _span_of(t)), _join(c[0], c[1]))
+
+    def _scope(self, kind, c):
+        m = c[-1]
+        if isinstance(m, _ExplicitMode):
+            return A.Scope(kind, m.var, _join(c[0], m))
+        return A.Scope(kind, m, _join(c[0], m))
+
+    def in_scope(self, c):
+        return self._scope("in", c)
+
+    def notin_scope(self, c):
+        return self._scope("notin", c)
+
+    def onlyin_scope(self, c):
+        return self._scope("onlyIn", c)
+
+    def after_scope(self, c):
+        return self._scope("after", c)
+
+    def before_scope(self, c):
+        return self._scope("before", c)
+
+    def onlyafter_scope(self, c):
+        return self._scope("onlyAfter", c)
+
+    def onlybefore_scope(self, c):
+        return self._scope("onlyBefore", c)
+
+    # ---- condition
+    @staticmethod
+    def _part(c, connective):
+        i = 0
+        if connective is not None and c[0].type in ("AND", "OR"):
+            connective = c[0].type.lower()
+            i = 1
+        q = c[i]
+        qualifier = q.value.lower()
+        expr = c[i + 1]
+        last = expr
+        negate = qualifier == "unless"
+        if len(c) > i + 2:                       # is true / is false
+            last = c[i + 3]
+            if last.type == "FALSE":
+                negate = not negate
+        span = _join(c[0], last)
+        if negate:
+            expr = A.Unary("!", expr, span)
+        return A.ConditionPart(qualifier, expr, connective, span)
+
+    def cond_first(self, c):
+        return self._part(c, None)
+
+    def cond_next(self, c):
+        return self._part(c, "and")
+
+    def condition(self, c):
+        first = c[0]
+        parts = c[1:] if isinstance(first, Token) else c
+        expr = parts[0].expr
+        for p in parts[1:]:
+            expr = A.Binary("|" if p.connective == "or" else "&", expr, p.expr,
+                            _join(expr, p.expr))
+        kind = "holding" if all(p.qualifier == "whenever" for p in parts) else "regular"
+        return A.Condition(kind, expr, tuple(parts), _join(first, parts[-1]))
+
+    # ---- component, probability, timing, response
+    def subject(self, c):
+        names = [t for t in c if t.type in ("NAME", "STRING")]
+        t = names[0]
+        first = c[1] if c[0].type == "SHALL" else c[0]
+        return _Subject(_name_of(t), _join(first, t))
+
+    def probability(self, c):
+        op, num = c[2], c[-1]
+        value = ("-" if c[-2].type == "MINUS" else "") + num.value
+        if op.type == "NE":
+            raise _Fail(op, "a probability bound uses <, <=, >, >= or =, not '!='",
+                        "write e.g. 'with probability >= 0.99'")
+        v = Fraction(value)
+        if not 0 <= v <= 1 or (op.type == "GT" and v == 1) or (op.type == "LT" and v == 0):
+            what = (f"probability {value} is outside [0, 1]" if not 0 <= v <= 1 else
+                    f"'{op.value} {value}' is no probability bound: a probability is never "
+                    + ("above 1" if v == 1 else "below 0"))
+            raise _Fail(c[-1] if not value.startswith("-") else c[-2], what,
+                        "a probability bound is a number in [0, 1], e.g. "
+                        "'with probability >= 0.99'")
+        return A.Probability(_BINOPS[op.type], value, _join(c[0], num))
+
+    def duration(self, c):
+        num, unit = c
+        if not _DURATION_AMOUNT.match(num.value):
+            raise _Fail(num, f"a duration is a whole or decimal number, not '{num.value}'",
+                        "write e.g. 'within 3 seconds' or 'for 2.5 seconds'")
+        return A.Duration(num.value, _UNITS[unit.type], _join(num, unit))
+
+    def timing(self, c):
+        head = c[0]
+        last = c[-1]
+        if head.type == "AT":
+            return A.Timing(_AT_TIMINGS[c[2].type], phrase=" ".join(t.value.lower() for t in c),
+                            span=_join(head, last))
+        kind = _SIMPLE_TIMINGS[head.type]
+        phrase = head.value.lower()
+        if len(c) == 1:
+            return A.Timing(kind, phrase=phrase, span=_span_of(head))
+        if kind in A.DURATION_TIMINGS:
+            return A.Timing(kind, duration=last, phrase=phrase, span=_join(head, last))
+        return A.Timing(kind, stop=last, phrase=phrase, span=_join(head, last))
+
+    def response(self, c):
+        return _Response(c[1], _join(c[0], c[1]))
+
+    # ---- sentences
+    def sentence(self, c):
+        scope = A.Scope()
+        condition = A.Condition()
+        probability = None
+        timing = A.Timing()
+        subject = response = None
+        for x in c:
+            if isinstance(x, A.Scope):
+                scope = x
+            elif isinstance(x, A.Condition):
+                condition = x
+            elif isinstance(x, _Subject):
+                subject = x
+            elif isinstance(x, A.Probability):
+                probability = x
+            elif isinstance(x, A.Timing):
+                timing = x
+            elif isinstance(x, _Response):
+                response = x
+        return A.Requirement(_ctx.text, scope=scope, condition=condition,
+                             component=subject.name, probability=probability,
+                             timing=timing, response=response.expr,
+                             component_span=subject.span, response_span=response.span)
+
+    def freeform(self, c):
+        return A.Requirement(_ctx.text, freeform=True)
+
+    def start(self, c):
+        return c[0]
+
+
+# --------------------------------------------------------------------------- the parser
+_lock = threading.Lock()
+_lark: Optional[Lark] = None
+
+
+def build_lark(**options) -> Lark:
+    """A new Lark parser for ``grammar.lark`` (start symbols ``start`` and ``expr``), LALR
+    with the contextual lexer and the AST builder applied while parsing. ``options`` go
+    to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts)."""
+    return Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), parser="lalr",
+                lexer="contextual", start=["start", "expr"], transformer=_Builder(),
+                maybe_placeholders=False, **options)
+
+
+def _get_parser() -> Lark:
+    global _lark
+    if _lark is None:
+        with _lock:
+            if _lark is None:
+                _lark = build_lark()
+    return _lark
+
+
+def _run(start: str, text: str, source: str, line: int, column: int):
+    if not isinstance(text, str):
+        raise TypeError(f"parse() wants a str, got {type(text).__name__}")
+    lark = _get_parser()
+    _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
+    try:
+        return lark.parse(text, start=start)
+    except _Fail as f:
+        s = f.span
+        raise _make_error(text, source, line, column, s.start, f.message, (), f.hint) from None
+    except (UnexpectedInput, LarkError) as e:
+        raise _translate(e, text, source, line, column, start) from None
+    except RecursionError:
+        raise _make_error(text, source, line, column, 0,
+                          "expression nested too deeply", [],
+                          "split the requirement or add parentheses") from None
+    finally:
+        _ctx.text = ""
+
+
+def parse(text: str, *, source: str = "<string>", line: int = 1,
+          column: int = 1) -> A.Requirement:
+    """Parse one FRETish requirement sentence.
+
+    ``text`` is the sentence (a trailing ``.`` is allowed); ``source``, ``line`` and
+    ``column`` say where ``text`` starts in its file, so every :class:`~fretish.ast.Span`
+    and error position is in file coordinates (1-based), while ``Span.start``/``end`` are
+    0-based offsets into ``text``. A sentence that is one double-quoted string is free
+    form: ``Requirement(text, freeform=True)``.
+
+    Returns a :class:`fretish.ast.Requirement`. Raises :class:`FretishSyntaxError` for any
+    text that is not FRETish (FRET 3.x grammar, with the fixes of README section 7),
+    including a probability outside [0, 1], a reserved word used as a name and
+    ``preBool`` with a numeric initial value.
+    """
+    return _run("start", text, source, line, column)
+
+
+def parse_expression(text: str, *, source: str = "<string>", line: int = 1,
+                     column: int = 1) -> A.Expr:
+    """Parse one FRETish expression (README section 5), e.g. ``"x + 1 > y & !p"``; same
+    positions and errors as :func:`parse`."""
+    return _run("expr", text, source, line, column)
+
+
+# --------------------------------------------------------------------------- diagnostics
+# Terminal groups, for the "expected" list and for recognizing the parser's situation.
+_OPERAND_START = {"BANG"}
+_OPERATORS = {"AMP", "BAR", "XOR", "IMPLIES", "IFF", "PLUS", "STAR", "SLASH", "MOD", "CARET"}
+_QUALIFIERS = {"UPON", "WHENEVER", "WHERE"}
+_SCOPE_WORDS = {"ONLY", "EXCEPT", "DURING", "WHILE"}
+_TIMING_WORDS = {"IMMEDIATELY", "INITIALLY", "FINALLY", "EVENTUALLY", "ALWAYS", "NEVER",
+                 "WITHIN", "UNTIL"}
+_UNIT_WORDS = set(_UNITS)
+_COMPARISONS = {"EQ", "NE", "LT", "LE", "GT", "GE"}
+_KEYWORD_TYPES = {t.upper() for t in (
+    "after always and at before during eventually except false finally first for hour if "
+    "immediately in initially is last microsecond millisecond minute mod mode never next not "
+    "occurrence of only or previous probability same satisfy second shall the then tick "
+    "timepoint true unless until upon when whenever where while with within xor").split()}
+_PUNCT = {"_COMMA": "','", "_DOT": "'.'", "RPAR": "')'", "LPAR": "'('", "$END":
+          "the end of the sentence"}
+
+_HINT_AND_OR = ("'and'/'or'/'not' are not expression operators in FRETish: write '&', '|' "
+                "and '!' ('and'/'or' only chain conditions: 'upon p and when q')")
+_HINT_SATISFY = ("the response must follow 'satisfy': "
+                 "'... shall [timing] satisfy <condition>'")
+_HINT_SHALL = ("a requirement needs 'shall' next to its component: "
+               "'[the] component shall ...' or '... shall [the] component ...'")
+
+
+def _expected_names(exp) -> List[str]:
+    exp = set(exp)
+    out: List[str] = []
+
+    def add(label):
+        if label not in out:
+            out.append(label)
+
+    expr_start = "BANG" in exp
+    if exp & {"IN", "ONLY", "EXCEPT", "DURING"}:
+        add("a scope")
+    if exp & _QUALIFIERS:
+        add("a condition (upon/when/if/where/unless/whenever ...)")
+    if "THE" in exp and not exp & {"NEXT", "PREVIOUS"} and "NAME" in exp:
+        add("a component")
+    if expr_start:
+        add("an expression")
+    elif "MODE" in exp and "NAME" in exp:
+        add("a mode name")
+    elif ("NAME" in exp or "STRING" in exp) and "a component" not in out:
+        add("a name")
+    if "SHALL" in exp:
+        add("'shall'")
+    if "WITH" in exp:
+        add("a probability ('with probability >= 0.9')")
+    if exp & _TIMING_WORDS:
+        add("a timing (always, eventually, within N ticks, ...)")
+    if "SATISFY" in exp:
+        add("'satisfy'")
+    if exp & _OPERATORS:
+        add("an operator")
+    elif exp & _COMPARISONS and "NUMBER" not in exp:
+        add("a comparison (<, <=, >, >=, =)")
+    if "IS" in exp:
+        add("'is true'/'is false'")
+    if exp & _UNIT_WORDS:
+        add("a time unit (ticks, microseconds, milliseconds, seconds, minutes, hours)")
+    if "NUMBER" in exp and not expr_start:
+        add("a number")
+    if exp == {"TRUE", "FALSE"}:
+        add("'true' or 'false'")
+    for t in ("THEN", "OF", "TIMEPOINT", "OCCURRENCE", "PROBABILITY", "IN", "MODE"):
+        if t in exp and not (t == "IN" and "a scope" in out) and \
+                not (t == "MODE" and "a mode name" in out):
+            add(f"'{t.lower()}'")
+    if exp & {"FIRST", "SAME", "LAST"}:
+        add("'first', 'same', 'next' or 'last'")
+    for t in ("RPAR", "_COMMA", "_DOT", "$END"):
+        if t in exp:
+            add(_PUNCT[t])
+    return out
+
+
+def _position(text: str, pos: int) -> Tuple[int, int]:
+    """1-based line and column of offset ``pos`` in ``text``."""
+    line = text.count("\n", 0, pos) + 1
+    col = pos - (text.rfind("\n", 0, pos) + 1) + 1
+    return line, col
+
+
+def _make_error(text, source, line0, col0, pos, message, expected, hint):
+    tline, tcol = _position(text, pos)
+    lines = text.split("\n")
+    text_line = lines[tline - 1] if tline - 1 < len(lines) else ""
+    fline = tline + line0 - 1
+    fcol = tcol + col0 - 1 if tline == 1 else tcol
+    return FretishSyntaxError(message, source=source, line=fline, column=fcol,
+                              text_line=text_line, expected=expected, hint=hint,
+                              text_line_column=col0 if tline == 1 else 1, offset=pos)
+
+
+_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_.%]*")
+
+
+def _previous_word(text: str, pos: int) -> str:
+    m = re.search(r"([A-Za-z][A-Za-z0-9_%]*)\W*\Z", text[:pos])
+    return m.group(1).lower() if m else ""
+
+
+def _accepted_before(text: str, start: str, pos: int) -> Optional[set]:
+    """Terminals the parser accepts just before offset ``pos``, found by replaying the
+    parse up to there. (An LALR parser may perform reductions before it notices a bad
+    token; the set it reports is then that of a later state, e.g. only "end of sentence"
+    after "satisfy p" when it meets "and".) None if the replay fails."""
+    try:
+        ip = _get_parser().parse_interactive(text, start=start)
+        try:
+            for tok in ip.iter_parse():
+                if tok.start_pos >= pos:
+                    break
+        except UnexpectedInput:
+            pass          # the lexer stopped at pos: the parser state is the one before it
+        return set(ip.accepts())
+    except Exception:     # pragma: no cover - diagnostics must never fail
+        return None
+
+
+def _translate(e: Exception, text: str, source: str, line: int, column: int,
+               start: str = "start"):
+    """Turn a Lark exception into a :class:`FretishSyntaxError` with a hint."""
+    if isinstance(e, UnexpectedToken):
+        tok = e.token
+        expected = set(e.expected or ())
+        if tok.type == "$END":
+            pos = len(text.rstrip())
+            value = None
+        else:
+            pos, value = tok.start_pos, tok.value
+        ttype = tok.type
+    elif isinstance(e, UnexpectedCharacters):
+        pos = e.pos_in_stream
+        expected = set(e.allowed or ())
+        m = _WORD.match(text, pos)
+        value = m.group(0) if m else text[pos]
+        ttype = "CHAR"
+    elif isinstance(e, UnexpectedEOF):
+        pos, value, ttype = len(text.rstrip()), None, "$END"
+        expected = set(e.expected or ())
+    else:  # any other Lark failure: report it at the start, never leak Lark's exception
+        return _make_error(text, source, line, column, 0, f"cannot parse: {e}", [], None)
+    replayed = _accepted_before(text, start, pos if value is not None else len(text))
+    if replayed:
+        expected = replayed
+
+    names = _expected_names(expected)
+    in_expr = bool(expected & (_OPERAND_START | _OPERATORS))
+    where = " in an expression" if in_expr else ""
+    shown = "end of the sentence" if value is None else f"'{value}'"
+    message = f"unexpected {shown}{where}"
+    hint = None
+    low = (value or "").lower()
+    prev = _previous_word(text, pos)
+
+    # --- common mistakes, most specific first
+    first = re.match(r"\s*([A-Za-z]+)", text)
+    if not text.strip():
+        message, names, hint = "empty requirement", [], None
+    elif first and first.group(1).lower() == "globally" and (
+            low == "globally" or prev == "globally"):
+        pos = first.start(1)
+        message = "'globally' is not FRETish"
+        hint = ("drop it: a requirement without a scope already holds over the whole run "
+                "(the null scope)")
+        names = []
+    elif low == "globally":
+        message = "'globally' is not FRETish"
+        hint = ("drop it: a requirement without a scope already holds over the whole run "
+                "(the null scope)")
+    elif value == "=" and pos > 0 and text[pos - 1] == "=":
+        pos -= 1
+        message = f"unexpected '=='{where}"
+        hint = "FRETish equality is a single '=' ('==' is not FRETish)"
+    elif ttype in ("AND", "OR", "NOT") and (in_expr or "NAME" in expected):
+        hint = _HINT_AND_OR
+    elif prev in ("and", "or") and expected & {"UPON", "WHEN"} and "NAME" not in expected:
+        message = f"unexpected {shown} after '{prev}'"
+        hint = (f"after '{prev}' a condition needs its own qualifier ('upon p {prev} when "
+                f"q'); to combine expressions write 'p {'&' if prev == 'and' else '|'} q'")
+    elif prev == "shall" and "THE" in expected and ttype in _KEYWORD_TYPES:
+        message = f"unexpected '{value}': the component is missing after 'shall'"
+        hint = "name the component: '... shall [the] <component> [timing] satisfy ...'"
+    elif ttype == "IS" and not in_expr:
+        hint = "'is true'/'is false' may follow a condition (when p is true), not a scope"
+    elif (ttype in _KEYWORD_TYPES or ttype == "RESERVED") and (
+            "NAME" in expected or in_expr) and low not in ("shall", "satisfy"):
+        kind = ("a temporal operator of FRET's formulas" if value in RESERVED_LETTERS
+                else "a reserved word in FRETish")
+        message = f"unexpected '{value}'{where}: '{value}' is {kind}"
+        hint = (f"a reserved word cannot name a variable or component: quote it "
+                f"(\"{value}\") or rename it")
+    elif "SATISFY" in expected and ttype != "SATISFY":
+        hint = _HINT_SATISFY
+    elif "SHALL" in expected and ttype != "SHALL":
+        hint = _HINT_SHALL
+    elif expected & _UNIT_WORDS:
+        hint = ("durations are '<number> <unit>' with unit tick(s), microsec(ond)(s), "
+                "millisec(ond)(s), sec(ond)(s), minute(s) or hour(s)")
+    elif ttype == "CHAR" and value and value[0] == '"':
+        message = "unterminated quoted name"
+        hint = 'close the quote: "name"'
+    elif ttype == "CHAR":
+        message = f"unexpected character '{value[0]}'{where}"
+    return _make_error(text, source, line, column, pos, message, names, hint)

@@ -1,0 +1,727 @@
+"""Tests of the FRETish parser (fretish.parser, fretish.errors).
+
+Reference data: shared/fretish/fret_vectors.jsonl (FRET 3.x's own keys and formulas),
+shared/fretish/fret_trace_verdicts.jsonl, shared/corpora/fret_casestudies.jsonl.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from fretish import FretishSyntaxError, parse
+from fretish import ast as A
+from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
+
+SHARED = Path("/work/shared")
+VECTORS = [json.loads(l) for l in (SHARED / "fretish/fret_vectors.jsonl").open()]
+VECTOR_BY_ID = {v["id"]: v for v in VECTORS}
+CORPUS = [json.loads(l) for l in (SHARED / "corpora/fret_casestudies.jsonl").open()]
+TRACE_CASES = [(t["trace"], c) for t in map(json.loads, (SHARED / "fretish/fret_trace_verdicts.jsonl").open())
+               for c in t["cases"]]
+
+# Vectors FRET rejects but we accept on purpose (README section 7, defect 4), with the key
+# our reading gives.
+ACCEPTED_FRET_REJECTS = {
+    26: ("lower-case 'is false': FRET's lexer only matches FALSE through its TRUE/FALSE "
+         "keyword rules after the literal 'false' token won; defect 4",
+         "null,regular,immediately,satisfaction"),
+    106: ("lower-case 'is true', same FRET lexer defect; defect 4",
+          "null,regular,immediately,satisfaction"),
+    85: ("upper-case TRUE constant: FRET only accepts the literal 'true'; defect 4",
+         "null,null,always,satisfaction"),
+}
+# fret_defect vectors: FRET's output is broken; we parse them, except preBool(0, p), which
+# we reject (defect 3).
+DEFECT_REJECTED = {109: "preBool(0, p): numeric initial value of preBool (defect 3)"}
+
+# Case-study requirements we reject, and why (FRET's requirement grammar accepts these, but
+# its formula pipeline re-parses every formula with its LTL grammar, in which the letter is
+# an operator).
+CORPUS_REJECTED = {
+    "LMCPS/LM_requirements.json#NLG-006":
+        ("'T' is FRET's past-time Trigger operator (LTL.g4 binaryLTLOp); a variable named T "
+         "cannot be printed in FRET's formulas; write \"T\" or rename it", "'T'"),
+}
+
+
+# --------------------------------------------------------------------------- helpers
+def mangle(name: str) -> str:
+    """FRET's identifier mangling in printed formulas (README section 5)."""
+    return name.replace(".", "_DOT_").replace("%", "_PRC_")
+
+
+def fret_text(e: A.Expr) -> str:
+    """Expression in FRET's printed style: every binary operation and negation in
+    parentheses, constants upper case."""
+    if isinstance(e, A.Var):
+        return mangle(e.name)
+    if isinstance(e, A.BoolLit):
+        return "TRUE" if e.value else "FALSE"
+    if isinstance(e, A.NumLit):
+        return e.text
+    if isinstance(e, A.Unary):
+        return f"(! {fret_text(e.operand)})" if e.op == "!" else f"(- {fret_text(e.operand)})"
+    if isinstance(e, A.Binary):
+        return f"({fret_text(e.left)} {e.op} {fret_text(e.right)})"
+    return f"{e.name}({','.join(fret_text(a) for a in e.args)})"
+
+
+def has_call(e) -> bool:
+    return any(isinstance(n, A.Call) for n in A.walk(e))
+
+
+def error_of(text, **kw) -> FretishSyntaxError:
+    with pytest.raises(FretishSyntaxError) as info:
+        parse(text, **kw)
+    return info.value
+
+
+# --------------------------------------------------------------------------- grammar
+def test_grammar_has_no_lalr_conflicts(caplog):
+    """Lark resolves shift/reduce conflicts silently (as shift); with debug=True it logs
+    them. The grammar must have none (reduce/reduce conflicts would raise)."""
+    from lark import logger as lark_logger
+    old = lark_logger.level
+    lark_logger.setLevel(logging.DEBUG)
+    try:
+        with caplog.at_level(logging.DEBUG, logger="lark"):
+            build_lark(debug=True)
+    finally:
+        lark_logger.setLevel(old)
+    assert not [r for r in caplog.records if "conflict" in r.getMessage().lower()]
+
+
+def test_reserved_words_match_grammar_keywords():
+    grammar = (Path(__file__).parents[1] / "fretish/grammar.lark").read_text()
+    name_rule = re.search(r"^NAME: (.*)$", grammar, re.M).group(1)
+    for word in RESERVED_WORDS:
+        for variant in (word, word.upper(), word.capitalize()):
+            if word in ("true", "false"):
+                assert parse_expression(variant) == A.BoolLit(word == "true")
+                continue
+            with pytest.raises(FretishSyntaxError):
+                parse_expression(variant)
+            assert parse_expression(f'"{variant}"') == A.Var(variant)
+    assert "what" in name_rule
+    for letter in RESERVED_LETTERS:
+        with pytest.raises(FretishSyntaxError):
+            parse_expression(letter)
+        assert parse_expression(letter.lower()) == A.Var(letter.lower())
+    # words that merely start with a keyword are names
+    for word in ("shallow", "theme", "information", "ifx", "modes", "seconds_left", "next.x",
+                 "Xpos", "Ts", "TT", "whatever", "format"):
+        assert parse_expression(word) == A.Var(word)
+
+
+# --------------------------------------------------------------------------- FRET vectors
+@pytest.mark.parametrize("v", VECTORS, ids=lambda v: f"v{v['id']}")
+def test_fret_vector(v):
+    vid = v["id"]
+    if vid in ACCEPTED_FRET_REJECTS:
+        assert v["parse_error"]
+        assert parse(v["text"]).key == ACCEPTED_FRET_REJECTS[vid][1]
+    elif vid in DEFECT_REJECTED:
+        assert v["fret_defect"]
+        error_of(v["text"])
+    elif v["parse_error"]:
+        error_of(v["text"])
+    else:
+        r = parse(v["text"])
+        assert r.key == v["key"]
+        assert r.freeform == bool(v.get("freeform"))
+
+
+def test_every_listed_exception_is_a_vector():
+    for vid in (*ACCEPTED_FRET_REJECTS, *DEFECT_REJECTED):
+        assert vid in VECTOR_BY_ID
+
+
+def test_fixed_defects_mean_what_they_say():
+    r = parse(VECTOR_BY_ID[26]["text"])                      # upon p is false
+    assert r.condition.expr == A.Unary("!", A.Var("p"))
+    assert parse(VECTOR_BY_ID[106]["text"]).condition.expr == A.Var("p")
+    assert parse(VECTOR_BY_ID[85]["text"]).response == A.BoolLit(True)
+    # FRET's own spellings give the same trees
+    assert parse(VECTOR_BY_ID[104]["text"]).condition.expr == A.Unary("!", A.Var("p"))
+    assert parse(VECTOR_BY_ID[107]["text"]).condition.expr == A.Var("p")
+    for spelling in ("true", "True", "TRUE", "tRuE"):
+        assert parse(f"the sw shall always satisfy {spelling}").response == A.BoolLit(True)
+        assert parse(f"upon p is {spelling} the sw shall always satisfy q").condition.expr == \
+            A.Var("p")
+
+
+@pytest.mark.parametrize("v", [v for v in VECTORS if not v["parse_error"] and not v["fret_defect"]
+                               and not v.get("freeform")], ids=lambda v: f"v{v['id']}")
+def test_printed_parenthesization_matches_fret(v):
+    """Our trees, printed in FRET's style, occur verbatim in FRET's formulas (only for
+    expressions without functions, which FRET expands)."""
+    r = parse(v["text"])
+    formulas = " ".join((v["ft"], v["ft_inf"], v["pt"]))
+    if not has_call(r.response):
+        assert fret_text(r.response) in formulas
+    if r.condition.expr is not None and not has_call(r.condition.expr):
+        assert fret_text(r.condition.expr) in formulas
+
+
+@pytest.mark.parametrize("vid,expected", [
+    (77, "((x + (2 * (y ^ 2))) <= (z mod 3))"),
+    (112, "((! (a & b)) | (c & d))"),
+    (113, "(a | (b & c))"),
+    (115, "((a & b) xor c)"),
+    (116, "(((x * y) + z) > w)"),
+    (118, "((x = 1) & (y = 2))"),
+    (79, "((x - y) > 0)"),
+    (80, "(x > -3.0e2)"),
+    (76, "(a -> b)"),
+    (74, "(a <-> b)"),
+    (86, "(ROS_DOT_state = 2)"),
+])
+def test_precedence_against_fret(vid, expected):
+    v = VECTOR_BY_ID[vid]
+    assert expected in v["ft"]
+    assert fret_text(parse(v["text"]).response) == expected
+
+
+@pytest.mark.parametrize("text,expected", [
+    ("a xor b | c", "(a xor (b | c))"),
+    ("a & b xor c", "((a & b) xor c)"),
+    ("a | b xor c & d", "((a | b) xor (c & d))"),
+    ("a -> b -> c", "(a -> (b -> c))"),
+    ("a => b -> c", "(a -> (b -> c))"),
+    ("a <-> b <-> c", "((a <-> b) <-> c)"),
+    ("a -> b <-> c -> d", "((a -> b) <-> (c -> d))"),
+    ("a xor b -> c", "((a xor b) -> c)"),
+    ("!a & b", "((! a) & b)"),
+    ("!x > 3", "(! (x > 3))"),
+    ("!!a", "(! (! a))"),
+    ("~a | b", "((! a) | b)"),
+    ("x - y - z", "((x - y) - z)"),
+    ("x / y * z", "((x / y) * z)"),
+    ("x ^ y ^ z", "(x ^ (y ^ z))"),
+    ("-x ^ 2", "(- (x ^ 2))"),
+    ("-x^2", "(- (x ^ 2))"),
+    ("2 ^ -x", "(2 ^ (- x))"),
+    ("-x * y", "((- x) * y)"),
+    ("x mod 2 + 1 = 0", "(((x mod 2) + 1) = 0)"),
+    ("x + 2 * y ^ 2 <= z mod 3", "((x + (2 * (y ^ 2))) <= (z mod 3))"),
+    ("if a then b & c", "(a -> (b & c))"),
+    ("if a then if b then c", "(a -> (b -> c))"),
+    ("if if a then b then c", "((a -> b) -> c)"),
+    ("(if a then b) & c", "((a -> b) & c)"),
+    ("a & (b | c)", "(a & (b | c))"),
+    ("x>-3.0e2", "(x > -3.0e2)"),
+    ("x-3", "(x - 3)"),
+    ("- 3", "(- 3)"),
+    ("-3 ^ 2", "(-3 ^ 2)"),
+    ("- 3 ^ 2", "(- (3 ^ 2))"),
+    ("2 ^ -3", "(2 ^ -3)"),
+    ("x - -3", "(x - -3)"),
+    ("-(3)", "(- 3)"),
+    ("- -3", "(- -3)"),
+])
+def test_precedence_table(text, expected):
+    assert fret_text(parse_expression(text)) == expected
+
+
+@pytest.mark.parametrize("text", [
+    "a < b < c", "a = b = c", "x = !y", "x + !y", "x ^ !y", "-!y", "a & if b then c",
+    "p and q", "p or q", "not p", "x == 3", ".5", "f(a,)", "(a", "a)", "a &", "3x",
+    "x = y z", "at the next occurrence of p", "X", "next", "the",
+])
+def test_bad_expressions(text):
+    with pytest.raises(FretishSyntaxError):
+        parse_expression(text)
+
+
+# --------------------------------------------------------------------------- real corpora
+@pytest.mark.parametrize("req", CORPUS, ids=lambda r: r["id"])
+def test_case_study_corpus(req):
+    if req["id"] in CORPUS_REJECTED:
+        _why, needle = CORPUS_REJECTED[req["id"]]
+        e = error_of(req["text"])
+        assert needle in e.message and e.hint
+    else:
+        r = parse(req["text"])
+        assert r.key is not None or r.freeform
+
+
+def test_corpus_size_and_rejections_listed():
+    assert len(CORPUS) == 198
+    assert set(CORPUS_REJECTED) <= {r["id"] for r in CORPUS}
+
+
+def test_trace_verdict_sentences():
+    assert len(TRACE_CASES) == 2640
+    for _trace, case in TRACE_CASES:
+        assert parse(case["sentence"]).key == case["key"], case["sentence"]
+
+
+# --------------------------------------------------------------------------- sentence parts
+@pytest.mark.parametrize("phrase,kind", [
+    ("in m", "in"), ("during m", "in"), ("when in m", "in"), ("if in m", "in"),
+    ("In mode m", "in"), ("in m mode", "in"), ("DURING M MODE", "in"),
+    ("when not in m", "notin"), ("if not in m", "notin"), ("unless in m", "notin"),
+    ("except in m", "notin"), ("except during m", "notin"), ("except when in m", "notin"),
+    ("except if in m", "notin"),
+    ("only in m", "onlyIn"), ("only during m", "onlyIn"), ("only when in m", "onlyIn"),
+    ("only if in mode m", "onlyIn"),
+    ("after m", "after"), ("after mode m", "after"), ("after m mode", "after"),
+    ("before m", "before"), ("only after m", "onlyAfter"), ("only before m", "onlyBefore"),
+])
+def test_scope_modes(phrase, kind):
+    for sep in (" ", ", "):
+        r = parse(f"{phrase}{sep}the sw shall always satisfy q")
+        assert r.scope.kind == kind
+        assert r.scope.mode == A.Var("M" if "M" in phrase.split() else "m")
+
+
+@pytest.mark.parametrize("phrase,kind", [
+    ("while x > 3", "in"), ("except while x > 3", "notin"), ("only while x > 3", "onlyIn"),
+    ("after x > 3", "after"), ("before x > 3", "before"), ("only after x > 3", "onlyAfter"),
+    ("only before x > 3", "onlyBefore"),
+])
+def test_scope_conditions(phrase, kind):
+    r = parse(f"{phrase} the sw shall always satisfy q")
+    assert r.scope.kind == kind
+    assert r.scope.mode == A.Binary(">", A.Var("x"), A.NumLit("3"))
+
+
+def test_quoted_mode_and_scope_span():
+    r = parse('in "flight mode" mode, the sw shall always satisfy q')
+    assert r.scope.mode == A.Var("flight mode")
+    assert (r.scope.span.start, r.scope.span.end) == (0, 21)
+    assert r.scope.mode.span.start == 3
+
+
+def test_is_true_after_a_scope_is_rejected():
+    e = error_of("when in mode m is true the sw shall always satisfy q")
+    assert e.column == 16 and "is true" in e.hint
+
+
+@pytest.mark.parametrize("cond,expr,kind,parts", [
+    ("upon p", "p", "regular", [("upon", None)]),
+    ("when p", "p", "regular", [("when", None)]),
+    ("if p", "p", "regular", [("if", None)]),
+    ("where p", "p", "regular", [("where", None)]),
+    ("unless p", "(! p)", "regular", [("unless", None)]),
+    ("unless p is false", "p", "regular", [("unless", None)]),
+    ("whenever p", "p", "holding", [("whenever", None)]),
+    ("whenever p, whenever q", "(p & q)", "holding", [("whenever", None), ("whenever", "and")]),
+    ("whenever p upon q", "(p & q)", "regular", [("whenever", None), ("upon", "and")]),
+    ("upon p and when r", "(p & r)", "regular", [("upon", None), ("when", "and")]),
+    ("upon p, or when r,", "(p | r)", "regular", [("upon", None), ("when", "or")]),
+    ("upon p or when q and if r", "((p | q) & r)", "regular",
+     [("upon", None), ("when", "or"), ("if", "and")]),
+    ("upon p is FALSE, unless q", "((! p) & (! q))", "regular",
+     [("upon", None), ("unless", "and")]),
+    ("UPON x > 2 IS True", "(x > 2)", "regular", [("upon", None)]),
+    ("upon if a then b", "(a -> b)", "regular", [("upon", None)]),
+])
+def test_conditions(cond, expr, kind, parts):
+    r = parse(f"{cond} the sw shall always satisfy q")
+    assert r.condition.kind == kind
+    assert fret_text(r.condition.expr) == expr
+    assert [(p.qualifier, p.connective) for p in r.condition.parts] == parts
+
+
+def test_condition_after_scope_with_and():
+    r = parse("in m, and upon p the sw shall always satisfy q")
+    assert (r.scope.kind, r.condition.kind, r.condition.expr) == ("in", "regular", A.Var("p"))
+
+
+def test_condition_spans():
+    text = "upon p is false, or when r the sw shall always satisfy q"
+    r = parse(text)
+    p0, p1 = r.condition.parts
+    assert text[p0.span.start:p0.span.end] == "upon p is false"
+    assert text[p1.span.start:p1.span.end] == "or when r"
+    assert text[r.condition.span.start:r.condition.span.end] == "upon p is false, or when r"
+
+
+@pytest.mark.parametrize("phrase,kind", [
+    ("", "null"), ("immediately", "immediately"), ("initially", "immediately"),
+    ("at the first timepoint", "immediately"), ("at the same timepoint", "immediately"),
+    ("at the next timepoint", "next"), ("finally", "finally"),
+    ("at the last timepoint", "finally"), ("eventually", "eventually"),
+    ("always", "always"), ("never", "never"),
+])
+def test_simple_timings(phrase, kind):
+    r = parse(f"the sw shall {phrase} satisfy q")
+    assert r.timing.kind == kind and r.timing.phrase == phrase
+    r = parse(f"the sw shall {phrase.upper()} satisfy q")
+    assert r.timing.kind == kind and r.timing.phrase == phrase
+
+
+def test_timing_phrase_is_normalized():
+    t = parse("the sw shall, AT  the\tNext timepoint, satisfy q").timing
+    assert (t.kind, t.phrase) == ("next", "at the next timepoint")
+
+
+@pytest.mark.parametrize("unit,canon", [
+    ("tick", "ticks"), ("ticks", "ticks"), ("microsec", "microseconds"),
+    ("microsecs", "microseconds"), ("microsecond", "microseconds"),
+    ("microseconds", "microseconds"), ("millisec", "milliseconds"),
+    ("milliseconds", "milliseconds"), ("sec", "seconds"), ("secs", "seconds"),
+    ("second", "seconds"), ("Seconds", "seconds"), ("minute", "minutes"),
+    ("minutes", "minutes"), ("hour", "hours"), ("HOURS", "hours"),
+])
+@pytest.mark.parametrize("word", ["within", "for", "after"])
+def test_duration_timings(word, unit, canon):
+    r = parse(f"the sw shall {word} 2.5 {unit} satisfy q")
+    assert r.timing == A.Timing(word, duration=A.Duration("2.5", canon), phrase=word)
+    assert r.timing.duration.value == A.Duration("5/2", canon).value
+
+
+@pytest.mark.parametrize("text", [
+    "the sw shall within 1e3 ticks satisfy q", "the sw shall within -2 ticks satisfy q",
+    "the sw shall within 2 satisfy q", "the sw shall within 2 ms satisfy q",
+    "the sw shall within two ticks satisfy q",
+])
+def test_bad_durations(text):
+    error_of(text)
+
+
+def test_stop_timings():
+    r = parse("the sw shall until stop | halt satisfy post")
+    assert r.timing == A.Timing("until", stop=A.Binary("|", A.Var("stop"), A.Var("halt")),
+                                phrase="until")
+    r = parse("the sw shall before at the next occurrence of p, q satisfy r")
+    assert r.timing.stop == A.Call("nextOcc", (A.Var("p"), A.Var("q")))
+
+
+@pytest.mark.parametrize("op", ["<", "<=", ">", ">=", "="])
+def test_probability(op):
+    r = parse(f"the sw shall, with probability {op} 0.99, always satisfy q")
+    assert r.probability == A.Probability(op, "0.99")
+    assert r.timing.kind == "always"
+
+
+@pytest.mark.parametrize("bound", ["> 1", ">= 1.5", "< 0", "= -0.5", "<= 2", "!= 0.5"])
+def test_probability_out_of_range(bound):
+    e = error_of(f"the sw shall with probability {bound} always satisfy q")
+    assert e.hint and "with probability >= 0.99" in e.hint
+    assert e.column == len("the sw shall with probability ") + 1 + (
+        bound.index(" ") + 1 if bound[0] != "!" else 0)
+
+
+@pytest.mark.parametrize("bound", [">= 1", "<= 0", "> 0", "< 1", "= 1", "= 0", "> 1e-3"])
+def test_probability_edges(bound):
+    assert parse(f"the sw shall with probability {bound} satisfy q").probability is not None
+
+
+def test_component_forms():
+    for text, comp in [("the sw shall satisfy p", "sw"), ("sw shall satisfy p", "sw"),
+                       ("shall the sw satisfy p", "sw"), ("shall sw satisfy p", "sw"),
+                       ('the "flight computer" shall satisfy p', "flight computer"),
+                       ("THE Sw_2.a shall satisfy p", "Sw_2.a")]:
+        assert parse(text).component == comp
+    text = "only after p shall the sw , after 2 ticks, satisfy q"
+    r = parse(text)
+    assert (r.component, r.timing.kind, r.timing.duration.amount) == ("sw", "after", "2")
+    assert text[r.component_span.start:r.component_span.end] == "the sw"
+    assert text[r.response_span.start:r.response_span.end] == "satisfy q"
+
+
+def test_freeform():
+    r = parse('"The system shall be nice, # really."')
+    assert r.freeform and r.key is None and r.text == '"The system shall be nice, # really."'
+    assert parse('  "free"  .').freeform
+
+
+def test_trailing_dot_and_whitespace():
+    a = parse("  The sw shall, until stop, satisfy post.  ")
+    b = parse("the sw shall until stop satisfy post")
+    assert a.response == b.response == A.Var("post")
+    assert a == A.Requirement(a.text, **{k: getattr(b, k) for k in
+                                         ("scope", "condition", "component", "timing",
+                                          "response")})
+    assert parse("the sw shall satisfy ROS.state.").response == A.Var("ROS.state")
+    error_of("the sw shall satisfy p..")
+    error_of("the sw shall satisfy p. q")
+
+
+def test_identifiers_and_functions():
+    e = parse_expression('ROS.state = 2 & x% > 1 & "next" & "a \\"q\\"" & FTP')
+    names = [n.name for n in A.walk(e) if isinstance(n, A.Var)]
+    assert names == ["ROS.state", "x%", "next", 'a "q"', "FTP"]
+    error_of("the sw shall satisfy _ok")
+    c = parse_expression("persisted(2, 3, p) & occurred(3,p) & preBool(false, p) & "
+                         "absReal(x - 1) < 2 & ite(a, b, c) & f()")
+    calls = [(n.name, len(n.args)) for n in A.walk(c) if isinstance(n, A.Call)]
+    assert calls == [("persisted", 3), ("occurred", 2), ("preBool", 2), ("absReal", 1),
+                     ("ite", 3), ("f", 0)]
+    assert parse_expression("at the previous occurrence of p, q") == \
+        A.Call("prevOcc", (A.Var("p"), A.Var("q")))
+
+
+@pytest.mark.parametrize("init", ["0", "1", "-1", "2.5", "x + 1", "-(1)"])
+def test_prebool_numeric_init_rejected(init):
+    e = error_of(f"the sw shall always satisfy preBool({init}, p) -> q")
+    assert "preBool" in e.message and e.hint
+    assert e.column == len("the sw shall always satisfy preBool(") + 1
+
+
+def test_nusmv_words_are_not_reserved():
+    # FRET does not reserve them either; the SMV printer mangles names it cannot print.
+    for w in ("case", "esac", "init", "self", "union", "word", "count", "abs", "max", "A", "E"):
+        assert parse_expression(w) == A.Var(w)
+
+
+# --------------------------------------------------------------------------- spans
+def test_spans_in_file_coordinates():
+    text = "upon p the sw shall always satisfy x + 1 > y"
+    r = parse(text, source="f.fret", line=7, column=5)
+    rel = r.response
+    assert text[rel.span.start:rel.span.end] == "x + 1 > y"
+    assert (rel.span.line, rel.span.column, rel.span.end_line, rel.span.end_column) == \
+        (7, 5 + text.index("x + 1"), 7, 5 + len(text))
+    p = r.condition.parts[0].expr
+    assert (p.span.line, p.span.column, p.span.start, p.span.end) == (7, 10, 5, 6)
+
+
+def test_spans_across_lines():
+    text = "upon p the sw\n    shall always satisfy x &\n  y"
+    r = parse(text, line=3, column=9)
+    y = r.response.right
+    assert (y.span.line, y.span.column, y.span.start) == (5, 3, text.rindex("y"))
+    assert (r.response.span.line, r.response.span.column) == (4, 26)
+    assert (r.component_span.line, r.component_span.column) == (3, 9 + len("upon p "))
+
+
+def test_every_node_has_a_span():
+    r = parse("in m upon p & f(x, -3) the sw shall within 3 seconds satisfy "
+              "if a then !b | (at the next occurrence of c, d)")
+    nodes = [r.scope, r.scope.mode, r.condition, *r.condition.parts, r.timing,
+             r.timing.duration]
+    for root in (r.condition.expr, r.response):
+        nodes.extend(A.walk(root))
+    for n in nodes:
+        s = n.span
+        assert s != A.NO_SPAN and s.start < s.end and s.line >= 1, n
+        assert r.text[s.start:s.end].strip() == r.text[s.start:s.end]
+
+
+# --------------------------------------------------------------------------- diagnostics
+def test_error_rendering_like_a_compiler():
+    e = error_of("the sw shall always satisfy p and q", source="r1.fret", line=3, column=5)
+    assert (e.source, e.line, e.column) == ("r1.fret", 3, 5 + 30)
+    assert e.message == "unexpected 'and' in an expression"
+    lines = str(e).split("\n")
+    assert lines[0] == "r1.fret:3:35: error: unexpected 'and' in an expression"
+    assert lines[1] == "the sw shall always satisfy p and q"
+    assert lines[2] == " " * 30 + "^"
+    assert lines[3].startswith("expected: ") and "an operator" in lines[3]
+    assert lines[4].startswith("hint: ") and "'&'" in lines[4]
+
+
+@pytest.mark.parametrize("text,col,needle", [
+    ("globally the sw shall always satisfy p", 1, "globally"),
+    ("Globally, upon p the sw shall always satisfy q", 1, "globally"),
+    ("the sw shall globally satisfy p", 14, "globally"),
+])
+def test_hint_globally(text, col, needle):
+    e = error_of(text)
+    assert e.column == col and needle in e.message and "whole run" in e.hint
+
+
+@pytest.mark.parametrize("text,word", [
+    ("the sw shall always satisfy p and q", "and"),
+    ("the sw shall always satisfy p or q", "or"),
+    ("the sw shall always satisfy not p", "not"),
+    ("upon p and q the sw shall always satisfy r", "and"),
+    ("upon p or q the sw shall always satisfy r", "or"),
+])
+def test_hint_and_or_not(text, word):
+    e = error_of(text)
+    assert e.column == text.index(f" {word} ") + 2 + (len(word) + 1 if text.startswith("upon") else 0)
+    assert e.hint and ("&" in e.hint or "|" in e.hint)
+    assert word in e.message or word in e.hint
+
+
+def test_hint_double_equals():
+    e = error_of("the sw shall always satisfy x == 3")
+    assert e.column == len("the sw shall always satisfy x ") + 1
+    assert "'=='" in e.message and "'='" in e.hint
+
+
+@pytest.mark.parametrize("text,word,col", [
+    ("the sw shall always satisfy next", "next", 29),
+    ("the sw shall always satisfy p & mode", "mode", 33),
+    ("upon first the sw shall satisfy p", "first", 6),
+    ("the mode shall satisfy p", "mode", 5),
+    ("the sw shall always satisfy X | p", "X", 29),
+    ("the sw shall always satisfy what", "what", 29),
+])
+def test_hint_reserved_word(text, word, col):
+    e = error_of(text)
+    assert e.column == col
+    assert f'"{word}"' in e.hint and "rename" in e.hint
+
+
+def test_hint_missing_satisfy():
+    e = error_of("the sw shall always p")
+    assert e.column == 21 and "'satisfy'" in e.expected and "satisfy" in e.hint
+    e = error_of("the sw shall eventually")
+    assert e.column == 24 and "end of the sentence" in e.message and "satisfy" in e.hint
+
+
+def test_hint_missing_shall():
+    e = error_of("the sw always satisfy p")
+    assert e.column == 8 and e.expected == ["'shall'"] and "shall" in e.hint
+    e = error_of("upon p the sw must always satisfy q")
+    assert e.column == 15 and "shall" in e.hint
+
+
+def test_hint_probability():
+    e = error_of("the sw shall with probability >= 1.5 always satisfy q", line=2, column=4)
+    assert (e.line, e.column) == (2, 4 + 33) and "outside [0, 1]" in e.message
+    assert "[0, 1]" in e.hint
+
+
+def test_errors_on_later_lines():
+    e = error_of("the sw shall\n   always satisfy p\n   & & q", source="x.fret", line=10,
+                 column=20)
+    assert (e.line, e.column) == (12, 6) and e.text_line == "   & & q"
+    assert str(e).split("\n")[2] == "     ^"
+
+
+def test_unexpected_characters_and_strings():
+    e = error_of("the sw shall always satisfy p @ q")
+    assert e.column == 31 and "'@'" in e.message
+    e = error_of('the sw shall always satisfy "open')
+    assert e.column == 29 and "quote" in e.message
+    e = error_of("")
+    assert e.message == "empty requirement"
+
+
+def test_no_lark_exception_escapes():
+    import lark
+    for text in ["", "(", ")", "shall", "the", '"', "upon", "in", "the sw shall satisfy (((",
+                 "\x00", "the sw shall satisfy p\x00", "when in m is", "upon p,,", "é"]:
+        try:
+            parse(text)
+        except FretishSyntaxError:
+            pass
+        except lark.exceptions.LarkError as e:  # pragma: no cover
+            pytest.fail(f"raw Lark error for {text!r}: {e!r}")
+
+
+def test_parse_rejects_non_strings():
+    with pytest.raises(TypeError):
+        parse(b"the sw shall satisfy p")  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------- round trips
+_KW = {w.lower() for w in RESERVED_WORDS}
+names = st.from_regex(r"[A-Za-z][A-Za-z0-9_%]{0,6}(\.[A-Za-z0-9_%]{1,4})?", fullmatch=True).filter(
+    lambda s: s.lower() not in _KW and s not in RESERVED_LETTERS
+    and s.split(".")[0].lower() not in _KW | {"true", "false"})
+quoted = st.text(st.characters(blacklist_categories=("Cs", "Cc"), blacklist_characters='\n'),
+                 min_size=1, max_size=8).filter(lambda s: s.strip() != "")
+numbers = st.from_regex(r"-?[0-9]{1,4}(\.[0-9]{1,3})?([eE][+-]?[0-9]{1,2})?", fullmatch=True)
+atoms = st.one_of(names.map(A.Var), quoted.map(A.Var), st.booleans().map(A.BoolLit),
+                  numbers.map(A.NumLit))
+OPS = A.BOOL_OPS + A.COMPARISON_OPS + A.ARITH_OPS
+
+
+def _extend(children):
+    return st.one_of(
+        st.tuples(st.sampled_from(OPS), children, children).map(lambda t: A.Binary(*t)),
+        st.tuples(st.sampled_from("!-"), children).map(lambda t: A.Unary(*t)),
+        st.tuples(names, st.lists(children, max_size=3)).map(
+            lambda t: A.Call(t[0], tuple(t[1]))),
+    )
+
+
+exprs = st.recursive(atoms, _extend, max_leaves=12)
+
+
+def _name(v: A.Var, quote_all=False) -> str:
+    if quote_all or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_%.]*", v.name) or \
+            v.name.lower() in _KW or v.name in RESERVED_LETTERS or v.name.endswith(".") or \
+            ".." in v.name or v.name.split(".")[0].lower() in _KW:
+        return '"' + v.name.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return v.name
+
+
+def show_full(e: A.Expr, rnd=0) -> str:
+    """Fully parenthesized FRETish text of ``e``."""
+    if isinstance(e, A.Var):
+        return _name(e)
+    if isinstance(e, A.BoolLit):
+        return ("TRUE", "true", "True", "fALSE")[rnd % 3] if e.value else ("false", "FALSE", "False")[rnd % 3]
+    if isinstance(e, A.NumLit):
+        return e.text
+    if isinstance(e, A.Unary):
+        inner = show_full(e.operand, rnd + 1)
+        return f"(~{inner})" if e.op == "!" and rnd % 2 else f"({e.op}({inner}))"
+    if isinstance(e, A.Binary):
+        op = {"->": ("->", "=>"), "<->": ("<->", "<=>")}.get(e.op, (e.op,))[rnd % 2 if e.op in ("->", "<->") else 0]
+        if e.op == "->" and rnd % 3 == 2:
+            return f"(if {show_full(e.left, rnd + 1)} then {show_full(e.right, rnd + 2)})"
+        return f"({show_full(e.left, rnd + 1)} {op} {show_full(e.right, rnd + 2)})"
+    return f"{e.name}({', '.join(show_full(a, rnd + i) for i, a in enumerate(e.args))})"
+
+
+# Minimal-parentheses printer, from the precedence table alone (README section 5).
+_PREC = {"<->": 1, "->": 2, "xor": 3, "|": 4, "&": 5, "=": 7, "!=": 7, "<": 7, "<=": 7,
+         ">": 7, ">=": 7, "+": 8, "-": 8, "*": 9, "/": 9, "mod": 9, "^": 11}
+_RIGHT = {"->", "^"}
+
+
+def _prec(e) -> int:
+    if isinstance(e, A.Binary):
+        return _PREC[e.op]
+    if isinstance(e, A.Unary):
+        return 6 if e.op == "!" else 10
+    return 12
+
+
+def show_min(e: A.Expr) -> str:
+    def sub(x, need):
+        s = show_min(x)
+        return f"({s})" if _prec(x) < need else s
+
+    if isinstance(e, A.Unary):
+        if e.op == "!":
+            return "!" + sub(e.operand, 6)
+        if isinstance(e.operand, A.NumLit):
+            return f"-({e.operand.text})"
+        return "- " + sub(e.operand, 10)
+    if isinstance(e, A.Binary):
+        p = _PREC[e.op]
+        left_need = p + 1 if e.op in _RIGHT or p == 7 else p
+        right_need = p if e.op in _RIGHT else p + 1
+        return f"{sub(e.left, left_need)} {e.op} {sub(e.right, right_need)}"
+    if isinstance(e, A.Call):
+        return f"{e.name}({', '.join(show_min(a) for a in e.args)})"
+    return show_full(e)
+
+
+@settings(max_examples=400, deadline=None)
+@given(exprs, st.integers(0, 5))
+def test_round_trip_fully_parenthesized(e, rnd):
+    assert parse_expression(show_full(e, rnd)) == e
+
+
+@settings(max_examples=400, deadline=None)
+@given(exprs)
+def test_round_trip_minimal_parentheses(e):
+    text = show_min(e)
+    assert parse_expression(text) == e, text
+
+
+@settings(max_examples=200, deadline=None)
+@given(exprs)
+def test_round_trip_in_sentences(e):
+    text = show_full(e)
+    r = parse(f"upon {text} the sw shall before {text} satisfy {text}.")
+    assert r.condition.expr == r.timing.stop == r.response == e
+    s = r.response_span
+    assert r.text[s.start:s.end] == f"satisfy {text}"
