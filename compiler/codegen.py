@@ -63,6 +63,7 @@ class _StepCode:
     counter: int = 0
     numeric_reads: set = field(default_factory=set)
     bool_reads: set = field(default_factory=set)
+    uses: Dict[Node, int] = field(default_factory=dict)
 
     def new(self, prefix: str = "n") -> str:
         self.counter += 1
@@ -100,6 +101,12 @@ def _compile_nodes(roots: List[Node], code: _StepCode) -> List[str]:
 
     for r in roots:
         visit(r)
+    # how many times each node's value is read: single-use pure expressions are inlined
+    for n in post:
+        for a in n.args:
+            code.uses[a] = code.uses.get(a, 0) + 1
+    for r in roots:
+        code.uses[r] = code.uses.get(r, 0) + 2  # roots are read by the template
     deferred: List[Tuple[int, str]] = []  # slots whose next value is a child's value
     for n in post:
         code.locals[n] = _emit(n, code, deferred)
@@ -125,28 +132,29 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
         return _read(n.name, code, numeric=op == "var")
     if op == "num":
         return repr(float(n.name)) if any(c in n.name for c in ".eE") else str(int(n.name))
+    expr = None  # a pure expression: inlined where it is read once
     if op == "cmp":
-        line = f"{out} = {a[0]} {_PY_CMP[n.name]} {a[1]}"
+        expr = f"{a[0]} {_PY_CMP[n.name]} {a[1]}"
     elif op == "arith":
         if n.name in ("+", "-", "*"):
-            line = f"{out} = {a[0]} {n.name} {a[1]}"
+            expr = f"{a[0]} {n.name} {a[1]}"
         else:
             fn = {"/": "_div", "mod": "_mod", "^": "_pow"}[n.name]
-            line = f"{out} = {fn}({a[0]}, {a[1]})"
+            expr = f"{fn}({a[0]}, {a[1]})"
     elif op == "neg":
-        line = f"{out} = -{a[0]}"
+        expr = f"-{a[0]}"
     elif op == "fn":
         fn = {"absReal": "abs", "absInt": "abs", "minReal": "min", "minInt": "min",
               "maxReal": "max", "maxInt": "max"}.get(n.name)
         if fn is None:
             return _opaque(n, code, numeric=True)
-        line = f"{out} = {fn}({', '.join(a)})"
+        expr = f"{fn}({', '.join(a)})"
     elif op == "ite":
-        line = f"{out} = {a[1]} if {a[0]} else {a[2]}"
+        expr = f"{a[1]} if {a[0]} else {a[2]}"
     elif op == "pre":
         prev, idx = code.slot("0")
         code.uses_first = True
-        line = f"{out} = {a[0]} if first else {prev}"
+        expr = f"{a[0]} if first else {prev}"
         deferred.append((idx, a[1]))
     elif op == "call":
         return _opaque(n, code, numeric=False)
@@ -158,17 +166,21 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
             "monitor cannot know yet; write the requirement with past-time functions "
             "(persisted, occurred) or audit it offline")
     elif op == "!":
-        line = f"{out} = not {a[0]}"
+        expr = f"not {a[0]}"
     elif op == "&":
-        line = f"{out} = {a[0]} and {a[1]}"
+        expr = f"{a[0]} and {a[1]}"
     elif op == "|":
-        line = f"{out} = {a[0]} or {a[1]}"
+        expr = f"{a[0]} or {a[1]}"
     elif op == "xor":
-        line = f"{out} = {a[0]} != {a[1]}"
+        expr = f"{a[0]} != {a[1]}"
     elif op == "->":
-        line = f"{out} = (not {a[0]}) or {a[1]}"
+        expr = f"(not {a[0]}) or {a[1]}"
     elif op == "<->":
-        line = f"{out} = {a[0]} == {a[1]}"
+        expr = f"{a[0]} == {a[1]}"
+    if expr is not None:
+        if code.uses.get(n, 0) <= 1:
+            return f"({expr})"
+        line = f"{out} = {expr}"
     elif op in ("Y", "Z"):
         prev, idx = code.slot("False" if op == "Y" else "True")
         deferred.append((idx, a[0]))
@@ -334,6 +346,15 @@ class MonitorSource:
     status_note: str
 
     @property
+    def verdict_expr(self) -> str:
+        """The verdict as a Python bool: locals computed from boolean reads are bools
+        already; numeric reads may bring other types (e.g. numpy scalars)."""
+        if any(numeric for _, _, numeric, _ in self.var_locals) or self.verdict in (
+                "True", "False", "first"):
+            return f"bool({self.verdict})"
+        return self.verdict
+
+    @property
     def status_live(self) -> bool:
         """Can the status still change after reset()? (some automaton can reject)"""
         return any(a is not None and not a.complete for a in (self.good, self.bad))
@@ -376,8 +397,9 @@ def monitor_source(compiled, index: int) -> MonitorSource:
                                       for j, b in enumerate(idx)) or "0"
     var_locals = [(name, local, local in code.numeric_reads, local in code.bool_reads)
                   for name, local in code.variables.items()]
-    slots_init = "(" + "".join(f"{init}, " for init, _ in code.slots) + ")"
-    slots_next = "(" + "".join(f"{nxt}, " for _, nxt in code.slots) + ")"
+    # the state tuple: pt slots, then the tick count, then the last verdict
+    slots_init = "(" + "".join(f"{init}, " for init, _ in code.slots) + "0, None)"
+    slots_next = "(" + "".join(f"{nxt}, " for _, nxt in code.slots) + "tick + 1, verdict)"
     note = "" if bad is not None and good is not None else (
         f"Spot's deterministic monitor exceeds {MAX_AUTOMATON_STATES} states: no early verdict")
     return MonitorSource(
@@ -386,7 +408,7 @@ def monitor_source(compiled, index: int) -> MonitorSource:
         pt=compiled.smv("pt"), source_hash=compiled.source_hash,
         variables=[v[0] for v in var_locals], var_locals=var_locals,
         slots_init=slots_init,
-        slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))).rstrip(),
+        slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))) + "tick, _",
         slots_next=slots_next, step_lines=code.lines,
         verdict=verdict, atom_locals=atom_locals, good=good, bad=bad,
         uses_first=code.uses_first, status_note=note)
