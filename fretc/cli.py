@@ -125,13 +125,18 @@ def _write_outputs(outputs: dict, output: Optional[str], suffix: str) -> None:
 
 
 def _register_optional() -> None:
-    """Attach the audit and report commands (their modules import heavier libraries)."""
-    try:
-        from monitors.cli import audit_cmd, report_cmd
-    except ImportError:
-        return
+    """Attach ``audit`` (``monitors/cli.py``; it imports its engine lazily) and, once
+    ``monitors/report.py`` provides it, ``report``."""
+    from monitors.cli import audit_cmd
+
     main.add_command(audit_cmd, "audit")
-    main.add_command(report_cmd, "report")
+    try:
+        from monitors.report import report_cmd
+    except ModuleNotFoundError as exc:
+        if exc.name != "monitors.report":
+            raise
+    else:
+        main.add_command(report_cmd, "report")
 
 
 _register_optional()

@@ -45,10 +45,11 @@ through ``min``/``max``/``mean``.
 
 LaserScan ranges (REP 117): a field path ending in ``ranges`` of a ``sensor_msgs/LaserScan``
 (without an index) yields only the valid returns: values inside
-``[range_min, range_max]``; NaN, ±inf and out-of-range values are ignored by every
+``[range_min, range_max]``; NaN, +inf and out-of-range values are ignored by every
 item-wise operation and reduction (``len`` counts valid returns).  So ``min(/scan.ranges)``
-is +inf when no return is valid.  Note REP 117 uses -inf for "too close to measure"; that is
-ignored too, like any out-of-range value.  ``/scan.ranges[i]`` is the raw value of beam i.
+is +inf when no return is valid.  REP 117's -inf ("detected, too close to measure") is read
+as ``range_min``, so a too-close object is never hidden from ``min``.
+``/scan.ranges[i]`` is the raw value of beam i.
 
 Each binding is parsed once (Lark, LALR) and compiled to nested Python closures (no eval of
 user text): :meth:`Binding.evaluate` for one tick, :meth:`Binding.evaluate_columns` for all
@@ -411,6 +412,11 @@ def make_extractor(f: Field) -> Callable[[Any], Any]:
                 v = parent.ranges
                 if getattr(parent, "__msgtype__", None) == LASER_SCAN:
                     arr = np.asarray(v, dtype=np.float64)
+                    # REP 117: -inf is a detection closer than range_min; count it as
+                    # range_min so that a too-close object is never hidden
+                    too_close = np.isneginf(arr)
+                    if too_close.any():
+                        arr = np.where(too_close, parent.range_min, arr)
                     return Valid(arr, (arr >= parent.range_min) & (arr <= parent.range_max))
         except AttributeError as exc:
             owner = data

@@ -221,7 +221,7 @@ def test_age_is_seconds_since_the_held_message():
 
 
 def test_laserscan_rep117_ignores_nan_inf_and_out_of_range():
-    ranges = [0.05, 0.95, np.nan, np.inf, -np.inf, 2.5, 10.0, 10.5, 0.1]
+    ranges = [0.05, 0.95, np.nan, np.inf, 2.5, 10.0, 10.5, 0.1]
     m = {"/scan": scan(ranges, range_min=0.1, range_max=10.0)}
     r = np.asarray(ranges, dtype=np.float32).astype(np.float64)
     valid = r[(r >= np.float32(0.1)) & (r <= np.float32(10.0))]
@@ -238,7 +238,16 @@ def test_laserscan_rep117_ignores_nan_inf_and_out_of_range():
     assert math.isnan(ev("/scan.ranges[2]", m))
     assert ev("/scan.ranges[0]", m) == pytest.approx(0.05)
     # Intensities are not filtered.
-    assert ev("len(/scan.intensities)", m) == 9.0
+    assert ev("len(/scan.intensities)", m) == 8.0
+
+
+def test_laserscan_negative_infinity_is_a_too_close_return():
+    # REP 117: -inf = detected but closer than range_min; it must not hide an obstacle
+    m = {"/scan": scan([2.0, -np.inf, 5.0], range_min=0.1, range_max=10.0)}
+    assert ev("min(/scan.ranges)", m) == pytest.approx(0.1)
+    assert ev("min(/scan.ranges) < 0.9", m) is True
+    assert ev("len(/scan.ranges)", m) == 3.0
+    assert ev("/scan.ranges[1]", m) == -math.inf  # indexing stays raw
 
 
 def test_laserscan_with_no_valid_return():
@@ -275,6 +284,7 @@ def test_rep117_reductions_match_numpy(ranges, rmin, rmax):
     m = {"/scan": scan(ranges, range_min=rmin, range_max=rmax)}
     msg = m["/scan"]
     r = np.asarray(msg.ranges, dtype=np.float64)
+    r = np.where(np.isneginf(r), msg.range_min, r)  # REP 117 -inf: closer than range_min
     ok = (r >= msg.range_min) & (r <= msg.range_max)
     v = r[ok]
     assert ev("min(/scan.ranges)", m) == (v.min() if v.size else math.inf)

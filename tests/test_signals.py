@@ -272,10 +272,12 @@ def test_rep117_through_the_clock(tmp_path):
     b = make_bindings({"near": "min(/scan.ranges)", "far": "max(/scan.ranges)", "close": "min(/scan.ranges) < 0.9",
                        "valid": "len(/scan.ranges)"}, TickSpec(topic="/scan"))
     ticks, _arr = _equal_paths(src, b)
-    assert [t.values["near"] for t in ticks] == [5.0, 0.5, np.inf, pytest.approx(0.95)]
+    # frame 1's -inf (REP 117: closer than range_min) reads as range_min = 0.05
+    assert [t.values["near"] for t in ticks] == [5.0, pytest.approx(0.05), np.inf,
+                                                 pytest.approx(0.95)]
     assert [t.values["far"] for t in ticks] == [5.0, 0.5, -np.inf, 1.0]
     assert [t.values["close"] for t in ticks] == [False, True, False, False]
-    assert [t.values["valid"] for t in ticks] == [1.0, 1.0, 0.0, 2.0]
+    assert [t.values["valid"] for t in ticks] == [1.0, 2.0, 0.0, 2.0]
 
 
 def test_ragged_arrays_fall_back_to_the_stream(tmp_path):

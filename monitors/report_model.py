@@ -1,0 +1,284 @@
+"""What an audit found, as plain dataclasses and a stable JSON document.
+
+``fretc audit --json FILE`` writes :func:`audit_json`; ``fretc report`` (another module) reads
+the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space indent)::
+
+    {
+      "schema": "fretc-audit/1",
+      "requirements": [ {id, text, source, line, key, variables, tick_period_s,
+                         duration_ticks, offline, error, notes} ... ],
+      "bindings": {sources: [...], tick: {period_ns | topic}, time_base,
+                   variables: {name: {expr, source, line, topics}}} | null,
+      "logs": [ LogAudit.to_json() ... ],              # in the order the logs were given
+      "summary": {satisfied, vacuous, violated, error, partial_logs, exit_code}
+    }
+
+Every time is given twice: ``*_ns`` - integer nanoseconds on the log's clock (MCAP log time
+or header stamp, see ``time_base``), what Foxglove shows; ``*_s`` - seconds since the log's
+first tick (``LogAudit.start_time_ns``), what a person reads. Ticks are 0-based indexes of
+*evaluated* ticks (warm-up ticks are not numbered, see :mod:`monitors.signals`).
+
+Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
+never entered or the trigger never fired (README "vacuous passes"); ``violated`` - FRET's
+finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
+(``error`` says why: no binding, topic missing, no tick evaluated, ...). A verdict on a
+damaged log is computed on what could be read and has ``partial`` true.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Optional, Tuple
+
+__all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_json",
+           "summary", "exit_code", "SCHEMA", "VERDICTS"]
+
+SCHEMA = "fretc-audit/1"
+VERDICTS = ("satisfied", "vacuous", "violated", "error")
+
+
+def _t(ns: Optional[int], start: Optional[int]) -> Dict[str, Any]:
+    """``{"ns": int, "s": seconds since start}`` (None values when unknown)."""
+    if ns is None:
+        return {"ns": None, "s": None}
+    return {"ns": int(ns), "s": None if start is None else round((ns - start) / 1e9, 9)}
+
+
+@dataclass(frozen=True)
+class TimePoint:
+    """A tick and its time (ns on the log clock)."""
+
+    tick: int
+    time_ns: int
+
+    def to_json(self, start: Optional[int]) -> dict:
+        return {"tick": self.tick, "time_ns": self.time_ns,
+                "time_s": _t(self.time_ns, start)["s"]}
+
+
+@dataclass
+class FirstViolation:
+    """The evidence of a violation (see :class:`monitors.evidence.Violation`).
+
+    Attributes:
+        at: the tick (and time) at which the obligation was definitely missed.
+        trigger: the trigger point behind it; None when the interval semantics could not be
+            evaluated (then ``at`` is the monitor's earliest definitive violation, or the
+            last tick).
+        scope: the scope interval ``(first, last)`` holding the trigger.
+        window: the ticks the obligation was about (``(lo, hi)``; ``hi`` may lie past the
+            end of the log for ``within``-like timings cut short by the log).
+        obligation: the timing's obligation in words (``monitors.evidence.OBLIGATIONS``).
+        reason: what failed, in tick numbers.
+    """
+
+    at: TimePoint
+    trigger: Optional[TimePoint] = None
+    scope: Optional[Tuple[TimePoint, TimePoint]] = None
+    window: Optional[Tuple[int, int]] = None
+    window_time_ns: Optional[Tuple[Optional[int], Optional[int]]] = None
+    obligation: str = ""
+    reason: str = ""
+
+    def to_json(self, start: Optional[int]) -> dict:
+        out = {"tick": self.at.tick, "log_time_ns": self.at.time_ns,
+               "log_time_s": _t(self.at.time_ns, start)["s"],
+               "obligation": self.obligation, "reason": self.reason,
+               "trigger": self.trigger.to_json(start) if self.trigger else None,
+               "scope_interval": None, "window": None}
+        if self.scope is not None:
+            out["scope_interval"] = {"start": self.scope[0].to_json(start),
+                                     "end": self.scope[1].to_json(start)}
+        if self.window is not None:
+            lo_ns, hi_ns = self.window_time_ns or (None, None)
+            out["window"] = {"start_tick": self.window[0], "end_tick": self.window[1],
+                             "start_time_ns": lo_ns, "end_time_ns": hi_ns,
+                             "start_time_s": _t(lo_ns, start)["s"],
+                             "end_time_s": _t(hi_ns, start)["s"]}
+        return out
+
+
+@dataclass
+class Ltl3:
+    """The earliest definitive verdict of the infinite-trace formula (LTL3: ``satisfied``,
+    ``violated`` or ``unknown``) and the tick at which it was reached (None: unknown, or
+    definitive before the first tick)."""
+
+    status: str = "unknown"
+    tick: Optional[int] = None
+    time_ns: Optional[int] = None
+
+    def to_json(self, start: Optional[int]) -> dict:
+        return {"status": self.status, "tick": self.tick, "time_ns": self.time_ns,
+                "time_s": _t(self.time_ns, start)["s"]}
+
+
+@dataclass
+class Verdict:
+    """One requirement on one log.
+
+    Attributes:
+        log, requirement: the log path and the requirement id; ``source`` its file:line.
+        verdict: one of :data:`VERDICTS`.
+        partial: the log is damaged and was audited up to the damage.
+        first_violation: evidence when violated.
+        ltl3: the earliest definitive LTL3 verdict.
+        values: variable -> [(tick, time_ns, value)] around the trigger and the violation.
+        sources: topic -> [(tick, time_ns, log_time_ns of the message held)] for the topics
+            those variables are bound to, at the same ticks.
+        ticks_evaluated, warmup_ticks: as :class:`LogAudit` (per log).
+        intervals, triggers, violations: counts from the interval semantics (None when it
+            could not be evaluated).
+        engine: ``"stepwise"`` (the generated monitor's ``step()``), ``"vectorized"``
+            (``compiler.vectorized`` over the columns; equal by test) or ``"interval"``
+            (no online monitor exists - a future-time function - so FRET's interval
+            semantics decided it, :mod:`monitors.evidence`).
+        notes: remarks (evidence unavailable, warnings of the formalization).
+        error: why the verdict is ``error``.
+    """
+
+    log: str
+    requirement: str
+    text: str = ""
+    source: str = ""
+    verdict: str = "error"
+    partial: bool = False
+    first_violation: Optional[FirstViolation] = None
+    ltl3: Ltl3 = field(default_factory=Ltl3)
+    values: Dict[str, List[Tuple[int, int, Any]]] = field(default_factory=dict)
+    sources: Dict[str, List[Tuple[int, int, Optional[int]]]] = field(default_factory=dict)
+    ticks_evaluated: int = 0
+    warmup_ticks: int = 0
+    intervals: Optional[int] = None
+    triggers: Optional[int] = None
+    violations: Optional[int] = None
+    engine: Optional[str] = None
+    notes: List[str] = field(default_factory=list)
+    error: Optional[str] = None
+
+    @property
+    def ok(self) -> bool:
+        """satisfied or vacuous."""
+        return self.verdict in ("satisfied", "vacuous")
+
+    def to_json(self, start: Optional[int]) -> dict:
+        def val(v):
+            if isinstance(v, float) and v != v:
+                return "nan"
+            if isinstance(v, float) and v in (float("inf"), float("-inf")):
+                return "inf" if v > 0 else "-inf"
+            return v
+
+        return {
+            "log": self.log, "requirement": self.requirement, "text": self.text,
+            "source": self.source, "verdict": self.verdict, "partial": self.partial,
+            "first_violation": (self.first_violation.to_json(start)
+                                if self.first_violation else None),
+            "ltl3": self.ltl3.to_json(start),
+            "values": {k: [{"tick": t, "time_ns": ns, "time_s": _t(ns, start)["s"],
+                            "value": val(v)} for t, ns, v in rows]
+                       for k, rows in self.values.items()},
+            "sources": {k: [{"tick": t, "time_ns": ns, "time_s": _t(ns, start)["s"],
+                             "message_log_time_ns": lt} for t, ns, lt in rows]
+                        for k, rows in self.sources.items()},
+            "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
+            "intervals": self.intervals, "triggers": self.triggers,
+            "violations": self.violations, "engine": self.engine, "notes": self.notes,
+            "error": self.error,
+        }
+
+
+@dataclass
+class LogAudit:
+    """One log: how it was read and the verdicts of every requirement on it.
+
+    Attributes:
+        log: the path as given; ``kind`` mcap / bag / rosbag2 / csv.
+        partial, damage_time_ns: the log ends early (truncated); the last good message's log
+            time.
+        start_time_ns: time of the first tick (evaluated or not); ``first_time_ns`` of the
+            first evaluated tick; ``end_time_ns`` of the last tick.
+        ticks_evaluated, warmup_ticks: evaluated ticks, and ticks before every bound topic
+            had a message (not evaluated); ``waiting_for`` the topics still silent at the
+            first tick; ``missing_topics`` bound topics that never had a message.
+        tick, time_base: the clock used (``{"period_ns": ...}`` or ``{"topic": ...}``).
+        messages: messages read per topic.
+        problems: data problems (kind, topic, log_time_ns, end_time_ns, detail);
+            ``problem_counts`` counts all of them by ``kind topic`` (the list is capped).
+        verdicts: one per requirement, in requirement order.
+        error: a log-level input error (unreadable log, no bindings for a ROS log).
+    """
+
+    log: str
+    kind: Optional[str] = None
+    partial: bool = False
+    damage_time_ns: Optional[int] = None
+    start_time_ns: Optional[int] = None
+    first_time_ns: Optional[int] = None
+    end_time_ns: Optional[int] = None
+    ticks_evaluated: int = 0
+    warmup_ticks: int = 0
+    waiting_for: List[str] = field(default_factory=list)
+    missing_topics: List[str] = field(default_factory=list)
+    tick: Dict[str, Any] = field(default_factory=dict)
+    time_base: Optional[str] = None
+    messages: Dict[str, int] = field(default_factory=dict)
+    problems: List[Dict[str, Any]] = field(default_factory=list)
+    problem_counts: Dict[str, int] = field(default_factory=dict)
+    verdicts: List[Verdict] = field(default_factory=list)
+    engine: Optional[str] = None
+    error: Optional[str] = None
+
+    def to_json(self) -> dict:
+        st = self.start_time_ns
+        return {
+            "log": self.log, "kind": self.kind, "partial": self.partial,
+            "damage_time_ns": self.damage_time_ns,
+            "damage_time_s": _t(self.damage_time_ns, st)["s"],
+            "start_time_ns": st, "first_time_ns": self.first_time_ns,
+            "first_time_s": _t(self.first_time_ns, st)["s"],
+            "end_time_ns": self.end_time_ns, "end_time_s": _t(self.end_time_ns, st)["s"],
+            "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
+            "waiting_for": self.waiting_for, "missing_topics": self.missing_topics,
+            "tick": self.tick, "time_base": self.time_base, "messages": self.messages,
+            "problems": [dict(p, log_time_s=_t(p.get("log_time_ns"), st)["s"])
+                         for p in self.problems],
+            "problem_counts": self.problem_counts,
+            "verdicts": [v.to_json(st) for v in self.verdicts],
+            "engine": self.engine, "error": self.error,
+        }
+
+
+def summary(logs: List[LogAudit]) -> Dict[str, int]:
+    """Counts of verdicts over all logs, and the exit code they give (0 all satisfied or
+    vacuous, 1 a violation, 2 an error)."""
+    out = {k: 0 for k in VERDICTS}
+    for la in logs:
+        for v in la.verdicts:
+            out[v.verdict] += 1
+    out["partial_logs"] = sum(1 for la in logs if la.partial)
+    out["log_errors"] = sum(1 for la in logs if la.error)
+    out["exit_code"] = exit_code(logs)
+    return out
+
+
+def exit_code(logs: List[LogAudit], input_errors: bool = False) -> int:
+    """2 when anything could not be audited (an input error, an ``error`` verdict), else 1
+    when a requirement is violated, else 0."""
+    if input_errors or any(la.error for la in logs) or any(
+            v.verdict == "error" for la in logs for v in la.verdicts):
+        return 2
+    if any(v.verdict == "violated" for la in logs for v in la.verdicts):
+        return 1
+    return 0
+
+
+def audit_json(logs: List[LogAudit], requirements: List[dict], bindings: Optional[dict],
+               input_errors: bool = False) -> str:
+    """The ``--json`` document (module docstring), as text with sorted keys."""
+    s = summary(logs)
+    s["exit_code"] = exit_code(logs, input_errors)
+    doc = {"schema": SCHEMA, "requirements": requirements, "bindings": bindings,
+           "logs": [la.to_json() for la in logs], "summary": s}
+    return json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n"

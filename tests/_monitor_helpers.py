@@ -1,0 +1,86 @@
+"""Helpers for the audit, evidence and vectorized tests: requirements built directly from
+``fretish.ast`` (no parser), compiled to generated monitor modules loaded in-process."""
+
+from __future__ import annotations
+
+import random
+import types
+from typing import Dict, List
+
+import numpy as np
+
+from compiler.build import compile_entry
+from compiler.codegen import monitor_source, render_module
+from fretish import ast as A
+from fretish.files import RequirementEntry
+
+KEYS = [(s, c, t) for s in A.SCOPE_KINDS for c in A.CONDITION_KINDS for t in A.TIMING_KINDS]
+assert len(KEYS) == 288
+
+_RESPONSES = {
+    "r": A.Var("r"),
+    "!r": A.Unary("!", A.Var("r")),
+    "r | s": A.Binary("|", A.Var("r"), A.Var("s")),
+    "r & c": A.Binary("&", A.Var("r"), A.Var("c")),
+    "r xor m": A.Binary("xor", A.Var("r"), A.Var("m")),
+    "x > 2": A.Binary(">", A.Var("x"), A.NumLit("2")),
+}
+_CONDITIONS = {
+    "c": A.Var("c"),
+    "!c": A.Unary("!", A.Var("c")),
+    "c & x <= 3": A.Binary("&", A.Var("c"), A.Binary("<=", A.Var("x"), A.NumLit("3"))),
+}
+
+
+def requirement(scope: str, cond: str, timing: str, response: str = "r",
+                condition: str = "c", n: int = 2) -> A.Requirement:
+    """A requirement of template key ``scope,cond,timing`` over the variables m, c, r, s
+    (and the number x), built from AST nodes."""
+    sc = A.Scope(scope, A.Var("m") if scope != "null" else None)
+    cd = A.Condition(cond, _CONDITIONS[condition] if cond != "null" else None)
+    tm = A.Timing(timing,
+                  duration=A.Duration(str(n), "ticks") if timing in A.DURATION_TIMINGS else None,
+                  stop=A.Var("s") if timing in A.STOP_TIMINGS else None)
+    text = f"<{scope},{cond},{timing}> {condition} {response} n={n}"
+    return A.Requirement(text, scope=sc, condition=cd, component="sw", timing=tm,
+                         response=_RESPONSES[response])
+
+
+def compiled(req: A.Requirement, rid: str = "R", tick_period=None):
+    entry = RequirementEntry(id=rid, text=req.text, source="<test>", line=1, column=1,
+                             tick_period=tick_period, requirement=req)
+    c = compile_entry(entry)
+    assert c.error is None, c.error
+    return c
+
+
+def load_module(compiled_list, name: str = "test_monitors") -> types.ModuleType:
+    """exec the generated monitor module text into a fresh module."""
+    src = render_module(compiled_list, name)
+    mod = types.ModuleType(name)
+    exec(compile(src, f"<{name}>", "exec"), mod.__dict__)
+    return mod
+
+
+def random_trace(rnd: random.Random, length: int, variables=("m", "c", "r", "s"),
+                 numeric=("x",)) -> Dict[str, np.ndarray]:
+    cols = {v: np.array([rnd.random() < 0.5 for _ in range(length)], dtype=np.bool_)
+            for v in variables}
+    for v in numeric:
+        cols[v] = np.array([float(rnd.randint(0, 5)) for _ in range(length)])
+    return cols
+
+
+def samples(cols: Dict[str, np.ndarray], length: int) -> List[dict]:
+    return [{k: (bool(v[i]) if v.dtype == np.bool_ else float(v[i])) for k, v in cols.items()}
+            for i in range(length)]
+
+
+def step_all(monitor, cols, length):
+    """[pt verdict per tick], (status, status_tick) of a monitor instance."""
+    out = [monitor.step(s) for s in samples(cols, length)]
+    return out, (monitor.status, monitor.status_tick)
+
+
+__all__ = ["KEYS", "requirement", "compiled", "load_module", "random_trace", "samples",
+           "step_all", "monitor_source"]

@@ -1,0 +1,119 @@
+"""``fretc audit`` on the command line: the summary, --json, --junit, -j, inline bindings and
+the exit codes (0 all satisfied, 1 a violation, 2 usage or input errors)."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from fretc.cli import main
+
+from test_audit import SYN_BINDINGS, SYN_FRET, TRACES, _readme_expectations, _synthetic
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(*args):
+    res = CliRunner().invoke(main, ["audit", "--no-progress", *map(str, args)])
+    if res.exception and not isinstance(res.exception, SystemExit):
+        raise res.exception
+    return res
+
+
+def test_main_job_on_the_shipped_traces(tmp_path):
+    if not (TRACES / "README.md").exists():
+        pytest.skip("traces/ not recorded")
+    out_json, out_xml = tmp_path / "a.json", tmp_path / "a.xml"
+    res = run("--requirements", ROOT / "requirements", TRACES, "--json", out_json,
+              "--junit", out_xml, "-j", "2")
+    assert res.exit_code == 1, res.output
+    assert "VIOLATED" in res.output and "sif_disabled" in res.output
+    doc = json.loads(out_json.read_text())
+    assert doc["schema"] == "fretc-audit/1"
+    assert [r["id"] for r in doc["requirements"]] == ["R1", "R2", "R3", "R4", "R5", "R6"]
+    assert doc["bindings"]["tick"] == {"period_ns": 100_000_000}
+    logs = {Path(l["log"]).name: l for l in doc["logs"]}
+    r1 = next(v for v in logs["sif_disabled.mcap"]["verdicts"] if v["requirement"] == "R1")
+    assert r1["verdict"] == "violated"
+    assert r1["first_violation"]["trigger"]["time_s"] == pytest.approx(8.8)
+    assert r1["first_violation"]["scope_interval"]["start"]["tick"] == 0
+    assert r1["values"]["too_close"] and r1["sources"]["/scan"]
+    assert logs["sif_disabled.mcap"]["warmup_ticks"] == 1
+    n_violated = sum(v["verdict"] == "violated" for l in doc["logs"] for v in l["verdicts"])
+    readme = _readme_expectations()
+    expected_violated = sum(v == "violated" for exp in readme.values() for v, _ in exp.values())
+    assert doc["summary"]["violated"] == n_violated == expected_violated
+    assert doc["summary"]["exit_code"] == 1
+    suites = ET.parse(out_xml).getroot()
+    assert int(suites.get("tests")) == 6 * len(doc["logs"]) and len(doc["logs"]) >= 8
+    assert int(suites.get("failures")) == n_violated and suites.get("errors") == "0"
+    case = suites.find(".//testsuite[@name='traces/sif_disabled.mcap']/testcase[@name='R1']")
+    if case is None:  # run from another working directory: absolute names
+        case = next(s for s in suites if s.get("name").endswith("sif_disabled.mcap")
+                    ).find("testcase[@name='R1']")
+    assert case.find("failure") is not None
+    assert "8.800 s" in case.find("failure").get("message")
+    # deterministic: the same audit gives the same JSON
+    res2 = run("--requirements", ROOT / "requirements", TRACES, "--json", tmp_path / "b.json")
+    assert (tmp_path / "b.json").read_text() == out_json.read_text()
+
+
+def test_exit_0_when_everything_holds_and_json_to_stdout(tmp_path):
+    log = _synthetic(tmp_path)
+    with open(tmp_path / "syn.fret", "a") as f:  # free-form: kept, not audited, no error
+        f.write('F1: "The operator is told when the robot stops."\n')
+    res = run("-r", tmp_path / "syn.fret", log, "--json", "-")
+    assert res.exit_code == 0, res.output
+    assert "free-form, not audited: F1" in res.stderr
+    doc = json.loads(res.stdout[res.stdout.index("{"):])
+    assert doc["summary"]["satisfied"] == 3 and doc["summary"]["exit_code"] == 0
+
+
+def test_exit_1_on_a_violation_with_inline_bindings(tmp_path):
+    log = _synthetic(tmp_path)
+    (tmp_path / "syn.bindings.toml").unlink()
+    fret = tmp_path / "v.fret"
+    fret.write_text("V1: the bot shall always satisfy speed < 0.4\n")
+    res = run("-r", fret, log, "--tick-period", "100 ms", "--bind", "speed=abs(/cmd.linear.x)")
+    assert res.exit_code == 1, res.output
+    assert "V1 violated" in res.output and "speed" in res.output
+
+
+def test_exit_2_on_input_errors(tmp_path):
+    log = _synthetic(tmp_path)
+    assert run("-r", tmp_path / "syn.fret", tmp_path / "nope.mcap").exit_code == 2
+    # a binding file that does not parse
+    (tmp_path / "syn.bindings.toml").write_text(SYN_BINDINGS + "oops = \n")
+    res = run("-r", tmp_path / "syn.fret", log)
+    assert res.exit_code == 2 and "syn.bindings.toml" in res.output
+    (tmp_path / "syn.bindings.toml").write_text(SYN_BINDINGS)
+    # a requirement that does not parse: reported, the others still audited
+    (tmp_path / "syn.fret").write_text(SYN_FRET + "A9: the bot shall sometimes satisfy halted\n")
+    res = run("-r", tmp_path / "syn.fret", log)
+    assert res.exit_code == 2 and "A9" in res.output and "satisfied" in res.output
+    # a ROS log without bindings
+    (tmp_path / "syn.bindings.toml").unlink()
+    (tmp_path / "syn.fret").write_text(SYN_FRET)
+    res = run("-r", tmp_path / "syn.fret", log)
+    assert res.exit_code == 2 and "needs signal bindings" in res.output
+    # both tick options
+    res = run("-r", tmp_path / "syn.fret", log, "--tick-period", "1 s", "--tick-topic", "/scan")
+    assert res.exit_code == 2
+
+
+def test_csv_trace_and_junit(tmp_path):
+    (tmp_path / "t.fret").write_text(
+        "C1: upon cc the sw shall within 2 ticks satisfy rr\n"
+        "C2: in mm the sw shall always satisfy rr\n")
+    (tmp_path / "t.csv").write_text("mm,cc,rr\n0,0,0\n1,1,0\n1,0,1\n0,0,0\n")
+    xml = tmp_path / "j.xml"
+    res = run("-r", tmp_path / "t.fret", tmp_path / "t.csv", "--junit", xml)
+    assert res.exit_code == 1, res.output
+    root = ET.parse(xml).getroot()
+    assert root.get("tests") == "2" and root.get("failures") == "1"
+    failed = [c.get("name") for c in root.iter("testcase") if c.find("failure") is not None]
+    assert failed == ["C2"]
