@@ -22,39 +22,54 @@ from pathlib import Path
 
 import click
 
-__all__ = ["audit_cmd"]
+__all__ = ["audit_cmd", "audit_input_options"]
+
+
+def audit_input_options(f):
+    """The options that say what to audit and how (shared by ``fretc audit`` and
+    ``fretc report``): requirements, bindings, tick, time base, jobs, engine, window."""
+    options = [
+        click.option("-r", "--requirements", "requirements", multiple=True,
+                     type=click.Path(exists=True),
+                     help="Requirement file (.fret, FRET JSON export) or folder; repeatable. "
+                          "Default: ./requirements."),
+        click.option("-b", "--bindings", "bindings", multiple=True,
+                     type=click.Path(exists=True),
+                     help="Signal binding file (TOML); repeatable. Default: *.bindings.toml "
+                          "beside the requirements."),
+        click.option("--bind", "inline", multiple=True, metavar="NAME=EXPR",
+                     help="Bind a FRET variable inline, e.g. "
+                          "--bind 'too_close=min(/scan.ranges) < 0.9'."),
+        click.option("--tick-period", default=None, metavar="DURATION",
+                     help="Fixed tick with sample-and-hold, e.g. \"100 ms\" (overrides the "
+                          "bindings)."),
+        click.option("--tick-topic", default=None, metavar="TOPIC",
+                     help="One tick per message of TOPIC (overrides the bindings)."),
+        click.option("--time-base", type=click.Choice(["log", "header"]), default=None,
+                     help="Message time: log time (default) or header.stamp."),
+        click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
+                     show_default=True, help="Audit this many logs in parallel processes."),
+        click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]),
+                     default="auto", show_default=True,
+                     help="stepwise: the generated monitors' step() on every tick; "
+                          "vectorized: numpy over the sampled columns; auto: vectorized on "
+                          "long logs."),
+        click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
+                     help="Ticks of values kept each side of a trigger and a violation."),
+    ]
+    for option in reversed(options):
+        f = option(f)
+    return f
 
 
 @click.command("audit")
 @click.argument("logs", nargs=-1, required=True)
-@click.option("-r", "--requirements", "requirements", multiple=True,
-              type=click.Path(exists=True),
-              help="Requirement file (.fret, FRET JSON export) or folder; repeatable. "
-                   "Default: ./requirements.")
-@click.option("-b", "--bindings", "bindings", multiple=True, type=click.Path(exists=True),
-              help="Signal binding file (TOML); repeatable. Default: *.bindings.toml beside "
-                   "the requirements.")
-@click.option("--bind", "inline", multiple=True, metavar="NAME=EXPR",
-              help="Bind a FRET variable inline, e.g. --bind 'too_close=min(/scan.ranges) < 0.9'.")
-@click.option("--tick-period", default=None, metavar="DURATION",
-              help="Fixed tick with sample-and-hold, e.g. \"100 ms\" (overrides the bindings).")
-@click.option("--tick-topic", default=None, metavar="TOPIC",
-              help="One tick per message of TOPIC (overrides the bindings).")
-@click.option("--time-base", type=click.Choice(["log", "header"]), default=None,
-              help="Message time: log time (default) or header.stamp.")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Audit this many logs in parallel processes.")
+@audit_input_options
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the verdicts and evidence as JSON to FILE ('-': stdout).")
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False), default=None,
               help="Write JUnit XML to FILE: one test case per requirement x log.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
-@click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]), default="auto",
-              show_default=True,
-              help="stepwise: the generated monitors' step() on every tick; vectorized: numpy "
-                   "over the sampled columns; auto: vectorized on long logs.")
-@click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
-              help="Ticks of values shown each side of a trigger and a violation.")
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, engine, window):

@@ -50,6 +50,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import click
 
+from .cli import audit_input_options
 from .report_model import SCHEMA
 
 __all__ = ["ReportError", "RequirementTrace", "ModuleInfo", "ReportFiles", "load_audit_json",
@@ -987,24 +988,7 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: Optional[str] = No
 # --------------------------------------------------------------------------- the command
 @click.command("report")
 @click.argument("logs", nargs=-1)
-@click.option("-r", "--requirements", "requirements", multiple=True,
-              type=click.Path(exists=True),
-              help="Requirement file or folder (runs the audit); repeatable. Default: "
-                   "./requirements.")
-@click.option("-b", "--bindings", "bindings", multiple=True, type=click.Path(exists=True),
-              help="Signal binding file (TOML); repeatable. Default: *.bindings.toml beside "
-                   "the requirements.")
-@click.option("--bind", "inline", multiple=True, metavar="NAME=EXPR",
-              help="Bind a FRET variable inline.")
-@click.option("--tick-period", default=None, metavar="DURATION", help="As fretc audit.")
-@click.option("--tick-topic", default=None, metavar="TOPIC", help="As fretc audit.")
-@click.option("--time-base", type=click.Choice(["log", "header"]), default=None,
-              help="As fretc audit.")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True)
-@click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]), default="auto",
-              show_default=True)
-@click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
-              help="Ticks of values kept each side of a trigger and a violation.")
+@audit_input_options
 @click.option("--from-json", "from_json", type=click.Path(exists=True, dir_okay=False),
               default=None, help="Report an audit document (fretc audit --json) instead of "
                                  "running the audit.")

@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from fretish import FretishSyntaxError, parse
+from compiler.printers import expr_text
 from fretish import ast as A
 from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
 
@@ -57,19 +58,9 @@ def mangle(name: str) -> str:
 
 
 def fret_text(e: A.Expr) -> str:
-    """Expression in FRET's printed style: every binary operation and negation in
-    parentheses, constants upper case."""
-    if isinstance(e, A.Var):
-        return mangle(e.name)
-    if isinstance(e, A.BoolLit):
-        return "TRUE" if e.value else "FALSE"
-    if isinstance(e, A.NumLit):
-        return e.text
-    if isinstance(e, A.Unary):
-        return f"(! {fret_text(e.operand)})" if e.op == "!" else f"(- {fret_text(e.operand)})"
-    if isinstance(e, A.Binary):
-        return f"({fret_text(e.left)} {e.op} {fret_text(e.right)})"
-    return f"{e.name}({','.join(fret_text(a) for a in e.args)})"
+    """Expression in FRET's printed style (every binary operation and negation in
+    parentheses, constants upper case): the SMV printer's."""
+    return expr_text(e)
 
 
 def has_call(e) -> bool:
