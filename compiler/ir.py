@@ -58,18 +58,22 @@ class Node:
         self.name = name
         self.lo = lo
         self.hi = hi
-        self._hash = hash((op, args, name, lo, hi))
+        self._hash = None  # computed on first use (most nodes are never hashed)
         self.text = None  # printers cache the FRET/SMV text of a node here (FTP as FTP)
         self.ztext = None  # ... and with FTP printed as (Z FALSE), as FRET's pt formulas do
 
     def __hash__(self) -> int:
-        return self._hash
+        h = self._hash
+        if h is None:
+            h = self._hash = hash((self.op, self.args, self.name, self.lo, self.hi))
+        return h
 
     def __eq__(self, other) -> bool:
         if self is other:
             return True
-        return (isinstance(other, Node) and self._hash == other._hash and self.op == other.op
-                and self.name == other.name and self.lo == other.lo and self.hi == other.hi
+        return (isinstance(other, Node) and self.op == other.op and self.name == other.name
+                and self.lo == other.lo and self.hi == other.hi
+                and (self._hash is None or other._hash is None or self._hash == other._hash)
                 and self.args == other.args)
 
     def __repr__(self) -> str:

@@ -24,6 +24,7 @@ a non-boolean initial value is an error; ``if A then B`` is ``A -> B`` everywher
 
 from __future__ import annotations
 
+import gc
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Callable, List, Optional
@@ -292,6 +293,16 @@ class _Expander:
                              getattr(e, "span", None))
 
 
+_TIME_NAMES = _PAST_FUNCS | _FUTURE_FUNCS
+
+
+def _mentions_time(e: A.Expr) -> bool:
+    """Does the expression use a temporal function or FTP (whose meaning depends on the
+    formula kind and the scope)?"""
+    return any((isinstance(n, A.Call) and n.name in _TIME_NAMES)
+               or (isinstance(n, A.Var) and n.name == "FTP") for n in A.walk(e))
+
+
 def _looks_numeric(e: A.Expr) -> bool:
     if isinstance(e, A.NumLit):
         return True
@@ -530,7 +541,21 @@ def formalize(req: A.Requirement, tick_period: Optional[Fraction] = None) -> For
     ``tick_period`` is the duration of one tick in seconds (``None``: units are read as
     ticks, as FRET does, with a warning). Raises :class:`SemanticsError` for a free-form
     requirement, a bad duration or a bad temporal-function argument.
+
+    The formula trees are acyclic, so Python's cyclic garbage collector is paused while they
+    are built (it would otherwise spend half the time rescanning the new nodes).
     """
+    paused = gc.isenabled()
+    if paused:
+        gc.disable()
+    try:
+        return _formalize(req, tick_period)
+    finally:
+        if paused:
+            gc.enable()
+
+
+def _formalize(req: A.Requirement, tick_period: Optional[Fraction]) -> Formalization:
     if req.freeform:
         raise SemanticsError("a free-form requirement has no formalization")
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
@@ -540,11 +565,20 @@ def formalize(req: A.Requirement, tick_period: Optional[Fraction] = None) -> For
     if timing in A.DURATION_TIMINGS:
         n = duration_ticks(timing_duration(req), tick_period, warnings)
 
+    exprs = [req.response, req.condition.expr if cond != "null" else None,
+             req.timing.stop if timing in A.STOP_TIMINGS else None]
+    # Without temporal functions or FTP an expression means the same in every formula:
+    # convert it once.
+    plain = not any(e is not None and _mentions_time(e) for e in exprs)
+    shared: list = []
+
     def fields(x: _Expander):
-        R = x.bool(req.response)
-        c = x.bool(req.condition.expr) if cond != "null" else None
-        s = x.bool(req.timing.stop) if timing in A.STOP_TIMINGS else None
-        return R, c, s
+        if plain and shared:
+            return shared[0]
+        out = tuple(None if e is None else x.bool(e) for e in exprs)
+        if plain:
+            shared.append(out)
+        return out
 
     # Mode formulas: functions inside a mode are expanded w.r.t. the whole run.
     m_pt = None if scope == "null" else _Expander("pt", FTP, LAST).bool(req.scope.mode)
