@@ -116,6 +116,7 @@ def compile_entry(entry) -> Compiled:
 
 
 def compile_entries(entries: Iterable) -> List[Compiled]:
+    """:func:`compile_entry` of each entry, in order."""
     return [compile_entry(e) for e in entries]
 
 

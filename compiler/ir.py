@@ -82,6 +82,7 @@ class Node:
 
     @property
     def bounded(self) -> bool:
+        """True for ``F G O H`` with a ``[lo, hi]`` window."""
         return self.hi is not None
 
 
@@ -92,6 +93,7 @@ FTP = Node("FTP")
 
 
 def const(value: bool) -> Node:
+    """TRUE or FALSE."""
     return TRUE if value else FALSE
 
 
@@ -102,6 +104,7 @@ def ap(name: str) -> Node:
 
 # --------------------------------------------------------------------------- boolean
 def not_(a: Node) -> Node:
+    """Negation; folds constants and double negation."""
     if a is TRUE or a.op == "true":
         return FALSE
     if a.op == "false":
@@ -112,6 +115,7 @@ def not_(a: Node) -> Node:
 
 
 def and_(a: Node, b: Node) -> Node:
+    """Conjunction; folds constants and ``a & a``."""
     if a.op == "false" or b.op == "false":
         return FALSE
     if a.op == "true":
@@ -124,6 +128,7 @@ def and_(a: Node, b: Node) -> Node:
 
 
 def or_(a: Node, b: Node) -> Node:
+    """Disjunction; folds constants and ``a | a``."""
     if a.op == "true" or b.op == "true":
         return TRUE
     if a.op == "false":
@@ -136,6 +141,7 @@ def or_(a: Node, b: Node) -> Node:
 
 
 def and_all(*xs: Node) -> Node:
+    """Conjunction of any number of formulas (TRUE for none)."""
     out = TRUE
     for x in xs:
         out = and_(out, x)
@@ -143,6 +149,7 @@ def and_all(*xs: Node) -> Node:
 
 
 def or_all(*xs: Node) -> Node:
+    """Disjunction of any number of formulas (FALSE for none)."""
     out = FALSE
     for x in xs:
         out = or_(out, x)
@@ -150,6 +157,7 @@ def or_all(*xs: Node) -> Node:
 
 
 def implies(a: Node, b: Node) -> Node:
+    """Implication; folds constants."""
     if a.op == "false" or b.op == "true":
         return TRUE
     if a.op == "true":
@@ -160,10 +168,12 @@ def implies(a: Node, b: Node) -> Node:
 
 
 def xor(a: Node, b: Node) -> Node:
+    """Exclusive or."""
     return Node("xor", (a, b))
 
 
 def iff(a: Node, b: Node) -> Node:
+    """Equivalence."""
     return Node("<->", (a, b))
 
 
@@ -231,10 +241,12 @@ def V(a: Node, b: Node) -> Node:
 
 # --------------------------------------------------------------------------- past time
 def Y(a: Node) -> Node:
+    """Previous (strong): false at position 0."""
     return Node("Y", (a,))
 
 
 def Z(a: Node) -> Node:
+    """Weak previous: true at position 0 (``Z FALSE`` marks the first position)."""
     return Node("Z", (a,))
 
 
@@ -283,23 +295,28 @@ def S(a: Node, b: Node) -> Node:
 
 
 def T(a: Node, b: Node) -> Node:
+    """Trigger, the dual of since: ``a T b = !(!a S !b)``."""
     return Node("T", (a, b))
 
 
 # --------------------------------------------------------------------------- terms
 def var(name: str) -> Node:
+    """A numeric variable (a term)."""
     return Node("var", name=name)
 
 
 def num(text: str) -> Node:
+    """A numeric literal, kept as written."""
     return Node("num", name=text)
 
 
 def cmp(op: str, a: Node, b: Node) -> Node:
+    """A comparison ``a op b`` of two terms (``op`` in ``= != < <= > >=``)."""
     return Node("cmp", (a, b), name=op)
 
 
 def arith(op: str, a: Node, b: Node) -> Node:
+    """Arithmetic ``a op b`` on two terms (``op`` in ``+ - * / mod ^``)."""
     return Node("arith", (a, b), name=op)
 
 
@@ -323,14 +340,17 @@ def variables(node: Node) -> list:
 
 
 def has_op(node: Node, ops) -> bool:
+    """Does any sub-node of ``node`` have an ``op`` in ``ops``?"""
     return any(n.op in ops for n in walk(node))
 
 
 def is_past(node: Node) -> bool:
+    """Does the formula use a past-time operator or FTP?"""
     return has_op(node, PAST_UNARY + PAST_BINARY + ("FTP",))
 
 
 def is_future(node: Node) -> bool:
+    """Does the formula use a future-time operator or LAST?"""
     return has_op(node, FUTURE_UNARY + FUTURE_BINARY + ("LAST",))
 
 

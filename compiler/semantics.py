@@ -620,6 +620,7 @@ def _formalize(req: A.Requirement, tick_period: Optional[Fraction]) -> Formaliza
 
 
 def timing_duration(req: A.Requirement) -> A.Duration:
+    """The duration of a ``within/for/after`` timing; :class:`SemanticsError` if absent."""
     if req.timing.duration is None:
         raise SemanticsError(f"timing '{req.timing.kind}' needs a duration", req.timing.span)
     return req.timing.duration
