@@ -688,6 +688,20 @@ class McapSource(LogSource):
                             start = _peek_chunk_start(f, pos)
                             if start is not None:
                                 what += f" (a Chunk whose messages start at log time {start})"
+                            f.seek(pos + 9)
+                            recovered = _truncated_chunk_records(f.read())
+                            n_msgs = 0
+                            for r in recovered:
+                                if isinstance(r, Schema):
+                                    schemas[r.id] = r
+                                elif isinstance(r, Channel):
+                                    channels[r.id] = r
+                                elif isinstance(r, McapMessage):
+                                    take(r, pos)
+                                    n_msgs += 1
+                            if n_msgs:
+                                what += (f"; {n_msgs} complete messages recovered from the cut "
+                                         "chunk (unverified: its CRC covers the whole chunk)")
                     self.partial = True
                     self.damage_time = last_good
                     self._problem(P.TRUNCATED, None, last_good,
@@ -755,6 +769,49 @@ class McapSource(LogSource):
         self._scanned = (schemas, channels)
         if first_time is not None:
             self._start_time, self._end_time = first_time, last_good
+
+
+def _truncated_chunk_records(tail: bytes) -> list[Any]:
+    """The complete records at the start of a Chunk record cut short by the end of the file.
+
+    ``tail`` is what the file holds after the chunk's 9-byte record header. Layout (MCAP
+    spec, "Chunk"): message_start_time u64, message_end_time u64, uncompressed_size u64,
+    uncompressed_crc u32, compression (u32 length + bytes), records (u64 length + bytes).
+    The compressed prefix is decompressed as a stream (zstd, lz4 frames or none) and parsed
+    record by record until a record is incomplete. Returns [] when nothing can be recovered.
+    """
+    try:
+        (clen,) = struct.unpack_from("<I", tail, 28)
+        compression = tail[32:32 + clen].decode("ascii")
+        data = tail[32 + clen + 8:]
+        if compression == "":
+            raw = data
+        elif compression == "zstd":
+            import zstandard
+
+            raw = zstandard.ZstdDecompressor().decompressobj().decompress(data)
+        elif compression == "lz4":
+            import lz4.frame
+
+            raw = lz4.frame.LZ4FrameDecompressor().decompress(data)
+        else:
+            return []
+    except Exception:  # a cut header or a cut compressed stream: nothing to recover
+        return []
+    records: list[Any] = []
+    at = 0
+    while at + 9 <= len(raw):
+        opcode, length = _HEAD.unpack_from(raw, at)
+        if at + 9 + length > len(raw):
+            break
+        try:
+            rec = _parse_record(opcode, raw[at + 9:at + 9 + length])
+        except _RECORD_ERRORS:
+            break
+        if rec is not None:
+            records.append(rec)
+        at += 9 + length
+    return records
 
 
 def _peek_chunk_start(f: io.BufferedReader, pos: int) -> int | None:
