@@ -81,7 +81,9 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
                 ltl3 += f" @ {_s(v.ltl3.time_ns, st)}"
             notes = []
             if v.partial:
-                notes.append(f"partial (damage at {_s(la.damage_time_ns, st)})")
+                where = (_s(la.damage_time_ns, st) if la.damage_time_ns is not None
+                         else "the first message")
+                notes.append(f"partial (damage at {where})")
             if v.error:
                 notes.append(v.error)
             elif v.verdict == "vacuous":
@@ -115,8 +117,12 @@ def _log_notes(la: LogAudit) -> List[str]:
         out.append(f"[magenta]not audited[/magenta]: {escape(la.error)}")
         return out
     if la.partial:
-        out.append(f"[yellow]partial[/yellow]: the log ends early (damage after "
-                   f"{_s(la.damage_time_ns, st)}); audited up to there")
+        if la.damage_time_ns is None:
+            out.append("[yellow]partial[/yellow]: the log is damaged before its first "
+                       "readable message; nothing to audit")
+        else:
+            out.append(f"[yellow]partial[/yellow]: the log ends early (damage after "
+                       f"{_s(la.damage_time_ns, st)}); audited up to there")
     if la.warmup_ticks:
         out.append(f"{la.warmup_ticks} warm-up ticks not evaluated (waiting for "
                    f"{escape(', '.join(la.waiting_for)) or 'the first messages'}; first evaluated tick "
