@@ -238,3 +238,34 @@ def test_hostile_input_cannot_inject_code(tmp_path):
         assert M.__name__.isidentifier() and M.__name__.startswith("Monitor_")
         for v in M.VARIABLES:
             assert isinstance(v, str)
+
+
+# --------------------------------------------------------------------------- numeric
+TERMS = ["x", "y", "2", "0.5", "-3", "x + y", "x - 2 * y", "x / y", "y mod 3", "x ^ 2",
+         "absReal(x - y)", "minReal(x, y)", "maxInt(x, 3)", "preReal(0, x)", "preInt(1, y)"]
+COMPARE = ["<", "<=", ">", ">=", "=", "!="]
+
+
+@settings(max_examples=150, deadline=None)
+@given(data=st.data())
+def test_numeric_monitors_agree_with_reference_evaluator(data):
+    def atom():
+        return (f"{data.draw(st.sampled_from(TERMS))} {data.draw(st.sampled_from(COMPARE))} "
+                f"{data.draw(st.sampled_from(TERMS))}")
+
+    cond = data.draw(st.sampled_from(["", "upon {a}", "whenever {a}", "when {a} & b"]))
+    timing = data.draw(st.sampled_from(["always", "eventually", "within 2 ticks",
+                                        "for 1 tick", "immediately", "until b"]))
+    scope = data.draw(st.sampled_from(["", "in m", "after m", "only before m"]))
+    text = " ".join(p for p in (scope, cond.format(a=atom()), "the sw shall", timing,
+                                "satisfy", atom()) if p)
+    c = compile_entry(entry("N", text))
+    mod = load(render_module([c], "numeric"))
+    values = st.one_of(st.integers(-4, 4), st.sampled_from([0.0, 0.5, -1.5, 2.25]))
+    trace = data.draw(st.lists(st.fixed_dictionaries(
+        {"x": values, "y": values, "b": st.booleans(), "m": st.booleans()}),
+        min_size=1, max_size=10))
+    m = mod.MONITORS["N"]()
+    got = [m.step(s) for s in trace]
+    assert got == [bool(v) for v in series(c.formalization.pt, trace)], text
+    assert m.finish() == ft_at(c.formalization.ft, trace), text
