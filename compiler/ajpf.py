@@ -156,6 +156,9 @@ def emit_psl(compiled, mapping_path: Optional[str] = None) -> Dict[str, str]:
     groups: Dict[str, List] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
+    from .codegen import file_stems
+
+    stems = file_stems(groups)
     out: Dict[str, str] = {}
     for source, items in groups.items():
         used: set = set()
@@ -173,8 +176,7 @@ def emit_psl(compiled, mapping_path: Optional[str] = None) -> Dict[str, str]:
                 lines.append("//   no AJPF property: " + _comment(str(exc)))
                 continue
             lines.append(f"{_label(c.id, used)}: {formula}")
-        stem = re.sub(r"[^A-Za-z0-9_]", "_", source.rsplit("/", 1)[-1].rsplit(".", 1)[0])
-        out[stem] = "\n".join(lines) + "\n"
+        out[stems[source]] = "\n".join(lines) + "\n"
     return out
 
 

@@ -468,14 +468,31 @@ def render_module(compiled_list, module_name: str) -> str:
         module_name=module_name, monitors=monitors, skipped=skipped, digest=digest)
 
 
+def file_stems(sources, suffix: str = "") -> Dict[str, str]:
+    """A distinct Python-identifier stem per requirement file, in order: the file name's
+    stem (``requirements/r1.fret`` -> ``r1`` + ``suffix``), with ``_2``, ``_3`` ... added when
+    two files of different folders share a name (so no output overwrites another)."""
+    out: Dict[str, str] = {}
+    used: set = set()
+    for source in sources:
+        if source in out:
+            continue
+        base = re.sub(r"[^A-Za-z0-9_]", "_", str(source).rsplit("/", 1)[-1].rsplit(".", 1)[0])
+        base = base if base and not base[0].isdigit() else f"m_{base}"
+        stem, k = f"{base}{suffix}", 2
+        while stem in used:
+            stem, k = f"{base}_{k}{suffix}", k + 1
+        used.add(stem)
+        out[source] = stem
+    return out
+
+
 def emit_monitors(compiled) -> Dict[str, str]:
-    """One module per requirement file: ``{module stem: source text}``, in input order."""
+    """One module per requirement file: ``{module stem: source text}``, in input order
+    (stems from :func:`file_stems`, ``r1.fret`` -> ``r1_monitors``)."""
     groups: Dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
-    out: Dict[str, str] = {}
-    for source, items in groups.items():
-        stem = re.sub(r"[^A-Za-z0-9_]", "_", source.rsplit("/", 1)[-1].rsplit(".", 1)[0])
-        stem = f"{stem}_monitors" if stem and not stem[0].isdigit() else f"m_{stem}_monitors"
-        out[stem] = render_module(items, stem)
-    return out
+    stems = file_stems(groups, "_monitors")
+    return {stems[source]: render_module(items, stems[source])
+            for source, items in groups.items()}

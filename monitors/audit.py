@@ -321,7 +321,7 @@ def load_plan(config: AuditConfig) -> AuditPlan:
             options.
     """
     from compiler.build import compile_entries
-    from compiler.codegen import emit_monitors
+    from compiler.codegen import emit_monitors, file_stems
     from fretish.errors import FretishError
     from fretish.files import load_requirements
 
@@ -356,23 +356,18 @@ def load_plan(config: AuditConfig) -> AuditPlan:
         rp.tick_period = e.tick_period
         plans.append(rp)
         to_compile.append(e)
-    stems: Dict[str, str] = {}
-    for e in to_compile:
-        other = stems.setdefault(_stem_of(e.source), e.source)
-        if other != e.source:
-            raise AuditInputError(f"{other} and {e.source} would give the same monitor module "
-                                  f"({_stem_of(e.source)}); rename one of them")
     compiled = compile_entries(to_compile)
     ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
     modules = emit_monitors(ok) if ok else {}
     classes: Dict[Tuple[str, str], type] = {}
     skipped: Dict[Tuple[str, str], str] = {}
+    stem_of = file_stems([c.entry.source for c in ok], "_monitors")  # as emit_monitors
     for stem, text in modules.items():
         mod = types.ModuleType(_MODULE_PREFIX + stem)
         exec(compile(text, f"<fretc monitors {stem}>", "exec"), mod.__dict__)
         # map by (source, id): emit_monitors groups by source in input order
         for c in ok:
-            if _stem_of(c.entry.source) == stem:
+            if stem_of[c.entry.source] == stem:
                 src = c.entry.source
                 if c.id in mod.MONITORS:
                     classes[(src, c.id)] = mod.MONITORS[c.id]
@@ -414,12 +409,6 @@ def load_plan(config: AuditConfig) -> AuditPlan:
                               ": nothing to audit")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
                      freeform)
-
-
-def _stem_of(source: str) -> str:
-    """The module stem ``compiler.codegen.emit_monitors`` gives a requirement file."""
-    stem = re.sub(r"[^A-Za-z0-9_]", "_", source.rsplit("/", 1)[-1].rsplit(".", 1)[0])
-    return f"{stem}_monitors" if stem and not stem[0].isdigit() else f"m_{stem}_monitors"
 
 
 # --------------------------------------------------------------------------- logs

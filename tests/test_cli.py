@@ -75,3 +75,15 @@ def test_console_script_runs_as_users_wrote_it():
                          cwd=ROOT, capture_output=True, text=True)
     assert got.returncode == 0, got.stderr
     assert "R1" in got.stdout
+
+
+def test_files_with_the_same_name_get_distinct_modules(tmp_path):
+    for folder, var in (("a", "p"), ("b", "q")):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "reqs.fret").write_text(f"R: the sw shall always satisfy {var}\n")
+    out = tmp_path / "mods"
+    res = run(str(tmp_path / "a" / "reqs.fret"), str(tmp_path / "b" / "reqs.fret"),
+              "--emit", "monitor", "-o", str(out))
+    assert res.exit_code == 0
+    assert sorted(p.name for p in out.iterdir()) == ["reqs_2_monitors.py", "reqs_monitors.py"]
+    assert "'q'" in (out / "reqs_2_monitors.py").read_text()
