@@ -143,6 +143,14 @@ def verdict_events(log: dict) -> List[VerdictEvent]:
             add(fv["log_time_ns"], "ERROR", "violation",
                 f"{rid} VIOLATED at tick {fv['tick']} ({_s(fv['log_time_ns'], start)}): "
                 f"{fv.get('reason', '')} - {text}")
+            # the later failed triggers (the audit lists the first ones)
+            listed = v.get("violation_list") or []
+            for k, item in enumerate(listed[1:], start=2):
+                w = item["violation"]
+                add(w["time_ns"], "ERROR", "violation",
+                    f"{rid} violation {k} of {v.get('violations')}: trigger at tick "
+                    f"{item['trigger']['tick']}, missed at tick {w['tick']} "
+                    f"({_s(w['time_ns'], start)}) - {text}")
         l3 = v.get("ltl3") or {}
         if l3.get("status") in ("violated", "satisfied") and l3.get("time_ns") is not None:
             add(l3["time_ns"], "ERROR" if l3["status"] == "violated" else "INFO", "ltl3",

@@ -872,6 +872,8 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
             obligation=obligation.replace("t+k", f"t+{k}") if k is not None else obligation,
             reason=w.reason)
         centres = [w.trigger_tick, vt]
+        v.violation_list = [(tp(x.trigger_tick), tp(min(x.violation_tick, n - 1)))
+                            for x in ev.listed]
     else:
         vt = st_tick if (status == "violated" and st_tick is not None) else n - 1
         fv = FirstViolation(at=tp(vt), obligation=obligation,

@@ -39,7 +39,7 @@ of the requirement's own variables for this (1 byte per tick for a boolean, 8 fo
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Dict, List, Mapping, Optional, Tuple
 
@@ -51,6 +51,10 @@ __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement
            "scope_intervals", "OBLIGATIONS"]
 
 Interval = Tuple[int, int]
+
+
+#: How many failed triggers an :class:`Evidence` lists (all are counted).
+MAX_LISTED = 100
 
 
 class EvidenceUnsupported(ValueError):
@@ -91,6 +95,7 @@ class Evidence:
         triggers: number of trigger points over all intervals.
         violations: number of triggers whose obligation failed.
         violation: the first of them, or None.
+        listed: the failed triggers in order, at most :data:`MAX_LISTED` of them.
         ticks: trace length.
     """
 
@@ -103,6 +108,7 @@ class Evidence:
     ticks: int
     first_interval: Optional[Interval] = None
     first_trigger: Optional[int] = None
+    listed: List[Violation] = field(default_factory=list)
 
 
 # --------------------------------------------------------------------------- expressions
@@ -522,6 +528,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
     checker = _Checker(timing, negate, R, S, k)
     triggers = violations = 0
     first: Optional[Violation] = None
+    listed: List[Violation] = []
     first_trigger: Optional[int] = None
     for s, e in intervals:
         if cond == "null":
@@ -540,12 +547,14 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
             bad = checker.check(t, e)
             if bad is not None:
                 violations += 1
-                if first is None:
+                if len(listed) < MAX_LISTED:
                     window, vt, reason = bad
-                    first = Violation(t, (s, e), window, vt, reason)
+                    listed.append(Violation(t, (s, e), window, vt, reason))
+                    if first is None:
+                        first = listed[0]
     holds = violations == 0
     return Evidence(holds=holds, vacuous=holds and (not intervals or triggers == 0),
                     intervals=len(intervals), triggers=triggers, violations=violations,
                     violation=first, ticks=n,
                     first_interval=intervals[0] if intervals else None,
-                    first_trigger=first_trigger)
+                    first_trigger=first_trigger, listed=listed)

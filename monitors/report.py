@@ -511,6 +511,14 @@ def _witness(v: dict) -> List[Tuple[str, str]]:
     if v.get("triggers") is not None:
         out.append(("triggers", f"{v['triggers']} in {v.get('intervals')} scope interval(s), "
                                 f"{v.get('violations')} failed"))
+    listed = v.get("violation_list") or []
+    if len(listed) > 1:
+        shown = ", ".join(f"{_fmt_s(x['violation']['time_s'])} (#{x['violation']['tick']})"
+                          for x in listed[:20])
+        more = len(listed) - 20
+        total = v.get("violations") or len(listed)
+        out.append(("violations at", shown + (f", ... ({more} more listed)" if more > 0 else "")
+                    + (f"; {total} in all" if total > len(listed[:20]) else "")))
     out.append(("ticks", f"{v.get('ticks_evaluated')} evaluated"
                          + (f", {v['warmup_ticks']} warm-up" if v.get("warmup_ticks") else "")
                          + (f" ({v['engine']} engine)" if v.get("engine") else "")))

@@ -130,6 +130,9 @@ class Verdict:
         ticks_evaluated, warmup_ticks: as :class:`LogAudit` (per log).
         intervals, triggers, violations: counts from the interval semantics (None when it
             could not be evaluated).
+        violation_list: (trigger, violation) time points of the failed triggers in order,
+            the first :data:`monitors.evidence.MAX_LISTED` of them (``violations`` counts
+            all).
         engine: ``"stepwise"`` (the generated monitor's ``step()``), ``"vectorized"``
             (``compiler.vectorized`` over the columns; equal by test) or ``"interval"``
             (no online monitor exists - a future-time function - so FRET's interval
@@ -153,6 +156,7 @@ class Verdict:
     intervals: Optional[int] = None
     triggers: Optional[int] = None
     violations: Optional[int] = None
+    violation_list: List[Tuple[TimePoint, TimePoint]] = field(default_factory=list)
     engine: Optional[str] = None
     notes: List[str] = field(default_factory=list)
     error: Optional[str] = None
@@ -184,7 +188,10 @@ class Verdict:
                         for k, rows in self.sources.items()},
             "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
             "intervals": self.intervals, "triggers": self.triggers,
-            "violations": self.violations, "engine": self.engine, "notes": self.notes,
+            "violations": self.violations,
+            "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}
+                               for t, w in self.violation_list],
+            "engine": self.engine, "notes": self.notes,
             "error": self.error,
         }
 

@@ -117,3 +117,36 @@ def test_csv_trace_and_junit(tmp_path):
     assert root.get("tests") == "2" and root.get("failures") == "1"
     failed = [c.get("name") for c in root.iter("testcase") if c.find("failure") is not None]
     assert failed == ["C2"]
+
+
+def test_violations_are_listed_and_annotated(tmp_path):
+    """Every failed trigger is counted, the first ones are listed with their times, and the
+    annotated MCAP carries one ERROR event per listed violation."""
+    import json as _json
+
+    from click.testing import CliRunner
+    from mcap.reader import make_reader
+
+    from fretc.cli import main as fretc_main
+    from monitors.evidence import MAX_LISTED
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "audit.json"
+    res = CliRunner().invoke(fretc_main, [
+        "report", "-r", str(root / "requirements"), str(root / "traces" / "interceptor_fault.mcap"),
+        "-o", str(tmp_path / "report"), "--annotate", str(tmp_path / "annotated")])
+    assert res.exit_code == 1, res.output
+    doc = _json.loads((tmp_path / "report" / "audit.json").read_text())
+    r3 = next(v for v in doc["logs"][0]["verdicts"] if v["requirement"] == "R3")
+    listed = r3["violation_list"]
+    assert r3["violations"] > MAX_LISTED and len(listed) == MAX_LISTED
+    assert listed[0]["violation"]["tick"] == r3["first_violation"]["tick"]
+    ticks = [item["violation"]["tick"] for item in listed]
+    assert ticks == sorted(ticks) and len(set(ticks)) == len(ticks)
+    with open(tmp_path / "annotated" / "interceptor_fault.mcap", "rb") as f:
+        events = [_json.loads(m.data) for _s, _c, m in make_reader(f).iter_messages(
+            topics=["/fretc/verdicts"])]
+    r3_violations = [e for e in events if e["message"].startswith(("R3 VIOLATED",
+                                                                     "R3 violation "))]
+    assert len(r3_violations) == MAX_LISTED
+    assert all(e["level"] == 4 for e in r3_violations)  # foxglove.Log ERROR
