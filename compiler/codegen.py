@@ -42,9 +42,10 @@ TABLE_MAX_APS = 10
 MAX_AUTOMATON_STATES = 5000
 #: Spot's determinization of bounded operators (``F[0,n]`` unrolls into n nested ``X``) grows
 #: exponentially with the bounds: measured 0.7 s for ``in m upon p ... within 12 ticks`` and
-#: over a minute for 16. LTL3 monitors are built only when ft_inf's largest bound and the
+#: over a minute for 16. Spot's monitors are built only when ft_inf's largest bound and the
 #: sum of its bounds stay within these limits (a deterministic rule, so the same input always
-#: gives the same module); otherwise ``status`` stays "unknown" and the module says why.
+#: gives the same module); beyond them the LTL3 automaton comes from formula progression
+#: (:mod:`compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
 MAX_LTL3_BOUND = 12
 MAX_LTL3_BOUND_SUM = 96
 
@@ -325,6 +326,28 @@ def _bdd_code(f, aps: List[str]) -> str:
     raise CodegenError(f"unexpected Boolean operator in an automaton edge: {f}")
 
 
+def _progression_automata(ft_inf: Node, atoms_by_name: Dict[str, Node], bounds: List[int]):
+    """LTL3 automata by formula progression (:mod:`compiler.ltl3`) for ft_inf whose bounds
+    are too large for Spot; ``(bad, good, note)`` with both None when that fails too."""
+    from .ltl3 import MAX_ATOMS, MAX_STATES, progression_tables
+
+    atoms = list(dict.fromkeys(atoms_by_name.values()))
+    tables = progression_tables(ft_inf, atoms)
+    why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what Spot "
+           f"determinizes quickly (largest {MAX_LTL3_BOUND}, sum {MAX_LTL3_BOUND_SUM})")
+    if tables is None:
+        return None, None, (
+            f"no LTL3 monitor: {why}, and formula progression needs more than {MAX_STATES} "
+            f"residuals or {MAX_ATOMS} atoms; status stays 'unknown' (step and finish "
+            "unaffected)")
+    bad_table, good_table, init = tables
+    bad = _Automaton(list(atoms), init, bad_table, None, empty=ft_inf.op == "false")
+    good = _Automaton(list(atoms), init, good_table, None, empty=ft_inf.op == "true")
+    return bad, good, (f"LTL3 by formula progression ({len(bad_table) - 2} residual states): "
+                       f"{why}; verdicts are sound but may come later than the exact LTL3 "
+                       "verdict when a residual is unsatisfiable without simplifying to FALSE")
+
+
 # --------------------------------------------------------------------------- per requirement
 @dataclass
 class MonitorSource:
@@ -387,10 +410,7 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     from .ir import not_
     bounds = [n.hi for n in ir.walk(f.ft_inf) if n.hi is not None]
     if bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
-        bad = good = None
-        note = (f"no LTL3 monitor: ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} "
-                f"ticks) exceed what Spot determinizes quickly (largest {MAX_LTL3_BOUND}, sum "
-                f"{MAX_LTL3_BOUND_SUM}); status stays 'unknown' (step and finish unaffected)")
+        bad, good, note = _progression_automata(f.ft_inf, atoms_by_name, bounds)
     else:
         bad = _build_automaton(f.ft_inf, atoms_by_name)
         good = _build_automaton(not_(f.ft_inf), atoms_by_name)

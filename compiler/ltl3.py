@@ -1,0 +1,261 @@
+"""LTL3 monitors by formula progression, for formulas whose bounds are too large for Spot.
+
+Spot determinizes bounded operators by unrolling ``F[0,n]`` into n nested ``X``, which grows
+exponentially with n (see :data:`compiler.codegen.MAX_LTL3_BOUND`). Formula progression
+(Bacchus & Kabanza, "Planning for temporally extended goals", AMAI 1998; used for LTL3 by
+Bauer, Leucker & Schallhart, TOSEM 2011, section 4) keeps bounds symbolic instead: reading one
+letter turns a formula into its *residual*, the formula the rest of the word must satisfy
+(``F[0,k] q`` becomes ``q | F[0,k-1] q``). Residuals are normalized (conjunctions and
+disjunctions flattened, sorted and deduplicated; ``F[0,a] x & F[0,b] x`` is ``F[0,min] x``;
+the dual rules for ``|`` and ``G``), so for FRET's formulas their number stays small, and the
+reachable residuals over all letters form a deterministic automaton built ahead of time.
+
+A residual that normalizes to FALSE means no continuation satisfies the formula (violated);
+TRUE means every continuation does (satisfied). The verdicts are therefore sound, never
+contradicted; they can come later than the exact LTL3 verdict when a residual is unsatisfiable
+(or valid) without normalizing to FALSE (TRUE).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Dict, List, Optional, Sequence, Tuple
+
+from . import ir
+from .ir import FALSE, TRUE, Node
+from .printers import to_smv
+
+#: Give up beyond this many residual states (the module then has no LTL3 automaton).
+MAX_STATES = 4096
+#: Letters are enumerated: at most this many atomic propositions.
+MAX_ATOMS = 10
+
+
+def _key(n: Node) -> str:
+    return to_smv(n)
+
+
+def _conj(items: Sequence[Node]) -> Node:
+    """Normalized conjunction: flattened, TRUE dropped, FALSE absorbing, sorted, deduplicated;
+    ``F[0,a] x & F[0,b] x`` keeps the smaller window, ``G[0,a] x & G[0,b] x`` the larger."""
+    flat: List[Node] = []
+    stack = list(items)
+    while stack:
+        n = stack.pop()
+        if n.op == "&":
+            stack.extend(n.args)
+        elif n.op == "false":
+            return FALSE
+        elif n.op != "true":
+            flat.append(n)
+    return _rebuild(flat, "&")
+
+
+def _disj(items: Sequence[Node]) -> Node:
+    """Normalized disjunction (the dual of :func:`_conj`)."""
+    flat: List[Node] = []
+    stack = list(items)
+    while stack:
+        n = stack.pop()
+        if n.op == "|":
+            stack.extend(n.args)
+        elif n.op == "true":
+            return TRUE
+        elif n.op != "false":
+            flat.append(n)
+    return _rebuild(flat, "|")
+
+
+_BOUND = re.compile(r"\[\d+,\d+\]")
+_SHAPES: Dict[str, str] = {}
+
+
+def _shape(n: Node) -> str:
+    """The text of ``n`` with every bound erased: formulas that differ only in bounds."""
+    k = _key(n)
+    got = _SHAPES.get(k)
+    if got is None:
+        got = _SHAPES[k] = _BOUND.sub("[]", k)
+    return got
+
+
+def _combine(rels) -> Optional[int]:
+    """Combine the relations of the parts of two formulas built the same monotone way."""
+    out = 0
+    for r in rels:
+        if r is None:
+            return None
+        if r and out and r != out:
+            return None
+        out = out or r
+    return out
+
+
+def _relation(x: Node, y: Node) -> Optional[int]:
+    """-1 when ``x`` implies ``y``, +1 when ``y`` implies ``x``, 0 when they are the same,
+    None when unknown. Sound for formulas of the same shape: ``F[0,a]`` implies ``F[0,b]``
+    for a <= b, ``G[0,b]`` implies ``G[0,a]``, and the operators are monotone (``!`` and the
+    left of ``->`` reverse)."""
+    if x is y or _key(x) == _key(y):
+        return 0
+    if x.op != y.op or x.name != y.name or len(x.args) != len(y.args) or x.lo != y.lo:
+        return None
+    op = x.op
+    if op == "!":
+        r = _relation(x.args[0], y.args[0])
+        return None if r is None else -r
+    if op == "->":
+        r = _relation(x.args[0], y.args[0])
+        return _combine([None if r is None else -r, _relation(x.args[1], y.args[1])])
+    if op in ("&", "|", "U", "V", "X") or (op in ("F", "G") and x.hi is None):
+        return _combine(_relation(a, b) for a, b in zip(x.args, y.args))
+    if op in ("F", "G") and x.lo == 0:
+        if x.hi == y.hi:
+            bound = 0
+        elif op == "F":
+            bound = -1 if x.hi < y.hi else 1
+        else:
+            bound = 1 if x.hi < y.hi else -1
+        return _combine([_relation(x.args[0], y.args[0]), bound])
+    return None
+
+
+def _rebuild(flat: List[Node], op: str) -> Node:
+    """Deduplicate, drop what another part makes redundant (``&`` keeps the stronger of two
+    comparable parts, ``|`` the weaker), detect ``p`` beside ``!p``, sort, rebuild."""
+    by_shape: Dict[str, List[Node]] = {}
+    for n in flat:
+        group = by_shape.setdefault(_shape(n), [])
+        keep = True
+        for i, old in enumerate(group):
+            r = _relation(n, old)
+            if r is None:
+                continue
+            if r == 0:
+                keep = False
+                break
+            # r == -1: n implies old
+            n_wins = (r == -1) == (op == "&")
+            if n_wins:
+                group[i] = n
+            keep = False
+            break
+        if keep:
+            group.append(n)
+    parts = [n for group in by_shape.values() for n in group]
+    keys = {_key(p) for p in parts}
+    for p in parts:
+        if p.op == "!" and _key(p.args[0]) in keys:
+            return FALSE if op == "&" else TRUE
+    parts.sort(key=lambda p: (_shape(p), _key(p)))
+    if not parts:
+        return TRUE if op == "&" else FALSE
+    out = parts[0]
+    for p in parts[1:]:
+        out = Node(op, (out, p))
+    return out
+
+
+def progress(n: Node, letter: Dict[Node, bool], memo: Dict[Node, Node]) -> Node:
+    """The residual of ``n`` after one letter (``letter`` maps each atom to its value)."""
+    got = memo.get(n)
+    if got is not None:
+        return got
+    op = n.op
+    a = n.args
+    if n in letter:
+        out = TRUE if letter[n] else FALSE
+    elif op in ("true", "false"):
+        out = n
+    elif op == "!":
+        out = ir.not_(progress(a[0], letter, memo))
+    elif op == "&":
+        out = _conj([progress(a[0], letter, memo), progress(a[1], letter, memo)])
+    elif op == "|":
+        out = _disj([progress(a[0], letter, memo), progress(a[1], letter, memo)])
+    elif op == "->":
+        out = _disj([ir.not_(progress(a[0], letter, memo)), progress(a[1], letter, memo)])
+    elif op in ("<->", "xor"):
+        x, y = progress(a[0], letter, memo), progress(a[1], letter, memo)
+        same = _disj([_conj([x, y]), _conj([ir.not_(x), ir.not_(y)])])
+        out = same if op == "<->" else ir.not_(same)
+    elif op == "X":
+        out = a[0]
+    elif op in ("F", "G") and n.hi is None:
+        now = progress(a[0], letter, memo)
+        out = _disj([now, n]) if op == "F" else _conj([now, n])
+    elif op in ("F", "G"):
+        if n.lo > 0:
+            out = Node(op, a, lo=n.lo - 1, hi=n.hi - 1)
+        else:
+            rest = (ir.F if op == "F" else ir.G)(a[0], 0, n.hi - 1)
+            now = progress(a[0], letter, memo)
+            out = _disj([now, rest]) if op == "F" else _conj([now, rest])
+    elif op == "U":
+        out = _disj([progress(a[1], letter, memo),
+                     _conj([progress(a[0], letter, memo), n])])
+    elif op == "V":
+        out = _conj([progress(a[1], letter, memo),
+                     _disj([progress(a[0], letter, memo), n])])
+    else:
+        raise ValueError(f"cannot progress IR node {op!r} (not an atom of the letter?)")
+    memo[n] = out
+    return out
+
+
+def _normalize(n: Node) -> Node:
+    """Bring a formula to the normal form residuals use (so the initial state compares
+    equal to residuals that come back to it)."""
+    if n.op == "&":
+        return _conj([_normalize(x) for x in n.args])
+    if n.op == "|":
+        return _disj([_normalize(x) for x in n.args])
+    if n.args and n.op not in ("cmp", "call", "past", "future"):
+        return ir.rebuild(n, tuple(_normalize(x) for x in n.args))
+    return n
+
+
+def progression_tables(formula: Node, atoms: List[Node]) -> Optional[Tuple[list, list, int]]:
+    """Deterministic residual automaton of ``formula`` over the letters of ``atoms`` (bit i
+    of a letter = value of ``atoms[i]``), as two tables in :mod:`compiler.codegen`'s format:
+    ``bad[state][letter]`` (-1 when the residual is FALSE: violated) and
+    ``good[state][letter]`` (-1 when it is TRUE: satisfied), and the initial state 0.
+    Returns None when there are more than :data:`MAX_ATOMS` atoms or :data:`MAX_STATES`
+    residuals."""
+    if len(atoms) > MAX_ATOMS:
+        return None
+    init = _normalize(formula)
+    states: List[Node] = [init]
+    index: Dict[str, int] = {_key(init): 0}
+    letters = [{atom: bool((bits >> i) & 1) for i, atom in enumerate(atoms)}
+               for bits in range(1 << len(atoms))]
+    nxt: List[List[Node]] = []
+    i = 0
+    while i < len(states):
+        row = []
+        for letter in letters:
+            r = progress(states[i], letter, {})
+            if r.op not in ("true", "false"):
+                k = _key(r)
+                if k not in index:
+                    if len(states) >= MAX_STATES:
+                        return None
+                    index[k] = len(states)
+                    states.append(r)
+            row.append(r)
+        nxt.append(row)
+        i += 1
+    n = len(states)
+    true_sink, false_sink = n, n + 1  # absorbing states after a definitive verdict
+    bad = []
+    good = []
+    for row in nxt:
+        bad.append([-1 if r.op == "false" else true_sink if r.op == "true" else index[_key(r)]
+                    for r in row])
+        good.append([-1 if r.op == "true" else false_sink if r.op == "false"
+                     else index[_key(r)] for r in row])
+    width = 1 << len(atoms)
+    for table in (bad, good):
+        table.append([true_sink] * width)
+        table.append([false_sink] * width)
+    return bad, good, 0
