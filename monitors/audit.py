@@ -54,7 +54,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from .bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
-from .problems import BindingError, DataProblem, FretcInputError, SignalError
+from .problems import BindingError, DataProblem, FretcInputError, LogError, SignalError
 
 __all__ = ["AuditConfig", "AuditPlan", "RequirementPlan", "AuditInputError", "load_plan",
            "discover_bindings", "find_logs", "audit_log", "audit_logs", "CHUNK",
@@ -768,7 +768,64 @@ def audit_log(plan: AuditPlan, path: str,
     la.engine = engines[0] if len(engines) == 1 else "mixed"
     for r in active:
         _finalize(plan, r, result, bindings, verdicts[r.index], la)
+    if bindings is not None:
+        _operand_values(path, plan, bindings, active, verdicts, result.times)
     return finish()
+
+
+def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
+                    times) -> None:
+    """Evidence of violations: the numbers behind their boolean variables (the operands of
+    the comparisons a binding is made of, :func:`monitors.bindings.operand_signals`) at the
+    ticks whose values are shown. A second streaming pass over the log, only when something
+    was violated and only for those operands; ticks are matched by time."""
+    from .bindings import operand_signals
+    from .signals import sample
+    from .sources import open_log
+
+    wanted: Dict[str, Tuple[str, object]] = {}  # aux name -> (label, binding)
+    needs: Dict[str, List[Tuple[object, List[str]]]] = {}
+    for r in active:
+        v = verdicts[r.index]
+        if v.verdict != "violated" or not v.values:
+            continue
+        for name in r.variables:
+            b = bindings.variables.get(name)
+            if b is None or name not in v.values:
+                continue
+            try:
+                pairs = operand_signals(b)
+            except Exception:  # an operand that cannot stand alone: show the boolean only
+                continue
+            for label, aux in pairs:
+                wanted[aux.name] = (label, aux)
+                needs.setdefault(aux.name, []).append((v, [t for t, _ns, _x in v.values[name]]))
+    if not wanted:
+        return
+    at_time = {}  # tick time -> tick index of the first pass
+    for aux_name, uses in needs.items():
+        for v, ticks in uses:
+            for t in ticks:
+                at_time[int(times[t])] = t
+    aux_bindings = Bindings({name: aux for name, (_l, aux) in wanted.items()}, bindings.tick,
+                            bindings.time_base, bindings.header_lag_ns, bindings.source)
+    got: Dict[str, Dict[int, object]] = {name: {} for name in wanted}
+    try:
+        source = open_log(path, csv_period_ns=plan.csv_period_ns)
+        for tick in sample(source, aux_bindings):
+            t = at_time.get(int(tick.time))
+            if t is None:
+                continue
+            for name in wanted:
+                got[name][t] = _py(tick.values.get(name))
+    except (LogError, SignalError, OSError):
+        return  # the first pass already reported what is wrong with the log
+    for aux_name, uses in needs.items():
+        label = wanted[aux_name][0]
+        for v, ticks in uses:
+            rows = [(t, int(times[t]), got[aux_name][t]) for t in ticks if t in got[aux_name]]
+            if rows:
+                v.values[label] = rows
 
 
 def _silent_reasons(silent, problems) -> Dict[str, str]:

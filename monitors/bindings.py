@@ -919,6 +919,59 @@ class Bindings:
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source)
 
 
+def unparse(node: Node) -> str:
+    """Expression text of a binding AST node (fully parenthesized where it matters)."""
+    if isinstance(node, Const):
+        v = node.value
+        return ("true" if v else "false") if isinstance(v, bool) else repr(float(v))
+    if isinstance(node, Field):
+        return node.text()
+    if isinstance(node, Unary):
+        return f"{node.op}{unparse(node.arg)}"
+    if isinstance(node, Binary):
+        return f"({unparse(node.left)} {node.op} {unparse(node.right)})"
+    if isinstance(node, Call):
+        return f"{node.func}({', '.join(unparse(a) for a in node.args)})"
+    raise TypeError(type(node).__name__)
+
+
+_COMPARISONS = ("<", "<=", ">", ">=", "=", "!=")
+
+
+def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding]]:
+    """The numbers behind a boolean binding: the non-constant operands of the comparisons it
+    is made of (through ``& | -> !``), as ``(label, Binding)`` pairs; e.g. ``too_close =
+    "min(/scan.ranges) < 0.9"`` gives ``("too_close: min(/scan.ranges)", ...)``. At most
+    ``limit`` of them; evidence shows them next to the boolean."""
+    found: list[Node] = []
+
+    def walk(n: Node) -> None:
+        if isinstance(n, Unary) and n.op == "!":
+            walk(n.arg)
+        elif isinstance(n, Binary) and n.op in ("&", "|", "->"):
+            walk(n.left)
+            walk(n.right)
+        elif isinstance(n, Binary) and n.op in _COMPARISONS:
+            for side in (n.left, n.right):
+                if not isinstance(side, Const):
+                    found.append(side)
+
+    walk(binding.ast)
+    out: list[tuple[str, Binding]] = []
+    seen: set[str] = set()
+    for i, side in enumerate(found):
+        text = unparse(side)
+        if text.startswith("(") and text.endswith(")"):
+            text = text[1:-1]
+        if text in seen or len(out) >= limit:
+            continue
+        seen.add(text)
+        aux = compile_expression(f"{binding.name}__operand{i}", text, source=binding.source,
+                                 line=binding.line, col=binding.col, exact=False)
+        out.append((f"{binding.name}: {text}", aux))
+    return out
+
+
 def parse_inline(spec: str) -> Binding:
     """One inline binding ``NAME=EXPR`` (CLI ``--bind``); source is ``"<--bind NAME>"``.
 

@@ -150,3 +150,36 @@ def test_violations_are_listed_and_annotated(tmp_path):
                                                                      "R3 violation "))]
     assert len(r3_violations) == MAX_LISTED
     assert all(e["level"] == 4 for e in r3_violations)  # foxglove.Log ERROR
+
+
+def test_numbers_behind_a_violated_boolean_are_shown(tmp_path):
+    """R2 on sif_disabled: besides too_close (true/false), the audit shows the minimum valid
+    /scan range behind it at the same ticks; checked against the scans decoded here."""
+    import numpy as np
+    from mcap.reader import make_reader
+    from rosbags.typesys import Stores, get_typestore
+
+    root = Path(__file__).resolve().parents[1]
+    log = root / "traces" / "sif_disabled.mcap"
+    out = tmp_path / "a.json"
+    res = CliRunner().invoke(main, ["audit", "-r", str(root / "requirements"), str(log),
+                                    "--no-progress", "--json", str(out)])
+    assert res.exit_code == 1, res.output
+    doc = json.loads(out.read_text())
+    r2 = next(v for v in doc["logs"][0]["verdicts"] if v["requirement"] == "R2")
+    rows = r2["values"]["too_close: min(/scan.ranges)"]
+    flags = {r["tick"]: r["value"] for r in r2["values"]["too_close"]}
+    assert len(rows) >= 10
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    scans = []
+    with open(log, "rb") as f:
+        for _s, _c, m in make_reader(f).iter_messages(topics=["/scan"]):
+            msg = store.deserialize_cdr(m.data, "sensor_msgs/msg/LaserScan")
+            r = np.asarray(msg.ranges, dtype=np.float64)
+            r = np.where(np.isneginf(r), msg.range_min, r)
+            ok = r[(r >= msg.range_min) & (r <= msg.range_max)]
+            scans.append((m.log_time, ok.min() if ok.size else np.inf))
+    for row in rows:
+        held = [v for t, v in scans if t <= row["time_ns"]][-1]
+        assert row["value"] == pytest.approx(held)
+        assert flags[row["tick"]] == (held < 0.9)
