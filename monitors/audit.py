@@ -601,7 +601,6 @@ def _problem_json(p: DataProblem) -> dict:
             "end_time_ns": p.end_time, "detail": p.detail}
 
 
-_VAR_IN_MESSAGE = re.compile(r"variable '([A-Za-z_][A-Za-z0-9_]*)'")
 
 
 def audit_log(plan: AuditPlan, path: str,
@@ -723,8 +722,7 @@ def audit_log(plan: AuditPlan, path: str,
         try:
             result = _run_pass(plan, source, b, active, progress)
         except SignalError as exc:
-            m = _VAR_IN_MESSAGE.search(str(exc))
-            culprit = m.group(1) if m else None
+            culprit = exc.variable
             hit = [r for r in active if culprit in r.variables] if culprit else []
             _collect_problems(source, None, problems, problem_counts)
             if hit:

@@ -776,7 +776,7 @@ class Binding:
 
     def _fail(self, exc: _EvalError, context: str) -> SignalError:
         err = self._where().error(f"{exc.message}{context}", exc.node.col)
-        return SignalError(str(err))
+        return SignalError(str(err), variable=self.name)
 
     def evaluate(self, state: EvalState, context: str = "") -> bool | float:
         """Value at one tick: Python bool or float.

@@ -156,4 +156,9 @@ class BindingError(FretcInputError):
 
 
 class SignalError(FretcInputError):
-    """A binding that cannot be evaluated on a particular log (missing topic or field)."""
+    """A binding that cannot be evaluated on a particular log (missing topic or field).
+    ``variable`` names the FRET variable whose binding failed, when one did."""
+
+    def __init__(self, message: str, variable: str | None = None) -> None:
+        super().__init__(message)
+        self.variable = variable

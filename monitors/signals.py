@@ -289,7 +289,8 @@ def _sample_stream(s: Sampling, source: LogSource, bindings: Bindings, topics: s
                 try:
                     values[b.name] = b.evaluate(state)
                 except SignalError as exc:
-                    raise SignalError(f"{exc}{_context(state, log_times)}") from None
+                    raise SignalError(f"{exc}{_context(state, log_times)}",
+                                      variable=exc.variable) from None
         tick = Tick(index, t, values, dict(log_times))
         index += 1
         s.ticks += 1
