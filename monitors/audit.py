@@ -231,7 +231,22 @@ class RequirementPlan:
                 "tick_period_s": (None if self.tick_period is None
                                   else float(self.tick_period)),
                 "duration_ticks": f.ticks if f is not None else None,
-                "offline": self.offline, "error": self.error, "notes": self.notes}
+                "offline": self.offline, "error": self.error, "notes": self.notes,
+                **self._trace_json()}
+
+    def _trace_json(self) -> dict:
+        """Traceability: parent, rationale, the three formulas (FRET syntax), the source
+        hash the generated monitor carries and its class name."""
+        c = self.compiled
+        if c is None:
+            return {}
+        out = {"parent": c.entry.parent, "rationale": c.entry.rationale,
+               "source_hash": c.source_hash}
+        if c.formalization is not None:
+            out.update(ft=c.smv("ft"), ft_inf=c.smv("ft_inf"), pt=c.smv("pt"))
+        if self.monitor_cls is not None:
+            out["monitor_class"] = self.monitor_cls.__name__
+        return out
 
 
 @dataclass
