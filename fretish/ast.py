@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Optional, Tuple, Union
+from typing import NamedTuple, Optional, Tuple, Union
 
 SCOPE_KINDS = ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter", "onlyBefore")
 CONDITION_KINDS = ("null", "regular", "holding")
@@ -34,11 +34,10 @@ UNIT_SECONDS = {
 }
 
 
-@dataclass(frozen=True)
-class Span:
+class Span(NamedTuple):
     """Where a node sits in its source: 1-based ``line``/``column`` of its first character,
     ``end_line``/``end_column`` just past its last one, and 0-based character offsets
-    ``start``/``end`` into the parsed text."""
+    ``start``/``end`` into the parsed text. (A named tuple: the parser makes one per node.)"""
 
     line: int
     column: int
