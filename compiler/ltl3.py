@@ -35,35 +35,32 @@ def _key(n: Node) -> str:
     return to_smv(n)
 
 
-def _conj(items: Sequence[Node]) -> Node:
-    """Normalized conjunction: flattened, TRUE dropped, FALSE absorbing, sorted, deduplicated;
-    ``F[0,a] x & F[0,b] x`` keeps the smaller window, ``G[0,a] x & G[0,b] x`` the larger."""
+def _junction(items: Sequence[Node], op: str) -> Node:
+    """Normalized ``&`` (``op == "&"``) or ``|`` of ``items``: flattened, the neutral constant
+    dropped, the absorbing one returned, then :func:`_rebuild` (sorted, deduplicated, the
+    redundant of two comparable parts dropped)."""
+    neutral, absorbing = ("true", "false") if op == "&" else ("false", "true")
     flat: List[Node] = []
     stack = list(items)
     while stack:
         n = stack.pop()
-        if n.op == "&":
+        if n.op == op:
             stack.extend(n.args)
-        elif n.op == "false":
-            return FALSE
-        elif n.op != "true":
+        elif n.op == absorbing:
+            return FALSE if op == "&" else TRUE
+        elif n.op != neutral:
             flat.append(n)
-    return _rebuild(flat, "&")
+    return _rebuild(flat, op)
+
+
+def _conj(items: Sequence[Node]) -> Node:
+    """Normalized conjunction; ``F[0,a] x & F[0,b] x`` keeps the smaller window."""
+    return _junction(items, "&")
 
 
 def _disj(items: Sequence[Node]) -> Node:
     """Normalized disjunction (the dual of :func:`_conj`)."""
-    flat: List[Node] = []
-    stack = list(items)
-    while stack:
-        n = stack.pop()
-        if n.op == "|":
-            stack.extend(n.args)
-        elif n.op == "true":
-            return TRUE
-        elif n.op != "false":
-            flat.append(n)
-    return _rebuild(flat, "|")
+    return _junction(items, "|")
 
 
 _BOUND = re.compile(r"\[\d+,\d+\]")

@@ -296,23 +296,13 @@ def _parse_record(opcode: int, body: bytes) -> Any:
     stream = ReadDataStream(io.BytesIO(body))
     if opcode == Opcode.MESSAGE:
         return McapMessage.read(stream, len(body))
-    if opcode == Opcode.CHUNK:
-        return Chunk.read(stream)
-    if opcode == Opcode.SCHEMA:
-        return Schema.read(stream)
-    if opcode == Opcode.CHANNEL:
-        return Channel.read(stream)
-    if opcode == Opcode.HEADER:
-        return Header.read(stream)
-    if opcode == Opcode.DATA_END:
-        return DataEnd.read(stream)
-    if opcode == Opcode.FOOTER:
-        return Footer.read(stream)
-    if opcode == Opcode.CHUNK_INDEX:
-        return ChunkIndex.read(stream)
-    if opcode == Opcode.STATISTICS:
-        return Statistics.read(stream)
-    return None
+    cls = _RECORD_CLASSES.get(opcode)
+    return cls.read(stream) if cls is not None else None
+
+
+_RECORD_CLASSES = {Opcode.CHUNK: Chunk, Opcode.SCHEMA: Schema, Opcode.CHANNEL: Channel,
+                   Opcode.HEADER: Header, Opcode.DATA_END: DataEnd, Opcode.FOOTER: Footer,
+                   Opcode.CHUNK_INDEX: ChunkIndex, Opcode.STATISTICS: Statistics}
 
 
 _RECORD_ERRORS = (McapError, struct.error, UnicodeDecodeError, ValueError, EOFError, MemoryError,
