@@ -33,7 +33,7 @@ from fretish.errors import FretishError
 
 from . import ir
 from .ir import Node
-from .printers import spot_ap, to_smv, to_spot
+from .printers import to_smv, to_spot
 
 #: Above this many atomic propositions the automaton step uses condition chains instead of a
 #: letter-indexed table.

@@ -27,7 +27,7 @@ from __future__ import annotations
 import gc
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Callable, List, Optional
+from typing import List, Optional
 
 from fretish import ast as A
 try:
@@ -36,7 +36,7 @@ except ImportError:  # pragma: no cover - during bootstrap
     FretishError = Exception
 
 from . import ir
-from .ir import (FALSE, FTP, LAST, TRUE, F, G, H, Node, O, S, U, V, X, Y, Z, and_, and_all,
+from .ir import (FALSE, FTP, LAST, TRUE, F, G, H, Node, O, S, U, V, X, Y, and_, and_all,
                  implies, not_, or_)
 
 

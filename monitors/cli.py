@@ -22,7 +22,7 @@ from pathlib import Path
 
 import click
 
-__all__ = ["audit_cmd", "audit_input_options"]
+__all__ = ["audit_cmd", "audit_input_options", "audit_config"]
 
 
 def audit_input_options(f):
@@ -62,6 +62,22 @@ def audit_input_options(f):
     return f
 
 
+def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, engine,
+                 window):
+    """The :class:`monitors.audit.AuditConfig` of :func:`audit_input_options`' values
+    (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
+    from .audit import AuditConfig
+
+    if not requirements:
+        if not Path("requirements").is_dir():
+            raise click.UsageError("no --requirements given and no ./requirements folder")
+        requirements = ("requirements",)
+    return AuditConfig(requirements=tuple(requirements),
+                       bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
+                       tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
+                       engine=engine, window=window)
+
+
 @click.command("audit")
 @click.argument("logs", nargs=-1, required=True)
 @audit_input_options
@@ -78,7 +94,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from rich.console import Console
     from rich.markup import escape
 
-    from .audit import AuditConfig, AuditInputError, audit_logs, find_logs, load_plan
+    from .audit import AuditInputError, audit_logs, find_logs, load_plan
     from .audit_output import AuditProgress, junit_xml, print_summary
     from .report_model import audit_json, exit_code
 
@@ -86,15 +102,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
                   highlight=False)
     err = Console(stderr=True, highlight=False, soft_wrap=True)
-    if not requirements:
-        if Path("requirements").is_dir():
-            requirements = ("requirements",)
-        else:
-            raise click.UsageError("no --requirements given and no ./requirements folder")
-    config = AuditConfig(requirements=tuple(requirements),
-                         bindings=tuple(bindings) if bindings else None,
-                         inline=tuple(inline), tick_period=tick_period, tick_topic=tick_topic,
-                         time_base=time_base, engine=engine, window=window)
+    config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
+                          engine, window)
     try:
         plan = load_plan(config)
         paths = find_logs(logs)

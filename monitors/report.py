@@ -50,7 +50,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import click
 
-from .cli import audit_input_options
+from .cli import audit_config, audit_input_options
 from .report_model import SCHEMA
 
 __all__ = ["ReportError", "RequirementTrace", "ModuleInfo", "ReportFiles", "load_audit_json",
@@ -1035,20 +1035,12 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
             return
         json_dir = str(Path(from_json).resolve().parent)
     else:
-        from .audit import AuditConfig, AuditInputError, audit_logs, find_logs, load_plan
+        from .audit import AuditInputError, audit_logs, find_logs, load_plan
         from .report_model import audit_json
 
         json_dir = None
-        if not requirements:
-            if Path("requirements").is_dir():
-                requirements = ("requirements",)
-            else:
-                raise click.UsageError("no --requirements given and no ./requirements folder")
-        config = AuditConfig(requirements=tuple(requirements),
-                             bindings=tuple(bindings) if bindings else None,
-                             inline=tuple(inline), tick_period=tick_period,
-                             tick_topic=tick_topic, time_base=time_base, engine=engine,
-                             window=window)
+        config = audit_config(requirements, bindings, inline, tick_period, tick_topic,
+                              time_base, engine, window)
         try:
             plan = load_plan(config)
             paths = find_logs(logs)

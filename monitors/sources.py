@@ -647,6 +647,20 @@ class McapSource(LogSource):
             heapq.heappush(heap, (rec.log_time, pos, seq, rec))
             seq += 1
 
+        def absorb(records: list[Any], pos: int) -> int:
+            """Take the schemas, channels and messages of one chunk; returns the number of
+            messages."""
+            n = 0
+            for r in records:
+                if isinstance(r, Schema):
+                    schemas[r.id] = r
+                elif isinstance(r, Channel):
+                    channels[r.id] = r
+                elif isinstance(r, McapMessage):
+                    take(r, pos)
+                    n += 1
+            return n
+
         def release(limit: int | None) -> Iterator[Message]:
             nonlocal released
             while heap and (limit is None or heap[0][0] < limit):
@@ -679,16 +693,7 @@ class McapSource(LogSource):
                             if start is not None:
                                 what += f" (a Chunk whose messages start at log time {start})"
                             f.seek(pos + 9)
-                            recovered = _truncated_chunk_records(f.read())
-                            n_msgs = 0
-                            for r in recovered:
-                                if isinstance(r, Schema):
-                                    schemas[r.id] = r
-                                elif isinstance(r, Channel):
-                                    channels[r.id] = r
-                                elif isinstance(r, McapMessage):
-                                    take(r, pos)
-                                    n_msgs += 1
+                            n_msgs = absorb(_truncated_chunk_records(f.read()), pos)
                             if n_msgs:
                                 what += (f"; {n_msgs} complete messages recovered from the cut "
                                          "chunk (unverified: its CRC covers the whole chunk)")
@@ -748,13 +753,7 @@ class McapSource(LogSource):
                     watermark = (rec.message_start_time if watermark is None
                                  else max(watermark, rec.message_start_time))
                     yield from release(watermark - REORDER_WINDOW_NS)
-                    for r in records:
-                        if isinstance(r, Schema):
-                            schemas[r.id] = r
-                        elif isinstance(r, Channel):
-                            channels[r.id] = r
-                        elif isinstance(r, McapMessage):
-                            take(r, pos)
+                    absorb(records, pos)
         yield from release(None)
         self._scanned = (schemas, channels)
         if first_time is not None:
