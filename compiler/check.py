@@ -148,6 +148,7 @@ class CheckResult:
     abstractions: List[dict] = field(default_factory=list)
     notes: List[str] = field(default_factory=list)
     realizability: Optional[dict] = None
+    witnesses: List[dict] = field(default_factory=list)
     input_errors: List[str] = field(default_factory=list)
     queries: int = 0
     unknown_queries: int = 0
@@ -168,6 +169,7 @@ class CheckResult:
                 "requirements": self.requirements, "components": self.components,
                 "findings": [f.to_json() for f in self.findings],
                 "abstractions": self.abstractions, "realizability": self.realizability,
+                "witnesses": self.witnesses,
                 "notes": self.notes, "input_errors": self.input_errors,
                 "queries": self.queries, "unknown_queries": self.unknown_queries}
 
@@ -489,6 +491,11 @@ def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
             others = [y.phi for y in comp if y is not x]
             ans = ck.sat(others + [ir.not_(x.phi)])
             status[x.index]["redundant"] = _tri(not ans) if ans in (True, False) else "unknown"
+            if ans == UNKNOWN:
+                result.findings.append(Finding(
+                    "unknown", "warning", [x.id],
+                    f"redundancy of {x.id} ({x.location}) unknown: the Spot query ran out of "
+                    "time (--timeout)"))
             if ans is False:
                 if others:
                     msg = (f"{x.id} ({x.location}) is implied by the others of its component ("
