@@ -240,46 +240,52 @@ def write_witnesses(checker, result, witness_dir: str) -> None:
     for finding in result.findings:
         if finding.kind not in ("conflict", "vacuous", "unsatisfiable"):
             continue
-        intended: Dict[str, str] = {}
+        plans = []  # (formula variants, intended verdicts), best first
         if finding.kind == "unsatisfiable":
             x = by_id[finding.requirements[0]]
-            variants = [[ir.not_(x.phi_ft)] + trig(x), [ir.not_(x.phi_ft)]]
-            intended[x.id] = "violated"
+            plans.append(([[ir.not_(x.phi_ft)] + trig(x), [ir.not_(x.phi_ft)]],
+                          {x.id: "violated"}))
         else:
             subset = [by_id[i] for i in finding.subsets[0]] if finding.subsets else []
             if not subset:
                 continue
             target = by_id[finding.details["requirement"]] if finding.kind == "vacuous" else None
             others = [y for y in subset if y is not target] or [target]
-            victim = others[-1]
-            keep = [y for y in subset if y is not victim]
-            base = [y.phi_ft for y in keep] + [ir.not_(victim.phi_ft)]
-            trigs = [t for y in keep for t in trig(y)]
-            if target is not None:
-                base += trig(target)
-            variants = [base + trigs, base]
-            for y in keep:
-                intended[y.id] = "satisfied"
-            intended[victim.id] = "violated"
-        rows = attempt(variants)
-        if rows == UNKNOWN or not rows:
-            finding.details["witness"] = ("not built: the finite-trace query ran out of time"
-                                          if rows == UNKNOWN else
-                                          "no finite trace shows it (it exists on infinite "
-                                          "traces only)")
+            for victim in reversed(others):  # the last member first
+                keep = [y for y in subset if y is not victim]
+                base = [y.phi_ft for y in keep] + [ir.not_(victim.phi_ft)]
+                if target is not None and target is not victim:
+                    base += trig(target)
+                trigs = [t for y in keep for t in trig(y)]
+                intended = {y.id: "satisfied" for y in keep}
+                intended[victim.id] = "violated"
+                plans.append(([base + trigs, base], intended))
+        best = None
+        for variants, intended in plans:
+            rows = attempt(variants)
+            if rows == UNKNOWN or not rows:
+                continue
+            expected = expected_verdicts(items, rows)
+            wrong = {k: v for k, v in intended.items() if expected.get(k) != v}
+            if best is None or len(wrong) < len(best[2]):
+                best = (rows, expected, wrong, intended)
+            if not wrong:
+                break
+        if best is None:
+            finding.details["witness"] = "not built: no finite trace found in time"
             continue
+        rows, expected, wrong, intended = best
         serial += 1
         path = out / f"{serial:02d}_{finding.kind}_{_safe('_'.join(finding.requirements))}.csv"
-        expected = expected_verdicts(items, rows)
         _write(path, finding.message, sources, rows, expected)
         finding.witness = str(path)
         finding.expected = expected
-        wrong = {k: v for k, v in intended.items() if expected.get(k) != v}
+        finding.details["witness_intended"] = intended
         finding.details["witness_shows_finding"] = not wrong
         if wrong:
             finding.details["witness_note"] = (
-                "the written numbers do not reproduce the finding (an uninterpreted atom): "
-                + ", ".join(f"{k} is {expected.get(k)} not {v}" for k, v in wrong.items()))
+                "the witness shows the finding only in part: "
+                + ", ".join(f"{k} is {expected.get(k)}, not {v}" for k, v in wrong.items()))
     if not any(f.severity == "error" for f in result.findings):
         rows = None
         if comps:
