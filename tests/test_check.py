@@ -211,3 +211,23 @@ def test_safe_ros_requirements(tmp_path):
     doc = json.loads(res.output)
     assert res.exit_code == 0 and doc["findings"] == []
     assert all(c["realizable"] is True for c in doc["realizability"]["components"])
+
+
+def test_report_shows_check_findings(tmp_path):
+    req = _write(tmp_path, "modes.fret",
+                 "A1: in modeA the sw shall always satisfy a\n"
+                 "A2: in modeA the sw shall always satisfy <b>!a</b>\n".replace("<b>", "")
+                 .replace("</b>", ""))
+    check_json = tmp_path / "check.json"
+    wdir = tmp_path / "w"
+    res = CliRunner().invoke(main, ["check", str(req), "-o", str(check_json),
+                                    "--witness-dir", str(wdir)])
+    assert res.exit_code == 1
+    witness = sorted(wdir.glob("*.csv"))[0]
+    out = tmp_path / "report"
+    res = CliRunner().invoke(main, ["report", "-r", str(req), str(witness), "-o", str(out),
+                                    "--check", str(check_json)])
+    assert res.exit_code in (0, 1), res.output
+    md = (out / "report.md").read_text()
+    assert "## Check findings" in md and "| A1 |" in md and "vacuous:" in md
+    assert 'id="check-findings"' in (out / "report.html").read_text()
