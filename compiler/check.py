@@ -203,11 +203,23 @@ class Checker:
 
     def sat_word(self, formulas: Sequence[Node]) -> Tuple[object, Optional[tuple]]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
-        conj = ir.and_all(*formulas)
-        conj = ir.and_(conj, self.numeric.invariant([conj]))
-        return self._ask_sat(to_spot(conj))
+        parts: List[Node] = []
 
-    def _ask_sat(self, text: str):
+        def split(f: Node) -> None:
+            if f.op == "&":
+                split(f.args[0])
+                split(f.args[1])
+            elif f.op != "true" and f not in parts:
+                parts.append(f)
+
+        for f in formulas:
+            split(f)
+        split(self.numeric.invariant(formulas))
+        if not parts:
+            parts = [ir.TRUE]
+        return self._ask_sat(tuple(to_spot(f) for f in parts))
+
+    def _ask_sat(self, text):
         got = self._cache.get(text)
         if got is None:
             self.queries += 1

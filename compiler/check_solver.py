@@ -8,7 +8,7 @@ they pickle cheaply through a pipe.
 
 Queries (all on infinite words, Spot's LTL semantics):
 
-* ``("sat", f)`` -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
+* ``("sat", f)`` (``f`` one formula or a list of conjuncts) -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
   ``{ap: bool}`` letters (atoms a letter leaves free are absent), or ``(False, None)``.
 * ``("realizable", f, outputs)`` -> ``(True, mealy_states)`` or ``(False, counter)`` where
   ``counter`` is an input lasso ``(prefix, cycle)`` that defeats every controller (no output
@@ -64,7 +64,16 @@ def run_query(query: tuple) -> Any:
 
     kind = query[0]
     if kind == "sat":
-        aut = spot.translate(spot.formula(query[1]), "high", "any")
+        texts = [query[1]] if isinstance(query[1], str) else list(query[1])
+        # one automaton per conjunct, then their product, smallest first: far smaller
+        # than translating the conjunction when the conjuncts are many
+        auts = sorted((spot.translate(spot.formula(t), "high", "any") for t in texts),
+                      key=lambda a: a.num_states())
+        aut = auts[0]
+        for other in auts[1:]:
+            aut = spot.product(aut, other)
+            if aut.is_empty():
+                return (False, None)
         if aut.is_empty():
             return (False, None)
         return (True, _word(aut))
