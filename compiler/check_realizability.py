@@ -81,8 +81,12 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
                            and simple_comparison(a) and simple_comparison(a)[0] not in inputs})
         inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars))
         inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars))
-        spec = ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out))
-        key = (to_spot(spec), tuple(outs))
+        if inv_in.op == "true":  # a conjunction: one automaton per conjunct
+            parts = [p for p in phis + [inv_out] if p.op != "true"] or [ir.TRUE]
+            spec_text = tuple(to_spot(p) for p in parts)
+        else:
+            spec_text = to_spot(ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out)))
+        key = (spec_text, tuple(outs))
         if key not in cache:
             checker.queries += 1
             ans = checker.worker.ask(("realizable", key[0], outs))

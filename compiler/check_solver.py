@@ -10,7 +10,7 @@ Queries (all on infinite words, Spot's LTL semantics):
 
 * ``("sat", f)`` (``f`` one formula or a list of conjuncts) -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
   ``{ap: bool}`` letters (atoms a letter leaves free are absent), or ``(False, None)``.
-* ``("realizable", f, outputs)`` -> ``(True, mealy_states)`` or ``(False, counter)`` where
+* ``("realizable", f, outputs)`` (``f`` one formula or a list of conjuncts) -> ``(True, mealy_states)`` or ``(False, counter)`` where
   ``counter`` is an input lasso ``(prefix, cycle)`` that defeats every controller (no output
   sequence satisfies ``f`` along it), or None when the environment must react to the
   outputs (no fixed input sequence wins). Uses Spot's synthesis games:
@@ -58,6 +58,41 @@ def _word(aut) -> Optional[Tuple[list, list]]:
     return _letters(aut, w.prefix), _letters(aut, w.cycle)
 
 
+def _conj(texts) -> str:
+    return " & ".join(f"({t})" for t in texts)
+
+
+def _product_game(texts, outputs):
+    """The synthesis game of a conjunction built from one deterministic automaton per
+    conjunct (their product, made parity, split into environment and controller moves), or
+    None when some conjunct has no small deterministic automaton (then the caller uses
+    ``spot.ltl_to_game`` on the whole formula). Same game as ``ltl_to_game`` up to the
+    automaton construction; equal answers checked in tests/test_check.py."""
+    import buddy
+    import spot
+
+    auts = []
+    for t in texts:
+        a = spot.translate(spot.formula(t), "high", "det")
+        if not a.prop_universal().is_true():
+            return None
+        auts.append(a)
+    auts.sort(key=lambda a: a.num_states())
+    prod = auts[0]
+    for a in auts[1:]:
+        prod = spot.product(prod, a)
+    if prod.num_sets() > 0 and not prod.acc().is_parity()[0]:
+        prod = spot.to_parity(prod)
+    outs = buddy.bddtrue
+    wanted = set(outputs)
+    for f in prod.ap():
+        if f.ap_name() in wanted:
+            outs = buddy.bdd_and(outs, buddy.bdd_ithvar(prod.register_ap(f)))
+    game = spot.split_2step(prod, outs, True)
+    spot.set_synthesis_outputs(game, outs)
+    return game
+
+
 def run_query(query: tuple) -> Any:
     """Answer one query in this process (see the module docstring for the shapes)."""
     import spot
@@ -67,7 +102,7 @@ def run_query(query: tuple) -> Any:
         texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         # one automaton per conjunct, then their product, smallest first: far smaller
         # than translating the conjunction when the conjuncts are many
-        auts = sorted((spot.translate(spot.formula(t), "high", "any") for t in texts),
+        auts = sorted((spot.translate(spot.formula(t), "high", "small") for t in texts),
                       key=lambda a: a.num_states())
         aut = auts[0]
         for other in auts[1:]:
@@ -78,16 +113,18 @@ def run_query(query: tuple) -> Any:
             return (False, None)
         return (True, _word(aut))
     if kind == "realizable":
-        f = spot.formula(query[1])
+        texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         outputs = list(query[2])
         si = spot.synthesis_info()
-        game = spot.ltl_to_game(f, outputs, si)
+        game = _product_game(texts, outputs) if len(texts) > 1 else None
+        if game is None:
+            game = spot.ltl_to_game(spot.formula(_conj(texts)), outputs, si)
         if spot.solve_game(game):
             mealy = spot.solved_game_to_mealy(game, si)
             return (True, mealy.num_states())
         # a fixed input sequence that defeats every controller: an input word along which
         # no output sequence satisfies f (outputs quantified away, then complemented)
-        aut = spot.translate(f)
+        aut = spot.translate(spot.formula(_conj(texts)))
         strip = spot.remove_ap()
         for o in outputs:
             strip.add_ap(o)
