@@ -196,34 +196,40 @@ class Checker:
         self.unknown = 0
 
     # ---------------------------------------------------------------- queries
-    def sat(self, formulas: Sequence[Node]) -> object:
-        """True / False / UNKNOWN: is the conjunction of ``formulas`` (with the numeric
-        invariants of their comparisons) satisfiable on infinite words?"""
-        return self.sat_word(formulas)[0]
+    def sat(self, formulas: Sequence[Node], extra: Sequence[Node] = ()) -> object:
+        """True / False / UNKNOWN: is the conjunction of ``formulas`` and ``extra`` (with the
+        numeric invariants of their comparisons) satisfiable on infinite words? (``extra``
+        apart so the worker can reuse the product of ``formulas``.)"""
+        return self.sat_word(formulas, extra)[0]
 
-    def sat_word(self, formulas: Sequence[Node]) -> Tuple[object, Optional[tuple]]:
+    def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
+                 ) -> Tuple[object, Optional[tuple]]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
-        parts: List[Node] = []
 
-        def split(f: Node) -> None:
+        def split(f: Node, parts: List[Node]) -> None:
             if f.op == "&":
-                split(f.args[0])
-                split(f.args[1])
+                split(f.args[0], parts)
+                split(f.args[1], parts)
             elif f.op != "true" and f not in parts:
                 parts.append(f)
 
+        base: List[Node] = []
+        more: List[Node] = []
         for f in formulas:
-            split(f)
-        split(self.numeric.invariant(formulas))
-        if not parts:
-            parts = [ir.TRUE]
-        return self._ask_sat(tuple(to_spot(f) for f in parts))
+            split(f, base)
+        split(self.numeric.invariant(list(formulas) + list(extra)), base)
+        for f in extra:
+            split(f, more)
+        if not base:
+            base = [ir.TRUE]
+        return self._ask_sat((tuple(to_spot(f) for f in base),
+                              tuple(to_spot(f) for f in more if f not in base)))
 
     def _ask_sat(self, text):
         got = self._cache.get(text)
         if got is None:
             self.queries += 1
-            ans = self.worker.ask(("sat", text))
+            ans = self.worker.ask(("sat", text[0], text[1]))
             if ans == UNKNOWN:
                 self.unknown += 1
                 got = (UNKNOWN, None)
@@ -471,7 +477,7 @@ def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
         for x in comp:
             if x.trigger is None:
                 continue
-            ans = ck.sat([y.phi for y in comp] + [x.trigger])
+            ans = ck.sat([y.phi for y in comp], [x.trigger])
             status[x.index]["non_vacuous"] = _tri(ans)
             if ans is True:
                 continue
@@ -501,7 +507,7 @@ def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
     if redundancy:
         for x in comp:
             others = [y.phi for y in comp if y is not x]
-            ans = ck.sat(others + [ir.not_(x.phi)])
+            ans = ck.sat(others, [ir.not_(x.phi)])
             status[x.index]["redundant"] = _tri(not ans) if ans in (True, False) else "unknown"
             if ans == UNKNOWN:
                 result.findings.append(Finding(

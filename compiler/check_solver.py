@@ -8,7 +8,8 @@ they pickle cheaply through a pipe.
 
 Queries (all on infinite words, Spot's LTL semantics):
 
-* ``("sat", f)`` (``f`` one formula or a list of conjuncts) -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
+* ``("sat", base, extra)`` (``base`` one formula or a list of conjuncts, ``extra`` more
+  conjuncts) -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
   ``{ap: bool}`` letters (atoms a letter leaves free are absent), or ``(False, None)``.
 * ``("realizable", f, outputs)`` (``f`` one formula or a list of conjuncts) -> ``(True, mealy_states)`` or ``(False, counter)`` where
   ``counter`` is an input lasso ``(prefix, cycle)`` that defeats every controller (no output
@@ -58,6 +59,21 @@ def _word(aut) -> Optional[Tuple[list, list]]:
     return _letters(aut, w.prefix), _letters(aut, w.cycle)
 
 
+_PRODUCTS: dict = {}
+_AUTOMATA: dict = {}
+
+
+def _translate(text: str):
+    import spot
+
+    a = _AUTOMATA.get(text)
+    if a is None:
+        if len(_AUTOMATA) > 1024:
+            _AUTOMATA.clear()
+        a = _AUTOMATA[text] = spot.translate(spot.formula(text), "high", "small")
+    return a
+
+
 def _conj(texts) -> str:
     return " & ".join(f"({t})" for t in texts)
 
@@ -99,14 +115,26 @@ def run_query(query: tuple) -> Any:
 
     kind = query[0]
     if kind == "sat":
-        texts = [query[1]] if isinstance(query[1], str) else list(query[1])
-        # one automaton per conjunct, then their product, smallest first: far smaller
-        # than translating the conjunction when the conjuncts are many
-        auts = sorted((spot.translate(spot.formula(t), "high", "small") for t in texts),
-                      key=lambda a: a.num_states())
-        aut = auts[0]
-        for other in auts[1:]:
-            aut = spot.product(aut, other)
+        base = [query[1]] if isinstance(query[1], str) else list(query[1])
+        extra = list(query[2]) if len(query) > 2 else []
+        # one automaton per conjunct (deterministic when Spot finds a small one), then
+        # their product, smallest first: far smaller than translating the conjunction when
+        # the conjuncts are many. The product of the base is kept: the queries of one
+        # component share it (non-vacuity adds one trigger to the same base).
+        key = tuple(sorted(base))
+        aut = _PRODUCTS.get(key)
+        if aut is None:
+            for a in sorted((_translate(t) for t in base), key=lambda a: a.num_states()):
+                aut = a if aut is None else spot.product(aut, a)
+                if aut.is_empty():
+                    break
+            if len(_PRODUCTS) > 64:
+                _PRODUCTS.clear()
+            _PRODUCTS[key] = aut
+        if aut.is_empty():
+            return (False, None)
+        for t in extra:
+            aut = spot.product(aut, _translate(t))
             if aut.is_empty():
                 return (False, None)
         if aut.is_empty():
