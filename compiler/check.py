@@ -468,9 +468,10 @@ def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
         for x in comp:
             if whole is False:
                 status[x.index]["non_vacuous"] = None
-        if whole is False:
-            result.notes.append("component " + ", ".join(_ids(comp)) + ": non-vacuity and "
-                                "redundancy not checked (the requirements conflict)")
+        result.notes.append("component " + ", ".join(_ids(comp)) + ": non-vacuity and "
+                            "redundancy not checked ("
+                            + ("the requirements conflict)" if whole is False else
+                               "the satisfiability of the set is unknown)"))
         return
     # 3. non-vacuity
     if vacuity:
