@@ -49,6 +49,7 @@ from rosbags.typesys.store import Typestore
 
 from . import problems as P
 from .problems import CsvError, DataProblem, LogError, ProblemLog
+from .selective import chunk_messages
 
 __all__ = [
     "Message",
@@ -258,7 +259,8 @@ def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typesto
     return store, typename
 
 
-def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Callable[[bytes], Any]:
+def _decoder_for(store: Typestore, typename: str, message_encoding: str,
+                 fields: Any = None) -> Callable[[bytes], Any]:
     if message_encoding == "cdr":
         deser = store.deserialize_cdr
     elif message_encoding == "ros1":
@@ -269,6 +271,9 @@ def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Call
     def decode(raw: bytes) -> Any:
         return deser(raw, typename)
 
+    if fields is not None:  # only the fields the bindings read (monitors.selective)
+        from .selective import selective_decoder
+        return selective_decoder(store, typename, message_encoding, fields, decode) or decode
     return decode
 
 
@@ -501,7 +506,8 @@ class McapSource(LogSource):
                                    f"encoding {channel.message_encoding!r}")
             store, typename = build_typestore(schema.encoding, schema.name,
                                               schema.data.decode("utf-8", errors="replace"))
-            dec = _decoder_for(store, typename, channel.message_encoding)
+            dec = _decoder_for(store, typename, channel.message_encoding,
+                               (getattr(self, "_wanted_fields", None) or {}).get(channel.topic))
         except _Unsupported as exc:
             kind = (P.UNKNOWN_ENCODING if channel.message_encoding not in _SCHEMA_FOR_ENCODING
                     else P.UNKNOWN_SCHEMA)
@@ -568,7 +574,11 @@ class McapSource(LogSource):
                     opcode, length = _HEAD.unpack_from(raw)
                     if opcode != Opcode.CHUNK or 9 + length != ci.chunk_length:
                         raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
-                    records = _chunk_records(_parse_record(Opcode.CHUNK, raw[9:]))
+                    chunk = _parse_record(Opcode.CHUNK, raw[9:])
+                    if chunk.uncompressed_size > _MAX_UNCOMPRESSED:
+                        raise ValueError(f"chunk claims {chunk.uncompressed_size} uncompressed bytes")
+                    # only the messages of wanted (or unknown) channels are parsed
+                    records = chunk_messages(chunk, wanted, index.channels)
                 except CRCValidationError as exc:
                     self._problem(P.CHUNK_CRC, None, ci.message_start_time,
                                   f"chunk at byte {ci.chunk_start_offset}: {exc}; its messages "
@@ -901,7 +911,8 @@ class BagSource(LogSource):
                 schema_encoding = ("ros1msg" if self.kind == "bag" else
                                    "ros2idl" if fmt == MessageDefinitionFormat.IDL else "ros2msg")
                 store, typename = build_typestore(schema_encoding, conn.msgtype, text)
-            dec = _decoder_for(store, typename, encoding)
+            dec = _decoder_for(store, typename, encoding,
+                               (getattr(self, "_wanted_fields", None) or {}).get(conn.topic))
         except _Unsupported as exc:
             kind = P.UNKNOWN_ENCODING if encoding not in _SCHEMA_FOR_ENCODING else P.UNKNOWN_SCHEMA
             self._open_problems.add(DataProblem(kind, conn.topic, log_time,
