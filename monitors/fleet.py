@@ -222,6 +222,8 @@ def _audit_task(shipped: ShippedPlan, path: str, kill: Optional[Tuple[str, str]]
     progress = None
     if kill is not None and kill[0] in path:
         marker = kill[1]
+        if marker == ":raise":
+            raise RuntimeError("fault injected by the tests")
 
         def progress(frac: float) -> None:
             # fault injection for the tests: the worker dies mid-run, once per marker file

@@ -43,7 +43,8 @@ from typing import Any, Callable, Dict, FrozenSet, Iterable, List, Optional, Tup
 
 import numpy as np
 
-__all__ = ["selective_decoder", "wanted_fields", "install", "stats"]
+__all__ = ["selective_decoder", "wanted_fields", "install", "chunk_messages", "stats",
+           "HEADER_STAMP"]
 
 #: Field paths as in :class:`monitors.bindings.Field`: attribute names and indexes.
 Path = Tuple[Any, ...]
@@ -57,6 +58,9 @@ _NP = {"bool": "bool_", "char": "uint8", "byte": "byte"}
 _HEADER = "std_msgs/msg/Header"
 _LASER = "sensor_msgs/msg/LaserScan"
 _U32 = struct.Struct("<I").unpack_from
+#: A path asking for ``header.stamp`` if the type has a std_msgs/Header (for the header
+#: time base); without it a selectively decoded message has ``header_stamp`` None.
+HEADER_STAMP: Path = ("\0header.stamp",)
 #: Decoders built and messages decoded by each path (for tests and benchmarks).
 stats = {"fast_types": 0, "full_types": 0, "fallback_messages": 0}
 
@@ -67,13 +71,17 @@ class _NotCovered(Exception):
 
 def wanted_fields(bindings) -> Dict[str, FrozenSet[Path]]:
     """Topic -> field paths the variables of ``bindings`` read (``/scan.ranges`` gives
-    ``("ranges",)``); the tick topic and topics read only by ``age()`` get an empty set."""
+    ``("ranges",)``); the tick topic and topics read only by ``age()`` get an empty set;
+    with the header time base every topic also gets :data:`HEADER_STAMP`."""
     out: Dict[str, set] = {t: set() for t in bindings.topics}
     if bindings.tick.topic is not None:
         out.setdefault(bindings.tick.topic, set())
     for b in bindings.variables.values():
         for f in b.fields:
             out.setdefault(f.topic, set()).add(tuple(f.path))
+    if bindings.time_base != "log":  # the clock reads header.stamp of every message
+        for paths in out.values():
+            paths.add(HEADER_STAMP)
     return {t: frozenset(p) for t, p in out.items()}
 
 
@@ -90,14 +98,16 @@ def install(source, bindings) -> None:
 
 
 # --------------------------------------------------------------------------- tree of fields
-def _tree(store, typename: str, paths: Iterable[Path]) -> dict:
+def _tree(store, typename: str, paths) -> dict:
     """Nested dict: field name -> sub-dict (fields of a nested message) or None (the whole
-    value). Adds ``header.stamp`` (Message.header_stamp) and, beside a LaserScan's
+    value). :data:`HEADER_STAMP` asks for ``header.stamp`` when the type has a
+    std_msgs/Header (``Message.header_stamp`` is None without it); beside a LaserScan's
     ``ranges``, ``range_min``/``range_max`` (REP 117 filtering)."""
     fields = dict(store.get_msgdef(typename).fields)
     tree: dict = {}
-    all_paths = list(paths)
-    if "header" in fields and fields["header"][0] == 2 and fields["header"][1] == _HEADER:
+    all_paths = [p for p in paths if p != HEADER_STAMP]
+    if (HEADER_STAMP in paths and "header" in fields and fields["header"][0] == 2
+            and fields["header"][1] == _HEADER):
         all_paths += [("header", "stamp", "sec"), ("header", "stamp", "nanosec")]
     for path in all_paths:
         _add(store, typename, tree, tuple(path))
@@ -129,8 +139,8 @@ def _add(store, typename: str, tree: dict, path: Path) -> None:
         return
     if kind == 2:
         raise _NotCovered("a whole nested message is wanted")
-    if kind in (3, 4) and rest and _elem(desc)[0] == 2:
-        raise _NotCovered("a field inside an array of messages")
+    if kind in (3, 4) and _elem(desc)[0] == 2:
+        raise _NotCovered("an array of messages is wanted")
     tree[name] = None  # primitive, string or array: read whole (indexes applied later)
 
 
@@ -152,7 +162,7 @@ class _Gen:
         self.off = 0  # constant offset not yet added to pos
         self.known = 8  # pos is a multiple of this
         self.n = 0
-        self.funcs: Dict[str, str] = {}
+        self.pending: List[Tuple[int, str, str]] = []
 
     def name(self, prefix: str) -> str:
         self.n += 1
@@ -165,7 +175,29 @@ class _Gen:
         k = self.off + self.base
         return f"pos + {k}" if k else "pos"
 
+    def read(self, t: str, target: str) -> None:
+        """Read primitive ``t`` at the current offset into ``target``; reads at constant
+        offsets from ``pos`` are gathered into one ``struct`` call (:meth:`emit_reads`)."""
+        self.pending.append((self.off + self.base, t, target))
+
+    def emit_reads(self, ind: int) -> None:
+        if not self.pending:
+            return
+        reads = sorted(self.pending)
+        self.pending = []
+        start = reads[0][0]
+        fmt, at = "<", start
+        for o, t, _ in reads:
+            fmt += "x" * (o - at) + _FMT[t]
+            at = o + _SIZE[t]
+        key = self.name("_S")
+        self.env[key] = struct.Struct(fmt).unpack_from
+        names = ", ".join(target for _, _, target in reads)
+        where = f"pos + {start}" if start else "pos"
+        self.emit(ind, f"{names}{',' if len(reads) == 1 else ''} = {key}(raw, {where})")
+
     def flush(self, ind: int) -> None:
+        self.emit_reads(ind)
         if self.off:
             self.emit(ind, f"pos += {self.off}")
             low = self.off & -self.off
@@ -223,7 +255,7 @@ class _Gen:
                 self.string(target, ind)
             else:
                 if target:
-                    self.emit(ind, f"{target} = {self.unpack(t)}(raw, {self.at()})[0]")
+                    self.read(t, target)
                 self.off += _SIZE[t]
         elif kind == 2:
             if sub is not None and target:
@@ -277,21 +309,26 @@ class _Gen:
                 self.emit(ind, f"pos += {count} * {size}" if size > 1 else f"pos += {count}")
                 self.known = min(4, size) if self.cdr else 1
             else:
-                if target:
-                    raise _NotCovered("a sequence of strings or messages is wanted")
+                if target and elem[0] != 1:
+                    raise _NotCovered("a sequence of messages is wanted")
                 self.flush(ind)
                 self.emit(ind, f"if {count} > len(raw):")
                 self.emit(ind + 1, "raise ValueError('sequence count beyond the message')")
+                vals = self.name("v") if target else None
+                if vals:
+                    self.emit(ind, f"{vals} = []")
                 self.emit(ind, f"for _ in range({count}):")
                 self.known = 1
                 if elem[0] == 1:
                     self.align(4, ind + 1)
-                    self.string(None, ind + 1)
+                    self.string(f"{vals}.append" if vals else None, ind + 1, call=True)
                 else:
                     self.align(self.alignment(elem), ind + 1)
                     self.struct(elem[1], None, None, ind + 1)
                 self.flush(ind + 1)
                 self.known = 1
+                if vals:
+                    self.emit(ind, f"{target} = {vals}")
 
     def string(self, target: Optional[str], ind: int, call: bool = False) -> None:
         ln = self.name("l")
@@ -317,30 +354,32 @@ class _Gen:
 
     def message_class(self, typename: str, tree: dict) -> str:
         key = self.name("M")
-        self.env[key] = _message_class(typename, tuple(tree))
+        clsname = getattr(self.store.types.get(typename), "__name__", typename)
+        self.env[key] = _message_class(typename, tuple(tree), clsname)
         return key
 
 
 _CLASSES: Dict[Tuple[str, Tuple[str, ...]], type] = {}
 
 
-def _message_class(typename: str, names: Tuple[str, ...]) -> type:
-    """A slotted class with only ``names``; ``__msgtype__`` as rosbags' classes have."""
-    key = (typename, names)
+def _message_class(typename: str, names: Tuple[str, ...], clsname: str) -> type:
+    """A slotted class with only ``names``; named and with ``__msgtype__`` as rosbags'
+    class of the type (so messages naming the type read the same)."""
+    key = (typename, names, clsname)
     cls = _CLASSES.get(key)
     if cls is None:
         def __repr__(self):
             inner = ", ".join(f"{n}={getattr(self, n, None)!r}" for n in names)
-            return f"{typename}({inner}; selective)"
+            return f"{typename}({inner}; selectively decoded)"
 
-        cls = type(typename.replace("/", "_") + "_selective", (),
+        cls = type(clsname, (),
                    {"__slots__": names, "__msgtype__": typename, "__repr__": __repr__})
         _CLASSES[key] = cls
     return cls
 
 
 def _generate(store, typename: str, paths: Iterable[Path], cdr: bool) -> Callable[[bytes], Any]:
-    tree = _tree(store, typename, paths)
+    tree = _tree(store, typename, set(paths))
     g = _Gen(store, cdr)
     top = g.message_class(typename, tree)
     body_start = len(g.lines)
@@ -453,7 +492,6 @@ def chunk_messages(chunk, wanted: "set[int] | dict", known: "set[int] | dict") -
             continue
         cid, seq, log_time, publish_time = mhead(data, body)
         if cid in wanted or cid not in known:
-            out.append(McapMessage(channel_id=cid, log_time=log_time,
-                                   data=data[body + 22:pos], publish_time=publish_time,
-                                   sequence=seq))
+            # positional, in the dataclass's field order (keywords cost more)
+            out.append(McapMessage(cid, log_time, data[body + 22:pos], publish_time, seq))
     return out
