@@ -337,3 +337,8 @@ def run_audits(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=No
                               retries=opts.get("retries") or 0, progress=progress)
     except RayUnavailable as exc:
         raise FleetError(str(exc)) from None
+    except KeyboardInterrupt:
+        err = FleetError("interrupted: the running Ray tasks were cancelled; no result was "
+                         "written")
+        err.exit_code = 130
+        raise err from None
