@@ -20,8 +20,9 @@ Faults (the rule: nothing is reported satisfied that was not audited):
   this run started, and re-raises ``KeyboardInterrupt``.
 
 Where Ray runs (:func:`connect`): ``address`` None or ``"local"`` starts a local Ray for the
-run (``num_cpus`` = the machine's CPUs, no dashboard, quiet logs, usage statistics off,
-bound to 127.0.0.1, so nothing reaches the network) and stops it at the end; ``"auto"``,
+run (``num_cpus`` = the machine's CPUs, no dashboard, quiet logs, usage statistics off, so
+nothing is sent to the network; Ray's own servers still listen on the node's address, as Ray
+resolves 127.0.0.1 to it) and stops it at the end; ``"auto"``,
 ``"ray://host:10001"`` or ``host:port`` connect to an existing cluster, whose workers must
 have fretc installed (``pip install 'fretc[ray]'``) and see the log paths (shared storage).
 
@@ -185,8 +186,7 @@ def connect(address: Optional[str] = None, num_cpus: Optional[int] = None) -> bo
 
     Args:
         address: None or ``"local"``: a local Ray for this run (``num_cpus`` default: the
-            machine's CPUs; no dashboard; logs not forwarded; usage statistics off; node on
-            127.0.0.1). ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing
+            machine's CPUs; no dashboard; logs not forwarded; usage statistics off). ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing
             cluster.
 
     Raises:
@@ -201,7 +201,7 @@ def connect(address: Optional[str] = None, num_cpus: Optional[int] = None) -> bo
         if address in (None, "local"):
             ray.init(num_cpus=num_cpus or os.cpu_count() or 1, include_dashboard=False,
                      log_to_driver=False, logging_level=logging.ERROR,
-                     configure_logging=True, _node_ip_address="127.0.0.1")
+                     configure_logging=True)
             return True
         ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
         return False

@@ -117,6 +117,18 @@ def test_cli_ray_equals_cli_local(ray_session, tmp_path):
     assert (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()
 
 
+@pytest.mark.ray
+@pytest.mark.xdist_group("ray")
+def test_report_ray_writes_the_local_audit(ray_session, tmp_path):
+    runner = CliRunner()
+    args = ["report", "-r", str(ROOT / "requirements"), TRACES[0]]
+    a = runner.invoke(main, args + ["-o", str(tmp_path / "a")])
+    b = runner.invoke(main, args + ["-o", str(tmp_path / "b"), "--ray"])
+    assert a.exit_code == b.exit_code, b.output
+    assert (tmp_path / "a" / "audit.json").read_text() == \
+           (tmp_path / "b" / "audit.json").read_text()
+
+
 # --------------------------------------------------------------------------- without Ray
 def test_ray_missing_says_how_to_get_it(monkeypatch):
     import importlib.util
