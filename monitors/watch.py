@@ -263,20 +263,32 @@ class WatchSource(LogSource):
                 ev = self._early.popleft()
             else:
                 if self.stopped:
-                    break
-                try:
-                    ev = self.client.events.get(timeout=0.05)
-                except queue.Empty:
-                    continue
-                if ev[0] != "message":
-                    self._handle(ev)
-                    continue
+                    try:  # what already arrived is still used
+                        ev = self.client.events.get_nowait()
+                    except queue.Empty:
+                        break
+                else:
+                    try:
+                        ev = self.client.events.get(timeout=0.05)
+                    except queue.Empty:
+                        continue
+            if ev[0] != "message":
+                self._handle(ev)
+                continue
             _k, topic, log_time, payload, wall = ev
             if wanted is not None and topic not in wanted:
                 continue
             msg = self._deliver(topic, log_time, payload)
             if msg is not None:
                 yield msg
+        if self._gap_open is not None and self._last_time is not None:
+            wall0, reason = self._gap_open
+            self._gap_open = None
+            self.gaps.append((self._last_time, self._last_time))
+            detail = (f"connection lost ({reason}) {time.monotonic() - wall0:.2f} s before the "
+                      f"watch ended; nothing was received after log time {self._last_time}")
+            self._problem(CONNECTION_GAP, None, self._last_time, detail)
+            self.on_event(WatchEvent("gap", self._last_time, time.time_ns(), detail=detail))
 
     def _deliver(self, topic: str, log_time: int, payload: bytes) -> Optional[Message]:
         dec = self.decoders.get(topic)
