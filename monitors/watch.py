@@ -24,7 +24,9 @@ Faults, each a data problem of the run, never a crash:
   :data:`CONNECTION_GAP` problem (log time of the last message before, of the first after,
   the wall-clock length). Ticks strictly inside the gap are **not evaluated** (counted as
   unknown, never held over the gap); the monitors keep their state and go on from the next
-  message. A run with a gap is ``partial`` and cannot exit 0;
+  message. A run with a gap is ``partial`` and cannot exit 0. A connection that closes with
+  nothing after it before the watch ends is the end of the watched run
+  (:data:`CONNECTION_CLOSED`, reported, not a gap);
 * a topic the server stops advertising: :data:`UNADVERTISED` (its last message is then held
   like any silent topic, and the problem says since when);
 * a message that does not decode: ``undecodable`` (skipped), as in logs;
@@ -58,11 +60,13 @@ from .problems import DataProblem
 from .sources import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
 
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
-           "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED"]
+           "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
 
 NS_PER_S = 1_000_000_000
 #: The connection dropped: messages between the two log times were not received.
 CONNECTION_GAP = "connection_gap"
+#: The connection closed and nothing came after it until the watch ended.
+CONNECTION_CLOSED = "connection_closed"
 #: The server stopped advertising a subscribed topic.
 UNADVERTISED = "unadvertised"
 #: A message's time is before one already used; skipped.
@@ -282,13 +286,17 @@ class WatchSource(LogSource):
             if msg is not None:
                 yield msg
         if self._gap_open is not None and self._last_time is not None:
+            # the run ends here: nothing came after the connection closed (the end of the
+            # robot's run, or of its network - the watch cannot tell), so no tick is missing
+            # from inside the run; reported, not a gap
             wall0, reason = self._gap_open
             self._gap_open = None
-            self.gaps.append((self._last_time, self._last_time))
             detail = (f"connection lost ({reason}) {time.monotonic() - wall0:.2f} s before the "
-                      f"watch ended; nothing was received after log time {self._last_time}")
-            self._problem(CONNECTION_GAP, None, self._last_time, detail)
-            self.on_event(WatchEvent("gap", self._last_time, time.time_ns(), detail=detail))
+                      f"watch ended; nothing was received after log time {self._last_time}: "
+                      "the watched run ends there")
+            self._problem(CONNECTION_CLOSED, None, self._last_time, detail)
+            self.on_event(WatchEvent("problem", self._last_time, time.time_ns(),
+                                     detail=f"{CONNECTION_CLOSED}: {detail}"))
 
     def _deliver(self, topic: str, log_time: int, payload: bytes) -> Optional[Message]:
         dec = self.decoders.get(topic)
@@ -451,6 +459,10 @@ class Watch:
                                   on_event=self._event)
         self.recorder: Optional[_Recorder] = None
         self._lock = threading.Lock()
+        #: called after every evaluated tick's monitors stepped, with (tick index, tick
+        #: time, log time of the newest message its values use, log time of the message
+        #: whose arrival closed it): the latency benchmark's hook.
+        self.on_tick: Optional[Callable[[int, int, Optional[int], Optional[int]], None]] = None
 
     def stop(self) -> None:
         """Stop watching (thread-safe): :meth:`run` finishes with the final verdicts."""
@@ -619,6 +631,8 @@ class Watch:
                                            extra={"status_tick": mon.status_tick}))
             self._cols.append(tick)
             self.ticks += 1
+            if self.on_tick is not None:
+                self.on_tick(i, t, dep, src._last_time)
             self.last_tick_time = t
             if self.start_time is None:
                 self.start_time = t

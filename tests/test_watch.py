@@ -271,3 +271,31 @@ def test_cli_watch_jsonl_and_exit_code(tmp_path):
     assert finals == {"R1": "violated", "R2": "violated", "R3": "vacuous", "R4": "satisfied",
                       "R5": "violated", "R6": "vacuous"}
     assert any(x["event"] == "pt" and x["verdict"] == "violated" for x in lines)
+
+
+def test_live_simulator_equals_the_recorded_trace(plan):
+    """``python -m sim serve``'s engine: the simulator run live on a foxglove-sdk server and
+    watched gives the verdicts of the audit of the recorded trace of that scenario."""
+    from sim.serve import serve
+
+    server = FoxgloveServer(port=0)
+    try:
+        w = Watch(plan, WatchOptions(url=server.url, wait=5.0))
+        out = {}
+
+        def run():
+            try:
+                out["res"] = serve("sif_disabled", rate=20.0, server=server, wait=True)
+                time.sleep(0.3)
+            finally:
+                w.stop()
+
+        t = threading.Thread(target=run, daemon=True)
+        t.start()
+        la = w.run()
+        t.join(30)
+    finally:
+        server.stop()
+    ref = audit_log(plan, str(ROOT / "traces" / "sif_disabled.mcap"))
+    assert out["res"].outcome == "contact"
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
