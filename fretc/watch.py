@@ -36,6 +36,7 @@ def live_table(w):
     from rich.table import Table
     from rich.text import Text
 
+    w.refresh_evidence()
     st0 = w.start_time
 
     def s(ns):

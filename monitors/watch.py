@@ -423,7 +423,7 @@ class Watch:
     """
 
     #: Seconds between two recomputations of "violations so far" / "last trigger".
-    EVIDENCE_EVERY = 0.5
+    EVIDENCE_EVERY = 1.0
 
     def __init__(self, plan, options: WatchOptions,
                  on_event: Optional[Callable[[WatchEvent], None]] = None) -> None:
@@ -459,6 +459,8 @@ class Watch:
                                   on_event=self._event)
         self.recorder: Optional[_Recorder] = None
         self._lock = threading.Lock()
+        self._evidence_at = 0.0
+        self._cols = None
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
         #: whose arrival closed it): the latency benchmark's hook.
@@ -600,7 +602,6 @@ class Watch:
         self._active = active
         sampling = sample(src, bindings)
         gaps = src.gaps
-        next_evidence = time.monotonic() + self.EVIDENCE_EVERY
         self.status_line = f"watching {self.options.url}"
         for tick in sampling:
             t = tick.time
@@ -636,12 +637,22 @@ class Watch:
             self.last_tick_time = t
             if self.start_time is None:
                 self.start_time = t
-            if time.monotonic() >= next_evidence:
-                self._live_evidence()
-                next_evidence = time.monotonic() + self.EVIDENCE_EVERY
         times, columns, log_times = self._cols.arrays()
         self._live_evidence()
         return _Pass(sampling, times, columns, log_times, monitors, engine)
+
+    def refresh_evidence(self) -> None:
+        """Update "violations so far" and "last trigger" of the live table (at most every
+        :data:`EVIDENCE_EVERY` s; called by the table's refresh thread, so the monitors are
+        never held up by it)."""
+        now = time.monotonic()
+        if now - self._evidence_at < self.EVIDENCE_EVERY or getattr(self, "_cols", None) is None:
+            return
+        self._evidence_at = now
+        try:
+            self._live_evidence()
+        except Exception:  # a display helper: never let it stop the watch
+            pass
 
     def _live_evidence(self) -> None:
         """Violations so far and the last trigger, by the audit's interval semantics over
@@ -651,7 +662,7 @@ class Watch:
         n = self._cols.n
         if n == 0:
             return
-        _times, columns, _lt = self._cols.arrays()
+        _times, columns, _lt = self._cols.arrays(n)
         for r in self._active:
             st = self.live[r.index]
             try:
@@ -730,7 +741,11 @@ class _LiveColumns:
         self.times.append(tick.time)
         self.n += 1
 
-    def arrays(self):
+    def arrays(self, n: Optional[int] = None):
+        """(times, variable -> values, topic -> held log times) of the first ``n`` ticks
+        (all by default; a snapshot of ``n`` taken first is safe while another thread
+        appends)."""
+        n = self.n if n is None else n
         def arr(values):
             if values and all(type(x) is bool for x in values):
                 return np.array(values, dtype=np.bool_)
@@ -738,7 +753,7 @@ class _LiveColumns:
                 return np.zeros(0, dtype=np.bool_)
             return np.array(values, dtype=np.float64)
 
-        times = np.array(self.times, dtype=np.int64)
-        cols = {n: arr(v) for n, v in self.vals.items()}
-        lts = {t: np.array(v, dtype=np.int64) for t, v in self.lts.items()}
+        times = np.array(self.times[:n], dtype=np.int64)
+        cols = {k: arr(v[:n]) for k, v in self.vals.items()}
+        lts = {t: np.array(v[:n], dtype=np.int64) for t, v in self.lts.items()}
         return times, cols, lts

@@ -151,9 +151,15 @@ class FoxgloveClient:
                     self._ws = ws
                     delay = self.backoff
                     self._put("connected", time.time_ns(), ws.subprotocol, "")
-                    await self._session(ws)
+                    session = asyncio.ensure_future(self._session(ws))
+                    stopper = asyncio.ensure_future(self._stop.wait())
+                    await asyncio.wait({session, stopper}, return_when=asyncio.FIRST_COMPLETED)
                     if self._stop.is_set():
+                        session.cancel()
+                        await ws.close()
                         return
+                    stopper.cancel()
+                    session.result()
                     reason = "the server closed the connection"
             except asyncio.CancelledError:  # pragma: no cover - loop shutdown
                 return
@@ -169,32 +175,24 @@ class FoxgloveClient:
             delay = min(self.max_backoff, delay * 2)
 
     async def _session(self, ws) -> None:
+        """Read frames until the connection closes (``ConnectionClosed`` ends the loop)."""
+        from websockets.exceptions import ConnectionClosed
+
         subs: Dict[int, str] = {}  # subscription id -> topic
         by_channel: Dict[int, int] = {}  # channel id -> subscription id
         next_id = 1
-        stop_task = asyncio.ensure_future(self._stop.wait())
+        put = self.events.put
+        head, head_size = _HEAD.unpack_from, _HEAD.size
         try:
-            while True:
-                recv = asyncio.ensure_future(ws.recv())
-                done, _ = await asyncio.wait({recv, stop_task},
-                                             return_when=asyncio.FIRST_COMPLETED)
-                if stop_task in done:
-                    recv.cancel()
-                    await ws.close()
-                    return
-                try:
-                    frame = recv.result()
-                except Exception:  # ConnectionClosed and friends
-                    return
+            async for frame in ws:
                 now = time.time_ns()
-                if isinstance(frame, (bytes, bytearray, memoryview)):
+                if not isinstance(frame, str):
                     frame = bytes(frame)
-                    if len(frame) >= _HEAD.size and frame[0] == _MESSAGE_DATA:
-                        _op, sid, log_time = _HEAD.unpack_from(frame)
+                    if len(frame) >= head_size and frame[0] == _MESSAGE_DATA:
+                        _op, sid, log_time = head(frame)
                         topic = subs.get(sid)
                         if topic is not None:
-                            self.events.put(("message", topic, log_time,
-                                             frame[_HEAD.size:], now))
+                            put(("message", topic, log_time, frame[head_size:], now))
                     continue
                 try:
                     msg = json.loads(frame)
@@ -232,8 +230,8 @@ class FoxgloveClient:
                     self._put("server", now, str(msg.get("name", "")))
                 elif op == "status":
                     self._put("status", now, msg.get("level"), str(msg.get("message", "")))
-        finally:
-            stop_task.cancel()
+        except ConnectionClosed:
+            return
 
     def _put(self, *event) -> None:
         self.events.put(event)
