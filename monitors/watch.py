@@ -635,8 +635,8 @@ class Watch:
             if self.on_tick is not None:
                 self.on_tick(i, t, dep, src._last_time)
             self.last_tick_time = t
-            if self.start_time is None:
-                self.start_time = t
+            if self.start_time is None:  # the run's time 0, as in the audit's tables
+                self.start_time = sampling.start_time
         times, columns, log_times = self._cols.arrays()
         self._live_evidence()
         return _Pass(sampling, times, columns, log_times, monitors, engine)
