@@ -54,11 +54,11 @@ def _watch_trace(plan, trace, rate=RATE, record=None, at=None, backoff=0.05):
 
         def publish():
             try:
-                server.wait_subscribed(w.needed & set(server.channels), timeout=20)
+                server.wait_subscribed(w.needed & set(server.channels), timeout=60)
                 done["sent"], done["last"] = replay_mcap(
                     str(trace), server, rate, topics=w.needed,
                     at=(lambda i: at(i, server)) if at else None)
-                deadline = time.monotonic() + 5
+                deadline = time.monotonic() + 60  # returns once caught up
                 while (w.source._last_time or 0) < done["last"] and time.monotonic() < deadline:
                     time.sleep(0.02)
             finally:
@@ -144,14 +144,21 @@ def _write_reqs(tmp_path, fret, bindings):
     return load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),)))
 
 
-def _run_synthetic(plan, server, publish, wait=0.5):
+def _run_synthetic(plan, server, publish, wait=0.5, last=None):
+    """Watch ``server`` while ``publish(server)`` runs; stop once the watch used the message
+    at log time ``last`` (or 0.3 s after publishing)."""
     w = Watch(plan, WatchOptions(url=server.url, wait=wait))
 
     def go():
         try:
-            server.wait_subscribed(timeout=10)
+            server.wait_subscribed(timeout=60)
             publish(server)
-            time.sleep(0.3)
+            if last is None:
+                time.sleep(0.3)
+            else:
+                deadline = time.monotonic() + 60
+                while (w.source._last_time or 0) < last and time.monotonic() < deadline:
+                    time.sleep(0.02)
         finally:
             w.stop()
 
@@ -192,7 +199,7 @@ def test_unknown_topic_and_undecodable_schema_are_errors_for_their_requirements_
                 srv.log("/b", _f64(1.0), t0 + k * 50_000_000)
                 time.sleep(0.005)
 
-        w, la = _run_synthetic(plan, server, publish)
+        w, la = _run_synthetic(plan, server, publish, last=1_700_000_000 * S + 19 * 50_000_000)
     finally:
         server.stop()
     by = {v.requirement: v for v in la.verdicts}
@@ -229,7 +236,7 @@ def test_bad_payload_clock_backwards_and_unadvertise_are_data_problems(tmp_path)
                     srv.channels["/b"].close()  # unadvertised
                     time.sleep(0.1)
 
-        w, la = _run_synthetic(plan, server, publish)
+        w, la = _run_synthetic(plan, server, publish, last=1_700_000_000 * S + 29 * 50_000_000)
     finally:
         server.stop()
     kinds = {p["kind"] for p in la.problems}
@@ -261,7 +268,7 @@ def test_cli_watch_jsonl_and_exit_code(tmp_path):
         t = threading.Thread(target=publish, daemon=True)
         t.start()
         res = CliRunner().invoke(main, ["watch", server.url, "-r", REQS, "--jsonl",
-                                        "--duration", "3", "--no-live"])
+                                        "--duration", "6", "--no-live"])
         t.join(20)
     finally:
         server.stop()
