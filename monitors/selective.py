@@ -90,7 +90,10 @@ def install(source, bindings) -> None:
     cached decoders are dropped when the wanted fields change."""
     fields = wanted_fields(bindings) if bindings is not None else None
     if getattr(source, "_wanted_fields", None) != fields:
-        source._wanted_fields = fields
+        try:
+            source._wanted_fields = fields
+        except AttributeError:  # a source that cannot take it decodes in full
+            return
         cache = getattr(source, "_decoders", None)
         if cache:  # keep the None entries: unreadable schemas, already reported
             for key in [k for k, v in cache.items() if v is not None]:
