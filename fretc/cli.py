@@ -130,6 +130,7 @@ def _register_optional() -> None:
     from monitors.cli import audit_cmd
 
     main.add_command(audit_cmd, "audit")
+    main.add_command(__import__("fretc.check", fromlist=["check_cmd"]).check_cmd, "check")
     try:
         from monitors.report import report_cmd
     except ModuleNotFoundError as exc:

@@ -1012,10 +1012,14 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: Optional[str] = No
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="TOML mapping of variables to AJPF beliefs (as fretc --emit psl).")
 @click.option("--title", default=None, help="Report title.")
+@click.option("--check", "check_json", type=click.Path(exists=True, dir_okay=False),
+              default=None, help="Show the findings of fretc check -o FILE beside the "
+                                 "requirements.")
 @ray_options
 @click.pass_context
 def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-               jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title):
+               jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title,
+               check_json=None):
     """Write the traceability report (HTML + Markdown) of an audit: requirements x runs,
     formulas, monitors, AJPF properties, verdicts, witnesses and violation timelines.
 
@@ -1062,6 +1066,9 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         click.echo(f"error: {exc}", err=True)
         ctx.exit(2)
         return
+    if check_json:  # fretc check findings beside the requirements (compiler/check_report.py)
+        from compiler.check_report import add_to_report, load_check
+        add_to_report(str(files.markdown), str(files.html), load_check(check_json))
     for n in files.notes:
         click.echo(f"note: {n}", file=err)
     s = doc.get("summary") or {}
