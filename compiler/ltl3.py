@@ -275,7 +275,7 @@ def progression_tables(formula: Node, atoms: List[Node]) -> Optional[Tuple[list,
 #: Above this many states, the powerset of Spot's low-effort monitor is not minimized
 #: (``minimize_monitor`` takes about a minute on 80,000 states); Spot's reduced translation
 #: is used instead.
-POWERSET_MAX = 2000
+POWERSET_MAX = 10000
 #: Atom operators: each distinct one becomes an atomic proposition of the automata.
 ATOM_OPS = ("ap", "cmp", "call", "past", "future", "FTP", "LAST")
 
