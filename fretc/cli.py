@@ -168,6 +168,7 @@ def _register_optional() -> None:
             raise
     else:
         main.add_command(report_cmd, "report")
+    __import__("fretc.watch").watch.register(main)
 
 
 if __name__ == "__main__":  # pragma: no cover
