@@ -9,6 +9,7 @@ violation), 2 usage or input errors.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Optional
@@ -20,13 +21,42 @@ from fretish.errors import FretishError
 
 class _DefaultGroup(click.Group):
     """A group whose first argument, when it is not a sub-command, goes to ``compile``
-    (so ``fretc requirements/r1.fret --emit ltl`` works as the users wrote it)."""
+    (so ``fretc requirements/r1.fret --emit ltl`` works as the users wrote it).
+
+    The optional sub-commands (:func:`_register_optional`) are attached on first need: not
+    when the first argument is a requirement file (a path with a folder or a ``.fret`` /
+    ``.json`` name, which no sub-command is called), so ``fretc FILE`` does not import the
+    audit and report machinery (start-up time, issue 9)."""
+
+    _optional_registered = False
+
+    def _ensure_optional(self) -> None:
+        if not _DefaultGroup._optional_registered:
+            _DefaultGroup._optional_registered = True
+            _register_optional()
 
     def parse_args(self, ctx, args):
         if args and args[0] not in self.commands and args[0] not in ("--help", "-h",
                                                                      "--version"):
-            args = ["compile"] + list(args)
+            if not _names_a_file(args[0]):
+                self._ensure_optional()
+            if args[0] not in self.commands:
+                args = ["compile"] + list(args)
         return super().parse_args(ctx, args)
+
+    def get_command(self, ctx, cmd_name):
+        if cmd_name not in self.commands:
+            self._ensure_optional()
+        return super().get_command(ctx, cmd_name)
+
+    def list_commands(self, ctx):
+        self._ensure_optional()
+        return super().list_commands(ctx)
+
+
+def _names_a_file(arg: str) -> bool:
+    """Can ``arg`` only be a requirement file (never a sub-command name)?"""
+    return "/" in arg or os.sep in arg or arg.lower().endswith((".fret", ".json"))
 
 
 @click.group(cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -126,7 +156,8 @@ def _write_outputs(outputs: dict, output: Optional[str], suffix: str) -> None:
 
 def _register_optional() -> None:
     """Attach ``audit`` (``monitors/cli.py``; it imports its engine lazily) and, once
-    ``monitors/report.py`` provides it, ``report``."""
+    ``monitors/report.py`` provides it, ``report``. Called on first need by
+    :class:`_DefaultGroup` (not at import: ``fretc FILE`` does not need them)."""
     from monitors.cli import audit_cmd
 
     main.add_command(audit_cmd, "audit")
@@ -140,8 +171,6 @@ def _register_optional() -> None:
         main.add_command(report_cmd, "report")
     __import__("fretc.watch").watch.register(main)
 
-
-_register_optional()
 
 if __name__ == "__main__":  # pragma: no cover
     main()
