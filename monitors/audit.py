@@ -544,6 +544,8 @@ class _Pass:
     log_times: Dict[str, np.ndarray]
     monitors: Dict[int, Any]
     engine: Dict[int, str]
+    cut: int = 0  # ticks dropped after the damage (_cut_at_damage)
+    intact_end: Optional[int] = None  # exclusive bound of the judged ticks' times
 
 
 def _restrict(b: Bindings, names: List[str]) -> Bindings:
@@ -608,7 +610,40 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
             elif expected:
                 progress(min(1.0, count / expected))
     times, columns, log_times = cols.finish()
-    return _Pass(sampling, times, columns, log_times, monitors, engine)
+    res = _Pass(sampling, times, columns, log_times, monitors, engine)
+    _cut_at_damage(res, source, bindings, active)
+    return res
+
+
+def _cut_at_damage(res: _Pass, source, bindings: Optional[Bindings],
+                   active: List[RequirementPlan]) -> None:
+    """Keep only the ticks of the span read completely (DESIGN.md "Damage is never
+    evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
+    under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
+    precede its log time by that much). The stepwise monitors, which saw every tick, are
+    replayed over the kept ones. Sets ``res.cut`` to the number of ticks dropped."""
+    end = source.intact_end
+    if end is None:
+        return
+    if bindings is not None and bindings.time_base == "header":
+        end -= bindings.header_lag_ns
+    keep = int(np.searchsorted(res.times, end, side="left"))
+    n = len(res.times)
+    res.intact_end = end
+    if keep >= n:
+        return
+    res.cut = n - keep
+    res.times = res.times[:keep]
+    res.columns = {k: v[:keep] for k, v in res.columns.items()}
+    res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+    by_index = {r.index: r for r in active}
+    names = list(res.columns)
+    for idx in list(res.monitors):
+        mon = by_index[idx].monitor_cls()
+        cols = [res.columns[k] for k in names]
+        for i in range(keep):
+            mon.step({k: _py(c[i]) for k, c in zip(names, cols)})
+        res.monitors[idx] = mon
 
 
 def _problem_json(p: DataProblem) -> dict:
@@ -764,6 +799,7 @@ def audit_log(plan: AuditPlan, path: str,
         break
     la.partial = bool(source.partial)
     la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut)
     la.messages = dict(sorted(source.counts.items()))
     la.problems = [_problem_json(p) for p in problems.values()]
     la.problem_counts = dict(sorted(problem_counts.items()))
@@ -773,7 +809,10 @@ def audit_log(plan: AuditPlan, path: str,
     la.start_time_ns = s.start_time
     la.first_time_ns = s.first_time
     la.end_time_ns = s.end_time
-    la.ticks_evaluated = s.ticks
+    la.ticks_evaluated = len(result.times)
+    if result.cut:
+        la.end_time_ns = int(result.times[-1]) if len(result.times) else None
+        la.ticks_after_damage = result.cut
     la.warmup_ticks = s.warmup_ticks
     la.waiting_for = list(s.waiting_for)
     la.missing_topics = list(s.missing_topics)
@@ -879,6 +918,11 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
 
     n = len(res.times)
     v.engine = res.engine[r.index]
+    if n == 0 and res.intact_end is not None:
+        v.verdict = "unknown"
+        v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
+                            "read completely to judge")
+        return
     if n == 0:
         waiting = la.missing_topics or la.waiting_for
         v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
@@ -911,6 +955,10 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
             v.notes.append("the interval semantics disagrees with the monitor "
                            f"({'holds' if ev.holds else 'violated'}); please report this")
             ev = None
+    if res.intact_end is not None:
+        holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+        if holds is None:
+            return
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous":
@@ -967,6 +1015,32 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
         if lt is None:
             continue
         v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]
+
+
+def _judge_at_damage(r: RequirementPlan, res: _Pass, v, holds: bool, ev, status, st_tick,
+                     n: int) -> Optional[bool]:
+    """The verdict over the intact span of a damaged log (:mod:`monitors.damage`): True /
+    False for the usual satisfied-or-vacuous / violated paths of :func:`_finalize`, None
+    when the verdict (``unknown``) is set here."""
+    from .damage import open_obligations, verdict_at_damage
+    from .evidence import EvidenceUnsupported
+
+    opened = []
+    try:
+        opened = open_obligations(r.requirement, res.columns, n, r.formalization.ticks)
+    except (EvidenceUnsupported, KeyError) as exc:
+        if holds:  # cannot tell whether an obligation is open at the damage
+            v.verdict = "unknown"
+            v.unknown_reason = (f"the log is damaged and whether an obligation is open at "
+                                f"the damage cannot be decided ({exc})")
+            return None
+    verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
+                                     st_tick, n, ev, opened, has_ltl3=v.engine != "interval")
+    if verdict == "unknown":
+        v.verdict = "unknown"
+        v.unknown_reason = why
+        return None
+    return verdict != "violated"
 
 
 def _py(x):

@@ -847,24 +847,36 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
 def _env(autoescape: bool):
     import jinja2
 
+    import markupsafe
+
+    from fretish.textsafe import md_code, visible
+
+    def finalize(value: Any) -> Any:
+        # every value printed by a template: control and bidi characters shown escaped
+        # (XML 1.0 forbids C0 characters; a U+202E must not reorder the page), except
+        # markup built here (the inlined SVG, already safe)
+        if isinstance(value, str) and not isinstance(value, markupsafe.Markup):
+            return visible(value, keep="\n\t")
+        return value
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("templates", ""), autoescape=autoescape,
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined)
+        undefined=jinja2.StrictUndefined, finalize=finalize)
 
     def md(text: Any) -> str:
         """Markdown table-cell / inline text: pipes, backticks, newlines and HTML made
         harmless."""
-        s = "" if text is None else str(text)
-        s = s.replace("\\", "\\\\").replace("|", "\\|").replace("\n", " ")
+        s = visible("" if text is None else str(text).replace("\n", " "))
+        s = s.replace("\\", "\\\\").replace("|", "\\|")
         s = s.replace("<", "&lt;").replace(">", "&gt;").replace("*", "\\*")
+        s = s.replace("`", "\\`")
         return s
 
     def code(text: Any) -> str:
-        """Inline Markdown code span that survives backticks in the text."""
-        s = "" if text is None else str(text).replace("\n", " ").replace("|", "\\|")
-        fence = "``" if "`" in s else "`"
-        return f"{fence} {s} {fence}" if fence == "``" else f"`{s}`"
+        """Inline Markdown code span that no backtick run in the text can close
+        (:func:`fretish.textsafe.md_code`)."""
+        return md_code("" if text is None else str(text).replace("\n", " "))
 
     env.filters["md"] = md
     env.filters["code"] = code

@@ -126,10 +126,18 @@ class LogSource:
         kind: ``"mcap"``, ``"bag"`` (ROS 1), ``"rosbag2"`` or ``"csv"``.
         counts: messages delivered per topic by the most recent :meth:`messages` pass
             (filled while iterating).
-        partial: True when the log ends early (truncated or unreadable from some point on);
-            everything before that point was delivered.
-        damage_time: when ``partial``, the log time (ns) of the last good message read before
-            the damage; None otherwise (or when no message was read at all).
+        partial: True when the log is damaged: it ends early (truncated or unreadable from
+            some point on), a part of it was skipped (a chunk failing its CRC, a record that
+            does not parse: a *gap*), or its summary or data-section CRC is damaged.
+        damage_time: where the intact span ends: the log time (ns) of the last good message
+            read before a truncation, or the first log time of the first gap; None when the
+            damage loses no message (summary, data CRC) or when nothing was read before it.
+            Only ticks strictly before it are judged (DESIGN.md "Damage is never evidence").
+        gaps: ``(start, end)`` log-time spans (ns, inclusive; ``end`` None when unknown) of the
+            data skipped in the latest pass, in the order found.
+        damage_cut: True when the damage loses messages (truncation or gap), so that only the
+            span before ``damage_time`` was read completely; False for damage that loses none
+            (summary, data-section CRC).
 
     ``problems`` lists the damage found at open time and during the most recent pass (capped
     per kind and topic, see :mod:`monitors.problems`); ``problem_counts`` counts all of it.
@@ -143,6 +151,9 @@ class LogSource:
         self.counts: dict[str, int] = {}
         self.partial = False
         self.damage_time: int | None = None
+        self.damage_cut = False
+        self.gaps: list[tuple[int | None, int | None]] = []
+        self._open_damage = False  # damage found at open time (summary): every pass is partial
         self._open_problems = ProblemLog()
         self._pass_problems = ProblemLog()
         self._start_time: int | None = None
@@ -168,9 +179,32 @@ class LogSource:
 
     def _begin_pass(self) -> None:
         self.counts = {}
-        self.partial = False
+        self.partial = self._open_damage
         self.damage_time = None
+        self.damage_cut = False
+        self.gaps = []
         self._pass_problems = ProblemLog()
+
+    def _gap(self, start: int | None, end: int | None = None) -> None:
+        """Record data lost from log time ``start`` (None: unknown, then the intact span
+        ends at ``start``'s best bound the caller passes) to ``end``: the log is partial and
+        its intact span ends at the earliest gap."""
+        self.partial = True
+        self.damage_cut = True
+        self.gaps.append((start, end))
+        if start is not None and (self.damage_time is None or start < self.damage_time):
+            self.damage_time = start
+
+    @property
+    def intact_end(self) -> int | None:
+        """Exclusive log-time bound (ns) of the span read completely in the latest pass: None
+        when no message was lost (``damage_cut`` False); a value below every log time when
+        nothing before the damage is intact."""
+        if not self.damage_cut:
+            return None
+        if self.damage_time is None or any(start is None for start, _ in self.gaps):
+            return -(2**63)
+        return self.damage_time
 
     # -- interface ------------------------------------------------------------------------------
     @property
@@ -354,6 +388,7 @@ class McapSource(LogSource):
             raise LogError(path, "not an MCAP file (bad magic at byte 0)")
         self.profile = ""
         self._index: _McapIndex | None = self._read_index()
+        self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
         self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
@@ -387,6 +422,7 @@ class McapSource(LogSource):
             raw = f.read(_FOOTER_LEN)
             opcode, length = _HEAD.unpack_from(raw)
             if opcode != Opcode.FOOTER or length != _FOOTER_LEN - 9:
+                self._open_damage = True
                 self._open_problems.add(DataProblem(
                     P.SUMMARY_CORRUPT, None, None,
                     f"no Footer record at byte {footer_pos}; reading without the index"))
@@ -397,6 +433,7 @@ class McapSource(LogSource):
                 summary_bytes = b""
             else:
                 if not (0 < footer.summary_start <= footer_pos):
+                    self._open_damage = True
                     self._open_problems.add(DataProblem(
                         P.SUMMARY_CORRUPT, None, None,
                         f"Footer summary_start {footer.summary_start} is outside the file; "
@@ -408,6 +445,7 @@ class McapSource(LogSource):
             if footer.summary_crc != 0:
                 crc = zlib.crc32(raw[: _FOOTER_LEN - 4], zlib.crc32(summary_bytes))
                 if crc != footer.summary_crc:
+                    self._open_damage = True
                     self._open_problems.add(DataProblem(
                         P.SUMMARY_CORRUPT, None, None,
                         f"summary CRC mismatch (Footer says {footer.summary_crc:#010x}, "
@@ -443,6 +481,7 @@ class McapSource(LogSource):
                     statistics = rec
                 pos += 9 + length
         except _RECORD_ERRORS as exc:
+            self._open_damage = True
             self._open_problems.add(DataProblem(
                 P.SUMMARY_CORRUPT, None, None,
                 f"summary record at byte {footer.summary_start + pos} unreadable ({exc}); "
@@ -570,15 +609,17 @@ class McapSource(LogSource):
                         raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
                     records = _chunk_records(_parse_record(Opcode.CHUNK, raw[9:]))
                 except CRCValidationError as exc:
+                    self._gap(ci.message_start_time, ci.message_end_time)
                     self._problem(P.CHUNK_CRC, None, ci.message_start_time,
                                   f"chunk at byte {ci.chunk_start_offset}: {exc}; its messages "
-                                  "are skipped", ci.message_end_time)
+                                  f"are skipped: a gap in the log{_GAP_NOTE}", ci.message_end_time)
                     continue
                 except Exception as exc:  # mcap, struct, zstd and lz4 raise their own errors
+                    self._gap(ci.message_start_time, ci.message_end_time)
                     self._problem(P.CHUNK_CORRUPT, None, ci.message_start_time,
                                   f"chunk at byte {ci.chunk_start_offset} unreadable "
-                                  f"({type(exc).__name__}: {exc}); its messages are skipped",
-                                  ci.message_end_time)
+                                  f"({type(exc).__name__}: {exc}); its messages are skipped: a "
+                                  f"gap in the log{_GAP_NOTE}", ci.message_end_time)
                     continue
                 n = 0
                 for rec in records:
@@ -587,6 +628,7 @@ class McapSource(LogSource):
                                               (rec.channel_id, rec)))
                         n += 1
                     elif isinstance(rec, McapMessage) and rec.channel_id not in index.channels:
+                        self._gap(rec.log_time, rec.log_time)
                         self._problem(P.UNKNOWN_CHANNEL, None, rec.log_time,
                                       f"message on channel id {rec.channel_id} that the summary "
                                       "does not define; skipped")
@@ -609,10 +651,18 @@ class McapSource(LogSource):
                 crc = zlib.crc32(block, crc)
                 remaining -= len(block)
         if crc != index.data_section_crc:
+            self._open_damage = True
+            self.partial = True
             self._open_problems.add(DataProblem(
                 P.DATA_CRC, None, None,
                 f"data section CRC mismatch (DataEnd says {index.data_section_crc:#010x}, "
                 f"computed {crc:#010x}): bytes outside the chunks are damaged"))
+
+    def _chunk_gap(self, chunk: Chunk, last_good: int | None) -> None:
+        """A skipped chunk read without the index: its header's times are not covered by a
+        CRC, so the gap starts no later than the last good message read before it."""
+        start = chunk.message_start_time
+        self._gap(start if last_good is None else min(start, last_good), chunk.message_end_time)
 
     def _linear(self, wanted: frozenset[str] | None, decode: bool) -> Iterator[Message]:
         """Record-by-record pass from byte 0 (no usable index).
@@ -635,6 +685,8 @@ class McapSource(LogSource):
             last_good = rec.log_time if last_good is None else max(last_good, rec.log_time)
             first_time = rec.log_time if first_time is None else min(first_time, rec.log_time)
             if ch is None:
+                if decode:
+                    self._gap(rec.log_time, rec.log_time)
                 if rec.channel_id not in reported_channels:
                     reported_channels.add(rec.channel_id)
                     self._problem(P.UNKNOWN_CHANNEL, None, rec.log_time,
@@ -666,6 +718,9 @@ class McapSource(LogSource):
             while heap and (limit is None or heap[0][0] < limit):
                 log_time, _pos, _seq, rec = heapq.heappop(heap)
                 if released is not None and log_time < released:
+                    # without an index only damage (a log time or chunk header changed) puts a
+                    # message this far out of order: a gap at its log time
+                    self._gap(log_time, log_time)
                     self._problem(P.OUT_OF_ORDER, channels[rec.channel_id].topic, log_time,
                                   f"message is {released - log_time} ns older than one already "
                                   f"delivered (beyond the {REORDER_WINDOW_NS} ns reorder window); "
@@ -697,8 +752,7 @@ class McapSource(LogSource):
                             if n_msgs:
                                 what += (f"; {n_msgs} complete messages recovered from the cut "
                                          "chunk (unverified: its CRC covers the whole chunk)")
-                    self.partial = True
-                    self.damage_time = last_good
+                    self._gap(last_good)
                     self._problem(P.TRUNCATED, None, last_good,
                                   f"{what}; read up to there (crashed or cut recording)")
                     break
@@ -708,6 +762,7 @@ class McapSource(LogSource):
                     try:
                         de = _parse_record(opcode, body)
                         if self.check_data_crc and de.data_section_crc not in (0, crc):
+                            self.partial = True
                             self._problem(P.DATA_CRC, None, None,
                                           f"data section CRC mismatch (DataEnd says "
                                           f"{de.data_section_crc:#010x}, computed {crc:#010x})")
@@ -725,6 +780,8 @@ class McapSource(LogSource):
                     rec = _parse_record(opcode, body)
                 except _RECORD_ERRORS as exc:
                     kind = P.CHUNK_CORRUPT if opcode == Opcode.CHUNK else P.CORRUPT_RECORD
+                    if opcode in (Opcode.CHUNK, Opcode.MESSAGE, Opcode.CHANNEL, Opcode.SCHEMA):
+                        self._gap(last_good)  # what it held is lost; its times are unknown
                     self._problem(kind, None, last_good,
                                   f"{Opcode(opcode).name} record at byte {pos} unreadable "
                                   f"({type(exc).__name__}: {exc}); skipped")
@@ -741,23 +798,47 @@ class McapSource(LogSource):
                     try:
                         records = _chunk_records(rec)
                     except CRCValidationError as exc:
+                        self._chunk_gap(rec, last_good)
                         self._problem(P.CHUNK_CRC, None, rec.message_start_time,
-                                      f"chunk at byte {pos}: {exc}; its messages are skipped",
-                                      rec.message_end_time)
+                                      f"chunk at byte {pos}: {exc}; its messages are skipped: "
+                                      f"a gap in the log{_GAP_NOTE}", rec.message_end_time)
                         continue
                     except Exception as exc:  # decompression libraries raise their own errors
+                        self._chunk_gap(rec, last_good)
                         self._problem(P.CHUNK_CORRUPT, None, rec.message_start_time,
                                       f"chunk at byte {pos} unreadable ({type(exc).__name__}: "
-                                      f"{exc}); its messages are skipped", rec.message_end_time)
+                                      f"{exc}); its messages are skipped: a gap in the log"
+                                      f"{_GAP_NOTE}", rec.message_end_time)
                         continue
-                    watermark = (rec.message_start_time if watermark is None
-                                 else max(watermark, rec.message_start_time))
-                    yield from release(watermark - REORDER_WINDOW_NS)
                     absorb(records, pos)
+                    # the watermark comes from the messages (CRC-checked), not from the chunk
+                    # header's message_start_time, which no CRC covers
+                    if last_good is not None:
+                        watermark = last_good if watermark is None else max(watermark, last_good)
+                        yield from release(watermark - REORDER_WINDOW_NS)
+        if decode and not self.damage_cut and not _ends_with_footer(f_size=self._size,
+                                                                     path=self.path):
+            self.partial = True
+            self._problem(P.SUMMARY_CORRUPT, None, None,
+                          "the file ends after its data section without a Footer and closing "
+                          "magic (summary lost); every message was read")
         yield from release(None)
         self._scanned = (schemas, channels)
         if first_time is not None:
             self._start_time, self._end_time = first_time, last_good
+
+
+_GAP_NOTE = "; the log is audited up to its start (nothing is held across a gap)"
+
+
+def _ends_with_footer(f_size: int, path: str) -> bool:
+    """True when the file ends with a Footer record and the closing magic (MCAP spec)."""
+    if f_size < len(MCAP_MAGIC) + _FOOTER_LEN:
+        return False
+    with open(path, "rb") as f:
+        f.seek(f_size - len(MCAP_MAGIC) - _FOOTER_LEN)
+        tail = f.read(len(MCAP_MAGIC) + _FOOTER_LEN)
+    return tail[-len(MCAP_MAGIC):] == MCAP_MAGIC and tail[0] == Opcode.FOOTER
 
 
 def _truncated_chunk_records(tail: bytes) -> list[Any]:
@@ -941,8 +1022,7 @@ class BagSource(LogSource):
                     self.counts[conn.topic] = self.counts.get(conn.topic, 0) + 1
                     yield Message(conn.topic, log_time, log_time, header_stamp(data), data)
         except _BAG_ERRORS as exc:  # data corrupt part-way
-            self.partial = True
-            self.damage_time = last
+            self._gap(last)
             self._problem(P.CORRUPT_RECORD, None, last,
                           f"reading stopped: {type(exc).__name__}: {exc}")
 

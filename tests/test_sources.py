@@ -261,7 +261,15 @@ def test_flipped_bytes_in_a_chunk_skip_that_chunk_only(tmp_path, compression):
         assert kinds[0] in allowed, (label, kinds)
         # The linear copy also lacks everything after the last chunk: partial, at its end.
         assert kinds[1:] == ([] if label == "indexed" else [P.TRUNCATED]), (label, kinds)
-        assert src.partial == (label == "linear")
+        # A skipped chunk is a gap (issue 15 item 9): the log is partial and its intact span
+        # ends where the gap starts.
+        assert src.partial and src.damage_cut, label
+        # (without the index the chunk header's start time is not CRC-covered: the gap
+        # starts no later than the last good message before it)
+        start = src.gaps[0][0]
+        assert chunks[3].message_end_time <= start <= bad.message_start_time, label
+        assert src.gaps[0][1] == bad.message_end_time, label
+        assert src.intact_end == start, label
         prob = next(p for p in src.problems if p.kind in allowed)
         assert (prob.log_time, prob.end_time) == (bad.message_start_time, bad.message_end_time)
 
@@ -287,7 +295,8 @@ def test_corrupt_summary_falls_back_to_linear_read(tmp_path, chunked):
     assert not src.indexed
     assert [p.kind for p in src.problems] == [P.SUMMARY_CORRUPT]
     assert [_key(m) for m in src.messages()] == _expected(msgs)
-    assert not src.partial
+    # damaged, so partial (never exit 0 on it), but no message lost: nothing is cut
+    assert src.partial and not src.damage_cut and src.intact_end is None
 
 
 def test_unknown_schema_or_encoding_is_an_error_for_that_topic_only(tmp_path):
