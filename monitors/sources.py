@@ -943,6 +943,7 @@ class BagSource(LogSource):
         self._fallback = fallback_typestore
         self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
         self._topics: dict[str, str] = {}
+        self._linear_bag: _Ros1Linear | None = None
         try:
             with self._reader() as reader:
                 for c in reader.connections:
@@ -953,7 +954,14 @@ class BagSource(LogSource):
         except LogError:
             raise
         except Exception as exc:  # rosbags ReaderError and friends
-            raise LogError(path, f"cannot open {self.kind}: {exc}") from None
+            if self.kind != "bag" or not _is_ros1_bag(p):
+                raise LogError(path, f"cannot open {self.kind}: {exc}") from None
+            # a ROS 1 bag whose index (at its end) is damaged or missing, as a crashed
+            # recording leaves it: read its records from the start, as far as they go
+            self._linear_bag = _Ros1Linear(self, str(exc))
+            self._open_damage = True
+            self.partial = True
+            self._topics = self._linear_bag.scan()
 
     def _reader(self) -> Any:
         if self.kind == "bag":
@@ -996,6 +1004,9 @@ class BagSource(LogSource):
         A read error part-way (damaged bag) ends the pass with ``partial`` set.
         """
         self._begin_pass()
+        if self._linear_bag is not None:
+            yield from self._linear_bag.messages(topics)
+            return
         last: int | None = None
         try:
             with self._reader() as reader:
@@ -1025,6 +1036,199 @@ class BagSource(LogSource):
             self._gap(last)
             self._problem(P.CORRUPT_RECORD, None, last,
                           f"reading stopped: {type(exc).__name__}: {exc}")
+
+
+_ROS1_MAGIC = b"#ROSBAG V2.0\n"
+_OP_MSG, _OP_BAG_HEADER, _OP_CHUNK, _OP_CONN = 0x02, 0x03, 0x05, 0x07
+
+
+def _is_ros1_bag(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(_ROS1_MAGIC)) == _ROS1_MAGIC
+    except OSError:
+        return False
+
+
+def _ros1_fields(raw: bytes) -> dict[bytes, bytes]:
+    """The ``name=value`` fields of a ROS 1 bag record header (ROS bag format 2.0)."""
+    out: dict[bytes, bytes] = {}
+    pos = 0
+    while pos + 4 <= len(raw):
+        (n,) = struct.unpack_from("<I", raw, pos)
+        if pos + 4 + n > len(raw):
+            raise ValueError("a header field runs past its record header")
+        name, eq, value = raw[pos + 4: pos + 4 + n].partition(b"=")
+        if not eq:
+            raise ValueError("a header field without '='")
+        out[name] = value
+        pos += 4 + n
+    return out
+
+
+def _ros1_records(buf: bytes, base: int) -> Iterator[tuple[int, dict[bytes, bytes], bytes]]:
+    """(offset, header fields, data) of the complete records in ``buf``; stops at the first
+    record cut short (ValueError for a record that does not parse)."""
+    pos = 0
+    while pos + 4 <= len(buf):
+        (hlen,) = struct.unpack_from("<I", buf, pos)
+        if pos + 4 + hlen + 4 > len(buf):
+            return
+        header = _ros1_fields(buf[pos + 4: pos + 4 + hlen])
+        (dlen,) = struct.unpack_from("<I", buf, pos + 4 + hlen)
+        start = pos + 8 + hlen
+        if start + dlen > len(buf):
+            return
+        yield base + pos, header, buf[start: start + dlen]
+        pos = start + dlen
+
+
+class _Ros1Linear:
+    """Record-by-record reading of a ROS 1 bag without its index (ROS bag format 2.0:
+    records of a header of ``name=value`` fields and data; ``op`` 0x05 Chunk - bz2, lz4 or
+    uncompressed records; 0x07 Connection; 0x02 Message data, ``time`` = sec, nsec u32).
+    Everything up to the first record cut short or unreadable is delivered (in log-time
+    order, :data:`REORDER_WINDOW_NS` held back); what follows is a truncation."""
+
+    def __init__(self, source: BagSource, why: str) -> None:
+        self.src = source
+        self.why = why
+        self.conns: dict[int, tuple[str, str, str]] = {}  # conn -> (topic, type, definition)
+
+    def scan(self) -> dict[str, str]:
+        for _ in self._walk(None, decode=False):
+            pass
+        return {t: normalize_msgtype(ty) for t, ty, _d in self.conns.values()}
+
+    def messages(self, topics) -> Iterator[Message]:
+        yield from self._walk(topics, decode=True)
+
+    def _walk(self, topics, decode: bool) -> Iterator[Message]:
+        src = self.src
+        data = Path(src.path).read_bytes()
+        heap: list[tuple] = []
+        seq = 0
+        last_good: int | None = None
+        released: int | None = None
+        decoders: dict[int, Any] = {}
+
+        def take(header: dict[bytes, bytes], body: bytes) -> None:
+            nonlocal seq, last_good
+            op = header.get(b"op", b"\x00")[:1]
+            if op == bytes([_OP_CONN]):
+                conn = struct.unpack("<I", header[b"conn"])[0]
+                f = _ros1_fields(body)
+                self.conns.setdefault(conn, (header.get(b"topic", f.get(b"topic", b"")).decode(),
+                                             f.get(b"type", b"").decode(),
+                                             f.get(b"message_definition", b"").decode(
+                                                 "utf-8", "replace")))
+            elif op == bytes([_OP_MSG]):
+                conn = struct.unpack("<I", header[b"conn"])[0]
+                sec, nsec = struct.unpack("<II", header[b"time"])
+                t = sec * NS_PER_S + nsec
+                last_good = t if last_good is None else max(last_good, t)
+                if decode:
+                    heapq.heappush(heap, (t, seq, conn, body))
+                    seq += 1
+
+        def release(limit: int | None) -> Iterator[Message]:
+            nonlocal released
+            while heap and (limit is None or heap[0][0] < limit):
+                t, _s, conn, body = heapq.heappop(heap)
+                c = self.conns.get(conn)
+                if c is None or (topics is not None and c[0] not in topics):
+                    continue
+                if released is not None and t < released:
+                    src._gap(t, t)
+                    src._problem(P.OUT_OF_ORDER, c[0], t, "message older than one already "
+                                 "delivered beyond the reorder window (no index); skipped")
+                    continue
+                if conn not in decoders:
+                    try:
+                        store, typename = build_typestore("ros1msg", c[1], c[2])
+                        decoders[conn] = _decoder_for(store, typename, "ros1")
+                    except _Unsupported as exc:
+                        decoders[conn] = None
+                        src._problem(P.UNKNOWN_SCHEMA, c[0], t,
+                                     f"{exc}; messages on this topic are skipped")
+                dec = decoders[conn]
+                if dec is None:
+                    continue
+                try:
+                    msg = dec(body)
+                except _DECODE_ERRORS as exc:
+                    src._problem(P.UNDECODABLE, c[0], t, f"payload of {len(body)} bytes does "
+                                 f"not deserialize ({type(exc).__name__}); message skipped")
+                    continue
+                released = t
+                src.counts[c[0]] = src.counts.get(c[0], 0) + 1
+                yield Message(c[0], t, t, header_stamp(msg), msg)
+
+        pos = len(_ROS1_MAGIC)
+        reason = None
+        while pos < len(data):
+            recs = list(_ros1_records_one(data, pos))
+            if not recs:
+                reason = f"file ends at byte {len(data)} inside the record at byte {pos}"
+                break
+            (_off, header, body, nxt), = recs
+            op = header.get(b"op", b"\x00")[:1]
+            try:
+                if op == bytes([_OP_CHUNK]):
+                    comp = header.get(b"compression", b"none").decode()
+                    if comp == "none":
+                        raw = body
+                    elif comp == "bz2":
+                        import bz2
+
+                        raw = bz2.decompress(body)
+                    elif comp == "lz4":
+                        import lz4.frame
+
+                        raw = lz4.frame.decompress(body)
+                    else:
+                        raise ValueError(f"unknown chunk compression {comp!r}")
+                    for _o, h, b in _ros1_records(raw, 0):
+                        take(h, b)
+                elif op in (bytes([_OP_CONN]), bytes([_OP_MSG])):
+                    take(header, body)
+            except Exception as exc:  # bz2/lz4/struct errors: the record is damaged
+                reason = f"record at byte {pos} unreadable ({type(exc).__name__}: {exc})"
+                break
+            if last_good is not None:
+                yield from release(last_good - REORDER_WINDOW_NS)
+            pos = nxt
+        if decode:
+            yield from release(None)
+        if reason is not None or pos < len(data):
+            src._gap(last_good)
+            src._problem(P.TRUNCATED, None, last_good,
+                         f"{reason or 'records end early'}; read up to there without the bag "
+                         f"index ({self.why})")
+        else:
+            src._problem(P.SUMMARY_CORRUPT, None, None,
+                         f"the bag index is damaged or missing ({self.why}); every record was "
+                         "read without it")
+        if not decode and last_good is not None:
+            src._end_time = last_good
+
+
+def _ros1_records_one(data: bytes, pos: int) -> Iterator[tuple[int, dict, bytes, int]]:
+    """The one complete record at ``pos`` of ``data`` with the offset after it, or nothing."""
+    if pos + 4 > len(data):
+        return
+    (hlen,) = struct.unpack_from("<I", data, pos)
+    if pos + 8 + hlen > len(data):
+        return
+    try:
+        header = _ros1_fields(data[pos + 4: pos + 4 + hlen])
+    except ValueError:
+        return
+    (dlen,) = struct.unpack_from("<I", data, pos + 4 + hlen)
+    start = pos + 8 + hlen
+    if start + dlen > len(data):
+        return
+    yield pos, header, data[start: start + dlen], start + dlen
 
 
 # ------------------------------------------------------------------------------------------------
