@@ -65,6 +65,9 @@ NS_PER_S = 1_000_000_000
 CHUNK = 4096
 #: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
 VECTORIZE_MIN_TICKS = 20_000
+#: At most this many ticks per log: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many (issue 15 item 11).
+MAX_TICKS = 10**8
 #: File kinds audited when a folder is given.
 LOG_SUFFIXES = (".mcap", ".bag", ".csv")
 _MODULE_PREFIX = "fretc_audit_"
@@ -604,6 +607,9 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
             step(vals)
         cols.append(tick)
         count += 1
+        if count > MAX_TICKS:
+            raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
+                              "choose a longer tick period")
         if progress is not None and count % every == 0:
             if span is not None:
                 progress(min(1.0, max(0.0, (tick.time - start_t) / span)))
@@ -742,10 +748,24 @@ def audit_log(plan: AuditPlan, path: str,
         la.error = str(exc)
         fail_all(f"log not audited: {exc}")
         return finish()
+    too_many = _too_many_ticks(source, bindings, path)
+    if too_many is not None:
+        la.error = too_many
+        fail_all(too_many)
+        return finish()
+    r_skip: set = set()  # requirements already decided (unknown) before the pass
+    damaged = _damage_before_topics(source, la)  # damage seen while finding the topics
     if bindings is not None:
         if bindings.tick.topic is not None and bindings.tick.topic not in log_topics:
-            la.error = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
-                        f"{', '.join(log_topics) or 'no topics'})")
+            msg = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
+                   f"{', '.join(log_topics) or 'no topics'})")
+            if damaged:  # the damage may have taken it: unknown, with the damage's reason
+                for r in active:
+                    if verdicts[r.index].error is None:
+                        verdicts[r.index].verdict = "unknown"
+                        verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                return finish()
+            la.error = msg
             fail_all(la.error)
             return finish()
         for r in active:
@@ -756,15 +776,22 @@ def audit_log(plan: AuditPlan, path: str,
             if absent:
                 users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
                          for t in absent}
-                verdicts[r.index].error = (
-                    "; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
-                              for t in absent)
-                    + f" (it has {', '.join(log_topics) or 'no topics'})")
+                msg = ("; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
+                                 for t in absent)
+                       + f" (it has {', '.join(log_topics) or 'no topics'})")
+                if damaged:
+                    verdicts[r.index].verdict = "unknown"
+                    verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                    verdicts[r.index].error = None
+                    r_skip.add(r.index)
+                else:
+                    verdicts[r.index].error = msg
     problems: Dict[Tuple, DataProblem] = {}
     problem_counts: Dict[str, int] = {}
     result: Optional[_Pass] = None
     while True:
-        active = [r for r in plan.requirements if verdicts[r.index].error is None]
+        active = [r for r in plan.requirements if verdicts[r.index].error is None
+                  and r.index not in r_skip]
         if not active:
             break
         names = sorted({v for r in active for v in r.variables})
@@ -797,12 +824,14 @@ def audit_log(plan: AuditPlan, path: str,
                 result = None
                 continue
         break
-    la.partial = bool(source.partial)
-    la.damage_time_ns = source.damage_time
-    la.damage_cut = bool(source.damage_cut)
+    la.partial = bool(source.partial) or la.partial
+    if source.partial or la.damage_time_ns is None:
+        la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut) or la.damage_cut
     la.messages = dict(sorted(source.counts.items()))
-    la.problems = [_problem_json(p) for p in problems.values()]
-    la.problem_counts = dict(sorted(problem_counts.items()))
+    if problems or not la.problems:  # (else: only the damage found with the topics)
+        la.problems = [_problem_json(p) for p in problems.values()]
+        la.problem_counts = dict(sorted(problem_counts.items()))
     if result is None:
         return finish()
     s = result.sampling
@@ -819,10 +848,47 @@ def audit_log(plan: AuditPlan, path: str,
     engines = sorted(set(result.engine.values()))
     la.engine = engines[0] if len(engines) == 1 else "mixed"
     for r in active:
-        _finalize(plan, r, result, bindings, verdicts[r.index], la)
+        if r.index not in r_skip:
+            _finalize(plan, r, result, bindings, verdicts[r.index], la)
     if bindings is not None:
         _operand_values(path, plan, bindings, active, verdicts, result.times)
     return finish()
+
+
+def _too_many_ticks(source, bindings: Optional[Bindings], path: str) -> Optional[str]:
+    """The error when the fixed tick period would give more than :data:`MAX_TICKS` ticks
+    over the log's span (first to last message), else None."""
+    if bindings is None or not bindings.tick.period_ns or source.kind == "csv":
+        return None
+    n = _expected_ticks(source, bindings)
+    if n is None or n <= MAX_TICKS:
+        return None
+    span = (source.end_time - source.start_time) / NS_PER_S
+    return (f"{path}: the tick period {_fmt_ns(bindings.tick.period_ns)} ({bindings.source}) "
+            f"would give {n:,} ticks over the {span:.3f} s of the log, more than the limit of "
+            f"{MAX_TICKS:,}; choose a longer period")
+
+
+def _damage_before_topics(source, la) -> Optional[str]:
+    """When finding the log's topics met damage (a log cut inside its only chunk, say): mark
+    ``la`` partial with the problems, and return the reason in words (else None). Issue 15
+    item 10: the reason for the damage is kept even when nothing readable is left."""
+    if not source.partial:
+        return None
+    la.partial = True
+    la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut)
+    probs = [p for p in source.problems if p.kind in _DAMAGE_KINDS]
+    la.problems = [_problem_json(p) for p in source.problems]
+    la.problem_counts = {f"{k} {t or '-'}": n for (k, t), n in sorted(
+        source.problem_counts.items(), key=lambda kv: (kv[0][0], kv[0][1] or ""))}
+    if not probs:
+        return "the log is damaged"
+    return "the log is damaged: " + "; ".join(str(p) for p in probs[:3])
+
+
+_DAMAGE_KINDS = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
+                 "data_crc", "unknown_channel", "out_of_order")
 
 
 def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
