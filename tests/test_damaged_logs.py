@@ -20,6 +20,7 @@ from __future__ import annotations
 import random
 import shutil
 import struct
+import zlib
 from pathlib import Path
 
 import pytest
@@ -111,7 +112,15 @@ def _check(original, damaged, label: str) -> None:
         assert all(v.verdict == "error" for v in damaged.verdicts), where
         return
     kinds = {p["kind"] for p in damaged.problems}
-    assert damaged.partial, f"{where}: damaged but not partial ({sorted(kinds)})"
+    if not damaged.partial:
+        # damage no check can see (a flip in bytes no CRC covers and no reader uses, like a
+        # MessageIndex or a chunk header's copy of its times), or that looks like a bad
+        # recording (a schema without CRC): the verdicts are the original ones, or errors
+        # (exit 2) naming the problem
+        for ov, dv in zip(original.verdicts, damaged.verdicts):
+            assert dv.verdict in (ov.verdict, "error"), \
+                f"{where} {dv.requirement}: {dv.verdict} != {ov.verdict} ({sorted(kinds)})"
+        return
     assert kinds & DAMAGE_KINDS, f"{where}: partial without its reason ({sorted(kinds)})"
     end = damaged.damage_time_ns if damaged.damage_cut else None
     for ov, dv in zip(original.verdicts, damaged.verdicts):
@@ -152,7 +161,8 @@ def _damages(log: Path, full: bool):
     seeds = range(3) if full else (0,)
     for count in flips:
         for seed in seeds:
-            yield f"flip{count}s{seed}", _flip(data, count, hash((log.name, seed)) & 0xFFFF)
+            yield f"flip{count}s{seed}", _flip(data, count, zlib.crc32(f"{log.name}:{seed}:"
+                                                                      f"{count}".encode()))
     yield "nosummary", _lose_summary(log)
 
 
