@@ -239,3 +239,39 @@ def test_item13_one_file_named_twice_is_read_once(tmp_path):
     assert res.exit_code == 0, res.output
     ids = [r["id"] for r in json.loads(res.output)]
     assert len(ids) == len(set(ids))
+
+
+# --------------------------------------------------------------------------- item 12, properties
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+from fretish.textsafe import is_unsafe, one_line, xml_text  # noqa: E402
+
+_HOSTILE_CHARS = st.text(alphabet=st.one_of(
+    st.sampled_from("`|<>&\\\x00\x1b\x7f\x85\u202e\u2066\u200b\u2028\ufeff\ufffe\n\t\r "),
+    st.characters()), max_size=40)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_HOSTILE_CHARS)
+def test_item12_escaped_text_is_safe_and_keeps_the_safe_characters(s):
+    out = visible(s)
+    assert not is_unsafe(out)
+    if "\\" not in s:  # the escapes decode back to the text: nothing lost or changed
+        back = re.sub(r"\\x([0-9a-f]{2})|\\u([0-9a-f]{4})|\\U([0-9a-f]{8})",
+                      lambda m: chr(int(next(g for g in m.groups() if g), 16)), out)
+        assert back == s
+    el = ET.Element("a", b=xml_text(s, keep=""))
+    el.text = xml_text(s)
+    ET.fromstring(ET.tostring(el, encoding="unicode"))  # a NUL would not parse
+    assert "\n" not in one_line(s)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_HOSTILE_CHARS)
+def test_item12_a_markdown_code_span_holds_any_text(s):
+    span = md_code(s.replace("\n", " "))
+    fence = re.match(r"`+", span).group(0)
+    inner = span[len(fence):-len(fence)]
+    assert span.endswith(fence)
+    # no backtick run of the fence's length inside: the span cannot be closed early
+    assert all(len(run) != len(fence) for run in re.findall(r"`+", inner))
