@@ -31,8 +31,11 @@ engine: per evaluated tick, 8 bytes of time, 8 bytes per bound topic (log time o
 message), 1 byte per boolean and 8 per numeric variable - about 80 bytes a tick for the
 Safe-ROS set, 3 MB for an hour at 10 Hz. (Kept in chunks of :data:`CHUNK` ticks.)
 
-Damage: a truncated log is audited up to its end and every verdict on it is ``partial``
-(``LogAudit.damage_time_ns``); damaged chunks are data problems, not failures; a topic whose
+Damage (DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
+summary lost) is ``partial``; only the ticks before its first cut or gap
+(``LogAudit.damage_time_ns``, :attr:`monitors.sources.LogSource.intact_end`) are judged, and
+a verdict that the end of that span would decide is ``unknown`` (:mod:`monitors.damage`); a
+fixed tick period giving more than :data:`MAX_TICKS` ticks is an input error; a topic whose
 schema is unknown makes only the requirements reading it ``error`` - the others are audited
 without it (a second pass over the log, only in that case). Problems of every pass are kept.
 

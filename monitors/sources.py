@@ -359,7 +359,9 @@ class McapSource(LogSource):
       chunks are read through the index in ``message_start_time`` order and merged so messages
       come out in exact log-time order (ties: file position), skipping chunks holding none of
       the wanted topics.  A chunk that is damaged (bad record, CRC mismatch, undecompressable)
-      is skipped with a DataProblem and reading goes on with the next chunk.  After a full
+      is skipped with a DataProblem and reading goes on with the next chunk; it is a *gap*
+      (``gaps``): the log is ``partial`` and its intact span ends where the gap starts
+      (``intact_end``; the audit judges only the ticks before it).  After a full
       pass the data-section CRC (DataEnd record) is checked once.
     * Otherwise (no summary, crashed recording, bad footer): records are read one by one from
       the start (framing: 1-byte opcode, 8-byte length).  A record whose body is damaged is
