@@ -37,7 +37,9 @@ def _T(text) -> "Text":
 
 
 def short_log_name(path: str) -> str:
-    """The path relative to the working directory when it lies below it."""
+    """The path relative to the working directory when it lies below it (a URL as is)."""
+    if "://" in path:
+        return path
     try:
         rel = os.path.relpath(path)
     except ValueError:  # pragma: no cover - other drive on Windows
