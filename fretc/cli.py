@@ -73,12 +73,20 @@ def _load(paths) -> list:
     try:
         entries = load_requirements([Path(p) for p in paths])
     except FretishError as exc:
-        click.echo(str(exc), err=True)
+        click.echo(_shown(str(exc)), err=True)
         sys.exit(2)
     except OSError as exc:
-        click.echo(f"error: {exc}", err=True)
+        click.echo(_shown(f"error: {exc}"), err=True)
         sys.exit(2)
     return compile_entries(entries)
+
+
+def _shown(text: str) -> str:
+    """Text for the terminal: control and bidi characters escaped, lines kept
+    (:func:`fretish.textsafe.visible`)."""
+    from fretish.textsafe import visible
+
+    return visible(text, keep="\n")
 
 
 @main.command("compile")
@@ -95,7 +103,7 @@ def compile_cmd(files, emit, as_json, output, psl_map):
     compiled = _load(files)
     failed = [c for c in compiled if c.error is not None]
     for c in failed:
-        click.echo(str(c.error), err=True)
+        click.echo(_shown(str(c.error)), err=True)
     if emit == "ltl":
         _emit_ltl(compiled, as_json)
     elif emit == "monitor":
@@ -117,8 +125,8 @@ def _emit_ltl(compiled, as_json: bool) -> None:
         click.echo(json.dumps([c.to_json() for c in compiled], indent=2))
         return
     for c in compiled:
-        click.echo(f"{c.id}  ({c.location()})")
-        click.echo(f"  text    {c.text}")
+        click.echo(_shown(f"{c.id}  ({c.location()})"))
+        click.echo(_shown(f"  text    {c.text}"))
         if c.formalization is not None:
             f = c.formalization
             click.echo(f"  key     {f.key}")
@@ -130,7 +138,7 @@ def _emit_ltl(compiled, as_json: bool) -> None:
         elif c.freeform:
             click.echo("  free-form: kept, not formalized")
         else:
-            click.echo("  error   " + getattr(c.error, "message", str(c.error)))
+            click.echo(_shown("  error   " + getattr(c.error, "message", str(c.error))))
         click.echo("")
 
 

@@ -406,6 +406,25 @@ def load_requirements(paths: Union[PathLike, Iterable[PathLike]]) -> List[Requir
     :class:`FretishFileError` naming ``file:line:column``.
     """
     entries: List[RequirementEntry] = []
+    read: set = set()
+    first: Dict[str, RequirementEntry] = {}
     for f in _files_of(paths):
-        entries.extend(_load_json(f) if f.suffix.lower() == ".json" else _load_fret(f))
+        key = os.path.realpath(f)
+        if key in read:  # the same file named twice (a folder and a file in it)
+            continue
+        read.add(key)
+        got = _load_json(f) if f.suffix.lower() == ".json" else _load_fret(f)
+        for e in got:
+            # ids are unique across all the files of a run: verdicts, monitors and reports
+            # are keyed by id (issue 15 item 13); duplicates inside one file are caught by
+            # its reader
+            other = first.get(e.id)
+            if other is not None and other.source != e.source:
+                raise FretishFileError(
+                    f"requirement id '{e.id}' is also defined at {other.source}:{other.line}; "
+                    "ids must be unique across the requirement files of a run (rename one)",
+                    source=e.source, line=e.line,
+                    column=e.column if f.suffix.lower() == ".json" else 1)
+            first.setdefault(e.id, e)
+        entries.extend(got)
     return entries

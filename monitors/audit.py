@@ -31,8 +31,11 @@ engine: per evaluated tick, 8 bytes of time, 8 bytes per bound topic (log time o
 message), 1 byte per boolean and 8 per numeric variable - about 80 bytes a tick for the
 Safe-ROS set, 3 MB for an hour at 10 Hz. (Kept in chunks of :data:`CHUNK` ticks.)
 
-Damage: a truncated log is audited up to its end and every verdict on it is ``partial``
-(``LogAudit.damage_time_ns``); damaged chunks are data problems, not failures; a topic whose
+Damage (DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
+summary lost) is ``partial``; only the ticks before its first cut or gap
+(``LogAudit.damage_time_ns``, :attr:`monitors.sources.LogSource.intact_end`) are judged, and
+a verdict that the end of that span would decide is ``unknown`` (:mod:`monitors.damage`); a
+fixed tick period giving more than :data:`MAX_TICKS` ticks is an input error; a topic whose
 schema is unknown makes only the requirements reading it ``error`` - the others are audited
 without it (a second pass over the log, only in that case). Problems of every pass are kept.
 
@@ -65,6 +68,9 @@ NS_PER_S = 1_000_000_000
 CHUNK = 4096
 #: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
 VECTORIZE_MIN_TICKS = 20_000
+#: At most this many ticks per log: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many (issue 15 item 11).
+MAX_TICKS = 10**8
 #: File kinds audited when a folder is given.
 LOG_SUFFIXES = (".mcap", ".bag", ".csv")
 _MODULE_PREFIX = "fretc_audit_"
@@ -544,6 +550,8 @@ class _Pass:
     log_times: Dict[str, np.ndarray]
     monitors: Dict[int, Any]
     engine: Dict[int, str]
+    cut: int = 0  # ticks dropped after the damage (_cut_at_damage)
+    intact_end: Optional[int] = None  # exclusive bound of the judged ticks' times
 
 
 def _restrict(b: Bindings, names: List[str]) -> Bindings:
@@ -602,13 +610,49 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
             step(vals)
         cols.append(tick)
         count += 1
+        if count > MAX_TICKS:
+            raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
+                              "choose a longer tick period")
         if progress is not None and count % every == 0:
             if span is not None:
                 progress(min(1.0, max(0.0, (tick.time - start_t) / span)))
             elif expected:
                 progress(min(1.0, count / expected))
     times, columns, log_times = cols.finish()
-    return _Pass(sampling, times, columns, log_times, monitors, engine)
+    res = _Pass(sampling, times, columns, log_times, monitors, engine)
+    _cut_at_damage(res, source, bindings, active)
+    return res
+
+
+def _cut_at_damage(res: _Pass, source, bindings: Optional[Bindings],
+                   active: List[RequirementPlan]) -> None:
+    """Keep only the ticks of the span read completely (DESIGN.md "Damage is never
+    evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
+    under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
+    precede its log time by that much). The stepwise monitors, which saw every tick, are
+    replayed over the kept ones. Sets ``res.cut`` to the number of ticks dropped."""
+    end = source.intact_end
+    if end is None:
+        return
+    if bindings is not None and bindings.time_base == "header":
+        end -= bindings.header_lag_ns
+    keep = int(np.searchsorted(res.times, end, side="left"))
+    n = len(res.times)
+    res.intact_end = end
+    if keep >= n:
+        return
+    res.cut = n - keep
+    res.times = res.times[:keep]
+    res.columns = {k: v[:keep] for k, v in res.columns.items()}
+    res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+    by_index = {r.index: r for r in active}
+    names = list(res.columns)
+    for idx in list(res.monitors):
+        mon = by_index[idx].monitor_cls()
+        cols = [res.columns[k] for k in names]
+        for i in range(keep):
+            mon.step({k: _py(c[i]) for k, c in zip(names, cols)})
+        res.monitors[idx] = mon
 
 
 def _problem_json(p: DataProblem) -> dict:
@@ -707,10 +751,24 @@ def audit_log(plan: AuditPlan, path: str,
         la.error = str(exc)
         fail_all(f"log not audited: {exc}")
         return finish()
+    too_many = _too_many_ticks(source, bindings, path)
+    if too_many is not None:
+        la.error = too_many
+        fail_all(too_many)
+        return finish()
+    r_skip: set = set()  # requirements already decided (unknown) before the pass
+    damaged = _damage_before_topics(source, la)  # damage seen while finding the topics
     if bindings is not None:
         if bindings.tick.topic is not None and bindings.tick.topic not in log_topics:
-            la.error = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
-                        f"{', '.join(log_topics) or 'no topics'})")
+            msg = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
+                   f"{', '.join(log_topics) or 'no topics'})")
+            if damaged:  # the damage may have taken it: unknown, with the damage's reason
+                for r in active:
+                    if verdicts[r.index].error is None:
+                        verdicts[r.index].verdict = "unknown"
+                        verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                return finish()
+            la.error = msg
             fail_all(la.error)
             return finish()
         for r in active:
@@ -721,15 +779,22 @@ def audit_log(plan: AuditPlan, path: str,
             if absent:
                 users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
                          for t in absent}
-                verdicts[r.index].error = (
-                    "; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
-                              for t in absent)
-                    + f" (it has {', '.join(log_topics) or 'no topics'})")
+                msg = ("; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
+                                 for t in absent)
+                       + f" (it has {', '.join(log_topics) or 'no topics'})")
+                if damaged:
+                    verdicts[r.index].verdict = "unknown"
+                    verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                    verdicts[r.index].error = None
+                    r_skip.add(r.index)
+                else:
+                    verdicts[r.index].error = msg
     problems: Dict[Tuple, DataProblem] = {}
     problem_counts: Dict[str, int] = {}
     result: Optional[_Pass] = None
     while True:
-        active = [r for r in plan.requirements if verdicts[r.index].error is None]
+        active = [r for r in plan.requirements if verdicts[r.index].error is None
+                  and r.index not in r_skip]
         if not active:
             break
         names = sorted({v for r in active for v in r.variables})
@@ -762,28 +827,71 @@ def audit_log(plan: AuditPlan, path: str,
                 result = None
                 continue
         break
-    la.partial = bool(source.partial)
-    la.damage_time_ns = source.damage_time
+    la.partial = bool(source.partial) or la.partial
+    if source.partial or la.damage_time_ns is None:
+        la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut) or la.damage_cut
     la.messages = dict(sorted(source.counts.items()))
-    la.problems = [_problem_json(p) for p in problems.values()]
-    la.problem_counts = dict(sorted(problem_counts.items()))
+    if problems or not la.problems:  # (else: only the damage found with the topics)
+        la.problems = [_problem_json(p) for p in problems.values()]
+        la.problem_counts = dict(sorted(problem_counts.items()))
     if result is None:
         return finish()
     s = result.sampling
     la.start_time_ns = s.start_time
     la.first_time_ns = s.first_time
     la.end_time_ns = s.end_time
-    la.ticks_evaluated = s.ticks
+    la.ticks_evaluated = len(result.times)
+    if result.cut:
+        la.end_time_ns = int(result.times[-1]) if len(result.times) else None
+        la.ticks_after_damage = result.cut
     la.warmup_ticks = s.warmup_ticks
     la.waiting_for = list(s.waiting_for)
     la.missing_topics = list(s.missing_topics)
     engines = sorted(set(result.engine.values()))
     la.engine = engines[0] if len(engines) == 1 else "mixed"
     for r in active:
-        _finalize(plan, r, result, bindings, verdicts[r.index], la)
+        if r.index not in r_skip:
+            _finalize(plan, r, result, bindings, verdicts[r.index], la)
     if bindings is not None:
         _operand_values(path, plan, bindings, active, verdicts, result.times)
     return finish()
+
+
+def _too_many_ticks(source, bindings: Optional[Bindings], path: str) -> Optional[str]:
+    """The error when the fixed tick period would give more than :data:`MAX_TICKS` ticks
+    over the log's span (first to last message), else None."""
+    if bindings is None or not bindings.tick.period_ns or source.kind == "csv":
+        return None
+    n = _expected_ticks(source, bindings)
+    if n is None or n <= MAX_TICKS:
+        return None
+    span = (source.end_time - source.start_time) / NS_PER_S
+    return (f"{path}: the tick period {_fmt_ns(bindings.tick.period_ns)} ({bindings.source}) "
+            f"would give {n:,} ticks over the {span:.3f} s of the log, more than the limit of "
+            f"{MAX_TICKS:,}; choose a longer period")
+
+
+def _damage_before_topics(source, la) -> Optional[str]:
+    """When finding the log's topics met damage (a log cut inside its only chunk, say): mark
+    ``la`` partial with the problems, and return the reason in words (else None). Issue 15
+    item 10: the reason for the damage is kept even when nothing readable is left."""
+    if not source.partial:
+        return None
+    la.partial = True
+    la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut)
+    probs = [p for p in source.problems if p.kind in _DAMAGE_KINDS]
+    la.problems = [_problem_json(p) for p in source.problems]
+    la.problem_counts = {f"{k} {t or '-'}": n for (k, t), n in sorted(
+        source.problem_counts.items(), key=lambda kv: (kv[0][0], kv[0][1] or ""))}
+    if not probs:
+        return "the log is damaged"
+    return "the log is damaged: " + "; ".join(str(p) for p in probs[:3])
+
+
+_DAMAGE_KINDS = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
+                 "data_crc", "unknown_channel", "out_of_order")
 
 
 def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
@@ -879,6 +987,11 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
 
     n = len(res.times)
     v.engine = res.engine[r.index]
+    if n == 0 and res.intact_end is not None:
+        v.verdict = "unknown"
+        v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
+                            "read completely to judge")
+        return
     if n == 0:
         waiting = la.missing_topics or la.waiting_for
         v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
@@ -911,6 +1024,10 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
             v.notes.append("the interval semantics disagrees with the monitor "
                            f"({'holds' if ev.holds else 'violated'}); please report this")
             ev = None
+    if res.intact_end is not None:
+        holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+        if holds is None:
+            return
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous":
@@ -967,6 +1084,32 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
         if lt is None:
             continue
         v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]
+
+
+def _judge_at_damage(r: RequirementPlan, res: _Pass, v, holds: bool, ev, status, st_tick,
+                     n: int) -> Optional[bool]:
+    """The verdict over the intact span of a damaged log (:mod:`monitors.damage`): True /
+    False for the usual satisfied-or-vacuous / violated paths of :func:`_finalize`, None
+    when the verdict (``unknown``) is set here."""
+    from .damage import open_obligations, verdict_at_damage
+    from .evidence import EvidenceUnsupported
+
+    opened = []
+    try:
+        opened = open_obligations(r.requirement, res.columns, n, r.formalization.ticks)
+    except (EvidenceUnsupported, KeyError) as exc:
+        if holds:  # cannot tell whether an obligation is open at the damage
+            v.verdict = "unknown"
+            v.unknown_reason = (f"the log is damaged and whether an obligation is open at "
+                                f"the damage cannot be decided ({exc})")
+            return None
+    verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
+                                     st_tick, n, ev, opened, has_ltl3=v.engine != "interval")
+    if verdict == "unknown":
+        v.verdict = "unknown"
+        v.unknown_reason = why
+        return None
+    return verdict != "violated"
 
 
 def _py(x):

@@ -11,14 +11,29 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 
-from rich.markup import escape
+from rich.markup import escape as _markup_escape
 from typing import Dict, List, Optional
+
+from fretish.textsafe import terminal_text, xml_text
 
 from .report_model import LogAudit, Verdict, exit_code
 
 __all__ = ["print_summary", "junit_xml", "AuditProgress", "short_log_name"]
 
-_STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red", "error": "magenta"}
+_STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
+          "unknown": "yellow", "error": "magenta"}
+
+
+def escape(text) -> str:
+    """Text from the inputs for rich markup: control and bidi characters shown escaped
+    (:func:`fretish.textsafe.terminal_text`), then markup escaped."""
+    return _markup_escape(terminal_text(text))
+
+
+def _T(text) -> "Text":
+    from rich.text import Text
+
+    return Text(terminal_text(text))
 
 
 def short_log_name(path: str) -> str:
@@ -88,11 +103,13 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
                 notes.append(f"partial (damage at {where})")
             if v.error:
                 notes.append(v.error)
+            elif v.verdict == "unknown" and v.unknown_reason:
+                notes.append(f"unknown: {v.unknown_reason}")
             elif v.verdict == "vacuous":
                 notes.extend(n for n in v.notes if n.startswith("vacuous"))
             label = v.verdict.upper() if v.verdict == "violated" else v.verdict
-            table.add_row(Text(name), Text(v.requirement), Text(label, style=_STYLE[v.verdict]),
-                          first, trig, ltl3, str(v.ticks_evaluated), Text("; ".join(notes)))
+            table.add_row(_T(name), _T(v.requirement), Text(label, style=_STYLE[v.verdict]),
+                          first, trig, ltl3, str(v.ticks_evaluated), _T("; ".join(notes)))
     console.print(table)
     for la in logs:
         lines = _log_notes(la)
@@ -108,7 +125,8 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
     for la in logs:
         for v in la.verdicts:
             counts[v.verdict] = counts.get(v.verdict, 0) + 1
-    parts = [f"{counts.get(k, 0)} {k}" for k in ("satisfied", "vacuous", "violated", "error")]
+    parts = [f"{counts.get(k, 0)} {k}" for k in ("satisfied", "vacuous", "violated", "unknown",
+                                                 "error")]
     console.print(f"{', '.join(parts)} (exit {exit_code(logs)})", highlight=False)
 
 
@@ -119,12 +137,7 @@ def _log_notes(la: LogAudit) -> List[str]:
         out.append(f"[magenta]not audited[/magenta]: {escape(la.error)}")
         return out
     if la.partial:
-        if la.damage_time_ns is None:
-            out.append("[yellow]partial[/yellow]: the log is damaged before its first "
-                       "readable message; nothing to audit")
-        else:
-            out.append(f"[yellow]partial[/yellow]: the log ends early (damage after "
-                       f"{_s(la.damage_time_ns, st)}); audited up to there")
+        out.append("[yellow]partial[/yellow]: " + escape(damage_summary(la)))
     if la.warmup_ticks:
         out.append(f"{la.warmup_ticks} warm-up ticks not evaluated (waiting for "
                    f"{escape(', '.join(la.waiting_for)) or 'the first messages'}; first evaluated tick "
@@ -153,8 +166,9 @@ def _print_violation(console, la: LogAudit, v: Verdict) -> None:
                       f"({_s(sc[0].time_ns, st)} .. {_s(sc[1].time_ns, st)})", markup=False,
                       highlight=False)
     if fv.obligation:
-        console.print(f"  obligation: {fv.obligation}", markup=False, highlight=False)
-    console.print(f"  {fv.reason}; missed at tick {fv.at.tick} ({_s(fv.at.time_ns, st)}, "
+        console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
+                      highlight=False)
+    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} ({_s(fv.at.time_ns, st)}, "
                   f"log time {fv.at.time_ns} ns)", markup=False, highlight=False)
     if v.triggers is not None and v.violations:
         console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
@@ -166,10 +180,10 @@ def _print_violation(console, la: LogAudit, v: Verdict) -> None:
     t.add_column("time", justify="right")
     names = list(v.values)
     for n in names:
-        t.add_column(n, justify="right")
+        t.add_column(terminal_text(n), justify="right")
     topics = list(v.sources)
     for tp in topics:
-        t.add_column(f"{tp} @", justify="right")
+        t.add_column(f"{terminal_text(tp)} @", justify="right")
     rows = list(zip(*[v.values[n] for n in names])) if names else []
     marks = {fv.at.tick: "<- missed"}
     if fv.trigger is not None:
@@ -221,6 +235,10 @@ def junit_xml(logs: List[LogAudit]) -> str:
                     msg += " [partial log]"
                 ET.SubElement(case, "failure", message=msg, type="violated").text = \
                     "\n".join(x for x in [v.text] + body if x)
+            elif v.verdict == "unknown":
+                counts["skipped"] = counts.get("skipped", 0) + 1
+                ET.SubElement(case, "skipped", message="unknown: " + (v.unknown_reason or
+                                                                      "damaged log"))
             elif v.verdict == "error":
                 counts["errors"] += 1
                 ET.SubElement(case, "error", message=v.error or "error", type="error").text = \
@@ -229,15 +247,59 @@ def junit_xml(logs: List[LogAudit]) -> str:
                 out.append(f"verdict: {v.verdict}" + (" (partial log)" if v.partial else ""))
                 out.extend(n for n in v.notes if n.startswith("vacuous"))
             ET.SubElement(case, "system-out").text = "\n".join(out)
+        skipped = counts.pop("skipped", 0)
         for k, n in counts.items():
             suite.set(k, str(n))
             tot[k] += n
-        suite.set("skipped", "0")
+        suite.set("skipped", str(skipped))
         suite.set("time", "0")
     for k, n in tot.items():
         root.set(k, str(n))
+    _xml_safe(root)
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _xml_safe(root) -> None:
+    """Make every attribute and text of the tree legal XML 1.0 (a NUL in a requirement id
+    must not make the file unparseable): :func:`fretish.textsafe.xml_text`."""
+    for el in root.iter():
+        for k, val in list(el.attrib.items()):
+            el.set(k, xml_text(val, keep=""))
+        if el.text:
+            el.text = xml_text(el.text)
+
+
+def damage_summary(la: LogAudit) -> str:
+    """What damaged a partial log and how far it was judged, in one sentence: the damage
+    problems (kind and log-time span, seconds from the first tick) and the end of the span
+    read completely."""
+    st = la.start_time_ns
+    kinds = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
+             "data_crc", "unknown_channel", "out_of_order")
+    parts = []
+    for p in la.problems:
+        if p.get("kind") not in kinds:
+            continue
+        lo, hi = p.get("log_time_ns"), p.get("end_time_ns")
+        span = ""
+        if lo is not None:
+            span = f" at {_s(lo, st)}" if hi is None or hi == lo else \
+                f" over {_s(lo, st)} .. {_s(hi, st)}"
+        parts.append(f"{p['kind']}{span}")
+        if len(parts) >= 3:
+            break
+    more = sum(n for k, n in la.problem_counts.items() if k.split(" ")[0] in kinds) - len(parts)
+    what = ", ".join(parts) + (f" and {more} more" if more > 0 else "") or "damaged"
+    if la.damage_time_ns is not None:
+        judged = f"judged up to {_s(la.damage_time_ns, st)}"
+        if la.ticks_after_damage:
+            judged += f" ({la.ticks_after_damage} ticks after it not judged)"
+    elif la.damage_cut:
+        judged = "nothing before the damage to judge"
+    else:
+        judged = "no message lost"
+    return f"the log is damaged ({what}); {judged}"
 
 
 class AuditProgress:

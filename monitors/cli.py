@@ -95,7 +95,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements."""
     from rich.console import Console
-    from rich.markup import escape
+    from .audit_output import escape  # markup and control characters escaped
 
     from .audit import AuditInputError, find_logs, load_plan
     from .audit_output import AuditProgress, junit_xml, print_summary

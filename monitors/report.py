@@ -65,7 +65,7 @@ FIELD_NAMES = ("scope", "condition", "component", "probability", "timing", "resp
 #: ``<p class="generated">``; Markdown: the line itself).
 GENERATED_PREFIX = "Generated at "
 VERDICT_WORDS = {"satisfied": "satisfied", "vacuous": "vacuous", "violated": "violated",
-                 "error": "error"}
+                 "unknown": "unknown", "error": "error"}
 
 
 class ReportError(Exception):
@@ -542,6 +542,20 @@ def _verdict_for(la: dict, i: int, r: dict) -> Optional[dict]:
     return same[0] if len(same) == 1 else None
 
 
+def _damage_text(la: dict) -> str:
+    """Where and how a partial log is damaged, and how far it was judged
+    (:func:`monitors.audit_output.damage_summary` on the JSON document)."""
+    from types import SimpleNamespace
+
+    from .audit_output import damage_summary
+
+    fields = ("start_time_ns", "damage_time_ns", "ticks_after_damage", "damage_cut")
+    ns = SimpleNamespace(problems=la.get("problems") or [],
+                         problem_counts=la.get("problem_counts") or {},
+                         **{k: la.get(k) for k in fields})
+    return damage_summary(ns)
+
+
 def _cell_label(v: Optional[dict]) -> Tuple[str, str]:
     """(verdict class, short text) of a matrix cell."""
     if v is None:
@@ -657,7 +671,7 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
             "tick": _tick_text(la.get("tick")), "time_base": la.get("time_base") or "-",
             "messages": sorted((la.get("messages") or {}).items()),
             "problems": problems, "partial": bool(la.get("partial")),
-            "damage": _fmt_s(la.get("damage_time_s")) if la.get("partial") else None,
+            "damage": _damage_text(la) if la.get("partial") else None,
             "error": la.get("error"), "engine": la.get("engine"),
             "annotated": ann,
         })
@@ -830,7 +844,9 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
         "version": _version(), "schema": doc.get("schema"),
         "summary": summary,
         "exit_meaning": {0: "every verdict satisfied or vacuous", 1: "a requirement is violated",
-                         2: "something could not be audited"}.get(summary.get("exit_code"), ""),
+                         2: "something could not be audited",
+                         3: "a log is damaged (partial) or a verdict unknown"}.get(
+                             summary.get("exit_code"), ""),
         "requirement_files": req_files, "binding_files": bind_files,
         "tick": _tick_text(bindings.get("tick")), "time_base": bindings.get("time_base") or "-",
         "runs": runs, "requirements": req_ctx, "violations": violations,
@@ -848,24 +864,36 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
 def _env(autoescape: bool):
     import jinja2
 
+    import markupsafe
+
+    from fretish.textsafe import md_code, visible
+
+    def finalize(value: Any) -> Any:
+        # every value printed by a template: control and bidi characters shown escaped
+        # (XML 1.0 forbids C0 characters; a U+202E must not reorder the page), except
+        # markup built here (the inlined SVG, already safe)
+        if isinstance(value, str) and not isinstance(value, markupsafe.Markup):
+            return visible(value, keep="\n\t")
+        return value
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("templates", ""), autoescape=autoescape,
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined)
+        undefined=jinja2.StrictUndefined, finalize=finalize)
 
     def md(text: Any) -> str:
         """Markdown table-cell / inline text: pipes, backticks, newlines and HTML made
         harmless."""
-        s = "" if text is None else str(text)
-        s = s.replace("\\", "\\\\").replace("|", "\\|").replace("\n", " ")
+        s = visible("" if text is None else str(text).replace("\n", " "))
+        s = s.replace("\\", "\\\\").replace("|", "\\|")
         s = s.replace("<", "&lt;").replace(">", "&gt;").replace("*", "\\*")
+        s = s.replace("`", "\\`")
         return s
 
     def code(text: Any) -> str:
-        """Inline Markdown code span that survives backticks in the text."""
-        s = "" if text is None else str(text).replace("\n", " ").replace("|", "\\|")
-        fence = "``" if "`" in s else "`"
-        return f"{fence} {s} {fence}" if fence == "``" else f"`{s}`"
+        """Inline Markdown code span that no backtick run in the text can close
+        (:func:`fretish.textsafe.md_code`)."""
+        return md_code("" if text is None else str(text).replace("\n", " "))
 
     env.filters["md"] = md
     env.filters["code"] = code

@@ -21,8 +21,11 @@ first tick (``LogAudit.start_time_ns``), what a person reads. Ticks are 0-based 
 Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
 never entered or the trigger never fired (README "vacuous passes"); ``violated`` - FRET's
 finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
-(``error`` says why: no binding, topic missing, no tick evaluated, ...). A verdict on a
-damaged log is computed on what could be read and has ``partial`` true.
+(``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
+log is damaged and the span read completely decides nothing: an obligation is still open where
+it ends (``unknown_reason`` says which; :mod:`monitors.damage`). A verdict on a damaged log is
+computed on the span read completely (the ticks before ``damage_time_ns``) and has ``partial``
+true; a violation on it was decided before the damage.
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ __all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_
            "summary", "exit_code", "SCHEMA", "VERDICTS"]
 
 SCHEMA = "fretc-audit/1"
-VERDICTS = ("satisfied", "vacuous", "violated", "error")
+VERDICTS = ("satisfied", "vacuous", "violated", "unknown", "error")
 
 
 def _t(ns: Optional[int], start: Optional[int]) -> Dict[str, Any]:
@@ -160,6 +163,7 @@ class Verdict:
     engine: Optional[str] = None
     notes: List[str] = field(default_factory=list)
     error: Optional[str] = None
+    unknown_reason: Optional[str] = None
 
     @property
     def ok(self) -> bool:
@@ -192,7 +196,7 @@ class Verdict:
             "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}
                                for t, w in self.violation_list],
             "engine": self.engine, "notes": self.notes,
-            "error": self.error,
+            "error": self.error, "unknown_reason": self.unknown_reason,
         }
 
 
@@ -202,8 +206,10 @@ class LogAudit:
 
     Attributes:
         log: the path as given; ``kind`` mcap / bag / rosbag2 / csv.
-        partial, damage_time_ns: the log ends early (truncated); the last good message's log
-            time.
+        partial, damage_time_ns: the log is damaged (truncated, a chunk skipped, its summary
+            lost); where the span read completely ends (log time, ns; None when no message
+            was lost). Only ticks before it are judged; ``ticks_after_damage`` counts the
+            ticks sampled after it and not judged.
         start_time_ns: time of the first tick (evaluated or not); ``first_time_ns`` of the
             first evaluated tick; ``end_time_ns`` of the last tick.
         ticks_evaluated, warmup_ticks: evaluated ticks, and ticks before every bound topic
@@ -236,6 +242,8 @@ class LogAudit:
     verdicts: List[Verdict] = field(default_factory=list)
     engine: Optional[str] = None
     error: Optional[str] = None
+    ticks_after_damage: int = 0
+    damage_cut: bool = False
 
     def to_json(self) -> dict:
         st = self.start_time_ns
@@ -254,6 +262,7 @@ class LogAudit:
             "problem_counts": self.problem_counts,
             "verdicts": [v.to_json(st) for v in self.verdicts],
             "engine": self.engine, "error": self.error,
+            "ticks_after_damage": self.ticks_after_damage, "damage_cut": self.damage_cut,
         }
 
 
@@ -270,14 +279,23 @@ def summary(logs: List[LogAudit]) -> Dict[str, int]:
     return out
 
 
+#: Exit code of an audit whose only trouble is a damaged (partial) log or an ``unknown``
+#: verdict: never 0 on a log that was cut short.
+EXIT_PARTIAL = 3
+
+
 def exit_code(logs: List[LogAudit], input_errors: bool = False) -> int:
     """2 when anything could not be audited (an input error, an ``error`` verdict), else 1
-    when a requirement is violated, else 0."""
+    when a requirement is violated, else :data:`EXIT_PARTIAL` (3) when a log is damaged
+    (partial) or a verdict is ``unknown``, else 0."""
     if input_errors or any(la.error for la in logs) or any(
             v.verdict == "error" for la in logs for v in la.verdicts):
         return 2
     if any(v.verdict == "violated" for la in logs for v in la.verdicts):
         return 1
+    if any(la.partial for la in logs) or any(v.verdict == "unknown" for la in logs
+                                             for v in la.verdicts):
+        return EXIT_PARTIAL
     return 0
 
 

@@ -457,7 +457,7 @@ def test_synthetic_report_scope_missing_topic_and_partial_log(synthetic):
     assert len(missing) == 2 and all("S4" in _text(e) and "not in the log" in _text(e)
                                      for e in missing)
     assert "/battery" in _text(cov.find(f".//{X}p[@class='err']"))   # in no run at all
-    assert "partial log, damaged at" in _text(cov)
+    assert "partial log: the log is damaged (truncated" in _text(cov)
     assert "/battery" in _text(ids["coverage"]) and "S4 on syn_run.mcap" in _text(cov)
     md = synthetic["md"]
     assert "[in moving mode]<sub>scope</sub>" in md
