@@ -486,7 +486,7 @@ class _Columns:
     def append(self, tick) -> None:
         v = tick.values
         for name, lst in zip(self.names, self._vals):
-            lst.append(v[name])
+            lst.append(v.get(name, False))  # a failed variable: its requirements are errors
         lt = tick.log_times
         for topic, lst in zip(self.topics, self._lts):
             lst.append(lt.get(topic, -1))
@@ -562,20 +562,30 @@ def _expected_ticks(source, bindings: Optional[Bindings]) -> Optional[int]:
     return (en - st) // bindings.tick.period_ns + 1
 
 
-def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: List[RequirementPlan],
-              progress: Optional[Callable[[float], None]]) -> _Pass:
-    from .signals import sample
+def _clock_key(r: RequirementPlan, bindings: Optional[Bindings]) -> frozenset:
+    """The clock a requirement is sampled on: the topics of its own variables (DESIGN.md,
+    "Each verdict stands alone": its tick grid, start, end and warm-up come from them and
+    the bindings' tick, never from other requirements of the run)."""
+    if bindings is None:
+        return frozenset()
+    return frozenset(t for v in r.variables if v in bindings.variables
+                     for t in bindings.variables[v].topics)
 
-    names: List[str] = []
-    for r in active:
-        for v in r.variables:
-            if v not in names:
-                names.append(v)
-    if bindings is not None:
-        topics = sorted({t for n in names for t in bindings.variables[n].topics})
-    else:
-        from .sources import CSV_TOPIC
-        topics = [CSV_TOPIC]
+
+@dataclass
+class _Passes:
+    """One read of a log: a :class:`_Pass` per clock, and what went wrong per clock."""
+
+    sampling: Any
+    passes: Dict[frozenset, "_Pass"]
+    failed: Dict[frozenset, Dict[str, SignalError]]
+    errors: Dict[frozenset, SignalError]
+
+
+def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: List[RequirementPlan],
+              progress: Optional[Callable[[float], None]]) -> _Passes:
+    from .signals import sample, sample_groups
+
     expected = _expected_ticks(source, bindings)
     engine: Dict[int, str] = {}
     for r in active:
@@ -586,29 +596,68 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
         if mode == "vectorized" and not r.vectorizable():
             mode = "stepwise"
         engine[r.index] = "interval" if r.offline else mode
-    monitors = {r.index: r.monitor_cls() for r in active if engine[r.index] == "stepwise"}
-    steppers = [m.step for m in monitors.values()]
-    cols = _Columns(names, topics)
-    sampling = sample(source, bindings)
+    groups: Dict[frozenset, List[RequirementPlan]] = {}
+    for r in active:
+        groups.setdefault(_clock_key(r, bindings), []).append(r)
+    cols: Dict[frozenset, _Columns] = {}
+    monitors: Dict[frozenset, Dict[int, Any]] = {}
+    steppers: Dict[frozenset, List[Tuple[RequirementPlan, Any]]] = {}
+    spec: Dict[frozenset, Tuple[List[str], frozenset]] = {}
+    for key, rs in groups.items():
+        names: List[str] = []
+        for r in rs:
+            for v in r.variables:
+                if v not in names:
+                    names.append(v)
+        if bindings is not None:
+            topics = sorted(key)
+        else:
+            from .sources import CSV_TOPIC
+            topics = [CSV_TOPIC]
+        spec[key] = (names, key)
+        cols[key] = _Columns(names, topics)
+        monitors[key] = {r.index: r.monitor_cls() for r in rs if engine[r.index] == "stepwise"}
+        steppers[key] = [(r, monitors[key][r.index].step) for r in rs
+                         if r.index in monitors[key]]
+    if bindings is not None:
+        sampling = sample_groups(source, bindings, spec)
+        stream = iter(sampling)
+        failed = sampling.failed
+        errors = sampling.errors
+    else:
+        single = sample(source, None)
+        key0 = next(iter(groups))
+        stream = ((key0, t) for t in single)
+        failed = {key0: {}}
+        errors = {}
+        sampling = single
     start_t = source.start_time
     end_t = source.end_time
     span = (end_t - start_t) if (start_t is not None and end_t is not None
                                  and end_t > start_t) else None
     every = 512
     count = 0
-    for tick in sampling:
+    for key, tick in stream:
         vals = tick.values
-        for step in steppers:
+        fails = failed[key]
+        steps = steppers[key]
+        if fails and any(v not in vals for r, _ in steps for v in r.variables):
+            steps[:] = [(r, st) for r, st in steps if all(v in vals for v in r.variables)]
+        for _r, step in steps:
             step(vals)
-        cols.append(tick)
+        cols[key].append(tick)
         count += 1
         if progress is not None and count % every == 0:
             if span is not None:
                 progress(min(1.0, max(0.0, (tick.time - start_t) / span)))
             elif expected:
                 progress(min(1.0, count / expected))
-    times, columns, log_times = cols.finish()
-    return _Pass(sampling, times, columns, log_times, monitors, engine)
+    passes: Dict[frozenset, _Pass] = {}
+    for key in groups:
+        times, columns, log_times = cols[key].finish()
+        s = sampling.groups[key] if bindings is not None else sampling
+        passes[key] = _Pass(s, times, columns, log_times, monitors[key], engine)
+    return _Passes(sampling, passes, failed, errors)
 
 
 def _problem_json(p: DataProblem) -> dict:
@@ -649,8 +698,6 @@ def audit_log(plan: AuditPlan, path: str,
             if v.error is not None:
                 v.verdict = "error"
             v.partial = la.partial
-            v.ticks_evaluated = la.ticks_evaluated
-            v.warmup_ticks = la.warmup_ticks
         return la
 
     def fail_all(message: str, rs=None) -> None:
@@ -727,7 +774,7 @@ def audit_log(plan: AuditPlan, path: str,
                     + f" (it has {', '.join(log_topics) or 'no topics'})")
     problems: Dict[Tuple, DataProblem] = {}
     problem_counts: Dict[str, int] = {}
-    result: Optional[_Pass] = None
+    result: Optional[_Passes] = None
     while True:
         active = [r for r in plan.requirements if verdicts[r.index].error is None]
         if not active:
@@ -749,59 +796,86 @@ def audit_log(plan: AuditPlan, path: str,
             result = None
             break
         _collect_problems(source, result.sampling, problems, problem_counts)
-        silent = set(result.sampling.missing_topics)
-        if silent and b is not None:
-            hit = [r for r in active
-                   if any(t in silent for v in r.variables for t in b.variables[v].topics)]
-            if hit:
-                why = _silent_reasons(silent, problems.values())
-                for r in hit:
-                    topics = sorted({t for v in r.variables for t in b.variables[v].topics
-                                     if t in silent})
-                    verdicts[r.index].error = "; ".join(why[t] for t in topics)
-                result = None
-                continue
         break
     la.partial = bool(source.partial)
     la.damage_time_ns = source.damage_time
     la.messages = dict(sorted(source.counts.items()))
     la.problems = [_problem_json(p) for p in problems.values()]
     la.problem_counts = dict(sorted(problem_counts.items()))
+    la.start_time_ns = source.start_time
+    la.end_time_ns = source.end_time
     if result is None:
         return finish()
-    s = result.sampling
-    la.start_time_ns = s.start_time
-    la.first_time_ns = s.first_time
-    la.end_time_ns = s.end_time
-    la.ticks_evaluated = s.ticks
-    la.warmup_ticks = s.warmup_ticks
-    la.waiting_for = list(s.waiting_for)
-    la.missing_topics = list(s.missing_topics)
-    engines = sorted(set(result.engine.values()))
-    la.engine = engines[0] if len(engines) == 1 else "mixed"
+    engines = set()
+    by_key: Dict[int, Any] = {}
     for r in active:
-        _finalize(plan, r, result, bindings, verdicts[r.index], la)
+        key = _clock_key(r, b)
+        res = result.passes[key]
+        by_key[r.index] = res
+        v = verdicts[r.index]
+        s = res.sampling
+        v.ticks_evaluated = s.ticks
+        v.warmup_ticks = s.warmup_ticks
+        v.first_tick_ns = s.first_time
+        v.last_tick_ns = s.end_time
+        v.waiting_for = list(s.waiting_for)
+        err = result.errors.get(key)
+        bad = [n for n in r.variables if n in result.failed.get(key, {})]
+        if err is not None:
+            v.error = str(err)
+            continue
+        if bad:
+            v.error = str(result.failed[key][bad[0]])
+            continue
+        silent = list(s.missing_topics) if b is not None else []
+        if silent:
+            why = _silent_reasons(silent, problems.values())
+            v.error = "; ".join(why[t] for t in sorted(silent))
+            continue
+        engines.add(res.engine[r.index])
+    # the log's figures summarize its requirements' clocks (each verdict has its own)
+    ok = [r for r in active if verdicts[r.index].error is None]
+    if ok:
+        la.ticks_evaluated = max(verdicts[r.index].ticks_evaluated for r in ok)
+        la.warmup_ticks = max(verdicts[r.index].warmup_ticks for r in ok)
+        firsts = [verdicts[r.index].first_tick_ns for r in ok
+                  if verdicts[r.index].first_tick_ns is not None]
+        la.first_time_ns = min(firsts) if firsts else None
+        la.waiting_for = sorted({t for r in ok for t in verdicts[r.index].waiting_for})
+    la.missing_topics = sorted({t for res in result.passes.values()
+                                for t in (res.sampling.missing_topics if b is not None else [])})
+    if la.start_time_ns is None:
+        starts = [res.sampling.start_time for res in result.passes.values()
+                  if res.sampling.start_time is not None]
+        la.start_time_ns = min(starts) if starts else None
+    engines = sorted(engines)
+    la.engine = engines[0] if len(engines) == 1 else ("mixed" if engines else None)
+    for r in ok:
+        _finalize(plan, r, by_key[r.index], bindings, verdicts[r.index], la)
     if bindings is not None:
-        _operand_values(path, plan, bindings, active, verdicts, result.times)
+        _operand_values(path, plan, bindings, ok, verdicts, by_key)
     return finish()
 
 
 def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
-                    times) -> None:
+                    passes) -> None:
     """Evidence of violations: the numbers behind their boolean variables (the operands of
     the comparisons a binding is made of, :func:`monitors.bindings.operand_signals`) at the
     ticks whose values are shown. A second streaming pass over the log, only when something
-    was violated and only for those operands; ticks are matched by time."""
+    was violated and only for those operands, each on its requirement's own clock (so tick
+    indexes match the first pass)."""
     from .bindings import operand_signals
-    from .signals import sample
+    from .signals import sample_groups
     from .sources import open_log
 
     wanted: Dict[str, Tuple[str, object]] = {}  # aux name -> (label, binding)
-    needs: Dict[str, List[Tuple[object, List[str]]]] = {}
+    groups: Dict[frozenset, Tuple[List[str], frozenset]] = {}
+    needs: List[Tuple[frozenset, str, object, List[int]]] = []
     for r in active:
         v = verdicts[r.index]
         if v.verdict != "violated" or not v.values:
             continue
+        key = _clock_key(r, bindings)
         for name in r.variables:
             b = bindings.variables.get(name)
             if b is None or name not in v.values:
@@ -812,33 +886,37 @@ def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verd
                 continue
             for label, aux in pairs:
                 wanted[aux.name] = (label, aux)
-                needs.setdefault(aux.name, []).append((v, [t for t, _ns, _x in v.values[name]]))
+                names = groups.setdefault(key, ([], key))[0]
+                if aux.name not in names:
+                    names.append(aux.name)
+                needs.append((key, aux.name, v, [t for t, _ns, _x in v.values[name]]))
     if not wanted:
         return
-    at_time = {}  # tick time -> tick index of the first pass
-    for aux_name, uses in needs.items():
-        for v, ticks in uses:
-            for t in ticks:
-                at_time[int(times[t])] = t
+    at = {(key, t) for key, _a, _v, ticks in needs for t in ticks}
     aux_bindings = Bindings({name: aux for name, (_l, aux) in wanted.items()}, bindings.tick,
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
-    got: Dict[str, Dict[int, object]] = {name: {} for name in wanted}
+    got: Dict[Tuple[frozenset, str], Dict[int, object]] = {}
     try:
         source = open_log(path, csv_period_ns=plan.csv_period_ns)
-        for tick in sample(source, aux_bindings):
-            t = at_time.get(int(tick.time))
-            if t is None:
+        for key, tick in sample_groups(source, aux_bindings, groups):
+            if (key, tick.index) not in at:
                 continue
-            for name in wanted:
-                got[name][t] = _py(tick.values.get(name))
+            for name in groups[key][0]:
+                if name in tick.values:
+                    got.setdefault((key, name), {})[tick.index] = _py(tick.values[name])
     except (LogError, SignalError, OSError):
         return  # the first pass already reported what is wrong with the log
-    for aux_name, uses in needs.items():
+    for key, aux_name, v, ticks in needs:
         label = wanted[aux_name][0]
-        for v, ticks in uses:
-            rows = [(t, int(times[t]), got[aux_name][t]) for t in ticks if t in got[aux_name]]
-            if rows:
-                v.values[label] = rows
+        times = passes_times = None
+        for r_index, res in passes.items():
+            if verdicts[r_index] is v:
+                passes_times = res.times
+        times = passes_times
+        vals = got.get((key, aux_name), {})
+        rows = [(t, int(times[t]), vals[t]) for t in ticks if t in vals]
+        if rows:
+            v.values[label] = rows
 
 
 def _silent_reasons(silent, problems) -> Dict[str, str]:
@@ -923,8 +1001,15 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
     obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]
     k = f.ticks
 
+    own_topics = sorted(_clock_key(r, bindings)) if bindings is not None else []
+    held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
+        list(res.log_times.values())
+
     def tp(i: int) -> TimePoint:
-        return TimePoint(int(i), int(times[min(max(i, 0), n - 1)]))
+        j = min(max(i, 0), n - 1)
+        lts = [int(h[j]) for h in held if h[j] >= 0]
+        # the message that decided the tick: the newest one held among its topics
+        return TimePoint(int(i), int(times[j]), max(lts) if lts else None)
 
     def time_at(i: int) -> Optional[int]:
         if 0 <= i < n:

@@ -282,7 +282,9 @@ flag = "/flag.data"
 
 def _synthetic(tmp_path, seconds=20, **kw):
     """A 10 Hz run: an obstacle approaches between 8 and 9 s; the bot halts at 8.3 s and the
-    flag is raised then; 1 kB chunks so that a log has many chunks."""
+    flag is raised then; the flag is lowered at 9.52 s and the bot moves again at 9.61 s (on
+    A3's own clock, ticks at 10 ms past each 100 ms, a bot moving while the flag is still up
+    would be a violation); 1 kB chunks so that a log has many chunks."""
     msgs = []
     for k in range(seconds * 10):
         t = k * 100 * MS
@@ -291,7 +293,7 @@ def _synthetic(tmp_path, seconds=20, **kw):
         msgs.append(("/scan", "sensor_msgs/msg/LaserScan", t,
                      scan([0.3 if near else 2.0, 3.0, float("inf")], t)))
         msgs.append(("/cmd", "geometry_msgs/msg/Twist", t + 10 * MS,
-                     twist(0.0 if halted else 0.5)))
+                     twist(0.0 if 83 <= k < 96 else 0.5)))
         msgs.append(("/flag", "std_msgs/msg/Bool", t + 20 * MS, boolean(halted)))
     path = tmp_path / kw.pop("name", "run.mcap")
     write_mcap(path, msgs, chunk_size=kw.pop("chunk_size", 1024), **kw)
