@@ -101,8 +101,10 @@ def test_r1_violated_in_sif_disabled_at_the_right_second(shipped):
     fv = v.first_violation
     st = la.start_time_ns
     assert (fv.trigger.time_ns - st) / 1e9 == pytest.approx(8.8)  # too close from 8.8 s
-    assert fv.scope[0].tick == 0 and fv.scope[1].tick == la.ticks_evaluated - 1
-    assert fv.at.tick == la.ticks_evaluated - 1  # "eventually": missed at the end of the run
+    # R1's own clock (/scan, /cmd_vel_filtered): 158 ticks from 0.0 s, the first a warm-up
+    assert v.ticks_evaluated == 157 and v.warmup_ticks == 1
+    assert fv.scope[0].tick == 0 and fv.scope[1].tick == v.ticks_evaluated - 1
+    assert fv.at.tick == v.ticks_evaluated - 1  # "eventually": missed at the end of the run
     trig = fv.trigger.tick
     values = {name: {t: x for t, _, x in rows} for name, rows in v.values.items()}
     assert values["too_close"][trig] is True and values["too_close"][trig - 1] is False
@@ -111,7 +113,7 @@ def test_r1_violated_in_sif_disabled_at_the_right_second(shipped):
     scan_rows = {t: lt for t, _, lt in v.sources["/scan"]}
     assert scan_rows[trig] == fv.trigger.time_ns
     assert set(v.sources) == {"/scan", "/cmd_vel_filtered"}
-    assert la.warmup_ticks == 1 and la.waiting_for == ["/cmd_vel_filtered"]
+    assert v.waiting_for == ["/cmd_vel_filtered"]
     assert la.messages["/scan"] == 158
 
 
@@ -308,7 +310,10 @@ def test_synthetic_log_baseline(tmp_path):
     v = _by_req(la)
     assert [v[r].verdict for r in ("A1", "A2", "A3")] == ["satisfied"] * 3
     assert not la.partial and not la.problems
-    assert la.ticks_evaluated == 199 and la.warmup_ticks == 1  # /cmd, /flag start 10, 20 ms late
+    # A1 (/scan, /cmd): /cmd starts 10 ms late; A2 (/cmd alone) has its own grid from 10 ms
+    assert (v["A1"].ticks_evaluated, v["A1"].warmup_ticks) == (199, 1)
+    assert (v["A2"].ticks_evaluated, v["A2"].warmup_ticks) == (200, 0)
+    assert v["A2"].first_tick_ns - v["A1"].first_tick_ns == -90 * MS
     assert la.messages == {"/cmd": 200, "/flag": 200, "/scan": 200}
 
 
@@ -368,7 +373,7 @@ def test_unknown_schema_is_an_error_for_that_topic_only(tmp_path):
     assert v["A3"].verdict == "error" and "/flag" in v["A3"].error
     assert v["A1"].verdict == "satisfied" and v["A2"].verdict == "satisfied"
     assert any(p["kind"] == "unknown_schema" and p["topic"] == "/flag" for p in la.problems)
-    assert la.ticks_evaluated == 199
+    assert v["A1"].ticks_evaluated == 199 and v["A2"].ticks_evaluated == 200
 
 
 def test_missing_topic_and_binding_are_errors_of_the_requirement(tmp_path):
@@ -406,9 +411,12 @@ def test_warm_up_ticks_are_not_evaluated_and_reported(tmp_path):
     (tmp_path / "syn.fret").write_text(SYN_FRET)
     (tmp_path / "syn.bindings.toml").write_text(SYN_BINDINGS)
     la = audit_log(_plan(tmp_path / "syn.fret"), str(tmp_path / "late.mcap"))
-    assert la.warmup_ticks == 11 and la.waiting_for == ["/cmd", "/flag"]
-    assert la.ticks_evaluated == 39
-    assert (la.first_time_ns - la.start_time_ns) == 1100 * MS
+    v = _by_req(la)
+    assert v["A1"].warmup_ticks == 11 and v["A1"].waiting_for == ["/cmd"]
+    assert v["A1"].ticks_evaluated == 39
+    assert (v["A1"].first_tick_ns - la.start_time_ns) == 1100 * MS
+    assert v["A2"].warmup_ticks == 0 and v["A2"].ticks_evaluated == 40  # /cmd's own clock
+    assert la.warmup_ticks == 11 and la.waiting_for == ["/cmd"]
 
 
 def test_engines_and_parallel_audits_agree(tmp_path, safe_ros_plan):
