@@ -718,11 +718,14 @@ def audit_log(plan: AuditPlan, path: str,
     la.kind = source.kind
     bindings = plan.bindings
     if source.kind == "csv":
-        from .sources import CSV_TOPIC
-        if bindings is not None and not (bindings.topics <= {CSV_TOPIC}):
-            bindings = None  # a trace of FRET variables: its columns are the variables
-        elif bindings is not None and not bindings.variables:
+        # the same binding rules as any log (README "CSV traces"): with bindings, bound
+        # variables are their expressions over /csv.<column> (a missing topic or column is
+        # an error naming the columns), unbound ones read the column of their name; without
+        # bindings the columns are the variables
+        if bindings is not None and not bindings.variables:
             bindings = None
+        elif bindings is not None:
+            bindings = _csv_bindings(plan, bindings, source)
     elif bindings is None:
         la.error = (f"{path}: a {source.kind} log needs signal bindings (*.bindings.toml next to "
                     "the requirements, --bindings or --bind): signals are declared, never "
@@ -768,10 +771,14 @@ def audit_log(plan: AuditPlan, path: str,
             if absent:
                 users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
                          for t in absent}
+                has = (f"a CSV trace has one topic, /csv, with the columns "
+                       f"{', '.join(source.columns)}" if source.kind == "csv"
+                       else f"it has {', '.join(log_topics) or 'no topics'}")
                 verdicts[r.index].error = (
                     "; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
-                              for t in absent)
-                    + f" (it has {', '.join(log_topics) or 'no topics'})")
+                              for t in absent) + f" ({has})")
+    if bindings is not None:
+        _check_binding_types(source, bindings, plan, verdicts)
     problems: Dict[Tuple, DataProblem] = {}
     problem_counts: Dict[str, int] = {}
     result: Optional[_Passes] = None
@@ -917,6 +924,53 @@ def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verd
         rows = [(t, int(times[t]), vals[t]) for t in ticks if t in vals]
         if rows:
             v.values[label] = rows
+
+
+def _csv_bindings(plan: AuditPlan, bindings: Bindings, source) -> Bindings:
+    """CSV with bindings: the bound variables as bound; every other variable of the
+    requirements that names a column reads it (``/csv.<column>``)."""
+    from .bindings import compile_expression
+    from .sources import CSV_TOPIC
+
+    variables = dict(bindings.variables)
+    for r in plan.requirements:
+        for v in r.variables:
+            if v not in variables and v in source.columns:
+                variables[v] = compile_expression(v, f"{CSV_TOPIC}.{v}",
+                                                  source=f"<CSV column {v}>")
+    return Bindings(variables, bindings.tick, bindings.time_base, bindings.header_lag_ns,
+                    bindings.source)
+
+
+def _check_binding_types(source, bindings: Bindings, plan: AuditPlan, verdicts) -> None:
+    """Check the bindings the requirements use against the log's message types
+    (:func:`monitors.bindings.check_types`): a binding that names a field the schema does
+    not declare, or mixes strings, booleans and numbers, makes its requirements ``error``
+    before anything is evaluated."""
+    from .bindings import check_types
+    from .schema import log_schemas
+
+    try:
+        schemas = log_schemas(source)
+    except Exception:  # unreadable schemas: the reader reports the damage itself
+        return
+    bad: Dict[str, str] = {}
+    for r in plan.requirements:
+        if verdicts[r.index].error is not None:
+            continue
+        for v in r.variables:
+            b = bindings.variables.get(v)
+            if b is None:
+                continue
+            if v not in bad:
+                try:
+                    check_types(b, schemas)
+                    bad[v] = ""
+                except BindingError as exc:
+                    bad[v] = str(exc)
+            if bad[v]:
+                verdicts[r.index].error = bad[v]
+                break
 
 
 def _silent_reasons(silent, problems) -> Dict[str, str]:

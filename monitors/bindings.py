@@ -87,12 +87,17 @@ __all__ = [
     "parse_duration",
     "compile_expression",
     "LASER_SCAN",
+    "check_types",
 ]
 
 NS_PER_S = 1_000_000_000
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 DEFAULT_HEADER_LAG_NS = NS_PER_S
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+#: A FRET variable name as a binding key: an identifier, or the text of a quoted FRETish
+#: variable (``"wind speed"``: a TOML quoted key ``"wind speed" = "..."``, or
+#: ``--bind '"wind speed"=...'``): no quotes, no control characters, not blank at either end.
+_VARNAME = re.compile(r"(?=\S)[^\"\x00-\x1f\x7f]*(?<=\S)\Z")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -265,6 +270,11 @@ def _to_ast(tree: Tree | Token, where: _Where) -> Node:
 def _check(node: Node, where: _Where, topics: set[str]) -> None:
     """Static checks: known functions and arities, age() of a topic, fields below topics."""
     if isinstance(node, Field):
+        for p in node.path:
+            if isinstance(p, str) and p.startswith("_"):
+                raise where.error(f"{node.text()}: {p!r} is not a message field (ROS field "
+                                  "names start with a letter; a binding reads only fields the "
+                                  "message type declares)", node.col)
         if not node.path:
             raise where.error(f"{node.topic} is a topic, not a value: name a field "
                               f"(e.g. {node.topic}.data) or use age({node.topic})", node.col)
@@ -849,8 +859,9 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>", li
             used as a value; names source:line:col and the variable.
     """
     where = _Where(source, name, line, col, exact)
-    if not _IDENT.match(name):
-        raise where.error(f"variable name {name!r} is not an identifier")
+    if not _VARNAME.match(name):
+        raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
+                          "quoted FRETish variable")
     node, topics = _parse(expr, where)
     fields: list[Field] = []
 
@@ -980,6 +991,8 @@ def parse_inline(spec: str) -> Binding:
     """
     name, sep, expr = spec.partition("=")
     name = name.strip()
+    if len(name) >= 2 and name[0] == name[-1] == '"':
+        name = name[1:-1]  # a quoted FRETish variable: --bind '"wind speed"=...'
     if not sep or not name:
         raise BindingError(f"<--bind {spec}>", "expected NAME=EXPRESSION")
     col = spec.index("=") + 2
@@ -1112,9 +1125,10 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
         if not isinstance(expr, str):
             raise BindingError(source, "the binding must be a string expression",
                                line=line, col=col, variable=name)
-        if not _IDENT.match(name):
+        if not _VARNAME.match(name):
             kline, kcol, _ = where.get(("[key]", "variables." + name), (line, None, ""))
-            raise BindingError(source, f"variable name {name!r} is not an identifier",
+            raise BindingError(source, f"variable name {name!r} is not an identifier nor the "
+                               "text of a quoted FRETish variable",
                                line=kline, col=kcol, variable=name)
         exact = False
         if col is not None:
@@ -1138,3 +1152,125 @@ def load_bindings(path: str | Path, inline: Iterable[str] = ()) -> Bindings:
         raise BindingError(str(path), f"binding file is not UTF-8: {exc}") from None
     b = parse_bindings(text, str(path))
     return b.with_inline(inline) if inline else b
+
+
+# -- types against a log's schemas -------------------------------------------------------------
+
+_BOOLS = ("bool", "array_bool")
+_NUMS = ("number", "array_number")
+_WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of booleans",
+          "array_number": "an array of numbers", "string": "a string", "message": "a message",
+          "array_other": "an array of messages or strings"}
+
+
+def check_types(binding: Binding, schemas: dict) -> str:
+    """Check ``binding`` against the message types of a log (:func:`monitors.schema.log_schemas`)
+    before it is evaluated (issue 15): every field path must resolve through fields the
+    schema declares (never Python attributes), strings cannot enter arithmetic or
+    comparisons, a boolean is not a number and a number is not a boolean, and the value must
+    end as a boolean or a number. Topics whose schema is unknown (None) are not checked.
+
+    Returns:
+        the binding's type: ``"bool"``, ``"number"`` (or ``"any"`` when unknown).
+
+    Raises:
+        BindingError: naming the binding file:line:col, the variable, and the topic and
+            field at fault (with the fields that exist and the closest name).
+    """
+    from .schema import FieldPathError
+
+    where = binding._where()
+
+    def describe(node: Node, t: str) -> str:
+        if isinstance(node, Field):
+            path = node.text()[len(node.topic) + 1:]
+            return (f"{node.text()} (topic {node.topic}, field {path}) is "
+                    f"{_WORDS.get(t, t)}")
+        return f"{unparse(node).strip('()')} is {_WORDS.get(t, t)}"
+
+    def need(node: Node, t: str, ok: tuple, what: str, at: Node) -> None:
+        if t != "any" and t not in ok:
+            hint = ""
+            if t in _NUMS and ok == _BOOLS:
+                hint = "; compare it (e.g. x != 0) to make a boolean"
+            elif t in _BOOLS and ok == _NUMS:
+                hint = "; a boolean is not a number in a binding"
+            raise where.error(f"type error: {what}, but {describe(node, t)}{hint}", at.col)
+
+    def typ(node: Node) -> str:
+        if isinstance(node, Const):
+            return "bool" if isinstance(node.value, bool) else "number"
+        if isinstance(node, Field):
+            sch = schemas.get(node.topic)
+            if sch is None:
+                return "any"
+            try:
+                ft = sch.resolve(node.path)
+            except FieldPathError as exc:
+                raise where.error(f"{exc} (topic {node.topic}, {sch.typename})", node.col) from None
+            if ft.kind == "array":
+                k = ft.item.kind
+                return {"bool": "array_bool", "number": "array_number"}.get(k, "array_other")
+            return {"bool": "bool", "number": "number", "string": "string",
+                    "message": "message"}.get(ft.kind, "any")
+        if isinstance(node, Unary):
+            t = typ(node.arg)
+            if node.op == "-":
+                need(node.arg, t, _NUMS, "unary '-' takes a number", node)
+                return t
+            need(node.arg, t, _BOOLS, "'!' takes a boolean", node)
+            return t
+        if isinstance(node, Binary):
+            a, b = typ(node.left), typ(node.right)
+            arr = "array" in a or "array" in b
+            if node.op in ("+", "-", "*", "/"):
+                need(node.left, a, _NUMS, f"{node.op!r} takes numbers", node)
+                need(node.right, b, _NUMS, f"{node.op!r} takes numbers", node)
+                return "array_number" if arr else ("any" if "any" in (a, b) else "number")
+            if node.op in ("<", "<=", ">", ">="):
+                need(node.left, a, _NUMS, f"{node.op!r} compares numbers", node)
+                need(node.right, b, _NUMS, f"{node.op!r} compares numbers", node)
+                return "array_bool" if arr else "bool"
+            if node.op in ("=", "!="):
+                known = [x for x in (a, b) if x != "any"]
+                for n, x in ((node.left, a), (node.right, b)):
+                    need(n, x, _NUMS + _BOOLS, f"{node.op!r} compares numbers or booleans", node)
+                if len(known) == 2 and (known[0] in _BOOLS) != (known[1] in _BOOLS):
+                    raise where.error(f"type error: {node.op!r} compares a boolean with a number "
+                                      f"({describe(node.left, a)}; {describe(node.right, b)})",
+                                      node.col)
+                return "array_bool" if arr else "bool"
+            need(node.left, a, _BOOLS, f"{node.op!r} takes booleans", node)
+            need(node.right, b, _BOOLS, f"{node.op!r} takes booleans", node)
+            return "array_bool" if arr else "bool"
+        if isinstance(node, Call):
+            f = node.func
+            if f == "age":
+                return "number"
+            ts = [typ(a) for a in node.args]
+            for a, t in zip(node.args, ts):
+                if f in ("any", "all", "count"):
+                    need(a, t, ("array_bool", "array_number"), f"{f}() takes an array", node)
+                elif f == "len":
+                    if t not in ("any", "array_bool", "array_number", "array_other"):
+                        need(a, t, ("array_number",), "len() takes an array", node)
+                else:
+                    need(a, t, _NUMS, f"{f}() takes numbers", node)
+            if f in ("any", "all"):
+                return "bool"
+            if f == "abs":
+                return ts[0] if ts[0] != "any" else "any"
+            if f in ("min", "max") and len(ts) > 1:
+                for a, t in zip(node.args, ts):
+                    if "array" in t:
+                        raise where.error(f"type error: {f}() of several values takes numbers, "
+                                          f"but {describe(a, t)}", node.col)
+            return "number"
+        return "any"  # pragma: no cover
+
+    t = typ(binding.ast)
+    if t not in ("bool", "number", "any"):
+        raise where.error(f"type error: a variable must be a boolean or a number, but "
+                          f"{describe(binding.ast, t)}"
+                          + ("; reduce it with min/max/any/all/count" if "array" in t else ""))
+    return t
