@@ -955,22 +955,55 @@ def _check_binding_types(source, bindings: Bindings, plan: AuditPlan, verdicts) 
     except Exception:  # unreadable schemas: the reader reports the damage itself
         return
     bad: Dict[str, str] = {}
+    types: Dict[str, str] = {}
     for r in plan.requirements:
         if verdicts[r.index].error is not None:
             continue
+        uses = _variable_uses(r)
         for v in r.variables:
             b = bindings.variables.get(v)
             if b is None:
                 continue
             if v not in bad:
                 try:
-                    check_types(b, schemas)
+                    types[v] = check_types(b, schemas)
                     bad[v] = ""
                 except BindingError as exc:
                     bad[v] = str(exc)
             if bad[v]:
                 verdicts[r.index].error = bad[v]
                 break
+            use, t = uses.get(v, set()), types.get(v)
+            where = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+            if t == "bool" and "var" in use:
+                verdicts[r.index].error = (
+                    f"{where}: type error: {r.id} uses {v!r} as a number, but its binding "
+                    f"{b.expr!r} is a boolean; bind it to a number")
+                break
+            if t == "number" and "ap" in use:
+                verdicts[r.index].error = (
+                    f"{where}: type error: {r.id} uses {v!r} as a boolean, but its binding "
+                    f"{b.expr!r} is a number; compare it (e.g. {b.expr.strip()} > 0) to make "
+                    "a boolean")
+                break
+
+
+def _variable_uses(r: RequirementPlan) -> Dict[str, set]:
+    """FRET variable -> {"ap"} (used as a boolean) and/or {"var"} (used as a number, inside
+    a comparison or arithmetic), from the requirement's formulas (compiler.ir)."""
+    out: Dict[str, set] = {}
+    f = r.formalization
+    if f is None:
+        return out
+    stack = [f.pt, f.ft]
+    while stack:
+        n = stack.pop()
+        if n is None:
+            continue
+        if n.op in ("ap", "var"):
+            out.setdefault(n.name, set()).add(n.op)
+        stack.extend(n.args)
+    return out
 
 
 def _silent_reasons(silent, problems) -> Dict[str, str]:
