@@ -119,6 +119,42 @@ def discover_bindings(requirement_paths: Sequence[str]) -> List[Path]:
     return out
 
 
+#: A tick topic's measured rate may differ this much from its nominal rate without warning.
+RATE_TOLERANCE = 0.10
+
+
+def _check_nominal_rate(la, bindings: Optional[Bindings]) -> None:
+    """Warn when one tick per message of a topic whose nominal rate converts the durations
+    runs at a measured rate (messages over the log's span) more than
+    :data:`RATE_TOLERANCE` away from it: ``within 1 second`` then means a different time."""
+    if bindings is None or bindings.tick.topic is None or not bindings.tick.nominal_period_ns:
+        return
+    n = la.messages.get(bindings.tick.topic, 0)
+    st, en = la.start_time_ns, la.end_time_ns
+    if n < 2 or st is None or en is None or en <= st:
+        return
+    measured = (n - 1) * NS_PER_S / (en - st)
+    nominal = NS_PER_S / bindings.tick.nominal_period_ns
+    if abs(measured - nominal) > RATE_TOLERANCE * nominal:
+        la.warnings.append(
+            f"{bindings.tick.topic} runs at {measured:.3g} Hz, not its nominal "
+            f"{nominal:.3g} Hz ({bindings.source}): durations in time units, converted with "
+            f"the nominal rate, are off by {abs(measured / nominal - 1):.0%}")
+
+
+def _has_time_units(entry) -> bool:
+    """The requirement's text has a duration in time units (not ``ticks``)."""
+    from fretish.errors import FretishError
+    from fretish.parser import parse
+
+    try:
+        req = parse(entry.text)
+    except (FretishError, Exception):  # reported when compiled
+        return False
+    d = getattr(req.timing, "duration", None)
+    return d is not None and d.unit != "ticks"
+
+
 def _merge_bindings(parts: List[Bindings]) -> Bindings:
     """One Bindings from several files: variables united; the same variable bound twice
     differently, or different ticks / time bases, is an :class:`AuditInputError`."""
@@ -352,26 +388,53 @@ def load_plan(config: AuditConfig) -> AuditPlan:
     if not entries:
         raise AuditInputError(f"no requirements in {', '.join(config.requirements)}")
     period = None
+    nominal = None
     if bindings is not None and bindings.tick.period_ns is not None:
         period = Fraction(bindings.tick.period_ns, NS_PER_S)
+    elif bindings is not None and bindings.tick.nominal_period_ns is not None:
+        nominal = Fraction(bindings.tick.nominal_period_ns, NS_PER_S)
+    flag = config.tick_period is not None  # --tick-period overrides every declared period
     plans: List[RequirementPlan] = []
     to_compile = []
     for i, e in enumerate(entries):
         rp = RequirementPlan(i, e.id, e.text, f"{e.source}:{e.line}", e.line)
-        if e.tick_period is None and period is not None:
+        if flag:
+            if e.tick_period is not None and e.tick_period != period:
+                rp.notes.append(f"durations converted with --tick-period "
+                                f"{_fmt_period(period)} instead of the declared "
+                                f"{_fmt_period(e.tick_period)}")
+            e = dataclasses.replace(e, tick_period=period)
+        elif e.tick_period is None and period is not None:
             e = dataclasses.replace(e, tick_period=period)
         elif e.tick_period is not None and period is not None and e.tick_period != period:
             rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
                         f"{_fmt_period(e.tick_period)} but the bindings ({bindings.source}) "
                         f"tick every {_fmt_period(period)}: durations would convert with the "
-                        "wrong period; make them equal")
-        elif e.tick_period is not None and bindings is not None and bindings.tick.topic:
-            rp.notes.append(f"durations convert with the declared {_fmt_period(e.tick_period)}"
-                            f" as the nominal period of {bindings.tick.topic}")
+                        "wrong period; make them equal (or pass --tick-period to override "
+                        "both for this run)")
+        elif bindings is not None and bindings.tick.topic:
+            if nominal is not None and e.tick_period is not None and e.tick_period != nominal:
+                rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
+                            f"{_fmt_period(e.tick_period)} but the bindings ({bindings.source})"
+                            f" give {bindings.tick.topic} a nominal period of "
+                            f"{_fmt_period(nominal)}; make them equal")
+            elif nominal is not None:
+                e = dataclasses.replace(e, tick_period=nominal)
+            elif _has_time_units(e):
+                rp.error = (f"{e.source}:{e.line}: {e.id} has a duration in time units but "
+                            f"the bindings ({bindings.source}) tick once per "
+                            f"{bindings.tick.topic} message, whose rate is not declared: add "
+                            f"nominal_rate = \"10 Hz\" (the topic's rate) to [tick]; the "
+                            "audit checks it against the log")
         rp.tick_period = e.tick_period
         plans.append(rp)
         to_compile.append(e)
     compiled = compile_entries(to_compile)
+    if flag:
+        for c, rp in zip(compiled, plans):
+            if c.error is not None and rp.error is None:
+                rp.error = (f"{c.error} (the tick period {_fmt_period(period)} comes from "
+                            "--tick-period)")
     ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
     modules = emit_monitors(ok) if ok else {}
     classes: Dict[Tuple[str, str], type] = {}
@@ -811,6 +874,7 @@ def audit_log(plan: AuditPlan, path: str,
     la.problem_counts = dict(sorted(problem_counts.items()))
     la.start_time_ns = source.start_time
     la.end_time_ns = source.end_time
+    _check_nominal_rate(la, bindings)
     if result is None:
         return finish()
     engines = set()

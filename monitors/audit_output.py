@@ -175,6 +175,8 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> List[str]:
                 out.append(f"{escape(v.requirement)}: {v.warmup_ticks} warm-up ticks (waiting "
                            f"for {escape(', '.join(v.waiting_for)) or 'the first messages'}; "
                            f"first evaluated tick at {_s(v.first_tick_ns, st)})")
+    for w in la.warnings:
+        out.append(f"[yellow]warning[/yellow]: {escape(w)}")
     if la.missing_topics:
         out.append(f"never published: {escape(', '.join(la.missing_topics))}")
     if la.problem_counts:

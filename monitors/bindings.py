@@ -7,6 +7,7 @@ binding file.  A binding file is TOML (read with :mod:`tomllib`)::
     [tick]
     period = "100 ms"      # fixed period with sample-and-hold, or
     # topic = "/scan"      # one tick per message of this topic (exactly one of the two)
+    # nominal_rate = "10 Hz" # topic only: converts durations in time units to ticks
     time = "log"           # time base: "log" (MCAP log time, default) or "header"
     # header_lag = "500 ms" # time="header" only: how late a message may arrive (default 1 s)
 
@@ -748,6 +749,10 @@ class TickSpec:
 
     period_ns: int | None = None
     topic: str | None = None
+    #: topic ticks only: the tick topic's nominal period (``[tick] nominal_rate``), with
+    #: which durations in time units convert to ticks; the audit warns when the measured
+    #: rate differs by more than 10 %.
+    nominal_period_ns: int | None = None
 
     def __post_init__(self) -> None:
         if (self.period_ns is None) == (self.topic is None):
@@ -1080,10 +1085,10 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
         raise BindingError(source, "missing [tick] table: say period = \"100 ms\" or topic = \"/scan\" "
                            "(signals are declared, never guessed)", line=1)
     for key in tick_t:
-        if key not in ("period", "topic", "time", "header_lag"):
+        if key not in ("period", "topic", "time", "header_lag", "nominal_rate"):
             line, col = at("tick", key)
-            raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, time, header_lag)",
-                               line=line, col=col)
+            raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, "
+                               "nominal_rate, time, header_lag)", line=line, col=col)
     has_p, has_t = "period" in tick_t, "topic" in tick_t
     if has_p == has_t:
         line, col = at("tick")
@@ -1101,7 +1106,19 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
             line, col = at("tick", "topic")
             raise BindingError(source, f"[tick] topic {topic!r} is not a topic name like \"/scan\"",
                                line=line, col=col)
-        tick = TickSpec(topic=topic)
+        nominal = None
+        if "nominal_rate" in tick_t:
+            try:
+                nominal = parse_duration(tick_t["nominal_rate"])
+            except ValueError as exc:
+                line, col = at("tick", "nominal_rate")
+                raise BindingError(source, f"[tick] nominal_rate: {exc}", line=line,
+                                   col=col) from None
+        tick = TickSpec(topic=topic, nominal_period_ns=nominal)
+    if has_p and "nominal_rate" in tick_t:
+        line, col = at("tick", "nominal_rate")
+        raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "
+                           "period is its own rate)", line=line, col=col)
     time_base = tick_t.get("time", "log")
     if time_base not in ("log", "header"):
         line, col = at("tick", "time")

@@ -233,6 +233,8 @@ class LogAudit:
             ``problem_counts`` counts all of them by ``kind topic`` (the list is capped).
         verdicts: one per requirement, in requirement order.
         error: a log-level input error (unreadable log, no bindings for a ROS log).
+        warnings: remarks on how far the audit can be trusted (e.g. the tick topic's
+            measured rate differs from its declared nominal rate by more than 10 %).
     """
 
     log: str
@@ -254,6 +256,7 @@ class LogAudit:
     verdicts: List[Verdict] = field(default_factory=list)
     engine: Optional[str] = None
     error: Optional[str] = None
+    warnings: List[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         st = self.start_time_ns
