@@ -99,6 +99,7 @@ class AuditConfig:
     time_base: Optional[str] = None
     engine: str = "auto"
     window: int = 5
+    select_logs: bool = True
 
 
 def discover_bindings(requirement_paths: Sequence[str]) -> List[Path]:
@@ -308,11 +309,23 @@ class AuditPlan:
     modules: Dict[str, str]
     csv_period_ns: int
     freeform: List[str] = field(default_factory=list)
+    #: binding files with ``[logs]``: (selector, file, the plan for the logs it selects)
+    variants: List[Tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
 
     def requirements_json(self) -> List[dict]:
         return [r.to_json() for r in self.requirements]
 
     def bindings_json(self) -> Optional[dict]:
+        if self.variants:
+            variables = {}
+            for _sel, _f, sub in self.variants:
+                for name, v in (sub.bindings_json() or {}).get("variables", {}).items():
+                    variables.setdefault(name, v)
+            return {"sources": self.binding_files, "tick": None, "time_base": None,
+                    "variables": variables,
+                    "per_log": [dict(sub.bindings_json() or {}, file=f,
+                                     logs={"glob": list(sel.glob), "topics": list(sel.topics)})
+                                for sel, f, sub in self.variants]}
         b = self.bindings
         if b is None:
             return None
@@ -378,6 +391,10 @@ def load_plan(config: AuditConfig) -> AuditPlan:
 
     if config.engine not in ("auto", "stepwise", "vectorized"):
         raise AuditInputError(f"unknown engine {config.engine!r} (auto, stepwise, vectorized)")
+    if config.select_logs:
+        split = _plan_per_log(config)
+        if split is not None:
+            return split
     bindings, binding_files = _load_bindings(config)
     try:
         entries = load_requirements([Path(p) for p in config.requirements])
@@ -487,6 +504,68 @@ def load_plan(config: AuditConfig) -> AuditPlan:
                               ": nothing to audit")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
                      freeform)
+
+
+def _plan_per_log(config: AuditConfig) -> Optional[AuditPlan]:
+    """Binding files that select their logs (``[logs]``, :class:`monitors.bindings.LogSelector`):
+    one plan per selecting file (merged with the files that select nothing, which apply to
+    every log), each compiled with its own tick. A requirement whose variables are bound
+    only by another selecting file is not applicable to that file's logs (it is left out of
+    their verdicts); one bound nowhere stays an error. None when no file selects logs."""
+    files = ([Path(p) for p in config.bindings] if config.bindings is not None
+             else discover_bindings(config.requirements))
+    parts = []
+    for f in files:
+        try:
+            parts.append((f, load_bindings(f)))
+        except BindingError as exc:
+            raise AuditInputError(str(exc)) from None
+    selecting = [(f, b) for f, b in parts if b.logs is not None]
+    if not selecting:
+        return None
+    plain = [str(f) for f, b in parts if b.logs is None]
+    variants = []
+    for f, b in selecting:
+        sub = load_plan(dataclasses.replace(config, bindings=tuple([str(f)] + plain),
+                                            select_logs=False))
+        variants.append((b.logs, str(f), sub))
+    anywhere = {n for _s, _f, sub in variants for n in sub.bindings.variables}
+    union: Dict[Tuple[str, str], RequirementPlan] = {}
+    for _s, _f, sub in variants:
+        keep = []
+        for r in sub.requirements:
+            names = r.variables or (list(r.formalization.variables)
+                                    if r.formalization is not None else [])
+            missing = [v for v in names if v not in sub.bindings.variables]
+            if missing and all(v in anywhere for v in missing):
+                continue  # bound by another selecting file: for its logs, not these
+            keep.append(r)
+            union.setdefault((r.source, r.id), r)
+        sub.requirements = keep
+    reqs = sorted(union.values(), key=lambda r: r.index)
+    return AuditPlan(config, reqs, None, [str(f) for f in files], {}, NS_PER_S,
+                     variants[0][2].freeform, variants)
+
+
+def _select_variant(plan: AuditPlan, path: str):
+    """(plan for ``path``, None) or (None, the input error naming the binding files)."""
+    need_topics = any(sel.topics for sel, _f, _p in plan.variants)
+    topics = None
+    if need_topics:
+        from .sources import open_log
+        try:
+            topics = list(open_log(path).topics())
+        except (FretcInputError, OSError):
+            topics = None
+    hits = [(sel, f, sub) for sel, f, sub in plan.variants if sel.matches(path, topics)]
+    if len(hits) == 1:
+        return hits[0][2], None
+    if not hits:
+        return None, (f"{path}: no binding file selects this log ("
+                      + "; ".join(f"{f}: {sel.text()}" for sel, f, _p in plan.variants)
+                      + "); add a [logs] glob or topics that match it")
+    return None, (f"{path} is selected by both {hits[0][1]} ({hits[0][0].text()}) and "
+                  f"{hits[1][1]} ({hits[1][0].text()}): make their [logs] tables exclusive")
 
 
 # --------------------------------------------------------------------------- logs
@@ -747,6 +826,15 @@ def audit_log(plan: AuditPlan, path: str,
     from .report_model import LogAudit, Verdict
     from .sources import open_log
 
+    if plan.variants:
+        sub, err = _select_variant(plan, str(path))
+        if sub is None:
+            la = LogAudit(log=str(path), error=err)
+            la.verdicts = [Verdict(log=str(path), requirement=r.id, text=r.text,
+                                   source=r.source, error=f"log not audited: {err}")
+                           for r in plan.requirements]
+            return la
+        return audit_log(sub, path, progress)
     la = LogAudit(log=str(path))
     verdicts: Dict[int, Verdict] = {}
     for r in plan.requirements:

@@ -72,7 +72,10 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
     if plan is not None:
         b = plan.bindings
         clock = "no bindings (CSV columns are the variables)"
-        if b is not None:
+        if getattr(plan, "variants", None):
+            clock = "bindings per log: " + "; ".join(
+                f"{f} ({sel.text()})" for sel, f, _sub in plan.variants)
+        elif b is not None:
             tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
                     else f"one tick per {b.tick.topic} message")
             clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \

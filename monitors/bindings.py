@@ -89,6 +89,7 @@ __all__ = [
     "compile_expression",
     "LASER_SCAN",
     "check_types",
+    "LogSelector",
 ]
 
 NS_PER_S = 1_000_000_000
@@ -909,6 +910,8 @@ class Bindings:
     time_base: str = "log"
     header_lag_ns: int = DEFAULT_HEADER_LAG_NS
     source: str | None = None
+    #: ``[logs]``: the logs this binding file applies to (None: every log).
+    logs: "LogSelector | None" = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in ("log", "header"):
@@ -1076,10 +1079,10 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
         return (loc[0], loc[1]) if loc else (None, None)
 
     for key in doc:
-        if key not in ("tick", "variables"):
+        if key not in ("tick", "variables", "logs"):
             line, col = at(key) if isinstance(doc[key], dict) else at("", key)
             raise BindingError(source, f"unknown {'table [' + key + ']' if isinstance(doc[key], dict) else 'key ' + repr(key)} "
-                               "(expected [tick] and [variables])", line=line, col=col)
+                               "(expected [tick], [variables] and optionally [logs])", line=line, col=col)
     tick_t = doc.get("tick")
     if not isinstance(tick_t, dict):
         raise BindingError(source, "missing [tick] table: say period = \"100 ms\" or topic = \"/scan\" "
@@ -1152,7 +1155,66 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
             off, exact = _value_start(rest, expr)
             col = col + off
         variables[name] = compile_expression(name, expr, source=source, line=line, col=col, exact=exact)
-    return Bindings(variables, tick, time_base, lag, source)
+    out = Bindings(variables, tick, time_base, lag, source)
+    out.logs = _parse_logs(doc.get("logs"), source, at)
+    return out
+
+
+@dataclass(frozen=True)
+class LogSelector:
+    """``[logs]`` of a binding file: which logs it applies to. ``glob``: patterns matched
+    against the log's path from the right (:meth:`pathlib.PurePath.match`: ``"*.bag"``,
+    ``"stage_*"``, ``"real/*.mcap"``); ``topics``: topics the log must have. A log is
+    selected when it matches some pattern (if any are given) and has every topic (if any
+    are given)."""
+
+    glob: tuple[str, ...] = ()
+    topics: tuple[str, ...] = ()
+
+    def matches(self, path: str, log_topics: Iterable[str] | None) -> bool:
+        from pathlib import PurePath
+        p = PurePath(path)
+        if self.glob and not any(p.match(g) or p.name == g for g in self.glob):
+            return False
+        if self.topics and (log_topics is None or not set(self.topics) <= set(log_topics)):
+            return False
+        return True
+
+    def text(self) -> str:
+        parts = []
+        if self.glob:
+            parts.append("glob " + ", ".join(self.glob))
+        if self.topics:
+            parts.append("topics " + ", ".join(self.topics))
+        return "; ".join(parts)
+
+
+def _parse_logs(table: Any, source: str, at: Callable) -> "LogSelector | None":
+    if table is None:
+        return None
+    line, col = at("logs")
+    if not isinstance(table, dict):
+        raise BindingError(source, "logs must be a table [logs]", line=line, col=col)
+    for key in table:
+        if key not in ("glob", "topics"):
+            kl, kc = at("logs", key)
+            raise BindingError(source, f"unknown key {key!r} in [logs] (glob, topics)",
+                               line=kl, col=kc)
+
+    def strings(key: str) -> tuple[str, ...]:
+        v = table.get(key, [])
+        v = [v] if isinstance(v, str) else v
+        if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+            kl, kc = at("logs", key)
+            raise BindingError(source, f"[logs] {key} must be a string or a list of strings",
+                               line=kl, col=kc)
+        return tuple(v)
+
+    sel = LogSelector(strings("glob"), strings("topics"))
+    if not sel.glob and not sel.topics:
+        raise BindingError(source, "[logs] needs glob = \"...\" and/or topics = [...]",
+                           line=line, col=col)
+    return sel
 
 
 def load_bindings(path: str | Path, inline: Iterable[str] = ()) -> Bindings:
