@@ -166,6 +166,7 @@ def _register_optional() -> None:
     from monitors.cli import audit_cmd
 
     main.add_command(audit_cmd, "audit")
+    from fretc.inspect import inspect_cmd; main.add_command(inspect_cmd, "inspect")  # noqa: E702
     try:
         from monitors.report import report_cmd
     except ModuleNotFoundError as exc:
