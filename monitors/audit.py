@@ -309,6 +309,8 @@ class AuditPlan:
     modules: Dict[str, str]
     csv_period_ns: int
     freeform: List[str] = field(default_factory=list)
+    #: remarks on the inputs (bound variables no requirement uses)
+    warnings: List[str] = field(default_factory=list)
     #: binding files with ``[logs]``: (selector, file, the plan for the logs it selects)
     variants: List[Tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
 
@@ -502,8 +504,16 @@ def load_plan(config: AuditConfig) -> AuditPlan:
     if not plans:
         raise AuditInputError(f"only free-form requirements in {', '.join(config.requirements)}"
                               ": nothing to audit")
+    warnings = []
+    if bindings is not None:
+        used = {v for rp in plans for v in (rp.variables or (
+            rp.formalization.variables if rp.formalization is not None else []))}
+        for name, b in bindings.variables.items():
+            if name not in used:
+                at = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+                warnings.append(f"{at}: {name!r} is bound but no requirement uses it")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
-                     freeform)
+                     freeform, warnings)
 
 
 def _plan_per_log(config: AuditConfig) -> Optional[AuditPlan]:
@@ -543,8 +553,12 @@ def _plan_per_log(config: AuditConfig) -> Optional[AuditPlan]:
             union.setdefault((r.source, r.id), r)
         sub.requirements = keep
     reqs = sorted(union.values(), key=lambda r: r.index)
+    used = {v for r in reqs for v in (r.variables or (
+        r.formalization.variables if r.formalization is not None else []))}
+    warnings = sorted({w for _s, _f, sub in variants for w in sub.warnings
+                       if w.split("'")[1] not in used})
     return AuditPlan(config, reqs, None, [str(f) for f in files], {}, NS_PER_S,
-                     variants[0][2].freeform, variants)
+                     variants[0][2].freeform, warnings, variants)
 
 
 def _select_variant(plan: AuditPlan, path: str):
@@ -899,8 +913,11 @@ def audit_log(plan: AuditPlan, path: str,
         if missing:
             where = (f"bindings ({bindings.source})" if bindings is not None
                      else f"the CSV columns ({', '.join(source.columns)})")
+            from .schema import closest
+            hints = [(m, closest(m, sorted(available))) for m in missing]
+            hint = "; ".join(f"did you mean {h!r} for {m!r}?" for m, h in hints if h)
             verdicts[r.index].error = (f"no binding for {', '.join(map(repr, missing))} in "
-                                       f"{where}")
+                                       f"{where}" + (f"; {hint}" if hint else ""))
     # topics absent from the log
     try:
         log_topics = source.topics()

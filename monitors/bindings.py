@@ -169,17 +169,37 @@ class Const(Node):
 
 
 @dataclass(frozen=True)
+class Slice:
+    """``[lo:hi]`` of an array field (Python slice rules; None = open end)."""
+
+    lo: int | None
+    hi: int | None
+
+    def text(self) -> str:
+        return f"[{'' if self.lo is None else self.lo}:{'' if self.hi is None else self.hi}]"
+
+
+@dataclass(frozen=True)
 class Field(Node):
-    """``/topic.a.b[i]``: ``path`` holds attribute names (str) and indexes (int)."""
+    """``/topic.a.b[i]``: ``path`` holds attribute names (str), indexes (int) and, last,
+    at most one :class:`Slice`."""
 
     topic: str
-    path: tuple[str | int, ...]
+    path: tuple[str | int | Slice, ...]
 
     def text(self) -> str:
         out = self.topic
         for p in self.path:
-            out += f"[{p}]" if isinstance(p, int) else f".{p}"
+            out += (p.text() if isinstance(p, Slice) else f"[{p}]" if isinstance(p, int)
+                    else f".{p}")
         return out
+
+
+@dataclass(frozen=True)
+class Ref(Node):
+    """Another variable of the same binding file, by name (substituted before compiling)."""
+
+    name: str
 
 
 @dataclass(frozen=True)
@@ -247,9 +267,19 @@ def _to_ast(tree: Tree | Token, where: _Where) -> Node:
         topic = str(kids[0])
         path: list[str | int] = []
         for sel in kids[1:]:
+            if sel.data == "slice":
+                lo, hi = (int(c.children[0]) if c.children else None for c in sel.children)
+                path.append(Slice(lo, hi))
+                continue
             tok = sel.children[0]
             path.append(int(tok) if sel.data == "index" else str(tok))
+        for p in path[:-1]:
+            if isinstance(p, Slice):
+                raise where.error(f"{Field(0, topic, tuple(path)).text()}: a slice must be "
+                                  "the last selector", kids[0].column)
         return Field(kids[0].column, topic, tuple(path))
+    if data == "ref":
+        return Ref(kids[0].column, str(kids[0]))
     if data == "neg":
         return Unary(col, "-", _to_ast(kids[0], where))
     if data == "not_":
@@ -281,6 +311,8 @@ def _check(node: Node, where: _Where, topics: set[str]) -> None:
             raise where.error(f"{node.topic} is a topic, not a value: name a field "
                               f"(e.g. {node.topic}.data) or use age({node.topic})", node.col)
         topics.add(node.topic)
+    elif isinstance(node, Ref):
+        pass  # resolved against the other variables (_substitute)
     elif isinstance(node, Unary):
         _check(node.arg, where, topics)
     elif isinstance(node, Binary):
@@ -387,6 +419,19 @@ def make_extractor(f: Field) -> Callable[[Any], Any]:
     Raises (from the returned function):
         _FieldError: no such field, index out of range, or indexing a non-sequence.
     """
+    if f.path and isinstance(f.path[-1], Slice):
+        inner = make_extractor(Field(f.col, f.topic, f.path[:-1]))
+        sl = slice(f.path[-1].lo, f.path[-1].hi)
+        text = f.text()
+
+        def sliced(data: Any) -> Any:
+            v = inner(data)  # REP 117 validity of LaserScan ranges is kept for the slice
+            if isinstance(v, Valid):
+                return Valid(v.data[..., sl], None if v.mask is None else v.mask[..., sl])
+            if isinstance(v, (list, tuple)):
+                return list(v[sl])
+            raise _FieldError(f"{text}: only arrays can be sliced")
+        return sliced
     path = f.path
     laser = isinstance(path[-1], str) and path[-1] == "ranges"
     steps: list[Callable[[Any], Any]] = []
@@ -851,7 +896,8 @@ class Binding:
 
 
 def compile_expression(name: str, expr: str, *, source: str = "<expression>", line: int | None = None,
-                       col: int | None = None, exact: bool = True) -> Binding:
+                       col: int | None = None, exact: bool = True,
+                       refs: "dict[str, Binding] | None" = None) -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -859,6 +905,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>", li
         expr: the expression text.
         source, line, col: where ``expr`` starts, for error messages (``exact`` False when
             columns inside the expression cannot be mapped to the file, e.g. escapes).
+        refs: the other variables a bare name in ``expr`` may refer to (already compiled);
+            their expressions are substituted.
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
@@ -869,6 +917,11 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>", li
         raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
                           "quoted FRETish variable")
     node, topics = _parse(expr, where)
+    if _refs(node):
+        node = _substitute(node, refs or {}, where, name)
+        found: set[str] = set()
+        _check(node, where, found)
+        topics = frozenset(found)
     fields: list[Field] = []
 
     def collect(n: Node) -> None:
@@ -889,6 +942,49 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>", li
     scalar = _compile(node, _Ops(False), extractors)
     vector = _compile(node, _Ops(True), extractors)
     return Binding(name, expr, source, line, col, node, topics, tuple(fields), exact, scalar, vector)
+
+
+def _refs(node: Node, deep: bool = False) -> list[str]:
+    """Names of the variables ``node`` refers to, in order of appearance."""
+    out: list[str] = []
+
+    def walk(n: Node) -> None:
+        if isinstance(n, Ref):
+            out.append(n.name)
+        elif isinstance(n, Unary):
+            walk(n.arg)
+        elif isinstance(n, Binary):
+            walk(n.left)
+            walk(n.right)
+        elif isinstance(n, Call):
+            for a in n.args:
+                walk(a)
+    walk(node)
+    return out
+
+
+def _substitute(node: Node, refs: dict, where: _Where, name: str) -> Node:
+    """``node`` with every :class:`Ref` replaced by the referenced variable's expression."""
+    if isinstance(node, Ref):
+        if node.name == name:
+            raise where.error(f"{name!r} refers to itself", node.col)
+        b = refs.get(node.name)
+        if b is None:
+            from .schema import closest
+            hint = closest(node.name, [n for n in refs if n != name] + list(_FUNCS))
+            raise where.error(f"unknown name {node.name!r}: not a variable of this binding file"
+                              + (f"; did you mean {hint!r}?" if hint else "")
+                              + " (a field is /topic.field, a function call f(...))", node.col)
+        return b.ast
+    if isinstance(node, Unary):
+        return Unary(node.col, node.op, _substitute(node.arg, refs, where, name))
+    if isinstance(node, Binary):
+        return Binary(node.col, node.op, _substitute(node.left, refs, where, name),
+                      _substitute(node.right, refs, where, name))
+    if isinstance(node, Call):
+        return Call(node.col, node.func, tuple(_substitute(a, refs, where, name)
+                                               for a in node.args))
+    return node
 
 
 @dataclass
@@ -933,7 +1029,7 @@ class Bindings:
         """
         variables = dict(self.variables)
         for spec in specs:
-            b = parse_inline(spec)
+            b = parse_inline(spec, refs=variables)
             variables[b.name] = b
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source)
 
@@ -991,7 +1087,7 @@ def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding
     return out
 
 
-def parse_inline(spec: str) -> Binding:
+def parse_inline(spec: str, refs: "dict[str, Binding] | None" = None) -> Binding:
     """One inline binding ``NAME=EXPR`` (CLI ``--bind``); source is ``"<--bind NAME>"``.
 
     Raises:
@@ -1004,7 +1100,8 @@ def parse_inline(spec: str) -> Binding:
     if not sep or not name:
         raise BindingError(f"<--bind {spec}>", "expected NAME=EXPRESSION")
     col = spec.index("=") + 2
-    return compile_expression(name, expr, source=f"<--bind {name}>", line=1, col=col)
+    return compile_expression(name, expr, source=f"<--bind {name}>", line=1, col=col,
+                              refs=refs)
 
 
 def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str = "log",
@@ -1138,7 +1235,7 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     if not isinstance(var_t, dict):
         line, col = at("", "variables")
         raise BindingError(source, "variables must be a table [variables]", line=line, col=col)
-    variables: dict[str, Binding] = {}
+    pending: dict[str, tuple] = {}
     for name, expr in var_t.items():
         loc = where.get(("variables", name))
         line, col, rest = loc if loc else (None, None, "")
@@ -1154,7 +1251,34 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
         if col is not None:
             off, exact = _value_start(rest, expr)
             col = col + off
-        variables[name] = compile_expression(name, expr, source=source, line=line, col=col, exact=exact)
+        pending[name] = (expr, line, col, exact)
+    # references to other variables: compile in dependency order, cycles are errors
+    deps: dict[str, list[str]] = {}
+    for name, (expr, line, col, exact) in pending.items():
+        node, _t = _parse(expr, _Where(source, name, line, col, exact))
+        deps[name] = [r for r in _refs(node) if r in pending]
+    state: dict[str, int] = {}
+
+    def visit(name: str, chain: list[str]) -> None:
+        if state.get(name) == 2:
+            return
+        if state.get(name) == 1:
+            cyc = chain[chain.index(name):] + [name]
+            expr, line, col, _e = pending[name]
+            raise BindingError(source, "variables refer to each other in a cycle: "
+                               + " -> ".join(cyc), line=line, col=col, variable=name)
+        state[name] = 1
+        for d in deps[name]:
+            visit(d, chain + [name])
+        expr, line, col, exact = pending[name]
+        compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
+                                            exact=exact, refs=compiled)
+        state[name] = 2
+
+    compiled: dict[str, Binding] = {}
+    for name in pending:
+        visit(name, [])
+    variables = {name: compiled[name] for name in pending}
     out = Bindings(variables, tick, time_base, lag, source)
     out.logs = _parse_logs(doc.get("logs"), source, at)
     return out

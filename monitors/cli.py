@@ -132,6 +132,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
+    for w in plan.warnings:
+        err.print(f"[yellow]warning:[/yellow] {escape(w)}")
     input_errors = False
     for r in plan.requirements:
         if r.error is not None:

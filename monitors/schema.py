@@ -111,7 +111,7 @@ class TopicSchema:
                 cur = cur.item
                 walked += f"[{p}]"
                 continue
-            if isinstance(p, slice):
+            if type(p).__name__ == "Slice":
                 if cur.kind != "array":
                     raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it cannot "
                                          f"be sliced", [], None)
