@@ -46,7 +46,7 @@ def _by_req(la):
 def _readme_expectations():
     """{log: {req: (verdict, t or None)}} from the "Expected verdicts" table."""
     text = (TRACES / "README.md").read_text(encoding="utf-8")
-    section = text.split("## Expected verdicts", 1)[1]
+    section = text.split("## Expected verdicts", 1)[1].split("### First violations", 1)[0]
     rows = [l for l in section.splitlines() if l.startswith("| ") and ".mcap" in l]
     header = next(l for l in section.splitlines() if l.startswith("| log"))
     reqs = [c.strip() for c in header.strip("|").split("|")][1:]
@@ -529,3 +529,22 @@ def test_future_time_function_is_decided_offline(tmp_path):
     expected = ft_at(r.formalization.ft, trace)
     assert v.engine == "interval" and (v.verdict != "violated") == expected
     assert v.verdict == "violated" and v.first_violation.trigger.tick == 4
+
+
+def test_traces_readme_gives_trigger_and_miss_times_apart(shipped):
+    """traces/README.md's "First violations" table: trigger time and miss time in separate
+    columns, as the audit reports them (each on the requirement's own clock)."""
+    text = (TRACES / "README.md").read_text(encoding="utf-8")
+    section = text.split("### First violations", 1)[1].split("\nWhy", 1)[0]
+    rows = [[c.strip() for c in l.strip("|").split("|")] for l in section.splitlines()
+            if l.startswith("| ") and not l.startswith("| run")]
+    assert len(rows) == 7
+    for run, req, trig, missed, _ob in rows:
+        v = _by_req(shipped[f"{run}.mcap"])[req]
+        fv = v.first_violation
+        st = shipped[f"{run}.mcap"].start_time_ns
+        t_s, t_tick = re.match(r"([\d.]+) \((\d+)", trig).groups()
+        m_s, m_tick = re.match(r"([\d.]+) \((\d+)", missed).groups()
+        assert (fv.trigger.tick, fv.at.tick) == (int(t_tick), int(m_tick)), (run, req)
+        assert (fv.trigger.time_ns - st) / 1e9 == pytest.approx(float(t_s), abs=1e-6)
+        assert (fv.at.time_ns - st) / 1e9 == pytest.approx(float(m_s), abs=1e-6)
