@@ -188,18 +188,24 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> List[str]:
     return out
 
 
-def _headers(names: List[str], width: int = 24) -> List[str]:
-    """Column headers that stay unique when shortened: the end of each name is kept (where
-    Twist components differ: ``…linear.y``), longer where two would collide."""
+def _headers(names: List[str]) -> List[str]:
+    """Short column headers that stay unique: of each name (an operand label ``var: expr``
+    counts by its expression) the fewest trailing dotted components that no other name
+    ends with (``…linear.y`` for ``/cmd_vel_filtered.linear.y``); plain names as they are."""
+    keys = [n.split(": ", 1)[1] if ": " in n else n for n in names]
     out = []
-    for n in names:
-        w = width
-        while True:
-            h = n if len(n) <= w else "…" + n[-(w - 1):]
-            others = [m if len(m) <= w else "…" + m[-(w - 1):] for m in names if m != n]
-            if h not in others or w >= len(n):
+    for i, (n, k) in enumerate(zip(names, keys)):
+        if (": " not in n and len(n) <= 20) or len(k) <= 20:
+            out.append(k)
+            continue
+        parts = k.split(".")
+        h = k
+        for j in range(min(2, len(parts)), len(parts) + 1):
+            cand = ".".join(parts[-j:])
+            if not any(o != k and (o == cand or o.endswith("." + cand) or o.endswith(cand))
+                       for o in keys[:i] + keys[i + 1:]) and cand not in out:
+                h = cand if j == len(parts) else "…" + cand
                 break
-            w += 4
         out.append(h)
     return out
 
@@ -237,16 +243,16 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
     t.add_column("time", justify="right")
     names = list(v.values)
     topics = list(v.sources)
-    heads = _headers(names + [f"{tp} @" for tp in topics])
+    heads = _headers(names) + [f"{tp} @" for tp in topics]
     for h in heads:
-        t.add_column(h, justify="right")
+        t.add_column(h, justify="right", no_wrap=True, min_width=len(h))
     rows = list(zip(*[v.values[n] for n in names])) if names else []
     marks = {fv.at.tick: "<- missed"}
     if fv.trigger is not None:
         marks.setdefault(fv.trigger.tick, "<- trigger")
         if fv.trigger.tick == fv.at.tick:
             marks[fv.at.tick] = "<- trigger, missed"
-    t.add_column("")
+    t.add_column("", no_wrap=True, min_width=18)
     prev = None
     for k, row in enumerate(rows):
         tick, ns = row[0][0], row[0][1]
