@@ -481,8 +481,11 @@ def _witness(v: dict) -> List[Tuple[str, str]]:
     out: List[Tuple[str, str]] = []
     fv = v.get("first_violation")
     if fv:
-        out.append(("first violation", f"tick {fv['tick']} at {_fmt_s(fv.get('log_time_s'))} "
-                                        f"(log time {fv['log_time_ns']} ns)"))
+        tick_s = fv.get("tick_time_s", fv.get("log_time_s"))
+        base = fv.get("tick_time_base") or "log"
+        out.append(("first violation", f"tick {fv['tick']} at {_fmt_s(tick_s)} on the {base} "
+                                        f"clock (deciding message log time "
+                                        f"{fv['log_time_ns']} ns)"))
         t = fv.get("trigger")
         if t:
             out.append(("trigger", f"tick {t['tick']} at {_fmt_s(t.get('time_s'))} "
@@ -548,8 +551,8 @@ def _cell_label(v: Optional[dict]) -> Tuple[str, str]:
     verdict = v.get("verdict", "error")
     text = VERDICT_WORDS.get(verdict, verdict)
     fv = v.get("first_violation")
-    if verdict == "violated" and fv and fv.get("log_time_s") is not None:
-        text += f" @ {fv['log_time_s']:.3f} s"
+    if verdict == "violated" and fv and fv.get("tick_time_s", fv.get("log_time_s")) is not None:
+        text += f" @ {fv.get('tick_time_s', fv.get('log_time_s')):.3f} s"
     return verdict, text
 
 
@@ -740,7 +743,7 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
                     "svg_file": f"timelines/{va}.svg", "witness": cell["witness"],
                     "verdict": v, "table": _values_table(v, la.get("start_time_ns")),
                     "violation_ns": fv.get("log_time_ns"),
-                    "violation_s": _fmt_s(fv.get("log_time_s")),
+                    "violation_s": _fmt_s(fv.get("tick_time_s", fv.get("log_time_s"))),
                     "trigger_ns": trig.get("time_ns"), "trigger_s": _fmt_s(trig.get("time_s")),
                     "ltl3_status": l3.get("status"), "ltl3_ns": l3.get("time_ns"),
                     "ltl3_s": _fmt_s(l3.get("time_s")),
