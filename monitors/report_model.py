@@ -14,9 +14,15 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
                   log_errors, exit_code}
     }
 
-Every time is given twice: ``*_ns`` - integer nanoseconds on the log's clock (MCAP log time
-or header stamp, see ``time_base``), what Foxglove shows; ``*_s`` - seconds since the log's
-first tick (``LogAudit.start_time_ns``), what a person reads. Ticks are 0-based indexes of
+Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
+log's first message (``LogAudit.start_time_ns``), what a person reads. Each time says its
+clock: ``log_time_ns`` is always the log time of a real message (in a first violation, the
+message that decided the missed tick: where Foxglove seeks); a tick's own time is
+``tick_time_ns`` (first violation) or ``time_ns`` (other tick points), on the bindings' time
+base (``tick_time_base`` / ``LogAudit.time_base``: ``log`` or ``header``). Each
+requirement runs on its own clock (its variables' topics): ``ticks_evaluated``,
+``warmup_ticks``, ``first_tick_ns`` and ``last_tick_ns`` are per verdict; the log's own
+fields summarize them. Ticks are 0-based indexes of
 *evaluated* ticks (warm-up ticks are not numbered, see :mod:`monitors.signals`).
 
 Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
