@@ -24,6 +24,8 @@ from pathlib import Path
 
 import click
 
+from .fleet_cli import ray_options
+
 __all__ = ["audit_cmd", "audit_input_options", "audit_config"]
 
 
@@ -93,6 +95,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
                    "data problems.")
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
+@ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, engine, window, allow_partial,
@@ -115,8 +118,9 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from rich.console import Console
     from rich.markup import escape
 
-    from .audit import AuditInputError, audit_logs, find_logs, load_plan
+    from .audit import AuditInputError, find_logs, load_plan
     from .audit_output import AuditProgress, junit_xml, print_summary
+    from .fleet import expand_log_args, run_audits
     from .report_model import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
@@ -127,7 +131,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
                           engine, window)
     try:
         plan = load_plan(config)
-        paths = find_logs(logs)
+        paths = find_logs(expand_log_args(logs))
     except AuditInputError as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
@@ -142,9 +146,9 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     show = not no_progress and sys.stderr.isatty()
     if show:
         with AuditProgress(err, len(paths)) as prog:
-            results = audit_logs(plan, paths, jobs=jobs, progress=prog)
+            results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
-        results = audit_logs(plan, paths, jobs=jobs)
+        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors)
     doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,

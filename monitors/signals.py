@@ -41,6 +41,7 @@ import numpy as np
 from . import problems as P
 from .bindings import Binding, Bindings, EvalState, Field, TickSpec, Valid, make_extractor
 from .problems import DataProblem, ProblemLog, SignalError
+from .selective import install as install_selective
 from .sources import CSV_TOPIC, CsvSource, LogSource
 
 __all__ = ["Tick", "Sampling", "GroupSampling", "SampledArrays", "sample", "sample_groups",
@@ -345,6 +346,7 @@ def sample(source: LogSource, bindings: Bindings | None = None) -> Sampling:
         raise SignalError(f"{source.path}: a {source.kind} log needs bindings (signals are declared, "
                           "never guessed)")
     topics = _check_topics(source, bindings)
+    install_selective(source, bindings)  # decode only the fields the bindings read
     s._iter = _sample_stream(s, source, bindings, topics)
     return s
 
@@ -443,6 +445,9 @@ def sample_groups(source: LogSource, bindings: Bindings,
             fed.setdefault(t, []).append(key)
     _check_topics(source, Bindings({}, tick, bindings.time_base, bindings.header_lag_ns,
                                    bindings.source), extra=set(fed), users=bindings)
+    install_selective(source, Bindings(
+        {n: bindings.variables[n] for names, _t in groups.values() for n in names},
+        tick, bindings.time_base, bindings.header_lag_ns, bindings.source))
 
     def run() -> Iterator[tuple[Any, Tick]]:
         for m in source.messages(set(fed)):
@@ -630,6 +635,7 @@ def sample_arrays(source: LogSource, bindings: Bindings | None = None) -> Sample
         raise SignalError(f"{source.path}: a {source.kind} log needs bindings (signals are declared, "
                           "never guessed)")
     topics = _check_topics(source, bindings)
+    install_selective(source, bindings)
     fields: dict[tuple[str, tuple], Any] = {}
     for b in bindings.variables.values():
         for f in b.fields:
