@@ -70,3 +70,19 @@ def test_stage_speed_is_the_norm_of_the_planar_twist():
     assert "norm(/base_pose_ground_truth.twist.twist.linear.x, " \
            "/base_pose_ground_truth.twist.twist.linear.y)" in text
     assert "takes minutes" not in (REAL / "stage_mapping1.fret").read_text()
+
+
+def test_a_plan_with_selecting_binding_files_ships_to_workers():
+    """Ray workers get the plan pickled (monitors.fleet.ship_plan): the per-file plans go
+    along and give the same verdicts."""
+    import pickle
+
+    from monitors.audit import AuditConfig, audit_log, load_plan
+    from monitors.fleet import ship_plan
+
+    plan = load_plan(AuditConfig(requirements=(str(REAL),)))
+    again = pickle.loads(pickle.dumps(ship_plan(plan))).rebuild()
+    log = str(LOGS / "cmd_vel_scaled.mcap")
+    assert [(v.requirement, v.verdict) for v in audit_log(again, log).verdicts] == \
+        [(v.requirement, v.verdict) for v in audit_log(plan, log).verdicts] == \
+        [("CV1", "satisfied"), ("CV2", "violated"), ("CV3", "satisfied")]
