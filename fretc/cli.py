@@ -101,6 +101,10 @@ def _shown(text: str) -> str:
 def compile_cmd(files, emit, as_json, output, psl_map):
     """Compile requirement FILES (.fret or FRET JSON exports)."""
     compiled = _load(files)
+    if not compiled:
+        click.echo(f"error: no requirements in {', '.join(files)} (empty or only comments)",
+                   err=True)
+        sys.exit(2)
     failed = [c for c in compiled if c.error is not None]
     for c in failed:
         click.echo(_shown(str(c.error)), err=True)
@@ -108,7 +112,13 @@ def compile_cmd(files, emit, as_json, output, psl_map):
         _emit_ltl(compiled, as_json)
     elif emit == "monitor":
         from compiler.codegen import emit_monitors
-        _write_outputs(emit_monitors(compiled), output, ".py")
+        outputs = emit_monitors(compiled)
+        _check_output(outputs, output, ".py")
+        _write_outputs(outputs, output, ".py")
+        for stem, text in outputs.items():
+            for rid, reason in _skipped(text):
+                if not any(c.id == rid and c.error is not None for c in compiled):
+                    click.echo(f"skipped {rid} ({stem}): {reason}", err=True)
     elif emit == "psl":
         from compiler.ajpf import emit_psl
         try:
@@ -116,6 +126,7 @@ def compile_cmd(files, emit, as_json, output, psl_map):
         except FretishError as exc:
             click.echo(str(exc), err=True)
             sys.exit(2)
+        _check_output(outputs, output, ".psl")
         _write_outputs(outputs, output, ".psl")
     sys.exit(1 if failed else 0)
 
@@ -142,6 +153,30 @@ def _emit_ltl(compiled, as_json: bool) -> None:
         click.echo("")
 
 
+def _skipped(module_text: str) -> list:
+    """(id, reason) of the ``SKIPPED`` dict literal of a generated module."""
+    import ast
+
+    start = module_text.find("\nSKIPPED = {")
+    if start < 0:
+        return []
+    end = module_text.find("\n}", start)
+    try:
+        return list(ast.literal_eval(module_text[start + len("\nSKIPPED = "):end + 2]).items())
+    except (ValueError, SyntaxError):  # pragma: no cover - the template writes a literal
+        return []
+
+
+def _check_output(outputs: dict, output: Optional[str], suffix: str) -> None:
+    """``-o`` is a file for one output and a directory for several: a path ending in
+    ``suffix`` for several outputs is an error (it would become a directory named so)."""
+    if output is not None and len(outputs) > 1 and Path(output).suffix == suffix:
+        click.echo(f"error: -o {output}: {len(outputs)} modules are written (one per input "
+                   f"file: {', '.join(sorted(outputs))}); give a directory (no {suffix} "
+                   "suffix) or one input file", err=True)
+        sys.exit(2)
+
+
 def _write_outputs(outputs: dict, output: Optional[str], suffix: str) -> None:
     """``outputs`` maps a file stem to text. One output and ``-o FILE``: write the file;
     ``-o DIR``: one file per stem; no ``-o``: print them."""
@@ -150,7 +185,8 @@ def _write_outputs(outputs: dict, output: Optional[str], suffix: str) -> None:
             click.echo(text, nl=False)
         return
     out = Path(output)
-    if len(outputs) == 1 and (out.suffix or not out.is_dir()) and out.suffix:
+    if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
+        # one module: -o is the file
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(next(iter(outputs.values())), encoding="utf-8")
         click.echo(f"wrote {out}", err=True)
@@ -170,6 +206,7 @@ def _register_optional() -> None:
 
     main.add_command(audit_cmd, "audit")
     main.add_command(__import__("fretc.check", fromlist=["check_cmd"]).check_cmd, "check")
+    from fretc.inspect import inspect_cmd; main.add_command(inspect_cmd, "inspect")  # noqa: E702
     try:
         from monitors.report import report_cmd
     except ModuleNotFoundError as exc:

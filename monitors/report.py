@@ -482,8 +482,11 @@ def _witness(v: dict) -> List[Tuple[str, str]]:
     out: List[Tuple[str, str]] = []
     fv = v.get("first_violation")
     if fv:
-        out.append(("first violation", f"tick {fv['tick']} at {_fmt_s(fv.get('log_time_s'))} "
-                                        f"(log time {fv['log_time_ns']} ns)"))
+        tick_s = fv.get("tick_time_s", fv.get("log_time_s"))
+        base = fv.get("tick_time_base") or "log"
+        out.append(("first violation", f"tick {fv['tick']} at {_fmt_s(tick_s)} on the {base} "
+                                        f"clock (deciding message log time "
+                                        f"{fv['log_time_ns']} ns)"))
         t = fv.get("trigger")
         if t:
             out.append(("trigger", f"tick {t['tick']} at {_fmt_s(t.get('time_s'))} "
@@ -563,8 +566,8 @@ def _cell_label(v: Optional[dict]) -> Tuple[str, str]:
     verdict = v.get("verdict", "error")
     text = VERDICT_WORDS.get(verdict, verdict)
     fv = v.get("first_violation")
-    if verdict == "violated" and fv and fv.get("log_time_s") is not None:
-        text += f" @ {fv['log_time_s']:.3f} s"
+    if verdict == "violated" and fv and fv.get("tick_time_s", fv.get("log_time_s")) is not None:
+        text += f" @ {fv.get('tick_time_s', fv.get('log_time_s')):.3f} s"
     return verdict, text
 
 
@@ -755,7 +758,7 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
                     "svg_file": f"timelines/{va}.svg", "witness": cell["witness"],
                     "verdict": v, "table": _values_table(v, la.get("start_time_ns")),
                     "violation_ns": fv.get("log_time_ns"),
-                    "violation_s": _fmt_s(fv.get("log_time_s")),
+                    "violation_s": _fmt_s(fv.get("tick_time_s", fv.get("log_time_s"))),
                     "trigger_ns": trig.get("time_ns"), "trigger_s": _fmt_s(trig.get("time_s")),
                     "ltl3_status": l3.get("status"), "ltl3_ns": l3.get("time_ns"),
                     "ltl3_s": _fmt_s(l3.get("time_s")),
@@ -845,8 +848,8 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
         "summary": summary,
         "exit_meaning": {0: "every verdict satisfied or vacuous", 1: "a requirement is violated",
                          2: "something could not be audited",
-                         3: "a log is damaged (partial) or a verdict unknown"}.get(
-                             summary.get("exit_code"), ""),
+                         3: "no violation, but a log is partial or had data problems, or a verdict is unknown"
+                         }.get(summary.get("exit_code"), ""),
         "requirement_files": req_files, "binding_files": bind_files,
         "tick": _tick_text(bindings.get("tick")), "time_base": bindings.get("time_base") or "-",
         "runs": runs, "requirements": req_ctx, "violations": violations,

@@ -16,7 +16,7 @@ from mcap.reader import make_reader
 from fretc.cli import main
 from fretish.textsafe import md_code, visible
 from monitors.audit import AuditConfig, audit_log, load_plan
-from monitors.report_model import EXIT_PARTIAL, exit_code
+from monitors.report_model import EXIT_INCOMPLETE, exit_code
 
 ROOT = Path(__file__).resolve().parents[1]
 TRACES = ROOT / "traces"
@@ -51,7 +51,7 @@ def test_item8_a_cut_is_no_evidence_of_a_violation(tmp_path, plan):
     assert v["R1"].verdict == "unknown", v["R1"]
     assert "open" in v["R1"].unknown_reason
     assert all(x.verdict != "violated" for x in la.verdicts)
-    assert exit_code([la]) == EXIT_PARTIAL  # never 0 on a log cut short
+    assert exit_code([la]) == EXIT_INCOMPLETE  # never 0 on a log cut short
 
 
 def test_item8_a_violation_decided_before_the_cut_stands(tmp_path, plan):
@@ -105,12 +105,12 @@ def test_item9_partial_shows_in_terminal_json_and_junit(tmp_path):
     damaged.write_bytes(bytes(data))
     res = run("audit", "-r", REQS / "safe_ros.fret", damaged, "--json", tmp_path / "a.json",
               "--junit", tmp_path / "j.xml", "--no-progress")
-    assert res.exit_code == EXIT_PARTIAL, res.output
+    assert res.exit_code == EXIT_INCOMPLETE, res.output
     out = re.sub(r"\s+", " ", res.output)
     assert "partial" in out and ("chunk_crc over" in out or "chunk_corrupt over" in out), out
     doc = json.loads((tmp_path / "a.json").read_text())
     (log,) = doc["logs"]
-    assert log["partial"] and log["damage_cut"] and doc["summary"]["exit_code"] == EXIT_PARTIAL
+    assert log["partial"] and log["damage_cut"] and doc["summary"]["exit_code"] == EXIT_INCOMPLETE
     assert 'name="partial" value="true"' in (tmp_path / "j.xml").read_text()
 
 
@@ -127,7 +127,7 @@ def test_item10_the_reason_is_kept_when_the_only_chunk_is_cut(tmp_path):
     for v in la.verdicts:
         assert v.verdict == "unknown"
         assert "truncated" in v.unknown_reason
-    assert exit_code([la]) == EXIT_PARTIAL
+    assert exit_code([la]) == EXIT_INCOMPLETE
 
 
 # --------------------------------------------------------------------------- item 11
