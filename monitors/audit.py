@@ -887,6 +887,14 @@ def audit_log(plan: AuditPlan, path: str,
         sub, err = _select_variant(plan, str(path))
         if sub is None:
             la = LogAudit(log=str(path), error=err)
+            damaged = _damage_of(path, la)
+            if damaged:  # the damage may have taken the topics that select it: unknown
+                la.error = None
+                la.verdicts = [Verdict(log=str(path), requirement=r.id, text=r.text,
+                                       source=r.source, verdict="unknown", partial=True,
+                                       unknown_reason=f"{err}; {damaged}")
+                               for r in plan.requirements]
+                return la
             la.verdicts = [Verdict(log=str(path), requirement=r.id, text=r.text,
                                    source=r.source, error=f"log not audited: {err}")
                            for r in plan.requirements]
@@ -1087,6 +1095,10 @@ def audit_log(plan: AuditPlan, path: str,
                   if verdicts[r.index].first_tick_ns is not None]
         la.first_time_ns = min(firsts) if firsts else None
         la.waiting_for = sorted({t for r in ok for t in verdicts[r.index].waiting_for})
+        if la.ticks_after_damage:  # the log's judged span ends at the damage
+            lasts = [verdicts[r.index].last_tick_ns for r in ok
+                     if verdicts[r.index].last_tick_ns is not None]
+            la.end_time_ns = max(lasts) if lasts else None
     la.missing_topics = sorted({t for res in result.passes.values()
                                 for t in (res.sampling.missing_topics if b is not None else [])})
     if la.start_time_ns is None:
@@ -1114,6 +1126,20 @@ def _too_many_ticks(source, bindings: Optional[Bindings], path: str) -> Optional
     return (f"{path}: the tick period {_fmt_ns(bindings.tick.period_ns)} ({bindings.source}) "
             f"would give {n:,} ticks over the {span:.3f} s of the log, more than the limit of "
             f"{MAX_TICKS:,}; choose a longer period")
+
+
+def _damage_of(path: str, la) -> Optional[str]:
+    """Open ``path`` and read its topics; when that meets damage, mark ``la`` partial and
+    return the reason (:func:`_damage_before_topics`), else None (also when it cannot be
+    opened at all: that is an input error, not damage)."""
+    from .sources import open_log
+
+    try:
+        source = open_log(path)
+        source.topics()
+    except (FretcInputError, OSError):
+        return None
+    return _damage_before_topics(source, la)
 
 
 def _damage_before_topics(source, la) -> Optional[str]:

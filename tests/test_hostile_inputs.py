@@ -214,9 +214,9 @@ def test_item12_psl_comments_carry_no_control_or_bidi_characters(tmp_path):
     reqs = tmp_path / "hostile.json"
     reqs.write_text(json.dumps([{"reqid": HOSTILE,
                                  "fulltext": "the sw shall always satisfy p\u202e"}]))
-    res = run(reqs, "--emit", "psl", "-o", tmp_path / "out")
-    texts = [p.read_text(encoding="utf-8") for p in (tmp_path / "out").glob("*.psl")]
-    assert texts, res.output
+    res = run(reqs, "--emit", "psl", "-o", tmp_path / "out.psl")  # one input: -o is a file
+    texts = [(tmp_path / "out.psl").read_text(encoding="utf-8")]
+    assert texts[0], res.output
     for t in texts:
         assert "\x00" not in t and "\u202e" not in t and "\x1b" not in t
         assert "\\x00" in t
