@@ -1,0 +1,62 @@
+"""fretc's ft, pt and ft_inf against an independent interval-semantics oracle on random
+sentences over the whole grammar (tests/differential.py). A bounded sample here; the long
+run is ``python bench/differential.py --sentences 5000``."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+
+from differential import (_World, check_requirement, oracle, random_requirement, value)
+
+SENTENCES = 150
+
+
+@pytest.mark.parametrize("chunk", range(5))
+def test_random_sentences_agree_with_the_oracle(chunk):
+    rnd = random.Random(1000 + chunk)
+    for _ in range(SENTENCES // 5):
+        text, meaning = random_requirement(rnd)
+        problem = check_requirement(text, meaning, rnd, traces=20)
+        assert problem is None, f"{text}\n{problem}"
+
+
+def test_generator_covers_the_grammar():
+    rnd = random.Random(7)
+    texts = [random_requirement(rnd)[0] for _ in range(400)]
+    joined = "\n".join(texts)
+    for needle in ("persisted(", "occurred(", "prevOcc(", "persists(", "occurs(", "nextOcc(",
+                   "preBool(", "at the previous occurrence of", "at the next occurrence of",
+                   " then ", "if (", '"weird var"', "a.b", "x%", "only before", "only after",
+                   "only in", "except while", "when not in", "whenever", "upon", "is false",
+                   "until", "before (", "within", "for ", "after 0", "at the next timepoint"):
+        assert needle in joined, needle
+    meanings = [random_requirement(rnd)[1] for _ in range(400)]
+    assert {m["scope"] for m in meanings} == {"null", "in", "notin", "onlyIn", "after",
+                                              "before", "onlyAfter", "onlyBefore"}
+    assert len({m["timing"] for m in meanings}) == 12
+
+
+def test_oracle_function_meanings():
+    """The oracle's functions on hand-checked cases (section 6b's meaning column)."""
+    tr = [{"p": False}, {"p": True}, {"p": True, "q": True}, {"p": False}]
+    w = _World(tr, "null", None, False)
+    at = lambda e, t: value(w, e, t)  # noqa: E731
+    p, q = ("var", "p"), ("var", "q")
+    assert [at(("persisted", (1,), p), t) for t in range(4)] == [False, False, True, False]
+    assert [at(("occurred", (1, 2), p), t) for t in range(4)] == [False, False, True, True]
+    assert [at(("prevOcc", p, q), t) for t in range(4)] == [True, True, False, True]
+    assert [at(("nextOcc", p, q), t) for t in range(4)] == [False, True, True, True]
+    assert [at(("occurs", (1, 2), p), t) for t in range(4)] == [True, True, False, False]
+    assert [at(("persists", (1,), p), t) for t in range(4)] == [False, True, False, False]
+
+
+def test_oracle_requirement_truth():
+    meaning = {"scope": "in", "mode": ("var", "m"), "cond_kind": "null", "cond": None,
+               "timing": "immediately", "n": 0, "stop": None,
+               "response": ("prevOcc", ("var", "p"), ("var", "q"))}
+    trace = [{"m": False, "p": True}, {"m": True}]
+    assert oracle(meaning, trace)        # true at the interval's first position
+    meaning["response"] = ("occurred", (1, 2), ("var", "p"))
+    assert not oracle(meaning, [{"m": False, "p": True}, {"m": True}, {"m": True}])
