@@ -115,6 +115,9 @@ def parse_fret(text: str, derived: dict | None = None) -> Node:
         if kind == "bin":
             return ir.arith(t[1], term(t[2]), term(t[3]))
         if kind == "call":
+            if t[1] in ("preInt", "preReal") and len(t[2]) == 2:
+                # FRET never expands these: give them our meaning (value one step back)
+                return Node("pre", (term(t[2][0]), term(t[2][1])), name=t[1])
             return Node("fn", tuple(term(a) for a in t[2]), name=t[1])
         raise ValueError(f"not a number: {t}")
 

@@ -25,6 +25,8 @@ class _Lasso(_Evaluator):
         L = self.L
         if op == "LAST":
             return [False] * (L + 1)
+        if op in ("past", "future") and n.name is None:  # a comparison over preReal
+            return self.series(n.args[0])
         if op in ("past", "future"):
             return [bool(self.trace[i].get(n.name, False)) for i in range(L)] + [False]
         if op == "X":
