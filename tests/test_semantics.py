@@ -5,7 +5,7 @@
   traces each (ft at 0 on the trace followed by the all-false absorbing state, pt at the
   last position), and our ft_inf is equivalent to FRET's (Spot for fret_vectors.jsonl; 2000
   random lassos for the functions file, whose bounded operators make Spot's check take
-  minutes; the default run takes 300 traces and lassos per function vector, the full 2000
+  minutes; the default run takes 50 traces and lassos per function vector, the full 2000
   run is marked slow);
 * every case of fret_trace_verdicts.jsonl: our ft at 0 and pt at L-1 equal ``expected``;
 * all 288 template keys, generated sentences (hypothesis): ft at 0 equals pt at the end.
@@ -99,7 +99,7 @@ def test_formulas_agree_with_fret_on_random_traces(vec):
 
 def _function_vector_ids(slow: bool):
     marks = [pytest.mark.slow] if slow else []
-    return [pytest.param(v, 2000 if slow else 300, id=str(v["id"]), marks=marks)
+    return [pytest.param(v, 2000 if slow else 50, id=str(v["id"]), marks=marks)
             for v in FUNCTION_VECTORS if not v["parse_error"] and not v["fret_defect"]]
 
 
