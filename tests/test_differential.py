@@ -60,3 +60,30 @@ def test_oracle_requirement_truth():
     assert oracle(meaning, trace)        # true at the interval's first position
     meaning["response"] = ("occurred", (1, 2), ("var", "p"))
     assert not oracle(meaning, [{"m": False, "p": True}, {"m": True}, {"m": True}])
+
+
+@pytest.mark.parametrize("sentence", [
+    "in m upon occurred(1, 2, p) the sw shall immediately satisfy q",
+    "while persisted(2, p) the sw shall always satisfy q",
+    "after occurred(1, 3, p) the sw shall eventually satisfy q",
+    "only before persisted(1, 2, p) the sw shall always satisfy !q",
+    "in m the sw shall always satisfy occurred(2, 3, p) | q",
+])
+def test_interval_evidence_follows_the_formulas(sentence):
+    """monitors/evidence.py's direct interval semantics gives the ft verdict for bounded
+    occurred/persisted and for functions inside scope conditions (endpoint-free)."""
+    from compiler.evaluate import ft_at
+    from compiler.semantics import formalize
+    from fretish import parse
+    from monitors.evidence import evaluate_requirement
+    from _monitor_helpers import random_trace, samples
+
+    req = parse(sentence)
+    f = formalize(req)
+    rnd = random.Random(3)
+    for _ in range(300):
+        n = rnd.randint(1, 10)
+        cols = random_trace(rnd, n, variables=("m", "p", "q"), numeric=())
+        ev = evaluate_requirement(req, cols, n, f.ticks)
+        assert ev.holds == ft_at(f.ft, samples(cols, n)), {k: v.tolist()
+                                                          for k, v in cols.items()}
