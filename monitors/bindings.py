@@ -510,10 +510,12 @@ class _Ops:
     def reduce(self, func: str, a: Valid) -> Any:
         ax = self.axis
         # ndarray methods (not np.min etc.): same ufunc reductions, less Python overhead.
-        if func == "min":
-            return self._out(self._filled(a, np.inf).min(axis=ax, initial=np.inf))
+        if func == "min":  # where=: no filled copy; the same values
+            return self._out(_num(a.data).min(axis=ax, initial=np.inf,
+                                              where=True if a.mask is None else a.mask))
         if func == "max":
-            return self._out(self._filled(a, -np.inf).max(axis=ax, initial=-np.inf))
+            return self._out(_num(a.data).max(axis=ax, initial=-np.inf,
+                                              where=True if a.mask is None else a.mask))
         if func == "mean":
             total = self._filled(a, 0.0).sum(axis=ax)
             n = a.mask.sum(axis=ax) if a.mask is not None else a.data.shape[-1]
@@ -706,6 +708,21 @@ def _compile(node: Node, ops: _Ops, extractors: dict[Field, Callable[[Any], Any]
                 return acc
             return several
         a0 = args[0]
+        arg0 = node.args[0]
+        if not vec and isinstance(arg0, Field):
+            # a reduction of one field depends only on the held message: computed once per
+            # message, shared by the bindings that use it (like the field memo)
+            key = (func, arg0.topic, arg0.path)
+            topic0 = arg0.topic
+
+            def reduce_memo(st: Any) -> Any:
+                msg = st.msgs[topic0]
+                memo = st.values.get(key)
+                if memo is not None and memo[0] is msg:
+                    return memo[1]
+                v = reduce_(st)
+                st.values[key] = (msg, v)
+                return v
 
         def reduce_(st: Any) -> Any:
             a = a0(st)
@@ -718,7 +735,7 @@ def _compile(node: Node, ops: _Ops, extractors: dict[Field, Callable[[Any], Any]
                     return abs(a) if type(a) in _PY else np.abs(_num(a))
                 raise _EvalError(node, f"{func}() takes an array")
             return ops.reduce(func, a)
-        return reduce_
+        return reduce_memo if (not vec and isinstance(arg0, Field)) else reduce_
     raise AssertionError(node)  # pragma: no cover
 
 

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import click
 
+from .fleet_cli import ray_options
+
 __all__ = ["audit_cmd", "audit_input_options", "audit_config"]
 
 
@@ -86,6 +88,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False), default=None,
               help="Write JUnit XML to FILE: one test case per requirement x log.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
+@ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, engine, window):
@@ -94,8 +97,9 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from rich.console import Console
     from rich.markup import escape
 
-    from .audit import AuditInputError, audit_logs, find_logs, load_plan
+    from .audit import AuditInputError, find_logs, load_plan
     from .audit_output import AuditProgress, junit_xml, print_summary
+    from .fleet import expand_log_args, run_audits
     from .report_model import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
@@ -106,7 +110,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
                           engine, window)
     try:
         plan = load_plan(config)
-        paths = find_logs(logs)
+        paths = find_logs(expand_log_args(logs))
     except AuditInputError as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
@@ -119,9 +123,9 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     show = not no_progress and sys.stderr.isatty()
     if show:
         with AuditProgress(err, len(paths)) as prog:
-            results = audit_logs(plan, paths, jobs=jobs, progress=prog)
+            results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
-        results = audit_logs(plan, paths, jobs=jobs)
+        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
     print_summary(out, results, plan)
     doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors)
     if json_path:

@@ -51,6 +51,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 import click
 
 from .cli import audit_config, audit_input_options
+from .fleet_cli import ray_options
 from .report_model import SCHEMA
 
 __all__ = ["ReportError", "RequirementTrace", "ModuleInfo", "ReportFiles", "load_audit_json",
@@ -1011,6 +1012,7 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: Optional[str] = No
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="TOML mapping of variables to AJPF beliefs (as fretc --emit psl).")
 @click.option("--title", default=None, help="Report title.")
+@ray_options
 @click.pass_context
 def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
                jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title):
@@ -1035,7 +1037,8 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
             return
         json_dir = str(Path(from_json).resolve().parent)
     else:
-        from .audit import AuditInputError, audit_logs, find_logs, load_plan
+        from .audit import AuditInputError, find_logs, load_plan
+        from .fleet import expand_log_args, run_audits
         from .report_model import audit_json
 
         json_dir = None
@@ -1043,13 +1046,13 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
                               time_base, engine, window)
         try:
             plan = load_plan(config)
-            paths = find_logs(logs)
+            paths = find_logs(expand_log_args(logs))
         except AuditInputError as exc:
             click.echo(f"error: {exc}", err=True)
             ctx.exit(2)
             return
         input_errors = any(r.error is not None for r in plan.requirements)
-        results = audit_logs(plan, paths, jobs=jobs)
+        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
         doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
                                     input_errors))
     try:

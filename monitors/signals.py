@@ -41,6 +41,7 @@ import numpy as np
 from . import problems as P
 from .bindings import Binding, Bindings, EvalState, Field, Valid, make_extractor
 from .problems import DataProblem, ProblemLog, SignalError
+from .selective import install as install_selective
 from .sources import CSV_TOPIC, CsvSource, LogSource
 
 __all__ = ["Tick", "Sampling", "SampledArrays", "sample", "sample_arrays"]
@@ -213,6 +214,7 @@ def sample(source: LogSource, bindings: Bindings | None = None) -> Sampling:
         raise SignalError(f"{source.path}: a {source.kind} log needs bindings (signals are declared, "
                           "never guessed)")
     topics = _check_topics(source, bindings)
+    install_selective(source, bindings)  # decode only the fields the bindings read
     s._iter = _sample_stream(s, source, bindings, topics)
     return s
 
@@ -449,6 +451,7 @@ def sample_arrays(source: LogSource, bindings: Bindings | None = None) -> Sample
         raise SignalError(f"{source.path}: a {source.kind} log needs bindings (signals are declared, "
                           "never guessed)")
     topics = _check_topics(source, bindings)
+    install_selective(source, bindings)
     fields: dict[tuple[str, tuple], Any] = {}
     for b in bindings.variables.values():
         for f in b.fields:

@@ -49,10 +49,12 @@ from rosbags.typesys.store import Typestore
 
 from . import problems as P
 from .problems import CsvError, DataProblem, LogError, ProblemLog
+from .selective import chunk_messages
 
 __all__ = [
     "Message",
     "LogSource",
+    "schema_decoder",
     "McapSource",
     "BagSource",
     "CsvSource",
@@ -258,7 +260,8 @@ def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typesto
     return store, typename
 
 
-def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Callable[[bytes], Any]:
+def _decoder_for(store: Typestore, typename: str, message_encoding: str,
+                 fields: Any = None) -> Callable[[bytes], Any]:
     if message_encoding == "cdr":
         deser = store.deserialize_cdr
     elif message_encoding == "ros1":
@@ -269,11 +272,47 @@ def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Call
     def decode(raw: bytes) -> Any:
         return deser(raw, typename)
 
+    if fields is not None:  # only the fields the bindings read (monitors.selective)
+        from .selective import selective_decoder
+        return selective_decoder(store, typename, message_encoding, fields, decode) or decode
     return decode
 
 
 _SCHEMA_FOR_ENCODING = {"cdr": ("ros2msg", "ros2idl"), "ros1": ("ros1msg",)}
-_DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError, UnicodeDecodeError,
+
+
+def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
+                   schema_text: str | None, fields: Any = None) -> Callable[[bytes], Any]:
+    """A function ``bytes -> rosbags message`` for one channel, with its types built from the
+    schema text the channel carries (an MCAP Schema record, or a Foxglove WebSocket
+    ``advertise``): shared by the log readers and ``fretc watch``.
+
+    Args:
+        message_encoding: ``"cdr"`` (ROS 2) or ``"ros1"`` (MCAP well-known message encodings).
+        schema_encoding: ``"ros2msg"``, ``"ros2idl"`` or ``"ros1msg"`` (well-known schema
+            encodings), matching the message encoding; None or ``""`` when the channel has none.
+        schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
+        schema_text: the definition text (see :func:`build_typestore`).
+        fields: field paths to decode (:mod:`monitors.selective`); None: every field.
+
+    Raises:
+        _Unsupported: an unsupported message encoding, a channel without schema, a schema
+            encoding that does not go with the message encoding, or a schema rosbags cannot
+            parse (the message says which).
+    """
+    if message_encoding not in _SCHEMA_FOR_ENCODING:
+        raise _Unsupported(f"message encoding {message_encoding!r} is not supported (cdr, ros1)")
+    if not schema_encoding or not schema_name or schema_text is None:
+        raise _Unsupported("the channel has no schema")
+    if schema_encoding not in _SCHEMA_FOR_ENCODING[message_encoding]:
+        raise _Unsupported(f"schema encoding {schema_encoding!r} does not go with message "
+                           f"encoding {message_encoding!r}")
+    store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+    return _decoder_for(store, typename, message_encoding, fields)
+
+
+#: Exceptions a decoder from :func:`schema_decoder` raises on a payload that does not match.
+DECODE_ERRORS = _DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError, UnicodeDecodeError,
                   KeyError, TypeError, OverflowError)
 
 
@@ -490,18 +529,14 @@ class McapSource(LogSource):
         dec = None
         schema = schemas.get(channel.schema_id)
         try:
-            if channel.message_encoding not in _SCHEMA_FOR_ENCODING:
-                raise _Unsupported(f"message encoding {channel.message_encoding!r} is not "
-                                   "supported (cdr, ros1)")
-            if channel.schema_id == 0 or schema is None:
+            if (channel.message_encoding in _SCHEMA_FOR_ENCODING
+                    and (channel.schema_id == 0 or schema is None)):
                 raise _Unsupported(f"channel {channel.id} has no schema (schema id "
                                    f"{channel.schema_id})")
-            if schema.encoding not in _SCHEMA_FOR_ENCODING[channel.message_encoding]:
-                raise _Unsupported(f"schema encoding {schema.encoding!r} does not go with message "
-                                   f"encoding {channel.message_encoding!r}")
-            store, typename = build_typestore(schema.encoding, schema.name,
-                                              schema.data.decode("utf-8", errors="replace"))
-            dec = _decoder_for(store, typename, channel.message_encoding)
+            dec = schema_decoder(channel.message_encoding, schema and schema.encoding,
+                                 schema and schema.name,
+                                 schema and schema.data.decode("utf-8", errors="replace"),
+                                 (getattr(self, "_wanted_fields", None) or {}).get(channel.topic))
         except _Unsupported as exc:
             kind = (P.UNKNOWN_ENCODING if channel.message_encoding not in _SCHEMA_FOR_ENCODING
                     else P.UNKNOWN_SCHEMA)
@@ -568,7 +603,11 @@ class McapSource(LogSource):
                     opcode, length = _HEAD.unpack_from(raw)
                     if opcode != Opcode.CHUNK or 9 + length != ci.chunk_length:
                         raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
-                    records = _chunk_records(_parse_record(Opcode.CHUNK, raw[9:]))
+                    chunk = _parse_record(Opcode.CHUNK, raw[9:])
+                    if chunk.uncompressed_size > _MAX_UNCOMPRESSED:
+                        raise ValueError(f"chunk claims {chunk.uncompressed_size} uncompressed bytes")
+                    # only the messages of wanted (or unknown) channels are parsed
+                    records = chunk_messages(chunk, wanted, index.channels)
                 except CRCValidationError as exc:
                     self._problem(P.CHUNK_CRC, None, ci.message_start_time,
                                   f"chunk at byte {ci.chunk_start_offset}: {exc}; its messages "
@@ -901,7 +940,8 @@ class BagSource(LogSource):
                 schema_encoding = ("ros1msg" if self.kind == "bag" else
                                    "ros2idl" if fmt == MessageDefinitionFormat.IDL else "ros2msg")
                 store, typename = build_typestore(schema_encoding, conn.msgtype, text)
-            dec = _decoder_for(store, typename, encoding)
+            dec = _decoder_for(store, typename, encoding,
+                               (getattr(self, "_wanted_fields", None) or {}).get(conn.topic))
         except _Unsupported as exc:
             kind = P.UNKNOWN_ENCODING if encoding not in _SCHEMA_FOR_ENCODING else P.UNKNOWN_SCHEMA
             self._open_problems.add(DataProblem(kind, conn.topic, log_time,
