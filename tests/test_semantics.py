@@ -306,7 +306,7 @@ def test_r1_formulas_are_the_papers():
     # inside a scope condition the functions are endpoint-free: H[0,1] p
     ("while persisted(1, p) the sw shall always satisfy q", [{"p": True, "q": False}], False),
     ("while prevOcc(p, q) the sw shall always satisfy r",
-     [{"p": False}, {"p": False, "r": True}], True),
+     [{"p": False, "r": False}, {"p": False, "r": False}], True),
 ])
 def test_function_semantics(sentence, trace, expected):
     f = formalize(parse(sentence))
