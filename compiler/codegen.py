@@ -262,50 +262,6 @@ class _Automaton:
     complete: bool = False  # every state has a transition for every letter: never rejects
 
 
-def _build_automaton(f: Node, atoms_by_name: Dict[str, Node]) -> Optional[_Automaton]:
-    import spot
-
-    formula = spot.formula(to_spot(f))
-    aut = spot.translate(formula, "monitor", "det")
-    if aut.num_states() > MAX_AUTOMATON_STATES:
-        return None
-    d = aut.get_dict()
-    aps = [str(p.ap_name()) for p in aut.ap()]
-    atoms = [atoms_by_name[p] for p in aps]
-    empty = aut.is_empty()
-    if len(aps) <= TABLE_MAX_APS:
-        table = []
-        for s in range(aut.num_states()):
-            row = [-1] * (1 << len(aps))
-            for e in aut.out(s):
-                for letter in range(1 << len(aps)):
-                    if _bdd_letter(e.cond, d, aps, letter):
-                        row[letter] = e.dst
-            table.append(row)
-        complete = all(x >= 0 for row in table for x in row)
-        return _Automaton(atoms, aut.get_init_state_number(), table, None, empty,
-                          complete=complete and not empty)
-    chains = []
-    for s in range(aut.num_states()):
-        chains.append([(_bdd_code(spot.bdd_to_formula(e.cond, d), aps), e.dst)
-                       for e in aut.out(s)])
-    return _Automaton(atoms, aut.get_init_state_number(), None, chains, empty)
-
-
-def _bdd_letter(cond, d, aps: List[str], letter: int) -> bool:
-    """Does the edge condition ``cond`` (a BDD) hold for the letter whose bit ``i`` is the
-    value of ``aps[i]``?"""
-    import buddy
-    import spot
-
-    c = cond
-    for i, name in enumerate(aps):
-        v = d.varnum(spot.formula.ap(name))
-        lit = buddy.bdd_ithvar(v) if (letter >> i) & 1 else buddy.bdd_nithvar(v)
-        c = buddy.bdd_restrict(c, lit)
-    return c == buddy.bddtrue
-
-
 def _bdd_code(f, aps: List[str]) -> str:
     """Python code of a Spot Boolean formula over the letter bits ``a[i]``."""
     import spot
@@ -326,26 +282,71 @@ def _bdd_code(f, aps: List[str]) -> str:
     raise CodegenError(f"unexpected Boolean operator in an automaton edge: {f}")
 
 
-def _progression_automata(ft_inf: Node, atoms_by_name: Dict[str, Node], bounds: List[int]):
-    """LTL3 automata by formula progression (:mod:`compiler.ltl3`) for ft_inf whose bounds
-    are too large for Spot; ``(bad, good, note)`` with both None when that fails too."""
-    from .ltl3 import MAX_ATOMS, MAX_STATES, progression_tables
+def _check_monitorable(pt: Node) -> None:
+    """Raise :class:`CodegenError` at once when pt needs the future (so such a requirement
+    costs no automaton construction before it is skipped)."""
+    for n in ir.walk(pt):
+        if n.op == "future":
+            raise CodegenError(
+                f"the pt formula needs the future-time function {n.name}, which a "
+                "tick-by-tick monitor cannot know yet; write the requirement with past-time "
+                "functions (persisted, occurred) or audit it offline")
 
-    atoms = list(dict.fromkeys(atoms_by_name.values()))
-    tables = progression_tables(ft_inf, atoms)
-    why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what Spot "
-           f"determinizes quickly (largest {MAX_LTL3_BOUND}, sum {MAX_LTL3_BOUND_SUM})")
-    if tables is None:
-        return None, None, (
-            f"no LTL3 monitor: {why}, and formula progression needs more than {MAX_STATES} "
-            f"residuals or {MAX_ATOMS} atoms; status stays 'unknown' (step and finish "
-            "unaffected)")
-    bad_table, good_table, init = tables
-    bad = _Automaton(list(atoms), init, bad_table, None, empty=ft_inf.op == "false")
-    good = _Automaton(list(atoms), init, good_table, None, empty=ft_inf.op == "true")
-    return bad, good, (f"LTL3 by formula progression ({len(bad_table) - 2} residual states): "
-                       f"{why}; verdicts are sound but may come later than the exact LTL3 "
-                       "verdict when a residual is unsatisfiable without simplifying to FALSE")
+
+def ltl3_automata(ft_inf: Node) -> Tuple[Optional[_Automaton], Optional[_Automaton], str]:
+    """The LTL3 automata of ``ft_inf``: ``(bad, good, note)``. ``bad`` rejects exactly the bad
+    prefixes (violated), ``good`` the good ones (satisfied); None when not built, with the
+    reason in ``note`` ("" when both come from Spot).
+
+    Built once per shape of ft_inf (:func:`compiler.ltl3.canonical_shape`: atoms renamed, so
+    requirements of the same template, bounds and atom pattern share it) and kept in fretc's
+    disk cache (:func:`compiler.ltl3.shape_automata`); the tables are canonical, so the
+    generated module is the same with a cold or a warm cache. Spot (exact LTL3) while
+    ft_inf's bounds are at most :data:`MAX_LTL3_BOUND` ticks and sum to at most
+    :data:`MAX_LTL3_BOUND_SUM`; formula progression (sound, bounds symbolic) beyond, unless
+    a bound exceeds :data:`compiler.ltl3.MAX_STATES` (progression would need at least that
+    many residuals: decided before any construction)."""
+    from . import ltl3
+
+    shape, atoms = ltl3.canonical_shape(ft_inf)
+    bounds = [n.hi for n in ir.walk(ft_inf) if n.hi is not None]
+    if bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
+        why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what "
+               f"Spot determinizes quickly (largest {MAX_LTL3_BOUND}, sum "
+               f"{MAX_LTL3_BOUND_SUM})")
+        if max(bounds) >= ltl3.MAX_STATES or len(atoms) > ltl3.MAX_ATOMS:
+            data = {"bad": None, "good": None}
+        else:
+            data = ltl3.shape_automata("progression", shape, len(atoms), ltl3.MAX_STATES,
+                                       TABLE_MAX_APS)
+        if data["bad"] is None or data["good"] is None:
+            return None, None, (
+                f"no LTL3 monitor: {why}, and formula progression needs more than "
+                f"{ltl3.MAX_STATES} residuals or {ltl3.MAX_ATOMS} atoms; status stays "
+                "'unknown' (step and finish unaffected)")
+        bad, good = _automaton(data["bad"], atoms), _automaton(data["good"], atoms)
+        return bad, good, (
+            f"LTL3 by formula progression ({data['bad']['states']} residual states): {why}; "
+            "verdicts are sound but may come later than the exact LTL3 verdict when a "
+            "residual is unsatisfiable without simplifying to FALSE")
+    data = ltl3.shape_automata("spot", shape, len(atoms), MAX_AUTOMATON_STATES, TABLE_MAX_APS)
+    bad, good = _automaton(data["bad"], atoms), _automaton(data["good"], atoms)
+    note = "" if bad is not None and good is not None else (
+        f"Spot's deterministic monitor exceeds {MAX_AUTOMATON_STATES} states: no early "
+        "verdict")
+    return bad, good, note
+
+
+def _automaton(data: Optional[dict], atoms: List[Node]) -> Optional[_Automaton]:
+    """An :class:`_Automaton` over ``atoms`` (bit i of a letter = atoms[i]) from the data of
+    :func:`compiler.ltl3.shape_automata`."""
+    if data is None:
+        return None
+    chains = None
+    if data["chains"] is not None:
+        chains = [[(cond, dst) for cond, dst in row] for row in data["chains"]]
+    return _Automaton(list(atoms), data["initial"], data["table"], chains, data["empty"],
+                      complete=data["complete"])
 
 
 # --------------------------------------------------------------------------- per requirement
@@ -374,6 +375,8 @@ class MonitorSource:
     bad: Optional[_Automaton]
     uses_first: bool
     status_note: str
+    bad_table: Optional[int] = None  # index in the module's _TABLES (render_module)
+    good_table: Optional[int] = None
 
     @property
     def verdict_expr(self) -> str:
@@ -399,24 +402,9 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     """Generate the code pieces of one compiled requirement (``compiler.build.Compiled``).
     Raises :class:`CodegenError` when no monitor can be built."""
     f = compiled.formalization
+    _check_monitorable(f.pt)  # before any expensive work
     code = _StepCode()
-    # atoms of ft_inf that the automata read
-    atoms_by_name: Dict[str, Node] = {}
-    for n in ir.walk(f.ft_inf):
-        if n.op == "ap":
-            atoms_by_name[mangled_ap(n)] = n
-        elif n.op in ("cmp", "call", "past", "FTP"):
-            atoms_by_name[to_smv(n)] = n
-    from .ir import not_
-    bounds = [n.hi for n in ir.walk(f.ft_inf) if n.hi is not None]
-    if bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
-        bad, good, note = _progression_automata(f.ft_inf, atoms_by_name, bounds)
-    else:
-        bad = _build_automaton(f.ft_inf, atoms_by_name)
-        good = _build_automaton(not_(f.ft_inf), atoms_by_name)
-        note = "" if bad is not None and good is not None else (
-            f"Spot's deterministic monitor exceeds {MAX_AUTOMATON_STATES} states: no early "
-            "verdict")
+    bad, good, note = ltl3_automata(f.ft_inf)
     atom_nodes: List[Node] = []
     for aut in (bad, good):
         if aut is not None:
@@ -484,8 +472,22 @@ def render_module(compiled_list, module_name: str) -> str:
             skipped.append((c.id, str(exc)))
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
+    tables: Dict[str, int] = {}  # encoded table -> index: one copy per distinct table
+    for m in monitors:
+        for which in ("bad", "good"):
+            aut = getattr(m, which)
+            if aut is not None and aut.table is not None and not aut.complete:
+                text = encode_table(aut.table)
+                setattr(m, f"{which}_table", tables.setdefault(text, len(tables)))
     return _env().get_template("monitor_module.py.j2").render(
-        module_name=module_name, monitors=monitors, skipped=skipped, digest=digest)
+        module_name=module_name, monitors=monitors, skipped=skipped, digest=digest,
+        tables=list(tables))
+
+
+def encode_table(table: List[List[int]]) -> str:
+    """A transition table as the generated module stores it: rows separated by ``;``,
+    destinations by ``,`` (the module's ``_table`` decodes it)."""
+    return ";".join(",".join(map(str, row)) for row in table)
 
 
 def file_stems(sources, suffix: str = "") -> Dict[str, str]:

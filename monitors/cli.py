@@ -8,9 +8,11 @@
 
 LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosbag2 folders,
 ``.csv`` traces, or folders searched for them. Binding files default to every
-``*.bindings.toml`` beside the requirement files or folders. Exit status: 0 every verdict
-satisfied (or vacuous), 1 a requirement is violated, 2 usage or input errors (including a
-requirement that could not be audited on some log).
+``*.bindings.toml`` beside the requirement files or folders. Exit status
+(:data:`monitors.report_model.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
+complete logs, 1 a requirement is violated, 2 usage or input errors (including a
+requirement that could not be audited on some log), 3 no violation but a log is partial or
+had data problems (``--allow-partial``: 0).
 
 Only click is imported at module level; the engine loads on first use.
 """
@@ -88,14 +90,33 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False), default=None,
               help="Write JUnit XML to FILE: one test case per requirement x log.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
+@click.option("--allow-partial", is_flag=True,
+              help="Exit 0 instead of 3 when nothing is violated but a log is partial or had "
+                   "data problems.")
+@click.option("-v", "--verbose", is_flag=True,
+              help="Full evidence: every value row around each violation and every note.")
 @ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, json_path, junit_path, no_progress, engine, window):
+              jobs, json_path, junit_path, no_progress, engine, window, allow_partial,
+              verbose):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
-    against FRETish requirements."""
+    against FRETish requirements.
+
+    \b
+    Exit codes:
+      0  every verdict satisfied or vacuous, on complete logs
+      1  a requirement is violated
+      2  usage or input error (bad option, requirement, binding or log; a
+         requirement that could not be audited on some log)
+      3  no violation, but a log is partial (cut short, damaged) or had data
+         problems, or a verdict is unknown (--allow-partial: 0)
+
+    \b
+    Binding reference (expressions, functions, slices, units, NaN/inf rules,
+    examples): docs/bindings.md."""
     from rich.console import Console
-    from rich.markup import escape
+    from .audit_output import escape  # markup and control characters escaped
 
     from .audit import AuditInputError, find_logs, load_plan
     from .audit_output import AuditProgress, junit_xml, print_summary
@@ -115,6 +136,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
+    for w in plan.warnings:
+        err.print(f"[yellow]warning:[/yellow] {escape(w)}")
     input_errors = False
     for r in plan.requirements:
         if r.error is not None:
@@ -126,8 +149,10 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
             results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
-    print_summary(out, results, plan)
-    doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors)
+    print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
+                  input_errors=input_errors)
+    doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,
+                     allow_partial)
     if json_path:
         if to_stdout_json:
             click.echo(doc, nl=False)
@@ -135,5 +160,5 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
             Path(json_path).write_text(doc, encoding="utf-8")
     if junit_path:
         Path(junit_path).write_text(junit_xml(results), encoding="utf-8")
-    code = exit_code(results, input_errors)
+    code = exit_code(results, input_errors, allow_partial)
     ctx.exit(code)

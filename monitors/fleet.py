@@ -38,7 +38,7 @@ import os
 import sys
 import time
 import types
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
@@ -114,6 +114,8 @@ class ShippedPlan:
     classes: Dict[int, Tuple[str, str]]
     bindings: Optional[List[Tuple]]
     key: str
+    #: binding files that select their logs: (selector, file, ShippedPlan of that file)
+    variants: List[Tuple[Any, str, "ShippedPlan"]] = field(default_factory=list)
 
     def rebuild(self) -> AuditPlan:
         """The runnable plan: monitor modules ``exec``'d, binding expressions compiled."""
@@ -134,12 +136,31 @@ class ShippedPlan:
             reqs.append(r)
         b = self.plan.bindings
         if b is not None:
+            from .problems import BindingError
             variables = {}
-            for name, expr, source, line, col, exact in self.bindings or []:
+            todo = list(self.bindings or [])
+            for _round in range(len(todo) + 1):  # references compile after their targets
+                left = []
+                for spec in todo:
+                    name, expr, source, line, col, exact = spec
+                    try:
+                        variables[name] = compile_expression(
+                            name, expr, source=source, line=line, col=col, exact=exact,
+                            refs=variables)
+                    except BindingError:
+                        left.append(spec)
+                if not left or len(left) == len(todo):
+                    todo = left
+                    break
+                todo = left
+            for name, expr, source, line, col, exact in todo:  # raises the real error
                 variables[name] = compile_expression(name, expr, source=source, line=line,
-                                                     col=col, exact=exact)
+                                                     col=col, exact=exact, refs=variables)
+            order = [spec[0] for spec in self.bindings or []]
+            variables = {n: variables[n] for n in order}
             b = Bindings(variables, b.tick, b.time_base, b.header_lag_ns, b.source)
-        return replace(self.plan, requirements=reqs, bindings=b)
+        return replace(self.plan, requirements=reqs, bindings=b,
+                       variants=[(sel, f, sp.rebuild()) for sel, f, sp in self.variants])
 
 
 def ship_plan(plan: AuditPlan) -> ShippedPlan:
@@ -153,7 +174,7 @@ def ship_plan(plan: AuditPlan) -> ShippedPlan:
     reqs = []
     for r in plan.requirements:
         r2 = replace(r, monitor_cls=None, _msource=None)
-        if r.monitor_cls is not None:
+        if r.monitor_cls is not None and not plan.variants:  # variants ship their own
             classes[r.index] = (r.monitor_cls.__module__[len(_MODULE_PREFIX):], r.id)
         reqs.append(r2)
     b = plan.bindings
@@ -167,8 +188,11 @@ def ship_plan(plan: AuditPlan) -> ShippedPlan:
         h.update(stem.encode() + b"\0" + text.encode() + b"\0")
     h.update(repr(shipped_b).encode())
     h.update(repr(plan.config).encode())
-    return ShippedPlan(replace(plan, requirements=reqs, bindings=b), classes, shipped_b,
-                       h.hexdigest())
+    variants = [(sel, f, ship_plan(sub)) for sel, f, sub in plan.variants]
+    for _sel, _f, sp in variants:
+        h.update(sp.key.encode())
+    return ShippedPlan(replace(plan, requirements=reqs, bindings=b, variants=[]), classes,
+                       shipped_b, h.hexdigest(), variants)
 
 
 # --------------------------------------------------------------------------- Ray
