@@ -10,7 +10,7 @@ from typing import Iterable, List, Optional
 
 from fretish.errors import FretishError
 
-from .printers import to_smv, to_spot
+from .printers import mangle, to_smv, to_spot
 from .semantics import Formalization, SemanticsError, formalize
 
 PT_FTP = "(Z FALSE)"
@@ -78,7 +78,10 @@ class Compiled:
 
     def to_json(self) -> dict:
         """The ``--json`` object: ``id``, ``text``, ``source``, ``key``, ``ft``, ``ft_inf``,
-        ``pt`` (FRET syntax), ``ft_spot``, ``ft_inf_spot``, ``variables``, ``warnings``,
+        ``pt`` (FRET syntax), ``ft_spot``, ``ft_inf_spot``, ``variables`` (the names as
+        written, quotes removed, as FRET's list), ``variables_fret`` (the same names as
+        FRET's formulas print them: ``"weird var"`` -> ``_DQT_weird_SPC_var_DQT_``),
+        ``warnings``,
         and ``error`` (``message``, ``line``, ``column``) when it failed."""
         e = self.entry
         out = {"id": e.id, "text": e.text, "source": e.source, "line": e.line,
@@ -89,6 +92,7 @@ class Compiled:
                 "key": f.key, "ft": self.smv("ft"), "ft_inf": self.smv("ft_inf"),
                 "pt": self.smv("pt"), "ft_spot": self.spot("ft"),
                 "ft_inf_spot": self.spot("ft_inf"), "variables": f.variables,
+                "variables_fret": [mangle(v) for v in f.variables],
                 "ticks": f.ticks, "warnings": f.warnings, "pt_causal": f.pt_causal,
             })
         elif self.freeform:

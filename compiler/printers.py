@@ -13,29 +13,65 @@
 
 from __future__ import annotations
 
+import functools
 import re
 
 from fretish import ast as A
 
 from .ir import Node
 
-_FRET_SPECIAL = {".": "_DOT_", "%": "_PRC_"}
+#: FRET's names for the special characters of identifiers (shared/fretish/README.md section
+#: 6b, "Names"); each prints as ``_XXX_``.
+FRET_CHAR_NAMES = {
+    ".": "DOT", "%": "PRC", "#": "HSH", "$": "DOL", "&": "AMP", "@": "ATS", "!": "BNG",
+    "?": "QUS", "-": "HYP", "*": "AST", "=": "EQU", "^": "CRT", " ": "SPC", "+": "PLS",
+    ";": "SEM", ":": "CLN", ",": "CMA", "/": "FSL", "\\": "BSL", "|": "VBR", "~": "TLD",
+    "<": "LAN", ">": "RAN", "(": "LPR", ")": "RPR", "{": "LCB", "}": "RCB", "[": "LSQ",
+    "]": "RSQ", "'": "SQT", '"': "DQT", "`": "BQT",
+}
 _PLAIN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_BARE = re.compile(r"^[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*$")
+_RESERVED = None
 
 
+def _is_bare(name: str) -> bool:
+    """Can ``name`` be written without quotes in FRETish (grammar rule NAME: a letter, then
+    letters, digits, ``_``, ``%`` and inner ``.``; never a reserved word)?"""
+    global _RESERVED
+    if _RESERVED is None:
+        from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS
+        _RESERVED = (RESERVED_WORDS, RESERVED_LETTERS)
+    return (bool(_BARE.match(name)) and name.lower() not in _RESERVED[0]
+            and name not in _RESERVED[1])
+
+
+def _mangle_char(ch: str) -> str:
+    if ch.isascii() and ch.isalnum() or ch == "_":
+        return ch
+    code = FRET_CHAR_NAMES.get(ch)
+    return f"_{code}_" if code else f"_U{ord(ch):04X}_"
+
+
+@functools.lru_cache(maxsize=4096)
 def mangle(name: str) -> str:
-    """FRET's identifier mangling for SMV output; characters other than letters, digits and
-    ``_`` that FRET has no name for become ``_Uxxxx_`` (their code point)."""
-    if _PLAIN.match(name):
-        return name
-    out = []
-    for ch in name:
-        if ch.isalnum() and ch.isascii() or ch == "_":
-            out.append(ch)
-        else:
-            out.append(_FRET_SPECIAL.get(ch, f"_U{ord(ch):04X}_"))
-    s = "".join(out)
-    return s if s and not s[0].isdigit() else "_" + s
+    """FRET's name for a FRETish identifier in printed formulas (FRET's name mangling,
+    shared/fretish/README.md section 6b): in a bare name ``.`` -> ``_DOT_`` and ``%`` ->
+    ``_PRC_`` (``ROS.ok`` -> ``ROS_DOT_ok``); a name that must be quoted in FRETish is
+    mapped character by character with its quotes (``"weird var"`` ->
+    ``_DQT_weird_SPC_var_DQT_``) using :data:`FRET_CHAR_NAMES`. Letters, digits and ``_``
+    are kept. Characters FRET has no name for (non-ASCII) become ``_Uxxxx_`` (their code
+    point): FRET would keep them, which no downstream tool accepts.
+
+    The AST keeps names without their quotes, so a quoted name that could have been
+    written bare (``"speed"``) is the same variable as the bare one and prints bare
+    (FRET would print ``_DQT_speed_DQT_``, a second variable); likewise a quoted name of
+    letters, digits and ``_`` that starts with ``_`` prints as is, which keeps the
+    mangling idempotent (``mangle(mangle(x)) == mangle(x)``)."""
+    if _PLAIN.match(name) and _is_bare(name if name[0] != "_" else "x" + name):
+        return name  # also keeps mangle(mangle(x)) == mangle(x)
+    if _is_bare(name):
+        return "".join(_mangle_char(ch) for ch in name)
+    return "_DQT_" + "".join(_mangle_char(ch) for ch in name) + "_DQT_"
 
 
 def _bounds(n: Node, sep: str) -> str:

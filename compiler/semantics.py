@@ -120,16 +120,22 @@ class _Expander:
     """Turns AST expressions into IR for one formula kind.
 
     ``kind`` is ``"ft"`` or ``"pt"``. Temporal functions of the formula's own direction are
-    expanded with the scope's interval endpoints (FRET: ``$Left$`` for past functions in pt,
-    ``$Right$`` for future ones in ft); functions of the other direction become *derived
-    atoms*: IR nodes ``past``/``future`` whose name is the printed call and whose single
-    argument is the expansion, which evaluators compute pointwise.
+    expanded (FRET: past functions in pt, future ones in ft and ft_inf); functions of the
+    other direction become *derived atoms*: IR nodes ``past``/``future`` whose name is
+    FRET's printed call and whose single argument is the expansion, which evaluators and
+    monitors compute pointwise.
+
+    ``left_pt`` is FRET's ``Left`` (pt formula true at the first position of a scope
+    interval) and ``right_ft`` its ``Right`` (ft formula true at the last position), per
+    scope (shared/fretish/README.md section 6b). ``free`` selects FRET's endpoint-free
+    expansions, used inside scope conditions (``while C``, ``after C`` ...).
     """
 
-    def __init__(self, kind: str, left_pt: Node, right_ft: Node):
+    def __init__(self, kind: str, left_pt: Node, right_ft: Node, free: bool = False):
         self.kind = kind
         self.left_pt = left_pt
         self.right_ft = right_ft
+        self.free = free
         self.has_future_atom = False
 
     # boolean context
@@ -202,29 +208,39 @@ class _Expander:
         raise SemanticsError(f"{e.name}: the bound must be a non-negative integer literal",
                              getattr(a, "span", e.span))
 
+    def _bounds(self, e: A.Call, x: "_Expander"):
+        """(m, n, p) of ``f(n, p)`` (m = 0) or ``f(m, n, p)``."""
+        args = e.args
+        if len(args) == 2:
+            return 0, self._int_arg(e, args[0]), x.bool(args[1])
+        if len(args) == 3:
+            m, n = self._int_arg(e, args[0]), self._int_arg(e, args[1])
+            if m > n:
+                raise SemanticsError(f"{e.name}: lower bound {m} above upper bound {n}",
+                                     e.span)
+            return m, n, x.bool(args[2])
+        raise SemanticsError(f"{e.name} takes (n, p) or (m, n, p)", e.span)
+
     def _past_function(self, e: A.Call) -> Node:
-        """FRET's past-time functions (FRET ``xform.js`` rules, restated):
-        persisted(n,p) = H[0,n] p & H[0,n-1] !Left; persisted(m,n,p) = H[m,n] p &
-        H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) & O[0,n] p (occurred(m,n,p) with
-        O[m,n]); preBool(b,p) = (FTP & b) | (!FTP & Y p); prevOcc(p,q) =
-        Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q)))."""
+        """FRET's past-time functions (README section 6b, FRET's expansions restated):
+        persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) &
+        O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP & b) | (Y p);
+        prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))). Endpoint-
+        free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""
         name, args = e.name, e.args
         # Function expansions are built in a pt expander whatever the formula kind.
-        px = _Expander("pt", self.left_pt, self.right_ft)
+        px = _Expander("pt", self.left_pt, self.right_ft, self.free)
         left = self.left_pt
+        free = self.free
         if name in ("persisted", "occurred"):
-            if len(args) == 2:
-                m, n, p = 0, self._int_arg(e, args[0]), px.bool(args[1])
-            elif len(args) == 3:
-                m, n, p = self._int_arg(e, args[0]), self._int_arg(e, args[1]), px.bool(args[2])
-                if m > n:
-                    raise SemanticsError(f"{name}: lower bound {m} above upper bound {n}",
-                                         e.span)
-            else:
-                raise SemanticsError(f"{name} takes (n, p) or (m, n, p)", e.span)
+            m, n, p = self._bounds(e, px)
             if name == "persisted":
+                if free:
+                    return H(p, m, n)
                 return and_(H(p, m, n), H(not_(left), 0, n - 1))
-            return and_(S(not_(left), p), O(p, m, n))
+            if free:
+                return O(p, m, n)
+            return _since_bounded(not_(left), p, m, n)
         if name == "preBool":
             if len(args) != 2:
                 raise SemanticsError("preBool takes (initial value, p)", e.span)
@@ -239,30 +255,39 @@ class _Expander:
             if len(args) != 2:
                 raise SemanticsError("prevOcc takes (p, q)", e.span)
             p, q = px.bool(args[0]), px.bool(args[1])
+            if free:
+                return Y(S(not_(p), and_(p, q)))
             guard = and_(not_(left), not_(p))
-            return Y(implies(S(guard, p), S(guard, and_(p, q))))
+            return or_(left, Y(implies(S(guard, p), S(guard, and_(p, q)))))
         raise SemanticsError(f"unknown past-time function {name}", e.span)
 
     def _future_function(self, e: A.Call) -> Node:
-        """FRET's future-time functions: persists(n,p) = G[0,n] p & G[0,n-1] !Right;
-        occurs(n,p) = ((!Right) U p) & F[0,n] p; nextOcc(p,q) = X(((!p & !Right) U p) ->
-        ((!p & !Right) U (p & q)))."""
+        """FRET's future-time functions: persists(m,n,p) = G[m,n] p & G[0,n-1] !Right;
+        occurs(n,p) = ((!Right) U p) & F[0,n] p; occurs(m,n,p) = (!Right) U[m,n] p;
+        nextOcc(p,q) = Right | X(((!p & !Right) U p) -> ((!p & !Right) U (p & q))).
+        Endpoint-free forms inside scope conditions: G[m,n] p, F[m,n] p,
+        X((!p) U (p & q))."""
         name, args = e.name, e.args
-        fx = _Expander("ft", self.left_pt, self.right_ft)
+        fx = _Expander("ft", self.left_pt, self.right_ft, self.free)
         right = self.right_ft
+        free = self.free
         if name in ("persists", "occurs"):
-            if len(args) != 2:
-                raise SemanticsError(f"{name} takes (n, p)", e.span)
-            n, p = self._int_arg(e, args[0]), fx.bool(args[1])
+            m, n, p = self._bounds(e, fx)
             if name == "persists":
-                return and_(G(p, 0, n), G(not_(right), 0, n - 1))
-            return and_(U(not_(right), p), F(p, 0, n))
+                if free:
+                    return G(p, m, n)
+                return and_(G(p, m, n), G(not_(right), 0, n - 1))
+            if free:
+                return F(p, m, n)
+            return _until_bounded(not_(right), p, m, n)
         if name == "nextOcc":
             if len(args) != 2:
                 raise SemanticsError("nextOcc takes (p, q)", e.span)
             p, q = fx.bool(args[0]), fx.bool(args[1])
+            if free:
+                return X(U(not_(p), and_(p, q)))
             guard = and_(not_(p), not_(right))
-            return X(implies(U(guard, p), U(guard, and_(p, q))))
+            return or_(right, X(implies(U(guard, p), U(guard, and_(p, q)))))
         raise SemanticsError(f"unknown future-time function {name}", e.span)
 
     # numeric context
@@ -291,6 +316,27 @@ class _Expander:
             raise SemanticsError("a truth value where a number is expected", e.span)
         raise SemanticsError("a condition where a number is expected",
                              getattr(e, "span", None))
+
+
+def _since_bounded(a: Node, b: Node, m: int, n: int) -> Node:
+    """``a S[m,n] b``: b at some j in [t-n, t-m] and a at every position in (j, t] (FRET's
+    bounded since). Built from unbounded since and bounded once/historically, anchored at
+    the same position: ``H[0,m-1] a & O[m,m] ((a S b) & O[0,n-m] b)``; for m = 0 the most
+    recent b is the witness, so ``(a S b) & O[0,n] b`` (FRET's occurred(n,p))."""
+    inner = and_(S(a, b), O(b, 0, n - m))
+    if m == 0:
+        return inner
+    return and_(H(a, 0, m - 1), O(inner, m, m))
+
+
+def _until_bounded(a: Node, b: Node, m: int, n: int) -> Node:
+    """``a U[m,n] b``: b at some j in [t+m, t+n] and a at every position in [t, j) (FRET's
+    bounded until), as ``G[0,m-1] a & F[m,m] ((a U b) & F[0,n-m] b)``; for m = 0
+    ``(a U b) & F[0,n] b`` (FRET's occurs(n,p))."""
+    inner = and_(U(a, b), F(b, 0, n - m))
+    if m == 0:
+        return inner
+    return and_(G(a, 0, m - 1), F(inner, m, m))
 
 
 _TIME_NAMES = _PAST_FUNCS | _FUTURE_FUNCS
@@ -485,6 +531,25 @@ def _ft_right(kind: str, m: Optional[Node], last: Node) -> Node:
     return or_(fim if kind == "before" else lim, last)
 
 
+def _fn_right(kind: str, m: Optional[Node], last: Node) -> Node:
+    """FRET's ``Right`` for the temporal functions (README section 6b): true at the last
+    position of a scope interval. For ``in``/``onlyAfter`` it is ``m & (LAST | X !m)``, for
+    ``notin``/``onlyIn``/``before`` ``(!m & !LAST) & X m`` (no LAST disjunct), else LAST.
+    ``last`` is ``LAST``, or FALSE for ft_inf."""
+    if kind in ("null", "after", "onlyBefore"):
+        return last
+    if kind in ("in", "onlyAfter"):
+        return and_(m, or_(last, X(not_(m))))
+    return and_all(not_(m), not_(last), X(m))
+
+
+def _ft_mode(req: A.Requirement, scope: str) -> Optional[Node]:
+    """The scope condition in ft (endpoint-free functions), or None for the null scope."""
+    if scope == "null":
+        return None
+    return _Expander("ft", FTP, LAST, free=True).bool(req.scope.mode)
+
+
 def _pt_endpoints(kind: str, m: Optional[Node]):
     """pt: (left, right) with ``left`` true at an interval's first point and ``right`` at
     the first point after it (``LAST`` when intervals run to the end of the trace); FRET's
@@ -561,6 +626,9 @@ def _formalize(req: A.Requirement, tick_period: Optional[Fraction]) -> Formaliza
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     negate = scope.startswith("only")
     warnings: List[str] = []
+    if "then" in req.text.lower():
+        from .ifthen import regrouping_warnings
+        warnings.extend(regrouping_warnings(req))
     n = None
     if timing in A.DURATION_TIMINGS:
         n = duration_ticks(timing_duration(req), tick_period, warnings)
@@ -580,15 +648,17 @@ def _formalize(req: A.Requirement, tick_period: Optional[Fraction]) -> Formaliza
             shared.append(out)
         return out
 
-    # Mode formulas: functions inside a mode are expanded w.r.t. the whole run.
-    m_pt = None if scope == "null" else _Expander("pt", FTP, LAST).bool(req.scope.mode)
+    # Scope conditions: temporal functions take FRET's endpoint-free forms.
+    m_pt = None if scope == "null" else _Expander("pt", FTP, LAST, free=True).bool(
+        req.scope.mode)
     left, right_pt = _pt_endpoints(scope, m_pt)
 
     # ---- ft (last = LAST) and ft_inf (last = FALSE): the same construction
     def future(last: Node):
-        m = None if scope == "null" else _Expander("ft", FTP, last).bool(req.scope.mode)
+        m = None if scope == "null" else _Expander("ft", FTP, last, free=True).bool(
+            req.scope.mode)
         right = _ft_right(scope, m, last)
-        R, c, s = fields(_Expander("ft", left, right))
+        R, c, s = fields(_Expander("ft", left, _fn_right(scope, m, last)))
         T = _ft_timing(timing, negate, R, right, n, s)
         if cond == "null":
             body = T
@@ -603,7 +673,7 @@ def _formalize(req: A.Requirement, tick_period: Optional[Fraction]) -> Formaliza
     ft_inf, _ = future(FALSE)
 
     # ---- pt
-    px = _Expander("pt", left, LAST)
+    px = _Expander("pt", left, _fn_right(scope, _ft_mode(req, scope), LAST))
     R, c, s = fields(px)
     if cond == "null":
         trig = no_cond = None

@@ -297,6 +297,8 @@ class _Builder(Transformer):
             return first
         return c
 
+    open_ops = chain_ops                 # a chain ending in a prefix form (if-then ...)
+
     def climb(self, c):
         node, _ = _climb(c[0], 0, 1)
         return node

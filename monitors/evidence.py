@@ -246,9 +246,11 @@ class _Expr:
                 return np.where(hi_c > lo_c, cs[hi_c] - cs[lo_c], 0)
 
             if name == "persisted":  # H[m,k] p & H[0,k-1] !Left
-                return (i - k >= self.start) & (count(i - k, i - m) == (k - m + 1))
-            if name == "occurred":  # ((!Left) S p) & O[m,k] p
-                return (count(self.start, i) > 0) & (count(np.maximum(i - k, 0), i - m) > 0)
+                # (in a scope condition start is -inf: H[m,k] p over the ticks that exist)
+                needed = np.clip(i - m + 1, 0, n) - np.clip(i - k, 0, n)
+                return (i - k >= self.start) & (count(i - k, i - m) == needed)
+            if name == "occurred":  # (!Left) S[m,k] p: p in [max(start, i-k), i-m]
+                return count(np.maximum(np.maximum(i - k, 0), self.start), i - m) > 0
             if name == "persists":  # G[0,k] p & G[0,k-1] !Right
                 return (i + k <= self.end) & (count(i, i + k) == k + 1)
             # occurs: ((!Right) U p) & F[0,k] p
@@ -504,7 +506,9 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         raise ValueError("the interval semantics needs at least one tick")
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     negate = scope.startswith("only")
-    whole = _Expr(columns, n, np.zeros(n, np.int64), np.full(n, n - 1, np.int64))
+    # scope conditions use FRET's endpoint-free function forms (shared/fretish/README.md
+    # section 6b): no interval start or end
+    whole = _Expr(columns, n, np.full(n, -(1 << 40), np.int64), np.full(n, 1 << 40, np.int64))
     mode = whole.bool(req.scope.mode) if scope != "null" else None
     intervals = scope_intervals(scope, mode, n)
     start = np.arange(n, dtype=np.int64)

@@ -22,7 +22,7 @@ start: f
 ?arg: f
 UNARY.3: /(!|X|F|G|Y|Z|H|O)(\[[^\]]*\])?(?=[\s(])/
 BIN.2: "<->" | "->" | "&" | "|" | "xor" | "!=" | "<=" | ">=" | "<" | ">" | "=" | "+" | "-"
-     | "*" | "/" | "mod" | "^" | /[UVST](?=\s)/
+     | "*" | "/" | "mod" | "^" | /[UVST](\[\d+,\d+\])?(?=\s)/
 NAME.1: /[A-Za-z_][A-Za-z0-9_]*/
 NUMBER.1: /-?\d+(\.\d+)?([eE][-+]?\d+)?/
 %import common.WS
@@ -102,6 +102,8 @@ def parse_fret(text: str, derived: dict | None = None) -> Node:
                 return Node("cmp", (term(l), term(r)), name=op)
             if op in _BOOL_OPS:
                 return Node(op, (boolean(l), boolean(r)))
+            if op[0] in "SU" and "[" in op:
+                return _bounded(op, boolean(l), boolean(r))
         raise ValueError(f"not a condition: {t}")
 
     def term(t) -> Node:
@@ -113,6 +115,9 @@ def parse_fret(text: str, derived: dict | None = None) -> Node:
         if kind == "bin":
             return ir.arith(t[1], term(t[2]), term(t[3]))
         if kind == "call":
+            if t[1] in ("preInt", "preReal") and len(t[2]) == 2:
+                # FRET never expands these: give them our meaning (value one step back)
+                return Node("pre", (term(t[2][0]), term(t[2][1])), name=t[1])
             return Node("fn", tuple(term(a) for a in t[2]), name=t[1])
         raise ValueError(f"not a number: {t}")
 
@@ -123,6 +128,21 @@ def parse_fret(text: str, derived: dict | None = None) -> Node:
             return term(t)
 
     return boolean(raw)
+
+
+def _bounded(op: str, a: Node, b: Node) -> Node:
+    """FRET's bounded since/until by its definition: ``a S[m,n] b`` holds when b held k
+    steps ago for some k in [m, n] and a held at each of the k positions since; ``U``
+    mirrors it in the future."""
+    m, n = (int(x) for x in op[2:-1].split(","))
+    once, hist = ("O", "H") if op[0] == "S" else ("F", "G")
+    out = None
+    for k in range(m, n + 1):
+        x = Node(once, (b,), lo=k, hi=k) if k else b
+        if k:
+            x = Node("&", (x, Node(hist, (a,), lo=0, hi=k - 1)))
+        out = x if out is None else Node("|", (out, x))
+    return out
 
 
 def _text(t) -> str:

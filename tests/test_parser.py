@@ -205,6 +205,16 @@ def test_precedence_against_fret(vid, expected):
     ("if a then if b then c", "(a -> (b -> c))"),
     ("if if a then b then c", "((a -> b) -> c)"),
     ("(if a then b) & c", "((a -> b) & c)"),
+    # a nested if-then as the last operand, with the grammar's grouping (FRET regroups
+    # these by a text rewrite: shared/fretish/README.md section 6b, defect 2)
+    ("a & if b then c", "(a & (b -> c))"),
+    ("a & if b then c | d", "(a & (b -> (c | d)))"),
+    ("(speed <= alt) & if landed then q", "((speed <= alt) & (landed -> q))"),
+    ("q <=> if a then b", "(q <-> (a -> b))"),
+    ("!if a then b", "(! (a -> b))"),
+    ("a | !if b then c", "(a | (! (b -> c)))"),
+    ("a xor b & if c then d", "(a xor (b & (c -> d)))"),
+    ("r & at the next occurrence of p, q | s", "(r & nextOcc(p,(q | s)))"),
     ("a & (b | c)", "(a & (b | c))"),
     ("x>-3.0e2", "(x > -3.0e2)"),
     ("x-3", "(x - 3)"),
@@ -221,7 +231,8 @@ def test_precedence_table(text, expected):
 
 
 @pytest.mark.parametrize("text", [
-    "a < b < c", "a = b = c", "x = !y", "x + !y", "x ^ !y", "-!y", "a & if b then c",
+    "a < b < c", "a = b = c", "x = !y", "x + !y", "x ^ !y", "-!y", "x = !if a then b",
+    "(if a then b", "a & if b", "if a then b & if c",
     "p and q", "p or q", "not p", "x == 3", ".5", "f(a,)", "(a", "a)", "a &", "3x",
     "x = y z", "at the next occurrence of p", "X", "next", "the",
 ])
