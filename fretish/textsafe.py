@@ -69,9 +69,11 @@ def visible(text: Any, keep: str = "") -> str:
     return "".join(_escape(ch) if _unsafe(ch, keep) else ch for ch in s)
 
 
-def terminal_text(text: Any) -> str:
-    """Text for the terminal (module docstring)."""
-    return visible(text)
+def terminal_text(text: Any, keep: str = "\n") -> str:
+    """Text for the terminal (module docstring); newlines are kept by default (our own
+    multi-line messages: a parse error's source line and caret), pass ``keep=""`` for
+    one-line fields."""
+    return visible(text, keep)
 
 
 def xml_text(text: Any, keep: str = "\n\t") -> str:

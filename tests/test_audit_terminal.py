@@ -24,7 +24,7 @@ def test_main_job_summary_fits_one_screen():
     assert res.exit_code == 1
     lines = res.output.splitlines()
     assert len(lines) <= 60, len(lines)  # was 241
-    assert lines[-1].startswith("33 satisfied, 8 vacuous, 7 violated, 0 error (exit 1")
+    assert lines[-1].startswith("33 satisfied, 8 vacuous, 7 violated, 0 unknown, 0 error (exit 1")
 
 
 def test_verbose_windows_have_unique_headers_and_gap_markers():
