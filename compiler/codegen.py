@@ -25,6 +25,7 @@ string literals made by ``repr``; identifiers in the code are generated (``v0``,
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Tuple
@@ -47,6 +48,11 @@ MAX_AUTOMATON_STATES = 5000
 #: gives the same module); beyond them the LTL3 automaton comes from formula progression
 #: (:mod:`compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
 MAX_LTL3_BOUND = 12
+#: An expression read once is inlined into the expression that reads it up to this nesting
+#: depth; deeper ones get a local of their own, so the emitted code's nesting is bounded
+#: whatever the requirement's (CPython rejects about 200 nested parentheses and runs out of
+#: recursion compiling deeper expressions).
+MAX_INLINE_DEPTH = 16
 MAX_LTL3_BOUND_SUM = 96
 
 
@@ -72,6 +78,7 @@ class _StepCode:
     numeric_reads: set = field(default_factory=set)
     bool_reads: set = field(default_factory=set)
     uses: Dict[Node, int] = field(default_factory=dict)
+    depth: Dict[Node, int] = field(default_factory=dict)  # nesting of inlined expressions
 
     def new(self, prefix: str = "n") -> str:
         self.counter += 1
@@ -139,7 +146,7 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
     if op in ("ap", "var"):
         return _read(n.name, code, numeric=op == "var")
     if op == "num":
-        return repr(float(n.name)) if any(c in n.name for c in ".eE") else str(int(n.name))
+        return _number(n.name)
     expr = None  # a pure expression: inlined where it is read once
     if op == "cmp":
         expr = f"{a[0]} {_PY_CMP[n.name]} {a[1]}"
@@ -186,7 +193,9 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
     elif op == "<->":
         expr = f"{a[0]} == {a[1]}"
     if expr is not None:
-        if code.uses.get(n, 0) <= 1:
+        depth = 1 + max((code.depth.get(x, 0) for x in n.args), default=0)
+        if code.uses.get(n, 0) <= 1 and depth <= MAX_INLINE_DEPTH:
+            code.depth[n] = depth
             return f"({expr})"
         line = f"{out} = {expr}"
     elif op in ("Y", "Z"):
@@ -212,7 +221,9 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
             prev, idx = code.slot("0")
             hist = code.new("h")
             bit = a[0] if op == "O" else f"not {a[0]}"
-            mask = (1 << (hi + 1)) - 1
+            # a decimal literal of more than sys.get_int_max_str_digits() digits (4300)
+            # would not load: large masks are written as an expression
+            mask = str((1 << (hi + 1)) - 1) if hi < 64 else f"((1 << {hi + 1}) - 1)"
             code.lines.append(f"{hist} = (({prev} << 1) | ({bit})) & {mask}")
             code.set_slot(idx, hist)
             test = "!= 0" if op == "O" else "== 0"
@@ -228,6 +239,18 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
         raise CodegenError(f"no monitor code for the future-time operator {op!r} in pt")
     code.lines.append(line)
     return out
+
+
+def _number(text: str) -> str:
+    """Python code of a FRETish number literal (``3``, ``-2.5e3``): an int when it is
+    written without a point or exponent, else a float; a float that overflows is written
+    ``float('inf')`` / ``float('-inf')`` (``repr`` would give the name ``inf``)."""
+    if not any(c in text for c in ".eE"):
+        return str(int(text))
+    value = float(text)
+    if math.isinf(value):
+        return "float('-inf')" if value < 0 else "float('inf')"
+    return repr(value)
 
 
 def _opaque(n: Node, code: _StepCode, numeric: bool) -> str:
@@ -251,15 +274,22 @@ def _read(name: str, code: _StepCode, numeric: bool) -> str:
 @dataclass
 class _Automaton:
     """A deterministic Spot monitor as tables: ``table[state][letter]`` (letter = bits of the
-    atoms, -1 = no transition) or ``chains[state]`` = [(condition code, destination)]."""
+    atoms, -1 = no transition) for at most :data:`TABLE_MAX_APS` atoms; beyond that
+    ``edges[state]`` = [(BDD node of the edge condition, destination)] over the shared node
+    table ``bdd``: node 0 is false, 1 true, node k >= 2 is ``(atom index, low, high)``
+    (Bryant's reduced ordered BDDs, as Spot's BuDDy builds them, renumbered in the order
+    they are first met so the same automaton always gives the same table). Code and size
+    are linear in the BDD, whatever the number of atoms (an edge condition written as a
+    Boolean formula can be exponential: ``a xor b xor ...``)."""
 
     atoms: List[Node]
     initial: int
     table: Optional[List[List[int]]]
-    chains: Optional[List[List[Tuple[str, int]]]]
+    edges: Optional[List[List[Tuple[int, int]]]]
     empty: bool  # the automaton accepts nothing at all
     sub_code: str = "0"  # Python expression of the letter, set once atoms have locals
     complete: bool = False  # every state has a transition for every letter: never rejects
+    bdd: Optional[List[Optional[Tuple[int, int, int]]]] = None
 
 
 def _build_automaton(f: Node, atoms_by_name: Dict[str, Node]) -> Optional[_Automaton]:
@@ -285,11 +315,48 @@ def _build_automaton(f: Node, atoms_by_name: Dict[str, Node]) -> Optional[_Autom
         complete = all(x >= 0 for row in table for x in row)
         return _Automaton(atoms, aut.get_init_state_number(), table, None, empty,
                           complete=complete and not empty)
-    chains = []
-    for s in range(aut.num_states()):
-        chains.append([(_bdd_code(spot.bdd_to_formula(e.cond, d), aps), e.dst)
-                       for e in aut.out(s)])
-    return _Automaton(atoms, aut.get_init_state_number(), None, chains, empty)
+    atom_of_var = {d.varnum(spot.formula.ap(name)): i for i, name in enumerate(aps)}
+    nodes: List[Optional[Tuple[int, int, int]]] = [None, None]
+    memo: Dict[int, int] = {}
+    edges = [[(_bdd_nodes(e.cond, atom_of_var, nodes, memo), e.dst) for e in aut.out(s)]
+             for s in range(aut.num_states())]
+    return _Automaton(atoms, aut.get_init_state_number(), None, edges, empty, bdd=nodes)
+
+
+def _bdd_nodes(cond, atom_of_var: Dict[int, int], nodes: list, memo: Dict[int, int]) -> int:
+    """Append the nodes of the BDD ``cond`` not yet in ``nodes`` (see :class:`_Automaton`;
+    ``memo`` maps BuDDy node ids to their numbers, so shared sub-graphs appear once) and
+    return its node number. Iterative: BDD depth is the number of atoms."""
+    import buddy
+
+    if cond == buddy.bddfalse:
+        return 0
+    if cond == buddy.bddtrue:
+        return 1
+    number: Dict[int, int] = {}
+    stack = [cond]
+    while stack:  # post-order: children numbered before their parent
+        b = stack[-1]
+        key = b.id()
+        if key in number or key in memo:
+            stack.pop()
+            continue
+        low, high = buddy.bdd_low(b), buddy.bdd_high(b)
+        todo = [c for c in (high, low) if c.id() > 1 and c.id() not in number
+                and c.id() not in memo]
+        if todo:
+            stack.extend(todo)
+            continue
+        stack.pop()
+
+        def ref(c):
+            k = c.id()
+            return k if k <= 1 else (number[k] if k in number else memo[k])
+
+        nodes.append((atom_of_var[buddy.bdd_var(b)], ref(low), ref(high)))
+        number[key] = len(nodes) - 1
+    memo.update(number)
+    return memo[cond.id()]
 
 
 def _bdd_letter(cond, d, aps: List[str], letter: int) -> bool:
@@ -304,26 +371,6 @@ def _bdd_letter(cond, d, aps: List[str], letter: int) -> bool:
         lit = buddy.bdd_ithvar(v) if (letter >> i) & 1 else buddy.bdd_nithvar(v)
         c = buddy.bdd_restrict(c, lit)
     return c == buddy.bddtrue
-
-
-def _bdd_code(f, aps: List[str]) -> str:
-    """Python code of a Spot Boolean formula over the letter bits ``a[i]``."""
-    import spot
-
-    k = f.kind()
-    if k == spot.op_tt:
-        return "True"
-    if k == spot.op_ff:
-        return "False"
-    if k == spot.op_ap:
-        return f"(sub >> {aps.index(f.ap_name())} & 1)"
-    if k == spot.op_Not:
-        return f"(not {_bdd_code(f[0], aps)})"
-    if k == spot.op_And:
-        return "(" + " and ".join(_bdd_code(x, aps) for x in f) + ")"
-    if k == spot.op_Or:
-        return "(" + " or ".join(_bdd_code(x, aps) for x in f) + ")"
-    raise CodegenError(f"unexpected Boolean operator in an automaton edge: {f}")
 
 
 def _progression_automata(ft_inf: Node, atoms_by_name: Dict[str, Node], bounds: List[int]):
@@ -430,8 +477,11 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     for aut in (bad, good):
         if aut is not None:
             idx = [atom_nodes.index(a) for a in aut.atoms]
-            aut.sub_code = " | ".join(f"({1 << j} if {atom_locals[b]} else 0)"
-                                      for j, b in enumerate(idx)) or "0"
+            if aut.table is not None:
+                aut.sub_code = " | ".join(f"({1 << j} if {atom_locals[b]} else 0)"
+                                          for j, b in enumerate(idx)) or "0"
+            else:  # the atoms' values, indexed by the BDD nodes' atom numbers
+                aut.sub_code = "(" + "".join(f"{atom_locals[b]}, " for b in idx) + ")"
     var_locals = [(name, local, local in code.numeric_reads, local in code.bool_reads)
                   for name, local in code.variables.items()]
     # the state tuple: pt slots, then the tick count, then the last verdict
@@ -467,10 +517,76 @@ def _env():
     return env
 
 
-def render_module(compiled_list, module_name: str) -> str:
+class InvalidMonitorError(RuntimeError):
+    """Internal error: the code generated for a requirement is not a valid, loadable monitor
+    (a bug in fretc, never the user's). ``ids`` are the requirements concerned."""
+
+    def __init__(self, message: str, ids=()):
+        super().__init__(message)
+        self.ids = list(ids)
+
+
+_ALLOWED_BUILTINS = frozenset(("abs", "min", "max", "bool", "float", "int", "len",
+                               "RuntimeError", "KeyError", "ZeroDivisionError",
+                               "OverflowError", "ValueError", "complex", "isinstance",
+                               "property", "__name__"))
+
+
+def check_module(text: str, module_name: str) -> None:
+    """Check a generated module before it is written or loaded: it compiles, every global
+    name its code reads is defined by the module or is one of the builtins the template
+    uses (so no ``NameError`` can happen at run time), it loads, and every monitor steps
+    through two ticks (all variables 0, then 1) and finishes.
+
+    Raises :class:`InvalidMonitorError` (an internal error) naming the failure."""
+    import dis
+    import types
+
+    def fail(what, exc=None):
+        detail = f": {type(exc).__name__}: {exc}" if exc is not None else ""
+        raise InvalidMonitorError(
+            f"internal error: the generated monitor module {module_name!r} {what}{detail}; "
+            "this is a bug in fretc, please report it with the requirement")
+
+    try:
+        code = compile(text, f"<fretc monitors {module_name}>", "exec")
+    except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
+        fail("does not compile", exc)
+    defined = set()
+    reads = set()
+    stack = [code]
+    while stack:
+        co = stack.pop()
+        for ins in dis.get_instructions(co):
+            if ins.opname in ("STORE_NAME", "STORE_GLOBAL", "IMPORT_NAME") and co is code:
+                defined.add(ins.argval)
+            elif ins.opname in ("LOAD_GLOBAL", "LOAD_NAME"):
+                reads.add(ins.argval)
+        stack.extend(c for c in co.co_consts if isinstance(c, types.CodeType))
+    unknown = sorted(reads - defined - _ALLOWED_BUILTINS)
+    if unknown:
+        fail(f"reads undefined names {', '.join(unknown)}")
+    ns = {"__name__": module_name}
+    try:
+        exec(code, ns)  # only the standard library and literals made by repr
+        for rid, cls in ns["MONITORS"].items():
+            m = cls()
+            for value in (0, 1):
+                m.step({v: value for v in cls.VARIABLES})
+            m.finish()
+    except Exception as exc:  # noqa: BLE001 - any failure here is an internal error
+        fail("does not load and step", exc)
+
+
+def render_module(compiled_list, module_name: str, errors: Optional[list] = None) -> str:
     """The text of one generated monitor module for a list of compiled requirements
     (``compiler.build.Compiled``); requirements that failed or have no monitor are listed
-    in ``SKIPPED`` with the reason."""
+    in ``SKIPPED`` with the reason.
+
+    The module is checked by :func:`check_module`. Should a requirement's code ever fail
+    that check (an internal error), it is listed in ``SKIPPED`` with the error, so the other
+    requirements keep their monitors, and the :class:`InvalidMonitorError` is appended to
+    ``errors`` when given (``fretc --emit monitor`` then exits non-zero)."""
     monitors: List[MonitorSource] = []
     skipped: List[Tuple[str, str]] = []
     for i, c in enumerate(compiled_list):
@@ -482,6 +598,31 @@ def render_module(compiled_list, module_name: str) -> str:
             monitors.append(monitor_source(c, i))
         except CodegenError as exc:
             skipped.append((c.id, str(exc)))
+    text = _render(monitors, skipped, module_name)
+    try:
+        check_module(text, module_name)
+        return text
+    except InvalidMonitorError as exc:
+        problem = exc
+    # find the monitors at fault, one at a time, and skip them
+    bad = []
+    for m in monitors:
+        try:
+            check_module(_render([m], [], module_name), module_name)
+        except InvalidMonitorError as exc:
+            bad.append((m, exc))
+    if not bad:  # pragma: no cover - the module itself is broken
+        bad = [(m, problem) for m in monitors]
+    failed = InvalidMonitorError("; ".join(f"{m.id}: {exc}" for m, exc in bad),
+                                 [m.id for m, _ in bad])
+    if errors is not None:
+        errors.append(failed)
+    skipped += [(m.id, str(exc)) for m, exc in bad]
+    monitors = [m for m in monitors if m not in [b for b, _ in bad]]
+    return _render(monitors, skipped, module_name)
+
+
+def _render(monitors: List[MonitorSource], skipped, module_name: str) -> str:
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
     return _env().get_template("monitor_module.py.j2").render(
@@ -507,12 +648,14 @@ def file_stems(sources, suffix: str = "") -> Dict[str, str]:
     return out
 
 
-def emit_monitors(compiled) -> Dict[str, str]:
+def emit_monitors(compiled, errors: Optional[list] = None) -> Dict[str, str]:
     """One module per requirement file: ``{module stem: source text}``, in input order
-    (stems from :func:`file_stems`, ``r1.fret`` -> ``r1_monitors``)."""
+    (stems from :func:`file_stems`, ``r1.fret`` -> ``r1_monitors``). Internal errors
+    (:class:`InvalidMonitorError`) are appended to ``errors``, the requirements concerned
+    being listed in ``SKIPPED`` with the error (see :func:`render_module`)."""
     groups: Dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
     stems = file_stems(groups, "_monitors")
-    return {stems[source]: render_module(items, stems[source])
+    return {stems[source]: render_module(items, stems[source], errors)
             for source, items in groups.items()}
