@@ -287,6 +287,10 @@ def main(argv=None) -> int:
     ap.add_argument("--slow", type=float, default=5.0, help="seconds (CPU) per input")
     ap.add_argument("--out", default="fuzz_failures.jsonl")
     ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--minutes", type=float, default=None,
+                    help="stop after this many minutes (wall clock) and report what ran")
+    ap.add_argument("--shard", default="0/1", help="K/N: run the inputs whose index is K mod N "
+                    "(N processes with the same --seed run distinct inputs)")
     args = ap.parse_args(argv)
 
     from compiler import codegen
@@ -367,7 +371,13 @@ def main(argv=None) -> int:
         flush_children(force)
 
     signal.signal(signal.SIGPROF, _alarm)
-    for k, text in enumerate(inputs(args.count, args.seed)):
+    shard, shards = (int(x) for x in args.shard.split("/"))
+    for k, text in enumerate(inputs(args.count * shards, args.seed)):
+        if k % shards != shard:
+            continue
+        if stats["inputs"] >= args.count or (
+                args.minutes is not None and time.time() - wall0 > args.minutes * 60):
+            break
         stats["inputs"] += 1
         t0 = time.process_time()
         signal.setitimer(signal.ITIMER_PROF, args.slow)

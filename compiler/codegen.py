@@ -307,21 +307,26 @@ def _build_automaton(f: Node, atoms_by_name: Dict[str, Node]) -> Optional[_Autom
     aps = [str(p.ap_name()) for p in aut.ap()]
     atoms = [atoms_by_name[p] for p in aps]
     empty = aut.is_empty()
+    atom_of_var = {d.varnum(spot.formula.ap(name)): i for i, name in enumerate(aps)}
+    nodes: List[Optional[Tuple[int, int, int]]] = [None, None]
+    memo: Dict[int, int] = {}
     if len(aps) <= TABLE_MAX_APS:
         table = []
         for s in range(aut.num_states()):
             row = [-1] * (1 << len(aps))
             for e in aut.out(s):
+                root = _bdd_nodes(e.cond, atom_of_var, nodes, memo)
                 for letter in range(1 << len(aps)):
-                    if _bdd_letter(e.cond, d, aps, letter):
+                    node = root
+                    while node > 1:  # the letter's path through the edge's BDD
+                        atom, low, high = nodes[node]
+                        node = high if (letter >> atom) & 1 else low
+                    if node:
                         row[letter] = e.dst
             table.append(row)
         complete = all(x >= 0 for row in table for x in row)
         return _Automaton(atoms, aut.get_init_state_number(), table, None, empty,
                           complete=complete and not empty)
-    atom_of_var = {d.varnum(spot.formula.ap(name)): i for i, name in enumerate(aps)}
-    nodes: List[Optional[Tuple[int, int, int]]] = [None, None]
-    memo: Dict[int, int] = {}
     edges = [[(_bdd_nodes(e.cond, atom_of_var, nodes, memo), e.dst) for e in aut.out(s)]
              for s in range(aut.num_states())]
     return _Automaton(atoms, aut.get_init_state_number(), None, edges, empty, bdd=nodes)
