@@ -48,11 +48,6 @@ MAX_AUTOMATON_STATES = 5000
 #: gives the same module); beyond them the LTL3 automaton comes from formula progression
 #: (:mod:`compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
 MAX_LTL3_BOUND = 12
-#: An expression read once is inlined into the expression that reads it up to this nesting
-#: depth; deeper ones get a local of their own, so the emitted code's nesting is bounded
-#: whatever the requirement's (CPython rejects about 200 nested parentheses and runs out of
-#: recursion compiling deeper expressions).
-MAX_INLINE_DEPTH = 16
 MAX_LTL3_BOUND_SUM = 96
 #: With bounded operators, LTL3 monitors are built for at most this many atoms (fuzzing:
 #: ``after m upon c ... after 8 ticks satisfy r | p0 | ... | p11`` took 7 s in Spot).
@@ -61,6 +56,11 @@ MAX_LTL3_BOUNDED_ATOMS = 10
 #: LTL3 monitor (4096: about 1 s on the build machine for the worst residuals seen; the
 #: fuzzed ``before q ... after 999999 ticks`` took 110 s for 4096 states without it).
 LTL3_MAX_PROGRESSIONS = 4096
+#: An expression read once is inlined into the expression that reads it up to this nesting
+#: depth; deeper ones get a local of their own, so the emitted code's nesting is bounded
+#: whatever the requirement's (CPython rejects about 200 nested parentheses and runs out of
+#: recursion compiling deeper expressions).
+MAX_INLINE_DEPTH = 16
 
 
 class CodegenError(FretishError):
@@ -369,20 +369,6 @@ def _bdd_nodes(cond, atom_of_var: Dict[int, int], nodes: list, memo: Dict[int, i
         number[key] = len(nodes) - 1
     memo.update(number)
     return memo[cond.id()]
-
-
-def _bdd_letter(cond, d, aps: List[str], letter: int) -> bool:
-    """Does the edge condition ``cond`` (a BDD) hold for the letter whose bit ``i`` is the
-    value of ``aps[i]``?"""
-    import buddy
-    import spot
-
-    c = cond
-    for i, name in enumerate(aps):
-        v = d.varnum(spot.formula.ap(name))
-        lit = buddy.bdd_ithvar(v) if (letter >> i) & 1 else buddy.bdd_nithvar(v)
-        c = buddy.bdd_restrict(c, lit)
-    return c == buddy.bddtrue
 
 
 def _progression_automata(ft_inf: Node, atoms_by_name: Dict[str, Node], bounds: List[int]):
