@@ -52,6 +52,10 @@ MAX_LTL3_BOUND_SUM = 96
 #: With bounded operators, LTL3 monitors are built for at most this many atoms (fuzzing:
 #: ``after m upon c ... after 8 ticks satisfy r | p0 | ... | p11`` took 7 s in Spot).
 MAX_LTL3_BOUNDED_ATOMS = 10
+#: Above this many atoms, LTL3 monitors are built only for a single temporal operator
+#: (``G (big Boolean)`` is cheap for Spot; fuzzing: ``only after m ... finally satisfy r &
+#: w0 & ... & w29`` ran Spot for minutes into gigabytes).
+MAX_LTL3_ATOMS = 16
 #: Work bound of formula progression (residual states x letters): beyond it there is no
 #: LTL3 monitor (4096: about 1 s on the build machine for the worst residuals seen; the
 #: fuzzed ``before q ... after 999999 ticks`` took 110 s for 4096 states without it).
@@ -455,7 +459,13 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     from .ir import not_
     bounds = [n.hi for n in ir.walk(f.ft_inf) if n.hi is not None]
     n_atoms = len(set(atoms_by_name.values()))
-    if bounds and n_atoms > MAX_LTL3_BOUNDED_ATOMS:
+    temporal = sum(1 for n in ir.walk(f.ft_inf) if n.op in ("X", "F", "G", "U", "V"))
+    if n_atoms > MAX_LTL3_ATOMS and temporal > 1:
+        bad = good = None
+        note = (f"no LTL3 monitor: ft_inf has {n_atoms} atoms (more than {MAX_LTL3_ATOMS}) "
+                "under nested temporal operators: Spot's determinization can take minutes "
+                "and gigabytes; status stays 'unknown' (step and finish unaffected)")
+    elif bounds and n_atoms > MAX_LTL3_BOUNDED_ATOMS:
         bad = good = None
         note = (f"no LTL3 monitor: ft_inf has bounded operators over {n_atoms} atoms (more "
                 f"than {MAX_LTL3_BOUNDED_ATOMS}: Spot's determinization takes seconds to "

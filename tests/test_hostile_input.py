@@ -249,3 +249,25 @@ def test_previous_word_hints_still_work():
     assert "'globally' is not FRETish" in str(e)
     e = fret_error("upon p and q the sw shall always satisfy r")
     assert "after 'and'" in str(e)
+
+
+# ------------------------------------------------------------------ item 15: fuzz findings
+@pytest.mark.parametrize("text", [
+    "before mm whenever cc the sw shall after 999999 ticks satisfy rr",  # 110 s before
+    "after mm upon cc the sw shall after 8 ticks satisfy rr | "
+    + " | ".join(f"p{k}" for k in range(12)),  # 7 s in Spot
+    "only after mm the sw shall finally satisfy rr & "
+    + " & ".join(f"w{k}" for k in range(30)),  # minutes and gigabytes in Spot
+])
+def test_fuzzed_slow_requirements_generate_quickly(text):
+    from compiler.build import compile_entry
+    from compiler.codegen import monitor_source
+    from fretish.files import RequirementEntry
+
+    entry = RequirementEntry(id="R", text=text, source="f", line=1, column=1,
+                             requirement=parse(text))
+    c = compile_entry(entry)
+    t0 = time.process_time()
+    ms = monitor_source(c, 0)
+    assert time.process_time() - t0 < 5
+    assert ms.status_note.startswith("no LTL3 monitor")
