@@ -372,6 +372,7 @@ def main(argv=None) -> int:
 
     signal.signal(signal.SIGPROF, _alarm)
     shard, shards = (int(x) for x in args.shard.split("/"))
+    current = open(args.out + ".current", "w", encoding="utf-8")
     for k, text in enumerate(inputs(args.count * shards, args.seed)):
         if k % shards != shard:
             continue
@@ -379,6 +380,11 @@ def main(argv=None) -> int:
                 args.minutes is not None and time.time() - wall0 > args.minutes * 60):
             break
         stats["inputs"] += 1
+        if k % 16 == 0 or len(text) > 200:  # for a hang inside C code (Spot), which no
+            current.seek(0)                  # signal interrupts: the input is on disk
+            current.truncate()
+            current.write(text)
+            current.flush()
         t0 = time.process_time()
         signal.setitimer(signal.ITIMER_PROF, args.slow)
         try:
