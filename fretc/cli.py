@@ -144,6 +144,7 @@ def _register_optional() -> None:
             raise
     else:
         main.add_command(report_cmd, "report")
+    __import__("fretc.watch").watch.register(main)
 
 
 _register_optional()

@@ -22,7 +22,9 @@ _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red", "er
 
 
 def short_log_name(path: str) -> str:
-    """The path relative to the working directory when it lies below it."""
+    """The path relative to the working directory when it lies below it (a URL as is)."""
+    if "://" in path:
+        return path
     try:
         rel = os.path.relpath(path)
     except ValueError:  # pragma: no cover - other drive on Windows

@@ -53,6 +53,7 @@ from .problems import CsvError, DataProblem, LogError, ProblemLog
 __all__ = [
     "Message",
     "LogSource",
+    "schema_decoder",
     "McapSource",
     "BagSource",
     "CsvSource",
@@ -273,7 +274,39 @@ def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Call
 
 
 _SCHEMA_FOR_ENCODING = {"cdr": ("ros2msg", "ros2idl"), "ros1": ("ros1msg",)}
-_DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError, UnicodeDecodeError,
+
+
+def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
+                   schema_text: str | None) -> Callable[[bytes], Any]:
+    """A function ``bytes -> rosbags message`` for one channel, with its types built from the
+    schema text the channel carries (an MCAP Schema record, or a Foxglove WebSocket
+    ``advertise``): shared by the log readers and ``fretc watch``.
+
+    Args:
+        message_encoding: ``"cdr"`` (ROS 2) or ``"ros1"`` (MCAP well-known message encodings).
+        schema_encoding: ``"ros2msg"``, ``"ros2idl"`` or ``"ros1msg"`` (well-known schema
+            encodings), matching the message encoding; None or ``""`` when the channel has none.
+        schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
+        schema_text: the definition text (see :func:`build_typestore`).
+
+    Raises:
+        _Unsupported: an unsupported message encoding, a channel without schema, a schema
+            encoding that does not go with the message encoding, or a schema rosbags cannot
+            parse (the message says which).
+    """
+    if message_encoding not in _SCHEMA_FOR_ENCODING:
+        raise _Unsupported(f"message encoding {message_encoding!r} is not supported (cdr, ros1)")
+    if not schema_encoding or not schema_name or schema_text is None:
+        raise _Unsupported("the channel has no schema")
+    if schema_encoding not in _SCHEMA_FOR_ENCODING[message_encoding]:
+        raise _Unsupported(f"schema encoding {schema_encoding!r} does not go with message "
+                           f"encoding {message_encoding!r}")
+    store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+    return _decoder_for(store, typename, message_encoding)
+
+
+#: Exceptions a decoder from :func:`schema_decoder` raises on a payload that does not match.
+DECODE_ERRORS = _DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError, UnicodeDecodeError,
                   KeyError, TypeError, OverflowError)
 
 
@@ -490,18 +523,13 @@ class McapSource(LogSource):
         dec = None
         schema = schemas.get(channel.schema_id)
         try:
-            if channel.message_encoding not in _SCHEMA_FOR_ENCODING:
-                raise _Unsupported(f"message encoding {channel.message_encoding!r} is not "
-                                   "supported (cdr, ros1)")
-            if channel.schema_id == 0 or schema is None:
+            if (channel.message_encoding in _SCHEMA_FOR_ENCODING
+                    and (channel.schema_id == 0 or schema is None)):
                 raise _Unsupported(f"channel {channel.id} has no schema (schema id "
                                    f"{channel.schema_id})")
-            if schema.encoding not in _SCHEMA_FOR_ENCODING[channel.message_encoding]:
-                raise _Unsupported(f"schema encoding {schema.encoding!r} does not go with message "
-                                   f"encoding {channel.message_encoding!r}")
-            store, typename = build_typestore(schema.encoding, schema.name,
-                                              schema.data.decode("utf-8", errors="replace"))
-            dec = _decoder_for(store, typename, channel.message_encoding)
+            dec = schema_decoder(channel.message_encoding, schema and schema.encoding,
+                                 schema and schema.name,
+                                 schema and schema.data.decode("utf-8", errors="replace"))
         except _Unsupported as exc:
             kind = (P.UNKNOWN_ENCODING if channel.message_encoding not in _SCHEMA_FOR_ENCODING
                     else P.UNKNOWN_SCHEMA)

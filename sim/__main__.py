@@ -1,4 +1,4 @@
-"""Command line: ``python -m sim record|list|verdicts`` (see ``python -m sim --help``)."""
+"""Command line: ``python -m sim record|serve|list|verdicts`` (see ``python -m sim --help``)."""
 
 from __future__ import annotations
 
@@ -48,6 +48,34 @@ def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression
     clr = ("<= 0 (contact)" if res.min_clearance <= 0 else f"{res.min_clearance:.3f} m")
     click.echo(f"{output}: {scenario} seed {seed}: {res.outcome}; {res.duration:.2f} s sim "
                f"in {wall:.1f} s wall; reached: {reached or 'none'}; min clearance {clr}")
+
+
+@main.command()
+@click.option("--scenario", "-s", type=click.Choice(list(SCENARIOS)), default="nominal",
+              show_default=True, help="Scenario to simulate.")
+@click.option("--seed", type=int, default=1, show_default=True, help="Random seed.")
+@click.option("--rate", type=float, default=1.0, show_default=True,
+              help="Times real time (0: as fast as possible).")
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Interface to bind (loopback by default).")
+@click.option("--port", type=int, default=8765, show_default=True)
+@click.option("--ros1", is_flag=True, help="ROS 1 messages instead of ROS 2 (cdr).")
+@click.option("--wait/--no-wait", default=True, show_default=True,
+              help="Start the run once a client subscribed.")
+def serve(scenario, seed, rate, host, port, ros1, wait):
+    """Run one scenario live over the Foxglove WebSocket protocol (foxglove-sdk)."""
+    from .serve import serve as do_serve
+
+    def ready(server):
+        click.echo(f"serving {scenario} on {server.url} at {rate:g}x"
+                   + ("; waiting for a client to subscribe" if wait else ""), err=True)
+
+    try:
+        res = do_serve(scenario, seed=seed, rate=rate, host=host, port=port, ros1=ros1,
+                       wait=wait, on_ready=ready)
+    except KeyboardInterrupt:
+        return
+    click.echo(f"{scenario}: {res.outcome}; {res.duration:.2f} s sim", err=True)
 
 
 @main.command()

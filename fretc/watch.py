@@ -1,0 +1,219 @@
+"""``fretc watch URL`` and ``fretc replay LOG.mcap --serve``: the audit's monitors on a
+running robot over the Foxglove WebSocket protocol, and a server to watch.
+
+::
+
+    fretc watch ws://localhost:8765 --requirements requirements/ [--bindings B.toml]
+                [--duration S] [--record OUT.mcap] [--jsonl] [--no-live]
+    fretc replay traces/nominal.mcap --serve [--rate 10] [--host 127.0.0.1] [--port 8765]
+
+Exit status of ``watch`` as ``fretc audit``: 0 every verdict satisfied (or vacuous), 1 a
+requirement violated, 2 usage or input errors (a requirement that could not be watched, no
+connection); a run with a connection gap never exits 0 (2: part of it was not checked).
+Needs the ``watch`` extra: ``pip install 'fretc[watch]'``.
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import sys
+import threading
+import time
+
+import click
+
+from monitors.cli import audit_config, audit_input_options
+
+__all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
+
+
+def live_table(w):
+    """The live table of a :class:`monitors.watch.Watch`: per requirement the pt verdict
+    now, the LTL3 status and when it became definite, violations so far, the last trigger
+    (times in s from the first tick)."""
+    from rich.console import Group
+    from rich.table import Table
+    from rich.text import Text
+
+    w.refresh_evidence()
+    st0 = w.start_time
+
+    def s(ns):
+        return "-" if ns is None or st0 is None else f"{(ns - st0) / 1e9:.1f} s"
+
+    table = Table(header_style="bold", title=None)
+    for col in ("req", "pt now", "LTL3", "definite at", "violations", "last trigger"):
+        table.add_column(col, no_wrap=True)
+    cols = getattr(w, "_cols", None)
+    times = cols.times if cols is not None else []
+    for r in w.plan.requirements:
+        st = w.live[r.index]
+        if st.error is not None:
+            table.add_row(r.id, Text("error", style="red"), Text(st.error[:60]), "", "", "")
+            continue
+        if st.offline:
+            pt = Text("offline", style="dim")
+        elif st.pt is None:
+            pt = Text("-")
+        else:
+            pt = Text("holds", style="green") if st.pt else Text("violated", style="bold red")
+        style = {"violated": "bold red", "satisfied": "green"}.get(st.status, "")
+        definite = "-"
+        if st.status_tick is not None and st.status_tick < len(times):
+            definite = f"{s(times[st.status_tick])} (#{st.status_tick})"
+        trig = "-"
+        if st.last_trigger is not None and st.last_trigger < len(times):
+            trig = f"{s(times[st.last_trigger])} (#{st.last_trigger})"
+        table.add_row(r.id, pt, Text(st.status, style=style), definite, str(st.violations),
+                      trig)
+    src = w.source
+    gaps = len(src.gaps)
+    line = (f"{w.status_line} | ticks {w.ticks} ({s(w.last_tick_time)}) | unknown {w.unknown_ticks}"
+            f" | gaps {gaps} | problems {len(src.problems)}")
+    return Group(Text(line, style="dim"), table)
+
+
+class _Renderable:
+    def __init__(self, w):
+        self.w = w
+
+    def __rich__(self):
+        return live_table(self.w)
+
+
+@click.command("watch")
+@click.argument("url")
+@audit_input_options
+@click.option("--duration", type=float, default=None, metavar="SECONDS",
+              help="Stop after this many seconds (default: until Ctrl-C).")
+@click.option("--record", "record", type=click.Path(dir_okay=False), default=None,
+              help="Write the watched messages and the verdict events (/fretc/verdicts) to "
+                   "this MCAP; `fretc audit` of it gives the watch's verdicts.")
+@click.option("--jsonl", is_flag=True, help="One JSON line per verdict event on stdout.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
+              help="Write the final verdicts and evidence as the audit's JSON to FILE.")
+@click.option("--wait", type=float, default=3.0, show_default=True, metavar="SECONDS",
+              help="After connecting, wait this long for the bound topics' advertisements.")
+@click.option("--connect-timeout", type=float, default=None, metavar="SECONDS",
+              help="Give up when no connection was made within this time (default: retry "
+                   "until stopped).")
+@click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
+@click.pass_context
+def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
+              jobs, engine, window, duration, record, jsonl, json_path, wait, connect_timeout,
+              no_live):
+    """Watch a robot live over the Foxglove WebSocket protocol (URL ws://host:8765, e.g.
+    foxglove_bridge) with the requirements and bindings that audit its logs."""
+    from rich.console import Console
+    from rich.live import Live
+    from rich.markup import escape
+
+    from monitors.audit import AuditInputError, load_plan
+    from monitors.audit_output import print_summary
+    from monitors.report_model import audit_json, exit_code
+    from monitors.watch import Watch, WatchOptions
+
+    if not url.startswith(("ws://", "wss://")):
+        raise click.BadParameter(f"{url!r}: expected ws://host:port", param_hint="URL")
+    err = Console(stderr=True, highlight=False, soft_wrap=True)
+    out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
+    config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
+                          "stepwise", window)
+    try:
+        plan = load_plan(config)
+        lock = threading.Lock()
+
+        def on_event(e):
+            if jsonl:
+                with lock:
+                    sys.stdout.write(json.dumps(e.to_json(), sort_keys=True) + "\n")
+                    sys.stdout.flush()
+
+        w = Watch(plan, WatchOptions(url=url, duration=duration, wait=wait,
+                                     connect_timeout=connect_timeout, record=record),
+                  on_event=on_event)
+    except AuditInputError as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}")
+        ctx.exit(2)
+        return
+    input_errors = False
+    for r in plan.requirements:
+        if r.error is not None:
+            input_errors = True
+            err.print(f"[red]error:[/red] {escape(f'{r.id} ({r.source}): {r.error}')}")
+
+    previous = signal.getsignal(signal.SIGINT)
+
+    def on_sigint(signum, frame):
+        w.stop()
+
+    signal.signal(signal.SIGINT, on_sigint)
+    try:
+        if not no_live and err.is_terminal:
+            with Live(_Renderable(w), console=err, refresh_per_second=4, transient=False):
+                la = w.run()
+        else:
+            la = w.run()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    print_summary(out, [la], plan)
+    if la.partial:
+        out.print(f"connection gaps: {len(w.source.gaps)}; {w.unknown_ticks} ticks not "
+                  "evaluated (unknown)", markup=False)
+    if record:
+        out.print(f"recorded {record}", markup=False)
+    if json_path:
+        doc = audit_json([la], plan.requirements_json(), plan.bindings_json(), input_errors)
+        with open(json_path, "w", encoding="utf-8") as f:
+            f.write(doc)
+    code = exit_code([la], input_errors)
+    if code == 0 and la.partial:
+        code = 2
+    ctx.exit(code)
+
+
+@click.command("replay")
+@click.argument("log", type=click.Path(exists=True, dir_okay=False))
+@click.option("--serve", is_flag=True, required=True,
+              help="Publish the log over the Foxglove WebSocket protocol (foxglove-sdk).")
+@click.option("--rate", type=float, default=1.0, show_default=True,
+              help="Times real time (0: as fast as possible).")
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Interface to bind (loopback by default).")
+@click.option("--port", type=int, default=8765, show_default=True)
+@click.option("--wait/--no-wait", default=True, show_default=True,
+              help="Start publishing once a client subscribed.")
+@click.option("--loop", is_flag=True, help="Start again at the end.")
+def replay_cmd(log, serve, rate, host, port, wait, loop):
+    """Publish a recorded MCAP LOG over the Foxglove WebSocket protocol, paced at RATE
+    times real time, with its recorded schemas, encodings and log times."""
+    from monitors.watch_serve import FoxgloveServer, advertise_mcap, replay_mcap
+
+    try:
+        server = FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")
+    except RuntimeError as exc:
+        raise click.ClickException(str(exc))
+    advertise_mcap(log, server)
+    click.echo(f"serving {log} on {server.url} at {rate:g}x", err=True)
+    try:
+        while True:
+            if wait:
+                click.echo("waiting for a client to subscribe", err=True)
+                server.wait_subscribed(timeout=1e9)
+            t0 = time.perf_counter()
+            n, _last = replay_mcap(log, server, rate)
+            click.echo(f"sent {n} messages in {time.perf_counter() - t0:.1f} s", err=True)
+            if not loop:
+                break
+        time.sleep(0.5)  # let the last messages leave
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+
+
+def register(main) -> None:
+    """Add ``watch`` and ``replay`` to the ``fretc`` group."""
+    main.add_command(watch_cmd, "watch")
+    main.add_command(replay_cmd, "replay")

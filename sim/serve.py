@@ -1,0 +1,100 @@
+"""Run the simulator live: ``python -m sim serve --scenario S [--rate 10]`` publishes the
+simulated robot's topics over the Foxglove WebSocket protocol (foxglove-sdk's server,
+loopback by default) while it runs, paced at ``rate`` times real time, so the Foxglove app
+and ``fretc watch`` can connect to it as to a robot running ``foxglove_bridge``.
+
+Channels, schemas and bytes are those :class:`sim.recording.McapRecorder` writes (ROS 2:
+``cdr`` / ``ros2msg``; ROS 1 with ``ros1=True``); log times are the simulation clock (from
+1 700 000 000 s, as in the recorded traces), so a served run and the recorded run of the same
+scenario and seed carry the same messages at the same log times.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Dict, Iterable, Optional, Tuple
+
+from .recording import TOPICS, MessageFactory, schema_name
+
+__all__ = ["ServeRecorder", "serve"]
+
+
+class ServeRecorder:
+    """The recorder interface of :class:`sim.recording.McapRecorder` (``factory``,
+    ``counts``, ``write``, ``finish``), publishing on a
+    :class:`monitors.watch_serve.FoxgloveServer` instead of writing a file.
+
+    Raises ValueError for an unknown topic or a log time going backwards (as the MCAP
+    recorder).
+    """
+
+    def __init__(self, server, rate: float = 1.0, ros1: bool = False,
+                 topics: Iterable[Tuple[str, str]] = TOPICS,
+                 stop: Optional[threading.Event] = None) -> None:
+        from monitors.watch_serve import Pacer
+
+        self.server = server
+        self.ros1 = ros1
+        self.factory = MessageFactory(ros1)
+        self.pacer = Pacer(rate)
+        self.stop = stop
+        self.counts: Dict[str, int] = {}
+        self.types: Dict[str, str] = {}
+        self.last_time = -1
+        ts = self.factory.ts
+        for topic, typename in topics:
+            text, _md5 = ts.generate_msgdef(typename, ros_version=1 if ros1 else 2)
+            server.channel(topic, "ros1" if ros1 else "cdr", schema_name(typename, ros1),
+                           "ros1msg" if ros1 else "ros2msg", text.encode("utf-8"))
+            self.types[topic] = typename
+            self.counts[topic] = 0
+
+    def write(self, topic: str, log_time_ns: int, msg) -> None:
+        """Serialize ``msg`` and publish it on ``topic`` when its log time is due."""
+        if topic not in self.types:
+            raise ValueError(f"unknown topic {topic}")
+        if log_time_ns < self.last_time:
+            raise ValueError("log times must not decrease")
+        if self.stop is not None and self.stop.is_set():
+            raise KeyboardInterrupt
+        self.last_time = log_time_ns
+        data = self.factory.serialize(msg, self.types[topic])
+        self.pacer.wait(log_time_ns)
+        self.server.log(topic, data, log_time_ns)
+        self.counts[topic] += 1
+
+    def finish(self) -> None:
+        """Nothing to flush (the server sends as messages are logged)."""
+
+
+def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0.0.1",
+          port: int = 8765, ros1: bool = False, threshold: float = 0.9,
+          stop_delay: Optional[float] = None, wait: bool = True, server=None,
+          on_ready=None):
+    """Simulate ``scenario`` live on a foxglove-sdk server (a new one on ``host:port``
+    unless ``server`` is given); with ``wait``, start once a client subscribed. Returns the
+    :class:`~sim.simulation.RunResult`.
+
+    Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
+    """
+    from monitors.watch_serve import FoxgloveServer
+
+    from .scenarios import get_scenario
+    from .simulation import Simulation
+
+    own = server is None
+    if own:
+        server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}")
+    try:
+        rec = ServeRecorder(server, rate=rate, ros1=ros1)
+        if on_ready is not None:
+            on_ready(server)
+        if wait:
+            server.wait_subscribed(timeout=1e9)
+        sim = Simulation(get_scenario(scenario, stop_delay), seed=seed, threshold=threshold)
+        return sim.run(rec)
+    finally:
+        if own:
+            import time
+            time.sleep(0.5)  # let the last messages leave
+            server.stop()
