@@ -194,4 +194,8 @@ def psl_label_and_formula(compiled, mapping: Optional[dict] = None):
 
 
 def _comment(text: str) -> str:
-    return " ".join(str(text).split())
+    """One ``//`` comment line: white space folded, control and bidi characters escaped
+    (:func:`fretish.textsafe.one_line`; a NUL or U+202E in an id must not reach the file)."""
+    from fretish.textsafe import one_line
+
+    return one_line(text)

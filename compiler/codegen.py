@@ -49,17 +49,11 @@ MAX_AUTOMATON_STATES = 5000
 #: (:mod:`compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
 MAX_LTL3_BOUND = 12
 MAX_LTL3_BOUND_SUM = 96
-#: With bounded operators, LTL3 monitors are built for at most this many atoms (fuzzing:
-#: ``after m upon c ... after 8 ticks satisfy r | p0 | ... | p11`` took 7 s in Spot).
-MAX_LTL3_BOUNDED_ATOMS = 10
-#: Above this many atoms, LTL3 monitors are built only for a single temporal operator
-#: (``G (big Boolean)`` is cheap for Spot; fuzzing: ``only after m ... finally satisfy r &
-#: w0 & ... & w29`` ran Spot for minutes into gigabytes).
-MAX_LTL3_ATOMS = 16
-#: Work bound of formula progression (residual states x letters): beyond it there is no
-#: LTL3 monitor (4096: about 1 s on the build machine for the worst residuals seen; the
-#: fuzzed ``before q ... after 999999 ticks`` took 110 s for 4096 states without it).
-LTL3_MAX_PROGRESSIONS = 4096
+#: LTL3 monitors are built for at most this many atoms: beyond it an edge condition written
+#: as Boolean code can be exponential (``a xor b xor ...``: minutes for 16 atoms) and Spot's
+#: determinization can take minutes and gigabytes (fuzzing: ``only after m ... finally
+#: satisfy r & w0 & ... & w29``); status stays "unknown" with a note.
+MAX_LTL3_ATOMS = 10
 #: An expression read once is inlined into the expression that reads it up to this nesting
 #: depth; deeper ones get a local of their own, so the emitted code's nesting is bounded
 #: whatever the requirement's (CPython rejects about 200 nested parentheses and runs out of
@@ -285,116 +279,108 @@ def _read(name: str, code: _StepCode, numeric: bool) -> str:
 @dataclass
 class _Automaton:
     """A deterministic Spot monitor as tables: ``table[state][letter]`` (letter = bits of the
-    atoms, -1 = no transition) for at most :data:`TABLE_MAX_APS` atoms; beyond that
-    ``edges[state]`` = [(BDD node of the edge condition, destination)] over the shared node
-    table ``bdd``: node 0 is false, 1 true, node k >= 2 is ``(atom index, low, high)``
-    (Bryant's reduced ordered BDDs, as Spot's BuDDy builds them, renumbered in the order
-    they are first met so the same automaton always gives the same table). Code and size
-    are linear in the BDD, whatever the number of atoms (an edge condition written as a
-    Boolean formula can be exponential: ``a xor b xor ...``)."""
+    atoms, -1 = no transition) or ``chains[state]`` = [(condition code, destination)]."""
 
     atoms: List[Node]
     initial: int
     table: Optional[List[List[int]]]
-    edges: Optional[List[List[Tuple[int, int]]]]
+    chains: Optional[List[List[Tuple[str, int]]]]
     empty: bool  # the automaton accepts nothing at all
     sub_code: str = "0"  # Python expression of the letter, set once atoms have locals
     complete: bool = False  # every state has a transition for every letter: never rejects
-    bdd: Optional[List[Optional[Tuple[int, int, int]]]] = None
 
 
-def _build_automaton(f: Node, atoms_by_name: Dict[str, Node]) -> Optional[_Automaton]:
+def _bdd_code(f, aps: List[str]) -> str:
+    """Python code of a Spot Boolean formula over the letter bits ``a[i]``."""
     import spot
 
-    formula = spot.formula(to_spot(f))
-    aut = spot.translate(formula, "monitor", "det")
-    if aut.num_states() > MAX_AUTOMATON_STATES:
-        return None
-    d = aut.get_dict()
-    aps = [str(p.ap_name()) for p in aut.ap()]
-    atoms = [atoms_by_name[p] for p in aps]
-    empty = aut.is_empty()
-    atom_of_var = {d.varnum(spot.formula.ap(name)): i for i, name in enumerate(aps)}
-    nodes: List[Optional[Tuple[int, int, int]]] = [None, None]
-    memo: Dict[int, int] = {}
-    if len(aps) <= TABLE_MAX_APS:
-        table = []
-        for s in range(aut.num_states()):
-            row = [-1] * (1 << len(aps))
-            for e in aut.out(s):
-                root = _bdd_nodes(e.cond, atom_of_var, nodes, memo)
-                for letter in range(1 << len(aps)):
-                    node = root
-                    while node > 1:  # the letter's path through the edge's BDD
-                        atom, low, high = nodes[node]
-                        node = high if (letter >> atom) & 1 else low
-                    if node:
-                        row[letter] = e.dst
-            table.append(row)
-        complete = all(x >= 0 for row in table for x in row)
-        return _Automaton(atoms, aut.get_init_state_number(), table, None, empty,
-                          complete=complete and not empty)
-    edges = [[(_bdd_nodes(e.cond, atom_of_var, nodes, memo), e.dst) for e in aut.out(s)]
-             for s in range(aut.num_states())]
-    return _Automaton(atoms, aut.get_init_state_number(), None, edges, empty, bdd=nodes)
+    k = f.kind()
+    if k == spot.op_tt:
+        return "True"
+    if k == spot.op_ff:
+        return "False"
+    if k == spot.op_ap:
+        return f"(sub >> {aps.index(f.ap_name())} & 1)"
+    if k == spot.op_Not:
+        return f"(not {_bdd_code(f[0], aps)})"
+    if k == spot.op_And:
+        return "(" + " and ".join(_bdd_code(x, aps) for x in f) + ")"
+    if k == spot.op_Or:
+        return "(" + " or ".join(_bdd_code(x, aps) for x in f) + ")"
+    raise CodegenError(f"unexpected Boolean operator in an automaton edge: {f}")
 
 
-def _bdd_nodes(cond, atom_of_var: Dict[int, int], nodes: list, memo: Dict[int, int]) -> int:
-    """Append the nodes of the BDD ``cond`` not yet in ``nodes`` (see :class:`_Automaton`;
-    ``memo`` maps BuDDy node ids to their numbers, so shared sub-graphs appear once) and
-    return its node number. Iterative: BDD depth is the number of atoms."""
-    import buddy
-
-    if cond == buddy.bddfalse:
-        return 0
-    if cond == buddy.bddtrue:
-        return 1
-    number: Dict[int, int] = {}
-    stack = [cond]
-    while stack:  # post-order: children numbered before their parent
-        b = stack[-1]
-        key = b.id()
-        if key in number or key in memo:
-            stack.pop()
-            continue
-        low, high = buddy.bdd_low(b), buddy.bdd_high(b)
-        todo = [c for c in (high, low) if c.id() > 1 and c.id() not in number
-                and c.id() not in memo]
-        if todo:
-            stack.extend(todo)
-            continue
-        stack.pop()
-
-        def ref(c):
-            k = c.id()
-            return k if k <= 1 else (number[k] if k in number else memo[k])
-
-        nodes.append((atom_of_var[buddy.bdd_var(b)], ref(low), ref(high)))
-        number[key] = len(nodes) - 1
-    memo.update(number)
-    return memo[cond.id()]
+def _check_monitorable(pt: Node) -> None:
+    """Raise :class:`CodegenError` at once when pt needs the future (so such a requirement
+    costs no automaton construction before it is skipped)."""
+    for n in ir.walk(pt):
+        if n.op == "future":
+            raise CodegenError(
+                f"the pt formula needs the future-time function {n.name}, which a "
+                "tick-by-tick monitor cannot know yet; write the requirement with past-time "
+                "functions (persisted, occurred) or audit it offline")
 
 
-def _progression_automata(ft_inf: Node, atoms_by_name: Dict[str, Node], bounds: List[int]):
-    """LTL3 automata by formula progression (:mod:`compiler.ltl3`) for ft_inf whose bounds
-    are too large for Spot; ``(bad, good, note)`` with both None when that fails too."""
-    from .ltl3 import MAX_ATOMS, MAX_STATES, progression_tables
+def ltl3_automata(ft_inf: Node) -> Tuple[Optional[_Automaton], Optional[_Automaton], str]:
+    """The LTL3 automata of ``ft_inf``: ``(bad, good, note)``. ``bad`` rejects exactly the bad
+    prefixes (violated), ``good`` the good ones (satisfied); None when not built, with the
+    reason in ``note`` ("" when both come from Spot).
 
-    atoms = list(dict.fromkeys(atoms_by_name.values()))
-    tables = progression_tables(ft_inf, atoms, LTL3_MAX_PROGRESSIONS)
-    why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what Spot "
-           f"determinizes quickly (largest {MAX_LTL3_BOUND}, sum {MAX_LTL3_BOUND_SUM})")
-    if tables is None:
+    Built once per shape of ft_inf (:func:`compiler.ltl3.canonical_shape`: atoms renamed, so
+    requirements of the same template, bounds and atom pattern share it) and kept in fretc's
+    disk cache (:func:`compiler.ltl3.shape_automata`); the tables are canonical, so the
+    generated module is the same with a cold or a warm cache. Spot (exact LTL3) while
+    ft_inf's bounds are at most :data:`MAX_LTL3_BOUND` ticks and sum to at most
+    :data:`MAX_LTL3_BOUND_SUM`; formula progression (sound, bounds symbolic) beyond, unless
+    a bound exceeds :data:`compiler.ltl3.MAX_STATES` (progression would need at least that
+    many residuals: decided before any construction)."""
+    from . import ltl3
+
+    shape, atoms = ltl3.canonical_shape(ft_inf)
+    if len(atoms) > MAX_LTL3_ATOMS:
         return None, None, (
-            f"no LTL3 monitor: {why}, and formula progression needs more than {MAX_STATES} "
-            f"residuals, {MAX_ATOMS} atoms or {LTL3_MAX_PROGRESSIONS} progressions; status "
+            f"no LTL3 monitor: ft_inf has {len(atoms)} atoms (more than {MAX_LTL3_ATOMS}: "
+            "the deterministic monitors can take minutes and gigabytes to build); status "
             "stays 'unknown' (step and finish unaffected)")
-    bad_table, good_table, init = tables
-    bad = _Automaton(list(atoms), init, bad_table, None, empty=ft_inf.op == "false")
-    good = _Automaton(list(atoms), init, good_table, None, empty=ft_inf.op == "true")
-    return bad, good, (f"LTL3 by formula progression ({len(bad_table) - 2} residual states): "
-                       f"{why}; verdicts are sound but may come later than the exact LTL3 "
-                       "verdict when a residual is unsatisfiable without simplifying to FALSE")
+    bounds = [n.hi for n in ir.walk(ft_inf) if n.hi is not None]
+    if bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
+        why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what "
+               f"Spot determinizes quickly (largest {MAX_LTL3_BOUND}, sum "
+               f"{MAX_LTL3_BOUND_SUM})")
+        if max(bounds) >= ltl3.MAX_STATES or len(atoms) > ltl3.MAX_ATOMS:
+            data = {"bad": None, "good": None}
+        else:
+            data = ltl3.shape_automata("progression", shape, len(atoms), ltl3.MAX_STATES,
+                                       TABLE_MAX_APS)
+        if data["bad"] is None or data["good"] is None:
+            return None, None, (
+                f"no LTL3 monitor: {why}, and formula progression needs more than "
+                f"{ltl3.MAX_STATES} residuals, {ltl3.MAX_ATOMS} atoms or "
+                f"{ltl3.MAX_PROGRESSIONS} progressions; status stays "
+                "'unknown' (step and finish unaffected)")
+        bad, good = _automaton(data["bad"], atoms), _automaton(data["good"], atoms)
+        return bad, good, (
+            f"LTL3 by formula progression ({data['bad']['states']} residual states): {why}; "
+            "verdicts are sound but may come later than the exact LTL3 verdict when a "
+            "residual is unsatisfiable without simplifying to FALSE")
+    data = ltl3.shape_automata("spot", shape, len(atoms), MAX_AUTOMATON_STATES, TABLE_MAX_APS)
+    bad, good = _automaton(data["bad"], atoms), _automaton(data["good"], atoms)
+    note = "" if bad is not None and good is not None else (
+        f"Spot's deterministic monitor exceeds {MAX_AUTOMATON_STATES} states: no early "
+        "verdict")
+    return bad, good, note
+
+
+def _automaton(data: Optional[dict], atoms: List[Node]) -> Optional[_Automaton]:
+    """An :class:`_Automaton` over ``atoms`` (bit i of a letter = atoms[i]) from the data of
+    :func:`compiler.ltl3.shape_automata`."""
+    if data is None:
+        return None
+    chains = None
+    if data["chains"] is not None:
+        chains = [[(cond, dst) for cond, dst in row] for row in data["chains"]]
+    return _Automaton(list(atoms), data["initial"], data["table"], chains, data["empty"],
+                      complete=data["complete"])
 
 
 # --------------------------------------------------------------------------- per requirement
@@ -423,6 +409,8 @@ class MonitorSource:
     bad: Optional[_Automaton]
     uses_first: bool
     status_note: str
+    bad_table: Optional[int] = None  # index in the module's _TABLES (render_module)
+    good_table: Optional[int] = None
 
     @property
     def verdict_expr(self) -> str:
@@ -448,37 +436,9 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     """Generate the code pieces of one compiled requirement (``compiler.build.Compiled``).
     Raises :class:`CodegenError` when no monitor can be built."""
     f = compiled.formalization
+    _check_monitorable(f.pt)  # before any expensive work
     code = _StepCode()
-    # atoms of ft_inf that the automata read
-    atoms_by_name: Dict[str, Node] = {}
-    for n in ir.walk(f.ft_inf):
-        if n.op == "ap":
-            atoms_by_name[mangled_ap(n)] = n
-        elif n.op in ("cmp", "call", "past", "FTP"):
-            atoms_by_name[to_smv(n)] = n
-    from .ir import not_
-    bounds = [n.hi for n in ir.walk(f.ft_inf) if n.hi is not None]
-    n_atoms = len(set(atoms_by_name.values()))
-    temporal = sum(1 for n in ir.walk(f.ft_inf) if n.op in ("X", "F", "G", "U", "V"))
-    if n_atoms > MAX_LTL3_ATOMS and temporal > 1:
-        bad = good = None
-        note = (f"no LTL3 monitor: ft_inf has {n_atoms} atoms (more than {MAX_LTL3_ATOMS}) "
-                "under nested temporal operators: Spot's determinization can take minutes "
-                "and gigabytes; status stays 'unknown' (step and finish unaffected)")
-    elif bounds and n_atoms > MAX_LTL3_BOUNDED_ATOMS:
-        bad = good = None
-        note = (f"no LTL3 monitor: ft_inf has bounded operators over {n_atoms} atoms (more "
-                f"than {MAX_LTL3_BOUNDED_ATOMS}: Spot's determinization takes seconds to "
-                "minutes, progression enumerates 2^atoms letters); status stays 'unknown' "
-                "(step and finish unaffected)")
-    elif bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
-        bad, good, note = _progression_automata(f.ft_inf, atoms_by_name, bounds)
-    else:
-        bad = _build_automaton(f.ft_inf, atoms_by_name)
-        good = _build_automaton(not_(f.ft_inf), atoms_by_name)
-        note = "" if bad is not None and good is not None else (
-            f"Spot's deterministic monitor exceeds {MAX_AUTOMATON_STATES} states: no early "
-            "verdict")
+    bad, good, note = ltl3_automata(f.ft_inf)
     atom_nodes: List[Node] = []
     for aut in (bad, good):
         if aut is not None:
@@ -640,8 +600,22 @@ def render_module(compiled_list, module_name: str, errors: Optional[list] = None
 def _render(monitors: List[MonitorSource], skipped, module_name: str) -> str:
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
+    tables: Dict[str, int] = {}  # encoded table -> index: one copy per distinct table
+    for m in monitors:
+        for which in ("bad", "good"):
+            aut = getattr(m, which)
+            if aut is not None and aut.table is not None and not aut.complete:
+                text = encode_table(aut.table)
+                setattr(m, f"{which}_table", tables.setdefault(text, len(tables)))
     return _env().get_template("monitor_module.py.j2").render(
-        module_name=module_name, monitors=monitors, skipped=skipped, digest=digest)
+        module_name=module_name, monitors=monitors, skipped=skipped, digest=digest,
+        tables=list(tables))
+
+
+def encode_table(table: List[List[int]]) -> str:
+    """A transition table as the generated module stores it: rows separated by ``;``,
+    destinations by ``,`` (the module's ``_table`` decodes it)."""
+    return ";".join(",".join(map(str, row)) for row in table)
 
 
 def file_stems(sources, suffix: str = "") -> Dict[str, str]:

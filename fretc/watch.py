@@ -45,9 +45,8 @@ def live_table(w):
     table = Table(header_style="bold", title=None)
     for col in ("req", "pt now", "LTL3", "definite at", "violations", "last trigger"):
         table.add_column(col, no_wrap=True)
-    cols = getattr(w, "_cols", None)
-    times = cols.times if cols is not None else []
     for r in w.plan.requirements:
+        times = w.tick_times(r.index)
         st = w.live[r.index]
         if st.error is not None:
             table.add_row(r.id, Text("error", style="red"), Text(st.error[:60]), "", "", "")

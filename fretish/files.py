@@ -27,6 +27,9 @@
   FRETish ones (``microsec[ond][s]``, ``millisec[ond][s]``, ``sec[ond][s]``,
   ``minute[s]``, ``hour[s]``) and ``us``, ``µs``, ``ms``, ``s``, ``min``, ``h``. The period
   is stored in seconds as an exact :class:`~fractions.Fraction` of the decimal text.
+* ``@inputs a, b`` and ``@outputs c`` (each at most once; names separated by commas or
+  spaces) declare which FRET variables the environment sets (sensor-derived) and which the
+  component sets, for ``fretc check``'s realizability check. A name in both is an error.
 * Blank lines are ignored.
 
 The sentence text handed to the parser keeps the file's geometry: continuation lines keep
@@ -68,7 +71,9 @@ class RequirementEntry:
     ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
     it starts (1-based). ``tick_period`` is in seconds (None: not declared). Exactly one
     of ``requirement`` (the parsed AST) and ``error`` (why it does not parse) is set.
-    ``extra`` holds the other members of a FRET JSON object.
+    ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
+    the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
+    realizability), the same for every requirement of the file.
     """
 
     id: str
@@ -82,6 +87,8 @@ class RequirementEntry:
     requirement: Optional[Requirement] = None
     error: Optional[FretishError] = None
     extra: dict = field(default_factory=dict)
+    inputs: Tuple[str, ...] = ()
+    outputs: Tuple[str, ...] = ()
 
 
 # --------------------------------------------------------------------------- durations
@@ -174,6 +181,8 @@ def _load_fret(path: Path) -> List[RequirementEntry]:
     seen: Dict[str, int] = {}
     file_period: Optional[Fraction] = None
     period_line = 0
+    io: Dict[str, Tuple[str, ...]] = {}
+    io_line: Dict[str, int] = {}
     current: Optional[_Pending] = None
 
     def fail(msg, ln, col=1, hint=None):
@@ -212,9 +221,26 @@ def _load_fret(path: Path) -> List[RequirementEntry]:
             continue
         if content.startswith("@"):
             m = _DIRECTIVE.match(content)
+            if m and m.group(1) in ("inputs", "outputs"):
+                kind = m.group(1)
+                if kind in io_line:
+                    fail(f"second @{kind} (the first is on line {io_line[kind]})", ln)
+                names = [n for n in re.split(r"[\s,]+", m.group(2) or "") if n]
+                for n in names:
+                    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", n):
+                        fail(f"bad variable name '{n}' in @{kind}", ln,
+                             content.index(n) + 1)
+                io[kind] = tuple(names)
+                io_line[kind] = ln
+                clash = sorted(set(io.get("inputs", ())) & set(io.get("outputs", ())))
+                if clash:
+                    fail("declared both @inputs and @outputs: " + ", ".join(clash), ln)
+                current = None
+                continue
             if not m or m.group(1) != "tick_period":
                 fail(f"unknown directive '{content.split()[0]}'", ln, 1,
-                     "the only directive is '@tick_period <number> <unit>'")
+                     "the directives are '@tick_period <number> <unit>', '@inputs NAMES' "
+                     "and '@outputs NAMES'")
             if period_line:
                 fail(f"second @tick_period (the first is on line {period_line})", ln)
             try:
@@ -266,7 +292,7 @@ def _load_fret(path: Path) -> List[RequirementEntry]:
             id=p.id, text=text, source=source, line=line0, column=col0,
             rationale=p.attrs["rationale"][0] if "rationale" in p.attrs else None,
             parent=(p.attrs["parent"][0] or None) if "parent" in p.attrs else None,
-            tick_period=period)
+            tick_period=period, inputs=io.get("inputs", ()), outputs=io.get("outputs", ()))
         try:
             entry.requirement = parse(text, source=source, line=line0, column=col0)
         except FretishSyntaxError as e:
@@ -380,6 +406,25 @@ def load_requirements(paths: Union[PathLike, Iterable[PathLike]]) -> List[Requir
     :class:`FretishFileError` naming ``file:line:column``.
     """
     entries: List[RequirementEntry] = []
+    read: set = set()
+    first: Dict[str, RequirementEntry] = {}
     for f in _files_of(paths):
-        entries.extend(_load_json(f) if f.suffix.lower() == ".json" else _load_fret(f))
+        key = os.path.realpath(f)
+        if key in read:  # the same file named twice (a folder and a file in it)
+            continue
+        read.add(key)
+        got = _load_json(f) if f.suffix.lower() == ".json" else _load_fret(f)
+        for e in got:
+            # ids are unique across all the files of a run: verdicts, monitors and reports
+            # are keyed by id (issue 15 item 13); duplicates inside one file are caught by
+            # its reader
+            other = first.get(e.id)
+            if other is not None and other.source != e.source:
+                raise FretishFileError(
+                    f"requirement id '{e.id}' is also defined at {other.source}:{other.line}; "
+                    "ids must be unique across the requirement files of a run (rename one)",
+                    source=e.source, line=e.line,
+                    column=e.column if f.suffix.lower() == ".json" else 1)
+            first.setdefault(e.id, e)
+        entries.extend(got)
     return entries

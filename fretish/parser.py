@@ -51,7 +51,7 @@ from . import ast as A
 from .errors import FretishSyntaxError
 from .limits import LimitError, check_expression, check_requirement
 
-__all__ = ["parse", "parse_expression", "build_lark", "RESERVED_WORDS", "RESERVED_LETTERS"]
+__all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS", "RESERVED_LETTERS"]
 
 _GRAMMAR_FILE = Path(__file__).with_name("grammar.lark")
 
@@ -466,13 +466,58 @@ _lock = threading.Lock()
 _lark: Optional[Lark] = None
 
 
+_LARK_OPTIONS = dict(parser="lalr", lexer="contextual", start=["start", "expr"],
+                     maybe_placeholders=False)
+
+
 def build_lark(**options) -> Lark:
     """A new Lark parser for ``grammar.lark`` (start symbols ``start`` and ``expr``), LALR
     with the contextual lexer and the AST builder applied while parsing. ``options`` go
-    to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts)."""
-    return Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), parser="lalr",
-                lexer="contextual", start=["start", "expr"], transformer=_Builder(),
-                maybe_placeholders=False, **options)
+    to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts). Builds the LALR
+    tables from the grammar (about a second); :func:`cached_lark` loads them instead."""
+    return Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), transformer=_Builder(),
+                **_LARK_OPTIONS, **options)
+
+
+def cached_lark() -> Lark:
+    """The parser of :func:`build_lark`, with its LALR tables loaded from fretc's disk
+    cache (:mod:`fretish.cache`, sub-folder ``lark``) when an entry for this grammar text,
+    Lark version, Python version and these options is there, else built and stored
+    (``Lark.save`` / ``Lark.load``, Lark's documented serialization; loading takes a few
+    milliseconds where building the tables takes about a second).
+
+    ``grammar.lark`` stays the only source: the entry's name is a hash of everything the
+    tables depend on, so editing the grammar or upgrading Lark or Python gives a new entry,
+    never a stale one. Entries are written atomically (:func:`fretish.cache.write_bytes`);
+    an entry that cannot be read or loaded is ignored and rebuilt, and when the cache
+    folder cannot be written the tables are built in memory as :func:`build_lark` does."""
+    import io
+    import sys
+
+    import lark as _lark_pkg
+
+    from . import cache
+
+    grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
+    key = cache.key_of("fretish-lark-1", grammar, _lark_pkg.__version__,
+                       "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
+    name = f"grammar-{key[:40]}.pickle"
+    data = cache.read_bytes("lark", name)
+    if data is not None:
+        try:
+            parser = Lark.load(io.BytesIO(data))
+            if isinstance(parser.options.transformer, _Builder):
+                return parser
+        except Exception:  # a damaged or foreign entry: rebuild it  # noqa: BLE001
+            pass
+    parser = build_lark()
+    buf = io.BytesIO()
+    try:
+        parser.save(buf)
+    except Exception:  # noqa: BLE001 - not serializable here: keep the built parser
+        return parser
+    cache.write_bytes("lark", name, buf.getvalue())
+    return parser
 
 
 def _get_parser() -> Lark:
@@ -480,7 +525,7 @@ def _get_parser() -> Lark:
     if _lark is None:
         with _lock:
             if _lark is None:
-                _lark = build_lark()
+                _lark = cached_lark()
     return _lark
 
 

@@ -31,8 +31,11 @@ engine: per evaluated tick, 8 bytes of time, 8 bytes per bound topic (log time o
 message), 1 byte per boolean and 8 per numeric variable - about 80 bytes a tick for the
 Safe-ROS set, 3 MB for an hour at 10 Hz. (Kept in chunks of :data:`CHUNK` ticks.)
 
-Damage: a truncated log is audited up to its end and every verdict on it is ``partial``
-(``LogAudit.damage_time_ns``); damaged chunks are data problems, not failures; a topic whose
+Damage (DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
+summary lost) is ``partial``; only the ticks before its first cut or gap
+(``LogAudit.damage_time_ns``, :attr:`monitors.sources.LogSource.intact_end`) are judged, and
+a verdict that the end of that span would decide is ``unknown`` (:mod:`monitors.damage`); a
+fixed tick period giving more than :data:`MAX_TICKS` ticks is an input error; a topic whose
 schema is unknown makes only the requirements reading it ``error`` - the others are audited
 without it (a second pass over the log, only in that case). Problems of every pass are kept.
 
@@ -65,6 +68,9 @@ NS_PER_S = 1_000_000_000
 CHUNK = 4096
 #: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
 VECTORIZE_MIN_TICKS = 20_000
+#: At most this many ticks per log: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many (issue 15 item 11).
+MAX_TICKS = 10**8
 #: File kinds audited when a folder is given.
 LOG_SUFFIXES = (".mcap", ".bag", ".csv")
 _MODULE_PREFIX = "fretc_audit_"
@@ -99,6 +105,7 @@ class AuditConfig:
     time_base: Optional[str] = None
     engine: str = "auto"
     window: int = 5
+    select_logs: bool = True
 
 
 def discover_bindings(requirement_paths: Sequence[str]) -> List[Path]:
@@ -117,6 +124,42 @@ def discover_bindings(requirement_paths: Sequence[str]) -> List[Path]:
             if f not in out:
                 out.append(f)
     return out
+
+
+#: A tick topic's measured rate may differ this much from its nominal rate without warning.
+RATE_TOLERANCE = 0.10
+
+
+def _check_nominal_rate(la, bindings: Optional[Bindings]) -> None:
+    """Warn when one tick per message of a topic whose nominal rate converts the durations
+    runs at a measured rate (messages over the log's span) more than
+    :data:`RATE_TOLERANCE` away from it: ``within 1 second`` then means a different time."""
+    if bindings is None or bindings.tick.topic is None or not bindings.tick.nominal_period_ns:
+        return
+    n = la.messages.get(bindings.tick.topic, 0)
+    st, en = la.start_time_ns, la.end_time_ns
+    if n < 2 or st is None or en is None or en <= st:
+        return
+    measured = (n - 1) * NS_PER_S / (en - st)
+    nominal = NS_PER_S / bindings.tick.nominal_period_ns
+    if abs(measured - nominal) > RATE_TOLERANCE * nominal:
+        la.warnings.append(
+            f"{bindings.tick.topic} runs at {measured:.3g} Hz, not its nominal "
+            f"{nominal:.3g} Hz ({bindings.source}): durations in time units, converted with "
+            f"the nominal rate, are off by {abs(measured / nominal - 1):.0%}")
+
+
+def _has_time_units(entry) -> bool:
+    """The requirement's text has a duration in time units (not ``ticks``)."""
+    from fretish.errors import FretishError
+    from fretish.parser import parse
+
+    try:
+        req = parse(entry.text)
+    except (FretishError, Exception):  # reported when compiled
+        return False
+    d = getattr(req.timing, "duration", None)
+    return d is not None and d.unit != "ticks"
 
 
 def _merge_bindings(parts: List[Bindings]) -> Bindings:
@@ -272,11 +315,25 @@ class AuditPlan:
     modules: Dict[str, str]
     csv_period_ns: int
     freeform: List[str] = field(default_factory=list)
+    #: remarks on the inputs (bound variables no requirement uses)
+    warnings: List[str] = field(default_factory=list)
+    #: binding files with ``[logs]``: (selector, file, the plan for the logs it selects)
+    variants: List[Tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
 
     def requirements_json(self) -> List[dict]:
         return [r.to_json() for r in self.requirements]
 
     def bindings_json(self) -> Optional[dict]:
+        if self.variants:
+            variables = {}
+            for _sel, _f, sub in self.variants:
+                for name, v in (sub.bindings_json() or {}).get("variables", {}).items():
+                    variables.setdefault(name, v)
+            return {"sources": self.binding_files, "tick": None, "time_base": None,
+                    "variables": variables,
+                    "per_log": [dict(sub.bindings_json() or {}, file=f,
+                                     logs={"glob": list(sel.glob), "topics": list(sel.topics)})
+                                for sel, f, sub in self.variants]}
         b = self.bindings
         if b is None:
             return None
@@ -342,6 +399,10 @@ def load_plan(config: AuditConfig) -> AuditPlan:
 
     if config.engine not in ("auto", "stepwise", "vectorized"):
         raise AuditInputError(f"unknown engine {config.engine!r} (auto, stepwise, vectorized)")
+    if config.select_logs:
+        split = _plan_per_log(config)
+        if split is not None:
+            return split
     bindings, binding_files = _load_bindings(config)
     try:
         entries = load_requirements([Path(p) for p in config.requirements])
@@ -352,26 +413,53 @@ def load_plan(config: AuditConfig) -> AuditPlan:
     if not entries:
         raise AuditInputError(f"no requirements in {', '.join(config.requirements)}")
     period = None
+    nominal = None
     if bindings is not None and bindings.tick.period_ns is not None:
         period = Fraction(bindings.tick.period_ns, NS_PER_S)
+    elif bindings is not None and bindings.tick.nominal_period_ns is not None:
+        nominal = Fraction(bindings.tick.nominal_period_ns, NS_PER_S)
+    flag = config.tick_period is not None  # --tick-period overrides every declared period
     plans: List[RequirementPlan] = []
     to_compile = []
     for i, e in enumerate(entries):
         rp = RequirementPlan(i, e.id, e.text, f"{e.source}:{e.line}", e.line)
-        if e.tick_period is None and period is not None:
+        if flag:
+            if e.tick_period is not None and e.tick_period != period:
+                rp.notes.append(f"durations converted with --tick-period "
+                                f"{_fmt_period(period)} instead of the declared "
+                                f"{_fmt_period(e.tick_period)}")
+            e = dataclasses.replace(e, tick_period=period)
+        elif e.tick_period is None and period is not None:
             e = dataclasses.replace(e, tick_period=period)
         elif e.tick_period is not None and period is not None and e.tick_period != period:
             rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
                         f"{_fmt_period(e.tick_period)} but the bindings ({bindings.source}) "
                         f"tick every {_fmt_period(period)}: durations would convert with the "
-                        "wrong period; make them equal")
-        elif e.tick_period is not None and bindings is not None and bindings.tick.topic:
-            rp.notes.append(f"durations convert with the declared {_fmt_period(e.tick_period)}"
-                            f" as the nominal period of {bindings.tick.topic}")
+                        "wrong period; make them equal (or pass --tick-period to override "
+                        "both for this run)")
+        elif bindings is not None and bindings.tick.topic:
+            if nominal is not None and e.tick_period is not None and e.tick_period != nominal:
+                rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
+                            f"{_fmt_period(e.tick_period)} but the bindings ({bindings.source})"
+                            f" give {bindings.tick.topic} a nominal period of "
+                            f"{_fmt_period(nominal)}; make them equal")
+            elif nominal is not None:
+                e = dataclasses.replace(e, tick_period=nominal)
+            elif _has_time_units(e):
+                rp.error = (f"{e.source}:{e.line}: {e.id} has a duration in time units but "
+                            f"the bindings ({bindings.source}) tick once per "
+                            f"{bindings.tick.topic} message, whose rate is not declared: add "
+                            f"nominal_rate = \"10 Hz\" (the topic's rate) to [tick]; the "
+                            "audit checks it against the log")
         rp.tick_period = e.tick_period
         plans.append(rp)
         to_compile.append(e)
     compiled = compile_entries(to_compile)
+    if flag:
+        for c, rp in zip(compiled, plans):
+            if c.error is not None and rp.error is None:
+                rp.error = (f"{c.error} (the tick period {_fmt_period(period)} comes from "
+                            "--tick-period)")
     ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
     modules = emit_monitors(ok) if ok else {}
     classes: Dict[Tuple[str, str], type] = {}
@@ -422,8 +510,82 @@ def load_plan(config: AuditConfig) -> AuditPlan:
     if not plans:
         raise AuditInputError(f"only free-form requirements in {', '.join(config.requirements)}"
                               ": nothing to audit")
+    warnings = []
+    if bindings is not None:
+        used = {v for rp in plans for v in (rp.variables or (
+            rp.formalization.variables if rp.formalization is not None else []))}
+        for name, b in bindings.variables.items():
+            if name not in used:
+                at = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+                warnings.append(f"{at}: {name!r} is bound but no requirement uses it")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
-                     freeform)
+                     freeform, warnings)
+
+
+def _plan_per_log(config: AuditConfig) -> Optional[AuditPlan]:
+    """Binding files that select their logs (``[logs]``, :class:`monitors.bindings.LogSelector`):
+    one plan per selecting file (merged with the files that select nothing, which apply to
+    every log), each compiled with its own tick. A requirement whose variables are bound
+    only by another selecting file is not applicable to that file's logs (it is left out of
+    their verdicts); one bound nowhere stays an error. None when no file selects logs."""
+    files = ([Path(p) for p in config.bindings] if config.bindings is not None
+             else discover_bindings(config.requirements))
+    parts = []
+    for f in files:
+        try:
+            parts.append((f, load_bindings(f)))
+        except BindingError as exc:
+            raise AuditInputError(str(exc)) from None
+    selecting = [(f, b) for f, b in parts if b.logs is not None]
+    if not selecting:
+        return None
+    plain = [str(f) for f, b in parts if b.logs is None]
+    variants = []
+    for f, b in selecting:
+        sub = load_plan(dataclasses.replace(config, bindings=tuple([str(f)] + plain),
+                                            select_logs=False))
+        variants.append((b.logs, str(f), sub))
+    anywhere = {n for _s, _f, sub in variants for n in sub.bindings.variables}
+    union: Dict[Tuple[str, str], RequirementPlan] = {}
+    for _s, _f, sub in variants:
+        keep = []
+        for r in sub.requirements:
+            names = r.variables or (list(r.formalization.variables)
+                                    if r.formalization is not None else [])
+            missing = [v for v in names if v not in sub.bindings.variables]
+            if missing and all(v in anywhere for v in missing):
+                continue  # bound by another selecting file: for its logs, not these
+            keep.append(r)
+            union.setdefault((r.source, r.id), r)
+        sub.requirements = keep
+    reqs = sorted(union.values(), key=lambda r: r.index)
+    used = {v for r in reqs for v in (r.variables or (
+        r.formalization.variables if r.formalization is not None else []))}
+    warnings = sorted({w for _s, _f, sub in variants for w in sub.warnings
+                       if w.split("'")[1] not in used})
+    return AuditPlan(config, reqs, None, [str(f) for f in files], {}, NS_PER_S,
+                     variants[0][2].freeform, warnings, variants)
+
+
+def _select_variant(plan: AuditPlan, path: str):
+    """(plan for ``path``, None) or (None, the input error naming the binding files)."""
+    need_topics = any(sel.topics for sel, _f, _p in plan.variants)
+    topics = None
+    if need_topics:
+        from .sources import open_log
+        try:
+            topics = list(open_log(path).topics())
+        except (FretcInputError, OSError):
+            topics = None
+    hits = [(sel, f, sub) for sel, f, sub in plan.variants if sel.matches(path, topics)]
+    if len(hits) == 1:
+        return hits[0][2], None
+    if not hits:
+        return None, (f"{path}: no binding file selects this log ("
+                      + "; ".join(f"{f}: {sel.text()}" for sel, f, _p in plan.variants)
+                      + "); add a [logs] glob or topics that match it")
+    return None, (f"{path} is selected by both {hits[0][1]} ({hits[0][0].text()}) and "
+                  f"{hits[1][1]} ({hits[1][0].text()}): make their [logs] tables exclusive")
 
 
 # --------------------------------------------------------------------------- logs
@@ -486,7 +648,7 @@ class _Columns:
     def append(self, tick) -> None:
         v = tick.values
         for name, lst in zip(self.names, self._vals):
-            lst.append(v[name])
+            lst.append(v.get(name, False))  # a failed variable: its requirements are errors
         lt = tick.log_times
         for topic, lst in zip(self.topics, self._lts):
             lst.append(lt.get(topic, -1))
@@ -544,6 +706,8 @@ class _Pass:
     log_times: Dict[str, np.ndarray]
     monitors: Dict[int, Any]
     engine: Dict[int, str]
+    cut: int = 0  # ticks dropped after the damage (_cut_at_damage)
+    intact_end: Optional[int] = None  # exclusive bound of the judged ticks' times
 
 
 def _restrict(b: Bindings, names: List[str]) -> Bindings:
@@ -562,20 +726,30 @@ def _expected_ticks(source, bindings: Optional[Bindings]) -> Optional[int]:
     return (en - st) // bindings.tick.period_ns + 1
 
 
-def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: List[RequirementPlan],
-              progress: Optional[Callable[[float], None]]) -> _Pass:
-    from .signals import sample
+def _clock_key(r: RequirementPlan, bindings: Optional[Bindings]) -> frozenset:
+    """The clock a requirement is sampled on: the topics of its own variables (DESIGN.md,
+    "Each verdict stands alone": its tick grid, start, end and warm-up come from them and
+    the bindings' tick, never from other requirements of the run)."""
+    if bindings is None:
+        return frozenset()
+    return frozenset(t for v in r.variables if v in bindings.variables
+                     for t in bindings.variables[v].topics)
 
-    names: List[str] = []
-    for r in active:
-        for v in r.variables:
-            if v not in names:
-                names.append(v)
-    if bindings is not None:
-        topics = sorted({t for n in names for t in bindings.variables[n].topics})
-    else:
-        from .sources import CSV_TOPIC
-        topics = [CSV_TOPIC]
+
+@dataclass
+class _Passes:
+    """One read of a log: a :class:`_Pass` per clock, and what went wrong per clock."""
+
+    sampling: Any
+    passes: Dict[frozenset, "_Pass"]
+    failed: Dict[frozenset, Dict[str, SignalError]]
+    errors: Dict[frozenset, SignalError]
+
+
+def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: List[RequirementPlan],
+              progress: Optional[Callable[[float], None]]) -> _Passes:
+    from .signals import sample, sample_groups
+
     expected = _expected_ticks(source, bindings)
     engine: Dict[int, str] = {}
     for r in active:
@@ -586,29 +760,103 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
         if mode == "vectorized" and not r.vectorizable():
             mode = "stepwise"
         engine[r.index] = "interval" if r.offline else mode
-    monitors = {r.index: r.monitor_cls() for r in active if engine[r.index] == "stepwise"}
-    steppers = [m.step for m in monitors.values()]
-    cols = _Columns(names, topics)
-    sampling = sample(source, bindings)
+    groups: Dict[frozenset, List[RequirementPlan]] = {}
+    for r in active:
+        groups.setdefault(_clock_key(r, bindings), []).append(r)
+    cols: Dict[frozenset, _Columns] = {}
+    monitors: Dict[frozenset, Dict[int, Any]] = {}
+    steppers: Dict[frozenset, List[Tuple[RequirementPlan, Any]]] = {}
+    spec: Dict[frozenset, Tuple[List[str], frozenset]] = {}
+    for key, rs in groups.items():
+        names: List[str] = []
+        for r in rs:
+            for v in r.variables:
+                if v not in names:
+                    names.append(v)
+        if bindings is not None:
+            topics = sorted(key)
+        else:
+            from .sources import CSV_TOPIC
+            topics = [CSV_TOPIC]
+        spec[key] = (names, key)
+        cols[key] = _Columns(names, topics)
+        monitors[key] = {r.index: r.monitor_cls() for r in rs if engine[r.index] == "stepwise"}
+        steppers[key] = [(r, monitors[key][r.index].step) for r in rs
+                         if r.index in monitors[key]]
+    if bindings is not None:
+        sampling = sample_groups(source, bindings, spec)
+        stream = iter(sampling)
+        failed = sampling.failed
+        errors = sampling.errors
+    else:
+        single = sample(source, None)
+        key0 = next(iter(groups))
+        stream = ((key0, t) for t in single)
+        failed = {key0: {}}
+        errors = {}
+        sampling = single
     start_t = source.start_time
     end_t = source.end_time
     span = (end_t - start_t) if (start_t is not None and end_t is not None
                                  and end_t > start_t) else None
     every = 512
     count = 0
-    for tick in sampling:
+    for key, tick in stream:
         vals = tick.values
-        for step in steppers:
+        fails = failed[key]
+        steps = steppers[key]
+        if fails and any(v not in vals for r, _ in steps for v in r.variables):
+            steps[:] = [(r, st) for r, st in steps if all(v in vals for v in r.variables)]
+        for _r, step in steps:
             step(vals)
-        cols.append(tick)
+        cols[key].append(tick)
         count += 1
+        if count > MAX_TICKS:
+            raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
+                              "choose a longer tick period")
         if progress is not None and count % every == 0:
             if span is not None:
                 progress(min(1.0, max(0.0, (tick.time - start_t) / span)))
             elif expected:
                 progress(min(1.0, count / expected))
-    times, columns, log_times = cols.finish()
-    return _Pass(sampling, times, columns, log_times, monitors, engine)
+    passes: Dict[frozenset, _Pass] = {}
+    for key in groups:
+        times, columns, log_times = cols[key].finish()
+        s = sampling.groups[key] if bindings is not None else sampling
+        passes[key] = _Pass(s, times, columns, log_times, monitors[key], engine)
+        _cut_at_damage(passes[key], source, bindings, groups[key])
+    return _Passes(sampling, passes, failed, errors)
+
+
+def _cut_at_damage(res: _Pass, source, bindings: Optional[Bindings],
+                   active: List[RequirementPlan]) -> None:
+    """Keep only the ticks of the span read completely (DESIGN.md "Damage is never
+    evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
+    under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
+    precede its log time by that much). The stepwise monitors, which saw every tick, are
+    replayed over the kept ones. Sets ``res.cut`` to the number of ticks dropped."""
+    end = source.intact_end
+    if end is None:
+        return
+    if bindings is not None and bindings.time_base == "header":
+        end -= bindings.header_lag_ns
+    keep = int(np.searchsorted(res.times, end, side="left"))
+    n = len(res.times)
+    res.intact_end = end
+    if keep >= n:
+        return
+    res.cut = n - keep
+    res.times = res.times[:keep]
+    res.columns = {k: v[:keep] for k, v in res.columns.items()}
+    res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+    by_index = {r.index: r for r in active}
+    names = list(res.columns)
+    for idx in list(res.monitors):
+        mon = by_index[idx].monitor_cls()
+        cols = [res.columns[k] for k in names]
+        for i in range(keep):
+            mon.step({k: _py(c[i]) for k, c in zip(names, cols)})
+        res.monitors[idx] = mon
 
 
 def _problem_json(p: DataProblem) -> dict:
@@ -635,6 +883,23 @@ def audit_log(plan: AuditPlan, path: str,
     from .report_model import LogAudit, Verdict
     from .sources import open_log
 
+    if plan.variants:
+        sub, err = _select_variant(plan, str(path))
+        if sub is None:
+            la = LogAudit(log=str(path), error=err)
+            damaged = _damage_of(path, la)
+            if damaged:  # the damage may have taken the topics that select it: unknown
+                la.error = None
+                la.verdicts = [Verdict(log=str(path), requirement=r.id, text=r.text,
+                                       source=r.source, verdict="unknown", partial=True,
+                                       unknown_reason=f"{err}; {damaged}")
+                               for r in plan.requirements]
+                return la
+            la.verdicts = [Verdict(log=str(path), requirement=r.id, text=r.text,
+                                   source=r.source, error=f"log not audited: {err}")
+                           for r in plan.requirements]
+            return la
+        return audit_log(sub, path, progress)
     la = LogAudit(log=str(path))
     verdicts: Dict[int, Verdict] = {}
     for r in plan.requirements:
@@ -649,8 +914,6 @@ def audit_log(plan: AuditPlan, path: str,
             if v.error is not None:
                 v.verdict = "error"
             v.partial = la.partial
-            v.ticks_evaluated = la.ticks_evaluated
-            v.warmup_ticks = la.warmup_ticks
         return la
 
     def fail_all(message: str, rs=None) -> None:
@@ -671,11 +934,14 @@ def audit_log(plan: AuditPlan, path: str,
     la.kind = source.kind
     bindings = plan.bindings
     if source.kind == "csv":
-        from .sources import CSV_TOPIC
-        if bindings is not None and not (bindings.topics <= {CSV_TOPIC}):
-            bindings = None  # a trace of FRET variables: its columns are the variables
-        elif bindings is not None and not bindings.variables:
+        # the same binding rules as any log (README "CSV traces"): with bindings, bound
+        # variables are their expressions over /csv.<column> (a missing topic or column is
+        # an error naming the columns), unbound ones read the column of their name; without
+        # bindings the columns are the variables
+        if bindings is not None and not bindings.variables:
             bindings = None
+        elif bindings is not None:
+            bindings = _csv_bindings(plan, bindings, source)
     elif bindings is None:
         la.error = (f"{path}: a {source.kind} log needs signal bindings (*.bindings.toml next to "
                     "the requirements, --bindings or --bind): signals are declared, never "
@@ -689,6 +955,11 @@ def audit_log(plan: AuditPlan, path: str,
     else:
         la.tick = {"period_ns": plan.csv_period_ns, "rows": True}
         la.time_base = "csv"
+    too_many = _too_many_ticks(source, bindings, path)
+    if too_many is not None:
+        la.error = too_many
+        fail_all(too_many)
+        return finish()
 
     active = [r for r in plan.requirements if r.error is None]
     # variables without a binding (or CSV column)
@@ -698,8 +969,11 @@ def audit_log(plan: AuditPlan, path: str,
         if missing:
             where = (f"bindings ({bindings.source})" if bindings is not None
                      else f"the CSV columns ({', '.join(source.columns)})")
+            from .schema import closest
+            hints = [(m, closest(m, sorted(available))) for m in missing]
+            hint = "; ".join(f"did you mean {h!r} for {m!r}?" for m, h in hints if h)
             verdicts[r.index].error = (f"no binding for {', '.join(map(repr, missing))} in "
-                                       f"{where}")
+                                       f"{where}" + (f"; {hint}" if hint else ""))
     # topics absent from the log
     try:
         log_topics = source.topics()
@@ -707,10 +981,19 @@ def audit_log(plan: AuditPlan, path: str,
         la.error = str(exc)
         fail_all(f"log not audited: {exc}")
         return finish()
+    r_skip: set = set()  # requirements already decided (unknown) before the pass
+    damaged = _damage_before_topics(source, la)  # damage seen while finding the topics
     if bindings is not None:
         if bindings.tick.topic is not None and bindings.tick.topic not in log_topics:
-            la.error = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
-                        f"{', '.join(log_topics) or 'no topics'})")
+            msg = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
+                   f"{', '.join(log_topics) or 'no topics'})")
+            if damaged:  # the damage may have taken it: unknown, with the damage's reason
+                for r in active:
+                    if verdicts[r.index].error is None:
+                        verdicts[r.index].verdict = "unknown"
+                        verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                return finish()
+            la.error = msg
             fail_all(la.error)
             return finish()
         for r in active:
@@ -721,15 +1004,25 @@ def audit_log(plan: AuditPlan, path: str,
             if absent:
                 users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
                          for t in absent}
-                verdicts[r.index].error = (
-                    "; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
-                              for t in absent)
-                    + f" (it has {', '.join(log_topics) or 'no topics'})")
+                has = (f"a CSV trace has one topic, /csv, with the columns "
+                       f"{', '.join(source.columns)}" if source.kind == "csv"
+                       else f"it has {', '.join(log_topics) or 'no topics'}")
+                msg = ("; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
+                                 for t in absent) + f" ({has})")
+                if damaged:
+                    verdicts[r.index].verdict = "unknown"
+                    verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                    r_skip.add(r.index)
+                else:
+                    verdicts[r.index].error = msg
+    if bindings is not None:
+        _check_binding_types(source, bindings, plan, verdicts)
     problems: Dict[Tuple, DataProblem] = {}
     problem_counts: Dict[str, int] = {}
-    result: Optional[_Pass] = None
+    result: Optional[_Passes] = None
     while True:
-        active = [r for r in plan.requirements if verdicts[r.index].error is None]
+        active = [r for r in plan.requirements if verdicts[r.index].error is None
+                  and r.index not in r_skip]
         if not active:
             break
         names = sorted({v for r in active for v in r.variables})
@@ -749,59 +1042,147 @@ def audit_log(plan: AuditPlan, path: str,
             result = None
             break
         _collect_problems(source, result.sampling, problems, problem_counts)
-        silent = set(result.sampling.missing_topics)
-        if silent and b is not None:
-            hit = [r for r in active
-                   if any(t in silent for v in r.variables for t in b.variables[v].topics)]
-            if hit:
-                why = _silent_reasons(silent, problems.values())
-                for r in hit:
-                    topics = sorted({t for v in r.variables for t in b.variables[v].topics
-                                     if t in silent})
-                    verdicts[r.index].error = "; ".join(why[t] for t in topics)
-                result = None
-                continue
         break
-    la.partial = bool(source.partial)
-    la.damage_time_ns = source.damage_time
+    la.partial = bool(source.partial) or la.partial
+    if source.partial or la.damage_time_ns is None:
+        la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut) or la.damage_cut
     la.messages = dict(sorted(source.counts.items()))
-    la.problems = [_problem_json(p) for p in problems.values()]
-    la.problem_counts = dict(sorted(problem_counts.items()))
+    if problems or not la.problems:  # (else: only the damage found with the topics)
+        la.problems = [_problem_json(p) for p in problems.values()]
+        la.problem_counts = dict(sorted(problem_counts.items()))
+    la.start_time_ns = source.start_time
+    la.end_time_ns = source.end_time
+    _check_nominal_rate(la, bindings)
     if result is None:
         return finish()
-    s = result.sampling
-    la.start_time_ns = s.start_time
-    la.first_time_ns = s.first_time
-    la.end_time_ns = s.end_time
-    la.ticks_evaluated = s.ticks
-    la.warmup_ticks = s.warmup_ticks
-    la.waiting_for = list(s.waiting_for)
-    la.missing_topics = list(s.missing_topics)
-    engines = sorted(set(result.engine.values()))
-    la.engine = engines[0] if len(engines) == 1 else "mixed"
+    engines = set()
+    by_key: Dict[int, Any] = {}
     for r in active:
-        _finalize(plan, r, result, bindings, verdicts[r.index], la)
+        key = _clock_key(r, b)
+        res = result.passes[key]
+        by_key[r.index] = res
+        v = verdicts[r.index]
+        s = res.sampling
+        v.ticks_evaluated = len(res.times)
+        v.warmup_ticks = s.warmup_ticks
+        v.first_tick_ns = s.first_time
+        v.last_tick_ns = s.end_time
+        if res.cut:  # ticks after the damage are not judged
+            v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
+            la.ticks_after_damage = max(la.ticks_after_damage, res.cut)
+        v.waiting_for = list(s.waiting_for)
+        err = result.errors.get(key)
+        bad = [n for n in r.variables if n in result.failed.get(key, {})]
+        if err is not None:
+            v.error = str(err)
+            continue
+        if bad:
+            v.error = str(result.failed[key][bad[0]])
+            continue
+        silent = list(s.missing_topics) if b is not None else []
+        if silent:
+            why = _silent_reasons(silent, problems.values())
+            v.error = "; ".join(why[t] for t in sorted(silent))
+            continue
+        engines.add(res.engine[r.index])
+    # the log's figures summarize its requirements' clocks (each verdict has its own)
+    ok = [r for r in active if verdicts[r.index].error is None]
+    if ok:
+        la.ticks_evaluated = max(verdicts[r.index].ticks_evaluated for r in ok)
+        la.warmup_ticks = max(verdicts[r.index].warmup_ticks for r in ok)
+        firsts = [verdicts[r.index].first_tick_ns for r in ok
+                  if verdicts[r.index].first_tick_ns is not None]
+        la.first_time_ns = min(firsts) if firsts else None
+        la.waiting_for = sorted({t for r in ok for t in verdicts[r.index].waiting_for})
+        if la.ticks_after_damage:  # the log's judged span ends at the damage
+            lasts = [verdicts[r.index].last_tick_ns for r in ok
+                     if verdicts[r.index].last_tick_ns is not None]
+            la.end_time_ns = max(lasts) if lasts else None
+    la.missing_topics = sorted({t for res in result.passes.values()
+                                for t in (res.sampling.missing_topics if b is not None else [])})
+    if la.start_time_ns is None:
+        starts = [res.sampling.start_time for res in result.passes.values()
+                  if res.sampling.start_time is not None]
+        la.start_time_ns = min(starts) if starts else None
+    engines = sorted(engines)
+    la.engine = engines[0] if len(engines) == 1 else ("mixed" if engines else None)
+    for r in ok:
+        _finalize(plan, r, by_key[r.index], bindings, verdicts[r.index], la)
     if bindings is not None:
-        _operand_values(path, plan, bindings, active, verdicts, result.times)
+        _operand_values(path, plan, bindings, ok, verdicts, by_key)
     return finish()
 
 
+def _too_many_ticks(source, bindings: Optional[Bindings], path: str) -> Optional[str]:
+    """The error when the fixed tick period would give more than :data:`MAX_TICKS` ticks
+    over the log's span (first to last message), else None."""
+    if bindings is None or not bindings.tick.period_ns or source.kind == "csv":
+        return None
+    n = _expected_ticks(source, bindings)
+    if n is None or n <= MAX_TICKS:
+        return None
+    span = (source.end_time - source.start_time) / NS_PER_S
+    return (f"{path}: the tick period {_fmt_ns(bindings.tick.period_ns)} ({bindings.source}) "
+            f"would give {n:,} ticks over the {span:.3f} s of the log, more than the limit of "
+            f"{MAX_TICKS:,}; choose a longer period")
+
+
+def _damage_of(path: str, la) -> Optional[str]:
+    """Open ``path`` and read its topics; when that meets damage, mark ``la`` partial and
+    return the reason (:func:`_damage_before_topics`), else None (also when it cannot be
+    opened at all: that is an input error, not damage)."""
+    from .sources import open_log
+
+    try:
+        source = open_log(path)
+        source.topics()
+    except (FretcInputError, OSError):
+        return None
+    return _damage_before_topics(source, la)
+
+
+def _damage_before_topics(source, la) -> Optional[str]:
+    """When finding the log's topics met damage (a log cut inside its only chunk, say): mark
+    ``la`` partial with the problems, and return the reason in words (else None). Issue 15
+    item 10: the reason for the damage is kept even when nothing readable is left."""
+    if not source.partial:
+        return None
+    la.partial = True
+    la.damage_time_ns = source.damage_time
+    la.damage_cut = bool(source.damage_cut)
+    probs = [p for p in source.problems if p.kind in _DAMAGE_KINDS]
+    la.problems = [_problem_json(p) for p in source.problems]
+    la.problem_counts = {f"{k} {t or '-'}": n for (k, t), n in sorted(
+        source.problem_counts.items(), key=lambda kv: (kv[0][0], kv[0][1] or ""))}
+    if not probs:
+        return "the log is damaged"
+    return "the log is damaged: " + "; ".join(str(p) for p in probs[:3])
+
+
+_DAMAGE_KINDS = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
+                 "data_crc", "unknown_channel", "out_of_order")
+
+
 def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
-                    times) -> None:
+                    passes) -> None:
     """Evidence of violations: the numbers behind their boolean variables (the operands of
     the comparisons a binding is made of, :func:`monitors.bindings.operand_signals`) at the
     ticks whose values are shown. A second streaming pass over the log, only when something
-    was violated and only for those operands; ticks are matched by time."""
+    was violated and only for those operands, each on its requirement's own clock (so tick
+    indexes match the first pass)."""
     from .bindings import operand_signals
-    from .signals import sample
+    from .signals import sample_groups
     from .sources import open_log
 
     wanted: Dict[str, Tuple[str, object]] = {}  # aux name -> (label, binding)
-    needs: Dict[str, List[Tuple[object, List[str]]]] = {}
+    groups: Dict[frozenset, Tuple[List[str], frozenset]] = {}
+    needs: List[Tuple[frozenset, str, object, List[int]]] = []
     for r in active:
         v = verdicts[r.index]
         if v.verdict != "violated" or not v.values:
             continue
+        key = _clock_key(r, bindings)
         for name in r.variables:
             b = bindings.variables.get(name)
             if b is None or name not in v.values:
@@ -812,33 +1193,117 @@ def _operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verd
                 continue
             for label, aux in pairs:
                 wanted[aux.name] = (label, aux)
-                needs.setdefault(aux.name, []).append((v, [t for t, _ns, _x in v.values[name]]))
+                names = groups.setdefault(key, ([], key))[0]
+                if aux.name not in names:
+                    names.append(aux.name)
+                needs.append((key, aux.name, v, [t for t, _ns, _x in v.values[name]]))
     if not wanted:
         return
-    at_time = {}  # tick time -> tick index of the first pass
-    for aux_name, uses in needs.items():
-        for v, ticks in uses:
-            for t in ticks:
-                at_time[int(times[t])] = t
+    at = {(key, t) for key, _a, _v, ticks in needs for t in ticks}
     aux_bindings = Bindings({name: aux for name, (_l, aux) in wanted.items()}, bindings.tick,
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
-    got: Dict[str, Dict[int, object]] = {name: {} for name in wanted}
+    got: Dict[Tuple[frozenset, str], Dict[int, object]] = {}
     try:
         source = open_log(path, csv_period_ns=plan.csv_period_ns)
-        for tick in sample(source, aux_bindings):
-            t = at_time.get(int(tick.time))
-            if t is None:
+        for key, tick in sample_groups(source, aux_bindings, groups):
+            if (key, tick.index) not in at:
                 continue
-            for name in wanted:
-                got[name][t] = _py(tick.values.get(name))
+            for name in groups[key][0]:
+                if name in tick.values:
+                    got.setdefault((key, name), {})[tick.index] = _py(tick.values[name])
     except (LogError, SignalError, OSError):
         return  # the first pass already reported what is wrong with the log
-    for aux_name, uses in needs.items():
+    for key, aux_name, v, ticks in needs:
         label = wanted[aux_name][0]
-        for v, ticks in uses:
-            rows = [(t, int(times[t]), got[aux_name][t]) for t in ticks if t in got[aux_name]]
-            if rows:
-                v.values[label] = rows
+        times = passes_times = None
+        for r_index, res in passes.items():
+            if verdicts[r_index] is v:
+                passes_times = res.times
+        times = passes_times
+        vals = got.get((key, aux_name), {})
+        rows = [(t, int(times[t]), vals[t]) for t in ticks if t in vals]
+        if rows:
+            v.values[label] = rows
+
+
+def _csv_bindings(plan: AuditPlan, bindings: Bindings, source) -> Bindings:
+    """CSV with bindings: the bound variables as bound; every other variable of the
+    requirements that names a column reads it (``/csv.<column>``)."""
+    from .bindings import compile_expression
+    from .sources import CSV_TOPIC
+
+    variables = dict(bindings.variables)
+    for r in plan.requirements:
+        for v in r.variables:
+            if v not in variables and v in source.columns:
+                variables[v] = compile_expression(v, f"{CSV_TOPIC}.{v}",
+                                                  source=f"<CSV column {v}>")
+    return Bindings(variables, bindings.tick, bindings.time_base, bindings.header_lag_ns,
+                    bindings.source)
+
+
+def _check_binding_types(source, bindings: Bindings, plan: AuditPlan, verdicts) -> None:
+    """Check the bindings the requirements use against the log's message types
+    (:func:`monitors.bindings.check_types`): a binding that names a field the schema does
+    not declare, or mixes strings, booleans and numbers, makes its requirements ``error``
+    before anything is evaluated."""
+    from .bindings import check_types
+    from .schema import log_schemas
+
+    try:
+        schemas = log_schemas(source)
+    except Exception:  # unreadable schemas: the reader reports the damage itself
+        return
+    bad: Dict[str, str] = {}
+    types: Dict[str, str] = {}
+    for r in plan.requirements:
+        if verdicts[r.index].error is not None:
+            continue
+        uses = _variable_uses(r)
+        for v in r.variables:
+            b = bindings.variables.get(v)
+            if b is None:
+                continue
+            if v not in bad:
+                try:
+                    types[v] = check_types(b, schemas)
+                    bad[v] = ""
+                except BindingError as exc:
+                    bad[v] = str(exc)
+            if bad[v]:
+                verdicts[r.index].error = bad[v]
+                break
+            use, t = uses.get(v, set()), types.get(v)
+            where = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+            if t == "bool" and "var" in use:
+                verdicts[r.index].error = (
+                    f"{where}: type error: {r.id} uses {v!r} as a number, but its binding "
+                    f"{b.expr!r} is a boolean; bind it to a number")
+                break
+            if t == "number" and "ap" in use:
+                verdicts[r.index].error = (
+                    f"{where}: type error: {r.id} uses {v!r} as a boolean, but its binding "
+                    f"{b.expr!r} is a number; compare it (e.g. {b.expr.strip()} > 0) to make "
+                    "a boolean")
+                break
+
+
+def _variable_uses(r: RequirementPlan) -> Dict[str, set]:
+    """FRET variable -> {"ap"} (used as a boolean) and/or {"var"} (used as a number, inside
+    a comparison or arithmetic), from the requirement's formulas (compiler.ir)."""
+    out: Dict[str, set] = {}
+    f = r.formalization
+    if f is None:
+        return out
+    stack = [f.pt, f.ft]
+    while stack:
+        n = stack.pop()
+        if n is None:
+            continue
+        if n.op in ("ap", "var"):
+            out.setdefault(n.name, set()).add(n.op)
+        stack.extend(n.args)
+    return out
 
 
 def _silent_reasons(silent, problems) -> Dict[str, str]:
@@ -879,6 +1344,11 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
 
     n = len(res.times)
     v.engine = res.engine[r.index]
+    if n == 0 and res.intact_end is not None:
+        v.verdict = "unknown"
+        v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
+                            "read completely to judge")
+        return
     if n == 0:
         waiting = la.missing_topics or la.waiting_for
         v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
@@ -911,6 +1381,10 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
             v.notes.append("the interval semantics disagrees with the monitor "
                            f"({'holds' if ev.holds else 'violated'}); please report this")
             ev = None
+    if res.intact_end is not None:
+        holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+        if holds is None:
+            return
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous":
@@ -923,8 +1397,15 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
     obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]
     k = f.ticks
 
+    own_topics = sorted(_clock_key(r, bindings)) if bindings is not None else []
+    held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
+        list(res.log_times.values())
+
     def tp(i: int) -> TimePoint:
-        return TimePoint(int(i), int(times[min(max(i, 0), n - 1)]))
+        j = min(max(i, 0), n - 1)
+        lts = [int(h[j]) for h in held if h[j] >= 0]
+        # the message that decided the tick: the newest one held among its topics
+        return TimePoint(int(i), int(times[j]), max(lts) if lts else None)
 
     def time_at(i: int) -> Optional[int]:
         if 0 <= i < n:
@@ -967,6 +1448,32 @@ def _finalize(plan: AuditPlan, r: RequirementPlan, res: _Pass, bindings: Optiona
         if lt is None:
             continue
         v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]
+
+
+def _judge_at_damage(r: RequirementPlan, res: _Pass, v, holds: bool, ev, status, st_tick,
+                     n: int) -> Optional[bool]:
+    """The verdict over the intact span of a damaged log (:mod:`monitors.damage`): True /
+    False for the usual satisfied-or-vacuous / violated paths of :func:`_finalize`, None
+    when the verdict (``unknown``) is set here."""
+    from .damage import open_obligations, verdict_at_damage
+    from .evidence import EvidenceUnsupported
+
+    opened = []
+    try:
+        opened = open_obligations(r.requirement, res.columns, n, r.formalization.ticks)
+    except (EvidenceUnsupported, KeyError) as exc:
+        if holds:  # cannot tell whether an obligation is open at the damage
+            v.verdict = "unknown"
+            v.unknown_reason = (f"the log is damaged and whether an obligation is open at "
+                                f"the damage cannot be decided ({exc})")
+            return None
+    verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
+                                     st_tick, n, ev, opened, has_ltl3=v.engine != "interval")
+    if verdict == "unknown":
+        v.verdict = "unknown"
+        v.unknown_reason = why
+        return None
+    return verdict != "violated"
 
 
 def _py(x):

@@ -11,14 +11,29 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 
-from rich.markup import escape
-from typing import Dict, List, Optional
+from rich.markup import escape as _markup_escape
+from typing import Dict, List, Optional, Tuple
+
+from fretish.textsafe import terminal_text, xml_text
 
 from .report_model import LogAudit, Verdict, exit_code
 
 __all__ = ["print_summary", "junit_xml", "AuditProgress", "short_log_name"]
 
-_STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red", "error": "magenta"}
+_STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
+          "unknown": "yellow", "error": "magenta"}
+
+
+def escape(text) -> str:
+    """Text from the inputs for rich markup: control and bidi characters shown escaped
+    (:func:`fretish.textsafe.terminal_text`), then markup escaped."""
+    return _markup_escape(terminal_text(text))
+
+
+def _T(text) -> "Text":
+    from rich.text import Text
+
+    return Text(terminal_text(text))
 
 
 def short_log_name(path: str) -> str:
@@ -46,16 +61,38 @@ def _value(v) -> str:
     return str(v)
 
 
-def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True) -> None:
-    """Print the verdict table, per-log notes and, with ``details``, the evidence of each
-    violation (trigger, scope interval, obligation, values around it) to a rich Console."""
+#: The matrix (logs x requirements) is used while its smaller side has at most this many
+#: entries; beyond, a list of the verdicts that are not plain passes.
+MATRIX_MAX = 10
+
+
+def _cell(v: Verdict, st: Optional[int]) -> str:
+    if v.verdict == "violated":
+        fv = v.first_violation
+        at = f" {_s(fv.at.time_ns, st)}" if fv is not None else ""
+        return f"VIOLATED{at}" + (" *" if v.partial else "")
+    return v.verdict + (" *" if v.partial else "")
+
+
+def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True,
+                  verbose: bool = False, allow_partial: bool = False,
+                  input_errors: bool = False) -> None:
+    """Print the verdicts to a rich Console: a header line, the verdict matrix (logs x
+    requirements; cells give the first violation's time in seconds from the log's start),
+    per-log notes, errors in full below the table (never cut inside a cell), with
+    ``details`` one evidence block per violation (trigger, obligation, the missed tick with
+    its tick time and the log time of the message that decided it) and, with ``verbose``,
+    the values around each violation; last the counts and the exit code."""
     from rich.table import Table
     from rich.text import Text
 
     if plan is not None:
         b = plan.bindings
         clock = "no bindings (CSV columns are the variables)"
-        if b is not None:
+        if getattr(plan, "variants", None):
+            clock = "bindings per log: " + "; ".join(
+                f"{f} ({sel.text()})" for sel, f, _sub in plan.variants)
+        elif b is not None:
             tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
                     else f"one tick per {b.tick.topic} message")
             clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
@@ -64,71 +101,104 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
                       f"logs; {clock}", markup=False)
         if plan.freeform:
             console.print(f"free-form, not audited: {', '.join(plan.freeform)}", markup=False)
-    table = Table(show_lines=False, header_style="bold")
-    for col in ("log", "req", "verdict", "first violation", "trigger", "LTL3", "ticks",
-                "notes"):
-        table.add_column(col, no_wrap=col in ("log", "req", "verdict"))
+    reqs: List[str] = []
     for la in logs:
-        name = short_log_name(la.log)
-        st = la.start_time_ns
         for v in la.verdicts:
-            fv = v.first_violation
-            first = trig = "-"
-            if fv is not None:
-                first = f"{_s(fv.at.time_ns, st)} (#{fv.at.tick})"
-                if fv.trigger is not None:
-                    trig = f"{_s(fv.trigger.time_ns, st)} (#{fv.trigger.tick})"
-            ltl3 = v.ltl3.status
-            if v.ltl3.tick is not None:
-                ltl3 += f" @ {_s(v.ltl3.time_ns, st)}"
-            notes = []
-            if v.partial:
-                where = (_s(la.damage_time_ns, st) if la.damage_time_ns is not None
-                         else "the first message")
-                notes.append(f"partial (damage at {where})")
-            if v.error:
-                notes.append(v.error)
-            elif v.verdict == "vacuous":
-                notes.extend(n for n in v.notes if n.startswith("vacuous"))
-            label = v.verdict.upper() if v.verdict == "violated" else v.verdict
-            table.add_row(Text(name), Text(v.requirement), Text(label, style=_STYLE[v.verdict]),
-                          first, trig, ltl3, str(v.ticks_evaluated), Text("; ".join(notes)))
-    console.print(table)
+            if v.requirement not in reqs:
+                reqs.append(v.requirement)
+    cells: Dict[tuple, Verdict] = {(la.log, v.requirement): v for la in logs for v in la.verdicts}
+    starts = {la.log: la.start_time_ns for la in logs}
+    by_log = len(reqs) <= len(logs) or len(logs) > MATRIX_MAX
+    rows, cols = (logs, reqs) if by_log else (reqs, logs)
+    if min(len(logs), len(reqs)) <= MATRIX_MAX and logs:
+        table = Table(show_lines=False, header_style="bold")
+        table.add_column("log" if by_log else "req", no_wrap=True)
+        for c in cols:
+            table.add_column(terminal_text(c) if by_log else terminal_text(short_log_name(c.log)),
+                                 no_wrap=True)
+        for row in rows:
+            out = [_T(short_log_name(row.log) if by_log else row)]
+            for c in cols:
+                la_log, req = (row.log, c) if by_log else (c.log, row)
+                v = cells.get((la_log, req))
+                if v is None:
+                    out.append(Text("-"))
+                else:
+                    out.append(Text(_cell(v, starts[la_log]), style=_STYLE.get(v.verdict, "")))
+            table.add_row(*out)
+        console.print(table)
+    else:
+        table = Table(show_lines=False, header_style="bold")
+        for col in ("log", "req", "verdict"):
+            table.add_column(col, no_wrap=True)
+        shown = 0
+        for la in logs:
+            for v in la.verdicts:
+                if v.verdict in ("satisfied", "vacuous") and not v.partial:
+                    continue
+                shown += 1
+                table.add_row(_T(short_log_name(la.log)), _T(v.requirement),
+                              Text(_cell(v, la.start_time_ns), style=_STYLE.get(v.verdict, "")))
+        if shown:
+            console.print(table)
+        console.print("(only verdicts that are not complete passes are listed)",
+                      highlight=False)
+    if any(v.partial for la in logs for v in la.verdicts):
+        console.print("* partial log: audited up to the damage", highlight=False)
     for la in logs:
-        lines = _log_notes(la)
+        lines = _log_notes(la, verbose)
         if lines:
             console.print(f"[bold]{escape(short_log_name(la.log))}[/bold]: " + "; ".join(lines),
                           highlight=False)
+    # errors in full, outside the table; one requirement's error once for all logs
+    seen: Dict[Tuple[str, str], List[str]] = {}
+    for la in logs:
+        for v in la.verdicts:
+            if v.verdict == "error" and v.error and not la.error:
+                seen.setdefault(("error", f"{v.requirement}: {v.error}"), []).append(
+                    short_log_name(la.log))
+            elif v.verdict == "unknown" and v.unknown_reason:
+                seen.setdefault(("unknown", f"{v.requirement}: {v.unknown_reason}"), []).append(
+                    short_log_name(la.log))
+    for (kind, text), where in seen.items():
+        on = where[0] if len(where) == 1 else f"{len(where)} logs"
+        console.print(Text(f"{kind} ", style=_STYLE[kind]) + _T(f"({on}) {text}"))
     if details:
         for la in logs:
             for v in la.verdicts:
                 if v.verdict == "violated":
-                    _print_violation(console, la, v)
+                    _print_violation(console, la, v, verbose)
     counts: Dict[str, int] = {}
     for la in logs:
         for v in la.verdicts:
             counts[v.verdict] = counts.get(v.verdict, 0) + 1
-    parts = [f"{counts.get(k, 0)} {k}" for k in ("satisfied", "vacuous", "violated", "error")]
-    console.print(f"{', '.join(parts)} (exit {exit_code(logs)})", highlight=False)
+    parts = [f"{counts.get(k, 0)} {k}" for k in ("satisfied", "vacuous", "violated", "unknown",
+                                                 "error")]
+    parts += [f"{n} {k}" for k, n in sorted(counts.items())
+              if k not in ("satisfied", "vacuous", "violated", "unknown", "error")]
+    code = exit_code(logs, input_errors, allow_partial)
+    why = {0: "", 1: ": a requirement is violated", 2: ": something could not be audited",
+           3: ": no violation, but a log is partial or had data problems, or a verdict is "
+              "unknown"}.get(code, "")
+    console.print(f"{', '.join(parts)} (exit {code}{why})", highlight=False)
 
 
-def _log_notes(la: LogAudit) -> List[str]:
+def _log_notes(la: LogAudit, verbose: bool = False) -> List[str]:
     st = la.start_time_ns
     out = []
     if la.error:
         out.append(f"[magenta]not audited[/magenta]: {escape(la.error)}")
         return out
     if la.partial:
-        if la.damage_time_ns is None:
-            out.append("[yellow]partial[/yellow]: the log is damaged before its first "
-                       "readable message; nothing to audit")
-        else:
-            out.append(f"[yellow]partial[/yellow]: the log ends early (damage after "
-                       f"{_s(la.damage_time_ns, st)}); audited up to there")
-    if la.warmup_ticks:
-        out.append(f"{la.warmup_ticks} warm-up ticks not evaluated (waiting for "
-                   f"{escape(', '.join(la.waiting_for)) or 'the first messages'}; first evaluated tick "
-                   f"at {_s(la.first_time_ns, st)})")
+        out.append("[yellow]partial[/yellow]: " + escape(damage_summary(la)))
+    if verbose:
+        for v in la.verdicts:
+            if v.warmup_ticks:
+                out.append(f"{escape(v.requirement)}: {v.warmup_ticks} warm-up ticks (waiting "
+                           f"for {escape(', '.join(v.waiting_for)) or 'the first messages'}; "
+                           f"first evaluated tick at {_s(v.first_tick_ns, st)})")
+    for w in la.warnings:
+        out.append(f"[yellow]warning[/yellow]: {escape(w)}")
     if la.missing_topics:
         out.append(f"never published: {escape(', '.join(la.missing_topics))}")
     if la.problem_counts:
@@ -137,11 +207,34 @@ def _log_notes(la: LogAudit) -> List[str]:
     return out
 
 
-def _print_violation(console, la: LogAudit, v: Verdict) -> None:
+def _headers(names: List[str]) -> List[str]:
+    """Short column headers that stay unique: of each name (an operand label ``var: expr``
+    counts by its expression) the fewest trailing dotted components that no other name
+    ends with (``…linear.y`` for ``/cmd_vel_filtered.linear.y``); plain names as they are."""
+    keys = [n.split(": ", 1)[1] if ": " in n else n for n in names]
+    out = []
+    for i, (n, k) in enumerate(zip(names, keys)):
+        if (": " not in n and len(n) <= 20) or len(k) <= 20:
+            out.append(k)
+            continue
+        parts = k.split(".")
+        h = k
+        for j in range(min(2, len(parts)), len(parts) + 1):
+            cand = ".".join(parts[-j:])
+            if not any(o != k and (o == cand or o.endswith("." + cand) or o.endswith(cand))
+                       for o in keys[:i] + keys[i + 1:]) and cand not in out:
+                h = cand if j == len(parts) else "…" + cand
+                break
+        out.append(h)
+    return out
+
+
+def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -> None:
     from rich.table import Table
 
     st = la.start_time_ns
     fv = v.first_violation
+    clock = "header-stamp clock" if la.time_base == "header" else "log clock"
     console.print(f"\n[bold red]{escape(v.requirement)} violated[/bold red] on "
                   f"{escape(short_log_name(la.log))}: {escape(v.text)}", highlight=False)
     if fv is None:
@@ -150,35 +243,42 @@ def _print_violation(console, la: LogAudit, v: Verdict) -> None:
         sc = fv.scope
         console.print(f"  trigger at tick {fv.trigger.tick} ({_s(fv.trigger.time_ns, st)}) in the "
                       f"scope interval [{sc[0].tick}, {sc[1].tick}] "
-                      f"({_s(sc[0].time_ns, st)} .. {_s(sc[1].time_ns, st)})", markup=False,
+                      f"({_s(sc[0].time_ns, st)} .. {_s(sc[1].time_ns, st)})"
+                      + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""),
+                      markup=False, highlight=False)
+    elif fv.obligation:
+        console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
                       highlight=False)
-    if fv.obligation:
-        console.print(f"  obligation: {fv.obligation}", markup=False, highlight=False)
-    console.print(f"  {fv.reason}; missed at tick {fv.at.tick} ({_s(fv.at.time_ns, st)}, "
-                  f"log time {fv.at.time_ns} ns)", markup=False, highlight=False)
+    lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
+          if fv.at.log_time_ns is not None else "")
+    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} ({_s(fv.at.time_ns, st)} on the "
+                  f"{clock}{lt})", markup=False, highlight=False)
     if v.triggers is not None and v.violations:
         console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
                       highlight=False)
-    if not v.values:
+    if not v.values or not verbose:
         return
     t = Table(show_header=True, header_style="bold", box=None, pad_edge=False)
     t.add_column("tick", justify="right")
     t.add_column("time", justify="right")
     names = list(v.values)
-    for n in names:
-        t.add_column(n, justify="right")
     topics = list(v.sources)
-    for tp in topics:
-        t.add_column(f"{tp} @", justify="right")
+    heads = [terminal_text(h) for h in _headers(names) + [f"{tp} @" for tp in topics]]
+    for h in heads:
+        t.add_column(h, justify="right", no_wrap=True, min_width=len(h))
     rows = list(zip(*[v.values[n] for n in names])) if names else []
     marks = {fv.at.tick: "<- missed"}
     if fv.trigger is not None:
         marks.setdefault(fv.trigger.tick, "<- trigger")
         if fv.trigger.tick == fv.at.tick:
             marks[fv.at.tick] = "<- trigger, missed"
-    t.add_column("")
+    t.add_column("", no_wrap=True, min_width=18)
+    prev = None
     for k, row in enumerate(rows):
         tick, ns = row[0][0], row[0][1]
+        if prev is not None and tick != prev + 1:
+            t.add_row("…", f"{tick - prev - 1} ticks", *[""] * (len(heads) + 1))
+        prev = tick
         cells = [str(tick), _s(ns, st)] + [_value(c[2]) for c in row]
         for tp in topics:
             lt = v.sources[tp][k][2]
@@ -225,19 +325,73 @@ def junit_xml(logs: List[LogAudit]) -> str:
                 counts["errors"] += 1
                 ET.SubElement(case, "error", message=v.error or "error", type="error").text = \
                     v.error or ""
+            elif v.partial or v.verdict not in ("satisfied", "vacuous"):
+                # not checked to the end: an error case, never a pass (exit code 3)
+                counts["errors"] += 1
+                where = (f" (damage after {_s(la.damage_time_ns, st)})"
+                         if la.damage_time_ns is not None else "")
+                why = (f"partial log{where}: {v.verdict} up to the damage, the rest was not "
+                       "audited" if v.partial else f"verdict {v.verdict}")
+                if v.verdict == "unknown" and v.unknown_reason:
+                    why += f" (unknown: {v.unknown_reason})"
+
+                ET.SubElement(case, "error", message=why, type="partial").text = why
+                out.append(f"verdict: {v.verdict}")
             else:
-                out.append(f"verdict: {v.verdict}" + (" (partial log)" if v.partial else ""))
+                out.append(f"verdict: {v.verdict}")
                 out.extend(n for n in v.notes if n.startswith("vacuous"))
             ET.SubElement(case, "system-out").text = "\n".join(out)
         for k, n in counts.items():
             suite.set(k, str(n))
             tot[k] += n
-        suite.set("skipped", "0")
         suite.set("time", "0")
     for k, n in tot.items():
         root.set(k, str(n))
+    _xml_safe(root)
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _xml_safe(root) -> None:
+    """Make every attribute and text of the tree legal XML 1.0 (a NUL in a requirement id
+    must not make the file unparseable): :func:`fretish.textsafe.xml_text`."""
+    for el in root.iter():
+        for k, val in list(el.attrib.items()):
+            el.set(k, xml_text(val, keep=""))
+        if el.text:
+            el.text = xml_text(el.text)
+
+
+def damage_summary(la: LogAudit) -> str:
+    """What damaged a partial log and how far it was judged, in one sentence: the damage
+    problems (kind and log-time span, seconds from the first tick) and the end of the span
+    read completely."""
+    st = la.start_time_ns
+    kinds = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
+             "data_crc", "unknown_channel", "out_of_order")
+    parts = []
+    for p in la.problems:
+        if p.get("kind") not in kinds:
+            continue
+        lo, hi = p.get("log_time_ns"), p.get("end_time_ns")
+        span = ""
+        if lo is not None:
+            span = f" at {_s(lo, st)}" if hi is None or hi == lo else \
+                f" over {_s(lo, st)} .. {_s(hi, st)}"
+        parts.append(f"{p['kind']}{span}")
+        if len(parts) >= 3:
+            break
+    more = sum(n for k, n in la.problem_counts.items() if k.split(" ")[0] in kinds) - len(parts)
+    what = ", ".join(parts) + (f" and {more} more" if more > 0 else "") or "damaged"
+    if la.damage_time_ns is not None:
+        judged = f"judged up to {_s(la.damage_time_ns, st)}"
+        if la.ticks_after_damage:
+            judged += f" ({la.ticks_after_damage} ticks after it not judged)"
+    elif la.damage_cut:
+        judged = "nothing before the damage to judge"
+    else:
+        judged = "no message lost"
+    return f"the log is damaged ({what}); {judged}"
 
 
 class AuditProgress:

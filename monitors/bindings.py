@@ -7,6 +7,7 @@ binding file.  A binding file is TOML (read with :mod:`tomllib`)::
     [tick]
     period = "100 ms"      # fixed period with sample-and-hold, or
     # topic = "/scan"      # one tick per message of this topic (exactly one of the two)
+    # nominal_rate = "10 Hz" # topic only: converts durations in time units to ticks
     time = "log"           # time base: "log" (MCAP log time, default) or "header"
     # header_lag = "500 ms" # time="header" only: how late a message may arrive (default 1 s)
 
@@ -87,12 +88,18 @@ __all__ = [
     "parse_duration",
     "compile_expression",
     "LASER_SCAN",
+    "check_types",
+    "LogSelector",
 ]
 
 NS_PER_S = 1_000_000_000
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 DEFAULT_HEADER_LAG_NS = NS_PER_S
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+#: A FRET variable name as a binding key: an identifier, or the text of a quoted FRETish
+#: variable (``"wind speed"``: a TOML quoted key ``"wind speed" = "..."``, or
+#: ``--bind '"wind speed"=...'``): no quotes, no control characters, not blank at either end.
+_VARNAME = re.compile(r"(?=\S)[^\"\x00-\x1f\x7f]*(?<=\S)\Z")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -162,17 +169,37 @@ class Const(Node):
 
 
 @dataclass(frozen=True)
+class Slice:
+    """``[lo:hi]`` of an array field (Python slice rules; None = open end)."""
+
+    lo: int | None
+    hi: int | None
+
+    def text(self) -> str:
+        return f"[{'' if self.lo is None else self.lo}:{'' if self.hi is None else self.hi}]"
+
+
+@dataclass(frozen=True)
 class Field(Node):
-    """``/topic.a.b[i]``: ``path`` holds attribute names (str) and indexes (int)."""
+    """``/topic.a.b[i]``: ``path`` holds attribute names (str), indexes (int) and, last,
+    at most one :class:`Slice`."""
 
     topic: str
-    path: tuple[str | int, ...]
+    path: tuple[str | int | Slice, ...]
 
     def text(self) -> str:
         out = self.topic
         for p in self.path:
-            out += f"[{p}]" if isinstance(p, int) else f".{p}"
+            out += (p.text() if isinstance(p, Slice) else f"[{p}]" if isinstance(p, int)
+                    else f".{p}")
         return out
+
+
+@dataclass(frozen=True)
+class Ref(Node):
+    """Another variable of the same binding file, by name (substituted before compiling)."""
+
+    name: str
 
 
 @dataclass(frozen=True)
@@ -240,9 +267,19 @@ def _to_ast(tree: Tree | Token, where: _Where) -> Node:
         topic = str(kids[0])
         path: list[str | int] = []
         for sel in kids[1:]:
+            if sel.data == "slice":
+                lo, hi = (int(c.children[0]) if c.children else None for c in sel.children)
+                path.append(Slice(lo, hi))
+                continue
             tok = sel.children[0]
             path.append(int(tok) if sel.data == "index" else str(tok))
+        for p in path[:-1]:
+            if isinstance(p, Slice):
+                raise where.error(f"{Field(0, topic, tuple(path)).text()}: a slice must be "
+                                  "the last selector", kids[0].column)
         return Field(kids[0].column, topic, tuple(path))
+    if data == "ref":
+        return Ref(kids[0].column, str(kids[0]))
     if data == "neg":
         return Unary(col, "-", _to_ast(kids[0], where))
     if data == "not_":
@@ -265,10 +302,17 @@ def _to_ast(tree: Tree | Token, where: _Where) -> Node:
 def _check(node: Node, where: _Where, topics: set[str]) -> None:
     """Static checks: known functions and arities, age() of a topic, fields below topics."""
     if isinstance(node, Field):
+        for p in node.path:
+            if isinstance(p, str) and p.startswith("_"):
+                raise where.error(f"{node.text()}: {p!r} is not a message field (ROS field "
+                                  "names start with a letter; a binding reads only fields the "
+                                  "message type declares)", node.col)
         if not node.path:
             raise where.error(f"{node.topic} is a topic, not a value: name a field "
                               f"(e.g. {node.topic}.data) or use age({node.topic})", node.col)
         topics.add(node.topic)
+    elif isinstance(node, Ref):
+        pass  # resolved against the other variables (_substitute)
     elif isinstance(node, Unary):
         _check(node.arg, where, topics)
     elif isinstance(node, Binary):
@@ -375,6 +419,19 @@ def make_extractor(f: Field) -> Callable[[Any], Any]:
     Raises (from the returned function):
         _FieldError: no such field, index out of range, or indexing a non-sequence.
     """
+    if f.path and isinstance(f.path[-1], Slice):
+        inner = make_extractor(Field(f.col, f.topic, f.path[:-1]))
+        sl = slice(f.path[-1].lo, f.path[-1].hi)
+        text = f.text()
+
+        def sliced(data: Any) -> Any:
+            v = inner(data)  # REP 117 validity of LaserScan ranges is kept for the slice
+            if isinstance(v, Valid):
+                return Valid(v.data[..., sl], None if v.mask is None else v.mask[..., sl])
+            if isinstance(v, (list, tuple)):
+                return list(v[sl])
+            raise _FieldError(f"{text}: only arrays can be sliced")
+        return sliced
     path = f.path
     laser = isinstance(path[-1], str) and path[-1] == "ranges"
     steps: list[Callable[[Any], Any]] = []
@@ -510,10 +567,12 @@ class _Ops:
     def reduce(self, func: str, a: Valid) -> Any:
         ax = self.axis
         # ndarray methods (not np.min etc.): same ufunc reductions, less Python overhead.
-        if func == "min":
-            return self._out(self._filled(a, np.inf).min(axis=ax, initial=np.inf))
+        if func == "min":  # where=: no filled copy; the same values
+            return self._out(_num(a.data).min(axis=ax, initial=np.inf,
+                                              where=True if a.mask is None else a.mask))
         if func == "max":
-            return self._out(self._filled(a, -np.inf).max(axis=ax, initial=-np.inf))
+            return self._out(_num(a.data).max(axis=ax, initial=-np.inf,
+                                              where=True if a.mask is None else a.mask))
         if func == "mean":
             total = self._filled(a, 0.0).sum(axis=ax)
             n = a.mask.sum(axis=ax) if a.mask is not None else a.data.shape[-1]
@@ -706,6 +765,21 @@ def _compile(node: Node, ops: _Ops, extractors: dict[Field, Callable[[Any], Any]
                 return acc
             return several
         a0 = args[0]
+        arg0 = node.args[0]
+        if not vec and isinstance(arg0, Field):
+            # a reduction of one field depends only on the held message: computed once per
+            # message, shared by the bindings that use it (like the field memo)
+            key = (func, arg0.topic, arg0.path)
+            topic0 = arg0.topic
+
+            def reduce_memo(st: Any) -> Any:
+                msg = st.msgs[topic0]
+                memo = st.values.get(key)
+                if memo is not None and memo[0] is msg:
+                    return memo[1]
+                v = reduce_(st)
+                st.values[key] = (msg, v)
+                return v
 
         def reduce_(st: Any) -> Any:
             a = a0(st)
@@ -718,7 +792,7 @@ def _compile(node: Node, ops: _Ops, extractors: dict[Field, Callable[[Any], Any]
                     return abs(a) if type(a) in _PY else np.abs(_num(a))
                 raise _EvalError(node, f"{func}() takes an array")
             return ops.reduce(func, a)
-        return reduce_
+        return reduce_memo if (not vec and isinstance(arg0, Field)) else reduce_
     raise AssertionError(node)  # pragma: no cover
 
 
@@ -738,6 +812,10 @@ class TickSpec:
 
     period_ns: int | None = None
     topic: str | None = None
+    #: topic ticks only: the tick topic's nominal period (``[tick] nominal_rate``), with
+    #: which durations in time units convert to ticks; the audit warns when the measured
+    #: rate differs by more than 10 %.
+    nominal_period_ns: int | None = None
 
     def __post_init__(self) -> None:
         if (self.period_ns is None) == (self.topic is None):
@@ -835,7 +913,8 @@ class Binding:
 
 
 def compile_expression(name: str, expr: str, *, source: str = "<expression>", line: int | None = None,
-                       col: int | None = None, exact: bool = True) -> Binding:
+                       col: int | None = None, exact: bool = True,
+                       refs: "dict[str, Binding] | None" = None) -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -843,15 +922,23 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>", li
         expr: the expression text.
         source, line, col: where ``expr`` starts, for error messages (``exact`` False when
             columns inside the expression cannot be mapped to the file, e.g. escapes).
+        refs: the other variables a bare name in ``expr`` may refer to (already compiled);
+            their expressions are substituted.
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
             used as a value; names source:line:col and the variable.
     """
     where = _Where(source, name, line, col, exact)
-    if not _IDENT.match(name):
-        raise where.error(f"variable name {name!r} is not an identifier")
+    if not _VARNAME.match(name):
+        raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
+                          "quoted FRETish variable")
     node, topics = _parse(expr, where)
+    if _refs(node):
+        node = _substitute(node, refs or {}, where, name)
+        found: set[str] = set()
+        _check(node, where, found)
+        topics = frozenset(found)
     fields: list[Field] = []
 
     def collect(n: Node) -> None:
@@ -874,6 +961,49 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>", li
     return Binding(name, expr, source, line, col, node, topics, tuple(fields), exact, scalar, vector)
 
 
+def _refs(node: Node, deep: bool = False) -> list[str]:
+    """Names of the variables ``node`` refers to, in order of appearance."""
+    out: list[str] = []
+
+    def walk(n: Node) -> None:
+        if isinstance(n, Ref):
+            out.append(n.name)
+        elif isinstance(n, Unary):
+            walk(n.arg)
+        elif isinstance(n, Binary):
+            walk(n.left)
+            walk(n.right)
+        elif isinstance(n, Call):
+            for a in n.args:
+                walk(a)
+    walk(node)
+    return out
+
+
+def _substitute(node: Node, refs: dict, where: _Where, name: str) -> Node:
+    """``node`` with every :class:`Ref` replaced by the referenced variable's expression."""
+    if isinstance(node, Ref):
+        if node.name == name:
+            raise where.error(f"{name!r} refers to itself", node.col)
+        b = refs.get(node.name)
+        if b is None:
+            from .schema import closest
+            hint = closest(node.name, [n for n in refs if n != name] + list(_FUNCS))
+            raise where.error(f"unknown name {node.name!r}: not a variable of this binding file"
+                              + (f"; did you mean {hint!r}?" if hint else "")
+                              + " (a field is /topic.field, a function call f(...))", node.col)
+        return b.ast
+    if isinstance(node, Unary):
+        return Unary(node.col, node.op, _substitute(node.arg, refs, where, name))
+    if isinstance(node, Binary):
+        return Binary(node.col, node.op, _substitute(node.left, refs, where, name),
+                      _substitute(node.right, refs, where, name))
+    if isinstance(node, Call):
+        return Call(node.col, node.func, tuple(_substitute(a, refs, where, name)
+                                               for a in node.args))
+    return node
+
+
 @dataclass
 class Bindings:
     """A set of variable bindings with a tick and a time base.
@@ -893,6 +1023,8 @@ class Bindings:
     time_base: str = "log"
     header_lag_ns: int = DEFAULT_HEADER_LAG_NS
     source: str | None = None
+    #: ``[logs]``: the logs this binding file applies to (None: every log).
+    logs: "LogSelector | None" = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in ("log", "header"):
@@ -914,7 +1046,7 @@ class Bindings:
         """
         variables = dict(self.variables)
         for spec in specs:
-            b = parse_inline(spec)
+            b = parse_inline(spec, refs=variables)
             variables[b.name] = b
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source)
 
@@ -972,7 +1104,7 @@ def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding
     return out
 
 
-def parse_inline(spec: str) -> Binding:
+def parse_inline(spec: str, refs: "dict[str, Binding] | None" = None) -> Binding:
     """One inline binding ``NAME=EXPR`` (CLI ``--bind``); source is ``"<--bind NAME>"``.
 
     Raises:
@@ -980,10 +1112,13 @@ def parse_inline(spec: str) -> Binding:
     """
     name, sep, expr = spec.partition("=")
     name = name.strip()
+    if len(name) >= 2 and name[0] == name[-1] == '"':
+        name = name[1:-1]  # a quoted FRETish variable: --bind '"wind speed"=...'
     if not sep or not name:
         raise BindingError(f"<--bind {spec}>", "expected NAME=EXPRESSION")
     col = spec.index("=") + 2
-    return compile_expression(name, expr, source=f"<--bind {name}>", line=1, col=col)
+    return compile_expression(name, expr, source=f"<--bind {name}>", line=1, col=col,
+                              refs=refs)
 
 
 def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str = "log",
@@ -1058,19 +1193,19 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
         return (loc[0], loc[1]) if loc else (None, None)
 
     for key in doc:
-        if key not in ("tick", "variables"):
+        if key not in ("tick", "variables", "logs"):
             line, col = at(key) if isinstance(doc[key], dict) else at("", key)
             raise BindingError(source, f"unknown {'table [' + key + ']' if isinstance(doc[key], dict) else 'key ' + repr(key)} "
-                               "(expected [tick] and [variables])", line=line, col=col)
+                               "(expected [tick], [variables] and optionally [logs])", line=line, col=col)
     tick_t = doc.get("tick")
     if not isinstance(tick_t, dict):
         raise BindingError(source, "missing [tick] table: say period = \"100 ms\" or topic = \"/scan\" "
                            "(signals are declared, never guessed)", line=1)
     for key in tick_t:
-        if key not in ("period", "topic", "time", "header_lag"):
+        if key not in ("period", "topic", "time", "header_lag", "nominal_rate"):
             line, col = at("tick", key)
-            raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, time, header_lag)",
-                               line=line, col=col)
+            raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, "
+                               "nominal_rate, time, header_lag)", line=line, col=col)
     has_p, has_t = "period" in tick_t, "topic" in tick_t
     if has_p == has_t:
         line, col = at("tick")
@@ -1088,7 +1223,19 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
             line, col = at("tick", "topic")
             raise BindingError(source, f"[tick] topic {topic!r} is not a topic name like \"/scan\"",
                                line=line, col=col)
-        tick = TickSpec(topic=topic)
+        nominal = None
+        if "nominal_rate" in tick_t:
+            try:
+                nominal = parse_duration(tick_t["nominal_rate"])
+            except ValueError as exc:
+                line, col = at("tick", "nominal_rate")
+                raise BindingError(source, f"[tick] nominal_rate: {exc}", line=line,
+                                   col=col) from None
+        tick = TickSpec(topic=topic, nominal_period_ns=nominal)
+    if has_p and "nominal_rate" in tick_t:
+        line, col = at("tick", "nominal_rate")
+        raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "
+                           "period is its own rate)", line=line, col=col)
     time_base = tick_t.get("time", "log")
     if time_base not in ("log", "header"):
         line, col = at("tick", "time")
@@ -1105,23 +1252,110 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     if not isinstance(var_t, dict):
         line, col = at("", "variables")
         raise BindingError(source, "variables must be a table [variables]", line=line, col=col)
-    variables: dict[str, Binding] = {}
+    pending: dict[str, tuple] = {}
     for name, expr in var_t.items():
         loc = where.get(("variables", name))
         line, col, rest = loc if loc else (None, None, "")
         if not isinstance(expr, str):
             raise BindingError(source, "the binding must be a string expression",
                                line=line, col=col, variable=name)
-        if not _IDENT.match(name):
+        if not _VARNAME.match(name):
             kline, kcol, _ = where.get(("[key]", "variables." + name), (line, None, ""))
-            raise BindingError(source, f"variable name {name!r} is not an identifier",
+            raise BindingError(source, f"variable name {name!r} is not an identifier nor the "
+                               "text of a quoted FRETish variable",
                                line=kline, col=kcol, variable=name)
         exact = False
         if col is not None:
             off, exact = _value_start(rest, expr)
             col = col + off
-        variables[name] = compile_expression(name, expr, source=source, line=line, col=col, exact=exact)
-    return Bindings(variables, tick, time_base, lag, source)
+        pending[name] = (expr, line, col, exact)
+    # references to other variables: compile in dependency order, cycles are errors
+    deps: dict[str, list[str]] = {}
+    for name, (expr, line, col, exact) in pending.items():
+        node, _t = _parse(expr, _Where(source, name, line, col, exact))
+        deps[name] = [r for r in _refs(node) if r in pending]
+    state: dict[str, int] = {}
+
+    def visit(name: str, chain: list[str]) -> None:
+        if state.get(name) == 2:
+            return
+        if state.get(name) == 1:
+            cyc = chain[chain.index(name):] + [name]
+            expr, line, col, _e = pending[name]
+            raise BindingError(source, "variables refer to each other in a cycle: "
+                               + " -> ".join(cyc), line=line, col=col, variable=name)
+        state[name] = 1
+        for d in deps[name]:
+            visit(d, chain + [name])
+        expr, line, col, exact = pending[name]
+        compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
+                                            exact=exact, refs=compiled)
+        state[name] = 2
+
+    compiled: dict[str, Binding] = {}
+    for name in pending:
+        visit(name, [])
+    variables = {name: compiled[name] for name in pending}
+    out = Bindings(variables, tick, time_base, lag, source)
+    out.logs = _parse_logs(doc.get("logs"), source, at)
+    return out
+
+
+@dataclass(frozen=True)
+class LogSelector:
+    """``[logs]`` of a binding file: which logs it applies to. ``glob``: patterns matched
+    against the log's path from the right (:meth:`pathlib.PurePath.match`: ``"*.bag"``,
+    ``"stage_*"``, ``"real/*.mcap"``); ``topics``: topics the log must have. A log is
+    selected when it matches some pattern (if any are given) and has every topic (if any
+    are given)."""
+
+    glob: tuple[str, ...] = ()
+    topics: tuple[str, ...] = ()
+
+    def matches(self, path: str, log_topics: Iterable[str] | None) -> bool:
+        from pathlib import PurePath
+        p = PurePath(path)
+        if self.glob and not any(p.match(g) or p.name == g for g in self.glob):
+            return False
+        if self.topics and (log_topics is None or not set(self.topics) <= set(log_topics)):
+            return False
+        return True
+
+    def text(self) -> str:
+        parts = []
+        if self.glob:
+            parts.append("glob " + ", ".join(self.glob))
+        if self.topics:
+            parts.append("topics " + ", ".join(self.topics))
+        return "; ".join(parts)
+
+
+def _parse_logs(table: Any, source: str, at: Callable) -> "LogSelector | None":
+    if table is None:
+        return None
+    line, col = at("logs")
+    if not isinstance(table, dict):
+        raise BindingError(source, "logs must be a table [logs]", line=line, col=col)
+    for key in table:
+        if key not in ("glob", "topics"):
+            kl, kc = at("logs", key)
+            raise BindingError(source, f"unknown key {key!r} in [logs] (glob, topics)",
+                               line=kl, col=kc)
+
+    def strings(key: str) -> tuple[str, ...]:
+        v = table.get(key, [])
+        v = [v] if isinstance(v, str) else v
+        if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+            kl, kc = at("logs", key)
+            raise BindingError(source, f"[logs] {key} must be a string or a list of strings",
+                               line=kl, col=kc)
+        return tuple(v)
+
+    sel = LogSelector(strings("glob"), strings("topics"))
+    if not sel.glob and not sel.topics:
+        raise BindingError(source, "[logs] needs glob = \"...\" and/or topics = [...]",
+                           line=line, col=col)
+    return sel
 
 
 def load_bindings(path: str | Path, inline: Iterable[str] = ()) -> Bindings:
@@ -1138,3 +1372,125 @@ def load_bindings(path: str | Path, inline: Iterable[str] = ()) -> Bindings:
         raise BindingError(str(path), f"binding file is not UTF-8: {exc}") from None
     b = parse_bindings(text, str(path))
     return b.with_inline(inline) if inline else b
+
+
+# -- types against a log's schemas -------------------------------------------------------------
+
+_BOOLS = ("bool", "array_bool")
+_NUMS = ("number", "array_number")
+_WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of booleans",
+          "array_number": "an array of numbers", "string": "a string", "message": "a message",
+          "array_other": "an array of messages or strings"}
+
+
+def check_types(binding: Binding, schemas: dict) -> str:
+    """Check ``binding`` against the message types of a log (:func:`monitors.schema.log_schemas`)
+    before it is evaluated (issue 15): every field path must resolve through fields the
+    schema declares (never Python attributes), strings cannot enter arithmetic or
+    comparisons, a boolean is not a number and a number is not a boolean, and the value must
+    end as a boolean or a number. Topics whose schema is unknown (None) are not checked.
+
+    Returns:
+        the binding's type: ``"bool"``, ``"number"`` (or ``"any"`` when unknown).
+
+    Raises:
+        BindingError: naming the binding file:line:col, the variable, and the topic and
+            field at fault (with the fields that exist and the closest name).
+    """
+    from .schema import FieldPathError
+
+    where = binding._where()
+
+    def describe(node: Node, t: str) -> str:
+        if isinstance(node, Field):
+            path = node.text()[len(node.topic) + 1:]
+            return (f"{node.text()} (topic {node.topic}, field {path}) is "
+                    f"{_WORDS.get(t, t)}")
+        return f"{unparse(node).strip('()')} is {_WORDS.get(t, t)}"
+
+    def need(node: Node, t: str, ok: tuple, what: str, at: Node) -> None:
+        if t != "any" and t not in ok:
+            hint = ""
+            if t in _NUMS and ok == _BOOLS:
+                hint = "; compare it (e.g. x != 0) to make a boolean"
+            elif t in _BOOLS and ok == _NUMS:
+                hint = "; a boolean is not a number in a binding"
+            raise where.error(f"type error: {what}, but {describe(node, t)}{hint}", at.col)
+
+    def typ(node: Node) -> str:
+        if isinstance(node, Const):
+            return "bool" if isinstance(node.value, bool) else "number"
+        if isinstance(node, Field):
+            sch = schemas.get(node.topic)
+            if sch is None:
+                return "any"
+            try:
+                ft = sch.resolve(node.path)
+            except FieldPathError as exc:
+                raise where.error(f"{exc} (topic {node.topic}, {sch.typename})", node.col) from None
+            if ft.kind == "array":
+                k = ft.item.kind
+                return {"bool": "array_bool", "number": "array_number"}.get(k, "array_other")
+            return {"bool": "bool", "number": "number", "string": "string",
+                    "message": "message"}.get(ft.kind, "any")
+        if isinstance(node, Unary):
+            t = typ(node.arg)
+            if node.op == "-":
+                need(node.arg, t, _NUMS, "unary '-' takes a number", node)
+                return t
+            need(node.arg, t, _BOOLS, "'!' takes a boolean", node)
+            return t
+        if isinstance(node, Binary):
+            a, b = typ(node.left), typ(node.right)
+            arr = "array" in a or "array" in b
+            if node.op in ("+", "-", "*", "/"):
+                need(node.left, a, _NUMS, f"{node.op!r} takes numbers", node)
+                need(node.right, b, _NUMS, f"{node.op!r} takes numbers", node)
+                return "array_number" if arr else ("any" if "any" in (a, b) else "number")
+            if node.op in ("<", "<=", ">", ">="):
+                need(node.left, a, _NUMS, f"{node.op!r} compares numbers", node)
+                need(node.right, b, _NUMS, f"{node.op!r} compares numbers", node)
+                return "array_bool" if arr else "bool"
+            if node.op in ("=", "!="):
+                known = [x for x in (a, b) if x != "any"]
+                for n, x in ((node.left, a), (node.right, b)):
+                    need(n, x, _NUMS + _BOOLS, f"{node.op!r} compares numbers or booleans", node)
+                if len(known) == 2 and (known[0] in _BOOLS) != (known[1] in _BOOLS):
+                    raise where.error(f"type error: {node.op!r} compares a boolean with a number "
+                                      f"({describe(node.left, a)}; {describe(node.right, b)})",
+                                      node.col)
+                return "array_bool" if arr else "bool"
+            need(node.left, a, _BOOLS, f"{node.op!r} takes booleans", node)
+            need(node.right, b, _BOOLS, f"{node.op!r} takes booleans", node)
+            return "array_bool" if arr else "bool"
+        if isinstance(node, Call):
+            f = node.func
+            if f == "age":
+                return "number"
+            ts = [typ(a) for a in node.args]
+            for a, t in zip(node.args, ts):
+                if f in ("any", "all", "count"):
+                    need(a, t, ("array_bool", "array_number"), f"{f}() takes an array", node)
+                elif f == "len":
+                    if t not in ("any", "array_bool", "array_number", "array_other"):
+                        need(a, t, ("array_number",), "len() takes an array", node)
+                else:
+                    need(a, t, _NUMS, f"{f}() takes numbers", node)
+            if f in ("any", "all"):
+                return "bool"
+            if f == "abs":
+                return ts[0] if ts[0] != "any" else "any"
+            if f in ("min", "max") and len(ts) > 1:
+                for a, t in zip(node.args, ts):
+                    if "array" in t:
+                        raise where.error(f"type error: {f}() of several values takes numbers, "
+                                          f"but {describe(a, t)}", node.col)
+            return "number"
+        return "any"  # pragma: no cover
+
+    t = typ(binding.ast)
+    if t not in ("bool", "number", "any"):
+        raise where.error(f"type error: a variable must be a boolean or a number, but "
+                          f"{describe(binding.ast, t)}"
+                          + ("; reduce it with min/max/any/all/count" if "array" in t else ""))
+    return t

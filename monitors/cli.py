@@ -8,9 +8,11 @@
 
 LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosbag2 folders,
 ``.csv`` traces, or folders searched for them. Binding files default to every
-``*.bindings.toml`` beside the requirement files or folders. Exit status: 0 every verdict
-satisfied (or vacuous), 1 a requirement is violated, 2 usage or input errors (including a
-requirement that could not be audited on some log).
+``*.bindings.toml`` beside the requirement files or folders. Exit status
+(:data:`monitors.report_model.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
+complete logs, 1 a requirement is violated, 2 usage or input errors (including a
+requirement that could not be audited on some log), 3 no violation but a log is partial or
+had data problems (``--allow-partial``: 0).
 
 Only click is imported at module level; the engine loads on first use.
 """
@@ -21,6 +23,8 @@ import sys
 from pathlib import Path
 
 import click
+
+from .fleet_cli import ray_options
 
 __all__ = ["audit_cmd", "audit_input_options", "audit_config"]
 
@@ -86,16 +90,37 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False), default=None,
               help="Write JUnit XML to FILE: one test case per requirement x log.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
+@click.option("--allow-partial", is_flag=True,
+              help="Exit 0 instead of 3 when nothing is violated but a log is partial or had "
+                   "data problems.")
+@click.option("-v", "--verbose", is_flag=True,
+              help="Full evidence: every value row around each violation and every note.")
+@ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, json_path, junit_path, no_progress, engine, window):
+              jobs, json_path, junit_path, no_progress, engine, window, allow_partial,
+              verbose):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
-    against FRETish requirements."""
-    from rich.console import Console
-    from rich.markup import escape
+    against FRETish requirements.
 
-    from .audit import AuditInputError, audit_logs, find_logs, load_plan
+    \b
+    Exit codes:
+      0  every verdict satisfied or vacuous, on complete logs
+      1  a requirement is violated
+      2  usage or input error (bad option, requirement, binding or log; a
+         requirement that could not be audited on some log)
+      3  no violation, but a log is partial (cut short, damaged) or had data
+         problems, or a verdict is unknown (--allow-partial: 0)
+
+    \b
+    Binding reference (expressions, functions, slices, units, NaN/inf rules,
+    examples): docs/bindings.md."""
+    from rich.console import Console
+    from .audit_output import escape  # markup and control characters escaped
+
+    from .audit import AuditInputError, find_logs, load_plan
     from .audit_output import AuditProgress, junit_xml, print_summary
+    from .fleet import expand_log_args, run_audits
     from .report_model import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
@@ -106,11 +131,13 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
                           engine, window)
     try:
         plan = load_plan(config)
-        paths = find_logs(logs)
+        paths = find_logs(expand_log_args(logs))
     except AuditInputError as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
+    for w in plan.warnings:
+        err.print(f"[yellow]warning:[/yellow] {escape(w)}")
     input_errors = False
     for r in plan.requirements:
         if r.error is not None:
@@ -119,11 +146,13 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     show = not no_progress and sys.stderr.isatty()
     if show:
         with AuditProgress(err, len(paths)) as prog:
-            results = audit_logs(plan, paths, jobs=jobs, progress=prog)
+            results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
-        results = audit_logs(plan, paths, jobs=jobs)
-    print_summary(out, results, plan)
-    doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors)
+        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
+    print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
+                  input_errors=input_errors)
+    doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,
+                     allow_partial)
     if json_path:
         if to_stdout_json:
             click.echo(doc, nl=False)
@@ -131,5 +160,5 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
             Path(json_path).write_text(doc, encoding="utf-8")
     if junit_path:
         Path(junit_path).write_text(junit_xml(results), encoding="utf-8")
-    code = exit_code(results, input_errors)
+    code = exit_code(results, input_errors, allow_partial)
     ctx.exit(code)

@@ -51,6 +51,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 import click
 
 from .cli import audit_config, audit_input_options
+from .fleet_cli import ray_options
 from .report_model import SCHEMA
 
 __all__ = ["ReportError", "RequirementTrace", "ModuleInfo", "ReportFiles", "load_audit_json",
@@ -64,7 +65,7 @@ FIELD_NAMES = ("scope", "condition", "component", "probability", "timing", "resp
 #: ``<p class="generated">``; Markdown: the line itself).
 GENERATED_PREFIX = "Generated at "
 VERDICT_WORDS = {"satisfied": "satisfied", "vacuous": "vacuous", "violated": "violated",
-                 "error": "error"}
+                 "unknown": "unknown", "error": "error"}
 
 
 class ReportError(Exception):
@@ -481,8 +482,11 @@ def _witness(v: dict) -> List[Tuple[str, str]]:
     out: List[Tuple[str, str]] = []
     fv = v.get("first_violation")
     if fv:
-        out.append(("first violation", f"tick {fv['tick']} at {_fmt_s(fv.get('log_time_s'))} "
-                                        f"(log time {fv['log_time_ns']} ns)"))
+        tick_s = fv.get("tick_time_s", fv.get("log_time_s"))
+        base = fv.get("tick_time_base") or "log"
+        out.append(("first violation", f"tick {fv['tick']} at {_fmt_s(tick_s)} on the {base} "
+                                        f"clock (deciding message log time "
+                                        f"{fv['log_time_ns']} ns)"))
         t = fv.get("trigger")
         if t:
             out.append(("trigger", f"tick {t['tick']} at {_fmt_s(t.get('time_s'))} "
@@ -541,6 +545,20 @@ def _verdict_for(la: dict, i: int, r: dict) -> Optional[dict]:
     return same[0] if len(same) == 1 else None
 
 
+def _damage_text(la: dict) -> str:
+    """Where and how a partial log is damaged, and how far it was judged
+    (:func:`monitors.audit_output.damage_summary` on the JSON document)."""
+    from types import SimpleNamespace
+
+    from .audit_output import damage_summary
+
+    fields = ("start_time_ns", "damage_time_ns", "ticks_after_damage", "damage_cut")
+    ns = SimpleNamespace(problems=la.get("problems") or [],
+                         problem_counts=la.get("problem_counts") or {},
+                         **{k: la.get(k) for k in fields})
+    return damage_summary(ns)
+
+
 def _cell_label(v: Optional[dict]) -> Tuple[str, str]:
     """(verdict class, short text) of a matrix cell."""
     if v is None:
@@ -548,8 +566,8 @@ def _cell_label(v: Optional[dict]) -> Tuple[str, str]:
     verdict = v.get("verdict", "error")
     text = VERDICT_WORDS.get(verdict, verdict)
     fv = v.get("first_violation")
-    if verdict == "violated" and fv and fv.get("log_time_s") is not None:
-        text += f" @ {fv['log_time_s']:.3f} s"
+    if verdict == "violated" and fv and fv.get("tick_time_s", fv.get("log_time_s")) is not None:
+        text += f" @ {fv.get('tick_time_s', fv.get('log_time_s')):.3f} s"
     return verdict, text
 
 
@@ -656,7 +674,7 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
             "tick": _tick_text(la.get("tick")), "time_base": la.get("time_base") or "-",
             "messages": sorted((la.get("messages") or {}).items()),
             "problems": problems, "partial": bool(la.get("partial")),
-            "damage": _fmt_s(la.get("damage_time_s")) if la.get("partial") else None,
+            "damage": _damage_text(la) if la.get("partial") else None,
             "error": la.get("error"), "engine": la.get("engine"),
             "annotated": ann,
         })
@@ -740,7 +758,7 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
                     "svg_file": f"timelines/{va}.svg", "witness": cell["witness"],
                     "verdict": v, "table": _values_table(v, la.get("start_time_ns")),
                     "violation_ns": fv.get("log_time_ns"),
-                    "violation_s": _fmt_s(fv.get("log_time_s")),
+                    "violation_s": _fmt_s(fv.get("tick_time_s", fv.get("log_time_s"))),
                     "trigger_ns": trig.get("time_ns"), "trigger_s": _fmt_s(trig.get("time_s")),
                     "ltl3_status": l3.get("status"), "ltl3_ns": l3.get("time_ns"),
                     "ltl3_s": _fmt_s(l3.get("time_s")),
@@ -829,7 +847,9 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
         "version": _version(), "schema": doc.get("schema"),
         "summary": summary,
         "exit_meaning": {0: "every verdict satisfied or vacuous", 1: "a requirement is violated",
-                         2: "something could not be audited"}.get(summary.get("exit_code"), ""),
+                         2: "something could not be audited",
+                         3: "no violation, but a log is partial or had data problems, or a verdict is unknown"
+                         }.get(summary.get("exit_code"), ""),
         "requirement_files": req_files, "binding_files": bind_files,
         "tick": _tick_text(bindings.get("tick")), "time_base": bindings.get("time_base") or "-",
         "runs": runs, "requirements": req_ctx, "violations": violations,
@@ -847,24 +867,36 @@ def report_context(doc: dict, traces: Dict[int, RequirementTrace],
 def _env(autoescape: bool):
     import jinja2
 
+    import markupsafe
+
+    from fretish.textsafe import md_code, visible
+
+    def finalize(value: Any) -> Any:
+        # every value printed by a template: control and bidi characters shown escaped
+        # (XML 1.0 forbids C0 characters; a U+202E must not reorder the page), except
+        # markup built here (the inlined SVG, already safe)
+        if isinstance(value, str) and not isinstance(value, markupsafe.Markup):
+            return visible(value, keep="\n\t")
+        return value
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("templates", ""), autoescape=autoescape,
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined)
+        undefined=jinja2.StrictUndefined, finalize=finalize)
 
     def md(text: Any) -> str:
         """Markdown table-cell / inline text: pipes, backticks, newlines and HTML made
         harmless."""
-        s = "" if text is None else str(text)
-        s = s.replace("\\", "\\\\").replace("|", "\\|").replace("\n", " ")
+        s = visible("" if text is None else str(text).replace("\n", " "))
+        s = s.replace("\\", "\\\\").replace("|", "\\|")
         s = s.replace("<", "&lt;").replace(">", "&gt;").replace("*", "\\*")
+        s = s.replace("`", "\\`")
         return s
 
     def code(text: Any) -> str:
-        """Inline Markdown code span that survives backticks in the text."""
-        s = "" if text is None else str(text).replace("\n", " ").replace("|", "\\|")
-        fence = "``" if "`" in s else "`"
-        return f"{fence} {s} {fence}" if fence == "``" else f"`{s}`"
+        """Inline Markdown code span that no backtick run in the text can close
+        (:func:`fretish.textsafe.md_code`)."""
+        return md_code("" if text is None else str(text).replace("\n", " "))
 
     env.filters["md"] = md
     env.filters["code"] = code
@@ -1011,9 +1043,14 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: Optional[str] = No
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="TOML mapping of variables to AJPF beliefs (as fretc --emit psl).")
 @click.option("--title", default=None, help="Report title.")
+@click.option("--check", "check_json", type=click.Path(exists=True, dir_okay=False),
+              default=None, help="Show the findings of fretc check -o FILE beside the "
+                                 "requirements.")
+@ray_options
 @click.pass_context
 def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-               jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title):
+               jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title,
+               check_json=None):
     """Write the traceability report (HTML + Markdown) of an audit: requirements x runs,
     formulas, monitors, AJPF properties, verdicts, witnesses and violation timelines.
 
@@ -1035,7 +1072,8 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
             return
         json_dir = str(Path(from_json).resolve().parent)
     else:
-        from .audit import AuditInputError, audit_logs, find_logs, load_plan
+        from .audit import AuditInputError, find_logs, load_plan
+        from .fleet import expand_log_args, run_audits
         from .report_model import audit_json
 
         json_dir = None
@@ -1043,13 +1081,13 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
                               time_base, engine, window)
         try:
             plan = load_plan(config)
-            paths = find_logs(logs)
+            paths = find_logs(expand_log_args(logs))
         except AuditInputError as exc:
             click.echo(f"error: {exc}", err=True)
             ctx.exit(2)
             return
         input_errors = any(r.error is not None for r in plan.requirements)
-        results = audit_logs(plan, paths, jobs=jobs)
+        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
         doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
                                     input_errors))
     try:
@@ -1059,6 +1097,9 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         click.echo(f"error: {exc}", err=True)
         ctx.exit(2)
         return
+    if check_json:  # fretc check findings beside the requirements (compiler/check_report.py)
+        from compiler.check_report import add_to_report, load_check
+        add_to_report(str(files.markdown), str(files.html), load_check(check_json))
     for n in files.notes:
         click.echo(f"note: {n}", file=err)
     s = doc.get("summary") or {}

@@ -10,19 +10,29 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
       "bindings": {sources: [...], tick: {period_ns | topic}, time_base,
                    variables: {name: {expr, source, line, topics}}} | null,
       "logs": [ LogAudit.to_json() ... ],              # in the order the logs were given
-      "summary": {satisfied, vacuous, violated, error, partial_logs, exit_code}
+      "summary": {satisfied, vacuous, violated, error, partial_logs, incomplete_logs,
+                  log_errors, exit_code}
     }
 
-Every time is given twice: ``*_ns`` - integer nanoseconds on the log's clock (MCAP log time
-or header stamp, see ``time_base``), what Foxglove shows; ``*_s`` - seconds since the log's
-first tick (``LogAudit.start_time_ns``), what a person reads. Ticks are 0-based indexes of
+Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
+log's first message (``LogAudit.start_time_ns``), what a person reads. Each time says its
+clock: ``log_time_ns`` is always the log time of a real message (in a first violation, the
+message that decided the missed tick: where Foxglove seeks); a tick's own time is
+``tick_time_ns`` (first violation) or ``time_ns`` (other tick points), on the bindings' time
+base (``tick_time_base`` / ``LogAudit.time_base``: ``log`` or ``header``). Each
+requirement runs on its own clock (its variables' topics): ``ticks_evaluated``,
+``warmup_ticks``, ``first_tick_ns`` and ``last_tick_ns`` are per verdict; the log's own
+fields summarize them. Ticks are 0-based indexes of
 *evaluated* ticks (warm-up ticks are not numbered, see :mod:`monitors.signals`).
 
 Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
 never entered or the trigger never fired (README "vacuous passes"); ``violated`` - FRET's
 finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
-(``error`` says why: no binding, topic missing, no tick evaluated, ...). A verdict on a
-damaged log is computed on what could be read and has ``partial`` true.
+(``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
+log is damaged and the span read completely decides nothing: an obligation is still open where
+it ends (``unknown_reason`` says which; :mod:`monitors.damage`). A verdict on a damaged log is
+computed on the span read completely (the ticks before ``damage_time_ns``) and has ``partial``
+true; a violation on it was decided before the damage.
 """
 
 from __future__ import annotations
@@ -32,10 +42,11 @@ from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Tuple
 
 __all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_json",
-           "summary", "exit_code", "SCHEMA", "VERDICTS"]
+           "summary", "exit_code", "incomplete", "SCHEMA", "VERDICTS", "EXIT_CODES", "EXIT_OK",
+           "EXIT_VIOLATED", "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE"]
 
 SCHEMA = "fretc-audit/1"
-VERDICTS = ("satisfied", "vacuous", "violated", "error")
+VERDICTS = ("satisfied", "vacuous", "violated", "unknown", "error")
 
 
 def _t(ns: Optional[int], start: Optional[int]) -> Dict[str, Any]:
@@ -47,14 +58,19 @@ def _t(ns: Optional[int], start: Optional[int]) -> Dict[str, Any]:
 
 @dataclass(frozen=True)
 class TimePoint:
-    """A tick and its time (ns on the log clock)."""
+    """A tick: its index, its own time (``time_ns``, ns in the bindings' time base: the
+    log clock or header stamps; a fixed-period tick is usually no message's time) and the
+    log time of the message that decided it (``log_time_ns``: the newest message held at
+    the tick among the requirement's topics - a real MCAP/bag log time, what Foxglove
+    seeks to; None when unknown)."""
 
     tick: int
     time_ns: int
+    log_time_ns: Optional[int] = None
 
     def to_json(self, start: Optional[int]) -> dict:
         return {"tick": self.tick, "time_ns": self.time_ns,
-                "time_s": _t(self.time_ns, start)["s"]}
+                "time_s": _t(self.time_ns, start)["s"], "log_time_ns": self.log_time_ns}
 
 
 @dataclass
@@ -81,9 +97,11 @@ class FirstViolation:
     obligation: str = ""
     reason: str = ""
 
-    def to_json(self, start: Optional[int]) -> dict:
-        out = {"tick": self.at.tick, "log_time_ns": self.at.time_ns,
-               "log_time_s": _t(self.at.time_ns, start)["s"],
+    def to_json(self, start: Optional[int], time_base: Optional[str] = None) -> dict:
+        lt = self.at.log_time_ns
+        out = {"tick": self.at.tick, "log_time_ns": lt, "log_time_s": _t(lt, start)["s"],
+               "tick_time_ns": self.at.time_ns, "tick_time_s": _t(self.at.time_ns, start)["s"],
+               "tick_time_base": time_base,
                "obligation": self.obligation, "reason": self.reason,
                "trigger": self.trigger.to_json(start) if self.trigger else None,
                "scope_interval": None, "window": None}
@@ -127,7 +145,10 @@ class Verdict:
         values: variable -> [(tick, time_ns, value)] around the trigger and the violation.
         sources: topic -> [(tick, time_ns, log_time_ns of the message held)] for the topics
             those variables are bound to, at the same ticks.
-        ticks_evaluated, warmup_ticks: as :class:`LogAudit` (per log).
+        ticks_evaluated, warmup_ticks, first_tick_ns, last_tick_ns, waiting_for: this
+            requirement's own clock (the topics of its variables and the bindings' tick;
+            never other requirements'): evaluated ticks, warm-up ticks, the times of its
+            first evaluated and last tick, the topics it waited for.
         intervals, triggers, violations: counts from the interval semantics (None when it
             could not be evaluated).
         violation_list: (trigger, violation) time points of the failed triggers in order,
@@ -153,6 +174,9 @@ class Verdict:
     sources: Dict[str, List[Tuple[int, int, Optional[int]]]] = field(default_factory=dict)
     ticks_evaluated: int = 0
     warmup_ticks: int = 0
+    first_tick_ns: Optional[int] = None
+    last_tick_ns: Optional[int] = None
+    waiting_for: List[str] = field(default_factory=list)
     intervals: Optional[int] = None
     triggers: Optional[int] = None
     violations: Optional[int] = None
@@ -160,13 +184,14 @@ class Verdict:
     engine: Optional[str] = None
     notes: List[str] = field(default_factory=list)
     error: Optional[str] = None
+    unknown_reason: Optional[str] = None
 
     @property
     def ok(self) -> bool:
         """satisfied or vacuous."""
         return self.verdict in ("satisfied", "vacuous")
 
-    def to_json(self, start: Optional[int]) -> dict:
+    def to_json(self, start: Optional[int], time_base: Optional[str] = None) -> dict:
         def val(v):
             if isinstance(v, float) and v != v:
                 return "nan"
@@ -177,7 +202,7 @@ class Verdict:
         return {
             "log": self.log, "requirement": self.requirement, "text": self.text,
             "source": self.source, "verdict": self.verdict, "partial": self.partial,
-            "first_violation": (self.first_violation.to_json(start)
+            "first_violation": (self.first_violation.to_json(start, time_base)
                                 if self.first_violation else None),
             "ltl3": self.ltl3.to_json(start),
             "values": {k: [{"tick": t, "time_ns": ns, "time_s": _t(ns, start)["s"],
@@ -187,12 +212,15 @@ class Verdict:
                              "message_log_time_ns": lt} for t, ns, lt in rows]
                         for k, rows in self.sources.items()},
             "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
+            "first_tick_ns": self.first_tick_ns, "first_tick_s": _t(self.first_tick_ns, start)["s"],
+            "last_tick_ns": self.last_tick_ns, "last_tick_s": _t(self.last_tick_ns, start)["s"],
+            "waiting_for": self.waiting_for,
             "intervals": self.intervals, "triggers": self.triggers,
             "violations": self.violations,
             "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}
                                for t, w in self.violation_list],
             "engine": self.engine, "notes": self.notes,
-            "error": self.error,
+            "error": self.error, "unknown_reason": self.unknown_reason,
         }
 
 
@@ -202,8 +230,10 @@ class LogAudit:
 
     Attributes:
         log: the path as given; ``kind`` mcap / bag / rosbag2 / csv.
-        partial, damage_time_ns: the log ends early (truncated); the last good message's log
-            time.
+        partial, damage_time_ns: the log is damaged (truncated, a chunk skipped, its summary
+            lost); where the span read completely ends (log time, ns; None when no message
+            was lost). Only ticks before it are judged; ``ticks_after_damage`` counts the
+            ticks sampled after it and not judged.
         start_time_ns: time of the first tick (evaluated or not); ``first_time_ns`` of the
             first evaluated tick; ``end_time_ns`` of the last tick.
         ticks_evaluated, warmup_ticks: evaluated ticks, and ticks before every bound topic
@@ -215,6 +245,8 @@ class LogAudit:
             ``problem_counts`` counts all of them by ``kind topic`` (the list is capped).
         verdicts: one per requirement, in requirement order.
         error: a log-level input error (unreadable log, no bindings for a ROS log).
+        warnings: remarks on how far the audit can be trusted (e.g. the tick topic's
+            measured rate differs from its declared nominal rate by more than 10 %).
     """
 
     log: str
@@ -236,6 +268,9 @@ class LogAudit:
     verdicts: List[Verdict] = field(default_factory=list)
     engine: Optional[str] = None
     error: Optional[str] = None
+    ticks_after_damage: int = 0
+    damage_cut: bool = False
+    warnings: List[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         st = self.start_time_ns
@@ -252,40 +287,75 @@ class LogAudit:
             "problems": [dict(p, log_time_s=_t(p.get("log_time_ns"), st)["s"])
                          for p in self.problems],
             "problem_counts": self.problem_counts,
-            "verdicts": [v.to_json(st) for v in self.verdicts],
+            "verdicts": [v.to_json(st, self.time_base) for v in self.verdicts],
             "engine": self.engine, "error": self.error,
+            "ticks_after_damage": self.ticks_after_damage, "damage_cut": self.damage_cut,
         }
 
 
-def summary(logs: List[LogAudit]) -> Dict[str, int]:
-    """Counts of verdicts over all logs, and the exit code they give (0 all satisfied or
-    vacuous, 1 a violation, 2 an error)."""
+#: Exit codes of ``fretc audit`` (README "Exit codes"; ``fretc audit --help``).
+EXIT_OK = 0
+EXIT_VIOLATED = 1
+EXIT_INPUT_ERROR = 2
+EXIT_INCOMPLETE = 3
+EXIT_CODES = (
+    (EXIT_OK, "every verdict satisfied or vacuous, on complete logs without data problems"),
+    (EXIT_VIOLATED, "a requirement is violated on some log"),
+    (EXIT_INPUT_ERROR, "a usage or input error: bad option, requirement or binding, a log "
+                       "that cannot be read, a requirement that could not be audited on a log"),
+    (EXIT_INCOMPLETE, "no violation found, but a log is partial (truncated, damaged) or had "
+                      "data problems, or a verdict is unknown: the audit is incomplete "
+                      "(--allow-partial: 0 instead)"),
+)
+
+
+def incomplete(la: "LogAudit") -> bool:
+    """The log was not audited completely: partial (damaged, cut short), data problems
+    found while reading it, or a verdict that is neither satisfied, vacuous, violated nor
+    error (e.g. ``unknown`` at damage)."""
+    return bool(la.partial or la.problems or la.problem_counts
+                or any(v.verdict not in _DECIDED for v in la.verdicts))
+
+
+#: Verdicts that say the requirement was checked to the end of the log.
+_DECIDED = ("satisfied", "vacuous", "violated", "error")
+
+
+def summary(logs: List[LogAudit], allow_partial: bool = False) -> Dict[str, int]:
+    """Counts of verdicts over all logs, and the exit code they give (:func:`exit_code`)."""
     out = {k: 0 for k in VERDICTS}
     for la in logs:
         for v in la.verdicts:
-            out[v.verdict] += 1
+            out[v.verdict] = out.get(v.verdict, 0) + 1
     out["partial_logs"] = sum(1 for la in logs if la.partial)
+    out["incomplete_logs"] = sum(1 for la in logs if incomplete(la))
     out["log_errors"] = sum(1 for la in logs if la.error)
-    out["exit_code"] = exit_code(logs)
+    out["exit_code"] = exit_code(logs, allow_partial=allow_partial)
     return out
 
 
-def exit_code(logs: List[LogAudit], input_errors: bool = False) -> int:
-    """2 when anything could not be audited (an input error, an ``error`` verdict), else 1
-    when a requirement is violated, else 0."""
+def exit_code(logs: List[LogAudit], input_errors: bool = False,
+              allow_partial: bool = False) -> int:
+    """The exit code of an audit (:data:`EXIT_CODES`), first that applies: 2 anything could
+    not be audited (an input error, an ``error`` verdict); 1 a requirement is violated; 3
+    (0 with ``allow_partial``) no violation but some log is incomplete (:func:`incomplete`:
+    partial, data problems, unknown verdicts - a CI gate must not pass a recording that lost
+    its last minutes); else 0."""
     if input_errors or any(la.error for la in logs) or any(
             v.verdict == "error" for la in logs for v in la.verdicts):
-        return 2
+        return EXIT_INPUT_ERROR
     if any(v.verdict == "violated" for la in logs for v in la.verdicts):
-        return 1
-    return 0
+        return EXIT_VIOLATED
+    if not allow_partial and any(incomplete(la) for la in logs):
+        return EXIT_INCOMPLETE
+    return EXIT_OK
 
 
 def audit_json(logs: List[LogAudit], requirements: List[dict], bindings: Optional[dict],
-               input_errors: bool = False) -> str:
+               input_errors: bool = False, allow_partial: bool = False) -> str:
     """The ``--json`` document (module docstring), as text with sorted keys."""
-    s = summary(logs)
-    s["exit_code"] = exit_code(logs, input_errors)
+    s = summary(logs, allow_partial)
+    s["exit_code"] = exit_code(logs, input_errors, allow_partial)
     doc = {"schema": SCHEMA, "requirements": requirements, "bindings": bindings,
            "logs": [la.to_json() for la in logs], "summary": s}
     return json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n"

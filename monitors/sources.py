@@ -49,6 +49,7 @@ from rosbags.typesys.store import Typestore
 
 from . import problems as P
 from .problems import CsvError, DataProblem, LogError, ProblemLog
+from .selective import chunk_messages
 
 __all__ = [
     "Message",
@@ -127,10 +128,18 @@ class LogSource:
         kind: ``"mcap"``, ``"bag"`` (ROS 1), ``"rosbag2"`` or ``"csv"``.
         counts: messages delivered per topic by the most recent :meth:`messages` pass
             (filled while iterating).
-        partial: True when the log ends early (truncated or unreadable from some point on);
-            everything before that point was delivered.
-        damage_time: when ``partial``, the log time (ns) of the last good message read before
-            the damage; None otherwise (or when no message was read at all).
+        partial: True when the log is damaged: it ends early (truncated or unreadable from
+            some point on), a part of it was skipped (a chunk failing its CRC, a record that
+            does not parse: a *gap*), or its summary or data-section CRC is damaged.
+        damage_time: where the intact span ends: the log time (ns) of the last good message
+            read before a truncation, or the first log time of the first gap; None when the
+            damage loses no message (summary, data CRC) or when nothing was read before it.
+            Only ticks strictly before it are judged (DESIGN.md "Damage is never evidence").
+        gaps: ``(start, end)`` log-time spans (ns, inclusive; ``end`` None when unknown) of the
+            data skipped in the latest pass, in the order found.
+        damage_cut: True when the damage loses messages (truncation or gap), so that only the
+            span before ``damage_time`` was read completely; False for damage that loses none
+            (summary, data-section CRC).
 
     ``problems`` lists the damage found at open time and during the most recent pass (capped
     per kind and topic, see :mod:`monitors.problems`); ``problem_counts`` counts all of it.
@@ -144,6 +153,9 @@ class LogSource:
         self.counts: dict[str, int] = {}
         self.partial = False
         self.damage_time: int | None = None
+        self.damage_cut = False
+        self.gaps: list[tuple[int | None, int | None]] = []
+        self._open_damage = False  # damage found at open time (summary): every pass is partial
         self._open_problems = ProblemLog()
         self._pass_problems = ProblemLog()
         self._start_time: int | None = None
@@ -169,9 +181,32 @@ class LogSource:
 
     def _begin_pass(self) -> None:
         self.counts = {}
-        self.partial = False
+        self.partial = self._open_damage
         self.damage_time = None
+        self.damage_cut = False
+        self.gaps = []
         self._pass_problems = ProblemLog()
+
+    def _gap(self, start: int | None, end: int | None = None) -> None:
+        """Record data lost from log time ``start`` (None: unknown, then the intact span
+        ends at ``start``'s best bound the caller passes) to ``end``: the log is partial and
+        its intact span ends at the earliest gap."""
+        self.partial = True
+        self.damage_cut = True
+        self.gaps.append((start, end))
+        if start is not None and (self.damage_time is None or start < self.damage_time):
+            self.damage_time = start
+
+    @property
+    def intact_end(self) -> int | None:
+        """Exclusive log-time bound (ns) of the span read completely in the latest pass: None
+        when no message was lost (``damage_cut`` False); a value below every log time when
+        nothing before the damage is intact."""
+        if not self.damage_cut:
+            return None
+        if self.damage_time is None or any(start is None for start, _ in self.gaps):
+            return -(2**63)
+        return self.damage_time
 
     # -- interface ------------------------------------------------------------------------------
     @property
@@ -259,7 +294,8 @@ def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typesto
     return store, typename
 
 
-def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Callable[[bytes], Any]:
+def _decoder_for(store: Typestore, typename: str, message_encoding: str,
+                 fields: Any = None) -> Callable[[bytes], Any]:
     if message_encoding == "cdr":
         deser = store.deserialize_cdr
     elif message_encoding == "ros1":
@@ -270,6 +306,9 @@ def _decoder_for(store: Typestore, typename: str, message_encoding: str) -> Call
     def decode(raw: bytes) -> Any:
         return deser(raw, typename)
 
+    if fields is not None:  # only the fields the bindings read (monitors.selective)
+        from .selective import selective_decoder
+        return selective_decoder(store, typename, message_encoding, fields, decode) or decode
     return decode
 
 
@@ -277,7 +316,7 @@ _SCHEMA_FOR_ENCODING = {"cdr": ("ros2msg", "ros2idl"), "ros1": ("ros1msg",)}
 
 
 def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
-                   schema_text: str | None) -> Callable[[bytes], Any]:
+                   schema_text: str | None, fields: Any = None) -> Callable[[bytes], Any]:
     """A function ``bytes -> rosbags message`` for one channel, with its types built from the
     schema text the channel carries (an MCAP Schema record, or a Foxglove WebSocket
     ``advertise``): shared by the log readers and ``fretc watch``.
@@ -288,6 +327,7 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
             encodings), matching the message encoding; None or ``""`` when the channel has none.
         schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
         schema_text: the definition text (see :func:`build_typestore`).
+        fields: field paths to decode (:mod:`monitors.selective`); None: every field.
 
     Raises:
         _Unsupported: an unsupported message encoding, a channel without schema, a schema
@@ -302,7 +342,7 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
         raise _Unsupported(f"schema encoding {schema_encoding!r} does not go with message "
                            f"encoding {message_encoding!r}")
     store, typename = build_typestore(schema_encoding, schema_name, schema_text)
-    return _decoder_for(store, typename, message_encoding)
+    return _decoder_for(store, typename, message_encoding, fields)
 
 
 #: Exceptions a decoder from :func:`schema_decoder` raises on a payload that does not match.
@@ -358,7 +398,9 @@ class McapSource(LogSource):
       chunks are read through the index in ``message_start_time`` order and merged so messages
       come out in exact log-time order (ties: file position), skipping chunks holding none of
       the wanted topics.  A chunk that is damaged (bad record, CRC mismatch, undecompressable)
-      is skipped with a DataProblem and reading goes on with the next chunk.  After a full
+      is skipped with a DataProblem and reading goes on with the next chunk; it is a *gap*
+      (``gaps``): the log is ``partial`` and its intact span ends where the gap starts
+      (``intact_end``; the audit judges only the ticks before it).  After a full
       pass the data-section CRC (DataEnd record) is checked once.
     * Otherwise (no summary, crashed recording, bad footer): records are read one by one from
       the start (framing: 1-byte opcode, 8-byte length).  A record whose body is damaged is
@@ -387,6 +429,7 @@ class McapSource(LogSource):
             raise LogError(path, "not an MCAP file (bad magic at byte 0)")
         self.profile = ""
         self._index: _McapIndex | None = self._read_index()
+        self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
         self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
@@ -420,6 +463,7 @@ class McapSource(LogSource):
             raw = f.read(_FOOTER_LEN)
             opcode, length = _HEAD.unpack_from(raw)
             if opcode != Opcode.FOOTER or length != _FOOTER_LEN - 9:
+                self._open_damage = True
                 self._open_problems.add(DataProblem(
                     P.SUMMARY_CORRUPT, None, None,
                     f"no Footer record at byte {footer_pos}; reading without the index"))
@@ -430,6 +474,7 @@ class McapSource(LogSource):
                 summary_bytes = b""
             else:
                 if not (0 < footer.summary_start <= footer_pos):
+                    self._open_damage = True
                     self._open_problems.add(DataProblem(
                         P.SUMMARY_CORRUPT, None, None,
                         f"Footer summary_start {footer.summary_start} is outside the file; "
@@ -441,6 +486,7 @@ class McapSource(LogSource):
             if footer.summary_crc != 0:
                 crc = zlib.crc32(raw[: _FOOTER_LEN - 4], zlib.crc32(summary_bytes))
                 if crc != footer.summary_crc:
+                    self._open_damage = True
                     self._open_problems.add(DataProblem(
                         P.SUMMARY_CORRUPT, None, None,
                         f"summary CRC mismatch (Footer says {footer.summary_crc:#010x}, "
@@ -476,6 +522,7 @@ class McapSource(LogSource):
                     statistics = rec
                 pos += 9 + length
         except _RECORD_ERRORS as exc:
+            self._open_damage = True
             self._open_problems.add(DataProblem(
                 P.SUMMARY_CORRUPT, None, None,
                 f"summary record at byte {footer.summary_start + pos} unreadable ({exc}); "
@@ -529,7 +576,8 @@ class McapSource(LogSource):
                                    f"{channel.schema_id})")
             dec = schema_decoder(channel.message_encoding, schema and schema.encoding,
                                  schema and schema.name,
-                                 schema and schema.data.decode("utf-8", errors="replace"))
+                                 schema and schema.data.decode("utf-8", errors="replace"),
+                                 (getattr(self, "_wanted_fields", None) or {}).get(channel.topic))
         except _Unsupported as exc:
             kind = (P.UNKNOWN_ENCODING if channel.message_encoding not in _SCHEMA_FOR_ENCODING
                     else P.UNKNOWN_SCHEMA)
@@ -596,17 +644,23 @@ class McapSource(LogSource):
                     opcode, length = _HEAD.unpack_from(raw)
                     if opcode != Opcode.CHUNK or 9 + length != ci.chunk_length:
                         raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
-                    records = _chunk_records(_parse_record(Opcode.CHUNK, raw[9:]))
+                    chunk = _parse_record(Opcode.CHUNK, raw[9:])
+                    if chunk.uncompressed_size > _MAX_UNCOMPRESSED:
+                        raise ValueError(f"chunk claims {chunk.uncompressed_size} uncompressed bytes")
+                    # only the messages of wanted (or unknown) channels are parsed
+                    records = chunk_messages(chunk, wanted, index.channels)
                 except CRCValidationError as exc:
+                    self._gap(ci.message_start_time, ci.message_end_time)
                     self._problem(P.CHUNK_CRC, None, ci.message_start_time,
                                   f"chunk at byte {ci.chunk_start_offset}: {exc}; its messages "
-                                  "are skipped", ci.message_end_time)
+                                  f"are skipped: a gap in the log{_GAP_NOTE}", ci.message_end_time)
                     continue
                 except Exception as exc:  # mcap, struct, zstd and lz4 raise their own errors
+                    self._gap(ci.message_start_time, ci.message_end_time)
                     self._problem(P.CHUNK_CORRUPT, None, ci.message_start_time,
                                   f"chunk at byte {ci.chunk_start_offset} unreadable "
-                                  f"({type(exc).__name__}: {exc}); its messages are skipped",
-                                  ci.message_end_time)
+                                  f"({type(exc).__name__}: {exc}); its messages are skipped: a "
+                                  f"gap in the log{_GAP_NOTE}", ci.message_end_time)
                     continue
                 n = 0
                 for rec in records:
@@ -615,6 +669,7 @@ class McapSource(LogSource):
                                               (rec.channel_id, rec)))
                         n += 1
                     elif isinstance(rec, McapMessage) and rec.channel_id not in index.channels:
+                        self._gap(rec.log_time, rec.log_time)
                         self._problem(P.UNKNOWN_CHANNEL, None, rec.log_time,
                                       f"message on channel id {rec.channel_id} that the summary "
                                       "does not define; skipped")
@@ -637,10 +692,18 @@ class McapSource(LogSource):
                 crc = zlib.crc32(block, crc)
                 remaining -= len(block)
         if crc != index.data_section_crc:
+            self._open_damage = True
+            self.partial = True
             self._open_problems.add(DataProblem(
                 P.DATA_CRC, None, None,
                 f"data section CRC mismatch (DataEnd says {index.data_section_crc:#010x}, "
                 f"computed {crc:#010x}): bytes outside the chunks are damaged"))
+
+    def _chunk_gap(self, chunk: Chunk, last_good: int | None) -> None:
+        """A skipped chunk read without the index: its header's times are not covered by a
+        CRC, so the gap starts no later than the last good message read before it."""
+        start = chunk.message_start_time
+        self._gap(start if last_good is None else min(start, last_good), chunk.message_end_time)
 
     def _linear(self, wanted: frozenset[str] | None, decode: bool) -> Iterator[Message]:
         """Record-by-record pass from byte 0 (no usable index).
@@ -663,6 +726,8 @@ class McapSource(LogSource):
             last_good = rec.log_time if last_good is None else max(last_good, rec.log_time)
             first_time = rec.log_time if first_time is None else min(first_time, rec.log_time)
             if ch is None:
+                if decode:
+                    self._gap(rec.log_time, rec.log_time)
                 if rec.channel_id not in reported_channels:
                     reported_channels.add(rec.channel_id)
                     self._problem(P.UNKNOWN_CHANNEL, None, rec.log_time,
@@ -694,6 +759,9 @@ class McapSource(LogSource):
             while heap and (limit is None or heap[0][0] < limit):
                 log_time, _pos, _seq, rec = heapq.heappop(heap)
                 if released is not None and log_time < released:
+                    # without an index only damage (a log time or chunk header changed) puts a
+                    # message this far out of order: a gap at its log time
+                    self._gap(log_time, log_time)
                     self._problem(P.OUT_OF_ORDER, channels[rec.channel_id].topic, log_time,
                                   f"message is {released - log_time} ns older than one already "
                                   f"delivered (beyond the {REORDER_WINDOW_NS} ns reorder window); "
@@ -725,8 +793,7 @@ class McapSource(LogSource):
                             if n_msgs:
                                 what += (f"; {n_msgs} complete messages recovered from the cut "
                                          "chunk (unverified: its CRC covers the whole chunk)")
-                    self.partial = True
-                    self.damage_time = last_good
+                    self._gap(last_good)
                     self._problem(P.TRUNCATED, None, last_good,
                                   f"{what}; read up to there (crashed or cut recording)")
                     break
@@ -736,6 +803,7 @@ class McapSource(LogSource):
                     try:
                         de = _parse_record(opcode, body)
                         if self.check_data_crc and de.data_section_crc not in (0, crc):
+                            self.partial = True
                             self._problem(P.DATA_CRC, None, None,
                                           f"data section CRC mismatch (DataEnd says "
                                           f"{de.data_section_crc:#010x}, computed {crc:#010x})")
@@ -753,6 +821,8 @@ class McapSource(LogSource):
                     rec = _parse_record(opcode, body)
                 except _RECORD_ERRORS as exc:
                     kind = P.CHUNK_CORRUPT if opcode == Opcode.CHUNK else P.CORRUPT_RECORD
+                    if opcode in (Opcode.CHUNK, Opcode.MESSAGE, Opcode.CHANNEL, Opcode.SCHEMA):
+                        self._gap(last_good)  # what it held is lost; its times are unknown
                     self._problem(kind, None, last_good,
                                   f"{Opcode(opcode).name} record at byte {pos} unreadable "
                                   f"({type(exc).__name__}: {exc}); skipped")
@@ -769,23 +839,47 @@ class McapSource(LogSource):
                     try:
                         records = _chunk_records(rec)
                     except CRCValidationError as exc:
+                        self._chunk_gap(rec, last_good)
                         self._problem(P.CHUNK_CRC, None, rec.message_start_time,
-                                      f"chunk at byte {pos}: {exc}; its messages are skipped",
-                                      rec.message_end_time)
+                                      f"chunk at byte {pos}: {exc}; its messages are skipped: "
+                                      f"a gap in the log{_GAP_NOTE}", rec.message_end_time)
                         continue
                     except Exception as exc:  # decompression libraries raise their own errors
+                        self._chunk_gap(rec, last_good)
                         self._problem(P.CHUNK_CORRUPT, None, rec.message_start_time,
                                       f"chunk at byte {pos} unreadable ({type(exc).__name__}: "
-                                      f"{exc}); its messages are skipped", rec.message_end_time)
+                                      f"{exc}); its messages are skipped: a gap in the log"
+                                      f"{_GAP_NOTE}", rec.message_end_time)
                         continue
-                    watermark = (rec.message_start_time if watermark is None
-                                 else max(watermark, rec.message_start_time))
-                    yield from release(watermark - REORDER_WINDOW_NS)
                     absorb(records, pos)
+                    # the watermark comes from the messages (CRC-checked), not from the chunk
+                    # header's message_start_time, which no CRC covers
+                    if last_good is not None:
+                        watermark = last_good if watermark is None else max(watermark, last_good)
+                        yield from release(watermark - REORDER_WINDOW_NS)
+        if decode and not self.damage_cut and not _ends_with_footer(f_size=self._size,
+                                                                     path=self.path):
+            self.partial = True
+            self._problem(P.SUMMARY_CORRUPT, None, None,
+                          "the file ends after its data section without a Footer and closing "
+                          "magic (summary lost); every message was read")
         yield from release(None)
         self._scanned = (schemas, channels)
         if first_time is not None:
             self._start_time, self._end_time = first_time, last_good
+
+
+_GAP_NOTE = "; the log is audited up to its start (nothing is held across a gap)"
+
+
+def _ends_with_footer(f_size: int, path: str) -> bool:
+    """True when the file ends with a Footer record and the closing magic (MCAP spec)."""
+    if f_size < len(MCAP_MAGIC) + _FOOTER_LEN:
+        return False
+    with open(path, "rb") as f:
+        f.seek(f_size - len(MCAP_MAGIC) - _FOOTER_LEN)
+        tail = f.read(len(MCAP_MAGIC) + _FOOTER_LEN)
+    return tail[-len(MCAP_MAGIC):] == MCAP_MAGIC and tail[0] == Opcode.FOOTER
 
 
 def _truncated_chunk_records(tail: bytes) -> list[Any]:
@@ -890,6 +984,7 @@ class BagSource(LogSource):
         self._fallback = fallback_typestore
         self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
         self._topics: dict[str, str] = {}
+        self._linear_bag: _Ros1Linear | None = None
         try:
             with self._reader() as reader:
                 for c in reader.connections:
@@ -900,7 +995,14 @@ class BagSource(LogSource):
         except LogError:
             raise
         except Exception as exc:  # rosbags ReaderError and friends
-            raise LogError(path, f"cannot open {self.kind}: {exc}") from None
+            if self.kind != "bag" or not _is_ros1_bag(p):
+                raise LogError(path, f"cannot open {self.kind}: {exc}") from None
+            # a ROS 1 bag whose index (at its end) is damaged or missing, as a crashed
+            # recording leaves it: read its records from the start, as far as they go
+            self._linear_bag = _Ros1Linear(self, str(exc))
+            self._open_damage = True
+            self.partial = True
+            self._topics = self._linear_bag.scan()
 
     def _reader(self) -> Any:
         if self.kind == "bag":
@@ -929,7 +1031,8 @@ class BagSource(LogSource):
                 schema_encoding = ("ros1msg" if self.kind == "bag" else
                                    "ros2idl" if fmt == MessageDefinitionFormat.IDL else "ros2msg")
                 store, typename = build_typestore(schema_encoding, conn.msgtype, text)
-            dec = _decoder_for(store, typename, encoding)
+            dec = _decoder_for(store, typename, encoding,
+                               (getattr(self, "_wanted_fields", None) or {}).get(conn.topic))
         except _Unsupported as exc:
             kind = P.UNKNOWN_ENCODING if encoding not in _SCHEMA_FOR_ENCODING else P.UNKNOWN_SCHEMA
             self._open_problems.add(DataProblem(kind, conn.topic, log_time,
@@ -943,6 +1046,9 @@ class BagSource(LogSource):
         A read error part-way (damaged bag) ends the pass with ``partial`` set.
         """
         self._begin_pass()
+        if self._linear_bag is not None:
+            yield from self._linear_bag.messages(topics)
+            return
         last: int | None = None
         try:
             with self._reader() as reader:
@@ -969,10 +1075,202 @@ class BagSource(LogSource):
                     self.counts[conn.topic] = self.counts.get(conn.topic, 0) + 1
                     yield Message(conn.topic, log_time, log_time, header_stamp(data), data)
         except _BAG_ERRORS as exc:  # data corrupt part-way
-            self.partial = True
-            self.damage_time = last
+            self._gap(last)
             self._problem(P.CORRUPT_RECORD, None, last,
                           f"reading stopped: {type(exc).__name__}: {exc}")
+
+
+_ROS1_MAGIC = b"#ROSBAG V2.0\n"
+_OP_MSG, _OP_BAG_HEADER, _OP_CHUNK, _OP_CONN = 0x02, 0x03, 0x05, 0x07
+
+
+def _is_ros1_bag(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(_ROS1_MAGIC)) == _ROS1_MAGIC
+    except OSError:
+        return False
+
+
+def _ros1_fields(raw: bytes) -> dict[bytes, bytes]:
+    """The ``name=value`` fields of a ROS 1 bag record header (ROS bag format 2.0)."""
+    out: dict[bytes, bytes] = {}
+    pos = 0
+    while pos + 4 <= len(raw):
+        (n,) = struct.unpack_from("<I", raw, pos)
+        if pos + 4 + n > len(raw):
+            raise ValueError("a header field runs past its record header")
+        name, eq, value = raw[pos + 4: pos + 4 + n].partition(b"=")
+        if not eq:
+            raise ValueError("a header field without '='")
+        out[name] = value
+        pos += 4 + n
+    return out
+
+
+def _ros1_records(buf: bytes, base: int) -> Iterator[tuple[int, dict[bytes, bytes], bytes]]:
+    """(offset, header fields, data) of the complete records in ``buf``; stops at the first
+    record cut short (ValueError for a record that does not parse)."""
+    pos = 0
+    while pos + 4 <= len(buf):
+        (hlen,) = struct.unpack_from("<I", buf, pos)
+        if pos + 4 + hlen + 4 > len(buf):
+            return
+        header = _ros1_fields(buf[pos + 4: pos + 4 + hlen])
+        (dlen,) = struct.unpack_from("<I", buf, pos + 4 + hlen)
+        start = pos + 8 + hlen
+        if start + dlen > len(buf):
+            return
+        yield base + pos, header, buf[start: start + dlen]
+        pos = start + dlen
+
+
+class _Ros1Linear:
+    """Record-by-record reading of a ROS 1 bag without its index (ROS bag format 2.0:
+    records of a header of ``name=value`` fields and data; ``op`` 0x05 Chunk - bz2, lz4 or
+    uncompressed records; 0x07 Connection; 0x02 Message data, ``time`` = sec, nsec u32).
+    Everything up to the first record cut short or unreadable is delivered (in log-time
+    order, :data:`REORDER_WINDOW_NS` held back); what follows is a truncation."""
+
+    def __init__(self, source: BagSource, why: str) -> None:
+        self.src = source
+        self.why = why
+        self.conns: dict[int, tuple[str, str, str]] = {}  # conn -> (topic, type, definition)
+
+    def scan(self) -> dict[str, str]:
+        for _ in self._walk(None, decode=False):
+            pass
+        return {t: normalize_msgtype(ty) for t, ty, _d in self.conns.values()}
+
+    def messages(self, topics) -> Iterator[Message]:
+        yield from self._walk(topics, decode=True)
+
+    def _walk(self, topics, decode: bool) -> Iterator[Message]:
+        src = self.src
+        data = Path(src.path).read_bytes()
+        heap: list[tuple] = []
+        seq = 0
+        last_good: int | None = None
+        released: int | None = None
+        decoders: dict[int, Any] = {}
+
+        def take(header: dict[bytes, bytes], body: bytes) -> None:
+            nonlocal seq, last_good
+            op = header.get(b"op", b"\x00")[:1]
+            if op == bytes([_OP_CONN]):
+                conn = struct.unpack("<I", header[b"conn"])[0]
+                f = _ros1_fields(body)
+                self.conns.setdefault(conn, (header.get(b"topic", f.get(b"topic", b"")).decode(),
+                                             f.get(b"type", b"").decode(),
+                                             f.get(b"message_definition", b"").decode(
+                                                 "utf-8", "replace")))
+            elif op == bytes([_OP_MSG]):
+                conn = struct.unpack("<I", header[b"conn"])[0]
+                sec, nsec = struct.unpack("<II", header[b"time"])
+                t = sec * NS_PER_S + nsec
+                last_good = t if last_good is None else max(last_good, t)
+                if decode:
+                    heapq.heappush(heap, (t, seq, conn, body))
+                    seq += 1
+
+        def release(limit: int | None) -> Iterator[Message]:
+            nonlocal released
+            while heap and (limit is None or heap[0][0] < limit):
+                t, _s, conn, body = heapq.heappop(heap)
+                c = self.conns.get(conn)
+                if c is None or (topics is not None and c[0] not in topics):
+                    continue
+                if released is not None and t < released:
+                    src._gap(t, t)
+                    src._problem(P.OUT_OF_ORDER, c[0], t, "message older than one already "
+                                 "delivered beyond the reorder window (no index); skipped")
+                    continue
+                if conn not in decoders:
+                    try:
+                        store, typename = build_typestore("ros1msg", c[1], c[2])
+                        decoders[conn] = _decoder_for(store, typename, "ros1")
+                    except _Unsupported as exc:
+                        decoders[conn] = None
+                        src._problem(P.UNKNOWN_SCHEMA, c[0], t,
+                                     f"{exc}; messages on this topic are skipped")
+                dec = decoders[conn]
+                if dec is None:
+                    continue
+                try:
+                    msg = dec(body)
+                except _DECODE_ERRORS as exc:
+                    src._problem(P.UNDECODABLE, c[0], t, f"payload of {len(body)} bytes does "
+                                 f"not deserialize ({type(exc).__name__}); message skipped")
+                    continue
+                released = t
+                src.counts[c[0]] = src.counts.get(c[0], 0) + 1
+                yield Message(c[0], t, t, header_stamp(msg), msg)
+
+        pos = len(_ROS1_MAGIC)
+        reason = None
+        while pos < len(data):
+            recs = list(_ros1_records_one(data, pos))
+            if not recs:
+                reason = f"file ends at byte {len(data)} inside the record at byte {pos}"
+                break
+            (_off, header, body, nxt), = recs
+            op = header.get(b"op", b"\x00")[:1]
+            try:
+                if op == bytes([_OP_CHUNK]):
+                    comp = header.get(b"compression", b"none").decode()
+                    if comp == "none":
+                        raw = body
+                    elif comp == "bz2":
+                        import bz2
+
+                        raw = bz2.decompress(body)
+                    elif comp == "lz4":
+                        import lz4.frame
+
+                        raw = lz4.frame.decompress(body)
+                    else:
+                        raise ValueError(f"unknown chunk compression {comp!r}")
+                    for _o, h, b in _ros1_records(raw, 0):
+                        take(h, b)
+                elif op in (bytes([_OP_CONN]), bytes([_OP_MSG])):
+                    take(header, body)
+            except Exception as exc:  # bz2/lz4/struct errors: the record is damaged
+                reason = f"record at byte {pos} unreadable ({type(exc).__name__}: {exc})"
+                break
+            if last_good is not None:
+                yield from release(last_good - REORDER_WINDOW_NS)
+            pos = nxt
+        if decode:
+            yield from release(None)
+        if reason is not None or pos < len(data):
+            src._gap(last_good)
+            src._problem(P.TRUNCATED, None, last_good,
+                         f"{reason or 'records end early'}; read up to there without the bag "
+                         f"index ({self.why})")
+        else:
+            src._problem(P.SUMMARY_CORRUPT, None, None,
+                         f"the bag index is damaged or missing ({self.why}); every record was "
+                         "read without it")
+        if not decode and last_good is not None:
+            src._end_time = last_good
+
+
+def _ros1_records_one(data: bytes, pos: int) -> Iterator[tuple[int, dict, bytes, int]]:
+    """The one complete record at ``pos`` of ``data`` with the offset after it, or nothing."""
+    if pos + 4 > len(data):
+        return
+    (hlen,) = struct.unpack_from("<I", data, pos)
+    if pos + 8 + hlen > len(data):
+        return
+    try:
+        header = _ros1_fields(data[pos + 4: pos + 4 + hlen])
+    except ValueError:
+        return
+    (dlen,) = struct.unpack_from("<I", data, pos + 4 + hlen)
+    start = pos + 8 + hlen
+    if start + dlen > len(data):
+        return
+    yield pos, header, data[start: start + dlen], start + dlen
 
 
 # ------------------------------------------------------------------------------------------------

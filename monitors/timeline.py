@@ -29,7 +29,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Sequence, Tuple
-from xml.sax.saxutils import escape, quoteattr
+from xml.sax.saxutils import escape as _xml_escape, quoteattr as _xml_quoteattr
+
+from fretish.textsafe import xml_text
+
+
+def escape(s: str) -> str:
+    """XML character data from the inputs: control and bidi characters shown escaped
+    (:func:`fretish.textsafe.xml_text`: a NUL must not make the SVG unparseable)."""
+    return _xml_escape(xml_text(s, keep=""))
+
+
+def quoteattr(s: str) -> str:
+    """A quoted XML attribute value, made safe like :func:`escape`."""
+    return _xml_quoteattr(xml_text(s, keep=""))
 
 __all__ = ["timeline_svg", "Threshold", "COLORS"]
 

@@ -460,7 +460,9 @@ class Watch:
         self.recorder: Optional[_Recorder] = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
-        self._cols = None
+        self._cols = {}
+        self._group = {}
+        self._unknown = {}
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
         #: whose arrival closed it): the latency benchmark's hook.
@@ -583,36 +585,52 @@ class Watch:
             src.pump(0.05)
 
     def _run_pass(self, active, bindings):
-        from .audit import _Pass
-        from .signals import sample
+        """Step the monitors over the live ticks, each requirement on its own clock (the
+        topics of its variables, :func:`monitors.signals.sample_groups`, as the audit)."""
+        from .audit import _Pass, _clock_key
+        from .signals import sample_groups
 
-        plan, src = self.plan, self.source
-        names = []
-        for r in active:
-            for v in r.variables:
-                if v not in names:
-                    names.append(v)
-        topics = sorted({t for n in names for t in bindings.variables[n].topics})
+        src = self.source
         engine = {r.index: ("interval" if r.offline else "stepwise") for r in active}
         monitors = {r.index: r.monitor_cls() for r in active if engine[r.index] == "stepwise"}
         for r in active:
             self.live[r.index].offline = r.offline
-        order = [(r, monitors.get(r.index), self.live[r.index]) for r in active]
-        self._cols = _LiveColumns(names, topics)
+        groups: Dict[frozenset, list] = {}
+        for r in active:
+            groups.setdefault(_clock_key(r, bindings), []).append(r)
+        spec = {}
+        self._cols = {}
+        self._group = {}
+        order = {}
+        for key, rs in groups.items():
+            names: List[str] = []
+            for r in rs:
+                for v in r.variables:
+                    if v not in names:
+                        names.append(v)
+            spec[key] = (names, key)
+            self._cols[key] = _LiveColumns(names, sorted(key))
+            order[key] = [(r, monitors.get(r.index), self.live[r.index]) for r in rs]
+            for r in rs:
+                self._group[r.index] = key
         self._active = active
-        sampling = sample(src, bindings)
+        self._unknown = {key: 0 for key in groups}
+        sampling = sample_groups(src, bindings, spec)
         gaps = src.gaps
         self.status_line = f"watching {self.options.url}"
-        for tick in sampling:
+        for key, tick in sampling:
             t = tick.time
             if gaps and any(a < t < e for a, e in gaps[-4:]):
-                self.unknown_ticks += 1
+                self._unknown[key] += 1
+                # ticks skipped on the busiest clock (each requirement counts its own)
+                self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
                 continue
             vals = tick.values
-            i = self._cols.n
+            cols = self._cols[key]
+            i = cols.n
             dep = max(tick.log_times.values()) if tick.log_times else None
-            for r, mon, st in order:
-                if mon is None:
+            for r, mon, st in order[key]:
+                if mon is None or any(v not in vals for v in r.variables):
                     continue
                 pt = mon.step(vals)
                 if pt != st.pt:
@@ -630,16 +648,27 @@ class Watch:
                     self._event(WatchEvent("ltl3", t, time.time_ns(), r.id, i, mon.status,
                                            depends_on=dep,
                                            extra={"status_tick": mon.status_tick}))
-            self._cols.append(tick)
+            cols.append(tick)
             self.ticks += 1
             if self.on_tick is not None:
                 self.on_tick(i, t, dep, src._last_time)
             self.last_tick_time = t
             if self.start_time is None:  # the run's time 0, as in the audit's tables
-                self.start_time = sampling.start_time
-        times, columns, log_times = self._cols.arrays()
+                self.start_time = (src.start_time if src.start_time is not None
+                                   else sampling.groups[key].start_time)
+        passes = {}
+        for key in groups:
+            times, columns, log_times = self._cols[key].arrays()
+            passes[key] = _Pass(sampling.groups[key], times, columns, log_times, monitors,
+                                engine)
         self._live_evidence()
-        return _Pass(sampling, times, columns, log_times, monitors, engine)
+        return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
+                            sampling.failed, self._group)
+
+    def tick_times(self, index: int):
+        """Tick times seen so far on the clock of the requirement at ``index``."""
+        cols = (getattr(self, "_cols", None) or {}).get(getattr(self, "_group", {}).get(index))
+        return cols.times if cols is not None else []
 
     def refresh_evidence(self) -> None:
         """Update "violations so far" and "last trigger" of the live table (at most every
@@ -659,11 +688,14 @@ class Watch:
         the ticks seen (:func:`monitors.evidence.evaluate_requirement`)."""
         from .evidence import evaluate_requirement
 
-        n = self._cols.n
-        if n == 0:
-            return
-        _times, columns, _lt = self._cols.arrays(n)
+        arrays = {}
+        for key, cols in self._cols.items():
+            if cols.n:
+                arrays[key] = (cols.n, cols.arrays(cols.n)[1])
         for r in self._active:
+            if self._group.get(r.index) not in arrays:
+                continue
+            n, columns = arrays[self._group[r.index]]
             st = self.live[r.index]
             try:
                 ev = evaluate_requirement(r.requirement, columns, n, r.formalization.ticks)
@@ -681,35 +713,58 @@ class Watch:
         from .audit import _finalize, _operand_values
 
         if result is not None:
-            s = result.sampling
-            la.start_time_ns = s.start_time
-            la.first_time_ns = s.first_time
-            la.end_time_ns = s.end_time
-            la.ticks_evaluated = s.ticks - self.unknown_ticks
-            la.warmup_ticks = s.warmup_ticks
-            la.waiting_for = list(s.waiting_for)
-            la.missing_topics = list(s.missing_topics)
+            src = self.source
+            groups = [res.sampling for res in result.by_req.values()]
+            starts = [g.start_time for g in groups if g.start_time is not None]
+            la.start_time_ns = (src.start_time if src.start_time is not None
+                                else (min(starts) if starts else None))
+            ends = [g.end_time for g in groups if g.end_time is not None]
+            la.end_time_ns = max(ends) if ends else None
+            la.missing_topics = sorted({t for g in groups for t in g.missing_topics})
             la.engine = "stepwise"
+            ok = []
             for r in active:
-                _finalize(self.plan, r, result, self.plan.bindings, verdicts[r.index], la)
-                if self.unknown_ticks:
-                    verdicts[r.index].notes.append(
-                        f"{self.unknown_ticks} ticks inside connection gaps were not "
-                        "evaluated (unknown)")
+                res = result.by_req[r.index]
+                g, v = res.sampling, verdicts[r.index]
+                unknown = self._unknown.get(self._group[r.index], 0)
+                v.ticks_evaluated = g.ticks - unknown
+                v.warmup_ticks = g.warmup_ticks
+                v.first_tick_ns, v.last_tick_ns = g.first_time, g.end_time
+                v.waiting_for = list(g.waiting_for)
+                bad = [n for n in r.variables
+                       if n in result.failed.get(self._group[r.index], {})]
+                if bad:
+                    v.error = str(result.failed[self._group[r.index]][bad[0]])
+                    continue
+                if g.missing_topics:
+                    v.error = "; ".join(f"topic {t} has no message in the run"
+                                        for t in g.missing_topics)
+                    continue
+                _finalize(self.plan, r, res, self.plan.bindings, v, la)
+                ok.append(r)
+                if unknown:
+                    v.notes.append(f"{unknown} ticks inside connection gaps were not "
+                                   "evaluated (unknown)")
+            if ok:
+                la.ticks_evaluated = max(verdicts[r.index].ticks_evaluated for r in ok)
+                la.warmup_ticks = max(verdicts[r.index].warmup_ticks for r in ok)
+                firsts = [verdicts[r.index].first_tick_ns for r in ok
+                          if verdicts[r.index].first_tick_ns is not None]
+                la.first_time_ns = min(firsts) if firsts else None
+                la.waiting_for = sorted({t for r in ok for t in verdicts[r.index].waiting_for})
+            active = ok
         la.verdicts = [verdicts[r.index] for r in self.plan.requirements]
         for v in la.verdicts:
             if v.error is not None:
                 v.verdict = "error"
             v.partial = la.partial
-            v.ticks_evaluated = la.ticks_evaluated
-            v.warmup_ticks = la.warmup_ticks
         if self.recorder is not None:
             self.recorder.finish(la)
             if result is not None and not self.source.gaps:
                 # the numbers behind violated boolean variables: the audit's second pass,
                 # over the recording
                 _operand_values(self.recorder.path, self.plan, self.plan.bindings,
-                                list(active), verdicts, result.times)
+                                list(active), verdicts, result.by_req)
         for v in la.verdicts:
             e = WatchEvent("final", la.end_time_ns, time.time_ns(), v.requirement,
                            verdict=v.verdict,
@@ -717,6 +772,16 @@ class Watch:
                            extra={"ltl3": v.ltl3.status, "violations": v.violations})
             self._event(e)
         return la
+
+
+@dataclass
+class _WatchPasses:
+    """The watch's ticks, one :class:`monitors.audit._Pass` per requirement's clock."""
+
+    sampling: Any
+    by_req: Dict[int, Any]
+    failed: Dict[Any, Dict[str, Any]]
+    group: Dict[int, Any]
 
 
 class _LiveColumns:

@@ -42,7 +42,7 @@ def test_main_job_on_the_shipped_traces(tmp_path):
     assert r1["first_violation"]["trigger"]["time_s"] == pytest.approx(8.8)
     assert r1["first_violation"]["scope_interval"]["start"]["tick"] == 0
     assert r1["values"]["too_close"] and r1["sources"]["/scan"]
-    assert logs["sif_disabled.mcap"]["warmup_ticks"] == 1
+    assert r1["warmup_ticks"] == 1 and r1["waiting_for"] == ["/cmd_vel_filtered"]
     n_violated = sum(v["verdict"] == "violated" for l in doc["logs"] for v in l["verdicts"])
     readme = _readme_expectations()
     expected_violated = sum(v == "violated" for exp in readme.values() for v, _ in exp.values())

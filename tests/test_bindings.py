@@ -89,7 +89,7 @@ def test_parse_duration_rejects(value):
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "age(/a.x) > 1"\n', 4, 12, "age() takes a topic"),
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "/scan < 3"\n', 4, 8, "is a topic, not a value"),
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = 3\n', 4, 7, "must be a string"),
-    ('[tick]\nperiod = "100 ms"\n[variables]\n"2bad" = "/a.x"\n', 4, 1, "not an identifier"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\n" bad" = "/a.x"\n', 4, 1, "not an identifier"),
     ('[tick]\nperiod = "fast"\n[variables]\n', 2, 10, "[tick] period"),
     ('[tick]\nperiod = "1 s"\ntopic = "/a"\n[variables]\n', 1, 1, "exactly one of"),
     ('[tick]\nperiod = "1 s"\ntime = "wall"\n[variables]\n', 3, 8, "time must be"),

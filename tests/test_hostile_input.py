@@ -76,37 +76,6 @@ def test_case_study_eb_requirements(tmp_path):
     assert set(res["monitors"]) == {"EB0", "EB1"}
 
 
-def test_edge_bdds_give_the_table_verdicts(monkeypatch):
-    """Differential: the automata written as BDD edge tables (used above TABLE_MAX_APS
-    atoms) give the same status at the same tick as the letter-indexed tables."""
-    import random
-
-    from compiler import codegen
-    from _monitor_helpers import KEYS, compiled, requirement
-
-    rng = random.Random(15)
-    keys = rng.sample(KEYS, 24)
-    reqs = [compiled(requirement(s, c, t, response="r xor m", n=2), rid=f"R{i}")
-            for i, (s, c, t) in enumerate(keys)]
-
-    def load(table_max):
-        monkeypatch.setattr(codegen, "TABLE_MAX_APS", table_max)
-        ns = {}
-        exec(compile(codegen.render_module(reqs, "m"), "m", "exec"), ns)
-        return ns["MONITORS"]
-
-    tables, bdds = load(10), load(0)
-    assert sum("_BAD_EDGES" in vars(cls) for cls in bdds.values()) >= 16
-    for rid in tables:
-        for run in range(8):
-            a, b = tables[rid](), bdds[rid]()
-            for _ in range(12):
-                sample = {v: rng.random() < 0.5 if v != "x" else rng.randint(0, 4)
-                          for v in a.VARIABLES}
-                assert a.step(sample) == b.step(sample)
-                assert (a.status, a.status_tick) == (b.status, b.status_tick), rid
-
-
 # ------------------------------------------------------------------ item 2: long chains
 @pytest.mark.parametrize("op", ["xor", "&", "|", "->", "<->"])
 def test_two_hundred_chained_operators(tmp_path, op):

@@ -101,7 +101,7 @@ def test_matrix_cells_match_the_audit_json(shipped):
             assert link[1:] in ids, link              # every cell links to its detail
             if v["verdict"] == "violated":
                 fv = v["first_violation"]
-                assert f"@ {fv['log_time_s']:.3f} s" in text
+                assert f"@ {fv['tick_time_s']:.3f} s" in text
                 assert int(cell.get("data-log-time-ns")) == fv["log_time_ns"]
                 assert ids[link[1:]].get("class") == "violation"
             else:
@@ -138,8 +138,9 @@ def test_every_witness_time_matches_the_audit_json(shipped):
             if l3["time_ns"] is not None:
                 assert int(sec.get("data-ltl3-ns")) == l3["time_ns"]
             t = _text(sec)
-            assert (f"tick {fv['tick']} at {fv['log_time_s']:.3f} s "
-                    f"(log time {fv['log_time_ns']} ns)") in t
+            assert (f"tick {fv['tick']} at {fv['tick_time_s']:.3f} s on the "
+                    f"{fv['tick_time_base']} clock (deciding message log time "
+                    f"{fv['log_time_ns']} ns)") in t
             tr = fv["trigger"]
             assert f"tick {tr['tick']} at {tr['time_s']:.3f} s (log time {tr['time_ns']} ns)" in t
             sc, w = fv["scope_interval"], fv["window"]
@@ -267,13 +268,13 @@ def test_markdown_has_the_same_content(shipped):
             v = la["verdicts"][i]
             assert v["verdict"] in cell
             if v["verdict"] == "violated":
-                assert f"@ {v['first_violation']['log_time_s']:.3f} s" in cell
+                assert f"@ {v['first_violation']['tick_time_s']:.3f} s" in cell
     for la in doc["logs"]:
         for v in la["verdicts"]:
             if v["verdict"] != "violated":
                 continue
             fv = v["first_violation"]
-            assert f"(log time {fv['log_time_ns']} ns)" in md
+            assert f"(deciding message log time {fv['log_time_ns']} ns)" in md
             assert f"(log time {fv['trigger']['time_ns']} ns)" in md
             for rows in v["values"].values():
                 for x in rows:
@@ -457,7 +458,7 @@ def test_synthetic_report_scope_missing_topic_and_partial_log(synthetic):
     assert len(missing) == 2 and all("S4" in _text(e) and "not in the log" in _text(e)
                                      for e in missing)
     assert "/battery" in _text(cov.find(f".//{X}p[@class='err']"))   # in no run at all
-    assert "partial log, damaged at" in _text(cov)
+    assert "partial log: the log is damaged (truncated" in _text(cov)
     assert "/battery" in _text(ids["coverage"]) and "S4 on syn_run.mcap" in _text(cov)
     md = synthetic["md"]
     assert "[in moving mode]<sub>scope</sub>" in md

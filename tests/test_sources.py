@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import struct
+
 import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType
@@ -261,7 +263,15 @@ def test_flipped_bytes_in_a_chunk_skip_that_chunk_only(tmp_path, compression):
         assert kinds[0] in allowed, (label, kinds)
         # The linear copy also lacks everything after the last chunk: partial, at its end.
         assert kinds[1:] == ([] if label == "indexed" else [P.TRUNCATED]), (label, kinds)
-        assert src.partial == (label == "linear")
+        # A skipped chunk is a gap (issue 15 item 9): the log is partial and its intact span
+        # ends where the gap starts.
+        assert src.partial and src.damage_cut, label
+        # (without the index the chunk header's start time is not CRC-covered: the gap
+        # starts no later than the last good message before it)
+        start = src.gaps[0][0]
+        assert chunks[3].message_end_time <= start <= bad.message_start_time, label
+        assert src.gaps[0][1] == bad.message_end_time, label
+        assert src.intact_end == start, label
         prob = next(p for p in src.problems if p.kind in allowed)
         assert (prob.log_time, prob.end_time) == (bad.message_start_time, bad.message_end_time)
 
@@ -287,7 +297,8 @@ def test_corrupt_summary_falls_back_to_linear_read(tmp_path, chunked):
     assert not src.indexed
     assert [p.kind for p in src.problems] == [P.SUMMARY_CORRUPT]
     assert [_key(m) for m in src.messages()] == _expected(msgs)
-    assert not src.partial
+    # damaged, so partial (never exit 0 on it), but no message lost: nothing is cut
+    assert src.partial and not src.damage_cut and src.intact_end is None
 
 
 def test_unknown_schema_or_encoding_is_an_error_for_that_topic_only(tmp_path):
@@ -384,11 +395,30 @@ def test_rosbag2_without_definitions_needs_a_fallback_typestore(tmp_path):
     assert src.problems == []
 
 
-def test_truncated_ros1_bag_is_a_clear_error(tmp_path):
+def test_truncated_ros1_bag_is_read_up_to_the_cut(tmp_path):
+    # the index of a ROS 1 bag is at its end: a cut bag is read record by record
     cut = tmp_path / "cut.bag"
     cut.write_bytes(STAGE_BAG.read_bytes()[:200_000])
-    with pytest.raises(LogError, match=r"cut\.bag: cannot open bag"):
-        open_log(cut)
+    src = open_log(cut)
+    got = [(m.topic, m.log_time) for m in src.messages()]
+    full = [(m.topic, m.log_time) for m in open_log(STAGE_BAG).messages()]
+    assert 0 < len(got) < len(full) and got == full[:len(got)]
+    assert src.partial and src.damage_cut and src.damage_time == got[-1][1]
+    assert [p.kind for p in src.problems] == [P.TRUNCATED]
+    assert "without the bag index" in src.problems[0].detail
+
+
+def test_ros1_bag_without_its_index_is_read_completely(tmp_path):
+    data = STAGE_BAG.read_bytes()
+    header = data[13 + 4: 13 + 4 + struct.unpack_from("<I", data, 13)[0]]
+    index_pos = struct.unpack_from("<Q", header, header.index(b"index_pos=") + 10)[0]
+    cut = tmp_path / "noindex.bag"
+    cut.write_bytes(data[:index_pos])
+    src = open_log(cut)
+    got = [(m.topic, m.log_time) for m in src.messages()]
+    assert got == [(m.topic, m.log_time) for m in open_log(STAGE_BAG).messages()]
+    assert src.partial and not src.damage_cut
+    assert [p.kind for p in src.problems] == [P.SUMMARY_CORRUPT]
 
 
 def test_open_log_errors(tmp_path):

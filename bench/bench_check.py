@@ -1,0 +1,139 @@
+"""Benchmark of ``fretc check`` (issue 11).
+
+1. The 198 case-study requirements of ``../shared/corpora/fret_casestudies.jsonl``, grouped by
+   project (the id's part before ``#``), checked for satisfiability and non-vacuity
+   (redundancy off): CPU time per group and in total, and the findings per group.
+2. Realizability of the Safe-ROS set (``requirements/*.fret``, ``too_close`` input,
+   ``stopped`` output) and of generated Safe-ROS-sized sets (<= 10 requirements, bounds <= 10
+   ticks): CPU time each (aim: under 5 s).
+3. The command a user runs, start-up included: ``fretc check requirements/ --inputs
+   too_close --outputs stopped`` (CPU of the process and its Spot worker).
+
+Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
+queries run with the default 20 s budget (a timed-out query is counted as unknown).
+
+    python bench/bench_check.py [--corpus PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from compiler.build import compile_entries  # noqa: E402
+from compiler.check import check_requirements  # noqa: E402
+from fretish.files import RequirementEntry, load_requirements  # noqa: E402
+from fretish.parser import parse  # noqa: E402
+from fretish.errors import FretishError  # noqa: E402
+
+
+def cpu() -> float:
+    s = resource.getrusage(resource.RUSAGE_SELF)
+    c = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
+
+
+def corpus_groups(path: Path):
+    groups = {}
+    for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        d = json.loads(line)
+        group, _, rid = d["id"].partition("#")
+        e = RequirementEntry(id=rid, text=d["text"], source=f"{path.name}", line=n, column=1)
+        try:
+            e.requirement = parse(d["text"], source=path.name, line=n, column=1)
+        except FretishError as exc:
+            e.error = exc
+        groups.setdefault(group, []).append(e)
+    return groups
+
+
+SIZED = [
+    "S1: upon too_close the robot shall within {a} ticks satisfy stopped",
+    "S2: whenever stopped the robot shall immediately satisfy !moving",
+    "S3: in docking upon too_close the robot shall for {b} ticks satisfy slow",
+    "S4: whenever slow the robot shall immediately satisfy speed <= 0.2",
+    "S5: the robot shall always satisfy speed <= 0.5",
+    "S6: upon !too_close the robot shall within {b} ticks satisfy moving | docking",
+    "S7: whenever scan_stale the robot shall within {a} ticks satisfy stopped",
+    "S8: whenever stopped the robot shall immediately satisfy speed <= 0.01",
+    "S9: in docking the robot shall always satisfy speed <= 0.1",
+    "S10: upon moving the robot shall at the next timepoint satisfy !stopped | too_close",
+]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--corpus", default=str(ROOT / ".." / "shared" / "corpora" /
+                                            "fret_casestudies.jsonl"))
+    args = ap.parse_args()
+
+    print("1. case-study corpus: satisfiability + non-vacuity per project")
+    total0 = cpu()
+    w0 = time.perf_counter()
+    count = 0
+    for group, entries in corpus_groups(Path(args.corpus)).items():
+        t0 = cpu()
+        r = check_requirements(compile_entries(entries), redundancy=False)
+        dt = cpu() - t0
+        count += len(entries)
+        kinds = {}
+        for f in r.findings:
+            kinds[f.kind] = kinds.get(f.kind, 0) + 1
+        print(f"  {group:<45} {len(entries):3d} reqs {len(r.components):3d} components "
+              f"{dt:6.2f} s CPU  findings {kinds or '-'}  input errors "
+              f"{len(r.input_errors)}  queries {r.queries} (unknown {r.unknown_queries})")
+        for f in r.findings:
+            print(f"      {f.kind}: {f.message[:150]}")
+    print(f"  total: {count} requirements in {cpu() - total0:.2f} s CPU "
+          f"({time.perf_counter() - w0:.2f} s wall)")
+
+    print("2. realizability of Safe-ROS-sized sets (too_close, scan_stale inputs)")
+    files = sorted(str(p) for p in (ROOT / "requirements").glob("*.fret"))
+    t0 = cpu()
+    r = check_requirements(compile_entries(load_requirements(files)), inputs=["too_close"],
+                           outputs=["stopped"])
+    print(f"  Safe-ROS R1-R6: {cpu() - t0:.2f} s CPU, "
+          + "; ".join(f"{','.join(c['requirements'])}: realizable={c['realizable']}"
+                      for c in r.realizability["components"]))
+    for a, b in [(3, 3), (5, 5), (10, 10)]:
+        text = "\n".join(s.format(a=a, b=b) for s in SIZED) + "\n"
+        path = Path("/tmp") / f"fretc_bench_check_{a}_{b}.fret"
+        path.write_text(text, encoding="utf-8")
+        io = dict(inputs=["too_close", "scan_stale"],
+                  outputs=["stopped", "moving", "slow", "speed", "docking"])
+        t0 = cpu()
+        check_requirements(compile_entries(load_requirements([path])), vacuity=False,
+                           redundancy=False)
+        t1 = cpu()
+        r = check_requirements(compile_entries(load_requirements([path])), vacuity=False,
+                               redundancy=False, **io)
+        t2 = cpu()
+        full = check_requirements(compile_entries(load_requirements([path])), **io)
+        t3 = cpu()
+        rz = r.realizability["components"]
+        print(f"  10 requirements, bounds {a}/{b} ticks: realizability {max(0.0, (t2 - t1) - (t1 - t0)):.2f} s "
+              f"CPU (satisfiability alone {t1 - t0:.2f} s; every check {t3 - t2:.2f} s), "
+              + "; ".join(f"{len(c['requirements'])} reqs realizable={c['realizable']}"
+                          for c in rz) + f", findings {[f.kind for f in full.findings]}")
+
+    print("3. the command, start-up included")
+    t0 = cpu()
+    w0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "fretc", "check", "requirements/", "--inputs",
+                           "too_close", "--outputs", "stopped"], cwd=ROOT,
+                          capture_output=True, text=True)
+    print(f"  fretc check requirements/ --inputs too_close --outputs stopped: exit "
+          f"{proc.returncode}, {cpu() - t0:.2f} s CPU ({time.perf_counter() - w0:.2f} s wall)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,302 @@
+"""Witness traces of ``fretc check`` findings, as CSV files ``fretc audit`` reads directly.
+
+A witness is a *finite* run, so it is built from the **ft** formulas (FRET's finite-trace
+semantics, the one the audit's verdict uses) under FRET's trace model
+(``compiler/evaluate.py``): Spot finds an infinite word of
+
+    query & (!LAST U (LAST & X G (!LAST & absorbing)))
+
+where ``absorbing`` gives every atom its value in the absorbing state after the last tick
+(booleans false, numbers 0); the ticks up to ``LAST`` are the CSV rows. Comparisons get
+numbers back through :meth:`compiler.numeric_abstraction.NumericAbstraction.values`.
+
+What each witness shows (intended verdicts):
+
+* consistent set: every requirement satisfied, non-vacuously where the checks found that
+  possible;
+* conflict (minimal subset ``M``, last member ``v``): ``M - {v}`` satisfied with their
+  triggers firing, ``v`` violated;
+* vacuity of ``R`` forced by ``M``: ``R``'s trigger fires, ``M - {v}`` satisfied, ``v``
+  violated (``v`` the last member other than ``R``; ``R`` itself when ``M = {R}``);
+* unsatisfiable ``R``: ``R`` violated.
+
+The verdicts written in the header (``# expected: R1=satisfied, R2=violated``) are not the
+intended ones but those FRET's interval semantics gives on the written numbers
+(:func:`monitors.evidence.evaluate_requirement`, the audit's own evidence engine), for every
+requirement of the checked files; when they differ from the intended ones (an uninterpreted
+atom made the abstraction spurious) the finding says so.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from . import ir
+from .check_solver import UNKNOWN
+from .ir import LAST, Node
+from .numeric_abstraction import simple_comparison
+from .printers import mangle, to_smv
+
+__all__ = ["finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
+
+_EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
+
+
+def _atoms(nodes: Sequence[Node]) -> List[Node]:
+    out, seen = [], set()
+    for f in nodes:
+        for n in ir.walk(f):
+            if n.op in ("ap", "cmp", "call", "past", "future") and n not in seen:
+                seen.add(n)
+                out.append(n)
+    return out
+
+
+def _absorbing_value(atom: Node) -> bool:
+    if atom.op == "cmp":
+        from .evaluate import ft_at
+        names = {n.name for n in ir.walk(atom) if n.op == "var"}
+        try:
+            return bool(ft_at(atom, [{n: 0.0 for n in names}], 0))
+        except Exception:
+            return False
+    return False
+
+
+def _finite_model(nodes: Sequence[Node]) -> Node:
+    absorbing = ir.and_all(*(a if _absorbing_value(a) else ir.not_(a)
+                             for a in _atoms(nodes)))
+    return ir.U(ir.not_(LAST), ir.and_(LAST, ir.X(ir.G(ir.and_(ir.not_(LAST), absorbing)))))
+
+
+def finite_trace(checker, formulas: Sequence[Node], columns: Dict[str, str],
+                 length: Optional[int] = None) -> object:
+    """A finite trace meeting the ft ``formulas`` (list of rows ``{variable: value}`` over
+    ``columns``, name -> ``"bool"``/``"float"``), None when there is none, or UNKNOWN.
+    ``length``: exactly that many ticks."""
+    model = _finite_model(formulas)
+    extra = [model]
+    if length is not None:
+        at = LAST
+        for _ in range(length - 1):
+            at = ir.X(at)
+        extra.append(at)
+    ok, word = checker.sat_word(list(formulas) + extra)
+    if ok is not True:
+        return ok if ok == UNKNOWN else None
+    prefix, cycle = word
+    letters = []
+    last_name = to_smv(LAST)
+    k = 0
+    seq = list(prefix)
+    while True:
+        letter = seq[k] if k < len(seq) else cycle[(k - len(seq)) % len(cycle)]
+        letters.append(letter)
+        if letter.get(last_name):
+            break
+        k += 1
+        if k > len(seq) + len(cycle) + 1:  # pragma: no cover - the model forces LAST
+            return None
+    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
+                 for a in checker.numeric.atoms[name]}
+    rows = []
+    for letter in letters:
+        truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
+        numbers = checker.numeric.values(truth)
+        row = {}
+        for name, kind in columns.items():
+            if kind == "bool":
+                row[name] = bool(letter.get(mangle(name), False))
+            else:
+                row[name] = numbers.get(name, 0.0)
+        rows.append(row)
+    return rows
+
+
+def _columns(items) -> Dict[str, str]:
+    cols: Dict[str, str] = {}
+    for x in items:
+        for f in (x.phi_ft, x.phi):
+            for n in ir.walk(f):
+                if n.op == "var":
+                    cols[n.name] = "float"
+                elif n.op == "ap" and n.name not in cols:
+                    cols[n.name] = "bool"
+    return cols
+
+
+def expected_verdicts(items, rows: List[dict]) -> Dict[str, str]:
+    """FRET's verdict of each item on ``rows`` (``satisfied``/``vacuous``/``violated``, or
+    ``unknown`` where the evidence engine cannot decide), by the audit's evidence engine."""
+    from monitors.evidence import EvidenceUnsupported, evaluate_requirement
+
+    n = len(rows)
+    cols = {name: np.array([r[name] for r in rows]) for name in (rows[0] if rows else {})}
+    out = {}
+    for x in items:
+        f = x.compiled.formalization
+        try:
+            ev = evaluate_requirement(x.compiled.requirement, cols, n, duration_ticks=f.ticks)
+        except (EvidenceUnsupported, KeyError, ValueError):
+            out[x.id] = "unknown"
+            continue
+        out[x.id] = "violated" if not ev.holds else ("vacuous" if ev.vacuous else "satisfied")
+    return out
+
+
+def _cell(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if math.isfinite(v) and float(v).is_integer():
+        return f"{v:.1f}"
+    return repr(float(v))
+
+
+def read_expected(path: str) -> Dict[str, str]:
+    """The ``# expected:`` verdicts of a witness CSV (requirement id -> verdict)."""
+    for line in Path(path).read_text(encoding="utf-8").splitlines():
+        m = _EXPECTED.match(line)
+        if m:
+            return dict(p.strip().split("=", 1) for p in m.group(1).split(",") if "=" in p)
+    return {}
+
+
+def _write(path: Path, title: str, sources: List[str], rows: List[dict],
+           expected: Dict[str, str]) -> None:
+    names = list(rows[0])
+    lines = [f"# fretc check witness: {title}",
+             "# replay: fretc audit " + " ".join(f"-r {s}" for s in sources) + f" {path}",
+             "# one row per tick; expected verdicts (FRET finite-trace semantics):",
+             "# expected: " + ", ".join(f"{k}={v}" for k, v in expected.items()),
+             ",".join(names)]
+    for r in rows:
+        lines.append(",".join(_cell(r[n]) for n in names))
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def _safe(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text)[:60]
+
+
+def write_witnesses(checker, result, witness_dir: str) -> None:
+    """Write one witness CSV per finding (conflict, vacuity, unsatisfiable) and one for a
+    consistent set, into ``witness_dir``; set ``Finding.witness``/``expected`` and
+    ``result.witnesses``."""
+    out = Path(witness_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    items = checker.items
+    if not items:
+        return
+    by_id = {x.id: x for x in items}
+    cols = _columns(items)
+    sources = []
+    for x in items:
+        if x.compiled.entry.source not in sources:
+            sources.append(x.compiled.entry.source)
+
+    def trig(x):
+        return [x.trigger_ft] if x.trigger_ft is not None else []
+
+    comps = checker.components()
+
+    def filler(comp):  # the other components: a run meeting them, triggers firing
+        phis = [x.phi_ft for x in comp]
+        return [phis + [t for x in comp for t in trig(x)], phis]
+
+    def one(variants, length=None):
+        for formulas in variants:
+            rows = finite_trace(checker, formulas, cols, length)
+            if rows == UNKNOWN:
+                return UNKNOWN
+            if rows:
+                return rows
+        return None
+
+    def attempt(variants):
+        """Rows meeting ``variants`` (first that works) on its component, and the other
+        components filled with runs of the same length that meet them."""
+        main = one(variants)
+        if main in (None, UNKNOWN):
+            return main
+        names = {n for f in variants[-1] for n in ir.variables(f)}
+        rows = [dict(r) for r in main]
+        for comp in comps:
+            if names.intersection(v for x in comp for v in x.variables):
+                continue
+            part = one(filler(comp), len(rows))
+            if part in (None, UNKNOWN):
+                continue  # left at false / 0
+            own = {v for x in comp for v in x.variables}
+            for r, p in zip(rows, part):
+                r.update({k: v for k, v in p.items() if k in own})
+        return rows
+
+    serial = 0
+    for finding in result.findings:
+        if finding.kind not in ("conflict", "vacuous", "unsatisfiable"):
+            continue
+        plans = []  # (formula variants, intended verdicts), best first
+        if finding.kind == "unsatisfiable":
+            x = by_id[finding.requirements[0]]
+            plans.append(([[ir.not_(x.phi_ft)] + trig(x), [ir.not_(x.phi_ft)]],
+                          {x.id: "violated"}))
+        else:
+            subset = [by_id[i] for i in finding.subsets[0]] if finding.subsets else []
+            if not subset:
+                continue
+            target = by_id[finding.details["requirement"]] if finding.kind == "vacuous" else None
+            others = [y for y in subset if y is not target] or [target]
+            for victim in reversed(others):  # the last member first
+                keep = [y for y in subset if y is not victim]
+                base = [y.phi_ft for y in keep] + [ir.not_(victim.phi_ft)]
+                if target is not None and target is not victim:
+                    base += trig(target)
+                trigs = [t for y in keep for t in trig(y)]
+                intended = {y.id: "satisfied" for y in keep}
+                intended[victim.id] = "violated"
+                plans.append(([base + trigs, base], intended))
+        best = None
+        for variants, intended in plans:
+            rows = attempt(variants)
+            if rows == UNKNOWN or not rows:
+                continue
+            expected = expected_verdicts(items, rows)
+            wrong = {k: v for k, v in intended.items() if expected.get(k) != v}
+            if best is None or len(wrong) < len(best[2]):
+                best = (rows, expected, wrong, intended)
+            if not wrong:
+                break
+        if best is None:
+            finding.details["witness"] = "not built: no finite trace found in time"
+            continue
+        rows, expected, wrong, intended = best
+        serial += 1
+        path = out / f"{serial:02d}_{finding.kind}_{_safe('_'.join(finding.requirements))}.csv"
+        _write(path, finding.message, sources, rows, expected)
+        finding.witness = str(path)
+        finding.expected = expected
+        finding.details["witness_intended"] = intended
+        finding.details["witness_shows_finding"] = not wrong
+        if wrong:
+            finding.details["witness_note"] = (
+                "the witness shows the finding only in part: "
+                + ", ".join(f"{k} is {expected.get(k)}, not {v}" for k, v in wrong.items()))
+    if not any(f.severity == "error" for f in result.findings):
+        rows = None
+        if comps:
+            rows = attempt(filler(comps[0]))
+        if rows and rows != UNKNOWN:
+            path = out / "00_consistent.csv"
+            expected = expected_verdicts(items, rows)
+            _write(path, "a run meeting every requirement", sources, rows, expected)
+            result.witnesses.append({"kind": "consistent", "path": str(path),
+                                     "expected": expected})
+    for f in result.findings:
+        if f.witness:
+            result.witnesses.append({"kind": f.kind, "path": f.witness,
+                                     "expected": f.expected})

@@ -1,0 +1,156 @@
+"""``fretc check``: find conflicting, vacuous, redundant and unrealizable requirements before
+any robot runs (issue 11; the analyses are in :mod:`compiler.check`).
+
+::
+
+    fretc check FILE... [--inputs a,b] [--outputs c,d] [--json] [--witness-dir DIR]
+                [--timeout SECONDS] [--mus-budget SECONDS] [--no-redundancy]
+
+Realizability is checked when inputs or outputs are given, by the flags or by the
+``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win). Exit status: 0 no
+finding (redundancy is a warning), 1 a conflict, vacuity, unrealizability or an unknown
+answer (a Spot query that ran out of ``--timeout``), 2 input errors.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+__all__ = ["check_cmd", "render_text"]
+
+
+def _names(text):
+    if text is None:
+        return None
+    return [n for n in text.replace(",", " ").split() if n]
+
+
+def render_text(result) -> str:
+    """The terminal report of a :class:`compiler.check.CheckResult`."""
+    lines = []
+    mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN"}
+    for r in result.requirements:
+        sat = r["satisfiable"]
+        nv = r["non_vacuous"]
+        lines.append(f"{r['id']:<10} satisfiable={_fmt(sat):<8} non-vacuous={_fmt(nv):<8} "
+                     f"redundant={_fmt(r['redundant']):<8} ({r['source']}:{r['line']})")
+    if result.realizability is not None:
+        rz = result.realizability
+        lines.append("")
+        lines.append("realizability: inputs " + (", ".join(rz["inputs"]) or "-")
+                     + "; outputs " + (", ".join(rz["outputs"]) or "-")
+                     + (("; taken as outputs: " + ", ".join(rz["assumed_outputs"]))
+                        if rz["assumed_outputs"] else ""))
+        for c in rz["components"]:
+            status = c["realizable"]
+            extra = (f" (Mealy machine of {c['mealy_states']} states)"
+                     if status is True else "")
+            lines.append(f"  {', '.join(c['requirements'])}: "
+                         f"{'realizable' if status is True else 'UNREALIZABLE' if status is False else 'unknown'}"
+                         + extra)
+            env = c.get("environment")
+            if env and "prefix" in env:
+                lines.append("    inputs that defeat every controller: "
+                             + _lasso(env["prefix"], env["cycle"]))
+            elif env:
+                lines.append("    " + env["note"])
+    lines.append("")
+    if not result.findings:
+        lines.append("no findings")
+    for f in result.findings:
+        lines.append(f"{mark[f.severity]} {f.kind}: {f.message}")
+        if f.witness:
+            lines.append(f"    witness {f.witness}: expected "
+                         + ", ".join(f"{k}={v}" for k, v in f.expected.items()))
+        note = f.details.get("witness_note") or (f.details.get("witness")
+                                                 if isinstance(f.details.get("witness"), str)
+                                                 else None)
+        if note:
+            lines.append(f"    {note}")
+    for w in result.witnesses:
+        if w["kind"] == "consistent":
+            lines.append(f"witness of a run meeting every requirement: {w['path']}")
+    for a in result.abstractions:
+        lines.append(f"abstraction: {a['atom']}: {a['why']} (a finding may be spurious)")
+    for n in result.notes:
+        lines.append(f"note: {n}")
+    lines.append(f"{len(result.requirements)} requirements, {len(result.components)} "
+                 f"components, {result.queries} Spot queries"
+                 + (f" ({result.unknown_queries} ran out of time)" if result.unknown_queries
+                    else "") + f"; exit {result.exit_code}")
+    return "\n".join(lines)
+
+
+def _fmt(v) -> str:
+    return {True: "yes", False: "NO", None: "-"}.get(v, str(v)) if not isinstance(v, str) \
+        else v
+
+
+def _lasso(prefix, cycle) -> str:
+    def row(r):
+        return "{" + ", ".join(f"{k}={str(v).lower() if isinstance(v, bool) else v}"
+                               for k, v in r.items()) + "}"
+    text = " ".join(row(r) for r in prefix)
+    return (text + " " if text else "") + "then forever (" + " ".join(row(r) for r in cycle) + ")"
+
+
+@click.command("check")
+@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--inputs", default=None, metavar="A,B",
+              help="Environment variables (realizability); default: @inputs of the files.")
+@click.option("--outputs", default=None, metavar="C,D",
+              help="Component variables (realizability); default: @outputs of the files.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--witness-dir", type=click.Path(file_okay=False), default=None,
+              help="Write a witness CSV per finding (replay with fretc audit).")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=20.0,
+              show_default=True, help="Seconds per Spot query; past it the answer is unknown.")
+@click.option("--mus-budget", type=click.FloatRange(min=0), default=10.0, show_default=True,
+              help="Seconds per enumeration of minimal subsets.")
+@click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="Also write the JSON result to FILE (for fretc report --check).")
+def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
+              no_redundancy, output):
+    """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
+    realizability."""
+    from compiler.build import compile_entries
+    from compiler.check import check_requirements
+    from compiler.check_realizability import RealizabilityError
+    from fretish.errors import FretishError
+    from fretish.files import load_requirements
+
+    try:
+        entries = load_requirements([Path(p) for p in files])
+    except (FretishError, OSError) as exc:
+        click.echo(str(exc), err=True)
+        sys.exit(2)
+    ins, outs = _names(inputs), _names(outputs)
+    if ins is None:
+        declared = [n for e in entries for n in e.inputs]
+        ins = list(dict.fromkeys(declared)) if declared else None
+    if outs is None:
+        declared = [n for e in entries for n in e.outputs]
+        outs = list(dict.fromkeys(declared)) if declared else None
+    compiled = compile_entries(entries)
+    try:
+        result = check_requirements(compiled, timeout=timeout, mus_budget=mus_budget,
+                                    redundancy=not no_redundancy, witness_dir=witness_dir,
+                                    inputs=ins, outputs=outs)
+    except RealizabilityError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(2)
+    for e in result.input_errors:
+        click.echo(e, err=True)
+    doc = result.to_json()
+    if output:
+        Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    if as_json:
+        click.echo(json.dumps(doc, indent=2))
+    else:
+        click.echo(render_text(result))
+    sys.exit(result.exit_code)

@@ -1,0 +1,185 @@
+"""``fretc inspect LOG... [--json]``: what a log holds, to write its signal bindings.
+
+Per log: kind, time span, and per topic its message type, message count, mean rate, and
+every field path of the type in binding syntax (``/odom.twist.twist.linear.x``; items of a
+message array as ``[i]``) with its ROS type, for arrays the lengths seen, for numeric fields
+the minimum and maximum over the log (finite values; NaN and infinities counted apart) and
+for booleans how often each value occurs. Field types come from the schemas embedded in the
+log (:mod:`monitors.schema`); values from one read of every message.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from typing import Any, Dict, List
+
+import click
+
+__all__ = ["inspect_cmd", "inspect_log"]
+
+
+class _Stat:
+    __slots__ = ("type", "min", "max", "nonfinite", "lengths", "true", "false", "n")
+
+    def __init__(self, type_text: str) -> None:
+        self.type = type_text
+        self.min = math.inf
+        self.max = -math.inf
+        self.nonfinite = 0
+        self.lengths: set = set()
+        self.true = self.false = self.n = 0
+
+    def numbers(self, values) -> None:
+        import numpy as np
+        a = np.asarray(values, dtype=np.float64).ravel()
+        if a.size == 0:
+            return
+        fin = np.isfinite(a)
+        self.nonfinite += int((~fin).sum())
+        if fin.any():
+            self.min = min(self.min, float(a[fin].min()))
+            self.max = max(self.max, float(a[fin].max()))
+
+    def to_json(self) -> dict:
+        out: Dict[str, Any] = {"type": self.type}
+        if self.min <= self.max:
+            out["min"], out["max"] = self.min, self.max
+        if self.nonfinite:
+            out["nonfinite"] = self.nonfinite
+        if self.lengths:
+            out["lengths"] = [min(self.lengths), max(self.lengths)]
+        if self.true or self.false:
+            out["true"], out["false"] = self.true, self.false
+        return out
+
+
+def _visit(schema, obj, typename: str, prefix: str, stats: Dict[str, _Stat]) -> None:
+    for name, t in schema.fields(typename):
+        path = f"{prefix}.{name}"
+        v = getattr(obj, name, None)
+        st = stats.get(path)
+        if st is None:
+            st = stats[path] = _Stat(t.text())
+        if t.kind == "message":
+            _visit(schema, v, t.name, path, stats)
+        elif t.kind == "array":
+            n = len(v) if v is not None else 0
+            st.lengths.add(n)
+            if t.item.kind == "message":
+                for x in v:
+                    _visit(schema, x, t.item.name, f"{path}[i]", stats)
+            elif t.item.kind == "number":
+                st.numbers(v)
+            elif t.item.kind == "bool":
+                k = sum(1 for x in v if x)
+                st.true += k
+                st.false += n - k
+        elif t.kind == "number":
+            st.numbers([v])
+        elif t.kind == "bool":
+            if v:
+                st.true += 1
+            else:
+                st.false += 1
+
+
+def inspect_log(path: str) -> dict:
+    """The inventory of one log (module docstring) as a JSON-ready dict.
+
+    Raises:
+        monitors.problems.FretcInputError: the file is not a readable log.
+    """
+    from monitors.schema import log_schemas
+    from monitors.sources import open_log
+
+    source = open_log(path)
+    types = source.topics()
+    schemas = log_schemas(source)
+    stats: Dict[str, Dict[str, _Stat]] = {t: {} for t in types}
+    first: Dict[str, int] = {}
+    last: Dict[str, int] = {}
+    counts: Dict[str, int] = {}
+    for m in source.messages(None):
+        counts[m.topic] = counts.get(m.topic, 0) + 1
+        first.setdefault(m.topic, m.log_time)
+        last[m.topic] = m.log_time
+        sch = schemas.get(m.topic)
+        if sch is not None and source.kind != "csv":
+            _visit(sch, m.data, sch.typename, m.topic, stats[m.topic])
+        elif source.kind == "csv":
+            for c in source.columns:
+                st = stats[m.topic].setdefault(f"{m.topic}.{c}", _Stat(source.types.get(c, "")))
+                v = getattr(m.data, c)
+                if isinstance(v, bool):
+                    st.true += v
+                    st.false += not v
+                else:
+                    st.numbers([v])
+    topics = []
+    for t, typ in types.items():
+        n = counts.get(t, 0)
+        span = (last[t] - first[t]) / 1e9 if n > 1 else None
+        topics.append({"topic": t, "type": typ or None, "messages": n,
+                       "rate_hz": (n - 1) / span if span else None,
+                       "schema": schemas.get(t) is not None,
+                       "fields": {p: s.to_json() for p, s in stats[t].items()}})
+    st, en = source.start_time, source.end_time
+    return {"log": str(path), "kind": source.kind, "start_time_ns": st, "end_time_ns": en,
+            "duration_s": (en - st) / 1e9 if st is not None and en is not None else None,
+            "partial": bool(source.partial),
+            "problems": [str(p) for p in source.problems], "topics": topics}
+
+
+def _num(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def _print(doc: dict) -> None:
+    dur = f"{doc['duration_s']:.3f} s" if doc["duration_s"] is not None else "unknown span"
+    click.echo(f"{doc['log']} ({doc['kind']}): {dur}, {len(doc['topics'])} topics"
+               + (" [partial: damaged]" if doc["partial"] else ""))
+    for t in doc["topics"]:
+        rate = f"{t['rate_hz']:.3g} Hz" if t["rate_hz"] else "-"
+        click.echo(f"  {t['topic']}  {t['type'] or '?'}  {t['messages']} messages  {rate}"
+                   + ("" if t["schema"] else "  (schema unknown)"))
+        for p, f in t["fields"].items():
+            extra = []
+            if "lengths" in f:
+                lo, hi = f["lengths"]
+                extra.append(f"length {lo}" if lo == hi else f"length {lo}..{hi}")
+            if "min" in f:
+                extra.append(f"min {_num(f['min'])} max {_num(f['max'])}")
+            if f.get("nonfinite"):
+                extra.append(f"{f['nonfinite']} NaN/inf")
+            if "true" in f:
+                extra.append(f"true {f['true']} false {f['false']}")
+            click.echo(f"    {p}  {f['type']}" + (f"  {', '.join(extra)}" if extra else ""))
+    for p in doc["problems"]:
+        click.echo(f"  problem: {p}")
+
+
+@click.command("inspect")
+@click.argument("logs", nargs=-1, required=True)
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON list, one object per log.")
+def inspect_cmd(logs, as_json):
+    """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
+    counts, rates, time span, and every field path in binding syntax with its type, array
+    lengths and numeric min/max - what a binding file can name (docs/bindings.md)."""
+    from monitors.problems import FretcInputError
+
+    docs: List[dict] = []
+    failed = False
+    for p in logs:
+        try:
+            docs.append(inspect_log(p))
+        except (FretcInputError, OSError) as exc:
+            click.echo(f"error: {exc}", err=True)
+            failed = True
+    if as_json:
+        click.echo(json.dumps(docs, indent=2, sort_keys=True))
+    else:
+        for d in docs:
+            _print(d)
+    sys.exit(2 if failed else 0)

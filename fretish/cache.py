@@ -1,0 +1,87 @@
+"""fretc's on-disk cache of derived data (the Lark parser tables, LTL3 automata).
+
+Everything cached here is a pure function of its key, and every key names all the inputs
+of the computation (e.g. the grammar text and Lark's version; a formula's shape and Spot's
+version), so an entry is never stale: when an input changes, its key changes. Entries are
+written to a temporary file in the same folder and renamed into place (``os.replace``,
+atomic on POSIX and Windows), so a reader sees a whole entry or none. A cache that cannot
+be read or written (read-only home, full disk, ``FRETC_CACHE_DIR=""``) is skipped
+silently: the caller computes the value again, so the cache changes speed, never output.
+
+Location: ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
+``$XDG_CACHE_HOME/fretc``, else ``~/.cache/fretc``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+from typing import Optional
+
+__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path"]
+
+
+def cache_dir() -> Optional[Path]:
+    """The cache folder (not created here), or None when the disk cache is off."""
+    env = os.environ.get("FRETC_CACHE_DIR")
+    if env is not None:
+        return Path(env) if env.strip() else None
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    if xdg:
+        return Path(xdg) / "fretc"
+    try:
+        return Path.home() / ".cache" / "fretc"
+    except (RuntimeError, KeyError):  # no home directory
+        return None
+
+
+def key_of(*parts: str) -> str:
+    """A hex SHA-256 of ``parts`` (joined unambiguously): a cache key."""
+    h = hashlib.sha256()
+    for p in parts:
+        b = p.encode("utf-8")
+        h.update(len(b).to_bytes(8, "little"))
+        h.update(b)
+    return h.hexdigest()
+
+
+def entry_path(kind: str, name: str) -> Optional[Path]:
+    """Where entry ``name`` of sub-folder ``kind`` lives (None: cache off)."""
+    root = cache_dir()
+    return None if root is None else root / kind / name
+
+
+def read_bytes(kind: str, name: str) -> Optional[bytes]:
+    """The entry's bytes, or None when missing or unreadable."""
+    path = entry_path(kind, name)
+    if path is None:
+        return None
+    try:
+        return path.read_bytes()
+    except OSError:
+        return None
+
+
+def write_bytes(kind: str, name: str, data: bytes) -> bool:
+    """Store an entry atomically (temporary file + rename). Returns False, without raising,
+    when the cache folder cannot be created or written."""
+    path = entry_path(kind, name)
+    if path is None:
+        return False
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=path.parent)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+        return True
+    except OSError:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        return False

@@ -1,0 +1,99 @@
+"""Text from the inputs made safe for each output format (issue 15 item 12).
+
+Requirement ids, texts, file names, topic names and binding expressions come from files a
+user did not necessarily write (a FRET JSON export, a log's channel records). Every output
+shows them so that they cannot change the output's structure or the reader's screen:
+
+* :func:`visible` - control characters (Unicode category Cc: C0, DEL, C1), format
+  characters (Cf: the bidirectional overrides and isolates U+202A-U+202E, U+2066-U+2069, the
+  marks U+200E/U+200F, zero-width characters), line and paragraph separators (Zl, Zp),
+  lone surrogates (Cs) and the noncharacters U+FFFE/U+FFFF are written as Python-style
+  escapes (``\\x1b``, ``\\u202e``), visible and inert. The base of every other function.
+* :func:`terminal_text` - for the terminal: :func:`visible` (an ``ESC[2J`` in an id is
+  printed as ``\\x1b[2J``, not obeyed; a U+202E cannot reorder the line).
+* :func:`xml_text` - for XML 1.0 (JUnit, SVG, XHTML): :func:`visible` (XML 1.0, section 2.2,
+  allows no C0 character but tab, newline and carriage return; a NUL makes the document
+  unparseable). Markup characters are escaped by the XML writer afterwards.
+* :func:`md_code` - a Markdown code span that the text cannot close early: the fence is one
+  backtick longer than the longest backtick run in the text, padded with spaces (CommonMark
+  0.30, "Code spans"); ``|`` escaped for GFM tables.
+* :func:`one_line` - a ``//`` comment line of a ``.psl`` file: :func:`visible` with runs of
+  white space folded into one space.
+"""
+
+from __future__ import annotations
+
+import re
+import unicodedata
+from typing import Any
+
+__all__ = ["visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe"]
+
+_UNSAFE_CATEGORIES = frozenset({"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"})
+
+
+def _unsafe(ch: str, keep: str) -> bool:
+    if ch in keep:
+        return False
+    o = ord(ch)
+    if 0x20 <= o < 0x7F:
+        return False
+    if o in (0xFFFE, 0xFFFF):
+        return True
+    cat = unicodedata.category(ch)
+    if cat == "Cn":  # unassigned: unknown to this Python; only noncharacters are unsafe
+        return (o & 0xFFFE) == 0xFFFE or 0xFDD0 <= o <= 0xFDEF
+    return cat in _UNSAFE_CATEGORIES and cat != "Co"
+
+
+def _escape(ch: str) -> str:
+    o = ord(ch)
+    if o <= 0xFF:
+        return f"\\x{o:02x}"
+    if o <= 0xFFFF:
+        return f"\\u{o:04x}"
+    return f"\\U{o:08x}"
+
+
+def is_unsafe(text: str, keep: str = "") -> bool:
+    """True when :func:`visible` would change ``text``."""
+    return any(_unsafe(ch, keep) for ch in text)
+
+
+def visible(text: Any, keep: str = "") -> str:
+    """``text`` (``str()`` of it; None gives ``""``) with every unsafe character (module
+    docstring) written as a visible escape; characters in ``keep`` are left alone."""
+    s = "" if text is None else str(text)
+    if s.isascii() and s.isprintable():
+        return s
+    return "".join(_escape(ch) if _unsafe(ch, keep) else ch for ch in s)
+
+
+def terminal_text(text: Any) -> str:
+    """Text for the terminal (module docstring)."""
+    return visible(text)
+
+
+def xml_text(text: Any, keep: str = "\n\t") -> str:
+    """Text for XML 1.0 content or attributes (module docstring); newlines and tabs are kept
+    by default (element content), pass ``keep=""`` for one-line fields."""
+    return visible(text, keep)
+
+
+_BACKTICKS = re.compile(r"`+")
+
+
+def md_code(text: Any) -> str:
+    """A Markdown code span holding ``text`` literally (module docstring)."""
+    s = visible(text).replace("|", "\\|")
+    longest = max((len(m) for m in _BACKTICKS.findall(s)), default=0)
+    fence = "`" * (longest + 1)
+    if longest or s.startswith(" ") or s.endswith(" ") or not s:
+        return f"{fence} {s} {fence}"
+    return f"{fence}{s}{fence}"
+
+
+def one_line(text: Any) -> str:
+    """One line of a comment (``.psl`` ``//`` lines): white space runs folded to one space,
+    then :func:`visible`."""
+    return visible(" ".join(str(text).split()))

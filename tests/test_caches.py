@@ -1,0 +1,195 @@
+"""fretc's disk caches (Lark parser tables, LTL3 automata by shape): safe, never stale, and
+never a change of output; requirements that cannot be monitored are decided before any
+automaton construction (issue 9)."""
+
+from __future__ import annotations
+
+import types
+from types import SimpleNamespace
+
+import pytest
+
+from compiler import codegen, ltl3
+from compiler.build import compile_entry
+from compiler.codegen import render_module
+from fretish import parse
+from fretish import parser as P
+
+
+def entry(rid: str, text: str):
+    return SimpleNamespace(id=rid, text=text, source="t.fret", line=1, column=1,
+                           rationale=None, parent=None, tick_period=None,
+                           requirement=parse(text), error=None, extra={})
+
+
+def load(source: str):
+    mod = types.ModuleType("generated")
+    exec(compile(source, "generated.py", "exec"), mod.__dict__)
+    return mod
+
+
+SENTENCES = [
+    "in m upon p the sw shall within 3 ticks satisfy q",
+    "in mode2 upon alarm the sw shall within 3 ticks satisfy x > 2",  # same shape as above
+    "whenever too_close agilex_agent shall eventually satisfy stopped",
+    "only after m when c the sw shall for 2 ticks satisfy r | s",
+    "the sw shall always satisfy (a & b) -> c",
+]
+
+
+# --------------------------------------------------------------------------- LTL3 by shape
+def test_module_is_byte_identical_cold_warm_and_without_cache(tmp_path, monkeypatch):
+    compiled = [compile_entry(entry(f"R{i}", t)) for i, t in enumerate(SENTENCES)]
+    outputs = []
+    for cache_dir in (tmp_path / "c", tmp_path / "c", ""):  # cold, warm from disk, off
+        monkeypatch.setenv("FRETC_CACHE_DIR", str(cache_dir))
+        monkeypatch.setattr(ltl3, "_SHAPE_MEMO", {})
+        outputs.append(render_module(compiled, "m"))
+    assert outputs[0] == outputs[1] == outputs[2]
+    files = list((tmp_path / "c" / "ltl3").glob("*.json"))
+    # R0 and R1 share one shape: one entry for both
+    assert len(files) == len(SENTENCES) - 1
+    mod = load(outputs[0])
+    assert mod.MONITORS["R0"]._BAD is None  # tables decoded lazily
+    m0, m1 = mod.MONITORS["R0"](), mod.MONITORS["R1"]()
+    assert mod.MONITORS["R0"]._BAD is mod.MONITORS["R1"]._BAD  # and shared
+
+
+def test_shape_renames_atoms_in_order_of_appearance():
+    f1 = compile_entry(entry("A", SENTENCES[0])).formalization.ft_inf
+    f2 = compile_entry(entry("B", SENTENCES[1])).formalization.ft_inf
+    s1, atoms1 = ltl3.canonical_shape(f1)
+    s2, atoms2 = ltl3.canonical_shape(f2)
+    assert s1 == s2
+    assert [a.name for a in atoms1] == ["m", "p", "q"]
+    assert atoms2[0].name == "mode2" and atoms2[2].op == "cmp"
+
+
+def test_monitor_built_from_cache_agrees_with_spot_det(tmp_path, monkeypatch):
+    """The canonical tables (low-effort translation, powerset, minimized) equal those of
+    Spot's own deterministic monitor, renumbered the same way."""
+    import spot
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    for text in SENTENCES:
+        ft_inf = compile_entry(entry("R", text)).formalization.ft_inf
+        shape, atoms = ltl3.canonical_shape(ft_inf)
+        from compiler.printers import to_spot
+        for negate in (False, True):
+            ours = ltl3._spot_monitor(to_spot(shape), negate, len(atoms), 5000, 10)
+            d = spot.make_bdd_dict()
+            f = spot.formula(to_spot(shape))
+            aut = spot.translate(spot.formula.Not(f) if negate else f, "monitor", "det",
+                                 dict=d)
+            names = [f"a{i}" for i in range(len(atoms))]
+            var = {n: aut.register_ap(n) for n in names}
+            rows = []
+            for s in range(aut.num_states()):
+                row = [-1] * (1 << len(names))
+                for e in aut.out(s):
+                    for letter in ltl3._letters(e.cond, var, names, 1 << len(names)):
+                        row[letter] = e.dst
+                rows.append(row)
+            assert ltl3._bfs_tables(aut.get_init_state_number(), rows)[1] == ours["table"]
+
+
+def test_future_pt_is_skipped_before_any_automaton(monkeypatch):
+    def boom(*a, **k):
+        raise AssertionError("automaton built for a requirement that is skipped")
+
+    monkeypatch.setattr(codegen, "ltl3_automata", boom)
+    c = compile_entry(entry(
+        "R", "the sw shall always satisfy persists(99999999999, occurs(99999999999, p))"))
+    mod = load(render_module([c], "m"))
+    assert "R" in mod.SKIPPED and "future" in mod.SKIPPED["R"]
+
+
+def test_huge_bound_gets_no_progression_attempt(tmp_path, monkeypatch):
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+
+    def boom(*a, **k):
+        raise AssertionError("progression attempted on a bound beyond MAX_STATES")
+
+    monkeypatch.setattr(ltl3, "progression_tables", boom)
+    c = compile_entry(entry("R", "upon p the sw shall within 5000 ticks satisfy q"))
+    mod = load(render_module([c], "m"))
+    m = mod.MONITORS["R"]()
+    assert "no LTL3 monitor" in m.STATUS_NOTE
+    m.step({"p": True, "q": False})
+    assert m.status == "unknown"
+
+
+def test_damaged_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(ltl3, "_SHAPE_MEMO", {})
+    compiled = [compile_entry(entry("R", SENTENCES[0]))]
+    good = render_module(compiled, "m")
+    for f in (tmp_path / "ltl3").glob("*.json"):
+        f.write_text('{"shape": "something else", "bad": null, "good": null}')
+    monkeypatch.setattr(ltl3, "_SHAPE_MEMO", {})
+    assert render_module(compiled, "m") == good
+
+
+# --------------------------------------------------------------------------- Lark tables
+TEXT = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
+
+
+def _parsed(lark) -> str:
+    """The AST ``lark`` gives for TEXT (set up as fretish.parser._run does)."""
+    P._ctx.text, P._ctx.dl, P._ctx.dc = TEXT, 0, 0
+    try:
+        return repr(lark.parse(TEXT, start="start"))
+    finally:
+        P._ctx.text = ""
+
+
+def _reference():
+    return _parsed(P.build_lark())
+
+
+def test_lark_tables_cached_and_reused(tmp_path, monkeypatch):
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    first = P.cached_lark()
+    entries = list((tmp_path / "lark").iterdir())
+    assert len(entries) == 1 and entries[0].suffix == ".pickle"
+    assert not list((tmp_path / "lark").glob(".*"))  # no temporary file left
+
+    def no_build(**options):
+        raise AssertionError("tables rebuilt although cached")
+
+    monkeypatch.setattr(P, "build_lark", no_build)
+    second = P.cached_lark()
+    assert _parsed(second) == _parsed(first)
+
+
+def test_lark_cache_unwritable_or_damaged_falls_back(tmp_path, monkeypatch):
+    ref = _reference()
+    blocker = tmp_path / "not_a_dir"
+    blocker.write_text("x")
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(blocker))  # mkdir fails under a file
+    assert _parsed(P.cached_lark()) == ref
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / "c"))
+    P.cached_lark()
+    (entry_file,) = (tmp_path / "c" / "lark").iterdir()
+    entry_file.write_bytes(entry_file.read_bytes()[:1000])  # truncated
+    assert _parsed(P.cached_lark()) == ref
+    assert entry_file.stat().st_size > 1000  # rewritten whole
+
+
+def test_lark_cache_key_follows_the_grammar(tmp_path, monkeypatch):
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    P.cached_lark()
+    edited = tmp_path / "grammar.lark"
+    edited.write_text(P._GRAMMAR_FILE.read_text(encoding="utf-8") + "\n// edited\n",
+                      encoding="utf-8")
+    monkeypatch.setattr(P, "_GRAMMAR_FILE", edited)
+    P.cached_lark()
+    assert len(list((tmp_path / "lark").iterdir())) == 2  # a new entry, not the old one
+
+
+@pytest.mark.parametrize("value", [""])
+def test_cache_off(value, tmp_path, monkeypatch):
+    from fretish import cache
+    monkeypatch.setenv("FRETC_CACHE_DIR", value)
+    assert cache.cache_dir() is None and not cache.write_bytes("x", "y", b"z")
+    assert _parsed(P.cached_lark()) == _reference()
