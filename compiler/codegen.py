@@ -25,6 +25,7 @@ string literals made by ``repr``; identifiers in the code are generated (``v0``,
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Tuple
@@ -48,6 +49,16 @@ MAX_AUTOMATON_STATES = 5000
 #: (:mod:`compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
 MAX_LTL3_BOUND = 12
 MAX_LTL3_BOUND_SUM = 96
+#: LTL3 monitors are built for at most this many atoms: beyond it an edge condition written
+#: as Boolean code can be exponential (``a xor b xor ...``: minutes for 16 atoms) and Spot's
+#: determinization can take minutes and gigabytes (fuzzing: ``only after m ... finally
+#: satisfy r & w0 & ... & w29``); status stays "unknown" with a note.
+MAX_LTL3_ATOMS = 10
+#: An expression read once is inlined into the expression that reads it up to this nesting
+#: depth; deeper ones get a local of their own, so the emitted code's nesting is bounded
+#: whatever the requirement's (CPython rejects about 200 nested parentheses and runs out of
+#: recursion compiling deeper expressions).
+MAX_INLINE_DEPTH = 16
 
 
 class CodegenError(FretishError):
@@ -72,6 +83,7 @@ class _StepCode:
     numeric_reads: set = field(default_factory=set)
     bool_reads: set = field(default_factory=set)
     uses: Dict[Node, int] = field(default_factory=dict)
+    depth: Dict[Node, int] = field(default_factory=dict)  # nesting of inlined expressions
 
     def new(self, prefix: str = "n") -> str:
         self.counter += 1
@@ -139,7 +151,7 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
     if op in ("ap", "var"):
         return _read(n.name, code, numeric=op == "var")
     if op == "num":
-        return repr(float(n.name)) if any(c in n.name for c in ".eE") else str(int(n.name))
+        return _number(n.name)
     expr = None  # a pure expression: inlined where it is read once
     if op == "cmp":
         expr = f"{a[0]} {_PY_CMP[n.name]} {a[1]}"
@@ -186,7 +198,9 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
     elif op == "<->":
         expr = f"{a[0]} == {a[1]}"
     if expr is not None:
-        if code.uses.get(n, 0) <= 1:
+        depth = 1 + max((code.depth.get(x, 0) for x in n.args), default=0)
+        if code.uses.get(n, 0) <= 1 and depth <= MAX_INLINE_DEPTH:
+            code.depth[n] = depth
             return f"({expr})"
         line = f"{out} = {expr}"
     elif op in ("Y", "Z"):
@@ -212,7 +226,9 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
             prev, idx = code.slot("0")
             hist = code.new("h")
             bit = a[0] if op == "O" else f"not {a[0]}"
-            mask = (1 << (hi + 1)) - 1
+            # a decimal literal of more than sys.get_int_max_str_digits() digits (4300)
+            # would not load: large masks are written as an expression
+            mask = str((1 << (hi + 1)) - 1) if hi < 64 else f"((1 << {hi + 1}) - 1)"
             code.lines.append(f"{hist} = (({prev} << 1) | ({bit})) & {mask}")
             code.set_slot(idx, hist)
             test = "!= 0" if op == "O" else "== 0"
@@ -228,6 +244,18 @@ def _emit(n: Node, code: _StepCode, deferred) -> str:
         raise CodegenError(f"no monitor code for the future-time operator {op!r} in pt")
     code.lines.append(line)
     return out
+
+
+def _number(text: str) -> str:
+    """Python code of a FRETish number literal (``3``, ``-2.5e3``): an int when it is
+    written without a point or exponent, else a float; a float that overflows is written
+    ``float('inf')`` / ``float('-inf')`` (``repr`` would give the name ``inf``)."""
+    if not any(c in text for c in ".eE"):
+        return str(int(text))
+    value = float(text)
+    if math.isinf(value):
+        return "float('-inf')" if value < 0 else "float('inf')"
+    return repr(value)
 
 
 def _opaque(n: Node, code: _StepCode, numeric: bool) -> str:
@@ -309,6 +337,11 @@ def ltl3_automata(ft_inf: Node) -> Tuple[Optional[_Automaton], Optional[_Automat
     from . import ltl3
 
     shape, atoms = ltl3.canonical_shape(ft_inf)
+    if len(atoms) > MAX_LTL3_ATOMS:
+        return None, None, (
+            f"no LTL3 monitor: ft_inf has {len(atoms)} atoms (more than {MAX_LTL3_ATOMS}: "
+            "the deterministic monitors can take minutes and gigabytes to build); status "
+            "stays 'unknown' (step and finish unaffected)")
     bounds = [n.hi for n in ir.walk(ft_inf) if n.hi is not None]
     if bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
         why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what "
@@ -322,7 +355,8 @@ def ltl3_automata(ft_inf: Node) -> Tuple[Optional[_Automaton], Optional[_Automat
         if data["bad"] is None or data["good"] is None:
             return None, None, (
                 f"no LTL3 monitor: {why}, and formula progression needs more than "
-                f"{ltl3.MAX_STATES} residuals or {ltl3.MAX_ATOMS} atoms; status stays "
+                f"{ltl3.MAX_STATES} residuals, {ltl3.MAX_ATOMS} atoms or "
+                f"{ltl3.MAX_PROGRESSIONS} progressions; status stays "
                 "'unknown' (step and finish unaffected)")
         bad, good = _automaton(data["bad"], atoms), _automaton(data["good"], atoms)
         return bad, good, (
@@ -418,8 +452,11 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     for aut in (bad, good):
         if aut is not None:
             idx = [atom_nodes.index(a) for a in aut.atoms]
-            aut.sub_code = " | ".join(f"({1 << j} if {atom_locals[b]} else 0)"
-                                      for j, b in enumerate(idx)) or "0"
+            if aut.table is not None:
+                aut.sub_code = " | ".join(f"({1 << j} if {atom_locals[b]} else 0)"
+                                          for j, b in enumerate(idx)) or "0"
+            else:  # the atoms' values, indexed by the BDD nodes' atom numbers
+                aut.sub_code = "(" + "".join(f"{atom_locals[b]}, " for b in idx) + ")"
     var_locals = [(name, local, local in code.numeric_reads, local in code.bool_reads)
                   for name, local in code.variables.items()]
     # the state tuple: pt slots, then the tick count, then the last verdict
@@ -455,10 +492,76 @@ def _env():
     return env
 
 
-def render_module(compiled_list, module_name: str) -> str:
+class InvalidMonitorError(RuntimeError):
+    """Internal error: the code generated for a requirement is not a valid, loadable monitor
+    (a bug in fretc, never the user's). ``ids`` are the requirements concerned."""
+
+    def __init__(self, message: str, ids=()):
+        super().__init__(message)
+        self.ids = list(ids)
+
+
+_ALLOWED_BUILTINS = frozenset(("abs", "min", "max", "bool", "float", "int", "len",
+                               "RuntimeError", "KeyError", "ZeroDivisionError",
+                               "OverflowError", "ValueError", "complex", "isinstance",
+                               "property", "__name__"))
+
+
+def check_module(text: str, module_name: str) -> None:
+    """Check a generated module before it is written or loaded: it compiles, every global
+    name its code reads is defined by the module or is one of the builtins the template
+    uses (so no ``NameError`` can happen at run time), it loads, and every monitor steps
+    through two ticks (all variables 0, then 1) and finishes.
+
+    Raises :class:`InvalidMonitorError` (an internal error) naming the failure."""
+    import dis
+    import types
+
+    def fail(what, exc=None):
+        detail = f": {type(exc).__name__}: {exc}" if exc is not None else ""
+        raise InvalidMonitorError(
+            f"internal error: the generated monitor module {module_name!r} {what}{detail}; "
+            "this is a bug in fretc, please report it with the requirement")
+
+    try:
+        code = compile(text, f"<fretc monitors {module_name}>", "exec")
+    except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
+        fail("does not compile", exc)
+    defined = set()
+    reads = set()
+    stack = [code]
+    while stack:
+        co = stack.pop()
+        for ins in dis.get_instructions(co):
+            if ins.opname in ("STORE_NAME", "STORE_GLOBAL", "IMPORT_NAME") and co is code:
+                defined.add(ins.argval)
+            elif ins.opname in ("LOAD_GLOBAL", "LOAD_NAME"):
+                reads.add(ins.argval)
+        stack.extend(c for c in co.co_consts if isinstance(c, types.CodeType))
+    unknown = sorted(reads - defined - _ALLOWED_BUILTINS)
+    if unknown:
+        fail(f"reads undefined names {', '.join(unknown)}")
+    ns = {"__name__": module_name}
+    try:
+        exec(code, ns)  # only the standard library and literals made by repr
+        for rid, cls in ns["MONITORS"].items():
+            m = cls()
+            for value in (0, 1):
+                m.step({v: value for v in cls.VARIABLES})
+            m.finish()
+    except Exception as exc:  # noqa: BLE001 - any failure here is an internal error
+        fail("does not load and step", exc)
+
+
+def render_module(compiled_list, module_name: str, errors: Optional[list] = None) -> str:
     """The text of one generated monitor module for a list of compiled requirements
     (``compiler.build.Compiled``); requirements that failed or have no monitor are listed
-    in ``SKIPPED`` with the reason."""
+    in ``SKIPPED`` with the reason.
+
+    The module is checked by :func:`check_module`. Should a requirement's code ever fail
+    that check (an internal error), it is listed in ``SKIPPED`` with the error, so the other
+    requirements keep their monitors, and the :class:`InvalidMonitorError` is appended to
+    ``errors`` when given (``fretc --emit monitor`` then exits non-zero)."""
     monitors: List[MonitorSource] = []
     skipped: List[Tuple[str, str]] = []
     for i, c in enumerate(compiled_list):
@@ -470,6 +573,31 @@ def render_module(compiled_list, module_name: str) -> str:
             monitors.append(monitor_source(c, i))
         except CodegenError as exc:
             skipped.append((c.id, str(exc)))
+    text = _render(monitors, skipped, module_name)
+    try:
+        check_module(text, module_name)
+        return text
+    except InvalidMonitorError as exc:
+        problem = exc
+    # find the monitors at fault, one at a time, and skip them
+    bad = []
+    for m in monitors:
+        try:
+            check_module(_render([m], [], module_name), module_name)
+        except InvalidMonitorError as exc:
+            bad.append((m, exc))
+    if not bad:  # pragma: no cover - the module itself is broken
+        bad = [(m, problem) for m in monitors]
+    failed = InvalidMonitorError("; ".join(f"{m.id}: {exc}" for m, exc in bad),
+                                 [m.id for m, _ in bad])
+    if errors is not None:
+        errors.append(failed)
+    skipped += [(m.id, str(exc)) for m, exc in bad]
+    monitors = [m for m in monitors if m not in [b for b, _ in bad]]
+    return _render(monitors, skipped, module_name)
+
+
+def _render(monitors: List[MonitorSource], skipped, module_name: str) -> str:
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
     tables: Dict[str, int] = {}  # encoded table -> index: one copy per distinct table
@@ -509,12 +637,14 @@ def file_stems(sources, suffix: str = "") -> Dict[str, str]:
     return out
 
 
-def emit_monitors(compiled) -> Dict[str, str]:
+def emit_monitors(compiled, errors: Optional[list] = None) -> Dict[str, str]:
     """One module per requirement file: ``{module stem: source text}``, in input order
-    (stems from :func:`file_stems`, ``r1.fret`` -> ``r1_monitors``)."""
+    (stems from :func:`file_stems`, ``r1.fret`` -> ``r1_monitors``). Internal errors
+    (:class:`InvalidMonitorError`) are appended to ``errors``, the requirements concerned
+    being listed in ``SKIPPED`` with the error (see :func:`render_module`)."""
     groups: Dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
     stems = file_stems(groups, "_monitors")
-    return {stems[source]: render_module(items, stems[source])
+    return {stems[source]: render_module(items, stems[source], errors)
             for source, items in groups.items()}

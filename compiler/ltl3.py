@@ -212,13 +212,22 @@ def _normalize(n: Node) -> Node:
     return n
 
 
-def progression_tables(formula: Node, atoms: List[Node]) -> Optional[Tuple[list, list, int]]:
+#: Work bound of :func:`progression_tables` (residual states x letters): the residuals of a
+#: bound in the thousands are large (fuzzing: ``before q whenever c ... after 999999 ticks``
+#: took 110 s for 4096 states without it).
+MAX_PROGRESSIONS = 4096
+
+
+def progression_tables(formula: Node, atoms: List[Node],
+                       max_progressions: Optional[int] = MAX_PROGRESSIONS
+                       ) -> Optional[Tuple[list, list, int]]:
     """Deterministic residual automaton of ``formula`` over the letters of ``atoms`` (bit i
     of a letter = value of ``atoms[i]``), as two tables in :mod:`compiler.codegen`'s format:
     ``bad[state][letter]`` (-1 when the residual is FALSE: violated) and
     ``good[state][letter]`` (-1 when it is TRUE: satisfied), and the initial state 0.
     Returns None when there are more than :data:`MAX_ATOMS` atoms or :data:`MAX_STATES`
-    residuals."""
+    residuals, or when it would take more than ``max_progressions`` progressions of a
+    residual by a letter (a work bound: large bounds give many large residuals)."""
     if len(atoms) > MAX_ATOMS:
         return None
     init = _normalize(formula)
@@ -229,6 +238,8 @@ def progression_tables(formula: Node, atoms: List[Node]) -> Optional[Tuple[list,
     nxt: List[List[Node]] = []
     i = 0
     while i < len(states):
+        if max_progressions is not None and (i + 1) * len(letters) > max_progressions:
+            return None
         row = []
         for letter in letters:
             r = progress(states[i], letter, {})

@@ -30,6 +30,7 @@ from fractions import Fraction
 from typing import List, Optional
 
 from fretish import ast as A
+from fretish.limits import MAX_DURATION_TICKS, duration_too_long
 try:
     from fretish.errors import FretishError
 except ImportError:  # pragma: no cover - during bootstrap
@@ -101,6 +102,8 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
             + ("" if tick_period else "; declare a tick period to use time units"), d.span)
     if ticks < 0:
         raise SemanticsError("a duration cannot be negative", d.span)
+    if ticks > MAX_DURATION_TICKS:
+        raise SemanticsError(duration_too_long(ticks), d.span)
     return int(ticks)
 
 
@@ -204,6 +207,8 @@ class _Expander:
 
     def _int_arg(self, e: A.Call, a: A.Expr) -> int:
         if isinstance(a, A.NumLit) and isinstance(a.value, int) and a.value >= 0:
+            if a.value > MAX_DURATION_TICKS:
+                raise SemanticsError(f"{e.name}: {duration_too_long(a.value)}", a.span)
             return a.value
         raise SemanticsError(f"{e.name}: the bound must be a non-negative integer literal",
                              getattr(a, "span", e.span))

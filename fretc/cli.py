@@ -3,7 +3,8 @@
 ``fretc FILE... --emit ltl|monitor|psl`` compiles requirement files (the default command,
 ``fretc compile``); ``fretc audit`` checks recorded runs; ``fretc report`` writes the
 traceability report. Exit codes: 0 success, 1 a requirement failed (or, for ``audit``, a
-violation), 2 usage or input errors.
+violation), 2 usage or input errors, 3 an internal error (a generated monitor that is not
+valid: nothing is written).
 """
 
 from __future__ import annotations
@@ -112,7 +113,12 @@ def compile_cmd(files, emit, as_json, output, psl_map):
         _emit_ltl(compiled, as_json)
     elif emit == "monitor":
         from compiler.codegen import emit_monitors
-        outputs = emit_monitors(compiled)
+        internal: list = []
+        outputs = emit_monitors(compiled, internal)
+        for exc in internal:  # never exit 0 with a monitor that is not valid
+            click.echo(str(exc), err=True)
+        if internal:
+            sys.exit(4)  # internal error: not audit's 3 (incomplete)
         _check_output(outputs, output, ".py")
         _write_outputs(outputs, output, ".py")
         for stem, text in outputs.items():

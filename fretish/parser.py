@@ -49,6 +49,7 @@ from lark.exceptions import (LarkError, UnexpectedCharacters, UnexpectedEOF,
 
 from . import ast as A
 from .errors import FretishSyntaxError
+from .limits import LimitError, check_expression, check_requirement
 
 __all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS", "RESERVED_LETTERS"]
 
@@ -536,7 +537,15 @@ def _run(start: str, text: str, source: str, line: int, column: int):
     lark = _get_parser()
     _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
     try:
-        return lark.parse(text, start=start)
+        result = lark.parse(text, start=start)
+        if start == "start":
+            check_requirement(result)
+        else:
+            check_expression(result)
+        return result
+    except LimitError as f:
+        raise _make_error(text, source, line, column, f.span.start, f.message, (),
+                          f.hint) from None
     except _Fail as f:
         s = f.span
         raise _make_error(text, source, line, column, s.start, f.message, (), f.hint) from None
@@ -676,8 +685,19 @@ _WORD = re.compile(r"[A-Za-z][A-Za-z0-9_.%]*")
 
 
 def _previous_word(text: str, pos: int) -> str:
-    m = re.search(r"([A-Za-z][A-Za-z0-9_%]*)\W*\Z", text[:pos])
-    return m.group(1).lower() if m else ""
+    """The word before offset ``pos`` (skipping what is not a word character), from its
+    first letter, lower-cased; "" when there is none. Scans backwards from ``pos`` only:
+    linear in the word's length (a regular-expression search over ``text[:pos]`` is
+    quadratic on a long identifier)."""
+    i = pos
+    while i > 0 and not (text[i - 1].isalnum() or text[i - 1] == "_"):
+        i -= 1
+    end = i
+    while i > 0 and (text[i - 1].isalnum() or text[i - 1] in "_%"):
+        i -= 1
+    word = text[i:end]
+    m = re.search(r"[A-Za-z]", word)
+    return word[m.start():].lower() if m else ""
 
 
 def _accepted_before(text: str, start: str, pos: int) -> Optional[set]:

@@ -1,0 +1,115 @@
+"""Depth and size limits on FRETish input.
+
+A requirement beyond these limits is rejected with a positioned error (``file:line:col``)
+instead of exhausting recursion, memory or time further down the tool chain (formalization,
+printers, Spot, generated monitors). They are far above what requirements are written with:
+the 197 NASA case-study requirements that parse (``shared/corpora/fret_casestudies.jsonl``)
+reach an expression depth of 17 (calls counted as below), 227 expression nodes, numbers of 7
+characters and durations of 200 ticks.
+
+* :data:`MAX_EXPR_DEPTH`: operators, negations and function calls nested inside one another
+  in one expression (``a & b & c`` is 2 deep: ``&`` is left-associative; parentheses alone
+  add nothing; a function call counts :data:`CALL_DEPTH` levels). The tool chain recurses
+  once or twice per level; CPython's default recursion limit is 1000.
+* :data:`MAX_EXPR_NODES`: names, numbers, operators and calls in one requirement.
+* :data:`MAX_NUMBER_CHARS`: characters of a number literal (CPython will not convert an
+  integer of more than 4300 digits to or from text by default).
+* :data:`MAX_DURATION_TICKS`: a duration or a function's tick bound after conversion to
+  ticks (monitors keep a history of up to this many bits).
+"""
+
+from __future__ import annotations
+
+from typing import Iterator, Optional, Tuple
+
+from . import ast as A
+
+MAX_EXPR_DEPTH = 200
+#: A function call counts for this many levels: FRET's past- and future-time functions
+#: expand into up to four nested operators (``preBool(b, p)`` = ``(FTP & b) | (!FTP & Y p)``).
+CALL_DEPTH = 4
+MAX_EXPR_NODES = 5000
+MAX_NUMBER_CHARS = 100
+MAX_DURATION_TICKS = 1_000_000
+
+__all__ = ["MAX_EXPR_DEPTH", "MAX_EXPR_NODES", "MAX_NUMBER_CHARS", "MAX_DURATION_TICKS",
+           "LimitError", "check_requirement", "check_expression", "duration_too_long"]
+
+
+class LimitError(Exception):
+    """A limit exceeded at ``span`` (a :class:`fretish.ast.Span`), with a hint."""
+
+    def __init__(self, span, message: str, hint: Optional[str] = None):
+        super().__init__(message)
+        self.span, self.message, self.hint = span, message, hint
+
+
+def _expressions(req: A.Requirement) -> Iterator[A.Expr]:
+    if req.scope.mode is not None:
+        yield req.scope.mode
+    if req.condition.expr is not None:
+        yield req.condition.expr
+    if req.timing.stop is not None:
+        yield req.timing.stop
+    if req.response is not None:
+        yield req.response
+
+
+def check_requirement(req: A.Requirement) -> None:
+    """Check a parsed requirement against the limits (iteratively: any depth is safe).
+    Raises :class:`LimitError` at the first node beyond a limit."""
+    count = [0]
+    for e in _expressions(req):
+        _check(e, count)
+    d = req.timing.duration
+    if d is not None and len(d.amount) > MAX_NUMBER_CHARS:
+        raise _long_number(d.span, d.amount)
+    if d is not None and d.unit == "ticks" and d.value > MAX_DURATION_TICKS:
+        raise LimitError(d.span, duration_too_long(d.value), _DURATION_HINT)
+
+
+def check_expression(e: A.Expr) -> None:
+    """:func:`check_requirement` for one expression."""
+    _check(e, [0])
+
+
+_DURATION_HINT = ("use a coarser tick period or a shorter duration; monitors keep up to one "
+                  "bit per tick of a bounded duration")
+
+
+def duration_too_long(ticks) -> str:
+    """The message for a duration of ``ticks`` ticks above :data:`MAX_DURATION_TICKS`."""
+    shown = f"{int(ticks):,}" if ticks == int(ticks) else f"{float(ticks):,.1f}"
+    return (f"a duration of {shown} ticks is beyond the limit of {MAX_DURATION_TICKS:,} "
+            "ticks")
+
+
+def _long_number(span, text: str) -> LimitError:
+    return LimitError(span, f"a number of {len(text):,} characters is beyond the limit of "
+                      f"{MAX_NUMBER_CHARS} characters", "write it with an exponent (1e400)")
+
+
+def _check(root: A.Expr, count: list) -> None:
+    stack: list = [(root, 1)]
+    while stack:
+        e, depth = stack.pop()
+        count[0] += 1
+        if count[0] > MAX_EXPR_NODES:
+            raise LimitError(e.span, f"the requirement has more than {MAX_EXPR_NODES:,} names, "
+                             "numbers and operators", "split it into several requirements")
+        if depth > MAX_EXPR_DEPTH:
+            raise LimitError(e.span, f"expression nested more than {MAX_EXPR_DEPTH} levels "
+                             "deep (operators, negations and function calls inside one "
+                             "another)", "split it into several requirements or introduce a "
+                             "variable for a part of it")
+        t = type(e)
+        if t is A.NumLit:
+            if len(e.text) > MAX_NUMBER_CHARS:
+                raise _long_number(e.span, e.text)
+        elif t is A.Unary:
+            stack.append((e.operand, depth + 1))
+        elif t is A.Binary:
+            stack.append((e.right, depth + 1))
+            stack.append((e.left, depth + 1))
+        elif t is A.Call:
+            stack.extend((a, depth + CALL_DEPTH) for a in reversed(e.args))
