@@ -31,6 +31,7 @@ from typing import List, Optional
 
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
+from fretish.units import format_period_ms
 try:
     from fretish.errors import FretishError
 except ImportError:  # pragma: no cover - during bootstrap
@@ -95,7 +96,7 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
     if ticks.denominator != 1:
         if d.unit != "ticks" and tick_period is not None:
             raise SemanticsError(
-                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of {_fmt_period(tick_period)}: "
+                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of {format_period_ms(tick_period)}: "
                 "not a whole number of ticks; change the duration or the tick period", d.span)
         raise SemanticsError(
             f"duration '{d.amount} {d.unit}' is not a whole number of ticks"
@@ -105,11 +106,6 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
     if ticks > MAX_DURATION_TICKS:
         raise SemanticsError(duration_too_long(ticks), d.span)
     return int(ticks)
-
-
-def _fmt_period(p: Fraction) -> str:
-    ms = p * 1000
-    return f"{float(ms):g} ms" if ms < 1000 else f"{float(p):g} s"
 
 
 # --------------------------------------------------------------------------- expressions

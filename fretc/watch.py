@@ -23,6 +23,7 @@ import time
 
 import click
 
+from fretish.units import format_offset
 from monitors.cli import audit_config, audit_input_options
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
@@ -40,7 +41,7 @@ def live_table(w):
     st0 = w.start_time
 
     def s(ns):
-        return "-" if ns is None or st0 is None else f"{(ns - st0) / 1e9:.1f} s"
+        return format_offset(ns, st0, decimals=1)
 
     table = Table(header_style="bold", title=None)
     for col in ("req", "pt now", "LTL3", "definite at", "violations", "last trigger"):

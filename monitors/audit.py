@@ -56,6 +56,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from fretish.units import NS_PER_S
+from fretish.units import format_ns as _fmt_ns, format_period as _fmt_period
+
 from .bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
 from .problems import BindingError, DataProblem, FretcInputError, LogError, SignalError
 
@@ -63,7 +66,6 @@ __all__ = ["AuditConfig", "AuditPlan", "RequirementPlan", "AuditInputError", "lo
            "discover_bindings", "find_logs", "audit_log", "audit_logs", "CHUNK",
            "VECTORIZE_MIN_TICKS", "LOG_SUFFIXES"]
 
-NS_PER_S = 1_000_000_000
 #: Ticks per column chunk.
 CHUNK = 4096
 #: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
@@ -189,20 +191,6 @@ def _tick_text(tick: TickSpec) -> str:
     if tick.period_ns is not None:
         return f"every {_fmt_ns(tick.period_ns)}"
     return f"one per {tick.topic} message"
-
-
-def _fmt_ns(ns: int) -> str:
-    if ns % NS_PER_S == 0:
-        return f"{ns // NS_PER_S} s"
-    if ns % 1_000_000 == 0:
-        return f"{ns // 1_000_000} ms"
-    if ns % 1000 == 0:
-        return f"{ns // 1000} us"
-    return f"{ns} ns"
-
-
-def _fmt_period(p: Fraction) -> str:
-    return _fmt_ns(int(p * NS_PER_S)) if (p * NS_PER_S).denominator == 1 else f"{float(p)} s"
 
 
 # --------------------------------------------------------------------------- the plan

@@ -50,6 +50,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import click
 
+from fretish.units import format_seconds as _fmt_s
+
 from .cli import audit_config, audit_input_options
 from .fleet_cli import ray_options
 from .report_model import SCHEMA
@@ -102,10 +104,6 @@ class _Anchors:
             name, k = f"{base}-{k}", k + 1
         self.used.add(name)
         return name
-
-
-def _fmt_s(s: Optional[float]) -> str:
-    return "-" if s is None else f"{s:.3f} s"
 
 
 def _fmt_value(v: Any) -> str:
