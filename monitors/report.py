@@ -50,6 +50,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import click
 
+from fretish.errors import FretcError
 from fretish.units import format_seconds as _fmt_s
 
 from .cli import audit_config, audit_input_options
@@ -70,7 +71,7 @@ VERDICT_WORDS = {"satisfied": "satisfied", "vacuous": "vacuous", "violated": "vi
                  "unknown": "unknown", "error": "error"}
 
 
-class ReportError(Exception):
+class ReportError(FretcError):
     """The report cannot be made: unreadable or wrong-schema JSON, unwritable output."""
 
 
