@@ -24,7 +24,8 @@ import time
 import click
 
 from fretish.units import format_offset
-from monitors.cli import audit_config, audit_input_options
+
+from .options import audit_config, audit_input_options
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
