@@ -52,7 +52,6 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
     Either LOGS (the audit runs here, as fretc audit) or --from-json FILE. Exit status as
     fretc audit: 0 every verdict satisfied or vacuous, 1 a violation, 2 input errors or a
     requirement that could not be audited (the report is still written)."""
-    err = click.get_text_stream("stderr")
     plan = None
     if from_json and logs:
         raise click.UsageError("give LOGS or --from-json, not both")
@@ -97,17 +96,17 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         from compiler.check_report import add_to_report, load_check  # lazy: only with --check
         add_to_report(str(files.markdown), str(files.html), load_check(check_json))
     for n in files.notes:
-        click.echo(f"note: {n}", file=err)
+        click.echo(f"note: {n}", err=True)
     s = doc.get("summary") or {}
     click.echo(f"fretc report: {len(doc.get('requirements') or [])} requirements x "
                f"{len(doc.get('logs') or [])} runs: {s.get('satisfied', 0)} satisfied, "
                f"{s.get('vacuous', 0)} vacuous, {s.get('violated', 0)} violated, "
-               f"{s.get('error', 0)} error", file=err)
-    click.echo(f"wrote {files.html}", file=err)
-    click.echo(f"wrote {files.markdown}", file=err)
-    click.echo(f"wrote {files.audit_json} and {len(files.timelines)} timelines", file=err)
+               f"{s.get('error', 0)} error", err=True)
+    click.echo(f"wrote {files.html}", err=True)
+    click.echo(f"wrote {files.markdown}", err=True)
+    click.echo(f"wrote {files.audit_json} and {len(files.timelines)} timelines", err=True)
     for r in files.annotated:
         extra = f" (partial: {r.damage})" if r.partial else ""
         click.echo(f"wrote {r.output}: {r.messages} messages + {r.events} verdict events on "
-                   f"/fretc/verdicts{extra}", file=err)
+                   f"/fretc/verdicts{extra}", err=True)
     ctx.exit(int(s.get("exit_code", 0) or 0))

@@ -31,7 +31,7 @@ engine: per evaluated tick, 8 bytes of time, 8 bytes per bound topic (log time o
 message), 1 byte per boolean and 8 per numeric variable - about 80 bytes a tick for the
 Safe-ROS set, 3 MB for an hour at 10 Hz. (Kept in chunks of :data:`CHUNK` ticks.)
 
-Damage (DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
+Damage (../shared/DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
 summary lost) is ``partial``; only the ticks before its first cut or gap
 (``LogAudit.damage_time_ns``, :attr:`monitors.sources.LogSource.intact_end`) are judged, and
 a verdict that the end of that span would decide is ``unknown`` (:mod:`monitors.damage`); a
@@ -715,7 +715,7 @@ def _expected_ticks(source, bindings: Optional[Bindings]) -> Optional[int]:
 
 
 def _clock_key(r: RequirementPlan, bindings: Optional[Bindings]) -> frozenset:
-    """The clock a requirement is sampled on: the topics of its own variables (DESIGN.md,
+    """The clock a requirement is sampled on: the topics of its own variables (../shared/DESIGN.md,
     "Each verdict stands alone": its tick grid, start, end and warm-up come from them and
     the bindings' tick, never from other requirements of the run)."""
     if bindings is None:
@@ -818,7 +818,7 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
 
 def _cut_at_damage(res: _Pass, source, bindings: Optional[Bindings],
                    active: List[RequirementPlan]) -> None:
-    """Keep only the ticks of the span read completely (DESIGN.md "Damage is never
+    """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
     evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
     under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
     precede its log time by that much). The stepwise monitors, which saw every tick, are

@@ -1,6 +1,6 @@
 """Signal bindings: how each FRET variable is computed from recorded messages.
 
-Bindings live apart from the requirement text (DESIGN.md, "Signals are declared, never
+Bindings live apart from the requirement text (../shared/DESIGN.md, "Signals are declared, never
 guessed"): one requirement set audits both the simulator and the real robot by swapping the
 binding file.  A binding file is TOML (read with :mod:`tomllib`)::
 

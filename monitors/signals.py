@@ -398,7 +398,7 @@ class GroupSampling:
 
 def sample_groups(source: LogSource, bindings: Bindings,
                   groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
-    """Per-requirement clocks in one read of the log (DESIGN.md, "Each verdict stands
+    """Per-requirement clocks in one read of the log (../shared/DESIGN.md, "Each verdict stands
     alone"): each group ``key -> (variable names, topics)`` gets its own tick grid, start,
     end and warm-up from ``topics`` alone (normally the topics of one requirement's
     variables) and the bindings' tick, exactly as :func:`sample` with bindings restricted to

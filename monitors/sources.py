@@ -135,7 +135,7 @@ class LogSource:
         damage_time: where the intact span ends: the log time (ns) of the last good message
             read before a truncation, or the first log time of the first gap; None when the
             damage loses no message (summary, data CRC) or when nothing was read before it.
-            Only ticks strictly before it are judged (DESIGN.md "Damage is never evidence").
+            Only ticks strictly before it are judged (../shared/DESIGN.md "Damage is never evidence").
         gaps: ``(start, end)`` log-time spans (ns, inclusive; ``end`` None when unknown) of the
             data skipped in the latest pass, in the order found.
         damage_cut: True when the damage loses messages (truncation or gap), so that only the

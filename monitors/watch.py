@@ -1,7 +1,7 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
 protocol.
 
-One engine, three places (DESIGN.md): the watch runs the *same* pieces as an audit of a
+One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit of a
 recorded log, only fed live:
 
 * :class:`WatchSource` is a :class:`monitors.sources.LogSource` whose messages come from a
