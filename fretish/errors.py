@@ -41,7 +41,7 @@ Lines and columns are 1-based and in the coordinates of the file the text came f
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Optional, Sequence
+from collections.abc import Sequence
 
 __all__ = ["Where", "FretcError", "FretishError", "FretishSyntaxError", "FretishFileError",
            "CheckError", "InputError", "render_diagnostic", "error_text"]
@@ -53,11 +53,11 @@ class Where:
     and/or a place in a log (``topic``, ``log_time_ns``: MCAP log time, integer ns). Any
     field may be None (not known). ``str()``: ``file:line:column`` then ``topic @ t ns``."""
 
-    file: Optional[str] = None
-    line: Optional[int] = None
-    column: Optional[int] = None
-    topic: Optional[str] = None
-    log_time_ns: Optional[int] = None
+    file: str | None = None
+    line: int | None = None
+    column: int | None = None
+    topic: str | None = None
+    log_time_ns: int | None = None
 
     def __str__(self) -> str:
         parts = [str(x) for x in (self.file, self.line, self.column) if x is not None]
@@ -78,9 +78,9 @@ class FretcError(Exception):
     itself always names the place (file:line:col, topic, log time) when one is known.
     """
 
-    where: Optional[Where] = None
+    where: Where | None = None
 
-    def __init__(self, *args: object, where: Optional[Where] = None) -> None:
+    def __init__(self, *args: object, where: Where | None = None) -> None:
         super().__init__(*args)
         if where is not None:
             self.where = where
@@ -111,8 +111,8 @@ def error_text(exc: FretcError) -> str:
 
 
 def render_diagnostic(source: str, line: int, column: int, message: str, *,
-                      text_line: Optional[str] = None, text_line_column: int = 1,
-                      expected: Sequence[str] = (), hint: Optional[str] = None) -> str:
+                      text_line: str | None = None, text_line_column: int = 1,
+                      expected: Sequence[str] = (), hint: str | None = None) -> str:
     """Compiler-style text: ``source:line:column: error: message``, then (if known) the
     source line with a caret under ``column``, ``expected: ...`` and ``hint: ...`` lines.
 
@@ -147,15 +147,15 @@ class FretishSyntaxError(FretishError):
 
     def __init__(self, message: str, *, source: str = "<string>", line: int = 1,
                  column: int = 1, text_line: str = "", expected: Sequence[str] = (),
-                 hint: Optional[str] = None, text_line_column: int = 1,
-                 offset: Optional[int] = None):
+                 hint: str | None = None, text_line_column: int = 1,
+                 offset: int | None = None):
         self.message = message
         self.source = source
         self.line = line
         self.column = column
         self.text_line = text_line
         self.text_line_column = text_line_column
-        self.expected: List[str] = list(expected)
+        self.expected: list[str] = list(expected)
         self.hint = hint
         #: 0-based offset of the error in the parsed text (None if unknown).
         self.offset = offset
@@ -175,7 +175,7 @@ class FretishFileError(FretishError):
     """
 
     def __init__(self, message: str, *, source: str, line: int = 1, column: int = 1,
-                 text_line: Optional[str] = None, hint: Optional[str] = None):
+                 text_line: str | None = None, hint: str | None = None):
         self.message = message
         self.source = source
         self.line = line
