@@ -68,6 +68,14 @@ class McapSource(LogSource):
     Channels whose schema is missing, unparsable, or of an unsupported encoding yield an
     ``unknown_schema`` / ``unknown_encoding`` problem once and their messages are skipped;
     other topics go on.
+
+    Args:
+        path: the ``.mcap`` file.
+        check_data_crc: check the DataEnd data-section CRC (one extra read of the data
+            section after the first full indexed pass).
+
+    Raises:
+        LogError: the file cannot be read or does not start with the MCAP magic.
     """
 
     kind = "mcap"
