@@ -67,9 +67,13 @@ class BagSource(LogSource):
     ``fallback_typestore`` if given, else its topic gets an ``unknown_schema`` problem.
     Bags do not record a publish time: ``Message.publish_time == log_time``.
 
+    A ROS 1 bag whose index is damaged or missing (a crashed recording) is read record by
+    record from the start (:class:`~monitors.sources.ros1_linear.Ros1Linear`), as far as
+    it goes; the log is then ``partial``.
+
     Raises:
-        LogError: the bag cannot be opened (e.g. an unindexed ROS 1 bag from a crashed
-            recording: run ``rosbag reindex`` first).
+        LogError: the bag cannot be opened (a rosbag2 folder rosbags cannot read, a ``.bag``
+            file that is not a ROS 1 bag).
     """
 
     def __init__(self, path: str | os.PathLike, *, fallback_typestore: Typestore | None = None) -> None:
