@@ -30,6 +30,8 @@ from mcap.stream_reader import StreamReader
 from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag2 import Reader as Ros2Reader
 
+from fretish.errors import InputError
+
 from .sources.bag_source import connection_typestore
 from .sources.csv_source import CSV_TOPIC
 from .sources.decoding import UnsupportedSchema, build_typestore
@@ -59,7 +61,7 @@ class FieldType:
         return self.name
 
 
-class FieldPathError(ValueError):
+class FieldPathError(InputError, ValueError):
     """A field path that the schema does not declare; ``valid`` lists the fields that exist
     at the point where it failed and ``suggestion`` is the closest one (or None)."""
 

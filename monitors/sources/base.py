@@ -3,8 +3,8 @@
 A source reads a recorded run as a stream of decoded messages in non-decreasing log time,
 streaming (memory does not grow with the length of the log). Damage is recorded as
 :class:`~monitors.problems.DataProblem` in ``source.problems`` and reading goes on; the
-span read completely before the damage is ``source.intact_end`` (README.md, "Damaged
-logs").
+span read completely before the damage is ``source.intact_end`` (../shared/DESIGN.md
+"Damage is never evidence").
 
 Times are integer nanoseconds since the epoch of the recording clock (MCAP ``log_time``,
 rosbag ``timestamp``).
@@ -16,11 +16,11 @@ import os
 from collections.abc import Iterator
 from typing import Any, NamedTuple
 
+from fretish.units import NS_PER_S
+
 from ..problems import DataProblem, ProblemLog
 
-__all__ = ["Message", "LogSource", "header_stamp", "NS_PER_S"]
-
-NS_PER_S = 1_000_000_000
+__all__ = ["Message", "LogSource", "header_stamp"]
 
 
 class Message(NamedTuple):
@@ -71,7 +71,7 @@ class LogSource:
         damage_time: where the intact span ends: the log time (ns) of the last good message
             read before a truncation, or the first log time of the first gap; None when the
             damage loses no message (summary, data CRC) or when nothing was read before it.
-            Only ticks strictly before it are judged (README.md, "Damaged logs").
+            Only ticks strictly before it are judged (../shared/DESIGN.md "Damage is never evidence").
         gaps: ``(start, end)`` log-time spans (ns, inclusive; ``end`` None when unknown) of the
             data skipped in the latest pass, in the order found.
         damage_cut: True when the damage loses messages (truncation or gap), so that only the

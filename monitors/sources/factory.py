@@ -9,9 +9,11 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from fretish.units import NS_PER_S
+
 from ..problems import LogError
 from .bag_source import BagSource
-from .base import NS_PER_S, LogSource
+from .base import LogSource
 from .csv_source import CsvSource
 from .mcap_source import McapSource
 
