@@ -29,7 +29,7 @@ __all__ = ["BagSource", "connection_typestore"]
 
 #: Errors of a bag whose data is damaged part-way.
 _BAG_ERRORS = (Ros1ReaderError, Ros2ReaderError, OSError, struct.error, EOFError, ValueError,
-               KeyError, IndexError, zlib.error)
+               KeyError, IndexError, zlib.error, AssertionError)  # rosbags asserts on some corrupt bags
 
 
 def connection_typestore(kind: str, conn: Any, fallback: Typestore | None
