@@ -5,8 +5,8 @@ failure never stops the others."""
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Iterable, List, Optional
 
 from fretish.errors import FretishError
 
@@ -26,8 +26,8 @@ class Compiled:
     """
 
     entry: object
-    formalization: Optional[Formalization] = None
-    error: Optional[FretishError] = None
+    formalization: Formalization | None = None
+    error: FretishError | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -119,7 +119,7 @@ def compile_entry(entry) -> Compiled:
         return Compiled(entry, error=_locate(exc, entry))
 
 
-def compile_entries(entries: Iterable) -> List[Compiled]:
+def compile_entries(entries: Iterable) -> list[Compiled]:
     """:func:`compile_entry` of each entry, in order."""
     return [compile_entry(e) for e in entries]
 

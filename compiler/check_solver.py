@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from typing import Any, Optional, Tuple
+from typing import Any
 
 __all__ = ["UNKNOWN", "SpotWorker", "run_query"]
 
@@ -51,7 +51,7 @@ def _letters(aut, bdds) -> list:
     return out
 
 
-def _word(aut) -> Optional[Tuple[list, list]]:
+def _word(aut) -> tuple[list, list] | None:
     w = aut.accepting_word()
     if w is None:
         return None
@@ -182,7 +182,7 @@ class SpotWorker:
     ``RuntimeError``.
     """
 
-    def __init__(self, timeout: Optional[float] = None):
+    def __init__(self, timeout: float | None = None):
         self.timeout = timeout
         self._proc = None
         self._conn = None

@@ -34,7 +34,7 @@ negation, and the identities FRET's own optimizer uses, e.g. ``p S (p & FTP) = H
 
 from __future__ import annotations
 
-from typing import Iterator, Optional, Tuple
+from collections.abc import Iterator
 
 BOOL_BINARY = ("&", "|", "xor", "->", "<->")
 FUTURE_UNARY = ("X", "F", "G")
@@ -51,8 +51,8 @@ class Node:
 
     __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext")
 
-    def __init__(self, op: str, args: Tuple["Node", ...] = (), name: Optional[str] = None,
-                 lo: Optional[int] = None, hi: Optional[int] = None):
+    def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
+                 lo: int | None = None, hi: int | None = None):
         self.op = op
         self.args = args
         self.name = name
@@ -186,7 +186,7 @@ def X(a: Node) -> Node:
     return Node("X", (a,))
 
 
-def F(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def F(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Eventually; bounded ``F[lo,hi]`` when ``hi`` is given (an empty window is FALSE)."""
     if hi is not None:
         lo = lo or 0
@@ -202,7 +202,7 @@ def F(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
     return Node("F", (a,))
 
 
-def G(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def G(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Globally; bounded ``G[lo,hi]`` when ``hi`` is given (an empty window is TRUE)."""
     if hi is not None:
         lo = lo or 0
@@ -250,7 +250,7 @@ def Z(a: Node) -> Node:
     return Node("Z", (a,))
 
 
-def O(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def O(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Once; bounded ``O[lo,hi]`` (``O[=n]`` is ``O[n,n]``) when ``hi`` is given."""
     if hi is not None:
         lo = lo or 0
@@ -266,7 +266,7 @@ def O(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
     return Node("O", (a,))
 
 
-def H(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def H(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Historically; bounded ``H[lo,hi]`` when ``hi`` is given (empty window: TRUE).
     ``H[l,h] p`` at i: p at every j in [i-h, i-l] with j >= 0 (FRET/SALT convention)."""
     if hi is not None:
@@ -385,7 +385,7 @@ _REBUILD = {
 }
 
 
-def rebuild(n: Node, args: Tuple[Node, ...]) -> Node:
+def rebuild(n: Node, args: tuple[Node, ...]) -> Node:
     """``n`` with new children, simplified where a constructor applies."""
     f = _REBUILD.get(n.op)
     if f is not None:
