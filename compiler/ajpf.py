@@ -23,9 +23,12 @@ Variable mapping (TOML, ``--psl-map``)::
 from __future__ import annotations
 
 import re
+import tomllib
 
 from fretish.errors import FretishError
+from fretish.textsafe import one_line
 
+from .codegen import file_stems
 from .ir import Node
 from .printers import mangle, to_smv
 
@@ -40,8 +43,6 @@ def load_mapping(path: str | None) -> dict:
     """Read a ``--psl-map`` TOML file. Raises :class:`AjpfError` naming the file."""
     if path is None:
         return {}
-    import tomllib
-
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
@@ -155,8 +156,6 @@ def emit_psl(compiled, mapping_path: str | None = None) -> dict[str, str]:
     groups: dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
-    from .codegen import file_stems
-
     stems = file_stems(groups)
     out: dict[str, str] = {}
     for source, items in groups.items():
@@ -195,6 +194,4 @@ def psl_label_and_formula(compiled, mapping: dict | None = None):
 def _comment(text: str) -> str:
     """One ``//`` comment line: white space folded, control and bidi characters escaped
     (:func:`fretish.textsafe.one_line`; a NUL or U+202E in an id must not reach the file)."""
-    from fretish.textsafe import one_line
-
     return one_line(text)

@@ -8,7 +8,7 @@ import hashlib
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from fretish.errors import FretishError
+from fretish.errors import FretishError, render_diagnostic
 
 from .printers import mangle, to_smv, to_spot
 from .semantics import Formalization, SemanticsError, formalize
@@ -46,10 +46,6 @@ class Compiled:
     def freeform(self) -> bool:
         r = self.entry.requirement
         return bool(r is not None and r.freeform)
-
-    @property
-    def ok(self) -> bool:
-        return self.formalization is not None
 
     @property
     def source_hash(self) -> str:
@@ -126,8 +122,6 @@ def compile_entries(entries: Iterable) -> list[Compiled]:
 
 def _locate(exc: SemanticsError, entry) -> FretishError:
     """Give a semantics error the file position of the span it names."""
-    from fretish.errors import render_diagnostic
-
     span = exc.span
     line = span.line if span is not None and span.line else entry.line
     column = span.column if span is not None and span.line else entry.column

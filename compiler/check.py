@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 from fretish import ast as A
 
 from . import ir
+from .check_findings import Finding
 from .check_solver import UNKNOWN, SpotWorker
 from .ir import Node
 from .numeric_abstraction import NumericAbstraction
@@ -107,34 +108,6 @@ def atom_variables(node: Node) -> set[str]:
 
 
 # --------------------------------------------------------------------------- results
-@dataclass
-class Finding:
-    """One result worth a user's attention.
-
-    ``kind``: ``unsatisfiable`` (one requirement), ``conflict`` (a set), ``vacuous``,
-    ``redundant``, ``unrealizable``, ``unknown``. ``severity``: ``error`` (exit 1),
-    ``warning`` or ``unknown``. ``requirements``: the ids it is about; ``subsets``: minimal
-    subsets (lists of ids, smallest first); ``cut``: the subset enumeration ran out of
-    budget; ``witness``: path of the witness CSV, ``expected`` the verdicts it promises.
-    """
-
-    kind: str
-    severity: str
-    requirements: list[str]
-    message: str
-    subsets: list[list[str]] = field(default_factory=list)
-    cut: bool = False
-    witness: str | None = None
-    expected: dict[str, str] = field(default_factory=dict)
-    details: dict = field(default_factory=dict)
-
-    def to_json(self) -> dict:
-        return {"kind": self.kind, "severity": self.severity,
-                "requirements": self.requirements, "message": self.message,
-                "subsets": self.subsets, "cut": self.cut, "witness": self.witness,
-                "expected": self.expected, "details": self.details}
-
-
 @dataclass
 class CheckResult:
     """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
@@ -390,11 +363,11 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
         checker = Checker(items, worker, mus_budget)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy)
         if inputs is not None or outputs is not None:
-            from .check_realizability import check_realizability
+            from .check_realizability import check_realizability  # lazy: numpy, if asked
             result.realizability = check_realizability(checker, result, inputs or [],
                                                        outputs or [])
         if witness_dir is not None:
-            from .check_witness import write_witnesses
+            from .check_witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir)
         result.queries = checker.queries
         result.unknown_queries = checker.unknown

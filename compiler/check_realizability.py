@@ -26,7 +26,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from . import ir
-from .check import Finding, _ids
+from .check_findings import Finding
+from .check_findings import ids as _ids
 from .check_solver import UNKNOWN
 from .check_witness import _atoms
 from .numeric_abstraction import simple_comparison

@@ -38,6 +38,7 @@ import numpy as np
 
 from . import ir
 from .check_solver import UNKNOWN
+from .evaluate import ft_at
 from .ir import LAST, Node
 from .printers import mangle, to_smv
 
@@ -58,7 +59,6 @@ def _atoms(nodes: Sequence[Node]) -> list[Node]:
 
 def _absorbing_value(atom: Node) -> bool:
     if atom.op == "cmp":
-        from .evaluate import ft_at
         names = {n.name for n in ir.walk(atom) if n.op == "var"}
         try:
             return bool(ft_at(atom, [{n: 0.0 for n in names}], 0))
@@ -132,6 +132,7 @@ def _columns(items) -> dict[str, str]:
 def expected_verdicts(items, rows: list[dict]) -> dict[str, str]:
     """FRET's verdict of each item on ``rows`` (``satisfied``/``vacuous``/``violated``, or
     ``unknown`` where the evidence engine cannot decide), by the audit's evidence engine."""
+    # lazy: the audit's evidence engine lives in monitors/, a layer above compiler/
     from monitors.evidence import EvidenceUnsupported, evaluate_requirement
 
     n = len(rows)

@@ -36,15 +36,6 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-BOOL_BINARY = ("&", "|", "xor", "->", "<->")
-FUTURE_UNARY = ("X", "F", "G")
-FUTURE_BINARY = ("U", "V")
-PAST_UNARY = ("Y", "Z", "O", "H")
-PAST_BINARY = ("S", "T")
-TERM_OPS = ("var", "num", "arith", "neg", "fn", "ite")
-ATOM_OPS = ("true", "false", "ap", "LAST", "FTP", "cmp", "call")
-
-
 class Node:
     """One IR node; see the module docstring for ``op``. ``lo``/``hi`` are tick bounds of
     ``F G O H`` (``None`` = unbounded)."""
@@ -59,8 +50,10 @@ class Node:
         self.lo = lo
         self.hi = hi
         self._hash = None  # computed on first use (most nodes are never hashed)
-        self.text = None  # printers cache the FRET/SMV text of a node here (FTP as FTP)
-        self.ztext = None  # ... and with FTP printed as (Z FALSE), as FRET's pt formulas do
+        # memo slots of compiler.printers (the FRET/SMV text with FTP printed as FTP, and as
+        # (Z FALSE)): a node's text is read once per node, however often a formula shares it
+        self.text = None
+        self.ztext = None
 
     def __hash__(self) -> int:
         h = self._hash
@@ -77,8 +70,12 @@ class Node:
                 and self.args == other.args)
 
     def __repr__(self) -> str:
-        from .printers import to_smv
-        return f"Node<{to_smv(self)}>"
+        """A short structural form for debugging (``Node<& 2 args>``, ``Node<ap p>``);
+        :func:`compiler.printers.to_smv` prints a formula."""
+        head = " ".join(str(x) for x in (self.op, self.name) if x is not None)
+        bounds = f"[{self.lo},{self.hi}]" if self.hi is not None else ""
+        args = f" {len(self.args)} args" if self.args else ""
+        return f"Node<{head}{bounds}{args}>"
 
     @property
     def bounded(self) -> bool:
@@ -342,37 +339,6 @@ def variables(node: Node) -> list:
 def has_op(node: Node, ops) -> bool:
     """Does any sub-node of ``node`` have an ``op`` in ``ops``?"""
     return any(n.op in ops for n in walk(node))
-
-
-def is_past(node: Node) -> bool:
-    """Does the formula use a past-time operator or FTP?"""
-    return has_op(node, PAST_UNARY + PAST_BINARY + ("FTP",))
-
-
-def is_future(node: Node) -> bool:
-    """Does the formula use a future-time operator or LAST?"""
-    return has_op(node, FUTURE_UNARY + FUTURE_BINARY + ("LAST",))
-
-
-def substitute(node: Node, mapping: dict) -> Node:
-    """Replace sub-nodes equal to a key of ``mapping`` by its value, rebuilding bottom-up
-    through the simplifying constructors."""
-    memo: dict = {}
-
-    def go(n: Node) -> Node:
-        if n in mapping:
-            return mapping[n]
-        if not n.args:
-            return n
-        got = memo.get(n)
-        if got is not None:
-            return got
-        args = tuple(go(a) for a in n.args)
-        out = n if args == n.args else rebuild(n, args)
-        memo[n] = out
-        return out
-
-    return go(node)
 
 
 _REBUILD = {
