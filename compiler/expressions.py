@@ -1,7 +1,7 @@
 """FRETish expressions to the formula IR, for one formula kind (ft or pt).
 
 Temporal functions of the formula's own direction are expanded with FRET's definitions
-(``shared/fretish/README.md`` section 6b: past functions in pt, future ones in ft and
+(``../shared/fretish/README.md`` section 6b: past functions in pt, future ones in ft and
 ft_inf); functions of the other direction become derived atoms (IR ``past``/``future``
 nodes named by FRET's printed call). :mod:`compiler.semantics` uses :class:`Expander` for
 the response, condition, stop and scope expressions of a requirement.
@@ -48,7 +48,7 @@ class Expander:
 
     ``left_pt`` is FRET's ``Left`` (pt formula true at the first position of a scope
     interval) and ``right_ft`` its ``Right`` (ft formula true at the last position), per
-    scope (shared/fretish/README.md section 6b). ``free`` selects FRET's endpoint-free
+    scope (../shared/fretish/README.md section 6b). ``free`` selects FRET's endpoint-free
     expansions, used inside scope conditions (``while C``, ``after C`` ...).
     """
 
@@ -145,8 +145,8 @@ class Expander:
         raise SemanticsError(f"{e.name} takes (n, p) or (m, n, p)", e.span)
 
     def _past_function(self, e: A.Call) -> Node:
-        """FRET's past-time functions (README section 6b, FRET's expansions restated):
-        persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) &
+        """FRET's past-time functions (../shared/fretish/README.md section 6b, FRET's
+        expansions restated): persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) &
         O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP & b) | (Y p);
         prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))). Endpoint-
         free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""

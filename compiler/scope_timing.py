@@ -3,7 +3,7 @@
 wrapper).
 
 Restated from FRET's ``formalizations_future`` / ``formalizations_past`` building blocks and
-``shared/fretish/README.md`` section 4; :mod:`compiler.semantics` composes them (scope
+``../shared/fretish/README.md`` section 4; :mod:`compiler.semantics` composes them (scope
 wrapper (condition wrapper (timing))).
 """
 
@@ -19,7 +19,8 @@ __all__ = ["ft_timing", "pt_timing", "ft_markers", "pt_markers", "ft_right", "fn
 def ft_timing(kind: str, negate: bool, R: Node, right: Node, n: int | None,
                stop: Node | None) -> Node:
     """What must hold at a trigger point (ft), with ``right`` marking the interval's last
-    point (README section 4; FRET ``formalizations_future`` building blocks)."""
+    point (../shared/fretish/README.md section 4; FRET ``formalizations_future`` building
+    blocks)."""
     nR = not_(R)
 
     def within(r: Node, k: int) -> Node:
@@ -199,8 +200,8 @@ def ft_right(kind: str, m: Node | None, last: Node) -> Node:
 
 
 def fn_right(kind: str, m: Node | None, last: Node) -> Node:
-    """FRET's ``Right`` for the temporal functions (README section 6b): true at the last
-    position of a scope interval. For ``in``/``onlyAfter`` it is ``m & (LAST | X !m)``, for
+    """FRET's ``Right`` for the temporal functions (../shared/fretish/README.md section 6b):
+    true at the last position of a scope interval. For ``in``/``onlyAfter`` it is ``m & (LAST | X !m)``, for
     ``notin``/``onlyIn``/``before`` ``(!m & !LAST) & X m`` (no LAST disjunct), else LAST.
     ``last`` is ``LAST``, or FALSE for ft_inf."""
     if kind in ("null", "after", "onlyBefore"):

@@ -14,7 +14,8 @@ RESERVED_WORDS = frozenset("""
     occurrence of only or previous probability same satisfy sec secs second seconds shall
     the then tick ticks timepoint true unless until upon what when whenever where while
     with within xor""".split())
-#: Operators of FRET's printed formulas (README section 6); reserved, case-sensitive.
+#: Operators of FRET's printed formulas (../shared/fretish/README.md section 6); reserved,
+#: case-sensitive.
 RESERVED_LETTERS = frozenset("XFGUVYZHOST")
 
 #: The grammar's unit terminals (``grammar.lark``) -> the :class:`fretish.ast.Duration`
