@@ -146,10 +146,10 @@ class Expander:
 
     def _past_function(self, e: A.Call) -> Node:
         """FRET's past-time functions (../shared/fretish/README.md section 6b, FRET's
-        expansions restated): persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) &
-        O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP & b) | (Y p);
-        prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))). Endpoint-
-        free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""
+        expansions restated): persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) =
+        ((!Left) S p) & O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP &
+        b) | (Y p); prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))).
+        Endpoint-free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""
         name, args = e.name, e.args
         # Function expansions are built in a pt expander whatever the formula kind.
         px = Expander("pt", self.left_pt, self.right_ft, self.free)

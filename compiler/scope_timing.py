@@ -201,9 +201,9 @@ def ft_right(kind: str, m: Node | None, last: Node) -> Node:
 
 def fn_right(kind: str, m: Node | None, last: Node) -> Node:
     """FRET's ``Right`` for the temporal functions (../shared/fretish/README.md section 6b):
-    true at the last position of a scope interval. For ``in``/``onlyAfter`` it is ``m & (LAST | X !m)``, for
-    ``notin``/``onlyIn``/``before`` ``(!m & !LAST) & X m`` (no LAST disjunct), else LAST.
-    ``last`` is ``LAST``, or FALSE for ft_inf."""
+    true at the last position of a scope interval. For ``in``/``onlyAfter`` it is
+    ``m & (LAST | X !m)``, for ``notin``/``onlyIn``/``before`` ``(!m & !LAST) & X m`` (no
+    LAST disjunct), else LAST. ``last`` is ``LAST``, or FALSE for ft_inf."""
     if kind in ("null", "after", "onlyBefore"):
         return last
     if kind in ("in", "onlyAfter"):
