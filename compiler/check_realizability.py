@@ -25,6 +25,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from fretish.errors import CheckError
+
 from . import ir
 from .check_findings import Finding
 from .check_findings import ids as _ids
@@ -36,7 +38,7 @@ from .printers import mangle, to_smv, to_spot
 __all__ = ["check_realizability", "RealizabilityError"]
 
 
-class RealizabilityError(ValueError):
+class RealizabilityError(CheckError, ValueError):
     """Bad input/output declarations (a variable both input and output)."""
 
 

@@ -10,16 +10,17 @@ builds, in the formula IR (:mod:`compiler.ir`):
 
 The meaning is FRET's interval semantics (Giannakopoulou et al., "Automated formalization of
 structured natural language requirements", IST 2021; FRET's ``fretishSemantics`` manual;
-``shared/fretish/README.md`` sections 2-4): the scope selects intervals of the run, the
+``../shared/fretish/README.md`` sections 2-4): the scope selects intervals of the run, the
 condition selects trigger points inside each interval, and the timing says what the response
 must do from each trigger until the interval ends. ``only*`` scopes negate the timing and
 apply it to the complement intervals. The construction here is compositional - scope
 wrapper (condition wrapper (timing)) - in the style of FRET's own templates, and is checked
 on traces against FRET's formulas and FRET's interval verdicts in the tests.
 
-FRET defects fixed here (README section 7): units are converted with the declared tick
-period instead of being dropped; decimal or inexact durations are rejected; ``preBool`` with
-a non-boolean initial value is an error; ``if A then B`` is ``A -> B`` everywhere.
+FRET defects fixed here (../shared/fretish/README.md section 7): units are converted with
+the declared tick period instead of being dropped; decimal or inexact durations are
+rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then B`` is
+``A -> B`` everywhere.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from fractions import Fraction
 
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
+from fretish.units import format_period_ms
 
 from . import ir
 from .expressions import Expander, SemanticsError, mentions_time
@@ -68,7 +70,8 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     With ``tick_period`` (seconds, exact) a time unit converts exactly; an amount that is not
     a whole number of ticks raises :class:`SemanticsError`. Without one, FRET's behaviour is
     kept (``N unit`` means N ticks) and a warning is recorded; a fractional amount is then
-    an error (FRET would print ``F[<=2.5]``, a defect, README section 7.5).
+    an error (FRET would print ``F[<=2.5]``, a defect, ../shared/fretish/README.md section
+    7.5).
     """
     amount = d.value
     if d.unit == "ticks":
@@ -83,7 +86,8 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     if ticks.denominator != 1:
         if d.unit != "ticks" and tick_period is not None:
             raise SemanticsError(
-                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of {_fmt_period(tick_period)}: "
+                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of "
+                f"{format_period_ms(tick_period)}: "
                 "not a whole number of ticks; change the duration or the tick period", d.span)
         raise SemanticsError(
             f"duration '{d.amount} {d.unit}' is not a whole number of ticks"
@@ -93,11 +97,6 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     if ticks > MAX_DURATION_TICKS:
         raise SemanticsError(duration_too_long(ticks), d.span)
     return int(ticks)
-
-
-def _fmt_period(p: Fraction) -> str:
-    ms = p * 1000
-    return f"{float(ms):g} ms" if ms < 1000 else f"{float(p):g} s"
 
 
 def _ft_mode(req: A.Requirement, scope: str) -> Node | None:
