@@ -9,7 +9,7 @@ tables: the subset construction with successor sets as integer bit masks, looked
 at a time, and Moore's partition refinement (Hopcroft and Ullman, "Introduction to Automata
 Theory", section 3.4) vectorized with numpy. Spot's ``tgba_powerset`` + ``minimize_monitor``
 compute the same automaton (the minimal DFA of a language is unique up to the names of its
-states, and :func:`compiler.ltl3._bfs_tables` renames them canonically) but take seconds
+states, and :func:`compiler.automata._bfs_tables` renames them canonically) but take seconds
 where this takes a fraction of one (a 40,000-state powerset minimized to 512 states for
 ``only in m whenever c the sw shall after 8 ticks satisfy r``).
 

@@ -1,7 +1,7 @@
 """compiler/dfa.py: our subset construction and minimization give Spot's minimal monitors.
 
 Differential: for sentences of FRET's trace vectors (and both polarities, as the LTL3 monitor
-uses), the table built by ``compiler.ltl3._table_monitor`` equals the one from Spot's
+uses), the table built by ``compiler.automata._table_monitor`` equals the one from Spot's
 ``tgba_powerset`` + ``minimize_monitor``, after the same breadth-first renaming."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pytest
 
 spot = pytest.importorskip("spot")
 
-from compiler import dfa, ltl3  # noqa: E402
+from compiler import automata, dfa  # noqa: E402
 from compiler.printers import to_spot  # noqa: E402
 from compiler.semantics import formalize  # noqa: E402
 from fretish import parse  # noqa: E402
@@ -39,10 +39,10 @@ def _spot_table(aut, n_atoms: int):
     for s in range(m.num_states()):
         row = [-1] * width
         for e in m.out(s):
-            for letter in ltl3._letters(e.cond, var, names, width):
+            for letter in automata._letters(e.cond, var, names, width):
                 row[letter] = e.dst
         rows.append(row)
-    return ltl3._bfs_tables(m.get_init_state_number(), rows)[1], bool(m.is_empty())
+    return automata._bfs_tables(m.get_init_state_number(), rows)[1], bool(m.is_empty())
 
 
 SAMPLE = random.Random(7).sample(_sentences(), 60) + [
@@ -52,13 +52,13 @@ SAMPLE = random.Random(7).sample(_sentences(), 60) + [
 
 @pytest.mark.parametrize("text", SAMPLE)
 def test_same_minimal_monitor_as_spot(text):
-    shape, atoms = ltl3.canonical_shape(formalize(parse(text)).ft_inf)
+    shape, atoms = automata.canonical_shape(formalize(parse(text)).ft_inf)
     if len(atoms) > dfa.SUBSET_MAX_APS:
         pytest.skip("Spot's construction is used above SUBSET_MAX_APS atoms")
     for negate in (False, True):
         f = spot.formula(to_spot(shape))
         aut = spot.translate(spot.formula.Not(f) if negate else f, "monitor", "low")
-        ours = ltl3._table_monitor(aut, len(atoms), 10**6)
+        ours = automata._table_monitor(aut, len(atoms))
         assert ours is not None
         table, empty = _spot_table(aut, len(atoms))
         assert (ours["table"], ours["empty"]) == (table, empty), (text, negate)
@@ -68,7 +68,7 @@ def test_minimize_merges_equivalent_states_and_drops_the_sink():
     # states 1 and 2 behave alike (letter 0 -> themselves, letter 1 -> reject); 0 differs
     rows = [[1, 2], [1, -1], [2, -1]]
     init, out = dfa.minimize(rows)
-    init, out = ltl3._bfs_tables(init, out)
+    init, out = automata._bfs_tables(init, out)
     assert out == [[1, 1], [1, -1]]
 
 
