@@ -119,7 +119,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from .audit_output import escape  # markup and control characters escaped
 
     from .audit import AuditInputError, find_logs, load_plan
-    from .audit_output import AuditProgress, junit_xml, print_summary
+    from .audit_junit import junit_xml
+    from .audit_output import AuditProgress, print_summary
     from .fleet import expand_log_args, run_audits
     from .report_model import audit_json, exit_code
 
