@@ -12,7 +12,7 @@ scenario and seed carry the same messages at the same log times.
 from __future__ import annotations
 
 import threading
-from typing import Dict, Iterable, Optional, Tuple
+from typing import Iterable
 
 from .recording import TOPICS, MessageFactory, schema_name
 
@@ -29,8 +29,8 @@ class ServeRecorder:
     """
 
     def __init__(self, server, rate: float = 1.0, ros1: bool = False,
-                 topics: Iterable[Tuple[str, str]] = TOPICS,
-                 stop: Optional[threading.Event] = None) -> None:
+                 topics: Iterable[tuple[str, str]] = TOPICS,
+                 stop: threading.Event | None = None) -> None:
         from monitors.watch_serve import Pacer
 
         self.server = server
@@ -38,8 +38,8 @@ class ServeRecorder:
         self.factory = MessageFactory(ros1)
         self.pacer = Pacer(rate)
         self.stop = stop
-        self.counts: Dict[str, int] = {}
-        self.types: Dict[str, str] = {}
+        self.counts: dict[str, int] = {}
+        self.types: dict[str, str] = {}
         self.last_time = -1
         ts = self.factory.ts
         for topic, typename in topics:
@@ -69,7 +69,7 @@ class ServeRecorder:
 
 def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0.0.1",
           port: int = 8765, ros1: bool = False, threshold: float = 0.9,
-          stop_delay: Optional[float] = None, wait: bool = True, server=None,
+          stop_delay: float | None = None, wait: bool = True, server=None,
           on_ready=None):
     """Simulate ``scenario`` live on a foxglove-sdk server (a new one on ``host:port``
     unless ``server`` is given); with ``wait``, start once a client subscribed. Returns the
