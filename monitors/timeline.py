@@ -417,7 +417,7 @@ def _bool_lane(svg: _Svg, axis: Axis, segs: list[Segment], lane_cells, y: float,
 
 def _num_lane(svg: _Svg, axis: Axis, segs: list[Segment], lane_cells, y: float, h: float,
               thresholds: list[Threshold]) -> None:
-    finite = [x for x in (_num(v) for _, _, v in cells) if x is not None and math.isfinite(x)]
+    finite = [x for x in (_num(v) for _, _, v in lane_cells) if x is not None and math.isfinite(x)]
     lo_v = min(finite) if finite else 0.0
     hi_v = max(finite) if finite else 1.0
     for t in thresholds:

@@ -38,6 +38,6 @@ def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase 
         if close:
             stream.close()
     if png is not None:
-        from .plot import draw_run
+        from .plot import draw_run  # lazy: matplotlib takes ~1 s to import, only for --png
         draw_run(result, png)
     return result

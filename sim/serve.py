@@ -12,9 +12,14 @@ scenario and seed carry the same messages at the same log times.
 from __future__ import annotations
 
 import threading
+import time
 from typing import Iterable
 
+from monitors.watch_serve import FoxgloveServer, Pacer
+
 from .recording import TOPICS, MessageFactory, schema_name
+from .scenarios import get_scenario
+from .simulation import Simulation
 
 __all__ = ["ServeRecorder", "serve"]
 
@@ -31,8 +36,6 @@ class ServeRecorder:
     def __init__(self, server, rate: float = 1.0, ros1: bool = False,
                  topics: Iterable[tuple[str, str]] = TOPICS,
                  stop: threading.Event | None = None) -> None:
-        from monitors.watch_serve import Pacer
-
         self.server = server
         self.ros1 = ros1
         self.factory = MessageFactory(ros1)
@@ -77,11 +80,6 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
 
     Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
     """
-    from monitors.watch_serve import FoxgloveServer
-
-    from .scenarios import get_scenario
-    from .simulation import Simulation
-
     own = server is None
     if own:
         server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}")
@@ -95,6 +93,5 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
         return sim.run(rec)
     finally:
         if own:
-            import time
             time.sleep(0.5)  # let the last messages leave
             server.stop()
