@@ -186,11 +186,6 @@ class Verdict:
     error: str | None = None
     unknown_reason: str | None = None
 
-    @property
-    def ok(self) -> bool:
-        """satisfied or vacuous."""
-        return self.verdict in ("satisfied", "vacuous")
-
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         def val(v):
             if isinstance(v, float) and v != v:
