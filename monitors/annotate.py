@@ -27,6 +27,7 @@ Times: the audit's times are on the log clock it used (``time_base``: MCAP log t
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from dataclasses import dataclass
@@ -36,6 +37,8 @@ from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, 
                           Schema)
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
+
+from fretish.units import format_offset
 
 __all__ = ["VERDICT_TOPIC", "FOXGLOVE_LOG_SCHEMA", "VerdictEvent", "AnnotateResult",
            "verdict_events", "annotate_mcap", "LEVELS"]
@@ -108,10 +111,7 @@ class AnnotateResult:
     schemas: int = 0
 
 
-def _s(ns: int | None, start: int | None) -> str:
-    if ns is None or start is None:
-        return "?"
-    return f"{(ns - start) / 1e9:.3f} s"
+_s = functools.partial(format_offset, missing="?")
 
 
 def verdict_events(log: dict) -> list[VerdictEvent]:

@@ -9,8 +9,9 @@ import os
 import xml.etree.ElementTree as ET
 
 from fretish.textsafe import xml_text
+from fretish.units import format_offset
 
-from .audit_output import _s, short_log_name
+from .audit_output import short_log_name
 from .report_model import LogAudit
 
 __all__ = ["junit_xml"]
@@ -41,9 +42,9 @@ def junit_xml(logs: list[LogAudit]) -> str:
                 msg = f"{v.requirement} violated"
                 body = []
                 if fv is not None:
-                    msg += f" at {_s(fv.at.time_ns, st)} (tick {fv.at.tick})"
+                    msg += f" at {format_offset(fv.at.time_ns, st)} (tick {fv.at.tick})"
                     if fv.trigger is not None:
-                        msg += f"; trigger at {_s(fv.trigger.time_ns, st)} (tick {fv.trigger.tick})"
+                        msg += f"; trigger at {format_offset(fv.trigger.time_ns, st)} (tick {fv.trigger.tick})"
                     body = [fv.obligation, fv.reason]
                 if v.partial:
                     msg += " [partial log]"
@@ -56,7 +57,7 @@ def junit_xml(logs: list[LogAudit]) -> str:
             elif v.partial or v.verdict not in ("satisfied", "vacuous"):
                 # not checked to the end: an error case, never a pass (exit code 3)
                 counts["errors"] += 1
-                where = (f" (damage after {_s(la.damage_time_ns, st)})"
+                where = (f" (damage after {format_offset(la.damage_time_ns, st)})"
                          if la.damage_time_ns is not None else "")
                 why = (f"partial log{where}: {v.verdict} up to the damage, the rest was not "
                        "audited" if v.partial else f"verdict {v.verdict}")

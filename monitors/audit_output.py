@@ -17,6 +17,7 @@ from rich.table import Table
 from rich.text import Text
 
 from fretish.textsafe import terminal_text
+from fretish.units import format_offset
 
 from .report_model import LogAudit, Verdict, exit_code
 
@@ -47,10 +48,6 @@ def short_log_name(path: str) -> str:
     return path if rel.startswith("..") else rel
 
 
-def _s(ns: int | None, start: int | None) -> str:
-    if ns is None or start is None:
-        return "-"
-    return f"{(ns - start) / 1e9:.3f} s"
 
 
 def _value(v) -> str:
@@ -69,7 +66,7 @@ MATRIX_MAX = 10
 def _cell(v: Verdict, st: int | None) -> str:
     if v.verdict == "violated":
         fv = v.first_violation
-        at = f" {_s(fv.at.time_ns, st)}" if fv is not None else ""
+        at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
         return f"VIOLATED{at}" + (" *" if v.partial else "")
     return v.verdict + (" *" if v.partial else "")
 
@@ -221,7 +218,7 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> list[str]:
             if v.warmup_ticks:
                 out.append(f"{escape(v.requirement)}: {v.warmup_ticks} warm-up ticks (waiting "
                            f"for {escape(', '.join(v.waiting_for)) or 'the first messages'}; "
-                           f"first evaluated tick at {_s(v.first_tick_ns, st)})")
+                           f"first evaluated tick at {format_offset(v.first_tick_ns, st)})")
     for w in la.warnings:
         out.append(f"[yellow]warning[/yellow]: {escape(w)}")
     if la.missing_topics:
@@ -264,9 +261,9 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
         return
     if fv.trigger is not None:
         sc = fv.scope
-        console.print(f"  trigger at tick {fv.trigger.tick} ({_s(fv.trigger.time_ns, st)}) in the "
+        console.print(f"  trigger at tick {fv.trigger.tick} ({format_offset(fv.trigger.time_ns, st)}) in the "
                       f"scope interval [{sc[0].tick}, {sc[1].tick}] "
-                      f"({_s(sc[0].time_ns, st)} .. {_s(sc[1].time_ns, st)})"
+                      f"({format_offset(sc[0].time_ns, st)} .. {format_offset(sc[1].time_ns, st)})"
                       + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""),
                       markup=False, highlight=False)
     elif fv.obligation:
@@ -274,7 +271,7 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
                       highlight=False)
     lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
           if fv.at.log_time_ns is not None else "")
-    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} ({_s(fv.at.time_ns, st)} on the "
+    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} ({format_offset(fv.at.time_ns, st)} on the "
                   f"{clock}{lt})", markup=False, highlight=False)
     if v.triggers is not None and v.violations:
         console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
@@ -302,10 +299,10 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
         if prev is not None and tick != prev + 1:
             t.add_row("…", f"{tick - prev - 1} ticks", *[""] * (len(heads) + 1))
         prev = tick
-        cells = [str(tick), _s(ns, st)] + [_value(c[2]) for c in row]
+        cells = [str(tick), format_offset(ns, st)] + [_value(c[2]) for c in row]
         for tp in topics:
             lt = v.sources[tp][k][2]
-            cells.append(_s(lt, st))
+            cells.append(format_offset(lt, st))
         cells.append(marks.get(tick, ""))
         t.add_row(*cells)
     console.print(t)
@@ -325,15 +322,15 @@ def damage_summary(la: LogAudit) -> str:
         lo, hi = p.get("log_time_ns"), p.get("end_time_ns")
         span = ""
         if lo is not None:
-            span = f" at {_s(lo, st)}" if hi is None or hi == lo else \
-                f" over {_s(lo, st)} .. {_s(hi, st)}"
+            span = f" at {format_offset(lo, st)}" if hi is None or hi == lo else \
+                f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
         parts.append(f"{p['kind']}{span}")
         if len(parts) >= 3:
             break
     more = sum(n for k, n in la.problem_counts.items() if k.split(" ")[0] in kinds) - len(parts)
     what = ", ".join(parts) + (f" and {more} more" if more > 0 else "") or "damaged"
     if la.damage_time_ns is not None:
-        judged = f"judged up to {_s(la.damage_time_ns, st)}"
+        judged = f"judged up to {format_offset(la.damage_time_ns, st)}"
         if la.ticks_after_damage:
             judged += f" ({la.ticks_after_damage} ticks after it not judged)"
     elif la.damage_cut:

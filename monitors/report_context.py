@@ -19,9 +19,11 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Sequence
 
+from fretish.units import format_seconds
+
 from .audit_output import damage_summary
 from .report_trace import FIELD_NAMES, ModuleInfo, RequirementTrace, resolve_input, split_source
-from .report_verdicts import cell_label, fmt_s, values_table, verdict_for, witness
+from .report_verdicts import cell_label, values_table, verdict_for, witness
 from .timeline import COLORS, timeline_svg
 
 __all__ = ["report_context", "GENERATED_PREFIX"]
@@ -134,7 +136,7 @@ def _run_rows(logs: list[dict], anchors: _Anchors, annotated: dict[int, dict] | 
             "name_parts": re.split(r"(?<=[_.-])", Path(name).stem),
             "path": la.get("log"), "kind": la.get("kind"),
             "sha256": (inputs.file_info(la["log"])["sha256"] if la.get("log") else None),
-            "duration": "-" if dur is None else f"{dur:.3f} s",
+            "duration": format_seconds(dur),
             "start_time_ns": st, "ticks": la.get("ticks_evaluated"),
             "warmup": la.get("warmup_ticks"), "waiting_for": la.get("waiting_for") or [],
             "missing_topics": la.get("missing_topics") or [],
@@ -203,7 +205,7 @@ def _violation(v: dict, la: dict, r: dict, rt: RequirementTrace | None, rc: dict
     svg = timeline_svg(v, la, period_ns=(la.get("tick") or {}).get("period_ns") or period_ns,
                        thresholds=rt.thresholds if rt else (),
                        title=f"{r.get('id')} violated on {la.get('log')} at "
-                             f"{fmt_s(fv.get('log_time_s'))}")
+                             f"{format_seconds(fv.get('log_time_s'))}")
     trig = fv.get("trigger") or {}
     l3 = v.get("ltl3") or {}
     return {
@@ -211,10 +213,10 @@ def _violation(v: dict, la: dict, r: dict, rt: RequirementTrace | None, rc: dict
         "svg_file": f"timelines/{anchor}.svg", "witness": witness_facts,
         "verdict": v, "table": values_table(v, la.get("start_time_ns")),
         "violation_ns": fv.get("log_time_ns"),
-        "violation_s": fmt_s(fv.get("tick_time_s", fv.get("log_time_s"))),
-        "trigger_ns": trig.get("time_ns"), "trigger_s": fmt_s(trig.get("time_s")),
+        "violation_s": format_seconds(fv.get("tick_time_s", fv.get("log_time_s"))),
+        "trigger_ns": trig.get("time_ns"), "trigger_s": format_seconds(trig.get("time_s")),
         "ltl3_status": l3.get("status"), "ltl3_ns": l3.get("time_ns"),
-        "ltl3_s": fmt_s(l3.get("time_s")),
+        "ltl3_s": format_seconds(l3.get("time_s")),
         "partial": bool(v.get("partial")),
     }
 

@@ -15,6 +15,7 @@ from pathlib import Path
 from compiler.ajpf import AjpfError, load_mapping, psl_label_and_formula
 from compiler.codegen import file_stems
 from fretish import ast as A
+from fretish.errors import FretcError
 
 from .audit import AuditConfig, AuditInputError, load_plan
 from .timeline import Threshold
@@ -26,7 +27,7 @@ __all__ = ["ReportError", "FIELD_NAMES", "ModuleInfo", "RequirementTrace", "mark
 FIELD_NAMES = ("scope", "condition", "component", "probability", "timing", "response")
 
 
-class ReportError(Exception):
+class ReportError(FretcError):
     """The report cannot be made: unreadable or wrong-schema JSON, unwritable output."""
 
 

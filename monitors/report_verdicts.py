@@ -8,12 +8,9 @@ from __future__ import annotations
 import json
 from typing import Any
 
-__all__ = ["fmt_s", "verdict_for", "cell_label", "witness", "values_table"]
+from fretish.units import format_offset, format_seconds
 
-
-def fmt_s(s: float | None) -> str:
-    """Seconds with millisecond digits (``"12.300 s"``); ``"-"`` when unknown."""
-    return "-" if s is None else f"{s:.3f} s"
+__all__ = ["verdict_for", "cell_label", "witness", "values_table"]
 
 
 def _fmt_value(v: Any) -> str:
@@ -58,23 +55,23 @@ def _violation_facts(fv: dict) -> list[tuple[str, str]]:
     out: list[tuple[str, str]] = []
     tick_s = fv.get("tick_time_s", fv.get("log_time_s"))
     base = fv.get("tick_time_base") or "log"
-    out.append(("first violation", f"tick {fv['tick']} at {fmt_s(tick_s)} on the {base} "
+    out.append(("first violation", f"tick {fv['tick']} at {format_seconds(tick_s)} on the {base} "
                                     f"clock (deciding message log time "
                                     f"{fv['log_time_ns']} ns)"))
     t = fv.get("trigger")
     if t:
-        out.append(("trigger", f"tick {t['tick']} at {fmt_s(t.get('time_s'))} "
+        out.append(("trigger", f"tick {t['tick']} at {format_seconds(t.get('time_s'))} "
                                f"(log time {t['time_ns']} ns)"))
     sc = fv.get("scope_interval")
     if sc:
         out.append(("scope interval", f"ticks [{sc['start']['tick']}, {sc['end']['tick']}]"
-                    f" = {fmt_s(sc['start'].get('time_s'))} .. "
-                    f"{fmt_s(sc['end'].get('time_s'))}"))
+                    f" = {format_seconds(sc['start'].get('time_s'))} .. "
+                    f"{format_seconds(sc['end'].get('time_s'))}"))
     w = fv.get("window")
     if w:
-        hi = fmt_s(w.get("end_time_s")) if w.get("end_time_s") is not None else "past the end"
+        hi = format_seconds(w.get("end_time_s")) if w.get("end_time_s") is not None else "past the end"
         out.append(("response window", f"ticks [{w['start_tick']}, {w['end_tick']}] = "
-                    f"{fmt_s(w.get('start_time_s'))} .. {hi}"))
+                    f"{format_seconds(w.get('start_time_s'))} .. {hi}"))
     if fv.get("obligation"):
         out.append(("obligation", fv["obligation"]))
     if fv.get("reason"):
@@ -92,7 +89,7 @@ def witness(v: dict) -> list[tuple[str, str]]:
     if l3.get("status"):
         txt = l3["status"]
         if l3.get("tick") is not None:
-            txt += (f" at tick {l3['tick']} ({fmt_s(l3.get('time_s'))}, "
+            txt += (f" at tick {l3['tick']} ({format_seconds(l3.get('time_s'))}, "
                     f"log time {l3['time_ns']} ns)")
         out.append(("LTL3 (ft_inf)", txt))
     if v.get("triggers") is not None:
@@ -100,7 +97,7 @@ def witness(v: dict) -> list[tuple[str, str]]:
                                 f"{v.get('violations')} failed"))
     listed = v.get("violation_list") or []
     if len(listed) > 1:
-        shown = ", ".join(f"{fmt_s(x['violation']['time_s'])} (#{x['violation']['tick']})"
+        shown = ", ".join(f"{format_seconds(x['violation']['time_s'])} (#{x['violation']['tick']})"
                           for x in listed[:20])
         more = len(listed) - 20
         total = v.get("violations") or len(listed)
@@ -173,14 +170,13 @@ def values_table(v: dict, start_ns: int | None) -> dict:
         for c in columns:
             raw = row["cells"].get(c["key"])
             if c["kind"] == "topic":
-                shown = ("-" if raw is None or start_ns is None
-                         else f"{(raw - start_ns) / 1e9:.3f} s")
+                shown = format_offset(raw, start_ns)
             else:
                 shown = _fmt_value(raw)
             cells.append({"raw": json.dumps(raw), "text": shown,
                           "bool": raw if isinstance(raw, bool) else None})
         in_window = bool(w and w["start_tick"] <= k <= w["end_tick"])
-        rows.append({"tick": k, "time_s": fmt_s(row["time_s"]), "time_ns": row["time_ns"],
+        rows.append({"tick": k, "time_s": format_seconds(row["time_s"]), "time_ns": row["time_ns"],
                      "cells": cells, "marks": ", ".join(marks.get(k, [])),
                      "gap": prev is not None and k != prev + 1, "window": in_window})
         prev = k

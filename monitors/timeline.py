@@ -32,10 +32,11 @@ from typing import Sequence
 from xml.sax.saxutils import escape as _xml_escape, quoteattr as _xml_quoteattr
 
 from fretish.textsafe import xml_text
+from fretish.units import format_offset
 
 from .timeline_layout import (LANE_GAP, BOOL_H, NUM_H, PLOT_X1, TOPIC_H, WIDTH, Axis, Segment,
                               Threshold, Timeline, cells, cells_by_segment, lane_label,
-                              nice_step_ns, plan_timeline, secs, step_decimals)
+                              nice_step_ns, plan_timeline, step_decimals)
 
 __all__ = ["timeline_svg", "Threshold", "COLORS"]
 
@@ -166,7 +167,7 @@ def timeline_svg(verdict: dict, log: dict, *, period_ns: int | None = None,
 
 def _default_title(verdict: dict, lay: Timeline) -> str:
     return (f"{verdict.get('requirement')} violated on {verdict.get('log')} at "
-            f"{secs(lay.viol_ns, lay.start)} s")
+            f"{format_offset(lay.viol_ns, lay.start)}")
 
 
 def _draw_legend(svg: _Svg, x0: float, y: float) -> float:
@@ -364,7 +365,7 @@ def _draw_break(svg: _Svg, s: Segment, nxt: Segment, det: _Detail, ay: float) ->
     for dx in (-3, 3):
         svg.line(mx + dx - 3, mid_y + 8, mx + dx + 3, mid_y - 8, COLORS["axis"], 1.2)
         svg.line(mx + dx - 3, ay + 5, mx + dx + 3, ay - 5, COLORS["axis"], 1.2)
-    svg.text(mx, mid_y + 22, f"{(nxt.a - s.b) / 1e9:.1f} s",
+    svg.text(mx, mid_y + 22, format_offset(nxt.a, s.b, decimals=1),
              size=9, fill=COLORS["muted"], anchor="middle")
     svg.text(mx, mid_y + 32, "skipped", size=9, fill=COLORS["muted"], anchor="middle")
 
@@ -375,14 +376,14 @@ def _draw_notes(svg: _Svg, lay: Timeline, y: float) -> float:
     start, segs = lay.start, lay.segs
     notes = []
     if lay.scope_ab and lay.scope_ab[0] < segs[0].a:
-        notes.append(f"scope interval from {secs(lay.scope_ab[0], start)} s")
+        notes.append(f"scope interval from {format_offset(lay.scope_ab[0], start)}")
     if lay.win_ab and lay.win_ab[0] < segs[0].a:
-        notes.append(f"response window from {secs(lay.win_ab[0], start)} s")
+        notes.append(f"response window from {format_offset(lay.win_ab[0], start)}")
     if lay.win_past_end:
         notes.append("response window reaches past the end of the log"
                      + (f" (tick {lay.window['end_tick']})" if lay.window else ""))
     if lay.damage is not None:
-        notes.append(f"log damaged at {secs(lay.damage, start)} s (partial)")
+        notes.append(f"log damaged at {format_offset(lay.damage, start)} (partial)")
     svg.text(lay.x0, y, f"time: s since the log's first tick (t0 = {start} ns log time); "
              f"tick k drawn from its time to the next tick ({lay.period / 1e6:g} ms)", size=10,
              fill=COLORS["muted"])
@@ -487,7 +488,8 @@ def _topic_lane(svg: _Svg, axis: Axis, segs: list[Segment], rows, y: float, h: f
                  if r.get("message_log_time_ns") is not None
                  and int(r["message_log_time_ns"]) < s.a - period]
         if older:
-            svg.text(s.p + 3, cy - 3, f"\u2190 held from {secs(min(older), start)} s",
-                     size=9, fill=COLORS["topic"])
+            svg.text(s.p + 3, cy - 3,
+                     f"\u2190 held from {format_offset(min(older), start)}", size=9,
+                     fill=COLORS["topic"])
         if any(r.get("message_log_time_ns") is None for r in seg_rows):
             svg.text(s.p + 3, cy + 9, "no message yet", size=9, fill=COLORS["topic"])

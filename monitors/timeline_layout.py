@@ -10,8 +10,10 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
+from fretish.units import format_offset
+
 __all__ = ["Threshold", "Segment", "Axis", "Timeline", "plan_timeline", "nice_step_ns",
-           "step_decimals", "secs", "lane_label", "cells", "cells_by_segment"]
+           "step_decimals", "lane_label", "cells", "cells_by_segment"]
 
 WIDTH = 980
 LABEL_MIN_W = 120      # lane labels on the left: as wide as the longest label needs
@@ -36,11 +38,6 @@ class Threshold:
     variable: str
     op: str
     value: float
-
-
-def secs(ns: int, start: int, decimals: int = 3) -> str:
-    """``ns`` as seconds since ``start`` (both ns), without unit."""
-    return f"{(ns - start) / 1e9:.{decimals}f}"
 
 
 @dataclass
@@ -218,12 +215,15 @@ def _marks(fv: dict, ltl3: dict, start: int) -> list[tuple[str, int, str]]:
     viol_ns = int(fv["log_time_ns"])
     ltl3_ns = ltl3.get("time_ns") if ltl3.get("status") in ("violated", "satisfied") else None
     if trig:
-        marks.append(("trigger", int(trig["time_ns"]),
-                      f"trigger {secs(int(trig['time_ns']), start)} s (#{trig['tick']})"))
-    marks.append(("violation", viol_ns, f"violation {secs(viol_ns, start)} s (#{fv['tick']})"))
+        trig_ns = int(trig["time_ns"])
+        marks.append(("trigger", trig_ns,
+                      f"trigger {format_offset(trig_ns, start)} (#{trig['tick']})"))
+    marks.append(("violation", viol_ns,
+                  f"violation {format_offset(viol_ns, start)} (#{fv['tick']})"))
     if ltl3_ns is not None:
-        marks.append(("ltl3", int(ltl3_ns),
-                      f"LTL3 {ltl3['status']} {secs(int(ltl3_ns), start)} s (#{ltl3['tick']})"))
+        ltl3_ns = int(ltl3_ns)
+        marks.append(("ltl3", ltl3_ns, f"LTL3 {ltl3['status']} {format_offset(ltl3_ns, start)} "
+                                       f"(#{ltl3['tick']})"))
     return marks
 
 
