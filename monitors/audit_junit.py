@@ -44,7 +44,8 @@ def junit_xml(logs: list[LogAudit]) -> str:
                 if fv is not None:
                     msg += f" at {format_offset(fv.at.time_ns, st)} (tick {fv.at.tick})"
                     if fv.trigger is not None:
-                        msg += f"; trigger at {format_offset(fv.trigger.time_ns, st)} (tick {fv.trigger.tick})"
+                        msg += (f"; trigger at {format_offset(fv.trigger.time_ns, st)} "
+                                f"(tick {fv.trigger.tick})")
                     body = [fv.obligation, fv.reason]
                 if v.partial:
                     msg += " [partial log]"

@@ -261,7 +261,8 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
         return
     if fv.trigger is not None:
         sc = fv.scope
-        console.print(f"  trigger at tick {fv.trigger.tick} ({format_offset(fv.trigger.time_ns, st)}) in the "
+        console.print(f"  trigger at tick {fv.trigger.tick} "
+                      f"({format_offset(fv.trigger.time_ns, st)}) in the "
                       f"scope interval [{sc[0].tick}, {sc[1].tick}] "
                       f"({format_offset(sc[0].time_ns, st)} .. {format_offset(sc[1].time_ns, st)})"
                       + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""),
@@ -271,8 +272,9 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
                       highlight=False)
     lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
           if fv.at.log_time_ns is not None else "")
-    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} ({format_offset(fv.at.time_ns, st)} on the "
-                  f"{clock}{lt})", markup=False, highlight=False)
+    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "
+                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})", markup=False,
+                  highlight=False)
     if v.triggers is not None and v.violations:
         console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
                       highlight=False)
