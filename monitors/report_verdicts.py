@@ -69,7 +69,7 @@ def _violation_facts(fv: dict) -> list[tuple[str, str]]:
                     f"{format_seconds(sc['end'].get('time_s'))}"))
     w = fv.get("window")
     if w:
-        hi = format_seconds(w.get("end_time_s")) if w.get("end_time_s") is not None else "past the end"
+        hi = format_seconds(w.get("end_time_s"), missing="past the end")
         out.append(("response window", f"ticks [{w['start_tick']}, {w['end_tick']}] = "
                     f"{format_seconds(w.get('start_time_s'))} .. {hi}"))
     if fv.get("obligation"):
