@@ -38,7 +38,7 @@ import struct
 import threading
 import time
 from dataclasses import dataclass
-from typing import Callable, Dict, Optional
+from collections.abc import Callable
 
 __all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient"]
 
@@ -84,15 +84,15 @@ class FoxgloveClient:
     """
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *, backoff: float = 0.1,
-                 max_backoff: float = 5.0, events: Optional[queue.Queue] = None) -> None:
+                 max_backoff: float = 5.0, events: queue.Queue | None = None) -> None:
         self.url = url
         self.wanted = wanted
         self.backoff = backoff
         self.max_backoff = max_backoff
         self.events: queue.Queue = events if events is not None else queue.Queue()
-        self._thread: Optional[threading.Thread] = None
-        self._loop: Optional[asyncio.AbstractEventLoop] = None
-        self._stop: Optional[asyncio.Event] = None
+        self._thread: threading.Thread | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop: asyncio.Event | None = None
         self._ws = None
         self._started = threading.Event()
 
@@ -178,8 +178,8 @@ class FoxgloveClient:
         """Read frames until the connection closes (``ConnectionClosed`` ends the loop)."""
         from websockets.exceptions import ConnectionClosed
 
-        subs: Dict[int, str] = {}  # subscription id -> topic
-        by_channel: Dict[int, int] = {}  # channel id -> subscription id
+        subs: dict[int, str] = {}  # subscription id -> topic
+        by_channel: dict[int, int] = {}  # channel id -> subscription id
         next_id = 1
         put = self.events.put
         head, head_size = _HEAD.unpack_from, _HEAD.size
