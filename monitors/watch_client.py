@@ -134,7 +134,7 @@ class FoxgloveClient:
 
     # -- protocol --------------------------------------------------------------------------
     async def _main(self) -> None:
-        import websockets
+        import websockets  # optional (the watch extra): imported only when connecting
 
         self._stop = asyncio.Event()
         self._started.set()
@@ -176,7 +176,7 @@ class FoxgloveClient:
 
     async def _session(self, ws) -> None:
         """Read frames until the connection closes (``ConnectionClosed`` ends the loop)."""
-        from websockets.exceptions import ConnectionClosed
+        from websockets.exceptions import ConnectionClosed  # (as websockets in _main)
 
         subs: dict[int, str] = {}  # subscription id -> topic
         by_channel: dict[int, int] = {}  # channel id -> subscription id

@@ -16,7 +16,10 @@ import threading
 import time
 from collections.abc import Callable, Iterable
 
-__all__ = ["FoxgloveServer", "Pacer", "replay_mcap", "advertise_mcap", "DEFAULT_HOST", "DEFAULT_PORT"]
+from mcap.reader import make_reader
+
+__all__ = ["FoxgloveServer", "Pacer", "replay_mcap", "advertise_mcap", "DEFAULT_HOST",
+           "DEFAULT_PORT"]
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765
@@ -27,7 +30,7 @@ BACKLOG = 1 << 17
 
 def _foxglove():
     try:
-        import foxglove
+        import foxglove  # optional (the watch extra): imported only when serving
     except ImportError as exc:  # pragma: no cover - depends on the install
         raise RuntimeError("serving needs foxglove-sdk: pip install 'fretc[watch]'") from exc
     return foxglove
@@ -190,8 +193,6 @@ def advertise_mcap(path: str, server: FoxgloveServer,
     """Create on ``server`` a channel for every channel of the MCAP at ``path`` (all, or
     those of ``topics``), with its schema and message encoding; returns topic -> schema
     name. Reads the summary (or scans the file when it has none)."""
-    from mcap.reader import make_reader
-
     out: dict[str, str] = {}
     with open(path, "rb") as f:
         reader = make_reader(f)
@@ -235,8 +236,6 @@ def replay_mcap(path: str, server: FoxgloveServer, rate: float = 1.0, *,
     Raises:
         OSError, mcap's errors: the file cannot be read.
     """
-    from mcap.reader import make_reader
-
     pacer = Pacer(rate)
     sent, last = 0, -1
     with open(path, "rb") as f:

@@ -47,6 +47,7 @@ import numpy as np
 
 from fretish import ast as A
 
+from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 from .obligations import OBLIGATIONS, Interval, ObligationChecker
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement",
@@ -147,20 +148,10 @@ class _Expr:
             if op in A.COMPARISON_OPS:
                 x, y = self.num(e.left), self.num(e.right)
                 with np.errstate(invalid="ignore"):
-                    return {"=": np.equal, "!=": np.not_equal, "<": np.less,
-                            "<=": np.less_equal, ">": np.greater,
-                            ">=": np.greater_equal}[op](x, y)
+                    return COMPARISONS[op](x, y)
             a, b = self.bool(e.left), self.bool(e.right)
-            if op == "&":
-                return a & b
-            if op == "|":
-                return a | b
-            if op == "xor":
-                return a != b
-            if op == "->":
-                return ~a | b
-            if op == "<->":
-                return a == b
+            if op in CONNECTIVES:
+                return connective(op, a, b)
             raise EvidenceUnsupported(f"arithmetic '{op}' where a condition is expected")
         if isinstance(e, A.Call):
             return self.bool_call(e)
@@ -175,20 +166,7 @@ class _Expr:
         if isinstance(e, A.Unary) and e.op == "-":
             return -self.num(e.operand)
         if isinstance(e, A.Binary) and e.op in A.ARITH_OPS:
-            x, y = self.num(e.left), self.num(e.right)
-            with np.errstate(all="ignore"):
-                if e.op == "+":
-                    return x + y
-                if e.op == "-":
-                    return x - y
-                if e.op == "*":
-                    return x * y
-                if e.op == "/":
-                    return np.where(y == 0, np.nan, x / np.where(y == 0, 1.0, y))
-                if e.op == "mod":
-                    return np.fmod(x, y)
-                out = np.power(x, y)
-                return np.where(np.isinf(out) & np.isfinite(x) & np.isfinite(y), np.nan, out)
+            return arith(e.op, self.num(e.left), self.num(e.right))
         if isinstance(e, A.Call):
             name, args = e.name, e.args
             if name == "ite" and len(args) == 3:
@@ -197,17 +175,10 @@ class _Expr:
                 return np.abs(self.num(args[0]))
             if name in ("minReal", "minInt", "maxReal", "maxInt") and args:
                 vals = [self.num(a) for a in args]
-                out = vals[0]
-                for b in vals[1:]:
-                    out = np.where((b < out) if name.startswith("min") else (b > out), b, out)
-                return out
+                return py_min(vals) if name.startswith("min") else py_max(vals)
             if name in ("preInt", "preReal") and len(args) == 2:
                 init, x = self.num(args[0]), self.num(args[1])
-                out = np.empty(n)
-                if n:
-                    out[0] = init[0]
-                    out[1:] = x[:-1]
-                return out
+                return shifted(x, init[0] if n else None, np.float64)
         raise EvidenceUnsupported(f"cannot evaluate {type(e).__name__} as a number")
 
     def _int(self, a: A.Expr) -> int:
@@ -222,12 +193,7 @@ class _Expr:
             c = self.bool(args[0])
             return (c & self.bool(args[1])) | (~c & self.bool(args[2]))
         if name == "preBool" and len(args) == 2 and isinstance(args[0], A.BoolLit):
-            p = self.bool(args[1])
-            out = np.empty(n, np.bool_)
-            if n:
-                out[0] = bool(args[0].value)
-                out[1:] = p[:-1]
-            return out
+            return shifted(self.bool(args[1]), bool(args[0].value), np.bool_)
         if name in ("persisted", "occurred", "persists", "occurs") and len(args) in (2, 3):
             if len(args) == 3 and name in ("persists", "occurs"):
                 raise EvidenceUnsupported(f"{name} with three arguments")

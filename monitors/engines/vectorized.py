@@ -36,6 +36,8 @@ import numpy as np
 from compiler.ir import Node, walk
 from compiler.printers import to_smv
 
+from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
+
 __all__ = ["VectorizeError", "pt_series", "node_series", "atom_letters", "ltl3_status",
            "supports"]
 
@@ -48,10 +50,6 @@ class VectorizeError(ValueError):
     columns (the message names it)."""
 
 
-_CMP = {
-    "=": np.equal, "!=": np.not_equal, "<": np.less, "<=": np.less_equal,
-    ">": np.greater, ">=": np.greater_equal,
-}
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
 
@@ -103,7 +101,7 @@ class _Series:
         if op in _FUTURE:
             raise VectorizeError(f"future-time operator {op!r} (or function "
                                  f"{node.name or ''}) in a past-time formula")
-        if op in ("!", "&", "|", "xor", "->", "<->"):
+        if op == "!" or op in CONNECTIVES:
             return self._connective(node)
         if op in ("Y", "Z", "O", "H", "S", "T"):
             return self._temporal(node)
@@ -138,9 +136,9 @@ class _Series:
         op, a = node.op, node.args
         if op == "cmp":
             x, y = self.num(a[0]), self.num(a[1])
-            return _CMP[node.name](x, y)
+            return COMPARISONS[node.name](x, y)
         if op == "arith":
-            return _arith(node.name, self.num(a[0]), self.num(a[1]))
+            return arith(node.name, self.num(a[0]), self.num(a[1]))
         if op == "neg":
             return -self.num(a[0])
         if op == "fn":
@@ -153,38 +151,20 @@ class _Series:
             return np.where(c, self.bool(a[1]), self.bool(a[2]))
         if op == "pre":
             init, x = self.num(a[0]), self.num(a[1])
-            out = np.empty(self.n, np.float64)
-            if self.n:
-                out[0] = init[0]
-                out[1:] = x[:-1]
-            return out
+            return shifted(x, init[0] if self.n else None, np.float64)
         return self.get(a[0], numeric)  # "past"
 
     def _connective(self, node: Node) -> np.ndarray:
         op, a = node.op, node.args
         if op == "!":
             return ~self.bool(a[0])
-        x, y = self.bool(a[0]), self.bool(a[1])
-        if op == "&":
-            return x & y
-        if op == "|":
-            return x | y
-        if op == "xor":
-            return x != y
-        if op == "->":
-            return ~x | y
-        return x == y
+        return connective(op, self.bool(a[0]), self.bool(a[1]))
 
     def _temporal(self, node: Node) -> np.ndarray:
         """The past-time operators (module docstring's table)."""
         op, a, n = node.op, node.args, self.n
         if op in ("Y", "Z"):
-            x = self.bool(a[0])
-            out = np.empty(n, np.bool_)
-            if n:
-                out[0] = op == "Z"
-                out[1:] = x[:-1]
-            return out
+            return shifted(self.bool(a[0]), op == "Z", np.bool_)
         if op in ("O", "H") and node.hi is None:
             x = self.bool(a[0])
             if op == "O":
@@ -218,42 +198,9 @@ class _Series:
         return ~nonempty | (count == 0)
 
 
-def _arith(op: str, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    with np.errstate(all="ignore"):
-        if op == "+":
-            return x + y
-        if op == "-":
-            return x - y
-        if op == "*":
-            return x * y
-        if op == "/":
-            return np.where(y == 0, np.nan, x / np.where(y == 0, 1.0, y))
-        if op == "mod":
-            return np.fmod(x, y)
-        if op == "^":
-            out = np.power(x, y)
-            overflow = np.isinf(out) & np.isfinite(x) & np.isfinite(y)
-            return np.where(overflow, np.nan, out)
-    raise VectorizeError(f"unknown arithmetic operator {op!r}")
-
-
-def _py_min(args: list[np.ndarray]) -> np.ndarray:
-    out = args[0]
-    for b in args[1:]:
-        out = np.where(b < out, b, out)  # Python's min keeps the first unless b < a
-    return out
-
-
-def _py_max(args: list[np.ndarray]) -> np.ndarray:
-    out = args[0]
-    for b in args[1:]:
-        out = np.where(b > out, b, out)
-    return out
-
-
 _FUNCS = {
     "absReal": lambda a: np.abs(a[0]), "absInt": lambda a: np.abs(a[0]),
-    "minReal": _py_min, "minInt": _py_min, "maxReal": _py_max, "maxInt": _py_max,
+    "minReal": py_min, "minInt": py_min, "maxReal": py_max, "maxInt": py_max,
 }
 
 
