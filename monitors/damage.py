@@ -61,8 +61,8 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
                      ) -> list[OpenObligation]:
     """Triggers of ``req`` whose obligation is neither met nor missed at the end of a trace
     of ``n`` ticks that a damage cut short (FRET's interval semantics, as
-    :func:`monitors.engines.interval.evaluate_requirement`; only the scope interval reaching the last
-    tick can hold one).
+    :func:`monitors.engines.interval.evaluate_requirement`; only the scope interval reaching
+    the last tick can hold one).
 
     Args:
         req: a parsed, not free-form requirement.

@@ -201,8 +201,8 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> bool:
 
     Args:
         address: None or ``"local"``: a local Ray for this run (``num_cpus`` default: the
-            machine's CPUs; no dashboard; logs not forwarded; usage statistics off). ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing
-            cluster.
+            machine's CPUs; no dashboard; logs not forwarded; usage statistics off).
+            ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing cluster.
 
     Raises:
         RayUnavailable: Ray is not installed, or the cluster cannot be reached.

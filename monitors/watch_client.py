@@ -63,6 +63,7 @@ class Advertised:
 
     @staticmethod
     def from_json(ch: dict) -> "Advertised":
+        """An advertisement of the Foxglove protocol's ``advertise`` message."""
         return Advertised(int(ch["id"]), str(ch["topic"]), str(ch.get("encoding", "")),
                           str(ch.get("schemaName", "")), str(ch.get("schema", "")),
                           str(ch.get("schemaEncoding", "") or ""))
@@ -98,6 +99,7 @@ class FoxgloveClient:
 
     # -- thread control --------------------------------------------------------------------
     def start(self) -> "FoxgloveClient":
+        """Connect in a background thread (returns at once)."""
         self._thread = threading.Thread(target=self._run, name="fretc-watch-client",
                                         daemon=True)
         self._thread.start()
@@ -105,6 +107,7 @@ class FoxgloveClient:
         return self
 
     def stop(self) -> None:
+        """Close the connection and end the thread."""
         loop, stop = self._loop, self._stop
         if loop is not None and stop is not None and not loop.is_closed():
             try:

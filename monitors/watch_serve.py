@@ -112,6 +112,7 @@ class FoxgloveServer:
 
     @property
     def url(self) -> str:
+        """``ws://host:port`` of the server."""
         return f"ws://{self.host}:{self.port}"
 
     def channel(self, topic: str, message_encoding: str, schema_name: str,
@@ -127,6 +128,7 @@ class FoxgloveServer:
         return ch
 
     def log(self, topic: str, data: bytes, log_time: int) -> None:
+        """Publish one message on ``topic``'s channel at ``log_time`` (ns)."""
         self.channels[topic].log(data, log_time=int(log_time))
 
     def wait_subscribed(self, topics: Iterable[str] | None = None, timeout: float = 30.0,
@@ -164,6 +166,7 @@ class FoxgloveServer:
         self._server = self._start(self.port)
 
     def stop(self) -> None:
+        """Stop the server."""
         self._server.stop()
 
 
@@ -177,6 +180,7 @@ class Pacer:
         self._w0 = 0.0
 
     def wait(self, log_time: int) -> None:
+        """Sleep until the message of ``log_time`` is due on the wall clock."""
         if self.rate <= 0:
             return
         if self._t0 is None:

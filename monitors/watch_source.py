@@ -83,6 +83,7 @@ class WatchEvent:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self) -> dict:
+        """The event as one ``--jsonl`` line's object."""
         out = {"event": self.kind, "time_ns": self.time_ns, "wall_ns": self.wall_ns}
         for k in ("requirement", "tick", "verdict", "detail", "depends_on"):
             val = getattr(self, k)
@@ -132,10 +133,12 @@ class WatchSource(LogSource):
 
     @property
     def stopped(self) -> bool:
+        """Stopped, or past the deadline."""
         return self._stop.is_set() or (self.deadline is not None
                                        and time.monotonic() >= self.deadline)
 
     def topics(self) -> dict[str, str]:
+        """Advertised topic -> its message type (ROS name)."""
         out = {}
         for t, ch in self.advertised.items():
             try:
@@ -212,6 +215,8 @@ class WatchSource(LogSource):
 
     # -- the stream ------------------------------------------------------------------------
     def messages(self, topics=None) -> Iterator[Message]:
+        """The watched messages of ``topics`` (all wanted by default) as they arrive,
+        until stopped."""
         self.counts = {}
         wanted = None if topics is None else set(topics)
         while True:
@@ -310,6 +315,7 @@ class Recorder:
         self.seq: dict[str, int] = {}
 
     def message(self, topic: str, log_time: int, payload: bytes) -> None:
+        """Write one watched message (its channel and schema on first use)."""
         cid = self.channels.get(topic)
         if cid is None:
             ch = self.source.advertised[topic]
@@ -323,6 +329,7 @@ class Recorder:
         self.seq[topic] += 1
 
     def finish(self, la) -> int:
+        """Write the verdict events of ``la`` and close the file; the number of events."""
         events = verdict_events(la.to_json())
         sid = self.writer.register_schema("foxglove.Log", "jsonschema",
                                           json.dumps(FOXGLOVE_LOG_SCHEMA).encode("utf-8"))

@@ -52,10 +52,12 @@ class RequirementPlan:
 
     @property
     def formalization(self):
+        """The :class:`compiler.semantics.Formalization`, or None."""
         return self.compiled.formalization if self.compiled is not None else None
 
     @property
     def requirement(self):
+        """The parsed requirement (:class:`fretish.ast.Requirement`), or None."""
         return self.compiled.requirement if self.compiled is not None else None
 
     def monitor_source(self):
@@ -77,6 +79,7 @@ class RequirementPlan:
         return all(a is None or a.table is not None or a.complete for a in (ms.bad, ms.good))
 
     def to_json(self) -> dict:
+        """The requirement as the audit JSON's ``requirements`` list gives it."""
         f = self.formalization
         return {"id": self.id, "text": self.text, "source": self.source, "line": self.line,
                 "key": f.key if f is not None else None,
@@ -131,9 +134,11 @@ class AuditPlan:
     variants: list[tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
 
     def requirements_json(self) -> list[dict]:
+        """Every requirement's :meth:`RequirementPlan.to_json`."""
         return [r.to_json() for r in self.requirements]
 
     def bindings_json(self) -> dict | None:
+        """The bindings as the audit JSON gives them (per log with ``[logs]``)."""
         if self.variants:
             variables = {}
             for _sel, _f, sub in self.variants:

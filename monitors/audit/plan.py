@@ -107,7 +107,8 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
 
 
 def _read_requirements(config: AuditConfig) -> list:
-    """The requirement entries of ``config.requirements`` (:func:`fretish.files.load_requirements`)."""
+    """The requirement entries of ``config.requirements``
+    (:func:`fretish.files.load_requirements`)."""
     try:
         entries = load_requirements([Path(p) for p in config.requirements])
     except FretishError as exc:

@@ -98,6 +98,7 @@ class ObligationChecker:
 
     @property
     def rname(self) -> str:
+        """How the response is named in reasons: ``R``, or ``!R`` in only* scopes."""
         return "R" if self.want else "!R"
 
     def everywhere(self, lo: int, hi: int) -> int | None:
@@ -212,5 +213,6 @@ class ObligationChecker:
 _CHECKS = {"immediately": ObligationChecker._immediately, "next": ObligationChecker._next,
            "finally": ObligationChecker._finally, "eventually": ObligationChecker._eventually,
            "always": ObligationChecker._always_never, "never": ObligationChecker._always_never,
-           "within": ObligationChecker._within, "for": ObligationChecker._for, "after": ObligationChecker._after,
-           "until": ObligationChecker._until_before, "before": ObligationChecker._until_before}
+           "within": ObligationChecker._within, "for": ObligationChecker._for,
+           "after": ObligationChecker._after, "until": ObligationChecker._until_before,
+           "before": ObligationChecker._until_before}
