@@ -13,7 +13,7 @@ import pytest
 from compiler import ir
 from compiler.codegen import monitor_source
 from monitors.engines.vectorized import (VectorizeError, ltl3_status, node_series, pt_series,
-                                 supports)
+                                        supports)
 from fretish import parse
 
 from _monitor_helpers import (KEYS, compiled, load_module, random_trace, requirement,
