@@ -4,6 +4,7 @@ chunk: :func:`damage_before_topics`), and why a silent topic gave nothing."""
 
 from __future__ import annotations
 
+from .. import problems as P
 from ..problems import DataProblem, FretcInputError
 from ..sources import open_log
 
@@ -12,8 +13,8 @@ __all__ = ["DAMAGE_KINDS", "problem_json", "collect_problems", "silent_reasons",
 
 
 #: Problem kinds that are damage to the log (not to one message's data).
-DAMAGE_KINDS = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
-                "data_crc", "unknown_channel", "out_of_order")
+DAMAGE_KINDS = (P.TRUNCATED, P.CHUNK_CRC, P.CHUNK_CORRUPT, P.CORRUPT_RECORD, P.SUMMARY_CORRUPT,
+                P.DATA_CRC, P.UNKNOWN_CHANNEL, P.OUT_OF_ORDER)
 
 
 def problem_json(p: DataProblem) -> dict:
@@ -47,7 +48,7 @@ def silent_reasons(silent, problems) -> dict[str, str]:
     out = {}
     for t in silent:
         detail = next((f"{p.kind}: {p.detail}" for p in problems
-                       if p.topic == t and p.kind in ("unknown_schema", "unknown_encoding")),
+                       if p.topic == t and p.kind in (P.UNKNOWN_SCHEMA, P.UNKNOWN_ENCODING)),
                       None)
         out[t] = (f"topic {t} cannot be read ({detail})" if detail
                   else f"topic {t} has no message in the log")
