@@ -1,6 +1,6 @@
 """Signal bindings: how each FRET variable is computed from recorded messages.
 
-Bindings live apart from the requirement text (DESIGN.md, "Signals are declared, never
+Bindings live apart from the requirement text (../shared/DESIGN.md, "Signals are declared, never
 guessed"): one requirement set audits both the simulator and the real robot by swapping the
 binding file.  A binding file is TOML (read with :mod:`tomllib`)::
 
@@ -16,8 +16,10 @@ binding file.  A binding file is TOML (read with :mod:`tomllib`)::
     stopped = "abs(/cmd_vel.linear.x) < 1e-3 & abs(/cmd_vel.angular.z) < 1e-3"
     scan_stale = "age(/scan) > 0.3"
 
-Durations are a number with a unit: ``ns``, ``us``, ``ms``, ``s``, ``min``, or a frequency in
-``Hz`` (period = 1/f); a bare TOML number is seconds.
+Durations are a number with a unit (:mod:`fretish.units`, the grammar of the requirement
+files' ``tick_period`` too): ``ns``, ``us``, ``ms``, ``s``, ``min``, ``h`` (or their long
+names, ``milliseconds``), or a frequency in ``Hz`` (period = 1/f); a bare TOML number is
+seconds.
 
 Expression language (grammar: ``bindings.lark``), loosest binding first:
 
@@ -64,7 +66,6 @@ import operator
 import re
 import tomllib
 from dataclasses import dataclass, field
-from decimal import Decimal, InvalidOperation
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -72,6 +73,8 @@ from typing import Any, Callable, Iterable
 import numpy as np
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from fretish.units import NS_PER_S, parse_duration
 
 from .problems import BindingError, SignalError
 
@@ -92,7 +95,6 @@ __all__ = [
     "LogSelector",
 ]
 
-NS_PER_S = 1_000_000_000
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 DEFAULT_HEADER_LAG_NS = NS_PER_S
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
@@ -100,55 +102,6 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 #: variable (``"wind speed"``: a TOML quoted key ``"wind speed" = "..."``, or
 #: ``--bind '"wind speed"=...'``): no quotes, no control characters, not blank at either end.
 _VARNAME = re.compile(r"(?=\S)[^\"\x00-\x1f\x7f]*(?<=\S)\Z")
-
-
-# ------------------------------------------------------------------------------------------------
-# Durations
-# ------------------------------------------------------------------------------------------------
-
-_UNITS = {"ns": Decimal(1), "us": Decimal(10**3), "µs": Decimal(10**3), "ms": Decimal(10**6),
-          "s": Decimal(10**9), "sec": Decimal(10**9), "min": Decimal(60 * 10**9)}
-_DURATION = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([A-Za-zµ]+)\s*\Z")
-
-
-def parse_duration(value: Any) -> int:
-    """A positive duration in integer nanoseconds (rounded to the nearest ns).
-
-    Args:
-        value: ``"100 ms"``, ``"0.1 s"``, ``"10 Hz"`` (period of that frequency), or a bare
-            int/float meaning seconds.
-
-    Raises:
-        ValueError: not a duration, no unit, unknown unit, or not positive.
-    """
-    if isinstance(value, bool):
-        raise ValueError(f"{value!r} is not a duration")
-    if isinstance(value, (int, float)):
-        amount, unit = Decimal(repr(value)), "s"
-    elif isinstance(value, str):
-        m = _DURATION.match(value)
-        if not m:
-            raise ValueError(f"{value!r} is not a duration: write a number and a unit, e.g. "
-                             "\"100 ms\" or \"10 Hz\"")
-        try:
-            amount = Decimal(m.group(1))
-        except InvalidOperation:
-            raise ValueError(f"{value!r} is not a duration") from None
-        unit = m.group(2)
-    else:
-        raise ValueError(f"{value!r} is not a duration")
-    if unit in ("Hz", "hz"):
-        if amount <= 0:
-            raise ValueError(f"{value!r}: frequency must be positive")
-        ns = Decimal(NS_PER_S) / amount
-    elif unit in _UNITS:
-        ns = amount * _UNITS[unit]
-    else:
-        raise ValueError(f"{value!r}: unknown unit {unit!r} (ns, us, ms, s, min, Hz)")
-    out = int(ns.to_integral_value())
-    if out <= 0:
-        raise ValueError(f"{value!r}: duration must be at least 1 ns")
-    return out
 
 
 # ------------------------------------------------------------------------------------------------

@@ -38,6 +38,8 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from fretish.units import NS_PER_S
+
 from . import problems as P
 from .bindings import Binding, Bindings, EvalState, Field, TickSpec, Valid, make_extractor
 from .problems import DataProblem, ProblemLog, SignalError
@@ -46,8 +48,6 @@ from .sources import CSV_TOPIC, CsvSource, LogSource
 
 __all__ = ["Tick", "Sampling", "GroupSampling", "SampledArrays", "sample", "sample_groups",
            "sample_arrays"]
-
-NS_PER_S = 1_000_000_000
 
 
 class Tick:
@@ -398,7 +398,7 @@ class GroupSampling:
 
 def sample_groups(source: LogSource, bindings: Bindings,
                   groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
-    """Per-requirement clocks in one read of the log (DESIGN.md, "Each verdict stands
+    """Per-requirement clocks in one read of the log (../shared/DESIGN.md, "Each verdict stands
     alone"): each group ``key -> (variable names, topics)`` gets its own tick grid, start,
     end and warm-up from ``topics`` alone (normally the topics of one requirement's
     variables) and the bindings' tick, exactly as :func:`sample` with bindings restricted to

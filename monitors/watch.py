@@ -1,8 +1,8 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
 protocol.
 
-One engine, three places (DESIGN.md): the watch runs the *same* pieces as an audit of a
-recorded log, only fed live:
+One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
+of a recorded log, only fed live:
 
 * :class:`~monitors.watch_source.WatchSource` is a :class:`monitors.sources.LogSource`
   whose messages come from a :class:`monitors.watch_client.FoxgloveClient` instead of a

@@ -1,6 +1,6 @@
 """The audit engine: recorded runs x FRETish requirements -> verdicts with evidence.
 
-One module per step (ARCHITECTURE.md):
+One module per step:
 
 1. **Plan** (:mod:`.plan`, data in :mod:`.model`): the requirements compiled with the tick
    period of the signal bindings (:mod:`.binding_files`), their monitors generated and

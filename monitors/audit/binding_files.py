@@ -7,15 +7,14 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from fretish.units import format_ns
+
 from ..bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
 from ..problems import BindingError
 from .config import AuditConfig, AuditInputError
 from .discovery import discover_bindings
 
-__all__ = ["load_audit_bindings", "merge_bindings", "binding_files", "tick_text", "format_ns"]
-
-NS_PER_S = 1_000_000_000
-
+__all__ = ["load_audit_bindings", "merge_bindings", "binding_files", "tick_text"]
 
 def binding_files(config: AuditConfig) -> list[tuple[Path, Bindings]]:
     """The binding files of ``config`` (given, or :func:`discover_bindings` next to the
@@ -103,15 +102,3 @@ def tick_text(tick: TickSpec) -> str:
     if tick.period_ns is not None:
         return f"every {format_ns(tick.period_ns)}"
     return f"one per {tick.topic} message"
-
-
-def format_ns(ns: int) -> str:
-    """A duration in nanoseconds in the largest whole unit: ``100 ms``, ``1 s``, ``7 ns``."""
-    if ns % NS_PER_S == 0:
-        return f"{ns // NS_PER_S} s"
-    if ns % 1_000_000 == 0:
-        return f"{ns // 1_000_000} ms"
-    if ns % 1000 == 0:
-        return f"{ns // 1000} us"
-    return f"{ns} ns"
-

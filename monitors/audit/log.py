@@ -9,8 +9,8 @@ numbers behind their boolean variables (:func:`monitors.audit.operands.operand_v
 A CSV trace is read with its columns as the variables unless the bindings read ``/csv``
 fields. A topic whose schema is unknown makes only the requirements reading it ``error`` -
 the others are audited without it (a second pass over the log, only in that case). Damage
-(DESIGN.md "Damage is never evidence"): a damaged log is ``partial``; only the ticks before
-its first cut or gap are judged. Problems of every pass are kept.
+(../shared/DESIGN.md "Damage is never evidence"): a damaged log is ``partial``; only the ticks
+before its first cut or gap are judged. Problems of every pass are kept.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 tick by tick, and the columns kept (:func:`run_passes`); then everything cut at the damage
 (:func:`cut_at_damage`).
 
-A requirement's clock is the set of topics its variables read (DESIGN.md, "Each verdict
-stands alone"); requirements on the same clock share one sampled stream
+A requirement's clock is the set of topics its variables read (../shared/DESIGN.md, "Each
+verdict stands alone"); requirements on the same clock share one sampled stream
 (:func:`monitors.signals.sample_groups`). The engine of each requirement: ``stepwise``
 (the generated ``step()`` on every tick, :mod:`monitors.engines.stepwise`), ``vectorized``
 (at the end, from the columns, :mod:`monitors.engines.vectorized`; engine ``auto`` chooses it
@@ -85,9 +85,9 @@ def expected_ticks(source, bindings: Bindings | None) -> int | None:
 
 
 def clock_key(r: RequirementPlan, bindings: Bindings | None) -> frozenset:
-    """The clock a requirement is sampled on: the topics of its own variables (DESIGN.md,
-    "Each verdict stands alone": its tick grid, start, end and warm-up come from them and
-    the bindings' tick, never from other requirements of the run)."""
+    """The clock a requirement is sampled on: the topics of its own variables
+    (../shared/DESIGN.md, "Each verdict stands alone": its tick grid, start, end and warm-up
+    come from them and the bindings' tick, never from other requirements of the run)."""
     if bindings is None:
         return frozenset()
     return frozenset(t for v in r.variables if v in bindings.variables
@@ -201,7 +201,7 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
 
 def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
                   active: list[RequirementPlan]) -> None:
-    """Keep only the ticks of the span read completely (DESIGN.md "Damage is never
+    """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
     evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
     under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
     precede its log time by that much). The stepwise monitors, which saw every tick, are

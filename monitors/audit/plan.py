@@ -22,11 +22,12 @@ from compiler.codegen import emit_monitors, file_stems
 from fretish.errors import FretishError
 from fretish.files import load_requirements
 from fretish.parser import parse
+from fretish.units import NS_PER_S, format_period
 
 from ..bindings import Bindings
 from ..problems import FretcInputError
 from ..sources import open_log
-from .binding_files import NS_PER_S, binding_files, format_ns, load_audit_bindings
+from .binding_files import binding_files, load_audit_bindings
 from .config import AuditConfig, AuditInputError
 from .model import AuditPlan, RequirementPlan
 
@@ -44,11 +45,6 @@ def _has_time_units(entry) -> bool:
         return False
     d = getattr(req.timing, "duration", None)
     return d is not None and d.unit != "ticks"
-
-
-def _fmt_period(p: Fraction) -> str:
-    """A tick period (seconds) as :func:`format_ns` prints it, or ``0.3333 s``."""
-    return format_ns(int(p * NS_PER_S)) if (p * NS_PER_S).denominator == 1 else f"{float(p)} s"
 
 
 def load_plan(config: AuditConfig) -> AuditPlan:
@@ -85,7 +81,7 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
     if config.tick_period is not None:
         for c, rp in zip(compiled, plans):
             if c.error is not None and rp.error is None:
-                rp.error = (f"{c.error} (the tick period {_fmt_period(period)} comes from "
+                rp.error = (f"{c.error} (the tick period {format_period(period)} comes from "
                             "--tick-period)")
     ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
     modules = emit_monitors(ok) if ok else {}
@@ -139,23 +135,23 @@ def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bin
     if config.tick_period is not None:
         if e.tick_period is not None and e.tick_period != period:
             rp.notes.append(f"durations converted with --tick-period "
-                            f"{_fmt_period(period)} instead of the declared "
-                            f"{_fmt_period(e.tick_period)}")
+                            f"{format_period(period)} instead of the declared "
+                            f"{format_period(e.tick_period)}")
         return dataclasses.replace(e, tick_period=period)
     if e.tick_period is None and period is not None:
         return dataclasses.replace(e, tick_period=period)
     if e.tick_period is not None and period is not None and e.tick_period != period:
         rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
-                    f"{_fmt_period(e.tick_period)} but the bindings ({bindings.source}) "
-                    f"tick every {_fmt_period(period)}: durations would convert with the "
+                    f"{format_period(e.tick_period)} but the bindings ({bindings.source}) "
+                    f"tick every {format_period(period)}: durations would convert with the "
                     "wrong period; make them equal (or pass --tick-period to override "
                     "both for this run)")
     elif bindings is not None and bindings.tick.topic:
         if nominal is not None and e.tick_period is not None and e.tick_period != nominal:
             rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
-                        f"{_fmt_period(e.tick_period)} but the bindings ({bindings.source})"
+                        f"{format_period(e.tick_period)} but the bindings ({bindings.source})"
                         f" give {bindings.tick.topic} a nominal period of "
-                        f"{_fmt_period(nominal)}; make them equal")
+                        f"{format_period(nominal)}; make them equal")
         elif nominal is not None:
             return dataclasses.replace(e, tick_period=nominal)
         elif _has_time_units(e):

@@ -1,4 +1,4 @@
-"""The obligations of FRET's timings (``shared/fretish/README.md`` section 4): from a
+"""The obligations of FRET's timings (``../shared/fretish/README.md`` section 4): from a
 trigger ``t`` until its scope interval's end ``e``, e.g. ``within k``: ``R`` somewhere in
 ``[t, t+k]``, vacuous when ``e < t+k``; ``only*`` scopes check the negated obligation
 (:data:`OBLIGATIONS`). :class:`ObligationChecker` answers, for one trigger, whether the
