@@ -393,6 +393,12 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
     if negate:
         f = spot.formula.Not(f)
     aut = spot.translate(f, "monitor", "low", dict=d)
+    from . import dfa  # numpy: not imported by `fretc FILE --emit ltl`
+
+    if n_atoms <= min(dfa.SUBSET_MAX_APS, table_max_aps):
+        got = _table_monitor(aut, n_atoms, max_states)
+        if got is not None:
+            return got if got["states"] <= max_states else None
     if not aut.is_deterministic():
         det = spot.tgba_powerset(aut)
         if det.num_states() > POWERSET_MAX:
@@ -411,11 +417,12 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
         var[name] = aut.register_ap(name)  # present ones keep their number
     if n_atoms <= table_max_aps:
         width = 1 << n_atoms
+        memo: dict = {}
         rows = []
         for s in range(aut.num_states()):
             row = [-1] * width
             for e in aut.out(s):
-                for letter in _letters(e.cond, var, names, width):
+                for letter in _cached_letters(memo, e.cond, var, names, width):
                     row[letter] = e.dst
             rows.append(row)
         init, rows = _bfs_tables(aut.get_init_state_number(), rows)
@@ -431,6 +438,43 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
     init, chains = _bfs_chains(aut.get_init_state_number(), edges)
     return {"initial": init, "table": None, "chains": chains, "empty": empty,
             "complete": False, "states": len(chains)}
+
+
+def _table_monitor(aut, n_atoms: int, max_states: int) -> dict | None:
+    """The minimal deterministic monitor of Spot's nondeterministic monitor ``aut`` by
+    :mod:`compiler.dfa` (the same automaton as Spot's powerset and ``minimize_monitor``,
+    faster on small alphabets), as :func:`_spot_monitor`'s data; None when the subset
+    construction exceeds :data:`compiler.dfa.SUBSET_MAX_STATES`."""
+    from . import dfa  # numpy: not imported by `fretc FILE --emit ltl`
+
+    names = [f"a{i}" for i in range(n_atoms)]
+    var = {name: aut.register_ap(name) for name in names}
+    width = 1 << n_atoms
+    memo: dict = {}
+    succ = [[0] * width for _ in range(aut.num_states())]
+    for s in range(aut.num_states()):
+        for e in aut.out(s):
+            for letter in _cached_letters(memo, e.cond, var, names, width):
+                succ[s][letter] |= 1 << e.dst
+    rows = dfa.determinize(succ, aut.get_init_state_number(), width)
+    if rows is None:
+        return None
+    init, rows = _bfs_tables(*dfa.minimize(rows))
+    empty = bool(aut.is_empty())
+    complete = not empty and all(x >= 0 for row in rows for x in row)
+    return {"initial": init, "table": rows, "chains": None, "empty": empty,
+            "complete": complete, "states": len(rows)}
+
+
+def _cached_letters(memo: dict, cond, var: Dict[str, int], names: List[str],
+                    width: int) -> List[int]:
+    """:func:`_letters` memoized by the BDD's id in ``memo`` (edges of an automaton share few
+    distinct conditions; over 10 atoms each walk costs 1024 x 10 restrictions)."""
+    key = cond.id()
+    got = memo.get(key)
+    if got is None:
+        got = memo[key] = _letters(cond, var, names, width)
+    return got
 
 
 def _letters(cond, var: Dict[str, int], names: List[str], width: int) -> List[int]:
