@@ -22,7 +22,7 @@ What each witness shows (intended verdicts):
 
 The verdicts written in the header (``# expected: R1=satisfied, R2=violated``) are not the
 intended ones but those FRET's interval semantics gives on the written numbers
-(:func:`monitors.evidence.evaluate_requirement`, the audit's own evidence engine), for every
+(:func:`monitors.engines.interval.evaluate_requirement`, the audit's own evidence engine), for every
 requirement of the checked files; when they differ from the intended ones (an uninterpreted
 atom made the abstraction spurious) the finding says so.
 """
@@ -133,7 +133,7 @@ def expected_verdicts(items, rows: list[dict]) -> dict[str, str]:
     """FRET's verdict of each item on ``rows`` (``satisfied``/``vacuous``/``violated``, or
     ``unknown`` where the evidence engine cannot decide), by the audit's evidence engine."""
     # lazy: the audit's evidence engine lives in monitors/, a layer above compiler/
-    from monitors.evidence import EvidenceUnsupported, evaluate_requirement
+    from monitors.engines.interval import EvidenceUnsupported, evaluate_requirement
 
     n = len(rows)
     cols = {name: np.array([r[name] for r in rows]) for name in (rows[0] if rows else {})}

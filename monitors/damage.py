@@ -1,7 +1,7 @@
 """Verdicts on a damaged log: what the span read completely decides, and nothing more.
 
-../shared/DESIGN.md, "Damage is never evidence": only the span of a log that was read completely is
-judged (the ticks strictly before :attr:`monitors.sources.LogSource.intact_end`); an
+../shared/DESIGN.md, "Damage is never evidence": only the span of a log that was read completely
+is judged (the ticks strictly before :attr:`monitors.sources.LogSource.intact_end`); an
 obligation still open where that span ends (a cut, or the first gap) is *unknown*, not
 violated; a violation decided entirely before the damage stands.
 
@@ -29,13 +29,14 @@ at the cut comes out violated although the run went on. Which verdict a requirem
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Mapping, Optional, Tuple
+from collections.abc import Mapping
 
 import numpy as np
 
 from fretish import ast as A
 
-from .evidence import (Evidence, EvidenceUnsupported, _Checker, _Expr, scope_intervals)
+from .engines.interval import Evidence, EvidenceUnsupported, scope_of, trace_signals, trigger_points
+from .engines.obligations import ObligationChecker
 
 __all__ = ["OpenObligation", "open_obligations", "verdict_at_damage"]
 
@@ -51,17 +52,17 @@ class OpenObligation:
     """
 
     trigger_tick: int
-    interval: Tuple[int, int]
+    interval: tuple[int, int]
     what: str
 
 
 def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                     duration_ticks: Optional[int] = None, limit: int = 1
-                     ) -> List[OpenObligation]:
+                     duration_ticks: int | None = None, limit: int = 1
+                     ) -> list[OpenObligation]:
     """Triggers of ``req`` whose obligation is neither met nor missed at the end of a trace
     of ``n`` ticks that a damage cut short (FRET's interval semantics, as
-    :func:`monitors.evidence.evaluate_requirement`; only the scope interval reaching the last
-    tick can hold one).
+    :func:`monitors.engines.interval.evaluate_requirement`; only the scope interval reaching
+    the last tick can hold one).
 
     Args:
         req: a parsed, not free-form requirement.
@@ -74,7 +75,7 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
         Up to ``limit`` :class:`OpenObligation`, earliest trigger first.
 
     Raises:
-        EvidenceUnsupported: as :func:`monitors.evidence.evaluate_requirement`.
+        EvidenceUnsupported: as :func:`monitors.engines.interval.evaluate_requirement`.
     """
     if req.freeform or req.response is None:
         raise EvidenceUnsupported("a free-form requirement has no semantics")
@@ -82,37 +83,21 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
         return []
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     negate = scope.startswith("only")
-    whole = _Expr(columns, n, np.zeros(n, np.int64), np.full(n, n - 1, np.int64))
-    mode = whole.bool(req.scope.mode) if scope != "null" else None
-    intervals = scope_intervals(scope, mode, n)
+    # (the mode's temporal functions bounded by the intact span, where the verdict's
+    # evidence, monitors.engines.interval.evaluate_requirement, leaves them endpoint-free)
+    intervals = scope_of(req, columns, n, np.zeros(n, np.int64), np.full(n, n - 1, np.int64))
     last = [(s, e) for s, e in intervals if e == n - 1]
     if not last:
         return []
-    start = np.arange(n, dtype=np.int64)
-    end = np.arange(n, dtype=np.int64)
-    for s, e in intervals:
-        start[s:e + 1] = s
-        end[s:e + 1] = e
-    ex = _Expr(columns, n, start, end)
-    R = ex.bool(req.response)
-    C = ex.bool(req.condition.expr) if cond != "null" else None
-    S = ex.bool(req.timing.stop) if timing in A.STOP_TIMINGS else None
+    R, C, S = trace_signals(req, columns, n, intervals)
     k = 0
     if timing in A.DURATION_TIMINGS:
         k = int(duration_ticks) if duration_ticks is not None else int(
             req.timing.duration.amount)
-    chk = _Checker(timing, negate, R, S, k)
+    chk = ObligationChecker(timing, negate, R, S, k)
     s, e = last[0]
-    if cond == "null":
-        points = [s]
-    elif cond == "holding":
-        points = (np.flatnonzero(C[s:e + 1]) + s).tolist()
-    else:
-        seg = C[s:e + 1]
-        rise = seg.copy()
-        rise[1:] &= ~seg[:-1]
-        points = (np.flatnonzero(rise) + s).tolist()
-    out: List[OpenObligation] = []
+    points = trigger_points(cond, C, s, e)
+    out: list[OpenObligation] = []
     kind = "eventually" if timing == "null" else timing
     want = not negate
     nWant, nUnwant = (chk.nR, chk.nNR) if want else (chk.nNR, chk.nR)
@@ -126,10 +111,11 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
     return out
 
 
-def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int, chk: _Checker,
-          nWant, nUnwant) -> Optional[str]:
+def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int,
+          chk: ObligationChecker, nWant, nUnwant) -> str | None:
     """Why the obligation of trigger ``t`` is open at the end ``e`` of the intact span, or
-    None when it is met or missed already (:class:`monitors.evidence._Checker` semantics)."""
+    None when it is met or missed already (the semantics of
+    :class:`monitors.engines.obligations.ObligationChecker`)."""
     rname = "R" if want else "!R"
     if kind == "immediately":
         return None
@@ -180,10 +166,10 @@ def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int, chk: _Che
     return None
 
 
-def verdict_at_damage(holds: bool, vacuous: bool, status: Optional[str],
-                      status_tick: Optional[int], n: int, evidence: Optional[Evidence],
-                      opened: List[OpenObligation], has_ltl3: bool
-                      ) -> Tuple[str, Optional[str]]:
+def verdict_at_damage(holds: bool, vacuous: bool, status: str | None,
+                      status_tick: int | None, n: int, evidence: Evidence | None,
+                      opened: list[OpenObligation], has_ltl3: bool
+                      ) -> tuple[str, str | None]:
     """The verdict of a requirement over the intact span of a damaged log (module
     docstring).
 

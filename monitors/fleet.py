@@ -34,15 +34,19 @@ FILE's folder), so a cluster job can be started from an index of a fleet's recor
 from __future__ import annotations
 
 import glob
+import hashlib
+import logging
 import os
-import sys
-import time
-import types
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any
 
-from .audit import AuditInputError, AuditPlan, audit_log, audit_logs as local_audit_logs
+from .audit import AuditInputError, AuditPlan, audit_log
+from .audit.plan import MODULE_PREFIX, load_module
+from .bindings import Bindings, compile_expression
+from .problems import BindingError
+from .report_model import LogAudit, Verdict
 
 __all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
            "audit_logs_ray", "error_audit", "RAY_HINT"]
@@ -56,7 +60,7 @@ class RayUnavailable(AuditInputError):
 
 
 # --------------------------------------------------------------------------- log lists
-def expand_log_args(args: Sequence[str]) -> List[str]:
+def expand_log_args(args: Sequence[str]) -> list[str]:
     """Expand ``@FILE`` lists and globs in the LOGS arguments, in order.
 
     ``@FILE``: one path or glob per line; blank lines and ``#`` comments skipped; a relative
@@ -68,7 +72,7 @@ def expand_log_args(args: Sequence[str]) -> List[str]:
         AuditInputError: an unreadable list file, or a glob that matches nothing (naming
             the file and line for a list entry).
     """
-    out: List[str] = []
+    out: list[str] = []
     for a in args:
         if a.startswith("@") and len(a) > 1:
             lst = Path(a[1:])
@@ -88,7 +92,7 @@ def expand_log_args(args: Sequence[str]) -> List[str]:
     return out
 
 
-def _glob_one(p: str, where: Optional[str]) -> List[str]:
+def _glob_one(p: str, where: str | None) -> list[str]:
     if os.path.exists(p) or not any(c in p for c in "*?["):
         return [p]
     found = sorted(glob.glob(p, recursive=True))
@@ -111,22 +115,15 @@ class ShippedPlan:
     """
 
     plan: AuditPlan
-    classes: Dict[int, Tuple[str, str]]
-    bindings: Optional[List[Tuple]]
+    classes: dict[int, tuple[str, str]]
+    bindings: list[tuple] | None
     key: str
     #: binding files that select their logs: (selector, file, ShippedPlan of that file)
-    variants: List[Tuple[Any, str, "ShippedPlan"]] = field(default_factory=list)
+    variants: list[tuple[Any, str, "ShippedPlan"]] = field(default_factory=list)
 
     def rebuild(self) -> AuditPlan:
         """The runnable plan: monitor modules ``exec``'d, binding expressions compiled."""
-        from .audit import _MODULE_PREFIX
-        from .bindings import Bindings, compile_expression
-
-        mods: Dict[str, Any] = {}
-        for stem, text in self.plan.modules.items():
-            mod = types.ModuleType(_MODULE_PREFIX + stem)
-            exec(compile(text, f"<fretc monitors {stem}>", "exec"), mod.__dict__)
-            mods[stem] = mod
+        mods = {stem: load_module(stem, text) for stem, text in self.plan.modules.items()}
         reqs = []
         for r in self.plan.requirements:
             r = replace(r)
@@ -136,7 +133,6 @@ class ShippedPlan:
             reqs.append(r)
         b = self.plan.bindings
         if b is not None:
-            from .problems import BindingError
             variables = {}
             todo = list(self.bindings or [])
             for _round in range(len(todo) + 1):  # references compile after their targets
@@ -165,17 +161,12 @@ class ShippedPlan:
 
 def ship_plan(plan: AuditPlan) -> ShippedPlan:
     """Strip ``plan`` of what does not pickle (generated classes, compiled closures)."""
-    import hashlib
-
-    from .audit import _MODULE_PREFIX
-    from .bindings import Bindings
-
-    classes: Dict[int, Tuple[str, str]] = {}
+    classes: dict[int, tuple[str, str]] = {}
     reqs = []
     for r in plan.requirements:
         r2 = replace(r, monitor_cls=None, _msource=None)
         if r.monitor_cls is not None and not plan.variants:  # variants ship their own
-            classes[r.index] = (r.monitor_cls.__module__[len(_MODULE_PREFIX):], r.id)
+            classes[r.index] = (r.monitor_cls.__module__[len(MODULE_PREFIX):], r.id)
         reqs.append(r2)
     b = plan.bindings
     shipped_b = None
@@ -198,20 +189,20 @@ def ship_plan(plan: AuditPlan) -> ShippedPlan:
 # --------------------------------------------------------------------------- Ray
 def _import_ray():
     try:
-        import ray  # noqa: F401
+        import ray  # noqa: F401 - imported only with --ray (start-up cost)
     except ImportError:
         raise RayUnavailable(RAY_HINT) from None
     return ray
 
 
-def connect(address: Optional[str] = None, num_cpus: Optional[int] = None) -> bool:
+def connect(address: str | None = None, num_cpus: int | None = None) -> bool:
     """Connect to Ray; returns True when this call started a local Ray (stop it with
     ``ray.shutdown()``), False when Ray was already initialized or a cluster was joined.
 
     Args:
         address: None or ``"local"``: a local Ray for this run (``num_cpus`` default: the
-            machine's CPUs; no dashboard; logs not forwarded; usage statistics off). ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing
-            cluster.
+            machine's CPUs; no dashboard; logs not forwarded; usage statistics off).
+            ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing cluster.
 
     Raises:
         RayUnavailable: Ray is not installed, or the cluster cannot be reached.
@@ -220,7 +211,6 @@ def connect(address: Optional[str] = None, num_cpus: Optional[int] = None) -> bo
     if ray.is_initialized():
         return False
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-    import logging
     try:
         if address in (None, "local"):
             ray.init(num_cpus=num_cpus or os.cpu_count() or 1, include_dashboard=False,
@@ -234,10 +224,10 @@ def connect(address: Optional[str] = None, num_cpus: Optional[int] = None) -> bo
                              f"{type(exc).__name__}: {exc}") from None
 
 
-_WORKER_PLAN: Dict[str, Any] = {}
+_WORKER_PLAN: dict[str, Any] = {}
 
 
-def _audit_task(shipped: ShippedPlan, path: str, kill: Optional[Tuple[str, str]] = None):
+def _audit_task(shipped: ShippedPlan, path: str, kill: tuple[str, str] | None = None):
     """The Ray task body: audit one log with the shipped plan (rebuilt once per worker)."""
     plan = _WORKER_PLAN.get(shipped.key)
     if plan is None:
@@ -262,8 +252,6 @@ def error_audit(plan: AuditPlan, path: str, reason: str):
     """A :class:`~monitors.report_model.LogAudit` of a log that could not be audited: the
     log's ``error`` is ``reason`` and every requirement's verdict is ``error`` with it (so the
     exit code is 2 and nothing reads as satisfied)."""
-    from .report_model import LogAudit, Verdict
-
     la = LogAudit(log=str(path), error=f"{path}: {reason}")
     for r in plan.requirements:
         v = Verdict(log=str(path), requirement=r.id, text=r.text, source=r.source,
@@ -274,9 +262,9 @@ def error_audit(plan: AuditPlan, path: str, reason: str):
     return la
 
 
-def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: Optional[str] = None,
-                   retries: int = 0, progress=None, num_cpus: Optional[int] = None,
-                   _kill: Optional[Tuple[str, str]] = None) -> List[Any]:
+def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = None,
+                   retries: int = 0, progress=None, num_cpus: int | None = None,
+                   _kill: tuple[str, str] | None = None) -> list[Any]:
     """Audit ``paths`` on Ray, one task per log; results in the order of ``paths``.
 
     Args:
@@ -308,7 +296,7 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: Optional[str]
             refs[task.remote(shipped, str(p), _kill)] = i
             if progress is not None:
                 progress.start(i, p)
-        results: Dict[int, Any] = {}
+        results: dict[int, Any] = {}
         pending = list(refs)
         try:
             while pending:

@@ -75,7 +75,7 @@ class TimePoint:
 
 @dataclass
 class FirstViolation:
-    """The evidence of a violation (see :class:`monitors.evidence.Violation`).
+    """The evidence of a violation (see :class:`monitors.engines.interval.Violation`).
 
     Attributes:
         at: the tick (and time) at which the obligation was definitely missed.
@@ -85,7 +85,7 @@ class FirstViolation:
         scope: the scope interval ``(first, last)`` holding the trigger.
         window: the ticks the obligation was about (``(lo, hi)``; ``hi`` may lie past the
             end of the log for ``within``-like timings cut short by the log).
-        obligation: the timing's obligation in words (``monitors.evidence.OBLIGATIONS``).
+        obligation: the timing's obligation in words (``monitors.engines.obligations.OBLIGATIONS``).
         reason: what failed, in tick numbers.
     """
 
@@ -152,12 +152,12 @@ class Verdict:
         intervals, triggers, violations: counts from the interval semantics (None when it
             could not be evaluated).
         violation_list: (trigger, violation) time points of the failed triggers in order,
-            the first :data:`monitors.evidence.MAX_LISTED` of them (``violations`` counts
+            the first :data:`monitors.engines.interval.MAX_LISTED` of them (``violations`` counts
             all).
         engine: ``"stepwise"`` (the generated monitor's ``step()``), ``"vectorized"``
-            (``compiler.vectorized`` over the columns; equal by test) or ``"interval"``
+            (``monitors.engines.vectorized`` over the columns; equal by test) or ``"interval"``
             (no online monitor exists - a future-time function - so FRET's interval
-            semantics decided it, :mod:`monitors.evidence`).
+            semantics decided it, :mod:`monitors.engines.interval`).
         notes: remarks (evidence unavailable, warnings of the formalization).
         error: why the verdict is ``error``.
     """

@@ -38,7 +38,7 @@ import struct
 import threading
 import time
 from dataclasses import dataclass
-from typing import Callable, Dict, Optional
+from collections.abc import Callable
 
 __all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient"]
 
@@ -63,6 +63,7 @@ class Advertised:
 
     @staticmethod
     def from_json(ch: dict) -> "Advertised":
+        """An advertisement of the Foxglove protocol's ``advertise`` message."""
         return Advertised(int(ch["id"]), str(ch["topic"]), str(ch.get("encoding", "")),
                           str(ch.get("schemaName", "")), str(ch.get("schema", "")),
                           str(ch.get("schemaEncoding", "") or ""))
@@ -84,20 +85,21 @@ class FoxgloveClient:
     """
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *, backoff: float = 0.1,
-                 max_backoff: float = 5.0, events: Optional[queue.Queue] = None) -> None:
+                 max_backoff: float = 5.0, events: queue.Queue | None = None) -> None:
         self.url = url
         self.wanted = wanted
         self.backoff = backoff
         self.max_backoff = max_backoff
         self.events: queue.Queue = events if events is not None else queue.Queue()
-        self._thread: Optional[threading.Thread] = None
-        self._loop: Optional[asyncio.AbstractEventLoop] = None
-        self._stop: Optional[asyncio.Event] = None
+        self._thread: threading.Thread | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop: asyncio.Event | None = None
         self._ws = None
         self._started = threading.Event()
 
     # -- thread control --------------------------------------------------------------------
     def start(self) -> "FoxgloveClient":
+        """Connect in a background thread (returns at once)."""
         self._thread = threading.Thread(target=self._run, name="fretc-watch-client",
                                         daemon=True)
         self._thread.start()
@@ -105,6 +107,7 @@ class FoxgloveClient:
         return self
 
     def stop(self) -> None:
+        """Close the connection and end the thread."""
         loop, stop = self._loop, self._stop
         if loop is not None and stop is not None and not loop.is_closed():
             try:
@@ -134,7 +137,7 @@ class FoxgloveClient:
 
     # -- protocol --------------------------------------------------------------------------
     async def _main(self) -> None:
-        import websockets
+        import websockets  # optional (the watch extra): imported only when connecting
 
         self._stop = asyncio.Event()
         self._started.set()
@@ -176,10 +179,10 @@ class FoxgloveClient:
 
     async def _session(self, ws) -> None:
         """Read frames until the connection closes (``ConnectionClosed`` ends the loop)."""
-        from websockets.exceptions import ConnectionClosed
+        from websockets.exceptions import ConnectionClosed  # (as websockets in _main)
 
-        subs: Dict[int, str] = {}  # subscription id -> topic
-        by_channel: Dict[int, int] = {}  # channel id -> subscription id
+        subs: dict[int, str] = {}  # subscription id -> topic
+        by_channel: dict[int, int] = {}  # channel id -> subscription id
         next_id = 1
         put = self.events.put
         head, head_size = _HEAD.unpack_from, _HEAD.size

@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Callable, Dict, Iterable, Optional, Set, Tuple
+from collections.abc import Callable, Iterable
 
-__all__ = ["FoxgloveServer", "Pacer", "replay_mcap", "advertise_mcap", "DEFAULT_HOST", "DEFAULT_PORT"]
+from mcap.reader import make_reader
+
+__all__ = ["FoxgloveServer", "Pacer", "replay_mcap", "advertise_mcap", "DEFAULT_HOST",
+           "DEFAULT_PORT"]
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765
@@ -27,7 +30,7 @@ BACKLOG = 1 << 17
 
 def _foxglove():
     try:
-        import foxglove
+        import foxglove  # optional (the watch extra): imported only when serving
     except ImportError as exc:  # pragma: no cover - depends on the install
         raise RuntimeError("serving needs foxglove-sdk: pip install 'fretc[watch]'") from exc
     return foxglove
@@ -37,7 +40,7 @@ class _Listener:
     """foxglove-sdk ServerListener: records which topics clients subscribed to."""
 
     def __init__(self) -> None:
-        self.subscribed: Set[str] = set()
+        self.subscribed: set[str] = set()
         self.cond = threading.Condition()
 
     def on_subscribe(self, client, channel) -> None:
@@ -98,7 +101,7 @@ class FoxgloveServer:
         self.name = name
         self.context = fg.Context()
         self.listener = _Listener()
-        self.channels: Dict[str, object] = {}
+        self.channels: dict[str, object] = {}
         self._server = self._start(port)
         self.port = self._server.port
 
@@ -109,6 +112,7 @@ class FoxgloveServer:
 
     @property
     def url(self) -> str:
+        """``ws://host:port`` of the server."""
         return f"ws://{self.host}:{self.port}"
 
     def channel(self, topic: str, message_encoding: str, schema_name: str,
@@ -124,9 +128,10 @@ class FoxgloveServer:
         return ch
 
     def log(self, topic: str, data: bytes, log_time: int) -> None:
+        """Publish one message on ``topic``'s channel at ``log_time`` (ns)."""
         self.channels[topic].log(data, log_time=int(log_time))
 
-    def wait_subscribed(self, topics: Optional[Iterable[str]] = None, timeout: float = 30.0,
+    def wait_subscribed(self, topics: Iterable[str] | None = None, timeout: float = 30.0,
                         settle: float = 0.2) -> bool:
         """Block until clients subscribed to all of ``topics`` (None: to any topic), then
         ``settle`` seconds more. False on timeout."""
@@ -161,6 +166,7 @@ class FoxgloveServer:
         self._server = self._start(self.port)
 
     def stop(self) -> None:
+        """Stop the server."""
         self._server.stop()
 
 
@@ -170,10 +176,11 @@ class Pacer:
 
     def __init__(self, rate: float) -> None:
         self.rate = rate
-        self._t0: Optional[int] = None
+        self._t0: int | None = None
         self._w0 = 0.0
 
     def wait(self, log_time: int) -> None:
+        """Sleep until the message of ``log_time`` is due on the wall clock."""
         if self.rate <= 0:
             return
         if self._t0 is None:
@@ -186,13 +193,11 @@ class Pacer:
 
 
 def advertise_mcap(path: str, server: FoxgloveServer,
-                   topics: Optional[Set[str]] = None) -> Dict[str, str]:
+                   topics: set[str] | None = None) -> dict[str, str]:
     """Create on ``server`` a channel for every channel of the MCAP at ``path`` (all, or
     those of ``topics``), with its schema and message encoding; returns topic -> schema
     name. Reads the summary (or scans the file when it has none)."""
-    from mcap.reader import make_reader
-
-    out: Dict[str, str] = {}
+    out: dict[str, str] = {}
     with open(path, "rb") as f:
         reader = make_reader(f)
         summary = reader.get_summary()
@@ -213,10 +218,10 @@ def advertise_mcap(path: str, server: FoxgloveServer,
 
 
 def replay_mcap(path: str, server: FoxgloveServer, rate: float = 1.0, *,
-                topics: Optional[Set[str]] = None,
-                on_message: Optional[Callable[[str, int], None]] = None,
-                stop: Optional[threading.Event] = None,
-                at: Optional[Callable[[int], None]] = None) -> Tuple[int, int]:
+                topics: set[str] | None = None,
+                on_message: Callable[[str, int], None] | None = None,
+                stop: threading.Event | None = None,
+                at: Callable[[int], None] | None = None) -> tuple[int, int]:
     """Publish the messages of the MCAP at ``path`` on ``server`` in log-time order, paced
     at ``rate`` times real time, each with its recorded log time, bytes, message encoding
     and schema.
@@ -235,8 +240,6 @@ def replay_mcap(path: str, server: FoxgloveServer, rate: float = 1.0, *,
     Raises:
         OSError, mcap's errors: the file cannot be read.
     """
-    from mcap.reader import make_reader
-
     pacer = Pacer(rate)
     sent, last = 0, -1
     with open(path, "rb") as f:

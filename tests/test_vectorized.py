@@ -1,4 +1,4 @@
-"""compiler.vectorized: numpy evaluation of pt formulas over whole columns equals the
+"""monitors.engines.vectorized: numpy evaluation of pt formulas over whole columns equals the
 generated step-wise monitors, tick by tick, for all 288 FRET template keys; its replay of the
 Spot monitors gives the same LTL3 status and tick."""
 
@@ -12,8 +12,8 @@ import pytest
 
 from compiler import ir
 from compiler.codegen import monitor_source
-from compiler.vectorized import (VectorizeError, ltl3_status, node_series, pt_series,
-                                 supports)
+from monitors.engines.vectorized import (VectorizeError, ltl3_status, node_series, pt_series,
+                                        supports)
 from fretish import parse
 
 from _monitor_helpers import (KEYS, compiled, load_module, random_trace, requirement,

@@ -29,11 +29,14 @@ monitors that codegen embeds (same tables, same atoms) over the same columns.
 
 from __future__ import annotations
 
-from typing import Dict, List, Mapping, Optional, Tuple
+from collections.abc import Mapping
 
 import numpy as np
 
-from .ir import Node
+from compiler.ir import Node, walk
+from compiler.printers import to_smv
+
+from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 
 __all__ = ["VectorizeError", "pt_series", "node_series", "atom_letters", "ltl3_status",
            "supports"]
@@ -47,17 +50,11 @@ class VectorizeError(ValueError):
     columns (the message names it)."""
 
 
-_CMP = {
-    "=": np.equal, "!=": np.not_equal, "<": np.less, "<=": np.less_equal,
-    ">": np.greater, ">=": np.greater_equal,
-}
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
 
 def supports(node: Node) -> bool:
     """True when :func:`pt_series` can evaluate ``node`` (no future-time operator)."""
-    from .ir import walk
-
     return not any(n.op in _FUTURE for n in walk(node))
 
 
@@ -67,7 +64,7 @@ class _Series:
     def __init__(self, columns: Columns, n: int):
         self.columns = columns
         self.n = n
-        self.memo: Dict[Tuple[Node, bool], np.ndarray] = {}
+        self.memo: dict[tuple[Node, bool], np.ndarray] = {}
         self.idx = np.arange(n, dtype=np.int64)
 
     # ------------------------------------------------------------------ reading variables
@@ -99,10 +96,24 @@ class _Series:
             self.memo[key] = got
         return got
 
-    def _compute(self, node: Node, numeric: bool) -> np.ndarray:  # noqa: C901 - one switch
+    def _compute(self, node: Node, numeric: bool) -> np.ndarray:
         op = node.op
-        a = node.args
-        n = self.n
+        if op in _FUTURE:
+            raise VectorizeError(f"future-time operator {op!r} (or function "
+                                 f"{node.name or ''}) in a past-time formula")
+        if op == "!" or op in CONNECTIVES:
+            return self._connective(node)
+        if op in ("Y", "Z", "O", "H", "S", "T"):
+            return self._temporal(node)
+        if op in ("cmp", "arith", "neg", "fn", "ite", "pre", "past") and (
+                op != "fn" or node.name in _FUNCS):
+            return self._term(node, numeric)
+        return self._leaf(node, numeric)
+
+    def _leaf(self, node: Node, numeric: bool) -> np.ndarray:
+        """Constants, variables, FTP, and uninterpreted calls (read as columns named by
+        their text)."""
+        op, n = node.op, self.n
         if op == "true":
             return np.ones(n, np.bool_)
         if op == "false":
@@ -114,16 +125,20 @@ class _Series:
             return out
         if op in ("ap", "var"):
             return self.read(node.name, numeric=(op == "var"))
-        if op in ("call",) or (op == "fn" and node.name not in _FUNCS):
-            from .printers import to_smv
+        if op in ("call", "fn"):
             return self.read(to_smv(node), numeric=(op == "fn"))
         if op == "num":
             return np.full(n, float(node.name), np.float64)
+        raise VectorizeError(f"cannot evaluate IR node {op!r}")
+
+    def _term(self, node: Node, numeric: bool) -> np.ndarray:
+        """Comparisons, arithmetic, the numeric functions, ``ite``, ``pre``."""
+        op, a = node.op, node.args
         if op == "cmp":
             x, y = self.num(a[0]), self.num(a[1])
-            return _CMP[node.name](x, y)
+            return COMPARISONS[node.name](x, y)
         if op == "arith":
-            return _arith(node.name, self.num(a[0]), self.num(a[1]))
+            return arith(node.name, self.num(a[0]), self.num(a[1]))
         if op == "neg":
             return -self.num(a[0])
         if op == "fn":
@@ -136,102 +151,56 @@ class _Series:
             return np.where(c, self.bool(a[1]), self.bool(a[2]))
         if op == "pre":
             init, x = self.num(a[0]), self.num(a[1])
-            out = np.empty(n, np.float64)
-            if n:
-                out[0] = init[0]
-                out[1:] = x[:-1]
-            return out
-        if op == "past":
-            return self.get(a[0], numeric)
-        if op in _FUTURE:
-            raise VectorizeError(f"future-time operator {op!r} (or function "
-                                 f"{node.name or ''}) in a past-time formula")
+            return shifted(x, init[0] if self.n else None, np.float64)
+        return self.get(a[0], numeric)  # "past"
+
+    def _connective(self, node: Node) -> np.ndarray:
+        op, a = node.op, node.args
         if op == "!":
             return ~self.bool(a[0])
-        if op in ("&", "|", "xor", "->", "<->"):
-            x, y = self.bool(a[0]), self.bool(a[1])
-            if op == "&":
-                return x & y
-            if op == "|":
-                return x | y
-            if op == "xor":
-                return x != y
-            if op == "->":
-                return ~x | y
-            return x == y
+        return connective(op, self.bool(a[0]), self.bool(a[1]))
+
+    def _temporal(self, node: Node) -> np.ndarray:
+        """The past-time operators (module docstring's table)."""
+        op, a, n = node.op, node.args, self.n
         if op in ("Y", "Z"):
-            x = self.bool(a[0])
-            out = np.empty(n, np.bool_)
-            if n:
-                out[0] = op == "Z"
-                out[1:] = x[:-1]
-            return out
+            return shifted(self.bool(a[0]), op == "Z", np.bool_)
         if op in ("O", "H") and node.hi is None:
             x = self.bool(a[0])
             if op == "O":
                 return np.logical_or.accumulate(x) if n else x
             return np.logical_and.accumulate(x) if n else x
         if op in ("O", "H"):
-            x = self.bool(a[0])
-            lo, hi = node.lo or 0, node.hi
-            # count of "hits" (x for O, !x for H) in [max(0, i-hi), i-lo]
-            hits = x if op == "O" else ~x
-            cs = np.zeros(n + 1, np.int64)
-            np.cumsum(hits, out=cs[1:])
-            upper = self.idx - lo  # inclusive
-            lower = np.maximum(self.idx - hi, 0)
-            nonempty = upper >= 0
-            count = np.where(nonempty, cs[np.clip(upper + 1, 0, n)] - cs[np.minimum(lower, n)], 0)
-            if op == "O":
-                return nonempty & (count > 0)
-            return ~nonempty | (count == 0)
-        if op in ("S", "T"):
-            x, y = self.bool(a[0]), self.bool(a[1])
-            if op == "T":
-                x, y = ~x, ~y
-            last_y = np.maximum.accumulate(np.where(y, self.idx, -1)) if n else self.idx
-            last_not_x = np.maximum.accumulate(np.where(x, -1, self.idx)) if n else self.idx
-            s = (last_y >= 0) & (last_not_x <= last_y)
-            return ~s if op == "T" else s
-        raise VectorizeError(f"cannot evaluate IR node {op!r}")
+            return self._bounded_once(node)
+        x, y = self.bool(a[0]), self.bool(a[1])
+        if op == "T":
+            x, y = ~x, ~y
+        last_y = np.maximum.accumulate(np.where(y, self.idx, -1)) if n else self.idx
+        last_not_x = np.maximum.accumulate(np.where(x, -1, self.idx)) if n else self.idx
+        s = (last_y >= 0) & (last_not_x <= last_y)
+        return ~s if op == "T" else s
 
-
-def _arith(op: str, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    with np.errstate(all="ignore"):
-        if op == "+":
-            return x + y
-        if op == "-":
-            return x - y
-        if op == "*":
-            return x * y
-        if op == "/":
-            return np.where(y == 0, np.nan, x / np.where(y == 0, 1.0, y))
-        if op == "mod":
-            return np.fmod(x, y)
-        if op == "^":
-            out = np.power(x, y)
-            overflow = np.isinf(out) & np.isfinite(x) & np.isfinite(y)
-            return np.where(overflow, np.nan, out)
-    raise VectorizeError(f"unknown arithmetic operator {op!r}")
-
-
-def _py_min(args: List[np.ndarray]) -> np.ndarray:
-    out = args[0]
-    for b in args[1:]:
-        out = np.where(b < out, b, out)  # Python's min keeps the first unless b < a
-    return out
-
-
-def _py_max(args: List[np.ndarray]) -> np.ndarray:
-    out = args[0]
-    for b in args[1:]:
-        out = np.where(b > out, b, out)
-    return out
+    def _bounded_once(self, node: Node) -> np.ndarray:
+        """``O[lo,hi]`` / ``H[lo,hi]``: window sums of hits (``x`` for O, ``!x`` for H) in
+        ``[max(0, i-hi), i-lo]``."""
+        op, n = node.op, self.n
+        x = self.bool(node.args[0])
+        lo, hi = node.lo or 0, node.hi
+        hits = x if op == "O" else ~x
+        cs = np.zeros(n + 1, np.int64)
+        np.cumsum(hits, out=cs[1:])
+        upper = self.idx - lo  # inclusive
+        lower = np.maximum(self.idx - hi, 0)
+        nonempty = upper >= 0
+        count = np.where(nonempty, cs[np.clip(upper + 1, 0, n)] - cs[np.minimum(lower, n)], 0)
+        if op == "O":
+            return nonempty & (count > 0)
+        return ~nonempty | (count == 0)
 
 
 _FUNCS = {
     "absReal": lambda a: np.abs(a[0]), "absInt": lambda a: np.abs(a[0]),
-    "minReal": _py_min, "minInt": _py_min, "maxReal": _py_max, "maxInt": _py_max,
+    "minReal": py_min, "minInt": py_min, "maxReal": py_max, "maxInt": py_max,
 }
 
 
@@ -261,7 +230,7 @@ def pt_series(node: Node, columns: Columns, n: int) -> np.ndarray:
     return _Series(columns, n).bool(node)
 
 
-def atom_letters(atoms: List[Node], columns: Columns, n: int) -> np.ndarray:
+def atom_letters(atoms: list[Node], columns: Columns, n: int) -> np.ndarray:
     """The automaton letter at each tick: bit ``j`` is the truth of ``atoms[j]`` (int64
     array). Same bit order as the generated ``sub`` expressions."""
     ev = _Series(columns, n)
@@ -271,7 +240,7 @@ def atom_letters(atoms: List[Node], columns: Columns, n: int) -> np.ndarray:
     return out
 
 
-def ltl3_status(monitor_source, columns: Columns, n: int) -> Tuple[str, Optional[int]]:
+def ltl3_status(monitor_source, columns: Columns, n: int) -> tuple[str, int | None]:
     """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
     deterministic Spot monitors embedded by :func:`compiler.codegen.monitor_source`
     (``bad`` for ft_inf: rejection means *violated*; ``good`` for its negation: rejection
@@ -314,7 +283,7 @@ def ltl3_status(monitor_source, columns: Columns, n: int) -> Tuple[str, Optional
                 hit = i
                 break
         firsts.append(hit)
-    best: Tuple[str, Optional[int]] = ("unknown", None)
+    best: tuple[str, int | None] = ("unknown", None)
     for (table, _s, _l, outcome), hit in zip(runs, firsts):
         if hit is not None and (best[1] is None or hit < best[1]):
             best = (outcome, hit)

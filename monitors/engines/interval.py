@@ -17,8 +17,9 @@ says *why*:
    first point; ``holding`` (``whenever``) - every point where ``C`` holds; ``regular`` -
    every point where ``C`` becomes true, or holds at the interval's first point.
 3. **The timing's obligation** from each trigger ``t`` until the interval end ``e``
-   (../shared/fretish/README.md section 4), e.g. ``within k``: ``R`` somewhere in ``[t, t+k]``, vacuous when
-   ``e < t+k``; ``only*`` scopes use the negated obligation.
+   (../shared/fretish/README.md section 4, :mod:`monitors.engines.obligations`), e.g.
+   ``within k``: ``R`` somewhere in ``[t, t+k]``, vacuous when ``e < t+k``; ``only*`` scopes
+   use the negated obligation.
 
 A requirement holds iff every trigger meets its obligation; it holds *vacuously* when there is
 no scope interval or no trigger. The first violation is the earliest trigger (in tick order)
@@ -41,17 +42,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Dict, List, Mapping, Optional, Tuple
+from collections.abc import Mapping
 
 import numpy as np
 
 from fretish import ast as A
 
+from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
+from .obligations import OBLIGATIONS, Interval, ObligationChecker
+
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement",
-           "scope_intervals", "OBLIGATIONS"]
-
-Interval = Tuple[int, int]
-
+           "scope_intervals", "scope_of", "trace_signals", "trigger_points", "OBLIGATIONS"]
 
 #: How many failed triggers an :class:`Evidence` lists (all are counted).
 MAX_LISTED = 100
@@ -104,11 +105,11 @@ class Evidence:
     intervals: int
     triggers: int
     violations: int
-    violation: Optional[Violation]
+    violation: Violation | None
     ticks: int
-    first_interval: Optional[Interval] = None
-    first_trigger: Optional[int] = None
-    listed: List[Violation] = field(default_factory=list)
+    first_interval: Interval | None = None
+    first_trigger: int | None = None
+    listed: list[Violation] = field(default_factory=list)
 
 
 # --------------------------------------------------------------------------- expressions
@@ -148,20 +149,10 @@ class _Expr:
             if op in A.COMPARISON_OPS:
                 x, y = self.num(e.left), self.num(e.right)
                 with np.errstate(invalid="ignore"):
-                    return {"=": np.equal, "!=": np.not_equal, "<": np.less,
-                            "<=": np.less_equal, ">": np.greater,
-                            ">=": np.greater_equal}[op](x, y)
+                    return COMPARISONS[op](x, y)
             a, b = self.bool(e.left), self.bool(e.right)
-            if op == "&":
-                return a & b
-            if op == "|":
-                return a | b
-            if op == "xor":
-                return a != b
-            if op == "->":
-                return ~a | b
-            if op == "<->":
-                return a == b
+            if op in CONNECTIVES:
+                return connective(op, a, b)
             raise EvidenceUnsupported(f"arithmetic '{op}' where a condition is expected")
         if isinstance(e, A.Call):
             return self.bool_call(e)
@@ -176,20 +167,7 @@ class _Expr:
         if isinstance(e, A.Unary) and e.op == "-":
             return -self.num(e.operand)
         if isinstance(e, A.Binary) and e.op in A.ARITH_OPS:
-            x, y = self.num(e.left), self.num(e.right)
-            with np.errstate(all="ignore"):
-                if e.op == "+":
-                    return x + y
-                if e.op == "-":
-                    return x - y
-                if e.op == "*":
-                    return x * y
-                if e.op == "/":
-                    return np.where(y == 0, np.nan, x / np.where(y == 0, 1.0, y))
-                if e.op == "mod":
-                    return np.fmod(x, y)
-                out = np.power(x, y)
-                return np.where(np.isinf(out) & np.isfinite(x) & np.isfinite(y), np.nan, out)
+            return arith(e.op, self.num(e.left), self.num(e.right))
         if isinstance(e, A.Call):
             name, args = e.name, e.args
             if name == "ite" and len(args) == 3:
@@ -198,17 +176,10 @@ class _Expr:
                 return np.abs(self.num(args[0]))
             if name in ("minReal", "minInt", "maxReal", "maxInt") and args:
                 vals = [self.num(a) for a in args]
-                out = vals[0]
-                for b in vals[1:]:
-                    out = np.where((b < out) if name.startswith("min") else (b > out), b, out)
-                return out
+                return py_min(vals) if name.startswith("min") else py_max(vals)
             if name in ("preInt", "preReal") and len(args) == 2:
                 init, x = self.num(args[0]), self.num(args[1])
-                out = np.empty(n)
-                if n:
-                    out[0] = init[0]
-                    out[1:] = x[:-1]
-                return out
+                return shifted(x, init[0] if n else None, np.float64)
         raise EvidenceUnsupported(f"cannot evaluate {type(e).__name__} as a number")
 
     def _int(self, a: A.Expr) -> int:
@@ -223,12 +194,7 @@ class _Expr:
             c = self.bool(args[0])
             return (c & self.bool(args[1])) | (~c & self.bool(args[2]))
         if name == "preBool" and len(args) == 2 and isinstance(args[0], A.BoolLit):
-            p = self.bool(args[1])
-            out = np.empty(n, np.bool_)
-            if n:
-                out[0] = bool(args[0].value)
-                out[1:] = p[:-1]
-            return out
+            return shifted(self.bool(args[1]), bool(args[0].value), np.bool_)
         if name in ("persisted", "occurred", "persists", "occurs") and len(args) in (2, 3):
             if len(args) == 3 and name in ("persists", "occurs"):
                 raise EvidenceUnsupported(f"{name} with three arguments")
@@ -260,7 +226,7 @@ class _Expr:
 
 
 # --------------------------------------------------------------------------- scopes
-def _runs(x: np.ndarray) -> List[Interval]:
+def _runs(x: np.ndarray) -> list[Interval]:
     """Maximal runs of True in ``x``: [(start, end)] inclusive."""
     if not len(x):
         return []
@@ -270,7 +236,7 @@ def _runs(x: np.ndarray) -> List[Interval]:
     return list(zip(starts.tolist(), ends.tolist()))
 
 
-def scope_intervals(kind: str, mode: Optional[np.ndarray], n: int) -> List[Interval]:
+def scope_intervals(kind: str, mode: np.ndarray | None, n: int) -> list[Interval]:
     """Scope intervals of a trace of ``n`` ticks (module docstring, point 1).
 
     Args:
@@ -311,177 +277,50 @@ def scope_intervals(kind: str, mode: Optional[np.ndarray], n: int) -> List[Inter
     raise ValueError(f"unknown scope kind {kind!r}")
 
 
-# --------------------------------------------------------------------------- obligations
-#: The obligation of each timing, for documentation and reports: (plain, negated).
-OBLIGATIONS: Dict[str, Tuple[str, str]] = {
-    "immediately": ("R at t", "!R at t"),
-    "next": ("R at t+1 (none if t = e)", "!R at t+1 (none if t = e)"),
-    "finally": ("R at e", "!R at e"),
-    "eventually": ("R somewhere in [t, e]", "!R everywhere in [t, e]"),
-    "null": ("R somewhere in [t, e]", "!R everywhere in [t, e]"),
-    "always": ("R everywhere in [t, e]", "!R somewhere in [t, e]"),
-    "never": ("!R everywhere in [t, e]", "R somewhere in [t, e]"),
-    "within": ("R somewhere in [t, t+k] (none if e < t+k)",
-               "!R everywhere in [t, min(t+k, e)]"),
-    "for": ("R everywhere in [t, min(t+k, e)]", "!R somewhere in [t, t+k] (none if e < t+k)"),
-    "after": ("!R in [t, min(t+k, e)] and R at t+k+1 (if t+k+1 <= e)",
-              "not (!R in [t, t+k] and R at t+k+1 <= e)"),
-    "until": ("R everywhere from t until S holds (or to e)",
-              "S nowhere in [t, j], j = first !R at or after t (or e)"),
-    "before": ("S nowhere in [t, j], j = first R at or after t (or e)",
-               "!R everywhere from t until S holds (or to e)"),
-}
+# --------------------------------------------------------------------------- the trace
+def scope_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+             mode_start: np.ndarray, mode_end: np.ndarray) -> list[Interval]:
+    """The scope intervals of ``req`` over ``n`` ticks (:func:`scope_intervals`), its mode
+    evaluated with ``mode_start`` / ``mode_end`` as the interval bounds of its temporal
+    functions."""
+    scope = req.scope.kind
+    whole = _Expr(columns, n, mode_start, mode_end)
+    mode = whole.bool(req.scope.mode) if scope != "null" else None
+    return scope_intervals(scope, mode, n)
 
 
-def _next_true(x: np.ndarray) -> np.ndarray:
-    """``out[i]`` = smallest j >= i with x[j], else n (int32 array)."""
-    n = len(x)
-    idx = np.where(x, np.arange(n, dtype=np.int32), np.int32(n))
-    return np.minimum.accumulate(idx[::-1])[::-1] if n else idx
+def trace_signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+                  intervals: list[Interval]
+                  ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """(response ``R``, condition ``C`` or None, stop condition ``S`` or None) at each tick,
+    their temporal functions relative to the scope interval holding the tick."""
+    start = np.arange(n, dtype=np.int64)
+    end = np.arange(n, dtype=np.int64)
+    for s, e in intervals:
+        start[s:e + 1] = s
+        end[s:e + 1] = e
+    ex = _Expr(columns, n, start, end)
+    R = ex.bool(req.response)
+    C = ex.bool(req.condition.expr) if req.condition.kind != "null" else None
+    S = ex.bool(req.timing.stop) if req.timing.kind in A.STOP_TIMINGS else None
+    return R, C, S
 
 
-class _Ints:
-    """Read-only int view of an int array (numpy scalars become Python ints)."""
-
-    __slots__ = ("a",)
-
-    def __init__(self, a: np.ndarray):
-        self.a = a
-
-    def __getitem__(self, i: int) -> int:
-        return int(self.a[i])
-
-
-class _Bools(_Ints):
-    __slots__ = ()
-
-    def __getitem__(self, i: int) -> bool:
-        return bool(self.a[i])
-
-
-class _Checker:
-    """Obligations of one timing over a trace (module docstring, point 3)."""
-
-    def __init__(self, timing: str, negate: bool, R: np.ndarray, S: Optional[np.ndarray],
-                 k: Optional[int]):
-        self.timing = timing
-        self.negate = negate
-        # numpy arrays (not lists): a few bytes a tick, for long logs
-        self.R = _Bools(R)
-        self.k = k or 0
-        self.nR = _Ints(_next_true(R))
-        self.nNR = _Ints(_next_true(~R))
-        self.nS = _Ints(_next_true(S)) if S is not None else None
-
-    def check(self, t: int, e: int) -> Optional[Tuple[Interval, int, str]]:
-        """None if the obligation of trigger ``t`` (interval end ``e``) holds, else (window,
-        violation tick, reason)."""
-        R, nR, nNR, k = self.R, self.nR, self.nNR, self.k
-        kind = "eventually" if self.timing == "null" else self.timing
-        want = not self.negate  # the value R must take where the obligation says "R"
-        rname = "R" if want else "!R"
-        nWant, nUnwant = (nR, nNR) if want else (nNR, nR)
-
-        def everywhere(lo, hi):  # `want` on [lo, hi]
-            bad = nUnwant[lo]
-            return None if bad > hi else bad
-
-        def somewhere(lo, hi):
-            return nWant[lo] <= hi
-
-        if kind == "immediately":
-            if R[t] != want:
-                return (t, t), t, f"{rname} does not hold at the trigger t={t}"
-            return None
-        if kind == "next":
-            if t == e or R[t + 1] == want:
-                return None
-            return (t + 1, t + 1), t + 1, f"{rname} does not hold at t+1={t + 1}"
-        if kind == "finally":
-            if R[e] == want:
-                return None
-            return (e, e), e, f"{rname} does not hold at the interval end e={e}"
-        if kind == "eventually":
-            if not self.negate:
-                if somewhere(t, e):
-                    return None
-                return (t, e), e, f"R never holds in [{t}, {e}]"
-            bad = everywhere(t, e)
-            if bad is None:
-                return None
-            return (t, e), bad, f"R holds at {bad} (only* scope: R must not hold in [{t}, {e}])"
-        if kind in ("always", "never"):
-            about_r = kind == "always"  # the obligation is about R (always) or !R (never)
-            name = "R" if about_r else "!R"
-            if not self.negate:  # `name` everywhere in [t, e]
-                bad = (nNR if about_r else nR)[t]
-                if bad > e:
-                    return None
-                return (t, e), bad, f"{name} fails at {bad} in [{t}, {e}]"
-            # only* scope: the negation, "!name" somewhere in [t, e]
-            if (nNR if about_r else nR)[t] <= e:
-                return None
-            return (t, e), e, f"{name} holds everywhere in [{t}, {e}] (only* scope)"
-        if kind == "within":
-            if not self.negate:
-                if e < t + k or somewhere(t, t + k):
-                    return None
-                return (t, t + k), t + k, f"R does not hold in [{t}, {t + k}]"
-            hi = min(t + k, e)
-            bad = everywhere(t, hi)
-            if bad is None:
-                return None
-            return (t, hi), bad, f"R holds at {bad} in [{t}, {hi}] (only* scope)"
-        if kind == "for":
-            if not self.negate:
-                hi = min(t + k, e)
-                bad = everywhere(t, hi)
-                if bad is None:
-                    return None
-                return (t, hi), bad, f"R fails at {bad} in [{t}, {hi}]"
-            if e < t + k or somewhere(t, t + k):
-                return None
-            return (t, t + k), t + k, f"!R never holds in [{t}, {t + k}] (only* scope)"
-        if kind == "after":
-            if not self.negate:
-                hi = min(t + k, e)
-                early = nR[t]
-                if early <= hi:
-                    return (t, hi), early, f"R holds at {early}, before t+k+1={t + k + 1}"
-                if e >= t + k + 1 and not R[t + k + 1]:
-                    return (t, t + k + 1), t + k + 1, f"R does not hold at t+k+1={t + k + 1}"
-                return None
-            # negated: violated iff e >= t+k+1, !R on [t, t+k] and R at t+k+1
-            if e >= t + k + 1 and nR[t] == t + k + 1:
-                return (t, t + k + 1), t + k + 1, (f"R first holds exactly at t+k+1={t + k + 1}"
-                                                    " (only* scope)")
-            return None
-        if kind in ("until", "before"):
-            nS = self.nS
-            assert nS is not None
-            if (kind == "until") == want:
-                # `want` everywhere from t up to (not incl.) the first S, capped at e
-                ks = nS[t]
-                hi = min(ks - 1, e)
-                if hi < t:
-                    return None
-                bad = everywhere(t, hi)
-                if bad is None:
-                    return None
-                return (t, hi), bad, f"{rname} fails at {bad} before the stop condition"
-            # no S in [t, j], j = first point >= t where `want` holds, capped at e
-            j = min(nWant[t], e)
-            s = nS[t]
-            if s > j:
-                return None
-            return (t, j), s, (f"the stop condition holds at {s} before {rname} held "
-                               f"(window [{t}, {j}])")
-        raise ValueError(f"unknown timing {self.timing!r}")
+def trigger_points(cond: str, C: np.ndarray | None, s: int, e: int) -> list[int]:
+    """The trigger points of the scope interval ``[s, e]`` (module docstring, point 2)."""
+    if cond == "null":
+        return [s]
+    if cond == "holding":
+        return (np.flatnonzero(C[s:e + 1]) + s).tolist()
+    seg = C[s:e + 1]
+    rise = seg.copy()
+    rise[1:] &= ~seg[:-1]
+    return (np.flatnonzero(rise) + s).tolist()
 
 
 # --------------------------------------------------------------------------- entry point
 def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                         duration_ticks: Optional[int] = None) -> Evidence:
+                         duration_ticks: int | None = None) -> Evidence:
     """Decide ``req`` on a trace of ``n`` ticks by FRET's interval semantics.
 
     Args:
@@ -505,21 +344,11 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
     if n < 1:
         raise ValueError("the interval semantics needs at least one tick")
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
-    negate = scope.startswith("only")
     # scope conditions use FRET's endpoint-free function forms (../shared/fretish/README.md
     # section 6b): no interval start or end
-    whole = _Expr(columns, n, np.full(n, -(1 << 40), np.int64), np.full(n, 1 << 40, np.int64))
-    mode = whole.bool(req.scope.mode) if scope != "null" else None
-    intervals = scope_intervals(scope, mode, n)
-    start = np.arange(n, dtype=np.int64)
-    end = np.arange(n, dtype=np.int64)
-    for s, e in intervals:
-        start[s:e + 1] = s
-        end[s:e + 1] = e
-    ex = _Expr(columns, n, start, end)
-    R = ex.bool(req.response)
-    C = ex.bool(req.condition.expr) if cond != "null" else None
-    S = ex.bool(req.timing.stop) if timing in A.STOP_TIMINGS else None
+    intervals = scope_of(req, columns, n, np.full(n, -(1 << 40), np.int64),
+                         np.full(n, 1 << 40, np.int64))
+    R, C, S = trace_signals(req, columns, n, intervals)
     k = None
     if timing in A.DURATION_TIMINGS:
         if duration_ticks is not None:
@@ -529,22 +358,13 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
             if amount.denominator != 1:
                 raise EvidenceUnsupported("a fractional duration without a tick period")
             k = int(amount)
-    checker = _Checker(timing, negate, R, S, k)
+    checker = ObligationChecker(timing, scope.startswith("only"), R, S, k)
     triggers = violations = 0
-    first: Optional[Violation] = None
-    listed: List[Violation] = []
-    first_trigger: Optional[int] = None
+    first: Violation | None = None
+    listed: list[Violation] = []
+    first_trigger: int | None = None
     for s, e in intervals:
-        if cond == "null":
-            points = [s]
-        elif cond == "holding":
-            points = (np.flatnonzero(C[s:e + 1]) + s).tolist()
-        else:
-            seg = C[s:e + 1]
-            rise = seg.copy()
-            rise[1:] &= ~seg[:-1]
-            points = (np.flatnonzero(rise) + s).tolist()
-        for t in points:
+        for t in trigger_points(cond, C, s, e):
             triggers += 1
             if first_trigger is None:
                 first_trigger = t

@@ -1,0 +1,128 @@
+"""Checks of one log's inputs before it is read: the bindings a CSV trace gets, the number
+of ticks a fixed period would give, the binding types against the log's schemas, and the
+tick topic's measured rate against its nominal rate."""
+
+from __future__ import annotations
+
+from fretish.units import NS_PER_S, format_ns
+
+from ..bindings import Bindings, check_types, compile_expression
+from ..problems import BindingError
+from ..schema import log_schemas
+from ..sources import CSV_TOPIC
+from .model import AuditPlan, RequirementPlan
+from .passes import MAX_TICKS, expected_ticks
+
+__all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "check_binding_types",
+           "check_nominal_rate"]
+
+#: A tick topic's measured rate may differ this much from its nominal rate without warning.
+RATE_TOLERANCE = 0.10
+
+
+def csv_bindings(plan: AuditPlan, bindings: Bindings, source) -> Bindings:
+    """CSV with bindings: the bound variables as bound; every other variable of the
+    requirements that names a column reads it (``/csv.<column>``)."""
+    variables = dict(bindings.variables)
+    for r in plan.requirements:
+        for v in r.variables:
+            if v not in variables and v in source.columns:
+                variables[v] = compile_expression(v, f"{CSV_TOPIC}.{v}",
+                                                  source=f"<CSV column {v}>")
+    return Bindings(variables, bindings.tick, bindings.time_base, bindings.header_lag_ns,
+                    bindings.source)
+
+
+def too_many_ticks(source, bindings: Bindings | None, path: str) -> str | None:
+    """The error when the fixed tick period would give more than :data:`MAX_TICKS` ticks
+    over the log's span (first to last message), else None."""
+    if bindings is None or not bindings.tick.period_ns or source.kind == "csv":
+        return None
+    n = expected_ticks(source, bindings)
+    if n is None or n <= MAX_TICKS:
+        return None
+    span = (source.end_time - source.start_time) / NS_PER_S
+    return (f"{path}: the tick period {format_ns(bindings.tick.period_ns)} ({bindings.source}) "
+            f"would give {n:,} ticks over the {span:.3f} s of the log, more than the limit of "
+            f"{MAX_TICKS:,}; choose a longer period")
+
+
+def check_binding_types(source, bindings: Bindings, plan: AuditPlan, verdicts) -> None:
+    """Check the bindings the requirements use against the log's message types
+    (:func:`monitors.bindings.check_types`): a binding that names a field the schema does
+    not declare, or mixes strings, booleans and numbers, makes its requirements ``error``
+    before anything is evaluated."""
+    try:
+        schemas = log_schemas(source)
+    except Exception:  # unreadable schemas: the reader reports the damage itself
+        return
+    bad: dict[str, str] = {}
+    types: dict[str, str] = {}
+    for r in plan.requirements:
+        if verdicts[r.index].error is not None:
+            continue
+        uses = variable_uses(r)
+        for v in r.variables:
+            b = bindings.variables.get(v)
+            if b is None:
+                continue
+            if v not in bad:
+                try:
+                    types[v] = check_types(b, schemas)
+                    bad[v] = ""
+                except BindingError as exc:
+                    bad[v] = str(exc)
+            if bad[v]:
+                verdicts[r.index].error = bad[v]
+                break
+            use, t = uses.get(v, set()), types.get(v)
+            where = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+            if t == "bool" and "var" in use:
+                verdicts[r.index].error = (
+                    f"{where}: type error: {r.id} uses {v!r} as a number, but its binding "
+                    f"{b.expr!r} is a boolean; bind it to a number")
+                break
+            if t == "number" and "ap" in use:
+                verdicts[r.index].error = (
+                    f"{where}: type error: {r.id} uses {v!r} as a boolean, but its binding "
+                    f"{b.expr!r} is a number; compare it (e.g. {b.expr.strip()} > 0) to make "
+                    "a boolean")
+                break
+
+
+def variable_uses(r: RequirementPlan) -> dict[str, set]:
+    """FRET variable -> {"ap"} (used as a boolean) and/or {"var"} (used as a number, inside
+    a comparison or arithmetic), from the requirement's formulas (compiler.ir)."""
+    out: dict[str, set] = {}
+    f = r.formalization
+    if f is None:
+        return out
+    stack = [f.pt, f.ft]
+    while stack:
+        n = stack.pop()
+        if n is None:
+            continue
+        if n.op in ("ap", "var"):
+            out.setdefault(n.name, set()).add(n.op)
+        stack.extend(n.args)
+    return out
+
+
+def check_nominal_rate(la, bindings: Bindings | None) -> None:
+    """Warn when one tick per message of a topic whose nominal rate converts the durations
+    runs at a measured rate (messages over the log's span) more than
+    :data:`RATE_TOLERANCE` away from it: ``within 1 second`` then means a different time."""
+    if bindings is None or bindings.tick.topic is None or not bindings.tick.nominal_period_ns:
+        return
+    n = la.messages.get(bindings.tick.topic, 0)
+    st, en = la.start_time_ns, la.end_time_ns
+    if n < 2 or st is None or en is None or en <= st:
+        return
+    measured = (n - 1) * NS_PER_S / (en - st)
+    nominal = NS_PER_S / bindings.tick.nominal_period_ns
+    if abs(measured - nominal) > RATE_TOLERANCE * nominal:
+        la.warnings.append(
+            f"{bindings.tick.topic} runs at {measured:.3g} Hz, not its nominal "
+            f"{nominal:.3g} Hz ({bindings.source}): durations in time units, converted with "
+            f"the nominal rate, are off by {abs(measured / nominal - 1):.0%}")
+

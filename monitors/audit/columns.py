@@ -1,0 +1,87 @@
+"""The per-tick columns an audit keeps for the evidence and the vectorized engine.
+
+Memory: messages are streamed (:mod:`monitors.sources`), never kept. What grows with the
+length of the log is only these columns: per evaluated tick, 8 bytes of time, 8 bytes per
+bound topic (log time of the held message), 1 byte per boolean and 8 per numeric variable -
+about 80 bytes a tick for the Safe-ROS set, 3 MB for an hour at 10 Hz (kept in chunks of
+:data:`CHUNK` ticks).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["CHUNK", "TickColumns", "column_array"]
+
+#: Ticks per column chunk.
+CHUNK = 4096
+
+
+class TickColumns:
+    """Per-tick columns of one clock (module docstring): values of ``names``, tick times, and
+    log times (ns; -1 when none yet) of the messages of ``topics`` held at each tick; in
+    numpy chunks of :data:`CHUNK` ticks."""
+
+    def __init__(self, names: list[str], topics: list[str]):
+        self.names = names
+        self.topics = topics
+        self.n = 0
+        self._vals: list[list] = [[] for _ in names]
+        self._lts: list[list] = [[] for _ in topics]
+        self._times: list = []
+        self._vchunks: list[list[np.ndarray]] = [[] for _ in names]
+        self._lchunks: list[list[np.ndarray]] = [[] for _ in topics]
+        self._tchunks: list[np.ndarray] = []
+
+    def append(self, tick) -> None:
+        """Add one tick (:class:`monitors.signals.Tick`)."""
+        v = tick.values
+        for name, lst in zip(self.names, self._vals):
+            lst.append(v.get(name, False))  # a failed variable: its requirements are errors
+        lt = tick.log_times
+        for topic, lst in zip(self.topics, self._lts):
+            lst.append(lt.get(topic, -1))
+        self._times.append(tick.time)
+        self.n += 1
+        if len(self._times) >= CHUNK:
+            self._flush()
+
+    def _flush(self) -> None:
+        if not self._times:
+            return
+        for lst, chunks in zip(self._vals, self._vchunks):
+            chunks.append(column_array(lst))
+            lst.clear()
+        for lst, chunks in zip(self._lts, self._lchunks):
+            chunks.append(np.array(lst, dtype=np.int64))
+            lst.clear()
+        self._tchunks.append(np.array(self._times, dtype=np.int64))
+        self._times.clear()
+
+    def finish(self) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """(times, variable -> values, topic -> held log times), each of length ``n``.
+        Chunks are joined one column at a time and released, so the peak is the columns
+        plus one column."""
+        self._flush()
+
+        def cat(chunks: list[np.ndarray], dtype) -> np.ndarray:
+            if not chunks:
+                return np.zeros(0, dtype=dtype)
+            if any(c.dtype != chunks[0].dtype for c in chunks):
+                out = np.concatenate([c.astype(np.float64) for c in chunks])
+            else:
+                out = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
+            chunks.clear()
+            return out
+
+        times = cat(self._tchunks, np.int64)
+        cols = {n: cat(c, np.bool_) for n, c in zip(self.names, self._vchunks)}
+        lts = {t: cat(c, np.int64) for t, c in zip(self.topics, self._lchunks)}
+        return times, cols, lts
+
+
+def column_array(values: list) -> np.ndarray:
+    """A column of values: booleans as ``bool``, anything else as ``float64``."""
+    if all(type(x) is bool for x in values):
+        return np.array(values, dtype=np.bool_)
+    return np.array(values, dtype=np.float64)

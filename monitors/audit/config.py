@@ -1,0 +1,42 @@
+"""What an audit needs besides the logs (:class:`AuditConfig`), and the error of input it
+cannot start with (:class:`AuditInputError`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..problems import FretcInputError
+
+__all__ = ["AuditConfig", "AuditInputError"]
+
+
+class AuditInputError(FretcInputError):
+    """Input the audit cannot start with (exit code 2): unreadable requirement or binding
+    files, conflicting bindings, bad options, no logs. The message names the file."""
+
+
+@dataclass(frozen=True)
+class AuditConfig:
+    """Everything an audit needs besides the logs; plain values (picklable for workers).
+
+    Attributes:
+        requirements: requirement files or folders (``.fret``, FRET JSON exports).
+        bindings: binding files (TOML); None: discover ``*.bindings.toml`` next to the
+            requirements (:func:`discover_bindings`).
+        inline: ``NAME=EXPR`` bindings (``--bind``), added last.
+        tick_period: override of the bindings' tick (``"100 ms"``); ``tick_topic``: one tick
+            per message of this topic; ``time_base``: ``"log"`` or ``"header"``.
+        engine: ``"auto"``, ``"stepwise"`` or ``"vectorized"`` (:mod:`monitors.audit`, step 3).
+        window: ticks of values shown on each side of the trigger and the violation.
+    """
+
+    requirements: tuple[str, ...]
+    bindings: tuple[str, ...] | None = None
+    inline: tuple[str, ...] = ()
+    tick_period: str | None = None
+    tick_topic: str | None = None
+    time_base: str | None = None
+    engine: str = "auto"
+    window: int = 5
+    select_logs: bool = True
+

@@ -1,0 +1,72 @@
+"""Finding the inputs on disk: the logs named by paths (:func:`find_logs`) and the binding
+files next to requirement files (:func:`discover_bindings`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from .config import AuditInputError
+
+__all__ = ["LOG_SUFFIXES", "discover_bindings", "find_logs"]
+
+#: File kinds audited when a folder is given.
+LOG_SUFFIXES = (".mcap", ".bag", ".csv")
+
+
+def discover_bindings(requirement_paths: Sequence[str]) -> list[Path]:
+    """Binding files for requirement paths: for a folder, its ``*.bindings.toml``; for a
+    file ``X.fret`` (or ``X.json``), ``X.bindings.toml`` beside it if it exists, else every
+    ``*.bindings.toml`` in its folder. Sorted by name, without duplicates."""
+    out: list[Path] = []
+    for p in requirement_paths:
+        path = Path(p)
+        if path.is_dir():
+            found = sorted(path.glob("*.bindings.toml"))
+        else:
+            own = path.with_name(path.name.split(".")[0] + ".bindings.toml")
+            found = [own] if own.is_file() else sorted(path.parent.glob("*.bindings.toml"))
+        for f in found:
+            if f not in out:
+                out.append(f)
+    return out
+
+
+def find_logs(paths: Sequence[str]) -> list[str]:
+    """Logs named by ``paths``: files as given; a rosbag2 folder (``metadata.yaml``) as one
+    log; other folders searched recursively (sorted) for ``*.mcap``, ``*.bag``, ``*.csv``
+    and rosbag2 folders.
+
+    Raises:
+        AuditInputError: a path that does not exist, or a folder holding no log.
+    """
+    out: list[str] = []
+    for p in paths:
+        path = Path(p)
+        if not path.exists():
+            raise AuditInputError(f"{p}: no such file or folder")
+        if path.is_file() or (path / "metadata.yaml").is_file():
+            out.append(str(path))
+            continue
+        found = _walk_logs(path)
+        if not found:
+            raise AuditInputError(f"{p}: no logs (*.mcap, *.bag, *.csv, rosbag2 folders)")
+        out.extend(found)
+    seen = set()
+    return [x for x in out if not (x in seen or seen.add(x))]
+
+
+def _walk_logs(folder: Path) -> list[str]:
+    out: list[str] = []
+    for child in sorted(folder.iterdir(), key=lambda c: c.name):
+        if child.name.startswith("."):
+            continue
+        if child.is_dir():
+            if (child / "metadata.yaml").is_file():
+                out.append(str(child))
+            else:
+                out.extend(_walk_logs(child))
+        elif child.suffix.lower() in LOG_SUFFIXES:
+            out.append(str(child))
+    return out
+

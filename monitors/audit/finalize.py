@@ -1,0 +1,215 @@
+"""Finalization: one requirement's verdict and evidence from the pass over its clock
+(:func:`finalize`), and the log's figures that summarize its requirements' clocks
+(:func:`summarize_clocks`).
+
+The verdict comes from the requirement's engine (:mod:`monitors.engines`): ``finish()`` gives
+FRET's finite-trace verdict, ``status``/``status_tick`` the earliest definitive (LTL3)
+verdict. The interval semantics (:func:`monitors.engines.interval.evaluate_requirement`)
+re-decides it from the columns and gives the vacuity, the first violated trigger, its scope
+interval and response window; the values of the requirement's variables and the log times of
+the messages behind them are taken around the trigger and the violation. On a damaged log the
+verdict is the one the intact span decides (:mod:`monitors.damage`).
+"""
+
+from __future__ import annotations
+
+from ..bindings import Bindings
+from ..damage import open_obligations, verdict_at_damage
+from ..engines import stepwise
+from ..engines.interval import OBLIGATIONS, EvidenceUnsupported, evaluate_requirement
+from ..engines.vectorized import ltl3_status, pt_series
+from ..report_model import FirstViolation, Ltl3, TimePoint
+from .model import AuditPlan, RequirementPlan
+from .passes import ClockPass, clock_key
+
+__all__ = ["finalize", "summarize_clocks"]
+
+
+def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
+             v, la) -> None:
+    """Set the verdict ``v`` (:class:`monitors.report_model.Verdict`) of requirement ``r``
+    from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
+    violation the first violation with the values and message log times around it.
+    ``la`` is the log's :class:`monitors.report_model.LogAudit`."""
+    n = len(res.times)
+    v.engine = res.engine[r.index]
+    if n == 0:
+        _no_tick(res, v, la)
+        return
+    f = r.formalization
+    ev = None
+    try:
+        ev = evaluate_requirement(r.requirement, res.columns, n, f.ticks)
+    except EvidenceUnsupported as exc:
+        if v.engine == "interval":
+            v.error = f"no online monitor and no interval semantics for it: {exc}"
+            return
+        v.notes.append(f"interval evidence unavailable: {exc}")
+    holds, status, st_tick = _engine_verdict(r, res, v.engine, ev, n)
+    v.ltl3 = Ltl3(status, st_tick, int(res.times[st_tick]) if st_tick is not None else None)
+    if ev is not None:
+        v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
+        if ev.holds != holds:  # never seen in tests; the monitor's verdict stands
+            v.notes.append("the interval semantics disagrees with the monitor "
+                           f"({'holds' if ev.holds else 'violated'}); please report this")
+            ev = None
+    if res.intact_end is not None:
+        holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+        if holds is None:
+            return
+    if holds:
+        v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
+        if v.verdict == "vacuous":
+            v.notes.append("vacuous: " + ("the scope was never entered" if ev.intervals == 0
+                                          else "the trigger never fired"))
+        return
+    v.verdict = "violated"
+    _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
+
+
+def _no_tick(res: ClockPass, v, la) -> None:
+    """No tick evaluated: unknown when the damage came first, else an error saying what the
+    clock waited for."""
+    if res.intact_end is not None:
+        v.verdict = "unknown"
+        v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
+                            "read completely to judge")
+        return
+    waiting = la.missing_topics or la.waiting_for
+    v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
+                                      else ": the log has no message on the bound topics"))
+
+
+def _engine_verdict(r: RequirementPlan, res: ClockPass, engine: str, ev, n: int
+                    ) -> tuple[bool, str, int | None]:
+    """(FRET's finite-trace verdict, LTL3 status, its tick) from the requirement's engine."""
+    if engine == "interval":
+        return ev.holds, "unknown", None
+    if engine == "stepwise":
+        return stepwise.verdict(res.monitors[r.index])
+    holds = bool(pt_series(r.formalization.pt, res.columns, n)[-1])
+    status, st_tick = ltl3_status(r.monitor_source(), res.columns, n)
+    return holds, status, st_tick
+
+
+def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, status, st_tick,
+                     n: int) -> bool | None:
+    """The verdict over the intact span of a damaged log (:mod:`monitors.damage`): True /
+    False for the usual satisfied-or-vacuous / violated paths of :func:`finalize`, None
+    when the verdict (``unknown``) is set here."""
+    opened = []
+    try:
+        opened = open_obligations(r.requirement, res.columns, n, r.formalization.ticks)
+    except (EvidenceUnsupported, KeyError) as exc:
+        if holds:  # cannot tell whether an obligation is open at the damage
+            v.verdict = "unknown"
+            v.unknown_reason = (f"the log is damaged and whether an obligation is open at "
+                                f"the damage cannot be decided ({exc})")
+            return None
+    verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
+                                     st_tick, n, ev, opened, has_ltl3=v.engine != "interval")
+    if verdict == "unknown":
+        v.verdict = "unknown"
+        v.unknown_reason = why
+        return None
+    return verdict != "violated"
+
+
+class _Ticks:
+    """Tick indexes of one clock as :class:`monitors.report_model.TimePoint` and times."""
+
+    def __init__(self, res: ClockPass, held: list, bindings: Bindings | None) -> None:
+        self.times = res.times
+        self.n = len(res.times)
+        self.held = held
+        self.bindings = bindings
+
+    def point(self, i: int) -> TimePoint:
+        j = min(max(i, 0), self.n - 1)
+        lts = [int(h[j]) for h in self.held if h[j] >= 0]
+        # the message that decided the tick: the newest one held among its topics
+        return TimePoint(int(i), int(self.times[j]), max(lts) if lts else None)
+
+    def time_at(self, i: int) -> int | None:
+        n, b = self.n, self.bindings
+        if 0 <= i < n:
+            return int(self.times[i])
+        if i >= n and b is not None and b.tick.period_ns:
+            return int(self.times[-1]) + (i - n + 1) * b.tick.period_ns
+        return None
+
+
+def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
+                        bindings: Bindings | None, v, ev, status: str,
+                        st_tick: int | None) -> None:
+    """The first violation of a violated requirement, and the values and message log times
+    ``plan.config.window`` ticks around its trigger and violation."""
+    n = len(res.times)
+    scope_kind = r.requirement.scope.kind
+    timing = r.requirement.timing.kind
+    obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]
+    k = r.formalization.ticks
+    own_topics = sorted(clock_key(r, bindings)) if bindings is not None else []
+    held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
+        list(res.log_times.values())
+    ticks = _Ticks(res, held, bindings)
+    tp = ticks.point
+    if ev is not None and ev.violation is not None:
+        w = ev.violation
+        vt = min(w.violation_tick, n - 1)
+        fv = FirstViolation(
+            at=tp(vt), trigger=tp(w.trigger_tick), scope=(tp(w.interval[0]), tp(w.interval[1])),
+            window=w.window, window_time_ns=(ticks.time_at(w.window[0]),
+                                             ticks.time_at(w.window[1])),
+            obligation=obligation.replace("t+k", f"t+{k}") if k is not None else obligation,
+            reason=w.reason)
+        centres = [w.trigger_tick, vt]
+        v.violation_list = [(tp(x.trigger_tick), tp(min(x.violation_tick, n - 1)))
+                            for x in ev.listed]
+    else:
+        vt = st_tick if (status == "violated" and st_tick is not None) else n - 1
+        fv = FirstViolation(at=tp(vt), obligation=obligation,
+                            reason="the monitor's verdict (no interval evidence)")
+        centres = [vt]
+    v.first_violation = fv
+    _values_around(plan.config.window, r, res, bindings, v, centres)
+
+
+def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
+                   v, centres: list[int]) -> None:
+    """``v.values`` and ``v.sources``: the requirement's variables and its topics' held log
+    times at the ticks within ``window`` of each centre."""
+    n, times = len(res.times), res.times
+    ticks = sorted({i for c in centres for i in range(c - window, c + window + 1)
+                    if 0 <= i < n})
+    for name in r.variables:
+        col = res.columns.get(name)
+        if col is None:
+            continue
+        v.values[name] = [(i, int(times[i]), stepwise.to_python(col[i])) for i in ticks]
+    if bindings is not None:
+        topics = sorted({t for name in r.variables if name in bindings.variables
+                         for t in bindings.variables[name].topics})
+    else:
+        topics = sorted(res.log_times)
+    for t in topics:
+        lt = res.log_times.get(t)
+        if lt is None:
+            continue
+        v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]
+
+
+def summarize_clocks(la, verdicts: list) -> None:
+    """The log's figures from its requirements' clocks (each verdict has its own): the most
+    ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
+    after damage the end of the judged span. ``verdicts``: those without an error."""
+    if not verdicts:
+        return
+    la.ticks_evaluated = max(v.ticks_evaluated for v in verdicts)
+    la.warmup_ticks = max(v.warmup_ticks for v in verdicts)
+    firsts = [v.first_tick_ns for v in verdicts if v.first_tick_ns is not None]
+    la.first_time_ns = min(firsts) if firsts else None
+    la.waiting_for = sorted({t for v in verdicts for t in v.waiting_for})
+    if la.ticks_after_damage:  # the log's judged span ends at the damage
+        lasts = [v.last_tick_ns for v in verdicts if v.last_tick_ns is not None]
+        la.end_time_ns = max(lasts) if lasts else None

@@ -1,0 +1,225 @@
+"""The passes over one log: each requirement sampled on its own clock, its monitors stepped
+tick by tick, and the columns kept (:func:`run_passes`); then everything cut at the damage
+(:func:`cut_at_damage`).
+
+A requirement's clock is the set of topics its variables read (../shared/DESIGN.md, "Each
+verdict stands alone"); requirements on the same clock share one sampled stream
+(:func:`monitors.signals.sample_groups`). The engine of each requirement: ``stepwise``
+(the generated ``step()`` on every tick, :mod:`monitors.engines.stepwise`), ``vectorized``
+(at the end, from the columns, :mod:`monitors.engines.vectorized`; engine ``auto`` chooses it
+on logs expected to have at least :data:`VECTORIZE_MIN_TICKS` ticks) or ``interval`` (no
+online monitor: decided by :mod:`monitors.engines.interval` alone).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..bindings import Bindings
+from ..engines.stepwise import replay
+from ..problems import SignalError
+from ..signals import sample, sample_groups
+from ..sources import CSV_TOPIC
+from .columns import TickColumns
+from .model import AuditPlan, RequirementPlan
+
+__all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
+           "expected_ticks", "MAX_TICKS", "VECTORIZE_MIN_TICKS"]
+
+#: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
+VECTORIZE_MIN_TICKS = 20_000
+#: At most this many ticks per log: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many (issue 15 item 11).
+MAX_TICKS = 10**8
+#: Ticks between two progress reports.
+_PROGRESS_EVERY = 512
+
+
+@dataclass
+class ClockPass:
+    """The ticks of one clock: its sampling (:class:`monitors.signals.Sampling`), tick
+    times (ns), the columns (variable -> values, topic -> held log times), the stepwise
+    monitors by requirement index after the last tick, and each requirement's engine."""
+
+    sampling: Any
+    times: np.ndarray
+    columns: dict[str, np.ndarray]
+    log_times: dict[str, np.ndarray]
+    monitors: dict[int, Any]
+    engine: dict[int, str]
+    cut: int = 0  # ticks dropped after the damage (cut_at_damage)
+    intact_end: int | None = None  # exclusive bound of the judged ticks' times
+
+
+@dataclass
+class LogPasses:
+    """One read of a log: a :class:`ClockPass` per clock, and what went wrong per clock."""
+
+    sampling: Any
+    passes: dict[frozenset, ClockPass]
+    failed: dict[frozenset, dict[str, SignalError]]
+    errors: dict[frozenset, SignalError]
+
+
+def restrict(b: Bindings, names: list[str]) -> Bindings:
+    """``b`` with only the variables in ``names``."""
+    return Bindings({n: b.variables[n] for n in b.variables if n in names}, b.tick, b.time_base,
+                    b.header_lag_ns, b.source)
+
+
+def expected_ticks(source, bindings: Bindings | None) -> int | None:
+    """Ticks the log should give: a CSV trace's rows, or its span over a fixed tick period
+    (None when unknown: a topic tick, no span)."""
+    if source.kind == "csv":
+        return getattr(source, "row_count", None)
+    if bindings is None or bindings.tick.period_ns is None:
+        return None
+    st, en = source.start_time, source.end_time
+    if st is None or en is None:
+        return None
+    return (en - st) // bindings.tick.period_ns + 1
+
+
+def clock_key(r: RequirementPlan, bindings: Bindings | None) -> frozenset:
+    """The clock a requirement is sampled on: the topics of its own variables
+    (../shared/DESIGN.md, "Each verdict stands alone": its tick grid, start, end and warm-up
+    come from them and the bindings' tick, never from other requirements of the run)."""
+    if bindings is None:
+        return frozenset()
+    return frozenset(t for v in r.variables if v in bindings.variables
+                     for t in bindings.variables[v].topics)
+
+
+def choose_engines(plan: AuditPlan, expected: int | None,
+                   active: list[RequirementPlan]) -> dict[int, str]:
+    """Requirement index -> ``stepwise``, ``vectorized`` or ``interval`` (module docstring)."""
+    engine: dict[int, str] = {}
+    for r in active:
+        mode = plan.config.engine
+        if mode == "auto":
+            mode = ("vectorized" if expected is not None and expected >= VECTORIZE_MIN_TICKS
+                    else "stepwise")
+        if mode == "vectorized" and not r.vectorizable():
+            mode = "stepwise"
+        engine[r.index] = "interval" if r.offline else mode
+    return engine
+
+
+class _Clock:
+    """The requirements of one clock while the log is read: their columns and the ``step``
+    of their stepwise monitors."""
+
+    def __init__(self, key: frozenset, rs: list[RequirementPlan], engine: dict[int, str],
+                 bindings: Bindings | None) -> None:
+        self.requirements = rs
+        self.names: list[str] = []
+        for r in rs:
+            for v in r.variables:
+                if v not in self.names:
+                    self.names.append(v)
+        topics = sorted(key) if bindings is not None else [CSV_TOPIC]
+        self.columns = TickColumns(self.names, topics)
+        self.monitors = {r.index: r.monitor_cls() for r in rs if engine[r.index] == "stepwise"}
+        self.steppers = [(r, self.monitors[r.index].step) for r in rs
+                         if r.index in self.monitors]
+
+    def step(self, tick, failed: dict) -> None:
+        """Step the monitors whose variables the tick has, and keep the tick."""
+        vals = tick.values
+        steps = self.steppers
+        if failed and any(v not in vals for r, _ in steps for v in r.variables):
+            steps[:] = [(r, st) for r, st in steps if all(v in vals for v in r.variables)]
+        for _r, step in steps:
+            step(vals)
+        self.columns.append(tick)
+
+
+def _progress(source, expected: int | None, progress: Callable[[float], None]
+              ) -> Callable[[Any], None]:
+    """Report the fraction of the log read at ``tick``: by log time over the log's span, or
+    by ticks over the ticks expected."""
+    start_t, end_t = source.start_time, source.end_time
+    span = (end_t - start_t) if (start_t is not None and end_t is not None
+                                 and end_t > start_t) else None
+
+    def report(tick, count: int) -> None:
+        if span is not None:
+            progress(min(1.0, max(0.0, (tick.time - start_t) / span)))
+        elif expected:
+            progress(min(1.0, count / expected))
+    return report
+
+
+def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
+               active: list[RequirementPlan],
+               progress: Callable[[float], None] | None) -> LogPasses:
+    """Read the log once: sample every clock of ``active``, step the stepwise monitors, keep
+    the columns, then cut each clock at the damage.
+
+    Raises:
+        SignalError: a signal cannot be computed (the variable is named), or more than
+            :data:`MAX_TICKS` ticks.
+    """
+    expected = expected_ticks(source, bindings)
+    engine = choose_engines(plan, expected, active)
+    groups: dict[frozenset, list[RequirementPlan]] = {}
+    for r in active:
+        groups.setdefault(clock_key(r, bindings), []).append(r)
+    clocks = {key: _Clock(key, rs, engine, bindings) for key, rs in groups.items()}
+    if bindings is not None:
+        sampling = sample_groups(source, bindings,
+                                 {key: (c.names, key) for key, c in clocks.items()})
+        stream = iter(sampling)
+        failed, errors = sampling.failed, sampling.errors
+    else:
+        sampling = sample(source, None)
+        key0 = next(iter(groups))
+        stream = ((key0, t) for t in sampling)
+        failed, errors = {key0: {}}, {}
+    report = _progress(source, expected, progress) if progress is not None else None
+    count = 0
+    for key, tick in stream:
+        clocks[key].step(tick, failed[key])
+        count += 1
+        if count > MAX_TICKS:
+            raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
+                              "choose a longer tick period")
+        if report is not None and count % _PROGRESS_EVERY == 0:
+            report(tick, count)
+    passes: dict[frozenset, ClockPass] = {}
+    for key, clock in clocks.items():
+        times, columns, log_times = clock.columns.finish()
+        s = sampling.groups[key] if bindings is not None else sampling
+        passes[key] = ClockPass(s, times, columns, log_times, clock.monitors, engine)
+        cut_at_damage(passes[key], source, bindings, groups[key])
+    return LogPasses(sampling, passes, failed, errors)
+
+
+def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
+                  active: list[RequirementPlan]) -> None:
+    """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
+    evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
+    under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
+    precede its log time by that much). The stepwise monitors, which saw every tick, are
+    replayed over the kept ones. Sets ``res.cut`` to the number of ticks dropped."""
+    end = source.intact_end
+    if end is None:
+        return
+    if bindings is not None and bindings.time_base == "header":
+        end -= bindings.header_lag_ns
+    keep = int(np.searchsorted(res.times, end, side="left"))
+    n = len(res.times)
+    res.intact_end = end
+    if keep >= n:
+        return
+    res.cut = n - keep
+    res.times = res.times[:keep]
+    res.columns = {k: v[:keep] for k, v in res.columns.items()}
+    res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+    by_index = {r.index: r for r in active}
+    for idx in list(res.monitors):
+        res.monitors[idx] = replay(by_index[idx].monitor_cls, res.columns, keep)
