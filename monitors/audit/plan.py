@@ -4,8 +4,9 @@ bindings merged, ready for any number of logs (:func:`load_plan`).
 Requirements are compiled (:mod:`compiler.build`) with the tick period of the signal
 bindings when their file declares none (a declared period must equal a fixed bindings period,
 else that requirement is an input error naming both), and their monitors are generated
-(:func:`compiler.codegen.emit_monitors`, one module per requirement file) and loaded
-in-process into a fresh module: the same code ``fretc FILE --emit monitor`` gives users.
+(:func:`compiler.codegen.build_monitor_modules`, one module per requirement file) and loaded
+in-process into a fresh module: the same code ``fretc FILE --emit monitor`` gives users; the
+builder's map pairs requirements with their classes and automata (nothing built twice).
 Binding files that select their logs (``[logs]``) give one plan per file
 (:class:`monitors.bindings.LogSelector`, :func:`select_variant`).
 """
@@ -18,7 +19,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from compiler.build import compile_entries
-from compiler.codegen import emit_monitors, file_stems
+from compiler.codegen import MonitorModule, MonitorSource, build_monitor_modules
 from fretish.errors import FretishError
 from fretish.files import load_requirements
 from fretish.parser import parse
@@ -84,10 +85,13 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
                 rp.error = (f"{c.error} (the tick period {format_period(period)} comes from "
                             "--tick-period)")
     ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
-    modules = emit_monitors(ok) if ok else {}
-    classes, skipped = _load_monitors(modules, ok)
+    built = build_monitor_modules(ok) if ok else {}
+    modules = {m.name: m.text for m in built.values()}
+    classes, skipped, sources = _load_monitors(built)
     for c, rp in zip(compiled, plans):
         _attach(rp, c, classes, skipped)
+        if (c.entry.source, c.id) in sources:  # the automata built with the module, not again
+            rp._msource = sources[(c.entry.source, c.id)]
     csv_period = bindings.tick.period_ns if (bindings is not None
                                              and bindings.tick.period_ns) else None
     if csv_period is None:
@@ -163,24 +167,24 @@ def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bin
     return e
 
 
-def _load_monitors(modules: dict[str, str], ok: list
-                   ) -> tuple[dict[tuple[str, str], type], dict[tuple[str, str], str]]:
-    """Execute each generated module once into a fresh module object; ((source, id) ->
-    monitor class, (source, id) -> why it was skipped)."""
+def _load_monitors(built: dict[str, MonitorModule]
+                   ) -> tuple[dict[tuple[str, str], type], dict[tuple[str, str], str],
+                              dict[tuple[str, str], MonitorSource]]:
+    """Execute each generated module once into a fresh module object: ((source, id) ->
+    monitor class, (source, id) -> why it was skipped, (source, id) -> the
+    :class:`~compiler.codegen.MonitorSource` its class was generated from), paired through
+    :func:`compiler.codegen.build_monitor_modules`' map (keyed by requirement file)."""
     classes: dict[tuple[str, str], type] = {}
     skipped: dict[tuple[str, str], str] = {}
-    stem_of = file_stems([c.entry.source for c in ok], "_monitors")  # as emit_monitors
-    for stem, text in modules.items():
-        mod = load_module(stem, text)
-        # map by (source, id): emit_monitors groups by source in input order
-        for c in ok:
-            if stem_of[c.entry.source] == stem:
-                src = c.entry.source
-                if c.id in mod.MONITORS:
-                    classes[(src, c.id)] = mod.MONITORS[c.id]
-                elif c.id in mod.SKIPPED:
-                    skipped[(src, c.id)] = mod.SKIPPED[c.id]
-    return classes, skipped
+    sources: dict[tuple[str, str], MonitorSource] = {}
+    for src, mm in built.items():
+        mod = load_module(mm.name, mm.text)
+        for rid, info in mm.monitors.items():
+            classes[(src, rid)] = mod.MONITORS[rid]
+            sources[(src, rid)] = info.source
+        for rid, why in mm.skipped.items():
+            skipped[(src, rid)] = why
+    return classes, skipped, sources
 
 
 def load_module(stem: str, text: str) -> types.ModuleType:
