@@ -15,7 +15,7 @@ from ..problems import BindingError, SignalError
 from .compile import EvalError, EvalState, compile_node
 from .expression import (BinOp, Const, Expr, Field, Ref, UnaryOp, Where, check,
                          parse_expression, substitute, unparse, walk)
-from .extract import Valid
+from .extract import Valid, normalize_scalar
 from .operations import Ops
 
 __all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals"]
@@ -76,13 +76,11 @@ class Binding:
         except EvalError as exc:
             raise self._fail(exc, context) from None
         t = type(v)
-        if t is bool or t is float:
+        if t is bool or t is float:  # the fast path: most values are
             return v
-        if t is int:
-            return float(v)
-        if isinstance(v, np.generic):
-            v = v.item()
-            return v if isinstance(v, bool) else float(v)
+        v = normalize_scalar(v)  # ints and numpy scalars (results of array operations)
+        if type(v) is bool or type(v) is float:
+            return v
         if isinstance(v, Valid):
             raise self._fail(EvalError(self.ast, f"value is an array of {v.data.shape[-1]} "
                                        "items; reduce it with min/max/any/all/count"), context)

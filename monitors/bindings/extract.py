@@ -17,7 +17,7 @@ import numpy as np
 
 from .expression import Field, Slice
 
-__all__ = ["LASER_SCAN", "Valid", "FieldAccessError", "make_extractor"]
+__all__ = ["LASER_SCAN", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
 
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 
@@ -42,7 +42,9 @@ class FieldAccessError(Exception):
     field's text (``/scan.ranges[3]: index out of range``)."""
 
 
-def _norm_scalar(v: Any) -> Any:
+def normalize_scalar(v: Any) -> Any:
+    """A scalar field value as a binding value: ints and numpy numbers as float, numpy
+    bools as bool; anything else (strings, messages) as it is."""
     t = type(v)
     if t is float or t is bool:
         return v
@@ -171,6 +173,6 @@ def make_extractor(f: Field) -> Callable[[Any], Any]:
             return Valid(_as_array(v), None)
         if isinstance(v, (list, tuple)) and v and all(isinstance(x, (bool, int, float)) for x in v):
             return Valid(_as_array(np.asarray(v)), None)
-        return _norm_scalar(v)
+        return normalize_scalar(v)
 
     return extract
