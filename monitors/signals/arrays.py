@@ -10,8 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from ..bindings import Bindings, Valid, make_extractor
 from ..bindings.expression import Field
+from ..bindings.extract import Valid, make_extractor
+from ..bindings.spec import Bindings
 from ..problems import ProblemLog, SignalError
 from ..selective import install as install_selective
 from ..sources import CSV_TOPIC, CsvSource, LogSource

@@ -14,7 +14,9 @@ from typing import Any
 import numpy as np
 
 from .. import problems as P
-from ..bindings import Binding, Bindings, EvalState, TickSpec
+from ..bindings.binding import Binding
+from ..bindings.compile import EvalState
+from ..bindings.spec import Bindings, TickSpec
 from ..problems import DataProblem, ProblemLog, SignalError
 from ..selective import install as install_selective
 from ..sources import CSV_TOPIC, CsvSource, LogSource

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
-from ..bindings import Bindings, TickSpec
+from ..bindings.spec import Bindings, TickSpec
 from ..problems import DataProblem, SignalError
 from ..selective import install as install_selective
 from ..sources import CsvSource, LogSource
