@@ -35,7 +35,7 @@ class SampledArrays(tuple):
     """
 
     def __new__(cls, times: np.ndarray, columns: dict[str, np.ndarray], warmup_ticks: int,
-                log_times: dict[str, np.ndarray], vectorized: bool) -> "SampledArrays":
+                log_times: dict[str, np.ndarray], vectorized: bool) -> SampledArrays:
         self = super().__new__(cls, (times, columns))
         self.warmup_ticks = warmup_ticks
         self.log_times = log_times
