@@ -55,6 +55,7 @@ class Slice:
     hi: int | None
 
     def text(self) -> str:
+        """``[lo:hi]`` as written (open ends empty)."""
         return f"[{'' if self.lo is None else self.lo}:{'' if self.hi is None else self.hi}]"
 
 
@@ -67,6 +68,7 @@ class Field(Expr):
     path: tuple[str | int | Slice, ...]
 
     def text(self) -> str:
+        """``/topic.a[2].b``: the field as written in a binding."""
         out = self.topic
         for p in self.path:
             out += (p.text() if isinstance(p, Slice) else f"[{p}]" if isinstance(p, int)

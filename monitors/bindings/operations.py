@@ -47,6 +47,8 @@ class Ops:
         return x, None
 
     def lift2(self, fn: Callable[[Any, Any], Any], a: Any, b: Any, numeric: bool) -> Any:
+        """``fn(a, b)`` on numbers or arrays; a :class:`Valid` operand's mask is kept (both
+        masks: both must hold). ``numeric``: booleans become numbers first."""
         if isinstance(a, Valid) or isinstance(b, Valid):
             da, ma = self._split(a)
             db, mb = self._split(b)
@@ -59,6 +61,7 @@ class Ops:
         return fn(a, b)
 
     def lift1(self, fn: Callable[[Any], Any], a: Any, numeric: bool) -> Any:
+        """``fn(a)`` on a number or an array, keeping a :class:`Valid` mask."""
         if isinstance(a, Valid):
             return Valid(fn(num(a.data) if numeric else a.data), a.mask)
         return fn(num(a) if numeric else a)
@@ -84,6 +87,8 @@ class Ops:
         return x.item() if isinstance(x, np.generic) else x
 
     def reduce(self, func: str, a: Valid) -> Any:
+        """``func`` (min, max, mean, norm, any, all, count, len) of an array over its valid
+        items: a number per tick (one tick) or an array of them (vectorized)."""
         ax = self.axis
         # ndarray methods (not np.min etc.): same ufunc reductions, less Python overhead.
         if func == "min":  # where=: no filled copy; the same values

@@ -79,6 +79,12 @@ class TickColumns:
         self.cache: dict[tuple[str, tuple], Any] = {}
 
     def field(self, topic: str, path: tuple, node: Field) -> Any:
+        """The field ``path`` of ``topic`` at each tick (bool/float64 array, or :class:`Valid`
+        of ticks × items); ``node`` names it in errors.
+
+        Raises:
+            _Fallback: values that do not fit a column (ragged arrays, strings).
+        """
         key = (topic, path)
         if key in self.cache:
             return self.cache[key]
@@ -106,6 +112,7 @@ class TickColumns:
         return out
 
     def age(self, topic: str) -> np.ndarray:
+        """``age(topic)`` at each tick: seconds since the held message (float64)."""
         held = self.topic_times[topic][self.idx[topic]]
         return (self.tick_times - held).astype(np.float64) / NS_PER_S
 

@@ -102,6 +102,12 @@ class Sampling:
 
 def check_topics(source: LogSource, bindings: Bindings, extra: set[str] | None = None,
                   users: Bindings | None = None) -> set[str]:
+    """The topics to read: the bound ones, ``extra`` and the tick topic.
+
+    Raises:
+        SignalError: some of them are not in the log (naming the variables that use them,
+            from ``users`` if given).
+    """
     available = source.topics()
     need = set(bindings.topics) | (extra or set())
     if bindings.tick.topic is not None:
@@ -130,6 +136,12 @@ class HeaderBuffer:
         self.seq = 0
 
     def push(self, m: Any) -> list[tuple[str, int, int, Any]]:
+        """Buffer message ``m``; the messages now ``lag`` behind the newest stamp, in stamp
+        order, as (topic, stamp, log time, data).
+
+        Raises:
+            SignalError: ``m`` has no header stamp.
+        """
         s = m.header_stamp
         if s is None:
             raise SignalError(f"{self.source.path}: time = \"header\" but {m.topic} messages "
@@ -159,6 +171,7 @@ class HeaderBuffer:
         return out
 
     def drain(self) -> list[tuple[str, int, int, Any]]:
+        """The messages still buffered, in stamp order (at the end of the log)."""
         out = []
         while self.heap:
             s0, _, m0 = heapq.heappop(self.heap)
@@ -246,6 +259,7 @@ class Clock:
             st.msgs[tt], st.times[tt], lt[tt] = held
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
+        """Hold message ``data`` of ``topic`` at time ``t``; the ticks due before it."""
         out: list[Tick] = []
         if self.period is not None:
             if self.next_grid is None:
@@ -271,6 +285,7 @@ class Clock:
         return out
 
     def finish(self) -> list[Tick]:
+        """The ticks left at the end of the log."""
         out: list[Tick] = []
         if self.last is not None:
             if self.period is not None:
@@ -326,6 +341,7 @@ def sample(source: LogSource, bindings: Bindings | None = None) -> Sampling:
 
 
 def csv_bindings_check(source: CsvSource, bindings: Bindings) -> None:
+    """Raises SignalError when bindings read a topic other than the CSV pseudo-topic."""
     bad = sorted(bindings.topics - {CSV_TOPIC})
     if bad:
         raise SignalError(f"{source.path}: a CSV trace has only the pseudo-topic {CSV_TOPIC} "
@@ -333,6 +349,7 @@ def csv_bindings_check(source: CsvSource, bindings: Bindings) -> None:
 
 
 def csv_period(source: CsvSource, bindings: Bindings | None) -> int:
+    """The CSV tick period (ns): the bindings' fixed period if given, else the source's."""
     if bindings is not None and bindings.tick.period_ns is not None:
         return bindings.tick.period_ns
     return source.period_ns
