@@ -1,0 +1,162 @@
+"""Same outputs before and after a refactor: fretc's outputs of a git revision against this tree.
+
+Usage::
+
+    python bench/same_outputs.py [--ref arch-base] [--keep DIR] [--skip-audit]
+
+The revision ``--ref`` is exported with ``git archive`` into a temporary folder; both trees
+then run the same commands with the same Python (this virtual environment; each tree's own
+packages first on ``PYTHONPATH``), in their own folder, on the same inputs:
+
+* ``fretc FILE --emit ltl --json``, ``--emit monitor``, ``--emit psl`` for every requirement
+  file in ``requirements/`` and for FRET's vectors (``../shared/fretish/fret_vectors.jsonl``,
+  ``fret_vectors_functions.jsonl`` and the 696 sentences of ``fret_trace_verdicts.jsonl``,
+  written as ``.fret`` files of 100 requirements);
+* ``fretc audit`` (JSON, JUnit XML, terminal text) and ``fretc report`` (HTML, Markdown) on the
+  shipped traces (``traces/``) and on the two real logs of ``../shared/data/logs`` with
+  ``requirements/real_logs/``.
+
+Each command's exit status, standard output, standard error and written files are compared
+byte for byte; ``SOURCE_DATE_EPOCH`` fixes the reports' generated-at line. Prints one line per
+compared output and a unified diff excerpt of each difference; exits 1 when any output
+differs, 0 when all are identical. This is the acceptance check of issue 14 (behaviour
+unchanged by the restructuring).
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED = (REPO.parent / "shared").resolve()
+CHUNK = 100
+
+
+def _vector_files(folder: Path) -> list[Path]:
+    """FRET's vector sentences as .fret files of CHUNK requirements each."""
+    texts: list[str] = []
+    for name in ("fret_vectors.jsonl", "fret_vectors_functions.jsonl"):
+        for line in (SHARED / "fretish" / name).read_text().splitlines():
+            texts.append(json.loads(line)["text"])
+    seen: set[str] = set()
+    for line in (SHARED / "fretish" / "fret_trace_verdicts.jsonl").read_text().splitlines():
+        for case in json.loads(line)["cases"]:
+            if case["sentence"] not in seen:
+                seen.add(case["sentence"])
+                texts.append(case["sentence"])
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for start in range(0, len(texts), CHUNK):
+        path = folder / f"vectors_{start // CHUNK:02d}.fret"
+        body = "".join(f"V{start + i + 1}: {' '.join(t.split())}\n"
+                       for i, t in enumerate(texts[start:start + CHUNK]))
+        path.write_text(body)
+        paths.append(path)
+    return paths
+
+
+def _commands(inputs: list[Path], audit: bool) -> list[tuple[str, list[str]]]:
+    """(name, fretc arguments) of every compared command; paths relative to the tree."""
+    cmds: list[tuple[str, list[str]]] = []
+    reqs = sorted(str(p.relative_to(REPO)) for p in (REPO / "requirements").rglob("*.fret"))
+    for i, f in enumerate(reqs + [str(p) for p in inputs]):
+        tag = Path(f).stem + f"_{i}"
+        cmds.append((f"ltl_{tag}", [f, "--emit", "ltl", "--json"]))
+        cmds.append((f"ltl_text_{tag}", [f, "--emit", "ltl"]))
+        cmds.append((f"monitor_{tag}", [f, "--emit", "monitor"]))
+        cmds.append((f"psl_{tag}", [f, "--emit", "psl"]))
+    if audit:
+        logs = sorted(str(p) for p in (SHARED / "data" / "logs").iterdir())
+        for name, reqdir, paths in (("shipped", "requirements/", ["traces/"]),
+                                    ("real", "requirements/real_logs/", logs)):
+            out = f"_same/{name}"
+            cmds.append((f"audit_{name}", ["audit", "-r", reqdir, *paths, "--no-progress",
+                                           "--json", f"{out}/audit.json",
+                                           "--junit", f"{out}/junit.xml"]))
+            cmds.append((f"audit_verbose_{name}", ["audit", "-r", reqdir, *paths,
+                                                   "--no-progress", "--verbose"]))
+            cmds.append((f"report_{name}", ["report", "-r", reqdir, *paths,
+                                            "-o", f"{out}/report"]))
+    return cmds
+
+
+def _run_tree(tree: Path, cmds, dest: Path) -> None:
+    """Run every command in ``tree``; results go to ``dest/<name>/``."""
+    env = dict(os.environ, PYTHONPATH=str(tree), SOURCE_DATE_EPOCH="1700000000",
+               FRETC_CACHE_DIR=str(dest / "_cache"), COLUMNS="120", NO_COLOR="1",
+               PYTHONHASHSEED="0")
+    for name, args in cmds:
+        work = tree / "_same"
+        if work.exists():
+            subprocess.run(["rm", "-rf", str(work)], check=True)
+        proc = subprocess.run([sys.executable, "-m", "fretc", *args], cwd=tree, env=env,
+                              capture_output=True)
+        out = dest / name
+        out.mkdir(parents=True)
+        (out / "exit").write_text(f"{proc.returncode}\n")
+        (out / "stdout").write_bytes(proc.stdout)
+        (out / "stderr").write_bytes(proc.stderr)
+        if work.exists():
+            subprocess.run(["cp", "-r", str(work), str(out / "files")], check=True)
+        print(f"  {tree.name}: {name} exit {proc.returncode}", flush=True)
+
+
+def _compare(a: Path, b: Path) -> int:
+    """Number of differing files between result folders ``a`` (ref) and ``b`` (this tree)."""
+    names = sorted({p.relative_to(a) for p in a.rglob("*") if p.is_file()}
+                   | {p.relative_to(b) for p in b.rglob("*") if p.is_file()})
+    names = [n for n in names if n.parts[0] != "_cache"]
+    differ = 0
+    for n in names:
+        pa, pb = a / n, b / n
+        if not pa.exists() or not pb.exists():
+            differ += 1
+            print(f"DIFFER {n}: only in {'this tree' if pb.exists() else 'the ref'}")
+            continue
+        ta, tb = pa.read_bytes(), pb.read_bytes()
+        if ta == tb:
+            continue
+        differ += 1
+        print(f"DIFFER {n}")
+        lines = difflib.unified_diff(ta.decode("utf-8", "replace").splitlines(),
+                                     tb.decode("utf-8", "replace").splitlines(),
+                                     "ref", "tree", lineterm="", n=1)
+        for i, line in enumerate(lines):
+            if i >= 20:
+                print("    ...")
+                break
+            print("    " + line[:200])
+    print(f"{len(names)} outputs compared, {differ} differ")
+    return differ
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ref", default="arch-base", help="git revision to compare against")
+    ap.add_argument("--keep", type=Path, help="keep the results in this folder")
+    ap.add_argument("--skip-audit", action="store_true", help="compiler outputs only")
+    args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory(prefix="fretc-same-") as tmp:
+        root = Path(args.keep or tmp).resolve()
+        ref_tree = root / "ref"
+        ref_tree.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "archive", args.ref], cwd=REPO, check=True,
+                                 capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(ref_tree)], input=archive, check=True)
+        inputs = _vector_files(root / "inputs")
+        cmds = _commands(inputs, not args.skip_audit)
+        _run_tree(ref_tree, cmds, root / "out_ref")
+        _run_tree(REPO, cmds, root / "out_tree")
+        differ = _compare(root / "out_ref", root / "out_tree")
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
