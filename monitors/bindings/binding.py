@@ -13,7 +13,7 @@ import numpy as np
 
 from ..problems import BindingError, SignalError
 from .compile import EvalError, EvalState, compile_node
-from .expression import (BinOp, Const, Expr, Field, Ref, UnaryOp, Where, check,
+from .expression import (BinOp, Const, Expr, ExprLocation, Field, Ref, UnaryOp, check,
                          parse_expression, substitute, unparse, walk)
 from .extract import Valid, normalize_scalar
 from .operations import Ops
@@ -52,12 +52,12 @@ class Binding:
     _scalar: Callable[[EvalState], Any] | None = field(default=None, repr=False)
     _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
 
-    def where(self) -> Where:
+    def location(self) -> ExprLocation:
         """Where the expression is, for error messages."""
-        return Where(self.source, self.name, self.line, self.col, self._exact)
+        return ExprLocation(self.source, self.name, self.line, self.col, self._exact)
 
     def _fail(self, exc: EvalError, context: str) -> SignalError:
-        err = self.where().error(f"{exc.message}{context}", exc.node.col)
+        err = self.location().error(f"{exc.message}{context}", exc.node.col)
         return SignalError(str(err), variable=self.name)
 
     def evaluate(self, state: EvalState, context: str = "") -> bool | float:
@@ -132,7 +132,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
             used as a value; names source:line:col and the variable.
     """
-    where = Where(source, name, line, col, exact)
+    where = ExprLocation(source, name, line, col, exact)
     if not VARNAME.match(name):
         raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
                           "quoted FRETish variable")

@@ -8,7 +8,7 @@ column in the expression text, for error messages).  The language itself (operat
 functions, values) is described in ``docs/bindings.md`` and in :mod:`monitors.bindings`.
 
 Errors are :class:`monitors.problems.BindingError` naming the binding file, line, column
-and variable (:class:`Where` maps a column in the expression to one in the file).
+and variable (:class:`ExprLocation` maps a column in the expression to one in the file).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from ..problems import BindingError
 from ..schema import closest
 
 __all__ = ["Expr", "Const", "Slice", "Field", "Ref", "UnaryOp", "BinOp", "FuncCall", "FUNCS",
-           "Where", "parse_expression", "check", "walk", "refs", "substitute", "unparse"]
+           "ExprLocation", "parse_expression", "check", "walk", "refs", "substitute", "unparse"]
 
 
 # ------------------------------------------------------------------------------------------------
@@ -158,7 +158,7 @@ def unparse(node: Expr) -> str:
 # ------------------------------------------------------------------------------------------------
 
 
-class Where:
+class ExprLocation:
     """Maps a column in the expression to file:line:col for error messages.
 
     ``line``/``col`` are where the expression text starts in ``source`` (1-based; None when
@@ -203,7 +203,7 @@ def _col(meta: object) -> int:
 class _ToExpr(Transformer):
     """Parse tree -> :class:`Expr`; one callback per rule (alias) of ``grammar.lark``."""
 
-    def __init__(self, where: Where) -> None:
+    def __init__(self, where: ExprLocation) -> None:
         super().__init__(visit_tokens=False)
         self.where = where
 
@@ -270,7 +270,7 @@ class _ToExpr(Transformer):
         return FuncCall(name.column, str(name), tuple(k for k in kids[1:] if k is not None))
 
 
-def _syntax_error(expr: str, exc: UnexpectedInput, where: Where) -> BindingError:
+def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> BindingError:
     col = getattr(exc, "column", None)
     if isinstance(exc, UnexpectedCharacters):
         msg = f"unexpected character {expr[exc.pos_in_stream]!r}"
@@ -287,7 +287,7 @@ def _syntax_error(expr: str, exc: UnexpectedInput, where: Where) -> BindingError
     return where.error(f"syntax error: {msg}", col)
 
 
-def parse_expression(expr: str, where: Where) -> tuple[Expr, frozenset[str]]:
+def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[str]]:
     """Parse and check (:func:`check`) one expression.
 
     Returns:
@@ -317,7 +317,7 @@ def parse_expression(expr: str, where: Where) -> tuple[Expr, frozenset[str]]:
 # ------------------------------------------------------------------------------------------------
 
 
-def check(node: Expr, where: Where, topics: set[str]) -> None:
+def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
     """Static checks: known functions and arities, age() of a topic, fields below topics.
     Adds the topics ``node`` reads to ``topics``.
 
@@ -344,7 +344,7 @@ def check(node: Expr, where: Where, topics: set[str]) -> None:
     # a Ref is resolved against the other variables (substitute)
 
 
-def _check_call(node: FuncCall, where: Where, topics: set[str]) -> None:
+def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
     if node.func not in FUNCS:
         raise where.error(f"unknown function {node.func!r} (known: "
                           f"{', '.join(sorted(FUNCS))})", node.col)
@@ -363,7 +363,7 @@ def _check_call(node: FuncCall, where: Where, topics: set[str]) -> None:
         check(a, where, topics)
 
 
-def substitute(node: Expr, trees: dict[str, Expr], where: Where, name: str) -> Expr:
+def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: str) -> Expr:
     """``node`` with every :class:`Ref` replaced by the tree of the variable it names.
 
     Args:

@@ -17,7 +17,7 @@ from typing import Any
 
 from ..problems import BindingError
 from .binding import VARNAME, Binding, compile_expression
-from .expression import Where, parse_expression, refs
+from .expression import ExprLocation, parse_expression, refs
 from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec
 
 __all__ = ["parse_bindings", "load_bindings", "parse_duration"]
@@ -234,7 +234,7 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
     deps: dict[str, list[str]] = {}
     for name, (expr, line, col, exact) in pending.items():
-        node, _t = parse_expression(expr, Where(source, name, line, col, exact))
+        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact))
         deps[name] = [r for r in refs(node) if r in pending]
     state: dict[str, int] = {}
     compiled: dict[str, Binding] = {}

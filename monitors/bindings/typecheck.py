@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from ..schema import FieldPathError
 from .binding import Binding
-from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp, Where, unparse
+from .expression import BinOp, Const, Expr, ExprLocation, Field, FuncCall, UnaryOp, unparse
 
 __all__ = ["check_types"]
 
@@ -40,7 +40,7 @@ def check_types(binding: Binding, schemas: dict) -> str:
         BindingError: naming the binding file:line:col, the variable, and the topic and
             field at fault (with the fields that exist and the closest name).
     """
-    checker = _TypeChecker(binding.where(), schemas)
+    checker = _TypeChecker(binding.location(), schemas)
     t = checker.type(binding.ast)
     if t not in ("bool", "number", "any"):
         raise checker.where.error(
@@ -61,7 +61,7 @@ def _describe(node: Expr, t: str) -> str:
 class _TypeChecker:
     """The type of each node, bottom up; raises at the first node that does not fit."""
 
-    def __init__(self, where: Where, schemas: dict) -> None:
+    def __init__(self, where: ExprLocation, schemas: dict) -> None:
         self.where = where
         self.schemas = schemas
 
