@@ -16,6 +16,10 @@ packages first on ``PYTHONPATH``), in their own folder, on the same inputs:
   shipped traces (``traces/``) and on the two real logs of ``../shared/data/logs`` with
   ``requirements/real_logs/``.
 
+The reference's outputs are computed once per commit and kept in
+``/tmp/fretc-same/<commit>/`` (``--ref-cache``; a lock lets several runs share it); the
+inputs live in ``/tmp/fretc-same/inputs`` so that messages naming them are equal.
+
 Each command's exit status, standard output, standard error and written files are compared
 byte for byte; ``SOURCE_DATE_EPOCH`` fixes the reports' generated-at line. Prints one line per
 compared output and a unified diff excerpt of each difference; exits 1 when any output
@@ -27,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import fcntl
 import json
 import os
 import subprocess
@@ -87,10 +92,11 @@ def _commands(inputs: list[Path], audit: bool) -> list[tuple[str, list[str]]]:
     return cmds
 
 
-def _run_tree(tree: Path, cmds, dest: Path) -> None:
-    """Run every command in ``tree``; results go to ``dest/<name>/``."""
+def _run_tree(tree: Path, cmds, dest: Path, cache_dir: Path) -> None:
+    """Run every command in ``tree``; results go to ``dest/<name>/``; fretc's disk cache
+    (whose keys name the code they depend on) in ``cache_dir``."""
     env = dict(os.environ, PYTHONPATH=str(tree), SOURCE_DATE_EPOCH="1700000000",
-               FRETC_CACHE_DIR=str(dest / "_cache"), COLUMNS="120", NO_COLOR="1",
+               FRETC_CACHE_DIR=str(cache_dir), COLUMNS="120", NO_COLOR="1",
                PYTHONHASHSEED="0")
     for name, args in cmds:
         work = tree / "_same"
@@ -112,7 +118,7 @@ def _compare(a: Path, b: Path) -> int:
     """Number of differing files between result folders ``a`` (ref) and ``b`` (this tree)."""
     names = sorted({p.relative_to(a) for p in a.rglob("*") if p.is_file()}
                    | {p.relative_to(b) for p in b.rglob("*") if p.is_file()})
-    names = [n for n in names if n.parts[0] != "_cache"]
+    names = [n for n in names if n.parts[0] != "_cache"]  # older runs kept fretc's cache here
     differ = 0
     for n in names:
         pa, pb = a / n, b / n
@@ -142,20 +148,41 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--ref", default="arch-base", help="git revision to compare against")
     ap.add_argument("--keep", type=Path, help="keep the results in this folder")
     ap.add_argument("--skip-audit", action="store_true", help="compiler outputs only")
+    ap.add_argument("--ref-cache", type=Path, default=Path("/tmp/fretc-same"),
+                    help="folder of the reference outputs, one sub-folder per commit")
     args = ap.parse_args(argv)
+    commit = subprocess.run(["git", "rev-parse", args.ref], cwd=REPO, check=True,
+                            capture_output=True, text=True).stdout.strip()
+    cache = args.ref_cache.resolve()
+    cache.mkdir(parents=True, exist_ok=True)
+    with open(cache / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # one run builds the inputs and the reference
+        inputs = _vector_files(cache / "inputs")
+        cmds = _commands(inputs, not args.skip_audit)
+        ref_out = _reference(commit, cache / (commit + ("-noaudit" if args.skip_audit else "")),
+                             cmds)
     with tempfile.TemporaryDirectory(prefix="fretc-same-") as tmp:
         root = Path(args.keep or tmp).resolve()
-        ref_tree = root / "ref"
-        ref_tree.mkdir(parents=True, exist_ok=True)
-        archive = subprocess.run(["git", "archive", args.ref], cwd=REPO, check=True,
-                                 capture_output=True).stdout
-        subprocess.run(["tar", "-x", "-C", str(ref_tree)], input=archive, check=True)
-        inputs = _vector_files(root / "inputs")
-        cmds = _commands(inputs, not args.skip_audit)
-        _run_tree(ref_tree, cmds, root / "out_ref")
-        _run_tree(REPO, cmds, root / "out_tree")
-        differ = _compare(root / "out_ref", root / "out_tree")
+        _run_tree(REPO, cmds, root / "out_tree", cache / "fretc-cache")
+        differ = _compare(ref_out, root / "out_tree")
     return 1 if differ else 0
+
+
+def _reference(commit: str, folder: Path, cmds) -> Path:
+    """The reference's result folder, computed unless a complete one is there."""
+    out = folder / "out_ref"
+    if (folder / "complete").exists():
+        print(f"reference outputs of {commit[:12]} from {folder}")
+        return out
+    subprocess.run(["rm", "-rf", str(folder)], check=True)
+    ref_tree = folder / "ref"
+    ref_tree.mkdir(parents=True)
+    archive = subprocess.run(["git", "archive", commit], cwd=REPO, check=True,
+                             capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(ref_tree)], input=archive, check=True)
+    _run_tree(ref_tree, cmds, out, folder / "fretc-cache")
+    (folder / "complete").write_text(commit + "\n")
+    return out
 
 
 if __name__ == "__main__":
