@@ -17,7 +17,7 @@
 caches bytecode; without it every run would compile fretc's sources again). ``--baseline
 DIR`` runs the same commands with another checkout of fretc (e.g. ``git archive main | tar
 -x -C DIR``) for a ratio measured in the same run. FRET's own formalizer takes about 35 ms
-per sentence (``shared/fretish/README.md``, a published figure, not measured here). The
+per sentence (``../shared/fretish/README.md``, a published figure, not measured here). The
 machine's speed is printed as ``sum(range(1000))`` in µs (the README's figures were taken
 at about 20 µs).
 """

@@ -102,6 +102,8 @@ def _run_tree(tree: Path, cmds, dest: Path, cache_dir: Path) -> None:
         work = tree / "_same"
         if work.exists():
             subprocess.run(["rm", "-rf", str(work)], check=True)
+        for sub in ("shipped", "real"):  # the folders the audit commands write into
+            (work / sub).mkdir(parents=True)
         proc = subprocess.run([sys.executable, "-m", "fretc", *args], cwd=tree, env=env,
                               capture_output=True)
         out = dest / name

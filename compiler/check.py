@@ -1,5 +1,5 @@
 """``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
-requirements, decided by Spot on their formulas (DESIGN.md, "Check requirements before
+requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
 runs"; issue 11).
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons

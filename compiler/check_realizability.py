@@ -25,6 +25,8 @@ from __future__ import annotations
 
 from typing import Dict, List, Optional, Sequence
 
+from fretish.errors import CheckError
+
 from . import ir
 from .check import Finding, _ids
 from .check_solver import UNKNOWN
@@ -34,7 +36,7 @@ from .printers import mangle, to_smv, to_spot
 __all__ = ["check_realizability", "RealizabilityError"]
 
 
-class RealizabilityError(ValueError):
+class RealizabilityError(CheckError, ValueError):
     """Bad input/output declarations (a variable both input and output)."""
 
 

@@ -1,7 +1,7 @@
 """Reference evaluator of IR formulas on finite traces - the oracle the monitors and the
 semantics are tested against. Written for clarity, not speed.
 
-Trace model (FRET's own NuSMV tests; ``shared/fretish/README.md`` section 6): a finite trace
+Trace model (FRET's own NuSMV tests; ``../shared/fretish/README.md`` section 6): a finite trace
 ``s0 .. s(L-1)`` (a sequence of mappings from variable name to bool or number) is followed by
 one absorbing state, repeated forever, in which every variable is false (numbers are 0) and
 ``LAST`` is false. ``LAST`` holds exactly at ``s(L-1)``. Future operators read that infinite

@@ -6,7 +6,7 @@ that parse: it rewrites the expression's text (`` then `` becomes ``=>``, ``if `
 deleted) and parses the result again, which regroups an if-then that is an operand
 (``(a & if b then c) | d`` becomes ``((a & b) -> c) | d``, ``!if a then b`` becomes
 ``(!a) -> b``), and in scope and stop conditions gives ``undefined(...)``
-(shared/fretish/README.md section 6b and section 7, defect 2).
+(../shared/fretish/README.md section 6b and section 7, defect 2).
 
 fretc follows the grammar everywhere. :func:`regrouping_warnings` reproduces FRET's rewrite
 on each expression of a requirement and returns a warning, showing both readings, for each

@@ -1,6 +1,6 @@
 """The formula IR: one tree type for future-time LTL (ft, ft_inf), past-time LTL (pt) and the
 arithmetic terms inside comparisons. Every printer, evaluator and code generator reads it;
-nothing re-parses printed text (DESIGN.md, "One IR, many back ends").
+nothing re-parses printed text (../shared/DESIGN.md, "One IR, many back ends").
 
 A node is ``Node(op, args, name, lo, hi)``:
 

@@ -20,7 +20,7 @@ from fretish import ast as A
 
 from .ir import Node
 
-#: FRET's names for the special characters of identifiers (shared/fretish/README.md section
+#: FRET's names for the special characters of identifiers (../shared/fretish/README.md section
 #: 6b, "Names"); each prints as ``_XXX_``.
 FRET_CHAR_NAMES = {
     ".": "DOT", "%": "PRC", "#": "HSH", "$": "DOL", "&": "AMP", "@": "ATS", "!": "BNG",
@@ -55,7 +55,7 @@ def _mangle_char(ch: str) -> str:
 @functools.lru_cache(maxsize=4096)
 def mangle(name: str) -> str:
     """FRET's name for a FRETish identifier in printed formulas (FRET's name mangling,
-    shared/fretish/README.md section 6b): in a bare name ``.`` -> ``_DOT_`` and ``%`` ->
+    ../shared/fretish/README.md section 6b): in a bare name ``.`` -> ``_DOT_`` and ``%`` ->
     ``_PRC_`` (``ROS.ok`` -> ``ROS_DOT_ok``); a name that must be quoted in FRETish is
     mapped character by character with its quotes (``"weird var"`` ->
     ``_DQT_weird_SPC_var_DQT_``) using :data:`FRET_CHAR_NAMES`. Letters, digits and ``_``

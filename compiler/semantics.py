@@ -10,14 +10,14 @@ builds, in the formula IR (:mod:`compiler.ir`):
 
 The meaning is FRET's interval semantics (Giannakopoulou et al., "Automated formalization of
 structured natural language requirements", IST 2021; FRET's ``fretishSemantics`` manual;
-``shared/fretish/README.md`` sections 2-4): the scope selects intervals of the run, the
+``../shared/fretish/README.md`` sections 2-4): the scope selects intervals of the run, the
 condition selects trigger points inside each interval, and the timing says what the response
 must do from each trigger until the interval ends. ``only*`` scopes negate the timing and
 apply it to the complement intervals. The construction here is compositional - scope
 wrapper (condition wrapper (timing)) - in the style of FRET's own templates, and is checked
 on traces against FRET's formulas and FRET's interval verdicts in the tests.
 
-FRET defects fixed here (README section 7): units are converted with the declared tick
+FRET defects fixed here (../shared/fretish/README.md section 7): units are converted with the declared tick
 period instead of being dropped; decimal or inexact durations are rejected; ``preBool`` with
 a non-boolean initial value is an error; ``if A then B`` is ``A -> B`` everywhere.
 """
@@ -31,6 +31,7 @@ from typing import List, Optional
 
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
+from fretish.units import format_period_ms
 try:
     from fretish.errors import FretishError
 except ImportError:  # pragma: no cover - during bootstrap
@@ -80,7 +81,7 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
     With ``tick_period`` (seconds, exact) a time unit converts exactly; an amount that is not
     a whole number of ticks raises :class:`SemanticsError`. Without one, FRET's behaviour is
     kept (``N unit`` means N ticks) and a warning is recorded; a fractional amount is then
-    an error (FRET would print ``F[<=2.5]``, a defect, README section 7.5).
+    an error (FRET would print ``F[<=2.5]``, a defect, ../shared/fretish/README.md section 7.5).
     """
     amount = d.value
     if d.unit == "ticks":
@@ -95,7 +96,7 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
     if ticks.denominator != 1:
         if d.unit != "ticks" and tick_period is not None:
             raise SemanticsError(
-                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of {_fmt_period(tick_period)}: "
+                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of {format_period_ms(tick_period)}: "
                 "not a whole number of ticks; change the duration or the tick period", d.span)
         raise SemanticsError(
             f"duration '{d.amount} {d.unit}' is not a whole number of ticks"
@@ -105,11 +106,6 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
     if ticks > MAX_DURATION_TICKS:
         raise SemanticsError(duration_too_long(ticks), d.span)
     return int(ticks)
-
-
-def _fmt_period(p: Fraction) -> str:
-    ms = p * 1000
-    return f"{float(ms):g} ms" if ms < 1000 else f"{float(p):g} s"
 
 
 # --------------------------------------------------------------------------- expressions
@@ -130,7 +126,7 @@ class _Expander:
 
     ``left_pt`` is FRET's ``Left`` (pt formula true at the first position of a scope
     interval) and ``right_ft`` its ``Right`` (ft formula true at the last position), per
-    scope (shared/fretish/README.md section 6b). ``free`` selects FRET's endpoint-free
+    scope (../shared/fretish/README.md section 6b). ``free`` selects FRET's endpoint-free
     expansions, used inside scope conditions (``while C``, ``after C`` ...).
     """
 
@@ -227,7 +223,7 @@ class _Expander:
         raise SemanticsError(f"{e.name} takes (n, p) or (m, n, p)", e.span)
 
     def _past_function(self, e: A.Call) -> Node:
-        """FRET's past-time functions (README section 6b, FRET's expansions restated):
+        """FRET's past-time functions (../shared/fretish/README.md section 6b, FRET's expansions restated):
         persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) = ((!Left) S p) &
         O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP & b) | (Y p);
         prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))). Endpoint-
@@ -375,7 +371,7 @@ def _call_text(e: A.Call) -> str:
 def _ft_timing(kind: str, negate: bool, R: Node, right: Node, n: Optional[int],
                stop: Optional[Node]) -> Node:
     """What must hold at a trigger point (ft), with ``right`` marking the interval's last
-    point (README section 4; FRET ``formalizations_future`` building blocks)."""
+    point (../shared/fretish/README.md section 4; FRET ``formalizations_future`` building blocks)."""
     nR = not_(R)
 
     def within(r: Node, k: int) -> Node:
@@ -537,7 +533,7 @@ def _ft_right(kind: str, m: Optional[Node], last: Node) -> Node:
 
 
 def _fn_right(kind: str, m: Optional[Node], last: Node) -> Node:
-    """FRET's ``Right`` for the temporal functions (README section 6b): true at the last
+    """FRET's ``Right`` for the temporal functions (../shared/fretish/README.md section 6b): true at the last
     position of a scope interval. For ``in``/``onlyAfter`` it is ``m & (LAST | X !m)``, for
     ``notin``/``onlyIn``/``before`` ``(!m & !LAST) & X m`` (no LAST disjunct), else LAST.
     ``last`` is ``LAST``, or FALSE for ft_inf."""

@@ -118,6 +118,7 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
               no_redundancy, output):
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
+    # lazy: the compiler (Lark tables, Spot) only when the command runs
     from compiler.build import compile_entries
     from compiler.check import check_requirements
     from compiler.check_realizability import RealizabilityError

@@ -1,23 +1,26 @@
-"""The ``fretc`` command (click).
+"""The ``fretc`` command (click): the group and the registration of its sub-commands, one
+module per sub-command in this folder (shared options: :mod:`fretc.options`).
 
 ``fretc FILE... --emit ltl|monitor|psl`` compiles requirement files (the default command,
-``fretc compile``); ``fretc audit`` checks recorded runs; ``fretc report`` writes the
-traceability report. Exit codes: 0 success, 1 a requirement failed (or, for ``audit``, a
-violation), 2 usage or input errors, 3 an internal error (a generated monitor that is not
-valid: nothing is written).
+``fretc compile``: :mod:`fretc.compile`); ``fretc audit`` checks recorded runs
+(:mod:`fretc.audit`); ``fretc report`` writes the traceability report (:mod:`fretc.report`);
+``fretc check`` (:mod:`fretc.check`), ``fretc inspect`` (:mod:`fretc.inspect`), ``fretc
+watch`` and ``fretc replay`` (:mod:`fretc.watch`). Exit codes: 0 success, 1 a requirement
+failed (or, for ``audit``, a violation), 2 usage or input errors (every
+:class:`fretish.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
+internal error (a generated monitor that is not valid: nothing is written).
 """
 
 from __future__ import annotations
 
-import json
 import os
-import sys
-from pathlib import Path
-from typing import Optional
 
 import click
 
-from fretish.errors import FretishError
+from fretish.errors import FretcError, error_text
+
+from .compile import compile_cmd
+from .options import shown
 
 
 class _DefaultGroup(click.Group):
@@ -54,6 +57,16 @@ class _DefaultGroup(click.Group):
         self._ensure_optional()
         return super().list_commands(ctx)
 
+    def invoke(self, ctx):
+        """Run the sub-command; an input error of any stage (:class:`FretcError`) that it
+        does not report itself is printed here (:func:`fretish.errors.error_text`, control
+        characters escaped) with exit code 2."""
+        try:
+            return super().invoke(ctx)
+        except FretcError as exc:
+            click.echo(shown(error_text(exc)), err=True)
+            ctx.exit(2)
+
 
 def _names_a_file(arg: str) -> bool:
     """Can ``arg`` only be a requirement file (never a sub-command name)?"""
@@ -67,160 +80,24 @@ def main():
     audits of recorded robot runs against them."""
 
 
-def _load(paths) -> list:
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
-
-    try:
-        entries = load_requirements([Path(p) for p in paths])
-    except FretishError as exc:
-        click.echo(_shown(str(exc)), err=True)
-        sys.exit(2)
-    except OSError as exc:
-        click.echo(_shown(f"error: {exc}"), err=True)
-        sys.exit(2)
-    return compile_entries(entries)
-
-
-def _shown(text: str) -> str:
-    """Text for the terminal: control and bidi characters escaped, lines kept
-    (:func:`fretish.textsafe.visible`)."""
-    from fretish.textsafe import visible
-
-    return visible(text, keep="\n")
-
-
-@main.command("compile")
-@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl"]), default="ltl",
-              show_default=True, help="What to produce.")
-@click.option("--json", "as_json", is_flag=True, help="ltl: print a JSON list instead of text.")
-@click.option("-o", "--output", type=click.Path(), default=None,
-              help="monitor/psl: output file (one input) or directory; default: stdout.")
-@click.option("--psl-map", type=click.Path(exists=True), default=None,
-              help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
-def compile_cmd(files, emit, as_json, output, psl_map):
-    """Compile requirement FILES (.fret or FRET JSON exports)."""
-    compiled = _load(files)
-    if not compiled:
-        click.echo(f"error: no requirements in {', '.join(files)} (empty or only comments)",
-                   err=True)
-        sys.exit(2)
-    failed = [c for c in compiled if c.error is not None]
-    for c in failed:
-        click.echo(_shown(str(c.error)), err=True)
-    if emit == "ltl":
-        _emit_ltl(compiled, as_json)
-    elif emit == "monitor":
-        from compiler.codegen import emit_monitors
-        internal: list = []
-        outputs = emit_monitors(compiled, internal)
-        for exc in internal:  # never exit 0 with a monitor that is not valid
-            click.echo(str(exc), err=True)
-        if internal:
-            sys.exit(4)  # internal error: not audit's 3 (incomplete)
-        _check_output(outputs, output, ".py")
-        _write_outputs(outputs, output, ".py")
-        for stem, text in outputs.items():
-            for rid, reason in _skipped(text):
-                if not any(c.id == rid and c.error is not None for c in compiled):
-                    click.echo(f"skipped {rid} ({stem}): {reason}", err=True)
-    elif emit == "psl":
-        from compiler.ajpf import emit_psl
-        try:
-            outputs = emit_psl(compiled, mapping_path=psl_map)
-        except FretishError as exc:
-            click.echo(str(exc), err=True)
-            sys.exit(2)
-        _check_output(outputs, output, ".psl")
-        _write_outputs(outputs, output, ".psl")
-    sys.exit(1 if failed else 0)
-
-
-def _emit_ltl(compiled, as_json: bool) -> None:
-    if as_json:
-        click.echo(json.dumps([c.to_json() for c in compiled], indent=2))
-        return
-    for c in compiled:
-        click.echo(_shown(f"{c.id}  ({c.location()})"))
-        click.echo(_shown(f"  text    {c.text}"))
-        if c.formalization is not None:
-            f = c.formalization
-            click.echo(f"  key     {f.key}")
-            click.echo(f"  ft      {c.smv('ft')}")
-            click.echo(f"  ft_inf  {c.smv('ft_inf')}")
-            click.echo(f"  pt      {c.smv('pt')}")
-            for w in f.warnings:
-                click.echo(f"  warning {w}")
-        elif c.freeform:
-            click.echo("  free-form: kept, not formalized")
-        else:
-            click.echo(_shown("  error   " + getattr(c.error, "message", str(c.error))))
-        click.echo("")
-
-
-def _skipped(module_text: str) -> list:
-    """(id, reason) of the ``SKIPPED`` dict literal of a generated module."""
-    import ast
-
-    start = module_text.find("\nSKIPPED = {")
-    if start < 0:
-        return []
-    end = module_text.find("\n}", start)
-    try:
-        return list(ast.literal_eval(module_text[start + len("\nSKIPPED = "):end + 2]).items())
-    except (ValueError, SyntaxError):  # pragma: no cover - the template writes a literal
-        return []
-
-
-def _check_output(outputs: dict, output: Optional[str], suffix: str) -> None:
-    """``-o`` is a file for one output and a directory for several: a path ending in
-    ``suffix`` for several outputs is an error (it would become a directory named so)."""
-    if output is not None and len(outputs) > 1 and Path(output).suffix == suffix:
-        click.echo(f"error: -o {output}: {len(outputs)} modules are written (one per input "
-                   f"file: {', '.join(sorted(outputs))}); give a directory (no {suffix} "
-                   "suffix) or one input file", err=True)
-        sys.exit(2)
-
-
-def _write_outputs(outputs: dict, output: Optional[str], suffix: str) -> None:
-    """``outputs`` maps a file stem to text. One output and ``-o FILE``: write the file;
-    ``-o DIR``: one file per stem; no ``-o``: print them."""
-    if output is None:
-        for text in outputs.values():
-            click.echo(text, nl=False)
-        return
-    out = Path(output)
-    if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
-        # one module: -o is the file
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(next(iter(outputs.values())), encoding="utf-8")
-        click.echo(f"wrote {out}", err=True)
-        return
-    out.mkdir(parents=True, exist_ok=True)
-    for stem, text in outputs.items():
-        path = out / f"{stem}{suffix}"
-        path.write_text(text, encoding="utf-8")
-        click.echo(f"wrote {path}", err=True)
+main.add_command(compile_cmd, "compile")
 
 
 def _register_optional() -> None:
-    """Attach ``audit`` (``monitors/cli.py``; it imports its engine lazily) and, once
-    ``monitors/report.py`` provides it, ``report``. Called on first need by
-    :class:`_DefaultGroup` (not at import: ``fretc FILE`` does not need them)."""
-    from monitors.cli import audit_cmd
+    """Attach the sub-commands other than ``compile``. Called on first need by
+    :class:`_DefaultGroup`, not at import: ``fretc FILE`` does not need them (start-up)."""
+    # lazy: these modules load rich and the report machinery (start-up time, issue 9)
+    from .audit import audit_cmd
+    from .check import check_cmd
+    from .inspect import inspect_cmd
+    from .report import report_cmd
+    from .watch import register as register_watch
 
     main.add_command(audit_cmd, "audit")
-    main.add_command(__import__("fretc.check", fromlist=["check_cmd"]).check_cmd, "check")
-    from fretc.inspect import inspect_cmd; main.add_command(inspect_cmd, "inspect")  # noqa: E702
-    try:
-        from monitors.report import report_cmd
-    except ModuleNotFoundError as exc:
-        if exc.name != "monitors.report":
-            raise
-    else:
-        main.add_command(report_cmd, "report")
-    __import__("fretc.watch").watch.register(main)
+    main.add_command(check_cmd, "check")
+    main.add_command(inspect_cmd, "inspect")
+    main.add_command(report_cmd, "report")
+    register_watch(main)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -32,7 +32,7 @@ class _Stat:
         self.true = self.false = self.n = 0
 
     def numbers(self, values) -> None:
-        import numpy as np
+        import numpy as np  # lazy: numpy only when a log is read
         a = np.asarray(values, dtype=np.float64).ravel()
         if a.size == 0:
             return
@@ -91,6 +91,7 @@ def inspect_log(path: str) -> dict:
     Raises:
         monitors.problems.FretcInputError: the file is not a readable log.
     """
+    # lazy: the log readers (mcap, rosbags) only when the command runs
     from monitors.schema import log_schemas
     from monitors.sources import open_log
 
@@ -167,7 +168,7 @@ def inspect_cmd(logs, as_json):
     """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
     counts, rates, time span, and every field path in binding syntax with its type, array
     lengths and numeric min/max - what a binding file can name (docs/bindings.md)."""
-    from monitors.problems import FretcInputError
+    from monitors.problems import FretcInputError  # lazy: as the readers
 
     docs: List[dict] = []
     failed = False

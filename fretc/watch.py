@@ -23,7 +23,9 @@ import time
 
 import click
 
-from monitors.cli import audit_config, audit_input_options
+from fretish.units import format_offset
+
+from .options import audit_config, audit_input_options
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
@@ -32,6 +34,7 @@ def live_table(w):
     """The live table of a :class:`monitors.watch.Watch`: per requirement the pt verdict
     now, the LTL3 status and when it became definite, violations so far, the last trigger
     (times in s from the first tick)."""
+    # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Group
     from rich.table import Table
     from rich.text import Text
@@ -40,7 +43,7 @@ def live_table(w):
     st0 = w.start_time
 
     def s(ns):
-        return "-" if ns is None or st0 is None else f"{(ns - st0) / 1e9:.1f} s"
+        return format_offset(ns, st0, decimals=1)
 
     table = Table(header_style="bold", title=None)
     for col in ("req", "pt now", "LTL3", "definite at", "violations", "last trigger"):
@@ -104,6 +107,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
               no_live):
     """Watch a robot live over the Foxglove WebSocket protocol (URL ws://host:8765, e.g.
     foxglove_bridge) with the requirements and bindings that audit its logs."""
+    # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Console
     from rich.live import Live
     from rich.markup import escape
@@ -187,6 +191,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
 def replay_cmd(log, serve, rate, host, port, wait, loop):
     """Publish a recorded MCAP LOG over the Foxglove WebSocket protocol, paced at RATE
     times real time, with its recorded schemas, encodings and log times."""
+    # lazy: foxglove-sdk (the watch extra) only when the command runs
     from monitors.watch_serve import FoxgloveServer, advertise_mcap, replay_mcap
 
     try:

@@ -1,4 +1,31 @@
-"""Errors of the FRETish front end, rendered like a compiler's diagnostics.
+"""The exception tree of fretc, and diagnostics rendered like a compiler's.
+
+Every error fretc reports about its input derives from :class:`FretcError`, so one ``except
+FretcError`` (the ``fretc`` command's, exit code 2) catches the input errors of every stage;
+each stage has its own subclass (the model: Lark's one exception tree)::
+
+    FretcError                          where: Where | None
+    ├── FretishError                    requirement text and files (fretish/)
+    │   ├── FretishSyntaxError          a sentence that does not parse
+    │   ├── FretishFileError            a file's structure (ids, attributes, JSON)
+    │   ├── LimitError                  an input limit (fretish/limits.py)
+    │   ├── SemanticsError              formalization (compiler/semantics.py)
+    │   ├── CodegenError                no monitor (compiler/codegen.py)
+    │   └── AjpfError                   no AJPF property (compiler/ajpf.py)
+    ├── CheckError                      fretc check's inputs
+    │   └── RealizabilityError          (compiler/check_realizability.py)
+    ├── InputError                      the audit's inputs (monitors/problems.py)
+    │   ├── LogError ── CsvError        a log that cannot be read
+    │   ├── BindingError                a signal binding
+    │   ├── SignalError                 a binding that cannot be evaluated on a log
+    │   ├── FieldPathError              a field path the schema lacks (monitors/schema.py)
+    │   └── AuditInputError ── RayUnavailable   (monitors/audit.py, monitors/fleet.py)
+    └── ReportError                     fretc report's inputs and output (monitors/report.py)
+
+Internal errors are not input errors and stay outside the tree (a generated monitor that is
+not valid: ``compiler.codegen.InvalidMonitorError``, exit code 4), as do the signals by which
+an engine hands a requirement to another (``VectorizeError``, ``EvidenceUnsupported``) and
+private control-flow exceptions (``_Fail``, ``_Fallback`` ...).
 
 A :class:`FretishSyntaxError` renders as::
 
@@ -13,21 +40,79 @@ Lines and columns are 1-based and in the coordinates of the file the text came f
 
 from __future__ import annotations
 
-from typing import List, Optional, Sequence
+from dataclasses import dataclass
+from collections.abc import Sequence
 
-__all__ = ["FretishError", "FretishSyntaxError", "FretishFileError", "render_diagnostic"]
+__all__ = ["Where", "FretcError", "FretishError", "FretishSyntaxError", "FretishFileError",
+           "CheckError", "InputError", "render_diagnostic", "error_text"]
 
 
-class FretishError(Exception):
-    """Base class of every error fretc reports about requirement text or files.
+@dataclass(frozen=True)
+class Where:
+    """Where an input error is: a file position (``file``, 1-based ``line`` and ``column``)
+    and/or a place in a log (``topic``, ``log_time_ns``: MCAP log time, integer ns). Any
+    field may be None (not known). ``str()``: ``file:line:column`` then ``topic @ t ns``."""
 
-    Constructed like any exception (``FretishError(message)``); subclasses add positions.
+    file: str | None = None
+    line: int | None = None
+    column: int | None = None
+    topic: str | None = None
+    log_time_ns: int | None = None
+
+    def __str__(self) -> str:
+        parts = [str(x) for x in (self.file, self.line, self.column) if x is not None]
+        out = ":".join(parts)
+        if self.topic is not None:
+            out += (" " if out else "") + self.topic
+        if self.log_time_ns is not None:
+            out += (" " if out else "") + f"@ {self.log_time_ns} ns"
+        return out
+
+
+class FretcError(Exception):
+    """Root of every input error fretc reports (any stage); the ``fretc`` command prints it
+    and exits with code 2.
+
+    Constructed like any exception, with an optional keyword ``where`` (:class:`Where`);
+    ``exc.where`` is None when the error names no place beyond its message. The message
+    itself always names the place (file:line:col, topic, log time) when one is known.
     """
+
+    where: Where | None = None
+
+    def __init__(self, *args: object, where: Where | None = None) -> None:
+        super().__init__(*args)
+        if where is not None:
+            self.where = where
+
+
+class FretishError(FretcError):
+    """Requirement text or files that fretc cannot use (parse, file structure, and the
+    compiler stages on top: semantics, code generation, AJPF). ``str(e)`` of the subclasses
+    with a position is the full compiler-style diagnostic."""
+
+
+class CheckError(FretcError):
+    """Input that ``fretc check`` cannot use (e.g. a variable declared both input and
+    output)."""
+
+
+class InputError(FretcError):
+    """Audit input fretc cannot use: a log, a binding, a signal. The message names where
+    (file, line:col, topic, log time). Formerly ``monitors.problems.FretcInputError`` (still
+    exported under that name)."""
+
+
+def error_text(exc: FretcError) -> str:
+    """The text the ``fretc`` command prints for ``exc``: a :class:`FretishError` is its
+    own diagnostic (``file:line:col: error: ...`` where it has a position); any other error
+    is ``error: <message>``."""
+    return str(exc) if isinstance(exc, FretishError) else f"error: {exc}"
 
 
 def render_diagnostic(source: str, line: int, column: int, message: str, *,
-                      text_line: Optional[str] = None, text_line_column: int = 1,
-                      expected: Sequence[str] = (), hint: Optional[str] = None) -> str:
+                      text_line: str | None = None, text_line_column: int = 1,
+                      expected: Sequence[str] = (), hint: str | None = None) -> str:
     """Compiler-style text: ``source:line:column: error: message``, then (if known) the
     source line with a caret under ``column``, ``expected: ...`` and ``hint: ...`` lines.
 
@@ -62,19 +147,19 @@ class FretishSyntaxError(FretishError):
 
     def __init__(self, message: str, *, source: str = "<string>", line: int = 1,
                  column: int = 1, text_line: str = "", expected: Sequence[str] = (),
-                 hint: Optional[str] = None, text_line_column: int = 1,
-                 offset: Optional[int] = None):
+                 hint: str | None = None, text_line_column: int = 1,
+                 offset: int | None = None):
         self.message = message
         self.source = source
         self.line = line
         self.column = column
         self.text_line = text_line
         self.text_line_column = text_line_column
-        self.expected: List[str] = list(expected)
+        self.expected: list[str] = list(expected)
         self.hint = hint
         #: 0-based offset of the error in the parsed text (None if unknown).
         self.offset = offset
-        super().__init__(message)
+        super().__init__(message, where=Where(source, line, column))
 
     def __str__(self) -> str:
         return render_diagnostic(self.source, self.line, self.column, self.message,
@@ -90,14 +175,14 @@ class FretishFileError(FretishError):
     """
 
     def __init__(self, message: str, *, source: str, line: int = 1, column: int = 1,
-                 text_line: Optional[str] = None, hint: Optional[str] = None):
+                 text_line: str | None = None, hint: str | None = None):
         self.message = message
         self.source = source
         self.line = line
         self.column = column
         self.text_line = text_line
         self.hint = hint
-        super().__init__(message)
+        super().__init__(message, where=Where(source, line, column))
 
     def __str__(self) -> str:
         return render_diagnostic(self.source, self.line, self.column, self.message,

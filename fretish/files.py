@@ -23,10 +23,10 @@
   after a ``rationale:`` line that is not an attribute continues the rationale (joined with
   one space).
 * ``@tick_period <number> <unit>`` (at most once, anywhere in the file) is the tick period
-  of every requirement of the file that has no ``tick_period:`` attribute. Units: the
-  FRETish ones (``microsec[ond][s]``, ``millisec[ond][s]``, ``sec[ond][s]``,
-  ``minute[s]``, ``hour[s]``) and ``us``, ``µs``, ``ms``, ``s``, ``min``, ``h``. The period
-  is stored in seconds as an exact :class:`~fractions.Fraction` of the decimal text.
+  of every requirement of the file that has no ``tick_period:`` attribute. Its grammar is
+  the one of every fretc duration (:mod:`fretish.units`: ns, us/µs, ms, s, min, h, their
+  long names such as ``milliseconds``, and ``Hz``). The period is stored in seconds as an
+  exact :class:`~fractions.Fraction` of the decimal text.
 * ``@inputs a, b`` and ``@outputs c`` (each at most once; names separated by commas or
   spaces) declare which FRET variables the environment sets (sensor-derived) and which the
   component sets, for ``fretc check``'s realizability check. A name in both is an error.
@@ -55,9 +55,10 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Tuple, Union
 
-from .ast import UNIT_SECONDS, Requirement
+from .ast import Requirement
 from .errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
+from .units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 
@@ -92,40 +93,14 @@ class RequirementEntry:
 
 
 # --------------------------------------------------------------------------- durations
-_PERIOD_UNITS = {"us": "microseconds", "µs": "microseconds", "ms": "milliseconds",
-                 "s": "seconds", "min": "minutes", "h": "hours"}
-_FRETISH_UNIT = re.compile(
-    r"(?:(microsec(?:ond)?s?)|(millisec(?:ond)?s?)|(sec(?:ond)?s?)|(minutes?)|(hours?))\Z",
-    re.IGNORECASE)
-_PERIOD = re.compile(r"\s*([0-9]+(?:\.[0-9]+)?)\s*([^\s0-9]+)\s*\Z")
-
-
 def parse_tick_period(text: str) -> Fraction:
-    """``"<number> <unit>"`` (e.g. ``"100 ms"``, ``"0.05 seconds"``) -> seconds, exactly.
+    """``"<number> <unit>"`` (e.g. ``"100 ms"``, ``"0.05 seconds"``, ``"10 Hz"``) -> seconds,
+    exactly: the duration grammar of :mod:`fretish.units` (the same as the bindings').
 
-    Units: FRETish time units (README section 4) and the abbreviations us, µs, ms, s,
-    min, h. Raises :class:`ValueError` (with a readable message) for anything else, for
-    ``ticks`` (a tick period must be a time) and for a zero period.
+    Raises :class:`ValueError` (with a readable message) for anything else, for ``ticks`` (a
+    tick period must be a time) and for a period that is not positive.
     """
-    m = _PERIOD.match(text)
-    if not m:
-        raise ValueError(f"expected '<number> <unit>' such as '100 ms', got '{text.strip()}'")
-    amount, unit = m.group(1), m.group(2)
-    canon = _PERIOD_UNITS.get(unit) or _PERIOD_UNITS.get(unit.lower())
-    if canon is None:
-        u = _FRETISH_UNIT.match(unit)
-        if u:
-            canon = ("microseconds", "milliseconds", "seconds", "minutes",
-                     "hours")[u.lastindex - 1]
-    if canon is None:
-        if re.fullmatch(r"ticks?", unit, re.IGNORECASE):
-            raise ValueError("a tick period must be a time (e.g. '100 ms'), not ticks")
-        raise ValueError(f"unknown time unit '{unit}' (use us, ms, s, min, h or the "
-                         "FRETish units microseconds ... hours)")
-    seconds = Fraction(amount) * UNIT_SECONDS[canon]
-    if seconds <= 0:
-        raise ValueError("a tick period must be positive")
-    return seconds
+    return parse_seconds(text)
 
 
 # --------------------------------------------------------------------------- .fret files

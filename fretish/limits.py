@@ -23,6 +23,7 @@ from __future__ import annotations
 from typing import Iterator, Optional, Tuple
 
 from . import ast as A
+from .errors import FretishError
 
 MAX_EXPR_DEPTH = 200
 #: A function call counts for this many levels: FRET's past- and future-time functions
@@ -36,7 +37,7 @@ __all__ = ["MAX_EXPR_DEPTH", "MAX_EXPR_NODES", "MAX_NUMBER_CHARS", "MAX_DURATION
            "LimitError", "check_requirement", "check_expression", "duration_too_long"]
 
 
-class LimitError(Exception):
+class LimitError(FretishError):
     """A limit exceeded at ``span`` (a :class:`fretish.ast.Span`), with a hint."""
 
     def __init__(self, span, message: str, hint: Optional[str] = None):

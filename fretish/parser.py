@@ -5,7 +5,7 @@ phrasings and the expression precedence. The Lark parser is built once per proce
 applies the AST builder while it parses (no intermediate parse tree).
 
 Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, restated;
-``shared/fretish/README.md`` sections 1-5 and 7):
+``../shared/fretish/README.md`` sections 1-5 and 7):
 
 * Scope: ``in/during/when in/if in M`` and ``while C`` are ``in``; ``when not in/if not
   in/unless in/except in/except during/except when in/except if in M`` and ``except while
@@ -64,7 +64,7 @@ RESERVED_WORDS = frozenset("""
     occurrence of only or previous probability same satisfy sec secs second seconds shall
     the then tick ticks timepoint true unless until upon what when whenever where while
     with within xor""".split())
-#: Operators of FRET's printed formulas (README section 6); reserved, case-sensitive.
+#: Operators of FRET's printed formulas (../shared/fretish/README.md section 6); reserved, case-sensitive.
 RESERVED_LETTERS = frozenset("XFGUVYZHOST")
 
 _UNITS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "milliseconds",
@@ -570,7 +570,7 @@ def parse(text: str, *, source: str = "<string>", line: int = 1,
     form: ``Requirement(text, freeform=True)``.
 
     Returns a :class:`fretish.ast.Requirement`. Raises :class:`FretishSyntaxError` for any
-    text that is not FRETish (FRET 3.x grammar, with the fixes of README section 7),
+    text that is not FRETish (FRET 3.x grammar, with the fixes of ../shared/fretish/README.md section 7),
     including a probability outside [0, 1], a reserved word used as a name and
     ``preBool`` with a numeric initial value.
     """
@@ -579,7 +579,7 @@ def parse(text: str, *, source: str = "<string>", line: int = 1,
 
 def parse_expression(text: str, *, source: str = "<string>", line: int = 1,
                      column: int = 1) -> A.Expr:
-    """Parse one FRETish expression (README section 5), e.g. ``"x + 1 > y & !p"``; same
+    """Parse one FRETish expression (../shared/fretish/README.md section 5), e.g. ``"x + 1 > y & !p"``; same
     positions and errors as :func:`parse`."""
     return _run("expr", text, source, line, column)
 

@@ -27,11 +27,14 @@ Times: the audit's times are on the log clock it used (``time_base``: MCAP log t
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple
+
+from fretish.units import format_offset
 
 __all__ = ["VERDICT_TOPIC", "FOXGLOVE_LOG_SCHEMA", "VerdictEvent", "AnnotateResult",
            "verdict_events", "annotate_mcap", "LEVELS"]
@@ -104,10 +107,7 @@ class AnnotateResult:
     schemas: int = 0
 
 
-def _s(ns: Optional[int], start: Optional[int]) -> str:
-    if ns is None or start is None:
-        return "?"
-    return f"{(ns - start) / 1e9:.3f} s"
+_s = functools.partial(format_offset, missing="?")
 
 
 def verdict_events(log: dict) -> List[VerdictEvent]:

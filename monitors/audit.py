@@ -31,7 +31,7 @@ engine: per evaluated tick, 8 bytes of time, 8 bytes per bound topic (log time o
 message), 1 byte per boolean and 8 per numeric variable - about 80 bytes a tick for the
 Safe-ROS set, 3 MB for an hour at 10 Hz. (Kept in chunks of :data:`CHUNK` ticks.)
 
-Damage (DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
+Damage (../shared/DESIGN.md "Damage is never evidence"): a damaged log (cut short, a chunk skipped, its
 summary lost) is ``partial``; only the ticks before its first cut or gap
 (``LogAudit.damage_time_ns``, :attr:`monitors.sources.LogSource.intact_end`) are judged, and
 a verdict that the end of that span would decide is ``unknown`` (:mod:`monitors.damage`); a
@@ -56,6 +56,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from fretish.units import NS_PER_S
+from fretish.units import format_ns as _fmt_ns, format_period as _fmt_period
+
 from .bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
 from .problems import BindingError, DataProblem, FretcInputError, LogError, SignalError
 
@@ -63,7 +66,6 @@ __all__ = ["AuditConfig", "AuditPlan", "RequirementPlan", "AuditInputError", "lo
            "discover_bindings", "find_logs", "audit_log", "audit_logs", "CHUNK",
            "VECTORIZE_MIN_TICKS", "LOG_SUFFIXES"]
 
-NS_PER_S = 1_000_000_000
 #: Ticks per column chunk.
 CHUNK = 4096
 #: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
@@ -189,20 +191,6 @@ def _tick_text(tick: TickSpec) -> str:
     if tick.period_ns is not None:
         return f"every {_fmt_ns(tick.period_ns)}"
     return f"one per {tick.topic} message"
-
-
-def _fmt_ns(ns: int) -> str:
-    if ns % NS_PER_S == 0:
-        return f"{ns // NS_PER_S} s"
-    if ns % 1_000_000 == 0:
-        return f"{ns // 1_000_000} ms"
-    if ns % 1000 == 0:
-        return f"{ns // 1000} us"
-    return f"{ns} ns"
-
-
-def _fmt_period(p: Fraction) -> str:
-    return _fmt_ns(int(p * NS_PER_S)) if (p * NS_PER_S).denominator == 1 else f"{float(p)} s"
 
 
 # --------------------------------------------------------------------------- the plan
@@ -727,7 +715,7 @@ def _expected_ticks(source, bindings: Optional[Bindings]) -> Optional[int]:
 
 
 def _clock_key(r: RequirementPlan, bindings: Optional[Bindings]) -> frozenset:
-    """The clock a requirement is sampled on: the topics of its own variables (DESIGN.md,
+    """The clock a requirement is sampled on: the topics of its own variables (../shared/DESIGN.md,
     "Each verdict stands alone": its tick grid, start, end and warm-up come from them and
     the bindings' tick, never from other requirements of the run)."""
     if bindings is None:
@@ -830,7 +818,7 @@ def _run_pass(plan: AuditPlan, source, bindings: Optional[Bindings], active: Lis
 
 def _cut_at_damage(res: _Pass, source, bindings: Optional[Bindings],
                    active: List[RequirementPlan]) -> None:
-    """Keep only the ticks of the span read completely (DESIGN.md "Damage is never
+    """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
     evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
     under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
     precede its log time by that much). The stepwise monitors, which saw every tick, are

@@ -15,6 +15,7 @@ from rich.markup import escape as _markup_escape
 from typing import Dict, List, Optional, Tuple
 
 from fretish.textsafe import terminal_text, xml_text
+from fretish.units import format_offset
 
 from .report_model import LogAudit, Verdict, exit_code
 
@@ -47,10 +48,7 @@ def short_log_name(path: str) -> str:
     return path if rel.startswith("..") else rel
 
 
-def _s(ns: Optional[int], start: Optional[int]) -> str:
-    if ns is None or start is None:
-        return "-"
-    return f"{(ns - start) / 1e9:.3f} s"
+_s = format_offset
 
 
 def _value(v) -> str:

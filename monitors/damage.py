@@ -1,6 +1,6 @@
 """Verdicts on a damaged log: what the span read completely decides, and nothing more.
 
-DESIGN.md, "Damage is never evidence": only the span of a log that was read completely is
+../shared/DESIGN.md, "Damage is never evidence": only the span of a log that was read completely is
 judged (the ticks strictly before :attr:`monitors.sources.LogSource.intact_end`); an
 obligation still open where that span ends (a cut, or the first gap) is *unknown*, not
 violated; a violation decided entirely before the damage stands.

@@ -2,7 +2,7 @@
 verdict, and a second opinion on it.
 
 The monitors decide a requirement with its past-time formula; this module decides it again
-from the meaning the formulas encode (``shared/fretish/README.md`` sections 2-4; FRET's
+from the meaning the formulas encode (``../shared/fretish/README.md`` sections 2-4; FRET's
 ``fretishSemantics`` manual; Giannakopoulou et al., IST 2021), without any formula code, and
 says *why*:
 
@@ -17,7 +17,7 @@ says *why*:
    first point; ``holding`` (``whenever``) - every point where ``C`` holds; ``regular`` -
    every point where ``C`` becomes true, or holds at the interval's first point.
 3. **The timing's obligation** from each trigger ``t`` until the interval end ``e``
-   (README section 4), e.g. ``within k``: ``R`` somewhere in ``[t, t+k]``, vacuous when
+   (../shared/fretish/README.md section 4), e.g. ``within k``: ``R`` somewhere in ``[t, t+k]``, vacuous when
    ``e < t+k``; ``only*`` scopes use the negated obligation.
 
 A requirement holds iff every trigger meets its obligation; it holds *vacuously* when there is
@@ -506,7 +506,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         raise ValueError("the interval semantics needs at least one tick")
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     negate = scope.startswith("only")
-    # scope conditions use FRET's endpoint-free function forms (shared/fretish/README.md
+    # scope conditions use FRET's endpoint-free function forms (../shared/fretish/README.md
     # section 6b): no interval start or end
     whole = _Expr(columns, n, np.full(n, -(1 << 40), np.int64), np.full(n, 1 << 40, np.int64))
     mode = whole.bool(req.scope.mode) if scope != "null" else None

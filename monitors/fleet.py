@@ -45,10 +45,10 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 from .audit import AuditInputError, AuditPlan, audit_log, audit_logs as local_audit_logs
 
 __all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
-           "audit_logs_ray", "error_audit", "run_audits", "RAY_HINT"]
+           "audit_logs_ray", "error_audit", "RAY_HINT"]
 
 #: How to get Ray (printed when ``--ray`` is used without it).
-from .fleet_cli import RAY_HINT  # noqa: E402
+RAY_HINT = "--ray needs Ray: pip install 'fretc[ray]' (or pip install 'ray>=2.40')"
 
 
 class RayUnavailable(AuditInputError):
@@ -344,25 +344,3 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: Optional[str]
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__
-
-
-# --------------------------------------------------------------------------- CLI glue
-def run_audits(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=None,
-               ctx=None) -> List[Any]:
-    """The CLI's audit of ``paths``: on Ray when ``--ray`` was given (see
-    :func:`ray_options`), else :func:`monitors.audit.audit_logs` with ``jobs`` processes."""
-    from .fleet_cli import META, FleetError
-
-    opts = (ctx.meta.get(META) if ctx is not None else None) or {}
-    if "ray" not in opts:
-        return local_audit_logs(plan, paths, jobs=jobs, progress=progress)
-    try:
-        return audit_logs_ray(plan, paths, address=opts["ray"],
-                              retries=opts.get("retries") or 0, progress=progress)
-    except RayUnavailable as exc:
-        raise FleetError(str(exc)) from None
-    except KeyboardInterrupt:
-        err = FleetError("interrupted: the running Ray tasks were cancelled; no result was "
-                         "written")
-        err.exit_code = 130
-        raise err from None

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from fretish.errors import InputError, Where
+
 # Kinds of DataProblem.  Strings (not an Enum) so reports and JSON stay plain.
 TRUNCATED = "truncated"  # the log ends inside a record (crashed recording)
 CORRUPT_RECORD = "corrupt_record"  # a record outside chunks cannot be read; reading stops
@@ -91,8 +93,9 @@ class ProblemLog:
             self.problems.append(problem)
 
 
-class FretcInputError(Exception):
-    """Input fretc cannot use.  The message names where (file, line:col, topic, log time)."""
+#: The audit's input errors derive from :class:`fretish.errors.InputError` (kept here under
+#: its former name; ``except FretcError`` catches them with every other stage's errors).
+FretcInputError = InputError
 
 
 class LogError(FretcInputError):
@@ -104,7 +107,7 @@ class LogError(FretcInputError):
 
     def __init__(self, path: object, message: str) -> None:
         self.path = str(path)
-        super().__init__(f"{self.path}: {message}")
+        super().__init__(f"{self.path}: {message}", where=Where(file=self.path))
 
 
 class CsvError(LogError):
@@ -120,6 +123,7 @@ class CsvError(LogError):
         where = f"{line}" if column is None else f"{line} (column {column!r})"
         LogError.__init__(self, f"{path}:{where}", message)
         self.path = str(path)
+        self.where = Where(file=self.path, line=line)
 
 
 class BindingError(FretcInputError):
@@ -151,7 +155,7 @@ class BindingError(FretcInputError):
             if col is not None:
                 where += f":{col}"
         who = f" variable {variable!r}:" if variable else ""
-        super().__init__(f"{where}:{who} {message}")
+        super().__init__(f"{where}:{who} {message}", where=Where(source, line, col))
         self.message = message
 
 

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Iterator, List, Optional, Tuple
 
+from fretish.errors import InputError
+
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "log_schemas", "field_paths",
            "closest"]
 
@@ -48,7 +50,7 @@ class FieldType:
         return self.name
 
 
-class FieldPathError(ValueError):
+class FieldPathError(InputError, ValueError):
     """A field path that the schema does not declare; ``valid`` lists the fields that exist
     at the point where it failed and ``suggestion`` is the closest one (or None)."""
 

@@ -47,6 +47,8 @@ from rosbags.typesys import Stores, TypesysError, get_types_from_idl, get_types_
 from rosbags.typesys.msg import normalize_msgtype
 from rosbags.typesys.store import Typestore
 
+from fretish.units import NS_PER_S
+
 from . import problems as P
 from .problems import CsvError, DataProblem, LogError, ProblemLog
 from .selective import chunk_messages
@@ -66,7 +68,6 @@ __all__ = [
     "REORDER_WINDOW_NS",
 ]
 
-NS_PER_S = 1_000_000_000
 MCAP_MAGIC = b"\x89MCAP0\r\n"  # MCAP spec, "Magic"
 _HEAD = struct.Struct("<BQ")  # opcode, record length (MCAP spec, "Records")
 _FOOTER_LEN = 1 + 8 + 8 + 8 + 4  # opcode, length, summary_start, summary_offset_start, summary_crc
@@ -134,7 +135,7 @@ class LogSource:
         damage_time: where the intact span ends: the log time (ns) of the last good message
             read before a truncation, or the first log time of the first gap; None when the
             damage loses no message (summary, data CRC) or when nothing was read before it.
-            Only ticks strictly before it are judged (DESIGN.md "Damage is never evidence").
+            Only ticks strictly before it are judged (../shared/DESIGN.md "Damage is never evidence").
         gaps: ``(start, end)`` log-time spans (ns, inclusive; ``end`` None when unknown) of the
             data skipped in the latest pass, in the order found.
         damage_cut: True when the damage loses messages (truncation or gap), so that only the

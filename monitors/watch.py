@@ -1,7 +1,7 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
 protocol.
 
-One engine, three places (DESIGN.md): the watch runs the *same* pieces as an audit of a
+One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit of a
 recorded log, only fed live:
 
 * :class:`WatchSource` is a :class:`monitors.sources.LogSource` whose messages come from a
@@ -55,6 +55,8 @@ from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Set, Tu
 
 import numpy as np
 
+from fretish.units import NS_PER_S
+
 from . import problems as P
 from .problems import DataProblem
 from .sources import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
@@ -62,7 +64,6 @@ from .sources import DECODE_ERRORS, LogSource, Message, _Unsupported, header_sta
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
            "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
 
-NS_PER_S = 1_000_000_000
 #: The connection dropped: messages between the two log times were not received.
 CONNECTION_GAP = "connection_gap"
 #: The connection closed and nothing came after it until the watch ended.

@@ -4,7 +4,7 @@
 scopes, the 3 condition kinds, the 12 timings, every temporal function and occurrence
 phrase, nested ``if ... then`` standing as an operand, quoted and dotted names) together
 with its meaning as a small tuple tree. :func:`oracle` evaluates that meaning on a trace
-directly from the definitions of ``shared/fretish/README.md``: scope intervals (section 2),
+directly from the definitions of ``../shared/fretish/README.md``: scope intervals (section 2),
 triggers (section 3), timings (section 4) and the "meaning" column of section 6b for the
 temporal functions. It never looks at a formula, so it is independent of
 :mod:`compiler.semantics` (which builds FRET's expansions).
@@ -13,11 +13,11 @@ temporal functions. It never looks at a formula, so it is independent of
 (infinite words: the trace followed by the all-false state forever) with the oracle.
 Used by tests/test_differential.py (a bounded sample) and bench/differential.py.
 
-Trace model (README section 6): the finite trace is followed by an absorbing state in which
+Trace model (../shared/fretish/README.md section 6): the finite trace is followed by an absorbing state in which
 every variable is false and every number 0. Two FRET facts the oracle models explicitly:
 
 * ``Right`` of the ``notin``/``onlyIn``/``before`` scopes has no ``LAST`` disjunct, and
-  that of ``onlyAfter`` is ``m & (LAST | X !m)`` (README section 6b), so for the future
+  that of ``onlyAfter`` is ``m & (LAST | X !m)`` (../shared/fretish/README.md section 6b), so for the future
   functions an interval that runs to the end of the trace (with ``m`` false there, for
   ``onlyAfter``) does not end there: it continues into the absorbing state.
 * At position 0 outside every scope interval (reachable only through ``preBool``'s
@@ -242,7 +242,7 @@ def _runs(series: List[bool]) -> List[Tuple[int, int]]:
 
 
 def _intervals(scope: str, m: Optional[list], L: int, infinite: bool):
-    """Scope intervals [s, e] (README section 2); ``only*`` scopes give the complement
+    """Scope intervals [s, e] (../shared/fretish/README.md section 2); ``only*`` scopes give the complement
     intervals on which the negated obligation applies."""
     if scope == "null":
         return [(0, L - 1)]
@@ -363,7 +363,7 @@ def oracle(meaning: dict, trace: Sequence[dict], infinite: bool = False) -> bool
 
 
 def _obligation(tk, negate, n, t, e, R, S, L) -> bool:
-    """What a trigger at t must see in its interval ending at e (README section 4);
+    """What a trigger at t must see in its interval ending at e (../shared/fretish/README.md section 4);
     ``negate``: the only* form (the response must not hold, FRET's dual timings)."""
     top = min(e, L - 1 + 2)       # positions past L-1 all repeat the last state
     rng = lambda a, b: range(a, min(b, top) + 1)  # noqa: E731

@@ -1,6 +1,6 @@
 """Per-requirement clocks (issue 10): a requirement's verdict and evidence depend only on the
 requirement, its bindings and the log - never on the other requirements audited with it
-(DESIGN.md, "Each verdict stands alone"). Each shipped requirement is audited alone and in
+(../shared/DESIGN.md, "Each verdict stands alone"). Each shipped requirement is audited alone and in
 random groups on the shipped traces and must give identical JSON."""
 
 from __future__ import annotations

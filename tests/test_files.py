@@ -147,7 +147,7 @@ def test_tick_period_units(text, seconds):
 
 
 @pytest.mark.parametrize("text", ["", "ms", "1", "1 tick", "2 ticks", "1 fortnight", "-1 ms",
-                                  "0 s", "1e3 ms", "1 ms 2"])
+                                  "0 s", "1 ms 2", "0 Hz", "1 ms2"])
 def test_tick_period_errors(text):
     with pytest.raises(ValueError):
         parse_tick_period(text)

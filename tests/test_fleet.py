@@ -21,8 +21,6 @@ from monitors.report_model import audit_json, exit_code
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data" / "logs"
-if not SHARED.is_dir():
-    SHARED = Path("/work/shared/data/logs")
 TRACES = [str(p) for p in sorted((ROOT / "traces").glob("*.mcap"))]
 REAL = ROOT / "requirements" / "real_logs"
 

@@ -19,14 +19,14 @@ from compiler.printers import expr_text
 from fretish import ast as A
 from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
 
-SHARED = Path("/work/shared")
+SHARED = Path(__file__).resolve().parents[2] / "shared"  # ../shared beside the repository
 VECTORS = [json.loads(l) for l in (SHARED / "fretish/fret_vectors.jsonl").open()]
 VECTOR_BY_ID = {v["id"]: v for v in VECTORS}
 CORPUS = [json.loads(l) for l in (SHARED / "corpora/fret_casestudies.jsonl").open()]
 TRACE_CASES = [(t["trace"], c) for t in map(json.loads, (SHARED / "fretish/fret_trace_verdicts.jsonl").open())
                for c in t["cases"]]
 
-# Vectors FRET rejects but we accept on purpose (README section 7, defect 4), with the key
+# Vectors FRET rejects but we accept on purpose (../shared/fretish/README.md section 7, defect 4), with the key
 # our reading gives.
 ACCEPTED_FRET_REJECTS = {
     26: ("lower-case 'is false': FRET's lexer only matches FALSE through its TRUE/FALSE "
@@ -53,7 +53,7 @@ CORPUS_REJECTED = {
 
 # --------------------------------------------------------------------------- helpers
 def mangle(name: str) -> str:
-    """FRET's identifier mangling in printed formulas (README section 5)."""
+    """FRET's identifier mangling in printed formulas (../shared/fretish/README.md section 5)."""
     return name.replace(".", "_DOT_").replace("%", "_PRC_")
 
 
@@ -206,7 +206,7 @@ def test_precedence_against_fret(vid, expected):
     ("if if a then b then c", "((a -> b) -> c)"),
     ("(if a then b) & c", "((a -> b) & c)"),
     # a nested if-then as the last operand, with the grammar's grouping (FRET regroups
-    # these by a text rewrite: shared/fretish/README.md section 6b, defect 2)
+    # these by a text rewrite: ../shared/fretish/README.md section 6b, defect 2)
     ("a & if b then c", "(a & (b -> c))"),
     ("a & if b then c | d", "(a & (b -> (c | d)))"),
     ("(speed <= alt) & if landed then q", "((speed <= alt) & (landed -> q))"),
@@ -671,7 +671,7 @@ def show_full(e: A.Expr, rnd=0) -> str:
     return f"{e.name}({', '.join(show_full(a, rnd + i) for i, a in enumerate(e.args))})"
 
 
-# Minimal-parentheses printer, from the precedence table alone (README section 5).
+# Minimal-parentheses printer, from the precedence table alone (../shared/fretish/README.md section 5).
 _PREC = {"<->": 1, "->": 2, "xor": 3, "|": 4, "&": 5, "=": 7, "!=": 7, "<": 7, "<=": 7,
          ">": 7, ">=": 7, "+": 8, "-": 8, "*": 9, "/": 9, "mod": 9, "^": 11}
 _RIGHT = {"->", "^"}

@@ -28,8 +28,6 @@ from monitors.sources import open_log
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data" / "logs"
-if not SHARED.is_dir():
-    SHARED = Path("/work/shared/data/logs")
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 REAL = [SHARED / "cmd_vel_scaled.mcap", SHARED / "stage_mapping1.bag"]
 

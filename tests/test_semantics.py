@@ -39,7 +39,7 @@ FUNCTION_VECTORS = [json.loads(l)
 VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
 
 #: Vectors FRET rejects but we accept, each because the rejection is a FRET defect we fix
-#: (shared/fretish/README.md section 7).
+#: (../shared/fretish/README.md section 7).
 FIXED_REJECTIONS = {
     26: "lower-case 'is false' (defect 4)",
     106: "lower-case 'is true' (defect 4)",

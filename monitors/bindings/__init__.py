@@ -1,7 +1,7 @@
 """Signal bindings: how each FRET variable is computed from recorded messages.
 
-Bindings live apart from the requirement text (DESIGN.md, "Signals are declared, never
-guessed"): one requirement set audits both the simulator and the real robot by swapping the
+Bindings live apart from the requirement text (../shared/DESIGN.md, "Signals are declared,
+never guessed"): one requirement set audits both the simulator and the real robot by swapping the
 binding file.  A binding file is TOML (read with :mod:`tomllib`)::
 
     [tick]
@@ -16,8 +16,10 @@ binding file.  A binding file is TOML (read with :mod:`tomllib`)::
     stopped = "abs(/cmd_vel.linear.x) < 1e-3 & abs(/cmd_vel.angular.z) < 1e-3"
     scan_stale = "age(/scan) > 0.3"
 
-Durations are a number with a unit: ``ns``, ``us``, ``ms``, ``s``, ``min``, or a frequency in
-``Hz`` (period = 1/f); a bare TOML number is seconds.
+Durations are a number with a unit (:mod:`fretish.units`, the grammar of the requirement
+files' ``tick_period`` too): ``ns``, ``us``, ``ms``, ``s``, ``min``, ``h`` (or their long
+names, ``milliseconds``), or a frequency in ``Hz`` (period = 1/f); a bare TOML number is
+seconds.
 
 Expression language (grammar: ``monitors/bindings/grammar.lark``), loosest binding first:
 
@@ -66,7 +68,7 @@ The modules, in the order they build on each other:
 * :mod:`~monitors.bindings.binding`: :class:`Binding`, one variable, compiled;
 * :mod:`~monitors.bindings.typecheck`: a binding against a log's message types;
 * :mod:`~monitors.bindings.spec`: :class:`Bindings`, :class:`TickSpec`, :class:`LogSelector`;
-* :mod:`~monitors.bindings.files`: binding files (TOML) and durations.
+* :mod:`~monitors.bindings.files`: binding files (TOML).
 """
 
 from __future__ import annotations
@@ -75,7 +77,9 @@ from .binding import Binding, compile_expression, operand_signals, parse_inline
 from .compile import EvalState
 from .expression import Field, unparse
 from .extract import LASER_SCAN, Valid, make_extractor
-from .files import load_bindings, parse_bindings, parse_duration
+from fretish.units import parse_duration
+
+from .files import load_bindings, parse_bindings
 from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec, make_bindings
 from .typecheck import check_types
 

@@ -15,13 +15,13 @@ from typing import Any
 
 import numpy as np
 
+from fretish.units import NS_PER_S
+
 from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
 from .extract import FieldAccessError, Valid, make_extractor
 from .operations import NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2, num
 
 __all__ = ["EvalState", "EvalError", "compile_node"]
-
-NS_PER_S = 1_000_000_000
 
 Evaluator = Callable[[Any], Any]
 

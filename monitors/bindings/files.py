@@ -11,67 +11,17 @@ from __future__ import annotations
 import re
 import tomllib
 from collections.abc import Iterable
-from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Any
+
+from fretish.units import parse_duration
 
 from ..problems import BindingError
 from .binding import VARNAME, Binding, compile_expression
 from .expression import ExprLocation, parse_expression, refs
 from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec
 
-__all__ = ["parse_bindings", "load_bindings", "parse_duration"]
-
-NS_PER_S = 1_000_000_000
-
-# ------------------------------------------------------------------------------------------------
-# Durations
-# ------------------------------------------------------------------------------------------------
-
-_UNITS = {"ns": Decimal(1), "us": Decimal(10**3), "µs": Decimal(10**3), "ms": Decimal(10**6),
-          "s": Decimal(10**9), "sec": Decimal(10**9), "min": Decimal(60 * 10**9)}
-_DURATION = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([A-Za-zµ]+)\s*\Z")
-
-
-def parse_duration(value: Any) -> int:
-    """A positive duration in integer nanoseconds (rounded to the nearest ns).
-
-    Args:
-        value: ``"100 ms"``, ``"0.1 s"``, ``"10 Hz"`` (period of that frequency), or a bare
-            int/float meaning seconds.
-
-    Raises:
-        ValueError: not a duration, no unit, unknown unit, or not positive.
-    """
-    if isinstance(value, bool):
-        raise ValueError(f"{value!r} is not a duration")
-    if isinstance(value, (int, float)):
-        amount, unit = Decimal(repr(value)), "s"
-    elif isinstance(value, str):
-        m = _DURATION.match(value)
-        if not m:
-            raise ValueError(f"{value!r} is not a duration: write a number and a unit, e.g. "
-                             "\"100 ms\" or \"10 Hz\"")
-        try:
-            amount = Decimal(m.group(1))
-        except InvalidOperation:
-            raise ValueError(f"{value!r} is not a duration") from None
-        unit = m.group(2)
-    else:
-        raise ValueError(f"{value!r} is not a duration")
-    if unit in ("Hz", "hz"):
-        if amount <= 0:
-            raise ValueError(f"{value!r}: frequency must be positive")
-        ns = Decimal(NS_PER_S) / amount
-    elif unit in _UNITS:
-        ns = amount * _UNITS[unit]
-    else:
-        raise ValueError(f"{value!r}: unknown unit {unit!r} (ns, us, ms, s, min, Hz)")
-    out = int(ns.to_integral_value())
-    if out <= 0:
-        raise ValueError(f"{value!r}: duration must be at least 1 ns")
-    return out
-
+__all__ = ["parse_bindings", "load_bindings"]
 
 # ------------------------------------------------------------------------------------------------
 # Where things are in the TOML text

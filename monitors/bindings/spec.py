@@ -8,12 +8,14 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import PurePath
 
+from fretish.units import NS_PER_S
+
 from .binding import Binding, compile_expression, parse_inline
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "TickSpec", "LogSelector", "Bindings", "make_bindings"]
 
 #: ``[tick] header_lag`` when not given: 1 s (ns).
-DEFAULT_HEADER_LAG_NS = 1_000_000_000
+DEFAULT_HEADER_LAG_NS = NS_PER_S
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from fretish.units import NS_PER_S
+
 from ..bindings.expression import Field
 from ..bindings.extract import Valid, make_extractor
 from ..bindings.spec import Bindings
@@ -19,8 +21,6 @@ from ..sources import CSV_TOPIC, CsvSource, LogSource
 from .clock import Tick, check_topics, csv_bindings_check, csv_period, feed, sample
 
 __all__ = ["SampledArrays", "TickColumns", "sample_arrays"]
-
-NS_PER_S = 1_000_000_000
 
 
 class SampledArrays(tuple):

@@ -1,6 +1,7 @@
 """Several clocks over one read of a log (:func:`sample_groups`): one per group of
-variables (normally one requirement's), each on the clock of its own topics (DESIGN.md,
-"Each verdict stands alone"); the clock rules are in :mod:`monitors.signals`."""
+variables (normally one requirement's), each on the clock of its own topics
+(../shared/DESIGN.md, "Each verdict stands alone"); the clock rules are in
+:mod:`monitors.signals`."""
 
 from __future__ import annotations
 
@@ -63,8 +64,8 @@ class GroupSampling:
 
 def sample_groups(source: LogSource, bindings: Bindings,
                   groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
-    """Per-requirement clocks in one read of the log (DESIGN.md, "Each verdict stands
-    alone"): each group ``key -> (variable names, topics)`` gets its own tick grid, start,
+    """Per-requirement clocks in one read of the log (../shared/DESIGN.md, "Each verdict
+    stands alone"): each group ``key -> (variable names, topics)`` gets its own tick grid, start,
     end and warm-up from ``topics`` alone (normally the topics of one requirement's
     variables) and the bindings' tick, exactly as :func:`sample` with bindings restricted to
     those variables would give it; header-stamp ordering is buffered per group too. So a

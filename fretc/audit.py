@@ -24,62 +24,9 @@ from pathlib import Path
 
 import click
 
-from .fleet_cli import ray_options
+from .options import audit_config, audit_input_options, ray_options, run_audits
 
-__all__ = ["audit_cmd", "audit_input_options", "audit_config"]
-
-
-def audit_input_options(f):
-    """The options that say what to audit and how (shared by ``fretc audit`` and
-    ``fretc report``): requirements, bindings, tick, time base, jobs, engine, window."""
-    options = [
-        click.option("-r", "--requirements", "requirements", multiple=True,
-                     type=click.Path(exists=True),
-                     help="Requirement file (.fret, FRET JSON export) or folder; repeatable. "
-                          "Default: ./requirements."),
-        click.option("-b", "--bindings", "bindings", multiple=True,
-                     type=click.Path(exists=True),
-                     help="Signal binding file (TOML); repeatable. Default: *.bindings.toml "
-                          "beside the requirements."),
-        click.option("--bind", "inline", multiple=True, metavar="NAME=EXPR",
-                     help="Bind a FRET variable inline, e.g. "
-                          "--bind 'too_close=min(/scan.ranges) < 0.9'."),
-        click.option("--tick-period", default=None, metavar="DURATION",
-                     help="Fixed tick with sample-and-hold, e.g. \"100 ms\" (overrides the "
-                          "bindings)."),
-        click.option("--tick-topic", default=None, metavar="TOPIC",
-                     help="One tick per message of TOPIC (overrides the bindings)."),
-        click.option("--time-base", type=click.Choice(["log", "header"]), default=None,
-                     help="Message time: log time (default) or header.stamp."),
-        click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
-                     show_default=True, help="Audit this many logs in parallel processes."),
-        click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]),
-                     default="auto", show_default=True,
-                     help="stepwise: the generated monitors' step() on every tick; "
-                          "vectorized: numpy over the sampled columns; auto: vectorized on "
-                          "long logs."),
-        click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
-                     help="Ticks of values kept each side of a trigger and a violation."),
-    ]
-    for option in reversed(options):
-        f = option(f)
-    return f
-
-
-def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, engine,
-                 window):
-    """The :class:`monitors.audit.AuditConfig` of :func:`audit_input_options`' values
-    (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
-    from .audit import AuditConfig
-
-    if not requirements:
-        if not Path("requirements").is_dir():
-            raise click.UsageError("no --requirements given and no ./requirements folder")
-        requirements = ("requirements",)
-    return AuditConfig(requirements=tuple(requirements),
-                       bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
-                       tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
-                       engine=engine, window=window)
+__all__ = ["audit_cmd"]
 
 
 @click.command("audit")
@@ -115,13 +62,13 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     \b
     Binding reference (expressions, functions, slices, units, NaN/inf rules,
     examples): docs/bindings.md."""
+    # lazy: the audit engine (numpy, mcap, rosbags, rich) only when the command runs
     from rich.console import Console
-    from .audit_output import escape  # markup and control characters escaped
 
-    from .audit import AuditInputError, find_logs, load_plan
-    from .audit_output import AuditProgress, junit_xml, print_summary
-    from .fleet import expand_log_args, run_audits
-    from .report_model import audit_json, exit_code
+    from monitors.audit import AuditInputError, find_logs, load_plan
+    from monitors.audit_output import AuditProgress, escape, junit_xml, print_summary
+    from monitors.fleet import expand_log_args
+    from monitors.report_model import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,

@@ -1,0 +1,145 @@
+"""``fretc compile`` (also ``fretc FILE...``, the default command): requirement files to
+FRET's LTL (``--emit ltl``, text or ``--json``), Python runtime monitors (``--emit monitor``)
+or AJPF properties (``--emit psl``).
+
+Exit codes: 0 success, 1 a requirement failed, 2 usage or input errors, 4 an internal error
+(a generated monitor that is not valid: nothing is written). Only click and the standard
+library are imported at module level: ``fretc FILE --emit ltl`` loads the compiler, not
+numpy, mcap, Jinja2 or Spot.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from .options import shown as _shown
+
+__all__ = ["compile_cmd"]
+
+
+def _load(paths) -> list:
+    """The compiled requirements of ``paths`` (a :class:`fretish.errors.FretishError` of a
+    file goes to the command group's handler: printed, exit code 2)."""
+    # lazy: the compiler (Lark tables, Spot) only when a command compiles
+    from compiler.build import compile_entries
+    from fretish.files import load_requirements
+
+    try:
+        entries = load_requirements([Path(p) for p in paths])
+    except OSError as exc:
+        click.echo(_shown(f"error: {exc}"), err=True)
+        sys.exit(2)
+    return compile_entries(entries)
+
+
+@click.command("compile")
+@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl"]), default="ltl",
+              show_default=True, help="What to produce.")
+@click.option("--json", "as_json", is_flag=True, help="ltl: print a JSON list instead of text.")
+@click.option("-o", "--output", type=click.Path(), default=None,
+              help="monitor/psl: output file (one input) or directory; default: stdout.")
+@click.option("--psl-map", type=click.Path(exists=True), default=None,
+              help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
+def compile_cmd(files, emit, as_json, output, psl_map):
+    """Compile requirement FILES (.fret or FRET JSON exports)."""
+    compiled = _load(files)
+    if not compiled:
+        click.echo(f"error: no requirements in {', '.join(files)} (empty or only comments)",
+                   err=True)
+        sys.exit(2)
+    failed = [c for c in compiled if c.error is not None]
+    for c in failed:
+        click.echo(_shown(str(c.error)), err=True)
+    if emit == "ltl":
+        _emit_ltl(compiled, as_json)
+    elif emit == "monitor":
+        from compiler.codegen import emit_monitors  # lazy: Jinja2 and Spot only for monitors
+        internal: list = []
+        outputs = emit_monitors(compiled, internal)
+        for exc in internal:  # never exit 0 with a monitor that is not valid
+            click.echo(str(exc), err=True)
+        if internal:
+            sys.exit(4)  # internal error: not audit's 3 (incomplete)
+        _check_output(outputs, output, ".py")
+        _write_outputs(outputs, output, ".py")
+        for stem, text in outputs.items():
+            for rid, reason in _skipped(text):
+                if not any(c.id == rid and c.error is not None for c in compiled):
+                    click.echo(f"skipped {rid} ({stem}): {reason}", err=True)
+    elif emit == "psl":
+        from compiler.ajpf import emit_psl  # lazy: only for psl
+        outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler
+        _check_output(outputs, output, ".psl")
+        _write_outputs(outputs, output, ".psl")
+    sys.exit(1 if failed else 0)
+
+
+def _emit_ltl(compiled, as_json: bool) -> None:
+    if as_json:
+        click.echo(json.dumps([c.to_json() for c in compiled], indent=2))
+        return
+    for c in compiled:
+        click.echo(_shown(f"{c.id}  ({c.location()})"))
+        click.echo(_shown(f"  text    {c.text}"))
+        if c.formalization is not None:
+            f = c.formalization
+            click.echo(f"  key     {f.key}")
+            click.echo(f"  ft      {c.smv('ft')}")
+            click.echo(f"  ft_inf  {c.smv('ft_inf')}")
+            click.echo(f"  pt      {c.smv('pt')}")
+            for w in f.warnings:
+                click.echo(f"  warning {w}")
+        elif c.freeform:
+            click.echo("  free-form: kept, not formalized")
+        else:
+            click.echo(_shown("  error   " + getattr(c.error, "message", str(c.error))))
+        click.echo("")
+
+
+def _skipped(module_text: str) -> list:
+    """(id, reason) of the ``SKIPPED`` dict literal of a generated module."""
+    start = module_text.find("\nSKIPPED = {")
+    if start < 0:
+        return []
+    end = module_text.find("\n}", start)
+    try:
+        return list(ast.literal_eval(module_text[start + len("\nSKIPPED = "):end + 2]).items())
+    except (ValueError, SyntaxError):  # pragma: no cover - the template writes a literal
+        return []
+
+
+def _check_output(outputs: dict, output: str | None, suffix: str) -> None:
+    """``-o`` is a file for one output and a directory for several: a path ending in
+    ``suffix`` for several outputs is an error (it would become a directory named so)."""
+    if output is not None and len(outputs) > 1 and Path(output).suffix == suffix:
+        click.echo(f"error: -o {output}: {len(outputs)} modules are written (one per input "
+                   f"file: {', '.join(sorted(outputs))}); give a directory (no {suffix} "
+                   "suffix) or one input file", err=True)
+        sys.exit(2)
+
+
+def _write_outputs(outputs: dict, output: str | None, suffix: str) -> None:
+    """``outputs`` maps a file stem to text. One output and ``-o FILE``: write the file;
+    ``-o DIR``: one file per stem; no ``-o``: print them."""
+    if output is None:
+        for text in outputs.values():
+            click.echo(text, nl=False)
+        return
+    out = Path(output)
+    if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
+        # one module: -o is the file
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(next(iter(outputs.values())), encoding="utf-8")
+        click.echo(f"wrote {out}", err=True)
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    for stem, text in outputs.items():
+        path = out / f"{stem}{suffix}"
+        path.write_text(text, encoding="utf-8")
+        click.echo(f"wrote {path}", err=True)

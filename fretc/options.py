@@ -1,0 +1,154 @@
+"""Option definitions shared by the ``fretc`` commands, and the click glue around the audit.
+
+``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
+``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
+:func:`audit_config` turns their values into a :class:`monitors.audit.AuditConfig` and
+:func:`run_audits` runs the audit locally or on Ray (:mod:`monitors.fleet`) as the options
+say. Only click is imported at module level, so the command starts fast; the engine loads
+on first use.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+import click
+
+from fretish.textsafe import visible
+
+__all__ = ["audit_input_options", "audit_config", "ray_options", "run_audits", "META",
+           "FleetError", "shown"]
+
+#: Key of the Ray options in the click context's ``meta``.
+META = "fretc.fleet"
+
+
+def shown(text: str) -> str:
+    """Text for the terminal: control and bidi characters escaped, lines kept
+    (:func:`fretish.textsafe.visible`)."""
+    return visible(text, keep="\n")
+
+
+def audit_input_options(f):
+    """The options that say what to audit and how (shared by ``fretc audit`` and
+    ``fretc report``): requirements, bindings, tick, time base, jobs, engine, window."""
+    options = [
+        click.option("-r", "--requirements", "requirements", multiple=True,
+                     type=click.Path(exists=True),
+                     help="Requirement file (.fret, FRET JSON export) or folder; repeatable. "
+                          "Default: ./requirements."),
+        click.option("-b", "--bindings", "bindings", multiple=True,
+                     type=click.Path(exists=True),
+                     help="Signal binding file (TOML); repeatable. Default: *.bindings.toml "
+                          "beside the requirements."),
+        click.option("--bind", "inline", multiple=True, metavar="NAME=EXPR",
+                     help="Bind a FRET variable inline, e.g. "
+                          "--bind 'too_close=min(/scan.ranges) < 0.9'."),
+        click.option("--tick-period", default=None, metavar="DURATION",
+                     help="Fixed tick with sample-and-hold, e.g. \"100 ms\" (overrides the "
+                          "bindings)."),
+        click.option("--tick-topic", default=None, metavar="TOPIC",
+                     help="One tick per message of TOPIC (overrides the bindings)."),
+        click.option("--time-base", type=click.Choice(["log", "header"]), default=None,
+                     help="Message time: log time (default) or header.stamp."),
+        click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
+                     show_default=True, help="Audit this many logs in parallel processes."),
+        click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]),
+                     default="auto", show_default=True,
+                     help="stepwise: the generated monitors' step() on every tick; "
+                          "vectorized: numpy over the sampled columns; auto: vectorized on "
+                          "long logs."),
+        click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
+                     help="Ticks of values kept each side of a trigger and a violation."),
+    ]
+    for option in reversed(options):
+        f = option(f)
+    return f
+
+
+def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, engine,
+                 window):
+    """The :class:`monitors.audit.AuditConfig` of :func:`audit_input_options`' values
+    (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
+    from monitors.audit import AuditConfig  # lazy: numpy and the engine only when run
+
+    if not requirements:
+        if not Path("requirements").is_dir():
+            raise click.UsageError("no --requirements given and no ./requirements folder")
+        requirements = ("requirements",)
+    return AuditConfig(requirements=tuple(requirements),
+                       bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
+                       tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
+                       engine=engine, window=window)
+
+
+class FleetError(click.ClickException):
+    """Ray cannot be started or reached: printed as ``Error: ...``, exit code 2."""
+
+    exit_code = 2
+
+
+def _store(ctx, param, value):
+    if value is not None:
+        ctx.meta.setdefault(META, {})[param.name] = value
+    return value
+
+
+def ray_options(f):
+    """``--ray [ADDRESS]`` and ``--retries N`` (values kept in the click context; read by
+    :func:`run_audits`), for ``fretc audit``, ``fretc report`` and ``fretc watch``."""
+    f = click.option("--retries", type=click.IntRange(min=0), default=None,
+                     expose_value=False, callback=_store, metavar="N",
+                     help="--ray: run a log's task again up to N times when its worker dies "
+                          "[default: 0].")(f)
+    f = click.option("--ray", "ray", is_flag=False, flag_value="local", default=None,
+                     expose_value=False, callback=_check_address, metavar="[ADDRESS]",
+                     help="Audit the logs on Ray, one task per log: a local Ray for the run, "
+                          "or ADDRESS of a cluster (auto, ray://host:10001). "
+                          "Needs pip install 'fretc[ray]'.")(f)
+    return f
+
+
+def _check_address(ctx, param, value):
+    if value is None:
+        return None
+    if importlib.util.find_spec("ray") is None:
+        from monitors.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
+
+        raise click.UsageError(RAY_HINT, ctx=ctx)
+    ok = (value in ("local", "auto") or value.startswith("ray://")
+          or (":" in value and not os.path.exists(value) and "/" not in value))
+    if not ok:
+        raise click.BadParameter(
+            f"{value!r} is not a Ray address (local, auto, ray://host:10001, host:6379); "
+            "give the logs before --ray, or write --ray=ADDRESS", ctx=ctx, param=param)
+    return _store(ctx, param, value)
+
+
+def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
+               ctx: click.Context | None = None) -> list[Any]:
+    """The commands' audit of ``paths``: on Ray when ``--ray`` was given
+    (:func:`ray_options`), else :func:`monitors.audit.audit_logs` with ``jobs`` processes.
+
+    Raises :class:`FleetError` (exit code 2; 130 when interrupted) when Ray cannot be
+    started or reached."""
+    # lazy: the audit engine (numpy, mcap, rosbags) is loaded only when a command runs
+    from monitors.audit import audit_logs
+    from monitors.fleet import RayUnavailable, audit_logs_ray
+
+    opts = (ctx.meta.get(META) if ctx is not None else None) or {}
+    if "ray" not in opts:
+        return audit_logs(plan, paths, jobs=jobs, progress=progress)
+    try:
+        return audit_logs_ray(plan, paths, address=opts["ray"],
+                              retries=opts.get("retries") or 0, progress=progress)
+    except RayUnavailable as exc:
+        raise FleetError(str(exc)) from None
+    except KeyboardInterrupt:
+        err = FleetError("interrupted: the running Ray tasks were cancelled; no result was "
+                         "written")
+        err.exit_code = 130
+        raise err from None

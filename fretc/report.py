@@ -1,0 +1,112 @@
+"""``fretc report``: the traceability report (HTML + Markdown) of an audit, run here on LOGS
+or read from ``--from-json FILE`` (the report itself: :mod:`monitors.report`).
+
+::
+
+    fretc report -r requirements/ traces/ -o report/ [--annotate annotated/]   # runs the audit
+    fretc report --from-json audit.json -o report/ [--annotate annotated/]     # reads one
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from monitors.report import ReportError, load_audit_json, write_report
+
+from .options import audit_config, audit_input_options, ray_options, run_audits
+
+__all__ = ["report_cmd"]
+
+
+@click.command("report")
+@click.argument("logs", nargs=-1)
+@audit_input_options
+@click.option("--from-json", "from_json", type=click.Path(exists=True, dir_okay=False),
+              default=None, help="Report an audit document (fretc audit --json) instead of "
+                                 "running the audit.")
+@click.option("--base", type=click.Path(file_okay=False), default=None,
+              help="--from-json: folder the document's relative paths start from (default: "
+                   "the current folder, then the document's folder).")
+@click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
+              help="Report folder (report.html, report.md, audit.json, timelines/).")
+@click.option("--annotate", "annotate_dir", type=click.Path(file_okay=False), default=None,
+              help="Also write a copy of each MCAP log here with a foxglove.Log channel "
+                   "/fretc/verdicts of the verdict events.")
+@click.option("--psl-map", type=click.Path(exists=True), default=None,
+              help="TOML mapping of variables to AJPF beliefs (as fretc --emit psl).")
+@click.option("--title", default=None, help="Report title.")
+@click.option("--check", "check_json", type=click.Path(exists=True, dir_okay=False),
+              default=None, help="Show the findings of fretc check -o FILE beside the "
+                                 "requirements.")
+@ray_options
+@click.pass_context
+def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
+               jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title,
+               check_json=None):
+    """Write the traceability report (HTML + Markdown) of an audit: requirements x runs,
+    formulas, monitors, AJPF properties, verdicts, witnesses and violation timelines.
+
+    Either LOGS (the audit runs here, as fretc audit) or --from-json FILE. Exit status as
+    fretc audit: 0 every verdict satisfied or vacuous, 1 a violation, 2 input errors or a
+    requirement that could not be audited (the report is still written)."""
+    plan = None
+    if from_json and logs:
+        raise click.UsageError("give LOGS or --from-json, not both")
+    if not from_json and not logs:
+        raise click.UsageError("give the LOGS to audit, or --from-json FILE")
+    if from_json:
+        try:
+            doc = load_audit_json(from_json)
+        except ReportError as exc:
+            click.echo(f"error: {exc}", err=True)
+            ctx.exit(2)
+            return
+        json_dir = str(Path(from_json).resolve().parent)
+    else:
+        # lazy: the audit engine only when the logs are audited here
+        from monitors.audit import AuditInputError, find_logs, load_plan
+        from monitors.fleet import expand_log_args
+        from monitors.report_model import audit_json
+
+        json_dir = None
+        config = audit_config(requirements, bindings, inline, tick_period, tick_topic,
+                              time_base, engine, window)
+        try:
+            plan = load_plan(config)
+            paths = find_logs(expand_log_args(logs))
+        except AuditInputError as exc:
+            click.echo(f"error: {exc}", err=True)
+            ctx.exit(2)
+            return
+        input_errors = any(r.error is not None for r in plan.requirements)
+        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
+        doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
+                                    input_errors))
+    try:
+        files = write_report(doc, output, plan=plan, base=base, json_dir=json_dir,
+                             psl_map=psl_map, annotate_dir=annotate_dir, title=title)
+    except ReportError as exc:
+        click.echo(f"error: {exc}", err=True)
+        ctx.exit(2)
+        return
+    if check_json:  # fretc check findings beside the requirements (compiler/check_report.py)
+        from compiler.check_report import add_to_report, load_check  # lazy: only with --check
+        add_to_report(str(files.markdown), str(files.html), load_check(check_json))
+    for n in files.notes:
+        click.echo(f"note: {n}", err=True)
+    s = doc.get("summary") or {}
+    click.echo(f"fretc report: {len(doc.get('requirements') or [])} requirements x "
+               f"{len(doc.get('logs') or [])} runs: {s.get('satisfied', 0)} satisfied, "
+               f"{s.get('vacuous', 0)} vacuous, {s.get('violated', 0)} violated, "
+               f"{s.get('error', 0)} error", err=True)
+    click.echo(f"wrote {files.html}", err=True)
+    click.echo(f"wrote {files.markdown}", err=True)
+    click.echo(f"wrote {files.audit_json} and {len(files.timelines)} timelines", err=True)
+    for r in files.annotated:
+        extra = f" (partial: {r.damage})" if r.partial else ""
+        click.echo(f"wrote {r.output}: {r.messages} messages + {r.events} verdict events on "
+                   f"/fretc/verdicts{extra}", err=True)
+    ctx.exit(int(s.get("exit_code", 0) or 0))

@@ -1,0 +1,142 @@
+"""Units of time: one duration grammar and the time formatters of every fretc output.
+
+Durations are written the same way in requirement files (``@tick_period 100 ms``,
+``tick_period: 10 Hz``) and in signal bindings (``period = "100 ms"``, ``nominal_rate =
+"10 Hz"``, ``--tick-period``)::
+
+    duration := number [spaces] unit
+    number   := digits ["." digits] | "." digits, optionally followed by an exponent e[+-]N
+    unit     := ns | nanosec[ond][s]
+              | us | µs | microsec[ond][s]
+              | ms | millisec[ond][s]
+              | s | sec[ond][s]
+              | min | mins | minute[s]
+              | h | hour[s]
+              | Hz                    (a frequency: the duration is its period, 1/f)
+
+Units are case-insensitive. A bare number is seconds only where the file format gives it a
+type (a TOML number in a binding file); as text it needs its unit. Durations inside FRETish
+sentences (``within 3 seconds``) follow the FRETish grammar (``fretish/grammar.lark``), not
+this one. Times in fretc are integer nanoseconds (ROS 2 ``builtin_interfaces/Time`` and MCAP
+log times are nanoseconds) or, for requirement files, exact :class:`fractions.Fraction`
+seconds.
+"""
+
+from __future__ import annotations
+
+import re
+from decimal import Decimal
+from fractions import Fraction
+
+__all__ = ["NS_PER_S", "TIME_UNITS", "parse_seconds", "parse_duration", "format_ns",
+           "format_period", "format_period_ms", "format_offset", "format_seconds"]
+
+#: Nanoseconds per second (MCAP log times and ROS times are integer nanoseconds).
+NS_PER_S = 1_000_000_000
+
+#: Length in seconds of every time unit of the duration grammar (lower case; ``hz`` is
+#: absent: it is a frequency).
+TIME_UNITS: dict[str, Fraction] = {}
+for _names, _seconds in (
+        (("ns", "nanosec", "nanosecs", "nanosecond", "nanoseconds"), Fraction(1, NS_PER_S)),
+        (("us", "µs", "μs", "microsec", "microsecs", "microsecond", "microseconds"),
+         Fraction(1, 1_000_000)),
+        (("ms", "millisec", "millisecs", "millisecond", "milliseconds"), Fraction(1, 1000)),
+        (("s", "sec", "secs", "second", "seconds"), Fraction(1)),
+        (("min", "mins", "minute", "minutes"), Fraction(60)),
+        (("h", "hour", "hours"), Fraction(3600))):
+    TIME_UNITS.update(dict.fromkeys(_names, _seconds))
+del _names, _seconds
+
+_NUMBER = r"(?:[0-9]+(?:\.[0-9]+)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+_DURATION = re.compile(rf"\s*({_NUMBER})\s*([^\s0-9.+-]+)\s*\Z")
+_EXAMPLE = "e.g. '100 ms' or '10 Hz'"
+
+
+def parse_seconds(value: str | int | float) -> Fraction:
+    """A positive duration (grammar in the module docstring) as exact seconds.
+
+    :param value: text such as ``"100 ms"``, ``"0.05 seconds"``, ``"10 Hz"`` (the period
+        of that frequency, 1/10 s), or an int/float meaning seconds (a TOML number).
+    :returns: the duration in seconds, exact (``"0.1 s"`` is ``Fraction(1, 10)``).
+    :raises ValueError: not a number and a unit, ``ticks`` (a duration here must be a
+        time), an unknown unit, or a duration that is not positive.
+    """
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise ValueError(f"{value!r} is not a duration")
+    if not isinstance(value, str):
+        amount, unit = Fraction(Decimal(repr(value))), "s"
+    else:
+        m = _DURATION.match(value)
+        if not m:
+            raise ValueError(f"{value.strip()!r} is not a duration: write a number and a "
+                             f"unit, {_EXAMPLE}")
+        amount, unit = Fraction(Decimal(m.group(1))), m.group(2).lower()
+    if unit == "hz":
+        if amount <= 0:
+            raise ValueError(f"{value!r}: a frequency must be positive")
+        return 1 / amount
+    if unit not in TIME_UNITS:
+        if unit in ("tick", "ticks"):
+            raise ValueError(f"{value!r}: a period must be a time ({_EXAMPLE}), not ticks")
+        raise ValueError(f"{value!r}: unknown time unit {unit!r} (ns, us, ms, s, min, h, Hz "
+                         "or their long names: microseconds ... hours)")
+    seconds = amount * TIME_UNITS[unit]
+    if seconds <= 0:
+        raise ValueError(f"{value!r}: a duration must be positive")
+    return seconds
+
+
+def parse_duration(value: str | int | float) -> int:
+    """A positive duration (grammar in the module docstring) in integer nanoseconds, rounded
+    to the nearest nanosecond (ties to even).
+
+    :param value: as :func:`parse_seconds` (``"100 ms"``, ``"10 Hz"``, ``0.05``).
+    :returns: nanoseconds, at least 1.
+    :raises ValueError: as :func:`parse_seconds`, and for a duration under half a nanosecond.
+    """
+    ns = round(parse_seconds(value) * NS_PER_S)
+    if ns <= 0:
+        raise ValueError(f"{value!r}: a duration must be at least 1 ns")
+    return ns
+
+
+# --------------------------------------------------------------------------- formatters
+def format_ns(ns: int) -> str:
+    """A duration in integer nanoseconds in the largest unit that shows it exactly:
+    ``"2 s"``, ``"100 ms"``, ``"250 us"``, ``"7 ns"`` (the audit's tick and clock lines)."""
+    if ns % NS_PER_S == 0:
+        return f"{ns // NS_PER_S} s"
+    if ns % 1_000_000 == 0:
+        return f"{ns // 1_000_000} ms"
+    if ns % 1000 == 0:
+        return f"{ns // 1000} us"
+    return f"{ns} ns"
+
+
+def format_period(seconds: Fraction) -> str:
+    """A period in exact seconds: :func:`format_ns` when it is a whole number of
+    nanoseconds, else the float seconds (``"3.3333333333333335e-10 s"``)."""
+    ns = seconds * NS_PER_S
+    return format_ns(int(ns)) if ns.denominator == 1 else f"{float(seconds)} s"
+
+
+def format_period_ms(seconds: Fraction) -> str:
+    """A period in exact seconds as milliseconds below one second, else seconds, with
+    ``%g`` digits: ``"100 ms"``, ``"2.5 ms"``, ``"1.5 s"`` (the compiler's messages)."""
+    ms = seconds * 1000
+    return f"{float(ms):g} ms" if ms < 1000 else f"{float(seconds):g} s"
+
+
+def format_offset(ns: int | None, start: int | None, *, missing: str = "-",
+                  decimals: int = 3) -> str:
+    """A log time as seconds after ``start`` (both integer nanoseconds):
+    ``"12.345 s"``; ``missing`` when either is None."""
+    if ns is None or start is None:
+        return missing
+    return f"{(ns - start) / 1e9:.{decimals}f} s"
+
+
+def format_seconds(seconds: float | None, *, missing: str = "-") -> str:
+    """Seconds with three decimals, ``"1.250 s"``; ``missing`` for None."""
+    return missing if seconds is None else f"{seconds:.3f} s"
