@@ -111,6 +111,9 @@ def duration_ticks(d: A.Duration, tick_period: Optional[Fraction],
 # --------------------------------------------------------------------------- expressions
 _NUMERIC_FUNCS = {"absReal", "absInt", "minReal", "minInt", "maxReal", "maxInt",
                   "preInt", "preReal"}
+#: FRET's numeric functions and their arities (absReal(x), maxReal(x, y), ...).
+_NUMERIC_ARITY = {"absReal": 1, "absInt": 1, "minReal": 2, "minInt": 2, "maxReal": 2,
+                  "maxInt": 2}
 _PAST_FUNCS = {"persisted", "occurred", "preBool", "prevOcc", "preInt", "preReal"}
 _FUTURE_FUNCS = {"persists", "occurs", "nextOcc"}
 
@@ -312,6 +315,10 @@ class _Expander:
                 if len(e.args) != 2 or not _looks_numeric(e.args[0]):
                     raise SemanticsError(f"{e.name} takes (numeric initial value, x)", e.span)
                 return Node("pre", (self.term(e.args[0]), self.term(e.args[1])), name=e.name)
+            if e.name in _NUMERIC_ARITY and len(e.args) != _NUMERIC_ARITY[e.name]:
+                want = _NUMERIC_ARITY[e.name]
+                raise SemanticsError(f"{e.name} takes {want} argument{'s' if want > 1 else ''}"
+                                     f", not {len(e.args)}", e.span)
             return Node("fn", tuple(self.term(a) for a in e.args), name=e.name)
         if isinstance(e, A.BoolLit):
             raise SemanticsError("a truth value where a number is expected", e.span)
