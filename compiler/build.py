@@ -5,10 +5,10 @@ failure never stops the others."""
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Iterable, List, Optional
 
-from fretish.errors import FretishError
+from fretish.errors import FretishError, render_diagnostic
 
 from .printers import mangle, to_smv, to_spot
 from .semantics import Formalization, SemanticsError, formalize
@@ -26,8 +26,8 @@ class Compiled:
     """
 
     entry: object
-    formalization: Optional[Formalization] = None
-    error: Optional[FretishError] = None
+    formalization: Formalization | None = None
+    error: FretishError | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -46,10 +46,6 @@ class Compiled:
     def freeform(self) -> bool:
         r = self.entry.requirement
         return bool(r is not None and r.freeform)
-
-    @property
-    def ok(self) -> bool:
-        return self.formalization is not None
 
     @property
     def source_hash(self) -> str:
@@ -119,15 +115,13 @@ def compile_entry(entry) -> Compiled:
         return Compiled(entry, error=_locate(exc, entry))
 
 
-def compile_entries(entries: Iterable) -> List[Compiled]:
+def compile_entries(entries: Iterable) -> list[Compiled]:
     """:func:`compile_entry` of each entry, in order."""
     return [compile_entry(e) for e in entries]
 
 
 def _locate(exc: SemanticsError, entry) -> FretishError:
     """Give a semantics error the file position of the span it names."""
-    from fretish.errors import render_diagnostic
-
     span = exc.span
     line = span.line if span is not None and span.line else entry.line
     column = span.column if span is not None and span.line else entry.column

@@ -38,15 +38,16 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Sequence, Set, Tuple
 
 from fretish import ast as A
 
 from . import ir
+from .check_findings import Finding
 from .check_solver import UNKNOWN, SpotWorker
 from .ir import Node
-from .numeric_abstraction import NumericAbstraction, simple_comparison
+from .numeric_abstraction import NumericAbstraction
 from .printers import to_spot
 from .semantics import SemanticsError, formalize
 
@@ -68,9 +69,9 @@ class CheckItem:
     compiled: object
     phi: Node
     phi_ft: Node
-    trigger: Optional[Node]
-    trigger_ft: Optional[Node]
-    variables: List[str]
+    trigger: Node | None
+    trigger_ft: Node | None
+    variables: list[str]
 
     @property
     def id(self) -> str:
@@ -101,40 +102,12 @@ def make_item(index: int, compiled) -> CheckItem:
     return CheckItem(index, compiled, f.ft_inf, f.ft, trig, trig_ft, list(f.variables))
 
 
-def atom_variables(node: Node) -> Set[str]:
+def atom_variables(node: Node) -> set[str]:
     """FRET variable names read by ``node`` (boolean and numeric)."""
     return set(ir.variables(node))
 
 
 # --------------------------------------------------------------------------- results
-@dataclass
-class Finding:
-    """One result worth a user's attention.
-
-    ``kind``: ``unsatisfiable`` (one requirement), ``conflict`` (a set), ``vacuous``,
-    ``redundant``, ``unrealizable``, ``unknown``. ``severity``: ``error`` (exit 1),
-    ``warning`` or ``unknown``. ``requirements``: the ids it is about; ``subsets``: minimal
-    subsets (lists of ids, smallest first); ``cut``: the subset enumeration ran out of
-    budget; ``witness``: path of the witness CSV, ``expected`` the verdicts it promises.
-    """
-
-    kind: str
-    severity: str
-    requirements: List[str]
-    message: str
-    subsets: List[List[str]] = field(default_factory=list)
-    cut: bool = False
-    witness: Optional[str] = None
-    expected: Dict[str, str] = field(default_factory=dict)
-    details: dict = field(default_factory=dict)
-
-    def to_json(self) -> dict:
-        return {"kind": self.kind, "severity": self.severity,
-                "requirements": self.requirements, "message": self.message,
-                "subsets": self.subsets, "cut": self.cut, "witness": self.witness,
-                "expected": self.expected, "details": self.details}
-
-
 @dataclass
 class CheckResult:
     """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
@@ -142,14 +115,14 @@ class CheckResult:
     / None when not checked); ``components`` the ids per component; ``abstractions`` the
     uninterpreted atoms; ``timings`` CPU seconds per phase."""
 
-    requirements: List[dict] = field(default_factory=list)
-    components: List[List[str]] = field(default_factory=list)
-    findings: List[Finding] = field(default_factory=list)
-    abstractions: List[dict] = field(default_factory=list)
-    notes: List[str] = field(default_factory=list)
-    realizability: Optional[dict] = None
-    witnesses: List[dict] = field(default_factory=list)
-    input_errors: List[str] = field(default_factory=list)
+    requirements: list[dict] = field(default_factory=list)
+    components: list[list[str]] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    abstractions: list[dict] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    realizability: dict | None = None
+    witnesses: list[dict] = field(default_factory=list)
+    input_errors: list[str] = field(default_factory=list)
     queries: int = 0
     unknown_queries: int = 0
 
@@ -191,7 +164,7 @@ class Checker:
         allf += [x.phi_ft for x in self.items] + [x.trigger_ft for x in self.items
                                                   if x.trigger_ft]
         self.numeric = NumericAbstraction.of(allf)
-        self._cache: Dict[str, object] = {}
+        self._cache: dict[str, object] = {}
         self.queries = 0
         self.unknown = 0
 
@@ -203,18 +176,18 @@ class Checker:
         return self.sat_word(formulas, extra)[0]
 
     def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
-                 ) -> Tuple[object, Optional[tuple]]:
+                 ) -> tuple[object, tuple | None]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
 
-        def split(f: Node, parts: List[Node]) -> None:
+        def split(f: Node, parts: list[Node]) -> None:
             if f.op == "&":
                 split(f.args[0], parts)
                 split(f.args[1], parts)
             elif f.op != "true" and f not in parts:
                 parts.append(f)
 
-        base: List[Node] = []
-        more: List[Node] = []
+        base: list[Node] = []
+        more: list[Node] = []
         for f in formulas:
             split(f, base)
         split(self.numeric.invariant(list(formulas) + list(extra)), base)
@@ -239,7 +212,7 @@ class Checker:
         return got
 
     # ---------------------------------------------------------------- components
-    def components(self) -> List[List[CheckItem]]:
+    def components(self) -> list[list[CheckItem]]:
         """Requirements grouped by shared variables (union-find), in input order."""
         parent = list(range(len(self.items)))
 
@@ -249,7 +222,7 @@ class Checker:
                 i = parent[i]
             return i
 
-        owner: Dict[str, int] = {}
+        owner: dict[str, int] = {}
         for k, item in enumerate(self.items):
             for v in item.variables:
                 if v in owner:
@@ -258,15 +231,15 @@ class Checker:
                         parent[max(a, b)] = min(a, b)
                 else:
                     owner[v] = k
-        groups: Dict[int, List[CheckItem]] = {}
+        groups: dict[int, list[CheckItem]] = {}
         for k, item in enumerate(self.items):
             groups.setdefault(find(k), []).append(item)
         return list(groups.values())
 
     # ---------------------------------------------------------------- subsets
     def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
-                        bad: Callable[[List[CheckItem]], object]
-                        ) -> Tuple[List[List[CheckItem]], bool, bool]:
+                        bad: Callable[[list[CheckItem]], object]
+                        ) -> tuple[list[list[CheckItem]], bool, bool]:
         """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
         smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
 
@@ -279,7 +252,7 @@ class Checker:
         deadline = time.monotonic() + self.mus_budget
         must_ids = {x.index for x in must}
         rest = [x for x in pool if x.index not in must_ids]
-        found: List[List[CheckItem]] = []
+        found: list[list[CheckItem]] = []
         unknown = False
         # deletion-based shrink of the whole pool: one minimal subset
         current = list(must) + rest
@@ -346,7 +319,7 @@ def _connected(subset: Sequence[CheckItem]) -> bool:
     return len(reach) == len(subset)
 
 
-def _ids(items: Sequence[CheckItem]) -> List[str]:
+def _ids(items: Sequence[CheckItem]) -> list[str]:
     return [x.id for x in items]
 
 
@@ -359,12 +332,12 @@ def _tri(ans) -> object:
 
 
 # --------------------------------------------------------------------------- entry point
-def check_requirements(compiled: Sequence, *, timeout: Optional[float] = 10.0,
+def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
                        mus_budget: float = 10.0, redundancy: bool = True,
-                       vacuity: bool = True, witness_dir: Optional[str] = None,
-                       inputs: Optional[Sequence[str]] = None,
-                       outputs: Optional[Sequence[str]] = None,
-                       worker: Optional[SpotWorker] = None) -> CheckResult:
+                       vacuity: bool = True, witness_dir: str | None = None,
+                       inputs: Sequence[str] | None = None,
+                       outputs: Sequence[str] | None = None,
+                       worker: SpotWorker | None = None) -> CheckResult:
     """Check compiled requirements (:class:`compiler.build.Compiled`, in file order).
 
     ``timeout``: seconds per Spot query (None: no budget). ``mus_budget``: seconds per
@@ -375,7 +348,7 @@ def check_requirements(compiled: Sequence, *, timeout: Optional[float] = 10.0,
     are skipped with a note.
     """
     result = CheckResult()
-    items: List[CheckItem] = []
+    items: list[CheckItem] = []
     for c in compiled:
         if c.error is not None:
             result.input_errors.append(str(c.error))
@@ -390,11 +363,11 @@ def check_requirements(compiled: Sequence, *, timeout: Optional[float] = 10.0,
         checker = Checker(items, worker, mus_budget)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy)
         if inputs is not None or outputs is not None:
-            from .check_realizability import check_realizability
+            from .check_realizability import check_realizability  # lazy: numpy, if asked
             result.realizability = check_realizability(checker, result, inputs or [],
                                                        outputs or [])
         if witness_dir is not None:
-            from .check_witness import write_witnesses
+            from .check_witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir)
         result.queries = checker.queries
         result.unknown_queries = checker.unknown
@@ -425,9 +398,23 @@ def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool) -
                     s["findings"].append(n)
 
 
-def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
+def _check_component(ck: Checker, comp: list[CheckItem], status: dict,
                      result: CheckResult, vacuity: bool, redundancy: bool) -> None:
-    # 1. each requirement alone
+    """Check one component (requirements sharing variables): each requirement alone, the
+    set, then (when the set is satisfiable) non-vacuity and redundancy; findings and notes
+    go to ``result``, per-requirement answers to ``status``."""
+    alone_bad = _check_alone(ck, comp, status, result)
+    if not _check_set(ck, comp, status, result, alone_bad):
+        return
+    if vacuity:
+        _check_vacuity(ck, comp, status, result)
+    if redundancy:
+        _check_redundancy(ck, comp, status, result)
+
+
+def _check_alone(ck: Checker, comp: list[CheckItem], status: dict,
+                 result: CheckResult) -> list:
+    """Satisfiability of each requirement on its own; returns the unsatisfiable ones."""
     alone_bad = []
     for x in comp:
         ans = ck.sat([x.phi])
@@ -443,7 +430,13 @@ def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
                 "unknown", "unknown", [x.id],
                 f"satisfiability of {x.id} ({x.location}) unknown: the Spot query ran out of "
                 "time (--timeout)"))
-    # 2. the component
+    return alone_bad
+
+
+def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckResult,
+               alone_bad: list) -> bool:
+    """Satisfiability of the component (minimal conflicting subsets when it is not);
+    True when it is satisfiable (the later checks are meaningful)."""
     whole = ck.sat([x.phi for x in comp]) if len(comp) > 1 else ck.sat([comp[0].phi])
     if len(comp) > 1 and whole is False and not alone_bad:
         subsets, cut, unknown = ck.minimal_subsets(
@@ -472,58 +465,65 @@ def _check_component(ck: Checker, comp: List[CheckItem], status: dict,
                             "redundancy not checked ("
                             + ("the requirements conflict)" if whole is False else
                                "the satisfiability of the set is unknown)"))
-        return
-    # 3. non-vacuity
-    if vacuity:
-        for x in comp:
-            if x.trigger is None:
-                continue
-            ans = ck.sat([y.phi for y in comp], [x.trigger])
-            status[x.index]["non_vacuous"] = _tri(ans)
-            if ans is True:
-                continue
-            if ans == UNKNOWN:
-                result.findings.append(Finding(
-                    "unknown", "unknown", [x.id],
-                    f"non-vacuity of {x.id} ({x.location}) unknown: the Spot query ran out "
-                    "of time (--timeout)"))
-                continue
-            subsets, cut, unknown = ck.minimal_subsets(
-                comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
-            names = [_ids(s) for s in subsets]
-            if names and names[0] == [x.id]:
-                msg = (f"{x.id} ({x.location}) can only be satisfied vacuously: its scope is "
-                       "never entered or its trigger never fires with room for the response "
-                       "in any run that meets it")
+        return False
+    return True
+
+
+def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
+                   result: CheckResult) -> None:
+    """Can each requirement's trigger fire (its scope be entered) in a run meeting all?"""
+    for x in comp:
+        if x.trigger is None:
+            continue
+        ans = ck.sat([y.phi for y in comp], [x.trigger])
+        status[x.index]["non_vacuous"] = _tri(ans)
+        if ans is True:
+            continue
+        if ans == UNKNOWN:
+            result.findings.append(Finding(
+                "unknown", "unknown", [x.id],
+                f"non-vacuity of {x.id} ({x.location}) unknown: the Spot query ran out "
+                "of time (--timeout)"))
+            continue
+        subsets, cut, unknown = ck.minimal_subsets(
+            comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
+        names = [_ids(s) for s in subsets]
+        if names and names[0] == [x.id]:
+            msg = (f"{x.id} ({x.location}) can only be satisfied vacuously: its scope is "
+                   "never entered or its trigger never fires with room for the response "
+                   "in any run that meets it")
+        else:
+            msg = (f"{x.id} ({x.location}) can only be satisfied vacuously in the presence"
+                   " of the others: no run meeting all requirements enters its scope and "
+                   "fires its trigger; minimal sets forcing this: "
+                   + "; ".join("{" + ", ".join(s) + "}" for s in names)
+                   + (" (enumeration cut by the time budget)" if cut else ""))
+        involved = [x.id] + sorted({i for s in names for i in s if i != x.id})
+        result.findings.append(Finding("vacuous", "error", involved, msg, subsets=names,
+                                       cut=cut, details={"requirement": x.id}))
+
+
+def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
+                      result: CheckResult) -> None:
+    """Is each requirement implied by the others of its component?"""
+    for x in comp:
+        others = [y.phi for y in comp if y is not x]
+        ans = ck.sat(others, [ir.not_(x.phi)])
+        status[x.index]["redundant"] = _tri(not ans) if ans in (True, False) else "unknown"
+        if ans == UNKNOWN:
+            result.findings.append(Finding(
+                "unknown", "warning", [x.id],
+                f"redundancy of {x.id} ({x.location}) unknown: the Spot query ran out of "
+                "time (--timeout)"))
+        if ans is False:
+            if others:
+                msg = (f"{x.id} ({x.location}) is implied by the others of its component ("
+                       + ", ".join(_ids([y for y in comp if y is not x])) + ")")
             else:
-                msg = (f"{x.id} ({x.location}) can only be satisfied vacuously in the presence"
-                       " of the others: no run meeting all requirements enters its scope and "
-                       "fires its trigger; minimal sets forcing this: "
-                       + "; ".join("{" + ", ".join(s) + "}" for s in names)
-                       + (" (enumeration cut by the time budget)" if cut else ""))
-            involved = [x.id] + sorted({i for s in names for i in s if i != x.id})
-            result.findings.append(Finding("vacuous", "error", involved, msg, subsets=names,
-                                           cut=cut, details={"requirement": x.id}))
-    # 4. redundancy
-    if redundancy:
-        for x in comp:
-            others = [y.phi for y in comp if y is not x]
-            ans = ck.sat(others, [ir.not_(x.phi)])
-            status[x.index]["redundant"] = _tri(not ans) if ans in (True, False) else "unknown"
-            if ans == UNKNOWN:
-                result.findings.append(Finding(
-                    "unknown", "warning", [x.id],
-                    f"redundancy of {x.id} ({x.location}) unknown: the Spot query ran out of "
-                    "time (--timeout)"))
-            if ans is False:
-                if others:
-                    msg = (f"{x.id} ({x.location}) is implied by the others of its component ("
-                           + ", ".join(_ids([y for y in comp if y is not x])) + ")")
-                else:
-                    msg = f"{x.id} ({x.location}) holds on every run (on infinite traces)"
-                result.findings.append(Finding("redundant", "warning", [x.id], msg,
-                                               details={"implied_by": _ids(
-                                                   [y for y in comp if y is not x])}))
+                msg = f"{x.id} ({x.location}) holds on every run (on infinite traces)"
+            result.findings.append(Finding("redundant", "warning", [x.id], msg,
+                                           details={"implied_by": _ids(
+                                               [y for y in comp if y is not x])}))
 
 
 def _neg(ans):

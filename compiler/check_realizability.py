@@ -23,13 +23,15 @@ environment has to react to the outputs and the report says so.
 
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Sequence
+from collections.abc import Sequence
 
 from fretish.errors import CheckError
 
 from . import ir
-from .check import Finding, _ids
+from .check_findings import Finding
+from .check_findings import ids as _ids
 from .check_solver import UNKNOWN
+from .check_witness import _atoms
 from .numeric_abstraction import simple_comparison
 from .printers import mangle, to_smv, to_spot
 
@@ -40,7 +42,7 @@ class RealizabilityError(CheckError, ValueError):
     """Bad input/output declarations (a variable both input and output)."""
 
 
-def _atom_vars(atom) -> List[str]:
+def _atom_vars(atom) -> list[str]:
     return [n.name for n in ir.walk(atom) if n.op in ("ap", "var")]
 
 
@@ -55,8 +57,6 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
 
     Raises :class:`RealizabilityError` when a variable is declared both input and output.
     """
-    from .check_witness import _atoms
-
     inputs, outputs = list(dict.fromkeys(inputs)), list(dict.fromkeys(outputs))
     both = sorted(set(inputs) & set(outputs))
     if both:
@@ -70,9 +70,36 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
                "assumed_outputs": [v for v in used if v not in inputs and v not in outputs],
                "unused": [v for v in inputs + outputs if v not in used],
                "components": []}
-    cache: Dict[tuple, object] = {}
+    decide = _Decider(checker, inputs)
+    for comp in checker.components():
+        entry: dict = {"requirements": _ids(comp)}
+        ans = decide(comp)
+        if ans == UNKNOWN:
+            entry["realizable"] = "unknown"
+            result.findings.append(Finding(
+                "unknown", "unknown", _ids(comp),
+                "realizability of " + ", ".join(_ids(comp)) + " unknown: the synthesis game "
+                "ran out of time (--timeout)"))
+        elif ans[0]:
+            entry["realizable"] = True
+            entry["mealy_states"] = ans[1]
+        else:
+            _unrealizable(checker, decide, comp, ans[1], inputs, entry, result)
+        summary["components"].append(entry)
+    return summary
 
-    def decide(items) -> object:
+
+class _Decider:
+    """Realizability of a set of requirement items (Spot's synthesis game through the
+    checker's worker), memoized by the specification's text and its outputs. Returns
+    UNKNOWN or (realizable, Mealy states or the environment's counter-strategy)."""
+
+    def __init__(self, checker, inputs: list[str]):
+        self.checker, self.inputs = checker, inputs
+        self.cache: dict[tuple, object] = {}
+
+    def __call__(self, items) -> object:
+        checker, inputs = self.checker, self.inputs
         phis = [x.phi for x in items]
         atoms = _atoms(phis)
         outs = sorted({_spot_name(a) for a in atoms
@@ -89,46 +116,35 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
         else:
             spec_text = to_spot(ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out)))
         key = (spec_text, tuple(outs))
-        if key not in cache:
+        if key not in self.cache:
             checker.queries += 1
             ans = checker.worker.ask(("realizable", key[0], outs))
             if ans == UNKNOWN:
                 checker.unknown += 1
-            cache[key] = ans
-        return cache[key]
+            self.cache[key] = ans
+        return self.cache[key]
 
-    for comp in checker.components():
-        entry: dict = {"requirements": _ids(comp)}
-        ans = decide(comp)
-        if ans == UNKNOWN:
-            entry["realizable"] = "unknown"
-            result.findings.append(Finding(
-                "unknown", "unknown", _ids(comp),
-                "realizability of " + ", ".join(_ids(comp)) + " unknown: the synthesis game "
-                "ran out of time (--timeout)"))
-        elif ans[0]:
-            entry["realizable"] = True
-            entry["mealy_states"] = ans[1]
-        else:
-            entry["realizable"] = False
-            subsets, cut, unknown = checker.minimal_subsets(
-                comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)[0]))
-            names = [_ids(s) for s in subsets]
-            entry["minimal_unrealizable"] = names
-            entry["cut"] = cut
-            counter = ans[1]
-            env = _environment(checker, counter, inputs)
-            entry["environment"] = env
-            involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
-            msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
-                   + ", ".join(inputs) + ") do: minimal unrealizable subsets "
-                   + "; ".join("{" + ", ".join(s) + "}" for s in names)
-                   + (" (enumeration cut by the time budget)" if cut else ""))
-            result.findings.append(Finding("unrealizable", "error", involved, msg,
-                                           subsets=names, cut=cut,
-                                           details={"environment": env}))
-        summary["components"].append(entry)
-    return summary
+
+def _unrealizable(checker, decide: _Decider, comp, counter, inputs: list[str], entry: dict,
+                  result) -> None:
+    """Fill ``entry`` for an unrealizable component (minimal unrealizable subsets, the
+    environment's input lasso) and append the finding to ``result``."""
+    entry["realizable"] = False
+    subsets, cut, unknown = checker.minimal_subsets(
+        comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)[0]))
+    names = [_ids(s) for s in subsets]
+    entry["minimal_unrealizable"] = names
+    entry["cut"] = cut
+    env = _environment(checker, counter, inputs)
+    entry["environment"] = env
+    involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
+    msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
+           + ", ".join(inputs) + ") do: minimal unrealizable subsets "
+           + "; ".join("{" + ", ".join(s) + "}" for s in names)
+           + (" (enumeration cut by the time budget)" if cut else ""))
+    result.findings.append(Finding("unrealizable", "error", involved, msg,
+                                   subsets=names, cut=cut,
+                                   details={"environment": env}))
 
 
 def _environment(checker, counter, inputs: Sequence[str]) -> dict:

@@ -8,7 +8,6 @@ from __future__ import annotations
 import html
 import json
 from pathlib import Path
-from typing import List
 
 __all__ = ["load_check", "findings_rows", "add_to_report"]
 
@@ -25,7 +24,7 @@ def _yn(v) -> str:
     return {True: "yes", False: "no", None: "-"}.get(v, str(v)) if not isinstance(v, str) else v
 
 
-def findings_rows(doc: dict) -> List[dict]:
+def findings_rows(doc: dict) -> list[dict]:
     """One row per requirement: ``id``, ``source``, ``satisfiable``, ``non_vacuous``,
     ``redundant``, ``findings`` (texts ``KIND: message``)."""
     rows = []

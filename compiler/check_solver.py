@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from typing import Any, Optional, Tuple
+from typing import Any
 
 __all__ = ["UNKNOWN", "SpotWorker", "run_query"]
 
@@ -32,7 +32,7 @@ UNKNOWN = "unknown"
 
 
 def _letters(aut, bdds) -> list:
-    import spot
+    import spot  # lazy: Spot loads in the query worker process only
 
     out = []
     for b in bdds:
@@ -51,7 +51,7 @@ def _letters(aut, bdds) -> list:
     return out
 
 
-def _word(aut) -> Optional[Tuple[list, list]]:
+def _word(aut) -> tuple[list, list] | None:
     w = aut.accepting_word()
     if w is None:
         return None
@@ -64,7 +64,7 @@ _AUTOMATA: dict = {}
 
 
 def _translate(text: str):
-    import spot
+    import spot  # lazy: Spot loads in the query worker process only
 
     a = _AUTOMATA.get(text)
     if a is None:
@@ -84,8 +84,8 @@ def _product_game(texts, outputs):
     None when some conjunct has no small deterministic automaton (then the caller uses
     ``spot.ltl_to_game`` on the whole formula). Same game as ``ltl_to_game`` up to the
     automaton construction; equal answers checked in tests/test_check.py."""
-    import buddy
-    import spot
+    import buddy  # lazy: with Spot, in the query worker process only
+    import spot  # lazy: Spot loads in the query worker process only
 
     auts = []
     for t in texts:
@@ -111,7 +111,7 @@ def _product_game(texts, outputs):
 
 def run_query(query: tuple) -> Any:
     """Answer one query in this process (see the module docstring for the shapes)."""
-    import spot
+    import spot  # lazy: Spot loads in the query worker process only
 
     kind = query[0]
     if kind == "sat":
@@ -182,7 +182,7 @@ class SpotWorker:
     ``RuntimeError``.
     """
 
-    def __init__(self, timeout: Optional[float] = None):
+    def __init__(self, timeout: float | None = None):
         self.timeout = timeout
         self._proc = None
         self._conn = None

@@ -31,15 +31,15 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
 from . import ir
 from .check_solver import UNKNOWN
+from .evaluate import ft_at
 from .ir import LAST, Node
-from .numeric_abstraction import simple_comparison
 from .printers import mangle, to_smv
 
 __all__ = ["finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
@@ -47,7 +47,7 @@ __all__ = ["finite_trace", "write_witnesses", "expected_verdicts", "read_expecte
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
 
 
-def _atoms(nodes: Sequence[Node]) -> List[Node]:
+def _atoms(nodes: Sequence[Node]) -> list[Node]:
     out, seen = [], set()
     for f in nodes:
         for n in ir.walk(f):
@@ -59,7 +59,6 @@ def _atoms(nodes: Sequence[Node]) -> List[Node]:
 
 def _absorbing_value(atom: Node) -> bool:
     if atom.op == "cmp":
-        from .evaluate import ft_at
         names = {n.name for n in ir.walk(atom) if n.op == "var"}
         try:
             return bool(ft_at(atom, [{n: 0.0 for n in names}], 0))
@@ -74,8 +73,8 @@ def _finite_model(nodes: Sequence[Node]) -> Node:
     return ir.U(ir.not_(LAST), ir.and_(LAST, ir.X(ir.G(ir.and_(ir.not_(LAST), absorbing)))))
 
 
-def finite_trace(checker, formulas: Sequence[Node], columns: Dict[str, str],
-                 length: Optional[int] = None) -> object:
+def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
+                 length: int | None = None) -> object:
     """A finite trace meeting the ft ``formulas`` (list of rows ``{variable: value}`` over
     ``columns``, name -> ``"bool"``/``"float"``), None when there is none, or UNKNOWN.
     ``length``: exactly that many ticks."""
@@ -118,8 +117,8 @@ def finite_trace(checker, formulas: Sequence[Node], columns: Dict[str, str],
     return rows
 
 
-def _columns(items) -> Dict[str, str]:
-    cols: Dict[str, str] = {}
+def _columns(items) -> dict[str, str]:
+    cols: dict[str, str] = {}
     for x in items:
         for f in (x.phi_ft, x.phi):
             for n in ir.walk(f):
@@ -130,9 +129,10 @@ def _columns(items) -> Dict[str, str]:
     return cols
 
 
-def expected_verdicts(items, rows: List[dict]) -> Dict[str, str]:
+def expected_verdicts(items, rows: list[dict]) -> dict[str, str]:
     """FRET's verdict of each item on ``rows`` (``satisfied``/``vacuous``/``violated``, or
     ``unknown`` where the evidence engine cannot decide), by the audit's evidence engine."""
+    # lazy: the audit's evidence engine lives in monitors/, a layer above compiler/
     from monitors.evidence import EvidenceUnsupported, evaluate_requirement
 
     n = len(rows)
@@ -157,7 +157,7 @@ def _cell(v) -> str:
     return repr(float(v))
 
 
-def read_expected(path: str) -> Dict[str, str]:
+def read_expected(path: str) -> dict[str, str]:
     """The ``# expected:`` verdicts of a witness CSV (requirement id -> verdict)."""
     for line in Path(path).read_text(encoding="utf-8").splitlines():
         m = _EXPECTED.match(line)
@@ -166,8 +166,8 @@ def read_expected(path: str) -> Dict[str, str]:
     return {}
 
 
-def _write(path: Path, title: str, sources: List[str], rows: List[dict],
-           expected: Dict[str, str]) -> None:
+def _write(path: Path, title: str, sources: list[str], rows: list[dict],
+           expected: dict[str, str]) -> None:
     names = list(rows[0])
     lines = [f"# fretc check witness: {title}",
              "# replay: fretc audit " + " ".join(f"-r {s}" for s in sources) + f" {path}",
@@ -189,95 +189,24 @@ def write_witnesses(checker, result, witness_dir: str) -> None:
     ``result.witnesses``."""
     out = Path(witness_dir)
     out.mkdir(parents=True, exist_ok=True)
-    items = checker.items
-    if not items:
+    if not checker.items:
         return
-    by_id = {x.id: x for x in items}
-    cols = _columns(items)
-    sources = []
-    for x in items:
-        if x.compiled.entry.source not in sources:
-            sources.append(x.compiled.entry.source)
-
-    def trig(x):
-        return [x.trigger_ft] if x.trigger_ft is not None else []
-
-    comps = checker.components()
-
-    def filler(comp):  # the other components: a run meeting them, triggers firing
-        phis = [x.phi_ft for x in comp]
-        return [phis + [t for x in comp for t in trig(x)], phis]
-
-    def one(variants, length=None):
-        for formulas in variants:
-            rows = finite_trace(checker, formulas, cols, length)
-            if rows == UNKNOWN:
-                return UNKNOWN
-            if rows:
-                return rows
-        return None
-
-    def attempt(variants):
-        """Rows meeting ``variants`` (first that works) on its component, and the other
-        components filled with runs of the same length that meet them."""
-        main = one(variants)
-        if main in (None, UNKNOWN):
-            return main
-        names = {n for f in variants[-1] for n in ir.variables(f)}
-        rows = [dict(r) for r in main]
-        for comp in comps:
-            if names.intersection(v for x in comp for v in x.variables):
-                continue
-            part = one(filler(comp), len(rows))
-            if part in (None, UNKNOWN):
-                continue  # left at false / 0
-            own = {v for x in comp for v in x.variables}
-            for r, p in zip(rows, part):
-                r.update({k: v for k, v in p.items() if k in own})
-        return rows
-
+    w = _Witnesses(checker)
     serial = 0
     for finding in result.findings:
         if finding.kind not in ("conflict", "vacuous", "unsatisfiable"):
             continue
-        plans = []  # (formula variants, intended verdicts), best first
-        if finding.kind == "unsatisfiable":
-            x = by_id[finding.requirements[0]]
-            plans.append(([[ir.not_(x.phi_ft)] + trig(x), [ir.not_(x.phi_ft)]],
-                          {x.id: "violated"}))
-        else:
-            subset = [by_id[i] for i in finding.subsets[0]] if finding.subsets else []
-            if not subset:
-                continue
-            target = by_id[finding.details["requirement"]] if finding.kind == "vacuous" else None
-            others = [y for y in subset if y is not target] or [target]
-            for victim in reversed(others):  # the last member first
-                keep = [y for y in subset if y is not victim]
-                base = [y.phi_ft for y in keep] + [ir.not_(victim.phi_ft)]
-                if target is not None and target is not victim:
-                    base += trig(target)
-                trigs = [t for y in keep for t in trig(y)]
-                intended = {y.id: "satisfied" for y in keep}
-                intended[victim.id] = "violated"
-                plans.append(([base + trigs, base], intended))
-        best = None
-        for variants, intended in plans:
-            rows = attempt(variants)
-            if rows == UNKNOWN or not rows:
-                continue
-            expected = expected_verdicts(items, rows)
-            wrong = {k: v for k, v in intended.items() if expected.get(k) != v}
-            if best is None or len(wrong) < len(best[2]):
-                best = (rows, expected, wrong, intended)
-            if not wrong:
-                break
+        plans = w.plans(finding)
+        if not plans:
+            continue
+        best = w.best(plans)
         if best is None:
             finding.details["witness"] = "not built: no finite trace found in time"
             continue
         rows, expected, wrong, intended = best
         serial += 1
         path = out / f"{serial:02d}_{finding.kind}_{_safe('_'.join(finding.requirements))}.csv"
-        _write(path, finding.message, sources, rows, expected)
+        _write(path, finding.message, w.sources, rows, expected)
         finding.witness = str(path)
         finding.expected = expected
         finding.details["witness_intended"] = intended
@@ -288,15 +217,109 @@ def write_witnesses(checker, result, witness_dir: str) -> None:
                 + ", ".join(f"{k} is {expected.get(k)}, not {v}" for k, v in wrong.items()))
     if not any(f.severity == "error" for f in result.findings):
         rows = None
-        if comps:
-            rows = attempt(filler(comps[0]))
+        if w.comps:
+            rows = w.attempt(w.filler(w.comps[0]))
         if rows and rows != UNKNOWN:
             path = out / "00_consistent.csv"
-            expected = expected_verdicts(items, rows)
-            _write(path, "a run meeting every requirement", sources, rows, expected)
+            expected = expected_verdicts(w.items, rows)
+            _write(path, "a run meeting every requirement", w.sources, rows, expected)
             result.witnesses.append({"kind": "consistent", "path": str(path),
                                      "expected": expected})
     for f in result.findings:
         if f.witness:
             result.witnesses.append({"kind": f.kind, "path": f.witness,
                                      "expected": f.expected})
+
+
+class _Witnesses:
+    """Finite traces for the findings of one check: the requirement items, their columns,
+    the components and the requirement files (for the replay command)."""
+
+    def __init__(self, checker):
+        self.checker = checker
+        self.items = checker.items
+        self.by_id = {x.id: x for x in self.items}
+        self.cols = _columns(self.items)
+        self.sources: list[str] = []
+        for x in self.items:
+            if x.compiled.entry.source not in self.sources:
+                self.sources.append(x.compiled.entry.source)
+        self.comps = checker.components()
+
+    @staticmethod
+    def trig(x) -> list:
+        return [x.trigger_ft] if x.trigger_ft is not None else []
+
+    def filler(self, comp) -> list:
+        """Formula variants for a component: a run meeting it, triggers firing (else not)."""
+        phis = [x.phi_ft for x in comp]
+        return [phis + [t for x in comp for t in self.trig(x)], phis]
+
+    def one(self, variants, length=None):
+        """Rows meeting the first satisfiable variant, None, or UNKNOWN (time budget)."""
+        for formulas in variants:
+            rows = finite_trace(self.checker, formulas, self.cols, length)
+            if rows == UNKNOWN:
+                return UNKNOWN
+            if rows:
+                return rows
+        return None
+
+    def attempt(self, variants):
+        """Rows meeting ``variants`` (first that works) on its component, and the other
+        components filled with runs of the same length that meet them."""
+        main = self.one(variants)
+        if main in (None, UNKNOWN):
+            return main
+        names = {n for f in variants[-1] for n in ir.variables(f)}
+        rows = [dict(r) for r in main]
+        for comp in self.comps:
+            if names.intersection(v for x in comp for v in x.variables):
+                continue
+            part = self.one(self.filler(comp), len(rows))
+            if part in (None, UNKNOWN):
+                continue  # left at false / 0
+            own = {v for x in comp for v in x.variables}
+            for r, p in zip(rows, part):
+                r.update({k: v for k, v in p.items() if k in own})
+        return rows
+
+    def plans(self, finding) -> list:
+        """(formula variants, intended verdicts) that would show ``finding``, best first."""
+        by_id, trig = self.by_id, self.trig
+        if finding.kind == "unsatisfiable":
+            x = by_id[finding.requirements[0]]
+            return [([[ir.not_(x.phi_ft)] + trig(x), [ir.not_(x.phi_ft)]],
+                     {x.id: "violated"})]
+        subset = [by_id[i] for i in finding.subsets[0]] if finding.subsets else []
+        if not subset:
+            return []
+        plans = []
+        target = by_id[finding.details["requirement"]] if finding.kind == "vacuous" else None
+        others = [y for y in subset if y is not target] or [target]
+        for victim in reversed(others):  # the last member first
+            keep = [y for y in subset if y is not victim]
+            base = [y.phi_ft for y in keep] + [ir.not_(victim.phi_ft)]
+            if target is not None and target is not victim:
+                base += trig(target)
+            trigs = [t for y in keep for t in trig(y)]
+            intended = {y.id: "satisfied" for y in keep}
+            intended[victim.id] = "violated"
+            plans.append(([base + trigs, base], intended))
+        return plans
+
+    def best(self, plans):
+        """(rows, expected, wrong, intended) of the plan whose trace shows most of its
+        intended verdicts (the first that shows all), or None when no trace was found."""
+        best = None
+        for variants, intended in plans:
+            rows = self.attempt(variants)
+            if rows == UNKNOWN or not rows:
+                continue
+            expected = expected_verdicts(self.items, rows)
+            wrong = {k: v for k, v in intended.items() if expected.get(k) != v}
+            if best is None or len(wrong) < len(best[2]):
+                best = (rows, expected, wrong, intended)
+            if not wrong:
+                break
+        return best

@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import math
 import operator
-from typing import Any, Dict, List, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from .ir import Node
+from .printers import to_smv
 
 Trace = Sequence[Mapping[str, Any]]
 
@@ -59,7 +61,7 @@ class _Evaluator:
     def __init__(self, trace: Trace):
         self.trace = trace
         self.L = len(trace)
-        self.memo: Dict[Node, List[Any]] = {}
+        self.memo: dict[Node, list[Any]] = {}
 
     def value(self, name: str, i: int, numeric: bool):
         if i >= self.L:
@@ -67,18 +69,30 @@ class _Evaluator:
         v = self.trace[i].get(name, 0 if numeric else False)
         return v if numeric else bool(v)
 
-    def series(self, n: Node) -> List[Any]:
+    def series(self, n: Node) -> list[Any]:
         got = self.memo.get(n)
         if got is None:
             got = self._compute(n)
             self.memo[n] = got
         return got
 
-    def _compute(self, n: Node) -> List[Any]:
-        L = self.L
-        rng = range(L + 1)
+    def _compute(self, n: Node) -> list[Any]:
         op = n.op
-        a = n.args
+        if op in _FUTURE_OPS:
+            return self._future(n)
+        if op in _PAST_OPS:
+            return self._past(n)
+        got = self._leaf(n)
+        if got is None:
+            got = self._pointwise(n)
+        if got is None:
+            raise ValueError(f"cannot evaluate IR node {op!r}")
+        return got
+
+    def _leaf(self, n: Node) -> list[Any] | None:
+        """Constants, markers and reads of the trace (None for other nodes)."""
+        L, op = self.L, n.op
+        rng = range(L + 1)
         if op == "true":
             return [True] * (L + 1)
         if op == "false":
@@ -94,6 +108,16 @@ class _Evaluator:
         if op == "num":
             v = float(n.name) if any(c in n.name for c in ".eE") else int(n.name)
             return [v] * (L + 1)
+        if op == "call":
+            key = to_smv(n)
+            return [self.value(key, i, False) for i in rng]
+        return None
+
+    def _pointwise(self, n: Node) -> list[Any] | None:
+        """Operators whose value at a position depends on that position only (and
+        ``pre``, on the previous one); None for other nodes."""
+        L, op, a = self.L, n.op, n.args
+        rng = range(L + 1)
         if op == "cmp":
             x, y, f = self.series(a[0]), self.series(a[1]), _CMP[n.name]
             return [bool(f(x[i], y[i])) for i in rng]
@@ -106,7 +130,6 @@ class _Evaluator:
             args = [self.series(x) for x in a]
             f = _FUNCS.get(n.name)
             if f is None:  # uninterpreted: read the trace under its printed name
-                from .printers import to_smv
                 key = to_smv(n)
                 return [self.value(key, i, True) for i in rng]
             return [f(*(s[i] for s in args)) for i in rng]
@@ -116,27 +139,21 @@ class _Evaluator:
         if op == "pre":
             init, x = self.series(a[0]), self.series(a[1])
             return [init[i] if i == 0 else x[i - 1] for i in rng]
-        if op == "call":
-            from .printers import to_smv
-            key = to_smv(n)
-            return [self.value(key, i, False) for i in rng]
         if op in ("past", "future"):
             s = self.series(a[0])
             return s[:L] + [False]
         if op == "!":
             return [not v for v in self.series(a[0])]
-        if op in ("&", "|", "xor", "->", "<->"):
+        if op in _BOOL_BINARY:
             x, y = self.series(a[0]), self.series(a[1])
-            if op == "&":
-                return [p and q for p, q in zip(x, y)]
-            if op == "|":
-                return [p or q for p, q in zip(x, y)]
-            if op == "xor":
-                return [p != q for p, q in zip(x, y)]
-            if op == "->":
-                return [(not p) or q for p, q in zip(x, y)]
-            return [p == q for p, q in zip(x, y)]
-        # ---- future: backward over positions, absorbing state first
+            f = _BOOL_BINARY[op]
+            return [f(p, q) for p, q in zip(x, y)]
+        return None
+
+    def _future(self, n: Node) -> list[Any]:
+        """X, F, G, U, V: backward over positions, absorbing state first."""
+        L, op, a = self.L, n.op, n.args
+        rng = range(L + 1)
         if op == "X":
             x = self.series(a[0])
             return [x[min(i + 1, L)] for i in rng]
@@ -150,17 +167,20 @@ class _Evaluator:
                     out[i] = (x[i] or out[i + 1]) if op == "F" else (x[i] and out[i + 1])
                 return out
             return [agg(x[min(j, L)] for j in range(i + n.lo, i + n.hi + 1)) for i in rng]
-        if op in ("U", "V"):
-            x, y = self.series(a[0]), self.series(a[1])
-            out = [False] * (L + 1)
-            out[L] = y[L]
-            for i in range(L - 1, -1, -1):
-                if op == "U":
-                    out[i] = y[i] or (x[i] and out[i + 1])
-                else:
-                    out[i] = y[i] and (x[i] or out[i + 1])
-            return out
-        # ---- past: forward over positions 0..L-1 (the absorbing state reads as false)
+        x, y = self.series(a[0]), self.series(a[1])
+        out = [False] * (L + 1)
+        out[L] = y[L]
+        for i in range(L - 1, -1, -1):
+            if op == "U":
+                out[i] = y[i] or (x[i] and out[i + 1])
+            else:
+                out[i] = y[i] and (x[i] or out[i + 1])
+        return out
+
+    def _past(self, n: Node) -> list[Any]:
+        """Y, Z, O, H, S, T: forward over positions 0..L-1 (the absorbing state reads as
+        false)."""
+        L, op, a = self.L, n.op, n.args
         if op in ("Y", "Z"):
             x = self.series(a[0])
             first = op == "Z"
@@ -177,18 +197,23 @@ class _Evaluator:
             agg = any if op == "O" else all
             return [agg(x[j] for j in range(max(0, i - n.hi), i - n.lo + 1))
                     for i in range(L)] + [False]
-        if op in ("S", "T"):
-            x, y = self.series(a[0]), self.series(a[1])
-            out = []
-            prev = op == "T"
-            for i in range(L):
-                if op == "S":
-                    prev = y[i] or (x[i] and prev)
-                else:
-                    prev = y[i] and (x[i] or prev)
-                out.append(prev)
-            return out + [False]
-        raise ValueError(f"cannot evaluate IR node {op!r}")
+        x, y = self.series(a[0]), self.series(a[1])
+        out = []
+        prev = op == "T"
+        for i in range(L):
+            if op == "S":
+                prev = y[i] or (x[i] and prev)
+            else:
+                prev = y[i] and (x[i] or prev)
+            out.append(prev)
+        return out + [False]
+
+
+_FUTURE_OPS = frozenset(("X", "F", "G", "U", "V"))
+_PAST_OPS = frozenset(("Y", "Z", "O", "H", "S", "T"))
+_BOOL_BINARY = {"&": lambda p, q: p and q, "|": lambda p, q: p or q,
+                "xor": lambda p, q: p != q, "->": lambda p, q: (not p) or q,
+                "<->": lambda p, q: p == q}
 
 
 def ft_at(node: Node, trace: Trace, pos: int = 0) -> bool:
@@ -205,6 +230,6 @@ def pt_at(node: Node, trace: Trace, pos: int = -1) -> bool:
     return bool(ev.series(node)[pos if pos >= 0 else len(trace) + pos])
 
 
-def series(node: Node, trace: Trace) -> List[Any]:
+def series(node: Node, trace: Trace) -> list[Any]:
     """Values of ``node`` at positions ``0..L-1``."""
     return _Evaluator(trace).series(node)[: len(trace)]

@@ -19,12 +19,16 @@ from __future__ import annotations
 import itertools
 import random
 import re
-from typing import Iterable, List, Optional, Tuple
+from collections.abc import Iterable
 
 from fretish import ast as A
+from fretish.errors import FretishError
+from fretish.parser import parse_expression
 
 from . import ir
+from .expressions import Expander, SemanticsError
 from .ir import Node
+from .printers import expr_text
 
 _THEN_WORD = re.compile(r"\bthen\b", re.IGNORECASE)
 _IF = re.compile(r"\bif\s+", re.IGNORECASE)
@@ -38,7 +42,7 @@ def fret_rewrite(text: str) -> str:
     return _THEN.sub(" => ", _IF.sub("", text))
 
 
-def _fields(req: A.Requirement) -> Iterable[Tuple[str, A.Expr]]:
+def _fields(req: A.Requirement) -> Iterable[tuple[str, A.Expr]]:
     """(where, expression as written) for each expression of the requirement."""
     if req.scope.mode is not None:
         yield "scope condition", req.scope.mode
@@ -78,7 +82,7 @@ def _value(node: Node, env: dict) -> bool:
     return env[node]
 
 
-def same_meaning(a: Node, b: Node, exhaustive_atoms: int = 14) -> Optional[Tuple[bool, ...]]:
+def same_meaning(a: Node, b: Node, exhaustive_atoms: int = 14) -> tuple[bool, ...] | None:
     """None when the boolean combinations ``a`` and ``b`` agree on every valuation of their
     atoms (maximal sub-formulas that are not boolean connectives), otherwise a valuation
     (tuple of atom values, in order of appearance) where they differ. Up to
@@ -99,18 +103,12 @@ def same_meaning(a: Node, b: Node, exhaustive_atoms: int = 14) -> Optional[Tuple
     return None
 
 
-def regrouping_warnings(req: A.Requirement) -> List[str]:
+def regrouping_warnings(req: A.Requirement) -> list[str]:
     """Warnings for the expressions of ``req`` that FRET's if-then rewrite reads with
     another meaning than the grammar (or cannot formalize). Empty when the sentence has no
     ``then``."""
     if not _THEN_WORD.search(req.text):
         return []
-    from fretish.errors import FretishError
-    from fretish.parser import parse_expression
-
-    from .printers import expr_text
-    from .semantics import SemanticsError, _Expander
-
     out = []
     for where, e in _fields(req):
         written = req.text[e.span.start:e.span.end]
@@ -132,8 +130,8 @@ def regrouping_warnings(req: A.Requirement) -> List[str]:
         if fret_e == e:
             continue
         try:
-            ours = _Expander("pt", ir.FTP, ir.LAST, free=True).bool(e)
-            theirs = _Expander("pt", ir.FTP, ir.LAST, free=True).bool(fret_e)
+            ours = Expander("pt", ir.FTP, ir.LAST, free=True).bool(e)
+            theirs = Expander("pt", ir.FTP, ir.LAST, free=True).bool(fret_e)
         except SemanticsError:
             continue
         if same_meaning(ours, theirs) is None:

@@ -34,16 +34,7 @@ negation, and the identities FRET's own optimizer uses, e.g. ``p S (p & FTP) = H
 
 from __future__ import annotations
 
-from typing import Iterator, Optional, Tuple
-
-BOOL_BINARY = ("&", "|", "xor", "->", "<->")
-FUTURE_UNARY = ("X", "F", "G")
-FUTURE_BINARY = ("U", "V")
-PAST_UNARY = ("Y", "Z", "O", "H")
-PAST_BINARY = ("S", "T")
-TERM_OPS = ("var", "num", "arith", "neg", "fn", "ite")
-ATOM_OPS = ("true", "false", "ap", "LAST", "FTP", "cmp", "call")
-
+from collections.abc import Iterator
 
 class Node:
     """One IR node; see the module docstring for ``op``. ``lo``/``hi`` are tick bounds of
@@ -51,16 +42,18 @@ class Node:
 
     __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext")
 
-    def __init__(self, op: str, args: Tuple["Node", ...] = (), name: Optional[str] = None,
-                 lo: Optional[int] = None, hi: Optional[int] = None):
+    def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
+                 lo: int | None = None, hi: int | None = None):
         self.op = op
         self.args = args
         self.name = name
         self.lo = lo
         self.hi = hi
         self._hash = None  # computed on first use (most nodes are never hashed)
-        self.text = None  # printers cache the FRET/SMV text of a node here (FTP as FTP)
-        self.ztext = None  # ... and with FTP printed as (Z FALSE), as FRET's pt formulas do
+        # memo slots of compiler.printers (the FRET/SMV text with FTP printed as FTP, and as
+        # (Z FALSE)): a node's text is read once per node, however often a formula shares it
+        self.text = None
+        self.ztext = None
 
     def __hash__(self) -> int:
         h = self._hash
@@ -77,8 +70,12 @@ class Node:
                 and self.args == other.args)
 
     def __repr__(self) -> str:
-        from .printers import to_smv
-        return f"Node<{to_smv(self)}>"
+        """A short structural form for debugging (``Node<& 2 args>``, ``Node<ap p>``);
+        :func:`compiler.printers.to_smv` prints a formula."""
+        head = " ".join(str(x) for x in (self.op, self.name) if x is not None)
+        bounds = f"[{self.lo},{self.hi}]" if self.hi is not None else ""
+        args = f" {len(self.args)} args" if self.args else ""
+        return f"Node<{head}{bounds}{args}>"
 
     @property
     def bounded(self) -> bool:
@@ -186,7 +183,7 @@ def X(a: Node) -> Node:
     return Node("X", (a,))
 
 
-def F(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def F(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Eventually; bounded ``F[lo,hi]`` when ``hi`` is given (an empty window is FALSE)."""
     if hi is not None:
         lo = lo or 0
@@ -202,7 +199,7 @@ def F(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
     return Node("F", (a,))
 
 
-def G(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def G(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Globally; bounded ``G[lo,hi]`` when ``hi`` is given (an empty window is TRUE)."""
     if hi is not None:
         lo = lo or 0
@@ -250,7 +247,7 @@ def Z(a: Node) -> Node:
     return Node("Z", (a,))
 
 
-def O(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def O(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Once; bounded ``O[lo,hi]`` (``O[=n]`` is ``O[n,n]``) when ``hi`` is given."""
     if hi is not None:
         lo = lo or 0
@@ -266,7 +263,7 @@ def O(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
     return Node("O", (a,))
 
 
-def H(a: Node, lo: Optional[int] = None, hi: Optional[int] = None) -> Node:
+def H(a: Node, lo: int | None = None, hi: int | None = None) -> Node:
     """Historically; bounded ``H[lo,hi]`` when ``hi`` is given (empty window: TRUE).
     ``H[l,h] p`` at i: p at every j in [i-h, i-l] with j >= 0 (FRET/SALT convention)."""
     if hi is not None:
@@ -344,37 +341,6 @@ def has_op(node: Node, ops) -> bool:
     return any(n.op in ops for n in walk(node))
 
 
-def is_past(node: Node) -> bool:
-    """Does the formula use a past-time operator or FTP?"""
-    return has_op(node, PAST_UNARY + PAST_BINARY + ("FTP",))
-
-
-def is_future(node: Node) -> bool:
-    """Does the formula use a future-time operator or LAST?"""
-    return has_op(node, FUTURE_UNARY + FUTURE_BINARY + ("LAST",))
-
-
-def substitute(node: Node, mapping: dict) -> Node:
-    """Replace sub-nodes equal to a key of ``mapping`` by its value, rebuilding bottom-up
-    through the simplifying constructors."""
-    memo: dict = {}
-
-    def go(n: Node) -> Node:
-        if n in mapping:
-            return mapping[n]
-        if not n.args:
-            return n
-        got = memo.get(n)
-        if got is not None:
-            return got
-        args = tuple(go(a) for a in n.args)
-        out = n if args == n.args else rebuild(n, args)
-        memo[n] = out
-        return out
-
-    return go(node)
-
-
 _REBUILD = {
     "!": lambda n, a: not_(a[0]), "&": lambda n, a: and_(*a), "|": lambda n, a: or_(*a),
     "->": lambda n, a: implies(*a), "X": lambda n, a: X(a[0]),
@@ -385,7 +351,7 @@ _REBUILD = {
 }
 
 
-def rebuild(n: Node, args: Tuple[Node, ...]) -> Node:
+def rebuild(n: Node, args: tuple[Node, ...]) -> Node:
     """``n`` with new children, simplified where a constructor applies."""
     f = _REBUILD.get(n.op)
     if f is not None:

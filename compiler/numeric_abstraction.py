@@ -22,8 +22,8 @@ them (the midpoint of the region).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from fractions import Fraction
-from typing import Dict, Iterable, List, Optional, Tuple
 
 from . import ir
 from .ir import Node
@@ -36,7 +36,7 @@ _TEST = {"<": lambda v, c: v < c, "<=": lambda v, c: v <= c, ">": lambda v, c: v
          ">=": lambda v, c: v >= c, "=": lambda v, c: v == c, "!=": lambda v, c: v != c}
 
 
-def _constant(n: Node) -> Optional[Fraction]:
+def _constant(n: Node) -> Fraction | None:
     if n.op == "num":
         try:
             return Fraction(n.name)
@@ -48,7 +48,7 @@ def _constant(n: Node) -> Optional[Fraction]:
     return None
 
 
-def simple_comparison(node: Node) -> Optional[Tuple[str, str, Fraction]]:
+def simple_comparison(node: Node) -> tuple[str, str, Fraction] | None:
     """``(variable, op, constant)`` of a comparison of one variable with a constant, with the
     variable on the left (``3 < x`` gives ``("x", ">", 3)``); None for any other node."""
     if node.op != "cmp":
@@ -69,8 +69,8 @@ class NumericAbstraction:
     """
 
     def __init__(self) -> None:
-        self.atoms: Dict[str, List[Node]] = {}
-        self._uninterpreted: Dict[str, str] = {}
+        self.atoms: dict[str, list[Node]] = {}
+        self._uninterpreted: dict[str, str] = {}
 
     @classmethod
     def of(cls, formulas: Iterable[Node]) -> "NumericAbstraction":
@@ -101,15 +101,15 @@ class NumericAbstraction:
                         "independent proposition at each tick")
         return self
 
-    def uninterpreted(self) -> List[Tuple[str, str]]:
+    def uninterpreted(self) -> list[tuple[str, str]]:
         """``(atom text, why)`` of every atom left uninterpreted, sorted by text."""
         return sorted(self._uninterpreted.items())
 
-    def _regions(self, name: str) -> List[Tuple[Fraction, Tuple[bool, ...]]]:
+    def _regions(self, name: str) -> list[tuple[Fraction, tuple[bool, ...]]]:
         """``(representative value, truth of each atom)`` per region, distinct truths only."""
         atoms = self.atoms[name]
         consts = sorted({simple_comparison(a)[2] for a in atoms})
-        points: List[Fraction] = [consts[0] - 1]
+        points: list[Fraction] = [consts[0] - 1]
         for i, c in enumerate(consts):
             points.append(c)
             points.append((c + consts[i + 1]) / 2 if i + 1 < len(consts) else c + 1)
@@ -151,11 +151,11 @@ class NumericAbstraction:
                                              for a, t in zip(atoms, truth))))
         return ir.G(disj)
 
-    def values(self, truth: Dict[Node, bool]) -> Dict[str, float]:
+    def values(self, truth: dict[Node, bool]) -> dict[str, float]:
         """A value per compared variable giving the comparisons the truth values ``truth``
         (atom node -> bool; atoms missing from ``truth`` are free). A combination no real
         value gives (impossible under the invariant) takes the first region."""
-        out: Dict[str, float] = {}
+        out: dict[str, float] = {}
         for name in self.atoms:
             atoms = self.atoms[name]
             regions = self._regions(name)

@@ -17,6 +17,7 @@ import functools
 import re
 
 from fretish import ast as A
+from fretish.words import RESERVED_LETTERS, RESERVED_WORDS
 
 from .ir import Node
 
@@ -31,18 +32,13 @@ FRET_CHAR_NAMES = {
 }
 _PLAIN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _BARE = re.compile(r"^[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*$")
-_RESERVED = None
 
 
 def _is_bare(name: str) -> bool:
     """Can ``name`` be written without quotes in FRETish (grammar rule NAME: a letter, then
     letters, digits, ``_``, ``%`` and inner ``.``; never a reserved word)?"""
-    global _RESERVED
-    if _RESERVED is None:
-        from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS
-        _RESERVED = (RESERVED_WORDS, RESERVED_LETTERS)
-    return (bool(_BARE.match(name)) and name.lower() not in _RESERVED[0]
-            and name not in _RESERVED[1])
+    return (bool(_BARE.match(name)) and name.lower() not in RESERVED_WORDS
+            and name not in RESERVED_LETTERS)
 
 
 def _mangle_char(ch: str) -> str:

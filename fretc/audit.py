@@ -66,7 +66,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from rich.console import Console
 
     from monitors.audit import AuditInputError, find_logs, load_plan
-    from monitors.audit_output import AuditProgress, escape, junit_xml, print_summary
+    from monitors.audit_junit import junit_xml
+    from monitors.audit_output import AuditProgress, escape, print_summary
     from monitors.fleet import expand_log_args
     from monitors.report_model import audit_json, exit_code
 

@@ -10,7 +10,6 @@ numpy, mcap, Jinja2 or Spot.
 
 from __future__ import annotations
 
-import ast
 import json
 import sys
 from pathlib import Path
@@ -59,19 +58,20 @@ def compile_cmd(files, emit, as_json, output, psl_map):
     if emit == "ltl":
         _emit_ltl(compiled, as_json)
     elif emit == "monitor":
-        from compiler.codegen import emit_monitors  # lazy: Jinja2 and Spot only for monitors
+        from compiler.codegen import build_monitor_modules  # lazy: Jinja2 and Spot
         internal: list = []
-        outputs = emit_monitors(compiled, internal)
+        modules = build_monitor_modules(compiled, internal).values()
+        outputs = {m.name: m.text for m in modules}
         for exc in internal:  # never exit 0 with a monitor that is not valid
             click.echo(str(exc), err=True)
         if internal:
             sys.exit(4)  # internal error: not audit's 3 (incomplete)
         _check_output(outputs, output, ".py")
         _write_outputs(outputs, output, ".py")
-        for stem, text in outputs.items():
-            for rid, reason in _skipped(text):
+        for m in modules:
+            for rid, reason in m.skipped.items():
                 if not any(c.id == rid and c.error is not None for c in compiled):
-                    click.echo(f"skipped {rid} ({stem}): {reason}", err=True)
+                    click.echo(f"skipped {rid} ({m.name}): {reason}", err=True)
     elif emit == "psl":
         from compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler
@@ -100,18 +100,6 @@ def _emit_ltl(compiled, as_json: bool) -> None:
         else:
             click.echo(_shown("  error   " + getattr(c.error, "message", str(c.error))))
         click.echo("")
-
-
-def _skipped(module_text: str) -> list:
-    """(id, reason) of the ``SKIPPED`` dict literal of a generated module."""
-    start = module_text.find("\nSKIPPED = {")
-    if start < 0:
-        return []
-    end = module_text.find("\n}", start)
-    try:
-        return list(ast.literal_eval(module_text[start + len("\nSKIPPED = "):end + 2]).items())
-    except (ValueError, SyntaxError):  # pragma: no cover - the template writes a literal
-        return []
 
 
 def _check_output(outputs: dict, output: str | None, suffix: str) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import NamedTuple, Optional, Tuple, Union
+from typing import NamedTuple
 
 SCOPE_KINDS = ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter", "onlyBefore")
 CONDITION_KINDS = ("null", "regular", "holding")
@@ -80,7 +80,7 @@ class NumLit:
     span: Span = _span()
 
     @property
-    def value(self) -> Union[int, float]:
+    def value(self) -> int | float:
         try:
             return int(self.text)
         except ValueError:
@@ -122,11 +122,11 @@ class Call:
     is ``prevOcc(P, Q)``, ``at the next occurrence of P, Q`` is ``nextOcc(P, Q)``)."""
 
     name: str
-    args: Tuple["Expr", ...]
+    args: tuple["Expr", ...]
     span: Span = _span()
 
 
-Expr = Union[Var, BoolLit, NumLit, Unary, Binary, Call]
+Expr = Var | BoolLit | NumLit | Unary | Binary | Call
 
 
 # --------------------------------------------------------------------------- fields
@@ -136,7 +136,7 @@ class Scope:
     and ``after/before C``, a boolean expression (``None`` for the null scope)."""
 
     kind: str = "null"
-    mode: Optional[Expr] = None
+    mode: Expr | None = None
     span: Span = _span()
 
 
@@ -148,7 +148,7 @@ class ConditionPart:
 
     qualifier: str
     expr: Expr
-    connective: Optional[str] = None  # "and"/"or" joining it to the previous part
+    connective: str | None = None  # "and"/"or" joining it to the previous part
     span: Span = _span()
 
 
@@ -159,8 +159,8 @@ class Condition:
     connectives (FRET: ``upon p, or when r`` is ``p | r``)."""
 
     kind: str = "null"
-    expr: Optional[Expr] = None
-    parts: Tuple[ConditionPart, ...] = ()
+    expr: Expr | None = None
+    parts: tuple[ConditionPart, ...] = ()
     span: Span = _span()
 
 
@@ -184,8 +184,8 @@ class Timing:
     stop condition) for ``until/before``; ``phrase`` is the phrasing used."""
 
     kind: str = "null"
-    duration: Optional[Duration] = None
-    stop: Optional[Expr] = None
+    duration: Duration | None = None
+    stop: Expr | None = None
     phrase: str = ""
     span: Span = _span()
 
@@ -211,15 +211,15 @@ class Requirement:
     scope: Scope = Scope()
     condition: Condition = Condition()
     component: str = ""
-    probability: Optional[Probability] = None
+    probability: Probability | None = None
     timing: Timing = Timing()
-    response: Optional[Expr] = None
+    response: Expr | None = None
     freeform: bool = False
     component_span: Span = _span()
     response_span: Span = _span()
 
     @property
-    def key(self) -> Optional[str]:
+    def key(self) -> str | None:
         if self.freeform:
             return None
         return f"{self.scope.kind},{self.condition.kind},{self.timing.kind},satisfaction"

@@ -18,12 +18,11 @@ import hashlib
 import os
 import tempfile
 from pathlib import Path
-from typing import Optional
 
 __all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path"]
 
 
-def cache_dir() -> Optional[Path]:
+def cache_dir() -> Path | None:
     """The cache folder (not created here), or None when the disk cache is off."""
     env = os.environ.get("FRETC_CACHE_DIR")
     if env is not None:
@@ -47,13 +46,13 @@ def key_of(*parts: str) -> str:
     return h.hexdigest()
 
 
-def entry_path(kind: str, name: str) -> Optional[Path]:
+def entry_path(kind: str, name: str) -> Path | None:
     """Where entry ``name`` of sub-folder ``kind`` lives (None: cache off)."""
     root = cache_dir()
     return None if root is None else root / kind / name
 
 
-def read_bytes(kind: str, name: str) -> Optional[bytes]:
+def read_bytes(kind: str, name: str) -> bytes | None:
     """The entry's bytes, or None when missing or unreadable."""
     path = entry_path(kind, name)
     if path is None:

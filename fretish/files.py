@@ -50,10 +50,10 @@ from __future__ import annotations
 import json
 import os
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import Dict, Iterable, List, Optional, Tuple, Union
 
 from .ast import Requirement
 from .errors import FretishError, FretishFileError, FretishSyntaxError
@@ -62,7 +62,7 @@ from .units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 
-PathLike = Union[str, "os.PathLike[str]"]
+PathLike = str | os.PathLike
 
 
 @dataclass
@@ -82,14 +82,14 @@ class RequirementEntry:
     source: str
     line: int
     column: int
-    rationale: Optional[str] = None
-    parent: Optional[str] = None
-    tick_period: Optional[Fraction] = None
-    requirement: Optional[Requirement] = None
-    error: Optional[FretishError] = None
+    rationale: str | None = None
+    parent: str | None = None
+    tick_period: Fraction | None = None
+    requirement: Requirement | None = None
+    error: FretishError | None = None
     extra: dict = field(default_factory=dict)
-    inputs: Tuple[str, ...] = ()
-    outputs: Tuple[str, ...] = ()
+    inputs: tuple[str, ...] = ()
+    outputs: tuple[str, ...] = ()
 
 
 # --------------------------------------------------------------------------- durations
@@ -135,9 +135,9 @@ class _Pending:
     def __init__(self, rid: str, line: int):
         self.id = rid
         self.id_line = line
-        self.pieces: List[Tuple[int, int, str]] = []   # (line, column, text from column)
-        self.attrs: Dict[str, Tuple[str, int, int]] = {}
-        self.last_attr: Optional[str] = None
+        self.pieces: list[tuple[int, int, str]] = []   # (line, column, text from column)
+        self.attrs: dict[str, tuple[str, int, int]] = {}
+        self.last_attr: str | None = None
 
 
 def _read_text(path: Path) -> str:
@@ -149,103 +149,124 @@ def _read_text(path: Path) -> str:
         raise FretishFileError(f"cannot read: {e.strerror}", source=str(path)) from None
 
 
-def _load_fret(path: Path) -> List[RequirementEntry]:
-    source = str(path)
-    lines = _read_text(path).split("\n")
-    pending: List[_Pending] = []
-    seen: Dict[str, int] = {}
-    file_period: Optional[Fraction] = None
-    period_line = 0
-    io: Dict[str, Tuple[str, ...]] = {}
-    io_line: Dict[str, int] = {}
-    current: Optional[_Pending] = None
+def _load_fret(path: Path) -> list[RequirementEntry]:
+    return _FretReader(path).read()
 
-    def fail(msg, ln, col=1, hint=None):
-        raise FretishFileError(msg, source=source, line=ln, column=col,
-                               text_line=lines[ln - 1].rstrip("\r"), hint=hint)
 
-    for ln, raw in enumerate(lines, start=1):
-        content = _strip_comment(raw.rstrip("\r"))
-        if not content.strip():
-            continue
-        if content[0] in " \t":                               # indented: belongs above
-            if current is None:
-                fail("indented line outside a requirement", ln,
-                     len(content) - len(content.lstrip()) + 1,
-                     "start a requirement with 'ID: sentence' at column 1")
-            m = _ATTRIBUTE.match(content)
-            if m:
-                key, value = m.group(1), m.group(2).strip()
-                if key in current.attrs:
-                    fail(f"duplicate attribute '{key}' for requirement {current.id}", ln,
-                         m.start(1) + 1)
-                current.attrs[key] = (value, ln, m.start(2) + 1)
-                current.last_attr = key
-            elif current.last_attr == "rationale":
-                value, aln, acol = current.attrs["rationale"]
-                current.attrs["rationale"] = (f"{value} {content.strip()}".strip(), aln, acol)
-            elif current.last_attr is not None:
-                col = len(content) - len(content.lstrip()) + 1
-                fail(f"the sentence of {current.id} must come before its attributes", ln,
-                     col, "put continuation lines right under the 'ID:' line")
-            elif current.pieces:
-                current.pieces.append((ln, 1, content))
-            else:                                             # sentence starts here
-                col = len(content) - len(content.lstrip()) + 1
-                current.pieces.append((ln, col, content[col - 1:]))
-            continue
-        if content.startswith("@"):
-            m = _DIRECTIVE.match(content)
-            if m and m.group(1) in ("inputs", "outputs"):
-                kind = m.group(1)
-                if kind in io_line:
-                    fail(f"second @{kind} (the first is on line {io_line[kind]})", ln)
-                names = [n for n in re.split(r"[\s,]+", m.group(2) or "") if n]
-                for n in names:
-                    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", n):
-                        fail(f"bad variable name '{n}' in @{kind}", ln,
-                             content.index(n) + 1)
-                io[kind] = tuple(names)
-                io_line[kind] = ln
-                clash = sorted(set(io.get("inputs", ())) & set(io.get("outputs", ())))
-                if clash:
-                    fail("declared both @inputs and @outputs: " + ", ".join(clash), ln)
-                current = None
+class _FretReader:
+    """One pass over the lines of a .fret file (the format of this module's docstring):
+    requirements, their attributes and the file's directives; then the entries."""
+
+    def __init__(self, path: Path):
+        self.source = str(path)
+        self.lines = _read_text(path).split("\n")
+        self.pending: list[_Pending] = []
+        self.seen: dict[str, int] = {}
+        self.file_period: Fraction | None = None
+        self.period_line = 0
+        self.io: dict[str, tuple[str, ...]] = {}
+        self.io_line: dict[str, int] = {}
+        self.current: _Pending | None = None
+
+    def fail(self, msg: str, ln: int, col: int = 1, hint: str | None = None):
+        raise FretishFileError(msg, source=self.source, line=ln, column=col,
+                               text_line=self.lines[ln - 1].rstrip("\r"), hint=hint)
+
+    def read(self) -> list[RequirementEntry]:
+        for ln, raw in enumerate(self.lines, start=1):
+            content = _strip_comment(raw.rstrip("\r"))
+            if not content.strip():
                 continue
-            if not m or m.group(1) != "tick_period":
-                fail(f"unknown directive '{content.split()[0]}'", ln, 1,
-                     "the directives are '@tick_period <number> <unit>', '@inputs NAMES' "
-                     "and '@outputs NAMES'")
-            if period_line:
-                fail(f"second @tick_period (the first is on line {period_line})", ln)
-            try:
-                file_period = parse_tick_period(m.group(2) or "")
-            except ValueError as e:
-                fail(f"bad @tick_period: {e}", ln, (m.start(2) + 1) if m.group(2) else 1)
-            period_line = ln
-            current = None
-            continue
+            if content[0] in " \t":                           # indented: belongs above
+                self._indented(ln, content)
+            elif content.startswith("@"):
+                self._directive(ln, content)
+            else:
+                self._id_line(ln, content)
+        return [self._entry(p) for p in self.pending]
+
+    def _indented(self, ln: int, content: str) -> None:
+        current = self.current
+        if current is None:
+            self.fail("indented line outside a requirement", ln,
+                      len(content) - len(content.lstrip()) + 1,
+                      "start a requirement with 'ID: sentence' at column 1")
+        m = _ATTRIBUTE.match(content)
+        if m:
+            key, value = m.group(1), m.group(2).strip()
+            if key in current.attrs:
+                self.fail(f"duplicate attribute '{key}' for requirement {current.id}", ln,
+                          m.start(1) + 1)
+            current.attrs[key] = (value, ln, m.start(2) + 1)
+            current.last_attr = key
+        elif current.last_attr == "rationale":
+            value, aln, acol = current.attrs["rationale"]
+            current.attrs["rationale"] = (f"{value} {content.strip()}".strip(), aln, acol)
+        elif current.last_attr is not None:
+            col = len(content) - len(content.lstrip()) + 1
+            self.fail(f"the sentence of {current.id} must come before its attributes", ln,
+                      col, "put continuation lines right under the 'ID:' line")
+        elif current.pieces:
+            current.pieces.append((ln, 1, content))
+        else:                                                 # sentence starts here
+            col = len(content) - len(content.lstrip()) + 1
+            current.pieces.append((ln, col, content[col - 1:]))
+
+    def _directive(self, ln: int, content: str) -> None:
+        m = _DIRECTIVE.match(content)
+        if m and m.group(1) in ("inputs", "outputs"):
+            self._io_directive(ln, content, m)
+            return
+        if not m or m.group(1) != "tick_period":
+            self.fail(f"unknown directive '{content.split()[0]}'", ln, 1,
+                      "the directives are '@tick_period <number> <unit>', '@inputs NAMES' "
+                      "and '@outputs NAMES'")
+        if self.period_line:
+            self.fail(f"second @tick_period (the first is on line {self.period_line})", ln)
+        try:
+            self.file_period = parse_tick_period(m.group(2) or "")
+        except ValueError as e:
+            self.fail(f"bad @tick_period: {e}", ln, (m.start(2) + 1) if m.group(2) else 1)
+        self.period_line = ln
+        self.current = None
+
+    def _io_directive(self, ln: int, content: str, m: re.Match) -> None:
+        kind = m.group(1)
+        if kind in self.io_line:
+            self.fail(f"second @{kind} (the first is on line {self.io_line[kind]})", ln)
+        names = [n for n in re.split(r"[\s,]+", m.group(2) or "") if n]
+        for n in names:
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", n):
+                self.fail(f"bad variable name '{n}' in @{kind}", ln, content.index(n) + 1)
+        self.io[kind] = tuple(names)
+        self.io_line[kind] = ln
+        clash = sorted(set(self.io.get("inputs", ())) & set(self.io.get("outputs", ())))
+        if clash:
+            self.fail("declared both @inputs and @outputs: " + ", ".join(clash), ln)
+        self.current = None
+
+    def _id_line(self, ln: int, content: str) -> None:
         m = _ID_LINE.match(content)
         if not m:
-            fail("expected 'ID: requirement' (an id of letters, digits, '_', '.' or '-', "
-                 "then ':')", ln, 1,
-                 "begin each requirement with its id, e.g. 'R1: the sw shall ...'; indent "
-                 "continuation lines")
+            self.fail("expected 'ID: requirement' (an id of letters, digits, '_', '.' or '-', "
+                      "then ':')", ln, 1,
+                      "begin each requirement with its id, e.g. 'R1: the sw shall ...'; "
+                      "indent continuation lines")
         rid = m.group(1)
-        if rid in seen:
-            fail(f"duplicate requirement id '{rid}' (first defined on line {seen[rid]})",
-                 ln, 1)
-        seen[rid] = ln
-        current = _Pending(rid, ln)
-        pending.append(current)
+        if rid in self.seen:
+            self.fail(f"duplicate requirement id '{rid}' (first defined on line "
+                      f"{self.seen[rid]})", ln, 1)
+        self.seen[rid] = ln
+        self.current = _Pending(rid, ln)
+        self.pending.append(self.current)
         rest = content[m.end():]
         if rest.strip():
             col = m.end() + (len(rest) - len(rest.lstrip())) + 1
-            current.pieces.append((ln, col, content[col - 1:]))
+            self.current.pieces.append((ln, col, content[col - 1:]))
 
-    entries = []
-    for p in pending:
-        period = file_period
+    def _entry(self, p: _Pending) -> RequirementEntry:
+        source, lines = self.source, self.lines
+        period = self.file_period
         if "tick_period" in p.attrs:
             value, aln, acol = p.attrs["tick_period"]
             try:
@@ -267,7 +288,8 @@ def _load_fret(path: Path) -> List[RequirementEntry]:
             id=p.id, text=text, source=source, line=line0, column=col0,
             rationale=p.attrs["rationale"][0] if "rationale" in p.attrs else None,
             parent=(p.attrs["parent"][0] or None) if "parent" in p.attrs else None,
-            tick_period=period, inputs=io.get("inputs", ()), outputs=io.get("outputs", ()))
+            tick_period=period, inputs=self.io.get("inputs", ()),
+            outputs=self.io.get("outputs", ()))
         try:
             entry.requirement = parse(text, source=source, line=line0, column=col0)
         except FretishSyntaxError as e:
@@ -275,8 +297,7 @@ def _load_fret(path: Path) -> List[RequirementEntry]:
                 e.text_line = lines[e.line - 1].rstrip("\r")
                 e.text_line_column = 1
             entry.error = e
-        entries.append(entry)
-    return entries
+        return entry
 
 
 # --------------------------------------------------------------------------- JSON exports
@@ -284,12 +305,12 @@ _FULLTEXT = re.compile(r'"fulltext"\s*:\s*"')
 _KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
 
 
-def _line_col(raw: str, offset: int) -> Tuple[int, int]:
+def _line_col(raw: str, offset: int) -> tuple[int, int]:
     line = raw.count("\n", 0, offset) + 1
     return line, offset - (raw.rfind("\n", 0, offset) + 1) + 1
 
 
-def _load_json(path: Path) -> List[RequirementEntry]:
+def _load_json(path: Path) -> list[RequirementEntry]:
     source = str(path)
     raw = _read_text(path)
     try:
@@ -310,7 +331,7 @@ def _load_json(path: Path) -> List[RequirementEntry]:
     starts = [m.end() for m in _FULLTEXT.finditer(raw)]
     exact_positions = len(starts) == len(reqs)
     entries = []
-    seen: Dict[Tuple[object, str], int] = {}
+    seen: dict[tuple[object, str], int] = {}
     for k, obj in enumerate(reqs):
         where = f"requirement #{k + 1}"
         line, col = _line_col(raw, starts[k]) if exact_positions else (1, 1)
@@ -349,10 +370,10 @@ def _load_json(path: Path) -> List[RequirementEntry]:
 
 
 # --------------------------------------------------------------------------- entry point
-def _files_of(paths) -> List[Path]:
+def _files_of(paths) -> list[Path]:
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
-    out: List[Path] = []
+    out: list[Path] = []
     for p in paths:
         path = Path(p)
         if path.is_dir():
@@ -367,7 +388,7 @@ def _files_of(paths) -> List[Path]:
     return out
 
 
-def load_requirements(paths: Union[PathLike, Iterable[PathLike]]) -> List[RequirementEntry]:
+def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementEntry]:
     """Read requirements from files and folders, in the order given.
 
     ``paths`` is one path or an iterable of paths; a folder contributes its ``*.fret`` and
@@ -380,9 +401,9 @@ def load_requirements(paths: Union[PathLike, Iterable[PathLike]]) -> List[Requir
     ``ID:``, a duplicate id, a bad tick period, a missing path) raise
     :class:`FretishFileError` naming ``file:line:column``.
     """
-    entries: List[RequirementEntry] = []
+    entries: list[RequirementEntry] = []
     read: set = set()
-    first: Dict[str, RequirementEntry] = {}
+    first: dict[str, RequirementEntry] = {}
     for f in _files_of(paths):
         key = os.path.realpath(f)
         if key in read:  # the same file named twice (a folder and a file in it)

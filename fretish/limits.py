@@ -20,7 +20,7 @@ characters and durations of 200 ticks.
 
 from __future__ import annotations
 
-from typing import Iterator, Optional, Tuple
+from collections.abc import Iterator
 
 from . import ast as A
 from .errors import FretishError
@@ -40,7 +40,7 @@ __all__ = ["MAX_EXPR_DEPTH", "MAX_EXPR_NODES", "MAX_NUMBER_CHARS", "MAX_DURATION
 class LimitError(FretishError):
     """A limit exceeded at ``span`` (a :class:`fretish.ast.Span`), with a hint."""
 
-    def __init__(self, span, message: str, hint: Optional[str] = None):
+    def __init__(self, span, message: str, hint: str | None = None):
         super().__init__(message)
         self.span, self.message, self.hint = span, message, hint
 

@@ -36,39 +36,29 @@ Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, rest
 
 from __future__ import annotations
 
+import io
 import re
+import sys
 import threading
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
-from typing import List, Optional, Tuple
 
 from lark import Lark, Token, Transformer
-from lark.exceptions import (LarkError, UnexpectedCharacters, UnexpectedEOF,
-                             UnexpectedInput, UnexpectedToken)
+from lark import __version__ as _LARK_VERSION
+from lark.exceptions import LarkError, UnexpectedInput
 
 from . import ast as A
-from .errors import FretishSyntaxError
+from . import cache
+from .diagnostics import make_error, translate
 from .limits import LimitError, check_expression, check_requirement
+from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 
-__all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS", "RESERVED_LETTERS"]
+__all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS",
+           "RESERVED_LETTERS"]
 
 _GRAMMAR_FILE = Path(__file__).with_name("grammar.lark")
 
-#: FRETish keywords (case-insensitive); none of them can name a variable (FRET 3.x
-#: ``Requirement.g4`` lexer rules). Unit words also take their plural and short forms.
-RESERVED_WORDS = frozenset("""
-    after always and at before during eventually except false finally first for hour hours
-    if immediately in initially is last microsec microsecs microsecond microseconds
-    millisec millisecs millisecond milliseconds minute minutes mod mode never next not
-    occurrence of only or previous probability same satisfy sec secs second seconds shall
-    the then tick ticks timepoint true unless until upon what when whenever where while
-    with within xor""".split())
-#: Operators of FRET's printed formulas (../shared/fretish/README.md section 6); reserved, case-sensitive.
-RESERVED_LETTERS = frozenset("XFGUVYZHOST")
-
-_UNITS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "milliseconds",
-          "SECOND": "seconds", "MINUTE": "minutes", "HOUR": "hours"}
 _BINOPS = {"AMP": "&", "BAR": "|", "XOR": "xor", "IMPLIES": "->", "IFF": "<->",
            "EQ": "=", "NE": "!=", "LT": "<", "LE": "<=", "GT": ">", "GE": ">=",
            "PLUS": "+", "MINUS": "-", "STAR": "*", "SLASH": "/", "MOD": "mod",
@@ -122,7 +112,7 @@ def _join(a, b) -> A.Span:
 class _Fail(Exception):
     """A rule the grammar accepts but FRETish forbids, found while building the AST."""
 
-    def __init__(self, where, message: str, hint: Optional[str] = None):
+    def __init__(self, where, message: str, hint: str | None = None):
         super().__init__(message)
         self.span = _span_of(where)
         self.message = message
@@ -412,7 +402,7 @@ class _Builder(Transformer):
         if not _DURATION_AMOUNT.match(num.value):
             raise _Fail(num, f"a duration is a whole or decimal number, not '{num.value}'",
                         "write e.g. 'within 3 seconds' or 'for 2.5 seconds'")
-        return A.Duration(num.value, _UNITS[unit.type], _join(num, unit))
+        return A.Duration(num.value, UNIT_TOKENS[unit.type], _join(num, unit))
 
     def timing(self, c):
         head = c[0]
@@ -465,7 +455,7 @@ class _Builder(Transformer):
 
 # --------------------------------------------------------------------------- the parser
 _lock = threading.Lock()
-_lark: Optional[Lark] = None
+_lark: Lark | None = None
 
 
 _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", start=["start", "expr"],
@@ -493,15 +483,8 @@ def cached_lark() -> Lark:
     never a stale one. Entries are written atomically (:func:`fretish.cache.write_bytes`);
     an entry that cannot be read or loaded is ignored and rebuilt, and when the cache
     folder cannot be written the tables are built in memory as :func:`build_lark` does."""
-    import io
-    import sys
-
-    import lark as _lark_pkg
-
-    from . import cache
-
     grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
-    key = cache.key_of("fretish-lark-1", grammar, _lark_pkg.__version__,
+    key = cache.key_of("fretish-lark-1", grammar, _LARK_VERSION,
                        "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
     name = f"grammar-{key[:40]}.pickle"
     data = cache.read_bytes("lark", name)
@@ -544,15 +527,15 @@ def _run(start: str, text: str, source: str, line: int, column: int):
             check_expression(result)
         return result
     except LimitError as f:
-        raise _make_error(text, source, line, column, f.span.start, f.message, (),
-                          f.hint) from None
+        raise make_error(text, source, line, column, f.span.start, f.message, (),
+                         f.hint) from None
     except _Fail as f:
         s = f.span
-        raise _make_error(text, source, line, column, s.start, f.message, (), f.hint) from None
+        raise make_error(text, source, line, column, s.start, f.message, (), f.hint) from None
     except (UnexpectedInput, LarkError) as e:
-        raise _translate(e, text, source, line, column, start) from None
+        raise translate(e, lark, text, source, line, column, start) from None
     except RecursionError:
-        raise _make_error(text, source, line, column, 0,
+        raise make_error(text, source, line, column, 0,
                           "expression nested too deeply", [],
                           "split the requirement or add parentheses") from None
     finally:
@@ -570,7 +553,8 @@ def parse(text: str, *, source: str = "<string>", line: int = 1,
     form: ``Requirement(text, freeform=True)``.
 
     Returns a :class:`fretish.ast.Requirement`. Raises :class:`FretishSyntaxError` for any
-    text that is not FRETish (FRET 3.x grammar, with the fixes of ../shared/fretish/README.md section 7),
+    text that is not FRETish (FRET 3.x grammar, with the fixes of
+    ../shared/fretish/README.md section 7),
     including a probability outside [0, 1], a reserved word used as a name and
     ``preBool`` with a numeric initial value.
     """
@@ -579,228 +563,6 @@ def parse(text: str, *, source: str = "<string>", line: int = 1,
 
 def parse_expression(text: str, *, source: str = "<string>", line: int = 1,
                      column: int = 1) -> A.Expr:
-    """Parse one FRETish expression (../shared/fretish/README.md section 5), e.g. ``"x + 1 > y & !p"``; same
-    positions and errors as :func:`parse`."""
+    """Parse one FRETish expression (../shared/fretish/README.md section 5), e.g.
+    ``"x + 1 > y & !p"``; same positions and errors as :func:`parse`."""
     return _run("expr", text, source, line, column)
-
-
-# --------------------------------------------------------------------------- diagnostics
-# Terminal groups, for the "expected" list and for recognizing the parser's situation.
-_OPERAND_START = {"BANG"}
-_OPERATORS = {"AMP", "BAR", "XOR", "IMPLIES", "IFF", "PLUS", "STAR", "SLASH", "MOD", "CARET"}
-_QUALIFIERS = {"UPON", "WHENEVER", "WHERE"}
-_SCOPE_WORDS = {"ONLY", "EXCEPT", "DURING", "WHILE"}
-_TIMING_WORDS = {"IMMEDIATELY", "INITIALLY", "FINALLY", "EVENTUALLY", "ALWAYS", "NEVER",
-                 "WITHIN", "UNTIL"}
-_UNIT_WORDS = set(_UNITS)
-_COMPARISONS = {"EQ", "NE", "LT", "LE", "GT", "GE"}
-_KEYWORD_TYPES = {t.upper() for t in (
-    "after always and at before during eventually except false finally first for hour if "
-    "immediately in initially is last microsecond millisecond minute mod mode never next not "
-    "occurrence of only or previous probability same satisfy second shall the then tick "
-    "timepoint true unless until upon when whenever where while with within xor").split()}
-_PUNCT = {"_COMMA": "','", "_DOT": "'.'", "RPAR": "')'", "LPAR": "'('", "$END":
-          "the end of the sentence"}
-
-_HINT_AND_OR = ("'and'/'or'/'not' are not expression operators in FRETish: write '&', '|' "
-                "and '!' ('and'/'or' only chain conditions: 'upon p and when q')")
-_HINT_SATISFY = ("the response must follow 'satisfy': "
-                 "'... shall [timing] satisfy <condition>'")
-_HINT_SHALL = ("a requirement needs 'shall' next to its component: "
-               "'[the] component shall ...' or '... shall [the] component ...'")
-
-
-def _expected_names(exp) -> List[str]:
-    exp = set(exp)
-    out: List[str] = []
-
-    def add(label):
-        if label not in out:
-            out.append(label)
-
-    expr_start = "BANG" in exp
-    if exp & {"IN", "ONLY", "EXCEPT", "DURING"}:
-        add("a scope")
-    if exp & _QUALIFIERS:
-        add("a condition (upon/when/if/where/unless/whenever ...)")
-    if "THE" in exp and not exp & {"NEXT", "PREVIOUS"} and "NAME" in exp:
-        add("a component")
-    if expr_start:
-        add("an expression")
-    elif "MODE" in exp and "NAME" in exp:
-        add("a mode name")
-    elif ("NAME" in exp or "STRING" in exp) and "a component" not in out:
-        add("a name")
-    if "SHALL" in exp:
-        add("'shall'")
-    if "WITH" in exp:
-        add("a probability ('with probability >= 0.9')")
-    if exp & _TIMING_WORDS:
-        add("a timing (always, eventually, within N ticks, ...)")
-    if "SATISFY" in exp:
-        add("'satisfy'")
-    if exp & _OPERATORS:
-        add("an operator")
-    elif exp & _COMPARISONS and "NUMBER" not in exp:
-        add("a comparison (<, <=, >, >=, =)")
-    if "IS" in exp:
-        add("'is true'/'is false'")
-    if exp & _UNIT_WORDS:
-        add("a time unit (ticks, microseconds, milliseconds, seconds, minutes, hours)")
-    if "NUMBER" in exp and not expr_start:
-        add("a number")
-    if exp == {"TRUE", "FALSE"}:
-        add("'true' or 'false'")
-    for t in ("THEN", "OF", "TIMEPOINT", "OCCURRENCE", "PROBABILITY", "IN", "MODE"):
-        if t in exp and not (t == "IN" and "a scope" in out) and \
-                not (t == "MODE" and "a mode name" in out):
-            add(f"'{t.lower()}'")
-    if exp & {"FIRST", "SAME", "LAST"}:
-        add("'first', 'same', 'next' or 'last'")
-    for t in ("RPAR", "_COMMA", "_DOT", "$END"):
-        if t in exp:
-            add(_PUNCT[t])
-    return out
-
-
-def _position(text: str, pos: int) -> Tuple[int, int]:
-    """1-based line and column of offset ``pos`` in ``text``."""
-    line = text.count("\n", 0, pos) + 1
-    col = pos - (text.rfind("\n", 0, pos) + 1) + 1
-    return line, col
-
-
-def _make_error(text, source, line0, col0, pos, message, expected, hint):
-    tline, tcol = _position(text, pos)
-    lines = text.split("\n")
-    text_line = lines[tline - 1] if tline - 1 < len(lines) else ""
-    fline = tline + line0 - 1
-    fcol = tcol + col0 - 1 if tline == 1 else tcol
-    return FretishSyntaxError(message, source=source, line=fline, column=fcol,
-                              text_line=text_line, expected=expected, hint=hint,
-                              text_line_column=col0 if tline == 1 else 1, offset=pos)
-
-
-_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_.%]*")
-
-
-def _previous_word(text: str, pos: int) -> str:
-    """The word before offset ``pos`` (skipping what is not a word character), from its
-    first letter, lower-cased; "" when there is none. Scans backwards from ``pos`` only:
-    linear in the word's length (a regular-expression search over ``text[:pos]`` is
-    quadratic on a long identifier)."""
-    i = pos
-    while i > 0 and not (text[i - 1].isalnum() or text[i - 1] == "_"):
-        i -= 1
-    end = i
-    while i > 0 and (text[i - 1].isalnum() or text[i - 1] in "_%"):
-        i -= 1
-    word = text[i:end]
-    m = re.search(r"[A-Za-z]", word)
-    return word[m.start():].lower() if m else ""
-
-
-def _accepted_before(text: str, start: str, pos: int) -> Optional[set]:
-    """Terminals the parser accepts just before offset ``pos``, found by replaying the
-    parse up to there. (An LALR parser may perform reductions before it notices a bad
-    token; the set it reports is then that of a later state, e.g. only "end of sentence"
-    after "satisfy p" when it meets "and".) None if the replay fails."""
-    try:
-        ip = _get_parser().parse_interactive(text, start=start)
-        try:
-            for tok in ip.iter_parse():
-                if tok.start_pos >= pos:
-                    break
-        except UnexpectedInput:
-            pass          # the lexer stopped at pos: the parser state is the one before it
-        return set(ip.accepts())
-    except Exception:     # pragma: no cover - diagnostics must never fail
-        return None
-
-
-def _translate(e: Exception, text: str, source: str, line: int, column: int,
-               start: str = "start"):
-    """Turn a Lark exception into a :class:`FretishSyntaxError` with a hint."""
-    if isinstance(e, UnexpectedToken):
-        tok = e.token
-        expected = set(e.expected or ())
-        if tok.type == "$END":
-            pos = len(text.rstrip())
-            value = None
-        else:
-            pos, value = tok.start_pos, tok.value
-        ttype = tok.type
-    elif isinstance(e, UnexpectedCharacters):
-        pos = e.pos_in_stream
-        expected = set(e.allowed or ())
-        m = _WORD.match(text, pos)
-        value = m.group(0) if m else text[pos]
-        ttype = "CHAR"
-    elif isinstance(e, UnexpectedEOF):
-        pos, value, ttype = len(text.rstrip()), None, "$END"
-        expected = set(e.expected or ())
-    else:  # any other Lark failure: report it at the start, never leak Lark's exception
-        return _make_error(text, source, line, column, 0, f"cannot parse: {e}", [], None)
-    replayed = _accepted_before(text, start, pos if value is not None else len(text))
-    if replayed:
-        expected = replayed
-
-    names = _expected_names(expected)
-    in_expr = bool(expected & (_OPERAND_START | _OPERATORS))
-    where = " in an expression" if in_expr else ""
-    shown = "end of the sentence" if value is None else f"'{value}'"
-    message = f"unexpected {shown}{where}"
-    hint = None
-    low = (value or "").lower()
-    prev = _previous_word(text, pos)
-
-    # --- common mistakes, most specific first
-    first = re.match(r"\s*([A-Za-z]+)", text)
-    if not text.strip():
-        message, names, hint = "empty requirement", [], None
-    elif first and first.group(1).lower() == "globally" and (
-            low == "globally" or prev == "globally"):
-        pos = first.start(1)
-        message = "'globally' is not FRETish"
-        hint = ("drop it: a requirement without a scope already holds over the whole run "
-                "(the null scope)")
-        names = []
-    elif low == "globally":
-        message = "'globally' is not FRETish"
-        hint = ("drop it: a requirement without a scope already holds over the whole run "
-                "(the null scope)")
-    elif value == "=" and pos > 0 and text[pos - 1] == "=":
-        pos -= 1
-        message = f"unexpected '=='{where}"
-        hint = "FRETish equality is a single '=' ('==' is not FRETish)"
-    elif ttype in ("AND", "OR", "NOT") and (in_expr or "NAME" in expected):
-        hint = _HINT_AND_OR
-    elif prev in ("and", "or") and expected & {"UPON", "WHEN"} and "NAME" not in expected:
-        message = f"unexpected {shown} after '{prev}'"
-        hint = (f"after '{prev}' a condition needs its own qualifier ('upon p {prev} when "
-                f"q'); to combine expressions write 'p {'&' if prev == 'and' else '|'} q'")
-    elif prev == "shall" and "THE" in expected and ttype in _KEYWORD_TYPES:
-        message = f"unexpected '{value}': the component is missing after 'shall'"
-        hint = "name the component: '... shall [the] <component> [timing] satisfy ...'"
-    elif ttype == "IS" and not in_expr:
-        hint = "'is true'/'is false' may follow a condition (when p is true), not a scope"
-    elif (ttype in _KEYWORD_TYPES or ttype == "RESERVED") and (
-            "NAME" in expected or in_expr) and low not in ("shall", "satisfy"):
-        kind = ("a temporal operator of FRET's formulas" if value in RESERVED_LETTERS
-                else "a reserved word in FRETish")
-        message = f"unexpected '{value}'{where}: '{value}' is {kind}"
-        hint = (f"a reserved word cannot name a variable or component: quote it "
-                f"(\"{value}\") or rename it")
-    elif "SATISFY" in expected and ttype != "SATISFY":
-        hint = _HINT_SATISFY
-    elif "SHALL" in expected and ttype != "SHALL":
-        hint = _HINT_SHALL
-    elif expected & _UNIT_WORDS:
-        hint = ("durations are '<number> <unit>' with unit tick(s), microsec(ond)(s), "
-                "millisec(ond)(s), sec(ond)(s), minute(s) or hour(s)")
-    elif ttype == "CHAR" and value and value[0] == '"':
-        message = "unterminated quoted name"
-        hint = 'close the quote: "name"'
-    elif ttype == "CHAR":
-        message = f"unexpected character '{value[0]}'{where}"
-    return _make_error(text, source, line, column, pos, message, names, hint)

@@ -32,7 +32,11 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+
+from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, Metadata,
+                          Schema)
+from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.writer import CompressionType, Writer
 
 from fretish.units import format_offset
 
@@ -101,7 +105,7 @@ class AnnotateResult:
     messages: int = 0
     events: int = 0
     partial: bool = False
-    damage: Optional[str] = None
+    damage: str | None = None
     compression: str = ""
     channels: int = 0
     schemas: int = 0
@@ -110,13 +114,13 @@ class AnnotateResult:
 _s = functools.partial(format_offset, missing="?")
 
 
-def verdict_events(log: dict) -> List[VerdictEvent]:
+def verdict_events(log: dict) -> list[VerdictEvent]:
     """The events of one log object of the audit JSON (``fretc-audit/1``), sorted by time
     (then by requirement order, then kind). A log whose audit failed (``error``) or that has
     no tick gives none."""
     start = log.get("start_time_ns")
     end = log.get("end_time_ns")
-    out: List[Tuple[int, int, int, VerdictEvent]] = []
+    out: list[tuple[int, int, int, VerdictEvent]] = []
     order = {"trigger": 0, "violation": 1, "ltl3": 2, "verdict": 3}
     for i, v in enumerate(log.get("verdicts") or []):
         rid = v.get("requirement", "?")
@@ -172,13 +176,10 @@ def verdict_events(log: dict) -> List[VerdictEvent]:
     return [t[3] for t in out]
 
 
-def _compression_of(path: str) -> Tuple[Optional[str], int]:
+def _compression_of(path: str) -> tuple[str | None, int]:
     """(compression of the first chunk: '' for none, None when the file has no chunk before
     its first message, i.e. unchunked; the first chunk's uncompressed size, the chunk size
     the copy is written with)."""
-    from mcap.records import Chunk, Message
-    from mcap.stream_reader import StreamReader
-
     default = 1024 * 1024
     with open(path, "rb") as fh:
         try:
@@ -190,6 +191,114 @@ def _compression_of(path: str) -> Tuple[Optional[str], int]:
         except Exception:  # noqa: BLE001 - damaged before any chunk: mcap's default
             pass
     return "zstd", default
+
+
+class _Copy:
+    """The copy being written: the original's records re-registered in the writer, the
+    verdict events merged in by log time."""
+
+    def __init__(self, fout, events: list[VerdictEvent], res: AnnotateResult, comp: str | None,
+                 chunk_size: int, library: str):
+        self.fout, self.events, self.res = fout, events, res
+        self.comp, self.chunk_size, self.library = comp, chunk_size, library
+        self.writer: Writer | None = None
+        self.schemas: dict[int, int] = {}
+        self.channels: dict[int, int] = {}
+        self.verdict_channel: int | None = None
+        self.ev_i = 0
+
+    def start(self, profile: str, lib: str) -> None:
+        ctype = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
+                 "": CompressionType.NONE, None: CompressionType.NONE
+                 }.get(self.comp, CompressionType.ZSTD)
+        w = Writer(self.fout, chunk_size=self.chunk_size, compression=ctype,
+                   use_chunking=self.comp is not None)
+        library = self.library
+        w.start(profile=profile, library=f"{library} (copy of {lib})" if lib else library)
+        self.writer = w
+
+    def emit_events(self, until_ns: int | None) -> None:
+        """Write the events before ``until_ns`` (all when None)."""
+        events, writer = self.events, self.writer
+        while self.ev_i < len(events) and (until_ns is None
+                                           or events[self.ev_i].time_ns < until_ns):
+            if self.verdict_channel is None:
+                sid = writer.register_schema(
+                    "foxglove.Log", "jsonschema",
+                    json.dumps(FOXGLOVE_LOG_SCHEMA, sort_keys=True).encode())
+                self.verdict_channel = writer.register_channel(
+                    VERDICT_TOPIC, "json", sid, {"generator": "fretc report --annotate"})
+            ev = events[self.ev_i]
+            writer.add_message(self.verdict_channel, ev.time_ns,
+                               json.dumps(ev.to_json(), sort_keys=True).encode(),
+                               ev.time_ns, self.ev_i)
+            self.ev_i += 1
+            self.res.events += 1
+
+    def handle(self, rec) -> None:
+        """Copy one record of the original's data section (not a chunk)."""
+        writer = self.writer
+        if isinstance(rec, Schema):
+            if rec.id not in self.schemas:
+                self.schemas[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
+        elif isinstance(rec, Channel):
+            if rec.id not in self.channels:
+                sid = self.schemas.get(rec.schema_id, 0) if rec.schema_id else 0
+                self.channels[rec.id] = writer.register_channel(
+                    rec.topic, rec.message_encoding, sid, dict(rec.metadata))
+        elif isinstance(rec, Message):
+            self.emit_events(rec.log_time)
+            writer.add_message(self.channels[rec.channel_id], rec.log_time, rec.data,
+                               rec.publish_time, rec.sequence)
+            self.res.messages += 1
+        elif isinstance(rec, Metadata):
+            writer.add_metadata(rec.name, dict(rec.metadata))
+        elif isinstance(rec, Attachment):
+            writer.add_attachment(rec.create_time, rec.log_time, rec.name, rec.media_type,
+                                  rec.data)
+
+    def copy(self, reader: StreamReader) -> None:
+        """Copy the data section up to its end or the damage (then ``res.partial``)."""
+        res = self.res
+        records = iter(reader.records)
+        while True:
+            try:
+                rec = next(records)
+            except StopIteration:
+                break
+            except Exception as exc:  # noqa: BLE001 - mcap raises many kinds on damage
+                # a damaged or truncated original: keep what was read before the damage
+                res.partial = True
+                res.damage = f"{type(exc).__name__}: {exc}"
+                break
+            if isinstance(rec, Header):
+                self.start(rec.profile, rec.library)
+            elif isinstance(rec, DataEnd):
+                break  # the summary section repeats what was already copied
+            elif self.writer is None:
+                continue
+            elif isinstance(rec, Chunk):
+                try:
+                    inner = breakup_chunk(rec, validate_crc=True)
+                except Exception as exc:  # noqa: BLE001 - a corrupt chunk is skipped
+                    res.partial = True
+                    res.damage = f"chunk at {rec.message_start_time} ns skipped: {exc}"
+                    continue
+                for r in inner:
+                    self.handle(r)
+            else:
+                self.handle(rec)
+
+    def finish(self, log: dict) -> None:
+        """The events after the last message, the ``fretc.verdicts`` metadata, the end."""
+        if self.writer is None:
+            self.start("", "")
+        self.emit_events(None)
+        self.writer.add_metadata("fretc.verdicts", {
+            str(v.get("requirement")): str(v.get("verdict")) + (" (partial log)"
+                                                               if v.get("partial") else "")
+            for v in log.get("verdicts") or []})
+        self.writer.finish()
 
 
 def annotate_mcap(source: str, output: str, log: dict, *, library: str = "fretc report"
@@ -204,109 +313,21 @@ def annotate_mcap(source: str, output: str, log: dict, *, library: str = "fretc 
         OSError: ``source`` cannot be read or ``output`` written.
         ValueError: ``source`` is not an MCAP file (bad magic).
     """
-    from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, Metadata,
-                              Schema)
-    from mcap.stream_reader import StreamReader, breakup_chunk
-    from mcap.writer import CompressionType, Writer
-
     with open(source, "rb") as fh:
         if fh.read(8) != b"\x89MCAP0\r\n":
             raise ValueError(f"{source}: not an MCAP file")
     comp, chunk_size = _compression_of(source)
-    ctype = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "": CompressionType.NONE,
-             None: CompressionType.NONE}.get(comp, CompressionType.ZSTD)
     events = verdict_events(log)
     res = AnnotateResult(source=source, output=output,
                          compression=comp if comp is not None else "unchunked")
     Path(output).parent.mkdir(parents=True, exist_ok=True)
     tmp = f"{output}.part"
-    schemas: Dict[int, int] = {}
-    channels: Dict[int, int] = {}
-    verdict_channel = None
-    ev_i = 0
     with open(source, "rb") as fin, open(tmp, "wb") as fout:
-        writer: Optional[Writer] = None
-        reader = StreamReader(fin, emit_chunks=True, validate_crcs=True)
-
-        def start(profile: str, lib: str) -> Writer:
-            w = Writer(fout, chunk_size=chunk_size, compression=ctype,
-                       use_chunking=comp is not None)
-            w.start(profile=profile, library=f"{library} (copy of {lib})" if lib else library)
-            return w
-
-        def emit_events(until_ns: Optional[int]) -> None:
-            nonlocal ev_i, verdict_channel
-            while ev_i < len(events) and (until_ns is None or events[ev_i].time_ns < until_ns):
-                if verdict_channel is None:
-                    sid = writer.register_schema(
-                        "foxglove.Log", "jsonschema",
-                        json.dumps(FOXGLOVE_LOG_SCHEMA, sort_keys=True).encode())
-                    verdict_channel = writer.register_channel(
-                        VERDICT_TOPIC, "json", sid, {"generator": "fretc report --annotate"})
-                ev = events[ev_i]
-                writer.add_message(verdict_channel, ev.time_ns,
-                                   json.dumps(ev.to_json(), sort_keys=True).encode(),
-                                   ev.time_ns, ev_i)
-                ev_i += 1
-                res.events += 1
-
-        def handle(rec) -> None:
-            if isinstance(rec, Schema):
-                if rec.id not in schemas:
-                    schemas[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
-            elif isinstance(rec, Channel):
-                if rec.id not in channels:
-                    sid = schemas.get(rec.schema_id, 0) if rec.schema_id else 0
-                    channels[rec.id] = writer.register_channel(
-                        rec.topic, rec.message_encoding, sid, dict(rec.metadata))
-            elif isinstance(rec, Message):
-                emit_events(rec.log_time)
-                writer.add_message(channels[rec.channel_id], rec.log_time, rec.data,
-                                   rec.publish_time, rec.sequence)
-                res.messages += 1
-            elif isinstance(rec, Metadata):
-                writer.add_metadata(rec.name, dict(rec.metadata))
-            elif isinstance(rec, Attachment):
-                writer.add_attachment(rec.create_time, rec.log_time, rec.name, rec.media_type,
-                                      rec.data)
-
-        records = iter(reader.records)
-        while True:
-            try:
-                rec = next(records)
-            except StopIteration:
-                break
-            except Exception as exc:  # noqa: BLE001 - mcap raises many kinds on damage
-                # a damaged or truncated original: keep what was read before the damage
-                res.partial = True
-                res.damage = f"{type(exc).__name__}: {exc}"
-                break
-            if isinstance(rec, Header):
-                writer = start(rec.profile, rec.library)
-            elif isinstance(rec, DataEnd):
-                break  # the summary section repeats what was already copied
-            elif writer is None:
-                continue
-            elif isinstance(rec, Chunk):
-                try:
-                    inner = breakup_chunk(rec, validate_crc=True)
-                except Exception as exc:  # noqa: BLE001 - a corrupt chunk is skipped
-                    res.partial = True
-                    res.damage = f"chunk at {rec.message_start_time} ns skipped: {exc}"
-                    continue
-                for r in inner:
-                    handle(r)
-            else:
-                handle(rec)
-        if writer is None:
-            writer = start("", "")
-        emit_events(None)
-        writer.add_metadata("fretc.verdicts", {
-            str(v.get("requirement")): str(v.get("verdict")) + (" (partial log)"
-                                                               if v.get("partial") else "")
-            for v in log.get("verdicts") or []})
-        writer.finish()
+        copy = _Copy(fout, events, res, comp, chunk_size, library)
+        copy.copy(StreamReader(fin, emit_chunks=True, validate_crcs=True))
+        copy.finish(log)
     os.replace(tmp, output)
-    res.channels = len(channels) + (1 if verdict_channel is not None else 0)
-    res.schemas = len(schemas) + (1 if verdict_channel is not None else 0)
+    extra = 1 if copy.verdict_channel is not None else 0
+    res.channels = len(copy.channels) + extra
+    res.schemas = len(copy.schemas) + extra
     return res

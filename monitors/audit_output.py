@@ -1,5 +1,6 @@
-"""How ``fretc audit`` shows its verdicts: the terminal summary (rich), the JUnit XML file
-(one test case per requirement x log, for CI) and the progress bar.
+"""How ``fretc audit`` shows its verdicts: the terminal summary (rich), the progress bar,
+and the damage of a partial log in one sentence (the JUnit XML file:
+:mod:`monitors.audit_junit`).
 
 All output is deterministic: same logs and requirements, same text (no wall-clock times).
 Times are printed as seconds since the log's first tick (``12.300 s``) next to the tick
@@ -9,17 +10,18 @@ number; the JSON report (:mod:`monitors.report_model`) also has the absolute ns.
 from __future__ import annotations
 
 import os
-import xml.etree.ElementTree as ET
 
 from rich.markup import escape as _markup_escape
-from typing import Dict, List, Optional, Tuple
+from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+from rich.table import Table
+from rich.text import Text
 
-from fretish.textsafe import terminal_text, xml_text
+from fretish.textsafe import terminal_text
 from fretish.units import format_offset
 
 from .report_model import LogAudit, Verdict, exit_code
 
-__all__ = ["print_summary", "junit_xml", "AuditProgress", "short_log_name"]
+__all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
 
 _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
           "unknown": "yellow", "error": "magenta"}
@@ -31,9 +33,7 @@ def escape(text) -> str:
     return _markup_escape(terminal_text(text))
 
 
-def _T(text) -> "Text":
-    from rich.text import Text
-
+def _T(text) -> Text:
     return Text(terminal_text(text))
 
 
@@ -48,7 +48,6 @@ def short_log_name(path: str) -> str:
     return path if rel.startswith("..") else rel
 
 
-_s = format_offset
 
 
 def _value(v) -> str:
@@ -64,15 +63,15 @@ def _value(v) -> str:
 MATRIX_MAX = 10
 
 
-def _cell(v: Verdict, st: Optional[int]) -> str:
+def _cell(v: Verdict, st: int | None) -> str:
     if v.verdict == "violated":
         fv = v.first_violation
-        at = f" {_s(fv.at.time_ns, st)}" if fv is not None else ""
+        at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
         return f"VIOLATED{at}" + (" *" if v.partial else "")
     return v.verdict + (" *" if v.partial else "")
 
 
-def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True,
+def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
                   verbose: bool = False, allow_partial: bool = False,
                   input_errors: bool = False) -> None:
     """Print the verdicts to a rich Console: a header line, the verdict matrix (logs x
@@ -81,66 +80,17 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
     ``details`` one evidence block per violation (trigger, obligation, the missed tick with
     its tick time and the log time of the message that decided it) and, with ``verbose``,
     the values around each violation; last the counts and the exit code."""
-    from rich.table import Table
-    from rich.text import Text
-
     if plan is not None:
-        b = plan.bindings
-        clock = "no bindings (CSV columns are the variables)"
-        if getattr(plan, "variants", None):
-            clock = "bindings per log: " + "; ".join(
-                f"{f} ({sel.text()})" for sel, f, _sub in plan.variants)
-        elif b is not None:
-            tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
-                    else f"one tick per {b.tick.topic} message")
-            clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
-                    f"{b.time_base} time)"
-        console.print(f"fretc audit: {len(plan.requirements)} requirements, {len(logs)} "
-                      f"logs; {clock}", markup=False)
-        if plan.freeform:
-            console.print(f"free-form, not audited: {', '.join(plan.freeform)}", markup=False)
-    reqs: List[str] = []
+        _print_plan(console, plan, len(logs))
+    reqs: list[str] = []
     for la in logs:
         for v in la.verdicts:
             if v.requirement not in reqs:
                 reqs.append(v.requirement)
-    cells: Dict[tuple, Verdict] = {(la.log, v.requirement): v for la in logs for v in la.verdicts}
-    starts = {la.log: la.start_time_ns for la in logs}
-    by_log = len(reqs) <= len(logs) or len(logs) > MATRIX_MAX
-    rows, cols = (logs, reqs) if by_log else (reqs, logs)
     if min(len(logs), len(reqs)) <= MATRIX_MAX and logs:
-        table = Table(show_lines=False, header_style="bold")
-        table.add_column("log" if by_log else "req", no_wrap=True)
-        for c in cols:
-            table.add_column(terminal_text(c) if by_log else terminal_text(short_log_name(c.log)),
-                                 no_wrap=True)
-        for row in rows:
-            out = [_T(short_log_name(row.log) if by_log else row)]
-            for c in cols:
-                la_log, req = (row.log, c) if by_log else (c.log, row)
-                v = cells.get((la_log, req))
-                if v is None:
-                    out.append(Text("-"))
-                else:
-                    out.append(Text(_cell(v, starts[la_log]), style=_STYLE.get(v.verdict, "")))
-            table.add_row(*out)
-        console.print(table)
+        _print_matrix(console, logs, reqs)
     else:
-        table = Table(show_lines=False, header_style="bold")
-        for col in ("log", "req", "verdict"):
-            table.add_column(col, no_wrap=True)
-        shown = 0
-        for la in logs:
-            for v in la.verdicts:
-                if v.verdict in ("satisfied", "vacuous") and not v.partial:
-                    continue
-                shown += 1
-                table.add_row(_T(short_log_name(la.log)), _T(v.requirement),
-                              Text(_cell(v, la.start_time_ns), style=_STYLE.get(v.verdict, "")))
-        if shown:
-            console.print(table)
-        console.print("(only verdicts that are not complete passes are listed)",
-                      highlight=False)
+        _print_incomplete(console, logs)
     if any(v.partial for la in logs for v in la.verdicts):
         console.print("* partial log: audited up to the damage", highlight=False)
     for la in logs:
@@ -148,8 +98,82 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
         if lines:
             console.print(f"[bold]{escape(short_log_name(la.log))}[/bold]: " + "; ".join(lines),
                           highlight=False)
-    # errors in full, outside the table; one requirement's error once for all logs
-    seen: Dict[Tuple[str, str], List[str]] = {}
+    _print_errors(console, logs)
+    if details:
+        for la in logs:
+            for v in la.verdicts:
+                if v.verdict == "violated":
+                    _print_violation(console, la, v, verbose)
+    _print_counts(console, logs, input_errors, allow_partial)
+
+
+def _print_plan(console, plan, n_logs: int) -> None:
+    """The header: requirements, logs and the clock of the bindings."""
+    b = plan.bindings
+    clock = "no bindings (CSV columns are the variables)"
+    if getattr(plan, "variants", None):
+        clock = "bindings per log: " + "; ".join(
+            f"{f} ({sel.text()})" for sel, f, _sub in plan.variants)
+    elif b is not None:
+        tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
+                else f"one tick per {b.tick.topic} message")
+        clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
+                f"{b.time_base} time)"
+    console.print(f"fretc audit: {len(plan.requirements)} requirements, {n_logs} "
+                  f"logs; {clock}", markup=False)
+    if plan.freeform:
+        console.print(f"free-form, not audited: {', '.join(plan.freeform)}", markup=False)
+
+
+def _print_matrix(console, logs: list[LogAudit], reqs: list[str]) -> None:
+    """The verdict matrix: a row per log and a column per requirement when there are no
+    more requirements than logs (or more than :data:`MATRIX_MAX` logs), else the other way
+    round."""
+    cells: dict[tuple, Verdict] = {(la.log, v.requirement): v for la in logs for v in la.verdicts}
+    starts = {la.log: la.start_time_ns for la in logs}
+    by_log = len(reqs) <= len(logs) or len(logs) > MATRIX_MAX
+    rows, cols = (logs, reqs) if by_log else (reqs, logs)
+    table = Table(show_lines=False, header_style="bold")
+    table.add_column("log" if by_log else "req", no_wrap=True)
+    for c in cols:
+        table.add_column(terminal_text(c) if by_log else terminal_text(short_log_name(c.log)),
+                         no_wrap=True)
+    for row in rows:
+        out = [_T(short_log_name(row.log) if by_log else row)]
+        for c in cols:
+            la_log, req = (row.log, c) if by_log else (c.log, row)
+            v = cells.get((la_log, req))
+            if v is None:
+                out.append(Text("-"))
+            else:
+                out.append(Text(_cell(v, starts[la_log]), style=_STYLE.get(v.verdict, "")))
+        table.add_row(*out)
+    console.print(table)
+
+
+def _print_incomplete(console, logs: list[LogAudit]) -> None:
+    """Instead of a matrix too large to read: the verdicts that are not complete passes."""
+    table = Table(show_lines=False, header_style="bold")
+    for col in ("log", "req", "verdict"):
+        table.add_column(col, no_wrap=True)
+    shown = 0
+    for la in logs:
+        for v in la.verdicts:
+            if v.verdict in ("satisfied", "vacuous") and not v.partial:
+                continue
+            shown += 1
+            table.add_row(_T(short_log_name(la.log)), _T(v.requirement),
+                          Text(_cell(v, la.start_time_ns), style=_STYLE.get(v.verdict, "")))
+    if shown:
+        console.print(table)
+    console.print("(only verdicts that are not complete passes are listed)",
+                  highlight=False)
+
+
+def _print_errors(console, logs: list[LogAudit]) -> None:
+    """Errors and unknown verdicts in full, outside the table; one requirement's error once
+    for all logs."""
+    seen: dict[tuple[str, str], list[str]] = {}
     for la in logs:
         for v in la.verdicts:
             if v.verdict == "error" and v.error and not la.error:
@@ -161,12 +185,12 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
     for (kind, text), where in seen.items():
         on = where[0] if len(where) == 1 else f"{len(where)} logs"
         console.print(Text(f"{kind} ", style=_STYLE[kind]) + _T(f"({on}) {text}"))
-    if details:
-        for la in logs:
-            for v in la.verdicts:
-                if v.verdict == "violated":
-                    _print_violation(console, la, v, verbose)
-    counts: Dict[str, int] = {}
+
+
+def _print_counts(console, logs: list[LogAudit], input_errors: bool,
+                  allow_partial: bool) -> None:
+    """The last line: the count of each verdict and the exit code with its meaning."""
+    counts: dict[str, int] = {}
     for la in logs:
         for v in la.verdicts:
             counts[v.verdict] = counts.get(v.verdict, 0) + 1
@@ -181,7 +205,7 @@ def print_summary(console, logs: List[LogAudit], plan=None, details: bool = True
     console.print(f"{', '.join(parts)} (exit {code}{why})", highlight=False)
 
 
-def _log_notes(la: LogAudit, verbose: bool = False) -> List[str]:
+def _log_notes(la: LogAudit, verbose: bool = False) -> list[str]:
     st = la.start_time_ns
     out = []
     if la.error:
@@ -194,7 +218,7 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> List[str]:
             if v.warmup_ticks:
                 out.append(f"{escape(v.requirement)}: {v.warmup_ticks} warm-up ticks (waiting "
                            f"for {escape(', '.join(v.waiting_for)) or 'the first messages'}; "
-                           f"first evaluated tick at {_s(v.first_tick_ns, st)})")
+                           f"first evaluated tick at {format_offset(v.first_tick_ns, st)})")
     for w in la.warnings:
         out.append(f"[yellow]warning[/yellow]: {escape(w)}")
     if la.missing_topics:
@@ -205,7 +229,7 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> List[str]:
     return out
 
 
-def _headers(names: List[str]) -> List[str]:
+def _headers(names: list[str]) -> list[str]:
     """Short column headers that stay unique: of each name (an operand label ``var: expr``
     counts by its expression) the fewest trailing dotted components that no other name
     ends with (``…linear.y`` for ``/cmd_vel_filtered.linear.y``); plain names as they are."""
@@ -228,8 +252,6 @@ def _headers(names: List[str]) -> List[str]:
 
 
 def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -> None:
-    from rich.table import Table
-
     st = la.start_time_ns
     fv = v.first_violation
     clock = "header-stamp clock" if la.time_base == "header" else "log clock"
@@ -239,9 +261,10 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
         return
     if fv.trigger is not None:
         sc = fv.scope
-        console.print(f"  trigger at tick {fv.trigger.tick} ({_s(fv.trigger.time_ns, st)}) in the "
+        console.print(f"  trigger at tick {fv.trigger.tick} "
+                      f"({format_offset(fv.trigger.time_ns, st)}) in the "
                       f"scope interval [{sc[0].tick}, {sc[1].tick}] "
-                      f"({_s(sc[0].time_ns, st)} .. {_s(sc[1].time_ns, st)})"
+                      f"({format_offset(sc[0].time_ns, st)} .. {format_offset(sc[1].time_ns, st)})"
                       + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""),
                       markup=False, highlight=False)
     elif fv.obligation:
@@ -249,8 +272,9 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
                       highlight=False)
     lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
           if fv.at.log_time_ns is not None else "")
-    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} ({_s(fv.at.time_ns, st)} on the "
-                  f"{clock}{lt})", markup=False, highlight=False)
+    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "
+                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})", markup=False,
+                  highlight=False)
     if v.triggers is not None and v.violations:
         console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
                       highlight=False)
@@ -277,87 +301,13 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
         if prev is not None and tick != prev + 1:
             t.add_row("…", f"{tick - prev - 1} ticks", *[""] * (len(heads) + 1))
         prev = tick
-        cells = [str(tick), _s(ns, st)] + [_value(c[2]) for c in row]
+        cells = [str(tick), format_offset(ns, st)] + [_value(c[2]) for c in row]
         for tp in topics:
             lt = v.sources[tp][k][2]
-            cells.append(_s(lt, st))
+            cells.append(format_offset(lt, st))
         cells.append(marks.get(tick, ""))
         t.add_row(*cells)
     console.print(t)
-
-
-def junit_xml(logs: List[LogAudit]) -> str:
-    """JUnit XML: a ``testsuite`` per log, a ``testcase`` per requirement (``failure`` when
-    violated, ``error`` when not audited; vacuous passes say so in ``system-out``)."""
-    root = ET.Element("testsuites", name="fretc audit")
-    tot = {"tests": 0, "failures": 0, "errors": 0}
-    for la in logs:
-        suite = ET.SubElement(root, "testsuite", name=short_log_name(la.log))
-        props = ET.SubElement(suite, "properties")
-        for k, val in (("partial", str(la.partial).lower()),
-                       ("ticks_evaluated", str(la.ticks_evaluated)),
-                       ("warmup_ticks", str(la.warmup_ticks))):
-            ET.SubElement(props, "property", name=k, value=val)
-        counts = {"tests": 0, "failures": 0, "errors": 0}
-        st = la.start_time_ns
-        cls = "fretc.audit." + os.path.splitext(os.path.basename(la.log.rstrip("/")))[0]
-        for v in la.verdicts:
-            counts["tests"] += 1
-            case = ET.SubElement(suite, "testcase", classname=cls, name=v.requirement, time="0")
-            out = [v.text]
-            if v.verdict == "violated":
-                counts["failures"] += 1
-                fv = v.first_violation
-                msg = f"{v.requirement} violated"
-                body = []
-                if fv is not None:
-                    msg += f" at {_s(fv.at.time_ns, st)} (tick {fv.at.tick})"
-                    if fv.trigger is not None:
-                        msg += f"; trigger at {_s(fv.trigger.time_ns, st)} (tick {fv.trigger.tick})"
-                    body = [fv.obligation, fv.reason]
-                if v.partial:
-                    msg += " [partial log]"
-                ET.SubElement(case, "failure", message=msg, type="violated").text = \
-                    "\n".join(x for x in [v.text] + body if x)
-            elif v.verdict == "error":
-                counts["errors"] += 1
-                ET.SubElement(case, "error", message=v.error or "error", type="error").text = \
-                    v.error or ""
-            elif v.partial or v.verdict not in ("satisfied", "vacuous"):
-                # not checked to the end: an error case, never a pass (exit code 3)
-                counts["errors"] += 1
-                where = (f" (damage after {_s(la.damage_time_ns, st)})"
-                         if la.damage_time_ns is not None else "")
-                why = (f"partial log{where}: {v.verdict} up to the damage, the rest was not "
-                       "audited" if v.partial else f"verdict {v.verdict}")
-                if v.verdict == "unknown" and v.unknown_reason:
-                    why += f" (unknown: {v.unknown_reason})"
-
-                ET.SubElement(case, "error", message=why, type="partial").text = why
-                out.append(f"verdict: {v.verdict}")
-            else:
-                out.append(f"verdict: {v.verdict}")
-                out.extend(n for n in v.notes if n.startswith("vacuous"))
-            ET.SubElement(case, "system-out").text = "\n".join(out)
-        for k, n in counts.items():
-            suite.set(k, str(n))
-            tot[k] += n
-        suite.set("time", "0")
-    for k, n in tot.items():
-        root.set(k, str(n))
-    _xml_safe(root)
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
-def _xml_safe(root) -> None:
-    """Make every attribute and text of the tree legal XML 1.0 (a NUL in a requirement id
-    must not make the file unparseable): :func:`fretish.textsafe.xml_text`."""
-    for el in root.iter():
-        for k, val in list(el.attrib.items()):
-            el.set(k, xml_text(val, keep=""))
-        if el.text:
-            el.text = xml_text(el.text)
 
 
 def damage_summary(la: LogAudit) -> str:
@@ -374,15 +324,15 @@ def damage_summary(la: LogAudit) -> str:
         lo, hi = p.get("log_time_ns"), p.get("end_time_ns")
         span = ""
         if lo is not None:
-            span = f" at {_s(lo, st)}" if hi is None or hi == lo else \
-                f" over {_s(lo, st)} .. {_s(hi, st)}"
+            span = f" at {format_offset(lo, st)}" if hi is None or hi == lo else \
+                f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
         parts.append(f"{p['kind']}{span}")
         if len(parts) >= 3:
             break
     more = sum(n for k, n in la.problem_counts.items() if k.split(" ")[0] in kinds) - len(parts)
     what = ", ".join(parts) + (f" and {more} more" if more > 0 else "") or "damaged"
     if la.damage_time_ns is not None:
-        judged = f"judged up to {_s(la.damage_time_ns, st)}"
+        judged = f"judged up to {format_offset(la.damage_time_ns, st)}"
         if la.ticks_after_damage:
             judged += f" ({la.ticks_after_damage} ticks after it not judged)"
     elif la.damage_cut:
@@ -397,14 +347,11 @@ class AuditProgress:
     of its log time). Used as the ``progress`` object of :func:`monitors.audit.audit_logs`."""
 
     def __init__(self, console, total: int):
-        from rich.progress import (BarColumn, Progress, TaskProgressColumn, TextColumn,
-                                   TimeElapsedColumn)
-
         self.progress = Progress(TextColumn("{task.description}"), BarColumn(),
                                  TaskProgressColumn(), TimeElapsedColumn(), console=console,
                                  transient=True)
         self.total = self.progress.add_task("logs", total=total)
-        self.tasks: Dict[int, int] = {}
+        self.tasks: dict[int, int] = {}
 
     def __enter__(self):
         self.progress.start()

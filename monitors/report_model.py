@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any
 
 __all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_json",
            "summary", "exit_code", "incomplete", "SCHEMA", "VERDICTS", "EXIT_CODES", "EXIT_OK",
@@ -49,7 +49,7 @@ SCHEMA = "fretc-audit/1"
 VERDICTS = ("satisfied", "vacuous", "violated", "unknown", "error")
 
 
-def _t(ns: Optional[int], start: Optional[int]) -> Dict[str, Any]:
+def _t(ns: int | None, start: int | None) -> dict[str, Any]:
     """``{"ns": int, "s": seconds since start}`` (None values when unknown)."""
     if ns is None:
         return {"ns": None, "s": None}
@@ -66,9 +66,9 @@ class TimePoint:
 
     tick: int
     time_ns: int
-    log_time_ns: Optional[int] = None
+    log_time_ns: int | None = None
 
-    def to_json(self, start: Optional[int]) -> dict:
+    def to_json(self, start: int | None) -> dict:
         return {"tick": self.tick, "time_ns": self.time_ns,
                 "time_s": _t(self.time_ns, start)["s"], "log_time_ns": self.log_time_ns}
 
@@ -90,14 +90,14 @@ class FirstViolation:
     """
 
     at: TimePoint
-    trigger: Optional[TimePoint] = None
-    scope: Optional[Tuple[TimePoint, TimePoint]] = None
-    window: Optional[Tuple[int, int]] = None
-    window_time_ns: Optional[Tuple[Optional[int], Optional[int]]] = None
+    trigger: TimePoint | None = None
+    scope: tuple[TimePoint, TimePoint] | None = None
+    window: tuple[int, int] | None = None
+    window_time_ns: tuple[int | None, int | None] | None = None
     obligation: str = ""
     reason: str = ""
 
-    def to_json(self, start: Optional[int], time_base: Optional[str] = None) -> dict:
+    def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         lt = self.at.log_time_ns
         out = {"tick": self.at.tick, "log_time_ns": lt, "log_time_s": _t(lt, start)["s"],
                "tick_time_ns": self.at.time_ns, "tick_time_s": _t(self.at.time_ns, start)["s"],
@@ -124,10 +124,10 @@ class Ltl3:
     definitive before the first tick)."""
 
     status: str = "unknown"
-    tick: Optional[int] = None
-    time_ns: Optional[int] = None
+    tick: int | None = None
+    time_ns: int | None = None
 
-    def to_json(self, start: Optional[int]) -> dict:
+    def to_json(self, start: int | None) -> dict:
         return {"status": self.status, "tick": self.tick, "time_ns": self.time_ns,
                 "time_s": _t(self.time_ns, start)["s"]}
 
@@ -168,30 +168,25 @@ class Verdict:
     source: str = ""
     verdict: str = "error"
     partial: bool = False
-    first_violation: Optional[FirstViolation] = None
+    first_violation: FirstViolation | None = None
     ltl3: Ltl3 = field(default_factory=Ltl3)
-    values: Dict[str, List[Tuple[int, int, Any]]] = field(default_factory=dict)
-    sources: Dict[str, List[Tuple[int, int, Optional[int]]]] = field(default_factory=dict)
+    values: dict[str, list[tuple[int, int, Any]]] = field(default_factory=dict)
+    sources: dict[str, list[tuple[int, int, int | None]]] = field(default_factory=dict)
     ticks_evaluated: int = 0
     warmup_ticks: int = 0
-    first_tick_ns: Optional[int] = None
-    last_tick_ns: Optional[int] = None
-    waiting_for: List[str] = field(default_factory=list)
-    intervals: Optional[int] = None
-    triggers: Optional[int] = None
-    violations: Optional[int] = None
-    violation_list: List[Tuple[TimePoint, TimePoint]] = field(default_factory=list)
-    engine: Optional[str] = None
-    notes: List[str] = field(default_factory=list)
-    error: Optional[str] = None
-    unknown_reason: Optional[str] = None
+    first_tick_ns: int | None = None
+    last_tick_ns: int | None = None
+    waiting_for: list[str] = field(default_factory=list)
+    intervals: int | None = None
+    triggers: int | None = None
+    violations: int | None = None
+    violation_list: list[tuple[TimePoint, TimePoint]] = field(default_factory=list)
+    engine: str | None = None
+    notes: list[str] = field(default_factory=list)
+    error: str | None = None
+    unknown_reason: str | None = None
 
-    @property
-    def ok(self) -> bool:
-        """satisfied or vacuous."""
-        return self.verdict in ("satisfied", "vacuous")
-
-    def to_json(self, start: Optional[int], time_base: Optional[str] = None) -> dict:
+    def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         def val(v):
             if isinstance(v, float) and v != v:
                 return "nan"
@@ -250,27 +245,27 @@ class LogAudit:
     """
 
     log: str
-    kind: Optional[str] = None
+    kind: str | None = None
     partial: bool = False
-    damage_time_ns: Optional[int] = None
-    start_time_ns: Optional[int] = None
-    first_time_ns: Optional[int] = None
-    end_time_ns: Optional[int] = None
+    damage_time_ns: int | None = None
+    start_time_ns: int | None = None
+    first_time_ns: int | None = None
+    end_time_ns: int | None = None
     ticks_evaluated: int = 0
     warmup_ticks: int = 0
-    waiting_for: List[str] = field(default_factory=list)
-    missing_topics: List[str] = field(default_factory=list)
-    tick: Dict[str, Any] = field(default_factory=dict)
-    time_base: Optional[str] = None
-    messages: Dict[str, int] = field(default_factory=dict)
-    problems: List[Dict[str, Any]] = field(default_factory=list)
-    problem_counts: Dict[str, int] = field(default_factory=dict)
-    verdicts: List[Verdict] = field(default_factory=list)
-    engine: Optional[str] = None
-    error: Optional[str] = None
+    waiting_for: list[str] = field(default_factory=list)
+    missing_topics: list[str] = field(default_factory=list)
+    tick: dict[str, Any] = field(default_factory=dict)
+    time_base: str | None = None
+    messages: dict[str, int] = field(default_factory=dict)
+    problems: list[dict[str, Any]] = field(default_factory=list)
+    problem_counts: dict[str, int] = field(default_factory=dict)
+    verdicts: list[Verdict] = field(default_factory=list)
+    engine: str | None = None
+    error: str | None = None
     ticks_after_damage: int = 0
     damage_cut: bool = False
-    warnings: List[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         st = self.start_time_ns
@@ -321,7 +316,7 @@ def incomplete(la: "LogAudit") -> bool:
 _DECIDED = ("satisfied", "vacuous", "violated", "error")
 
 
-def summary(logs: List[LogAudit], allow_partial: bool = False) -> Dict[str, int]:
+def summary(logs: list[LogAudit], allow_partial: bool = False) -> dict[str, int]:
     """Counts of verdicts over all logs, and the exit code they give (:func:`exit_code`)."""
     out = {k: 0 for k in VERDICTS}
     for la in logs:
@@ -334,7 +329,7 @@ def summary(logs: List[LogAudit], allow_partial: bool = False) -> Dict[str, int]
     return out
 
 
-def exit_code(logs: List[LogAudit], input_errors: bool = False,
+def exit_code(logs: list[LogAudit], input_errors: bool = False,
               allow_partial: bool = False) -> int:
     """The exit code of an audit (:data:`EXIT_CODES`), first that applies: 2 anything could
     not be audited (an input error, an ``error`` verdict); 1 a requirement is violated; 3
@@ -351,7 +346,7 @@ def exit_code(logs: List[LogAudit], input_errors: bool = False,
     return EXIT_OK
 
 
-def audit_json(logs: List[LogAudit], requirements: List[dict], bindings: Optional[dict],
+def audit_json(logs: list[LogAudit], requirements: list[dict], bindings: dict | None,
                input_errors: bool = False, allow_partial: bool = False) -> str:
     """The ``--json`` document (module docstring), as text with sorted keys."""
     s = summary(logs, allow_partial)

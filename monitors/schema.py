@@ -7,7 +7,7 @@ declare - each an error naming the variable, the topic and the field) and by
 
 Types come from the schemas embedded in the log (MCAP Schema records, the ROS 1 bag
 connection headers, rosbag2 metadata), parsed by rosbags exactly as the reader does
-(:func:`monitors.sources.build_typestore`). A field path resolves only through the fields
+(:func:`monitors.sources.decoding.build_typestore`). A field path resolves only through the fields
 a schema declares, so a binding can never walk Python attributes of the decoded objects
 (``/scan.__class__`` or ``/scan.ranges.size`` are errors).
 
@@ -19,11 +19,22 @@ fixed length or None for a sequence) - the kinds the binding language distinguis
 from __future__ import annotations
 
 import difflib
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Optional, Tuple
+from typing import Any
+
+from mcap.reader import make_reader
+from mcap.records import Channel, Schema
+from mcap.stream_reader import StreamReader
+from rosbags.rosbag1 import Reader as Ros1Reader
+from rosbags.rosbag2 import Reader as Ros2Reader
 
 from fretish.errors import InputError
+
+from .sources.bag_source import connection_typestore
+from .sources.csv_source import CSV_TOPIC
+from .sources.decoding import UnsupportedSchema, build_typestore
 
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "log_schemas", "field_paths",
            "closest"]
@@ -41,8 +52,8 @@ class FieldType:
 
     kind: str
     name: str
-    item: Optional["FieldType"] = None
-    length: Optional[int] = None
+    item: FieldType | None = None
+    length: int | None = None
 
     def text(self) -> str:
         if self.kind == "array":
@@ -54,13 +65,13 @@ class FieldPathError(InputError, ValueError):
     """A field path that the schema does not declare; ``valid`` lists the fields that exist
     at the point where it failed and ``suggestion`` is the closest one (or None)."""
 
-    def __init__(self, message: str, valid: List[str], suggestion: Optional[str]) -> None:
+    def __init__(self, message: str, valid: list[str], suggestion: str | None) -> None:
         super().__init__(message)
         self.valid = valid
         self.suggestion = suggestion
 
 
-def closest(name: str, candidates: List[str]) -> Optional[str]:
+def closest(name: str, candidates: list[str]) -> str | None:
     """The candidate closest to ``name`` (difflib ratio >= 0.6), or None."""
     got = difflib.get_close_matches(name, candidates, n=1, cutoff=0.6)
     return got[0] if got else None
@@ -74,7 +85,7 @@ class TopicSchema:
         self.typename = typename
         self.store = store
 
-    def fields(self, typename: Optional[str] = None) -> List[Tuple[str, FieldType]]:
+    def fields(self, typename: str | None = None) -> list[tuple[str, FieldType]]:
         """(name, type) of the fields of ``typename`` (default: the topic's type)."""
         _consts, fields = self.store.fielddefs[typename or self.typename]
         return [(n, self._type(spec)) for n, spec in fields]
@@ -92,7 +103,7 @@ class TopicSchema:
         item, length = sub
         return FieldType("array", "array", self._type(item), length if node == 3 else None)
 
-    def resolve(self, path: Tuple) -> FieldType:
+    def resolve(self, path: tuple) -> FieldType:
         """The type at ``path`` (field names and integer indexes).
 
         Raises:
@@ -138,16 +149,16 @@ class TopicSchema:
 class CsvSchema(TopicSchema):
     """The ``/csv`` pseudo-topic of a CSV trace: one field per column (bool or number)."""
 
-    def __init__(self, topic: str, columns: Dict[str, str]) -> None:
+    def __init__(self, topic: str, columns: dict[str, str]) -> None:
         super().__init__(topic, "csv", None)
         self.columns = columns
 
-    def fields(self, typename: Optional[str] = None) -> List[Tuple[str, FieldType]]:
+    def fields(self, typename: str | None = None) -> list[tuple[str, FieldType]]:
         return [(c, FieldType("bool" if t == "bool" else "number",
                               "bool" if t == "bool" else "float64"))
                 for c, t in self.columns.items()]
 
-    def resolve(self, path: Tuple) -> FieldType:
+    def resolve(self, path: tuple) -> FieldType:
         cols = [c for c, _ in self.fields()]
         if not path or not isinstance(path[0], str) or path[0] not in self.columns:
             name = path[0] if path else ""
@@ -162,7 +173,7 @@ class CsvSchema(TopicSchema):
         return t
 
 
-def field_paths(schema: TopicSchema, limit_depth: int = 8) -> Iterator[Tuple[str, FieldType]]:
+def field_paths(schema: TopicSchema, limit_depth: int = 8) -> Iterator[tuple[str, FieldType]]:
     """Every field path of the topic's type (``pose.pose.position.x``), depth first, with
     its type; arrays are listed with ``[]`` and the fields of their items below."""
     def walk(prefix: str, typename: str, depth: int):
@@ -182,14 +193,13 @@ def field_paths(schema: TopicSchema, limit_depth: int = 8) -> Iterator[Tuple[str
 
 
 # --------------------------------------------------------------------------- reading
-def log_schemas(source) -> Dict[str, Optional[TopicSchema]]:
+def log_schemas(source) -> dict[str, TopicSchema | None]:
     """Topic -> :class:`TopicSchema` of an open log (:func:`monitors.sources.open_log`);
     None for a topic whose schema is missing or cannot be parsed (the reader reports it as
     ``unknown_schema``). Reads only the schema and channel records (the summary of an MCAP,
     the connection headers of a bag), never the messages."""
     kind = source.kind
     if kind == "csv":
-        from .sources import CSV_TOPIC
         return {CSV_TOPIC: CsvSchema(CSV_TOPIC, dict(getattr(source, "types", {}) or
                                                      {c: "float" for c in source.columns}))}
     if kind == "mcap":
@@ -197,20 +207,16 @@ def log_schemas(source) -> Dict[str, Optional[TopicSchema]]:
     return _bag_schemas(source)
 
 
-def _build(encoding: str, name: str, text: str):
-    from .sources import _Unsupported, build_typestore
+def _build(encoding: str, name: str, text: str) -> tuple[Any, str] | None:
     try:
         return build_typestore(encoding, name, text)
-    except _Unsupported:
+    except UnsupportedSchema:
         return None
 
 
-def _mcap_schemas(source) -> Dict[str, Optional[TopicSchema]]:
-    from mcap.reader import make_reader
-    from mcap.records import Channel, Schema
-
-    schemas: Dict[int, Any] = {}
-    channels: Dict[int, Any] = {}
+def _mcap_schemas(source) -> dict[str, TopicSchema | None]:
+    schemas: dict[int, Any] = {}
+    channels: dict[int, Any] = {}
     wanted = set(source.topics())
     with open(source.path, "rb") as f:
         summary = None
@@ -221,7 +227,6 @@ def _mcap_schemas(source) -> Dict[str, Optional[TopicSchema]]:
         if summary is not None and summary.channels:
             schemas, channels = dict(summary.schemas), dict(summary.channels)
         else:
-            from mcap.stream_reader import StreamReader
             f.seek(0)
             try:
                 for rec in StreamReader(f, skip_magic=False).records:
@@ -234,7 +239,7 @@ def _mcap_schemas(source) -> Dict[str, Optional[TopicSchema]]:
                         break
             except Exception:  # damage: what was read so far
                 pass
-    out: Dict[str, Optional[TopicSchema]] = {}
+    out: dict[str, TopicSchema | None] = {}
     for ch in sorted(channels.values(), key=lambda c: c.id):
         if ch.topic in out and out[ch.topic] is not None:
             continue
@@ -246,27 +251,16 @@ def _mcap_schemas(source) -> Dict[str, Optional[TopicSchema]]:
     return dict(sorted(out.items()))
 
 
-def _bag_schemas(source) -> Dict[str, Optional[TopicSchema]]:
-    from rosbags.interfaces import MessageDefinitionFormat
-
-    out: Dict[str, Optional[TopicSchema]] = {}
-    if source.kind == "bag":
-        from rosbags.rosbag1 import Reader
-    else:
-        from rosbags.rosbag2 import Reader
-    with Reader(Path(source.path)) as reader:
+def _bag_schemas(source) -> dict[str, TopicSchema | None]:
+    out: dict[str, TopicSchema | None] = {}
+    reader_class = Ros1Reader if source.kind == "bag" else Ros2Reader
+    with reader_class(Path(source.path)) as reader:
         for c in reader.connections:
             if out.get(c.topic) is not None:
                 continue
-            built = None
-            fmt, text = c.msgdef.format, c.msgdef.data
-            if fmt != MessageDefinitionFormat.NONE and text.strip():
-                enc = ("ros1msg" if source.kind == "bag" else
-                       "ros2idl" if fmt == MessageDefinitionFormat.IDL else "ros2msg")
-                built = _build(enc, c.msgtype, text)
-            else:
-                fb = getattr(source, "_fallback", None)
-                if fb is not None and c.msgtype in fb.fielddefs:
-                    built = (fb, c.msgtype)
+            try:
+                built = connection_typestore(source.kind, c, getattr(source, "_fallback", None))
+            except UnsupportedSchema:
+                built = None
             out[c.topic] = TopicSchema(c.topic, built[1], built[0]) if built else None
     return dict(sorted(out.items()))

@@ -39,15 +39,15 @@ from __future__ import annotations
 
 import struct
 import sys
-from typing import Any, Callable, Dict, FrozenSet, Iterable, List, Optional, Tuple
+from collections.abc import Callable, Iterable
+from typing import Any
 
 import numpy as np
 
-__all__ = ["selective_decoder", "wanted_fields", "install", "chunk_messages", "stats",
-           "HEADER_STAMP"]
+__all__ = ["selective_decoder", "wanted_fields", "install", "stats", "HEADER_STAMP"]
 
 #: Field paths as in :class:`monitors.bindings.Field`: attribute names and indexes.
-Path = Tuple[Any, ...]
+Path = tuple[Any, ...]
 
 _SIZE = {"bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2,
          "int32": 4, "uint32": 4, "int64": 8, "uint64": 8, "float32": 4, "float64": 8}
@@ -69,11 +69,11 @@ class _NotCovered(Exception):
     """The fast path does not cover this (type, fields): use the full decoder."""
 
 
-def wanted_fields(bindings) -> Dict[str, FrozenSet[Path]]:
+def wanted_fields(bindings) -> dict[str, frozenset[Path]]:
     """Topic -> field paths the variables of ``bindings`` read (``/scan.ranges`` gives
     ``("ranges",)``); the tick topic and topics read only by ``age()`` get an empty set;
     with the header time base every topic also gets :data:`HEADER_STAMP`."""
-    out: Dict[str, set] = {t: set() for t in bindings.topics}
+    out: dict[str, set] = {t: set() for t in bindings.topics}
     if bindings.tick.topic is not None:
         out.setdefault(bindings.tick.topic, set())
     for b in bindings.variables.values():
@@ -160,12 +160,12 @@ class _Gen:
         self.store = store
         self.cdr = cdr
         self.base = 4 if cdr else 0
-        self.lines: List[str] = []
-        self.env: Dict[str, Any] = {"np": np, "_u32": _U32}
+        self.lines: list[str] = []
+        self.env: dict[str, Any] = {"np": np, "_u32": _U32}
         self.off = 0  # constant offset not yet added to pos
         self.known = 8  # pos is a multiple of this
         self.n = 0
-        self.pending: List[Tuple[int, str, str]] = []
+        self.pending: list[tuple[int, str, str]] = []
 
     def name(self, prefix: str) -> str:
         self.n += 1
@@ -239,7 +239,7 @@ class _Gen:
         return key
 
     # -- fields -------------------------------------------------------------------------------
-    def struct(self, typename: str, tree: Optional[dict], obj: Optional[str], ind: int) -> None:
+    def struct(self, typename: str, tree: dict | None, obj: str | None, ind: int) -> None:
         """Walk a message of ``typename``; store the fields in ``tree`` on ``obj``."""
         for fname, desc in self.store.get_msgdef(typename).fields:
             if not self.cdr and fname == "structure_needs_at_least_one_member":
@@ -249,7 +249,10 @@ class _Gen:
             sub = tree.get(fname) if want else None
             self.field(desc, target, sub, ind)
 
-    def field(self, desc, target: Optional[str], sub: Optional[dict], ind: int) -> None:
+    def field(self, desc, target: str | None, sub: dict | None, ind: int) -> None:
+        """Walk one field (rosbags field descriptor ``desc``: node type 1 base, 2 nested
+        message, 3 array, 4 sequence); store it in ``target`` when wanted (``sub``: the
+        wanted fields of a nested message)."""
         kind = desc[0]
         self.align(self.alignment(desc), ind)
         if kind == 1:
@@ -270,70 +273,77 @@ class _Gen:
             else:
                 self.struct(desc[1], None, None, ind)
         elif kind == 3:
-            elem, length = desc[1]
-            if elem[0] == 1 and elem[1][0] != "string":
-                t = elem[1][0]
-                if target:
-                    self.emit(ind, f"{target} = np.frombuffer(raw, {self.dtype(t)}, {length}, "
-                                   f"{self.at()})")
-                self.off += length * _SIZE[t]
-            elif elem[0] == 1:
-                vals = self.name("v") if target else None
-                if vals:
-                    self.emit(ind, f"{vals} = []")
-                for i in range(length):
-                    if i:
-                        self.align(4, ind)
-                    self.string(f"{vals}.append" if vals else None, ind, call=True)
-                if target:
-                    self.emit(ind, f"{target} = {vals}")
-            else:
-                if target:
-                    raise _NotCovered("an array of messages is wanted")
-                for i in range(length):
-                    if i:
-                        self.align(self.alignment(elem), ind)
-                    self.struct(elem[1], None, None, ind)
-        else:  # sequence
-            elem = desc[1][0]
-            count = self.name("n")
-            self.emit(ind, f"{count} = _u32(raw, {self.at()})[0]")
-            self.off += 4
-            if elem[0] == 1 and elem[1][0] != "string":
-                t = elem[1][0]
-                size = _SIZE[t]
-                self.flush(ind)
-                if self.cdr and size > 4:
-                    self.emit(ind, f"if {count}:")
-                    self.emit(ind + 1, f"pos = (pos + {size - 1}) & -{size}")
-                if target:
-                    self.emit(ind, f"{target} = np.frombuffer(raw, {self.dtype(t)}, {count}, "
-                                   f"{self.at()})")
-                self.emit(ind, f"pos += {count} * {size}" if size > 1 else f"pos += {count}")
-                self.known = min(4, size) if self.cdr else 1
-            else:
-                if target and elem[0] != 1:
-                    raise _NotCovered("a sequence of messages is wanted")
-                self.flush(ind)
-                self.emit(ind, f"if {count} > len(raw):")
-                self.emit(ind + 1, "raise ValueError('sequence count beyond the message')")
-                vals = self.name("v") if target else None
-                if vals:
-                    self.emit(ind, f"{vals} = []")
-                self.emit(ind, f"for _ in range({count}):")
-                self.known = 1
-                if elem[0] == 1:
-                    self.align(4, ind + 1)
-                    self.string(f"{vals}.append" if vals else None, ind + 1, call=True)
-                else:
-                    self.align(self.alignment(elem), ind + 1)
-                    self.struct(elem[1], None, None, ind + 1)
-                self.flush(ind + 1)
-                self.known = 1
-                if vals:
-                    self.emit(ind, f"{target} = {vals}")
+            self.array(desc[1], target, ind)
+        else:
+            self.sequence(desc[1][0], target, ind)
 
-    def string(self, target: Optional[str], ind: int, call: bool = False) -> None:
+    def array(self, spec, target: str | None, ind: int) -> None:
+        """A fixed-length array (``spec``: element descriptor, length): no count."""
+        elem, length = spec
+        if elem[0] == 1 and elem[1][0] != "string":
+            t = elem[1][0]
+            if target:
+                self.emit(ind, f"{target} = np.frombuffer(raw, {self.dtype(t)}, {length}, "
+                               f"{self.at()})")
+            self.off += length * _SIZE[t]
+        elif elem[0] == 1:
+            vals = self.name("v") if target else None
+            if vals:
+                self.emit(ind, f"{vals} = []")
+            for i in range(length):
+                if i:
+                    self.align(4, ind)
+                self.string(f"{vals}.append" if vals else None, ind, call=True)
+            if target:
+                self.emit(ind, f"{target} = {vals}")
+        else:
+            if target:
+                raise _NotCovered("an array of messages is wanted")
+            for i in range(length):
+                if i:
+                    self.align(self.alignment(elem), ind)
+                self.struct(elem[1], None, None, ind)
+
+    def sequence(self, elem, target: str | None, ind: int) -> None:
+        """A sequence of ``elem``: a uint32 count, then the elements."""
+        count = self.name("n")
+        self.emit(ind, f"{count} = _u32(raw, {self.at()})[0]")
+        self.off += 4
+        if elem[0] == 1 and elem[1][0] != "string":
+            t = elem[1][0]
+            size = _SIZE[t]
+            self.flush(ind)
+            if self.cdr and size > 4:
+                self.emit(ind, f"if {count}:")
+                self.emit(ind + 1, f"pos = (pos + {size - 1}) & -{size}")
+            if target:
+                self.emit(ind, f"{target} = np.frombuffer(raw, {self.dtype(t)}, {count}, "
+                               f"{self.at()})")
+            self.emit(ind, f"pos += {count} * {size}" if size > 1 else f"pos += {count}")
+            self.known = min(4, size) if self.cdr else 1
+            return
+        if target and elem[0] != 1:
+            raise _NotCovered("a sequence of messages is wanted")
+        self.flush(ind)
+        self.emit(ind, f"if {count} > len(raw):")
+        self.emit(ind + 1, "raise ValueError('sequence count beyond the message')")
+        vals = self.name("v") if target else None
+        if vals:
+            self.emit(ind, f"{vals} = []")
+        self.emit(ind, f"for _ in range({count}):")
+        self.known = 1
+        if elem[0] == 1:
+            self.align(4, ind + 1)
+            self.string(f"{vals}.append" if vals else None, ind + 1, call=True)
+        else:
+            self.align(self.alignment(elem), ind + 1)
+            self.struct(elem[1], None, None, ind + 1)
+        self.flush(ind + 1)
+        self.known = 1
+        if vals:
+            self.emit(ind, f"{target} = {vals}")
+
+    def string(self, target: str | None, ind: int, call: bool = False) -> None:
         ln = self.name("l")
         self.emit(ind, f"{ln} = _u32(raw, {self.at()})[0]")
         start = self.off + self.base + 4
@@ -362,10 +372,10 @@ class _Gen:
         return key
 
 
-_CLASSES: Dict[Tuple[str, Tuple[str, ...]], type] = {}
+_CLASSES: dict[tuple[str, tuple[str, ...]], type] = {}
 
 
-def _message_class(typename: str, names: Tuple[str, ...], clsname: str) -> type:
+def _message_class(typename: str, names: tuple[str, ...], clsname: str) -> type:
     """A slotted class with only ``names``; named and with ``__msgtype__`` as rosbags'
     class of the type (so messages naming the type read the same)."""
     key = (typename, names, clsname)
@@ -410,8 +420,8 @@ def _generate(store, typename: str, paths: Iterable[Path], cdr: bool) -> Callabl
 
 
 def selective_decoder(store, typename: str, message_encoding: str,
-                      paths: Optional[Iterable[Path]], full: Callable[[bytes], Any]
-                      ) -> Optional[Callable[[bytes], Any]]:
+                      paths: Iterable[Path] | None, full: Callable[[bytes], Any]
+                      ) -> Callable[[bytes], Any] | None:
     """A decoder of ``typename`` messages reading only ``paths`` (see the module docstring),
     or None when the fast path does not cover them (then use ``full``).
 
@@ -441,60 +451,3 @@ def selective_decoder(store, typename: str, message_encoding: str,
 
     decode.fast = fast
     return decode
-
-
-# --------------------------------------------------------------------------- MCAP chunks
-_RECORD_HEAD = struct.Struct("<BQ")  # opcode, length (MCAP spec, "Records")
-_MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel_id, sequence, log_time, publish_time
-_OP_MESSAGE = 0x05
-
-
-def chunk_messages(chunk, wanted: "set[int] | dict", known: "set[int] | dict") -> list:
-    """The Message records of an MCAP ``chunk`` on channels in ``wanted``, and those on
-    channels not in ``known`` (the caller reports them), as ``mcap.records.Message``; other
-    records are skipped without being parsed (MCAP spec, "Chunk" and "Message").
-
-    The chunk is decompressed (zstd, lz4 or none) and its ``uncompressed_crc`` checked as
-    ``mcap.stream_reader.breakup_chunk(validate_crc=True)`` does.
-
-    Raises:
-        CRCValidationError: the uncompressed bytes do not match the chunk's CRC.
-        ValueError: an unknown compression, or a record that runs past the chunk's end.
-    """
-    import zlib
-
-    from mcap.records import Message as McapMessage
-    from mcap.stream_reader import CRCValidationError
-
-    if chunk.compression == "zstd":
-        import zstandard
-        data = zstandard.decompress(chunk.data, chunk.uncompressed_size)
-    elif chunk.compression == "lz4":
-        import lz4.frame
-        data = lz4.frame.decompress(chunk.data)
-    elif chunk.compression == "":
-        data = bytes(chunk.data)
-    else:
-        raise ValueError(f"unknown chunk compression {chunk.compression!r}")
-    if chunk.uncompressed_crc != 0:
-        crc = zlib.crc32(data)
-        if crc != chunk.uncompressed_crc:
-            raise CRCValidationError(expected=chunk.uncompressed_crc, actual=crc, record=chunk)
-    out = []
-    head = _RECORD_HEAD.unpack_from
-    mhead = _MESSAGE_HEAD.unpack_from
-    pos = 0
-    end = len(data)
-    while pos < end:
-        opcode, length = head(data, pos)
-        body = pos + 9
-        pos = body + length
-        if pos > end:
-            raise ValueError(f"record at byte {body - 9} of the chunk runs past its end")
-        if opcode != _OP_MESSAGE:
-            continue
-        cid, seq, log_time, publish_time = mhead(data, body)
-        if cid in wanted or cid not in known:
-            # positional, in the dataclass's field order (keywords cost more)
-            out.append(McapMessage(cid, log_time, data[body + 22:pos], publish_time, seq))
-    return out

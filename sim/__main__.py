@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import click
 
+from .logs import REQUIREMENTS, counts, expected_verdicts, read_log
+from .run import record as do_record
 from .scenarios import SCENARIOS
+from .serve import serve as do_serve
 
 
 @click.group()
@@ -38,8 +42,6 @@ def list_scenarios():
               show_default=True, help="MCAP chunk compression.")
 def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression):
     """Record one scenario to an MCAP file."""
-    from .run import record as do_record
-
     t0 = time.perf_counter()
     res = do_record(scenario, seed=seed, output=output, ros1=ros1, png=png,
                     threshold=threshold, stop_delay=stop_delay, compression=compression)
@@ -64,8 +66,6 @@ def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression
               help="Start the run once a client subscribed.")
 def serve(scenario, seed, rate, host, port, ros1, wait):
     """Run one scenario live over the Foxglove WebSocket protocol (foxglove-sdk)."""
-    from .serve import serve as do_serve
-
     def ready(server):
         click.echo(f"serving {scenario} on {server.url} at {rate:g}x"
                    + ("; waiting for a client to subscribe" if wait else ""), err=True)
@@ -84,10 +84,6 @@ def serve(scenario, seed, rate, host, port, ros1, wait):
 @click.option("--markdown", is_flag=True, help="Print Markdown tables.")
 def verdicts(files, threshold, markdown):
     """Evaluate R1-R6 on recorded runs with the reference evaluator (sim.logs)."""
-    from pathlib import Path
-
-    from .logs import REQUIREMENTS, counts, expected_verdicts, read_log
-
     rows = []
     for f in files:
         log = read_log(f)

@@ -32,7 +32,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Tuple, Union
 
 import numpy as np
 from mcap.reader import make_reader
@@ -57,10 +56,10 @@ class RecordedLog:
     and the raw log times in file order (``order``: list of ``(topic, log_time_ns)``)."""
 
     profile: str
-    messages: Dict[str, List[Tuple[int, int, object]]]
-    schemas: Dict[str, str]
-    encodings: Dict[str, Tuple[str, str]]
-    order: List[Tuple[str, int]]
+    messages: dict[str, list[tuple[int, int, object]]]
+    schemas: dict[str, str]
+    encodings: dict[str, tuple[str, str]]
+    order: list[tuple[str, int]]
 
     def times(self, topic: str) -> np.ndarray:
         """Log times (s since the epoch, float64) of ``topic``."""
@@ -77,7 +76,7 @@ class RecordedLog:
         return max(t for _, t in self.order)
 
 
-def read_log(path: Union[str, Path]) -> RecordedLog:
+def read_log(path: str | Path) -> RecordedLog:
     """Decode every message of the MCAP file at ``path``.
 
     Raises ``ValueError`` for a profile other than ``ros1``/``ros2`` or an unknown schema
@@ -90,9 +89,9 @@ def read_log(path: Union[str, Path]) -> RecordedLog:
             raise ValueError(f"unsupported MCAP profile {profile!r}")
         ts = get_typestore(Stores.EMPTY)
         registered = {}
-        messages: Dict[str, list] = {}
-        schemas: Dict[str, str] = {}
-        encodings: Dict[str, Tuple[str, str]] = {}
+        messages: dict[str, list] = {}
+        schemas: dict[str, str] = {}
+        encodings: dict[str, tuple[str, str]] = {}
         order = []
         for schema, channel, message in reader.iter_messages(log_time_order=False):
             if schema.id not in registered:
@@ -140,7 +139,7 @@ def _hold(times_ns: np.ndarray, values: np.ndarray, ticks_ns: np.ndarray, defaul
 
 
 def signals(log: RecordedLog, threshold: float = 0.9, tick_s: float = 0.1,
-            stale_s: float = 0.3) -> Dict[str, np.ndarray]:
+            stale_s: float = 0.3) -> dict[str, np.ndarray]:
     """The requirement variables sampled at every tick (see module docstring): arrays of
     equal length keyed ``t`` (s from the first message), ``too_close``, ``stopped``,
     ``stop_requested``, ``forwarded_zero``, ``linear_speed``, ``angular_speed``,
@@ -213,7 +212,7 @@ def _whenever_within(trig, resp, n, t):
                    triggers=int(trig.sum()))
 
 
-def expected_verdicts(log: RecordedLog, threshold: float = 0.9) -> Dict[str, Verdict]:
+def expected_verdicts(log: RecordedLog, threshold: float = 0.9) -> dict[str, Verdict]:
     """R1-R6 on ``log`` under the reference conventions of the module docstring."""
     s = signals(log, threshold)
     t = s["t"]
@@ -231,7 +230,7 @@ def expected_verdicts(log: RecordedLog, threshold: float = 0.9) -> Dict[str, Ver
     }
 
 
-def counts(path: Union[str, Path]) -> Dict[str, int]:
+def counts(path: str | Path) -> dict[str, int]:
     """Messages per topic from the MCAP summary (statistics record)."""
     with open(path, "rb") as fh:
         summ = make_reader(fh).get_summary()

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence, Tuple
+from typing import Sequence
 
 import numpy as np
 from scipy import ndimage
@@ -48,7 +48,7 @@ class NavigationFunction:
     ``dist`` (float, one per traversable cell) and ``pred`` (next cell towards the goal, -1 at
     the goal or where unreachable)."""
 
-    def __init__(self, planner: "GlobalPlanner", goal: Tuple[float, float],
+    def __init__(self, planner: "GlobalPlanner", goal: tuple[float, float],
                  dist: np.ndarray, pred: np.ndarray):
         self.planner = planner
         self.goal = goal
@@ -134,7 +134,7 @@ class GlobalPlanner:
             return -1
         return int(self.ids[r, c])
 
-    def node_xy(self, node: int) -> Tuple[float, float]:
+    def node_xy(self, node: int) -> tuple[float, float]:
         """Centre (x, y) in m of a node's cell."""
         x, y = self.omap.cell_centers(self.rows[node], self.cols[node])
         return float(x), float(y)
@@ -156,7 +156,7 @@ class GlobalPlanner:
                             best, best_d = node, dd
         return best
 
-    def plan(self, goal: Tuple[float, float]) -> NavigationFunction:
+    def plan(self, goal: tuple[float, float]) -> NavigationFunction:
         """Dijkstra from ``goal`` (x, y in m) over the whole grid.
 
         Raises ``ValueError`` if the goal is not on a traversable cell (outside the map, in an
@@ -199,7 +199,7 @@ class LocalController:
 
     def __init__(self, params: ControllerParams = ControllerParams()):
         self.p = params
-        self.nav: Optional[NavigationFunction] = None
+        self.nav: NavigationFunction | None = None
         self.best_cost = math.inf
         self.best_time = 0.0
 
@@ -219,7 +219,7 @@ class LocalController:
         return t - self.best_time > self.p.stuck_timeout
 
     def compute(self, x: float, y: float, yaw: float, v_odom: float, w_odom: float,
-                min_range: float, t: float) -> Tuple[float, float]:
+                min_range: float, t: float) -> tuple[float, float]:
         """The command ``(v, w)`` (m/s, rad/s) for the estimated pose ``(x, y, yaw)`` (``map``),
         the odometry twist and the nearest valid scan range ``min_range`` m, at sim time ``t``.
         Returns ``(0, 0)`` if there is no path."""
@@ -265,7 +265,7 @@ class LocalController:
 
 
 #: The inspection points of the paper's mission (Safe-ROS ``simple_navigation_goals.cpp``).
-INSPECTION_POINTS: Tuple[Tuple[float, float], ...] = ((0.0, 0.0), (2.30, -1.11), (2.61, 2.42))
+INSPECTION_POINTS: tuple[tuple[float, float], ...] = ((0.0, 0.0), (2.30, -1.11), (2.61, 2.42))
 
 
 @dataclass
@@ -273,22 +273,22 @@ class Mission:
     """The route: ``points`` in order, then ``home``; ``dwell`` s of inspection at each point.
     ``index`` is the current goal (``len(points)`` is home); ``done``/``aborted`` end it."""
 
-    points: Sequence[Tuple[float, float]]
-    home: Tuple[float, float]
+    points: Sequence[tuple[float, float]]
+    home: tuple[float, float]
     dwell: float = 1.0
     index: int = 0
     done: bool = False
     aborted: bool = False
     abort_reason: str = ""
     #: (goal index, t s, x m, y m) of each arrival, ground truth
-    reached: List[Tuple[int, float, float, float]] = field(default_factory=list)
+    reached: list[tuple[int, float, float, float]] = field(default_factory=list)
 
     @property
-    def goals(self) -> List[Tuple[float, float]]:
+    def goals(self) -> list[tuple[float, float]]:
         """All goals in order, home last."""
         return list(self.points) + [tuple(self.home)]
 
     @property
-    def current(self) -> Tuple[float, float]:
+    def current(self) -> tuple[float, float]:
         """The current goal (x, y) in m."""
         return self.goals[self.index]

@@ -4,7 +4,6 @@ where the SIF fired, and the time series the requirements talk about."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Union
 
 import matplotlib
 
@@ -92,17 +91,35 @@ def _draw_zoom(ax, res: RunResult, img, stop_idx, release_idx):
     ax.indicate_inset_zoom(axins, edgecolor="0.3")
 
 
-def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
+def draw_run(res: RunResult, path: str | Path, dpi: int = 110) -> None:
     """Write a PNG of run ``res`` to ``path``: left, the room (zoomed on the route) with the
     ground-truth trajectory coloured by time, footprints at SIF stops, unmapped objects,
     inspection points and home; right, min valid scan range vs the threshold, commanded
     (filtered) and true speed, and ground-truth clearance, with stop requests shaded."""
-    tr, w = res.trace, res.world
-    m = w.omap
     fig = plt.figure(figsize=(14, 7.2), dpi=dpi)
     gs = fig.add_gridspec(3, 2, width_ratios=[1.05, 1.0], hspace=0.32, wspace=0.18,
                           left=0.05, right=0.98, top=0.9, bottom=0.08)
     ax = fig.add_subplot(gs[:, 0])
+    img = _draw_map(ax, res.world.omap)
+    _draw_objects(ax, res)
+    _draw_trajectory(fig, ax, res)
+    _draw_goals(ax, res)
+    _draw_sif(ax, res, img)
+    _draw_time_series(fig, gs, res)
+    reached = ", ".join(f"{'P' + str(g + 1) if g < len(res.goals) - 1 else 'home'}@{tt:.1f}s"
+                        for g, tt, _, _ in res.reached)
+    clr = ("<= 0 (contact)" if res.min_clearance <= 0 else f"{res.min_clearance:.2f} m")
+    fig.suptitle(f"fretc sim — scenario {res.scenario.name} (seed {res.seed}, threshold "
+                 f"{res.threshold:g} m): {res.outcome} after {res.duration:.1f} s; reached "
+                 f"{reached or 'nothing'}; min clearance {clr}\n{res.scenario.description}",
+                 fontsize=10.5)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+
+
+def _draw_map(ax, m):
+    """The occupancy map (free white, unknown grey, occupied black), zoomed on the route;
+    returns the image drawn."""
     img = np.full(m.grid.shape, 1.0)
     img[m.grid == UNKNOWN] = 0.72
     img[m.grid == OCCUPIED] = 0.0
@@ -114,7 +131,12 @@ def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
     ax.set_xlabel("x [m] (map)")
     ax.set_ylabel("y [m] (map)")
     ax.grid(alpha=0.25)
-    # moved (ghost) objects, unmapped drums, moving objects
+    return img
+
+
+def _draw_objects(ax, res: RunResult) -> None:
+    """Moved (ghost) objects, unmapped drums, moving objects."""
+    tr, w = res.trace, res.world
     for r in res.scenario.removed:
         ax.add_patch(Circle((r.x, r.y), r.radius, fill=False, ls="--", ec="tab:orange", lw=1.2))
         ax.annotate(f"mapped place of\n{r.label.split(' (')[0]}, now empty", (r.x, r.y),
@@ -143,7 +165,11 @@ def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
                         textcoords="offset points", fontsize=6.5)
         ax.annotate(f"{mv.label} ({mv.speed} m/s, from t={mv.t_start:g} s)", pts[0],
                     xytext=(6, 4), textcoords="offset points", fontsize=8, color="tab:purple")
-    # trajectory; underneath, where stop was requested and where scans were missing
+
+def _draw_trajectory(fig, ax, res: RunResult) -> None:
+    """The trajectory coloured by time; underneath, where stop was requested and where
+    scans were missing; where the SIF decided a delayed stop."""
+    tr = res.trace
     t = np.asarray(tr.t)
     xs, ys = np.asarray(tr.x), np.asarray(tr.y)
     ctl_t = np.array([c[0] for c in tr.control])
@@ -173,7 +199,9 @@ def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
                         zorder=9, label=(f"SIF decided stop (published {sc_.stop_delay:g} s "
                                          "later)") if first else None)
                 first = False
-    # goals
+
+def _draw_goals(ax, res: RunResult) -> None:
+    """The inspection points and home."""
     for i, (gx, gy) in enumerate(res.goals[:-1]):
         ax.plot(gx, gy, marker="*", ms=15, color="gold", mec="k", zorder=6)
         ax.annotate(f"P{i + 1}", (gx, gy), xytext=(8, 6), textcoords="offset points",
@@ -182,7 +210,12 @@ def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
     hx, hy = res.goals[-1]
     ax.plot(hx, hy, marker="s", ms=10, color="tab:cyan", mec="k", zorder=6)
     ax.annotate("home", (hx, hy), xytext=(7, -14), textcoords="offset points", fontsize=10)
-    # where the SIF fired (stop published) and was released
+
+def _draw_sif(ax, res: RunResult, img) -> None:
+    """Where the SIF fired (stop published) and was released, the contact, the footprint
+    at the end, the legend and the zoom on the stops."""
+    tr = res.trace
+    t = np.asarray(tr.t)
     hl, hw = 0.21, 0.165
     first = True
     for (tc, stop) in tr.control:
@@ -217,7 +250,11 @@ def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
                    if not st]
     _draw_zoom(ax, res, img, stop_idx, release_idx)
 
-    # time series
+
+def _draw_time_series(fig, gs, res: RunResult) -> None:
+    """Right: min valid scan range vs the threshold, commanded and true speed, clearance,
+    with the stop requests shaded."""
+    tr = res.trace
     stops = [(tc, s) for tc, s in tr.control]
     ctl_t = [c[0] for c in stops] + [tr.t[-1]]
     ctl_v = [c[1] for c in stops] + [stops[-1][1] if stops else False]
@@ -261,12 +298,3 @@ def draw_run(res: RunResult, path: Union[str, Path], dpi: int = 110) -> None:
     for a in (a1, a2):
         plt.setp(a.get_xticklabels(), visible=False)
     a1.set_xlim(0, tr.t[-1])
-    reached = ", ".join(f"{'P' + str(g + 1) if g < len(res.goals) - 1 else 'home'}@{tt:.1f}s"
-                        for g, tt, _, _ in res.reached)
-    clr = ("<= 0 (contact)" if res.min_clearance <= 0 else f"{res.min_clearance:.2f} m")
-    fig.suptitle(f"fretc sim — scenario {res.scenario.name} (seed {res.seed}, threshold "
-                 f"{res.threshold:g} m): {res.outcome} after {res.duration:.1f} s; reached "
-                 f"{reached or 'nothing'}; min clearance {clr}\n{res.scenario.description}",
-                 fontsize=10.5)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)

@@ -25,14 +25,14 @@ byte-identical files.
 from __future__ import annotations
 
 import math
-from typing import BinaryIO, Dict, Iterable, Sequence, Tuple
+from typing import BinaryIO, Iterable, Sequence
 
 import numpy as np
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 #: Topics recorded, with their message types (ROS 2 names), in channel order.
-TOPICS: Tuple[Tuple[str, str], ...] = (
+TOPICS: tuple[tuple[str, str], ...] = (
     ("/map", "nav_msgs/msg/OccupancyGrid"),
     ("/tf", "tf2_msgs/msg/TFMessage"),
     ("/odom", "nav_msgs/msg/Odometry"),
@@ -66,7 +66,7 @@ def make_typestore(ros1: bool):
     return ts
 
 
-def yaw_to_quaternion(yaw: float) -> Tuple[float, float, float, float]:
+def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
     """Quaternion ``(x, y, z, w)`` of a rotation by ``yaw`` rad about z (REP 103)."""
     return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
 
@@ -81,7 +81,7 @@ class MessageFactory:
         self.ros1 = ros1
         self.ts = make_typestore(ros1)
         self.T = self.ts.types
-        self._seq: Dict[str, int] = {}
+        self._seq: dict[str, int] = {}
 
     # ---------------------------------------------------------------- primitives
     def time(self, stamp_ns: int):
@@ -200,7 +200,7 @@ class McapRecorder:
     """
 
     def __init__(self, stream: BinaryIO, ros1: bool = False, compression: str = "zstd",
-                 topics: Iterable[Tuple[str, str]] = TOPICS, chunk_size: int = 1 << 20):
+                 topics: Iterable[tuple[str, str]] = TOPICS, chunk_size: int = 1 << 20):
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
                 "none": CompressionType.NONE}.get(compression)
         if comp is None:
@@ -209,11 +209,11 @@ class McapRecorder:
         self.factory = MessageFactory(ros1)
         self.writer = Writer(stream, chunk_size=chunk_size, compression=comp)
         self.writer.start(profile="ros1" if ros1 else "ros2", library="fretc-sim")
-        self.channels: Dict[str, Tuple[int, str]] = {}
-        self.counts: Dict[str, int] = {}
+        self.channels: dict[str, tuple[int, str]] = {}
+        self.counts: dict[str, int] = {}
         self.last_time = -1
         ts = self.factory.ts
-        schemas: Dict[str, int] = {}
+        schemas: dict[str, int] = {}
         for topic, typename in topics:
             if typename not in schemas:
                 text, md5 = ts.generate_msgdef(typename, ros_version=1 if ros1 else 2)

@@ -4,16 +4,15 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
-from typing import Optional, Union
 
 from .recording import McapRecorder
 from .scenarios import get_scenario
 from .simulation import RunResult, Simulation
 
 
-def record(scenario: str, seed: int = 1, output: Union[str, Path, io.BufferedIOBase, None] = None,
-           ros1: bool = False, png: Union[str, Path, None] = None, threshold: float = 0.9,
-           stop_delay: Optional[float] = None, compression: str = "zstd") -> RunResult:
+def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase | None = None,
+           ros1: bool = False, png: str | Path | None = None, threshold: float = 0.9,
+           stop_delay: float | None = None, compression: str = "zstd") -> RunResult:
     """Simulate ``scenario`` with ``seed`` and write the run to ``output`` (a path or a binary
     stream; ``None`` discards it), as ROS 2 (CDR) or, with ``ros1``, ROS 1 messages; draw it to
     ``png`` if given. ``threshold`` m is the SIF threshold, ``stop_delay`` s overrides the
@@ -39,6 +38,6 @@ def record(scenario: str, seed: int = 1, output: Union[str, Path, io.BufferedIOB
         if close:
             stream.close()
     if png is not None:
-        from .plot import draw_run
+        from .plot import draw_run  # lazy: matplotlib takes ~1 s to import, only for --png
         draw_run(result, png)
     return result

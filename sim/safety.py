@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import List, Optional, Tuple
 
 ARMED, STOPPED, MONITORED = "ARMED", "STOPPED", "MONITORED"
 
@@ -90,8 +89,8 @@ class SafetyAgent:
         self.state = ARMED
         self.release_range = math.inf
         self.was_clear = False
-        self.rest_since: Optional[float] = None
-        self.events: List[SifEvent] = []
+        self.rest_since: float | None = None
+        self.events: list[SifEvent] = []
 
     @property
     def stop_requested(self) -> bool:
@@ -99,7 +98,7 @@ class SafetyAgent:
         return self.state == STOPPED
 
     def on_scan(self, t: float, min_range: float, v_odom: float, w_odom: float,
-                ) -> Optional[bool]:
+                ) -> bool | None:
         """Process one scan at sim time ``t`` s with its minimum valid range (m) and the
         latest odometry twist; returns the Bool to publish, or ``None``."""
         p = self.p
@@ -153,7 +152,7 @@ class CmdVelInterceptor:
         self.faulty = faulty
         self.stop_requested = False
 
-    def on_control(self, stop: bool) -> Optional[Tuple[float, float]]:
+    def on_control(self, stop: bool) -> tuple[float, float] | None:
         """A ``/gwendolen_control`` message arrived; returns the Twist ``(v, w)`` to publish
         on ``/cmd_vel_filtered`` at once (a zero Twist on a stop request), or ``None``."""
         self.stop_requested = bool(stop)
@@ -161,7 +160,7 @@ class CmdVelInterceptor:
             return (0.0, 0.0)
         return None
 
-    def on_cmd_vel(self, v: float, w: float) -> Tuple[float, float]:
+    def on_cmd_vel(self, v: float, w: float) -> tuple[float, float]:
         """A ``/cmd_vel`` arrived; returns the Twist to forward on ``/cmd_vel_filtered``."""
         if self.stop_requested and not self.faulty:
             return (0.0, 0.0)

@@ -30,7 +30,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Dict, Optional, Tuple
 
 from .world import Barrel, MovingObstacle, RemovedObject
 
@@ -58,18 +57,18 @@ class Scenario:
 
     name: str
     description: str
-    barrels: Tuple[Barrel, ...] = ()
-    movers: Tuple[MovingObstacle, ...] = ()
-    removed: Tuple[RemovedObject, ...] = ()
+    barrels: tuple[Barrel, ...] = ()
+    movers: tuple[MovingObstacle, ...] = ()
+    removed: tuple[RemovedObject, ...] = ()
     sif_enabled: bool = True
     interceptor_faulty: bool = False
     stop_delay: float = 0.0
-    dropout_start: Optional[float] = None
+    dropout_start: float | None = None
     dropout_duration: float = 0.0
-    home: Tuple[float, float, float] = (-1.2, -0.8, 0.0)
+    home: tuple[float, float, float] = (-1.2, -0.8, 0.0)
 
 
-SCENARIOS: Dict[str, Scenario] = {s.name: s for s in (
+SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
     Scenario("nominal", "The inspection mission in the mapped reactor room."),
     Scenario("unmapped_obstacles",
              "Drum A moved from its mapped place onto the route between points 1 and 2; "
@@ -95,7 +94,7 @@ SCENARIOS: Dict[str, Scenario] = {s.name: s for s in (
 )}
 
 
-def get_scenario(name: str, stop_delay: Optional[float] = None) -> Scenario:
+def get_scenario(name: str, stop_delay: float | None = None) -> Scenario:
     """The scenario called ``name``; ``stop_delay`` (s) overrides the delay of
     ``stop_delay``-type injections (it applies to the ``stop_delay`` scenario only).
 

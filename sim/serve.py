@@ -12,9 +12,14 @@ scenario and seed carry the same messages at the same log times.
 from __future__ import annotations
 
 import threading
-from typing import Dict, Iterable, Optional, Tuple
+import time
+from typing import Iterable
+
+from monitors.watch_serve import FoxgloveServer, Pacer
 
 from .recording import TOPICS, MessageFactory, schema_name
+from .scenarios import get_scenario
+from .simulation import Simulation
 
 __all__ = ["ServeRecorder", "serve"]
 
@@ -29,17 +34,15 @@ class ServeRecorder:
     """
 
     def __init__(self, server, rate: float = 1.0, ros1: bool = False,
-                 topics: Iterable[Tuple[str, str]] = TOPICS,
-                 stop: Optional[threading.Event] = None) -> None:
-        from monitors.watch_serve import Pacer
-
+                 topics: Iterable[tuple[str, str]] = TOPICS,
+                 stop: threading.Event | None = None) -> None:
         self.server = server
         self.ros1 = ros1
         self.factory = MessageFactory(ros1)
         self.pacer = Pacer(rate)
         self.stop = stop
-        self.counts: Dict[str, int] = {}
-        self.types: Dict[str, str] = {}
+        self.counts: dict[str, int] = {}
+        self.types: dict[str, str] = {}
         self.last_time = -1
         ts = self.factory.ts
         for topic, typename in topics:
@@ -69,7 +72,7 @@ class ServeRecorder:
 
 def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0.0.1",
           port: int = 8765, ros1: bool = False, threshold: float = 0.9,
-          stop_delay: Optional[float] = None, wait: bool = True, server=None,
+          stop_delay: float | None = None, wait: bool = True, server=None,
           on_ready=None):
     """Simulate ``scenario`` live on a foxglove-sdk server (a new one on ``host:port``
     unless ``server`` is given); with ``wait``, start once a client subscribed. Returns the
@@ -77,11 +80,6 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
 
     Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
     """
-    from monitors.watch_serve import FoxgloveServer
-
-    from .scenarios import get_scenario
-    from .simulation import Simulation
-
     own = server is None
     if own:
         server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}")
@@ -95,6 +93,5 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
         return sim.run(rec)
     finally:
         if own:
-            import time
             time.sleep(0.5)  # let the last messages leave
             server.stop()

@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -66,18 +65,18 @@ class SimParams:
 class Trace:
     """What happened, sampled by the simulator for plots and summaries (not the log)."""
 
-    t: List[float] = field(default_factory=list)            # s, 20 Hz
-    x: List[float] = field(default_factory=list)            # m, ground truth
-    y: List[float] = field(default_factory=list)
-    yaw: List[float] = field(default_factory=list)
-    v: List[float] = field(default_factory=list)            # m/s, ground truth
-    clearance: List[float] = field(default_factory=list)    # m
-    scan_t: List[float] = field(default_factory=list)       # s, 10 Hz
-    scan_min: List[float] = field(default_factory=list)     # m, min valid range
-    control: List[Tuple[float, bool]] = field(default_factory=list)  # published Bools
-    cmd_t: List[float] = field(default_factory=list)
-    cmd_v: List[float] = field(default_factory=list)        # /cmd_vel_filtered linear.x
-    cmd_w: List[float] = field(default_factory=list)
+    t: list[float] = field(default_factory=list)            # s, 20 Hz
+    x: list[float] = field(default_factory=list)            # m, ground truth
+    y: list[float] = field(default_factory=list)
+    yaw: list[float] = field(default_factory=list)
+    v: list[float] = field(default_factory=list)            # m/s, ground truth
+    clearance: list[float] = field(default_factory=list)    # m
+    scan_t: list[float] = field(default_factory=list)       # s, 10 Hz
+    scan_min: list[float] = field(default_factory=list)     # m, min valid range
+    control: list[tuple[float, bool]] = field(default_factory=list)  # published Bools
+    cmd_t: list[float] = field(default_factory=list)
+    cmd_v: list[float] = field(default_factory=list)        # /cmd_vel_filtered linear.x
+    cmd_w: list[float] = field(default_factory=list)
 
 
 @dataclass
@@ -88,15 +87,42 @@ class RunResult:
     seed: int
     threshold: float
     duration: float                      # s of sim time (first to last message)
-    counts: Dict[str, int]               # messages per topic
+    counts: dict[str, int]               # messages per topic
     outcome: str                         # "completed", "aborted: ...", "contact"
-    reached: List[Tuple[int, float, float, float]]  # (goal index, t s, x m, y m) ground truth
+    reached: list[tuple[int, float, float, float]]  # (goal index, t s, x m, y m) ground truth
     min_clearance: float
-    contact: Optional[Tuple[float, float, float]]   # (t, x, y)
+    contact: tuple[float, float, float] | None   # (t, x, y)
     sif_events: list
     trace: Trace
     world: World
-    goals: List[Tuple[float, float]]
+    goals: list[tuple[float, float]]
+
+
+def _ns(t_ms: int) -> int:
+    """Log time (ns) of sim time ``t_ms`` (ms)."""
+    return EPOCH_NS + t_ms * 1_000_000
+
+
+@dataclass
+class _RunState:
+    """What one run carries from step to step: the trace, the SIF decisions waiting for
+    their delay (``pending``: (due ms, stop)), the last min valid scan range, the contact,
+    the run's end and outcome, the mission's dwell and goal state, the least clearance."""
+
+    trace: Trace
+    delay_ms: int
+    max_ms: int
+    start_ms: int = 0
+    drop: tuple[int, int] | None = None
+    pending: deque = field(default_factory=deque)
+    last_min: float = math.inf
+    contact: tuple[float, float, float] | None = None
+    blocked: bool = False
+    end_ms: int | None = None
+    outcome: str = ""
+    dwell_until: int | None = None
+    goal_active: bool = False
+    min_clear: float = math.inf
 
 
 class Simulation:
@@ -108,12 +134,12 @@ class Simulation:
     Raises ``ValueError`` for a non-positive threshold."""
 
     def __init__(self, scenario: Scenario, seed: int = 1, threshold: float = 0.9,
-                 omap: Optional[OccupancyMap] = None, sim: SimParams = SimParams(),
+                 omap: OccupancyMap | None = None, sim: SimParams = SimParams(),
                  robot: ScoutMiniParams = ScoutMiniParams(), lidar: LidarParams = LidarParams(),
                  odom_noise: OdometryNoise = OdometryNoise(),
                  planner: PlannerParams = PlannerParams(),
-                 controller: Optional[ControllerParams] = None,
-                 safety: Optional[SafetyParams] = None):
+                 controller: ControllerParams | None = None,
+                 safety: SafetyParams | None = None):
         if not threshold > 0:
             raise ValueError("threshold must be > 0")
         self.scenario = scenario
@@ -160,174 +186,178 @@ class Simulation:
     # ------------------------------------------------------------------ run
     def run(self, rec: McapRecorder) -> RunResult:
         """Simulate until the run ends, writing every message to ``rec`` (not finished here)."""
-        f = rec.factory
-        sc, sim, base, lid = self.scenario, self.sim, self.base, self.lidar.p
-        trace = Trace()
-        half_l, half_w = base.p.half_length, base.p.half_width
-        ns = lambda t_ms: EPOCH_NS + t_ms * 1_000_000  # noqa: E731
-
-        def publish_control(t_ms, stop):
-            rec.write("/gwendolen_control", ns(t_ms), f.bool(stop))
-            trace.control.append((t_ms / 1000.0, bool(stop)))
-            out = self.interceptor.on_control(stop)
-            if out is not None:
-                publish_filtered(t_ms, *out)
-
-        def publish_filtered(t_ms, v, w):
-            self.cmd_filtered = (v, w)
-            rec.write("/cmd_vel_filtered", ns(t_ms), f.twist(v, w))
-            trace.cmd_t.append(t_ms / 1000.0)
-            trace.cmd_v.append(v)
-            trace.cmd_w.append(w)
-
-        def publish_cmd(t_ms, v, w):
-            rec.write("/cmd_vel", ns(t_ms), f.twist(v, w))
-            publish_filtered(t_ms, *self.interceptor.on_cmd_vel(v, w))
-
+        sim = self.sim
+        st = _RunState(trace=Trace(), delay_ms=int(round(self.safety.p.delay * 1000)),
+                       max_ms=int(round(sim.max_time * 1000)))
         self.cmd_filtered = (0.0, 0.0)
         self.map_odom = self._loc_estimate()
-        pending = deque()
-        delay_ms = int(round(self.safety.p.delay * 1000))
-        last_min = math.inf
-        contact = None
-        blocked = False
-        end_ms: Optional[int] = None
-        outcome = ""
-        dwell_until: Optional[int] = None
-        goal_active = False
-        start_ms = int(round(sim.mission_start * 1000))
-        start_ms += (50 - start_ms % 100) % 100  # first SRAS tick at or after mission_start
-        drop = None
+        st.start_ms = int(round(sim.mission_start * 1000))
+        st.start_ms += (50 - st.start_ms % 100) % 100  # first SRAS tick at or after mission_start
+        sc = self.scenario
         if sc.dropout_start is not None:
-            drop = (int(round(sc.dropout_start * 1000)),
-                    int(round((sc.dropout_start + sc.dropout_duration) * 1000)))
-        max_ms = int(round(sim.max_time * 1000))
-        min_clear = math.inf
-        m = self.omap
-
+            st.drop = (int(round(sc.dropout_start * 1000)),
+                       int(round((sc.dropout_start + sc.dropout_duration) * 1000)))
         # start-up: the map (latched) and the agent's initial decision
-        rec.write("/map", ns(0), f.occupancy_grid(ns(0), m.resolution, m.width, m.height,
-                                                  m.origin_x, m.origin_y, m.grid))
-        publish_control(0, False)
-
+        f, m = rec.factory, self.omap
+        rec.write("/map", _ns(0), f.occupancy_grid(_ns(0), m.resolution, m.width, m.height,
+                                                   m.origin_x, m.origin_y, m.grid))
+        self._publish_control(rec, st, 0, False)
         t_ms = 0
         while True:
             t = t_ms / 1000.0
-            s = base.state
-            # 1. physics
-            if t_ms > 0:
-                if not blocked:
-                    base.step(*self.cmd_filtered, STEP_MS / 1000.0)
-                self.odom.update(s.v, s.w, STEP_MS / 1000.0)
-                if contact is None:
-                    lb = self.world.clearance_lower_bound(s.x, s.y, t, base.p.circumradius)
-                    if lb < 0.02:
-                        c = self.world.clearance(s.x, s.y, s.yaw, t, half_l, half_w)
-                        if c <= 0.0:
-                            contact = (t, s.x, s.y)
-                            blocked = True
-                            base.halt()
-                            outcome = "contact"
-                            end_ms = t_ms + int(round(sim.contact_linger * 1000))
-                            end_ms += (100 - end_ms % 100) % 100
+            s = self.base.state
+            if t_ms > 0:  # 1. physics
+                self._physics(st, t_ms, t, s)
             # 2. delayed decisions
-            while pending and pending[0][0] <= t_ms:
-                publish_control(t_ms, pending.popleft()[1])
-            # 3. 20 Hz: odometry, tf, ground truth
-            if t_ms % 50 == 0 or (contact is not None and contact[0] == t):
-                o = self.odom
-                if t_ms % 50 == 0:
-                    rec.write("/odom", ns(t_ms), f.odometry(
-                        ns(t_ms), o.x, o.y, o.yaw, o.v, o.w, _POSE_COV, _TWIST_COV))
-                    rec.write("/tf", ns(t_ms), f.tf([f.transform(
-                        ns(t_ms), "odom", "base_link", o.x, o.y, o.yaw)]))
-                clr = self.world.clearance(s.x, s.y, s.yaw, t, half_l, half_w)
-                min_clear = min(min_clear, clr)
-                rec.write("/ground_truth/pose", ns(t_ms),
-                          f.pose_stamped(ns(t_ms), "map", s.x, s.y, s.yaw, "/ground_truth/pose"))
-                rec.write("/ground_truth/clearance", ns(t_ms), f.float64(clr))
-                trace.t.append(t)
-                trace.x.append(s.x)
-                trace.y.append(s.y)
-                trace.yaw.append(s.yaw)
-                trace.v.append(s.v)
-                trace.clearance.append(clr)
-            # 4. 10 Hz: scan, localization, SIF
-            if t_ms % 100 == 0 and not (drop and drop[0] <= t_ms < drop[1]):
-                ranges = self.lidar.scan(self.world, s.x, s.y, s.yaw, t)
-                rec.write("/scan", ns(t_ms), f.laser_scan(
-                    ns(t_ms), "base_link", lid.angle_min, lid.angle_max, lid.angle_increment,
-                    lid.scan_time, lid.range_min, lid.range_max, ranges))
-                self.map_odom = self._loc_estimate()
-                rec.write("/tf", ns(t_ms), f.tf([f.transform(ns(t_ms), "map", "odom",
-                                                            *self.map_odom)]))
-                last_min = min_valid_range(ranges, lid.range_min, lid.range_max)
-                trace.scan_t.append(t)
-                trace.scan_min.append(last_min)
-                decision = self.safety.on_scan(t, last_min, self.odom.v, self.odom.w)
-                if decision is not None:
-                    if delay_ms > 0:
-                        pending.append((t_ms + delay_ms, decision))
-                    else:
-                        publish_control(t_ms, decision)
-            # 5. 10 Hz, 50 ms after the scan: the SRAS
+            while st.pending and st.pending[0][0] <= t_ms:
+                self._publish_control(rec, st, t_ms, st.pending.popleft()[1])
+            if t_ms % 50 == 0 or (st.contact is not None and st.contact[0] == t):
+                self._sample_20hz(rec, st, t_ms, t, s)
+            if t_ms % 100 == 0 and not (st.drop and st.drop[0] <= t_ms < st.drop[1]):
+                self._scan_10hz(rec, st, t_ms, t, s)
             if t_ms % 100 == 50:
-                v = w = 0.0
-                mis = self.mission
-                if end_ms is None and t_ms >= start_ms:
-                    if not goal_active and dwell_until is None and not mis.done:
-                        goal_active = self._send_goal(rec, t_ms)
-                    elif goal_active:
-                        ex, ey, eyaw = self._pose_estimate()
-                        if self.controller.goal_reached(ex, ey):
-                            mis.reached.append((mis.index, t, s.x, s.y))
-                            goal_active = False
-                            dwell_until = t_ms + int(round(mis.dwell * 1000))
-                        elif self.controller.stuck(t) or t_ms >= max_ms:
-                            mis.aborted = True
-                            mis.abort_reason = ("no progress" if t_ms < max_ms
-                                                else "time limit")
-                            outcome = f"aborted: {mis.abort_reason}"
-                            goal_active = False
-                            end_ms = t_ms + int(round(sim.final_linger * 1000))
-                        else:
-                            v, w = self.controller.compute(ex, ey, eyaw, self.odom.v,
-                                                           self.odom.w, last_min, t)
-                    if dwell_until is not None and t_ms >= dwell_until:
-                        dwell_until = None
-                        if mis.index + 1 >= len(mis.goals):
-                            mis.done = True
-                            outcome = "completed"
-                            end_ms = t_ms + int(round(sim.final_linger * 1000))
-                        else:
-                            mis.index += 1
-                            goal_active = self._send_goal(rec, t_ms)
-                            if goal_active:
-                                ex, ey, eyaw = self._pose_estimate()
-                                v, w = self.controller.compute(ex, ey, eyaw, self.odom.v,
-                                                               self.odom.w, last_min, t)
-                elif end_ms is not None and contact is not None and goal_active:
-                    # after a contact nobody stops the robot: the SRAS keeps commanding
-                    ex, ey, eyaw = self._pose_estimate()
-                    v, w = self.controller.compute(ex, ey, eyaw, self.odom.v, self.odom.w,
-                                                   last_min, t)
-                publish_cmd(t_ms, v, w)
-            if end_ms is not None and t_ms >= end_ms:
+                self._publish_cmd(rec, st, t_ms, *self._sras(rec, st, t_ms, t, s))
+            if st.end_ms is not None and t_ms >= st.end_ms:
                 break
             t_ms += STEP_MS
 
         duration = t_ms / 1000.0
         return RunResult(
             scenario=sc, seed=self.seed, threshold=self.threshold, duration=duration,
-            counts=dict(rec.counts), outcome=outcome, reached=list(self.mission.reached),
-            min_clearance=min_clear, contact=contact, sif_events=list(self.safety.events),
-            trace=trace, world=self.world, goals=self.mission.goals)
+            counts=dict(rec.counts), outcome=st.outcome, reached=list(self.mission.reached),
+            min_clearance=st.min_clear, contact=st.contact, sif_events=list(self.safety.events),
+            trace=st.trace, world=self.world, goals=self.mission.goals)
+
+    def _publish_control(self, rec: McapRecorder, st: _RunState, t_ms: int, stop) -> None:
+        rec.write("/gwendolen_control", _ns(t_ms), rec.factory.bool(stop))
+        st.trace.control.append((t_ms / 1000.0, bool(stop)))
+        out = self.interceptor.on_control(stop)
+        if out is not None:
+            self._publish_filtered(rec, st, t_ms, *out)
+
+    def _publish_filtered(self, rec: McapRecorder, st: _RunState, t_ms: int, v: float,
+                          w: float) -> None:
+        self.cmd_filtered = (v, w)
+        rec.write("/cmd_vel_filtered", _ns(t_ms), rec.factory.twist(v, w))
+        st.trace.cmd_t.append(t_ms / 1000.0)
+        st.trace.cmd_v.append(v)
+        st.trace.cmd_w.append(w)
+
+    def _publish_cmd(self, rec: McapRecorder, st: _RunState, t_ms: int, v: float,
+                     w: float) -> None:
+        rec.write("/cmd_vel", _ns(t_ms), rec.factory.twist(v, w))
+        self._publish_filtered(rec, st, t_ms, *self.interceptor.on_cmd_vel(v, w))
+
+    def _physics(self, st: _RunState, t_ms: int, t: float, s) -> None:
+        """1. The base executes the last ``/cmd_vel_filtered``; the contact check (a contact
+        blocks the base and ends the run ``contact_linger`` s later)."""
+        base = self.base
+        if not st.blocked:
+            base.step(*self.cmd_filtered, STEP_MS / 1000.0)
+        self.odom.update(s.v, s.w, STEP_MS / 1000.0)
+        if st.contact is None:
+            lb = self.world.clearance_lower_bound(s.x, s.y, t, base.p.circumradius)
+            if lb < 0.02:
+                c = self.world.clearance(s.x, s.y, s.yaw, t, base.p.half_length,
+                                         base.p.half_width)
+                if c <= 0.0:
+                    st.contact = (t, s.x, s.y)
+                    st.blocked = True
+                    base.halt()
+                    st.outcome = "contact"
+                    st.end_ms = t_ms + int(round(self.sim.contact_linger * 1000))
+                    st.end_ms += (100 - st.end_ms % 100) % 100
+
+    def _sample_20hz(self, rec: McapRecorder, st: _RunState, t_ms: int, t: float, s) -> None:
+        """3. Every 50 ms (and at a contact): odometry, tf, ground truth."""
+        f, o, trace = rec.factory, self.odom, st.trace
+        if t_ms % 50 == 0:
+            rec.write("/odom", _ns(t_ms), f.odometry(
+                _ns(t_ms), o.x, o.y, o.yaw, o.v, o.w, _POSE_COV, _TWIST_COV))
+            rec.write("/tf", _ns(t_ms), f.tf([f.transform(
+                _ns(t_ms), "odom", "base_link", o.x, o.y, o.yaw)]))
+        clr = self.world.clearance(s.x, s.y, s.yaw, t, self.base.p.half_length,
+                                   self.base.p.half_width)
+        st.min_clear = min(st.min_clear, clr)
+        rec.write("/ground_truth/pose", _ns(t_ms),
+                  f.pose_stamped(_ns(t_ms), "map", s.x, s.y, s.yaw, "/ground_truth/pose"))
+        rec.write("/ground_truth/clearance", _ns(t_ms), f.float64(clr))
+        trace.t.append(t)
+        trace.x.append(s.x)
+        trace.y.append(s.y)
+        trace.yaw.append(s.yaw)
+        trace.v.append(s.v)
+        trace.clearance.append(clr)
+
+    def _scan_10hz(self, rec: McapRecorder, st: _RunState, t_ms: int, t: float, s) -> None:
+        """4. Every 100 ms: ``/scan``, ``/tf`` map -> odom; the SIF reads the scan and may
+        decide (published now, or ``stop_delay`` later)."""
+        f, lid = rec.factory, self.lidar.p
+        ranges = self.lidar.scan(self.world, s.x, s.y, s.yaw, t)
+        rec.write("/scan", _ns(t_ms), f.laser_scan(
+            _ns(t_ms), "base_link", lid.angle_min, lid.angle_max, lid.angle_increment,
+            lid.scan_time, lid.range_min, lid.range_max, ranges))
+        self.map_odom = self._loc_estimate()
+        rec.write("/tf", _ns(t_ms), f.tf([f.transform(_ns(t_ms), "map", "odom",
+                                                      *self.map_odom)]))
+        st.last_min = min_valid_range(ranges, lid.range_min, lid.range_max)
+        st.trace.scan_t.append(t)
+        st.trace.scan_min.append(st.last_min)
+        decision = self.safety.on_scan(t, st.last_min, self.odom.v, self.odom.w)
+        if decision is not None:
+            if st.delay_ms > 0:
+                st.pending.append((t_ms + st.delay_ms, decision))
+            else:
+                self._publish_control(rec, st, t_ms, decision)
+
+    def _command(self, st: _RunState, t: float) -> tuple[float, float]:
+        ex, ey, eyaw = self._pose_estimate()
+        return self.controller.compute(ex, ey, eyaw, self.odom.v, self.odom.w, st.last_min, t)
+
+    def _sras(self, rec: McapRecorder, st: _RunState, t_ms: int, t: float,
+              s) -> tuple[float, float]:
+        """5. Every 100 ms, 50 ms after the scan: the SRAS's mission step; returns the
+        ``/cmd_vel`` (v, w) to publish."""
+        v = w = 0.0
+        mis = self.mission
+        if st.end_ms is None and t_ms >= st.start_ms:
+            if not st.goal_active and st.dwell_until is None and not mis.done:
+                st.goal_active = self._send_goal(rec, t_ms)
+            elif st.goal_active:
+                ex, ey, eyaw = self._pose_estimate()
+                if self.controller.goal_reached(ex, ey):
+                    mis.reached.append((mis.index, t, s.x, s.y))
+                    st.goal_active = False
+                    st.dwell_until = t_ms + int(round(mis.dwell * 1000))
+                elif self.controller.stuck(t) or t_ms >= st.max_ms:
+                    mis.aborted = True
+                    mis.abort_reason = ("no progress" if t_ms < st.max_ms else "time limit")
+                    st.outcome = f"aborted: {mis.abort_reason}"
+                    st.goal_active = False
+                    st.end_ms = t_ms + int(round(self.sim.final_linger * 1000))
+                else:
+                    v, w = self.controller.compute(ex, ey, eyaw, self.odom.v, self.odom.w,
+                                                   st.last_min, t)
+            if st.dwell_until is not None and t_ms >= st.dwell_until:
+                st.dwell_until = None
+                if mis.index + 1 >= len(mis.goals):
+                    mis.done = True
+                    st.outcome = "completed"
+                    st.end_ms = t_ms + int(round(self.sim.final_linger * 1000))
+                else:
+                    mis.index += 1
+                    st.goal_active = self._send_goal(rec, t_ms)
+                    if st.goal_active:
+                        v, w = self._command(st, t)
+        elif st.end_ms is not None and st.contact is not None and st.goal_active:
+            # after a contact nobody stops the robot: the SRAS keeps commanding
+            v, w = self._command(st, t)
+        return v, w
 
     def _send_goal(self, rec: McapRecorder, t_ms: int) -> bool:
         gx, gy = self.mission.current
-        f = rec.factory
-        ns = EPOCH_NS + t_ms * 1_000_000
-        rec.write("/goal", ns, f.pose_stamped(ns, "map", gx, gy, 0.0, "/goal"))
+        ns = _ns(t_ms)
+        rec.write("/goal", ns, rec.factory.pose_stamped(ns, "map", gx, gy, 0.0, "/goal"))
         self.controller.set_goal(self.planner.plan((gx, gy)), t_ms / 1000.0)
         return True
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence, Tuple
+from typing import Sequence
 
 import numpy as np
 import yaml
@@ -105,7 +105,7 @@ class OccupancyMap:
                 self.origin_y + (np.asarray(row) + 0.5) * self.resolution)
 
     @property
-    def extent(self) -> Tuple[float, float, float, float]:
+    def extent(self) -> tuple[float, float, float, float]:
         """``(xmin, xmax, ymin, ymax)`` of the grid in m (for matplotlib's ``imshow``)."""
         return (self.origin_x, self.origin_x + self.width * self.resolution,
                 self.origin_y, self.origin_y + self.height * self.resolution)
@@ -137,7 +137,7 @@ class MovingObstacle:
     ((x, y) in m) at constant ``speed`` m/s, starting at sim time ``t_start`` s; it waits at the
     first waypoint before and at the last one after its walk."""
 
-    waypoints: Tuple[Tuple[float, float], ...]
+    waypoints: tuple[tuple[float, float], ...]
     speed: float
     radius: float
     t_start: float
@@ -149,7 +149,7 @@ class MovingObstacle:
         if not self.speed > 0:
             raise ValueError("MovingObstacle.speed must be > 0")
 
-    def position(self, t: float) -> Tuple[float, float]:
+    def position(self, t: float) -> tuple[float, float]:
         """Position (x, y) in m at sim time ``t`` s."""
         pts = np.asarray(self.waypoints, dtype=float)
         seg = np.hypot(*np.diff(pts, axis=0).T)
@@ -186,9 +186,9 @@ class World:
     are the insides of objects), each an axis-aligned square of side ``resolution``."""
 
     omap: OccupancyMap
-    barrels: Tuple[Barrel, ...] = ()
-    movers: Tuple[MovingObstacle, ...] = ()
-    removed: Tuple[RemovedObject, ...] = ()
+    barrels: tuple[Barrel, ...] = ()
+    movers: tuple[MovingObstacle, ...] = ()
+    removed: tuple[RemovedObject, ...] = ()
     solid: np.ndarray = field(init=False, repr=False)
     edt: np.ndarray = field(init=False, repr=False)
 

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from compiler import codegen, ltl3
+from compiler import automata, codegen, ltl3
 from compiler.build import compile_entry
 from compiler.codegen import render_module
 from fretish import parse
@@ -43,7 +43,7 @@ def test_module_is_byte_identical_cold_warm_and_without_cache(tmp_path, monkeypa
     outputs = []
     for cache_dir in (tmp_path / "c", tmp_path / "c", ""):  # cold, warm from disk, off
         monkeypatch.setenv("FRETC_CACHE_DIR", str(cache_dir))
-        monkeypatch.setattr(ltl3, "_SHAPE_MEMO", {})
+        monkeypatch.setattr(automata, "_SHAPE_MEMO", {})
         outputs.append(render_module(compiled, "m"))
     assert outputs[0] == outputs[1] == outputs[2]
     files = list((tmp_path / "c" / "ltl3").glob("*.json"))
@@ -58,8 +58,8 @@ def test_module_is_byte_identical_cold_warm_and_without_cache(tmp_path, monkeypa
 def test_shape_renames_atoms_in_order_of_appearance():
     f1 = compile_entry(entry("A", SENTENCES[0])).formalization.ft_inf
     f2 = compile_entry(entry("B", SENTENCES[1])).formalization.ft_inf
-    s1, atoms1 = ltl3.canonical_shape(f1)
-    s2, atoms2 = ltl3.canonical_shape(f2)
+    s1, atoms1 = automata.canonical_shape(f1)
+    s2, atoms2 = automata.canonical_shape(f2)
     assert s1 == s2
     assert [a.name for a in atoms1] == ["m", "p", "q"]
     assert atoms2[0].name == "mode2" and atoms2[2].op == "cmp"
@@ -73,10 +73,10 @@ def test_monitor_built_from_cache_agrees_with_spot_det(tmp_path, monkeypatch):
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
     for text in SENTENCES:
         ft_inf = compile_entry(entry("R", text)).formalization.ft_inf
-        shape, atoms = ltl3.canonical_shape(ft_inf)
+        shape, atoms = automata.canonical_shape(ft_inf)
         from compiler.printers import to_spot
         for negate in (False, True):
-            ours = ltl3._spot_monitor(to_spot(shape), negate, len(atoms), 5000, 10)
+            ours = automata._spot_monitor(to_spot(shape), negate, len(atoms), 5000, 10)
             d = spot.make_bdd_dict()
             f = spot.formula(to_spot(shape))
             aut = spot.translate(spot.formula.Not(f) if negate else f, "monitor", "det",
@@ -87,10 +87,10 @@ def test_monitor_built_from_cache_agrees_with_spot_det(tmp_path, monkeypatch):
             for s in range(aut.num_states()):
                 row = [-1] * (1 << len(names))
                 for e in aut.out(s):
-                    for letter in ltl3._letters(e.cond, var, names, 1 << len(names)):
+                    for letter in automata._letters(e.cond, var, names, 1 << len(names)):
                         row[letter] = e.dst
                 rows.append(row)
-            assert ltl3._bfs_tables(aut.get_init_state_number(), rows)[1] == ours["table"]
+            assert automata._bfs_tables(aut.get_init_state_number(), rows)[1] == ours["table"]
 
 
 def test_future_pt_is_skipped_before_any_automaton(monkeypatch):
@@ -121,12 +121,12 @@ def test_huge_bound_gets_no_progression_attempt(tmp_path, monkeypatch):
 
 def test_damaged_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(ltl3, "_SHAPE_MEMO", {})
+    monkeypatch.setattr(automata, "_SHAPE_MEMO", {})
     compiled = [compile_entry(entry("R", SENTENCES[0]))]
     good = render_module(compiled, "m")
     for f in (tmp_path / "ltl3").glob("*.json"):
         f.write_text('{"shape": "something else", "bad": null, "good": null}')
-    monkeypatch.setattr(ltl3, "_SHAPE_MEMO", {})
+    monkeypatch.setattr(automata, "_SHAPE_MEMO", {})
     assert render_module(compiled, "m") == good
 
 

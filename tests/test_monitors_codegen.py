@@ -276,11 +276,11 @@ def test_progression_ltl3_agrees_with_spot(all_templates, monkeypatch):
     """LTL3 by formula progression (used when bounds are too large for Spot) against Spot's
     exact monitors on the same formulas: never a different verdict, never earlier, and
     nearly always at the same tick."""
-    from compiler import codegen
+    from compiler import automata
 
     compiled, spot_mod = all_templates
-    monkeypatch.setattr(codegen, "MAX_LTL3_BOUND", -1)
-    monkeypatch.setattr(codegen, "MAX_LTL3_BOUND_SUM", -1)
+    monkeypatch.setattr(automata, "MAX_LTL3_BOUND", -1)
+    monkeypatch.setattr(automata, "MAX_LTL3_BOUND_SUM", -1)
     prog_mod = load(render_module(compiled, "progression"))
     rnd = random.Random(17)
     same = later = 0

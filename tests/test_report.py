@@ -23,8 +23,10 @@ from mcap.writer import CompressionType
 
 from fretc.cli import main
 from monitors.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
-from monitors.report import GENERATED_PREFIX, marked_fields
-from monitors.timeline import Threshold, timeline_svg
+from monitors.report_context import GENERATED_PREFIX
+from monitors.report_trace import marked_fields
+from monitors.timeline import timeline_svg
+from monitors.timeline_layout import Threshold
 
 from _logs import MS, boolean, float64, scan, twist, write_mcap
 

@@ -1,0 +1,60 @@
+"""The factory: :func:`open_log` chooses the source class by what the path is (as the
+``mcap`` library's ``make_reader`` chooses a reader class)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+from fretish.units import NS_PER_S
+
+from ..problems import LogError
+from .bag_source import BagSource
+from .base import LogSource
+from .csv_source import CsvSource
+from .mcap_source import McapSource
+
+__all__ = ["open_log"]
+
+
+def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores | None = None,
+             check_data_crc: bool = True, csv_period_ns: int = NS_PER_S) -> LogSource:
+    """Open a recorded run for reading.
+
+    Args:
+        path: ``*.mcap`` file, ROS 1 ``*.bag`` file, rosbag2 folder (with ``metadata.yaml``),
+            or ``*.csv`` trace.
+        fallback_typestore: types for rosbag connections that carry no definition (e.g. old
+            rosbag2 sqlite3 bags): a rosbags Typestore or a ``rosbags.typesys.Stores`` member.
+            Never used when the log embeds its definitions.
+        check_data_crc: MCAP only: check the DataEnd data-section CRC (one extra read of the
+            data section after a full indexed pass).
+        csv_period_ns: CSV only: time step between rows when there is no ``time`` column.
+
+    Returns:
+        A :class:`LogSource` (McapSource, BagSource or CsvSource).
+
+    Raises:
+        LogError: missing path, unknown kind, or a file that cannot be opened as that kind.
+        CsvError: a bad CSV trace (names file:line).
+    """
+    p = Path(path)
+    if not p.exists():
+        raise LogError(path, "no such file or folder")
+    if isinstance(fallback_typestore, Stores):
+        fallback_typestore = get_typestore(fallback_typestore)
+    suffix = p.suffix.lower()
+    if p.is_dir():
+        if not (p / "metadata.yaml").exists():
+            raise LogError(path, "a folder but not a rosbag2 bag (no metadata.yaml)")
+        return BagSource(p, fallback_typestore=fallback_typestore)
+    if suffix == ".mcap":
+        return McapSource(p, check_data_crc=check_data_crc)
+    if suffix == ".bag":
+        return BagSource(p, fallback_typestore=fallback_typestore)
+    if suffix == ".csv":
+        return CsvSource(p, period_ns=csv_period_ns)
+    raise LogError(path, "unknown log kind (expected .mcap, .bag, .csv or a rosbag2 folder)")

@@ -1,0 +1,282 @@
+"""Reading a damaged MCAP file: the summary and its CRC, the data-section CRC, and what a
+file cut short still holds.
+
+* :func:`read_summary` reads the Footer, the summary section and the DataEnd record and
+  checks the summary CRC (MCAP spec, "Footer", "Summary Section"); a damaged summary is a
+  ``summary_corrupt`` problem and the file is read without its index.
+* :func:`check_data_section` checks the DataEnd data_section_crc after an indexed pass.
+* :func:`cut_record` describes a record cut short by the end of the file and recovers the
+  complete records at the start of a cut Chunk.
+
+The ``mcap`` library's :meth:`mcap.reader.SeekingReader.get_summary` reads the same
+records but checks no summary CRC and, on damage, raises without saying where; so the
+summary is framed here (the bodies are parsed by the library's record classes).
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import Any, BinaryIO, NamedTuple
+
+import lz4.frame
+import zstandard
+from mcap.opcode import Opcode
+from mcap.records import Channel, ChunkIndex, Message as McapMessage, Schema, Statistics
+
+from .. import problems as P
+from ..problems import DataProblem
+from .mcap_records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
+                           crc_skip, parse_record)
+
+__all__ = ["McapIndex", "SummaryRead", "read_summary", "check_data_section", "cut_record",
+           "ends_with_footer", "GAP_NOTE"]
+
+#: Appended to the detail of a chunk skipped as damaged.
+GAP_NOTE = "; the log is audited up to its start (nothing is held across a gap)"
+
+
+class McapIndex(NamedTuple):
+    """The summary section of an MCAP file (MCAP spec, "Summary Section").
+
+    Attributes:
+        schemas: schema id -> Schema record.
+        channels: channel id -> Channel record.
+        chunk_indexes: ChunkIndex records sorted by (message_start_time, chunk_start_offset).
+        statistics: the Statistics record, or None.
+        data_end_offset: byte offset of the DataEnd record.
+        data_section_crc: the DataEnd data_section_crc (0: none).
+    """
+
+    schemas: dict[int, Schema]
+    channels: dict[int, Channel]
+    chunk_indexes: list[ChunkIndex]
+    statistics: Statistics | None
+    data_end_offset: int
+    data_section_crc: int
+
+
+class SummaryRead(NamedTuple):
+    """What :func:`read_summary` found: the Header ``profile`` (``""`` when unreadable), the
+    ``index`` (None: read the file linearly) and the ``summary_corrupt`` ``problem`` that made
+    the index unusable (None when the summary is intact or absent)."""
+
+    profile: str
+    index: McapIndex | None
+    problem: DataProblem | None
+
+
+class _Unusable(Exception):
+    """The summary is damaged; the message is the detail of the ``summary_corrupt`` problem."""
+
+
+def read_summary(path: str, size: int) -> SummaryRead:
+    """The Header profile and the summary of the MCAP file ``path`` of ``size`` bytes.
+
+    The index is None when the file has no trailing magic (a crashed recording: the linear
+    pass reports it), no summary, no ChunkIndex records (an unchunked file), or a damaged
+    Footer or summary (then ``problem`` says what).
+    """
+    with open(path, "rb") as f:
+        profile = _read_profile(f, size)
+        try:
+            index = _read_index(f, size)
+        except _Unusable as exc:
+            return SummaryRead(profile, None, DataProblem(P.SUMMARY_CORRUPT, None, None, str(exc)))
+    return SummaryRead(profile, index, None)
+
+
+def _read_profile(f: BinaryIO, size: int) -> str:
+    """The Header record's profile (MCAP spec, "Header"), ``""`` when unreadable."""
+    head = f.read(len(MCAP_MAGIC) + 9)
+    if len(head) == len(MCAP_MAGIC) + 9 and head[8] == Opcode.HEADER:
+        length = RECORD_HEAD.unpack_from(head, 8)[1]
+        if length < size:
+            try:
+                return parse_record(Opcode.HEADER, f.read(length)).profile
+            except RECORD_ERRORS:
+                pass
+    return ""
+
+
+def _read_index(f: BinaryIO, size: int) -> McapIndex | None:
+    if size < 2 * len(MCAP_MAGIC) + FOOTER_LEN + DATA_END_LEN:
+        return None
+    f.seek(size - len(MCAP_MAGIC))
+    if f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+        return None  # no trailing magic: crashed recording; the linear pass reports it
+    footer, summary_bytes = _read_footer(f, size - len(MCAP_MAGIC) - FOOTER_LEN)
+    if footer.summary_start == 0:
+        return None  # valid file without a summary: linear pass
+    data_end_offset = footer.summary_start - DATA_END_LEN
+    data_section_crc = 0
+    if data_end_offset >= len(MCAP_MAGIC):
+        f.seek(data_end_offset)
+        raw_de = f.read(DATA_END_LEN)
+        if len(raw_de) == DATA_END_LEN and raw_de[0] == Opcode.DATA_END:
+            data_section_crc = struct.unpack_from("<I", raw_de, 9)[0]
+    schemas, channels, chunk_indexes, statistics = _parse_summary(summary_bytes,
+                                                                  footer.summary_start)
+    if not chunk_indexes:
+        return None  # unchunked file: the linear pass reads its loose messages
+    chunk_indexes.sort(key=lambda c: (c.message_start_time, c.chunk_start_offset))
+    return McapIndex(schemas, channels, chunk_indexes, statistics, data_end_offset,
+                     data_section_crc)
+
+
+def _read_footer(f: BinaryIO, footer_pos: int) -> tuple[Any, bytes]:
+    """The Footer record at ``footer_pos`` and the summary bytes it points to, CRC-checked.
+
+    Raises:
+        _Unusable: no Footer there, a summary_start outside the file, a summary CRC mismatch.
+    """
+    f.seek(footer_pos)
+    raw = f.read(FOOTER_LEN)
+    opcode, length = RECORD_HEAD.unpack_from(raw)
+    if opcode != Opcode.FOOTER or length != FOOTER_LEN - 9:
+        raise _Unusable(f"no Footer record at byte {footer_pos}; reading without the index")
+    footer = parse_record(Opcode.FOOTER, raw[9:])
+    summary_bytes = b""
+    if footer.summary_start != 0:
+        if not (0 < footer.summary_start <= footer_pos):
+            raise _Unusable(f"Footer summary_start {footer.summary_start} is outside the file; "
+                            "reading without the index")
+        f.seek(footer.summary_start)
+        summary_bytes = f.read(footer_pos - footer.summary_start)
+    if footer.summary_crc != 0:
+        crc = zlib.crc32(raw[: FOOTER_LEN - 4], zlib.crc32(summary_bytes))
+        if crc != footer.summary_crc:
+            raise _Unusable(f"summary CRC mismatch (Footer says {footer.summary_crc:#010x}, "
+                            f"computed {crc:#010x}); reading without the index")
+    return footer, summary_bytes
+
+
+def _parse_summary(summary: bytes, start: int
+                   ) -> tuple[dict[int, Schema], dict[int, Channel], list[ChunkIndex],
+                              Statistics | None]:
+    """The Schema, Channel, ChunkIndex and Statistics records of the summary section (which
+    starts at byte ``start`` of the file).
+
+    Raises:
+        _Unusable: a record that does not parse or runs past the section.
+    """
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    chunk_indexes: list[ChunkIndex] = []
+    statistics = None
+    pos = 0
+    try:
+        while pos < len(summary):
+            opcode, length = RECORD_HEAD.unpack_from(summary, pos)
+            body = summary[pos + 9: pos + 9 + length]
+            if len(body) != length:
+                raise ValueError("record runs past the summary section")
+            rec = parse_record(opcode, body)
+            if isinstance(rec, Schema):
+                schemas[rec.id] = rec
+            elif isinstance(rec, Channel):
+                channels[rec.id] = rec
+            elif isinstance(rec, ChunkIndex):
+                chunk_indexes.append(rec)
+            elif isinstance(rec, Statistics):
+                statistics = rec
+            pos += 9 + length
+    except RECORD_ERRORS as exc:
+        raise _Unusable(f"summary record at byte {start + pos} unreadable ({exc}); "
+                        "reading without the index") from None
+    return schemas, channels, chunk_indexes, statistics
+
+
+def check_data_section(path: str, index: McapIndex) -> DataProblem | None:
+    """A ``data_crc`` problem when the CRC-32 of bytes [0, DataEnd) differs from the DataEnd
+    record's data_section_crc (MCAP spec, "DataEnd"); None when it matches or is 0."""
+    if index.data_section_crc == 0:
+        return None
+    with open(path, "rb") as f:
+        crc = crc_skip(f, index.data_end_offset, 0)
+    if crc == index.data_section_crc:
+        return None
+    return DataProblem(P.DATA_CRC, None, None,
+                       f"data section CRC mismatch (DataEnd says {index.data_section_crc:#010x}, "
+                       f"computed {crc:#010x}): bytes outside the chunks are damaged")
+
+
+def cut_record(f: BinaryIO, pos: int, size: int, head: bytes) -> tuple[str, list[Any]]:
+    """The record at byte ``pos`` (its first bytes ``head``) runs past the end of a file of
+    ``size`` bytes: the text of the ``truncated`` problem, and the complete records
+    recovered from the start of a cut Chunk (unverified: the chunk CRC covers all of it)."""
+    if not head:
+        return f"file ends at byte {pos} without DataEnd/Footer records", []
+    what = f"file ends at byte {size} inside the record starting at byte {pos}"
+    if len(head) < 9 or head[0] != Opcode.CHUNK:
+        return what, []
+    start = _peek_chunk_start(f, pos)
+    if start is not None:
+        what += f" (a Chunk whose messages start at log time {start})"
+    f.seek(pos + 9)
+    records = _truncated_chunk_records(f.read())
+    n_msgs = sum(isinstance(r, McapMessage) for r in records)
+    if n_msgs:
+        what += (f"; {n_msgs} complete messages recovered from the cut chunk (unverified: its "
+                 "CRC covers the whole chunk)")
+    return what, records
+
+
+def ends_with_footer(path: str, size: int) -> bool:
+    """True when the file ends with a Footer record and the closing magic (MCAP spec)."""
+    if size < len(MCAP_MAGIC) + FOOTER_LEN:
+        return False
+    with open(path, "rb") as f:
+        f.seek(size - len(MCAP_MAGIC) - FOOTER_LEN)
+        tail = f.read(len(MCAP_MAGIC) + FOOTER_LEN)
+    return tail[-len(MCAP_MAGIC):] == MCAP_MAGIC and tail[0] == Opcode.FOOTER
+
+
+def _truncated_chunk_records(tail: bytes) -> list[Any]:
+    """The complete records at the start of a Chunk record cut short by the end of the file.
+
+    ``tail`` is what the file holds after the chunk's 9-byte record header. Layout (MCAP
+    spec, "Chunk"): message_start_time u64, message_end_time u64, uncompressed_size u64,
+    uncompressed_crc u32, compression (u32 length + bytes), records (u64 length + bytes).
+    The compressed prefix is decompressed as a stream (zstd, lz4 frames or none) and parsed
+    record by record until a record is incomplete. Returns [] when nothing can be recovered.
+    """
+    try:
+        (clen,) = struct.unpack_from("<I", tail, 28)
+        compression = tail[32:32 + clen].decode("ascii")
+        data = tail[32 + clen + 8:]
+        if compression == "":
+            raw = data
+        elif compression == "zstd":
+            raw = zstandard.ZstdDecompressor().decompressobj().decompress(data)
+        elif compression == "lz4":
+            raw = lz4.frame.LZ4FrameDecompressor().decompress(data)
+        else:
+            return []
+    except Exception:  # a cut header or a cut compressed stream: nothing to recover
+        return []
+    records: list[Any] = []
+    at = 0
+    while at + 9 <= len(raw):
+        opcode, length = RECORD_HEAD.unpack_from(raw, at)
+        if at + 9 + length > len(raw):
+            break
+        try:
+            rec = parse_record(opcode, raw[at + 9:at + 9 + length])
+        except RECORD_ERRORS:
+            break
+        if rec is not None:
+            records.append(rec)
+        at += 9 + length
+    return records
+
+
+def _peek_chunk_start(f: BinaryIO, pos: int) -> int | None:
+    """message_start_time of the (truncated) Chunk record at ``pos``, if its first field is there."""
+    here = f.tell()
+    try:
+        f.seek(pos + 9)
+        raw = f.read(8)
+        return struct.unpack("<Q", raw)[0] if len(raw) == 8 else None
+    finally:
+        f.seek(here)

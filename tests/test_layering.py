@@ -1,0 +1,71 @@
+"""Structure of compiler/ and fretish/ (issue 14): no import cycles, and ``fretc FILE --emit
+ltl`` starts without the heavy libraries (Spot, Jinja2, numpy, mcap, Ray) that only code
+generation, checking and the audit need."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGES = ("fretish", "compiler")
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for pkg in PACKAGES:
+        for p in sorted((REPO / pkg).glob("*.py")):
+            out[pkg if p.stem == "__init__" else f"{pkg}.{p.stem}"] = p
+    return out
+
+
+def _imports(name: str, path: Path, known) -> set[str]:
+    """Modules of ``known`` that ``name`` imports anywhere (inside functions too)."""
+    pkg = name if path.stem == "__init__" else name.rsplit(".", 1)[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                base = ".".join([pkg] + ([base] if base else []))
+            for alias in node.names:
+                target = f"{base}.{alias.name}"
+                out.add(target if target in known else base)
+        elif isinstance(node, ast.Import):
+            out.update(alias.name for alias in node.names)
+    return {m for m in out if m in known and m != name}
+
+
+def test_no_import_cycles():
+    mods = _modules()
+    graph = {m: _imports(m, p, mods) for m, p in mods.items()}
+    cycles = []
+    for start in graph:  # a cycle through start: a path back to it
+        stack, seen = [(start, [start])], set()
+        while stack:
+            node, path = stack.pop()
+            for nxt in sorted(graph[node]):
+                if nxt == start:
+                    cycles.append(path + [start])
+                elif nxt not in seen:
+                    seen.add(nxt)
+                    stack.append((nxt, path + [nxt]))
+    assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles)
+
+
+def test_emit_ltl_starts_without_heavy_libraries(tmp_path):
+    f = tmp_path / "r.fret"
+    f.write_text("R1: whenever p the sw shall within 3 ticks satisfy q\n")
+    code = ("import sys\n"
+            "sys.argv = ['fretc', sys.argv[1], '--emit', 'ltl']\n"
+            "from fretc.cli import main\n"
+            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "heavy = sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('spot', 'buddy', 'jinja2', 'numpy', 'mcap', 'ray', 'rosbags'))\n"
+            "print('HEAVY', heavy)\n")
+    out = subprocess.run([sys.executable, "-c", code, str(f)], cwd=REPO, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "HEAVY []" in out.stdout, out.stdout
