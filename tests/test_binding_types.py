@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from monitors.audit import AuditConfig, audit_log, load_plan
-from monitors.bindings import compile_expression, parse_bindings
+from monitors.bindings.binding import compile_expression
+from monitors.bindings.files import parse_bindings
 from monitors.problems import BindingError
 
 ROOT = Path(__file__).resolve().parents[1]

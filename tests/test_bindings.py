@@ -10,8 +10,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from monitors.bindings import (Bindings, EvalState, TickSpec, compile_expression, load_bindings,
-                               make_bindings, parse_bindings, parse_duration, parse_inline)
+from fretish.units import parse_duration
+from monitors.bindings.binding import compile_expression, parse_inline
+from monitors.bindings.compile import EvalState
+from monitors.bindings.extract import Valid, make_extractor
+from monitors.bindings.files import load_bindings, parse_bindings
+from monitors.bindings.spec import Bindings, TickSpec, make_bindings
 from monitors.problems import BindingError, SignalError
 
 from _logs import ROS1, ROS2, scan, twist
@@ -311,8 +315,6 @@ def test_make_bindings_and_tickspec_validation():
 
 def test_ros2_laserscan_type_name_and_vectorized_agree():
     """The per-tick and vectorized closures of one binding give identical values."""
-    from monitors.bindings import Valid, make_extractor
-
     b = compile_expression("v", "mean(/scan.ranges * 2) + count(/scan.ranges > 1) - min(/scan.ranges)")
     scans = [scan(np.random.default_rng(i).uniform(-1, 12, 50)) for i in range(20)]
     per_tick = []

@@ -11,8 +11,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from monitors.bindings import compile_expression, parse_bindings
-from monitors.bindings import EvalState
+from monitors.bindings.binding import compile_expression
+from monitors.bindings.compile import EvalState
+from monitors.bindings.files import parse_bindings
 from monitors.problems import BindingError
 
 from _logs import scan

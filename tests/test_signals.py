@@ -10,9 +10,11 @@ from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 
 from monitors import problems as P
-from monitors.bindings import TickSpec, make_bindings, parse_bindings
+from monitors.bindings.files import parse_bindings
+from monitors.bindings.spec import TickSpec, make_bindings
 from monitors.problems import SignalError
-from monitors.signals import sample, sample_arrays
+from monitors.signals.arrays import sample_arrays
+from monitors.signals.clock import sample
 from monitors.sources import open_log
 
 from _logs import (CMD_VEL_MCAP, MS, ROS2, S, STAGE_BAG, boolean, float64, scan, twist_stamped,

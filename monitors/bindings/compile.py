@@ -1,0 +1,229 @@
+"""Compilation of an expression tree to nested Python closures (no ``eval`` of user text).
+
+:func:`compile_node` gives, for one :class:`~monitors.bindings.expression.Expr`, a function
+of what the evaluation sees: an :class:`EvalState` (one tick: the held messages, their times
+and the tick time) or, vectorized, a columns object (all ticks at once: ``n``,
+``field(topic, path, node)`` and ``age(topic)``, see :mod:`monitors.signals.arrays`).  Both
+evaluators apply the same :mod:`~monitors.bindings.operations`, so they give the same values.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from fretish.units import NS_PER_S
+
+from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
+from .extract import FieldAccessError, Valid, make_extractor
+from .operations import NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2, num
+
+__all__ = ["EvalState", "EvalError", "compile_node"]
+
+Evaluator = Callable[[Any], Any]
+
+
+class EvalState:
+    """What a per-tick evaluation sees.
+
+    Attributes:
+        msgs: topic → data of the latest message at or before the tick (sample-and-hold).
+        times: topic → time (ns, in the time base) of that message.
+        now: the tick time (ns).
+    """
+
+    __slots__ = ("msgs", "times", "now", "values")
+
+    def __init__(self) -> None:
+        self.msgs: dict[str, Any] = {}
+        self.times: dict[str, int] = {}
+        self.now = 0
+        #: (topic, field path) → (message data, extracted value): extraction memo.
+        self.values: dict[tuple[str, tuple], tuple[Any, Any]] = {}
+
+
+class EvalError(Exception):
+    """An evaluation that failed at ``node`` (its column goes into the error message)."""
+
+    def __init__(self, node: Expr, message: str) -> None:
+        super().__init__(message)
+        self.node = node
+        self.message = message
+
+
+def compile_node(node: Expr, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+    """Closure evaluating ``node``; its argument is an :class:`EvalState` (``ops`` per tick)
+    or a columns object (``ops`` vectorized).  ``extractors`` (field -> extractor) is shared
+    by the per-tick and the vectorized compilation of one binding.
+
+    The closure raises :class:`EvalError` (a field missing from a message, an operation that
+    does not apply to its values).
+    """
+    if isinstance(node, Const):
+        v = node.value
+        return lambda st: v
+    if isinstance(node, Field):
+        return _field(node, ops, extractors)
+    if isinstance(node, UnaryOp):
+        return _unary(node, ops, extractors)
+    if isinstance(node, BinOp):
+        return _binary(node, ops, extractors)
+    if isinstance(node, FuncCall):
+        return _call(node, ops, extractors)
+    raise AssertionError(node)  # pragma: no cover
+
+
+def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+    if ops.vec:
+        topic, path = node.topic, node.path
+        return lambda cols: cols.field(topic, path, node)
+    ex = extractors.setdefault(node, make_extractor(node))
+    topic = node.topic
+    key = (topic, node.path)
+
+    def field_value(st: EvalState) -> Any:
+        msg = st.msgs[topic]
+        memo = st.values.get(key)  # shared by bindings and ticks while the message is held
+        if memo is not None and memo[0] is msg:
+            return memo[1]
+        try:
+            v = ex(msg)
+        except FieldAccessError as exc:
+            raise EvalError(node, str(exc)) from None
+        st.values[key] = (msg, v)
+        return v
+
+    return field_value
+
+
+def _unary(node: UnaryOp, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+    arg = compile_node(node.arg, ops, extractors)
+    if node.op == "-":
+        def neg(st: Any) -> Any:
+            a = arg(st)
+            if type(a) in PY_TYPES:
+                return -a
+            return ops.lift1(np.negative, a, True)
+        return neg
+
+    def not_(st: Any) -> Any:
+        a = arg(st)
+        if type(a) in PY_TYPES:
+            return not a
+        return ops.lift1(np.logical_not, a, False)
+    return not_
+
+
+def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+    left = compile_node(node.left, ops, extractors)
+    right = compile_node(node.right, ops, extractors)
+    npfn, numeric = NP_BINARY[node.op]
+    pyfn = PY_BINARY[node.op]
+
+    def binary(st: Any) -> Any:
+        a = left(st)
+        b = right(st)
+        if type(a) in PY_TYPES and type(b) in PY_TYPES:
+            return pyfn(a, b)
+        try:
+            return ops.lift2(npfn, a, b, numeric)
+        except (ValueError, TypeError) as exc:
+            raise EvalError(node, f"cannot apply {node.op!r}: {exc}") from None
+    return binary
+
+
+def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+    func = node.func
+    if func == "age":
+        topic = node.args[0].topic  # type: ignore[attr-defined]
+        if ops.vec:
+            return lambda cols: cols.age(topic)
+        return lambda st: (st.now - st.times[topic]) / NS_PER_S
+    args = [compile_node(a, ops, extractors) for a in node.args]
+    if func == "abs":
+        a0 = args[0]
+
+        def abs_(st: Any) -> Any:
+            a = a0(st)
+            if type(a) in PY_TYPES:
+                return abs(a)
+            return ops.lift1(np.abs, a, True)
+        return abs_
+    if func in ("min", "max", "norm") and len(args) > 1:
+        return _several(node, args)
+    return _reduction(node, args[0], ops)
+
+
+def _norm(vals: list[Any]) -> Any:
+    """sqrt(a² + b² + ...) of Python numbers or of per-tick arrays."""
+    if all(type(v) in PY_TYPES for v in vals):
+        total = 0.0
+        for v in vals:
+            total = total + v * v
+        return math.sqrt(total)
+    total = 0.0
+    for v in vals:
+        v = num(v)
+        total = total + v * v
+    return np.sqrt(total)
+
+
+def _several(node: FuncCall, args: list[Evaluator]) -> Evaluator:
+    """``min``/``max``/``norm`` of several values (numbers, not arrays)."""
+    func = node.func
+    pair = {"min": min2, "max": max2}.get(func)
+    npfn = {"min": np.minimum, "max": np.maximum}.get(func)
+
+    def several(st: Any) -> Any:
+        vals = [a(st) for a in args]
+        for v in vals:
+            if isinstance(v, Valid):
+                raise EvalError(node, f"{func}() of several values takes numbers, not arrays")
+        if func == "norm":
+            return _norm(vals)
+        acc = vals[0]
+        for v in vals[1:]:
+            if type(acc) in PY_TYPES and type(v) in PY_TYPES:
+                acc = pair(acc, v)
+            else:
+                acc = npfn(num(acc), num(v))
+        return acc
+    return several
+
+
+def _reduction(node: FuncCall, a0: Evaluator, ops: Ops) -> Evaluator:
+    """A function of one value: a reduction of an array (or the value itself for a number)."""
+    func = node.func
+
+    def reduce_(st: Any) -> Any:
+        a = a0(st)
+        if not isinstance(a, Valid):
+            if func == "len" and isinstance(a, (list, tuple, str)):
+                return float(len(a))  # e.g. len(/tf.transforms): a sequence of messages
+            if func in ("min", "max", "mean"):
+                return a  # of one number: itself
+            if func == "norm":
+                return abs(a) if type(a) in PY_TYPES else np.abs(num(a))
+            raise EvalError(node, f"{func}() takes an array")
+        return ops.reduce(func, a)
+
+    arg0 = node.args[0]
+    if ops.vec or not isinstance(arg0, Field):
+        return reduce_
+    # a reduction of one field depends only on the held message: computed once per message,
+    # shared by the bindings that use it (like the field memo)
+    key = (func, arg0.topic, arg0.path)
+    topic0 = arg0.topic
+
+    def reduce_memo(st: Any) -> Any:
+        msg = st.msgs[topic0]
+        memo = st.values.get(key)
+        if memo is not None and memo[0] is msg:
+            return memo[1]
+        v = reduce_(st)
+        st.values[key] = (msg, v)
+        return v
+    return reduce_memo

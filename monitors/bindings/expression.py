@@ -1,0 +1,394 @@
+"""The binding expression language: its tree, its parser and its static checks.
+
+An expression (``"min(/scan.ranges) < 0.9"``) is parsed with Lark (LALR, contextual lexer)
+from the grammar ``monitors/bindings/grammar.lark``; :class:`_ToExpr`, a Lark
+``Transformer`` whose callbacks are named after the grammar's rules, turns the parse tree
+into the frozen dataclasses below (:class:`Expr` and its subclasses; ``col`` is the 1-based
+column in the expression text, for error messages).  The language itself (operators,
+functions, values) is described in ``docs/bindings.md`` and in :mod:`monitors.bindings`.
+
+Errors are :class:`monitors.problems.BindingError` naming the binding file, line, column
+and variable (:class:`ExprLocation` maps a column in the expression to one in the file).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from functools import lru_cache
+
+from lark import Lark, Transformer, v_args
+from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
+                             UnexpectedToken, VisitError)
+
+from ..problems import BindingError
+from ..schema import closest
+
+__all__ = ["Expr", "Const", "Slice", "Field", "Ref", "UnaryOp", "BinOp", "FuncCall", "FUNCS",
+           "ExprLocation", "parse_expression", "check", "walk", "refs", "substitute", "unparse"]
+
+
+# ------------------------------------------------------------------------------------------------
+# The expression tree
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Expr:
+    """Base of expression nodes; ``col`` is the 1-based column in the expression text."""
+
+    col: int
+
+
+@dataclass(frozen=True)
+class Const(Expr):
+    """``1.5``, ``2e-3``, ``true``, ``false``: a float or a bool."""
+
+    value: bool | float
+
+
+@dataclass(frozen=True)
+class Slice:
+    """``[lo:hi]`` of an array field (Python slice rules; None = open end)."""
+
+    lo: int | None
+    hi: int | None
+
+    def text(self) -> str:
+        """``[lo:hi]`` as written (open ends empty)."""
+        return f"[{'' if self.lo is None else self.lo}:{'' if self.hi is None else self.hi}]"
+
+
+@dataclass(frozen=True)
+class Field(Expr):
+    """``/topic.a.b[i]``: ``path`` holds attribute names (str), indexes (int) and, last,
+    at most one :class:`Slice`."""
+
+    topic: str
+    path: tuple[str | int | Slice, ...]
+
+    def text(self) -> str:
+        """``/topic.a[2].b``: the field as written in a binding."""
+        out = self.topic
+        for p in self.path:
+            out += (p.text() if isinstance(p, Slice) else f"[{p}]" if isinstance(p, int)
+                    else f".{p}")
+        return out
+
+
+@dataclass(frozen=True)
+class Ref(Expr):
+    """Another variable of the same binding file, by name (substituted before compiling)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class UnaryOp(Expr):
+    """``-a`` (``op`` ``"-"``) or ``!a`` (``op`` ``"!"``)."""
+
+    op: str
+    arg: Expr
+
+
+@dataclass(frozen=True)
+class BinOp(Expr):
+    """``left op right``; ``op`` one of ``+ - * / < <= > >= = != & | -> <->``."""
+
+    op: str
+    left: Expr
+    right: Expr
+
+
+@dataclass(frozen=True)
+class FuncCall(Expr):
+    """``func(args...)``, ``func`` a name of :data:`FUNCS`."""
+
+    func: str
+    args: tuple[Expr, ...]
+
+
+#: The functions of the language: name -> (min args, max args or None).
+FUNCS = {
+    "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
+    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1),
+}
+
+
+def walk(node: Expr) -> Iterator[Expr]:
+    """``node`` and every node below it, depth first, left to right (pre-order)."""
+    yield node
+    if isinstance(node, UnaryOp):
+        yield from walk(node.arg)
+    elif isinstance(node, BinOp):
+        yield from walk(node.left)
+        yield from walk(node.right)
+    elif isinstance(node, FuncCall):
+        for a in node.args:
+            yield from walk(a)
+
+
+def refs(node: Expr) -> list[str]:
+    """Names of the variables ``node`` refers to, in order of appearance."""
+    return [n.name for n in walk(node) if isinstance(n, Ref)]
+
+
+def unparse(node: Expr) -> str:
+    """Expression text of a node (fully parenthesized where it matters).
+
+    Raises:
+        TypeError: a :class:`Ref` (substitute references first).
+    """
+    if isinstance(node, Const):
+        v = node.value
+        return ("true" if v else "false") if isinstance(v, bool) else repr(float(v))
+    if isinstance(node, Field):
+        return node.text()
+    if isinstance(node, UnaryOp):
+        return f"{node.op}{unparse(node.arg)}"
+    if isinstance(node, BinOp):
+        return f"({unparse(node.left)} {node.op} {unparse(node.right)})"
+    if isinstance(node, FuncCall):
+        return f"{node.func}({', '.join(unparse(a) for a in node.args)})"
+    raise TypeError(type(node).__name__)
+
+
+# ------------------------------------------------------------------------------------------------
+# Where an error is
+# ------------------------------------------------------------------------------------------------
+
+
+class ExprLocation:
+    """Maps a column in the expression to file:line:col for error messages.
+
+    ``line``/``col`` are where the expression text starts in ``source`` (1-based; None when
+    unknown); ``exact`` is False when columns inside the expression do not map one to one
+    onto the file (escapes, multi-line strings): the column in the expression is then said in
+    words.
+    """
+
+    def __init__(self, source: str, variable: str | None, line: int | None, col: int | None,
+                 exact: bool = True) -> None:
+        self.source, self.variable, self.line, self.col, self.exact = (source, variable, line,
+                                                                        col, exact)
+
+    def error(self, message: str, expr_col: int | None = None) -> BindingError:
+        """A :class:`BindingError` at column ``expr_col`` of the expression (None: at its
+        start)."""
+        line, col = self.line, self.col
+        if expr_col is not None:
+            if col is not None and self.exact:
+                col = col + expr_col - 1
+            else:
+                message = f"{message} (column {expr_col} of the expression)"
+        return BindingError(self.source, message, line=line, col=col, variable=self.variable)
+
+
+# ------------------------------------------------------------------------------------------------
+# Parsing
+# ------------------------------------------------------------------------------------------------
+
+
+@lru_cache(maxsize=1)
+def _parser() -> Lark:
+    return Lark.open("grammar.lark", rel_to=__file__, parser="lalr", lexer="contextual",
+                     propagate_positions=True, maybe_placeholders=False)
+
+
+def _col(meta: object) -> int:
+    return meta.column if not meta.empty else 1  # type: ignore[attr-defined]
+
+
+@v_args(meta=True)
+class _ToExpr(Transformer):
+    """Parse tree -> :class:`Expr`; one callback per rule (alias) of ``grammar.lark``."""
+
+    def __init__(self, where: ExprLocation) -> None:
+        super().__init__(visit_tokens=False)
+        self.where = where
+
+    def number(self, meta, kids):
+        return Const(_col(meta), float(kids[0]))
+
+    def true(self, meta, kids):
+        return Const(_col(meta), True)
+
+    def false(self, meta, kids):
+        return Const(_col(meta), False)
+
+    def attr(self, meta, kids):
+        return str(kids[0])
+
+    def index(self, meta, kids):
+        return int(kids[0])
+
+    def slice_lo(self, meta, kids):
+        return int(kids[0]) if kids else None
+
+    slice_hi = slice_lo
+
+    def slice(self, meta, kids):
+        return Slice(kids[0], kids[1])
+
+    def field(self, meta, kids):
+        topic, path = kids[0], tuple(kids[1:])
+        for p in path[:-1]:
+            if isinstance(p, Slice):
+                raise self.where.error(f"{Field(0, str(topic), path).text()}: a slice must be "
+                                       "the last selector", topic.column)
+        return Field(topic.column, str(topic), path)
+
+    def ref(self, meta, kids):
+        return Ref(kids[0].column, str(kids[0]))
+
+    def neg(self, meta, kids):
+        return UnaryOp(_col(meta), "-", kids[0])
+
+    def not_(self, meta, kids):
+        return UnaryOp(_col(meta), "!", kids[0])
+
+    def arith(self, meta, kids):
+        left, op, right = kids
+        return BinOp(op.column, "=" if op == "==" else str(op), left, right)
+
+    compare = arith
+
+    def and_(self, meta, kids):
+        return BinOp(_col(meta), "&", kids[0], kids[1])
+
+    def or_(self, meta, kids):
+        return BinOp(_col(meta), "|", kids[0], kids[1])
+
+    def implies(self, meta, kids):
+        return BinOp(_col(meta), "->", kids[0], kids[1])
+
+    def iff(self, meta, kids):
+        return BinOp(_col(meta), "<->", kids[0], kids[1])
+
+    def call(self, meta, kids):
+        name = kids[0]
+        return FuncCall(name.column, str(name), tuple(k for k in kids[1:] if k is not None))
+
+
+def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> BindingError:
+    col = getattr(exc, "column", None)
+    if isinstance(exc, UnexpectedCharacters):
+        msg = f"unexpected character {expr[exc.pos_in_stream]!r}"
+    elif isinstance(exc, UnexpectedEOF) or (isinstance(exc, UnexpectedToken)
+                                            and exc.token.type == "$END"):
+        msg = "expression ends too early"
+        col = len(expr) + 1
+    elif isinstance(exc, UnexpectedToken):
+        msg = f"unexpected {str(exc.token)!r}"
+    else:  # pragma: no cover
+        msg = "syntax error"
+    if not isinstance(col, int) or col < 1:
+        col = None
+    return where.error(f"syntax error: {msg}", col)
+
+
+def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[str]]:
+    """Parse and check (:func:`check`) one expression.
+
+    Returns:
+        the tree and the topics it reads (fields and ``age``); references (:class:`Ref`)
+        are left in the tree.
+
+    Raises:
+        BindingError: empty text, a syntax error, or a failed static check, at ``where``.
+    """
+    if not expr.strip():
+        raise where.error("empty expression")
+    try:
+        tree = _parser().parse(expr)
+    except UnexpectedInput as exc:
+        raise _syntax_error(expr, exc, where) from None
+    try:
+        node = _ToExpr(where).transform(tree)
+    except VisitError as exc:
+        raise exc.orig_exc from None
+    topics: set[str] = set()
+    check(node, where, topics)
+    return node, frozenset(topics)
+
+
+# ------------------------------------------------------------------------------------------------
+# Static checks and references
+# ------------------------------------------------------------------------------------------------
+
+
+def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
+    """Static checks: known functions and arities, age() of a topic, fields below topics.
+    Adds the topics ``node`` reads to ``topics``.
+
+    Raises:
+        BindingError: the first failed check, at ``where``.
+    """
+    if isinstance(node, Field):
+        for p in node.path:
+            if isinstance(p, str) and p.startswith("_"):
+                raise where.error(f"{node.text()}: {p!r} is not a message field (ROS field "
+                                  "names start with a letter; a binding reads only fields the "
+                                  "message type declares)", node.col)
+        if not node.path:
+            raise where.error(f"{node.topic} is a topic, not a value: name a field "
+                              f"(e.g. {node.topic}.data) or use age({node.topic})", node.col)
+        topics.add(node.topic)
+    elif isinstance(node, UnaryOp):
+        check(node.arg, where, topics)
+    elif isinstance(node, BinOp):
+        check(node.left, where, topics)
+        check(node.right, where, topics)
+    elif isinstance(node, FuncCall):
+        _check_call(node, where, topics)
+    # a Ref is resolved against the other variables (substitute)
+
+
+def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
+    if node.func not in FUNCS:
+        raise where.error(f"unknown function {node.func!r} (known: "
+                          f"{', '.join(sorted(FUNCS))})", node.col)
+    lo, hi = FUNCS[node.func]
+    n = len(node.args)
+    if n < lo or (hi is not None and n > hi):
+        want = f"{lo}" if lo == hi else f"at least {lo}"
+        raise where.error(f"{node.func}() takes {want} argument(s), got {n}", node.col)
+    if node.func == "age":
+        arg = node.args[0]
+        if not isinstance(arg, Field) or arg.path:
+            raise where.error("age() takes a topic name, e.g. age(/scan)", arg.col)
+        topics.add(arg.topic)
+        return
+    for a in node.args:
+        check(a, where, topics)
+
+
+def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: str) -> Expr:
+    """``node`` with every :class:`Ref` replaced by the tree of the variable it names.
+
+    Args:
+        trees: variable -> its (already substituted) tree.
+        name: the variable ``node`` belongs to (it may not refer to itself).
+
+    Raises:
+        BindingError: a reference to ``name`` itself or to an unknown variable.
+    """
+    if isinstance(node, Ref):
+        if node.name == name:
+            raise where.error(f"{name!r} refers to itself", node.col)
+        tree = trees.get(node.name)
+        if tree is None:
+            hint = closest(node.name, [n for n in trees if n != name] + list(FUNCS))
+            raise where.error(f"unknown name {node.name!r}: not a variable of this binding file"
+                              + (f"; did you mean {hint!r}?" if hint else "")
+                              + " (a field is /topic.field, a function call f(...))", node.col)
+        return tree
+    if isinstance(node, UnaryOp):
+        return UnaryOp(node.col, node.op, substitute(node.arg, trees, where, name))
+    if isinstance(node, BinOp):
+        return BinOp(node.col, node.op, substitute(node.left, trees, where, name),
+                     substitute(node.right, trees, where, name))
+    if isinstance(node, FuncCall):
+        return FuncCall(node.col, node.func, tuple(substitute(a, trees, where, name)
+                                                   for a in node.args))
+    return node

@@ -1,0 +1,178 @@
+"""Field access: a message's field as a binding value (:func:`make_extractor`).
+
+Values are Python ``bool``/``float`` (integer fields are read as floats), :class:`Valid`
+arrays (numeric arrays as float64), or the raw object for anything else (strings, nested
+messages).  A field path ending in ``ranges`` of a ``sensor_msgs/LaserScan`` (without an
+index) yields only the valid returns (REP 117): values inside ``[range_min, range_max]``,
+with -inf ("detected, too close to measure") read as ``range_min``.
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .expression import Field, Slice
+
+__all__ = ["LASER_SCAN", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
+
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+
+
+class Valid:
+    """An array value with an optional validity mask (REP 117-filtered LaserScan ranges).
+
+    ``data`` is 1-D (one tick) or 2-D (ticks × items, vectorized path); ``mask`` is None
+    (all items valid) or a bool array of the same shape.
+    """
+
+    __slots__ = ("data", "mask")
+
+    def __init__(self, data: np.ndarray, mask: np.ndarray | None) -> None:
+        self.data = data
+        self.mask = mask
+
+
+class FieldAccessError(Exception):
+    """A field an extractor cannot read from a message: no such field, an index out of
+    range, or indexing (slicing) what is not a sequence.  The message starts with the
+    field's text (``/scan.ranges[3]: index out of range``)."""
+
+
+def normalize_scalar(v: Any) -> Any:
+    """A scalar field value as a binding value: ints and numpy numbers as float, numpy
+    bools as bool; anything else (strings, messages) as it is."""
+    t = type(v)
+    if t is float or t is bool:
+        return v
+    if t is int:
+        return float(v)
+    if isinstance(v, np.generic):
+        v = v.item()
+        return v if type(v) is bool else float(v) if isinstance(v, (int, float)) else v
+    return v
+
+
+def _as_array(v: np.ndarray) -> np.ndarray:
+    if v.dtype == np.bool_:
+        return v
+    if v.dtype.kind in "iuf":
+        return v.astype(np.float64, copy=False)
+    return v
+
+
+def _identity(data: Any) -> Any:
+    return data
+
+
+def _walker(path: tuple) -> Callable[[Any], Any]:
+    """message -> the object at ``path`` (names and indexes): runs of names become one
+    ``attrgetter``, indexes ``itemgetter``s."""
+    steps: list[Callable[[Any], Any]] = []
+    attrs: list[str] = []
+    for p in path:
+        if isinstance(p, str):
+            attrs.append(p)
+            continue
+        if attrs:
+            steps.append(operator.attrgetter(".".join(attrs)))
+            attrs = []
+        steps.append(operator.itemgetter(p))
+    if attrs:
+        steps.append(operator.attrgetter(".".join(attrs)))
+    if len(steps) == 1:
+        return steps[0]  # fast path: one attrgetter
+    if not steps:
+        return _identity
+
+    def walk_steps(data: Any) -> Any:
+        for s in steps:
+            data = s(data)
+        return data
+    return walk_steps
+
+
+def _no_field(data: Any, path: tuple, text: str, exc: AttributeError) -> FieldAccessError:
+    owner = data
+    for p in path:  # find the object that lacks the field, for the message
+        if isinstance(p, str) and not hasattr(owner, p):
+            break
+        try:
+            owner = getattr(owner, p) if isinstance(p, str) else owner[p]
+        except (IndexError, TypeError, KeyError):
+            break
+    typename = getattr(owner, "__msgtype__", type(owner).__name__)
+    return FieldAccessError(f"{text}: a {typename} message has no field {exc.name!r}")
+
+
+def _laser_ranges(parent: Any) -> Any:
+    """``parent.ranges``: as :class:`Valid` with the REP 117 mask when ``parent`` is a
+    LaserScan, else as it is."""
+    v = parent.ranges
+    if getattr(parent, "__msgtype__", None) != LASER_SCAN:
+        return v
+    arr = np.asarray(v, dtype=np.float64)
+    # REP 117: -inf is a detection closer than range_min; count it as range_min so that a
+    # too-close object is never hidden
+    too_close = np.isneginf(arr)
+    if too_close.any():
+        arr = np.where(too_close, parent.range_min, arr)
+    return Valid(arr, (arr >= parent.range_min) & (arr <= parent.range_max))
+
+
+def _sliced(f: Field) -> Callable[[Any], Any]:
+    inner = make_extractor(Field(f.col, f.topic, f.path[:-1]))
+    last = f.path[-1]
+    assert isinstance(last, Slice)
+    sl = slice(last.lo, last.hi)
+    text = f.text()
+
+    def sliced(data: Any) -> Any:
+        v = inner(data)  # REP 117 validity of LaserScan ranges is kept for the slice
+        if isinstance(v, Valid):
+            return Valid(v.data[..., sl], None if v.mask is None else v.mask[..., sl])
+        if isinstance(v, (list, tuple)):
+            return list(v[sl])
+        raise FieldAccessError(f"{text}: only arrays can be sliced")
+    return sliced
+
+
+def make_extractor(f: Field) -> Callable[[Any], Any]:
+    """A function message-data → value of field ``f`` (normalized; module docstring).
+
+    Returns Python bool/float, :class:`Valid` for arrays (masked for LaserScan ranges), or the
+    raw object for anything else (strings, nested messages).
+
+    Raises (from the returned function):
+        FieldAccessError: no such field, index out of range, or indexing a non-sequence.
+    """
+    if f.path and isinstance(f.path[-1], Slice):
+        return _sliced(f)
+    path = f.path
+    laser = isinstance(path[-1], str) and path[-1] == "ranges"
+    walk = _walker(path[:-1] if laser else path)
+    text = f.text()
+
+    def extract(data: Any) -> Any:
+        try:
+            v = walk(data)
+            if laser:
+                v = _laser_ranges(v)
+                if isinstance(v, Valid):
+                    return v
+        except AttributeError as exc:
+            raise _no_field(data, path, text, exc) from None
+        except IndexError:
+            raise FieldAccessError(f"{text}: index out of range") from None
+        except (TypeError, KeyError) as exc:
+            raise FieldAccessError(f"{text}: cannot index ({exc})") from None
+        if isinstance(v, np.ndarray):
+            return Valid(_as_array(v), None)
+        if isinstance(v, (list, tuple)) and v and all(isinstance(x, (bool, int, float)) for x in v):
+            return Valid(_as_array(np.asarray(v)), None)
+        return normalize_scalar(v)
+
+    return extract
