@@ -83,7 +83,7 @@ def _product_game(texts, outputs):
     conjunct (their product, made parity, split into environment and controller moves), or
     None when some conjunct has no small deterministic automaton (then the caller uses
     ``spot.ltl_to_game`` on the whole formula). Same game as ``ltl_to_game`` up to the
-    automaton construction; equal answers checked in tests/test_check.py."""
+    automaton construction; equal answers checked in tests/compiler/test_check.py."""
     import buddy  # lazy: with Spot, in the query worker process only
     import spot  # lazy: Spot loads in the query worker process only
 

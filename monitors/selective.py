@@ -28,7 +28,7 @@ Fallback: a type the fast path does not cover (a wanted field inside a sequence 
 messages, a whole nested message wanted, a field the type lacks, big-endian CDR) gets the
 full decoder; and a message the fast path fails on (short or malformed bytes) is decoded in
 full, so errors and their messages are those of rosbags. Both paths give identical values
-(``tests/test_selective.py`` over every shipped log and the real logs).
+(``tests/monitors/test_selective.py`` over every shipped log and the real logs).
 
 Hook: :func:`install` (called by :func:`monitors.signals.sample`) records on the source the
 fields each topic's bindings read; the sources pass them to :func:`selective_decoder` when

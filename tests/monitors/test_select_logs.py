@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REAL = ROOT / "requirements" / "real_logs"
 LOGS = ROOT.parent / "shared" / "data" / "logs"
 

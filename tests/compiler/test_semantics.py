@@ -32,7 +32,7 @@ from fretish import FretishError, parse
 
 from fret_formulas import parse_fret
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 VECTORS = [json.loads(l) for l in (SHARED / "fretish/fret_vectors.jsonl").open()]
 FUNCTION_VECTORS = [json.loads(l)
                     for l in (SHARED / "fretish/fret_vectors_functions.jsonl").open()]

@@ -26,7 +26,7 @@ from monitors.problems import SignalError
 from monitors.signals import sample
 from monitors.sources import open_log
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "logs"
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 REAL = [SHARED / "cmd_vel_scaled.mcap", SHARED / "stage_mapping1.bag"]

@@ -24,7 +24,7 @@ from monitors.sources.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 from _logs import ROS2, S, twist, write_mcap
 
-TRACES = sorted((Path(__file__).resolve().parents[1] / "traces").glob("*.mcap"))
+TRACES = sorted((Path(__file__).resolve().parents[2] / "traces").glob("*.mcap"))
 
 
 @settings(max_examples=60, deadline=None)

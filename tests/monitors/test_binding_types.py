@@ -14,7 +14,7 @@ from monitors.bindings.binding import compile_expression
 from monitors.bindings.files import parse_bindings
 from monitors.problems import BindingError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOMINAL = str(ROOT / "traces" / "nominal.mcap")
 
 

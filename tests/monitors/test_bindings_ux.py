@@ -18,7 +18,7 @@ from monitors.problems import BindingError
 
 from _logs import scan
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _value(expr, msg, name="x", refs=None):

@@ -19,7 +19,7 @@ from monitors.report_model import EXIT_INCOMPLETE, exit_code
 
 from _logs import MS, S, twist_stamped, write_mcap
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 
 

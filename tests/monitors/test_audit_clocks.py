@@ -14,7 +14,7 @@ import pytest
 
 from monitors.audit import AuditConfig, audit_log, load_plan
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 
 

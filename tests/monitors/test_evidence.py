@@ -19,7 +19,7 @@ from monitors.engines.interval import (EvidenceUnsupported, evaluate_requirement
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
 
 RESPONSES = ["r", "!r", "r | s", "r & c", "r xor m", "x > 2"]

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from compiler import codegen
 from fretish.errors import FretishError
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 import fuzz  # noqa: E402
 
 SEEDS = fuzz.load_seeds()

@@ -19,7 +19,7 @@ from monitors.report_model import audit_json
 
 from _logs import MS, S, boolean, scan, twist, write_mcap
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared"
 TRACES = ROOT / "traces"
 REAL = ROOT / "requirements" / "real_logs"

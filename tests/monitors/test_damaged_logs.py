@@ -12,7 +12,7 @@ flips, the summary lost - and audited. For each damaged copy:
   verdict equals the original's.
 
 The default run takes a deterministic sample (a few cut points and one flip count per log);
-the full sweep is ``pytest -m slow tests/test_damaged_logs.py``.
+the full sweep is ``pytest -m slow tests/monitors/test_damaged_logs.py``.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import pytest
 
 from monitors.audit import AuditConfig, audit_log, load_plan
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "logs"
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 REAL = [SHARED / "cmd_vel_scaled.mcap", SHARED / "stage_mapping1.bag"]

@@ -20,7 +20,7 @@ from fretish import limits
 from fretish.errors import FretishSyntaxError
 from fretish.parser import parse
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CORPUS = ROOT.parent / "shared" / "corpora" / "fret_casestudies.jsonl"
 
 # Loads a generated module, steps every monitor over ticks of all-0 / all-1 / mixed values

@@ -30,7 +30,7 @@ from monitors.timeline_layout import Threshold
 
 from _logs import MS, boolean, float64, scan, twist, write_mcap
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
 REQS = ROOT / "requirements"
 X = "{http://www.w3.org/1999/xhtml}"

@@ -19,7 +19,7 @@ from monitors import fleet
 from monitors.audit import AuditConfig, AuditInputError, audit_log, audit_logs, load_plan
 from monitors.report_model import audit_json, exit_code
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "logs"
 TRACES = [str(p) for p in sorted((ROOT / "traces").glob("*.mcap"))]
 REAL = ROOT / "requirements" / "real_logs"

@@ -19,7 +19,7 @@ from compiler.printers import to_spot  # noqa: E402
 from compiler.semantics import formalize  # noqa: E402
 from fretish import parse  # noqa: E402
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+SHARED = Path(__file__).resolve().parents[2].parent / "shared"
 
 
 def _sentences() -> list[str]:

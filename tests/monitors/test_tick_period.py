@@ -6,7 +6,7 @@ from pathlib import Path
 
 from monitors.audit import AuditConfig, audit_log, load_plan
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOMINAL = str(ROOT / "traces" / "nominal.mcap")
 FRET = """@tick_period 100 ms
 T1: upon too_close agilex_agent shall within 1 second satisfy stopped

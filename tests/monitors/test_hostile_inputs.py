@@ -18,7 +18,7 @@ from fretish.textsafe import md_code, visible
 from monitors.audit import AuditConfig, audit_log, load_plan
 from monitors.report_model import EXIT_INCOMPLETE, exit_code
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
 REQS = ROOT / "requirements"
 REAL = ROOT.parent / "shared" / "data" / "logs"

@@ -22,7 +22,7 @@ from monitors.watch_serve import FoxgloveServer, advertise_mcap, replay_mcap  # 
 
 pytestmark = pytest.mark.watch
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 REQS = str(ROOT / "requirements")
 RATE = 40.0  # times real time (>= 10x)

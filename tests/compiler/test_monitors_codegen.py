@@ -23,7 +23,7 @@ from compiler.printers import to_spot
 from fretish import ast as A
 from fretish import parse
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
 
 

@@ -17,7 +17,7 @@ from compiler.check_witness import read_expected
 from fretc.cli import main
 from fretish.files import load_requirements
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _write(tmp_path, name, text):

@@ -19,7 +19,7 @@ from compiler.printers import expr_text
 from fretish import ast as A
 from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"  # ../shared beside the repository
+SHARED = Path(__file__).resolve().parents[3] / "shared"  # ../shared beside the repository
 VECTORS = [json.loads(l) for l in (SHARED / "fretish/fret_vectors.jsonl").open()]
 VECTOR_BY_ID = {v["id"]: v for v in VECTORS}
 CORPUS = [json.loads(l) for l in (SHARED / "corpora/fret_casestudies.jsonl").open()]
@@ -89,7 +89,7 @@ def test_grammar_has_no_lalr_conflicts(caplog):
 
 
 def test_reserved_words_match_grammar_keywords():
-    grammar = (Path(__file__).parents[1] / "fretish/grammar.lark").read_text()
+    grammar = (Path(__file__).parents[2] / "fretish/grammar.lark").read_text()
     name_rule = re.search(r"^NAME: (.*)$", grammar, re.M).group(1)
     for word in RESERVED_WORDS:
         for variant in (word, word.upper(), word.capitalize()):

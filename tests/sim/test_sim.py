@@ -16,7 +16,7 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
 SCENARIOS = ["nominal", "unmapped_obstacles", "dynamic_obstacle", "sif_disabled",
              "interceptor_fault", "stop_delay", "lidar_dropout"]

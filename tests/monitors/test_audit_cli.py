@@ -14,7 +14,7 @@ from fretc.cli import main
 
 from test_audit import SYN_BINDINGS, SYN_FRET, TRACES, _readme_expectations, _synthetic
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def run(*args):
@@ -130,7 +130,7 @@ def test_violations_are_listed_and_annotated(tmp_path):
     from fretc.cli import main as fretc_main
     from monitors.engines.interval import MAX_LISTED
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     out = tmp_path / "audit.json"
     res = CliRunner().invoke(fretc_main, [
         "report", "-r", str(root / "requirements"), str(root / "traces" / "interceptor_fault.mcap"),
@@ -159,7 +159,7 @@ def test_numbers_behind_a_violated_boolean_are_shown(tmp_path):
     from mcap.reader import make_reader
     from rosbags.typesys import Stores, get_typestore
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     log = root / "traces" / "sif_disabled.mcap"
     out = tmp_path / "a.json"
     res = CliRunner().invoke(main, ["audit", "-r", str(root / "requirements"), str(log),
