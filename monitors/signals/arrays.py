@@ -20,7 +20,7 @@ from ..selective import install as install_selective
 from ..sources import CSV_TOPIC, CsvSource, LogSource
 from .clock import Tick, check_topics, csv_bindings_check, csv_period, feed, sample
 
-__all__ = ["SampledArrays", "TickColumns", "sample_arrays"]
+__all__ = ["SampledArrays", "FieldColumns", "sample_arrays"]
 
 
 class SampledArrays(tuple):
@@ -57,7 +57,7 @@ class _Fallback(Exception):
     """The vectorized path cannot represent some field (ragged arrays, strings, errors)."""
 
 
-class TickColumns:
+class FieldColumns:
     """The value of each bound field at each evaluated tick, gathered from per-message
     columns (what :meth:`monitors.bindings.Binding.evaluate_columns` reads).
 
@@ -165,7 +165,7 @@ def sample_arrays(source: LogSource, bindings: Bindings | None = None) -> Sample
     n = len(tick_times)
     columns: dict[str, np.ndarray] = {}
     if n:
-        cols = TickColumns(n, tick_times, topic_times, idx, raw)
+        cols = FieldColumns(n, tick_times, topic_times, idx, raw)
         try:
             with np.errstate(all="ignore"):
                 for name, b in bindings.variables.items():
@@ -260,7 +260,7 @@ def _arrays_csv(source: CsvSource, bindings: Bindings | None) -> SampledArrays:
             for f in b.fields:
                 ex = make_extractor(f)
                 raw[(f.topic, f.path)] = [ex(SimpleNamespace(**r.values)) for r in rows]
-        cols = TickColumns(len(rows), times, {CSV_TOPIC: times}, idx, raw)
+        cols = FieldColumns(len(rows), times, {CSV_TOPIC: times}, idx, raw)
         with np.errstate(all="ignore"):
             columns = {name: b.evaluate_columns(cols) for name, b in bindings.variables.items()}
     except Exception:

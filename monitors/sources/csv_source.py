@@ -57,7 +57,7 @@ class CsvSource(LogSource):
     The file is checked completely when opened (two streaming passes: types, then rows).
 
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
-    ``data`` has one attribute per column (so bindings may say ``/csv.speed``); signals.py
+    ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`monitors.signals`)
     uses :meth:`rows` directly so columns are variables without bindings.
 
     Raises:
