@@ -19,7 +19,7 @@ each stage has its own subclass (the model: Lark's one exception tree)::
     │   ├── BindingError                a signal binding
     │   ├── SignalError                 a binding that cannot be evaluated on a log
     │   ├── FieldPathError              a field path the schema lacks (monitors/schema.py)
-    │   └── AuditInputError ── RayUnavailable   (monitors/audit.py, monitors/fleet.py)
+    │   └── AuditInputError ── RayUnavailable   (monitors/audit/config.py, monitors/fleet.py)
     └── ReportError                     fretc report's inputs and output (monitors/report.py)
 
 Internal errors are not input errors and stay outside the tree (a generated monitor that is
