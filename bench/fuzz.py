@@ -277,7 +277,7 @@ def audit_csv(c, workdir: Path, rng: random.Random):
 
 
 # ------------------------------------------------------------------------ main
-def main(argv=None) -> int:
+def _arguments(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=int, default=2000)
     ap.add_argument("--seed", type=int, default=1)
@@ -291,151 +291,179 @@ def main(argv=None) -> int:
                     help="stop after this many minutes (wall clock) and report what ran")
     ap.add_argument("--shard", default="0/1", help="K/N: run the inputs whose index is K mod N "
                     "(N processes with the same --seed run distinct inputs)")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
 
-    from compiler import codegen
 
-    signal.signal(signal.SIGALRM, _alarm)
-    stats = {"inputs": 0, "rejected": 0, "accepted": 0, "monitors": 0, "modules": 0,
-             "skipped": 0, "audited": 0, "tracebacks": 0, "slow": 0, "invalid_modules": 0,
-             "max_input_s": 0.0}
-    failures = []
-    rng = random.Random(args.seed + 1)
-    tmp = Path(tempfile.mkdtemp(prefix="fretc_fuzz_"))
-    pending_modules: list = []
-    batch: list = []  # (MonitorSource, text)
-    texts_of_module = {}
-    cpu0, wall0 = time.process_time(), time.time()
+class _Fuzzer:
+    """One fuzzing run: the statistics, the failures, the batch of monitors waiting to be
+    rendered into a module and the modules waiting to be stepped in a child."""
 
-    def fail(kind, text, detail):
-        stats[kind] += 1
-        failures.append({"kind": kind, "input": text, "detail": detail})
-        if not args.quiet:
+    def __init__(self, args):
+        from compiler import codegen  # after sys.path has the repository
+
+        self.codegen = codegen
+        self.args = args
+        self.stats = {"inputs": 0, "rejected": 0, "accepted": 0, "monitors": 0, "modules": 0,
+                      "skipped": 0, "audited": 0, "tracebacks": 0, "slow": 0,
+                      "invalid_modules": 0, "max_input_s": 0.0}
+        self.failures: list = []
+        self.rng = random.Random(args.seed + 1)
+        self.tmp = Path(tempfile.mkdtemp(prefix="fretc_fuzz_"))
+        self.pending_modules: list = []
+        self.batch: list = []  # (MonitorSource, text)
+        self.texts_of_module: dict = {}
+        self.cpu0, self.wall0 = time.process_time(), time.time()
+
+    def fail(self, kind, text, detail):
+        self.stats[kind] += 1
+        self.failures.append({"kind": kind, "input": text, "detail": detail})
+        if not self.args.quiet:
             print(f"FAIL {kind}: {text[:300]!r}\n  {detail[-600:]}", flush=True)
 
-    def flush_children(force=False):
-        if not pending_modules or (len(pending_modules) < args.modules_per_child and not force):
+    def flush_children(self, force=False):
+        """Step the pending modules in a child ``python -I -S`` (see :func:`run_children`)."""
+        pending, args = self.pending_modules, self.args
+        if not pending or (len(pending) < args.modules_per_child and not force):
             return
-        paths = list(pending_modules)
-        pending_modules.clear()
+        paths = list(pending)
+        pending.clear()
         try:
             results, took = run_children(paths, timeout=600)
         except subprocess.TimeoutExpired:
             for p in paths:
-                fail("slow", "\n".join(texts_of_module[str(p)]), "child timed out")
+                self.fail("slow", "\n".join(self.texts_of_module[str(p)]), "child timed out")
             return
-        n = sum(len(texts_of_module[str(p)]) for p in paths)
+        n = sum(len(self.texts_of_module[str(p)]) for p in paths)
         if took / max(n, 1) > args.slow:
-            fail("slow", "", f"stepping took {took:.1f} s for {n} monitors")
+            self.fail("slow", "", f"stepping took {took:.1f} s for {n} monitors")
         for r in results:
-            stats["monitors"] += r["monitors"]
+            self.stats["monitors"] += r["monitors"]
             for rid, tb in r["errors"]:
-                stats["invalid_modules"] += 1
-                failures.append({"kind": "invalid_modules", "module": r["module"],
-                                 "input": rid, "detail": tb,
-                                 "inputs": texts_of_module.get(r["module"], [])})
+                self.stats["invalid_modules"] += 1
+                self.failures.append({"kind": "invalid_modules", "module": r["module"],
+                                      "input": rid, "detail": tb,
+                                      "inputs": self.texts_of_module.get(r["module"], [])})
                 if not args.quiet:
                     print(f"FAIL invalid module {r['module']} {rid}: {tb[-600:]}", flush=True)
         for p in paths:
             os.unlink(p)
-            texts_of_module.pop(str(p), None)
+            self.texts_of_module.pop(str(p), None)
 
-    def flush_batch(force=False):
-        if not batch or (len(batch) < args.batch and not force):
+    def flush_batch(self, force=False):
+        """Render the batch into one module, check it and queue it for a child."""
+        batch, codegen = self.batch, self.codegen
+        if not batch or (len(batch) < self.args.batch and not force):
             return
-        name = f"m{stats['modules']}"
-        stats["modules"] += 1
+        name = f"m{self.stats['modules']}"
+        self.stats["modules"] += 1
         sources = [m for m, _ in batch]
         texts = [t for _, t in batch]
         batch.clear()
-        signal.setitimer(signal.ITIMER_PROF, args.slow * len(sources))
+        signal.setitimer(signal.ITIMER_PROF, self.args.slow * len(sources))
         signal.signal(signal.SIGPROF, _alarm)
         try:
             text = codegen._render(sources, [], name)
             codegen.check_module(text, name)
         except codegen.InvalidMonitorError as exc:
-            fail("invalid_modules", "\n".join(texts), str(exc))
+            self.fail("invalid_modules", "\n".join(texts), str(exc))
             return
         except _Timeout:
-            fail("slow", "\n".join(texts), "module render/check over the limit")
+            self.fail("slow", "\n".join(texts), "module render/check over the limit")
             return
         except Exception:
-            fail("tracebacks", "\n".join(texts), traceback.format_exc())
+            self.fail("tracebacks", "\n".join(texts), traceback.format_exc())
             return
         finally:
             signal.setitimer(signal.ITIMER_PROF, 0)
-        path = tmp / f"{name}.py"
+        path = self.tmp / f"{name}.py"
         path.write_text(text, encoding="utf-8")
-        pending_modules.append(path)
-        texts_of_module[str(path)] = texts
-        flush_children(force)
+        self.pending_modules.append(path)
+        self.texts_of_module[str(path)] = texts
+        self.flush_children(force)
 
-    signal.signal(signal.SIGPROF, _alarm)
-    shard, shards = (int(x) for x in args.shard.split("/"))
-    current = open(args.out + ".current", "w", encoding="utf-8")
-    for k, text in enumerate(inputs(args.count * shards, args.seed)):
-        if k % shards != shard:
-            continue
-        if stats["inputs"] >= args.count or (
-                args.minutes is not None and time.time() - wall0 > args.minutes * 60):
-            break
-        stats["inputs"] += 1
-        if k % 16 == 0 or len(text) > 200:  # for a hang inside C code (Spot), which no
-            current.seek(0)                  # signal interrupts: the input is on disk
-            current.truncate()
-            current.write(text)
-            current.flush()
-        t0 = time.process_time()
-        signal.setitimer(signal.ITIMER_PROF, args.slow)
+    def front_end(self, k: int, text: str):
+        """Parse, formalize and build the monitor of input ``k`` under the CPU limit:
+        (compiled requirement or None, MonitorSource or None), or None after a failure."""
+        signal.setitimer(signal.ITIMER_PROF, self.args.slow)
         try:
-            c, rejected = front(text, f"F{k}")
+            c, _rejected = front(text, f"F{k}")
             ms = None
             if c is not None:
                 try:
-                    ms = codegen.monitor_source(c, len(batch))
-                except codegen.CodegenError:
-                    stats["skipped"] += 1
+                    ms = self.codegen.monitor_source(c, len(self.batch))
+                except self.codegen.CodegenError:
+                    self.stats["skipped"] += 1
+            return c, ms
         except _Timeout:
-            fail("slow", text, f"over {args.slow} s in parse/formalize/codegen")
-            continue
+            self.fail("slow", text, f"over {self.args.slow} s in parse/formalize/codegen")
         except RecursionError:
-            fail("tracebacks", text, traceback.format_exc()[-1500:])
-            continue
+            self.fail("tracebacks", text, traceback.format_exc()[-1500:])
         except Exception:
-            fail("tracebacks", text, traceback.format_exc())
-            continue
+            self.fail("tracebacks", text, traceback.format_exc())
         finally:
             signal.setitimer(signal.ITIMER_PROF, 0)
-        took = time.process_time() - t0
-        stats["max_input_s"] = max(stats["max_input_s"], took)
+        return None
+
+    def one_input(self, k: int, text: str) -> None:
+        t0 = time.process_time()
+        got = self.front_end(k, text)
+        if got is None:
+            return
+        c, ms = got
+        self.stats["max_input_s"] = max(self.stats["max_input_s"], time.process_time() - t0)
         if c is None:
-            stats["rejected"] += 1
-        else:
-            stats["accepted"] += 1
-            if ms is not None:
-                batch.append((ms, text))
-            if stats["accepted"] % args.audit_every == 1:
-                stats["audited"] += 1
-                try:
-                    code = audit_csv(c, tmp, rng)
-                    if code not in (0, 1, 2, 3):
-                        fail("tracebacks", text, f"audit exit {code}")
-                except Exception:
-                    fail("tracebacks", text, "audit: " + traceback.format_exc())
-        flush_batch()
-        if not args.quiet and stats["inputs"] % 1000 == 0:
-            print(json.dumps(stats), f"cpu {time.process_time() - cpu0:.0f} s "
-                  f"wall {time.time() - wall0:.0f} s", flush=True)
-    flush_batch(force=True)
-    flush_children(force=True)
-    stats["cpu_s"] = round(time.process_time() - cpu0, 1)
-    stats["wall_s"] = round(time.time() - wall0, 1)
-    stats["max_input_s"] = round(stats["max_input_s"], 3)
-    with open(args.out, "w", encoding="utf-8") as fh:
-        for f in failures:
-            fh.write(json.dumps(f) + "\n")
-    print(json.dumps(stats))
-    return 1 if failures else 0
+            self.stats["rejected"] += 1
+            return
+        self.stats["accepted"] += 1
+        if ms is not None:
+            self.batch.append((ms, text))
+        if self.stats["accepted"] % self.args.audit_every == 1:
+            self.stats["audited"] += 1
+            try:
+                code = audit_csv(c, self.tmp, self.rng)
+                if code not in (0, 1, 2, 3):
+                    self.fail("tracebacks", text, f"audit exit {code}")
+            except Exception:
+                self.fail("tracebacks", text, "audit: " + traceback.format_exc())
+
+    def run(self) -> int:
+        args, stats = self.args, self.stats
+        signal.signal(signal.SIGPROF, _alarm)
+        shard, shards = (int(x) for x in args.shard.split("/"))
+        current = open(args.out + ".current", "w", encoding="utf-8")
+        for k, text in enumerate(inputs(args.count * shards, args.seed)):
+            if k % shards != shard:
+                continue
+            if stats["inputs"] >= args.count or (
+                    args.minutes is not None and time.time() - self.wall0 > args.minutes * 60):
+                break
+            stats["inputs"] += 1
+            if k % 16 == 0 or len(text) > 200:  # for a hang inside C code (Spot), which no
+                current.seek(0)                  # signal interrupts: the input is on disk
+                current.truncate()
+                current.write(text)
+                current.flush()
+            self.one_input(k, text)
+            self.flush_batch()
+            if not args.quiet and stats["inputs"] % 1000 == 0:
+                print(json.dumps(stats), f"cpu {time.process_time() - self.cpu0:.0f} s "
+                      f"wall {time.time() - self.wall0:.0f} s", flush=True)
+        self.flush_batch(force=True)
+        self.flush_children(force=True)
+        stats["cpu_s"] = round(time.process_time() - self.cpu0, 1)
+        stats["wall_s"] = round(time.time() - self.wall0, 1)
+        stats["max_input_s"] = round(stats["max_input_s"], 3)
+        with open(args.out, "w", encoding="utf-8") as fh:
+            for f in self.failures:
+                fh.write(json.dumps(f) + "\n")
+        print(json.dumps(stats))
+        return 1 if self.failures else 0
+
+
+def main(argv=None) -> int:
+    args = _arguments(argv)
+    signal.signal(signal.SIGALRM, _alarm)
+    return _Fuzzer(args).run()
 
 
 if __name__ == "__main__":
