@@ -293,7 +293,7 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
     if negate:
         f = spot.formula.Not(f)
     aut = spot.translate(f, "monitor", "low", dict=d)
-    if n_atoms <= min(dfa.SUBSET_MAX_APS, table_max_aps):
+    if n_atoms <= table_max_aps:
         got = _table_monitor(aut, n_atoms)
         if got is not None:
             return got if got["states"] <= max_states else None
@@ -339,21 +339,42 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
 def _table_monitor(aut, n_atoms: int) -> dict | None:
     """The minimal deterministic monitor of Spot's nondeterministic monitor ``aut`` by
     :mod:`compiler.dfa` (the same automaton as Spot's powerset and ``minimize_monitor``,
-    faster on small alphabets), as :func:`_spot_monitor`'s data; None when the subset
-    construction exceeds :data:`compiler.dfa.SUBSET_MAX_STATES`."""
+    faster), as :func:`_spot_monitor`'s data; None when there are more than
+    :data:`compiler.dfa.SUBSET_MAX_CLASSES` letter classes or the subset construction exceeds
+    :data:`compiler.dfa.SUBSET_MAX_STATES`.
+
+    Letters that satisfy the same edge conditions of ``aut`` lead everywhere to the same
+    states, so the construction runs over these classes (``rr | p0 | ... | p9`` is one class
+    boundary, not 2**11 letters) and the rows are expanded to letters at the end."""
     names = [f"a{i}" for i in range(n_atoms)]
     var = {name: aut.register_ap(name) for name in names}
     width = 1 << n_atoms
     memo: dict = {}
-    succ = [[0] * width for _ in range(aut.num_states())]
-    for s in range(aut.num_states()):
-        for e in aut.out(s):
-            for letter in _cached_letters(memo, e.cond, var, names, width):
-                succ[s][letter] |= 1 << e.dst
-    rows = dfa.determinize(succ, aut.get_init_state_number(), width)
+    edges = [[(_cached_letters(memo, e.cond, var, names, width), e.dst) for e in aut.out(s)]
+             for s in range(aut.num_states())]
+    signature = [0] * width
+    for bit, letters in enumerate(memo.values()):
+        for letter in letters:
+            signature[letter] |= 1 << bit
+    number: dict[int, int] = {}
+    class_of = [number.setdefault(sig, len(number)) for sig in signature]
+    if len(number) > dfa.SUBSET_MAX_CLASSES:
+        return None
+    classes_of: dict[int, list[int]] = {}  # id of a letter list -> the classes it covers
+    succ = [[0] * len(number) for _ in edges]
+    for s, out in enumerate(edges):
+        for letters, dst in out:
+            covered = classes_of.get(id(letters))
+            if covered is None:
+                covered = classes_of[id(letters)] = sorted({class_of[x] for x in letters})
+            for c in covered:
+                succ[s][c] |= 1 << dst
+    rows = dfa.determinize(succ, aut.get_init_state_number(), len(number))
     if rows is None:
         return None
-    init, rows = _bfs_tables(*dfa.minimize(rows))
+    init, rows = dfa.minimize(rows)
+    rows = [[row[c] for c in class_of] for row in rows]
+    init, rows = _bfs_tables(init, rows)
     empty = bool(aut.is_empty())
     complete = not empty and all(x >= 0 for row in rows for x in row)
     return {"initial": init, "table": rows, "chains": None, "empty": empty,

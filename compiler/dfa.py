@@ -3,7 +3,7 @@ over explicit letter tables.
 
 An LTL3 monitor (Bauer, Leucker, Schallhart, "Runtime Verification for LTL and TLTL", TOSEM
 2011) is a deterministic automaton whose missing transitions reject: its language is a prefix
-language. For alphabets of a few atoms (up to :data:`SUBSET_MAX_APS`, i.e. 64 letters) the
+language. For alphabets of few letter classes (up to :data:`SUBSET_MAX_CLASSES`) the
 powerset of Spot's nondeterministic monitor and its minimization are done here on letter
 tables: the subset construction with successor sets as integer bit masks, looked up a byte
 at a time, and Moore's partition refinement (Hopcroft and Ullman, "Introduction to Automata
@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-#: The construction here is used for at most this many atoms (2**6 letters); Spot's symbolic
-#: powerset is faster for larger alphabets.
-SUBSET_MAX_APS = 6
+#: The construction here is used for at most this many letter classes (letters that satisfy
+#: the same edge conditions); Spot's symbolic powerset is faster beyond.
+SUBSET_MAX_CLASSES = 64
 #: Above this many states the subset construction gives up (the caller falls back to Spot).
 SUBSET_MAX_STATES = 200_000
 

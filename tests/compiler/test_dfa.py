@@ -47,19 +47,20 @@ def _spot_table(aut, n_atoms: int):
 
 SAMPLE = random.Random(7).sample(_sentences(), 60) + [
     "only after mm whenever cc the sw shall after 7 ticks satisfy rr",
-    "in mm whenever cc the sw shall within 5 ticks satisfy rr"]
+    "in mm whenever cc the sw shall within 5 ticks satisfy rr",
+    # 8 atoms, few letter classes (found slow by bench/fuzz.py)
+    "only after mm whenever cc the sw shall after 3 ticks satisfy rr | p0 | p1 | p2 | p6 | p7"]
 
 
 @pytest.mark.parametrize("text", SAMPLE)
 def test_same_minimal_monitor_as_spot(text):
     shape, atoms = automata.canonical_shape(formalize(parse(text)).ft_inf)
-    if len(atoms) > dfa.SUBSET_MAX_APS:
-        pytest.skip("Spot's construction is used above SUBSET_MAX_APS atoms")
     for negate in (False, True):
         f = spot.formula(to_spot(shape))
         aut = spot.translate(spot.formula.Not(f) if negate else f, "monitor", "low")
         ours = automata._table_monitor(aut, len(atoms))
-        assert ours is not None
+        if ours is None:
+            pytest.skip(f"more than {dfa.SUBSET_MAX_CLASSES} letter classes: Spot's construction")
         table, empty = _spot_table(aut, len(atoms))
         assert (ours["table"], ours["empty"]) == (table, empty), (text, negate)
 
