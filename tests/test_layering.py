@@ -1,4 +1,4 @@
-"""Structure of compiler/ and fretish/ (issue 14): no import cycles, and ``fretc FILE --emit
+"""Structure of the code (issue 14): no import cycles in any source folder, and ``fretc FILE --emit
 ltl`` starts without the heavy libraries (Spot, Jinja2, numpy, mcap, Ray) that only code
 generation, checking and the audit need."""
 
@@ -10,14 +10,17 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("fretish", "compiler")
+PACKAGES = ("fretish", "compiler", "monitors", "fretc", "sim")
 
 
 def _modules() -> dict[str, Path]:
     out = {}
     for pkg in PACKAGES:
-        for p in sorted((REPO / pkg).glob("*.py")):
-            out[pkg if p.stem == "__init__" else f"{pkg}.{p.stem}"] = p
+        for p in sorted((REPO / pkg).rglob("*.py")):
+            parts = list(p.relative_to(REPO).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts.pop()
+            out[".".join(parts)] = p
     return out
 
 
@@ -28,8 +31,9 @@ def _imports(name: str, path: Path, known) -> set[str]:
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         if isinstance(node, ast.ImportFrom):
             base = node.module or ""
-            if node.level:
-                base = ".".join([pkg] + ([base] if base else []))
+            if node.level:  # relative: level 1 is this package, 2 its parent ...
+                anchor = pkg.split(".")[:len(pkg.split(".")) - (node.level - 1)]
+                base = ".".join(anchor + ([base] if base else []))
             for alias in node.names:
                 target = f"{base}.{alias.name}"
                 out.add(target if target in known else base)
