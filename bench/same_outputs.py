@@ -103,7 +103,7 @@ def _run_tree(tree: Path, cmds, dest: Path, cache_dir: Path) -> None:
         if work.exists():
             subprocess.run(["rm", "-rf", str(work)], check=True)
         for sub in ("shipped", "real"):  # the folders the audit commands write into
-            (work / sub).mkdir(parents=True)
+            (work / sub).mkdir(parents=True, exist_ok=True)
         proc = subprocess.run([sys.executable, "-m", "fretc", *args], cwd=tree, env=env,
                               capture_output=True)
         out = dest / name
