@@ -36,6 +36,8 @@ def to_rye(n: Node, witness: str) -> str:
     op = n.op
     a = n.args
 
+    # same shape as compiler.ajpf's go: a case per IR operator (kept: Rye spells every case its own
+    # way)
     def go(x: Node) -> str:
         return to_rye(x, witness)
 

@@ -389,6 +389,8 @@ def _obligation(tk, negate, n, t, e, R, S, L) -> bool:
         k = next((j for j in rng(t, e) if f(j)), INF)
         return not any(S(j) for j in rng(t, min(k, e)))
 
+    # same cases as compiler.scope_timing.ft_timing (kept: an independent oracle of truth values,
+    # not formulas)
     if tk == "immediately":
         return nR(t) if negate else R(t)
     if tk == "next":
