@@ -50,6 +50,7 @@ def to_rye(n: Node, witness: str) -> str:
         return f"(not {true})"
     if op == "FTP":
         return f"(not (pre {true}))"
+    # the operator cases below are alike but for Rye's words (kept: one case per operator)
     if op == "!":
         return f"(not {go(a[0])})"
     if op == "&":

@@ -296,6 +296,7 @@ def value(w: _World, e: tuple, t: int, free: bool = False):
         if k == "persists":    # p at t+m..t+n, and e >= t+n
             return end >= t + n and all(v(j) for j in range(t + m, t + n + 1))
         return any(v(j) for j in range(t + m, min(t + n, end) + 1))   # occurs
+    # same shape as nextOcc below: the past mirror (kept: previous positions, s_of, Y false at 0)
     if k == "prevOcc":
         p = lambda j: value(w, e[1], j, free)  # noqa: E731
         q = lambda j: value(w, e[2], j, free)  # noqa: E731
@@ -310,6 +311,7 @@ def value(w: _World, e: tuple, t: int, free: bool = False):
         if not prev:
             return not free
         return q(prev[-1])
+    # same shape as prevOcc above: the future mirror (kept: next positions, e_of, a horizon)
     if k == "nextOcc":
         p = lambda j: value(w, e[1], j, free)  # noqa: E731
         q = lambda j: value(w, e[2], j, free)  # noqa: E731
