@@ -48,6 +48,8 @@ B9: after too_close the safety_system shall eventually satisfy stop_requested
 B10: the scout_mini shall always satisfy min_range > 0.05
 """
 
+# same layout as SYN_BINDINGS in tests/monitors/test_report.py (kept: a bindings file is data; the
+# bench binds the robot's topics)
 BINDINGS = """[tick]
 period = "100 ms"
 [variables]

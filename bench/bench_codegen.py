@@ -158,10 +158,7 @@ def main() -> None:
                   f"{c2:.2f} s = {1000 * c2 / len(texts):.1f} ms each; module cold == warm: "
                   f"{same}")
             if label == "fretc":
-                cpu, _, out = run_child([sys.executable, "-c", PER_REQ, f696],
-                                        _env(root, tempfile.mkdtemp(dir=tmp)), tmp)
-                per = json.loads(out)
-                worst = max(per)
+                cpu, per, worst = _per_requirement(root, f696, tmp)
                 print(f"[1] fretc: slowest requirement (cold, monitor_source): "
                       f"{worst[0]:.3f} s CPU ({worst[1]!r}); mean "
                       f"{1000 * sum(t for t, _ in per) / len(per):.1f} ms")
@@ -179,10 +176,7 @@ def main() -> None:
 
         if not args.quick:
             ft = write_fret(tmp / "templates12.fret", template_sentences(12), "K")
-            cpu, _, out = run_child([sys.executable, "-c", PER_REQ, ft],
-                                    _env(ROOT, tempfile.mkdtemp(dir=tmp)), tmp)
-            per = json.loads(out)
-            worst = max(per)
+            cpu, per, worst = _per_requirement(ROOT, ft, tmp)
             print(f"[2] fretc: 288 template keys, bounds 12 ticks, cold: total {cpu:.2f} s "
                   f"CPU, slowest {worst[0]:.3f} s ({worst[1]!r}), "
                   f"{sum(1 for t, _ in per if t > 1.0)} over 1 s")
@@ -208,6 +202,15 @@ def main() -> None:
               f"{t3:.2f} s / {rss3:.0f} MB; bare Python {rss0:.0f} MB"
               + ("" if args.baseline else
                  f"; old code per the issue (10,000): {ISSUE_BASELINE['import10k']}"))
+
+
+def _per_requirement(root: Path, fret_file: Path, tmp: Path):
+    """CPU s of a cold child timing each requirement of ``fret_file`` (PER_REQ), the list of
+    (seconds, requirement text) pairs it prints, and the slowest pair."""
+    cpu, _, out = run_child([sys.executable, "-c", PER_REQ, fret_file],
+                            _env(root, tempfile.mkdtemp(dir=tmp)), tmp)
+    per = json.loads(out)
+    return cpu, per, max(per)
 
 
 def _worst_case(root: Path, fret_file: Path, tmp: Path):

@@ -36,6 +36,8 @@ def to_rye(n: Node, witness: str) -> str:
     op = n.op
     a = n.args
 
+    # same shape as compiler.ajpf's go: a case per IR operator (kept: Rye spells every case its own
+    # way)
     def go(x: Node) -> str:
         return to_rye(x, witness)
 
@@ -48,6 +50,7 @@ def to_rye(n: Node, witness: str) -> str:
         return f"(not {true})"
     if op == "FTP":
         return f"(not (pre {true}))"
+    # the operator cases below are alike but for Rye's words (kept: one case per operator)
     if op == "!":
         return f"(not {go(a[0])})"
     if op == "&":

@@ -117,6 +117,8 @@ def run_plain(path: str) -> tuple[float, int, int]:
 
     t = time.perf_counter()
     n = 0
+    # same decode loop as _decode_mcap in tests/monitors/test_audit.py (kept: the bench times it,
+    # the test keeps the messages)
     stores = {}
     with open(path, "rb") as f:
         for schema, _channel, m in make_reader(f).iter_messages(log_time_order=True):

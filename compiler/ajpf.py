@@ -92,6 +92,8 @@ def to_ajpf(node: Node, agent: str, mapping: dict) -> str:
             return f"D({ag},{term})"
         return f"B({ag},{term})"
 
+    # same shape as bench/bench_monitor.py's to_rye: a case per IR operator (kept: AJPF spells
+    # every case its own way)
     def go(n: Node) -> str:
         op = n.op
         if op == "ap":

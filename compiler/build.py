@@ -30,6 +30,8 @@ class Compiled:
     error: FretishError | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
+    # read-only delegations, same shape as compiler.codegen.MonitorSource's (kept: one property per
+    # field)
     @property
     def id(self) -> str:
         return self.entry.id

@@ -73,6 +73,7 @@ class MonitorSource:
     bad_table: int | None = None  # index in the module's _TABLES (render_module)
     good_table: int | None = None
 
+    # read-only delegations, same shape as compiler.build.Compiled's (kept: one property per field)
     @property
     def bad(self):
         """The automaton whose rejection means *violated* (or None)."""

@@ -153,6 +153,8 @@ class Expander:
         ((!Left) S p) & O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP &
         b) | (Y p); prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))).
         Endpoint-free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""
+        # same shape as _future_function below: FRET's past functions mirror its future ones (kept:
+        # other operators, H/O/S/Y here)
         name, args = e.name, e.args
         # Function expansions are built in a pt expander whatever the formula kind.
         px = Expander("pt", self.left_pt, self.right_ft, self.free)
@@ -193,6 +195,8 @@ class Expander:
         nextOcc(p,q) = Right | X(((!p & !Right) U p) -> ((!p & !Right) U (p & q))).
         Endpoint-free forms inside scope conditions: G[m,n] p, F[m,n] p,
         X((!p) U (p & q))."""
+        # same shape as _past_function above: the future mirror (kept: other operators, G/F/U/X
+        # here)
         name, args = e.name, e.args
         fx = Expander("ft", self.left_pt, self.right_ft, self.free)
         right = self.right_ft

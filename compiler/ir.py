@@ -44,6 +44,8 @@ class Node:
 
     def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
                  lo: int | None = None, hi: int | None = None):
+        # plain attribute stores, same shape as fretish.errors' __init__s (kept: a __slots__
+        # class's fields)
         self.op = op
         self.args = args
         self.name = name
@@ -111,6 +113,7 @@ def not_(a: Node) -> Node:
     return Node("!", (a,))
 
 
+# the dual of or_ below, same shape (kept: constants and operator swapped)
 def and_(a: Node, b: Node) -> Node:
     """Conjunction; folds constants and ``a & a``."""
     if a.op == "false" or b.op == "false":
@@ -124,6 +127,7 @@ def and_(a: Node, b: Node) -> Node:
     return Node("&", (a, b))
 
 
+# the dual of and_ above, same shape (kept: constants and operator swapped)
 def or_(a: Node, b: Node) -> Node:
     """Disjunction; folds constants and ``a | a``."""
     if a.op == "true" or b.op == "true":

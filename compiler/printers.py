@@ -81,6 +81,8 @@ def to_smv(node: Node, ftp: str = "FTP") -> str:
         raise ValueError("ftp must be 'FTP' or '(Z FALSE)'")
     slot = "text" if ftp == "FTP" else "ztext"  # node-level caches, one per spelling
 
+    # same shape as to_spot's go below: a case per IR operator (kept: each syntax spells every case
+    # its own way)
     def go(n: Node) -> str:
         got = getattr(n, slot)
         if got is not None:
@@ -136,6 +138,8 @@ def to_spot(node: Node) -> str:
     """Spot LTL text of a future-time formula. Raises ``ValueError`` on past operators."""
     memo: dict = {}
 
+    # same shape as to_smv's go above: a case per IR operator (kept: each syntax spells every case
+    # its own way)
     def go(n: Node) -> str:
         got = memo.get(n)
         if got is not None:

@@ -38,6 +38,8 @@ def ft_timing(kind: str, negate: bool, R: Node, right: Node, n: int | None,
     def eventually(r: Node) -> Node:
         return U(not_(right), r)
 
+    # same cases as _obligation in tests/differential.py (kept: formulas here, that test's
+    # independent truth-value oracle there)
     if kind == "immediately":
         return nR if negate else R
     if kind == "next":

@@ -149,6 +149,8 @@ class FretishSyntaxError(FretishError):
                  column: int = 1, text_line: str = "", expected: Sequence[str] = (),
                  hint: str | None = None, text_line_column: int = 1,
                  offset: int | None = None):
+        # same attribute stores as FretishFileError.__init__ below (kept: each error its own fields
+        # and defaults)
         self.message = message
         self.source = source
         self.line = line
@@ -176,6 +178,8 @@ class FretishFileError(FretishError):
 
     def __init__(self, message: str, *, source: str, line: int = 1, column: int = 1,
                  text_line: str | None = None, hint: str | None = None):
+        # same attribute stores as FretishSyntaxError.__init__ above and compiler.ir.Node.__init__
+        # (kept: each class its own fields)
         self.message = message
         self.source = source
         self.line = line

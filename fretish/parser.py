@@ -316,6 +316,7 @@ class _Builder(Transformer):
             return A.Scope(kind, m.var, _join(c[0], m))
         return A.Scope(kind, m, _join(c[0], m))
 
+    # one Lark callback per scope rule, all through _scope (kept: Lark wants a method per rule)
     def in_scope(self, c):
         return self._scope("in", c)
 

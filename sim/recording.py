@@ -236,6 +236,8 @@ class McapRecorder:
 
     def write(self, topic: str, log_time_ns: int, msg) -> None:
         """Serialize ``msg`` and add it on ``topic`` at ``log_time_ns`` (= publish time)."""
+        # same checks as sim.serve.ServeRecorder.write (kept: two small recorders, a file and a
+        # live server)
         if topic not in self.channels:
             raise ValueError(f"unknown topic {topic}")
         if log_time_ns < self.last_time:

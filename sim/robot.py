@@ -31,6 +31,8 @@ class ScoutMiniParams:
     accelerations of 0.5 m/s^2 and 0.5 rad/s^2 (issue #4).
     """
 
+    # dataclass fields, same shape as LidarParams' and sim.simulation.SimParams' (kept: parameter
+    # defaults, no logic)
     half_length: float = 0.21
     half_width: float = 0.165
     max_v: float = 0.5
@@ -134,6 +136,7 @@ class LidarParams:
     ``resolution`` m (a VLP-16 reports distances in 2 mm units) and a per-beam probability
     ``p_invalid`` of an invalid return (published as NaN, REP 117)."""
 
+    # dataclass fields, same shape as ScoutMiniParams' (kept: parameter defaults, no logic)
     n_beams: int = 720
     angle_min: float = -math.pi
     angle_increment: float = math.pi / 360.0

@@ -54,6 +54,8 @@ class ServeRecorder:
 
     def write(self, topic: str, log_time_ns: int, msg) -> None:
         """Serialize ``msg`` and publish it on ``topic`` when its log time is due."""
+        # same checks as sim.recording.McapRecorder.write (kept: two small recorders, a live server
+        # and a file)
         if topic not in self.types:
             raise ValueError(f"unknown topic {topic}")
         if log_time_ns < self.last_time:

@@ -52,6 +52,8 @@ class SimParams:
     limit), ``final_linger`` / ``contact_linger`` s of recording after the end,
     ``loc_sigma_xy`` m / ``loc_sigma_yaw`` rad (localization noise, per scan)."""
 
+    # dataclass fields, same shape as sim.robot.ScoutMiniParams' (kept: parameter defaults, no
+    # logic)
     mission_start: float = 1.0
     max_time: float = 110.0
     final_linger: float = 2.0

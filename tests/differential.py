@@ -296,6 +296,7 @@ def value(w: _World, e: tuple, t: int, free: bool = False):
         if k == "persists":    # p at t+m..t+n, and e >= t+n
             return end >= t + n and all(v(j) for j in range(t + m, t + n + 1))
         return any(v(j) for j in range(t + m, min(t + n, end) + 1))   # occurs
+    # same shape as nextOcc below: the past mirror (kept: previous positions, s_of, Y false at 0)
     if k == "prevOcc":
         p = lambda j: value(w, e[1], j, free)  # noqa: E731
         q = lambda j: value(w, e[2], j, free)  # noqa: E731
@@ -310,6 +311,7 @@ def value(w: _World, e: tuple, t: int, free: bool = False):
         if not prev:
             return not free
         return q(prev[-1])
+    # same shape as prevOcc above: the future mirror (kept: next positions, e_of, a horizon)
     if k == "nextOcc":
         p = lambda j: value(w, e[1], j, free)  # noqa: E731
         q = lambda j: value(w, e[2], j, free)  # noqa: E731
@@ -389,6 +391,8 @@ def _obligation(tk, negate, n, t, e, R, S, L) -> bool:
         k = next((j for j in rng(t, e) if f(j)), INF)
         return not any(S(j) for j in rng(t, min(k, e)))
 
+    # same cases as compiler.scope_timing.ft_timing (kept: an independent oracle of truth values,
+    # not formulas)
     if tk == "immediately":
         return nR(t) if negate else R(t)
     if tk == "next":

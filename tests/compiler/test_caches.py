@@ -16,6 +16,8 @@ from fretish import parse
 from fretish import parser as P
 
 
+# same helpers as entry/load in tests/compiler/test_monitors_codegen.py (kept: each test file
+# stands alone)
 def entry(rid: str, text: str):
     return SimpleNamespace(id=rid, text=text, source="t.fret", line=1, column=1,
                            rationale=None, parent=None, tick_period=None,

@@ -27,6 +27,7 @@ SHARED = Path(__file__).resolve().parents[3] / "shared"
 VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
 
 
+# same helpers as entry/load in tests/compiler/test_caches.py (kept: each test file stands alone)
 def entry(rid: str, text: str, tick_period=None):
     """A requirement entry as fretish.files makes them (without a file)."""
     return SimpleNamespace(id=rid, text=text, source="test.fret", line=1, column=1,

@@ -138,6 +138,8 @@ def _decode_mcap(path):
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     out = {}
+    # same decode loop as run_plain in bench/bench_read.py (kept: independent of monitors.sources,
+    # the bench times it)
     stores = {}
     with open(path, "rb") as f:
         for schema, channel, message in make_reader(f).iter_messages(log_time_order=True):
@@ -280,6 +282,8 @@ A1: whenever near the bot shall within 500 milliseconds satisfy halted
 A2: the bot shall always satisfy speed <= 1
 A3: whenever flag the bot shall immediately satisfy halted
 """
+# the first lines of SYN_BINDINGS in tests/monitors/test_report.py (kept: data; each test file
+# binds its own variables)
 SYN_BINDINGS = """[tick]
 period = "100 ms"
 [variables]

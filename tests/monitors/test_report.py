@@ -378,6 +378,8 @@ S1: in moving mode, upon near the bot shall within 300 milliseconds satisfy halt
 S3: whenever flag the bot shall immediately satisfy halted
 S4: the bot shall always satisfy battery > 0.2
 """
+# same layout as BINDINGS in bench/bench_audit.py and SYN_BINDINGS in tests/monitors/test_audit.py
+# (kept: data; this one binds more variables)
 SYN_BINDINGS = """[tick]
 period = "100 ms"
 [variables]

@@ -188,6 +188,8 @@ def test_header_time_base_needs_headers(tmp_path):
 
 
 def test_real_mcap_bindings_against_numpy():
+    # same arrange as test_real_bag_laserscan_against_numpy (kept: another log and other
+    # expressions)
     src = open_log(CMD_VEL_MCAP)
     b = make_bindings({
         "cmd": "/vehicle/cmd_vel.twist.linear.x",
@@ -229,6 +231,8 @@ def test_real_mcap_bindings_against_numpy():
 
 
 def test_real_bag_laserscan_against_numpy():
+    # same arrange as test_real_mcap_bindings_against_numpy (kept: another log and other
+    # expressions)
     src = open_log(STAGE_BAG)
     b = make_bindings({
         "too_close": "min(/base_scan.ranges) < 0.9",

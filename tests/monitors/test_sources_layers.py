@@ -35,23 +35,22 @@ def test_reorder_queue_releases_in_log_time_order_within_the_window(items):
     q = ReorderQueue()
     out: list[tuple[int, int]] = []
     late: list[int] = []
-    watermark = None
-    for pos, (t, jitter) in enumerate(items):
-        t = max(0, t + jitter)
-        watermark = t if watermark is None else max(watermark, t)
+
+    def drain(watermark):
         for log_time, item in q.due(watermark):
             if q.late_by(log_time):
                 late.append(item)
                 continue
             q.delivered(log_time)
             out.append((log_time, item))
+
+    watermark = None
+    for pos, (t, jitter) in enumerate(items):
+        t = max(0, t + jitter)
+        watermark = t if watermark is None else max(watermark, t)
+        drain(watermark)
         q.push(t, pos, pos)
-    for log_time, item in q.due(None):
-        if q.late_by(log_time):
-            late.append(item)
-            continue
-        q.delivered(log_time)
-        out.append((log_time, item))
+    drain(None)
     assert len(q) == 0
     assert [t for t, _ in out] == sorted(t for t, _ in out)
     assert sorted([i for _, i in out] + late) == list(range(len(items)))

@@ -64,6 +64,8 @@ def _watch_trace(plan, trace, rate=RATE, record=None, at=None, backoff=0.05):
             finally:
                 w.stop()
 
+        # same thread-run-join as _run_synthetic below (kept: a recorded trace served here,
+        # synthetic messages there, other waits)
         t = threading.Thread(target=publish, daemon=True)
         t.start()
         la = w.run()
@@ -167,6 +169,8 @@ def _run_synthetic(plan, server, publish, wait=0.5, last=None):
         finally:
             w.stop()
 
+    # same thread-run-join as _watch_trace above (kept: synthetic messages here, a recorded trace
+    # there, other waits)
     t = threading.Thread(target=go, daemon=True)
     t.start()
     la = w.run()
