@@ -73,3 +73,15 @@ def test_emit_ltl_starts_without_heavy_libraries(tmp_path):
                          text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert "HEAVY []" in out.stdout, out.stdout
+
+
+def test_every_package_is_installed():
+    # `pip install .` (the README's first command) installs only the packages pyproject.toml
+    # lists: a new sub-package missing there breaks the installed fretc, not the tests
+    import tomllib
+
+    listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = {".".join(p.parent.relative_to(REPO).parts) for pkg in PACKAGES + ("templates",)
+             for p in (REPO / pkg).rglob("__init__.py")}
+    assert found <= listed, sorted(found - listed)
