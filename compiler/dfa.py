@@ -9,7 +9,8 @@ tables:
 
 - the subset construction with state sets as integer bit masks, the successors of a set
   looked up 16 NFA states at a time (memoized unions);
-- each new set is *pruned* by direct simulation: when every state of the NFA is accepting
+- when the plain powerset grows beyond :data:`PRUNE_AFTER` sets, the construction starts
+  again with each new set *pruned* by direct simulation: when every state of the NFA is accepting
   (a monitor), a state ``s`` simulated by a state ``t`` (every letter ``s`` reads leads to a
   state simulated by one ``t`` reaches on the same letter) accepts a subset of ``t``'s words,
   so a set holding both accepts what it accepts without ``s`` (Dill, Hu & Wong-Toi,
@@ -42,6 +43,9 @@ SUBSET_MAX_STATES = 200_000
 #: The simulation preorder is computed for NFAs of at most this many states (its cost grows
 #: with the square of the states); larger ones are determinized without pruning.
 SIMULATION_MAX_STATES = 2000
+#: The subset construction runs without pruning first (computing the simulation costs more
+#: than it saves on small powersets) and restarts with pruning beyond this many subsets.
+PRUNE_AFTER = 1000
 #: NFA states per memoized chunk of a state set.
 _CHUNK = 16
 
@@ -108,7 +112,8 @@ def simulation_dominated(succ: list[list[int]]) -> list[int]:
 
 
 def determinize(succ: list[list[int]], init: int, width: int,
-                limit: int = SUBSET_MAX_STATES, prune: bool = True) -> list[list[int]] | None:
+                limit: int = SUBSET_MAX_STATES,
+                prune_after: int | None = PRUNE_AFTER) -> list[list[int]] | None:
     """The subset construction of a nondeterministic automaton given by successor masks.
 
     :param succ: ``succ[s][letter]`` is the bit mask of the successors of NFA state ``s`` on
@@ -116,13 +121,26 @@ def determinize(succ: list[list[int]], init: int, width: int,
     :param init: the NFA's initial state.
     :param width: the number of letters (or letter classes).
     :param limit: the most DFA states built; beyond it None is returned.
-    :param prune: remove from each state set the states simulated by another of the set
+    :param prune_after: when the plain construction exceeds this many sets, start again
+        removing from each set the states simulated by another of the set
         (:func:`simulation_dominated`; same language, fewer sets), for NFAs of at most
-        :data:`SIMULATION_MAX_STATES` states.
-    :returns: the DFA's rows, state 0 = ``{init}``; the empty set is not a state (-1).
+        :data:`SIMULATION_MAX_STATES` states; 0: prune from the start; None: never.
+    :returns: the DFA's rows, state 0 = ``{init}``; the empty set is not a state (-1). The
+        rows depend on whether pruning happened; their minimal DFA does not.
     """
-    n = len(succ)
-    dom = simulation_dominated(succ) if prune and 1 < n <= SIMULATION_MAX_STATES else None
+    if prune_after is None or not 1 < len(succ) <= SIMULATION_MAX_STATES:
+        return _subsets(succ, init, width, limit, None)
+    if 0 < prune_after < limit:
+        rows = _subsets(succ, init, width, prune_after, None)
+        if rows is not None:
+            return rows
+    return _subsets(succ, init, width, limit, simulation_dominated(succ))
+
+
+def _subsets(succ: list[list[int]], init: int, width: int, limit: int,
+             dom: list[int] | None) -> list[list[int]] | None:
+    """The subset construction; each new set pruned by ``dom`` (from
+    :func:`simulation_dominated`) unless None. See :func:`determinize`."""
     mask = (1 << _CHUNK) - 1
     unions: dict[tuple[int, int], list[int]] = {}  # (chunk, bits) -> successors per letter
 

@@ -80,13 +80,15 @@ def test_determinize_unions_successors_and_gives_up_beyond_the_limit():
     # 1 -!a-> {} (reject), 1 -a-> {1}
     succ = [[0b01, 0b11], [0b00, 0b10]]
     # {0}: !a -> {0}, a -> {0,1}; {0,1}: !a -> {0}, a -> {0,1}
-    assert dfa.determinize(succ, 0, 2, prune=False) == [[0, 1], [0, 1]]
+    assert dfa.determinize(succ, 0, 2, prune_after=None) == [[0, 1], [0, 1]]
     # 1 is simulated by 0 (0 reads every word 1 reads): {0,1} is pruned to {0}
     assert dfa.simulation_dominated(succ) == [0b10, 0]
-    assert dfa.determinize(succ, 0, 2) == [[0, 0]]
+    assert dfa.determinize(succ, 0, 2, prune_after=0) == [[0, 0]]
+    # pruning starts only when the plain construction exceeds prune_after sets
+    assert dfa.determinize(succ, 0, 2, prune_after=5) == [[0, 1], [0, 1]]
     # from {1} alone: !a rejects
-    assert dfa.determinize(succ, 1, 2) == [[-1, 0]]
-    assert dfa.determinize(succ, 0, 2, limit=1, prune=False) is None
+    assert dfa.determinize(succ, 1, 2, prune_after=0) == [[-1, 0]]
+    assert dfa.determinize(succ, 0, 2, limit=1, prune_after=None) is None
 
 
 def test_mutually_simulating_states_keep_the_lower_number():
@@ -114,8 +116,8 @@ def test_pruning_by_simulation_keeps_the_minimal_dfa(nfa):
     """Differential: the subset construction with and without simulation pruning gives the
     same minimal DFA on random NFAs (every state accepting, as in a monitor)."""
     succ, init, width = nfa
-    assert _canonical(dfa.determinize(succ, init, width)) == \
-        _canonical(dfa.determinize(succ, init, width, prune=False))
+    assert _canonical(dfa.determinize(succ, init, width, prune_after=0)) == \
+        _canonical(dfa.determinize(succ, init, width, prune_after=None))
 
 
 @settings(max_examples=200, deadline=None)
