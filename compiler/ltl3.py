@@ -214,8 +214,11 @@ def _normalize(n: Node) -> Node:
 
 #: Work bound of :func:`progression_tables` (residual states x letters): the residuals of a
 #: bound in the thousands are large (fuzzing: ``before q whenever c ... after 999999 ticks``
-#: took 110 s for 4096 states without it).
-MAX_PROGRESSIONS = 4096
+#: took 110 s for 4096 states without it). 1280: the largest residual automata of FRET's
+#: templates at 12 ticks (``in m upon c ... after 12 ticks``: 151 residuals x 8 letters = 1208
+#: progressions) are built; those that would exceed it (``only in m whenever c ... after 12
+#: ticks``) give up after about a second instead of five.
+MAX_PROGRESSIONS = 1280
 
 
 def progression_tables(formula: Node, atoms: list[Node],
