@@ -51,7 +51,8 @@ from fretish import ast as A
 from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 from .obligations import OBLIGATIONS, Interval, ObligationChecker
 
-__all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement",
+__all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
+           "endpoints", "scope_mode",
            "scope_intervals", "scope_of", "trace_signals", "trigger_points", "OBLIGATIONS"]
 
 #: How many failed triggers an :class:`Evidence` lists (all are counted).
@@ -551,3 +552,17 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
                     violation=first, ticks=n,
                     first_interval=intervals[0] if intervals else None,
                     first_trigger=first_trigger, listed=listed)
+
+
+def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+               duration_ticks: int | None = None) -> str:
+    """FRET's verdict of ``req`` on a finite trace as a word: ``"satisfied"``,
+    ``"vacuous"``, ``"violated"``, or ``"unknown"`` when the interval semantics cannot
+    evaluate it (:class:`EvidenceUnsupported`: an uninterpreted function, a free-form
+    sentence). Arguments and other errors as :func:`evaluate_requirement`; this is the
+    :data:`compiler.check_witness.Judge` ``fretc check`` passes for its witnesses."""
+    try:
+        ev = evaluate_requirement(req, columns, n, duration_ticks)
+    except EvidenceUnsupported:
+        return "unknown"
+    return "violated" if not ev.holds else ("vacuous" if ev.vacuous else "satisfied")
