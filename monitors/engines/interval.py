@@ -28,11 +28,20 @@ looked at and the tick at which the obligation was definitely missed.
 
 Expressions are evaluated over numpy columns (one value per tick per FRET variable) with the
 same value conventions as the generated monitors (a number read as a condition is
-``bool(x)``; ``/`` by zero is NaN). FRET's past/future functions ``persisted``, ``occurred``,
-``persists``, ``occurs`` are evaluated relative to the scope interval (FRET's ``$Left$`` /
-``$Right$``), ``preBool``/``preInt``/``preReal`` relative to the run's first tick;
-``prevOcc``, ``nextOcc`` and uninterpreted functions raise :class:`EvidenceUnsupported`
-(the audit then reports the monitor's verdict without interval evidence).
+``bool(x)``; ``/`` by zero is NaN). Every FRET temporal function is evaluated from the
+"meaning" column of ``../shared/fretish/README.md`` section 6b, relative to FRET's ``Left`` /
+``Right`` of the requirement's scope (:func:`endpoints`) in conditions, responses and stop
+conditions, and in FRET's endpoint-free forms inside scope conditions: ``persisted`` and
+``occurred`` (2 and 3 arguments), ``persists`` and ``occurs`` (2 and 3 arguments),
+``prevOcc`` / ``at the previous occurrence of`` (true at an interval's first position),
+``nextOcc`` / ``at the next occurrence of`` (true at its last), ``preBool`` / ``preInt`` /
+``preReal`` (relative to the run's first tick), nested in any way. Future-time functions near
+the end of the trace read FRET's absorbing state after it (every variable false, every
+number 0; section 6's trace model), where an interval of ``notin``/``onlyIn``/``before``
+reaching the end has no ``Right``. Only uninterpreted functions and free-form sentences raise
+:class:`EvidenceUnsupported` (the audit then reports the monitor's verdict without interval
+evidence). tests/monitors/test_evidence_functions.py checks all of this against the
+generated monitors, FRET's formulas and an independent oracle on random sentences.
 
 Cost: O(ticks + triggers) time and a few arrays of ``n`` items; the audit keeps the columns
 of the requirement's own variables for this (1 byte per tick for a boolean, 8 for a number).
@@ -60,8 +69,8 @@ MAX_LISTED = 100
 
 
 class EvidenceUnsupported(ValueError):
-    """The requirement uses something the direct interval semantics does not evaluate
-    (``prevOcc``, ``nextOcc``, an uninterpreted function, a free-form sentence)."""
+    """The requirement uses something the direct interval semantics does not evaluate: an
+    uninterpreted function (one FRET does not define) or a free-form sentence."""
 
 
 @dataclass(frozen=True)
@@ -501,7 +510,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         An :class:`Evidence`.
 
     Raises:
-        EvidenceUnsupported: free-form, or a function this module does not evaluate.
+        EvidenceUnsupported: free-form, or an uninterpreted function.
         KeyError: a variable missing from ``columns``.
         ValueError: ``n`` < 1.
     """
