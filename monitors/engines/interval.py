@@ -457,12 +457,10 @@ def scope_mode(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
     return _Expr(columns, n, free=True).bool(req.scope.mode)[:n]
 
 
-def scope_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-             *_legacy) -> list[Interval]:
+def scope_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
+             ) -> list[Interval]:
     """The scope intervals of ``req`` over ``n`` ticks (:func:`scope_intervals`), its mode
-    evaluated with FRET's endpoint-free function forms (:func:`scope_mode`). (Extra
-    positional arguments, the interval bounds earlier versions took, are ignored: a scope
-    condition's functions have no endpoints in FRET.)"""
+    evaluated with FRET's endpoint-free function forms (:func:`scope_mode`)."""
     return scope_intervals(req.scope.kind, scope_mode(req, columns, n), n)
 
 
@@ -473,7 +471,13 @@ def trace_signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
     the ``n`` ticks, their temporal functions relative to FRET's ``Left``/``Right`` of the
     requirement's scope (:func:`endpoints`, from the scope mode; ``intervals`` is accepted
     for compatibility and not needed)."""
-    left, right = endpoints(req.scope.kind, scope_mode(req, columns, n), n)
+    return _signals(req, columns, n, scope_mode(req, columns, n))
+
+
+def _signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+             mode: np.ndarray | None):
+    """:func:`trace_signals` given the scope mode's truth at each tick."""
+    left, right = endpoints(req.scope.kind, mode, n)
     ex = _Expr(columns, n, left, right)
     R = ex.bool(req.response)[:n]
     C = ex.bool(req.condition.expr)[:n] if req.condition.kind != "null" else None
@@ -523,11 +527,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
     # section 6b); conditions, responses and stop conditions the scope's Left/Right
     mode = scope_mode(req, columns, n)
     intervals = scope_intervals(scope, mode, n)
-    left, right = endpoints(scope, mode, n)
-    ex = _Expr(columns, n, left, right)
-    R = ex.bool(req.response)[:n]
-    C = ex.bool(req.condition.expr)[:n] if cond != "null" else None
-    S = ex.bool(req.timing.stop)[:n] if timing in A.STOP_TIMINGS else None
+    R, C, S = _signals(req, columns, n, mode)
     k = None
     if timing in A.DURATION_TIMINGS:
         if duration_ticks is not None:
