@@ -177,7 +177,7 @@ class Timeline:
     Attributes:
         start, end: the log's first tick and the end of the picture's time (its last tick,
             or the violation); ``log_end`` = ``end`` + one ``period`` (the last cell).
-        viol_ns: log time of the message that decided the violation.
+        viol_ns: where the violation is drawn (:func:`violation_time_ns`).
         ticks: tick -> time of every sampled tick; ``segs`` the detail windows over them.
         marks: (kind: trigger | violation | ltl3, ns, label).
         scope_ab, win_ab: the scope interval and the response window as ``(a, b)`` ns (None
