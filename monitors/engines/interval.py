@@ -127,7 +127,6 @@ class Evidence:
 _FAR = 1 << 40
 
 _PAST_FUNCS = ("persisted", "occurred", "prevOcc", "preBool")
-_FUTURE_FUNCS = ("persists", "occurs", "nextOcc")
 
 
 def endpoints(kind: str, mode: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -18,13 +18,17 @@ A bounded sample runs by default; ``pytest -m slow`` runs a longer one.
 
 from __future__ import annotations
 
+import json
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from compiler.evaluate import ft_at, pt_at
+from compiler.semantics import formalize
 from fretish import parse
+from fretish.errors import FretishError
 from monitors.engines.interval import EvidenceUnsupported, evaluate_requirement
 from monitors.engines.vectorized import pt_series
 
@@ -193,7 +197,6 @@ def test_hand_checked_functions(sentence, trace, holds, first):
     req = parse(sentence)
     ev = evaluate_requirement(req, cols, n)
     rows = [{k: bool(v[i]) for k, v in cols.items()} for i in range(n)]
-    from compiler.semantics import formalize
     assert ev.holds == holds == ft_at(formalize(req).ft, rows)
     got = (ev.violation.trigger_tick, ev.violation.interval) if ev.violation else None
     assert got == first
@@ -207,3 +210,27 @@ def test_only_uninterpreted_functions_are_unsupported(sentence):
     cols = {"p": np.array([True, False]), "q": np.array([True, True])}
     with pytest.raises(EvidenceUnsupported):
         evaluate_requirement(parse(sentence), cols, 2)
+
+
+def test_fret_function_vectors():
+    """The 152 sentences FRET formalized around its temporal functions
+    (fret_vectors_functions.jsonl): the evidence gives the ft verdict on random traces."""
+    path = Path(__file__).resolve().parents[3] / "shared/fretish/fret_vectors_functions.jsonl"
+    rnd = random.Random(21)
+    checked = 0
+    for line in path.open(encoding="utf-8"):
+        row = json.loads(line)
+        try:
+            req = parse(row["text"])
+            f = formalize(req)
+        except FretishError:  # a sentence FRET rejects too
+            continue
+        names = sorted(f.variables)
+        for _ in range(25):
+            n = rnd.randint(1, 9)
+            rows = [{v: rnd.random() < 0.5 for v in names} for _ in range(n)]
+            cols = {v: np.array([r[v] for r in rows]) for v in names}
+            ev = evaluate_requirement(req, cols, n, f.ticks)
+            assert ev.holds == ft_at(f.ft, rows), (row["text"], rows)
+        checked += 1
+    assert checked >= 140
