@@ -188,7 +188,7 @@ def main() -> None:
                 own = cpu - warm
                 print(f"[2] {label}: {text!r}: {cpu:.2f} s CPU, peak RSS {rss:.0f} MB "
                       f"(cold cache, fresh process, start-up included; warm {warm:.2f} s, "
-                      f"so {own:.2f} s for the automata)"
+                      f"so {own:.2f} s filling the cache: Lark tables and automata)"
                       + (f"; target <= {TARGET_MAX_S:.0f} s: {verdict(own <= TARGET_MAX_S)}"
                          if label == "fretc" else "")
                       + (f"; old code per the issue: {ISSUE_BASELINE[key]}"
