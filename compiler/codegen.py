@@ -12,6 +12,16 @@ class has ``VARIABLES``, ``step(sample) -> bool``, ``status``, ``finish() -> boo
   continuation satisfies ft_inf: *violated*), a prefix with no run in ``good`` a good prefix
   (*satisfied*); otherwise *unknown* (LTL3; Bauer, Leucker & Schallhart, TOSEM 2011).
 
+Import cost: a module may hold thousands of requirements, and compiling Python source costs
+about a second per megabyte of code. So the code of ``reset``/``step`` is rendered per
+requirement from ``templates/monitor_shape.py.j2`` without the variable names (``K0``,
+``K1``, ... stand for ``VARIABLES[0]``, ...); requirements whose code is then equal share one
+entry of the module's ``_SHAPES``, kept as a string literal and compiled when the first
+monitor of that shape is made. Each requirement is one ``_monitor(...)`` call (its id, text,
+formulas, hash, variables, shape number), and LTL3 tables are text in ``_TABLES``, decoded on
+first use into tuples. Only code and read-only tables are shared: a monitor's state is its
+object's own.
+
 :func:`build_monitor_modules` returns, per requirement file, the module text with what was
 built for it (per requirement: the class name, the :class:`MonitorSource` the template was
 fed and the LTL3 automata), so a caller that runs the monitors in this process (the audit)

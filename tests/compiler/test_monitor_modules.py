@@ -189,3 +189,22 @@ def test_each_requirement_of_a_shared_shape_has_its_own_verdict(rows, rnd):
     for rid, m in side_by_side.items():
         assert (got[rid], m.finish()) == _run(alone[rid].MONITORS[rid](), trace), rid
     assert (got_twin, twin.finish()) == _run(alone["S0"].MONITORS["S0"](), other)
+
+
+def test_a_requirements_monitor_source_is_found_by_its_class_name():
+    """What the report shows as a requirement's generated monitor: its ``_monitor`` call
+    (id, text, formulas, variables) and the shape entry with its step code."""
+    from monitors.report_trace import _class_source
+
+    entries = [RequirementEntry(id=rid, text=text, source="shaped.fret", line=i + 1,
+                                column=1, requirement=parse(text))
+               for i, (rid, text) in enumerate(SHAPED)]
+    mm = codegen.build_monitor_module(compile_entries(entries), "shaped")
+    info = mm.monitors["O1"]
+    src = _class_source(mm.text, info.class_name)
+    assert src.startswith(f"{info.class_name} = _monitor(") and "ID='O1'" in src
+    for text in (info.source.text, info.source.ft, info.source.ft_inf, info.source.pt):
+        assert repr(text) in src
+    assert f"VARIABLES={info.source.variables!r}" in src
+    shape = src[src.index("# _SHAPES["):]
+    assert "def step(self, sample):" in shape and "S0" not in src
