@@ -10,6 +10,7 @@ numpy, mcap, Jinja2 or Spot.
 
 from __future__ import annotations
 
+import gc
 import json
 import sys
 from pathlib import Path
@@ -47,6 +48,11 @@ def _load(paths) -> list:
               help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
 def compile_cmd(files, emit, as_json, output, psl_map):
     """Compile requirement FILES (.fret or FRET JSON exports)."""
+    if emit == "ltl":
+        # Parsed sentences, formula trees and printed texts are acyclic and live until the
+        # process ends: Python's cyclic garbage collector would only rescan them, again and
+        # again as they accumulate (more than half the CPU time of a thousand requirements).
+        gc.disable()
     compiled = _load(files)
     if not compiled:
         click.echo(f"error: no requirements in {', '.join(files)} (empty or only comments)",
