@@ -572,7 +572,7 @@ class _Inline:
 
 def fast_tables(lark) -> dict | None:
     """What :class:`_FastParser` needs from a Lark parser of ``grammar.lark``, as plain data
-    (pickled in fretc's cache beside Lark's own entry, so a run loads it without importing
+    (marshalled in fretc's cache beside Lark's own entry, so a run loads it without importing
     Lark): the terminals in the order Lark's lexer tries them, Lark's LALR table, and per
     rule its origin, length, callback name and Lark's child filter (``_``-prefixed
     terminals dropped, ``_``-prefixed rules spliced, ``?rule`` single children passed up).
@@ -603,11 +603,11 @@ def fast_tables(lark) -> dict | None:
                    if opts.keep_all_tokens or not (sym.is_term and sym.filter_out)]
         filtered = len(include) < len(exp) or any(x for _, x in include)
         index[rule] = len(rules)
-        rules.append((rule.origin.name, len(exp),
-                      rule.alias or opts.template_source or rule.origin.name,
+        rules.append((str(rule.origin.name), len(exp),
+                      str(rule.alias or opts.template_source or rule.origin.name),
                       bool(opts.expand1 and not rule.alias),
                       tuple(include) if filtered else None))
-    states = {s: {t: (True, arg) if act is Shift else (False, index[arg])
+    states = {int(s): {str(t): (True, int(arg)) if act is Shift else (False, index[arg])
                   for t, (act, arg) in acts.items()}
               for s, acts in table.states.items()}
     firsts = [_first_chars(t.pattern.to_regexp(), conf.g_regex_flags) for t in terminals]
@@ -616,13 +616,14 @@ def fast_tables(lark) -> dict | None:
     for ch in _ASCII:
         subset = tuple(i for i, f in enumerate(firsts) if f is None or ch in f)
         dispatch[ch] = subsets.setdefault(subset, len(subsets))
-    return {"terminals": [(t.name, t.pattern.to_regexp()) for t in terminals],
+    return {"terminals": [(str(t.name), str(t.pattern.to_regexp())) for t in terminals],
             "dispatch": dispatch, "subsets": list(subsets),
-            "flags": conf.g_regex_flags, "ignore": sorted(conf.ignore),
-            "newline": sorted(t.name for t in terminals
+            "flags": int(conf.g_regex_flags), "ignore": sorted(str(t) for t in conf.ignore),
+            "newline": sorted(str(t.name) for t in terminals
                               if _regexp_has_newline(t.pattern.to_regexp())),
-            "states": states, "rules": rules, "start_states": dict(table.start_states),
-            "end_states": dict(table.end_states)}
+            "states": states, "rules": rules,
+            "start_states": {str(k): int(v) for k, v in table.start_states.items()},
+            "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
 
 
 _ASCII = [chr(i) for i in range(128)]
@@ -720,8 +721,20 @@ class _FastParser:
         self.start_states = tables["start_states"]
         self.end_states = tables["end_states"]
         builder = _Builder()
-        self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include))
+        self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include),
+                       self._passed_up(size, expand1, include))
                       for origin, size, name, expand1, include in tables["rules"]]
+
+    @staticmethod
+    def _passed_up(size, expand1, include) -> int:
+        """For a ``?rule`` whose filtered children are always exactly one child (no splice),
+        that child's index counted from the end of the rule (Lark's callback returns it
+        as is); 0 otherwise."""
+        kept = [(i, splice) for i, splice in include] if include is not None else \
+            [(i, False) for i in range(size)]
+        if expand1 and len(kept) == 1 and not kept[0][1]:
+            return kept[0][0] - size
+        return 0
 
     def _matcher(self, sid: int):
         """The ``match`` of the regexp of subset ``sid``: its terminals, in Lark's order."""
@@ -808,7 +821,17 @@ class _FastParser:
                     state_stack.append(action[1])
                     value_stack.append(tok)
                     break
-                origin, size, callback = rules[action[1]]
+                origin, size, callback, up = rules[action[1]]
+                if up:
+                    value = value_stack[up]
+                    del state_stack[-size:]
+                    del value_stack[-size:]
+                    goto = states[state_stack[-1]][origin][1]
+                    state_stack.append(goto)
+                    value_stack.append(value)
+                    if is_end and goto == end_state:
+                        return value
+                    continue
                 if size:
                     children = value_stack[-size:]
                     del state_stack[-size:]
@@ -826,21 +849,19 @@ class _FastParser:
 def _load_fast():
     """The :class:`_FastParser` from its cache entry (built from Lark's tables, and stored,
     when missing), or False when it cannot be used."""
-    import pickle
+    import marshal  # plain data only; the key names the Python version (marshal's format)
     grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
-    name = f"grammar-{_cache_key(grammar)[:40]}.fast.pickle"
+    name = f"grammar-{_cache_key(grammar)[:40]}.fast.marshal"
     data = cache.read_bytes("lark", name)
-    tables = None
     if data is not None:
         try:
-            tables = pickle.loads(data)
-            return _FastParser(tables)
+            return _FastParser(marshal.loads(data))
         except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
-            tables = None
+            pass
     tables = fast_tables(_get_parser())
     if tables is None:
         return False
-    cache.write_bytes("lark", name, pickle.dumps(tables, protocol=pickle.HIGHEST_PROTOCOL))
+    cache.write_bytes("lark", name, marshal.dumps(tables))
     return _FastParser(tables)
 
 

@@ -147,3 +147,18 @@ def test_fast_path_equals_lark_on_word_soup(words, sep):
 def test_fast_path_equals_lark_on_edited_sentences(text, at, word):
     at = min(at, len(text))
     _check(text[:at] + word + text[at:])
+
+
+def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
+    """The fast path's tables live in fretc's cache beside Lark's; a damaged entry is
+    rebuilt, never trusted."""
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(P, "_fast", None)
+    monkeypatch.setattr(P, "_lark", None)
+    text = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
+    ref = _public(text)
+    (entry,) = (tmp_path / "lark").glob("*.fast.marshal")
+    entry.write_bytes(entry.read_bytes()[:200])
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert entry.stat().st_size > 200  # rewritten whole
