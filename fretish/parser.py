@@ -715,6 +715,7 @@ class _FastParser:
         self.subsets = tables["subsets"] + [tuple(range(len(self.terminals)))]
         self.dispatch = tables["dispatch"]       # ASCII character -> index into subsets
         self.matchers = [None] * len(self.subsets)  # compiled on first use
+        self.parts: dict = {}                     # terminal indices -> compiled match
         self.newline = frozenset(tables["newline"])
         self.ignore = frozenset(tables["ignore"])
         self.states = tables["states"]
@@ -737,14 +738,44 @@ class _FastParser:
         return 0
 
     def _matcher(self, sid: int):
-        """The ``match`` of the regexp of subset ``sid``: its terminals, in Lark's order."""
+        """The ``match`` of subset ``sid``: its terminals tried in Lark's order. A long
+        regexp (NAME's, with its reserved-word lookahead) is a part of its own, compiled
+        once and shared by every subset (trying the parts in turn is the alternation of
+        them all: the first alternative that matches wins either way)."""
         subset = self.subsets[sid]
         if not subset:
             raise _Slow("no terminal starts with this character")
-        m = re.compile("|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})"
-                                for i in subset), self.flags).match
+        parts, run = [], []
+        for i in subset:
+            if len(self.terminals[i][1]) > 200:
+                if run:
+                    parts.append(tuple(run))
+                    run = []
+                parts.append((i,))
+            else:
+                run.append(i)
+        if run:
+            parts.append(tuple(run))
+        matches = [self._part(p) for p in parts]
+        if len(matches) == 1:
+            m = matches[0]
+        else:
+            def m(text, pos, matches=matches):
+                for match in matches:
+                    found = match(text, pos)
+                    if found is not None:
+                        return found
+                return None
         self.matchers[sid] = m
         return m
+
+    def _part(self, indices: tuple):
+        got = self.parts.get(indices)
+        if got is None:
+            got = self.parts[indices] = re.compile(
+                "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})"
+                         for i in indices), self.flags).match
+        return got
 
     @staticmethod
     def _callback(builder, origin, name, expand1, include):
