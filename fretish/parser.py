@@ -1,8 +1,11 @@
 """FRETish sentence -> :class:`fretish.ast.Requirement`.
 
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
-phrasings and the expression precedence. The Lark parser is built once per process and
-applies the AST builder while it parses (no intermediate parse tree).
+phrasings and the expression precedence. The AST builder is applied while parsing (no
+intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
+cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character);
+a sentence it cannot parse goes to Lark itself, which is imported only then and reports the
+error (``fretc FILE --emit ltl`` on valid sentences does not import Lark).
 
 Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, restated;
 ``../shared/fretish/README.md`` sections 1-5 and 7):
