@@ -177,7 +177,7 @@ class Timeline:
     Attributes:
         start, end: the log's first tick and the end of the picture's time (its last tick,
             or the violation); ``log_end`` = ``end`` + one ``period`` (the last cell).
-        viol_ns: log time of the message that decided the violation.
+        viol_ns: where the violation is drawn (:func:`violation_time_ns`).
         ticks: tick -> time of every sampled tick; ``segs`` the detail windows over them.
         marks: (kind: trigger | violation | ltl3, ns, label).
         scope_ab, win_ab: the scope interval and the response window as ``(a, b)`` ns (None
@@ -208,11 +208,21 @@ class Timeline:
     axis: Axis
 
 
+def violation_time_ns(fv: dict) -> int:
+    """Where a first violation is drawn: its tick's time on the bindings' time base when that
+    is ``header`` (the detail windows, the trigger and the LTL3 mark are tick times there, and
+    header stamps may lie far from the log time of the deciding message), else the log time
+    of the message that decided it (``monitors.report_model``: each time says its clock)."""
+    if fv.get("tick_time_base") == "header" and fv.get("tick_time_ns") is not None:
+        return int(fv["tick_time_ns"])
+    return int(fv["log_time_ns"])
+
+
 def _marks(fv: dict, ltl3: dict, start: int) -> list[tuple[str, int, str]]:
     """The vertical marks: trigger, violation, LTL3 verdict time (when definitive)."""
     marks: list[tuple[str, int, str]] = []   # (kind, ns, label)
     trig = fv.get("trigger")
-    viol_ns = int(fv["log_time_ns"])
+    viol_ns = violation_time_ns(fv)
     ltl3_ns = ltl3.get("time_ns") if ltl3.get("status") in ("violated", "satisfied") else None
     if trig:
         trig_ns = int(trig["time_ns"])
@@ -261,7 +271,7 @@ def plan_timeline(verdict: dict, log: dict, period_ns: int | None,
     ticks = _tick_times(values, sources)
     period = _period_ns(ticks, period_ns)
     if not ticks:  # no sampled values: one window around the violation
-        ticks = {int(fv["tick"]): int(fv["log_time_ns"])}
+        ticks = {int(fv["tick"]): violation_time_ns(fv)}
     segs = _segments(ticks, period)
     log_end = end + period
     scope = fv.get("scope_interval")
@@ -285,7 +295,7 @@ def plan_timeline(verdict: dict, log: dict, period_ns: int | None,
     _layout(segs, x0)
     damage = log.get("damage_time_ns")
     return Timeline(start=start, end=end, log_end=log_end, period=period,
-                    viol_ns=int(fv["log_time_ns"]), ticks=ticks, segs=segs,
+                    viol_ns=violation_time_ns(fv), ticks=ticks, segs=segs,
                     marks=_marks(fv, verdict.get("ltl3") or {}, start), scope_ab=scope_ab,
                     win_ab=win_ab, win_past_end=win_past_end, window=window,
                     damage=int(damage) if damage is not None else None, lanes=lanes,

@@ -145,12 +145,20 @@ def unparse(node: Expr) -> str:
     if isinstance(node, Field):
         return node.text()
     if isinstance(node, UnaryOp):
-        return f"{node.op}{unparse(node.arg)}"
+        arg = unparse(node.arg) if node.op == "!" else _operand(node.arg)
+        return f"{node.op}{arg}"
     if isinstance(node, BinOp):
-        return f"({unparse(node.left)} {node.op} {unparse(node.right)})"
+        return f"({_operand(node.left)} {node.op} {_operand(node.right)})"
     if isinstance(node, FuncCall):
         return f"{node.func}({', '.join(unparse(a) for a in node.args)})"
     raise TypeError(type(node).__name__)
+
+
+def _operand(node: Expr) -> str:
+    """``unparse`` of an operand: ``!`` binds looser than comparisons, arithmetic and unary
+    minus (grammar.lark), so a negation inside them is parenthesized: ``(!a) = b``."""
+    text = unparse(node)
+    return f"({text})" if isinstance(node, UnaryOp) and node.op == "!" else text
 
 
 # ------------------------------------------------------------------------------------------------

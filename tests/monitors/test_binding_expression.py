@@ -43,14 +43,21 @@ def _where() -> ExprLocation:
 @given(_expressions())
 def test_printing_a_parsed_tree_and_parsing_it_again_gives_the_same_tree(text):
     tree, _topics = parse_expression(text, _where())
-    if any(isinstance(n, Ref) for n in walk(tree)) or any(
-            isinstance(n, UnaryOp) and n.op == "!" for n in walk(tree)):
-        # unparse prints substituted trees only; it prints `!a` unparenthesized, which reads
-        # differently inside arithmetic (kept as it is: its text is in audit outputs)
-        return
+    if any(isinstance(n, Ref) for n in walk(tree)):
+        return  # unparse prints substituted trees only
     printed = unparse(tree)
     again, _ = parse_expression(printed, _where())
     assert unparse(again) == printed
+
+
+def test_a_negation_inside_a_comparison_keeps_its_parentheses():
+    tree, _ = parse_expression("(!/a.b) = /c.d", _where())
+    assert unparse(tree) == "((!/a.b) = /c.d)"
+    again, _ = parse_expression(unparse(tree), _where())
+    assert isinstance(again, BinOp) and again.op == "="
+    neg, _ = parse_expression("-(!/a.b)", _where())
+    assert unparse(neg) == "-(!/a.b)"
+    assert unparse(parse_expression("!(/a.b = 1)", _where())[0]) == "!(/a.b = 1.0)"
 
 
 @settings(max_examples=100, deadline=None)

@@ -91,3 +91,21 @@ def test_timeline_svg_marks_gaps_and_non_finite_values():
     ET.fromstring(timeline_svg(v2, log))
     with pytest.raises(ValueError):
         timeline_svg(dict(v, first_violation=None), log)
+
+
+def test_under_the_header_time_base_the_violation_is_drawn_at_its_tick_time():
+    """Header stamps 2 s behind the log time: the violation mark sits on the violated tick
+    (the detail windows' clock), not on the deciding message's log time."""
+    v, log = _verdict()
+    P = 100 * MS
+    start = log["start_time_ns"]
+    v["first_violation"].update(log_time_ns=start + 43 * P + 2_000 * MS,
+                                tick_time_ns=start + 43 * P, tick_time_base="header")
+
+    def violation_marks(verdict):
+        root = ET.fromstring(timeline_svg(verdict, log, period_ns=P))
+        return {e.get("data-ns") for e in root.iter() if e.get("data-mark") == "violation"}
+
+    assert violation_marks(v) == {str(start + 43 * P)}
+    v["first_violation"]["tick_time_base"] = "log"   # log time base: the deciding message
+    assert violation_marks(v) == {str(start + 43 * P + 2_000 * MS)}
