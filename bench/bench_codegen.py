@@ -1,6 +1,6 @@
 """Monitor generation and generated-module import, as a user runs them.
 
-    python bench/bench_codegen.py [--baseline DIR] [--quick]
+    python bench/bench_codegen.py [--baseline DIR] [--quick] [--import-only]
 
 Measured in one run, each in a fresh Python process with an empty fretc cache
 (``FRETC_CACHE_DIR`` set to a new folder: "cold") unless said otherwise, CPU time (user +
@@ -16,7 +16,12 @@ system) of the child from ``resource.getrusage(RUSAGE_CHILDREN)``:
    occurs(99999999999, p))``;
 3. importing a generated module of 10,000 requirements (``bench_formalize``'s generator):
    CPU time and peak RSS of a child that imports it (first import compiles it; the second
-   uses the ``.pyc``), beside a child that only starts Python;
+   uses the ``.pyc``), beside a child that only starts Python, and of a child that makes one
+   object of every class (which compiles the step code of every shape); with
+   ``--baseline``, the same for the module the baseline generates from the same file; and
+   where the CPU time of ``--emit monitor`` on the 696 sentences of (1) goes, cold, in one
+   process (formalization, LTL3 automata and step code per requirement, Jinja rendering,
+   the module check);
 4. the generated module text of (1) cold and warm: byte-identical or not.
 
 ``--baseline DIR`` runs (1) and the two worst cases with another checkout of fretc (e.g.
@@ -24,6 +29,7 @@ system) of the child from ``resource.getrusage(RUSAGE_CHILDREN)``:
 51 s on (1) and 137 s / 1.5 GB on the ``persists`` case on an idle machine). Without it the
 figures the issue recorded for the old code are printed as the baseline.
 ``--quick`` skips (2)'s 288-key sweep and uses 2,000 requirements in (3).
+``--import-only`` runs (3) alone.
 """
 
 from __future__ import annotations
@@ -50,6 +56,32 @@ WORST = {
 }
 ISSUE_BASELINE = {"696": "51 s CPU (73 ms per requirement)", "W1": "6.5 s, 235 MB",
                   "W2": "137 s, 1.5 GB", "import10k": "20 s, 1.85 GB"}
+
+# Where the CPU time of --emit monitor goes, cold, in this process; prints JSON.
+PHASES = r"""
+import json, sys, time
+from pathlib import Path
+t0 = time.process_time()
+from compiler import codegen
+from compiler.build import compile_entries
+from fretish.files import load_requirements
+t1 = time.process_time()
+cs = compile_entries(load_requirements([Path(sys.argv[1])]))
+t2 = time.process_time()
+sources, skipped = [], []
+for i, c in enumerate(cs):
+    try:
+        sources.append(codegen.monitor_source(c, i))
+    except codegen.CodegenError as exc:
+        skipped.append((c.id, str(exc)))
+t3 = time.process_time()
+text = codegen._render(sources, skipped, "m")
+t4 = time.process_time()
+codegen.check_module(text, "m")
+t5 = time.process_time()
+print(json.dumps({"imports": t1 - t0, "formalize": t2 - t1, "monitor_source": t3 - t2,
+                  "render": t4 - t3, "check": t5 - t4, "n": len(cs)}))
+"""
 
 # Times each requirement's monitor_source in this (cold) process; prints JSON.
 PER_REQ = r"""
@@ -136,6 +168,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--baseline", type=Path, default=None)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--import-only", action="store_true")
     args = ap.parse_args()
     calib = min(timeit.repeat("sum(range(1000))", number=2000, repeat=5)) / 2000 * 1e6
     print(f"machine: sum(range(1000)) = {calib:.1f} µs (README figures: ~20 µs)")
@@ -146,6 +179,9 @@ def main() -> None:
         texts = verdict_sentences()
         f696 = write_fret(tmp / "verdicts.fret", texts, "T")
         figures = {}
+        if args.import_only:
+            _import_section(roots, 2000 if args.quick else 10000, f696, tmp)
+            return
         for label, root in roots:
             cold = tempfile.mkdtemp(prefix="cache_", dir=tmp)
             out_cold, out_warm = tmp / f"{label}_cold.py", tmp / f"{label}_warm.py"
@@ -181,13 +217,19 @@ def main() -> None:
                   f"CPU, slowest {worst[0]:.3f} s ({worst[1]!r}), "
                   f"{sum(1 for t, _ in per if t > 1.0)} over 1 s")
 
-        from bench_formalize import sentences
-        n = 2000 if args.quick else 10000
-        fbig = write_fret(tmp / "big.fret", sentences(n, seed=3), "R")
+        _import_section(roots, 2000 if args.quick else 10000, f696, tmp)
+
+
+def _import_section(roots, n: int, f696: Path, tmp: Path) -> None:
+    """Section (3): import of a generated module of ``n`` requirements, per root; where
+    ``--emit monitor``'s CPU time goes on the 696 sentences."""
+    from bench_formalize import sentences
+    fbig = write_fret(tmp / "big.fret", sentences(n, seed=3), "R")
+    for label, root in roots:
         cache = tempfile.mkdtemp(prefix="cache_", dir=tmp)
-        mod_dir = tmp / "mod"
+        mod_dir = tmp / f"mod_{label}"
         mod_dir.mkdir()
-        cpu_gen, _, _ = fretc(ROOT, [fbig, "--emit", "monitor", "-o", mod_dir / "big.py"],
+        cpu_gen, _, _ = fretc(root, [fbig, "--emit", "monitor", "-o", mod_dir / "big.py"],
                               cache, tmp)
         env = _env(mod_dir, cache)
         _, t0, rss0 = rss_child("pass", env, mod_dir)
@@ -196,12 +238,21 @@ def main() -> None:
         _, t3, rss3 = rss_child("import big\nfor c in big.MONITORS.values(): c()", env,
                                 mod_dir)
         size = (mod_dir / "big.py").stat().st_size / 1e6
-        print(f"[3] module of {n} requirements ({size:.1f} MB, generated in {cpu_gen:.1f} s "
-              f"CPU): import {t1:.2f} s CPU / {rss1:.0f} MB peak RSS (first, compiles), "
-              f"{t2:.2f} s / {rss2:.0f} MB (from .pyc); one instance of every class "
-              f"{t3:.2f} s / {rss3:.0f} MB; bare Python {rss0:.0f} MB"
-              + ("" if args.baseline else
+        print(f"[3] {label}: module of {n} requirements ({size:.1f} MB, generated cold in "
+              f"{cpu_gen:.1f} s CPU): import {t1:.2f} s CPU / {rss1:.0f} MB peak RSS (first, "
+              f"compiles), {t2:.2f} s / {rss2:.0f} MB (from .pyc); then one object of every "
+              f"class {t3 - t2:.2f} s more ({t3:.2f} s / {rss3:.0f} MB in all); bare Python "
+              f"{rss0:.0f} MB"
+              + ("" if len(roots) > 1 or n != 10000 else
                  f"; old code per the issue (10,000): {ISSUE_BASELINE['import10k']}"))
+    _, _, out = run_child([sys.executable, "-c", PHASES, f696],
+                          _env(ROOT, tempfile.mkdtemp(dir=tmp)), tmp)
+    ph = json.loads(out)
+    total = sum(v for k, v in ph.items() if k != "n")
+    print(f"[3] fretc: `--emit monitor` of {ph['n']} requirements in one cold process, "
+          f"{1000 * total / ph['n']:.1f} ms CPU each: "
+          + ", ".join(f"{k} {1000 * v / ph['n']:.2f} ms ({100 * v / total:.0f}%)"
+                      for k, v in ph.items() if k != "n"))
 
 
 def _per_requirement(root: Path, fret_file: Path, tmp: Path):

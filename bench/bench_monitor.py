@@ -1,19 +1,29 @@
 """Per-tick cost of generated monitors against reelay (PyPI ``reelay``, a C++ runtime
 verification library with Python bindings) on the same past-time formula and trace.
 
-    python bench/bench_monitor.py [--ticks 200000]
+    python bench/bench_monitor.py [--ticks 200000] [--baseline DIR]
 
 Monitors: Safe-ROS R1 and ``in m upon p the sw shall within 10 ticks satisfy q``. For each,
 our generated monitor's ``step()`` (pt verdict + LTL3 status) and reelay's
 ``discrete_timed_monitor`` on the same pt formula (translated to reelay's Rye syntax) run over
 the same random trace in one process. Prints microseconds per step and the ratio.
 Both monitors' verdicts are compared tick by tick where their semantics coincide.
+
+``--baseline DIR`` also steps the monitors another checkout of fretc generates (e.g.
+``git archive main | tar -x -C DIR``; its module is rendered in a child process and loaded
+here, generated modules being standalone) over the same trace, alternating with ours over
+``--rounds`` rounds (best round of each), and prints the ratio and whether the verdicts and
+LTL3 statuses are equal tick by tick.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import random
+import subprocess
+import sys
 import time
 import types
 from types import SimpleNamespace
@@ -72,9 +82,74 @@ def to_rye(n: Node, witness: str) -> str:
     raise ValueError(f"no Rye form for {op}")
 
 
+# Renders the module of REQUIREMENTS with the fretc on PYTHONPATH (the baseline); prints it.
+RENDER = r"""
+import json, sys
+from types import SimpleNamespace
+from compiler.build import compile_entry
+from compiler.codegen import render_module
+from fretish import parse
+entries = [SimpleNamespace(id=rid, text=text, source="bench.fret", line=1, column=1,
+                           rationale=None, parent=None, tick_period=None,
+                           requirement=parse(text), error=None, extra={})
+           for rid, text in json.loads(sys.argv[1]).items()]
+sys.stdout.write(render_module([compile_entry(e) for e in entries], "bench_monitors"))
+"""
+
+
+def load_text(text: str, name: str) -> types.ModuleType:
+    mod = types.ModuleType(name)
+    exec(compile(text, name, "exec"), mod.__dict__)
+    return mod
+
+
+def run(cls, trace) -> tuple[float, list, list]:
+    """(CPU seconds, verdicts, statuses) of one monitor of ``cls`` over ``trace``."""
+    m = cls()
+    step = m.step
+    t0 = time.process_time()
+    verdicts = [step(s) for s in trace]
+    t = time.process_time() - t0
+    m.reset()
+    statuses = []
+    for s in trace:
+        m.step(s)
+        statuses.append(m.status)
+    return t, verdicts, statuses
+
+
+def compare_baseline(compiled, mod, baseline: str, ticks: int, rounds: int) -> None:
+    env = dict(os.environ, PYTHONPATH=baseline)
+    text = subprocess.run([sys.executable, "-c", RENDER, json.dumps(REQUIREMENTS)], env=env,
+                          cwd=baseline, check=True, stdout=subprocess.PIPE).stdout.decode()
+    base = load_text(text, "baseline_monitors")
+    rnd = random.Random(7)
+    print(f"\nagainst the baseline {baseline} ({rounds} alternating rounds, best of each, "
+          "CPU time)")
+    print(f"{'monitor':<6} {'fretc µs/step':>14} {'baseline µs/step':>17} "
+          f"{'baseline/fretc':>15}  verdicts and statuses equal")
+    for c in compiled:
+        names = c.formalization.variables
+        trace = [{v: rnd.random() < (0.9 if v == "m" else 0.3) for v in names}
+                 for _ in range(ticks)]
+        best = {"fretc": float("inf"), "baseline": float("inf")}
+        outputs = {}
+        for _ in range(rounds):
+            for label, m in (("fretc", mod), ("baseline", base)):
+                t, verdicts, statuses = run(m.MONITORS[c.id], trace)
+                best[label] = min(best[label], t)
+                outputs[label] = (verdicts, statuses)
+        us = {k: 1e6 * v / ticks for k, v in best.items()}
+        print(f"{c.id:<6} {us['fretc']:>14.3f} {us['baseline']:>17.3f} "
+              f"{us['baseline'] / us['fretc']:>14.2f}x  "
+              f"{outputs['fretc'] == outputs['baseline']}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ticks", type=int, default=200_000)
+    ap.add_argument("--baseline", default=None)
+    ap.add_argument("--rounds", type=int, default=9)
     args = ap.parse_args()
     import reelay
 
@@ -83,9 +158,7 @@ def main() -> None:
                                requirement=parse(text), error=None, extra={})
                for rid, text in REQUIREMENTS.items()]
     compiled = [compile_entry(e) for e in entries]
-    mod = types.ModuleType("bench_monitors")
-    exec(compile(render_module(compiled, "bench_monitors"), "bench_monitors", "exec"),
-         mod.__dict__)
+    mod = load_text(render_module(compiled, "bench_monitors"), "bench_monitors")
     rnd = random.Random(5)
     print(f"ticks per run: {args.ticks}")
     print(f"{'monitor':<6} {'fretc µs/step':>14} {'reelay µs/step':>15} {'reelay/fretc':>13}"
@@ -113,6 +186,9 @@ def main() -> None:
         us_reelay = 1e6 * t_reelay / args.ticks
         print(f"{c.id:<6} {us_ours:>14.3f} {us_reelay:>15.3f} {us_reelay / us_ours:>12.1f}x"
               f"  {same}")
+    if args.baseline:
+        compare_baseline(compiled, mod, os.path.abspath(args.baseline), args.ticks,
+                         args.rounds)
 
 
 if __name__ == "__main__":

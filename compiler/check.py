@@ -337,16 +337,23 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
                        vacuity: bool = True, witness_dir: str | None = None,
                        inputs: Sequence[str] | None = None,
                        outputs: Sequence[str] | None = None,
-                       worker: SpotWorker | None = None) -> CheckResult:
+                       worker: SpotWorker | None = None,
+                       witness_judge=None) -> CheckResult:
     """Check compiled requirements (:class:`compiler.build.Compiled`, in file order).
 
     ``timeout``: seconds per Spot query (None: no budget). ``mus_budget``: seconds per
     subset enumeration. ``witness_dir``: write witness CSVs there
-    (:mod:`compiler.check_witness`). ``inputs``/``outputs``: FRET variable names; when
+    (:mod:`compiler.check_witness`), their expected verdicts given by ``witness_judge``
+    (:data:`compiler.check_witness.Judge`; required with ``witness_dir``: the audit's
+    evidence engine lives in a layer above, ``fretc check`` passes
+    :func:`monitors.engines.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
     either is given, realizability is checked too (:mod:`compiler.check_realizability`).
     Requirements that failed to formalize are listed in ``input_errors``; free-form ones
     are skipped with a note.
     """
+    if witness_dir is not None and witness_judge is None:
+        raise TypeError("check_requirements: witness_dir needs a witness_judge "
+                        "(compiler.check_witness.Judge)")
     result = CheckResult()
     items: list[CheckItem] = []
     for c in compiled:
@@ -368,7 +375,7 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
                                                        outputs or [])
         if witness_dir is not None:
             from .check_witness import write_witnesses  # lazy: numpy, if asked
-            write_witnesses(checker, result, witness_dir)
+            write_witnesses(checker, result, witness_dir, witness_judge)
         result.queries = checker.queries
         result.unknown_queries = checker.unknown
     finally:

@@ -21,17 +21,19 @@ What each witness shows (intended verdicts):
 * unsatisfiable ``R``: ``R`` violated.
 
 The verdicts written in the header (``# expected: R1=satisfied, R2=violated``) are not the
-intended ones but those FRET's interval semantics gives on the written numbers
-(:func:`monitors.engines.interval.evaluate_requirement`, the audit's own evidence engine), for every
+intended ones but those FRET's interval semantics gives on the written numbers, for every
 requirement of the checked files; when they differ from the intended ones (an uninterpreted
-atom made the abstraction spurious) the finding says so.
+atom made the abstraction spurious) the finding says so. That semantics is the audit's own
+evidence engine (:func:`monitors.engines.interval.verdict_of`), a layer above this one
+(ARCHITECTURE.md: layers import downwards only), so the caller passes it in as a
+:data:`Judge` (``fretc check`` does).
 """
 
 from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +44,13 @@ from .evaluate import ft_at
 from .ir import LAST, Node
 from .printers import mangle, to_smv
 
-__all__ = ["finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
+__all__ = ["Judge", "finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
+
+#: FRET's verdict of one requirement on a finite trace: ``judge(requirement, columns, n,
+#: duration_ticks)`` -> ``"satisfied"``, ``"vacuous"``, ``"violated"`` or ``"unknown"``
+#: (``columns``: FRET variable -> numpy array of ``n`` values; ``duration_ticks`` as
+#: ``Formalization.ticks``). The audit's is :func:`monitors.engines.interval.verdict_of`.
+Judge = Callable[[object, Mapping[str, np.ndarray], int, "int | None"], str]
 
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
 
@@ -129,23 +137,18 @@ def _columns(items) -> dict[str, str]:
     return cols
 
 
-def expected_verdicts(items, rows: list[dict]) -> dict[str, str]:
+def expected_verdicts(items, rows: list[dict], judge: Judge) -> dict[str, str]:
     """FRET's verdict of each item on ``rows`` (``satisfied``/``vacuous``/``violated``, or
-    ``unknown`` where the evidence engine cannot decide), by the audit's evidence engine."""
-    # lazy: the audit's evidence engine lives in monitors/, a layer above compiler/
-    from monitors.engines.interval import EvidenceUnsupported, evaluate_requirement
-
+    ``unknown`` where ``judge`` cannot decide), by ``judge`` (:data:`Judge`)."""
     n = len(rows)
     cols = {name: np.array([r[name] for r in rows]) for name in (rows[0] if rows else {})}
     out = {}
     for x in items:
         f = x.compiled.formalization
         try:
-            ev = evaluate_requirement(x.compiled.requirement, cols, n, duration_ticks=f.ticks)
-        except (EvidenceUnsupported, KeyError, ValueError):
+            out[x.id] = judge(x.compiled.requirement, cols, n, f.ticks)
+        except (KeyError, ValueError):
             out[x.id] = "unknown"
-            continue
-        out[x.id] = "violated" if not ev.holds else ("vacuous" if ev.vacuous else "satisfied")
     return out
 
 
@@ -183,15 +186,16 @@ def _safe(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text)[:60]
 
 
-def write_witnesses(checker, result, witness_dir: str) -> None:
+def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
     """Write one witness CSV per finding (conflict, vacuity, unsatisfiable) and one for a
     consistent set, into ``witness_dir``; set ``Finding.witness``/``expected`` and
-    ``result.witnesses``."""
+    ``result.witnesses``. ``judge`` gives the expected verdicts written in each file
+    (:data:`Judge`)."""
     out = Path(witness_dir)
     out.mkdir(parents=True, exist_ok=True)
     if not checker.items:
         return
-    w = _Witnesses(checker)
+    w = _Witnesses(checker, judge)
     serial = 0
     for finding in result.findings:
         if finding.kind not in ("conflict", "vacuous", "unsatisfiable"):
@@ -221,7 +225,7 @@ def write_witnesses(checker, result, witness_dir: str) -> None:
             rows = w.attempt(w.filler(w.comps[0]))
         if rows and rows != UNKNOWN:
             path = out / "00_consistent.csv"
-            expected = expected_verdicts(w.items, rows)
+            expected = expected_verdicts(w.items, rows, judge)
             _write(path, "a run meeting every requirement", w.sources, rows, expected)
             result.witnesses.append({"kind": "consistent", "path": str(path),
                                      "expected": expected})
@@ -235,8 +239,9 @@ class _Witnesses:
     """Finite traces for the findings of one check: the requirement items, their columns,
     the components and the requirement files (for the replay command)."""
 
-    def __init__(self, checker):
+    def __init__(self, checker, judge: Judge):
         self.checker = checker
+        self.judge = judge
         self.items = checker.items
         self.by_id = {x.id: x for x in self.items}
         self.cols = _columns(self.items)
@@ -316,7 +321,7 @@ class _Witnesses:
             rows = self.attempt(variants)
             if rows == UNKNOWN or not rows:
                 continue
-            expected = expected_verdicts(self.items, rows)
+            expected = expected_verdicts(self.items, rows, self.judge)
             wrong = {k: v for k, v in intended.items() if expected.get(k) != v}
             if best is None or len(wrong) < len(best[2]):
                 best = (rows, expected, wrong, intended)

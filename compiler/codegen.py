@@ -12,6 +12,16 @@ class has ``VARIABLES``, ``step(sample) -> bool``, ``status``, ``finish() -> boo
   continuation satisfies ft_inf: *violated*), a prefix with no run in ``good`` a good prefix
   (*satisfied*); otherwise *unknown* (LTL3; Bauer, Leucker & Schallhart, TOSEM 2011).
 
+Import cost: a module may hold thousands of requirements, and compiling Python source costs
+about a second per megabyte of code. So the code of ``reset``/``step`` is rendered per
+requirement from ``templates/monitor_shape.py.j2`` without the variable names (``K0``,
+``K1``, ... stand for ``VARIABLES[0]``, ...); requirements whose code is then equal share one
+entry of the module's ``_SHAPES``, kept as a string literal and compiled when the first
+monitor of that shape is made. Each requirement is one ``_monitor(...)`` call (its id, text,
+formulas, hash, variables, shape number), and LTL3 tables are text in ``_TABLES``, decoded on
+first use into tuples. Only code and read-only tables are shared: a monitor's state is its
+object's own.
+
 :func:`build_monitor_modules` returns, per requirement file, the module text with what was
 built for it (per requirement: the class name, the :class:`MonitorSource` the template was
 fed and the LTL3 automata), so a caller that runs the monitors in this process (the audit)
@@ -24,9 +34,11 @@ string literals made by ``repr``; identifiers in the code are generated (``v0``,
 
 from __future__ import annotations
 
-import dis
+import functools
 import hashlib
+import opcode
 import re
+import sys
 import types
 from dataclasses import dataclass
 
@@ -72,6 +84,7 @@ class MonitorSource:
     good_sub: str = "0"
     bad_table: int | None = None  # index in the module's _TABLES (render_module)
     good_table: int | None = None
+    shape: int | None = None  # index in the module's _SHAPES (render_module)
 
     # read-only delegations, same shape as compiler.build.Compiled's (kept: one property per field)
     @property
@@ -187,6 +200,7 @@ class MonitorModule:
     skipped: dict[str, str]
 
 
+@functools.lru_cache(maxsize=1)
 def _env():
     import jinja2  # lazy: start-up of the commands that render nothing (--emit ltl)
 
@@ -210,7 +224,8 @@ class InvalidMonitorError(RuntimeError):
 _ALLOWED_BUILTINS = frozenset(("abs", "min", "max", "bool", "float", "int", "len",
                                "RuntimeError", "KeyError", "ZeroDivisionError",
                                "OverflowError", "ValueError", "complex", "isinstance",
-                               "property", "__name__"))
+                               "property", "__name__", "type", "tuple", "dict", "str",
+                               "exec", "compile", "globals"))
 
 
 def check_module(text: str, module_name: str) -> None:
@@ -231,36 +246,65 @@ def check_module(text: str, module_name: str) -> None:
         code = compile(text, f"<fretc monitors {module_name}>", "exec")
     except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
         fail("does not compile", exc)
-    unknown = sorted(_global_reads(code) - _ALLOWED_BUILTINS)
+    defined, reads = _names(code)
+    unknown = sorted(reads - defined - _ALLOWED_BUILTINS)
     if unknown:
         fail(f"reads undefined names {', '.join(unknown)}")
     ns = {"__name__": module_name}
     try:
         exec(code, ns)  # only the standard library and literals made by repr
+        for i, shape in enumerate(ns["_SHAPES"]):  # the step code, compiled on first use
+            shape_code = compile(shape[-1], f"<{module_name} shape {i}>", "exec")
+            shape_defined, shape_reads = _names(shape_code)
+            unknown = sorted(shape_reads - shape_defined - defined - _ALLOWED_BUILTINS)
+            if unknown:
+                fail(f"reads undefined names {', '.join(unknown)} in shape {i}")
+            shape_ns = {}
+            exec(shape_code, ns, shape_ns)  # what the module's _bind does, compiled once
+            ns["_MAKE"][i] = shape_ns["make"]
         for rid, cls in ns["MONITORS"].items():
             m = cls()
             for value in (0, 1):
                 m.step({v: value for v in cls.VARIABLES})
             m.finish()
+    except InvalidMonitorError:
+        raise
     except Exception as exc:  # noqa: BLE001 - any failure here is an internal error
         fail("does not load and step", exc)
 
 
-def _global_reads(code: types.CodeType) -> set[str]:
-    """The global names the module's code (functions included) reads and does not define
-    at module level."""
+_EXTENDED_ARG = opcode.EXTENDED_ARG
+_STORES = {opcode.opmap[n] for n in ("STORE_NAME", "STORE_GLOBAL", "IMPORT_NAME")}
+_LOAD_NAME = opcode.opmap["LOAD_NAME"]
+_LOAD_GLOBAL = opcode.opmap["LOAD_GLOBAL"]
+#: Python 3.11 moved a flag into the low bit of LOAD_GLOBAL's argument (dis documents it)
+_GLOBAL_SHIFT = 1 if sys.version_info >= (3, 11) else 0
+
+
+def _names(code: types.CodeType) -> tuple[set[str], set[str]]:
+    """(names defined at the top level of ``code``, global names its code and functions
+    read), from the bytecode's name operations (``dis``'s instruction decoding, inlined: it
+    is 20 times slower on the thousands of functions of a large module)."""
     defined = set()
     reads = set()
     stack = [code]
     while stack:
         co = stack.pop()
-        for ins in dis.get_instructions(co):
-            if ins.opname in ("STORE_NAME", "STORE_GLOBAL", "IMPORT_NAME") and co is code:
-                defined.add(ins.argval)
-            elif ins.opname in ("LOAD_GLOBAL", "LOAD_NAME"):
-                reads.add(ins.argval)
+        raw, names, ext = co.co_code, co.co_names, 0
+        for i in range(0, len(raw), 2):
+            op, arg = raw[i], raw[i + 1] | ext
+            if op == _EXTENDED_ARG:
+                ext = arg << 8
+                continue
+            ext = 0
+            if op == _LOAD_GLOBAL:
+                reads.add(names[arg >> _GLOBAL_SHIFT])
+            elif op == _LOAD_NAME:
+                reads.add(names[arg])
+            elif op in _STORES and co is code:
+                defined.add(names[arg])
         stack.extend(c for c in co.co_consts if isinstance(c, types.CodeType))
-    return reads - defined
+    return defined, reads
 
 
 def build_monitor_module(compiled_list, module_name: str,
@@ -333,9 +377,40 @@ def _render(monitors: list[MonitorSource], skipped, module_name: str) -> str:
             if aut is not None and aut.table is not None and not aut.complete:
                 text = encode_table(aut.table)
                 setattr(m, f"{which}_table", tables.setdefault(text, len(tables)))
-    return _env().get_template("monitor_module.py.j2").render(
+    env = _env()
+    shape_template = env.get_template("monitor_shape.py.j2")
+    # one shape per distinct (step code, KEY, STATUS_NOTE, tables): the code is rendered
+    # without the variable names, so equal text means equal behaviour
+    shapes: dict[tuple, int] = {}
+    for m in monitors:
+        ident = (shape_template.render(m=m), m.key, m.status_note, m.bad_table, m.good_table)
+        m.shape = shapes.setdefault(ident, len(shapes))
+    return env.get_template("monitor_module.py.j2").render(
         module_name=module_name, monitors=monitors, skipped=skipped, digest=digest,
-        tables=list(tables))
+        tables=list(tables),
+        shapes=[_Shape(key, note, bad, good, _code_literal(code))
+                for code, key, note, bad, good in shapes])
+
+
+@dataclass(frozen=True)
+class _Shape:
+    """One entry of a module's ``_SHAPES``: template key, status note, table indices (or
+    None) and the step code as a Python string literal."""
+
+    key: str
+    note: str
+    bad_table: int | None
+    good_table: int | None
+    literal: str
+
+
+def _code_literal(code: str) -> str:
+    """Generated code as a readable string literal: triple-quoted with its line breaks
+    (the code holds no backslash and no triple quote: generated locals, numbers and
+    repr'd status words only), else ``repr``."""
+    if "\\" in code or "'''" in code or code.endswith("'"):
+        return repr(code)
+    return "'''\\\n" + code + "'''"
 
 
 def encode_table(table: list[list[int]]) -> str:

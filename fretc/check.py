@@ -138,10 +138,14 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
         declared = [n for e in entries for n in e.outputs]
         outs = list(dict.fromkeys(declared)) if declared else None
     compiled = compile_entries(entries)
+    judge = None
+    if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
+        from monitors.engines.interval import verdict_of
+        judge = verdict_of
     try:
         result = check_requirements(compiled, timeout=timeout, mus_budget=mus_budget,
                                     redundancy=not no_redundancy, witness_dir=witness_dir,
-                                    inputs=ins, outputs=outs)
+                                    inputs=ins, outputs=outs, witness_judge=judge)
     except RealizabilityError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(2)

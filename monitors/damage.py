@@ -83,9 +83,9 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
         return []
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     negate = scope.startswith("only")
-    # (the mode's temporal functions bounded by the intact span, where the verdict's
-    # evidence, monitors.engines.interval.evaluate_requirement, leaves them endpoint-free)
-    intervals = scope_of(req, columns, n, np.zeros(n, np.int64), np.full(n, n - 1, np.int64))
+    # (the mode's temporal functions endpoint-free, as in the verdict's evidence,
+    # monitors.engines.interval.evaluate_requirement)
+    intervals = scope_of(req, columns, n)
     last = [(s, e) for s, e in intervals if e == n - 1]
     if not last:
         return []

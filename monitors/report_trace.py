@@ -54,20 +54,35 @@ def resolve_input(p: str, base: Path | None, json_dir: Path | None) -> Path | No
 
 
 def _class_source(module_text: str, class_name: str) -> str:
-    """The text of ``class <class_name>:`` in a generated module, up to the next top-level
-    statement."""
+    """The source of one requirement's monitor in a generated module: its
+    ``<class_name> = _monitor(...)`` statement followed by the ``_SHAPES`` entry holding its
+    step logic (modules of an older layout: its ``class <class_name>:`` statement)."""
     lines = module_text.splitlines()
     out: list[str] = []
     inside = False
     for line in lines:
-        if line.startswith(f"class {class_name}:"):
+        if line.startswith((f"class {class_name}:", f"{class_name} = _monitor(")):
             inside = True
         elif inside and line and not line[0].isspace():
+            if line == ")":
+                out.append(line)
             break
         if inside:
             out.append(line)
     while out and not out[-1].strip():
         out.pop()
+    m = re.search(r"# step logic: _SHAPES\[(\d+)\]", "\n".join(out[:2]))
+    if m:
+        shape: list[str] = []
+        for line in lines:
+            if line == f"    # shape {m.group(1)}":
+                shape.append(f"# _SHAPES[{m.group(1)}]: (KEY, STATUS_NOTE, bad table, good "
+                             "table, step logic)")
+            elif shape and (line.startswith("    # shape ") or line == ")"):
+                break
+            elif shape:
+                shape.append(line)
+        out += [""] + shape
     return "\n".join(out)
 
 
@@ -229,7 +244,8 @@ def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
         # the plan shares its name; the class is looked up in the text to be sure)
         stem = file_stems([e.source], "_monitors")[e.source]
         mod = modules.get(stem)
-        if mod is not None and f"\nclass {rt.class_name}:" in mod.text:
+        if mod is not None and (f"\nclass {rt.class_name}:" in mod.text
+                                or f"\n{rt.class_name} = _monitor(" in mod.text):
             rt.module = stem
             rt.class_source = _class_source(mod.text, rt.class_name)
     return rt

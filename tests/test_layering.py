@@ -59,6 +59,42 @@ def test_no_import_cycles():
     assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles)
 
 
+#: ARCHITECTURE.md: layers import downwards only, fretc/ -> monitors/ -> compiler/ -> fretish/.
+LAYERS = {"fretish": 0, "compiler": 1, "monitors": 2, "fretc": 3}
+
+
+def upward_imports(graph: dict[str, set[str]]) -> list[str]:
+    """``a -> b`` for every import (at any depth of the module, lazy ones included) from a
+    lower layer of :data:`LAYERS` to a higher one."""
+    out = []
+    for mod, targets in sorted(graph.items()):
+        rank = LAYERS.get(mod.split(".")[0])
+        if rank is None:
+            continue
+        for t in sorted(targets):
+            if LAYERS.get(t.split(".")[0], -1) > rank:
+                out.append(f"{mod} -> {t}")
+    return out
+
+
+def test_layers_import_downwards_only():
+    mods = _modules()
+    graph = {m: _imports(m, p, mods) for m, p in mods.items()}
+    assert upward_imports(graph) == []
+
+
+def test_upward_imports_are_found():
+    # the check itself: a lazy import inside a function of compiler/ is an upward import
+    src = "def f():\n    from monitors.engines.interval import verdict_of\n"
+    known = {"compiler.x", "monitors.engines.interval"}
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "x.py"
+        p.write_text(src)
+        graph = {"compiler.x": _imports("compiler.x", p, known)}
+    assert upward_imports(graph) == ["compiler.x -> monitors.engines.interval"]
+
+
 def test_emit_ltl_starts_without_heavy_libraries(tmp_path):
     f = tmp_path / "r.fret"
     f.write_text("R1: whenever p the sw shall within 3 ticks satisfy q\n")

@@ -28,11 +28,20 @@ looked at and the tick at which the obligation was definitely missed.
 
 Expressions are evaluated over numpy columns (one value per tick per FRET variable) with the
 same value conventions as the generated monitors (a number read as a condition is
-``bool(x)``; ``/`` by zero is NaN). FRET's past/future functions ``persisted``, ``occurred``,
-``persists``, ``occurs`` are evaluated relative to the scope interval (FRET's ``$Left$`` /
-``$Right$``), ``preBool``/``preInt``/``preReal`` relative to the run's first tick;
-``prevOcc``, ``nextOcc`` and uninterpreted functions raise :class:`EvidenceUnsupported`
-(the audit then reports the monitor's verdict without interval evidence).
+``bool(x)``; ``/`` by zero is NaN). Every FRET temporal function is evaluated from the
+"meaning" column of ``../shared/fretish/README.md`` section 6b, relative to FRET's ``Left`` /
+``Right`` of the requirement's scope (:func:`endpoints`) in conditions, responses and stop
+conditions, and in FRET's endpoint-free forms inside scope conditions: ``persisted`` and
+``occurred`` (2 and 3 arguments), ``persists`` and ``occurs`` (2 and 3 arguments),
+``prevOcc`` / ``at the previous occurrence of`` (true at an interval's first position),
+``nextOcc`` / ``at the next occurrence of`` (true at its last), ``preBool`` / ``preInt`` /
+``preReal`` (relative to the run's first tick), nested in any way. Future-time functions near
+the end of the trace read FRET's absorbing state after it (every variable false, every
+number 0; section 6's trace model), where an interval of ``notin``/``onlyIn``/``before``
+reaching the end has no ``Right``. Only uninterpreted functions and free-form sentences raise
+:class:`EvidenceUnsupported` (the audit then reports the monitor's verdict without interval
+evidence). tests/monitors/test_evidence_functions.py checks all of this against the
+generated monitors, FRET's formulas and an independent oracle on random sentences.
 
 Cost: O(ticks + triggers) time and a few arrays of ``n`` items; the audit keeps the columns
 of the requirement's own variables for this (1 byte per tick for a boolean, 8 for a number).
@@ -51,7 +60,8 @@ from fretish import ast as A
 from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 from .obligations import OBLIGATIONS, Interval, ObligationChecker
 
-__all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement",
+__all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
+           "endpoints", "scope_mode",
            "scope_intervals", "scope_of", "trace_signals", "trigger_points", "OBLIGATIONS"]
 
 #: How many failed triggers an :class:`Evidence` lists (all are counted).
@@ -59,8 +69,8 @@ MAX_LISTED = 100
 
 
 class EvidenceUnsupported(ValueError):
-    """The requirement uses something the direct interval semantics does not evaluate
-    (``prevOcc``, ``nextOcc``, an uninterpreted function, a free-form sentence)."""
+    """The requirement uses something the direct interval semantics does not evaluate: an
+    uninterpreted function (one FRET does not define) or a free-form sentence."""
 
 
 @dataclass(frozen=True)
@@ -113,33 +123,121 @@ class Evidence:
 
 
 # --------------------------------------------------------------------------- expressions
+#: Stands for "no endpoint": before the first tick / past the absorbing state.
+_FAR = 1 << 40
+
+_PAST_FUNCS = ("persisted", "occurred", "prevOcc", "preBool")
+
+
+def endpoints(kind: str, mode: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """FRET's ``Left`` and ``Right`` of a scope (``../shared/fretish/README.md`` section 6b's
+    table) at each of the ``n`` ticks of a finite trace: ``Left`` (a pt formula) marks the
+    first position of a scope interval, ``Right`` (an ft formula, false after the last tick)
+    its last position, as the temporal functions of conditions, responses and stop
+    conditions see them.
+
+    Args:
+        kind: a scope kind of :data:`fretish.ast.SCOPE_KINDS`.
+        mode: the mode's truth at each tick (None for ``null``).
+        n: ticks (>= 1).
+
+    Returns:
+        (left, right): two bool arrays of ``n`` items.
+
+    FRET's ``Right`` of ``notin``/``onlyIn``/``before`` has no ``LAST`` disjunct, so an
+    interval of those scopes reaching the last tick has no ``Right`` (its functions look
+    into the absorbing state after the trace); ``onlyAfter``'s is the end of every ``m`` run.
+    """
+    i = np.arange(n)
+    first = i == 0
+    last = i == n - 1
+    if kind == "null" or mode is None:
+        return first, last.copy()
+    m = np.asarray(mode, dtype=np.bool_)
+    prev = np.concatenate(([False], m[:-1]))           # Y m (false at 0)
+    prev_z = np.concatenate(([True], m[:-1]))          # Z m (true at 0)
+    nxt = np.concatenate((m[1:], [False]))             # X m (unused at the last tick)
+    run_start = m & ~prev                              # m & Z !m
+    run_end = m & (last | ~nxt)                        # m & (LAST | X !m)
+    gap_start = ~m & prev_z                            # !m & Z m
+    gap_end = ~m & ~last & nxt                         # !m & !LAST & X m
+    if kind == "in":
+        return run_start, run_end
+    if kind in ("notin", "onlyIn"):
+        return gap_start, gap_end
+    if kind == "after":
+        fall = ~m & prev                               # first !m & Y m
+        left = np.zeros(n, np.bool_)
+        if fall.any():
+            left[int(np.argmax(fall))] = True
+        return left, last.copy()
+    if kind == "onlyAfter":
+        return first, run_end
+    if kind == "before":
+        return first, gap_end
+    if kind == "onlyBefore":
+        left = np.zeros(n, np.bool_)
+        if m.any():
+            left[int(np.argmax(m))] = True             # m & Z !m & Z H !m
+        return left, last.copy()
+    raise ValueError(f"unknown scope kind {kind!r}")
+
+
 class _Expr:
-    """Evaluates fretish AST expressions over columns. ``start``/``end`` give, per tick, the
-    first and last tick of the scope interval holding it (for interval-relative functions)."""
+    """Evaluates fretish AST expressions over columns, at the ``n`` ticks of the trace and
+    at FRET's absorbing state after it (index ``n``: every variable false, every number 0;
+    ``../shared/fretish/README.md`` section 6), which future-time functions near the end of
+    the trace read. Past-time functions (and comparisons of ``preInt``/``preReal``) are
+    false there, as FRET's derived past atoms.
+
+    ``left``/``right`` (bool arrays of ``n`` items, :func:`endpoints`) are the scope's
+    ``Left``/``Right`` the temporal functions are relative to; ``free`` selects FRET's
+    endpoint-free forms (inside scope conditions). Every array is ``n + 1`` items; each
+    function costs O(n) (prefix counts, next/last-true indexes)."""
 
     def __init__(self, columns: Mapping[str, np.ndarray], n: int,
-                 start: np.ndarray, end: np.ndarray):
+                 left: np.ndarray | None = None, right: np.ndarray | None = None,
+                 free: bool = False):
         self.columns = columns
         self.n = n
-        self.start = start
-        self.end = end
-        self.idx = np.arange(n, dtype=np.int64)
+        self.N = n + 1
+        self.free = free or left is None
+        self.idx = np.arange(self.N, dtype=np.int64)
+        self._cols: dict[str, np.ndarray] = {}
+        if not self.free:
+            lft = np.concatenate((np.asarray(left, np.bool_), [False]))
+            rgt = np.concatenate((np.asarray(right, np.bool_), [False]))
+            self.left = lft
+            self.right = rgt
+            # the last Left at or before t, the first Right at or after t
+            self.s_last = np.maximum.accumulate(np.where(lft, self.idx, -_FAR))
+            self.e_next = np.minimum.accumulate(np.where(rgt, self.idx, _FAR)[::-1])[::-1]
 
     def column(self, name: str) -> np.ndarray:
+        got = self._cols.get(name)
+        if got is not None:
+            return got
         col = self.columns.get(name)
         if col is None:
             raise KeyError(name)
-        return np.asarray(col)
+        col = np.asarray(col)
+        if len(col) < self.n:
+            raise ValueError(f"column {name!r} has {len(col)} values for {self.n} ticks")
+        col = col[:self.n]
+        absorbing = np.zeros(1, dtype=col.dtype if col.dtype != object else np.float64)
+        got = np.concatenate((col, absorbing))
+        self._cols[name] = got
+        return got
 
     def bool(self, e: A.Expr) -> np.ndarray:
-        n = self.n
+        N = self.N
         if isinstance(e, A.Var):
             if e.name == "FTP":
                 return self.idx == 0
             c = self.column(e.name)
             return c if c.dtype == np.bool_ else c.astype(np.bool_)
         if isinstance(e, A.BoolLit):
-            return np.full(n, bool(e.value))
+            return np.full(N, bool(e.value))
         if isinstance(e, A.Unary):
             if e.op == "!":
                 return ~self.bool(e.operand)
@@ -149,7 +247,11 @@ class _Expr:
             if op in A.COMPARISON_OPS:
                 x, y = self.num(e.left), self.num(e.right)
                 with np.errstate(invalid="ignore"):
-                    return COMPARISONS[op](x, y)
+                    out = COMPARISONS[op](x, y)
+                if _has_pre(e):  # a derived past atom: false in the absorbing state
+                    out = out.copy()
+                    out[self.n] = False
+                return out
             a, b = self.bool(e.left), self.bool(e.right)
             if op in CONNECTIVES:
                 return connective(op, a, b)
@@ -159,11 +261,11 @@ class _Expr:
         raise EvidenceUnsupported(f"cannot evaluate {type(e).__name__}")
 
     def num(self, e: A.Expr) -> np.ndarray:
-        n = self.n
+        N = self.N
         if isinstance(e, A.Var):
             return self.column(e.name).astype(np.float64)
         if isinstance(e, A.NumLit):
-            return np.full(n, float(e.value))
+            return np.full(N, float(e.value))
         if isinstance(e, A.Unary) and e.op == "-":
             return -self.num(e.operand)
         if isinstance(e, A.Binary) and e.op in A.ARITH_OPS:
@@ -179,7 +281,7 @@ class _Expr:
                 return py_min(vals) if name.startswith("min") else py_max(vals)
             if name in ("preInt", "preReal") and len(args) == 2:
                 init, x = self.num(args[0]), self.num(args[1])
-                return shifted(x, init[0] if n else None, np.float64)
+                return shifted(x, init[0], np.float64)
         raise EvidenceUnsupported(f"cannot evaluate {type(e).__name__} as a number")
 
     def _int(self, a: A.Expr) -> int:
@@ -187,42 +289,108 @@ class _Expr:
             return a.value
         raise EvidenceUnsupported("a temporal-function bound that is not an integer literal")
 
+    # counts of p over windows, positions clamped to [0, n] (positions past the trace all
+    # repeat the absorbing state n; positions before 0 do not exist)
+    def _counts(self, p: np.ndarray):
+        cs = np.zeros(self.N + 1, np.int64)
+        np.cumsum(p, out=cs[1:])
+
+        def count(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+            lo_c = np.clip(lo, 0, self.n)
+            hi_c = np.clip(hi, -1, self.n)
+            return np.where(hi_c >= lo_c, cs[np.maximum(hi_c, lo_c - 1) + 1] - cs[lo_c], 0)
+
+        return count
+
     def bool_call(self, e: A.Call) -> np.ndarray:
         name, args = e.name, e.args
-        n = self.n
         if name == "ite" and len(args) == 3:
             c = self.bool(args[0])
             return (c & self.bool(args[1])) | (~c & self.bool(args[2]))
         if name == "preBool" and len(args) == 2 and isinstance(args[0], A.BoolLit):
-            return shifted(self.bool(args[1]), bool(args[0].value), np.bool_)
+            out = shifted(self.bool(args[1]), bool(args[0].value), np.bool_)
+            out[self.n] = False  # a derived past atom in the absorbing state
+            return out
         if name in ("persisted", "occurred", "persists", "occurs") and len(args) in (2, 3):
-            if len(args) == 3 and name in ("persists", "occurs"):
-                raise EvidenceUnsupported(f"{name} with three arguments")
             if len(args) == 2:
                 m, k, p = 0, self._int(args[0]), self.bool(args[1])
             else:
                 m, k, p = self._int(args[0]), self._int(args[1]), self.bool(args[2])
-            cs = np.zeros(n + 1, np.int64)
-            np.cumsum(p, out=cs[1:])
-            i = self.idx
-
-            def count(lo, hi):  # number of p in [lo, hi] (clipped to the trace)
-                lo_c = np.clip(lo, 0, n)
-                hi_c = np.clip(hi + 1, 0, n)
-                return np.where(hi_c > lo_c, cs[hi_c] - cs[lo_c], 0)
-
-            if name == "persisted":  # H[m,k] p & H[0,k-1] !Left
-                # (in a scope condition start is -inf: H[m,k] p over the ticks that exist)
-                needed = np.clip(i - m + 1, 0, n) - np.clip(i - k, 0, n)
-                return (i - k >= self.start) & (count(i - k, i - m) == needed)
-            if name == "occurred":  # (!Left) S[m,k] p: p in [max(start, i-k), i-m]
-                return count(np.maximum(np.maximum(i - k, 0), self.start), i - m) > 0
-            if name == "persists":  # G[0,k] p & G[0,k-1] !Right
-                return (i + k <= self.end) & (count(i, i + k) == k + 1)
-            # occurs: ((!Right) U p) & F[0,k] p
-            return (count(i, self.end) > 0) & (count(i, i + k) > 0)
+            if m > k:
+                raise EvidenceUnsupported(f"{name}: lower bound {m} above upper bound {k}")
+            return self._window(name, m, k, p)
+        if name in ("prevOcc", "nextOcc") and len(args) == 2:
+            p, q = self.bool(args[0]), self.bool(args[1])
+            return self._prev_occ(p, q) if name == "prevOcc" else self._next_occ(p, q)
         raise EvidenceUnsupported(f"function {name}/{len(args)} is not evaluated by the "
                                   "interval semantics")
+
+    def _window(self, name: str, m: int, k: int, p: np.ndarray) -> np.ndarray:
+        """``persisted``/``occurred``/``persists``/``occurs`` with bounds ``[m, k]``
+        (section 6b's meaning column; endpoint-free: ``H``/``O``/``G``/``F`` over
+        ``[m, k]``)."""
+        i, n = self.idx, self.n
+        count = self._counts(p)
+        free = self.free
+        if name == "persisted":   # p at every position t-k..t-m, and s <= t-k
+            lo, hi = np.maximum(i - k, 0), i - m
+            out = count(lo, hi) == np.maximum(hi - lo + 1, 0)
+            if not free:
+                out &= self.s_last <= i - k
+        elif name == "occurred":  # p at some j, max(s, t-k) <= j <= t-m
+            lo = np.maximum(i - k, 0)
+            if not free:
+                lo = np.maximum(lo, self.s_last)
+            out = count(lo, i - m) > 0
+        elif name == "persists":  # p at every position t+m..t+k, and e >= t+k
+            lo, hi = np.minimum(i + m, n), np.minimum(i + k, n)
+            out = count(lo, hi) == hi - lo + 1
+            if not free:
+                out &= self.e_next >= i + k
+        else:                     # occurs: p at some j, t+m <= j <= min(t+k, e)
+            hi = i + k if free else np.minimum(i + k, self.e_next)
+            lo = i + m
+            out = (hi >= lo) & (count(np.minimum(lo, n), np.minimum(hi, n)) > 0)
+        if name in _PAST_FUNCS:
+            out[n] = False  # a derived past atom in the absorbing state
+        return out
+
+    def _prev_occ(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``prevOcc(p, q)``: true at t = s; else q at the last p in [s, t-1], true if
+        none (section 6b); endpoint-free ``Y((!p) S (p & q))``: q at the last p before t,
+        false if none. False at tick 0 off an interval start (FRET's ``Y``)."""
+        i, n = self.idx, self.n
+        last_p = np.maximum.accumulate(np.where(p, i, -1))
+        j = np.concatenate(([-1], last_p[:-1]))        # the last p at or before t-1
+        q_at_j = np.where(j >= 0, q[np.maximum(j, 0)], False)
+        if self.free:
+            out = (j >= 0) & q_at_j
+        else:
+            s_prev = np.concatenate(([-_FAR], self.s_last[:-1]))
+            out = self.left | ((i >= 1) & ((j < 0) | (j < s_prev) | q_at_j))
+        out[n] = False
+        return out
+
+    def _next_occ(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``nextOcc(p, q)``: true at t = e; else q at the first p in [t+1, e], true if
+        none (section 6b); endpoint-free ``X((!p) U (p & q))``: q at the first p after t,
+        false if none. The absorbing state (index n) stands for every position after the
+        trace."""
+        i, n = self.idx, self.n
+        next_p = np.minimum.accumulate(np.where(p, i, _FAR)[::-1])[::-1]
+        u = np.minimum(i + 1, n)                       # X: the next position
+        j = next_p[u]                                  # the first p at or after t+1
+        found = j < _FAR
+        q_at_j = np.where(found, q[np.minimum(j, n)], False)
+        if self.free:
+            return found & q_at_j
+        reached = found & (self.e_next[u] >= j)        # no Right in [t+1, j)
+        return self.right | ~reached | q_at_j
+
+
+def _has_pre(e: A.Expr) -> bool:
+    """Does a comparison read ``preInt``/``preReal`` (a derived past atom in ft)?"""
+    return any(isinstance(x, A.Call) and x.name in ("preInt", "preReal") for x in A.walk(e))
 
 
 # --------------------------------------------------------------------------- scopes
@@ -278,31 +446,41 @@ def scope_intervals(kind: str, mode: np.ndarray | None, n: int) -> list[Interval
 
 
 # --------------------------------------------------------------------------- the trace
-def scope_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-             mode_start: np.ndarray, mode_end: np.ndarray) -> list[Interval]:
+def scope_mode(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
+               ) -> np.ndarray | None:
+    """The truth of ``req``'s scope mode (or scope condition) at each of ``n`` ticks, its
+    temporal functions in FRET's endpoint-free forms (``../shared/fretish/README.md``
+    section 6b); None for the ``null`` scope."""
+    if req.scope.kind == "null":
+        return None
+    return _Expr(columns, n, free=True).bool(req.scope.mode)[:n]
+
+
+def scope_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
+             ) -> list[Interval]:
     """The scope intervals of ``req`` over ``n`` ticks (:func:`scope_intervals`), its mode
-    evaluated with ``mode_start`` / ``mode_end`` as the interval bounds of its temporal
-    functions."""
-    scope = req.scope.kind
-    whole = _Expr(columns, n, mode_start, mode_end)
-    mode = whole.bool(req.scope.mode) if scope != "null" else None
-    return scope_intervals(scope, mode, n)
+    evaluated with FRET's endpoint-free function forms (:func:`scope_mode`)."""
+    return scope_intervals(req.scope.kind, scope_mode(req, columns, n), n)
 
 
 def trace_signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                  intervals: list[Interval]
+                  intervals: list[Interval] | None = None
                   ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """(response ``R``, condition ``C`` or None, stop condition ``S`` or None) at each tick,
-    their temporal functions relative to the scope interval holding the tick."""
-    start = np.arange(n, dtype=np.int64)
-    end = np.arange(n, dtype=np.int64)
-    for s, e in intervals:
-        start[s:e + 1] = s
-        end[s:e + 1] = e
-    ex = _Expr(columns, n, start, end)
-    R = ex.bool(req.response)
-    C = ex.bool(req.condition.expr) if req.condition.kind != "null" else None
-    S = ex.bool(req.timing.stop) if req.timing.kind in A.STOP_TIMINGS else None
+    """(response ``R``, condition ``C`` or None, stop condition ``S`` or None) at each of
+    the ``n`` ticks, their temporal functions relative to FRET's ``Left``/``Right`` of the
+    requirement's scope (:func:`endpoints`, from the scope mode; ``intervals`` is accepted
+    for compatibility and not needed)."""
+    return _signals(req, columns, n, scope_mode(req, columns, n))
+
+
+def _signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+             mode: np.ndarray | None):
+    """:func:`trace_signals` given the scope mode's truth at each tick."""
+    left, right = endpoints(req.scope.kind, mode, n)
+    ex = _Expr(columns, n, left, right)
+    R = ex.bool(req.response)[:n]
+    C = ex.bool(req.condition.expr)[:n] if req.condition.kind != "null" else None
+    S = ex.bool(req.timing.stop)[:n] if req.timing.kind in A.STOP_TIMINGS else None
     return R, C, S
 
 
@@ -335,7 +513,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         An :class:`Evidence`.
 
     Raises:
-        EvidenceUnsupported: free-form, or a function this module does not evaluate.
+        EvidenceUnsupported: free-form, or an uninterpreted function.
         KeyError: a variable missing from ``columns``.
         ValueError: ``n`` < 1.
     """
@@ -345,10 +523,10 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         raise ValueError("the interval semantics needs at least one tick")
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     # scope conditions use FRET's endpoint-free function forms (../shared/fretish/README.md
-    # section 6b): no interval start or end
-    intervals = scope_of(req, columns, n, np.full(n, -(1 << 40), np.int64),
-                         np.full(n, 1 << 40, np.int64))
-    R, C, S = trace_signals(req, columns, n, intervals)
+    # section 6b); conditions, responses and stop conditions the scope's Left/Right
+    mode = scope_mode(req, columns, n)
+    intervals = scope_intervals(scope, mode, n)
+    R, C, S = _signals(req, columns, n, mode)
     k = None
     if timing in A.DURATION_TIMINGS:
         if duration_ticks is not None:
@@ -382,3 +560,17 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
                     violation=first, ticks=n,
                     first_interval=intervals[0] if intervals else None,
                     first_trigger=first_trigger, listed=listed)
+
+
+def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+               duration_ticks: int | None = None) -> str:
+    """FRET's verdict of ``req`` on a finite trace as a word: ``"satisfied"``,
+    ``"vacuous"``, ``"violated"``, or ``"unknown"`` when the interval semantics cannot
+    evaluate it (:class:`EvidenceUnsupported`: an uninterpreted function, a free-form
+    sentence). Arguments and other errors as :func:`evaluate_requirement`; this is the
+    :data:`compiler.check_witness.Judge` ``fretc check`` passes for its witnesses."""
+    try:
+        ev = evaluate_requirement(req, columns, n, duration_ticks)
+    except EvidenceUnsupported:
+        return "unknown"
+    return "violated" if not ev.holds else ("vacuous" if ev.vacuous else "satisfied")

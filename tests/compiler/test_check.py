@@ -195,7 +195,9 @@ def _audit(req: Path, csv: Path, tmp_path: Path) -> dict:
 def test_witnesses_replay_through_the_audit(tmp_path, text):
     req = _write(tmp_path, "set.fret", text)
     wdir = tmp_path / "w"
-    r = _check(req, witness_dir=str(wdir))
+    from monitors.engines.interval import verdict_of
+
+    r = _check(req, witness_dir=str(wdir), witness_judge=verdict_of)
     assert r.witnesses, "every finding here (or the consistent set) has a witness"
     for w in r.witnesses:
         promised = read_expected(w["path"])

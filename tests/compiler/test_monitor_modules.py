@@ -117,3 +117,94 @@ def _truth(atom, sample) -> bool:
         return bool(sample[atom.name])
     assert atom.op == "cmp" and atom.name == ">", atom  # x > 2 is the only comparison
     return sample[atom.args[0].name] > int(atom.args[1].name)
+
+
+# --------------------------------------------------------------------------- shared shapes
+#: Requirements of one shape (same code but for the variable names; D1 and D2 even share
+#: their names) and one of another shape, in one module.
+SHAPED = [(f"S{i}", f"in m{i} upon p{i} the sw shall within 3 ticks satisfy q{i}")
+          for i in range(6)] + [
+    ("D1", "in m0 upon p0 the sw shall within 3 ticks satisfy q0"),
+    ("D2", "in m0 upon p0 the sw shall within 3 ticks satisfy q0"),
+    ("O1", "whenever p1 the sw shall immediately satisfy q0"),
+]
+
+
+def _shaped_modules():
+    entries = [RequirementEntry(id=rid, text=text, source="shaped.fret", line=i + 1,
+                                column=1, requirement=parse(text))
+               for i, (rid, text) in enumerate(SHAPED)]
+    compiled = compile_entries(entries)
+    together = load(codegen.build_monitor_module(compiled, "together"))
+    alone = {c.id: load(codegen.build_monitor_module([c], "alone")) for c in compiled}
+    return together, alone
+
+
+_SHAPED = []
+
+
+def shaped_modules():
+    if not _SHAPED:
+        _SHAPED.append(_shaped_modules())
+    return _SHAPED[0]
+
+
+def _run(monitor, trace):
+    out = [(monitor.step(s), monitor.status, monitor.status_tick) for s in trace]
+    return out, monitor.finish()
+
+
+def test_requirements_of_one_shape_share_code_but_not_state():
+    together, _ = shaped_modules()
+    classes = [together.MONITORS[rid] for rid, _ in SHAPED]
+    # the six S* and D* requirements share one shape (and its tables), O1 has its own
+    assert len(together._SHAPES) == 2
+    assert len({c._SHAPE for c in classes[:-1]}) == 1
+    monitors = [c() for c in classes]
+    assert classes[0]._BAD is classes[1]._BAD is not None  # read-only, shared
+    assert classes[0].step is not classes[1].step  # each class reads its own variables
+    assert [c.VARIABLES for c in classes[:2]] == [["m0", "p0", "q0"], ["m1", "p1", "q1"]]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.lists(st.booleans(), min_size=18, max_size=18), min_size=1, max_size=40),
+       st.randoms(use_true_random=False))
+def test_each_requirement_of_a_shared_shape_has_its_own_verdict(rows, rnd):
+    """Stepped side by side on one trace, each monitor of a module where many requirements
+    share a shape gives, tick by tick, the pt verdict, LTL3 status and final verdict of a
+    module generated for that requirement alone; two objects of one class stepped on two
+    traces do not disturb each other."""
+    together, alone = shaped_modules()
+    names = [f"{v}{i}" for i in range(6) for v in "mpq"]
+    trace = [dict(zip(names, row)) for row in rows]
+    other = [dict(zip(names, rnd.sample(row, len(row)))) for row in rows]
+    side_by_side = {rid: together.MONITORS[rid]() for rid, _ in SHAPED}
+    twin = together.MONITORS["S0"]()  # a second object of one class, another trace
+    got = {rid: [] for rid in side_by_side}
+    got_twin = []
+    for s, o in zip(trace, other):
+        for rid, m in side_by_side.items():
+            got[rid].append((m.step(s), m.status, m.status_tick))
+        got_twin.append((twin.step(o), twin.status, twin.status_tick))
+    for rid, m in side_by_side.items():
+        assert (got[rid], m.finish()) == _run(alone[rid].MONITORS[rid](), trace), rid
+    assert (got_twin, twin.finish()) == _run(alone["S0"].MONITORS["S0"](), other)
+
+
+def test_a_requirements_monitor_source_is_found_by_its_class_name():
+    """What the report shows as a requirement's generated monitor: its ``_monitor`` call
+    (id, text, formulas, variables) and the shape entry with its step code."""
+    from monitors.report_trace import _class_source
+
+    entries = [RequirementEntry(id=rid, text=text, source="shaped.fret", line=i + 1,
+                                column=1, requirement=parse(text))
+               for i, (rid, text) in enumerate(SHAPED)]
+    mm = codegen.build_monitor_module(compile_entries(entries), "shaped")
+    info = mm.monitors["O1"]
+    src = _class_source(mm.text, info.class_name)
+    assert src.startswith(f"{info.class_name} = _monitor(") and "ID='O1'" in src
+    for text in (info.source.text, info.source.ft, info.source.ft_inf, info.source.pt):
+        assert repr(text) in src
+    assert f"VARIABLES={info.source.variables!r}" in src
+    shape = src[src.index("# _SHAPES["):]
+    assert "def step(self, sample):" in shape and "S0" not in src

@@ -166,6 +166,10 @@ def test_interval_relative_functions_agree_with_monitor():
 
 
 def test_unsupported_functions_are_reported():
+    # every FRET temporal function is evaluated (tests/monitors/test_evidence_functions.py);
+    # an uninterpreted function is not
     req = parse("whenever p the sw shall immediately satisfy prevOcc(p, q)")
+    assert evaluate_requirement(req, _cols(p="01", q="11"), 2).holds
+    req = parse("whenever p the sw shall immediately satisfy h(p, q)")
     with pytest.raises(EvidenceUnsupported):
         evaluate_requirement(req, _cols(p="01", q="11"), 2)
