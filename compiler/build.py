@@ -4,6 +4,7 @@ failure never stops the others."""
 
 from __future__ import annotations
 
+import gc
 import hashlib
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -118,8 +119,20 @@ def compile_entry(entry) -> Compiled:
 
 
 def compile_entries(entries: Iterable) -> list[Compiled]:
-    """:func:`compile_entry` of each entry, in order."""
-    return [compile_entry(e) for e in entries]
+    """:func:`compile_entry` of each entry, in order.
+
+    Python's cyclic garbage collector is paused meanwhile, as :func:`formalize` does for one
+    requirement: the formula trees and the compiled records are acyclic, and between two
+    requirements the collector would rescan every node built so far (a quarter of the
+    time of a thousand requirements)."""
+    paused = gc.isenabled()
+    if paused:
+        gc.disable()
+    try:
+        return [compile_entry(e) for e in entries]
+    finally:
+        if paused:
+            gc.enable()
 
 
 def _locate(exc: SemanticsError, entry) -> FretishError:

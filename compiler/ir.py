@@ -40,7 +40,7 @@ class Node:
     """One IR node; see the module docstring for ``op``. ``lo``/``hi`` are tick bounds of
     ``F G O H`` (``None`` = unbounded)."""
 
-    __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext")
+    __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext", "stext")
 
     def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
                  lo: int | None = None, hi: int | None = None):
@@ -53,9 +53,11 @@ class Node:
         self.hi = hi
         self._hash = None  # computed on first use (most nodes are never hashed)
         # memo slots of compiler.printers (the FRET/SMV text with FTP printed as FTP, and as
-        # (Z FALSE)): a node's text is read once per node, however often a formula shares it
+        # (Z FALSE); the Spot text): a node's text is built once per node, however often a
+        # formula shares it
         self.text = None
         self.ztext = None
+        self.stext = None  # and the Spot text (compiler.printers.to_spot)
 
     def __hash__(self) -> int:
         h = self._hash

@@ -70,105 +70,150 @@ def mangle(name: str) -> str:
     return "_DQT_" + "".join(_mangle_char(ch) for ch in name) + "_DQT_"
 
 
-def _bounds(n: Node, sep: str) -> str:
-    return "" if n.hi is None else f"[{n.lo},{n.hi}]" if sep == "," else f"[{n.lo}..{n.hi}]"
+#: How each IR operator prints (one dispatch per node instead of a chain of comparisons):
+#: 0 a fixed word, 1 the first-timepoint atom, 2 a mangled name, 3 a literal, 4 a
+#: comparison or arithmetic, 5 unary minus, 6 a call, 7 ite, 8 a derived atom, 9 not; no
+#: entry: a binary operator, or a unary temporal operator with optional bounds.
+_SMV_KIND = {"true": 0, "false": 0, "LAST": 0, "FTP": 1, "ap": 2, "var": 2, "num": 3,
+             "cmp": 4, "arith": 4, "neg": 5, "call": 6, "fn": 6, "pre": 6, "ite": 7,
+             "past": 8, "future": 8, "!": 9}
+_SMV_WORD = {"true": "TRUE", "false": "FALSE", "LAST": "LAST"}
 
 
 def to_smv(node: Node, ftp: str = "FTP") -> str:
     """FRET/SMV text of ``node``. ``ftp`` is how the first-timepoint atom prints: FRET writes
     ``FTP`` in ft formulas and ``(Z FALSE)`` in pt formulas (pass ``"(Z FALSE)"``)."""
-    if ftp not in ("FTP", "(Z FALSE)"):
-        raise ValueError("ftp must be 'FTP' or '(Z FALSE)'")
-    slot = "text" if ftp == "FTP" else "ztext"  # node-level caches, one per spelling
+    if ftp == "FTP":
+        return _smv(node)
+    if ftp == "(Z FALSE)":
+        return _smv_z(node)
+    raise ValueError("ftp must be 'FTP' or '(Z FALSE)'")
 
-    # same shape as to_spot's go below: a case per IR operator (kept: each syntax spells every case
-    # its own way)
-    def go(n: Node) -> str:
-        got = getattr(n, slot)
-        if got is not None:
-            return got
-        op = n.op
-        if op == "true":
-            s = "TRUE"
-        elif op == "false":
-            s = "FALSE"
-        elif op == "LAST":
-            s = "LAST"
-        elif op == "FTP":
-            s = ftp
-        elif op in ("ap", "var"):
-            s = mangle(n.name)
-        elif op == "num":
-            s = n.name
-        elif op in ("cmp", "arith"):
-            s = f"({go(n.args[0])} {n.name} {go(n.args[1])})"
-        elif op == "neg":
-            s = f"(- {go(n.args[0])})"
-        elif op in ("call", "fn", "pre"):
-            s = f"{mangle(n.name)}({','.join(go(a) for a in n.args)})"
-        elif op == "ite":
-            s = f"ite({','.join(go(a) for a in n.args)})"
-        elif op in ("past", "future"):
-            s = n.name if n.name else go(n.args[0])
-        elif op == "!":
-            s = f"(! {go(n.args[0])})"
-        elif len(n.args) == 2:
-            s = f"({go(n.args[0])} {op} {go(n.args[1])})"
-        else:
-            s = f"({op}{_bounds(n, ',')} {go(n.args[0])})"
-        setattr(n, slot, s)
+
+# _smv and _smv_z below are the same printer with FTP spelt two ways, each with its own memo
+# slot on the nodes (kept as two functions: the slot and the spelling are constants there)
+def _smv(n: Node) -> str:
+    s = n.text
+    if s is not None:
         return s
+    op = n.op
+    kind = _SMV_KIND.get(op)
+    if kind is None:
+        args = n.args
+        if len(args) == 2:
+            s = f"({_smv(args[0])} {op} {_smv(args[1])})"
+        elif n.hi is None:
+            s = f"({op} {_smv(args[0])})"
+        else:
+            s = f"({op}[{n.lo},{n.hi}] {_smv(args[0])})"
+    elif kind == 9:
+        s = f"(! {_smv(n.args[0])})"
+    elif kind == 2:
+        s = mangle(n.name)
+    elif kind == 4:
+        s = f"({_smv(n.args[0])} {n.name} {_smv(n.args[1])})"
+    elif kind == 0:
+        s = _SMV_WORD[op]
+    elif kind == 1:
+        s = "FTP"
+    elif kind == 3:
+        s = n.name
+    elif kind == 5:
+        s = f"(- {_smv(n.args[0])})"
+    elif kind == 6:
+        s = f"{mangle(n.name)}({','.join(_smv(a) for a in n.args)})"
+    elif kind == 7:
+        s = f"ite({','.join(_smv(a) for a in n.args)})"
+    else:
+        s = n.name if n.name else _smv(n.args[0])
+    n.text = s
+    return s
 
-    return go(node)
+
+def _smv_z(n: Node) -> str:
+    s = n.ztext
+    if s is not None:
+        return s
+    op = n.op
+    kind = _SMV_KIND.get(op)
+    if kind is None:
+        args = n.args
+        if len(args) == 2:
+            s = f"({_smv_z(args[0])} {op} {_smv_z(args[1])})"
+        elif n.hi is None:
+            s = f"({op} {_smv_z(args[0])})"
+        else:
+            s = f"({op}[{n.lo},{n.hi}] {_smv_z(args[0])})"
+    elif kind == 9:
+        s = f"(! {_smv_z(n.args[0])})"
+    elif kind == 2:
+        s = mangle(n.name)
+    elif kind == 4:
+        s = f"({_smv_z(n.args[0])} {n.name} {_smv_z(n.args[1])})"
+    elif kind == 0:
+        s = _SMV_WORD[op]
+    elif kind == 1:
+        s = "(Z FALSE)"
+    elif kind == 3:
+        s = n.name
+    elif kind == 5:
+        s = f"(- {_smv_z(n.args[0])})"
+    elif kind == 6:
+        s = f"{mangle(n.name)}({','.join(_smv_z(a) for a in n.args)})"
+    elif kind == 7:
+        s = f"ite({','.join(_smv_z(a) for a in n.args)})"
+    else:
+        s = n.name if n.name else _smv_z(n.args[0])
+    n.ztext = s
+    return s
 
 
 _SPOT_OP = {"&": "&", "|": "|", "xor": "xor", "->": "->", "<->": "<->", "U": "U", "V": "R"}
 _SPOT_KEYWORDS = {"true", "false", "xor", "and", "or", "not", "implies", "equiv", "t", "f"}
+_SPOT_BARE = re.compile(r"^[a-z_][a-z0-9_]*$")
 
 
+@functools.lru_cache(maxsize=4096)
 def spot_ap(text: str) -> str:
     """An atomic proposition in Spot syntax: bare when it is a lower-case identifier Spot
     cannot mistake for an operator, otherwise double-quoted (``"x > 3"``)."""
-    if re.match(r"^[a-z_][a-z0-9_]*$", text) and text not in _SPOT_KEYWORDS:
+    if _SPOT_BARE.match(text) and text not in _SPOT_KEYWORDS:
         return text
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def to_spot(node: Node) -> str:
     """Spot LTL text of a future-time formula. Raises ``ValueError`` on past operators."""
-    memo: dict = {}
+    return _spot(node)
 
-    # same shape as to_smv's go above: a case per IR operator (kept: each syntax spells every case
-    # its own way)
-    def go(n: Node) -> str:
-        got = memo.get(n)
-        if got is not None:
-            return got
-        op = n.op
-        if op == "true":
-            s = "true"
-        elif op == "false":
-            s = "false"
-        elif op == "ap":
-            s = spot_ap(mangle(n.name))
-        elif op in ("LAST", "FTP", "cmp", "call", "past", "future"):
-            s = spot_ap(to_smv(n))
-        elif op == "!":
-            s = f"!{go(n.args[0])}"
-        elif op in _SPOT_OP:
-            s = f"({go(n.args[0])} {_SPOT_OP[op]} {go(n.args[1])})"
-        elif op in ("X", "F", "G"):
-            s = f"{op}{_bounds(n, '..')} {go(n.args[0])}"
-            s = f"({s})"
-        elif op in ("Y", "Z", "O", "H", "S", "T"):
-            raise ValueError("Spot has no past-time operators: a pt formula cannot be printed "
-                             "in Spot syntax")
-        else:
-            raise ValueError(f"no Spot form for IR node {op!r}")
-        memo[n] = s
+
+def _spot(n: Node) -> str:
+    s = n.stext
+    if s is not None:
         return s
-
-    return go(node)
+    op = n.op
+    if op in _SPOT_OP:
+        s = f"({_spot(n.args[0])} {_SPOT_OP[op]} {_spot(n.args[1])})"
+    elif op == "!":
+        s = f"!{_spot(n.args[0])}"
+    elif op == "ap":
+        s = spot_ap(mangle(n.name))
+    elif op in ("X", "F", "G"):
+        s = (f"({op} {_spot(n.args[0])})" if n.hi is None else
+             f"({op}[{n.lo}..{n.hi}] {_spot(n.args[0])})")
+    elif op == "true":
+        s = "true"
+    elif op == "false":
+        s = "false"
+    elif op in ("LAST", "FTP", "cmp", "call", "past", "future"):
+        s = spot_ap(_smv(n))
+    elif op in ("Y", "Z", "O", "H", "S", "T"):
+        raise ValueError("Spot has no past-time operators: a pt formula cannot be printed "
+                         "in Spot syntax")
+    else:
+        raise ValueError(f"no Spot form for IR node {op!r}")
+    n.stext = s
+    return s
 
 
 def expr_text(e: A.Expr) -> str:

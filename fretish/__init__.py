@@ -8,8 +8,20 @@
 """
 
 from .errors import FretishError, FretishFileError, FretishSyntaxError
-from .files import RequirementEntry, load_requirements
-from .parser import parse
+
+# The parser and the file loader are imported on first use (PEP 562): ``from
+# fretish.errors import ...`` (every fretc command does) must not load them (start-up time).
+_LAZY = {"parse": "parser", "load_requirements": "files", "RequirementEntry": "files"}
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'fretish' has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
 
 __all__ = ["parse", "load_requirements", "RequirementEntry", "FretishError",
            "FretishSyntaxError", "FretishFileError"]

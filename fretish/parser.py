@@ -1,8 +1,11 @@
 """FRETish sentence -> :class:`fretish.ast.Requirement`.
 
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
-phrasings and the expression precedence. The Lark parser is built once per process and
-applies the AST builder while it parses (no intermediate parse tree).
+phrasings and the expression precedence. The AST builder is applied while parsing (no
+intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
+cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character);
+a sentence it cannot parse goes to Lark itself, which is imported only then and reports the
+error (``fretc FILE --emit ltl`` on valid sentences does not import Lark).
 
 Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, restated;
 ``../shared/fretish/README.md`` sections 1-5 and 7):
@@ -44,13 +47,8 @@ from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
 
-from lark import Lark, Token, Transformer
-from lark import __version__ as _LARK_VERSION
-from lark.exceptions import LarkError, UnexpectedInput
-
 from . import ast as A
 from . import cache
-from .diagnostics import make_error, translate
 from .limits import LimitError, check_expression, check_requirement
 from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 
@@ -83,8 +81,25 @@ class _Ctx(threading.local):
 _ctx = _Ctx()
 
 
+class _Tok:
+    """A token of the fast path (:class:`_FastParser`): the attributes of a ``lark.Token``
+    that the AST builder reads (``type``, ``value``, 1-based ``line``/``column`` and
+    ``end_line``/``end_column``, 0-based ``start_pos``/``end_pos``)."""
+    __slots__ = ("type", "value", "start_pos", "line", "column", "end_line", "end_column",
+                 "end_pos")
+
+    def __init__(self, type_, value, start_pos, line, column, end_line, end_column, end_pos):
+        self.type, self.value, self.start_pos = type_, value, start_pos
+        self.line, self.column, self.end_line = line, column, end_line
+        self.end_column, self.end_pos = end_column, end_pos
+
+
+#: Token classes the builder may receive: ours, and ``lark.Token`` once Lark is loaded.
+_TOKENS = {_Tok}
+
+
 def _span_of(x) -> A.Span:
-    if isinstance(x, Token):
+    if type(x) in _TOKENS:
         dl, dc = _ctx.dl, _ctx.dc
         return A.Span(x.line + dl, x.column + dc if x.line == 1 else x.column,
                       x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
@@ -94,13 +109,13 @@ def _span_of(x) -> A.Span:
 
 def _join(a, b) -> A.Span:
     """Span from the start of ``a`` to the end of ``b`` (tokens or nodes)."""
-    if type(a) is Token:
+    if type(a) in _TOKENS:
         line = a.line
         start = (line + _ctx.dl, a.column + _ctx.dc if line == 1 else a.column, a.start_pos)
     else:
         s = a.span
         start = (s.line, s.column, s.start)
-    if type(b) is Token:
+    if type(b) in _TOKENS:
         line = b.end_line
         return A.Span(start[0], start[1], line + _ctx.dl,
                       b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
@@ -141,14 +156,14 @@ class _ExplicitMode:
         self.var, self.span = var, span
 
 
-def _unquote(tok: Token) -> str:
+def _unquote(tok) -> str:
     body = tok.value[1:-1]
     if "\\" in body:
         body = body.replace('\\"', '"').replace("\\\\", "\\")
     return body
 
 
-def _name_of(tok: Token) -> str:
+def _name_of(tok) -> str:
     if tok.type == "STRING":
         name = _unquote(tok)
         if not name.strip():
@@ -226,7 +241,7 @@ def _not_here(x) -> "_Fail":
 
 
 # --------------------------------------------------------------------------- AST builder
-class _Builder(Transformer):
+class _Builder:
     """Lark callbacks, one per grammar rule or alias; each gets the rule's children (AST
     nodes, helper objects and the named keyword tokens)."""
 
@@ -367,7 +382,7 @@ class _Builder(Transformer):
 
     def condition(self, c):
         first = c[0]
-        parts = c[1:] if isinstance(first, Token) else c
+        parts = c[1:] if type(first) in _TOKENS else c
         expr = parts[0].expr
         for p in parts[1:]:
             expr = A.Binary("|" if p.connective == "or" else "&", expr, p.expr,
@@ -455,24 +470,54 @@ class _Builder(Transformer):
 
 
 # --------------------------------------------------------------------------- the parser
-_lock = threading.Lock()
-_lark: Lark | None = None
+_lock = threading.RLock()
+_lark = None          # the lark.Lark parser (loaded on first need: errors, no fast path)
+_fast = None          # the _FastParser, False when it cannot be used
 
 
 _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", start=["start", "expr"],
                      maybe_placeholders=False)
 
 
-def build_lark(**options) -> Lark:
+def _import_lark():
+    """Import Lark (on first need: ``fretc FILE --emit ltl`` on valid sentences runs without
+    it) and let the builder accept its tokens."""
+    import lark
+    _TOKENS.add(lark.Token)
+    return lark
+
+
+def _lark_version() -> str:
+    """The installed Lark's version, read from its ``__init__.py`` without importing Lark
+    (importing it costs more than parsing a hundred sentences); imports it when that fails."""
+    import importlib.util
+    try:
+        spec = importlib.util.find_spec("lark")
+        text = Path(spec.origin).read_text(encoding="utf-8")
+        m = re.search(r"^__version__\s*(?::\s*str\s*)?=\s*[\"']([^\"']+)[\"']", text, re.M)
+        if m:
+            return m.group(1)
+    except (AttributeError, OSError, TypeError, ValueError, ImportError):
+        pass
+    return _import_lark().__version__
+
+
+def _cache_key(grammar: str) -> str:
+    return cache.key_of("fretish-lark-1", grammar, _lark_version(),
+                        "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
+
+
+def build_lark(**options):
     """A new Lark parser for ``grammar.lark`` (start symbols ``start`` and ``expr``), LALR
     with the contextual lexer and the AST builder applied while parsing. ``options`` go
     to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts). Builds the LALR
     tables from the grammar (about a second); :func:`cached_lark` loads them instead."""
-    return Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), transformer=_Builder(),
-                **_LARK_OPTIONS, **options)
+    lark = _import_lark()
+    return lark.Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), transformer=_Builder(),
+                     **_LARK_OPTIONS, **options)
 
 
-def cached_lark() -> Lark:
+def cached_lark():
     """The parser of :func:`build_lark`, with its LALR tables loaded from fretc's disk
     cache (:mod:`fretish.cache`, sub-folder ``lark``) when an entry for this grammar text,
     Lark version, Python version and these options is there, else built and stored
@@ -484,14 +529,13 @@ def cached_lark() -> Lark:
     never a stale one. Entries are written atomically (:func:`fretish.cache.write_bytes`);
     an entry that cannot be read or loaded is ignored and rebuilt, and when the cache
     folder cannot be written the tables are built in memory as :func:`build_lark` does."""
+    lark = _import_lark()
     grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
-    key = cache.key_of("fretish-lark-1", grammar, _LARK_VERSION,
-                       "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
-    name = f"grammar-{key[:40]}.pickle"
+    name = f"grammar-{_cache_key(grammar)[:40]}.pickle"
     data = cache.read_bytes("lark", name)
     if data is not None:
         try:
-            parser = Lark.load(io.BytesIO(data))
+            parser = lark.Lark.load(io.BytesIO(data))
             if isinstance(parser.options.transformer, _Builder):
                 return parser
         except Exception:  # a damaged or foreign entry: rebuild it  # noqa: BLE001
@@ -506,7 +550,7 @@ def cached_lark() -> Lark:
     return parser
 
 
-def _get_parser() -> Lark:
+def _get_parser():
     global _lark
     if _lark is None:
         with _lock:
@@ -515,9 +559,380 @@ def _get_parser() -> Lark:
     return _lark
 
 
+# --------------------------------------------------------------------------- the fast path
+class _Slow(Exception):
+    """The fast path cannot decide this text: parse it with Lark (errors included)."""
+
+
+class _Inline:
+    """The children of an inlined rule (``_name``, Lark's anonymous ``__x_star`` rules),
+    spliced into the parent's children as Lark's child filter does with its trees."""
+    __slots__ = ("children",)
+
+    def __init__(self, children):
+        self.children = children
+
+
+def fast_tables(lark) -> dict | None:
+    """What :class:`_FastParser` needs from a Lark parser of ``grammar.lark``, as plain data
+    (marshalled in fretc's cache beside Lark's own entry, so a run loads it without importing
+    Lark): the terminals in the order Lark's lexer tries them, Lark's LALR table, and per
+    rule its origin, length, callback name and Lark's child filter (``_``-prefixed
+    terminals dropped, ``_``-prefixed rules spliced, ``?rule`` single children passed up).
+    None when the grammar uses a Lark feature the fast path does not reproduce (a terminal
+    callback or a string terminal that a regexp terminal also matches)."""
+    from lark.lexer import _create_unless, _regexp_has_newline
+    from lark.parsers.lalr_analysis import Shift
+
+    conf = lark.lexer_conf
+    terminals = list(conf.terminals)
+    terminals.sort(key=lambda x: (-x.priority, -x.pattern.max_width, -len(x.pattern.value),
+                                  x.name))
+    kept, callbacks = _create_unless(terminals, conf.g_regex_flags, conf.re_module,
+                                     conf.use_bytes)
+    builder = _Builder()
+    if callbacks or conf.callbacks or len(kept) != len(terminals) or conf.use_bytes \
+            or any(hasattr(builder, t.name) for t in terminals) or lark.options.postlex:
+        return None
+    parser = lark.parser.parser.parser
+    table = parser.parse_table
+    index = {}
+    rules = []
+    for rule in lark.rules:
+        exp = rule.expansion
+        opts = rule.options
+        include = [(i, not sym.is_term and sym.name.startswith("_"))
+                   for i, sym in enumerate(exp)
+                   if opts.keep_all_tokens or not (sym.is_term and sym.filter_out)]
+        filtered = len(include) < len(exp) or any(x for _, x in include)
+        index[rule] = len(rules)
+        rules.append((str(rule.origin.name), len(exp),
+                      str(rule.alias or opts.template_source or rule.origin.name),
+                      bool(opts.expand1 and not rule.alias),
+                      tuple(include) if filtered else None))
+    states = {int(s): {str(t): (True, int(arg)) if act is Shift else (False, index[arg])
+                  for t, (act, arg) in acts.items()}
+              for s, acts in table.states.items()}
+    firsts = [_first_chars(t.pattern.to_regexp(), conf.g_regex_flags) for t in terminals]
+    subsets: dict = {}
+    dispatch = {}
+    for ch in _ASCII:
+        subset = tuple(i for i, f in enumerate(firsts) if f is None or ch in f)
+        dispatch[ch] = subsets.setdefault(subset, len(subsets))
+    return {"terminals": [(str(t.name), str(t.pattern.to_regexp())) for t in terminals],
+            "dispatch": dispatch, "subsets": list(subsets),
+            "flags": int(conf.g_regex_flags), "ignore": sorted(str(t) for t in conf.ignore),
+            "newline": sorted(str(t.name) for t in terminals
+                              if _regexp_has_newline(t.pattern.to_regexp())),
+            "states": states, "rules": rules,
+            "start_states": {str(k): int(v) for k, v in table.start_states.items()},
+            "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
+
+
+_ASCII = [chr(i) for i in range(128)]
+
+
+def _first_chars(rx: str, flags: int) -> frozenset | None:
+    """A superset of the ASCII characters a match of regexp ``rx`` can start with (None: it
+    may start with any), from the parse tree of Python's ``re``: zero-width assertions are
+    skipped (so the set only grows), anything not understood means "any"."""
+    import re._constants as C
+    import re._parser as P
+
+    def chars(codes, icase):
+        out = set()
+        for code in codes:
+            ch = chr(code)
+            out.update(x for x in _ASCII
+                       if x == ch or (icase and re.fullmatch(re.escape(ch), x, re.I)))
+        return out
+
+    def first(seq, icase):            # -> (set or None, nullable)
+        out: set = set()
+        for op, av in seq:
+            if op in (C.ASSERT, C.ASSERT_NOT, C.AT):
+                continue
+            if op is C.LITERAL:
+                return out | chars([av], icase), False
+            if op is C.IN:
+                codes = []
+                for iop, iav in av:
+                    if iop is C.LITERAL:
+                        codes.append(iav)
+                    elif iop is C.RANGE:
+                        codes.extend(range(iav[0], iav[1] + 1))
+                    else:
+                        return None, False
+                return out | chars(codes, icase), False
+            if op is C.SUBPATTERN:
+                _, add, dele, sub = av
+                sub_icase = (icase or bool(add & re.I)) and not dele & re.I
+                got, nullable = first(sub, sub_icase)
+            elif op is C.BRANCH:
+                got, nullable = set(), False
+                for alt in av[1]:
+                    g, nl = first(alt, icase)
+                    if g is None:
+                        return None, False
+                    got |= g
+                    nullable = nullable or nl
+            elif op in (C.MAX_REPEAT, C.MIN_REPEAT, C.POSSESSIVE_REPEAT):
+                lo, _, sub = av
+                got, nullable = first(sub, icase)
+                nullable = nullable or lo == 0
+            else:
+                return None, False
+            if got is None:
+                return None, False
+            out |= got
+            if not nullable:
+                return out, False
+        return out, True
+
+    tree = P.parse(rx, flags)
+    got, nullable = first(tree.data, bool(tree.state.flags & re.I))
+    return None if got is None or nullable else frozenset(got)
+
+
+class _FastParser:
+    """Lark's LALR(1) table for ``grammar.lark`` run by a plain loop, with one lexer regexp.
+
+    The grammar's terminals never overlap (its header: a keyword matches only its word and
+    NAME refuses every reserved word), so the one regexp of all terminals, tried in the
+    order Lark's lexer tries them, gives the token the contextual lexer would give in every
+    state where that token can be shifted: the first alternative that matches is the same
+    in the state's subset and in the whole set whenever it belongs to the subset. That
+    regexp is split by the next character: only the terminals that can start with it
+    (:func:`_first_chars`, a superset) are tried, in the same order, so the first match is
+    the same; each part is compiled on first use. Each token
+    is fed to Lark's table and each reduction calls the same :class:`_Builder` callback,
+    wrapped as Lark wraps it (:func:`fast_tables`), so a sentence parsed here gets the AST
+    Lark gives. Anything else - a character no terminal matches, a token the state does
+    not accept, an error raised by the builder - raises :class:`_Slow`, and the sentence is
+    parsed again by Lark for its exact error (tests/fretish/test_fast_parser.py compares the
+    two on every test sentence)."""
+
+    def __init__(self, tables: dict):
+        self.terminals = tables["terminals"]
+        self.flags = tables["flags"]
+        self.subsets = tables["subsets"] + [tuple(range(len(self.terminals)))]
+        self.dispatch = tables["dispatch"]       # ASCII character -> index into subsets
+        self.matchers = [None] * len(self.subsets)  # compiled on first use
+        self.parts: dict = {}                     # terminal indices -> compiled match
+        self.newline = frozenset(tables["newline"])
+        self.ignore = frozenset(tables["ignore"])
+        self.states = tables["states"]
+        self.start_states = tables["start_states"]
+        self.end_states = tables["end_states"]
+        builder = _Builder()
+        self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include),
+                       self._passed_up(size, expand1, include))
+                      for origin, size, name, expand1, include in tables["rules"]]
+
+    @staticmethod
+    def _passed_up(size, expand1, include) -> int:
+        """For a ``?rule`` whose filtered children are always exactly one child (no splice),
+        that child's index counted from the end of the rule (Lark's callback returns it
+        as is); 0 otherwise."""
+        kept = [(i, splice) for i, splice in include] if include is not None else \
+            [(i, False) for i in range(size)]
+        if expand1 and len(kept) == 1 and not kept[0][1]:
+            return kept[0][0] - size
+        return 0
+
+    def _matcher(self, sid: int):
+        """The ``match`` of subset ``sid``: its terminals tried in Lark's order. A long
+        regexp (NAME's, with its reserved-word lookahead) is a part of its own, compiled
+        once and shared by every subset (trying the parts in turn is the alternation of
+        them all: the first alternative that matches wins either way)."""
+        subset = self.subsets[sid]
+        if not subset:
+            raise _Slow("no terminal starts with this character")
+        parts, run = [], []
+        for i in subset:
+            if len(self.terminals[i][1]) > 200:
+                if run:
+                    parts.append(tuple(run))
+                    run = []
+                parts.append((i,))
+            else:
+                run.append(i)
+        if run:
+            parts.append(tuple(run))
+        matches = [self._part(p) for p in parts]
+        if len(matches) == 1:
+            m = matches[0]
+        else:
+            def m(text, pos, matches=matches):
+                for match in matches:
+                    found = match(text, pos)
+                    if found is not None:
+                        return found
+                return None
+        self.matchers[sid] = m
+        return m
+
+    def _part(self, indices: tuple):
+        got = self.parts.get(indices)
+        if got is None:
+            got = self.parts[indices] = re.compile(
+                "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})"
+                         for i in indices), self.flags).match
+        return got
+
+    @staticmethod
+    def _callback(builder, origin, name, expand1, include):
+        f = getattr(builder, name, None)
+        if f is None:
+            if not origin.startswith("_"):
+                def f(children):  # Lark would build a Tree: not a FRETish AST
+                    raise _Slow(origin)
+            else:
+                f = _Inline
+        if expand1:
+            inner = f
+
+            def f(children, inner=inner):
+                return children[0] if len(children) == 1 else inner(children)
+        if include is not None:
+            inner2 = f
+
+            def f(children, inner=inner2, include=include):
+                out = []
+                for i, splice in include:
+                    if splice:
+                        if out:
+                            out += children[i].children
+                        else:
+                            out = children[i].children
+                    else:
+                        out.append(children[i])
+                return inner(out)
+        return f
+
+    def parse(self, text: str, start: str):
+        """The builder's result for ``text`` from start symbol ``start``; raises
+        :class:`_Slow` (or the builder's exception) where Lark must decide."""
+        ignore, newline = self.ignore, self.newline
+        dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
+        states, rules = self.states, self.rules
+        state_stack = [self.start_states[start]]
+        value_stack = []
+        end_state = self.end_states[start]
+        pos, n, line, line_start = 0, len(text), 1, 0
+        while True:
+            if pos < n:
+                sid = dispatch.get(text[pos], full)
+                match = matchers[sid] or self._matcher(sid)
+                m = match(text, pos)
+                if m is None:
+                    raise _Slow("no terminal")
+                typ = m.lastgroup
+                end = m.end()
+                nline, nstart = line, line_start
+                if typ in newline:
+                    value = text[pos:end]
+                    k = value.count("\n")
+                    if k:
+                        nline = line + k
+                        nstart = pos + value.rindex("\n") + 1
+                if typ in ignore:
+                    pos, line, line_start = end, nline, nstart
+                    continue
+                tok = _Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
+                           end - nstart + 1, end)
+                pos, line, line_start = end, nline, nstart
+                is_end = False
+            else:
+                typ, tok, is_end = "$END", None, True
+            while True:
+                action = states[state_stack[-1]].get(typ)
+                if action is None:
+                    raise _Slow(typ)
+                if action[0]:
+                    if is_end:
+                        raise _Slow(typ)
+                    state_stack.append(action[1])
+                    value_stack.append(tok)
+                    break
+                origin, size, callback, up = rules[action[1]]
+                if up:
+                    value = value_stack[up]
+                    del state_stack[-size:]
+                    del value_stack[-size:]
+                    goto = states[state_stack[-1]][origin][1]
+                    state_stack.append(goto)
+                    value_stack.append(value)
+                    if is_end and goto == end_state:
+                        return value
+                    continue
+                if size:
+                    children = value_stack[-size:]
+                    del state_stack[-size:]
+                    del value_stack[-size:]
+                else:
+                    children = []
+                value = callback(children)
+                goto = states[state_stack[-1]][origin][1]
+                state_stack.append(goto)
+                value_stack.append(value)
+                if is_end and goto == end_state:
+                    return value
+
+
+def _load_fast():
+    """The :class:`_FastParser` from its cache entry (built from Lark's tables, and stored,
+    when missing), or False when it cannot be used."""
+    import marshal  # plain data only; the key names the Python version (marshal's format)
+    grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
+    name = f"grammar-{_cache_key(grammar)[:40]}.fast.marshal"
+    data = cache.read_bytes("lark", name)
+    if data is not None:
+        try:
+            return _FastParser(marshal.loads(data))
+        except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
+            pass
+    tables = fast_tables(_get_parser())
+    if tables is None:
+        return False
+    cache.write_bytes("lark", name, marshal.dumps(tables))
+    return _FastParser(tables)
+
+
+def _get_fast():
+    global _fast
+    if _fast is None:
+        with _lock:
+            if _fast is None:
+                _fast = _load_fast()
+    return _fast
+
+
 def _run(start: str, text: str, source: str, line: int, column: int):
     if not isinstance(text, str):
         raise TypeError(f"parse() wants a str, got {type(text).__name__}")
+    fast = _get_fast()
+    if fast:
+        _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
+        try:
+            result = fast.parse(text, start)
+            if start == "start":
+                check_requirement(result)
+            else:
+                check_expression(result)
+            return result
+        except Exception:  # noqa: BLE001 - Lark decides, with its exact error
+            pass
+        finally:
+            _ctx.text = ""
+    return _run_lark(start, text, source, line, column)
+
+
+def _run_lark(start: str, text: str, source: str, line: int, column: int):
+    """Parse with Lark itself (the reference; every error is reported from here)."""
+    from lark.exceptions import LarkError, UnexpectedInput
+
+    from .diagnostics import make_error, translate
     lark = _get_parser()
     _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
     try:

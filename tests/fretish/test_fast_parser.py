@@ -1,0 +1,164 @@
+"""The parser's fast path (fretish.parser._FastParser: Lark's LALR table run by a plain loop,
+one lexer regexp split by first character) against Lark itself (fretish.parser._run_lark,
+the reference): on every sentence the fast path accepts, the same AST with the same spans;
+every sentence Lark accepts is accepted by the fast path too (else the speed is silently
+lost); and through the public ``parse``, the same error text for every rejected one."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import random
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import fretish.parser as P
+from fretish.errors import FretishError
+from fretish.words import RESERVED_WORDS
+
+SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "fretish"
+
+
+def _deep(x):
+    """A comparable form of an AST node with every field, spans included (spans take no part
+    in the nodes' own equality and repr)."""
+    if dataclasses.is_dataclass(x):
+        return (type(x).__name__,) + tuple((f.name, _deep(getattr(x, f.name)))
+                                           for f in dataclasses.fields(x))
+    if isinstance(x, (tuple, list)):
+        return tuple(_deep(y) for y in x)
+    return x
+
+
+def _lark(text, start="start", line=1, column=1):
+    try:
+        return "ok", _deep(P._run_lark(start, text, "<t>", line, column))
+    except FretishError as e:
+        return "error", str(e)
+
+
+def _fast(text, start="start", line=1, column=1):
+    """The fast path's AST (deep form), or None where it hands the text to Lark."""
+    fast = P._get_fast()
+    assert fast, "the fast path is not available for grammar.lark"
+    P._ctx.text, P._ctx.dl, P._ctx.dc = text, line - 1, column - 1
+    try:
+        result = fast.parse(text, start)
+        (P.check_requirement if start == "start" else P.check_expression)(result)
+        return _deep(result)
+    except Exception:  # noqa: BLE001 - handed to Lark
+        return None
+    finally:
+        P._ctx.text = ""
+
+
+def _public(text, start="start", line=1, column=1):
+    run = P.parse if start == "start" else P.parse_expression
+    try:
+        return "ok", _deep(run(text, source="<t>", line=line, column=column))
+    except FretishError as e:
+        return "error", str(e)
+
+
+def _check(text, start="start", line=1, column=1):
+    ref = _lark(text, start, line, column)
+    fast = _fast(text, start, line, column)
+    if ref[0] == "ok":
+        assert fast == ref[1], text
+    else:
+        assert fast is None, text
+    assert _public(text, start, line, column) == ref, text
+
+
+def _corpus():
+    texts = []
+    for name in ("fret_vectors.jsonl", "fret_vectors_functions.jsonl"):
+        path = SHARED / name
+        if path.exists():
+            texts += [json.loads(line)["text"] for line in path.open(encoding="utf-8")]
+    path = SHARED / "fret_trace_verdicts.jsonl"
+    if path.exists():
+        texts += [json.loads(line).get("sentence", "") for line in path.open(encoding="utf-8")]
+    rnd = random.Random(7)
+    scopes = ["", "in m", "only after \"flight mode\"", "before mode m,", "except while x > 1",
+              "unless in m", "only during m"]
+    conds = ["", "upon c", "whenever c & !d,", "upon p is false and when q", "if x >= -3.5e2",
+             "unless p, or where q is true"]
+    timings = ["", "immediately", "at the next timepoint", "within 5 ticks", "for 2 seconds",
+               "until s", "before preBool(false, p)", "with probability >= 0.9 eventually"]
+    responses = ["r", "!r | q", "x + 2 * y <= 10", "persisted(3, p) -> q", "a xor b & c",
+                 "if a then b", "at the previous occurrence of p, q", "-3 ^ 2 > -x ^ 2",
+                 "(a <-> b) => ~c", "f(x, y) = 1"]
+    for _ in range(150):
+        parts = [rnd.choice(scopes), rnd.choice(conds), rnd.choice(["the sw shall",
+                                                                    "shall the sw"]),
+                 rnd.choice(timings), "satisfy", rnd.choice(responses)]
+        text = " ".join(p for p in parts if p) + rnd.choice(["", ".", " ."])
+        texts.append(text)
+        words = text.split(" ")  # and a near miss: one word dropped or doubled
+        i = rnd.randrange(len(words))
+        texts.append(" ".join(words[:i] + words[i + 1:]))
+        texts.append(" ".join(words[:i] + [words[i]] + words[i:]))
+        texts.append("\n  ".join(words))  # spread over lines
+    return texts
+
+
+CORPUS = _corpus()
+
+
+def test_fast_path_equals_lark_on_the_corpus():
+    accepted = 0
+    for text in CORPUS:
+        _check(text)
+        accepted += _lark(text)[0] == "ok"
+    assert accepted > len(CORPUS) // 3  # the comparison covered accepted sentences
+
+
+@pytest.mark.parametrize("text", ["x + 1 > y & !p", "if a then b | c", "a < b < c", "x = !y",
+                                  "f(", "\"weird var\" -> X"])
+def test_fast_path_equals_lark_on_expressions(text):
+    _check(text, start="expr")
+
+
+def test_positions_in_file_coordinates():
+    text = "in m upon p,\n  the sw shall\twithin 3 ticks satisfy x + 1 > -2"
+    _check(text, line=7, column=5)
+    _check(text.replace("satisfy", "satisfy satisfy"), line=7, column=5)
+
+
+_WORDS = sorted(RESERVED_WORDS) + ["p", "x1", "a.b", "sw", "X", "What", "\"q r\"", "3", "-2",
+                                   "1.5e3", "0.5", "&", "|", "->", "<=>", "!", "~", "(",
+                                   ")", ",", ".", "+", "-", "*", "/", "^", "=", "!=", "<",
+                                   ">=", "#", "é", "\"", "mode", "Shall", "SATISFY"]
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.sampled_from(_WORDS), min_size=1, max_size=14),
+       st.sampled_from([" ", "", "\n", "  \t"]))
+def test_fast_path_equals_lark_on_word_soup(words, sep):
+    _check(sep.join(words))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(CORPUS), st.integers(0, 200), st.sampled_from(_WORDS))
+def test_fast_path_equals_lark_on_edited_sentences(text, at, word):
+    at = min(at, len(text))
+    _check(text[:at] + word + text[at:])
+
+
+def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
+    """The fast path's tables live in fretc's cache beside Lark's; a damaged entry is
+    rebuilt, never trusted."""
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(P, "_fast", None)
+    monkeypatch.setattr(P, "_lark", None)
+    text = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
+    ref = _public(text)
+    (entry,) = (tmp_path / "lark").glob("*.fast.marshal")
+    entry.write_bytes(entry.read_bytes()[:200])
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert entry.stat().st_size > 200  # rewritten whole
