@@ -54,6 +54,23 @@ def compiled(req: A.Requirement, rid: str = "R", tick_period=None):
     return c
 
 
+def entry(rid: str, text: str, tick_period=None, source: str = "test.fret"):
+    """A requirement entry as fretish.files makes them (without a file), its text parsed."""
+    from types import SimpleNamespace
+
+    from fretish import parse
+    return SimpleNamespace(id=rid, text=text, source=source, line=1, column=1,
+                           rationale=None, parent=None, tick_period=tick_period,
+                           requirement=parse(text), error=None, extra={})
+
+
+def load_source(source: str) -> types.ModuleType:
+    """exec a generated monitor module's text into a fresh module named ``generated``."""
+    mod = types.ModuleType("generated")
+    exec(compile(source, "generated.py", "exec"), mod.__dict__)
+    return mod
+
+
 def load_module(compiled_list, name: str = "test_monitors") -> types.ModuleType:
     """exec the generated monitor module text into a fresh module."""
     src = render_module(compiled_list, name)

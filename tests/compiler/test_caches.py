@@ -4,30 +4,18 @@ automaton construction (issue 9)."""
 
 from __future__ import annotations
 
-import types
-from types import SimpleNamespace
 
 import pytest
 
 from compiler import automata, codegen, ltl3
 from compiler.build import compile_entry
 from compiler.codegen import render_module
-from fretish import parse
 from fretish import parser as P
 
 
 # same helpers as entry/load in tests/compiler/test_monitors_codegen.py (kept: each test file
 # stands alone)
-def entry(rid: str, text: str):
-    return SimpleNamespace(id=rid, text=text, source="t.fret", line=1, column=1,
-                           rationale=None, parent=None, tick_period=None,
-                           requirement=parse(text), error=None, extra={})
-
-
-def load(source: str):
-    mod = types.ModuleType("generated")
-    exec(compile(source, "generated.py", "exec"), mod.__dict__)
-    return mod
+from _monitor_helpers import entry, load_source as load  # noqa: E402
 
 
 SENTENCES = [

@@ -7,7 +7,6 @@ import json
 import random
 import subprocess
 import sys
-import types
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -28,17 +27,7 @@ VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl"
 
 
 # same helpers as entry/load in tests/compiler/test_caches.py (kept: each test file stands alone)
-def entry(rid: str, text: str, tick_period=None):
-    """A requirement entry as fretish.files makes them (without a file)."""
-    return SimpleNamespace(id=rid, text=text, source="test.fret", line=1, column=1,
-                           rationale=None, parent=None, tick_period=tick_period,
-                           requirement=parse(text), error=None, extra={})
-
-
-def load(source: str):
-    mod = types.ModuleType("generated")
-    exec(compile(source, "generated.py", "exec"), mod.__dict__)
-    return mod
+from _monitor_helpers import entry, load_source as load  # noqa: E402
 
 
 def template_requirement(scope, cond, timing, n):
