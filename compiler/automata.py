@@ -320,23 +320,13 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
         return None
     empty = bool(aut.is_empty())
     names = [f"a{i}" for i in range(n_atoms)]
-    var = {}
-    for name in names:
-        var[name] = aut.register_ap(name)  # present ones keep their number
     if n_atoms <= table_max_aps:
-        width = 1 << n_atoms
-        memo: dict = {}
-        rows = []
-        for s in range(aut.num_states()):
-            row = [-1] * width
-            for e in aut.out(s):
-                for letter in _cached_letters(memo, e.cond, var, names, width):
-                    row[letter] = e.dst
-            rows.append(row)
-        init, rows = _bfs_tables(aut.get_init_state_number(), rows)
+        init, rows = _bfs_tables(aut.get_init_state_number(), letter_rows(aut, n_atoms))
         complete = not empty and all(x >= 0 for row in rows for x in row)
         return {"initial": init, "table": rows, "chains": None, "empty": empty,
                 "complete": complete, "states": len(rows)}
+    for name in names:
+        aut.register_ap(name)  # present ones keep their number
     edges = []
     for s in range(aut.num_states()):
         out = [(bdd_code(spot.bdd_to_formula(e.cond, d), names), e.dst) for e in aut.out(s)]
@@ -344,6 +334,26 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
     init, chains = _bfs_chains(aut.get_init_state_number(), edges)
     return {"initial": init, "table": None, "chains": chains, "empty": empty,
             "complete": False, "states": len(chains)}
+
+
+def letter_rows(aut, n_atoms: int) -> list[list[int]]:
+    """The transition table of a deterministic Spot automaton over the atoms ``a0`` ..
+    ``a{n_atoms-1}``: ``rows[state][letter]`` is the successor state (-1: no edge), a letter
+    being the bit vector of the atoms' values (bit i = ``a{i}``), ``2**n_atoms`` per row.
+    States keep Spot's numbers. Registers the atoms on ``aut`` (present ones keep their
+    number)."""
+    names = [f"a{i}" for i in range(n_atoms)]
+    var = {name: aut.register_ap(name) for name in names}
+    width = 1 << n_atoms
+    memo: dict = {}
+    rows = []
+    for s in range(aut.num_states()):
+        row = [-1] * width
+        for e in aut.out(s):
+            for letter in _cached_letters(memo, e.cond, var, names, width):
+                row[letter] = e.dst
+        rows.append(row)
+    return rows
 
 
 def _table_monitor(aut, n_atoms: int) -> dict | None:

@@ -4,13 +4,13 @@ failure never stops the others."""
 
 from __future__ import annotations
 
-import gc
 import hashlib
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from fretish.errors import FretishError, render_diagnostic
 
+from .ir import gc_paused
 from .printers import mangle, to_smv, to_spot
 from .semantics import Formalization, SemanticsError, formalize
 
@@ -124,15 +124,9 @@ def compile_entries(entries: Iterable) -> list[Compiled]:
     Python's cyclic garbage collector is paused meanwhile, as :func:`formalize` does for one
     requirement: the formula trees and the compiled records are acyclic, and between two
     requirements the collector would rescan every node built so far (a quarter of the
-    time of a thousand requirements)."""
-    paused = gc.isenabled()
-    if paused:
-        gc.disable()
-    try:
+    time of a thousand requirements; :class:`compiler.ir.gc_paused`)."""
+    with gc_paused():
         return [compile_entry(e) for e in entries]
-    finally:
-        if paused:
-            gc.enable()
 
 
 def _locate(exc: SemanticsError, entry) -> FretishError:

@@ -25,7 +25,6 @@ rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then 
 
 from __future__ import annotations
 
-import gc
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -115,16 +114,10 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
     requirement, a bad duration or a bad temporal-function argument.
 
     The formula trees are acyclic, so Python's cyclic garbage collector is paused while they
-    are built (it would otherwise spend half the time rescanning the new nodes).
+    are built (:class:`compiler.ir.gc_paused`).
     """
-    paused = gc.isenabled()
-    if paused:
-        gc.disable()
-    try:
+    with ir.gc_paused():
         return _formalize(req, tick_period)
-    finally:
-        if paused:
-            gc.enable()
 
 
 def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalization:

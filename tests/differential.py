@@ -328,6 +328,31 @@ def value(w: _World, e: tuple, t: int, free: bool = False):
     raise AssertionError(k)
 
 
+def world_signals(meaning: dict, trace: Sequence[dict], infinite: bool = False):
+    """``(world, R, S, C)``: the scope intervals of ``meaning`` on ``trace`` (its mode read
+    with the endpoint-free functions) and the response, stop and condition as functions of a
+    position (S, C None when absent)."""
+    scope = meaning["scope"]
+    mode_series = None
+    if scope != "null":
+        w0 = _World(trace, "null", None, infinite)
+        mode_series = [value(w0, meaning["mode"], i, free=True) for i in range(len(trace))]
+    w = _World(trace, scope, mode_series, infinite)
+    R = lambda j: value(w, meaning["response"], j)  # noqa: E731
+    S = (lambda j: value(w, meaning["stop"], j)) if meaning["stop"] else None  # noqa: E731
+    C = (lambda j: value(w, meaning["cond"], j)) if meaning["cond"] else None  # noqa: E731
+    return w, R, S, C
+
+
+def trigger_points(meaning: dict, C, s: int, last: int) -> list[int]:
+    """The trigger points in ``[s, last]`` of an interval starting at ``s`` (section 2)."""
+    if meaning["cond_kind"] == "null":
+        return [s]
+    if meaning["cond_kind"] == "holding":
+        return [t for t in range(s, last + 1) if C(t)]
+    return [t for t in range(s, last + 1) if C(t) and (t == s or not C(t - 1))]
+
+
 def oracle(meaning: dict, trace: Sequence[dict], infinite: bool = False) -> bool:
     """Truth of the requirement on ``trace`` by FRET's interval semantics. ``infinite``:
     the trace is followed by the all-false state forever and intervals reaching the end do
@@ -337,28 +362,13 @@ def oracle(meaning: dict, trace: Sequence[dict], infinite: bool = False) -> bool
         # unroll the absorbing state far enough for every bound and nested lookahead
         trace = list(trace) + [{}] * 12
         L = len(trace)
-    scope = meaning["scope"]
-    mode_series = None
-    if scope != "null":
-        w0 = _World(trace, "null", None, infinite)
-        mode_series = [value(w0, meaning["mode"], i, free=True) for i in range(L)]
-    w = _World(trace, scope, mode_series, infinite)
-    negate = scope.startswith("only")
-    R = lambda j: value(w, meaning["response"], j)  # noqa: E731
-    S = (lambda j: value(w, meaning["stop"], j)) if meaning["stop"] else None  # noqa: E731
-    C = (lambda j: value(w, meaning["cond"], j)) if meaning["cond"] else None  # noqa: E731
+    w, R, S, C = world_signals(meaning, trace, infinite)
+    negate = meaning["scope"].startswith("only")
     tk, n = meaning["timing"], meaning["n"]
     for s, e in w.intervals:
         if infinite and e == L - 1:
             e = INF
-        last_t = min(e, L - 1)
-        if meaning["cond_kind"] == "null":
-            triggers = [s]
-        elif meaning["cond_kind"] == "holding":
-            triggers = [t for t in range(s, last_t + 1) if C(t)]
-        else:
-            triggers = [t for t in range(s, last_t + 1) if C(t) and (t == s or not C(t - 1))]
-        for t in triggers:
+        for t in trigger_points(meaning, C, s, min(e, L - 1)):
             if not _obligation(tk, negate, n, t, e, R, S, L):
                 return False
     return True

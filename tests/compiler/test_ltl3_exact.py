@@ -51,18 +51,7 @@ REFERENCE_MINIMIZE_MAX = 3000
 
 
 def _table(aut, n_atoms: int) -> tuple[int, list[list[int]]]:
-    names = [f"a{i}" for i in range(n_atoms)]
-    var = {x: aut.register_ap(x) for x in names}
-    width = 1 << n_atoms
-    memo: dict = {}
-    rows = []
-    for s in range(aut.num_states()):
-        row = [-1] * width
-        for e in aut.out(s):
-            for letter in automata._cached_letters(memo, e.cond, var, names, width):
-                row[letter] = e.dst
-        rows.append(row)
-    return aut.get_init_state_number(), rows
+    return aut.get_init_state_number(), automata.letter_rows(aut, n_atoms)
 
 
 def _spot_reference(text: str, negate: bool, n_atoms: int):

@@ -33,8 +33,8 @@ from monitors.engines.interval import EvidenceUnsupported, evaluate_requirement
 from monitors.engines.vectorized import pt_series
 
 from _monitor_helpers import compiled, load_module
-from differential import (BOOL_VARS, MODE_VARS, NUM_VARS, _World, _obligation,
-                          random_requirement, random_trace, value)
+from differential import (BOOL_VARS, MODE_VARS, NUM_VARS, _obligation, random_requirement,
+                          random_trace, trigger_points, world_signals)
 
 FUNCTIONS = ("persisted(", "occurred(", "persists(", "occurs(", "prevOcc(", "nextOcc(",
              "at the previous occurrence of", "at the next occurrence of", "preBool(")
@@ -45,28 +45,14 @@ def oracle_detail(meaning: dict, trace: list[dict]) -> dict:
     a requirement on a finite trace, trigger by trigger, by tests/differential.py's oracle
     (its scope intervals, triggers and obligations; functions from section 6b's meaning)."""
     L = len(trace)
-    scope = meaning["scope"]
-    mode = None
-    if scope != "null":
-        w0 = _World(trace, "null", None, False)
-        mode = [value(w0, meaning["mode"], i, free=True) for i in range(L)]
-    w = _World(trace, scope, mode, False)
-    R = lambda j: value(w, meaning["response"], j)  # noqa: E731
-    S = (lambda j: value(w, meaning["stop"], j)) if meaning["stop"] else None  # noqa: E731
-    C = (lambda j: value(w, meaning["cond"], j)) if meaning["cond"] else None  # noqa: E731
+    w, R, S, C = world_signals(meaning, trace)
+    negate = meaning["scope"].startswith("only")
     triggers = violations = 0
     first = None
     for s, e in w.intervals:
-        if meaning["cond_kind"] == "null":
-            points = [s]
-        elif meaning["cond_kind"] == "holding":
-            points = [t for t in range(s, e + 1) if C(t)]
-        else:
-            points = [t for t in range(s, e + 1) if C(t) and (t == s or not C(t - 1))]
-        for t in points:
+        for t in trigger_points(meaning, C, s, e):
             triggers += 1
-            if not _obligation(meaning["timing"], scope.startswith("only"), meaning["n"], t,
-                               e, R, S, L):
+            if not _obligation(meaning["timing"], negate, meaning["n"], t, e, R, S, L):
                 violations += 1
                 if first is None:
                     first = (t, (s, e))
