@@ -247,3 +247,131 @@ def minimize(rows: list[list[int]]) -> tuple[int, list[list[int]]]:
     number = {int(cls[s]): i for i, s in enumerate(reps)}
     out = [[number.get(int(cls[d]), -1) for d in table[s]] for s in reps]
     return number[int(cls[0])], out
+
+
+def safety_complement(rows: list[list[int]]) -> list[list[int]]:
+    """The LTL3 monitor of ``not g`` from the LTL3 monitor of a *safety* property ``g``.
+
+    :param rows: the monitor of ``g`` (initial state 0, ``rows[state][letter]``, -1 = no
+        run: the prefix is bad for ``g``).
+    :returns: the rows (initial state 0, -1 = no run) of a deterministic automaton, not
+        minimal, whose prefix language is that of the monitor of ``not g``: the prefixes
+        that some infinite continuation extends to a word violating ``g``. Minimize it
+        (:func:`minimize`) to get the table Spot's monitor of ``not g`` gives.
+
+    The rule: in a safety property every violating word has a bad prefix (Alpern &
+    Schneider, "Defining liveness", IPL 1985; Kupferman & Vardi, "Model checking of safety
+    properties", FMSD 2001), so a prefix ``u`` has a violating continuation iff some finite
+    extension of ``u`` is bad, i.e. iff the monitor of ``g`` can reach "no run" from the
+    state ``u`` leads to. Hence: "no run" becomes a state looping on every letter (every
+    continuation of a bad prefix violates ``g``) and the states that cannot reach "no run"
+    become "no run" (``u`` is a good prefix of ``g``). Wrong for a ``g`` that is not safety
+    (``F a``: no bad prefix, yet ``G !a`` is satisfiable): the caller decides safety.
+    """
+    n = len(rows)
+    width = len(rows[0]) if rows else 0
+    pred: list[set[int]] = [set() for _ in range(n)]
+    reach = [False] * n  # reach[s]: "no run" is reachable from s
+    queue = []
+    for s, row in enumerate(rows):
+        for d in row:
+            if d < 0:
+                if not reach[s]:
+                    reach[s] = True
+                    queue.append(s)
+            else:
+                pred[d].add(s)
+    while queue:
+        d = queue.pop()
+        for s in pred[d]:
+            if not reach[s]:
+                reach[s] = True
+                queue.append(s)
+    if not n or not reach[0]:  # g is valid: not g has no run at all
+        return [[-1] * width]
+    sink = n
+    out = [[(d if reach[d] else -1) if d >= 0 else sink for d in row] if reach[s]
+           else [-1] * width for s, row in enumerate(rows)]
+    out.append([sink] * width)
+    return out
+
+
+def guarantee_bad_prefixes(succ: list[list[int]], init: int, width: int, target: int,
+                           limit: int) -> list[list[int]] | None:
+    """The LTL3 monitor of a safety property ``f`` from a terminal automaton of ``not f``.
+
+    :param succ: ``succ[s][letter]``: bit mask of the successors of state ``s`` of a
+        nondeterministic automaton ``A`` of the guarantee property ``h = not f`` in which
+        the states of ``target`` (a bit mask) accept every continuation and the other states
+        none by themselves: ``A`` accepts an infinite word iff one of its runs reaches
+        ``target`` (a *terminal* Büchi automaton: its accepting SCCs are complete and lead to
+        no rejecting SCC).
+    :param init: ``A``'s initial state.
+    :param width: the number of letters (or letter classes).
+    :param limit: the most subsets built; beyond it None is returned.
+    :returns: the rows (initial state 0, ``rows[state][letter]``, -1 = no run) of a
+        deterministic automaton, not minimal, whose prefix language is that of the LTL3
+        monitor of ``f``: the prefixes that are not bad for ``f``, i.e. not good for ``h``.
+
+    The rule (Kupferman & Vardi, "Model checking of safety properties", FMSD 2001): the
+    subset construction of ``A`` as an automaton of finite words, a set meeting ``target``
+    accepting; ``u`` is good for ``h`` iff every infinite path of the subset automaton from
+    the set ``u`` leads to meets an accepting set (König's lemma), i.e. iff no cycle of
+    non-accepting sets (the empty set included: it loops on every letter) is reachable from
+    it without passing an accepting set. Those sets become "no run".
+    """
+    start = 1 << init
+    if start & target:
+        return [[-1] * width]
+    index = {start: 0}
+    subsets = [start]
+    rows: list[list[int]] = []
+    i = 0
+    while i < len(subsets):
+        sub = subsets[i]
+        masks = [0] * width
+        x = sub
+        while x:
+            low = x & -x
+            s = low.bit_length() - 1
+            x ^= low
+            masks = list(map(or_, masks, succ[s]))
+        row = []
+        for r in masks:
+            if r & target:
+                row.append(-1)  # accepting set: a good prefix of h
+                continue
+            j = index.get(r)
+            if j is None:
+                j = index[r] = len(subsets)
+                if j >= limit:
+                    return None
+                subsets.append(r)
+            row.append(j)
+        rows.append(row)
+        i += 1
+    # keep[s]: an infinite path of non-accepting sets starts at s (greatest fixpoint: drop
+    # the sets whose every letter leads to an accepting set or to a dropped set)
+    n = len(rows)
+    pred: list[list[int]] = [[] for _ in range(n)]
+    alive = [0] * n  # successors (with multiplicity) among the kept sets
+    for s, row in enumerate(rows):
+        for d in row:
+            if d >= 0:
+                pred[d].append(s)
+                alive[s] += 1
+    keep = [True] * n
+    queue = [s for s in range(n) if alive[s] == 0]
+    for s in queue:
+        keep[s] = False
+    while queue:
+        d = queue.pop()
+        for s in pred[d]:
+            alive[s] -= 1
+            if alive[s] == 0 and keep[s]:
+                keep[s] = False
+                queue.append(s)
+    if not keep[0]:
+        return [[-1] * width]
+    return [[d if d >= 0 and keep[d] else -1 for d in row] if keep[s] else [-1] * width
+            for s, row in enumerate(rows)]
