@@ -1,10 +1,11 @@
 """The LTL3 tables fretc embeds are exactly Spot's LTL3 monitors of ft_inf.
 
 Differential, per requirement shape and polarity (``bad`` = monitor of ft_inf, ``good`` = of
-its negation; Bauer, Leucker & Schallhart, TOSEM 2011): the table of
-``compiler.automata._spot_monitor`` (Spot's ``low`` translation with
-``automata.LOW_XARGS``, then :mod:`compiler.dfa`'s subset construction pruned by simulation
-and its minimization) equals the table of Spot's own construction from its default ``low``
+its negation; Bauer, Leucker & Schallhart, TOSEM 2011): the tables of
+``compiler.automata.spot_automata`` (what the disk cache stores: for a safety or guarantee
+shape one monitor from Spot's terminal automaton of the guarantee side and the other derived
+from it; otherwise Spot's ``low`` translation with ``automata.LOW_XARGS``, then
+:mod:`compiler.dfa`'s subset construction pruned by simulation and its minimization) equal the table of Spot's own construction from its default ``low``
 translation (``tgba_powerset`` + ``minimize_monitor``; Moore's refinement instead of
 ``minimize_monitor`` on powersets of more than 3000 states), both renamed breadth-first.
 
@@ -81,9 +82,10 @@ def check_exact(sentence: str) -> bool:
             or sum(bounds) > automata.MAX_LTL3_BOUND_SUM)):
         return False
     text = to_spot(shape)
+    got = automata.spot_automata(text, len(atoms), automata.MAX_AUTOMATON_STATES,
+                                 automata.TABLE_MAX_APS)
     for negate in (False, True):
-        ours = automata._spot_monitor(text, negate, len(atoms), automata.MAX_AUTOMATON_STATES,
-                                      automata.TABLE_MAX_APS)
+        ours = got["good" if negate else "bad"]
         assert ours is not None, (sentence, negate)
         assert (ours["table"], ours["empty"]) == _spot_reference(text, negate, len(atoms)), \
             (sentence, negate)
