@@ -406,9 +406,13 @@ def _safety_complement_data(data: dict | None, max_states: int) -> dict | None:
     has more than ``max_states`` states."""
     if data is None or data["table"] is None:
         return None
-    rows = dfa.safety_complement(data["table"])
+    # letters whose columns agree lead everywhere to the same states: one column per class
+    number: dict[tuple, int] = {}
+    class_of = [number.setdefault(col, len(number)) for col in zip(*data["table"])]
+    rows = dfa.safety_complement([list(col) for col in zip(*number)] if number else [[]])
     empty = all(d < 0 for d in rows[0]) and len(rows) == 1
-    init, rows = _bfs_tables(*dfa.minimize(rows))
+    init, rows = dfa.minimize(rows)
+    init, rows = _bfs_tables(init, [[row[c] for c in class_of] for row in rows])
     if len(rows) > max_states:
         return None
     complete = not empty and all(x >= 0 for row in rows for x in row)

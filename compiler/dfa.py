@@ -46,6 +46,10 @@ SIMULATION_MAX_STATES = 2000
 #: The subset construction runs without pruning first (computing the simulation costs more
 #: than it saves on small powersets) and restarts with pruning beyond this many subsets.
 PRUNE_AFTER = 1000
+#: :func:`minimize` refines in plain Python up to this many table cells (states x letters),
+#: with numpy beyond (numpy's fixed cost per call dominates on the small tables of most
+#: requirements).
+PYTHON_MINIMIZE_MAX = 4096
 #: NFA states per memoized chunk of a state set.
 _CHUNK = 16
 
@@ -222,6 +226,8 @@ def minimize(rows: list[list[int]]) -> tuple[int, list[list[int]]]:
     :returns: ``(initial, rows)`` of the quotient, the sink removed (its transitions -1);
         states in an arbitrary order (rename them with ``_bfs_tables``).
     """
+    if len(rows) * (len(rows[0]) if rows else 0) <= PYTHON_MINIMIZE_MAX:
+        return _minimize_small(rows)
     table = np.asarray(rows, dtype=np.int64).reshape(len(rows), -1)
     n, width = table.shape
     table = np.where(table < 0, n, table)
@@ -247,6 +253,35 @@ def minimize(rows: list[list[int]]) -> tuple[int, list[list[int]]]:
     number = {int(cls[s]): i for i, s in enumerate(reps)}
     out = [[number.get(int(cls[d]), -1) for d in table[s]] for s in reps]
     return number[int(cls[0])], out
+
+
+def _minimize_small(rows: list[list[int]]) -> tuple[int, list[list[int]]]:
+    """:func:`minimize` in plain Python: the same refinement, the same result."""
+    n = len(rows)
+    sink = n
+    table = [[d if d >= 0 else sink for d in row] for row in rows]
+    width = len(table[0]) if table else 0
+    table.append([sink] * width)
+    cls = [0] * n + [1]
+    count = 2
+    while True:
+        signatures: dict[tuple, int] = {}
+        new = [signatures.setdefault((cls[s], *[cls[d] for d in table[s]]), len(signatures))
+               for s in range(n + 1)]
+        cls = new
+        if len(signatures) == count:
+            break
+        count = len(signatures)
+    sink_class = cls[n]
+    number: dict[int, int] = {}
+    reps = []
+    for s in range(n):
+        c = cls[s]
+        if c != sink_class and c not in number:
+            number[c] = len(reps)
+            reps.append(s)
+    out = [[number.get(cls[d], -1) for d in table[s]] for s in reps]
+    return number[cls[0]], out
 
 
 def safety_complement(rows: list[list[int]]) -> list[list[int]]:
