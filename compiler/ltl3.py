@@ -239,13 +239,16 @@ def progression_tables(formula: Node, atoms: list[Node],
     letters = [{atom: bool((bits >> i) & 1) for i, atom in enumerate(atoms)}
                for bits in range(1 << len(atoms))]
     nxt: list[list[Node]] = []
+    # progress is a function of (formula, letter): one memo per letter, shared by all the
+    # residuals (they share most of their sub-formulas)
+    memos: list[dict[Node, Node]] = [{} for _ in letters]
     i = 0
     while i < len(states):
         if max_progressions is not None and (i + 1) * len(letters) > max_progressions:
             return None
         row = []
-        for letter in letters:
-            r = progress(states[i], letter, {})
+        for letter, memo in zip(letters, memos):
+            r = progress(states[i], letter, memo)
             if r.op not in ("true", "false"):
                 k = _key(r)
                 if k not in index:
