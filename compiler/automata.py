@@ -561,23 +561,31 @@ def _cached_letters(memo: dict, cond, var: dict[str, int], names: list[str],
 
 
 def _letters(cond, var: dict[str, int], names: list[str], width: int) -> list[int]:
-    """The letters (bit ``i`` = value of ``names[i]``) satisfying the BDD ``cond``: one walk
-    of the BDD per letter, restricted variable by variable."""
+    """The letters (bit ``i`` = value of ``names[i]``), in increasing order, satisfying the
+    BDD ``cond`` (a condition over other variables satisfies none): ``cond`` restricted atom
+    by atom, depth first, each partial restriction shared by the letters below it, a branch
+    cut where it becomes FALSE and completed at once where it becomes TRUE."""
     import buddy  # lazy: Spot's BDD library, with Spot (start-up of --emit ltl)
 
     if cond == buddy.bddtrue:
         return list(range(width))
-    out = []
-    pos = [buddy.bdd_ithvar(var[n]) for n in names]
-    neg = [buddy.bdd_nithvar(var[n]) for n in names]
-    for letter in range(width):
-        c = cond
-        for i in range(len(names)):
-            c = buddy.bdd_restrict(c, pos[i] if (letter >> i) & 1 else neg[i])
-            if c == buddy.bddfalse:
-                break
+    n = len(names)
+    pos = [buddy.bdd_ithvar(var[x]) for x in names]
+    neg = [buddy.bdd_nithvar(var[x]) for x in names]
+    out: list[int] = []
+    stack = [(cond, 0, 0)]
+    while stack:
+        c, i, letter = stack.pop()
+        if c == buddy.bddfalse:
+            continue
         if c == buddy.bddtrue:
-            out.append(letter)
+            out.extend(letter | (k << i) for k in range(1 << (n - i)))
+            continue
+        if i == n:
+            continue
+        stack.append((buddy.bdd_restrict(c, pos[i]), i + 1, letter | 1 << i))
+        stack.append((buddy.bdd_restrict(c, neg[i]), i + 1, letter))
+    out.sort()
     return out
 
 

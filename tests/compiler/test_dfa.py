@@ -171,3 +171,50 @@ def test_small_minimization_equals_the_numpy_one(rows):
         dfa.PYTHON_MINIMIZE_MAX = saved
     assert automata._bfs_tables(*small) == automata._bfs_tables(*big)
     assert len(small[1]) == len(big[1])
+
+
+_BOOL_ATOMS = st.sampled_from(["a0", "a1", "a2", "a3", "b", "true", "false"])
+_BOOLS = st.recursive(_BOOL_ATOMS, lambda sub: st.one_of(
+    sub.map(lambda a: f"!({a})"),
+    st.tuples(st.sampled_from(["&", "|", "^", "->", "<->"]), sub, sub).map(
+        lambda t: f"({t[1]}) {t[0]} ({t[2]})")), max_leaves=8)
+
+
+@settings(max_examples=200, deadline=None)
+@given(_BOOLS, st.integers(1, 4))
+def test_letters_of_a_bdd_are_its_satisfying_letters(text, n_atoms):
+    """Differential: automata._letters (depth-first restriction) against evaluating the
+    Boolean formula on every letter; a condition that depends on an atom outside the letter
+    (``b``) is satisfied by no letter unless it is true whatever ``b`` is."""
+    d = spot.make_bdd_dict()
+    aut = spot.make_twa_graph(d)
+    names = [f"a{i}" for i in range(n_atoms)]
+    var = {x: aut.register_ap(x) for x in names}
+    aut.register_ap("b")
+    f = spot.formula(text)
+    cond = spot.formula_to_bdd(f, d, aut)
+    width = 1 << n_atoms
+    got = automata._letters(cond, var, names, width)
+    assert got == sorted(got)
+    assert got == _brute_letters(text, n_atoms)
+
+
+def _brute_letters(text: str, n_atoms: int) -> list[int]:
+    """The letters over a0..a{n_atoms-1} on which ``text`` is true whatever a{n_atoms}..a3
+    and b are (Python evaluation of the formula)."""
+    expr = (text.replace("!", " not ").replace("&", " and ").replace("|", " or ")
+            .replace("<->", " == ").replace("->", " <= ").replace("^", " != ")
+            .replace("true", "True").replace("false", "False"))
+    out = []
+    for letter in range(1 << n_atoms):
+        ok = True
+        for rest in range(1 << (5 - n_atoms)):
+            env = {f"a{i}": bool(letter >> i & 1) for i in range(n_atoms)}
+            extra = [f"a{i}" for i in range(n_atoms, 4)] + ["b"]
+            env.update({x: bool(rest >> j & 1) for j, x in enumerate(extra)})
+            if not eval(expr, {}, env):  # noqa: S307 - generated Boolean text
+                ok = False
+                break
+        if ok:
+            out.append(letter)
+    return out
