@@ -56,10 +56,11 @@ WORST = {
 }
 ISSUE_BASELINE = {"696": "51 s CPU (73 ms per requirement)", "W1": "6.5 s, 235 MB",
                   "W2": "137 s, 1.5 GB", "import10k": "20 s, 1.85 GB"}
-#: The figures of the previous session (bench_codegen --quick, load ~8, sum(range(1000))
-#: about 20 µs), printed beside today's.
-LAST_SESSION = {"696": "32.5 ms cold, 5.4 ms warm per requirement",
-                "slowest": "4.5 s ('only in mm upon cc the sw shall after 8 ticks satisfy rr')"}
+#: The figures of the previous session (README "Issue 9 figures", final tree, idle machine,
+#: sum(range(1000)) 16-23 µs), printed beside today's.
+LAST_SESSION = {"696": "20.0 ms cold, 3.4 ms warm per requirement",
+                "slowest": "0.65 s ('only in mm whenever cc the sw shall after 8 ticks "
+                           "satisfy rr'); 288 keys at 12 ticks: 0.54 s"}
 #: Issue 9's targets for monitor generation.
 TARGET_MS_PER_REQ = 10.0
 TARGET_MAX_S = 1.0
