@@ -586,6 +586,7 @@ def fast_tables(lark) -> dict | None:
 
     conf = lark.lexer_conf
     terminals = list(conf.terminals)
+    terminal_names = {t.name for t in terminals} | {"$END"}
     terminals.sort(key=lambda x: (-x.priority, -x.pattern.max_width, -len(x.pattern.value),
                                   x.name))
     kept, callbacks = _create_unless(terminals, conf.g_regex_flags, conf.re_module,
@@ -610,9 +611,17 @@ def fast_tables(lark) -> dict | None:
                       str(rule.alias or opts.template_source or rule.origin.name),
                       bool(opts.expand1 and not rule.alias),
                       tuple(include) if filtered else None))
-    states = {int(s): {str(t): (True, int(arg)) if act is Shift else (False, index[arg])
-                  for t, (act, arg) in acts.items()}
-              for s, acts in table.states.items()}
+    n_states = max(table.states) + 1
+    actions: list = [{} for _ in range(n_states)]
+    gotos: list = [{} for _ in range(n_states)]
+    for s, acts in table.states.items():
+        for t, (act, arg) in acts.items():
+            if act is not Shift:
+                actions[s][str(t)] = ~index[arg]
+            elif t in terminal_names:
+                actions[s][str(t)] = int(arg)
+            else:
+                gotos[s][str(t)] = int(arg)
     firsts = [_first_chars(t.pattern.to_regexp(), conf.g_regex_flags) for t in terminals]
     subsets: dict = {}
     dispatch = {}
@@ -624,7 +633,8 @@ def fast_tables(lark) -> dict | None:
             "flags": int(conf.g_regex_flags), "ignore": sorted(str(t) for t in conf.ignore),
             "newline": sorted(str(t.name) for t in terminals
                               if _regexp_has_newline(t.pattern.to_regexp())),
-            "states": states, "rules": rules,
+            "firsts": [None if f is None else "".join(sorted(f)) for f in firsts],
+            "actions": actions, "gotos": gotos, "rules": rules,
             "start_states": {str(k): int(v) for k, v in table.start_states.items()},
             "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
 
@@ -721,13 +731,15 @@ class _FastParser:
         self.parts: dict = {}                     # terminal indices -> compiled match
         self.newline = frozenset(tables["newline"])
         self.ignore = frozenset(tables["ignore"])
-        self.states = tables["states"]
+        self.actions = tables["actions"]
+        self.gotos = tables["gotos"]
         self.start_states = tables["start_states"]
         self.end_states = tables["end_states"]
         builder = _Builder()
         self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include),
                        self._passed_up(size, expand1, include))
                       for origin, size, name, expand1, include in tables["rules"]]
+        self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
 
     @staticmethod
     def _passed_up(size, expand1, include) -> int:
@@ -810,74 +822,188 @@ class _FastParser:
                 return inner(out)
         return f
 
-    def parse(self, text: str, start: str):
-        """The builder's result for ``text`` from start symbol ``start``; raises
-        :class:`_Slow` (or the builder's exception) where Lark must decide."""
+    # ---- the lexer: one regexp over the whole text
+    _WORD = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
+    _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
+    _MAX_WORDS = 100_000
+
+    def _build_scanner(self, firsts: list) -> None:
+        """The whole-text lexer, when the grammar's terminals allow it (else the lexer of
+        :meth:`_tokens_by_char` is used): one regexp ``(ignored)* (word | T1 | T2 ...)``
+        where ``word`` is an identifier-shaped run of characters (FRETish's keywords,
+        reserved letters and names all are: each keyword terminal ends where the word
+        ends, and NAME's regexp is the same run) and ``T1, T2 ...`` are the other
+        terminals in Lark's order. A word's terminal is that of the exact lexer
+        (:meth:`_matcher`) on the word alone, kept in :attr:`words` (it never depends on
+        what follows a whole word). Used only when every terminal starts either with
+        letters only or with no letter, and the ignored terminals start with characters
+        no other terminal starts with."""
+        self.scan = None
+        letters = self._LETTERS
+        ignored, others = [], []
+        ignore_firsts: set = set()
+        for i, (name, rx) in enumerate(self.terminals):
+            f = firsts[i]
+            if f is None:
+                return
+            if name in self.ignore:
+                ignored.append(rx)
+                ignore_firsts |= f
+            elif not f & letters:
+                others.append(i)
+            elif not f <= letters:
+                return
+        if not ignored or any(f is None or (f & ignore_firsts)
+                              for i, f in enumerate(firsts)
+                              if self.terminals[i][0] not in self.ignore):
+            return
+        body = "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})" for i in others)
+        rx = f"(?:{'|'.join(ignored)})*(?:(?P<word>{self._WORD})|{body})"
+        self.scan = re.compile(rx, self.flags).finditer
+        self.trailing = re.compile(f"(?:{'|'.join(ignored)})*\\Z", self.flags).match
+        self.words: dict = {}
+
+    def _word_type(self, word: str) -> str:
+        """The terminal of ``word`` (the exact lexer on the word alone; :class:`_Slow` when
+        no terminal matches the whole word)."""
+        sid = self.dispatch.get(word[0], len(self.subsets) - 1)
+        m = (self.matchers[sid] or self._matcher(sid))(word, 0)
+        if m is None or m.end() != len(word):
+            raise _Slow("word")
+        if len(self.words) >= self._MAX_WORDS:
+            self.words.clear()
+        typ = self.words[word] = m.lastgroup
+        return typ
+
+    def _tokens(self, text: str) -> list:
+        """The tokens of ``text`` (:class:`_Tok`, ignored terminals dropped); raises
+        :class:`_Slow` where a character starts no terminal."""
+        scan = self.scan
+        if scan is None:
+            return self._tokens_by_char(text)
+        words = self.words
+        out = []
+        add = out.append
+        pos = 0
+        multiline = "\n" in text
+        for m in scan(text):
+            if m.start() != pos:
+                raise _Slow("no terminal")
+            typ = m.lastgroup
+            k = m.lastindex
+            start = m.start(k)
+            pos = m.end()
+            value = text[start:pos]
+            if typ == "word":
+                typ = words.get(value) or self._word_type(value)
+            add(_Tok(typ, value, start, 1, start + 1, 1, pos + 1, pos))
+        if pos != len(text) and self.trailing(text, pos) is None:
+            raise _Slow("no terminal")
+        if multiline:
+            self._relocate(text, out)
+        return out
+
+    @staticmethod
+    def _relocate(text: str, toks: list) -> None:
+        """Set the 1-based lines and columns of ``toks`` in a text of several lines."""
+        from bisect import bisect_right
+        starts = [0] + [i + 1 for i, ch in enumerate(text) if ch == "\n"]
+        for t in toks:
+            li = bisect_right(starts, t.start_pos)
+            t.line, t.column = li, t.start_pos - starts[li - 1] + 1
+            li = bisect_right(starts, t.end_pos)
+            t.end_line, t.end_column = li, t.end_pos - starts[li - 1] + 1
+
+    def _tokens_by_char(self, text: str) -> list:
+        """The tokens of ``text`` by the exact lexer, one regexp match per token or ignored
+        run (the fallback of :meth:`_tokens`)."""
         ignore, newline = self.ignore, self.newline
         dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
-        states, rules = self.states, self.rules
-        state_stack = [self.start_states[start]]
-        value_stack = []
-        end_state = self.end_states[start]
+        out = []
         pos, n, line, line_start = 0, len(text), 1, 0
-        while True:
-            if pos < n:
-                sid = dispatch.get(text[pos], full)
-                match = matchers[sid] or self._matcher(sid)
-                m = match(text, pos)
-                if m is None:
-                    raise _Slow("no terminal")
-                typ = m.lastgroup
-                end = m.end()
-                nline, nstart = line, line_start
-                if typ in newline:
-                    value = text[pos:end]
-                    k = value.count("\n")
-                    if k:
-                        nline = line + k
-                        nstart = pos + value.rindex("\n") + 1
-                if typ in ignore:
-                    pos, line, line_start = end, nline, nstart
-                    continue
-                tok = _Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
-                           end - nstart + 1, end)
-                pos, line, line_start = end, nline, nstart
-                is_end = False
-            else:
-                typ, tok, is_end = "$END", None, True
+        while pos < n:
+            sid = dispatch.get(text[pos], full)
+            match = matchers[sid] or self._matcher(sid)
+            m = match(text, pos)
+            if m is None:
+                raise _Slow("no terminal")
+            typ = m.lastgroup
+            end = m.end()
+            nline, nstart = line, line_start
+            if typ in newline:
+                value = text[pos:end]
+                k = value.count("\n")
+                if k:
+                    nline = line + k
+                    nstart = pos + value.rindex("\n") + 1
+            if typ not in ignore:
+                out.append(_Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
+                                end - nstart + 1, end))
+            pos, line, line_start = end, nline, nstart
+        return out
+
+    def parse(self, text: str, start: str):
+        """The builder's result for ``text`` from start symbol ``start``; raises
+        :class:`_Slow` (or the builder's exception) where Lark must decide.
+
+        The table is :attr:`actions` (per state: terminal -> the next state when >= 0,
+        else the complement ``~i`` of rule ``i`` to reduce by) and :attr:`gotos` (per
+        state: rule origin -> next state)."""
+        toks = self._tokens(text)
+        actions, gotos, rules = self.actions, self.gotos, self.rules
+        state = self.start_states[start]
+        state_stack = [state]
+        value_stack = []
+        for tok in toks:
+            typ = tok.type
             while True:
-                action = states[state_stack[-1]].get(typ)
+                action = actions[state].get(typ)
                 if action is None:
                     raise _Slow(typ)
-                if action[0]:
-                    if is_end:
-                        raise _Slow(typ)
-                    state_stack.append(action[1])
+                if action >= 0:
+                    state = action
+                    state_stack.append(state)
                     value_stack.append(tok)
                     break
-                origin, size, callback, up = rules[action[1]]
+                origin, size, callback, up = rules[~action]
                 if up:
                     value = value_stack[up]
-                    del state_stack[-size:]
                     del value_stack[-size:]
-                    goto = states[state_stack[-1]][origin][1]
-                    state_stack.append(goto)
-                    value_stack.append(value)
-                    if is_end and goto == end_state:
-                        return value
-                    continue
-                if size:
-                    children = value_stack[-size:]
-                    del state_stack[-size:]
+                elif size:
+                    value = callback(value_stack[-size:])
                     del value_stack[-size:]
                 else:
-                    children = []
-                value = callback(children)
-                goto = states[state_stack[-1]][origin][1]
-                state_stack.append(goto)
+                    value = callback([])
+                if size:
+                    del state_stack[-size:]
+                state = gotos[state_stack[-1]][origin]
+                state_stack.append(state)
                 value_stack.append(value)
-                if is_end and goto == end_state:
-                    return value
+        end_state = self.end_states[start]
+        while True:
+            action = actions[state].get("$END")
+            if action is None or action >= 0:
+                raise _Slow("$END")
+            origin, size, callback, up = rules[~action]
+            if up:
+                value = value_stack[up]
+                del value_stack[-size:]
+            elif size:
+                value = callback(value_stack[-size:])
+                del value_stack[-size:]
+            else:
+                value = callback([])
+            if size:
+                del state_stack[-size:]
+            state = gotos[state_stack[-1]][origin]
+            if state == end_state:
+                return value
+            state_stack.append(state)
+            value_stack.append(value)
+
+
+#: The format of :func:`fast_tables`'s data (part of its cache entry's name).
+_FAST_FORMAT = "v2"
 
 
 def _load_fast():
@@ -885,7 +1011,7 @@ def _load_fast():
     when missing), or False when it cannot be used."""
     import marshal  # plain data only; the key names the Python version (marshal's format)
     grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
-    name = f"grammar-{_cache_key(grammar)[:40]}.fast.marshal"
+    name = f"grammar-{_cache_key(grammar)[:40]}-{_FAST_FORMAT}.fast.marshal"
     data = cache.read_bytes("lark", name)
     if data is not None:
         try:
