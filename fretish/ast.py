@@ -7,6 +7,12 @@ al., REFSQ 2020)::
 
 Every node carries a :class:`Span` into the text it was parsed from; spans take no part in
 equality, so two parses of differently spaced sentences compare equal.
+
+The nodes are frozen dataclasses (``dataclasses.fields``/``replace``, equality, hash and
+repr as generated) with an ``__init__`` written out (``init=False``): the generated one
+sets each field through ``object.__setattr__``, which made building the tree a tenth of
+the parse time (issue 9). ``tests/fretish/test_parser.py`` checks each ``__init__`` takes
+the fields, in order, with their defaults.
 """
 
 from __future__ import annotations
@@ -55,29 +61,44 @@ def _span() -> Span:
 
 
 # --------------------------------------------------------------------------- expressions
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Var:
     """A FRET variable (boolean or numeric), by its source name (quotes removed)."""
 
     name: str
     span: Span = _span()
 
+    def __init__(self, name, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["name"] = name
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class BoolLit:
     """``true``/``false`` in any letter case."""
 
     value: bool
     span: Span = _span()
 
+    def __init__(self, value, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["value"] = value
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class NumLit:
     """A numeric literal, kept as written (``3``, ``-3.0e2``, ``0.5``) so printers can
     reproduce it; :attr:`value` gives it as ``int`` or ``float``."""
 
     text: str
     span: Span = _span()
+
+    def __init__(self, text, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["text"] = text
+        d["span"] = span
 
     @property
     def value(self) -> int | float:
@@ -87,13 +108,19 @@ class NumLit:
             return float(self.text)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Unary:
     """``op`` is ``"!"`` (logical not; FRETish ``!`` and ``~``) or ``"-"`` (arithmetic)."""
 
     op: str
     operand: "Expr"
     span: Span = _span()
+
+    def __init__(self, op, operand, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["op"] = op
+        d["operand"] = operand
+        d["span"] = span
 
 
 #: Binary operators, in FRET's canonical spelling. ``=>`` is stored as ``->``, ``<=>`` as
@@ -103,7 +130,7 @@ COMPARISON_OPS = ("=", "!=", "<", "<=", ">", ">=")
 ARITH_OPS = ("+", "-", "*", "/", "mod", "^")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Binary:
     """A binary operation; ``op`` is one of :data:`BOOL_OPS`, :data:`COMPARISON_OPS` or
     :data:`ARITH_OPS`."""
@@ -113,8 +140,15 @@ class Binary:
     right: "Expr"
     span: Span = _span()
 
+    def __init__(self, op, left, right, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["op"] = op
+        d["left"] = left
+        d["right"] = right
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class Call:
     """A function application ``name(args...)``. FRET's predefined temporal functions use
     this node too: ``persisted``, ``occurred``, ``preBool``/``preInt``/``preReal``,
@@ -125,12 +159,18 @@ class Call:
     args: tuple["Expr", ...]
     span: Span = _span()
 
+    def __init__(self, name, args, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["name"] = name
+        d["args"] = args
+        d["span"] = span
+
 
 Expr = Var | BoolLit | NumLit | Unary | Binary | Call
 
 
 # --------------------------------------------------------------------------- fields
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Scope:
     """``kind`` in :data:`SCOPE_KINDS`; ``mode`` is the mode variable or, for ``while C``
     and ``after/before C``, a boolean expression (``None`` for the null scope)."""
@@ -139,8 +179,14 @@ class Scope:
     mode: Expr | None = None
     span: Span = _span()
 
+    def __init__(self, kind="null", mode=None, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["kind"] = kind
+        d["mode"] = mode
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class ConditionPart:
     """One qualified condition as written: ``qualifier`` is ``upon``, ``when``, ``if``,
     ``where``, ``unless`` or ``whenever``; ``expr`` is the expression with ``is true``/
@@ -151,8 +197,15 @@ class ConditionPart:
     connective: str | None = None  # "and"/"or" joining it to the previous part
     span: Span = _span()
 
+    def __init__(self, qualifier, expr, connective=None, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["qualifier"] = qualifier
+        d["expr"] = expr
+        d["connective"] = connective
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class Condition:
     """The trigger. ``kind`` in :data:`CONDITION_KINDS`: ``holding`` when every part is
     ``whenever``, otherwise ``regular``; ``expr`` folds the parts left to right with their
@@ -163,8 +216,15 @@ class Condition:
     parts: tuple[ConditionPart, ...] = ()
     span: Span = _span()
 
+    def __init__(self, kind="null", expr=None, parts=(), span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["kind"] = kind
+        d["expr"] = expr
+        d["parts"] = parts
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class Duration:
     """``amount`` as written (``"10"``, ``"2.5"``) and ``unit`` canonical: ``ticks`` or a key
     of :data:`UNIT_SECONDS`."""
@@ -173,12 +233,18 @@ class Duration:
     unit: str
     span: Span = _span()
 
+    def __init__(self, amount, unit, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["amount"] = amount
+        d["unit"] = unit
+        d["span"] = span
+
     @property
     def value(self) -> Fraction:
         return Fraction(self.amount)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Timing:
     """``kind`` in :data:`TIMING_KINDS`; ``duration`` for ``within/for/after``, ``stop`` (the
     stop condition) for ``until/before``; ``phrase`` is the phrasing used."""
@@ -189,8 +255,16 @@ class Timing:
     phrase: str = ""
     span: Span = _span()
 
+    def __init__(self, kind="null", duration=None, stop=None, phrase="", span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["kind"] = kind
+        d["duration"] = duration
+        d["stop"] = stop
+        d["phrase"] = phrase
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class Probability:
     """``with probability OP value``; ``op`` one of ``< <= > >= =``, value in [0, 1]."""
 
@@ -198,8 +272,14 @@ class Probability:
     value: str
     span: Span = _span()
 
+    def __init__(self, op, value, span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["op"] = op
+        d["value"] = value
+        d["span"] = span
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class Requirement:
     """A parsed FRETish sentence.
 
@@ -217,6 +297,21 @@ class Requirement:
     freeform: bool = False
     component_span: Span = _span()
     response_span: Span = _span()
+
+    def __init__(self, text, scope=Scope(), condition=Condition(), component="",
+                 probability=None, timing=Timing(), response=None, freeform=False,
+                 component_span=NO_SPAN, response_span=NO_SPAN):
+        d = self.__dict__  # frozen: the fields are set once, here
+        d["text"] = text
+        d["scope"] = scope
+        d["condition"] = condition
+        d["component"] = component
+        d["probability"] = probability
+        d["timing"] = timing
+        d["response"] = response
+        d["freeform"] = freeform
+        d["component_span"] = component_span
+        d["response_span"] = response_span
 
     @property
     def key(self) -> str | None:

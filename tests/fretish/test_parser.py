@@ -583,3 +583,27 @@ def test_round_trip_in_sentences(e):
     assert r.condition.expr == r.timing.stop == r.response == e
     s = r.response_span
     assert r.text[s.start:s.end] == f"satisfy {text}"
+
+
+def test_ast_nodes_init_takes_the_fields_with_their_defaults():
+    """fretish.ast writes each node's ``__init__`` out (``init=False``, speed): it must take
+    the dataclass fields in order with their defaults, set every field and keep the node
+    frozen, as the generated one would."""
+    import dataclasses
+    import inspect
+
+    nodes = [c for c in vars(A).values() if dataclasses.is_dataclass(c) and isinstance(c, type)]
+    assert len(nodes) >= 13
+    for cls in nodes:
+        fields = dataclasses.fields(cls)
+        params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+        assert [p.name for p in params] == [f.name for f in fields], cls
+        for p, f in zip(params, fields):
+            want = f.default if f.default is not dataclasses.MISSING else inspect.Parameter.empty
+            assert p.default is want or p.default == want, (cls, f.name)
+        args = {f.name: object() for f in fields}
+        node = cls(**args)
+        assert all(getattr(node, k) is v for k, v in args.items()), cls
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(node, fields[0].name, 1)
+        assert dataclasses.replace(node) == node
