@@ -623,6 +623,16 @@ def fast_tables(lark) -> dict | None:
             else:
                 gotos[s][str(t)] = int(arg)
     firsts = [_first_chars(t.pattern.to_regexp(), conf.g_regex_flags) for t in terminals]
+    # the terminal of each reserved word as written in any of the usual letter cases, by
+    # the exact lexer (all terminals in Lark's order), for _FastParser._word_type
+    exact = re.compile("|".join(f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in terminals),
+                       conf.g_regex_flags).match
+    words = {}
+    for w in sorted(RESERVED_WORDS | RESERVED_LETTERS | {"what"}):
+        for v in (w, w.lower(), w.upper(), w.capitalize()):
+            m = exact(v)
+            if m is not None and m.end() == len(v):
+                words[v] = str(m.lastgroup)
     subsets: dict = {}
     dispatch = {}
     for ch in _ASCII:
@@ -633,7 +643,7 @@ def fast_tables(lark) -> dict | None:
             "flags": int(conf.g_regex_flags), "ignore": sorted(str(t) for t in conf.ignore),
             "newline": sorted(str(t.name) for t in terminals
                               if _regexp_has_newline(t.pattern.to_regexp())),
-            "firsts": [None if f is None else "".join(sorted(f)) for f in firsts],
+            "words": words, "firsts": [None if f is None else "".join(sorted(f)) for f in firsts],
             "actions": actions, "gotos": gotos, "rules": rules,
             "start_states": {str(k): int(v) for k, v in table.start_states.items()},
             "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
@@ -739,6 +749,7 @@ class _FastParser:
         self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include),
                        self._passed_up(size, expand1, include))
                       for origin, size, name, expand1, include in tables["rules"]]
+        self.known_words = tables["words"]
         self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
 
     @staticmethod
@@ -861,17 +872,33 @@ class _FastParser:
         rx = f"(?:{'|'.join(ignored)})*(?:(?P<word>{self._WORD})|{body})"
         self.scan = re.compile(rx, self.flags).finditer
         self.trailing = re.compile(f"(?:{'|'.join(ignored)})*\\Z", self.flags).match
-        self.words: dict = {}
+        self.words = dict(self.known_words)
+        names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
+        # NAME tried first among the terminals that start with a letter: a word it matches
+        # whole is a NAME (else the exact lexer decides)
+        self.name_first = bool(names) and all(f is not None and not f & letters
+                                              for f in firsts[:names[0]])
+        self.name_rx = self.terminals[names[0]][1] if names else None
+        self.name_match = None
 
     def _word_type(self, word: str) -> str:
-        """The terminal of ``word`` (the exact lexer on the word alone; :class:`_Slow` when
-        no terminal matches the whole word)."""
+        """The terminal of ``word``: the exact lexer on the word alone (:class:`_Slow` when
+        no terminal matches the whole word), or NAME when NAME, the first terminal a word
+        can start, matches it whole. The reserved words' terminals come with the tables
+        (:attr:`known_words`), so a run compiles no keyword regexp."""
+        if len(self.words) >= self._MAX_WORDS:
+            self.words = dict(self.known_words)
+        if self.name_first:
+            if self.name_match is None:
+                self.name_match = re.compile(self.name_rx, self.flags).match
+            m = self.name_match(word)
+            if m is not None and m.end() == len(word):
+                self.words[word] = "NAME"
+                return "NAME"
         sid = self.dispatch.get(word[0], len(self.subsets) - 1)
         m = (self.matchers[sid] or self._matcher(sid))(word, 0)
         if m is None or m.end() != len(word):
             raise _Slow("word")
-        if len(self.words) >= self._MAX_WORDS:
-            self.words.clear()
         typ = self.words[word] = m.lastgroup
         return typ
 
@@ -1003,7 +1030,7 @@ class _FastParser:
 
 
 #: The format of :func:`fast_tables`'s data (part of its cache entry's name).
-_FAST_FORMAT = "v2"
+_FAST_FORMAT = "v3"
 
 
 def _load_fast():

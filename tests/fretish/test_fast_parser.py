@@ -162,3 +162,34 @@ def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
     monkeypatch.setattr(P, "_fast", None)
     assert P._get_fast() and _public(text) == ref
     assert entry.stat().st_size > 200  # rewritten whole
+
+
+def _exact_type(word):
+    """The terminal of ``word`` by the exact lexer (all terminals in Lark's order, split by
+    first character), None when none matches it whole."""
+    fast = P._get_fast()
+    sid = fast.dispatch.get(word[0], len(fast.subsets) - 1)
+    try:
+        m = (fast.matchers[sid] or fast._matcher(sid))(word, 0)
+    except P._Slow:
+        return None
+    return m.lastgroup if m is not None and m.end() == len(word) else None
+
+
+_RESERVED = sorted(RESERVED_WORDS | set("XFGUVYZHOST") | {"what"})
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(
+    st.tuples(st.sampled_from(_RESERVED), st.lists(st.booleans(), min_size=12, max_size=12))
+    .map(lambda t: "".join(c.upper() if up else c.lower() for c, up in zip(t[0], t[1]))),
+    st.from_regex(r"[A-Za-z][A-Za-z0-9_%.]{0,10}", fullmatch=True)))
+def test_word_terminal_equals_the_exact_lexers(word):
+    """The whole-text lexer's word classification (known reserved words, NAME tried first,
+    then the exact lexer) gives the exact lexer's terminal for any letter case."""
+    fast = P._get_fast()
+    try:
+        got = fast.words.get(word) or fast._word_type(word)
+    except P._Slow:
+        got = None
+    assert got == _exact_type(word), word
