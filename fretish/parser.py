@@ -40,12 +40,12 @@ Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, rest
 from __future__ import annotations
 
 import io
+import os
 import re
 import sys
 import threading
 from dataclasses import replace
 from fractions import Fraction
-from pathlib import Path
 
 from . import ast as A
 from . import cache
@@ -55,7 +55,7 @@ from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 __all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS",
            "RESERVED_LETTERS"]
 
-_GRAMMAR_FILE = Path(__file__).with_name("grammar.lark")
+_GRAMMAR_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "grammar.lark")
 
 _BINOPS = {"AMP": "&", "BAR": "|", "XOR": "xor", "IMPLIES": "->", "IFF": "<->",
            "EQ": "=", "NE": "!=", "LT": "<", "LE": "<=", "GT": ">", "GE": ">=",
@@ -493,13 +493,20 @@ def _lark_version() -> str:
     import importlib.util
     try:
         spec = importlib.util.find_spec("lark")
-        text = Path(spec.origin).read_text(encoding="utf-8")
+        with open(spec.origin, encoding="utf-8") as f:
+            text = f.read()
         m = re.search(r"^__version__\s*(?::\s*str\s*)?=\s*[\"']([^\"']+)[\"']", text, re.M)
         if m:
             return m.group(1)
     except (AttributeError, OSError, TypeError, ValueError, ImportError):
         pass
     return _import_lark().__version__
+
+
+def _read_grammar() -> str:
+    """The text of ``grammar.lark`` (the only source of the parser tables)."""
+    with open(_GRAMMAR_FILE, encoding="utf-8") as f:
+        return f.read()
 
 
 def _cache_key(grammar: str) -> str:
@@ -513,7 +520,7 @@ def build_lark(**options):
     to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts). Builds the LALR
     tables from the grammar (about a second); :func:`cached_lark` loads them instead."""
     lark = _import_lark()
-    return lark.Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), transformer=_Builder(),
+    return lark.Lark(_read_grammar(), transformer=_Builder(),
                      **_LARK_OPTIONS, **options)
 
 
@@ -530,7 +537,7 @@ def cached_lark():
     an entry that cannot be read or loaded is ignored and rebuilt, and when the cache
     folder cannot be written the tables are built in memory as :func:`build_lark` does."""
     lark = _import_lark()
-    grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
+    grammar = _read_grammar()
     name = f"grammar-{_cache_key(grammar)[:40]}.pickle"
     data = cache.read_bytes("lark", name)
     if data is not None:
@@ -1037,7 +1044,7 @@ def _load_fast():
     """The :class:`_FastParser` from its cache entry (built from Lark's tables, and stored,
     when missing), or False when it cannot be used."""
     import marshal  # plain data only; the key names the Python version (marshal's format)
-    grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
+    grammar = _read_grammar()
     name = f"grammar-{_cache_key(grammar)[:40]}-{_FAST_FORMAT}.fast.marshal"
     data = cache.read_bytes("lark", name)
     if data is not None:
