@@ -8,16 +8,17 @@ al., REFSQ 2020)::
 Every node carries a :class:`Span` into the text it was parsed from; spans take no part in
 equality, so two parses of differently spaced sentences compare equal.
 
-The nodes are frozen dataclasses (``dataclasses.fields``/``replace``, equality, hash and
-repr as generated) with an ``__init__`` written out (``init=False``): the generated one
-sets each field through ``object.__setattr__``, which made building the tree a tenth of
-the parse time (issue 9). ``tests/fretish/test_parser.py`` checks each ``__init__`` takes
-the fields, in order, with their defaults.
+The nodes are dataclasses (``dataclasses.fields``/``replace`` work) that behave as
+``@dataclass(frozen=True)`` ones: their methods are written out instead of generated
+(:class:`_Node`, and an ``__init__`` per class). The generated ones cost start-up time
+(compiled for every class at each start) and parse time (the frozen ``__init__`` sets each
+field through ``object.__setattr__``; issue 9). ``tests/fretish/test_parser.py`` compares
+them with generated ones.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import FrozenInstanceError, dataclass, field, fields
 from fractions import Fraction
 from typing import NamedTuple
 
@@ -60,9 +61,52 @@ def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)
 
 
+class _Node:
+    """What ``@dataclass(frozen=True)`` would generate for a node, written once for all
+    (the generated methods are compiled anew for every class at each start-up, issue 9):
+    equality and hash over the fields that are not spans, ``repr`` without the spans,
+    assignment and deletion refused. The subclasses are dataclasses (``fields``,
+    ``replace``) with ``init=False, repr=False, eq=False`` and an ``__init__`` of their
+    own; ``tests/fretish/test_parser.py`` compares them with generated ones."""
+
+    __slots__ = ()
+
+    def _key(self) -> tuple:
+        d = self.__dict__
+        return tuple([d[f] for f in self._COMPARED])
+
+    def __eq__(self, other):
+        if other.__class__ is self.__class__:
+            return self._key() == other._key()
+        return NotImplemented
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def __repr__(self):
+        d = self.__dict__
+        inner = ", ".join(f"{f}={d[f]!r}" for f in self._SHOWN)
+        return f"{self.__class__.__qualname__}({inner})"
+
+    def __setattr__(self, name, value):
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name):
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
+
+
+def _node(cls):
+    """Finish a node class (a dataclass): the fields compared and hashed, and those shown
+    by ``repr``, as ``@dataclass`` would take them (every field but the spans)."""
+    cls._COMPARED = tuple(f.name for f in fields(cls) if f.compare)
+    cls._SHOWN = tuple(f.name for f in fields(cls) if f.repr)
+    return cls
+
+
 # --------------------------------------------------------------------------- expressions
-@dataclass(frozen=True, init=False)
-class Var:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Var(_Node):
     """A FRET variable (boolean or numeric), by its source name (quotes removed)."""
 
     name: str
@@ -74,8 +118,9 @@ class Var:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class BoolLit:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class BoolLit(_Node):
     """``true``/``false`` in any letter case."""
 
     value: bool
@@ -87,8 +132,9 @@ class BoolLit:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class NumLit:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class NumLit(_Node):
     """A numeric literal, kept as written (``3``, ``-3.0e2``, ``0.5``) so printers can
     reproduce it; :attr:`value` gives it as ``int`` or ``float``."""
 
@@ -108,8 +154,9 @@ class NumLit:
             return float(self.text)
 
 
-@dataclass(frozen=True, init=False)
-class Unary:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Unary(_Node):
     """``op`` is ``"!"`` (logical not; FRETish ``!`` and ``~``) or ``"-"`` (arithmetic)."""
 
     op: str
@@ -130,8 +177,9 @@ COMPARISON_OPS = ("=", "!=", "<", "<=", ">", ">=")
 ARITH_OPS = ("+", "-", "*", "/", "mod", "^")
 
 
-@dataclass(frozen=True, init=False)
-class Binary:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Binary(_Node):
     """A binary operation; ``op`` is one of :data:`BOOL_OPS`, :data:`COMPARISON_OPS` or
     :data:`ARITH_OPS`."""
 
@@ -148,8 +196,9 @@ class Binary:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class Call:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Call(_Node):
     """A function application ``name(args...)``. FRET's predefined temporal functions use
     this node too: ``persisted``, ``occurred``, ``preBool``/``preInt``/``preReal``,
     ``prevOcc``, ``persists``, ``occurs``, ``nextOcc`` (``at the previous occurrence of P, Q``
@@ -170,8 +219,9 @@ Expr = Var | BoolLit | NumLit | Unary | Binary | Call
 
 
 # --------------------------------------------------------------------------- fields
-@dataclass(frozen=True, init=False)
-class Scope:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Scope(_Node):
     """``kind`` in :data:`SCOPE_KINDS`; ``mode`` is the mode variable or, for ``while C``
     and ``after/before C``, a boolean expression (``None`` for the null scope)."""
 
@@ -186,8 +236,9 @@ class Scope:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class ConditionPart:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class ConditionPart(_Node):
     """One qualified condition as written: ``qualifier`` is ``upon``, ``when``, ``if``,
     ``where``, ``unless`` or ``whenever``; ``expr`` is the expression with ``is true``/
     ``is false`` and ``unless`` already applied."""
@@ -205,8 +256,9 @@ class ConditionPart:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class Condition:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Condition(_Node):
     """The trigger. ``kind`` in :data:`CONDITION_KINDS`: ``holding`` when every part is
     ``whenever``, otherwise ``regular``; ``expr`` folds the parts left to right with their
     connectives (FRET: ``upon p, or when r`` is ``p | r``)."""
@@ -224,8 +276,9 @@ class Condition:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class Duration:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Duration(_Node):
     """``amount`` as written (``"10"``, ``"2.5"``) and ``unit`` canonical: ``ticks`` or a key
     of :data:`UNIT_SECONDS`."""
 
@@ -244,8 +297,9 @@ class Duration:
         return Fraction(self.amount)
 
 
-@dataclass(frozen=True, init=False)
-class Timing:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Timing(_Node):
     """``kind`` in :data:`TIMING_KINDS`; ``duration`` for ``within/for/after``, ``stop`` (the
     stop condition) for ``until/before``; ``phrase`` is the phrasing used."""
 
@@ -264,8 +318,9 @@ class Timing:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class Probability:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Probability(_Node):
     """``with probability OP value``; ``op`` one of ``< <= > >= =``, value in [0, 1]."""
 
     op: str
@@ -279,8 +334,9 @@ class Probability:
         d["span"] = span
 
 
-@dataclass(frozen=True, init=False)
-class Requirement:
+@_node
+@dataclass(init=False, repr=False, eq=False)
+class Requirement(_Node):
     """A parsed FRETish sentence.
 
     ``freeform`` sentences (one double-quoted string) carry only ``text``; they are kept,

@@ -607,3 +607,53 @@ def test_ast_nodes_init_takes_the_fields_with_their_defaults():
         with pytest.raises(dataclasses.FrozenInstanceError):
             setattr(node, fields[0].name, 1)
         assert dataclasses.replace(node) == node
+
+
+def test_ast_nodes_behave_as_generated_frozen_dataclasses():
+    """Every node of parsed sentences against a ``@dataclass(frozen=True)`` built from the
+    same fields: the same repr, hash and equality."""
+    import dataclasses
+
+    refs = {}
+
+    def ref(node):
+        cls = type(node)
+        if cls not in refs:
+            spec = []
+            for f in dataclasses.fields(cls):
+                kw = dict(compare=f.compare, repr=f.repr)
+                if f.default is not dataclasses.MISSING:
+                    kw["default"] = f.default
+                spec.append((f.name, f.type, dataclasses.field(**kw)))
+            refs[cls] = dataclasses.make_dataclass(cls.__name__, spec, frozen=True)
+        return refs[cls](**{f.name: getattr(node, f.name) for f in dataclasses.fields(cls)})
+
+    def nodes(x):
+        if dataclasses.is_dataclass(x):
+            yield x
+            for f in dataclasses.fields(x):
+                yield from nodes(getattr(x, f.name))
+        elif isinstance(x, tuple) and not isinstance(x, A.Span):
+            for y in x:
+                yield from nodes(y)
+
+    texts = ["in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2",
+             "when not in m whenever !q is false the sw shall until s satisfy f(a, 2.5) = b",
+             "only after c, the sw shall with probability >= 0.5 always satisfy true",
+             "the sw shall at the next timepoint satisfy at the previous occurrence of p, q",
+             '"free form"', "upon a, or when b the sw shall for 2 seconds satisfy -x ^ 2"]
+    parsed = [parse(t) for t in texts] + [parse(t + " ") for t in texts]
+    seen = set()
+    for a in parsed:
+        for n in nodes(a):
+            r = ref(n)
+            assert repr(n) == repr(r)
+            assert hash(n) == hash(r)
+            seen.add(type(n).__name__)
+    for a in parsed:
+        for b in parsed:
+            assert (a == b) == (ref(a) == ref(b))
+            assert (a.response == b.response) == (ref(a).response == ref(b).response) \
+                or a.response is None or b.response is None
+    assert A.Var("x") != ref(A.Var("x"))  # another class: not equal (NotImplemented)
+    assert len(seen) >= 12
