@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path"]
+__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path", "read_file",
+           "write_file"]
 
 
 def _root() -> str | None:
@@ -72,8 +73,19 @@ def entry_path(kind: str, name: str):
 def read_bytes(kind: str, name: str) -> bytes | None:
     """The entry's bytes, or None when missing or unreadable."""
     path = _entry(kind, name)
-    if path is None:
-        return None
+    return None if path is None else read_file(path)
+
+
+def write_bytes(kind: str, name: str, data: bytes) -> bool:
+    """Store an entry atomically (temporary file + rename). Returns False, without raising,
+    when the cache folder cannot be created or written."""
+    path = _entry(kind, name)
+    return path is not None and write_file(path, data)
+
+
+def read_file(path: str) -> bytes | None:
+    """The bytes of the cache file ``path`` (any folder), or None when missing or
+    unreadable."""
     try:
         with open(path, "rb") as f:
             return f.read()
@@ -81,19 +93,18 @@ def read_bytes(kind: str, name: str) -> bytes | None:
         return None
 
 
-def write_bytes(kind: str, name: str, data: bytes) -> bool:
-    """Store an entry atomically (temporary file + rename). Returns False, without raising,
-    when the cache folder cannot be created or written."""
-    path = _entry(kind, name)
-    if path is None:
-        return False
+def write_file(path: str, data: bytes) -> bool:
+    """Write the cache file ``path`` (any folder, created if missing) atomically: a
+    temporary file in the same folder renamed into place. Returns False, without raising,
+    when that fails (a read-only folder, a full disk)."""
     tmp = None
     try:
         folder = os.path.dirname(path)
         os.makedirs(folder, exist_ok=True)
         import tempfile  # lazy: a run that only reads the cache does not need it
 
-        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp",
+                                   dir=folder)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
         os.replace(tmp, path)

@@ -1040,22 +1040,40 @@ class _FastParser:
 _FAST_FORMAT = "v3"
 
 
+#: Where the fast path's tables are kept first: beside the package, as Python keeps its
+#: ``.pyc`` files (so emptying fretc's cache folder, as a "cold" run does, does not mean
+#: building the LALR tables again, about a second). None: only fretc's cache folder.
+_PACKAGE_CACHE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
+
+
 def _load_fast():
     """The :class:`_FastParser` from its cache entry (built from Lark's tables, and stored,
-    when missing), or False when it cannot be used."""
+    when missing), or False when it cannot be used.
+
+    The entry (plain data, :func:`fast_tables`, marshalled) is named by a hash of the
+    grammar text, Lark's and Python's versions and the data format, so it is never stale.
+    It is read from :data:`_PACKAGE_CACHE`, else from fretc's cache folder
+    (:mod:`fretish.cache`, sub-folder ``lark``); a new entry is written beside the package
+    unless that folder cannot be written or Python writes no bytecode
+    (``PYTHONDONTWRITEBYTECODE``), and then to fretc's cache folder. An entry that cannot be
+    loaded is ignored and written again."""
     import marshal  # plain data only; the key names the Python version (marshal's format)
     grammar = _read_grammar()
     name = f"grammar-{_cache_key(grammar)[:40]}-{_FAST_FORMAT}.fast.marshal"
-    data = cache.read_bytes("lark", name)
-    if data is not None:
-        try:
-            return _FastParser(marshal.loads(data))
-        except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
-            pass
+    beside = None if _PACKAGE_CACHE is None else os.path.join(_PACKAGE_CACHE, name)
+    for data in (None if beside is None else cache.read_file(beside),
+                 cache.read_bytes("lark", name)):
+        if data is not None:
+            try:
+                return _FastParser(marshal.loads(data))
+            except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
+                pass
     tables = fast_tables(_get_parser())
     if tables is None:
         return False
-    cache.write_bytes("lark", name, marshal.dumps(tables))
+    data = marshal.dumps(tables)
+    if beside is None or sys.dont_write_bytecode or not cache.write_file(beside, data):
+        cache.write_bytes("lark", name, data)
     return _FastParser(tables)
 
 

@@ -150,9 +150,10 @@ def test_fast_path_equals_lark_on_edited_sentences(text, at, word):
 
 
 def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
-    """The fast path's tables live in fretc's cache beside Lark's; a damaged entry is
-    rebuilt, never trusted."""
+    """The fast path's tables live in fretc's cache beside Lark's when the package folder
+    is not used; a damaged entry is rebuilt, never trusted."""
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(P, "_PACKAGE_CACHE", None)
     monkeypatch.setattr(P, "_fast", None)
     monkeypatch.setattr(P, "_lark", None)
     text = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
@@ -162,6 +163,51 @@ def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
     monkeypatch.setattr(P, "_fast", None)
     assert P._get_fast() and _public(text) == ref
     assert entry.stat().st_size > 200  # rewritten whole
+
+
+def test_fast_tables_beside_the_package(tmp_path, monkeypatch):
+    """The tables are kept beside the package like .pyc files: a run with an empty fretc
+    cache folder ("cold") loads them from there and does not build Lark's tables; a damaged
+    entry there is rebuilt; a package folder that cannot be written, or
+    PYTHONDONTWRITEBYTECODE, sends the entry to fretc's cache folder."""
+    text = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
+    ref = _public(text)
+    pkg = tmp_path / "pkg" / "__pycache__"
+    monkeypatch.setattr(P, "_PACKAGE_CACHE", str(pkg))
+    monkeypatch.setattr(P.sys, "dont_write_bytecode", False)
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / "user1"))
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    (entry,) = pkg.glob("*.fast.marshal")
+    assert not (tmp_path / "user1" / "lark").exists() or \
+        not list((tmp_path / "user1" / "lark").glob("*.fast.marshal"))
+
+    def no_lark():
+        raise AssertionError("Lark's tables built or loaded on a cold run")
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / "user2"))  # cold
+    monkeypatch.setattr(P, "_fast", None)
+    with monkeypatch.context() as m:
+        m.setattr(P, "_get_parser", no_lark)
+        assert P._get_fast() and _public(text) == ref
+
+    entry.write_bytes(entry.read_bytes()[:100])  # damaged: rebuilt in place
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert entry.stat().st_size > 100
+
+    for blocked in ("file", "dont_write_bytecode"):
+        monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / f"user_{blocked}"))
+        monkeypatch.setattr(P, "_fast", None)
+        if blocked == "file":
+            blocker = tmp_path / "blocker"
+            blocker.write_text("x")
+            monkeypatch.setattr(P, "_PACKAGE_CACHE", str(blocker / "__pycache__"))
+        else:
+            monkeypatch.setattr(P, "_PACKAGE_CACHE", str(tmp_path / "pkg2"))
+            monkeypatch.setattr(P.sys, "dont_write_bytecode", True)
+        assert P._get_fast() and _public(text) == ref
+        assert list((tmp_path / f"user_{blocked}" / "lark").glob("*.fast.marshal"))
+    assert not (tmp_path / "pkg2").exists()
 
 
 def _exact_type(word):
