@@ -11,7 +11,6 @@ numpy, mcap, Jinja2 or Spot.
 from __future__ import annotations
 
 import gc
-import json
 import sys
 
 import click
@@ -94,6 +93,7 @@ def json_indent2(obj) -> str:
     strings, ints, booleans and None (anything else: ``json.dumps`` itself). The standard
     library's C encoder only serves ``indent=None``; its Python one is a tenth of the time
     of ``--emit ltl --json`` on a thousand requirements."""
+    import json.encoder  # lazy: only --json needs it (start-up, issue 9)
     enc = json.encoder.encode_basestring_ascii
     parts: list = []
     add = parts.append

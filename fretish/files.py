@@ -47,7 +47,6 @@ sentence itself.
 
 from __future__ import annotations
 
-import json
 import os
 import re
 from collections.abc import Iterable
@@ -313,6 +312,7 @@ def _line_col(raw: str, offset: int) -> tuple[int, int]:
 def _load_json(path: str) -> list[RequirementEntry]:
     source = str(path)
     raw = _read_text(path)
+    import json  # lazy: only FRET's JSON exports need it (start-up, issue 9)
     try:
         data = json.loads(raw)
     except json.JSONDecodeError as e:
