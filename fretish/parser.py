@@ -1050,27 +1050,36 @@ def _load_fast():
     """The :class:`_FastParser` from its cache entry (built from Lark's tables, and stored,
     when missing), or False when it cannot be used.
 
-    The entry (plain data, :func:`fast_tables`, marshalled) is named by a hash of the
-    grammar text, Lark's and Python's versions and the data format, so it is never stale.
+    The entry (plain data, :func:`fast_tables`, marshalled) holds the grammar text, Lark's
+    and Python's versions and the data format it was built from (its name is a CRC of
+    them), and is used only when they are this run's, so it is never stale.
     It is read from :data:`_PACKAGE_CACHE`, else from fretc's cache folder
     (:mod:`fretish.cache`, sub-folder ``lark``); a new entry is written beside the package
     unless that folder cannot be written or Python writes no bytecode
     (``PYTHONDONTWRITEBYTECODE``), and then to fretc's cache folder. An entry that cannot be
     loaded is ignored and written again."""
-    import marshal  # plain data only; the key names the Python version (marshal's format)
+    import marshal  # plain data only; the identity names the Python version (its format)
+    import zlib
     grammar = _read_grammar()
-    name = f"grammar-{_cache_key(grammar)[:40]}-{_FAST_FORMAT}.fast.marshal"
+    # Everything the tables depend on, stored in the entry and compared on loading (exact,
+    # and no SHA-256 at start-up: loading OpenSSL costs more than reading the entry)
+    identity = "\n".join((_FAST_FORMAT, _lark_version(), "%d.%d" % sys.version_info[:2],
+                          repr(sorted(_LARK_OPTIONS.items())), grammar))
+    name = f"grammar-{zlib.crc32(identity.encode('utf-8')):08x}-{_FAST_FORMAT}.fast.marshal"
     beside = None if _PACKAGE_CACHE is None else os.path.join(_PACKAGE_CACHE, name)
     for data in (None if beside is None else cache.read_file(beside),
                  cache.read_bytes("lark", name)):
         if data is not None:
             try:
-                return _FastParser(marshal.loads(data))
+                tables = marshal.loads(data)
+                if tables["identity"] == identity:
+                    return _FastParser(tables)
             except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
                 pass
     tables = fast_tables(_get_parser())
     if tables is None:
         return False
+    tables["identity"] = identity
     data = marshal.dumps(tables)
     if beside is None or sys.dont_write_bytecode or not cache.write_file(beside, data):
         cache.write_bytes("lark", name, data)

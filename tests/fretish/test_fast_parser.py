@@ -163,6 +163,16 @@ def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
     monkeypatch.setattr(P, "_fast", None)
     assert P._get_fast() and _public(text) == ref
     assert entry.stat().st_size > 200  # rewritten whole
+    # an entry built from other inputs (another grammar, Lark or Python) under the same
+    # name is not used: its recorded identity differs
+    import marshal
+    tables = marshal.loads(entry.read_bytes())
+    tables["identity"] = tables["identity"] + "\n// another grammar"
+    tables["start_states"] = {}
+    entry.write_bytes(marshal.dumps(tables))
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert marshal.loads(entry.read_bytes())["start_states"]  # rebuilt
 
 
 def test_fast_tables_beside_the_package(tmp_path, monkeypatch):
