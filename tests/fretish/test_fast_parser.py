@@ -249,3 +249,25 @@ def test_word_terminal_equals_the_exact_lexers(word):
     except P._Slow:
         got = None
     assert got == _exact_type(word), word
+
+
+_DEEP = ["!", "-", "f(", "g(1, ", "(", "if p then ", "a & ", "x ^ ", "~"]
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.sampled_from(_DEEP), max_size=60), st.sampled_from(["p", "1", "9" * 99]))
+def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
+    """limits.check_requirement skips the walk for a text of at most SHORT_TEXT characters:
+    the walk finds nothing there, even for the deepest expressions that fit."""
+    from fretish import limits
+    expr = "".join(prefixes) + leaf
+    expr += ")" * (expr.count("(") - expr.count(")"))
+    text = f"the sw shall satisfy {expr}"
+    if len(text) > limits.SHORT_TEXT:
+        return
+    try:
+        req = P._run_lark("start", text, "<t>", 1, 1)
+    except FretishError:
+        return
+    for e in limits._expressions(req):
+        limits._check(e, [0])  # raises LimitError beyond a limit
