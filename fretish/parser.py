@@ -877,7 +877,7 @@ class _FastParser:
             return
         body = "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})" for i in others)
         rx = f"(?:{'|'.join(ignored)})*(?:(?P<word>{self._WORD})|{body})"
-        self.scan = re.compile(rx, self.flags).finditer
+        self.scan = re.compile(rx, self.flags).scanner
         self.trailing = re.compile(f"(?:{'|'.join(ignored)})*\\Z", self.flags).match
         self.words = dict(self.known_words)
         names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
@@ -920,13 +920,10 @@ class _FastParser:
         add = out.append
         pos = 0
         multiline = "\n" in text
-        for m in scan(text):
-            if m.start() != pos:
-                raise _Slow("no terminal")
+        match = scan(text).match      # each match starts where the previous one ended
+        while (m := match()) is not None:
             typ = m.lastgroup
-            k = m.lastindex
-            start = m.start(k)
-            pos = m.end()
+            start, pos = m.span(m.lastindex)
             value = text[start:pos]
             if typ == "word":
                 typ = words.get(value) or self._word_type(value)
