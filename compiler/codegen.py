@@ -42,6 +42,7 @@ import sys
 import types
 from dataclasses import dataclass
 
+from . import code_cache
 from .automata import LTL3Automata, ltl3_automata
 from .ir import Node
 from .pt_step import CodegenError, StepCode, check_monitorable, compile_nodes
@@ -228,11 +229,16 @@ _ALLOWED_BUILTINS = frozenset(("abs", "min", "max", "bool", "float", "int", "len
                                "exec", "compile", "globals"))
 
 
-def check_module(text: str, module_name: str) -> None:
+def check_module(text: str, module_name: str, cache: bool = False) -> None:
     """Check a generated module before it is written or loaded: it compiles, every global
     name its code reads is defined by the module or is one of the builtins the template
     uses (so no ``NameError`` can happen at run time), it loads, and every monitor steps
     through two ticks (all variables 0, then 1) and finishes.
+
+    With ``cache``, the code objects of the module and of its shapes come from the disk
+    cache when a previous check compiled this very text (:mod:`compiler.code_cache`; the
+    names check, the load and the steps run all the same), and are stored there after a
+    check that passed.
 
     Raises :class:`InvalidMonitorError` (an internal error) naming the failure."""
 
@@ -242,19 +248,29 @@ def check_module(text: str, module_name: str) -> None:
             f"internal error: the generated monitor module {module_name!r} {what}{detail}; "
             "this is a bug in fretc, please report it with the requirement")
 
-    try:
-        code = compile(text, f"<fretc monitors {module_name}>", "exec")
-    except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
-        fail("does not compile", exc)
+    cached = code_cache.load(module_name, text) if cache else None
+    if cached is not None:
+        code, shape_codes = cached
+    else:
+        try:
+            code = compile(text, f"<fretc monitors {module_name}>", "exec")
+        except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
+            fail("does not compile", exc)
+        shape_codes = ()
     defined, reads = _names(code)
     unknown = sorted(reads - defined - _ALLOWED_BUILTINS)
     if unknown:
         fail(f"reads undefined names {', '.join(unknown)}")
     ns = {"__name__": module_name}
+    compiled_shapes = []
     try:
         exec(code, ns)  # only the standard library and literals made by repr
         for i, shape in enumerate(ns["_SHAPES"]):  # the step code, compiled on first use
-            shape_code = compile(shape[-1], f"<{module_name} shape {i}>", "exec")
+            if i < len(shape_codes):
+                shape_code = shape_codes[i]
+            else:
+                shape_code = compile(shape[-1], f"<{module_name} shape {i}>", "exec")
+            compiled_shapes.append(shape_code)
             shape_defined, shape_reads = _names(shape_code)
             unknown = sorted(shape_reads - shape_defined - defined - _ALLOWED_BUILTINS)
             if unknown:
@@ -271,6 +287,8 @@ def check_module(text: str, module_name: str) -> None:
         raise
     except Exception as exc:  # noqa: BLE001 - any failure here is an internal error
         fail("does not load and step", exc)
+    if cache and cached is None:
+        code_cache.store(module_name, text, code, compiled_shapes)
 
 
 _EXTENDED_ARG = opcode.EXTENDED_ARG
@@ -365,7 +383,7 @@ def build_monitor_module(compiled_list, module_name: str,
             skipped.append((c.id, str(exc)))
     text = _render(monitors, skipped, module_name)
     try:
-        check_module(text, module_name)
+        check_module(text, module_name, cache=True)
     except InvalidMonitorError as exc:
         bad = _invalid_monitors(monitors, module_name, exc)
         failed = InvalidMonitorError("; ".join(f"{m.id}: {e}" for m, e in bad),
