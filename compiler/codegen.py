@@ -42,6 +42,8 @@ import sys
 import types
 from dataclasses import dataclass
 
+from fretish import cache as fretc_cache
+
 from . import code_cache
 from .automata import LTL3Automata, ltl3_automata
 from .ir import Node
@@ -205,10 +207,31 @@ class MonitorModule:
 def _env():
     import jinja2  # lazy: start-up of the commands that render nothing (--emit ltl)
 
+    class BytecodeCache(jinja2.BytecodeCache):
+        """Jinja's compiled templates in fretc's disk cache (:mod:`fretish.cache`: skipped
+        when off or not writable). Jinja checks an entry's header (its bytecode format,
+        Python's version) and the template source's checksum; the SHA-256 of the entry
+        written before it makes a damaged entry a miss too (compiled again), never a
+        template that renders other text."""
+
+        def load_bytecode(self, bucket):
+            data = fretc_cache.read_bytes("jinja", bucket.key)
+            if data is None or hashlib.sha256(data[32:]).digest() != data[:32]:
+                return
+            try:
+                bucket.bytecode_from_string(data[32:])
+            except Exception:  # noqa: BLE001 - an entry Jinja cannot read is a miss
+                bucket.reset()
+
+        def dump_bytecode(self, bucket):
+            payload = bucket.bytecode_to_string()
+            fretc_cache.write_bytes("jinja", bucket.key,
+                                    hashlib.sha256(payload).digest() + payload)
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("templates", ""),
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined, autoescape=False)
+        undefined=jinja2.StrictUndefined, autoescape=False, bytecode_cache=BytecodeCache())
     env.filters["py"] = repr
     return env
 

@@ -248,3 +248,32 @@ def test_module_code_cache_off_or_unwritable(tmp_path, monkeypatch):
         monkeypatch.setenv("FRETC_CACHE_DIR", value)
         outputs.append(render_module([compile_entry(entry("R", SENTENCES[0]))], "m"))
     assert outputs[0] == outputs[1]
+
+
+def test_templates_compiled_once_and_reloaded_from_disk(tmp_path, monkeypatch):
+    """Jinja's compiled templates are kept in the cache: a new process (a new environment)
+    renders from them without compiling the templates; a damaged entry is compiled again."""
+    import jinja2
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    compiled = [compile_entry(entry("R", SENTENCES[0]))]
+    codegen._env.cache_clear()
+    first = render_module(compiled, "m")
+    entries = sorted((tmp_path / "jinja").iterdir())
+    assert len(entries) == 2  # the module and the shape template
+    compiles = []
+    real = jinja2.Environment.compile
+
+    def counting(self, *a, **k):
+        compiles.append(a)
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(jinja2.Environment, "compile", counting)
+    codegen._env.cache_clear()
+    assert render_module(compiled, "m") == first and compiles == []
+    for damage in (lambda b: b[:40], lambda b: b[:-10] + bytes(10), lambda b: b[:60]):
+        entries[0].write_bytes(damage(entries[0].read_bytes()))
+        codegen._env.cache_clear()
+        compiles.clear()
+        assert render_module(compiled, "m") == first and len(compiles) == 1
+    codegen._env.cache_clear()
