@@ -327,9 +327,10 @@ def _names(code: types.CodeType) -> tuple[set[str], set[str]]:
     read), from the bytecode's name operations (``dis``'s instruction decoding, without
     ``dis``: it is 20 times slower on the thousands of functions of a large module).
 
-    An instruction is two bytes, opcode then argument: the opcodes are the even bytes, so
-    the name operations are found by ``bytes.find`` on them; a code object with an
-    ``EXTENDED_ARG`` prefix (more than 256 names) is decoded instruction by instruction."""
+    An instruction is two bytes, opcode then argument, so the opcodes are the even bytes
+    of ``co_code``: the name operations are found by ``bytes.find`` on them, and their
+    argument is the next byte, extended by the ``EXTENDED_ARG`` prefixes just before
+    (a code object of more than 256 names)."""
     defined: set[str] = set()
     reads: set[str] = set()
     stack = [code]
@@ -339,19 +340,24 @@ def _names(code: types.CodeType) -> tuple[set[str], set[str]]:
         if names:
             raw = co.co_code
             ops, args = raw[::2], raw[1::2]
+            extended = _EXTENDED_ARG_BYTE in ops
             top = co is code
-            if _EXTENDED_ARG_BYTE in ops:
-                pairs = _instructions(raw)
-            else:
-                pairs = [(op, args[i]) for op in (_WANTED_TOP if top else _WANTED)
-                         for i in _positions(ops, op)]
-            for op, arg in pairs:
-                if op == _LOAD_GLOBAL:
-                    reads.add(names[arg >> _GLOBAL_SHIFT])
-                elif op == _LOAD_NAME:
-                    reads.add(names[arg])
-                elif top and op in _STORES:
-                    defined.add(names[arg])
+            for op in (_WANTED_TOP if top else _WANTED):
+                i = ops.find(op)
+                while i >= 0:
+                    arg = args[i]
+                    if extended:
+                        j, shift = i - 1, 8
+                        while j >= 0 and ops[j] == _EXTENDED_ARG:
+                            arg |= args[j] << shift
+                            j, shift = j - 1, shift + 8
+                    if op == _LOAD_GLOBAL:
+                        reads.add(names[arg >> _GLOBAL_SHIFT])
+                    elif op == _LOAD_NAME:
+                        reads.add(names[arg])
+                    else:
+                        defined.add(names[arg])
+                    i = ops.find(op, i + 1)
         stack.extend(c for c in co.co_consts if isinstance(c, types.CodeType))
     return defined, reads
 
@@ -359,28 +365,6 @@ def _names(code: types.CodeType) -> tuple[set[str], set[str]]:
 _EXTENDED_ARG_BYTE = bytes([_EXTENDED_ARG])
 _WANTED = (_LOAD_GLOBAL, _LOAD_NAME)
 _WANTED_TOP = _WANTED + tuple(sorted(_STORES))
-
-
-def _positions(ops: bytes, op: int):
-    """The indices of ``op`` in ``ops``."""
-    i = ops.find(op)
-    while i >= 0:
-        yield i
-        i = ops.find(op, i + 1)
-
-
-def _instructions(raw: bytes) -> list[tuple[int, int]]:
-    """(opcode, argument) of each instruction of ``raw`` (a ``co_code``), ``EXTENDED_ARG``
-    prefixes folded into the argument of the instruction they extend."""
-    out, ext = [], 0
-    for i in range(0, len(raw), 2):
-        op, arg = raw[i], raw[i + 1] | ext
-        if op == _EXTENDED_ARG:
-            ext = arg << 8
-            continue
-        ext = 0
-        out.append((op, arg))
-    return out
 
 
 def build_monitor_module(compiled_list, module_name: str,
