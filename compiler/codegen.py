@@ -431,11 +431,14 @@ def _render(monitors: list[MonitorSource], skipped, module_name: str) -> str:
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
     tables: dict[str, int] = {}  # encoded table -> index: one copy per distinct table
+    encoded: dict[int, str] = {}  # id of a table -> its text (monitors of a shape share one)
     for m in monitors:
         for which in ("bad", "good"):
             aut = getattr(m, which)
             if aut is not None and aut.table is not None and not aut.complete:
-                text = encode_table(aut.table)
+                text = encoded.get(id(aut.table))
+                if text is None:
+                    text = encoded[id(aut.table)] = encode_table(aut.table)
                 setattr(m, f"{which}_table", tables.setdefault(text, len(tables)))
     env = _env()
     shape_template = env.get_template("monitor_shape.py.j2")
