@@ -42,8 +42,11 @@ import sys
 import types
 from dataclasses import dataclass
 
+from fretish import cache as fretc_cache
+
+from . import code_cache
 from .automata import LTL3Automata, ltl3_automata
-from .ir import Node
+from .ir import Node, gc_paused
 from .pt_step import CodegenError, StepCode, check_monitorable, compile_nodes
 
 __all__ = ["CodegenError", "InvalidMonitorError", "MonitorInfo", "MonitorModule",
@@ -204,10 +207,31 @@ class MonitorModule:
 def _env():
     import jinja2  # lazy: start-up of the commands that render nothing (--emit ltl)
 
+    class BytecodeCache(jinja2.BytecodeCache):
+        """Jinja's compiled templates in fretc's disk cache (:mod:`fretish.cache`: skipped
+        when off or not writable). Jinja checks an entry's header (its bytecode format,
+        Python's version) and the template source's checksum; the SHA-256 of the entry
+        written before it makes a damaged entry a miss too (compiled again), never a
+        template that renders other text."""
+
+        def load_bytecode(self, bucket):
+            data = fretc_cache.read_bytes("jinja", bucket.key)
+            if data is None or hashlib.sha256(data[32:]).digest() != data[:32]:
+                return
+            try:
+                bucket.bytecode_from_string(data[32:])
+            except Exception:  # noqa: BLE001 - an entry Jinja cannot read is a miss
+                bucket.reset()
+
+        def dump_bytecode(self, bucket):
+            payload = bucket.bytecode_to_string()
+            fretc_cache.write_bytes("jinja", bucket.key,
+                                    hashlib.sha256(payload).digest() + payload)
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("templates", ""),
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined, autoescape=False)
+        undefined=jinja2.StrictUndefined, autoescape=False, bytecode_cache=BytecodeCache())
     env.filters["py"] = repr
     return env
 
@@ -228,13 +252,27 @@ _ALLOWED_BUILTINS = frozenset(("abs", "min", "max", "bool", "float", "int", "len
                                "exec", "compile", "globals"))
 
 
-def check_module(text: str, module_name: str) -> None:
+def check_module(text: str, module_name: str, cache: bool = False) -> None:
     """Check a generated module before it is written or loaded: it compiles, every global
     name its code reads is defined by the module or is one of the builtins the template
     uses (so no ``NameError`` can happen at run time), it loads, and every monitor steps
     through two ticks (all variables 0, then 1) and finishes.
 
+    With ``cache``, the code objects of the module and of its shapes come from the disk
+    cache when a previous check compiled this very text (:mod:`compiler.code_cache`; the
+    names check, the load and the steps run all the same), and are stored there after a
+    check that passed.
+
     Raises :class:`InvalidMonitorError` (an internal error) naming the failure."""
+    # compile() and exec allocate a lot while the heap holds every requirement's formulas
+    # and automata: Python's cyclic collector would rescan those again and again (a sixth
+    # of the check's CPU time on the 696 sentences, measured); nothing here is cyclic but
+    # the module's namespace, collected once the collector resumes
+    with gc_paused():
+        _check_module(text, module_name, cache)
+
+
+def _check_module(text: str, module_name: str, cache: bool) -> None:
 
     def fail(what, exc=None):
         detail = f": {type(exc).__name__}: {exc}" if exc is not None else ""
@@ -242,19 +280,29 @@ def check_module(text: str, module_name: str) -> None:
             f"internal error: the generated monitor module {module_name!r} {what}{detail}; "
             "this is a bug in fretc, please report it with the requirement")
 
-    try:
-        code = compile(text, f"<fretc monitors {module_name}>", "exec")
-    except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
-        fail("does not compile", exc)
+    cached = code_cache.load(module_name, text) if cache else None
+    if cached is not None:
+        code, shape_codes = cached
+    else:
+        try:
+            code = compile(text, f"<fretc monitors {module_name}>", "exec")
+        except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
+            fail("does not compile", exc)
+        shape_codes = ()
     defined, reads = _names(code)
     unknown = sorted(reads - defined - _ALLOWED_BUILTINS)
     if unknown:
         fail(f"reads undefined names {', '.join(unknown)}")
     ns = {"__name__": module_name}
+    compiled_shapes = []
     try:
         exec(code, ns)  # only the standard library and literals made by repr
         for i, shape in enumerate(ns["_SHAPES"]):  # the step code, compiled on first use
-            shape_code = compile(shape[-1], f"<{module_name} shape {i}>", "exec")
+            if i < len(shape_codes):
+                shape_code = shape_codes[i]
+            else:
+                shape_code = compile(shape[-1], f"<{module_name} shape {i}>", "exec")
+            compiled_shapes.append(shape_code)
             shape_defined, shape_reads = _names(shape_code)
             unknown = sorted(shape_reads - shape_defined - defined - _ALLOWED_BUILTINS)
             if unknown:
@@ -271,6 +319,8 @@ def check_module(text: str, module_name: str) -> None:
         raise
     except Exception as exc:  # noqa: BLE001 - any failure here is an internal error
         fail("does not load and step", exc)
+    if cache and cached is None:
+        code_cache.store(module_name, text, code, compiled_shapes)
 
 
 _EXTENDED_ARG = opcode.EXTENDED_ARG
@@ -283,28 +333,47 @@ _GLOBAL_SHIFT = 1 if sys.version_info >= (3, 11) else 0
 
 def _names(code: types.CodeType) -> tuple[set[str], set[str]]:
     """(names defined at the top level of ``code``, global names its code and functions
-    read), from the bytecode's name operations (``dis``'s instruction decoding, inlined: it
-    is 20 times slower on the thousands of functions of a large module)."""
-    defined = set()
-    reads = set()
+    read), from the bytecode's name operations (``dis``'s instruction decoding, without
+    ``dis``: it is 20 times slower on the thousands of functions of a large module).
+
+    An instruction is two bytes, opcode then argument, so the opcodes are the even bytes
+    of ``co_code``: the name operations are found by ``bytes.find`` on them, and their
+    argument is the next byte, extended by the ``EXTENDED_ARG`` prefixes just before
+    (a code object of more than 256 names)."""
+    defined: set[str] = set()
+    reads: set[str] = set()
     stack = [code]
     while stack:
         co = stack.pop()
-        raw, names, ext = co.co_code, co.co_names, 0
-        for i in range(0, len(raw), 2):
-            op, arg = raw[i], raw[i + 1] | ext
-            if op == _EXTENDED_ARG:
-                ext = arg << 8
-                continue
-            ext = 0
-            if op == _LOAD_GLOBAL:
-                reads.add(names[arg >> _GLOBAL_SHIFT])
-            elif op == _LOAD_NAME:
-                reads.add(names[arg])
-            elif op in _STORES and co is code:
-                defined.add(names[arg])
+        names = co.co_names
+        if names:
+            raw = co.co_code
+            ops, args = raw[::2], raw[1::2]
+            extended = _EXTENDED_ARG_BYTE in ops
+            top = co is code
+            for op in (_WANTED_TOP if top else _WANTED):
+                i = ops.find(op)
+                while i >= 0:
+                    arg = args[i]
+                    if extended:
+                        j, shift = i - 1, 8
+                        while j >= 0 and ops[j] == _EXTENDED_ARG:
+                            arg |= args[j] << shift
+                            j, shift = j - 1, shift + 8
+                    if op == _LOAD_GLOBAL:
+                        reads.add(names[arg >> _GLOBAL_SHIFT])
+                    elif op == _LOAD_NAME:
+                        reads.add(names[arg])
+                    else:
+                        defined.add(names[arg])
+                    i = ops.find(op, i + 1)
         stack.extend(c for c in co.co_consts if isinstance(c, types.CodeType))
     return defined, reads
+
+
+_EXTENDED_ARG_BYTE = bytes([_EXTENDED_ARG])
+_WANTED = (_LOAD_GLOBAL, _LOAD_NAME)
+_WANTED_TOP = _WANTED + tuple(sorted(_STORES))
 
 
 def build_monitor_module(compiled_list, module_name: str,
@@ -330,7 +399,7 @@ def build_monitor_module(compiled_list, module_name: str,
             skipped.append((c.id, str(exc)))
     text = _render(monitors, skipped, module_name)
     try:
-        check_module(text, module_name)
+        check_module(text, module_name, cache=True)
     except InvalidMonitorError as exc:
         bad = _invalid_monitors(monitors, module_name, exc)
         failed = InvalidMonitorError("; ".join(f"{m.id}: {e}" for m, e in bad),
@@ -368,14 +437,22 @@ def render_module(compiled_list, module_name: str, errors: list | None = None) -
 
 
 def _render(monitors: list[MonitorSource], skipped, module_name: str) -> str:
+    with gc_paused():  # as check_module: strings and Jinja contexts, no cycles worth a pass
+        return _render_text(monitors, skipped, module_name)
+
+
+def _render_text(monitors: list[MonitorSource], skipped, module_name: str) -> str:
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
     tables: dict[str, int] = {}  # encoded table -> index: one copy per distinct table
+    encoded: dict[int, str] = {}  # id of a table -> its text (monitors of a shape share one)
     for m in monitors:
         for which in ("bad", "good"):
             aut = getattr(m, which)
             if aut is not None and aut.table is not None and not aut.complete:
-                text = encode_table(aut.table)
+                text = encoded.get(id(aut.table))
+                if text is None:
+                    text = encoded[id(aut.table)] = encode_table(aut.table)
                 setattr(m, f"{which}_table", tables.setdefault(text, len(tables)))
     env = _env()
     shape_template = env.get_template("monitor_shape.py.j2")

@@ -81,9 +81,18 @@ class StepCode:
 def check_monitorable(pt: Node) -> None:
     """Raise :class:`CodegenError` at once when pt needs the future (so such a requirement
     costs no automaton construction before it is skipped)."""
-    for n in ir.walk(pt):
+    # pre-order, each node object once (a formula is a DAG: a tree walk visits a shared
+    # sub-formula once per path to it); a node's sub-DAG is done before its next sibling, so
+    # the first future found is the first of a tree walk, the one the error names
+    stack, seen = [pt], set()
+    while stack:
+        n = stack.pop()
+        if id(n) in seen:
+            continue
+        seen.add(id(n))
         if n.op == "future":
             raise _future_error(n)
+        stack.extend(reversed(n.args))
 
 
 def _future_error(n: Node) -> CodegenError:

@@ -72,9 +72,10 @@ def compile_cmd(files, emit, as_json, output, psl_map):
             sys.exit(4)  # internal error: not audit's 3 (incomplete)
         _check_output(outputs, output, ".py")
         _write_outputs(outputs, output, ".py")
+        reported = {c.id for c in failed}  # their error is printed above
         for m in modules:
             for rid, reason in m.skipped.items():
-                if not any(c.id == rid and c.error is not None for c in compiled):
+                if rid not in reported:
                     click.echo(f"skipped {rid} ({m.name}): {reason}", err=True)
     elif emit == "psl":
         from compiler.ajpf import emit_psl  # lazy: only for psl

@@ -184,3 +184,97 @@ def test_cache_off(value, tmp_path, monkeypatch):
     monkeypatch.setenv("FRETC_CACHE_DIR", value)
     assert cache.cache_dir() is None and not cache.write_bytes("x", "y", b"z")
     assert _parsed(P.cached_lark()) == _reference()
+
+
+# --------------------------------------------------------------------------- module bytecode
+def _counting_compile(monkeypatch):
+    """Count the compile() calls of codegen.check_module (the module's and each shape's)."""
+    calls = []
+
+    def counting(source, filename, mode, *args, **kwargs):
+        calls.append(filename)
+        return compile(source, filename, mode, *args, **kwargs)
+
+    monkeypatch.setattr(codegen, "compile", counting, raising=False)
+    return calls
+
+
+def test_checked_module_code_is_reused_and_still_checked(tmp_path, monkeypatch):
+    """A second check of the same module text takes its code objects from the disk cache
+    (no compile) and gives the same module; the names check still runs on them: a builtin
+    no longer allowed is reported although the code came from the cache."""
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    compiled = [compile_entry(entry(f"R{i}", t)) for i, t in enumerate(SENTENCES)]
+    calls = _counting_compile(monkeypatch)
+    first = render_module(compiled, "m")
+    n_shapes = len(load(first)._SHAPES)
+    assert len(calls) == 1 + n_shapes
+    assert len(list((tmp_path / "monitor-code").iterdir())) == 1
+    calls.clear()
+    errors: list = []
+    assert render_module(compiled, "m", errors) == first and not errors
+    assert calls == []  # warm: nothing compiled
+    monkeypatch.setattr(codegen, "_ALLOWED_BUILTINS", codegen._ALLOWED_BUILTINS - {"type"})
+    render_module(compiled, "m", errors)
+    assert errors and "undefined names type" in str(errors[0])
+    assert errors[0].ids == [c.id for c in compiled]
+    # the module's own check used the cached code; only the modules of each requirement
+    # alone, checked after it (they fail before their shape is compiled), are compiled
+    assert calls == ["<fretc monitors m>"] * len(compiled)
+
+
+def test_module_code_entry_of_another_text_or_damaged_is_recompiled(tmp_path, monkeypatch):
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    one = [compile_entry(entry("R", SENTENCES[0]))]
+    two = [compile_entry(entry("R", SENTENCES[3]))]
+    calls = _counting_compile(monkeypatch)
+    text_one = render_module(one, "m")
+    render_module(two, "m")  # same module name, another text: replaces the entry
+    assert len(list((tmp_path / "monitor-code").iterdir())) == 1
+    calls.clear()
+    assert render_module(one, "m") == text_one and len(calls) == 2  # a miss: compiled
+    (f,) = (tmp_path / "monitor-code").iterdir()
+    for damage in (lambda b: b[:len(b) // 2], lambda b: b[:-10] + bytes(10),
+                   lambda b: b"x" + b[1:]):
+        f.write_bytes(damage(f.read_bytes()))
+        calls.clear()
+        assert render_module(one, "m") == text_one and len(calls) == 2
+
+
+def test_module_code_cache_off_or_unwritable(tmp_path, monkeypatch):
+    blocker = tmp_path / "not_a_dir"
+    blocker.write_text("x")
+    outputs = []
+    for value in ("", str(blocker)):
+        monkeypatch.setenv("FRETC_CACHE_DIR", value)
+        outputs.append(render_module([compile_entry(entry("R", SENTENCES[0]))], "m"))
+    assert outputs[0] == outputs[1]
+
+
+def test_templates_compiled_once_and_reloaded_from_disk(tmp_path, monkeypatch):
+    """Jinja's compiled templates are kept in the cache: a new process (a new environment)
+    renders from them without compiling the templates; a damaged entry is compiled again."""
+    import jinja2
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    compiled = [compile_entry(entry("R", SENTENCES[0]))]
+    codegen._env.cache_clear()
+    first = render_module(compiled, "m")
+    entries = sorted((tmp_path / "jinja").iterdir())
+    assert len(entries) == 2  # the module and the shape template
+    compiles = []
+    real = jinja2.Environment.compile
+
+    def counting(self, *a, **k):
+        compiles.append(a)
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(jinja2.Environment, "compile", counting)
+    codegen._env.cache_clear()
+    assert render_module(compiled, "m") == first and compiles == []
+    for damage in (lambda b: b[:40], lambda b: b[:-10] + bytes(10), lambda b: b[:60]):
+        entries[0].write_bytes(damage(entries[0].read_bytes()))
+        codegen._env.cache_clear()
+        compiles.clear()
+        assert render_module(compiled, "m") == first and len(compiles) == 1
+    codegen._env.cache_clear()

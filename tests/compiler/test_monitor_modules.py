@@ -208,3 +208,51 @@ def test_a_requirements_monitor_source_is_found_by_its_class_name():
     assert f"VARIABLES={info.source.variables!r}" in src
     shape = src[src.index("# _SHAPES["):]
     assert "def step(self, sample):" in shape and "S0" not in src
+
+
+def _names_by_dis(code):
+    """The reference of ``codegen._names``: the standard library's instruction decoding."""
+    import dis
+
+    defined, reads, stack = set(), set(), [code]
+    while stack:
+        co = stack.pop()
+        for ins in dis.get_instructions(co):
+            if ins.opname in ("LOAD_GLOBAL", "LOAD_NAME"):
+                reads.add(ins.argval)
+            elif co is code and ins.opname in ("STORE_NAME", "STORE_GLOBAL", "IMPORT_NAME"):
+                defined.add(ins.argval)
+        stack.extend(c for c in co.co_consts if isinstance(c, types.CodeType))
+    return defined, reads
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.sampled_from(["load", "store", "attr", "call", "global"]), max_size=12),
+       st.integers(0, 600), st.randoms(use_true_random=False))
+def test_names_of_code_agree_with_dis(kinds, n_filler, rnd):
+    """``codegen._names`` (which decodes bytecode itself, for speed) reads the same defined
+    and read names as ``dis``, at the top level and in nested functions, also past 256
+    names (``EXTENDED_ARG`` prefixes)."""
+    pool = [f"x{i}" for i in range(12)]
+    lines = [f"f{i} = {i}" for i in range(n_filler)]  # many names: EXTENDED_ARG past 255
+    body = []
+    for k in kinds:
+        a, b = rnd.choice(pool), rnd.choice(pool)
+        if k == "load":
+            lines.append(f"y = {a}")
+            body.append(f"z = {b}")
+        elif k == "store":
+            lines.append(f"{a} = 1")
+        elif k == "attr":
+            body.append(f"z = {a}.{b}")
+        elif k == "call":
+            body.append(f"{a}({b}, f{n_filler - 1 if n_filler else 0})")
+        else:
+            lines.append(f"def h{len(lines)}():\n    global {a}\n    {a} = {b}")
+    lines.append("def g():\n    " + "\n    ".join(body or ["pass"]))
+    lines.append("import math as " + rnd.choice(pool))
+    code = compile("\n".join(lines), "<t>", "exec")
+    assert codegen._names(code) == _names_by_dis(code)
+    mm = codegen.build_monitor_module(compiled_files()[:3], "m")
+    mod_code = compile(mm.text, "m", "exec")
+    assert codegen._names(mod_code) == _names_by_dis(mod_code)
