@@ -59,8 +59,12 @@ lo``, ``hi == 0``): ``within``/``for``/``after`` use bounds from ``n - 1`` to ``
 which for every ``n >= 2`` compare alike with each other and with 0. So the template key holds ``n`` itself for ``n``
 0 and 1, and one symbolic bound for ``n >= 2``, built with a large sentinel (an ``int``
 subclass that keeps its offset through ``+``/``-`` and prints as a format field). Memory is
-bounded: at most 8 scopes x 3 condition kinds x (8 timings + 4 duration timings x 3 classes)
-= 480 template keys.
+bounded: there are 432 template keys (8 scopes x 3 condition kinds x (8 timings + 4
+duration timings x 3 classes)), about 0.35 ms of CPU each to build. A process builds its
+first 16 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB)
+from fretc's disk cache (:mod:`fretish.cache`, entry named by a hash of the construction's
+sources and Python's version), building and storing it on first use. The table changes
+speed only: a cache that is off, unreadable or damaged means the keys are built.
 
 Byte identity with the full path is checked by ``tests/compiler/test_instantiate.py`` on
 random sentences over the whole grammar, FRET's vectors and the case-study corpus.
@@ -68,9 +72,11 @@ random sentences over the whole grammar, FRET's vectors and the case-study corpu
 
 from __future__ import annotations
 
+import marshal
 import operator
 import re
 from fractions import Fraction
+from pathlib import Path
 
 from fretish import ast as A
 
@@ -140,59 +146,87 @@ class _Template:
     ``%``-format string and a getter picking its fields' values, in order, from the list
     of the twelve atoms' texts and the bounds (``_BOUND0``). ``compared`` are the pairs of
     template nodes the simplifier found different while building, as conditions on the
-    atoms (:func:`_unify`, rule 2)."""
+    atoms (:func:`_unify`, rule 2), with template nodes as plain tuples (:func:`_data`).
+    ``data`` is the whole as plain data (strings, ints, tuples: ``marshal``-able) for
+    the disk cache."""
 
-    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared")
+    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data")
 
-    def __init__(self, scope: str, cond: str, timing: str, n: int | None):
-        ph = _PLACEHOLDERS
-        sets = [(ph[k + 3], None if cond == "null" else ph[k + 1],
-                 ph[k + 2] if timing in A.STOP_TIMINGS else None)
-                for k in range(0, 3 * _ATOMS, _ATOMS)]
-        calls = iter(sets)  # construct converts the fields for ft, ft_inf, pt in order
+    def __init__(self, data: tuple):
+        self.data = data
+        forms, self.compared = data
+        self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot = (
+            None if f is None else (f[0], _picker(f[1])) for f in forms)
 
-        def mode(kind: str, last: Node):
-            if scope == "null":
-                return None
-            return ph[2 * _ATOMS] if kind == "pt" else ph[0] if last is LAST else ph[_ATOMS]
 
-        with ir.recording_comparisons() as compared:
-            ft, ft_inf, pt, _, _ = construct(scope, cond, timing, n, mode,
-                                             lambda x: next(calls))
-        # each pair once (a shared sub-formula is compared again and again), as the
-        # conditions on the atoms under which it would be equal
-        conditions: dict = {}
-        pairs = set()
-        for x, y in compared:
-            if (id(x), id(y)) in pairs:
-                continue
-            pairs.add((id(x), id(y)))
-            conj: list = []
-            if _unify(x, y, conj):
-                conditions.setdefault(tuple(conj), None)
-        self.compared = tuple(conditions)
-        self.ft, self.ft_inf, self.pt = _compiled(_smv(ft)), _compiled(_smv(ft_inf)), \
-            _compiled(_smv_z(pt))
-        self.ft_spot, self.ft_inf_spot = _spot_or_none(ft), _spot_or_none(ft_inf)
+def _picker(order: tuple):
+    """``values -> tuple`` of the values at ``order`` (a ``%`` operand)."""
+    if not order:
+        return lambda values: ()
+    if len(order) == 1:
+        i = order[0]
+        return lambda values: (values[i],)
+    return operator.itemgetter(*order)
+
+
+def build_template(scope: str, cond: str, timing: str, n: int | None) -> tuple:
+    """The plain data of :class:`_Template` for one key, built with placeholder atoms by
+    :func:`compiler.semantics.construct` (``n``: ticks, or a :class:`_SymbolicBound`)."""
+    ph = _PLACEHOLDERS
+    sets = [(ph[k + 3], None if cond == "null" else ph[k + 1],
+             ph[k + 2] if timing in A.STOP_TIMINGS else None)
+            for k in range(0, 3 * _ATOMS, _ATOMS)]
+    calls = iter(sets)  # construct converts the fields for ft, ft_inf, pt in order
+
+    def mode(kind: str, last: Node):
+        if scope == "null":
+            return None
+        return ph[2 * _ATOMS] if kind == "pt" else ph[0] if last is LAST else ph[_ATOMS]
+
+    with gc_paused(), ir.recording_comparisons() as compared:
+        ft, ft_inf, pt, _, _ = construct(scope, cond, timing, n, mode,
+                                         lambda x: next(calls))
+    # each pair once (a shared sub-formula is compared again and again), as the
+    # conditions on the atoms under which it would be equal
+    conditions: dict = {}
+    pairs = set()
+    for x, y in compared:
+        if (id(x), id(y)) in pairs:
+            continue
+        pairs.add((id(x), id(y)))
+        conj: list = []
+        if _unify(x, y, conj):
+            conditions.setdefault(tuple(conj), None)
+    forms = (_compiled(_smv(ft)), _compiled(_smv(ft_inf)), _compiled(_smv_z(pt)),
+             _spot_or_none(ft), _spot_or_none(ft_inf))
+    return forms, tuple(conditions)
+
+
+def _data(t: Node):
+    """A template node as plain data: its field number for a placeholder, else ``(op,
+    name, lo, hi, args)`` with a symbolic bound as ``(offset,)``."""
+    f = _FIELD_OF.get(id(t))
+    if f is not None:
+        return f
+    return (t.op, t.name, _bound_data(t.lo), _bound_data(t.hi),
+            tuple(_data(a) for a in t.args))
+
+
+def _bound_data(b):
+    return (b.offset,) if type(b) is _SymbolicBound else b
 
 
 def _compiled(text: str | None):
-    """``(format, getter)`` of a template text whose fields are ``{i}``: ``format %
-    getter(values)`` fills them in (None stays None)."""
+    """``(format, order)`` of a template text whose fields are ``{i}``: ``format %
+    tuple(values[i] for i in order)`` fills them in (None stays None)."""
     if text is None:
         return None
     own = _FIELD.sub("", text)
     if "{" in own or "}" in own or str(_SENTINEL)[:6] in own:
         # a brace of its own, or a bound that lost its offset
         raise AssertionError(f"template text {text!r}")  # pragma: no cover
-    order = [int(x[1:-1]) for x in _FIELD.findall(text)]
-    fmt = _FIELD.sub("%s", text.replace("%", "%%"))
-    if not order:
-        return fmt, lambda values: ()
-    if len(order) == 1:
-        i = order[0]
-        return fmt, lambda values: (values[i],)
-    return fmt, operator.itemgetter(*order)
+    order = tuple(int(x[1:-1]) for x in _FIELD.findall(text))
+    return _FIELD.sub("%s", text.replace("%", "%%")), order
 
 
 def _spot_or_none(node: Node):
@@ -202,7 +236,68 @@ def _spot_or_none(node: Node):
         return None
 
 
+#: every template key: (scope, condition kind, timing, n class: None, 0, 1 or -1 for >= 2)
+ALL_KEYS = tuple(
+    (scope, cond, timing, n)
+    for scope in ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter",
+                  "onlyBefore")
+    for cond in ("null", "regular", "holding")
+    for timing in ("null", "immediately", "next", "finally", "eventually", "always",
+                   "never", "within", "for", "after", "until", "before")
+    for n in ((0, 1, -1) if timing in A.DURATION_TIMINGS else (None,)))
+
 _TEMPLATES: dict = {}
+_BUILT_BEFORE_TABLE = 16  # keys built directly before the disk table is read
+_TABLE: list = []  # [dict key -> data] once the disk cache was consulted
+
+
+def _build_key(key) -> tuple:
+    scope, cond, timing, nkey = key
+    return build_template(scope, cond, timing, _SymbolicBound(0) if nkey == -1 else nkey)
+
+
+def _cache_name() -> str:
+    """The disk-cache entry name: a hash of everything the templates are a function of
+    (this module and the construction's sources, Python's version for ``marshal``)."""
+    import sys
+
+    from fretish.cache import key_of
+
+    here = Path(__file__).resolve().parent
+    sources = [(here / f).read_text(encoding="utf-8") for f in _SOURCES]
+    return key_of("templates-v1", sys.version, *sources)
+
+
+_SOURCES = ("instantiate.py", "semantics.py", "scope_timing.py", "ir.py", "printers.py",
+            "expressions.py")
+
+
+def _table() -> dict | None:
+    """Every key's data from fretc's disk cache (:mod:`fretish.cache`), built and stored
+    there on first use; None when the disk cache is off or fails (keys are then built one
+    by one as needed)."""
+    if _TABLE:
+        return _TABLE[0]
+    from fretish import cache
+
+    table = None
+    try:
+        if cache.cache_dir() is not None:
+            name = _cache_name()
+            blob = cache.read_bytes("templates", name)
+            if blob is not None:
+                try:
+                    table = dict(zip(ALL_KEYS, marshal.loads(blob)))
+                except (ValueError, EOFError, TypeError):
+                    table = None  # a damaged entry: built again below
+            if table is None or len(table) != len(ALL_KEYS):
+                data = tuple(_build_key(k) for k in ALL_KEYS)
+                cache.write_bytes("templates", name, marshal.dumps(data))
+                table = dict(zip(ALL_KEYS, data))
+    except OSError:
+        table = None
+    _TABLE.append(table)
+    return table
 
 
 def template(scope: str, cond: str, timing: str, n: int | None) -> _Template:
@@ -212,9 +307,10 @@ def template(scope: str, cond: str, timing: str, n: int | None) -> _Template:
     key = (scope, cond, timing, nkey)
     t = _TEMPLATES.get(key)
     if t is None:
-        with gc_paused():
-            t = _TEMPLATES[key] = _Template(scope, cond, timing,
-                                            n if nkey != -1 else _SymbolicBound(0))
+        # a few keys are quicker built than the whole table read (about 10 ms)
+        table = _table() if len(_TEMPLATES) >= _BUILT_BEFORE_TABLE else None
+        data = table.get(key) if table is not None else None
+        t = _TEMPLATES[key] = _Template(data if data is not None else _build_key(key))
     return t
 
 
@@ -244,7 +340,7 @@ def _unify(x: Node, y: Node, out: list) -> bool:
         out.append((0, fx, fy))
         return True
     if fx is not None or fy is not None:
-        out.append((1, fx, y) if fx is not None else (1, fy, x))
+        out.append((1, fx, _data(y)) if fx is not None else (1, fy, _data(x)))
         return True
     if x.op != y.op or x.name != y.name or len(x.args) != len(y.args):
         return False
@@ -262,22 +358,23 @@ def _unify(x: Node, y: Node, out: list) -> bool:
     return all(_unify(a, b, out) for a, b in zip(x.args, y.args))
 
 
-def _matches(real: Node, t: Node, atoms, n) -> bool:
-    """Is the requirement's node ``real`` equal to template node ``t`` instantiated?"""
+def _matches(real: Node, t, atoms, n) -> bool:
+    """Is the requirement's node ``real`` equal to template node ``t`` (as
+    :func:`_data`) instantiated?"""
     if real is None:
         return False
-    f = _FIELD_OF.get(id(t))
-    if f is not None:
-        return real == atoms[f]
-    if (real.op != t.op or real.name != t.name or len(real.args) != len(t.args)
-            or real.lo != _bound(t.lo, n) or real.hi != _bound(t.hi, n)):
+    if type(t) is int:
+        return real == atoms[t]
+    op, name, lo, hi, args = t
+    if (real.op != op or real.name != name or len(real.args) != len(args)
+            or real.lo != _bound(lo, n) or real.hi != _bound(hi, n)):
         return False
-    return all(_matches(a, b, atoms, n) for a, b in zip(real.args, t.args))
+    return all(_matches(a, b, atoms, n) for a, b in zip(real.args, args))
 
 
 def _bound(b, n):
-    if type(b) is _SymbolicBound:
-        return n + b.offset
+    if type(b) is tuple:
+        return n + b[0]
     return b
 
 

@@ -319,3 +319,24 @@ def test_template_count_is_bounded():
     keys = set(I._TEMPLATES)
     assert len(keys) <= 8 * 3 * (8 + 4 * 3)
     assert {k[3] for k in keys} <= {None, 0, 1, -1}
+
+
+def test_disk_table_gives_the_built_templates(tmp_path, monkeypatch):
+    """The marshalled table of the disk cache is the templates as built, and a damaged
+    entry is rebuilt, not trusted."""
+    import marshal
+
+    from fretish import cache
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(I, "_TABLE", [])
+    table = I._table()
+    assert table is not None and len(table) == len(I.ALL_KEYS) == 432
+    for key in I.ALL_KEYS[::37]:
+        assert table[key] == I._build_key(key)
+    name = I._cache_name()
+    assert marshal.loads(cache.read_bytes("templates", name)) == tuple(
+        table[k] for k in I.ALL_KEYS)
+    cache.write_bytes("templates", name, b"\x00damaged")
+    monkeypatch.setattr(I, "_TABLE", [])
+    assert I._table() == table
