@@ -421,6 +421,7 @@ class InstantiatedFormalization(Formalization):
         self._req, self._period, self._tmpl = req, tick_period, tmpl
         self._atoms, self._texts = atoms, texts
         self._full = None
+        self._smv_values = None
 
     def _build(self) -> Formalization:
         f = self._full
@@ -442,7 +443,10 @@ class InstantiatedFormalization(Formalization):
     def smv(self, which: str) -> str:
         """FRET/SMV text of ``ft``, ``ft_inf`` or ``pt`` (pt with FTP as ``(Z FALSE)``)."""
         fmt, pick = getattr(self._tmpl, which)
-        return fmt % pick(self._values(self._texts))
+        values = self._smv_values
+        if values is None:
+            values = self._smv_values = self._values(self._texts)
+        return fmt % pick(values)
 
     def spot(self, which: str) -> str:
         """Spot text of ``ft`` or ``ft_inf``; ``ValueError`` where Spot has no form."""
