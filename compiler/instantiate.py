@@ -429,6 +429,13 @@ class InstantiatedFormalization(Formalization):
             f = self._full = formalize(self._req, self._period)
         return f
 
+    def __reduce__(self):
+        """Pickled (a plan shipped to workers) as the full build it stands for: the texts
+        the printers give on it are the template's (module docstring)."""
+        f = self._build()
+        return (Formalization, (f.key, f.ft, f.ft_inf, f.pt, f.variables, f.warnings,
+                                f.ticks, f.pt_causal))
+
     ft = property(lambda self: self._build().ft, doc="ft (IR), built on first use")
     ft_inf = property(lambda self: self._build().ft_inf,
                       doc="ft_inf (IR), built on first use")

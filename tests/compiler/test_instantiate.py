@@ -340,3 +340,18 @@ def test_disk_table_gives_the_built_templates(tmp_path, monkeypatch):
     cache.write_bytes("templates", name, b"\x00damaged")
     monkeypatch.setattr(I, "_TABLE", [])
     assert I._table() == table
+
+
+def test_pickles_as_the_full_build():
+    """A plan shipped to workers pickles its formalizations: an instantiated one arrives
+    as the full build, whose printed texts are the same."""
+    import pickle
+
+    text = "in m upon p the sw shall within 3 ticks satisfy occurs(1, q)"
+    f = I.instantiate(parse(text))
+    assert isinstance(f, I.InstantiatedFormalization)
+    g = pickle.loads(pickle.dumps(f))
+    assert type(g) is I.Formalization
+    assert _template_texts(f) == _template_texts(g) == _full_texts(formalize(parse(text)))
+    assert (g.key, g.variables, g.ticks, g.pt_causal) == (f.key, f.variables, f.ticks,
+                                                          f.pt_causal)
