@@ -11,7 +11,8 @@
   (imports, the Lark tables) from ``resource.getrusage(RUSAGE_CHILDREN)``; best and median
   of ``--repeat`` runs after one warm-up run (which writes the ``.pyc`` files and fretc's
   disk cache as a user's first run does; that first run is printed too), and the same for
-  the single requirement of ``requirements/r1.fret``.
+  the single requirement of ``requirements/r1.fret``; beside them the interpreter's own
+  start-up (``python -c pass``, same measure), the floor under every fretc command.
 
 The issue's targets (issue 9) are checked and printed as PASS/FAIL: at least 3000
 sentences/s of CPU time end to end (best run, start-up included) and under 0.3 s of CPU for
@@ -152,6 +153,10 @@ def main() -> None:
             (a, b), (c, d) = results["fretc"], results["baseline"]
             print(f"ratio baseline/fretc (CPU): {c / a:.2f}x on {args.n} sentences, "
                   f"{d / b:.2f}x on r1.fret")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    bare = [child_cpu([sys.executable, "-c", "pass"], env, ROOT) for _ in range(args.repeat)]
+    print(f"python -c pass (the interpreter's start-up, in every run above): best "
+          f"{min(bare):.3f} s CPU, median {statistics.median(bare):.3f} s")
     rate = args.n / results["fretc"][0]
     print(f"FRET (35 ms each): {1000 / 35:.0f} sentences/s; fretc end to end is "
           f"{rate / (1000 / 35):.0f}x that")

@@ -4,7 +4,6 @@ failure never stops the others."""
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -56,6 +55,7 @@ class Compiled:
         """SHA-256 of the requirement's identity and text (id, text, tick period), hex."""
         period = self.entry.tick_period
         blob = f"{self.id}\n{self.text}\n{period if period is not None else ''}"
+        import hashlib  # lazy: loading OpenSSL is start-up time --emit ltl does not need
         return hashlib.sha256(blob.encode("utf-8")).hexdigest()
 
     def smv(self, which: str) -> str:

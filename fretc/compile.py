@@ -11,9 +11,7 @@ numpy, mcap, Jinja2 or Spot.
 from __future__ import annotations
 
 import gc
-import json
 import sys
-from pathlib import Path
 
 import click
 
@@ -30,7 +28,7 @@ def _load(paths) -> list:
     from fretish.files import load_requirements
 
     try:
-        entries = load_requirements([Path(p) for p in paths])
+        entries = load_requirements(list(paths))
     except OSError as exc:
         click.echo(_shown(f"error: {exc}"), err=True)
         sys.exit(2)
@@ -95,6 +93,7 @@ def json_indent2(obj) -> str:
     strings, ints, booleans and None (anything else: ``json.dumps`` itself). The standard
     library's C encoder only serves ``indent=None``; its Python one is a tenth of the time
     of ``--emit ltl --json`` on a thousand requirements."""
+    import json.encoder  # lazy: only --json needs it (start-up, issue 9)
     enc = json.encoder.encode_basestring_ascii
     parts: list = []
     add = parts.append
@@ -172,6 +171,7 @@ def _emit_ltl(compiled, as_json: bool) -> None:
 def _check_output(outputs: dict, output: str | None, suffix: str) -> None:
     """``-o`` is a file for one output and a directory for several: a path ending in
     ``suffix`` for several outputs is an error (it would become a directory named so)."""
+    from pathlib import Path  # lazy: --emit ltl does not need it (start-up, issue 9)
     if output is not None and len(outputs) > 1 and Path(output).suffix == suffix:
         click.echo(f"error: -o {output}: {len(outputs)} modules are written (one per input "
                    f"file: {', '.join(sorted(outputs))}); give a directory (no {suffix} "
@@ -186,6 +186,7 @@ def _write_outputs(outputs: dict, output: str | None, suffix: str) -> None:
         for text in outputs.values():
             click.echo(text, nl=False)
         return
+    from pathlib import Path  # lazy: --emit ltl does not need it (start-up, issue 9)
     out = Path(output)
     if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
         # one module: -o is the file

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import importlib.util
 import os
-from pathlib import Path
 from typing import Any, Sequence
 
 import click
@@ -76,7 +75,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
     from monitors.audit import AuditConfig  # lazy: numpy and the engine only when run
 
     if not requirements:
-        if not Path("requirements").is_dir():
+        if not os.path.isdir("requirements"):
             raise click.UsageError("no --requirements given and no ./requirements folder")
         requirements = ("requirements",)
     return AuditConfig(requirements=tuple(requirements),

@@ -14,29 +14,39 @@ Location: ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
 
 from __future__ import annotations
 
-import hashlib
 import os
-from pathlib import Path
 
-__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path"]
+__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path", "read_file",
+           "write_file"]
 
 
-def cache_dir() -> Path | None:
-    """The cache folder (not created here), or None when the disk cache is off."""
+def _root() -> str | None:
+    """:func:`cache_dir` as a string (no pathlib: this runs at every start-up, issue 9)."""
     env = os.environ.get("FRETC_CACHE_DIR")
     if env is not None:
-        return Path(env) if env.strip() else None
+        return env if env.strip() else None
     xdg = os.environ.get("XDG_CACHE_HOME")
     if xdg:
-        return Path(xdg) / "fretc"
-    try:
-        return Path.home() / ".cache" / "fretc"
-    except (RuntimeError, KeyError):  # no home directory
+        return os.path.join(xdg, "fretc")
+    home = os.path.expanduser("~")
+    if home.startswith("~"):  # no home directory
         return None
+    return os.path.join(home, ".cache", "fretc")
+
+
+def cache_dir():
+    """The cache folder (a :class:`pathlib.Path`, not created here), or None when the disk
+    cache is off."""
+    root = _root()
+    if root is None:
+        return None
+    from pathlib import Path
+    return Path(root)
 
 
 def key_of(*parts: str) -> str:
     """A hex SHA-256 of ``parts`` (joined unambiguously): a cache key."""
+    import hashlib  # lazy: loading OpenSSL is a few ms of start-up
     h = hashlib.sha256()
     for p in parts:
         b = p.encode("utf-8")
@@ -45,35 +55,56 @@ def key_of(*parts: str) -> str:
     return h.hexdigest()
 
 
-def entry_path(kind: str, name: str) -> Path | None:
-    """Where entry ``name`` of sub-folder ``kind`` lives (None: cache off)."""
-    root = cache_dir()
-    return None if root is None else root / kind / name
+def _entry(kind: str, name: str) -> str | None:
+    root = _root()
+    return None if root is None else os.path.join(root, kind, name)
+
+
+def entry_path(kind: str, name: str):
+    """Where entry ``name`` of sub-folder ``kind`` lives (a :class:`pathlib.Path`; None:
+    cache off)."""
+    path = _entry(kind, name)
+    if path is None:
+        return None
+    from pathlib import Path
+    return Path(path)
 
 
 def read_bytes(kind: str, name: str) -> bytes | None:
     """The entry's bytes, or None when missing or unreadable."""
-    path = entry_path(kind, name)
-    if path is None:
-        return None
-    try:
-        return path.read_bytes()
-    except OSError:
-        return None
+    path = _entry(kind, name)
+    return None if path is None else read_file(path)
 
 
 def write_bytes(kind: str, name: str, data: bytes) -> bool:
     """Store an entry atomically (temporary file + rename). Returns False, without raising,
     when the cache folder cannot be created or written."""
-    path = entry_path(kind, name)
-    if path is None:
-        return False
+    path = _entry(kind, name)
+    return path is not None and write_file(path, data)
+
+
+def read_file(path: str) -> bytes | None:
+    """The bytes of the cache file ``path`` (any folder), or None when missing or
+    unreadable."""
+    try:
+        with open(path, "rb") as f:
+            return f.read()
+    except OSError:
+        return None
+
+
+def write_file(path: str, data: bytes) -> bool:
+    """Write the cache file ``path`` (any folder, created if missing) atomically: a
+    temporary file in the same folder renamed into place. Returns False, without raising,
+    when that fails (a read-only folder, a full disk)."""
     tmp = None
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        folder = os.path.dirname(path)
+        os.makedirs(folder, exist_ok=True)
         import tempfile  # lazy: a run that only reads the cache does not need it
 
-        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp",
+                                   dir=folder)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
         os.replace(tmp, path)

@@ -47,13 +47,11 @@ sentence itself.
 
 from __future__ import annotations
 
-import json
 import os
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
-from pathlib import Path
 
 from .ast import Requirement
 from .errors import FretishError, FretishFileError, FretishSyntaxError
@@ -140,16 +138,17 @@ class _Pending:
         self.last_attr: str | None = None
 
 
-def _read_text(path: Path) -> str:
+def _read_text(path: str) -> str:
     try:
-        return path.read_text(encoding="utf-8-sig")
+        with open(path, encoding="utf-8-sig") as f:
+            return f.read()
     except UnicodeDecodeError as e:
         raise FretishFileError(f"not UTF-8 text ({e.reason})", source=str(path)) from None
     except OSError as e:
         raise FretishFileError(f"cannot read: {e.strerror}", source=str(path)) from None
 
 
-def _load_fret(path: Path) -> list[RequirementEntry]:
+def _load_fret(path: str) -> list[RequirementEntry]:
     return _FretReader(path).read()
 
 
@@ -157,7 +156,7 @@ class _FretReader:
     """One pass over the lines of a .fret file (the format of this module's docstring):
     requirements, their attributes and the file's directives; then the entries."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: str):
         self.source = str(path)
         self.lines = _read_text(path).split("\n")
         self.pending: list[_Pending] = []
@@ -310,9 +309,10 @@ def _line_col(raw: str, offset: int) -> tuple[int, int]:
     return line, offset - (raw.rfind("\n", 0, offset) + 1) + 1
 
 
-def _load_json(path: Path) -> list[RequirementEntry]:
+def _load_json(path: str) -> list[RequirementEntry]:
     source = str(path)
     raw = _read_text(path)
+    import json  # lazy: only FRET's JSON exports need it (start-up, issue 9)
     try:
         data = json.loads(raw)
     except json.JSONDecodeError as e:
@@ -370,20 +370,42 @@ def _load_json(path: Path) -> list[RequirementEntry]:
 
 
 # --------------------------------------------------------------------------- entry point
-def _files_of(paths) -> list[Path]:
+def _path_text(p) -> str:
+    """``str(pathlib.Path(p))`` without importing pathlib (start-up time, issue 9): on POSIX
+    the path with empty and ``.`` parts dropped (one or three-plus leading slashes are
+    ``/``, exactly two stay ``//``), ``.`` when nothing is left; elsewhere pathlib itself."""
+    p = os.fspath(p)
+    if os.name != "posix" or not isinstance(p, str):
+        from pathlib import Path
+        return str(Path(p))
+    root = "//" if p.startswith("//") and not p.startswith("///") else \
+        "/" if p.startswith("/") else ""
+    parts = [x for x in p.split("/") if x and x != "."]
+    return root + "/".join(parts) if root or parts else "."
+
+
+def _suffix(path: str) -> str:
+    """``pathlib.PurePath(path).suffix``: the file name's last ``.ext`` (none for a name
+    starting with its only dot or ending with a dot)."""
+    name = path.rsplit("/", 1)[-1] if os.name == "posix" else os.path.basename(path)
+    i = name.rfind(".")
+    return name[i:] if 0 < i < len(name) - 1 else ""
+
+
+def _files_of(paths) -> list[str]:
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
-    out: list[Path] = []
+    out: list[str] = []
     for p in paths:
-        path = Path(p)
-        if path.is_dir():
-            out.extend(sorted((f for f in path.iterdir()
-                               if f.is_file() and f.suffix in (".fret", ".json")),
-                              key=lambda f: f.name))
-        elif path.is_file():
+        path = _path_text(p)
+        if os.path.isdir(path):
+            names = sorted(os.listdir(path))
+            out.extend(f for f in (_path_text(os.path.join(path, n)) for n in names)
+                       if os.path.isfile(f) and _suffix(f) in (".fret", ".json"))
+        elif os.path.isfile(path):
             out.append(path)
         else:
-            raise FretishFileError("no such file or folder", source=str(path), line=1,
+            raise FretishFileError("no such file or folder", source=path, line=1,
                                    column=1)
     return out
 
@@ -409,7 +431,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementE
         if key in read:  # the same file named twice (a folder and a file in it)
             continue
         read.add(key)
-        got = _load_json(f) if f.suffix.lower() == ".json" else _load_fret(f)
+        got = _load_json(f) if _suffix(f).lower() == ".json" else _load_fret(f)
         for e in got:
             # ids are unique across all the files of a run: verdicts, monitors and reports
             # are keyed by id (issue 15 item 13); duplicates inside one file are caught by
@@ -420,7 +442,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementE
                     f"requirement id '{e.id}' is also defined at {other.source}:{other.line}; "
                     "ids must be unique across the requirement files of a run (rename one)",
                     source=e.source, line=e.line,
-                    column=e.column if f.suffix.lower() == ".json" else 1)
+                    column=e.column if _suffix(f).lower() == ".json" else 1)
             first.setdefault(e.id, e)
         entries.extend(got)
     return entries

@@ -56,12 +56,21 @@ def _expressions(req: A.Requirement) -> Iterator[A.Expr]:
         yield req.response
 
 
+#: A sentence this short cannot exceed the expression limits, so its expressions are not
+#: walked: a number literal beyond :data:`MAX_NUMBER_CHARS` is longer; every node takes at
+#: least one character of the text (a name, a number, an operator, ``!``, ``-``), and a
+#: call, which counts :data:`CALL_DEPTH` levels, at least three (``f()``), so the depth is
+#: at most ``1 + CALL_DEPTH / 3`` per character and the node count at most one per character.
+SHORT_TEXT = min(MAX_NUMBER_CHARS, MAX_EXPR_NODES, (MAX_EXPR_DEPTH - 1) * 3 // CALL_DEPTH)
+
+
 def check_requirement(req: A.Requirement) -> None:
     """Check a parsed requirement against the limits (iteratively: any depth is safe).
     Raises :class:`LimitError` at the first node beyond a limit."""
-    count = [0]
-    for e in _expressions(req):
-        _check(e, count)
+    if len(req.text) > SHORT_TEXT:
+        count = [0]
+        for e in _expressions(req):
+            _check(e, count)
     d = req.timing.duration
     if d is not None and len(d.amount) > MAX_NUMBER_CHARS:
         raise _long_number(d.span, d.amount)

@@ -40,12 +40,12 @@ Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, rest
 from __future__ import annotations
 
 import io
+import os
 import re
 import sys
 import threading
 from dataclasses import replace
 from fractions import Fraction
-from pathlib import Path
 
 from . import ast as A
 from . import cache
@@ -55,7 +55,7 @@ from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 __all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS",
            "RESERVED_LETTERS"]
 
-_GRAMMAR_FILE = Path(__file__).with_name("grammar.lark")
+_GRAMMAR_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "grammar.lark")
 
 _BINOPS = {"AMP": "&", "BAR": "|", "XOR": "xor", "IMPLIES": "->", "IFF": "<->",
            "EQ": "=", "NE": "!=", "LT": "<", "LE": "<=", "GT": ">", "GE": ">=",
@@ -493,13 +493,20 @@ def _lark_version() -> str:
     import importlib.util
     try:
         spec = importlib.util.find_spec("lark")
-        text = Path(spec.origin).read_text(encoding="utf-8")
+        with open(spec.origin, encoding="utf-8") as f:
+            text = f.read()
         m = re.search(r"^__version__\s*(?::\s*str\s*)?=\s*[\"']([^\"']+)[\"']", text, re.M)
         if m:
             return m.group(1)
     except (AttributeError, OSError, TypeError, ValueError, ImportError):
         pass
     return _import_lark().__version__
+
+
+def _read_grammar() -> str:
+    """The text of ``grammar.lark`` (the only source of the parser tables)."""
+    with open(_GRAMMAR_FILE, encoding="utf-8") as f:
+        return f.read()
 
 
 def _cache_key(grammar: str) -> str:
@@ -513,7 +520,7 @@ def build_lark(**options):
     to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts). Builds the LALR
     tables from the grammar (about a second); :func:`cached_lark` loads them instead."""
     lark = _import_lark()
-    return lark.Lark(_GRAMMAR_FILE.read_text(encoding="utf-8"), transformer=_Builder(),
+    return lark.Lark(_read_grammar(), transformer=_Builder(),
                      **_LARK_OPTIONS, **options)
 
 
@@ -530,7 +537,7 @@ def cached_lark():
     an entry that cannot be read or loaded is ignored and rebuilt, and when the cache
     folder cannot be written the tables are built in memory as :func:`build_lark` does."""
     lark = _import_lark()
-    grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
+    grammar = _read_grammar()
     name = f"grammar-{_cache_key(grammar)[:40]}.pickle"
     data = cache.read_bytes("lark", name)
     if data is not None:
@@ -586,6 +593,7 @@ def fast_tables(lark) -> dict | None:
 
     conf = lark.lexer_conf
     terminals = list(conf.terminals)
+    terminal_names = {t.name for t in terminals} | {"$END"}
     terminals.sort(key=lambda x: (-x.priority, -x.pattern.max_width, -len(x.pattern.value),
                                   x.name))
     kept, callbacks = _create_unless(terminals, conf.g_regex_flags, conf.re_module,
@@ -610,10 +618,28 @@ def fast_tables(lark) -> dict | None:
                       str(rule.alias or opts.template_source or rule.origin.name),
                       bool(opts.expand1 and not rule.alias),
                       tuple(include) if filtered else None))
-    states = {int(s): {str(t): (True, int(arg)) if act is Shift else (False, index[arg])
-                  for t, (act, arg) in acts.items()}
-              for s, acts in table.states.items()}
+    n_states = max(table.states) + 1
+    actions: list = [{} for _ in range(n_states)]
+    gotos: list = [{} for _ in range(n_states)]
+    for s, acts in table.states.items():
+        for t, (act, arg) in acts.items():
+            if act is not Shift:
+                actions[s][str(t)] = ~index[arg]
+            elif t in terminal_names:
+                actions[s][str(t)] = int(arg)
+            else:
+                gotos[s][str(t)] = int(arg)
     firsts = [_first_chars(t.pattern.to_regexp(), conf.g_regex_flags) for t in terminals]
+    # the terminal of each reserved word as written in any of the usual letter cases, by
+    # the exact lexer (all terminals in Lark's order), for _FastParser._word_type
+    exact = re.compile("|".join(f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in terminals),
+                       conf.g_regex_flags).match
+    words = {}
+    for w in sorted(RESERVED_WORDS | RESERVED_LETTERS | {"what"}):
+        for v in (w, w.lower(), w.upper(), w.capitalize()):
+            m = exact(v)
+            if m is not None and m.end() == len(v):
+                words[v] = str(m.lastgroup)
     subsets: dict = {}
     dispatch = {}
     for ch in _ASCII:
@@ -624,7 +650,8 @@ def fast_tables(lark) -> dict | None:
             "flags": int(conf.g_regex_flags), "ignore": sorted(str(t) for t in conf.ignore),
             "newline": sorted(str(t.name) for t in terminals
                               if _regexp_has_newline(t.pattern.to_regexp())),
-            "states": states, "rules": rules,
+            "words": words, "firsts": [None if f is None else "".join(sorted(f)) for f in firsts],
+            "actions": actions, "gotos": gotos, "rules": rules,
             "start_states": {str(k): int(v) for k, v in table.start_states.items()},
             "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
 
@@ -721,13 +748,16 @@ class _FastParser:
         self.parts: dict = {}                     # terminal indices -> compiled match
         self.newline = frozenset(tables["newline"])
         self.ignore = frozenset(tables["ignore"])
-        self.states = tables["states"]
+        self.actions = tables["actions"]
+        self.gotos = tables["gotos"]
         self.start_states = tables["start_states"]
         self.end_states = tables["end_states"]
         builder = _Builder()
         self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include),
                        self._passed_up(size, expand1, include))
                       for origin, size, name, expand1, include in tables["rules"]]
+        self.known_words = tables["words"]
+        self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
 
     @staticmethod
     def _passed_up(size, expand1, include) -> int:
@@ -810,92 +840,246 @@ class _FastParser:
                 return inner(out)
         return f
 
-    def parse(self, text: str, start: str):
-        """The builder's result for ``text`` from start symbol ``start``; raises
-        :class:`_Slow` (or the builder's exception) where Lark must decide."""
+    # ---- the lexer: one regexp over the whole text
+    _WORD = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
+    _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
+    _MAX_WORDS = 100_000
+
+    def _build_scanner(self, firsts: list) -> None:
+        """The whole-text lexer, when the grammar's terminals allow it (else the lexer of
+        :meth:`_tokens_by_char` is used): one regexp ``(ignored)* (word | T1 | T2 ...)``
+        where ``word`` is an identifier-shaped run of characters (FRETish's keywords,
+        reserved letters and names all are: each keyword terminal ends where the word
+        ends, and NAME's regexp is the same run) and ``T1, T2 ...`` are the other
+        terminals in Lark's order. A word's terminal is that of the exact lexer
+        (:meth:`_matcher`) on the word alone, kept in :attr:`words` (it never depends on
+        what follows a whole word). Used only when every terminal starts either with
+        letters only or with no letter, and the ignored terminals start with characters
+        no other terminal starts with."""
+        self.scan = None
+        letters = self._LETTERS
+        ignored, others = [], []
+        ignore_firsts: set = set()
+        for i, (name, rx) in enumerate(self.terminals):
+            f = firsts[i]
+            if f is None:
+                return
+            if name in self.ignore:
+                ignored.append(rx)
+                ignore_firsts |= f
+            elif not f & letters:
+                others.append(i)
+            elif not f <= letters:
+                return
+        if not ignored or any(f is None or (f & ignore_firsts)
+                              for i, f in enumerate(firsts)
+                              if self.terminals[i][0] not in self.ignore):
+            return
+        body = "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})" for i in others)
+        rx = f"(?:{'|'.join(ignored)})*(?:(?P<word>{self._WORD})|{body})"
+        self.scan = re.compile(rx, self.flags).scanner
+        self.trailing = re.compile(f"(?:{'|'.join(ignored)})*\\Z", self.flags).match
+        self.words = dict(self.known_words)
+        names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
+        # NAME tried first among the terminals that start with a letter: a word it matches
+        # whole is a NAME (else the exact lexer decides)
+        self.name_first = bool(names) and all(f is not None and not f & letters
+                                              for f in firsts[:names[0]])
+        self.name_rx = self.terminals[names[0]][1] if names else None
+        self.name_match = None
+
+    def _word_type(self, word: str) -> str:
+        """The terminal of ``word``: the exact lexer on the word alone (:class:`_Slow` when
+        no terminal matches the whole word), or NAME when NAME, the first terminal a word
+        can start, matches it whole. The reserved words' terminals come with the tables
+        (:attr:`known_words`), so a run compiles no keyword regexp."""
+        if len(self.words) >= self._MAX_WORDS:
+            self.words = dict(self.known_words)
+        if self.name_first:
+            if self.name_match is None:
+                self.name_match = re.compile(self.name_rx, self.flags).match
+            m = self.name_match(word)
+            if m is not None and m.end() == len(word):
+                self.words[word] = "NAME"
+                return "NAME"
+        sid = self.dispatch.get(word[0], len(self.subsets) - 1)
+        m = (self.matchers[sid] or self._matcher(sid))(word, 0)
+        if m is None or m.end() != len(word):
+            raise _Slow("word")
+        typ = self.words[word] = m.lastgroup
+        return typ
+
+    def _tokens(self, text: str) -> list:
+        """The tokens of ``text`` (:class:`_Tok`, ignored terminals dropped); raises
+        :class:`_Slow` where a character starts no terminal."""
+        scan = self.scan
+        if scan is None:
+            return self._tokens_by_char(text)
+        words = self.words
+        out = []
+        add = out.append
+        pos = 0
+        multiline = "\n" in text
+        match = scan(text).match      # each match starts where the previous one ended
+        while (m := match()) is not None:
+            typ = m.lastgroup
+            start, pos = m.span(m.lastindex)
+            value = text[start:pos]
+            if typ == "word":
+                typ = words.get(value) or self._word_type(value)
+            add(_Tok(typ, value, start, 1, start + 1, 1, pos + 1, pos))
+        if pos != len(text) and self.trailing(text, pos) is None:
+            raise _Slow("no terminal")
+        if multiline:
+            self._relocate(text, out)
+        return out
+
+    @staticmethod
+    def _relocate(text: str, toks: list) -> None:
+        """Set the 1-based lines and columns of ``toks`` in a text of several lines."""
+        from bisect import bisect_right
+        starts = [0] + [i + 1 for i, ch in enumerate(text) if ch == "\n"]
+        for t in toks:
+            li = bisect_right(starts, t.start_pos)
+            t.line, t.column = li, t.start_pos - starts[li - 1] + 1
+            li = bisect_right(starts, t.end_pos)
+            t.end_line, t.end_column = li, t.end_pos - starts[li - 1] + 1
+
+    def _tokens_by_char(self, text: str) -> list:
+        """The tokens of ``text`` by the exact lexer, one regexp match per token or ignored
+        run (the fallback of :meth:`_tokens`)."""
         ignore, newline = self.ignore, self.newline
         dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
-        states, rules = self.states, self.rules
-        state_stack = [self.start_states[start]]
-        value_stack = []
-        end_state = self.end_states[start]
+        out = []
         pos, n, line, line_start = 0, len(text), 1, 0
-        while True:
-            if pos < n:
-                sid = dispatch.get(text[pos], full)
-                match = matchers[sid] or self._matcher(sid)
-                m = match(text, pos)
-                if m is None:
-                    raise _Slow("no terminal")
-                typ = m.lastgroup
-                end = m.end()
-                nline, nstart = line, line_start
-                if typ in newline:
-                    value = text[pos:end]
-                    k = value.count("\n")
-                    if k:
-                        nline = line + k
-                        nstart = pos + value.rindex("\n") + 1
-                if typ in ignore:
-                    pos, line, line_start = end, nline, nstart
-                    continue
-                tok = _Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
-                           end - nstart + 1, end)
-                pos, line, line_start = end, nline, nstart
-                is_end = False
-            else:
-                typ, tok, is_end = "$END", None, True
+        while pos < n:
+            sid = dispatch.get(text[pos], full)
+            match = matchers[sid] or self._matcher(sid)
+            m = match(text, pos)
+            if m is None:
+                raise _Slow("no terminal")
+            typ = m.lastgroup
+            end = m.end()
+            nline, nstart = line, line_start
+            if typ in newline:
+                value = text[pos:end]
+                k = value.count("\n")
+                if k:
+                    nline = line + k
+                    nstart = pos + value.rindex("\n") + 1
+            if typ not in ignore:
+                out.append(_Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
+                                end - nstart + 1, end))
+            pos, line, line_start = end, nline, nstart
+        return out
+
+    def parse(self, text: str, start: str):
+        """The builder's result for ``text`` from start symbol ``start``; raises
+        :class:`_Slow` (or the builder's exception) where Lark must decide.
+
+        The table is :attr:`actions` (per state: terminal -> the next state when >= 0,
+        else the complement ``~i`` of rule ``i`` to reduce by) and :attr:`gotos` (per
+        state: rule origin -> next state)."""
+        toks = self._tokens(text)
+        actions, gotos, rules = self.actions, self.gotos, self.rules
+        state = self.start_states[start]
+        state_stack = [state]
+        value_stack = []
+        for tok in toks:
+            typ = tok.type
             while True:
-                action = states[state_stack[-1]].get(typ)
+                action = actions[state].get(typ)
                 if action is None:
                     raise _Slow(typ)
-                if action[0]:
-                    if is_end:
-                        raise _Slow(typ)
-                    state_stack.append(action[1])
+                if action >= 0:
+                    state = action
+                    state_stack.append(state)
                     value_stack.append(tok)
                     break
-                origin, size, callback, up = rules[action[1]]
+                origin, size, callback, up = rules[~action]
                 if up:
                     value = value_stack[up]
-                    del state_stack[-size:]
                     del value_stack[-size:]
-                    goto = states[state_stack[-1]][origin][1]
-                    state_stack.append(goto)
-                    value_stack.append(value)
-                    if is_end and goto == end_state:
-                        return value
-                    continue
-                if size:
-                    children = value_stack[-size:]
-                    del state_stack[-size:]
+                elif size:
+                    value = callback(value_stack[-size:])
                     del value_stack[-size:]
                 else:
-                    children = []
-                value = callback(children)
-                goto = states[state_stack[-1]][origin][1]
-                state_stack.append(goto)
+                    value = callback([])
+                if size:
+                    del state_stack[-size:]
+                state = gotos[state_stack[-1]][origin]
+                state_stack.append(state)
                 value_stack.append(value)
-                if is_end and goto == end_state:
-                    return value
+        end_state = self.end_states[start]
+        while True:
+            action = actions[state].get("$END")
+            if action is None or action >= 0:
+                raise _Slow("$END")
+            origin, size, callback, up = rules[~action]
+            if up:
+                value = value_stack[up]
+                del value_stack[-size:]
+            elif size:
+                value = callback(value_stack[-size:])
+                del value_stack[-size:]
+            else:
+                value = callback([])
+            if size:
+                del state_stack[-size:]
+            state = gotos[state_stack[-1]][origin]
+            if state == end_state:
+                return value
+            state_stack.append(state)
+            value_stack.append(value)
+
+
+#: The format of :func:`fast_tables`'s data (part of its cache entry's name).
+_FAST_FORMAT = "v3"
+
+
+#: Where the fast path's tables are kept first: beside the package, as Python keeps its
+#: ``.pyc`` files (so emptying fretc's cache folder, as a "cold" run does, does not mean
+#: building the LALR tables again, about a second). None: only fretc's cache folder.
+_PACKAGE_CACHE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
 
 
 def _load_fast():
     """The :class:`_FastParser` from its cache entry (built from Lark's tables, and stored,
-    when missing), or False when it cannot be used."""
-    import marshal  # plain data only; the key names the Python version (marshal's format)
-    grammar = _GRAMMAR_FILE.read_text(encoding="utf-8")
-    name = f"grammar-{_cache_key(grammar)[:40]}.fast.marshal"
-    data = cache.read_bytes("lark", name)
-    if data is not None:
-        try:
-            return _FastParser(marshal.loads(data))
-        except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
-            pass
+    when missing), or False when it cannot be used.
+
+    The entry (plain data, :func:`fast_tables`, marshalled) holds the grammar text, Lark's
+    and Python's versions and the data format it was built from (its name is a CRC of
+    them), and is used only when they are this run's, so it is never stale.
+    It is read from :data:`_PACKAGE_CACHE`, else from fretc's cache folder
+    (:mod:`fretish.cache`, sub-folder ``lark``); a new entry is written beside the package
+    unless that folder cannot be written or Python writes no bytecode
+    (``PYTHONDONTWRITEBYTECODE``), and then to fretc's cache folder. An entry that cannot be
+    loaded is ignored and written again."""
+    import marshal  # plain data only; the identity names the Python version (its format)
+    import zlib
+    grammar = _read_grammar()
+    # Everything the tables depend on, stored in the entry and compared on loading (exact,
+    # and no SHA-256 at start-up: loading OpenSSL costs more than reading the entry)
+    identity = "\n".join((_FAST_FORMAT, _lark_version(), "%d.%d" % sys.version_info[:2],
+                          repr(sorted(_LARK_OPTIONS.items())), grammar))
+    name = f"grammar-{zlib.crc32(identity.encode('utf-8')):08x}-{_FAST_FORMAT}.fast.marshal"
+    beside = None if _PACKAGE_CACHE is None else os.path.join(_PACKAGE_CACHE, name)
+    for data in (None if beside is None else cache.read_file(beside),
+                 cache.read_bytes("lark", name)):
+        if data is not None:
+            try:
+                tables = marshal.loads(data)
+                if tables["identity"] == identity:
+                    return _FastParser(tables)
+            except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
+                pass
     tables = fast_tables(_get_parser())
     if tables is None:
         return False
-    cache.write_bytes("lark", name, marshal.dumps(tables))
+    tables["identity"] = identity
+    data = marshal.dumps(tables)
+    if beside is None or sys.dont_write_bytecode or not cache.write_file(beside, data):
+        cache.write_bytes("lark", name, data)
     return _FastParser(tables)
 
 

@@ -170,7 +170,8 @@ def test_lark_cache_key_follows_the_grammar(tmp_path, monkeypatch):
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
     P.cached_lark()
     edited = tmp_path / "grammar.lark"
-    edited.write_text(P._GRAMMAR_FILE.read_text(encoding="utf-8") + "\n// edited\n",
+    edited.write_text(type(tmp_path)(P._GRAMMAR_FILE).read_text(encoding="utf-8")
+                      + "\n// edited\n",
                       encoding="utf-8")
     monkeypatch.setattr(P, "_GRAMMAR_FILE", edited)
     P.cached_lark()

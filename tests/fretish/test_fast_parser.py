@@ -150,9 +150,10 @@ def test_fast_path_equals_lark_on_edited_sentences(text, at, word):
 
 
 def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
-    """The fast path's tables live in fretc's cache beside Lark's; a damaged entry is
-    rebuilt, never trusted."""
+    """The fast path's tables live in fretc's cache beside Lark's when the package folder
+    is not used; a damaged entry is rebuilt, never trusted."""
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(P, "_PACKAGE_CACHE", None)
     monkeypatch.setattr(P, "_fast", None)
     monkeypatch.setattr(P, "_lark", None)
     text = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
@@ -162,3 +163,111 @@ def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
     monkeypatch.setattr(P, "_fast", None)
     assert P._get_fast() and _public(text) == ref
     assert entry.stat().st_size > 200  # rewritten whole
+    # an entry built from other inputs (another grammar, Lark or Python) under the same
+    # name is not used: its recorded identity differs
+    import marshal
+    tables = marshal.loads(entry.read_bytes())
+    tables["identity"] = tables["identity"] + "\n// another grammar"
+    tables["start_states"] = {}
+    entry.write_bytes(marshal.dumps(tables))
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert marshal.loads(entry.read_bytes())["start_states"]  # rebuilt
+
+
+def test_fast_tables_beside_the_package(tmp_path, monkeypatch):
+    """The tables are kept beside the package like .pyc files: a run with an empty fretc
+    cache folder ("cold") loads them from there and does not build Lark's tables; a damaged
+    entry there is rebuilt; a package folder that cannot be written, or
+    PYTHONDONTWRITEBYTECODE, sends the entry to fretc's cache folder."""
+    text = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
+    ref = _public(text)
+    pkg = tmp_path / "pkg" / "__pycache__"
+    monkeypatch.setattr(P, "_PACKAGE_CACHE", str(pkg))
+    monkeypatch.setattr(P.sys, "dont_write_bytecode", False)
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / "user1"))
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    (entry,) = pkg.glob("*.fast.marshal")
+    assert not (tmp_path / "user1" / "lark").exists() or \
+        not list((tmp_path / "user1" / "lark").glob("*.fast.marshal"))
+
+    def no_lark():
+        raise AssertionError("Lark's tables built or loaded on a cold run")
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / "user2"))  # cold
+    monkeypatch.setattr(P, "_fast", None)
+    with monkeypatch.context() as m:
+        m.setattr(P, "_get_parser", no_lark)
+        assert P._get_fast() and _public(text) == ref
+
+    entry.write_bytes(entry.read_bytes()[:100])  # damaged: rebuilt in place
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert entry.stat().st_size > 100
+
+    for blocked in ("file", "dont_write_bytecode"):
+        monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path / f"user_{blocked}"))
+        monkeypatch.setattr(P, "_fast", None)
+        if blocked == "file":
+            blocker = tmp_path / "blocker"
+            blocker.write_text("x")
+            monkeypatch.setattr(P, "_PACKAGE_CACHE", str(blocker / "__pycache__"))
+        else:
+            monkeypatch.setattr(P, "_PACKAGE_CACHE", str(tmp_path / "pkg2"))
+            monkeypatch.setattr(P.sys, "dont_write_bytecode", True)
+        assert P._get_fast() and _public(text) == ref
+        assert list((tmp_path / f"user_{blocked}" / "lark").glob("*.fast.marshal"))
+    assert not (tmp_path / "pkg2").exists()
+
+
+def _exact_type(word):
+    """The terminal of ``word`` by the exact lexer (all terminals in Lark's order, split by
+    first character), None when none matches it whole."""
+    fast = P._get_fast()
+    sid = fast.dispatch.get(word[0], len(fast.subsets) - 1)
+    try:
+        m = (fast.matchers[sid] or fast._matcher(sid))(word, 0)
+    except P._Slow:
+        return None
+    return m.lastgroup if m is not None and m.end() == len(word) else None
+
+
+_RESERVED = sorted(RESERVED_WORDS | set("XFGUVYZHOST") | {"what"})
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(
+    st.tuples(st.sampled_from(_RESERVED), st.lists(st.booleans(), min_size=12, max_size=12))
+    .map(lambda t: "".join(c.upper() if up else c.lower() for c, up in zip(t[0], t[1]))),
+    st.from_regex(r"[A-Za-z][A-Za-z0-9_%.]{0,10}", fullmatch=True)))
+def test_word_terminal_equals_the_exact_lexers(word):
+    """The whole-text lexer's word classification (known reserved words, NAME tried first,
+    then the exact lexer) gives the exact lexer's terminal for any letter case."""
+    fast = P._get_fast()
+    try:
+        got = fast.words.get(word) or fast._word_type(word)
+    except P._Slow:
+        got = None
+    assert got == _exact_type(word), word
+
+
+_DEEP = ["!", "-", "f(", "g(1, ", "(", "if p then ", "a & ", "x ^ ", "~"]
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.sampled_from(_DEEP), max_size=60), st.sampled_from(["p", "1", "9" * 99]))
+def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
+    """limits.check_requirement skips the walk for a text of at most SHORT_TEXT characters:
+    the walk finds nothing there, even for the deepest expressions that fit."""
+    from fretish import limits
+    expr = "".join(prefixes) + leaf
+    expr += ")" * (expr.count("(") - expr.count(")"))
+    text = f"the sw shall satisfy {expr}"
+    if len(text) > limits.SHORT_TEXT:
+        return
+    try:
+        req = P._run_lark("start", text, "<t>", 1, 1)
+    except FretishError:
+        return
+    for e in limits._expressions(req):
+        limits._check(e, [0])  # raises LimitError beyond a limit

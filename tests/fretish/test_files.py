@@ -283,3 +283,20 @@ def test_fret_positions_property(tmp_path_factory, reqs):
             assert err.text_line == lines[err.line - 1]
             assert err.line == 2 * k + 2
             assert 1 <= err.column <= len(lines[err.line - 1]) + 1
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.sampled_from(["", ".", "..", "a", "b.fret", ".json", "x.", "r1.JSON",
+                                 "a.b.c", " "]), min_size=1, max_size=6),
+       st.sampled_from(["", "/", "//", "///"]), st.sampled_from(["", "/", "//"]))
+def test_path_text_and_suffix_are_pathlibs(parts, lead, trail):
+    """files.py names files without importing pathlib (start-up): the same text as
+    ``str(Path(p))`` and the same ``suffix``."""
+    from pathlib import Path
+
+    from fretish.files import _path_text, _suffix
+    p = lead + "/".join(parts) + trail
+    if not p:
+        return
+    assert _path_text(p) == str(Path(p))
+    assert _suffix(_path_text(p)) == Path(p).suffix

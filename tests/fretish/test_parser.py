@@ -583,3 +583,77 @@ def test_round_trip_in_sentences(e):
     assert r.condition.expr == r.timing.stop == r.response == e
     s = r.response_span
     assert r.text[s.start:s.end] == f"satisfy {text}"
+
+
+def test_ast_nodes_init_takes_the_fields_with_their_defaults():
+    """fretish.ast writes each node's ``__init__`` out (``init=False``, speed): it must take
+    the dataclass fields in order with their defaults, set every field and keep the node
+    frozen, as the generated one would."""
+    import dataclasses
+    import inspect
+
+    nodes = [c for c in vars(A).values() if dataclasses.is_dataclass(c) and isinstance(c, type)]
+    assert len(nodes) >= 13
+    for cls in nodes:
+        fields = dataclasses.fields(cls)
+        params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+        assert [p.name for p in params] == [f.name for f in fields], cls
+        for p, f in zip(params, fields):
+            want = f.default if f.default is not dataclasses.MISSING else inspect.Parameter.empty
+            assert p.default is want or p.default == want, (cls, f.name)
+        args = {f.name: object() for f in fields}
+        node = cls(**args)
+        assert all(getattr(node, k) is v for k, v in args.items()), cls
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(node, fields[0].name, 1)
+        assert dataclasses.replace(node) == node
+
+
+def test_ast_nodes_behave_as_generated_frozen_dataclasses():
+    """Every node of parsed sentences against a ``@dataclass(frozen=True)`` built from the
+    same fields: the same repr, hash and equality."""
+    import dataclasses
+
+    refs = {}
+
+    def ref(node):
+        cls = type(node)
+        if cls not in refs:
+            spec = []
+            for f in dataclasses.fields(cls):
+                kw = dict(compare=f.compare, repr=f.repr)
+                if f.default is not dataclasses.MISSING:
+                    kw["default"] = f.default
+                spec.append((f.name, f.type, dataclasses.field(**kw)))
+            refs[cls] = dataclasses.make_dataclass(cls.__name__, spec, frozen=True)
+        return refs[cls](**{f.name: getattr(node, f.name) for f in dataclasses.fields(cls)})
+
+    def nodes(x):
+        if dataclasses.is_dataclass(x):
+            yield x
+            for f in dataclasses.fields(x):
+                yield from nodes(getattr(x, f.name))
+        elif isinstance(x, tuple) and not isinstance(x, A.Span):
+            for y in x:
+                yield from nodes(y)
+
+    texts = ["in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2",
+             "when not in m whenever !q is false the sw shall until s satisfy f(a, 2.5) = b",
+             "only after c, the sw shall with probability >= 0.5 always satisfy true",
+             "the sw shall at the next timepoint satisfy at the previous occurrence of p, q",
+             '"free form"', "upon a, or when b the sw shall for 2 seconds satisfy -x ^ 2"]
+    parsed = [parse(t) for t in texts] + [parse(t + " ") for t in texts]
+    seen = set()
+    for a in parsed:
+        for n in nodes(a):
+            r = ref(n)
+            assert repr(n) == repr(r)
+            assert hash(n) == hash(r)
+            seen.add(type(n).__name__)
+    for a in parsed:
+        for b in parsed:
+            assert (a == b) == (ref(a) == ref(b))
+            assert (a.response == b.response) == (ref(a).response == ref(b).response) \
+                or a.response is None or b.response is None
+    assert A.Var("x") != ref(A.Var("x"))  # another class: not equal (NotImplemented)
+    assert len(seen) >= 12
