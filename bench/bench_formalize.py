@@ -46,8 +46,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from compiler.printers import to_smv  # noqa: E402
-from compiler.semantics import formalize  # noqa: E402
+from compiler.instantiate import formula_text, instantiate  # noqa: E402
 from fretish import parse  # noqa: E402
 
 SCOPES = ["", "in m", "when not in m", "only in m", "after m", "before m", "only after m",
@@ -106,8 +105,8 @@ def in_process(texts, repeat: int) -> list:
         gc.disable()
         t0 = time.process_time()
         for text in texts:
-            f = formalize(parse(text))
-            to_smv(f.ft), to_smv(f.ft_inf), to_smv(f.pt, ftp="(Z FALSE)")
+            f = instantiate(parse(text))  # as fretc's compile path (compiler.build)
+            formula_text(f, "ft"), formula_text(f, "ft_inf"), formula_text(f, "pt")
         runs.append(time.process_time() - t0)
         gc.enable()
     return runs

@@ -9,9 +9,10 @@ from dataclasses import dataclass, field
 
 from fretish.errors import FretishError, render_diagnostic
 
+from .instantiate import formula_text, instantiate
 from .ir import gc_paused
-from .printers import mangle, to_smv, to_spot
-from .semantics import Formalization, SemanticsError, formalize
+from .printers import mangle
+from .semantics import Formalization, SemanticsError
 
 PT_FTP = "(Z FALSE)"
 
@@ -61,15 +62,15 @@ class Compiled:
         """FRET/SMV text of ``ft``, ``ft_inf`` or ``pt``."""
         key = ("smv", which)
         if key not in self._cache:
-            node = getattr(self.formalization, which)
-            self._cache[key] = to_smv(node, ftp=PT_FTP if which == "pt" else "FTP")
+            # compiler.instantiate: from the template key's printed form where it applies
+            self._cache[key] = formula_text(self.formalization, which)
         return self._cache[key]
 
     def spot(self, which: str) -> str:
         """Spot text of ``ft`` or ``ft_inf``."""
         key = ("spot", which)
         if key not in self._cache:
-            self._cache[key] = to_spot(getattr(self.formalization, which))
+            self._cache[key] = formula_text(self.formalization, which + "_spot")
         return self._cache[key]
 
     def location(self) -> str:
@@ -113,7 +114,8 @@ def compile_entry(entry) -> Compiled:
     if req is None or req.freeform:
         return Compiled(entry)
     try:
-        return Compiled(entry, formalization=formalize(req, entry.tick_period))
+        # the printed formulas by template instantiation; the IR on first use
+        return Compiled(entry, formalization=instantiate(req, entry.tick_period))
     except SemanticsError as exc:
         return Compiled(entry, error=_locate(exc, entry))
 

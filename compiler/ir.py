@@ -107,6 +107,30 @@ class Node:
         return self.hi is not None
 
 
+#: while not None, the list :func:`and_`, :func:`or_` and :func:`S` append each pair of
+#: formulas they compared and found different (``a & a = a``, ``a | a = a``, FRET's since
+#: identity): :mod:`compiler.instantiate` records a template's comparisons with
+#: :class:`recording_comparisons` to redo them on a requirement's atoms
+_compared: list | None = None
+
+
+class recording_comparisons:
+    """Context manager: the list of ``(x, y)`` pairs of formulas the simplifying
+    constructors compared and found different inside (see ``_compared``); not reentrant,
+    single thread (the compiler's)."""
+
+    def __enter__(self) -> list:
+        global _compared
+        if _compared is not None:
+            raise RuntimeError("recording_comparisons is not reentrant")
+        _compared = []
+        return _compared
+
+    def __exit__(self, *exc) -> None:
+        global _compared
+        _compared = None
+
+
 TRUE = Node("true")
 FALSE = Node("false")
 LAST = Node("LAST")
@@ -146,6 +170,8 @@ def and_(a: Node, b: Node) -> Node:
         return a
     if a == b:
         return a
+    if _compared is not None:
+        _compared.append((a, b))
     return Node("&", (a, b))
 
 
@@ -160,6 +186,8 @@ def or_(a: Node, b: Node) -> Node:
         return a
     if a == b:
         return a
+    if _compared is not None:
+        _compared.append((a, b))
     return Node("|", (a, b))
 
 
@@ -308,10 +336,16 @@ def S(a: Node, b: Node) -> Node:
     """Since. Simplifies FRET's identities ``a S (a & FTP) = H a`` and ``a S FTP`` forms."""
     if b.op == "false":
         return FALSE
-    if b.op == "&" and b.args[1].op == "FTP" and b.args[0] == a:
-        return H(a)
-    if b.op == "&" and b.args[0].op == "FTP" and b.args[1] == a:
-        return H(a)
+    if b.op == "&" and b.args[1].op == "FTP":
+        if b.args[0] == a:
+            return H(a)
+        if _compared is not None:
+            _compared.append((b.args[0], a))
+    if b.op == "&" and b.args[0].op == "FTP":
+        if b.args[1] == a:
+            return H(a)
+        if _compared is not None:
+            _compared.append((b.args[1], a))
     if a.op == "true":
         return O(b)
     return Node("S", (a, b))

@@ -98,13 +98,6 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     return int(ticks)
 
 
-def _ft_mode(req: A.Requirement, scope: str) -> Node | None:
-    """The scope condition in ft (endpoint-free functions), or None for the null scope."""
-    if scope == "null":
-        return None
-    return Expander("ft", FTP, LAST, free=True).bool(req.scope.mode)
-
-
 # --------------------------------------------------------------------------- entry point
 def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formalization:
     """ft, ft_inf and pt of a parsed requirement.
@@ -121,17 +114,7 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
 
 
 def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalization:
-    if req.freeform:
-        raise SemanticsError("a free-form requirement has no formalization")
-    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
-    negate = scope.startswith("only")
-    warnings: list[str] = []
-    if "then" in req.text.lower():
-        warnings.extend(regrouping_warnings(req))
-    n = None
-    if timing in A.DURATION_TIMINGS:
-        n = duration_ticks(timing_duration(req), tick_period, warnings)
-
+    scope, cond, timing, n, warnings = _shape(req, tick_period)
     exprs = [req.response, req.condition.expr if cond != "null" else None,
              req.timing.stop if timing in A.STOP_TIMINGS else None]
     # Without temporal functions or FTP an expression means the same in every formula:
@@ -147,15 +130,52 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
             shared.append(out)
         return out
 
-    # Scope conditions: temporal functions take FRET's endpoint-free forms.
-    m_pt = None if scope == "null" else Expander("pt", FTP, LAST, free=True).bool(
-        req.scope.mode)
+    def mode(kind: str, last: Node) -> Node | None:
+        # Scope conditions: temporal functions take FRET's endpoint-free forms.
+        if scope == "null":
+            return None
+        return Expander(kind, FTP, last, free=True).bool(req.scope.mode)
+
+    ft, ft_inf, pt, used, px = construct(scope, cond, timing, n, mode, fields)
+    # variables in sentence order: mode, condition, stop, response
+    variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
+    return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
+                         pt_causal=not px.has_future_atom)
+
+
+def _shape(req: A.Requirement, tick_period: Fraction | None):
+    """(scope, condition kind, timing, ticks or None, warnings) of a requirement; raises
+    :class:`SemanticsError` for a free-form requirement or a bad duration."""
+    if req.freeform:
+        raise SemanticsError("a free-form requirement has no formalization")
+    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
+    warnings: list[str] = []
+    if "then" in req.text.lower():
+        warnings.extend(regrouping_warnings(req))
+    n = None
+    if timing in A.DURATION_TIMINGS:
+        n = duration_ticks(timing_duration(req), tick_period, warnings)
+    return scope, cond, timing, n, warnings
+
+
+def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields):
+    """The three formulas of one template key, from its atoms.
+
+    ``mode(kind, last)`` gives the scope condition (None for the null scope) for formula
+    ``kind`` (``"ft"``/``"pt"``) with ``last`` (``LAST``, or FALSE for ft_inf);
+    ``fields(expander)`` gives ``(response, condition, stop)`` (None where absent)
+    converted by that :class:`Expander`. Returns ``(ft, ft_inf, pt, used, px)``: the IR
+    nodes, the atoms of ft ``(mode, condition, stop, response)`` and pt's expander. Both
+    the full build (:func:`formalize`) and the per-template-key instantiation
+    (:mod:`compiler.instantiate`, with placeholder atoms) run this one construction.
+    """
+    negate = scope.startswith("only")
+    m_pt = mode("pt", LAST)
     left, right_pt = pt_endpoints(scope, m_pt)
 
     # ---- ft (last = LAST) and ft_inf (last = FALSE): the same construction
     def future(last: Node):
-        m = None if scope == "null" else Expander("ft", FTP, last, free=True).bool(
-            req.scope.mode)
+        m = mode("ft", last)
         right = ft_right(scope, m, last)
         R, c, s = fields(Expander("ft", left, fn_right(scope, m, last)))
         T = ft_timing(timing, negate, R, right, n, s)
@@ -172,7 +192,7 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
     ft_inf, _ = future(FALSE)
 
     # ---- pt
-    px = Expander("pt", left, fn_right(scope, _ft_mode(req, scope), LAST))
+    px = Expander("pt", left, fn_right(scope, mode("ft", LAST), LAST))
     R, c, s = fields(px)
     if cond == "null":
         trig = no_cond = None
@@ -181,11 +201,7 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
         no_cond = S(not_(c), and_(not_(c), left))
     base = pt_timing(timing, negate, R, left, trig, no_cond, n, s)
     pt = pt_scope(base, left, right_pt)
-
-    # variables in sentence order: mode, condition, stop, response
-    variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
-    return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
-                         pt_causal=not px.has_future_atom)
+    return ft, ft_inf, pt, used, px
 
 
 def timing_duration(req: A.Requirement) -> A.Duration:

@@ -1,0 +1,534 @@
+"""Printed formulas by per-template-key instantiation, as FRET's own formalizer does.
+
+:func:`compiler.semantics.formalize` builds the IR of a requirement's ft, ft_inf and pt and
+the printers (:mod:`compiler.printers`) walk it. Most of that work depends only on the
+requirement's *template key* - scope, condition kind, timing and the duration's class - not
+on its atoms (scope mode, condition, stop condition, response). :func:`instantiate` builds,
+once per template key, the three formulas with placeholder atoms through the very same
+construction (:func:`compiler.semantics.construct`), prints them once (FRET/SMV text of ft,
+ft_inf and pt; Spot text of ft and ft_inf) with each placeholder printed as a
+:meth:`str.format`-style field ``{i}``, and per requirement only converts and prints the
+atoms and fills the cached texts in (one ``%`` formatting per printed formula). The IR itself is built only
+when something asks for it (monitors, ``.psl``, ``fretc check``): the returned
+:class:`InstantiatedFormalization`'s ``ft``/``ft_inf``/``pt`` run the full build on first use.
+
+**Why the texts are equal.** Every printer is compositional: a node's text is a function of
+its operator, bounds and its children's texts, with each compound parenthesized (FRET/SMV:
+every binary operation and operator application; Spot: ``!x`` applied to a name or to a
+parenthesized compound). So if the IR built from the placeholders is, node for node, the IR
+built from the real atoms with the atoms put back, the printed texts are the template texts
+with the atom texts put back. The two IRs differ only where a simplifying constructor of
+:mod:`compiler.ir` looks inside an argument. It looks at
+
+* the argument's operator: constants fold (``true``/``false``), ``!!a`` is ``a``
+  (:func:`~compiler.ir.not_`), ``O FTP``/``O true``, and FRET's since identity
+  ``a S (a & FTP) = H a`` (:func:`~compiler.ir.S`);
+* equality of two arguments: ``a & a = a``, ``a | a = a``, the since identity's
+  ``b.args[0] == a``.
+
+**Fallback rule (opaque-safe atoms).** A placeholder is an atom (``ap``) that equals nothing
+but itself. The template is used only when the requirement's atoms are *opaque-safe*, i.e.
+every decision the construction took on the placeholders it also takes on the atoms;
+otherwise :func:`instantiate` returns the full build (:func:`compiler.semantics.formalize`)
+and its printed texts. The atoms are the scope mode, condition, stop condition and response
+*of each formula* (ft, ft_inf, pt: temporal functions and FTP expand differently in each, so
+the template has twelve atom fields):
+
+1. (operators) *no atom is inspected by a constructor*: none is ``true``, ``false``, a
+   negation, ``FTP`` or ``LAST`` at top level, nor a conjunction with ``FTP`` as a side
+   (:func:`inspected`). ``not_(!p)`` is ``p``, ``true & x`` is ``x``, ``O FTP`` is ``true``,
+   ``p S (p & FTP)`` is ``H p``; a placeholder would fold none of them.
+2. (equalities) *every pair the construction compared and found different stays
+   different*: while a template is built, :func:`compiler.ir.and_`, :func:`~compiler.ir.or_`
+   and :func:`~compiler.ir.S` record each pair of formulas they compared
+   (:class:`compiler.ir.recording_comparisons`); each pair is reduced once (:func:`_unify`)
+   to the conditions on the atoms under which it would be equal (atom ``f`` equals atom
+   ``g``; atom ``f`` equals a template sub-formula; ``n + k`` equals a bound), and a
+   requirement whose atoms meet all the conditions of any pair falls back. This catches
+   equal atoms (``upon p ... satisfy p``: ``p & !p``-style folds), an atom equal to a
+   sub-formula the construction builds from other atoms (a condition ``p | r`` against
+   ``or_`` of the response and another atom), and temporal-function expansions equal to structure (``persisted``
+   in pt against FRET's ``since`` interval test).
+
+Pairs found equal in the template stay equal with any atoms, and every other branch of the
+construction depends on the template key only, so with 1 and 2 the requirement's IR is the
+template's IR with the atoms put back, node for node.
+
+The duration shapes the formula through the bounds' comparisons (an empty window ``hi <
+lo``, ``hi == 0``): ``within``/``for``/``after`` use bounds from ``n - 1`` to ``n + 1``,
+which for every ``n >= 2`` compare alike with each other and with 0. So the template key holds ``n`` itself for ``n``
+0 and 1, and one symbolic bound for ``n >= 2``, built with a large sentinel (an ``int``
+subclass that keeps its offset through ``+``/``-`` and prints as a format field). Memory is
+bounded: there are 432 template keys (8 scopes x 3 condition kinds x (8 timings + 4
+duration timings x 3 classes)), about 0.35 ms of CPU each to build. A process builds its
+first 16 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB)
+from fretc's disk cache (:mod:`fretish.cache`, entry named by a hash of the construction's
+sources and Python's version), building and storing it on first use. The table changes
+speed only: a cache that is off, unreadable or damaged means the keys are built.
+
+Byte identity with the full path is checked by ``tests/compiler/test_instantiate.py`` on
+random sentences over the whole grammar, FRET's vectors and the case-study corpus.
+"""
+
+from __future__ import annotations
+
+import marshal
+import operator
+import re
+from fractions import Fraction
+from pathlib import Path
+
+from fretish import ast as A
+
+from . import ir
+from .expressions import Expander, mentions_time
+from .ir import FALSE, FTP, LAST, Node, gc_paused
+from .printers import _smv, _smv_z, _spot
+from .scope_timing import fn_right, pt_endpoints
+from .semantics import Formalization, _shape, construct, formalize
+
+__all__ = ["instantiate", "InstantiatedFormalization", "opaque_safe", "template"]
+
+#: format-field numbers: the atoms (mode, condition, stop, response) of ft, of ft_inf and
+#: of pt, then the bounds n-2 .. n+3
+_FORMULAS = ("ft", "ft_inf", "pt")
+_ATOMS = 4
+_BOUND0 = 3 * _ATOMS  # field of n + _MIN_OFFSET
+_MIN_OFFSET, _MAX_OFFSET = -2, 3
+_SENTINEL = 1_000_000_000  # a symbolic n: far from 0 and from every other bound
+
+
+class _SymbolicBound(int):
+    """The duration ``n`` (plus ``offset``) of a template: an ``int`` (the sentinel plus the
+    offset) for the constructors' comparisons, printed as the format field of its offset."""
+
+    def __new__(cls, offset: int):
+        if not _MIN_OFFSET <= offset <= _MAX_OFFSET:
+            raise AssertionError(f"template bound n{offset:+d} out of range")
+        self = super().__new__(cls, _SENTINEL + offset)
+        self.offset = offset
+        return self
+
+    def __add__(self, k):
+        if type(k) is int:
+            return _SymbolicBound(self.offset + k)
+        return NotImplemented
+
+    __radd__ = __add__
+
+    def __sub__(self, k):
+        if type(k) is int:
+            return _SymbolicBound(self.offset - k)
+        return NotImplemented
+
+    def __format__(self, spec: str) -> str:
+        return "{%d}" % (_BOUND0 + self.offset - _MIN_OFFSET)
+
+    __str__ = __repr__ = lambda self: self.__format__("")
+
+
+def _placeholder(field: int) -> Node:
+    """An atom standing for format field ``field`` in every printed form."""
+    node = Node("ap", name=f"\x00atom{field}")
+    node.text = node.ztext = node.stext = "{%d}" % field
+    return node
+
+
+_PLACEHOLDERS = tuple(_placeholder(i) for i in range(3 * _ATOMS))
+_FIELD_OF = {id(p): i for i, p in enumerate(_PLACEHOLDERS)}
+_FIELD = re.compile(r"\{\d+\}")
+
+
+class _Template:
+    """The printed forms of one template key with fields for the atoms and bounds: ``ft``,
+    ``ft_inf``, ``pt`` (FRET/SMV; pt with FTP as ``(Z FALSE)``), ``ft_spot``,
+    ``ft_inf_spot`` (Spot, None where Spot cannot print the formula). Each is kept as a
+    ``%``-format string and a getter picking its fields' values, in order, from the list
+    of the twelve atoms' texts and the bounds (``_BOUND0``). ``compared`` are the pairs of
+    template nodes the simplifier found different while building, as conditions on the
+    atoms (:func:`_unify`, rule 2), with template nodes as plain tuples (:func:`_data`).
+    ``data`` is the whole as plain data (strings, ints, tuples: ``marshal``-able) for
+    the disk cache."""
+
+    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data")
+
+    def __init__(self, data: tuple):
+        self.data = data
+        forms, self.compared = data
+        self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot = (
+            None if f is None else (f[0], _picker(f[1])) for f in forms)
+
+
+def _picker(order: tuple):
+    """``values -> tuple`` of the values at ``order`` (a ``%`` operand)."""
+    if not order:
+        return lambda values: ()
+    if len(order) == 1:
+        i = order[0]
+        return lambda values: (values[i],)
+    return operator.itemgetter(*order)
+
+
+def build_template(scope: str, cond: str, timing: str, n: int | None) -> tuple:
+    """The plain data of :class:`_Template` for one key, built with placeholder atoms by
+    :func:`compiler.semantics.construct` (``n``: ticks, or a :class:`_SymbolicBound`)."""
+    ph = _PLACEHOLDERS
+    sets = [(ph[k + 3], None if cond == "null" else ph[k + 1],
+             ph[k + 2] if timing in A.STOP_TIMINGS else None)
+            for k in range(0, 3 * _ATOMS, _ATOMS)]
+    calls = iter(sets)  # construct converts the fields for ft, ft_inf, pt in order
+
+    def mode(kind: str, last: Node):
+        if scope == "null":
+            return None
+        return ph[2 * _ATOMS] if kind == "pt" else ph[0] if last is LAST else ph[_ATOMS]
+
+    with gc_paused(), ir.recording_comparisons() as compared:
+        ft, ft_inf, pt, _, _ = construct(scope, cond, timing, n, mode,
+                                         lambda x: next(calls))
+    # each pair once (a shared sub-formula is compared again and again), as the
+    # conditions on the atoms under which it would be equal
+    conditions: dict = {}
+    pairs = set()
+    for x, y in compared:
+        if (id(x), id(y)) in pairs:
+            continue
+        pairs.add((id(x), id(y)))
+        conj: list = []
+        if _unify(x, y, conj):
+            conditions.setdefault(tuple(conj), None)
+    forms = (_compiled(_smv(ft)), _compiled(_smv(ft_inf)), _compiled(_smv_z(pt)),
+             _spot_or_none(ft), _spot_or_none(ft_inf))
+    return forms, tuple(conditions)
+
+
+def _data(t: Node):
+    """A template node as plain data: its field number for a placeholder, else ``(op,
+    name, lo, hi, args)`` with a symbolic bound as ``(offset,)``."""
+    f = _FIELD_OF.get(id(t))
+    if f is not None:
+        return f
+    return (t.op, t.name, _bound_data(t.lo), _bound_data(t.hi),
+            tuple(_data(a) for a in t.args))
+
+
+def _bound_data(b):
+    return (b.offset,) if type(b) is _SymbolicBound else b
+
+
+def _compiled(text: str | None):
+    """``(format, order)`` of a template text whose fields are ``{i}``: ``format %
+    tuple(values[i] for i in order)`` fills them in (None stays None)."""
+    if text is None:
+        return None
+    own = _FIELD.sub("", text)
+    if "{" in own or "}" in own or str(_SENTINEL)[:6] in own:
+        # a brace of its own, or a bound that lost its offset
+        raise AssertionError(f"template text {text!r}")  # pragma: no cover
+    order = tuple(int(x[1:-1]) for x in _FIELD.findall(text))
+    return _FIELD.sub("%s", text.replace("%", "%%")), order
+
+
+def _spot_or_none(node: Node):
+    try:
+        return _compiled(_spot(node))
+    except ValueError:
+        return None
+
+
+#: every template key: (scope, condition kind, timing, n class: None, 0, 1 or -1 for >= 2)
+ALL_KEYS = tuple(
+    (scope, cond, timing, n)
+    for scope in ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter",
+                  "onlyBefore")
+    for cond in ("null", "regular", "holding")
+    for timing in ("null", "immediately", "next", "finally", "eventually", "always",
+                   "never", "within", "for", "after", "until", "before")
+    for n in ((0, 1, -1) if timing in A.DURATION_TIMINGS else (None,)))
+
+_TEMPLATES: dict = {}
+_BUILT_BEFORE_TABLE = 16  # keys built directly before the disk table is read
+_TABLE: list = []  # [dict key -> data] once the disk cache was consulted
+
+
+def _build_key(key) -> tuple:
+    scope, cond, timing, nkey = key
+    return build_template(scope, cond, timing, _SymbolicBound(0) if nkey == -1 else nkey)
+
+
+def _cache_name() -> str:
+    """The disk-cache entry name: a hash of everything the templates are a function of
+    (this module and the construction's sources, Python's version for ``marshal``)."""
+    import sys
+
+    from fretish.cache import key_of
+
+    here = Path(__file__).resolve().parent
+    sources = [(here / f).read_text(encoding="utf-8") for f in _SOURCES]
+    return key_of("templates-v1", sys.version, *sources)
+
+
+_SOURCES = ("instantiate.py", "semantics.py", "scope_timing.py", "ir.py", "printers.py",
+            "expressions.py")
+
+
+def _table() -> dict | None:
+    """Every key's data from fretc's disk cache (:mod:`fretish.cache`), built and stored
+    there on first use; None when the disk cache is off or fails (keys are then built one
+    by one as needed)."""
+    if _TABLE:
+        return _TABLE[0]
+    from fretish import cache
+
+    table = None
+    try:
+        if cache.cache_dir() is not None:
+            name = _cache_name()
+            blob = cache.read_bytes("templates", name)
+            if blob is not None:
+                try:
+                    table = dict(zip(ALL_KEYS, marshal.loads(blob)))
+                except (ValueError, EOFError, TypeError):
+                    table = None  # a damaged entry: built again below
+            if table is None or len(table) != len(ALL_KEYS):
+                data = tuple(_build_key(k) for k in ALL_KEYS)
+                cache.write_bytes("templates", name, marshal.dumps(data))
+                table = dict(zip(ALL_KEYS, data))
+    except OSError:
+        table = None
+    _TABLE.append(table)
+    return table
+
+
+def template(scope: str, cond: str, timing: str, n: int | None) -> _Template:
+    """The cached :class:`_Template` of a template key (``n``: the duration in ticks, or
+    None). Keys: ``n`` itself for 0 and 1, one symbolic bound for ``n >= 2``."""
+    nkey = n if n is None or n < 2 else -1
+    key = (scope, cond, timing, nkey)
+    t = _TEMPLATES.get(key)
+    if t is None:
+        # a few keys are quicker built than the whole table read (about 10 ms)
+        table = _table() if len(_TEMPLATES) >= _BUILT_BEFORE_TABLE else None
+        data = table.get(key) if table is not None else None
+        t = _TEMPLATES[key] = _Template(data if data is not None else _build_key(key))
+    return t
+
+
+#: operators a simplifying constructor of compiler.ir looks for in an argument
+_INSPECTED_OPS = frozenset(("true", "false", "!", "FTP", "LAST"))
+
+
+def inspected(atom: Node) -> bool:
+    """Rule 1: would a simplifying constructor look inside ``atom`` (a constant, a
+    negation, FTP or LAST at top level, or a conjunction with FTP as a side, FRET's since
+    identity)?"""
+    op = atom.op
+    return op in _INSPECTED_OPS or (op == "&" and (atom.args[0].op == "FTP"
+                                                   or atom.args[1].op == "FTP"))
+
+
+def _unify(x: Node, y: Node, out: list) -> bool:
+    """Could template nodes ``x`` and ``y`` be equal once the placeholders are replaced by
+    atoms and the symbolic bounds by ``n`` plus their offsets? False: never; True: exactly
+    when every condition appended to ``out`` holds: ``(0, f, g)`` atom ``f`` equals atom
+    ``g``, ``(1, f, t)`` atom ``f`` equals template node ``t`` instantiated, ``(2, k, v)``
+    ``n + k == v``."""
+    if x is y:
+        return True
+    fx, fy = _FIELD_OF.get(id(x)), _FIELD_OF.get(id(y))
+    if fx is not None and fy is not None:
+        out.append((0, fx, fy))
+        return True
+    if fx is not None or fy is not None:
+        out.append((1, fx, _data(y)) if fx is not None else (1, fy, _data(x)))
+        return True
+    if x.op != y.op or x.name != y.name or len(x.args) != len(y.args):
+        return False
+    for bx, by in ((x.lo, y.lo), (x.hi, y.hi)):
+        sx, sy = type(bx) is _SymbolicBound, type(by) is _SymbolicBound
+        if sx and sy:
+            if bx.offset != by.offset:
+                return False
+        elif sx or sy:
+            if (bx if sx else by) is None or (by if sx else bx) is None:
+                return False
+            out.append((2, bx.offset, by) if sx else (2, by.offset, bx))
+        elif bx != by:
+            return False
+    return all(_unify(a, b, out) for a, b in zip(x.args, y.args))
+
+
+def _matches(real: Node, t, atoms, n) -> bool:
+    """Is the requirement's node ``real`` equal to template node ``t`` (as
+    :func:`_data`) instantiated?"""
+    if real is None:
+        return False
+    if type(t) is int:
+        return real == atoms[t]
+    op, name, lo, hi, args = t
+    if (real.op != op or real.name != name or len(real.args) != len(args)
+            or real.lo != _bound(lo, n) or real.hi != _bound(hi, n)):
+        return False
+    return all(_matches(a, b, atoms, n) for a, b in zip(real.args, args))
+
+
+def _bound(b, n):
+    if type(b) is tuple:
+        return n + b[0]
+    return b
+
+
+def opaque_safe(tmpl: "_Template", atoms, n: int | None) -> bool:
+    """Rules 1 and 2 of the module docstring: no atom is inspected by a constructor
+    (:func:`inspected`), and every pair of formulas the template's construction compared
+    and found different is still different with the requirement's atoms (``atoms``: the
+    twelve atoms by field, None where absent; ``n`` the duration in ticks)."""
+    for a in atoms:
+        if a is not None and inspected(a):
+            return False
+    for conj in tmpl.compared:
+        for kind, f, v in conj:
+            if kind == 0:
+                if atoms[f] != atoms[v]:
+                    break
+            elif kind == 1:
+                if not _matches(atoms[f], v, atoms, n):
+                    break
+            elif n + f != v:
+                break
+        else:
+            return False  # this pair of the template is equal with these atoms
+    return True
+
+
+class InstantiatedFormalization(Formalization):
+    """A :class:`~compiler.semantics.Formalization` whose printed formulas come from a
+    template; ``ft``, ``ft_inf`` and ``pt`` are built (the full construction) on first use.
+    :meth:`smv` and :meth:`spot` give the texts.
+
+    ``atoms`` are the ``(mode, condition, stop, response)`` IR atoms of ft, of ft_inf and
+    of pt, in one tuple of twelve (None where absent); ``texts`` their printed texts
+    (FRET/SMV; pt's with FTP as ``(Z FALSE)``)."""
+
+    def __init__(self, req: A.Requirement, tick_period: Fraction | None, tmpl: _Template,
+                 atoms: tuple, texts: list, variables: list, warnings: list,
+                 ticks: int | None, pt_causal: bool):
+        self.key = req.key
+        self.variables = variables
+        self.warnings = warnings
+        self.ticks = ticks
+        self.pt_causal = pt_causal
+        self._req, self._period, self._tmpl = req, tick_period, tmpl
+        self._atoms, self._texts = atoms, texts
+        self._full = None
+        self._smv_values = None
+
+    def _build(self) -> Formalization:
+        f = self._full
+        if f is None:
+            f = self._full = formalize(self._req, self._period)
+        return f
+
+    def __reduce__(self):
+        """Pickled (a plan shipped to workers) as the full build it stands for: the texts
+        the printers give on it are the template's (module docstring)."""
+        f = self._build()
+        return (Formalization, (f.key, f.ft, f.ft_inf, f.pt, f.variables, f.warnings,
+                                f.ticks, f.pt_causal))
+
+    ft = property(lambda self: self._build().ft, doc="ft (IR), built on first use")
+    ft_inf = property(lambda self: self._build().ft_inf,
+                      doc="ft_inf (IR), built on first use")
+    pt = property(lambda self: self._build().pt, doc="pt (IR), built on first use")
+
+    def _values(self, texts) -> list:
+        n = self.ticks
+        if n is None:
+            return texts
+        return list(texts) + [str(n + k) for k in range(_MIN_OFFSET, _MAX_OFFSET + 1)]
+
+    def smv(self, which: str) -> str:
+        """FRET/SMV text of ``ft``, ``ft_inf`` or ``pt`` (pt with FTP as ``(Z FALSE)``)."""
+        fmt, pick = getattr(self._tmpl, which)
+        values = self._smv_values
+        if values is None:
+            values = self._smv_values = self._values(self._texts)
+        return fmt % pick(values)
+
+    def spot(self, which: str) -> str:
+        """Spot text of ``ft`` or ``ft_inf``; ``ValueError`` where Spot has no form."""
+        compiled = getattr(self._tmpl, which + "_spot")
+        if compiled is None:
+            return _spot(getattr(self, which))  # raises the printer's own error
+        fmt, pick = compiled
+        lo = 0 if which == "ft" else _ATOMS  # only that formula's atoms: pt's have past
+        texts = [None] * (3 * _ATOMS)
+        for i in range(lo, lo + _ATOMS):
+            a = self._atoms[i]
+            if a is not None:
+                texts[i] = _spot(a)
+        return fmt % pick(self._values(texts))
+
+
+def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Formalization:
+    """:func:`compiler.semantics.formalize` for printing: an
+    :class:`InstantiatedFormalization` when the requirement's atoms are opaque-safe (module
+    docstring), else the full build. Same errors, warnings, variables and ticks as
+    :func:`formalize`; the printed texts (:func:`formula_text`) are byte-identical to the
+    printers' on the full build."""
+    with gc_paused():
+        scope, cond, timing, n, warnings = _shape(req, tick_period)
+        mode = req.scope.mode if scope != "null" else None
+        cexpr = req.condition.expr if cond != "null" else None
+        sexpr = req.timing.stop if timing in A.STOP_TIMINGS else None
+        exprs = (cexpr, sexpr, req.response)
+        if not any(e is not None and mentions_time(e) for e in exprs) and (
+                mode is None or not mentions_time(mode)):
+            # without temporal functions or FTP every atom is the same in ft, ft_inf and pt
+            # (compiler.semantics converts it once) and prints alike in pt
+            x = Expander("ft", FTP, LAST)
+            one = (None if mode is None else x.bool(mode),
+                   *(None if e is None else x.bool(e) for e in exprs))
+            atoms = one * 3
+            one_text = [None if a is None else _smv(a) for a in one]
+            texts = one_text * 3
+            pt_causal = True
+        else:
+            # the atoms of each formula, converted as compiler.semantics.construct does
+            if mode is None:
+                m_pt = m_ft = m_inf = None
+            else:
+                m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
+                m_ft = Expander("ft", FTP, LAST, free=True).bool(mode)
+                m_inf = Expander("ft", FTP, FALSE, free=True).bool(mode)
+            left, _ = pt_endpoints(scope, m_pt)
+            px = Expander("pt", left, fn_right(scope, m_ft, LAST))
+            atoms = ()
+            for m, x in ((m_ft, Expander("ft", left, fn_right(scope, m_ft, LAST))),
+                         (m_inf, Expander("ft", left, fn_right(scope, m_inf, FALSE))),
+                         (m_pt, px)):
+                atoms += (m, *(None if e is None else x.bool(e) for e in exprs))
+            texts = [None if a is None else (_smv_z(a) if i >= 2 * _ATOMS else _smv(a))
+                     for i, a in enumerate(atoms)]
+            pt_causal = not px.has_future_atom
+        tmpl = template(scope, cond, timing, n)
+        if not opaque_safe(tmpl, atoms, n):
+            return formalize(req, tick_period)
+        # variables in sentence order: mode, condition, stop, response (of ft)
+        variables = ir.variables(Node("vars", tuple(a for a in atoms[:_ATOMS]
+                                                    if a is not None)))
+        return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts, variables,
+                                         warnings, n, pt_causal)
+
+
+def formula_text(f: Formalization, which: str) -> str:
+    """Printed form ``which`` of a formalization: ``ft``, ``ft_inf``, ``pt`` (FRET/SMV) or
+    ``ft_spot``, ``ft_inf_spot`` (Spot), from the template when there is one."""
+    if which.endswith("_spot"):
+        base = which[:-5]
+        if isinstance(f, InstantiatedFormalization):
+            return f.spot(base)
+        return _spot(getattr(f, base))
+    if isinstance(f, InstantiatedFormalization):
+        return f.smv(which)
+    return _smv_z(f.pt) if which == "pt" else _smv(getattr(f, which))

@@ -1,0 +1,357 @@
+"""compiler.instantiate: the printed formulas from per-template-key templates are byte for
+byte those of the full IR build (compiler.semantics.formalize + compiler.printers), on
+random sentences over the whole grammar (every scope, condition kind and timing; atoms that
+are constants, negations, FTP, equal to each other or to parts of each other, comparisons,
+arithmetic, numeric and temporal functions, nested if-then), on FRET's vectors and on the
+case-study corpus. The lazily built IR is the full build's, and the same errors come out.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
+
+from compiler import instantiate as I
+from compiler.printers import to_smv, to_spot
+from compiler.semantics import formalize
+from differential import random_requirement
+from fretish import FretishError, parse
+
+SHARED = Path(__file__).resolve().parents[3] / "shared"
+FORMS = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot")
+
+
+def _full_texts(f) -> list:
+    out = [to_smv(f.ft), to_smv(f.ft_inf), to_smv(f.pt, ftp="(Z FALSE)")]
+    for node in (f.ft, f.ft_inf):
+        try:
+            out.append(to_spot(node))
+        except ValueError as exc:
+            out.append(("ValueError", str(exc)))
+    return out
+
+
+def _template_texts(f) -> list:
+    out = []
+    for which in FORMS:
+        try:
+            out.append(I.formula_text(f, which))
+        except ValueError as exc:
+            out.append(("ValueError", str(exc)))
+    return out
+
+
+def _outcome(fn, req, period):
+    try:
+        return fn(req, period), None
+    except FretishError as exc:
+        return None, (type(exc).__name__, str(exc))
+
+
+def same(text: str, period: Fraction | None = None) -> bool:
+    """Assert the template path equals the full path on ``text``; True when the template
+    was used (False: it fell back, or the sentence does not parse/formalize)."""
+    try:
+        req = parse(text)
+    except FretishError:
+        return False
+    if req.freeform:
+        return False
+    full, err_full = _outcome(formalize, req, period)
+    inst, err_inst = _outcome(I.instantiate, req, period)
+    assert err_full == err_inst, text
+    if full is None:
+        return False
+    assert _template_texts(inst) == _full_texts(full), text
+    for attr in ("key", "variables", "warnings", "ticks", "pt_causal"):
+        assert getattr(inst, attr) == getattr(full, attr), (text, attr)
+    used = isinstance(inst, I.InstantiatedFormalization)
+    if used:
+        # the IR, built on first use, is the full build's
+        assert (inst.ft, inst.ft_inf, inst.pt) == (full.ft, full.ft_inf, full.pt), text
+    return used
+
+
+# --------------------------------------------------------------------------- generator
+# few names, so that atoms are often equal to each other or to a part of each other
+BOOLS = ["p", "q", "m", "true", "false", "FTP"]
+NUMS = ["x", "y", "3", "0"]
+
+
+@st.composite
+def num_expr(draw, depth: int):
+    if depth <= 0 or draw(st.integers(0, 3)) == 0:
+        return draw(st.sampled_from(NUMS))
+    k = draw(st.integers(0, 4))
+    a = draw(num_expr(depth - 1))
+    if k == 0:
+        return f"({a} {draw(st.sampled_from(['+', '-', '*', '/', '^']))} "\
+               f"{draw(num_expr(depth - 1))})"
+    if k == 1:
+        return f"absReal({a})"
+    if k == 2:
+        return f"preReal(0, {a})"
+    if k == 3:
+        return f"-{a}"
+    return f"maxReal({a}, {draw(num_expr(depth - 1))})"
+
+
+@st.composite
+def bool_expr(draw, depth: int):
+    if depth <= 0 or draw(st.integers(0, 4)) == 0:
+        k = draw(st.integers(0, 5))
+        if k == 0:
+            return (f"{draw(num_expr(1))} {draw(st.sampled_from(['<', '<=', '=', '!=', '>']))}"
+                    f" {draw(num_expr(1))}")
+        return draw(st.sampled_from(BOOLS))
+    sub = lambda: draw(bool_expr(depth - 1))  # noqa: E731
+    bound = draw(st.sampled_from(["0", "1", "2", "0, 2", "1, 3"]))
+    k = draw(st.integers(0, 13))
+    if k <= 1:
+        return f"!{sub()}" if k == 0 else f"!({sub()})"
+    if k <= 5:
+        return f"({sub()} {draw(st.sampled_from(['&', '|', '->', 'xor', '<->']))} {sub()})"
+    if k == 6:
+        return f"(if {sub()} then {sub()})"
+    if k == 7:
+        return f"persisted({bound}, {sub()})"
+    if k == 8:
+        return f"occurred({bound}, {sub()})"
+    if k == 9:
+        return f"persists({bound}, {sub()})"
+    if k == 10:
+        return f"occurs({bound}, {sub()})"
+    if k == 11:
+        return f"preBool({draw(st.sampled_from(['true', 'false']))}, {sub()})"
+    if k == 12:
+        return f"{draw(st.sampled_from(['prevOcc', 'nextOcc']))}({sub()}, {sub()})"
+    return f"ite({sub()}, {sub()}, {sub()})"
+
+
+@st.composite
+def atom(draw, depth: int):
+    """A sentence's mode, condition, stop or response: often a bare name or a small
+    formula over the same few names, so that atoms collide."""
+    if draw(st.integers(0, 2)) == 0:
+        return draw(bool_expr(depth))
+    return draw(st.sampled_from(["p", "q", "m", "!p", "(p & q)", "(p | q)", "(q & p)",
+                                 "(!p & q)", "(p & !q)", "(p -> q)"]))
+
+
+SCOPE_PHRASES = ["", "in {m}", "when not in {m}", "only in {m}", "after {c}", "before {c}",
+                 "only after {c}", "only before {c}", "while {c}", "except while {c}"]
+TIMING_PHRASES = ["", "immediately", "at the next timepoint", "finally", "eventually",
+                  "always", "never", "within {n} ticks", "for {n} ticks", "after {n} ticks",
+                  "until {s}", "before {s}", "within {n} seconds"]
+
+
+@st.composite
+def sentence(draw):
+    parts = []
+    scope = draw(st.sampled_from(SCOPE_PHRASES))
+    if scope:
+        mode = draw(st.sampled_from(["m", "p", "q"]))
+        parts.append(scope.format(m=mode, c=f"({draw(atom(1))})") + ",")
+    cond = draw(st.sampled_from(["", "upon", "whenever", "when", "if"]))
+    if cond:
+        c = draw(atom(2))
+        neg = " is false" if cond == "upon" and draw(st.booleans()) else ""
+        parts.append(f"{cond} ({c}){neg},")
+    parts.append("the sw shall")
+    timing = draw(st.sampled_from(TIMING_PHRASES))
+    n = draw(st.sampled_from([0, 1, 2, 3, 7, 250]))
+    parts.append(timing.format(n=n, s=f"({draw(atom(1))})"))
+    parts.append(f"satisfy {draw(atom(2))}")
+    return " ".join(p for p in parts if p)
+
+
+@st.composite
+def colliding_sentence(draw):
+    """A sentence whose mode, condition, stop and response are each, at random, one
+    shared formula or another atom: the equalities the fallback rule must catch."""
+    shared = draw(atom(1))
+    pick = lambda depth: shared if draw(st.booleans()) else draw(atom(depth))  # noqa: E731
+    parts = []
+    scope = draw(st.sampled_from(SCOPE_PHRASES))
+    if scope:
+        parts.append(scope.format(m=f"({pick(1)})" if "{m}" not in scope else "m",
+                                  c=f"({pick(1)})") + ",")
+    cond = draw(st.sampled_from(["", "upon", "whenever"]))
+    if cond:
+        parts.append(f"{cond} ({pick(2)}),")
+    parts.append("the sw shall")
+    timing = draw(st.sampled_from(TIMING_PHRASES))
+    parts.append(timing.format(n=draw(st.sampled_from([0, 1, 2, 5])), s=f"({pick(1)})"))
+    parts.append(f"satisfy {pick(2)}")
+    return " ".join(p for p in parts if p)
+
+
+# --------------------------------------------------------------------------- properties
+SAMPLES = {"used": 0, "all": 0}
+
+
+@settings(max_examples=400, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(sentence(), st.sampled_from([None, Fraction(1, 10), Fraction(1)]))
+@example("upon p the sw shall always satisfy p", None)  # equal atoms
+@example("upon p the sw shall always satisfy !p", None)  # negation at top level
+@example("in m upon true the sw shall within 3 ticks satisfy q", None)  # constant
+@example("whenever p the sw shall until p satisfy q", None)  # equal stop and condition
+@example("the sw shall always satisfy persisted(0, p) & FTP", None)  # FTP conjunction
+@example("after p the sw shall for 1 ticks satisfy q", None)  # n = 1 key
+def test_template_equals_full_build(text, period):
+    SAMPLES["all"] += 1
+    SAMPLES["used"] += same(text, period)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(colliding_sentence())
+def test_template_equals_full_build_with_colliding_atoms(text):
+    same(text)
+
+
+@pytest.mark.slow
+@settings(max_examples=5000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(colliding_sentence())
+def test_template_equals_full_build_with_colliding_atoms_long(text):
+    same(text)
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(st.integers(0, 2**32 - 1))
+def test_template_equals_full_build_differential_generator(seed):
+    text, _ = random_requirement(random.Random(seed), depth=2)
+    same(text)
+
+
+@pytest.mark.slow
+@settings(max_examples=8000, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(sentence(), st.sampled_from([None, Fraction(1, 10), Fraction(1)]))
+def test_template_equals_full_build_long(text, period):
+    same(text, period)
+
+
+@pytest.mark.slow
+@settings(max_examples=5000, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 3))
+def test_template_equals_full_build_differential_generator_long(seed, depth):
+    text, _ = random_requirement(random.Random(seed), depth=depth)
+    same(text)
+
+
+def _vector_sentences() -> list:
+    texts = []
+    for name in ("fret_vectors.jsonl", "fret_vectors_functions.jsonl"):
+        texts += [json.loads(line)["text"]
+                  for line in (SHARED / "fretish" / name).read_text().splitlines()]
+    for line in (SHARED / "fretish" / "fret_trace_verdicts.jsonl").read_text().splitlines():
+        texts += [c["sentence"] for c in json.loads(line)["cases"]]
+    return sorted(set(texts))
+
+
+def test_template_equals_full_build_on_fret_vectors():
+    texts = _vector_sentences()
+    used = sum(same(t) for t in texts)
+    # the template serves most sentences (the fallbacks are the unsafe atoms)
+    assert used > len(texts) // 2, (used, len(texts))
+
+
+def test_template_equals_full_build_on_corpus():
+    texts = [json.loads(line)["text"] for line in
+             (SHARED / "corpora" / "fret_casestudies.jsonl").read_text().splitlines()]
+    for period in (None, Fraction(1, 10)):
+        for t in texts:
+            same(t, period)
+
+
+# --------------------------------------------------------------------------- the rule
+@pytest.mark.parametrize("text", [
+    "whenever p the sw shall until q satisfy q",     # stop = response: r | stop folds
+    "upon p the sw shall always satisfy !q",         # negation at top level
+    "upon p the sw shall always satisfy true",       # constant
+    "in m the sw shall always satisfy FTP",          # FTP
+])
+def test_unsafe_atoms_fall_back(text):
+    """Each case is one a placeholder would fold differently: the full build is used."""
+    f = I.instantiate(parse(text))
+    assert not isinstance(f, I.InstantiatedFormalization)
+    assert same(text) is False
+
+
+@pytest.mark.parametrize("text", [
+    "upon p the sw shall always satisfy p",          # equal, but never compared here
+    "in m upon m the sw shall always satisfy q",
+    "in m the sw shall always satisfy persisted(2, m)",
+])
+def test_equal_atoms_the_construction_never_compares_use_the_template(text):
+    assert isinstance(I.instantiate(parse(text)), I.InstantiatedFormalization)
+    assert same(text) is True
+
+
+def test_safe_atoms_use_the_template_and_templates_are_shared():
+    a = I.instantiate(parse("in m upon p the sw shall within 5 ticks satisfy q"))
+    b = I.instantiate(parse("in mode2 upon c > 3 the sw shall within 9 ticks satisfy r | s"))
+    assert isinstance(a, I.InstantiatedFormalization)
+    assert isinstance(b, I.InstantiatedFormalization)
+    assert a._tmpl is b._tmpl  # one template for n >= 2
+    assert "[0,5]" in I.formula_text(a, "ft") and "[0,9]" in I.formula_text(b, "ft")
+
+
+def test_template_count_is_bounded():
+    """Keys are (scope, condition kind, timing, n in {0, 1, >= 2}): at most 480."""
+    rnd = random.Random(3)
+    for _ in range(300):
+        text, _ = random_requirement(rnd, depth=1)
+        try:
+            I.instantiate(parse(text))
+        except FretishError:
+            pass
+    for n in range(0, 40):
+        I.instantiate(parse(f"upon p the sw shall within {n} ticks satisfy q"))
+    keys = set(I._TEMPLATES)
+    assert len(keys) <= 8 * 3 * (8 + 4 * 3)
+    assert {k[3] for k in keys} <= {None, 0, 1, -1}
+
+
+def test_disk_table_gives_the_built_templates(tmp_path, monkeypatch):
+    """The marshalled table of the disk cache is the templates as built, and a damaged
+    entry is rebuilt, not trusted."""
+    import marshal
+
+    from fretish import cache
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(I, "_TABLE", [])
+    table = I._table()
+    assert table is not None and len(table) == len(I.ALL_KEYS) == 432
+    for key in I.ALL_KEYS[::37]:
+        assert table[key] == I._build_key(key)
+    name = I._cache_name()
+    assert marshal.loads(cache.read_bytes("templates", name)) == tuple(
+        table[k] for k in I.ALL_KEYS)
+    cache.write_bytes("templates", name, b"\x00damaged")
+    monkeypatch.setattr(I, "_TABLE", [])
+    assert I._table() == table
+
+
+def test_pickles_as_the_full_build():
+    """A plan shipped to workers pickles its formalizations: an instantiated one arrives
+    as the full build, whose printed texts are the same."""
+    import pickle
+
+    text = "in m upon p the sw shall within 3 ticks satisfy occurs(1, q)"
+    f = I.instantiate(parse(text))
+    assert isinstance(f, I.InstantiatedFormalization)
+    g = pickle.loads(pickle.dumps(f))
+    assert type(g) is I.Formalization
+    assert _template_texts(f) == _template_texts(g) == _full_texts(formalize(parse(text)))
+    assert (g.key, g.variables, g.ticks, g.pt_causal) == (f.key, f.variables, f.ticks,
+                                                          f.pt_causal)
