@@ -61,8 +61,8 @@ which for every ``n >= 2`` compare alike with each other and with 0. So the temp
 subclass that keeps its offset through ``+``/``-`` and prints as a format field). Memory is
 bounded: there are 432 template keys (8 scopes x 3 condition kinds x (8 timings + 4
 duration timings x 3 classes)), about 0.35 ms of CPU each to build. A process builds its
-first 16 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB)
-from fretc's disk cache (:mod:`fretish.cache`, entry named by a hash of the construction's
+first 16 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB,
+behind a CRC-32 of its bytes) from fretc's disk cache (:mod:`fretish.cache`, entry named by a hash of the construction's
 sources and Python's version), building and storing it on first use. The table changes
 speed only: a cache that is off, unreadable or damaged means the keys are built.
 
@@ -75,6 +75,7 @@ from __future__ import annotations
 import marshal
 import operator
 import re
+import zlib
 from fractions import Fraction
 from pathlib import Path
 
@@ -265,7 +266,7 @@ def _cache_name() -> str:
 
     here = Path(__file__).resolve().parent
     sources = [(here / f).read_text(encoding="utf-8") for f in _SOURCES]
-    return key_of("templates-v1", sys.version, *sources)
+    return key_of("templates-v2", sys.version, *sources)
 
 
 _SOURCES = ("instantiate.py", "semantics.py", "scope_timing.py", "ir.py", "printers.py",
@@ -285,14 +286,17 @@ def _table() -> dict | None:
         if cache.cache_dir() is not None:
             name = _cache_name()
             blob = cache.read_bytes("templates", name)
-            if blob is not None:
+            if blob is not None and len(blob) > 4 and zlib.crc32(blob[4:]) == int.from_bytes(
+                    blob[:4], "big"):
                 try:
-                    table = dict(zip(ALL_KEYS, marshal.loads(blob)))
+                    table = dict(zip(ALL_KEYS, marshal.loads(blob[4:])))
                 except (ValueError, EOFError, TypeError):
                     table = None  # a damaged entry: built again below
             if table is None or len(table) != len(ALL_KEYS):
                 data = tuple(_build_key(k) for k in ALL_KEYS)
-                cache.write_bytes("templates", name, marshal.dumps(data))
+                body = marshal.dumps(data)
+                cache.write_bytes("templates", name,
+                                  zlib.crc32(body).to_bytes(4, "big") + body)
                 table = dict(zip(ALL_KEYS, data))
     except OSError:
         table = None

@@ -335,11 +335,20 @@ def test_disk_table_gives_the_built_templates(tmp_path, monkeypatch):
     for key in I.ALL_KEYS[::37]:
         assert table[key] == I._build_key(key)
     name = I._cache_name()
-    assert marshal.loads(cache.read_bytes("templates", name)) == tuple(
-        table[k] for k in I.ALL_KEYS)
+    blob = cache.read_bytes("templates", name)
+    assert marshal.loads(blob[4:]) == tuple(table[k] for k in I.ALL_KEYS)
     cache.write_bytes("templates", name, b"\x00damaged")
     monkeypatch.setattr(I, "_TABLE", [])
     assert I._table() == table
+    # an entry that still unmarshals but whose formula text was altered (a flipped byte)
+    # fails its CRC-32 and is rebuilt, never used
+    key = I.ALL_KEYS[100]
+    forged = list(marshal.loads(blob[4:]))
+    forged[100] = marshal.loads(marshal.dumps(forged[100]).replace(b"H", b"O", 1))
+    assert forged[100] != table[key]
+    cache.write_bytes("templates", name, blob[:4] + marshal.dumps(tuple(forged)))
+    monkeypatch.setattr(I, "_TABLE", [])
+    assert I._table()[key] == table[key]
 
 
 def test_pickles_as_the_full_build():
