@@ -82,7 +82,7 @@ from pathlib import Path
 from fretish import ast as A
 
 from . import ir
-from .expressions import Expander, mentions_time
+from .expressions import _TIME_NAMES, Expander, SemanticsError, mentions_time
 from .ir import FALSE, FTP, LAST, Node, gc_paused
 from .printers import _smv, _smv_z, _spot
 from .scope_timing import fn_right, pt_endpoints
@@ -390,6 +390,11 @@ def opaque_safe(tmpl: "_Template", atoms, n: int | None) -> bool:
     for a in atoms:
         if a is not None and inspected(a):
             return False
+    return _compared_safe(tmpl, atoms, n)
+
+
+def _compared_safe(tmpl: "_Template", atoms, n: int | None) -> bool:
+    """Rule 2 of :func:`opaque_safe` alone."""
     for conj in tmpl.compared:
         for kind, f, v in conj:
             if kind == 0:
@@ -405,6 +410,54 @@ def opaque_safe(tmpl: "_Template", atoms, n: int | None) -> bool:
     return True
 
 
+class _Timed(Exception):
+    """Raised by :class:`_PlainExpander` at the first temporal function or FTP."""
+
+
+class _PlainExpander(Expander):
+    """:class:`~compiler.expressions.Expander` for ft (``FTP``, ``LAST``) that converts an
+    expression *without* temporal functions or FTP - which then means the same in ft,
+    ft_inf and pt (:mod:`compiler.semantics` converts it once) - and collects its
+    variables on the way: ``names`` holds the ``ap``/``var`` names in the order the
+    conversion creates them, which is the pre-order of the IR it returns (children are
+    converted left to right, nothing converted is dropped: ``!!a`` folds to ``a``, which
+    keeps ``a``'s names), i.e. :func:`compiler.ir.variables` of the result. At a temporal
+    function or FTP it raises :class:`_Timed` (the caller converts per formula), so one
+    walk replaces :func:`~compiler.expressions.mentions_time`'s scan and the conversion."""
+
+    def __init__(self):
+        super().__init__("ft", FTP, LAST)
+        self.names: dict = {}
+
+    def bool(self, e: A.Expr) -> Node:
+        if isinstance(e, A.Var):
+            name = e.name
+            if name == "FTP":
+                raise _Timed
+            self.names[name] = None
+            return Node("ap", name=name)
+        return Expander.bool(self, e)
+
+    def _atom(self, node: Node) -> Node:
+        return node  # no preInt/preReal here (they raise _Timed): never a derived atom
+
+    def _bool_call(self, e: A.Call) -> Node:
+        if e.name in _TIME_NAMES:
+            raise _Timed
+        return Expander._bool_call(self, e)
+
+    def term(self, e: A.Expr) -> Node:
+        if isinstance(e, A.Var):
+            name = e.name
+            if name == "FTP":
+                raise _Timed
+            self.names[name] = None
+            return Node("var", name=name)
+        if isinstance(e, A.Call) and e.name in _TIME_NAMES:
+            raise _Timed  # preInt, preReal
+        return Expander.term(self, e)
+
+
 class InstantiatedFormalization(Formalization):
     """A :class:`~compiler.semantics.Formalization` whose printed formulas come from a
     template; ``ft``, ``ft_inf`` and ``pt`` are built (the full construction) on first use.
@@ -416,7 +469,7 @@ class InstantiatedFormalization(Formalization):
 
     def __init__(self, req: A.Requirement, tick_period: Fraction | None, tmpl: _Template,
                  atoms: tuple, texts: list, variables: list, warnings: list,
-                 ticks: int | None, pt_causal: bool):
+                 ticks: int | None, pt_causal: bool, plain: bool = False):
         self.key = req.key
         self.variables = variables
         self.warnings = warnings
@@ -426,6 +479,8 @@ class InstantiatedFormalization(Formalization):
         self._atoms, self._texts = atoms, texts
         self._full = None
         self._smv_values = None
+        self._plain = plain  # the same four atoms in ft, ft_inf and pt
+        self._spot_values = None
 
     def _build(self) -> Formalization:
         f = self._full
@@ -465,6 +520,14 @@ class InstantiatedFormalization(Formalization):
         if compiled is None:
             return _spot(getattr(self, which))  # raises the printer's own error
         fmt, pick = compiled
+        if self._plain:
+            # one atom set, whose Spot texts serve ft and ft_inf (pt's fields, never picked
+            # by a Spot form, hold the same texts)
+            values = self._spot_values
+            if values is None:
+                one = [None if a is None else _spot(a) for a in self._atoms[:_ATOMS]]
+                values = self._spot_values = self._values(one * 3)
+            return fmt % pick(values)
         lo = 0 if which == "ft" else _ATOMS  # only that formula's atoms: pt's have past
         texts = [None] * (3 * _ATOMS)
         for i in range(lo, lo + _ATOMS):
@@ -486,35 +549,48 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
         cexpr = req.condition.expr if cond != "null" else None
         sexpr = req.timing.stop if timing in A.STOP_TIMINGS else None
         exprs = (cexpr, sexpr, req.response)
-        if not any(e is not None and mentions_time(e) for e in exprs) and (
-                mode is None or not mentions_time(mode)):
+        x = _PlainExpander()
+        try:
             # without temporal functions or FTP every atom is the same in ft, ft_inf and pt
-            # (compiler.semantics converts it once) and prints alike in pt
-            x = Expander("ft", FTP, LAST)
+            # (compiler.semantics converts it once) and prints alike in pt: converted and
+            # printed once
             one = (None if mode is None else x.bool(mode),
                    *(None if e is None else x.bool(e) for e in exprs))
+        except _Timed:
+            one = None  # converted per formula below
+        except SemanticsError:
+            if not any(e is not None and mentions_time(e) for e in (mode, *exprs)):
+                raise  # the error of the one conversion (Expander("ft", FTP, LAST))
+            one = None  # the per-formula conversion below raises, in its own order
+        if one is not None:
+            for a in one:
+                if a is not None and inspected(a):
+                    return formalize(req, tick_period)
+            tmpl = template(scope, cond, timing, n)
             atoms = one * 3
-            one_text = [None if a is None else _smv(a) for a in one]
-            texts = one_text * 3
-            pt_causal = True
+            if not _compared_safe(tmpl, atoms, n):
+                return formalize(req, tick_period)
+            texts = [None if a is None else _smv(a) for a in one] * 3
+            # variables in sentence order: mode, condition, stop, response
+            return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
+                                             list(x.names), warnings, n, True, plain=True)
+        # the atoms of each formula, converted as compiler.semantics.construct does
+        if mode is None:
+            m_pt = m_ft = m_inf = None
         else:
-            # the atoms of each formula, converted as compiler.semantics.construct does
-            if mode is None:
-                m_pt = m_ft = m_inf = None
-            else:
-                m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
-                m_ft = Expander("ft", FTP, LAST, free=True).bool(mode)
-                m_inf = Expander("ft", FTP, FALSE, free=True).bool(mode)
-            left, _ = pt_endpoints(scope, m_pt)
-            px = Expander("pt", left, fn_right(scope, m_ft, LAST))
-            atoms = ()
-            for m, x in ((m_ft, Expander("ft", left, fn_right(scope, m_ft, LAST))),
-                         (m_inf, Expander("ft", left, fn_right(scope, m_inf, FALSE))),
-                         (m_pt, px)):
-                atoms += (m, *(None if e is None else x.bool(e) for e in exprs))
-            texts = [None if a is None else (_smv_z(a) if i >= 2 * _ATOMS else _smv(a))
-                     for i, a in enumerate(atoms)]
-            pt_causal = not px.has_future_atom
+            m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
+            m_ft = Expander("ft", FTP, LAST, free=True).bool(mode)
+            m_inf = Expander("ft", FTP, FALSE, free=True).bool(mode)
+        left, _ = pt_endpoints(scope, m_pt)
+        px = Expander("pt", left, fn_right(scope, m_ft, LAST))
+        atoms = ()
+        for m, x in ((m_ft, Expander("ft", left, fn_right(scope, m_ft, LAST))),
+                     (m_inf, Expander("ft", left, fn_right(scope, m_inf, FALSE))),
+                     (m_pt, px)):
+            atoms += (m, *(None if e is None else x.bool(e) for e in exprs))
+        texts = [None if a is None else (_smv_z(a) if i >= 2 * _ATOMS else _smv(a))
+                 for i, a in enumerate(atoms)]
+        pt_causal = not px.has_future_atom
         tmpl = template(scope, cond, timing, n)
         if not opaque_safe(tmpl, atoms, n):
             return formalize(req, tick_period)

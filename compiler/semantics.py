@@ -125,7 +125,10 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
     def fields(x: Expander):
         if plain and shared:
             return shared[0]
-        out = tuple(None if e is None else x.bool(e) for e in exprs)
+        # converted in sentence order (condition, stop, response), so the first bad
+        # expression of the sentence is the one reported, as compiler.instantiate does
+        c, s, r = (None if e is None else x.bool(e) for e in exprs[1:] + exprs[:1])
+        out = (r, c, s)
         if plain:
             shared.append(out)
         return out
