@@ -364,3 +364,21 @@ def test_pickles_as_the_full_build():
     assert _template_texts(f) == _template_texts(g) == _full_texts(formalize(parse(text)))
     assert (g.key, g.variables, g.ticks, g.pt_causal) == (f.key, f.variables, f.ticks,
                                                           f.pt_causal)
+
+
+@pytest.mark.parametrize("text", [
+    "upon x + 1 the sw shall satisfy y + 2",                  # condition and response bad
+    "upon x + 1 the sw shall until s - 1 satisfy persists(2, q)",
+    "in m the sw shall until s * 2 satisfy y + 2",            # stop and response bad
+])
+def test_the_first_bad_expression_of_the_sentence_is_reported(text):
+    """Both paths convert the condition, stop and response in sentence order: the error
+    (and its span) is the first bad expression's, the same with and without a template."""
+    req = parse(text)
+    errors = []
+    for fn in (formalize, I.instantiate):
+        with pytest.raises(FretishError) as exc:
+            fn(req)
+        errors.append((str(exc.value), exc.value.span))
+    assert errors[0] == errors[1]
+    assert errors[0][1].column == text.index("x + 1" if "x + 1" in text else "s * 2") + 1
