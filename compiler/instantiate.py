@@ -414,6 +414,9 @@ class _Timed(Exception):
     """Raised by :class:`_PlainExpander` at the first temporal function or FTP."""
 
 
+_TIMED = object()  # an expression with temporal functions or FTP (converted per formula)
+
+
 class _PlainExpander(Expander):
     """:class:`~compiler.expressions.Expander` for ft (``FTP``, ``LAST``) that converts an
     expression *without* temporal functions or FTP - which then means the same in ft,
@@ -548,57 +551,82 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
         mode = req.scope.mode if scope != "null" else None
         cexpr = req.condition.expr if cond != "null" else None
         sexpr = req.timing.stop if timing in A.STOP_TIMINGS else None
-        exprs = (cexpr, sexpr, req.response)
+        exprs = (mode, cexpr, sexpr, req.response)
+        # An expression without temporal functions or FTP converts to the same atom in ft,
+        # ft_inf and pt (Expander's kind, endpoints and endpoint-free forms only shape
+        # temporal functions; compiler.semantics converts it once) and prints alike in pt
+        # (no FTP): converted and printed once, its variables collected on the way.
         x = _PlainExpander()
+        one: list = []  # per expression: its atom, None (absent) or _TIMED
+        names: list = []  # per expression: its variables (a dict), None for _TIMED
         try:
-            # without temporal functions or FTP every atom is the same in ft, ft_inf and pt
-            # (compiler.semantics converts it once) and prints alike in pt: converted and
-            # printed once
-            one = (None if mode is None else x.bool(mode),
-                   *(None if e is None else x.bool(e) for e in exprs))
-        except _Timed:
-            one = None  # converted per formula below
+            for e in exprs:
+                if e is None:
+                    one.append(None)
+                    names.append({})
+                    continue
+                x.names = {}
+                try:
+                    one.append(x.bool(e))
+                    names.append(x.names)
+                except _Timed:
+                    one.append(_TIMED)
+                    names.append(None)
         except SemanticsError:
-            if not any(e is not None and mentions_time(e) for e in (mode, *exprs)):
+            if not any(e is not None and mentions_time(e) for e in exprs):
                 raise  # the error of the one conversion (Expander("ft", FTP, LAST))
-            one = None  # the per-formula conversion below raises, in its own order
-        if one is not None:
+            # the per-formula conversion raises, in its own order (mode, then per formula)
+            one = [_TIMED if e is not None else None for e in exprs]
+            names = [None] * 4
+        if _TIMED not in one:
             for a in one:
                 if a is not None and inspected(a):
                     return formalize(req, tick_period)
             tmpl = template(scope, cond, timing, n)
-            atoms = one * 3
+            atoms = tuple(one) * 3
             if not _compared_safe(tmpl, atoms, n):
                 return formalize(req, tick_period)
             texts = [None if a is None else _smv(a) for a in one] * 3
+            variables = {}
+            for d in names:
+                variables.update(d)
             # variables in sentence order: mode, condition, stop, response
             return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
-                                             list(x.names), warnings, n, True, plain=True)
-        # the atoms of each formula, converted as compiler.semantics.construct does
-        if mode is None:
-            m_pt = m_ft = m_inf = None
-        else:
+                                             list(variables), warnings, n, True, plain=True)
+        # the atoms of each formula, converted as compiler.semantics.construct does (the
+        # expressions with temporal functions; the others are the same in every formula)
+        m = one[0]
+        if m is _TIMED:
             m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
             m_ft = Expander("ft", FTP, LAST, free=True).bool(mode)
             m_inf = Expander("ft", FTP, FALSE, free=True).bool(mode)
+        else:
+            m_pt = m_ft = m_inf = m
         left, _ = pt_endpoints(scope, m_pt)
         px = Expander("pt", left, fn_right(scope, m_ft, LAST))
+        rest = one[1:]
         atoms = ()
         for m, x in ((m_ft, Expander("ft", left, fn_right(scope, m_ft, LAST))),
                      (m_inf, Expander("ft", left, fn_right(scope, m_inf, FALSE))),
                      (m_pt, px)):
-            atoms += (m, *(None if e is None else x.bool(e) for e in exprs))
-        texts = [None if a is None else (_smv_z(a) if i >= 2 * _ATOMS else _smv(a))
-                 for i, a in enumerate(atoms)]
+            atoms += (m, *(x.bool(e) if a is _TIMED else a for e, a in zip(exprs[1:], rest)))
+        plain_text = [None if a is None or a is _TIMED else _smv(a) for a in one]
+        texts = []
+        for i, a in enumerate(atoms):
+            t = plain_text[i % _ATOMS]
+            if t is None and a is not None:
+                t = _smv_z(a) if i >= 2 * _ATOMS else _smv(a)
+            texts.append(t)
         pt_causal = not px.has_future_atom
         tmpl = template(scope, cond, timing, n)
         if not opaque_safe(tmpl, atoms, n):
             return formalize(req, tick_period)
         # variables in sentence order: mode, condition, stop, response (of ft)
-        variables = ir.variables(Node("vars", tuple(a for a in atoms[:_ATOMS]
-                                                    if a is not None)))
-        return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts, variables,
-                                         warnings, n, pt_causal)
+        variables = {}
+        for a, d in zip(atoms[:_ATOMS], names):
+            variables.update(dict.fromkeys(ir.variables(a)) if d is None else d)
+        return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
+                                         list(variables), warnings, n, pt_causal)
 
 
 def formula_text(f: Formalization, which: str) -> str:
