@@ -76,8 +76,8 @@ import marshal
 import operator
 import re
 import zlib
+import os
 from fractions import Fraction
-from pathlib import Path
 
 from fretish import ast as A
 
@@ -258,15 +258,24 @@ def _build_key(key) -> tuple:
 
 
 def _cache_name() -> str:
-    """The disk-cache entry name: a hash of everything the templates are a function of
-    (this module and the construction's sources, Python's version for ``marshal``)."""
+    """The disk-cache entry name: a digest of everything the templates are a function of
+    (this module and the construction's sources, Python's version for ``marshal``), the
+    CRC-32 and Adler-32 (``zlib``) of those texts each preceded by its length (no OpenSSL
+    or ``pathlib`` to load at start-up; an edit of a source changes the name except with
+    odds of about 2**-64; the entry's own CRC-32 guards its bytes)."""
     import sys
 
-    from fretish.cache import key_of
-
-    here = Path(__file__).resolve().parent
-    sources = [(here / f).read_text(encoding="utf-8") for f in _SOURCES]
-    return key_of("templates-v2", sys.version, *sources)
+    here = os.path.dirname(os.path.abspath(__file__))
+    crc = adler = 1
+    parts = [b"templates-v3", sys.version.encode()]
+    for f in _SOURCES:
+        with open(os.path.join(here, f), "rb") as fh:
+            parts.append(fh.read())
+    for b in parts:
+        head = len(b).to_bytes(8, "little")
+        crc = zlib.crc32(b, zlib.crc32(head, crc))
+        adler = zlib.adler32(b, zlib.adler32(head, adler))
+    return "v3-%08x%08x" % (crc, adler)
 
 
 _SOURCES = ("instantiate.py", "semantics.py", "scope_timing.py", "ir.py", "printers.py",
@@ -283,16 +292,17 @@ def _table() -> dict | None:
 
     table = None
     try:
-        if cache.cache_dir() is not None:
-            name = _cache_name()
-            blob = cache.read_bytes("templates", name)
-            if blob is not None and len(blob) > 4 and zlib.crc32(blob[4:]) == int.from_bytes(
-                    blob[:4], "big"):
-                try:
-                    table = dict(zip(ALL_KEYS, marshal.loads(blob[4:])))
-                except (ValueError, EOFError, TypeError):
-                    table = None  # a damaged entry: built again below
-            if table is None or len(table) != len(ALL_KEYS):
+        name = _cache_name()
+        blob = cache.read_bytes("templates", name)  # None: missing, or the cache is off
+        if blob is not None and len(blob) > 4 and zlib.crc32(blob[4:]) == int.from_bytes(
+                blob[:4], "big"):
+            try:
+                table = dict(zip(ALL_KEYS, marshal.loads(blob[4:])))
+            except (ValueError, EOFError, TypeError):
+                table = None  # a damaged entry: built again below
+        if table is None or len(table) != len(ALL_KEYS):
+            table = None
+            if cache.cache_dir() is not None:
                 data = tuple(_build_key(k) for k in ALL_KEYS)
                 body = marshal.dumps(data)
                 cache.write_bytes("templates", name,

@@ -382,3 +382,55 @@ def test_the_first_bad_expression_of_the_sentence_is_reported(text):
         errors.append((str(exc.value), exc.value.span))
     assert errors[0] == errors[1]
     assert errors[0][1].column == text.index("x + 1" if "x + 1" in text else "s * 2") + 1
+
+
+def test_cache_name_follows_the_sources(monkeypatch):
+    """The table's entry name is a digest of the construction's sources: the same
+    sources give the same name, a changed source another."""
+    name = I._cache_name()
+    assert name == I._cache_name()
+    real_open = open
+
+    def edited(path, *args, **kw):
+        f = real_open(path, *args, **kw)
+        if str(path).endswith("printers.py"):
+            import io
+            return io.BytesIO(f.read() + b"\n# edited\n")
+        return f
+
+    monkeypatch.setattr("builtins.open", edited)
+    assert I._cache_name() != name
+
+
+def test_emit_ltl_loads_neither_pathlib_nor_openssl(tmp_path):
+    """Start-up (issue 9): formalizing and printing with the templates' disk table needs
+    neither ``pathlib`` nor ``hashlib`` (OpenSSL), a few ms of imports each."""
+    import os
+    import subprocess
+    import sys
+
+    fret = tmp_path / "r.fret"
+    # more than _BUILT_BEFORE_TABLE template keys, so the disk table is read
+    fret.write_text("".join(f"R{i}: in m upon p the sw shall {t} satisfy q\n"
+                            for i, t in enumerate(["immediately", "always", "eventually",
+                                                   "never", "finally", "within 3 ticks",
+                                                   "for 2 ticks", "after 4 ticks",
+                                                   "until s", "before s", "within 1 ticks",
+                                                   "for 0 ticks", "after 1 ticks",
+                                                   "at the next timepoint"]))
+                    + "".join(f"S{i}: upon p the sw shall {t} satisfy q\n"
+                              for i, t in enumerate(["immediately", "always", "eventually",
+                                                     "never", "finally"])))
+    code = ("import sys, io, contextlib\nfrom fretc.cli import main\n"
+            f"sys.argv = ['fretc', {str(fret)!r}, '--emit', 'ltl', '--json']\n"
+            "out = io.StringIO()\n"
+            "try:\n    with contextlib.redirect_stdout(out):\n        main()\n"
+            "except SystemExit as e:\n    assert not e.code, e.code\n"
+            "assert '\"pt\"' in out.getvalue()\n"
+            "print(sorted(m for m in ('pathlib', 'hashlib', '_hashlib') if m in sys.modules))")
+    env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))
+    for _ in range(2):  # the first run writes the table, the second reads it
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             env=env, check=True).stdout
+    assert out.strip() == "[]"
+    assert any((tmp_path / "cache" / "templates").iterdir())
