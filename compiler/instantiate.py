@@ -62,8 +62,9 @@ subclass that keeps its offset through ``+``/``-`` and prints as a format field)
 bounded: there are 432 template keys (8 scopes x 3 condition kinds x (8 timings + 4
 duration timings x 3 classes)), about 0.35 ms of CPU each to build. A process builds its
 first 16 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB,
-behind a CRC-32 of its bytes) from fretc's disk cache (:mod:`fretish.cache`, entry named by a hash of the construction's
-sources and Python's version), building and storing it on first use. The table changes
+behind a CRC-32 of its bytes; each key's entry unmarshalled on its first use) from fretc's
+disk cache (:mod:`fretish.cache`, entry named by a digest of the construction's sources
+and Python's version, :func:`_cache_name`), building and storing it on first use. The table changes
 speed only: a cache that is off, unreadable or damaged means the keys are built.
 
 Byte identity with the full path is checked by ``tests/compiler/test_instantiate.py`` on
@@ -283,8 +284,9 @@ _SOURCES = ("instantiate.py", "semantics.py", "scope_timing.py", "ir.py", "print
 
 
 def _table() -> dict | None:
-    """Every key's data from fretc's disk cache (:mod:`fretish.cache`), built and stored
-    there on first use; None when the disk cache is off or fails (keys are then built one
+    """Every key's data, each ``marshal``-ed on its own (unmarshalled when the key is first
+    used: a file uses some of the 432 keys), from fretc's disk cache
+    (:mod:`fretish.cache`), built and stored there on first use; None when the disk cache is off or fails (keys are then built one
     by one as needed)."""
     if _TABLE:
         return _TABLE[0]
@@ -300,10 +302,11 @@ def _table() -> dict | None:
                 table = dict(zip(ALL_KEYS, marshal.loads(blob[4:])))
             except (ValueError, EOFError, TypeError):
                 table = None  # a damaged entry: built again below
-        if table is None or len(table) != len(ALL_KEYS):
+        if table is None or len(table) != len(ALL_KEYS) or not all(
+                type(v) is bytes for v in table.values()):
             table = None
             if cache.cache_dir() is not None:
-                data = tuple(_build_key(k) for k in ALL_KEYS)
+                data = tuple(marshal.dumps(_build_key(k)) for k in ALL_KEYS)
                 body = marshal.dumps(data)
                 cache.write_bytes("templates", name,
                                   zlib.crc32(body).to_bytes(4, "big") + body)
@@ -323,7 +326,12 @@ def template(scope: str, cond: str, timing: str, n: int | None) -> _Template:
     if t is None:
         # a few keys are quicker built than the whole table read (about 10 ms)
         table = _table() if len(_TEMPLATES) >= _BUILT_BEFORE_TABLE else None
-        data = table.get(key) if table is not None else None
+        data = None
+        if table is not None:
+            try:
+                data = marshal.loads(table[key])
+            except (KeyError, ValueError, EOFError, TypeError):
+                data = None  # (the entry's CRC-32 held: not expected)
         t = _TEMPLATES[key] = _Template(data if data is not None else _build_key(key))
     return t
 
