@@ -757,6 +757,10 @@ class _FastParser:
                        self._passed_up(size, expand1, include))
                       for origin, size, name, expand1, include in tables["rules"]]
         self.known_words = tables["words"]
+        # rules that reduce one symbol to itself (a ``?rule`` passing its single child up):
+        # reducing by one leaves the value stack as it is and replaces only the top state
+        self.unit = [size == 1 and up == -1 for _, size, _, up in self.rules]
+        self.chains: dict = {}    # (state below, state, terminal) -> state after the units
         self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
 
     @staticmethod
@@ -973,6 +977,17 @@ class _FastParser:
             pos, line, line_start = end, nline, nstart
         return out
 
+    def _chain(self, below: int, state: int, typ: str) -> int:
+        """The state reached from ``state`` (``below`` under it on the stack) by reducing
+        by unit rules (:attr:`unit`) while the action on lookahead ``typ`` is one: the
+        first state whose action on ``typ`` is a shift, another reduction or an error."""
+        actions, gotos, rules, unit = self.actions, self.gotos, self.rules, self.unit
+        while True:
+            action = actions[state].get(typ)
+            if action is None or action >= 0 or not unit[~action]:
+                return state
+            state = gotos[below][rules[~action][0]]
+
     def parse(self, text: str, start: str):
         """The builder's result for ``text`` from start symbol ``start``; raises
         :class:`_Slow` (or the builder's exception) where Lark must decide.
@@ -982,6 +997,7 @@ class _FastParser:
         state: rule origin -> next state)."""
         toks = self._tokens(text)
         actions, gotos, rules = self.actions, self.gotos, self.rules
+        unit, chains = self.unit, self.chains
         state = self.start_states[start]
         state_stack = [state]
         value_stack = []
@@ -996,6 +1012,16 @@ class _FastParser:
                     state_stack.append(state)
                     value_stack.append(tok)
                     break
+                if unit[~action]:
+                    # A run of unit reductions keeps the state below the top, so where it
+                    # ends depends only on (that state, the top state, the lookahead):
+                    # followed once, then looked up (the same states as one by one).
+                    key = (state_stack[-2], state, typ)
+                    state = chains.get(key)
+                    if state is None:
+                        state = chains[key] = self._chain(*key)
+                    state_stack[-1] = state
+                    continue
                 origin, size, callback, up = rules[~action]
                 if up:
                     value = value_stack[up]
