@@ -39,6 +39,7 @@ Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, rest
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import re
@@ -98,12 +99,17 @@ class _Tok:
 _TOKENS = {_Tok}
 
 
+#: ``A.Span`` from one tuple of its six fields, without the named tuple's Python-level
+#: ``__new__`` (the parser makes one per node): the same class, the same value.
+_new_span = functools.partial(tuple.__new__, A.Span)
+
+
 def _span_of(x) -> A.Span:
     if type(x) in _TOKENS:
         dl, dc = _ctx.dl, _ctx.dc
-        return A.Span(x.line + dl, x.column + dc if x.line == 1 else x.column,
-                      x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
-                      x.start_pos, x.end_pos)
+        return _new_span((x.line + dl, x.column + dc if x.line == 1 else x.column,
+                          x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
+                          x.start_pos, x.end_pos))
     return x.span
 
 
@@ -117,11 +123,11 @@ def _join(a, b) -> A.Span:
         start = (s.line, s.column, s.start)
     if type(b) in _TOKENS:
         line = b.end_line
-        return A.Span(start[0], start[1], line + _ctx.dl,
-                      b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
-                      b.end_pos)
+        return _new_span((start[0], start[1], line + _ctx.dl,
+                          b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
+                          b.end_pos))
     e = b.span
-    return A.Span(start[0], start[1], e.end_line, e.end_column, start[2], e.end)
+    return _new_span((start[0], start[1], e.end_line, e.end_column, start[2], e.end))
 
 
 class _Fail(Exception):
