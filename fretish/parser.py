@@ -1029,6 +1029,10 @@ class _FastParser:
                     state_stack[-1] = state
                     continue
                 origin, size, callback, up = rules[~action]
+                if size == 1 and not up:  # one symbol replaced in place: no pop and push
+                    value_stack[-1] = callback(value_stack[-1:])
+                    state = state_stack[-1] = gotos[state_stack[-2]][origin]
+                    continue
                 if up:
                     value = value_stack[up]
                     del value_stack[-size:]
