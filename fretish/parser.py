@@ -3,7 +3,8 @@
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
 phrasings and the expression precedence. The AST builder is applied while parsing (no
 intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
-cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character);
+cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character;
+a run of unit reductions, a ``?rule`` passing its one child up, is one dictionary lookup);
 a sentence it cannot parse goes to Lark itself, which is imported only then and reports the
 error (``fretc FILE --emit ltl`` on valid sentences does not import Lark).
 
