@@ -1071,7 +1071,7 @@ class _FastParser:
 
 
 #: The format of :func:`fast_tables`'s data (part of its cache entry's name).
-_FAST_FORMAT = "v3"
+_FAST_FORMAT = "v4"
 
 
 #: Where the fast path's tables are kept first: beside the package, as Python keeps its
@@ -1086,7 +1086,8 @@ def _load_fast():
 
     The entry (plain data, :func:`fast_tables`, marshalled) holds the grammar text, Lark's
     and Python's versions and the data format it was built from (its name is a CRC of
-    them), and is used only when they are this run's, so it is never stale.
+    them), and is used only when they are this run's, so it is never stale; a CRC-32 of the entry's
+    bytes precedes them, so an altered entry is rebuilt, not used.
     It is read from :data:`_PACKAGE_CACHE`, else from fretc's cache folder
     (:mod:`fretish.cache`, sub-folder ``lark``); a new entry is written beside the package
     unless that folder cannot be written or Python writes no bytecode
@@ -1103,9 +1104,12 @@ def _load_fast():
     beside = None if _PACKAGE_CACHE is None else os.path.join(_PACKAGE_CACHE, name)
     for data in (None if beside is None else cache.read_file(beside),
                  cache.read_bytes("lark", name)):
-        if data is not None:
+        # the first 4 bytes are a CRC-32 of the rest: an altered table that still
+        # unmarshals would parse sentences wrongly, so it is rebuilt, never used
+        if data is not None and len(data) > 4 and zlib.crc32(data[4:]) == int.from_bytes(
+                data[:4], "big"):
             try:
-                tables = marshal.loads(data)
+                tables = marshal.loads(data[4:])
                 if tables["identity"] == identity:
                     return _FastParser(tables)
             except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
@@ -1114,7 +1118,8 @@ def _load_fast():
     if tables is None:
         return False
     tables["identity"] = identity
-    data = marshal.dumps(tables)
+    body = marshal.dumps(tables)
+    data = zlib.crc32(body).to_bytes(4, "big") + body
     if beside is None or sys.dont_write_bytecode or not cache.write_file(beside, data):
         cache.write_bytes("lark", name, data)
     return _FastParser(tables)
