@@ -22,10 +22,11 @@ tables are built) are printed beside them, not judged.
 ``PYTHONDONTWRITEBYTECODE`` is dropped from the children's environment (a user's Python
 caches bytecode; without it every run would compile fretc's sources again). ``--baseline
 DIR`` runs the same commands with another checkout of fretc (e.g. ``git archive main | tar
--x -C DIR``) for a ratio measured in the same run. FRET's own formalizer takes about 35 ms
-per sentence (``../shared/fretish/README.md``, a published figure, not measured here). The
-machine's speed is printed as ``sum(range(1000))`` in µs (the README's figures were taken
-at about 20 µs).
+-x -C DIR``) for a ratio measured in the same run; the timed runs of the two checkouts
+alternate, so a change in the machine's load hits both. FRET's own formalizer takes about
+35 ms per sentence (``../shared/fretish/README.md``, a published figure, not measured
+here). The machine's speed is printed as ``sum(range(1000))`` in µs (the README's figures
+were taken at about 20 µs).
 """
 
 from __future__ import annotations
@@ -81,14 +82,20 @@ def child_cpu(cmd, env, cwd) -> float:
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def command_times(root: Path, args, repeat: int, cache_dir: str):
-    """(first run, [timed runs]) CPU seconds of ``fretc ARGS`` with the fretc of ``root``."""
+def command_times(roots, args, repeat: int, caches: dict) -> dict:
+    """``{label: (first run, [timed runs])}``: CPU seconds of ``fretc ARGS`` with the fretc
+    of each ``(label, root)`` of ``roots``. The timed runs alternate between the roots
+    (fretc, baseline, fretc, ...) so a change in the machine's load hits both alike."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    env["PYTHONPATH"] = str(root)
-    env["FRETC_CACHE_DIR"] = cache_dir
-    cmd = [sys.executable, "-c", LAUNCH, *map(str, args)]
-    first = child_cpu(cmd, env, root)
-    return first, [child_cpu(cmd, env, root) for _ in range(repeat)]
+    cmds = {}
+    for label, root in roots:
+        e = dict(env, PYTHONPATH=str(root), FRETC_CACHE_DIR=caches[label])
+        cmds[label] = ([sys.executable, "-c", LAUNCH, *map(str, args)], e, root)
+    out = {label: (child_cpu(*cmds[label]), []) for label, _ in roots}
+    for _ in range(repeat):
+        for label, _root in roots:
+            out[label][1].append(child_cpu(*cmds[label]))
+    return out
 
 
 TARGET_RATE = 3000      # sentences/s of CPU, end to end (issue 9)
@@ -135,13 +142,14 @@ def main() -> None:
         req_file = Path(tmp) / "generated.fret"
         req_file.write_text("".join(f"G{i}: {t}\n" for i, t in enumerate(texts)),
                             encoding="utf-8")
+        caches = {label: tempfile.mkdtemp(prefix="cache_", dir=tmp) for label, _ in roots}
+        many = command_times(roots, [req_file, "--emit", "ltl", "--json"], args.repeat,
+                             caches)
+        one = command_times(roots, [ROOT / "requirements/r1.fret", "--emit", "ltl"],
+                            args.repeat, caches)
         results = {}
-        for label, root in roots:
-            cache = tempfile.mkdtemp(prefix="cache_", dir=tmp)
-            first, e2e = command_times(root, [req_file, "--emit", "ltl", "--json"],
-                                       args.repeat, cache)
-            r1_first, r1 = command_times(root, [ROOT / "requirements/r1.fret", "--emit",
-                                                "ltl"], args.repeat, cache)
+        for label, _root in roots:
+            (first, e2e), (r1_first, r1) = many[label], one[label]
             results[label] = (min(e2e), min(r1))
             print(f"{label}: `fretc FILE --emit ltl --json`, {args.n} sentences, fresh "
                   f"process: best {min(e2e):.3f} s CPU = {args.n / min(e2e):.0f} "

@@ -15,6 +15,7 @@ symbolic) beyond.
 from __future__ import annotations
 
 import json
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -254,16 +255,18 @@ def shape_automata(kind: str, shape: Node, n_atoms: int, max_states: int,
     arguments, Spot's version and the text of this module and :mod:`compiler.ltl3`."""
     text = to_spot(shape)
     spot_version = _spot_version() if kind == "spot" else "-"
-    key = cache.key_of("ltl3-shape-1", kind, text, str(n_atoms), str(max_states),
+    key = cache.key_of("ltl3-shape-2", kind, text, str(n_atoms), str(max_states),
                        str(table_max_aps), spot_version, _source_key())
     got = _SHAPE_MEMO.get(key)
     if got is not None:
         return got
     name = f"{key[:40]}.json"
     raw = cache.read_bytes("ltl3", name)
-    if raw is not None:
+    # an entry is a CRC-32 line (8 hex digits) then the JSON: a table altered on disk but
+    # still valid JSON would give a monitor a wrong LTL3 status, so it is rebuilt instead
+    if raw is not None and raw[8:9] == b"\n" and raw[:8] == b"%08x" % zlib.crc32(raw[9:]):
         try:
-            got = json.loads(raw)
+            got = json.loads(raw[9:])
             if got.get("shape") != text:  # a hash collision or a foreign file
                 got = None
         except ValueError:
@@ -274,7 +277,8 @@ def shape_automata(kind: str, shape: Node, n_atoms: int, max_states: int,
         else:
             got = _progression_data(shape, n_atoms)
         got["shape"] = text
-        cache.write_bytes("ltl3", name, json.dumps(got, separators=(",", ":")).encode())
+        body = json.dumps(got, separators=(",", ":")).encode()
+        cache.write_bytes("ltl3", name, b"%08x\n" % zlib.crc32(body) + body)
     _SHAPE_MEMO[key] = got
     return got
 

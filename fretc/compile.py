@@ -89,26 +89,52 @@ class _NotPlain(Exception):
     """A value :func:`json_indent2` leaves to :func:`json.dumps`."""
 
 
+def _string_encoder():
+    """``json``'s C string escaper (``ensure_ascii=True``, the default of ``json.dumps``),
+    taken from ``_json`` without importing the ``json`` package (its decoder and scanner:
+    start-up, issue 9); ``json.encoder``'s own choice where ``_json`` is missing."""
+    try:
+        from _json import encode_basestring_ascii
+    except ImportError:  # pragma: no cover - CPython always has _json
+        from json.encoder import encode_basestring_ascii
+    return encode_basestring_ascii
+
+
 def json_indent2(obj) -> str:
     """``json.dumps(obj, indent=2)``, the same text, for dicts with string keys, lists,
     strings, ints, booleans and None (anything else: ``json.dumps`` itself). The standard
     library's C encoder only serves ``indent=None``; its Python one is a tenth of the time
-    of ``--emit ltl --json`` on a thousand requirements."""
-    import json.encoder  # lazy: only --json needs it (start-up, issue 9)
-    enc = json.encoder.encode_basestring_ascii
+    of ``--emit ltl --json`` on a thousand requirements.
+
+    A dict is written from a layout computed once per (key tuple, depth): the quoted keys
+    with their separators and indentation, so a list of same-shaped objects (one per
+    requirement, :meth:`compiler.build.Compiled.to_json`) costs one escape per string value
+    and one join; a list whose items are all strings is one join. Any other shape takes
+    the general recursive path; a value neither handles (a float, a non-string key, nesting
+    deeper than the recursion limit) gives ``json.dumps``'s text."""
+    enc = _string_encoder()
     parts: list = []
     add = parts.append
+    layouts: dict = {}
+    scalars = {None: "null", True: "true", False: "false"}  # 1 == True: looked up by type
+
+    def layout(keys: tuple, pad: str) -> tuple:
+        inner = pad + "  "
+        for k in keys:
+            if type(k) is not str:
+                raise _NotPlain
+        heads = tuple(("{" if i == 0 else ",") + inner + enc(k) + ": "
+                      for i, k in enumerate(keys))
+        lay = (heads, inner, pad + "}")
+        layouts[(keys, pad)] = lay
+        return lay
 
     def go(o, pad: str) -> None:
         t = type(o)
         if t is str:
             add(enc(o))
-        elif o is None:
-            add("null")
-        elif o is True:
-            add("true")
-        elif o is False:
-            add("false")
+        elif o is None or t is bool:
+            add(scalars[o])
         elif t is int:
             add(int.__repr__(o))
         elif t is list:
@@ -116,6 +142,12 @@ def json_indent2(obj) -> str:
                 add("[]")
                 return
             inner = pad + "  "
+            for x in o:
+                if type(x) is not str:
+                    break
+            else:  # all strings: one join
+                add("[" + inner + ("," + inner).join(map(enc, o)) + pad + "]")
+                return
             sep = "[" + inner
             for x in o:
                 add(sep)
@@ -126,23 +158,31 @@ def json_indent2(obj) -> str:
             if not o:
                 add("{}")
                 return
-            inner = pad + "  "
-            sep = "{" + inner
-            for k, v in o.items():
-                if type(k) is not str:
-                    raise _NotPlain
-                add(sep)
-                add(enc(k))
-                add(": ")
-                go(v, inner)
-                sep = "," + inner
-            add(pad + "}")
+            keys = tuple(o)
+            lay = layouts.get((keys, pad))
+            if lay is None:
+                lay = layout(keys, pad)
+            heads, inner, close = lay
+            for head, v in zip(heads, o.values()):
+                t = type(v)
+                if t is str:
+                    add(head)
+                    add(enc(v))
+                elif v is None or t is bool:
+                    add(head + scalars[v])
+                elif t is int:
+                    add(head + int.__repr__(v))
+                else:
+                    add(head)
+                    go(v, inner)
+            add(close)
         else:
             raise _NotPlain
 
     try:
         go(obj, "\n")
     except (_NotPlain, RecursionError):
+        import json  # lazy: only for values outside the plain shapes
         return json.dumps(obj, indent=2)
     return "".join(parts)
 

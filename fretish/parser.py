@@ -3,7 +3,8 @@
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
 phrasings and the expression precedence. The AST builder is applied while parsing (no
 intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
-cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character);
+cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character;
+a run of unit reductions, a ``?rule`` passing its one child up, is one dictionary lookup);
 a sentence it cannot parse goes to Lark itself, which is imported only then and reports the
 error (``fretc FILE --emit ltl`` on valid sentences does not import Lark).
 
@@ -39,6 +40,7 @@ Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, rest
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import re
@@ -98,12 +100,17 @@ class _Tok:
 _TOKENS = {_Tok}
 
 
+#: ``A.Span`` from one tuple of its six fields, without the named tuple's Python-level
+#: ``__new__`` (the parser makes one per node): the same class, the same value.
+_new_span = functools.partial(tuple.__new__, A.Span)
+
+
 def _span_of(x) -> A.Span:
     if type(x) in _TOKENS:
         dl, dc = _ctx.dl, _ctx.dc
-        return A.Span(x.line + dl, x.column + dc if x.line == 1 else x.column,
-                      x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
-                      x.start_pos, x.end_pos)
+        return _new_span((x.line + dl, x.column + dc if x.line == 1 else x.column,
+                          x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
+                          x.start_pos, x.end_pos))
     return x.span
 
 
@@ -117,11 +124,11 @@ def _join(a, b) -> A.Span:
         start = (s.line, s.column, s.start)
     if type(b) in _TOKENS:
         line = b.end_line
-        return A.Span(start[0], start[1], line + _ctx.dl,
-                      b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
-                      b.end_pos)
+        return _new_span((start[0], start[1], line + _ctx.dl,
+                          b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
+                          b.end_pos))
     e = b.span
-    return A.Span(start[0], start[1], e.end_line, e.end_column, start[2], e.end)
+    return _new_span((start[0], start[1], e.end_line, e.end_column, start[2], e.end))
 
 
 class _Fail(Exception):
@@ -757,6 +764,10 @@ class _FastParser:
                        self._passed_up(size, expand1, include))
                       for origin, size, name, expand1, include in tables["rules"]]
         self.known_words = tables["words"]
+        # rules that reduce one symbol to itself (a ``?rule`` passing its single child up):
+        # reducing by one leaves the value stack as it is and replaces only the top state
+        self.unit = [size == 1 and up == -1 for _, size, _, up in self.rules]
+        self.chains: dict = {}    # (state below, state, terminal) -> state after the units
         self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
 
     @staticmethod
@@ -973,6 +984,17 @@ class _FastParser:
             pos, line, line_start = end, nline, nstart
         return out
 
+    def _chain(self, below: int, state: int, typ: str) -> int:
+        """The state reached from ``state`` (``below`` under it on the stack) by reducing
+        by unit rules (:attr:`unit`) while the action on lookahead ``typ`` is one: the
+        first state whose action on ``typ`` is a shift, another reduction or an error."""
+        actions, gotos, rules, unit = self.actions, self.gotos, self.rules, self.unit
+        while True:
+            action = actions[state].get(typ)
+            if action is None or action >= 0 or not unit[~action]:
+                return state
+            state = gotos[below][rules[~action][0]]
+
     def parse(self, text: str, start: str):
         """The builder's result for ``text`` from start symbol ``start``; raises
         :class:`_Slow` (or the builder's exception) where Lark must decide.
@@ -982,6 +1004,7 @@ class _FastParser:
         state: rule origin -> next state)."""
         toks = self._tokens(text)
         actions, gotos, rules = self.actions, self.gotos, self.rules
+        unit, chains = self.unit, self.chains
         state = self.start_states[start]
         state_stack = [state]
         value_stack = []
@@ -996,7 +1019,21 @@ class _FastParser:
                     state_stack.append(state)
                     value_stack.append(tok)
                     break
+                if unit[~action]:
+                    # A run of unit reductions keeps the state below the top, so where it
+                    # ends depends only on (that state, the top state, the lookahead):
+                    # followed once, then looked up (the same states as one by one).
+                    key = (state_stack[-2], state, typ)
+                    state = chains.get(key)
+                    if state is None:
+                        state = chains[key] = self._chain(*key)
+                    state_stack[-1] = state
+                    continue
                 origin, size, callback, up = rules[~action]
+                if size == 1 and not up:  # one symbol replaced in place: no pop and push
+                    value_stack[-1] = callback(value_stack[-1:])
+                    state = state_stack[-1] = gotos[state_stack[-2]][origin]
+                    continue
                 if up:
                     value = value_stack[up]
                     del value_stack[-size:]
@@ -1034,7 +1071,7 @@ class _FastParser:
 
 
 #: The format of :func:`fast_tables`'s data (part of its cache entry's name).
-_FAST_FORMAT = "v3"
+_FAST_FORMAT = "v4"
 
 
 #: Where the fast path's tables are kept first: beside the package, as Python keeps its
@@ -1049,7 +1086,8 @@ def _load_fast():
 
     The entry (plain data, :func:`fast_tables`, marshalled) holds the grammar text, Lark's
     and Python's versions and the data format it was built from (its name is a CRC of
-    them), and is used only when they are this run's, so it is never stale.
+    them), and is used only when they are this run's, so it is never stale; a CRC-32 of the entry's
+    bytes precedes them, so an altered entry is rebuilt, not used.
     It is read from :data:`_PACKAGE_CACHE`, else from fretc's cache folder
     (:mod:`fretish.cache`, sub-folder ``lark``); a new entry is written beside the package
     unless that folder cannot be written or Python writes no bytecode
@@ -1066,9 +1104,12 @@ def _load_fast():
     beside = None if _PACKAGE_CACHE is None else os.path.join(_PACKAGE_CACHE, name)
     for data in (None if beside is None else cache.read_file(beside),
                  cache.read_bytes("lark", name)):
-        if data is not None:
+        # the first 4 bytes are a CRC-32 of the rest: an altered table that still
+        # unmarshals would parse sentences wrongly, so it is rebuilt, never used
+        if data is not None and len(data) > 4 and zlib.crc32(data[4:]) == int.from_bytes(
+                data[:4], "big"):
             try:
-                tables = marshal.loads(data)
+                tables = marshal.loads(data[4:])
                 if tables["identity"] == identity:
                     return _FastParser(tables)
             except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
@@ -1077,7 +1118,8 @@ def _load_fast():
     if tables is None:
         return False
     tables["identity"] = identity
-    data = marshal.dumps(tables)
+    body = marshal.dumps(tables)
+    data = zlib.crc32(body).to_bytes(4, "big") + body
     if beside is None or sys.dont_write_bytecode or not cache.write_file(beside, data):
         cache.write_bytes("lark", name, data)
     return _FastParser(tables)

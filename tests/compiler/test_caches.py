@@ -120,6 +120,26 @@ def test_damaged_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
     assert render_module(compiled, "m") == good
 
 
+def test_altered_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
+    """An entry whose table was altered on disk but is still valid JSON with the right
+    shape (a flipped transition) fails its CRC-32 and is recomputed, never used."""
+    import json
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(automata, "_SHAPE_MEMO", {})
+    compiled = [compile_entry(entry("R", SENTENCES[0]))]
+    good = render_module(compiled, "m")
+    (f,) = (tmp_path / "ltl3").glob("*.json")
+    raw = f.read_bytes()
+    data = json.loads(raw[9:])
+    table = data["bad"]["table"]
+    table[0] = [(x + 1) % len(table) for x in table[0]]  # redirect the initial state
+    f.write_bytes(raw[:9] + json.dumps(data, separators=(",", ":")).encode())
+    monkeypatch.setattr(automata, "_SHAPE_MEMO", {})
+    assert render_module(compiled, "m") == good
+    assert f.read_bytes() == raw  # rewritten as computed
+
+
 # --------------------------------------------------------------------------- Lark tables
 TEXT = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
 

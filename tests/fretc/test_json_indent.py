@@ -30,3 +30,32 @@ def test_compiled_requirements():
     root = Path(__file__).resolve().parents[2]
     objs = [c.to_json() for c in compile_entries(load_requirements([root / "requirements"]))]
     assert objs and json_indent2(objs) == json.dumps(objs, indent=2)
+
+
+# Same-shaped objects (the per-requirement layout is computed once per key tuple and depth
+# and reused): keys and values drawn with quotes, backslashes, control and non-ASCII
+# characters, so a wrong key, separator, indentation or escape in a reused layout differs.
+NASTY = st.text(alphabet=st.sampled_from('a"\\\n\t\x00\x1f\x7fé€😀 '), max_size=5)
+LEAVES = st.one_of(st.none(), st.booleans(), st.integers(), NASTY,
+                   st.lists(NASTY, max_size=3), st.lists(st.one_of(NASTY, st.integers()),
+                                                         max_size=3))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(NASTY, min_size=1, max_size=5, unique=True), st.data())
+def test_same_shaped_objects_reuse_one_layout(keys, data):
+    rows = [{k: data.draw(LEAVES) for k in keys} for _ in range(data.draw(st.integers(1, 4)))]
+    nested = {"outer": rows, "again": [{"x": rows}]}
+    for value in (rows, nested, [rows, rows[0]]):
+        assert json_indent2(value) == json.dumps(value, indent=2)
+
+
+def test_requirement_shaped_rows_with_escapes():
+    keys = ("id", "text", "source", "line", "parent", "rationale", "key", "ft", "ft_inf",
+            "pt", "ft_spot", "ft_inf_spot", "variables", "variables_fret", "ticks",
+            "warnings", "pt_causal")
+    row = dict.fromkeys(keys, 'G"1\\\u00e9\n')
+    row.update(line=3, parent=None, ticks=None, pt_causal=False, warnings=[],
+               variables=["a", 'w"x'], variables_fret=["_DQT_w_DQT_"])
+    rows = [row, dict(row, id="G2", pt_causal=True, ticks=7), {"id": "E", "error": {}}]
+    assert json_indent2(rows) == json.dumps(rows, indent=2)

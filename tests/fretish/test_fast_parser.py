@@ -166,13 +166,28 @@ def test_fast_tables_cached_damaged_entry_rebuilt(tmp_path, monkeypatch):
     # an entry built from other inputs (another grammar, Lark or Python) under the same
     # name is not used: its recorded identity differs
     import marshal
-    tables = marshal.loads(entry.read_bytes())
+    import zlib
+
+    def framed(tables):  # an entry as written: CRC-32 of the body, then the body
+        body = marshal.dumps(tables)
+        return zlib.crc32(body).to_bytes(4, "big") + body
+
+    tables = marshal.loads(entry.read_bytes()[4:])
     tables["identity"] = tables["identity"] + "\n// another grammar"
     tables["start_states"] = {}
-    entry.write_bytes(marshal.dumps(tables))
+    entry.write_bytes(framed(tables))
     monkeypatch.setattr(P, "_fast", None)
     assert P._get_fast() and _public(text) == ref
-    assert marshal.loads(entry.read_bytes())["start_states"]  # rebuilt
+    assert marshal.loads(entry.read_bytes()[4:])["start_states"]  # rebuilt
+    # an entry whose bytes were altered but still unmarshal (same identity, a table
+    # emptied) fails its CRC-32 and is rebuilt, never used
+    good = entry.read_bytes()
+    tables = marshal.loads(good[4:])
+    tables["start_states"] = {}
+    entry.write_bytes(good[:4] + marshal.dumps(tables))
+    monkeypatch.setattr(P, "_fast", None)
+    assert P._get_fast() and _public(text) == ref
+    assert entry.read_bytes() == good
 
 
 def test_fast_tables_beside_the_package(tmp_path, monkeypatch):
