@@ -16,6 +16,11 @@ from .semantics import Formalization, SemanticsError
 
 PT_FTP = "(Z FALSE)"
 
+#: the keys of :meth:`Compiled.to_json` for a requirement that formalized, in order
+FORMALIZED_KEYS = ("id", "text", "source", "line", "parent", "rationale", "key", "ft",
+                   "ft_inf", "pt", "ft_spot", "ft_inf_spot", "variables", "variables_fret",
+                   "ticks", "warnings", "pt_causal")
+
 
 @dataclass
 class Compiled:
@@ -76,13 +81,43 @@ class Compiled:
     def location(self) -> str:
         return f"{self.entry.source}:{self.entry.line}"
 
+    def printed(self) -> tuple:
+        """The five printed forms ``(ft, ft_inf, pt, ft_spot, ft_inf_spot)`` (FRET/SMV, pt
+        with FTP as ``(Z FALSE)``; Spot), computed in that order, each as :meth:`smv` and
+        :meth:`spot` give it; ``ValueError`` where Spot has no form. A template
+        instantiation (:class:`compiler.instantiate.InstantiatedFormalization`) fills its
+        atoms' texts in once for all five."""
+        f = self.formalization
+        forms = getattr(f, "printed", None)
+        if forms is not None:
+            return forms()
+        return (self.smv("ft"), self.smv("ft_inf"), self.smv("pt"), self.spot("ft"),
+                self.spot("ft_inf"))
+
+    def json_values(self) -> tuple | None:
+        """The values of :meth:`to_json`, in the order of :data:`FORMALIZED_KEYS`, for a
+        requirement that formalized (no error); None for any other (free-form, failed)."""
+        f = self.formalization
+        if f is None or self.error is not None:
+            return None
+        e = self.entry
+        ft, ft_inf, pt, ft_spot, ft_inf_spot = self.printed()
+        variables = f.variables
+        return (e.id, e.text, e.source, e.line, e.parent, e.rationale, f.key, ft, ft_inf, pt,
+                ft_spot, ft_inf_spot, variables, [mangle(v) for v in variables], f.ticks,
+                f.warnings, f.pt_causal)
+
     def to_json(self) -> dict:
         """The ``--json`` object: ``id``, ``text``, ``source``, ``key``, ``ft``, ``ft_inf``,
         ``pt`` (FRET syntax), ``ft_spot``, ``ft_inf_spot``, ``variables`` (the names as
         written, quotes removed, as FRET's list), ``variables_fret`` (the same names as
         FRET's formulas print them: ``"weird var"`` -> ``_DQT_weird_SPC_var_DQT_``),
         ``warnings``,
-        and ``error`` (``message``, ``line``, ``column``) when it failed."""
+        and ``error`` (``message``, ``line``, ``column``) when it failed. A formalized
+        requirement's keys are :data:`FORMALIZED_KEYS`, its values :meth:`json_values`."""
+        values = self.json_values()
+        if values is not None:
+            return dict(zip(FORMALIZED_KEYS, values))
         e = self.entry
         out = {"id": e.id, "text": e.text, "source": e.source, "line": e.line,
                "parent": e.parent, "rationale": e.rationale}

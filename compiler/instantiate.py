@@ -479,6 +479,68 @@ class _PlainExpander(Expander):
         return Expander.term(self, e)
 
 
+class _SharingExpander(Expander):
+    """:class:`~compiler.expressions.Expander` whose temporal functions' expansions are
+    shared, through ``memo``, by the expanders of one requirement: an expansion is built
+    in a pt expander whatever the formula kind, from the call, ``Left``, ``Right`` and
+    the endpoint-free flag only (:meth:`Expander._past_function`), so ft's derived
+    ``past`` atom holds pt's expansion of the same call, and pt's derived ``future`` atom
+    ft's. Keyed by the identities of the call and of the endpoints (alive while the
+    requirement is instantiated); the nodes are equal to those built anew, and shared
+    nodes are immutable."""
+
+    def __init__(self, kind: str, left_pt: Node, right_ft: Node, memo: dict):
+        super().__init__(kind, left_pt, right_ft)
+        self.memo = memo
+
+    def _past_function(self, e: A.Call) -> Node:
+        key = (0, id(e), id(self.left_pt), id(self.right_ft), self.free)
+        node = self.memo.get(key)
+        if node is None:
+            node = self.memo[key] = Expander._past_function(self, e)
+        return node
+
+    def _future_function(self, e: A.Call) -> Node:
+        key = (1, id(e), id(self.left_pt), id(self.right_ft), self.free)
+        node = self.memo.get(key)
+        if node is None:
+            node = self.memo[key] = Expander._future_function(self, e)
+        return node
+
+
+#: FRET's future-time functions (compiler.expressions' ``_FUTURE_FUNCS``, checked by
+#: tests/compiler/test_instantiate.py)
+_FUTURE_FUNCTIONS = frozenset(("persists", "occurs", "nextOcc"))
+
+
+def _has_future_function(e: A.Expr) -> bool:
+    """Does ``e`` call a future-time function (``persists``, ``occurs``, ``nextOcc``)
+    anywhere?"""
+    for x in A.walk(e):
+        if isinstance(x, A.Call) and x.name in _FUTURE_FUNCTIONS:
+            return True
+    return False
+
+
+def _variables_into(node: Node, seen: dict, done: set) -> None:
+    """:func:`compiler.ir.variables` of ``node`` added to ``seen`` (a dict used as an
+    ordered set), in the same order: pre-order, first appearance; a sub-formula met again
+    (``done``: node identities) is skipped, its names are in ``seen`` already."""
+    op = node.op
+    if op == "ap" or op == "var":
+        seen[node.name] = None
+        return
+    for a in node.args:
+        if a.args:
+            i = id(a)
+            if i in done:
+                continue
+            done.add(i)
+            _variables_into(a, seen, done)
+        elif a.op == "ap" or a.op == "var":
+            seen[a.name] = None
+
+
 class InstantiatedFormalization(Formalization):
     """A :class:`~compiler.semantics.Formalization` whose printed formulas come from a
     template; ``ft``, ``ft_inf`` and ``pt`` are built (the full construction) on first use.
@@ -534,6 +596,20 @@ class InstantiatedFormalization(Formalization):
         if values is None:
             values = self._smv_values = self._values(self._texts)
         return fmt % pick(values)
+
+    def printed(self) -> tuple:
+        """``(ft, ft_inf, pt, ft_spot, ft_inf_spot)``: :meth:`smv` of the three formulas
+        and :meth:`spot` of ft and ft_inf, in that order (the atoms' values picked once)."""
+        t = self._tmpl
+        values = self._smv_values
+        if values is None:
+            values = self._smv_values = self._values(self._texts)
+        fmt, pick = t.ft
+        ft = fmt % pick(values)
+        fmt, pick = t.ft_inf
+        ft_inf = fmt % pick(values)
+        fmt, pick = t.pt
+        return ft, ft_inf, fmt % pick(values), self.spot("ft"), self.spot("ft_inf")
 
     def spot(self, which: str) -> str:
         """Spot text of ``ft`` or ``ft_inf``; ``ValueError`` where Spot has no form."""
@@ -616,18 +692,24 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
         m = one[0]
         if m is _TIMED:
             m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
-            m_ft = Expander("ft", FTP, LAST, free=True).bool(mode)
-            m_inf = Expander("ft", FTP, FALSE, free=True).bool(mode)
+            # the endpoint-free forms never read the endpoints: ft_inf's mode is ft's
+            m_ft = m_inf = Expander("ft", FTP, LAST, free=True).bool(mode)
         else:
             m_pt = m_ft = m_inf = m
         left, _ = pt_endpoints(scope, m_pt)
-        px = Expander("pt", left, fn_right(scope, m_ft, LAST))
-        rest = one[1:]
-        atoms = ()
-        for m, x in ((m_ft, Expander("ft", left, fn_right(scope, m_ft, LAST))),
-                     (m_inf, Expander("ft", left, fn_right(scope, m_inf, FALSE))),
-                     (m_pt, px)):
-            atoms += (m, *(x.bool(e) if a is _TIMED else a for e, a in zip(exprs[1:], rest)))
+        right = fn_right(scope, m_ft, LAST)
+        memo: dict = {}
+        px = _SharingExpander("pt", left, right, memo)
+        fx = _SharingExpander("ft", left, right, memo)
+        ix = _SharingExpander("ft", left, fn_right(scope, m_inf, FALSE), memo)
+        rest = tuple(zip(exprs[1:], one[1:]))
+        a_ft = tuple(fx.bool(e) if a is _TIMED else a for e, a in rest)
+        # ft_inf differs from ft only in Right (LAST or FALSE), which only a future-time
+        # function's expansion reads: without one, ft_inf's atom is ft's
+        a_inf = tuple(ix.bool(e) if a is _TIMED and _has_future_function(e) else f
+                      for (e, a), f in zip(rest, a_ft))
+        atoms = (m_ft, *a_ft, m_inf, *a_inf,
+                 m_pt, *(px.bool(e) if a is _TIMED else a for e, a in rest))
         plain_text = [None if a is None or a is _TIMED else _smv(a) for a in one]
         texts = []
         for i, a in enumerate(atoms):
@@ -642,7 +724,10 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
         # variables in sentence order: mode, condition, stop, response (of ft)
         variables = {}
         for a, d in zip(atoms[:_ATOMS], names):
-            variables.update(dict.fromkeys(ir.variables(a)) if d is None else d)
+            if d is None:
+                _variables_into(a, variables, set())
+            else:
+                variables.update(d)
         return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
                                          list(variables), warnings, n, pt_causal)
 

@@ -100,32 +100,18 @@ def _string_encoder():
     return encode_basestring_ascii
 
 
-def json_indent2(obj) -> str:
-    """``json.dumps(obj, indent=2)``, the same text, for dicts with string keys, lists,
-    strings, ints, booleans and None (anything else: ``json.dumps`` itself). The standard
-    library's C encoder only serves ``indent=None``; its Python one is a tenth of the time
-    of ``--emit ltl --json`` on a thousand requirements.
-
-    A dict is written from a layout computed once per (key tuple, depth): the quoted keys
-    with their separators and indentation, so a list of same-shaped objects (one per
-    requirement, :meth:`compiler.build.Compiled.to_json`) costs one escape per string value
-    and one join; a list whose items are all strings is one join. Any other shape takes
-    the general recursive path; a value neither handles (a float, a non-string key, nesting
-    deeper than the recursion limit) gives ``json.dumps``'s text."""
-    enc = _string_encoder()
+def _indent2_writer(enc):
+    """``(go, parts)``: ``go(value, pad)`` appends the ``json.dumps(value, indent=2)`` text
+    of ``value`` nested at ``pad`` (a newline and the indentation of its line) to
+    ``parts``; raises :class:`_NotPlain` for a value outside the plain shapes of
+    :func:`json_indent2`. ``enc`` is the string escaper (:func:`_string_encoder`)."""
     parts: list = []
     add = parts.append
     layouts: dict = {}
     scalars = {None: "null", True: "true", False: "false"}  # 1 == True: looked up by type
 
     def layout(keys: tuple, pad: str) -> tuple:
-        inner = pad + "  "
-        for k in keys:
-            if type(k) is not str:
-                raise _NotPlain
-        heads = tuple(("{" if i == 0 else ",") + inner + enc(k) + ": "
-                      for i, k in enumerate(keys))
-        lay = (heads, inner, pad + "}")
+        lay = _layout(enc, keys, pad)
         layouts[(keys, pad)] = lay
         return lay
 
@@ -179,6 +165,36 @@ def json_indent2(obj) -> str:
         else:
             raise _NotPlain
 
+    return go, parts
+
+
+def _layout(enc, keys: tuple, pad: str) -> tuple:
+    """``(heads, inner, close)`` of a dict with string ``keys`` nested at ``pad``: per key
+    the text before its value (``{`` or ``,``, the indentation, the quoted key, ``: ``),
+    the values' indentation and the closing text; :class:`_NotPlain` for a key that is
+    not a string."""
+    inner = pad + "  "
+    for k in keys:
+        if type(k) is not str:
+            raise _NotPlain
+    heads = tuple(("{" if i == 0 else ",") + inner + enc(k) + ": "
+                  for i, k in enumerate(keys))
+    return heads, inner, pad + "}"
+
+
+def json_indent2(obj) -> str:
+    """``json.dumps(obj, indent=2)``, the same text, for dicts with string keys, lists,
+    strings, ints, booleans and None (anything else: ``json.dumps`` itself). The standard
+    library's C encoder only serves ``indent=None``; its Python one is a tenth of the time
+    of ``--emit ltl --json`` on a thousand requirements.
+
+    A dict is written from a layout computed once per (key tuple, depth): the quoted keys
+    with their separators and indentation, so a list of same-shaped objects costs one
+    escape per string value and one join; a list whose items are all strings is one join.
+    Any other shape takes the general recursive path; a value neither handles (a float, a
+    non-string key, nesting deeper than the recursion limit) gives ``json.dumps``'s text.
+    :func:`ltl_json` writes ``--emit ltl --json``'s list without building the dicts."""
+    go, parts = _indent2_writer(_string_encoder())
     try:
         go(obj, "\n")
     except (_NotPlain, RecursionError):
@@ -187,9 +203,71 @@ def json_indent2(obj) -> str:
     return "".join(parts)
 
 
+def ltl_json(compiled) -> str:
+    """``json_indent2([c.to_json() for c in compiled])``, the same text, written in one pass:
+    a requirement that formalized is one ``%`` formatting of a format made once from
+    :data:`compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes it)
+    with :meth:`compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
+    escaper; any other requirement, or a value of another type than those
+    :meth:`~compiler.build.Compiled.json_values` documents, takes :func:`json_indent2`'s
+    general path (and a value that path cannot write, ``json.dumps`` for the whole list)."""
+    from compiler.build import FORMALIZED_KEYS
+
+    if not compiled:
+        return "[]"
+    enc = _string_encoder()
+    go, parts = _indent2_writer(enc)
+    add = parts.append
+    heads, inner, close = _layout(enc, FORMALIZED_KEYS, "\n  ")
+    fmt = "".join(h.replace("%", "%%") + "%s" for h in heads) + close.replace("%", "%%")
+    li = inner + "  "  # a list value's items
+    lsep = "," + li
+    scalars = {None: "null", True: "true", False: "false"}
+    sep = "[\n  "
+    try:
+        for c in compiled:
+            add(sep)
+            sep = ",\n  "
+            values = c.json_values()
+            if values is not None:
+                (rid, text, source, line, parent, rationale, key, ft, ft_inf, pt, ft_spot,
+                 ft_inf_spot, variables, variables_fret, ticks, warnings, causal) = values
+                if (type(line) is int and type(causal) is bool
+                        and (ticks is None or type(ticks) is int)
+                        and type(variables) is list and type(variables_fret) is list
+                        and type(warnings) is list):
+                    try:
+                        add(fmt % (
+                            enc(rid), enc(text), enc(source), int.__repr__(line),
+                            "null" if parent is None else enc(parent),
+                            "null" if rationale is None else enc(rationale), enc(key),
+                            enc(ft), enc(ft_inf), enc(pt), enc(ft_spot), enc(ft_inf_spot),
+                            "[" + li + lsep.join(map(enc, variables)) + inner + "]"
+                            if variables else "[]",
+                            "[" + li + lsep.join(map(enc, variables_fret)) + inner + "]"
+                            if variables_fret else "[]",
+                            "null" if ticks is None else int.__repr__(ticks),
+                            "[" + li + lsep.join(map(enc, warnings)) + inner + "]"
+                            if warnings else "[]",
+                            scalars[causal]))
+                        continue
+                    except TypeError:  # a value that is not a string where one is written
+                        pass
+            go(c.to_json(), "\n  ")
+    except (_NotPlain, RecursionError):
+        import json  # lazy: only for values outside the plain shapes
+        return json.dumps([c.to_json() for c in compiled], indent=2)
+    add("\n]")
+    return "".join(parts)
+
+
 def _emit_ltl(compiled, as_json: bool) -> None:
     if as_json:
-        click.echo(json_indent2([c.to_json() for c in compiled]))
+        # click.echo would scan the text for ANSI escapes to strip: JSON's text is printable
+        # ASCII (ensure_ascii escapes every control character), there are none
+        out = sys.stdout
+        out.write(ltl_json(compiled) + "\n")
+        out.flush()
         return
     for c in compiled:
         click.echo(_shown(f"{c.id}  ({c.location()})"))
