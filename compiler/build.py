@@ -94,14 +94,22 @@ class Compiled:
         return (self.smv("ft"), self.smv("ft_inf"), self.smv("pt"), self.spot("ft"),
                 self.spot("ft_inf"))
 
-    def json_values(self) -> tuple | None:
+    def json_forms(self, enc, seps: tuple) -> str | None:
+        """The five printed forms as JSON strings escaped by ``enc`` and separated by
+        ``seps``, in one piece, where the formalization gives them so
+        (:meth:`compiler.instantiate.InstantiatedFormalization.json_forms`); else None."""
+        forms = getattr(self.formalization, "json_forms", None)
+        return None if forms is None else forms(enc, seps)
+
+    def json_values(self, texts: bool = True) -> tuple | None:
         """The values of :meth:`to_json`, in the order of :data:`FORMALIZED_KEYS`, for a
-        requirement that formalized (no error); None for any other (free-form, failed)."""
+        requirement that formalized (no error); None for any other (free-form, failed).
+        ``texts=False``: None in place of the five printed forms (nothing printed)."""
         f = self.formalization
         if f is None or self.error is not None:
             return None
         e = self.entry
-        ft, ft_inf, pt, ft_spot, ft_inf_spot = self.printed()
+        ft, ft_inf, pt, ft_spot, ft_inf_spot = self.printed() if texts else (None,) * 5
         variables = f.variables
         return (e.id, e.text, e.source, e.line, e.parent, e.rationale, f.key, ft, ft_inf, pt,
                 ft_spot, ft_inf_spot, variables, [mangle(v) for v in variables], f.ticks,

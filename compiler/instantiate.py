@@ -150,15 +150,43 @@ class _Template:
     template nodes the simplifier found different while building, as conditions on the
     atoms (:func:`_unify`, rule 2), with template nodes as plain tuples (:func:`_data`).
     ``data`` is the whole as plain data (strings, ints, tuples: ``marshal``-able) for
-    the disk cache."""
+    the disk cache. ``json`` is ``(escaper, separators, compiled)`` of
+    :func:`_json_format`, made on first use."""
 
-    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data")
+    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data", "json")
 
     def __init__(self, data: tuple):
         self.data = data
+        self.json = None
         forms, self.compared = data
         self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot = (
             None if f is None else (f[0], _picker(f[1])) for f in forms)
+
+
+#: field numbers of the JSON format (:func:`_json_format`): the FRET/SMV values (the twelve
+#: atoms, the six bounds) first, then the Spot values from _JSON_SPOT on
+_JSON_SPOT = 3 * _ATOMS + 6
+
+
+def _json_format(t: "_Template", enc, seps: tuple):
+    """``(format, getter)`` of the five printed forms of template ``t`` as JSON strings
+    (``json``'s escaper ``enc``), ft, ft_inf, pt, ft_spot, ft_inf_spot, separated by
+    ``seps`` (the four texts between them), from the values of
+    :meth:`InstantiatedFormalization.json_forms`; None when Spot has no form for ft or
+    ft_inf. JSON's escaping maps each character on its own, so the escaped text of a
+    filled-in form is its escaped format (``%s`` and ``%%`` escape to themselves)
+    filled in with the escaped values."""
+    forms = t.data[0]
+    if any(f is None for f in forms):
+        return None
+    parts: list = []
+    order: list = []
+    for i, (fmt, fields) in enumerate(forms):
+        if i:
+            parts.append(seps[i - 1].replace("%", "%%"))
+        parts.append('"' + enc(fmt)[1:-1] + '"')
+        order.extend(fields if i < 3 else map(_JSON_SPOT.__add__, fields))
+    return "".join(parts), _picker(tuple(order))
 
 
 def _picker(order: tuple):
@@ -450,13 +478,26 @@ class _PlainExpander(Expander):
         super().__init__("ft", FTP, LAST)
         self.names: dict = {}
 
+    # The common shapes (names, comparisons, and/or/implies/xor/iff, negation, literals,
+    # arithmetic) are dispatched on the AST node's exact type and build the nodes
+    # Expander builds for them, in the same order (children left to right); any other
+    # shape, or an error, is Expander's own code.
     def bool(self, e: A.Expr) -> Node:
-        if isinstance(e, A.Var):
+        t = type(e)
+        if t is _Var:
             name = e.name
             if name == "FTP":
                 raise _Timed
             self.names[name] = None
-            return Node("ap", name=name)
+            return _name_node("ap", name)
+        if t is _Binary:
+            op = e.op
+            if op in _COMPARISON_OPS:  # Expander: ir.cmp, no derived atom (no preReal here)
+                return Node("cmp", (self.term(e.left), self.term(e.right)), name=op)
+            if op in _BOOL_OPS:  # Expander: Node(op) for & | ->, ir.xor, ir.iff
+                return Node(op, (self.bool(e.left), self.bool(e.right)))
+        elif t is _Unary and e.op == "!":
+            return ir.not_(self.bool(e.operand))
         return Expander.bool(self, e)
 
     def _atom(self, node: Node) -> Node:
@@ -468,15 +509,45 @@ class _PlainExpander(Expander):
         return Expander._bool_call(self, e)
 
     def term(self, e: A.Expr) -> Node:
-        if isinstance(e, A.Var):
+        t = type(e)
+        if t is _Var:
             name = e.name
             if name == "FTP":
                 raise _Timed
             self.names[name] = None
-            return Node("var", name=name)
+            return _name_node("var", name)
+        if t is _NumLit:
+            return _name_node("num", e.text)  # ir.num
+        if t is _Binary and e.op in _ARITH_OPS:  # ir.arith
+            return Node("arith", (self.term(e.left), self.term(e.right)), name=e.op)
         if isinstance(e, A.Call) and e.name in _TIME_NAMES:
             raise _Timed  # preInt, preReal
         return Expander.term(self, e)
+
+
+_Var, _Binary, _Unary, _NumLit = A.Var, A.Binary, A.Unary, A.NumLit
+_COMPARISON_OPS = frozenset(A.COMPARISON_OPS)
+_BOOL_OPS = frozenset(A.BOOL_OPS)
+_ARITH_OPS = frozenset(A.ARITH_OPS)
+
+#: the leaf nodes of names and literals made so far: ``(op, name) -> Node`` for ``ap``,
+#: ``var`` and ``num``; a node is immutable and its printed texts (memo slots of
+#: compiler.printers) depend on its op and name only, so one node serves every
+#: requirement that mentions the name. Emptied when it reaches _LEAVES_MAX entries.
+_LEAVES: dict = {}
+_LEAVES_MAX = 65536
+
+
+def _name_node(op: str, name: str) -> Node:
+    """The leaf ``Node(op, name=name)`` (``ap``, ``var`` or ``num``), made once per
+    ``(op, name)`` (:data:`_LEAVES`)."""
+    key = (op, name)
+    node = _LEAVES.get(key)
+    if node is None:
+        if len(_LEAVES) >= _LEAVES_MAX:
+            _LEAVES.clear()
+        node = _LEAVES[key] = Node(op, name=name)
+    return node
 
 
 class _SharingExpander(Expander):
@@ -610,6 +681,39 @@ class InstantiatedFormalization(Formalization):
         ft_inf = fmt % pick(values)
         fmt, pick = t.pt
         return ft, ft_inf, fmt % pick(values), self.spot("ft"), self.spot("ft_inf")
+
+    def json_forms(self, enc, seps: tuple) -> str | None:
+        """The five printed forms (as :meth:`printed`) as JSON strings escaped by ``enc``
+        (``json``'s ``encode_basestring_ascii``), separated by ``seps`` (the four texts
+        between them): one ``%`` formatting of the template's escaped forms
+        (:func:`_json_format`) with the atoms' escaped texts. None where :meth:`printed`
+        would raise (Spot has no form) - the caller then takes :meth:`printed`'s path."""
+        t = self._tmpl
+        j = t.json
+        if j is None or j[0] is not enc or j[1] != seps:
+            j = t.json = (enc, seps, _json_format(t, enc, seps))
+        compiled = j[2]
+        if compiled is None:
+            return None
+        fmt, pick = compiled
+        atoms = self._atoms
+        texts = self._texts
+        try:
+            if self._plain:
+                smv = [None if x is None else enc(x)[1:-1] for x in texts[:_ATOMS]] * 3
+                spot = [None if a is None else enc(_spot(a))[1:-1]
+                        for a in atoms[:_ATOMS]] * 3
+            else:  # Spot forms: ft's and ft_inf's atoms only (pt's have past operators)
+                smv = [None if x is None else enc(x)[1:-1] for x in texts]
+                spot = [None if a is None else enc(_spot(a))[1:-1]
+                        for a in atoms[:2 * _ATOMS]]
+                spot += (None,) * _ATOMS
+        except ValueError:
+            return None
+        n = self.ticks
+        bounds = ([str(n + k) for k in range(_MIN_OFFSET, _MAX_OFFSET + 1)]
+                  if n is not None else [None] * 6)
+        return fmt % pick(smv + bounds + spot + bounds)
 
     def spot(self, which: str) -> str:
         """Spot text of ``ft`` or ``ft_inf``; ``ValueError`` where Spot has no form."""

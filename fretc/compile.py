@@ -208,9 +208,11 @@ def ltl_json(compiled) -> str:
     a requirement that formalized is one ``%`` formatting of a format made once from
     :data:`compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes it)
     with :meth:`compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
-    escaper; any other requirement, or a value of another type than those
-    :meth:`~compiler.build.Compiled.json_values` documents, takes :func:`json_indent2`'s
-    general path (and a value that path cannot write, ``json.dumps`` for the whole list)."""
+    escaper; its five printed forms come escaped in one piece from its template where
+    there is one (:meth:`compiler.build.Compiled.json_forms`). Any other requirement, or a
+    value of another type than those :meth:`~compiler.build.Compiled.json_values`
+    documents, takes :func:`json_indent2`'s general path (and a value that path cannot
+    write, ``json.dumps`` for the whole list)."""
     from compiler.build import FORMALIZED_KEYS
 
     if not compiled:
@@ -219,7 +221,13 @@ def ltl_json(compiled) -> str:
     go, parts = _indent2_writer(enc)
     add = parts.append
     heads, inner, close = _layout(enc, FORMALIZED_KEYS, "\n  ")
-    fmt = "".join(h.replace("%", "%%") + "%s" for h in heads) + close.replace("%", "%%")
+    # ft, ft_inf, pt, ft_spot, ft_inf_spot: one field of the format, the texts between them
+    # given to json_forms
+    ft = FORMALIZED_KEYS.index("ft")
+    seps = heads[ft + 1:ft + 5]
+    s0, s1, s2, s3 = seps
+    fmt = "".join(h.replace("%", "%%") + "%s" for h in heads[:ft + 1] + heads[ft + 5:])
+    fmt += close.replace("%", "%%")
     li = inner + "  "  # a list value's items
     lsep = "," + li
     scalars = {None: "null", True: "true", False: "false"}
@@ -228,20 +236,24 @@ def ltl_json(compiled) -> str:
         for c in compiled:
             add(sep)
             sep = ",\n  "
-            values = c.json_values()
+            values = c.json_values(texts=False)
             if values is not None:
-                (rid, text, source, line, parent, rationale, key, ft, ft_inf, pt, ft_spot,
-                 ft_inf_spot, variables, variables_fret, ticks, warnings, causal) = values
+                (rid, text, source, line, parent, rationale, key, _, _, _, _, _, variables,
+                 variables_fret, ticks, warnings, causal) = values
                 if (type(line) is int and type(causal) is bool
                         and (ticks is None or type(ticks) is int)
                         and type(variables) is list and type(variables_fret) is list
                         and type(warnings) is list):
                     try:
+                        forms = c.json_forms(enc, seps)
+                        if forms is None:
+                            f0, f1, f2, f3, f4 = c.printed()
+                            forms = (enc(f0) + s0 + enc(f1) + s1 + enc(f2) + s2 + enc(f3) + s3
+                                     + enc(f4))
                         add(fmt % (
                             enc(rid), enc(text), enc(source), int.__repr__(line),
                             "null" if parent is None else enc(parent),
-                            "null" if rationale is None else enc(rationale), enc(key),
-                            enc(ft), enc(ft_inf), enc(pt), enc(ft_spot), enc(ft_inf_spot),
+                            "null" if rationale is None else enc(rationale), enc(key), forms,
                             "[" + li + lsep.join(map(enc, variables)) + inner + "]"
                             if variables else "[]",
                             "[" + li + lsep.join(map(enc, variables_fret)) + inner + "]"
