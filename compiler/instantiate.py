@@ -151,13 +151,16 @@ class _Template:
     atoms (:func:`_unify`, rule 2), with template nodes as plain tuples (:func:`_data`).
     ``data`` is the whole as plain data (strings, ints, tuples: ``marshal``-able) for
     the disk cache. ``json`` is ``(escaper, separators, compiled)`` of
-    :func:`_json_format`, made on first use."""
+    :func:`_json_format` and ``plain_compared`` :func:`_plain_conditions`, both made on
+    first use."""
 
-    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data", "json")
+    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data", "json",
+                 "plain_compared")
 
     def __init__(self, data: tuple):
         self.data = data
         self.json = None
+        self.plain_compared = None  # _plain_conditions, made on first use
         forms, self.compared = data
         self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot = (
             None if f is None else (f[0], _picker(f[1])) for f in forms)
@@ -456,6 +459,50 @@ def _compared_safe(tmpl: "_Template", atoms, n: int | None) -> bool:
     return True
 
 
+def _plain_conditions(tmpl: "_Template") -> tuple:
+    """``tmpl.compared`` for atoms that are the same in ft, ft_inf and pt (field ``f`` is
+    field ``f % 4``): a condition "atom f equals atom g" of two fields of the same
+    expression always holds and is dropped, equal conjunctions are kept once, and each
+    conjunction checks the bounds, then atom equalities, then the structural matches
+    (cheapest first; the order does not change the result)."""
+    conds = tmpl.plain_compared
+    if conds is None:
+        out: dict = {}
+        for conj in tmpl.compared:
+            kept = []
+            for kind, f, v in conj:
+                if kind == 0:
+                    f, v = f % _ATOMS, v % _ATOMS
+                    if f == v:
+                        continue
+                elif kind == 1:
+                    f %= _ATOMS
+                kept.append((kind, f, v))
+            kept.sort(key=lambda c: (2, 0, 1)[c[0]])
+            out.setdefault(tuple(kept), None)
+        conds = tmpl.plain_compared = tuple(out)
+    return conds
+
+
+def _plain_compared_safe(tmpl: "_Template", one, atoms, n: int | None) -> bool:
+    """:func:`_compared_safe` for plain atoms: ``one`` the four atoms (mode, condition,
+    stop, response), ``atoms`` them three times (ft, ft_inf, pt)."""
+    for conj in _plain_conditions(tmpl):
+        for kind, f, v in conj:
+            if kind == 0:
+                if one[f] != one[v]:
+                    break
+            elif kind == 1:
+                a = one[f]
+                if a is None or a.op != v[0] or not _matches(a, v, atoms, n):
+                    break
+            elif n + f != v:
+                break
+        else:
+            return False  # this pair of the template is equal with these atoms
+    return True
+
+
 class _Timed(Exception):
     """Raised by :class:`_PlainExpander` at the first temporal function or FTP."""
 
@@ -563,6 +610,33 @@ class _SharingExpander(Expander):
     def __init__(self, kind: str, left_pt: Node, right_ft: Node, memo: dict):
         super().__init__(kind, left_pt, right_ft)
         self.memo = memo
+
+    # the common shapes as in _PlainExpander (same nodes, same order; leaves shared)
+    def bool(self, e: A.Expr) -> Node:
+        t = type(e)
+        if t is _Var:
+            name = e.name
+            return FTP if name == "FTP" else _name_node("ap", name)
+        if t is _Binary:
+            op = e.op
+            if op in _COMPARISON_OPS:
+                return self._atom(Node("cmp", (self.term(e.left), self.term(e.right)),
+                                       name=op))
+            if op in _BOOL_OPS:
+                return Node(op, (self.bool(e.left), self.bool(e.right)))
+        elif t is _Unary and e.op == "!":
+            return ir.not_(self.bool(e.operand))
+        return Expander.bool(self, e)
+
+    def term(self, e: A.Expr) -> Node:
+        t = type(e)
+        if t is _Var:
+            return _name_node("var", e.name)  # ir.var
+        if t is _NumLit:
+            return _name_node("num", e.text)  # ir.num
+        if t is _Binary and e.op in _ARITH_OPS:  # ir.arith
+            return Node("arith", (self.term(e.left), self.term(e.right)), name=e.op)
+        return Expander.term(self, e)
 
     def _past_function(self, e: A.Call) -> Node:
         key = (0, id(e), id(self.left_pt), id(self.right_ft), self.free)
@@ -782,7 +856,7 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
                     return formalize(req, tick_period)
             tmpl = template(scope, cond, timing, n)
             atoms = tuple(one) * 3
-            if not _compared_safe(tmpl, atoms, n):
+            if not _plain_compared_safe(tmpl, one, atoms, n):
                 return formalize(req, tick_period)
             texts = [None if a is None else _smv(a) for a in one] * 3
             variables = {}

@@ -72,7 +72,10 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     an error (FRET would print ``F[<=2.5]``, a defect, ../shared/fretish/README.md section
     7.5).
     """
-    amount = d.value
+    text = d.amount
+    # a whole number as written: its int (what Fraction(text) equals), without parsing it
+    # as a decimal
+    amount = int(text) if text.isdigit() and text.isascii() else d.value
     if d.unit == "ticks":
         ticks = amount
     elif tick_period is None:
