@@ -585,6 +585,25 @@ _LEAVES: dict = {}
 _LEAVES_MAX = 65536
 
 
+#: (scope, mode name or None) -> (Left, Right, Right of ft_inf) of the temporal functions
+#: for a scope whose mode is a plain name (or the null scope): made once per name, emptied
+#: with _LEAVES
+_ENDPOINTS: dict = {}
+
+
+def _named_endpoints(scope: str, m: Node | None) -> tuple:
+    """``(Left, Right, Right_inf)``: :func:`~compiler.scope_timing.pt_endpoints`'s left of
+    ``m``, :func:`~compiler.scope_timing.fn_right` of ``m`` with ``LAST`` and with FALSE;
+    ``m`` is None or a leaf of :data:`_LEAVES` (a name), whose endpoints are functions of
+    the scope and the name only: made once per pair (:data:`_ENDPOINTS`)."""
+    key = (scope, None if m is None else m.name)
+    ends = _ENDPOINTS.get(key)
+    if ends is None:
+        ends = _ENDPOINTS[key] = (pt_endpoints(scope, m)[0], fn_right(scope, m, LAST),
+                                  fn_right(scope, m, FALSE))
+    return ends
+
+
 def _name_node(op: str, name: str) -> Node:
     """The leaf ``Node(op, name=name)`` (``ap``, ``var`` or ``num``), made once per
     ``(op, name)`` (:data:`_LEAVES`)."""
@@ -593,6 +612,7 @@ def _name_node(op: str, name: str) -> Node:
     if node is None:
         if len(_LEAVES) >= _LEAVES_MAX:
             _LEAVES.clear()
+            _ENDPOINTS.clear()
         node = _LEAVES[key] = Node(op, name=name)
     return node
 
@@ -874,12 +894,16 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
             m_ft = m_inf = Expander("ft", FTP, LAST, free=True).bool(mode)
         else:
             m_pt = m_ft = m_inf = m
-        left, _ = pt_endpoints(scope, m_pt)
-        right = fn_right(scope, m_ft, LAST)
+        if m is None or m is not _TIMED and m.op == "ap" and _LEAVES.get(("ap", m.name)) is m:
+            left, right, right_inf = _named_endpoints(scope, m)
+        else:
+            left, _ = pt_endpoints(scope, m_pt)
+            right = fn_right(scope, m_ft, LAST)
+            right_inf = fn_right(scope, m_inf, FALSE)
         memo: dict = {}
         px = _SharingExpander("pt", left, right, memo)
         fx = _SharingExpander("ft", left, right, memo)
-        ix = _SharingExpander("ft", left, fn_right(scope, m_inf, FALSE), memo)
+        ix = _SharingExpander("ft", left, right_inf, memo)
         rest = tuple(zip(exprs[1:], one[1:]))
         a_ft = tuple(fx.bool(e) if a is _TIMED else a for e, a in rest)
         # ft_inf differs from ft only in Right (LAST or FALSE), which only a future-time
@@ -901,9 +925,11 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
             return formalize(req, tick_period)
         # variables in sentence order: mode, condition, stop, response (of ft)
         variables = {}
+        # Left and Right are made of the mode's names, which come first: not walked
+        done = {id(left), id(right), id(right_inf)}
         for a, d in zip(atoms[:_ATOMS], names):
             if d is None:
-                _variables_into(a, variables, set())
+                _variables_into(a, variables, done)
             else:
                 variables.update(d)
         return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
