@@ -9,6 +9,7 @@ case-study corpus. The lazily built IR is the full build's, and the same errors 
 from __future__ import annotations
 
 import json
+import json.encoder
 import random
 from fractions import Fraction
 from pathlib import Path
@@ -24,6 +25,8 @@ from differential import random_requirement
 from fretish import FretishError, parse
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
+ENC = json.encoder.encode_basestring_ascii  # json.dumps's escaper (ensure_ascii)
+SEPS = (',\n    "ft_inf": ', ',\n    "pt": ', ',\n    "ft_spot": ', ',\n    "%ft_inf_spot": ')
 FORMS = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot")
 
 
@@ -73,6 +76,14 @@ def same(text: str, period: Fraction | None = None) -> bool:
         assert getattr(inst, attr) == getattr(full, attr), (text, attr)
     used = isinstance(inst, I.InstantiatedFormalization)
     if used:
+        # the five forms at once (--json) and JSON-escaped in one piece are the same texts
+        texts = _full_texts(full)
+        if all(type(t) is str for t in texts):
+            assert inst.printed() == tuple(texts), text
+            assert inst.json_forms(ENC, SEPS) == "".join(
+                ENC(t) + sep for t, sep in zip(texts, SEPS + ("",))), text
+        else:
+            assert inst.json_forms(ENC, SEPS) is None, text
         # the IR, built on first use, is the full build's
         assert (inst.ft, inst.ft_inf, inst.pt) == (full.ft, full.ft_inf, full.pt), text
     return used
@@ -434,3 +445,124 @@ def test_emit_ltl_loads_neither_pathlib_nor_openssl(tmp_path):
                              env=env, check=True).stdout
     assert out.strip() == "[]"
     assert any((tmp_path / "cache" / "templates").iterdir())
+
+
+# --------------------------------------------------------------------------- shortcuts
+def _atoms_of(text: str, period=None):
+    """The instantiation of ``text`` (None when it falls back or fails)."""
+    try:
+        f = I.instantiate(parse(text), period)
+    except FretishError:
+        return None
+    return f if isinstance(f, I.InstantiatedFormalization) else None
+
+
+@settings(max_examples=300, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.one_of(sentence(), colliding_sentence()))
+def test_plain_comparisons_agree_with_the_general_check(text):
+    """_plain_compared_safe (conditions reduced once per template for atoms shared by ft,
+    ft_inf and pt) gives _compared_safe's answer on every plain requirement."""
+    try:
+        req = parse(text)
+    except FretishError:
+        return
+    if req.freeform:
+        return
+    try:
+        scope, cond, timing, n, _ = I._shape(req, None)
+    except FretishError:
+        return
+    exprs = (req.scope.mode if scope != "null" else None,
+             req.condition.expr if cond != "null" else None,
+             req.timing.stop if timing in I.A.STOP_TIMINGS else None, req.response)
+    x = I._PlainExpander()
+    try:
+        one = [None if e is None else x.bool(e) for e in exprs]
+    except (I._Timed, FretishError):
+        return
+    tmpl = I.template(scope, cond, timing, n)
+    atoms = tuple(one) * 3
+    assert I._plain_compared_safe(tmpl, one, atoms, n) == I._compared_safe(tmpl, atoms, n)
+
+
+@settings(max_examples=200, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(sentence())
+def test_variables_walk_matches_ir_variables(text):
+    """_variables_into (shared sub-formulas skipped) lists ir.variables' names in order."""
+    f = _atoms_of(text)
+    if f is None:
+        return
+    seen: dict = {}
+    done: set = set()
+    want: dict = {}
+    for a in f._atoms:
+        if a is not None:
+            I._variables_into(a, seen, done)
+            want.update(dict.fromkeys(I.ir.variables(a)))
+    assert list(seen) == list(want), text
+
+
+def test_future_function_names_are_the_expanders():
+    from compiler.expressions import _FUTURE_FUNCS
+    assert I._FUTURE_FUNCTIONS == frozenset(_FUTURE_FUNCS)
+
+
+def test_ft_inf_atoms_are_rebuilt_with_future_functions():
+    """ft_inf's Right is FALSE where ft's is LAST: an atom with a future-time function has
+    its own ft_inf conversion (ft's reused otherwise)."""
+    f = _atoms_of("in m the sw shall always satisfy occurs(2, q)")
+    assert f is not None and f._atoms[3] is not f._atoms[7] and f._atoms[3] != f._atoms[7]
+    g = _atoms_of("in m the sw shall always satisfy persisted(2, q)")
+    assert g is not None and g._atoms[3] is g._atoms[7]
+    assert same("in m the sw shall always satisfy occurs(2, q)")
+    assert same("in m the sw shall always satisfy persisted(2, q) | occurs(1, p)")
+
+
+def test_shared_leaves_and_endpoints_are_bounded(monkeypatch):
+    """The name leaves and named-mode endpoints are made once per name, and both tables
+    are emptied together at their bound; texts stay the full build's."""
+    monkeypatch.setattr(I, "_LEAVES", {})
+    monkeypatch.setattr(I, "_ENDPOINTS", {})
+    monkeypatch.setattr(I, "_LEAVES_MAX", 3)
+    a = _atoms_of("in m upon p the sw shall within 3 ticks satisfy q")
+    b = _atoms_of("in m upon p the sw shall within 4 ticks satisfy q")
+    assert a._atoms[1] is b._atoms[1]  # the leaf of p, shared
+    texts = ["in m upon p%d the sw shall always satisfy persisted(2, q%d) & x%d > %d"
+             % (i, i, i, i) for i in range(12)]
+    for i, t in enumerate(texts):
+        assert same(t)
+        assert len(I._LEAVES) <= 3
+    # the named-mode endpoints were emptied with the leaves (one mode name, m)
+    assert len(I._ENDPOINTS) <= 1
+    assert I._ENDPOINTS.get(("in", "m")) in (None, I._named_endpoints("in", I._LEAVES.get(
+        ("ap", "m")) or I._name_node("ap", "m")))
+
+
+class _NotDigits(str):
+    """A duration's text that does not look like a whole number: read as a Fraction."""
+
+    def isdigit(self) -> bool:
+        return False
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(st.from_regex(r"[0-9]{1,7}", fullmatch=True),
+       st.sampled_from(["ticks", "seconds", "milliseconds", "minutes", "microseconds"]),
+       st.sampled_from([None, Fraction(1, 10), Fraction(1), Fraction(3, 7)]))
+def test_whole_durations_read_without_fraction(amount, unit, period):
+    """duration_ticks reads a whole number as written (``007``) as its int: the same
+    ticks, warnings and errors as the exact Fraction of the text."""
+    from compiler import semantics
+    from fretish import ast as A
+
+    def outcome(d):
+        warnings: list = []
+        try:
+            ticks = semantics.duration_ticks(d, period, warnings)
+            return (type(ticks), ticks), warnings
+        except FretishError as exc:
+            return str(exc), warnings
+
+    assert outcome(A.Duration(amount, unit)) == outcome(A.Duration(_NotDigits(amount), unit))
