@@ -706,6 +706,21 @@ def _variables_into(node: Node, seen: dict, done: set) -> None:
             seen[a.name] = None
 
 
+_BOUND_TEXTS: dict = {None: [None] * (_MAX_OFFSET - _MIN_OFFSET + 1)}
+
+
+def _bound_texts(n: int | None) -> list:
+    """The texts of the bounds ``n - 2 .. n + 3`` (the format fields from ``_BOUND0``; None
+    for no duration), made once per ``n`` (at most 4096 kept)."""
+    texts = _BOUND_TEXTS.get(n)
+    if texts is None:
+        if len(_BOUND_TEXTS) > 4096:
+            _BOUND_TEXTS.clear()
+            _BOUND_TEXTS[None] = [None] * (_MAX_OFFSET - _MIN_OFFSET + 1)
+        texts = _BOUND_TEXTS[n] = [str(n + k) for k in range(_MIN_OFFSET, _MAX_OFFSET + 1)]
+    return texts
+
+
 class InstantiatedFormalization(Formalization):
     """A :class:`~compiler.semantics.Formalization` whose printed formulas come from a
     template; ``ft``, ``ft_inf`` and ``pt`` are built (the full construction) on first use.
@@ -752,7 +767,7 @@ class InstantiatedFormalization(Formalization):
         n = self.ticks
         if n is None:
             return texts
-        return list(texts) + [str(n + k) for k in range(_MIN_OFFSET, _MAX_OFFSET + 1)]
+        return list(texts) + _bound_texts(n)
 
     def smv(self, which: str) -> str:
         """FRET/SMV text of ``ft``, ``ft_inf`` or ``pt`` (pt with FTP as ``(Z FALSE)``)."""
@@ -804,9 +819,7 @@ class InstantiatedFormalization(Formalization):
                 spot += (None,) * _ATOMS
         except ValueError:
             return None
-        n = self.ticks
-        bounds = ([str(n + k) for k in range(_MIN_OFFSET, _MAX_OFFSET + 1)]
-                  if n is not None else [None] * 6)
+        bounds = _bound_texts(self.ticks)
         return fmt % pick(smv + bounds + spot + bounds)
 
     def spot(self, which: str) -> str:
