@@ -67,6 +67,16 @@ disk cache (:mod:`fretish.cache`, entry named by a digest of the construction's 
 and Python's version, :func:`_cache_name`), building and storing it on first use. The table changes
 speed only: a cache that is off, unreadable or damaged means the keys are built.
 
+Per requirement the work is kept to the atoms: the leaves of names and literals
+(:func:`_name_node`) and the ``Left``/``Right`` endpoints of a scope whose mode is a name
+(:func:`_named_endpoints`) are made once per name; a temporal function's expansion is built
+once and shared by ft's derived atom and pt (:class:`_SharingExpander`), and ft_inf reuses
+ft's atoms unless they call a future-time function; plain atoms are checked against the
+template's comparisons reduced once per template (:func:`_plain_conditions`); ``--emit ltl
+--json`` takes the five printed forms JSON-escaped in one formatting
+(:meth:`InstantiatedFormalization.json_forms`). None of these caches holds a requirement's
+expression or text.
+
 Byte identity with the full path is checked by ``tests/compiler/test_instantiate.py`` on
 random sentences over the whole grammar, FRET's vectors and the case-study corpus.
 """
