@@ -111,3 +111,34 @@ def test_emit_ltl_in_ticks_builds_no_unit_table(tmp_path):
     run = [subprocess.run([sys.executable, "-c", code, str(f)], capture_output=True,
                           text=True, env=env, check=True).stdout.split() for f in (fret, secs)]
     assert run == [["0", "True"], ["1", "True"]]
+
+
+def _python(code: str) -> str:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT)), check=True).stdout
+
+
+def test_import_freezes_its_objects_and_restores_the_collector():
+    """``import fretc.cli`` pauses the cyclic collector while it loads, moves what exists
+    to the permanent generation and puts the collector back as it was."""
+    out = _python("import gc\nimport fretc.cli\n"
+                  "print(gc.isenabled(), gc.get_freeze_count() > 1000)")
+    assert out.split() == ["True", "True"]
+    out = _python("import gc\ngc.disable()\nimport fretc.cli\n"
+                  "print(gc.isenabled(), gc.get_freeze_count() > 1000)")
+    assert out.split() == ["False", "True"]
+    # objects made afterwards are collected as before
+    out = _python("import gc, weakref\nimport fretc.cli\n"
+                  "class C: pass\n"
+                  "a = C(); a.me = a; w = weakref.ref(a); del a\n"
+                  "gc.collect(); print(w() is None)")
+    assert out.strip() == "True"
+
+
+def test_exit_freeze_only_when_the_command_paused_the_collector():
+    out = _python("import gc\nfrom fretc import cli\n"
+                  "n = gc.get_freeze_count(); x = [[] for _ in range(500)]\n"
+                  "cli._freeze_if_paused(); a = gc.get_freeze_count()\n"
+                  "gc.disable(); cli._freeze_if_paused(); b = gc.get_freeze_count()\n"
+                  "print(a == n, b >= n + 500)")
+    assert out.split() == ["True", "True"]
