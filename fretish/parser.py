@@ -74,30 +74,33 @@ _DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
 
 # --------------------------------------------------------------------------- positions
 class _Ctx(threading.local):
-    """Per-parse state read by the AST builder (the Lark parser is shared)."""
+    """Per-parse state read by the AST builder (the Lark parser is shared); set by
+    :meth:`set`. ``line``/``col``: the file line of the text's line 1 and the file column
+    of its first character; ``starts``: the offsets where the text's lines 2, 3 ... begin
+    (None for a text of one line, where a span is plain arithmetic)."""
     text = ""
-    dl = 0   # file line of the text's line 1, minus 1
-    dc = 0   # file column of the text's first character, minus 1
+    line = 1
+    col = 1
+    starts = None
+
+    def set(self, text: str, dl: int, dc: int) -> None:
+        """Parse ``text``, whose first character is at file line ``dl + 1``, column
+        ``dc + 1``."""
+        self.text, self.line, self.col = text, dl + 1, dc + 1
+        if "\n" in text:
+            self.starts = [m.end() for m in _NEWLINE.finditer(text)]
+        else:
+            self.starts = None
 
 
+_NEWLINE = re.compile("\n")
 _ctx = _Ctx()
 
 
-class _Tok:
-    """A token of the fast path (:class:`_FastParser`): the attributes of a ``lark.Token``
-    that the AST builder reads (``type``, ``value``, 1-based ``line``/``column`` and
-    ``end_line``/``end_column``, 0-based ``start_pos``/``end_pos``)."""
-    __slots__ = ("type", "value", "start_pos", "line", "column", "end_line", "end_column",
-                 "end_pos")
-
-    def __init__(self, type_, value, start_pos, line, column, end_line, end_column, end_pos):
-        self.type, self.value, self.start_pos = type_, value, start_pos
-        self.line, self.column, self.end_line = line, column, end_line
-        self.end_column, self.end_pos = end_column, end_pos
-
-
-#: Token classes the builder may receive: ours, and ``lark.Token`` once Lark is loaded.
-_TOKENS = {_Tok}
+# Tokens, of the fast path and (converted, :class:`_LarkBuilder`) of Lark's: plain tuples
+# ``(terminal, text, start, end)`` with 0-based offsets into the text (a tuple is the
+# cheapest object Python makes; a node is never a plain tuple: ``A.Span`` is a subclass).
+_TYPE, _VALUE, _START, _END = 0, 1, 2, 3
 
 
 #: ``A.Span`` from one tuple of its six fields, without the named tuple's Python-level
@@ -105,30 +108,32 @@ _TOKENS = {_Tok}
 _new_span = functools.partial(tuple.__new__, A.Span)
 
 
+def _mk(s: int, e: int) -> A.Span:
+    """The span of text offsets ``s`` to ``e`` (0-based, end excluded) in file coordinates
+    (:class:`_Ctx`): 1-based lines and columns as Lark counts them (a line starts after
+    each ``"\\n"``; only the text's first line is shifted by its starting column)."""
+    c = _ctx
+    starts = c.starts
+    if starts is None:
+        line, col = c.line, c.col
+        return _new_span((line, s + col, line, e + col, s, e))
+    from bisect import bisect_right
+    i = bisect_right(starts, s)
+    j = bisect_right(starts, e)
+    return _new_span((c.line + i, s + c.col if i == 0 else s - starts[i - 1] + 1,
+                      c.line + j, e + c.col if j == 0 else e - starts[j - 1] + 1, s, e))
+
+
 def _span_of(x) -> A.Span:
-    if type(x) in _TOKENS:
-        dl, dc = _ctx.dl, _ctx.dc
-        return _new_span((x.line + dl, x.column + dc if x.line == 1 else x.column,
-                          x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
-                          x.start_pos, x.end_pos))
+    """The span of a token or a node."""
+    if type(x) is tuple:
+        return _mk(x[2], x[3])
     return x.span
 
 
 def _join(a, b) -> A.Span:
     """Span from the start of ``a`` to the end of ``b`` (tokens or nodes)."""
-    if type(a) in _TOKENS:
-        line = a.line
-        start = (line + _ctx.dl, a.column + _ctx.dc if line == 1 else a.column, a.start_pos)
-    else:
-        s = a.span
-        start = (s.line, s.column, s.start)
-    if type(b) in _TOKENS:
-        line = b.end_line
-        return _new_span((start[0], start[1], line + _ctx.dl,
-                          b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
-                          b.end_pos))
-    e = b.span
-    return _new_span((start[0], start[1], e.end_line, e.end_column, start[2], e.end))
+    return _mk(a[2] if type(a) is tuple else a.span[4], b[3] if type(b) is tuple else b.span[5])
 
 
 class _Fail(Exception):
@@ -164,19 +169,19 @@ class _ExplicitMode:
 
 
 def _unquote(tok) -> str:
-    body = tok.value[1:-1]
+    body = tok[1][1:-1]
     if "\\" in body:
         body = body.replace('\\"', '"').replace("\\\\", "\\")
     return body
 
 
 def _name_of(tok) -> str:
-    if tok.type == "STRING":
+    if tok[0] == "STRING":
         name = _unquote(tok)
         if not name.strip():
             raise _Fail(tok, "an empty quoted name", "write a name between the quotes")
         return name
-    return tok.value
+    return tok[1]
 
 
 def _is_numeric_literal(e) -> bool:
@@ -210,13 +215,13 @@ def _climb(c: list, i: int, min_prec: int):
     n = len(c)
     while i < n:
         op = c[i]
-        prec, right_assoc = _PREC[op.type]
+        prec, right_assoc = _PREC[op[0]]
         if prec < min_prec:
             break
         right, i = _climb(c, i + 1, prec if right_assoc else prec + 1)
-        left = A.Binary(_BINOPS[op.type], left, right, _join(left, right))
-        if prec == _CMP and i < n and _PREC[c[i].type][0] == _CMP:
-            raise _Fail(c[i], f"comparisons do not chain: unexpected '{c[i].value}' after "
+        left = A.Binary(_BINOPS[op[0]], left, right, _join(left, right))
+        if prec == _CMP and i < n and _PREC[c[i][0]][0] == _CMP:
+            raise _Fail(c[i], f"comparisons do not chain: unexpected '{c[i][1]}' after "
                         "a comparison",
                         "compare twice and join with '&': 'a < b & b < c'")
     return left, i
@@ -255,19 +260,19 @@ class _Builder:
     # ---- expressions
     def number(self, c):
         t = c[0]
-        return A.NumLit(t.value, _span_of(t))
+        return A.NumLit(t[1], _mk(t[2], t[3]))
 
     def var(self, c):
         t = c[0]
-        return A.Var(_name_of(t), _span_of(t))
+        return A.Var(_name_of(t), _mk(t[2], t[3]))
 
     def boolean(self, c):
         t = c[0]
-        return A.BoolLit(t.type == "TRUE", _span_of(t))
+        return A.BoolLit(t[0] == "TRUE", _mk(t[2], t[3]))
 
     def reserved(self, c):
         t = c[0]
-        w = t.value
+        w = t[1]
         if w.lower() == "what":
             raise _Fail(t, "'what' is a reserved word in FRETish (probability queries)",
                         f"quote it (\"{w}\") or rename the variable")
@@ -281,23 +286,23 @@ class _Builder:
     def call(self, c):
         name, rpar = c[0], c[-1]
         args = tuple(c[2:-1])
-        if name.value == "preBool" and args and _is_numeric_literal(args[0]):
+        if name[1] == "preBool" and args and _is_numeric_literal(args[0]):
             init = args[0]
             shown = _ctx.text[init.span.start:init.span.end]
             raise _Fail(init, f"preBool's initial value must be true or false, not '{shown}'",
                         "preBool(init, p) is init at the first step and p one step earlier "
                         "afterwards; write preBool(false, p) or preBool(true, p) (FRET "
                         "prints 'undefined' for a numeric initial value)")
-        return A.Call(name.value, args, _join(name, rpar))
+        return A.Call(name[1], args, _join(name, rpar))
 
     def prefixed(self, c):               # ! p, ~ p, - x (as if standing alone)
         op, x = c
-        if op.type == "BANG":
+        if op[0] == "BANG":
             return A.Unary("!", x, _join(op, x))
         if type(x) is A.Unary and x.op == "!" and _ctx.text[x.span.start] != "(":
             raise _not_here(x)
-        if type(x) is A.NumLit and x.span.start == op.end_pos \
-                and _ctx.text[op.end_pos] != "(" and not x.text.startswith("-"):
+        if type(x) is A.NumLit and x.span.start == op[3] \
+                and _ctx.text[op[3]] != "(" and not x.text.startswith("-"):
             # a minus written against a number literal is part of it, as in FRET's
             # lexer: -3 ^ 2 is (-3) ^ 2, while - 3 ^ 2 and -x ^ 2 negate the power
             return A.NumLit("-" + x.text, _join(op, x))
@@ -320,16 +325,16 @@ class _Builder:
         return A.Binary("->", c[1], c[3], _join(c[0], c[3]))
 
     def occurrence(self, c):
-        name = "prevOcc" if c[2].type == "PREVIOUS" else "nextOcc"
+        name = "prevOcc" if c[2][0] == "PREVIOUS" else "nextOcc"
         return A.Call(name, (c[5], c[6]), _join(c[0], c[6]))
 
     # ---- scope
     def mode_name(self, c):
         t = c[0]
-        return A.Var(_name_of(t), _span_of(t))
+        return A.Var(_name_of(t), _mk(t[2], t[3]))
 
     def explicit_mode(self, c):
-        t = c[1] if c[0].type == "MODE" else c[0]
+        t = c[1] if c[0][0] == "MODE" else c[0]
         return _ExplicitMode(A.Var(_name_of(t), _span_of(t)), _join(c[0], c[1]))
 
     def _scope(self, kind, c):
@@ -364,17 +369,17 @@ class _Builder:
     @staticmethod
     def _part(c, connective):
         i = 0
-        if connective is not None and c[0].type in ("AND", "OR"):
-            connective = c[0].type.lower()
+        if connective is not None and c[0][0] in ("AND", "OR"):
+            connective = c[0][0].lower()
             i = 1
         q = c[i]
-        qualifier = q.value.lower()
+        qualifier = q[1].lower()
         expr = c[i + 1]
         last = expr
         negate = qualifier == "unless"
         if len(c) > i + 2:                       # is true / is false
             last = c[i + 3]
-            if last.type == "FALSE":
+            if last[0] == "FALSE":
                 negate = not negate
         span = _join(c[0], last)
         if negate:
@@ -389,7 +394,7 @@ class _Builder:
 
     def condition(self, c):
         first = c[0]
-        parts = c[1:] if type(first) in _TOKENS else c
+        parts = c[1:] if type(first) is tuple else c
         expr = parts[0].expr
         for p in parts[1:]:
             expr = A.Binary("|" if p.connective == "or" else "&", expr, p.expr,
@@ -399,42 +404,42 @@ class _Builder:
 
     # ---- component, probability, timing, response
     def subject(self, c):
-        names = [t for t in c if t.type in ("NAME", "STRING")]
+        names = [t for t in c if t[0] in ("NAME", "STRING")]
         t = names[0]
-        first = c[1] if c[0].type == "SHALL" else c[0]
+        first = c[1] if c[0][0] == "SHALL" else c[0]
         return _Subject(_name_of(t), _join(first, t))
 
     def probability(self, c):
         op, num = c[2], c[-1]
-        value = ("-" if c[-2].type == "MINUS" else "") + num.value
-        if op.type == "NE":
+        value = ("-" if c[-2][0] == "MINUS" else "") + num[1]
+        if op[0] == "NE":
             raise _Fail(op, "a probability bound uses <, <=, >, >= or =, not '!='",
                         "write e.g. 'with probability >= 0.99'")
         v = Fraction(value)
-        if not 0 <= v <= 1 or (op.type == "GT" and v == 1) or (op.type == "LT" and v == 0):
+        if not 0 <= v <= 1 or (op[0] == "GT" and v == 1) or (op[0] == "LT" and v == 0):
             what = (f"probability {value} is outside [0, 1]" if not 0 <= v <= 1 else
-                    f"'{op.value} {value}' is no probability bound: a probability is never "
+                    f"'{op[1]} {value}' is no probability bound: a probability is never "
                     + ("above 1" if v == 1 else "below 0"))
             raise _Fail(c[-1] if not value.startswith("-") else c[-2], what,
                         "a probability bound is a number in [0, 1], e.g. "
                         "'with probability >= 0.99'")
-        return A.Probability(_BINOPS[op.type], value, _join(c[0], num))
+        return A.Probability(_BINOPS[op[0]], value, _join(c[0], num))
 
     def duration(self, c):
         num, unit = c
-        if not _DURATION_AMOUNT.match(num.value):
-            raise _Fail(num, f"a duration is a whole or decimal number, not '{num.value}'",
+        if not _DURATION_AMOUNT.match(num[1]):
+            raise _Fail(num, f"a duration is a whole or decimal number, not '{num[1]}'",
                         "write e.g. 'within 3 seconds' or 'for 2.5 seconds'")
-        return A.Duration(num.value, UNIT_TOKENS[unit.type], _join(num, unit))
+        return A.Duration(num[1], UNIT_TOKENS[unit[0]], _join(num, unit))
 
     def timing(self, c):
         head = c[0]
         last = c[-1]
-        if head.type == "AT":
-            return A.Timing(_AT_TIMINGS[c[2].type], phrase=" ".join(t.value.lower() for t in c),
+        if head[0] == "AT":
+            return A.Timing(_AT_TIMINGS[c[2][0]], phrase=" ".join(t[1].lower() for t in c),
                             span=_join(head, last))
-        kind = _SIMPLE_TIMINGS[head.type]
-        phrase = head.value.lower()
+        kind = _SIMPLE_TIMINGS[head[0]]
+        phrase = head[1].lower()
         if len(c) == 1:
             return A.Timing(kind, phrase=phrase, span=_span_of(head))
         if kind in A.DURATION_TIMINGS:
@@ -476,6 +481,28 @@ class _Builder:
         return c[0]
 
 
+def _lark_callback(f):
+    def callback(self, c):
+        # a lark.Token is a str; nothing the builder returns is
+        return f(self, [(x.type, str(x), x.start_pos, x.end_pos) if isinstance(x, str) else x
+                        for x in c])
+    callback.__name__ = f.__name__
+    return callback
+
+
+class _LarkBuilder(_Builder):
+    """The :class:`_Builder` as Lark's transformer: each callback first turns Lark's tokens
+    into the builder's token tuples (``lark.Token`` ``type``, text, ``start_pos``,
+    ``end_pos``), so Lark and the fast path run the same code on the same values (Lark is
+    the reference the fast path is tested against, and reports every error)."""
+
+
+for _name, _f in list(vars(_Builder).items()):
+    if not _name.startswith("_") and callable(_f):
+        setattr(_LarkBuilder, _name, _lark_callback(_f))
+del _name, _f
+
+
 # --------------------------------------------------------------------------- the parser
 _lock = threading.RLock()
 _lark = None          # the lark.Lark parser (loaded on first need: errors, no fast path)
@@ -488,9 +515,8 @@ _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", start=["start", "expr"],
 
 def _import_lark():
     """Import Lark (on first need: ``fretc FILE --emit ltl`` on valid sentences runs without
-    it) and let the builder accept its tokens."""
+    it)."""
     import lark
-    _TOKENS.add(lark.Token)
     return lark
 
 
@@ -517,7 +543,7 @@ def _read_grammar() -> str:
 
 
 def _cache_key(grammar: str) -> str:
-    return cache.key_of("fretish-lark-1", grammar, _lark_version(),
+    return cache.key_of("fretish-lark-2", grammar, _lark_version(),
                         "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
 
 
@@ -527,7 +553,7 @@ def build_lark(**options):
     to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts). Builds the LALR
     tables from the grammar (about a second); :func:`cached_lark` loads them instead."""
     lark = _import_lark()
-    return lark.Lark(_read_grammar(), transformer=_Builder(),
+    return lark.Lark(_read_grammar(), transformer=_LarkBuilder(),
                      **_LARK_OPTIONS, **options)
 
 
@@ -550,7 +576,7 @@ def cached_lark():
     if data is not None:
         try:
             parser = lark.Lark.load(io.BytesIO(data))
-            if isinstance(parser.options.transformer, _Builder):
+            if type(parser.options.transformer) is _LarkBuilder:
                 return parser
         except Exception:  # a damaged or foreign entry: rebuild it  # noqa: BLE001
             pass
@@ -728,6 +754,29 @@ def _first_chars(rx: str, flags: int) -> frozenset | None:
     return None if got is None or nullable else frozenset(got)
 
 
+def _context_free(rx: str, flags: int) -> bool:
+    """Whether regexp ``rx`` matches a text the same way whatever follows or precedes it:
+    no lookaround, anchor or back-reference (from the parse tree of Python's ``re``)."""
+    import re._constants as C
+    import re._parser as P
+
+    def plain(seq) -> bool:
+        for op, av in seq:
+            if op in (C.ASSERT, C.ASSERT_NOT, C.AT, C.GROUPREF, C.GROUPREF_EXISTS):
+                return False
+            if op is C.SUBPATTERN and not plain(av[-1]):
+                return False
+            if op is C.BRANCH and not all(plain(alt) for alt in av[1]):
+                return False
+            if op in (C.MAX_REPEAT, C.MIN_REPEAT, C.POSSESSIVE_REPEAT) and not plain(av[2]):
+                return False
+            if op is C.ATOMIC_GROUP and not plain(av):
+                return False
+        return True
+
+    return plain(P.parse(rx, flags).data)
+
+
 class _FastParser:
     """Lark's LALR(1) table for ``grammar.lark`` run by a plain loop, with one lexer regexp.
 
@@ -753,7 +802,6 @@ class _FastParser:
         self.dispatch = tables["dispatch"]       # ASCII character -> index into subsets
         self.matchers = [None] * len(self.subsets)  # compiled on first use
         self.parts: dict = {}                     # terminal indices -> compiled match
-        self.newline = frozenset(tables["newline"])
         self.ignore = frozenset(tables["ignore"])
         self.actions = tables["actions"]
         self.gotos = tables["gotos"]
@@ -858,16 +906,23 @@ class _FastParser:
 
     def _build_scanner(self, firsts: list) -> None:
         """The whole-text lexer, when the grammar's terminals allow it (else the lexer of
-        :meth:`_tokens_by_char` is used): one regexp ``(ignored)* (word | T1 | T2 ...)``
-        where ``word`` is an identifier-shaped run of characters (FRETish's keywords,
-        reserved letters and names all are: each keyword terminal ends where the word
-        ends, and NAME's regexp is the same run) and ``T1, T2 ...`` are the other
-        terminals in Lark's order. A word's terminal is that of the exact lexer
-        (:meth:`_matcher`) on the word alone, kept in :attr:`words` (it never depends on
-        what follows a whole word). Used only when every terminal starts either with
-        letters only or with no letter, and the ignored terminals start with characters
-        no other terminal starts with."""
-        self.scan = None
+        :meth:`_tokens_by_char` is used): one regexp ``((ignored)*)(word | T1 | T2 ... |
+        \\Z)`` run by ``findall``, where ``word`` is an identifier-shaped run of characters
+        (FRETish's keywords, reserved letters and names all are: each keyword terminal ends
+        where the word ends, and NAME's regexp is the same run) and ``T1, T2 ...`` are the
+        other terminals in Lark's order. ``findall`` gives (ignored text, token text) pairs,
+        so the offsets are the running sum of their lengths; a character no terminal
+        matches is skipped by ``findall``, which the sum then shows (the last pair is the
+        ``\\Z`` one, ending at the text's end when nothing was skipped).
+
+        A token's terminal is that of the exact lexer (:meth:`_matcher`) on the token's
+        text alone, kept in :attr:`words` by text: for a word, it never depends on what
+        follows a whole word; for the other terminals, whose regexps are required to have
+        no lookaround, anchor or back-reference, a terminal that matches the text alone
+        matches it in place too, so the first one in Lark's order is the same. Used only
+        when every terminal starts either with letters only or with no letter, and the
+        ignored terminals start with characters no other terminal starts with."""
+        self.findall = None
         letters = self._LETTERS
         ignored, others = [], []
         ignore_firsts: set = set()
@@ -879,6 +934,8 @@ class _FastParser:
                 ignored.append(rx)
                 ignore_firsts |= f
             elif not f & letters:
+                if not _context_free(rx, self.flags):
+                    return
                 others.append(i)
             elif not f <= letters:
                 return
@@ -886,10 +943,11 @@ class _FastParser:
                               for i, f in enumerate(firsts)
                               if self.terminals[i][0] not in self.ignore):
             return
-        body = "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})" for i in others)
-        rx = f"(?:{'|'.join(ignored)})*(?:(?P<word>{self._WORD})|{body})"
-        self.scan = re.compile(rx, self.flags).scanner
-        self.trailing = re.compile(f"(?:{'|'.join(ignored)})*\\Z", self.flags).match
+        body = "".join(f"|(?:{self.terminals[i][1]})" for i in others)
+        rx = re.compile(f"((?:{'|'.join(ignored)})*)((?:{self._WORD}){body}|\\Z)", self.flags)
+        if rx.groups != 2:   # a terminal with a capturing group of its own
+            return
+        self.findall = rx.findall
         self.words = dict(self.known_words)
         names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
         # NAME tried first among the terminals that start with a letter: a word it matches
@@ -900,13 +958,16 @@ class _FastParser:
         self.name_match = None
 
     def _word_type(self, word: str) -> str:
-        """The terminal of ``word``: the exact lexer on the word alone (:class:`_Slow` when
-        no terminal matches the whole word), or NAME when NAME, the first terminal a word
-        can start, matches it whole. The reserved words' terminals come with the tables
-        (:attr:`known_words`), so a run compiles no keyword regexp."""
+        """The terminal of token text ``word`` (:meth:`_build_scanner`): the exact lexer on
+        the text alone (:class:`_Slow` when no terminal matches it whole), or NAME when
+        NAME, the first terminal a word can start, matches it whole. The reserved words'
+        terminals come with the tables (:attr:`known_words`), so a run compiles no keyword
+        regexp."""
+        if not word:
+            raise _Slow("empty token")
         if len(self.words) >= self._MAX_WORDS:
             self.words = dict(self.known_words)
-        if self.name_first:
+        if self.name_first and word[0] in self._LETTERS:
             if self.name_match is None:
                 self.name_match = re.compile(self.name_rx, self.flags).match
             m = self.name_match(word)
@@ -921,48 +982,32 @@ class _FastParser:
         return typ
 
     def _tokens(self, text: str) -> list:
-        """The tokens of ``text`` (:class:`_Tok`, ignored terminals dropped); raises
-        :class:`_Slow` where a character starts no terminal."""
-        scan = self.scan
-        if scan is None:
+        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
+        terminals dropped); raises :class:`_Slow` where a character starts no terminal."""
+        findall = self.findall
+        if findall is None:
             return self._tokens_by_char(text)
         words = self.words
+        found = findall(text)
+        ws, last = found.pop()     # the \Z match: the ignored characters at the end
         out = []
         add = out.append
         pos = 0
-        multiline = "\n" in text
-        match = scan(text).match      # each match starts where the previous one ended
-        while (m := match()) is not None:
-            typ = m.lastgroup
-            start, pos = m.span(m.lastindex)
-            value = text[start:pos]
-            if typ == "word":
-                typ = words.get(value) or self._word_type(value)
-            add(_Tok(typ, value, start, 1, start + 1, 1, pos + 1, pos))
-        if pos != len(text) and self.trailing(text, pos) is None:
+        for ignored, value in found:
+            start = pos + len(ignored)
+            pos = start + len(value)
+            add((words.get(value) or self._word_type(value), value, start, pos))
+        if pos + len(ws) != len(text) or last:
             raise _Slow("no terminal")
-        if multiline:
-            self._relocate(text, out)
         return out
-
-    @staticmethod
-    def _relocate(text: str, toks: list) -> None:
-        """Set the 1-based lines and columns of ``toks`` in a text of several lines."""
-        from bisect import bisect_right
-        starts = [0] + [i + 1 for i, ch in enumerate(text) if ch == "\n"]
-        for t in toks:
-            li = bisect_right(starts, t.start_pos)
-            t.line, t.column = li, t.start_pos - starts[li - 1] + 1
-            li = bisect_right(starts, t.end_pos)
-            t.end_line, t.end_column = li, t.end_pos - starts[li - 1] + 1
 
     def _tokens_by_char(self, text: str) -> list:
         """The tokens of ``text`` by the exact lexer, one regexp match per token or ignored
         run (the fallback of :meth:`_tokens`)."""
-        ignore, newline = self.ignore, self.newline
+        ignore = self.ignore
         dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
         out = []
-        pos, n, line, line_start = 0, len(text), 1, 0
+        pos, n = 0, len(text)
         while pos < n:
             sid = dispatch.get(text[pos], full)
             match = matchers[sid] or self._matcher(sid)
@@ -971,17 +1016,9 @@ class _FastParser:
                 raise _Slow("no terminal")
             typ = m.lastgroup
             end = m.end()
-            nline, nstart = line, line_start
-            if typ in newline:
-                value = text[pos:end]
-                k = value.count("\n")
-                if k:
-                    nline = line + k
-                    nstart = pos + value.rindex("\n") + 1
             if typ not in ignore:
-                out.append(_Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
-                                end - nstart + 1, end))
-            pos, line, line_start = end, nline, nstart
+                out.append((typ, text[pos:end], pos, end))
+            pos = end
         return out
 
     def _chain(self, below: int, state: int, typ: str) -> int:
@@ -1009,7 +1046,7 @@ class _FastParser:
         state_stack = [state]
         value_stack = []
         for tok in toks:
-            typ = tok.type
+            typ = tok[0]
             while True:
                 action = actions[state].get(typ)
                 if action is None:
@@ -1139,7 +1176,7 @@ def _run(start: str, text: str, source: str, line: int, column: int):
         raise TypeError(f"parse() wants a str, got {type(text).__name__}")
     fast = _get_fast()
     if fast:
-        _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
+        _ctx.set(text, line - 1, column - 1)
         try:
             result = fast.parse(text, start)
             if start == "start":
@@ -1160,7 +1197,7 @@ def _run_lark(start: str, text: str, source: str, line: int, column: int):
 
     from .diagnostics import make_error, translate
     lark = _get_parser()
-    _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
+    _ctx.set(text, line - 1, column - 1)
     try:
         result = lark.parse(text, start=start)
         if start == "start":

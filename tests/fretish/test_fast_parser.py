@@ -44,7 +44,7 @@ def _fast(text, start="start", line=1, column=1):
     """The fast path's AST (deep form), or None where it hands the text to Lark."""
     fast = P._get_fast()
     assert fast, "the fast path is not available for grammar.lark"
-    P._ctx.text, P._ctx.dl, P._ctx.dc = text, line - 1, column - 1
+    P._ctx.set(text, line - 1, column - 1)
     try:
         result = fast.parse(text, start)
         (P.check_requirement if start == "start" else P.check_expression)(result)
