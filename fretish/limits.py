@@ -74,7 +74,9 @@ def check_requirement(req: A.Requirement) -> None:
     d = req.timing.duration
     if d is not None and len(d.amount) > MAX_NUMBER_CHARS:
         raise _long_number(d.span, d.amount)
-    if d is not None and d.unit == "ticks" and d.value > MAX_DURATION_TICKS:
+    if d is not None and d.unit == "ticks" and (
+            int(d.amount) if d.amount.isascii() and d.amount.isdigit() else d.value
+    ) > MAX_DURATION_TICKS:
         raise LimitError(d.span, duration_too_long(d.value), _DURATION_HINT)
 
 

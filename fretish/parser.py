@@ -81,7 +81,8 @@ class _Ctx(threading.local):
     text = ""
     line = 1
     col = 1
-    starts = None
+    starts: list = []
+    flat: tuple | None = (1, 1)   # (line, col) when the text has one line, else None
 
     def set(self, text: str, dl: int, dc: int) -> None:
         """Parse ``text``, whose first character is at file line ``dl + 1``, column
@@ -89,8 +90,9 @@ class _Ctx(threading.local):
         self.text, self.line, self.col = text, dl + 1, dc + 1
         if "\n" in text:
             self.starts = [m.end() for m in _NEWLINE.finditer(text)]
+            self.flat = None
         else:
-            self.starts = None
+            self.flat = (dl + 1, dc + 1)
 
 
 _NEWLINE = re.compile("\n")
@@ -112,12 +114,13 @@ def _mk(s: int, e: int) -> A.Span:
     """The span of text offsets ``s`` to ``e`` (0-based, end excluded) in file coordinates
     (:class:`_Ctx`): 1-based lines and columns as Lark counts them (a line starts after
     each ``"\\n"``; only the text's first line is shifted by its starting column)."""
-    c = _ctx
-    starts = c.starts
-    if starts is None:
-        line, col = c.line, c.col
+    flat = _ctx.flat
+    if flat is not None:
+        line, col = flat
         return _new_span((line, s + col, line, e + col, s, e))
     from bisect import bisect_right
+    c = _ctx
+    starts = c.starts
     i = bisect_right(starts, s)
     j = bisect_right(starts, e)
     return _new_span((c.line + i, s + c.col if i == 0 else s - starts[i - 1] + 1,
@@ -451,28 +454,16 @@ class _Builder:
 
     # ---- sentences
     def sentence(self, c):
-        scope = A.Scope()
-        condition = A.Condition()
-        probability = None
-        timing = A.Timing()
-        subject = response = None
+        # the fields by the class of each part (an absent part: the null one, which is
+        # never modified, so one is shared as Requirement's own defaults are)
+        parts = [_NULL_SCOPE, _NULL_CONDITION, None, None, _NULL_TIMING, None]
         for x in c:
-            if isinstance(x, A.Scope):
-                scope = x
-            elif isinstance(x, A.Condition):
-                condition = x
-            elif isinstance(x, _Subject):
-                subject = x
-            elif isinstance(x, A.Probability):
-                probability = x
-            elif isinstance(x, A.Timing):
-                timing = x
-            elif isinstance(x, _Response):
-                response = x
-        return A.Requirement(_ctx.text, scope=scope, condition=condition,
-                             component=subject.name, probability=probability,
-                             timing=timing, response=response.expr,
-                             component_span=subject.span, response_span=response.span)
+            i = _SENTENCE_PARTS.get(type(x))
+            if i is not None:
+                parts[i] = x
+        scope, condition, subject, probability, timing, response = parts
+        return A.Requirement(_ctx.text, scope, condition, subject.name, probability, timing,
+                             response.expr, False, subject.span, response.span)
 
     def freeform(self, c):
         return A.Requirement(_ctx.text, freeform=True)
@@ -501,6 +492,11 @@ for _name, _f in list(vars(_Builder).items()):
     if not _name.startswith("_") and callable(_f):
         setattr(_LarkBuilder, _name, _lark_callback(_f))
 del _name, _f
+
+
+_SENTENCE_PARTS = {A.Scope: 0, A.Condition: 1, _Subject: 2, A.Probability: 3, A.Timing: 4,
+                   _Response: 5}
+_NULL_SCOPE, _NULL_CONDITION, _NULL_TIMING = A.Scope(), A.Condition(), A.Timing()
 
 
 # --------------------------------------------------------------------------- the parser
@@ -883,7 +879,13 @@ class _FastParser:
 
             def f(children, inner=inner):
                 return children[0] if len(children) == 1 else inner(children)
-        if include is not None:
+        if include is not None and not any(splice for _, splice in include):
+            inner2 = f
+            kept = tuple(i for i, _ in include)
+
+            def f(children, inner=inner2, kept=kept):
+                return inner([children[i] for i in kept])
+        elif include is not None:
             inner2 = f
 
             def f(children, inner=inner2, include=include):
