@@ -222,7 +222,7 @@ def _climb(c: list, i: int, min_prec: int):
         if prec < min_prec:
             break
         right, i = _climb(c, i + 1, prec if right_assoc else prec + 1)
-        left = A.Binary(_BINOPS[op[0]], left, right, _join(left, right))
+        left = A.Binary(_BINOPS[op[0]], left, right, _mk(left.span[4], right.span[5]))
         if prec == _CMP and i < n and _PREC[c[i][0]][0] == _CMP:
             raise _Fail(c[i], f"comparisons do not chain: unexpected '{c[i][1]}' after "
                         "a comparison",
@@ -321,7 +321,12 @@ class _Builder:
     open_ops = chain_ops                 # a chain ending in a prefix form (if-then ...)
 
     def climb(self, c):
-        node, _ = _climb(c[0], 0, 1)
+        c = c[0]
+        if len(c) == 3:   # one operator (most chains): what _climb gives, directly
+            left, op, right = c
+            if type(left) is not A.Unary and type(right) is not A.Unary:
+                return A.Binary(_BINOPS[op[0]], left, right, _mk(left.span[4], right.span[5]))
+        node, _ = _climb(c, 0, 1)
         return node
 
     def if_then(self, c):
@@ -343,8 +348,8 @@ class _Builder:
     def _scope(self, kind, c):
         m = c[-1]
         if isinstance(m, _ExplicitMode):
-            return A.Scope(kind, m.var, _join(c[0], m))
-        return A.Scope(kind, m, _join(c[0], m))
+            return A.Scope(kind, m.var, _mk(c[0][2], m.span[5]))
+        return A.Scope(kind, m, _mk(c[0][2], m.span[5]))
 
     # one Lark callback per scope rule, all through _scope (kept: Lark wants a method per rule)
     def in_scope(self, c):
@@ -410,7 +415,7 @@ class _Builder:
         names = [t for t in c if t[0] in ("NAME", "STRING")]
         t = names[0]
         first = c[1] if c[0][0] == "SHALL" else c[0]
-        return _Subject(_name_of(t), _join(first, t))
+        return _Subject(_name_of(t), _mk(first[2], t[3]))
 
     def probability(self, c):
         op, num = c[2], c[-1]
@@ -433,7 +438,7 @@ class _Builder:
         if not _DURATION_AMOUNT.match(num[1]):
             raise _Fail(num, f"a duration is a whole or decimal number, not '{num[1]}'",
                         "write e.g. 'within 3 seconds' or 'for 2.5 seconds'")
-        return A.Duration(num[1], UNIT_TOKENS[unit[0]], _join(num, unit))
+        return A.Duration(num[1], UNIT_TOKENS[unit[0]], _mk(num[2], unit[3]))
 
     def timing(self, c):
         head = c[0]
@@ -450,7 +455,7 @@ class _Builder:
         return A.Timing(kind, stop=last, phrase=phrase, span=_join(head, last))
 
     def response(self, c):
-        return _Response(c[1], _join(c[0], c[1]))
+        return _Response(c[1], _mk(c[0][2], c[1].span[5]))
 
     # ---- sentences
     def sentence(self, c):
