@@ -996,7 +996,11 @@ class _FastParser:
             return self._tokens_by_char(text)
         words = self.words
         found = findall(text)
-        ws, last = found.pop()     # the \Z match: the ignored characters at the end
+        # the \Z matches, last: the ignored characters at the end, then (after them)
+        # an empty match at the very end
+        end = 0
+        while found and not found[-1][1]:
+            end += len(found.pop()[0])
         out = []
         add = out.append
         pos = 0
@@ -1004,7 +1008,7 @@ class _FastParser:
             start = pos + len(ignored)
             pos = start + len(value)
             add((words.get(value) or self._word_type(value), value, start, pos))
-        if pos + len(ws) != len(text) or last:
+        if pos + end != len(text):
             raise _Slow("no terminal")
         return out
 

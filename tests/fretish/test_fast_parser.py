@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import fretish.ast as A
 import fretish.parser as P
 from fretish.errors import FretishError
 from fretish.words import RESERVED_WORDS
@@ -103,6 +104,8 @@ def _corpus():
         texts.append(" ".join(words[:i] + words[i + 1:]))
         texts.append(" ".join(words[:i] + [words[i]] + words[i:]))
         texts.append("\n  ".join(words))  # spread over lines
+        # ignored characters before and after the sentence (the lexer's last match)
+        texts.append(rnd.choice(["", " ", "\n"]) + text + rnd.choice([" ", "\t\n", "  "]))
     return texts
 
 
@@ -115,6 +118,71 @@ def test_fast_path_equals_lark_on_the_corpus():
         _check(text)
         accepted += _lark(text)[0] == "ok"
     assert accepted > len(CORPUS) // 3  # the comparison covered accepted sentences
+
+
+CASE_STUDIES = SHARED.parent / "corpora" / "fret_casestudies.jsonl"
+
+
+@pytest.mark.skipif(not CASE_STUDIES.exists(), reason="shared corpora not available")
+def test_fast_path_equals_lark_on_the_case_studies():
+    """NASA's case-study requirements (real text: trailing blanks, long expressions): the
+    fast path accepts every one Lark accepts, with the same AST and spans."""
+    texts = [json.loads(line)["text"] for line in CASE_STUDIES.open(encoding="utf-8")]
+    accepted = 0
+    for text in texts:
+        _check(text)
+        accepted += _lark(text)[0] == "ok"
+    assert accepted >= len(texts) - 5
+
+
+def _spans(x):
+    """Every (node class, span) in an AST (spans of the requirement's parts included)."""
+    if dataclasses.is_dataclass(x):
+        for f in dataclasses.fields(x):
+            v = getattr(x, f.name)
+            if isinstance(v, A.Span):
+                yield type(x).__name__, f.name, v
+            else:
+                yield from _spans(v)
+    elif isinstance(x, (tuple, list)) and not isinstance(x, A.Span):
+        for y in x:
+            yield from _spans(y)
+
+
+def _geometry(text, offset, line, column):
+    """File line and column of 0-based ``offset`` in ``text`` that starts at file
+    ``line``:``column``, counted by hand (a line starts after each newline)."""
+    before = text[:offset]
+    k = before.count("\n")
+    if k == 0:
+        return line, column + offset
+    return line + k, offset - before.rindex("\n")
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.sampled_from(CORPUS), st.integers(1, 40), st.integers(1, 30),
+       st.lists(st.sampled_from([" ", "\n", "\n\t", "  "]), min_size=1, max_size=4))
+def test_span_lines_and_columns_follow_the_offsets(text, line, column, blanks):
+    """Every span's line/column pairs are the file position of its start/end offsets
+    (computed by hand here), on texts spread over lines by random blanks, through the fast
+    path and Lark alike (the two share the position code, so they are checked apart)."""
+    parts = text.split(" ")
+    text = parts[0] + "".join(blanks[i % len(blanks)] + p for i, p in enumerate(parts[1:]))
+    got = []
+    try:
+        got.append(P.parse(text, source="<t>", line=line, column=column))
+    except FretishError:
+        return
+    got.append(P._run_lark("start", text, "<t>", line, column))
+    for req in got:
+        for cls, name, span in _spans(req):
+            if span == A.NO_SPAN:
+                continue
+            assert 0 <= span.start <= span.end <= len(text), (cls, name, span)
+            assert (span.line, span.column) == _geometry(text, span.start, line, column), \
+                (text, cls, name, span)
+            assert (span.end_line, span.end_column) == _geometry(text, span.end, line,
+                                                                 column), (text, cls, name, span)
 
 
 @pytest.mark.parametrize("text", ["x + 1 > y & !p", "if a then b | c", "a < b < c", "x = !y",
