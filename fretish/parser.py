@@ -267,7 +267,7 @@ class _Builder:
 
     def var(self, c):
         t = c[0]
-        return A.Var(_name_of(t), _mk(t[2], t[3]))
+        return A.Var(t[1] if t[0] == "NAME" else _name_of(t), _mk(t[2], t[3]))
 
     def boolean(self, c):
         t = c[0]

@@ -338,15 +338,18 @@ _DEEP = ["!", "-", "f(", "g(1, ", "(", "if p then ", "a & ", "x ^ ", "~"]
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(st.sampled_from(_DEEP), max_size=60), st.sampled_from(["p", "1", "9" * 99]))
+@given(st.lists(st.sampled_from(_DEEP), max_size=60),
+       st.sampled_from(["p", "1", "9" * 99, "9" * 100, "1.5e" + "7" * 96, "-" + "8" * 100]))
 def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
-    """limits.check_requirement skips the walk for a text of at most SHORT_TEXT characters:
-    the walk finds nothing there, even for the deepest expressions that fit."""
+    """limits.check_requirement skips the walk for a text of at most SHORT_TEXT characters,
+    and for one of at most SHORT_TEXT_NO_NUMBER characters without a long run of number
+    characters: the walk finds nothing there, even for the deepest expressions that fit."""
     from fretish import limits
     expr = "".join(prefixes) + leaf
     expr += ")" * (expr.count("(") - expr.count(")"))
     text = f"the sw shall satisfy {expr}"
-    if len(text) > limits.SHORT_TEXT:
+    if len(text) > limits.SHORT_TEXT and (len(text) > limits.SHORT_TEXT_NO_NUMBER
+                                          or limits._NUMBER_RUN.search(text)):
         return
     try:
         req = P._run_lark("start", text, "<t>", 1, 1)
