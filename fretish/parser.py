@@ -620,6 +620,8 @@ def fast_tables(lark) -> dict | None:
     Lark): the terminals in the order Lark's lexer tries them, Lark's LALR table, and per
     rule its origin, length, callback name and Lark's child filter (``_``-prefixed
     terminals dropped, ``_``-prefixed rules spliced, ``?rule`` single children passed up).
+    Per terminal, the characters it can start with and whether it matches the same way
+    whatever surrounds it (for the lexer, :meth:`_FastParser._build_scanner`).
     None when the grammar uses a Lark feature the fast path does not reproduce (a terminal
     callback or a string terminal that a regexp terminal also matches)."""
     from lark.lexer import _create_unless, _regexp_has_newline
@@ -685,6 +687,8 @@ def fast_tables(lark) -> dict | None:
             "newline": sorted(str(t.name) for t in terminals
                               if _regexp_has_newline(t.pattern.to_regexp())),
             "words": words, "firsts": [None if f is None else "".join(sorted(f)) for f in firsts],
+            "context_free": [_context_free(t.pattern.to_regexp(), conf.g_regex_flags)
+                             for t in terminals],
             "actions": actions, "gotos": gotos, "rules": rules,
             "start_states": {str(k): int(v) for k, v in table.start_states.items()},
             "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
@@ -817,7 +821,8 @@ class _FastParser:
         # reducing by one leaves the value stack as it is and replaces only the top state
         self.unit = [size == 1 and up == -1 for _, size, _, up in self.rules]
         self.chains: dict = {}    # (state below, state, terminal) -> state after the units
-        self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
+        self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]],
+                            tables["context_free"])
 
     @staticmethod
     def _passed_up(size, expand1, include) -> int:
@@ -911,7 +916,7 @@ class _FastParser:
     _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
     _MAX_WORDS = 100_000
 
-    def _build_scanner(self, firsts: list) -> None:
+    def _build_scanner(self, firsts: list, context_free: list) -> None:
         """The whole-text lexer, when the grammar's terminals allow it (else the lexer of
         :meth:`_tokens_by_char` is used): one regexp ``((ignored)*)(word | T1 | T2 ... |
         \\Z)`` run by ``findall``, where ``word`` is an identifier-shaped run of characters
@@ -928,7 +933,9 @@ class _FastParser:
         no lookaround, anchor or back-reference, a terminal that matches the text alone
         matches it in place too, so the first one in Lark's order is the same. Used only
         when every terminal starts either with letters only or with no letter, and the
-        ignored terminals start with characters no other terminal starts with."""
+        ignored terminals start with characters no other terminal starts with. ``firsts``
+        and ``context_free`` are per terminal (:func:`fast_tables`: :func:`_first_chars`,
+        :func:`_context_free`)."""
         self.findall = None
         letters = self._LETTERS
         ignored, others = [], []
@@ -941,7 +948,7 @@ class _FastParser:
                 ignored.append(rx)
                 ignore_firsts |= f
             elif not f & letters:
-                if not _context_free(rx, self.flags):
+                if not context_free[i]:
                     return
                 others.append(i)
             elif not f <= letters:
@@ -1119,7 +1126,7 @@ class _FastParser:
 
 
 #: The format of :func:`fast_tables`'s data (part of its cache entry's name).
-_FAST_FORMAT = "v4"
+_FAST_FORMAT = "v5"
 
 
 #: Where the fast path's tables are kept first: beside the package, as Python keeps its
