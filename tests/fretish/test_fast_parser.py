@@ -1,4 +1,4 @@
-"""The parser's fast path (fretish.parser._FastParser: Lark's LALR table run by a plain loop,
+"""The parser's fast path (fretish.fastparse._FastParser: Lark's LALR table run by a plain loop,
 one lexer regexp split by first character) against Lark itself (fretish.parser._run_lark,
 the reference): on every sentence the fast path accepts, the same AST with the same spans;
 every sentence Lark accepts is accepted by the fast path too (else the speed is silently
@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fretish.ast as A
+import fretish.fastparse as F
 import fretish.parser as P
 from fretish.errors import FretishError
 from fretish.words import RESERVED_WORDS
@@ -310,7 +311,7 @@ def _exact_type(word):
     sid = fast.dispatch.get(word[0], len(fast.subsets) - 1)
     try:
         m = (fast.matchers[sid] or fast._matcher(sid))(word, 0)
-    except P._Slow:
+    except F._Slow:
         return None
     return m.lastgroup if m is not None and m.end() == len(word) else None
 
@@ -329,7 +330,7 @@ def test_word_terminal_equals_the_exact_lexers(word):
     fast = P._get_fast()
     try:
         got = fast.words.get(word) or fast._word_type(word)
-    except P._Slow:
+    except F._Slow:
         got = None
     assert got == _exact_type(word), word
 
