@@ -47,7 +47,6 @@ import os
 import re
 import sys
 import threading
-from dataclasses import replace
 from fractions import Fraction
 
 from . import ast as A
@@ -189,6 +188,16 @@ def _name_of(tok) -> str:
     return tok[1]
 
 
+def _respan(node, span: A.Span):
+    """``dataclasses.replace(node, span=span)`` for an AST node (whose ``__init__`` only
+    stores its fields in its ``__dict__``), without the generic machinery."""
+    new = object.__new__(node.__class__)
+    d = new.__dict__
+    d.update(node.__dict__)
+    d["span"] = span
+    return new
+
+
 def _is_numeric_literal(e) -> bool:
     if isinstance(e, A.NumLit):
         return True
@@ -286,7 +295,7 @@ class _Builder:
 
     def paren(self, c):
         # the parentheses belong to the expression's span
-        return replace(c[1], span=_join(c[0], c[2]))
+        return _respan(c[1], _mk(c[0][2], c[2][3]))
 
     def call(self, c):
         name, rpar = c[0], c[-1]
@@ -324,10 +333,23 @@ class _Builder:
 
     def climb(self, c):
         c = c[0]
-        if len(c) == 3:   # one operator (most chains): what _climb gives, directly
-            left, op, right = c
-            if type(left) is not A.Unary and type(right) is not A.Unary:
-                return A.Binary(_BINOPS[op[0]], left, right, _mk(left.span[4], right.span[5]))
+        left = c[0]
+        n = len(c)
+        if type(left) is not A.Unary:
+            # one operator, or several of one left-associative precedence that is not the
+            # comparisons', and no prefix operand: _climb's result is a left fold
+            prec = _PREC[c[1][0]]
+            if n == 3 or not (prec[1] or prec[0] == _CMP):
+                for i in range(2, n, 2):
+                    if type(c[i]) is A.Unary or (i + 1 < n and _PREC[c[i + 1][0]] != prec):
+                        break
+                else:
+                    start = left.span[4]
+                    for i in range(1, n, 2):
+                        right = c[i + 1]
+                        left = A.Binary(_BINOPS[c[i][0]], left, right,
+                                        _mk(start, right.span[5]))
+                    return left
         node, _ = _climb(c, 0, 1)
         return node
 

@@ -358,3 +358,40 @@ def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
         return
     for e in limits._expressions(req):
         limits._check(e, [0])  # raises LimitError beyond a limit
+
+
+_OPERATORS = sorted(P._PREC)
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["v", "v", "v", "!", "-"]),
+                          st.sampled_from(_OPERATORS)), min_size=1, max_size=7),
+       st.sampled_from(["v", "!", "-"]))
+def test_climb_shortcuts_equal_precedence_climbing(pairs, last):
+    """The builder's ``climb`` (one-operator chains and left folds built directly) gives
+    what the general precedence climbing (``_climb``) gives, spans and errors included."""
+    def operand(kind, at):
+        var = A.Var(f"v{at}", P._mk(at, at + 1))
+        if kind == "v":
+            return var
+        return A.Unary("!" if kind == "!" else "-", var, P._mk(at - 1, at + 1))
+
+    chain, at = [], 1
+    for kind, op in pairs:
+        chain.append(operand(kind, at))
+        chain.append((op, P._BINOPS[op], at + 1, at + 2))
+        at += 3
+    chain.append(operand(last, at))
+
+    def outcome(run):
+        try:
+            return "ok", _deep(run(list(chain)))
+        except P._Fail as f:
+            return "error", f.message, f.span
+    P._ctx.set("x" * (at + 2), 0, 0)
+    try:
+        got = outcome(lambda c: P._Builder().climb([c]))
+        ref = outcome(lambda c: P._climb(c, 0, 1)[0])
+    finally:
+        P._ctx.text = ""
+    assert got == ref, [x if type(x) is tuple else type(x).__name__ for x in chain]
