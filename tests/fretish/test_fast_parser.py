@@ -363,7 +363,7 @@ def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
 _OPERATORS = sorted(P._PREC)
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=250, deadline=None)
 @given(st.lists(st.tuples(st.sampled_from(["v", "v", "v", "!", "-"]),
                           st.sampled_from(_OPERATORS)), min_size=1, max_size=7),
        st.sampled_from(["v", "!", "-"]))
