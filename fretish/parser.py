@@ -427,6 +427,11 @@ class _Builder:
     def condition(self, c):
         first = c[0]
         parts = c[1:] if type(first) is tuple else c
+        if len(parts) == 1:      # one part (most conditions): the loops below, unrolled
+            p = parts[0]
+            return A.Condition("holding" if p.qualifier == "whenever" else "regular", p.expr,
+                               (p,), _mk(first[2] if type(first) is tuple else p.span[4],
+                                         p.span[5]))
         expr = parts[0].expr
         for p in parts[1:]:
             expr = A.Binary("|" if p.connective == "or" else "&", expr, p.expr,
@@ -468,15 +473,15 @@ class _Builder:
         head = c[0]
         last = c[-1]
         if head[0] == "AT":
-            return A.Timing(_AT_TIMINGS[c[2][0]], phrase=" ".join(t[1].lower() for t in c),
-                            span=_join(head, last))
+            return A.Timing(_AT_TIMINGS[c[2][0]], None, None,
+                            " ".join(t[1].lower() for t in c), _mk(head[2], last[3]))
         kind = _SIMPLE_TIMINGS[head[0]]
         phrase = head[1].lower()
         if len(c) == 1:
-            return A.Timing(kind, phrase=phrase, span=_span_of(head))
-        if kind in A.DURATION_TIMINGS:
-            return A.Timing(kind, duration=last, phrase=phrase, span=_join(head, last))
-        return A.Timing(kind, stop=last, phrase=phrase, span=_join(head, last))
+            return A.Timing(kind, None, None, phrase, _mk(head[2], head[3]))
+        if kind in A.DURATION_TIMINGS:     # a Duration
+            return A.Timing(kind, last, None, phrase, _mk(head[2], last.span[5]))
+        return A.Timing(kind, None, last, phrase, _join(head, last))
 
     def response(self, c):
         return _Response(c[1], _mk(c[0][2], c[1].span[5]))
