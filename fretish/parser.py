@@ -441,10 +441,12 @@ class _Builder:
 
     # ---- component, probability, timing, response
     def subject(self, c):
-        names = [t for t in c if t[0] in ("NAME", "STRING")]
-        t = names[0]
-        first = c[1] if c[0][0] == "SHALL" else c[0]
-        return _Subject(_name_of(t), _mk(first[2], t[3]))
+        # [the] NAME shall | shall [the] NAME (NAME or STRING)
+        if c[0][0] == "SHALL":
+            first, t = c[1], c[-1]
+        else:
+            first, t = c[0], c[-2]
+        return _Subject(t[1] if t[0] == "NAME" else _name_of(t), _mk(first[2], t[3]))
 
     def probability(self, c):
         op, num = c[2], c[-1]
