@@ -395,3 +395,14 @@ def test_climb_shortcuts_equal_precedence_climbing(pairs, last):
     finally:
         P._ctx.text = ""
     assert got == ref, [x if type(x) is tuple else type(x).__name__ for x in chain]
+
+
+def test_lexer_by_character_equals_the_whole_text_lexer(monkeypatch):
+    """The exact lexer's fallback (``_tokens_by_char``, used when the terminals do not
+    allow the whole-text regexp) gives the same tokens, so the same ASTs and spans."""
+    fast = P._get_fast()
+    texts = CORPUS[::3]
+    whole = [_fast(t) for t in texts]
+    monkeypatch.setattr(fast, "findall", None)
+    assert [_fast(t) for t in texts] == whole
+    assert sum(x is not None for x in whole) > len(texts) // 3
