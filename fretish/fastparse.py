@@ -205,16 +205,19 @@ class _FastParser:
     NAME refuses every reserved word), so the one regexp of all terminals, tried in the
     order Lark's lexer tries them, gives the token the contextual lexer would give in every
     state where that token can be shifted: the first alternative that matches is the same
-    in the state's subset and in the whole set whenever it belongs to the subset. That
-    regexp is split by the next character: only the terminals that can start with it
-    (:func:`_first_chars`, a superset) are tried, in the same order, so the first match is
-    the same; each part is compiled on first use. Each token
-    is fed to Lark's table and each reduction calls the same :class:`fretish.parser._Builder` callback,
-    wrapped as Lark wraps it (:func:`fast_tables`), so a sentence parsed here gets the AST
-    Lark gives. Anything else - a character no terminal matches, a token the state does
-    not accept, an error raised by the builder - raises :class:`_Slow`, and the sentence is
-    parsed again by Lark for its exact error (tests/fretish/test_fast_parser.py compares the
-    two on every test sentence)."""
+    in the state's subset and in the whole set whenever it belongs to the subset. The text
+    is cut into tokens by one ``findall`` (:meth:`_build_scanner`); a token's terminal is
+    that regexp's on the token alone, split by the token's first character (only the
+    terminals that can start with it, :func:`_first_chars`, a superset, in the same order,
+    so the first match is the same; each part compiled on first use) and kept by text.
+
+    Tokens are tuples ``(terminal, text, start, end)`` (0-based offsets). Each is fed to
+    Lark's table and each reduction calls the builder's callback for the rule (the
+    :class:`fretish.parser._Builder` given), wrapped as Lark wraps it (:func:`fast_tables`),
+    so a sentence parsed here gets the AST Lark gives. Anything else - a character no
+    terminal matches, a token the state does not accept, an error raised by the builder -
+    raises :class:`_Slow`, and the sentence is parsed again by Lark for its exact error
+    (tests/fretish/test_fast_parser.py compares the two on every test sentence)."""
 
     def __init__(self, tables: dict, builder):
         self.terminals = tables["terminals"]
