@@ -1,6 +1,6 @@
 """Formalization throughput, in-process and as a user runs it.
 
-    python bench/bench_formalize.py [--n 1000] [--repeat 5] [--baseline DIR]
+    python bench/bench_formalize.py [--n 1000] [--repeat 5] [--baseline DIR] [--corpus FILE]
 
 1000 generated FRETish sentences covering all 288 template keys, measured two ways in one run:
 
@@ -13,6 +13,17 @@
   disk cache as a user's first run does; that first run is printed too), and the same for
   the single requirement of ``requirements/r1.fret``; beside them the interpreter's own
   start-up (``python -c pass``, same measure), the floor under every fretc command.
+
+Real sentences end to end: the NASA case-study requirements of ``--corpus`` (default
+``../shared/corpora/fret_casestudies.jsonl``, JSON lines with ``id`` and ``text``), those
+that compile (197 of 198: one uses FRET's reserved ``T``), written as a ``.fret`` file (ids
+``C1``, ``C2``, ...) and run as ``fretc FILE --emit ltl --json``, so the figure is not only
+our generator's.
+
+Start-up, the fixed cost of every run whatever the number of sentences: ``python -c "import
+fretc.cli"`` (the command's import) and ``fretc EMPTY.fret --emit ltl`` on an empty file (the
+import, the command line's parsing and the compile path's imports, then the "no
+requirements" error, exit code 2), same measure, beside the per-sentence figures.
 
 The issue's targets (issue 9) are checked and printed as PASS/FAIL: at least 3000
 sentences/s of CPU time end to end (best run, start-up included) and under 0.3 s of CPU for
@@ -58,6 +69,8 @@ TIMINGS = ["", "immediately", "at the next timepoint", "finally", "eventually", 
 RESPONSES = ["r", "!r | q", "x + 2 * y <= 10", "persisted(3, p) -> q", "a xor b & c",
              "occurs(2, q)"]
 LAUNCH = "import sys; from fretc.cli import main; sys.exit(main())"
+IMPORT = "import fretc.cli"
+CORPUS = ROOT.parent / "shared" / "corpora" / "fret_casestudies.jsonl"
 
 
 def sentences(n: int, seed: int = 1) -> list:
@@ -70,27 +83,54 @@ def sentences(n: int, seed: int = 1) -> list:
     return out
 
 
-def child_cpu(cmd, env, cwd) -> float:
-    """CPU seconds (user + system) of one child process run to completion."""
+def corpus_sentences(path: Path) -> list:
+    """The texts of the JSON-lines corpus ``path`` (``{"id": ..., "text": ...}`` per line),
+    each on one line, that fretc compiles without error (read as a ``.fret`` file and
+    compiled in-process: :func:`compiler.build.compile_entries`)."""
+    import json
+
+    from compiler.build import compile_entries
+    from fretish.files import load_requirements
+
+    texts = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.strip():
+            text = " ".join(json.loads(line)["text"].split())
+            if "#" not in text:  # would start a comment in a .fret file
+                texts.append(text)
+    with tempfile.TemporaryDirectory(prefix="bench_formalize_") as tmp:
+        fret = Path(tmp) / "corpus.fret"
+        fret.write_text("".join(f"C{i + 1}: {t}\n" for i, t in enumerate(texts)),
+                        encoding="utf-8")
+        compiled = compile_entries(load_requirements([str(fret)]))
+    ok = {c.id for c in compiled if c.error is None and c.formalization is not None}
+    return [t for i, t in enumerate(texts) if f"C{i + 1}" in ok]
+
+
+def child_cpu(cmd, env, cwd, ok=(0,)) -> float:
+    """CPU seconds (user + system) of one child process run to completion (its exit code
+    one of ``ok``)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL,
                           stderr=subprocess.PIPE)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if proc.returncode != 0:
+    if proc.returncode not in ok:
         raise SystemExit(f"{' '.join(map(str, cmd))} exited {proc.returncode}:\n"
                          + proc.stderr.decode(errors="replace")[-2000:])
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def command_times(roots, args, repeat: int, caches: dict) -> dict:
-    """``{label: (first run, [timed runs])}``: CPU seconds of ``fretc ARGS`` with the fretc
-    of each ``(label, root)`` of ``roots``. The timed runs alternate between the roots
-    (fretc, baseline, fretc, ...) so a change in the machine's load hits both alike."""
+def command_times(roots, args, repeat: int, caches: dict, launch: str = LAUNCH,
+                  ok=(0,)) -> dict:
+    """``{label: (first run, [timed runs])}``: CPU seconds of ``fretc ARGS`` (``python -c
+    LAUNCH ARGS``) with the fretc of each ``(label, root)`` of ``roots``. The timed runs
+    alternate between the roots (fretc, baseline, fretc, ...) so a change in the machine's
+    load hits both alike."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     cmds = {}
     for label, root in roots:
         e = dict(env, PYTHONPATH=str(root), FRETC_CACHE_DIR=caches[label])
-        cmds[label] = ([sys.executable, "-c", LAUNCH, *map(str, args)], e, root)
+        cmds[label] = ([sys.executable, "-c", launch, *map(str, args)], e, root, ok)
     out = {label: (child_cpu(*cmds[label]), []) for label, _ in roots}
     for _ in range(repeat):
         for label, _root in roots:
@@ -126,8 +166,12 @@ def main() -> None:
                     help="runs of each measurement; best (and median) reported")
     ap.add_argument("--baseline", type=Path, default=None,
                     help="another fretc checkout to run the same commands with")
+    ap.add_argument("--corpus", type=Path, default=CORPUS,
+                    help="JSON lines of real requirements ({\"id\", \"text\"}) run end to "
+                         "end as a .fret file")
     args = ap.parse_args()
     texts = sentences(args.n)
+    corpus = corpus_sentences(args.corpus)
     calib = min(timeit.repeat("sum(range(1000))", number=2000, repeat=5)) / 2000 * 1e6
     print(f"machine: sum(range(1000)) = {calib:.1f} µs (README figures: ~20 µs)")
 
@@ -143,24 +187,44 @@ def main() -> None:
         req_file.write_text("".join(f"G{i}: {t}\n" for i, t in enumerate(texts)),
                             encoding="utf-8")
         caches = {label: tempfile.mkdtemp(prefix="cache_", dir=tmp) for label, _ in roots}
+        corpus_file = Path(tmp) / "casestudies.fret"
+        corpus_file.write_text("".join(f"C{i + 1}: {t}\n" for i, t in enumerate(corpus)),
+                               encoding="utf-8")
+        empty_file = Path(tmp) / "empty.fret"
+        empty_file.write_text("", encoding="utf-8")
         many = command_times(roots, [req_file, "--emit", "ltl", "--json"], args.repeat,
+                             caches)
+        real = command_times(roots, [corpus_file, "--emit", "ltl", "--json"], args.repeat,
                              caches)
         one = command_times(roots, [ROOT / "requirements/r1.fret", "--emit", "ltl"],
                             args.repeat, caches)
+        imp = command_times(roots, [], args.repeat, caches, launch=IMPORT)
+        empty = command_times(roots, [empty_file, "--emit", "ltl"], args.repeat, caches,
+                              ok=(2,))
         results = {}
         for label, _root in roots:
             (first, e2e), (r1_first, r1) = many[label], one[label]
-            results[label] = (min(e2e), min(r1))
+            (c_first, cs), (_, im), (_, em) = real[label], imp[label], empty[label]
+            results[label] = (min(e2e), min(r1), min(cs), min(im), min(em))
             print(f"{label}: `fretc FILE --emit ltl --json`, {args.n} sentences, fresh "
                   f"process: best {min(e2e):.3f} s CPU = {args.n / min(e2e):.0f} "
                   f"sentences/s, median {statistics.median(e2e):.3f} s; first run (empty "
                   f"cache) {first:.3f} s")
+            print(f"{label}: `fretc FILE --emit ltl --json`, {len(corpus)} case-study "
+                  f"sentences: best {min(cs):.3f} s CPU = {len(corpus) / min(cs):.0f} "
+                  f"sentences/s, median {statistics.median(cs):.3f} s; first run "
+                  f"{c_first:.3f} s")
             print(f"{label}: `fretc requirements/r1.fret --emit ltl`: best {min(r1):.3f} s "
                   f"CPU, median {statistics.median(r1):.3f} s; first run {r1_first:.3f} s")
+            print(f"{label}: start-up: `python -c \"{IMPORT}\"` best {min(im):.3f} s CPU, "
+                  f"median {statistics.median(im):.3f} s; `fretc EMPTY.fret --emit ltl` "
+                  f"(exit 2) best {min(em):.3f} s, median {statistics.median(em):.3f} s")
         if "baseline" in results:
-            (a, b), (c, d) = results["fretc"], results["baseline"]
-            print(f"ratio baseline/fretc (CPU): {c / a:.2f}x on {args.n} sentences, "
-                  f"{d / b:.2f}x on r1.fret")
+            a, c = results["fretc"], results["baseline"]
+            names = (f"{args.n} sentences", "r1.fret", f"{len(corpus)} case studies",
+                     "import fretc.cli", "EMPTY.fret")
+            print("ratio baseline/fretc (CPU, best runs): " + ", ".join(
+                f"{y / x:.2f}x on {name}" for x, y, name in zip(a, c, names)))
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     bare = [child_cpu([sys.executable, "-c", "pass"], env, ROOT) for _ in range(args.repeat)]
     print(f"python -c pass (the interpreter's start-up, in every run above): best "

@@ -61,8 +61,9 @@ which for every ``n >= 2`` compare alike with each other and with 0. So the temp
 subclass that keeps its offset through ``+``/``-`` and prints as a format field). Memory is
 bounded: there are 432 template keys (8 scopes x 3 condition kinds x (8 timings + 4
 duration timings x 3 classes)), about 0.35 ms of CPU each to build. A process builds its
-first 16 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB,
-behind a CRC-32 of its bytes; each key's entry unmarshalled on its first use) from fretc's
+first 4 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB,
+an index behind a CRC-32, each key's entry behind its own CRC-32, checked and unmarshalled
+on its first use: :func:`table_blob`) from fretc's
 disk cache (:mod:`fretish.cache`, entry named by a digest of the construction's sources
 and Python's version, :func:`_cache_name`), building and storing it on first use. The table changes
 speed only: a cache that is off, unreadable or damaged means the keys are built.
@@ -249,8 +250,12 @@ ALL_KEYS = tuple(
     for n in ((0, 1, -1) if timing in A.DURATION_TIMINGS else (None,)))
 
 _TEMPLATES: dict = {}
-_BUILT_BEFORE_TABLE = 16  # keys built directly before the disk table is read
-_TABLE: list = []  # [dict key -> data] once the disk cache was consulted
+#: keys built directly before the disk table is read: building one takes about 0.3-0.45 ms
+#: of CPU, reading the table about 1.3 ms (its name's digest 0.4 ms, the 0.85 MB read 0.8
+#: ms) plus about 10 us per key used; so a file of a few keys never reads (nor, on a first
+#: run, builds) the table
+_BUILT_BEFORE_TABLE = 4
+_TABLE: list = []  # [the table (see _table) or None] once the disk cache was consulted
 
 
 def _build_key(key) -> tuple:
@@ -260,15 +265,16 @@ def _build_key(key) -> tuple:
 
 def _cache_name() -> str:
     """The disk-cache entry name: a digest of everything the templates are a function of
-    (this module and the construction's sources, Python's version for ``marshal``), the
-    CRC-32 and Adler-32 (``zlib``) of those texts each preceded by its length (no OpenSSL
-    or ``pathlib`` to load at start-up; an edit of a source changes the name except with
-    odds of about 2**-64; the entry's own CRC-32 guards its bytes)."""
+    (this module and the construction's sources, Python's version for ``marshal``, the
+    table's layout :data:`_MAGIC`), the CRC-32 and Adler-32 (``zlib``) of those texts each
+    preceded by its length (no OpenSSL or ``pathlib`` to load at start-up; an edit of a
+    source changes the name except with odds of about 2**-64; the entry's own CRC-32s guard
+    its bytes)."""
     import sys
 
     here = os.path.dirname(os.path.abspath(__file__))
     crc = adler = 1
-    parts = [b"templates-v3", sys.version.encode()]
+    parts = [b"templates-v4", _MAGIC, sys.version.encode()]
     for f in _SOURCES:
         with open(os.path.join(here, f), "rb") as fh:
             parts.append(fh.read())
@@ -276,18 +282,69 @@ def _cache_name() -> str:
         head = len(b).to_bytes(8, "little")
         crc = zlib.crc32(b, zlib.crc32(head, crc))
         adler = zlib.adler32(b, zlib.adler32(head, adler))
-    return "v3-%08x%08x" % (crc, adler)
+    return "v4-%08x%08x" % (crc, adler)
 
 
 _SOURCES = ("instantiate.py", "semantics.py", "scope_timing.py", "ir.py", "printers.py",
             "expressions.py")
 
+#: first bytes of a table entry (its layout: :func:`table_blob`)
+_MAGIC = b"fretc templates 4\n"
+
+
+def table_blob(entries) -> bytes:
+    """The disk-cache entry of the template table: ``entries`` is one ``marshal``-ed
+    :func:`build_template` result per key of :data:`ALL_KEYS`, in that order.
+
+    Layout: :data:`_MAGIC`; the CRC-32 of the index (4 bytes, big-endian); the index's
+    length (4 bytes, big-endian); the index, ``marshal.dumps`` of a flat tuple ``(length,
+    crc32, length, crc32, ...)``, one pair per key; then the entries one after the other.
+    Reading it (:func:`read_table`) checks the index, and each key's entry is checked
+    against its own CRC-32 when the key is first used (:func:`template`): a run reads the
+    file once and unmarshals only the keys it uses (about 270 of the 432 for a thousand
+    varied sentences)."""
+    entries = tuple(entries)
+    index = marshal.dumps(tuple(x for e in entries for x in (len(e), zlib.crc32(e))))
+    return b"".join((_MAGIC, zlib.crc32(index).to_bytes(4, "big"),
+                     len(index).to_bytes(4, "big"), index) + entries)
+
+
+def read_table(blob: bytes) -> dict | None:
+    """The table of a disk-cache entry written by :func:`table_blob`: ``{key: (view,
+    crc32)}``, ``view`` a ``memoryview`` of the key's ``marshal`` bytes (not yet checked
+    against ``crc32``: :func:`template` does, on the key's first use). None when the entry is
+    not one (another layout, a damaged header or index, lengths that do not add up to the
+    entry's size)."""
+    head = len(_MAGIC)
+    if len(blob) < head + 8 or not blob.startswith(_MAGIC):
+        return None
+    crc = int.from_bytes(blob[head:head + 4], "big")
+    size = int.from_bytes(blob[head + 4:head + 8], "big")
+    view = memoryview(blob)
+    index = view[head + 8:head + 8 + size]
+    if len(index) != size or zlib.crc32(index) != crc:
+        return None
+    try:
+        pairs = marshal.loads(index)
+    except (ValueError, EOFError, TypeError):
+        return None
+    if type(pairs) is not tuple or len(pairs) != 2 * len(ALL_KEYS):
+        return None
+    table = {}
+    pos = head + 8 + size
+    for i, key in enumerate(ALL_KEYS):
+        n, c = pairs[2 * i], pairs[2 * i + 1]
+        if type(n) is not int or type(c) is not int or n < 0:
+            return None
+        table[key] = (view[pos:pos + n], c)
+        pos += n
+    return table if pos == len(blob) else None
+
 
 def _table() -> dict | None:
-    """Every key's data, each ``marshal``-ed on its own (unmarshalled when the key is first
-    used: a file uses some of the 432 keys), from fretc's disk cache
-    (:mod:`fretish.cache`), built and stored there on first use; None when the disk cache is off or fails (keys are then built one
-    by one as needed)."""
+    """The table of every key's data (:func:`read_table`) from fretc's disk cache
+    (:mod:`fretish.cache`), built and stored there on first use; None when the disk cache
+    is off or fails (keys are then built one by one as needed)."""
     if _TABLE:
         return _TABLE[0]
     from fretish import cache
@@ -296,42 +353,50 @@ def _table() -> dict | None:
     try:
         name = _cache_name()
         blob = cache.read_bytes("templates", name)  # None: missing, or the cache is off
-        if blob is not None and len(blob) > 4 and zlib.crc32(blob[4:]) == int.from_bytes(
-                blob[:4], "big"):
-            try:
-                table = dict(zip(ALL_KEYS, marshal.loads(blob[4:])))
-            except (ValueError, EOFError, TypeError):
-                table = None  # a damaged entry: built again below
-        if table is None or len(table) != len(ALL_KEYS) or not all(
-                type(v) is bytes for v in table.values()):
-            table = None
-            if cache.cache_dir() is not None:
-                data = tuple(marshal.dumps(_build_key(k)) for k in ALL_KEYS)
-                body = marshal.dumps(data)
-                cache.write_bytes("templates", name,
-                                  zlib.crc32(body).to_bytes(4, "big") + body)
-                table = dict(zip(ALL_KEYS, data))
+        if blob is not None:
+            table = read_table(blob)  # None: damaged, built again below
+        if table is None and cache.cache_dir() is not None:
+            blob = table_blob(marshal.dumps(_build_key(k)) for k in ALL_KEYS)
+            cache.write_bytes("templates", name, blob)
+            table = read_table(blob)
     except OSError:
         table = None
     _TABLE.append(table)
     return table
 
 
+def _from_table(table: dict, key) -> tuple | None:
+    """The data of ``key`` from the disk table, or None when its entry fails its CRC-32 or
+    does not unmarshal: the key is then built, and the damaged cache entry removed so the
+    next run that needs the table writes it again."""
+    view, crc = table[key]
+    if zlib.crc32(view) == crc:
+        try:
+            data = marshal.loads(view)
+        except (ValueError, EOFError, TypeError):
+            data = None
+        if type(data) is tuple:
+            return data
+    from fretish import cache
+
+    try:
+        cache.remove("templates", _cache_name())
+    except OSError:  # the sources cannot be read for the name
+        pass
+    return None
+
+
 def template(scope: str, cond: str, timing: str, n: int | None) -> _Template:
     """The cached :class:`_Template` of a template key (``n``: the duration in ticks, or
-    None). Keys: ``n`` itself for 0 and 1, one symbolic bound for ``n >= 2``."""
+    None). Keys: ``n`` itself for 0 and 1, one symbolic bound for ``n >= 2``. The first
+    :data:`_BUILT_BEFORE_TABLE` keys of a process are built, the others read from the disk
+    table (:func:`_table`), or built when it is off or the key's entry is damaged."""
     nkey = n if n is None or n < 2 else -1
     key = (scope, cond, timing, nkey)
     t = _TEMPLATES.get(key)
     if t is None:
-        # a few keys are quicker built than the whole table read (about 10 ms)
         table = _table() if len(_TEMPLATES) >= _BUILT_BEFORE_TABLE else None
-        data = None
-        if table is not None:
-            try:
-                data = marshal.loads(table[key])
-            except (KeyError, ValueError, EOFError, TypeError):
-                data = None  # (the entry's CRC-32 held: not expected)
+        data = None if table is None else _from_table(table, key)
         t = _TEMPLATES[key] = _Template(data if data is not None else _build_key(key))
     return t
 

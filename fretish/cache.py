@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "entry_path", "read_file",
-           "write_file"]
+__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "remove", "entry_path",
+           "read_file", "write_file"]
 
 
 def _root() -> str | None:
@@ -96,6 +96,19 @@ def write_bytes(kind: str, name: str, data: bytes) -> bool:
     when the cache folder cannot be created or written."""
     path = _entry(kind, name)
     return path is not None and write_file(path, data)
+
+
+def remove(kind: str, name: str) -> bool:
+    """Delete an entry (one found damaged, so the next run computes and writes it again).
+    Returns False, without raising, when there is none or it cannot be removed."""
+    path = _entry(kind, name)
+    if path is None:
+        return False
+    try:
+        os.unlink(path)
+        return True
+    except OSError:
+        return False
 
 
 def read_file(path: str) -> bytes | None:

@@ -34,22 +34,40 @@ __all__ = ["NS_PER_S", "TIME_UNITS", "parse_seconds", "parse_duration", "format_
 #: Nanoseconds per second (MCAP log times and ROS times are integer nanoseconds).
 NS_PER_S = 1_000_000_000
 
-#: Length in seconds of every time unit of the duration grammar (lower case; ``hz`` is
-#: absent: it is a frequency).
-TIME_UNITS: dict[str, Fraction] = {}
-for _names, _seconds in (
-        (("ns", "nanosec", "nanosecs", "nanosecond", "nanoseconds"), Fraction(1, NS_PER_S)),
-        (("us", "µs", "μs", "microsec", "microsecs", "microsecond", "microseconds"),
-         Fraction(1, 1_000_000)),
-        (("ms", "millisec", "millisecs", "millisecond", "milliseconds"), Fraction(1, 1000)),
-        (("s", "sec", "secs", "second", "seconds"), Fraction(1)),
-        (("min", "mins", "minute", "minutes"), Fraction(60)),
-        (("h", "hour", "hours"), Fraction(3600))):
-    TIME_UNITS.update(dict.fromkeys(_names, _seconds))
-del _names, _seconds
-
 _NUMBER = r"(?:[0-9]+(?:\.[0-9]+)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
-_DURATION = re.compile(rf"\s*({_NUMBER})\s*([^\s0-9.+-]+)\s*\Z")
+_TABLES: list = []  # [(the unit table, the duration regexp)] once built
+
+
+def _tables() -> tuple:
+    """``(TIME_UNITS, duration regexp)``, built on first use: a run that reads no duration
+    in a time unit (``fretc FILE --emit ltl`` on sentences in ticks) does not pay for the
+    regexp's compilation and the table's fractions (start-up, issue 9)."""
+    if not _TABLES:
+        units: dict = {}
+        for names, seconds in (
+                (("ns", "nanosec", "nanosecs", "nanosecond", "nanoseconds"),
+                 Fraction(1, NS_PER_S)),
+                (("us", "µs", "μs", "microsec", "microsecs", "microsecond", "microseconds"),
+                 Fraction(1, 1_000_000)),
+                (("ms", "millisec", "millisecs", "millisecond", "milliseconds"),
+                 Fraction(1, 1000)),
+                (("s", "sec", "secs", "second", "seconds"), Fraction(1)),
+                (("min", "mins", "minute", "minutes"), Fraction(60)),
+                (("h", "hour", "hours"), Fraction(3600))):
+            units.update(dict.fromkeys(names, seconds))
+        _TABLES.append((units, re.compile(rf"\s*({_NUMBER})\s*([^\s0-9.+-]+)\s*\Z")))
+    return _TABLES[0]
+
+
+def __getattr__(name: str):
+    """``TIME_UNITS`` (PEP 562): the length in seconds (a :class:`~fractions.Fraction`) of
+    every time unit of the duration grammar, lower case (``hz`` is absent: it is a
+    frequency); built on first use (:func:`_tables`)."""
+    if name == "TIME_UNITS":
+        return _tables()[0]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 _EXAMPLE = "e.g. '100 ms' or '10 Hz'"
 
 
@@ -64,10 +82,11 @@ def parse_seconds(value: str | int | float) -> Fraction:
     """
     if isinstance(value, bool) or not isinstance(value, (str, int, float)):
         raise ValueError(f"{value!r} is not a duration")
+    time_units, duration = _tables()
     if not isinstance(value, str):
         amount, unit = Fraction(Decimal(repr(value))), "s"
     else:
-        m = _DURATION.match(value)
+        m = duration.match(value)
         if not m:
             raise ValueError(f"{value.strip()!r} is not a duration: write a number and a "
                              f"unit, {_EXAMPLE}")
@@ -76,12 +95,12 @@ def parse_seconds(value: str | int | float) -> Fraction:
         if amount <= 0:
             raise ValueError(f"{value!r}: a frequency must be positive")
         return 1 / amount
-    if unit not in TIME_UNITS:
+    if unit not in time_units:
         if unit in ("tick", "ticks"):
             raise ValueError(f"{value!r}: a period must be a time ({_EXAMPLE}), not ticks")
         raise ValueError(f"{value!r}: unknown time unit {unit!r} (ns, us, ms, s, min, h, Hz "
                          "or their long names: microseconds ... hours)")
-    seconds = amount * TIME_UNITS[unit]
+    seconds = amount * time_units[unit]
     if seconds <= 0:
         raise ValueError(f"{value!r}: a duration must be positive")
     return seconds
