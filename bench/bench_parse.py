@@ -1,21 +1,41 @@
-"""Parse-rate sanity check (not a test): generate 1000 varied FRETish sentences and print
-how many the parser handles per second.
+"""Parse rate, in-process (not a test): CPU time per sentence of ``fretish.parse`` on three
+inputs, and the same for another checkout of fretc in the same process for a ratio.
 
-    python3 bench/bench_parse.py [--n 1000] [--rounds 5] [--seed 0]
+    python3 bench/bench_parse.py [--n 1000] [--rounds 10] [--seed 0] [--baseline DIR]
+
+Inputs: this script's generator (varied expressions, ``--n`` sentences), the 1000 sentences
+of ``bench/bench_formalize.py`` (all template keys) and the NASA case-study requirements
+that parse (``../shared/corpora/fret_casestudies.jsonl``, real text). Each input is cut in
+chunks of 100 sentences; each chunk is timed ``--rounds`` times (``time.process_time``) and
+its best time kept, so a burst of load on the machine costs one sample, not the figure.
+
+``--baseline DIR`` (e.g. ``git archive main | tar -x -C DIR``) imports ``DIR/fretish`` as
+a package of another name (``fretish_baseline``, copied to a temporary folder; its modules
+import one another relatively) and times it on the same chunks, alternating with ours, so
+both see the same machine; the ratio ours/baseline is printed per input.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import json
 import random
+import re
+import shutil
 import sys
+import tempfile
 import time
 import timeit
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 from fretish import parse  # noqa: E402
+
+CASE_STUDIES = ROOT / ".." / "shared" / "corpora" / "fret_casestudies.jsonl"
 
 SCOPES = ["", "in m", "during flight mode", "when in mode m", "if not in m", "unless in m",
           "except during m", "except while alt > 10", "only in m", "only while x < 3",
@@ -53,31 +73,82 @@ def sentence(rng: random.Random) -> str:
     return " ".join(p for p in parts if p) + rng.choice(["", "."])
 
 
+def _parses(text: str) -> bool:
+    try:
+        parse(text)
+        return True
+    except Exception:  # noqa: BLE001 - an invalid case-study sentence is left out
+        return False
+
+
+def inputs(n: int, seed: int) -> dict:
+    """name -> list of sentences."""
+    from bench_formalize import sentences as formalize_sentences
+    rng = random.Random(seed)
+    out = {"bench_parse generator": [sentence(rng) for _ in range(n)],
+           "bench_formalize sentences": formalize_sentences(1000)}
+    if CASE_STUDIES.exists():
+        texts = [json.loads(line)["text"] for line in CASE_STUDIES.open(encoding="utf-8")]
+        out["case studies (valid)"] = [t for t in texts if _parses(t)]
+    return out
+
+
+def load_baseline(path: Path, tmp: str):
+    """``parse`` of the checkout at ``path``, imported as package ``fretish_baseline``."""
+    src = path / "fretish"
+    for f in src.glob("*.py"):
+        if re.search(r"^\s*(from|import)\s+fretish\b", f.read_text(encoding="utf-8"), re.M):
+            raise SystemExit(f"{f}: imports fretish absolutely; cannot load it beside ours")
+    shutil.copytree(src, Path(tmp) / "fretish_baseline",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    sys.path.insert(0, tmp)
+    return importlib.import_module("fretish_baseline").parse
+
+
+def best_times(runs: dict, texts: list, rounds: int) -> dict:
+    """name -> sum over 100-sentence chunks of the best CPU time of each chunk."""
+    chunks = [texts[i:i + 100] for i in range(0, len(texts), 100)]
+    best = {name: [float("inf")] * len(chunks) for name in runs}
+    for name, run in runs.items():       # warm-up: tables loaded, words known
+        for t in texts:
+            run(t)
+    for _ in range(rounds):
+        for j, chunk in enumerate(chunks):
+            for name, run in runs.items():
+                c0 = time.process_time()
+                for t in chunk:
+                    run(t)
+                best[name][j] = min(best[name][j], time.process_time() - c0)
+    return {name: sum(v) for name, v in best.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1000)
-    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--baseline", type=Path, default=None,
+                    help="another fretc checkout, timed in the same process for a ratio")
     args = ap.parse_args()
-    rng = random.Random(args.seed)
-    sentences = [sentence(rng) for _ in range(args.n)]
     t0 = time.perf_counter()
-    parse(sentences[0])                        # builds the Lark parser once
+    parse("the sw shall satisfy p")             # loads (or builds) the parser tables once
     build = time.perf_counter() - t0
-    best = best_cpu = float("inf")
-    for _ in range(args.rounds):
-        t0, c0 = time.perf_counter(), time.process_time()
-        for s in sentences:
-            parse(s)
-        best = min(best, time.perf_counter() - t0)
-        best_cpu = min(best_cpu, time.process_time() - c0)
-    chars = sum(map(len, sentences)) / len(sentences)
+    with tempfile.TemporaryDirectory() as tmp:
+        runs = {"fretc": parse}
+        if args.baseline is not None:
+            runs["baseline"] = load_baseline(args.baseline, tmp)
+        print(f"parser load: {build * 1000:.0f} ms")
+        for label, texts in inputs(args.n, args.seed).items():
+            best = best_times(runs, texts, args.rounds)
+            chars = sum(map(len, texts)) / len(texts)
+            line = (f"{label}: {len(texts)} sentences (mean {chars:.0f} chars), CPU per "
+                    f"sentence: fretc {best['fretc'] / len(texts) * 1e6:.1f} us "
+                    f"({len(texts) / best['fretc']:,.0f}/s)")
+            if "baseline" in best:
+                line += (f", baseline {best['baseline'] / len(texts) * 1e6:.1f} us; "
+                         f"ratio fretc/baseline {best['fretc'] / best['baseline']:.2f}")
+            print(line)
     calib = min(timeit.repeat("sum(range(1000))", number=2000, repeat=5)) / 2000 * 1e6
-    print(f"parser build: {build * 1000:.0f} ms")
-    print(f"{len(sentences)} sentences (mean {chars:.0f} chars), best of {args.rounds}: "
-          f"{len(sentences) / best:,.0f} sentences/s ({best / len(sentences) * 1e6:.0f} us each); "
-          f"CPU time: {len(sentences) / best_cpu:,.0f} sentences/s "
-          f"({best_cpu / len(sentences) * 1e6:.0f} us each)")
     print(f"machine speed: sum(range(1000)) takes {calib:.1f} us here "
           "(about 5-10 us on an idle modern x86 core)")
 

@@ -20,6 +20,7 @@ characters and durations of 200 ticks.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 
 from . import ast as A
@@ -63,18 +64,28 @@ def _expressions(req: A.Requirement) -> Iterator[A.Expr]:
 #: at most ``1 + CALL_DEPTH / 3`` per character and the node count at most one per character.
 SHORT_TEXT = min(MAX_NUMBER_CHARS, MAX_EXPR_NODES, (MAX_EXPR_DEPTH - 1) * 3 // CALL_DEPTH)
 
+#: Up to this length, only a long number literal can exceed a limit (the depth and node
+#: bounds of :data:`SHORT_TEXT`), and a text with no run of :data:`MAX_NUMBER_CHARS` - 1
+#: number characters (a literal, or ``-`` and one, is at most that run and its sign) has
+#: none: such a text is not walked either.
+SHORT_TEXT_NO_NUMBER = min(MAX_EXPR_NODES, (MAX_EXPR_DEPTH - 1) * 3 // CALL_DEPTH)
+_NUMBER_RUN = re.compile(f"[0-9][0-9.eE+-]{{{MAX_NUMBER_CHARS - 2}}}")
+
 
 def check_requirement(req: A.Requirement) -> None:
     """Check a parsed requirement against the limits (iteratively: any depth is safe).
     Raises :class:`LimitError` at the first node beyond a limit."""
-    if len(req.text) > SHORT_TEXT:
+    n = len(req.text)
+    if n > SHORT_TEXT and (n > SHORT_TEXT_NO_NUMBER or _NUMBER_RUN.search(req.text)):
         count = [0]
         for e in _expressions(req):
             _check(e, count)
     d = req.timing.duration
     if d is not None and len(d.amount) > MAX_NUMBER_CHARS:
         raise _long_number(d.span, d.amount)
-    if d is not None and d.unit == "ticks" and d.value > MAX_DURATION_TICKS:
+    if d is not None and d.unit == "ticks" and (
+            int(d.amount) if d.amount.isascii() and d.amount.isdigit() else d.value
+    ) > MAX_DURATION_TICKS:
         raise LimitError(d.span, duration_too_long(d.value), _DURATION_HINT)
 
 

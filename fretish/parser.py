@@ -3,10 +3,11 @@
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
 phrasings and the expression precedence. The AST builder is applied while parsing (no
 intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
-cache, is run by :class:`_FastParser` (a plain loop, one lexer regexp per first character;
-a run of unit reductions, a ``?rule`` passing its one child up, is one dictionary lookup);
-a sentence it cannot parse goes to Lark itself, which is imported only then and reports the
-error (``fretc FILE --emit ltl`` on valid sentences does not import Lark).
+cache, is run by :class:`fretish.fastparse._FastParser` (a plain loop over the tokens of one
+lexer regexp; a run of unit reductions, a ``?rule`` passing its one child up, is one
+dictionary lookup); a sentence it cannot parse goes to Lark itself, which is imported only
+then and reports the error (``fretc FILE --emit ltl`` on valid sentences does not import
+Lark). Both call the same AST builder (:class:`_Builder`) on tokens as plain tuples.
 
 Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, restated;
 ``../shared/fretish/README.md`` sections 1-5 and 7):
@@ -46,11 +47,11 @@ import os
 import re
 import sys
 import threading
-from dataclasses import replace
 from fractions import Fraction
 
 from . import ast as A
 from . import cache
+from .fastparse import _FastParser, fast_tables
 from .limits import LimitError, check_expression, check_requirement
 from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 
@@ -74,30 +75,35 @@ _DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
 
 # --------------------------------------------------------------------------- positions
 class _Ctx(threading.local):
-    """Per-parse state read by the AST builder (the Lark parser is shared)."""
+    """Per-parse state read by the AST builder (the Lark parser is shared); set by
+    :meth:`set`. ``line``/``col``: the file line of the text's line 1 and the file column
+    of its first character; ``starts``: the offsets where the text's lines 2, 3 ... begin
+    (None for a text of one line, where a span is plain arithmetic)."""
     text = ""
-    dl = 0   # file line of the text's line 1, minus 1
-    dc = 0   # file column of the text's first character, minus 1
+    line = 1
+    col = 1
+    starts: list = []
+    flat: tuple | None = (1, 1)   # (line, col) when the text has one line, else None
+
+    def set(self, text: str, dl: int, dc: int) -> None:
+        """Parse ``text``, whose first character is at file line ``dl + 1``, column
+        ``dc + 1``."""
+        self.text, self.line, self.col = text, dl + 1, dc + 1
+        if "\n" in text:
+            self.starts = [m.end() for m in _NEWLINE.finditer(text)]
+            self.flat = None
+        else:
+            self.flat = (dl + 1, dc + 1)
 
 
+_NEWLINE = re.compile("\n")
 _ctx = _Ctx()
 
 
-class _Tok:
-    """A token of the fast path (:class:`_FastParser`): the attributes of a ``lark.Token``
-    that the AST builder reads (``type``, ``value``, 1-based ``line``/``column`` and
-    ``end_line``/``end_column``, 0-based ``start_pos``/``end_pos``)."""
-    __slots__ = ("type", "value", "start_pos", "line", "column", "end_line", "end_column",
-                 "end_pos")
-
-    def __init__(self, type_, value, start_pos, line, column, end_line, end_column, end_pos):
-        self.type, self.value, self.start_pos = type_, value, start_pos
-        self.line, self.column, self.end_line = line, column, end_line
-        self.end_column, self.end_pos = end_column, end_pos
-
-
-#: Token classes the builder may receive: ours, and ``lark.Token`` once Lark is loaded.
-_TOKENS = {_Tok}
+# Tokens, of the fast path and (converted, :class:`_LarkBuilder`) of Lark's: plain tuples
+# ``(terminal, text, start, end)`` with 0-based offsets into the text (a tuple is the
+# cheapest object Python makes; a node is never a plain tuple: ``A.Span`` is a subclass).
+_TYPE, _VALUE, _START, _END = 0, 1, 2, 3
 
 
 #: ``A.Span`` from one tuple of its six fields, without the named tuple's Python-level
@@ -105,30 +111,33 @@ _TOKENS = {_Tok}
 _new_span = functools.partial(tuple.__new__, A.Span)
 
 
+def _mk(s: int, e: int) -> A.Span:
+    """The span of text offsets ``s`` to ``e`` (0-based, end excluded) in file coordinates
+    (:class:`_Ctx`): 1-based lines and columns as Lark counts them (a line starts after
+    each ``"\\n"``; only the text's first line is shifted by its starting column)."""
+    flat = _ctx.flat
+    if flat is not None:
+        line, col = flat
+        return _new_span((line, s + col, line, e + col, s, e))
+    from bisect import bisect_right
+    c = _ctx
+    starts = c.starts
+    i = bisect_right(starts, s)
+    j = bisect_right(starts, e)
+    return _new_span((c.line + i, s + c.col if i == 0 else s - starts[i - 1] + 1,
+                      c.line + j, e + c.col if j == 0 else e - starts[j - 1] + 1, s, e))
+
+
 def _span_of(x) -> A.Span:
-    if type(x) in _TOKENS:
-        dl, dc = _ctx.dl, _ctx.dc
-        return _new_span((x.line + dl, x.column + dc if x.line == 1 else x.column,
-                          x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
-                          x.start_pos, x.end_pos))
+    """The span of a token or a node."""
+    if type(x) is tuple:
+        return _mk(x[2], x[3])
     return x.span
 
 
 def _join(a, b) -> A.Span:
     """Span from the start of ``a`` to the end of ``b`` (tokens or nodes)."""
-    if type(a) in _TOKENS:
-        line = a.line
-        start = (line + _ctx.dl, a.column + _ctx.dc if line == 1 else a.column, a.start_pos)
-    else:
-        s = a.span
-        start = (s.line, s.column, s.start)
-    if type(b) in _TOKENS:
-        line = b.end_line
-        return _new_span((start[0], start[1], line + _ctx.dl,
-                          b.end_column + _ctx.dc if line == 1 else b.end_column, start[2],
-                          b.end_pos))
-    e = b.span
-    return _new_span((start[0], start[1], e.end_line, e.end_column, start[2], e.end))
+    return _mk(a[2] if type(a) is tuple else a.span[4], b[3] if type(b) is tuple else b.span[5])
 
 
 class _Fail(Exception):
@@ -164,19 +173,29 @@ class _ExplicitMode:
 
 
 def _unquote(tok) -> str:
-    body = tok.value[1:-1]
+    body = tok[1][1:-1]
     if "\\" in body:
         body = body.replace('\\"', '"').replace("\\\\", "\\")
     return body
 
 
 def _name_of(tok) -> str:
-    if tok.type == "STRING":
+    if tok[0] == "STRING":
         name = _unquote(tok)
         if not name.strip():
             raise _Fail(tok, "an empty quoted name", "write a name between the quotes")
         return name
-    return tok.value
+    return tok[1]
+
+
+def _respan(node, span: A.Span):
+    """``dataclasses.replace(node, span=span)`` for an AST node (whose ``__init__`` only
+    stores its fields in its ``__dict__``), without the generic machinery."""
+    new = object.__new__(node.__class__)
+    d = new.__dict__
+    d.update(node.__dict__)
+    d["span"] = span
+    return new
 
 
 def _is_numeric_literal(e) -> bool:
@@ -210,13 +229,13 @@ def _climb(c: list, i: int, min_prec: int):
     n = len(c)
     while i < n:
         op = c[i]
-        prec, right_assoc = _PREC[op.type]
+        prec, right_assoc = _PREC[op[0]]
         if prec < min_prec:
             break
         right, i = _climb(c, i + 1, prec if right_assoc else prec + 1)
-        left = A.Binary(_BINOPS[op.type], left, right, _join(left, right))
-        if prec == _CMP and i < n and _PREC[c[i].type][0] == _CMP:
-            raise _Fail(c[i], f"comparisons do not chain: unexpected '{c[i].value}' after "
+        left = A.Binary(_BINOPS[op[0]], left, right, _mk(left.span[4], right.span[5]))
+        if prec == _CMP and i < n and _PREC[c[i][0]][0] == _CMP:
+            raise _Fail(c[i], f"comparisons do not chain: unexpected '{c[i][1]}' after "
                         "a comparison",
                         "compare twice and join with '&': 'a < b & b < c'")
     return left, i
@@ -255,19 +274,19 @@ class _Builder:
     # ---- expressions
     def number(self, c):
         t = c[0]
-        return A.NumLit(t.value, _span_of(t))
+        return A.NumLit(t[1], _mk(t[2], t[3]))
 
     def var(self, c):
         t = c[0]
-        return A.Var(_name_of(t), _span_of(t))
+        return A.Var(t[1] if t[0] == "NAME" else _name_of(t), _mk(t[2], t[3]))
 
     def boolean(self, c):
         t = c[0]
-        return A.BoolLit(t.type == "TRUE", _span_of(t))
+        return A.BoolLit(t[0] == "TRUE", _mk(t[2], t[3]))
 
     def reserved(self, c):
         t = c[0]
-        w = t.value
+        w = t[1]
         if w.lower() == "what":
             raise _Fail(t, "'what' is a reserved word in FRETish (probability queries)",
                         f"quote it (\"{w}\") or rename the variable")
@@ -276,28 +295,28 @@ class _Builder:
 
     def paren(self, c):
         # the parentheses belong to the expression's span
-        return replace(c[1], span=_join(c[0], c[2]))
+        return _respan(c[1], _mk(c[0][2], c[2][3]))
 
     def call(self, c):
         name, rpar = c[0], c[-1]
         args = tuple(c[2:-1])
-        if name.value == "preBool" and args and _is_numeric_literal(args[0]):
+        if name[1] == "preBool" and args and _is_numeric_literal(args[0]):
             init = args[0]
             shown = _ctx.text[init.span.start:init.span.end]
             raise _Fail(init, f"preBool's initial value must be true or false, not '{shown}'",
                         "preBool(init, p) is init at the first step and p one step earlier "
                         "afterwards; write preBool(false, p) or preBool(true, p) (FRET "
                         "prints 'undefined' for a numeric initial value)")
-        return A.Call(name.value, args, _join(name, rpar))
+        return A.Call(name[1], args, _join(name, rpar))
 
     def prefixed(self, c):               # ! p, ~ p, - x (as if standing alone)
         op, x = c
-        if op.type == "BANG":
+        if op[0] == "BANG":
             return A.Unary("!", x, _join(op, x))
         if type(x) is A.Unary and x.op == "!" and _ctx.text[x.span.start] != "(":
             raise _not_here(x)
-        if type(x) is A.NumLit and x.span.start == op.end_pos \
-                and _ctx.text[op.end_pos] != "(" and not x.text.startswith("-"):
+        if type(x) is A.NumLit and x.span.start == op[3] \
+                and _ctx.text[op[3]] != "(" and not x.text.startswith("-"):
             # a minus written against a number literal is part of it, as in FRET's
             # lexer: -3 ^ 2 is (-3) ^ 2, while - 3 ^ 2 and -x ^ 2 negate the power
             return A.NumLit("-" + x.text, _join(op, x))
@@ -313,30 +332,48 @@ class _Builder:
     open_ops = chain_ops                 # a chain ending in a prefix form (if-then ...)
 
     def climb(self, c):
-        node, _ = _climb(c[0], 0, 1)
+        c = c[0]
+        left = c[0]
+        n = len(c)
+        if type(left) is not A.Unary:
+            # one operator, or several of one left-associative precedence that is not the
+            # comparisons', and no prefix operand: _climb's result is a left fold
+            prec = _PREC[c[1][0]]
+            if n == 3 or not (prec[1] or prec[0] == _CMP):
+                for i in range(2, n, 2):
+                    if type(c[i]) is A.Unary or (i + 1 < n and _PREC[c[i + 1][0]] != prec):
+                        break
+                else:
+                    start = left.span[4]
+                    for i in range(1, n, 2):
+                        right = c[i + 1]
+                        left = A.Binary(_BINOPS[c[i][0]], left, right,
+                                        _mk(start, right.span[5]))
+                    return left
+        node, _ = _climb(c, 0, 1)
         return node
 
     def if_then(self, c):
         return A.Binary("->", c[1], c[3], _join(c[0], c[3]))
 
     def occurrence(self, c):
-        name = "prevOcc" if c[2].type == "PREVIOUS" else "nextOcc"
+        name = "prevOcc" if c[2][0] == "PREVIOUS" else "nextOcc"
         return A.Call(name, (c[5], c[6]), _join(c[0], c[6]))
 
     # ---- scope
     def mode_name(self, c):
         t = c[0]
-        return A.Var(_name_of(t), _span_of(t))
+        return A.Var(_name_of(t), _mk(t[2], t[3]))
 
     def explicit_mode(self, c):
-        t = c[1] if c[0].type == "MODE" else c[0]
+        t = c[1] if c[0][0] == "MODE" else c[0]
         return _ExplicitMode(A.Var(_name_of(t), _span_of(t)), _join(c[0], c[1]))
 
     def _scope(self, kind, c):
         m = c[-1]
         if isinstance(m, _ExplicitMode):
-            return A.Scope(kind, m.var, _join(c[0], m))
-        return A.Scope(kind, m, _join(c[0], m))
+            return A.Scope(kind, m.var, _mk(c[0][2], m.span[5]))
+        return A.Scope(kind, m, _mk(c[0][2], m.span[5]))
 
     # one Lark callback per scope rule, all through _scope (kept: Lark wants a method per rule)
     def in_scope(self, c):
@@ -364,17 +401,17 @@ class _Builder:
     @staticmethod
     def _part(c, connective):
         i = 0
-        if connective is not None and c[0].type in ("AND", "OR"):
-            connective = c[0].type.lower()
+        if connective is not None and c[0][0] in ("AND", "OR"):
+            connective = c[0][0].lower()
             i = 1
         q = c[i]
-        qualifier = q.value.lower()
+        qualifier = q[1].lower()
         expr = c[i + 1]
         last = expr
         negate = qualifier == "unless"
         if len(c) > i + 2:                       # is true / is false
             last = c[i + 3]
-            if last.type == "FALSE":
+            if last[0] == "FALSE":
                 negate = not negate
         span = _join(c[0], last)
         if negate:
@@ -389,7 +426,12 @@ class _Builder:
 
     def condition(self, c):
         first = c[0]
-        parts = c[1:] if type(first) in _TOKENS else c
+        parts = c[1:] if type(first) is tuple else c
+        if len(parts) == 1:      # one part (most conditions): the loops below, unrolled
+            p = parts[0]
+            return A.Condition("holding" if p.qualifier == "whenever" else "regular", p.expr,
+                               (p,), _mk(first[2] if type(first) is tuple else p.span[4],
+                                         p.span[5]))
         expr = parts[0].expr
         for p in parts[1:]:
             expr = A.Binary("|" if p.connective == "or" else "&", expr, p.expr,
@@ -399,81 +441,98 @@ class _Builder:
 
     # ---- component, probability, timing, response
     def subject(self, c):
-        names = [t for t in c if t.type in ("NAME", "STRING")]
-        t = names[0]
-        first = c[1] if c[0].type == "SHALL" else c[0]
-        return _Subject(_name_of(t), _join(first, t))
+        # [the] NAME shall | shall [the] NAME (NAME or STRING)
+        if c[0][0] == "SHALL":
+            first, t = c[1], c[-1]
+        else:
+            first, t = c[0], c[-2]
+        return _Subject(t[1] if t[0] == "NAME" else _name_of(t), _mk(first[2], t[3]))
 
     def probability(self, c):
         op, num = c[2], c[-1]
-        value = ("-" if c[-2].type == "MINUS" else "") + num.value
-        if op.type == "NE":
+        value = ("-" if c[-2][0] == "MINUS" else "") + num[1]
+        if op[0] == "NE":
             raise _Fail(op, "a probability bound uses <, <=, >, >= or =, not '!='",
                         "write e.g. 'with probability >= 0.99'")
         v = Fraction(value)
-        if not 0 <= v <= 1 or (op.type == "GT" and v == 1) or (op.type == "LT" and v == 0):
+        if not 0 <= v <= 1 or (op[0] == "GT" and v == 1) or (op[0] == "LT" and v == 0):
             what = (f"probability {value} is outside [0, 1]" if not 0 <= v <= 1 else
-                    f"'{op.value} {value}' is no probability bound: a probability is never "
+                    f"'{op[1]} {value}' is no probability bound: a probability is never "
                     + ("above 1" if v == 1 else "below 0"))
             raise _Fail(c[-1] if not value.startswith("-") else c[-2], what,
                         "a probability bound is a number in [0, 1], e.g. "
                         "'with probability >= 0.99'")
-        return A.Probability(_BINOPS[op.type], value, _join(c[0], num))
+        return A.Probability(_BINOPS[op[0]], value, _join(c[0], num))
 
     def duration(self, c):
         num, unit = c
-        if not _DURATION_AMOUNT.match(num.value):
-            raise _Fail(num, f"a duration is a whole or decimal number, not '{num.value}'",
+        if not _DURATION_AMOUNT.match(num[1]):
+            raise _Fail(num, f"a duration is a whole or decimal number, not '{num[1]}'",
                         "write e.g. 'within 3 seconds' or 'for 2.5 seconds'")
-        return A.Duration(num.value, UNIT_TOKENS[unit.type], _join(num, unit))
+        return A.Duration(num[1], UNIT_TOKENS[unit[0]], _mk(num[2], unit[3]))
 
     def timing(self, c):
         head = c[0]
         last = c[-1]
-        if head.type == "AT":
-            return A.Timing(_AT_TIMINGS[c[2].type], phrase=" ".join(t.value.lower() for t in c),
-                            span=_join(head, last))
-        kind = _SIMPLE_TIMINGS[head.type]
-        phrase = head.value.lower()
+        if head[0] == "AT":
+            return A.Timing(_AT_TIMINGS[c[2][0]], None, None,
+                            " ".join(t[1].lower() for t in c), _mk(head[2], last[3]))
+        kind = _SIMPLE_TIMINGS[head[0]]
+        phrase = head[1].lower()
         if len(c) == 1:
-            return A.Timing(kind, phrase=phrase, span=_span_of(head))
-        if kind in A.DURATION_TIMINGS:
-            return A.Timing(kind, duration=last, phrase=phrase, span=_join(head, last))
-        return A.Timing(kind, stop=last, phrase=phrase, span=_join(head, last))
+            return A.Timing(kind, None, None, phrase, _mk(head[2], head[3]))
+        if kind in A.DURATION_TIMINGS:     # a Duration
+            return A.Timing(kind, last, None, phrase, _mk(head[2], last.span[5]))
+        return A.Timing(kind, None, last, phrase, _join(head, last))
 
     def response(self, c):
-        return _Response(c[1], _join(c[0], c[1]))
+        return _Response(c[1], _mk(c[0][2], c[1].span[5]))
 
     # ---- sentences
     def sentence(self, c):
-        scope = A.Scope()
-        condition = A.Condition()
-        probability = None
-        timing = A.Timing()
-        subject = response = None
+        # the fields by the class of each part (an absent part: the null one, which is
+        # never modified, so one is shared as Requirement's own defaults are)
+        parts = [_NULL_SCOPE, _NULL_CONDITION, None, None, _NULL_TIMING, None]
         for x in c:
-            if isinstance(x, A.Scope):
-                scope = x
-            elif isinstance(x, A.Condition):
-                condition = x
-            elif isinstance(x, _Subject):
-                subject = x
-            elif isinstance(x, A.Probability):
-                probability = x
-            elif isinstance(x, A.Timing):
-                timing = x
-            elif isinstance(x, _Response):
-                response = x
-        return A.Requirement(_ctx.text, scope=scope, condition=condition,
-                             component=subject.name, probability=probability,
-                             timing=timing, response=response.expr,
-                             component_span=subject.span, response_span=response.span)
+            i = _SENTENCE_PARTS.get(type(x))
+            if i is not None:
+                parts[i] = x
+        scope, condition, subject, probability, timing, response = parts
+        return A.Requirement(_ctx.text, scope, condition, subject.name, probability, timing,
+                             response.expr, False, subject.span, response.span)
 
     def freeform(self, c):
         return A.Requirement(_ctx.text, freeform=True)
 
     def start(self, c):
         return c[0]
+
+
+def _lark_callback(f):
+    def callback(self, c):
+        # a lark.Token is a str; nothing the builder returns is
+        return f(self, [(x.type, str(x), x.start_pos, x.end_pos) if isinstance(x, str) else x
+                        for x in c])
+    callback.__name__ = f.__name__
+    return callback
+
+
+class _LarkBuilder(_Builder):
+    """The :class:`_Builder` as Lark's transformer: each callback first turns Lark's tokens
+    into the builder's token tuples (``lark.Token`` ``type``, text, ``start_pos``,
+    ``end_pos``), so Lark and the fast path run the same code on the same values (Lark is
+    the reference the fast path is tested against, and reports every error)."""
+
+
+for _name, _f in list(vars(_Builder).items()):
+    if not _name.startswith("_") and callable(_f):
+        setattr(_LarkBuilder, _name, _lark_callback(_f))
+del _name, _f
+
+
+_SENTENCE_PARTS = {A.Scope: 0, A.Condition: 1, _Subject: 2, A.Probability: 3, A.Timing: 4,
+                   _Response: 5}
+_NULL_SCOPE, _NULL_CONDITION, _NULL_TIMING = A.Scope(), A.Condition(), A.Timing()
 
 
 # --------------------------------------------------------------------------- the parser
@@ -488,9 +547,8 @@ _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", start=["start", "expr"],
 
 def _import_lark():
     """Import Lark (on first need: ``fretc FILE --emit ltl`` on valid sentences runs without
-    it) and let the builder accept its tokens."""
+    it)."""
     import lark
-    _TOKENS.add(lark.Token)
     return lark
 
 
@@ -517,7 +575,7 @@ def _read_grammar() -> str:
 
 
 def _cache_key(grammar: str) -> str:
-    return cache.key_of("fretish-lark-1", grammar, _lark_version(),
+    return cache.key_of("fretish-lark-2", grammar, _lark_version(),
                         "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
 
 
@@ -527,7 +585,7 @@ def build_lark(**options):
     to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts). Builds the LALR
     tables from the grammar (about a second); :func:`cached_lark` loads them instead."""
     lark = _import_lark()
-    return lark.Lark(_read_grammar(), transformer=_Builder(),
+    return lark.Lark(_read_grammar(), transformer=_LarkBuilder(),
                      **_LARK_OPTIONS, **options)
 
 
@@ -550,7 +608,7 @@ def cached_lark():
     if data is not None:
         try:
             parser = lark.Lark.load(io.BytesIO(data))
-            if isinstance(parser.options.transformer, _Builder):
+            if type(parser.options.transformer) is _LarkBuilder:
                 return parser
         except Exception:  # a damaged or foreign entry: rebuild it  # noqa: BLE001
             pass
@@ -573,505 +631,8 @@ def _get_parser():
     return _lark
 
 
-# --------------------------------------------------------------------------- the fast path
-class _Slow(Exception):
-    """The fast path cannot decide this text: parse it with Lark (errors included)."""
-
-
-class _Inline:
-    """The children of an inlined rule (``_name``, Lark's anonymous ``__x_star`` rules),
-    spliced into the parent's children as Lark's child filter does with its trees."""
-    __slots__ = ("children",)
-
-    def __init__(self, children):
-        self.children = children
-
-
-def fast_tables(lark) -> dict | None:
-    """What :class:`_FastParser` needs from a Lark parser of ``grammar.lark``, as plain data
-    (marshalled in fretc's cache beside Lark's own entry, so a run loads it without importing
-    Lark): the terminals in the order Lark's lexer tries them, Lark's LALR table, and per
-    rule its origin, length, callback name and Lark's child filter (``_``-prefixed
-    terminals dropped, ``_``-prefixed rules spliced, ``?rule`` single children passed up).
-    None when the grammar uses a Lark feature the fast path does not reproduce (a terminal
-    callback or a string terminal that a regexp terminal also matches)."""
-    from lark.lexer import _create_unless, _regexp_has_newline
-    from lark.parsers.lalr_analysis import Shift
-
-    conf = lark.lexer_conf
-    terminals = list(conf.terminals)
-    terminal_names = {t.name for t in terminals} | {"$END"}
-    terminals.sort(key=lambda x: (-x.priority, -x.pattern.max_width, -len(x.pattern.value),
-                                  x.name))
-    kept, callbacks = _create_unless(terminals, conf.g_regex_flags, conf.re_module,
-                                     conf.use_bytes)
-    builder = _Builder()
-    if callbacks or conf.callbacks or len(kept) != len(terminals) or conf.use_bytes \
-            or any(hasattr(builder, t.name) for t in terminals) or lark.options.postlex:
-        return None
-    parser = lark.parser.parser.parser
-    table = parser.parse_table
-    index = {}
-    rules = []
-    for rule in lark.rules:
-        exp = rule.expansion
-        opts = rule.options
-        include = [(i, not sym.is_term and sym.name.startswith("_"))
-                   for i, sym in enumerate(exp)
-                   if opts.keep_all_tokens or not (sym.is_term and sym.filter_out)]
-        filtered = len(include) < len(exp) or any(x for _, x in include)
-        index[rule] = len(rules)
-        rules.append((str(rule.origin.name), len(exp),
-                      str(rule.alias or opts.template_source or rule.origin.name),
-                      bool(opts.expand1 and not rule.alias),
-                      tuple(include) if filtered else None))
-    n_states = max(table.states) + 1
-    actions: list = [{} for _ in range(n_states)]
-    gotos: list = [{} for _ in range(n_states)]
-    for s, acts in table.states.items():
-        for t, (act, arg) in acts.items():
-            if act is not Shift:
-                actions[s][str(t)] = ~index[arg]
-            elif t in terminal_names:
-                actions[s][str(t)] = int(arg)
-            else:
-                gotos[s][str(t)] = int(arg)
-    firsts = [_first_chars(t.pattern.to_regexp(), conf.g_regex_flags) for t in terminals]
-    # the terminal of each reserved word as written in any of the usual letter cases, by
-    # the exact lexer (all terminals in Lark's order), for _FastParser._word_type
-    exact = re.compile("|".join(f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in terminals),
-                       conf.g_regex_flags).match
-    words = {}
-    for w in sorted(RESERVED_WORDS | RESERVED_LETTERS | {"what"}):
-        for v in (w, w.lower(), w.upper(), w.capitalize()):
-            m = exact(v)
-            if m is not None and m.end() == len(v):
-                words[v] = str(m.lastgroup)
-    subsets: dict = {}
-    dispatch = {}
-    for ch in _ASCII:
-        subset = tuple(i for i, f in enumerate(firsts) if f is None or ch in f)
-        dispatch[ch] = subsets.setdefault(subset, len(subsets))
-    return {"terminals": [(str(t.name), str(t.pattern.to_regexp())) for t in terminals],
-            "dispatch": dispatch, "subsets": list(subsets),
-            "flags": int(conf.g_regex_flags), "ignore": sorted(str(t) for t in conf.ignore),
-            "newline": sorted(str(t.name) for t in terminals
-                              if _regexp_has_newline(t.pattern.to_regexp())),
-            "words": words, "firsts": [None if f is None else "".join(sorted(f)) for f in firsts],
-            "actions": actions, "gotos": gotos, "rules": rules,
-            "start_states": {str(k): int(v) for k, v in table.start_states.items()},
-            "end_states": {str(k): int(v) for k, v in table.end_states.items()}}
-
-
-_ASCII = [chr(i) for i in range(128)]
-
-
-def _first_chars(rx: str, flags: int) -> frozenset | None:
-    """A superset of the ASCII characters a match of regexp ``rx`` can start with (None: it
-    may start with any), from the parse tree of Python's ``re``: zero-width assertions are
-    skipped (so the set only grows), anything not understood means "any"."""
-    import re._constants as C
-    import re._parser as P
-
-    def chars(codes, icase):
-        out = set()
-        for code in codes:
-            ch = chr(code)
-            out.update(x for x in _ASCII
-                       if x == ch or (icase and re.fullmatch(re.escape(ch), x, re.I)))
-        return out
-
-    def first(seq, icase):            # -> (set or None, nullable)
-        out: set = set()
-        for op, av in seq:
-            if op in (C.ASSERT, C.ASSERT_NOT, C.AT):
-                continue
-            if op is C.LITERAL:
-                return out | chars([av], icase), False
-            if op is C.IN:
-                codes = []
-                for iop, iav in av:
-                    if iop is C.LITERAL:
-                        codes.append(iav)
-                    elif iop is C.RANGE:
-                        codes.extend(range(iav[0], iav[1] + 1))
-                    else:
-                        return None, False
-                return out | chars(codes, icase), False
-            if op is C.SUBPATTERN:
-                _, add, dele, sub = av
-                sub_icase = (icase or bool(add & re.I)) and not dele & re.I
-                got, nullable = first(sub, sub_icase)
-            elif op is C.BRANCH:
-                got, nullable = set(), False
-                for alt in av[1]:
-                    g, nl = first(alt, icase)
-                    if g is None:
-                        return None, False
-                    got |= g
-                    nullable = nullable or nl
-            elif op in (C.MAX_REPEAT, C.MIN_REPEAT, C.POSSESSIVE_REPEAT):
-                lo, _, sub = av
-                got, nullable = first(sub, icase)
-                nullable = nullable or lo == 0
-            else:
-                return None, False
-            if got is None:
-                return None, False
-            out |= got
-            if not nullable:
-                return out, False
-        return out, True
-
-    tree = P.parse(rx, flags)
-    got, nullable = first(tree.data, bool(tree.state.flags & re.I))
-    return None if got is None or nullable else frozenset(got)
-
-
-class _FastParser:
-    """Lark's LALR(1) table for ``grammar.lark`` run by a plain loop, with one lexer regexp.
-
-    The grammar's terminals never overlap (its header: a keyword matches only its word and
-    NAME refuses every reserved word), so the one regexp of all terminals, tried in the
-    order Lark's lexer tries them, gives the token the contextual lexer would give in every
-    state where that token can be shifted: the first alternative that matches is the same
-    in the state's subset and in the whole set whenever it belongs to the subset. That
-    regexp is split by the next character: only the terminals that can start with it
-    (:func:`_first_chars`, a superset) are tried, in the same order, so the first match is
-    the same; each part is compiled on first use. Each token
-    is fed to Lark's table and each reduction calls the same :class:`_Builder` callback,
-    wrapped as Lark wraps it (:func:`fast_tables`), so a sentence parsed here gets the AST
-    Lark gives. Anything else - a character no terminal matches, a token the state does
-    not accept, an error raised by the builder - raises :class:`_Slow`, and the sentence is
-    parsed again by Lark for its exact error (tests/fretish/test_fast_parser.py compares the
-    two on every test sentence)."""
-
-    def __init__(self, tables: dict):
-        self.terminals = tables["terminals"]
-        self.flags = tables["flags"]
-        self.subsets = tables["subsets"] + [tuple(range(len(self.terminals)))]
-        self.dispatch = tables["dispatch"]       # ASCII character -> index into subsets
-        self.matchers = [None] * len(self.subsets)  # compiled on first use
-        self.parts: dict = {}                     # terminal indices -> compiled match
-        self.newline = frozenset(tables["newline"])
-        self.ignore = frozenset(tables["ignore"])
-        self.actions = tables["actions"]
-        self.gotos = tables["gotos"]
-        self.start_states = tables["start_states"]
-        self.end_states = tables["end_states"]
-        builder = _Builder()
-        self.rules = [(origin, size, self._callback(builder, origin, name, expand1, include),
-                       self._passed_up(size, expand1, include))
-                      for origin, size, name, expand1, include in tables["rules"]]
-        self.known_words = tables["words"]
-        # rules that reduce one symbol to itself (a ``?rule`` passing its single child up):
-        # reducing by one leaves the value stack as it is and replaces only the top state
-        self.unit = [size == 1 and up == -1 for _, size, _, up in self.rules]
-        self.chains: dict = {}    # (state below, state, terminal) -> state after the units
-        self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]])
-
-    @staticmethod
-    def _passed_up(size, expand1, include) -> int:
-        """For a ``?rule`` whose filtered children are always exactly one child (no splice),
-        that child's index counted from the end of the rule (Lark's callback returns it
-        as is); 0 otherwise."""
-        kept = [(i, splice) for i, splice in include] if include is not None else \
-            [(i, False) for i in range(size)]
-        if expand1 and len(kept) == 1 and not kept[0][1]:
-            return kept[0][0] - size
-        return 0
-
-    def _matcher(self, sid: int):
-        """The ``match`` of subset ``sid``: its terminals tried in Lark's order. A long
-        regexp (NAME's, with its reserved-word lookahead) is a part of its own, compiled
-        once and shared by every subset (trying the parts in turn is the alternation of
-        them all: the first alternative that matches wins either way)."""
-        subset = self.subsets[sid]
-        if not subset:
-            raise _Slow("no terminal starts with this character")
-        parts, run = [], []
-        for i in subset:
-            if len(self.terminals[i][1]) > 200:
-                if run:
-                    parts.append(tuple(run))
-                    run = []
-                parts.append((i,))
-            else:
-                run.append(i)
-        if run:
-            parts.append(tuple(run))
-        matches = [self._part(p) for p in parts]
-        if len(matches) == 1:
-            m = matches[0]
-        else:
-            def m(text, pos, matches=matches):
-                for match in matches:
-                    found = match(text, pos)
-                    if found is not None:
-                        return found
-                return None
-        self.matchers[sid] = m
-        return m
-
-    def _part(self, indices: tuple):
-        got = self.parts.get(indices)
-        if got is None:
-            got = self.parts[indices] = re.compile(
-                "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})"
-                         for i in indices), self.flags).match
-        return got
-
-    @staticmethod
-    def _callback(builder, origin, name, expand1, include):
-        f = getattr(builder, name, None)
-        if f is None:
-            if not origin.startswith("_"):
-                def f(children):  # Lark would build a Tree: not a FRETish AST
-                    raise _Slow(origin)
-            else:
-                f = _Inline
-        if expand1:
-            inner = f
-
-            def f(children, inner=inner):
-                return children[0] if len(children) == 1 else inner(children)
-        if include is not None:
-            inner2 = f
-
-            def f(children, inner=inner2, include=include):
-                out = []
-                for i, splice in include:
-                    if splice:
-                        if out:
-                            out += children[i].children
-                        else:
-                            out = children[i].children
-                    else:
-                        out.append(children[i])
-                return inner(out)
-        return f
-
-    # ---- the lexer: one regexp over the whole text
-    _WORD = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
-    _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
-    _MAX_WORDS = 100_000
-
-    def _build_scanner(self, firsts: list) -> None:
-        """The whole-text lexer, when the grammar's terminals allow it (else the lexer of
-        :meth:`_tokens_by_char` is used): one regexp ``(ignored)* (word | T1 | T2 ...)``
-        where ``word`` is an identifier-shaped run of characters (FRETish's keywords,
-        reserved letters and names all are: each keyword terminal ends where the word
-        ends, and NAME's regexp is the same run) and ``T1, T2 ...`` are the other
-        terminals in Lark's order. A word's terminal is that of the exact lexer
-        (:meth:`_matcher`) on the word alone, kept in :attr:`words` (it never depends on
-        what follows a whole word). Used only when every terminal starts either with
-        letters only or with no letter, and the ignored terminals start with characters
-        no other terminal starts with."""
-        self.scan = None
-        letters = self._LETTERS
-        ignored, others = [], []
-        ignore_firsts: set = set()
-        for i, (name, rx) in enumerate(self.terminals):
-            f = firsts[i]
-            if f is None:
-                return
-            if name in self.ignore:
-                ignored.append(rx)
-                ignore_firsts |= f
-            elif not f & letters:
-                others.append(i)
-            elif not f <= letters:
-                return
-        if not ignored or any(f is None or (f & ignore_firsts)
-                              for i, f in enumerate(firsts)
-                              if self.terminals[i][0] not in self.ignore):
-            return
-        body = "|".join(f"(?P<{self.terminals[i][0]}>{self.terminals[i][1]})" for i in others)
-        rx = f"(?:{'|'.join(ignored)})*(?:(?P<word>{self._WORD})|{body})"
-        self.scan = re.compile(rx, self.flags).scanner
-        self.trailing = re.compile(f"(?:{'|'.join(ignored)})*\\Z", self.flags).match
-        self.words = dict(self.known_words)
-        names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
-        # NAME tried first among the terminals that start with a letter: a word it matches
-        # whole is a NAME (else the exact lexer decides)
-        self.name_first = bool(names) and all(f is not None and not f & letters
-                                              for f in firsts[:names[0]])
-        self.name_rx = self.terminals[names[0]][1] if names else None
-        self.name_match = None
-
-    def _word_type(self, word: str) -> str:
-        """The terminal of ``word``: the exact lexer on the word alone (:class:`_Slow` when
-        no terminal matches the whole word), or NAME when NAME, the first terminal a word
-        can start, matches it whole. The reserved words' terminals come with the tables
-        (:attr:`known_words`), so a run compiles no keyword regexp."""
-        if len(self.words) >= self._MAX_WORDS:
-            self.words = dict(self.known_words)
-        if self.name_first:
-            if self.name_match is None:
-                self.name_match = re.compile(self.name_rx, self.flags).match
-            m = self.name_match(word)
-            if m is not None and m.end() == len(word):
-                self.words[word] = "NAME"
-                return "NAME"
-        sid = self.dispatch.get(word[0], len(self.subsets) - 1)
-        m = (self.matchers[sid] or self._matcher(sid))(word, 0)
-        if m is None or m.end() != len(word):
-            raise _Slow("word")
-        typ = self.words[word] = m.lastgroup
-        return typ
-
-    def _tokens(self, text: str) -> list:
-        """The tokens of ``text`` (:class:`_Tok`, ignored terminals dropped); raises
-        :class:`_Slow` where a character starts no terminal."""
-        scan = self.scan
-        if scan is None:
-            return self._tokens_by_char(text)
-        words = self.words
-        out = []
-        add = out.append
-        pos = 0
-        multiline = "\n" in text
-        match = scan(text).match      # each match starts where the previous one ended
-        while (m := match()) is not None:
-            typ = m.lastgroup
-            start, pos = m.span(m.lastindex)
-            value = text[start:pos]
-            if typ == "word":
-                typ = words.get(value) or self._word_type(value)
-            add(_Tok(typ, value, start, 1, start + 1, 1, pos + 1, pos))
-        if pos != len(text) and self.trailing(text, pos) is None:
-            raise _Slow("no terminal")
-        if multiline:
-            self._relocate(text, out)
-        return out
-
-    @staticmethod
-    def _relocate(text: str, toks: list) -> None:
-        """Set the 1-based lines and columns of ``toks`` in a text of several lines."""
-        from bisect import bisect_right
-        starts = [0] + [i + 1 for i, ch in enumerate(text) if ch == "\n"]
-        for t in toks:
-            li = bisect_right(starts, t.start_pos)
-            t.line, t.column = li, t.start_pos - starts[li - 1] + 1
-            li = bisect_right(starts, t.end_pos)
-            t.end_line, t.end_column = li, t.end_pos - starts[li - 1] + 1
-
-    def _tokens_by_char(self, text: str) -> list:
-        """The tokens of ``text`` by the exact lexer, one regexp match per token or ignored
-        run (the fallback of :meth:`_tokens`)."""
-        ignore, newline = self.ignore, self.newline
-        dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
-        out = []
-        pos, n, line, line_start = 0, len(text), 1, 0
-        while pos < n:
-            sid = dispatch.get(text[pos], full)
-            match = matchers[sid] or self._matcher(sid)
-            m = match(text, pos)
-            if m is None:
-                raise _Slow("no terminal")
-            typ = m.lastgroup
-            end = m.end()
-            nline, nstart = line, line_start
-            if typ in newline:
-                value = text[pos:end]
-                k = value.count("\n")
-                if k:
-                    nline = line + k
-                    nstart = pos + value.rindex("\n") + 1
-            if typ not in ignore:
-                out.append(_Tok(typ, text[pos:end], pos, line, pos - line_start + 1, nline,
-                                end - nstart + 1, end))
-            pos, line, line_start = end, nline, nstart
-        return out
-
-    def _chain(self, below: int, state: int, typ: str) -> int:
-        """The state reached from ``state`` (``below`` under it on the stack) by reducing
-        by unit rules (:attr:`unit`) while the action on lookahead ``typ`` is one: the
-        first state whose action on ``typ`` is a shift, another reduction or an error."""
-        actions, gotos, rules, unit = self.actions, self.gotos, self.rules, self.unit
-        while True:
-            action = actions[state].get(typ)
-            if action is None or action >= 0 or not unit[~action]:
-                return state
-            state = gotos[below][rules[~action][0]]
-
-    def parse(self, text: str, start: str):
-        """The builder's result for ``text`` from start symbol ``start``; raises
-        :class:`_Slow` (or the builder's exception) where Lark must decide.
-
-        The table is :attr:`actions` (per state: terminal -> the next state when >= 0,
-        else the complement ``~i`` of rule ``i`` to reduce by) and :attr:`gotos` (per
-        state: rule origin -> next state)."""
-        toks = self._tokens(text)
-        actions, gotos, rules = self.actions, self.gotos, self.rules
-        unit, chains = self.unit, self.chains
-        state = self.start_states[start]
-        state_stack = [state]
-        value_stack = []
-        for tok in toks:
-            typ = tok.type
-            while True:
-                action = actions[state].get(typ)
-                if action is None:
-                    raise _Slow(typ)
-                if action >= 0:
-                    state = action
-                    state_stack.append(state)
-                    value_stack.append(tok)
-                    break
-                if unit[~action]:
-                    # A run of unit reductions keeps the state below the top, so where it
-                    # ends depends only on (that state, the top state, the lookahead):
-                    # followed once, then looked up (the same states as one by one).
-                    key = (state_stack[-2], state, typ)
-                    state = chains.get(key)
-                    if state is None:
-                        state = chains[key] = self._chain(*key)
-                    state_stack[-1] = state
-                    continue
-                origin, size, callback, up = rules[~action]
-                if size == 1 and not up:  # one symbol replaced in place: no pop and push
-                    value_stack[-1] = callback(value_stack[-1:])
-                    state = state_stack[-1] = gotos[state_stack[-2]][origin]
-                    continue
-                if up:
-                    value = value_stack[up]
-                    del value_stack[-size:]
-                elif size:
-                    value = callback(value_stack[-size:])
-                    del value_stack[-size:]
-                else:
-                    value = callback([])
-                if size:
-                    del state_stack[-size:]
-                state = gotos[state_stack[-1]][origin]
-                state_stack.append(state)
-                value_stack.append(value)
-        end_state = self.end_states[start]
-        while True:
-            action = actions[state].get("$END")
-            if action is None or action >= 0:
-                raise _Slow("$END")
-            origin, size, callback, up = rules[~action]
-            if up:
-                value = value_stack[up]
-                del value_stack[-size:]
-            elif size:
-                value = callback(value_stack[-size:])
-                del value_stack[-size:]
-            else:
-                value = callback([])
-            if size:
-                del state_stack[-size:]
-            state = gotos[state_stack[-1]][origin]
-            if state == end_state:
-                return value
-            state_stack.append(state)
-            value_stack.append(value)
-
-
 #: The format of :func:`fast_tables`'s data (part of its cache entry's name).
-_FAST_FORMAT = "v4"
+_FAST_FORMAT = "v5"
 
 
 #: Where the fast path's tables are kept first: beside the package, as Python keeps its
@@ -1111,10 +672,10 @@ def _load_fast():
             try:
                 tables = marshal.loads(data[4:])
                 if tables["identity"] == identity:
-                    return _FastParser(tables)
+                    return _FastParser(tables, _Builder())
             except Exception:  # a damaged entry: rebuild it  # noqa: BLE001
                 pass
-    tables = fast_tables(_get_parser())
+    tables = fast_tables(_get_parser(), _Builder())
     if tables is None:
         return False
     tables["identity"] = identity
@@ -1122,7 +683,7 @@ def _load_fast():
     data = zlib.crc32(body).to_bytes(4, "big") + body
     if beside is None or sys.dont_write_bytecode or not cache.write_file(beside, data):
         cache.write_bytes("lark", name, data)
-    return _FastParser(tables)
+    return _FastParser(tables, _Builder())
 
 
 def _get_fast():
@@ -1139,7 +700,7 @@ def _run(start: str, text: str, source: str, line: int, column: int):
         raise TypeError(f"parse() wants a str, got {type(text).__name__}")
     fast = _get_fast()
     if fast:
-        _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
+        _ctx.set(text, line - 1, column - 1)
         try:
             result = fast.parse(text, start)
             if start == "start":
@@ -1160,7 +721,7 @@ def _run_lark(start: str, text: str, source: str, line: int, column: int):
 
     from .diagnostics import make_error, translate
     lark = _get_parser()
-    _ctx.text, _ctx.dl, _ctx.dc = text, line - 1, column - 1
+    _ctx.set(text, line - 1, column - 1)
     try:
         result = lark.parse(text, start=start)
         if start == "start":

@@ -146,7 +146,7 @@ TEXT = "in m upon p, the sw shall within 3 ticks satisfy x + 1 > -2"
 
 def _parsed(lark) -> str:
     """The AST ``lark`` gives for TEXT (set up as fretish.parser._run does)."""
-    P._ctx.text, P._ctx.dl, P._ctx.dc = TEXT, 0, 0
+    P._ctx.set(TEXT, 0, 0)
     try:
         return repr(lark.parse(TEXT, start="start"))
     finally:

@@ -1,4 +1,4 @@
-"""The parser's fast path (fretish.parser._FastParser: Lark's LALR table run by a plain loop,
+"""The parser's fast path (fretish.fastparse._FastParser: Lark's LALR table run by a plain loop,
 one lexer regexp split by first character) against Lark itself (fretish.parser._run_lark,
 the reference): on every sentence the fast path accepts, the same AST with the same spans;
 every sentence Lark accepts is accepted by the fast path too (else the speed is silently
@@ -15,6 +15,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import fretish.ast as A
+import fretish.fastparse as F
 import fretish.parser as P
 from fretish.errors import FretishError
 from fretish.words import RESERVED_WORDS
@@ -44,7 +46,7 @@ def _fast(text, start="start", line=1, column=1):
     """The fast path's AST (deep form), or None where it hands the text to Lark."""
     fast = P._get_fast()
     assert fast, "the fast path is not available for grammar.lark"
-    P._ctx.text, P._ctx.dl, P._ctx.dc = text, line - 1, column - 1
+    P._ctx.set(text, line - 1, column - 1)
     try:
         result = fast.parse(text, start)
         (P.check_requirement if start == "start" else P.check_expression)(result)
@@ -103,6 +105,8 @@ def _corpus():
         texts.append(" ".join(words[:i] + words[i + 1:]))
         texts.append(" ".join(words[:i] + [words[i]] + words[i:]))
         texts.append("\n  ".join(words))  # spread over lines
+        # ignored characters before and after the sentence (the lexer's last match)
+        texts.append(rnd.choice(["", " ", "\n"]) + text + rnd.choice([" ", "\t\n", "  "]))
     return texts
 
 
@@ -115,6 +119,71 @@ def test_fast_path_equals_lark_on_the_corpus():
         _check(text)
         accepted += _lark(text)[0] == "ok"
     assert accepted > len(CORPUS) // 3  # the comparison covered accepted sentences
+
+
+CASE_STUDIES = SHARED.parent / "corpora" / "fret_casestudies.jsonl"
+
+
+@pytest.mark.skipif(not CASE_STUDIES.exists(), reason="shared corpora not available")
+def test_fast_path_equals_lark_on_the_case_studies():
+    """NASA's case-study requirements (real text: trailing blanks, long expressions): the
+    fast path accepts every one Lark accepts, with the same AST and spans."""
+    texts = [json.loads(line)["text"] for line in CASE_STUDIES.open(encoding="utf-8")]
+    accepted = 0
+    for text in texts:
+        _check(text)
+        accepted += _lark(text)[0] == "ok"
+    assert accepted >= len(texts) - 5
+
+
+def _spans(x):
+    """Every (node class, span) in an AST (spans of the requirement's parts included)."""
+    if dataclasses.is_dataclass(x):
+        for f in dataclasses.fields(x):
+            v = getattr(x, f.name)
+            if isinstance(v, A.Span):
+                yield type(x).__name__, f.name, v
+            else:
+                yield from _spans(v)
+    elif isinstance(x, (tuple, list)) and not isinstance(x, A.Span):
+        for y in x:
+            yield from _spans(y)
+
+
+def _geometry(text, offset, line, column):
+    """File line and column of 0-based ``offset`` in ``text`` that starts at file
+    ``line``:``column``, counted by hand (a line starts after each newline)."""
+    before = text[:offset]
+    k = before.count("\n")
+    if k == 0:
+        return line, column + offset
+    return line + k, offset - before.rindex("\n")
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.sampled_from(CORPUS), st.integers(1, 40), st.integers(1, 30),
+       st.lists(st.sampled_from([" ", "\n", "\n\t", "  "]), min_size=1, max_size=4))
+def test_span_lines_and_columns_follow_the_offsets(text, line, column, blanks):
+    """Every span's line/column pairs are the file position of its start/end offsets
+    (computed by hand here), on texts spread over lines by random blanks, through the fast
+    path and Lark alike (the two share the position code, so they are checked apart)."""
+    parts = text.split(" ")
+    text = parts[0] + "".join(blanks[i % len(blanks)] + p for i, p in enumerate(parts[1:]))
+    got = []
+    try:
+        got.append(P.parse(text, source="<t>", line=line, column=column))
+    except FretishError:
+        return
+    got.append(P._run_lark("start", text, "<t>", line, column))
+    for req in got:
+        for cls, name, span in _spans(req):
+            if span == A.NO_SPAN:
+                continue
+            assert 0 <= span.start <= span.end <= len(text), (cls, name, span)
+            assert (span.line, span.column) == _geometry(text, span.start, line, column), \
+                (text, cls, name, span)
+            assert (span.end_line, span.end_column) == _geometry(text, span.end, line,
+                                                                 column), (text, cls, name, span)
 
 
 @pytest.mark.parametrize("text", ["x + 1 > y & !p", "if a then b | c", "a < b < c", "x = !y",
@@ -242,7 +311,7 @@ def _exact_type(word):
     sid = fast.dispatch.get(word[0], len(fast.subsets) - 1)
     try:
         m = (fast.matchers[sid] or fast._matcher(sid))(word, 0)
-    except P._Slow:
+    except F._Slow:
         return None
     return m.lastgroup if m is not None and m.end() == len(word) else None
 
@@ -261,7 +330,7 @@ def test_word_terminal_equals_the_exact_lexers(word):
     fast = P._get_fast()
     try:
         got = fast.words.get(word) or fast._word_type(word)
-    except P._Slow:
+    except F._Slow:
         got = None
     assert got == _exact_type(word), word
 
@@ -270,15 +339,18 @@ _DEEP = ["!", "-", "f(", "g(1, ", "(", "if p then ", "a & ", "x ^ ", "~"]
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(st.sampled_from(_DEEP), max_size=60), st.sampled_from(["p", "1", "9" * 99]))
+@given(st.lists(st.sampled_from(_DEEP), max_size=60),
+       st.sampled_from(["p", "1", "9" * 99, "9" * 100, "1.5e" + "7" * 96, "-" + "8" * 100]))
 def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
-    """limits.check_requirement skips the walk for a text of at most SHORT_TEXT characters:
-    the walk finds nothing there, even for the deepest expressions that fit."""
+    """limits.check_requirement skips the walk for a text of at most SHORT_TEXT characters,
+    and for one of at most SHORT_TEXT_NO_NUMBER characters without a long run of number
+    characters: the walk finds nothing there, even for the deepest expressions that fit."""
     from fretish import limits
     expr = "".join(prefixes) + leaf
     expr += ")" * (expr.count("(") - expr.count(")"))
     text = f"the sw shall satisfy {expr}"
-    if len(text) > limits.SHORT_TEXT:
+    if len(text) > limits.SHORT_TEXT and (len(text) > limits.SHORT_TEXT_NO_NUMBER
+                                          or limits._NUMBER_RUN.search(text)):
         return
     try:
         req = P._run_lark("start", text, "<t>", 1, 1)
@@ -286,3 +358,51 @@ def test_short_sentences_cannot_exceed_the_limits(prefixes, leaf):
         return
     for e in limits._expressions(req):
         limits._check(e, [0])  # raises LimitError beyond a limit
+
+
+_OPERATORS = sorted(P._PREC)
+
+
+@settings(max_examples=250, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["v", "v", "v", "!", "-"]),
+                          st.sampled_from(_OPERATORS)), min_size=1, max_size=7),
+       st.sampled_from(["v", "!", "-"]))
+def test_climb_shortcuts_equal_precedence_climbing(pairs, last):
+    """The builder's ``climb`` (one-operator chains and left folds built directly) gives
+    what the general precedence climbing (``_climb``) gives, spans and errors included."""
+    def operand(kind, at):
+        var = A.Var(f"v{at}", P._mk(at, at + 1))
+        if kind == "v":
+            return var
+        return A.Unary("!" if kind == "!" else "-", var, P._mk(at - 1, at + 1))
+
+    chain, at = [], 1
+    for kind, op in pairs:
+        chain.append(operand(kind, at))
+        chain.append((op, P._BINOPS[op], at + 1, at + 2))
+        at += 3
+    chain.append(operand(last, at))
+
+    def outcome(run):
+        try:
+            return "ok", _deep(run(list(chain)))
+        except P._Fail as f:
+            return "error", f.message, f.span
+    P._ctx.set("x" * (at + 2), 0, 0)
+    try:
+        got = outcome(lambda c: P._Builder().climb([c]))
+        ref = outcome(lambda c: P._climb(c, 0, 1)[0])
+    finally:
+        P._ctx.text = ""
+    assert got == ref, [x if type(x) is tuple else type(x).__name__ for x in chain]
+
+
+def test_lexer_by_character_equals_the_whole_text_lexer(monkeypatch):
+    """The exact lexer's fallback (``_tokens_by_char``, used when the terminals do not
+    allow the whole-text regexp) gives the same tokens, so the same ASTs and spans."""
+    fast = P._get_fast()
+    texts = CORPUS[::3]
+    whole = [_fast(t) for t in texts]
+    monkeypatch.setattr(fast, "findall", None)
+    assert [_fast(t) for t in texts] == whole
+    assert sum(x is not None for x in whole) > len(texts) // 3
