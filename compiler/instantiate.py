@@ -607,11 +607,7 @@ class _PlainExpander(Expander):
     def bool(self, e: A.Expr) -> Node:
         t = type(e)
         if t is _Var:
-            name = e.name
-            if name == "FTP":
-                raise _Timed
-            self.names[name] = None
-            return _name_node("ap", name)
+            return self._name(e.name, "ap")
         if t is _Binary:
             op = e.op
             if op in _COMPARISON_OPS:  # Expander: ir.cmp, no derived atom (no preReal here)
@@ -621,6 +617,14 @@ class _PlainExpander(Expander):
         elif t is _Unary and e.op == "!":
             return ir.not_(self.bool(e.operand))
         return Expander.bool(self, e)
+
+    def _name(self, name: str, op: str) -> Node:
+        """The leaf ``op`` (``ap`` or ``var``) of variable ``name``, recorded in
+        :attr:`names`; FTP raises :class:`_Timed`."""
+        if name == "FTP":
+            raise _Timed
+        self.names[name] = None
+        return _name_node(op, name)
 
     def _atom(self, node: Node) -> Node:
         return node  # no preInt/preReal here (they raise _Timed): never a derived atom
@@ -633,11 +637,7 @@ class _PlainExpander(Expander):
     def term(self, e: A.Expr) -> Node:
         t = type(e)
         if t is _Var:
-            name = e.name
-            if name == "FTP":
-                raise _Timed
-            self.names[name] = None
-            return _name_node("var", name)
+            return self._name(e.name, "var")
         if t is _NumLit:
             return _name_node("num", e.text)  # ir.num
         if t is _Binary and e.op in _ARITH_OPS:  # ir.arith
