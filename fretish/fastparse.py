@@ -238,7 +238,12 @@ class _FastParser:
         # rules that reduce one symbol to itself (a ``?rule`` passing its single child up):
         # reducing by one leaves the value stack as it is and replaces only the top state
         self.unit = [size == 1 and up == -1 for _, size, _, up in self.rules]
-        self.chains: dict = {}    # (state below, state, terminal) -> state after the units
+        # rules of one symbol (unit or not): reducing by one replaces only the top of both
+        # stacks, so the state below stays and a run of them is a function of the states
+        self.single = [size == 1 for _, size, _, _ in self.rules]
+        #: (state below, top state, terminal) -> :meth:`_plan` of that run of one-symbol
+        #: reductions
+        self.plans: dict = {}
         self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]],
                             tables["context_free"])
 
@@ -457,16 +462,31 @@ class _FastParser:
             pos = end
         return out
 
-    def _chain(self, below: int, state: int, typ: str) -> int:
-        """The state reached from ``state`` (``below`` under it on the stack) by reducing
-        by unit rules (:attr:`unit`) while the action on lookahead ``typ`` is one: the
-        first state whose action on ``typ`` is a shift, another reduction or an error."""
+    def _plan(self, key: tuple) -> tuple:
+        """The run of one-symbol reductions (rules of size 1: a ``?rule`` passing its child
+        up, or a rule whose callback turns its one child into a value) taken from top state
+        ``key[1]``, with state ``key[0]`` below it, on lookahead ``key[2]``, and what follows
+        it: ``(callbacks, state, action)``. ``callbacks`` are those of the run's non-unit
+        rules in order (each applied to the top value, as ``[value]``), ``state`` the top
+        state after the run, ``action`` the table's action there on the lookahead (a shift,
+        a reduction by a rule of another size, or None for an error).
+
+        A one-symbol reduction leaves the stacks' depth and the state below the top as they
+        are, so the run is a function of the key alone (the values are still made by the
+        callbacks, in the same order as one by one); kept in :attr:`plans`."""
+        below, state, typ = key
         actions, gotos, rules, unit = self.actions, self.gotos, self.rules, self.unit
+        callbacks = []
         while True:
             action = actions[state].get(typ)
-            if action is None or action >= 0 or not unit[~action]:
-                return state
-            state = gotos[below][rules[~action][0]]
+            if action is None or action >= 0 or rules[~action][1] != 1:
+                break
+            origin, _, callback, _ = rules[~action]
+            if not unit[~action]:
+                callbacks.append(callback)
+            state = gotos[below][origin]
+        plan = self.plans[key] = (tuple(callbacks), state, action)
+        return plan
 
     def parse(self, text: str, start: str):
         """The builder's result for ``text`` from start symbol ``start``; raises
@@ -474,17 +494,18 @@ class _FastParser:
 
         The table is :attr:`actions` (per state: terminal -> the next state when >= 0,
         else the complement ``~i`` of rule ``i`` to reduce by) and :attr:`gotos` (per
-        state: rule origin -> next state)."""
+        state: rule origin -> next state). A run of one-symbol reductions is followed by
+        one lookup in :attr:`plans` (:meth:`_plan`)."""
         toks = self._tokens(text)
         actions, gotos, rules = self.actions, self.gotos, self.rules
-        unit, chains = self.unit, self.chains
+        single, plans = self.single, self.plans
         state = self.start_states[start]
         state_stack = [state]
         value_stack = []
         for tok in toks:
             typ = tok[0]
+            action = actions[state].get(typ)
             while True:
-                action = actions[state].get(typ)
                 if action is None:
                     raise _Slow(typ)
                 if action >= 0:
@@ -492,21 +513,18 @@ class _FastParser:
                     state_stack.append(state)
                     value_stack.append(tok)
                     break
-                if unit[~action]:
-                    # A run of unit reductions keeps the state below the top, so where it
-                    # ends depends only on (that state, the top state, the lookahead):
-                    # followed once, then looked up (the same states as one by one).
+                if single[~action]:
                     key = (state_stack[-2], state, typ)
-                    state = chains.get(key)
-                    if state is None:
-                        state = chains[key] = self._chain(*key)
+                    plan = plans.get(key) or self._plan(key)
+                    callbacks, state, action = plan
                     state_stack[-1] = state
+                    if callbacks:
+                        value = value_stack[-1]
+                        for callback in callbacks:
+                            value = callback([value])
+                        value_stack[-1] = value
                     continue
                 origin, size, callback, up = rules[~action]
-                if size == 1 and not up:  # one symbol replaced in place: no pop and push
-                    value_stack[-1] = callback(value_stack[-1:])
-                    state = state_stack[-1] = gotos[state_stack[-2]][origin]
-                    continue
                 if up:
                     value = value_stack[up]
                     del value_stack[-size:]
@@ -520,6 +538,7 @@ class _FastParser:
                 state = gotos[state_stack[-1]][origin]
                 state_stack.append(state)
                 value_stack.append(value)
+                action = actions[state].get(typ)
         end_state = self.end_states[start]
         while True:
             action = actions[state].get("$END")
