@@ -198,6 +198,71 @@ def _context_free(rx: str, flags: int) -> bool:
     return plain(P.parse(rx, flags).data)
 
 
+def _alphabet(rx: str, flags: int) -> frozenset | None:
+    """A superset of the characters a match of regexp ``rx`` can consume or look at
+    (lookarounds included), when they are all ASCII and known; None otherwise (a negated
+    class, ``.``, a category such as ``\\s``, an anchor, a back-reference: anything not
+    understood). From the parse tree of Python's ``re``, like :func:`_first_chars`."""
+    import re._constants as C
+    import re._parser as P
+
+    out: set = set()
+
+    def add(code: int, icase: bool) -> bool:
+        if code >= 128:
+            return False
+        ch = chr(code)
+        out.add(ch)
+        if icase:
+            out.update((ch.lower(), ch.upper()))
+        return True
+
+    def walk(seq, icase) -> bool:
+        for op, av in seq:
+            if op is C.LITERAL:
+                if not add(av, icase):
+                    return False
+            elif op is C.IN:
+                for iop, iav in av:
+                    if iop is C.LITERAL:
+                        if not add(iav, icase):
+                            return False
+                    elif iop is C.RANGE:
+                        if iav[1] >= 128:
+                            return False
+                        for code in range(iav[0], iav[1] + 1):
+                            add(code, icase)
+                    else:
+                        return False
+            elif op is C.SUBPATTERN:
+                _, add_flags, del_flags, sub = av
+                if not walk(sub, (icase or bool(add_flags & re.I)) and not del_flags & re.I):
+                    return False
+            elif op is C.BRANCH:
+                if not all(walk(alt, icase) for alt in av[1]):
+                    return False
+            elif op in (C.MAX_REPEAT, C.MIN_REPEAT, C.POSSESSIVE_REPEAT):
+                if not walk(av[2], icase):
+                    return False
+            elif op in (C.ASSERT, C.ASSERT_NOT):
+                if not walk(av[1], icase):
+                    return False
+            elif op is C.ATOMIC_GROUP:
+                if not walk(av, icase):
+                    return False
+            else:
+                return False
+        return True
+
+    tree = P.parse(rx, flags)
+    return frozenset(out) if walk(tree.data, bool(tree.state.flags & re.I)) else None
+
+
+def _class_escape(ch: str) -> str:
+    """``ch`` written inside a regexp character class."""
+    return "\\" + ch if ch in "\\]^-[" else ch if ch.isprintable() else f"\\x{ord(ch):02x}"
+
+
 class _FastParser:
     """Lark's LALR(1) table for ``grammar.lark`` run by a plain loop, with one lexer regexp.
 
@@ -335,7 +400,12 @@ class _FastParser:
         return f
 
     # ---- the lexer: one regexp over the whole text
-    _WORD = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
+    #: An identifier-shaped word: a letter, then letters, digits, ``_``, ``%`` and inner
+    #: ``.`` (NAME's run, ``[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*``, written so
+    #: that Python's re repeats single classes: the same words, tested)
+    _WORD = r"[A-Za-z][A-Za-z0-9_%]*(?:\.[A-Za-z0-9_%]+)*"
+    #: What ``str.split()`` splits an ASCII text at
+    _SPLIT_BLANKS = frozenset(" \t\n\r\x0b\x0c\x1c\x1d\x1e\x1f")
     _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
     _MAX_WORDS = 100_000
 
@@ -360,6 +430,7 @@ class _FastParser:
         and ``context_free`` are per terminal (:func:`fast_tables`: :func:`_first_chars`,
         :func:`_context_free`)."""
         self.findall = None
+        self.chunk_stop = None
         letters = self._LETTERS
         ignored, others = [], []
         ignore_firsts: set = set()
@@ -381,10 +452,18 @@ class _FastParser:
                               if self.terminals[i][0] not in self.ignore):
             return
         body = "".join(f"|(?:{self.terminals[i][1]})" for i in others)
-        rx = re.compile(f"((?:{'|'.join(ignored)})*)((?:{self._WORD}){body}|\\Z)", self.flags)
+        # a run of ignored text; one character class repeated (FRETish's blanks) is written
+        # as one repeat of the class, which Python's re runs much faster than a repeat of a
+        # repeat (the same runs match)
+        run = f"(?:{'|'.join(ignored)})*"
+        if len(ignored) == 1 and re.fullmatch(r"\[[^\]\[]*\]\+", ignored[0]):
+            run = ignored[0][:-1] + "*"
+        rx = re.compile(f"({run})((?:{self._WORD}){body}|\\Z)", self.flags)
         if rx.groups != 2:   # a terminal with a capturing group of its own
             return
         self.findall = rx.findall
+        self._build_chunk_lexer(ignored, [self._WORD] + [self.terminals[i][1] for i in others],
+                                [self._LETTERS] + [firsts[i] for i in others])
         self.words = dict(self.known_words)
         names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
         # NAME tried first among the terminals that start with a letter: a word it matches
@@ -393,6 +472,105 @@ class _FastParser:
                                               for f in firsts[:names[0]])
         self.name_rx = self.terminals[names[0]][1] if names else None
         self.name_match = None
+
+    def _build_chunk_lexer(self, ignored: list, alternatives: list, firsts: list) -> None:
+        """The lexer by blank-separated chunks (:meth:`_tokens_by_chunk`), when it gives the
+        whole-text lexer's tokens: the ignored terminals match exactly runs of characters
+        that ``str.split()`` splits at, and a token can hold such a character only if it
+        starts with one of :attr:`chunk_stop`'s characters (FRETish: a quoted string).
+
+        :attr:`chunk_stop` is then the ``search`` of a regexp of the characters that send
+        a text to the whole-text lexer: those starting a token that may hold a blank, and
+        the blanks of ``str.split()`` that are not ignored. An ASCII text without them is
+        cut by ``str.split()`` into chunks each of which is whole tokens, and since no
+        ``alternatives`` regexp (``findall``'s token part) can match a blank or look at one
+        (:func:`_alphabet`), each chunk alone is cut as the whole text cuts it there."""
+        self.chunks: dict = {}
+        self.chunk_stop = None
+        blanks = self._SPLIT_BLANKS
+        kept = frozenset()
+        for rx in ignored:
+            alpha = _alphabet(rx, self.flags)
+            if alpha is None or not alpha <= blanks:
+                return
+            kept |= alpha
+        if not all(any(re.fullmatch(rx, ch, self.flags) for rx in ignored) for ch in kept):
+            return
+        stop = set(blanks - kept)
+        for rx, first in zip(alternatives, firsts):
+            alpha = _alphabet(rx, self.flags)
+            if alpha is None or alpha & blanks:
+                if first is None:
+                    return
+                stop |= first
+        self.chunk_stop = re.compile("[" + "".join(sorted(map(_class_escape, stop))) + "]"
+                                     if stop else "(?!)").search
+
+    def _tokens_by_chunk(self, text: str) -> list:
+        """The tokens of ``text`` (as :meth:`_tokens`), for an ASCII text without the
+        characters of :attr:`chunk_stop` (:meth:`_build_chunk_lexer`): the chunks of
+        ``str.split()``, each found in the text after the previous one (only blanks lie
+        between) and cut into tokens once per chunk text (:attr:`chunks`: the terminal of a
+        one-token chunk, else its tokens with offsets from the chunk's start)."""
+        chunks = self.chunks
+        out = []
+        add = out.append
+        pos = 0
+        find = text.find
+        for chunk in text.split():
+            begin = find(chunk, pos)
+            pos = begin + len(chunk)
+            lexed = chunks.get(chunk) or self._lex_chunk(chunk)
+            if type(lexed) is str:
+                add((lexed, chunk, begin, pos))
+            else:
+                for typ, value, s, e in lexed:
+                    add((typ, value, begin + s, begin + e))
+        return out
+
+    def _lex_chunk(self, chunk: str):
+        """The tokens of one chunk (:meth:`_tokens_by_chunk`), by the whole-text lexer's
+        regexp; :class:`_Slow` where a character starts no terminal."""
+        words = self.words
+        out = []
+        pos = 0
+        for _, value in self.findall(chunk):
+            if not value:           # the \Z match
+                break
+            out.append((words.get(value) or self._word_type(value), value, pos,
+                        pos + len(value)))
+            pos += len(value)
+        if pos != len(chunk) or not out:
+            raise _Slow("no terminal")
+        if len(self.chunks) >= self._MAX_WORDS:
+            self.chunks.clear()
+        lexed = self.chunks[chunk] = out[0][0] if len(out) == 1 else tuple(out)
+        return lexed
+
+    def _tokens(self, text: str) -> list:
+        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
+        terminals dropped) by the whole-text lexer (:meth:`_build_scanner`); raises
+        :class:`_Slow` where a character starts no terminal."""
+        findall = self.findall
+        if findall is None:
+            return self._tokens_by_char(text)
+        words = self.words
+        found = findall(text)
+        # the \Z matches, last: the ignored characters at the end, then (after them)
+        # an empty match at the very end
+        end = 0
+        while found and not found[-1][1]:
+            end += len(found.pop()[0])
+        out = []
+        add = out.append
+        pos = 0
+        for ignored, value in found:
+            start = pos + len(ignored)
+            pos = start + len(value)
+            add((words.get(value) or self._word_type(value), value, start, pos))
+        if pos + end != len(text):
+            raise _Slow("no terminal")
+        return out
 
     def _word_type(self, word: str) -> str:
         """The terminal of token text ``word`` (:meth:`_build_scanner`): the exact lexer on
@@ -418,33 +596,11 @@ class _FastParser:
         typ = self.words[word] = m.lastgroup
         return typ
 
-    def _tokens(self, text: str) -> list:
-        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
-        terminals dropped); raises :class:`_Slow` where a character starts no terminal."""
-        findall = self.findall
-        if findall is None:
-            return self._tokens_by_char(text)
-        words = self.words
-        found = findall(text)
-        # the \Z matches, last: the ignored characters at the end, then (after them)
-        # an empty match at the very end
-        end = 0
-        while found and not found[-1][1]:
-            end += len(found.pop()[0])
-        out = []
-        add = out.append
-        pos = 0
-        for ignored, value in found:
-            start = pos + len(ignored)
-            pos = start + len(value)
-            add((words.get(value) or self._word_type(value), value, start, pos))
-        if pos + end != len(text):
-            raise _Slow("no terminal")
-        return out
-
     def _tokens_by_char(self, text: str) -> list:
-        """The tokens of ``text`` by the exact lexer, one regexp match per token or ignored
-        run (the fallback of :meth:`_tokens`)."""
+        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
+        terminals dropped) by the exact lexer, one regexp match per token or ignored run
+        (used when the whole-text lexer of :meth:`parse` cannot be); raises :class:`_Slow`
+        where a character starts no terminal."""
         ignore = self.ignore
         dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
         out = []
@@ -496,7 +652,11 @@ class _FastParser:
         else the complement ``~i`` of rule ``i`` to reduce by) and :attr:`gotos` (per
         state: rule origin -> next state). A run of one-symbol reductions is followed by
         one lookup in :attr:`plans` (:meth:`_plan`)."""
-        toks = self._tokens(text)
+        stop = self.chunk_stop
+        if stop is not None and text.isascii() and stop(text) is None:
+            toks = self._tokens_by_chunk(text)
+        else:
+            toks = self._tokens(text)
         actions, gotos, rules = self.actions, self.gotos, self.rules
         single, plans = self.single, self.plans
         state = self.start_states[start]
@@ -539,6 +699,11 @@ class _FastParser:
                 state_stack.append(state)
                 value_stack.append(value)
                 action = actions[state].get(typ)
+        return self._finish(state, state_stack, value_stack, start)
+
+    def _finish(self, state: int, state_stack: list, value_stack: list, start: str):
+        """The reductions on the end of the text, up to the start symbol's value."""
+        actions, gotos, rules = self.actions, self.gotos, self.rules
         end_state = self.end_states[start]
         while True:
             action = actions[state].get("$END")
