@@ -406,3 +406,63 @@ def test_lexer_by_character_equals_the_whole_text_lexer(monkeypatch):
     monkeypatch.setattr(fast, "findall", None)
     assert [_fast(t) for t in texts] == whole
     assert sum(x is not None for x in whole) > len(texts) // 3
+
+
+_NAMES_RUN = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.text(alphabet="aZ09_%. x-", min_size=1, max_size=14))
+def test_word_regexp_is_names_run(text):
+    """The whole-text lexer's word regexp (single-class repeats) takes, from every
+    position, the same word as NAME's run in grammar.lark (a letter, then letters, digits,
+    ``_``, ``%`` and inner dots)."""
+    import re
+    fast = P._get_fast()
+    for i in range(len(text)):
+        a = re.compile(fast._WORD).match(text, i)
+        b = re.compile(_NAMES_RUN).match(text, i)
+        assert (a and a.group()) == (b and b.group()), (text, i)
+
+
+# pieces of text around the chunk lexer's conditions: words and operators written against
+# each other, quoted strings holding blanks and '#', blanks str.split() cuts at but the
+# grammar does not ignore, a character no terminal starts with, a non-ASCII letter
+_PIECES = ["p", "x1.y", "shall", "the", "satisfy", "sw", "f(", ")", ",", "3", "-2.5e3", ">=",
+           "<->", "!", "&", ".", "a.", '"a b"', '"q #1"', '"', "\x0b", "\x1c", "@", "é", "if",
+           "then", "upon", "in", "mode", "within", "ticks"]
+_BLANKS = ["", " ", "  ", "\t", "\n ", "\r\n", "\f"]
+
+
+@settings(max_examples=600, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(_BLANKS), st.sampled_from(_PIECES)), max_size=14),
+       st.sampled_from(_BLANKS))
+def test_chunk_lexer_equals_the_whole_text_lexer(pairs, tail):
+    """Wherever parse() takes the chunk lexer (an ASCII text without the characters of
+    ``chunk_stop``), it gives the tokens of the whole-text lexer, or both refuse the text;
+    texts the chunk lexer must not take (a quoted string with a blank inside, a vertical
+    tab) are generated, and are sent to the whole-text lexer."""
+    fast = P._get_fast()
+    text = "".join(b + p for b, p in pairs) + tail
+
+    def tokens(lex):
+        try:
+            return lex(text)
+        except F._Slow:
+            return None
+    if text.isascii() and fast.chunk_stop(text) is None:
+        assert tokens(fast._tokens_by_chunk) == tokens(fast._tokens), repr(text)
+    else:
+        assert '"' in text or not text.isascii() or any(c in text for c in "\x0b\x1c")
+
+
+def test_chunk_lexer_sends_quoted_blanks_and_odd_blanks_away():
+    """The texts that would be cut wrongly by blanks take the whole-text lexer: a quoted
+    name holding a blank, a vertical tab (a blank for str.split(), not for FRETish)."""
+    fast = P._get_fast()
+    for text in ['the "my sw" shall satisfy p', "the sw shall satisfy p\x0b& q"]:
+        assert fast.chunk_stop(text) is not None
+    assert _public('the "my sw" shall satisfy p')[1] == _lark('the "my sw" shall satisfy p')[1]
+    assert _public("the sw shall satisfy p\x0b& q")[0] == "error"
+    assert fast.chunk_stop("in m upon x > 3.5e2, the sw shall within 3 ticks satisfy "
+                           "f(a, -b) & !c.") is None
