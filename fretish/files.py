@@ -173,8 +173,9 @@ class _FretReader:
 
     def read(self) -> list[RequirementEntry]:
         for ln, raw in enumerate(self.lines, start=1):
-            content = _strip_comment(raw.rstrip("\r"))
-            if not content.strip():
+            # (_strip_comment's result without its call on a line without "#")
+            content = _strip_comment(raw.rstrip("\r")) if "#" in raw else raw.rstrip()
+            if not content:
                 continue
             if content[0] in " \t":                           # indented: belongs above
                 self._indented(ln, content)
@@ -274,7 +275,9 @@ class _FretReader:
                 raise FretishFileError(f"bad tick_period for {p.id}: {e}", source=source,
                                        line=aln, column=acol,
                                        text_line=lines[aln - 1].rstrip("\r")) from None
-        if p.pieces:
+        if len(p.pieces) == 1:                              # a sentence on one line
+            line0, col0, text = p.pieces[0]
+        elif p.pieces:
             line0, col0, _ = p.pieces[0]
             chunks, prev = [], line0
             for ln, _col, piece in p.pieces:

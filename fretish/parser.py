@@ -111,6 +111,9 @@ _TYPE, _VALUE, _START, _END = 0, 1, 2, 3
 _new_span = functools.partial(tuple.__new__, A.Span)
 
 
+_new = object.__new__
+
+
 def _mk(s: int, e: int) -> A.Span:
     """The span of text offsets ``s`` to ``e`` (0-based, end excluded) in file coordinates
     (:class:`_Ctx`): 1-based lines and columns as Lark counts them (a line starts after
@@ -272,13 +275,33 @@ class _Builder:
     nodes, helper objects and the named keyword tokens)."""
 
     # ---- expressions
+    # number and var, the most frequent nodes, are made as A.NumLit / A.Var and _mk would
+    # make them, written out (no Python-level __init__ or _mk call)
     def number(self, c):
         t = c[0]
-        return A.NumLit(t[1], _mk(t[2], t[3]))
+        node = _new(A.NumLit)
+        d = node.__dict__
+        d["text"] = t[1]
+        flat = _ctx.flat
+        if flat is None:
+            d["span"] = _mk(t[2], t[3])
+        else:
+            line, col = flat
+            d["span"] = _new_span((line, t[2] + col, line, t[3] + col, t[2], t[3]))
+        return node
 
     def var(self, c):
         t = c[0]
-        return A.Var(t[1] if t[0] == "NAME" else _name_of(t), _mk(t[2], t[3]))
+        node = _new(A.Var)
+        d = node.__dict__
+        d["name"] = t[1] if t[0] == "NAME" else _name_of(t)
+        flat = _ctx.flat
+        if flat is None:
+            d["span"] = _mk(t[2], t[3])
+        else:
+            line, col = flat
+            d["span"] = _new_span((line, t[2] + col, line, t[3] + col, t[2], t[3]))
+        return node
 
     def boolean(self, c):
         t = c[0]

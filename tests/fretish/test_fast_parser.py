@@ -466,3 +466,21 @@ def test_chunk_lexer_sends_quoted_blanks_and_odd_blanks_away():
     assert _public("the sw shall satisfy p\x0b& q")[0] == "error"
     assert fast.chunk_stop("in m upon x > 3.5e2, the sw shall within 3 ticks satisfy "
                            "f(a, -b) & !c.") is None
+
+
+def test_nodes_written_out_equal_their_classes():
+    """The builder writes the most frequent nodes (A.Var, A.NumLit) out instead of calling
+    their classes: each one's fields, in order, are those its class's __init__ stores."""
+    seen = set()
+    for text in CORPUS[:200] + ["the sw shall satisfy x > -3.5 & y", "the sw shall satisfy\n  a + 1"]:
+        try:
+            req = P.parse(text)
+        except FretishError:
+            continue
+        for e in (req.response, req.condition.expr):
+            for node in A.walk(e) if e is not None else ():
+                if type(node) in (A.Var, A.NumLit):
+                    seen.add(type(node))
+                    remade = type(node)(**node.__dict__)
+                    assert list(node.__dict__.items()) == list(remade.__dict__.items())
+    assert seen == {A.Var, A.NumLit}
