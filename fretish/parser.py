@@ -262,6 +262,56 @@ def _operand(c: list, i: int, min_prec: int):
     return A.Unary(x.op, operand, _join(x, operand)), i
 
 
+def _shunt(c: list):
+    """:func:`_climb`'s tree for chain ``c`` built without recursion (operator precedence by
+    a stack of pending operators: a shunting-yard), when it is a plain precedence chain:
+    at most one comparison, and every prefix operand written without parentheses ("!p",
+    "-x") is followed by no operator it would take (precedence >= 6 for "!", >= 10 for
+    "-") and, for "!", stands where a negation may (after no operator of precedence >= 6
+    and no "^"): :func:`_operand` then returns a node equal to it, spans included.
+    None otherwise (:func:`_climb` decides, errors included)."""
+    text = _ctx.text
+    n = len(c)
+    min_prec = 1
+    comparisons = 0
+    for i in range(0, n, 2):
+        x = c[i]
+        if i + 1 < n:
+            prec, right_assoc = _PREC[c[i + 1][0]]
+        else:
+            prec, right_assoc = 0, False
+        if type(x) is A.Unary and text[x.span[4]] != "(":
+            if x.op == "!":
+                if min_prec > _NOT_OPERAND or prec >= _NOT_OPERAND:
+                    return None
+            elif prec >= _NEG_OPERAND:
+                return None
+        if prec == _CMP:
+            comparisons += 1
+            if comparisons > 1:
+                return None
+        min_prec = prec if right_assoc else prec + 1
+    out = [c[0]]
+    pending: list = []         # (precedence, operator token), precedences increasing
+    for i in range(1, n, 2):
+        op = c[i]
+        prec, right_assoc = _PREC[op[0]]
+        while pending and (pending[-1][0] > prec or (pending[-1][0] == prec
+                                                     and not right_assoc)):
+            right = out.pop()
+            left = out[-1]
+            out[-1] = A.Binary(_BINOPS[pending.pop()[1][0]], left, right,
+                               _mk(left.span[4], right.span[5]))
+        pending.append((prec, op))
+        out.append(c[i + 1])
+    while pending:
+        right = out.pop()
+        left = out[-1]
+        out[-1] = A.Binary(_BINOPS[pending.pop()[1][0]], left, right,
+                           _mk(left.span[4], right.span[5]))
+    return out[0]
+
+
 def _not_here(x) -> "_Fail":
     bang = _ctx.text[x.span.start]
     return _Fail(x, f"unexpected '{bang}' in an expression: a negation cannot be an operand "
@@ -373,7 +423,9 @@ class _Builder:
                         left = A.Binary(_BINOPS[c[i][0]], left, right,
                                         _mk(start, right.span[5]))
                     return left
-        node, _ = _climb(c, 0, 1)
+        node = _shunt(c)
+        if node is None:
+            node, _ = _climb(c, 0, 1)
         return node
 
     def if_then(self, c):

@@ -368,7 +368,8 @@ _OPERATORS = sorted(P._PREC)
                           st.sampled_from(_OPERATORS)), min_size=1, max_size=7),
        st.sampled_from(["v", "!", "-"]))
 def test_climb_shortcuts_equal_precedence_climbing(pairs, last):
-    """The builder's ``climb`` (one-operator chains and left folds built directly) gives
+    """The builder's ``climb`` (one-operator chains and left folds built directly, other
+    plain precedence chains by ``_shunt``) gives
     what the general precedence climbing (``_climb``) gives, spans and errors included."""
     def operand(kind, at):
         var = A.Var(f"v{at}", P._mk(at, at + 1))
