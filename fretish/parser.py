@@ -76,9 +76,9 @@ _DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
 # --------------------------------------------------------------------------- positions
 class _Ctx(threading.local):
     """Per-parse state read by the AST builder (the Lark parser is shared); set by
-    :meth:`set`. ``line``/``col``: the file line of the text's line 1 and the file column
-    of its first character; ``starts``: the offsets where the text's lines 2, 3 ... begin
-    (None for a text of one line, where a span is plain arithmetic)."""
+    :meth:`set`. ``flat``: (file line, file column) of the text's first character when the
+    text has one line (a span is then plain arithmetic), else None and ``line``/``col``
+    are those and ``starts`` the offsets where the text's lines 2, 3 ... begin."""
     text = ""
     line = 1
     col = 1
@@ -88,11 +88,12 @@ class _Ctx(threading.local):
     def set(self, text: str, dl: int, dc: int) -> None:
         """Parse ``text``, whose first character is at file line ``dl + 1``, column
         ``dc + 1``."""
-        self.text, self.line, self.col = text, dl + 1, dc + 1
+        self.text = text
         if "\n" in text:
+            self.line, self.col = dl + 1, dc + 1
             self.starts = [m.end() for m in _NEWLINE.finditer(text)]
             self.flat = None
-        else:
+        else:                  # (line and col are read only for a text of several lines)
             self.flat = (dl + 1, dc + 1)
 
 
