@@ -74,8 +74,11 @@ _DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
 
 
 # --------------------------------------------------------------------------- positions
-class _Ctx(threading.local):
-    """Per-parse state read by the AST builder (the Lark parser is shared); set by
+class _Ctx:
+    """Per-parse state read by the AST builder (one for all parses: :func:`_run` holds
+    :data:`_parsing` while it is set and read, so parses in several threads take turns
+    instead of mixing their states; a plain object's attributes are read several times
+    faster than a ``threading.local``'s, and the builder reads them for every node); set by
     :meth:`set`. ``flat``: (file line, file column) of the text's first character when the
     text has one line (a span is then plain arithmetic), else None and ``line``/``col``
     are those and ``starts`` the offsets where the text's lines 2, 3 ... begin."""
@@ -99,6 +102,8 @@ class _Ctx(threading.local):
 
 _NEWLINE = re.compile("\n")
 _ctx = _Ctx()
+#: Held by :func:`_run` while a text is parsed (fast path or Lark): :data:`_ctx` is shared.
+_parsing = threading.Lock()
 
 
 # Tokens, of the fast path and (converted, :class:`_LarkBuilder`) of Lark's: plain tuples
@@ -776,21 +781,22 @@ def _get_fast():
 def _run(start: str, text: str, source: str, line: int, column: int):
     if not isinstance(text, str):
         raise TypeError(f"parse() wants a str, got {type(text).__name__}")
-    fast = _get_fast()
-    if fast:
-        _ctx.set(text, line - 1, column - 1)
-        try:
-            result = fast.parse(text, start)
-            if start == "start":
-                check_requirement(result)
-            else:
-                check_expression(result)
-            return result
-        except Exception:  # noqa: BLE001 - Lark decides, with its exact error
-            pass
-        finally:
-            _ctx.text = ""
-    return _run_lark(start, text, source, line, column)
+    fast = _fast if _fast is not None else _get_fast()
+    with _parsing:
+        if fast:
+            _ctx.set(text, line - 1, column - 1)
+            try:
+                result = fast.parse(text, start)
+                if start == "start":
+                    check_requirement(result)
+                else:
+                    check_expression(result)
+                return result
+            except Exception:  # noqa: BLE001 - Lark decides, with its exact error
+                pass
+            finally:
+                _ctx.text = ""
+        return _run_lark(start, text, source, line, column)
 
 
 def _run_lark(start: str, text: str, source: str, line: int, column: int):

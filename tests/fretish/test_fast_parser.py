@@ -485,3 +485,30 @@ def test_nodes_written_out_equal_their_classes():
                     remade = type(node)(**node.__dict__)
                     assert list(node.__dict__.items()) == list(remade.__dict__.items())
     assert seen == {A.Var, A.NumLit}
+
+
+def test_parses_in_threads_equal_parses_alone():
+    """Parses running in several threads at once (the builder's context is one object,
+    held by a lock during each parse) give each text its own AST, spans and errors."""
+    import threading
+    texts = CORPUS[:120] + ["the sw shall satisfy\n   x > 1", "in m the sw shall satisfy (p"]
+    alone = [_public(t, line=i + 1, column=3) for i, t in enumerate(texts)]
+    got: dict = {}
+
+    def work(k):
+        for _ in range(3):
+            for i in range(k, len(texts), 4):
+                got[i] = _public(texts[i], line=i + 1, column=3)
+                assert got[i] == alone[i], texts[i]
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    import sys
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)   # switch threads as often as possible
+    try:
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert [got[i] for i in range(len(texts))] == alone
