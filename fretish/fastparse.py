@@ -201,20 +201,18 @@ def _context_free(rx: str, flags: int) -> bool:
 def _alphabet(rx: str, flags: int) -> frozenset | None:
     """A superset of the characters a match of regexp ``rx`` can consume or look at
     (lookarounds included), when they are all ASCII and known; None otherwise (a negated
-    class, ``.``, a category such as ``\\s``, an anchor, a back-reference: anything not
-    understood). From the parse tree of Python's ``re``, like :func:`_first_chars`."""
+    class, ``.``, a category such as ``\\s``, a letter matched in any case, an anchor, a
+    back-reference: anything not understood). From the parse tree of Python's ``re``, like :func:`_first_chars`."""
     import re._constants as C
     import re._parser as P
 
     out: set = set()
 
     def add(code: int, icase: bool) -> bool:
-        if code >= 128:
-            return False
         ch = chr(code)
+        if code >= 128 or (icase and ch.isalpha()):   # (a letter's other cases: not only
+            return False                              # ASCII ones, e.g. the Kelvin sign)
         out.add(ch)
-        if icase:
-            out.update((ch.lower(), ch.upper()))
         return True
 
     def walk(seq, icase) -> bool:
@@ -404,8 +402,6 @@ class _FastParser:
     #: ``.`` (NAME's run, ``[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*``, written so
     #: that Python's re repeats single classes: the same words, tested)
     _WORD = r"[A-Za-z][A-Za-z0-9_%]*(?:\.[A-Za-z0-9_%]+)*"
-    #: What ``str.split()`` splits an ASCII text at
-    _SPLIT_BLANKS = frozenset(" \t\n\r\x0b\x0c\x1c\x1d\x1e\x1f")
     _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
     _MAX_WORDS = 100_000
 
@@ -474,32 +470,32 @@ class _FastParser:
         self.name_match = None
 
     def _build_chunk_lexer(self, ignored: list, alternatives: list, firsts: list) -> None:
-        """The lexer by blank-separated chunks (:meth:`_tokens_by_chunk`), when it gives the
-        whole-text lexer's tokens: the ignored terminals match exactly runs of characters
-        that ``str.split()`` splits at, and a token can hold such a character only if it
-        starts with one of :attr:`chunk_stop`'s characters (FRETish: a quoted string).
+        """The lexer by space-separated chunks (:meth:`_tokens_by_chunk`), when it gives the
+        whole-text lexer's tokens: a run of spaces is ignored text, and only a token that
+        starts with one of :attr:`chunk_stop`'s characters can hold a space (FRETish: a
+        quoted string).
 
         :attr:`chunk_stop` is then the ``search`` of a regexp of the characters that send
-        a text to the whole-text lexer: those starting a token that may hold a blank, and
-        the blanks of ``str.split()`` that are not ignored. An ASCII text without them is
-        cut by ``str.split()`` into chunks each of which is whole tokens, and since no
-        ``alternatives`` regexp (``findall``'s token part) can match a blank or look at one
-        (:func:`_alphabet`), each chunk alone is cut as the whole text cuts it there."""
+        a text to the whole-text lexer: the ignored characters other than the space, and
+        those starting a token that may hold a space. In a text without them, the ignored
+        text is runs of spaces, so ``str.split(" ")`` cuts it into chunks each of which is
+        whole tokens (or empty, between two spaces); and since no ``alternatives`` regexp
+        (``findall``'s token part) can match a space or look at one (:func:`_alphabet`),
+        each chunk alone is cut as the whole text cuts it there."""
         self.chunks: dict = {}
         self.chunk_stop = None
-        blanks = self._SPLIT_BLANKS
-        kept = frozenset()
+        kept: frozenset = frozenset()
         for rx in ignored:
             alpha = _alphabet(rx, self.flags)
-            if alpha is None or not alpha <= blanks:
+            if alpha is None:
                 return
             kept |= alpha
-        if not all(any(re.fullmatch(rx, ch, self.flags) for rx in ignored) for ch in kept):
+        if not any(re.fullmatch(rx, " ", self.flags) for rx in ignored):
             return
-        stop = set(blanks - kept)
+        stop = set(kept - {" "})
         for rx, first in zip(alternatives, firsts):
             alpha = _alphabet(rx, self.flags)
-            if alpha is None or alpha & blanks:
+            if alpha is None or " " in alpha:
                 if first is None:
                     return
                 stop |= first
@@ -507,25 +503,27 @@ class _FastParser:
                                      if stop else "(?!)").search
 
     def _tokens_by_chunk(self, text: str) -> list:
-        """The tokens of ``text`` (as :meth:`_tokens`), for an ASCII text without the
-        characters of :attr:`chunk_stop` (:meth:`_build_chunk_lexer`): the chunks of
-        ``str.split()``, each found in the text after the previous one (only blanks lie
-        between) and cut into tokens once per chunk text (:attr:`chunks`: the terminal of a
-        one-token chunk, else its tokens with offsets from the chunk's start)."""
+        """The tokens of ``text`` (as :meth:`_tokens`), for a text without the characters
+        of :attr:`chunk_stop` (:meth:`_build_chunk_lexer`): the chunks of ``str.split(" ")``
+        at offsets counted from their lengths, each chunk text cut into tokens once
+        (:attr:`chunks`: the terminal of a one-token chunk, else its tokens with offsets
+        from the chunk's start)."""
         chunks = self.chunks
         out = []
         add = out.append
-        pos = 0
-        find = text.find
-        for chunk in text.split():
-            begin = find(chunk, pos)
-            pos = begin + len(chunk)
-            lexed = chunks.get(chunk) or self._lex_chunk(chunk)
-            if type(lexed) is str:
-                add((lexed, chunk, begin, pos))
+        begin = 0
+        for chunk in text.split(" "):
+            if chunk:
+                end = begin + len(chunk)
+                lexed = chunks.get(chunk) or self._lex_chunk(chunk)
+                if type(lexed) is str:
+                    add((lexed, chunk, begin, end))
+                else:
+                    for typ, value, s, e in lexed:
+                        add((typ, value, begin + s, begin + e))
+                begin = end + 1
             else:
-                for typ, value, s, e in lexed:
-                    add((typ, value, begin + s, begin + e))
+                begin += 1
         return out
 
     def _lex_chunk(self, chunk: str):
@@ -653,7 +651,7 @@ class _FastParser:
         state: rule origin -> next state). A run of one-symbol reductions is followed by
         one lookup in :attr:`plans` (:meth:`_plan`)."""
         stop = self.chunk_stop
-        if stop is not None and text.isascii() and stop(text) is None:
+        if stop is not None and stop(text) is None:
             toks = self._tokens_by_chunk(text)
         else:
             toks = self._tokens(text)
