@@ -286,12 +286,14 @@ class _FretReader:
             text = "".join(chunks)
         else:
             line0, col0, text = p.id_line, len(lines[p.id_line - 1].rstrip()) + 2, ""
+        attrs = p.attrs
+        # the fields in order (positional: half the keywords' cost; the order is
+        # checked by tests/fretish/test_files.py)
         entry = RequirementEntry(
-            id=p.id, text=text, source=source, line=line0, column=col0,
-            rationale=p.attrs["rationale"][0] if "rationale" in p.attrs else None,
-            parent=(p.attrs["parent"][0] or None) if "parent" in p.attrs else None,
-            tick_period=period, inputs=self.io.get("inputs", ()),
-            outputs=self.io.get("outputs", ()))
+            p.id, text, source, line0, col0,
+            attrs["rationale"][0] if "rationale" in attrs else None,
+            (attrs["parent"][0] or None) if "parent" in attrs else None,
+            period, None, None, {}, self.io.get("inputs", ()), self.io.get("outputs", ()))
         try:
             entry.requirement = parse(text, source=source, line=line0, column=col0)
         except FretishSyntaxError as e:
