@@ -166,13 +166,6 @@ class _Subject:
         self.name, self.span = name, span
 
 
-class _Response:
-    __slots__ = ("expr", "span")
-
-    def __init__(self, expr, span: A.Span):
-        self.expr, self.span = expr, span
-
-
 class _ExplicitMode:
     """``mode M`` / ``M mode``: the mode variable and the phrase's span."""
     __slots__ = ("var", "span")
@@ -569,20 +562,23 @@ class _Builder:
         return A.Timing(kind, None, last, phrase, _join(head, last))
 
     def response(self, c):
-        return _Response(c[1], _mk(c[0][2], c[1].span[5]))
+        # (expression, span of "satisfy R"): always the sentence's last part, so a plain
+        # pair (sentence reads it by position)
+        return (c[1], _mk(c[0][2], c[1].span[5]))
 
     # ---- sentences
     def sentence(self, c):
         # the fields by the class of each part (an absent part: the null one, which is
         # never modified, so one is shared as Requirement's own defaults are)
-        parts = [_NULL_SCOPE, _NULL_CONDITION, None, None, _NULL_TIMING, None]
+        parts = [_NULL_SCOPE, _NULL_CONDITION, None, None, _NULL_TIMING]
         for x in c:
             i = _SENTENCE_PARTS.get(type(x))
             if i is not None:
                 parts[i] = x
-        scope, condition, subject, probability, timing, response = parts
+        scope, condition, subject, probability, timing = parts
+        response, response_span = c[-1]
         return A.Requirement(_ctx.text, scope, condition, subject.name, probability, timing,
-                             response.expr, False, subject.span, response.span)
+                             response, False, subject.span, response_span)
 
     def freeform(self, c):
         return A.Requirement(_ctx.text, freeform=True)
@@ -613,8 +609,7 @@ for _name, _f in list(vars(_Builder).items()):
 del _name, _f
 
 
-_SENTENCE_PARTS = {A.Scope: 0, A.Condition: 1, _Subject: 2, A.Probability: 3, A.Timing: 4,
-                   _Response: 5}
+_SENTENCE_PARTS = {A.Scope: 0, A.Condition: 1, _Subject: 2, A.Probability: 3, A.Timing: 4}
 _NULL_SCOPE, _NULL_CONDITION, _NULL_TIMING = A.Scope(), A.Condition(), A.Timing()
 
 
