@@ -269,7 +269,9 @@ class _FastParser:
     order Lark's lexer tries them, gives the token the contextual lexer would give in every
     state where that token can be shifted: the first alternative that matches is the same
     in the state's subset and in the whole set whenever it belongs to the subset. The text
-    is cut into tokens by one ``findall`` (:meth:`_build_scanner`); a token's terminal is
+    is cut into tokens by one ``findall`` (:meth:`_build_scanner`), or, when it has no
+    blank but spaces and no quote, chunk by chunk at its spaces, each distinct chunk text
+    cut by that ``findall`` once (:meth:`_build_chunk_lexer`); a token's terminal is
     that regexp's on the token alone, split by the token's first character (only the
     terminals that can start with it, :func:`_first_chars`, a superset, in the same order,
     so the first match is the same; each part compiled on first use) and kept by text.
@@ -277,7 +279,8 @@ class _FastParser:
     Tokens are tuples ``(terminal, text, start, end)`` (0-based offsets). Each is fed to
     Lark's table and each reduction calls the builder's callback for the rule (the
     :class:`fretish.parser._Builder` given), wrapped as Lark wraps it (:func:`fast_tables`),
-    so a sentence parsed here gets the AST Lark gives. Anything else - a character no
+    so a sentence parsed here gets the AST Lark gives (a run of one-symbol reductions is
+    one lookup, :meth:`_plan`). Anything else - a character no
     terminal matches, a token the state does not accept, an error raised by the builder -
     raises :class:`_Slow`, and the sentence is parsed again by Lark for its exact error
     (tests/fretish/test_fast_parser.py compares the two on every test sentence)."""

@@ -4,7 +4,7 @@ The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header st
 phrasings and the expression precedence. The AST builder is applied while parsing (no
 intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
 cache, is run by :class:`fretish.fastparse._FastParser` (a plain loop over the tokens of one
-lexer regexp; a run of unit reductions, a ``?rule`` passing its one child up, is one
+lexer regexp, applied chunk by chunk between spaces; a run of one-symbol reductions is one
 dictionary lookup); a sentence it cannot parse goes to Lark itself, which is imported only
 then and reports the error (``fretc FILE --emit ltl`` on valid sentences does not import
 Lark). Both call the same AST builder (:class:`_Builder`) on tokens as plain tuples.
