@@ -5,9 +5,9 @@ failure never stops the others."""
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 
 from fretish.errors import FretishError, render_diagnostic
+from fretish.records import FACTORY, Record
 
 from .instantiate import formula_text, instantiate
 from .ir import gc_paused
@@ -22,19 +22,32 @@ FORMALIZED_KEYS = ("id", "text", "source", "line", "parent", "rationale", "key",
                    "ticks", "warnings", "pt_causal")
 
 
-@dataclass
-class Compiled:
+class Compiled(Record):
     """One requirement after compilation.
 
     ``entry`` is the :class:`fretish.files.RequirementEntry`; ``formalization`` is set when
     it formalized, ``error`` (a :class:`FretishError`) otherwise; free-form requirements
     have neither.
+
+    Written out as the ``@dataclass`` it was (``_cache`` a new dict by default, compared
+    but not shown by ``repr``; unhashable): generating it cost start-up time
+    (:mod:`fretish.records`).
     """
 
     entry: object
     formalization: Formalization | None = None
     error: FretishError | None = None
-    _cache: dict = field(default_factory=dict, repr=False)
+    _cache: dict
+
+    __match_args__ = _COMPARED = ("entry", "formalization", "error", "_cache")
+    _SHOWN = ("entry", "formalization", "error")
+
+    def __init__(self, entry: object, formalization: Formalization | None = None,
+                 error: FretishError | None = None, _cache: dict = FACTORY) -> None:
+        self.entry = entry
+        self.formalization = formalization
+        self.error = error
+        self._cache = {} if _cache is FACTORY else _cache
 
     # read-only delegations, same shape as compiler.codegen.MonitorSource's (kept: one property per
     # field)

@@ -47,7 +47,6 @@ import os
 import re
 import sys
 import threading
-from fractions import Fraction
 
 from . import ast as A
 from . import cache
@@ -454,6 +453,8 @@ class _Builder:
         if op[0] == "NE":
             raise _Fail(op, "a probability bound uses <, <=, >, >= or =, not '!='",
                         "write e.g. 'with probability >= 0.99'")
+        from fractions import Fraction  # lazy: probabilities are rare (start-up, issue 9)
+
         v = Fraction(value)
         if not 0 <= v <= 1 or (op[0] == "GT" and v == 1) or (op[0] == "LT" and v == 0):
             what = (f"probability {value} is outside [0, 1]" if not 0 <= v <= 1 else
