@@ -32,7 +32,6 @@ from fretish.units import format_period_ms
 
 from . import ir
 from .expressions import Expander, SemanticsError, mentions_time
-from .ifthen import regrouping_warnings
 from .ir import FALSE, FTP, LAST, Node, S, V, X, Y, and_, and_all, implies, not_, or_
 from .scope_timing import (fn_right, ft_right, ft_scope, ft_timing, pt_endpoints, pt_scope,
                            pt_timing)
@@ -173,6 +172,8 @@ def _shape(req: A.Requirement, tick_period: Fraction | None):
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     warnings: list[str] = []
     if "then" in req.text.lower():
+        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up, issue 9)
+
         warnings.extend(regrouping_warnings(req))
     n = None
     if timing in A.DURATION_TIMINGS:

@@ -128,8 +128,10 @@ def parse_tick_period(text: str) -> Fraction:
 
 # --------------------------------------------------------------------------- .fret files
 _ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
-_ATTRIBUTE = re.compile(r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z")
-_DIRECTIVE = re.compile(r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z")
+# Patterns of rare lines, compiled on first use by re's own cache (re.match(pattern, ...)):
+# a file without them does not pay for their compilation (start-up, issue 9)
+_ATTRIBUTE = r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z"
+_DIRECTIVE = r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z"
 
 
 def _strip_comment(line: str) -> str:
@@ -215,7 +217,7 @@ class _FretReader:
             self.fail("indented line outside a requirement", ln,
                       len(content) - len(content.lstrip()) + 1,
                       "start a requirement with 'ID: sentence' at column 1")
-        m = _ATTRIBUTE.match(content)
+        m = re.match(_ATTRIBUTE, content)
         if m:
             key, value = m.group(1), m.group(2).strip()
             if key in current.attrs:
@@ -237,7 +239,7 @@ class _FretReader:
             current.pieces.append((ln, col, content[col - 1:]))
 
     def _directive(self, ln: int, content: str) -> None:
-        m = _DIRECTIVE.match(content)
+        m = re.match(_DIRECTIVE, content)
         if m and m.group(1) in ("inputs", "outputs"):
             self._io_directive(ln, content, m)
             return
@@ -325,7 +327,7 @@ class _FretReader:
 
 
 # --------------------------------------------------------------------------- JSON exports
-_FULLTEXT = re.compile(r'"fulltext"\s*:\s*"')
+_FULLTEXT = r'"fulltext"\s*:\s*"'  # compiled on first use (re's cache), as _ATTRIBUTE
 _KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
 
 
@@ -353,7 +355,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
     else:
         raise FretishFileError("expected a list of FRET requirements or an object with a "
                                "\"requirements\" list", source=source)
-    starts = [m.end() for m in _FULLTEXT.finditer(raw)]
+    starts = [m.end() for m in re.finditer(_FULLTEXT, raw)]
     exact_positions = len(starts) == len(reqs)
     entries = []
     seen: dict[tuple[object, str], int] = {}
