@@ -5,6 +5,7 @@ failure never stops the others."""
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass, field
 
 from fretish.errors import FretishError, render_diagnostic
 from fretish.records import FACTORY, Record
@@ -22,6 +23,7 @@ FORMALIZED_KEYS = ("id", "text", "source", "line", "parent", "rationale", "key",
                    "ticks", "warnings", "pt_causal")
 
 
+@dataclass(init=False, repr=False, eq=False)
 class Compiled(Record):
     """One requirement after compilation.
 
@@ -29,15 +31,15 @@ class Compiled(Record):
     it formalized, ``error`` (a :class:`FretishError`) otherwise; free-form requirements
     have neither.
 
-    Written out as the ``@dataclass`` it was (``_cache`` a new dict by default, compared
-    but not shown by ``repr``; unhashable): generating it cost start-up time
-    (:mod:`fretish.records`).
+    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
+    ``==`` are written out (``_cache`` a new dict by default, compared but not shown by
+    ``repr``; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     entry: object
     formalization: Formalization | None = None
     error: FretishError | None = None
-    _cache: dict
+    _cache: dict = field(default_factory=dict, repr=False)
 
     __match_args__ = _COMPARED = ("entry", "formalization", "error", "_cache")
     _SHOWN = ("entry", "formalization", "error")

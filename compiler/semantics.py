@@ -25,6 +25,8 @@ rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then 
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
 from fretish.records import FACTORY, Record
@@ -37,6 +39,7 @@ from .scope_timing import (fn_right, ft_right, ft_scope, ft_timing, pt_endpoints
                            pt_timing)
 
 
+@dataclass(init=False, repr=False, eq=False)
 class Formalization(Record):
     """The formulas of one requirement.
 
@@ -46,9 +49,9 @@ class Formalization(Record):
     ``pt_causal`` is False when the pt formula refers to a future-time function (FRET leaves
     those unexpanded in pt), so pt cannot be computed online tick by tick.
 
-    Written out as the ``@dataclass`` it was (``warnings`` a new list by default; ``repr``
-    and ``==`` over every field; unhashable): generating it cost start-up time
-    (:mod:`fretish.records`).
+    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
+    ``==`` are written out (``warnings`` a new list by default; ``repr`` and ``==`` over
+    every field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     key: str
@@ -56,7 +59,7 @@ class Formalization(Record):
     ft_inf: Node
     pt: Node
     variables: list[str]
-    warnings: list[str]
+    warnings: list[str] = field(default_factory=list)
     ticks: int | None = None
     pt_causal: bool = True
 

@@ -50,6 +50,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable
+from dataclasses import dataclass, field
 
 from .ast import Requirement
 from .errors import FretishError, FretishFileError, FretishSyntaxError
@@ -62,6 +63,7 @@ __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 PathLike = str | os.PathLike
 
 
+@dataclass(init=False, repr=False, eq=False)
 class RequirementEntry(Record):
     """One requirement read from a file.
 
@@ -72,9 +74,9 @@ class RequirementEntry(Record):
     the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
     realizability), the same for every requirement of the file.
 
-    Written out as the ``@dataclass`` it was (``extra`` a new dict by default; ``repr`` and
-    ``==`` over every field; unhashable): generating it cost start-up time
-    (:mod:`fretish.records`).
+    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
+    ``==`` are written out (``extra`` a new dict by default; ``repr`` and ``==`` over every
+    field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     id: str
@@ -87,7 +89,7 @@ class RequirementEntry(Record):
     tick_period: Fraction | None = None
     requirement: Requirement | None = None
     error: FretishError | None = None
-    extra: dict
+    extra: dict = field(default_factory=dict)
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
 

@@ -725,6 +725,32 @@ def _run(start: str, text: str, source: str, line: int, column: int):
             pass
         finally:
             _ctx.text = ""
+    return _run_slow(start, text, source, line, column)
+
+
+def _run_slow(start: str, text: str, source: str, line: int, column: int):
+    """A text the fast path did not parse: its syntax error as Lark gives it, replayed on
+    the fast path's tables without Lark where that is exact
+    (:func:`fretish.fasterrors.lark_failure`: no Lark import, table load or lexer scanners,
+    about 0.2 s of CPU per run with a typo); else Lark itself (:func:`_run_lark`)."""
+    fast = _fast
+    if fast:
+        from .diagnostics import failure_error, make_error
+        from .fasterrors import lark_failure
+
+        _ctx.set(text, line - 1, column - 1)
+        try:
+            failure = lark_failure(fast, text, start, own=(_Fail,))
+        except _Fail as f:  # as _run_lark reports it
+            s = f.span
+            raise make_error(text, source, line, column, s.start, f.message, (),
+                             f.hint) from None
+        finally:
+            _ctx.text = ""
+        if failure is not None:
+            pos, value, ttype, expected = failure
+            raise failure_error(text, source, line, column, pos, value, ttype,
+                                expected) from None
     return _run_lark(start, text, source, line, column)
 
 

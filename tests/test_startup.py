@@ -226,12 +226,21 @@ def test_records_behave_as_the_generated_dataclasses(index, data):
         with pytest.raises(TypeError) as theirs:
             ref()
         assert str(mine.value).split("__init__")[1] == str(theirs.value).split("__init__")[1]
+    # still dataclasses: fields() and replace() as before
+    assert dataclasses.is_dataclass(cls)
+    assert [(f.name, f.default, f.default_factory, f.init, f.repr, f.compare)
+            for f in dataclasses.fields(cls)] == [
+        (f.name, f.default, f.default_factory, f.init, f.repr, f.compare)
+        for f in dataclasses.fields(ref)]
+    change = {flip: other[flip]}
+    r1, r2 = dataclasses.replace(a, **change), dataclasses.replace(b, **change)
+    assert type(r1) is cls and [getattr(r1, n) for n in names] == [getattr(r2, n) for n in names]
     twin = pickle.loads(pickle.dumps(a))
     assert type(twin) is cls and twin == a
     assert copy.copy(a) == a and copy.deepcopy(a) == a
 
 
-def test_compile_path_imports_no_fractions_nor_dataclass_records(tmp_path):
+def test_compile_path_imports_no_fractions(tmp_path):
     """``fretc FILE --emit ltl`` on sentences in ticks imports neither :mod:`fractions` nor
     :mod:`decimal`, nor the lazy modules (``compiler.ifthen``, ``unicodedata``); a tick
     period, a decimal duration, a probability and an
