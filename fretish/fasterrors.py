@@ -184,6 +184,8 @@ def _replay(fast, text: str, start: str):
             root = _first_match(fast, text, pos, None)
             expected = allowed - ignore or {"<END-OF-FILE>"}
             if root is None:  # UnexpectedCharacters(allowed)
+                from .diagnostics import _WORD  # the offending word, as _locate takes it
+
                 m = _WORD.match(text, pos)
                 return _result(fast, text, start, before, pos,
                                m.group(0) if m else text[pos], "CHAR", expected)
@@ -213,8 +215,6 @@ def _upper_keys(fast, state: int) -> set:
     return {k for k in keys if k.isupper()}
 
 
-#: diagnostics._WORD (the offending word of an unexpected character)
-_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_.%]*")
 
 
 def _result(fast, text, start, before, pos, value, typ, expected):
