@@ -198,6 +198,69 @@ def _context_free(rx: str, flags: int) -> bool:
     return plain(P.parse(rx, flags).data)
 
 
+def _alphabet(rx: str, flags: int) -> frozenset | None:
+    """A superset of the characters a match of regexp ``rx`` can consume or look at
+    (lookarounds included), when they are all ASCII and known; None otherwise (a negated
+    class, ``.``, a category such as ``\\s``, a letter matched in any case, an anchor, a
+    back-reference: anything not understood). From the parse tree of Python's ``re``, like :func:`_first_chars`."""
+    import re._constants as C
+    import re._parser as P
+
+    out: set = set()
+
+    def add(code: int, icase: bool) -> bool:
+        ch = chr(code)
+        if code >= 128 or (icase and ch.isalpha()):   # (a letter's other cases: not only
+            return False                              # ASCII ones, e.g. the Kelvin sign)
+        out.add(ch)
+        return True
+
+    def walk(seq, icase) -> bool:
+        for op, av in seq:
+            if op is C.LITERAL:
+                if not add(av, icase):
+                    return False
+            elif op is C.IN:
+                for iop, iav in av:
+                    if iop is C.LITERAL:
+                        if not add(iav, icase):
+                            return False
+                    elif iop is C.RANGE:
+                        if iav[1] >= 128:
+                            return False
+                        for code in range(iav[0], iav[1] + 1):
+                            add(code, icase)
+                    else:
+                        return False
+            elif op is C.SUBPATTERN:
+                _, add_flags, del_flags, sub = av
+                if not walk(sub, (icase or bool(add_flags & re.I)) and not del_flags & re.I):
+                    return False
+            elif op is C.BRANCH:
+                if not all(walk(alt, icase) for alt in av[1]):
+                    return False
+            elif op in (C.MAX_REPEAT, C.MIN_REPEAT, C.POSSESSIVE_REPEAT):
+                if not walk(av[2], icase):
+                    return False
+            elif op in (C.ASSERT, C.ASSERT_NOT):
+                if not walk(av[1], icase):
+                    return False
+            elif op is C.ATOMIC_GROUP:
+                if not walk(av, icase):
+                    return False
+            else:
+                return False
+        return True
+
+    tree = P.parse(rx, flags)
+    return frozenset(out) if walk(tree.data, bool(tree.state.flags & re.I)) else None
+
+
+def _class_escape(ch: str) -> str:
+    """``ch`` written inside a regexp character class."""
+    return "\\" + ch if ch in "\\]^-[" else ch if ch.isprintable() else f"\\x{ord(ch):02x}"
+
+
 class _FastParser:
     """Lark's LALR(1) table for ``grammar.lark`` run by a plain loop, with one lexer regexp.
 
@@ -206,7 +269,9 @@ class _FastParser:
     order Lark's lexer tries them, gives the token the contextual lexer would give in every
     state where that token can be shifted: the first alternative that matches is the same
     in the state's subset and in the whole set whenever it belongs to the subset. The text
-    is cut into tokens by one ``findall`` (:meth:`_build_scanner`); a token's terminal is
+    is cut into tokens by one ``findall`` (:meth:`_build_scanner`), or, when it has no
+    blank but spaces and no quote, chunk by chunk at its spaces, each distinct chunk text
+    cut by that ``findall`` once (:meth:`_build_chunk_lexer`); a token's terminal is
     that regexp's on the token alone, split by the token's first character (only the
     terminals that can start with it, :func:`_first_chars`, a superset, in the same order,
     so the first match is the same; each part compiled on first use) and kept by text.
@@ -214,7 +279,8 @@ class _FastParser:
     Tokens are tuples ``(terminal, text, start, end)`` (0-based offsets). Each is fed to
     Lark's table and each reduction calls the builder's callback for the rule (the
     :class:`fretish.parser._Builder` given), wrapped as Lark wraps it (:func:`fast_tables`),
-    so a sentence parsed here gets the AST Lark gives. Anything else - a character no
+    so a sentence parsed here gets the AST Lark gives (a run of one-symbol reductions is
+    one lookup, :meth:`_plan`). Anything else - a character no
     terminal matches, a token the state does not accept, an error raised by the builder -
     raises :class:`_Slow`, and the sentence is parsed again by Lark for its exact error
     (tests/fretish/test_fast_parser.py compares the two on every test sentence)."""
@@ -238,7 +304,12 @@ class _FastParser:
         # rules that reduce one symbol to itself (a ``?rule`` passing its single child up):
         # reducing by one leaves the value stack as it is and replaces only the top state
         self.unit = [size == 1 and up == -1 for _, size, _, up in self.rules]
-        self.chains: dict = {}    # (state below, state, terminal) -> state after the units
+        # rules of one symbol (unit or not): reducing by one replaces only the top of both
+        # stacks, so the state below stays and a run of them is a function of the states
+        self.single = [size == 1 for _, size, _, _ in self.rules]
+        #: (state below, top state, terminal) -> :meth:`_plan` of that run of one-symbol
+        #: reductions
+        self.plans: dict = {}
         self._build_scanner([None if f is None else frozenset(f) for f in tables["firsts"]],
                             tables["context_free"])
 
@@ -330,7 +401,10 @@ class _FastParser:
         return f
 
     # ---- the lexer: one regexp over the whole text
-    _WORD = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
+    #: An identifier-shaped word: a letter, then letters, digits, ``_``, ``%`` and inner
+    #: ``.`` (NAME's run, ``[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*``, written so
+    #: that Python's re repeats single classes: the same words, tested)
+    _WORD = r"[A-Za-z][A-Za-z0-9_%]*(?:\.[A-Za-z0-9_%]+)*"
     _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
     _MAX_WORDS = 100_000
 
@@ -355,6 +429,7 @@ class _FastParser:
         and ``context_free`` are per terminal (:func:`fast_tables`: :func:`_first_chars`,
         :func:`_context_free`)."""
         self.findall = None
+        self.chunk_stop = None
         letters = self._LETTERS
         ignored, others = [], []
         ignore_firsts: set = set()
@@ -376,10 +451,18 @@ class _FastParser:
                               if self.terminals[i][0] not in self.ignore):
             return
         body = "".join(f"|(?:{self.terminals[i][1]})" for i in others)
-        rx = re.compile(f"((?:{'|'.join(ignored)})*)((?:{self._WORD}){body}|\\Z)", self.flags)
+        # a run of ignored text; one character class repeated (FRETish's blanks) is written
+        # as one repeat of the class, which Python's re runs much faster than a repeat of a
+        # repeat (the same runs match)
+        run = f"(?:{'|'.join(ignored)})*"
+        if len(ignored) == 1 and re.fullmatch(r"\[[^\]\[]*\]\+", ignored[0]):
+            run = ignored[0][:-1] + "*"
+        rx = re.compile(f"({run})((?:{self._WORD}){body}|\\Z)", self.flags)
         if rx.groups != 2:   # a terminal with a capturing group of its own
             return
         self.findall = rx.findall
+        self._build_chunk_lexer(ignored, [self._WORD] + [self.terminals[i][1] for i in others],
+                                [self._LETTERS] + [firsts[i] for i in others])
         self.words = dict(self.known_words)
         names = [i for i, (name, _) in enumerate(self.terminals) if name == "NAME"]
         # NAME tried first among the terminals that start with a letter: a word it matches
@@ -388,6 +471,107 @@ class _FastParser:
                                               for f in firsts[:names[0]])
         self.name_rx = self.terminals[names[0]][1] if names else None
         self.name_match = None
+
+    def _build_chunk_lexer(self, ignored: list, alternatives: list, firsts: list) -> None:
+        """The lexer by space-separated chunks (:meth:`_tokens_by_chunk`), when it gives the
+        whole-text lexer's tokens: a run of spaces is ignored text, and only a token that
+        starts with one of :attr:`chunk_stop`'s characters can hold a space (FRETish: a
+        quoted string).
+
+        :attr:`chunk_stop` is then the ``search`` of a regexp of the characters that send
+        a text to the whole-text lexer: the ignored characters other than the space, and
+        those starting a token that may hold a space. In a text without them, the ignored
+        text is runs of spaces, so ``str.split(" ")`` cuts it into chunks each of which is
+        whole tokens (or empty, between two spaces); and since no ``alternatives`` regexp
+        (``findall``'s token part) can match a space or look at one (:func:`_alphabet`),
+        each chunk alone is cut as the whole text cuts it there."""
+        self.chunks: dict = {}
+        self.chunk_stop = None
+        kept: frozenset = frozenset()
+        for rx in ignored:
+            alpha = _alphabet(rx, self.flags)
+            if alpha is None:
+                return
+            kept |= alpha
+        if not any(re.fullmatch(rx, " ", self.flags) for rx in ignored):
+            return
+        stop = set(kept - {" "})
+        for rx, first in zip(alternatives, firsts):
+            alpha = _alphabet(rx, self.flags)
+            if alpha is None or " " in alpha:
+                if first is None:
+                    return
+                stop |= first
+        self.chunk_stop = re.compile("[" + "".join(sorted(map(_class_escape, stop))) + "]"
+                                     if stop else "(?!)").search
+
+    def _tokens_by_chunk(self, text: str) -> list:
+        """The tokens of ``text`` (as :meth:`_tokens`), for a text without the characters
+        of :attr:`chunk_stop` (:meth:`_build_chunk_lexer`): the chunks of ``str.split(" ")``
+        at offsets counted from their lengths, each chunk text cut into tokens once
+        (:attr:`chunks`: the terminal of a one-token chunk, else its tokens with offsets
+        from the chunk's start)."""
+        chunks = self.chunks
+        out = []
+        add = out.append
+        begin = 0
+        for chunk in text.split(" "):
+            if chunk:
+                end = begin + len(chunk)
+                lexed = chunks.get(chunk) or self._lex_chunk(chunk)
+                if type(lexed) is str:
+                    add((lexed, chunk, begin, end))
+                else:
+                    for typ, value, s, e in lexed:
+                        add((typ, value, begin + s, begin + e))
+                begin = end + 1
+            else:
+                begin += 1
+        return out
+
+    def _lex_chunk(self, chunk: str):
+        """The tokens of one chunk (:meth:`_tokens_by_chunk`), by the whole-text lexer's
+        regexp; :class:`_Slow` where a character starts no terminal."""
+        words = self.words
+        out = []
+        pos = 0
+        for _, value in self.findall(chunk):
+            if not value:           # the \Z match
+                break
+            out.append((words.get(value) or self._word_type(value), value, pos,
+                        pos + len(value)))
+            pos += len(value)
+        if pos != len(chunk) or not out:
+            raise _Slow("no terminal")
+        if len(self.chunks) >= self._MAX_WORDS:
+            self.chunks.clear()
+        lexed = self.chunks[chunk] = out[0][0] if len(out) == 1 else tuple(out)
+        return lexed
+
+    def _tokens(self, text: str) -> list:
+        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
+        terminals dropped) by the whole-text lexer (:meth:`_build_scanner`); raises
+        :class:`_Slow` where a character starts no terminal."""
+        findall = self.findall
+        if findall is None:
+            return self._tokens_by_char(text)
+        words = self.words
+        found = findall(text)
+        # the \Z matches, last: the ignored characters at the end, then (after them)
+        # an empty match at the very end
+        end = 0
+        while found and not found[-1][1]:
+            end += len(found.pop()[0])
+        out = []
+        add = out.append
+        pos = 0
+        for ignored, value in found:
+            start = pos + len(ignored)
+            pos = start + len(value)
+            add((words.get(value) or self._word_type(value), value, start, pos))
+        if pos + end != len(text):
+            raise _Slow("no terminal")
+        return out
 
     def _word_type(self, word: str) -> str:
         """The terminal of token text ``word`` (:meth:`_build_scanner`): the exact lexer on
@@ -413,33 +597,11 @@ class _FastParser:
         typ = self.words[word] = m.lastgroup
         return typ
 
-    def _tokens(self, text: str) -> list:
-        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
-        terminals dropped); raises :class:`_Slow` where a character starts no terminal."""
-        findall = self.findall
-        if findall is None:
-            return self._tokens_by_char(text)
-        words = self.words
-        found = findall(text)
-        # the \Z matches, last: the ignored characters at the end, then (after them)
-        # an empty match at the very end
-        end = 0
-        while found and not found[-1][1]:
-            end += len(found.pop()[0])
-        out = []
-        add = out.append
-        pos = 0
-        for ignored, value in found:
-            start = pos + len(ignored)
-            pos = start + len(value)
-            add((words.get(value) or self._word_type(value), value, start, pos))
-        if pos + end != len(text):
-            raise _Slow("no terminal")
-        return out
-
     def _tokens_by_char(self, text: str) -> list:
-        """The tokens of ``text`` by the exact lexer, one regexp match per token or ignored
-        run (the fallback of :meth:`_tokens`)."""
+        """The tokens of ``text`` (``(terminal, text, start, end)`` tuples, ignored
+        terminals dropped) by the exact lexer, one regexp match per token or ignored run
+        (used when the whole-text lexer of :meth:`parse` cannot be); raises :class:`_Slow`
+        where a character starts no terminal."""
         ignore = self.ignore
         dispatch, matchers, full = self.dispatch, self.matchers, len(self.subsets) - 1
         out = []
@@ -457,16 +619,31 @@ class _FastParser:
             pos = end
         return out
 
-    def _chain(self, below: int, state: int, typ: str) -> int:
-        """The state reached from ``state`` (``below`` under it on the stack) by reducing
-        by unit rules (:attr:`unit`) while the action on lookahead ``typ`` is one: the
-        first state whose action on ``typ`` is a shift, another reduction or an error."""
+    def _plan(self, key: tuple) -> tuple:
+        """The run of one-symbol reductions (rules of size 1: a ``?rule`` passing its child
+        up, or a rule whose callback turns its one child into a value) taken from top state
+        ``key[1]``, with state ``key[0]`` below it, on lookahead ``key[2]``, and what follows
+        it: ``(callbacks, state, action)``. ``callbacks`` are those of the run's non-unit
+        rules in order (each applied to the top value, as ``[value]``), ``state`` the top
+        state after the run, ``action`` the table's action there on the lookahead (a shift,
+        a reduction by a rule of another size, or None for an error).
+
+        A one-symbol reduction leaves the stacks' depth and the state below the top as they
+        are, so the run is a function of the key alone (the values are still made by the
+        callbacks, in the same order as one by one); kept in :attr:`plans`."""
+        below, state, typ = key
         actions, gotos, rules, unit = self.actions, self.gotos, self.rules, self.unit
+        callbacks = []
         while True:
             action = actions[state].get(typ)
-            if action is None or action >= 0 or not unit[~action]:
-                return state
-            state = gotos[below][rules[~action][0]]
+            if action is None or action >= 0 or rules[~action][1] != 1:
+                break
+            origin, _, callback, _ = rules[~action]
+            if not unit[~action]:
+                callbacks.append(callback)
+            state = gotos[below][origin]
+        plan = self.plans[key] = (tuple(callbacks), state, action)
+        return plan
 
     def parse(self, text: str, start: str):
         """The builder's result for ``text`` from start symbol ``start``; raises
@@ -474,17 +651,22 @@ class _FastParser:
 
         The table is :attr:`actions` (per state: terminal -> the next state when >= 0,
         else the complement ``~i`` of rule ``i`` to reduce by) and :attr:`gotos` (per
-        state: rule origin -> next state)."""
-        toks = self._tokens(text)
+        state: rule origin -> next state). A run of one-symbol reductions is followed by
+        one lookup in :attr:`plans` (:meth:`_plan`)."""
+        stop = self.chunk_stop
+        if stop is not None and stop(text) is None:
+            toks = self._tokens_by_chunk(text)
+        else:
+            toks = self._tokens(text)
         actions, gotos, rules = self.actions, self.gotos, self.rules
-        unit, chains = self.unit, self.chains
+        single, plans = self.single, self.plans
         state = self.start_states[start]
         state_stack = [state]
         value_stack = []
         for tok in toks:
             typ = tok[0]
+            action = actions[state].get(typ)
             while True:
-                action = actions[state].get(typ)
                 if action is None:
                     raise _Slow(typ)
                 if action >= 0:
@@ -492,21 +674,18 @@ class _FastParser:
                     state_stack.append(state)
                     value_stack.append(tok)
                     break
-                if unit[~action]:
-                    # A run of unit reductions keeps the state below the top, so where it
-                    # ends depends only on (that state, the top state, the lookahead):
-                    # followed once, then looked up (the same states as one by one).
+                if single[~action]:
                     key = (state_stack[-2], state, typ)
-                    state = chains.get(key)
-                    if state is None:
-                        state = chains[key] = self._chain(*key)
+                    plan = plans.get(key) or self._plan(key)
+                    callbacks, state, action = plan
                     state_stack[-1] = state
+                    if callbacks:
+                        value = value_stack[-1]
+                        for callback in callbacks:
+                            value = callback([value])
+                        value_stack[-1] = value
                     continue
                 origin, size, callback, up = rules[~action]
-                if size == 1 and not up:  # one symbol replaced in place: no pop and push
-                    value_stack[-1] = callback(value_stack[-1:])
-                    state = state_stack[-1] = gotos[state_stack[-2]][origin]
-                    continue
                 if up:
                     value = value_stack[up]
                     del value_stack[-size:]
@@ -520,6 +699,12 @@ class _FastParser:
                 state = gotos[state_stack[-1]][origin]
                 state_stack.append(state)
                 value_stack.append(value)
+                action = actions[state].get(typ)
+        return self._finish(state, state_stack, value_stack, start)
+
+    def _finish(self, state: int, state_stack: list, value_stack: list, start: str):
+        """The reductions on the end of the text, up to the start symbol's value."""
+        actions, gotos, rules = self.actions, self.gotos, self.rules
         end_state = self.end_states[start]
         while True:
             action = actions[state].get("$END")

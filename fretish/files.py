@@ -202,8 +202,9 @@ class _FretReader:
 
     def read(self) -> list[RequirementEntry]:
         for ln, raw in enumerate(self.lines, start=1):
-            content = _strip_comment(raw.rstrip("\r"))
-            if not content.strip():
+            # (_strip_comment's result without its call on a line without "#")
+            content = _strip_comment(raw.rstrip("\r")) if "#" in raw else raw.rstrip()
+            if not content:
                 continue
             if content[0] in " \t":                           # indented: belongs above
                 self._indented(ln, content)
@@ -303,7 +304,9 @@ class _FretReader:
                 raise FretishFileError(f"bad tick_period for {p.id}: {e}", source=source,
                                        line=aln, column=acol,
                                        text_line=lines[aln - 1].rstrip("\r")) from None
-        if p.pieces:
+        if len(p.pieces) == 1:                              # a sentence on one line
+            line0, col0, text = p.pieces[0]
+        elif p.pieces:
             line0, col0, _ = p.pieces[0]
             chunks, prev = [], line0
             for ln, _col, piece in p.pieces:
@@ -312,12 +315,14 @@ class _FretReader:
             text = "".join(chunks)
         else:
             line0, col0, text = p.id_line, len(lines[p.id_line - 1].rstrip()) + 2, ""
+        attrs = p.attrs
+        # the fields in order (positional: half the keywords' cost; the order is
+        # checked by tests/fretish/test_files.py)
         entry = RequirementEntry(
-            id=p.id, text=text, source=source, line=line0, column=col0,
-            rationale=p.attrs["rationale"][0] if "rationale" in p.attrs else None,
-            parent=(p.attrs["parent"][0] or None) if "parent" in p.attrs else None,
-            tick_period=period, inputs=self.io.get("inputs", ()),
-            outputs=self.io.get("outputs", ()))
+            p.id, text, source, line0, col0,
+            attrs["rationale"][0] if "rationale" in attrs else None,
+            (attrs["parent"][0] or None) if "parent" in attrs else None,
+            period, None, None, {}, self.io.get("inputs", ()), self.io.get("outputs", ()))
         try:
             entry.requirement = parse(text, source=source, line=line0, column=col0)
         except FretishSyntaxError as e:

@@ -4,7 +4,7 @@ The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header st
 phrasings and the expression precedence. The AST builder is applied while parsing (no
 intermediate parse tree). Lark's LALR table, built from the grammar once and kept in fretc's
 cache, is run by :class:`fretish.fastparse._FastParser` (a plain loop over the tokens of one
-lexer regexp; a run of unit reductions, a ``?rule`` passing its one child up, is one
+lexer regexp, applied chunk by chunk between spaces; a run of one-symbol reductions is one
 dictionary lookup); a sentence it cannot parse goes to Lark itself, which is imported only
 then and reports the error (``fretc FILE --emit ltl`` on valid sentences does not import
 Lark). Both call the same AST builder (:class:`_Builder`) on tokens as plain tuples.
@@ -41,7 +41,6 @@ Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, rest
 
 from __future__ import annotations
 
-import functools
 import io
 import os
 import re
@@ -52,6 +51,7 @@ from . import ast as A
 from . import cache
 from .fastparse import _FastParser, fast_tables
 from .limits import LimitError, check_expression, check_requirement
+from .positions import _ctx, _Fail, _join, _mk, _new_span, _span_of
 from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 
 __all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS",
@@ -73,80 +73,9 @@ _DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
 
 
 # --------------------------------------------------------------------------- positions
-class _Ctx(threading.local):
-    """Per-parse state read by the AST builder (the Lark parser is shared); set by
-    :meth:`set`. ``line``/``col``: the file line of the text's line 1 and the file column
-    of its first character; ``starts``: the offsets where the text's lines 2, 3 ... begin
-    (None for a text of one line, where a span is plain arithmetic)."""
-    text = ""
-    line = 1
-    col = 1
-    starts: list = []
-    flat: tuple | None = (1, 1)   # (line, col) when the text has one line, else None
-
-    def set(self, text: str, dl: int, dc: int) -> None:
-        """Parse ``text``, whose first character is at file line ``dl + 1``, column
-        ``dc + 1``."""
-        self.text, self.line, self.col = text, dl + 1, dc + 1
-        if "\n" in text:
-            self.starts = [m.end() for m in _NEWLINE.finditer(text)]
-            self.flat = None
-        else:
-            self.flat = (dl + 1, dc + 1)
-
-
-_NEWLINE = re.compile("\n")
-_ctx = _Ctx()
-
-
-# Tokens, of the fast path and (converted, :class:`_LarkBuilder`) of Lark's: plain tuples
-# ``(terminal, text, start, end)`` with 0-based offsets into the text (a tuple is the
-# cheapest object Python makes; a node is never a plain tuple: ``A.Span`` is a subclass).
-_TYPE, _VALUE, _START, _END = 0, 1, 2, 3
-
-
-#: ``A.Span`` from one tuple of its six fields, without the named tuple's Python-level
-#: ``__new__`` (the parser makes one per node): the same class, the same value.
-_new_span = functools.partial(tuple.__new__, A.Span)
-
-
-def _mk(s: int, e: int) -> A.Span:
-    """The span of text offsets ``s`` to ``e`` (0-based, end excluded) in file coordinates
-    (:class:`_Ctx`): 1-based lines and columns as Lark counts them (a line starts after
-    each ``"\\n"``; only the text's first line is shifted by its starting column)."""
-    flat = _ctx.flat
-    if flat is not None:
-        line, col = flat
-        return _new_span((line, s + col, line, e + col, s, e))
-    from bisect import bisect_right
-    c = _ctx
-    starts = c.starts
-    i = bisect_right(starts, s)
-    j = bisect_right(starts, e)
-    return _new_span((c.line + i, s + c.col if i == 0 else s - starts[i - 1] + 1,
-                      c.line + j, e + c.col if j == 0 else e - starts[j - 1] + 1, s, e))
-
-
-def _span_of(x) -> A.Span:
-    """The span of a token or a node."""
-    if type(x) is tuple:
-        return _mk(x[2], x[3])
-    return x.span
-
-
-def _join(a, b) -> A.Span:
-    """Span from the start of ``a`` to the end of ``b`` (tokens or nodes)."""
-    return _mk(a[2] if type(a) is tuple else a.span[4], b[3] if type(b) is tuple else b.span[5])
-
-
-class _Fail(Exception):
-    """A rule the grammar accepts but FRETish forbids, found while building the AST."""
-
-    def __init__(self, where, message: str, hint: str | None = None):
-        super().__init__(message)
-        self.span = _span_of(where)
-        self.message = message
-        self.hint = hint
+#: Held by :func:`_run` while a text is parsed (fast path or Lark): :data:`_ctx` is shared.
+_parsing = threading.Lock()
+_new = object.__new__
 
 
 class _Subject:
@@ -154,13 +83,6 @@ class _Subject:
 
     def __init__(self, name: str, span: A.Span):
         self.name, self.span = name, span
-
-
-class _Response:
-    __slots__ = ("expr", "span")
-
-    def __init__(self, expr, span: A.Span):
-        self.expr, self.span = expr, span
 
 
 class _ExplicitMode:
@@ -258,6 +180,56 @@ def _operand(c: list, i: int, min_prec: int):
     return A.Unary(x.op, operand, _join(x, operand)), i
 
 
+def _shunt(c: list):
+    """:func:`_climb`'s tree for chain ``c`` built without recursion (operator precedence by
+    a stack of pending operators: a shunting-yard), when it is a plain precedence chain:
+    at most one comparison, and every prefix operand written without parentheses ("!p",
+    "-x") is followed by no operator it would take (precedence >= 6 for "!", >= 10 for
+    "-") and, for "!", stands where a negation may (after no operator of precedence >= 6
+    and no "^"): :func:`_operand` then returns a node equal to it, spans included.
+    None otherwise (:func:`_climb` decides, errors included)."""
+    text = _ctx.text
+    n = len(c)
+    min_prec = 1
+    comparisons = 0
+    for i in range(0, n, 2):
+        x = c[i]
+        if i + 1 < n:
+            prec, right_assoc = _PREC[c[i + 1][0]]
+        else:
+            prec, right_assoc = 0, False
+        if type(x) is A.Unary and text[x.span[4]] != "(":
+            if x.op == "!":
+                if min_prec > _NOT_OPERAND or prec >= _NOT_OPERAND:
+                    return None
+            elif prec >= _NEG_OPERAND:
+                return None
+        if prec == _CMP:
+            comparisons += 1
+            if comparisons > 1:
+                return None
+        min_prec = prec if right_assoc else prec + 1
+    out = [c[0]]
+    pending: list = []         # (precedence, operator token), precedences increasing
+    for i in range(1, n, 2):
+        op = c[i]
+        prec, right_assoc = _PREC[op[0]]
+        while pending and (pending[-1][0] > prec or (pending[-1][0] == prec
+                                                     and not right_assoc)):
+            right = out.pop()
+            left = out[-1]
+            out[-1] = A.Binary(_BINOPS[pending.pop()[1][0]], left, right,
+                               _mk(left.span[4], right.span[5]))
+        pending.append((prec, op))
+        out.append(c[i + 1])
+    while pending:
+        right = out.pop()
+        left = out[-1]
+        out[-1] = A.Binary(_BINOPS[pending.pop()[1][0]], left, right,
+                           _mk(left.span[4], right.span[5]))
+    return out[0]
+
+
 def _not_here(x) -> "_Fail":
     bang = _ctx.text[x.span.start]
     return _Fail(x, f"unexpected '{bang}' in an expression: a negation cannot be an operand "
@@ -271,13 +243,33 @@ class _Builder:
     nodes, helper objects and the named keyword tokens)."""
 
     # ---- expressions
+    # number and var, the most frequent nodes, are made as A.NumLit / A.Var and _mk would
+    # make them, written out (no Python-level __init__ or _mk call)
     def number(self, c):
         t = c[0]
-        return A.NumLit(t[1], _mk(t[2], t[3]))
+        node = _new(A.NumLit)
+        d = node.__dict__
+        d["text"] = t[1]
+        flat = _ctx.flat
+        if flat is None:
+            d["span"] = _mk(t[2], t[3])
+        else:
+            line, col = flat
+            d["span"] = _new_span((line, t[2] + col, line, t[3] + col, t[2], t[3]))
+        return node
 
     def var(self, c):
         t = c[0]
-        return A.Var(t[1] if t[0] == "NAME" else _name_of(t), _mk(t[2], t[3]))
+        node = _new(A.Var)
+        d = node.__dict__
+        d["name"] = t[1] if t[0] == "NAME" else _name_of(t)
+        flat = _ctx.flat
+        if flat is None:
+            d["span"] = _mk(t[2], t[3])
+        else:
+            line, col = flat
+            d["span"] = _new_span((line, t[2] + col, line, t[3] + col, t[2], t[3]))
+        return node
 
     def boolean(self, c):
         t = c[0]
@@ -349,7 +341,9 @@ class _Builder:
                         left = A.Binary(_BINOPS[c[i][0]], left, right,
                                         _mk(start, right.span[5]))
                     return left
-        node, _ = _climb(c, 0, 1)
+        node = _shunt(c)
+        if node is None:
+            node, _ = _climb(c, 0, 1)
         return node
 
     def if_then(self, c):
@@ -467,7 +461,9 @@ class _Builder:
 
     def duration(self, c):
         num, unit = c
-        if not _DURATION_AMOUNT.match(num[1]):
+        amount = num[1]
+        # (a NUMBER token is ASCII: isdigit() is [0-9]+, the common case, without the regexp)
+        if not amount.isdigit() and not _DURATION_AMOUNT.match(amount):
             raise _Fail(num, f"a duration is a whole or decimal number, not '{num[1]}'",
                         "write e.g. 'within 3 seconds' or 'for 2.5 seconds'")
         return A.Duration(num[1], UNIT_TOKENS[unit[0]], _mk(num[2], unit[3]))
@@ -487,20 +483,23 @@ class _Builder:
         return A.Timing(kind, None, last, phrase, _join(head, last))
 
     def response(self, c):
-        return _Response(c[1], _mk(c[0][2], c[1].span[5]))
+        # (expression, span of "satisfy R"): always the sentence's last part, so a plain
+        # pair (sentence reads it by position)
+        return (c[1], _mk(c[0][2], c[1].span[5]))
 
     # ---- sentences
     def sentence(self, c):
         # the fields by the class of each part (an absent part: the null one, which is
         # never modified, so one is shared as Requirement's own defaults are)
-        parts = [_NULL_SCOPE, _NULL_CONDITION, None, None, _NULL_TIMING, None]
+        parts = [_NULL_SCOPE, _NULL_CONDITION, None, None, _NULL_TIMING]
         for x in c:
             i = _SENTENCE_PARTS.get(type(x))
             if i is not None:
                 parts[i] = x
-        scope, condition, subject, probability, timing, response = parts
+        scope, condition, subject, probability, timing = parts
+        response, response_span = c[-1]
         return A.Requirement(_ctx.text, scope, condition, subject.name, probability, timing,
-                             response.expr, False, subject.span, response.span)
+                             response, False, subject.span, response_span)
 
     def freeform(self, c):
         return A.Requirement(_ctx.text, freeform=True)
@@ -531,8 +530,7 @@ for _name, _f in list(vars(_Builder).items()):
 del _name, _f
 
 
-_SENTENCE_PARTS = {A.Scope: 0, A.Condition: 1, _Subject: 2, A.Probability: 3, A.Timing: 4,
-                   _Response: 5}
+_SENTENCE_PARTS = {A.Scope: 0, A.Condition: 1, _Subject: 2, A.Probability: 3, A.Timing: 4}
 _NULL_SCOPE, _NULL_CONDITION, _NULL_TIMING = A.Scope(), A.Condition(), A.Timing()
 
 
@@ -711,21 +709,22 @@ def _get_fast():
 def _run(start: str, text: str, source: str, line: int, column: int):
     if not isinstance(text, str):
         raise TypeError(f"parse() wants a str, got {type(text).__name__}")
-    fast = _get_fast()
-    if fast:
-        _ctx.set(text, line - 1, column - 1)
-        try:
-            result = fast.parse(text, start)
-            if start == "start":
-                check_requirement(result)
-            else:
-                check_expression(result)
-            return result
-        except Exception:  # noqa: BLE001 - Lark decides, with its exact error
-            pass
-        finally:
-            _ctx.text = ""
-    return _run_slow(start, text, source, line, column)
+    fast = _fast if _fast is not None else _get_fast()
+    with _parsing:
+        if fast:
+            _ctx.set(text, line - 1, column - 1)
+            try:
+                result = fast.parse(text, start)
+                if start == "start":
+                    check_requirement(result)
+                else:
+                    check_expression(result)
+                return result
+            except Exception:  # noqa: BLE001 - Lark decides, with its exact error
+                pass
+            finally:
+                _ctx.text = ""
+        return _run_slow(start, text, source, line, column)
 
 
 def _run_slow(start: str, text: str, source: str, line: int, column: int):

@@ -368,7 +368,8 @@ _OPERATORS = sorted(P._PREC)
                           st.sampled_from(_OPERATORS)), min_size=1, max_size=7),
        st.sampled_from(["v", "!", "-"]))
 def test_climb_shortcuts_equal_precedence_climbing(pairs, last):
-    """The builder's ``climb`` (one-operator chains and left folds built directly) gives
+    """The builder's ``climb`` (one-operator chains and left folds built directly, other
+    plain precedence chains by ``_shunt``) gives
     what the general precedence climbing (``_climb``) gives, spans and errors included."""
     def operand(kind, at):
         var = A.Var(f"v{at}", P._mk(at, at + 1))
@@ -406,3 +407,111 @@ def test_lexer_by_character_equals_the_whole_text_lexer(monkeypatch):
     monkeypatch.setattr(fast, "findall", None)
     assert [_fast(t) for t in texts] == whole
     assert sum(x is not None for x in whole) > len(texts) // 3
+
+
+_NAMES_RUN = r"[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*"
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.text(alphabet="aZ09_%. x-", min_size=1, max_size=14))
+def test_word_regexp_is_names_run(text):
+    """The whole-text lexer's word regexp (single-class repeats) takes, from every
+    position, the same word as NAME's run in grammar.lark (a letter, then letters, digits,
+    ``_``, ``%`` and inner dots)."""
+    import re
+    fast = P._get_fast()
+    for i in range(len(text)):
+        a = re.compile(fast._WORD).match(text, i)
+        b = re.compile(_NAMES_RUN).match(text, i)
+        assert (a and a.group()) == (b and b.group()), (text, i)
+
+
+# pieces of text around the chunk lexer's conditions: words and operators written against
+# each other, quoted strings holding blanks and '#', blanks str.split() cuts at but the
+# grammar does not ignore, a character no terminal starts with, a non-ASCII letter
+_PIECES = ["p", "x1.y", "shall", "the", "satisfy", "sw", "f(", ")", ",", "3", "-2.5e3", ">=",
+           "<->", "!", "&", ".", "a.", '"a b"', '"q #1"', '"', "\x0b", "\x1c", "@", "é", "if",
+           "then", "upon", "in", "mode", "within", "ticks"]
+_BLANKS = ["", " ", "  ", "\t", "\n ", "\r\n", "\f"]
+
+
+@settings(max_examples=600, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(_BLANKS), st.sampled_from(_PIECES)), max_size=14),
+       st.sampled_from(_BLANKS))
+def test_chunk_lexer_equals_the_whole_text_lexer(pairs, tail):
+    """Wherever parse() takes the chunk lexer (a text without the characters of
+    ``chunk_stop``), it gives the tokens of the whole-text lexer, or both refuse the text;
+    texts the chunk lexer must not take (a quoted string with a space inside, blanks other
+    than the space) are generated, and are sent to the whole-text lexer."""
+    fast = P._get_fast()
+    text = "".join(b + p for b, p in pairs) + tail
+
+    def tokens(lex):
+        try:
+            return lex(text)
+        except F._Slow:
+            return None
+    if fast.chunk_stop(text) is None:
+        assert tokens(fast._tokens_by_chunk) == tokens(fast._tokens), repr(text)
+    else:
+        assert any(c in text for c in '"\t\n\r\f'), repr(text)
+
+
+def test_chunk_lexer_sends_quoted_spaces_and_other_blanks_away():
+    """The texts that would be cut wrongly at spaces take the whole-text lexer: a quoted
+    name holding a space, blanks other than the space; a character no terminal matches
+    (a vertical tab) is refused either way."""
+    fast = P._get_fast()
+    for text in ['the "my sw" shall satisfy p', "the sw shall\tsatisfy p",
+                 "the sw shall\n  satisfy p"]:
+        assert fast.chunk_stop(text) is not None
+        assert _public(text) == _lark(text) and _lark(text)[0] == "ok"
+    assert fast.chunk_stop("the sw shall satisfy p\x0b& q") is None
+    assert _public("the sw shall satisfy p\x0b& q")[0] == "error"
+    assert fast.chunk_stop("in m upon x > 3.5e2, the sw shall within 3 ticks satisfy "
+                           "f(a, -b) & !c.") is None
+
+
+def test_nodes_written_out_equal_their_classes():
+    """The builder writes the most frequent nodes (A.Var, A.NumLit) out instead of calling
+    their classes: each one's fields, in order, are those its class's __init__ stores."""
+    seen = set()
+    for text in CORPUS[:200] + ["the sw shall satisfy x > -3.5 & y", "the sw shall satisfy\n  a + 1"]:
+        try:
+            req = P.parse(text)
+        except FretishError:
+            continue
+        for e in (req.response, req.condition.expr):
+            for node in A.walk(e) if e is not None else ():
+                if type(node) in (A.Var, A.NumLit):
+                    seen.add(type(node))
+                    remade = type(node)(**node.__dict__)
+                    assert list(node.__dict__.items()) == list(remade.__dict__.items())
+    assert seen == {A.Var, A.NumLit}
+
+
+def test_parses_in_threads_equal_parses_alone():
+    """Parses running in several threads at once (the builder's context is one object,
+    held by a lock during each parse) give each text its own AST, spans and errors."""
+    import threading
+    texts = CORPUS[:120] + ["the sw shall satisfy\n   x > 1", "in m the sw shall satisfy (p"]
+    alone = [_public(t, line=i + 1, column=3) for i, t in enumerate(texts)]
+    got: dict = {}
+
+    def work(k):
+        for _ in range(3):
+            for i in range(k, len(texts), 4):
+                got[i] = _public(texts[i], line=i + 1, column=3)
+                assert got[i] == alone[i], texts[i]
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    import sys
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)   # switch threads as often as possible
+    try:
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert [got[i] for i in range(len(texts))] == alone

@@ -300,3 +300,14 @@ def test_path_text_and_suffix_are_pathlibs(parts, lead, trail):
         return
     assert _path_text(p) == str(Path(p))
     assert _suffix(_path_text(p)) == Path(p).suffix
+
+
+def test_entry_fields_in_the_order_the_reader_passes_them():
+    """The .fret reader (files._FretReader._entry) makes each RequirementEntry with
+    positional arguments in this order: it must be the dataclass's field order."""
+    import dataclasses
+
+    from fretish import files
+    assert tuple(f.name for f in dataclasses.fields(files.RequirementEntry)) == (
+        "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
+        "requirement", "error", "extra", "inputs", "outputs")
