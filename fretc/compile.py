@@ -125,6 +125,7 @@ def _ltl_json_texts(paths) -> tuple:
             if c.error is not None:
                 failed.append(c)
             texts.append(item(c))
+            del c, e  # not held while the next one compiles
     return texts, failed
 
 
