@@ -305,8 +305,10 @@ def ltl_json_item():
     ft = FORMALIZED_KEYS.index("ft")
     seps = heads[ft + 1:ft + 5]
     s0, s1, s2, s3 = seps
-    fmt = "".join(h.replace("%", "%%") + "%s" for h in heads[:ft + 1] + heads[ft + 5:])
-    fmt += close.replace("%", "%%")
+    # the text before each written value (the five forms are one), in one join per
+    # requirement (a % format would scan these texts character by character)
+    (h_id, h_text, h_source, h_line, h_parent, h_rationale, h_key, h_forms, h_vars,
+     h_vars_fret, h_ticks, h_warnings, h_causal) = heads[:ft + 1] + heads[ft + 5:]
     li = inner + "  "  # a list value's items
     lsep = "," + li
     scalars = {None: "null", True: "true", False: "false"}
@@ -326,18 +328,20 @@ def ltl_json_item():
                         f0, f1, f2, f3, f4 = c.printed()
                         forms = (enc(f0) + s0 + enc(f1) + s1 + enc(f2) + s2 + enc(f3) + s3
                                  + enc(f4))
-                    return fmt % (
-                        enc(rid), enc(text), enc(source), int.__repr__(line),
-                        "null" if parent is None else enc(parent),
-                        "null" if rationale is None else enc(rationale), enc(key), forms,
-                        "[" + li + lsep.join(map(enc, variables)) + inner + "]"
+                    return "".join((
+                        h_id, enc(rid), h_text, enc(text), h_source, enc(source),
+                        h_line, int.__repr__(line),
+                        h_parent, "null" if parent is None else enc(parent),
+                        h_rationale, "null" if rationale is None else enc(rationale),
+                        h_key, enc(key), h_forms, forms,
+                        h_vars, "[" + li + lsep.join(map(enc, variables)) + inner + "]"
                         if variables else "[]",
-                        "[" + li + lsep.join(map(enc, variables_fret)) + inner + "]"
-                        if variables_fret else "[]",
-                        "null" if ticks is None else int.__repr__(ticks),
-                        "[" + li + lsep.join(map(enc, warnings)) + inner + "]"
+                        h_vars_fret, "[" + li + lsep.join(map(enc, variables_fret)) + inner
+                        + "]" if variables_fret else "[]",
+                        h_ticks, "null" if ticks is None else int.__repr__(ticks),
+                        h_warnings, "[" + li + lsep.join(map(enc, warnings)) + inner + "]"
                         if warnings else "[]",
-                        scalars[causal])
+                        h_causal, scalars[causal], close))
                 except TypeError:  # a value that is not a string where one is written
                     pass
         obj = c.to_json()
