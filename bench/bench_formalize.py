@@ -20,6 +20,9 @@ that compile (197 of 198: one uses FRET's reserved ``T``), written as a ``.fret`
 ``C1``, ``C2``, ...) and run as ``fretc FILE --emit ltl --json``, so the figure is not only
 our generator's.
 
+The error path: ``requirements/r1.fret`` with a second requirement that does not parse
+(``fretc FILE --emit ltl``, exit code 1), what a user pays at every typo.
+
 Start-up, the fixed cost of every run whatever the number of sentences: ``python -c "import
 fretc.cli"`` (the command's import) and ``fretc EMPTY.fret --emit ltl`` on an empty file (the
 import, the command line's parsing and the compile path's imports, then the "no
@@ -198,6 +201,11 @@ def main() -> None:
                              caches)
         one = command_times(roots, [ROOT / "requirements/r1.fret", "--emit", "ltl"],
                             args.repeat, caches)
+        typo_file = Path(tmp) / "typo.fret"
+        typo_file.write_text((ROOT / "requirements/r1.fret").read_text(encoding="utf-8")
+                             + "R2: the sw shall always satisfy p &\n", encoding="utf-8")
+        typo = command_times(roots, [typo_file, "--emit", "ltl"], args.repeat, caches,
+                             ok=(1,))
         imp = command_times(roots, [], args.repeat, caches, launch=IMPORT)
         empty = command_times(roots, [empty_file, "--emit", "ltl"], args.repeat, caches,
                               ok=(2,))
@@ -205,7 +213,8 @@ def main() -> None:
         for label, _root in roots:
             (first, e2e), (r1_first, r1) = many[label], one[label]
             (c_first, cs), (_, im), (_, em) = real[label], imp[label], empty[label]
-            results[label] = (min(e2e), min(r1), min(cs), min(im), min(em))
+            results[label] = (min(e2e), min(r1), min(cs), min(im), min(em),
+                              min(typo[label][1]))
             print(f"{label}: `fretc FILE --emit ltl --json`, {args.n} sentences, fresh "
                   f"process: best {min(e2e):.3f} s CPU = {args.n / min(e2e):.0f} "
                   f"sentences/s, median {statistics.median(e2e):.3f} s; first run (empty "
@@ -216,13 +225,17 @@ def main() -> None:
                   f"{c_first:.3f} s")
             print(f"{label}: `fretc requirements/r1.fret --emit ltl`: best {min(r1):.3f} s "
                   f"CPU, median {statistics.median(r1):.3f} s; first run {r1_first:.3f} s")
+            ty = typo[label][1]
+            print(f"{label}: the same with a second requirement that does not parse (exit "
+                  f"1, the error path): best {min(ty):.3f} s CPU, median "
+                  f"{statistics.median(ty):.3f} s")
             print(f"{label}: start-up: `python -c \"{IMPORT}\"` best {min(im):.3f} s CPU, "
                   f"median {statistics.median(im):.3f} s; `fretc EMPTY.fret --emit ltl` "
                   f"(exit 2) best {min(em):.3f} s, median {statistics.median(em):.3f} s")
         if "baseline" in results:
             a, c = results["fretc"], results["baseline"]
             names = (f"{args.n} sentences", "r1.fret", f"{len(corpus)} case studies",
-                     "import fretc.cli", "EMPTY.fret")
+                     "import fretc.cli", "EMPTY.fret", "r1.fret with a typo")
             print("ratio baseline/fretc (CPU, best runs): " + ", ".join(
                 f"{y / x:.2f}x on {name}" for x, y, name in zip(a, c, names)))
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}

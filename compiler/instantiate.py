@@ -89,7 +89,6 @@ import operator
 import re
 import zlib
 import os
-from fractions import Fraction
 
 from fretish import ast as A
 

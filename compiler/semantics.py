@@ -26,22 +26,21 @@ rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from fractions import Fraction
 
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
+from fretish.records import FACTORY, Record
 from fretish.units import format_period_ms
 
 from . import ir
 from .expressions import Expander, SemanticsError, mentions_time
-from .ifthen import regrouping_warnings
 from .ir import FALSE, FTP, LAST, Node, S, V, X, Y, and_, and_all, implies, not_, or_
 from .scope_timing import (fn_right, ft_right, ft_scope, ft_timing, pt_endpoints, pt_scope,
                            pt_timing)
 
 
-@dataclass
-class Formalization:
+@dataclass(init=False, repr=False, eq=False)
+class Formalization(Record):
     """The formulas of one requirement.
 
     ``ft``/``ft_inf``/``pt`` are IR nodes; ``variables`` the FRET variable names in order of
@@ -49,6 +48,10 @@ class Formalization:
     human-readable notes (e.g. units read as ticks for lack of a tick period);
     ``pt_causal`` is False when the pt formula refers to a future-time function (FRET leaves
     those unexpanded in pt), so pt cannot be computed online tick by tick.
+
+    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
+    ``==`` are written out (``warnings`` a new list by default; ``repr`` and ``==`` over
+    every field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     key: str
@@ -59,6 +62,21 @@ class Formalization:
     warnings: list[str] = field(default_factory=list)
     ticks: int | None = None
     pt_causal: bool = True
+
+    __match_args__ = _COMPARED = _SHOWN = ("key", "ft", "ft_inf", "pt", "variables",
+                                           "warnings", "ticks", "pt_causal")
+
+    def __init__(self, key: str, ft: Node, ft_inf: Node, pt: Node, variables: list[str],
+                 warnings: list[str] = FACTORY, ticks: int | None = None,
+                 pt_causal: bool = True) -> None:
+        self.key = key
+        self.ft = ft
+        self.ft_inf = ft_inf
+        self.pt = pt
+        self.variables = variables
+        self.warnings = [] if warnings is FACTORY else warnings
+        self.ticks = ticks
+        self.pt_causal = pt_causal
 
 
 # --------------------------------------------------------------------------- durations
@@ -157,6 +175,8 @@ def _shape(req: A.Requirement, tick_period: Fraction | None):
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     warnings: list[str] = []
     if "then" in req.text.lower():
+        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up, issue 9)
+
         warnings.extend(regrouping_warnings(req))
     n = None
     if timing in A.DURATION_TIMINGS:

@@ -10,7 +10,6 @@ on first use.
 
 from __future__ import annotations
 
-import importlib.util
 import os
 from typing import Any, Sequence
 
@@ -114,6 +113,8 @@ def ray_options(f):
 def _check_address(ctx, param, value):
     if value is None:
         return None
+    import importlib.util  # lazy: only for --ray (start-up, issue 9)
+
     if importlib.util.find_spec("ray") is None:
         from monitors.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
 

@@ -19,7 +19,6 @@ them with generated ones.
 from __future__ import annotations
 
 from dataclasses import FrozenInstanceError, dataclass, field, fields
-from fractions import Fraction
 from typing import NamedTuple
 
 SCOPE_KINDS = ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter", "onlyBefore")
@@ -31,14 +30,27 @@ TIMING_KINDS = (
 #: Timings that take a duration (``within N unit``) and those that take a stop condition.
 DURATION_TIMINGS = ("within", "for", "after")
 STOP_TIMINGS = ("until", "before")
-#: Canonical duration units and their length in seconds (``ticks`` has none).
-UNIT_SECONDS = {
-    "microseconds": Fraction(1, 1_000_000),
-    "milliseconds": Fraction(1, 1000),
-    "seconds": Fraction(1),
-    "minutes": Fraction(60),
-    "hours": Fraction(3600),
-}
+_UNIT_SECONDS: dict = {}
+
+
+def __getattr__(name: str):
+    """``UNIT_SECONDS`` (PEP 562): the canonical duration units and their length in seconds
+    (exact :class:`fractions.Fraction`; ``ticks`` has none), made on first use: importing
+    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit
+    (issue 9)."""
+    if name == "UNIT_SECONDS":
+        if not _UNIT_SECONDS:
+            from fractions import Fraction
+
+            _UNIT_SECONDS.update({
+                "microseconds": Fraction(1, 1_000_000),
+                "milliseconds": Fraction(1, 1000),
+                "seconds": Fraction(1),
+                "minutes": Fraction(60),
+                "hours": Fraction(3600),
+            })
+        return _UNIT_SECONDS
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class Span(NamedTuple):
@@ -294,6 +306,8 @@ class Duration(_Node):
 
     @property
     def value(self) -> Fraction:
+        from fractions import Fraction  # lazy (start-up, issue 9)
+
         return Fraction(self.amount)
 
 

@@ -14,14 +14,10 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from lark import Lark
-from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
-                             UnexpectedToken)
-
 from .errors import FretishSyntaxError
 from .words import RESERVED_LETTERS, UNIT_TOKENS
 
-__all__ = ["accepted_before", "expected_names", "make_error", "translate"]
+__all__ = ["accepted_before", "expected_names", "failure_error", "make_error", "translate"]
 
 # Terminal groups, for the "expected" list and for recognizing the parser's situation.
 _OPERAND_START = {"BANG"}
@@ -145,11 +141,13 @@ def _previous_word(text: str, pos: int) -> str:
     return word[m.start():].lower() if m else ""
 
 
-def accepted_before(parser: Lark, text: str, start: str, pos: int) -> set | None:
+def accepted_before(parser, text: str, start: str, pos: int) -> set | None:
     """Terminals ``parser`` accepts just before offset ``pos``, found by replaying the
     parse up to there. (An LALR parser may perform reductions before it notices a bad
     token; the set it reports is then that of a later state, e.g. only "end of sentence"
     after "satisfy p" when it meets "and".) None if the replay fails."""
+    from lark.exceptions import UnexpectedInput  # lazy: fretish.fasterrors needs no Lark
+
     try:
         ip = parser.parse_interactive(text, start=start)
         try:
@@ -163,7 +161,7 @@ def accepted_before(parser: Lark, text: str, start: str, pos: int) -> set | None
         return None
 
 
-def translate(e: Exception, parser: Lark, text: str, source: str, line: int, column: int,
+def translate(e: Exception, parser, text: str, source: str, line: int, column: int,
               start: str = "start") -> FretishSyntaxError:
     """Turn a Lark exception raised by ``parser`` (start symbol ``start``) on ``text``
     into a :class:`FretishSyntaxError` with a hint. Never raises; a Lark failure that is
@@ -175,6 +173,17 @@ def translate(e: Exception, parser: Lark, text: str, source: str, line: int, col
     replayed = accepted_before(parser, text, start, pos if value is not None else len(text))
     if replayed:
         expected = replayed
+    return failure_error(text, source, line, column, pos, value, ttype, expected)
+
+
+def failure_error(text: str, source: str, line: int, column: int, pos: int,
+                  value: str | None, ttype: str, expected: set) -> FretishSyntaxError:
+    """The error of a parse that failed at offset ``pos`` of ``text`` (which starts at
+    ``line``, ``column`` of ``source``) on ``value`` (None: the end of the sentence) of
+    terminal ``ttype`` (``"CHAR"``: no terminal, ``"$END"``) with the terminals
+    ``expected`` there: the message, expected names and hint of the common mistakes
+    (:func:`_explain`). Used for Lark's exceptions (:func:`translate`) and for their
+    replay without Lark (:func:`fretish.fasterrors.lark_failure`)."""
     f = _Failure(text, pos, value, ttype, expected, expected_names(expected))
     pos, message, names, hint = _explain(f)
     return make_error(text, source, line, column, pos, message, names, hint)
@@ -183,6 +192,8 @@ def translate(e: Exception, parser: Lark, text: str, source: str, line: int, col
 def _locate(e: Exception, text: str) -> tuple[int, str | None, str, set] | None:
     """(offset, offending text or None at the end, terminal type, expected terminals) of
     a Lark failure; None for a failure that is not about a position."""
+    from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+
     if isinstance(e, UnexpectedToken):
         tok = e.token
         if tok.type == "$END":

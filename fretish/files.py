@@ -51,11 +51,11 @@ import os
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from fractions import Fraction
 
 from .ast import Requirement
 from .errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
+from .records import FACTORY, Record
 from .units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
@@ -63,8 +63,8 @@ __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 PathLike = str | os.PathLike
 
 
-@dataclass
-class RequirementEntry:
+@dataclass(init=False, repr=False, eq=False)
+class RequirementEntry(Record):
     """One requirement read from a file.
 
     ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
@@ -73,6 +73,10 @@ class RequirementEntry:
     ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
     the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
     realizability), the same for every requirement of the file.
+
+    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
+    ``==`` are written out (``extra`` a new dict by default; ``repr`` and ``==`` over every
+    field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     id: str
@@ -89,6 +93,29 @@ class RequirementEntry:
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
 
+    __match_args__ = _COMPARED = _SHOWN = (
+        "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
+        "requirement", "error", "extra", "inputs", "outputs")
+
+    def __init__(self, id: str, text: str, source: str, line: int, column: int,
+                 rationale: str | None = None, parent: str | None = None,
+                 tick_period: Fraction | None = None, requirement: Requirement | None = None,
+                 error: FretishError | None = None, extra: dict = FACTORY,
+                 inputs: tuple[str, ...] = (), outputs: tuple[str, ...] = ()) -> None:
+        self.id = id
+        self.text = text
+        self.source = source
+        self.line = line
+        self.column = column
+        self.rationale = rationale
+        self.parent = parent
+        self.tick_period = tick_period
+        self.requirement = requirement
+        self.error = error
+        self.extra = {} if extra is FACTORY else extra
+        self.inputs = inputs
+        self.outputs = outputs
+
 
 # --------------------------------------------------------------------------- durations
 def parse_tick_period(text: str) -> Fraction:
@@ -103,8 +130,10 @@ def parse_tick_period(text: str) -> Fraction:
 
 # --------------------------------------------------------------------------- .fret files
 _ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
-_ATTRIBUTE = re.compile(r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z")
-_DIRECTIVE = re.compile(r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z")
+# Patterns of rare lines, compiled on first use by re's own cache (re.match(pattern, ...)):
+# a file without them does not pay for their compilation (start-up, issue 9)
+_ATTRIBUTE = r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z"
+_DIRECTIVE = r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z"
 
 
 def _strip_comment(line: str) -> str:
@@ -190,7 +219,7 @@ class _FretReader:
             self.fail("indented line outside a requirement", ln,
                       len(content) - len(content.lstrip()) + 1,
                       "start a requirement with 'ID: sentence' at column 1")
-        m = _ATTRIBUTE.match(content)
+        m = re.match(_ATTRIBUTE, content)
         if m:
             key, value = m.group(1), m.group(2).strip()
             if key in current.attrs:
@@ -212,7 +241,7 @@ class _FretReader:
             current.pieces.append((ln, col, content[col - 1:]))
 
     def _directive(self, ln: int, content: str) -> None:
-        m = _DIRECTIVE.match(content)
+        m = re.match(_DIRECTIVE, content)
         if m and m.group(1) in ("inputs", "outputs"):
             self._io_directive(ln, content, m)
             return
@@ -300,7 +329,7 @@ class _FretReader:
 
 
 # --------------------------------------------------------------------------- JSON exports
-_FULLTEXT = re.compile(r'"fulltext"\s*:\s*"')
+_FULLTEXT = r'"fulltext"\s*:\s*"'  # compiled on first use (re's cache), as _ATTRIBUTE
 _KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
 
 
@@ -328,7 +357,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
     else:
         raise FretishFileError("expected a list of FRET requirements or an object with a "
                                "\"requirements\" list", source=source)
-    starts = [m.end() for m in _FULLTEXT.finditer(raw)]
+    starts = [m.end() for m in re.finditer(_FULLTEXT, raw)]
     exact_positions = len(starts) == len(reqs)
     entries = []
     seen: dict[tuple[object, str], int] = {}

@@ -47,7 +47,6 @@ import os
 import re
 import sys
 import threading
-from fractions import Fraction
 
 from . import ast as A
 from . import cache
@@ -454,6 +453,8 @@ class _Builder:
         if op[0] == "NE":
             raise _Fail(op, "a probability bound uses <, <=, >, >= or =, not '!='",
                         "write e.g. 'with probability >= 0.99'")
+        from fractions import Fraction  # lazy: probabilities are rare (start-up, issue 9)
+
         v = Fraction(value)
         if not 0 <= v <= 1 or (op[0] == "GT" and v == 1) or (op[0] == "LT" and v == 0):
             what = (f"probability {value} is outside [0, 1]" if not 0 <= v <= 1 else
@@ -554,10 +555,22 @@ def _import_lark():
 
 def _lark_version() -> str:
     """The installed Lark's version, read from its ``__init__.py`` without importing Lark
-    (importing it costs more than parsing a hundred sentences); imports it when that fails."""
-    import importlib.util
+    (importing it costs more than parsing a hundred sentences); imports it when that fails.
+
+    The file is found as the import system finds it: Lark's own module when it is imported
+    already, else ``sys.path``'s finder (:class:`importlib.machinery.PathFinder`, loaded
+    with Python's start-up), else :func:`importlib.util.find_spec` (any other finder; that
+    module costs about 0.3 ms to import, start-up, issue 9)."""
     try:
-        spec = importlib.util.find_spec("lark")
+        spec = getattr(sys.modules.get("lark"), "__spec__", None)
+        if spec is None:
+            from importlib.machinery import PathFinder
+
+            spec = PathFinder.find_spec("lark")
+        if spec is None:
+            import importlib.util
+
+            spec = importlib.util.find_spec("lark")
         with open(spec.origin, encoding="utf-8") as f:
             text = f.read()
         m = re.search(r"^__version__\s*(?::\s*str\s*)?=\s*[\"']([^\"']+)[\"']", text, re.M)
@@ -712,6 +725,32 @@ def _run(start: str, text: str, source: str, line: int, column: int):
             pass
         finally:
             _ctx.text = ""
+    return _run_slow(start, text, source, line, column)
+
+
+def _run_slow(start: str, text: str, source: str, line: int, column: int):
+    """A text the fast path did not parse: its syntax error as Lark gives it, replayed on
+    the fast path's tables without Lark where that is exact
+    (:func:`fretish.fasterrors.lark_failure`: no Lark import, table load or lexer scanners,
+    about 0.2 s of CPU per run with a typo); else Lark itself (:func:`_run_lark`)."""
+    fast = _fast
+    if fast:
+        from .diagnostics import failure_error, make_error
+        from .fasterrors import lark_failure
+
+        _ctx.set(text, line - 1, column - 1)
+        try:
+            failure = lark_failure(fast, text, start, own=(_Fail,))
+        except _Fail as f:  # as _run_lark reports it
+            s = f.span
+            raise make_error(text, source, line, column, s.start, f.message, (),
+                             f.hint) from None
+        finally:
+            _ctx.text = ""
+        if failure is not None:
+            pos, value, ttype, expected = failure
+            raise failure_error(text, source, line, column, pos, value, ttype,
+                                expected) from None
     return _run_lark(start, text, source, line, column)
 
 

@@ -24,7 +24,6 @@ shows them so that they cannot change the output's structure or the reader's scr
 from __future__ import annotations
 
 import re
-import unicodedata
 from typing import Any
 
 __all__ = ["visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe"]
@@ -40,6 +39,8 @@ def _unsafe(ch: str, keep: str) -> bool:
         return False
     if o in (0xFFFE, 0xFFFF):
         return True
+    import unicodedata  # lazy: only text beyond printable ASCII needs it (start-up, issue 9)
+
     cat = unicodedata.category(ch)
     if cat == "Cn":  # unassigned: unknown to this Python; only noncharacters are unsafe
         return (o & 0xFFFE) == 0xFFFE or 0xFDD0 <= o <= 0xFDEF
@@ -82,13 +83,13 @@ def xml_text(text: Any, keep: str = "\n\t") -> str:
     return visible(text, keep)
 
 
-_BACKTICKS = re.compile(r"`+")
+_BACKTICKS = r"`+"  # compiled on first use (re's cache): start-up, issue 9
 
 
 def md_code(text: Any) -> str:
     """A Markdown code span holding ``text`` literally (module docstring)."""
     s = visible(text).replace("|", "\\|")
-    longest = max((len(m) for m in _BACKTICKS.findall(s)), default=0)
+    longest = max((len(m) for m in re.findall(_BACKTICKS, s)), default=0)
     fence = "`" * (longest + 1)
     if longest or s.startswith(" ") or s.endswith(" ") or not s:
         return f"{fence} {s} {fence}"

@@ -25,8 +25,6 @@ seconds.
 from __future__ import annotations
 
 import re
-from decimal import Decimal
-from fractions import Fraction
 
 __all__ = ["NS_PER_S", "TIME_UNITS", "parse_seconds", "parse_duration", "format_ns",
            "format_period", "format_period_ms", "format_offset", "format_seconds"]
@@ -41,8 +39,11 @@ _TABLES: list = []  # [(the unit table, the duration regexp)] once built
 def _tables() -> tuple:
     """``(TIME_UNITS, duration regexp)``, built on first use: a run that reads no duration
     in a time unit (``fretc FILE --emit ltl`` on sentences in ticks) does not pay for the
-    regexp's compilation and the table's fractions (start-up, issue 9)."""
+    regexp's compilation and the table's fractions, nor the import of :mod:`fractions`
+    and :mod:`decimal` (start-up, issue 9)."""
     if not _TABLES:
+        from fractions import Fraction  # lazy: fractions and decimal cost start-up (issue 9)
+
         units: dict = {}
         for names, seconds in (
                 (("ns", "nanosec", "nanosecs", "nanosecond", "nanoseconds"),
@@ -83,6 +84,9 @@ def parse_seconds(value: str | int | float) -> Fraction:
     if isinstance(value, bool) or not isinstance(value, (str, int, float)):
         raise ValueError(f"{value!r} is not a duration")
     time_units, duration = _tables()
+    from decimal import Decimal  # lazy, as in _tables
+    from fractions import Fraction
+
     if not isinstance(value, str):
         amount, unit = Fraction(Decimal(repr(value))), "s"
     else:
