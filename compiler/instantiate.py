@@ -161,19 +161,31 @@ class _Template:
     atoms (:func:`_unify`, rule 2), with template nodes as plain tuples (:func:`_data`).
     ``data`` is the whole as plain data (strings, ints, tuples: ``marshal``-able) for
     the disk cache. ``json`` is ``(escaper, separators, compiled)`` of
-    :func:`_json_format` and ``plain_compared`` :func:`_plain_conditions`, both made on
-    first use."""
+    :func:`_json_format` and ``plain_compared`` :func:`_plain_conditions`; they and the
+    five forms' getters are made on first use (``--emit ltl --json`` reads the forms
+    through :func:`_json_format` only)."""
 
-    __slots__ = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot", "compared", "data", "json",
-                 "plain_compared")
+    __slots__ = ("_forms", "compared", "data", "json", "plain_compared")
 
     def __init__(self, data: tuple):
         self.data = data
         self.json = None
         self.plain_compared = None  # _plain_conditions, made on first use
-        forms, self.compared = data
-        self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot = (
-            None if f is None else (f[0], _picker(f[1])) for f in forms)
+        self._forms = None  # the five (format, getter), made on first use
+        self.compared = data[1]
+
+    def _form(self, i: int):
+        forms = self._forms
+        if forms is None:
+            forms = self._forms = tuple(None if f is None else (f[0], _picker(f[1]))
+                                        for f in self.data[0])
+        return forms[i]
+
+    ft = property(lambda self: self._form(0))
+    ft_inf = property(lambda self: self._form(1))
+    pt = property(lambda self: self._form(2))
+    ft_spot = property(lambda self: self._form(3))
+    ft_inf_spot = property(lambda self: self._form(4))
 
 
 #: field numbers of the JSON format (:func:`_json_format`): the FRET/SMV values (the twelve
@@ -181,25 +193,55 @@ class _Template:
 _JSON_SPOT = 3 * _ATOMS + 6
 
 
+#: per format field (the twelve atoms, then the bounds from _BOUND0): the position of its
+#: value among a plain requirement's JSON values (:meth:`InstantiatedFormalization.json_forms`:
+#: the four atoms' FRET/SMV texts, the six bounds, the four atoms' Spot texts), in a
+#: FRET/SMV form and in a Spot form
+#: (``bytes.translate`` tables: a form's fields as bytes are mapped in one call, where a
+#: ``map`` would make a Python-level call per field, tens of thousands per run)
+_JSON_PLAIN_SMV = bytes(f % _ATOMS if f < _BOUND0 else _ATOMS + f - _BOUND0
+                        for f in range(_BOUND0 + 6)).ljust(256, b"\xff")
+_JSON_PLAIN_SPOT = bytes(_ATOMS + 6 + f % _ATOMS if f < _BOUND0 else _ATOMS + f - _BOUND0
+                         for f in range(_BOUND0 + 6)).ljust(256, b"\xff")
+#: and of a Spot form's fields among any requirement's values (:data:`_JSON_SPOT` on)
+_JSON_SPOT_OF = bytes(_JSON_SPOT + f for f in range(_BOUND0 + 6)).ljust(256, b"\xff")
+
+
 def _json_format(t: "_Template", enc, seps: tuple):
-    """``(format, getter)`` of the five printed forms of template ``t`` as JSON strings
-    (``json``'s escaper ``enc``), ft, ft_inf, pt, ft_spot, ft_inf_spot, separated by
-    ``seps`` (the four texts between them), from the values of
-    :meth:`InstantiatedFormalization.json_forms`; None when Spot has no form for ft or
-    ft_inf. JSON's escaping maps each character on its own, so the escaped text of a
-    filled-in form is its escaped format (``%s`` and ``%%`` escape to themselves)
-    filled in with the escaped values."""
+    """``(format, getter, plain getter)`` of the five printed forms of template ``t`` as
+    JSON strings (``json``'s escaper ``enc``), ft, ft_inf, pt, ft_spot, ft_inf_spot,
+    separated by ``seps`` (the four texts between them), from the values of
+    :meth:`InstantiatedFormalization.json_forms` (``plain getter``: those of atoms that
+    are the same in ft, ft_inf and pt, :data:`_JSON_PLAIN_SMV`); None when Spot has no form
+    for ft or ft_inf. JSON's escaping maps each character on its own, so the escaped text
+    of a filled-in form is its escaped format (``%s`` and ``%%`` escape to themselves, and
+    the quotes ``enc`` adds are the JSON string's) filled in with the escaped values."""
     forms = t.data[0]
     if any(f is None for f in forms):
         return None
-    parts: list = []
-    order: list = []
+    texts: list = []  # the literal texts between the fields, escaped
+    order = bytearray()
+    plain = bytearray()
     for i, (fmt, fields) in enumerate(forms):
+        if "%%" in fmt:  # a % of the text: the fields found by filling in NULs
+            pieces = (enc(fmt) % (("\x00",) * len(fields))).split("\x00")
+        else:  # (the usual case: no % in a template's text) every % is a field's
+            pieces = enc(fmt).split("%s")
         if i:
-            parts.append(seps[i - 1].replace("%", "%%"))
-        parts.append('"' + enc(fmt)[1:-1] + '"')
-        order.extend(fields if i < 3 else map(_JSON_SPOT.__add__, fields))
-    return "".join(parts), _picker(tuple(order))
+            texts[-1] += seps[i - 1] + pieces[0]
+            texts += pieces[1:]
+        else:
+            texts += pieces
+        fields = bytes(fields)  # field numbers 0 .. _BOUND0 + 5
+        if i < 3:
+            order += fields
+            plain += fields.translate(_JSON_PLAIN_SMV)
+        else:
+            order += fields.translate(_JSON_SPOT_OF)
+            plain += fields.translate(_JSON_PLAIN_SPOT)
+    buffer = [None] * (2 * len(texts) - 1)
+    buffer[0::2] = texts
+    return buffer, _picker(tuple(order)), _picker(tuple(plain))
 
 
 def _picker(order: tuple):
@@ -878,23 +920,28 @@ class InstantiatedFormalization(Formalization):
         compiled = j[2]
         if compiled is None:
             return None
-        fmt, pick = compiled
+        buffer, pick, pick_plain = compiled
         atoms = self._atoms
         texts = self._texts
+        bounds = _bound_texts(self.ticks)
         try:
-            if self._plain:
-                smv = [None if x is None else enc(x)[1:-1] for x in texts[:_ATOMS]] * 3
-                spot = [None if a is None else enc(_spot(a))[1:-1]
-                        for a in atoms[:_ATOMS]] * 3
+            if self._plain:  # one atom set: _JSON_PLAIN_SMV's values
+                values = [None if x is None else enc(x)[1:-1] for x in texts[:_ATOMS]]
+                values += bounds
+                values += [None if a is None else enc(_spot(a))[1:-1] for a in atoms[:_ATOMS]]
+                pick = pick_plain
             else:  # Spot forms: ft's and ft_inf's atoms only (pt's have past operators)
-                smv = [None if x is None else enc(x)[1:-1] for x in texts]
-                spot = [None if a is None else enc(_spot(a))[1:-1]
-                        for a in atoms[:2 * _ATOMS]]
-                spot += (None,) * _ATOMS
+                values = [None if x is None else enc(x)[1:-1] for x in texts]
+                values += bounds
+                values += [None if a is None else enc(_spot(a))[1:-1]
+                           for a in atoms[:2 * _ATOMS]]
+                values += (None,) * _ATOMS
+                values += bounds
         except ValueError:
             return None
-        bounds = _bound_texts(self.ticks)
-        return fmt % pick(smv + bounds + spot + bounds)
+        buffer = buffer.copy()
+        buffer[1::2] = pick(values)
+        return "".join(buffer)
 
     def spot(self, which: str) -> str:
         """Spot text of ``ft`` or ``ft_inf``; ``ValueError`` where Spot has no form."""
@@ -919,108 +966,120 @@ class InstantiatedFormalization(Formalization):
         return fmt % pick(self._values(texts))
 
 
+from gc import isenabled as _gc_isenabled  # noqa: E402 (used by instantiate only)
+
+
 def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Formalization:
     """:func:`compiler.semantics.formalize` for printing: an
     :class:`InstantiatedFormalization` when the requirement's atoms are opaque-safe (module
     docstring), else the full build. Same errors, warnings, variables and ticks as
     :func:`formalize`; the printed texts (:func:`formula_text`) are byte-identical to the
     printers' on the full build."""
+    if not _gc_isenabled():  # paused already (compile_entries, --emit ltl): no context
+        return _instantiate(req, tick_period)
     with gc_paused():
-        scope, cond, timing, n, warnings = _shape(req, tick_period)
-        mode = req.scope.mode if scope != "null" else None
-        cexpr = req.condition.expr if cond != "null" else None
-        sexpr = req.timing.stop if timing in A.STOP_TIMINGS else None
-        exprs = (mode, cexpr, sexpr, req.response)
-        # An expression without temporal functions or FTP converts to the same atom in ft,
-        # ft_inf and pt (Expander's kind, endpoints and endpoint-free forms only shape
-        # temporal functions; compiler.semantics converts it once) and prints alike in pt
-        # (no FTP): converted and printed once, its variables collected on the way.
-        x = _PlainExpander()
-        one: list = []  # per expression: its atom, None (absent) or _TIMED
-        names: list = []  # per expression: its variables (a dict), None for _TIMED
-        try:
-            for e in exprs:
-                if e is None:
-                    one.append(None)
-                    names.append({})
-                    continue
-                x.names = {}
-                try:
-                    one.append(x.bool(e))
-                    names.append(x.names)
-                except _Timed:
-                    one.append(_TIMED)
-                    names.append(None)
-        except SemanticsError:
-            if not any(e is not None and mentions_time(e) for e in exprs):
-                raise  # the error of the one conversion (Expander("ft", FTP, LAST))
-            # the per-formula conversion raises, in its own order (mode, then per formula)
-            one = [_TIMED if e is not None else None for e in exprs]
-            names = [None] * 4
-        if _TIMED not in one:
-            for a in one:
-                if a is not None and inspected(a):
-                    return formalize(req, tick_period)
-            tmpl = template(scope, cond, timing, n)
-            atoms = tuple(one) * 3
-            if not _plain_compared_safe(tmpl, one, atoms, n):
+        return _instantiate(req, tick_period)
+
+
+def _instantiate(req: A.Requirement, tick_period: Fraction | None) -> Formalization:
+    """:func:`instantiate`'s work, the cyclic garbage collector paused."""
+    scope, cond, timing, n, warnings = _shape(req, tick_period)
+    mode = req.scope.mode if scope != "null" else None
+    cexpr = req.condition.expr if cond != "null" else None
+    sexpr = req.timing.stop if timing in A.STOP_TIMINGS else None
+    exprs = (mode, cexpr, sexpr, req.response)
+    # An expression without temporal functions or FTP converts to the same atom in ft,
+    # ft_inf and pt (Expander's kind, endpoints and endpoint-free forms only shape
+    # temporal functions; compiler.semantics converts it once) and prints alike in pt
+    # (no FTP): converted and printed once, its variables collected on the way.
+    x = _PlainExpander()
+    one: list = []  # per expression: its atom, None (absent) or _TIMED
+    names: list = []  # per expression: its variables (a dict), None for _TIMED
+    try:
+        for e in exprs:
+            if e is None:
+                one.append(None)
+                names.append({})
+                continue
+            x.names = {}
+            try:
+                one.append(x.bool(e))
+                names.append(x.names)
+            except _Timed:
+                one.append(_TIMED)
+                names.append(None)
+    except SemanticsError:
+        if not any(e is not None and mentions_time(e) for e in exprs):
+            raise  # the error of the one conversion (Expander("ft", FTP, LAST))
+        # the per-formula conversion raises, in its own order (mode, then per formula)
+        one = [_TIMED if e is not None else None for e in exprs]
+        names = [None] * 4
+    # (identity tests: ``in`` would call Node.__eq__ on each atom)
+    if one[0] is not _TIMED and one[1] is not _TIMED and one[2] is not _TIMED \
+            and one[3] is not _TIMED:
+        for a in one:
+            if a is not None and (a.op in _INSPECTED_OPS or a.op == "&") and inspected(a):
                 return formalize(req, tick_period)
-            texts = [None if a is None else _smv(a) for a in one] * 3
-            variables = {}
-            for d in names:
-                variables.update(d)
-            # variables in sentence order: mode, condition, stop, response
-            return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
-                                             list(variables), warnings, n, True, plain=True)
-        # the atoms of each formula, converted as compiler.semantics.construct does (the
-        # expressions with temporal functions; the others are the same in every formula)
-        m = one[0]
-        if m is _TIMED:
-            m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
-            # the endpoint-free forms never read the endpoints: ft_inf's mode is ft's
-            m_ft = m_inf = Expander("ft", FTP, LAST, free=True).bool(mode)
-        else:
-            m_pt = m_ft = m_inf = m
-        if m is None or m is not _TIMED and m.op == "ap" and _LEAVES.get(("ap", m.name)) is m:
-            left, right, right_inf = _named_endpoints(scope, m)
-        else:
-            left, _ = pt_endpoints(scope, m_pt)
-            right = fn_right(scope, m_ft, LAST)
-            right_inf = fn_right(scope, m_inf, FALSE)
-        memo: dict = {}
-        px = _SharingExpander("pt", left, right, memo)
-        fx = _SharingExpander("ft", left, right, memo)
-        ix = _SharingExpander("ft", left, right_inf, memo)
-        rest = tuple(zip(exprs[1:], one[1:]))
-        a_ft = tuple(fx.bool(e) if a is _TIMED else a for e, a in rest)
-        # ft_inf differs from ft only in Right (LAST or FALSE), which only a future-time
-        # function's expansion reads: without one, ft_inf's atom is ft's
-        a_inf = tuple(ix.bool(e) if a is _TIMED and _has_future_function(e) else f
-                      for (e, a), f in zip(rest, a_ft))
-        atoms = (m_ft, *a_ft, m_inf, *a_inf,
-                 m_pt, *(px.bool(e) if a is _TIMED else a for e, a in rest))
-        plain_text = [None if a is None or a is _TIMED else _smv(a) for a in one]
-        texts = []
-        for i, a in enumerate(atoms):
-            t = plain_text[i % _ATOMS]
-            if t is None and a is not None:
-                t = _smv_z(a) if i >= 2 * _ATOMS else _smv(a)
-            texts.append(t)
-        pt_causal = not px.has_future_atom
         tmpl = template(scope, cond, timing, n)
-        if not opaque_safe(tmpl, atoms, n):
+        atoms = tuple(one) * 3
+        if not _plain_compared_safe(tmpl, one, atoms, n):
             return formalize(req, tick_period)
-        # variables in sentence order: mode, condition, stop, response (of ft)
+        texts = [None if a is None else _smv(a) for a in one] * 3
         variables = {}
-        # Left and Right are made of the mode's names, which come first: not walked
-        done = {id(left), id(right), id(right_inf)}
-        for a, d in zip(atoms[:_ATOMS], names):
-            if d is None:
-                _variables_into(a, variables, done)
-            else:
-                variables.update(d)
+        for d in names:
+            variables.update(d)
+        # variables in sentence order: mode, condition, stop, response
         return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
-                                         list(variables), warnings, n, pt_causal)
+                                         list(variables), warnings, n, True, plain=True)
+    # the atoms of each formula, converted as compiler.semantics.construct does (the
+    # expressions with temporal functions; the others are the same in every formula)
+    m = one[0]
+    if m is _TIMED:
+        m_pt = Expander("pt", FTP, LAST, free=True).bool(mode)
+        # the endpoint-free forms never read the endpoints: ft_inf's mode is ft's
+        m_ft = m_inf = Expander("ft", FTP, LAST, free=True).bool(mode)
+    else:
+        m_pt = m_ft = m_inf = m
+    if m is None or m is not _TIMED and m.op == "ap" and _LEAVES.get(("ap", m.name)) is m:
+        left, right, right_inf = _named_endpoints(scope, m)
+    else:
+        left, _ = pt_endpoints(scope, m_pt)
+        right = fn_right(scope, m_ft, LAST)
+        right_inf = fn_right(scope, m_inf, FALSE)
+    memo: dict = {}
+    px = _SharingExpander("pt", left, right, memo)
+    fx = _SharingExpander("ft", left, right, memo)
+    ix = _SharingExpander("ft", left, right_inf, memo)
+    rest = tuple(zip(exprs[1:], one[1:]))
+    a_ft = tuple(fx.bool(e) if a is _TIMED else a for e, a in rest)
+    # ft_inf differs from ft only in Right (LAST or FALSE), which only a future-time
+    # function's expansion reads: without one, ft_inf's atom is ft's
+    a_inf = tuple(ix.bool(e) if a is _TIMED and _has_future_function(e) else f
+                  for (e, a), f in zip(rest, a_ft))
+    atoms = (m_ft, *a_ft, m_inf, *a_inf,
+             m_pt, *(px.bool(e) if a is _TIMED else a for e, a in rest))
+    plain_text = [None if a is None or a is _TIMED else _smv(a) for a in one]
+    texts = []
+    for i, a in enumerate(atoms):
+        t = plain_text[i % _ATOMS]
+        if t is None and a is not None:
+            t = _smv_z(a) if i >= 2 * _ATOMS else _smv(a)
+        texts.append(t)
+    pt_causal = not px.has_future_atom
+    tmpl = template(scope, cond, timing, n)
+    if not opaque_safe(tmpl, atoms, n):
+        return formalize(req, tick_period)
+    # variables in sentence order: mode, condition, stop, response (of ft)
+    variables = {}
+    # Left and Right are made of the mode's names, which come first: not walked
+    done = {id(left), id(right), id(right_inf)}
+    for a, d in zip(atoms[:_ATOMS], names):
+        if d is None:
+            _variables_into(a, variables, done)
+        else:
+            variables.update(d)
+    return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts,
+                                     list(variables), warnings, n, pt_causal)
 
 
 def formula_text(f: Formalization, which: str) -> str:

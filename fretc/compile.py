@@ -51,11 +51,15 @@ def compile_cmd(files, emit, as_json, output, psl_map):
         # process ends: Python's cyclic garbage collector would only rescan them, again and
         # again as they accumulate (more than half the CPU time of a thousand requirements).
         gc.disable()
+        if as_json:
+            texts, failed = _ltl_json_texts(files)
+            for c in failed:
+                click.echo(_shown(str(c.error)), err=True)
+            _write_json_list(sys.stdout, texts)
+            sys.exit(1 if failed else 0)
     compiled = _load(files)
     if not compiled:
-        click.echo(f"error: no requirements in {', '.join(files)} (empty or only comments)",
-                   err=True)
-        sys.exit(2)
+        _no_requirements(files)
     failed = [c for c in compiled if c.error is not None]
     for c in failed:
         click.echo(_shown(str(c.error)), err=True)
@@ -83,6 +87,70 @@ def compile_cmd(files, emit, as_json, output, psl_map):
         _check_output(outputs, output, ".psl")
         _write_outputs(outputs, output, ".psl")
     sys.exit(1 if failed else 0)
+
+
+def _no_requirements(files) -> None:
+    click.echo(f"error: no requirements in {', '.join(files)} (empty or only comments)",
+               err=True)
+    sys.exit(2)
+
+
+def _ltl_json_texts(paths) -> tuple:
+    """``(texts, failed)`` of ``--emit ltl --json``: per requirement of ``paths``, in order,
+    its text in the JSON list (:func:`ltl_json_item`), and the compiled requirements that
+    failed (their errors are printed before the list). Each requirement is compiled and
+    written before the next: its entry (the parsed sentence), formula trees and printed
+    forms are dropped as soon as its text is made (a failed one is kept for its error), so
+    the run keeps the texts, not a thousand requirements' trees (a third of the peak
+    memory of a thousand requirements). Errors, exit codes and texts are those of
+    :func:`_load` then :func:`ltl_json`."""
+    from compiler.build import compile_entry
+    from compiler.ir import gc_paused
+    from fretish.files import load_requirements
+
+    try:
+        entries = load_requirements(list(paths))
+    except OSError as exc:
+        click.echo(_shown(f"error: {exc}"), err=True)
+        sys.exit(2)
+    if not entries:
+        _no_requirements(paths)
+    item = ltl_json_item()
+    texts: list = []
+    failed: list = []
+    with gc_paused():  # as compiler.build.compile_entries
+        for i, e in enumerate(entries):
+            entries[i] = None  # the list's reference: freed with the last one below
+            c = compile_entry(e)
+            if c.error is not None:
+                failed.append(c)
+            texts.append(item(c))
+            del c, e  # not held while the next one compiles
+    return texts, failed
+
+
+#: items of the JSON list written per write call by :func:`_write_json_list` (about 80 kB
+#: of text for requirements of a generated sentence)
+_WRITE_BATCH = 32
+
+
+def _write_json_list(out, texts: list) -> None:
+    """Write the JSON list of the item ``texts`` (:func:`ltl_json_item`) and a newline to
+    the text stream ``out``, as ``out.write(ltl_json(...) + "\n")`` writes it, in batches of
+    :data:`_WRITE_BATCH` items: no text of the whole list is made (joined, then copied with
+    its newline, then encoded: three copies of a 2.6 MB text for a thousand requirements).
+    ``click.echo`` is not used: it would scan the text for ANSI escapes to strip, and
+    JSON's text is printable ASCII (``ensure_ascii`` escapes every control character)."""
+    if not texts:
+        out.write("[]\n")
+    else:
+        sep = "[\n  "
+        for i in range(0, len(texts), _WRITE_BATCH):
+            out.write(sep)
+            out.write(",\n  ".join(texts[i:i + _WRITE_BATCH]))
+            sep = ",\n  "
+        out.write("\n]\n")
+    out.flush()
 
 
 class _NotPlain(Exception):
@@ -205,81 +273,93 @@ def json_indent2(obj) -> str:
 
 def ltl_json(compiled) -> str:
     """``json_indent2([c.to_json() for c in compiled])``, the same text, written in one pass:
-    a requirement that formalized is one ``%`` formatting of a format made once from
+    each requirement's text is :func:`ltl_json_item`'s, the list around them as
+    ``json.dumps(..., indent=2)`` writes it."""
+    if not compiled:
+        return "[]"
+    return "[\n  " + ",\n  ".join(map(ltl_json_item(), compiled)) + "\n]"
+
+
+def ltl_json_item():
+    """``item(compiled) -> str``: the text of ``compiled.to_json()`` as an item of
+    :func:`ltl_json`'s list (``json.dumps(..., indent=2)``'s text nested one level: every
+    line after the first indented by two more spaces), for one
+    :class:`compiler.build.Compiled`.
+
+    A requirement that formalized is one ``%`` formatting of a format made once from
     :data:`compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes it)
     with :meth:`compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
     escaper; its five printed forms come escaped in one piece from its template where
     there is one (:meth:`compiler.build.Compiled.json_forms`). Any other requirement, or a
     value of another type than those :meth:`~compiler.build.Compiled.json_values`
-    documents, takes :func:`json_indent2`'s general path (and a value that path cannot
-    write, ``json.dumps`` for the whole list)."""
+    documents, takes :func:`json_indent2`'s general path, and a value that path cannot
+    write ``json.dumps(value, indent=2)`` nested one level (JSON strings escape newlines,
+    so its only newlines are its layout's)."""
     from compiler.build import FORMALIZED_KEYS
 
-    if not compiled:
-        return "[]"
     enc = _string_encoder()
     go, parts = _indent2_writer(enc)
-    add = parts.append
     heads, inner, close = _layout(enc, FORMALIZED_KEYS, "\n  ")
     # ft, ft_inf, pt, ft_spot, ft_inf_spot: one field of the format, the texts between them
     # given to json_forms
     ft = FORMALIZED_KEYS.index("ft")
     seps = heads[ft + 1:ft + 5]
     s0, s1, s2, s3 = seps
-    fmt = "".join(h.replace("%", "%%") + "%s" for h in heads[:ft + 1] + heads[ft + 5:])
-    fmt += close.replace("%", "%%")
+    # the text before each written value (the five forms are one), in one join per
+    # requirement (a % format would scan these texts character by character)
+    (h_id, h_text, h_source, h_line, h_parent, h_rationale, h_key, h_forms, h_vars,
+     h_vars_fret, h_ticks, h_warnings, h_causal) = heads[:ft + 1] + heads[ft + 5:]
     li = inner + "  "  # a list value's items
     lsep = "," + li
     scalars = {None: "null", True: "true", False: "false"}
-    sep = "[\n  "
-    try:
-        for c in compiled:
-            add(sep)
-            sep = ",\n  "
-            values = c.json_values(texts=False)
-            if values is not None:
-                (rid, text, source, line, parent, rationale, key, _, _, _, _, _, variables,
-                 variables_fret, ticks, warnings, causal) = values
-                if (type(line) is int and type(causal) is bool
-                        and (ticks is None or type(ticks) is int)
-                        and type(variables) is list and type(variables_fret) is list
-                        and type(warnings) is list):
-                    try:
-                        forms = c.json_forms(enc, seps)
-                        if forms is None:
-                            f0, f1, f2, f3, f4 = c.printed()
-                            forms = (enc(f0) + s0 + enc(f1) + s1 + enc(f2) + s2 + enc(f3) + s3
-                                     + enc(f4))
-                        add(fmt % (
-                            enc(rid), enc(text), enc(source), int.__repr__(line),
-                            "null" if parent is None else enc(parent),
-                            "null" if rationale is None else enc(rationale), enc(key), forms,
-                            "[" + li + lsep.join(map(enc, variables)) + inner + "]"
-                            if variables else "[]",
-                            "[" + li + lsep.join(map(enc, variables_fret)) + inner + "]"
-                            if variables_fret else "[]",
-                            "null" if ticks is None else int.__repr__(ticks),
-                            "[" + li + lsep.join(map(enc, warnings)) + inner + "]"
-                            if warnings else "[]",
-                            scalars[causal]))
-                        continue
-                    except TypeError:  # a value that is not a string where one is written
-                        pass
-            go(c.to_json(), "\n  ")
-    except (_NotPlain, RecursionError):
-        import json  # lazy: only for values outside the plain shapes
-        return json.dumps([c.to_json() for c in compiled], indent=2)
-    add("\n]")
-    return "".join(parts)
+
+    def item(c) -> str:
+        values = c.json_values(texts=False)
+        if values is not None:
+            (rid, text, source, line, parent, rationale, key, _, _, _, _, _, variables,
+             variables_fret, ticks, warnings, causal) = values
+            if (type(line) is int and type(causal) is bool
+                    and (ticks is None or type(ticks) is int)
+                    and type(variables) is list and type(variables_fret) is list
+                    and type(warnings) is list):
+                try:
+                    forms = c.json_forms(enc, seps)
+                    if forms is None:
+                        f0, f1, f2, f3, f4 = c.printed()
+                        forms = (enc(f0) + s0 + enc(f1) + s1 + enc(f2) + s2 + enc(f3) + s3
+                                 + enc(f4))
+                    return "".join((
+                        h_id, enc(rid), h_text, enc(text), h_source, enc(source),
+                        h_line, int.__repr__(line),
+                        h_parent, "null" if parent is None else enc(parent),
+                        h_rationale, "null" if rationale is None else enc(rationale),
+                        h_key, enc(key), h_forms, forms,
+                        h_vars, "[" + li + lsep.join(map(enc, variables)) + inner + "]"
+                        if variables else "[]",
+                        h_vars_fret, "[" + li + lsep.join(map(enc, variables_fret)) + inner
+                        + "]" if variables_fret else "[]",
+                        h_ticks, "null" if ticks is None else int.__repr__(ticks),
+                        h_warnings, "[" + li + lsep.join(map(enc, warnings)) + inner + "]"
+                        if warnings else "[]",
+                        h_causal, scalars[causal], close))
+                except TypeError:  # a value that is not a string where one is written
+                    pass
+        obj = c.to_json()
+        try:
+            go(obj, "\n  ")
+            return "".join(parts)
+        except (_NotPlain, RecursionError):
+            import json  # lazy: only for values outside the plain shapes
+            return json.dumps(obj, indent=2).replace("\n", "\n  ")
+        finally:
+            parts.clear()
+
+    return item
 
 
 def _emit_ltl(compiled, as_json: bool) -> None:
-    if as_json:
-        # click.echo would scan the text for ANSI escapes to strip: JSON's text is printable
-        # ASCII (ensure_ascii escapes every control character), there are none
-        out = sys.stdout
-        out.write(ltl_json(compiled) + "\n")
-        out.flush()
+    if as_json:  # compile_cmd streams instead (_ltl_json_texts)
+        _write_json_list(sys.stdout, list(map(ltl_json_item(), compiled)))
         return
     for c in compiled:
         click.echo(_shown(f"{c.id}  ({c.location()})"))

@@ -547,3 +547,55 @@ def test_whole_durations_read_without_fraction(amount, unit, period):
             return str(exc), warnings
 
     assert outcome(A.Duration(amount, unit)) == outcome(A.Duration(_NotDigits(amount), unit))
+
+
+# ------------------------------------------------ --json: the forms joined from their pieces
+_TEXT = st.text(alphabet=st.sampled_from('(a) &"\\%s{}\x00\x1fé€'), max_size=4)
+
+
+def _form(fields_from: list):
+    """A template form: literal texts (with ``%``, quotes, backslashes, NULs) between
+    fields drawn from ``fields_from``, as ``(format, order)``."""
+    return st.lists(st.tuples(_TEXT, st.sampled_from(fields_from)), max_size=6).flatmap(
+        lambda segs: _TEXT.map(lambda tail: (
+            "".join(t.replace("%", "%%") + "%s" for t, _ in segs) + tail.replace("%", "%%"),
+            tuple(f for _, f in segs))))
+
+
+_SMV_FIELDS = list(range(I._BOUND0 + 6))
+_SPOT_FIELDS = list(range(2 * I._ATOMS)) + list(range(I._BOUND0, I._BOUND0 + 6))
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(st.tuples(_form(_SMV_FIELDS), _form(_SMV_FIELDS), _form(_SMV_FIELDS),
+                 _form(_SPOT_FIELDS), _form(_SPOT_FIELDS)),
+       st.lists(_TEXT, min_size=12, max_size=12), st.lists(_TEXT, min_size=12, max_size=12),
+       st.lists(_TEXT, min_size=6, max_size=6), st.booleans())
+def test_json_pieces_fill_as_the_escaped_format(forms, smv, spot, bounds, plain):
+    """_json_format's pieces, filled with the escaped values by its getters and joined
+    (InstantiatedFormalization.json_forms), give the five forms filled in by ``%`` and
+    then escaped by json, separators between them: for any literal text (``%`` included,
+    which takes the NUL-filling path) and any field order, with all twelve atoms or plain
+    ones (the same four in every formula)."""
+    enc = json.encoder.encode_basestring_ascii
+    seps = (',\n    "ft_inf": ', ',\n    "pt": ', ',\n    "ft_spot": ', ',\n    "ft_inf_spot": ')
+    if plain:
+        smv, spot = smv[:4] * 3, spot[:4] * 3
+    t = I._Template((forms, ()))
+    buffer, pick, pick_plain = I._json_format(t, enc, seps)
+
+    def raw(i, f):
+        if f >= I._BOUND0:
+            return bounds[f - I._BOUND0]
+        return smv[f] if i < 3 else spot[f]
+
+    want = "".join((seps[i - 1] if i else "") + enc(fmt % tuple(raw(i, f) for f in fields))
+                   for i, (fmt, fields) in enumerate(forms))
+    e = [enc(x)[1:-1] for x in smv + bounds + spot + bounds]  # all twelve atoms' values
+    if plain:
+        values, getter = e[:4] + e[12:18] + e[18:22], pick_plain
+    else:
+        values, getter = e, pick
+    got = buffer.copy()
+    got[1::2] = getter(values)
+    assert "".join(got) == want

@@ -119,3 +119,78 @@ def test_command_prints_the_reference_text(tmp_path):
     assert res.exit_code == 1  # B does not parse
     compiled = compile_entries(load_requirements([str(f)]))
     assert res.stdout == reference(compiled) + "\n"
+
+
+# ---------------------------------------------------------------- the command's streaming path
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(st.lists(st.text(alphabet=st.sampled_from('ab{}"\n, '), max_size=5), max_size=70))
+def test_json_list_written_in_batches_is_the_joined_list(items):
+    """_write_json_list writes what ``ltl_json`` returns (plus a newline) for any number of
+    items, across the batch boundaries (0, 1, 31, 32, 33, 64, 65 ... items)."""
+    import io
+
+    from fretc.compile import _WRITE_BATCH, _write_json_list
+
+    assert _WRITE_BATCH < 70
+    out = io.StringIO()
+    _write_json_list(out, items)
+    want = "[]" if not items else "[\n  " + ",\n  ".join(items) + "\n]"
+    assert out.getvalue() == want + "\n"
+
+
+def test_json_list_batches_at_the_boundaries():
+    import io
+
+    from fretc.compile import _WRITE_BATCH, _write_json_list
+
+    for n in (0, 1, _WRITE_BATCH - 1, _WRITE_BATCH, _WRITE_BATCH + 1, 2 * _WRITE_BATCH,
+              2 * _WRITE_BATCH + 1):
+        items = [json.dumps({"i": i}, indent=2).replace("\n", "\n  ") for i in range(n)]
+        out = io.StringIO()
+        _write_json_list(out, items)
+        assert out.getvalue() == json.dumps([{"i": i} for i in range(n)], indent=2) + "\n"
+
+
+def test_command_drops_each_requirement_once_its_text_is_made(tmp_path, monkeypatch):
+    """``--emit ltl --json`` keeps the texts, not the requirements: when a requirement is
+    compiled, the entries (parsed sentences) of the requirements before it are freed,
+    except a failed one's (its error is printed before the list). Output as the
+    reference."""
+    import gc
+    import weakref
+
+    import compiler.build as build
+
+    f = tmp_path / "r.fret"
+    f.write_text("".join(f"R{i}: upon p{i} the sw shall within {i + 2} ticks satisfy q\n"
+                         for i in range(5))
+                 + "BAD: the sw shall within 2.5 ticks satisfy p\n"
+                 + "".join(f"S{i}: the sw shall always satisfy x{i} > {i}\n"
+                           for i in range(5)), encoding="utf-8")
+    seen: list = []
+    alive_before: list = []
+    real = build.compile_entry
+
+    def spy(entry):
+        alive_before.append([r() is not None for r in seen])
+        seen.append(weakref.ref(entry))
+        return real(entry)
+
+    monkeypatch.setattr(build, "compile_entry", spy)
+    was = gc.isenabled()
+    try:
+        res = CliRunner().invoke(main, [str(f), "--emit", "ltl", "--json"])
+    finally:
+        if was:
+            gc.enable()
+    monkeypatch.setattr(build, "compile_entry", real)
+    assert res.exit_code == 1
+    compiled = compile_entries(load_requirements([str(f)]))
+    assert res.stdout == reference(compiled) + "\n"
+    assert "2.5 ticks" in res.stderr
+    assert len(alive_before) == 11
+    bad = 5
+    for k, alive in enumerate(alive_before):
+        # only the failed requirement's entry is kept (the one just compiled is not in
+        # the list yet)
+        assert alive == [i == bad for i in range(k)], (k, alive)
