@@ -20,19 +20,25 @@ from .options import shown as _shown
 __all__ = ["compile_cmd"]
 
 
-def _load(paths) -> list:
-    """The compiled requirements of ``paths`` (a :class:`fretish.errors.FretishError` of a
-    file goes to the command group's handler: printed, exit code 2)."""
-    # lazy: the compiler (Lark tables, Spot) only when a command compiles
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
+def _entries(paths) -> list:
+    """The :class:`fretish.files.RequirementEntry` list of ``paths``, parsed (an unreadable
+    file: its error printed, exit code 2; a :class:`fretish.errors.FretishError` of a file
+    goes to the command group's handler: printed, exit code 2)."""
+    from fretish.files import load_requirements  # lazy: the parser only when a command compiles
 
     try:
-        entries = load_requirements(list(paths))
+        return load_requirements(list(paths))
     except OSError as exc:
         click.echo(_shown(f"error: {exc}"), err=True)
         sys.exit(2)
-    return compile_entries(entries)
+
+
+def _load(paths) -> list:
+    """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler)."""
+    # lazy: the compiler (Lark tables, Spot) only when a command compiles
+    from compiler.build import compile_entries
+
+    return compile_entries(_entries(paths))
 
 
 @click.command("compile")
@@ -64,7 +70,7 @@ def compile_cmd(files, emit, as_json, output, psl_map):
     for c in failed:
         click.echo(_shown(str(c.error)), err=True)
     if emit == "ltl":
-        _emit_ltl(compiled, as_json)
+        _emit_ltl(compiled)  # text; --json took _ltl_json_texts above
     elif emit == "monitor":
         from compiler.codegen import build_monitor_modules  # lazy: Jinja2 and Spot
         internal: list = []
@@ -106,13 +112,8 @@ def _ltl_json_texts(paths) -> tuple:
     :func:`_load` then :func:`ltl_json`."""
     from compiler.build import compile_entry
     from compiler.ir import gc_paused
-    from fretish.files import load_requirements
 
-    try:
-        entries = load_requirements(list(paths))
-    except OSError as exc:
-        click.echo(_shown(f"error: {exc}"), err=True)
-        sys.exit(2)
+    entries = _entries(paths)
     if not entries:
         _no_requirements(paths)
     item = ltl_json_item()
@@ -286,9 +287,9 @@ def ltl_json_item():
     line after the first indented by two more spaces), for one
     :class:`compiler.build.Compiled`.
 
-    A requirement that formalized is one ``%`` formatting of a format made once from
-    :data:`compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes it)
-    with :meth:`compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
+    A requirement that formalized is one join of the texts between its values, made once
+    from :data:`compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes
+    it), and :meth:`compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
     escaper; its five printed forms come escaped in one piece from its template where
     there is one (:meth:`compiler.build.Compiled.json_forms`). Any other requirement, or a
     value of another type than those :meth:`~compiler.build.Compiled.json_values`
@@ -357,10 +358,9 @@ def ltl_json_item():
     return item
 
 
-def _emit_ltl(compiled, as_json: bool) -> None:
-    if as_json:  # compile_cmd streams instead (_ltl_json_texts)
-        _write_json_list(sys.stdout, list(map(ltl_json_item(), compiled)))
-        return
+def _emit_ltl(compiled) -> None:
+    """``--emit ltl``'s text: per requirement its id, place, text, key, ft, ft_inf, pt and
+    warnings (or its error)."""
     for c in compiled:
         click.echo(_shown(f"{c.id}  ({c.location()})"))
         click.echo(_shown(f"  text    {c.text}"))
