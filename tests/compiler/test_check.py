@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from click.testing import CliRunner
 
 from compiler.build import compile_entries
-from compiler.check import check_requirements
-from compiler.check_witness import read_expected
+from check.analysis import check_requirements
+from check.witness import read_expected
 from fretc.cli import main
 from fretish.files import load_requirements
 
@@ -142,7 +142,7 @@ def test_reactive_environment_needs_no_fixed_sequence(tmp_path):
                "P2: the robot shall always satisfy i2 <-> i\n")
     r = _check(p, inputs=["i"], outputs=["o", "i2"])
     assert r.findings == []  # o can follow i within the same tick
-    from compiler.check_solver import run_query
+    from check.solver import run_query
     ok, counter = run_query(("realizable", "G(o <-> X i)", ["o"]))
     assert ok is False and counter is None
 
@@ -250,7 +250,7 @@ def test_product_game_agrees_with_ltl_to_game(parts):
     realizability alike (inputs i, j; outputs o, p)."""
     import spot
 
-    from compiler.check_solver import _conj, _product_game
+    from check.solver import _conj, _product_game
 
     texts = [t.format(k=k) for t, k in parts]
     game = _product_game(texts, ["o", "p"])

@@ -1,4 +1,4 @@
-"""fretish.cache.key_of: the same digest as hashlib's SHA-256 over the same framing (it uses
+"""common.cache.key_of: the same digest as hashlib's SHA-256 over the same framing (it uses
 CPython's built-in SHA-256 to avoid loading OpenSSL at start-up), and unambiguous framing."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import hashlib
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretish.cache import key_of
+from common.cache import key_of
 
 
 def _reference(*parts: str) -> str:

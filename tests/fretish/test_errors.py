@@ -1,4 +1,4 @@
-"""One exception root (fretish/errors.py, issue 14): every stage's input error is a
+"""One exception root (common/errors.py, issue 14): every stage's input error is a
 FretcError, and the fretc command reports one that no sub-command caught with exit code 2."""
 
 from __future__ import annotations
@@ -7,19 +7,19 @@ import pytest
 from click.testing import CliRunner
 
 from compiler.ajpf import AjpfError
-from compiler.check_realizability import RealizabilityError
+from check.realizability import RealizabilityError
 from compiler.codegen import CodegenError, InvalidMonitorError
 from compiler.semantics import SemanticsError
 from fretc.cli import main
-from fretish.errors import (CheckError, FretcError, FretishError, FretishFileError,
-                            FretishSyntaxError, InputError, Where, error_text)
+from common.errors import (CheckError, FretcError, FretishError, FretishFileError,
+    FretishSyntaxError, InputError, Where, error_text)
 from fretish.files import load_requirements
 from fretish.limits import LimitError
 from monitors.audit import AuditInputError
-from monitors.fleet import RayUnavailable
-from monitors.problems import BindingError, CsvError, FretcInputError, LogError, SignalError
-from monitors.report import ReportError
-from monitors.schema import FieldPathError
+from monitors.audit.fleet import RayUnavailable
+from common.problems import BindingError, CsvError, FretcInputError, LogError, SignalError
+from monitors.report.write import ReportError
+from monitors.sources.schema import FieldPathError
 
 
 @pytest.mark.parametrize("cls, stage", [

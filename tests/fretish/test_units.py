@@ -1,4 +1,4 @@
-"""One duration grammar (fretish/units.py) for requirement files and bindings (issue 14)."""
+"""One duration grammar (common/units.py) for requirement files and bindings (issue 14)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from fretish.files import load_requirements, parse_tick_period
-from fretish.units import (NS_PER_S, format_ns, format_offset, format_period,
-                           format_period_ms, format_seconds, parse_duration, parse_seconds)
+from common.units import (NS_PER_S, format_ns, format_offset, format_period, format_period_ms,
+    format_seconds, parse_duration, parse_seconds)
 from monitors.bindings import parse_bindings
 
 # Each written both ways: the disagreement the issue names ('10 Hz' and '500 ns' used to be

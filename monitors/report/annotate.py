@@ -38,7 +38,7 @@ from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, 
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
-from fretish.units import format_offset
+from common.units import format_offset
 
 __all__ = ["VERDICT_TOPIC", "FOXGLOVE_LOG_SCHEMA", "VerdictEvent", "AnnotateResult",
            "verdict_events", "annotate_mcap", "LEVELS"]

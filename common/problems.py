@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fretish.errors import InputError, Where
+from common.errors import InputError, Where
 
 # Kinds of DataProblem.  Strings (not an Enum) so reports and JSON stay plain.
 TRUNCATED = "truncated"  # the log ends inside a record (crashed recording)
@@ -93,7 +93,7 @@ class ProblemLog:
             self.problems.append(problem)
 
 
-#: The audit's input errors derive from :class:`fretish.errors.InputError` (kept here under
+#: The audit's input errors derive from :class:`common.errors.InputError` (kept here under
 #: its former name; ``except FretcError`` catches them with every other stage's errors).
 FretcInputError = InputError
 

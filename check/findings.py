@@ -1,5 +1,5 @@
-"""A finding of ``fretc check`` (:mod:`compiler.check`, :mod:`compiler.check_realizability`,
-:mod:`compiler.check_witness`): what was found, about which requirements, and the witness
+"""A finding of ``fretc check`` (:mod:`check.analysis`, :mod:`check.realizability`,
+:mod:`check.witness`): what was found, about which requirements, and the witness
 trace that shows it."""
 
 from __future__ import annotations

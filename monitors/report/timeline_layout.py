@@ -1,4 +1,4 @@
-"""The layout of a violation's timeline (:mod:`monitors.timeline` draws it): from one verdict
+"""The layout of a violation's timeline (:mod:`monitors.report.timeline` draws it): from one verdict
 of the audit JSON and its log object, the marks (trigger, violation, LTL3 verdict), the
 scope interval, response window and damage, the lanes, the detail windows of sampled ticks
 and the broken time axis that maps log time (ns) to pixels. No drawing here.
@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
-from fretish.units import format_offset
+from common.units import format_offset
 
 __all__ = ["Threshold", "Segment", "Axis", "Timeline", "plan_timeline", "nice_step_ns",
            "step_decimals", "lane_label", "cells", "cells_by_segment"]
@@ -212,7 +212,7 @@ def violation_time_ns(fv: dict) -> int:
     """Where a first violation is drawn: its tick's time on the bindings' time base when that
     is ``header`` (the detail windows, the trigger and the LTL3 mark are tick times there, and
     header stamps may lie far from the log time of the deciding message), else the log time
-    of the message that decided it (``monitors.report_model``: each time says its clock)."""
+    of the message that decided it (``monitors.report.model``: each time says its clock)."""
     if fv.get("tick_time_base") == "header" and fv.get("tick_time_ns") is not None:
         return int(fv["tick_time_ns"])
     return int(fv["log_time_ns"])
@@ -253,7 +253,7 @@ def _lanes(values: dict[str, list], sources: dict[str, list]) -> list[tuple[str,
 def plan_timeline(verdict: dict, log: dict, period_ns: int | None,
                   thresholds: Sequence[Threshold]) -> Timeline:
     """The :class:`Timeline` of a violated verdict (arguments as
-    :func:`monitors.timeline.timeline_svg`).
+    :func:`monitors.report.timeline.timeline_svg`).
 
     Raises:
         ValueError: the verdict has no ``first_violation`` or the log no ``start_time_ns``.

@@ -7,7 +7,7 @@ Markdown.
     fretc report -r requirements/ traces/ -o report/ [--annotate annotated/]   # runs the audit
     fretc report --from-json audit.json -o report/ [--annotate annotated/]     # reads one
 
-Input is the audit's JSON document (schema ``fretc-audit/1``, :mod:`monitors.report_model`);
+Input is the audit's JSON document (schema ``fretc-audit/1``, :mod:`monitors.report.model`);
 what it does not carry (parent, rationale, the FRETish field spans, ft / ft_inf / pt, the
 generated monitor module, the AJPF property) comes from compiling the requirement files the
 audit names (``requirements[].source``), exactly as ``fretc audit`` does
@@ -28,7 +28,7 @@ The report holds: the summary and inputs (files with SHA-256); the matrix requir
 FRETish text with the fields (scope, condition, component, timing, response) marked from the
 AST spans, FRET template key, ft / ft_inf / pt, the monitor class and module with their
 hashes, the AJPF property label and formula (or why there is none), and per run the verdict
-and witness; per violation a timeline (:mod:`monitors.timeline`) and the sampled values;
+and witness; per violation a timeline (:mod:`monitors.report.timeline`) and the sampled values;
 coverage (requirements never triggered, runs missing a bound topic, damaged runs); the runs;
 the generated monitor modules.
 
@@ -37,20 +37,20 @@ generation time (UTC; ``SOURCE_DATE_EPOCH`` fixes it).
 
 The command is :mod:`fretc.report`; the library, one job per module (this module
 re-exports their names):
-:mod:`monitors.report_trace` (the requirements traced by compiling their files),
-:mod:`monitors.report_verdicts` (a verdict as a cell, witness and values table),
-:mod:`monitors.report_context` (the data record the templates are fed),
-:mod:`monitors.report_render` (Jinja2), :mod:`monitors.report_files` (reading the audit
+:mod:`monitors.report.trace` (the requirements traced by compiling their files),
+:mod:`monitors.report.verdicts` (a verdict as a cell, witness and values table),
+:mod:`monitors.report.context` (the data record the templates are fed),
+:mod:`monitors.report.render` (Jinja2), :mod:`monitors.report.files` (reading the audit
 document, writing the folder).
 """
 
 from __future__ import annotations
 
-from .report_context import GENERATED_PREFIX, report_context
-from .report_files import ReportFiles, load_audit_json, write_report
-from .report_render import render_html, render_markdown
-from .report_trace import (FIELD_NAMES, ModuleInfo, ReportError, RequirementTrace,
-                           marked_fields, trace_requirements)
+from .context import GENERATED_PREFIX, report_context
+from .files import ReportFiles, load_audit_json, write_report
+from .render import render_html, render_markdown
+from .trace import (FIELD_NAMES, ModuleInfo, ReportError, RequirementTrace, marked_fields,
+    trace_requirements)
 
 __all__ = ["ReportError", "RequirementTrace", "ModuleInfo", "ReportFiles", "load_audit_json",
            "trace_requirements", "report_context", "render_html", "render_markdown",

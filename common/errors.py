@@ -13,14 +13,14 @@ each stage has its own subclass (the model: Lark's one exception tree)::
     │   ├── CodegenError                no monitor (compiler/codegen.py)
     │   └── AjpfError                   no AJPF property (compiler/ajpf.py)
     ├── CheckError                      fretc check's inputs
-    │   └── RealizabilityError          (compiler/check_realizability.py)
-    ├── InputError                      the audit's inputs (monitors/problems.py)
+    │   └── RealizabilityError          (check/realizability.py)
+    ├── InputError                      the audit's inputs (common/problems.py)
     │   ├── LogError ── CsvError        a log that cannot be read
     │   ├── BindingError                a signal binding
     │   ├── SignalError                 a binding that cannot be evaluated on a log
-    │   ├── FieldPathError              a field path the schema lacks (monitors/schema.py)
-    │   └── AuditInputError ── RayUnavailable   (monitors/audit/config.py, monitors/fleet.py)
-    └── ReportError                     fretc report's inputs and output (monitors/report.py)
+    │   ├── FieldPathError              a field path the schema lacks (monitors/sources/schema.py)
+    │   └── AuditInputError ── RayUnavailable   (monitors/audit/config.py, monitors/audit/fleet.py)
+    └── ReportError                     fretc report's inputs and output (monitors/report/write.py)
 
 Internal errors are not input errors and stay outside the tree (a generated monitor that is
 not valid: ``compiler.codegen.InvalidMonitorError``, exit code 4), as do the signals by which
@@ -137,7 +137,7 @@ class CheckError(FretcError):
 
 class InputError(FretcError):
     """Audit input fretc cannot use: a log, a binding, a signal. The message names where
-    (file, line:col, topic, log time). Formerly ``monitors.problems.FretcInputError`` (still
+    (file, line:col, topic, log time). Formerly ``common.problems.FretcInputError`` (still
     exported under that name)."""
 
 

@@ -42,11 +42,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from .audit import AuditInputError, AuditPlan, audit_log
-from .audit.plan import MODULE_PREFIX, load_module
-from .bindings import Bindings, compile_expression
-from .problems import BindingError
-from .report_model import LogAudit, Verdict
+from . import AuditInputError, AuditPlan, audit_log
+from .plan import MODULE_PREFIX, load_module
+from ..bindings import Bindings, compile_expression
+from common.problems import BindingError
+from ..report.model import LogAudit, Verdict
 
 __all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
            "audit_logs_ray", "error_audit", "RAY_HINT"]
@@ -249,7 +249,7 @@ def _audit_task(shipped: ShippedPlan, path: str, kill: tuple[str, str] | None = 
 
 
 def error_audit(plan: AuditPlan, path: str, reason: str):
-    """A :class:`~monitors.report_model.LogAudit` of a log that could not be audited: the
+    """A :class:`~monitors.report.model.LogAudit` of a log that could not be audited: the
     log's ``error`` is ``reason`` and every requirement's verdict is ``error`` with it (so the
     exit code is 2 and nothing reads as satisfied)."""
     la = LogAudit(log=str(path), error=f"{path}: {reason}")
@@ -276,7 +276,7 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
         num_cpus: CPUs of a local Ray (default: all).
 
     Returns:
-        One :class:`~monitors.report_model.LogAudit` per path; a log whose task failed has
+        One :class:`~monitors.report.model.LogAudit` per path; a log whose task failed has
         an :func:`error_audit` entry naming the failure.
 
     Raises:

@@ -3,7 +3,7 @@ requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check req
 runs"; issue 11).
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
-abstracted by :mod:`compiler.numeric_abstraction` (its invariants are conjoined to every
+abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every
 query). Requirements are split into **components**: two requirements are in one component
 when they share a variable (a numeric variable counts as shared through its comparisons).
 Formulas over disjoint variables are satisfiable together iff each is, so every question is
@@ -29,8 +29,8 @@ answers "unknown", and a check with an unknown answer says so rather than guessi
 4. **Redundancy** (warning): a requirement implied by the other requirements of a
    satisfiable component (``others & !R`` unsatisfiable), or holding on every run.
 
-Witness traces for the findings are built by :mod:`compiler.check_witness`, realizability by
-:mod:`compiler.check_realizability`.
+Witness traces for the findings are built by :mod:`check.witness`, realizability by
+:mod:`check.realizability`.
 """
 
 from __future__ import annotations
@@ -43,13 +43,13 @@ from dataclasses import dataclass, field
 
 from fretish import ast as A
 
-from . import ir
-from .check_findings import Finding
-from .check_solver import UNKNOWN, SpotWorker
-from .ir import Node
+from compiler import ir
+from .findings import Finding
+from .solver import UNKNOWN, SpotWorker
+from compiler.ir import Node
 from .numeric_abstraction import NumericAbstraction
-from .printers import to_spot
-from .semantics import SemanticsError, formalize
+from compiler.printers import to_spot
+from compiler.semantics import SemanticsError, formalize
 
 __all__ = ["CheckItem", "CheckResult", "Finding", "Checker", "check_requirements",
            "atom_variables"]
@@ -151,7 +151,7 @@ class CheckResult:
 class Checker:
     """Runs the checks of the module docstring on a list of :class:`CheckItem`.
 
-    ``worker`` answers Spot queries (:class:`compiler.check_solver.SpotWorker`);
+    ``worker`` answers Spot queries (:class:`check.solver.SpotWorker`);
     ``mus_budget`` is the time in seconds each subset enumeration may take.
     """
 
@@ -343,17 +343,17 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
 
     ``timeout``: seconds per Spot query (None: no budget). ``mus_budget``: seconds per
     subset enumeration. ``witness_dir``: write witness CSVs there
-    (:mod:`compiler.check_witness`), their expected verdicts given by ``witness_judge``
-    (:data:`compiler.check_witness.Judge`; required with ``witness_dir``: the audit's
+    (:mod:`check.witness`), their expected verdicts given by ``witness_judge``
+    (:data:`check.witness.Judge`; required with ``witness_dir``: the audit's
     evidence engine lives in a layer above, ``fretc check`` passes
     :func:`monitors.engines.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
-    either is given, realizability is checked too (:mod:`compiler.check_realizability`).
+    either is given, realizability is checked too (:mod:`check.realizability`).
     Requirements that failed to formalize are listed in ``input_errors``; free-form ones
     are skipped with a note.
     """
     if witness_dir is not None and witness_judge is None:
         raise TypeError("check_requirements: witness_dir needs a witness_judge "
-                        "(compiler.check_witness.Judge)")
+                        "(check.witness.Judge)")
     result = CheckResult()
     items: list[CheckItem] = []
     for c in compiled:
@@ -370,11 +370,11 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
         checker = Checker(items, worker, mus_budget)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy)
         if inputs is not None or outputs is not None:
-            from .check_realizability import check_realizability  # lazy: numpy, if asked
+            from .realizability import check_realizability  # lazy: numpy, if asked
             result.realizability = check_realizability(checker, result, inputs or [],
                                                        outputs or [])
         if witness_dir is not None:
-            from .check_witness import write_witnesses  # lazy: numpy, if asked
+            from .witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir, witness_judge)
         result.queries = checker.queries
         result.unknown_queries = checker.unknown

@@ -6,7 +6,7 @@ report folder::
     audit.json         the audit document the report was made from
     timelines/*.svg    one timeline per violation (the same SVG as inlined in the HTML)
 
-and, on request, annotated copies of the MCAP logs (:mod:`monitors.annotate`).
+and, on request, annotated copies of the MCAP logs (:mod:`monitors.report.annotate`).
 """
 
 from __future__ import annotations
@@ -17,16 +17,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .annotate import AnnotateResult, annotate_mcap
-from .report_context import report_context
-from .report_model import SCHEMA
-from .report_render import render_html, render_markdown
-from .report_trace import ReportError, resolve_input, trace_requirements
+from .context import report_context
+from .model import SCHEMA
+from .render import render_html, render_markdown
+from .trace import ReportError, resolve_input, trace_requirements
 
 __all__ = ["load_audit_json", "ReportFiles", "write_report"]
 
 
 def load_audit_json(path: str) -> dict:
-    """Read an audit document. Raises :class:`~monitors.report_trace.ReportError` when it
+    """Read an audit document. Raises :class:`~monitors.report.trace.ReportError` when it
     cannot be read, is not JSON, or is not schema ``fretc-audit/1``."""
     try:
         doc = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -120,7 +120,7 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: str | None = None,
         plan: the audit's :class:`~monitors.audit.AuditPlan` when it ran in this process.
         base, json_dir: where the document's relative paths are looked up.
         psl_map: AJPF mapping TOML (``--psl-map``).
-        annotate_dir: also write annotated MCAP copies there (:mod:`monitors.annotate`).
+        annotate_dir: also write annotated MCAP copies there (:mod:`monitors.report.annotate`).
         title: report title.
         generated: the generation line (default: now, or ``SOURCE_DATE_EPOCH``).
 

@@ -9,7 +9,7 @@ outputs so that every requirement holds on every infinite run whatever the input
 connected component of requirements sharing variables.
 
 Each component's specification, on the ft_inf formulas with the numeric abstraction
-(:mod:`compiler.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
+(:mod:`check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
 invariants of input comparisons are assumptions on the environment, those of output
 comparisons obligations of the controller. A comparison is an output when it reads an output
 variable. Spot decides it with a synthesis game (``spot.ltl_to_game``, ``spot.solve_game``);
@@ -25,15 +25,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from fretish.errors import CheckError
+from common.errors import CheckError
 
-from . import ir
-from .check_findings import Finding
-from .check_findings import ids as _ids
-from .check_solver import UNKNOWN
-from .check_witness import _atoms
+from compiler import ir
+from .findings import Finding
+from .findings import ids as _ids
+from .solver import UNKNOWN
+from .witness import _atoms
 from .numeric_abstraction import simple_comparison
-from .printers import mangle, to_smv, to_spot
+from compiler.printers import mangle, to_smv, to_spot
 
 __all__ = ["check_realizability", "RealizabilityError"]
 

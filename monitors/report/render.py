@@ -1,4 +1,4 @@
-"""Rendering the report's data record (:func:`monitors.report_context.report_context`) with
+"""Rendering the report's data record (:func:`monitors.report.context.report_context`) with
 the Jinja2 templates ``templates/report.html.j2`` and ``templates/report.md.j2``: the
 template environment (every printed value made visible and safe), the HTML page and the
 Markdown document.
@@ -11,7 +11,7 @@ from typing import Any
 import jinja2
 import markupsafe
 
-from fretish.textsafe import md_code, visible
+from common.textsafe import md_code, visible
 
 __all__ = ["render_html", "render_markdown"]
 
@@ -37,7 +37,7 @@ def _md(text: Any) -> str:
 
 def _code(text: Any) -> str:
     """Inline Markdown code span that no backtick run in the text can close
-    (:func:`fretish.textsafe.md_code`)."""
+    (:func:`common.textsafe.md_code`)."""
     return md_code("" if text is None else str(text).replace("\n", " "))
 
 

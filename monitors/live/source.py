@@ -35,9 +35,9 @@ from typing import Any
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys.msg import normalize_msgtype
 
-from . import problems as P
-from .annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
-from .sources import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
+from common import problems as P
+from ..report.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+from ..sources import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
 
 __all__ = ["WatchEvent", "WatchSource", "Recorder", "CONNECTION_GAP", "UNADVERTISED",
            "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]

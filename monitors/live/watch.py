@@ -4,8 +4,8 @@ protocol.
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
 
-* :class:`~monitors.watch_source.WatchSource` is a :class:`monitors.sources.LogSource`
-  whose messages come from a :class:`monitors.watch_client.FoxgloveClient` instead of a
+* :class:`~monitors.live.source.WatchSource` is a :class:`monitors.sources.LogSource`
+  whose messages come from a :class:`monitors.live.client.FoxgloveClient` instead of a
   file; each channel is decoded with rosbags from the schema text the server advertised
   (:func:`monitors.sources.schema_decoder`, shared with the MCAP reader);
 * the ticks come from :func:`monitors.signals.sample` with the same bindings (tick, time
@@ -18,7 +18,7 @@ So the same messages give the same verdicts as ``fretc audit`` (tested: each shi
 served by foxglove-sdk and watched equals its audit; a ``--record``\\ ed watch audited offline
 equals the watch).
 
-The faults of a live run are data problems (:mod:`monitors.watch_source`).
+The faults of a live run are data problems (:mod:`monitors.live.source`).
 
 Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
 verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
@@ -37,19 +37,19 @@ from typing import Any
 
 import numpy as np
 
-from .audit import AuditInputError
-from .audit.columns import column_array
-from .audit.finalize import finalize, summarize_clocks
-from .audit.log_problems import collect_problems, problem_json
-from .audit.operands import operand_values
-from .audit.passes import ClockPass, clock_key, restrict
-from .engines.interval import evaluate_requirement
-from .problems import DataProblem
-from .report_model import LogAudit, Verdict
-from .signals import sample_groups
-from .watch_client import FoxgloveClient
-from .watch_source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
-                           UNADVERTISED, Recorder, WatchEvent, WatchSource)
+from ..audit import AuditInputError
+from ..audit.columns import column_array
+from ..audit.finalize import finalize, summarize_clocks
+from ..audit.log_problems import collect_problems, problem_json
+from ..audit.operands import operand_values
+from ..audit.passes import ClockPass, clock_key, restrict
+from ..engines.interval import evaluate_requirement
+from common.problems import DataProblem
+from ..report.model import LogAudit, Verdict
+from ..signals import sample_groups
+from .client import FoxgloveClient
+from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
+    UNADVERTISED, Recorder, WatchEvent, WatchSource)
 
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
            "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
@@ -109,7 +109,7 @@ class Watch:
         on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
 
     :meth:`run` blocks until the duration passes or :meth:`stop` is called, then returns
-    the :class:`~monitors.report_model.LogAudit` of the run (``log`` = the URL, ``kind``
+    the :class:`~monitors.report.model.LogAudit` of the run (``log`` = the URL, ``kind``
     ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
     """
 

@@ -8,11 +8,11 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 
-from fretish.textsafe import xml_text
-from fretish.units import format_offset
+from common.textsafe import xml_text
+from common.units import format_offset
 
-from .audit_output import short_log_name
-from .report_model import LogAudit
+from .terminal import short_log_name
+from .model import LogAudit
 
 __all__ = ["junit_xml"]
 
@@ -84,7 +84,7 @@ def junit_xml(logs: list[LogAudit]) -> str:
 
 def _xml_safe(root) -> None:
     """Make every attribute and text of the tree legal XML 1.0 (a NUL in a requirement id
-    must not make the file unparseable): :func:`fretish.textsafe.xml_text`."""
+    must not make the file unparseable): :func:`common.textsafe.xml_text`."""
     for el in root.iter():
         for k, val in list(el.attrib.items()):
             el.set(k, xml_text(val, keep=""))

@@ -30,7 +30,7 @@ never entered or the trigger never fired (README "vacuous passes"); ``violated``
 finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
 (``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
 log is damaged and the span read completely decides nothing: an obligation is still open where
-it ends (``unknown_reason`` says which; :mod:`monitors.damage`). A verdict on a damaged log is
+it ends (``unknown_reason`` says which; :mod:`monitors.audit.damage`). A verdict on a damaged log is
 computed on the span read completely (the ticks before ``damage_time_ns``) and has ``partial``
 true; a violation on it was decided before the damage.
 """

@@ -30,11 +30,11 @@ from mcap.stream_reader import StreamReader
 from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag2 import Reader as Ros2Reader
 
-from fretish.errors import InputError
+from common.errors import InputError
 
-from .sources.bag_source import connection_typestore
-from .sources.csv_source import CSV_TOPIC
-from .sources.decoding import UnsupportedSchema, build_typestore
+from .bag_source import connection_typestore
+from .csv_source import CSV_TOPIC
+from .decoding import UnsupportedSchema, build_typestore
 
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "log_schemas", "field_paths",
            "closest"]

@@ -8,7 +8,7 @@ semantics, the one the audit's verdict uses) under FRET's trace model
 
 where ``absorbing`` gives every atom its value in the absorbing state after the last tick
 (booleans false, numbers 0); the ticks up to ``LAST`` are the CSV rows. Comparisons get
-numbers back through :meth:`compiler.numeric_abstraction.NumericAbstraction.values`.
+numbers back through :meth:`check.numeric_abstraction.NumericAbstraction.values`.
 
 What each witness shows (intended verdicts):
 
@@ -38,11 +38,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import ir
-from .check_solver import UNKNOWN
-from .evaluate import ft_at
-from .ir import LAST, Node
-from .printers import mangle, to_smv
+from compiler import ir
+from .solver import UNKNOWN
+from compiler.evaluate import ft_at
+from compiler.ir import LAST, Node
+from compiler.printers import mangle, to_smv
 
 __all__ = ["Judge", "finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
 

@@ -35,8 +35,9 @@ import numpy as np
 
 from fretish import ast as A
 
-from .engines.interval import Evidence, EvidenceUnsupported, scope_of, trace_signals, trigger_points
-from .engines.obligations import ObligationChecker
+from ..engines.interval import (Evidence, EvidenceUnsupported, scope_of, trace_signals,
+    trigger_points)
+from ..engines.obligations import ObligationChecker
 
 __all__ = ["OpenObligation", "open_obligations", "verdict_at_damage"]
 

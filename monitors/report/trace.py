@@ -15,9 +15,9 @@ from pathlib import Path
 from compiler.ajpf import AjpfError, load_mapping, psl_label_and_formula
 from compiler.codegen import file_stems
 from fretish import ast as A
-from fretish.errors import FretcError
+from common.errors import FretcError
 
-from .audit import AuditConfig, AuditInputError, load_plan
+from ..audit import AuditConfig, AuditInputError, load_plan
 from .timeline import Threshold
 
 __all__ = ["ReportError", "FIELD_NAMES", "ModuleInfo", "RequirementTrace", "marked_fields",

@@ -1,10 +1,10 @@
 """How ``fretc audit`` shows its verdicts: the terminal summary (rich), the progress bar,
 and the damage of a partial log in one sentence (the JUnit XML file:
-:mod:`monitors.audit_junit`).
+:mod:`monitors.report.junit`).
 
 All output is deterministic: same logs and requirements, same text (no wall-clock times).
 Times are printed as seconds since the log's first tick (``12.300 s``) next to the tick
-number; the JSON report (:mod:`monitors.report_model`) also has the absolute ns.
+number; the JSON report (:mod:`monitors.report.model`) also has the absolute ns.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, T
 from rich.table import Table
 from rich.text import Text
 
-from fretish.textsafe import terminal_text
-from fretish.units import format_offset
+from common.textsafe import terminal_text
+from common.units import format_offset
 
-from .report_model import LogAudit, Verdict, exit_code
+from .model import LogAudit, Verdict, exit_code
 
 __all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
 
@@ -29,7 +29,7 @@ _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
 
 def escape(text) -> str:
     """Text from the inputs for rich markup: control and bidi characters shown escaped
-    (:func:`fretish.textsafe.terminal_text`), then markup escaped."""
+    (:func:`common.textsafe.terminal_text`), then markup escaped."""
     return _markup_escape(terminal_text(text))
 
 

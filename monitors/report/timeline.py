@@ -2,7 +2,7 @@
 
 A small deterministic SVG writer (no matplotlib, no JavaScript, no external fonts): the same
 verdict gives byte-identical text. Input is the audit's JSON (schema ``fretc-audit/1``, see
-:mod:`monitors.report_model`): one verdict object and the log object it belongs to.
+:mod:`monitors.report.model`): one verdict object and the log object it belongs to.
 
 The picture, top to bottom, all in log time (seconds since the log's first tick
 ``start_time_ns``, what Foxglove shows as elapsed time):
@@ -31,12 +31,12 @@ from dataclasses import dataclass, field
 from typing import Sequence
 from xml.sax.saxutils import escape as _xml_escape, quoteattr as _xml_quoteattr
 
-from fretish.textsafe import xml_text
-from fretish.units import format_offset
+from common.textsafe import xml_text
+from common.units import format_offset
 
 from .timeline_layout import (LANE_GAP, BOOL_H, NUM_H, PLOT_X1, TOPIC_H, WIDTH, Axis, Segment,
-                              Threshold, Timeline, cells, cells_by_segment, lane_label,
-                              nice_step_ns, plan_timeline, step_decimals)
+    Threshold, Timeline, cells, cells_by_segment, lane_label, nice_step_ns, plan_timeline,
+    step_decimals)
 
 __all__ = ["timeline_svg", "Threshold", "COLORS"]
 
@@ -66,7 +66,7 @@ FONT = "system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif"
 
 def escape(s: str) -> str:
     """XML character data from the inputs: control and bidi characters shown escaped
-    (:func:`fretish.textsafe.xml_text`: a NUL must not make the SVG unparseable)."""
+    (:func:`common.textsafe.xml_text`: a NUL must not make the SVG unparseable)."""
     return _xml_escape(xml_text(s, keep=""))
 
 
