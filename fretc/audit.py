@@ -38,14 +38,15 @@ __all__ = ["audit_cmd"]
               help="Write JUnit XML to FILE: one test case per requirement x log.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
 @click.option("--allow-partial", is_flag=True,
-              help="Exit 0 instead of 3 when nothing is violated but a log is partial or had "
-                   "data problems.")
+              help="Exit 0 instead of 3 when nothing is violated but a log is partial, had "
+                   "data problems or a verdict is unknown (the verdicts stay as they are: "
+                   "an unknown is never a pass).")
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
 @ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, json_path, junit_path, no_progress, engine, window, allow_partial,
+              jobs, json_path, junit_path, no_progress, window, allow_partial,
               verbose):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
@@ -76,7 +77,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
                   highlight=False)
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
-                          engine, window)
+                          window)
     try:
         plan = load_plan(config)
         paths = find_logs(expand_log_args(logs))

@@ -32,7 +32,7 @@ def shown(text: str) -> str:
 
 def audit_input_options(f):
     """The options that say what to audit and how (shared by ``fretc audit`` and
-    ``fretc report``): requirements, bindings, tick, time base, jobs, engine, window."""
+    ``fretc report``): requirements, bindings, tick, time base, jobs, window."""
     options = [
         click.option("-r", "--requirements", "requirements", multiple=True,
                      type=click.Path(exists=True),
@@ -54,11 +54,6 @@ def audit_input_options(f):
                      help="Message time: log time (default) or header.stamp."),
         click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
                      show_default=True, help="Audit this many logs in parallel processes."),
-        click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]),
-                     default="auto", show_default=True,
-                     help="stepwise: the generated monitors' step() on every tick; "
-                          "vectorized: numpy over the sampled columns; auto: vectorized on "
-                          "long logs."),
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
                      help="Ticks of values kept each side of a trigger and a violation."),
     ]
@@ -67,8 +62,7 @@ def audit_input_options(f):
     return f
 
 
-def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, engine,
-                 window):
+def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window):
     """The :class:`monitors.audit.AuditConfig` of :func:`audit_input_options`' values
     (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
     from monitors.audit import AuditConfig  # lazy: numpy and the engine only when run
@@ -80,7 +74,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
     return AuditConfig(requirements=tuple(requirements),
                        bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
-                       engine=engine, window=window)
+                       window=window)
 
 
 class FleetError(click.ClickException):

@@ -103,7 +103,7 @@ class _Renderable:
 @click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, engine, window, duration, record, jsonl, json_path, wait, connect_timeout,
+              jobs, window, duration, record, jsonl, json_path, wait, connect_timeout,
               no_live):
     """Watch a robot live over the Foxglove WebSocket protocol (URL ws://host:8765, e.g.
     foxglove_bridge) with the requirements and bindings that audit its logs."""
@@ -122,7 +122,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
-                          "stepwise", window)
+                          window)
     try:
         plan = load_plan(config)
         lock = threading.Lock()

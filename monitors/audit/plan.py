@@ -56,8 +56,6 @@ def load_plan(config: AuditConfig) -> AuditPlan:
             this: it becomes that requirement's ``error``), bad or conflicting bindings, bad
             options.
     """
-    if config.engine not in ("auto", "stepwise", "vectorized"):
-        raise AuditInputError(f"unknown engine {config.engine!r} (auto, stepwise, vectorized)")
     if config.select_logs:
         split = _plan_per_log(config)
         if split is not None:

@@ -10,7 +10,8 @@ of a recorded log, only fed live:
   (:func:`monitors.sources.schema_decoder`, shared with the MCAP reader);
 * the ticks come from :func:`monitors.signals.sample` with the same bindings (tick, time
   base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
-* every tick steps the generated monitors the audit loads (:func:`monitors.audit.load_plan`);
+* every tick steps the generated monitors the audit loads (:func:`monitors.audit.load_plan`)
+  for the live verdicts and events;
 * at the end the verdicts and evidence are made by the audit's own code
   (:func:`monitors.audit.finalize.finalize`) over the columns kept while watching.
 
@@ -39,7 +40,7 @@ import numpy as np
 
 from ..audit import AuditInputError
 from ..audit.columns import column_array
-from ..audit.finalize import finalize, summarize_clocks
+from ..audit.finalize import finalize, log_engine, summarize_clocks
 from ..audit.log_problems import collect_problems, problem_json
 from ..audit.operands import operand_values
 from ..audit.passes import ClockPass, clock_key, restrict
@@ -352,8 +353,7 @@ class Watch:
         passes = {}
         for key in groups:
             times, columns, log_times = self._cols[key].arrays()
-            passes[key] = ClockPass(sampling.groups[key], times, columns, log_times, monitors,
-                                engine)
+            passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)
@@ -410,7 +410,6 @@ class Watch:
             ends = [g.end_time for g in groups if g.end_time is not None]
             la.end_time_ns = max(ends) if ends else None
             la.missing_topics = sorted({t for g in groups for t in g.missing_topics})
-            la.engine = "stepwise"
             ok = []
             for r in active:
                 res = result.by_req[r.index]
@@ -435,6 +434,7 @@ class Watch:
                     v.notes.append(f"{unknown} ticks inside connection gaps were not "
                                    "evaluated (unknown)")
             summarize_clocks(la, [verdicts[r.index] for r in ok])
+            la.engine = log_engine(verdicts[r.index] for r in ok)
             active = ok
         la.verdicts = [verdicts[r.index] for r in self.plan.requirements]
         for v in la.verdicts:
