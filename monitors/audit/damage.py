@@ -17,13 +17,14 @@ at the cut comes out violated although the run went on. Which verdict a requirem
   engine ``interval``) have no LTL3 verdict; for them a violation stands only when its scope
   interval closed before the last intact tick (FRET's interval semantics, the future-time
   functions being relative to the interval end).
-* **unknown** - FRET's finite-trace verdict over the intact span is "violated" but no
-  violation was decided before the damage; or it "holds" while an obligation of a trigger is
-  still open at the end of the span (:func:`open_obligations`: a ``within``/``for``/``after``
-  window, an ``eventually``, ``until`` or ``before`` not yet discharged, a ``next`` or
-  ``finally`` point at or past the cut).
-* otherwise the verdict of the intact span (``satisfied`` or ``vacuous``) stands, marked
-  partial: an invariant (``always``) that held so far is satisfied over the intact span.
+* **satisfied** (or **vacuous**) - the earliest definitive LTL3 verdict is "satisfied"
+  inside the intact span: every continuation of the run satisfies the requirement.
+* **unknown** - everything else: FRET's finite-trace verdict over the intact span is
+  "violated" but no violation was decided before the damage; or it "holds" but the prefix
+  does not decide the requirement (its LTL3 verdict is not definite): an invariant
+  (``always``) that held so far, a trigger whose obligation is still open at the end of the
+  span (:func:`open_obligations` names it), a scope never entered so far. What the lost part
+  of the run held is not known, so neither is the verdict.
 """
 
 from __future__ import annotations
@@ -208,4 +209,12 @@ def verdict_at_damage(holds: bool, vacuous: bool, status: str | None,
         o = opened[0]
         return "unknown", (f"an obligation is open at the damage: trigger at tick "
                            f"{o.trigger_tick}, {o.what}")
-    return ("vacuous" if vacuous else "satisfied"), None
+    if not has_ltl3:
+        return "unknown", ("the intact span " + ("never fires the requirement"
+                                                 if vacuous else "satisfies it")
+                           + ", but it has no LTL3 verdict (no online monitor) to tell "
+                           "whether the rest of the run could still violate it")
+    return "unknown", ("the intact span " + ("never fires the requirement" if vacuous
+                                             else "satisfies it")
+                       + " so far, but its LTL3 verdict at the damage is not definite: the "
+                       "part of the run after the damage could still violate it")

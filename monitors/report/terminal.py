@@ -19,7 +19,7 @@ from rich.text import Text
 from common.textsafe import terminal_text
 from common.units import format_offset
 
-from .model import LogAudit, Verdict, exit_code
+from .model import LogAudit, Verdict, exit_code, incomplete
 
 __all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
 
@@ -202,6 +202,10 @@ def _print_counts(console, logs: list[LogAudit], input_errors: bool,
     why = {0: "", 1: ": a requirement is violated", 2: ": something could not be audited",
            3: ": no violation, but a log is partial or had data problems, or a verdict is "
               "unknown"}.get(code, "")
+    if code == 0 and allow_partial and any(incomplete(la) for la in logs):
+        # --allow-partial changes the exit code, never a verdict: say what it let through
+        why = (f": --allow-partial; {counts.get('unknown', 0)} unknown verdicts are not "
+               "passes, and partial logs were judged only up to their damage")
     console.print(f"{', '.join(parts)} (exit {code}{why})", highlight=False)
 
 
