@@ -6,6 +6,8 @@ Markdown document.
 
 from __future__ import annotations
 
+import re
+
 from typing import Any
 
 import jinja2
@@ -25,14 +27,19 @@ def _finalize(value: Any) -> Any:
     return value
 
 
+#: Markdown punctuation that can start a link, an image, an emphasis, a heading, an HTML tag, an
+#: entity or an autolink (CommonMark 0.31 section 2.4: every ASCII punctuation character may be
+#: backslash-escaped); ``:`` breaks ``scheme:`` autolinks, ``www.`` is escaped on its own
+_MD_PUNCTUATION = re.compile(r"([\\`*_{}\[\]()#+!|<>~:&])")
+_WWW = re.compile(r"(www)\.", re.IGNORECASE)
+
+
 def _md(text: Any) -> str:
-    """Markdown table-cell / inline text: pipes, backticks, newlines and HTML made
-    harmless."""
+    """Markdown table-cell / inline text that renders as the text itself: newlines folded,
+    control and bidi characters made visible, and every character that could start Markdown
+    or HTML (links, images, autolinks, emphasis, headings, tags) backslash-escaped."""
     s = visible("" if text is None else str(text).replace("\n", " "))
-    s = s.replace("\\", "\\\\").replace("|", "\\|")
-    s = s.replace("<", "&lt;").replace(">", "&gt;").replace("*", "\\*")
-    s = s.replace("`", "\\`")
-    return s
+    return _WWW.sub(r"\1\\.", _MD_PUNCTUATION.sub(r"\\\1", s))
 
 
 def _code(text: Any) -> str:
