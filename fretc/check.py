@@ -20,6 +20,8 @@ from pathlib import Path
 
 import click
 
+from .options import shown
+
 __all__ = ["check_cmd", "render_text"]
 
 
@@ -128,7 +130,7 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
     try:
         entries = load_requirements([Path(p) for p in files])
     except (FretishError, OSError) as exc:
-        click.echo(str(exc), err=True)
+        click.echo(shown(str(exc)), err=True)
         sys.exit(2)
     ins, outs = _names(inputs), _names(outputs)
     if ins is None:
@@ -147,15 +149,15 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
                                     redundancy=not no_redundancy, witness_dir=witness_dir,
                                     inputs=ins, outputs=outs, witness_judge=judge)
     except RealizabilityError as exc:
-        click.echo(f"error: {exc}", err=True)
+        click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
     for e in result.input_errors:
-        click.echo(e, err=True)
+        click.echo(shown(str(e)), err=True)
     doc = result.to_json()
     if output:
         Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     if as_json:
         click.echo(json.dumps(doc, indent=2))
     else:
-        click.echo(render_text(result))
+        click.echo(shown(render_text(result)))
     sys.exit(result.exit_code)
