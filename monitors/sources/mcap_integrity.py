@@ -19,15 +19,13 @@ import struct
 import zlib
 from typing import Any, BinaryIO, NamedTuple
 
-import lz4.frame
-import zstandard
 from mcap.opcode import Opcode
 from mcap.records import Channel, ChunkIndex, Message as McapMessage, Schema, Statistics
 
 from common import problems as P
 from common.problems import DataProblem
 from .mcap_records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
-                           crc_skip, parse_record)
+                           crc_skip, decompress, parse_record)
 
 __all__ = ["McapIndex", "SummaryRead", "read_summary", "check_data_section", "cut_record",
            "ends_with_footer", "GAP_NOTE"]
@@ -238,21 +236,16 @@ def _truncated_chunk_records(tail: bytes) -> list[Any]:
     ``tail`` is what the file holds after the chunk's 9-byte record header. Layout (MCAP
     spec, "Chunk"): message_start_time u64, message_end_time u64, uncompressed_size u64,
     uncompressed_crc u32, compression (u32 length + bytes), records (u64 length + bytes).
-    The compressed prefix is decompressed as a stream (zstd, lz4 frames or none) and parsed
+    The compressed prefix is decompressed as a stream (zstd, lz4 frames or none; at most the
+    chunk's declared uncompressed size, :func:`monitors.sources.mcap_records.decompress`) and parsed
     record by record until a record is incomplete. Returns [] when nothing can be recovered.
     """
     try:
+        (declared,) = struct.unpack_from("<Q", tail, 16)
         (clen,) = struct.unpack_from("<I", tail, 28)
         compression = tail[32:32 + clen].decode("ascii")
         data = tail[32 + clen + 8:]
-        if compression == "":
-            raw = data
-        elif compression == "zstd":
-            raw = zstandard.ZstdDecompressor().decompressobj().decompress(data)
-        elif compression == "lz4":
-            raw = lz4.frame.LZ4FrameDecompressor().decompress(data)
-        else:
-            return []
+        raw = decompress(compression, data, declared, partial=True)
     except Exception:  # a cut header or a cut compressed stream: nothing to recover
         return []
     records: list[Any] = []
