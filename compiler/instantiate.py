@@ -63,15 +63,13 @@ from .template_table import MAX_OFFSET, MIN_OFFSET, Template, json_format, templ
 
 __all__ = ["instantiate", "InstantiatedFormalization", "formula_text"]
 
-#: the operators rule 1 looks for (:func:`compiler.fallback.inspected`), and ``&``
-_INSPECTED_OPS = frozenset(("true", "false", "!", "FTP", "LAST", "&"))
-
 _BOUND_TEXTS: dict = {None: [None] * (MAX_OFFSET - MIN_OFFSET + 1)}
 
 
 def _bound_texts(n: int | None) -> list:
-    """The texts of the bounds ``n - 2 .. n + 3`` (the format fields from ``_BOUND0``; None
-    for no duration), made once per ``n`` (at most 4096 kept)."""
+    """The texts of the bounds ``n - 2 .. n + 3`` (the format fields from
+    :data:`compiler.template_table.BOUND0`; None for no duration), made once per ``n`` (at
+    most 4096 kept)."""
     texts = _BOUND_TEXTS.get(n)
     if texts is None:
         if len(_BOUND_TEXTS) > 4096:
@@ -270,7 +268,7 @@ def _plain(req, tick_period, shape: tuple, one: list, names: list) -> Formalizat
     and pt (``names``: their variables)."""
     scope, cond, timing, n, warnings = shape
     for a in one:
-        if a is not None and a.op in _INSPECTED_OPS and inspected(a):
+        if a is not None and inspected(a):
             return formalize(req, tick_period)
     tmpl = template(scope, cond, timing, n)
     atoms = tuple(one) * 3
