@@ -12,7 +12,7 @@
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``monitors.audit.audit_log``: read, sample every 100 ms, monitor, evidence),
    and prints both CPU times and their ratio (aim: <= 1.0x, issue #12: the audit decodes
-   only the fields its bindings read, :mod:`monitors.selective`); then the same two as
+   only the fields its bindings read, :mod:`monitors.sources.selective`); then the same two as
    commands in fresh processes (start-up included). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
 3. Peak memory (max RSS of a fresh process auditing the log) for two log lengths

@@ -25,8 +25,8 @@ from __future__ import annotations
 import re
 import tomllib
 
-from fretish.errors import FretishError
-from fretish.textsafe import one_line
+from common.errors import FretishError
+from common.textsafe import one_line
 
 from .codegen import file_stems
 from .ir import Node
@@ -195,5 +195,5 @@ def psl_label_and_formula(compiled, mapping: dict | None = None):
 
 def _comment(text: str) -> str:
     """One ``//`` comment line: white space folded, control and bidi characters escaped
-    (:func:`fretish.textsafe.one_line`; a NUL or U+202E in an id must not reach the file)."""
+    (:func:`common.textsafe.one_line`; a NUL or U+202E in an id must not reach the file)."""
     return one_line(text)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from fretish import cache
+from common import cache
 
 from . import ir, ltl3, spot_monitors
 from .ir import Node
@@ -158,7 +158,7 @@ def _automaton(data: dict | None, atoms: list[Node]) -> Automaton | None:
 # its atoms (variables, comparisons, calls, past-time sub-formulas, FTP) renamed a0, a1, ...
 # in order of first appearance. Requirements of the same template, bounds and atom pattern
 # share one construction, memoized in the process and stored in fretc's disk cache
-# (fretish.cache, sub-folder "ltl3"), keyed by the shape, Spot's version and the text of
+# (common.cache, sub-folder "ltl3"), keyed by the shape, Spot's version and the text of
 # this module, of compiler.spot_monitors and of compiler.ltl3 (so a change of the
 # construction can never meet an old entry). Output is canonical, whatever the cache holds
 # or the process did before (compiler.spot_monitors' docstring).

@@ -1,5 +1,5 @@
 """``fretc check``: find conflicting, vacuous, redundant and unrealizable requirements before
-any robot runs (issue 11; the analyses are in :mod:`compiler.check`).
+any robot runs (issue 11; the analyses are in :mod:`check.analysis`).
 
 ::
 
@@ -30,7 +30,7 @@ def _names(text):
 
 
 def render_text(result) -> str:
-    """The terminal report of a :class:`compiler.check.CheckResult`."""
+    """The terminal report of a :class:`check.analysis.CheckResult`."""
     lines = []
     mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN"}
     for r in result.requirements:
@@ -120,9 +120,9 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
     from compiler.build import compile_entries
-    from compiler.check import check_requirements
-    from compiler.check_realizability import RealizabilityError
-    from fretish.errors import FretishError
+    from check.analysis import check_requirements
+    from check.realizability import RealizabilityError
+    from common.errors import FretishError
     from fretish.files import load_requirements
 
     try:

@@ -22,7 +22,7 @@ __all__ = ["compile_cmd"]
 
 def _entries(paths) -> list:
     """The :class:`fretish.files.RequirementEntry` list of ``paths``, parsed (an unreadable
-    file: its error printed, exit code 2; a :class:`fretish.errors.FretishError` of a file
+    file: its error printed, exit code 2; a :class:`common.errors.FretishError` of a file
     goes to the command group's handler: printed, exit code 2)."""
     from fretish.files import load_requirements  # lazy: the parser only when a command compiles
 

@@ -3,7 +3,7 @@
 ``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
 ``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
 :func:`audit_config` turns their values into a :class:`monitors.audit.AuditConfig` and
-:func:`run_audits` runs the audit locally or on Ray (:mod:`monitors.fleet`) as the options
+:func:`run_audits` runs the audit locally or on Ray (:mod:`monitors.audit.fleet`) as the options
 say. Only click is imported at module level, so the command starts fast; the engine loads
 on first use.
 """
@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import click
 
-from fretish.textsafe import visible
+from common.textsafe import visible
 
 __all__ = ["audit_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
@@ -26,7 +26,7 @@ META = "fretc.fleet"
 
 def shown(text: str) -> str:
     """Text for the terminal: control and bidi characters escaped, lines kept
-    (:func:`fretish.textsafe.visible`)."""
+    (:func:`common.textsafe.visible`)."""
     return visible(text, keep="\n")
 
 
@@ -116,7 +116,7 @@ def _check_address(ctx, param, value):
     import importlib.util  # lazy: only for --ray (start-up, issue 9)
 
     if importlib.util.find_spec("ray") is None:
-        from monitors.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
+        from monitors.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
 
         raise click.UsageError(RAY_HINT, ctx=ctx)
     ok = (value in ("local", "auto") or value.startswith("ray://")
@@ -137,7 +137,7 @@ def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
     started or reached."""
     # lazy: the audit engine (numpy, mcap, rosbags) is loaded only when a command runs
     from monitors.audit import audit_logs
-    from monitors.fleet import RayUnavailable, audit_logs_ray
+    from monitors.audit.fleet import RayUnavailable, audit_logs_ray
 
     opts = (ctx.meta.get(META) if ctx is not None else None) or {}
     if "ray" not in opts:

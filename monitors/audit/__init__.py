@@ -16,7 +16,7 @@ One module per step:
    decided by the interval semantics alone (engine ``interval``). The engines are in
    :mod:`monitors.engines`.
 4. **Verdicts** (:mod:`.finalize`): the engine's verdict, the interval-semantics evidence,
-   the verdict at the damage (:mod:`monitors.damage`), the values around the first
+   the verdict at the damage (:mod:`monitors.audit.damage`), the values around the first
    violation and the numbers behind its boolean variables (:mod:`.operands`); the problems of
    every pass (:mod:`.log_problems`).
 5. **Many logs** (:mod:`.workers`): :func:`audit_logs` with ``jobs > 1`` audits logs in worker

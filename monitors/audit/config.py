@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..problems import FretcInputError
+from common.problems import FretcInputError
 
 __all__ = ["AuditConfig", "AuditInputError"]
 

@@ -8,17 +8,17 @@ verdict. The interval semantics (:func:`monitors.engines.interval.evaluate_requi
 re-decides it from the columns and gives the vacuity, the first violated trigger, its scope
 interval and response window; the values of the requirement's variables and the log times of
 the messages behind them are taken around the trigger and the violation. On a damaged log the
-verdict is the one the intact span decides (:mod:`monitors.damage`).
+verdict is the one the intact span decides (:mod:`monitors.audit.damage`).
 """
 
 from __future__ import annotations
 
 from ..bindings import Bindings
-from ..damage import open_obligations, verdict_at_damage
+from .damage import open_obligations, verdict_at_damage
 from ..engines import stepwise
 from ..engines.interval import OBLIGATIONS, EvidenceUnsupported, evaluate_requirement
 from ..engines.vectorized import ltl3_status, pt_series
-from ..report_model import FirstViolation, Ltl3, TimePoint
+from ..report.model import FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
 from .passes import ClockPass, clock_key
 
@@ -27,10 +27,10 @@ __all__ = ["finalize", "summarize_clocks"]
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
              v, la) -> None:
-    """Set the verdict ``v`` (:class:`monitors.report_model.Verdict`) of requirement ``r``
+    """Set the verdict ``v`` (:class:`monitors.report.model.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it.
-    ``la`` is the log's :class:`monitors.report_model.LogAudit`."""
+    ``la`` is the log's :class:`monitors.report.model.LogAudit`."""
     n = len(res.times)
     v.engine = res.engine[r.index]
     if n == 0:
@@ -94,7 +94,7 @@ def _engine_verdict(r: RequirementPlan, res: ClockPass, engine: str, ev, n: int
 
 def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, status, st_tick,
                      n: int) -> bool | None:
-    """The verdict over the intact span of a damaged log (:mod:`monitors.damage`): True /
+    """The verdict over the intact span of a damaged log (:mod:`monitors.audit.damage`): True /
     False for the usual satisfied-or-vacuous / violated paths of :func:`finalize`, None
     when the verdict (``unknown``) is set here."""
     opened = []
@@ -116,7 +116,7 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
 
 
 class _Ticks:
-    """Tick indexes of one clock as :class:`monitors.report_model.TimePoint` and times."""
+    """Tick indexes of one clock as :class:`monitors.report.model.TimePoint` and times."""
 
     def __init__(self, res: ClockPass, held: list, bindings: Bindings | None) -> None:
         self.times = res.times

@@ -18,9 +18,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..bindings import Bindings
-from ..problems import DataProblem, FretcInputError, SignalError
-from ..report_model import LogAudit, Verdict
-from ..schema import closest
+from common.problems import DataProblem, FretcInputError, SignalError
+from ..report.model import LogAudit, Verdict
+from ..sources.schema import closest
 from ..sources import open_log
 from .checks import check_binding_types, check_nominal_rate, csv_bindings, too_many_ticks
 from .finalize import finalize, summarize_clocks
@@ -44,7 +44,7 @@ def audit_log(plan: AuditPlan, path: str,
         progress: called now and then with the fraction of the log read (0..1).
 
     Returns:
-        A :class:`~monitors.report_model.LogAudit` with one verdict per requirement. Input
+        A :class:`~monitors.report.model.LogAudit` with one verdict per requirement. Input
         problems of this log (unreadable file, missing topic or binding) are reported in it
         (``error`` / ``error`` verdicts), never raised.
     """

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..bindings import Bindings
 from ..engines.stepwise import replay
-from ..problems import SignalError
+from common.problems import SignalError
 from ..signals import sample, sample_groups
 from ..sources import CSV_TOPIC
 from .columns import TickColumns

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from monitors.audit import AuditConfig, audit_log, audit_logs, find_logs, load_plan
-from monitors.report_model import audit_json
+from monitors.report.model import audit_json
 
 from _logs import MS, S, boolean, scan, twist, write_mcap
 

@@ -7,10 +7,10 @@ from __future__ import annotations
 from hypothesis import given, settings, strategies as st
 
 from fretish.parser import parse
-from monitors.report_trace import split_source, thresholds
-from monitors.report_verdicts import cell_label, values_table, verdict_for
-from monitors.timeline_layout import (PLOT_X1, Threshold, nice_step_ns, plan_timeline,
-                                      step_decimals)
+from monitors.report.trace import split_source, thresholds
+from monitors.report.verdicts import cell_label, values_table, verdict_for
+from monitors.report.timeline_layout import (PLOT_X1, Threshold, nice_step_ns, plan_timeline,
+    step_decimals)
 
 
 @settings(max_examples=200, deadline=None)
