@@ -7,15 +7,28 @@
   runs, so a second run is warm as a user's would be; the tests of cold runs, damaged
   entries and read-only folders set ``FRETC_CACHE_DIR`` to their own ``tmp_path``. Set before
   any test runs, so the fretc subprocesses the tests start inherit it.
+* ``shared``: the project's shared data (``../shared``), or a skip with one reason when it is
+  absent (``tests/_shared.py``; a user's clone has none).
 """
 import os
 import sys
 import tempfile
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _shared  # noqa: E402
 
 #: where the suite's fretc cache goes when the caller did not choose one
 TEST_CACHE_DIR = os.path.join(tempfile.gettempdir(),
                               f"fretc-test-cache-{getattr(os, 'getuid', lambda: 0)()}")
 os.environ.setdefault("FRETC_CACHE_DIR", TEST_CACHE_DIR)
+
+
+@pytest.fixture(scope="session")
+def shared() -> Path:
+    """The ../shared folder (FRET's vectors, the corpus, the real logs), or a skip."""
+    _shared.skip_without_shared()
+    return _shared.SHARED
