@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
 from fretish.records import FACTORY, Record
-from fretish.units import format_period_ms
+from common.units import format_period_ms
 
 from . import ir
 from .expressions import Expander, SemanticsError, mentions_time

@@ -48,7 +48,7 @@ import sys
 import threading
 
 from . import ast as A
-from . import cache
+from common import cache
 from .fastparse import _FastParser, fast_tables
 from .limits import LimitError, check_expression, check_requirement
 from .positions import _ctx, _Fail, _join, _mk, _new_span, _span_of
@@ -602,14 +602,14 @@ def build_lark(**options):
 
 def cached_lark():
     """The parser of :func:`build_lark`, with its LALR tables loaded from fretc's disk
-    cache (:mod:`fretish.cache`, sub-folder ``lark``) when an entry for this grammar text,
+    cache (:mod:`common.cache`, sub-folder ``lark``) when an entry for this grammar text,
     Lark version, Python version and these options is there, else built and stored
     (``Lark.save`` / ``Lark.load``, Lark's documented serialization; loading takes a few
     milliseconds where building the tables takes about a second).
 
     ``grammar.lark`` stays the only source: the entry's name is a hash of everything the
     tables depend on, so editing the grammar or upgrading Lark or Python gives a new entry,
-    never a stale one. Entries are written atomically (:func:`fretish.cache.write_bytes`);
+    never a stale one. Entries are written atomically (:func:`common.cache.write_bytes`);
     an entry that cannot be read or loaded is ignored and rebuilt, and when the cache
     folder cannot be written the tables are built in memory as :func:`build_lark` does."""
     lark = _import_lark()
@@ -661,7 +661,7 @@ def _load_fast():
     them), and is used only when they are this run's, so it is never stale; a CRC-32 of the entry's
     bytes precedes them, so an altered entry is rebuilt, not used.
     It is read from :data:`_PACKAGE_CACHE`, else from fretc's cache folder
-    (:mod:`fretish.cache`, sub-folder ``lark``); a new entry is written beside the package
+    (:mod:`common.cache`, sub-folder ``lark``); a new entry is written beside the package
     unless that folder cannot be written or Python writes no bytecode
     (``PYTHONDONTWRITEBYTECODE``), and then to fretc's cache folder. An entry that cannot be
     loaded is ignored and written again."""

@@ -1,6 +1,6 @@
 """Start-up work of ``fretc FILE --emit ltl`` (issue 9) that was moved or written out keeps
-its behaviour: :class:`fretish.errors.Where` behaves as the ``@dataclass(frozen=True)`` it
-replaces, and :mod:`fretish.units` builds its table and regexp on first use."""
+its behaviour: :class:`common.errors.Where` behaves as the ``@dataclass(frozen=True)`` it
+replaces, and :mod:`common.units` builds its table and regexp on first use."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fretish import units
-from fretish.errors import Where
+from common import units
+from common.errors import Where
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,7 +74,7 @@ def test_where_defaults_and_keywords():
 
 
 def test_units_table_is_built_on_first_use():
-    code = ("import fretish.units as u\n"
+    code = ("import common.units as u\n"
             "assert not u._TABLES\n"
             "assert u.parse_seconds('100 ms') * 10 == 1\n"
             "assert len(u._TABLES) == 1\n"
@@ -84,7 +84,7 @@ def test_units_table_is_built_on_first_use():
     assert out.strip() == "['h', 'hour', 'hours'] 3600"
     assert units.TIME_UNITS["µs"] * 1_000_000 == 1 == units.parse_seconds("10 Hz") * 10
     ns = {}
-    exec("from fretish.units import *", ns)
+    exec("from common.units import *", ns)
     assert ns["TIME_UNITS"] is units.TIME_UNITS
     with pytest.raises(AttributeError):
         units.NOT_THERE  # noqa: B018
@@ -105,7 +105,7 @@ def test_emit_ltl_in_ticks_builds_no_unit_table(tmp_path):
             "out = io.StringIO()\n"
             "try:\n    with contextlib.redirect_stdout(out):\n        main()\n"
             "except SystemExit as e:\n    assert not e.code, e.code\n"
-            "import fretish.units as u\n"
+            "import common.units as u\n"
             "print(len(u._TABLES), '\"ft\"' in out.getvalue())")
     env = dict(os.environ, PYTHONPATH=str(ROOT), FRETC_CACHE_DIR=str(tmp_path / "c"))
     run = [subprocess.run([sys.executable, "-c", code, str(f)], capture_output=True,

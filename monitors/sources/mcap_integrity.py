@@ -24,8 +24,8 @@ import zstandard
 from mcap.opcode import Opcode
 from mcap.records import Channel, ChunkIndex, Message as McapMessage, Schema, Statistics
 
-from .. import problems as P
-from ..problems import DataProblem
+from common import problems as P
+from common.problems import DataProblem
 from .mcap_records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
                            crc_skip, parse_record)
 

@@ -29,8 +29,8 @@ from mcap.records import Channel, Chunk, ChunkIndex, Message as McapMessage, Sch
 from mcap.stream_reader import CRCValidationError
 from rosbags.typesys.msg import normalize_msgtype
 
-from .. import problems as P
-from ..problems import DataProblem, LogError
+from common import problems as P
+from common.problems import DataProblem, LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
 from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 import fretish.ast as A
 import fretish.fastparse as F
 import fretish.parser as P
-from fretish.errors import FretishError
+from common.errors import FretishError
 from fretish.words import RESERVED_WORDS
 
 SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "fretish"
