@@ -120,7 +120,7 @@ def inspect_log(path: str) -> dict:
                     st.numbers([v])
     topics = []
     for t, typ in types.items():
-        n = counts.get(t, 0)
+        n = source.records.get(t, counts.get(t, 0))  # read, decoded or not
         span = (last[t] - first[t]) / 1e9 if n > 1 else None
         topics.append({"topic": t, "type": typ or None, "messages": n,
                        "rate_hz": (n - 1) / span if span else None,

@@ -1,6 +1,5 @@
 """Finalization: one requirement's verdict and evidence from the pass over its clock
-(:func:`finalize`), and the log's figures that summarize its requirements' clocks
-(:func:`summarize_clocks`).
+(:func:`finalize`).
 
 The verdict, the LTL3 verdict and the evidence come from one judge,
 :func:`monitors.engines.judge.judge`, over the columns of the requirement's clock: FRET's
@@ -22,7 +21,7 @@ from ..report.model import FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
 from .passes import ClockPass, clock_key
 
-__all__ = ["finalize", "summarize_clocks", "log_engine"]
+__all__ = ["finalize"]
 
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
@@ -183,26 +182,3 @@ def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bi
         if lt is None:
             continue
         v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]
-
-
-def log_engine(verdicts) -> str | None:
-    """The log's ``engine`` figure: what decided its verdicts (:class:`~monitors.engines.judge.
-    Judgement`'s ``engine``), ``"mixed"`` when several did, None when none was decided."""
-    engines = sorted({v.engine for v in verdicts if v.engine is not None})
-    return engines[0] if len(engines) == 1 else ("mixed" if engines else None)
-
-
-def summarize_clocks(la, verdicts: list) -> None:
-    """The log's figures from its requirements' clocks (each verdict has its own): the most
-    ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
-    after damage the end of the judged span. ``verdicts``: those without an error."""
-    if not verdicts:
-        return
-    la.ticks_evaluated = max(v.ticks_evaluated for v in verdicts)
-    la.warmup_ticks = max(v.warmup_ticks for v in verdicts)
-    firsts = [v.first_tick_ns for v in verdicts if v.first_tick_ns is not None]
-    la.first_time_ns = min(firsts) if firsts else None
-    la.waiting_for = sorted({t for v in verdicts for t in v.waiting_for})
-    if la.ticks_after_damage:  # the log's judged span ends at the damage
-        lasts = [v.last_tick_ns for v in verdicts if v.last_tick_ns is not None]
-        la.end_time_ns = max(lasts) if lasts else None

@@ -23,7 +23,7 @@ from ..report.model import LogAudit, Verdict
 from ..sources.schema import closest
 from ..sources import open_log
 from .checks import check_binding_types, check_nominal_rate, csv_bindings, too_many_ticks
-from .finalize import finalize, log_engine, summarize_clocks
+from .finalize import finalize
 from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
 from .model import AuditPlan, RequirementPlan
@@ -31,7 +31,7 @@ from .operands import operand_values
 from .passes import LogPasses, clock_key, restrict, run_passes
 from .plan import select_variant
 
-__all__ = ["audit_log"]
+__all__ = ["audit_log", "summarize_clocks", "log_engine"]
 
 
 def audit_log(plan: AuditPlan, path: str,
@@ -320,3 +320,26 @@ class _LogRun:
             v.error = "; ".join(why[t] for t in sorted(silent))
             return False
         return True
+
+
+def log_engine(verdicts) -> str | None:
+    """The log's ``engine`` figure: what decided its verdicts (:class:`~monitors.engines.judge.
+    Judgement`'s ``engine``), ``"mixed"`` when several did, None when none was decided."""
+    engines = sorted({v.engine for v in verdicts if v.engine is not None})
+    return engines[0] if len(engines) == 1 else ("mixed" if engines else None)
+
+
+def summarize_clocks(la, verdicts: list) -> None:
+    """The log's figures from its requirements' clocks (each verdict has its own): the most
+    ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
+    after damage the end of the judged span. ``verdicts``: those without an error."""
+    if not verdicts:
+        return
+    la.ticks_evaluated = max(v.ticks_evaluated for v in verdicts)
+    la.warmup_ticks = max(v.warmup_ticks for v in verdicts)
+    firsts = [v.first_tick_ns for v in verdicts if v.first_tick_ns is not None]
+    la.first_time_ns = min(firsts) if firsts else None
+    la.waiting_for = sorted({t for v in verdicts for t in v.waiting_for})
+    if la.ticks_after_damage:  # the log's judged span ends at the damage
+        lasts = [v.last_tick_ns for v in verdicts if v.last_tick_ns is not None]
+        la.end_time_ns = max(lasts) if lasts else None

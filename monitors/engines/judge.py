@@ -23,7 +23,7 @@ cross-check them, the vectorized pt engine and this judge on random traces.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,7 +61,7 @@ class Judgement:
 
 
 def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int, *,
-          monitor_source: Callable[[], object] | None = None,
+          monitor_source=None,
           monitor_cls: type | None = None) -> Judgement:
     """Decide one requirement over the first ``n`` ticks of ``columns``.
 
@@ -70,9 +70,8 @@ def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int,
         formalization: its :class:`compiler.semantics.Formalization` (pt, ticks).
         columns: FRET variable -> numpy array of at least ``n`` values (bool or float).
         n: the number of ticks judged (``n >= 1``).
-        monitor_source: a function giving the requirement's
-            :class:`compiler.codegen.MonitorSource` (LTL3 automata tables), or None for a
-            requirement without an online monitor.
+        monitor_source: the requirement's :class:`compiler.codegen.MonitorSource` (its LTL3
+            automata tables), or None for a requirement without an online monitor.
         monitor_cls: its generated monitor class, for the replay fallbacks, or None.
 
     Raises:
@@ -110,7 +109,7 @@ def _ltl3(monitor_source, monitor_cls, columns, n: int, replayed) -> tuple[str, 
     if monitor_source is None:
         return "unknown", None
     try:
-        return ltl3_status(monitor_source(), columns, n)
+        return ltl3_status(monitor_source, columns, n)
     except (VectorizeError, KeyError):
         if monitor_cls is None:
             return "unknown", None

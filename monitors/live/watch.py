@@ -40,7 +40,8 @@ import numpy as np
 
 from ..audit import AuditInputError
 from ..audit.columns import column_array
-from ..audit.finalize import finalize, log_engine, summarize_clocks
+from ..audit.finalize import finalize
+from ..audit.log import log_engine, summarize_clocks
 from ..audit.log_problems import collect_problems, problem_json
 from ..audit.operands import operand_values
 from ..audit.passes import ClockPass, clock_key, restrict

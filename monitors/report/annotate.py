@@ -35,10 +35,11 @@ from pathlib import Path
 
 from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, Metadata,
                           Schema)
-from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
 from common.units import format_offset
+from ..sources.mcap_records import chunk_records
 
 __all__ = ["VERDICT_TOPIC", "FOXGLOVE_LOG_SCHEMA", "VerdictEvent", "AnnotateResult",
            "verdict_events", "annotate_mcap", "LEVELS"]
@@ -279,7 +280,7 @@ class _Copy:
                 continue
             elif isinstance(rec, Chunk):
                 try:
-                    inner = breakup_chunk(rec, validate_crc=True)
+                    inner = chunk_records(rec)
                 except Exception as exc:  # noqa: BLE001 - a corrupt chunk is skipped
                     res.partial = True
                     res.damage = f"chunk at {rec.message_start_time} ns skipped: {exc}"

@@ -27,10 +27,11 @@ def _finalize(value: Any) -> Any:
     return value
 
 
-#: Markdown punctuation that can start a link, an image, an emphasis, a heading, an HTML tag, an
-#: entity or an autolink (CommonMark 0.31 section 2.4: every ASCII punctuation character may be
-#: backslash-escaped); ``:`` breaks ``scheme:`` autolinks, ``www.`` is escaped on its own
-_MD_PUNCTUATION = re.compile(r"([\\`*_{}\[\]()#+!|<>~:&])")
+#: Markdown punctuation that can start a link or an image (``[``, ``]``, ``!``), emphasis, code,
+#: a heading, a table cell, an HTML tag, an entity or an autolink (CommonMark 0.31 section 2.4:
+#: every ASCII punctuation character may be backslash-escaped); ``:`` breaks ``scheme:``
+#: autolinks, ``www.`` is escaped on its own. Parentheses need no escape once ``]`` has one.
+_MD_PUNCTUATION = re.compile(r"([\\`*_\[\]#!|<>~:&])")
 _WWW = re.compile(r"(www)\.", re.IGNORECASE)
 
 

@@ -65,6 +65,9 @@ class LogSource:
         kind: ``"mcap"``, ``"bag"`` (ROS 1), ``"rosbag2"`` or ``"csv"``.
         counts: messages delivered per topic by the most recent :meth:`messages` pass
             (filled while iterating).
+        records: messages read per topic by that pass, decoded or not (a message whose
+            encoding or schema cannot be decoded counts here, not in ``counts``); sources
+            that decode every message they read leave it empty.
         partial: True when the log is damaged: it ends early (truncated or unreadable from
             some point on), a part of it was skipped (a chunk failing its CRC, a record that
             does not parse: a *gap*), or its summary or data-section CRC is damaged.
@@ -88,6 +91,7 @@ class LogSource:
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = str(path)
         self.counts: dict[str, int] = {}
+        self.records: dict[str, int] = {}
         self.partial = False
         self.damage_time: int | None = None
         self.damage_cut = False
@@ -121,6 +125,7 @@ class LogSource:
 
     def _begin_pass(self) -> None:
         self.counts = {}
+        self.records = {}
         self.partial = self._open_damage
         self.damage_time = None
         self.damage_cut = False
