@@ -162,6 +162,33 @@ def in_process(texts, repeat: int) -> list:
     return runs
 
 
+def report_checkout(label: str, n: int, n_corpus: int, many, real, one, typo, imp,
+                    empty) -> tuple:
+    """Print one checkout's end-to-end figures (``command_times`` results by label); returns
+    its best runs: (n sentences, r1, corpus, import, empty file, r1 with a typo)."""
+    (first, e2e), (r1_first, r1) = many[label], one[label]
+    (c_first, cs), (_, im), (_, em) = real[label], imp[label], empty[label]
+    result = (min(e2e), min(r1), min(cs), min(im), min(em), min(typo[label][1]))
+    print(f"{label}: `fretc FILE --emit ltl --json`, {n} sentences, fresh "
+          f"process: best {min(e2e):.3f} s CPU = {n / min(e2e):.0f} "
+          f"sentences/s, median {statistics.median(e2e):.3f} s; first run (empty "
+          f"cache) {first:.3f} s")
+    print(f"{label}: `fretc FILE --emit ltl --json`, {n_corpus} case-study "
+          f"sentences: best {min(cs):.3f} s CPU = {n_corpus / min(cs):.0f} "
+          f"sentences/s, median {statistics.median(cs):.3f} s; first run "
+          f"{c_first:.3f} s")
+    print(f"{label}: `fretc requirements/r1.fret --emit ltl`: best {min(r1):.3f} s "
+          f"CPU, median {statistics.median(r1):.3f} s; first run {r1_first:.3f} s")
+    ty = typo[label][1]
+    print(f"{label}: the same with a second requirement that does not parse (exit "
+          f"1, the error path): best {min(ty):.3f} s CPU, median "
+          f"{statistics.median(ty):.3f} s")
+    print(f"{label}: start-up: `python -c \"{IMPORT}\"` best {min(im):.3f} s CPU, "
+          f"median {statistics.median(im):.3f} s; `fretc EMPTY.fret --emit ltl` "
+          f"(exit 2) best {min(em):.3f} s, median {statistics.median(em):.3f} s")
+    return result
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1000)
@@ -209,29 +236,9 @@ def main() -> None:
         imp = command_times(roots, [], args.repeat, caches, launch=IMPORT)
         empty = command_times(roots, [empty_file, "--emit", "ltl"], args.repeat, caches,
                               ok=(2,))
-        results = {}
-        for label, _root in roots:
-            (first, e2e), (r1_first, r1) = many[label], one[label]
-            (c_first, cs), (_, im), (_, em) = real[label], imp[label], empty[label]
-            results[label] = (min(e2e), min(r1), min(cs), min(im), min(em),
-                              min(typo[label][1]))
-            print(f"{label}: `fretc FILE --emit ltl --json`, {args.n} sentences, fresh "
-                  f"process: best {min(e2e):.3f} s CPU = {args.n / min(e2e):.0f} "
-                  f"sentences/s, median {statistics.median(e2e):.3f} s; first run (empty "
-                  f"cache) {first:.3f} s")
-            print(f"{label}: `fretc FILE --emit ltl --json`, {len(corpus)} case-study "
-                  f"sentences: best {min(cs):.3f} s CPU = {len(corpus) / min(cs):.0f} "
-                  f"sentences/s, median {statistics.median(cs):.3f} s; first run "
-                  f"{c_first:.3f} s")
-            print(f"{label}: `fretc requirements/r1.fret --emit ltl`: best {min(r1):.3f} s "
-                  f"CPU, median {statistics.median(r1):.3f} s; first run {r1_first:.3f} s")
-            ty = typo[label][1]
-            print(f"{label}: the same with a second requirement that does not parse (exit "
-                  f"1, the error path): best {min(ty):.3f} s CPU, median "
-                  f"{statistics.median(ty):.3f} s")
-            print(f"{label}: start-up: `python -c \"{IMPORT}\"` best {min(im):.3f} s CPU, "
-                  f"median {statistics.median(im):.3f} s; `fretc EMPTY.fret --emit ltl` "
-                  f"(exit 2) best {min(em):.3f} s, median {statistics.median(em):.3f} s")
+        results = {label: report_checkout(label, args.n, len(corpus), many, real, one, typo,
+                                          imp, empty)
+                   for label, _root in roots}
         if "baseline" in results:
             a, c = results["fretc"], results["baseline"]
             names = (f"{args.n} sentences", "r1.fret", f"{len(corpus)} case studies",
