@@ -49,7 +49,7 @@ from ..engines.interval import evaluate_requirement
 from common.problems import DataProblem
 from ..report.model import LogAudit, Verdict
 from ..signals import sample_groups
-from .client import FoxgloveClient
+from .client import FoxgloveClient, require_websockets
 from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
     UNADVERTISED, Recorder, WatchEvent, WatchSource)
 
@@ -71,10 +71,15 @@ class WatchOptions:
             until stopped).
         record: MCAP path to write the watched messages and the verdict events to.
         backoff, max_backoff: reconnection delays (s), doubling.
+        until_idle: end the run when no message arrived for this many seconds (wall time).
+        types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
+            a bound topic (``--topic-type``).
     """
 
     url: str
     duration: float | None = None
+    until_idle: float | None = None
+    types: dict[str, str] | None = None
     wait: float = 3.0
     connect_timeout: float | None = None
     record: str | None = None
@@ -82,19 +87,32 @@ class WatchOptions:
     max_backoff: float = 5.0
 
 
+def make_client(options: WatchOptions, wanted):
+    """The client for ``options.url``: :class:`~monitors.live.rosbridge.RosbridgeClient` for
+    ``rosbridge://`` (``rosbridge+wss://``; ``options.types`` for topics rosapi does not
+    type), else :class:`~monitors.live.client.FoxgloveClient` (``ws://``, ``wss://``)."""
+    kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
+    if options.url.startswith(("rosbridge://", "rosbridge+wss://")):
+        from .rosbridge import RosbridgeClient  # lazy: numpy's message building
+
+        return RosbridgeClient(options.url, wanted, types=options.types, **kw)
+    return FoxgloveClient(options.url, wanted, **kw)
+
+
 # --------------------------------------------------------------------------- the engine
 class _Live:
     """Per-requirement live state (read by the table)."""
 
-    __slots__ = ("pt", "status", "status_tick", "status_time", "violations", "last_trigger",
-                 "first_violation", "error", "offline")
+    __slots__ = ("pt", "status", "status_tick", "status_time", "violations", "pending",
+                 "last_trigger", "first_violation", "error", "offline")
 
     def __init__(self) -> None:
         self.pt: bool | None = None
         self.status = "unknown"
         self.status_tick: int | None = None
         self.status_time: int | None = None
-        self.violations = 0
+        self.violations = 0  # obligations already failed (they fail on every continuation)
+        self.pending = 0  # obligations failing on the ticks so far that may still be met
         self.last_trigger: int | None = None
         self.first_violation: int | None = None
         self.error: str | None = None
@@ -142,11 +160,11 @@ class Watch:
                         self.needed |= set(b.variables[v].topics)
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
-        self.client = FoxgloveClient(options.url, lambda t: t in self.needed,
-                                     backoff=options.backoff, max_backoff=options.max_backoff)
+        require_websockets()
+        self.client = make_client(options, lambda t: t in self.needed)
         deadline = (time.monotonic() + options.duration) if options.duration else None
         self.source = WatchSource(options.url, self.client, deadline=deadline,
-                                  on_event=self._event)
+                                  idle=options.until_idle, on_event=self._event)
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
@@ -169,6 +187,8 @@ class Watch:
             self.status_line = f"connected to {self.options.url} ({e.detail})"
         elif e.kind == "disconnected":
             self.status_line = f"disconnected: {e.detail}; retrying"
+        elif e.kind == "end":
+            self.status_line = f"run ended: {e.detail}"
         self.on_event(e)
 
     # -- the run -----------------------------------------------------------------------------
@@ -209,6 +229,8 @@ class Watch:
                 result = self._run_pass(active, rb)
         finally:
             self.client.stop()
+        self._event(WatchEvent("end", src._last_time, time.time_ns(),
+                               detail=src.end_reason or "stopped"))
         self._record_problems(la, result)
         return self._finish(la, verdicts, result, active if result is not None else [])
 
@@ -393,7 +415,7 @@ class Watch:
                 ev = evaluate_requirement(r.requirement, columns, n, r.formalization.ticks)
             except Exception:  # evidence unsupported for this requirement: pt only
                 continue
-            st.violations = ev.violations or 0
+            st.violations, st.pending = split_pending(ev, n)
             trig = None
             for x in getattr(ev, "listed", ()) or ():
                 trig = x.trigger_tick
@@ -456,6 +478,19 @@ class Watch:
                            extra={"ltl3": v.ltl3.status, "violations": v.violations})
             self._event(e)
         return la
+
+
+def split_pending(ev, n: int) -> tuple[int, int]:
+    """(violated, pending) of the failed obligations of ``ev`` (an
+    :class:`~monitors.engines.interval.Evidence` over the first ``n`` ticks of a run): pending
+    when its window reaches the last tick and it failed only there (FRET's finite-trace
+    semantics reads the end of the ticks so far as the end of the run; a later tick may still
+    meet it), violated otherwise. Counted over the listed failures
+    (:data:`~monitors.engines.interval.MAX_LISTED`); unlisted ones count as violated."""
+    total = ev.violations or 0
+    pending = sum(1 for x in (getattr(ev, "listed", ()) or ())
+                  if x.window[1] >= n - 1 and x.violation_tick >= n - 1)
+    return total - pending, pending
 
 
 @dataclass
