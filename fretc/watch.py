@@ -205,7 +205,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
             input_errors = True
             err.print(f"[red]error:[/red] {escape(f'{r.id} ({r.source}): {r.error}')}")
     la = _run_watch(w, err, no_live)
-    ctx.exit(_report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path))
+    ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
 
 
 def _run_watch(w, err, no_live):

@@ -124,7 +124,8 @@ class Watch:
     :func:`monitors.audit.load_plan`).
 
     Args:
-        plan: compiled requirements and bindings (bindings are required).
+        plan: compiled requirements and bindings (bindings are required; a plan whose only
+            binding file selects logs with ``[logs]`` is watched with that file).
         options: :class:`WatchOptions`.
         on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
 
@@ -138,9 +139,12 @@ class Watch:
 
     def __init__(self, plan, options: WatchOptions,
                  on_event: Callable[[WatchEvent], None] | None = None) -> None:
+        if plan.bindings is None and len(plan.variants) == 1:
+            plan = plan.variants[0][2]  # one binding file with [logs]: the watched run's
         if plan.bindings is None:
             raise AuditInputError("fretc watch needs signal bindings (*.bindings.toml next to "
-                                  "the requirements, --bindings or --bind)")
+                                  "the requirements, --bindings or --bind; one file when "
+                                  "they select logs with [logs])")
         self.plan = plan
         self.options = options
         self.on_event = on_event or (lambda e: None)
