@@ -73,7 +73,7 @@ class WatchOptions:
         backoff, max_backoff: reconnection delays (s), doubling.
         until_idle: end the run when no message arrived for this many seconds (wall time).
         types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
-            a bound topic (``--topic-type``).
+            a bound topic (``--topic-type``; over the bindings' ``[types]``).
     """
 
     url: str
@@ -87,15 +87,18 @@ class WatchOptions:
     max_backoff: float = 5.0
 
 
-def make_client(options: WatchOptions, wanted):
+def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = None):
     """The client for ``options.url``: :class:`~monitors.live.rosbridge.RosbridgeClient` for
-    ``rosbridge://`` (``rosbridge+wss://``; ``options.types`` for topics rosapi does not
-    type), else :class:`~monitors.live.client.FoxgloveClient` (``ws://``, ``wss://``)."""
+    ``rosbridge://`` (``rosbridge+wss://``; for topics rosapi does not type: ``types``, the
+    bindings' ``[types]``, overridden by ``options.types``), else
+    :class:`~monitors.live.client.FoxgloveClient` (``ws://``, ``wss://``)."""
     kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
     if options.url.startswith(("rosbridge://", "rosbridge+wss://")):
         from .rosbridge import RosbridgeClient  # lazy: numpy's message building
 
-        return RosbridgeClient(options.url, wanted, types=options.types, **kw)
+        given = dict(types or {})
+        given.update(options.types or {})
+        return RosbridgeClient(options.url, wanted, types=given, **kw)
     return FoxgloveClient(options.url, wanted, **kw)
 
 
@@ -165,7 +168,7 @@ class Watch:
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
         require_websockets()
-        self.client = make_client(options, lambda t: t in self.needed)
+        self.client = make_client(options, lambda t: t in self.needed, b.types)
         deadline = (time.monotonic() + options.duration) if options.duration else None
         self.source = WatchSource(options.url, self.client, deadline=deadline,
                                   idle=options.until_idle, on_event=self._event)

@@ -152,12 +152,17 @@ def test_real_log_served_both_ways_equals_audit(tmp_path):
 
 
 def test_rosbridge_without_rosapi_uses_the_given_types(tmp_path):
-    """No rosapi: the topics' types (and /clock's) come from --topic-type."""
+    """No rosapi: the topics' types come from the bindings' [types], /clock's from
+    --topic-type."""
     log = ROOT / "traces" / "stop_delay.mcap"
     ref, ref_code = _audit(log, REQS, tmp_path)
+    bindings = (ROOT / "requirements" / "safe_ros.bindings.toml").read_text(encoding="utf-8")
     with RosbridgeTestServer(str(log), SAFE_ROS_TOPICS, rate=RATE, rosapi=False) as srv:
-        types = [f"{t}={ty}" for t, ty in srv.types.items()] + ["/clock=rosgraph_msgs/Clock"]
-        args = [x for t in types for x in ("--topic-type", t)]
-        got, code, _doc, events = _watch(srv.url, REQS, tmp_path, *args)
+        table = "".join(f'"{t}" = "{ty}"\n' for t, ty in sorted(srv.types.items()))
+        typed = tmp_path / "typed.bindings.toml"
+        typed.write_text(bindings + "\n[types]\n" + table, encoding="utf-8")
+        reqs = [*REQS, "-b", str(typed)]
+        got, code, _doc, events = _watch(srv.url, reqs, tmp_path,
+                                         "--topic-type", "/clock=rosgraph_msgs/Clock")
     assert got == ref
     _check_end(events, code, ref_code)

@@ -205,3 +205,14 @@ def test_missing_watch_extra_is_one_line_and_exit_2(monkeypatch, reqs):
     assert res.exit_code == 2
     lines = [x for x in res.output.splitlines() if x.strip()]
     assert len(lines) == 1 and "pip install 'fretc[watch]'" in lines[0], res.output
+
+
+def test_bindings_types_table():
+    from common.problems import BindingError
+    from monitors.bindings.files import parse_bindings
+
+    b = parse_bindings(BINDINGS + '[types]\n"/a" = "std_msgs/msg/Float64"\n')
+    assert b.types == {"/a": "std_msgs/msg/Float64"}
+    assert b.with_inline(["c_ok=/a.data > 1"]).types == b.types
+    with pytest.raises(BindingError, match=r"\[types\] needs"):
+        parse_bindings(BINDINGS + '[types]\n"/a" = 3\n')
