@@ -264,7 +264,8 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
 @click.option("--loop", is_flag=True, help="Start again at the end.")
 def replay_cmd(log, serve, rate, host, port, wait, loop):
     """Publish a recorded MCAP LOG over the Foxglove WebSocket protocol, paced at RATE
-    times real time, with its recorded schemas, encodings and log times."""
+    times real time, with its recorded schemas, encodings and log times; then close (a
+    `fretc watch` of it ends there)."""
     # lazy: foxglove-sdk (the watch extra) only when the command runs
     from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap
 
