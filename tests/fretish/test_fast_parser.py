@@ -122,9 +122,10 @@ def test_fast_path_equals_lark_on_the_corpus():
 
 
 CASE_STUDIES = SHARED.parent / "corpora" / "fret_casestudies.jsonl"
+from _shared import needs_shared  # noqa: E402
 
 
-@pytest.mark.skipif(not CASE_STUDIES.exists(), reason="shared corpora not available")
+@needs_shared
 def test_fast_path_equals_lark_on_the_case_studies():
     """NASA's case-study requirements (real text: trailing blanks, long expressions): the
     fast path accepts every one Lark accepts, with the same AST and spans."""

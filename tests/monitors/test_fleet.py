@@ -20,7 +20,7 @@ from monitors.audit import AuditConfig, AuditInputError, audit_log, audit_logs, 
 from monitors.report.model import audit_json, exit_code
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared" / "data" / "logs"
+SHARED = ROOT.parent / "shared" / "data" / "logs"  # needs the shared fixture
 TRACES = [str(p) for p in sorted((ROOT / "traces").glob("*.mcap"))]
 REAL = ROOT / "requirements" / "real_logs"
 
@@ -53,7 +53,7 @@ def ray_session():
 # --------------------------------------------------------------------------- on Ray
 @pytest.mark.ray
 @pytest.mark.xdist_group("ray")
-def test_ray_json_equals_local_on_traces_and_real_logs(ray_session, safe_ros, local_docs):
+def test_ray_json_equals_local_on_traces_and_real_logs(shared, ray_session, safe_ros, local_docs):
     got = fleet.audit_logs_ray(safe_ros, TRACES)
     assert _doc(safe_ros, got) == _doc(safe_ros, local_docs)
     for name in ("cmd_vel_scaled", "stage_mapping1"):
@@ -101,6 +101,33 @@ def test_a_task_that_raises_is_an_error_entry(ray_session, safe_ros, local_docs)
     assert got[0].to_json() == local_docs[0].to_json()
     assert "RuntimeError: fault injected by the tests" in got[1].error
     assert {v.verdict for v in got[1].verdicts} == {"error"}
+
+
+@pytest.mark.ray
+@pytest.mark.xdist_group("ray")
+def test_ray_failing_mid_run_gives_error_entries_and_keeps_the_rest(ray_session, safe_ros,
+                                                                   local_docs, monkeypatch):
+    """The raylet lost mid-run (``ray.wait`` raising, as it does when the raylet is killed):
+    the logs audited before keep their verdicts, the others get error entries (exit 2)."""
+    import ray
+
+    real_wait, calls = ray.wait, []
+
+    def wait(refs, **kw):
+        calls.append(1)
+        if len(calls) > 1 and len(refs) < len(TRACES):
+            raise ConnectionError("raylet died (injected)")
+        return real_wait(refs, **kw)
+
+    monkeypatch.setattr(ray, "wait", wait)
+    got = fleet.audit_logs_ray(safe_ros, TRACES)
+    lost = [la for la in got if la.error]
+    kept = [(a, b) for a, b in zip(got, local_docs) if not a.error]
+    assert lost and kept and len(lost) + len(kept) == len(TRACES)
+    assert all("Ray failed" in la.error and "ConnectionError" in la.error for la in lost)
+    assert all({v.verdict for v in la.verdicts} == {"error"} for la in lost)
+    assert all(a.to_json() == b.to_json() for a, b in kept)
+    assert exit_code(got) == 2
 
 
 @pytest.mark.ray
