@@ -28,7 +28,6 @@ pytestmark = pytest.mark.watch
 
 ROOT = Path(__file__).resolve().parents[2]
 REQS = ["-r", str(ROOT / "requirements")]
-REAL_LOG = ROOT.parent / "shared" / "data" / "logs" / "cmd_vel_scaled.mcap"
 REAL_REQS = ["-r", str(ROOT / "requirements" / "real_logs" / "cmd_vel_scaled.fret"),
              "-b", str(ROOT / "requirements" / "real_logs" / "cmd_vel_scaled.bindings.toml")]
 #: topics the real log's requirements read, and the Safe-ROS requirements'
@@ -36,16 +35,8 @@ REAL_TOPICS = {"/scaled/cmd_vel", "/vehicle/cmd_vel"}
 SAFE_ROS_TOPICS = {"/scan", "/cmd_vel_filtered", "/gwendolen_control", "/ground_truth/clearance"}
 RATE = 50.0
 ALL = sorted(p.stem for p in (ROOT / "traces").glob("*.mcap"))
-#: the default run's sample: a violation, a clean ROS 1 run; all traces behind -m slow
-SAMPLE = ("stop_delay", "nominal_ros1")
-
-
-def _cases(sample):
-    out = []
-    for name in ALL:
-        marks = () if name in sample else (pytest.mark.slow,)
-        out.append(pytest.param(name, marks=marks, id=name))
-    return out
+#: every shipped trace, behind -m slow (the default run takes a fixed sample: conftest.py)
+CASES = [pytest.param(name, marks=pytest.mark.slow, id=name) for name in ALL]
 
 
 def _verdicts(doc: dict) -> list:
@@ -110,7 +101,7 @@ def _check_end(events: list, code: int, ref_code: int) -> None:
     assert code == ref_code
 
 
-@pytest.mark.parametrize("name", _cases(SAMPLE))
+@pytest.mark.parametrize("name", CASES)
 def test_replay_serve_watched_to_the_end_equals_audit(name, tmp_path):
     log = ROOT / "traces" / f"{name}.mcap"
     ref, ref_code = _audit(log, REQS, tmp_path)
@@ -119,7 +110,7 @@ def test_replay_serve_watched_to_the_end_equals_audit(name, tmp_path):
     _check_end(events, code, ref_code)
 
 
-@pytest.mark.parametrize("name", _cases(("sif_disabled", "nominal_ros1")))
+@pytest.mark.parametrize("name", CASES)
 def test_rosbridge_watched_to_the_end_equals_audit(name, tmp_path):
     log = ROOT / "traces" / f"{name}.mcap"
     ref, ref_code = _audit(log, REQS, tmp_path)
@@ -133,14 +124,8 @@ def test_rosbridge_watched_to_the_end_equals_audit(name, tmp_path):
     assert again == ref and again_code == ref_code
 
 
-def _real_log() -> Path:
-    if not REAL_LOG.exists():
-        pytest.skip(f"the real log {REAL_LOG} is absent (shared data not mounted)")
-    return REAL_LOG
-
-
-def test_real_log_served_both_ways_equals_audit(tmp_path):
-    log = _real_log()
+def test_real_log_served_both_ways_equals_audit(tmp_path, shared):
+    log = shared / "data" / "logs" / "cmd_vel_scaled.mcap"
     ref, ref_code = _audit(log, REAL_REQS, tmp_path)
     got, code, _doc, events = _via_replay(log, REAL_REQS, tmp_path)
     assert got == ref
