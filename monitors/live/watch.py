@@ -1,12 +1,12 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
-protocol.
+protocol (:class:`~monitors.live.client.FoxgloveClient`) or rosbridge
+(:class:`~monitors.live.rosbridge.RosbridgeClient`).
 
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
 
 * :class:`~monitors.live.source.WatchSource` is a :class:`monitors.sources.LogSource`
-  whose messages come from a :class:`monitors.live.client.FoxgloveClient` instead of a
-  file; each channel is decoded with rosbags from the schema text the server advertised
+  whose messages come from a client instead of a file; each channel is decoded with rosbags from the schema text the server advertised
   (:func:`monitors.sources.schema_decoder`, shared with the MCAP reader);
 * the ticks come from :func:`monitors.signals.sample` with the same bindings (tick, time
   base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
@@ -15,15 +15,19 @@ of a recorded log, only fed live:
 * at the end the verdicts and evidence are made by the audit's own code
   (:func:`monitors.audit.finalize.finalize`) over the columns kept while watching.
 
-So the same messages give the same verdicts as ``fretc audit`` (tested: each shipped trace
-served by foxglove-sdk and watched equals its audit; a ``--record``\\ ed watch audited offline
+The run ends with the server's orderly close, every bound topic unadvertised, the
+duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
+the final verdicts are FRET's finite-trace verdicts at the last tick, as the audit's at the
+end of a log. So the same messages give the same verdicts as ``fretc audit`` (tested: each
+shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
+server, watched to the end, equal its audit; a ``--record``\\ ed watch audited offline
 equals the watch).
 
 The faults of a live run are data problems (:mod:`monitors.live.source`).
 
 Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
 verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
-end, ``final`` (one per requirement). ``--jsonl`` prints them; ``--record`` writes them to
+end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them; ``--record`` writes them to
 the ``/fretc/verdicts`` channel of the recording (foxglove.Log, like ``fretc report
 --annotate``) beside every message the watch used.
 """
@@ -132,7 +136,8 @@ class Watch:
         options: :class:`WatchOptions`.
         on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
 
-    :meth:`run` blocks until the duration passes or :meth:`stop` is called, then returns
+    :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration,
+    idle, :meth:`stop`), then returns
     the :class:`~monitors.report.model.LogAudit` of the run (``log`` = the URL, ``kind``
     ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
     """
@@ -200,7 +205,7 @@ class Watch:
 
     # -- the run -----------------------------------------------------------------------------
     def run(self) -> LogAudit:
-        """Watch until the duration passes or :meth:`stop`; the run's LogAudit."""
+        """Watch until the run ends (:attr:`WatchSource.end_reason` says why); its LogAudit."""
         plan, src = self.plan, self.source
         url = self.options.url
         la = LogAudit(log=url, kind="watch")
