@@ -30,6 +30,11 @@ first item names it:
   close frame, RFC 6455 section 5.5.1: the end of its run, e.g. ``fretc replay --serve``
   finishing); not retried
 * ``("status", wall_ns, level, text)``
+* ``("protocol", wall_ns, detail)``: a frame of the wrong shape (valid JSON that is not an
+  object, a field of the wrong type, a truncated ``messageData``, more channels than
+  :data:`MAX_OTHER_CHANNELS` no requirement reads): ignored, the session goes on
+* ``("gave_up", wall_ns, reason)``: :data:`MAX_HOSTILE_SESSIONS` connections in a row sent
+  frames of the wrong shape and dropped without a message: not retried
 
 Needs ``websockets`` (the ``watch`` extra): :func:`require_websockets` says so in one line.
 """
@@ -46,7 +51,15 @@ from dataclasses import dataclass
 from collections.abc import Callable
 
 __all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient", "WebSocketClient", "WATCH_HINT",
-           "MissingDependency", "require_websockets"]
+           "MissingDependency", "require_websockets", "MAX_OTHER_CHANNELS",
+           "MAX_HOSTILE_SESSIONS", "frame_shape"]
+
+#: Channels no requirement reads kept per connection (their topics name what a server
+#: advertises in errors); more are counted in one ``protocol`` event, not kept.
+MAX_OTHER_CHANNELS = 1000
+#: Connections in a row that sent a frame of the wrong shape and then dropped before any
+#: message after which the client stops retrying (``gave_up``).
+MAX_HOSTILE_SESSIONS = 5
 
 #: What to install for the live commands (``fretc watch``, ``fretc replay --serve``).
 WATCH_HINT = "pip install 'fretc[watch]'"
@@ -96,10 +109,27 @@ class Advertised:
 
     @staticmethod
     def from_json(ch: dict) -> "Advertised":
-        """An advertisement of the Foxglove protocol's ``advertise`` message."""
-        return Advertised(int(ch["id"]), str(ch["topic"]), str(ch.get("encoding", "")),
+        """An advertisement of the Foxglove protocol's ``advertise`` message.
+
+        Raises:
+            ValueError: ``ch`` is not an object with an integer ``id`` and a string
+                ``topic`` (ws-protocol ``docs/spec.md``, "Advertise").
+        """
+        if not isinstance(ch, dict):
+            raise ValueError(f"a channel is a JSON {frame_shape(ch)}, not an object")
+        cid, topic = ch.get("id"), ch.get("topic")
+        if type(cid) is not int or not isinstance(topic, str):
+            raise ValueError("a channel without an integer id and a string topic")
+        return Advertised(cid, topic, str(ch.get("encoding", "")),
                           str(ch.get("schemaName", "")), str(ch.get("schema", "")),
                           str(ch.get("schemaEncoding", "") or ""))
+
+
+def frame_shape(value) -> str:
+    """The JSON kind of a decoded frame or field (``array``, ``number``, ``string``, ...),
+    for protocol problems."""
+    return {dict: "object", list: "array", str: "string", int: "number", float: "number",
+            bool: "boolean", type(None): "null"}.get(type(value), type(value).__name__)
 
 
 class WebSocketClient:
@@ -133,6 +163,8 @@ class WebSocketClient:
         self._stop: asyncio.Event | None = None
         self._ws = None
         self._started = threading.Event()
+        self._session_messages = 0  # messages put in the current session
+        self._session_problems = 0  # protocol problems in the current session
 
     # -- thread control --------------------------------------------------------------------
     def start(self) -> "WebSocketClient":
@@ -184,7 +216,9 @@ class WebSocketClient:
         self._stop = asyncio.Event()
         self._started.set()
         delay = self.backoff
+        hostile = 0  # connections in a row with a protocol problem and no message
         while not self._stop.is_set():
+            self._session_messages = self._session_problems = 0
             try:
                 async with websockets.connect(
                         self.url, subprotocols=list(self.subprotocols or ()) or None,
@@ -215,6 +249,12 @@ class WebSocketClient:
             finally:
                 self._ws = None
             self._put("disconnected", time.time_ns(), reason)
+            hostile = hostile + 1 if self._session_problems and not self._session_messages else 0
+            if hostile >= MAX_HOSTILE_SESSIONS:
+                self._put("gave_up", time.time_ns(),
+                          f"{hostile} connections in a row sent frames of the wrong shape and "
+                          "dropped before any message; not retried")
+                return
             try:
                 await asyncio.wait_for(self._stop.wait(), delay)
             except asyncio.TimeoutError:
@@ -226,6 +266,11 @@ class WebSocketClient:
 
     def _put(self, *event) -> None:
         self.events.put(event)
+
+    def _protocol(self, detail: str) -> None:
+        """Report a frame of the wrong shape (a ``protocol`` event); the session goes on."""
+        self._session_problems += 1
+        self.events.put(("protocol", time.time_ns(), detail))
 
 
 class FoxgloveClient(WebSocketClient):
@@ -241,12 +286,11 @@ class FoxgloveClient(WebSocketClient):
                                   f"({ws.subprotocol!r})")
 
     async def _session(self, ws) -> None:
-        """Read frames until the connection closes (``ConnectionClosed`` ends the loop)."""
+        """Read frames until the connection closes (``ConnectionClosed`` ends the loop); a
+        frame of the wrong shape is a ``protocol`` event and the loop goes on."""
         from websockets.exceptions import ConnectionClosed  # (as websockets in _main)
 
-        subs: dict[int, str] = {}  # subscription id -> topic
-        by_channel: dict[int, int] = {}  # channel id -> subscription id
-        next_id = 1
+        st = _FoxgloveState()
         put = self.events.put
         head, head_size = _HEAD.unpack_from, _HEAD.size
         try:
@@ -254,47 +298,111 @@ class FoxgloveClient(WebSocketClient):
                 now = time.time_ns()
                 if not isinstance(frame, str):
                     frame = bytes(frame)
-                    if len(frame) >= head_size and frame[0] == _MESSAGE_DATA:
-                        _op, sid, log_time = head(frame)
-                        topic = subs.get(sid)
-                        if topic is not None:
-                            put(("message", topic, log_time, frame[head_size:], now))
+                    if frame[:1] != b"\x01":
+                        continue  # other binary opcodes (time, service responses): not read
+                    if len(frame) < head_size:
+                        self._protocol(f"a messageData frame of {len(frame)} bytes, shorter "
+                                       f"than its {head_size}-byte header; ignored")
+                        continue
+                    _op, sid, log_time = head(frame)
+                    topic = st.subs.get(sid)
+                    if topic is not None:
+                        self._session_messages += 1
+                        put(("message", topic, log_time, frame[head_size:], now))
                     continue
                 try:
                     msg = json.loads(frame)
                 except ValueError:
+                    self._protocol("a text frame that is not JSON; ignored")
                     continue
-                op = msg.get("op")
-                if op == "advertise":
-                    chans = []
-                    for ch in msg.get("channels", ()):
-                        try:
-                            chans.append(Advertised.from_json(ch))
-                        except (KeyError, TypeError, ValueError):
-                            continue
-                    self._put("advertise", now, chans)
-                    new = []
-                    for ch in chans:
-                        if ch.id in by_channel or not self.wanted(ch.topic):
-                            continue
-                        sid = next_id
-                        next_id += 1
-                        subs[sid] = ch.topic
-                        by_channel[ch.id] = sid
-                        new.append({"id": sid, "channelId": ch.id})
-                    if new:
-                        await ws.send(json.dumps({"op": "subscribe", "subscriptions": new}))
-                elif op == "unadvertise":
-                    topics = []
-                    for cid in msg.get("channelIds", ()):
-                        sid = by_channel.pop(cid, None)
-                        if sid is not None:
-                            topics.append(subs.pop(sid))
-                    if topics:
-                        self._put("unadvertise", now, topics)
-                elif op == "serverInfo":
-                    self._put("server", now, str(msg.get("name", "")))
-                elif op == "status":
-                    self._put("status", now, msg.get("level"), str(msg.get("message", "")))
+                if not isinstance(msg, dict):
+                    self._protocol(f"a JSON {frame_shape(msg)} where the protocol sends an "
+                                   "object; ignored")
+                    continue
+                try:
+                    await self._text(ws, msg, st, now)
+                except ConnectionClosed:
+                    raise
+                except Exception as exc:  # a field of the wrong shape
+                    self._protocol(f"a {str(msg.get('op'))[:40]!r} frame of the wrong shape "
+                                   f"({type(exc).__name__}: {str(exc)[:200]}); ignored")
         except ConnectionClosed:
             return
+
+    async def _text(self, ws, msg: dict, st: "_FoxgloveState", now: int) -> None:
+        """Handle one JSON object frame (module docstring); raises on a field of the wrong
+        shape (the caller reports it)."""
+        op = msg.get("op")
+        if op == "advertise":
+            chans = st.advertised(self, msg.get("channels", ()))
+            self._put("advertise", now, chans)
+            new = []
+            for ch in chans:
+                if ch.id in st.by_channel or not self.wanted(ch.topic):
+                    continue
+                sid = st.next_id
+                st.next_id += 1
+                st.subs[sid] = ch.topic
+                st.by_channel[ch.id] = sid
+                new.append({"id": sid, "channelId": ch.id})
+            if new:
+                await ws.send(json.dumps({"op": "subscribe", "subscriptions": new}))
+        elif op == "unadvertise":
+            topics, ids = [], _items(msg, "channelIds")
+            if any(type(cid) is not int for cid in ids):
+                raise ValueError("channelIds holds other values than integers")
+            for cid in ids:
+                sid = st.by_channel.pop(cid, None)
+                if sid is not None:
+                    topics.append(st.subs.pop(sid))
+            if topics:
+                self._put("unadvertise", now, topics)
+        elif op == "serverInfo":
+            self._put("server", now, str(msg.get("name", "")))
+        elif op == "status":
+            self._put("status", now, msg.get("level"), str(msg.get("message", "")))
+
+
+def _items(msg: dict, key: str) -> list:
+    """``msg[key]`` as a list (missing: empty). Raises ValueError when it is not an array."""
+    value = msg.get(key, [])
+    if not isinstance(value, list):
+        raise ValueError(f"{key} is a JSON {frame_shape(value)}, not an array")
+    return value
+
+
+class _FoxgloveState:
+    """One connection's subscriptions and the count of channels no requirement reads."""
+
+    def __init__(self) -> None:
+        self.subs: dict[int, str] = {}  # subscription id -> topic
+        self.by_channel: dict[int, int] = {}  # channel id -> subscription id
+        self.next_id = 1
+        self.others = 0  # channels advertised that no requirement reads
+
+    def advertised(self, client: WebSocketClient, channels) -> list[Advertised]:
+        """The channels of an ``advertise`` frame to hand on: each wanted one, and others up
+        to :data:`MAX_OTHER_CHANNELS` per connection (one ``protocol`` event when more come);
+        a channel of the wrong shape is a ``protocol`` event."""
+        if not isinstance(channels, list):
+            raise ValueError(f"channels is a JSON {frame_shape(channels)}, not an array")
+        out, bad, dropped = [], 0, 0
+        for ch in channels:
+            try:
+                adv = Advertised.from_json(ch)
+            except ValueError:
+                bad += 1
+                continue
+            if not client.wanted(adv.topic):
+                self.others += 1
+                if self.others > MAX_OTHER_CHANNELS:
+                    dropped += 1
+                    continue
+            out.append(adv)
+        if bad:
+            client._protocol(f"{bad} advertised channel(s) without an integer id and a string "
+                             "topic; ignored")
+        if dropped and self.others - dropped <= MAX_OTHER_CHANNELS:
+            client._protocol(f"the server advertises more than {MAX_OTHER_CHANNELS} channels "
+                             "no requirement reads; the others are not kept")
+        return out

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .client import Advertised, WebSocketClient
+from .client import MAX_OTHER_CHANNELS, Advertised, WebSocketClient, frame_shape
 
 __all__ = ["RosbridgeClient", "json_to_cdr", "ros_url", "CLOCK_TOPIC"]
 
@@ -188,9 +188,7 @@ class RosbridgeClient(WebSocketClient):
         advertised: dict[str, str] = state["types"]
         while not reader.done():
             listed = await self._call(ws, replies, "/rosapi/topics", {})
-            types = {}
-            if listed:
-                types = dict(zip(listed.get("topics", ()), listed.get("types", ())))
+            types = self._listed_types(listed)
             for t, ty in self.types.items():
                 types.setdefault(t, ty)
             new = [t for t in sorted(types) if t not in advertised
@@ -204,42 +202,108 @@ class RosbridgeClient(WebSocketClient):
                     chans.append(advertisement(len(advertised), t, types[t]))
                 await ws.send(json.dumps({"op": "subscribe", "topic": t, "type": types[t],
                                           "id": f"fretc:{t}"}))
+            chans += self._others(types, state)
             if chans:
                 self._put("advertise", time.time_ns(), chans)
             if listed is None:  # no rosapi: the given types are all there is
                 return
             await asyncio.sleep(self.poll)
 
+    def _others(self, types: dict[str, str], state: dict) -> list[Advertised]:
+        """The listed topics no requirement reads, not subscribed, not seen before: kept (to
+        name what the server has) up to :data:`~monitors.live.client.MAX_OTHER_CHANNELS`
+        per connection, one ``protocol`` event when more are listed."""
+        seen: set[str] = state.setdefault("others", set())
+        out = []
+        for t in types:
+            if t in seen or t in state["types"] or self.wanted(t) or t == CLOCK_TOPIC:
+                continue
+            if len(seen) >= MAX_OTHER_CHANNELS:
+                if not state.get("others_reported"):
+                    state["others_reported"] = True
+                    self._protocol(f"the server lists more than {MAX_OTHER_CHANNELS} topics "
+                                   "no requirement reads; the others are not kept")
+                break
+            seen.add(t)
+            out.append(Advertised(-len(seen), t, "", types[t], "", ""))
+        return out
+
+    def _listed_types(self, listed) -> dict[str, str]:
+        """topic -> type of rosapi's ``/rosapi/topics`` answer (two parallel lists of
+        strings); an answer of another shape is a ``protocol`` event and lists nothing."""
+        if not listed:
+            return {}
+        topics = listed.get("topics") if isinstance(listed, dict) else None
+        types = listed.get("types") if isinstance(listed, dict) else None
+        if not isinstance(topics, list) or not isinstance(types, list):
+            self._protocol("a /rosapi/topics answer without the lists topics and types; "
+                           "ignored")
+            return {}
+        pairs = [(t, ty) for t, ty in zip(topics, types)
+                 if isinstance(t, str) and isinstance(ty, str)]
+        if len(pairs) < max(len(topics), len(types)):
+            self._protocol("a /rosapi/topics answer whose lists differ in length or hold "
+                           "other values than strings; those entries are ignored")
+        return dict(pairs)
+
     async def _read(self, ws, replies: dict, state: dict) -> None:
-        put = self.events.put
         async for frame in ws:
             now = time.time_ns()
             try:
                 msg = json.loads(frame)
             except (ValueError, TypeError):
+                self._protocol("a frame that is not JSON text; ignored")
                 continue
-            op = msg.get("op")
-            if op == "publish":
-                topic = msg.get("topic")
-                doc = msg.get("msg") or {}
-                if topic == CLOCK_TOPIC and state["clock"] is not None:
-                    c = doc.get("clock") or {}
-                    state["clock"] = (int(c.get("sec", c.get("secs", 0))) * 1_000_000_000
-                                      + int(c.get("nanosec", c.get("nsecs", 0))))
-                    if not self.wanted(topic):
-                        continue
-                type_name = state["types"].get(topic)
-                if type_name is None:
-                    continue
-                log_time = state["clock"] if state["clock"] else now
-                try:
-                    payload = json_to_cdr(_typename(type_name), doc)
-                except Exception:  # unknown type or a value that does not fit: undecodable
-                    payload = b""
-                put(("message", topic, log_time, payload, now))
-            elif op == "service_response":
-                fut = replies.get(msg.get("id"))
-                if fut is not None and not fut.done():
-                    fut.set_result(msg)
-            elif op == "status":
-                self._put("status", now, msg.get("level"), str(msg.get("msg", "")))
+            if not isinstance(msg, dict):
+                self._protocol(f"a JSON {frame_shape(msg)} where the protocol sends an "
+                               "object; ignored")
+                continue
+            try:
+                self._frame(msg, replies, state, now)
+            except Exception as exc:  # a field of the wrong shape
+                self._protocol(f"a {str(msg.get('op'))[:40]!r} frame of the wrong shape "
+                               f"({type(exc).__name__}: {str(exc)[:200]}); ignored")
+
+    def _frame(self, msg: dict, replies: dict, state: dict, now: int) -> None:
+        """Handle one JSON object frame (module docstring); raises on a field of the wrong
+        shape (the caller reports it)."""
+        op = msg.get("op")
+        if op == "publish":
+            topic = msg.get("topic")
+            if not isinstance(topic, str):
+                raise ValueError(f"topic is a JSON {frame_shape(topic)}, not a string")
+            doc = msg.get("msg") or {}
+            if topic == CLOCK_TOPIC and state["clock"] is not None:
+                state["clock"] = _clock_ns(doc)
+                if not self.wanted(topic):
+                    return
+            type_name = state["types"].get(topic)
+            if type_name is None:
+                return
+            log_time = state["clock"] if state["clock"] else now
+            try:
+                payload = json_to_cdr(_typename(type_name), doc)
+            except Exception:  # unknown type or a value that does not fit: undecodable
+                payload = b""
+            self._session_messages += 1
+            self.events.put(("message", topic, log_time, payload, now))
+        elif op == "service_response":
+            cid = msg.get("id")
+            fut = replies.get(cid) if isinstance(cid, str) else None
+            if fut is not None and not fut.done():
+                fut.set_result(msg)
+        elif op == "status":
+            self._put("status", now, msg.get("level"), str(msg.get("msg", "")))
+
+
+def _clock_ns(doc) -> int:
+    """The time (ns) of a ``rosgraph_msgs/Clock`` message as rosbridge sends it (ROS 2
+    ``sec``/``nanosec``, ROS 1 ``secs``/``nsecs``). Raises ValueError or TypeError when
+    they are not integers."""
+    c = doc.get("clock") if isinstance(doc, dict) else None
+    if not isinstance(c, dict):
+        raise ValueError("a /clock message without a clock object")
+    sec, nsec = c.get("sec", c.get("secs", 0)), c.get("nanosec", c.get("nsecs", 0))
+    if type(sec) is not int or type(nsec) is not int:
+        raise ValueError("a /clock time whose sec and nanosec are not integers")
+    return sec * 1_000_000_000 + nsec

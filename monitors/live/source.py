@@ -24,7 +24,15 @@ for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). T
   :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);
 * a bound topic not advertised within ``wait`` seconds of connecting, or advertised with a
   schema that cannot be decoded: the requirements reading it are ``error`` (as a topic
-  missing from a log in an audit); the others are watched.
+  missing from a log in an audit); the others are watched;
+* a frame of the wrong shape (the client's ``protocol`` event: a JSON array where an object
+  goes, a truncated message frame, an advertisement flood): :data:`PROTOCOL` (the frame is
+  ignored, the session goes on); a server whose connections keep sending such frames and
+  dropping ends the run (the client's ``gave_up``);
+* a log time outside ``[0, 2**63)`` ns (MCAP's log times are uint64, numpy's and the
+  clocks' int64), or one that jumps further past the last message used than
+  :attr:`WatchSource.max_jump_ns` (the ticks in between would be made one by one, live):
+  :data:`TIME_RANGE` (the message is skipped).
 """
 
 from __future__ import annotations
@@ -46,7 +54,7 @@ from ..report.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
 from ..sources import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
 
 __all__ = ["WatchEvent", "WatchSource", "Recorder", "CONNECTION_GAP", "UNADVERTISED",
-           "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
+           "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE"]
 
 #: The connection dropped: messages between the two log times were not received.
 CONNECTION_GAP = "connection_gap"
@@ -58,6 +66,12 @@ UNADVERTISED = "unadvertised"
 CLOCK_BACKWARDS = "clock_backwards"
 #: A bound topic the server does not advertise.
 NOT_ADVERTISED = "not_advertised"
+#: A frame of the wrong shape for the protocol; ignored.
+PROTOCOL = "protocol"
+#: A message's log time is outside the range the watch can tick on; skipped.
+TIME_RANGE = "time_range"
+#: Log times are int64 nanoseconds from here on (numpy columns, the clocks' grid).
+TIME_LIMIT = 2**63
 
 
 @dataclass
@@ -140,6 +154,10 @@ class WatchSource(LogSource):
         self._stop = threading.Event()
         self.unadvertised: set[str] = set()
         self._wanted: set[str] | None = None
+        #: the longest jump of log time (ns) from one message used to the next; None: no
+        #: bound (the watch sets it from the tick period)
+        self.max_jump_ns: int | None = None
+        self._reported: dict[str, int] = {}  # problem events sent per kind (capped)
 
     def stop(self) -> None:
         """End :meth:`messages` (thread-safe; the Ctrl-C handler calls it)."""
@@ -206,6 +224,12 @@ class WatchSource(LogSource):
             if subscribed and subscribed <= self.unadvertised:
                 self._server_ended = True
                 self._end("the server unadvertised every subscribed topic")
+        elif kind == "protocol":
+            self._report(PROTOCOL, None, self._last_time, f"{ev[2]} (from {self.path})")
+        elif kind == "gave_up":
+            self.last_reason = ev[2]
+            self._report(PROTOCOL, None, self._last_time, ev[2])
+            self._end(ev[2])
         elif kind == "closed":
             self.connected = False
             self.last_reason = ev[2]
@@ -228,6 +252,18 @@ class WatchSource(LogSource):
                     self._gap_open = (time.monotonic(), ev[2])
                 self.on_event(WatchEvent("disconnected", self._last_time, ev[1],
                                          detail=ev[2]))
+
+    def _report(self, kind: str, topic: str | None, log_time: int | None,
+                detail: str) -> None:
+        """A data problem and its ``problem`` event (events capped per kind at
+        :data:`common.problems.MAX_PROBLEMS_PER_KIND`, as the problems kept; all counted)."""
+        self._problem(kind, topic, log_time, detail)
+        n = self._reported.get(kind, 0)
+        if n < P.MAX_PROBLEMS_PER_KIND:
+            self._reported[kind] = n + 1
+            self.on_event(WatchEvent("problem", log_time, time.time_ns(),
+                                     detail=f"{kind}: {detail}" if topic is None
+                                     else f"{kind}: {topic}"))
 
     def _build(self, ch) -> None:
         if self._wanted is not None and ch.topic not in self._wanted:
@@ -307,12 +343,28 @@ class WatchSource(LogSource):
                                      detail=f"{UNADVERTISED}: {t}"))
         self._pending_unadvertised.clear()
 
+    def _time_problem(self, topic: str, log_time: int) -> str | None:
+        """Why ``log_time`` cannot be ticked on (module docstring), or None."""
+        if not 0 <= log_time < TIME_LIMIT:
+            return (f"log time {log_time} ns is outside [0, 2**63) ns, the range of the "
+                    "watch's clocks; message skipped")
+        last, jump = self._last_time, self.max_jump_ns
+        if last is not None and jump is not None and log_time - last > jump:
+            return (f"log time {log_time} ns is {(log_time - last) / 1e9:.6g} s after the "
+                    f"last message used, more than the {jump / 1e9:.6g} s the watch ticks "
+                    "over at once; message skipped")
+        return None
+
     def _deliver(self, topic: str, log_time: int, payload: bytes) -> Message | None:
         self._last_wall = time.monotonic()
         if self._pending_unadvertised:
             self._flush_unadvertised()
         dec = self.decoders.get(topic)
         if dec is None:
+            return None
+        why = self._time_problem(topic, log_time)
+        if why is not None:
+            self._report(TIME_RANGE, topic, None, why)
             return None
         try:
             data = dec(payload)

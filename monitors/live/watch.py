@@ -60,6 +60,11 @@ from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADV
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
            "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
 
+#: The most ticks one message may move a fixed-period clock forward (a jump of log time
+#: further than this many periods is a ``time_range`` problem, the message skipped): the
+#: ticks in between are made one by one while watching.
+MAX_JUMP_TICKS = 10**6
+
 
 @dataclass
 class WatchOptions:
@@ -177,6 +182,8 @@ class Watch:
         deadline = (time.monotonic() + options.duration) if options.duration else None
         self.source = WatchSource(options.url, self.client, deadline=deadline,
                                   idle=options.until_idle, on_event=self._event)
+        if b.tick.period_ns:
+            self.source.max_jump_ns = MAX_JUMP_TICKS * b.tick.period_ns
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
@@ -266,7 +273,7 @@ class Watch:
             for t in topics:
                 if t not in src.advertised:
                     bad.append(f"topic {t} is not advertised by {url} (it advertises "
-                               f"{', '.join(sorted(src.advertised)) or 'no topics'})")
+                               f"{_listing(src.advertised)})")
                 elif src.decoders.get(t) is None:
                     bad.append(f"topic {t} cannot be read "
                                f"({src.schema_errors.get(t, 'no decoder')})")
@@ -490,6 +497,15 @@ class Watch:
                            extra={"ltl3": v.ltl3.status, "violations": v.violations})
             self._event(e)
         return la
+
+
+def _listing(topics, most: int = 20) -> str:
+    """``topics`` for an error: sorted, at most ``most`` named, the rest counted."""
+    names = sorted(topics)
+    if not names:
+        return "no topics"
+    more = f" and {len(names) - most} more" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
 
 
 def split_pending(ev, n: int) -> tuple[int, int]:
