@@ -17,6 +17,7 @@ from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_
 from rosbags.typesys.msg import normalize_msgtype
 from rosbags.typesys.store import Typestore
 
+from .known_types import layout_mismatch
 from .selective import selective_decoder
 
 __all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
@@ -120,8 +121,9 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
 
     Raises:
         UnsupportedSchema: an unsupported message encoding, a channel without schema, a schema
-            encoding that does not go with the message encoding, or a schema rosbags cannot
-            parse (the message says which).
+            encoding that does not go with the message encoding, a schema rosbags cannot
+            parse, or a definition of a standard ROS type whose layout is not ROS's
+            (:func:`monitors.sources.known_types.layout_mismatch`; the message says which).
     """
     if message_encoding not in SCHEMA_FOR_ENCODING:
         raise UnsupportedSchema(f"message encoding {message_encoding!r} is not supported (cdr, ros1)")
@@ -131,6 +133,9 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
         raise UnsupportedSchema(f"schema encoding {schema_encoding!r} does not go with message "
                                 f"encoding {message_encoding!r}")
     store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+    lie = layout_mismatch(schema_encoding, store, typename)
+    if lie is not None:
+        raise UnsupportedSchema(lie)
     return decoder_for(store, typename, message_encoding, fields)
 
 

@@ -210,11 +210,10 @@ class McapSource(LogSource):
         index = self._index
         assert index is not None
         wanted = {cid for cid, ch in index.channels.items() if topics is None or ch.topic in topics}
-        heap: list[tuple] = []
-        for ci in index.chunk_indexes:
-            if ci.message_index_offsets and not wanted.intersection(ci.message_index_offsets):
-                continue
-            heap.append((ci.message_start_time, ci.chunk_start_offset, -1, ci))
+        # every chunk is read whole: the channels a ChunkIndex lists (its MessageIndex
+        # offsets) are a hint a forged summary can falsify, never a reason to skip a chunk
+        heap = [(ci.message_start_time, ci.chunk_start_offset, -1, ci)
+                for ci in index.chunk_indexes]
         heapq.heapify(heap)
         with open(self.path, "rb") as f:
             while heap:
