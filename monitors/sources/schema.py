@@ -24,9 +24,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from mcap.reader import make_reader
-from mcap.records import Channel, Schema
-from mcap.stream_reader import StreamReader
 from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag2 import Reader as Ros2Reader
 
@@ -215,30 +212,10 @@ def _build(encoding: str, name: str, text: str) -> tuple[Any, str] | None:
 
 
 def _mcap_schemas(source) -> dict[str, TopicSchema | None]:
-    schemas: dict[int, Any] = {}
-    channels: dict[int, Any] = {}
-    wanted = set(source.topics())
-    with open(source.path, "rb") as f:
-        summary = None
-        try:
-            summary = make_reader(f).get_summary()
-        except Exception:  # no or damaged summary: read records from the start below
-            summary = None
-        if summary is not None and summary.channels:
-            schemas, channels = dict(summary.schemas), dict(summary.channels)
-        else:
-            f.seek(0)
-            try:
-                for rec in StreamReader(f, skip_magic=False).records:
-                    if isinstance(rec, Schema):
-                        schemas[rec.id] = rec
-                    elif isinstance(rec, Channel):
-                        channels[rec.id] = rec
-                    if wanted and wanted <= {c.topic for c in channels.values()
-                                             if c.schema_id in schemas}:
-                        break
-            except Exception:  # damage: what was read so far
-                pass
+    # the source's own Schema and Channel records (its summary, or its bounded linear scan
+    # of the data section): never the mcap library's stream reader, which decompresses a
+    # chunk whatever size it declares
+    schemas, channels = source._channels()
     out: dict[str, TopicSchema | None] = {}
     for ch in sorted(channels.values(), key=lambda c: c.id):
         if ch.topic in out and out[ch.topic] is not None:

@@ -116,3 +116,29 @@ def test_a_payload_that_does_not_fit_a_custom_layout_is_undecodable(tmp_path):
     n, problems = _problems(_twist_log(tmp_path, text, "my_pkg/msg/Pair"))
     assert n == 0
     assert {k for k, _ in problems} == {"undecodable"}
+
+
+def test_the_binding_type_check_reads_a_bomb_with_bounded_memory(tmp_path):
+    """The schemas the bindings are type-checked against come from the source's own bounded
+    reading: a chunk of 64 MiB of zeros declaring 100 bytes is not decompressed."""
+    import random
+    import sys
+    import tracemalloc
+
+    from monitors.sources.schema import log_schemas
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    import fuzz_hostile
+
+    data = fuzz_hostile.small_mcap()
+    path = tmp_path / "bomb.mcap"
+    path.write_bytes(fuzz_hostile.bomb(random.Random(0), data, 64 * 2**20, "zstd", 100))
+    src = open_log(str(path))
+    tracemalloc.start()
+    try:
+        log_schemas(src)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+        src.close()
+    assert peak < 16 * 2**20

@@ -1,0 +1,484 @@
+"""Fuzz fretc with hostile inputs other than requirement text: forged MCAP indexes,
+decompression bombs, cut and bit-flipped logs, schemas that lie, hostile binding files and
+hostile live frames (Foxglove and rosbridge).
+
+    python bench/fuzz_hostile.py --count 2000 [--seed N] [--classes index,bomb,...]
+
+Each run takes a fresh seed unless ``--seed`` is given; the seed is printed first, and the
+same seed gives the same inputs. Per class:
+
+* ``index``: a small MCAP with its ChunkIndex records (times, offsets, lengths, channel
+  lists), MessageIndex records and summary CRC forged at random; audited;
+* ``bomb``: a chunk whose records are replaced by a zstd or LZ4 stream of up to 64 MiB of
+  zeros, declaring a random uncompressed size; audited;
+* ``cut``: a shipped trace (or the small MCAP) cut at a random byte or with 1-100 random bit
+  flips; audited;
+* ``schema``: the small MCAP with its Twist schema lying (fields swapped, renamed,
+  retyped, dropped, added); audited;
+* ``bindings``: a binding file mutated (deep nesting, long chains, chained and doubling
+  references, deep TOML, huge durations, random characters); parsed;
+* ``frames``: a sequence of Foxglove or rosbridge frames (non-object JSON, fields of the
+  wrong type, huge log times, truncated message frames, advertisement floods) handed to the
+  client's session and the watch source.
+
+A failure is a traceback (any exception but an input error), or for an audited log a verdict
+the damaged log does not support (:func:`unsupported`: the rule of
+``tests/monitors/test_damaged_logs.py`` against the intact log's verdicts and LTL3
+verdicts), or a forged schema read as if true. Printed with the class, seed and input
+number; the summary line gives inputs, tracebacks, unsupported verdicts and the peak RSS
+(``resource.getrusage``). Exit 1 when anything failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import io
+import json
+import os
+import random
+import resource
+import struct
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "monitors"))
+
+#: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
+TRACE_SHARE = 0.3
+CLASSES = ("index", "bomb", "cut", "schema", "bindings", "frames")
+FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
+        "RV: the robot shall always satisfy v_ok\n"
+        "RE: the robot shall eventually satisfy !a_ok\n")
+BINDINGS = ('[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\n'
+            'a_ok = "/a.data > 0"\nv_ok = "/cmd_vel.linear.x < 100"\n')
+TWIST = ("Vector3 linear\nVector3 angular\n" + "=" * 80 + "\nMSG: geometry_msgs/Vector3\n"
+         "float64 x\nfloat64 y\nfloat64 z\n")
+S = 1_000_000_000
+
+
+# --------------------------------------------------------------------------- logs
+def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700) -> bytes:
+    """A small chunked MCAP: /a (Float64, 1.0 but 0.0 at message ``dip``) and /cmd_vel
+    (Twist, linear.x 1.0, angular.x 500.0), 60 of each, 50 ms apart."""
+    from mcap.writer import CompressionType, Writer
+
+    out = io.BytesIO()
+    w = Writer(out, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+    w.start("ros2", "fretc-fuzz")
+    fs = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    ts = w.register_schema("geometry_msgs/msg/Twist", "ros2msg", schema.encode())
+    a, v = w.register_channel("/a", "cdr", fs), w.register_channel("/cmd_vel", "cdr", ts)
+    for k in range(60):
+        t = 10 * S + k * 50_000_000
+        w.add_message(a, log_time=t, publish_time=t,
+                      data=b"\x00\x01\x00\x00" + struct.pack("<d", 0.0 if k == dip else 1.0))
+        w.add_message(v, log_time=t, publish_time=t, data=b"\x00\x01\x00\x00" + struct.pack(
+            "<6d", 1.0, 0.0, 0.0, 500.0, 0.0, 0.0))
+    w.finish()
+    return out.getvalue()
+
+
+def _records(data, start: int, end: int):
+    pos = start
+    while pos + 9 <= end:
+        opcode, length = struct.unpack_from("<BQ", data, pos)
+        yield pos, opcode, length
+        pos += 9 + length
+
+
+def forge_index(rng: random.Random, data: bytes) -> bytes:
+    """``data`` with its ChunkIndex and MessageIndex records forged at random (module
+    docstring) and the summary CRC set to 0 ("not computed")."""
+    d = bytearray(data)
+    start = struct.unpack_from("<Q", d, len(d) - 28)[0]
+    struct.pack_into("<I", d, len(d) - 12, 0)  # the footer's summary CRC
+    big = (0, 1, 2**63 - 1, 2**63, 2**64 - 1, rng.getrandbits(64))
+    for pos, opcode, length in list(_records(d, 8, start)):
+        if opcode == 0x07 and rng.random() < 0.5:  # MessageIndex
+            struct.pack_into("<H", d, pos + 9, rng.randrange(5))
+            for k in range(pos + 15, pos + 9 + length - 7, 8):
+                struct.pack_into("<Q", d, k, rng.choice(big))
+        if opcode == 0x0F and rng.random() < 0.5:  # DataEnd: data CRC "not computed"
+            struct.pack_into("<I", d, pos + 9, 0)
+    for pos, opcode, length in list(_records(d, start, len(d) - 37)):
+        if opcode != 0x08 or rng.random() < 0.4:
+            continue
+        field = rng.randrange(5)
+        if field < 4:  # start, end, chunk offset, chunk length
+            old = struct.unpack_from("<Q", d, pos + 9 + 8 * field)[0]
+            near = (old + rng.randrange(-9, 9)) % 2**64
+            struct.pack_into("<Q", d, pos + 9 + 8 * field, rng.choice(big + (near,)))
+        else:  # the channel list
+            n = struct.unpack_from("<I", d, pos + 41)[0]
+            for k in range(pos + 45, pos + 45 + n, 10):
+                struct.pack_into("<HQ", d, k, rng.randrange(5), rng.choice(big))
+    return bytes(d)
+
+
+def bomb(rng: random.Random, data: bytes, n: int | None = None, codec: str | None = None,
+         declared: int | None = None) -> bytes:
+    """The first chunk of ``data`` with its records replaced by a ``codec`` stream of ``n``
+    zero bytes (random: up to 64 MiB, zstd or lz4) declaring ``declared`` uncompressed bytes
+    (random; later offsets shift: the summary then disagrees with the data)."""
+    import lz4.frame
+    import zstandard
+
+    pos = next(p for p, op, _ in _records(data, 8, len(data)) if op == 0x06)
+    n = n if n is not None else rng.choice((1, 16, 64)) * 2**20
+    codec = codec or rng.choice(("zstd", "lz4"))
+    stream = (zstandard.ZstdCompressor().compress(bytes(n)) if codec == "zstd"
+              else lz4.frame.compress(bytes(n)))
+    if declared is None:
+        declared = rng.choice((0, 100, n, n - 1, 2**40, 2**64 - 1))
+    body = struct.pack("<QQQI", 10 * S, 13 * S, declared, 0)
+    body += struct.pack("<I", len(codec)) + codec.encode() + struct.pack("<Q", len(stream))
+    body += stream
+    _op, length = struct.unpack_from("<BQ", data, pos)
+    return data[:pos] + struct.pack("<BQ", 0x06, len(body)) + body + data[pos + 9 + length:]
+
+
+SCHEMA_LIES = [
+    lambda t: t.replace("Vector3 linear\nVector3 angular", "Vector3 angular\nVector3 linear"),
+    lambda t: t.replace("float64 x\nfloat64 y", "float64 y\nfloat64 x"),
+    lambda t: t.replace("float64 x", "int64 x"),
+    lambda t: t.replace("float64", "float32"),
+    lambda t: t.replace("\nVector3 angular", ""),
+    lambda t: t.replace("Vector3 angular\n", "Vector3 angular\nVector3 extra\n"),
+    lambda t: t.replace("Vector3 angular", "Vector3[] angular"),
+    lambda t: t.replace("linear", "lin"),
+    lambda t: t.replace("float64 z", "float64 z\nstring s"),
+]
+
+
+# --------------------------------------------------------------------------- the oracle
+def unsupported(original, damaged) -> list[str]:
+    """The verdicts of ``damaged`` (a LogAudit of a damaged copy) that the damaged log does not
+    support, judged against ``original`` (the intact log's): a pass on a prefix that does not
+    decide it, a violation the intact log does not decide before the damage, a changed verdict
+    where nothing was lost, a partial log without its reason."""
+    out = []
+    if damaged.error is not None:
+        return [f"{v.requirement}: {v.verdict} on an unreadable log"
+                for v in damaged.verdicts if v.verdict != "error"]
+    end = damaged.damage_time_ns if damaged.damage_cut else None
+    for ov, dv in zip(original.verdicts, damaged.verdicts):
+        who, verdict = dv.requirement, dv.verdict
+        decided = ov.ltl3.time_ns if ov.ltl3.status == "violated" else None
+        if verdict in ("error", "unknown"):
+            continue
+        if not damaged.partial or not damaged.damage_cut:
+            if verdict != ov.verdict:
+                out.append(f"{who}: {verdict} != {ov.verdict} with nothing lost")
+            continue
+        if verdict == "violated" and (ov.verdict != "violated" or decided is None
+                                      or (end is not None and decided >= end)):
+            out.append(f"{who}: violated, the intact log decides no violation before {end}")
+        if verdict in ("satisfied", "vacuous") and (dv.ltl3.status != "satisfied"
+                                                   or ov.verdict not in ("satisfied",
+                                                                         "vacuous")):
+            out.append(f"{who}: {verdict} on a prefix that does not decide it")
+    return out
+
+
+class Audits:
+    """Audit logs in-process with the fuzz requirements (or the shipped ones for traces) and
+    keep the intact logs' audits."""
+
+    def __init__(self, tmp: Path) -> None:
+        from monitors.audit import AuditConfig, load_plan
+
+        (tmp / "f.fret").write_text(FRET, encoding="utf-8")
+        (tmp / "f.bindings.toml").write_text(BINDINGS, encoding="utf-8")
+        self.small = load_plan(AuditConfig((str(tmp / "f.fret"),)))
+        self._traces = None
+        self.tmp = tmp
+        self.originals: dict = {}
+
+    @property
+    def traces(self):
+        """The plan of the shipped requirements (for the shipped traces), loaded once."""
+        if self._traces is None:
+            from monitors.audit import AuditConfig, load_plan
+
+            self._traces = load_plan(AuditConfig((str(ROOT / "requirements"),)))
+        return self._traces
+
+    def audit(self, plan, data: bytes, name: str = "x.mcap"):
+        from monitors.audit import audit_log
+
+        path = self.tmp / name
+        path.write_bytes(data)
+        try:
+            return audit_log(plan, str(path))
+        finally:
+            path.unlink()
+
+    def original(self, key: str, plan, data: bytes):
+        if key not in self.originals:
+            self.originals[key] = self.audit(plan, data)
+        return self.originals[key]
+
+
+# --------------------------------------------------------------------------- log classes
+def run_log_class(kind: str, rng: random.Random, audits: Audits) -> list[str]:
+    """One input of a log class; the unsupported verdicts (an exception propagates)."""
+    if kind == "cut":
+        traces = sorted((ROOT / "traces").glob("*.mcap"))
+        if rng.random() < TRACE_SHARE and traces:
+            path = rng.choice(traces)
+            data, plan, key = path.read_bytes(), audits.traces, path.name
+        else:
+            data, plan, key = small_mcap(dip=rng.randrange(60)), audits.small, None
+        if rng.random() < 0.6:
+            damaged = data[:rng.randrange(len(data))]
+        else:
+            d = bytearray(data)
+            for _ in range(rng.choice((1, 10, 100))):
+                d[rng.randrange(len(d))] ^= 1 << rng.randrange(8)
+            damaged = bytes(d)
+        original = audits.original(key or f"small{data[:0]}{hash(data)}", plan, data)
+        return unsupported(original, audits.audit(plan, damaged))
+    data = small_mcap(dip=rng.randrange(60))
+    original = audits.original(f"small{hash(data)}", audits.small, data)
+    if kind == "index":
+        return unsupported(original, audits.audit(audits.small, forge_index(rng, data)))
+    if kind == "bomb":
+        return unsupported(original, audits.audit(audits.small, bomb(rng, data)))
+    lie = rng.choice(SCHEMA_LIES)(TWIST)
+    la = audits.audit(audits.small, small_mcap(lie, dip=rng.randrange(60)))
+    rv = next(v for v in la.verdicts if v.requirement == "RV")
+    return [] if rv.verdict == "error" else [f"RV: {rv.verdict} on a lying schema"]
+
+
+# --------------------------------------------------------------------------- bindings
+def hostile_binding(rng: random.Random) -> str:
+    """A binding file mutated at random (module docstring)."""
+    head = '[tick]\nperiod = "100 ms"\n[variables]\n'
+    field = rng.choice(["/scan.ranges[0]", "/a.data", "/x.y.z", "/a.data[99999999999]"])
+    n = rng.choice([1, 10, 199, 200, 201, 1000, 5000, 20000])
+    kind = rng.randrange(9)
+    if kind == 0:
+        return head + f'x = "{rng.choice("-!(~") * n}{field}{")" * rng.randrange(3)}"\n'
+    if kind == 1:
+        op = rng.choice(["+", "*", "&", "|", "-", "/", "and", "<"])
+        return head + 'x = "' + f" {op} ".join([field] * n) + '"\n'
+    if kind == 2:
+        m = min(n, 5000)
+        return head + 'x = "v0"\n' + "".join(f'v{i} = "v{i + 1}"\n' for i in range(m)) + \
+            f'v{m} = "{field}"\n'
+    if kind == 3:
+        m = rng.choice([5, 20, 60])
+        return head + 'x = "v0 > 0"\n' + "".join(f'v{i} = "v{i + 1} + v{i + 1}"\n'
+                                                 for i in range(m)) + f'v{m} = "{field}"\n'
+    if kind == 4:
+        return "x = " + "[" * n + "]" * n + "\n"
+    if kind == 5:
+        return "[" + ".".join(["a"] * n) + "]\nx = 1\n"
+    if kind == 6:
+        dur = rng.choice(["1e300 h", "1e999 s", "-1 s", "0 s", "nan s", "inf ms", "1e-400 s",
+                          "9" * 400 + " ns", "100 parsecs", ""])
+        return f'[tick]\nperiod = "{dur}"\n[variables]\nx = "{field} > 0"\n'
+    if kind == 7:
+        return head + 'x = "v0"\nv0 = "x"\n'
+    text = head + f'x = "{field} > 0"\ny = "hold({field}, 1e999 s)"\n'
+    k = rng.randrange(len(text))
+    return text[:k] + rng.choice(['"', "\\", "\x00", "\u202e", "[", "=", "\n", "{", "é"]) + \
+        text[k + 1:]
+
+
+def run_binding(rng: random.Random) -> list[str]:
+    """Parse one hostile binding file: an input error or a binding set (an exception that is
+    not an input error propagates)."""
+    from common.errors import FretcError
+    from monitors.bindings.files import parse_bindings
+
+    try:
+        parse_bindings(hostile_binding(rng), "b.toml")
+    except FretcError:
+        pass
+    return []
+
+
+# --------------------------------------------------------------------------- live frames
+class FakeSocket:
+    """The server side of a connection as the clients read it: ``frames`` then the end."""
+
+    def __init__(self, frames: list) -> None:
+        self.frames = frames
+        self.sent: list = []
+
+    def __aiter__(self):
+        return self._gen()
+
+    async def _gen(self):
+        for f in self.frames:
+            yield f
+
+    async def send(self, text) -> None:
+        self.sent.append(text)
+
+
+def _json_value(rng: random.Random, depth: int = 0):
+    """A random JSON value (nesting at most 3 deep), leaning to the protocols' words."""
+    k = rng.randrange(9 if depth < 3 else 6)
+    if k < 6:
+        return [None, True, rng.choice((0, -1, 2**63, 2**64, 1e300, float("nan"))), "x" * 3,
+                "/a", rng.choice(("advertise", "publish", "status", "unadvertise"))][k]
+    if k == 6:
+        return [_json_value(rng, depth + 1) for _ in range(rng.randrange(4))]
+    if k == 7:
+        keys = ("op", "id", "topic", "channels", "channelIds", "msg", "values", "clock", "sec",
+                "level")
+        return {rng.choice(keys): _json_value(rng, depth + 1) for _ in range(rng.randrange(4))}
+    return {"op": rng.choice(("advertise", "unadvertise", "publish", "status",
+                              "service_response", "serverInfo")),
+            "channels": _json_value(rng, depth + 1), "topic": "/a",
+            "msg": _json_value(rng, depth + 1)}
+
+
+def hostile_frames(rng: random.Random, foxglove: bool) -> list:
+    """A session's frames (module docstring): the /a channel advertised first (Foxglove),
+    then a random mix of good, wrong-shaped and huge frames."""
+    frames = []
+    adv = {"op": "advertise", "channels": [{"id": 1, "topic": "/a", "encoding": "cdr",
+                                            "schemaName": "std_msgs/msg/Float64",
+                                            "schema": "float64 data",
+                                            "schemaEncoding": "ros2msg"}]}
+    if foxglove:
+        frames.append(json.dumps(adv))
+    for _ in range(rng.randrange(1, 30)):
+        k = rng.randrange(7)
+        t = rng.choice((10 * S, 2**63 - 1, 2**63, 2**64 - 1, 0, 10 * S + rng.getrandbits(40)))
+        if k == 0:
+            frames.append(json.dumps(_json_value(rng), allow_nan=True))
+        elif k == 1 and foxglove:
+            frames.append(struct.pack("<BIQ", rng.choice((1, 1, 2, 9)), rng.randrange(3), t)
+                          + rng.choice((b"\x00\x01\x00\x00" + struct.pack("<d", 1.0), b"",
+                                        b"\x00\x01")))
+        elif k == 1:
+            sec = rng.choice((10, 2**40, -5, "x", None, 1.5, 2**70))
+            frames.append(json.dumps({"op": "publish", "topic": "/clock",
+                                      "msg": {"clock": {"sec": sec, "nanosec": 0}}}))
+        elif k == 2:
+            frames.append(rng.choice((b"\x01\x00", b"", "{", "[]", "1", '"x"', "null")))
+        elif k == 3 and foxglove:
+            n = rng.choice((10, 2000))
+            frames.append(json.dumps({"op": "advertise", "channels": [
+                {"id": i + 5, "topic": f"/x{i}"} for i in range(n)]}))
+        elif k == 4:
+            frames.append(json.dumps({"op": "publish", "topic": "/a",
+                                      "msg": rng.choice(({"data": 1.0}, {"data": "x"}, [],
+                                                         {"data": 1e308}))}))
+        else:
+            frames.append(json.dumps({"op": "unadvertise", "channelIds":
+                                      rng.choice(([1], [[1]], "x", [2**70]))}))
+    return frames
+
+
+def run_frames(rng: random.Random) -> list[str]:
+    """Hand hostile frames to a client's session and its events to a watch source (an
+    exception propagates)."""
+    from monitors.live.client import FoxgloveClient
+    from monitors.live.rosbridge import RosbridgeClient
+    from monitors.live.source import WatchSource
+
+    foxglove = rng.random() < 0.6
+    frames = hostile_frames(rng, foxglove)
+    if foxglove:
+        client = FoxgloveClient("ws://127.0.0.1:1", lambda t: t == "/a")
+        asyncio.run(client._session(FakeSocket(frames)))
+    else:
+        client = RosbridgeClient("rosbridge://127.0.0.1:1", lambda t: t == "/a")
+        state = {"clock": 0, "types": {"/a": "std_msgs/msg/Float64"}}
+        client._put("advertise", 0, [__import__("monitors.live.rosbridge", fromlist=["x"])
+                                     .advertisement(1, "/a", "std_msgs/msg/Float64")])
+        asyncio.run(client._read(FakeSocket(frames), {}, state))
+    src = WatchSource("ws://fuzz", client)
+    src.want({"/a"})
+    src.counts = {}
+    src.max_jump_ns = 10**6 * 100_000_000
+    while not client.events.empty():
+        ev = client.events.get_nowait()
+        if ev[0] == "message":
+            src._deliver(ev[1], ev[2], ev[3])
+        else:
+            src._handle(ev)
+    return []
+
+
+# --------------------------------------------------------------------------- main
+def _arguments(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--count", type=int, default=600, help="inputs in all")
+    ap.add_argument("--seed", type=int, default=None, help="default: a fresh one, printed")
+    ap.add_argument("--classes", default=",".join(CLASSES),
+                    help="comma-separated; also NAME:WEIGHT (default weights below)")
+    ap.add_argument("--quiet", action="store_true")
+    return ap.parse_args(argv)
+
+
+#: inputs of each class per unit of --count (logs cost far more than frames)
+WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "bindings": 40, "frames": 40}
+
+
+def plan_inputs(classes: str, count: int) -> list[str]:
+    """The class of each input, ``count`` in all, in proportion to the weights."""
+    weights = {}
+    for part in classes.split(","):
+        name, _, w = part.partition(":")
+        if name not in CLASSES:
+            raise SystemExit(f"unknown class {name!r} (classes: {', '.join(CLASSES)})")
+        weights[name] = float(w) if w else WEIGHTS[name]
+    total = sum(weights.values())
+    out = []
+    for name, w in weights.items():
+        out += [name] * round(count * w / total)
+    return out
+
+
+def main(argv=None) -> int:
+    args = _arguments(argv)
+    seed = args.seed if args.seed is not None else random.SystemRandom().randrange(2**32)
+    print(f"seed {seed} (reproduce with --seed {seed})", flush=True)
+    kinds = plan_inputs(args.classes, args.count)
+    random.Random(seed).shuffle(kinds)
+    stats = {"inputs": 0, "tracebacks": 0, "unsupported": 0}
+    stats.update({k: 0 for k in CLASSES})
+    tmp = Path(tempfile.mkdtemp(prefix="fretc_hostile_"))
+    audits = None
+    t0 = time.time()
+    for i, kind in enumerate(kinds):
+        rng = random.Random(f"{seed}:{i}")
+        stats["inputs"] += 1
+        stats[kind] += 1
+        try:
+            if kind == "bindings":
+                bad = run_binding(rng)
+            elif kind == "frames":
+                bad = run_frames(rng)
+            else:
+                audits = audits or Audits(tmp)
+                bad = run_log_class(kind, rng, audits)
+        except Exception:
+            stats["tracebacks"] += 1
+            print(f"TRACEBACK {kind} seed {seed} input {i}:\n{traceback.format_exc()[-2500:]}",
+                  flush=True)
+            continue
+        if bad:
+            stats["unsupported"] += len(bad)
+            print(f"UNSUPPORTED {kind} seed {seed} input {i}: {bad}", flush=True)
+    stats["seconds"] = round(time.time() - t0, 1)
+    stats["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
+    stats["seed"] = seed
+    print(json.dumps(stats), flush=True)
+    return 1 if stats["tracebacks"] or stats["unsupported"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
