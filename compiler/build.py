@@ -8,7 +8,6 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from fretish.errors import FretishError, render_diagnostic
-from fretish.records import FACTORY, Record
 
 from .instantiate import formula_text, instantiate
 from .ir import gc_paused
@@ -23,33 +22,19 @@ FORMALIZED_KEYS = ("id", "text", "source", "line", "parent", "rationale", "key",
                    "ticks", "warnings", "pt_causal")
 
 
-@dataclass(init=False, repr=False, eq=False)
-class Compiled(Record):
+@dataclass
+class Compiled:
     """One requirement after compilation.
 
     ``entry`` is the :class:`fretish.files.RequirementEntry`; ``formalization`` is set when
     it formalized, ``error`` (a :class:`FretishError`) otherwise; free-form requirements
     have neither.
-
-    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
-    ``==`` are written out (``_cache`` a new dict by default, compared but not shown by
-    ``repr``; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     entry: object
     formalization: Formalization | None = None
     error: FretishError | None = None
     _cache: dict = field(default_factory=dict, repr=False)
-
-    __match_args__ = _COMPARED = ("entry", "formalization", "error", "_cache")
-    _SHOWN = ("entry", "formalization", "error")
-
-    def __init__(self, entry: object, formalization: Formalization | None = None,
-                 error: FretishError | None = None, _cache: dict = FACTORY) -> None:
-        self.entry = entry
-        self.formalization = formalization
-        self.error = error
-        self._cache = {} if _cache is FACTORY else _cache
 
     # read-only delegations, same shape as compiler.codegen.MonitorSource's (kept: one property per
     # field)

@@ -13,46 +13,14 @@ internal error (a generated monitor that is not valid: nothing is written).
 
 from __future__ import annotations
 
-import atexit
-import gc
 import os
 
-# Start-up (issue 9). The imports below make tens of thousands of objects (modules, classes,
-# functions) that live until the process ends. Python's cyclic garbage collector would scan
-# them as they are made, again at each later collection, and once more at exit, to free
-# nothing: the collector is paused while they load, then they are moved to its permanent
-# generation (gc.freeze: still freed by reference counting, never rescanned) and the
-# collector is put back as it was. Together with _freeze_if_paused, about 8% of the
-# instructions of `fretc r1.fret --emit ltl` and 3% of a thousand requirements. The price:
-# a reference cycle that is already garbage when fretc.cli is first imported is never
-# freed (bounded: only what exists at that moment; objects made later are collected as
-# before).
-_GC_WAS_ENABLED = gc.isenabled()
-gc.disable()
-try:
-    import click
+import click
 
-    from fretish.errors import FretcError, error_text
+from fretish.errors import FretcError, error_text
 
-    from .compile import compile_cmd
-    from .options import shown
-finally:
-    gc.freeze()
-    if _GC_WAS_ENABLED:
-        gc.enable()
-
-
-def _freeze_if_paused() -> None:
-    """At exit (``atexit``): when the command left the collector paused (``--emit ltl``
-    does, :mod:`fretc.compile`: its objects are acyclic and live until the end), move
-    everything to the permanent generation so the interpreter's final collection does not
-    scan the run's objects (about 1.3% of a thousand requirements' instructions). A command
-    that keeps the collector running (the audit, the other emits) is left as it is."""
-    if not gc.isenabled():
-        gc.freeze()
-
-
-atexit.register(_freeze_if_paused)
+from .compile import compile_cmd
+from .options import shown
 
 
 class _DefaultGroup(click.Group):

@@ -55,7 +55,6 @@ from dataclasses import dataclass, field
 from .ast import Requirement
 from .errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
-from .records import FACTORY, Record
 from .units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
@@ -63,8 +62,8 @@ __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 PathLike = str | os.PathLike
 
 
-@dataclass(init=False, repr=False, eq=False)
-class RequirementEntry(Record):
+@dataclass
+class RequirementEntry:
     """One requirement read from a file.
 
     ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
@@ -73,10 +72,6 @@ class RequirementEntry(Record):
     ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
     the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
     realizability), the same for every requirement of the file.
-
-    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
-    ``==`` are written out (``extra`` a new dict by default; ``repr`` and ``==`` over every
-    field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     id: str
@@ -92,29 +87,6 @@ class RequirementEntry(Record):
     extra: dict = field(default_factory=dict)
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
-
-    __match_args__ = _COMPARED = _SHOWN = (
-        "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
-        "requirement", "error", "extra", "inputs", "outputs")
-
-    def __init__(self, id: str, text: str, source: str, line: int, column: int,
-                 rationale: str | None = None, parent: str | None = None,
-                 tick_period: Fraction | None = None, requirement: Requirement | None = None,
-                 error: FretishError | None = None, extra: dict = FACTORY,
-                 inputs: tuple[str, ...] = (), outputs: tuple[str, ...] = ()) -> None:
-        self.id = id
-        self.text = text
-        self.source = source
-        self.line = line
-        self.column = column
-        self.rationale = rationale
-        self.parent = parent
-        self.tick_period = tick_period
-        self.requirement = requirement
-        self.error = error
-        self.extra = {} if extra is FACTORY else extra
-        self.inputs = inputs
-        self.outputs = outputs
 
 
 # --------------------------------------------------------------------------- durations
