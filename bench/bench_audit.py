@@ -12,7 +12,7 @@
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``monitors.audit.audit_log``: read, sample every 100 ms, monitor, evidence),
    and prints both CPU times and their ratio (aim: <= 1.0x, issue #12: the audit decodes
-   only the fields its bindings read, :mod:`monitors.selective`); then the same two as
+   only the fields its bindings read, :mod:`monitors.sources.selective`); then the same two as
    commands in fresh processes (start-up included). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
 3. Peak memory (max RSS of a fresh process auditing the log) for two log lengths
@@ -107,11 +107,11 @@ def plain_iteration(path: Path) -> tuple[float, int]:
     return time.process_time() - t, n
 
 
-def audit_once(path: Path, fret: Path, engine: str):
+def audit_once(path: Path, fret: Path):
     from monitors.audit import AuditConfig, audit_log, load_plan
 
     t = time.process_time()
-    plan = load_plan(AuditConfig(requirements=(str(fret),), engine=engine))
+    plan = load_plan(AuditConfig(requirements=(str(fret),)))
     t_plan = time.process_time() - t
     t = time.process_time()
     la = audit_log(plan, str(path))
@@ -154,9 +154,6 @@ def main() -> None:
     ap.add_argument("--memory", type=float, nargs=2, default=(2.0, 10.0), metavar=("A", "B"),
                     help="two log lengths (minutes) whose peak memory is compared")
     ap.add_argument("--workdir", default="/tmp/fretc-bench", help="where logs are kept")
-    ap.add_argument("--engine", default="auto", choices=("auto", "stepwise", "vectorized"))
-    ap.add_argument("--compare-engines", action="store_true",
-                    help="also time the step-wise and vectorized engines separately")
     ap.add_argument("--repeat", type=int, default=3, help="alternated runs of each (best kept)")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--child-plain", help=argparse.SUPPRESS)
@@ -176,7 +173,7 @@ def main() -> None:
         print(json.dumps({"heap_peak_mb": tracemalloc.get_traced_memory()[1] / 2**20}))
         return
     if args.child:
-        _, t_audit, la = audit_once(Path(args.child[0]), Path(args.child[1]), "auto")
+        _, t_audit, la = audit_once(Path(args.child[0]), Path(args.child[1]))
         rss_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
         print(json.dumps({"ticks": la.ticks_evaluated, "seconds": t_audit,
                           "max_rss_mb": rss_kb / 1024, "engine": la.engine}))
@@ -189,7 +186,7 @@ def main() -> None:
     plains, audits = [], []
     for _ in range(args.repeat):  # alternated, best of each: CPU time is less noisy than wall
         t_plain, n = plain_iteration(log)
-        t_plan, t_audit, la = audit_once(log, fret, args.engine)
+        t_plan, t_audit, la = audit_once(log, fret)
         plains.append(t_plain)
         audits.append(t_audit)
     t_plain, t_audit = min(plains), min(audits)
@@ -207,11 +204,6 @@ def main() -> None:
           f"fretc audit {c_audit:.2f} s CPU, ratio {c_audit / c_plain:.2f} x")
     verdicts = ", ".join(f"{v.requirement} {v.verdict}" for v in la.verdicts)
     print(f"verdicts: {verdicts}")
-    if args.compare_engines:
-        for engine in ("stepwise", "vectorized"):
-            _, t, la2 = audit_once(log, fret, engine)
-            assert [v.verdict for v in la2.verdicts] == [v.verdict for v in la.verdicts]
-            print(f"  engine {engine:10s}: {t:8.2f} s (same verdicts)")
 
     print("\npeak memory of a fresh process auditing a log (max RSS):")
     rows = []

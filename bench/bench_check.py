@@ -29,10 +29,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from compiler.build import compile_entries  # noqa: E402
-from compiler.check import check_requirements  # noqa: E402
+from check.analysis import check_requirements  # noqa: E402
 from fretish.files import RequirementEntry, load_requirements  # noqa: E402
 from fretish.parser import parse  # noqa: E402
-from fretish.errors import FretishError  # noqa: E402
+from common.errors import FretishError  # noqa: E402
 
 
 def cpu() -> float:

@@ -39,7 +39,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _serve(trace: str, rate: float, topics, conn) -> None:
-    from monitors.watch_serve import FoxgloveServer, advertise_mcap, replay_mcap
+    from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap
 
     server = FoxgloveServer(port=0)
     advertise_mcap(trace, server, topics=set(topics))
@@ -62,7 +62,7 @@ def _cpu() -> float:
 
 
 def watch_once(plan, trace: str, rate: float):
-    from monitors.watch import Watch, WatchOptions
+    from monitors.live.watch import Watch, WatchOptions
 
     ctx = mp.get_context("spawn")
     parent, child = ctx.Pipe()

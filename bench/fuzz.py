@@ -192,7 +192,7 @@ def _alarm(signum, frame):
 def front(text: str, rid: str, source: str = "fuzz.fret"):
     """Parse and formalize ``text``; ``(compiled or None, rejected error or None)``."""
     from compiler.build import compile_entry
-    from fretish.errors import FretishError
+    from common.errors import FretishError
     from fretish.files import RequirementEntry
     from fretish.parser import parse
 

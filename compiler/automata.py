@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from fretish import cache
+from common import cache
 
 from . import dfa, ir, ltl3
 from .ir import Node
@@ -180,7 +180,7 @@ def bdd_code(f, aps: list[str]) -> str:
 # its atoms (variables, comparisons, calls, past-time sub-formulas, FTP) renamed a0, a1, ...
 # in order of first appearance. Requirements of the same template, bounds and atom pattern
 # share one construction, memoized in the process and stored in fretc's disk cache
-# (fretish.cache, sub-folder "ltl3"), keyed by the shape, Spot's version and the text of
+# (common.cache, sub-folder "ltl3"), keyed by the shape, Spot's version and the text of
 # this module and of compiler.ltl3 (so a change of the construction can never meet an old
 # entry).
 #

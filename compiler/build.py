@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from fretish.errors import FretishError, render_diagnostic
+from common.errors import FretishError, render_diagnostic
 
 from .instantiate import formula_text, instantiate
 from .ir import gc_paused

@@ -15,7 +15,7 @@ number: code objects are not portable between Python versions) and the module na
 entry holds the SHA-256 of the module text it was compiled from and of its payload
 (``marshal`` of the module's code object and the tuple of its shapes' code objects). An
 entry for another text, damaged, or of another layout is a miss: the module is compiled
-again (:mod:`fretish.cache`: the cache changes speed, never output).
+again (:mod:`common.cache`: the cache changes speed, never output).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import importlib.util
 import marshal
 import types
 
-from fretish import cache
+from common import cache
 
 __all__ = ["load", "store"]
 

@@ -42,7 +42,7 @@ import sys
 import types
 from dataclasses import dataclass
 
-from fretish import cache as fretc_cache
+from common import cache as fretc_cache
 
 from . import code_cache
 from .automata import LTL3Automata, ltl3_automata
@@ -208,7 +208,7 @@ def _env():
     import jinja2  # lazy: start-up of the commands that render nothing (--emit ltl)
 
     class BytecodeCache(jinja2.BytecodeCache):
-        """Jinja's compiled templates in fretc's disk cache (:mod:`fretish.cache`: skipped
+        """Jinja's compiled templates in fretc's disk cache (:mod:`common.cache`: skipped
         when off or not writable). Jinja checks an entry's header (its bytecode format,
         Python's version) and the template source's checksum; the SHA-256 of the entry
         written before it makes a damaged entry a miss too (compiled again), never a

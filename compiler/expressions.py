@@ -10,7 +10,7 @@ the response, condition, stop and scope expressions of a requirement.
 from __future__ import annotations
 
 from fretish import ast as A
-from fretish.errors import FretishError
+from common.errors import FretishError
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
 
 from . import ir

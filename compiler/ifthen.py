@@ -21,7 +21,7 @@ import re
 from collections.abc import Iterable
 
 from fretish import ast as A
-from fretish.errors import FretishError
+from common.errors import FretishError
 from fretish.parser import parse_expression
 
 from . import ir

@@ -64,7 +64,7 @@ duration timings x 3 classes)), about 0.35 ms of CPU each to build. A process bu
 first 4 keys itself; past that it reads the table of all keys (``marshal``, about 0.85 MB,
 an index behind a CRC-32, each key's entry behind its own CRC-32, checked and unmarshalled
 on its first use: :func:`table_blob`) from fretc's
-disk cache (:mod:`fretish.cache`, entry named by a digest of the construction's sources
+disk cache (:mod:`common.cache`, entry named by a digest of the construction's sources
 and Python's version, :func:`_cache_name`), building and storing it on first use. The table changes
 speed only: a cache that is off, unreadable or damaged means the keys are built.
 
@@ -425,11 +425,11 @@ def read_table(blob: bytes) -> dict | None:
 
 def _table() -> dict | None:
     """The table of every key's data (:func:`read_table`) from fretc's disk cache
-    (:mod:`fretish.cache`), built and stored there on first use; None when the disk cache
+    (:mod:`common.cache`), built and stored there on first use; None when the disk cache
     is off or fails (keys are then built one by one as needed)."""
     if _TABLE:
         return _TABLE[0]
-    from fretish import cache
+    from common import cache
 
     table = None
     try:
@@ -459,7 +459,7 @@ def _from_table(table: dict, key) -> tuple | None:
             data = None
         if type(data) is tuple:
             return data
-    from fretish import cache
+    from common import cache
 
     try:
         cache.remove("templates", _cache_name())

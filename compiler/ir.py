@@ -64,7 +64,7 @@ class Node:
 
     def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
                  lo: int | None = None, hi: int | None = None):
-        # plain attribute stores, same shape as fretish.errors' __init__s (kept: a __slots__
+        # plain attribute stores, same shape as common.errors' __init__s (kept: a __slots__
         # class's fields)
         self.op = op
         self.args = args

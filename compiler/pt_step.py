@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from fretish.errors import FretishError
+from common.errors import FretishError
 
 from . import ir
 from .ir import Node

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
-from fretish.units import format_period_ms
+from common.units import format_period_ms
 
 from . import ir
 from .expressions import Expander, SemanticsError, mentions_time

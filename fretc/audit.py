@@ -9,7 +9,7 @@
 LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosbag2 folders,
 ``.csv`` traces, or folders searched for them. Binding files default to every
 ``*.bindings.toml`` beside the requirement files or folders. Exit status
-(:data:`monitors.report_model.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
+(:data:`monitors.report.model.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
 complete logs, 1 a requirement is violated, 2 usage or input errors (including a
 requirement that could not be audited on some log), 3 no violation but a log is partial or
 had data problems (``--allow-partial``: 0).
@@ -38,14 +38,15 @@ __all__ = ["audit_cmd"]
               help="Write JUnit XML to FILE: one test case per requirement x log.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
 @click.option("--allow-partial", is_flag=True,
-              help="Exit 0 instead of 3 when nothing is violated but a log is partial or had "
-                   "data problems.")
+              help="Exit 0 instead of 3 when nothing is violated but a log is partial, had "
+                   "data problems or a verdict is unknown (the verdicts stay as they are: "
+                   "an unknown is never a pass).")
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
 @ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, json_path, junit_path, no_progress, engine, window, allow_partial,
+              jobs, json_path, junit_path, no_progress, window, allow_partial,
               verbose):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
@@ -66,17 +67,17 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from rich.console import Console
 
     from monitors.audit import AuditInputError, find_logs, load_plan
-    from monitors.audit_junit import junit_xml
-    from monitors.audit_output import AuditProgress, escape, print_summary
-    from monitors.fleet import expand_log_args
-    from monitors.report_model import audit_json, exit_code
+    from monitors.report.junit import junit_xml
+    from monitors.report.terminal import AuditProgress, escape, print_summary
+    from monitors.audit.fleet import expand_log_args
+    from monitors.report.model import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
                   highlight=False)
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
-                          engine, window)
+                          window)
     try:
         plan = load_plan(config)
         paths = find_logs(expand_log_args(logs))

@@ -1,5 +1,5 @@
 """``fretc check``: find conflicting, vacuous, redundant and unrealizable requirements before
-any robot runs (issue 11; the analyses are in :mod:`compiler.check`).
+any robot runs (issue 11; the analyses are in :mod:`check.analysis`).
 
 ::
 
@@ -20,6 +20,8 @@ from pathlib import Path
 
 import click
 
+from .options import shown
+
 __all__ = ["check_cmd", "render_text"]
 
 
@@ -30,7 +32,7 @@ def _names(text):
 
 
 def render_text(result) -> str:
-    """The terminal report of a :class:`compiler.check.CheckResult`."""
+    """The terminal report of a :class:`check.analysis.CheckResult`."""
     lines = []
     mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN"}
     for r in result.requirements:
@@ -120,15 +122,15 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
     from compiler.build import compile_entries
-    from compiler.check import check_requirements
-    from compiler.check_realizability import RealizabilityError
-    from fretish.errors import FretishError
+    from check.analysis import check_requirements
+    from check.realizability import RealizabilityError
+    from common.errors import FretishError
     from fretish.files import load_requirements
 
     try:
         entries = load_requirements([Path(p) for p in files])
     except (FretishError, OSError) as exc:
-        click.echo(str(exc), err=True)
+        click.echo(shown(str(exc)), err=True)
         sys.exit(2)
     ins, outs = _names(inputs), _names(outputs)
     if ins is None:
@@ -147,15 +149,15 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
                                     redundancy=not no_redundancy, witness_dir=witness_dir,
                                     inputs=ins, outputs=outs, witness_judge=judge)
     except RealizabilityError as exc:
-        click.echo(f"error: {exc}", err=True)
+        click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
     for e in result.input_errors:
-        click.echo(e, err=True)
+        click.echo(shown(str(e)), err=True)
     doc = result.to_json()
     if output:
         Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     if as_json:
         click.echo(json.dumps(doc, indent=2))
     else:
-        click.echo(render_text(result))
+        click.echo(shown(render_text(result)))
     sys.exit(result.exit_code)

@@ -7,7 +7,7 @@ module per sub-command in this folder (shared options: :mod:`fretc.options`).
 ``fretc check`` (:mod:`fretc.check`), ``fretc inspect`` (:mod:`fretc.inspect`), ``fretc
 watch`` and ``fretc replay`` (:mod:`fretc.watch`). Exit codes: 0 success, 1 a requirement
 failed (or, for ``audit``, a violation), 2 usage or input errors (every
-:class:`fretish.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
+:class:`common.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
 internal error (a generated monitor that is not valid: nothing is written).
 """
 
@@ -17,7 +17,7 @@ import os
 
 import click
 
-from fretish.errors import FretcError, error_text
+from common.errors import FretcError, error_text
 
 from .compile import compile_cmd
 from .options import shown
@@ -59,7 +59,7 @@ class _DefaultGroup(click.Group):
 
     def invoke(self, ctx):
         """Run the sub-command; an input error of any stage (:class:`FretcError`) that it
-        does not report itself is printed here (:func:`fretish.errors.error_text`, control
+        does not report itself is printed here (:func:`common.errors.error_text`, control
         characters escaped) with exit code 2."""
         try:
             return super().invoke(ctx)

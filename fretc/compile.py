@@ -22,7 +22,7 @@ __all__ = ["compile_cmd"]
 
 def _entries(paths) -> list:
     """The :class:`fretish.files.RequirementEntry` list of ``paths``, parsed (an unreadable
-    file: its error printed, exit code 2; a :class:`fretish.errors.FretishError` of a file
+    file: its error printed, exit code 2; a :class:`common.errors.FretishError` of a file
     goes to the command group's handler: printed, exit code 2)."""
     from fretish.files import load_requirements  # lazy: the parser only when a command compiles
 
@@ -86,7 +86,8 @@ def compile_cmd(files, emit, as_json, output, psl_map):
         for m in modules:
             for rid, reason in m.skipped.items():
                 if rid not in reported:
-                    click.echo(f"skipped {rid} ({m.name}): {reason}", err=True)
+                    click.echo(_shown(f"skipped {rid} ({m.name}): {reason}".replace(
+                        "\n", " ")), err=True)
     elif emit == "psl":
         from compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler

@@ -5,7 +5,7 @@ every field path of the type in binding syntax (``/odom.twist.twist.linear.x``; 
 message array as ``[i]``) with its ROS type, for arrays the lengths seen, for numeric fields
 the minimum and maximum over the log (finite values; NaN and infinities counted apart) and
 for booleans how often each value occurs. Field types come from the schemas embedded in the
-log (:mod:`monitors.schema`); values from one read of every message.
+log (:mod:`monitors.sources.schema`); values from one read of every message.
 """
 
 from __future__ import annotations
@@ -89,10 +89,10 @@ def inspect_log(path: str) -> dict:
     """The inventory of one log (module docstring) as a JSON-ready dict.
 
     Raises:
-        monitors.problems.FretcInputError: the file is not a readable log.
+        common.problems.FretcInputError: the file is not a readable log.
     """
     # lazy: the log readers (mcap, rosbags) only when the command runs
-    from monitors.schema import log_schemas
+    from monitors.sources.schema import log_schemas
     from monitors.sources import open_log
 
     source = open_log(path)
@@ -120,7 +120,7 @@ def inspect_log(path: str) -> dict:
                     st.numbers([v])
     topics = []
     for t, typ in types.items():
-        n = counts.get(t, 0)
+        n = source.records.get(t, counts.get(t, 0))  # read, decoded or not
         span = (last[t] - first[t]) / 1e9 if n > 1 else None
         topics.append({"topic": t, "type": typ or None, "messages": n,
                        "rate_hz": (n - 1) / span if span else None,
@@ -168,7 +168,7 @@ def inspect_cmd(logs, as_json):
     """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
     counts, rates, time span, and every field path in binding syntax with its type, array
     lengths and numeric min/max - what a binding file can name (docs/bindings.md)."""
-    from monitors.problems import FretcInputError  # lazy: as the readers
+    from common.problems import FretcInputError  # lazy: as the readers
 
     docs: List[dict] = []
     failed = False

@@ -3,7 +3,7 @@
 ``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
 ``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
 :func:`audit_config` turns their values into a :class:`monitors.audit.AuditConfig` and
-:func:`run_audits` runs the audit locally or on Ray (:mod:`monitors.fleet`) as the options
+:func:`run_audits` runs the audit locally or on Ray (:mod:`monitors.audit.fleet`) as the options
 say. Only click is imported at module level, so the command starts fast; the engine loads
 on first use.
 """
@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import click
 
-from fretish.textsafe import visible
+from common.textsafe import visible
 
 __all__ = ["audit_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
@@ -26,13 +26,13 @@ META = "fretc.fleet"
 
 def shown(text: str) -> str:
     """Text for the terminal: control and bidi characters escaped, lines kept
-    (:func:`fretish.textsafe.visible`)."""
+    (:func:`common.textsafe.visible`)."""
     return visible(text, keep="\n")
 
 
 def audit_input_options(f):
     """The options that say what to audit and how (shared by ``fretc audit`` and
-    ``fretc report``): requirements, bindings, tick, time base, jobs, engine, window."""
+    ``fretc report``): requirements, bindings, tick, time base, jobs, window."""
     options = [
         click.option("-r", "--requirements", "requirements", multiple=True,
                      type=click.Path(exists=True),
@@ -54,11 +54,6 @@ def audit_input_options(f):
                      help="Message time: log time (default) or header.stamp."),
         click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
                      show_default=True, help="Audit this many logs in parallel processes."),
-        click.option("--engine", type=click.Choice(["auto", "stepwise", "vectorized"]),
-                     default="auto", show_default=True,
-                     help="stepwise: the generated monitors' step() on every tick; "
-                          "vectorized: numpy over the sampled columns; auto: vectorized on "
-                          "long logs."),
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
                      help="Ticks of values kept each side of a trigger and a violation."),
     ]
@@ -67,8 +62,7 @@ def audit_input_options(f):
     return f
 
 
-def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, engine,
-                 window):
+def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window):
     """The :class:`monitors.audit.AuditConfig` of :func:`audit_input_options`' values
     (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
     from monitors.audit import AuditConfig  # lazy: numpy and the engine only when run
@@ -80,7 +74,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
     return AuditConfig(requirements=tuple(requirements),
                        bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
-                       engine=engine, window=window)
+                       window=window)
 
 
 class FleetError(click.ClickException):
@@ -116,7 +110,7 @@ def _check_address(ctx, param, value):
     import importlib.util  # lazy: only for --ray (start-up, issue 9)
 
     if importlib.util.find_spec("ray") is None:
-        from monitors.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
+        from monitors.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
 
         raise click.UsageError(RAY_HINT, ctx=ctx)
     ok = (value in ("local", "auto") or value.startswith("ray://")
@@ -137,7 +131,7 @@ def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
     started or reached."""
     # lazy: the audit engine (numpy, mcap, rosbags) is loaded only when a command runs
     from monitors.audit import audit_logs
-    from monitors.fleet import RayUnavailable, audit_logs_ray
+    from monitors.audit.fleet import RayUnavailable, audit_logs_ray
 
     opts = (ctx.meta.get(META) if ctx is not None else None) or {}
     if "ray" not in opts:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import click
 
-from monitors.report import ReportError, load_audit_json, write_report
+from monitors.report.write import ReportError, load_audit_json, write_report
 
 from .options import audit_config, audit_input_options, ray_options, run_audits
 
@@ -44,7 +44,7 @@ __all__ = ["report_cmd"]
 @ray_options
 @click.pass_context
 def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-               jobs, engine, window, from_json, base, output, annotate_dir, psl_map, title,
+               jobs, window, from_json, base, output, annotate_dir, psl_map, title,
                check_json=None):
     """Write the traceability report (HTML + Markdown) of an audit: requirements x runs,
     formulas, monitors, AJPF properties, verdicts, witnesses and violation timelines.
@@ -68,12 +68,12 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
     else:
         # lazy: the audit engine only when the logs are audited here
         from monitors.audit import AuditInputError, find_logs, load_plan
-        from monitors.fleet import expand_log_args
-        from monitors.report_model import audit_json
+        from monitors.audit.fleet import expand_log_args
+        from monitors.report.model import audit_json
 
         json_dir = None
         config = audit_config(requirements, bindings, inline, tick_period, tick_topic,
-                              time_base, engine, window)
+                              time_base, window)
         try:
             plan = load_plan(config)
             paths = find_logs(expand_log_args(logs))
@@ -92,8 +92,8 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         click.echo(f"error: {exc}", err=True)
         ctx.exit(2)
         return
-    if check_json:  # fretc check findings beside the requirements (compiler/check_report.py)
-        from compiler.check_report import add_to_report, load_check  # lazy: only with --check
+    if check_json:  # fretc check findings beside the requirements (check/report.py)
+        from check.report import add_to_report, load_check  # lazy: only with --check
         add_to_report(str(files.markdown), str(files.html), load_check(check_json))
     for n in files.notes:
         click.echo(f"note: {n}", err=True)

@@ -23,7 +23,7 @@ import time
 
 import click
 
-from fretish.units import format_offset
+from common.units import format_offset
 
 from .options import audit_config, audit_input_options
 
@@ -31,7 +31,7 @@ __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
 
 def live_table(w):
-    """The live table of a :class:`monitors.watch.Watch`: per requirement the pt verdict
+    """The live table of a :class:`monitors.live.watch.Watch`: per requirement the pt verdict
     now, the LTL3 status and when it became definite, violations so far, the last trigger
     (times in s from the first tick)."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)
@@ -103,7 +103,7 @@ class _Renderable:
 @click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, engine, window, duration, record, jsonl, json_path, wait, connect_timeout,
+              jobs, window, duration, record, jsonl, json_path, wait, connect_timeout,
               no_live):
     """Watch a robot live over the Foxglove WebSocket protocol (URL ws://host:8765, e.g.
     foxglove_bridge) with the requirements and bindings that audit its logs."""
@@ -113,16 +113,16 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     from rich.markup import escape
 
     from monitors.audit import AuditInputError, load_plan
-    from monitors.audit_output import print_summary
-    from monitors.report_model import audit_json, exit_code
-    from monitors.watch import Watch, WatchOptions
+    from monitors.report.terminal import print_summary
+    from monitors.report.model import audit_json, exit_code
+    from monitors.live.watch import Watch, WatchOptions
 
     if not url.startswith(("ws://", "wss://")):
         raise click.BadParameter(f"{url!r}: expected ws://host:port", param_hint="URL")
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
-                          "stepwise", window)
+                          window)
     try:
         plan = load_plan(config)
         lock = threading.Lock()
@@ -192,7 +192,7 @@ def replay_cmd(log, serve, rate, host, port, wait, loop):
     """Publish a recorded MCAP LOG over the Foxglove WebSocket protocol, paced at RATE
     times real time, with its recorded schemas, encodings and log times."""
     # lazy: foxglove-sdk (the watch extra) only when the command runs
-    from monitors.watch_serve import FoxgloveServer, advertise_mcap, replay_mcap
+    from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap
 
     try:
         server = FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")

@@ -3,14 +3,15 @@
 * :func:`parse` - one sentence -> :class:`fretish.ast.Requirement` (``parser.py``);
 * :func:`load_requirements` - ``.fret`` files and FRET JSON exports -> entries
   (``files.py``);
-* errors: :class:`FretishError` and its subclasses :class:`FretishSyntaxError` (a sentence)
-  and :class:`FretishFileError` (a file), rendered like compiler diagnostics.
+* errors (defined in :mod:`common.errors`): :class:`FretishError` and its subclasses
+  :class:`FretishSyntaxError` (a sentence) and :class:`FretishFileError` (a file), rendered
+  like compiler diagnostics.
 """
 
-from .errors import FretishError, FretishFileError, FretishSyntaxError
+from common.errors import FretishError, FretishFileError, FretishSyntaxError
 
-# The parser and the file loader are imported on first use (PEP 562): ``from
-# fretish.errors import ...`` (every fretc command does) must not load them (start-up time).
+# The parser and the file loader are imported on first use (PEP 562): importing a small
+# module of this package (``fretish.words``) must not load them.
 _LAZY = {"parse": "parser", "load_requirements": "files", "RequirementEntry": "files"}
 
 

@@ -24,7 +24,7 @@
   one space).
 * ``@tick_period <number> <unit>`` (at most once, anywhere in the file) is the tick period
   of every requirement of the file that has no ``tick_period:`` attribute. Its grammar is
-  the one of every fretc duration (:mod:`fretish.units`: ns, us/µs, ms, s, min, h, their
+  the one of every fretc duration (:mod:`common.units`: ns, us/µs, ms, s, min, h, their
   long names such as ``milliseconds``, and ``Hz``). The period is stored in seconds as an
   exact :class:`~fractions.Fraction` of the decimal text.
 * ``@inputs a, b`` and ``@outputs c`` (each at most once; names separated by commas or
@@ -53,9 +53,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from .ast import Requirement
-from .errors import FretishError, FretishFileError, FretishSyntaxError
+from common.errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
-from .units import parse_seconds
+from common.units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 
@@ -92,7 +92,7 @@ class RequirementEntry:
 # --------------------------------------------------------------------------- durations
 def parse_tick_period(text: str) -> Fraction:
     """``"<number> <unit>"`` (e.g. ``"100 ms"``, ``"0.05 seconds"``, ``"10 Hz"``) -> seconds,
-    exactly: the duration grammar of :mod:`fretish.units` (the same as the bindings').
+    exactly: the duration grammar of :mod:`common.units` (the same as the bindings').
 
     Raises :class:`ValueError` (with a readable message) for anything else, for ``ticks`` (a
     tick period must be a time) and for a period that is not positive.

@@ -24,7 +24,7 @@ import re
 from collections.abc import Iterator
 
 from . import ast as A
-from .errors import FretishError
+from common.errors import FretishError
 
 MAX_EXPR_DEPTH = 200
 #: A function call counts for this many levels: FRET's past- and future-time functions

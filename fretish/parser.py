@@ -5,7 +5,7 @@ phrasings and the expression precedence, one rule per level. :class:`_Builder` i
 transformer, applied while parsing (no intermediate parse tree): one method per rule or
 alias, each given the rule's children (AST nodes and the named tokens, ``lark.Token``).
 Lark's tables are kept in Lark's own cache (``Lark(..., cache=PATH)``), the file
-``lark/grammar-KEY.lark`` of fretc's cache folder (:mod:`fretish.cache`; KEY names the
+``lark/grammar-KEY.lark`` of fretc's cache folder (:mod:`common.cache`; KEY names the
 grammar text and the Lark and Python versions, and Lark checks a hash of them when it loads
 the file); with the disk cache off the tables are built in each process (about a second).
 
@@ -53,8 +53,9 @@ import threading
 import lark
 from lark.exceptions import LarkError, UnexpectedInput
 
+from common import cache
+
 from . import ast as A
-from . import cache
 from .diagnostics import make_error, translate
 from .limits import LimitError, check_expression, check_requirement
 from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
@@ -404,7 +405,7 @@ def build_lark(**options) -> lark.Lark:
 
 def cached_lark() -> lark.Lark:
     """The parser of :func:`build_lark`, its tables in Lark's cache (Lark's ``cache``
-    option) at ``lark/grammar-KEY.lark`` in fretc's cache folder (:mod:`fretish.cache`):
+    option) at ``lark/grammar-KEY.lark`` in fretc's cache folder (:mod:`common.cache`):
     loaded when the file is there and Lark finds it matches (Lark stores a SHA-256 of the
     grammar, its options, Lark's and Python's versions in it), else built and written.
     KEY is a hash of the same inputs, so editing the grammar or upgrading Lark or Python

@@ -1,7 +1,7 @@
 """Test configuration.
 
 * The differential-test helpers in this folder are importable.
-* fretc's disk cache (``fretish/cache.py``) goes to a folder of the system's temporary
+* fretc's disk cache (``common/cache.py``) goes to a folder of the system's temporary
   directory, one per user, unless ``FRETC_CACHE_DIR`` is already set: the suite must not
   write entries into the user's own cache (``~/.cache/fretc``). The folder is kept between
   runs, so a second run is warm as a user's would be; the tests of cold runs, damaged

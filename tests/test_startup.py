@@ -1,6 +1,6 @@
 """Start-up of ``fretc`` as a user sees it: the first run stores the parser's tables in
 fretc's cache folder and later runs read them, with the same output (a damaged entry or
-no cache included); :class:`fretish.errors.Where` behaves as a ``@dataclass(frozen=True)``.
+no cache included); :class:`common.errors.Where` behaves as a ``@dataclass(frozen=True)``.
 (That ``fretc FILE --emit ltl`` loads no Spot, numpy, Jinja2 or MCAP code is checked by
 ``tests/test_layering.py``.)"""
 
@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fretish.errors import Where
+from common.errors import Where
 
 ROOT = Path(__file__).resolve().parents[1]
 

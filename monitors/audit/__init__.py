@@ -9,18 +9,14 @@ One module per step:
    :func:`audit_log` (:mod:`.log`): opened, its inputs checked (:mod:`.checks`), read once
    with every requirement on its own clock (:mod:`.passes`, columns in :mod:`.columns`) and
    cut at the damage.
-3. **Monitors**: every tick goes to every requirement's generated ``step()`` (engine
-   ``stepwise``), or, on long logs, the pt verdicts and LTL3 status are computed at the end
-   from the columns (engine ``vectorized``; equal by test); a requirement whose pt formula
-   needs a future-time function (``persists``, ``occurs``) has no online monitor and is
-   decided by the interval semantics alone (engine ``interval``). The engines are in
-   :mod:`monitors.engines`.
-4. **Verdicts** (:mod:`.finalize`): the engine's verdict, the interval-semantics evidence,
-   the verdict at the damage (:mod:`monitors.damage`), the values around the first
-   violation and the numbers behind its boolean variables (:mod:`.operands`); the problems of
-   every pass (:mod:`.log_problems`).
-5. **Many logs** (:mod:`.workers`): :func:`audit_logs` with ``jobs > 1`` audits logs in worker
-   processes; results come back in input order.
+3. **Verdicts** (:mod:`.finalize`): each requirement judged once over its clock's columns by
+   :func:`monitors.engines.judge.judge` (FRET's interval semantics for the verdict and its
+   evidence, the monitor automata for the LTL3 verdict), the verdict at the damage
+   (:mod:`.damage`), the values around the first violation and the numbers behind its boolean
+   variables (:mod:`.operands`); the problems of every pass (:mod:`.log_problems`).
+4. **Many logs** (:mod:`.workers`): :func:`audit_logs` with ``jobs > 1`` audits logs in worker
+   processes; results come back in input order; :mod:`.fleet` runs one Ray task per log,
+   the same :func:`audit_log`.
 
 This package re-exports the public names of those modules.
 """
@@ -32,10 +28,10 @@ from .config import AuditConfig, AuditInputError
 from .discovery import LOG_SUFFIXES, discover_bindings, find_logs
 from .log import audit_log
 from .model import AuditPlan, RequirementPlan
-from .passes import MAX_TICKS, VECTORIZE_MIN_TICKS
+from .passes import MAX_TICKS
 from .plan import load_plan
 from .workers import audit_logs
 
 __all__ = ["AuditConfig", "AuditPlan", "RequirementPlan", "AuditInputError", "load_plan",
            "discover_bindings", "find_logs", "audit_log", "audit_logs", "CHUNK",
-           "VECTORIZE_MIN_TICKS", "MAX_TICKS", "LOG_SUFFIXES"]
+           "MAX_TICKS", "LOG_SUFFIXES"]

@@ -7,10 +7,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from fretish.units import format_ns
+from common.units import format_ns
 
 from ..bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
-from ..problems import BindingError
+from common.problems import BindingError
 from .config import AuditConfig, AuditInputError
 from .discovery import discover_bindings
 

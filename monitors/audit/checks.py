@@ -4,11 +4,11 @@ tick topic's measured rate against its nominal rate."""
 
 from __future__ import annotations
 
-from fretish.units import NS_PER_S, format_ns
+from common.units import NS_PER_S, format_ns
 
 from ..bindings import Bindings, check_types, compile_expression
-from ..problems import BindingError
-from ..schema import log_schemas
+from common.problems import BindingError
+from ..sources.schema import log_schemas
 from ..sources import CSV_TOPIC
 from .model import AuditPlan, RequirementPlan
 from .passes import MAX_TICKS, expected_ticks

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..problems import FretcInputError
+from common.problems import FretcInputError
 
 __all__ = ["AuditConfig", "AuditInputError"]
 
@@ -26,7 +26,6 @@ class AuditConfig:
         inline: ``NAME=EXPR`` bindings (``--bind``), added last.
         tick_period: override of the bindings' tick (``"100 ms"``); ``tick_topic``: one tick
             per message of this topic; ``time_base``: ``"log"`` or ``"header"``.
-        engine: ``"auto"``, ``"stepwise"`` or ``"vectorized"`` (:mod:`monitors.audit`, step 3).
         window: ticks of values shown on each side of the trigger and the violation.
     """
 
@@ -36,7 +35,6 @@ class AuditConfig:
     tick_period: str | None = None
     tick_topic: str | None = None
     time_base: str | None = None
-    engine: str = "auto"
     window: int = 5
     select_logs: bool = True
 

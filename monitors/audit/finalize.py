@@ -1,58 +1,55 @@
 """Finalization: one requirement's verdict and evidence from the pass over its clock
-(:func:`finalize`), and the log's figures that summarize its requirements' clocks
-(:func:`summarize_clocks`).
+(:func:`finalize`).
 
-The verdict comes from the requirement's engine (:mod:`monitors.engines`): ``finish()`` gives
-FRET's finite-trace verdict, ``status``/``status_tick`` the earliest definitive (LTL3)
-verdict. The interval semantics (:func:`monitors.engines.interval.evaluate_requirement`)
-re-decides it from the columns and gives the vacuity, the first violated trigger, its scope
-interval and response window; the values of the requirement's variables and the log times of
-the messages behind them are taken around the trigger and the violation. On a damaged log the
-verdict is the one the intact span decides (:mod:`monitors.damage`).
+The verdict, the LTL3 verdict and the evidence come from one judge,
+:func:`monitors.engines.judge.judge`, over the columns of the requirement's clock: FRET's
+interval semantics gives the finite-trace verdict, the vacuity, the first violated trigger,
+its scope interval and response window; the monitor automata give the earliest definite
+(LTL3) verdict. The values of the requirement's variables and the log times of the messages
+behind them are taken around the trigger and the violation. On a damaged log the verdict is
+the one the intact span decides (:mod:`monitors.audit.damage`).
 """
 
 from __future__ import annotations
 
 from ..bindings import Bindings
-from ..damage import open_obligations, verdict_at_damage
-from ..engines import stepwise
-from ..engines.interval import OBLIGATIONS, EvidenceUnsupported, evaluate_requirement
-from ..engines.vectorized import ltl3_status, pt_series
-from ..report_model import FirstViolation, Ltl3, TimePoint
+from .damage import open_obligations, verdict_at_damage
+from ..engines.interval import OBLIGATIONS, EvidenceUnsupported
+from ..engines.judge import judge
+from ..engines.stepwise import to_python
+from ..report.model import FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
 from .passes import ClockPass, clock_key
 
-__all__ = ["finalize", "summarize_clocks"]
+__all__ = ["finalize"]
 
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
              v, la) -> None:
-    """Set the verdict ``v`` (:class:`monitors.report_model.Verdict`) of requirement ``r``
+    """Set the verdict ``v`` (:class:`monitors.report.model.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it.
-    ``la`` is the log's :class:`monitors.report_model.LogAudit`."""
+    ``la`` is the log's :class:`monitors.report.model.LogAudit`."""
     n = len(res.times)
-    v.engine = res.engine[r.index]
     if n == 0:
         _no_tick(res, v, la)
         return
     f = r.formalization
-    ev = None
+    online = not r.offline
     try:
-        ev = evaluate_requirement(r.requirement, res.columns, n, f.ticks)
+        j = judge(r.requirement, f, res.columns, n,
+                  monitor_source=r.monitor_source if online else None,
+                  monitor_cls=r.monitor_cls if online else None)
     except EvidenceUnsupported as exc:
-        if v.engine == "interval":
-            v.error = f"no online monitor and no interval semantics for it: {exc}"
-            return
-        v.notes.append(f"interval evidence unavailable: {exc}")
-    holds, status, st_tick = _engine_verdict(r, res, v.engine, ev, n)
+        v.error = f"no online monitor and no interval semantics for it: {exc}"
+        return
+    v.engine = j.engine
+    if j.note is not None:
+        v.notes.append(j.note)
+    ev, holds, status, st_tick = j.evidence, j.holds, j.ltl3, j.ltl3_tick
     v.ltl3 = Ltl3(status, st_tick, int(res.times[st_tick]) if st_tick is not None else None)
     if ev is not None:
         v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
-        if ev.holds != holds:  # never seen in tests; the monitor's verdict stands
-            v.notes.append("the interval semantics disagrees with the monitor "
-                           f"({'holds' if ev.holds else 'violated'}); please report this")
-            ev = None
     if res.intact_end is not None:
         holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
         if holds is None:
@@ -80,21 +77,9 @@ def _no_tick(res: ClockPass, v, la) -> None:
                                       else ": the log has no message on the bound topics"))
 
 
-def _engine_verdict(r: RequirementPlan, res: ClockPass, engine: str, ev, n: int
-                    ) -> tuple[bool, str, int | None]:
-    """(FRET's finite-trace verdict, LTL3 status, its tick) from the requirement's engine."""
-    if engine == "interval":
-        return ev.holds, "unknown", None
-    if engine == "stepwise":
-        return stepwise.verdict(res.monitors[r.index])
-    holds = bool(pt_series(r.formalization.pt, res.columns, n)[-1])
-    status, st_tick = ltl3_status(r.monitor_source(), res.columns, n)
-    return holds, status, st_tick
-
-
 def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, status, st_tick,
                      n: int) -> bool | None:
-    """The verdict over the intact span of a damaged log (:mod:`monitors.damage`): True /
+    """The verdict over the intact span of a damaged log (:mod:`monitors.audit.damage`): True /
     False for the usual satisfied-or-vacuous / violated paths of :func:`finalize`, None
     when the verdict (``unknown``) is set here."""
     opened = []
@@ -107,7 +92,7 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
                                 f"the damage cannot be decided ({exc})")
             return None
     verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
-                                     st_tick, n, ev, opened, has_ltl3=v.engine != "interval")
+                                     st_tick, n, ev, opened, has_ltl3=not r.offline)
     if verdict == "unknown":
         v.verdict = "unknown"
         v.unknown_reason = why
@@ -116,7 +101,7 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
 
 
 class _Ticks:
-    """Tick indexes of one clock as :class:`monitors.report_model.TimePoint` and times."""
+    """Tick indexes of one clock as :class:`monitors.report.model.TimePoint` and times."""
 
     def __init__(self, res: ClockPass, held: list, bindings: Bindings | None) -> None:
         self.times = res.times
@@ -186,7 +171,7 @@ def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bi
         col = res.columns.get(name)
         if col is None:
             continue
-        v.values[name] = [(i, int(times[i]), stepwise.to_python(col[i])) for i in ticks]
+        v.values[name] = [(i, int(times[i]), to_python(col[i])) for i in ticks]
     if bindings is not None:
         topics = sorted({t for name in r.variables if name in bindings.variables
                          for t in bindings.variables[name].topics})
@@ -197,19 +182,3 @@ def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bi
         if lt is None:
             continue
         v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]
-
-
-def summarize_clocks(la, verdicts: list) -> None:
-    """The log's figures from its requirements' clocks (each verdict has its own): the most
-    ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
-    after damage the end of the judged span. ``verdicts``: those without an error."""
-    if not verdicts:
-        return
-    la.ticks_evaluated = max(v.ticks_evaluated for v in verdicts)
-    la.warmup_ticks = max(v.warmup_ticks for v in verdicts)
-    firsts = [v.first_tick_ns for v in verdicts if v.first_tick_ns is not None]
-    la.first_time_ns = min(firsts) if firsts else None
-    la.waiting_for = sorted({t for v in verdicts for t in v.waiting_for})
-    if la.ticks_after_damage:  # the log's judged span ends at the damage
-        lasts = [v.last_tick_ns for v in verdicts if v.last_tick_ns is not None]
-        la.end_time_ns = max(lasts) if lasts else None

@@ -18,12 +18,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..bindings import Bindings
-from ..problems import DataProblem, FretcInputError, SignalError
-from ..report_model import LogAudit, Verdict
-from ..schema import closest
+from common.problems import DataProblem, FretcInputError, SignalError
+from ..report.model import LogAudit, Verdict
+from ..sources.schema import closest
 from ..sources import open_log
 from .checks import check_binding_types, check_nominal_rate, csv_bindings, too_many_ticks
-from .finalize import finalize, summarize_clocks
+from .finalize import finalize
 from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
 from .model import AuditPlan, RequirementPlan
@@ -31,7 +31,7 @@ from .operands import operand_values
 from .passes import LogPasses, clock_key, restrict, run_passes
 from .plan import select_variant
 
-__all__ = ["audit_log"]
+__all__ = ["audit_log", "summarize_clocks", "log_engine"]
 
 
 def audit_log(plan: AuditPlan, path: str,
@@ -44,7 +44,7 @@ def audit_log(plan: AuditPlan, path: str,
         progress: called now and then with the fraction of the log read (0..1).
 
     Returns:
-        A :class:`~monitors.report_model.LogAudit` with one verdict per requirement. Input
+        A :class:`~monitors.report.model.LogAudit` with one verdict per requirement. Input
         problems of this log (unreadable file, missing topic or binding) are reported in it
         (``error`` / ``error`` verdicts), never raised.
     """
@@ -273,12 +273,10 @@ class _LogRun:
                b: Bindings | None) -> None:
         """Each requirement's clock figures, then its verdict; the log's figures."""
         la, verdicts = self.la, self.verdicts
-        engines = set()
         by_index = {}
         for r in active:
             res = by_index[r.index] = result.passes[clock_key(r, b)]
-            if self._clock_figures(r, res, result, b):
-                engines.add(res.engine[r.index])
+            self._clock_figures(r, res, result, b)
         ok = [r for r in active if verdicts[r.index].error is None]
         summarize_clocks(la, [verdicts[r.index] for r in ok])
         la.missing_topics = sorted({t for res in result.passes.values()
@@ -288,10 +286,9 @@ class _LogRun:
             starts = [res.sampling.start_time for res in result.passes.values()
                       if res.sampling.start_time is not None]
             la.start_time_ns = min(starts) if starts else None
-        engines = sorted(engines)
-        la.engine = engines[0] if len(engines) == 1 else ("mixed" if engines else None)
         for r in ok:
             finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index], la)
+        la.engine = log_engine(verdicts[r.index] for r in ok)
         if self.bindings is not None:
             operand_values(self.path, self.plan, self.bindings, ok, verdicts, by_index)
 
@@ -323,3 +320,26 @@ class _LogRun:
             v.error = "; ".join(why[t] for t in sorted(silent))
             return False
         return True
+
+
+def log_engine(verdicts) -> str | None:
+    """The log's ``engine`` figure: what decided its verdicts (:class:`~monitors.engines.judge.
+    Judgement`'s ``engine``), ``"mixed"`` when several did, None when none was decided."""
+    engines = sorted({v.engine for v in verdicts if v.engine is not None})
+    return engines[0] if len(engines) == 1 else ("mixed" if engines else None)
+
+
+def summarize_clocks(la, verdicts: list) -> None:
+    """The log's figures from its requirements' clocks (each verdict has its own): the most
+    ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
+    after damage the end of the judged span. ``verdicts``: those without an error."""
+    if not verdicts:
+        return
+    la.ticks_evaluated = max(v.ticks_evaluated for v in verdicts)
+    la.warmup_ticks = max(v.warmup_ticks for v in verdicts)
+    firsts = [v.first_tick_ns for v in verdicts if v.first_tick_ns is not None]
+    la.first_time_ns = min(firsts) if firsts else None
+    la.waiting_for = sorted({t for v in verdicts for t in v.waiting_for})
+    if la.ticks_after_damage:  # the log's judged span ends at the damage
+        lasts = [v.last_tick_ns for v in verdicts if v.last_tick_ns is not None]
+        la.end_time_ns = max(lasts) if lasts else None

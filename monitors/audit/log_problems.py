@@ -4,8 +4,8 @@ chunk: :func:`damage_before_topics`), and why a silent topic gave nothing."""
 
 from __future__ import annotations
 
-from .. import problems as P
-from ..problems import DataProblem, FretcInputError
+from common import problems as P
+from common.problems import DataProblem, FretcInputError
 from ..sources import open_log
 
 __all__ = ["DAMAGE_KINDS", "problem_json", "collect_problems", "silent_reasons", "damage_of",

@@ -9,7 +9,6 @@ from fractions import Fraction
 from typing import Any
 
 from compiler.codegen import monitor_source
-from ..engines.vectorized import supports
 
 from ..bindings import Bindings
 from .config import AuditConfig
@@ -60,23 +59,13 @@ class RequirementPlan:
         """The parsed requirement (:class:`fretish.ast.Requirement`), or None."""
         return self.compiled.requirement if self.compiled is not None else None
 
+    @property
     def monitor_source(self):
-        """codegen's :class:`~compiler.codegen.MonitorSource` (automata tables for the
-        vectorized engine), built once."""
+        """codegen's :class:`~compiler.codegen.MonitorSource` (the LTL3 automata tables the
+        judge runs, :mod:`monitors.engines.judge`), built on first use and kept."""
         if self._msource is None:
             self._msource = monitor_source(self.compiled, self.index)
         return self._msource
-
-    def vectorizable(self) -> bool:
-        """The vectorized engine can decide it: an online monitor whose pt formula has no
-        future-time operator and whose automata have tables."""
-        if self.offline:
-            return False
-        f = self.formalization
-        if f is None or not f.pt_causal or not supports(f.pt):
-            return False
-        ms = self.monitor_source()
-        return all(a is None or a.table is not None or a.complete for a in (ms.bad, ms.good))
 
     def to_json(self) -> dict:
         """The requirement as the audit JSON's ``requirements`` list gives it."""

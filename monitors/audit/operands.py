@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..bindings import Bindings, operand_signals
 from ..engines.stepwise import to_python
-from ..problems import LogError, SignalError
+from common.problems import LogError, SignalError
 from ..signals import sample_groups
 from ..sources import open_log
 from .model import AuditPlan

@@ -1,14 +1,10 @@
-"""The passes over one log: each requirement sampled on its own clock, its monitors stepped
-tick by tick, and the columns kept (:func:`run_passes`); then everything cut at the damage
-(:func:`cut_at_damage`).
+"""The passes over one log: each requirement sampled on its own clock and the columns kept
+(:func:`run_passes`); then everything cut at the damage (:func:`cut_at_damage`).
 
 A requirement's clock is the set of topics its variables read (../shared/DESIGN.md, "Each
 verdict stands alone"); requirements on the same clock share one sampled stream
-(:func:`monitors.signals.sample_groups`). The engine of each requirement: ``stepwise``
-(the generated ``step()`` on every tick, :mod:`monitors.engines.stepwise`), ``vectorized``
-(at the end, from the columns, :mod:`monitors.engines.vectorized`; engine ``auto`` chooses it
-on logs expected to have at least :data:`VECTORIZE_MIN_TICKS` ticks) or ``interval`` (no
-online monitor: decided by :mod:`monitors.engines.interval` alone).
+(:func:`monitors.signals.sample_groups`). The columns are judged afterwards, once, by
+:func:`monitors.engines.judge.judge` (:mod:`monitors.audit.finalize`).
 """
 
 from __future__ import annotations
@@ -20,18 +16,15 @@ from typing import Any
 import numpy as np
 
 from ..bindings import Bindings
-from ..engines.stepwise import replay
-from ..problems import SignalError
+from common.problems import SignalError
 from ..signals import sample, sample_groups
 from ..sources import CSV_TOPIC
 from .columns import TickColumns
 from .model import AuditPlan, RequirementPlan
 
 __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
-           "expected_ticks", "MAX_TICKS", "VECTORIZE_MIN_TICKS"]
+           "expected_ticks", "MAX_TICKS"]
 
-#: Engine "auto" evaluates vectorized on logs expected to have at least this many ticks.
-VECTORIZE_MIN_TICKS = 20_000
 #: At most this many ticks per log: a tick period that would give more (``tick period =
 #: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many (issue 15 item 11).
 MAX_TICKS = 10**8
@@ -42,15 +35,12 @@ _PROGRESS_EVERY = 512
 @dataclass
 class ClockPass:
     """The ticks of one clock: its sampling (:class:`monitors.signals.Sampling`), tick
-    times (ns), the columns (variable -> values, topic -> held log times), the stepwise
-    monitors by requirement index after the last tick, and each requirement's engine."""
+    times (ns) and the columns (variable -> values, topic -> held log times)."""
 
     sampling: Any
     times: np.ndarray
     columns: dict[str, np.ndarray]
     log_times: dict[str, np.ndarray]
-    monitors: dict[int, Any]
-    engine: dict[int, str]
     cut: int = 0  # ticks dropped after the damage (cut_at_damage)
     intact_end: int | None = None  # exclusive bound of the judged ticks' times
 
@@ -94,28 +84,11 @@ def clock_key(r: RequirementPlan, bindings: Bindings | None) -> frozenset:
                      for t in bindings.variables[v].topics)
 
 
-def choose_engines(plan: AuditPlan, expected: int | None,
-                   active: list[RequirementPlan]) -> dict[int, str]:
-    """Requirement index -> ``stepwise``, ``vectorized`` or ``interval`` (module docstring)."""
-    engine: dict[int, str] = {}
-    for r in active:
-        mode = plan.config.engine
-        if mode == "auto":
-            mode = ("vectorized" if expected is not None and expected >= VECTORIZE_MIN_TICKS
-                    else "stepwise")
-        if mode == "vectorized" and not r.vectorizable():
-            mode = "stepwise"
-        engine[r.index] = "interval" if r.offline else mode
-    return engine
-
-
 class _Clock:
-    """The requirements of one clock while the log is read: their columns and the ``step``
-    of their stepwise monitors."""
+    """The columns of one clock's requirements while the log is read."""
 
-    def __init__(self, key: frozenset, rs: list[RequirementPlan], engine: dict[int, str],
+    def __init__(self, key: frozenset, rs: list[RequirementPlan],
                  bindings: Bindings | None) -> None:
-        self.requirements = rs
         self.names: list[str] = []
         for r in rs:
             for v in r.variables:
@@ -123,19 +96,6 @@ class _Clock:
                     self.names.append(v)
         topics = sorted(key) if bindings is not None else [CSV_TOPIC]
         self.columns = TickColumns(self.names, topics)
-        self.monitors = {r.index: r.monitor_cls() for r in rs if engine[r.index] == "stepwise"}
-        self.steppers = [(r, self.monitors[r.index].step) for r in rs
-                         if r.index in self.monitors]
-
-    def step(self, tick, failed: dict) -> None:
-        """Step the monitors whose variables the tick has, and keep the tick."""
-        vals = tick.values
-        steps = self.steppers
-        if failed and any(v not in vals for r, _ in steps for v in r.variables):
-            steps[:] = [(r, st) for r, st in steps if all(v in vals for v in r.variables)]
-        for _r, step in steps:
-            step(vals)
-        self.columns.append(tick)
 
 
 def _progress(source, expected: int | None, progress: Callable[[float], None]
@@ -157,19 +117,18 @@ def _progress(source, expected: int | None, progress: Callable[[float], None]
 def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
                active: list[RequirementPlan],
                progress: Callable[[float], None] | None) -> LogPasses:
-    """Read the log once: sample every clock of ``active``, step the stepwise monitors, keep
-    the columns, then cut each clock at the damage.
+    """Read the log once: sample every clock of ``active``, keep the columns, then cut each
+    clock at the damage.
 
     Raises:
         SignalError: a signal cannot be computed (the variable is named), or more than
             :data:`MAX_TICKS` ticks.
     """
     expected = expected_ticks(source, bindings)
-    engine = choose_engines(plan, expected, active)
     groups: dict[frozenset, list[RequirementPlan]] = {}
     for r in active:
         groups.setdefault(clock_key(r, bindings), []).append(r)
-    clocks = {key: _Clock(key, rs, engine, bindings) for key, rs in groups.items()}
+    clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
     if bindings is not None:
         sampling = sample_groups(source, bindings,
                                  {key: (c.names, key) for key, c in clocks.items()})
@@ -183,7 +142,7 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
     report = _progress(source, expected, progress) if progress is not None else None
     count = 0
     for key, tick in stream:
-        clocks[key].step(tick, failed[key])
+        clocks[key].columns.append(tick)
         count += 1
         if count > MAX_TICKS:
             raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
@@ -194,18 +153,16 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
     for key, clock in clocks.items():
         times, columns, log_times = clock.columns.finish()
         s = sampling.groups[key] if bindings is not None else sampling
-        passes[key] = ClockPass(s, times, columns, log_times, clock.monitors, engine)
-        cut_at_damage(passes[key], source, bindings, groups[key])
+        passes[key] = ClockPass(s, times, columns, log_times)
+        cut_at_damage(passes[key], source, bindings)
     return LogPasses(sampling, passes, failed, errors)
 
 
-def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
-                  active: list[RequirementPlan]) -> None:
+def cut_at_damage(res: ClockPass, source, bindings: Bindings | None) -> None:
     """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
     evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
     under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
-    precede its log time by that much). The stepwise monitors, which saw every tick, are
-    replayed over the kept ones. Sets ``res.cut`` to the number of ticks dropped."""
+    precede its log time by that much). Sets ``res.cut`` to the number of ticks dropped."""
     end = source.intact_end
     if end is None:
         return
@@ -220,6 +177,3 @@ def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
     res.times = res.times[:keep]
     res.columns = {k: v[:keep] for k, v in res.columns.items()}
     res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
-    by_index = {r.index: r for r in active}
-    for idx in list(res.monitors):
-        res.monitors[idx] = replay(by_index[idx].monitor_cls, res.columns, keep)

@@ -20,13 +20,13 @@ from pathlib import Path
 
 from compiler.build import compile_entries
 from compiler.codegen import MonitorModule, MonitorSource, build_monitor_modules
-from fretish.errors import FretishError
+from common.errors import FretishError
 from fretish.files import load_requirements
 from fretish.parser import parse
-from fretish.units import NS_PER_S, format_period
+from common.units import NS_PER_S, format_period
 
 from ..bindings import Bindings
-from ..problems import FretcInputError
+from common.problems import FretcInputError
 from ..sources import open_log
 from .binding_files import binding_files, load_audit_bindings
 from .config import AuditConfig, AuditInputError
@@ -56,8 +56,6 @@ def load_plan(config: AuditConfig) -> AuditPlan:
             this: it becomes that requirement's ``error``), bad or conflicting bindings, bad
             options.
     """
-    if config.engine not in ("auto", "stepwise", "vectorized"):
-        raise AuditInputError(f"unknown engine {config.engine!r} (auto, stepwise, vectorized)")
     if config.select_logs:
         split = _plan_per_log(config)
         if split is not None:

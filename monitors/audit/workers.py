@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
-from ..report_model import LogAudit
+from ..report.model import LogAudit
 from .config import AuditConfig
 from .log import audit_log
 from .model import AuditPlan
@@ -51,7 +51,7 @@ def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=No
             and ``done(index, log_audit)`` methods (the CLI's progress bar).
 
     Returns:
-        One :class:`~monitors.report_model.LogAudit` per path, in the order of ``paths``.
+        One :class:`~monitors.report.model.LogAudit` per path, in the order of ``paths``.
     """
     results: dict[int, Any] = {}
     if jobs <= 1 or len(paths) <= 1:

@@ -16,7 +16,7 @@ binding file.  A binding file is TOML (read with :mod:`tomllib`)::
     stopped = "abs(/cmd_vel.linear.x) < 1e-3 & abs(/cmd_vel.angular.z) < 1e-3"
     scan_stale = "age(/scan) > 0.3"
 
-Durations are a number with a unit (:mod:`fretish.units`, the grammar of the requirement
+Durations are a number with a unit (:mod:`common.units`, the grammar of the requirement
 files' ``tick_period`` too): ``ns``, ``us``, ``ms``, ``s``, ``min``, ``h`` (or their long
 names, ``milliseconds``), or a frequency in ``Hz`` (period = 1/f); a bare TOML number is
 seconds.
@@ -77,7 +77,7 @@ from .binding import Binding, compile_expression, operand_signals, parse_inline
 from .compile import EvalState
 from .expression import Field, unparse
 from .extract import LASER_SCAN, Valid, make_extractor
-from fretish.units import parse_duration
+from common.units import parse_duration
 
 from .files import load_bindings, parse_bindings
 from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec, make_bindings

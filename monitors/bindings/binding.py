@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..problems import BindingError, SignalError
+from common.problems import BindingError, SignalError
 from .compile import EvalError, EvalState, compile_node
 from .expression import (BinOp, Const, Expr, ExprLocation, Field, Ref, UnaryOp, check,
                          parse_expression, substitute, unparse, walk)

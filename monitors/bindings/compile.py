@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
 from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
 from .extract import FieldAccessError, Valid, make_extractor

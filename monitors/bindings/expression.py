@@ -7,7 +7,7 @@ into the frozen dataclasses below (:class:`Expr` and its subclasses; ``col`` is 
 column in the expression text, for error messages).  The language itself (operators,
 functions, values) is described in ``docs/bindings.md`` and in :mod:`monitors.bindings`.
 
-Errors are :class:`monitors.problems.BindingError` naming the binding file, line, column
+Errors are :class:`common.problems.BindingError` naming the binding file, line, column
 and variable (:class:`ExprLocation` maps a column in the expression to one in the file).
 """
 
@@ -21,8 +21,8 @@ from lark import Lark, Transformer, v_args
 from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
                              UnexpectedToken, VisitError)
 
-from ..problems import BindingError
-from ..schema import closest
+from common.problems import BindingError
+from ..sources.schema import closest
 
 __all__ = ["Expr", "Const", "Slice", "Field", "Ref", "UnaryOp", "BinOp", "FuncCall", "FUNCS",
            "ExprLocation", "parse_expression", "check", "walk", "refs", "substitute", "unparse"]

@@ -14,9 +14,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from fretish.units import parse_duration
+from common.units import parse_duration
 
-from ..problems import BindingError
+from common.problems import BindingError
 from .binding import VARNAME, Binding, compile_expression
 from .expression import ExprLocation, parse_expression, refs
 from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec

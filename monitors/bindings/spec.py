@@ -8,7 +8,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import PurePath
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
 from .binding import Binding, compile_expression, parse_inline
 

@@ -9,7 +9,7 @@ topic's schema is unknown (then nothing is checked).
 
 from __future__ import annotations
 
-from ..schema import FieldPathError
+from ..sources.schema import FieldPathError
 from .binding import Binding
 from .expression import BinOp, Const, Expr, ExprLocation, Field, FuncCall, UnaryOp, unparse
 
@@ -24,7 +24,7 @@ _WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of 
 
 
 def check_types(binding: Binding, schemas: dict) -> str:
-    """Check ``binding`` against the message types of a log (:func:`monitors.schema.log_schemas`)
+    """Check ``binding`` against the message types of a log (:func:`monitors.sources.schema.log_schemas`)
     before it is evaluated (issue 15): every field path must resolve through fields the
     schema declares (never Python attributes), strings cannot enter arithmetic or
     comparisons, a boolean is not a number and a number is not a boolean, and the value must

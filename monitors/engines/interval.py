@@ -568,7 +568,7 @@ def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
     ``"vacuous"``, ``"violated"``, or ``"unknown"`` when the interval semantics cannot
     evaluate it (:class:`EvidenceUnsupported`: an uninterpreted function, a free-form
     sentence). Arguments and other errors as :func:`evaluate_requirement`; this is the
-    :data:`compiler.check_witness.Judge` ``fretc check`` passes for its witnesses."""
+    :data:`check.witness.Judge` ``fretc check`` passes for its witnesses."""
     try:
         ev = evaluate_requirement(req, columns, n, duration_ticks)
     except EvidenceUnsupported:

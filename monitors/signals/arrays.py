@@ -10,13 +10,13 @@ from typing import Any
 
 import numpy as np
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
 from ..bindings.expression import Field
 from ..bindings.extract import Valid, make_extractor
 from ..bindings.spec import Bindings
-from ..problems import ProblemLog, SignalError
-from ..selective import install as install_selective
+from common.problems import ProblemLog, SignalError
+from ..sources.selective import install as install_selective
 from ..sources import CSV_TOPIC, CsvSource, LogSource
 from .clock import Tick, check_topics, csv_bindings_check, csv_period, feed, sample
 

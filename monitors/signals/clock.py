@@ -13,12 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from .. import problems as P
+from common import problems as P
 from ..bindings.binding import Binding
 from ..bindings.compile import EvalState
 from ..bindings.spec import Bindings, TickSpec
-from ..problems import DataProblem, ProblemLog, SignalError
-from ..selective import install as install_selective
+from common.problems import DataProblem, ProblemLog, SignalError
+from ..sources.selective import install as install_selective
 from ..sources import CSV_TOPIC, CsvSource, LogSource
 
 __all__ = ["Tick", "Sampling", "sample"]

@@ -9,8 +9,8 @@ from collections.abc import Iterator
 from typing import Any
 
 from ..bindings.spec import Bindings, TickSpec
-from ..problems import DataProblem, SignalError
-from ..selective import install as install_selective
+from common.problems import DataProblem, SignalError
+from ..sources.selective import install as install_selective
 from ..sources import CsvSource, LogSource
 from .clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, sample
 

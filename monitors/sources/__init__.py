@@ -20,7 +20,7 @@
 Every source gives :class:`Message` tuples in non-decreasing log time, streaming: memory does
 not grow with the length of the log (:mod:`monitors.sources.base`; the passes without an
 index restore log-time order with :mod:`monitors.sources.reorder`).  Damage is recorded as
-:class:`~monitors.problems.DataProblem` in ``source.problems`` and reading goes on; see
+:class:`~common.problems.DataProblem` in ``source.problems`` and reading goes on; see
 :class:`LogSource`.
 
 Times are integer nanoseconds since the epoch of the recording clock (MCAP ``log_time``,
@@ -37,7 +37,7 @@ from .factory import open_log
 from .mcap_source import McapSource
 from .reorder import REORDER_WINDOW_NS
 
-#: The former name of :class:`UnsupportedSchema` (``monitors/watch.py`` imports it).
+#: The former name of :class:`UnsupportedSchema` (``monitors/live/watch.py`` imports it).
 _Unsupported = UnsupportedSchema
 
 __all__ = [

@@ -18,8 +18,8 @@ from rosbags.rosbag1 import Reader as Ros1Reader, ReaderError as Ros1ReaderError
 from rosbags.rosbag2 import Reader as Ros2Reader, ReaderError as Ros2ReaderError
 from rosbags.typesys.store import Typestore
 
-from .. import problems as P
-from ..problems import DataProblem, LogError
+from common import problems as P
+from common.problems import DataProblem, LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, build_typestore
 from .decoding import decoder_for

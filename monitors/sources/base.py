@@ -2,7 +2,7 @@
 
 A source reads a recorded run as a stream of decoded messages in non-decreasing log time,
 streaming (memory does not grow with the length of the log). Damage is recorded as
-:class:`~monitors.problems.DataProblem` in ``source.problems`` and reading goes on; the
+:class:`~common.problems.DataProblem` in ``source.problems`` and reading goes on; the
 span read completely before the damage is ``source.intact_end`` (../shared/DESIGN.md
 "Damage is never evidence").
 
@@ -16,9 +16,9 @@ import os
 from collections.abc import Iterator
 from typing import Any, NamedTuple
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
-from ..problems import DataProblem, ProblemLog
+from common.problems import DataProblem, ProblemLog
 
 __all__ = ["Message", "LogSource", "header_stamp"]
 
@@ -65,6 +65,9 @@ class LogSource:
         kind: ``"mcap"``, ``"bag"`` (ROS 1), ``"rosbag2"`` or ``"csv"``.
         counts: messages delivered per topic by the most recent :meth:`messages` pass
             (filled while iterating).
+        records: messages read per topic by that pass, decoded or not (a message whose
+            encoding or schema cannot be decoded counts here, not in ``counts``); sources
+            that decode every message they read leave it empty.
         partial: True when the log is damaged: it ends early (truncated or unreadable from
             some point on), a part of it was skipped (a chunk failing its CRC, a record that
             does not parse: a *gap*), or its summary or data-section CRC is damaged.
@@ -79,7 +82,7 @@ class LogSource:
             (summary, data-section CRC).
 
     ``problems`` lists the damage found at open time and during the most recent pass (capped
-    per kind and topic, see :mod:`monitors.problems`); ``problem_counts`` counts all of it.
+    per kind and topic, see :mod:`common.problems`); ``problem_counts`` counts all of it.
     """
 
     path: str
@@ -88,6 +91,7 @@ class LogSource:
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = str(path)
         self.counts: dict[str, int] = {}
+        self.records: dict[str, int] = {}
         self.partial = False
         self.damage_time: int | None = None
         self.damage_cut = False
@@ -98,7 +102,7 @@ class LogSource:
         self._start_time: int | None = None
         self._end_time: int | None = None
         self._decoders: dict[int, Any] = {}  # channel/connection id -> decoder or None
-        #: topic -> field paths to decode (:func:`monitors.selective.install`); None: all
+        #: topic -> field paths to decode (:func:`monitors.sources.selective.install`); None: all
         self._wanted_fields: dict[str, frozenset[tuple]] | None = None
 
     # -- problems -------------------------------------------------------------------------------
@@ -121,6 +125,7 @@ class LogSource:
 
     def _begin_pass(self) -> None:
         self.counts = {}
+        self.records = {}
         self.partial = self._open_damage
         self.damage_time = None
         self.damage_cut = False

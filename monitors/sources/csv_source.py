@@ -11,9 +11,9 @@ from decimal import Decimal, InvalidOperation
 from types import SimpleNamespace
 from typing import NamedTuple
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
-from ..problems import CsvError, LogError
+from common.problems import CsvError, LogError
 from .base import LogSource, Message
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE"]

@@ -3,7 +3,7 @@
 
 Schema encodings ``ros2msg``, ``ros2idl`` and ``ros1msg``, message encodings ``cdr`` (ROS 2)
 and ``ros1`` (MCAP spec, "Well-known encodings"). Decoders read every field, or only the
-fields the signal bindings read (:mod:`monitors.selective`).
+fields the signal bindings read (:mod:`monitors.sources.selective`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_
 from rosbags.typesys.msg import normalize_msgtype
 from rosbags.typesys.store import Typestore
 
-from ..selective import selective_decoder
+from .selective import selective_decoder
 
 __all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
            "DECODE_ERRORS", "SCHEMA_FOR_ENCODING"]
@@ -81,7 +81,7 @@ def decoder_for(store: Typestore, typename: str, message_encoding: str,
         store: a rosbags Typestore holding ``typename``.
         typename: the normalized type name (``pkg/msg/Type``).
         message_encoding: ``"cdr"`` or ``"ros1"``.
-        fields: field paths to decode (:mod:`monitors.selective`); None: every field.
+        fields: field paths to decode (:mod:`monitors.sources.selective`); None: every field.
 
     Raises:
         UnsupportedSchema: another message encoding.
@@ -96,7 +96,7 @@ def decoder_for(store: Typestore, typename: str, message_encoding: str,
     def decode(raw: bytes) -> Any:
         return deser(raw, typename)
 
-    if fields is not None:  # only the fields the bindings read (monitors.selective)
+    if fields is not None:  # only the fields the bindings read (monitors.sources.selective)
         return selective_decoder(store, typename, message_encoding, fields, decode) or decode
     return decode
 
@@ -116,7 +116,7 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
             encodings), matching the message encoding; None or ``""`` when the channel has none.
         schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
         schema_text: the definition text (see :func:`build_typestore`).
-        fields: field paths to decode (:mod:`monitors.selective`); None: every field.
+        fields: field paths to decode (:mod:`monitors.sources.selective`); None: every field.
 
     Raises:
         UnsupportedSchema: an unsupported message encoding, a channel without schema, a schema

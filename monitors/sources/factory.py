@@ -9,9 +9,9 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
-from ..problems import LogError
+from common.problems import LogError
 from .bag_source import BagSource
 from .base import LogSource
 from .csv_source import CsvSource

@@ -19,15 +19,13 @@ import struct
 import zlib
 from typing import Any, BinaryIO, NamedTuple
 
-import lz4.frame
-import zstandard
 from mcap.opcode import Opcode
 from mcap.records import Channel, ChunkIndex, Message as McapMessage, Schema, Statistics
 
-from .. import problems as P
-from ..problems import DataProblem
+from common import problems as P
+from common.problems import DataProblem
 from .mcap_records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
-                           crc_skip, parse_record)
+                           crc_skip, decompress, parse_record)
 
 __all__ = ["McapIndex", "SummaryRead", "read_summary", "check_data_section", "cut_record",
            "ends_with_footer", "GAP_NOTE"]
@@ -238,21 +236,16 @@ def _truncated_chunk_records(tail: bytes) -> list[Any]:
     ``tail`` is what the file holds after the chunk's 9-byte record header. Layout (MCAP
     spec, "Chunk"): message_start_time u64, message_end_time u64, uncompressed_size u64,
     uncompressed_crc u32, compression (u32 length + bytes), records (u64 length + bytes).
-    The compressed prefix is decompressed as a stream (zstd, lz4 frames or none) and parsed
+    The compressed prefix is decompressed as a stream (zstd, lz4 frames or none; at most the
+    chunk's declared uncompressed size, :func:`monitors.sources.mcap_records.decompress`) and parsed
     record by record until a record is incomplete. Returns [] when nothing can be recovered.
     """
     try:
+        (declared,) = struct.unpack_from("<Q", tail, 16)
         (clen,) = struct.unpack_from("<I", tail, 28)
         compression = tail[32:32 + clen].decode("ascii")
         data = tail[32 + clen + 8:]
-        if compression == "":
-            raw = data
-        elif compression == "zstd":
-            raw = zstandard.ZstdDecompressor().decompressobj().decompress(data)
-        elif compression == "lz4":
-            raw = lz4.frame.LZ4FrameDecompressor().decompress(data)
-        else:
-            return []
+        raw = decompress(compression, data, declared, partial=True)
     except Exception:  # a cut header or a cut compressed stream: nothing to recover
         return []
     records: list[Any] = []
@@ -280,3 +273,78 @@ def _peek_chunk_start(f: BinaryIO, pos: int) -> int | None:
         return struct.unpack("<Q", raw)[0] if len(raw) == 8 else None
     finally:
         f.seek(here)
+
+
+def index_disagreement(path: str, index: McapIndex) -> str | None:
+    """Where the summary's index disagrees with the data section, or None when it accounts
+    for every chunk and message. The index is a hint, never the truth (MCAP spec: the summary
+    only repeats what the data section holds): the data section's record headers are read
+    (bodies skipped, only each chunk's own start and end times read) and compared. Where the
+    framing itself is broken (a record running past the DataEnd record), the data is damaged
+    and nothing is compared: the reader's checks of each chunk report that damage.
+
+    Disagreements: a Chunk record no ChunkIndex points to, or a ChunkIndex pointing at no
+    Chunk record of its length; a ChunkIndex whose times differ from its chunk's or run
+    backwards; a Message record outside chunks (no index covers it); a channel the chunk
+    indexes name, or a schema a channel names, that the summary does not hold (the summary
+    need not repeat Schema and Channel records: the mcap writer's ``repeat_channels=False``).
+    """
+    chunks: dict[int, tuple[int, int, int]] = {}  # offset -> (record length, start, end)
+    with open(path, "rb") as f:
+        pos = len(MCAP_MAGIC)
+        while pos < index.data_end_offset:
+            f.seek(pos)
+            head = f.read(9 + 16)
+            if len(head) < 9:
+                return f"the data section ends at byte {pos}, before the DataEnd record"
+            opcode, length = RECORD_HEAD.unpack_from(head)
+            if pos + 9 + length > index.data_end_offset:
+                # the framing itself is damaged from here on: nothing to compare the index
+                # with; the indexed reader checks each chunk it reads (CRC, record layout)
+                # and reports the damage as gaps
+                return None
+            if opcode == Opcode.MESSAGE:
+                return f"a Message record at byte {pos} lies outside every chunk"
+            if opcode == Opcode.CHUNK and len(head) == 25:
+                chunks[pos] = (9 + length, *struct.unpack_from("<QQ", head, 9))
+            pos += 9 + length
+    return _compare_chunks(chunks, index) or _missing_channels(index)
+
+
+def _compare_chunks(chunks: dict[int, tuple[int, int, int]], index: McapIndex) -> str | None:
+    """The first ChunkIndex that disagrees with the chunks found, or a chunk it misses."""
+    seen = set()
+    for ci in index.chunk_indexes:
+        found = chunks.get(ci.chunk_start_offset)
+        at = f"the ChunkIndex of the chunk at byte {ci.chunk_start_offset}"
+        if found is None or found[0] != ci.chunk_length:
+            return f"{at} points at no Chunk record of its length"
+        if ci.message_start_time > ci.message_end_time:
+            return f"{at} ends before it starts ({ci.message_start_time} > {ci.message_end_time})"
+        if (ci.message_start_time, ci.message_end_time) != found[1:]:
+            return f"{at} gives other times than the chunk itself"
+        seen.add(ci.chunk_start_offset)
+    missed = sorted(set(chunks) - seen)
+    if missed:
+        return f"the chunk at byte {missed[0]} has no ChunkIndex"
+    return None
+
+
+def _missing_channels(index: McapIndex) -> str | None:
+    """A channel or schema the index needs that the summary does not hold (channels named by
+    the chunks' message indexes or by the Statistics record; a chunked summary with no Channel
+    record at all cannot name the topics)."""
+    if index.chunk_indexes and not index.channels:
+        return "the summary holds no Channel record"
+    st = index.statistics
+    for cid in (st.channel_message_counts if st is not None else {}):
+        if cid not in index.channels:
+            return f"the summary does not hold channel {cid}, which its statistics count"
+    for ci in index.chunk_indexes:
+        for cid in ci.message_index_offsets:
+            if cid not in index.channels:
+                return f"the summary does not hold channel {cid}, which a chunk holds"
+    for ch in index.channels.values():
+        if ch.schema_id != 0 and ch.schema_id not in index.schemas:
+            return f"the summary does not hold schema {ch.schema_id} of channel {ch.id}"
+    return None

@@ -11,6 +11,7 @@ the library's stream stops at the first bad record.
 from __future__ import annotations
 
 import io
+import os
 import struct
 import zlib
 from typing import Any, BinaryIO
@@ -22,16 +23,21 @@ from mcap.exceptions import McapError
 from mcap.opcode import Opcode
 from mcap.records import Channel, Chunk, ChunkIndex, DataEnd, Footer, Header, Message as McapMessage
 from mcap.records import Schema, Statistics
-from mcap.stream_reader import CRCValidationError, breakup_chunk
+from mcap.stream_reader import CRCValidationError
 
 __all__ = ["MCAP_MAGIC", "RECORD_HEAD", "FOOTER_LEN", "DATA_END_LEN", "RECORD_ERRORS",
-           "parse_record", "chunk_records", "chunk_messages", "crc_skip"]
+           "parse_record", "chunk_records", "chunk_messages", "crc_skip", "decompress",
+           "max_chunk_bytes"]
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"  # MCAP spec, "Magic"
 RECORD_HEAD = struct.Struct("<BQ")  # opcode, record length (MCAP spec, "Records")
 FOOTER_LEN = 1 + 8 + 8 + 8 + 4  # opcode, length, summary_start, summary_offset_start, summary_crc
 DATA_END_LEN = 1 + 8 + 4  # opcode, length, data_section_crc
-MAX_UNCOMPRESSED = 4 * 2**30  # a chunk claiming more than this is treated as corrupt
+#: Default cap on one chunk's uncompressed size (bytes); the environment variable
+#: ``FRETC_MAX_CHUNK_BYTES`` sets another. Recorders write chunks of a few MB (the mcap
+#: writer's default is 1 MiB); a chunk declaring more is damage, not a reason to allocate it.
+DEFAULT_MAX_CHUNK_BYTES = 512 * 2**20
+_BLOCK = 1 << 20
 _MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel_id, sequence, log_time, publish_time
 _OP_MESSAGE = int(Opcode.MESSAGE)
 
@@ -59,18 +65,122 @@ def parse_record(opcode: int, body: bytes) -> Any:
     return cls.read(stream) if cls is not None else None
 
 
+def max_chunk_bytes() -> int:
+    """The cap on one chunk's uncompressed size: ``FRETC_MAX_CHUNK_BYTES`` (bytes, a positive
+    integer) or :data:`DEFAULT_MAX_CHUNK_BYTES`.
+
+    Raises:
+        ValueError: the variable is set but not a positive integer.
+    """
+    text = os.environ.get("FRETC_MAX_CHUNK_BYTES")
+    if text is None:
+        return DEFAULT_MAX_CHUNK_BYTES
+    if not text.strip().isdigit() or int(text) <= 0:
+        raise ValueError(f"FRETC_MAX_CHUNK_BYTES={text!r}: a positive number of bytes")
+    return int(text)
+
+
+def decompress(compression: str, data: bytes, declared: int, *, partial: bool = False
+               ) -> bytes:
+    """A chunk's records decompressed (``""``, ``"zstd"`` or ``"lz4"``; MCAP spec, "Chunk"),
+    never more than ``declared`` bytes (its ``uncompressed_size``) plus one, so a
+    decompression bomb or a lying size costs at most that much memory.
+
+    Args:
+        compression: the chunk's compression field.
+        data: the compressed records.
+        declared: the chunk's uncompressed_size (bytes).
+        partial: ``data`` is cut short (a truncated file): return what decompresses, up to
+            ``declared`` bytes, instead of requiring exactly ``declared``.
+
+    Raises:
+        ValueError: an unknown compression; ``declared`` above :func:`max_chunk_bytes`; the
+            output is longer than ``declared`` (or, unless ``partial``, shorter). The
+            decompression libraries raise their own errors on damaged bytes.
+    """
+    cap = max_chunk_bytes()
+    if declared > cap:
+        raise ValueError(f"chunk declares {declared} uncompressed bytes, above the cap of "
+                         f"{cap} (FRETC_MAX_CHUNK_BYTES)")
+    if compression == "":
+        out = bytes(data[:declared + 1])
+    elif compression == "zstd":
+        out = _zstd(data, declared + 1, partial)
+    elif compression == "lz4":
+        d = lz4.frame.LZ4FrameDecompressor()
+        try:
+            out = d.decompress(data, max_length=declared + 1)
+        except RuntimeError:
+            if not partial:
+                raise
+            out = b""
+    else:
+        raise ValueError(f"unknown chunk compression {compression!r}")
+    if len(out) > declared or (len(out) < declared and not partial):
+        raise ValueError(f"chunk decompresses to {'more' if len(out) > declared else 'fewer'}"
+                         f" bytes than the {declared} it declares")
+    return out
+
+
+def _zstd(data: bytes, limit: int, partial: bool) -> bytes:
+    """At most ``limit`` bytes of a zstd stream, read in blocks (bounded memory)."""
+    reader = zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data))
+    parts, size = [], 0
+    try:
+        while size < limit:
+            block = reader.read(min(_BLOCK, limit - size))
+            if not block:
+                break
+            parts.append(block)
+            size += len(block)
+    except zstandard.ZstdError:
+        if not partial:
+            raise
+    return b"".join(parts)
+
+
+def _records(data: bytes) -> list[Any]:
+    """The records of decompressed chunk bytes, parsed (MCAP spec, "Records").
+
+    Raises:
+        ValueError: a record runs past the end; one of :data:`RECORD_ERRORS` for a body that
+            does not parse.
+    """
+    out, pos, end = [], 0, len(data)
+    while pos < end:
+        if pos + 9 > end:
+            raise ValueError(f"record header at byte {pos} of the chunk runs past its end")
+        opcode, length = RECORD_HEAD.unpack_from(data, pos)
+        if pos + 9 + length > end:
+            raise ValueError(f"record at byte {pos} of the chunk runs past its end")
+        rec = parse_record(opcode, data[pos + 9:pos + 9 + length])
+        if rec is not None:
+            out.append(rec)
+        pos += 9 + length
+    return out
+
+
+def _checked(chunk: Chunk) -> bytes:
+    """The chunk's records decompressed (bounded, :func:`decompress`) and CRC-checked."""
+    data = decompress(chunk.compression, chunk.data, chunk.uncompressed_size)
+    if chunk.uncompressed_crc != 0:
+        crc = zlib.crc32(data)
+        if crc != chunk.uncompressed_crc:
+            raise CRCValidationError(expected=chunk.uncompressed_crc, actual=crc, record=chunk)
+    return data
+
+
 def chunk_records(chunk: Chunk) -> list[Any]:
     """The Schema, Channel and Message records inside ``chunk``, CRC-checked (MCAP spec,
-    "Chunk": uncompressed_crc), by :func:`mcap.stream_reader.breakup_chunk`.
+    "Chunk": uncompressed_crc), decompressed within its declared size (:func:`decompress`).
 
     Raises:
         CRCValidationError: the uncompressed bytes do not match the chunk's CRC.
-        ValueError: a chunk claiming more than 4 GiB uncompressed; the decompression
-            libraries and the record classes raise their own errors on damaged bytes.
+        ValueError: as :func:`decompress`, or a record that runs past the chunk's end; the
+            decompression libraries and the record classes raise their own errors on
+            damaged bytes.
     """
-    if chunk.uncompressed_size > MAX_UNCOMPRESSED:
-        raise ValueError(f"chunk claims {chunk.uncompressed_size} uncompressed bytes")
-    return breakup_chunk(chunk, validate_crc=True)
+    return _records(_checked(chunk))
 
 
 def chunk_messages(chunk: Chunk, wanted: set[int] | dict, known: set[int] | dict
@@ -79,36 +189,22 @@ def chunk_messages(chunk: Chunk, wanted: set[int] | dict, known: set[int] | dict
     channels not in ``known`` (the caller reports them), as ``mcap.records.Message``; other
     records are skipped without being parsed (MCAP spec, "Chunk" and "Message").
 
-    The chunk is decompressed (zstd, lz4 or none) and its ``uncompressed_crc`` checked as
-    ``mcap.stream_reader.breakup_chunk(validate_crc=True)`` does; ``breakup_chunk`` itself
-    is not used here because it builds an object for every record of the chunk (most of
-    them on topics no requirement reads) and reads an unknown compression as none.
+    The chunk is decompressed within its declared size (:func:`decompress`) and its
+    ``uncompressed_crc`` checked (0: not computed, as the spec allows).
 
     Raises:
         CRCValidationError: the uncompressed bytes do not match the chunk's CRC.
-        ValueError: an unknown compression, a chunk claiming more than 4 GiB uncompressed,
-            or a record that runs past the chunk's end.
+        ValueError: as :func:`decompress`, or a record that runs past the chunk's end.
     """
-    if chunk.uncompressed_size > MAX_UNCOMPRESSED:
-        raise ValueError(f"chunk claims {chunk.uncompressed_size} uncompressed bytes")
-    if chunk.compression == "zstd":
-        data = zstandard.decompress(chunk.data, chunk.uncompressed_size)
-    elif chunk.compression == "lz4":
-        data = lz4.frame.decompress(chunk.data)
-    elif chunk.compression == "":
-        data = bytes(chunk.data)
-    else:
-        raise ValueError(f"unknown chunk compression {chunk.compression!r}")
-    if chunk.uncompressed_crc != 0:
-        crc = zlib.crc32(data)
-        if crc != chunk.uncompressed_crc:
-            raise CRCValidationError(expected=chunk.uncompressed_crc, actual=crc, record=chunk)
+    data = _checked(chunk)
     out: list[McapMessage] = []
     head = RECORD_HEAD.unpack_from
     mhead = _MESSAGE_HEAD.unpack_from
     pos = 0
     end = len(data)
     while pos < end:
+        if pos + 9 > end:
+            raise ValueError(f"record header at byte {pos} of the chunk runs past its end")
         opcode, length = head(data, pos)
         body = pos + 9
         pos = body + length
@@ -116,6 +212,8 @@ def chunk_messages(chunk: Chunk, wanted: set[int] | dict, known: set[int] | dict
             raise ValueError(f"record at byte {body - 9} of the chunk runs past its end")
         if opcode != _OP_MESSAGE:
             continue
+        if length < _MESSAGE_HEAD.size:
+            raise ValueError(f"message record at byte {body - 9} of the chunk is too short")
         cid, seq, log_time, publish_time = mhead(data, body)
         if cid in wanted or cid not in known:
             # positional, in the dataclass's field order (keywords cost more)

@@ -29,12 +29,12 @@ from mcap.records import Channel, Chunk, ChunkIndex, Message as McapMessage, Sch
 from mcap.stream_reader import CRCValidationError
 from rosbags.typesys.msg import normalize_msgtype
 
-from .. import problems as P
-from ..problems import DataProblem, LogError
+from common import problems as P
+from common.problems import DataProblem, LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
 from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
-from .mcap_integrity import read_summary
+from .mcap_integrity import index_disagreement, read_summary
 from .mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
 from .mcap_records import crc_skip, parse_record
 from .reorder import REORDER_WINDOW_NS, ReorderQueue
@@ -97,6 +97,14 @@ class McapSource(LogSource):
             self._open_damage = True
             self._open_problems.add(found.problem)
         self._index: McapIndex | None = found.index
+        if self._index is not None:
+            why = index_disagreement(self.path, self._index)
+            if why is not None:  # a hint that lies: the data section is read as written
+                self._index = None
+                self._open_problems.add(DataProblem(
+                    P.INDEX_MISMATCH, None, None,
+                    f"the summary's index disagrees with the data section ({why}); the "
+                    "file is read record by record"))
         self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
@@ -166,6 +174,7 @@ class McapSource(LogSource):
                  ) -> Message | None:
         """``rec`` decoded and counted, or None (no decoder, or a payload that does not
         deserialize: an ``undecodable`` problem)."""
+        self.records[channel.topic] = self.records.get(channel.topic, 0) + 1
         dec = self._decoder(channel, schemas, rec.log_time)
         if dec is None:
             return None

@@ -21,9 +21,9 @@ from typing import Any
 import lz4.frame
 from rosbags.typesys.msg import normalize_msgtype
 
-from fretish.units import NS_PER_S
+from common.units import NS_PER_S
 
-from .. import problems as P
+from common import problems as P
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, decoder_for
 from .reorder import ReorderQueue

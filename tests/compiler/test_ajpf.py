@@ -21,7 +21,7 @@ def compiled(rid: str, text: str):
 def test_r1_is_the_property_safe_ros_verified():
     out = emit_psl([compiled("R1", "whenever too_close agilex_agent shall eventually "
                                    "satisfy stopped")])
-    lines = [l for l in out["req"].splitlines() if not l.startswith("//")]
+    lines = [l for l in out["req"].splitlines() if not l.startswith("#")]
     assert lines == ["R1: [] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))"]
 
 
@@ -54,7 +54,7 @@ def test_mapping_makes_percepts_actions_and_named_comparisons(tmp_path):
     out = emit_psl([compiled("S-1.a", "whenever obstacle sw shall eventually satisfy halt"),
                     compiled("S-2", "the sw shall always satisfy alt > 100")],
                    mapping_path=str(m))
-    lines = [l for l in out["req"].splitlines() if not l.startswith("//")]
+    lines = [l for l in out["req"].splitlines() if not l.startswith("#")]
     assert lines == ["S_1_a: [] (P(obstacle_seen) -> <> D(robot,stop))", "S_2: [] B(robot,high)"]
 
 
@@ -62,7 +62,38 @@ def test_unsupported_requirements_become_comments_and_labels_are_unique():
     out = emit_psl([compiled("A", "whenever p sw shall eventually satisfy q"),
                     compiled("A", "upon p sw shall eventually satisfy q"),
                     compiled("A", "whenever q sw shall eventually satisfy p")])["req"]
-    labels = [l.split(":")[0] for l in out.splitlines() if not l.startswith("//")]
+    labels = [l.split(":")[0] for l in out.splitlines() if not l.startswith("#")]
     assert labels == ["A", "A_2"]
-    assert "// A: upon p sw shall eventually satisfy q" in out
+    assert "# A: upon p sw shall eventually satisfy q" in out
     assert "no AJPF property" in out
+
+
+def _ajpf_read(text: str) -> list[tuple[str, str]]:
+    """AJPF's property-file rule: a line starting with ``#`` is skipped; every other line
+    is ``label: formula`` (a line without a colon continues the property above)."""
+    props: list[list[str]] = []
+    for line in text.splitlines():
+        if line.startswith("#") or not line.strip():
+            continue
+        if ":" in line:
+            label, formula = line.split(":", 1)
+            props.append([label, formula.strip()])
+        else:
+            props[-1][1] += " " + line.strip()
+    return [(a, b) for a, b in props]
+
+
+def test_psl_comments_are_hash_lines_ajpf_skips(tmp_path):
+    from compiler.ajpf import emit_psl
+    from compiler.build import compile_entries
+    from fretish.files import load_requirements
+
+    f = tmp_path / "req.fret"
+    f.write_text("R1: whenever p the sw shall eventually satisfy q\n"
+                 "R2: upon p the sw shall within 3 ticks satisfy q\n"
+                 "R3: the sw shall always satisfy !q\n")
+    out = emit_psl(compile_entries(load_requirements([str(f)])))["req"]
+    # R2 has no AJPF form (a next operator): its reason is a comment, not a property
+    assert [label for label, _ in _ajpf_read(out)] == ["R1", "R3"]
+    assert all(line.startswith("#") or line.split(":")[0] in ("R1", "R3")
+               for line in out.splitlines())

@@ -195,7 +195,7 @@ def test_lark_cache_key_follows_the_grammar(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("value", [""])
 def test_cache_off(value, tmp_path, monkeypatch):
-    from fretish import cache
+    from common import cache
     monkeypatch.setenv("FRETC_CACHE_DIR", value)
     assert cache.cache_dir() is None and not cache.write_bytes("x", "y", b"z")
     assert _parsed(P.cached_lark()) == _reference()

@@ -17,7 +17,7 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 from fretish import limits
-from fretish.errors import FretishSyntaxError
+from common.errors import FretishSyntaxError
 from fretish.parser import parse
 
 ROOT = Path(__file__).resolve().parents[2]

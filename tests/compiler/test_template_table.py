@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from compiler import instantiate as I
-from fretish import cache
+from common import cache
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -89,3 +89,20 @@ def test_files_with_the_same_name_get_distinct_modules(tmp_path):
     assert res.exit_code == 0
     assert sorted(p.name for p in out.iterdir()) == ["reqs_2_monitors.py", "reqs_monitors.py"]
     assert "'q'" in (out / "reqs_2_monitors.py").read_text()
+
+
+def test_user_text_reaches_the_terminal_escaped(tmp_path):
+    """An id with U+202E, NUL, NEL and CR (a FRET export allows any id) is printed escaped in
+    ``--emit monitor``'s ``skipped`` line and in ``fretc check``'s report."""
+    f = tmp_path / "x.json"
+    f.write_text(json.dumps([{"reqid": "R\u202eX\x00\x85\r", "project": "p",
+                              "fulltext": "whenever p the sw shall immediately satisfy "
+                                          "persists(2, q)"}]))
+    raw = ("\u202e", "\x00", "\x85", "\r")
+    res = CliRunner().invoke(main, [str(f), "--emit", "monitor", "-o",
+                                    str(tmp_path / "m.py")])
+    assert "skipped R\\u202eX\\x00\\x85\\x0d" in res.output
+    res2 = CliRunner().invoke(main, ["check", str(f)])
+    assert "R\\u202eX" in res2.output
+    for out in (res.output, res2.output):
+        assert not any(ch in out for ch in raw), out

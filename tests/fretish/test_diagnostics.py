@@ -1,4 +1,4 @@
-"""Tests of FRETish syntax errors and their diagnostics (fretish.diagnostics, fretish.errors):
+"""Tests of FRETish syntax errors and their diagnostics (fretish.diagnostics, common.errors):
 positions, carets, what was expected and the hints."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Tests of the FRETish parser (fretish.parser, fretish.errors).
+"""Tests of the FRETish parser (fretish.parser, common.errors).
 
 Reference data: shared/fretish/fret_vectors.jsonl (FRET 3.x's own keys and formulas),
 shared/fretish/fret_trace_verdicts.jsonl, shared/corpora/fret_casestudies.jsonl.

@@ -14,8 +14,8 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 from monitors.audit import AuditConfig, audit_log, load_plan
-from monitors.audit_junit import junit_xml
-from monitors.report_model import EXIT_INCOMPLETE, exit_code
+from monitors.report.junit import junit_xml
+from monitors.report.model import EXIT_INCOMPLETE, exit_code
 
 from _logs import MS, S, twist_stamped, write_mcap
 

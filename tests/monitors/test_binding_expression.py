@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from monitors.bindings.binding import compile_expression
 from monitors.bindings.expression import (BinOp, Const, ExprLocation, Field, FuncCall, Ref,
                                           UnaryOp, parse_expression, refs, unparse, walk)
-from monitors.problems import BindingError
+from common.problems import BindingError
 
 FIELDS = ["/scan.ranges", "/odom.pose.x", "/odom.v[2]", "/a.b[-1]", "/scan.ranges[1:3]",
           "/imu.q[:2]"]

@@ -12,7 +12,7 @@ import pytest
 from monitors.audit import AuditConfig, audit_log, load_plan
 from monitors.bindings.binding import compile_expression
 from monitors.bindings.files import parse_bindings
-from monitors.problems import BindingError
+from common.problems import BindingError
 
 ROOT = Path(__file__).resolve().parents[2]
 NOMINAL = str(ROOT / "traces" / "nominal.mcap")

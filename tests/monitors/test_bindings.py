@@ -10,13 +10,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretish.units import parse_duration
+from common.units import parse_duration
 from monitors.bindings.binding import compile_expression, parse_inline
 from monitors.bindings.compile import EvalState
 from monitors.bindings.extract import Valid, make_extractor
 from monitors.bindings.files import load_bindings, parse_bindings
 from monitors.bindings.spec import Bindings, TickSpec, make_bindings
-from monitors.problems import BindingError, SignalError
+from common.problems import BindingError, SignalError
 
 from _logs import ROS1, ROS2, scan, twist
 

@@ -14,7 +14,7 @@ from fretc.cli import main
 from monitors.bindings.binding import compile_expression
 from monitors.bindings.compile import EvalState
 from monitors.bindings.files import parse_bindings
-from monitors.problems import BindingError
+from common.problems import BindingError
 
 from _logs import scan
 

@@ -144,8 +144,11 @@ def _check(original, damaged, label: str) -> None:
                 and damaged.first_time_ns == original.first_time_ns:
             assert dv.verdict == "violated", \
                 f"{who}: {dv.verdict}, but violated at {decided} before the damage at {end}"
-        if dv.verdict in ("satisfied", "vacuous") and ov.verdict == "violated":
-            assert decided is None or end is None or decided >= end, who
+        if dv.verdict in ("satisfied", "vacuous"):
+            # only a prefix that decides the requirement (LTL3 "satisfied" before the
+            # damage) may give a pass, and then the intact log passes too
+            assert dv.ltl3.status == "satisfied", f"{who}: {dv.verdict} on an undecided prefix"
+            assert ov.verdict in ("satisfied", "vacuous"), f"{who}: {dv.verdict} != {ov.verdict}"
 
 
 def _damages(log: Path, full: bool):
@@ -194,3 +197,24 @@ def test_damaged_log_full_sweep(tmp_path, log):
 def test_every_shipped_trace_and_both_real_logs_are_covered():
     assert len(TRACES) >= 8
     assert all(p.exists() for p in REAL), "the real logs of ../shared/data/logs are missing"
+
+
+def test_a_cut_log_never_passes_what_its_prefix_does_not_decide(tmp_path):
+    """sif_disabled.mcap cut at byte 201549: R1, R2 and R5 (``always clearance > 0``) are
+    violated on the intact log after the cut. Their prefix satisfies them (or never fires
+    them), but does not decide them: unknown with the reason, never satisfied or vacuous."""
+    log = ROOT / "traces" / "sif_disabled.mcap"
+    cut = _damaged_copy(tmp_path, log, "cut201549", log.read_bytes()[:201549])
+    original = {v.requirement: v for v in _original(log).verdicts}
+    damaged = audit_log(_plan(log), str(cut))
+    assert damaged.partial
+    for v in damaged.verdicts:
+        if v.verdict in ("satisfied", "vacuous"):
+            assert v.ltl3.status == "satisfied", (v.requirement, v.verdict)
+            assert original[v.requirement].verdict in ("satisfied", "vacuous"), v.requirement
+    by_id = {v.requirement: v for v in damaged.verdicts}
+    for rid in ("R1", "R2", "R5"):
+        assert original[rid].verdict == "violated", rid
+        assert by_id[rid].verdict in ("unknown", "violated"), (rid, by_id[rid].verdict)
+        if by_id[rid].verdict == "unknown":
+            assert by_id[rid].unknown_reason, rid

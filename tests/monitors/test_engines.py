@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from compiler import evaluate, ir
-from monitors.audit.finalize import summarize_clocks
+from monitors.audit.log import summarize_clocks
 from monitors.engines import arrays, stepwise
 from monitors.engines.interval import trigger_points
 

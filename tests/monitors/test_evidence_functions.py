@@ -28,7 +28,7 @@ import pytest
 from compiler.evaluate import ft_at, pt_at
 from compiler.semantics import formalize
 from fretish import parse
-from fretish.errors import FretishError
+from common.errors import FretishError
 from monitors.engines.interval import EvidenceUnsupported, evaluate_requirement
 from monitors.engines.vectorized import pt_series
 

@@ -1,4 +1,4 @@
-"""Fleet audits (monitors/fleet.py): ``--ray`` gives the ``-j 1`` JSON; faults give error
+"""Fleet audits (monitors/audit/fleet.py): ``--ray`` gives the ``-j 1`` JSON; faults give error
 entries, never verdicts; ``--retries`` recovers a lost worker; log lists.
 
 The tests marked ``ray`` share one local Ray (2 CPUs) for the module (Ray starts slowly);
@@ -15,9 +15,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from monitors import fleet
+from monitors.audit import fleet
 from monitors.audit import AuditConfig, AuditInputError, audit_log, audit_logs, load_plan
-from monitors.report_model import audit_json, exit_code
+from monitors.report.model import audit_json, exit_code
 
 ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "logs"

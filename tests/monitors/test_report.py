@@ -1,4 +1,4 @@
-"""fretc report (monitors.report, monitors.timeline, monitors.annotate): the traceability report
+"""fretc report (monitors.report, monitors.report.timeline, monitors.report.annotate): the traceability report
 of the shipped Safe-ROS runs checked cell by cell and witness by witness against the audit's
 JSON; requirement -> formulas -> monitor -> AJPF traced against an independent compilation;
 determinism; annotated MCAP copies read back with ``mcap``; a synthetic run with a mode scope,
@@ -22,11 +22,11 @@ from mcap.reader import make_reader
 from mcap.writer import CompressionType
 
 from fretc.cli import main
-from monitors.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
-from monitors.report_context import GENERATED_PREFIX
-from monitors.report_trace import marked_fields
-from monitors.timeline import timeline_svg
-from monitors.timeline_layout import Threshold
+from monitors.report.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+from monitors.report.context import GENERATED_PREFIX
+from monitors.report.trace import marked_fields
+from monitors.report.timeline import timeline_svg
+from monitors.report.timeline_layout import Threshold
 
 from _logs import MS, boolean, float64, scan, twist, write_mcap
 
@@ -360,7 +360,7 @@ def test_annotated_mcaps_read_back_with_the_verdicts(shipped):
 
 
 def test_annotated_copy_is_deterministic(shipped, tmp_path):
-    from monitors.annotate import annotate_mcap
+    from monitors.report.annotate import annotate_mcap
 
     la = next(l for l in shipped["doc"]["logs"] if l["log"].endswith("sif_disabled.mcap"))
     annotate_mcap(la["log"], str(tmp_path / "a.mcap"), la)

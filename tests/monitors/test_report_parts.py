@@ -4,13 +4,14 @@ positions. Property-based where the rule is general (hypothesis)."""
 
 from __future__ import annotations
 
+import pytest
 from hypothesis import given, settings, strategies as st
 
 from fretish.parser import parse
-from monitors.report_trace import split_source, thresholds
-from monitors.report_verdicts import cell_label, values_table, verdict_for
-from monitors.timeline_layout import (PLOT_X1, Threshold, nice_step_ns, plan_timeline,
-                                      step_decimals)
+from monitors.report.trace import split_source, thresholds
+from monitors.report.verdicts import cell_label, values_table, verdict_for
+from monitors.report.timeline_layout import (PLOT_X1, Threshold, nice_step_ns, plan_timeline,
+    step_decimals)
 
 
 @settings(max_examples=200, deadline=None)
@@ -98,3 +99,28 @@ def test_thresholds_turn_constant_first_comparisons_round():
     req = parse("when 0.5 > d the robot shall always satisfy -1 <= v & v < 2 & d > 0.5")
     assert thresholds(req) == [Threshold("d", "<", 0.5), Threshold("v", ">=", -1.0),
                                          Threshold("v", "<", 2.0), Threshold("d", ">", 0.5)]
+
+
+HOSTILE_MD = ["![x](http://evil.example/i.png)", "[click](http://evil.example)",
+              "<img src=http://evil.example/i.png>", "http://evil.example/a",
+              "www.evil.example", "<http://evil.example>", "# heading", "*em* _em_ `c`",
+              "a | b", "&lt;script&gt;", "R1\nR2", "\u202eevil"]
+
+
+@pytest.mark.parametrize("text", HOSTILE_MD)
+def test_markdown_text_renders_as_itself(text):
+    """Ids, rationales and every other text in report.md render as plain text: no link,
+    image, tag, heading or emphasis (CommonMark with GFM tables and linkify)."""
+    from markdown_it import MarkdownIt
+
+    from monitors.report.render import _md
+
+    md = MarkdownIt("commonmark").enable("table")
+    try:
+        md = md.enable("linkify")  # needs linkify-it-py; GFM's bare-URL autolinks
+    except Exception:
+        pass
+    html = md.render(f"| id |\n|---|\n| {_md(text)} |\n\n### {_md(text)}\n")
+    for bad in ("<img", "<a ", "<em>", "<strong>", "<code>", "<h1", "<script"):
+        assert bad not in html, (text, html)
+    assert html.count("<td>") == 1 and html.count("<h3>") == 1

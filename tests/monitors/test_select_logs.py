@@ -73,12 +73,12 @@ def test_stage_speed_is_the_norm_of_the_planar_twist():
 
 
 def test_a_plan_with_selecting_binding_files_ships_to_workers():
-    """Ray workers get the plan pickled (monitors.fleet.ship_plan): the per-file plans go
+    """Ray workers get the plan pickled (monitors.audit.fleet.ship_plan): the per-file plans go
     along and give the same verdicts."""
     import pickle
 
     from monitors.audit import AuditConfig, audit_log, load_plan
-    from monitors.fleet import ship_plan
+    from monitors.audit.fleet import ship_plan
 
     plan = load_plan(AuditConfig(requirements=(str(REAL),)))
     again = pickle.loads(pickle.dumps(ship_plan(plan))).rebuild()

@@ -1,4 +1,4 @@
-"""Selective decoding (monitors/selective.py) against rosbags' full decode: identical values.
+"""Selective decoding (monitors/sources/selective.py) against rosbags' full decode: identical values.
 
 * every field (outside arrays of messages) of every message of every shipped trace and both
   real logs, decoded selectively, equals the full decode;
@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from monitors import selective
+from monitors.sources import selective
 from monitors.audit import AuditConfig, load_plan
-from monitors.problems import SignalError
+from common.problems import SignalError
 from monitors.signals import sample
 from monitors.sources import open_log
 

@@ -9,10 +9,10 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 
-from monitors import problems as P
+from common import problems as P
 from monitors.bindings.files import parse_bindings
 from monitors.bindings.spec import TickSpec, make_bindings
-from monitors.problems import SignalError
+from common.problems import SignalError
 from monitors.signals.arrays import sample_arrays
 from monitors.signals.clock import sample
 from monitors.sources import open_log

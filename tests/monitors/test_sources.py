@@ -14,8 +14,8 @@ from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import Writer as Rosbag2Writer
 from rosbags.typesys import Stores
 
-from monitors import problems as P
-from monitors.problems import CsvError, LogError
+from common import problems as P
+from common.problems import CsvError, LogError
 from monitors.sources import CSV_TOPIC, REORDER_WINDOW_NS, open_log
 
 from _logs import (CMD_VEL_MCAP, MS, ROS1, ROS2, S, STAGE_BAG, boolean, float64, scan, twist,

@@ -15,7 +15,7 @@ from mcap.stream_reader import breakup_chunk
 from mcap.writer import CompressionType
 from rosbags.interfaces import MessageDefinition, MessageDefinitionFormat
 
-from monitors import problems as P
+from common import problems as P
 from monitors.sources.bag_source import connection_typestore
 from monitors.sources.decoding import UnsupportedSchema
 from monitors.sources.mcap_integrity import check_data_section, cut_record, read_summary

@@ -8,9 +8,9 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from fretish.parser import parse
-from monitors.report_trace import marked_fields
-from monitors.timeline import timeline_svg
-from monitors.timeline_layout import Threshold
+from monitors.report.trace import marked_fields
+from monitors.report.timeline import timeline_svg
+from monitors.report.timeline_layout import Threshold
 
 from _logs import MS
 

@@ -16,9 +16,8 @@ pytest.importorskip("foxglove")
 pytest.importorskip("websockets")
 
 from monitors.audit import AuditConfig, audit_log, load_plan  # noqa: E402
-from monitors.watch import (CLOCK_BACKWARDS, CONNECTION_GAP, UNADVERTISED, Watch,  # noqa: E402
-                            WatchOptions)
-from monitors.watch_serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
+from monitors.live.watch import CLOCK_BACKWARDS, CONNECTION_GAP, UNADVERTISED, Watch, WatchOptions
+from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
 
 pytestmark = pytest.mark.watch
 

@@ -1,0 +1,540 @@
+"""``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
+requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
+runs"; issue 11).
+
+Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
+abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every
+query). Requirements are split into **components**: two requirements are in one component
+when they share a variable (a numeric variable counts as shared through its comparisons).
+Formulas over disjoint variables are satisfiable together iff each is, so every question is
+asked per component, which keeps Spot's automata small.
+
+Checks, per component (each Spot query has the ``timeout`` budget; a query that overruns
+answers "unknown", and a check with an unknown answer says so rather than guessing):
+
+1. **Satisfiability** of each requirement and of the component.
+2. **Non-vacuity** (Beer et al., CAV 1997; Kupferman & Vardi, STTT 2003, vacuity with
+   respect to the response): a run satisfies requirement R *vacuously* when R would hold
+   there whatever its response does. With ``R[false]`` and ``R[true]`` the requirement with
+   its response replaced by ``false`` and ``true`` (formalized by FRET's semantics like any
+   requirement), ``trigger(R) = !R[false] | !R[true]`` says that some trigger of R fires
+   inside its scope with room for the response to matter. R is **vacuous in the set** when
+   ``set & trigger(R)`` is unsatisfiable while the set is satisfiable: whatever run meets
+   all requirements never enters R's scope or never fires its condition. FRET's example
+   ``in modeA ... always a`` with ``in modeA ... always !a`` is found this way.
+3. **Minimal conflicts**: for an unsatisfiable component, the minimal unsatisfiable subsets;
+   for a vacuous requirement, the minimal subsets containing it that are unsatisfiable with
+   its trigger. Enumerated by size, smallest first, over connected subsets, within
+   ``mus_budget`` seconds (a cut enumeration says so).
+4. **Redundancy** (warning): a requirement implied by the other requirements of a
+   satisfiable component (``others & !R`` unsatisfiable), or holding on every run.
+
+Witness traces for the findings are built by :mod:`check.witness`, realizability by
+:mod:`check.realizability`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from fretish import ast as A
+
+from compiler import ir
+from .findings import Finding
+from .solver import UNKNOWN, SpotWorker
+from compiler.ir import Node
+from .numeric_abstraction import NumericAbstraction
+from compiler.printers import to_spot
+from compiler.semantics import SemanticsError, formalize
+
+__all__ = ["CheckItem", "CheckResult", "Finding", "Checker", "check_requirements",
+           "atom_variables"]
+
+
+# --------------------------------------------------------------------------- inputs
+@dataclass
+class CheckItem:
+    """One formalized requirement as the checks see it.
+
+    ``phi``/``phi_ft``: ft_inf / ft formula; ``trigger``/``trigger_ft``: the formula saying a
+    trigger fires in scope (module docstring, item 2), None when the requirement has no
+    response to vary; ``variables``: FRET variable names.
+    """
+
+    index: int
+    compiled: object
+    phi: Node
+    phi_ft: Node
+    trigger: Node | None
+    trigger_ft: Node | None
+    variables: list[str]
+
+    @property
+    def id(self) -> str:
+        return self.compiled.id
+
+    @property
+    def location(self) -> str:
+        return f"{self.compiled.entry.source}:{self.compiled.entry.line}"
+
+
+def _with_response(req: A.Requirement, value: bool) -> A.Requirement:
+    return dataclasses.replace(req, response=A.BoolLit(value))
+
+
+def make_item(index: int, compiled) -> CheckItem:
+    """A :class:`CheckItem` of a formalized :class:`compiler.build.Compiled`."""
+    f = compiled.formalization
+    req = compiled.requirement
+    period = compiled.entry.tick_period
+    trig = trig_ft = None
+    try:
+        lo = formalize(_with_response(req, False), period)
+        hi = formalize(_with_response(req, True), period)
+        trig = ir.or_(ir.not_(lo.ft_inf), ir.not_(hi.ft_inf))
+        trig_ft = ir.or_(ir.not_(lo.ft), ir.not_(hi.ft))
+    except SemanticsError:  # pragma: no cover - the requirement itself formalized
+        pass
+    return CheckItem(index, compiled, f.ft_inf, f.ft, trig, trig_ft, list(f.variables))
+
+
+def atom_variables(node: Node) -> set[str]:
+    """FRET variable names read by ``node`` (boolean and numeric)."""
+    return set(ir.variables(node))
+
+
+# --------------------------------------------------------------------------- results
+@dataclass
+class CheckResult:
+    """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
+    requirement (``satisfiable``, ``non_vacuous``, ``redundant``: true / false / "unknown"
+    / None when not checked); ``components`` the ids per component; ``abstractions`` the
+    uninterpreted atoms; ``timings`` CPU seconds per phase."""
+
+    requirements: list[dict] = field(default_factory=list)
+    components: list[list[str]] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    abstractions: list[dict] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    realizability: dict | None = None
+    witnesses: list[dict] = field(default_factory=list)
+    input_errors: list[str] = field(default_factory=list)
+    queries: int = 0
+    unknown_queries: int = 0
+
+    @property
+    def exit_code(self) -> int:
+        """0 no finding, 1 a conflict / vacuity / unrealizability (or an unknown answer:
+        nothing is called fine that was not checked), 2 input errors."""
+        if self.input_errors:
+            return 2
+        if any(f.severity in ("error", "unknown") for f in self.findings):
+            return 1
+        return 0
+
+    def to_json(self) -> dict:
+        return {"tool": "fretc check", "semantics": "ft_inf (infinite traces); witnesses "
+                "on finite traces (ft)", "exit_code": self.exit_code,
+                "requirements": self.requirements, "components": self.components,
+                "findings": [f.to_json() for f in self.findings],
+                "abstractions": self.abstractions, "realizability": self.realizability,
+                "witnesses": self.witnesses,
+                "notes": self.notes, "input_errors": self.input_errors,
+                "queries": self.queries, "unknown_queries": self.unknown_queries}
+
+
+# --------------------------------------------------------------------------- the checker
+class Checker:
+    """Runs the checks of the module docstring on a list of :class:`CheckItem`.
+
+    ``worker`` answers Spot queries (:class:`check.solver.SpotWorker`);
+    ``mus_budget`` is the time in seconds each subset enumeration may take.
+    """
+
+    def __init__(self, items: Sequence[CheckItem], worker: SpotWorker,
+                 mus_budget: float = 10.0):
+        self.items = list(items)
+        self.worker = worker
+        self.mus_budget = mus_budget
+        allf = [x.phi for x in self.items] + [x.trigger for x in self.items if x.trigger]
+        allf += [x.phi_ft for x in self.items] + [x.trigger_ft for x in self.items
+                                                  if x.trigger_ft]
+        self.numeric = NumericAbstraction.of(allf)
+        self._cache: dict[str, object] = {}
+        self.queries = 0
+        self.unknown = 0
+
+    # ---------------------------------------------------------------- queries
+    def sat(self, formulas: Sequence[Node], extra: Sequence[Node] = ()) -> object:
+        """True / False / UNKNOWN: is the conjunction of ``formulas`` and ``extra`` (with the
+        numeric invariants of their comparisons) satisfiable on infinite words? (``extra``
+        apart so the worker can reuse the product of ``formulas``.)"""
+        return self.sat_word(formulas, extra)[0]
+
+    def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
+                 ) -> tuple[object, tuple | None]:
+        """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
+
+        def split(f: Node, parts: list[Node]) -> None:
+            if f.op == "&":
+                split(f.args[0], parts)
+                split(f.args[1], parts)
+            elif f.op != "true" and f not in parts:
+                parts.append(f)
+
+        base: list[Node] = []
+        more: list[Node] = []
+        for f in formulas:
+            split(f, base)
+        split(self.numeric.invariant(list(formulas) + list(extra)), base)
+        for f in extra:
+            split(f, more)
+        if not base:
+            base = [ir.TRUE]
+        return self._ask_sat((tuple(to_spot(f) for f in base),
+                              tuple(to_spot(f) for f in more if f not in base)))
+
+    def _ask_sat(self, text):
+        got = self._cache.get(text)
+        if got is None:
+            self.queries += 1
+            ans = self.worker.ask(("sat", text[0], text[1]))
+            if ans == UNKNOWN:
+                self.unknown += 1
+                got = (UNKNOWN, None)
+            else:
+                got = ans
+            self._cache[text] = got
+        return got
+
+    # ---------------------------------------------------------------- components
+    def components(self) -> list[list[CheckItem]]:
+        """Requirements grouped by shared variables (union-find), in input order."""
+        parent = list(range(len(self.items)))
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        owner: dict[str, int] = {}
+        for k, item in enumerate(self.items):
+            for v in item.variables:
+                if v in owner:
+                    a, b = find(owner[v]), find(k)
+                    if a != b:
+                        parent[max(a, b)] = min(a, b)
+                else:
+                    owner[v] = k
+        groups: dict[int, list[CheckItem]] = {}
+        for k, item in enumerate(self.items):
+            groups.setdefault(find(k), []).append(item)
+        return list(groups.values())
+
+    # ---------------------------------------------------------------- subsets
+    def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
+                        bad: Callable[[list[CheckItem]], object]
+                        ) -> tuple[list[list[CheckItem]], bool, bool]:
+        """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
+        smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
+
+        Returns ``(subsets, cut, unknown)``: ``cut`` when the budget ran out before every
+        size was tried, ``unknown`` when some ``bad`` answer was UNKNOWN (a subset may then
+        be missing). Only subsets connected by shared variables are tried (a disconnected
+        bad subset is never minimal). A first minimal subset is found by deletion (so at
+        least one is reported whatever the budget), then sizes 1, 2, ... are enumerated.
+        """
+        deadline = time.monotonic() + self.mus_budget
+        must_ids = {x.index for x in must}
+        rest = [x for x in pool if x.index not in must_ids]
+        found: list[list[CheckItem]] = []
+        unknown = False
+        # deletion-based shrink of the whole pool: one minimal subset
+        current = list(must) + rest
+        whole = bad(current)
+        if whole is not True:
+            return [], False, whole == UNKNOWN
+        for x in list(rest):
+            trial = [y for y in current if y is not x]
+            ans = bad(trial)
+            if ans is True:
+                current = trial
+            elif ans == UNKNOWN:
+                unknown = True
+        first = sorted(current, key=lambda y: y.index)
+        found.append(first)
+        found_sets = [frozenset(y.index for y in first)]
+        cut = False
+        for size in range(0, len(rest) + 1):
+            if time.monotonic() > deadline:
+                cut = True
+                break
+            for combo in itertools.combinations(rest, size):
+                subset = list(must) + list(combo)
+                ids = frozenset(y.index for y in subset)
+                if any(s <= ids for s in found_sets):
+                    continue
+                if not _connected(subset):
+                    continue
+                if time.monotonic() > deadline:
+                    cut = True
+                    break
+                ans = bad(subset)
+                if ans is True:
+                    found.append(sorted(subset, key=lambda y: y.index))
+                    found_sets.append(ids)
+                elif ans == UNKNOWN:
+                    unknown = True
+            if cut:
+                break
+        order = sorted(range(len(found)), key=lambda k: (len(found[k]),
+                                                         [y.index for y in found[k]]))
+        out, seen = [], set()
+        for k in order:
+            key = frozenset(y.index for y in found[k])
+            if key not in seen:
+                seen.add(key)
+                out.append(found[k])
+        return out, cut, unknown
+
+
+def _connected(subset: Sequence[CheckItem]) -> bool:
+    if len(subset) <= 1:
+        return True
+    reach = {0}
+    names = set(subset[0].variables)
+    grew = True
+    while grew:
+        grew = False
+        for k, x in enumerate(subset):
+            if k not in reach and names.intersection(x.variables):
+                reach.add(k)
+                names.update(x.variables)
+                grew = True
+    return len(reach) == len(subset)
+
+
+def _ids(items: Sequence[CheckItem]) -> list[str]:
+    return [x.id for x in items]
+
+
+def _where(items: Sequence[CheckItem]) -> str:
+    return ", ".join(f"{x.id} ({x.location})" for x in items)
+
+
+def _tri(ans) -> object:
+    return "unknown" if ans == UNKNOWN else ans
+
+
+# --------------------------------------------------------------------------- entry point
+def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
+                       mus_budget: float = 10.0, redundancy: bool = True,
+                       vacuity: bool = True, witness_dir: str | None = None,
+                       inputs: Sequence[str] | None = None,
+                       outputs: Sequence[str] | None = None,
+                       worker: SpotWorker | None = None,
+                       witness_judge=None) -> CheckResult:
+    """Check compiled requirements (:class:`compiler.build.Compiled`, in file order).
+
+    ``timeout``: seconds per Spot query (None: no budget). ``mus_budget``: seconds per
+    subset enumeration. ``witness_dir``: write witness CSVs there
+    (:mod:`check.witness`), their expected verdicts given by ``witness_judge``
+    (:data:`check.witness.Judge`; required with ``witness_dir``: the audit's
+    evidence engine lives in a layer above, ``fretc check`` passes
+    :func:`monitors.engines.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
+    either is given, realizability is checked too (:mod:`check.realizability`).
+    Requirements that failed to formalize are listed in ``input_errors``; free-form ones
+    are skipped with a note.
+    """
+    if witness_dir is not None and witness_judge is None:
+        raise TypeError("check_requirements: witness_dir needs a witness_judge "
+                        "(check.witness.Judge)")
+    result = CheckResult()
+    items: list[CheckItem] = []
+    for c in compiled:
+        if c.error is not None:
+            result.input_errors.append(str(c.error))
+        elif c.freeform:
+            result.notes.append(f"{c.id} ({c.location()}): free-form, not checked")
+        else:
+            items.append(make_item(len(items), c))
+    own = worker is None
+    if own:
+        worker = SpotWorker(timeout)
+    try:
+        checker = Checker(items, worker, mus_budget)
+        _run(checker, result, vacuity=vacuity, redundancy=redundancy)
+        if inputs is not None or outputs is not None:
+            from .realizability import check_realizability  # lazy: numpy, if asked
+            result.realizability = check_realizability(checker, result, inputs or [],
+                                                       outputs or [])
+        if witness_dir is not None:
+            from .witness import write_witnesses  # lazy: numpy, if asked
+            write_witnesses(checker, result, witness_dir, witness_judge)
+        result.queries = checker.queries
+        result.unknown_queries = checker.unknown
+    finally:
+        if own:
+            worker.close()
+    return result
+
+
+def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool) -> None:
+    status = {x.index: {"id": x.id, "source": x.compiled.entry.source,
+                        "line": x.compiled.entry.line, "text": x.compiled.text,
+                        "component": None, "satisfiable": None, "non_vacuous": None,
+                        "redundant": None, "findings": []} for x in ck.items}
+    for name, why in ck.numeric.uninterpreted():
+        result.abstractions.append({"atom": name, "why": why})
+    comps = ck.components()
+    for k, comp in enumerate(comps):
+        result.components.append(_ids(comp))
+        for x in comp:
+            status[x.index]["component"] = k
+        _check_component(ck, comp, status, result, vacuity, redundancy)
+    result.requirements = [status[x.index] for x in ck.items]
+    for n, f in enumerate(result.findings):
+        for rid in f.requirements:
+            for s in result.requirements:
+                if s["id"] == rid:
+                    s["findings"].append(n)
+
+
+def _check_component(ck: Checker, comp: list[CheckItem], status: dict,
+                     result: CheckResult, vacuity: bool, redundancy: bool) -> None:
+    """Check one component (requirements sharing variables): each requirement alone, the
+    set, then (when the set is satisfiable) non-vacuity and redundancy; findings and notes
+    go to ``result``, per-requirement answers to ``status``."""
+    alone_bad = _check_alone(ck, comp, status, result)
+    if not _check_set(ck, comp, status, result, alone_bad):
+        return
+    if vacuity:
+        _check_vacuity(ck, comp, status, result)
+    if redundancy:
+        _check_redundancy(ck, comp, status, result)
+
+
+def _check_alone(ck: Checker, comp: list[CheckItem], status: dict,
+                 result: CheckResult) -> list:
+    """Satisfiability of each requirement on its own; returns the unsatisfiable ones."""
+    alone_bad = []
+    for x in comp:
+        ans = ck.sat([x.phi])
+        status[x.index]["satisfiable"] = _tri(ans)
+        if ans is False:
+            alone_bad.append(x)
+            result.findings.append(Finding(
+                "unsatisfiable", "error", [x.id],
+                f"{x.id} ({x.location}) is unsatisfiable on its own: no run meets it",
+                subsets=[[x.id]]))
+        elif ans == UNKNOWN:
+            result.findings.append(Finding(
+                "unknown", "unknown", [x.id],
+                f"satisfiability of {x.id} ({x.location}) unknown: the Spot query ran out of "
+                "time (--timeout)"))
+    return alone_bad
+
+
+def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckResult,
+               alone_bad: list) -> bool:
+    """Satisfiability of the component (minimal conflicting subsets when it is not);
+    True when it is satisfiable (the later checks are meaningful)."""
+    whole = ck.sat([x.phi for x in comp]) if len(comp) > 1 else ck.sat([comp[0].phi])
+    if len(comp) > 1 and whole is False and not alone_bad:
+        subsets, cut, unknown = ck.minimal_subsets(
+            comp, [], lambda s: _neg(ck.sat([y.phi for y in s])))
+        names = [_ids(s) for s in subsets]
+        involved = sorted({i for s in names for i in s},
+                          key=lambda i: [x.id for x in comp].index(i))
+        msg = ("the requirements cannot all hold: minimal conflicting subsets "
+               + "; ".join("{" + ", ".join(s) + "}" for s in names)
+               + (" (enumeration cut by the time budget: there may be more)" if cut else "")
+               + (" (some subset checks were unknown)" if unknown else ""))
+        result.findings.append(Finding("conflict", "error", involved, msg, subsets=names,
+                                       cut=cut, details={"locations": {
+                                           x.id: x.location for x in comp
+                                           if x.id in involved}}))
+    elif len(comp) > 1 and whole == UNKNOWN:
+        result.findings.append(Finding(
+            "unknown", "unknown", _ids(comp),
+            "satisfiability of the set " + ", ".join(_ids(comp)) + " unknown: the Spot "
+            "query ran out of time (--timeout)"))
+    if whole is not True:
+        for x in comp:
+            if whole is False:
+                status[x.index]["non_vacuous"] = None
+        result.notes.append("component " + ", ".join(_ids(comp)) + ": non-vacuity and "
+                            "redundancy not checked ("
+                            + ("the requirements conflict)" if whole is False else
+                               "the satisfiability of the set is unknown)"))
+        return False
+    return True
+
+
+def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
+                   result: CheckResult) -> None:
+    """Can each requirement's trigger fire (its scope be entered) in a run meeting all?"""
+    for x in comp:
+        if x.trigger is None:
+            continue
+        ans = ck.sat([y.phi for y in comp], [x.trigger])
+        status[x.index]["non_vacuous"] = _tri(ans)
+        if ans is True:
+            continue
+        if ans == UNKNOWN:
+            result.findings.append(Finding(
+                "unknown", "unknown", [x.id],
+                f"non-vacuity of {x.id} ({x.location}) unknown: the Spot query ran out "
+                "of time (--timeout)"))
+            continue
+        subsets, cut, unknown = ck.minimal_subsets(
+            comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
+        names = [_ids(s) for s in subsets]
+        if names and names[0] == [x.id]:
+            msg = (f"{x.id} ({x.location}) can only be satisfied vacuously: its scope is "
+                   "never entered or its trigger never fires with room for the response "
+                   "in any run that meets it")
+        else:
+            msg = (f"{x.id} ({x.location}) can only be satisfied vacuously in the presence"
+                   " of the others: no run meeting all requirements enters its scope and "
+                   "fires its trigger; minimal sets forcing this: "
+                   + "; ".join("{" + ", ".join(s) + "}" for s in names)
+                   + (" (enumeration cut by the time budget)" if cut else ""))
+        involved = [x.id] + sorted({i for s in names for i in s if i != x.id})
+        result.findings.append(Finding("vacuous", "error", involved, msg, subsets=names,
+                                       cut=cut, details={"requirement": x.id}))
+
+
+def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
+                      result: CheckResult) -> None:
+    """Is each requirement implied by the others of its component?"""
+    for x in comp:
+        others = [y.phi for y in comp if y is not x]
+        ans = ck.sat(others, [ir.not_(x.phi)])
+        status[x.index]["redundant"] = _tri(not ans) if ans in (True, False) else "unknown"
+        if ans == UNKNOWN:
+            result.findings.append(Finding(
+                "unknown", "warning", [x.id],
+                f"redundancy of {x.id} ({x.location}) unknown: the Spot query ran out of "
+                "time (--timeout)"))
+        if ans is False:
+            if others:
+                msg = (f"{x.id} ({x.location}) is implied by the others of its component ("
+                       + ", ".join(_ids([y for y in comp if y is not x])) + ")")
+            else:
+                msg = f"{x.id} ({x.location}) holds on every run (on infinite traces)"
+            result.findings.append(Finding("redundant", "warning", [x.id], msg,
+                                           details={"implied_by": _ids(
+                                               [y for y in comp if y is not x])}))
+
+
+def _neg(ans):
+    """sat answer -> 'bad' answer (unsatisfiable is bad)."""
+    if ans == UNKNOWN:
+        return UNKNOWN
+    return not ans

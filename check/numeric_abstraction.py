@@ -1,0 +1,168 @@
+"""Propositional abstraction of the numbers in requirement formulas, for ``fretc check``.
+
+Spot decides propositional LTL: every comparison (IR ``cmp`` node) is an atomic proposition
+to it. Comparisons of one numeric variable with constants (``speed <= 0.5``, ``3 < x``,
+``x = 2``) are not independent, so this module adds, per such variable ``x``, the invariant
+that at every tick the comparisons take the truth values of one real value of ``x``: the
+constants ``c1 < ... < ck`` cut the real line into the regions ``(-inf, c1)``, ``{c1}``,
+``(c1, c2)``, ... ``(ck, +inf)``, and ``G (region_1 | ... | region_2k+1)`` where each region
+fixes the truth of every comparison of ``x``. This is exact for real-valued variables (it
+gives ``x > 5 -> x > 3``, ``!(x < 2 & x > 3)``, and ``x = 2 -> x <= 2``); integer variables
+are read as reals (``x > 1 & x < 2`` stays satisfiable).
+
+Anything else (comparisons of two variables, arithmetic, numeric functions, boolean
+functions, past-time functions inside future formulas) stays an independent proposition and
+is listed by :meth:`NumericAbstraction.uninterpreted` as an abstraction that can make a
+finding spurious.
+
+The module also goes back from the abstraction to numbers: :meth:`NumericAbstraction.values`
+picks, for one tick's truth values of the comparisons, a value of each variable that gives
+them (the midpoint of the region).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from fractions import Fraction
+
+from compiler import ir
+from compiler.ir import Node
+from compiler.printers import to_smv
+
+__all__ = ["NumericAbstraction", "simple_comparison"]
+
+_FLIP = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "=": "=", "!=": "!="}
+_TEST = {"<": lambda v, c: v < c, "<=": lambda v, c: v <= c, ">": lambda v, c: v > c,
+         ">=": lambda v, c: v >= c, "=": lambda v, c: v == c, "!=": lambda v, c: v != c}
+
+
+def _constant(n: Node) -> Fraction | None:
+    if n.op == "num":
+        try:
+            return Fraction(n.name)
+        except (ValueError, ZeroDivisionError):
+            return None
+    if n.op == "neg":
+        c = _constant(n.args[0])
+        return None if c is None else -c
+    return None
+
+
+def simple_comparison(node: Node) -> tuple[str, str, Fraction] | None:
+    """``(variable, op, constant)`` of a comparison of one variable with a constant, with the
+    variable on the left (``3 < x`` gives ``("x", ">", 3)``); None for any other node."""
+    if node.op != "cmp":
+        return None
+    a, b = node.args
+    if a.op == "var" and _constant(b) is not None:
+        return a.name, node.name, _constant(b)
+    if b.op == "var" and _constant(a) is not None:
+        return b.name, _FLIP[node.name], _constant(a)
+    return None
+
+
+class NumericAbstraction:
+    """The comparisons of a set of IR formulas and the invariants relating them.
+
+    Build with :meth:`of` (all formulas of the requirement set, so every query sees the same
+    atoms). ``atoms[x]`` lists the comparison nodes of variable ``x`` with constants.
+    """
+
+    def __init__(self) -> None:
+        self.atoms: dict[str, list[Node]] = {}
+        self._uninterpreted: dict[str, str] = {}
+
+    @classmethod
+    def of(cls, formulas: Iterable[Node]) -> "NumericAbstraction":
+        """Collect the atoms of ``formulas`` (IR nodes)."""
+        self = cls()
+        seen = set()
+        for f in formulas:
+            for n in ir.walk(f):
+                if n in seen:
+                    continue
+                seen.add(n)
+                if n.op == "cmp":
+                    sc = simple_comparison(n)
+                    if sc is not None:
+                        lst = self.atoms.setdefault(sc[0], [])
+                        if n not in lst:
+                            lst.append(n)
+                    else:
+                        self._uninterpreted.setdefault(
+                            to_smv(n), "comparison that is not one variable against a "
+                            "constant: an independent proposition")
+                elif n.op == "call":
+                    self._uninterpreted.setdefault(
+                        to_smv(n), "boolean function: an independent proposition")
+                elif n.op in ("past", "future"):
+                    self._uninterpreted.setdefault(
+                        to_smv(n), "temporal function of the other time direction: an "
+                        "independent proposition at each tick")
+        return self
+
+    def uninterpreted(self) -> list[tuple[str, str]]:
+        """``(atom text, why)`` of every atom left uninterpreted, sorted by text."""
+        return sorted(self._uninterpreted.items())
+
+    def _regions(self, name: str) -> list[tuple[Fraction, tuple[bool, ...]]]:
+        """``(representative value, truth of each atom)`` per region, distinct truths only."""
+        atoms = self.atoms[name]
+        consts = sorted({simple_comparison(a)[2] for a in atoms})
+        points: list[Fraction] = [consts[0] - 1]
+        for i, c in enumerate(consts):
+            points.append(c)
+            points.append((c + consts[i + 1]) / 2 if i + 1 < len(consts) else c + 1)
+        out, seen = [], set()
+        for v in points:
+            truth = tuple(_TEST[simple_comparison(a)[1]](v, simple_comparison(a)[2])
+                          for a in atoms)
+            if truth not in seen:
+                seen.add(truth)
+                out.append((v, truth))
+        return out
+
+    def invariant(self, formulas: Iterable[Node]) -> Node:
+        """``G`` of the region disjunction for every variable compared with a constant in
+        ``formulas`` (TRUE when none or when its comparisons are independent anyway)."""
+        names = []
+        for f in formulas:
+            for n in ir.walk(f):
+                if n.op == "cmp":
+                    sc = simple_comparison(n)
+                    if sc is not None and sc[0] not in names and sc[0] in self.atoms:
+                        names.append(sc[0])
+        out = ir.TRUE
+        for name in sorted(names):
+            out = ir.and_(out, self.variable_invariant(name))
+        return out
+
+    def variable_invariant(self, name: str) -> Node:
+        """The invariant of one variable (TRUE when it has a single comparison)."""
+        atoms = self.atoms.get(name, [])
+        if len(atoms) < 2:
+            return ir.TRUE
+        regions = self._regions(name)
+        if len(regions) == 2 ** len(atoms):
+            return ir.TRUE
+        disj = ir.FALSE
+        for _v, truth in regions:
+            disj = ir.or_(disj, ir.and_all(*(a if t else ir.not_(a)
+                                             for a, t in zip(atoms, truth))))
+        return ir.G(disj)
+
+    def values(self, truth: dict[Node, bool]) -> dict[str, float]:
+        """A value per compared variable giving the comparisons the truth values ``truth``
+        (atom node -> bool; atoms missing from ``truth`` are free). A combination no real
+        value gives (impossible under the invariant) takes the first region."""
+        out: dict[str, float] = {}
+        for name in self.atoms:
+            atoms = self.atoms[name]
+            regions = self._regions(name)
+            pick = regions[0][0]
+            for v, t in regions:
+                if all(truth.get(a, tv) == tv for a, tv in zip(atoms, t)):
+                    pick = v
+                    break
+            out[name] = float(pick)
+        return out

@@ -1,0 +1,175 @@
+"""Realizability of requirement sets for ``fretc check`` (issue 11, item 5).
+
+The FRET variables are split into **inputs** (the environment's: sensor-derived, e.g.
+``too_close``) and **outputs** (the component's, e.g. ``stopped``); a variable named in
+neither is taken as an output (the component's own state) and listed as such. A set is
+*realizable* when a controller exists that, reading the inputs tick by tick, sets the
+outputs so that every requirement holds on every infinite run whatever the inputs do
+(Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
+connected component of requirements sharing variables.
+
+Each component's specification, on the ft_inf formulas with the numeric abstraction
+(:mod:`check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
+invariants of input comparisons are assumptions on the environment, those of output
+comparisons obligations of the controller. A comparison is an output when it reads an output
+variable. Spot decides it with a synthesis game (``spot.ltl_to_game``, ``spot.solve_game``);
+for a realizable component the size of the Mealy machine Spot extracts
+(``spot.solved_game_to_mealy``) is reported. For an unrealizable one: the minimal
+unrealizable subsets (smallest first, within the budget) and, when one exists, a fixed input
+sequence (a lasso: prefix, then a cycle repeated forever) along which no output sequence
+meets the requirements - so it defeats every controller. When no fixed sequence wins, the
+environment has to react to the outputs and the report says so.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from common.errors import CheckError
+
+from compiler import ir
+from .findings import Finding
+from .findings import ids as _ids
+from .solver import UNKNOWN
+from .witness import _atoms
+from .numeric_abstraction import simple_comparison
+from compiler.printers import mangle, to_smv, to_spot
+
+__all__ = ["check_realizability", "RealizabilityError"]
+
+
+class RealizabilityError(CheckError, ValueError):
+    """Bad input/output declarations (a variable both input and output)."""
+
+
+def _atom_vars(atom) -> list[str]:
+    return [n.name for n in ir.walk(atom) if n.op in ("ap", "var")]
+
+
+def _spot_name(atom) -> str:
+    return mangle(atom.name) if atom.op == "ap" else to_smv(atom)
+
+
+def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequence[str]
+                        ) -> dict:
+    """Decide realizability per component; append ``unrealizable`` / ``unknown`` findings
+    to ``result`` and return the JSON-able summary (module docstring).
+
+    Raises :class:`RealizabilityError` when a variable is declared both input and output.
+    """
+    inputs, outputs = list(dict.fromkeys(inputs)), list(dict.fromkeys(outputs))
+    both = sorted(set(inputs) & set(outputs))
+    if both:
+        raise RealizabilityError("declared both input and output: " + ", ".join(both))
+    used = []
+    for x in checker.items:
+        for v in x.variables:
+            if v not in used:
+                used.append(v)
+    summary = {"inputs": inputs, "outputs": outputs,
+               "assumed_outputs": [v for v in used if v not in inputs and v not in outputs],
+               "unused": [v for v in inputs + outputs if v not in used],
+               "components": []}
+    decide = _Decider(checker, inputs)
+    for comp in checker.components():
+        entry: dict = {"requirements": _ids(comp)}
+        ans = decide(comp)
+        if ans == UNKNOWN:
+            entry["realizable"] = "unknown"
+            result.findings.append(Finding(
+                "unknown", "unknown", _ids(comp),
+                "realizability of " + ", ".join(_ids(comp)) + " unknown: the synthesis game "
+                "ran out of time (--timeout)"))
+        elif ans[0]:
+            entry["realizable"] = True
+            entry["mealy_states"] = ans[1]
+        else:
+            _unrealizable(checker, decide, comp, ans[1], inputs, entry, result)
+        summary["components"].append(entry)
+    return summary
+
+
+class _Decider:
+    """Realizability of a set of requirement items (Spot's synthesis game through the
+    checker's worker), memoized by the specification's text and its outputs. Returns
+    UNKNOWN or (realizable, Mealy states or the environment's counter-strategy)."""
+
+    def __init__(self, checker, inputs: list[str]):
+        self.checker, self.inputs = checker, inputs
+        self.cache: dict[tuple, object] = {}
+
+    def __call__(self, items) -> object:
+        checker, inputs = self.checker, self.inputs
+        phis = [x.phi for x in items]
+        atoms = _atoms(phis)
+        outs = sorted({_spot_name(a) for a in atoms
+                       if not all(v in inputs for v in _atom_vars(a))})
+        in_vars = sorted({simple_comparison(a)[0] for a in atoms if a.op == "cmp"
+                          and simple_comparison(a) and simple_comparison(a)[0] in inputs})
+        out_vars = sorted({simple_comparison(a)[0] for a in atoms if a.op == "cmp"
+                           and simple_comparison(a) and simple_comparison(a)[0] not in inputs})
+        inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars))
+        inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars))
+        if inv_in.op == "true":  # a conjunction: one automaton per conjunct
+            parts = [p for p in phis + [inv_out] if p.op != "true"] or [ir.TRUE]
+            spec_text = tuple(to_spot(p) for p in parts)
+        else:
+            spec_text = to_spot(ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out)))
+        key = (spec_text, tuple(outs))
+        if key not in self.cache:
+            checker.queries += 1
+            ans = checker.worker.ask(("realizable", key[0], outs))
+            if ans == UNKNOWN:
+                checker.unknown += 1
+            self.cache[key] = ans
+        return self.cache[key]
+
+
+def _unrealizable(checker, decide: _Decider, comp, counter, inputs: list[str], entry: dict,
+                  result) -> None:
+    """Fill ``entry`` for an unrealizable component (minimal unrealizable subsets, the
+    environment's input lasso) and append the finding to ``result``."""
+    entry["realizable"] = False
+    subsets, cut, unknown = checker.minimal_subsets(
+        comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)[0]))
+    names = [_ids(s) for s in subsets]
+    entry["minimal_unrealizable"] = names
+    entry["cut"] = cut
+    env = _environment(checker, counter, inputs)
+    entry["environment"] = env
+    involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
+    msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
+           + ", ".join(inputs) + ") do: minimal unrealizable subsets "
+           + "; ".join("{" + ", ".join(s) + "}" for s in names)
+           + (" (enumeration cut by the time budget)" if cut else ""))
+    result.findings.append(Finding("unrealizable", "error", involved, msg,
+                                   subsets=names, cut=cut,
+                                   details={"environment": env}))
+
+
+def _environment(checker, counter, inputs: Sequence[str]) -> dict:
+    """The input lasso as rows of input values, or a note when none exists."""
+    if counter is None:
+        return {"note": "no fixed input sequence defeats every controller: the environment "
+                        "must react to the outputs"}
+    prefix, cycle = counter
+    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
+                 for a in checker.numeric.atoms[name]}
+
+    def rows(letters):
+        out = []
+        for letter in letters:
+            truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
+            numbers = checker.numeric.values(truth)
+            row = {}
+            for v in inputs:
+                if v in checker.numeric.atoms:
+                    row[v] = numbers[v]
+                else:
+                    row[v] = bool(letter.get(mangle(v), False))
+            out.append(row)
+        return out
+
+    return {"prefix": rows(prefix), "cycle": rows(cycle),
+            "note": "inputs tick by tick: the prefix, then the cycle repeated forever; no "
+                    "output sequence meets the requirements along it"}

@@ -1,0 +1,231 @@
+"""The exception tree of fretc, and diagnostics rendered like a compiler's.
+
+Every error fretc reports about its input derives from :class:`FretcError`, so one ``except
+FretcError`` (the ``fretc`` command's, exit code 2) catches the input errors of every stage;
+each stage has its own subclass (the model: Lark's one exception tree)::
+
+    FretcError                          where: Where | None
+    ├── FretishError                    requirement text and files (fretish/)
+    │   ├── FretishSyntaxError          a sentence that does not parse
+    │   ├── FretishFileError            a file's structure (ids, attributes, JSON)
+    │   ├── LimitError                  an input limit (fretish/limits.py)
+    │   ├── SemanticsError              formalization (compiler/semantics.py)
+    │   ├── CodegenError                no monitor (compiler/codegen.py)
+    │   └── AjpfError                   no AJPF property (compiler/ajpf.py)
+    ├── CheckError                      fretc check's inputs
+    │   └── RealizabilityError          (check/realizability.py)
+    ├── InputError                      the audit's inputs (common/problems.py)
+    │   ├── LogError ── CsvError        a log that cannot be read
+    │   ├── BindingError                a signal binding
+    │   ├── SignalError                 a binding that cannot be evaluated on a log
+    │   ├── FieldPathError              a field path the schema lacks (monitors/sources/schema.py)
+    │   └── AuditInputError ── RayUnavailable   (monitors/audit/config.py, monitors/audit/fleet.py)
+    └── ReportError                     fretc report's inputs and output (monitors/report/write.py)
+
+Internal errors are not input errors and stay outside the tree (a generated monitor that is
+not valid: ``compiler.codegen.InvalidMonitorError``, exit code 4), as do the signals by which
+an engine hands a requirement to another (``VectorizeError``, ``EvidenceUnsupported``) and
+private control-flow exceptions (``_Fail``, ``_Fallback`` ...).
+
+A :class:`FretishSyntaxError` renders as::
+
+    r1.fret:3:17: error: unexpected 'and' in an expression
+    R1: the sw shall always satisfy p and q
+                                      ^
+    expected: an operator, the end of the sentence
+    hint: FRETish writes conjunction as '&' ...
+
+Lines and columns are 1-based and in the coordinates of the file the text came from.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+__all__ = ["Where", "FretcError", "FretishError", "FretishSyntaxError", "FretishFileError",
+           "CheckError", "InputError", "render_diagnostic", "error_text"]
+
+
+_WHERE_FIELDS = ("file", "line", "column", "topic", "log_time_ns")
+
+
+class Where:
+    """Where an input error is: a file position (``file``, 1-based ``line`` and ``column``)
+    and/or a place in a log (``topic``, ``log_time_ns``: MCAP log time, integer ns). Any
+    field may be None (not known). ``str()``: ``file:line:column`` then ``topic @ t ns``.
+
+    Immutable, compared and hashed by its fields, ``repr`` ``Where(file=..., ...)``: what
+    ``@dataclass(frozen=True)`` generates, written out because generating it costs about
+    1 ms at every start-up (issue 9); ``tests/test_startup.py`` checks that it behaves as
+    the generated class does."""
+
+    __match_args__ = _WHERE_FIELDS
+    file: str | None
+    line: int | None
+    column: int | None
+    topic: str | None
+    log_time_ns: int | None
+
+    def __init__(self, file: str | None = None, line: int | None = None,
+                 column: int | None = None, topic: str | None = None,
+                 log_time_ns: int | None = None) -> None:
+        d = self.__dict__
+        d["file"], d["line"], d["column"] = file, line, column
+        d["topic"], d["log_time_ns"] = topic, log_time_ns
+
+    def _fields(self) -> tuple:
+        return (self.file, self.line, self.column, self.topic, self.log_time_ns)
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__qualname__}(file={self.file!r}, line={self.line!r}, "
+                f"column={self.column!r}, topic={self.topic!r}, "
+                f"log_time_ns={self.log_time_ns!r})")
+
+    def __eq__(self, other):
+        if other.__class__ is self.__class__:
+            return self._fields() == other._fields()
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self._fields())
+
+    def __setattr__(self, name, value):
+        from dataclasses import FrozenInstanceError  # only on this error path
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name):
+        from dataclasses import FrozenInstanceError
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
+
+    def __str__(self) -> str:
+        parts = [str(x) for x in (self.file, self.line, self.column) if x is not None]
+        out = ":".join(parts)
+        if self.topic is not None:
+            out += (" " if out else "") + self.topic
+        if self.log_time_ns is not None:
+            out += (" " if out else "") + f"@ {self.log_time_ns} ns"
+        return out
+
+
+class FretcError(Exception):
+    """Root of every input error fretc reports (any stage); the ``fretc`` command prints it
+    and exits with code 2.
+
+    Constructed like any exception, with an optional keyword ``where`` (:class:`Where`);
+    ``exc.where`` is None when the error names no place beyond its message. The message
+    itself always names the place (file:line:col, topic, log time) when one is known.
+    """
+
+    where: Where | None = None
+
+    def __init__(self, *args: object, where: Where | None = None) -> None:
+        super().__init__(*args)
+        if where is not None:
+            self.where = where
+
+
+class FretishError(FretcError):
+    """Requirement text or files that fretc cannot use (parse, file structure, and the
+    compiler stages on top: semantics, code generation, AJPF). ``str(e)`` of the subclasses
+    with a position is the full compiler-style diagnostic."""
+
+
+class CheckError(FretcError):
+    """Input that ``fretc check`` cannot use (e.g. a variable declared both input and
+    output)."""
+
+
+class InputError(FretcError):
+    """Audit input fretc cannot use: a log, a binding, a signal. The message names where
+    (file, line:col, topic, log time). Formerly ``common.problems.FretcInputError`` (still
+    exported under that name)."""
+
+
+def error_text(exc: FretcError) -> str:
+    """The text the ``fretc`` command prints for ``exc``: a :class:`FretishError` is its
+    own diagnostic (``file:line:col: error: ...`` where it has a position); any other error
+    is ``error: <message>``."""
+    return str(exc) if isinstance(exc, FretishError) else f"error: {exc}"
+
+
+def render_diagnostic(source: str, line: int, column: int, message: str, *,
+                      text_line: str | None = None, text_line_column: int = 1,
+                      expected: Sequence[str] = (), hint: str | None = None) -> str:
+    """Compiler-style text: ``source:line:column: error: message``, then (if known) the
+    source line with a caret under ``column``, ``expected: ...`` and ``hint: ...`` lines.
+
+    ``text_line_column`` is the file column of ``text_line``'s first character (1 when
+    ``text_line`` is the whole file line)."""
+    out = [f"{source}:{line}:{column}: error: {message}"]
+    if text_line is not None:
+        shown = text_line.rstrip("\r\n")
+        out.append(shown)
+        k = max(0, column - text_line_column)
+        # keep tabs so the caret lines up with the text above it
+        pad = "".join("\t" if ch == "\t" else " " for ch in shown[:k])
+        pad += " " * max(0, k - len(shown))
+        out.append(pad + "^")
+    if expected:
+        out.append("expected: " + ", ".join(expected))
+    if hint:
+        out.append("hint: " + hint)
+    return "\n".join(out)
+
+
+class FretishSyntaxError(FretishError):
+    """A FRETish sentence that does not parse.
+
+    Attributes: ``source`` (file name or ``"<string>"``), ``line``/``column`` (1-based, file
+    coordinates), ``text_line`` (the source line holding the error), ``text_line_column``
+    (file column of ``text_line``'s first character; 1 when it is the whole file line),
+    ``expected`` (human names such as ``"'shall'"``, ``"an expression"``, ``"a timing"``),
+    ``hint`` (advice for a common mistake, or None) and ``message`` (the one-line
+    description). ``str(e)`` is the full diagnostic (:func:`render_diagnostic`).
+    """
+
+    def __init__(self, message: str, *, source: str = "<string>", line: int = 1,
+                 column: int = 1, text_line: str = "", expected: Sequence[str] = (),
+                 hint: str | None = None, text_line_column: int = 1,
+                 offset: int | None = None):
+        # same attribute stores as FretishFileError.__init__ below (kept: each error its own fields
+        # and defaults)
+        self.message = message
+        self.source = source
+        self.line = line
+        self.column = column
+        self.text_line = text_line
+        self.text_line_column = text_line_column
+        self.expected: list[str] = list(expected)
+        self.hint = hint
+        #: 0-based offset of the error in the parsed text (None if unknown).
+        self.offset = offset
+        super().__init__(message, where=Where(source, line, column))
+
+    def __str__(self) -> str:
+        return render_diagnostic(self.source, self.line, self.column, self.message,
+                                 text_line=self.text_line,
+                                 text_line_column=self.text_line_column,
+                                 expected=self.expected, hint=self.hint)
+
+
+class FretishFileError(FretishError):
+    """A structural problem of a requirement file (bad JSON, a line without ``ID:``, a
+    duplicate id, a bad ``tick_period``...). Attributes ``source``, ``line``, ``column``
+    (1-based), ``message``, ``text_line`` (the offending line, or None) and ``hint``.
+    """
+
+    def __init__(self, message: str, *, source: str, line: int = 1, column: int = 1,
+                 text_line: str | None = None, hint: str | None = None):
+        # same attribute stores as FretishSyntaxError.__init__ above and compiler.ir.Node.__init__
+        # (kept: each class its own fields)
+        self.message = message
+        self.source = source
+        self.line = line
+        self.column = column
+        self.text_line = text_line
+        self.hint = hint
+        super().__init__(message, where=Where(source, line, column))
+
+    def __str__(self) -> str:
+        return render_diagnostic(self.source, self.line, self.column, self.message,
+                                 text_line=self.text_line, hint=self.hint)

@@ -1,0 +1,334 @@
+"""Fleet audits on Ray: ``fretc audit --ray [ADDRESS]`` and ``fretc report --ray``.
+
+One Ray task per log (a log's messages are needed in order, so a log is the unit of work).
+The requirements are compiled once, on the driver (:func:`monitors.audit.load_plan`), and
+shipped to the workers as a :class:`ShippedPlan`: the compiled requirements, the generated
+monitor module texts (each worker ``exec``\\s them once, as the local audit does) and the
+binding expressions (recompiled on the worker: their evaluators are closures). Each task
+runs :func:`monitors.audit.audit_log`, the same engine as a local run, so the JSON, JUnit,
+report and exit code are those of ``-j 1``; results are put back in the order of the logs.
+
+Faults (the rule: nothing is reported satisfied that was not audited):
+
+* a task that raises, or a worker process that dies (``WorkerCrashedError``, a lost node),
+  gives that log an error entry (:func:`error_audit`: every verdict ``error`` with the
+  reason, exit code 2) and the other logs complete;
+* ``retries``: a task whose worker died is run again up to this many times (Ray's
+  ``max_retries``; exceptions raised by the audit itself are not retried: they would raise
+  again);
+* Ctrl-C cancels the tasks still running (``ray.cancel(force=True)``), stops the local Ray
+  this run started, and re-raises ``KeyboardInterrupt``.
+
+Where Ray runs (:func:`connect`): ``address`` None or ``"local"`` starts a local Ray for the
+run (``num_cpus`` = the machine's CPUs, no dashboard, quiet logs, usage statistics off, so
+nothing is sent to the network; Ray's own servers still listen on the node's address, as Ray
+resolves 127.0.0.1 to it) and stops it at the end; ``"auto"``,
+``"ray://host:10001"`` or ``host:port`` connect to an existing cluster, whose workers must
+have fretc installed (``pip install 'fretc[ray]'``) and see the log paths (shared storage).
+
+Log lists (:func:`expand_log_args`, also for local runs): paths, folders, globs (``**``
+allowed) and ``@FILE`` (one path or glob per line, ``#`` comments; relative paths start at
+FILE's folder), so a cluster job can be started from an index of a fleet's recordings.
+"""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import logging
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from . import AuditInputError, AuditPlan, audit_log
+from .plan import MODULE_PREFIX, load_module
+from ..bindings import Bindings, compile_expression
+from common.problems import BindingError
+from ..report.model import LogAudit, Verdict
+
+__all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
+           "audit_logs_ray", "error_audit", "RAY_HINT"]
+
+#: How to get Ray (printed when ``--ray`` is used without it).
+RAY_HINT = "--ray needs Ray: pip install 'fretc[ray]' (or pip install 'ray>=2.40')"
+
+
+class RayUnavailable(AuditInputError):
+    """``--ray`` without Ray installed, or a cluster that cannot be reached (exit code 2)."""
+
+
+# --------------------------------------------------------------------------- log lists
+def expand_log_args(args: Sequence[str]) -> list[str]:
+    """Expand ``@FILE`` lists and globs in the LOGS arguments, in order.
+
+    ``@FILE``: one path or glob per line; blank lines and ``#`` comments skipped; a relative
+    path starts at FILE's folder. A glob (``*``, ``?``, ``[``) that is not an existing path
+    is expanded with ``**`` recursion, sorted. Other arguments are kept as given (folders are
+    searched later by :func:`monitors.audit.find_logs`).
+
+    Raises:
+        AuditInputError: an unreadable list file, or a glob that matches nothing (naming
+            the file and line for a list entry).
+    """
+    out: list[str] = []
+    for a in args:
+        if a.startswith("@") and len(a) > 1:
+            lst = Path(a[1:])
+            try:
+                lines = lst.read_text(encoding="utf-8").splitlines()
+            except OSError as exc:
+                raise AuditInputError(f"{a}: cannot read the log list: {exc}") from None
+            for n, line in enumerate(lines, 1):
+                entry = line.split("#", 1)[0].strip() if line.lstrip().startswith("#") \
+                    else line.strip()
+                if not entry:
+                    continue
+                p = entry if os.path.isabs(entry) else str(lst.parent / entry)
+                out.extend(_glob_one(p, f"{lst}:{n}"))
+            continue
+        out.extend(_glob_one(a, None))
+    return out
+
+
+def _glob_one(p: str, where: str | None) -> list[str]:
+    if os.path.exists(p) or not any(c in p for c in "*?["):
+        return [p]
+    found = sorted(glob.glob(p, recursive=True))
+    if not found:
+        raise AuditInputError(f"{where + ': ' if where else ''}{p}: no file matches")
+    return found
+
+
+# --------------------------------------------------------------------------- shipping a plan
+@dataclass
+class ShippedPlan:
+    """A picklable :class:`~monitors.audit.AuditPlan` (built by :func:`ship_plan`).
+
+    Attributes:
+        plan: the plan with its monitor classes and binding evaluators taken out.
+        classes: requirement index -> (module stem, requirement id) of its monitor class in
+            ``plan.modules``.
+        bindings: (name, expr, source, line, col, exact) of every binding, in order.
+        key: identifies the plan (workers keep the last one they rebuilt).
+    """
+
+    plan: AuditPlan
+    classes: dict[int, tuple[str, str]]
+    bindings: list[tuple] | None
+    key: str
+    #: binding files that select their logs: (selector, file, ShippedPlan of that file)
+    variants: list[tuple[Any, str, "ShippedPlan"]] = field(default_factory=list)
+
+    def rebuild(self) -> AuditPlan:
+        """The runnable plan: monitor modules ``exec``'d, binding expressions compiled."""
+        mods = {stem: load_module(stem, text) for stem, text in self.plan.modules.items()}
+        reqs = []
+        for r in self.plan.requirements:
+            r = replace(r)
+            where = self.classes.get(r.index)
+            if where is not None:
+                r.monitor_cls = mods[where[0]].MONITORS[where[1]]
+            reqs.append(r)
+        b = self.plan.bindings
+        if b is not None:
+            variables = {}
+            todo = list(self.bindings or [])
+            for _round in range(len(todo) + 1):  # references compile after their targets
+                left = []
+                for spec in todo:
+                    name, expr, source, line, col, exact = spec
+                    try:
+                        variables[name] = compile_expression(
+                            name, expr, source=source, line=line, col=col, exact=exact,
+                            refs=variables)
+                    except BindingError:
+                        left.append(spec)
+                if not left or len(left) == len(todo):
+                    todo = left
+                    break
+                todo = left
+            for name, expr, source, line, col, exact in todo:  # raises the real error
+                variables[name] = compile_expression(name, expr, source=source, line=line,
+                                                     col=col, exact=exact, refs=variables)
+            order = [spec[0] for spec in self.bindings or []]
+            variables = {n: variables[n] for n in order}
+            b = Bindings(variables, b.tick, b.time_base, b.header_lag_ns, b.source)
+        return replace(self.plan, requirements=reqs, bindings=b,
+                       variants=[(sel, f, sp.rebuild()) for sel, f, sp in self.variants])
+
+
+def ship_plan(plan: AuditPlan) -> ShippedPlan:
+    """Strip ``plan`` of what does not pickle (generated classes, compiled closures)."""
+    classes: dict[int, tuple[str, str]] = {}
+    reqs = []
+    for r in plan.requirements:
+        r2 = replace(r, monitor_cls=None, _msource=None)
+        if r.monitor_cls is not None and not plan.variants:  # variants ship their own
+            classes[r.index] = (r.monitor_cls.__module__[len(MODULE_PREFIX):], r.id)
+        reqs.append(r2)
+    b = plan.bindings
+    shipped_b = None
+    if b is not None:
+        shipped_b = [(v.name, v.expr, v.source, v.line, v.col, v._exact)
+                     for v in b.variables.values()]
+        b = Bindings({}, b.tick, b.time_base, b.header_lag_ns, b.source)
+    h = hashlib.sha256()
+    for stem, text in sorted(plan.modules.items()):
+        h.update(stem.encode() + b"\0" + text.encode() + b"\0")
+    h.update(repr(shipped_b).encode())
+    h.update(repr(plan.config).encode())
+    variants = [(sel, f, ship_plan(sub)) for sel, f, sub in plan.variants]
+    for _sel, _f, sp in variants:
+        h.update(sp.key.encode())
+    return ShippedPlan(replace(plan, requirements=reqs, bindings=b, variants=[]), classes,
+                       shipped_b, h.hexdigest(), variants)
+
+
+# --------------------------------------------------------------------------- Ray
+def _import_ray():
+    try:
+        import ray  # noqa: F401 - imported only with --ray (start-up cost)
+    except ImportError:
+        raise RayUnavailable(RAY_HINT) from None
+    return ray
+
+
+def connect(address: str | None = None, num_cpus: int | None = None) -> bool:
+    """Connect to Ray; returns True when this call started a local Ray (stop it with
+    ``ray.shutdown()``), False when Ray was already initialized or a cluster was joined.
+
+    Args:
+        address: None or ``"local"``: a local Ray for this run (``num_cpus`` default: the
+            machine's CPUs; no dashboard; logs not forwarded; usage statistics off).
+            ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing cluster.
+
+    Raises:
+        RayUnavailable: Ray is not installed, or the cluster cannot be reached.
+    """
+    ray = _import_ray()
+    if ray.is_initialized():
+        return False
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    try:
+        if address in (None, "local"):
+            ray.init(num_cpus=num_cpus or os.cpu_count() or 1, include_dashboard=False,
+                     log_to_driver=False, logging_level=logging.ERROR,
+                     configure_logging=True)
+            return True
+        ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
+        return False
+    except Exception as exc:  # ConnectionError, RuntimeError, ...
+        raise RayUnavailable(f"--ray {address or 'local'}: cannot start or reach Ray: "
+                             f"{type(exc).__name__}: {exc}") from None
+
+
+_WORKER_PLAN: dict[str, Any] = {}
+
+
+def _audit_task(shipped: ShippedPlan, path: str, kill: tuple[str, str] | None = None):
+    """The Ray task body: audit one log with the shipped plan (rebuilt once per worker)."""
+    plan = _WORKER_PLAN.get(shipped.key)
+    if plan is None:
+        _WORKER_PLAN.clear()
+        plan = _WORKER_PLAN[shipped.key] = shipped.rebuild()
+    progress = None
+    if kill is not None and kill[0] in path:
+        marker = kill[1]
+        if marker == ":raise":
+            raise RuntimeError("fault injected by the tests")
+
+        def progress(frac: float) -> None:
+            # fault injection for the tests: the worker dies mid-run, once per marker file
+            if frac > 0.2 and os.path.exists(marker):
+                os.remove(marker)
+                os._exit(1)
+
+    return audit_log(plan, path, progress)
+
+
+def error_audit(plan: AuditPlan, path: str, reason: str):
+    """A :class:`~monitors.report.model.LogAudit` of a log that could not be audited: the
+    log's ``error`` is ``reason`` and every requirement's verdict is ``error`` with it (so the
+    exit code is 2 and nothing reads as satisfied)."""
+    la = LogAudit(log=str(path), error=f"{path}: {reason}")
+    for r in plan.requirements:
+        v = Verdict(log=str(path), requirement=r.id, text=r.text, source=r.source,
+                    notes=list(r.notes))
+        v.error = r.error if r.error is not None else f"log not audited: {reason}"
+        v.verdict = "error"
+        la.verdicts.append(v)
+    return la
+
+
+def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = None,
+                   retries: int = 0, progress=None, num_cpus: int | None = None,
+                   _kill: tuple[str, str] | None = None) -> list[Any]:
+    """Audit ``paths`` on Ray, one task per log; results in the order of ``paths``.
+
+    Args:
+        plan: from :func:`monitors.audit.load_plan` (compiled here, once).
+        address: see :func:`connect`.
+        retries: times a task is re-run after its worker died (not after an exception).
+        progress: as :func:`monitors.audit.audit_logs` (``start``, ``done``; ``update`` is
+            not called: a task reports when it finishes).
+        num_cpus: CPUs of a local Ray (default: all).
+
+    Returns:
+        One :class:`~monitors.report.model.LogAudit` per path; a log whose task failed has
+        an :func:`error_audit` entry naming the failure.
+
+    Raises:
+        RayUnavailable: no Ray, or the cluster cannot be reached.
+        KeyboardInterrupt: after cancelling the running tasks.
+    """
+    ray = _import_ray()
+    if not paths:
+        return []
+    started = connect(address, num_cpus)
+    try:
+        shipped = ray.put(ship_plan(plan))
+        task = ray.remote(_audit_task).options(max_retries=max(0, retries),
+                                               retry_exceptions=False, num_cpus=1)
+        refs = {}
+        for i, p in enumerate(paths):
+            refs[task.remote(shipped, str(p), _kill)] = i
+            if progress is not None:
+                progress.start(i, p)
+        results: dict[int, Any] = {}
+        pending = list(refs)
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
+                for ref in done:
+                    i = refs[ref]
+                    try:
+                        la = ray.get(ref)
+                    except ray.exceptions.RayTaskError as exc:
+                        cause = getattr(exc, "cause", None) or exc
+                        la = error_audit(plan, paths[i], "the audit task raised "
+                                         f"{type(cause).__name__}: {_first_line(cause)}")
+                    except ray.exceptions.RayError as exc:  # worker died, node lost, ...
+                        la = error_audit(plan, paths[i], f"{type(exc).__name__}: the Ray "
+                                         f"worker was lost ({_first_line(exc)}) after "
+                                         f"{retries + 1} attempt(s); try --retries")
+                    results[i] = la
+                    if progress is not None:
+                        progress.done(i, la)
+        except KeyboardInterrupt:
+            for ref in pending:
+                try:
+                    ray.cancel(ref, force=True)
+                except Exception:
+                    pass
+            raise
+        return [results[i] for i in range(len(paths))]
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
