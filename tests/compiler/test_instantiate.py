@@ -394,40 +394,6 @@ def test_cache_name_follows_the_sources(monkeypatch):
     assert I._cache_name() != name
 
 
-def test_emit_ltl_loads_neither_pathlib_nor_openssl(tmp_path):
-    """Start-up (issue 9): formalizing and printing with the templates' disk table needs
-    neither ``pathlib`` nor ``hashlib`` (OpenSSL), a few ms of imports each."""
-    import os
-    import subprocess
-    import sys
-
-    fret = tmp_path / "r.fret"
-    # more than _BUILT_BEFORE_TABLE template keys, so the disk table is read
-    fret.write_text("".join(f"R{i}: in m upon p the sw shall {t} satisfy q\n"
-                            for i, t in enumerate(["immediately", "always", "eventually",
-                                                   "never", "finally", "within 3 ticks",
-                                                   "for 2 ticks", "after 4 ticks",
-                                                   "until s", "before s", "within 1 ticks",
-                                                   "for 0 ticks", "after 1 ticks",
-                                                   "at the next timepoint"]))
-                    + "".join(f"S{i}: upon p the sw shall {t} satisfy q\n"
-                              for i, t in enumerate(["immediately", "always", "eventually",
-                                                     "never", "finally"])))
-    code = ("import sys, io, contextlib\nfrom fretc.cli import main\n"
-            f"sys.argv = ['fretc', {str(fret)!r}, '--emit', 'ltl', '--json']\n"
-            "out = io.StringIO()\n"
-            "try:\n    with contextlib.redirect_stdout(out):\n        main()\n"
-            "except SystemExit as e:\n    assert not e.code, e.code\n"
-            "assert '\"pt\"' in out.getvalue()\n"
-            "print(sorted(m for m in ('pathlib', 'hashlib', '_hashlib') if m in sys.modules))")
-    env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))
-    for _ in range(2):  # the first run writes the table, the second reads it
-        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             env=env, check=True).stdout
-    assert out.strip() == "[]"
-    assert any((tmp_path / "cache" / "templates").iterdir())
-
-
 # --------------------------------------------------------------------------- shortcuts
 def _atoms_of(text: str, period=None):
     """The instantiation of ``text`` (None when it falls back or fails)."""
