@@ -30,8 +30,8 @@ requirements" error, exit code 2), same measure, beside the per-sentence figures
 
 The targets are checked and printed as PASS/FAIL: at least 1500 sentences/s of CPU time
 end to end (best run, start-up included; the parser is Lark's LALR parser, nothing written
-around it) and under 0.3 s of CPU for ``fretc requirements/r1.fret --emit ltl``; the first run's figures (empty cache: the Lark
-tables are built) are printed beside them, not judged.
+around it) and under 0.3 s of CPU for ``fretc requirements/r1.fret --emit ltl``; the first
+run's figures (empty cache: the Lark tables are built) are printed beside them, not judged.
 
 ``PYTHONDONTWRITEBYTECODE`` is dropped from the children's environment (a user's Python
 caches bytecode; without it every run would compile fretc's sources again). ``--baseline

@@ -11,8 +11,9 @@ prints: ft, ft_inf, pt (FRET/SMV) and the Spot text of ft and ft_inf.
 * full: :func:`compiler.semantics.formalize` then the printers (the path before
   :mod:`compiler.instantiate`);
 * template: :func:`compiler.instantiate.instantiate` then
-  :func:`compiler.instantiate.formula_text`; "cold" is the first pass of a fresh process
-  (templates built or read from fretc's disk cache), "warm" the best later pass.
+  :func:`compiler.instantiate.formula_text`; "cold" is the first pass of the process
+  (each template key's file of ``compiler/table/`` read on its first use), "warm" the best
+  later pass.
 
 CPU time (``time.process_time``), best of ``--repeat`` passes, the cyclic garbage collector
 paused as ``fretc --emit ltl`` pauses it; the ratio full/template is printed.
@@ -92,7 +93,7 @@ def emit(compiled):
 
 out = {}
 for f in files:
-    emit(compile_entries(load_requirements([f])))  # templates read or built, imports done
+    emit(compile_entries(load_requirements([f])))  # templates read, imports done
     best = None
     for _ in range(repeat):
         entries = load_requirements([f])

@@ -31,6 +31,9 @@ __all__ = ["NS_PER_S", "TIME_UNITS", "parse_seconds", "parse_duration", "format_
 
 #: Nanoseconds per second (MCAP log times and ROS times are integer nanoseconds).
 NS_PER_S = 1_000_000_000
+#: The longest duration (seconds) a period or timeout may have: longer ones are input errors,
+#: not numbers that overflow a float later
+MAX_SECONDS = 10**12
 
 _NUMBER = r"(?:[0-9]+(?:\.[0-9]+)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 _TABLES: list = []  # [(the unit table, the duration regexp)] once built
@@ -94,7 +97,11 @@ def parse_seconds(value: str | int | float) -> Fraction:
         if not m:
             raise ValueError(f"{value.strip()!r} is not a duration: write a number and a "
                              f"unit, {_EXAMPLE}")
-        amount, unit = Fraction(Decimal(m.group(1))), m.group(2).lower()
+        number = Decimal(m.group(1))
+        if not -30 <= number.adjusted() <= 30:  # 1e999999999 s must not become an integer
+            raise ValueError(f"{value.strip()!r}: the number is out of range for a duration "
+                             f"(at most {MAX_SECONDS:.0e} s)")
+        amount, unit = Fraction(number), m.group(2).lower()
     if unit == "hz":
         if amount <= 0:
             raise ValueError(f"{value!r}: a frequency must be positive")
@@ -107,6 +114,9 @@ def parse_seconds(value: str | int | float) -> Fraction:
     seconds = amount * time_units[unit]
     if seconds <= 0:
         raise ValueError(f"{value!r}: a duration must be positive")
+    if seconds > MAX_SECONDS:
+        raise ValueError(f"{value!r}: beyond the limit of {MAX_SECONDS:.0e} s (about 31,700 "
+                         "years) for a duration")
     return seconds
 
 

@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 from common.errors import FretishError, render_diagnostic
 
 from .instantiate import formula_text, instantiate
-from .ir import gc_paused
 from .printers import mangle
 from .semantics import Formalization, SemanticsError
 
@@ -164,14 +163,8 @@ def compile_entry(entry) -> Compiled:
 
 
 def compile_entries(entries: Iterable) -> list[Compiled]:
-    """:func:`compile_entry` of each entry, in order.
-
-    Python's cyclic garbage collector is paused meanwhile, as :func:`formalize` does for one
-    requirement: the formula trees and the compiled records are acyclic, and between two
-    requirements the collector would rescan every node built so far (a quarter of the
-    time of a thousand requirements; :class:`compiler.ir.gc_paused`)."""
-    with gc_paused():
-        return [compile_entry(e) for e in entries]
+    """:func:`compile_entry` of each entry, in order."""
+    return [compile_entry(e) for e in entries]
 
 
 def _locate(exc: SemanticsError, entry) -> FretishError:

@@ -46,7 +46,7 @@ from common import cache as fretc_cache
 
 from . import code_cache
 from .automata import LTL3Automata, ltl3_automata
-from .ir import Node, gc_paused
+from .ir import Node
 from .pt_step import CodegenError, StepCode, check_monitorable, compile_nodes
 
 __all__ = ["CodegenError", "InvalidMonitorError", "MonitorInfo", "MonitorModule",
@@ -264,12 +264,7 @@ def check_module(text: str, module_name: str, cache: bool = False) -> None:
     check that passed.
 
     Raises :class:`InvalidMonitorError` (an internal error) naming the failure."""
-    # compile() and exec allocate a lot while the heap holds every requirement's formulas
-    # and automata: Python's cyclic collector would rescan those again and again (a sixth
-    # of the check's CPU time on the 696 sentences, measured); nothing here is cyclic but
-    # the module's namespace, collected once the collector resumes
-    with gc_paused():
-        _check_module(text, module_name, cache)
+    _check_module(text, module_name, cache)
 
 
 def _check_module(text: str, module_name: str, cache: bool) -> None:
@@ -437,11 +432,6 @@ def render_module(compiled_list, module_name: str, errors: list | None = None) -
 
 
 def _render(monitors: list[MonitorSource], skipped, module_name: str) -> str:
-    with gc_paused():  # as check_module: strings and Jinja contexts, no cycles worth a pass
-        return _render_text(monitors, skipped, module_name)
-
-
-def _render_text(monitors: list[MonitorSource], skipped, module_name: str) -> str:
     digest = hashlib.sha256("\n".join(f"{m.id}:{m.source_hash}" for m in monitors)
                             .encode()).hexdigest()
     tables: dict[str, int] = {}  # encoded table -> index: one copy per distinct table

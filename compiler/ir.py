@@ -34,26 +34,7 @@ negation, and the identities FRET's own optimizer uses, e.g. ``p S (p & FTP) = H
 
 from __future__ import annotations
 
-import gc
 from collections.abc import Iterator
-
-class gc_paused:
-    """Context manager: Python's cyclic garbage collector paused inside, restored after (left
-    off if it was off). IR trees are acyclic, so while they are built the collector would
-    only rescan the new nodes again and again (half the time of formalizing a thousand
-    requirements). Used by :func:`compiler.semantics.formalize` and
-    :func:`compiler.build.compile_entries`; nested uses are free."""
-
-    __slots__ = ("_was_on",)
-
-    def __enter__(self) -> None:
-        self._was_on = gc.isenabled()
-        if self._was_on:
-            gc.disable()
-
-    def __exit__(self, *exc) -> None:
-        if self._was_on:
-            gc.enable()
 
 
 class Node:

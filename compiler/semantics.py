@@ -106,12 +106,8 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
     ``tick_period`` is the duration of one tick in seconds (``None``: units are read as
     ticks, as FRET does, with a warning). Raises :class:`SemanticsError` for a free-form
     requirement, a bad duration or a bad temporal-function argument.
-
-    The formula trees are acyclic, so Python's cyclic garbage collector is paused while they
-    are built (:class:`compiler.ir.gc_paused`).
     """
-    with ir.gc_paused():
-        return _formalize(req, tick_period)
+    return _formalize(req, tick_period)
 
 
 def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalization:

@@ -10,7 +10,6 @@ numpy, mcap, Jinja2 or Spot.
 
 from __future__ import annotations
 
-import gc
 import sys
 
 import click
@@ -53,10 +52,6 @@ def _load(paths) -> list:
 def compile_cmd(files, emit, as_json, output, psl_map):
     """Compile requirement FILES (.fret or FRET JSON exports)."""
     if emit == "ltl":
-        # Parsed sentences, formula trees and printed texts are acyclic and live until the
-        # process ends: Python's cyclic garbage collector would only rescan them, again and
-        # again as they accumulate (more than half the CPU time of a thousand requirements).
-        gc.disable()
         if as_json:
             texts, failed = _ltl_json_texts(files)
             for c in failed:
@@ -112,7 +107,6 @@ def _ltl_json_texts(paths) -> tuple:
     memory of a thousand requirements). Errors, exit codes and texts are those of
     :func:`_load` then :func:`ltl_json`."""
     from compiler.build import compile_entry
-    from compiler.ir import gc_paused
 
     entries = _entries(paths)
     if not entries:
@@ -120,14 +114,13 @@ def _ltl_json_texts(paths) -> tuple:
     item = ltl_json_item()
     texts: list = []
     failed: list = []
-    with gc_paused():  # as compiler.build.compile_entries
-        for i, e in enumerate(entries):
-            entries[i] = None  # the list's reference: freed with the last one below
-            c = compile_entry(e)
-            if c.error is not None:
-                failed.append(c)
-            texts.append(item(c))
-            del c, e  # not held while the next one compiles
+    for i, e in enumerate(entries):
+        entries[i] = None  # the list's reference: freed with the last one below
+        c = compile_entry(e)
+        if c.error is not None:
+            failed.append(c)
+        texts.append(item(c))
+        del c, e  # not held while the next one compiles
     return texts, failed
 
 

@@ -300,22 +300,16 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
         pending = list(refs)
         try:
             while pending:
-                done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
+                try:
+                    done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
+                except Exception as exc:  # the raylet or the node is gone: nothing more
+                    _lost(plan, paths, refs, pending, results, progress, exc)
+                    break
                 for ref in done:
                     i = refs[ref]
-                    try:
-                        la = ray.get(ref)
-                    except ray.exceptions.RayTaskError as exc:
-                        cause = getattr(exc, "cause", None) or exc
-                        la = error_audit(plan, paths[i], "the audit task raised "
-                                         f"{type(cause).__name__}: {_first_line(cause)}")
-                    except ray.exceptions.RayError as exc:  # worker died, node lost, ...
-                        la = error_audit(plan, paths[i], f"{type(exc).__name__}: the Ray "
-                                         f"worker was lost ({_first_line(exc)}) after "
-                                         f"{retries + 1} attempt(s); try --retries")
-                    results[i] = la
+                    results[i] = _result(ray, plan, paths[i], ref, retries)
                     if progress is not None:
-                        progress.done(i, la)
+                        progress.done(i, results[i])
         except KeyboardInterrupt:
             for ref in pending:
                 try:
@@ -327,6 +321,34 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
     finally:
         if started:
             ray.shutdown()
+
+
+def _result(ray, plan: AuditPlan, path: str, ref, retries: int):
+    """The LogAudit a finished task returned, or an :func:`error_audit` saying why not."""
+    try:
+        return ray.get(ref)
+    except ray.exceptions.RayTaskError as exc:
+        cause = getattr(exc, "cause", None) or exc
+        return error_audit(plan, path, "the audit task raised "
+                           f"{type(cause).__name__}: {_first_line(cause)}")
+    except Exception as exc:  # worker died, node or raylet lost, object lost, ...
+        return error_audit(plan, path, f"{type(exc).__name__}: the Ray worker was lost "
+                           f"({_first_line(exc)}) after {retries + 1} attempt(s); try "
+                           "--retries")
+
+
+def _lost(plan: AuditPlan, paths, refs: dict, pending: list, results: dict, progress,
+          exc: BaseException) -> None:
+    """Ray itself failed (``ray.wait`` raised): every log not yet returned gets an error
+    entry naming the failure; the logs already audited keep their verdicts."""
+    reason = (f"Ray failed while the log was being audited ({type(exc).__name__}: "
+              f"{_first_line(exc)}); run it again, with --retries or without --ray")
+    for ref in pending:
+        i = refs[ref]
+        if i not in results:
+            results[i] = error_audit(plan, paths[i], reason)
+            if progress is not None:
+                progress.done(i, results[i])
 
 
 def _first_line(exc: BaseException) -> str:

@@ -14,7 +14,7 @@ import numpy as np
 from common.problems import BindingError, SignalError
 from .compile import EvalError, EvalState, compile_node
 from .expression import (BinOp, Const, Expr, ExprLocation, Field, Ref, UnaryOp, check,
-                         parse_expression, substitute, unparse, walk)
+                         check_size, parse_expression, substitute, unparse, walk)
 from .extract import Valid, normalize_scalar
 from .operations import Ops
 
@@ -140,6 +140,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     if any(isinstance(n, Ref) for n in walk(node)):
         trees = {n: b.ast for n, b in (refs or {}).items()}
         node = substitute(node, trees, where, name)
+        check_size(node, where, "the expression with its references substituted")
         found: set[str] = set()
         check(node, where, found)
         topics = frozenset(found)

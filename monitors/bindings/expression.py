@@ -22,10 +22,15 @@ from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInpu
                              UnexpectedToken, VisitError)
 
 from common.problems import BindingError
+from fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
 from ..sources.schema import closest
 
 __all__ = ["Expr", "Const", "Slice", "Field", "Ref", "UnaryOp", "BinOp", "FuncCall", "FUNCS",
-           "ExprLocation", "parse_expression", "check", "walk", "refs", "substitute", "unparse"]
+           "ExprLocation", "parse_expression", "check", "check_size", "walk", "refs",
+           "substitute", "unparse", "MAX_EXPR_CHARS"]
+
+#: Characters of one binding expression (real ones have tens; the text is parsed whole)
+MAX_EXPR_CHARS = 20_000
 
 
 # ------------------------------------------------------------------------------------------------
@@ -307,6 +312,9 @@ def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[st
     """
     if not expr.strip():
         raise where.error("empty expression")
+    if len(expr) > MAX_EXPR_CHARS:
+        raise where.error(f"the expression has {len(expr):,} characters; the limit is "
+                          f"{MAX_EXPR_CHARS:,}")
     try:
         tree = _parser().parse(expr)
     except UnexpectedInput as exc:
@@ -315,6 +323,10 @@ def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[st
         node = _ToExpr(where).transform(tree)
     except VisitError as exc:
         raise exc.orig_exc from None
+    except RecursionError:
+        raise where.error(f"the expression is nested more than {MAX_EXPR_DEPTH} levels deep "
+                          "(operators, signs, calls)") from None
+    check_size(node, where)
     topics: set[str] = set()
     check(node, where, topics)
     return node, frozenset(topics)
@@ -323,6 +335,47 @@ def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[st
 # ------------------------------------------------------------------------------------------------
 # Static checks and references
 # ------------------------------------------------------------------------------------------------
+
+
+def check_size(node: Expr, where: ExprLocation, what: str = "the expression") -> None:
+    """The limits of requirements (:mod:`fretish.limits`) for a binding expression: at most
+    :data:`~fretish.limits.MAX_EXPR_NODES` nodes counted as expanded (a variable referred to
+    twice counts twice) and :data:`~fretish.limits.MAX_EXPR_DEPTH` levels. Shared subtrees
+    (references substituted) are counted once per use without walking them again, so a
+    chain of doubling references is refused in linear time.
+
+    Raises:
+        BindingError: over a limit, naming the limit.
+    """
+    size: dict[int, int] = {}
+    depth: dict[int, int] = {}
+    stack: list[tuple[Expr, bool]] = [(node, False)]
+    while stack:
+        n, done = stack.pop()
+        if id(n) in size:
+            continue
+        kids = _children(n)
+        if not done:
+            stack.append((n, True))
+            stack.extend((k, False) for k in kids if id(k) not in size)
+            continue
+        size[id(n)] = 1 + sum(size[id(k)] for k in kids)
+        depth[id(n)] = 1 + max((depth[id(k)] for k in kids), default=0)
+        if size[id(n)] > MAX_EXPR_NODES:
+            raise where.error(f"{what} has more than {MAX_EXPR_NODES:,} names, numbers and "
+                              "operators (counting each use of a referred variable)")
+        if depth[id(n)] > MAX_EXPR_DEPTH:
+            raise where.error(f"{what} is nested more than {MAX_EXPR_DEPTH} levels deep")
+
+
+def _children(n: Expr) -> tuple[Expr, ...]:
+    if isinstance(n, UnaryOp):
+        return (n.arg,)
+    if isinstance(n, BinOp):
+        return (n.left, n.right)
+    if isinstance(n, FuncCall):
+        return tuple(n.args)
+    return ()
 
 
 def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:

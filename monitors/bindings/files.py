@@ -21,7 +21,10 @@ from .binding import VARNAME, Binding, compile_expression
 from .expression import ExprLocation, parse_expression, refs
 from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec
 
-__all__ = ["parse_bindings", "load_bindings"]
+__all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
+
+#: How deep variables may refer to one another (``a = "b"``, ``b = "c"``, ...)
+MAX_REFERENCE_CHAIN = 100
 
 # ------------------------------------------------------------------------------------------------
 # Where things are in the TOML text
@@ -79,6 +82,9 @@ def _value_start(rest: str, value: str) -> tuple[int, bool]:
 def _load_toml(text: str, source: str) -> dict[str, Any]:
     try:
         return tomllib.loads(text)
+    except RecursionError:
+        raise BindingError(source, "TOML nested too deeply (arrays or tables inside one "
+                           "another beyond Python's recursion limit)") from None
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
         msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
@@ -192,11 +198,15 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
     def visit(name: str, chain: list[str]) -> None:
         if state.get(name) == 2:
             return
+        _expr, line, col, _e = pending[name]
         if state.get(name) == 1:
             cyc = chain[chain.index(name):] + [name]
-            _expr, line, col, _e = pending[name]
             raise BindingError(source, "variables refer to each other in a cycle: "
                                + " -> ".join(cyc), line=line, col=col, variable=name)
+        if len(chain) >= MAX_REFERENCE_CHAIN:
+            raise BindingError(source, f"variables refer to each other more than "
+                               f"{MAX_REFERENCE_CHAIN} deep: {chain[0]} -> {chain[1]} -> ... "
+                               f"-> {name}", line=line, col=col, variable=name)
         state[name] = 1
         for d in deps[name]:
             visit(d, chain + [name])

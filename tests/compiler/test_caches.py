@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from compiler import automata, codegen, ltl3
+from compiler import automata, codegen, ltl3, spot_monitors
 from compiler.build import compile_entry
 from compiler.codegen import render_module
 from fretish import parser as P
@@ -66,7 +66,7 @@ def test_monitor_built_from_cache_agrees_with_spot_det(tmp_path, monkeypatch):
         shape, atoms = automata.canonical_shape(ft_inf)
         from compiler.printers import to_spot
         for negate in (False, True):
-            ours = automata._spot_monitor(to_spot(shape), negate, len(atoms), 5000, 10)
+            ours = spot_monitors._spot_monitor(to_spot(shape), negate, len(atoms), 5000, 10)
             d = spot.make_bdd_dict()
             f = spot.formula(to_spot(shape))
             aut = spot.translate(spot.formula.Not(f) if negate else f, "monitor", "det",
@@ -77,10 +77,10 @@ def test_monitor_built_from_cache_agrees_with_spot_det(tmp_path, monkeypatch):
             for s in range(aut.num_states()):
                 row = [-1] * (1 << len(names))
                 for e in aut.out(s):
-                    for letter in automata._letters(e.cond, var, names, 1 << len(names)):
+                    for letter in spot_monitors._letters(e.cond, var, names, 1 << len(names)):
                         row[letter] = e.dst
                 rows.append(row)
-            assert automata._bfs_tables(aut.get_init_state_number(), rows)[1] == ours["table"]
+            assert spot_monitors._bfs_tables(aut.get_init_state_number(), rows)[1] == ours["table"]
 
 
 def test_future_pt_is_skipped_before_any_automaton(monkeypatch):

@@ -1,7 +1,7 @@
 """compiler/dfa.py: our subset construction and minimization give Spot's minimal monitors.
 
 Differential: for sentences of FRET's trace vectors (and both polarities, as the LTL3 monitor
-uses), the table built by ``compiler.automata._table_monitor`` equals the one from Spot's
+uses), the table built by ``compiler.spot_monitors._table_monitor`` equals the one from Spot's
 ``tgba_powerset`` + ``minimize_monitor``, after the same breadth-first renaming."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 spot = pytest.importorskip("spot")
 
-from compiler import automata, dfa  # noqa: E402
+from compiler import automata, dfa, spot_monitors  # noqa: E402
 from compiler.printers import to_spot  # noqa: E402
 from compiler.semantics import formalize  # noqa: E402
 from fretish import parse  # noqa: E402
@@ -41,10 +41,10 @@ def _spot_table(aut, n_atoms: int):
     for s in range(m.num_states()):
         row = [-1] * width
         for e in m.out(s):
-            for letter in automata._letters(e.cond, var, names, width):
+            for letter in spot_monitors._letters(e.cond, var, names, width):
                 row[letter] = e.dst
         rows.append(row)
-    return automata._bfs_tables(m.get_init_state_number(), rows)[1], bool(m.is_empty())
+    return spot_monitors._bfs_tables(m.get_init_state_number(), rows)[1], bool(m.is_empty())
 
 
 SAMPLE = random.Random(7).sample(_sentences(), 60) + [
@@ -60,7 +60,7 @@ def test_same_minimal_monitor_as_spot(text):
     for negate in (False, True):
         f = spot.formula(to_spot(shape))
         aut = spot.translate(spot.formula.Not(f) if negate else f, "monitor", "low")
-        ours = automata._table_monitor(aut, len(atoms))
+        ours = spot_monitors._table_monitor(aut, len(atoms))
         if ours is None:
             pytest.skip(f"more than {dfa.SUBSET_MAX_CLASSES} letter classes: Spot's construction")
         table, empty = _spot_table(aut, len(atoms))
@@ -71,7 +71,7 @@ def test_minimize_merges_equivalent_states_and_drops_the_sink():
     # states 1 and 2 behave alike (letter 0 -> themselves, letter 1 -> reject); 0 differs
     rows = [[1, 2], [1, -1], [2, -1]]
     init, out = dfa.minimize(rows)
-    init, out = automata._bfs_tables(init, out)
+    init, out = spot_monitors._bfs_tables(init, out)
     assert out == [[1, 1], [1, -1]]
 
 
@@ -99,7 +99,7 @@ def test_mutually_simulating_states_keep_the_lower_number():
 
 def _canonical(rows):
     init, rows = dfa.minimize(rows)
-    return automata._bfs_tables(init, rows)[1]
+    return spot_monitors._bfs_tables(init, rows)[1]
 
 
 @st.composite
@@ -169,7 +169,7 @@ def test_small_minimization_equals_the_numpy_one(rows):
         big = dfa.minimize(rows)
     finally:
         dfa.PYTHON_MINIMIZE_MAX = saved
-    assert automata._bfs_tables(*small) == automata._bfs_tables(*big)
+    assert spot_monitors._bfs_tables(*small) == spot_monitors._bfs_tables(*big)
     assert len(small[1]) == len(big[1])
 
 
@@ -183,7 +183,7 @@ _BOOLS = st.recursive(_BOOL_ATOMS, lambda sub: st.one_of(
 @settings(max_examples=200, deadline=None)
 @given(_BOOLS, st.integers(1, 4))
 def test_letters_of_a_bdd_are_its_satisfying_letters(text, n_atoms):
-    """Differential: automata._letters (depth-first restriction) against evaluating the
+    """Differential: spot_monitors._letters (depth-first restriction) against evaluating the
     Boolean formula on every letter; a condition that depends on an atom outside the letter
     (``b``) is satisfied by no letter unless it is true whatever ``b`` is."""
     d = spot.make_bdd_dict()
@@ -194,7 +194,7 @@ def test_letters_of_a_bdd_are_its_satisfying_letters(text, n_atoms):
     f = spot.formula(text)
     cond = spot.formula_to_bdd(f, d, aut)
     width = 1 << n_atoms
-    got = automata._letters(cond, var, names, width)
+    got = spot_monitors._letters(cond, var, names, width)
     assert got == sorted(got)
     assert got == _brute_letters(text, n_atoms)
 

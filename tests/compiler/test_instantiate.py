@@ -18,11 +18,15 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from compiler import fallback, ir
 from compiler import instantiate as I
+from compiler import instantiate_atoms as IA
+from compiler import template_table as TT
 from compiler.printers import to_smv, to_spot
-from compiler.semantics import formalize
+from compiler.semantics import _shape, formalize
 from differential import random_requirement
 from fretish import FretishError, parse
+from fretish import ast as A
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 ENC = json.encoder.encode_basestring_ascii  # json.dumps's escaper (ensure_ascii)
@@ -327,20 +331,9 @@ def test_template_count_is_bounded():
             pass
     for n in range(0, 40):
         I.instantiate(parse(f"upon p the sw shall within {n} ticks satisfy q"))
-    keys = set(I._TEMPLATES)
+    keys = set(TT._TEMPLATES)
     assert len(keys) <= 8 * 3 * (8 + 4 * 3)
     assert {k[3] for k in keys} <= {None, 0, 1, -1}
-
-
-def test_disk_table_gives_the_built_templates(tmp_path, monkeypatch):
-    """The disk cache's table gives the templates as built (its layout and its damage:
-    tests/compiler/test_template_table.py)."""
-    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(I, "_TABLE", [])
-    table = I._table()
-    assert table is not None and len(table) == len(I.ALL_KEYS) == 432
-    for key in I.ALL_KEYS[::37]:
-        assert I._from_table(table, key) == I._build_key(key)
 
 
 def test_pickles_as_the_full_build():
@@ -376,24 +369,6 @@ def test_the_first_bad_expression_of_the_sentence_is_reported(text):
     assert errors[0][1].column == text.index("x + 1" if "x + 1" in text else "s * 2") + 1
 
 
-def test_cache_name_follows_the_sources(monkeypatch):
-    """The table's entry name is a digest of the construction's sources: the same
-    sources give the same name, a changed source another."""
-    name = I._cache_name()
-    assert name == I._cache_name()
-    real_open = open
-
-    def edited(path, *args, **kw):
-        f = real_open(path, *args, **kw)
-        if str(path).endswith("printers.py"):
-            import io
-            return io.BytesIO(f.read() + b"\n# edited\n")
-        return f
-
-    monkeypatch.setattr("builtins.open", edited)
-    assert I._cache_name() != name
-
-
 # --------------------------------------------------------------------------- shortcuts
 def _atoms_of(text: str, period=None):
     """The instantiation of ``text`` (None when it falls back or fails)."""
@@ -408,7 +383,7 @@ def _atoms_of(text: str, period=None):
           suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(sentence(), colliding_sentence()))
 def test_plain_comparisons_agree_with_the_general_check(text):
-    """_plain_compared_safe (conditions reduced once per template for atoms shared by ft,
+    """plain_compared_safe (conditions reduced once per template for atoms shared by ft,
     ft_inf and pt) gives _compared_safe's answer on every plain requirement."""
     try:
         req = parse(text)
@@ -417,27 +392,27 @@ def test_plain_comparisons_agree_with_the_general_check(text):
     if req.freeform:
         return
     try:
-        scope, cond, timing, n, _ = I._shape(req, None)
+        scope, cond, timing, n, _ = _shape(req, None)
     except FretishError:
         return
     exprs = (req.scope.mode if scope != "null" else None,
              req.condition.expr if cond != "null" else None,
-             req.timing.stop if timing in I.A.STOP_TIMINGS else None, req.response)
-    x = I._PlainExpander()
+             req.timing.stop if timing in A.STOP_TIMINGS else None, req.response)
+    x = IA.PlainExpander()
     try:
         one = [None if e is None else x.bool(e) for e in exprs]
-    except (I._Timed, FretishError):
+    except (IA.Timed, FretishError):
         return
-    tmpl = I.template(scope, cond, timing, n)
+    tmpl = TT.template(scope, cond, timing, n)
     atoms = tuple(one) * 3
-    assert I._plain_compared_safe(tmpl, one, atoms, n) == I._compared_safe(tmpl, atoms, n)
+    assert fallback.plain_compared_safe(tmpl, one, atoms, n) == fallback._compared_safe(tmpl, atoms, n)
 
 
 @settings(max_examples=200, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(sentence())
 def test_variables_walk_matches_ir_variables(text):
-    """_variables_into (shared sub-formulas skipped) lists ir.variables' names in order."""
+    """variables_into (shared sub-formulas skipped) lists ir.variables' names in order."""
     f = _atoms_of(text)
     if f is None:
         return
@@ -446,14 +421,14 @@ def test_variables_walk_matches_ir_variables(text):
     want: dict = {}
     for a in f._atoms:
         if a is not None:
-            I._variables_into(a, seen, done)
-            want.update(dict.fromkeys(I.ir.variables(a)))
+            IA.variables_into(a, seen, done)
+            want.update(dict.fromkeys(ir.variables(a)))
     assert list(seen) == list(want), text
 
 
 def test_future_function_names_are_the_expanders():
     from compiler.expressions import _FUTURE_FUNCS
-    assert I._FUTURE_FUNCTIONS == frozenset(_FUTURE_FUNCS)
+    assert IA._FUTURE_FUNCTIONS == frozenset(_FUTURE_FUNCS)
 
 
 def test_ft_inf_atoms_are_rebuilt_with_future_functions():
@@ -470,9 +445,9 @@ def test_ft_inf_atoms_are_rebuilt_with_future_functions():
 def test_shared_leaves_and_endpoints_are_bounded(monkeypatch):
     """The name leaves and named-mode endpoints are made once per name, and both tables
     are emptied together at their bound; texts stay the full build's."""
-    monkeypatch.setattr(I, "_LEAVES", {})
-    monkeypatch.setattr(I, "_ENDPOINTS", {})
-    monkeypatch.setattr(I, "_LEAVES_MAX", 3)
+    monkeypatch.setattr(IA, "_LEAVES", {})
+    monkeypatch.setattr(IA, "_ENDPOINTS", {})
+    monkeypatch.setattr(IA, "_LEAVES_MAX", 3)
     a = _atoms_of("in m upon p the sw shall within 3 ticks satisfy q")
     b = _atoms_of("in m upon p the sw shall within 4 ticks satisfy q")
     assert a._atoms[1] is b._atoms[1]  # the leaf of p, shared
@@ -480,11 +455,11 @@ def test_shared_leaves_and_endpoints_are_bounded(monkeypatch):
              % (i, i, i, i) for i in range(12)]
     for i, t in enumerate(texts):
         assert same(t)
-        assert len(I._LEAVES) <= 3
+        assert len(IA._LEAVES) <= 3
     # the named-mode endpoints were emptied with the leaves (one mode name, m)
-    assert len(I._ENDPOINTS) <= 1
-    assert I._ENDPOINTS.get(("in", "m")) in (None, I._named_endpoints("in", I._LEAVES.get(
-        ("ap", "m")) or I._name_node("ap", "m")))
+    assert len(IA._ENDPOINTS) <= 1
+    assert IA._ENDPOINTS.get(("in", "m")) in (None, IA.named_endpoints("in", IA._LEAVES.get(
+        ("ap", "m")) or IA.name_node("ap", "m")))
 
 
 class _NotDigits(str):
@@ -528,8 +503,8 @@ def _form(fields_from: list):
             tuple(f for _, f in segs))))
 
 
-_SMV_FIELDS = list(range(I._BOUND0 + 6))
-_SPOT_FIELDS = list(range(2 * I._ATOMS)) + list(range(I._BOUND0, I._BOUND0 + 6))
+_SMV_FIELDS = list(range(TT.BOUND0 + 6))
+_SPOT_FIELDS = list(range(2 * TT.ATOMS)) + list(range(TT.BOUND0, TT.BOUND0 + 6))
 
 
 @settings(max_examples=200, deadline=None, derandomize=True)
@@ -538,7 +513,7 @@ _SPOT_FIELDS = list(range(2 * I._ATOMS)) + list(range(I._BOUND0, I._BOUND0 + 6))
        st.lists(_TEXT, min_size=12, max_size=12), st.lists(_TEXT, min_size=12, max_size=12),
        st.lists(_TEXT, min_size=6, max_size=6), st.booleans())
 def test_json_pieces_fill_as_the_escaped_format(forms, smv, spot, bounds, plain):
-    """_json_format's pieces, filled with the escaped values by its getters and joined
+    """json_format's pieces, filled with the escaped values by its getters and joined
     (InstantiatedFormalization.json_forms), give the five forms filled in by ``%`` and
     then escaped by json, separators between them: for any literal text (``%`` included,
     which takes the NUL-filling path) and any field order, with all twelve atoms or plain
@@ -547,12 +522,11 @@ def test_json_pieces_fill_as_the_escaped_format(forms, smv, spot, bounds, plain)
     seps = (',\n    "ft_inf": ', ',\n    "pt": ', ',\n    "ft_spot": ', ',\n    "ft_inf_spot": ')
     if plain:
         smv, spot = smv[:4] * 3, spot[:4] * 3
-    t = I._Template((forms, ()))
-    buffer, pick, pick_plain = I._json_format(t, enc, seps)
+    buffer, pick, pick_plain = TT.json_format(forms, enc, seps)
 
     def raw(i, f):
-        if f >= I._BOUND0:
-            return bounds[f - I._BOUND0]
+        if f >= TT.BOUND0:
+            return bounds[f - TT.BOUND0]
         return smv[f] if i < 3 else spot[f]
 
     want = "".join((seps[i - 1] if i else "") + enc(fmt % tuple(raw(i, f) for f in fields))

@@ -1,12 +1,12 @@
 """LTL3 monitors of safety and guarantee shapes built from one cheap translation.
 
-``compiler.automata.spot_automata`` builds the bad-prefix monitor of a syntactic safety
+``compiler.spot_monitors.spot_automata`` builds the bad-prefix monitor of a syntactic safety
 formula from Spot's terminal automaton of its (guarantee) negation
 (``compiler.dfa.guarantee_bad_prefixes``), translates it for a formula that is safety only
 after Spot's basic rewriting, and derives the other monitor from it
 (``compiler.dfa.safety_complement``). Differential:
 each derived table equals the table of Spot's monitor translated directly
-(``automata._spot_monitor``), on the 288 template keys, on FRET's trace-vector sentences and
+(``spot_monitors._spot_monitor``), on the 288 template keys, on FRET's trace-vector sentences and
 on random formulas (hypothesis); plus hand-checked small cases of both rules.
 """
 
@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 spot = pytest.importorskip("spot")
 
-from compiler import automata, dfa  # noqa: E402
+from compiler import automata, dfa, spot_monitors  # noqa: E402
 from compiler.printers import to_spot  # noqa: E402
 from compiler.semantics import formalize  # noqa: E402
 from fretish import parse  # noqa: E402
@@ -38,8 +38,8 @@ MAX, APS = automata.MAX_AUTOMATON_STATES, automata.TABLE_MAX_APS
 
 
 def _translated(text: str, n_atoms: int) -> dict:
-    return {"bad": automata._spot_monitor(text, False, n_atoms, MAX, APS),
-            "good": automata._spot_monitor(text, True, n_atoms, MAX, APS)}
+    return {"bad": spot_monitors._spot_monitor(text, False, n_atoms, MAX, APS),
+            "good": spot_monitors._spot_monitor(text, True, n_atoms, MAX, APS)}
 
 
 def _check(text: str, n_atoms: int) -> str:
@@ -47,22 +47,22 @@ def _check(text: str, n_atoms: int) -> str:
     return the shape's class: "safety" or "guarantee" (syntactically), "rewritten" (after
     Spot's basic rewriting) or "neither"."""
     f = spot.formula(text)
-    side, cls = automata._safety_side(f), None
+    side, cls = spot_monitors._safety_side(f), None
     if side is None:
         g = spot.tl_simplifier(spot.tl_simplifier_options(True, False, False)).simplify(f)
-        side = automata._safety_side(g)
+        side = spot_monitors._safety_side(g)
         cls = "rewritten" if side is not None else "neither"
     want = _translated(text, n_atoms)
     if side is not None:
         other = "good" if side == "bad" else "bad"
         if cls is None:
             cls = "safety" if side == "bad" else "guarantee"
-            terminal = automata._terminal_monitor(
+            terminal = spot_monitors._terminal_monitor(
                 f if side == "good" else spot.formula.Not(f), n_atoms, MAX)
             assert terminal == want[side], (text, side)
-        assert automata._safety_complement_data(want[side], MAX) == want[other], \
+        assert spot_monitors._safety_complement_data(want[side], MAX) == want[other], \
             (text, other)
-    assert automata.spot_automata(text, n_atoms, MAX, APS) == want, text
+    assert spot_monitors.spot_automata(text, n_atoms, MAX, APS) == want, text
     return cls
 
 
@@ -123,12 +123,12 @@ def test_safety_complement_of_a_hand_checked_monitor():
     # not g: runs on the prefixes starting without a0 (and the empty one); the monitor of g's
     # state 1 (every continuation satisfies g) has no run, "no run" became a looping state
     assert raw == [[2, -1], [-1, -1], [2, 2]]
-    assert automata._bfs_tables(*dfa.minimize(raw))[1] == [[1, -1], [1, 1]]
+    assert spot_monitors._bfs_tables(*dfa.minimize(raw))[1] == [[1, -1], [1, 1]]
     # g = G a0: every prefix can still be extended to violate it; the derived automaton has
     # two equivalent states that only the minimization merges
     raw = dfa.safety_complement([[-1, 0]])
     assert len(raw) == 2
-    assert automata._bfs_tables(*dfa.minimize(raw))[1] == [[0, 0]]
+    assert spot_monitors._bfs_tables(*dfa.minimize(raw))[1] == [[0, 0]]
     # g valid: not g has no run at all
     assert dfa.safety_complement([[0, 0]]) == [[-1, -1]]
 

@@ -2,9 +2,9 @@
 
 Differential, per requirement shape and polarity (``bad`` = monitor of ft_inf, ``good`` = of
 its negation; Bauer, Leucker & Schallhart, TOSEM 2011): the tables of
-``compiler.automata.spot_automata`` (what the disk cache stores: for a safety or guarantee
+``compiler.spot_monitors.spot_automata`` (what the disk cache stores: for a safety or guarantee
 shape one monitor from Spot's terminal automaton of the guarantee side and the other derived
-from it; otherwise Spot's ``low`` translation with ``automata.LOW_XARGS``, then
+from it; otherwise Spot's ``low`` translation with ``spot_monitors.LOW_XARGS``, then
 :mod:`compiler.dfa`'s subset construction pruned by simulation and its minimization) equal the table of Spot's own construction from its default ``low``
 translation (``tgba_powerset`` + ``minimize_monitor``; Moore's refinement instead of
 ``minimize_monitor`` on powersets of more than 3000 states), both renamed breadth-first.
@@ -26,7 +26,7 @@ import pytest
 
 spot = pytest.importorskip("spot")
 
-from compiler import automata, dfa, ir  # noqa: E402
+from compiler import automata, dfa, ir, spot_monitors  # noqa: E402
 from compiler.printers import to_spot  # noqa: E402
 from compiler.semantics import formalize  # noqa: E402
 from fretish import parse  # noqa: E402
@@ -52,7 +52,7 @@ REFERENCE_MINIMIZE_MAX = 3000
 
 
 def _table(aut, n_atoms: int) -> tuple[int, list[list[int]]]:
-    return aut.get_init_state_number(), automata.letter_rows(aut, n_atoms)
+    return aut.get_init_state_number(), spot_monitors.letter_rows(aut, n_atoms)
 
 
 def _spot_reference(text: str, negate: bool, n_atoms: int):
@@ -67,9 +67,9 @@ def _spot_reference(text: str, negate: bool, n_atoms: int):
         init, rows = _table(spot.minimize_monitor(det), n_atoms)
     else:
         init, rows = _table(det, n_atoms)
-        init, rows = automata._bfs_tables(init, rows)
+        init, rows = spot_monitors._bfs_tables(init, rows)
         init, rows = dfa.minimize(rows)
-    return automata._bfs_tables(init, rows)[1], empty
+    return spot_monitors._bfs_tables(init, rows)[1], empty
 
 
 def check_exact(sentence: str) -> bool:
@@ -82,8 +82,8 @@ def check_exact(sentence: str) -> bool:
             or sum(bounds) > automata.MAX_LTL3_BOUND_SUM)):
         return False
     text = to_spot(shape)
-    got = automata.spot_automata(text, len(atoms), automata.MAX_AUTOMATON_STATES,
-                                 automata.TABLE_MAX_APS)
+    got = spot_monitors.spot_automata(text, len(atoms), automata.MAX_AUTOMATON_STATES,
+                                      automata.TABLE_MAX_APS)
     for negate in (False, True):
         ours = got["good" if negate else "bad"]
         assert ours is not None, (sentence, negate)

@@ -105,6 +105,33 @@ def test_a_task_that_raises_is_an_error_entry(ray_session, safe_ros, local_docs)
 
 @pytest.mark.ray
 @pytest.mark.xdist_group("ray")
+def test_ray_failing_mid_run_gives_error_entries_and_keeps_the_rest(ray_session, safe_ros,
+                                                                   local_docs, monkeypatch):
+    """The raylet lost mid-run (``ray.wait`` raising, as it does when the raylet is killed):
+    the logs audited before keep their verdicts, the others get error entries (exit 2)."""
+    import ray
+
+    real_wait, calls = ray.wait, []
+
+    def wait(refs, **kw):
+        calls.append(1)
+        if len(calls) > 1 and len(refs) < len(TRACES):
+            raise ConnectionError("raylet died (injected)")
+        return real_wait(refs, **kw)
+
+    monkeypatch.setattr(ray, "wait", wait)
+    got = fleet.audit_logs_ray(safe_ros, TRACES)
+    lost = [la for la in got if la.error]
+    kept = [(a, b) for a, b in zip(got, local_docs) if not a.error]
+    assert lost and kept and len(lost) + len(kept) == len(TRACES)
+    assert all("Ray failed" in la.error and "ConnectionError" in la.error for la in lost)
+    assert all({v.verdict for v in la.verdicts} == {"error"} for la in lost)
+    assert all(a.to_json() == b.to_json() for a, b in kept)
+    assert exit_code(got) == 2
+
+
+@pytest.mark.ray
+@pytest.mark.xdist_group("ray")
 def test_cli_ray_equals_cli_local(ray_session, tmp_path):
     runner = CliRunner()
     logs = TRACES[:2]
