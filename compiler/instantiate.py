@@ -55,7 +55,7 @@ from .instantiate_atoms import (TIMED, PlainExpander, SharingExpander, Timed,
                                 has_future_function, is_shared_leaf, named_endpoints,
                                 variables_into)
 from .ir import FALSE, FTP, LAST
-from .printers import _smv, _smv_z, _spot
+from .printers import to_smv, to_spot
 from .scope_timing import fn_right, pt_endpoints
 from .semantics import Formalization, _shape, formalize
 from .template_table import ATOMS as _ATOMS
@@ -170,12 +170,12 @@ class InstantiatedFormalization(Formalization):
             if self._plain:  # one atom set: _JSON_PLAIN_SMV's values
                 values = [None if x is None else enc(x)[1:-1] for x in texts[:_ATOMS]]
                 values += bounds
-                values += [None if a is None else enc(_spot(a))[1:-1] for a in atoms[:_ATOMS]]
+                values += [None if a is None else enc(to_spot(a))[1:-1] for a in atoms[:_ATOMS]]
                 pick = pick_plain
             else:  # Spot forms: ft's and ft_inf's atoms only (pt's have past operators)
                 values = [None if x is None else enc(x)[1:-1] for x in texts]
                 values += bounds
-                values += [None if a is None else enc(_spot(a))[1:-1]
+                values += [None if a is None else enc(to_spot(a))[1:-1]
                            for a in atoms[:2 * _ATOMS]]
                 values += (None,) * _ATOMS
                 values += bounds
@@ -189,14 +189,14 @@ class InstantiatedFormalization(Formalization):
         """Spot text of ``ft`` or ``ft_inf``; ``ValueError`` where Spot has no form."""
         compiled = getattr(self._tmpl, which + "_spot")
         if compiled is None:
-            return _spot(getattr(self, which))  # raises the printer's own error
+            return to_spot(getattr(self, which))  # raises the printer's own error
         fmt, pick = compiled
         if self._plain:
             # one atom set, whose Spot texts serve ft and ft_inf (pt's fields, never picked
             # by a Spot form, hold the same texts)
             values = self._spot_values
             if values is None:
-                one = [None if a is None else _spot(a) for a in self._atoms[:_ATOMS]]
+                one = [None if a is None else to_spot(a) for a in self._atoms[:_ATOMS]]
                 values = self._spot_values = self._values(one * 3)
             return fmt % pick(values)
         lo = 0 if which == "ft" else _ATOMS  # only that formula's atoms: pt's have past
@@ -204,7 +204,7 @@ class InstantiatedFormalization(Formalization):
         for i in range(lo, lo + _ATOMS):
             a = self._atoms[i]
             if a is not None:
-                texts[i] = _spot(a)
+                texts[i] = to_spot(a)
         return fmt % pick(self._values(texts))
 
 
@@ -274,7 +274,7 @@ def _plain(req, tick_period, shape: tuple, one: list, names: list) -> Formalizat
     atoms = tuple(one) * 3
     if tmpl is None or not plain_compared_safe(tmpl, one, atoms, n):
         return formalize(req, tick_period)
-    texts = [None if a is None else _smv(a) for a in one] * 3
+    texts = [None if a is None else to_smv(a) for a in one] * 3
     variables = {}
     for d in names:
         variables.update(d)
@@ -314,12 +314,12 @@ def _timed(req, tick_period, shape: tuple, exprs: tuple, one: list,
                   for (e, a), f in zip(rest, a_ft))
     atoms = (m_ft, *a_ft, m_inf, *a_inf,
              m_pt, *(px.bool(e) if a is TIMED else a for e, a in rest))
-    plain_text = [None if a is None or a is TIMED else _smv(a) for a in one]
+    plain_text = [None if a is None or a is TIMED else to_smv(a) for a in one]
     texts = []
     for i, a in enumerate(atoms):
         t = plain_text[i % _ATOMS]
         if t is None and a is not None:
-            t = _smv_z(a) if i >= 2 * _ATOMS else _smv(a)
+            t = to_smv(a, "(Z FALSE)") if i >= 2 * _ATOMS else to_smv(a)
         texts.append(t)
     tmpl = template(scope, cond, timing, n)
     if tmpl is None or not opaque_safe(tmpl, atoms, n):
@@ -344,7 +344,7 @@ def formula_text(f: Formalization, which: str) -> str:
         base = which[:-5]
         if isinstance(f, InstantiatedFormalization):
             return f.spot(base)
-        return _spot(getattr(f, base))
+        return to_spot(getattr(f, base))
     if isinstance(f, InstantiatedFormalization):
         return f.smv(which)
-    return _smv_z(f.pt) if which == "pt" else _smv(getattr(f, which))
+    return to_smv(f.pt, "(Z FALSE)") if which == "pt" else to_smv(getattr(f, which))

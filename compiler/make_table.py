@@ -27,7 +27,7 @@ from fretish import ast as A
 
 from . import ir
 from .ir import LAST, Node
-from .printers import _smv, _smv_z, _spot
+from .printers import to_smv, to_spot
 from .semantics import construct
 from .template_table import (ALL_KEYS, ATOMS, BOUND0, MAX_OFFSET, MIN_OFFSET, TABLE_DIR,
                              file_name)
@@ -107,8 +107,8 @@ def build_template(scope: str, cond: str, timing: str, n: int | None) -> dict:
         conj: list = []
         if unify(x, y, conj):
             conditions.setdefault(json.dumps(conj), conj)
-    return {"ft": _checked(_smv(ft)), "ft_inf": _checked(_smv(ft_inf)),
-            "pt": _checked(_smv_z(pt)), "ft_spot": _spot_or_none(ft),
+    return {"ft": _checked(to_smv(ft)), "ft_inf": _checked(to_smv(ft_inf)),
+            "pt": _checked(to_smv(pt, "(Z FALSE)")), "ft_spot": _spot_or_none(ft),
             "ft_inf_spot": _spot_or_none(ft_inf), "fallback": list(conditions.values())}
 
 
@@ -123,7 +123,7 @@ def _checked(text: str) -> str:
 
 def _spot_or_none(node: Node) -> str | None:
     try:
-        return _checked(_spot(node))
+        return _checked(to_spot(node))
     except ValueError:
         return None
 

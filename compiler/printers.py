@@ -70,102 +70,59 @@ def mangle(name: str) -> str:
     return "_DQT_" + "".join(_mangle_char(ch) for ch in name) + "_DQT_"
 
 
-#: How each IR operator prints (one dispatch per node instead of a chain of comparisons):
-#: 0 a fixed word, 1 the first-timepoint atom, 2 a mangled name, 3 a literal, 4 a
-#: comparison or arithmetic, 5 unary minus, 6 a call, 7 ite, 8 a derived atom, 9 not; no
-#: entry: a binary operator, or a unary temporal operator with optional bounds.
-_SMV_KIND = {"true": 0, "false": 0, "LAST": 0, "FTP": 1, "ap": 2, "var": 2, "num": 3,
-             "cmp": 4, "arith": 4, "neg": 5, "call": 6, "fn": 6, "pre": 6, "ite": 7,
-             "past": 8, "future": 8, "!": 9}
 _SMV_WORD = {"true": "TRUE", "false": "FALSE", "LAST": "LAST"}
+#: Where a node keeps its printed text, by the spelling of the first-timepoint atom
+_MEMO = {"FTP": "text", "(Z FALSE)": "ztext"}
 
 
 def to_smv(node: Node, ftp: str = "FTP") -> str:
     """FRET/SMV text of ``node``. ``ftp`` is how the first-timepoint atom prints: FRET writes
     ``FTP`` in ft formulas and ``(Z FALSE)`` in pt formulas (pass ``"(Z FALSE)"``)."""
-    if ftp == "FTP":
-        return _smv(node)
-    if ftp == "(Z FALSE)":
-        return _smv_z(node)
-    raise ValueError("ftp must be 'FTP' or '(Z FALSE)'")
+    if ftp not in _MEMO:
+        raise ValueError("ftp must be 'FTP' or '(Z FALSE)'")
+    return _smv(node, ftp, _MEMO[ftp])
 
 
-# _smv and _smv_z below are the same printer with FTP spelt two ways, each with its own memo
-# slot on the nodes (kept as two functions: the slot and the spelling are constants there)
-def _smv(n: Node) -> str:
-    s = n.text
-    if s is not None:
-        return s
-    op = n.op
-    kind = _SMV_KIND.get(op)
-    if kind is None:
-        args = n.args
-        if len(args) == 2:
-            s = f"({_smv(args[0])} {op} {_smv(args[1])})"
-        elif n.hi is None:
-            s = f"({op} {_smv(args[0])})"
-        else:
-            s = f"({op}[{n.lo},{n.hi}] {_smv(args[0])})"
-    elif kind == 9:
-        s = f"(! {_smv(n.args[0])})"
-    elif kind == 2:
-        s = mangle(n.name)
-    elif kind == 4:
-        s = f"({_smv(n.args[0])} {n.name} {_smv(n.args[1])})"
-    elif kind == 0:
-        s = _SMV_WORD[op]
-    elif kind == 1:
-        s = "FTP"
-    elif kind == 3:
-        s = n.name
-    elif kind == 5:
-        s = f"(- {_smv(n.args[0])})"
-    elif kind == 6:
-        s = f"{mangle(n.name)}({','.join(_smv(a) for a in n.args)})"
-    elif kind == 7:
-        s = f"ite({','.join(_smv(a) for a in n.args)})"
-    else:
-        s = n.name if n.name else _smv(n.args[0])
-    n.text = s
+def _smv(n: Node, ftp: str, memo: str) -> str:
+    """The text of ``n``, kept on the node (attribute ``memo``): IR trees share sub-trees."""
+    s = getattr(n, memo)
+    if s is None:
+        s = _smv_text(n, ftp, memo)
+        setattr(n, memo, s)
     return s
 
 
-def _smv_z(n: Node) -> str:
-    s = n.ztext
-    if s is not None:
-        return s
-    op = n.op
-    kind = _SMV_KIND.get(op)
-    if kind is None:
-        args = n.args
-        if len(args) == 2:
-            s = f"({_smv_z(args[0])} {op} {_smv_z(args[1])})"
-        elif n.hi is None:
-            s = f"({op} {_smv_z(args[0])})"
-        else:
-            s = f"({op}[{n.lo},{n.hi}] {_smv_z(args[0])})"
-    elif kind == 9:
-        s = f"(! {_smv_z(n.args[0])})"
-    elif kind == 2:
-        s = mangle(n.name)
-    elif kind == 4:
-        s = f"({_smv_z(n.args[0])} {n.name} {_smv_z(n.args[1])})"
-    elif kind == 0:
-        s = _SMV_WORD[op]
-    elif kind == 1:
-        s = "(Z FALSE)"
-    elif kind == 3:
-        s = n.name
-    elif kind == 5:
-        s = f"(- {_smv_z(n.args[0])})"
-    elif kind == 6:
-        s = f"{mangle(n.name)}({','.join(_smv_z(a) for a in n.args)})"
-    elif kind == 7:
-        s = f"ite({','.join(_smv_z(a) for a in n.args)})"
-    else:
-        s = n.name if n.name else _smv_z(n.args[0])
-    n.ztext = s
-    return s
+def _smv_text(n: Node, ftp: str, memo: str) -> str:
+    op, args = n.op, n.args
+
+    def sub(i: int) -> str:
+        return _smv(args[i], ftp, memo)
+
+    if op in _SMV_WORD:
+        return _SMV_WORD[op]
+    if op == "FTP":
+        return ftp
+    if op in ("ap", "var"):
+        return mangle(n.name)
+    if op == "num":
+        return n.name
+    if op == "!":
+        return f"(! {sub(0)})"
+    if op in ("cmp", "arith"):
+        return f"({sub(0)} {n.name} {sub(1)})"
+    if op == "neg":
+        return f"(- {sub(0)})"
+    if op in ("call", "fn", "pre"):
+        return f"{mangle(n.name)}({','.join(_smv(a, ftp, memo) for a in args)})"
+    if op == "ite":
+        return f"ite({','.join(_smv(a, ftp, memo) for a in args)})"
+    if op in ("past", "future"):  # a derived atom: its name, or its formula
+        return n.name if n.name else sub(0)
+    if len(args) == 2:
+        return f"({sub(0)} {op} {sub(1)})"
+    if n.hi is None:
+        return f"({op} {sub(0)})"
+    return f"({op}[{n.lo},{n.hi}] {sub(0)})"
 
 
 _SPOT_OP = {"&": "&", "|": "|", "xor": "xor", "->": "->", "<->": "<->", "U": "U", "V": "R"}
@@ -206,7 +163,7 @@ def _spot(n: Node) -> str:
     elif op == "false":
         s = "false"
     elif op in ("LAST", "FTP", "cmp", "call", "past", "future"):
-        s = spot_ap(_smv(n))
+        s = spot_ap(to_smv(n))
     elif op in ("Y", "Z", "O", "H", "S", "T"):
         raise ValueError("Spot has no past-time operators: a pt formula cannot be printed "
                          "in Spot syntax")

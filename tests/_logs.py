@@ -9,11 +9,10 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
 
+from _shared import SHARED  # the real logs below: their tests are marked needs_shared
+
 ROS2 = get_typestore(Stores.ROS2_HUMBLE)
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
-#: The repository's folder; the shared data sits beside it (``../shared``, as in CI).
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
 LOGS = SHARED / "data" / "logs"
 CMD_VEL_MCAP = LOGS / "cmd_vel_scaled.mcap"
 STAGE_BAG = LOGS / "stage_mapping1.bag"

@@ -7,15 +7,51 @@
   runs, so a second run is warm as a user's would be; the tests of cold runs, damaged
   entries and read-only folders set ``FRETC_CACHE_DIR`` to their own ``tmp_path``. Set before
   any test runs, so the fretc subprocesses the tests start inherit it.
+* The default run (``-m 'not slow and not ray'``, pyproject.toml) also takes a fixed sample of
+  the cases of each parametrized ``slow`` test (:data:`SLOW_SAMPLE` of them, chosen by a hash
+  of their names: the same in every run and xdist worker); ``-m slow`` runs them all.
+* ``shared``: the project's shared data (``../shared``), or a skip with one reason when it is
+  absent (``tests/_shared.py``; a user's clone has none).
 """
 import os
 import sys
 import tempfile
+import zlib
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _shared  # noqa: E402
 
 #: where the suite's fretc cache goes when the caller did not choose one
 TEST_CACHE_DIR = os.path.join(tempfile.gettempdir(),
                               f"fretc-test-cache-{getattr(os, 'getuid', lambda: 0)()}")
 os.environ.setdefault("FRETC_CACHE_DIR", TEST_CACHE_DIR)
+
+#: cases of each parametrized slow test that the default run takes
+SLOW_SAMPLE = 2
+
+
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` deselects the slow tests
+def pytest_collection_modifyitems(config, items):
+    """When ``-m`` leaves the slow tests out, keep a fixed sample of each parametrized one."""
+    if "not slow" not in (config.option.markexpr or ""):
+        return
+    cases: dict = {}
+    for item in items:
+        if getattr(item, "callspec", None) is not None and item.get_closest_marker("slow"):
+            cases.setdefault((item.path, item.originalname), []).append(item)
+    for (path, _), group in cases.items():
+        # the cases of smallest hash: the same whatever other cases the test has
+        group.sort(key=lambda item: zlib.crc32(f"{path.name}::{item.name}".encode()))
+        for item in group[:SLOW_SAMPLE]:
+            item.own_markers[:] = [m for m in item.own_markers if m.name != "slow"]
+
+
+@pytest.fixture(scope="session")
+def shared() -> Path:
+    """The ../shared folder (FRET's vectors, the corpus, the real logs), or a skip."""
+    _shared.skip_without_shared()
+    return _shared.SHARED

@@ -11,7 +11,7 @@ temporal functions. It never looks at a formula, so it is independent of
 
 :func:`check_requirement` compares ft at 0, pt at the end (finite traces) and ft_inf
 (infinite words: the trace followed by the all-false state forever) with the oracle.
-Used by tests/compiler/test_differential.py (a bounded sample) and bench/differential.py.
+Used by tests/compiler/test_differential.py (a bounded sample) and bench/differential_long.py.
 
 Trace model (../shared/fretish/README.md section 6): the finite trace is followed by an absorbing state in which
 every variable is false and every number 0. Two FRET facts the oracle models explicitly:

@@ -1,6 +1,6 @@
 """fretc's ft, pt and ft_inf against an independent interval-semantics oracle on random
 sentences over the whole grammar (tests/differential.py). A bounded sample here; the long
-run is ``python bench/differential.py --sentences 5000``."""
+run is ``python bench/differential_long.py --sentences 5000``."""
 
 from __future__ import annotations
 

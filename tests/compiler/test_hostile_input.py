@@ -21,7 +21,6 @@ from common.errors import FretishSyntaxError
 from fretish.parser import parse
 
 ROOT = Path(__file__).resolve().parents[2]
-CORPUS = ROOT.parent / "shared" / "corpora" / "fret_casestudies.jsonl"
 
 # Loads a generated module, steps every monitor over ticks of all-0 / all-1 / mixed values
 # and prints one JSON line per monitor: id, verdicts, status, finish.
@@ -67,8 +66,9 @@ def test_more_than_ten_variables_loads_and_runs(tmp_path):
     assert len(vs) == 6 and status in ("unknown", "violated", "satisfied")
 
 
-def test_case_study_eb_requirements(tmp_path):
-    rows = [json.loads(line) for line in CORPUS.read_text(encoding="utf-8").splitlines()]
+def test_case_study_eb_requirements(tmp_path, shared):
+    corpus = shared / "corpora" / "fret_casestudies.jsonl"
+    rows = [json.loads(line) for line in corpus.read_text(encoding="utf-8").splitlines()]
     eb = [r for r in rows if r["id"].endswith(("#EB-001", "#EB-002"))]
     assert len(eb) == 2
     text = "".join(f"EB{i}: {' '.join(r['text'].split())}\n" for i, r in enumerate(eb))

@@ -272,14 +272,14 @@ def _vector_sentences() -> list:
     return sorted(set(texts))
 
 
-def test_template_equals_full_build_on_fret_vectors():
+def test_template_equals_full_build_on_fret_vectors(shared):
     texts = _vector_sentences()
     used = sum(same(t) for t in texts)
     # the template serves most sentences (the fallbacks are the unsafe atoms)
     assert used > len(texts) // 2, (used, len(texts))
 
 
-def test_template_equals_full_build_on_corpus():
+def test_template_equals_full_build_on_corpus(shared):
     texts = [json.loads(line)["text"] for line in
              (SHARED / "corpora" / "fret_casestudies.jsonl").read_text().splitlines()]
     for period in (None, Fraction(1, 10)):

@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT / "tests" / "compiler"))
 
 from bench_codegen import template_sentences  # noqa: E402
 from test_ltl3_exact import _verdict_sentences  # noqa: E402
+from _shared import PRESENT  # noqa: E402
 
 MAX, APS = automata.MAX_AUTOMATON_STATES, automata.TABLE_MAX_APS
 
@@ -71,7 +72,9 @@ def _shape(sentence: str) -> tuple[str, int]:
     return to_spot(shape), len(atoms)
 
 
-SENTENCES = template_sentences(3) + random.Random(5).sample(_verdict_sentences(), 40) + [
+#: (FRET's trace-vector sentences only with ../shared)
+SENTENCES = template_sentences(3) + (
+    random.Random(5).sample(_verdict_sentences(), 40) if PRESENT else []) + [
     # the slowest safety shape of the trace vectors: bounds 7 to 9 under an 'only after'
     "only after m upon c the sw shall within 9 ticks satisfy r"]
 

@@ -17,7 +17,6 @@ template keys at small bounds; ``-m slow`` checks all 696 sentences of
 
 from __future__ import annotations
 
-import json
 import random
 import sys
 from pathlib import Path
@@ -32,16 +31,17 @@ from compiler.semantics import formalize  # noqa: E402
 from fretish import parse  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared"
 sys.path.insert(0, str(ROOT / "bench"))
 
 from bench_codegen import template_sentences  # noqa: E402
+from _shared import jsonl, params  # noqa: E402
 
 
 def _verdict_sentences() -> list[str]:
+    """The sentences of FRET's trace vectors (none without ../shared)."""
     texts: dict[str, None] = {}
-    for line in (SHARED / "fretish" / "fret_trace_verdicts.jsonl").read_text().splitlines():
-        texts.update((c["sentence"], None) for c in json.loads(line)["cases"])
+    for row in jsonl("fretish/fret_trace_verdicts.jsonl"):
+        texts.update((c["sentence"], None) for c in row["cases"])
     return list(texts)
 
 
@@ -92,8 +92,8 @@ def check_exact(sentence: str) -> bool:
     return True
 
 
-SAMPLE = random.Random(11).sample(_verdict_sentences(), 40) + random.Random(11).sample(
-    template_sentences(3), 20) + [
+SAMPLE = params(lambda: random.Random(11).sample(_verdict_sentences(), 40)) + \
+    random.Random(11).sample(template_sentences(3), 20) + [
     # a 40,000-subset powerset (15 pruned by simulation)
     "only in mm whenever cc the sw shall after 8 ticks satisfy rr"]
 
@@ -104,6 +104,6 @@ def test_ltl3_tables_equal_spots(sentence):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("sentence", _verdict_sentences() + template_sentences(12))
+@pytest.mark.parametrize("sentence", params(_verdict_sentences) + template_sentences(12))
 def test_ltl3_tables_equal_spots_full_sweep(sentence):
     check_exact(sentence)

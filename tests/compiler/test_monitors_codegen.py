@@ -3,11 +3,9 @@ verdicts and Spot; determinism, isolation (``python -I``) and hostile input."""
 
 from __future__ import annotations
 
-import json
 import random
 import subprocess
 import sys
-from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -22,8 +20,9 @@ from compiler.printers import to_spot
 from fretish import ast as A
 from fretish import parse
 
-SHARED = Path(__file__).resolve().parents[3] / "shared"
-VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
+from _shared import jsonl, needs_shared  # noqa: E402
+
+VERDICTS = jsonl("fretish/fret_trace_verdicts.jsonl")
 
 
 # same helpers as entry/load in tests/compiler/test_caches.py (kept: each test file stands alone)
@@ -87,6 +86,7 @@ def test_every_template_on_random_traces(all_templates):
             assert m.finish() == ft_at(c.formalization.ft, trace), c.id
 
 
+@needs_shared
 def test_fret_trace_verdicts_with_finish():
     sentences = {}
     for case in VERDICTS:

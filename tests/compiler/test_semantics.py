@@ -13,10 +13,8 @@
 
 from __future__ import annotations
 
-import json
 import random
 from fractions import Fraction
-from pathlib import Path
 
 import pytest
 import spot
@@ -31,12 +29,11 @@ from fretish import ast as A
 from fretish import FretishError, parse
 
 from fret_formulas import parse_fret
+from _shared import jsonl, needs_shared
 
-SHARED = Path(__file__).resolve().parents[3] / "shared"
-VECTORS = [json.loads(l) for l in (SHARED / "fretish/fret_vectors.jsonl").open()]
-FUNCTION_VECTORS = [json.loads(l)
-                    for l in (SHARED / "fretish/fret_vectors_functions.jsonl").open()]
-VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
+VECTORS = jsonl("fretish/fret_vectors.jsonl")
+FUNCTION_VECTORS = jsonl("fretish/fret_vectors_functions.jsonl")
+VERDICTS = jsonl("fretish/fret_trace_verdicts.jsonl")
 
 #: Vectors FRET rejects but we accept, each because the rejection is a FRET defect we fix
 #: (../shared/fretish/README.md section 7).
@@ -63,6 +60,7 @@ def _vector_ids(pred):
     return [pytest.param(v, id=str(v["id"])) for v in VECTORS if pred(v)]
 
 
+@needs_shared
 @pytest.mark.parametrize("vec", _vector_ids(lambda v: not v["parse_error"]
                                             and not v["fret_defect"]
                                             and v["id"] not in OUR_REJECTIONS))
@@ -141,16 +139,19 @@ def _check_function_vector(vec, n):
         assert lasso_at(f.ft_inf, u, v) == lasso_at(fret_inf, u, v), (u, v)
 
 
+@needs_shared
 @pytest.mark.parametrize("vec,n", _function_vector_ids(slow=False))
 def test_function_vectors_agree_with_fret(vec, n):
     _check_function_vector(vec, n)
 
 
+@needs_shared
 @pytest.mark.parametrize("vec,n", _function_vector_ids(slow=True))
 def test_function_vectors_agree_with_fret_2000_traces(vec, n):
     _check_function_vector(vec, n)
 
 
+@needs_shared
 def test_function_vectors_are_all_accepted():
     """FRET formalized every sentence of the functions file (none is a parse error):
     so do we, the broken and regrouped ones included (defect 2 is fixed, not copied)."""
@@ -159,6 +160,7 @@ def test_function_vectors_are_all_accepted():
         formalize(parse(v["text"]))
 
 
+@needs_shared
 @pytest.mark.parametrize("vec", _vector_ids(lambda v: v["parse_error"]))
 def test_fret_rejections(vec):
     if vec["id"] in FIXED_REJECTIONS:
@@ -170,6 +172,7 @@ def test_fret_rejections(vec):
         assert str(info.value).startswith("<string>:1:"), str(info.value)
 
 
+@needs_shared
 def test_fret_defects_are_fixed():
     by_id = {v["id"]: v for v in VECTORS}
     # defect 1: ~p is negation
@@ -188,6 +191,7 @@ def test_fret_defects_are_fixed():
     assert "undefined" not in to_smv(f.pt)
 
 
+@needs_shared
 @pytest.mark.parametrize("text,fret_id", [(v["text"], v["id"]) for v in VECTORS
                                           if v["id"] in OUR_REJECTIONS])
 def test_our_rejections(text, fret_id):
@@ -196,6 +200,7 @@ def test_our_rejections(text, fret_id):
 
 
 # --------------------------------------------------------------------------- FRET verdicts
+@needs_shared
 def test_every_fret_trace_verdict():
     checked = 0
     for case in VERDICTS:
@@ -340,6 +345,7 @@ def test_json_lists_raw_and_fret_variable_names(tmp_path):
     assert out["variables_fret"] == ["_DQT_weird_SPC_var_DQT_", "a_DOT_b"]
 
 
+@needs_shared
 @pytest.mark.parametrize("vec", [v for v in FUNCTION_VECTORS
                                  if v.get("fret_defect_kind") == "ifthen_regrouped"],
                          ids=lambda v: str(v["id"]))

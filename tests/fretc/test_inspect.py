@@ -11,13 +11,12 @@ from click.testing import CliRunner
 from fretc.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
-LOGS = ROOT.parent / "shared" / "data" / "logs"
 
 
-def test_inspect_lists_fields_and_a_binding_from_it_audits(tmp_path):
-    log = ROOT / "traces" / "sif_disabled.mcap"
-    res = CliRunner().invoke(main, ["inspect", str(log), str(LOGS / "stage_mapping1.bag"),
-                                    str(LOGS / "cmd_vel_scaled.mcap"), "--json"])
+def test_inspect_lists_fields_and_a_binding_from_it_audits(tmp_path, shared):
+    log, logs = ROOT / "traces" / "sif_disabled.mcap", shared / "data" / "logs"
+    res = CliRunner().invoke(main, ["inspect", str(log), str(logs / "stage_mapping1.bag"),
+                                    str(logs / "cmd_vel_scaled.mcap"), "--json"])
     assert res.exit_code == 0, res.output
     docs = json.loads(res.output)
     assert [Path(d["log"]).name for d in docs] == ["sif_disabled.mcap", "stage_mapping1.bag",
@@ -44,8 +43,8 @@ def test_inspect_lists_fields_and_a_binding_from_it_audits(tmp_path):
     assert res.exit_code == 1 and "15.200 s" in res.output, res.output
 
 
-def test_inspect_text_output_and_bad_file(tmp_path):
-    res = CliRunner().invoke(main, ["inspect", str(LOGS / "cmd_vel_scaled.mcap")])
+def test_inspect_text_output_and_bad_file(tmp_path, shared):
+    res = CliRunner().invoke(main, ["inspect", str(shared / "data/logs/cmd_vel_scaled.mcap")])
     assert res.exit_code == 0
     assert "/scaled/cmd_vel.twist.linear.x  float64  min" in res.output
     (tmp_path / "x.mcap").write_bytes(b"not a log")

@@ -23,7 +23,6 @@ from fretish.files import RequirementEntry, load_requirements
 from fretish.parser import parse
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared"
 
 
 def reference(compiled) -> str:
@@ -69,13 +68,13 @@ def test_same_text_as_json_dumps(rows):
     assert json_indent2([c.to_json() for c in compiled]) == want
 
 
-def test_fret_vectors_and_corpus():
+def test_fret_vectors_and_corpus(shared):
     texts = []
     for name in ("fret_vectors.jsonl", "fret_vectors_functions.jsonl"):
         texts += [json.loads(x)["text"]
-                  for x in (SHARED / "fretish" / name).read_text().splitlines()]
+                  for x in (shared / "fretish" / name).read_text().splitlines()]
     texts += [json.loads(x)["text"] for x in
-              (SHARED / "corpora" / "fret_casestudies.jsonl").read_text().splitlines()]
+              (shared / "corpora" / "fret_casestudies.jsonl").read_text().splitlines()]
     for period in (None, Fraction(1, 10)):
         compiled = compile_entries(entry(f"R{i}", t, tick_period=period)
                                    for i, t in enumerate(texts))

@@ -6,7 +6,6 @@ shared/fretish/fret_trace_verdicts.jsonl, shared/corpora/fret_casestudies.jsonl.
 
 from __future__ import annotations
 
-import json
 import logging
 import re
 from pathlib import Path
@@ -18,12 +17,12 @@ from compiler.printers import expr_text
 from fretish import ast as A
 from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
 
-SHARED = Path(__file__).resolve().parents[3] / "shared"  # ../shared beside the repository
-VECTORS = [json.loads(l) for l in (SHARED / "fretish/fret_vectors.jsonl").open()]
+from _shared import jsonl, needs_shared  # ../shared beside the repository
+
+VECTORS = jsonl("fretish/fret_vectors.jsonl")
 VECTOR_BY_ID = {v["id"]: v for v in VECTORS}
-CORPUS = [json.loads(l) for l in (SHARED / "corpora/fret_casestudies.jsonl").open()]
-TRACE_CASES = [(t["trace"], c) for t in map(json.loads, (SHARED / "fretish/fret_trace_verdicts.jsonl").open())
-               for c in t["cases"]]
+CORPUS = jsonl("corpora/fret_casestudies.jsonl")
+TRACE_CASES = [(t["trace"], c) for t in jsonl("fretish/fret_trace_verdicts.jsonl") for c in t["cases"]]
 
 # Vectors FRET rejects but we accept on purpose (../shared/fretish/README.md section 7, defect 4), with the key
 # our reading gives.
@@ -110,6 +109,7 @@ def test_reserved_words_match_grammar_keywords():
 
 
 # --------------------------------------------------------------------------- FRET vectors
+@needs_shared
 @pytest.mark.parametrize("v", VECTORS, ids=lambda v: f"v{v['id']}")
 def test_fret_vector(v):
     vid = v["id"]
@@ -127,11 +127,13 @@ def test_fret_vector(v):
         assert r.freeform == bool(v.get("freeform"))
 
 
+@needs_shared
 def test_every_listed_exception_is_a_vector():
     for vid in (*ACCEPTED_FRET_REJECTS, *DEFECT_REJECTED):
         assert vid in VECTOR_BY_ID
 
 
+@needs_shared
 def test_fixed_defects_mean_what_they_say():
     r = parse(VECTOR_BY_ID[26]["text"])                      # upon p is false
     assert r.condition.expr == A.Unary("!", A.Var("p"))
@@ -146,6 +148,7 @@ def test_fixed_defects_mean_what_they_say():
             A.Var("p")
 
 
+@needs_shared
 @pytest.mark.parametrize("v", [v for v in VECTORS if not v["parse_error"] and not v["fret_defect"]
                                and not v.get("freeform")], ids=lambda v: f"v{v['id']}")
 def test_printed_parenthesization_matches_fret(v):
@@ -172,6 +175,7 @@ def test_printed_parenthesization_matches_fret(v):
     (74, "(a <-> b)"),
     (86, "(ROS_DOT_state = 2)"),
 ])
+@needs_shared
 def test_precedence_against_fret(vid, expected):
     v = VECTOR_BY_ID[vid]
     assert expected in v["ft"]
@@ -179,6 +183,7 @@ def test_precedence_against_fret(vid, expected):
 
 
 # --------------------------------------------------------------------------- real corpora
+@needs_shared
 @pytest.mark.parametrize("req", CORPUS, ids=lambda r: r["id"])
 def test_case_study_corpus(req):
     if req["id"] in CORPUS_REJECTED:
@@ -190,11 +195,13 @@ def test_case_study_corpus(req):
         assert r.key is not None or r.freeform
 
 
+@needs_shared
 def test_corpus_size_and_rejections_listed():
     assert len(CORPUS) == 198
     assert set(CORPUS_REJECTED) <= {r["id"] for r in CORPUS}
 
 
+@needs_shared
 def test_trace_verdict_sentences():
     assert len(TRACE_CASES) == 2640
     for _trace, case in TRACE_CASES:

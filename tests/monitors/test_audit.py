@@ -17,9 +17,9 @@ from monitors.audit import AuditConfig, audit_log, audit_logs, find_logs, load_p
 from monitors.report.model import audit_json
 
 from _logs import MS, S, boolean, scan, twist, write_mcap
+from _shared import SHARED, needs_shared
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared"
 TRACES = ROOT / "traces"
 REAL = ROOT / "requirements" / "real_logs"
 CMD_VEL = SHARED / "data/logs/cmd_vel_scaled.mcap"
@@ -151,6 +151,7 @@ def _decode_mcap(path):
     return out
 
 
+@needs_shared
 def test_cmd_vel_scaled_real_ros2_log():
     msgs = _decode_mcap(CMD_VEL)
 
@@ -186,6 +187,7 @@ def test_cmd_vel_scaled_real_ros2_log():
     assert la.messages == {"/scaled/cmd_vel": 50, "/vehicle/cmd_vel": 50}
 
 
+@needs_shared
 def test_stage_real_ros1_bag():
     from rosbags.highlevel import AnyReader
 
@@ -237,6 +239,7 @@ def test_stage_real_ros1_bag():
 
 
 # --------------------------------------------------------------------------- CSV traces
+@needs_shared
 def test_csv_traces_reproduce_every_fret_interval_verdict(tmp_path, monkeypatch):
     """Every ``expected`` of fret_trace_verdicts.jsonl, by auditing CSV traces written from
     its intervals. (Spot's LTL3 automata are skipped here - slow for durations up to 8 and
@@ -472,6 +475,7 @@ def test_judge_equals_the_generated_monitors_and_parallel_audits_agree(tmp_path,
         assert _judge_against_monitors(safe_ros_plan, str(TRACES / "sif_disabled.mcap")) > 0
 
 
+@needs_shared
 def test_header_time_base_on_the_real_ros2_log():
     """--time-base header: ticks at /scaled/cmd_vel header stamps; same verdicts here (the
     scaler copies the input's stamp)."""

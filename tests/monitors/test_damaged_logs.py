@@ -27,11 +27,14 @@ import pytest
 
 from monitors.audit import AuditConfig, audit_log, load_plan
 
+import _shared
+
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared" / "data" / "logs"
+SHARED = _shared.SHARED / "data" / "logs"
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
 REAL = [SHARED / "cmd_vel_scaled.mcap", SHARED / "stage_mapping1.bag"]
-LOGS = TRACES + [p for p in REAL if p.exists()]
+#: the real logs of ../shared are skipped without it
+LOGS = TRACES + [pytest.param(p, marks=_shared.needs_shared, id=p.name) for p in REAL]
 DAMAGE_KINDS = {"truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
                 "data_crc", "unknown_channel", "out_of_order"}
 CUTS = 20
@@ -183,17 +186,18 @@ def _run(tmp_path: Path, log: Path, full: bool) -> int:
     return n
 
 
-@pytest.mark.parametrize("log", LOGS, ids=[p.name for p in LOGS])
+@pytest.mark.parametrize("log", LOGS, ids=lambda p: p.name)
 def test_damaged_log_sample(tmp_path, log):
     assert _run(tmp_path, log, full=False) >= 3
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("log", LOGS, ids=[p.name for p in LOGS])
+@pytest.mark.parametrize("log", LOGS, ids=lambda p: p.name)
 def test_damaged_log_full_sweep(tmp_path, log):
     assert _run(tmp_path, log, full=True) >= CUTS
 
 
+@_shared.needs_shared
 def test_every_shipped_trace_and_both_real_logs_are_covered():
     assert len(TRACES) >= 8
     assert all(p.exists() for p in REAL), "the real logs of ../shared/data/logs are missing"

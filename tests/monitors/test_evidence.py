@@ -5,9 +5,7 @@ triggers, first violation) is right on hand-made traces."""
 
 from __future__ import annotations
 
-import json
 import random
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,8 +17,9 @@ from monitors.engines.interval import (EvidenceUnsupported, evaluate_requirement
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 
-SHARED = Path(__file__).resolve().parents[3] / "shared"
-VERDICTS = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
+from _shared import jsonl, needs_shared
+
+VERDICTS = jsonl("fretish/fret_trace_verdicts.jsonl")
 
 RESPONSES = ["r", "!r", "r | s", "r & c", "r xor m", "x > 2"]
 CONDITIONS = ["c", "!c", "c & x <= 3"]
@@ -61,6 +60,7 @@ def test_interval_semantics_equals_monitor_for_all_288_keys(all_keys):
     assert vacuous > 100 and violated > 500  # both outcomes well exercised
 
 
+@needs_shared
 def test_every_fret_trace_verdict():
     checked = 0
     for case in VERDICTS:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import random
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -198,10 +197,10 @@ def test_only_uninterpreted_functions_are_unsupported(sentence):
         evaluate_requirement(parse(sentence), cols, 2)
 
 
-def test_fret_function_vectors():
+def test_fret_function_vectors(shared):
     """The 152 sentences FRET formalized around its temporal functions
     (fret_vectors_functions.jsonl): the evidence gives the ft verdict on random traces."""
-    path = Path(__file__).resolve().parents[3] / "shared/fretish/fret_vectors_functions.jsonl"
+    path = shared / "fretish/fret_vectors_functions.jsonl"
     rnd = random.Random(21)
     checked = 0
     for line in path.open(encoding="utf-8"):

@@ -20,7 +20,7 @@ from monitors.audit import AuditConfig, AuditInputError, audit_log, audit_logs, 
 from monitors.report.model import audit_json, exit_code
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared" / "data" / "logs"
+SHARED = ROOT.parent / "shared" / "data" / "logs"  # needs the shared fixture
 TRACES = [str(p) for p in sorted((ROOT / "traces").glob("*.mcap"))]
 REAL = ROOT / "requirements" / "real_logs"
 
@@ -53,7 +53,7 @@ def ray_session():
 # --------------------------------------------------------------------------- on Ray
 @pytest.mark.ray
 @pytest.mark.xdist_group("ray")
-def test_ray_json_equals_local_on_traces_and_real_logs(ray_session, safe_ros, local_docs):
+def test_ray_json_equals_local_on_traces_and_real_logs(shared, ray_session, safe_ros, local_docs):
     got = fleet.audit_logs_ray(safe_ros, TRACES)
     assert _doc(safe_ros, got) == _doc(safe_ros, local_docs)
     for name in ("cmd_vel_scaled", "stage_mapping1"):

@@ -21,7 +21,6 @@ from monitors.report.model import EXIT_INCOMPLETE, exit_code
 ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
 REQS = ROOT / "requirements"
-REAL = ROOT.parent / "shared" / "data" / "logs"
 
 
 def run(*args):
@@ -115,8 +114,8 @@ def test_item9_partial_shows_in_terminal_json_and_junit(tmp_path):
 
 
 # --------------------------------------------------------------------------- item 10
-def test_item10_the_reason_is_kept_when_the_only_chunk_is_cut(tmp_path):
-    src = REAL / "cmd_vel_scaled.mcap"
+def test_item10_the_reason_is_kept_when_the_only_chunk_is_cut(tmp_path, shared):
+    src = shared / "data" / "logs" / "cmd_vel_scaled.mcap"
     (only,) = _chunks(src)
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(src.read_bytes()[: only.chunk_start_offset + 100])

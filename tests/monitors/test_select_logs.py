@@ -11,15 +11,18 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 
+from _shared import SHARED, needs_shared
+
 ROOT = Path(__file__).resolve().parents[2]
 REAL = ROOT / "requirements" / "real_logs"
-LOGS = ROOT.parent / "shared" / "data" / "logs"
+LOGS = SHARED / "data" / "logs"
 
 
 def _run(*args):
     return CliRunner().invoke(main, ["audit", "--no-progress", *map(str, args)])
 
 
+@needs_shared
 def test_one_requirements_folder_over_both_real_logs(tmp_path):
     """Today: exit 2, "one audit uses one clock"."""
     res = _run("-r", REAL, LOGS / "cmd_vel_scaled.mcap", LOGS / "stage_mapping1.bag",
@@ -53,6 +56,7 @@ def test_a_log_selected_by_no_binding_file_is_an_input_error_naming_them(tmp_pat
     assert "cmd_vel_scaled.bindings.toml" in out and "stage_mapping1.bindings.toml" in out
 
 
+@needs_shared
 def test_a_log_selected_by_two_binding_files_is_an_input_error_naming_both(tmp_path):
     _copy_real(tmp_path, glob_a='"*"')
     (tmp_path / "stage_mapping1.bindings.toml").write_text(
@@ -72,6 +76,7 @@ def test_stage_speed_is_the_norm_of_the_planar_twist():
     assert "takes minutes" not in (REAL / "stage_mapping1.fret").read_text()
 
 
+@needs_shared
 def test_a_plan_with_selecting_binding_files_ships_to_workers():
     """Ray workers get the plan pickled (monitors.audit.fleet.ship_plan): the per-file plans go
     along and give the same verdicts."""

@@ -26,10 +26,14 @@ from common.problems import SignalError
 from monitors.signals import sample
 from monitors.sources import open_log
 
+from _shared import SHARED as _SHARED, needs_shared
+
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared" / "data" / "logs"
+SHARED = _SHARED / "data" / "logs"
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
-REAL = [SHARED / "cmd_vel_scaled.mcap", SHARED / "stage_mapping1.bag"]
+#: the real logs of ../shared, skipped without it
+REAL = [pytest.param(p, marks=needs_shared, id=p.name)
+        for p in (SHARED / "cmd_vel_scaled.mcap", SHARED / "stage_mapping1.bag")]
 
 
 def leaves(obj, prefix=()):
@@ -65,8 +69,6 @@ def same(a, b) -> bool:
 
 @pytest.mark.parametrize("path", TRACES + REAL, ids=lambda p: p.name)
 def test_every_field_of_every_log_equals_the_full_decode(path):
-    if not path.exists():
-        pytest.skip(f"{path} missing")
     full = list(open_log(path).messages())
     wanted = {}
     for m in full:
@@ -105,15 +107,13 @@ def _nan_eq(x, y):
 
 @pytest.mark.parametrize("path,req,time_base", [
     (p, ROOT / "requirements", None) for p in TRACES[:3]] + [
-    (TRACES[3], ROOT / "requirements", "header"),
-    (SHARED / "cmd_vel_scaled.mcap", ROOT / "requirements/real_logs/cmd_vel_scaled.fret", None),
-    (SHARED / "cmd_vel_scaled.mcap", ROOT / "requirements/real_logs/cmd_vel_scaled.fret",
-     "header"),
-    (SHARED / "stage_mapping1.bag", ROOT / "requirements/real_logs/stage_mapping1.fret", None)],
+    (TRACES[3], ROOT / "requirements", "header")] + [
+    pytest.param(SHARED / log, ROOT / "requirements/real_logs" / (log.split(".")[0] + ".fret"),
+                 time_base, marks=needs_shared)
+    for log, time_base in (("cmd_vel_scaled.mcap", None), ("cmd_vel_scaled.mcap", "header"),
+                           ("stage_mapping1.bag", None))],
     ids=lambda p: getattr(p, "name", str(p)))
 def test_ticks_equal_with_and_without_the_fast_path(path, req, time_base, monkeypatch):
-    if not path.exists():
-        pytest.skip(f"{path} missing")
     plan = load_plan(AuditConfig(requirements=(str(req),), time_base=time_base))
     a = _ticks(path, plan, True, monkeypatch)
     b = _ticks(path, plan, False, monkeypatch)

@@ -17,6 +17,7 @@ from monitors.signals.arrays import sample_arrays
 from monitors.signals.clock import sample
 from monitors.sources import open_log
 
+from _shared import needs_shared
 from _logs import (CMD_VEL_MCAP, MS, ROS2, S, STAGE_BAG, boolean, float64, scan, twist_stamped,
                    write_mcap)
 
@@ -187,6 +188,7 @@ def test_header_time_base_needs_headers(tmp_path):
 # -- real logs against numpy computed here ---------------------------------------------------------
 
 
+@needs_shared
 def test_real_mcap_bindings_against_numpy():
     # same arrange as test_real_bag_laserscan_against_numpy (kept: another log and other
     # expressions)
@@ -230,6 +232,7 @@ def test_real_mcap_bindings_against_numpy():
     _equal_paths(src, b)
 
 
+@needs_shared
 def test_real_bag_laserscan_against_numpy():
     # same arrange as test_real_mcap_bindings_against_numpy (kept: another log and other
     # expressions)

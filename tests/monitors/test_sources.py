@@ -18,6 +18,7 @@ from common import problems as P
 from common.problems import CsvError, LogError
 from monitors.sources import CSV_TOPIC, REORDER_WINDOW_NS, open_log
 
+from _shared import needs_shared
 from _logs import (CMD_VEL_MCAP, MS, ROS1, ROS2, S, STAGE_BAG, boolean, float64, scan, twist,
                    twist_stamped, write_mcap)
 
@@ -27,6 +28,7 @@ from _logs import (CMD_VEL_MCAP, MS, ROS1, ROS2, S, STAGE_BAG, boolean, float64,
 # ------------------------------------------------------------------------------------------------
 
 
+@needs_shared
 def test_real_mcap_counts_topics_and_values_match_independent_decode():
     src = open_log(CMD_VEL_MCAP)
     assert src.kind == "mcap" and src.indexed
@@ -52,6 +54,7 @@ def test_real_mcap_counts_topics_and_values_match_independent_decode():
     assert max(m.data.twist.linear.x for m in msgs) > 0
 
 
+@needs_shared
 def test_real_mcap_topic_filter_reads_only_that_topic():
     src = open_log(CMD_VEL_MCAP)
     msgs = list(src.messages({"/vehicle/cmd_vel"}))
@@ -59,6 +62,7 @@ def test_real_mcap_topic_filter_reads_only_that_topic():
     assert src.counts == {"/vehicle/cmd_vel": 50}
 
 
+@needs_shared
 def test_real_ros1_bag_counts_duration_and_values_match_anyreader():
     src = open_log(STAGE_BAG)
     assert src.kind == "bag"
@@ -395,6 +399,7 @@ def test_rosbag2_without_definitions_needs_a_fallback_typestore(tmp_path):
     assert src.problems == []
 
 
+@needs_shared
 def test_truncated_ros1_bag_is_read_up_to_the_cut(tmp_path):
     # the index of a ROS 1 bag is at its end: a cut bag is read record by record
     cut = tmp_path / "cut.bag"
@@ -408,6 +413,7 @@ def test_truncated_ros1_bag_is_read_up_to_the_cut(tmp_path):
     assert "without the bag index" in src.problems[0].detail
 
 
+@needs_shared
 def test_ros1_bag_without_its_index_is_read_completely(tmp_path):
     data = STAGE_BAG.read_bytes()
     header = data[13 + 4: 13 + 4 + struct.unpack_from("<I", data, 13)[0]]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io
 import math
+import os
 import re
 import subprocess
 import sys
@@ -24,6 +25,9 @@ POINTS = [(0.0, 0.0), (2.30, -1.11), (2.61, 2.42)]
 HOME = (-1.2, -0.8)
 THRESHOLD = 0.9
 STAMPED = {"/map", "/odom", "/scan", "/goal", "/ground_truth/pose"}
+#: one xdist worker runs this module (``--dist loadgroup`` in pyproject.toml; a group of many
+#: tests is handed out first), the others the rest of the suite while it records
+pytestmark = pytest.mark.xdist_group("sim")
 
 
 # ----------------------------------------------------------------------------- reading
@@ -84,14 +88,31 @@ def record(tmp_path, scenario, *extra, seed=1, name=None):
     return out
 
 
-@pytest.fixture(scope="module")
+#: the fresh recordings: name -> (scenario, extra arguments)
+FRESH = {"nominal": ("nominal",), "sif_disabled": ("sif_disabled",),
+         "interceptor_fault": ("interceptor_fault",),
+         "stop_delay_1.5": ("stop_delay", "--stop-delay", "1.5"),
+         "ros1": ("sif_disabled", "--ros1")}
+
+
+@pytest.fixture(scope="session")
 def fresh(tmp_path_factory):
-    """Fresh recordings shared by the tests of this module."""
-    d = tmp_path_factory.mktemp("runs")
-    runs = {s: record(d, s) for s in ("nominal", "sif_disabled", "interceptor_fault")}
-    runs["stop_delay_1.5"] = record(d, "stop_delay", "--stop-delay", "1.5",
-                                    name="stop_delay_1.5.mcap")
-    runs["ros1"] = record(d, "sif_disabled", "--ros1", name="ros1.mcap")
+    """Fresh recordings shared by the tests of this module, made once per test session (the
+    simulator takes minutes): under xdist the first worker records them into the session's
+    common temporary folder, under a file lock, and the others read them from there."""
+    from filelock import FileLock
+
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the session's folder, common to its workers
+    d = base / "sim-fresh-runs"
+    runs = {name: d / f"{name}.mcap" for name in FRESH}
+    with FileLock(str(d) + ".lock"):
+        if not (d / "done").exists():
+            d.mkdir(exist_ok=True)
+            for name, (scenario, *extra) in FRESH.items():
+                record(d, scenario, *extra, name=runs[name].name)
+            (d / "done").touch()
     return runs
 
 

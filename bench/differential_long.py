@@ -2,7 +2,7 @@
 fretc's ft, pt and ft_inf checked against the independent interval-semantics oracle of
 tests/differential.py on random traces.
 
-    python bench/differential.py --sentences 5000 [--traces 20] [--seed 0] [--depth 2]
+    python bench/differential_long.py --sentences 5000 [--traces 20] [--seed 0] [--depth 2]
 
 Prints the number of sentences and traces checked, the CPU time, and each disagreement
 (sentence, formula, trace); exits 1 if there was any."""
