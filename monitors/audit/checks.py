@@ -13,7 +13,7 @@ from ..sources import CSV_TOPIC
 from .model import AuditPlan, RequirementPlan
 from .passes import MAX_TICKS, expected_ticks
 
-__all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "check_binding_types",
+__all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "binding_type_errors",
            "check_nominal_rate"]
 
 #: A tick topic's measured rate may differ this much from its nominal rate without warning.
@@ -47,19 +47,22 @@ def too_many_ticks(source, bindings: Bindings | None, path: str) -> str | None:
             f"{MAX_TICKS:,}; choose a longer period")
 
 
-def check_binding_types(source, bindings: Bindings, plan: AuditPlan, verdicts) -> None:
-    """Check the bindings the requirements use against the log's message types
-    (:func:`monitors.bindings.check_types`): a binding that names a field the schema does
-    not declare, or mixes strings, booleans and numbers, makes its requirements ``error``
-    before anything is evaluated."""
+def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[int]
+                        ) -> dict[int, str]:
+    """The bindings the requirements use checked against the log's message types
+    (:func:`monitors.bindings.check_types`): requirement index -> why it is an ``error``
+    (a binding that names a field the schema does not declare, mixes strings, booleans and
+    numbers, or is used as the other kind), before anything is evaluated. Requirements whose
+    index is in ``skip`` (already in error) are not checked."""
     try:
         schemas = log_schemas(source)
     except Exception:  # unreadable schemas: the reader reports the damage itself
-        return
+        return {}
+    errors: dict[int, str] = {}
     bad: dict[str, str] = {}
     types: dict[str, str] = {}
     for r in plan.requirements:
-        if verdicts[r.index].error is not None:
+        if r.index in skip:
             continue
         uses = variable_uses(r)
         for v in r.variables:
@@ -73,21 +76,22 @@ def check_binding_types(source, bindings: Bindings, plan: AuditPlan, verdicts) -
                 except BindingError as exc:
                     bad[v] = str(exc)
             if bad[v]:
-                verdicts[r.index].error = bad[v]
+                errors[r.index] = bad[v]
                 break
             use, t = uses.get(v, set()), types.get(v)
             where = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
             if t == "bool" and "var" in use:
-                verdicts[r.index].error = (
+                errors[r.index] = (
                     f"{where}: type error: {r.id} uses {v!r} as a number, but its binding "
                     f"{b.expr!r} is a boolean; bind it to a number")
                 break
             if t == "number" and "ap" in use:
-                verdicts[r.index].error = (
+                errors[r.index] = (
                     f"{where}: type error: {r.id} uses {v!r} as a boolean, but its binding "
                     f"{b.expr!r} is a number; compare it (e.g. {b.expr.strip()} > 0) to make "
                     "a boolean")
                 break
+    return errors
 
 
 def variable_uses(r: RequirementPlan) -> dict[str, set]:

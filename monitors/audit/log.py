@@ -22,7 +22,7 @@ from common.problems import DataProblem, FretcInputError, SignalError
 from ..report.model import LogAudit, Verdict
 from ..sources.schema import closest
 from ..sources import open_log
-from .checks import check_binding_types, check_nominal_rate, csv_bindings, too_many_ticks
+from .checks import binding_type_errors, check_nominal_rate, csv_bindings, too_many_ticks
 from .finalize import finalize
 from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
@@ -171,7 +171,9 @@ class _LogRun:
         if bindings is not None:
             if not self._check_topics(active, log_topics, damaged):
                 return False
-            check_binding_types(source, bindings, self.plan, self.verdicts)
+            skip = {i for i, v in self.verdicts.items() if v.error is not None}
+            for i, why in binding_type_errors(source, bindings, self.plan, skip).items():
+                self.verdicts[i].error = why
         return True
 
     def _check_bound(self, active: list[RequirementPlan]) -> None:

@@ -13,7 +13,7 @@ The audit (and a watch at the end of its run) asks :func:`judge` and nothing els
 * **The LTL3 verdict** (Bauer, Leucker, Schallhart, TOSEM 2011: the earliest tick after which
   every continuation of the trace satisfies, or every one violates, the infinite-trace
   formula ft_inf) comes from the requirement's deterministic monitor automata run over the
-  columns (:func:`monitors.engines.vectorized.ltl3_status`), or from the generated monitor
+  columns (:func:`ltl3_verdict`), or from the generated monitor
   replayed when its automata have no tables. A requirement without an online monitor (a
   future-time function in its pt formula) has none: ``"unknown"``.
 
@@ -30,9 +30,9 @@ import numpy as np
 
 from . import stepwise
 from .interval import Evidence, EvidenceUnsupported, evaluate_requirement
-from .vectorized import VectorizeError, ltl3_status, pt_series, supports
+from .vectorized import VectorizeError, atom_letters, pt_series, supports
 
-__all__ = ["Judgement", "judge"]
+__all__ = ["Judgement", "judge", "ltl3_verdict"]
 
 
 @dataclass
@@ -109,9 +109,60 @@ def _ltl3(monitor_source, monitor_cls, columns, n: int, replayed) -> tuple[str, 
     if monitor_source is None:
         return "unknown", None
     try:
-        return ltl3_status(monitor_source, columns, n)
+        return ltl3_verdict(monitor_source, columns, n)
     except (VectorizeError, KeyError):
         if monitor_cls is None:
             return "unknown", None
     mon = replayed if replayed is not None else stepwise.replay(monitor_cls, columns, n)
     return mon.status, mon.status_tick
+
+
+def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
+                 ) -> tuple[str, int | None]:
+    """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
+    deterministic Spot monitors embedded by :func:`compiler.codegen.monitor_source`
+    (``bad`` for ft_inf: rejection means *violated*; ``good`` for its negation: rejection
+    means *satisfied*).
+
+    Returns:
+        ``(verdict, tick)``: verdict ``"satisfied"``, ``"violated"`` or ``"unknown"``; tick
+        the 0-based tick where it became definitive (None when unknown or definitive before
+        any tick), as the generated ``status`` / ``status_tick``.
+
+    Raises:
+        VectorizeError: an automaton given as condition chains (more than
+            ``codegen.TABLE_MAX_APS`` atoms): use the step-wise monitor.
+    """
+    ms = monitor_source
+    bad, good = ms.bad, ms.good
+    if bad is not None and bad.empty:
+        return "violated", None
+    if good is not None and good.empty:
+        return "satisfied", None
+    live = [(aut, outcome) for aut, outcome in ((bad, "violated"), (good, "satisfied"))
+            if aut is not None and not aut.complete]
+    if not live:
+        return "unknown", None
+    for aut, _ in live:
+        if aut.table is None:
+            raise VectorizeError("automaton with condition chains (too many atoms to "
+                                 "tabulate): use the step-wise monitor")
+    runs = []
+    for aut, outcome in live:
+        letters = atom_letters(aut.atoms, columns, n).tolist()
+        runs.append((aut.table, aut.initial, letters, outcome))
+    # first rejection of each automaton
+    firsts = []
+    for table, state, letters, outcome in runs:
+        hit = None
+        for i, letter in enumerate(letters):
+            state = table[state][letter]
+            if state < 0:
+                hit = i
+                break
+        firsts.append(hit)
+    best: tuple[str, int | None] = ("unknown", None)
+    for (table, _s, _l, outcome), hit in zip(runs, firsts):
+        if hit is not None and (best[1] is None or hit < best[1]):
+            best = (outcome, hit)
+    return best

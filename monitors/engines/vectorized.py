@@ -38,8 +38,7 @@ from compiler.printers import to_smv
 
 from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 
-__all__ = ["VectorizeError", "pt_series", "node_series", "atom_letters", "ltl3_status",
-           "supports"]
+__all__ = ["VectorizeError", "pt_series", "node_series", "atom_letters", "supports"]
 
 Columns = Mapping[str, np.ndarray]
 
@@ -238,53 +237,3 @@ def atom_letters(atoms: list[Node], columns: Columns, n: int) -> np.ndarray:
     for j, a in enumerate(atoms):
         out |= ev.bool(a).astype(np.int64) << j
     return out
-
-
-def ltl3_status(monitor_source, columns: Columns, n: int) -> tuple[str, int | None]:
-    """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
-    deterministic Spot monitors embedded by :func:`compiler.codegen.monitor_source`
-    (``bad`` for ft_inf: rejection means *violated*; ``good`` for its negation: rejection
-    means *satisfied*).
-
-    Returns:
-        ``(status, tick)``: status ``"satisfied"``, ``"violated"`` or ``"unknown"``; tick
-        the 0-based tick where it became definitive (None when unknown or definitive before
-        any tick), as the generated ``status`` / ``status_tick``.
-
-    Raises:
-        VectorizeError: an automaton given as condition chains (more than
-            ``codegen.TABLE_MAX_APS`` atoms): use the step-wise monitor.
-    """
-    ms = monitor_source
-    bad, good = ms.bad, ms.good
-    if bad is not None and bad.empty:
-        return "violated", None
-    if good is not None and good.empty:
-        return "satisfied", None
-    live = [(aut, outcome) for aut, outcome in ((bad, "violated"), (good, "satisfied"))
-            if aut is not None and not aut.complete]
-    if not live:
-        return "unknown", None
-    for aut, _ in live:
-        if aut.table is None:
-            raise VectorizeError("automaton with condition chains (too many atoms to "
-                                 "tabulate): use the step-wise monitor")
-    runs = []
-    for aut, outcome in live:
-        letters = atom_letters(aut.atoms, columns, n).tolist()
-        runs.append((aut.table, aut.initial, letters, outcome))
-    # first rejection of each automaton
-    firsts = []
-    for table, state, letters, outcome in runs:
-        hit = None
-        for i, letter in enumerate(letters):
-            state = table[state][letter]
-            if state < 0:
-                hit = i
-                break
-        firsts.append(hit)
-    best: tuple[str, int | None] = ("unknown", None)
-    for (table, _s, _l, outcome), hit in zip(runs, firsts):
-        if hit is not None and (best[1] is None or hit < best[1]):
-            best = (outcome, hit)
-    return best

@@ -12,7 +12,8 @@ import pytest
 
 from compiler import ir
 from compiler.codegen import monitor_source
-from monitors.engines.vectorized import (VectorizeError, ltl3_status, node_series, pt_series,
+from monitors.engines.judge import ltl3_verdict
+from monitors.engines.vectorized import (VectorizeError, node_series, pt_series,
                                         supports)
 from fretish import parse
 
@@ -45,7 +46,7 @@ def test_pt_series_equals_step_for_all_288_keys(all_keys):
             cols = random_trace(rnd, n)
             steps, (status, tick) = step_all(cls(), cols, n)
             assert pt_series(comp.formalization.pt, cols, n).tolist() == steps, comp.text
-            assert ltl3_status(ms, cols, n) == (status, tick), comp.text
+            assert ltl3_verdict(ms, cols, n) == (status, tick), comp.text
             checked += 1
     assert checked == 288 * 12
 
@@ -58,7 +59,7 @@ def test_long_random_traces_agree(all_keys):
         cols = random_trace(rnd, n)
         steps, st = step_all(cls(), cols, n)
         assert pt_series(comp.formalization.pt, cols, n).tolist() == steps
-        assert ltl3_status(ms, cols, n) == st
+        assert ltl3_verdict(ms, cols, n) == st
 
 
 @pytest.mark.parametrize("sentence", [
