@@ -28,7 +28,7 @@ fretc.cli"`` (the command's import) and ``fretc EMPTY.fret --emit ltl`` on an em
 import, the command line's parsing and the compile path's imports, then the "no
 requirements" error, exit code 2), same measure, beside the per-sentence figures.
 
-The issue's targets (issue 9) are checked and printed as PASS/FAIL: at least 3000
+The targets are checked and printed as PASS/FAIL: at least 3000
 sentences/s of CPU time end to end (best run, start-up included) and under 0.3 s of CPU for
 ``fretc requirements/r1.fret --emit ltl``; the first run's figures (empty cache: the Lark
 tables are built) are printed beside them, not judged.
@@ -39,8 +39,8 @@ DIR`` runs the same commands with another checkout of fretc (e.g. ``git archive 
 -x -C DIR``) for a ratio measured in the same run; the timed runs of the two checkouts
 alternate, so a change in the machine's load hits both. FRET's own formalizer takes about
 35 ms per sentence (``../shared/fretish/README.md``, a published figure, not measured
-here). The machine's speed is printed as ``sum(range(1000))`` in µs (the README's figures
-were taken at about 20 µs).
+here). The machine's speed is printed as ``sum(range(1000))`` in µs (the figures of
+docs/performance.md were taken at about 20 µs).
 """
 
 from __future__ import annotations
@@ -141,8 +141,8 @@ def command_times(roots, args, repeat: int, caches: dict, launch: str = LAUNCH,
     return out
 
 
-TARGET_RATE = 3000      # sentences/s of CPU, end to end (issue 9)
-TARGET_R1 = 0.3         # s of CPU for fretc requirements/r1.fret --emit ltl (issue 9)
+TARGET_RATE = 3000      # sentences/s of CPU, end to end
+TARGET_R1 = 0.3         # s of CPU for fretc requirements/r1.fret --emit ltl
 
 
 def in_process(texts, repeat: int) -> list:
@@ -203,7 +203,7 @@ def main() -> None:
     texts = sentences(args.n)
     corpus = corpus_sentences(args.corpus)
     calib = min(timeit.repeat("sum(range(1000))", number=2000, repeat=5)) / 2000 * 1e6
-    print(f"machine: sum(range(1000)) = {calib:.1f} µs (README figures: ~20 µs)")
+    print(f"machine: sum(range(1000)) = {calib:.1f} µs (docs/performance.md figures: ~20 µs)")
 
     runs = in_process(texts, args.repeat)
     best = min(runs)

@@ -17,13 +17,13 @@ import atexit
 import gc
 import os
 
-# Start-up (issue 9). The imports below make tens of thousands of objects (modules, classes,
+# Start-up time. The imports below make tens of thousands of objects (modules, classes,
 # functions) that live until the process ends. Python's cyclic garbage collector would scan
 # them as they are made, again at each later collection, and once more at exit, to free
 # nothing: the collector is paused while they load, then they are moved to its permanent
 # generation (gc.freeze: still freed by reference counting, never rescanned) and the
-# collector is put back as it was. Together with _freeze_if_paused, about 8% of the
-# instructions of `fretc r1.fret --emit ltl` and 3% of a thousand requirements. The price:
+# collector is put back as it was. Together with _freeze_if_paused, a few per cent of the
+# CPU time of `fretc r1.fret --emit ltl`. The price:
 # a reference cycle that is already garbage when fretc.cli is first imported is never
 # freed (bounded: only what exists at that moment; objects made later are collected as
 # before).
@@ -46,7 +46,7 @@ def _freeze_if_paused() -> None:
     """At exit (``atexit``): when the command left the collector paused (``--emit ltl``
     does, :mod:`fretc.compile`: its objects are acyclic and live until the end), move
     everything to the permanent generation so the interpreter's final collection does not
-    scan the run's objects (about 1.3% of a thousand requirements' instructions). A command
+    scan the run's objects (about 1% of a thousand requirements' CPU time). A command
     that keeps the collector running (the audit, the other emits) is left as it is."""
     if not gc.isenabled():
         gc.freeze()
@@ -62,7 +62,7 @@ class _DefaultGroup(click.Group):
     The optional sub-commands (:func:`_register_optional`) are attached on first need: not
     when the first argument is a requirement file (a path with a folder or a ``.fret`` /
     ``.json`` name, which no sub-command is called), so ``fretc FILE`` does not import the
-    audit and report machinery (start-up time, issue 9)."""
+    audit and report machinery (start-up time)."""
 
     _optional_registered = False
 
@@ -118,7 +118,7 @@ main.add_command(compile_cmd, "compile")
 def _register_optional() -> None:
     """Attach the sub-commands other than ``compile``. Called on first need by
     :class:`_DefaultGroup`, not at import: ``fretc FILE`` does not need them (start-up)."""
-    # lazy: these modules load rich and the report machinery (start-up time, issue 9)
+    # lazy: these modules load rich and the report machinery (start-up time)
     from .audit import audit_cmd
     from .check import check_cmd
     from .inspect import inspect_cmd

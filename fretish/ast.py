@@ -12,7 +12,7 @@ The nodes are dataclasses (``dataclasses.fields``/``replace`` work) that behave 
 ``@dataclass(frozen=True)`` ones: their methods are written out instead of generated
 (:class:`_Node`, and an ``__init__`` per class). The generated ones cost start-up time
 (compiled for every class at each start) and parse time (the frozen ``__init__`` sets each
-field through ``object.__setattr__``; issue 9). ``tests/fretish/test_parser.py`` compares
+field through ``object.__setattr__``). ``tests/fretish/test_parser.py`` compares
 them with generated ones.
 """
 
@@ -36,8 +36,7 @@ _UNIT_SECONDS: dict = {}
 def __getattr__(name: str):
     """``UNIT_SECONDS`` (PEP 562): the canonical duration units and their length in seconds
     (exact :class:`fractions.Fraction`; ``ticks`` has none), made on first use: importing
-    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit
-    (issue 9)."""
+    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit."""
     if name == "UNIT_SECONDS":
         if not _UNIT_SECONDS:
             from fractions import Fraction
@@ -75,7 +74,7 @@ def _span() -> Span:
 
 class _Node:
     """What ``@dataclass(frozen=True)`` would generate for a node, written once for all
-    (the generated methods are compiled anew for every class at each start-up, issue 9):
+    (the generated methods are compiled anew for every class at each start-up):
     equality and hash over the fields that are not spans, ``repr`` without the spans,
     assignment and deletion refused. The subclasses are dataclasses (``fields``,
     ``replace``) with ``init=False, repr=False, eq=False`` and an ``__init__`` of their
@@ -306,7 +305,7 @@ class Duration(_Node):
 
     @property
     def value(self) -> Fraction:
-        from fractions import Fraction  # lazy (start-up, issue 9)
+        from fractions import Fraction  # lazy (start-up time)
 
         return Fraction(self.amount)
 

@@ -3,8 +3,8 @@ algorithm on the fast path's tables (:mod:`fretish.fastparse`).
 
 A sentence the fast path cannot parse used to go to Lark for its exact error: importing
 Lark, loading its tables and building the contextual lexer's scanners for every parser state
-the sentence passes through cost about 500 million instructions (0.15-0.2 s) for one bad
-sentence, paid by a user at every typo (issue 9). The error only depends on what Lark does
+the sentence passes through cost 0.15-0.2 s of CPU for one bad
+sentence, paid by a user at every typo. The error only depends on what Lark does
 with the text, and what Lark does is fixed by its tables (the fast path's copy of them) and
 its documented algorithm (Lark 1.x, ``lark/lexer.py`` and ``lark/parsers/``), replayed
 here step for step:

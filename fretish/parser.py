@@ -447,7 +447,7 @@ class _Builder:
         if op[0] == "NE":
             raise _Fail(op, "a probability bound uses <, <=, >, >= or =, not '!='",
                         "write e.g. 'with probability >= 0.99'")
-        from fractions import Fraction  # lazy: probabilities are rare (start-up, issue 9)
+        from fractions import Fraction  # lazy: probabilities are rare (start-up time)
 
         v = Fraction(value)
         if not 0 <= v <= 1 or (op[0] == "GT" and v == 1) or (op[0] == "LT" and v == 0):
@@ -558,7 +558,7 @@ def _lark_version() -> str:
     The file is found as the import system finds it: Lark's own module when it is imported
     already, else ``sys.path``'s finder (:class:`importlib.machinery.PathFinder`, loaded
     with Python's start-up), else :func:`importlib.util.find_spec` (any other finder; that
-    module costs about 0.3 ms to import, start-up, issue 9)."""
+    module costs about 0.3 ms to import)."""
     try:
         spec = getattr(sys.modules.get("lark"), "__spec__", None)
         if spec is None:

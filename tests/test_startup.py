@@ -1,4 +1,4 @@
-"""Start-up work of ``fretc FILE --emit ltl`` (issue 9) that was moved or written out keeps
+"""Start-up work of ``fretc FILE --emit ltl`` that was moved or written out keeps
 its behaviour: :class:`common.errors.Where` behaves as the ``@dataclass(frozen=True)`` it
 replaces, and :mod:`common.units` builds its table and regexp on first use."""
 
