@@ -39,8 +39,8 @@ DIR`` runs the same commands with another checkout of fretc (e.g. ``git archive 
 -x -C DIR``) for a ratio measured in the same run; the timed runs of the two checkouts
 alternate, so a change in the machine's load hits both. FRET's own formalizer takes about
 35 ms per sentence (``../shared/fretish/README.md``, a published figure, not measured
-here). The machine's speed is printed as ``sum(range(1000))`` in µs (the README's figures
-were taken at about 20 µs).
+here). The machine's speed is printed as ``sum(range(1000))`` in µs (the figures of
+docs/performance.md were taken at about 20 µs).
 """
 
 from __future__ import annotations
@@ -226,7 +226,7 @@ def main() -> None:
     texts = sentences(args.n)
     corpus = corpus_sentences(args.corpus)
     calib = min(timeit.repeat("sum(range(1000))", number=2000, repeat=5)) / 2000 * 1e6
-    print(f"machine: sum(range(1000)) = {calib:.1f} µs (README figures: ~20 µs)")
+    print(f"machine: sum(range(1000)) = {calib:.1f} µs (docs/performance.md figures: ~20 µs)")
 
     runs = in_process(texts, args.repeat)
     best = min(runs)

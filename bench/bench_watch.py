@@ -17,7 +17,9 @@ period: 100 ms of run time, 10 ms of wall time at 10x). Part 2: the highest repl
 watch keeps up with (verdicts equal to ``fretc audit`` of the trace, the median closing
 message -> verdict latency below one tick period of wall time at that rate, and the last
 message used within 0.5 s of leaving the server), with the watch's CPU time against the audit's on
-the same trace.
+the same trace; the keep-up ratio (that rate; aim: 50x or more) and the message -> verdict
+p50/p99 at it. Each run ends as a user's does: the server stops after the last message and
+the watch ends by itself at its orderly close.
 
     python bench/bench_watch.py [--trace traces/nominal.mcap] [--rates 10 20 50 75 100 150]
 """
@@ -52,8 +54,9 @@ def _serve(trace: str, rate: float, topics, conn) -> None:
 
     n, last = replay_mcap(trace, server, rate, topics=set(topics), on_message=note)
     conn.send((sent, last))
+    time.sleep(0.5)  # the last messages leave
+    server.stop()  # the end of the run: the watch ends by itself
     conn.recv()  # the watch is done
-    server.stop()
 
 
 def _cpu() -> float:
@@ -72,7 +75,7 @@ def watch_once(plan, trace: str, rate: float):
     proc = ctx.Process(target=_serve, args=(trace, rate, topics, child), daemon=True)
     proc.start()
     url = parent.recv()
-    w = Watch(plan, WatchOptions(url=url, wait=10.0))
+    w = Watch(plan, WatchOptions(url=url, wait=10.0, duration=600))
     ticks = []
 
     def on_tick(i, t, dep, closing):
@@ -88,7 +91,6 @@ def watch_once(plan, trace: str, rate: float):
         while (w.source._last_time or 0) < last and time.monotonic() < deadline:
             time.sleep(0.005)
         result["used_at"] = time.time_ns()
-        w.stop()
 
     th = threading.Thread(target=waiter, daemon=True)
     th.start()
@@ -131,6 +133,7 @@ def main() -> None:
     print("\nrate  ticks  data->verdict ms (median / p99)  closing msg->verdict ms (median / p99)"
           "  lag at end s  watch CPU s  CPU vs audit  verdicts = audit  kept up")
     best = None
+    kept_at = {}
     for rate in args.rates:
         la, dl, cl, lag, cpu = watch_once(plan, args.trace, rate)
         got = [(v.requirement, v.verdict, v.ltl3.status, v.ltl3.tick,
@@ -141,6 +144,7 @@ def main() -> None:
         kept = same and lag < 0.5 and np.median(cl) < period_ms / rate
         if kept:
             best = rate
+            kept_at[rate] = (dl, cl)
         print(f"{rate:>4g}x {la.ticks_evaluated:>6d}  "
               f"{np.median(dl):>10.2f} / {np.percentile(dl, 99):>7.2f}            "
               f"{np.median(cl):>10.2f} / {np.percentile(cl, 99):>7.2f}              "
@@ -149,8 +153,13 @@ def main() -> None:
             print(f"      (one tick period at 10x = {period_ms / 10:g} ms of wall time; p99 "
                   f"data->verdict {'<' if np.percentile(dl, 99) < period_ms / 10 else '>='} "
                   "it)")
-    print(f"\nhighest replay rate kept up with: {best:g}x" if best else
-          "\nno rate kept up with")
+    print(f"\nkeep-up ratio: {best:g}x real time ({'>=' if best >= 50 else '<'} 50x)"
+          if best else "\nkeep-up ratio: no rate kept up with (< 50x)")
+    if best:
+        dl, cl = kept_at[best]
+        print(f"message -> verdict at {best:g}x (ms): data p50 {np.median(dl):.2f} p99 "
+              f"{np.percentile(dl, 99):.2f}; closing message p50 {np.median(cl):.2f} p99 "
+              f"{np.percentile(cl, 99):.2f}")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
 requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
-runs"; issue 11).
+runs").
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
 abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every
@@ -377,7 +377,10 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
             from .witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir, witness_judge)
         result.queries = checker.queries
-        result.unknown_queries = checker.unknown
+        result.unknown_queries = worker.timeouts
+        if worker.failures:
+            result.notes.append(f"Spot could not take {len(worker.failures)} queries (their "
+                                f"answers are unknown), e.g. {worker.failures[0]}")
     finally:
         if own:
             worker.close()
@@ -436,7 +439,7 @@ def _check_alone(ck: Checker, comp: list[CheckItem], status: dict,
             result.findings.append(Finding(
                 "unknown", "unknown", [x.id],
                 f"satisfiability of {x.id} ({x.location}) unknown: the Spot query ran out of "
-                "time (--timeout)"))
+                "time (--timeout) or Spot could not take it (see the notes)"))
     return alone_bad
 
 
@@ -463,7 +466,7 @@ def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckRe
         result.findings.append(Finding(
             "unknown", "unknown", _ids(comp),
             "satisfiability of the set " + ", ".join(_ids(comp)) + " unknown: the Spot "
-            "query ran out of time (--timeout)"))
+            "query ran out of time (--timeout) or Spot could not take it (see the notes)"))
     if whole is not True:
         for x in comp:
             if whole is False:
@@ -490,7 +493,7 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
             result.findings.append(Finding(
                 "unknown", "unknown", [x.id],
                 f"non-vacuity of {x.id} ({x.location}) unknown: the Spot query ran out "
-                "of time (--timeout)"))
+                "of time (--timeout) or Spot could not take it (see the notes)"))
             continue
         subsets, cut, unknown = ck.minimal_subsets(
             comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
@@ -521,7 +524,7 @@ def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
             result.findings.append(Finding(
                 "unknown", "warning", [x.id],
                 f"redundancy of {x.id} ({x.location}) unknown: the Spot query ran out of "
-                "time (--timeout)"))
+                "time (--timeout) or Spot could not take it (see the notes)"))
         if ans is False:
             if others:
                 msg = (f"{x.id} ({x.location}) is implied by the others of its component ("

@@ -1,4 +1,4 @@
-"""Realizability of requirement sets for ``fretc check`` (issue 11, item 5).
+"""Realizability of requirement sets for ``fretc check``.
 
 The FRET variables are split into **inputs** (the environment's: sensor-derived, e.g.
 ``too_close``) and **outputs** (the component's, e.g. ``stopped``); a variable named in
@@ -79,7 +79,7 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
             result.findings.append(Finding(
                 "unknown", "unknown", _ids(comp),
                 "realizability of " + ", ".join(_ids(comp)) + " unknown: the synthesis game "
-                "ran out of time (--timeout)"))
+                "ran out of time (--timeout) or Spot could not take it (see the notes)"))
         elif ans[0]:
             entry["realizable"] = True
             entry["mealy_states"] = ans[1]

@@ -178,8 +178,9 @@ class SpotWorker:
 
     ``timeout`` is in seconds (None: no budget, queries run in this process). Use as a
     context manager, or call :meth:`close`. :meth:`ask` returns the answer, or
-    :data:`UNKNOWN` when the budget ran out; a Spot exception is re-raised as
-    ``RuntimeError``.
+    :data:`UNKNOWN` when the budget ran out or Spot could not take the query (a bound
+    beyond Spot's repetition limit of 254, a formula it does not parse); ``failures`` keeps
+    Spot's messages, so the answer says what was tried.
     """
 
     def __init__(self, timeout: float | None = None):
@@ -187,6 +188,7 @@ class SpotWorker:
         self._proc = None
         self._conn = None
         self.timeouts = 0
+        self.failures: list[str] = []
 
     def _start(self) -> None:
         methods = multiprocessing.get_all_start_methods()
@@ -199,7 +201,11 @@ class SpotWorker:
 
     def ask(self, query: tuple) -> Any:
         if self.timeout is None:
-            return run_query(query)
+            try:
+                return run_query(query)
+            except Exception as exc:  # a Spot error is an unknown answer, not a crash
+                self.failures.append(_one_line(f"{type(exc).__name__}: {exc}"))
+                return UNKNOWN
         if self._proc is None or not self._proc.is_alive():
             self._start()
         self._conn.send(query)
@@ -213,7 +219,8 @@ class SpotWorker:
             self._kill()
             return UNKNOWN
         if status == "error":
-            raise RuntimeError(value)
+            self.failures.append(_one_line(value))
+            return UNKNOWN
         return value
 
     def _kill(self) -> None:
@@ -243,3 +250,11 @@ class SpotWorker:
                 self._kill()
         except Exception:
             pass
+
+
+def _one_line(message: str) -> str:
+    """A Spot error as one line: its kind and its last line (Spot's parser prints the
+    formula and a caret before the reason)."""
+    lines = [x.strip() for x in message.splitlines() if x.strip()]
+    kind = message.split(":", 1)[0]
+    return lines[0] if len(lines) <= 1 else f"{kind}: {lines[-1]}"

@@ -56,7 +56,7 @@ class Where:
 
     Immutable, compared and hashed by its fields, ``repr`` ``Where(file=..., ...)``: what
     ``@dataclass(frozen=True)`` generates, written out because generating it costs about
-    1 ms at every start-up (issue 9); ``tests/test_startup.py`` checks that it behaves as
+    1 ms at every start-up; ``tests/test_startup.py`` checks that it behaves as
     the generated class does."""
 
     __match_args__ = _WHERE_FIELDS

@@ -151,7 +151,7 @@ def _shape(req: A.Requirement, tick_period: Fraction | None):
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     warnings: list[str] = []
     if "then" in req.text.lower():
-        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up, issue 9)
+        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up time)
 
         warnings.extend(regrouping_warnings(req))
     n = None

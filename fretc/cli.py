@@ -30,7 +30,7 @@ class _DefaultGroup(click.Group):
     The optional sub-commands (:func:`_register_optional`) are attached on first need: not
     when the first argument is a requirement file (a path with a folder or a ``.fret`` /
     ``.json`` name, which no sub-command is called), so ``fretc FILE`` does not import the
-    audit and report machinery (start-up time, issue 9)."""
+    audit and report machinery (start-up time)."""
 
     _optional_registered = False
 
@@ -86,7 +86,7 @@ main.add_command(compile_cmd, "compile")
 def _register_optional() -> None:
     """Attach the sub-commands other than ``compile``. Called on first need by
     :class:`_DefaultGroup`, not at import: ``fretc FILE`` does not need them (start-up)."""
-    # lazy: these modules load rich and the report machinery (start-up time, issue 9)
+    # lazy: these modules load rich and the report machinery (start-up time)
     from .audit import audit_cmd
     from .check import check_cmd
     from .inspect import inspect_cmd

@@ -17,7 +17,7 @@ import click
 
 from common.textsafe import visible
 
-__all__ = ["audit_input_options", "audit_config", "ray_options", "run_audits", "META",
+__all__ = ["audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
 
 #: Key of the Ray options in the click context's ``meta``.
@@ -30,9 +30,15 @@ def shown(text: str) -> str:
     return visible(text, keep="\n")
 
 
-def audit_input_options(f):
+def live_input_options(f):
+    """:func:`audit_input_options` without ``-j/--jobs`` (``fretc watch`` audits one run)."""
+    return audit_input_options(f, jobs=False)
+
+
+def audit_input_options(f, jobs: bool = True):
     """The options that say what to audit and how (shared by ``fretc audit`` and
-    ``fretc report``): requirements, bindings, tick, time base, jobs, window."""
+    ``fretc report``): requirements, bindings, tick, time base, jobs (unless ``jobs`` is
+    False), window."""
     options = [
         click.option("-r", "--requirements", "requirements", multiple=True,
                      type=click.Path(exists=True),
@@ -57,6 +63,8 @@ def audit_input_options(f):
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
                      help="Ticks of values kept each side of a trigger and a violation."),
     ]
+    if not jobs:
+        del options[-2]
     for option in reversed(options):
         f = option(f)
     return f
@@ -107,7 +115,7 @@ def ray_options(f):
 def _check_address(ctx, param, value):
     if value is None:
         return None
-    import importlib.util  # lazy: only for --ray (start-up, issue 9)
+    import importlib.util  # lazy: only for --ray (start-up time)
 
     if importlib.util.find_spec("ray") is None:
         from monitors.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help

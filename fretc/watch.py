@@ -1,16 +1,23 @@
 """``fretc watch URL`` and ``fretc replay LOG.mcap --serve``: the audit's monitors on a
-running robot over the Foxglove WebSocket protocol, and a server to watch.
+running robot over the Foxglove WebSocket protocol or rosbridge, and a server to watch.
 
 ::
 
     fretc watch ws://localhost:8765 --requirements requirements/ [--bindings B.toml]
-                [--duration S] [--record OUT.mcap] [--jsonl] [--no-live]
+                [--duration S] [--until-idle DURATION] [--allow-partial]
+                [--record OUT.mcap] [--jsonl] [--json OUT.json] [--no-live]
+    fretc watch rosbridge://localhost:9090 [--topic-type /scan=sensor_msgs/msg/LaserScan] ...
     fretc replay traces/nominal.mcap --serve [--rate 10] [--host 127.0.0.1] [--port 8765]
 
-Exit status of ``watch`` as ``fretc audit``: 0 every verdict satisfied (or vacuous), 1 a
-requirement violated, 2 usage or input errors (a requirement that could not be watched, no
-connection); a run with a connection gap never exits 0 (2: part of it was not checked).
-Needs the ``watch`` extra: ``pip install 'fretc[watch]'``.
+The watch ends with the run: the server's orderly close, every bound topic unadvertised,
+``--duration``, ``--until-idle`` or Ctrl-C; the final verdicts are then decided as ``fretc
+audit`` decides them at the end of a log, and the exit status is the audit's
+(:data:`monitors.report.model.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
+run, 1 a requirement violated, 2 usage or input errors (a requirement that could not be
+watched, no connection), 3 no violation but the run was incomplete (a connection gap, data
+problems; 0 with ``--allow-partial``).
+Needs the ``watch`` extra: ``pip install 'fretc[watch]'`` (without it: one line saying so,
+exit 2).
 """
 
 from __future__ import annotations
@@ -25,15 +32,17 @@ import click
 
 from common.units import format_offset
 
-from .options import audit_config, audit_input_options
+from .options import audit_config, live_input_options
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
 
 def live_table(w):
-    """The live table of a :class:`monitors.live.watch.Watch`: per requirement the pt verdict
-    now, the LTL3 status and when it became definite, violations so far, the last trigger
-    (times in s from the first tick)."""
+    """The live table of a :class:`monitors.live.watch.Watch`: per requirement its own
+    clock's ticks and the time of the last one, the pt verdict now, the LTL3 status and when
+    it became definite, obligations violated and pending so far
+    (:func:`monitors.live.watch.split_pending`), the last trigger (times in s from the
+    first tick)."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Group
     from rich.table import Table
@@ -46,14 +55,18 @@ def live_table(w):
         return format_offset(ns, st0, decimals=1)
 
     table = Table(header_style="bold", title=None)
-    for col in ("req", "pt now", "LTL3", "definite at", "violations", "last trigger"):
+    for col in ("req", "ticks", "pt now", "LTL3", "definite at", "violated", "pending",
+                "last trigger"):
         table.add_column(col, no_wrap=True)
     for r in w.plan.requirements:
         times = w.tick_times(r.index)
         st = w.live[r.index]
         if st.error is not None:
-            table.add_row(r.id, Text("error", style="red"), Text(st.error[:60]), "", "", "")
+            table.add_row(r.id, "", Text("error", style="red"), Text(st.error[:60]), "", "",
+                          "", "")
             continue
+        # the requirement's own clock: its ticks and the time of its last one
+        ticks = f"{len(times)} ({s(times[-1])})" if times else "0"
         if st.offline:
             pt = Text("offline", style="dim")
         elif st.pt is None:
@@ -67,12 +80,12 @@ def live_table(w):
         trig = "-"
         if st.last_trigger is not None and st.last_trigger < len(times):
             trig = f"{s(times[st.last_trigger])} (#{st.last_trigger})"
-        table.add_row(r.id, pt, Text(st.status, style=style), definite, str(st.violations),
-                      trig)
+        table.add_row(r.id, ticks, pt, Text(st.status, style=style), definite,
+                      str(st.violations), str(st.pending), trig)
     src = w.source
     gaps = len(src.gaps)
-    line = (f"{w.status_line} | ticks {w.ticks} ({s(w.last_tick_time)}) | unknown {w.unknown_ticks}"
-            f" | gaps {gaps} | problems {len(src.problems)}")
+    line = (f"{w.status_line} | unknown ticks {w.unknown_ticks} | gaps {gaps} | "
+            f"problems {len(src.problems)}")
     return Group(Text(line, style="dim"), table)
 
 
@@ -84,11 +97,56 @@ class _Renderable:
         return live_table(self.w)
 
 
+def _seconds(ctx, param, value):
+    """A click callback: a duration (``"2 s"``, ``"500 ms"``, a number of seconds) in s."""
+    if value is None:
+        return None
+    from common.units import parse_seconds
+
+    try:
+        return float(parse_seconds(value if not _number(value) else float(value)))
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), ctx=ctx, param=param) from None
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _topic_types(ctx, param, values):
+    out = {}
+    for v in values:
+        topic, sep, name = v.partition("=")
+        if not sep or not topic.startswith("/") or not name:
+            raise click.BadParameter(f"{v!r}: expected TOPIC=TYPE, e.g. "
+                                     "/scan=sensor_msgs/msg/LaserScan", ctx=ctx, param=param)
+        out[topic] = name
+    return out
+
+
+#: URL schemes ``fretc watch`` speaks: Foxglove WebSocket, rosbridge v2.
+URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://")
+
+
 @click.command("watch")
 @click.argument("url")
-@audit_input_options
+@live_input_options
 @click.option("--duration", type=float, default=None, metavar="SECONDS",
-              help="Stop after this many seconds (default: until Ctrl-C).")
+              help="End the run after this many seconds (default: until the server ends it "
+                   "or Ctrl-C).")
+@click.option("--until-idle", default=None, metavar="DURATION", callback=_seconds,
+              help="End the run when no message came for DURATION (e.g. \"2 s\").")
+@click.option("--allow-partial", is_flag=True,
+              help="Exit 0 instead of 3 when a run without violations was incomplete "
+                   "(connection gaps, data problems), as `fretc audit --allow-partial`.")
+@click.option("--topic-type", "topic_types", multiple=True, metavar="TOPIC=TYPE",
+              callback=_topic_types,
+              help="rosbridge: the message type of TOPIC when the server's rosapi does not "
+                   "give it, e.g. /scan=sensor_msgs/msg/LaserScan; repeatable.")
 @click.option("--record", "record", type=click.Path(dir_okay=False), default=None,
               help="Write the watched messages and the verdict events (/fretc/verdicts) to "
                    "this MCAP; `fretc audit` of it gives the watch's verdicts.")
@@ -103,40 +161,41 @@ class _Renderable:
 @click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, window, duration, record, jsonl, json_path, wait, connect_timeout,
-              no_live):
-    """Watch a robot live over the Foxglove WebSocket protocol (URL ws://host:8765, e.g.
-    foxglove_bridge) with the requirements and bindings that audit its logs."""
+              window, duration, until_idle, allow_partial, topic_types, record, jsonl,
+              json_path, wait, connect_timeout, no_live):
+    """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
+    rosbridge://host:9090: rosbridge v2) with the requirements and bindings that audit its
+    logs, until the run ends (the server closes or unadvertises every topic, --duration,
+    --until-idle, Ctrl-C). Exit codes as `fretc audit`."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Console
-    from rich.live import Live
     from rich.markup import escape
 
     from monitors.audit import AuditInputError, load_plan
-    from monitors.report.terminal import print_summary
-    from monitors.report.model import audit_json, exit_code
+    from monitors.live.client import MissingDependency
     from monitors.live.watch import Watch, WatchOptions
 
-    if not url.startswith(("ws://", "wss://")):
-        raise click.BadParameter(f"{url!r}: expected ws://host:port", param_hint="URL")
+    if not url.startswith(URL_SCHEMES):
+        raise click.BadParameter(f"{url!r}: expected ws://host:port or rosbridge://host:port",
+                                 param_hint="URL")
     err = Console(stderr=True, highlight=False, soft_wrap=True)
-    out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window)
+    lock = threading.Lock()
+
+    def on_event(e):
+        if jsonl:
+            with lock:
+                sys.stdout.write(json.dumps(e.to_json(), sort_keys=True) + "\n")
+                sys.stdout.flush()
+
     try:
         plan = load_plan(config)
-        lock = threading.Lock()
-
-        def on_event(e):
-            if jsonl:
-                with lock:
-                    sys.stdout.write(json.dumps(e.to_json(), sort_keys=True) + "\n")
-                    sys.stdout.flush()
-
         w = Watch(plan, WatchOptions(url=url, duration=duration, wait=wait,
-                                     connect_timeout=connect_timeout, record=record),
+                                     connect_timeout=connect_timeout, record=record,
+                                     until_idle=until_idle, types=topic_types or None),
                   on_event=on_event)
-    except AuditInputError as exc:
+    except (AuditInputError, MissingDependency) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
@@ -145,6 +204,13 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         if r.error is not None:
             input_errors = True
             err.print(f"[red]error:[/red] {escape(f'{r.id} ({r.source}): {r.error}')}")
+    la = _run_watch(w, err, no_live)
+    ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
+
+
+def _run_watch(w, err, no_live):
+    """Run the watch (live table on a terminal), Ctrl-C ending the run; its LogAudit."""
+    from rich.live import Live
 
     previous = signal.getsignal(signal.SIGINT)
 
@@ -155,25 +221,33 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     try:
         if not no_live and err.is_terminal:
             with Live(_Renderable(w), console=err, refresh_per_second=4, transient=False):
-                la = w.run()
-        else:
-            la = w.run()
+                return w.run()
+        return w.run()
     finally:
         signal.signal(signal.SIGINT, previous)
-    print_summary(out, [la], plan)
+
+
+def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) -> int:
+    """Print the summary, write --json; the exit code (:func:`monitors.report.model.exit_code`,
+    as ``fretc audit``)."""
+    from rich.console import Console
+
+    from monitors.report.model import audit_json, exit_code
+    from monitors.report.terminal import print_summary
+
+    out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
+    print_summary(out, [la], plan, allow_partial=allow_partial, input_errors=input_errors)
     if la.partial:
         out.print(f"connection gaps: {len(w.source.gaps)}; {w.unknown_ticks} ticks not "
                   "evaluated (unknown)", markup=False)
     if record:
         out.print(f"recorded {record}", markup=False)
     if json_path:
-        doc = audit_json([la], plan.requirements_json(), plan.bindings_json(), input_errors)
+        doc = audit_json([la], plan.requirements_json(), plan.bindings_json(), input_errors,
+                         allow_partial)
         with open(json_path, "w", encoding="utf-8") as f:
             f.write(doc)
-    code = exit_code([la], input_errors)
-    if code == 0 and la.partial:
-        code = 2
-    ctx.exit(code)
+    return exit_code([la], input_errors, allow_partial)
 
 
 @click.command("replay")
@@ -190,14 +264,15 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
 @click.option("--loop", is_flag=True, help="Start again at the end.")
 def replay_cmd(log, serve, rate, host, port, wait, loop):
     """Publish a recorded MCAP LOG over the Foxglove WebSocket protocol, paced at RATE
-    times real time, with its recorded schemas, encodings and log times."""
+    times real time, with its recorded schemas, encodings and log times; then close (a
+    `fretc watch` of it ends there)."""
     # lazy: foxglove-sdk (the watch extra) only when the command runs
     from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap
 
     try:
         server = FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")
     except RuntimeError as exc:
-        raise click.ClickException(str(exc))
+        raise MissingExtra(str(exc)) from None
     advertise_mcap(log, server)
     click.echo(f"serving {log} on {server.url} at {rate:g}x", err=True)
     try:
@@ -215,6 +290,13 @@ def replay_cmd(log, serve, rate, host, port, wait, loop):
         pass
     finally:
         server.stop()
+
+
+class MissingExtra(click.ClickException):
+    """An optional dependency is missing or the server cannot start: ``Error: ...`` in one
+    line, exit code 2 (as a usage or input error)."""
+
+    exit_code = 2
 
 
 def register(main) -> None:

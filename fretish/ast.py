@@ -32,8 +32,7 @@ _UNIT_SECONDS: dict = {}
 def __getattr__(name: str):
     """``UNIT_SECONDS`` (PEP 562): the canonical duration units and their length in seconds
     (exact :class:`fractions.Fraction`; ``ticks`` has none), made on first use: importing
-    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit
-    (issue 9)."""
+    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit."""
     if name == "UNIT_SECONDS":
         if not _UNIT_SECONDS:
             from fractions import Fraction
@@ -191,7 +190,7 @@ class Duration:
 
     @property
     def value(self) -> Fraction:
-        from fractions import Fraction  # lazy (start-up, issue 9)
+        from fractions import Fraction  # lazy (start-up time)
 
         return Fraction(self.amount)
 

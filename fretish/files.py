@@ -103,7 +103,7 @@ def parse_tick_period(text: str) -> Fraction:
 # --------------------------------------------------------------------------- .fret files
 _ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
 # Patterns of rare lines, compiled on first use by re's own cache (re.match(pattern, ...)):
-# a file without them does not pay for their compilation (start-up, issue 9)
+# a file without them does not pay for their compilation (start-up time)
 _ATTRIBUTE = r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z"
 _DIRECTIVE = r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z"
 
@@ -318,7 +318,7 @@ def _line_col(raw: str, offset: int) -> tuple[int, int]:
 def _load_json(path: str) -> list[RequirementEntry]:
     source = str(path)
     raw = _read_text(path)
-    import json  # lazy: only FRET's JSON exports need it (start-up, issue 9)
+    import json  # lazy: only FRET's JSON exports need it (start-up time)
     try:
         data = json.loads(raw)
     except json.JSONDecodeError as e:
@@ -377,7 +377,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
 
 # --------------------------------------------------------------------------- entry point
 def _path_text(p) -> str:
-    """``str(pathlib.Path(p))`` without importing pathlib (start-up time, issue 9): on POSIX
+    """``str(pathlib.Path(p))`` without importing pathlib (start-up time): on POSIX
     the path with empty and ``.`` parts dropped (one or three-plus leading slashes are
     ``/``, exactly two stay ``//``), ``.`` when nothing is left; elsewhere pathlib itself."""
     p = os.fspath(p)
@@ -440,7 +440,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementE
         got = _load_json(f) if _suffix(f).lower() == ".json" else _load_fret(f)
         for e in got:
             # ids are unique across all the files of a run: verdicts, monitors and reports
-            # are keyed by id (issue 15 item 13); duplicates inside one file are caught by
+            # are keyed by id; duplicates inside one file are caught by
             # its reader
             other = first.get(e.id)
             if other is not None and other.source != e.source:

@@ -75,6 +75,9 @@ def serve(scenario, seed, rate, host, port, ros1, wait):
                        wait=wait, on_ready=ready)
     except KeyboardInterrupt:
         return
+    except RuntimeError as exc:  # no foxglove-sdk (the watch extra): one line, exit 2
+        click.echo(f"error: {exc}", err=True)
+        raise SystemExit(2) from None
     click.echo(f"{scenario}: {res.outcome}; {res.duration:.2f} s sim", err=True)
 
 

@@ -65,7 +65,7 @@ def load_audit_bindings(config: AuditConfig) -> tuple[Bindings | None, list[str]
     if b is not None:
         if tick is not None or config.time_base is not None:
             b = Bindings(dict(b.variables), tick or b.tick, config.time_base or b.time_base,
-                         b.header_lag_ns, b.source)
+                         b.header_lag_ns, b.source, types=dict(b.types))
         if config.inline:
             try:
                 b = b.with_inline(config.inline)
@@ -79,7 +79,12 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
     differently, or different ticks / time bases, is an :class:`AuditInputError`."""
     first = parts[0]
     variables: dict[str, Binding] = {}
+    types: dict[str, str] = {}
     for b in parts:
+        for topic, name in b.types.items():
+            if types.setdefault(topic, name) != name:
+                raise AuditInputError(f"{b.source}: [types] gives {topic} the type {name}, "
+                                      f"another binding file {types[topic]}")
         if (b.tick, b.time_base, b.header_lag_ns) != (first.tick, first.time_base,
                                                         first.header_lag_ns):
             raise AuditInputError(
@@ -94,7 +99,8 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
                     f"{old.source}:{old.line} binds it to {old.expr!r}")
             variables.setdefault(name, v)
     source = ", ".join(str(b.source) for b in parts)
-    return Bindings(variables, first.tick, first.time_base, first.header_lag_ns, source)
+    return Bindings(variables, first.tick, first.time_base, first.header_lag_ns, source,
+                    types=types)
 
 
 def tick_text(tick: TickSpec) -> str:

@@ -95,12 +95,12 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
-        if key not in ("tick", "variables", "logs"):
+        if key not in ("tick", "variables", "logs", "types"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
-                               "optionally [logs])", line=line, col=col)
+                               "optionally [logs], [types])", line=line, col=col)
 
 
 def _duration(tick_t: dict[str, Any], key: str, source: str, loc: _Locations) -> int:
@@ -220,6 +220,22 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
     return {name: compiled[name] for name in pending}
 
 
+def _types_table(table: Any, source: str, loc: _Locations) -> dict[str, str]:
+    """``[types]``: topic -> ROS message type (``"/scan" = "sensor_msgs/msg/LaserScan"``)."""
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("types")
+        raise BindingError(source, "types must be a table [types]", line=line, col=col)
+    for topic, name in table.items():
+        if not re.fullmatch(r"(/[A-Za-z0-9_]+)+", topic) or not isinstance(name, str) \
+                or not re.fullmatch(r"[A-Za-z0-9_]+(/msg)?/[A-Za-z0-9_]+", name):
+            kl, kc = loc.at("types", topic)
+            raise BindingError(source, f"[types] needs \"/topic\" = \"pkg/msg/Type\", not "
+                               f"{topic!r} = {name!r}", line=kl, col=kc)
+    return dict(table)
+
+
 def _logs_table(table: Any, source: str, loc: _Locations) -> LogSelector | None:
     if table is None:
         return None
@@ -269,6 +285,7 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     variables = _compile_in_order(_variables_table(doc, source, loc), source)
     out = Bindings(variables, tick, time_base, lag, source)
     out.logs = _logs_table(doc.get("logs"), source, loc)
+    out.types = _types_table(doc.get("types"), source, loc)
     return out
 
 

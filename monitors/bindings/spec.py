@@ -88,6 +88,8 @@ class Bindings:
             arrive behind the newest stamp seen and still be placed in stamp order.
         source: the binding file, or None.
         logs: ``[logs]``: the logs this binding file applies to (None: every log).
+        types: ``[types]``: topic -> ROS message type, for live servers that do not say
+            (rosbridge without rosapi); logs carry their own schemas.
 
     Raises:
         ValueError: a time base other than "log" and "header".
@@ -99,6 +101,7 @@ class Bindings:
     header_lag_ns: int = DEFAULT_HEADER_LAG_NS
     source: str | None = None
     logs: LogSelector | None = field(default=None, compare=False)
+    types: dict[str, str] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in ("log", "header"):
@@ -122,7 +125,8 @@ class Bindings:
         for spec in specs:
             b = parse_inline(spec, refs=variables)
             variables[b.name] = b
-        return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source)
+        return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
+                        types=dict(self.types))
 
 
 def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str = "log",

@@ -26,7 +26,12 @@ first item names it:
 * ``("unadvertise", wall_ns, [topic, ...])``
 * ``("message", topic, log_time_ns, payload_bytes, wall_ns)``
 * ``("disconnected", wall_ns, reason)`` (also when a connection attempt fails)
+* ``("closed", wall_ns, reason)``: the server closed the connection in order (a WebSocket
+  close frame, RFC 6455 section 5.5.1: the end of its run, e.g. ``fretc replay --serve``
+  finishing); not retried
 * ``("status", wall_ns, level, text)``
+
+Needs ``websockets`` (the ``watch`` extra): :func:`require_websockets` says so in one line.
 """
 
 from __future__ import annotations
@@ -40,7 +45,35 @@ import time
 from dataclasses import dataclass
 from collections.abc import Callable
 
-__all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient"]
+__all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient", "WebSocketClient", "WATCH_HINT",
+           "MissingDependency", "require_websockets"]
+
+#: What to install for the live commands (``fretc watch``, ``fretc replay --serve``).
+WATCH_HINT = "pip install 'fretc[watch]'"
+
+
+class MissingDependency(RuntimeError):
+    """An optional dependency of the live commands is not installed (the message names
+    :data:`WATCH_HINT`)."""
+
+
+def require_websockets() -> None:
+    """Raise :class:`MissingDependency` when ``websockets`` cannot be imported."""
+    import importlib.util  # lazy: only when a watch starts
+
+    if importlib.util.find_spec("websockets") is None:
+        raise MissingDependency(f"fretc watch needs the websockets package: {WATCH_HINT}")
+
+
+def closed_in_order(ws) -> bool:
+    """The server sent a close frame (RFC 6455 section 5.5.1) before the connection ended:
+    an orderly close, not a network fault. Works with websockets' new (``protocol``) and
+    legacy (``close_rcvd``) connection objects."""
+    proto = getattr(ws, "protocol", None)
+    rcvd = getattr(proto, "close_rcvd", None) if proto is not None else None
+    if rcvd is None:
+        rcvd = getattr(ws, "close_rcvd", None)
+    return rcvd is not None
 
 #: Subprotocols offered, in order of preference.
 SUBPROTOCOLS = ("foxglove.websocket.v1", "foxglove.sdk.v1")
@@ -69,13 +102,14 @@ class Advertised:
                           str(ch.get("schemaEncoding", "") or ""))
 
 
-class FoxgloveClient:
-    """Connect to ``url`` (``ws://host:port``) in a daemon thread and subscribe, on every
-    advertisement, to the channels whose topic ``wanted(topic)`` accepts.
+class WebSocketClient:
+    """A WebSocket connection kept in a daemon thread, retried with backoff after a fault and
+    ended by the server's orderly close; subclasses speak a protocol in :meth:`_session`
+    and put its events on :attr:`events` (the module docstring's tuples).
 
     Args:
         url: the server's address.
-        wanted: topic -> bool, asked once per advertised channel.
+        wanted: topic -> bool, asked once per advertised topic.
         backoff, max_backoff: seconds before the first retry after a drop, and the cap of
             the doubling.
         events: the queue to put events on (a new one by default).
@@ -83,6 +117,9 @@ class FoxgloveClient:
     Call :meth:`start`, read :attr:`events`, call :meth:`stop` (idempotent). :meth:`drop`
     closes the current connection as a network fault would (tests).
     """
+
+    #: subprotocols offered (None: none).
+    subprotocols: tuple[str, ...] | None = None
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *, backoff: float = 0.1,
                  max_backoff: float = 5.0, events: queue.Queue | None = None) -> None:
@@ -98,8 +135,10 @@ class FoxgloveClient:
         self._started = threading.Event()
 
     # -- thread control --------------------------------------------------------------------
-    def start(self) -> "FoxgloveClient":
-        """Connect in a background thread (returns at once)."""
+    def start(self) -> "WebSocketClient":
+        """Connect in a background thread (returns at once). Raises
+        :class:`MissingDependency` without ``websockets``."""
+        require_websockets()
         self._thread = threading.Thread(target=self._run, name="fretc-watch-client",
                                         daemon=True)
         self._thread.start()
@@ -135,7 +174,10 @@ class FoxgloveClient:
         finally:
             loop.close()
 
-    # -- protocol --------------------------------------------------------------------------
+    # -- connection ------------------------------------------------------------------------
+    def _check(self, ws) -> None:
+        """Refuse a connection (raise ConnectionError) the protocol cannot use."""
+
     async def _main(self) -> None:
         import websockets  # optional (the watch extra): imported only when connecting
 
@@ -144,16 +186,14 @@ class FoxgloveClient:
         delay = self.backoff
         while not self._stop.is_set():
             try:
-                async with websockets.connect(self.url, subprotocols=list(SUBPROTOCOLS),
-                                              max_size=None, open_timeout=5,
-                                              ping_interval=5, ping_timeout=10,
-                                              compression=None) as ws:
-                    if ws.subprotocol not in SUBPROTOCOLS:
-                        raise ConnectionError(f"the server chose no Foxglove subprotocol "
-                                              f"({ws.subprotocol!r})")
+                async with websockets.connect(
+                        self.url, subprotocols=list(self.subprotocols or ()) or None,
+                        max_size=None, open_timeout=5, ping_interval=5, ping_timeout=10,
+                        compression=None) as ws:
+                    self._check(ws)
                     self._ws = ws
                     delay = self.backoff
-                    self._put("connected", time.time_ns(), ws.subprotocol, "")
+                    self._put("connected", time.time_ns(), ws.subprotocol or "", "")
                     session = asyncio.ensure_future(self._session(ws))
                     stopper = asyncio.ensure_future(self._stop.wait())
                     await asyncio.wait({session, stopper}, return_when=asyncio.FIRST_COMPLETED)
@@ -163,7 +203,11 @@ class FoxgloveClient:
                         return
                     stopper.cancel()
                     session.result()
-                    reason = "the server closed the connection"
+                    if closed_in_order(ws):
+                        self._put("closed", time.time_ns(),
+                                  f"the server closed the connection (code {ws.close_code})")
+                        return
+                    reason = "the connection was lost without a close frame"
             except asyncio.CancelledError:  # pragma: no cover - loop shutdown
                 return
             except Exception as exc:  # any network fault: report, back off, retry
@@ -176,6 +220,25 @@ class FoxgloveClient:
             except asyncio.TimeoutError:
                 pass
             delay = min(self.max_backoff, delay * 2)
+
+    async def _session(self, ws) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _put(self, *event) -> None:
+        self.events.put(event)
+
+
+class FoxgloveClient(WebSocketClient):
+    """A client of the Foxglove WebSocket protocol (module docstring): subscribes, on every
+    advertisement, to the channels whose topic ``wanted(topic)`` accepts. Arguments as
+    :class:`WebSocketClient`."""
+
+    subprotocols = SUBPROTOCOLS
+
+    def _check(self, ws) -> None:
+        if ws.subprotocol not in SUBPROTOCOLS:
+            raise ConnectionError(f"the server chose no Foxglove subprotocol "
+                                  f"({ws.subprotocol!r})")
 
     async def _session(self, ws) -> None:
         """Read frames until the connection closes (``ConnectionClosed`` ends the loop)."""
@@ -235,6 +298,3 @@ class FoxgloveClient:
                     self._put("status", now, msg.get("level"), str(msg.get("message", "")))
         except ConnectionClosed:
             return
-
-    def _put(self, *event) -> None:
-        self.events.put(event)

@@ -11,8 +11,14 @@ Faults, each a data problem of the run, never a crash:
   message. A run with a gap is ``partial`` and cannot exit 0. A connection that closes with
   nothing after it before the watch ends is the end of the watched run
   (:data:`CONNECTION_CLOSED`, reported, not a gap);
-* a topic the server stops advertising: :data:`UNADVERTISED` (its last message is then held
-  like any silent topic, and the problem says since when);
+* a topic the server stops advertising while the run goes on (a message on another topic
+  comes after): :data:`UNADVERTISED` (its last message is then held like any silent topic,
+  and the problem says since when);
+
+The end of the watched run, never a data problem: the server's orderly close (a WebSocket
+close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
+for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). The reason is
+:attr:`WatchSource.end_reason`.
 * a message that does not decode: ``undecodable`` (skipped), as in logs;
 * a log time (or, under the header time base, what the clock sees) going backwards:
   :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);
@@ -60,7 +66,8 @@ class WatchEvent:
 
     Attributes:
         kind: ``pt`` | ``ltl3`` | ``problem`` | ``gap`` | ``final`` | ``connected`` |
-            ``disconnected``.
+            ``disconnected`` | ``closed`` (the server's orderly close) | ``end`` (the
+            watched run ended; ``detail``: why).
         time_ns: on the run's clock (log time or header stamp), when known.
         wall_ns: wall clock (``time.time_ns()``) when the event was produced.
         requirement: the requirement id (verdict events).
@@ -105,11 +112,18 @@ class WatchSource(LogSource):
     kind = "watch"
 
     def __init__(self, url: str, client, *, deadline: float | None = None,
+                 idle: float | None = None,
                  on_event: Callable[[WatchEvent], None] | None = None,
                  on_message: Callable[[str, int, bytes], None] | None = None) -> None:
         super().__init__(url)
         self.client = client
         self.deadline = deadline
+        self.idle = idle
+        self.end_reason: str | None = None
+        self._ended = False
+        self._server_ended = False  # the server ended the run (close, all unadvertised)
+        self._last_wall: float | None = None  # monotonic time of the last message (or connect)
+        self._pending_unadvertised: list[tuple[str, int | None]] = []
         self.on_event = on_event or (lambda e: None)
         self.on_message = on_message
         self.advertised: dict[str, Any] = {}  # topic -> Advertised
@@ -133,9 +147,24 @@ class WatchSource(LogSource):
 
     @property
     def stopped(self) -> bool:
-        """Stopped, or past the deadline."""
-        return self._stop.is_set() or (self.deadline is not None
-                                       and time.monotonic() >= self.deadline)
+        """The run ended: stopped, past the deadline, idle too long, closed by the server or
+        every subscribed topic unadvertised (:attr:`end_reason` says which)."""
+        if self._ended:
+            return True
+        now = time.monotonic()
+        if self._stop.is_set():
+            self._end("stopped")
+        elif self.deadline is not None and now >= self.deadline:
+            self._end("the watch's duration passed")
+        elif (self.idle is not None and self._last_wall is not None
+              and now - self._last_wall >= self.idle):
+            self._end(f"no message for {self.idle:g} s")
+        return self._ended
+
+    def _end(self, reason: str) -> None:
+        if not self._ended:
+            self._ended = True
+            self.end_reason = reason
 
     def topics(self) -> dict[str, str]:
         """Advertised topic -> its message type (ROS name)."""
@@ -171,15 +200,24 @@ class WatchSource(LogSource):
         elif kind == "unadvertise":
             for t in ev[2]:
                 self.unadvertised.add(t)
-                self._problem(UNADVERTISED, t, self._last_time,
-                              "the server stopped advertising this topic; its last message is "
-                              "held from here on")
-                self.on_event(WatchEvent("problem", self._last_time, ev[1],
-                                         detail=f"{UNADVERTISED}: {t}"))
+                # a problem only if the run goes on without it (_flush_unadvertised)
+                self._pending_unadvertised.append((t, self._last_time))
+            subscribed = set(self.advertised) & (self._wanted or set(self.advertised))
+            if subscribed and subscribed <= self.unadvertised:
+                self._server_ended = True
+                self._end("the server unadvertised every subscribed topic")
+        elif kind == "closed":
+            self.connected = False
+            self.last_reason = ev[2]
+            self._server_ended = True
+            self._end(ev[2])
+            self.on_event(WatchEvent("closed", self._last_time, ev[1], detail=ev[2]))
         elif kind == "connected":
             self.connected = self.ever_connected = True
             if self.first_connect_wall is None:
                 self.first_connect_wall = time.monotonic()
+            if self._last_wall is None:
+                self._last_wall = time.monotonic()
             self.on_event(WatchEvent("connected", self._last_time, ev[1],
                                      detail=f"subprotocol {ev[2]}"))
         elif kind == "disconnected":
@@ -242,6 +280,9 @@ class WatchSource(LogSource):
             msg = self._deliver(topic, log_time, payload)
             if msg is not None:
                 yield msg
+        if not self._server_ended:
+            # the watch ended with some topics unadvertised and the run going on: reported
+            self._flush_unadvertised()
         if self._gap_open is not None and self._last_time is not None:
             # the run ends here: nothing came after the connection closed (the end of the
             # robot's run, or of its network - the watch cannot tell), so no tick is missing
@@ -255,7 +296,21 @@ class WatchSource(LogSource):
             self.on_event(WatchEvent("problem", self._last_time, time.time_ns(),
                                      detail=f"{CONNECTION_CLOSED}: {detail}"))
 
+    def _flush_unadvertised(self) -> None:
+        """The run went on after topics were unadvertised: each is an :data:`UNADVERTISED`
+        problem."""
+        for t, at in self._pending_unadvertised:
+            self._problem(UNADVERTISED, t, at,
+                          "the server stopped advertising this topic; its last message is "
+                          "held from here on")
+            self.on_event(WatchEvent("problem", at, time.time_ns(),
+                                     detail=f"{UNADVERTISED}: {t}"))
+        self._pending_unadvertised.clear()
+
     def _deliver(self, topic: str, log_time: int, payload: bytes) -> Message | None:
+        self._last_wall = time.monotonic()
+        if self._pending_unadvertised:
+            self._flush_unadvertised()
         dec = self.decoders.get(topic)
         if dec is None:
             return None

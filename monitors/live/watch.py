@@ -1,12 +1,12 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
-protocol.
+protocol (:class:`~monitors.live.client.FoxgloveClient`) or rosbridge
+(:class:`~monitors.live.rosbridge.RosbridgeClient`).
 
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
 
 * :class:`~monitors.live.source.WatchSource` is a :class:`monitors.sources.LogSource`
-  whose messages come from a :class:`monitors.live.client.FoxgloveClient` instead of a
-  file; each channel is decoded with rosbags from the schema text the server advertised
+  whose messages come from a client instead of a file; each channel is decoded with rosbags from the schema text the server advertised
   (:func:`monitors.sources.schema_decoder`, shared with the MCAP reader);
 * the ticks come from :func:`monitors.signals.sample` with the same bindings (tick, time
   base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
@@ -15,15 +15,19 @@ of a recorded log, only fed live:
 * at the end the verdicts and evidence are made by the audit's own code
   (:func:`monitors.audit.finalize.finalize`) over the columns kept while watching.
 
-So the same messages give the same verdicts as ``fretc audit`` (tested: each shipped trace
-served by foxglove-sdk and watched equals its audit; a ``--record``\\ ed watch audited offline
+The run ends with the server's orderly close, every bound topic unadvertised, the
+duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
+the final verdicts are FRET's finite-trace verdicts at the last tick, as the audit's at the
+end of a log. So the same messages give the same verdicts as ``fretc audit`` (tested: each
+shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
+server, watched to the end, equal its audit; a ``--record``\\ ed watch audited offline
 equals the watch).
 
 The faults of a live run are data problems (:mod:`monitors.live.source`).
 
 Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
 verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
-end, ``final`` (one per requirement). ``--jsonl`` prints them; ``--record`` writes them to
+end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them; ``--record`` writes them to
 the ``/fretc/verdicts`` channel of the recording (foxglove.Log, like ``fretc report
 --annotate``) beside every message the watch used.
 """
@@ -49,7 +53,7 @@ from ..engines.interval import evaluate_requirement
 from common.problems import DataProblem
 from ..report.model import LogAudit, Verdict
 from ..signals import sample_groups
-from .client import FoxgloveClient
+from .client import FoxgloveClient, require_websockets
 from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
     UNADVERTISED, Recorder, WatchEvent, WatchSource)
 
@@ -71,10 +75,15 @@ class WatchOptions:
             until stopped).
         record: MCAP path to write the watched messages and the verdict events to.
         backoff, max_backoff: reconnection delays (s), doubling.
+        until_idle: end the run when no message arrived for this many seconds (wall time).
+        types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
+            a bound topic (``--topic-type``; over the bindings' ``[types]``).
     """
 
     url: str
     duration: float | None = None
+    until_idle: float | None = None
+    types: dict[str, str] | None = None
     wait: float = 3.0
     connect_timeout: float | None = None
     record: str | None = None
@@ -82,19 +91,35 @@ class WatchOptions:
     max_backoff: float = 5.0
 
 
+def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = None):
+    """The client for ``options.url``: :class:`~monitors.live.rosbridge.RosbridgeClient` for
+    ``rosbridge://`` (``rosbridge+wss://``; for topics rosapi does not type: ``types``, the
+    bindings' ``[types]``, overridden by ``options.types``), else
+    :class:`~monitors.live.client.FoxgloveClient` (``ws://``, ``wss://``)."""
+    kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
+    if options.url.startswith(("rosbridge://", "rosbridge+wss://")):
+        from .rosbridge import RosbridgeClient  # lazy: numpy's message building
+
+        given = dict(types or {})
+        given.update(options.types or {})
+        return RosbridgeClient(options.url, wanted, types=given, **kw)
+    return FoxgloveClient(options.url, wanted, **kw)
+
+
 # --------------------------------------------------------------------------- the engine
 class _Live:
     """Per-requirement live state (read by the table)."""
 
-    __slots__ = ("pt", "status", "status_tick", "status_time", "violations", "last_trigger",
-                 "first_violation", "error", "offline")
+    __slots__ = ("pt", "status", "status_tick", "status_time", "violations", "pending",
+                 "last_trigger", "first_violation", "error", "offline")
 
     def __init__(self) -> None:
         self.pt: bool | None = None
         self.status = "unknown"
         self.status_tick: int | None = None
         self.status_time: int | None = None
-        self.violations = 0
+        self.violations = 0  # obligations already failed (they fail on every continuation)
+        self.pending = 0  # obligations failing on the ticks so far that may still be met
         self.last_trigger: int | None = None
         self.first_violation: int | None = None
         self.error: str | None = None
@@ -106,11 +131,13 @@ class Watch:
     :func:`monitors.audit.load_plan`).
 
     Args:
-        plan: compiled requirements and bindings (bindings are required).
+        plan: compiled requirements and bindings (bindings are required; a plan whose only
+            binding file selects logs with ``[logs]`` is watched with that file).
         options: :class:`WatchOptions`.
         on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
 
-    :meth:`run` blocks until the duration passes or :meth:`stop` is called, then returns
+    :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration,
+    idle, :meth:`stop`), then returns
     the :class:`~monitors.report.model.LogAudit` of the run (``log`` = the URL, ``kind``
     ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
     """
@@ -120,9 +147,12 @@ class Watch:
 
     def __init__(self, plan, options: WatchOptions,
                  on_event: Callable[[WatchEvent], None] | None = None) -> None:
+        if plan.bindings is None and len(plan.variants) == 1:
+            plan = plan.variants[0][2]  # one binding file with [logs]: the watched run's
         if plan.bindings is None:
             raise AuditInputError("fretc watch needs signal bindings (*.bindings.toml next to "
-                                  "the requirements, --bindings or --bind)")
+                                  "the requirements, --bindings or --bind; one file when "
+                                  "they select logs with [logs])")
         self.plan = plan
         self.options = options
         self.on_event = on_event or (lambda e: None)
@@ -142,11 +172,11 @@ class Watch:
                         self.needed |= set(b.variables[v].topics)
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
-        self.client = FoxgloveClient(options.url, lambda t: t in self.needed,
-                                     backoff=options.backoff, max_backoff=options.max_backoff)
+        require_websockets()
+        self.client = make_client(options, lambda t: t in self.needed, b.types)
         deadline = (time.monotonic() + options.duration) if options.duration else None
         self.source = WatchSource(options.url, self.client, deadline=deadline,
-                                  on_event=self._event)
+                                  idle=options.until_idle, on_event=self._event)
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
@@ -169,11 +199,13 @@ class Watch:
             self.status_line = f"connected to {self.options.url} ({e.detail})"
         elif e.kind == "disconnected":
             self.status_line = f"disconnected: {e.detail}; retrying"
+        elif e.kind == "end":
+            self.status_line = f"run ended: {e.detail}"
         self.on_event(e)
 
     # -- the run -----------------------------------------------------------------------------
     def run(self) -> LogAudit:
-        """Watch until the duration passes or :meth:`stop`; the run's LogAudit."""
+        """Watch until the run ends (:attr:`WatchSource.end_reason` says why); its LogAudit."""
         plan, src = self.plan, self.source
         url = self.options.url
         la = LogAudit(log=url, kind="watch")
@@ -209,6 +241,8 @@ class Watch:
                 result = self._run_pass(active, rb)
         finally:
             self.client.stop()
+        self._event(WatchEvent("end", src._last_time, time.time_ns(),
+                               detail=src.end_reason or "stopped"))
         self._record_problems(la, result)
         return self._finish(la, verdicts, result, active if result is not None else [])
 
@@ -393,7 +427,7 @@ class Watch:
                 ev = evaluate_requirement(r.requirement, columns, n, r.formalization.ticks)
             except Exception:  # evidence unsupported for this requirement: pt only
                 continue
-            st.violations = ev.violations or 0
+            st.violations, st.pending = split_pending(ev, n)
             trig = None
             for x in getattr(ev, "listed", ()) or ():
                 trig = x.trigger_tick
@@ -456,6 +490,19 @@ class Watch:
                            extra={"ltl3": v.ltl3.status, "violations": v.violations})
             self._event(e)
         return la
+
+
+def split_pending(ev, n: int) -> tuple[int, int]:
+    """(violated, pending) of the failed obligations of ``ev`` (an
+    :class:`~monitors.engines.interval.Evidence` over the first ``n`` ticks of a run): pending
+    when its window reaches the last tick and it failed only there (FRET's finite-trace
+    semantics reads the end of the ticks so far as the end of the run; a later tick may still
+    meet it), violated otherwise. Counted over the listed failures
+    (:data:`~monitors.engines.interval.MAX_LISTED`); unlisted ones count as violated."""
+    total = ev.violations or 0
+    pending = sum(1 for x in (getattr(ev, "listed", ()) or ())
+                  if x.window[1] >= n - 1 and x.violation_tick >= n - 1)
+    return total - pending, pending
 
 
 @dataclass

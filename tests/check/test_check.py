@@ -1,4 +1,4 @@
-"""fretc check (issue 11): requirement sets whose answers are known by construction, and
+"""fretc check: requirement sets whose answers are known by construction, and
 witness CSVs audited by fretc audit giving the verdicts their headers promise."""
 
 from __future__ import annotations
@@ -258,3 +258,25 @@ def test_product_game_agrees_with_ltl_to_game(parts):
     expected = spot.solve_game(ref)
     if game is not None:
         assert spot.solve_game(game) == expected, texts
+
+
+def test_spot_errors_are_unknown_answers_not_crashes(tmp_path):
+    """A bound beyond Spot's repetition limit (254) and a realizability query over numeric
+    outputs (Spot cannot parse the comparison) give unknown answers with Spot's reason, exit
+    1, no traceback."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    big = tmp_path / "big.fret"
+    big.write_text("C1: whenever p the sw shall within 300 ticks satisfy q\n")
+    res = CliRunner().invoke(main, ["check", str(big)])
+    assert res.exit_code == 1, res.output
+    assert "satisfiable=unknown" in res.output
+    assert "maximum supported repetition (254)" in res.output
+    ab = tmp_path / "ab.fret"
+    ab.write_text("A: the r shall always satisfy s <= 0.5\n"
+                  "B: whenever p the r shall immediately satisfy s > 0.6\n")
+    res = CliRunner().invoke(main, ["check", str(ab), "--inputs", "p", "--outputs", "s"])
+    assert res.exit_code == 1 and "Traceback" not in res.output
+    assert "realizability of A, B unknown" in res.output and "Spot could not take" in res.output

@@ -1,6 +1,6 @@
 """fretc's disk caches (Lark parser tables, LTL3 automata by shape): safe, never stale, and
 never a change of output; requirements that cannot be monitored are decided before any
-automaton construction (issue 9)."""
+automaton construction."""
 
 from __future__ import annotations
 

@@ -80,7 +80,7 @@ def test_console_script_runs_as_users_wrote_it():
 def test_files_with_the_same_name_get_distinct_modules(tmp_path):
     for folder, var in (("a", "p"), ("b", "q")):
         (tmp_path / folder).mkdir()
-        # (ids unique across the files of a run: issue 15 item 13)
+        # (ids unique across the files of a run)
         (tmp_path / folder / "reqs.fret").write_text(
             f"R{var}: the sw shall always satisfy {var}\n")
     out = tmp_path / "mods"

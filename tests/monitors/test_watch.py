@@ -43,11 +43,12 @@ def _key(v):
 
 
 def _watch_trace(plan, trace, rate=RATE, record=None, at=None, backoff=0.05):
-    """Serve ``trace`` (its bound topics) at ``rate`` and watch it to its last message."""
+    """Serve ``trace`` (its bound topics) at ``rate``, then stop the server: the watch ends
+    by itself at the server's close (bounded: stopped after 60 s at most)."""
     server = FoxgloveServer(port=0)
     try:
         w = Watch(plan, WatchOptions(url=server.url, wait=5.0, record=record, backoff=backoff,
-                                     max_backoff=0.2))
+                                     max_backoff=0.2, duration=60))
         advertise_mcap(str(trace), server, topics=w.needed)
         done = {}
 
@@ -56,12 +57,12 @@ def _watch_trace(plan, trace, rate=RATE, record=None, at=None, backoff=0.05):
                 server.wait_subscribed(w.needed & set(server.channels), timeout=60)
                 done["sent"], done["last"] = replay_mcap(
                     str(trace), server, rate, topics=w.needed,
-                    at=(lambda i: at(i, server)) if at else None)
-                deadline = time.monotonic() + 60  # returns once caught up
+                    at=(lambda i: at(i, server, w)) if at else None)
+                deadline = time.monotonic() + 30  # the last messages leave
                 while (w.source._last_time or 0) < done["last"] and time.monotonic() < deadline:
                     time.sleep(0.02)
             finally:
-                w.stop()
+                server.stop()  # the end of the run: an orderly close
 
         # same thread-run-join as _run_synthetic below (kept: a recorded trace served here,
         # synthetic messages there, other waits)
@@ -79,6 +80,7 @@ def test_watch_equals_audit(plan, trace):
     w, la, done = _watch_trace(plan, trace)
     ref = audit_log(plan, str(trace))
     assert done["sent"] > 0 and not la.partial and la.error is None
+    assert w.source.end_reason.startswith("the server closed the connection")
     assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
     # the watch produced live events on the way: one ltl3 event per definite LTL3 verdict
     definite = {v.requirement: v.ltl3.status for v in ref.verdicts
@@ -106,10 +108,10 @@ def test_dropped_connection_is_a_gap_and_the_watch_goes_on(plan):
     trace = ROOT / "traces" / "sif_disabled.mcap"
     state = {}
 
-    def at(i, server):
-        if i == 250 and not state:
-            state["restart"] = True
-            server.restart(down=0.4)
+    def at(i, server, w):
+        if i == 250 and not state:  # the network fails: no close frame, the server goes on
+            state["drop"] = True
+            w.client.drop()
 
     w, la, done = _watch_trace(plan, trace, rate=10.0, at=at)
     ref = audit_log(plan, str(trace))
@@ -270,13 +272,17 @@ def test_cli_watch_jsonl_and_exit_code(tmp_path):
         advertise_mcap(str(trace), server, topics=needed)
 
         def publish():
-            server.wait_subscribed(needed, timeout=20)
-            replay_mcap(str(trace), server, 40.0, topics=needed)
+            try:
+                server.wait_subscribed(needed, timeout=20)
+                replay_mcap(str(trace), server, 40.0, topics=needed)
+                time.sleep(0.3)
+            finally:
+                server.stop()  # the end of the run: the watch ends without --duration
 
         t = threading.Thread(target=publish, daemon=True)
         t.start()
         res = CliRunner().invoke(main, ["watch", server.url, "-r", REQS, "--jsonl",
-                                        "--duration", "6", "--no-live"])
+                                        "--no-live", "--duration", "60"])
         t.join(20)
     finally:
         server.stop()
@@ -286,6 +292,8 @@ def test_cli_watch_jsonl_and_exit_code(tmp_path):
     assert finals == {"R1": "violated", "R2": "violated", "R3": "vacuous", "R4": "satisfied",
                       "R5": "violated", "R6": "vacuous"}
     assert any(x["event"] == "pt" and x["verdict"] == "violated" for x in lines)
+    ends = [x for x in lines if x["event"] == "end"]
+    assert len(ends) == 1 and ends[0]["detail"].startswith("the server closed")
 
 
 def test_live_simulator_equals_the_recorded_trace(plan):
