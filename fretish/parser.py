@@ -107,8 +107,11 @@ class _ExplicitMode:
 
 
 def _unquote(tok) -> str:
+    """A quoted name's text as FRET keeps it: only ``\\"`` is unescaped (to ``"``); every
+    other backslash stays, so ``"back\\\\slash"`` keeps both (FRET prints
+    ``_DQT_back_BSL__BSL_slash_DQT_``; ../shared/fretish/README.md section 6b, names)."""
     body = tok.value[1:-1]
-    return body.replace('\\"', '"').replace("\\\\", "\\") if "\\" in body else body
+    return body.replace('\\"', '"') if "\\" in body else body
 
 
 def _is_numeric_literal(e) -> bool:
