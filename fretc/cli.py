@@ -60,12 +60,25 @@ class _DefaultGroup(click.Group):
     def invoke(self, ctx):
         """Run the sub-command; an input error of any stage (:class:`FretcError`) that it
         does not report itself is printed here (:func:`common.errors.error_text`, control
-        characters escaped) with exit code 2."""
+        characters escaped) with exit code 2. Anything else that escapes (a defect of fretc:
+        a RecursionError, an OverflowError, ...) is an internal error: one line naming it and
+        asking for a report, exit code 4, never a traceback with exit 1 (the code of
+        "violated"); ``FRETC_TRACEBACK=1`` shows the traceback."""
         try:
             return super().invoke(ctx)
         except FretcError as exc:
             click.echo(shown(error_text(exc)), err=True)
             ctx.exit(2)
+        except (click.exceptions.Exit, click.ClickException, click.Abort, SystemExit,
+                KeyboardInterrupt):
+            raise
+        except Exception as exc:  # noqa: BLE001 - the last line of defence
+            if os.environ.get("FRETC_TRACEBACK"):
+                raise
+            click.echo(shown(f"internal error: {type(exc).__name__}: {exc}".splitlines()[0])
+                       + " (please report it with the command and its inputs; "
+                       "FRETC_TRACEBACK=1 shows the traceback)", err=True)
+            ctx.exit(4)
 
 
 def _names_a_file(arg: str) -> bool:

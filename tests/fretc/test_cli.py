@@ -106,3 +106,18 @@ def test_user_text_reaches_the_terminal_escaped(tmp_path):
     assert "R\\u202eX" in res2.output
     for out in (res.output, res2.output):
         assert not any(ch in out for ch in raw), out
+
+
+def test_an_internal_error_is_one_line_and_exit_4(monkeypatch):
+    """A defect escaping a command (here a RecursionError) is not a traceback with exit 1,
+    the code of "violated": one line asking for a report, exit 4."""
+    import fretc.compile as compile_cmd
+
+    def boom(*_a, **_k):
+        raise RecursionError("maximum recursion depth exceeded")
+
+    monkeypatch.setattr(compile_cmd, "_load", boom)
+    res = CliRunner().invoke(main, [R1, "--emit", "psl"])
+    assert res.exit_code == 4
+    assert res.output.startswith("internal error: RecursionError")
+    assert len(res.output.strip().splitlines()) == 1 and "Traceback" not in res.output
