@@ -111,7 +111,7 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
 
 
 def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalization:
-    scope, cond, timing, n, warnings = _shape(req, tick_period)
+    scope, cond, timing, n, warnings = template_parts(req, tick_period)
     exprs = [req.response, req.condition.expr if cond != "null" else None,
              req.timing.stop if timing in A.STOP_TIMINGS else None]
     # Without temporal functions or FTP an expression means the same in every formula:
@@ -143,7 +143,7 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
                          pt_causal=not px.has_future_atom)
 
 
-def _shape(req: A.Requirement, tick_period: Fraction | None):
+def template_parts(req: A.Requirement, tick_period: Fraction | None):
     """(scope, condition kind, timing, ticks or None, warnings) of a requirement; raises
     :class:`SemanticsError` for a free-form requirement or a bad duration."""
     if req.freeform:

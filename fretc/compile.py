@@ -361,9 +361,9 @@ def _emit_ltl(compiled) -> None:
         if c.formalization is not None:
             f = c.formalization
             click.echo(f"  key     {f.key}")
-            click.echo(f"  ft      {c.smv('ft')}")
-            click.echo(f"  ft_inf  {c.smv('ft_inf')}")
-            click.echo(f"  pt      {c.smv('pt')}")
+            click.echo(f"  ft      {c.smv_text['ft']}")
+            click.echo(f"  ft_inf  {c.smv_text['ft_inf']}")
+            click.echo(f"  pt      {c.smv_text['pt']}")
             for w in f.warnings:
                 click.echo(f"  warning {w}")
         elif c.freeform:
