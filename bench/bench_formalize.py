@@ -46,7 +46,6 @@ docs/performance.md were taken at about 20 µs).
 from __future__ import annotations
 
 import argparse
-import gc
 import os
 import random
 import resource
@@ -146,19 +145,15 @@ TARGET_R1 = 0.3         # s of CPU for fretc requirements/r1.fret --emit ltl
 
 
 def in_process(texts, repeat: int) -> list:
-    """CPU seconds of parse + formalize + print of ``texts``, one per run; the cyclic
-    garbage collector paused as ``fretc FILE --emit ltl`` pauses it."""
+    """CPU seconds of parse + formalize + print of ``texts``, one per run."""
     parse(texts[0])  # build the parser once, outside the timing
     runs = []
     for _ in range(repeat):
-        gc.collect()
-        gc.disable()
         t0 = time.process_time()
         for text in texts:
             f = instantiate(parse(text))  # as fretc's compile path (compiler.build)
             formula_text(f, "ft"), formula_text(f, "ft_inf"), formula_text(f, "pt")
         runs.append(time.process_time() - t0)
-        gc.enable()
     return runs
 
 

@@ -1,69 +1,21 @@
 """Start-up of ``fretc`` as a user sees it: the first run stores the parser's tables in
 fretc's cache folder and later runs read them, with the same output (a damaged entry or
-no cache included); :class:`common.errors.Where` behaves as a ``@dataclass(frozen=True)``.
+no cache included); :class:`common.errors.Where`'s defaults, ``repr`` and ``str``.
 (That ``fretc FILE --emit ltl`` loads no Spot, numpy, Jinja2 or MCAP code is checked by
 ``tests/test_layering.py``.)"""
 
 from __future__ import annotations
 
-import copy
-import dataclasses
 import os
-import pickle
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
 
 from common.errors import Where
 
 ROOT = Path(__file__).resolve().parents[1]
-
-#: the class as it was: what the hand-written one must behave as
-Generated = dataclasses.make_dataclass(
-    "Where", [(n, object, dataclasses.field(default=None))
-              for n in ("file", "line", "column", "topic", "log_time_ns")], frozen=True)
-Generated.__str__ = Where.__str__
-
-texts = st.one_of(st.none(), st.text(max_size=8))
-ints = st.one_of(st.none(), st.integers(-5, 10**12))
-fields5 = st.tuples(texts, ints, ints, texts, ints)
-
-
-@given(fields5, fields5, st.integers(0, 5))
-def test_where_behaves_as_the_generated_dataclass(a, b, positional):
-    mine = [Where(*a[:positional], **dict(zip(Generated.__match_args__[positional:],
-                                               a[positional:]))), Where(*b)]
-    ref = [Generated(*a), Generated(*b)]
-    for m, r in zip(mine, ref):
-        assert repr(m) == repr(r) and str(m) == str(r)
-        assert (m.file, m.line, m.column, m.topic, m.log_time_ns) == (
-            r.file, r.line, r.column, r.topic, r.log_time_ns)
-        assert hash(m) == hash(r)
-        for name in ("file", "other"):
-            with pytest.raises(dataclasses.FrozenInstanceError) as em:
-                setattr(m, name, 1)
-            with pytest.raises(dataclasses.FrozenInstanceError) as er:
-                setattr(r, name, 1)
-            assert str(em.value) == str(er.value)
-            with pytest.raises(dataclasses.FrozenInstanceError) as em:
-                delattr(m, name)
-            with pytest.raises(dataclasses.FrozenInstanceError) as er:
-                delattr(r, name)
-            assert str(em.value) == str(er.value)
-        for twin in (pickle.loads(pickle.dumps(m)), copy.copy(m), copy.deepcopy(m)):
-            assert type(twin) is Where and twin == m and hash(twin) == hash(m)
-    assert (mine[0] == mine[1]) == (ref[0] == ref[1])
-    assert (mine[0] != mine[1]) == (ref[0] != ref[1])
-    assert mine[0] != ref[0] and mine[0] != a  # another class is never equal
-    assert Where.__match_args__ == Generated.__match_args__
-    match mine[0]:
-        case Where(f, ln, c, t, ns):
-            assert (f, ln, c, t, ns) == a
-
 
 def test_where_defaults_and_keywords():
     assert Where() == Where(None, None, None, None, None)
