@@ -1,4 +1,4 @@
-"""Benchmark of ``fretc audit`` on a long recorded run (issue #5, "Speed and scale").
+"""Benchmark of ``fretc audit`` on a long recorded run.
 
     python bench/bench_audit.py                      # quick: 5-minute log, memory 2 vs 10 min
     python bench/bench_audit.py --minutes 60 --memory 10 60   # the one-hour run
@@ -11,7 +11,7 @@
    ``mcap`` reader and rosbags' CDR deserializer with types from the embedded schemas: the
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``monitors.audit.audit_log``: read, sample every 100 ms, monitor, evidence),
-   and prints both CPU times and their ratio (aim: <= 1.0x, issue #12: the audit decodes
+   and prints both CPU times and their ratio (aim: <= 1.0x: the audit decodes
    only the fields its bindings read, :mod:`monitors.sources.selective`); then the same two as
    commands in fresh processes (start-up included). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.

@@ -1,4 +1,4 @@
-"""Benchmark of ``fretc check`` (issue 11).
+"""Benchmark of ``fretc check``.
 
 1. The 198 case-study requirements of ``../shared/corpora/fret_casestudies.jsonl``, grouped by
    project (the id's part before ``#``), checked for satisfiability and non-vacuity

@@ -56,15 +56,15 @@ WORST = {
 }
 ISSUE_BASELINE = {"696": "51 s CPU (73 ms per requirement)", "W1": "6.5 s, 235 MB",
                   "W2": "137 s, 1.5 GB", "import10k": "20 s, 1.85 GB"}
-#: The figures of the previous session (README "Issue 9 figures", final tree, idle machine,
+#: The figures of the previous session (docs/performance.md, final tree, idle machine,
 #: sum(range(1000)) 16-23 µs), printed beside today's.
 LAST_SESSION = {"696": "20.0 ms cold, 3.4 ms warm per requirement",
                 "slowest": "0.65 s ('only in mm whenever cc the sw shall after 8 ticks "
                            "satisfy rr'); 288 keys at 12 ticks: 0.54 s"}
-#: Issue 9's targets for monitor generation.
+#: The targets for monitor generation.
 TARGET_MS_PER_REQ = 10.0
 TARGET_MAX_S = 1.0
-#: Issue 9's target for importing a generated module of 10,000 requirements (first import).
+#: The target for importing a generated module of 10,000 requirements (first import).
 IMPORT_MAX_S, IMPORT_MAX_MB = 2.0, 300
 
 
@@ -204,7 +204,7 @@ def main() -> None:
     ap.add_argument("--import-only", action="store_true")
     args = ap.parse_args()
     calib = min(timeit.repeat("sum(range(1000))", number=2000, repeat=5)) / 2000 * 1e6
-    print(f"machine: sum(range(1000)) = {calib:.1f} µs (README figures: ~20 µs)")
+    print(f"machine: sum(range(1000)) = {calib:.1f} µs (docs/performance.md figures: ~20 µs)")
     roots = [("fretc", ROOT)] + ([("baseline", args.baseline.resolve())]
                                  if args.baseline else [])
     with tempfile.TemporaryDirectory(prefix="bench_codegen_") as tmp_s:

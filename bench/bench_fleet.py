@@ -1,4 +1,4 @@
-"""Benchmark of fleet audits (issue #12): many logs with ``-j 1``, ``-j 2`` and ``--ray``.
+"""Benchmark of fleet audits: many logs with ``-j 1``, ``-j 2`` and ``--ray``.
 
     python bench/bench_fleet.py                       # 40 logs of 5 minutes
     python bench/bench_fleet.py --logs 8 --minutes 1  # quick

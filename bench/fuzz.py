@@ -1,4 +1,4 @@
-"""Fuzz fretc with mutated FRETish sentences (issue 15).
+"""Fuzz fretc with mutated FRETish sentences.
 
     nice python bench/fuzz.py --count 100000 --seed 1 [--batch 40] [--audit-every 200]
 

@@ -23,7 +23,7 @@ inputs live in ``/tmp/fretc-same/inputs`` so that messages naming them are equal
 Each command's exit status, standard output, standard error and written files are compared
 byte for byte; ``SOURCE_DATE_EPOCH`` fixes the reports' generated-at line. Prints one line per
 compared output and a unified diff excerpt of each difference; exits 1 when any output
-differs, 0 when all are identical. This is the acceptance check of issue 14 (behaviour
+differs, 0 when all are identical. This is the acceptance check of a refactor (behaviour
 unchanged by the restructuring).
 """
 

@@ -1,6 +1,6 @@
 """``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
 requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
-runs"; issue 11).
+runs").
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
 abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every

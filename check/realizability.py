@@ -1,4 +1,4 @@
-"""Realizability of requirement sets for ``fretc check`` (issue 11, item 5).
+"""Realizability of requirement sets for ``fretc check``.
 
 The FRET variables are split into **inputs** (the environment's: sensor-derived, e.g.
 ``too_close``) and **outputs** (the component's, e.g. ``stopped``); a variable named in

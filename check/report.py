@@ -1,5 +1,5 @@
-"""The findings of ``fretc check`` beside the requirements in ``fretc report`` (issue 11,
-item 9): ``fretc report ... --check check.json`` (the document of ``fretc check -o``) adds a
+"""The findings of ``fretc check`` beside the requirements in ``fretc report``:
+``fretc report ... --check check.json`` (the document of ``fretc check -o``) adds a
 "Check findings" section to report.md and report.html, one row per requirement with its
 satisfiability, non-vacuity, redundancy and the findings naming it."""
 

@@ -21,7 +21,7 @@ __all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "remove", "entry_
 
 
 def _root() -> str | None:
-    """:func:`cache_dir` as a string (no pathlib: this runs at every start-up, issue 9)."""
+    """:func:`cache_dir` as a string (no pathlib: this runs at every start-up)."""
     env = os.environ.get("FRETC_CACHE_DIR")
     if env is not None:
         return env if env.strip() else None
@@ -48,7 +48,7 @@ def key_of(*parts: str) -> str:
     """A hex SHA-256 of ``parts`` (joined unambiguously): a cache key.
 
     CPython's built-in SHA-256 (``_sha256``, 3.11; ``_sha2``, 3.12+) is used where present:
-    ``hashlib`` loads OpenSSL (about 4 ms of every start-up, issue 9) for the same digest."""
+    ``hashlib`` loads OpenSSL (about 4 ms of every start-up) for the same digest."""
     h = _sha256()
     for p in parts:
         b = p.encode("utf-8")

@@ -41,61 +41,23 @@ Lines and columns are 1-based and in the coordinates of the file the text came f
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 __all__ = ["Where", "FretcError", "FretishError", "FretishSyntaxError", "FretishFileError",
            "CheckError", "InputError", "render_diagnostic", "error_text"]
 
 
-_WHERE_FIELDS = ("file", "line", "column", "topic", "log_time_ns")
-
-
+@dataclass(frozen=True)
 class Where:
     """Where an input error is: a file position (``file``, 1-based ``line`` and ``column``)
     and/or a place in a log (``topic``, ``log_time_ns``: MCAP log time, integer ns). Any
-    field may be None (not known). ``str()``: ``file:line:column`` then ``topic @ t ns``.
+    field may be None (not known). ``str()``: ``file:line:column`` then ``topic @ t ns``."""
 
-    Immutable, compared and hashed by its fields, ``repr`` ``Where(file=..., ...)``: what
-    ``@dataclass(frozen=True)`` generates, written out because generating it costs about
-    1 ms at every start-up (issue 9); ``tests/test_startup.py`` checks that it behaves as
-    the generated class does."""
-
-    __match_args__ = _WHERE_FIELDS
-    file: str | None
-    line: int | None
-    column: int | None
-    topic: str | None
-    log_time_ns: int | None
-
-    def __init__(self, file: str | None = None, line: int | None = None,
-                 column: int | None = None, topic: str | None = None,
-                 log_time_ns: int | None = None) -> None:
-        d = self.__dict__
-        d["file"], d["line"], d["column"] = file, line, column
-        d["topic"], d["log_time_ns"] = topic, log_time_ns
-
-    def _fields(self) -> tuple:
-        return (self.file, self.line, self.column, self.topic, self.log_time_ns)
-
-    def __repr__(self) -> str:
-        return (f"{type(self).__qualname__}(file={self.file!r}, line={self.line!r}, "
-                f"column={self.column!r}, topic={self.topic!r}, "
-                f"log_time_ns={self.log_time_ns!r})")
-
-    def __eq__(self, other):
-        if other.__class__ is self.__class__:
-            return self._fields() == other._fields()
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(self._fields())
-
-    def __setattr__(self, name, value):
-        from dataclasses import FrozenInstanceError  # only on this error path
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name):
-        from dataclasses import FrozenInstanceError
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
+    file: str | None = None
+    line: int | None = None
+    column: int | None = None
+    topic: str | None = None
+    log_time_ns: int | None = None
 
     def __str__(self) -> str:
         parts = [str(x) for x in (self.file, self.line, self.column) if x is not None]

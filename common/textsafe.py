@@ -1,4 +1,4 @@
-"""Text from the inputs made safe for each output format (issue 15 item 12).
+"""Text from the inputs made safe for each output format.
 
 Requirement ids, texts, file names, topic names and binding expressions come from files a
 user did not necessarily write (a FRET JSON export, a log's channel records). Every output
@@ -39,7 +39,7 @@ def _unsafe(ch: str, keep: str) -> bool:
         return False
     if o in (0xFFFE, 0xFFFF):
         return True
-    import unicodedata  # lazy: only text beyond printable ASCII needs it (start-up, issue 9)
+    import unicodedata  # lazy: only text beyond printable ASCII needs it (start-up time)
 
     cat = unicodedata.category(ch)
     if cat == "Cn":  # unassigned: unknown to this Python; only noncharacters are unsafe
@@ -83,7 +83,7 @@ def xml_text(text: Any, keep: str = "\n\t") -> str:
     return visible(text, keep)
 
 
-_BACKTICKS = r"`+"  # compiled on first use (re's cache): start-up, issue 9
+_BACKTICKS = r"`+"  # compiled on first use (re's cache): start-up time
 
 
 def md_code(text: Any) -> str:

@@ -43,9 +43,9 @@ def _tables() -> tuple:
     """``(TIME_UNITS, duration regexp)``, built on first use: a run that reads no duration
     in a time unit (``fretc FILE --emit ltl`` on sentences in ticks) does not pay for the
     regexp's compilation and the table's fractions, nor the import of :mod:`fractions`
-    and :mod:`decimal` (start-up, issue 9)."""
+    and :mod:`decimal` (start-up time)."""
     if not _TABLES:
-        from fractions import Fraction  # lazy: fractions and decimal cost start-up (issue 9)
+        from fractions import Fraction  # lazy: fractions and decimal cost start-up time
 
         units: dict = {}
         for names, seconds in (

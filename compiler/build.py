@@ -8,7 +8,6 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from common.errors import FretishError, render_diagnostic
-from fretish.records import FACTORY, Record
 
 from .instantiate import formula_text, instantiate
 from .printers import mangle
@@ -22,33 +21,19 @@ FORMALIZED_KEYS = ("id", "text", "source", "line", "parent", "rationale", "key",
                    "ticks", "warnings", "pt_causal")
 
 
-@dataclass(init=False, repr=False, eq=False)
-class Compiled(Record):
+@dataclass
+class Compiled:
     """One requirement after compilation.
 
     ``entry`` is the :class:`fretish.files.RequirementEntry`; ``formalization`` is set when
     it formalized, ``error`` (a :class:`FretishError`) otherwise; free-form requirements
     have neither.
-
-    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
-    ``==`` are written out (``_cache`` a new dict by default, compared but not shown by
-    ``repr``; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     entry: object
     formalization: Formalization | None = None
     error: FretishError | None = None
     _cache: dict = field(default_factory=dict, repr=False)
-
-    __match_args__ = _COMPARED = ("entry", "formalization", "error", "_cache")
-    _SHOWN = ("entry", "formalization", "error")
-
-    def __init__(self, entry: object, formalization: Formalization | None = None,
-                 error: FretishError | None = None, _cache: dict = FACTORY) -> None:
-        self.entry = entry
-        self.formalization = formalization
-        self.error = error
-        self._cache = {} if _cache is FACTORY else _cache
 
     # read-only delegations, same shape as compiler.codegen.MonitorSource's (kept: one property per
     # field)
@@ -77,13 +62,15 @@ class Compiled(Record):
         import hashlib  # lazy: loading OpenSSL is start-up time --emit ltl does not need
         return hashlib.sha256(blob.encode("utf-8")).hexdigest()
 
-    def smv(self, which: str) -> str:
-        """FRET/SMV text of ``ft``, ``ft_inf`` or ``pt``."""
-        key = ("smv", which)
-        if key not in self._cache:
-            # compiler.instantiate: from the template key's printed form where it applies
-            self._cache[key] = formula_text(self.formalization, which)
-        return self._cache[key]
+    @property
+    def smv_text(self) -> dict[str, str]:
+        """FRET/SMV text of the formulas: ``{"ft": ..., "ft_inf": ..., "pt": ...}`` (pt with
+        FTP printed ``(Z FALSE)``, as FRET does), printed once (from the template key's
+        printed form where it applies, :func:`compiler.instantiate.formula_text`)."""
+        if "smv" not in self._cache:
+            self._cache["smv"] = {w: formula_text(self.formalization, w)
+                                  for w in ("ft", "ft_inf", "pt")}
+        return self._cache["smv"]
 
     def spot(self, which: str) -> str:
         """Spot text of ``ft`` or ``ft_inf``."""
@@ -105,7 +92,7 @@ class Compiled(Record):
         forms = getattr(f, "printed", None)
         if forms is not None:
             return forms()
-        return (self.smv("ft"), self.smv("ft_inf"), self.smv("pt"), self.spot("ft"),
+        return (self.smv_text["ft"], self.smv_text["ft_inf"], self.smv_text["pt"], self.spot("ft"),
                 self.spot("ft_inf"))
 
     def json_forms(self, enc, seps: tuple) -> str | None:
@@ -146,8 +133,8 @@ class Compiled(Record):
         if self.formalization is not None:
             f = self.formalization
             out.update({
-                "key": f.key, "ft": self.smv("ft"), "ft_inf": self.smv("ft_inf"),
-                "pt": self.smv("pt"), "ft_spot": self.spot("ft"),
+                "key": f.key, "ft": self.smv_text["ft"], "ft_inf": self.smv_text["ft_inf"],
+                "pt": self.smv_text["pt"], "ft_spot": self.spot("ft"),
                 "ft_inf_spot": self.spot("ft_inf"), "variables": f.variables,
                 "variables_fret": [mangle(v) for v in f.variables],
                 "ticks": f.ticks, "warnings": f.warnings, "pt_causal": f.pt_causal,

@@ -144,8 +144,8 @@ def monitor_source(compiled, index: int) -> MonitorSource:
     slots_next = "(" + "".join(f"{nxt}, " for _, nxt in code.slots) + "tick + 1, verdict)"
     return MonitorSource(
         index=index, class_name=_class_name(compiled.id, index), id=compiled.id,
-        text=compiled.text, key=f.key, ft=compiled.smv("ft"), ft_inf=compiled.smv("ft_inf"),
-        pt=compiled.smv("pt"), source_hash=compiled.source_hash,
+        text=compiled.text, key=f.key, ft=compiled.smv_text["ft"], ft_inf=compiled.smv_text["ft_inf"],
+        pt=compiled.smv_text["pt"], source_hash=compiled.source_hash,
         variables=[v[0] for v in var_locals], var_locals=var_locals,
         slots_init=slots_init,
         slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))) + "tick, _",

@@ -93,7 +93,7 @@ def same_meaning(a: Node, b: Node, exhaustive_atoms: int = 14) -> tuple[bool, ..
     if len(keys) <= exhaustive_atoms:
         rows = itertools.product((False, True), repeat=len(keys))
     else:
-        import random  # lazy: only for many atoms (start-up time of fretc FILE, issue 9)
+        import random  # lazy: only for many atoms (start-up time of fretc FILE)
         rnd = random.Random(0)
         rows = (tuple(rnd.random() < 0.5 for _ in keys) for _ in range(4096))
     for row in rows:

@@ -57,7 +57,7 @@ from .instantiate_atoms import (TIMED, PlainExpander, SharingExpander, Timed,
 from .ir import FALSE, FTP, LAST
 from .printers import to_smv, to_spot
 from .scope_timing import fn_right, pt_endpoints
-from .semantics import Formalization, _shape, formalize
+from .semantics import Formalization, formalize, template_parts
 from .template_table import ATOMS as _ATOMS
 from .template_table import MAX_OFFSET, MIN_OFFSET, Template, json_format, template
 
@@ -216,7 +216,7 @@ def instantiate(req: A.Requirement, tick_period: Fraction | None = None) -> Form
     (:class:`~compiler.expressions.SemanticsError`), warnings, variables and ticks as
     :func:`formalize`; the printed texts (:func:`formula_text`) are byte-identical to the
     printers' on the full build."""
-    shape = _shape(req, tick_period)  # (scope, condition kind, timing, ticks, warnings)
+    shape = template_parts(req, tick_period)  # (scope, condition kind, timing, ticks, warnings)
     scope, cond, timing = shape[:3]
     exprs = (req.scope.mode if scope != "null" else None,
              req.condition.expr if cond != "null" else None,

@@ -17,7 +17,7 @@ import functools
 import re
 
 from fretish import ast as A
-from fretish.words import RESERVED_LETTERS, RESERVED_WORDS
+from fretish.words import FRET_RESERVED, RESERVED_LETTERS, RESERVED_WORDS
 
 from .ir import Node
 
@@ -36,9 +36,10 @@ _BARE = re.compile(r"^[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*$")
 
 def _is_bare(name: str) -> bool:
     """Can ``name`` be written without quotes in FRETish (grammar rule NAME: a letter, then
-    letters, digits, ``_``, ``%`` and inner ``.``; never a reserved word)?"""
+    letters, digits, ``_``, ``%`` and inner ``.``; never a reserved word, nor one of the
+    names FRET refuses bare, :data:`fretish.words.FRET_RESERVED`)?"""
     return (bool(_BARE.match(name)) and name.lower() not in RESERVED_WORDS
-            and name not in RESERVED_LETTERS)
+            and name not in RESERVED_LETTERS and name not in FRET_RESERVED)
 
 
 def _mangle_char(ch: str) -> str:

@@ -29,7 +29,6 @@ from dataclasses import dataclass, field
 
 from fretish import ast as A
 from fretish.limits import MAX_DURATION_TICKS, duration_too_long
-from fretish.records import FACTORY, Record
 from common.units import format_period_ms
 
 from . import ir
@@ -39,8 +38,8 @@ from .scope_timing import (fn_right, ft_right, ft_scope, ft_timing, pt_endpoints
                            pt_timing)
 
 
-@dataclass(init=False, repr=False, eq=False)
-class Formalization(Record):
+@dataclass
+class Formalization:
     """The formulas of one requirement.
 
     ``ft``/``ft_inf``/``pt`` are IR nodes; ``variables`` the FRET variable names in order of
@@ -48,10 +47,6 @@ class Formalization(Record):
     human-readable notes (e.g. units read as ticks for lack of a tick period);
     ``pt_causal`` is False when the pt formula refers to a future-time function (FRET leaves
     those unexpanded in pt), so pt cannot be computed online tick by tick.
-
-    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
-    ``==`` are written out (``warnings`` a new list by default; ``repr`` and ``==`` over
-    every field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     key: str
@@ -62,21 +57,6 @@ class Formalization(Record):
     warnings: list[str] = field(default_factory=list)
     ticks: int | None = None
     pt_causal: bool = True
-
-    __match_args__ = _COMPARED = _SHOWN = ("key", "ft", "ft_inf", "pt", "variables",
-                                           "warnings", "ticks", "pt_causal")
-
-    def __init__(self, key: str, ft: Node, ft_inf: Node, pt: Node, variables: list[str],
-                 warnings: list[str] = FACTORY, ticks: int | None = None,
-                 pt_causal: bool = True) -> None:
-        self.key = key
-        self.ft = ft
-        self.ft_inf = ft_inf
-        self.pt = pt
-        self.variables = variables
-        self.warnings = [] if warnings is FACTORY else warnings
-        self.ticks = ticks
-        self.pt_causal = pt_causal
 
 
 # --------------------------------------------------------------------------- durations
@@ -131,7 +111,7 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
 
 
 def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalization:
-    scope, cond, timing, n, warnings = _shape(req, tick_period)
+    scope, cond, timing, n, warnings = template_parts(req, tick_period)
     exprs = [req.response, req.condition.expr if cond != "null" else None,
              req.timing.stop if timing in A.STOP_TIMINGS else None]
     # Without temporal functions or FTP an expression means the same in every formula:
@@ -163,7 +143,7 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
                          pt_causal=not px.has_future_atom)
 
 
-def _shape(req: A.Requirement, tick_period: Fraction | None):
+def template_parts(req: A.Requirement, tick_period: Fraction | None):
     """(scope, condition kind, timing, ticks or None, warnings) of a requirement; raises
     :class:`SemanticsError` for a free-form requirement or a bad duration."""
     if req.freeform:
@@ -171,7 +151,7 @@ def _shape(req: A.Requirement, tick_period: Fraction | None):
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     warnings: list[str] = []
     if "then" in req.text.lower():
-        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up, issue 9)
+        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up time)
 
         warnings.extend(regrouping_warnings(req))
     n = None

@@ -1,5 +1,5 @@
 """``fretc check``: find conflicting, vacuous, redundant and unrealizable requirements before
-any robot runs (issue 11; the analyses are in :mod:`check.analysis`).
+any robot runs (the analyses are in :mod:`check.analysis`).
 
 ::
 

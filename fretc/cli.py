@@ -13,46 +13,14 @@ internal error (a generated monitor that is not valid: nothing is written).
 
 from __future__ import annotations
 
-import atexit
-import gc
 import os
 
-# Start-up (issue 9). The imports below make tens of thousands of objects (modules, classes,
-# functions) that live until the process ends. Python's cyclic garbage collector would scan
-# them as they are made, again at each later collection, and once more at exit, to free
-# nothing: the collector is paused while they load, then they are moved to its permanent
-# generation (gc.freeze: still freed by reference counting, never rescanned) and the
-# collector is put back as it was. Together with _freeze_if_paused, about 8% of the
-# instructions of `fretc r1.fret --emit ltl` and 3% of a thousand requirements. The price:
-# a reference cycle that is already garbage when fretc.cli is first imported is never
-# freed (bounded: only what exists at that moment; objects made later are collected as
-# before).
-_GC_WAS_ENABLED = gc.isenabled()
-gc.disable()
-try:
-    import click
+import click
 
-    from common.errors import FretcError, error_text
+from common.errors import FretcError, error_text
 
-    from .compile import compile_cmd
-    from .options import shown
-finally:
-    gc.freeze()
-    if _GC_WAS_ENABLED:
-        gc.enable()
-
-
-def _freeze_if_paused() -> None:
-    """At exit (``atexit``): when the command left the collector paused (``--emit ltl``
-    does, :mod:`fretc.compile`: its objects are acyclic and live until the end), move
-    everything to the permanent generation so the interpreter's final collection does not
-    scan the run's objects (about 1.3% of a thousand requirements' instructions). A command
-    that keeps the collector running (the audit, the other emits) is left as it is."""
-    if not gc.isenabled():
-        gc.freeze()
-
-
-atexit.register(_freeze_if_paused)
+from .compile import compile_cmd
+from .options import shown
 
 
 class _DefaultGroup(click.Group):
@@ -62,7 +30,7 @@ class _DefaultGroup(click.Group):
     The optional sub-commands (:func:`_register_optional`) are attached on first need: not
     when the first argument is a requirement file (a path with a folder or a ``.fret`` /
     ``.json`` name, which no sub-command is called), so ``fretc FILE`` does not import the
-    audit and report machinery (start-up time, issue 9)."""
+    audit and report machinery (start-up time)."""
 
     _optional_registered = False
 
@@ -92,12 +60,25 @@ class _DefaultGroup(click.Group):
     def invoke(self, ctx):
         """Run the sub-command; an input error of any stage (:class:`FretcError`) that it
         does not report itself is printed here (:func:`common.errors.error_text`, control
-        characters escaped) with exit code 2."""
+        characters escaped) with exit code 2. Anything else that escapes (a defect of fretc:
+        a RecursionError, an OverflowError, ...) is an internal error: one line naming it and
+        asking for a report, exit code 4, never a traceback with exit 1 (the code of
+        "violated"); ``FRETC_TRACEBACK=1`` shows the traceback."""
         try:
             return super().invoke(ctx)
         except FretcError as exc:
             click.echo(shown(error_text(exc)), err=True)
             ctx.exit(2)
+        except (click.exceptions.Exit, click.ClickException, click.Abort, SystemExit,
+                KeyboardInterrupt):
+            raise
+        except Exception as exc:  # noqa: BLE001 - the last line of defence
+            if os.environ.get("FRETC_TRACEBACK"):
+                raise
+            click.echo(shown(f"internal error: {type(exc).__name__}: {exc}".splitlines()[0])
+                       + " (please report it with the command and its inputs; "
+                       "FRETC_TRACEBACK=1 shows the traceback)", err=True)
+            ctx.exit(4)
 
 
 def _names_a_file(arg: str) -> bool:
@@ -118,7 +99,7 @@ main.add_command(compile_cmd, "compile")
 def _register_optional() -> None:
     """Attach the sub-commands other than ``compile``. Called on first need by
     :class:`_DefaultGroup`, not at import: ``fretc FILE`` does not need them (start-up)."""
-    # lazy: these modules load rich and the report machinery (start-up time, issue 9)
+    # lazy: these modules load rich and the report machinery (start-up time)
     from .audit import audit_cmd
     from .check import check_cmd
     from .inspect import inspect_cmd

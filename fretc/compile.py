@@ -155,7 +155,7 @@ class _NotPlain(Exception):
 def _string_encoder():
     """``json``'s C string escaper (``ensure_ascii=True``, the default of ``json.dumps``),
     taken from ``_json`` without importing the ``json`` package (its decoder and scanner:
-    start-up, issue 9); ``json.encoder``'s own choice where ``_json`` is missing."""
+    start-up time); ``json.encoder``'s own choice where ``_json`` is missing."""
     try:
         from _json import encode_basestring_ascii
     except ImportError:  # pragma: no cover - CPython always has _json
@@ -361,9 +361,9 @@ def _emit_ltl(compiled) -> None:
         if c.formalization is not None:
             f = c.formalization
             click.echo(f"  key     {f.key}")
-            click.echo(f"  ft      {c.smv('ft')}")
-            click.echo(f"  ft_inf  {c.smv('ft_inf')}")
-            click.echo(f"  pt      {c.smv('pt')}")
+            click.echo(f"  ft      {c.smv_text['ft']}")
+            click.echo(f"  ft_inf  {c.smv_text['ft_inf']}")
+            click.echo(f"  pt      {c.smv_text['pt']}")
             for w in f.warnings:
                 click.echo(f"  warning {w}")
         elif c.freeform:
@@ -376,7 +376,7 @@ def _emit_ltl(compiled) -> None:
 def _check_output(outputs: dict, output: str | None, suffix: str) -> None:
     """``-o`` is a file for one output and a directory for several: a path ending in
     ``suffix`` for several outputs is an error (it would become a directory named so)."""
-    from pathlib import Path  # lazy: --emit ltl does not need it (start-up, issue 9)
+    from pathlib import Path  # lazy: --emit ltl does not need it (start-up time)
     if output is not None and len(outputs) > 1 and Path(output).suffix == suffix:
         click.echo(f"error: -o {output}: {len(outputs)} modules are written (one per input "
                    f"file: {', '.join(sorted(outputs))}); give a directory (no {suffix} "
@@ -391,7 +391,7 @@ def _write_outputs(outputs: dict, output: str | None, suffix: str) -> None:
         for text in outputs.values():
             click.echo(text, nl=False)
         return
-    from pathlib import Path  # lazy: --emit ltl does not need it (start-up, issue 9)
+    from pathlib import Path  # lazy: --emit ltl does not need it (start-up time)
     out = Path(output)
     if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
         # one module: -o is the file

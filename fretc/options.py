@@ -115,7 +115,7 @@ def ray_options(f):
 def _check_address(ctx, param, value):
     if value is None:
         return None
-    import importlib.util  # lazy: only for --ray (start-up, issue 9)
+    import importlib.util  # lazy: only for --ray (start-up time)
 
     if importlib.util.find_spec("ray") is None:
         from monitors.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help

@@ -8,17 +8,13 @@ al., REFSQ 2020)::
 Every node carries a :class:`Span` into the text it was parsed from; spans take no part in
 equality, so two parses of differently spaced sentences compare equal.
 
-The nodes are dataclasses (``dataclasses.fields``/``replace`` work) that behave as
-``@dataclass(frozen=True)`` ones: their methods are written out instead of generated
-(:class:`_Node`, and an ``__init__`` per class). The generated ones cost start-up time
-(compiled for every class at each start) and parse time (the frozen ``__init__`` sets each
-field through ``object.__setattr__``; issue 9). ``tests/fretish/test_parser.py`` compares
-them with generated ones.
+The nodes are frozen dataclasses: immutable, hashable, compared and shown without their
+spans.
 """
 
 from __future__ import annotations
 
-from dataclasses import FrozenInstanceError, dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 SCOPE_KINDS = ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter", "onlyBefore")
@@ -36,8 +32,7 @@ _UNIT_SECONDS: dict = {}
 def __getattr__(name: str):
     """``UNIT_SECONDS`` (PEP 562): the canonical duration units and their length in seconds
     (exact :class:`fractions.Fraction`; ``ticks`` has none), made on first use: importing
-    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit
-    (issue 9)."""
+    :mod:`fractions` (and :mod:`decimal`) costs every start-up that meets no time unit."""
     if name == "UNIT_SECONDS":
         if not _UNIT_SECONDS:
             from fractions import Fraction
@@ -73,90 +68,30 @@ def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)
 
 
-class _Node:
-    """What ``@dataclass(frozen=True)`` would generate for a node, written once for all
-    (the generated methods are compiled anew for every class at each start-up, issue 9):
-    equality and hash over the fields that are not spans, ``repr`` without the spans,
-    assignment and deletion refused. The subclasses are dataclasses (``fields``,
-    ``replace``) with ``init=False, repr=False, eq=False`` and an ``__init__`` of their
-    own; ``tests/fretish/test_parser.py`` compares them with generated ones."""
-
-    __slots__ = ()
-
-    def _key(self) -> tuple:
-        d = self.__dict__
-        return tuple([d[f] for f in self._COMPARED])
-
-    def __eq__(self, other):
-        if other.__class__ is self.__class__:
-            return self._key() == other._key()
-        return NotImplemented
-
-    def __hash__(self):
-        return hash(self._key())
-
-    def __repr__(self):
-        d = self.__dict__
-        inner = ", ".join(f"{f}={d[f]!r}" for f in self._SHOWN)
-        return f"{self.__class__.__qualname__}({inner})"
-
-    def __setattr__(self, name, value):
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name):
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
-
-
-def _node(cls):
-    """Finish a node class (a dataclass): the fields compared and hashed, and those shown
-    by ``repr``, as ``@dataclass`` would take them (every field but the spans)."""
-    cls._COMPARED = tuple(f.name for f in fields(cls) if f.compare)
-    cls._SHOWN = tuple(f.name for f in fields(cls) if f.repr)
-    return cls
-
-
 # --------------------------------------------------------------------------- expressions
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Var(_Node):
+@dataclass(frozen=True)
+class Var:
     """A FRET variable (boolean or numeric), by its source name (quotes removed)."""
 
     name: str
     span: Span = _span()
 
-    def __init__(self, name, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["name"] = name
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class BoolLit(_Node):
+@dataclass(frozen=True)
+class BoolLit:
     """``true``/``false`` in any letter case."""
 
     value: bool
     span: Span = _span()
 
-    def __init__(self, value, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["value"] = value
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class NumLit(_Node):
+@dataclass(frozen=True)
+class NumLit:
     """A numeric literal, kept as written (``3``, ``-3.0e2``, ``0.5``) so printers can
     reproduce it; :attr:`value` gives it as ``int`` or ``float``."""
 
     text: str
     span: Span = _span()
-
-    def __init__(self, text, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["text"] = text
-        d["span"] = span
 
     @property
     def value(self) -> int | float:
@@ -166,20 +101,13 @@ class NumLit(_Node):
             return float(self.text)
 
 
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Unary(_Node):
+@dataclass(frozen=True)
+class Unary:
     """``op`` is ``"!"`` (logical not; FRETish ``!`` and ``~``) or ``"-"`` (arithmetic)."""
 
     op: str
     operand: "Expr"
     span: Span = _span()
-
-    def __init__(self, op, operand, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["op"] = op
-        d["operand"] = operand
-        d["span"] = span
 
 
 #: Binary operators, in FRET's canonical spelling. ``=>`` is stored as ``->``, ``<=>`` as
@@ -189,9 +117,8 @@ COMPARISON_OPS = ("=", "!=", "<", "<=", ">", ">=")
 ARITH_OPS = ("+", "-", "*", "/", "mod", "^")
 
 
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Binary(_Node):
+@dataclass(frozen=True)
+class Binary:
     """A binary operation; ``op`` is one of :data:`BOOL_OPS`, :data:`COMPARISON_OPS` or
     :data:`ARITH_OPS`."""
 
@@ -200,17 +127,9 @@ class Binary(_Node):
     right: "Expr"
     span: Span = _span()
 
-    def __init__(self, op, left, right, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["op"] = op
-        d["left"] = left
-        d["right"] = right
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Call(_Node):
+@dataclass(frozen=True)
+class Call:
     """A function application ``name(args...)``. FRET's predefined temporal functions use
     this node too: ``persisted``, ``occurred``, ``preBool``/``preInt``/``preReal``,
     ``prevOcc``, ``persists``, ``occurs``, ``nextOcc`` (``at the previous occurrence of P, Q``
@@ -220,20 +139,14 @@ class Call(_Node):
     args: tuple["Expr", ...]
     span: Span = _span()
 
-    def __init__(self, name, args, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["name"] = name
-        d["args"] = args
-        d["span"] = span
 
 
 Expr = Var | BoolLit | NumLit | Unary | Binary | Call
 
 
 # --------------------------------------------------------------------------- fields
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Scope(_Node):
+@dataclass(frozen=True)
+class Scope:
     """``kind`` in :data:`SCOPE_KINDS`; ``mode`` is the mode variable or, for ``while C``
     and ``after/before C``, a boolean expression (``None`` for the null scope)."""
 
@@ -241,16 +154,9 @@ class Scope(_Node):
     mode: Expr | None = None
     span: Span = _span()
 
-    def __init__(self, kind="null", mode=None, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["kind"] = kind
-        d["mode"] = mode
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class ConditionPart(_Node):
+@dataclass(frozen=True)
+class ConditionPart:
     """One qualified condition as written: ``qualifier`` is ``upon``, ``when``, ``if``,
     ``where``, ``unless`` or ``whenever``; ``expr`` is the expression with ``is true``/
     ``is false`` and ``unless`` already applied."""
@@ -260,17 +166,9 @@ class ConditionPart(_Node):
     connective: str | None = None  # "and"/"or" joining it to the previous part
     span: Span = _span()
 
-    def __init__(self, qualifier, expr, connective=None, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["qualifier"] = qualifier
-        d["expr"] = expr
-        d["connective"] = connective
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Condition(_Node):
+@dataclass(frozen=True)
+class Condition:
     """The trigger. ``kind`` in :data:`CONDITION_KINDS`: ``holding`` when every part is
     ``whenever``, otherwise ``regular``; ``expr`` folds the parts left to right with their
     connectives (FRET: ``upon p, or when r`` is ``p | r``)."""
@@ -280,17 +178,9 @@ class Condition(_Node):
     parts: tuple[ConditionPart, ...] = ()
     span: Span = _span()
 
-    def __init__(self, kind="null", expr=None, parts=(), span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["kind"] = kind
-        d["expr"] = expr
-        d["parts"] = parts
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Duration(_Node):
+@dataclass(frozen=True)
+class Duration:
     """``amount`` as written (``"10"``, ``"2.5"``) and ``unit`` canonical: ``ticks`` or a key
     of :data:`UNIT_SECONDS`."""
 
@@ -298,22 +188,15 @@ class Duration(_Node):
     unit: str
     span: Span = _span()
 
-    def __init__(self, amount, unit, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["amount"] = amount
-        d["unit"] = unit
-        d["span"] = span
-
     @property
     def value(self) -> Fraction:
-        from fractions import Fraction  # lazy (start-up, issue 9)
+        from fractions import Fraction  # lazy (start-up time)
 
         return Fraction(self.amount)
 
 
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Timing(_Node):
+@dataclass(frozen=True)
+class Timing:
     """``kind`` in :data:`TIMING_KINDS`; ``duration`` for ``within/for/after``, ``stop`` (the
     stop condition) for ``until/before``; ``phrase`` is the phrasing used."""
 
@@ -323,34 +206,18 @@ class Timing(_Node):
     phrase: str = ""
     span: Span = _span()
 
-    def __init__(self, kind="null", duration=None, stop=None, phrase="", span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["kind"] = kind
-        d["duration"] = duration
-        d["stop"] = stop
-        d["phrase"] = phrase
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Probability(_Node):
+@dataclass(frozen=True)
+class Probability:
     """``with probability OP value``; ``op`` one of ``< <= > >= =``, value in [0, 1]."""
 
     op: str
     value: str
     span: Span = _span()
 
-    def __init__(self, op, value, span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["op"] = op
-        d["value"] = value
-        d["span"] = span
 
-
-@_node
-@dataclass(init=False, repr=False, eq=False)
-class Requirement(_Node):
+@dataclass(frozen=True)
+class Requirement:
     """A parsed FRETish sentence.
 
     ``freeform`` sentences (one double-quoted string) carry only ``text``; they are kept,
@@ -367,21 +234,6 @@ class Requirement(_Node):
     freeform: bool = False
     component_span: Span = _span()
     response_span: Span = _span()
-
-    def __init__(self, text, scope=Scope(), condition=Condition(), component="",
-                 probability=None, timing=Timing(), response=None, freeform=False,
-                 component_span=NO_SPAN, response_span=NO_SPAN):
-        d = self.__dict__  # frozen: the fields are set once, here
-        d["text"] = text
-        d["scope"] = scope
-        d["condition"] = condition
-        d["component"] = component
-        d["probability"] = probability
-        d["timing"] = timing
-        d["response"] = response
-        d["freeform"] = freeform
-        d["component_span"] = component_span
-        d["response_span"] = response_span
 
     @property
     def key(self) -> str | None:

@@ -14,6 +14,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
 from common.errors import FretishSyntaxError
 from .words import RESERVED_LETTERS, UNIT_TOKENS
 
@@ -146,8 +148,6 @@ def accepted_before(parser, text: str, start: str, pos: int) -> set | None:
     parse up to there. (An LALR parser may perform reductions before it notices a bad
     token; the set it reports is then that of a later state, e.g. only "end of sentence"
     after "satisfy p" when it meets "and".) None if the replay fails."""
-    from lark.exceptions import UnexpectedInput  # lazy: fretish.fasterrors needs no Lark
-
     try:
         ip = parser.parse_interactive(text, start=start)
         try:
@@ -182,8 +182,7 @@ def failure_error(text: str, source: str, line: int, column: int, pos: int,
     ``line``, ``column`` of ``source``) on ``value`` (None: the end of the sentence) of
     terminal ``ttype`` (``"CHAR"``: no terminal, ``"$END"``) with the terminals
     ``expected`` there: the message, expected names and hint of the common mistakes
-    (:func:`_explain`). Used for Lark's exceptions (:func:`translate`) and for their
-    replay without Lark (:func:`fretish.fasterrors.lark_failure`)."""
+    (:func:`_explain`). Used for Lark's exceptions (:func:`translate`)."""
     f = _Failure(text, pos, value, ttype, expected, expected_names(expected))
     pos, message, names, hint = _explain(f)
     return make_error(text, source, line, column, pos, message, names, hint)
@@ -192,8 +191,6 @@ def failure_error(text: str, source: str, line: int, column: int, pos: int,
 def _locate(e: Exception, text: str) -> tuple[int, str | None, str, set] | None:
     """(offset, offending text or None at the end, terminal type, expected terminals) of
     a Lark failure; None for a failure that is not about a position."""
-    from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
-
     if isinstance(e, UnexpectedToken):
         tok = e.token
         if tok.type == "$END":

@@ -55,7 +55,6 @@ from dataclasses import dataclass, field
 from .ast import Requirement
 from common.errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
-from .records import FACTORY, Record
 from common.units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
@@ -63,8 +62,8 @@ __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
 PathLike = str | os.PathLike
 
 
-@dataclass(init=False, repr=False, eq=False)
-class RequirementEntry(Record):
+@dataclass
+class RequirementEntry:
     """One requirement read from a file.
 
     ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
@@ -73,10 +72,6 @@ class RequirementEntry(Record):
     ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
     the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
     realizability), the same for every requirement of the file.
-
-    A dataclass (``dataclasses.replace``/``fields`` work) whose ``__init__``, ``repr`` and
-    ``==`` are written out (``extra`` a new dict by default; ``repr`` and ``==`` over every
-    field; unhashable): generating them cost start-up time (:mod:`fretish.records`).
     """
 
     id: str
@@ -93,29 +88,6 @@ class RequirementEntry(Record):
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
 
-    __match_args__ = _COMPARED = _SHOWN = (
-        "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
-        "requirement", "error", "extra", "inputs", "outputs")
-
-    def __init__(self, id: str, text: str, source: str, line: int, column: int,
-                 rationale: str | None = None, parent: str | None = None,
-                 tick_period: Fraction | None = None, requirement: Requirement | None = None,
-                 error: FretishError | None = None, extra: dict = FACTORY,
-                 inputs: tuple[str, ...] = (), outputs: tuple[str, ...] = ()) -> None:
-        self.id = id
-        self.text = text
-        self.source = source
-        self.line = line
-        self.column = column
-        self.rationale = rationale
-        self.parent = parent
-        self.tick_period = tick_period
-        self.requirement = requirement
-        self.error = error
-        self.extra = {} if extra is FACTORY else extra
-        self.inputs = inputs
-        self.outputs = outputs
-
 
 # --------------------------------------------------------------------------- durations
 def parse_tick_period(text: str) -> Fraction:
@@ -131,7 +103,7 @@ def parse_tick_period(text: str) -> Fraction:
 # --------------------------------------------------------------------------- .fret files
 _ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
 # Patterns of rare lines, compiled on first use by re's own cache (re.match(pattern, ...)):
-# a file without them does not pay for their compilation (start-up, issue 9)
+# a file without them does not pay for their compilation (start-up time)
 _ATTRIBUTE = r"[ \t]+(rationale|parent|tick_period)[ \t]*:[ \t]*(.*)\Z"
 _DIRECTIVE = r"@([A-Za-z_]+)(?:[ \t]+(.*))?\Z"
 
@@ -346,7 +318,7 @@ def _line_col(raw: str, offset: int) -> tuple[int, int]:
 def _load_json(path: str) -> list[RequirementEntry]:
     source = str(path)
     raw = _read_text(path)
-    import json  # lazy: only FRET's JSON exports need it (start-up, issue 9)
+    import json  # lazy: only FRET's JSON exports need it (start-up time)
     try:
         data = json.loads(raw)
     except json.JSONDecodeError as e:
@@ -405,7 +377,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
 
 # --------------------------------------------------------------------------- entry point
 def _path_text(p) -> str:
-    """``str(pathlib.Path(p))`` without importing pathlib (start-up time, issue 9): on POSIX
+    """``str(pathlib.Path(p))`` without importing pathlib (start-up time): on POSIX
     the path with empty and ``.`` parts dropped (one or three-plus leading slashes are
     ``/``, exactly two stay ``//``), ``.`` when nothing is left; elsewhere pathlib itself."""
     p = os.fspath(p)
@@ -468,7 +440,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementE
         got = _load_json(f) if _suffix(f).lower() == ".json" else _load_fret(f)
         for e in got:
             # ids are unique across all the files of a run: verdicts, monitors and reports
-            # are keyed by id (issue 15 item 13); duplicates inside one file are caught by
+            # are keyed by id; duplicates inside one file are caught by
             # its reader
             other = first.get(e.id)
             if other is not None and other.source != e.source:

@@ -25,6 +25,7 @@ from collections.abc import Iterator
 
 from . import ast as A
 from common.errors import FretishError
+from .words import FRET_RESERVED
 
 MAX_EXPR_DEPTH = 200
 #: A function call counts for this many levels: FRET's past- and future-time functions
@@ -73,8 +74,10 @@ _NUMBER_RUN = re.compile(f"[0-9][0-9.eE+-]{{{MAX_NUMBER_CHARS - 2}}}")
 
 
 def check_requirement(req: A.Requirement) -> None:
-    """Check a parsed requirement against the limits (iteratively: any depth is safe).
-    Raises :class:`LimitError` at the first node beyond a limit."""
+    """Check a parsed requirement against the limits (iteratively: any depth is safe) and
+    FRET's reserved names (:func:`check_reserved`). Raises :class:`LimitError` at the first
+    node beyond a limit or reserved."""
+    check_reserved(req)
     n = len(req.text)
     if n > SHORT_TEXT and (n > SHORT_TEXT_NO_NUMBER or _NUMBER_RUN.search(req.text)):
         count = [0]
@@ -87,6 +90,44 @@ def check_requirement(req: A.Requirement) -> None:
             int(d.amount) if d.amount.isascii() and d.amount.isdigit() else d.value
     ) > MAX_DURATION_TICKS:
         raise LimitError(d.span, duration_too_long(d.value), _DURATION_HINT)
+
+
+_RESERVED_WORD = re.compile(r"(?<![A-Za-z0-9_])(" + "|".join(sorted(FRET_RESERVED, key=len,
+                                                                   reverse=True))
+                            + r")(?![A-Za-z0-9_])")
+
+
+def check_reserved(req: A.Requirement) -> None:
+    """FRET's rule on names (../shared/fretish/README.md section 5): a variable or function
+    named by one of NuSMV's or R2U2's reserved words (:data:`fretish.words.FRET_RESERVED`,
+    case sensitive: ``count``, ``abs``, ``min``, ``init``, ``E``, ``R``, ...) is refused with
+    FRET's message; a quoted one (``"count"``) is not (FRET prints it ``_DQT_count_DQT_``,
+    and so does :func:`compiler.printers.mangle`). Raises :class:`LimitError` at the first
+    such name."""
+    if not _RESERVED_WORD.search(req.text):
+        return
+    for root in _expressions(req):
+        stack = [root]
+        while stack:
+            e = stack.pop()
+            name = getattr(e, "name", None)
+            if (type(e) in (A.Var, A.Call) and name in FRET_RESERVED
+                    and not req.text[e.span.start:e.span.end].lstrip("( \t").startswith('"')):
+                raise LimitError(e.span, "These reserved letter combinations cannot be used: "
+                                 f"{name}", "rename it"
+                                 + ("; FRET's functions are absReal/absInt, minReal/minInt, "
+                                    "maxReal/maxInt" if name in ("abs", "min", "max") else ""))
+            stack.extend(_children(e))
+
+
+def _children(e: A.Expr) -> list:
+    if isinstance(e, A.Unary):
+        return [e.operand]
+    if isinstance(e, A.Binary):
+        return [e.left, e.right]
+    if isinstance(e, A.Call):
+        return list(e.args)
+    return []
 
 
 def check_expression(e: A.Expr) -> None:

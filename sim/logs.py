@@ -18,7 +18,7 @@ fretc's monitor; its conventions are:
   ``[i, i + d/100 ms]`` (a window cut off by the end of the log counts only its ticks);
   ``immediately`` = the same tick; ``always`` = every tick.
 
-Bindings (issue #4): ``too_close`` = min valid ``/scan`` range < 0.9 (valid: finite and within
+Bindings: ``too_close`` = min valid ``/scan`` range < 0.9 (valid: finite and within
 ``[range_min, range_max]``; ``-inf`` counts as ``range_min``; NaN and ``+inf`` ignored, REP 117);
 ``stopped`` = ``|linear.x| < 1e-3`` and ``|angular.z| < 1e-3`` on ``/cmd_vel_filtered``;
 ``stop_requested`` = ``/gwendolen_control.data``; ``forwarded_zero`` = all six components of
@@ -37,7 +37,7 @@ import numpy as np
 from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-#: Requirement texts (requirements/safe_ros.fret, issue #4).
+#: Requirement texts (requirements/safe_ros.fret).
 REQUIREMENTS = {
     "R1": "whenever too_close agilex_agent shall eventually satisfy stopped",
     "R2": "upon too_close agilex_agent shall within 1 second satisfy stopped",

@@ -4,7 +4,7 @@
   8-connected grid of the **static** map (``/map``), with obstacles inflated by
   ``inflation_radius`` (0.30 m, Safe-ROS ``costmap_common_params.yaml``) and a soft cost that
   decays away from obstacles, so paths keep to open space where they can. There is no obstacle
-  layer: objects absent from the map are invisible to the planner (issue #4: unmapped obstacles
+  layer: objects absent from the map are invisible to the planner (unmapped obstacles
   are exactly what the Safety System protects against).
 * :class:`LocalController` — a pure-pursuit tracker in the role of DWA: it publishes
   ``/cmd_vel`` at 10 Hz within |v| <= 0.5 m/s, |w| <= 0.5 rad/s and a dynamic window of

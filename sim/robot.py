@@ -28,7 +28,7 @@ class ScoutMiniParams:
     Footprint 0.42 m x 0.33 m (Safe-ROS ``costmap_common_params.yaml``:
     ``[[-0.21, -0.165], [-0.21, 0.165], [0.21, 0.165], [0.21, -0.165]]``); the base follows
     the commanded twist with the Safe-ROS DWA limits |v| <= 0.5 m/s, |w| <= 0.5 rad/s and
-    accelerations of 0.5 m/s^2 and 0.5 rad/s^2 (issue #4).
+    accelerations of 0.5 m/s^2 and 0.5 rad/s^2.
     """
 
     # dataclass fields, same shape as LidarParams' and sim.simulation.SimParams' (kept: parameter

@@ -1,4 +1,4 @@
-"""The recorded scenarios (issue #4). Each is a world (unmapped obstacles) plus fault injections.
+"""The recorded scenarios. Each is a world (unmapped obstacles) plus fault injections.
 
 ========================  ======================================================================
 ``nominal``               the paper's mission in the mapped room; the SIF fires near walls

@@ -12,6 +12,8 @@
   of their names: the same in every run and xdist worker); ``-m slow`` runs them all.
 * ``shared``: the project's shared data (``../shared``), or a skip with one reason when it is
   absent (``tests/_shared.py``; a user's clone has none).
+* Hypothesis: no deadline and no "too slow" health check (profile ``fretc``): on a loaded
+  2-core machine generating an example can take seconds, which says nothing about fretc.
 """
 import os
 import sys
@@ -20,8 +22,13 @@ import zlib
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+settings.register_profile("fretc", deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("fretc")
 
 import _shared  # noqa: E402
 

@@ -1,4 +1,4 @@
-"""Structure of the code (issue 14): no import cycles in any source folder, and ``fretc FILE --emit
+"""Structure of the code: no import cycles in any source folder, and ``fretc FILE --emit
 ltl`` starts without the heavy libraries (Spot, Jinja2, numpy, mcap, Ray) that only code
 generation, checking and the audit need."""
 

@@ -132,7 +132,7 @@ class _LogRun:
         la.kind = source.kind
         bindings = plan.bindings
         if source.kind == "csv":
-            # the same binding rules as any log (README "CSV traces"): with bindings, bound
+            # the same binding rules as any log (docs/guide/ticks.md "CSV traces"): with bindings, bound
             # variables are their expressions over /csv.<column> (a missing topic or column
             # is an error naming the columns), unbound ones read the column of their name;
             # without bindings the columns are the variables

@@ -69,8 +69,8 @@ def damage_of(path: str, la) -> str | None:
 
 def damage_before_topics(source, la) -> str | None:
     """When finding the log's topics met damage (a log cut inside its only chunk, say): mark
-    ``la`` partial with the problems, and return the reason in words (else None). Issue 15
-    item 10: the reason for the damage is kept even when nothing readable is left."""
+    ``la`` partial with the problems, and return the reason in words (else None).
+    The reason for the damage is kept even when nothing readable is left."""
     if not source.partial:
         return None
     la.partial = True

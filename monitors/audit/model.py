@@ -88,7 +88,7 @@ class RequirementPlan:
         out = {"parent": c.entry.parent, "rationale": c.entry.rationale,
                "source_hash": c.source_hash}
         if c.formalization is not None:
-            out.update(ft=c.smv("ft"), ft_inf=c.smv("ft_inf"), pt=c.smv("pt"))
+            out.update(ft=c.smv_text["ft"], ft_inf=c.smv_text["ft_inf"], pt=c.smv_text["pt"])
         if self.monitor_cls is not None:
             out["monitor_class"] = self.monitor_cls.__name__
         return out

@@ -26,7 +26,7 @@ __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key",
            "expected_ticks", "MAX_TICKS"]
 
 #: At most this many ticks per log: a tick period that would give more (``tick period =
-#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many (issue 15 item 11).
+#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many.
 MAX_TICKS = 10**8
 #: Ticks between two progress reports.
 _PROGRESS_EVERY = 512

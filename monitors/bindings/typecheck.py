@@ -25,7 +25,7 @@ _WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of 
 
 def check_types(binding: Binding, schemas: dict) -> str:
     """Check ``binding`` against the message types of a log (:func:`monitors.sources.schema.log_schemas`)
-    before it is evaluated (issue 15): every field path must resolve through fields the
+    before it is evaluated: every field path must resolve through fields the
     schema declares (never Python attributes), strings cannot enter arithmetic or
     comparisons, a boolean is not a number and a number is not a boolean, and the value must
     end as a boolean or a number. Topics whose schema is unknown (None) are not checked.

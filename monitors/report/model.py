@@ -26,7 +26,7 @@ fields summarize them. Ticks are 0-based indexes of
 *evaluated* ticks (warm-up ticks are not numbered, see :mod:`monitors.signals`).
 
 Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
-never entered or the trigger never fired (README "vacuous passes"); ``violated`` - FRET's
+never entered or the trigger never fired (docs/guide/audits.md "Verdicts"); ``violated`` - FRET's
 finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
 (``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
 log is damaged and the span read completely decides nothing: an obligation is still open where
@@ -288,7 +288,7 @@ class LogAudit:
         }
 
 
-#: Exit codes of ``fretc audit`` (README "Exit codes"; ``fretc audit --help``).
+#: Exit codes of ``fretc audit`` (docs/guide/audits.md "Exit codes"; ``fretc audit --help``).
 EXIT_OK = 0
 EXIT_VIOLATED = 1
 EXIT_INPUT_ERROR = 2

@@ -227,7 +227,7 @@ def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
     f = compiled.formalization
     if f is not None:
         rt.key, rt.variables, rt.warnings = f.key, list(f.variables), list(f.warnings)
-        rt.ft, rt.ft_inf, rt.pt = compiled.smv("ft"), compiled.smv("ft_inf"), compiled.smv("pt")
+        rt.ft, rt.ft_inf, rt.pt = compiled.smv_text["ft"], compiled.smv_text["ft_inf"], compiled.smv_text["pt"]
         rt.ft_spot, rt.ft_inf_spot = compiled.spot("ft"), compiled.spot("ft_inf")
         rt.source_hash = compiled.source_hash
         label, formula = psl_label_and_formula(compiled, psl_mapping)

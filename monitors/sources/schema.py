@@ -1,6 +1,6 @@
 """Message schemas of a log: the field paths of each topic's type, with their types.
 
-Used to check signal bindings against a log before it is audited (issue 15: a string in
+Used to check signal bindings against a log before it is audited (a string in
 arithmetic, a boolean used as a number and the reverse, a field the message type does not
 declare - each an error naming the variable, the topic and the field) and by
 ``fretc inspect`` (the field paths a binding can name).

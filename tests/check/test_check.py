@@ -1,4 +1,4 @@
-"""fretc check (issue 11): requirement sets whose answers are known by construction, and
+"""fretc check: requirement sets whose answers are known by construction, and
 witness CSVs audited by fretc audit giving the verdicts their headers promise."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""One exception root (common/errors.py, issue 14): every stage's input error is a
+"""One exception root (common/errors.py): every stage's input error is a
 FretcError, and the fretc command reports one that no sub-command caught with exit code 2."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""One duration grammar (common/units.py) for requirement files and bindings (issue 14)."""
+"""One duration grammar (common/units.py) for requirement files and bindings."""
 
 from __future__ import annotations
 

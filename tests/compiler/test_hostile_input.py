@@ -1,4 +1,4 @@
-"""Issue 15 items 1-6: generated monitors valid for every accepted requirement, depth and
+"""Hostile requirements: generated monitors valid for every accepted requirement, depth and
 size limits with positioned errors, a linear parser error path.
 
 Each generated module is loaded and stepped in a separate ``python -I -S`` (as a user copies

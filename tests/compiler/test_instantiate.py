@@ -23,7 +23,7 @@ from compiler import instantiate as I
 from compiler import instantiate_atoms as IA
 from compiler import template_table as TT
 from compiler.printers import to_smv, to_spot
-from compiler.semantics import _shape, formalize
+from compiler.semantics import formalize, template_parts as _shape
 from differential import random_requirement
 from fretish import FretishError, parse
 from fretish import ast as A

@@ -1,4 +1,4 @@
-"""The compiler -> audit contract (issue 14): :func:`compiler.codegen.build_monitor_modules`
+"""The compiler -> audit contract: :func:`compiler.codegen.build_monitor_modules`
 returns, per requirement file, the module text ``--emit monitor`` writes and, per
 requirement, its class name, template input and LTL3 automata, built once."""
 

@@ -18,7 +18,7 @@ from fractions import Fraction
 
 import pytest
 import spot
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from compiler import ir
@@ -241,7 +241,7 @@ traces = st.lists(st.fixed_dictionaries({v: st.booleans() for v in "mcrs"}),
 
 
 @pytest.mark.parametrize("scope,cond,timing", KEYS, ids=[",".join(k) for k in KEYS])
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_ft_equals_pt_for_every_template(scope, cond, timing, data):
     sp = data.draw(st.sampled_from(SCOPE_PHRASES[scope]))

@@ -80,7 +80,7 @@ def test_console_script_runs_as_users_wrote_it():
 def test_files_with_the_same_name_get_distinct_modules(tmp_path):
     for folder, var in (("a", "p"), ("b", "q")):
         (tmp_path / folder).mkdir()
-        # (ids unique across the files of a run: issue 15 item 13)
+        # (ids unique across the files of a run)
         (tmp_path / folder / "reqs.fret").write_text(
             f"R{var}: the sw shall always satisfy {var}\n")
     out = tmp_path / "mods"
@@ -106,3 +106,18 @@ def test_user_text_reaches_the_terminal_escaped(tmp_path):
     assert "R\\u202eX" in res2.output
     for out in (res.output, res2.output):
         assert not any(ch in out for ch in raw), out
+
+
+def test_an_internal_error_is_one_line_and_exit_4(monkeypatch):
+    """A defect escaping a command (here a RecursionError) is not a traceback with exit 1,
+    the code of "violated": one line asking for a report, exit 4."""
+    import fretc.compile as compile_cmd
+
+    def boom(*_a, **_k):
+        raise RecursionError("maximum recursion depth exceeded")
+
+    monkeypatch.setattr(compile_cmd, "_load", boom)
+    res = CliRunner().invoke(main, [R1, "--emit", "psl"])
+    assert res.exit_code == 4
+    assert res.output.startswith("internal error: RecursionError")
+    assert len(res.output.strip().splitlines()) == 1 and "Traceback" not in res.output

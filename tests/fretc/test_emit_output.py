@@ -1,5 +1,5 @@
 """``fretc FILE --emit monitor -o``: a file for one input, a directory for several; empty
-input is an error; skipped requirements are listed on stderr (issue 10)."""
+input is an error; skipped requirements are listed on stderr."""
 
 from __future__ import annotations
 

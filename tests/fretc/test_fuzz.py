@@ -1,7 +1,7 @@
-"""Fuzzing (issue 15), bounded: mutated FRETish sentences from the shared vectors and the
+"""Fuzzing, bounded: mutated FRETish sentences from the shared vectors and the
 case-study corpus (``bench/fuzz.py``'s mutator, driven by hypothesis) never give a traceback:
 each is rejected with a positioned ``FretishError`` or yields a monitor module that passes
-``codegen.check_module`` and steps. The long run is ``python bench/fuzz.py`` (README)."""
+``codegen.check_module`` and steps. The long run is ``python bench/fuzz.py`` (docs/contributing.md)."""
 
 from __future__ import annotations
 

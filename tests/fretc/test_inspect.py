@@ -1,4 +1,4 @@
-"""``fretc inspect`` (issue 10): topics, types, counts, rates, span, field paths with types,
+"""``fretc inspect``: topics, types, counts, rates, span, field paths with types,
 array lengths and numeric min/max; a binding written from its output audits."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Per-requirement clocks (issue 10): a requirement's verdict and evidence depend only on the
+"""Per-requirement clocks: a requirement's verdict and evidence depend only on the
 requirement, its bindings and the log - never on the other requirements audited with it
 (../shared/DESIGN.md, "Each verdict stands alone"). Each shipped requirement is audited alone and in
 random groups on the shipped traces and must give identical JSON."""

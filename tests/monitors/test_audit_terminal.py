@@ -1,4 +1,4 @@
-"""The terminal output of fretc audit (issue 10): a compact default (the README's first
+"""The terminal output of fretc audit: a compact default (the README's first
 command prints its summary within the first screen), ``--verbose`` windows with unique
 column headers and a marker where a window jumps, parse errors outside table cells with
 their caret intact."""

@@ -1,7 +1,6 @@
-"""Bindings checked against the log's schemas (issue 15 items 7, 13, 14): a string in
+"""Bindings checked against the log's schemas: a string in
 arithmetic, a boolean bound where a number is used and the reverse, field paths that walk
-Python attributes, quoted FRETish variables; CSV traces follow the same binding rules
-(issue 10)."""
+Python attributes, quoted FRETish variables; CSV traces follow the same binding rules."""
 
 from __future__ import annotations
 
@@ -103,7 +102,7 @@ CSV_FRET = "C1: the bot shall always satisfy speed <= 1\n"
 
 
 def test_csv_binding_to_a_missing_column_is_an_error_naming_the_columns(tmp_path):
-    """Issue 10: ``speed = "/x.nonexist"`` was ignored and the raw ``speed`` column audited."""
+    """Regression: ``speed = "/x.nonexist"`` was ignored and the raw ``speed`` column audited."""
     (tmp_path / "t.csv").write_text("time,speed\n0,0.5\n1,2.0\n")
     (tmp_path / "c.fret").write_text(CSV_FRET)
     for expr, words in (('"/x.nonexist"', ["/x", "columns speed"]),

@@ -1,4 +1,4 @@
-"""Bindings a newcomer can write (issue 10): slices with REP 117 filtering, references to
+"""Bindings a newcomer can write: slices with REP 117 filtering, references to
 other variables (acyclic, checked), misspelt variables, unused bindings."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Damaged logs (issue 15, ../shared/DESIGN.md "Damage is never evidence").
+"""Damaged logs (../shared/DESIGN.md "Damage is never evidence").
 
 Every shipped trace and both real logs are damaged - cut at 20 points, 1/10/100 random bit
 flips, the summary lost - and audited. For each damaged copy:

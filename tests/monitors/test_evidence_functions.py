@@ -141,7 +141,7 @@ def test_the_sample_uses_every_function():
 
 
 @pytest.mark.parametrize("sentence, trace, holds, first", [
-    # prevOcc is true at the first position of the scope interval (issue 9, family 1)
+    # prevOcc is true at the first position of the scope interval (FRET's prevOcc)
     ("the sw shall always satisfy at the previous occurrence of p, q",
      {"p": "1100", "q": "1100"}, True, None),
     ("the sw shall always satisfy at the previous occurrence of p, q",

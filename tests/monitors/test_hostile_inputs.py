@@ -1,4 +1,4 @@
-"""Regression tests of issue 15 items 8-13 (damaged logs, hostile text, tick limit,
+"""Regression tests of hostile inputs (damaged logs, hostile text, tick limit,
 duplicate ids). Each failed on the code before the fix."""
 
 from __future__ import annotations

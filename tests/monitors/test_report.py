@@ -222,7 +222,7 @@ def test_requirements_are_traced_to_formulas_monitor_and_ajpf(shipped):
         assert c.formalization.key in t
         for which in ("ft", "ft_inf", "pt"):
             pre = sec.find(f".//{X}pre[@data-formula='{which}']")
-            assert pre.text == c.smv(which)
+            assert pre.text == c.smv_text[which]
         hashes = {e.get("data-hash"): e.text for e in sec.iter(f"{X}code") if e.get("data-hash")}
         assert hashes["source"] == c.source_hash
         stem = "r1_monitors" if r["id"] == "R1" else "safe_ros_monitors"

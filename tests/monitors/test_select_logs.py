@@ -1,4 +1,4 @@
-"""Binding files that select their logs (``[logs]`` glob / topics, issue 10): one
+"""Binding files that select their logs (``[logs]`` glob / topics): one
 requirements folder serves several robots and simulators."""
 
 from __future__ import annotations

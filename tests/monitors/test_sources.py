@@ -267,7 +267,7 @@ def test_flipped_bytes_in_a_chunk_skip_that_chunk_only(tmp_path, compression):
         assert kinds[0] in allowed, (label, kinds)
         # The linear copy also lacks everything after the last chunk: partial, at its end.
         assert kinds[1:] == ([] if label == "indexed" else [P.TRUNCATED]), (label, kinds)
-        # A skipped chunk is a gap (issue 15 item 9): the log is partial and its intact span
+        # A skipped chunk is a gap: the log is partial and its intact span
         # ends where the gap starts.
         assert src.partial and src.damage_cut, label
         # (without the index the chunk header's start time is not CRC-covered: the gap

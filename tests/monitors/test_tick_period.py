@@ -1,4 +1,4 @@
-"""``--tick-period`` as an override, and durations under one tick per message (issue 10)."""
+"""``--tick-period`` as an override, and durations under one tick per message."""
 
 from __future__ import annotations
 

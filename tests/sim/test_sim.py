@@ -1,4 +1,4 @@
-"""Acceptance tests of the simulator (issue #4), on RECORDED FILES: fresh recordings into
+"""Acceptance tests of the simulator, on RECORDED FILES: fresh recordings into
 tmp_path and the shipped traces/, read back with ``mcap`` and ``rosbags`` deserializers built
 from the schemas embedded in each file — never from the simulator's internals."""
 

@@ -1,0 +1,67 @@
+"""The house stays walkable: module and function sizes, and R1's way from text to verdict as
+ARCHITECTURE.md states it, measured by tracing a real run (tests/trace_main_line.py)."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+#: ARCHITECTURE.md, "R1 from text to verdict": the most moves and data forms R1's way may have
+MAX_MOVES = 12
+MAX_FORMS = 10
+MAX_MODULE_LINES = 600
+MAX_FUNCTION_LINES = 80
+
+
+def _python_files() -> list[Path]:
+    out = subprocess.run(["git", "ls-files", "*.py"], cwd=REPO, capture_output=True,
+                         text=True)
+    if out.returncode != 0:  # not a git checkout (an unpacked archive): every file
+        return sorted(p for p in REPO.rglob("*.py") if ".venv" not in p.parts)
+    return [REPO / f for f in out.stdout.split() if (REPO / f).exists()]
+
+
+def oversized(files: list[Path], root: Path = REPO) -> list[str]:
+    """``path: N lines`` for modules over :data:`MAX_MODULE_LINES` and ``path:line name: N
+    lines`` for functions over :data:`MAX_FUNCTION_LINES` (paths relative to ``root``)."""
+    out = []
+    for p in files:
+        text = p.read_text(encoding="utf-8")
+        where = p.relative_to(root)
+        n = len(text.splitlines())
+        if n > MAX_MODULE_LINES:
+            out.append(f"{where}: {n} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                length = node.end_lineno - node.lineno + 1
+                if length > MAX_FUNCTION_LINES:
+                    out.append(f"{where}:{node.lineno} {node.name}: {length} lines")
+    return out
+
+
+def test_modules_and_functions_within_limits():
+    assert oversized(_python_files()) == []
+
+
+def test_the_size_check_finds_a_long_function_and_module(tmp_path):
+    p = tmp_path / "long.py"
+    p.write_text("def f():\n" + "    x = 1\n" * MAX_FUNCTION_LINES
+                 + "y = 2\n" * MAX_MODULE_LINES)
+    assert oversized([p], tmp_path) == [f"long.py: {MAX_MODULE_LINES + MAX_FUNCTION_LINES + 1} "
+                                        "lines", f"long.py:1 f: {MAX_FUNCTION_LINES + 1} lines"]
+
+
+@pytest.mark.skipif(not (REPO / "traces" / "nominal.mcap").exists(),
+                    reason="traces/nominal.mcap is absent")
+def test_r1_main_line_within_the_limits():
+    from trace_main_line import describe, trace
+
+    line = trace("R1")
+    report = "\n".join(describe(line))
+    assert line.moves and "Verdict" in line.forms, report
+    assert len(line.moves) <= MAX_MOVES, report
+    assert len(line.forms) <= MAX_FORMS, report
