@@ -75,10 +75,12 @@ class CheckItem:
 
     @property
     def id(self) -> str:
+        """The requirement's id."""
         return self.compiled.id
 
     @property
     def location(self) -> str:
+        """``file:line`` of the requirement."""
         return f"{self.compiled.entry.source}:{self.compiled.entry.line}"
 
 
@@ -137,6 +139,9 @@ class CheckResult:
         return 0
 
     def to_json(self) -> dict:
+        """The document of ``fretc check --json`` / ``-o``: tool, semantics, exit code, one status
+        per requirement, components, findings, abstractions, notes, realizability,
+        witnesses, input errors and the query counts."""
         return {"tool": "fretc check", "semantics": "ft_inf (infinite traces); witnesses "
                 "on finite traces (ft)", "exit_code": self.exit_code,
                 "requirements": self.requirements, "components": self.components,

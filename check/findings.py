@@ -31,6 +31,7 @@ class Finding:
     details: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
+        """The finding as a JSON object (every attribute, plain values)."""
         return {"kind": self.kind, "severity": self.severity,
                 "requirements": self.requirements, "message": self.message,
                 "subsets": self.subsets, "cut": self.cut, "witness": self.witness,

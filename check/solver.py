@@ -200,6 +200,9 @@ class SpotWorker:
         self._conn = parent
 
     def ask(self, query: tuple) -> Any:
+        """The answer to one :func:`run_query` query (a tuple naming the query and its formulas),
+        or :data:`UNKNOWN` when the budget ran out or Spot could not take the query (its
+        message kept in :attr:`failures`). Never raises for Spot's errors."""
         if self.timeout is None:
             try:
                 return run_query(query)

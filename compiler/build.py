@@ -39,18 +39,22 @@ class Compiled:
     # field)
     @property
     def id(self) -> str:
+        """The requirement's id (its entry's)."""
         return self.entry.id
 
     @property
     def text(self) -> str:
+        """The requirement's FRETish text (its entry's)."""
         return self.entry.text
 
     @property
     def requirement(self):
+        """The parsed requirement (:class:`fretish.ast.Requirement`), or None if it did not parse."""
         return self.entry.requirement
 
     @property
     def freeform(self) -> bool:
+        """True for a free-form requirement (no FRET formalization)."""
         r = self.entry.requirement
         return bool(r is not None and r.freeform)
 
@@ -80,6 +84,7 @@ class Compiled:
         return self._cache[key]
 
     def location(self) -> str:
+        """``file:line`` of the requirement."""
         return f"{self.entry.source}:{self.entry.line}"
 
     def printed(self) -> tuple:

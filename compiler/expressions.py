@@ -64,6 +64,9 @@ class Expander:
 
     # boolean context
     def bool(self, e: A.Expr) -> Node:
+        """``e`` as a boolean IR formula of this expander's kind (ft or pt), temporal functions
+        expanded (../shared/fretish/README.md section 6b). Raises :class:`SemanticsError`
+        for an expression that is not boolean or a bad function argument."""
         if isinstance(e, A.Var):
             if e.name == "FTP":
                 return FTP
@@ -222,6 +225,8 @@ class Expander:
 
     # numeric context
     def term(self, e: A.Expr) -> Node:
+        """``e`` as a numeric IR term (variables, numbers, arithmetic, calls). Raises
+        :class:`SemanticsError` for a boolean where a number is expected."""
         if isinstance(e, A.Var):
             return ir.var(e.name)
         if isinstance(e, A.NumLit):

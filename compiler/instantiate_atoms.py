@@ -49,6 +49,8 @@ class PlainExpander(Expander):
     # Expander builds for them, in the same order (children left to right); any other
     # shape, or an error, is Expander's own code.
     def bool(self, e: A.Expr) -> Node:
+        """``e`` as a boolean IR formula, as :meth:`compiler.expressions.Expander.bool` builds it
+        for an expression without temporal functions."""
         t = type(e)
         if t is _Var:
             return self._name(e.name, "ap")
@@ -79,6 +81,7 @@ class PlainExpander(Expander):
         return Expander._bool_call(self, e)
 
     def term(self, e: A.Expr) -> Node:
+        """``e`` as a numeric IR term, as :meth:`compiler.expressions.Expander.term` builds it."""
         t = type(e)
         if t is _Var:
             return self._name(e.name, "var")
@@ -157,6 +160,8 @@ class SharingExpander(Expander):
 
     # the common shapes as in PlainExpander (same nodes, same order; leaves shared)
     def bool(self, e: A.Expr) -> Node:
+        """``e`` as a boolean IR formula whose name nodes are shared between the formulas of one
+        requirement (:meth:`compiler.expressions.Expander.bool`'s result otherwise)."""
         t = type(e)
         if t is _Var:
             name = e.name
@@ -173,6 +178,7 @@ class SharingExpander(Expander):
         return Expander.bool(self, e)
 
     def term(self, e: A.Expr) -> Node:
+        """``e`` as a numeric IR term with shared name nodes (see :meth:`bool`)."""
         t = type(e)
         if t is _Var:
             return name_node("var", e.name)  # ir.var

@@ -95,6 +95,7 @@ class NumLit:
 
     @property
     def value(self) -> int | float:
+        """The literal's value: an ``int`` when the text is an integer, else a ``float``."""
         try:
             return int(self.text)
         except ValueError:
@@ -190,6 +191,7 @@ class Duration:
 
     @property
     def value(self) -> Fraction:
+        """The amount as an exact ``Fraction`` (``"2.5"`` is 5/2), in :attr:`unit`."""
         from fractions import Fraction  # lazy (start-up time)
 
         return Fraction(self.amount)
@@ -237,6 +239,8 @@ class Requirement:
 
     @property
     def key(self) -> str | None:
+        """FRET's template key ``scope,condition,timing,satisfaction`` (FRET's ``semantics.json``
+        keys; duration classes aside), or None for a free-form requirement."""
         if self.freeform:
             return None
         return f"{self.scope.kind},{self.condition.kind},{self.timing.kind},satisfaction"

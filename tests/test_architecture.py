@@ -65,3 +65,29 @@ def test_r1_main_line_within_the_limits():
     assert line.moves and "Verdict" in line.forms, report
     assert len(line.moves) <= MAX_MOVES, report
     assert len(line.forms) <= MAX_FORMS, report
+
+
+LIBRARY = ("common", "fretish", "compiler", "check", "monitors", "fretc", "sim")
+
+
+def undocumented(files: list[Path], root: Path = REPO) -> list[str]:
+    """``path:line name`` of every public function, class and method without a docstring."""
+    out = []
+    for p in files:
+        tree = ast.parse(p.read_text(encoding="utf-8"))
+        defs = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+        nodes = [(n, n.name) for n in tree.body if isinstance(n, defs)]
+        nodes += [(s, f"{n.name}.{s.name}") for n in tree.body if isinstance(n, ast.ClassDef)
+                  and not n.name.startswith("_") for s in n.body if isinstance(s, defs)]
+        for node, name in nodes:
+            if not node.name.startswith("_") and not ast.get_docstring(node):
+                out.append(f"{p.relative_to(root)}:{node.lineno} {name}")
+    return out
+
+
+def test_public_functions_and_classes_have_docstrings(tmp_path):
+    files = [p for p in _python_files() if p.relative_to(REPO).parts[0] in LIBRARY]
+    assert undocumented(files) == []
+    bare = tmp_path / "bare.py"
+    bare.write_text("def f():\n    pass\n\n\nclass C:\n    def g(self):\n        pass\n")
+    assert undocumented([bare], tmp_path) == ["bare.py:1 f", "bare.py:5 C", "bare.py:6 C.g"]

@@ -89,6 +89,8 @@ class VerdictEvent:
     line: int = 0
 
     def to_json(self) -> dict:
+        """The event as a ``foxglove.Log`` message (timestamp in s and ns, level, message, name,
+        file, line)."""
         sec, nsec = divmod(max(0, int(self.time_ns)), 1_000_000_000)
         return {"timestamp": {"sec": sec, "nsec": nsec}, "level": LEVELS[self.level],
                 "message": self.message, "name": f"fretc/{self.requirement}",

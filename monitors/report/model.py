@@ -69,6 +69,8 @@ class TimePoint:
     log_time_ns: int | None = None
 
     def to_json(self, start: int | None) -> dict:
+        """The point as the audit JSON gives it: tick, tick time (ns, and s from ``start``, the
+        log's start in ns) and the log time (ns) of the message that decided it."""
         return {"tick": self.tick, "time_ns": self.time_ns,
                 "time_s": _t(self.time_ns, start)["s"], "log_time_ns": self.log_time_ns}
 
@@ -98,6 +100,8 @@ class FirstViolation:
     reason: str = ""
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
+        """The first violation as the audit JSON gives it (times in ns and in s from ``start``;
+        ``time_base`` names the tick clock's base)."""
         lt = self.at.log_time_ns
         out = {"tick": self.at.tick, "log_time_ns": lt, "log_time_s": _t(lt, start)["s"],
                "tick_time_ns": self.at.time_ns, "tick_time_s": _t(self.at.time_ns, start)["s"],
@@ -128,6 +132,8 @@ class Ltl3:
     time_ns: int | None = None
 
     def to_json(self, start: int | None) -> dict:
+        """The LTL3 verdict as the audit JSON gives it (key ``status``: ``satisfied``,
+        ``violated`` or ``unknown``; its tick and time, in ns and in s from ``start``)."""
         return {"status": self.status, "tick": self.tick, "time_ns": self.time_ns,
                 "time_s": _t(self.time_ns, start)["s"]}
 
@@ -187,6 +193,8 @@ class Verdict:
     unknown_reason: str | None = None
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
+        """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
+        ns and in s from ``start`` (the log's start, ns); NaN and infinities as strings."""
         def val(v):
             if isinstance(v, float) and v != v:
                 return "nan"
@@ -268,6 +276,7 @@ class LogAudit:
     warnings: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
+        """The log's audit as the audit JSON gives it (``docs/reference/audit.schema.json``)."""
         st = self.start_time_ns
         return {
             "log": self.log, "kind": self.kind, "partial": self.partial,

@@ -365,14 +365,17 @@ class AuditProgress:
         self.progress.stop()
 
     def start(self, index: int, path: str) -> None:
+        """A progress bar for log ``index`` (its file name shown)."""
         self.tasks[index] = self.progress.add_task(short_log_name(path), total=1.0)
 
     def update(self, index: int, fraction: float) -> None:
+        """Log ``index`` read to ``fraction`` (0 to 1)."""
         task = self.tasks.get(index)
         if task is not None:
             self.progress.update(task, completed=fraction)
 
     def done(self, index: int, la) -> None:
+        """Log ``index`` audited: its bar removed, the overall bar advanced."""
         task = self.tasks.pop(index, None)
         if task is not None:
             self.progress.remove_task(task)

@@ -135,6 +135,8 @@ class Axis:
         self.x0 = x0
 
     def x(self, ns: int) -> tuple[float, str]:
+        """The plot x of log time ``ns`` and where it falls: in a segment of the (broken) axis,
+        ``before`` its first or after its last."""
         segs = self.segs
         if ns < segs[0].a:
             return segs[0].p, "before"

@@ -53,6 +53,7 @@ class FieldType:
     length: int | None = None
 
     def text(self) -> str:
+        """The type as bindings and ``fretc inspect`` print it (``float64``, ``float32[360]``)."""
         if self.kind == "array":
             return f"{self.item.text()}[{'' if self.length is None else self.length}]"
         return self.name
@@ -151,11 +152,14 @@ class CsvSchema(TopicSchema):
         self.columns = columns
 
     def fields(self, typename: str | None = None) -> list[tuple[str, FieldType]]:
+        """(column, type) of every CSV column: ``bool`` or a ``float64`` number."""
         return [(c, FieldType("bool" if t == "bool" else "number",
                               "bool" if t == "bool" else "float64"))
                 for c, t in self.columns.items()]
 
     def resolve(self, path: tuple) -> FieldType:
+        """The type of the column ``path`` names. Raises
+        :class:`common.problems.FieldPathError` for an unknown column (the closest one named)."""
         cols = [c for c, _ in self.fields()]
         if not path or not isinstance(path[0], str) or path[0] not in self.columns:
             name = path[0] if path else ""
