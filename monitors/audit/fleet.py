@@ -20,7 +20,9 @@ Faults (the rule: nothing is reported satisfied that was not audited):
   this run started, and re-raises ``KeyboardInterrupt``.
 
 Where Ray runs (:func:`connect`): ``address`` None or ``"local"`` starts a local Ray for the
-run (``num_cpus`` = the machine's CPUs, no dashboard, quiet logs, usage statistics off, so
+run (``num_cpus`` = the machine's CPUs, no dashboard web server (Ray's per-node dashboard
+agent process still starts: Ray uses it for runtime environments and metrics and has no
+supported switch for it), quiet logs, usage statistics off, so
 nothing is sent to the network; Ray's own servers still listen on the node's address, as Ray
 resolves 127.0.0.1 to it) and stops it at the end; ``"auto"``,
 ``"ray://host:10001"`` or ``host:port`` connect to an existing cluster, whose workers must
@@ -201,7 +203,8 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> bool:
 
     Args:
         address: None or ``"local"``: a local Ray for this run (``num_cpus`` default: the
-            machine's CPUs; no dashboard; logs not forwarded; usage statistics off).
+            machine's CPUs; no dashboard web server; logs not forwarded; usage statistics
+            off).
             ``"auto"``, ``"ray://host:port"``, ``"host:port"``: an existing cluster.
 
     Raises:
