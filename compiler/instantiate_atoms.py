@@ -189,17 +189,17 @@ class SharingExpander(Expander):
         return Expander.term(self, e)
 
     def _past_function(self, e: A.Call) -> Node:
-        key = (0, id(e), id(self.left_pt), id(self.right_ft), self.free)
-        node = self.memo.get(key)
-        if node is None:
-            node = self.memo[key] = Expander._past_function(self, e)
-        return node
+        return self._memoized(Expander._past_function, e)
 
     def _future_function(self, e: A.Call) -> Node:
-        key = (1, id(e), id(self.left_pt), id(self.right_ft), self.free)
+        return self._memoized(Expander._future_function, e)
+
+    def _memoized(self, expand, e: A.Call) -> Node:
+        """``expand(self, e)`` once per call node, endpoints and freedom."""
+        key = (expand, id(e), id(self.left_pt), id(self.right_ft), self.free)
         node = self.memo.get(key)
         if node is None:
-            node = self.memo[key] = Expander._future_function(self, e)
+            node = self.memo[key] = expand(self, e)
         return node
 
 

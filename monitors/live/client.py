@@ -52,7 +52,7 @@ from collections.abc import Callable
 
 __all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient", "WebSocketClient", "WATCH_HINT",
            "MissingDependency", "require_websockets", "MAX_OTHER_CHANNELS",
-           "MAX_HOSTILE_SESSIONS", "frame_shape"]
+           "MAX_HOSTILE_SESSIONS", "frame_shape", "json_object"]
 
 #: Channels no requirement reads kept per connection (their topics name what a server
 #: advertises in errors); more are counted in one ``protocol`` event, not kept.
@@ -130,6 +130,19 @@ def frame_shape(value) -> str:
     for protocol problems."""
     return {dict: "object", list: "array", str: "string", int: "number", float: "number",
             bool: "boolean", type(None): "null"}.get(type(value), type(value).__name__)
+
+
+def json_object(frame) -> tuple[dict | None, str | None]:
+    """A text frame of a JSON protocol (Foxglove WebSocket, rosbridge v2: every text frame
+    is one JSON object) decoded: ``(object, None)``, or ``(None, problem)`` with the
+    sentence of the protocol problem when it is not JSON text or not an object."""
+    try:
+        msg = json.loads(frame)
+    except (ValueError, TypeError):
+        return None, "a text frame that is not JSON; ignored"
+    if not isinstance(msg, dict):
+        return None, f"a JSON {frame_shape(msg)} where the protocol sends an object; ignored"
+    return msg, None
 
 
 class WebSocketClient:
@@ -310,14 +323,9 @@ class FoxgloveClient(WebSocketClient):
                         self._session_messages += 1
                         put(("message", topic, log_time, frame[head_size:], now))
                     continue
-                try:
-                    msg = json.loads(frame)
-                except ValueError:
-                    self._protocol("a text frame that is not JSON; ignored")
-                    continue
-                if not isinstance(msg, dict):
-                    self._protocol(f"a JSON {frame_shape(msg)} where the protocol sends an "
-                                   "object; ignored")
+                msg, problem = json_object(frame)
+                if problem is not None:
+                    self._protocol(problem)
                     continue
                 try:
                     await self._text(ws, msg, st, now)

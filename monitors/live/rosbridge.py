@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .client import MAX_OTHER_CHANNELS, Advertised, WebSocketClient, frame_shape
+from .client import MAX_OTHER_CHANNELS, Advertised, WebSocketClient, frame_shape, json_object
 
 __all__ = ["RosbridgeClient", "json_to_cdr", "ros_url", "CLOCK_TOPIC"]
 
@@ -249,14 +249,9 @@ class RosbridgeClient(WebSocketClient):
     async def _read(self, ws, replies: dict, state: dict) -> None:
         async for frame in ws:
             now = time.time_ns()
-            try:
-                msg = json.loads(frame)
-            except (ValueError, TypeError):
-                self._protocol("a frame that is not JSON text; ignored")
-                continue
-            if not isinstance(msg, dict):
-                self._protocol(f"a JSON {frame_shape(msg)} where the protocol sends an "
-                               "object; ignored")
+            msg, problem = json_object(frame)
+            if problem is not None:
+                self._protocol(problem)
                 continue
             try:
                 self._frame(msg, replies, state, now)
