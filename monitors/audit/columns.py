@@ -19,50 +19,34 @@ CHUNK = 4096
 
 class TickColumns:
     """Per-tick columns of one clock (module docstring): values of ``names``, tick times, and
-    log times (ns; -1 when none yet) of the messages of ``topics`` held at each tick; in
-    numpy chunks of :data:`CHUNK` ticks."""
+    log times (ns; -1 when none yet) of the messages of ``topics`` held at each tick; kept
+    as the blocks of :func:`monitors.signals.sample_blocks`."""
 
     def __init__(self, names: list[str], topics: list[str]):
         self.names = names
         self.topics = topics
         self.n = 0
-        self._vals: list[list] = [[] for _ in names]
-        self._lts: list[list] = [[] for _ in topics]
-        self._times: list = []
         self._vchunks: list[list[np.ndarray]] = [[] for _ in names]
         self._lchunks: list[list[np.ndarray]] = [[] for _ in topics]
         self._tchunks: list[np.ndarray] = []
 
-    def append(self, tick) -> None:
-        """Add one tick (:class:`monitors.signals.Tick`)."""
-        v = tick.values
-        for name, lst in zip(self.names, self._vals):
-            lst.append(v.get(name, False))  # a failed variable: its requirements are errors
-        lt = tick.log_times
-        for topic, lst in zip(self.topics, self._lts):
-            lst.append(lt.get(topic, -1))
-        self._times.append(tick.time)
-        self.n += 1
-        if len(self._times) >= CHUNK:
-            self._flush()
-
-    def _flush(self) -> None:
-        if not self._times:
-            return
-        for lst, chunks in zip(self._vals, self._vchunks):
-            chunks.append(column_array(lst))
-            lst.clear()
-        for lst, chunks in zip(self._lts, self._lchunks):
-            chunks.append(np.array(lst, dtype=np.int64))
-            lst.clear()
-        self._tchunks.append(np.array(self._times, dtype=np.int64))
-        self._times.clear()
+    def append_block(self, block) -> None:
+        """Add a block of ticks (:class:`monitors.signals.TickBlock`); a variable absent
+        from it (its evaluation failed: its requirements are errors) reads False."""
+        k = len(block.times)
+        for name, chunks in zip(self.names, self._vchunks):
+            v = block.values.get(name)
+            chunks.append(v if v is not None else np.zeros(k, dtype=np.bool_))
+        for topic, chunks in zip(self.topics, self._lchunks):
+            lt = block.log_times.get(topic)
+            chunks.append(lt if lt is not None else np.full(k, -1, dtype=np.int64))
+        self._tchunks.append(block.times)
+        self.n += k
 
     def finish(self) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
         """(times, variable -> values, topic -> held log times), each of length ``n``.
         Chunks are joined one column at a time and released, so the peak is the columns
         plus one column."""
-        self._flush()
 
         def cat(chunks: list[np.ndarray], dtype) -> np.ndarray:
             if not chunks:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from ..bindings import Bindings, operand_signals
 from ..engines.stepwise import to_python
 from common.problems import LogError, SignalError
-from ..signals import sample_groups
+from ..signals import sample_blocks
 from ..sources import open_log
 from .model import AuditPlan
 from .passes import clock_key
@@ -35,12 +35,14 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
     got: dict[tuple[frozenset, str], dict[int, object]] = {}
     try:
         source = open_log(path, csv_period_ns=plan.csv_period_ns)
-        for key, tick in sample_groups(source, aux_bindings, groups):
-            if (key, tick.index) not in at:
-                continue
-            for name in groups[key][0]:
-                if name in tick.values:
-                    got.setdefault((key, name), {})[tick.index] = to_python(tick.values[name])
+        for key, blk in sample_blocks(source, aux_bindings, groups):
+            for i in range(len(blk.times)):
+                if (key, blk.start + i) not in at:
+                    continue
+                for name in groups[key][0]:
+                    if name in blk.values:
+                        got.setdefault((key, name), {})[blk.start + i] = \
+                            to_python(blk.values[name][i])
     except (LogError, SignalError, OSError):
         return  # the first pass already reported what is wrong with the log
     for key, aux_name, v, ticks in needs:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..bindings import Bindings
 from common.problems import SignalError
-from ..signals import sample, sample_groups
+from ..signals import blocks_of_ticks, sample, sample_blocks
 from ..sources import CSV_TOPIC
 from .columns import TickColumns
 from .model import AuditPlan, RequirementPlan
@@ -28,8 +28,6 @@ __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key",
 #: At most this many ticks per log: a tick period that would give more (``tick period =
 #: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many.
 MAX_TICKS = 10**8
-#: Ticks between two progress reports.
-_PROGRESS_EVERY = 512
 
 
 @dataclass
@@ -100,15 +98,15 @@ class _Clock:
 
 def _progress(source, expected: int | None, progress: Callable[[float], None]
               ) -> Callable[[Any], None]:
-    """Report the fraction of the log read at ``tick``: by log time over the log's span, or
+    """Report the fraction of the log read at tick time ``time`` (ns): by log time over the log's span, or
     by ticks over the ticks expected."""
     start_t, end_t = source.start_time, source.end_time
     span = (end_t - start_t) if (start_t is not None and end_t is not None
                                  and end_t > start_t) else None
 
-    def report(tick, count: int) -> None:
+    def report(time: int, count: int) -> None:
         if span is not None:
-            progress(min(1.0, max(0.0, (tick.time - start_t) / span)))
+            progress(min(1.0, max(0.0, (time - start_t) / span)))
         elif expected:
             progress(min(1.0, count / expected))
     return report
@@ -130,25 +128,27 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
         groups.setdefault(clock_key(r, bindings), []).append(r)
     clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
     if bindings is not None:
-        sampling = sample_groups(source, bindings,
+        sampling = sample_blocks(source, bindings,
                                  {key: (c.names, key) for key, c in clocks.items()})
         stream = iter(sampling)
         failed, errors = sampling.failed, sampling.errors
     else:
         sampling = sample(source, None)
         key0 = next(iter(groups))
-        stream = ((key0, t) for t in sampling)
+        c0 = clocks[key0]
+        stream = ((key0, b) for b in blocks_of_ticks(iter(sampling), c0.names,
+                                                     c0.columns.topics))
         failed, errors = {key0: {}}, {}
     report = _progress(source, expected, progress) if progress is not None else None
     count = 0
-    for key, tick in stream:
-        clocks[key].columns.append(tick)
-        count += 1
+    for key, block in stream:
+        clocks[key].columns.append_block(block)
+        count += len(block.times)
         if count > MAX_TICKS:
             raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
                               "choose a longer tick period")
-        if report is not None and count % _PROGRESS_EVERY == 0:
-            report(tick, count)
+        if report is not None:
+            report(int(block.times[-1]), count)
     passes: dict[frozenset, ClockPass] = {}
     for key, clock in clocks.items():
         times, columns, log_times = clock.columns.finish()

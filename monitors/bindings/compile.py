@@ -17,11 +17,11 @@ import numpy as np
 
 from common.units import NS_PER_S
 
-from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
+from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp, walk
 from .extract import FieldAccessError, Valid, make_extractor
 from .operations import NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2, num
 
-__all__ = ["EvalState", "EvalError", "compile_node"]
+__all__ = ["EvalState", "EvalError", "compile_node", "per_message_topic"]
 
 Evaluator = Callable[[Any], Any]
 
@@ -211,7 +211,15 @@ def _reduction(node: FuncCall, a0: Evaluator, ops: Ops) -> Evaluator:
         return ops.reduce(func, a)
 
     arg0 = node.args[0]
-    if ops.vec or not isinstance(arg0, Field):
+    if ops.vec:
+        topic = per_message_topic(arg0)
+        if topic is None:
+            return reduce_
+        # a reduction of one topic's fields (``min(/scan.ranges)``) depends only on the held
+        # message: the columns compute it once per message and gather it per tick
+        scalar = _reduction(node, compile_node(arg0, Ops(False), {}), Ops(False))
+        return lambda cols: cols.per_message(node, topic, reduce_, scalar)
+    if not isinstance(arg0, Field):
         return reduce_
     # a reduction of one field depends only on the held message: computed once per message,
     # shared by the bindings that use it (like the field memo)
@@ -227,3 +235,15 @@ def _reduction(node: FuncCall, a0: Evaluator, ops: Ops) -> Evaluator:
         st.values[key] = (msg, v)
         return v
     return reduce_memo
+
+
+def per_message_topic(node: Expr) -> str | None:
+    """The one topic whose message alone decides ``node`` (fields of that topic, constants,
+    operators and reductions; no ``age``, no other topic), or None."""
+    topics = set()
+    for n in walk(node):
+        if isinstance(n, FuncCall) and n.func == "age":
+            return None
+        if isinstance(n, Field):
+            topics.add(n.topic)
+    return topics.pop() if len(topics) == 1 else None

@@ -38,6 +38,7 @@ from __future__ import annotations
 from .arrays import SampledArrays, sample_arrays
 from .clock import Sampling, Tick, sample
 from .groups import GroupSampling, sample_groups
+from .blocks import TickBlock, blocks_of_ticks, sample_blocks
 
 __all__ = ["Tick", "Sampling", "GroupSampling", "SampledArrays", "sample", "sample_groups",
-           "sample_arrays"]
+           "sample_arrays", "TickBlock", "sample_blocks", "blocks_of_ticks"]

@@ -6,6 +6,8 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+
+from monitors.signals.columns import HeldColumns, MessageColumns
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -322,14 +324,9 @@ def test_ros2_laserscan_type_name_and_vectorized_agree():
         st_ = EvalState()
         st_.msgs = {"/scan": s}
         per_tick.append(b.evaluate(st_))
-    ex = make_extractor(b.fields[0])
-    vals = [ex(s) for s in scans]
-
-    class Cols:
-        n = len(scans)
-
-        def field(self, topic, path, node):
-            return Valid(np.stack([v.data for v in vals]), np.stack([v.mask for v in vals]))
-
-    assert b.evaluate_columns(Cols()).tolist() == per_tick
+    msgs = MessageColumns({"/scan": scans})
+    idx = np.arange(len(scans))
+    cols = HeldColumns(msgs, idx.astype(np.int64), {"/scan": idx.astype(np.int64)},
+                       {"/scan": idx})
+    assert b.evaluate_columns(cols).tolist() == per_tick
     assert ROS2.types["sensor_msgs/msg/LaserScan"].__msgtype__ == "sensor_msgs/msg/LaserScan"

@@ -289,12 +289,21 @@ def test_rep117_through_the_clock(tmp_path):
     assert [t.values["valid"] for t in ticks] == [1.0, 2.0, 0.0, 2.0]
 
 
-def test_ragged_arrays_fall_back_to_the_stream(tmp_path):
-    msgs = [("/scan", "sensor_msgs/msg/LaserScan", i * MS, scan([1.0] * (3 + i), ns=i * MS)) for i in range(4)]
+def test_ragged_arrays_reduced_per_message_or_evaluated_per_tick(tmp_path):
+    """Arrays whose length changes: a reduction of one topic's fields is still computed per
+    message by numpy; an array mixed with another topic's value is evaluated tick by tick.
+    Both equal the streaming clock."""
+    msgs = [("/scan", "sensor_msgs/msg/LaserScan", i * MS, scan([1.0 + i] * (3 + i), ns=i * MS))
+            for i in range(4)]
+    msgs += [("/a", "std_msgs/msg/Float64", i * MS, float64(2.5)) for i in range(4)]
+    msgs.sort(key=lambda m: m[2])
     src = open_log(write_mcap(tmp_path / "ragged.mcap", msgs))
     b = make_bindings({"n": "len(/scan.ranges)"}, TickSpec(topic="/scan"))
     ticks, arr = _equal_paths(src, b)
-    assert not arr.vectorized and arr.columns["n"].tolist() == [3.0, 4.0, 5.0, 6.0]
+    assert arr.vectorized and arr.columns["n"].tolist() == [3.0, 4.0, 5.0, 6.0]
+    b = make_bindings({"n": "count(/scan.ranges > /a.data)"}, TickSpec(topic="/scan"))
+    ticks, arr = _equal_paths(src, b)
+    assert not arr.vectorized and arr.columns["n"].tolist() == [0.0, 0.0, 5.0, 6.0]
 
 
 def test_truncated_log_samples_up_to_the_damage(tmp_path):
