@@ -118,6 +118,31 @@ def run(cls, trace) -> tuple[float, list, list]:
     return t, verdicts, statuses
 
 
+BOUNDS = (10, 10_000)
+
+
+def bound_cost(mod_for, ticks: int) -> None:
+    """Per-step cost of ``upon p the sw shall within N ticks satisfy q`` and of ``after N
+    ticks`` at N = 10 and 10,000 (pt has ``O[N,N]``, ``O[0,N-1]``): the cost must not grow
+    with the bound (aim: 10,000 within 1.5x of 10)."""
+    rnd = random.Random(7)
+    trace = [{"p": rnd.random() < 0.05, "q": rnd.random() < 0.3} for _ in range(ticks)]
+    for timing in ("within", "after"):
+        costs = []
+        for n in BOUNDS:
+            text = f"upon p the sw shall {timing} {n} ticks satisfy q"
+            e = SimpleNamespace(id=f"B{n}", text=text, source="bench.fret", line=1, column=1,
+                                rationale=None, parent=None, tick_period=None,
+                                requirement=parse(text), error=None, extra={})
+            c = compile_entry(e)
+            mod = mod_for([c])
+            best = min(run(mod.MONITORS[c.id], trace)[0] for _ in range(3))
+            costs.append(1e6 * best / ticks)
+        print(f"bound cost, `upon p ... {timing} N ticks`: N={BOUNDS[0]} {costs[0]:.3f} µs/step, "
+              f"N={BOUNDS[1]} {costs[1]:.3f} µs/step, ratio {costs[1] / costs[0]:.2f}x "
+              "(aim <= 1.5x)")
+
+
 def compare_baseline(compiled, mod, baseline: str, ticks: int, rounds: int) -> None:
     env = dict(os.environ, PYTHONPATH=baseline)
     text = subprocess.run([sys.executable, "-c", RENDER, json.dumps(REQUIREMENTS)], env=env,
@@ -186,6 +211,8 @@ def main() -> None:
         us_reelay = 1e6 * t_reelay / args.ticks
         print(f"{c.id:<6} {us_ours:>14.3f} {us_reelay:>15.3f} {us_reelay / us_ours:>12.1f}x"
               f"  {same}")
+    bound_cost(mod_for=lambda cs: load_text(render_module(cs, "bench_bounds"), "bench_bounds"),
+               ticks=args.ticks)
     if args.baseline:
         compare_baseline(compiled, mod, os.path.abspath(args.baseline), args.ticks,
                          args.rounds)

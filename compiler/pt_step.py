@@ -3,8 +3,9 @@
 The Havelund-Rosu dynamic-programming scheme (Havelund & Rosu, "Synthesizing monitors for
 safety properties", TACAS 2002): the formula's sub-formulas in post-order, each computed from
 this tick's values and its own value at the previous tick, so time and memory per tick are
-constant whatever the trace length. Bounded past operators keep a counter (``O[0,h]``) or a
-bit history of ``h + 1`` ticks (``O[l,h]``, ``H[l,h]``): memory sized by the bound.
+constant whatever the trace length. Bounded past operators keep a counter (``O[0,h]``,
+``H[0,h]``) or the runs of ticks where their argument held within the window (``O[l,h]``,
+``H[l,h]``): constant time per tick whatever the bound (:func:`_bounded`).
 
 Identifiers in the code are generated (``v0``, ``n3``, ``s1``), never copied from the
 requirement: a variable's FRET name reaches the module only as a string literal
@@ -233,27 +234,28 @@ def _temporal(n: Node, a: list[str], out: str, code: StepCode,
 
 
 def _bounded(n: Node, arg: str, out: str, code: StepCode) -> str:
-    """The line of a bounded ``O[lo,hi]`` / ``H[lo,hi]`` (lines it needs first are added)."""
+    """The line of a bounded ``O[lo,hi]`` / ``H[lo,hi]`` (lines it needs first are added), in
+    constant time per tick whatever the bound: ``H[lo,hi] p`` is ``!O[lo,hi] !p``.
+
+    ``lo = 0``: a counter of the ticks since the argument (of O; for H its negation) last
+    held, capped at ``hi + 1``. ``lo > 0``: the runs of ticks where it held, as a queue of
+    ``[start, end]`` pairs (the module's ``_once_within``: amortized O(1) per tick, memory at
+    most the runs within the last ``hi + 1`` ticks); ticks before the first count as not
+    holding, so ``O`` is false and ``H`` true there (FRET's past-time semantics)."""
     op, lo, hi = n.op, n.lo, n.hi
-    if op == "O" and lo == 0:
+    bit = arg if op == "O" else f"not {arg}"
+    if lo == 0:
         # ticks since the argument last held, capped at hi + 1
         prev, idx = code.slot(str(hi + 1))
         cnt = code.new("c")
-        code.lines.append(f"{cnt} = 0 if {arg} else ({prev} + 1 if {prev} <= {hi} "
+        code.lines.append(f"{cnt} = 0 if {bit} else ({prev} + 1 if {prev} <= {hi} "
                           f"else {hi + 1})")
         code.set_slot(idx, cnt)
-        return f"{out} = {cnt} <= {hi}"
-    # bit history of the last hi+1 ticks (bit k = k ticks ago); for H, of "not arg"
-    prev, idx = code.slot("0")
-    hist = code.new("h")
-    bit = arg if op == "O" else f"not {arg}"
-    # a decimal literal of more than sys.get_int_max_str_digits() digits (4300) would not
-    # load: large masks are written as an expression
-    mask = str((1 << (hi + 1)) - 1) if hi < 64 else f"((1 << {hi + 1}) - 1)"
-    code.lines.append(f"{hist} = (({prev} << 1) | ({bit})) & {mask}")
-    code.set_slot(idx, hist)
-    test = "!= 0" if op == "O" else "== 0"
-    return f"{out} = ({hist} >> {lo}) {test}" if lo else f"{out} = {hist} {test}"
+        return f"{out} = {cnt} <= {hi}" if op == "O" else f"{out} = {cnt} > {hi}"
+    prev, idx = code.slot("deque()")
+    code.set_slot(idx, prev)  # the queue is updated in place
+    once = f"_once_within({prev}, {bit}, tick, {lo}, {hi})"
+    return f"{out} = {once}" if op == "O" else f"{out} = not {once}"
 
 
 def _number(text: str) -> str:
