@@ -166,6 +166,11 @@ class Verdict:
             semantics decided it, :mod:`monitors.engines.interval`).
         notes: remarks (evidence unavailable, warnings of the formalization).
         error: why the verdict is ``error``.
+        robustness: the margin behind the verdict (:mod:`monitors.engines.robustness`): in
+            the unit of the comparison that decides it, negative exactly when violated,
+            ``+-inf`` when a boolean decides it; None when ``unknown``, ``error``, or the pt
+            formula cannot be evaluated over columns (a note says why).
+        robustness_at: the first tick where the margin is that small.
     """
 
     log: str
@@ -191,6 +196,8 @@ class Verdict:
     notes: list[str] = field(default_factory=list)
     error: str | None = None
     unknown_reason: str | None = None
+    robustness: float | None = None
+    robustness_at: TimePoint | None = None
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
@@ -224,7 +231,17 @@ class Verdict:
                                for t, w in self.violation_list],
             "engine": self.engine, "notes": self.notes,
             "error": self.error, "unknown_reason": self.unknown_reason,
+            "robustness": self._robustness_json(start, val),
         }
+
+    def _robustness_json(self, start: int | None, val) -> dict:
+        """``{"value", "tick", "time_ns", "time_s", "log_time_ns"}`` (None values when
+        there is no robustness; infinities as the strings inf, -inf)."""
+        at = self.robustness_at
+        out = {"value": None if self.robustness is None else val(self.robustness)}
+        if at is None:
+            return dict(out, tick=None, time_ns=None, time_s=None, log_time_ns=None)
+        return dict(out, **at.to_json(start))
 
 
 @dataclass
