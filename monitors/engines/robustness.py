@@ -18,7 +18,7 @@ boolean atom ``p``      ``+inf`` when ``p`` is true, ``-inf`` when false
 ``O p`` / ``H p``       running ``max`` / ``min`` (bounded: over the window, an empty window
                         ``-inf`` for O and ``+inf`` for H)
 ``a S b``               ``max over j <= i of min(b[j], min over j < k <= i of a[k])``
-``a T b``               ``-((-a) S (-b))``
+``a T b``               ``min over j <= i of max(b[j], max over j < k <= i of a[k])``
 =====================  ==============================================================
 
 Sign convention (so that the sign always tells the verdict): a value ``>= 0`` means true,
@@ -197,13 +197,18 @@ class _Rho:
         return out
 
     def _since(self, op: str, p: Node, q: Node) -> np.ndarray:
-        """``s[i] = max(b[i], min(a[i], s[i-1]))``, ``s[-1] = -inf`` (T by duality)."""
+        """``a S b``: ``s[i] = max(b[i], min(a[i], s[i-1]))`` from ``s[-1] = -inf``; its dual
+        ``a T b``: ``s[i] = min(b[i], max(a[i], s[i-1]))`` from ``+inf``."""
         a, b = self.rho(p).tolist(), self.rho(q).tolist()
-        if op == "T":
-            a, b = _neg(np.array(a)).tolist(), _neg(np.array(b)).tolist()
-        out, s = [], -_INF
-        for ai, bi in zip(a, b):
-            s = max(bi, min(ai, s))
-            out.append(s)
-        res = np.array(out, dtype=np.float64)
-        return _neg(res) if op == "T" else res
+        out = []
+        if op == "S":
+            s = -_INF
+            for ai, bi in zip(a, b):
+                s = max(bi, min(ai, s))
+                out.append(s)
+        else:
+            s = _INF
+            for ai, bi in zip(a, b):
+                s = min(bi, max(ai, s))
+                out.append(s)
+        return np.array(out, dtype=np.float64)
