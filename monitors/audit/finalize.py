@@ -12,12 +12,14 @@ the one the intact span decides (:mod:`monitors.audit.damage`).
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..bindings import Bindings
 from .damage import open_obligations, verdict_at_damage
 from ..engines.interval import OBLIGATIONS, EvidenceUnsupported
 from ..engines.judge import judge
 from ..engines.stepwise import to_python
-from ..report.model import FirstViolation, Ltl3, TimePoint
+from ..report.model import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
 from .passes import ClockPass, clock_key
 
@@ -146,7 +148,15 @@ def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v
                        f"({rob.value!r})")
         return
     v.robustness = rob.value
-    v.robustness_at = _own_ticks(r, res, bindings).point(rob.tick)
+    # the message that decided the tick: the newest held among the clock's topics
+    v.robustness_at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
+    m, times = rob.margin, res.times
+    if len(m) <= MARGIN_POINTS:
+        ticks = range(len(m))
+    else:  # the least value of each run of consecutive ticks
+        edges = np.linspace(0, len(m), MARGIN_POINTS + 1).astype(int)
+        ticks = [int(a + np.argmin(m[a:b])) for a, b in zip(edges[:-1], edges[1:])]
+    v.margin = [(int(i), int(times[i]), float(m[i])) for i in ticks]
 
 
 def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
