@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import stepwise
-from .robustness import Robustness, robustness
 from .interval import Evidence, EvidenceUnsupported, evaluate_requirement
+from .robustness import Robustness, robustness
 from .vectorized import VectorizeError, atom_letters, pt_series, supports
 
 __all__ = ["Judgement", "judge", "ltl3_verdict"]

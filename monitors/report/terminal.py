@@ -75,13 +75,13 @@ def robustness_text(value: float | None) -> str:
 
 
 def _cell(v: Verdict, st: int | None) -> str:
-    rob = robustness_text(v.robustness)
-    rob = f" ({rob})" if rob else ""
+    rob = v.robustness
+    rob = f"\n({rob:+.4g})" if rob is not None and math.isfinite(rob) else ""
     if v.verdict == "violated":
         fv = v.first_violation
         at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
-        return f"VIOLATED{at}{rob}" + (" *" if v.partial else "")
-    return v.verdict + rob + (" *" if v.partial else "")
+        return f"VIOLATED{at}" + (" *" if v.partial else "") + rob
+    return v.verdict + (" *" if v.partial else "") + rob
 
 
 def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
@@ -105,9 +105,9 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
     else:
         _print_incomplete(console, logs)
     if any(v.robustness is not None for la in logs for v in la.verdicts):
-        console.print("(robustness: the margin to the threshold in the variable's unit, "
-                      "negative exactly when violated; +-inf: decided by a boolean)",
-                      highlight=False)
+        console.print("(n): robustness, the margin to the threshold in the variable's unit, "
+                      "negative exactly when violated; none shown: decided by booleans "
+                      "(+-inf) or no robustness", highlight=False)
     if any(v.partial for la in logs for v in la.verdicts):
         console.print("* partial log: audited up to the damage", highlight=False)
     for la in logs:
@@ -291,7 +291,7 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
     elif fv.obligation:
         console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
                       highlight=False)
-    if v.robustness_at is not None:
+    if v.robustness_at is not None and math.isfinite(v.robustness):
         console.print(f"  robustness {robustness_text(v.robustness)} at tick "
                       f"{v.robustness_at.tick} ({format_offset(v.robustness_at.time_ns, st)})",
                       markup=False, highlight=False)
