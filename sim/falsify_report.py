@@ -73,7 +73,7 @@ def _markdown(doc: dict) -> str:
     names = [p["name"] for p in sp["parameters"]]
     lines = [f"# Falsification of {sp['scenario']} over {sp['file']}", "",
              f"CMA-ES seed {doc['seed']}, budget {doc['budget']} runs, {len(doc['runs'])} "
-             f"run; targets {', '.join(doc['targets'])}; simulator seed {sp['sim_seed']}.", "",
+             f"run{'' if len(doc['runs']) == 1 else 's'} made; targets {', '.join(doc['targets'])}; simulator seed {sp['sim_seed']}.", "",
              ("**Falsified**: a run violates a target requirement (exit 1)."
               if doc["falsified"] else
               "**Not falsified** within the budget (exit 0)."), "",
