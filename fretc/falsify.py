@@ -14,6 +14,8 @@ Only click is imported at module level; the simulator and the engine load on fir
 
 from __future__ import annotations
 
+import os
+
 import click
 
 from .options import FleetError, shown
@@ -73,6 +75,9 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
 
     from .options import audit_config
 
+    if os.path.isdir(output) and os.listdir(output):
+        raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "
+                                 "search would mix with this one's)", param_hint="-o")
     config = audit_config(requirements, bindings, (), None, None, None, 5)
     assert isinstance(config, AuditConfig)
     space = load_space(space_path)

@@ -203,6 +203,7 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
             es = cma.CMAEvolutionStrategy(
                 [0.5] * len(space.parameters), 0.3,
                 {"seed": seed + restart + 1, "bounds": [0.0, 1.0], "verbose": -9})
+            made = len(search.runs)
             while not es.stop() and len(search.runs) < budget:
                 xs = es.ask()
                 asked = xs[:budget - len(search.runs)]
@@ -214,6 +215,8 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
                 if len(runs) < len(xs):
                     break
                 es.tell(xs, [_to_cma(r.objective) for r in runs])
+            if len(search.runs) == made:  # CMA-ES stopped before asking: nothing to gain
+                break
             restart += 1
         return search
     finally:

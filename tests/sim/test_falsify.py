@@ -116,6 +116,12 @@ def test_cli_bad_space_and_unknown_target_exit_2(tmp_path):
                                     str(SPACES / "environment.toml"), "-o",
                                     str(tmp_path / "o"), "--only", "R9"])
     assert res.exit_code == 2 and "no requirement R9" in res.output
+    (tmp_path / "used").mkdir()
+    (tmp_path / "used" / "falsify.json").write_text("{}")
+    res = CliRunner().invoke(main, ["falsify", "-r", str(ROOT / "requirements"), "--space",
+                                    str(SPACES / "environment.toml"), "-o",
+                                    str(tmp_path / "used")])
+    assert res.exit_code == 2 and "is not empty" in res.output
 
 
 @pytest.mark.ray
