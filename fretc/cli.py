@@ -102,12 +102,14 @@ def _register_optional() -> None:
     # lazy: these modules load rich and the report machinery (start-up time)
     from .audit import audit_cmd
     from .check import check_cmd
+    from .falsify import falsify_cmd
     from .inspect import inspect_cmd
     from .report import report_cmd
     from .watch import register as register_watch
 
     main.add_command(audit_cmd, "audit")
     main.add_command(check_cmd, "check")
+    main.add_command(falsify_cmd, "falsify")
     main.add_command(inspect_cmd, "inspect")
     main.add_command(report_cmd, "report")
     register_watch(main)

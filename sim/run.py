@@ -6,7 +6,7 @@ import io
 from pathlib import Path
 
 from .recording import McapRecorder
-from .scenarios import get_scenario
+from .scenarios import Scenario, get_scenario
 from .simulation import RunResult, Simulation
 
 
@@ -21,7 +21,22 @@ def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase 
     Raises ``KeyError`` for an unknown scenario, ``ValueError`` for bad parameters and
     ``OSError`` if the output cannot be written.
     """
-    sc = get_scenario(scenario, stop_delay)
+    result = record_scenario(get_scenario(scenario, stop_delay), seed, output, ros1=ros1,
+                             threshold=threshold, compression=compression)
+    if png is not None:
+        from .plot import draw_run  # lazy: matplotlib takes ~1 s to import, only for --png
+        draw_run(result, png)
+    return result
+
+
+def record_scenario(sc: Scenario, seed: int = 1,
+                    output: str | Path | io.BufferedIOBase | None = None, ros1: bool = False,
+                    threshold: float = 0.9, compression: str = "zstd") -> RunResult:
+    """Simulate the scenario ``sc`` (for instance with :func:`sim.space.apply`'s parameters)
+    and write the run to ``output`` as :func:`record` does.
+
+    Raises ``ValueError`` for bad parameters and ``OSError`` if the output cannot be
+    written."""
     sim = Simulation(sc, seed=seed, threshold=threshold)
     if output is None:
         stream, close = io.BytesIO(), True
@@ -37,7 +52,4 @@ def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase 
     finally:
         if close:
             stream.close()
-    if png is not None:
-        from .plot import draw_run  # lazy: matplotlib takes ~1 s to import, only for --png
-        draw_run(result, png)
     return result

@@ -52,7 +52,12 @@ class Scenario:
     ``sif_enabled``: the SIF runs; ``interceptor_faulty``: the interceptor ignores stops;
     ``stop_delay`` s: delay of every ``/gwendolen_control`` decision; ``dropout_start`` /
     ``dropout_duration`` s: no scans in ``[start, start + duration)`` (sim time from the start
-    of the run); ``home``: start and final pose ``(x, y, yaw)`` in m, rad.
+    of the run); ``home``: start and final pose ``(x, y, yaw)`` in m, rad;
+    ``interceptor_delay`` s: the interceptor acts on each ``/gwendolen_control`` message that
+    long after it arrives (until then it keeps forwarding ``/cmd_vel`` as before);
+    ``lidar_sigma`` m: the LiDAR's range noise (None: :class:`sim.robot.LidarParams`'
+    default); ``max_time`` s: the mission's time limit (None: :class:`sim.simulation.SimParams`'
+    default). The defaults leave the shipped scenarios as recorded.
     """
 
     name: str
@@ -66,6 +71,9 @@ class Scenario:
     dropout_start: float | None = None
     dropout_duration: float = 0.0
     home: tuple[float, float, float] = (-1.2, -0.8, 0.0)
+    interceptor_delay: float = 0.0
+    lidar_sigma: float | None = None
+    max_time: float | None = None
 
 
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -117,6 +117,7 @@ class _RunState:
     start_ms: int = 0
     drop: tuple[int, int] | None = None
     pending: deque = field(default_factory=deque)
+    interceptor_pending: deque = field(default_factory=deque)
     last_min: float = math.inf
     contact: tuple[float, float, float] | None = None
     blocked: bool = False
@@ -147,6 +148,10 @@ class Simulation:
         self.scenario = scenario
         self.seed = int(seed)
         self.threshold = float(threshold)
+        if scenario.max_time is not None:
+            sim = replace(sim, max_time=float(scenario.max_time))
+        if scenario.lidar_sigma is not None:
+            lidar = replace(lidar, sigma=float(scenario.lidar_sigma))
         self.sim = sim
         self.omap = omap if omap is not None else OccupancyMap.load()
         self.world = World(self.omap, scenario.barrels, scenario.movers, scenario.removed)
@@ -213,6 +218,8 @@ class Simulation:
             # 2. delayed decisions
             while st.pending and st.pending[0][0] <= t_ms:
                 self._publish_control(rec, st, t_ms, st.pending.popleft()[1])
+            while st.interceptor_pending and st.interceptor_pending[0][0] <= t_ms:
+                self._intercept_control(rec, st, t_ms, st.interceptor_pending.popleft()[1])
             if t_ms % 50 == 0 or (st.contact is not None and st.contact[0] == t):
                 self._sample_20hz(rec, st, t_ms, t, s)
             if t_ms % 100 == 0 and not (st.drop and st.drop[0] <= t_ms < st.drop[1]):
@@ -233,6 +240,13 @@ class Simulation:
     def _publish_control(self, rec: McapRecorder, st: _RunState, t_ms: int, stop) -> None:
         rec.write("/gwendolen_control", _ns(t_ms), rec.factory.bool(stop))
         st.trace.control.append((t_ms / 1000.0, bool(stop)))
+        delay_ms = int(round(self.scenario.interceptor_delay * 1000))
+        if delay_ms > 0:  # the interceptor fault: it acts on the message late
+            st.interceptor_pending.append((t_ms + delay_ms, stop))
+        else:
+            self._intercept_control(rec, st, t_ms, stop)
+
+    def _intercept_control(self, rec: McapRecorder, st: _RunState, t_ms: int, stop) -> None:
         out = self.interceptor.on_control(stop)
         if out is not None:
             self._publish_filtered(rec, st, t_ms, *out)

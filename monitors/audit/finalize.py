@@ -12,12 +12,14 @@ the one the intact span decides (:mod:`monitors.audit.damage`).
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..bindings import Bindings
 from .damage import open_obligations, verdict_at_damage
 from ..engines.interval import OBLIGATIONS, EvidenceUnsupported
 from ..engines.judge import judge
 from ..engines.stepwise import to_python
-from ..report.model import FirstViolation, Ltl3, TimePoint
+from ..report.model import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
 from .passes import ClockPass, clock_key
 
@@ -54,6 +56,7 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
         holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
         if holds is None:
             return
+    _robustness(r, res, bindings, v, j.robustness, holds)
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous":
@@ -124,6 +127,38 @@ class _Ticks:
         return None
 
 
+def _own_ticks(r: RequirementPlan, res: ClockPass, bindings: Bindings | None) -> _Ticks:
+    """The ticks of ``r``'s clock, with the log times of the messages its own topics held."""
+    own_topics = sorted(clock_key(r, bindings)) if bindings is not None else []
+    held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
+        list(res.log_times.values())
+    return _Ticks(res, held, bindings)
+
+
+def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v, rob,
+                holds: bool) -> None:
+    """``v.robustness`` and ``v.robustness_at`` from the judge's robustness ``rob`` (None:
+    the pt formula cannot be evaluated over columns; a note says so). A value whose sign
+    disagrees with the verdict is never reported (a note says so instead)."""
+    if rob is None:
+        v.notes.append("robustness unavailable: the pt formula has a future-time function")
+        return
+    if (rob.value < 0) == holds:
+        v.notes.append(f"robustness unavailable: its sign disagrees with the verdict "
+                       f"({rob.value!r})")
+        return
+    v.robustness = rob.value
+    # the message that decided the tick: the newest held among the clock's topics
+    v.robustness_at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
+    m, times = rob.margin, res.times
+    if len(m) <= MARGIN_POINTS:
+        ticks = range(len(m))
+    else:  # the least value of each run of consecutive ticks
+        edges = np.linspace(0, len(m), MARGIN_POINTS + 1).astype(int)
+        ticks = [int(a + np.argmin(m[a:b])) for a, b in zip(edges[:-1], edges[1:])]
+    v.margin = [(int(i), int(times[i]), float(m[i])) for i in ticks]
+
+
 def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
                         bindings: Bindings | None, v, ev, status: str,
                         st_tick: int | None) -> None:
@@ -134,10 +169,7 @@ def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
     timing = r.requirement.timing.kind
     obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]
     k = r.formalization.ticks
-    own_topics = sorted(clock_key(r, bindings)) if bindings is not None else []
-    held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
-        list(res.log_times.values())
-    ticks = _Ticks(res, held, bindings)
+    ticks = _own_ticks(r, res, bindings)
     tp = ticks.point
     if ev is not None and ev.violation is not None:
         w = ev.violation

@@ -10,6 +10,9 @@ The audit (and a watch at the end of its run) asks :func:`judge` and nothing els
   formula evaluated over the columns (:func:`monitors.engines.vectorized.pt_series`; FRET's
   pt formula at the last tick is its finite-trace verdict), and where that is impossible too,
   the generated monitor replayed over the columns (:mod:`monitors.engines.stepwise`).
+* **The robustness** (the margin behind the verdict) is the pt formula's space robustness over
+  the same columns (:func:`monitors.engines.robustness.robustness`); its sign is the
+  verdict's. None where the pt formula cannot be evaluated over columns.
 * **The LTL3 verdict** (Bauer, Leucker, Schallhart, TOSEM 2011: the earliest tick after which
   every continuation of the trace satisfies, or every one violates, the infinite-trace
   formula ft_inf) comes from the requirement's deterministic monitor automata run over the
@@ -30,6 +33,7 @@ import numpy as np
 
 from . import stepwise
 from .interval import Evidence, EvidenceUnsupported, evaluate_requirement
+from .robustness import Robustness, robustness
 from .vectorized import VectorizeError, atom_letters, pt_series, supports
 
 __all__ = ["Judgement", "judge", "ltl3_verdict"]
@@ -50,6 +54,9 @@ class Judgement:
             ``"vectorized"`` (the pt formula over the columns) or ``"stepwise"`` (the
             generated monitor replayed).
         note: why the interval semantics gave no evidence, or None.
+        robustness: the pt formula's robustness over the ticks
+            (:class:`monitors.engines.robustness.Robustness`), or None where the pt formula
+            cannot be evaluated over columns (a future-time function).
     """
 
     holds: bool
@@ -58,6 +65,7 @@ class Judgement:
     ltl3_tick: int | None
     engine: str
     note: str | None = None
+    robustness: Robustness | None = None
 
 
 def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int, *,
@@ -95,7 +103,8 @@ def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int,
         replayed = stepwise.replay(monitor_cls, columns, n)
         holds, engine = bool(replayed.finish()), "stepwise"
     ltl3, tick = _ltl3(monitor_source, monitor_cls, columns, n, replayed)
-    return Judgement(holds, ev, ltl3, tick, engine, note)
+    rob = robustness(formalization.pt, columns, n) if _pt_evaluable(formalization) else None
+    return Judgement(holds, ev, ltl3, tick, engine, note, rob)
 
 
 def _pt_evaluable(formalization) -> bool:

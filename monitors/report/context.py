@@ -21,6 +21,7 @@ from typing import Sequence
 
 from common.units import format_seconds
 
+from .margin import margin_svg
 from .terminal import damage_summary
 from .trace import FIELD_NAMES, ModuleInfo, RequirementTrace, resolve_input, split_source
 from .verdicts import cell_label, values_table, verdict_for, witness
@@ -225,7 +226,8 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
                runs: list[dict], anchors: _Anchors, period_ns: int | None,
                violations: list[dict]) -> None:
     """Append the requirement's matrix cells (one per run) to ``rc["cells"]`` and its
-    violations to ``violations``."""
+    violations to ``violations``; ``rc["margin_svg"]`` its margin over time in every run."""
+    margins: list[tuple[str, list]] = []
     for j, la in enumerate(logs):
         v = verdict_for(la, rc["index"], r)
         cls, label = cell_label(v)
@@ -244,7 +246,20 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
             cell["log_time_ns"] = v["first_violation"].get("log_time_ns")
             violations.append(_violation(v, la, r, rt, rc, run, va, cell["witness"],
                                          period_ns))
+        rob = (v or {}).get("robustness") or {}
+        cell["robustness"] = _robustness_text(rob.get("value"))
+        margins.append((run["name"], rob.get("margin") or []))
         rc["cells"].append(cell)
+    rc["margin_svg"] = margin_svg(margins, f"{r.get('id')}: margin over time")
+
+
+def _robustness_text(value) -> str:
+    """A robustness from the audit JSON as the report shows it (``-``: none)."""
+    if value is None:
+        return "-"
+    if isinstance(value, str):
+        return "+inf" if value == "inf" else value
+    return f"{value:+.4g}"
 
 
 def _requirement_rows(reqs: list[dict], logs: list[dict], runs: list[dict],

@@ -46,6 +46,8 @@ __all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_
            "EXIT_VIOLATED", "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE"]
 
 SCHEMA = "fretc-audit/1"
+#: At most this many points of a verdict's margin over time (:attr:`Verdict.margin`).
+MARGIN_POINTS = 400
 VERDICTS = ("satisfied", "vacuous", "violated", "unknown", "error")
 
 
@@ -166,6 +168,14 @@ class Verdict:
             semantics decided it, :mod:`monitors.engines.interval`).
         notes: remarks (evidence unavailable, warnings of the formalization).
         error: why the verdict is ``error``.
+        robustness: the margin behind the verdict (:mod:`monitors.engines.robustness`): in
+            the unit of the comparison that decides it, negative exactly when violated,
+            ``+-inf`` when a boolean decides it; None when ``unknown``, ``error``, or the pt
+            formula cannot be evaluated over columns (a note says why).
+        robustness_at: the first tick where the margin is that small.
+        margin: the margin over time, ``[(tick, time_ns, value)]``: every tick, or on a
+            long log the least value of each of :data:`MARGIN_POINTS` runs of consecutive
+            ticks (at the tick where it occurs), so no dip is lost.
     """
 
     log: str
@@ -191,6 +201,9 @@ class Verdict:
     notes: list[str] = field(default_factory=list)
     error: str | None = None
     unknown_reason: str | None = None
+    robustness: float | None = None
+    robustness_at: TimePoint | None = None
+    margin: list[tuple[int, int, float]] = field(default_factory=list)
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
@@ -224,7 +237,19 @@ class Verdict:
                                for t, w in self.violation_list],
             "engine": self.engine, "notes": self.notes,
             "error": self.error, "unknown_reason": self.unknown_reason,
+            "robustness": self._robustness_json(start, val),
         }
+
+    def _robustness_json(self, start: int | None, val) -> dict:
+        """``{"value", "tick", "time_ns", "time_s", "log_time_ns", "margin"}`` (margin:
+        ``[[tick, time_s, value]]``; None values and no margin when
+        there is no robustness; infinities as the strings inf, -inf)."""
+        at = self.robustness_at
+        out = {"value": None if self.robustness is None else val(self.robustness),
+               "margin": [[t, _t(ns, start)["s"], val(x)] for t, ns, x in self.margin]}
+        if at is None:
+            return dict(out, tick=None, time_ns=None, time_s=None, log_time_ns=None)
+        return dict(out, **at.to_json(start))
 
 
 @dataclass

@@ -65,6 +65,8 @@ def render_html(ctx: dict) -> str:
     ctx = dict(ctx)
     ctx["violations"] = [dict(v, svg_markup=markupsafe.Markup(v["svg"]))
                          for v in ctx["violations"]]
+    ctx["requirements"] = [dict(r, margin_markup=markupsafe.Markup(r.get("margin_svg", "")))
+                           for r in ctx["requirements"]]
     return _env(True).get_template("report.html.j2").render(**ctx)
 
 

@@ -9,6 +9,7 @@ number; the JSON report (:mod:`monitors.report.model`) also has the absolute ns.
 
 from __future__ import annotations
 
+import math
 import os
 
 from rich.markup import escape as _markup_escape
@@ -63,12 +64,24 @@ def _value(v) -> str:
 MATRIX_MAX = 10
 
 
+def robustness_text(value: float | None) -> str:
+    """A robustness as the terminal shows it: signed, 4 significant digits, ``+inf`` /
+    ``-inf`` when a boolean decides it; ``""`` when there is none."""
+    if value is None:
+        return ""
+    if math.isinf(value):
+        return "+inf" if value > 0 else "-inf"
+    return f"{value:+.4g}"
+
+
 def _cell(v: Verdict, st: int | None) -> str:
+    rob = v.robustness
+    rob = f"\n({rob:+.4g})" if rob is not None and math.isfinite(rob) else ""
     if v.verdict == "violated":
         fv = v.first_violation
         at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
-        return f"VIOLATED{at}" + (" *" if v.partial else "")
-    return v.verdict + (" *" if v.partial else "")
+        return f"VIOLATED{at}" + (" *" if v.partial else "") + rob
+    return v.verdict + (" *" if v.partial else "") + rob
 
 
 def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
@@ -91,6 +104,10 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
         _print_matrix(console, logs, reqs)
     else:
         _print_incomplete(console, logs)
+    if any(v.robustness is not None for la in logs for v in la.verdicts):
+        console.print("(n): robustness, the margin to the threshold in the variable's unit, "
+                      "negative exactly when violated; none shown: decided by booleans "
+                      "(+-inf) or no robustness", highlight=False)
     if any(v.partial for la in logs for v in la.verdicts):
         console.print("* partial log: audited up to the damage", highlight=False)
     for la in logs:
@@ -274,6 +291,10 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -
     elif fv.obligation:
         console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
                       highlight=False)
+    if v.robustness_at is not None and math.isfinite(v.robustness):
+        console.print(f"  robustness {robustness_text(v.robustness)} at tick "
+                      f"{v.robustness_at.tick} ({format_offset(v.robustness_at.time_ns, st)})",
+                      markup=False, highlight=False)
     lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
           if fv.at.log_time_ns is not None else "")
     console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "

@@ -222,3 +222,8 @@ def test_a_cut_log_never_passes_what_its_prefix_does_not_decide(tmp_path):
         assert by_id[rid].verdict in ("unknown", "violated"), (rid, by_id[rid].verdict)
         if by_id[rid].verdict == "unknown":
             assert by_id[rid].unknown_reason, rid
+            # the log does not decide it: no margin is claimed either
+            assert by_id[rid].robustness is None and by_id[rid].robustness_at is None, rid
+    for v in damaged.verdicts:  # a decided verdict's robustness has the verdict's sign
+        if v.verdict in ("satisfied", "vacuous", "violated") and v.robustness is not None:
+            assert (v.robustness < 0) == (v.verdict == "violated"), v.requirement

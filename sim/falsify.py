@@ -1,0 +1,247 @@
+"""Falsification: search a space of scenario parameters (:mod:`sim.space`) for simulator runs
+that violate a requirement (``fretc falsify``), as S-TaLiRo and Breach do for STL.
+
+Each run simulates the base scenario with one point of the space (:func:`sim.space.apply`),
+records it as MCAP and audits it with the requirements (:func:`monitors.audit.audit_log`, the
+same engine as ``fretc audit``). The search minimizes the run's *objective*, the least
+robustness (:mod:`monitors.engines.robustness`) over the target requirements (all, or those
+given), with CMA-ES (the ``cma`` library; Hansen's covariance matrix adaptation) over the unit
+cube mapped onto the parameters' ranges. When CMA-ES stops before the budget (converged, or a
+flat objective) it restarts from the centre with the next seed. A run *falsifies* when a target
+requirement is violated on it.
+
+Determinism: CMA-ES is seeded with ``seed`` (its ``k``-th restart with ``seed + k``; cma's
+seed 0 means "from the clock", so ``seed + 1`` is passed); the simulator always uses the
+space's own seed; so the same seed gives the same runs, one after another or on Ray. With Ray
+(``ray_address``) a population's runs are simulated and audited in parallel; the runs after
+the first falsifying one are dropped when the search stops at the first (``first``), so the
+runs are those of a run without Ray.
+
+Boolean FRET variables have robustness +-inf (no margin): a requirement decided by booleans
+alone gives CMA-ES nothing to descend, and the search over it is a seeded random search.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from .run import record_scenario
+from .space import Space, apply
+
+__all__ = ["Run", "Search", "falsify", "CLIP"]
+
+#: Robustness values passed to CMA-ES are clipped to +-CLIP (it needs finite numbers).
+CLIP = 1e9
+
+
+@dataclass
+class Run:
+    """One simulator run of the search.
+
+    Attributes:
+        index: 1-based, in the order the runs were asked.
+        parameters: parameter -> value (the space's units).
+        robustness: requirement -> its robustness on the run (None: unknown or error).
+        verdicts: requirement -> verdict.
+        violated: the target requirements violated on the run.
+        objective: the least robustness over the targets (None when none has one).
+        mcap: the MCAP file written for the run (relative to the output folder), or None
+            when the run was not kept (only a run violating a target requirement that no
+            earlier run violated is kept).
+        audit: the run's :class:`monitors.report.model.LogAudit`.
+    """
+
+    index: int
+    parameters: dict[str, float]
+    robustness: dict[str, float | None]
+    verdicts: dict[str, str]
+    violated: list[str]
+    objective: float | None
+    mcap: str | None = None
+    audit: Any = None
+
+
+@dataclass
+class Search:
+    """The search's result: its inputs and the runs, in order."""
+
+    space: Space
+    budget: int
+    seed: int
+    targets: list[str]
+    runs: list[Run] = field(default_factory=list)
+
+    @property
+    def falsified(self) -> bool:
+        """A run violated a target requirement."""
+        return any(r.violated for r in self.runs)
+
+    def smallest(self) -> dict[str, tuple[float, int, int | None] | None]:
+        """Requirement -> (its smallest robustness over the runs, the first run where it
+        occurs, the tick), or None when no run gave it one."""
+        out: dict[str, tuple[float, int, int | None] | None] = {t: None for t in self.targets}
+        for r in self.runs:
+            for t in self.targets:
+                v = r.robustness.get(t)
+                if v is not None and (out[t] is None or v < out[t][0]):
+                    at = _verdict(r.audit, t).robustness_at
+                    out[t] = (v, r.index, at.tick if at is not None else None)
+        return out
+
+
+def _verdict(la, rid: str):
+    return next(v for v in la.verdicts if v.requirement == rid)
+
+
+def _objective(values: list[float | None]) -> float | None:
+    vals = [v for v in values if v is not None]
+    return min(vals) if vals else None
+
+
+def _to_cma(obj: float | None) -> float:
+    if obj is None or math.isnan(obj):
+        return CLIP
+    return min(max(obj, -CLIP), CLIP)
+
+
+def simulate(space: Space, parameters: dict[str, float], path: str) -> str:
+    """Simulate one point of ``space`` and write the run to ``path`` (MCAP); returns it."""
+    record_scenario(apply(space.scenario, parameters), space.seed, path)
+    return path
+
+
+def _make_run(index: int, parameters: dict, la, targets: list[str]) -> Run:
+    rob = {v.requirement: v.robustness for v in la.verdicts}
+    verdicts = {v.requirement: v.verdict for v in la.verdicts}
+    violated = [t for t in targets if verdicts.get(t) == "violated"]
+    return Run(index, parameters, rob, verdicts, violated,
+               _objective([rob.get(t) for t in targets]), audit=la)
+
+
+class _Evaluator:
+    """Simulates and audits a batch of points, one after another or on Ray."""
+
+    def __init__(self, plan, space: Space, out: Path, ray_address: str | None):
+        self.plan, self.space, self.out = plan, space, out
+        self.ray_address = ray_address
+        self.started = False
+        if ray_address is not None:
+            from monitors.audit.fleet import connect  # lazy: Ray only with --ray
+            self.started = connect(ray_address)
+
+    def path(self, index: int) -> str:
+        return str(self.out / "runs" / f"run-{index:04d}.mcap")
+
+    def batch(self, start: int, points: list[dict], targets: list[str],
+              first: bool) -> list[Run]:
+        if self.ray_address is not None:
+            return self._batch_ray(start, points, targets)
+        from monitors.audit import audit_log
+        runs = []
+        for k, p in enumerate(points):
+            path = simulate(self.space, p, self.path(start + k))
+            runs.append(_make_run(start + k, p, audit_log(self.plan, path), targets))
+            if first and runs[-1].violated:
+                break
+        return runs
+
+    def _batch_ray(self, start: int, points: list[dict], targets: list[str]) -> list[Run]:
+        import ray  # lazy: Ray only with --ray
+
+        from monitors.audit.fleet import audit_logs_ray
+        task = ray.remote(simulate).options(num_cpus=1)
+        paths = ray.get([task.remote(self.space, p, self.path(start + k))
+                         for k, p in enumerate(points)])
+        audits = audit_logs_ray(self.plan, paths, address=self.ray_address)
+        return [_make_run(start + k, p, la, targets)
+                for k, (p, la) in enumerate(zip(points, audits))]
+
+    def close(self) -> None:
+        if self.started:
+            import ray
+            ray.shutdown()
+
+
+def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
+            targets: list[str] | None = None, first: bool = False,
+            ray_address: str | None = None,
+            progress: Callable[[Run], None] | None = None) -> Search:
+    """Search ``space`` for runs violating the requirements of ``plan``.
+
+    Args:
+        plan: the audit plan (:func:`monitors.audit.load_plan`).
+        space: from :func:`sim.space.load_space`.
+        budget: the number of simulator runs at most (``>= 1``).
+        seed: CMA-ES's seed (module docstring).
+        out: the output folder; runs are written to ``out/runs/``.
+        targets: the requirement ids to violate (default: every requirement of the plan).
+        first: stop after the first falsifying run; otherwise the search stops when the
+            budget is spent or every target has been violated.
+        ray_address: run on Ray (``"local"`` or a cluster address, as ``fretc audit --ray``).
+        progress: called with each run once it is audited.
+
+    Raises:
+        monitors.audit.fleet.RayUnavailable: ``ray_address`` given and Ray cannot start.
+        OSError: the output folder cannot be written.
+    """
+    import cma  # lazy: only fretc falsify needs it
+
+    ids = [r.id for r in plan.requirements]
+    targets = list(targets) if targets else ids
+    search = Search(space, budget, seed, targets)
+    outp = Path(out)
+    (outp / "runs").mkdir(parents=True, exist_ok=True)
+    ev = _Evaluator(plan, space, outp, ray_address)
+    violated_before: set[str] = set()
+    try:
+        restart = 0
+        while len(search.runs) < budget:
+            es = cma.CMAEvolutionStrategy(
+                [0.5] * len(space.parameters), 0.3,
+                {"seed": seed + restart + 1, "bounds": [0.0, 1.0], "verbose": -9})
+            made = len(search.runs)
+            while not es.stop() and len(search.runs) < budget:
+                xs = es.ask()
+                asked = xs[:budget - len(search.runs)]
+                runs = ev.batch(len(search.runs) + 1, [space.point(list(x)) for x in asked],
+                                targets, first)
+                stop = _take(search, runs, first, violated_before, outp, progress)
+                if stop:
+                    return search
+                if len(runs) < len(xs):
+                    break
+                es.tell(xs, [_to_cma(r.objective) for r in runs])
+            if len(search.runs) == made:  # CMA-ES stopped before asking: nothing to gain
+                break
+            restart += 1
+        return search
+    finally:
+        ev.close()
+
+
+def _take(search: Search, runs: list[Run], first: bool, violated_before: set[str], out: Path,
+          progress) -> bool:
+    """Add a batch's runs to the search in order, keep the MCAP of a run violating a target
+    no earlier run violated (delete the others); True when the search stops."""
+    for run in runs:
+        search.runs.append(run)
+        path = out / "runs" / f"run-{run.index:04d}.mcap"
+        new = [t for t in run.violated if t not in violated_before]
+        if new:
+            violated_before.update(new)
+            run.mcap = str(path.relative_to(out))
+        elif path.exists():
+            os.remove(path)
+        if progress is not None:
+            progress(run)
+        if (first and run.violated) or violated_before >= set(search.targets):
+            for later in runs[runs.index(run) + 1:]:
+                p = out / "runs" / f"run-{later.index:04d}.mcap"
+                if p.exists():
+                    os.remove(p)
+            return True
+    return False

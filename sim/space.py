@@ -1,0 +1,176 @@
+"""Scenario parameter spaces for falsification (``fretc falsify --space FILE.toml``): a base
+scenario of :mod:`sim.scenarios`, the simulator's seed, and a range for each parameter the
+search may change.
+
+A space file (``sim/spaces/*.toml``)::
+
+    scenario = "nominal"        # the scenario the parameters change (python -m sim list)
+    seed = 1                    # the simulator's seed (sensor noise), the same for every run
+    max_time = 30.0             # optional: the mission's time limit (s): shorter runs
+
+    [parameters]                # name = [low, high], in the parameter's unit
+    interceptor_delay = [0.0, 2.0]
+    obstacle_x = [0.8, 1.7]
+    obstacle_y = [-0.9, -0.3]
+
+The parameters (:data:`PARAMETERS`) and what a value does to the scenario are applied by
+:func:`apply`; a space whose base scenario lacks what a parameter changes (``obstacle_speed``
+without a moving obstacle) is refused when it is loaded.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from common.errors import FretcError, Where
+
+from .scenarios import DRUM_RADIUS, SCENARIOS, Scenario
+from .world import Barrel
+
+__all__ = ["PARAMETERS", "Space", "SpaceError", "load_space", "apply"]
+
+#: parameter -> (unit, what it changes)
+PARAMETERS: dict[str, tuple[str, str]] = {
+    "interceptor_delay": ("s", "the interceptor acts on each /gwendolen_control message this "
+                               "late (the interceptor delay fault)"),
+    "stop_delay": ("s", "every /gwendolen_control decision of the SIF is published this late"),
+    "dropout_start": ("s", "no /scan from this sim time on (lidar dropout)"),
+    "dropout_duration": ("s", "for this long (needs dropout_start)"),
+    "obstacle_x": ("m", "an unmapped drum (r = 0.15 m) at x in the map frame (needs "
+                        "obstacle_y)"),
+    "obstacle_y": ("m", "... and at y (needs obstacle_x)"),
+    "obstacle_speed": ("m/s", "the walking speed of the scenario's moving obstacles"),
+    "obstacle_start": ("s", "the sim time the moving obstacles start walking"),
+    "lidar_sigma": ("m", "the LiDAR's range noise (standard deviation)"),
+}
+
+_NEEDS = {"obstacle_x": "obstacle_y", "obstacle_y": "obstacle_x",
+          "dropout_duration": "dropout_start"}
+
+
+class SpaceError(FretcError):
+    """A space file fretc cannot use (its message names ``file:line``)."""
+
+
+@dataclass(frozen=True)
+class Space:
+    """A parameter space: ``scenario`` (the base :class:`~sim.scenarios.Scenario`), the
+    simulator's ``seed``, and ``parameters``: ``(name, low, high)`` in file order."""
+
+    path: str
+    scenario: Scenario
+    seed: int
+    parameters: tuple[tuple[str, float, float], ...]
+
+    @property
+    def names(self) -> list[str]:
+        """The parameter names, in file order."""
+        return [p[0] for p in self.parameters]
+
+    def point(self, unit: list[float]) -> dict[str, float]:
+        """The parameter values of a point of the unit cube (one coordinate in ``[0, 1]``
+        per parameter, clipped), rounded to 1 ms / 1 mm / 1e-6."""
+        out = {}
+        for (name, lo, hi), u in zip(self.parameters, unit):
+            u = min(max(float(u), 0.0), 1.0)
+            out[name] = round(lo + u * (hi - lo), 6)
+        return out
+
+
+def _line_of(text: str, key: str) -> int | None:
+    for i, line in enumerate(text.splitlines(), 1):
+        if re.match(rf"\s*{re.escape(key)}\s*=", line):
+            return i
+    return None
+
+
+def load_space(path: str | Path) -> Space:
+    """Read a space file.
+
+    Raises:
+        SpaceError: unreadable or invalid TOML, an unknown scenario or parameter, a range
+            that is not ``[low, high]`` of finite numbers with ``low <= high``, a parameter
+            without its partner (``obstacle_x`` without ``obstacle_y``), or one the base
+            scenario cannot take; the message names ``file:line``.
+    """
+    p = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+        doc = tomllib.loads(text)
+    except OSError as exc:
+        raise SpaceError(f"{p}: cannot read the space file: {exc.strerror or exc}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        m = re.search(r"line (\d+), column (\d+)", str(exc))
+        where = f"{p}:{m.group(1)}:{m.group(2)}" if m else p
+        raise SpaceError(f"{where}: not a TOML file: {exc}",
+                         where=Where(p, *(int(g) for g in m.groups())) if m else None) from None
+
+    def fail(key: str, msg: str):
+        line = _line_of(text, key)
+        raise SpaceError(f"{p}:{line}: {msg}" if line else f"{p}: {msg}",
+                         where=Where(p, line))
+
+    unknown = sorted(set(doc) - {"scenario", "seed", "max_time", "parameters"})
+    if unknown:
+        fail(unknown[0], f"unknown key {unknown[0]!r}; known: scenario, seed, max_time, "
+                         "[parameters]")
+    name = doc.get("scenario")
+    if name not in SCENARIOS:
+        fail("scenario", f"scenario {name!r} is not one of {', '.join(SCENARIOS)}")
+    sc = SCENARIOS[name]
+    seed = doc.get("seed", 1)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        fail("seed", "seed must be an integer >= 0")
+    if "max_time" in doc:
+        mt = doc["max_time"]
+        if not isinstance(mt, (int, float)) or isinstance(mt, bool) or not mt > 0:
+            fail("max_time", "max_time must be a number of seconds > 0")
+        sc = replace(sc, max_time=float(mt))
+    params = doc.get("parameters")
+    if not isinstance(params, dict) or not params:
+        fail("[parameters]", "the space needs a [parameters] table with at least one "
+                             "parameter")
+    out = []
+    for key, rng in params.items():
+        if key not in PARAMETERS:
+            fail(key, f"unknown parameter {key!r}; known: {', '.join(PARAMETERS)}")
+        if (not isinstance(rng, list) or len(rng) != 2
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                           and math.isfinite(x) for x in rng) or rng[0] > rng[1]):
+            fail(key, f"{key} must be [low, high] with finite numbers, low <= high "
+                      f"({PARAMETERS[key][0]})")
+        if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
+            fail(key, f"{key} cannot be negative")
+        if key == "obstacle_speed" and not rng[0] > 0:
+            fail(key, "obstacle_speed must be > 0 m/s")
+        if key in _NEEDS and _NEEDS[key] not in params and not (
+                key == "dropout_duration" and sc.dropout_start is not None):
+            fail(key, f"{key} needs {_NEEDS[key]} too")
+        if key.startswith("obstacle_s") and not sc.movers:
+            fail(key, f"{key}: scenario {name!r} has no moving obstacle")
+        out.append((key, float(rng[0]), float(rng[1])))
+    return Space(p, sc, seed, tuple(out))
+
+
+def apply(scenario: Scenario, values: dict[str, float]) -> Scenario:
+    """``scenario`` with the parameter ``values`` (name -> value, :data:`PARAMETERS`)."""
+    changes: dict = {}
+    for key in ("interceptor_delay", "stop_delay", "dropout_start", "dropout_duration",
+                "lidar_sigma"):
+        if key in values:
+            changes[key] = float(values[key])
+    if "obstacle_x" in values:
+        changes["barrels"] = scenario.barrels + (
+            Barrel(values["obstacle_x"], values["obstacle_y"], DRUM_RADIUS, "obstacle"),)
+    if "obstacle_speed" in values or "obstacle_start" in values:
+        changes["movers"] = tuple(
+            replace(m, speed=values.get("obstacle_speed", m.speed),
+                    t_start=values.get("obstacle_start", m.t_start))
+            for m in scenario.movers)
+    if changes.get("dropout_start") is not None and "dropout_duration" not in changes:
+        changes["dropout_duration"] = scenario.dropout_duration
+    return replace(scenario, **changes)

@@ -1,0 +1,187 @@
+"""monitors.engines.robustness: the pt formula's space robustness equals a brute-force
+evaluation of the quantitative semantics' definitions (windows and since as max/min over
+every earlier tick, no recurrence, no numpy; comparisons' truth and terms from the reference
+evaluator compiler.evaluate) on random traces, for every FRET template key; its sign is the
+judge's verdict (interval semantics) and the pt verdict at every tick."""
+
+from __future__ import annotations
+
+import math
+import random
+from functools import lru_cache
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from compiler import evaluate
+from fretish import ast as A
+from monitors.engines.judge import judge
+from monitors.engines.robustness import TINY, robustness, robustness_series
+from monitors.engines.vectorized import pt_series
+
+from _monitor_helpers import KEYS, compiled, samples
+
+INF = math.inf
+
+# numeric responses and conditions (every comparison operator), and boolean ones
+_X = A.Var("x")
+
+
+def _cmp(op, value):
+    return A.Binary(op, _X, A.NumLit(str(value)))
+
+
+RESPONSES = [
+    _cmp(">", 2),
+    A.Binary("|", A.Var("r"), _cmp("<=", 1)),
+    A.Unary("!", _cmp("<", 1)),
+    A.Binary("&", _cmp("!=", 3), _cmp(">=", 0.5)),
+    A.Binary("->", A.Var("r"), _cmp("=", 2)),
+    A.Binary("xor", A.Var("r"), _cmp("<", 4)),
+    A.Var("r"),
+]
+CONDITIONS = [_cmp(">=", 2), A.Binary("&", A.Var("c"), _cmp("<=", 3)), A.Var("c"),
+              A.Binary("<->", A.Var("c"), _cmp(">", 1))]
+
+
+def _requirement(scope, cond, timing, i):
+    sc = A.Scope(scope, A.Binary("<", A.Var("y"), A.NumLit("2")) if scope != "null" else None)
+    cd = A.Condition(cond, CONDITIONS[i % len(CONDITIONS)] if cond != "null" else None)
+    n = i % 4
+    tm = A.Timing(timing,
+                  duration=A.Duration(str(n), "ticks") if timing in A.DURATION_TIMINGS else None,
+                  stop=A.Var("s") if timing in A.STOP_TIMINGS else None)
+    text = f"<{scope},{cond},{timing}> #{i}"
+    return A.Requirement(text, scope=sc, condition=cd, component="sw", timing=tm,
+                         response=RESPONSES[i % len(RESPONSES)])
+
+
+@pytest.fixture(scope="module")
+def all_keys():
+    """One compiled requirement per template key whose pt formula is evaluable."""
+    return [compiled(_requirement(s, c, t, i), rid=f"K{i}")
+            for i, (s, c, t) in enumerate(KEYS)]
+
+
+def _trace(rnd: random.Random, n: int) -> dict:
+    values = [0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 2.25, -1.0, math.nan]
+    cols = {v: np.array([rnd.random() < 0.5 for _ in range(n)], dtype=np.bool_)
+            for v in ("m", "c", "r", "s")}
+    for v in ("x", "y"):
+        cols[v] = np.array([rnd.choice(values) for _ in range(n)])
+    return cols
+
+
+# ---------------------------------------------------------------- the brute-force reference
+def _neg(v: float) -> float:
+    return -TINY if v == 0 else -v
+
+
+class BruteForce:
+    """rho(node, i) straight from the definitions (module docstring of
+    monitors.engines.robustness), one tick at a time."""
+
+    def __init__(self, cols: dict, n: int):
+        self.trace = samples(cols, n)
+        self.n = n
+        self.rho = lru_cache(maxsize=None)(self._rho)
+
+    def _truth(self, node, i):
+        return bool(evaluate.series(node, self.trace)[i])
+
+    def _rho(self, node, i):  # noqa: C901 - one case per operator, as the definition
+        op, a = node.op, node.args
+        if op == "cmp":
+            x = float(evaluate.series(a[0], self.trace)[i])
+            y = float(evaluate.series(a[1], self.trace)[i])
+            d = {"<": y - x, "<=": y - x, ">": x - y, ">=": x - y,
+                 "=": -abs(x - y), "!=": abs(x - y)}[node.name]
+            truth = self._truth(node, i)
+            if truth and not d >= 0:
+                return 0.0
+            if not truth and not d < 0:
+                return -TINY
+            return d
+        if op == "!":
+            return _neg(self.rho(a[0], i))
+        if op in ("&", "|"):
+            f = min if op == "&" else max
+            return f(self.rho(a[0], i), self.rho(a[1], i))
+        if op == "->":
+            return max(_neg(self.rho(a[0], i)), self.rho(a[1], i))
+        if op in ("<->", "xor"):
+            p, q = self.rho(a[0], i), self.rho(a[1], i)
+            iff = min(max(_neg(p), q), max(p, _neg(q)))
+            return iff if op == "<->" else _neg(iff)
+        if op in ("Y", "Z"):
+            if i == 0:
+                return -INF if op == "Y" else INF
+            return self.rho(a[0], i - 1)
+        if op in ("O", "H"):
+            lo, hi = (node.lo or 0, node.hi) if node.hi is not None else (0, i)
+            window = [self.rho(a[0], j) for j in range(max(0, i - hi), i - lo + 1)]
+            if op == "O":
+                return max(window, default=-INF)
+            return min(window, default=INF)
+        if op == "S":  # max over j of min(b[j], a over (j, i])
+            return max(min([self.rho(a[1], j)] + [self.rho(a[0], k) for k in range(j + 1, i + 1)])
+                       for j in range(i + 1))
+        if op == "T":  # min over j of max(b[j], a over (j, i])
+            return min(max([self.rho(a[1], j)] + [self.rho(a[0], k) for k in range(j + 1, i + 1)])
+                       for j in range(i + 1))
+        if op == "ite":
+            c = self.rho(a[0], i)
+            return max(min(c, self.rho(a[1], i)), min(_neg(c), self.rho(a[2], i)))
+        return INF if self._truth(node, i) else -INF
+
+
+def _check(comp, cols, n):
+    f = comp.formalization
+    rob = robustness(f.pt, cols, n)
+    ref = BruteForce(cols, n).rho(f.pt, n - 1)
+    assert rob.value == ref, comp.text
+    assert rob.margin[rob.tick] == rob.value
+    assert not (rob.margin[:rob.tick] == rob.value).any()
+    # the sign is the verdict: of the judge (interval semantics), and of pt at every tick
+    j = judge(comp.requirement, f, cols, n)
+    assert (rob.value >= 0) == j.holds, comp.text
+    assert j.robustness is not None and j.robustness.value == rob.value
+    signs = (robustness_series(f.pt, cols, n) >= 0).tolist()
+    assert signs == pt_series(f.pt, cols, n).tolist(), comp.text
+
+
+def test_every_template_key_against_brute_force(all_keys):
+    rnd = random.Random(29)
+    for comp in all_keys:
+        for _ in range(3):
+            n = rnd.randint(1, 9)
+            _check(comp, _trace(rnd, n), n)
+
+
+@settings(max_examples=120, deadline=None)
+@given(st.integers(0, len(KEYS) - 1), st.integers(1, 12), st.randoms(use_true_random=False))
+def test_random_keys_and_traces_against_brute_force(all_keys, index, n, rnd):
+    _check(all_keys[index], _trace(rnd, n), n)
+
+
+def test_numeric_margin_is_the_distance_to_the_threshold():
+    """``always x <= 0.5``: the least margin, where it first occurs; a strict comparison at
+    its threshold is violated at distance 0 (-TINY), a non-strict one satisfied (0.0)."""
+    from _monitor_helpers import entry
+    from compiler.build import compile_entry
+
+    def value(text, xs):
+        c = compile_entry(entry("R", text))
+        cols = {"x": np.array(xs, dtype=float)}
+        r = robustness(c.formalization.pt, cols, len(xs))
+        return r.value, r.tick
+
+    assert value("the sw shall always satisfy x <= 0.5", [0.125, 0.25, 0.375, 0.375]) == (0.125, 2)
+    assert value("the sw shall always satisfy x <= 0.5", [0.1, 0.75, 0.2]) == (-0.25, 1)
+    assert value("the sw shall always satisfy x <= 0.5", [0.5, 0.1]) == (0.0, 0)
+    assert value("the sw shall always satisfy x < 0.5", [0.1, 0.5]) == (-TINY, 1)
+    # a vacuous requirement: the margin by which the condition never held
+    assert value("whenever x > 3 the sw shall immediately satisfy x > 10",
+                 [1.0, 2.5, 2.0])[0] == pytest.approx(0.5)
