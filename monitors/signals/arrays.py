@@ -111,6 +111,15 @@ class FieldColumns:
         self.cache[key] = out
         return out
 
+    @property
+    def tf(self) -> Any:
+        """``tf()`` needs every message of /tf and /tf_static, not the held ones.
+
+        Raises:
+            _Fallback: always (the values come from the streaming path).
+        """
+        raise _Fallback("tf() reads every message of /tf and /tf_static")
+
     def age(self, topic: str) -> np.ndarray:
         """``age(topic)`` at each tick: seconds since the held message (float64)."""
         held = self.topic_times[topic][self.idx[topic]]
