@@ -165,6 +165,20 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
     return keep
 
 
+def _select(items: list, many: bool, kind: str, fn: Any, text: str) -> tuple[list, bool]:
+    """One slice or filter of a path: on an array (or on each array of ``items``, their
+    items joined) a slice takes items and a filter keeps those it accepts; a filter right
+    after a slice filters the items the slice took."""
+    arrays = all(isinstance(x, (list, tuple, np.ndarray)) for x in items)
+    if kind == "slice" or not many or arrays:
+        if not arrays:
+            raise FieldAccessError(f"{text}: only arrays can be sliced or filtered")
+        if kind == "slice":
+            return [x for it in items for x in list(it)[fn]], True
+        items = [x for it in items for x in it]
+    return [x for x in items if fn(x)], True
+
+
 def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
     """Extractor of a path with a slice or a filter before its end (Foxglove's message path
     semantics): from the first of them on, each step applies to every item, a slice or a
@@ -187,11 +201,7 @@ def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
                 if kind == "step":
                     items = [fn(x) for x in items]
                     continue
-                if not many:
-                    if not isinstance(items[0], (list, tuple, np.ndarray)):
-                        raise FieldAccessError(f"{text}: only arrays can be sliced or filtered")
-                    items, many = list(items[0]), True
-                items = items[fn] if kind == "slice" else [x for x in items if fn(x)]
+                items, many = _select(items, many, kind, fn, text)
         except AttributeError as exc:
             raise FieldAccessError(f"{text}: an item has no field {exc.name!r}") from None
         except IndexError:

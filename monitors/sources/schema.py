@@ -124,11 +124,12 @@ class TopicSchema:
         for p in path:
             kind = type(p).__name__
             if kind in ("Slice", "Filter"):
-                if not many:
-                    if cur.kind != "array":
-                        raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it "
-                                             f"cannot be {'sliced' if kind == 'Slice' else 'filtered'}", [], None)
+                if cur.kind == "array":  # its items (a filter right after a slice: the same)
                     cur, many = cur.item, True
+                elif kind == "Slice" or not many:
+                    how = "sliced" if kind == "Slice" else "filtered"
+                    raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it "
+                                         f"cannot be {how}", [], None)
                 walked += p.text()
                 if kind == "Filter":
                     self._check_filter(cur, p, walked)
