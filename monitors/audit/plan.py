@@ -160,8 +160,9 @@ def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bin
             rp.error = (f"{e.source}:{e.line}: {e.id} has a duration in time units but "
                         f"the bindings ({bindings.source}) tick once per "
                         f"{bindings.tick.topic} message, whose rate is not declared: add "
-                        f"nominal_rate = \"10 Hz\" (the topic's rate) to [tick]; the "
-                        "audit checks it against the log")
+                        "the topic's rate as nominal_rate to [tick] (fretc inspect prints "
+                        "it); the audit checks it against the log")
+            rp.rate_topic = bindings.tick.topic
     return e
 
 
