@@ -13,6 +13,8 @@ Binding files that select their logs (``[logs]``) give one plan per file
 
 from __future__ import annotations
 
+import re
+
 import dataclasses
 import types
 from fractions import Fraction
@@ -234,8 +236,13 @@ def _unused_bindings(bindings: Bindings | None, plans: list[RequirementPlan]) ->
     warnings = []
     if bindings is not None:
         used = used_variables(plans)
+        # a requirement that failed before its variables were known (a syntax error) may
+        # use any name of its text: never call those unused
+        failed = " ".join(rp.text for rp in plans
+                          if rp.error is not None and not rp.variables)
+        words = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", failed))
         for name, b in bindings.variables.items():
-            if name not in used:
+            if name not in used and name not in words:
                 at = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
                 warnings.append(f"{at}: {name!r} is bound but no requirement uses it")
     return warnings

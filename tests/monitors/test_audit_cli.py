@@ -183,3 +183,25 @@ def test_numbers_behind_a_violated_boolean_are_shown(tmp_path):
         held = [v for t, v in scans if t <= row["time_ns"]][-1]
         assert row["value"] == pytest.approx(held)
         assert flags[row["tick"]] == (held < 0.9)
+
+
+def test_abs_in_a_requirement_hints_fret_spelling_and_its_variable_is_not_unused(tmp_path):
+    """Issue 25: ``abs(...)`` in a requirement: a hint that FRET spells it absReal/absInt,
+    and the variable inside is not reported unused (its requirement failed to parse)."""
+    log = _synthetic(tmp_path)
+    (tmp_path / "syn.bindings.toml").unlink()
+    fret = tmp_path / "a.fret"
+    for text, hint in [("abs(speed) < 0.4", "absReal/absInt"),
+                       ("fabs(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)"),
+                       ("ABS(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)")]:
+        fret.write_text(f"A1: the bot shall always satisfy {text}\n")
+        res = run("-r", fret, log, "--tick-period", "100 ms", "--bind", "speed=/cmd.linear.x")
+        out = " ".join(res.output.split())
+        assert res.exit_code == 2 and hint in out, out
+        assert "no requirement uses it" not in out
+        assert "bindings (None)" not in out
+    # a variable that no requirement names is still reported
+    fret.write_text("A1: the bot shall always satisfy abs(speed) < 0.4\n")
+    res = run("-r", fret, log, "--tick-period", "100 ms", "--bind", "speed=/cmd.linear.x",
+              "--bind", "other=/cmd.linear.x")
+    assert "'other' is bound but no requirement uses it" in res.output
