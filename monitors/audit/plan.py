@@ -68,7 +68,8 @@ def load_plan(config: AuditConfig) -> AuditPlan:
 def _build_plan(config: AuditConfig) -> AuditPlan:
     """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection)."""
     bindings, binding_files = load_audit_bindings(config)
-    entries = _read_requirements(config)
+    notes: list[str] = []
+    entries = _read_requirements(config, notes)
     period, nominal = _bindings_periods(bindings)
     plans: list[RequirementPlan] = []
     to_compile = []
@@ -103,14 +104,14 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
         raise AuditInputError(f"only free-form requirements in {', '.join(config.requirements)}"
                               ": nothing to audit")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
-                     freeform, _unused_bindings(bindings, plans))
+                     freeform, notes + _unused_bindings(bindings, plans))
 
 
-def _read_requirements(config: AuditConfig) -> list:
+def _read_requirements(config: AuditConfig, skipped: list[str]) -> list:
     """The requirement entries of ``config.requirements``
-    (:func:`fretish.files.load_requirements`)."""
+    (:func:`fretish.files.load_requirements`; notes of skipped files into ``skipped``)."""
     try:
-        entries = load_requirements([Path(p) for p in config.requirements])
+        entries = load_requirements([Path(p) for p in config.requirements], skipped)
     except FretishError as exc:
         raise AuditInputError(str(exc)) from None
     except OSError as exc:
