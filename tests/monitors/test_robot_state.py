@@ -110,6 +110,8 @@ def test_verdicts_equal_an_independent_computation(tmp_path, robot_log):
         assert v["verdict"] == ("satisfied" if first is None else "violated"), (rid, v)
         if first is not None:
             assert v["first_violation"]["tick_time_ns"] == first, rid
+            # one time per event: the terminal gives the JSON's tick time
+            assert f"VIOLATED {v['first_violation']['tick_time_s']:.3f} s" in res.output
 
 
 def test_mode_scope_on_text_judges_only_the_charging_ticks(tmp_path, robot_log):
