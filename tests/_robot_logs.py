@@ -1,5 +1,5 @@
 """A small robot log written with rosbags' writers, holding what real robots log and
-bindings must reach (issue 25): text (std_msgs/String ``/mode``), an enum
+bindings must reach : text (std_msgs/String ``/mode``), an enum
 (BatteryState's ``power_supply_status``), topics named ``groundtruth`` and ``ORB-SLAM``, a
 TF tree on ``/tf`` (two publishers: ``odom -> base_link`` at 20 Hz, ``map -> odom`` at
 2 Hz) and ``/tf_static`` (``base_link -> laser``), a JointState whose joint order changes

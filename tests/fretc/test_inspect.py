@@ -53,7 +53,7 @@ def test_inspect_text_output_and_bad_file(tmp_path, shared):
 
 
 def test_every_path_inspect_prints_binds_as_printed(tmp_path):
-    """Issue 25: quoted topics (``"ORB-SLAM".pose...``), ``[:]`` for items; each printed
+    """quoted topics (``"ORB-SLAM".pose...``), ``[:]`` for items; each printed
     path parses as a binding field and resolves in the log's schema; text fields list their
     values, enum fields their constants, numbers are in plain notation."""
     import _robot_logs as rl

@@ -186,7 +186,7 @@ def test_numbers_behind_a_violated_boolean_are_shown(tmp_path):
 
 
 def test_abs_in_a_requirement_hints_fret_spelling_and_its_variable_is_not_unused(tmp_path):
-    """Issue 25: ``abs(...)`` in a requirement: a hint that FRET spells it absReal/absInt,
+    """``abs(...)`` in a requirement: a hint that FRET spells it absReal/absInt,
     and the variable inside is not reported unused (its requirement failed to parse)."""
     log = _synthetic(tmp_path)
     (tmp_path / "syn.bindings.toml").unlink()
@@ -208,7 +208,7 @@ def test_abs_in_a_requirement_hints_fret_spelling_and_its_variable_is_not_unused
 
 
 def test_r_dir_reads_fret_exports_by_content_and_skips_other_json(tmp_path):
-    """Issue 25: ``--json audit.json`` written into the requirements folder broke the next
+    """Before, ``--json audit.json`` written into the requirements folder broke the next
     ``-r DIR`` run (exit 2, nothing audited): a JSON file is read as requirements only when
     it is a FRET export by its content; others are skipped with a note."""
     log = _synthetic(tmp_path)

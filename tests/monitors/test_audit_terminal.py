@@ -68,7 +68,7 @@ def _speed_log(tmp_path, value):
 
 
 def test_a_value_beside_its_threshold_shows_which_side_it_is_on(tmp_path):
-    """Issue 25: the terminal showed ``1`` for a speed of 1.000158 at the violation of
+    """Before, the terminal showed ``1`` for a speed of 1.000158 at the violation of
     ``speed <= 1.0``; every value shown reads back as the value sampled."""
     import json
     log = _speed_log(tmp_path, 1.000158)

@@ -91,7 +91,7 @@ def test_the_transformer_builds_one_node_per_rule():
 
 def test_a_slice_before_a_field_reads_the_field_of_each_item():
     """Foxglove's message path syntax: after a slice the rest of the path applies to each
-    item (issue 25; a slice had to be last before)."""
+    item (a slice had to be last before)."""
     from types import SimpleNamespace as NS
     b = compile_expression("v", "1 + min(/a.b[0:2].c)", source="f.toml", line=4, col=5)
     st = EvalState()

@@ -1,4 +1,4 @@
-"""Bindings that reach what robots log (issue 25), end to end: ``fretc audit`` of a log
+"""Bindings that reach what robots log, end to end: ``fretc audit`` of a log
 written with rosbags' writers (tests/_robot_logs.py) with a FRET mode scope bound to a text
 topic, a quoted topic name, a TF pose, a joint by name and a diagnostic by name; each
 verdict and first violation compared with the test's own computation from the values it

@@ -77,7 +77,7 @@ def test_a_declared_nominal_rate_converts_and_a_wrong_one_warns(tmp_path):
 
 
 def test_the_nominal_rate_hint_gives_the_measured_rate(tmp_path):
-    """Issue 25: the hint said "10 Hz" for a topic measured at 50 Hz."""
+    """Before, the hint said "10 Hz" for a topic measured at 50 Hz."""
     from _logs import MS, float64, write_mcap
     log = write_mcap(tmp_path / "fast.mcap", [("/fast", "std_msgs/msg/Float64", k * 20 * MS,
                                                float64(k % 7)) for k in range(101)])

@@ -107,7 +107,7 @@ def test_under_the_header_time_base_the_violation_is_drawn_at_its_tick_time():
         return {e.get("data-ns") for e in root.iter() if e.get("data-mark") == "violation"}
 
     assert violation_marks(v) == {str(start + 43 * P)}
-    # log time base: the tick's time too (issue 25: one time per event everywhere)
+    # log time base: the tick's time too (one time per event everywhere)
     v["first_violation"]["tick_time_base"] = "log"
     assert violation_marks(v) == {str(start + 43 * P)}
 
@@ -122,7 +122,7 @@ def _marks(v, log, P):
 
 
 def test_markers_keep_the_order_of_their_ticks_and_the_label_gives_the_tick_time():
-    """Issue 25: the violation was drawn at 29.775 s (its deciding message) before its
+    """Before, the violation was drawn at 29.775 s (its deciding message) before its
     trigger at 29.800 s, and labelled 6.900 s where the terminal said 6.903 s."""
     from common.units import format_offset
     v, log = _verdict()
@@ -139,7 +139,7 @@ def test_markers_keep_the_order_of_their_ticks_and_the_label_gives_the_tick_time
 
 
 def test_the_footer_states_the_origin_as_what_it_is():
-    """Issue 25: the footer said "since the log's first tick" but measured from the log's
+    """Before, the footer said "since the log's first tick" but measured from the log's
     start (its first message)."""
     v, log = _verdict()
     _, text = _marks(v, log, 100 * MS)
