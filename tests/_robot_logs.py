@@ -1,5 +1,5 @@
 """A small robot log written with rosbags' writers, holding what real robots log and
-bindings must reach : text (std_msgs/String ``/mode``), an enum
+bindings must reach: text (std_msgs/String ``/mode``), an enum
 (BatteryState's ``power_supply_status``), topics named ``groundtruth`` and ``ORB-SLAM``, a
 TF tree on ``/tf`` (two publishers: ``odom -> base_link`` at 20 Hz, ``map -> odom`` at
 2 Hz) and ``/tf_static`` (``base_link -> laser``), a JointState whose joint order changes
@@ -278,3 +278,28 @@ def first_false(log: RobotLog, topics: list[str], holds: Callable[[int], bool]) 
         if not holds(t):
             return t
     return None
+
+
+def pose_in_map(log: RobotLog, t: int) -> tuple[float, float, float]:
+    """base_link in map at ``t`` (x, y in m, yaw in rad, not wrapped) from the newest edges
+    written at or before ``t``: an independent 2-D composition with complex numbers."""
+    edges = {}
+    for tm, es in log.data["/tf"]:
+        if tm > t:
+            break
+        for parent, child, v in es:
+            edges[(parent, child)] = v
+    mx, my, myaw = edges[("map", "odom")]
+    ox, oy, oyaw = edges[("odom", "base_link")]
+    p = complex(mx, my) + complex(ox, oy) * complex(math.cos(myaw), math.sin(myaw))
+    return p.real, p.imag, myaw + oyaw
+
+
+def tf_age(log: RobotLog, t: int) -> float:
+    """Seconds since the older of the newest map -> odom and odom -> base_link edges."""
+    newest = {}
+    for tm, es in log.data["/tf"]:
+        if tm <= t:
+            for p, c, _ in es:
+                newest[(p, c)] = tm
+    return (t - min(newest.values())) / S

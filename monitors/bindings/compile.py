@@ -155,6 +155,9 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
         if type(a) in PY_TYPES and type(b) in PY_TYPES:
             return pyfn(a, b)
         if text_ok and (type(a) is str or type(b) is str):
+            if isinstance(a, list) or isinstance(b, list):  # an array of strings, item-wise
+                items, one = (a, b) if isinstance(a, list) else (b, a)
+                return Valid(np.array([pyfn(x, one) for x in items], dtype=np.bool_), None)
             return pyfn(a, b)  # text equality (types checked: both are strings)
         try:
             return ops.lift2(npfn, a, b, numeric)

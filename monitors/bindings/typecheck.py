@@ -3,7 +3,7 @@ read: a field the schema does not declare, a string in arithmetic or a boolean u
 number is an error naming the binding file:line:col, the variable, the topic and the field.
 
 Types are strings: ``"bool"``, ``"number"``, ``"array_bool"``, ``"array_number"``,
-``"array_other"`` (messages or strings), ``"string"``, ``"message"``, and ``"any"`` when the
+``"array_string"``, ``"array_other"`` (messages), ``"string"``, ``"message"``, and ``"any"`` when the
 topic's schema is unknown (then nothing is checked).
 """
 
@@ -21,7 +21,7 @@ _NUMS = ("number", "array_number")
 _ARRAYS = ("array_bool", "array_number")
 _WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of booleans",
           "array_number": "an array of numbers", "string": "a string", "message": "a message",
-          "array_other": "an array of messages or strings"}
+          "array_string": "an array of strings", "array_other": "an array of messages"}
 
 
 def check_types(binding: Binding, schemas: dict) -> str:
@@ -133,8 +133,8 @@ class _TypeChecker:
             if isinstance(p, Filter) and isinstance(p.value, Named):
                 self.resolve_named(p.value, node, node.path[:i])
         if ft.kind == "array":
-            return {"bool": "array_bool", "number": "array_number"}.get(ft.item.kind,
-                                                                       "array_other")
+            return {"bool": "array_bool", "number": "array_number",
+                    "string": "array_string"}.get(ft.item.kind, "array_other")
         return {"bool": "bool", "number": "number", "string": "string",
                 "message": "message"}.get(ft.kind, "any")
 
@@ -169,12 +169,12 @@ class _TypeChecker:
                 self.type(f)  # the field exists
                 self.resolve_named(side, f, f.path[:-1])
         a, b = self.type(node.left), self.type(node.right)
-        if node.op in ("=", "!=") and "string" in (a, b):
-            if {a, b} - {"string", "any"}:
+        if node.op in ("=", "!=") and {a, b} & {"string", "array_string"}:
+            if {a, b} - {"string", "array_string", "any"} or a == b == "array_string":
                 raise self.where.error(
                     f"type error: {node.op!r} compares a string with something else "
                     f"({_describe(node.left, a)}; {_describe(node.right, b)})", node.col)
-            return "bool"
+            return "array_bool" if "array_string" in (a, b) else "bool"
         arr = "array" in a or "array" in b
         op = node.op
         if op in ("+", "-", "*", "/"):
@@ -206,7 +206,7 @@ class _TypeChecker:
             values, names = self.type(node.args[0]), self.type(node.args[2])
             self.need(node.args[0], values, _ARRAYS, "joint() picks from an array of numbers",
                       node)
-            if names not in ("any", "array_other"):
+            if names not in ("any", "array_string"):
                 raise self.where.error(f"type error: joint() needs a name array of strings "
                                        f"beside its array, but {_describe(node.args[2], names)}",
                                        node.col)
@@ -216,7 +216,8 @@ class _TypeChecker:
             if f in ("any", "all", "count"):
                 self.need(a, t, _ARRAYS, f"{f}() takes an array", node)
             elif f == "len":
-                if t not in ("any", "array_bool", "array_number", "array_other"):
+                if t not in ("any", "array_bool", "array_number", "array_string",
+                             "array_other"):
                     self.need(a, t, ("array_number",), "len() takes an array", node)
             else:
                 self.need(a, t, _NUMS, f"{f}() takes numbers", node)

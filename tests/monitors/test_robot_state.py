@@ -41,21 +41,6 @@ battery_error = 'max(/diagnostics.status[:]{name=="battery"}.level) >= ERROR'
 """
 
 
-def _pose_in_map(log: rl.RobotLog, t: int) -> tuple[float, float, float]:
-    """base_link in map at ``t`` from the newest edges written (complex numbers: an
-    independent 2-D composition)."""
-    edges = {}
-    for tm, es in log.data["/tf"]:
-        if tm > t:
-            break
-        for parent, child, v in es:
-            edges[(parent, child)] = v
-    mx, my, myaw = edges[("map", "odom")]
-    ox, oy, oyaw = edges[("odom", "base_link")]
-    p = complex(mx, my) + complex(ox, oy) * complex(math.cos(myaw), math.sin(myaw))
-    return p.real, p.imag, myaw + oyaw
-
-
 def _expected(log: rl.RobotLog) -> dict[str, int | None]:
     """Requirement -> the time (ns) of its first violation, None when satisfied."""
     h = rl.held
@@ -75,7 +60,7 @@ def _expected(log: rl.RobotLog) -> dict[str, int | None]:
     tf = ["/tf", "/tf_static"]
     return {"M1": rl.first_false(log, ["/mode", "/battery"], m1),
             "S1": rl.first_false(log, ["ORB-SLAM", "groundtruth"], s1),
-            "T1": rl.first_false(log, tf, lambda t: _pose_in_map(log, t)[0] < 3.0),
+            "T1": rl.first_false(log, tf, lambda t: rl.pose_in_map(log, t)[0] < 3.0),
             "T2": None,
             "J1": rl.first_false(log, ["/joint_states"], j1),
             "D1": rl.first_false(log, ["/diagnostics"], d1)}
@@ -133,7 +118,7 @@ def test_tf_values_equal_an_independent_composition(robot_log):
                       TickSpec(period_ns=100 * rl.MS))
     n = 0
     for tick in sample(open_log(str(robot_log.path)), b):
-        x, y, yaw = _pose_in_map(robot_log, tick.time)
+        x, y, yaw = rl.pose_in_map(robot_log, tick.time)
         v = tick.values
         assert v["x"] == pytest.approx(x, abs=1e-9) and v["y"] == pytest.approx(y, abs=1e-9)
         assert math.remainder(v["yaw"] - yaw, 2 * math.pi) == pytest.approx(0, abs=1e-9)
@@ -144,12 +129,7 @@ def test_tf_values_equal_an_independent_composition(robot_log):
         lx, ly, _ = rl.BASE_LASER
         assert v["laser"] == pytest.approx(ox + math.cos(oyaw) * lx - math.sin(oyaw) * ly,
                                            abs=1e-9)
-        newest = {}
-        for tm, es in robot_log.data["/tf"]:
-            if tm <= tick.time:
-                for p, c, _ in es:
-                    newest[(p, c)] = tm
-        assert v["age"] == pytest.approx((tick.time - min(newest.values())) / rl.S)
+        assert v["age"] == pytest.approx(rl.tf_age(robot_log, tick.time))
         n += 1
     assert n > 90
 
