@@ -93,8 +93,10 @@ def _named(node: Named, consts: dict[str, Any]) -> Evaluator:
         try:
             return consts[name]
         except KeyError:
-            raise EvalError(node, f"{name} is not a variable of this binding file, and no "
-                            "message definition of the log declares it as a constant") from None
+            raise EvalError(node, f"{name} is not a variable of this binding file, and its "
+                            "value as a named constant was not read from the log's schemas "
+                            "(fretc audit reads them before the audit; fretc watch does not: "
+                            "write the number)") from None
     return named
 
 

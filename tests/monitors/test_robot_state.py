@@ -159,3 +159,27 @@ def test_an_unknown_constant_names_the_ones_the_type_declares(tmp_path, robot_lo
     assert "CHARGING is not a variable of this binding file nor a constant of " \
            "sensor_msgs/msg/BatteryState" in got["E9"]["error"]
     assert "POWER_SUPPLY_STATUS_CHARGING" in got["E9"]["error"]
+
+
+def test_all_ticks_at_once_equal_the_streamed_ticks(robot_log):
+    """sample_arrays (numpy over all ticks; falls back to the stream for text, filters,
+    joints and TF) gives the values of sample() for every new form."""
+    import numpy as np
+    from monitors.bindings import parse_bindings
+    from monitors.signals import sample, sample_arrays
+    from monitors.sources import open_log
+    extra = ('names = \'count(/joint_states.name = "wheel_left_joint")\'\n'
+             'first_level = "/diagnostics.status[0].level"\n')
+    from monitors.bindings import check_types
+    from monitors.sources.schema import log_schemas
+    b = parse_bindings(BINDINGS + extra)
+    schemas = log_schemas(open_log(str(robot_log.path)))
+    for v in b.variables.values():  # named constants from the log's schemas, as the audit
+        check_types(v, schemas)
+    arrays = sample_arrays(open_log(str(robot_log.path)), b)
+    ticks = list(sample(open_log(str(robot_log.path)), b))
+    assert list(arrays.times) == [t.time for t in ticks]
+    for name in b.variables:
+        want = np.array([t.values[name] for t in ticks], dtype=np.float64)
+        assert np.array_equal(arrays.columns[name].astype(np.float64), want), name
+    assert set(arrays.columns["names"]) == {1.0}
