@@ -230,8 +230,10 @@ def _print(doc: dict) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list, one object per log.")
 def inspect_cmd(logs, as_json):
     """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
-    counts, rates, time span, and every field path in binding syntax with its type, array
-    lengths and numeric min/max - what a binding file can name (docs/bindings.md)."""
+    counts, rates, time span, and every field path in binding syntax, as it binds when pasted
+    (quoted topics, [:] for items), with its type, array lengths, numeric min/max, the values
+    of text fields and the constants of enum fields - what a binding file can name
+    (docs/bindings.md)."""
     from common.problems import FretcInputError  # lazy: as the readers
 
     docs: List[dict] = []
