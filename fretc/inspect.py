@@ -1,11 +1,16 @@
 """``fretc inspect LOG... [--json]``: what a log holds, to write its signal bindings.
 
 Per log: kind, time span, and per topic its message type, message count, mean rate, and
-every field path of the type in binding syntax (``/odom.twist.twist.linear.x``; items of a
-message array as ``[i]``) with its ROS type, for arrays the lengths seen, for numeric fields
-the minimum and maximum over the log (finite values; NaN and infinities counted apart) and
-for booleans how often each value occurs. Field types come from the schemas embedded in the
-log (:mod:`monitors.sources.schema`); values from one read of every message.
+every field path of the type in binding syntax, as it binds when pasted into a binding
+(``/odom.twist.twist.linear.x``; a topic that is not a plain ROS name quoted,
+``"ORB-SLAM".pose.position.x``; items of a message array as ``[:]``, Foxglove's slice of
+every item) with its ROS type, for arrays the lengths seen, for numeric fields the minimum
+and maximum over the log (finite values; NaN and infinities counted apart, printed in plain
+notation), for booleans how often each value occurs, for text fields their distinct values
+(up to :data:`MAX_VALUES`) and for fields with named constants in their message definition
+(``power_supply_status``: ``POWER_SUPPLY_STATUS_CHARGING = 1``, DiagnosticStatus ``level``:
+``OK`` .. ``STALE``) those constants. Field types come from the schemas embedded in the log
+(:mod:`monitors.sources.schema`); values from one read of every message.
 """
 
 from __future__ import annotations
@@ -17,14 +22,20 @@ from typing import Any, Dict, List
 
 import click
 
-__all__ = ["inspect_cmd", "inspect_log"]
+__all__ = ["inspect_cmd", "inspect_log", "MAX_VALUES", "plain"]
+
+#: Distinct values of a text field listed at most (more: "and more").
+MAX_VALUES = 40
 
 
 class _Stat:
-    __slots__ = ("type", "min", "max", "nonfinite", "lengths", "true", "false", "n")
+    __slots__ = ("type", "min", "max", "nonfinite", "lengths", "true", "false", "n", "texts",
+                 "constants")
 
-    def __init__(self, type_text: str) -> None:
+    def __init__(self, type_text: str, constants: dict | None = None) -> None:
         self.type = type_text
+        self.texts: set = set()
+        self.constants = constants or {}
         self.min = math.inf
         self.max = -math.inf
         self.nonfinite = 0
@@ -42,8 +53,20 @@ class _Stat:
             self.min = min(self.min, float(a[fin].min()))
             self.max = max(self.max, float(a[fin].max()))
 
+    def text(self, values) -> None:
+        for v in values:
+            if len(self.texts) > MAX_VALUES:
+                return
+            self.texts.add(str(v))
+
     def to_json(self) -> dict:
         out: Dict[str, Any] = {"type": self.type}
+        if self.texts:
+            out["values"] = sorted(self.texts)[:MAX_VALUES]
+            if len(self.texts) > MAX_VALUES:
+                out["more_values"] = True
+        if self.constants:
+            out["constants"] = dict(self.constants)
         if self.min <= self.max:
             out["min"], out["max"] = self.min, self.max
         if self.nonfinite:
@@ -55,13 +78,39 @@ class _Stat:
         return out
 
 
+def _field_constants(schema, typename: str, name: str, t) -> dict:
+    """The named constants of ``typename`` that belong to its field ``name``: those named
+    after the field (``POWER_SUPPLY_STATUS_*`` for ``power_supply_status``, ROS's habit), or,
+    when no constant is named after any field, those of the field's own ROS type
+    (DiagnosticStatus: ``byte OK = 0`` .. ``STALE`` for ``byte level``)."""
+    consts = _constants(schema, typename)
+    if not consts or t.kind not in ("number", "bool", "string"):
+        return {}
+    fields = [f for f, _ in schema.fields(typename)]
+    prefix = name.upper() + "_"
+    mine = {c: v for c, (ty, v) in consts.items() if c.startswith(prefix)}
+    if mine:
+        return mine
+    if any(c.startswith(f.upper() + "_") for c in consts for f in fields):
+        return {}
+    return {c: v for c, (ty, v) in consts.items() if ty == t.name}
+
+
+def _constants(schema, typename: str) -> dict:
+    try:
+        consts = schema.store.fielddefs[typename][0]
+    except (AttributeError, KeyError, TypeError):
+        return {}
+    return {c[0]: (c[1], c[2]) for c in consts}
+
+
 def _visit(schema, obj, typename: str, prefix: str, stats: Dict[str, _Stat]) -> None:
     for name, t in schema.fields(typename):
         path = f"{prefix}.{name}"
         v = getattr(obj, name, None)
         st = stats.get(path)
         if st is None:
-            st = stats[path] = _Stat(t.text())
+            st = stats[path] = _Stat(t.text(), _field_constants(schema, typename, name, t))
         if t.kind == "message":
             _visit(schema, v, t.name, path, stats)
         elif t.kind == "array":
@@ -69,15 +118,19 @@ def _visit(schema, obj, typename: str, prefix: str, stats: Dict[str, _Stat]) -> 
             st.lengths.add(n)
             if t.item.kind == "message":
                 for x in v:
-                    _visit(schema, x, t.item.name, f"{path}[i]", stats)
+                    _visit(schema, x, t.item.name, f"{path}[:]", stats)
             elif t.item.kind == "number":
                 st.numbers(v)
             elif t.item.kind == "bool":
                 k = sum(1 for x in v if x)
                 st.true += k
                 st.false += n - k
+            elif t.item.kind == "string":
+                st.text(v)
         elif t.kind == "number":
             st.numbers([v])
+        elif t.kind == "string":
+            st.text([v])
         elif t.kind == "bool":
             if v:
                 st.true += 1
@@ -92,6 +145,7 @@ def inspect_log(path: str) -> dict:
         common.problems.FretcInputError: the file is not a readable log.
     """
     # lazy: the log readers (mcap, rosbags) only when the command runs
+    from monitors.bindings.paths import topic_text
     from monitors.sources.schema import log_schemas
     from monitors.sources import open_log
 
@@ -108,10 +162,11 @@ def inspect_log(path: str) -> dict:
         last[m.topic] = m.log_time
         sch = schemas.get(m.topic)
         if sch is not None and source.kind != "csv":
-            _visit(sch, m.data, sch.typename, m.topic, stats[m.topic])
+            _visit(sch, m.data, sch.typename, topic_text(m.topic), stats[m.topic])
         elif source.kind == "csv":
             for c in source.columns:
-                st = stats[m.topic].setdefault(f"{m.topic}.{c}", _Stat(source.types.get(c, "")))
+                st = stats[m.topic].setdefault(f"{m.topic}.{c}",
+                                               _Stat(source.types.get(c, "")))
                 v = getattr(m.data, c)
                 if isinstance(v, bool):
                     st.true += v
@@ -133,8 +188,11 @@ def inspect_log(path: str) -> dict:
             "problems": [str(p) for p in source.problems], "topics": topics}
 
 
-def _num(x: float) -> str:
-    return f"{x:.6g}"
+def plain(x: float) -> str:
+    """A number in plain notation with the digits that tell it apart (``1432240000.25``,
+    ``0.000158``; never ``1.43224e+09``): the shortest text that reads back as ``x``."""
+    import numpy as np  # lazy: as in _Stat
+    return np.format_float_positional(float(x), trim="-")
 
 
 def _print(doc: dict) -> None:
@@ -151,11 +209,17 @@ def _print(doc: dict) -> None:
                 lo, hi = f["lengths"]
                 extra.append(f"length {lo}" if lo == hi else f"length {lo}..{hi}")
             if "min" in f:
-                extra.append(f"min {_num(f['min'])} max {_num(f['max'])}")
+                extra.append(f"min {plain(f['min'])} max {plain(f['max'])}")
             if f.get("nonfinite"):
                 extra.append(f"{f['nonfinite']} NaN/inf")
             if "true" in f:
                 extra.append(f"true {f['true']} false {f['false']}")
+            if "values" in f:
+                extra.append("values " + ", ".join(json.dumps(v) for v in f["values"])
+                             + (" and more" if f.get("more_values") else ""))
+            if "constants" in f:
+                extra.append("constants " + ", ".join(f"{k} = {json.dumps(v)}"
+                                                      for k, v in f["constants"].items()))
             click.echo(f"    {p}  {f['type']}" + (f"  {', '.join(extra)}" if extra else ""))
     for p in doc["problems"]:
         click.echo(f"  problem: {p}")
@@ -166,8 +230,10 @@ def _print(doc: dict) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list, one object per log.")
 def inspect_cmd(logs, as_json):
     """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
-    counts, rates, time span, and every field path in binding syntax with its type, array
-    lengths and numeric min/max - what a binding file can name (docs/bindings.md)."""
+    counts, rates, time span, and every field path in binding syntax, as it binds when pasted
+    (quoted topics, [:] for items), with its type, array lengths, numeric min/max, the values
+    of text fields and the constants of enum fields - what a binding file can name
+    (docs/bindings.md)."""
     from common.problems import FretcInputError  # lazy: as the readers
 
     docs: List[dict] = []

@@ -57,7 +57,7 @@ from common.errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
 from common.units import parse_seconds
 
-__all__ = ["RequirementEntry", "load_requirements", "parse_tick_period"]
+__all__ = ["RequirementEntry", "load_requirements", "parse_tick_period", "is_fret_export"]
 
 PathLike = str | os.PathLike
 
@@ -398,7 +398,23 @@ def _suffix(path: str) -> str:
     return name[i:] if 0 < i < len(name) - 1 else ""
 
 
-def _files_of(paths) -> list[str]:
+def is_fret_export(path: str) -> bool:
+    """Whether the JSON file at ``path`` is a FRET export by its content: a non-empty list
+    of requirement objects (or an object with such a ``"requirements"`` list), each with a
+    ``"reqid"`` or a ``"fulltext"`` (FRET's export format). Unreadable or invalid JSON is
+    not one."""
+    import json  # lazy: as _load_json
+    try:
+        data = json.loads(_read_text(path))
+    except (OSError, ValueError, FretishError):
+        return False
+    if isinstance(data, dict):
+        data = data.get("requirements")
+    return (isinstance(data, list) and bool(data) and all(
+        isinstance(x, dict) and ("reqid" in x or "fulltext" in x) for x in data))
+
+
+def _files_of(paths, skipped: list[str] | None = None) -> list[str]:
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     out: list[str] = []
@@ -406,8 +422,15 @@ def _files_of(paths) -> list[str]:
         path = _path_text(p)
         if os.path.isdir(path):
             names = sorted(os.listdir(path))
-            out.extend(f for f in (_path_text(os.path.join(path, n)) for n in names)
-                       if os.path.isfile(f) and _suffix(f) in (".fret", ".json"))
+            for f in (_path_text(os.path.join(path, n)) for n in names):
+                if not os.path.isfile(f) or _suffix(f) not in (".fret", ".json"):
+                    continue
+                if _suffix(f) == ".json" and not is_fret_export(f):
+                    if skipped is not None:
+                        skipped.append(f"{f}: skipped: a JSON file that is not a FRET export "
+                                       "(no requirements with \"reqid\" and \"fulltext\")")
+                    continue
+                out.append(f)
         elif os.path.isfile(path):
             out.append(path)
         else:
@@ -416,12 +439,16 @@ def _files_of(paths) -> list[str]:
     return out
 
 
-def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementEntry]:
+def load_requirements(paths: PathLike | Iterable[PathLike],
+                      skipped: list[str] | None = None) -> list[RequirementEntry]:
     """Read requirements from files and folders, in the order given.
 
-    ``paths`` is one path or an iterable of paths; a folder contributes its ``*.fret`` and
-    ``*.json`` files (not recursively) sorted by name; a file is read as JSON if its name
-    ends in ``.json`` and as ``.fret`` otherwise (formats: module docstring).
+    ``paths`` is one path or an iterable of paths; a folder contributes its ``*.fret``
+    files and its ``*.json`` files that are FRET exports by content (:func:`is_fret_export`;
+    another JSON file there, an audit's ``--json`` output say, is skipped and a note for it
+    appended to ``skipped``), not recursively, sorted by name; a file named itself is read
+    as JSON if its name ends in ``.json`` and as ``.fret`` otherwise (formats: module
+    docstring).
 
     Returns one :class:`RequirementEntry` per requirement. A sentence that does not parse
     gives an entry with ``error`` set (a :class:`FretishSyntaxError` in file coordinates)
@@ -432,7 +459,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike]) -> list[RequirementE
     entries: list[RequirementEntry] = []
     read: set = set()
     first: dict[str, RequirementEntry] = {}
-    for f in _files_of(paths):
+    for f in _files_of(paths, skipped):
         key = os.path.realpath(f)
         if key in read:  # the same file named twice (a folder and a file in it)
             continue

@@ -14,7 +14,7 @@ from .model import AuditPlan, RequirementPlan
 from .passes import MAX_TICKS, expected_ticks
 
 __all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "binding_type_errors",
-           "check_nominal_rate"]
+           "check_nominal_rate", "rate_hint", "call_hint"]
 
 #: A tick topic's measured rate may differ this much from its nominal rate without warning.
 RATE_TOLERANCE = 0.10
@@ -130,3 +130,38 @@ def check_nominal_rate(la, bindings: Bindings | None) -> None:
             f"{nominal:.3g} Hz ({bindings.source}): durations in time units, converted with "
             f"the nominal rate, are off by {abs(measured / nominal - 1):.0%}")
 
+
+
+def rate_hint(source, topic: str, counts: dict[str, int]) -> str:
+    """The ``nominal_rate`` to write for ``topic``, measured on this log (messages over
+    the log's span; ``counts``: messages per topic already read, else the topic is counted
+    now): ``'; /scan runs at 50 Hz in this log: nominal_rate = "50 Hz"'``, or "" when the
+    log does not tell (fewer than two messages, no span)."""
+    n = counts.get(topic)
+    if n is None:
+        try:
+            n = sum(1 for _ in source.messages({topic}))
+        except Exception:  # a damaged log: the reader reports it; no hint
+            return ""
+    st, en = source.start_time, source.end_time
+    if n < 2 or st is None or en is None or en <= st:
+        return ""
+    rate = f"{(n - 1) * NS_PER_S / (en - st):.3g} Hz"
+    return f"; {topic} runs at {rate} in this log: nominal_rate = \"{rate}\""
+
+
+def call_hint(name: str) -> str:
+    """What to write instead of a call FRET does not know (``abs(x)``, ``fabs(x)``, which a
+    requirement reads as one variable): FRET's own functions (FRET's manual, "Arithmetic
+    expressions": absReal/absInt, minReal/minInt, maxReal/maxInt), or the binding's."""
+    func, _, rest = name.partition("(")
+    f = func.strip().lower()
+    fret = {"abs": "absReal(...) or absInt(...)", "fabs": "absReal(...) or absInt(...)",
+            "min": "minReal(...) or minInt(...)", "max": "maxReal(...) or maxInt(...)"}.get(f)
+    spelled = f"FRET spells it {fret}" if fret else (
+        "FRET's functions are absReal/absInt, minReal/minInt, maxReal/maxInt")
+    return (f"{name!r} is a call of {func.strip()!r}, a function FRET does not know: "
+            f"{spelled}; or bind a variable to the value (e.g. {f}({rest.rstrip(')')}) in "
+            "a binding file)" if f in ("abs", "min", "max") else
+            f"{name!r} is a call of {func.strip()!r}, a function FRET does not know: "
+            f"{spelled}")

@@ -22,7 +22,8 @@ from common.problems import DataProblem, FretcInputError, SignalError
 from ..report.model import LogAudit, Verdict
 from ..sources.schema import closest
 from ..sources import open_log
-from .checks import binding_type_errors, check_nominal_rate, csv_bindings, too_many_ticks
+from .checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
+                     rate_hint, too_many_ticks)
 from .finalize import finalize
 from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
@@ -183,10 +184,11 @@ class _LogRun:
         for r in active:
             missing = [v for v in r.variables if v not in available]
             if missing:
-                where = (f"bindings ({bindings.source})" if bindings is not None
+                where = (f"bindings ({bindings.source or '--bind'})" if bindings is not None
                          else f"the CSV columns ({', '.join(source.columns)})")
                 hints = [(m, closest(m, sorted(available))) for m in missing]
-                hint = "; ".join(f"did you mean {h!r} for {m!r}?" for m, h in hints if h)
+                hint = "; ".join([f"did you mean {h!r} for {m!r}?" for m, h in hints if h]
+                                 + [call_hint(m) for m in missing if "(" in m])
                 self.verdicts[r.index].error = (f"no binding for {', '.join(map(repr, missing))}"
                                                 f" in {where}" + (f"; {hint}" if hint else ""))
 
@@ -270,6 +272,9 @@ class _LogRun:
         la.start_time_ns = source.start_time
         la.end_time_ns = source.end_time
         check_nominal_rate(la, self.bindings)
+        for r in self.plan.requirements:  # the measured rate in the nominal_rate hint
+            if r.rate_topic is not None and self.verdicts[r.index].error == r.error:
+                self.verdicts[r.index].error += rate_hint(source, r.rate_topic, la.messages)
 
     def _judge(self, result: LogPasses, active: list[RequirementPlan],
                b: Bindings | None) -> None:

@@ -30,6 +30,9 @@ class RequirementPlan:
         error: why it cannot be audited (parse/formalization error, no monitor, tick period
             mismatch), or None.
         notes: warnings of the formalization.
+        rate_topic: set with ``error`` when the requirement has durations in time units
+            and the tick topic's rate is not declared: the topic whose measured rate the
+            audit of each log adds to the error as the ``nominal_rate`` to write.
         offline: no generated monitor because the pt formula needs a future-time function
             (``persists``, ``occurs``, ``nextOcc``); the verdict then comes from
             :mod:`monitors.engines.interval` over the whole trace (engine ``"interval"``).
@@ -47,6 +50,7 @@ class RequirementPlan:
     notes: list[str] = field(default_factory=list)
     tick_period: Fraction | None = None
     offline: bool = False
+    rate_topic: str | None = None
     _msource: Any = None
 
     @property

@@ -13,6 +13,8 @@ Binding files that select their logs (``[logs]``) give one plan per file
 
 from __future__ import annotations
 
+import re
+
 import dataclasses
 import types
 from fractions import Fraction
@@ -66,7 +68,8 @@ def load_plan(config: AuditConfig) -> AuditPlan:
 def _build_plan(config: AuditConfig) -> AuditPlan:
     """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection)."""
     bindings, binding_files = load_audit_bindings(config)
-    entries = _read_requirements(config)
+    notes: list[str] = []
+    entries = _read_requirements(config, notes)
     period, nominal = _bindings_periods(bindings)
     plans: list[RequirementPlan] = []
     to_compile = []
@@ -101,14 +104,14 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
         raise AuditInputError(f"only free-form requirements in {', '.join(config.requirements)}"
                               ": nothing to audit")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
-                     freeform, _unused_bindings(bindings, plans))
+                     freeform, notes + _unused_bindings(bindings, plans))
 
 
-def _read_requirements(config: AuditConfig) -> list:
+def _read_requirements(config: AuditConfig, skipped: list[str]) -> list:
     """The requirement entries of ``config.requirements``
-    (:func:`fretish.files.load_requirements`)."""
+    (:func:`fretish.files.load_requirements`; notes of skipped files into ``skipped``)."""
     try:
-        entries = load_requirements([Path(p) for p in config.requirements])
+        entries = load_requirements([Path(p) for p in config.requirements], skipped)
     except FretishError as exc:
         raise AuditInputError(str(exc)) from None
     except OSError as exc:
@@ -160,8 +163,9 @@ def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bin
             rp.error = (f"{e.source}:{e.line}: {e.id} has a duration in time units but "
                         f"the bindings ({bindings.source}) tick once per "
                         f"{bindings.tick.topic} message, whose rate is not declared: add "
-                        f"nominal_rate = \"10 Hz\" (the topic's rate) to [tick]; the "
-                        "audit checks it against the log")
+                        "the topic's rate as nominal_rate to [tick] (fretc inspect prints "
+                        "it); the audit checks it against the log")
+            rp.rate_topic = bindings.tick.topic
     return e
 
 
@@ -233,8 +237,13 @@ def _unused_bindings(bindings: Bindings | None, plans: list[RequirementPlan]) ->
     warnings = []
     if bindings is not None:
         used = used_variables(plans)
+        # a requirement that failed before its variables were known (a syntax error) may
+        # use any name of its text: never call those unused
+        failed = " ".join(rp.text for rp in plans
+                          if rp.error is not None and not rp.variables)
+        words = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", failed))
         for name, b in bindings.variables.items():
-            if name not in used:
+            if name not in used and name not in words:
                 at = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
                 warnings.append(f"{at}: {name!r} is bound but no requirement uses it")
     return warnings

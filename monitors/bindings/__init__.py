@@ -29,13 +29,18 @@ Expression language (grammar: ``monitors/bindings/grammar.lark``), loosest bindi
                    ``!(x < 3)``)
 ``< <= > >= = !=`` comparisons (``==`` also accepted); they do not chain
 ``+ - * /``        arithmetic; unary ``-``.  ``x / 0`` is ±inf (nan for 0/0), as IEEE 754
-``/topic.a.b[i]``  a message field: topic name, then fields by ``.``, array items by ``[i]``
-                   (negative counts from the end)
-``1.5 2e-3 true``  numbers and booleans
+``/topic.a.b[i]``  a message field (Foxglove's message path syntax): topic name (any topic
+                   quoted: ``"ORB-SLAM".pose``), then fields by ``.``, array items by
+                   ``[i]`` (negative counts from the end), slices ``[lo:hi]`` and filters
+                   ``{name=="battery"}``, after which the path applies to each item
+``1.5 2e-3 true``  numbers and booleans; ``"text"`` strings (``=``, ``!=``, ``in [...]``);
+                   ``NAME`` in capitals: a named constant of a message definition
 ``f(...)``         ``abs(x)``; ``norm(a, b, ...)`` = sqrt(a²+b²+...) or ``norm(array)``;
                    ``min``/``max`` of an array or of several values; ``mean``, ``any``,
                    ``all``, ``count`` (number of true/non-zero items), ``len`` of an array;
-                   ``age(/topic)`` = seconds from the topic's latest message to the tick
+                   ``age(/topic)`` = seconds from the topic's latest message to the tick;
+                   ``joint(/js.position, "name")`` a joint by name; ``tf("a", "b").x``
+                   (``.y .z .yaw .age``) a transform from /tf and /tf_static
 =================  ==========================================================================
 
 Values: booleans, float64 numbers (integer fields are read as floats), and arrays (numeric
@@ -62,7 +67,9 @@ The modules, in the order they build on each other:
 
 * :mod:`~monitors.bindings.expression`: the expression tree, the Lark Transformer that
   builds it from ``grammar.lark``, static checks;
+* :mod:`~monitors.bindings.paths`: topic names and strings as written in bindings;
 * :mod:`~monitors.bindings.extract`: a message field as a value (:func:`make_extractor`);
+* :mod:`~monitors.bindings.frames`: transforms between TF frames, joints by name;
 * :mod:`~monitors.bindings.operations`: the operations on values (per tick and vectorized);
 * :mod:`~monitors.bindings.compile`: an expression tree to closures;
 * :mod:`~monitors.bindings.binding`: :class:`Binding`, one variable, compiled;

@@ -13,7 +13,8 @@ import numpy as np
 
 from common.problems import BindingError, SignalError
 from .compile import EvalError, EvalState, compile_node
-from .expression import (BinOp, Const, Expr, ExprLocation, Field, Ref, UnaryOp, check,
+from .expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
+                         UnaryOp, check,
                          check_size, parse_expression, substitute, unparse, walk)
 from .extract import Valid, normalize_scalar
 from .operations import Ops
@@ -38,6 +39,9 @@ class Binding:
         ast: the expression tree, references to other variables substituted.
         topics: topics the expression reads (fields and ``age``).
         fields: the field references, in order of appearance.
+        constants: the values of its named constants (``POWER_SUPPLY_STATUS_CHARGING``),
+            filled in by :func:`monitors.bindings.check_types` from a log's schemas.
+        uses_tf: whether it reads ``tf()`` (every message of /tf and /tf_static).
     """
 
     name: str
@@ -49,6 +53,8 @@ class Binding:
     topics: frozenset[str]
     fields: tuple[Field, ...]
     _exact: bool = True
+    constants: dict[str, Any] = field(default_factory=dict, repr=False)
+    uses_tf: bool = False
     _scalar: Callable[[EvalState], Any] | None = field(default=None, repr=False)
     _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
 
@@ -146,9 +152,14 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
         topics = frozenset(found)
     fields = tuple(n for n in walk(node) if isinstance(n, Field) and n.path)
     extractors: dict[Field, Callable[[Any], Any]] = {}
-    scalar = compile_node(node, Ops(False), extractors)
-    vector = compile_node(node, Ops(True), extractors)
-    return Binding(name, expr, source, line, col, node, topics, fields, exact, scalar, vector)
+    constants: dict[str, Any] = {}
+    scalar = compile_node(node, Ops(False), extractors, constants)
+    vector = compile_node(node, Ops(True), extractors, constants)
+    uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
+    if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
+        fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
+    return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
+                   uses_tf, scalar, vector)
 
 
 def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:

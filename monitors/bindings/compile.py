@@ -17,8 +17,9 @@ import numpy as np
 
 from common.units import NS_PER_S
 
-from .expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp, walk
+from .expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, walk
 from .extract import FieldAccessError, Valid, make_extractor
+from .frames import LookupFailed, TfBuffer, pick_joint
 from .operations import NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2, num
 
 __all__ = ["EvalState", "EvalError", "compile_node", "per_message_topic"]
@@ -35,7 +36,7 @@ class EvalState:
         now: the tick time (ns).
     """
 
-    __slots__ = ("msgs", "times", "now", "values")
+    __slots__ = ("msgs", "times", "now", "values", "tf")
 
     def __init__(self) -> None:
         self.msgs: dict[str, Any] = {}
@@ -43,6 +44,9 @@ class EvalState:
         self.now = 0
         #: (topic, field path) → (message data, extracted value): extraction memo.
         self.values: dict[tuple[str, tuple], tuple[Any, Any]] = {}
+        #: every transform of /tf and /tf_static so far, when a binding reads ``tf()``
+        #: (the clock adds each message: :meth:`TfBuffer.add`); None otherwise.
+        self.tf: TfBuffer | None = None
 
 
 class EvalError(Exception):
@@ -54,33 +58,54 @@ class EvalError(Exception):
         self.message = message
 
 
-def compile_node(node: Expr, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+def compile_node(node: Expr, ops: Ops, extractors: dict[Field, Evaluator],
+                 constants: dict[str, Any] | None = None) -> Evaluator:
     """Closure evaluating ``node``; its argument is an :class:`EvalState` (``ops`` per tick)
     or a columns object (``ops`` vectorized).  ``extractors`` (field -> extractor) is shared
-    by the per-tick and the vectorized compilation of one binding.
+    by the per-tick and the vectorized compilation of one binding; ``constants`` (name ->
+    value: the :class:`Named` constants, filled in when the binding is checked against a
+    log's schemas) is read when the closure runs.
 
     The closure raises :class:`EvalError` (a field missing from a message, an operation that
     does not apply to its values).
     """
+    consts = constants if constants is not None else {}
     if isinstance(node, Const):
         v = node.value
         return lambda st: v
+    if isinstance(node, Named):
+        return _named(node, consts)
     if isinstance(node, Field):
-        return _field(node, ops, extractors)
+        return _field(node, ops, extractors, consts)
     if isinstance(node, UnaryOp):
-        return _unary(node, ops, extractors)
+        return _unary(node, ops, extractors, consts)
     if isinstance(node, BinOp):
-        return _binary(node, ops, extractors)
+        return _binary(node, ops, extractors, consts)
     if isinstance(node, FuncCall):
-        return _call(node, ops, extractors)
+        return _call(node, ops, extractors, consts)
     raise AssertionError(node)  # pragma: no cover
 
 
-def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+def _named(node: Named, consts: dict[str, Any]) -> Evaluator:
+    name = node.name
+
+    def named(st: Any) -> Any:
+        try:
+            return consts[name]
+        except KeyError:
+            raise EvalError(node, f"{name} is not a variable of this binding file, and its "
+                            "value as a named constant was not read from the log's schemas "
+                            "(fretc audit reads them before the audit; fretc watch does not: "
+                            "write the number)") from None
+    return named
+
+
+def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator],
+           consts: dict[str, Any]) -> Evaluator:
     if ops.vec:
         topic, path = node.topic, node.path
         return lambda cols: cols.field(topic, path, node)
-    ex = extractors.setdefault(node, make_extractor(node))
+    ex = extractors.setdefault(node, make_extractor(node, consts))
     topic = node.topic
     key = (topic, node.path)
 
@@ -99,8 +124,9 @@ def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluat
     return field_value
 
 
-def _unary(node: UnaryOp, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
-    arg = compile_node(node.arg, ops, extractors)
+def _unary(node: UnaryOp, ops: Ops, extractors: dict[Field, Evaluator],
+           consts: dict[str, Any]) -> Evaluator:
+    arg = compile_node(node.arg, ops, extractors, consts)
     if node.op == "-":
         def neg(st: Any) -> Any:
             a = arg(st)
@@ -117,17 +143,24 @@ def _unary(node: UnaryOp, ops: Ops, extractors: dict[Field, Evaluator]) -> Evalu
     return not_
 
 
-def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
-    left = compile_node(node.left, ops, extractors)
-    right = compile_node(node.right, ops, extractors)
+def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
+            consts: dict[str, Any]) -> Evaluator:
+    left = compile_node(node.left, ops, extractors, consts)
+    right = compile_node(node.right, ops, extractors, consts)
     npfn, numeric = NP_BINARY[node.op]
     pyfn = PY_BINARY[node.op]
+    text_ok = node.op in ("=", "!=")
 
     def binary(st: Any) -> Any:
         a = left(st)
         b = right(st)
         if type(a) in PY_TYPES and type(b) in PY_TYPES:
             return pyfn(a, b)
+        if text_ok and (type(a) is str or type(b) is str):
+            if isinstance(a, list) or isinstance(b, list):  # an array of strings, item-wise
+                items, one = (a, b) if isinstance(a, list) else (b, a)
+                return Valid(np.array([pyfn(x, one) for x in items], dtype=np.bool_), None)
+            return pyfn(a, b)  # text equality (types checked: both are strings)
         try:
             return ops.lift2(npfn, a, b, numeric)
         except (ValueError, TypeError) as exc:
@@ -135,14 +168,19 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator]) -> Evalua
     return binary
 
 
-def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator]) -> Evaluator:
+def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
+          consts: dict[str, Any]) -> Evaluator:
     func = node.func
     if func == "age":
         topic = node.args[0].topic  # type: ignore[attr-defined]
         if ops.vec:
             return lambda cols: cols.age(topic)
         return lambda st: (st.now - st.times[topic]) / NS_PER_S
-    args = [compile_node(a, ops, extractors) for a in node.args]
+    if func == "tf":
+        return _tf(node)
+    args = [compile_node(a, ops, extractors, consts) for a in node.args]
+    if func == "joint":
+        return _joint(node, args)
     if func == "abs":
         a0 = args[0]
 
@@ -155,6 +193,35 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator]) -> Evalu
     if func in ("min", "max", "norm") and len(args) > 1:
         return _several(node, args)
     return _reduction(node, args[0], ops)
+
+
+def _tf(node: FuncCall) -> Evaluator:
+    """``tf(parent, child).component`` from the transforms held at the tick."""
+    parent, child, comp = (a.value for a in node.args)  # type: ignore[attr-defined]
+
+    def tf(st: Any) -> Any:
+        buf = getattr(st, "tf", None)
+        if buf is None:
+            raise EvalError(node, "tf() is evaluated tick by tick only")
+        try:
+            return buf.lookup(parent, child, comp, st.now)
+        except LookupFailed as exc:
+            raise EvalError(node, str(exc)) from None
+    return tf
+
+
+def _joint(node: FuncCall, args: list[Evaluator]) -> Evaluator:
+    """``joint(/js.position, "name")``: the item of the array whose ``name`` is given."""
+    values_of, names_of = args[0], args[2]
+    joint_name = node.args[1].value  # type: ignore[attr-defined]
+    text = node.args[0].text()  # type: ignore[attr-defined]
+
+    def joint(st: Any) -> Any:
+        try:
+            return pick_joint(values_of(st), names_of(st), joint_name, text)
+        except LookupFailed as exc:
+            raise EvalError(node, str(exc)) from None
+    return joint
 
 
 def _norm(vals: list[Any]) -> Any:

@@ -13,6 +13,7 @@ and variable (:class:`ExprLocation` maps a column in the expression to one in th
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
@@ -24,8 +25,10 @@ from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInpu
 from common.problems import BindingError
 from fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
 from ..sources.schema import closest
+from .paths import quote, topic_text, unquote
 
-__all__ = ["Expr", "Const", "Slice", "Field", "Ref", "UnaryOp", "BinOp", "FuncCall", "FUNCS",
+__all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
+           "FuncCall", "FUNCS", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "parse_expression", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -47,9 +50,19 @@ class Expr:
 
 @dataclass(frozen=True)
 class Const(Expr):
-    """``1.5``, ``2e-3``, ``true``, ``false``: a float or a bool."""
+    """``1.5``, ``2e-3``, ``true``, ``false``, ``"charging"``: a float, a bool or a string."""
 
-    value: bool | float
+    value: bool | float | str
+
+
+@dataclass(frozen=True)
+class Named(Expr):
+    """A named constant of a message definition (``POWER_SUPPLY_STATUS_CHARGING``,
+    DiagnosticStatus's ``ERROR``): a name in capitals that is not a variable of the binding
+    file; its value is looked up in the log's schema of the field it is compared with
+    (:mod:`monitors.bindings.typecheck`)."""
+
+    name: str
 
 
 @dataclass(frozen=True)
@@ -65,20 +78,45 @@ class Slice:
 
 
 @dataclass(frozen=True)
-class Field(Expr):
-    """``/topic.a.b[i]``: ``path`` holds attribute names (str), indexes (int) and, last,
-    at most one :class:`Slice`."""
+class Filter:
+    """``{name=="battery"}`` (Foxglove's message path filter): keeps the items of an array
+    of messages whose field ``path`` compares true (``op`` one of ``= != < <= > >=``) with
+    ``value`` (a :class:`Const` or a :class:`Named` constant)."""
 
-    topic: str
-    path: tuple[str | int | Slice, ...]
+    path: tuple[str, ...]
+    op: str
+    value: Expr
 
     def text(self) -> str:
-        """``/topic.a[2].b``: the field as written in a binding."""
-        out = self.topic
+        """``{name=="battery"}`` as written (``=`` printed as ``==``)."""
+        op = "==" if self.op == "=" else self.op
+        return "{" + ".".join(self.path) + op + unparse(self.value) + "}"
+
+
+@dataclass(frozen=True)
+class Field(Expr):
+    """``/topic.a.b[i]``: ``path`` holds attribute names (str), indexes (int), slices
+    (:class:`Slice`) and filters (:class:`Filter`); after a slice or a filter the rest of
+    the path applies to each item and the value is the array of the results."""
+
+    topic: str
+    path: tuple[str | int | Slice | Filter, ...]
+
+    def text(self) -> str:
+        """``/topic.a[2].b`` (a topic that is not a plain ROS name quoted): the field as
+        written in a binding."""
+        out = topic_text(self.topic)
         for p in self.path:
-            out += (p.text() if isinstance(p, Slice) else f"[{p}]" if isinstance(p, int)
-                    else f".{p}")
+            out += (p.text() if isinstance(p, (Slice, Filter)) else f"[{p}]"
+                    if isinstance(p, int) else f".{p}")
         return out
+
+    @property
+    def multi(self) -> bool:
+        """Whether the path has a slice or a filter before its end, or a filter at the end
+        (its value is then an array of items read from each)."""
+        return any(isinstance(p, Filter) for p in self.path) or any(
+            isinstance(p, Slice) for p in self.path[:-1])
 
 
 @dataclass(frozen=True)
@@ -113,11 +151,19 @@ class FuncCall(Expr):
     args: tuple[Expr, ...]
 
 
-#: The functions of the language: name -> (min args, max args or None).
+#: The functions of the language: name -> (min args, max args or None). ``joint`` is
+#: written with two (``joint(/joint_states.position, "wheel")``; the ``name`` array beside
+#: the first is added as a third), ``tf`` as ``tf("map", "base_link").x`` (the component
+#: is its third).
 FUNCS = {
     "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
     "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1),
+    "joint": (3, 3), "tf": (3, 3),
 }
+#: The components of ``tf(parent, child)``: translation (m), yaw (rad) and age (s).
+TF_COMPONENTS = ("x", "y", "z", "yaw", "age")
+#: The topics ``tf()`` reads (REP 105 / tf2: dynamic and static transforms).
+TF_TOPICS = ("/tf", "/tf_static")
 
 
 def walk(node: Expr) -> Iterator[Expr]:
@@ -146,7 +192,11 @@ def unparse(node: Expr) -> str:
     """
     if isinstance(node, Const):
         v = node.value
+        if isinstance(v, str):
+            return quote(v)
         return ("true" if v else "false") if isinstance(v, bool) else repr(float(v))
+    if isinstance(node, Named):
+        return node.name
     if isinstance(node, Field):
         return node.text()
     if isinstance(node, UnaryOp):
@@ -155,7 +205,11 @@ def unparse(node: Expr) -> str:
     if isinstance(node, BinOp):
         return f"({_operand(node.left)} {node.op} {_operand(node.right)})"
     if isinstance(node, FuncCall):
-        return f"{node.func}({', '.join(unparse(a) for a in node.args)})"
+        if node.func == "tf":
+            a = node.args
+            return f"tf({unparse(a[0])}, {unparse(a[1])}).{a[2].value}"  # type: ignore
+        args = node.args[:2] if node.func == "joint" else node.args
+        return f"{node.func}({', '.join(unparse(a) for a in args)})"
     raise TypeError(type(node).__name__)
 
 
@@ -223,6 +277,15 @@ class _ToExpr(Transformer):
     def number(self, meta, kids):
         return Const(_col(meta), float(kids[0]))
 
+    def neg_number(self, meta, kids):
+        return Const(_col(meta), -float(kids[0]))
+
+    def string(self, meta, kids):
+        return Const(_col(meta), unquote(str(kids[0])))
+
+    def named(self, meta, kids):
+        return Named(kids[0].column, str(kids[0]))
+
     def true(self, meta, kids):
         return Const(_col(meta), True)
 
@@ -243,13 +306,17 @@ class _ToExpr(Transformer):
     def slice(self, meta, kids):
         return Slice(kids[0], kids[1])
 
+    def filter_path(self, meta, kids):
+        return tuple(str(k) for k in kids)
+
+    def filter(self, meta, kids):
+        path, op, value = kids
+        return Filter(path, "=" if op == "==" else str(op), value)
+
     def field(self, meta, kids):
-        topic, path = kids[0], tuple(kids[1:])
-        for p in path[:-1]:
-            if isinstance(p, Slice):
-                raise self.where.error(f"{Field(0, str(topic), path).text()}: a slice must be "
-                                       "the last selector", topic.column)
-        return Field(topic.column, str(topic), path)
+        tok, path = kids[0], tuple(kids[1:])
+        topic = unquote(str(tok)) if tok.type == "STRING" else str(tok)
+        return Field(tok.column, topic, path)
 
     def ref(self, meta, kids):
         return Ref(kids[0].column, str(kids[0]))
@@ -266,6 +333,14 @@ class _ToExpr(Transformer):
 
     compare = arith
 
+    def member(self, meta, kids):
+        """``x in [a, b]``: ``(x = a) | (x = b)``."""
+        item, word, values = kids[0], kids[1], kids[2:]
+        out: Expr = BinOp(word.column, "=", item, values[0])
+        for v in values[1:]:
+            out = BinOp(word.column, "|", out, BinOp(word.column, "=", item, v))
+        return out
+
     def and_(self, meta, kids):
         return BinOp(_col(meta), "&", kids[0], kids[1])
 
@@ -280,7 +355,46 @@ class _ToExpr(Transformer):
 
     def call(self, meta, kids):
         name = kids[0]
-        return FuncCall(name.column, str(name), tuple(k for k in kids[1:] if k is not None))
+        args = tuple(k for k in kids[1:] if k is not None)
+        if name == "tf":
+            raise self.where.error('tf() gives a transform: name one of its components, '
+                                   'e.g. tf("map", "base_link").x (components: '
+                                   f'{", ".join(TF_COMPONENTS)})', name.column)
+        if name == "age" and len(args) == 1 and isinstance(args[0], (Const, Ref)):
+            a = args[0]  # age("ORB-SLAM"), age(groundtruth): a topic
+            topic = a.value if isinstance(a, Const) else a.name
+            if isinstance(topic, str):
+                args = (Field(a.col, topic, ()),)
+        if name == "joint":
+            args = _joint_args(args, self.where, name.column)
+        return FuncCall(name.column, str(name), args)
+
+    def call_member(self, meta, kids):
+        name, member = kids[0], kids[-1]
+        args = tuple(k for k in kids[1:-1] if k is not None)
+        if name != "tf":
+            raise self.where.error(f"{name}(...).{member}: only tf() has components",
+                                   member.column)
+        if str(member) not in TF_COMPONENTS:
+            raise self.where.error(f"tf(...) has no component {str(member)!r} (components: "
+                                   f"{', '.join(TF_COMPONENTS)})", member.column)
+        if len(args) != 2 or not all(isinstance(a, Const) and isinstance(a.value, str)
+                                     for a in args):
+            raise self.where.error('tf() takes two frame names in quotes: '
+                                   'tf("map", "base_link").x', name.column)
+        return FuncCall(name.column, "tf", args + (Const(member.column, str(member)),))
+
+
+def _joint_args(args: tuple, where: ExprLocation, col: int) -> tuple:
+    """``joint(/js.position, "wheel")`` -> (the values field, the name, the ``name`` array
+    beside the values field)."""
+    if (len(args) != 2 or not isinstance(args[0], Field) or not args[0].path
+            or not isinstance(args[0].path[-1], str) or not isinstance(args[1], Const)
+            or not isinstance(args[1].value, str)):
+        raise where.error('joint() takes an array field and a joint name in quotes: '
+                          'joint(/joint_states.position, "wheel_left_joint")', col)
+    f = args[0]
+    return (f, args[1], Field(f.col, f.topic, f.path[:-1] + ("name",)))
 
 
 def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> BindingError:
@@ -386,8 +500,10 @@ def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
         BindingError: the first failed check, at ``where``.
     """
     if isinstance(node, Field):
-        for p in node.path:
-            if isinstance(p, str) and p.startswith("_"):
+        names = [p for p in node.path if isinstance(p, str)]
+        names += [n for p in node.path if isinstance(p, Filter) for n in p.path]
+        for p in names:
+            if p.startswith("_"):
                 raise where.error(f"{node.text()}: {p!r} is not a message field (ROS field "
                                   "names start with a letter; a binding reads only fields the "
                                   "message type declares)", node.col)
@@ -414,6 +530,9 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
     if n < lo or (hi is not None and n > hi):
         want = f"{lo}" if lo == hi else f"at least {lo}"
         raise where.error(f"{node.func}() takes {want} argument(s), got {n}", node.col)
+    if node.func == "tf":
+        topics.update(TF_TOPICS)
+        return
     if node.func == "age":
         arg = node.args[0]
         if not isinstance(arg, Field) or arg.path:
@@ -424,6 +543,10 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         check(a, where, topics)
 
 
+#: A name that may be a constant of a message definition (ROS writes them in capitals).
+_CONSTANT = re.compile(r"[A-Z][A-Z0-9_]*\Z")
+
+
 def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: str) -> Expr:
     """``node`` with every :class:`Ref` replaced by the tree of the variable it names.
 
@@ -432,12 +555,15 @@ def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: st
         name: the variable ``node`` belongs to (it may not refer to itself).
 
     Raises:
-        BindingError: a reference to ``name`` itself or to an unknown variable.
+        BindingError: a reference to ``name`` itself or to an unknown variable (a name in
+            capitals that is no variable becomes a :class:`Named` constant).
     """
     if isinstance(node, Ref):
         if node.name == name:
             raise where.error(f"{name!r} refers to itself", node.col)
         tree = trees.get(node.name)
+        if tree is None and _CONSTANT.match(node.name):
+            return Named(node.col, node.name)  # resolved against the log's schemas
         if tree is None:
             hint = closest(node.name, [n for n in trees if n != name] + list(FUNCS))
             raise where.error(f"unknown name {node.name!r}: not a variable of this binding file"

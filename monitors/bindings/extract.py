@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .expression import Field, Slice
+from .expression import Const, Field, Filter, Slice
 
 __all__ = ["LASER_SCAN", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
 
@@ -140,15 +140,95 @@ def _sliced(f: Field) -> Callable[[Any], Any]:
     return sliced
 
 
-def make_extractor(f: Field) -> Callable[[Any], Any]:
-    """A function message-data → value of field ``f`` (normalized; module docstring).
+_FILTER_OPS = {"=": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le,
+               ">": operator.gt, ">=": operator.ge}
 
-    Returns Python bool/float, :class:`Valid` for arrays (masked for LaserScan ranges), or the
-    raw object for anything else (strings, nested messages).
+
+def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[[Any], bool]:
+    """item -> whether ``flt`` keeps it (its field compared with the filter's value)."""
+    get = operator.attrgetter(".".join(flt.path))
+    op = _FILTER_OPS[flt.op]
+    value_node = flt.value
+
+    def keep(item: Any) -> bool:
+        if isinstance(value_node, Const):
+            want = value_node.value
+        else:  # a Named constant, resolved against the log's schemas
+            if value_node.name not in constants:  # type: ignore[attr-defined]
+                raise FieldAccessError(f"{text}: {value_node.name} is not a constant of the "  # type: ignore[attr-defined]
+                                       "message definition")
+            want = constants[value_node.name]  # type: ignore[attr-defined]
+        v = normalize_scalar(get(item))
+        if isinstance(want, str) != isinstance(v, str):
+            return False
+        return bool(op(v, want))
+    return keep
+
+
+def _select(items: list, many: bool, kind: str, fn: Any, text: str) -> tuple[list, bool]:
+    """One slice or filter of a path: on an array (or on each array of ``items``, their
+    items joined) a slice takes items and a filter keeps those it accepts; a filter right
+    after a slice filters the items the slice took."""
+    arrays = all(isinstance(x, (list, tuple, np.ndarray)) for x in items)
+    if kind == "slice" or not many or arrays:
+        if not arrays:
+            raise FieldAccessError(f"{text}: only arrays can be sliced or filtered")
+        if kind == "slice":
+            return [x for it in items for x in list(it)[fn]], True
+        items = [x for it in items for x in it]
+    return [x for x in items if fn(x)], True
+
+
+def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
+    """Extractor of a path with a slice or a filter before its end (Foxglove's message path
+    semantics): from the first of them on, each step applies to every item, a slice or a
+    filter selects items, and the value is the array of what is left."""
+    text = f.text()
+    steps: list[tuple[str, Any]] = []
+    for p in f.path:
+        if isinstance(p, Filter):
+            steps.append(("filter", _filter_test(p, constants, text)))
+        elif isinstance(p, Slice):
+            steps.append(("slice", slice(p.lo, p.hi)))
+        else:
+            steps.append(("step", operator.itemgetter(p) if isinstance(p, int)
+                          else operator.attrgetter(p)))
+
+    def extract(data: Any) -> Any:
+        items, many = [data], False
+        try:
+            for kind, fn in steps:
+                if kind == "step":
+                    items = [fn(x) for x in items]
+                    continue
+                items, many = _select(items, many, kind, fn, text)
+        except AttributeError as exc:
+            raise FieldAccessError(f"{text}: an item has no field {exc.name!r}") from None
+        except IndexError:
+            raise FieldAccessError(f"{text}: index out of range") from None
+        vals = [normalize_scalar(x) for x in items]
+        if all(type(v) is bool for v in vals) and vals:
+            return Valid(np.array(vals, dtype=np.bool_), None)
+        if all(type(v) in (bool, float) for v in vals):
+            return Valid(np.array(vals, dtype=np.float64), None)
+        return vals
+    return extract
+
+
+def make_extractor(f: Field, constants: dict[str, Any] | None = None) -> Callable[[Any], Any]:
+    """A function message-data → value of field ``f`` (normalized; module docstring).
+    ``constants``: values of the named constants a filter compares with (filled in when
+    the binding is checked against the log's schemas).
+
+    Returns Python bool/float, :class:`Valid` for arrays (masked for LaserScan ranges), a
+    list for arrays of strings or messages, or the raw object for anything else (strings,
+    nested messages).
 
     Raises (from the returned function):
         FieldAccessError: no such field, index out of range, or indexing a non-sequence.
     """
+    if f.multi:
+        return _multi(f, constants if constants is not None else {})
     if f.path and isinstance(f.path[-1], Slice):
         return _sliced(f)
     path = f.path

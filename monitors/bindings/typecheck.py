@@ -3,7 +3,7 @@ read: a field the schema does not declare, a string in arithmetic or a boolean u
 number is an error naming the binding file:line:col, the variable, the topic and the field.
 
 Types are strings: ``"bool"``, ``"number"``, ``"array_bool"``, ``"array_number"``,
-``"array_other"`` (messages or strings), ``"string"``, ``"message"``, and ``"any"`` when the
+``"array_string"``, ``"array_other"`` (messages), ``"string"``, ``"message"``, and ``"any"`` when the
 topic's schema is unknown (then nothing is checked).
 """
 
@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from ..sources.schema import FieldPathError
 from .binding import Binding
-from .expression import BinOp, Const, Expr, ExprLocation, Field, FuncCall, UnaryOp, unparse
+from .expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named,
+                         UnaryOp, unparse)
 
 __all__ = ["check_types"]
 
@@ -20,7 +21,7 @@ _NUMS = ("number", "array_number")
 _ARRAYS = ("array_bool", "array_number")
 _WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of booleans",
           "array_number": "an array of numbers", "string": "a string", "message": "a message",
-          "array_other": "an array of messages or strings"}
+          "array_string": "an array of strings", "array_other": "an array of messages"}
 
 
 def check_types(binding: Binding, schemas: dict) -> str:
@@ -36,11 +37,16 @@ def check_types(binding: Binding, schemas: dict) -> str:
     Returns:
         the binding's type: ``"bool"``, ``"number"`` (or ``"any"`` when unknown).
 
+    Named constants (``POWER_SUPPLY_STATUS_CHARGING``) are looked up in the message
+    definition declaring the field they are compared with (or filter on) and their values
+    stored in ``binding.constants``.
+
     Raises:
         BindingError: naming the binding file:line:col, the variable, and the topic and
-            field at fault (with the fields that exist and the closest name).
+            field at fault (with the fields that exist and the closest name); a named
+            constant the message definition does not declare (with the ones it does).
     """
-    checker = _TypeChecker(binding.location(), schemas)
+    checker = _TypeChecker(binding.location(), schemas, binding.constants)
     t = checker.type(binding.ast)
     if t not in ("bool", "number", "any"):
         raise checker.where.error(
@@ -48,6 +54,23 @@ def check_types(binding: Binding, schemas: dict) -> str:
             f"{_describe(binding.ast, t)}"
             + ("; reduce it with min/max/any/all/count" if "array" in t else ""))
     return t
+
+
+def _compared_field(node: Expr) -> Field | None:
+    """The field whose message definition declares a named constant compared with
+    ``node``: ``node`` itself, or the field a function takes first (``max(/d.status[:].level)``,
+    ``joint(/js.position, "w")``); None if neither ends in a field name."""
+    if isinstance(node, FuncCall) and node.args and node.func != "tf":
+        node = node.args[0]
+    if isinstance(node, Field) and node.path and isinstance(node.path[-1], str):
+        return node
+    return None
+
+
+def _kind(value) -> str:
+    """The binding type of a constant's value."""
+    return ("bool" if isinstance(value, bool) else "string" if isinstance(value, str)
+            else "number")
 
 
 def _describe(node: Expr, t: str) -> str:
@@ -61,9 +84,10 @@ def _describe(node: Expr, t: str) -> str:
 class _TypeChecker:
     """The type of each node, bottom up; raises at the first node that does not fit."""
 
-    def __init__(self, where: ExprLocation, schemas: dict) -> None:
+    def __init__(self, where: ExprLocation, schemas: dict, constants: dict) -> None:
         self.where = where
         self.schemas = schemas
+        self.constants = constants
 
     def need(self, node: Expr, t: str, ok: tuple, what: str, at: Expr) -> None:
         """Raise unless type ``t`` of ``node`` is one of ``ok`` (or unknown)."""
@@ -77,7 +101,15 @@ class _TypeChecker:
 
     def type(self, node: Expr) -> str:
         if isinstance(node, Const):
-            return "bool" if isinstance(node.value, bool) else "number"
+            v = node.value
+            return "bool" if isinstance(v, bool) else "string" if isinstance(v, str) else "number"
+        if isinstance(node, Named):
+            if node.name in self.constants:
+                return _kind(self.constants[node.name])
+            raise self.where.error(f"{node.name} is not a variable of this binding file; a "
+                                   "named constant must be compared with a field of the "
+                                   "message that declares it (/battery.power_supply_status = "
+                                   "POWER_SUPPLY_STATUS_CHARGING)", node.col)
         if isinstance(node, Field):
             return self.field(node)
         if isinstance(node, UnaryOp):
@@ -97,9 +129,12 @@ class _TypeChecker:
         except FieldPathError as exc:
             raise self.where.error(f"{exc} (topic {node.topic}, {sch.typename})",
                                    node.col) from None
+        for i, p in enumerate(node.path):
+            if isinstance(p, Filter) and isinstance(p.value, Named):
+                self.resolve_named(p.value, node, node.path[:i])
         if ft.kind == "array":
-            return {"bool": "array_bool", "number": "array_number"}.get(ft.item.kind,
-                                                                       "array_other")
+            return {"bool": "array_bool", "number": "array_number",
+                    "string": "array_string"}.get(ft.item.kind, "array_other")
         return {"bool": "bool", "number": "number", "string": "string",
                 "message": "message"}.get(ft.kind, "any")
 
@@ -111,8 +146,35 @@ class _TypeChecker:
             self.need(node.arg, t, _BOOLS, "'!' takes a boolean", node)
         return t
 
+    def resolve_named(self, named: Named, field: Field, owner_path: tuple) -> None:
+        """Store the value of ``named``, a constant of the message type at ``owner_path``
+        of ``field``'s topic (the items' type for an array)."""
+        sch = self.schemas.get(field.topic)
+        if sch is None or not hasattr(sch, "constants"):
+            return
+        owner = sch.resolve(owner_path)
+        while owner.kind == "array":
+            owner = owner.item
+        consts = sch.constants(owner.name) if owner.kind == "message" else {}
+        if named.name not in consts:
+            raise self.where.error(
+                f"{named.name} is not a variable of this binding file nor a constant of "
+                f"{owner.name} (its constants: {', '.join(consts) or 'none'})", named.col)
+        self.constants[named.name] = consts[named.name]
+
     def binary(self, node: BinOp) -> str:
+        for side, other in ((node.left, node.right), (node.right, node.left)):
+            f = _compared_field(other)
+            if isinstance(side, Named) and f is not None:
+                self.type(f)  # the field exists
+                self.resolve_named(side, f, f.path[:-1])
         a, b = self.type(node.left), self.type(node.right)
+        if node.op in ("=", "!=") and {a, b} & {"string", "array_string"}:
+            if {a, b} - {"string", "array_string", "any"} or a == b == "array_string":
+                raise self.where.error(
+                    f"type error: {node.op!r} compares a string with something else "
+                    f"({_describe(node.left, a)}; {_describe(node.right, b)})", node.col)
+            return "array_bool" if "array_string" in (a, b) else "bool"
         arr = "array" in a or "array" in b
         op = node.op
         if op in ("+", "-", "*", "/"):
@@ -138,14 +200,24 @@ class _TypeChecker:
 
     def call(self, node: FuncCall) -> str:
         f = node.func
-        if f == "age":
+        if f in ("age", "tf"):
             return "number"
+        if f == "joint":
+            values, names = self.type(node.args[0]), self.type(node.args[2])
+            self.need(node.args[0], values, _ARRAYS, "joint() picks from an array of numbers",
+                      node)
+            if names not in ("any", "array_string"):
+                raise self.where.error(f"type error: joint() needs a name array of strings "
+                                       f"beside its array, but {_describe(node.args[2], names)}",
+                                       node.col)
+            return {"array_bool": "bool", "array_number": "number"}.get(values, "any")
         ts = [self.type(a) for a in node.args]
         for a, t in zip(node.args, ts):
             if f in ("any", "all", "count"):
                 self.need(a, t, _ARRAYS, f"{f}() takes an array", node)
             elif f == "len":
-                if t not in ("any", "array_bool", "array_number", "array_other"):
+                if t not in ("any", "array_bool", "array_number", "array_string",
+                             "array_other"):
                     self.need(a, t, ("array_number",), "len() takes an array", node)
             else:
                 self.need(a, t, _NUMS, f"{f}() takes numbers", node)

@@ -206,7 +206,7 @@ def _violation(v: dict, la: dict, r: dict, rt: RequirementTrace | None, rc: dict
     svg = timeline_svg(v, la, period_ns=(la.get("tick") or {}).get("period_ns") or period_ns,
                        thresholds=rt.thresholds if rt else (),
                        title=f"{r.get('id')} violated on {la.get('log')} at "
-                             f"{format_seconds(fv.get('log_time_s'))}")
+                             f"{format_seconds(fv.get('tick_time_s', fv.get('log_time_s')))}")
     trig = fv.get("trigger") or {}
     l3 = v.get("ltl3") or {}
     return {

@@ -21,6 +21,7 @@ from common.textsafe import terminal_text
 from common.units import format_offset
 
 from .model import LogAudit, Verdict, exit_code, incomplete
+from .verdicts import format_value
 
 __all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
 
@@ -52,11 +53,7 @@ def short_log_name(path: str) -> str:
 
 
 def _value(v) -> str:
-    if isinstance(v, bool):
-        return "T" if v else "F"
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    return str(v)
+    return format_value(v)  # every digit it needs: which side of a threshold it is on
 
 
 #: The matrix (logs x requirements) is used while its smaller side has at most this many

@@ -4,8 +4,9 @@ A small deterministic SVG writer (no matplotlib, no JavaScript, no external font
 verdict gives byte-identical text. Input is the audit's JSON (schema ``fretc-audit/1``, see
 :mod:`monitors.report.model`): one verdict object and the log object it belongs to.
 
-The picture, top to bottom, all in log time (seconds since the log's first tick
-``start_time_ns``, what Foxglove shows as elapsed time):
+The picture, top to bottom, all in log time (seconds since the log's start
+``start_time_ns``, the log time of its first message, what Foxglove shows as elapsed time;
+every event at its tick's time, as the terminal and the JSON give it):
 
 * a legend;
 * **whole log** - one bar from the first to the last tick, with the scope interval, the
@@ -384,7 +385,8 @@ def _draw_notes(svg: _Svg, lay: Timeline, y: float) -> float:
                      + (f" (tick {lay.window['end_tick']})" if lay.window else ""))
     if lay.damage is not None:
         notes.append(f"log damaged at {format_offset(lay.damage, start)} (partial)")
-    svg.text(lay.x0, y, f"time: s since the log's first tick (t0 = {start} ns log time); "
+    svg.text(lay.x0, y, f"time: s since the log's start, its first message (t0 = {start} ns "
+             "log time); "
              f"tick k drawn from its time to the next tick ({lay.period / 1e6:g} ms)", size=10,
              fill=COLORS["muted"])
     y += 14

@@ -211,11 +211,13 @@ class Timeline:
 
 
 def violation_time_ns(fv: dict) -> int:
-    """Where a first violation is drawn: its tick's time on the bindings' time base when that
-    is ``header`` (the detail windows, the trigger and the LTL3 mark are tick times there, and
-    header stamps may lie far from the log time of the deciding message), else the log time
-    of the message that decided it (``monitors.report.model``: each time says its clock)."""
-    if fv.get("tick_time_base") == "header" and fv.get("tick_time_ns") is not None:
+    """Where a first violation is drawn: its tick's time (``tick_time_ns``, on the bindings'
+    time base), the one time the terminal, the JSON's ``tick_time_s`` and the report give
+    the event; the trigger and the LTL3 mark are tick times too, so the marks keep the
+    ticks' order (the log time of the message that decided the tick, earlier than the tick
+    on a fixed period, is the report's "in Foxglove" seek time, not this). Logs audited
+    before ``tick_time_ns`` existed: the log time."""
+    if fv.get("tick_time_ns") is not None:
         return int(fv["tick_time_ns"])
     return int(fv["log_time_ns"])
 

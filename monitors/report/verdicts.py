@@ -10,17 +10,25 @@ from typing import Any
 
 from common.units import format_offset, format_seconds
 
-__all__ = ["verdict_for", "cell_label", "witness", "values_table"]
+__all__ = ["verdict_for", "cell_label", "witness", "values_table", "format_value"]
 
 
-def _fmt_value(v: Any) -> str:
+def format_value(v: Any) -> str:
+    """A sampled value as reports print it: booleans ``T``/``F``, None ``-``, numbers with
+    every digit they need to read back as the same float (Python's shortest ``repr``,
+    ``1.000158``, never ``1`` for it: a value beside a threshold shows which side it is on;
+    a whole number without ``.0``)."""
     if isinstance(v, bool):
         return "T" if v else "F"
     if isinstance(v, float):
-        return f"{v:.6g}"
+        text = repr(v)
+        return text[:-2] if text.endswith(".0") else text
     if v is None:
         return "-"
     return str(v)
+
+
+_fmt_value = format_value
 
 
 def verdict_for(la: dict, i: int, r: dict) -> dict | None:

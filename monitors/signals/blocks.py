@@ -21,6 +21,8 @@ import numpy as np
 
 from ..bindings.binding import Binding
 from ..bindings.compile import EvalState
+from ..bindings.expression import TF_TOPICS
+from ..bindings.frames import TfBuffer
 from ..bindings.spec import Bindings, TickSpec
 from common.problems import SignalError
 from ..sources.selective import install as install_selective
@@ -124,6 +126,12 @@ class _Group:
         self.index = 0
         self.failed: dict[str, SignalError] = {}
         self.per_tick: set[str] = set()
+        #: per binding that reads ``tf()``: its transforms so far and, per TF topic, the
+        #: count of that topic's messages already added (tf() reads every message, not the
+        #: held one: they are added in time order up to each tick)
+        self.tf: dict[str, tuple[TfBuffer, dict[str, int]]] = {
+            b.name: (TfBuffer(), {t: 0 for t in TF_TOPICS}) for b in self.variables
+            if getattr(b, "uses_tf", False)}
 
     def next_time(self) -> float:
         """Time of its next tick not yet evaluated (inf: none is known yet)."""
@@ -238,6 +246,9 @@ def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
                 keep = min(keep, bisect_right(b.times, c.next_time()) - 1)
                 if topic == c.tick_topic and c.period is None:
                     keep = min(keep, c.next_seq - b.base)
+                for _buf, added in c.tf.values():
+                    if topic in added:
+                        keep = min(keep, added[topic] - b.base)
             b.trim(keep)
         stream.changed()
 
@@ -301,7 +312,8 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     values: dict[str, np.ndarray] = {}
     for b in list(c.variables):
         try:
-            values[b.name] = _values(b, cols, stream, times, held, c.per_tick)
+            values[b.name] = _values(b, cols, stream, times, held, c.per_tick,
+                                     c.tf.get(b.name))
         except SignalError as err:
             c.failed[b.name] = err
             c.variables.remove(b)
@@ -313,7 +325,8 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
 
 
 def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,
-            idx: dict[str, np.ndarray], per_tick: set[str]) -> np.ndarray:
+            idx: dict[str, np.ndarray], per_tick: set[str],
+            tf: tuple[TfBuffer, dict[str, int]] | None = None) -> np.ndarray:
     """``b`` at every tick: by numpy over the columns, else tick by tick (same values and
     errors as :class:`monitors.signals.clock.Clock`).
 
@@ -326,9 +339,13 @@ def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,
     except (SignalError, Irregular):
         per_tick.add(b.name)
     st = EvalState()
+    if tf is not None:
+        st.tf = tf[0]
     out: list[Any] = []
     with np.errstate(all="ignore"):
         for i in range(len(times)):
+            if tf is not None:
+                _add_transforms(tf, stream, int(times[i]))
             for t, ix in idx.items():
                 k = int(ix[i])
                 st.msgs[t] = stream.buffers[t].data[k]
@@ -344,6 +361,23 @@ def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,
     if all(type(v) is bool for v in out):
         return np.array(out, dtype=np.bool_)
     return np.array(out, dtype=np.float64)
+
+
+def _add_transforms(tf: tuple[TfBuffer, dict[str, int]], stream: _Stream, upto: int) -> None:
+    """Add to ``tf``'s buffer the messages of /tf and /tf_static with time <= ``upto`` not
+    added yet, in time order (as the streaming clock adds them)."""
+    buf, added = tf
+    pending = []
+    for topic in TF_TOPICS:
+        b = stream.buffers.get(topic)
+        if b is None:
+            continue
+        p = max(added[topic] - b.base, 0)
+        q = bisect_right(b.times, upto, lo=p)
+        pending.extend((b.times[k], topic, b.data[k]) for k in range(p, q))
+        added[topic] = b.base + q
+    for t, topic, data in sorted(pending, key=lambda x: x[0]):
+        buf.add(topic, data, t)
 
 
 def blocks_of_ticks(ticks: Iterator[Tick], names: list[str], topics: list[str],

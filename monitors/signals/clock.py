@@ -16,6 +16,8 @@ import numpy as np
 from common import problems as P
 from ..bindings.binding import Binding
 from ..bindings.compile import EvalState
+from ..bindings.expression import TF_TOPICS
+from ..bindings.frames import TfBuffer
 from ..bindings.spec import Bindings, TickSpec
 from common.problems import DataProblem, ProblemLog, SignalError
 from ..sources.selective import install as install_selective
@@ -208,6 +210,8 @@ class Clock:
         self.variables = list(variables)
         self.missing = set(required)
         self.state = EvalState()
+        if any(b.uses_tf for b in self.variables):  # tf(): every transform, not the held
+            self.state.tf = TfBuffer()
         self.log_times: dict[str, int] = {}
         self.period = tick.period_ns
         self.tick_topic = tick.topic
@@ -277,6 +281,8 @@ class Clock:
         st = self.state
         st.msgs[topic] = data
         st.times[topic] = t
+        if st.tf is not None and topic in TF_TOPICS:
+            st.tf.add(topic, data, t)
         self.log_times[topic] = log_time
         self.missing.discard(topic)
         if topic == self.tick_topic:

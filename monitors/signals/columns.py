@@ -168,6 +168,15 @@ class HeldColumns:
             return Valid(col.data[i], None if col.mask is None else col.mask[i])
         return col[i]
 
+    @property
+    def tf(self) -> Any:
+        """``tf()`` reads every message of /tf and /tf_static, not the held ones.
+
+        Raises:
+            Irregular: always (the binding is evaluated tick by tick).
+        """
+        raise Irregular("tf() reads every message of /tf and /tf_static")
+
     def age(self, topic: str) -> np.ndarray:
         """``age(topic)`` at each tick: seconds since the held message (float64)."""
         held = self.times[topic][self.idx[topic]]

@@ -101,47 +101,87 @@ class TopicSchema:
         item, length = sub
         return FieldType("array", "array", self._type(item), length if node == 3 else None)
 
+    def constants(self, typename: str | None = None) -> dict[str, Any]:
+        """The named constants of a message definition (``uint8 POWER_SUPPLY_STATUS_CHARGING
+        = 1``): name -> value (int, float, bool or str), in declaration order."""
+        consts, _fields = self.store.fielddefs[typename or self.typename]
+        return {c[0]: c[2] for c in consts}
+
     def resolve(self, path: tuple) -> FieldType:
-        """The type at ``path`` (field names and integer indexes).
+        """The type at ``path`` (field names, integer indexes, slices and filters, as in
+        :class:`monitors.bindings.expression.Field`). From the first slice or filter on,
+        the path applies to each item of the array and the type is an array of the result
+        (Foxglove's message path semantics).
 
         Raises:
             FieldPathError: a name the type does not declare (with the valid ones and the
                 closest), an index into something that is not an array, a field of an array
-                or of a number.
+                or of a number, a filter on what is not an array of messages.
         """
         cur = FieldType("message", self.typename)
         walked = self.topic
+        many = False
         for p in path:
+            kind = type(p).__name__
+            if kind in ("Slice", "Filter"):
+                if cur.kind == "array":  # its items (a filter right after a slice: the same)
+                    cur, many = cur.item, True
+                elif kind == "Slice" or not many:
+                    how = "sliced" if kind == "Slice" else "filtered"
+                    raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it "
+                                         f"cannot be {how}", [], None)
+                walked += p.text()
+                if kind == "Filter":
+                    self._check_filter(cur, p, walked)
+                continue
             if isinstance(p, int):
-                if cur.kind != "array":
-                    raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it cannot "
-                                         f"be indexed", [], None)
-                if cur.length is not None and not -cur.length <= p < cur.length:
-                    raise FieldPathError(f"{walked}[{p}]: index out of range (the array has "
-                                         f"{cur.length} items)", [], None)
-                cur = cur.item
+                cur = self._index(cur, p, walked)
                 walked += f"[{p}]"
                 continue
-            if type(p).__name__ == "Slice":
-                if cur.kind != "array":
-                    raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it cannot "
-                                         f"be sliced", [], None)
-                walked += "[:]"
-                continue
-            if cur.kind != "message":
-                what = "an array" if cur.kind == "array" else f"a {cur.text()}"
-                raise FieldPathError(f"{walked} is {what}: it has no field {p!r}", [], None)
-            fields = dict(self.fields(cur.name))
-            if p not in fields:
-                valid = list(fields)
-                hint = closest(p, valid)
-                raise FieldPathError(
-                    f"{walked}: a {cur.name} has no field {p!r} (its fields: "
-                    f"{', '.join(valid)})" + (f"; did you mean {hint!r}?" if hint else ""),
-                    valid, hint)
-            cur = fields[p]
+            cur = self._member(cur, p, walked)
             walked += f".{p}"
-        return cur
+        return FieldType("array", "array", cur, None) if many else cur
+
+    def _index(self, cur: FieldType, p: int, walked: str) -> FieldType:
+        if cur.kind != "array":
+            raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it cannot "
+                                 f"be indexed", [], None)
+        if cur.length is not None and not -cur.length <= p < cur.length:
+            raise FieldPathError(f"{walked}[{p}]: index out of range (the array has "
+                                 f"{cur.length} items)", [], None)
+        return cur.item
+
+    def _member(self, cur: FieldType, p: str, walked: str) -> FieldType:
+        if cur.kind != "message":
+            what = "an array" if cur.kind == "array" else f"a {cur.text()}"
+            raise FieldPathError(f"{walked} is {what}: it has no field {p!r}", [], None)
+        fields = dict(self.fields(cur.name))
+        if p not in fields:
+            valid = list(fields)
+            hint = closest(p, valid)
+            raise FieldPathError(
+                f"{walked}: a {cur.name} has no field {p!r} (its fields: "
+                f"{', '.join(valid)})" + (f"; did you mean {hint!r}?" if hint else ""),
+                valid, hint)
+        return fields[p]
+
+    def _check_filter(self, item: FieldType, flt: Any, walked: str) -> None:
+        """A filter's field must be a bool, number or string of the item message, and a
+        literal it is compared with of the same kind."""
+        if item.kind != "message":
+            raise FieldPathError(f"{walked}: only arrays of messages can be filtered "
+                                 f"(the items are {item.text()})", [], None)
+        t = item
+        for name in flt.path:
+            t = self._member(t, name, walked)
+        if t.kind not in ("bool", "number", "string"):
+            raise FieldPathError(f"{walked}: the filter's field is a {t.text()}, not a "
+                                 "boolean, a number or a string", [], None)
+        value = getattr(flt.value, "value", None)
+        if value is not None and (isinstance(value, str) != (t.kind == "string")):
+            raise FieldPathError(f"{walked}: the filter compares a {t.text()} field with "
+                                 f"{'a string' if isinstance(value, str) else 'a number'}",
+                                 [], None)
 
 
 class CsvSchema(TopicSchema):

@@ -31,7 +31,7 @@ def test_inspect_lists_fields_and_a_binding_from_it_audits(tmp_path, shared):
     assert clearance["type"] == "float64" and clearance["min"] <= 0 < clearance["max"]
     assert "true" in topics["/gwendolen_control"]["fields"]["/gwendolen_control.data"]
     tf = topics["/tf"]["fields"]
-    assert "/tf.transforms[i].transform.translation.x" in tf
+    assert "/tf.transforms[:].transform.translation.x" in tf
     odom = {t["topic"]: t for t in docs[1]["topics"]}["/base_pose_ground_truth"]["fields"]
     assert "/base_pose_ground_truth.twist.twist.linear.y" in odom
     # a binding written from the listing audits (R5 is violated at contact, 15.2 s)
@@ -50,3 +50,44 @@ def test_inspect_text_output_and_bad_file(tmp_path, shared):
     (tmp_path / "x.mcap").write_bytes(b"not a log")
     res = CliRunner().invoke(main, ["inspect", str(tmp_path / "x.mcap")])
     assert res.exit_code == 2 and "not an MCAP" in res.output
+
+
+def test_every_path_inspect_prints_binds_as_printed(tmp_path):
+    """quoted topics (``"ORB-SLAM".pose...``), ``[:]`` for items; each printed
+    path parses as a binding field and resolves in the log's schema; text fields list their
+    values, enum fields their constants, numbers are in plain notation."""
+    import _robot_logs as rl
+    from monitors.bindings.expression import ExprLocation, Field, parse_expression
+    from monitors.sources import open_log
+    from monitors.sources.schema import log_schemas
+    log = rl.write_robot_log(tmp_path)
+    res = CliRunner().invoke(main, ["inspect", str(log.path), "--json"])
+    assert res.exit_code == 0, res.output
+    topics = {t["topic"]: t for t in json.loads(res.output)[0]["topics"]}
+    schemas = log_schemas(open_log(str(log.path)))
+    n = 0
+    for topic, t in topics.items():
+        for path in t["fields"]:
+            node, _ = parse_expression(path, ExprLocation("inspect", None, None, None))
+            assert isinstance(node, Field) and node.topic == topic, path
+            schemas[topic].resolve(node.path)  # raises when it does not bind
+            n += 1
+    assert n > 100
+    assert '"ORB-SLAM".pose.position.x' in topics["ORB-SLAM"]["fields"]
+    assert '"groundtruth".pose.position.x' in topics["groundtruth"]["fields"]
+    assert topics["/mode"]["fields"]["/mode.data"]["values"] == ["charging", "navigating"]
+    status = topics["/battery"]["fields"]["/battery.power_supply_status"]["constants"]
+    assert status["POWER_SUPPLY_STATUS_CHARGING"] == 1 and len(status) == 5
+    level = topics["/diagnostics"]["fields"]["/diagnostics.status[:].level"]["constants"]
+    assert level == {"OK": 0, "WARN": 1, "ERROR": 2, "STALE": 3}
+    assert topics["/joint_states"]["fields"]["/joint_states.name"]["values"] == list(rl.JOINTS)
+    text = CliRunner().invoke(main, ["inspect", str(log.path)]).output
+    assert "/battery.header.stamp.sec  int32  min 1700000000 max 1700000009" in text
+    assert "e+" not in text
+    assert '/mode.data  string  values "charging", "navigating"' in text
+
+
+def test_plain_numbers_keep_the_digits_that_tell_them_apart():
+    from fretc.inspect import plain
+    assert plain(1.000158) == "1.000158" and plain(1432240000.25) == "1432240000.25"
+    assert plain(1.5e-7) == "0.00000015" and plain(-2.0) == "-2"

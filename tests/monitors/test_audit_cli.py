@@ -183,3 +183,45 @@ def test_numbers_behind_a_violated_boolean_are_shown(tmp_path):
         held = [v for t, v in scans if t <= row["time_ns"]][-1]
         assert row["value"] == pytest.approx(held)
         assert flags[row["tick"]] == (held < 0.9)
+
+
+def test_abs_in_a_requirement_hints_fret_spelling_and_its_variable_is_not_unused(tmp_path):
+    """``abs(...)`` in a requirement: a hint that FRET spells it absReal/absInt,
+    and the variable inside is not reported unused (its requirement failed to parse)."""
+    log = _synthetic(tmp_path)
+    (tmp_path / "syn.bindings.toml").unlink()
+    fret = tmp_path / "a.fret"
+    for text, hint in [("abs(speed) < 0.4", "absReal/absInt"),
+                       ("fabs(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)"),
+                       ("ABS(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)")]:
+        fret.write_text(f"A1: the bot shall always satisfy {text}\n")
+        res = run("-r", fret, log, "--tick-period", "100 ms", "--bind", "speed=/cmd.linear.x")
+        out = " ".join(res.output.split())
+        assert res.exit_code == 2 and hint in out, out
+        assert "no requirement uses it" not in out
+        assert "bindings (None)" not in out
+    # a variable that no requirement names is still reported
+    fret.write_text("A1: the bot shall always satisfy abs(speed) < 0.4\n")
+    res = run("-r", fret, log, "--tick-period", "100 ms", "--bind", "speed=/cmd.linear.x",
+              "--bind", "other=/cmd.linear.x")
+    assert "'other' is bound but no requirement uses it" in res.output
+
+
+def test_r_dir_reads_fret_exports_by_content_and_skips_other_json(tmp_path):
+    """Before, ``--json audit.json`` written into the requirements folder broke the next
+    ``-r DIR`` run (exit 2, nothing audited): a JSON file is read as requirements only when
+    it is a FRET export by its content; others are skipped with a note."""
+    log = _synthetic(tmp_path)
+    out = tmp_path / "audit.json"
+    first = run("-r", tmp_path, log, "--json", out)
+    assert first.exit_code == 0 and out.is_file(), first.output
+    second = run("-r", tmp_path, log, "--json", tmp_path / "again.json")
+    assert second.exit_code == 0, second.output
+    assert f"{out}: skipped: a JSON file that is not a FRET export" in " ".join(
+        second.output.split())
+    assert json.loads((tmp_path / "again.json").read_text())["summary"]["satisfied"] == 3
+    # a FRET export (whatever its name) is read by content
+    (tmp_path / "export.json").write_text(json.dumps(
+        [{"reqid": "E1", "fulltext": "the bot shall always satisfy speed <= 0.4"}]))
+    third = run("-r", tmp_path, log)
+    assert third.exit_code == 1 and "E1 violated" in third.output, third.output

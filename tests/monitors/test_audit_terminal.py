@@ -54,3 +54,31 @@ def test_parse_errors_are_printed_outside_the_table_with_the_caret(tmp_path):
     for i in carets:
         src = lines[i - 1]
         assert src[lines[i].index("^"):].startswith("eventualy"), (src, lines[i])
+
+
+def _speed_log(tmp_path, value):
+    from _logs import MS, twist, write_mcap
+    msgs = [("/cmd", "geometry_msgs/msg/Twist", k * 100 * MS + 7 * MS,
+             twist(value if k == 30 else 0.5)) for k in range(50)]
+    log = write_mcap(tmp_path / "speed.mcap", msgs)
+    (tmp_path / "s.fret").write_text("S1: the bot shall always satisfy speed <= 1.0\n")
+    (tmp_path / "s.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\nspeed = "/cmd.linear.x"\n')
+    return log
+
+
+def test_a_value_beside_its_threshold_shows_which_side_it_is_on(tmp_path):
+    """Before, the terminal showed ``1`` for a speed of 1.000158 at the violation of
+    ``speed <= 1.0``; every value shown reads back as the value sampled."""
+    import json
+    log = _speed_log(tmp_path, 1.000158)
+    res = _run("-r", tmp_path / "s.fret", log, "--verbose", "--json", tmp_path / "a.json")
+    assert res.exit_code == 1, res.output
+    assert "1.000158" in res.output
+    doc = json.loads((tmp_path / "a.json").read_text())
+    rows = doc["logs"][0]["verdicts"][0]["values"]["speed"]
+    assert any(r["value"] == 1.000158 for r in rows)
+    from monitors.report.verdicts import format_value
+    for x in (1.000158, 0.1 + 0.2, 1e-9, 123456789.125, 2.0, -0.5):
+        assert float(format_value(x)) == x
+    assert format_value(2.0) == "2" and format_value(True) == "T"

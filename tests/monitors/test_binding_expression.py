@@ -4,6 +4,8 @@ Transformer and the printer agree, and walking the tree follows the text."""
 from __future__ import annotations
 
 import pytest
+
+from monitors.bindings import EvalState
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -87,11 +89,15 @@ def test_the_transformer_builds_one_node_per_rule():
     assert right.right == Ref(41, "x")
 
 
-def test_a_slice_that_is_not_last_is_an_error_at_its_field():
-    with pytest.raises(BindingError) as exc:
-        compile_expression("v", "1 + min(/a.b[0:2].c)", source="f.toml", line=4, col=5)
-    assert str(exc.value) == ("f.toml:4:13: variable 'v': /a.b[0:2].c: a slice must be the "
-                              "last selector")
+def test_a_slice_before_a_field_reads_the_field_of_each_item():
+    """Foxglove's message path syntax: after a slice the rest of the path applies to each
+    item (a slice had to be last before)."""
+    from types import SimpleNamespace as NS
+    b = compile_expression("v", "1 + min(/a.b[0:2].c)", source="f.toml", line=4, col=5)
+    st = EvalState()
+    st.msgs["/a"] = NS(b=[NS(c=5), NS(c=3), NS(c=-9)])
+    assert b.evaluate(st) == 4.0
+    assert unparse(b.ast.right.args[0]) == "/a.b[0:2].c"
 
 
 def test_fields_of_a_binding_follow_the_text_through_substitution():

@@ -156,7 +156,7 @@ def test_every_witness_time_matches_the_audit_json(shipped):
             for e in svg.iter():
                 if e.get("data-mark") and e.get("data-ns"):
                     marks.setdefault(e.get("data-mark"), set()).add(int(e.get("data-ns")))
-            assert marks["violation"] == {fv["log_time_ns"]}
+            assert marks["violation"] == {fv["tick_time_ns"]}  # the tick's time
             assert marks["trigger"] == {tr["time_ns"]}
             assert marks["scope"] == {sc["start"]["time_ns"]}
             assert marks["window"] == {w["start_time_ns"]}

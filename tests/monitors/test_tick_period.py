@@ -74,3 +74,27 @@ def test_a_declared_nominal_rate_converts_and_a_wrong_one_warns(tmp_path):
     plan = load_plan(AuditConfig(requirements=(str(bad / "t.fret"),)))
     la = audit_log(plan, NOMINAL)
     assert any("/scan runs at 9.99 Hz, not its nominal 20 Hz" in w for w in la.warnings), la.warnings
+
+
+def test_the_nominal_rate_hint_gives_the_measured_rate(tmp_path):
+    """Before, the hint said "10 Hz" for a topic measured at 50 Hz."""
+    from _logs import MS, float64, write_mcap
+    log = write_mcap(tmp_path / "fast.mcap", [("/fast", "std_msgs/msg/Float64", k * 20 * MS,
+                                               float64(k % 7)) for k in range(101)])
+    (tmp_path / "f.fret").write_text(
+        "F1: upon high the bot shall within 1 second satisfy low\n"
+        "F2: the bot shall always satisfy x < 100\n")
+    (tmp_path / "f.bindings.toml").write_text(
+        '[tick]\ntopic = "/fast"\n[variables]\nhigh = "/fast.data > 5"\nlow = "/fast.data < 1"\n'
+        'x = "/fast.data"\n')
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "f.fret"),)))
+    la = audit_log(plan, str(log))
+    v = {x.requirement: x for x in la.verdicts}
+    assert v["F2"].verdict == "satisfied"
+    assert v["F1"].verdict == "error"
+    assert v["F1"].error.endswith('/fast runs at 50 Hz in this log: nominal_rate = "50 Hz"')
+    assert "10 Hz" not in v["F1"].error
+    # alone, the tick topic is not read for another requirement: counted for the hint
+    (tmp_path / "f.fret").write_text("F1: upon high the bot shall within 1 second satisfy low\n")
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "f.fret"),)))
+    assert 'nominal_rate = "50 Hz"' in audit_log(plan, str(log)).verdicts[0].error

@@ -107,5 +107,41 @@ def test_under_the_header_time_base_the_violation_is_drawn_at_its_tick_time():
         return {e.get("data-ns") for e in root.iter() if e.get("data-mark") == "violation"}
 
     assert violation_marks(v) == {str(start + 43 * P)}
-    v["first_violation"]["tick_time_base"] = "log"   # log time base: the deciding message
-    assert violation_marks(v) == {str(start + 43 * P + 2_000 * MS)}
+    # log time base: the tick's time too (one time per event everywhere)
+    v["first_violation"]["tick_time_base"] = "log"
+    assert violation_marks(v) == {str(start + 43 * P)}
+
+
+def _marks(v, log, P):
+    root = ET.fromstring(timeline_svg(v, log, period_ns=P))
+    out = {}
+    for e in root.iter():
+        if e.get("data-mark"):
+            out.setdefault(e.get("data-mark"), set()).add(int(e.get("data-ns")))
+    return out, " ".join(e.text or "" for e in root.iter())
+
+
+def test_markers_keep_the_order_of_their_ticks_and_the_label_gives_the_tick_time():
+    """Before, the violation was drawn at 29.775 s (its deciding message) before its
+    trigger at 29.800 s, and labelled 6.900 s where the terminal said 6.903 s."""
+    from common.units import format_offset
+    v, log = _verdict()
+    P = 100 * MS
+    start = log["start_time_ns"]
+    fv = v["first_violation"]
+    # violated at the trigger's own tick, decided by a message held from 25 ms before it
+    fv.update(tick=2, tick_time_ns=start + 2 * P, tick_time_s=0.2, tick_time_base="log",
+              log_time_ns=start + 2 * P - 25 * MS)
+    marks, text = _marks(v, log, P)
+    assert marks["violation"] == marks["trigger"] == {start + 2 * P}
+    assert min(marks["ltl3"]) >= max(marks["violation"])
+    assert f"violation {format_offset(start + 2 * P, start)}" in text
+
+
+def test_the_footer_states_the_origin_as_what_it_is():
+    """Before, the footer said "since the log's first tick" but measured from the log's
+    start (its first message)."""
+    v, log = _verdict()
+    _, text = _marks(v, log, 100 * MS)
+    assert "since the log's first tick" not in text
+    assert f"since the log's start, its first message (t0 = {log['start_time_ns']} ns" in text

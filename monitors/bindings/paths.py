@@ -1,0 +1,32 @@
+"""Text of message paths in Foxglove's message path syntax, as bindings and ``fretc inspect``
+print them: a topic bare when it is a plain ROS name (``/a/b_c``), else quoted
+(``"ORB-SLAM"``, ``"groundtruth"``); string literals in double quotes with ``\\"`` and
+``\\\\`` escaped (Foxglove's message path syntax, docs.foxglove.dev "Message path syntax").
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["PLAIN_TOPIC", "topic_text", "quote", "unquote"]
+
+#: A topic written without quotes: ``/`` and name characters, as grammar.lark's TOPIC.
+PLAIN_TOPIC = re.compile(r"(/[A-Za-z0-9_]+)+\Z")
+_ESCAPE = re.compile(r"\\(.)")
+
+
+def quote(text: str) -> str:
+    """``text`` as a double-quoted string literal of a binding (``\\`` and ``"`` escaped)."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def unquote(token: str) -> str:
+    """The text of a string literal token (``"a\\"b"`` or ``'a'``): quotes removed, a
+    backslash keeps the character after it."""
+    return _ESCAPE.sub(r"\1", token[1:-1])
+
+
+def topic_text(topic: str) -> str:
+    """A topic as it is written in a binding: bare when :data:`PLAIN_TOPIC` matches, else
+    quoted (a topic without a leading ``/`` or with ``-``, ``.``, spaces)."""
+    return topic if PLAIN_TOPIC.match(topic) else quote(topic)
