@@ -45,6 +45,16 @@ MAX_LTL3_BOUND_SUM = 96
 #: determinization can take minutes and gigabytes (fuzzing: ``only after m ... finally
 #: satisfy r & w0 & ... & w29``); status stays "unknown" with a note.
 MAX_LTL3_ATOMS = 10
+#: Spot's time grows with the size of the deterministic monitor, which for some shapes doubles
+#: with every tick of bound (``only before m whenever c ... after n ticks``: 2^(n+1) states,
+#: 0.5 s at n = 9, 1.7 s at 10, over 6 s at 11). Shapes whose largest bound exceeds
+#: PROBE_FROM are first built with every bound lowered by the same amount (largest bound
+#: PROBE_FROM - 1, then PROBE_FROM: cheap, deterministic); the monitor's size at the real
+#: bound is extrapolated from the growth between the two, and above MAX_PREDICTED_STATES the
+#: LTL3 automaton comes from formula progression instead (bench/bench_ltl3.py: no requirement
+#: with bounds up to 12 ticks over 1 s cold).
+PROBE_FROM = 6
+MAX_PREDICTED_STATES = 1100
 
 
 @dataclass(frozen=True)
@@ -110,6 +120,13 @@ def ltl3_automata(ft_inf: Node) -> LTL3Automata:
     bounds = [n.hi for n in ir.walk(ft_inf) if n.hi is not None]
     if bounds and (max(bounds) > MAX_LTL3_BOUND or sum(bounds) > MAX_LTL3_BOUND_SUM):
         return _progression_automata(shape, atoms, bounds)
+    if bounds and max(bounds) > PROBE_FROM:
+        predicted = predicted_states(shape, len(atoms), max(bounds))
+        if predicted > MAX_PREDICTED_STATES:
+            return _progression_automata(shape, atoms, bounds, (
+                f"Spot's monitor would have about {predicted} states (its growth between "
+                f"bounds {PROBE_FROM - 1} and {PROBE_FROM}, extrapolated to "
+                f"{max(bounds)}; more than {MAX_PREDICTED_STATES}: over a second to build)"))
     data = shape_automata("spot", shape, len(atoms), MAX_AUTOMATON_STATES, TABLE_MAX_APS)
     bad, good = _automaton(data["bad"], atoms), _automaton(data["good"], atoms)
     note = "" if bad is not None and good is not None else (
@@ -118,11 +135,40 @@ def ltl3_automata(ft_inf: Node) -> LTL3Automata:
     return LTL3Automata(bad, good, note)
 
 
-def _progression_automata(shape: Node, atoms: list[Node], bounds: list[int]) -> LTL3Automata:
-    """:func:`ltl3_automata` for bounds beyond what Spot determinizes quickly."""
-    why = (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed what "
-           f"Spot determinizes quickly (largest {MAX_LTL3_BOUND}, sum "
-           f"{MAX_LTL3_BOUND_SUM})")
+def predicted_states(shape: Node, n_atoms: int, largest: int) -> int:
+    """The states of Spot's "bad" LTL3 monitor of ``shape`` (largest bound ``largest``)
+    extrapolated from the monitors of ``shape`` with every bound lowered by the same amount
+    to a largest bound of PROBE_FROM - 1 and PROBE_FROM (see :data:`MAX_PREDICTED_STATES`):
+    ``s1 * (s1 / s0) ** (largest - PROBE_FROM)`` when the size grows, else ``s1``."""
+    sizes = []
+    for top in (PROBE_FROM - 1, PROBE_FROM):
+        low = _lowered(shape, largest - top)
+        data = shape_automata("spot", low, n_atoms, MAX_AUTOMATON_STATES, TABLE_MAX_APS)
+        sizes.append(max(len(data[k]["table"] or data[k]["chains"] or [])
+                         if data[k] is not None else MAX_AUTOMATON_STATES
+                         for k in ("bad", "good")))
+    s0, s1 = max(sizes[0], 1), max(sizes[1], 1)
+    if s1 <= s0:
+        return s1
+    return int(s1 * (s1 / s0) ** (largest - PROBE_FROM))
+
+
+def _lowered(n: Node, by: int) -> Node:
+    """``n`` with every bound lowered by ``by`` ticks (not below 0)."""
+    if not n.args:
+        return n
+    lo = None if n.lo is None else max(n.lo - by, 0)
+    hi = None if n.hi is None else max(n.hi - by, 0)
+    return Node(n.op, tuple(_lowered(a, by) for a in n.args), n.name, lo, hi)
+
+
+def _progression_automata(shape: Node, atoms: list[Node], bounds: list[int],
+                          why: str | None = None) -> LTL3Automata:
+    """:func:`ltl3_automata` for bounds beyond what Spot determinizes quickly (``why``: the
+    reason given in the note; by default the bounds' limits)."""
+    why = why or (f"ft_inf's bounds (largest {max(bounds)}, sum {sum(bounds)} ticks) exceed "
+                  f"what Spot determinizes quickly (largest {MAX_LTL3_BOUND}, sum "
+                  f"{MAX_LTL3_BOUND_SUM})")
     if max(bounds) >= ltl3.MAX_STATES or len(atoms) > ltl3.MAX_ATOMS:
         data = {"bad": None, "good": None}
     else:
