@@ -60,6 +60,10 @@ MAX_OTHER_CHANNELS = 1000
 #: Connections in a row that sent a frame of the wrong shape and then dropped before any
 #: message after which the client stops retrying (``gave_up``).
 MAX_HOSTILE_SESSIONS = 5
+#: The largest WebSocket message accepted (bytes): a larger one closes the connection (code
+#: 1009, "message too big"), which is reported and retried like any disconnection. Big enough
+#: for camera images and point clouds; a bound so that one frame cannot take all memory.
+MAX_FRAME_BYTES = 256 * 1024 * 1024
 
 #: What to install for the live commands (``fretc watch``, ``fretc replay --serve``).
 WATCH_HINT = "pip install 'fretc[watch]'"
@@ -235,7 +239,7 @@ class WebSocketClient:
             try:
                 async with websockets.connect(
                         self.url, subprotocols=list(self.subprotocols or ()) or None,
-                        max_size=None, open_timeout=5, ping_interval=5, ping_timeout=10,
+                        max_size=MAX_FRAME_BYTES, open_timeout=5, ping_interval=5, ping_timeout=10,
                         compression=None) as ws:
                     self._check(ws)
                     self._ws = ws
@@ -254,11 +258,17 @@ class WebSocketClient:
                         self._put("closed", time.time_ns(),
                                   f"the server closed the connection (code {ws.close_code})")
                         return
-                    reason = "the connection was lost without a close frame"
+                    reason = ("the connection was lost without a close frame"
+                              if not _too_big(ws) else
+                              f"a message over {MAX_FRAME_BYTES:,} bytes (the limit of one "
+                              "frame) closed the connection")
             except asyncio.CancelledError:  # pragma: no cover - loop shutdown
                 return
             except Exception as exc:  # any network fault: report, back off, retry
                 reason = f"{type(exc).__name__}: {exc}"
+                if getattr(getattr(exc, "sent", None), "code", None) == 1009:
+                    reason += (f" (a message over {MAX_FRAME_BYTES:,} bytes, the limit of "
+                               "one frame)")
             finally:
                 self._ws = None
             self._put("disconnected", time.time_ns(), reason)
@@ -284,6 +294,13 @@ class WebSocketClient:
         """Report a frame of the wrong shape (a ``protocol`` event); the session goes on."""
         self._session_problems += 1
         self.events.put(("protocol", time.time_ns(), detail))
+
+
+def _too_big(ws) -> bool:
+    """Whether the client closed ``ws`` for a message over :data:`MAX_FRAME_BYTES` (close
+    code 1009, RFC 6455 section 7.4.1)."""
+    sent = getattr(getattr(ws, "protocol", None), "close_sent", None)
+    return getattr(sent, "code", None) == 1009
 
 
 class FoxgloveClient(WebSocketClient):

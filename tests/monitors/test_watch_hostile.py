@@ -95,6 +95,21 @@ def test_a_server_repeating_a_bad_frame_and_dropping_is_given_up_on(plan):
     assert exit_code([la]) == 2
 
 
+def test_a_frame_over_the_size_limit_closes_the_connection_with_the_reason(plan, monkeypatch):
+    from monitors.live import client
+    monkeypatch.setattr(client, "MAX_FRAME_BYTES", 4096)
+
+    async def script(ws, k):
+        await ws.send(advertise([(1, "/a")]) if k else "x" * 10_000)
+        await asyncio.sleep(0.5)
+        await ws.close(1000, "end of the run")
+
+    w, la, connections, _took = _watch(plan, script, wait=1.0)
+    assert connections >= 2  # the oversized frame cut the first connection; retried
+    assert any(e.kind == "disconnected" and "over 4,096 bytes" in e.detail for e in w.events), \
+        [(e.kind, e.detail) for e in w.events]
+
+
 def test_a_flood_of_advertised_channels_is_bounded_and_reported(plan):
     async def script(ws, k):
         await ws.send(advertise([(i + 2, f"/x{i}") for i in range(100_000)] + [(1, "/a")]))
