@@ -11,7 +11,7 @@
    ``mcap`` reader and rosbags' CDR deserializer with types from the embedded schemas: the
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``monitors.audit.audit_log``: read, sample every 100 ms, monitor, evidence),
-   and prints both CPU times and their ratio (aim: <= 1.0x: the audit decodes
+   and prints both CPU times and their ratio (aim: <= 0.5x, issue 28: the audit decodes
    only the fields its bindings read, :mod:`monitors.sources.selective`); then the same two as
    commands in fresh processes (start-up included). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
@@ -198,7 +198,7 @@ def main() -> None:
           f"(runs: {', '.join(f'{x:.2f}' for x in audits)}; + {t_plan:.2f} s compiling the "
           "requirements, once)")
     print(f"ratio audit / plain:                               {t_audit / t_plain:8.2f} x   "
-          "(aim <= 1.0x)")
+          "(aim <= 0.5x)")
     c_plain, c_audit = command_cpu(log, fret)
     print(f"as commands (fresh processes, start-up included): plain read {c_plain:.2f} s, "
           f"fretc audit {c_audit:.2f} s CPU, ratio {c_audit / c_plain:.2f} x")

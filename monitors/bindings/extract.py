@@ -17,7 +17,7 @@ import numpy as np
 
 from .expression import Const, Field, Filter, Slice
 
-__all__ = ["LASER_SCAN", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
+__all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
 
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 
@@ -108,19 +108,25 @@ def _no_field(data: Any, path: tuple, text: str, exc: AttributeError) -> FieldAc
     return FieldAccessError(f"{text}: a {typename} message has no field {exc.name!r}")
 
 
+def rep117(ranges: np.ndarray, range_min: Any, range_max: Any) -> Valid:
+    """LaserScan ranges as :class:`Valid` under REP 117: -inf is a detection closer than
+    ``range_min`` and reads as ``range_min`` (a too-close object is never hidden); valid are
+    the values inside ``[range_min, range_max]``. ``ranges`` is 1-D (one message, scalar
+    limits) or 2-D (messages x beams, limits as columns of shape (messages, 1))."""
+    arr = np.asarray(ranges, dtype=np.float64)
+    too_close = np.isneginf(arr)
+    if too_close.any():
+        arr = np.where(too_close, range_min, arr)
+    return Valid(arr, (arr >= range_min) & (arr <= range_max))
+
+
 def _laser_ranges(parent: Any) -> Any:
     """``parent.ranges``: as :class:`Valid` with the REP 117 mask when ``parent`` is a
     LaserScan, else as it is."""
     v = parent.ranges
     if getattr(parent, "__msgtype__", None) != LASER_SCAN:
         return v
-    arr = np.asarray(v, dtype=np.float64)
-    # REP 117: -inf is a detection closer than range_min; count it as range_min so that a
-    # too-close object is never hidden
-    too_close = np.isneginf(arr)
-    if too_close.any():
-        arr = np.where(too_close, parent.range_min, arr)
-    return Valid(arr, (arr >= parent.range_min) & (arr <= parent.range_max))
+    return rep117(v, parent.range_min, parent.range_max)
 
 
 def _sliced(f: Field) -> Callable[[Any], Any]:

@@ -13,6 +13,7 @@ changes between messages, text, nested messages, a field missing from some messa
 
 from __future__ import annotations
 
+import operator
 from typing import Any
 
 import numpy as np
@@ -21,7 +22,7 @@ from common.units import NS_PER_S
 
 from ..bindings.compile import EvalError, EvalState
 from ..bindings.expression import Field, unparse
-from ..bindings.extract import FieldAccessError, Valid, make_extractor
+from ..bindings.extract import LASER_SCAN, FieldAccessError, Valid, make_extractor, rep117
 
 __all__ = ["Irregular", "MessageColumns", "HeldColumns", "regular_column"]
 
@@ -75,6 +76,8 @@ class MessageColumns:
         key = (topic, path)
         col = self._fields.get(key)
         if col is None:
+            col = self._fields[key] = _plain_column(self.data[topic], path)
+        if col is None:
             ex = make_extractor(node)
             try:
                 values = [ex(d) for d in self.data[topic]]
@@ -113,6 +116,45 @@ class MessageColumns:
             raise Irregular("a reduction that is not one number per message")
         self._reduced[key] = out
         return out
+
+
+def _plain_column(msgs: list[Any], path: tuple) -> Any:
+    """The column of a path of field names (no index) read with one ``attrgetter`` per
+    message when every value is a number or a bool (bool or float64 array), or LaserScan
+    ranges of one length (REP 117 applied to all messages at once); None otherwise (the
+    caller then extracts message by message, with its errors)."""
+    if not msgs or not path or not all(isinstance(p, str) for p in path):
+        return None
+    if path[-1] == "ranges":
+        parents = msgs if len(path) == 1 else _values(msgs, path[:-1])
+        if parents is None or any(getattr(p, "__msgtype__", None) != LASER_SCAN
+                                  for p in parents):
+            return None
+        rows = [p.ranges for p in parents]
+        if len({len(r) for r in rows}) != 1:
+            return None
+        limits = np.array([(p.range_min, p.range_max) for p in parents], dtype=np.float64)
+        return rep117(np.array(rows, dtype=np.float64), limits[:, :1], limits[:, 1:])
+    raw = _values(msgs, path)
+    if raw is None:
+        return None
+    try:
+        arr = np.array(raw)
+    except ValueError:  # arrays of different lengths
+        return None
+    if arr.ndim != 1:
+        return None
+    if arr.dtype == np.bool_:
+        return arr
+    return arr.astype(np.float64) if arr.dtype.kind in "iuf" else None
+
+
+def _values(msgs: list[Any], path: tuple) -> list[Any] | None:
+    get = operator.attrgetter(".".join(path))
+    try:
+        return [get(d) for d in msgs]
+    except AttributeError:
+        return None
 
 
 def _plain(v: Any) -> Any:
