@@ -78,6 +78,9 @@ class MonitorSource:
     slots_init: str
     slots_unpack: str
     slots_next: str
+    slots_unpack_run: str
+    slots_loop_next: str
+    slots_run_end: str
     step_lines: list[str]
     verdict: str
     atom_locals: list[str]
@@ -150,6 +153,12 @@ def monitor_source(compiled, index: int) -> MonitorSource:
         slots_init=slots_init,
         slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))) + "tick, _",
         slots_next=slots_next, step_lines=code.lines,
+        # run(): the slots stay locals across the ticks of the loop
+        slots_unpack_run="".join(f"s{i}, " for i in range(len(code.slots))) + "tick, verdict",
+        slots_loop_next=(", ".join(f"s{i}" for i in range(len(code.slots))) + " = "
+                         + ", ".join(nxt for _, nxt in code.slots)) if code.slots else "",
+        slots_run_end="(" + "".join(f"s{i}, " for i in range(len(code.slots)))
+                      + "tick, verdict)",
         verdict=verdict, atom_locals=atom_locals, automata=automata,
         uses_first=code.uses_first,
         bad_sub=_letter_code(bad, atom_nodes, atom_locals),

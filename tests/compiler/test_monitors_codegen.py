@@ -71,6 +71,12 @@ def test_monitors_agree_with_reference_evaluator(all_templates, data):
     assert m.finish() == ft_at(c.formalization.ft, trace)
     m.reset()
     assert [m.step(state) for state in trace] == got
+    # run(): the same verdicts, state and LTL3 status in one call, also split in two blocks
+    k = data.draw(st.integers(0, len(trace)))
+    r = mod.MONITORS[c.id]()
+    assert r.run(trace[:k]) + r.run(trace[k:]) == got
+    assert (r.status, r.status_tick, r.ticks, r.finish()) == \
+        (m.status, m.status_tick, m.ticks, m.finish())
 
 
 def test_every_template_on_random_traces(all_templates):
