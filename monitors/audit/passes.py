@@ -18,6 +18,7 @@ import numpy as np
 from ..bindings import Bindings
 from common.problems import SignalError
 from ..signals import blocks_of_ticks, sample, sample_blocks
+from ..signals.blocks import MAX_TICKS
 from ..sources import CSV_TOPIC
 from .columns import TickColumns
 from .model import AuditPlan, RequirementPlan
@@ -25,9 +26,6 @@ from .model import AuditPlan, RequirementPlan
 __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
            "expected_ticks", "MAX_TICKS"]
 
-#: At most this many ticks per log: a tick period that would give more (``tick period =
-#: "1 ns"`` on an 88 s log: 8.8e10) is an input error that says how many.
-MAX_TICKS = 10**8
 
 
 @dataclass

@@ -31,12 +31,16 @@ from .clock import HeaderBuffer, Sampling, Tick, check_topics, sample
 from .columns import HeldColumns, Irregular, MessageColumns
 from .groups import GroupSampling, _restrict
 
-__all__ = ["BLOCK", "TickBlock", "sample_blocks", "blocks_of_ticks"]
+__all__ = ["BLOCK", "MAX_TICKS", "TickBlock", "sample_blocks", "blocks_of_ticks"]
 
 #: Messages read between two evaluations of the clocks.
 BLOCK = 4096
 #: At most this many ticks in one block (a long gap at a short period gives many ticks).
 MAX_BLOCK_TICKS = 1 << 16
+#: At most this many ticks per clock: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10; a header.stamp that jumps by centuries) is an input error
+#: that says how many, raised before any of them is made.
+MAX_TICKS = 10**8
 
 
 class TickBlock(NamedTuple):
@@ -266,8 +270,14 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
             if c.next_grid is None:
                 c.next_grid = min(b.times[0] for b in bufs if b.times)
             end = last + 1 if final else last
-            n = 0 if c.next_grid >= end else min(-(-(end - c.next_grid) // c.period),
-                                                 MAX_BLOCK_TICKS)
+            due = 0 if c.next_grid >= end else -(-(end - c.next_grid) // c.period)
+            if c.index + c.sampling.warmup_ticks + due > MAX_TICKS:
+                raise SignalError(
+                    f"{c.sampling.source.path}: more than {MAX_TICKS:,} ticks (the limit): "
+                    f"the tick period {c.period} ns from {c.next_grid} ns to the newest "
+                    f"message at {last} ns (time base: a header.stamp jump?); choose a longer "
+                    "tick period")
+            n = min(due, MAX_BLOCK_TICKS)
             times = c.next_grid + c.period * np.arange(n, dtype=np.int64)
             own = None
             c.next_grid += n * c.period

@@ -382,3 +382,19 @@ def test_sample_arrays_equals_sample(tmp_path_factory, a_times, s_times, period,
     arr = sample_arrays(src, b)
     assert arr.vectorized and arr.warmup_ticks == s.warmup_ticks and len(arr.times) == n
     _equal_paths(src, b)
+
+
+def test_a_header_stamp_jump_of_decades_is_an_error_before_any_tick_is_made(tmp_path):
+    """One stamp 63 years ahead at a 10 ms period would need 2e11 ticks: the clock says so at
+    once (the audit then makes its requirements errors) instead of making 10^8 of them."""
+    import time
+    rows = [(1000, 900, 1.0), (1100, 1000, 2.0), (1200, 2 * 10**12, 3.0), (1300, 1100, 4.0)]
+    msgs = [("/cmd", "geometry_msgs/msg/TwistStamped", lt * MS, twist_stamped(hs * MS, x=x))
+            for lt, hs, x in rows]
+    src = open_log(write_mcap(tmp_path / "jump.mcap", msgs))
+    b = parse_bindings('[tick]\nperiod = "10 ms"\ntime = "header"\nheader_lag = "50 ms"\n'
+                       '[variables]\nx = "/cmd.twist.linear.x"\n')
+    t0 = time.process_time()
+    with pytest.raises(SignalError, match=r"more than 100,000,000 ticks .*header\.stamp jump"):
+        sample_arrays(src, b)
+    assert time.process_time() - t0 < 5
