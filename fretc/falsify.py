@@ -57,7 +57,7 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
     CMA-ES minimizes the least robustness (the margin behind each verdict, as fretc audit
     gives it) over the target requirements, one simulator run per evaluation.
 
-    Each run that violates a target no earlier run violated is kept as runs/run-NNNN.mcap
+    Each run that violates a target requirement is kept as runs/run-NNNN.mcap
     with its audit (run-NNNN.audit.json); falsify.json, falsify.md and falsify.svg report
     the search (robustness against runs, each requirement's smallest margin).
 

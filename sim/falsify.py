@@ -50,8 +50,7 @@ class Run:
         violated: the target requirements violated on the run.
         objective: the least robustness over the targets (None when none has one).
         mcap: the MCAP file written for the run (relative to the output folder), or None
-            when the run was not kept (only a run violating a target requirement that no
-            earlier run violated is kept).
+            when the run was not kept (every run violating a target requirement is kept).
         audit: the run's :class:`monitors.report.model.LogAudit`.
     """
 
@@ -225,14 +224,13 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
 
 def _take(search: Search, runs: list[Run], first: bool, violated_before: set[str], out: Path,
           progress) -> bool:
-    """Add a batch's runs to the search in order, keep the MCAP of a run violating a target
-    no earlier run violated (delete the others); True when the search stops."""
+    """Add a batch's runs to the search in order, keep the MCAP of every run violating a
+    target (delete the others); True when the search stops."""
     for run in runs:
         search.runs.append(run)
         path = out / "runs" / f"run-{run.index:04d}.mcap"
-        new = [t for t in run.violated if t not in violated_before]
-        if new:
-            violated_before.update(new)
+        if run.violated:
+            violated_before.update(run.violated)
             run.mcap = str(path.relative_to(out))
         elif path.exists():
             os.remove(path)
