@@ -11,7 +11,7 @@
    ``mcap`` reader and rosbags' CDR deserializer with types from the embedded schemas: the
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``monitors.audit.audit_log``: read, sample every 100 ms, monitor, evidence),
-   and prints both CPU times and their ratio (aim: <= 0.5x, issue 28: the audit decodes
+   and prints both CPU times and their ratio (aim: <= 0.5x; the audit decodes
    only the fields its bindings read, :mod:`monitors.sources.selective`); then the same two as
    commands in fresh processes (start-up included). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
