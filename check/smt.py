@@ -131,8 +131,11 @@ class _FirstOrder:
             return {"&": lambda: z3.And(a, b), "|": lambda: z3.Or(a, b),
                     "->": lambda: z3.Implies(a, b), "<->": lambda: a == b,
                     "xor": lambda: z3.Xor(a, b)}[op]()
-        if op == "X":
-            return self.at(n.args[0], t + 1)
+        if op == "X":  # a chain of X as one shift (witness lengths nest X a thousand deep)
+            depth = 0
+            while n.op == "X":
+                n, depth = n.args[0], depth + 1
+            return self.at(n, t + depth)
         if op in ("F", "U", "G", "V"):
             return self._defined(n)(t)
         raise ValueError(f"no z3 encoding of IR node {op!r} in a future formula")
@@ -185,9 +188,10 @@ class _Lasso:
         self.constraints: list = []
         self.fresh = 0
 
-    def succ(self, i: int) -> int:
-        """The position after ``i``."""
-        return i + 1 if i + 1 < self.K else self.l
+    def step(self, i: int, d: int) -> int:
+        """The position ``d`` steps after ``i``."""
+        v = i + d
+        return v if v < self.K else self.l + (v - self.l) % (self.K - self.l)
 
     def _vars(self, sort: str) -> list:
         z3 = self.z3
@@ -217,9 +221,12 @@ class _Lasso:
             fn = {"&": z3.And, "|": z3.Or, "->": z3.Implies, "<->": lambda a, b: a == b,
                   "xor": z3.Xor}[op]
             return [fn(a, b) for a, b in zip(self.series(n.args[0]), self.series(n.args[1]))]
-        if op == "X":
-            x = self.series(n.args[0])
-            return [x[self.succ(i)] for i in range(K)]
+        if op == "X":  # a chain of X as one shift (no recursion per X)
+            depth = 0
+            while n.op == "X":
+                n, depth = n.args[0], depth + 1
+            x = self.series(n)
+            return [x[self.step(i, depth)] for i in range(K)]
         if op in ("F", "G") and n.hi is not None:
             return self._window(n)
         if op == "F":
