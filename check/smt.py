@@ -8,9 +8,9 @@ infinite words as Spot reads them) gets two encodings, tried in turn within one 
 1. **Lasso models** (bounded model checking with a loop, Biere, Cimatti, Clarke, Zhu, TACAS
    1999): positions ``0 .. K-1`` whose successor of ``K-1`` is ``l``. Each atom is a z3
    variable per position; ``U`` (and ``F``, ``G``, ``V`` through it) is computed on the lasso
-   by two backward passes over the loop; a bounded ``F[lo,hi]``/``G[lo,hi]`` counts its
-   operand in the window by prefix sums (z3 ``Int``), so its size does not depend on the
-   bound. A model found is an ultimately periodic word meeting every formula: **sat** with
+   by two backward passes over the loop; a bounded ``F[lo,hi]``/``G[lo,hi]`` reads the
+   distance to its operand's next occurrence (a z3 ``Int`` per position, related to the
+   next position's only), so its size does not depend on the bound. A model found is an ultimately periodic word meeting every formula: **sat** with
    that word. A shape without model says nothing (a longer lasso may have one).
 2. **A first-order proof** (the translation of LTL into first-order logic over the naturals,
    Kamp 1968; the SMT encodings of MLTL by Li, Rozier et al. do the same for finite
@@ -74,7 +74,8 @@ def _z3():
 
 
 class _Atoms:
-    """z3 terms of the atoms at a position (shared by both encodings of one query)."""
+    """z3 terms of the atoms at a position: functions of an Int (``prefix`` "") or, with
+    ``prefix`` "@", one constant per position (an int)."""
 
     def __init__(self, z3, prefix: str):
         self.z3 = z3
@@ -85,7 +86,11 @@ class _Atoms:
         z3 = self.z3
         key = (name, str(sort))
         if key not in self.funcs:
-            self.funcs[key] = z3.Function(f"{self.prefix}{name}", z3.IntSort(), sort)
+            if self.prefix == "@":  # one constant per position (no function to reason on)
+                make = z3.Bool if sort == z3.BoolSort() else z3.Real
+                self.funcs[key] = lambda t, make=make: make(f"{name}@{t}")
+            else:
+                self.funcs[key] = z3.Function(f"{self.prefix}{name}", z3.IntSort(), sort)
         return self.funcs[key]
 
     def at(self, atom: Node, t):
@@ -182,7 +187,7 @@ class _Lasso:
 
     def __init__(self, z3, K: int, loop: int):
         self.z3, self.K, self.l = z3, K, loop
-        self.atoms = _Atoms(z3, "")
+        self.atoms = _Atoms(z3, "@")
         self.memo: dict[Node, list] = {}
         self.counts: dict[Node, list] = {}
         self.constraints: list = []
@@ -214,7 +219,7 @@ class _Lasso:
         if op == "FTP":
             return [z3.BoolVal(i == 0) for i in range(K)]
         if _is_atom(n):
-            return [self.atoms.at(n, z3.IntVal(i)) for i in range(K)]
+            return [self.atoms.at(n, i) for i in range(K)]
         if op == "!":
             return [z3.Not(x) for x in self.series(n.args[0])]
         if op in ("&", "|", "->", "<->", "xor"):
@@ -256,54 +261,36 @@ class _Lasso:
             c.append(out[i] == z3.Or(b[i], z3.And(a[i], nxt)))
         return out
 
-    def _count(self, p: Node) -> list:
-        """Prefix sums: ``c[i]`` the number of positions ``0 .. i`` where ``p`` holds."""
-        got = self.counts.get(p)
+    def _distance(self, p: Node, width: int) -> list:
+        """``d[i]``: ticks from position ``i`` to the next position where ``p`` holds,
+        saturated at ``width + 1`` (more than ``width``, or never). Each position relates
+        to its successor only (difference constraints), so the size does not grow with
+        ``width``; on the loop the saturation makes the solution unique."""
+        key = (p, width)
+        got = self.counts.get(key)
         if got is None:
             z3 = self.z3
             x = self.series(p)
-            got = self.counts[p] = self._vars("int")
+            bits = (width + 1).bit_length()
+            self.fresh += 1
+            got = self.counts[key] = [z3.BitVec(f"_d{self.fresh}_{i}", bits)
+                                      for i in range(self.K)]
             for i in range(self.K):
-                prev = got[i - 1] if i else z3.IntVal(0)
-                self.constraints.append(got[i] == prev + z3.If(x[i], 1, 0))
+                nxt = got[self.step(i, 1)]
+                self.constraints.append(got[i] == z3.If(
+                    x[i], z3.BitVecVal(0, bits), z3.If(z3.UGE(nxt, width), z3.BitVecVal(
+                        width + 1, bits), nxt + 1)))
         return got
 
-    def ranges(self, i: int, lo: int, hi: int) -> list[tuple[int, int]]:
-        """The positions ``lo .. hi`` steps after ``i`` as at most three ranges ``(a, b)``."""
-        K, loop = self.K, self.l
-        period = K - loop
-        A, B = i + lo, i + hi
-        out = []
-        if A <= K - 1:
-            out.append((A, min(B, K - 1)))
-        start = max(A, K)
-        if B >= start:
-            length = B - start + 1
-            if length >= period:
-                return out + [(loop, K - 1)]
-            s0 = loop + (start - loop) % period
-            end = s0 + length - 1
-            if end <= K - 1:
-                out.append((s0, end))
-            else:
-                out += [(s0, K - 1), (loop, loop + end - K)]
-        return out
-
     def _window(self, n: Node) -> list:
+        """``F[lo,hi] p`` at ``i``: from ``lo`` steps after ``i``, the next ``p`` is at most
+        ``hi - lo`` ticks away; ``G[lo,hi] p`` = ``!F[lo,hi] !p``."""
         z3 = self.z3
-        c = self._count(n.args[0])
-
-        def count(a: int, b: int):
-            return c[b] - (c[a - 1] if a else 0)
-
-        out = []
-        for i in range(self.K):
-            parts = self.ranges(i, n.lo or 0, n.hi)
-            if n.op == "F":
-                out.append(z3.Or(*[count(a, b) > 0 for a, b in parts]))
-            else:
-                out.append(z3.And(*[count(a, b) == b - a + 1 for a, b in parts]))
-        return out
+        lo, width = n.lo or 0, n.hi - (n.lo or 0)
+        p = n.args[0] if n.op == "F" else ir.not_(n.args[0])
+        d = self._distance(p, width)
+        out = [z3.ULE(d[self.step(i, lo)], width) for i in range(self.K)]
+        return out if n.op == "F" else [z3.Not(x) for x in out]
 
 
 # --------------------------------------------------------------------------- the solver
@@ -329,30 +316,29 @@ class SmtSolver:
         z3 = _z3()
         deadline = time.monotonic() + self.timeout
         bound = max_bound(formulas)
+        tried = 0
         try:
             shapes = [(1, 0), (2, 1), (2, 0), (4, 3), (4, 0)]
-            for shape in shapes:
-                got = self._lasso(z3, formulas, shape, deadline)
+            big = [(K, loop) for K in sorted({bound + 2, 2 * bound + 3})
+                   for loop in (0, K - 1, (K - 1) // 2)]
+            # small lassos, short proofs by model-based instantiation then by E-matching
+            # alone (each proves what the other misses on FRET's formulas; a proof found is
+            # found in about a second), a lasso past the largest bound, a longer proof,
+            # the other lassos, and the proof again
+            plan = ([("lasso", (x, 1.0)) for x in shapes] + [("proof", (0.15, True, 2.0))]
+                    + [("proof", (0.1, False, 2.0))] + [("lasso", (big[0], 0.5))]
+                    + [("proof", (0.4, True, None))]
+                    + [("lasso", (x, 0.5)) for x in big[1:]] + [("proof", (1.0, True, None))])
+            for kind, arg in plan:
+                if time.monotonic() > deadline:
+                    break
+                if kind == "lasso":
+                    got = self._lasso(z3, formulas, arg[0], deadline, arg[1])
+                    tried = max(tried, arg[0][0])
+                else:
+                    got = self._proof(z3, formulas, deadline, *arg)
                 if got is not None:
                     return got
-            # E-matching alone, then model-based instantiation: each proves what the other
-            # misses on FRET's formulas (measured in bench/bench_check.py)
-            for share, mbqi in ((0.2, False), (0.6, True)):
-                proof = self._proof(z3, formulas, deadline, share, mbqi)
-                if proof is not None:
-                    return proof
-            tried = max(shapes)[0]
-            for K in sorted({bound + 2, 2 * bound + 3, 3 * bound + 4}):
-                for loop in (K - 1, 0, (K - 1) // 2):
-                    if time.monotonic() > deadline:
-                        break
-                    got = self._lasso(z3, formulas, (K, loop), deadline)
-                    tried = max(tried, K)
-                    if got is not None:
-                        return got
-            proof = self._proof(z3, formulas, deadline, 1.0, True)
-            if proof is not None:
-                return proof
         except (ValueError, z3.Z3Exception) as exc:
             self.failures.append(f"z3 could not take the query: {exc}")
             return UNKNOWN
@@ -362,16 +348,18 @@ class SmtSolver:
             f"unsatisfiability within {self.timeout:g} s")
         return UNKNOWN
 
-    def _left(self, deadline: float, share: float = 1.0) -> int:
+    def _left(self, deadline: float, share: float = 1.0, cap: float | None = None) -> int:
+        """Milliseconds for one attempt: ``share`` of the time left, at most ``cap`` s."""
         import time
 
-        return max(1, int((deadline - time.monotonic()) * share * 1000))
+        left = (deadline - time.monotonic()) * share
+        return max(1, int((left if cap is None else min(left, cap)) * 1000))
 
-    def _lasso(self, z3, formulas, shape, deadline):
+    def _lasso(self, z3, formulas, shape, deadline, share: float):
         K, loop = shape
         enc = _Lasso(z3, K, loop)
-        s = z3.SolverFor("QF_LIRA")
-        s.set("timeout", self._left(deadline))
+        s = z3.Solver()
+        s.set("timeout", self._left(deadline, share))
         for f in formulas:
             s.add(enc.series(f)[0])
         s.add(*enc.constraints)
@@ -379,10 +367,10 @@ class SmtSolver:
             return None
         return (True, _word(z3, s.model(), enc, formulas))
 
-    def _proof(self, z3, formulas, deadline, share: float, mbqi: bool):
+    def _proof(self, z3, formulas, deadline, share: float, mbqi: bool, cap: float | None):
         enc = _FirstOrder(z3)
         s = z3.Solver()
-        s.set("timeout", self._left(deadline, share))
+        s.set("timeout", self._left(deadline, share, cap))
         s.set("mbqi", mbqi)
         for f in formulas:
             s.add(enc.at(f, z3.IntVal(0)))
