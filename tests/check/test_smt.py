@@ -52,9 +52,9 @@ def _file(tmp_path: Path, parts) -> Path:
     return p
 
 
-def _run(path: Path, engine: str, **kw):
+def _run(path: Path, engine: str, timeout: float = 60, **kw):
     return check_requirements(compile_entries(load_requirements([path])), engine=engine,
-                              timeout=60, **kw)
+                              timeout=timeout, **kw)
 
 
 def _answers(result) -> dict:
@@ -63,21 +63,27 @@ def _answers(result) -> dict:
         for key in ("satisfiable", "non_vacuous", "redundant"):
             out[(r["id"], key)] = r[key]
     for f in result.findings:
-        if f.kind in ("conflict", "vacuous") and not f.cut:
-            out[(f.kind, tuple(f.requirements))] = f.subsets
+        if f.kind in ("conflict", "vacuous"):
+            # a cut enumeration (an unknown subset check) may miss or grow a subset
+            unsure = f.cut or "some subset checks were unknown" in f.message
+            out[(f.kind, f.requirements[0])] = "unknown" if unsure else f.subsets
+        elif f.kind == "unknown":
+            out[("unknown", f.requirements[0])] = "unknown"
     return out
 
 
-@settings(max_examples=12)
+@settings(max_examples=4)
 @given(_SET)
 def test_smt_and_spot_agree_on_random_sets(tmp_path_factory, parts):
     """Every check (satisfiability, non-vacuity, redundancy, minimal subsets) answers alike
     by Spot and by z3 on bounds up to 12, where neither is unknown."""
     path = _file(tmp_path_factory.mktemp("agree"), parts)
-    spot, smt = _answers(_run(path, "spot")), _answers(_run(path, "smt"))
+    spot, smt = (_answers(_run(path, e, timeout=10)) for e in ("spot", "smt"))
+    unsure = {k[1] if k[0] in ("conflict", "vacuous", "unknown") else k[0]
+              for d in (spot, smt) for k, v in d.items() if v == "unknown"}
     for key in set(spot) | set(smt):
         a, b = spot.get(key), smt.get(key)
-        if "unknown" in (a, b):
+        if "unknown" in (a, b) or (key[0] in ("conflict", "vacuous") and key[1] in unsure):
             continue
         assert a == b, (key, path.read_text())
 
@@ -110,7 +116,7 @@ def _spot_sat(worker, formula):
     return worker.ask(("sat", [to_spot(ir.and_(formula, inv))], []))
 
 
-@settings(max_examples=60)
+@settings(max_examples=40)
 @given(st.lists(_FORMULA, min_size=1, max_size=3))
 def test_smt_formulas_agree_with_spot_and_models_hold(formulas):
     """z3's answer on random formulas (bounds up to 15) is Spot's, and every lasso z3 gives
@@ -181,6 +187,7 @@ def _audit(req: Path, csv: Path, tmp_path: Path) -> dict:
     return {v["requirement"]: v["verdict"] for log in doc["logs"] for v in log["verdicts"]}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text", [
     "C1: whenever p the sw shall within 60 ticks satisfy q\n"
     "C2: upon p the sw shall for 65 ticks satisfy !q\n",
