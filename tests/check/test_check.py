@@ -270,10 +270,12 @@ def test_spot_errors_are_unknown_answers_not_crashes(tmp_path):
 
     big = tmp_path / "big.fret"
     big.write_text("C1: whenever p the sw shall within 300 ticks satisfy q\n")
-    res = CliRunner().invoke(main, ["check", str(big)])
+    res = CliRunner().invoke(main, ["check", str(big), "--engine", "spot"])
     assert res.exit_code == 1, res.output
     assert "satisfiable=unknown" in res.output
     assert "maximum supported repetition (254)" in res.output
+    res = CliRunner().invoke(main, ["check", str(big)])  # auto: z3 past 16 ticks
+    assert res.exit_code == 0 and "satisfiable=yes" in res.output, res.output
     ab = tmp_path / "ab.fret"
     ab.write_text("A: the r shall always satisfy s <= 0.5\n"
                   "B: whenever p the r shall immediately satisfy s > 0.6\n")
