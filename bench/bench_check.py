@@ -8,11 +8,14 @@
    ticks): CPU time each (aim: under 5 s).
 3. The command a user runs, start-up included: ``fretc check requirements/ --inputs
    too_close --outputs stopped`` (CPU of the process and its Spot worker).
+4. Time against the bound (10, 50, 100, 250, 1000 ticks): satisfiability and non-vacuity of
+   a consistent set, the conflicts of an inconsistent one, by Spot (``--engine spot``) and
+   by z3 (``--engine smt``) on the same files; realizability (Spot's game).
 
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
 queries run with the default 20 s budget (a timed-out query is counted as unknown).
 
-    python bench/bench_check.py [--corpus PATH]
+    python bench/bench_check.py [--corpus PATH] [--bounds-only] [--budget SECONDS]
 """
 
 from __future__ import annotations
@@ -69,11 +72,67 @@ SIZED = [
 ]
 
 
+BOUNDED = [
+    "B1: whenever p the sw shall within {n} ticks satisfy q",
+    "B2: upon p the sw shall for {m} ticks satisfy !q",
+    "B3: the sw shall eventually satisfy p",
+    "B4: in mode upon p the sw shall within {n} ticks satisfy speed > 0.6",
+    "B5: in mode the sw shall always satisfy speed <= 0.5",
+]
+
+
+def _timed(path: Path, engine: str, budget: float, **kw) -> tuple[float, str]:
+    t0 = cpu()
+    r = check_requirements(compile_entries(load_requirements([path])), engine=engine,
+                           timeout=budget, redundancy=False, **kw)
+    kinds = sorted({f.kind for f in r.findings})
+    rz = r.realizability
+    if rz:
+        kinds.append("realizable=" + ",".join(str(c["realizable"]) for c in rz["components"]))
+    return cpu() - t0, " ".join(kinds) or "no findings"
+
+
+def bound_sweep(budget: float) -> None:
+    """Time against the bound: a consistent set (B1, B2 with a shorter `for`, B4, B5), a
+    conflict (B1, B2 longer than B1's window, B3), and realizability of B1/B2 (p input),
+    by Spot and by z3 (:mod:`check.smt`) in one run."""
+    print(f"4. time against the bound (CPU s; budget {budget:g} s per query)")
+    print(f"  {'bound':>5} {'check':<14} {'Spot':>8} {'z3':>8}  answers (Spot | z3)")
+    for n in (10, 50, 100, 250, 1000):
+        sets = {"consistent": [BOUNDED[0], BOUNDED[1], BOUNDED[3], BOUNDED[4]],
+                "conflict": BOUNDED[:3]}
+        for name, lines in sets.items():
+            m = n - 3 if name == "consistent" else n + 3
+            path = Path("/tmp") / f"fretc_bench_bound_{name}_{n}.fret"
+            path.write_text("\n".join(x.format(n=n, m=m) for x in lines) + "\n",
+                            encoding="utf-8")
+            ts, a = _timed(path, "spot", budget)
+            tz, b = _timed(path, "smt", budget)
+            print(f"  {n:>5} {name:<14} {ts:8.2f} {tz:8.2f}  {a} | {b}")
+        path = Path("/tmp") / f"fretc_bench_bound_real_{n}.fret"
+        path.write_text(BOUNDED[0].format(n=n) + "\n", encoding="utf-8")
+        t0 = cpu()
+        check_requirements(compile_entries(load_requirements([path])), timeout=budget,
+                           redundancy=False, vacuity=False)
+        t1 = cpu()
+        _, a = _timed(path, "auto", budget, inputs=["p"], outputs=["q"], vacuity=False)
+        t2 = cpu()
+        print(f"  {n:>5} {'realizability':<14} {max(0.0, (t2 - t1) - (t1 - t0)):8.2f} "
+              f"{'-':>8}  {a} (Spot's game; no z3 method yet)")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default=str(ROOT / ".." / "shared" / "corpora" /
                                             "fret_casestudies.jsonl"))
+    ap.add_argument("--bounds-only", action="store_true",
+                    help="Only the time-against-the-bound table (part 4).")
+    ap.add_argument("--budget", type=float, default=20.0,
+                    help="Seconds per solver query in part 4.")
     args = ap.parse_args()
+    if args.bounds_only:
+        bound_sweep(args.budget)
+        return 0
 
     print("1. case-study corpus: satisfiability + non-vacuity per project")
     total0 = cpu()
@@ -132,6 +191,7 @@ def main() -> int:
                           capture_output=True, text=True)
     print(f"  fretc check requirements/ --inputs too_close --outputs stopped: exit "
           f"{proc.returncode}, {cpu() - t0:.2f} s CPU ({time.perf_counter() - w0:.2f} s wall)")
+    bound_sweep(args.budget)
     return 0
 
 

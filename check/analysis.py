@@ -1,6 +1,6 @@
 """``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
 requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
-runs").
+runs"), and by z3 (:mod:`check.smt`) for queries with a bound past :data:`SPOT_MAX_BOUND`.
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
 abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every
@@ -48,11 +48,20 @@ from .findings import Finding
 from .solver import UNKNOWN, SpotWorker
 from compiler.ir import Node
 from .numeric_abstraction import NumericAbstraction
+from .smt import SmtSolver, max_bound
 from compiler.printers import to_spot
 from compiler.semantics import SemanticsError, formalize
 
 __all__ = ["CheckItem", "CheckResult", "Finding", "Checker", "check_requirements",
-           "atom_variables"]
+           "atom_variables", "ENGINES", "SPOT_MAX_BOUND"]
+
+#: the solvers ``fretc check --engine`` names: ``auto`` Spot up to :data:`SPOT_MAX_BOUND`
+#: ticks, z3 (:mod:`check.smt`) past it; ``spot``; ``smt``
+ENGINES = ("auto", "spot", "smt")
+
+#: the largest tick bound ``engine="auto"`` gives Spot (faster there, bench/bench_check.py;
+#: past it Spot's automata grow with the bound, and it refuses bounds over 254)
+SPOT_MAX_BOUND = 16
 
 
 # --------------------------------------------------------------------------- inputs
@@ -115,7 +124,8 @@ class CheckResult:
     """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
     requirement (``satisfiable``, ``non_vacuous``, ``redundant``: true / false / "unknown"
     / None when not checked); ``components`` the ids per component; ``abstractions`` the
-    uninterpreted atoms; ``timings`` CPU seconds per phase."""
+    uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered
+    (:mod:`check.smt`), ``unknown_queries`` those whose budget ran out."""
 
     requirements: list[dict] = field(default_factory=list)
     components: list[list[str]] = field(default_factory=list)
@@ -127,6 +137,7 @@ class CheckResult:
     input_errors: list[str] = field(default_factory=list)
     queries: int = 0
     unknown_queries: int = 0
+    smt_queries: int = 0
 
     @property
     def exit_code(self) -> int:
@@ -149,7 +160,8 @@ class CheckResult:
                 "abstractions": self.abstractions, "realizability": self.realizability,
                 "witnesses": self.witnesses,
                 "notes": self.notes, "input_errors": self.input_errors,
-                "queries": self.queries, "unknown_queries": self.unknown_queries}
+                "queries": self.queries, "smt_queries": self.smt_queries,
+                "unknown_queries": self.unknown_queries}
 
 
 # --------------------------------------------------------------------------- the checker
@@ -161,9 +173,15 @@ class Checker:
     """
 
     def __init__(self, items: Sequence[CheckItem], worker: SpotWorker,
-                 mus_budget: float = 10.0):
+                 mus_budget: float = 10.0, smt: SmtSolver | None = None,
+                 engine: str = "auto"):
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
         self.items = list(items)
         self.worker = worker
+        self.smt = smt if smt is not None else SmtSolver(worker.timeout)
+        self.engine = engine
+        self.smt_queries = 0
         self.mus_budget = mus_budget
         allf = [x.phi for x in self.items] + [x.trigger for x in self.items if x.trigger]
         allf += [x.phi_ft for x in self.items] + [x.trigger_ft for x in self.items
@@ -180,9 +198,18 @@ class Checker:
         apart so the worker can reuse the product of ``formulas``.)"""
         return self.sat_word(formulas, extra)[0]
 
+    def uses_smt(self, formulas: Sequence[Node]) -> bool:
+        """Does a query on ``formulas`` go to z3 (:mod:`check.smt`) rather than Spot? With
+        ``engine="auto"``, when a bound passes :data:`SPOT_MAX_BOUND`."""
+        if self.engine != "auto":
+            return self.engine == "smt"
+        return max_bound(formulas) > SPOT_MAX_BOUND
+
     def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
                  ) -> tuple[object, tuple | None]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
+        if self.uses_smt(list(formulas) + list(extra)):
+            return self._ask_smt(list(formulas) + list(extra))
 
         def split(f: Node, parts: list[Node]) -> None:
             if f.op == "&":
@@ -202,6 +229,21 @@ class Checker:
             base = [ir.TRUE]
         return self._ask_sat((tuple(to_spot(f) for f in base),
                               tuple(to_spot(f) for f in more if f not in base)))
+
+    def _ask_smt(self, formulas: list[Node]):
+        key = ("smt", tuple(formulas))
+        got = self._cache.get(key)
+        if got is None:
+            self.queries += 1
+            self.smt_queries += 1
+            ans = self.smt.sat(formulas)
+            if ans == UNKNOWN:
+                self.unknown += 1
+                got = (UNKNOWN, None)
+            else:
+                got = ans
+            self._cache[key] = got
+        return got
 
     def _ask_sat(self, text):
         got = self._cache.get(text)
@@ -343,7 +385,7 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
                        inputs: Sequence[str] | None = None,
                        outputs: Sequence[str] | None = None,
                        worker: SpotWorker | None = None,
-                       witness_judge=None) -> CheckResult:
+                       witness_judge=None, engine: str = "auto") -> CheckResult:
     """Check compiled requirements (:class:`compiler.build.Compiled`, in file order).
 
     ``timeout``: seconds per Spot query (None: no budget). ``mus_budget``: seconds per
@@ -354,7 +396,8 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
     :func:`monitors.engines.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
     either is given, realizability is checked too (:mod:`check.realizability`).
     Requirements that failed to formalize are listed in ``input_errors``; free-form ones
-    are skipped with a note.
+    are skipped with a note. ``engine``: one of :data:`ENGINES` (satisfiability queries;
+    realizability is Spot's). Raises ``ValueError`` for another engine.
     """
     if witness_dir is not None and witness_judge is None:
         raise TypeError("check_requirements: witness_dir needs a witness_judge "
@@ -372,7 +415,7 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
     if own:
         worker = SpotWorker(timeout)
     try:
-        checker = Checker(items, worker, mus_budget)
+        checker = Checker(items, worker, mus_budget, engine=engine)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy)
         if inputs is not None or outputs is not None:
             from .realizability import check_realizability  # lazy: numpy, if asked
@@ -383,6 +426,11 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
             write_witnesses(checker, result, witness_dir, witness_judge)
         result.queries = checker.queries
         result.unknown_queries = worker.timeouts
+        result.smt_queries = checker.smt_queries
+        result.unknown_queries += checker.smt.timeouts
+        if checker.smt.failures:
+            result.notes.append(f"z3 left {len(checker.smt.failures)} queries unknown, e.g. "
+                                f"{checker.smt.failures[0]}")
         if worker.failures:
             result.notes.append(f"Spot could not take {len(worker.failures)} queries (their "
                                 f"answers are unknown), e.g. {worker.failures[0]}")
@@ -443,8 +491,8 @@ def _check_alone(ck: Checker, comp: list[CheckItem], status: dict,
         elif ans == UNKNOWN:
             result.findings.append(Finding(
                 "unknown", "unknown", [x.id],
-                f"satisfiability of {x.id} ({x.location}) unknown: the Spot query ran out of "
-                "time (--timeout) or Spot could not take it (see the notes)"))
+                f"satisfiability of {x.id} ({x.location}) unknown: the solver query ran out "
+                "of time (--timeout) or the solver could not take it (see the notes)"))
     return alone_bad
 
 
@@ -470,8 +518,8 @@ def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckRe
     elif len(comp) > 1 and whole == UNKNOWN:
         result.findings.append(Finding(
             "unknown", "unknown", _ids(comp),
-            "satisfiability of the set " + ", ".join(_ids(comp)) + " unknown: the Spot "
-            "query ran out of time (--timeout) or Spot could not take it (see the notes)"))
+            "satisfiability of the set " + ", ".join(_ids(comp)) + " unknown: the solver "
+            "query ran out of time (--timeout) or the solver could not take it (see the notes)"))
     if whole is not True:
         for x in comp:
             if whole is False:
@@ -497,8 +545,8 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
         if ans == UNKNOWN:
             result.findings.append(Finding(
                 "unknown", "unknown", [x.id],
-                f"non-vacuity of {x.id} ({x.location}) unknown: the Spot query ran out "
-                "of time (--timeout) or Spot could not take it (see the notes)"))
+                f"non-vacuity of {x.id} ({x.location}) unknown: the solver query ran "
+                "out of time (--timeout) or the solver could not take it (see the notes)"))
             continue
         subsets, cut, unknown = ck.minimal_subsets(
             comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
@@ -528,8 +576,8 @@ def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
         if ans == UNKNOWN:
             result.findings.append(Finding(
                 "unknown", "warning", [x.id],
-                f"redundancy of {x.id} ({x.location}) unknown: the Spot query ran out of "
-                "time (--timeout) or Spot could not take it (see the notes)"))
+                f"redundancy of {x.id} ({x.location}) unknown: the solver query ran out "
+                "of time (--timeout) or the solver could not take it (see the notes)"))
         if ans is False:
             if others:
                 msg = (f"{x.id} ({x.location}) is implied by the others of its component ("

@@ -35,7 +35,13 @@ from .witness import _atoms
 from .numeric_abstraction import simple_comparison
 from compiler.printers import mangle, to_smv, to_spot
 
-__all__ = ["check_realizability", "RealizabilityError"]
+__all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
+
+#: who moves first in the game: at each tick the environment sets the inputs, then the
+#: controller sets the outputs knowing them (a Mealy machine; Spot's ``ltl_to_game`` and
+#: ``ltlsynt`` default). A Moore machine would set the outputs before seeing the inputs.
+MACHINE = ("Mealy: each tick the environment sets the inputs first, the controller then "
+           "sets the outputs knowing them")
 
 
 class RealizabilityError(CheckError, ValueError):
@@ -66,7 +72,7 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
         for v in x.variables:
             if v not in used:
                 used.append(v)
-    summary = {"inputs": inputs, "outputs": outputs,
+    summary = {"machine": MACHINE, "inputs": inputs, "outputs": outputs,
                "assumed_outputs": [v for v in used if v not in inputs and v not in outputs],
                "unused": [v for v in inputs + outputs if v not in used],
                "components": []}

@@ -4,12 +4,13 @@ any robot runs (the analyses are in :mod:`check.analysis`).
 ::
 
     fretc check FILE... [--inputs a,b] [--outputs c,d] [--json] [--witness-dir DIR]
-                [--timeout SECONDS] [--mus-budget SECONDS] [--no-redundancy]
+                [--timeout SECONDS] [--mus-budget SECONDS] [--engine auto|spot|smt]
+                [--no-redundancy]
 
 Realizability is checked when inputs or outputs are given, by the flags or by the
 ``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win). Exit status: 0 no
 finding (redundancy is a warning), 1 a conflict, vacuity, unrealizability or an unknown
-answer (a Spot query that ran out of ``--timeout``), 2 input errors.
+answer (a solver query that ran out of ``--timeout``), 2 input errors.
 """
 
 from __future__ import annotations
@@ -43,13 +44,14 @@ def render_text(result) -> str:
     if result.realizability is not None:
         rz = result.realizability
         lines.append("")
-        lines.append("realizability: inputs " + (", ".join(rz["inputs"]) or "-")
+        lines.append("realizability (" + rz["machine"] + "): inputs "
+                     + (", ".join(rz["inputs"]) or "-")
                      + "; outputs " + (", ".join(rz["outputs"]) or "-")
                      + (("; taken as outputs: " + ", ".join(rz["assumed_outputs"]))
                         if rz["assumed_outputs"] else ""))
         for c in rz["components"]:
             status = c["realizable"]
-            extra = (f" (Mealy machine of {c['mealy_states']} states)"
+            extra = (f" by a Mealy machine of {c['mealy_states']} states"
                      if status is True else "")
             lines.append(f"  {', '.join(c['requirements'])}: "
                          f"{'realizable' if status is True else 'UNREALIZABLE' if status is False else 'unknown'}"
@@ -81,7 +83,7 @@ def render_text(result) -> str:
     for n in result.notes:
         lines.append(f"note: {n}")
     lines.append(f"{len(result.requirements)} requirements, {len(result.components)} "
-                 f"components, {result.queries} Spot queries"
+                 f"components, {result.queries} solver queries ({result.smt_queries} by z3)"
                  + (f" ({result.unknown_queries} ran out of time)" if result.unknown_queries
                     else "") + f"; exit {result.exit_code}")
     return "\n".join(lines)
@@ -110,14 +112,18 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--witness-dir", type=click.Path(file_okay=False), default=None,
               help="Write a witness CSV per finding (replay with fretc audit).")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=20.0,
-              show_default=True, help="Seconds per Spot query; past it the answer is unknown.")
+              show_default=True, help="Seconds per solver query; past it the answer is "
+              "unknown.")
 @click.option("--mus-budget", type=click.FloatRange(min=0), default=10.0, show_default=True,
               help="Seconds per enumeration of minimal subsets.")
+@click.option("--engine", type=click.Choice(["auto", "spot", "smt"]), default="auto",
+              show_default=True, help="Satisfiability solver: Spot up to 16 ticks and z3 "
+              "past them (auto), or one of them.")
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
 def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
-              no_redundancy, output):
+              engine, no_redundancy, output):
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
@@ -147,7 +153,8 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
     try:
         result = check_requirements(compiled, timeout=timeout, mus_budget=mus_budget,
                                     redundancy=not no_redundancy, witness_dir=witness_dir,
-                                    inputs=ins, outputs=outs, witness_judge=judge)
+                                    inputs=ins, outputs=outs, witness_judge=judge,
+                                    engine=engine)
     except RealizabilityError as exc:
         click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
