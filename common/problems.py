@@ -34,6 +34,7 @@ UNDECODABLE = "undecodable"  # one message's payload does not deserialize; messa
 OUT_OF_ORDER = "out_of_order"  # message later than the reorder window allows; skipped
 HEADER_BACKWARDS = "header_backwards"  # header.stamp earlier than the previous one on the topic
 HEADER_LATE = "header_late"  # header.stamp older than a tick already emitted; skipped
+HEADER_JUMP = "header_jump"  # live: header.stamp too far past the newest one to tick over; skipped
 NO_HEADER = "no_header"  # time base "header" but the message has no header.stamp; skipped
 
 #: At most this many problems of one (kind, topic) are kept in ``problems``; the rest are only

@@ -150,6 +150,15 @@ class HeaderBuffer:
                               f"({type(m.data).__name__}) have no header.stamp (log time "
                               f"{m.log_time}); use time = \"log\""
                               + (f" in {self.bindings.source}" if self.bindings.source else ""))
+        # live sources bound how far time may jump at once (the ticks in between are made
+        # one by one): a stamp further past the newest one is skipped, as a log time is
+        jump = getattr(self.source, "max_jump_ns", None)
+        if jump is not None and self.newest is not None and s - self.newest > jump:
+            self.problems.add(DataProblem(P.HEADER_JUMP, m.topic, m.log_time,
+                                          f"header.stamp {s} is {(s - self.newest) / 1e9:.6g} s "
+                                          f"after the newest stamp, more than the "
+                                          f"{jump / 1e9:.6g} s ticked over at once; skipped"))
+            return []
         prev = self.last_stamp.get(m.topic)
         if prev is not None and s < prev:
             self.problems.add(DataProblem(P.HEADER_BACKWARDS, m.topic, m.log_time,

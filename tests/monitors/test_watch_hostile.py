@@ -230,3 +230,49 @@ def test_rosbridge_flood_of_topics_and_a_rosapi_answer_of_the_wrong_shape(plan):
                          subprotocol=None, wait=1.0)
     assert "/rosapi/topics answer" in _kinds(la)[PROTOCOL]
     assert [v.verdict for v in la.verdicts] == ["error"]
+
+
+POINT_STAMPED = ("std_msgs/Header header\ngeometry_msgs/Point point\n"
+                 "================================================================================\n"
+                 "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n"
+                 "================================================================================\n"
+                 "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
+                 "================================================================================\n"
+                 "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n")
+
+
+def _point_stamped(stamp_ns: int, x: float) -> bytes:
+    """A CDR ``geometry_msgs/msg/PointStamped`` with frame_id "m" (sec, nanosec, the string
+    with its NUL, padding to 8, then x, y, z)."""
+    import struct
+    body = struct.pack("<iII", stamp_ns // S, stamp_ns % S, 2) + b"m\x00"
+    body += b"\x00" * (-len(body) % 8)
+    return b"\x00\x01\x00\x00" + body + struct.pack("<ddd", x, 0.0, 0.0)
+
+
+def test_a_header_stamp_jump_is_skipped_as_a_header_jump_problem(tmp_path):
+    """Under the header time base, a stamp 10^7 s past the newest (10^8 ticks of 100 ms) is
+    skipped and reported; the watch goes on and ends in time."""
+    (tmp_path / "w.fret").write_text(FRET, encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "header"\nheader_lag = "10 ms"\n'
+        '[variables]\na_ok = "/a.point.x > 0"\n', encoding="utf-8")
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),)))
+
+    async def script(ws, k):
+        await ws.send(json.dumps({"op": "advertise", "channels": [
+            {"id": 1, "topic": "/a", "encoding": "cdr",
+             "schemaName": "geometry_msgs/msg/PointStamped", "schema": POINT_STAMPED,
+             "schemaEncoding": "ros2msg"}]}))
+        sid = await subscription(ws, 1)
+        stamps = [T0 + i * 50_000_000 for i in range(10)] + [T0 + 10**7 * S] + \
+            [T0 + (10 + i) * 50_000_000 for i in range(10)]
+        for i, st in enumerate(stamps):
+            await ws.send(message_data(sid, T0 + i * 50_000_000, _point_stamped(st, 1.0)))
+            await asyncio.sleep(0.002)
+        await ws.close(1000, "end of the run")
+
+    w, la, _, took = _watch(plan, script)
+    assert took < 10
+    assert la.problem_counts.get("header_jump /a") == 1, la.problem_counts
+    assert [v.verdict for v in la.verdicts] == ["satisfied"]
