@@ -19,6 +19,8 @@ import json
 import math
 from pathlib import Path
 
+from monitors.report.terminal import robustness_text
+
 from .falsify import Search
 
 __all__ = ["write_search", "search_json", "SCHEMA"]
@@ -60,14 +62,6 @@ def search_json(search: Search) -> dict:
     }
 
 
-def _text(v) -> str:
-    if v is None:
-        return "-"
-    if isinstance(v, str):
-        return "+inf" if v == "inf" else v
-    return f"{v:+.4g}"
-
-
 def _markdown(doc: dict) -> str:
     sp = doc["space"]
     names = [p["name"] for p in sp["parameters"]]
@@ -80,14 +74,15 @@ def _markdown(doc: dict) -> str:
              "## Smallest robustness per requirement", "",
              "| requirement | smallest robustness | run | tick |", "|---|---|---|---|"]
     for rid, s in doc["smallest"].items():
-        lines.append(f"| {rid} | {_text(s and s['value'])} | {s['run'] if s else '-'} | "
+        value = robustness_text(s and s["value"], "-")
+        lines.append(f"| {rid} | {value} | {s['run'] if s else '-'} | "
                      f"{s['tick'] if s and s['tick'] is not None else '-'} |")
     lines += ["", "## Robustness against runs", "",
               "| run | " + " | ".join(names + doc["targets"]) + " | violated | MCAP |",
               "|---" * (len(names) + len(doc["targets"]) + 3) + "|"]
     for r in doc["runs"]:
         cells = [f"{r['parameters'][n]:g}" for n in names]
-        cells += [_text(r["robustness"].get(t)) for t in doc["targets"]]
+        cells += [robustness_text(r["robustness"].get(t), "-") for t in doc["targets"]]
         lines.append(f"| {r['run']} | " + " | ".join(cells) + f" | "
                      f"{', '.join(r['violated']) or '-'} | {r['mcap'] or '-'} |")
     lines += ["", "Robustness: the margin to the threshold in the variable's unit, negative "

@@ -266,9 +266,6 @@ class WebSocketClient:
                 return
             except Exception as exc:  # any network fault: report, back off, retry
                 reason = f"{type(exc).__name__}: {exc}"
-                if getattr(getattr(exc, "sent", None), "code", None) == 1009:
-                    reason += (f" (a message over {MAX_FRAME_BYTES:,} bytes, the limit of "
-                               "one frame)")
             finally:
                 self._ws = None
             self._put("disconnected", time.time_ns(), reason)

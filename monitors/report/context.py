@@ -22,7 +22,7 @@ from typing import Sequence
 from common.units import format_seconds
 
 from .margin import margin_svg
-from .terminal import damage_summary
+from .terminal import damage_summary, robustness_text
 from .trace import FIELD_NAMES, ModuleInfo, RequirementTrace, resolve_input, split_source
 from .verdicts import cell_label, values_table, verdict_for, witness
 from .timeline import COLORS, timeline_svg
@@ -247,19 +247,10 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
             violations.append(_violation(v, la, r, rt, rc, run, va, cell["witness"],
                                          period_ns))
         rob = (v or {}).get("robustness") or {}
-        cell["robustness"] = _robustness_text(rob.get("value"))
+        cell["robustness"] = robustness_text(rob.get("value"), "-")
         margins.append((run["name"], rob.get("margin") or []))
         rc["cells"].append(cell)
     rc["margin_svg"] = margin_svg(margins, f"{r.get('id')}: margin over time")
-
-
-def _robustness_text(value) -> str:
-    """A robustness from the audit JSON as the report shows it (``-``: none)."""
-    if value is None:
-        return "-"
-    if isinstance(value, str):
-        return "+inf" if value == "inf" else value
-    return f"{value:+.4g}"
 
 
 def _requirement_rows(reqs: list[dict], logs: list[dict], runs: list[dict],

@@ -61,11 +61,13 @@ def _value(v) -> str:
 MATRIX_MAX = 10
 
 
-def robustness_text(value: float | None) -> str:
-    """A robustness as the terminal shows it: signed, 4 significant digits, ``+inf`` /
-    ``-inf`` when a boolean decides it; ``""`` when there is none."""
+def robustness_text(value: float | str | None, none: str = "") -> str:
+    """A robustness as fretc shows it (terminal, report, falsify): signed, 4 significant
+    digits, ``+inf`` / ``-inf`` when a boolean decides it; ``none`` when there is none.
+    ``value`` may also be the audit JSON's text of an infinity (``"inf"``, ``"-inf"``)."""
     if value is None:
-        return ""
+        return none
+    value = float(value)
     if math.isinf(value):
         return "+inf" if value > 0 else "-inf"
     return f"{value:+.4g}"

@@ -27,9 +27,9 @@ from ..bindings.spec import Bindings, TickSpec
 from common.problems import SignalError
 from ..sources.selective import install as install_selective
 from ..sources import CsvSource, LogSource
-from .clock import HeaderBuffer, Sampling, Tick, check_topics, sample
+from .clock import HeaderBuffer, Sampling, Tick, check_topics
 from .columns import HeldColumns, Irregular, MessageColumns
-from .groups import GroupSampling, _restrict
+from .groups import GroupSampling, _restrict, csv_clock
 
 __all__ = ["BLOCK", "MAX_TICKS", "TickBlock", "sample_blocks", "blocks_of_ticks"]
 
@@ -81,8 +81,8 @@ class _Stream:
     """The buffered messages that some clocks read (one shared stream under the log time
     base; one per clock under the header time base, each in its own stamp order)."""
 
-    def __init__(self, topics: set[str]) -> None:
-        self.buffers = {t: _Buffer() for t in topics}
+    def __init__(self) -> None:
+        self.buffers: dict[str, _Buffer] = {}
         self._arrays: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._messages: MessageColumns | None = None
 
@@ -161,17 +161,14 @@ def sample_blocks(source: LogSource, bindings: Bindings,
     g.per_tick = {key: set() for key in groups}
     if source.kind == "csv":
         assert isinstance(source, CsvSource)
-        names = [n for n in bindings.variables if any(n in v[0] for v in groups.values())]
-        whole = sample(source, _restrict(bindings, names))
-        for key in groups:
-            g.groups[key] = whole
-            g.failed[key] = {}
+        whole = csv_clock(g, source, bindings, groups)
+        names = list(whole.bindings.variables) if whole.bindings is not None else []
         topics = sorted({t for _n, ts in groups.values() for t in ts})
         g._iter = ((key, blk) for blk in blocks_of_ticks(iter(whole), names, topics)
                    for key in groups)
         return g
     tick = bindings.tick
-    shared = _Stream(set()) if bindings.time_base == "log" else None
+    shared = _Stream() if bindings.time_base == "log" else None
     clocks: dict[Any, _Group] = {}
     buffers: dict[Any, HeaderBuffer] = {}
     fed: dict[str, list[Any]] = {}
@@ -179,7 +176,7 @@ def sample_blocks(source: LogSource, bindings: Bindings,
         sub = _restrict(bindings, names)
         s = Sampling(source, sub)
         g.groups[key] = s
-        stream = shared if shared is not None else _Stream(set())
+        stream = shared if shared is not None else _Stream()
         clocks[key] = c = _Group(sub, set(topics), tick, s, stream)
         g.failed[key] = c.failed
         g.per_tick[key] = c.per_tick
@@ -224,17 +221,16 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
                 clocks[key].stream.add(*item)
     yield from _evaluate_all(g, clocks, True)
     for c in clocks.values():
-        c.sampling.missing_topics = [t for t in c.required if not c.stream.buffers[t].times
-                                     and c.stream.buffers[t].base == 0]
+        # the newest message of a topic is never trimmed: an empty buffer never had one
+        c.sampling.missing_topics = [t for t in c.required if not c.stream.buffers[t].times]
 
 
 def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
                   ) -> Iterator[tuple[Any, TickBlock]]:
     """Every clock's due ticks, then the buffers trimmed to what later ticks may hold."""
-    streams: dict[int, _Stream] = {}
-    for key, c in clocks.items():
-        streams[id(c.stream)] = c.stream
-        c.stream.changed()
+    streams = {id(c.stream): c.stream for c in clocks.values()}
+    for stream in streams.values():
+        stream.changed()
     for key, c in clocks.items():
         if key in g.errors:
             continue

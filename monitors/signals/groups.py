@@ -111,11 +111,7 @@ def _restrict(bindings: Bindings, names: list[str]) -> Bindings:
 def _csv_groups(g: GroupSampling, source: CsvSource, bindings: Bindings,
                 groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
     """A CSV trace has one clock (a tick per row): every group shares it."""
-    names = [n for n in bindings.variables if any(n in v[0] for v in groups.values())]
-    whole = sample(source, _restrict(bindings, names))
-    for key in groups:
-        g.groups[key] = whole
-        g.failed[key] = {}
+    whole = csv_clock(g, source, bindings, groups)
 
     def csv_iter() -> Iterator[tuple[Any, Tick]]:
         for tick in whole:
@@ -123,6 +119,18 @@ def _csv_groups(g: GroupSampling, source: CsvSource, bindings: Bindings,
                 yield key, tick
     g._iter = csv_iter()
     return g
+
+
+def csv_clock(g: GroupSampling, source: CsvSource, bindings: Bindings,
+              groups: dict[Any, tuple[list[str], frozenset[str]]]) -> Sampling:
+    """The one clock of a CSV trace (a tick per row) over the variables of every group,
+    recorded in ``g`` as each group's sampling."""
+    names = [n for n in bindings.variables if any(n in v[0] for v in groups.values())]
+    whole = sample(source, _restrict(bindings, names))
+    for key in groups:
+        g.groups[key] = whole
+        g.failed[key] = {}
+    return whole
 
 
 def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, Clock],
