@@ -231,31 +231,25 @@ class Checker:
                               tuple(to_spot(f) for f in more if f not in base)))
 
     def _ask_smt(self, formulas: list[Node]):
-        key = ("smt", tuple(formulas))
+        self.smt_queries += ("smt", tuple(formulas)) not in self._cache
+        return self._cached(("smt", tuple(formulas)), lambda: self.smt.sat(formulas))
+
+    def _ask_sat(self, text):
+        return self._cached(text, lambda: self.worker.ask(("sat", text[0], text[1])))
+
+    def _cached(self, key, ask):
+        """The answer to a satisfiability query (``ask()`` once per ``key``): (UNKNOWN,
+        None) when the solver could not tell, counted in ``unknown``."""
         got = self._cache.get(key)
         if got is None:
             self.queries += 1
-            self.smt_queries += 1
-            ans = self.smt.sat(formulas)
+            ans = ask()
             if ans == UNKNOWN:
                 self.unknown += 1
                 got = (UNKNOWN, None)
             else:
                 got = ans
             self._cache[key] = got
-        return got
-
-    def _ask_sat(self, text):
-        got = self._cache.get(text)
-        if got is None:
-            self.queries += 1
-            ans = self.worker.ask(("sat", text[0], text[1]))
-            if ans == UNKNOWN:
-                self.unknown += 1
-                got = (UNKNOWN, None)
-            else:
-                got = ans
-            self._cache[text] = got
         return got
 
     # ---------------------------------------------------------------- components
