@@ -13,11 +13,16 @@ Faults (the rule: nothing is reported satisfied that was not audited):
 * a task that raises, or a worker process that dies (``WorkerCrashedError``, a lost node),
   gives that log an error entry (:func:`error_audit`: every verdict ``error`` with the
   reason, exit code 2) and the other logs complete;
+* the driver's raylet lost (killed, out of memory): Ray ends its driver process, so the
+  driver runs in a child process (:mod:`monitors.audit.ray_driver`); the logs whose results
+  had arrived keep their verdicts, every other log gets an error entry naming the loss, and
+  the JSON, reports and exit code (2) are written as for any error entry;
 * ``retries``: a task whose worker died is run again up to this many times (Ray's
   ``max_retries``; exceptions raised by the audit itself are not retried: they would raise
   again);
-* Ctrl-C cancels the tasks still running (``ray.cancel(force=True)``), stops the local Ray
-  this run started, and re-raises ``KeyboardInterrupt``.
+* Ctrl-C is passed on to the driver process: it cancels the tasks still running
+  (``ray.cancel(force=True)``) and stops the local Ray it started; then
+  ``KeyboardInterrupt`` is re-raised here.
 
 Where Ray runs (:func:`connect`): ``address`` None or ``"local"`` starts a local Ray for the
 run (``num_cpus`` = the machine's CPUs, no dashboard web server (Ray's per-node dashboard
@@ -39,6 +44,13 @@ import glob
 import hashlib
 import logging
 import os
+import pickle
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -48,6 +60,7 @@ from . import AuditInputError, AuditPlan, audit_log
 from .plan import MODULE_PREFIX, load_module
 from ..bindings import Bindings, compile_expression
 from common.problems import BindingError
+from common.textsafe import visible
 from ..report.model import LogAudit, Verdict
 
 __all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
@@ -241,6 +254,11 @@ def _audit_task(shipped: ShippedPlan, path: str, kill: tuple[str, str] | None = 
         marker = kill[1]
         if marker == ":raise":
             raise RuntimeError("fault injected by the tests")
+        if marker.startswith(":raylet:") and os.path.exists(marker[8:]):
+            # fault injection for the tests: this node's raylet (the worker's parent) dies
+            os.remove(marker[8:])
+            os.kill(os.getppid(), signal.SIGKILL)
+            time.sleep(60)
 
         def progress(frac: float) -> None:
             # fault injection for the tests: the worker dies mid-run, once per marker file
@@ -270,6 +288,11 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
                    _kill: tuple[str, str] | None = None) -> list[Any]:
     """Audit ``paths`` on Ray, one task per log; results in the order of ``paths``.
 
+    Ray is driven from a child process (:mod:`monitors.audit.ray_driver`), because Ray ends
+    its driver when the driver's raylet dies: the logs whose results arrived before keep
+    their verdicts, the others get :func:`error_audit` entries naming the failure. When this
+    process already has Ray initialized (``address`` None), the child joins that session.
+
     Args:
         plan: from :func:`monitors.audit.load_plan` (compiled here, once).
         address: see :func:`connect`.
@@ -284,74 +307,91 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
 
     Raises:
         RayUnavailable: no Ray, or the cluster cannot be reached.
-        KeyboardInterrupt: after cancelling the running tasks.
+        KeyboardInterrupt: after the driver cancelled the running tasks.
     """
-    ray = _import_ray()
     if not paths:
         return []
-    started = connect(address, num_cpus)
-    try:
-        shipped = ray.put(ship_plan(plan))
-        task = ray.remote(_audit_task).options(max_retries=max(0, retries),
-                                               retry_exceptions=False, num_cpus=1)
-        refs = {}
+    if address is None and "ray" in sys.modules and sys.modules["ray"].is_initialized():
+        address = sys.modules["ray"].get_runtime_context().gcs_address
+    job = {"shipped": ship_plan(plan), "paths": [str(p) for p in paths], "address": address,
+           "retries": retries, "num_cpus": num_cpus, "kill": _kill}
+    if progress is not None:
         for i, p in enumerate(paths):
-            refs[task.remote(shipped, str(p), _kill)] = i
-            if progress is not None:
-                progress.start(i, p)
-        results: dict[int, Any] = {}
-        pending = list(refs)
-        try:
-            while pending:
-                try:
-                    done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
-                except Exception as exc:  # the raylet or the node is gone: nothing more
-                    _lost(plan, paths, refs, pending, results, progress, exc)
-                    break
-                for ref in done:
-                    i = refs[ref]
-                    results[i] = _result(ray, plan, paths[i], ref, retries)
+            progress.start(i, p)
+    results: dict[int, Any] = {}
+    with tempfile.TemporaryFile() as said:
+        rc = _run_driver(job, said, results, progress)
+        if rc == 130:
+            raise KeyboardInterrupt
+        if len(results) < len(paths):
+            said.seek(0)
+            reason = (f"the Ray driver process ended (exit code {rc}) before this log's "
+                      f"result arrived{_last_words(said.read())}; the raylet or the node "
+                      "was lost: run it again, with --retries or without --ray")
+            for i, p in enumerate(paths):
+                if i not in results:
+                    results[i] = error_audit(plan, p, reason)
                     if progress is not None:
                         progress.done(i, results[i])
-        except KeyboardInterrupt:
-            for ref in pending:
-                try:
-                    ray.cancel(ref, force=True)
-                except Exception:
-                    pass
-            raise
-        return [results[i] for i in range(len(paths))]
-    finally:
-        if started:
-            ray.shutdown()
+    return [results[i] for i in range(len(paths))]
 
 
-def _result(ray, plan: AuditPlan, path: str, ref, retries: int):
-    """The LogAudit a finished task returned, or an :func:`error_audit` saying why not."""
+def _run_driver(job: dict, said, results: dict, progress) -> int:
+    """Start the driver process, collect its ``("done", i, LogAudit)`` frames into
+    ``results``; returns its exit code. Raises :class:`RayUnavailable` when it says so."""
+    read_fd, write_fd = os.pipe()
+    job["fd"] = write_fd
     try:
-        return ray.get(ref)
-    except ray.exceptions.RayTaskError as exc:
-        cause = getattr(exc, "cause", None) or exc
-        return error_audit(plan, path, "the audit task raised "
-                           f"{type(cause).__name__}: {_first_line(cause)}")
-    except Exception as exc:  # worker died, node or raylet lost, object lost, ...
-        return error_audit(plan, path, f"{type(exc).__name__}: the Ray worker was lost "
-                           f"({_first_line(exc)}) after {retries + 1} attempt(s); try "
-                           "--retries")
+        child = subprocess.Popen([sys.executable, "-m", "monitors.audit.ray_driver"],
+                                 stdin=subprocess.PIPE, stdout=said, stderr=said,
+                                 pass_fds=(write_fd,), env=_driver_env(),
+                                 start_new_session=True)  # Ctrl-C is forwarded once, below
+    finally:
+        os.close(write_fd)
+    unavailable = None
+    try:
+        with os.fdopen(read_fd, "rb") as frames:
+            child.stdin.write(pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL))
+            child.stdin.close()
+            while True:
+                try:
+                    frame = pickle.load(frames)
+                except (EOFError, pickle.UnpicklingError):
+                    break
+                if frame[0] == "unavailable":
+                    unavailable = frame[1]
+                elif frame[0] == "done":
+                    results[frame[1]] = frame[2]
+                    if progress is not None:
+                        progress.done(frame[1], frame[2])
+        rc = child.wait()
+    except KeyboardInterrupt:  # the driver cancels its tasks and stops its Ray
+        child.send_signal(signal.SIGINT)
+        try:
+            child.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+        raise
+    if unavailable is not None:
+        raise RayUnavailable(unavailable)
+    return rc
 
 
-def _lost(plan: AuditPlan, paths, refs: dict, pending: list, results: dict, progress,
-          exc: BaseException) -> None:
-    """Ray itself failed (``ray.wait`` raised): every log not yet returned gets an error
-    entry naming the failure; the logs already audited keep their verdicts."""
-    reason = (f"Ray failed while the log was being audited ({type(exc).__name__}: "
-              f"{_first_line(exc)}); run it again, with --retries or without --ray")
-    for ref in pending:
-        i = refs[ref]
-        if i not in results:
-            results[i] = error_audit(plan, paths[i], reason)
-            if progress is not None:
-                progress.done(i, results[i])
+def _driver_env() -> dict[str, str]:
+    """The driver's environment: this one, with this checkout of fretc first on the path."""
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
+    return env
+
+
+def _last_words(text: bytes) -> str:
+    """Ray's first message about the raylet's end (its ``(raylet)`` lines), or ''."""
+    lines = [re.sub(r"\x1b\[[0-9;]*m", "", ln).strip()
+             for ln in text.decode("utf-8", "replace").splitlines()]
+    said = [ln[len("(raylet)"):].strip() for ln in lines if ln.startswith("(raylet)")]
+    return f" (Ray said: {visible(said[0][:240])})" if said else ""
 
 
 def _first_line(exc: BaseException) -> str:

@@ -105,29 +105,59 @@ def test_a_task_that_raises_is_an_error_entry(ray_session, safe_ros, local_docs)
 
 @pytest.mark.ray
 @pytest.mark.xdist_group("ray")
-def test_ray_failing_mid_run_gives_error_entries_and_keeps_the_rest(ray_session, safe_ros,
-                                                                   local_docs, monkeypatch):
-    """The raylet lost mid-run (``ray.wait`` raising, as it does when the raylet is killed):
-    the logs audited before keep their verdicts, the others get error entries (exit 2)."""
-    import ray
-
-    real_wait, calls = ray.wait, []
-
-    def wait(refs, **kw):
-        calls.append(1)
-        if len(calls) > 1 and len(refs) < len(TRACES):
-            raise ConnectionError("raylet died (injected)")
-        return real_wait(refs, **kw)
-
-    monkeypatch.setattr(ray, "wait", wait)
-    got = fleet.audit_logs_ray(safe_ros, TRACES)
+def test_killed_raylet_gives_error_entries_and_keeps_the_rest(ray_session, safe_ros,
+                                                              local_docs, tmp_path):
+    """The raylet of a local Ray killed (SIGKILL) while the third log is being audited: Ray
+    ends its driver, but the driver is a child process, so the logs audited before keep
+    their verdicts and the others get error entries naming the loss (exit code 2)."""
+    marker = tmp_path / "kill-raylet-once"
+    marker.write_text("")
+    victim = Path(TRACES[2]).name
+    got = fleet.audit_logs_ray(safe_ros, TRACES, address="local", num_cpus=1,
+                               _kill=(victim, ":raylet:" + str(marker)))
+    assert not marker.exists(), "the fault was not injected"
     lost = [la for la in got if la.error]
     kept = [(a, b) for a, b in zip(got, local_docs) if not a.error]
-    assert lost and kept and len(lost) + len(kept) == len(TRACES)
-    assert all("Ray failed" in la.error and "ConnectionError" in la.error for la in lost)
+    assert TRACES[2] in [la.log for la in lost]
+    assert len(kept) >= 2 and len(lost) + len(kept) == len(TRACES)
+    ended = [la for la in lost if "the Ray driver process ended" in la.error]
+    assert ended and "Ray said: Raylet is terminated" in ended[0].error, ended[0].error
+    assert all("Ray" in la.error and "--retries" in la.error for la in lost)
     assert all({v.verdict for v in la.verdicts} == {"error"} for la in lost)
     assert all(a.to_json() == b.to_json() for a, b in kept)
     assert exit_code(got) == 2
+
+
+@pytest.mark.ray
+@pytest.mark.xdist_group("ray")
+def test_cli_writes_the_json_when_the_raylet_is_killed(tmp_path):
+    """As a user runs it: ``fretc audit --ray --json`` in its own process, the raylet killed
+    mid-run: exit code 2 (not 1, "violated"), the JSON written, nothing reported satisfied
+    that was not audited."""
+    import subprocess
+    import sys
+
+    marker = tmp_path / "kill-raylet-once"
+    marker.write_text("")
+    script = (
+        "import sys; from monitors.audit import fleet; real = fleet.audit_logs_ray\n"
+        "def hooked(*a, **k):\n"
+        f"    k['_kill'] = ('nominal.mcap', ':raylet:{marker}'); k['num_cpus'] = 1\n"
+        "    return real(*a, **k)\n"
+        "fleet.audit_logs_ray = hooked\n"
+        "from fretc.cli import main; sys.exit(main())\n")
+    out = tmp_path / "a.json"
+    r = subprocess.run([sys.executable, "-c", script, "audit", "-r", str(ROOT / "requirements"),
+                        *TRACES, "--ray", "--no-progress", "--json", str(out)],
+                       capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert not marker.exists(), "the fault was not injected"
+    assert r.returncode == 2, r.stdout[-2000:] + r.stderr[-2000:]
+    doc = json.loads(out.read_text())
+    logs = {la["log"]: la for la in doc["logs"]}
+    nominal = next(la for name, la in logs.items() if name.endswith("nominal.mcap"))
+    assert "Ray driver process ended" in nominal["error"]
+    assert {v["verdict"] for v in nominal["verdicts"]} == {"error"}
+    assert "raylet" not in r.stdout.lower() or "Ray said" in r.stdout
 
 
 @pytest.mark.ray
@@ -215,3 +245,33 @@ def test_cli_reads_a_log_list(tmp_path):
     b = runner.invoke(main, base + TRACES[:2])
     assert a.exit_code == b.exit_code
     assert json.loads(a.stdout)["logs"] == json.loads(b.stdout)["logs"]
+
+
+@pytest.mark.ray
+@pytest.mark.xdist_group("ray")
+def test_local_ray_serves_no_dashboard(ray_session):
+    """A local Ray started by fretc (the ``ray_session`` fixture uses :func:`fleet.connect`):
+    no process of it listens on the dashboard's port, nor on its agent's HTTP port."""
+    psutil = pytest.importorskip("psutil")
+    procs = psutil.Process().children(recursive=True)
+    import re
+
+    agent_ports = {int(m) for p in procs
+                   for m in re.findall(r"--listen-port=(\d+)", " ".join(_cmdline(p)))}
+    assert agent_ports, "the agent's HTTP port is not in the raylet's command line"
+    listening = set()
+    for p in procs:
+        try:
+            listening |= {c.laddr.port for c in p.net_connections("inet")
+                          if c.status == psutil.CONN_LISTEN}
+        except psutil.Error:
+            continue
+    assert listening, "no Ray process found listening at all: the test sees nothing"
+    assert 8265 not in listening and not (agent_ports & listening)
+
+
+def _cmdline(p) -> list[str]:
+    try:
+        return p.cmdline()
+    except Exception:
+        return []
