@@ -291,7 +291,8 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
     Ray is driven from a child process (:mod:`monitors.audit.ray_driver`), because Ray ends
     its driver when the driver's raylet dies: the logs whose results arrived before keep
     their verdicts, the others get :func:`error_audit` entries naming the failure. When this
-    process already has Ray initialized (``address`` None), the child joins that session.
+    process already has Ray initialized, the child joins that session (as :func:`connect`
+    keeps an initialized Ray, whatever ``address`` says).
 
     Args:
         plan: from :func:`monitors.audit.load_plan` (compiled here, once).
@@ -311,7 +312,7 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
     """
     if not paths:
         return []
-    if address is None and "ray" in sys.modules and sys.modules["ray"].is_initialized():
+    if "ray" in sys.modules and sys.modules["ray"].is_initialized():  # as connect() does
         address = sys.modules["ray"].get_runtime_context().gcs_address
     job = {"shipped": ship_plan(plan), "paths": [str(p) for p in paths], "address": address,
            "retries": retries, "num_cpus": num_cpus, "kill": _kill}
