@@ -17,10 +17,12 @@ from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_
 from rosbags.typesys.msg import normalize_msgtype
 from rosbags.typesys.store import Typestore
 
+from .columnar import ColumnarDecoder, columnar_decoder
 from .known_types import layout_mismatch
 from .selective import selective_decoder
 
 __all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
+           "schema_columnar",
            "DECODE_ERRORS", "SCHEMA_FOR_ENCODING"]
 
 _IDL_SEP = "=" * 80 + "\n"
@@ -143,3 +145,23 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
 #: Exceptions a decoder from :func:`schema_decoder` raises on a payload that does not match.
 DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError,
                  UnicodeDecodeError, KeyError, TypeError, OverflowError)
+
+
+def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
+                    schema_text: str | None, fields: Any) -> ColumnarDecoder | None:
+    """A :class:`~monitors.sources.columnar.ColumnarDecoder` of one channel's ``fields``, or
+    None wherever :func:`schema_decoder` would raise or the columnar walk does not cover the
+    type (the channel is then decoded message by message, which reports the problem). Never
+    raises; the arguments are :func:`schema_decoder`'s."""
+    if message_encoding != "cdr" or fields is None:
+        return None
+    try:
+        if (not schema_name or schema_text is None
+                or schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]):
+            return None
+        store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+        if layout_mismatch(schema_encoding, store, typename) is not None:
+            return None
+        return columnar_decoder(store, typename, message_encoding, fields)
+    except Exception:  # noqa: BLE001 - whatever fails here fails again, reported, one by one
+        return None
