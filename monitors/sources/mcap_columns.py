@@ -20,7 +20,7 @@ that comes before it in that order is released, sorted: the same sequence, in bl
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from mcap.records import ChunkIndex, Message as McapMessage
@@ -29,9 +29,6 @@ from common import problems as P
 from .columnar import ColumnarDecoder, Segment
 from .decoding import schema_columnar
 from .mcap_records import chunk_message_table
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .mcap_source import McapSource
 
 __all__ = ["TopicBlock", "column_pass"]
 
@@ -68,7 +65,7 @@ class _Group:
         self.rest = np.arange(len(sel))
 
 
-def column_pass(src: McapSource, topics: set[str] | frozenset[str]
+def column_pass(src: Any, topics: set[str] | frozenset[str]
                 ) -> Iterator[list[TopicBlock]] | None:
     """The messages of ``topics`` in blocks (module docstring), or None when this pass does not
     apply: a file read without its index, or a channel of ``topics`` whose bound fields the
@@ -95,7 +92,7 @@ def column_pass(src: McapSource, topics: set[str] | frozenset[str]
 
 
 class _Pass:
-    def __init__(self, src: McapSource, decoders: dict[int, ColumnarDecoder]) -> None:
+    def __init__(self, src: Any, decoders: dict[int, ColumnarDecoder]) -> None:
         self.src = src
         self.index = src._index
         self.decoders = decoders
