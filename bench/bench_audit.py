@@ -110,6 +110,9 @@ def plain_iteration(path: Path) -> tuple[float, int]:
 
 def audit_once(path: Path, fret: Path):
     from monitors.audit import AuditConfig, audit_log, load_plan
+    from monitors.sources import decoding
+
+    decoding._build_typestore.cache_clear()  # each run builds the log's types, as a new process
 
     t = time.process_time()
     plan = load_plan(AuditConfig(requirements=(str(fret),)))

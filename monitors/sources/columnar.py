@@ -15,8 +15,8 @@ bytes; a sequence is a uint32 count then its elements, aligned to the element si
 the count is not zero; a fixed array is its elements; after the last field at most 3 bytes
 of padding.
 
-Exactly the messages the selective decoder's fast path reads are read here, with the same
-values: :meth:`ColumnarDecoder.decode` returns None - and the caller decodes that group
+Only messages the selective decoder's fast path reads are read here, with its values:
+:meth:`ColumnarDecoder.decode` returns None - and the caller decodes that group
 message by message with the selective decoder, which falls back to rosbags, so errors are
 rosbags' - on anything else: another encapsulation (big-endian CDR), a string that is not
 ASCII (the fast path decodes UTF-8), a length or count running past its message, a message

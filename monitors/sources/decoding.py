@@ -8,6 +8,7 @@ fields the signal bindings read (:mod:`monitors.sources.selective`).
 
 from __future__ import annotations
 
+import functools
 import struct
 from collections.abc import Callable
 from typing import Any
@@ -36,7 +37,11 @@ class UnsupportedSchema(Exception):
 
 
 def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
-    """A fresh rosbags Typestore holding the types of one embedded schema.
+    """A rosbags Typestore holding the types of one embedded schema. Building one compiles
+    rosbags' (de)serializers of its types (tens of ms); the stores of the latest
+    :data:`_STORES_KEPT` distinct schemas are kept and shared (read only: nothing registers
+    types in a store after it is built), so a log's channels, its binding type check and the
+    logs of one fleet audit with the same schema build it once.
 
     Args:
         schema_encoding: ``"ros2msg"``, ``"ros1msg"`` (concatenated .msg text with
@@ -51,6 +56,15 @@ def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typesto
     Raises:
         UnsupportedSchema: unknown schema encoding, or a definition rosbags cannot parse.
     """
+    return _build_typestore(schema_encoding, name, text)
+
+
+#: Distinct schemas whose Typestore :func:`build_typestore` keeps.
+_STORES_KEPT = 64
+
+
+@functools.lru_cache(maxsize=_STORES_KEPT)
+def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
     typename = normalize_msgtype(name)
     if not text.strip():
         raise UnsupportedSchema(f"schema {name!r} is empty")
