@@ -132,7 +132,8 @@ class _Pass:
             self.src._problem(P.UNKNOWN_CHANNEL, None, t,
                               f"message on channel id {int(cids[k])} that the summary does "
                               "not define; skipped")
-        for cid in np.unique(cids[np.isin(cids, self.wanted)]).tolist():
+        # sorted(set(...)), not np.unique: that imports numpy.ma (start-up of the command)
+        for cid in sorted(set(cids[np.isin(cids, self.wanted)].tolist())):
             g = _Group(cid, ci.chunk_start_offset, data, buf, np.flatnonzero(cids == cid),
                        heads, lengths, times)
             g.columns = self.decoders[cid].decode(buf, g.starts, g.lengths)
