@@ -96,8 +96,11 @@ class _Pass:
         self.src = src
         self.index = src._index
         self.decoders = decoders
-        self.wanted = np.array(sorted(decoders), dtype=np.int64)
-        self.known = np.array(sorted(self.index.channels), dtype=np.int64)
+        # channel id (uint16, MCAP spec "Message") -> wanted / defined by the summary
+        self.wanted = np.zeros(1 << 16, dtype=np.bool_)
+        self.wanted[list(decoders)] = True
+        self.known = np.zeros(1 << 16, dtype=np.bool_)
+        self.known[[c for c in self.index.channels if 0 <= c < 1 << 16]] = True
         self.pool: list[_Group] = []
 
     def run(self) -> Iterator[list[TopicBlock]]:
@@ -123,9 +126,9 @@ class _Pass:
             return
         data, heads, lengths = table
         buf = np.frombuffer(data, dtype=np.uint8)
-        cids = _u(buf, heads, 2, "<u2").astype(np.int64)
+        cids = _u(buf, heads, 2, "<u2")
         times = _u(buf, heads + 6, 8, "<u8")
-        unknown = np.flatnonzero(~np.isin(cids, self.known))
+        unknown = np.flatnonzero(~self.known[cids])
         for k in unknown.tolist():
             t = int(times[k])
             self.src._gap(t, t)
@@ -133,7 +136,7 @@ class _Pass:
                               f"message on channel id {int(cids[k])} that the summary does "
                               "not define; skipped")
         # sorted(set(...)), not np.unique: that imports numpy.ma (start-up of the command)
-        for cid in sorted(set(cids[np.isin(cids, self.wanted)].tolist())):
+        for cid in sorted(set(cids[self.wanted[cids]].tolist())):
             g = _Group(cid, ci.chunk_start_offset, data, buf, np.flatnonzero(cids == cid),
                        heads, lengths, times)
             g.columns = self.decoders[cid].decode(buf, g.starts, g.lengths)
@@ -169,7 +172,9 @@ class _Pass:
         for i, g in enumerate(groups):
             by_topic.setdefault(self.index.channels[g.cid].topic, []).append(i)
         for topic, members in by_topic.items():
-            mask = np.isin(which, members)
+            mask = np.zeros(len(groups), dtype=np.bool_)
+            mask[members] = True
+            mask = mask[which]
             blk = self._block(topic, groups, which[mask], idx[mask], times[mask], slow)
             if blk is not None:
                 out.append(blk)
