@@ -30,27 +30,33 @@ class _DefaultGroup(click.Group):
     The optional sub-commands (:func:`_register_optional`) are attached on first need: not
     when the first argument is a requirement file (a path with a folder or a ``.fret`` /
     ``.json`` name, which no sub-command is called), so ``fretc FILE`` does not import the
-    audit and report machinery (start-up time)."""
+    audit and report machinery (start-up time); a named sub-command imports only its own
+    module (``fretc audit`` does not import ``fretc report``'s)."""
 
     _optional_registered = False
 
-    def _ensure_optional(self) -> None:
-        if not _DefaultGroup._optional_registered:
-            _DefaultGroup._optional_registered = True
-            _register_optional()
+    def _ensure_optional(self, name: str | None = None) -> None:
+        if _DefaultGroup._optional_registered:
+            return
+        if name in _OPTIONAL:
+            if name not in self.commands:
+                _register_one(name)
+            return
+        _DefaultGroup._optional_registered = True
+        _register_optional()
 
     def parse_args(self, ctx, args):
         if args and args[0] not in self.commands and args[0] not in ("--help", "-h",
                                                                      "--version"):
             if not _names_a_file(args[0]):
-                self._ensure_optional()
+                self._ensure_optional(args[0])
             if args[0] not in self.commands:
                 args = ["compile"] + list(args)
         return super().parse_args(ctx, args)
 
     def get_command(self, ctx, cmd_name):
         if cmd_name not in self.commands:
-            self._ensure_optional()
+            self._ensure_optional(cmd_name)
         return super().get_command(ctx, cmd_name)
 
     def list_commands(self, ctx):
@@ -96,23 +102,28 @@ def main():
 main.add_command(compile_cmd, "compile")
 
 
+#: The sub-commands other than ``compile``: name -> (module of this package, its command).
+_OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
+             "falsify": ("falsify", "falsify_cmd"), "inspect": ("inspect", "inspect_cmd"),
+             "report": ("report", "report_cmd"), "watch": ("watch", "watch_cmd"),
+             "replay": ("watch", "replay_cmd")}
+
+
+def _register_one(name: str) -> None:
+    """Attach the sub-command ``name`` (a key of :data:`_OPTIONAL`), importing its module."""
+    import importlib
+
+    module, attr = _OPTIONAL[name]
+    main.add_command(getattr(importlib.import_module(f"{__package__}.{module}"), attr), name)
+
+
 def _register_optional() -> None:
     """Attach the sub-commands other than ``compile``. Called on first need by
-    :class:`_DefaultGroup`, not at import: ``fretc FILE`` does not need them (start-up)."""
-    # lazy: these modules load rich and the report machinery (start-up time)
-    from .audit import audit_cmd
-    from .check import check_cmd
-    from .falsify import falsify_cmd
-    from .inspect import inspect_cmd
-    from .report import report_cmd
-    from .watch import register as register_watch
-
-    main.add_command(audit_cmd, "audit")
-    main.add_command(check_cmd, "check")
-    main.add_command(falsify_cmd, "falsify")
-    main.add_command(inspect_cmd, "inspect")
-    main.add_command(report_cmd, "report")
-    register_watch(main)
+    :class:`_DefaultGroup`, not at import: ``fretc FILE`` does not need them (start-up);
+    lazy: their modules load rich and the report machinery (start-up time)."""
+    for name in _OPTIONAL:
+        if name not in main.commands:
+            _register_one(name)
 
 
 if __name__ == "__main__":  # pragma: no cover

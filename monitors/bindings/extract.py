@@ -114,7 +114,7 @@ def rep117(ranges: np.ndarray, range_min: Any, range_max: Any) -> Valid:
     the values inside ``[range_min, range_max]``. ``ranges`` is 1-D (one message, scalar
     limits) or 2-D (messages x beams, limits as columns of shape (messages, 1))."""
     arr = np.asarray(ranges, dtype=np.float64)
-    too_close = np.isneginf(arr)
+    too_close = arr == -np.inf
     if too_close.any():
         arr = np.where(too_close, range_min, arr)
     return Valid(arr, (arr >= range_min) & (arr <= range_max))

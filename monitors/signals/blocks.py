@@ -28,7 +28,7 @@ from common.problems import SignalError
 from ..sources.selective import install as install_selective
 from ..sources import CsvSource, LogSource
 from .clock import HeaderBuffer, Sampling, Tick, check_topics
-from .columns import HeldColumns, Irregular, MessageColumns
+from .columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from .groups import GroupSampling, _restrict, csv_clock
 
 __all__ = ["BLOCK", "MAX_TICKS", "TickBlock", "sample_blocks", "blocks_of_ticks"]
@@ -91,6 +91,17 @@ class _Stream:
         b.times.append(t)
         b.log_times.append(log_time)
         b.data.append(data)
+
+    def add_block(self, topic: str, log_times: list[int], segment: Any) -> None:
+        """Messages of ``topic`` from the columnar pass (log time base): their buffer holds a
+        :class:`SegmentList`."""
+        b = self.buffers[topic]
+        if not isinstance(b.data, SegmentList):
+            assert not b.data
+            b.data = SegmentList()
+        b.times.extend(log_times)
+        b.log_times.extend(log_times)
+        b.data.add(segment)
 
     def arrays(self, topic: str) -> tuple[np.ndarray, np.ndarray]:
         """int64 (times, log times) of the buffered messages of ``topic``."""
@@ -197,6 +208,20 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
          ) -> Iterator[tuple[Any, TickBlock]]:
     """One read of the log, evaluating every clock each :data:`BLOCK` messages."""
     count = 0
+    by_blocks = getattr(source, "message_blocks", None)
+    if shared is not None and by_blocks is not None and not any(c.tf for c in clocks.values()):
+        released = by_blocks(set(fed))
+        if released is not None:  # the columnar pass (the log time base reads no header)
+            for blocks in released:
+                for topic, log_times, segment in blocks:
+                    shared.add_block(topic, log_times, segment)
+                    count += len(log_times)
+                if count >= BLOCK:
+                    count = 0
+                    yield from _evaluate_all(g, clocks, False)
+            yield from _evaluate_all(g, clocks, True)
+            _missing(clocks)
+            return
     for m in source.messages(set(fed)):
         if shared is not None:
             shared.add(m.topic, m.log_time, m.log_time, m.data)
@@ -220,6 +245,10 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
             for item in b.drain():
                 clocks[key].stream.add(*item)
     yield from _evaluate_all(g, clocks, True)
+    _missing(clocks)
+
+
+def _missing(clocks: dict[Any, _Group]) -> None:
     for c in clocks.values():
         # the newest message of a topic is never trimmed: an empty buffer never had one
         c.sampling.missing_topics = [t for t in c.required if not c.stream.buffers[t].times]

@@ -24,7 +24,7 @@ from ..bindings.compile import EvalError, EvalState
 from ..bindings.expression import Field, unparse
 from ..bindings.extract import LASER_SCAN, FieldAccessError, Valid, make_extractor, rep117
 
-__all__ = ["Irregular", "MessageColumns", "HeldColumns", "regular_column"]
+__all__ = ["Irregular", "MessageColumns", "HeldColumns", "regular_column", "SegmentList"]
 
 
 class Irregular(Exception):
@@ -76,7 +76,11 @@ class MessageColumns:
         key = (topic, path)
         col = self._fields.get(key)
         if col is None:
-            col = self._fields[key] = _plain_column(self.data[topic], path)
+            msgs = self.data[topic]
+            col = msgs.column(path) if isinstance(msgs, SegmentList) else None
+            if col is None:
+                col = _plain_column(msgs, path)
+            self._fields[key] = col
         if col is None:
             ex = make_extractor(node)
             try:
@@ -228,3 +232,76 @@ class HeldColumns:
         """A reduction of ``topic``'s fields at each tick, computed once per message
         (:meth:`MessageColumns.reduced`) and gathered."""
         return self.messages.reduced(node, topic, vector, scalar)[self.idx[topic]]
+
+
+class SegmentList:
+    """The messages of one topic as a list (indexing decodes a message on demand), held as
+    :class:`~monitors.sources.columnar.Segment` s whose columns :meth:`column` joins: what the
+    columnar MCAP pass (:mod:`monitors.sources.mcap_columns`) gives the block sampler."""
+
+    def __init__(self) -> None:
+        self.segments: list[Any] = []
+        self._n = 0
+
+    def add(self, segment: Any) -> None:
+        """Append the messages of ``segment``."""
+        if len(segment):
+            self.segments.append(segment)
+            self._n += len(segment)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, k: int) -> Any:
+        if k < 0:
+            k += self._n
+        if not 0 <= k < self._n:
+            raise IndexError(k)
+        for seg in self.segments:
+            if k < len(seg):
+                return seg.message(k)
+            k -= len(seg)
+        raise IndexError(k)  # pragma: no cover
+
+    def __iter__(self):
+        for seg in self.segments:
+            for k in range(len(seg)):
+                yield seg.message(k)
+
+    def __delitem__(self, s: slice) -> None:
+        """``del messages[:k]``: drop the first ``k`` messages."""
+        k = s.stop if isinstance(s, slice) and s.start is None and s.step is None else None
+        if k is None:
+            raise TypeError("only del messages[:k]")
+        k = min(max(k, 0), self._n)
+        self._n -= k
+        while k:
+            seg = self.segments[0]
+            if k >= len(seg):
+                self.segments.pop(0)
+                k -= len(seg)
+            else:
+                self.segments[0] = seg.dropped(k)
+                k = 0
+
+    def column(self, path: tuple) -> Any:
+        """The column of field ``path`` of every message, as :func:`_plain_column` gives it
+        from the messages, when every segment holds it (LaserScan ``ranges``: REP 117 applied,
+        :func:`~monitors.bindings.extract.rep117`); None otherwise (read the messages)."""
+        segs = self.segments
+        if not segs or any(seg.columns is None for seg in segs):
+            return None
+        if path == ("ranges",):
+            if any(seg.typename != LASER_SCAN for seg in segs):
+                return None
+            need = (path, ("range_min",), ("range_max",))
+            if any(p not in seg.columns for seg in segs for p in need) or len(
+                    {seg.columns[path].shape[1] for seg in segs}) != 1:
+                return None
+            rows, lo, hi = (np.concatenate([seg.columns[p] for seg in segs]) for p in need)
+            return rep117(rows.astype(np.float64), lo[:, None], hi[:, None])
+        if any(path not in seg.columns for seg in segs):
+            return None
+        if len(segs) == 1:
+            return segs[0].columns[path]
+        return np.concatenate([seg.columns[path] for seg in segs])

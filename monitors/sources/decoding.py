@@ -8,6 +8,7 @@ fields the signal bindings read (:mod:`monitors.sources.selective`).
 
 from __future__ import annotations
 
+import functools
 import struct
 from collections.abc import Callable
 from typing import Any
@@ -17,10 +18,12 @@ from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_
 from rosbags.typesys.msg import normalize_msgtype
 from rosbags.typesys.store import Typestore
 
+from .columnar import ColumnarDecoder, columnar_decoder
 from .known_types import layout_mismatch
 from .selective import selective_decoder
 
 __all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
+           "schema_columnar",
            "DECODE_ERRORS", "SCHEMA_FOR_ENCODING"]
 
 _IDL_SEP = "=" * 80 + "\n"
@@ -34,7 +37,11 @@ class UnsupportedSchema(Exception):
 
 
 def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
-    """A fresh rosbags Typestore holding the types of one embedded schema.
+    """A rosbags Typestore holding the types of one embedded schema. Building one compiles
+    rosbags' (de)serializers of its types (tens of ms); the stores of the latest
+    :data:`_STORES_KEPT` distinct schemas are kept and shared (read only: nothing registers
+    types in a store after it is built), so a log's channels, its binding type check and the
+    logs of one fleet audit with the same schema build it once.
 
     Args:
         schema_encoding: ``"ros2msg"``, ``"ros1msg"`` (concatenated .msg text with
@@ -49,6 +56,15 @@ def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typesto
     Raises:
         UnsupportedSchema: unknown schema encoding, or a definition rosbags cannot parse.
     """
+    return _build_typestore(schema_encoding, name, text)
+
+
+#: Distinct schemas whose Typestore :func:`build_typestore` keeps.
+_STORES_KEPT = 64
+
+
+@functools.lru_cache(maxsize=_STORES_KEPT)
+def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
     typename = normalize_msgtype(name)
     if not text.strip():
         raise UnsupportedSchema(f"schema {name!r} is empty")
@@ -143,3 +159,23 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
 #: Exceptions a decoder from :func:`schema_decoder` raises on a payload that does not match.
 DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError,
                  UnicodeDecodeError, KeyError, TypeError, OverflowError)
+
+
+def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
+                    schema_text: str | None, fields: Any) -> ColumnarDecoder | None:
+    """A :class:`~monitors.sources.columnar.ColumnarDecoder` of one channel's ``fields``, or
+    None wherever :func:`schema_decoder` would raise or the columnar walk does not cover the
+    type (the channel is then decoded message by message, which reports the problem). Never
+    raises; the arguments are :func:`schema_decoder`'s."""
+    if message_encoding != "cdr" or fields is None:
+        return None
+    try:
+        if (not schema_name or schema_text is None
+                or schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]):
+            return None
+        store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+        if layout_mismatch(schema_encoding, store, typename) is not None:
+            return None
+        return columnar_decoder(store, typename, message_encoding, fields)
+    except Exception:  # noqa: BLE001 - whatever fails here fails again, reported, one by one
+        return None

@@ -17,6 +17,7 @@ import zlib
 from typing import Any, BinaryIO
 
 import lz4.frame
+import numpy as np
 import zstandard
 from mcap.data_stream import ReadDataStream
 from mcap.exceptions import McapError
@@ -26,8 +27,8 @@ from mcap.records import Schema, Statistics
 from mcap.stream_reader import CRCValidationError
 
 __all__ = ["MCAP_MAGIC", "RECORD_HEAD", "FOOTER_LEN", "DATA_END_LEN", "RECORD_ERRORS",
-           "parse_record", "chunk_records", "chunk_messages", "crc_skip", "decompress",
-           "max_chunk_bytes"]
+           "parse_record", "chunk_records", "chunk_messages", "chunk_message_table", "crc_skip",
+           "decompress", "max_chunk_bytes"]
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"  # MCAP spec, "Magic"
 RECORD_HEAD = struct.Struct("<BQ")  # opcode, record length (MCAP spec, "Records")
@@ -219,6 +220,35 @@ def chunk_messages(chunk: Chunk, wanted: set[int] | dict, known: set[int] | dict
             # positional, in the dataclass's field order (keywords cost more)
             out.append(McapMessage(cid, log_time, data[body + 22:pos], publish_time, seq))
     return out
+
+
+def chunk_message_table(chunk: Chunk) -> tuple[bytes, np.ndarray, np.ndarray]:
+    """The Message records of an MCAP ``chunk`` as a table: the decompressed bytes and the
+    int64 byte offsets and lengths of every Message record's body in them, in file order
+    (other records skipped). Checks and errors are :func:`chunk_messages`'s.
+
+    Raises:
+        CRCValidationError: the uncompressed bytes do not match the chunk's CRC.
+        ValueError: as :func:`decompress`, or a record that runs past the chunk's end.
+    """
+    data = _checked(chunk)
+    starts: list[int] = []
+    lengths: list[int] = []
+    head = RECORD_HEAD.unpack_from
+    pos, end, least = 0, len(data), _MESSAGE_HEAD.size
+    while pos < end:
+        if pos + 9 > end:
+            raise ValueError(f"record header at byte {pos} of the chunk runs past its end")
+        opcode, length = head(data, pos)
+        if pos + 9 + length > end:
+            raise ValueError(f"record at byte {pos} of the chunk runs past its end")
+        if opcode == _OP_MESSAGE:
+            if length < least:
+                raise ValueError(f"message record at byte {pos} of the chunk is too short")
+            starts.append(pos + 9)
+            lengths.append(length)
+        pos += 9 + length
+    return data, np.array(starts, dtype=np.int64), np.array(lengths, dtype=np.int64)
 
 
 def crc_skip(f: BinaryIO, length: int, crc: int) -> int:

@@ -35,6 +35,7 @@ from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
 from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
 from .mcap_integrity import index_disagreement, read_summary
+from .mcap_columns import TopicBlock, column_pass
 from .mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
 from .mcap_records import crc_skip, parse_record
 from .reorder import REORDER_WINDOW_NS, ReorderQueue
@@ -202,6 +203,14 @@ class McapSource(LogSource):
             wanted = None if topics is None else frozenset(topics)
             yield from _LinearPass(self, wanted=wanted, decode=True).run()
 
+    def message_blocks(self, topics: set[str] | frozenset[str]
+                       ) -> Iterator[list[TopicBlock]] | None:
+        """The messages of ``topics`` as blocks of columns per topic
+        (:func:`monitors.sources.mcap_columns.column_pass`: the same messages, order within
+        each topic, damage and problems as :meth:`messages`), or None when that pass does
+        not apply to this file and these topics (then use :meth:`messages`)."""
+        return column_pass(self, topics)
+
     def _indexed(self, topics: set[str] | frozenset[str] | None) -> Iterator[Message]:
         """The indexed pass: chunks are opened when their message_start_time comes up in a
         heap merged with the messages of the chunks already open (as
@@ -243,6 +252,13 @@ class McapSource(LogSource):
         damaged chunk is a gap (its ``chunk_crc`` / ``chunk_corrupt`` problem) and gives []."""
         index = self._index
         assert index is not None
+        # only the messages of wanted (or unknown) channels are parsed
+        return self._open_chunk(f, ci, lambda c: chunk_messages(c, wanted, index.channels), [])
+
+    def _open_chunk(self, f: BinaryIO, ci: ChunkIndex, parse: Callable[[Chunk], Any],
+                    damaged: Any) -> Any:
+        """``parse`` of the Chunk record ``ci`` points to; a damaged chunk is a gap (its
+        ``chunk_crc`` / ``chunk_corrupt`` problem) and gives ``damaged``."""
         try:
             f.seek(ci.chunk_start_offset)
             raw = f.read(ci.chunk_length)
@@ -251,9 +267,7 @@ class McapSource(LogSource):
             opcode, length = RECORD_HEAD.unpack_from(raw)
             if opcode != Opcode.CHUNK or 9 + length != ci.chunk_length:
                 raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
-            chunk = parse_record(Opcode.CHUNK, raw[9:])
-            # only the messages of wanted (or unknown) channels are parsed
-            return chunk_messages(chunk, wanted, index.channels)
+            return parse(parse_record(Opcode.CHUNK, raw[9:]))
         except CRCValidationError as exc:
             self._gap(ci.message_start_time, ci.message_end_time)
             self._problem(P.CHUNK_CRC, None, ci.message_start_time,
@@ -265,7 +279,7 @@ class McapSource(LogSource):
                           f"chunk at byte {ci.chunk_start_offset} unreadable "
                           f"({type(exc).__name__}: {exc}); its messages are skipped: a "
                           f"gap in the log{GAP_NOTE}", ci.message_end_time)
-        return []
+        return damaged
 
     def _check_data_crc(self) -> None:
         """Check the DataEnd data_section_crc (MCAP spec): CRC-32 of bytes [0, DataEnd)."""
