@@ -51,8 +51,16 @@ def render_text(result) -> str:
                         if rz["assumed_outputs"] else ""))
         for c in rz["components"]:
             status = c["realizable"]
-            extra = (f" by a Mealy machine of {c['mealy_states']} states"
-                     if status is True else "")
+            extra = ""
+            if status is True and "mealy_states" in c:
+                extra = f" by a Mealy machine of {c['mealy_states']} states (Spot's game)"
+            elif status is True and "strategy" in c:
+                st = c["strategy"]
+                extra = (f" by a controller over {st['state_bits']} monitor state bits "
+                         f"(safety game; winning region a BDD of "
+                         f"{st['winning_region_bdd_nodes']} nodes)")
+            elif status is False:
+                extra = f" ({c['method']})"
             lines.append(f"  {', '.join(c['requirements'])}: "
                          f"{'realizable' if status is True else 'UNREALIZABLE' if status is False else 'unknown'}"
                          + extra)
