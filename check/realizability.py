@@ -236,7 +236,8 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
            + (" (enumeration cut by the time budget)" if cut else ""))
     result.findings.append(Finding("unrealizable", "error", involved, msg,
                                    subsets=names, cut=cut,
-                                   details={"environment": env}))
+                                   details={"environment": env,
+                                            "run": entry.get("run", [])}))
 
 
 def _environment(checker, counter, inputs: Sequence[str], note: str = "") -> dict:

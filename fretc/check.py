@@ -103,11 +103,22 @@ def _fmt(v) -> str:
 
 
 def _lasso(prefix, cycle) -> str:
+    """The input lasso, equal consecutive rows written once with their count (``x197``)."""
     def row(r):
         return "{" + ", ".join(f"{k}={str(v).lower() if isinstance(v, bool) else v}"
                                for k, v in r.items()) + "}"
-    text = " ".join(row(r) for r in prefix)
-    return (text + " " if text else "") + "then forever (" + " ".join(row(r) for r in cycle) + ")"
+
+    def runs(rows):
+        out: list[list] = []
+        for r in rows:
+            if out and out[-1][0] == r:
+                out[-1][1] += 1
+            else:
+                out.append([r, 1])
+        return " ".join(row(r) + (f" x{k}" if k > 1 else "") for r, k in out)
+
+    text = runs(prefix)
+    return (text + " " if text else "") + "then forever (" + runs(cycle) + ")"
 
 
 @click.command("check")
