@@ -81,8 +81,8 @@ BOUNDED = [
     "B1: whenever p the sw shall within {n} ticks satisfy q",
     "B2: upon p the sw shall for {m} ticks satisfy !q",
     "B3: the sw shall eventually satisfy p",
-    "B4: in mode upon p the sw shall within {n} ticks satisfy speed > 0.6",
-    "B5: in mode the sw shall always satisfy speed <= 0.5",
+    "B4: in m mode upon p the sw shall within {n} ticks satisfy speed > 0.6",
+    "B5: in m mode the sw shall always satisfy speed <= 0.5",
 ]
 
 
