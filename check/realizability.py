@@ -8,6 +8,11 @@ outputs so that every requirement holds on every infinite run whatever the input
 (Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
 connected component of requirements sharing variables.
 
+Safety requirements are decided by the symbolic safety game of :mod:`check.safety_game`
+(their pt monitors, numeric outputs as constrained controller choices) unless the engine
+is ``spot``; an unrealizable safety part makes the component unrealizable; otherwise a
+component with a requirement that is not safety goes to Spot's game, as follows.
+
 Each component's specification, on the ft_inf formulas with the numeric abstraction
 (:mod:`check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
 invariants of input comparisons are assumptions on the environment, those of output

@@ -137,7 +137,8 @@ def _lasso(prefix, cycle) -> str:
               help="Seconds per enumeration of minimal subsets.")
 @click.option("--engine", type=click.Choice(["auto", "spot", "smt"]), default="auto",
               show_default=True, help="Satisfiability solver: Spot up to 16 ticks and z3 "
-              "past them (auto), or one of them.")
+              "past them (auto), or one of them; realizability: the safety game for safety "
+              "requirements (auto, smt) or Spot's game only (spot).")
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
