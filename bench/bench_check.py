@@ -10,12 +10,17 @@
    too_close --outputs stopped`` (CPU of the process and its Spot worker).
 4. Time against the bound (10, 50, 100, 250, 1000 ticks): satisfiability and non-vacuity of
    a consistent set, the conflicts of an inconsistent one, by Spot (``--engine spot``) and
-   by z3 (``--engine smt``) on the same files; realizability (Spot's game).
+   by z3 (``--engine smt``) on the same files.
+5. Realizability against the bound (10 ... 1000 ticks): a realizable and an unrealizable
+   set, by Spot's game (``--engine spot``) and by the symbolic safety game (``--engine
+   auto``), and the command a user runs (``fretc check FILE --inputs p,m --outputs
+   q,r,speed``, start-up and every check included).
 
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
 queries run with the default 20 s budget (a timed-out query is counted as unknown).
 
-    python bench/bench_check.py [--corpus PATH] [--bounds-only] [--budget SECONDS]
+    python bench/bench_check.py [--corpus PATH] [--bounds-only] [--realizability-only]
+                                [--budget SECONDS]
 """
 
 from __future__ import annotations
@@ -76,8 +81,8 @@ BOUNDED = [
     "B1: whenever p the sw shall within {n} ticks satisfy q",
     "B2: upon p the sw shall for {m} ticks satisfy !q",
     "B3: the sw shall eventually satisfy p",
-    "B4: in mode upon p the sw shall within {n} ticks satisfy speed > 0.6",
-    "B5: in mode the sw shall always satisfy speed <= 0.5",
+    "B4: in m mode upon p the sw shall within {n} ticks satisfy speed > 0.6",
+    "B5: in m mode the sw shall always satisfy speed <= 0.5",
 ]
 
 
@@ -94,8 +99,8 @@ def _timed(path: Path, engine: str, budget: float, **kw) -> tuple[float, str]:
 
 def bound_sweep(budget: float) -> None:
     """Time against the bound: a consistent set (B1, B2 with a shorter `for`, B4, B5), a
-    conflict (B1, B2 longer than B1's window, B3), and realizability of B1/B2 (p input),
-    by Spot and by z3 (:mod:`check.smt`) in one run."""
+    conflict (B1, B2 longer than B1's window, B3), by Spot and by z3 (:mod:`check.smt`)
+    in one run; then the realizability table (:func:`realizability_sweep`)."""
     print(f"4. time against the bound (CPU s; budget {budget:g} s per query)")
     print(f"  {'bound':>5} {'check':<14} {'Spot':>8} {'z3':>8}  answers (Spot | z3)")
     for n in (10, 50, 100, 250, 1000):
@@ -109,16 +114,67 @@ def bound_sweep(budget: float) -> None:
             ts, a = _timed(path, "spot", budget)
             tz, b = _timed(path, "smt", budget)
             print(f"  {n:>5} {name:<14} {ts:8.2f} {tz:8.2f}  {a} | {b}")
-        path = Path("/tmp") / f"fretc_bench_bound_real_{n}.fret"
-        path.write_text(BOUNDED[0].format(n=n) + "\n", encoding="utf-8")
-        t0 = cpu()
-        check_requirements(compile_entries(load_requirements([path])), timeout=budget,
-                           redundancy=False, vacuity=False)
-        t1 = cpu()
-        _, a = _timed(path, "auto", budget, inputs=["p"], outputs=["q"], vacuity=False)
-        t2 = cpu()
-        print(f"  {n:>5} {'realizability':<14} {max(0.0, (t2 - t1) - (t1 - t0)):8.2f} "
-              f"{'-':>8}  {a} (Spot's game; no z3 method yet)")
+    realizability_sweep(budget)
+
+
+#: realizability sets (p, m inputs): a realizable one (the response the same tick, speeds in
+#: (0.2, 0.5]) and an unrealizable one (the environment re-triggers the hold before the
+#: deadline)
+REALIZE = {
+    "realizable": ["R1: whenever p the sw shall within {n} ticks satisfy q",
+                   "R2: whenever q the sw shall immediately satisfy speed <= 0.5",
+                   "R3: in m mode the sw shall always satisfy speed > 0.2",
+                   "R4: upon p the sw shall for {m} ticks satisfy !r"],
+    "unrealizable": ["U1: whenever p the sw shall within {n} ticks satisfy q",
+                     "U2: upon p the sw shall for {m} ticks satisfy !q"],
+}
+
+
+def _realizability(path: Path, engine: str, budget: float) -> tuple[float, str]:
+    """CPU seconds of the realizability check alone (minimal subsets included)."""
+    from check.analysis import Checker, CheckResult, make_item
+    from check.realizability import check_realizability
+    from check.solver import SpotWorker
+
+    items = [make_item(k, c) for k, c in
+             enumerate(compile_entries(load_requirements([path])))]
+    t0 = cpu()
+    with SpotWorker(budget) as worker:
+        summary = check_realizability(Checker(items, worker, engine=engine), CheckResult(),
+                                      ["p", "m"], ["q", "r", "speed"])
+    comp = summary["components"][0]
+    what = str(comp["realizable"])
+    if comp["realizable"] is False:
+        what += f" ({len(comp['environment'].get('prefix', []))}-tick inputs)"
+    return cpu() - t0, what
+
+
+def _command(path: Path) -> float:
+    """CPU seconds of ``fretc check FILE --inputs p,m --outputs q,r,speed``, start-up and
+    every check included (the process and its children)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([sys.executable, "-m", "fretc", "check", str(path), "--inputs", "p,m",
+                    "--outputs", "q,r,speed"], cwd=ROOT, capture_output=True, text=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+
+
+def realizability_sweep(budget: float) -> None:
+    """Realizability against the bound: Spot's game (``--engine spot``) and the symbolic
+    safety game (``--engine auto``) on the same files, and the whole command."""
+    print(f"5. realizability against the bound (CPU s; budget {budget:g} s per Spot query, "
+          f"{3 * budget:g} s per safety game)")
+    print(f"  {'bound':>5} {'set':<13} {'Spot':>8} {'game':>8} {'command':>8}  answers "
+          "(Spot | game)")
+    for n in (10, 50, 100, 200, 250, 1000):
+        for name, lines in REALIZE.items():
+            path = Path("/tmp") / f"fretc_bench_realize_{name}_{n}.fret"
+            path.write_text("\n".join(x.format(n=n, m=n - 3) for x in lines) + "\n",
+                            encoding="utf-8")
+            ts, a = _realizability(path, "spot", budget)
+            tg, b = _realizability(path, "auto", budget)
+            tc = _command(path)
+            print(f"  {n:>5} {name:<13} {ts:8.2f} {tg:8.2f} {tc:8.2f}  {a} | {b}", flush=True)
 
 
 def main() -> int:
@@ -126,10 +182,15 @@ def main() -> int:
     ap.add_argument("--corpus", default=str(ROOT / ".." / "shared" / "corpora" /
                                             "fret_casestudies.jsonl"))
     ap.add_argument("--bounds-only", action="store_true",
-                    help="Only the time-against-the-bound table (part 4).")
+                    help="Only the time-against-the-bound tables (parts 4 and 5).")
+    ap.add_argument("--realizability-only", action="store_true",
+                    help="Only the realizability table (part 5).")
     ap.add_argument("--budget", type=float, default=20.0,
                     help="Seconds per solver query in part 4.")
     args = ap.parse_args()
+    if args.realizability_only:
+        realizability_sweep(args.budget)
+        return 0
     if args.bounds_only:
         bound_sweep(args.budget)
         return 0

@@ -391,7 +391,8 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
     either is given, realizability is checked too (:mod:`check.realizability`).
     Requirements that failed to formalize are listed in ``input_errors``; free-form ones
     are skipped with a note. ``engine``: one of :data:`ENGINES` (satisfiability queries;
-    realizability is Spot's). Raises ``ValueError`` for another engine.
+    realizability: :mod:`check.safety_game` for safety requirements unless ``spot``).
+    Raises ``ValueError`` for another engine.
     """
     if witness_dir is not None and witness_judge is None:
         raise TypeError("check_requirements: witness_dir needs a witness_judge "

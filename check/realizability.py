@@ -8,6 +8,11 @@ outputs so that every requirement holds on every infinite run whatever the input
 (Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
 connected component of requirements sharing variables.
 
+Safety requirements are decided by the symbolic safety game of :mod:`check.safety_game`
+(their pt monitors, numeric outputs as constrained controller choices) unless the engine
+is ``spot``; an unrealizable safety part makes the component unrealizable; otherwise a
+component with a requirement that is not safety goes to Spot's game, as follows.
+
 Each component's specification, on the ft_inf formulas with the numeric abstraction
 (:mod:`check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
 invariants of input comparisons are assumptions on the environment, those of output
@@ -32,7 +37,9 @@ from .findings import Finding
 from .findings import ids as _ids
 from .solver import UNKNOWN
 from .witness import _atoms
-from .numeric_abstraction import simple_comparison
+from .numeric_abstraction import NumericAbstraction, simple_comparison
+from .safety_game import Outside, game_atoms, is_safety
+from compiler.ir import Node
 from compiler.printers import mangle, to_smv, to_spot
 
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
@@ -86,25 +93,94 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
                 "unknown", "unknown", _ids(comp),
                 "realizability of " + ", ".join(_ids(comp)) + " unknown: the synthesis game "
                 "ran out of time (--timeout) or Spot could not take it (see the notes)"))
-        elif ans[0]:
+        elif ans["realizable"]:
             entry["realizable"] = True
-            entry["mealy_states"] = ans[1]
+            entry["method"] = ans["method"]
+            for k in ("mealy_states", "strategy"):
+                if k in ans:
+                    entry[k] = ans[k]
         else:
-            _unrealizable(checker, decide, comp, ans[1], inputs, entry, result)
+            _unrealizable(checker, decide, comp, ans, inputs, entry, result)
         summary["components"].append(entry)
+    result.notes.extend(decide.notes)
     return summary
 
 
+#: the symbolic safety game's budget, as a multiple of the per-query ``timeout`` (60 s at
+#: ``fretc check``'s default 20 s): the issue's aim is 200-tick sets within 60 s
+GAME_TIMEOUT_FACTOR = 3.0
+
+
 class _Decider:
-    """Realizability of a set of requirement items (Spot's synthesis game through the
-    checker's worker), memoized by the specification's text and its outputs. Returns
-    UNKNOWN or (realizable, Mealy states or the environment's counter-strategy)."""
+    """Realizability of a set of requirement items, memoized by the set. Safety
+    requirements go to the symbolic safety game (:mod:`check.safety_game`) unless the
+    engine is ``spot``; the rest to Spot's synthesis game. An unrealizable safety part makes
+    the whole set unrealizable (a subset's environment strategy defeats the superset);
+    otherwise a set with a requirement that is not safety is Spot's. Returns UNKNOWN or a
+    dict: ``realizable``, ``method``, and ``mealy_states`` / ``strategy`` (realizable) or
+    ``counter`` (the input lasso or None), ``note``, ``run`` (unrealizable)."""
 
     def __init__(self, checker, inputs: list[str]):
         self.checker, self.inputs = checker, inputs
         self.cache: dict[tuple, object] = {}
+        self.notes: list[str] = []
 
     def __call__(self, items) -> object:
+        key = tuple(x.index for x in items)
+        if key not in self.cache:
+            ans = None
+            if self.checker.engine != "spot":
+                ans = self._game(items)
+            self.cache[key] = ans if ans is not None else self._spot(items)
+        return self.cache[key]
+
+    def _game(self, items) -> object:
+        """The safety game's answer, or None when Spot has to decide (module docstring)."""
+        checker = self.checker
+        safe = [x for x in items if is_safety(x.phi) and x.compiled.formalization.pt]
+        if not safe:
+            return None
+        pts = [x.compiled.formalization.pt for x in safe]
+        try:
+            game_atoms(pts)
+        except Outside as exc:
+            self._note(f"safety game not used for {', '.join(_ids(safe))}: {exc}")
+            return None
+        numeric = NumericAbstraction.of(pts)
+        env = [v for v in numeric.atoms if v in self.inputs]
+        ctl = [v for v in numeric.atoms if v not in self.inputs]
+        timeout = checker.worker.timeout
+        budget = None if timeout is None else timeout * GAME_TIMEOUT_FACTOR
+        checker.queries += 1
+        ans = checker.worker.ask(("safety_game", pts, self.inputs, _regions(numeric, env),
+                                  _regions(numeric, ctl),
+                                  None if budget is None else budget / 4), budget)
+        if ans == UNKNOWN:
+            checker.unknown += 1
+            self._note(f"the safety game of {', '.join(_ids(safe))} ran out of its "
+                       f"{budget:g} s budget" if budget else "the safety game failed")
+            return UNKNOWN if len(safe) == len(items) else None
+        if ans["realizable"] and len(safe) < len(items):
+            rest = [x for x in items if x not in safe]
+            self._note(f"{', '.join(_ids(safe))}: realizable by the safety game; with "
+                       f"{', '.join(_ids(rest))} (not safety properties) Spot's game decides")
+            return None
+        out = {"realizable": ans["realizable"], "method": "safety game"}
+        if ans["realizable"]:
+            out["strategy"] = ans["strategy"]
+        else:
+            letters = ans["inputs"]
+            out["counter"] = (letters, letters[-1:]) if letters else None
+            out["note"] = ans["note"]
+            out["run"] = ans["run"]
+        return out
+
+    def _note(self, text: str) -> None:
+        if text not in self.notes:
+            self.notes.append(text)
+
+    def _spot(self, items) -> object:
+        """Spot's synthesis game on the ft_inf formulas (as before the safety game)."""
         checker, inputs = self.checker, self.inputs
         phis = [x.phi for x in items]
         atoms = _atoms(phis)
@@ -121,28 +197,43 @@ class _Decider:
             spec_text = tuple(to_spot(p) for p in parts)
         else:
             spec_text = to_spot(ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out)))
-        key = (spec_text, tuple(outs))
-        if key not in self.cache:
-            checker.queries += 1
-            ans = checker.worker.ask(("realizable", key[0], outs))
-            if ans == UNKNOWN:
-                checker.unknown += 1
-            self.cache[key] = ans
-        return self.cache[key]
+        checker.queries += 1
+        ans = checker.worker.ask(("realizable", spec_text, outs))
+        if ans == UNKNOWN:
+            checker.unknown += 1
+            return UNKNOWN
+        if ans[0]:
+            return {"realizable": True, "method": "Spot's synthesis game",
+                    "mealy_states": ans[1]}
+        return {"realizable": False, "method": "Spot's synthesis game", "counter": ans[1],
+                "note": "", "run": []}
 
 
-def _unrealizable(checker, decide: _Decider, comp, counter, inputs: list[str], entry: dict,
-                  result) -> None:
+def _regions(numeric: NumericAbstraction, names: list[str]) -> Node:
+    """The region disjunctions of ``names`` (the invariants without their ``G``)."""
+    out = ir.TRUE
+    for v in names:
+        inv = numeric.variable_invariant(v)
+        out = ir.and_(out, inv.args[0] if inv.op == "G" else inv)
+    return out
+
+
+def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
+                  entry: dict, result) -> None:
     """Fill ``entry`` for an unrealizable component (minimal unrealizable subsets, the
-    environment's input lasso) and append the finding to ``result``."""
+    environment's input lasso, a controller's best effort along it) and append the finding
+    to ``result``."""
     entry["realizable"] = False
+    entry["method"] = ans["method"]
     subsets, cut, unknown = checker.minimal_subsets(
-        comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)[0]))
+        comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)["realizable"]))
     names = [_ids(s) for s in subsets]
     entry["minimal_unrealizable"] = names
     entry["cut"] = cut
-    env = _environment(checker, counter, inputs)
+    env = _environment(checker, ans["counter"], inputs, ans["note"])
     entry["environment"] = env
+    if ans["run"]:
+        entry["run"] = [_values(checker, letter, _variables(comp)) for letter in ans["run"]]
     involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
     msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
            + ", ".join(inputs) + ") do: minimal unrealizable subsets "
@@ -150,32 +241,40 @@ def _unrealizable(checker, decide: _Decider, comp, counter, inputs: list[str], e
            + (" (enumeration cut by the time budget)" if cut else ""))
     result.findings.append(Finding("unrealizable", "error", involved, msg,
                                    subsets=names, cut=cut,
-                                   details={"environment": env}))
+                                   details={"environment": env,
+                                            "run": entry.get("run", [])}))
 
 
-def _environment(checker, counter, inputs: Sequence[str]) -> dict:
+def _environment(checker, counter, inputs: Sequence[str], note: str = "") -> dict:
     """The input lasso as rows of input values, or a note when none exists."""
     if counter is None:
-        return {"note": "no fixed input sequence defeats every controller: the environment "
-                        "must react to the outputs"}
+        return {"note": note or "no fixed input sequence defeats every controller: the "
+                                "environment must react to the outputs"}
     prefix, cycle = counter
-    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
-                 for a in checker.numeric.atoms[name]}
-
-    def rows(letters):
-        out = []
-        for letter in letters:
-            truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
-            numbers = checker.numeric.values(truth)
-            row = {}
-            for v in inputs:
-                if v in checker.numeric.atoms:
-                    row[v] = numbers[v]
-                else:
-                    row[v] = bool(letter.get(mangle(v), False))
-            out.append(row)
-        return out
-
-    return {"prefix": rows(prefix), "cycle": rows(cycle),
+    return {"prefix": [_values(checker, x, inputs) for x in prefix],
+            "cycle": [_values(checker, x, inputs) for x in cycle],
             "note": "inputs tick by tick: the prefix, then the cycle repeated forever; no "
                     "output sequence meets the requirements along it"}
+
+
+def _variables(comp) -> list[str]:
+    out: list[str] = []
+    for x in comp:
+        out += [v for v in x.variables if v not in out]
+    return out
+
+
+def _values(checker, letter: dict, names: Sequence[str]) -> dict:
+    """One tick's letter ``{atom name: bool}`` as values of the FRET variables ``names``
+    (a number in the region the comparisons' truth values give)."""
+    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
+                 for a in checker.numeric.atoms[name]}
+    truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
+    numbers = checker.numeric.values(truth)
+    row = {}
+    for v in names:
+        if v in checker.numeric.atoms:
+            row[v] = numbers[v]
+        else:
+            row[v] = bool(letter.get(mangle(v), False))
+    return row

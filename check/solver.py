@@ -17,6 +17,8 @@ Queries (all on infinite words, Spot's LTL semantics):
   outputs (no fixed input sequence wins). Uses Spot's synthesis games:
   ``spot.ltl_to_game``, ``spot.solve_game``, ``spot.solved_game_to_mealy`` (Spot >= 2.10,
   ``ltlsynt``'s engine).
+* ``("safety_game", pts, inputs, env_inv, ctl_inv, budget)``: the symbolic safety game of
+  :func:`check.safety_game.solve_game` (its answer dict).
 """
 
 from __future__ import annotations
@@ -140,6 +142,10 @@ def run_query(query: tuple) -> Any:
         if aut.is_empty():
             return (False, None)
         return (True, _word(aut))
+    if kind == "safety_game":
+        from .safety_game import solve_game  # lazy: BuDDy games only when asked
+
+        return solve_game(*query[1:])
     if kind == "realizable":
         texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         outputs = list(query[2])
@@ -199,10 +205,11 @@ class SpotWorker:
         child.close()
         self._conn = parent
 
-    def ask(self, query: tuple) -> Any:
+    def ask(self, query: tuple, timeout: float | None = None) -> Any:
         """The answer to one :func:`run_query` query (a tuple naming the query and its formulas),
         or :data:`UNKNOWN` when the budget ran out or Spot could not take the query (its
-        message kept in :attr:`failures`). Never raises for Spot's errors."""
+        message kept in :attr:`failures`). ``timeout``: this query's budget in seconds
+        (default the worker's). Never raises for Spot's errors."""
         if self.timeout is None:
             try:
                 return run_query(query)
@@ -212,7 +219,7 @@ class SpotWorker:
         if self._proc is None or not self._proc.is_alive():
             self._start()
         self._conn.send(query)
-        if not self._conn.poll(self.timeout):
+        if not self._conn.poll(self.timeout if timeout is None else timeout):
             self.timeouts += 1
             self._kill()
             return UNKNOWN

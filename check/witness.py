@@ -219,6 +219,11 @@ def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
             finding.details["witness_note"] = (
                 "the witness shows the finding only in part: "
                 + ", ".join(f"{k} is {expected.get(k)}, not {v}" for k, v in wrong.items()))
+    for finding in result.findings:
+        if finding.kind == "unrealizable" and finding.details.get("run"):
+            serial += 1
+            _controller_run(w, finding, out / f"{serial:02d}_unrealizable_"
+                            f"{_safe('_'.join(finding.requirements))}.csv")
     if not any(f.severity == "error" for f in result.findings):
         rows = None
         if w.comps:
@@ -233,6 +238,24 @@ def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
         if f.witness:
             result.witnesses.append({"kind": f.kind, "path": f.witness,
                                      "expected": f.expected})
+
+
+def _controller_run(w: "_Witnesses", finding, path: Path) -> None:
+    """The witness of an unrealizable set: the defeating inputs with a controller's best
+    effort (:mod:`check.safety_game`); some requirement of the set is violated whatever
+    the controller does, so on this run too."""
+    blank = {name: (False if kind == "bool" else 0.0) for name, kind in w.cols.items()}
+    rows = [{**blank, **r} for r in finding.details["run"]]
+    expected = expected_verdicts(w.items, rows, w.judge)
+    _write(path, finding.message, w.sources, rows, expected)
+    finding.witness = str(path)
+    finding.expected = expected
+    shown = any(expected.get(i) == "violated" for i in finding.requirements)
+    finding.details["witness_shows_finding"] = shown
+    if not shown:
+        finding.details["witness_note"] = ("the controller's run violates none of "
+                                           + ", ".join(finding.requirements)
+                                           + " under FRET's finite-trace semantics")
 
 
 class _Witnesses:

@@ -51,8 +51,16 @@ def render_text(result) -> str:
                         if rz["assumed_outputs"] else ""))
         for c in rz["components"]:
             status = c["realizable"]
-            extra = (f" by a Mealy machine of {c['mealy_states']} states"
-                     if status is True else "")
+            extra = ""
+            if status is True and "mealy_states" in c:
+                extra = f" by a Mealy machine of {c['mealy_states']} states (Spot's game)"
+            elif status is True and "strategy" in c:
+                st = c["strategy"]
+                extra = (f" by a controller over {st['state_bits']} monitor state bits "
+                         f"(safety game; winning region a BDD of "
+                         f"{st['winning_region_bdd_nodes']} nodes)")
+            elif status is False:
+                extra = f" ({c['method']})"
             lines.append(f"  {', '.join(c['requirements'])}: "
                          f"{'realizable' if status is True else 'UNREALIZABLE' if status is False else 'unknown'}"
                          + extra)
@@ -95,11 +103,22 @@ def _fmt(v) -> str:
 
 
 def _lasso(prefix, cycle) -> str:
+    """The input lasso, equal consecutive rows written once with their count (``x197``)."""
     def row(r):
         return "{" + ", ".join(f"{k}={str(v).lower() if isinstance(v, bool) else v}"
                                for k, v in r.items()) + "}"
-    text = " ".join(row(r) for r in prefix)
-    return (text + " " if text else "") + "then forever (" + " ".join(row(r) for r in cycle) + ")"
+
+    def runs(rows):
+        out: list[list] = []
+        for r in rows:
+            if out and out[-1][0] == r:
+                out[-1][1] += 1
+            else:
+                out.append([r, 1])
+        return " ".join(row(r) + (f" x{k}" if k > 1 else "") for r, k in out)
+
+    text = runs(prefix)
+    return (text + " " if text else "") + "then forever (" + runs(cycle) + ")"
 
 
 @click.command("check")
@@ -118,7 +137,8 @@ def _lasso(prefix, cycle) -> str:
               help="Seconds per enumeration of minimal subsets.")
 @click.option("--engine", type=click.Choice(["auto", "spot", "smt"]), default="auto",
               show_default=True, help="Satisfiability solver: Spot up to 16 ticks and z3 "
-              "past them (auto), or one of them.")
+              "past them (auto), or one of them; realizability: the safety game for safety "
+              "requirements (auto, smt) or Spot's game only (spot).")
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")

@@ -132,7 +132,11 @@ def test_satisfiable_but_unrealizable(tmp_path):
     # the same set with too_close an output is realizable
     r2 = check_requirements(compile_entries(entries), inputs=[], outputs=["stopped",
                                                                           "too_close"])
-    assert r2.findings == [] and r2.realizability["components"][0]["mealy_states"] >= 1
+    assert r2.findings == [] and r2.realizability["components"][0]["strategy"][
+        "state_bits"] >= 1
+    r3 = check_requirements(compile_entries(entries), inputs=[], engine="spot",
+                            outputs=["stopped", "too_close"])
+    assert r3.findings == [] and r3.realizability["components"][0]["mealy_states"] >= 1
 
 
 def test_reactive_environment_needs_no_fixed_sequence(tmp_path):
@@ -279,6 +283,11 @@ def test_spot_errors_are_unknown_answers_not_crashes(tmp_path):
     ab = tmp_path / "ab.fret"
     ab.write_text("A: the r shall always satisfy s <= 0.5\n"
                   "B: whenever p the r shall immediately satisfy s > 0.6\n")
-    res = CliRunner().invoke(main, ["check", str(ab), "--inputs", "p", "--outputs", "s"])
+    res = CliRunner().invoke(main, ["check", str(ab), "--inputs", "p", "--outputs", "s",
+                                    "--engine", "spot"])
     assert res.exit_code == 1 and "Traceback" not in res.output
     assert "realizability of A, B unknown" in res.output and "Spot could not take" in res.output
+    # the safety game (auto) decides it: p at the first tick defeats every controller
+    res = CliRunner().invoke(main, ["check", str(ab), "--inputs", "p", "--outputs", "s"])
+    assert res.exit_code == 1 and "UNREALIZABLE (safety game)" in res.output, res.output
+    assert "inputs that defeat every controller: {p=true}" in res.output

@@ -5,7 +5,6 @@ decided, witnesses at such bounds replayed by fretc audit, and no traceback on a
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import pytest
@@ -153,15 +152,14 @@ def _named(f):
 
 @pytest.mark.parametrize("n", [250, 1000])
 def test_conflicts_with_deadlines_of_hundreds_of_ticks_are_decided(tmp_path, n):
-    """A conflict with bounds of n ticks is found with its minimal subset within 10 s CPU
-    (Spot refuses bounds past 254)."""
+    """A conflict with bounds of n ticks is found with its minimal subset within the default
+    budget (Spot refuses bounds past 254). Its time is measured by ``bench/bench_check.py
+    --bounds-only``, not here: a timed test fails on a loaded machine."""
     p = tmp_path / "d.fret"
     p.write_text(f"C1: whenever p the sw shall within {n} ticks satisfy q\n"
                  f"C2: upon p the sw shall for {n + 5} ticks satisfy !q\n"
                  "C3: the sw shall eventually satisfy p\n", encoding="utf-8")
-    t0 = time.process_time()
     r = _run(p, "auto")
-    assert time.process_time() - t0 < 10
     conflict = [f for f in r.findings if f.kind == "conflict"]
     assert conflict and conflict[0].subsets == [["C1", "C2", "C3"]], r.findings
 

@@ -1,0 +1,532 @@
+"""Realizability of safety requirements by a symbolic safety game (``fretc check``).
+
+A requirement whose ft_inf formula is a *safety* property (every violating run has a finite
+bad prefix: bounded responses, always, immediately, next, within/for/until/before N ticks,
+in every scope) is violated exactly when its FRET **pt** formula turns false at some tick:
+FRET's pt formula is the finite-trace verdict "no violation yet" (Havelund & Rosu, TACAS
+2002, monitor synthesis). The pt formula's monitor is a deterministic finite-state machine
+whose state is the previous tick's value of each past-time sub-formula: one bit for ``Y``,
+``Z``, ``O``, ``H``, ``S``, ``T``; for a bounded ``O[0,w] x`` the ticks since ``x`` last held,
+saturated at ``w + 1`` (a counter of ``log2 w`` bits); ``O[l,h] x`` is ``O[0,h-l]`` of
+``Y^l x`` (``l`` bits of delay line); ``H[l,h] x = !O[l,h] !x``. So the set's product monitor
+is a safety automaton of ``O(sum of log bounds + lower bounds)`` bits, and no bound is
+unrolled into explicit states.
+
+The game (Pnueli & Rosner, POPL 1989; safety games solved by the attractor, Thomas, STACS
+1995): each tick the environment sets the inputs, then the controller sets the outputs
+knowing them (a Mealy machine, :data:`check.realizability.MACHINE`); the controller loses
+when a requirement's pt formula is false. The states from which the environment forces a
+loss are the least fixed point ``Lose = pre(Lose)`` with
+
+    pre(L)(s) = exists inputs (env_ok & forall outputs (ctl_ok -> !ok(s) | next(s) in L))
+
+computed on BDDs (BuDDy, shipped with Spot: ``import buddy``). ``env_ok`` / ``ctl_ok``
+say the comparisons of each numeric input / output variable take the truth values of one
+real value (:mod:`check.numeric_abstraction`): a comparison over an output is a choice of the
+controller, constrained like the number it stands for. The set is **realizable** iff the
+initial state is outside ``Lose``; the winning region's BDD is then a controller (its size
+is reported).
+
+For an unrealizable set the layers of ``Lose`` rank states by how many ticks the environment
+needs; a **fixed input sequence** that defeats every controller is searched for over the
+sets of states the monitors can be in after it whatever the outputs (greedy by rank, then
+breadth first within a budget): an input prefix after which no output sequence survives. A
+controller's best effort along it (outputs that keep every requirement as long as possible)
+is returned too, so the run can be replayed through ``fretc audit``.
+
+Outside the method (the caller falls back to Spot's game, or answers unknown): a requirement
+whose ft_inf is not syntactically safe (Sistla, 1994: eventually, until with a required
+end) or whose pt formula has an atom other than a boolean variable or a comparison of one
+variable with a constant.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+from compiler import ir
+from compiler.ir import Node
+from compiler.printers import mangle, to_smv
+
+from .numeric_abstraction import simple_comparison
+
+__all__ = ["is_safety", "Outside", "solve_game", "game_atoms"]
+
+#: fixed-input-sequence search: sets of states visited before giving up
+SEARCH_BUDGET = 4000
+#: more input letters than this (2^10) and no fixed sequence is searched for
+MAX_LETTERS = 1024
+
+
+class Outside(Exception):
+    """The requirement set is outside what the safety game handles; the message says why."""
+
+
+# --------------------------------------------------------------------------- fragment
+def is_safety(n: Node, positive: bool = True) -> bool:
+    """Is ``n`` (an ft_inf IR formula, read with polarity ``positive``) in the syntactic
+    safety fragment (Sistla, "Safety, liveness and fairness in temporal logic", 1994):
+    negation normal form with only ``X``, ``G``, ``V`` (release) and bounded ``F``/``G``
+    over atoms? ``F`` and ``U`` are allowed under negation only."""
+    op = n.op
+    if not n.args or op in ("cmp", "call", "past", "future"):
+        return True
+    if op == "!":
+        return is_safety(n.args[0], not positive)
+    if op in ("&", "|"):
+        return all(is_safety(a, positive) for a in n.args)
+    if op == "->":
+        return is_safety(n.args[0], not positive) and is_safety(n.args[1], positive)
+    if op in ("<->", "xor"):
+        return all(is_safety(a, p) for a in n.args for p in (True, False))
+    if op == "X" or (op in ("F", "G") and n.hi is not None):
+        return is_safety(n.args[0], positive)
+    if op in ("G", "V"):
+        return positive and all(is_safety(a, positive) for a in n.args)
+    if op in ("F", "U"):
+        return (not positive) and all(is_safety(a, positive) for a in n.args)
+    return False
+
+
+def game_atoms(pts: Sequence[Node]) -> list[Node]:
+    """The atoms of pt formulas, in first-seen order; raises :class:`Outside` for an atom
+    the game cannot give a player (a function, a comparison of two variables, ``LAST``)."""
+    out: list[Node] = []
+    for f in pts:
+        for n in ir.walk(f):
+            if n.op == "ap" or (n.op == "cmp" and simple_comparison(n) is not None):
+                if n not in out:
+                    out.append(n)
+            elif n.op in ("cmp", "call", "past", "future", "LAST"):
+                raise Outside(f"the atom {to_smv(n)} is neither a boolean variable nor a "
+                              "comparison of one variable with a constant")
+    return out
+
+
+def letter_name(atom: Node) -> str:
+    """An atom's key in a letter, as Spot's words and :mod:`check.smt` name it."""
+    return mangle(atom.name) if atom.op == "ap" else to_smv(atom)
+
+
+def _buddy():
+    import spot  # noqa: F401  lazy: Spot initializes BuDDy
+    import buddy
+
+    return buddy
+
+
+def _state_bits(n: Node, seen: set) -> int:
+    """An upper bound on the state bits the monitor of ``n`` needs (for one allocation)."""
+    if n in seen:
+        return 0
+    seen.add(n)
+    own = 0
+    if n.op in ("Y", "Z", "O", "H", "S", "T", "FTP"):
+        own = 1
+        if n.hi is not None:
+            own = (n.lo or 0) + (n.hi - (n.lo or 0) + 1).bit_length() + 1
+    return own + sum(_state_bits(a, seen) for a in n.args)
+
+
+# --------------------------------------------------------------------------- the monitor
+class _Monitor:
+    """The product monitor of pt formulas as BDDs: ``value(n)`` the truth of ``n`` at this
+    tick over (state, input, output) variables; ``bits`` the state bits as ``(current,
+    next, initial value, next-value BDD)``."""
+
+    def __init__(self, bdd, first_var: int, atoms: list[Node], inputs: set[str]):
+        self.b = bdd
+        self.memo: dict[Node, object] = {}
+        self.bits: list[list] = []
+        self.atom_var: dict[Node, int] = {}
+        self.in_vars: list[int] = []
+        self.out_vars: list[int] = []
+        for k, a in enumerate(atoms):
+            self.atom_var[a] = first_var + k
+            names = {x.name for x in ir.walk(a) if x.op in ("ap", "var")}
+            (self.in_vars if names <= inputs else self.out_vars).append(first_var + k)
+        self.base = first_var + len(atoms)
+
+    def _bit(self, init: bool) -> tuple[object, list]:
+        """A new state bit: its current and next variables side by side, after the bits
+        made before it. So each requirement's bits are contiguous and a delay line's bits
+        in delay order: measured far smaller winning regions than interleaving the delay
+        lines of different requirements (bench/bench_check.py)."""
+        cur = self.base + 2 * len(self.bits)
+        bit = [cur, cur + 1, init, None]
+        self.bits.append(bit)
+        return self.b.bdd_ithvar(cur), bit
+
+    def value(self, n: Node):
+        """Truth of ``n`` at the current tick (a BDD)."""
+        got = self.memo.get(n)
+        if got is None:
+            got = self.memo[n] = self._encode(n)
+        return got
+
+    def _encode(self, n: Node):
+        b, op = self.b, n.op
+        if op in ("true", "false"):
+            return b.bddtrue if op == "true" else b.bddfalse
+        if n in self.atom_var:
+            return b.bdd_ithvar(self.atom_var[n])
+        if op == "FTP":  # a bit "some tick has passed": FTP is its negation
+            v, bit = self._bit(False)
+            bit[3] = b.bddtrue
+            return b.bdd_not(v)
+        if op == "!":
+            return b.bdd_not(self.value(n.args[0]))
+        if op in ("&", "|", "->", "<->", "xor"):
+            x, y = self.value(n.args[0]), self.value(n.args[1])
+            return {"&": b.bdd_and, "|": b.bdd_or, "->": b.bdd_imp, "<->": b.bdd_biimp,
+                    "xor": b.bdd_xor}[op](x, y)
+        if op in ("O", "H") and n.hi is not None:
+            return self._bounded(n)
+        if op in ("Y", "Z"):
+            v, bit = self._bit(op == "Z")
+            bit[3] = self.value(n.args[0])
+            return v
+        if op in ("O", "H", "S", "T"):
+            prev, bit = self._bit(op in ("H", "T"))
+            a = self.value(n.args[0])
+            if op == "O":
+                now = b.bdd_or(a, prev)
+            elif op == "H":
+                now = b.bdd_and(a, prev)
+            elif op == "S":
+                now = b.bdd_or(self.value(n.args[1]), b.bdd_and(a, prev))
+            else:
+                now = b.bdd_and(self.value(n.args[1]), b.bdd_or(a, prev))
+            bit[3] = now
+            return now
+        raise Outside(f"no monitor for the IR node {op!r} in a pt formula")
+
+    def _bounded(self, n: Node):
+        """``O[l,h] x`` = ``O[0,h-l]`` of ``x`` delayed ``l`` ticks; ``H`` its dual."""
+        b = self.b
+        x = self.value(n.args[0])
+        if n.op == "H":
+            x = b.bdd_not(x)
+        for _ in range(n.lo or 0):  # the delay line, oldest last
+            v, bit = self._bit(False)
+            bit[3] = x
+            x = v
+        w = n.hi - (n.lo or 0)
+        if w > 0:
+            x = self._since_counter(x, w)
+        return b.bdd_not(x) if n.op == "H" else x
+
+    def _since_counter(self, x, w: int):
+        """``O[0,w] x``: a counter of the ticks since ``x`` last held (before this tick),
+        saturated at ``w + 1``, initially ``w + 1`` (never); true when ``x`` holds now or
+        the counter is below ``w``."""
+        b = self.b
+        width = (w + 1).bit_length()
+        bits = []
+        init = w + 1
+        for k in range(width):
+            v, bit = self._bit(bool((init >> k) & 1))
+            bits.append((v, bit))
+        cvars = [v for v, _ in bits]
+        below = _less_than(b, cvars, w)
+        now = b.bdd_or(x, below)
+        # next counter: 0 when x, else min(c + 1, w + 1)
+        carry = b.bddtrue
+        sat = b.bdd_not(_less_than(b, cvars, w + 1))
+        for k, (v, bit) in enumerate(bits):
+            inc = b.bdd_xor(v, carry)
+            carry = b.bdd_and(v, carry)
+            capped = b.bdd_ite(sat, b.bddtrue if (init >> k) & 1 else b.bddfalse, inc)
+            bit[3] = b.bdd_and(b.bdd_not(x), capped)
+        return now
+
+
+def _less_than(b, bits: list, k: int):
+    """BDD of ``value(bits) < k`` (``bits`` least significant first)."""
+    out = b.bddfalse
+    for i, v in enumerate(bits):  # from the least significant bit up
+        if (k >> i) & 1:
+            out = b.bdd_or(b.bdd_not(v), out)
+        else:
+            out = b.bdd_and(b.bdd_not(v), out)
+    if k >= (1 << len(bits)):
+        return b.bddtrue
+    return out
+
+
+# --------------------------------------------------------------------------- the game
+_DICT: list = []
+
+
+class _Game:
+    """The safety game of a set of pt formulas (module docstring). ``inputs``: FRET
+    variable names of the environment; ``env_inv``/``ctl_inv``: propositional IR formulas
+    over the atoms (the numeric consistency of inputs / outputs)."""
+
+    def __init__(self, pts: Sequence[Node], inputs: Sequence[str], env_inv: Node,
+                 ctl_inv: Node):
+        import spot  # lazy: Spot (and its BuDDy) in the query worker process only
+
+        b = self.b = _buddy()
+        if not _DICT:
+            _DICT.append(spot.make_bdd_dict())
+        self.owner = spot.make_twa_graph(_DICT[0])
+        self.atoms = game_atoms(list(pts) + [env_inv, ctl_inv])
+        seen: set = set()
+        nvars = len(self.atoms) + 2 * sum(_state_bits(f, seen) for f in pts) + 2
+        first = _DICT[0].register_anonymous_variables(nvars, self.owner)
+        m = self.m = _Monitor(b, first, self.atoms, set(inputs))
+        self.ok = b.bddtrue
+        for f in pts:
+            self.ok = b.bdd_and(self.ok, m.value(f))
+        self.env_ok, self.ctl_ok = m.value(env_inv), m.value(ctl_inv)
+        self.trans, self.init = b.bddtrue, b.bddtrue
+        for cur, nxt, init, fn in m.bits:
+            self.trans = b.bdd_and(self.trans, b.bdd_biimp(b.bdd_ithvar(nxt), fn))
+            self.init = b.bdd_and(self.init, b.bdd_ithvar(cur) if init
+                                  else b.bdd_nithvar(cur))
+        self.in_set = _varset(b, m.in_vars)
+        self.out_set = _varset(b, m.out_vars)
+        self.cur_set = _varset(b, [x[0] for x in m.bits])
+        self.nxt_set = _varset(b, [x[1] for x in m.bits])
+        self.layers: list = []
+
+    def close(self) -> None:
+        """Drop the BDDs and give their variables back to Spot's allocator."""
+        self.layers = []
+        self.m = self.ok = self.env_ok = self.ctl_ok = self.trans = self.init = None
+        _DICT[0].unregister_all_my_variables(self.owner)
+
+    def _primed(self, f):
+        b = self.b
+        for cur, nxt, _i, _f in self.m.bits:
+            f = b.bdd_compose(f, b.bdd_ithvar(nxt), cur)
+        return f
+
+    def _unprimed(self, f):
+        b = self.b
+        for cur, nxt, _i, _f in self.m.bits:
+            f = b.bdd_compose(f, b.bdd_ithvar(cur), nxt)
+        return f
+
+    def successors_in(self, target):
+        """BDD over (state, inputs, outputs): the next state is in ``target``
+        (``target`` with each state bit replaced by its next-value function: renamed to
+        its next variable first, so the substitution is simultaneous)."""
+        b = self.b
+        used = _support(b, target)
+        bits = [x for x in self.m.bits if x[0] in used]
+        f = target
+        for cur, nxt, _init, _fn in bits:
+            f = b.bdd_compose(f, b.bdd_ithvar(nxt), cur)
+        for _cur, nxt, _init, fn in bits:
+            f = b.bdd_compose(f, fn, nxt)
+        return f
+
+    def pre(self, lose):
+        """States from which the environment forces a loss now or a move into ``lose``."""
+        b = self.b
+        bad = b.bdd_or(b.bdd_not(self.ok), self.successors_in(lose))
+        every_out = b.bdd_forall(b.bdd_imp(self.ctl_ok, bad), self.out_set)
+        return b.bdd_exist(b.bdd_and(self.env_ok, every_out), self.in_set)
+
+    def solve(self, deadline: float | None = None) -> bool:
+        """Compute the layers of ``Lose`` (stopping once the initial state is in it);
+        True when the controller wins (realizable)."""
+        import time
+
+        b = self.b
+        lose = b.bddfalse
+        while True:
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError("the safety game ran out of its budget")
+            nxt = b.bdd_or(lose, self.pre(lose))
+            if nxt == lose:
+                return True
+            lose = nxt
+            self.layers.append(lose)
+            if b.bdd_and(self.init, lose) != b.bddfalse:
+                return False
+
+    def strategy_size(self) -> dict:
+        """The controller the game gives: memory = the monitors' state bits; each tick it
+        picks outputs that keep the requirements and the next state in the winning region
+        (the complement of ``Lose``, a BDD of ``winning_region_bdd_nodes`` nodes)."""
+        b = self.b
+        win = b.bdd_not(self.layers[-1]) if self.layers else b.bddtrue
+        return {"method": "safety game", "state_bits": len(self.m.bits),
+                "winning_region_bdd_nodes": b.bdd_nodecount(win),
+                "iterations": len(self.layers)}
+
+
+def _support(b, f) -> set[int]:
+    """The variables ``f`` depends on."""
+    cube, out = b.bdd_support(f), set()
+    while cube != b.bddtrue:
+        out.add(b.bdd_var(cube))
+        cube = b.bdd_high(cube)
+    return out
+
+
+def _varset(b, variables: Sequence[int]):
+    out = b.bddtrue
+    for v in variables:
+        out = b.bdd_and(out, b.bdd_ithvar(v))
+    return out
+
+
+# --------------------------------------------------------------------------- the environment
+class _Witness:
+    """A fixed input sequence that defeats every controller, and a controller's best
+    effort along it (module docstring)."""
+
+    def __init__(self, game: _Game):
+        self.g, self.b = game, game.b
+        m = game.m
+        self.in_atoms = [a for a in game.atoms if m.atom_var[a] in m.in_vars]
+        self.out_atoms = [a for a in game.atoms if m.atom_var[a] in m.out_vars]
+        self.all_set = game.b.bdd_and(game.b.bdd_and(game.cur_set, game.in_set),
+                                      game.out_set)
+
+    def _cubes(self, atoms: list[Node], allowed, limit: int) -> list[tuple]:
+        """Assignments of ``atoms`` allowed by ``allowed`` (a BDD over them), as
+        ``(values, cube)``, at most ``limit`` (None when there are more)."""
+        b, var = self.b, self.g.m.atom_var
+        if 2 ** len(atoms) > limit:
+            return None
+        out = []
+        for values in itertools.product((False, True), repeat=len(atoms)):
+            cube = b.bddtrue
+            for a, v in zip(atoms, values):
+                cube = b.bdd_and(cube, b.bdd_ithvar(var[a]) if v else b.bdd_nithvar(var[a]))
+            if b.bdd_and(cube, allowed) != b.bddfalse:
+                out.append((values, cube))
+        return out
+
+    def rank(self, states) -> int:
+        """Fewest ticks in which the environment forces a loss from every state of
+        ``states`` (``len(layers)`` when some state is not known to lose)."""
+        b, layers = self.b, self.g.layers
+        lo, hi = 0, len(layers)
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if b.bdd_and(states, b.bdd_not(layers[mid])) == b.bddfalse:
+                hi = mid
+            else:
+                lo = mid + 1
+        return lo
+
+    def post(self, states, cube):
+        """The states the monitors can be in after one tick with inputs ``cube``, over
+        every output that keeps every requirement."""
+        b, g = self.b, self.g
+        now = b.bdd_and(b.bdd_and(states, cube), b.bdd_and(g.ctl_ok, g.ok))
+        return g._unprimed(b.bdd_appex(now, g.trans, b.bddop_and, self.all_set))
+
+    def search(self, deadline: float | None) -> tuple[list | None, str]:
+        """Best-first search (by rank) over the sets of states: the input letters of a
+        prefix after which no output sequence keeps the requirements, or None and why."""
+        import heapq
+        import time
+
+        letters = self._cubes(self.in_atoms, self.g.env_ok, MAX_LETTERS)
+        if letters is None:
+            return None, (f"no fixed input sequence searched: {len(self.in_atoms)} input "
+                          "atoms are too many letters")
+        start = self.g.init
+        heap = [(self.rank(start), 0, 0, start, ())]
+        seen = {start.id()}
+        count = 0
+        while heap:
+            if count >= SEARCH_BUDGET or (deadline is not None
+                                          and time.monotonic() > deadline):
+                return None, ("no fixed input sequence found within the search budget "
+                              f"({count} sets of monitor states): the environment may "
+                              "have to react to the outputs")
+            _r, _n, _c, states, seq = heapq.heappop(heap)
+            for k, (_values, cube) in enumerate(letters):
+                nxt = self.post(states, cube)
+                if nxt == self.b.bddfalse:
+                    return [letters[i][0] for i in seq + (k,)], ""
+                if nxt.id() not in seen:
+                    seen.add(nxt.id())
+                    count += 1
+                    heapq.heappush(heap, (self.rank(nxt), len(seq) + 1, count, nxt,
+                                          seq + (k,)))
+        return None, ("no fixed input sequence defeats every controller (every one has a "
+                      "matching output sequence): the environment must react to the outputs")
+
+    def play(self, inputs: list[tuple]) -> list[dict]:
+        """A controller's best effort along ``inputs`` (letters of :meth:`search`): each
+        tick the outputs that keep every requirement and reach the state of highest rank
+        (any allowed outputs once none keeps them). Rows ``{atom name: bool}``."""
+        b, g = self.b, self.g
+        var = g.m.atom_var
+        state, rows = g.init, []
+        for values in inputs:
+            cube = b.bddtrue
+            for a, v in zip(self.in_atoms, values):
+                cube = b.bdd_and(cube, b.bdd_ithvar(var[a]) if v else b.bdd_nithvar(var[a]))
+            here = b.bdd_and(state, cube)
+            keep = b.bdd_exist(b.bdd_and(here, b.bdd_and(g.ctl_ok, g.ok)), g.cur_set)
+            keep = b.bdd_exist(keep, g.in_set)
+            if keep == b.bddfalse:
+                keep = g.ctl_ok
+            best = None
+            for values_o, cube_o in self._cubes(self.out_atoms, keep, 256) or []:
+                nxt = self._next(b.bdd_and(here, cube_o))
+                r = self.rank(nxt)
+                if best is None or r > best[0]:
+                    best = (r, values_o, nxt)
+            if best is None:  # too many output letters: any that keeps the requirements
+                one = b.bdd_satoneset(keep, g.out_set, b.bddfalse)
+                values_o = tuple(b.bdd_and(one, b.bdd_ithvar(var[a])) != b.bddfalse
+                                 for a in self.out_atoms)
+                best = (0, values_o, self._next(b.bdd_and(here, one)))
+            row = {letter_name(a): v for a, v in zip(self.in_atoms, values)}
+            row.update({letter_name(a): v for a, v in zip(self.out_atoms, best[1])})
+            rows.append(row)
+            state = best[2]
+        return rows
+
+    def _next(self, here):
+        """The state after ``here`` (a state, input and output cube)."""
+        b, g = self.b, self.g
+        out = b.bddtrue
+        for cur, _nxt, _init, fn in g.m.bits:
+            on = b.bdd_and(here, fn) != b.bddfalse
+            out = b.bdd_and(out, b.bdd_ithvar(cur) if on else b.bdd_nithvar(cur))
+        return out
+
+
+def solve_game(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_inv: Node,
+               budget: float | None = None) -> dict:
+    """Decide the safety game of the pt formulas ``pts`` (module docstring).
+
+    ``inputs``: the environment's FRET variables (every other variable is the
+    controller's); ``env_inv``/``ctl_inv``: propositional IR formulas over the comparisons
+    (numeric consistency of inputs / outputs); ``budget``: seconds for the search of a fixed
+    input sequence. Returns ``{"realizable": True, "strategy": {...}}`` or
+    ``{"realizable": False, "inputs": [letters] | None, "run": [rows], "note": str}``
+    (letters and rows: ``{atom name: bool}``). Raises :class:`Outside` for formulas the game
+    does not handle.
+    """
+    import time
+
+    game = _Game(pts, inputs, env_inv, ctl_inv)
+    try:
+        if game.solve():
+            return {"realizable": True, "strategy": game.strategy_size()}
+        deadline = None if budget is None else time.monotonic() + budget
+        w = _Witness(game)
+        seq, note = w.search(deadline)
+        if seq is None:
+            return {"realizable": False, "inputs": None, "run": [], "note": note,
+                    "iterations": len(game.layers)}
+        letters = [{letter_name(a): v for a, v in zip(w.in_atoms, values)}
+                   for values in seq]
+        return {"realizable": False, "inputs": letters, "run": w.play(seq), "note": "",
+                "iterations": len(game.layers)}
+    finally:
+        game.close()
