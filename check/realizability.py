@@ -107,7 +107,7 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
 
 
 #: the symbolic safety game's budget, as a multiple of the per-query ``timeout`` (60 s at
-#: ``fretc check``'s default 20 s): the issue's aim is 200-tick sets within 60 s
+#: ``fretc check``'s default 20 s): a 200-tick set fits in it (docs/guide/check.md)
 GAME_TIMEOUT_FACTOR = 3.0
 
 

@@ -16,6 +16,7 @@ from check.analysis import check_requirements
 from check.witness import read_expected
 from fretc.cli import main
 from fretish.files import load_requirements
+from tests.check._replay import audit_verdicts
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -173,15 +174,6 @@ def test_cli_json_and_exit_codes(tmp_path):
     assert CliRunner().invoke(main, ["check", str(both)]).exit_code == 2
 
 
-def _audit(req: Path, csv: Path, tmp_path: Path) -> dict:
-    out = tmp_path / (csv.stem + ".json")
-    res = CliRunner().invoke(main, ["audit", "-r", str(req), str(csv), "--json", str(out),
-                                    "--no-progress"])
-    assert res.exit_code in (0, 1), res.output
-    doc = json.loads(out.read_text())
-    return {v["requirement"]: v["verdict"] for log in doc["logs"] for v in log["verdicts"]}
-
-
 @pytest.mark.parametrize("text", [
     "A1: in modeA the sw shall always satisfy a\nA2: in modeA the sw shall always satisfy !a\n",
     "A1: in modeA the sw shall always satisfy a\nA2: in modeA the sw shall always satisfy !a\n"
@@ -206,7 +198,7 @@ def test_witnesses_replay_through_the_audit(tmp_path, text):
     for w in r.witnesses:
         promised = read_expected(w["path"])
         assert promised == w["expected"] and promised
-        assert _audit(req, Path(w["path"]), tmp_path) == promised
+        assert audit_verdicts(req, Path(w["path"]), tmp_path) == promised
     for f in r.findings:
         if f.witness:
             assert f.details["witness_shows_finding"] is True

@@ -8,7 +8,6 @@ import json
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -18,8 +17,8 @@ from check.safety_game import is_safety
 from check.solver import UNKNOWN, SpotWorker
 from compiler import ir
 from compiler.build import compile_entries
-from fretc.cli import main
 from fretish.files import load_requirements
+from tests.check._replay import audit_verdicts
 
 _TEMPLATES = [
     "whenever {a} the sw shall within {k} ticks satisfy {b}",
@@ -69,15 +68,6 @@ def test_game_agrees_with_spot(tmp_path, parts):
         assert game["method"] == "safety game"
 
 
-def _audit(req: Path, csv: Path, tmp_path: Path) -> dict:
-    out = tmp_path / (csv.stem + ".json")
-    res = CliRunner().invoke(main, ["audit", "-r", str(req), str(csv), "--json", str(out),
-                                    "--no-progress"])
-    assert res.exit_code in (0, 1), res.output
-    doc = json.loads(out.read_text())
-    return {v["requirement"]: v["verdict"] for log in doc["logs"] for v in log["verdicts"]}
-
-
 @pytest.mark.parametrize("text, inputs", [
     ("A: the r shall always satisfy s <= 0.5\n"
      "B: whenever p the r shall immediately satisfy s > 0.6\n", ["p"]),
@@ -104,7 +94,7 @@ def test_defeating_inputs_replay_through_the_audit(tmp_path, text, inputs):
     found = [f for f in r.findings if f.kind == "unrealizable"]
     assert found and found[0].witness, r.findings
     promised = json.loads(json.dumps(found[0].expected))
-    got = _audit(req, Path(found[0].witness), tmp_path)
+    got = audit_verdicts(req, Path(found[0].witness), tmp_path)
     assert got == promised
     assert any(got[i] == "violated" for i in found[0].requirements), got
     assert found[0].details["witness_shows_finding"] is True

@@ -21,6 +21,7 @@ from compiler.build import compile_entries
 from fretc.cli import main
 from fretish.files import load_requirements
 from tests.lasso import lasso_at
+from tests.check._replay import audit_verdicts
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -176,15 +177,6 @@ def test_consistent_sets_with_deadlines_are_decided(tmp_path, n):
     assert all(s["non_vacuous"] is True for s in r.requirements)
 
 
-def _audit(req: Path, csv: Path, tmp_path: Path) -> dict:
-    out = tmp_path / (csv.stem + ".json")
-    res = CliRunner().invoke(main, ["audit", "-r", str(req), str(csv), "--json", str(out),
-                                    "--no-progress"])
-    assert res.exit_code in (0, 1), res.output
-    doc = json.loads(out.read_text())
-    return {v["requirement"]: v["verdict"] for log in doc["logs"] for v in log["verdicts"]}
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("text", [
     "C1: whenever p the sw shall within 60 ticks satisfy q\n"
@@ -205,7 +197,7 @@ def test_witnesses_past_spot_bounds_replay_through_the_audit(tmp_path, text):
     assert r.smt_queries > 0 and r.witnesses
     for w in r.witnesses:
         promised = read_expected(w["path"])
-        assert promised and _audit(req, Path(w["path"]), tmp_path) == promised
+        assert promised and audit_verdicts(req, Path(w["path"]), tmp_path) == promised
     for f in r.findings:
         if f.kind in ("conflict", "vacuous", "unsatisfiable"):
             assert f.witness and f.details["witness_shows_finding"] is True
