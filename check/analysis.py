@@ -1,6 +1,8 @@
 """``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
 requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
-runs"), and by z3 (:mod:`check.smt`) for queries with a bound past :data:`SPOT_MAX_BOUND`.
+runs"); for queries with a bound past :data:`SPOT_MAX_BOUND`, by fixed points over the
+requirements' pt monitors (:mod:`check.monitor_sat`) when every formula has one, else by z3
+(:mod:`check.smt`).
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
 abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every
@@ -35,13 +37,10 @@ Witness traces for the findings are built by :mod:`check.witness`, realizability
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-
-from fretish import ast as A
 
 from compiler import ir
 from .findings import Finding
@@ -49,73 +48,22 @@ from .solver import UNKNOWN, SpotWorker
 from compiler.ir import Node
 from .numeric_abstraction import NumericAbstraction
 from .smt import SmtSolver, max_bound
+from .items import CheckItem, atom_variables, make_item, monitored_forms
+from .safety_game import Outside, game_atoms
 from compiler.printers import to_spot
-from compiler.semantics import SemanticsError, formalize
 
 __all__ = ["CheckItem", "CheckResult", "Finding", "Checker", "check_requirements",
            "atom_variables", "ENGINES", "SPOT_MAX_BOUND"]
 
 #: the solvers ``fretc check --engine`` names: ``auto`` Spot up to :data:`SPOT_MAX_BOUND`
-#: ticks, z3 (:mod:`check.smt`) past it; ``spot``; ``smt``
-ENGINES = ("auto", "spot", "smt")
+#: ticks, past it the requirements' pt monitors (:mod:`check.monitor_sat`) when they take
+#: the query, else z3 (:mod:`check.smt`); ``spot``; ``smt`` (z3 alone); ``bdd`` (the
+#: monitors whatever the bound, z3 for the queries they do not take)
+ENGINES = ("auto", "spot", "smt", "bdd")
 
 #: the largest tick bound ``engine="auto"`` gives Spot (faster there, bench/bench_check.py;
 #: past it Spot's automata grow with the bound, and it refuses bounds over 254)
 SPOT_MAX_BOUND = 16
-
-
-# --------------------------------------------------------------------------- inputs
-@dataclass
-class CheckItem:
-    """One formalized requirement as the checks see it.
-
-    ``phi``/``phi_ft``: ft_inf / ft formula; ``trigger``/``trigger_ft``: the formula saying a
-    trigger fires in scope (module docstring, item 2), None when the requirement has no
-    response to vary; ``variables``: FRET variable names.
-    """
-
-    index: int
-    compiled: object
-    phi: Node
-    phi_ft: Node
-    trigger: Node | None
-    trigger_ft: Node | None
-    variables: list[str]
-
-    @property
-    def id(self) -> str:
-        """The requirement's id."""
-        return self.compiled.id
-
-    @property
-    def location(self) -> str:
-        """``file:line`` of the requirement."""
-        return f"{self.compiled.entry.source}:{self.compiled.entry.line}"
-
-
-def _with_response(req: A.Requirement, value: bool) -> A.Requirement:
-    return dataclasses.replace(req, response=A.BoolLit(value))
-
-
-def make_item(index: int, compiled) -> CheckItem:
-    """A :class:`CheckItem` of a formalized :class:`compiler.build.Compiled`."""
-    f = compiled.formalization
-    req = compiled.requirement
-    period = compiled.entry.tick_period
-    trig = trig_ft = None
-    try:
-        lo = formalize(_with_response(req, False), period)
-        hi = formalize(_with_response(req, True), period)
-        trig = ir.or_(ir.not_(lo.ft_inf), ir.not_(hi.ft_inf))
-        trig_ft = ir.or_(ir.not_(lo.ft), ir.not_(hi.ft))
-    except SemanticsError:  # pragma: no cover - the requirement itself formalized
-        pass
-    return CheckItem(index, compiled, f.ft_inf, f.ft, trig, trig_ft, list(f.variables))
-
-
-def atom_variables(node: Node) -> set[str]:
-    """FRET variable names read by ``node`` (boolean and numeric)."""
-    return set(ir.variables(node))
 
 
 # --------------------------------------------------------------------------- results
@@ -124,7 +72,8 @@ class CheckResult:
     """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
     requirement (``satisfiable``, ``non_vacuous``, ``redundant``: true / false / "unknown"
     / None when not checked); ``components`` the ids per component; ``abstractions`` the
-    uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered
+    uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered,
+    ``monitor_queries`` those the pt monitors' fixed points answered
     (:mod:`check.smt`), ``unknown_queries`` those whose budget ran out."""
 
     requirements: list[dict] = field(default_factory=list)
@@ -138,6 +87,7 @@ class CheckResult:
     queries: int = 0
     unknown_queries: int = 0
     smt_queries: int = 0
+    monitor_queries: int = 0
 
     @property
     def exit_code(self) -> int:
@@ -161,6 +111,7 @@ class CheckResult:
                 "witnesses": self.witnesses,
                 "notes": self.notes, "input_errors": self.input_errors,
                 "queries": self.queries, "smt_queries": self.smt_queries,
+                "monitor_queries": self.monitor_queries,
                 "unknown_queries": self.unknown_queries}
 
 
@@ -188,6 +139,10 @@ class Checker:
                                                   if x.trigger_ft]
         self.numeric = NumericAbstraction.of(allf)
         self._cache: dict[str, object] = {}
+        #: formula -> ("safe" | "goal", pt formula, requirement index), on infinite runs /
+        #: finite traces (:mod:`check.monitor_sat`)
+        self.monitored = monitored_forms(self.items)
+        self.monitor_queries = 0
         self.queries = 0
         self.unknown = 0
 
@@ -202,13 +157,16 @@ class Checker:
         """Does a query on ``formulas`` go to z3 (:mod:`check.smt`) rather than Spot? With
         ``engine="auto"``, when a bound passes :data:`SPOT_MAX_BOUND`."""
         if self.engine != "auto":
-            return self.engine == "smt"
+            return self.engine in ("smt", "bdd")
         return max_bound(formulas) > SPOT_MAX_BOUND
 
     def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
                  ) -> tuple[object, tuple | None]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
         if self.uses_smt(list(formulas) + list(extra)):
+            got = self.monitor_word(list(formulas) + list(extra), finite=False)
+            if got is not None:
+                return got
             return self._ask_smt(list(formulas) + list(extra))
 
         def split(f: Node, parts: list[Node]) -> None:
@@ -229,6 +187,41 @@ class Checker:
             base = [ir.TRUE]
         return self._ask_sat((tuple(to_spot(f) for f in base),
                               tuple(to_spot(f) for f in more if f not in base)))
+
+    def monitor_word(self, formulas: Sequence[Node], finite: bool,
+                     length: int | None = None) -> tuple[object, tuple | None] | None:
+        """:meth:`sat_word` decided on the requirements' pt monitors
+        (:mod:`check.monitor_sat`), or None when a formula of the query is not a monitored
+        requirement, trigger or negated requirement (``finite``: read on finite traces,
+        FRET's ft; ``length``: exactly that many ticks)."""
+        if self.engine == "spot" or self.engine == "smt":
+            return None
+        forms = self.monitored[finite]
+        if not formulas or any(f not in forms for f in formulas):
+            return None
+        # in input order: one query, one variable order (the order changes the BDDs' sizes,
+        # the answer not), so the cache and the time do not depend on how it was asked
+        formulas = sorted(set(formulas), key=lambda f: forms[f][::-2])
+        safe = [forms[f][1] for f in formulas if forms[f][0] == "safe"]
+        goals = [forms[f][1] for f in formulas if forms[f][0] == "goal"]
+        try:
+            game_atoms(safe + goals)
+        except Outside:
+            return None
+        names = sorted({v for f in formulas for v in ir.variables(f)})
+        inv = ir.TRUE
+        for v in names:
+            if v in self.numeric.atoms:
+                g = self.numeric.variable_invariant(v)
+                inv = ir.and_(inv, g.args[0] if g.op == "G" else g)
+        key = ("monitor", finite, length, tuple(formulas))
+        timeout = self.worker.timeout
+        self.monitor_queries += key not in self._cache
+        # the fixed points stop at ``timeout`` and say so; the worker is killed a little
+        # later only if they do not
+        return self._cached(key, lambda: self.worker.ask(
+            ("monitor_sat", safe, goals, inv, finite, length, timeout),
+            None if timeout is None else 1.2 * timeout + 1))
 
     def _ask_smt(self, formulas: list[Node]):
         self.smt_queries += ("smt", tuple(formulas)) not in self._cache
@@ -422,13 +415,14 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
         result.queries = checker.queries
         result.unknown_queries = worker.timeouts
         result.smt_queries = checker.smt_queries
+        result.monitor_queries = checker.monitor_queries
         result.unknown_queries += checker.smt.timeouts
         if checker.smt.failures:
             result.notes.append(f"z3 left {len(checker.smt.failures)} queries unknown, e.g. "
                                 f"{checker.smt.failures[0]}")
         if worker.failures:
-            result.notes.append(f"Spot could not take {len(worker.failures)} queries (their "
-                                f"answers are unknown), e.g. {worker.failures[0]}")
+            result.notes.append(f"{len(worker.failures)} queries got no answer from Spot or "
+                                f"the pt monitors (unknown), e.g. {worker.failures[0]}")
     finally:
         if own:
             worker.close()

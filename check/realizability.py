@@ -38,7 +38,7 @@ from .findings import ids as _ids
 from .solver import UNKNOWN
 from .witness import _atoms
 from .numeric_abstraction import NumericAbstraction, simple_comparison
-from .safety_game import Outside, game_atoms, is_safety
+from .safety_game import Outside, game_atoms, pt_monitors_ft_inf
 from compiler.ir import Node
 from compiler.printers import mangle, to_smv, to_spot
 
@@ -137,7 +137,7 @@ class _Decider:
     def _game(self, items) -> object:
         """The safety game's answer, or None when Spot has to decide (module docstring)."""
         checker = self.checker
-        safe = [x for x in items if is_safety(x.phi) and x.compiled.formalization.pt]
+        safe = [x for x in items if pt_monitors_ft_inf(x.compiled.formalization)]
         if not safe:
             return None
         pts = [x.compiled.formalization.pt for x in safe]
@@ -163,7 +163,8 @@ class _Decider:
         if ans["realizable"] and len(safe) < len(items):
             rest = [x for x in items if x not in safe]
             self._note(f"{', '.join(_ids(safe))}: realizable by the safety game; with "
-                       f"{', '.join(_ids(rest))} (not safety properties) Spot's game decides")
+                       f"{', '.join(_ids(rest))} (whose pt formula does not monitor their ft_inf: "
+                       "eventually, at the last timepoint) Spot's game decides")
             return None
         out = {"realizable": ans["realizable"], "method": "safety game"}
         if ans["realizable"]:

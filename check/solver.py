@@ -146,6 +146,10 @@ def run_query(query: tuple) -> Any:
         from .safety_game import solve_game  # lazy: BuDDy games only when asked
 
         return solve_game(*query[1:])
+    if kind == "monitor_sat":
+        from .monitor_sat import decide  # lazy: BuDDy fixed points only when asked
+
+        return decide(*query[1:])
     if kind == "realizable":
         texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         outputs = list(query[2])

@@ -86,8 +86,38 @@ def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
     """A finite trace meeting the ft ``formulas`` (list of rows ``{variable: value}`` over
     ``columns``, name -> ``"bool"``/``"float"``), None when there is none, or UNKNOWN.
     ``length``: exactly that many ticks."""
-    model = _finite_model(formulas)
-    extra = [model]
+    got = None
+    if checker.uses_smt(formulas):  # past Spot's bounds: the pt monitors, when they take it
+        got = checker.monitor_word(formulas, finite=True, length=length)
+    if got is not None:
+        ok, word = got
+        if ok is not True:
+            return ok if ok == UNKNOWN else None
+        letters = word[0]
+    else:
+        letters = _spot_trace(checker, formulas, length)
+        if letters is None or letters == UNKNOWN:
+            return letters
+    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
+                 for a in checker.numeric.atoms[name]}
+    rows = []
+    for letter in letters:
+        truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
+        numbers = checker.numeric.values(truth)
+        row = {}
+        for name, kind in columns.items():
+            if kind == "bool":
+                row[name] = bool(letter.get(mangle(name), False))
+            else:
+                row[name] = numbers.get(name, 0.0)
+        rows.append(row)
+    return rows
+
+
+def _spot_trace(checker, formulas: Sequence[Node], length: int | None):
+    """The letters of a finite trace meeting the ft ``formulas`` by the LAST encoding of the
+    module docstring (Spot, or z3 past its bounds), None or UNKNOWN."""
+    extra = [_finite_model(formulas)]
     if length is not None:
         at = LAST
         for _ in range(length - 1):
@@ -105,24 +135,10 @@ def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
         letter = seq[k] if k < len(seq) else cycle[(k - len(seq)) % len(cycle)]
         letters.append(letter)
         if letter.get(last_name):
-            break
+            return letters
         k += 1
         if k > len(seq) + len(cycle) + 1:  # pragma: no cover - the model forces LAST
             return None
-    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
-                 for a in checker.numeric.atoms[name]}
-    rows = []
-    for letter in letters:
-        truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
-        numbers = checker.numeric.values(truth)
-        row = {}
-        for name, kind in columns.items():
-            if kind == "bool":
-                row[name] = bool(letter.get(mangle(name), False))
-            else:
-                row[name] = numbers.get(name, 0.0)
-        rows.append(row)
-    return rows
 
 
 def _columns(items) -> dict[str, str]:

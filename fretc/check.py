@@ -91,7 +91,8 @@ def render_text(result) -> str:
     for n in result.notes:
         lines.append(f"note: {n}")
     lines.append(f"{len(result.requirements)} requirements, {len(result.components)} "
-                 f"components, {result.queries} solver queries ({result.smt_queries} by z3)"
+                 f"components, {result.queries} solver queries ({result.smt_queries} by z3, "
+                 f"{result.monitor_queries} by pt monitors)"
                  + (f" ({result.unknown_queries} ran out of time)" if result.unknown_queries
                     else "") + f"; exit {result.exit_code}")
     return "\n".join(lines)
