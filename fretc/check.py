@@ -4,7 +4,7 @@ any robot runs (the analyses are in :mod:`check.analysis`).
 ::
 
     fretc check FILE... [--inputs a,b] [--outputs c,d] [--json] [--witness-dir DIR]
-                [--timeout SECONDS] [--mus-budget SECONDS] [--engine auto|spot|smt]
+                [--timeout SECONDS] [--mus-budget SECONDS] [--engine auto|spot|smt|bdd]
                 [--no-redundancy]
 
 Realizability is checked when inputs or outputs are given, by the flags or by the
@@ -136,10 +136,12 @@ def _lasso(prefix, cycle) -> str:
               "unknown.")
 @click.option("--mus-budget", type=click.FloatRange(min=0), default=10.0, show_default=True,
               help="Seconds per enumeration of minimal subsets.")
-@click.option("--engine", type=click.Choice(["auto", "spot", "smt"]), default="auto",
-              show_default=True, help="Satisfiability solver: Spot up to 16 ticks and z3 "
-              "past them (auto), or one of them; realizability: the safety game for safety "
-              "requirements (auto, smt) or Spot's game only (spot).")
+@click.option("--engine", type=click.Choice(["auto", "spot", "smt", "bdd"]), default="auto",
+              show_default=True, help="Satisfiability solver: Spot up to 16 ticks, past them "
+              "fixed points over the requirements' pt monitors (safety requirements) or z3 "
+              "(auto); Spot, z3 or the monitors alone (spot, smt, bdd: z3 for what the "
+              "monitors do not take); realizability: the safety game for safety "
+              "requirements (auto, smt, bdd) or Spot's game only (spot).")
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")

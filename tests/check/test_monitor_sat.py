@@ -1,0 +1,169 @@
+"""fretc check on the requirements' pt monitors (check/monitor_sat.py, check/pt_monitor.py):
+
+* the premise: for every template key whose ft_inf is safety, ft_inf holds on a lasso iff the
+  pt formula holds at every tick (random lassos), and `finally` is rightly left out;
+* the BDD monitor, with its one-counter deadlines, gives the pt formula's value at every tick
+  of random traces for every template key (against compiler.evaluate);
+* the same answers as Spot on random sets with bounds up to 12;
+* deadlines of 250 ticks decided, with a witness fretc audit replays.
+"""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+
+from check.analysis import check_requirements
+from check.safety_game import _Game, pt_monitors_ft_inf
+from check.witness import read_expected
+from compiler import ir
+from compiler.build import compile_entries
+from compiler.evaluate import series
+from compiler.semantics import formalize
+from fretish import parse
+from fretish.files import load_requirements
+from monitors.engines.interval import verdict_of
+from tests.check._replay import audit_verdicts
+from tests.check.test_smt import _SET, _answers, _file
+from tests.lasso import lasso_at
+from tests.compiler.test_semantics import (CONDITION_PHRASES, KEYS, SCOPE_PHRASES,
+                                           TIMING_PHRASES)
+
+
+def _sentences(bound: int, rnd: random.Random):
+    """One sentence per template key and response (r, false, true), phrases drawn."""
+    for scope, cond, timing in KEYS:
+        for resp in ("r", "false", "true"):
+            parts = (rnd.choice(SCOPE_PHRASES[scope]), rnd.choice(CONDITION_PHRASES[cond]),
+                     "the sw shall", rnd.choice(TIMING_PHRASES[timing]).format(n=bound),
+                     "satisfy", resp)
+            yield (scope, cond, timing), " ".join(x for x in parts if x)
+
+
+def _letters(rnd: random.Random, n: int) -> list[dict]:
+    return [{v: rnd.random() < 0.5 for v in "mcrs"} for _ in range(n)]
+
+
+def test_pt_monitors_ft_inf_on_random_lassos():
+    """ft_inf on a lasso u v^w equals "pt at every tick" (pt read on u v^12: its state is
+    periodic by then for bounds up to 4) for every key the monitors take; the `finally`
+    timing, left out, disagrees."""
+    rnd = random.Random(7)
+    taken, finally_disagrees = 0, False
+    for (_s, _c, timing), sentence in _sentences(rnd.randint(2, 4), rnd):
+        f = formalize(parse(sentence))
+        for _ in range(25):
+            u, v = _letters(rnd, rnd.randint(0, 6)), _letters(rnd, rnd.randint(1, 3))
+            same = lasso_at(f.ft_inf, u, v) == all(series(f.pt, u + v * 12))
+            if pt_monitors_ft_inf(f):
+                assert same, (sentence, u, v)
+            elif timing == "finally" and not same:
+                finally_disagrees = True
+        taken += pt_monitors_ft_inf(f)
+    assert taken > 400 and finally_disagrees
+
+
+def _monitor_series(pt, trace: list[dict]) -> tuple[list[bool], int]:
+    """The BDD monitor of ``pt`` run on ``trace``: its value at each tick, and how many
+    deadlines it monitors by a counter."""
+    g = _Game([pt], [], ir.TRUE, ir.TRUE)
+    try:
+        b, m = g.b, g.m
+        state, out = g.init, []
+        for letter in trace:
+            here = state
+            for atom, var in m.atom_var.items():
+                here = b.bdd_and(here, b.bdd_ithvar(var) if letter[atom.name]
+                                 else b.bdd_nithvar(var))
+            out.append(b.bdd_and(here, g.ok) != b.bddfalse)
+            state = b.bddtrue
+            for cur, _nxt, _init, fn in m.bits:
+                on = b.bdd_and(here, fn) != b.bddfalse
+                state = b.bdd_and(state, b.bdd_ithvar(cur) if on else b.bdd_nithvar(cur))
+        return out, len(m.deadlines)
+    finally:
+        g.close()
+
+
+@pytest.mark.parametrize("bound", [2, 3, 5])
+def test_bdd_monitor_gives_the_pt_value_at_every_tick(bound):
+    """The one-counter deadlines keep the value of the whole pt formula exact at every tick
+    (FRET's within and after timings, in every scope), against the reference evaluator."""
+    rnd = random.Random(bound)
+    counted = 0
+    for _key, sentence in _sentences(bound, rnd):
+        f = formalize(parse(sentence))
+        if not pt_monitors_ft_inf(f):
+            continue
+        for _ in range(6):
+            trace = _letters(rnd, rnd.randint(1, 3 * bound + 6))
+            got, deadlines = _monitor_series(f.pt, trace)
+            assert got == [bool(x) for x in series(f.pt, trace)], (sentence, trace)
+        counted += deadlines > 0
+    assert counted >= 20  # the counters were exercised, not only delay lines
+
+
+def test_a_deadline_is_a_counter_not_a_delay_line():
+    f = formalize(parse("whenever p the sw shall within 250 ticks satisfy q"))
+    g = _Game([f.pt], [], ir.TRUE, ir.TRUE)
+    try:
+        assert len(g.m.deadlines) == 1 and len(g.m.bits) < 32
+    finally:
+        g.close()
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                HealthCheck.function_scoped_fixture])
+@given(_SET)
+def test_monitors_and_spot_agree_on_random_sets(tmp_path_factory, parts):
+    """Every check answers alike by the pt monitors (engine bdd, z3 for what they do not
+    take) and by Spot, on bounds up to 12, where neither is unknown."""
+    path = _file(tmp_path_factory.mktemp("mon"), parts)
+    run = [check_requirements(compile_entries(load_requirements([path])), engine=e,
+                              timeout=10) for e in ("spot", "bdd")]
+    spot, mon = (_answers(r) for r in run)
+    unsure = {k[1] if k[0] in ("conflict", "vacuous", "unknown") else k[0]
+              for d in (spot, mon) for k, v in d.items() if v == "unknown"}
+    for key in set(spot) | set(mon):
+        a, b = spot.get(key), mon.get(key)
+        if "unknown" in (a, b) or (key[0] in ("conflict", "vacuous") and key[1] in unsure):
+            continue
+        assert a == b, (key, path.read_text())
+
+
+def test_finally_is_not_taken_for_its_pt_formula(tmp_path):
+    """`at the last timepoint` holds on every infinite run (ft_inf); with `always !r` the set
+    is realizable. Its pt formula (r at the last tick) once made the safety game say no."""
+    p = tmp_path / "f.fret"
+    p.write_text("A: the sw shall at the last timepoint satisfy r\n"
+                 "B: the sw shall always satisfy !r\n", encoding="utf-8")
+    r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
+                           outputs=["r"], timeout=20)
+    assert r.realizability["components"][0]["realizable"] is True
+
+
+def test_deadlines_of_250_ticks_are_decided_with_a_replayed_witness(tmp_path):
+    """Four interacting 250-tick requirements: every answer known; B4's trigger cannot fire
+    beside B5 (a vacuity with the minimal set {B4, B5}); the witness replays through the
+    audit with the verdicts its header promises."""
+    p = tmp_path / "d.fret"
+    p.write_text("B1: whenever p the sw shall within 250 ticks satisfy q\n"
+                 "B2: upon p the sw shall for 247 ticks satisfy !q\n"
+                 "B4: in m mode upon p the sw shall within 250 ticks satisfy speed > 0.6\n"
+                 "B5: in m mode the sw shall always satisfy speed <= 0.5\n", encoding="utf-8")
+    r = check_requirements(compile_entries(load_requirements([p])), timeout=20,
+                           witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
+    status = {s["id"]: s for s in r.requirements}
+    assert r.unknown_queries == 0 and r.monitor_queries > 0 and r.smt_queries == 0
+    assert [status[i]["non_vacuous"] for i in ("B1", "B2", "B4", "B5")] == [
+        True, True, False, True]
+    assert all(s["satisfiable"] is True and s["redundant"] is False
+               for s in r.requirements)
+    (vac,) = [f for f in r.findings if f.kind == "vacuous"]
+    assert vac.subsets == [["B4", "B5"]] and vac.details["witness_shows_finding"] is True
+    promised = read_expected(vac.witness)
+    assert audit_verdicts(p, Path(vac.witness), tmp_path) == promised
+    assert promised["B4"] == "satisfied" and promised["B5"] == "violated"
