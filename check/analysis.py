@@ -194,26 +194,21 @@ class Checker:
         (:mod:`check.monitor_sat`), or None when a formula of the query is not a monitored
         requirement, trigger or negated requirement (``finite``: read on finite traces,
         FRET's ft; ``length``: exactly that many ticks)."""
-        if self.engine == "spot" or self.engine == "smt":
+        if self.engine in ("spot", "smt"):
             return None
         forms = self.monitored[finite]
         if not formulas or any(f not in forms for f in formulas):
             return None
         # in input order: one query, one variable order (the order changes the BDDs' sizes,
         # the answer not), so the cache and the time do not depend on how it was asked
-        formulas = sorted(set(formulas), key=lambda f: forms[f][::-2])
+        formulas = sorted(set(formulas), key=lambda f: (forms[f][2], forms[f][0]))
         safe = [forms[f][1] for f in formulas if forms[f][0] == "safe"]
         goals = [forms[f][1] for f in formulas if forms[f][0] == "goal"]
         try:
             game_atoms(safe + goals)
         except Outside:
             return None
-        names = sorted({v for f in formulas for v in ir.variables(f)})
-        inv = ir.TRUE
-        for v in names:
-            if v in self.numeric.atoms:
-                g = self.numeric.variable_invariant(v)
-                inv = ir.and_(inv, g.args[0] if g.op == "G" else g)
+        inv = self.numeric.regions(sorted({v for f in formulas for v in ir.variables(f)}))
         key = ("monitor", finite, length, tuple(formulas))
         timeout = self.worker.timeout
         self.monitor_queries += key not in self._cache

@@ -6,8 +6,8 @@ a requirement (it holds), a requirement's trigger (it fires in scope: non-vacuit
 negated requirement (it is violated: redundancy, witnesses). When every requirement's ft_inf
 is monitored by its FRET pt formula (:func:`check.safety_game.pt_monitors_ft_inf`: ft_inf
 holds on an infinite run iff pt holds at every tick), each kind is a property of the product
-of the pt monitors (:class:`check.safety_game._Monitor`: one bit per ``Y``/``O``/``H``/``S``,
-a counter of ``log2 w`` bits per ``O[0,w]``), so no bound is unrolled into states:
+of the pt monitors (:class:`check.pt_monitor.Monitor`: one bit per ``Y``/``O``/``H``/``S``,
+a counter of ``log2 w`` bits per ``O[0,w]``, one per deadline), so no bound is unrolled into states:
 
 * a requirement holding: its pt formula true at every tick (a *safe* formula);
 * a trigger firing: ``!pt(R[false]) | !pt(R[true])`` true at some tick, a *goal* (the
@@ -143,23 +143,14 @@ class _Search:
         for k in range(top, -1, -1):
             want = self.done if k == 0 else None
             target = live if k == 0 else layers[k - 1]
-            f = b.bdd_and(b.bdd_and(state, self.ok), g.successors_in(target))
-            if want is not None:
-                f = b.bdd_and(f, want)
+            step = b.bdd_and(state, self.step if want is None else b.bdd_and(self.step, want))
+            f = b.bdd_appex(step, g._primed(target), b.bddop_and, g.nxt_set)
             letter = b.bdd_satoneset(b.bdd_exist(f, g.cur_set), self.letter_set, b.bddfalse)
             letters.append(self._letter(letter))
-            state = self._next(b.bdd_and(state, letter))
+            state = g.next_state(b.bdd_and(state, letter))
         return letters
 
     def _letter(self, cube) -> dict:
         b, g = self.b, self.g
         return {letter_name(a): b.bdd_and(cube, b.bdd_ithvar(g.m.atom_var[a])) != b.bddfalse
                 for a in g.atoms}
-
-    def _next(self, here):
-        """The state after ``here`` (a state and letter cube), as a cube."""
-        b, out = self.b, self.b.bddtrue
-        for cur, _nxt, _init, fn in self.g.m.bits:
-            on = b.bdd_and(here, fn) != b.bddfalse
-            out = b.bdd_and(out, b.bdd_ithvar(cur) if on else b.bdd_nithvar(cur))
-        return out

@@ -138,7 +138,14 @@ class NumericAbstraction:
         return out
 
     def variable_invariant(self, name: str) -> Node:
-        """The invariant of one variable (TRUE when it has a single comparison)."""
+        """The invariant of one variable (TRUE when it has a single comparison): ``G`` of
+        :meth:`region`."""
+        disj = self.region(name)
+        return disj if disj.op == "true" else ir.G(disj)
+
+    def region(self, name: str) -> Node:
+        """The truth values of one variable's comparisons that one real value gives, as a
+        propositional disjunction over them (TRUE when every combination is possible)."""
         atoms = self.atoms.get(name, [])
         if len(atoms) < 2:
             return ir.TRUE
@@ -149,7 +156,12 @@ class NumericAbstraction:
         for _v, truth in regions:
             disj = ir.or_(disj, ir.and_all(*(a if t else ir.not_(a)
                                              for a, t in zip(atoms, truth))))
-        return ir.G(disj)
+        return disj
+
+    def regions(self, names: Iterable[str]) -> Node:
+        """The conjunction of :meth:`region` over ``names`` (a propositional formula that
+        holds at every tick: the game's and the monitors' consistency of numbers)."""
+        return ir.and_all(*(self.region(v) for v in names))
 
     def values(self, truth: dict[Node, bool]) -> dict[str, float]:
         """A value per compared variable giving the comparisons the truth values ``truth``

@@ -39,7 +39,6 @@ from .solver import UNKNOWN
 from .witness import _atoms
 from .numeric_abstraction import NumericAbstraction, simple_comparison
 from .safety_game import Outside, game_atoms, pt_monitors_ft_inf
-from compiler.ir import Node
 from compiler.printers import mangle, to_smv, to_spot
 
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
@@ -152,8 +151,8 @@ class _Decider:
         timeout = checker.worker.timeout
         budget = None if timeout is None else timeout * GAME_TIMEOUT_FACTOR
         checker.queries += 1
-        ans = checker.worker.ask(("safety_game", pts, self.inputs, _regions(numeric, env),
-                                  _regions(numeric, ctl),
+        ans = checker.worker.ask(("safety_game", pts, self.inputs, numeric.regions(env),
+                                  numeric.regions(ctl),
                                   None if budget is None else budget / 4), budget)
         if ans == UNKNOWN:
             checker.unknown += 1
@@ -208,15 +207,6 @@ class _Decider:
                     "mealy_states": ans[1]}
         return {"realizable": False, "method": "Spot's synthesis game", "counter": ans[1],
                 "note": "", "run": []}
-
-
-def _regions(numeric: NumericAbstraction, names: list[str]) -> Node:
-    """The region disjunctions of ``names`` (the invariants without their ``G``)."""
-    out = ir.TRUE
-    for v in names:
-        inv = numeric.variable_invariant(v)
-        out = ir.and_(out, inv.args[0] if inv.op == "G" else inv)
-    return out
 
 
 def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],

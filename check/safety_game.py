@@ -226,6 +226,15 @@ class _Game:
             if b.bdd_and(self.init, lose) != b.bddfalse:
                 return False
 
+    def next_state(self, here):
+        """The state after ``here`` (a cube of every state bit and atom), as a cube of the
+        state bits."""
+        b, out = self.b, self.b.bddtrue
+        for cur, _nxt, _init, fn in self.m.bits:
+            on = b.bdd_and(here, fn) != b.bddfalse
+            out = b.bdd_and(out, b.bdd_ithvar(cur) if on else b.bdd_nithvar(cur))
+        return out
+
     def strategy_size(self) -> dict:
         """The controller the game gives: memory = the monitors' state bits; each tick it
         picks outputs that keep the requirements and the next state in the winning region
@@ -352,7 +361,7 @@ class _Witness:
                 keep = g.ctl_ok
             best = None
             for values_o, cube_o in self._cubes(self.out_atoms, keep, 256) or []:
-                nxt = self._next(b.bdd_and(here, cube_o))
+                nxt = self.g.next_state(b.bdd_and(here, cube_o))
                 r = self.rank(nxt)
                 if best is None or r > best[0]:
                     best = (r, values_o, nxt)
@@ -360,21 +369,12 @@ class _Witness:
                 one = b.bdd_satoneset(keep, g.out_set, b.bddfalse)
                 values_o = tuple(b.bdd_and(one, b.bdd_ithvar(var[a])) != b.bddfalse
                                  for a in self.out_atoms)
-                best = (0, values_o, self._next(b.bdd_and(here, one)))
+                best = (0, values_o, self.g.next_state(b.bdd_and(here, one)))
             row = {letter_name(a): v for a, v in zip(self.in_atoms, values)}
             row.update({letter_name(a): v for a, v in zip(self.out_atoms, best[1])})
             rows.append(row)
             state = best[2]
         return rows
-
-    def _next(self, here):
-        """The state after ``here`` (a state, input and output cube)."""
-        b, g = self.b, self.g
-        out = b.bddtrue
-        for cur, _nxt, _init, fn in g.m.bits:
-            on = b.bdd_and(here, fn) != b.bddfalse
-            out = b.bdd_and(out, b.bdd_ithvar(cur) if on else b.bdd_nithvar(cur))
-        return out
 
 
 def solve_game(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_inv: Node,

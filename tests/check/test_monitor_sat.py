@@ -27,7 +27,7 @@ from fretish import parse
 from fretish.files import load_requirements
 from monitors.engines.interval import verdict_of
 from tests.check._replay import audit_verdicts
-from tests.check.test_smt import _SET, _answers, _file
+from tests.check.test_smt import _SET, _file, assert_same_answers
 from tests.lasso import lasso_at
 from tests.compiler.test_semantics import (CONDITION_PHRASES, KEYS, SCOPE_PHRASES,
                                            TIMING_PHRASES)
@@ -122,16 +122,9 @@ def test_monitors_and_spot_agree_on_random_sets(tmp_path_factory, parts):
     """Every check answers alike by the pt monitors (engine bdd, z3 for what they do not
     take) and by Spot, on bounds up to 12, where neither is unknown."""
     path = _file(tmp_path_factory.mktemp("mon"), parts)
-    run = [check_requirements(compile_entries(load_requirements([path])), engine=e,
-                              timeout=10) for e in ("spot", "bdd")]
-    spot, mon = (_answers(r) for r in run)
-    unsure = {k[1] if k[0] in ("conflict", "vacuous", "unknown") else k[0]
-              for d in (spot, mon) for k, v in d.items() if v == "unknown"}
-    for key in set(spot) | set(mon):
-        a, b = spot.get(key), mon.get(key)
-        if "unknown" in (a, b) or (key[0] in ("conflict", "vacuous") and key[1] in unsure):
-            continue
-        assert a == b, (key, path.read_text())
+    assert_same_answers(*(check_requirements(compile_entries(load_requirements([path])),
+                                             engine=e, timeout=10) for e in ("spot", "bdd")),
+                        path)
 
 
 def test_finally_is_not_taken_for_its_pt_formula(tmp_path):
