@@ -118,6 +118,12 @@ class Monitor:
         self.bits.append(bit)
         return self.b.bdd_ithvar(cur), bit
 
+    def add_bit(self, init: bool) -> tuple[object, list]:
+        """A state bit for another machine in the product (an automaton of
+        :mod:`check.buchi_game`): ``(its BDD variable, [current, next, init, None])``; the
+        caller sets the next-value function (index 3)."""
+        return self._bit(init)
+
     def value(self, n: Node):
         """Truth of ``n`` at the current tick (a BDD)."""
         got = self.memo.get(n)

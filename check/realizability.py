@@ -38,7 +38,7 @@ from .findings import ids as _ids
 from .solver import UNKNOWN
 from .witness import _atoms
 from .numeric_abstraction import NumericAbstraction, simple_comparison
-from .safety_game import Outside, game_atoms, pt_monitors_ft_inf
+from .safety_game import Outside, game_atoms
 from compiler.printers import mangle, to_smv, to_spot
 
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
@@ -134,12 +134,21 @@ class _Decider:
         return self.cache[key]
 
     def _game(self, items) -> object:
-        """The safety game's answer, or None when Spot has to decide (module docstring)."""
+        """The symbolic games' answer, or None when Spot has to decide (module docstring):
+        the safety game of the safety requirements; when it is won and other requirements
+        remain, the Büchi game of the whole set (:mod:`check.buchi_game`)."""
+        safe = [x for x in items if x.pt is not None]
+        rest = [x for x in items if x.pt is None]
+        if safe:
+            ans = self._safety(safe, items)
+            if ans is None or not rest or ans == UNKNOWN or not ans["realizable"]:
+                return ans
+        return self._buchi(safe, rest)
+
+    def _safety(self, safe, items) -> object:
+        """The safety game of ``safe`` (the safety requirements of ``items``)."""
         checker = self.checker
-        safe = [x for x in items if pt_monitors_ft_inf(x.compiled.formalization)]
-        if not safe:
-            return None
-        pts = [x.compiled.formalization.pt for x in safe]
+        pts = [x.pt for x in safe]
         try:
             game_atoms(pts)
         except Outside as exc:
@@ -148,8 +157,7 @@ class _Decider:
         numeric = NumericAbstraction.of(pts)
         env = [v for v in numeric.atoms if v in self.inputs]
         ctl = [v for v in numeric.atoms if v not in self.inputs]
-        timeout = checker.worker.timeout
-        budget = None if timeout is None else timeout * GAME_TIMEOUT_FACTOR
+        budget = self._budget()
         checker.queries += 1
         ans = checker.worker.ask(("safety_game", pts, self.inputs, numeric.regions(env),
                                   numeric.regions(ctl),
@@ -159,12 +167,6 @@ class _Decider:
             self._note(f"the safety game of {', '.join(_ids(safe))} ran out of its "
                        f"{budget:g} s budget" if budget else "the safety game failed")
             return UNKNOWN if len(safe) == len(items) else None
-        if ans["realizable"] and len(safe) < len(items):
-            rest = [x for x in items if x not in safe]
-            self._note(f"{', '.join(_ids(safe))}: realizable by the safety game; with "
-                       f"{', '.join(_ids(rest))} (whose pt formula does not monitor their ft_inf: "
-                       "eventually, at the last timepoint) Spot's game decides")
-            return None
         out = {"realizable": ans["realizable"], "method": "safety game"}
         if ans["realizable"]:
             out["strategy"] = ans["strategy"]
@@ -174,6 +176,53 @@ class _Decider:
             out["note"] = ans["note"]
             out["run"] = ans["run"]
         return out
+
+    def _budget(self) -> float | None:
+        timeout = self.checker.worker.timeout
+        return None if timeout is None else timeout * GAME_TIMEOUT_FACTOR
+
+    def _buchi(self, safe, rest, search: bool = False) -> object:
+        """The Büchi game of ``safe`` (pt monitors) and ``rest`` (Spot's deterministic
+        automata of their ft_inf), or None (Spot's game decides). With ``search``, a lost
+        game comes with an input lasso that defeats every controller when one is found."""
+        checker, items = self.checker, sorted(safe + rest, key=lambda x: x.index)
+        pts, live = [x.pt for x in safe], [x.phi for x in rest]
+        names = ", ".join(_ids(items))
+        try:
+            game_atoms(pts + live)
+        except Outside as exc:
+            self._note(f"Büchi game not used for {names}: {exc}")
+            return None
+        numeric = NumericAbstraction.of(pts + live)
+        env = [v for v in numeric.atoms if v in self.inputs]
+        ctl = [v for v in numeric.atoms if v not in self.inputs]
+        budget = self._budget()
+        lasso = None if not search or budget is None else budget / 4
+        checker.queries += 1
+        ans = checker.worker.ask(("buchi_game", pts, live, self.inputs, numeric.regions(env),
+                                  numeric.regions(ctl), budget, lasso),
+                                 None if budget is None else budget + (lasso or 0))
+        if ans == UNKNOWN or "outside" in ans:
+            if ans == UNKNOWN:
+                checker.unknown += 1
+            self._note(f"the Büchi game of {names} "
+                       + (f"ran out of its {budget:g} s budget" if ans == UNKNOWN
+                          else f"was not used: {ans['outside']}") + "; Spot's game decides")
+            return None
+        if ans["realizable"]:
+            return {"realizable": True, "method": "Büchi game", "strategy": ans["strategy"]}
+        return {"realizable": False, "method": "Büchi game", "counter": ans.get("inputs"),
+                "note": ans.get("note", ""), "run": ans.get("run", [])}
+
+    def witness(self, items, ans: dict) -> dict:
+        """``ans`` (an unrealizable answer for ``items``) with the Büchi game's input lasso
+        searched for (the minimal-subset enumeration asks the games without it)."""
+        if ans["method"] != "Büchi game" or ans["counter"] is not None:
+            return ans
+        safe = [x for x in items if x.pt is not None]
+        rest = [x for x in items if x.pt is None]
+        found = self._buchi(safe, rest, search=True)
+        return found if isinstance(found, dict) and not found["realizable"] else ans
 
     def _note(self, text: str) -> None:
         if text not in self.notes:
@@ -216,6 +265,7 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
     to ``result``."""
     entry["realizable"] = False
     entry["method"] = ans["method"]
+    ans = decide.witness(comp, ans)
     subsets, cut, unknown = checker.minimal_subsets(
         comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)["realizable"]))
     names = [_ids(s) for s in subsets]

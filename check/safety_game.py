@@ -129,24 +129,36 @@ def _buddy():
 _DICT: list = []
 
 
+def bdd_dict():
+    """The one Spot BDD dictionary of the games and the automata they read (so their BDD
+    variables live in one BuDDy space)."""
+    import spot  # lazy: Spot (and its BuDDy) in the query worker process only
+
+    if not _DICT:
+        _DICT.append(spot.make_bdd_dict())
+    return _DICT[0]
+
+
 class _Game:
     """The safety game of a set of pt formulas (module docstring). ``inputs``: FRET
     variable names of the environment; ``env_inv``/``ctl_inv``: propositional IR formulas
     over the atoms (the numeric consistency of inputs / outputs); ``extra``: more pt
-    formulas monitored beside (their values in ``self.extra``), not required to hold."""
+    formulas monitored beside (their values in ``self.extra``), not required to hold;
+    ``atoms_of``: more formulas whose atoms the players set (not monitored here);
+    ``reserve``: state bits kept free for more monitors (:mod:`check.buchi_game`), whose
+    bits are added with ``self.m`` and made part of the relations by :meth:`relations`."""
 
     def __init__(self, pts: Sequence[Node], inputs: Sequence[str], env_inv: Node,
-                 ctl_inv: Node, extra: Sequence[Node] = ()):
+                 ctl_inv: Node, extra: Sequence[Node] = (), atoms_of: Sequence[Node] = (),
+                 reserve: int = 0):
         import spot  # lazy: Spot (and its BuDDy) in the query worker process only
 
         b = self.b = _buddy()
-        if not _DICT:
-            _DICT.append(spot.make_bdd_dict())
-        self.owner = spot.make_twa_graph(_DICT[0])
-        self.atoms = game_atoms(list(pts) + list(extra) + [env_inv, ctl_inv])
+        self.owner = spot.make_twa_graph(bdd_dict())
+        self.atoms = game_atoms(list(pts) + list(extra) + [env_inv, ctl_inv, *atoms_of])
         seen: set = set()
         counts = [state_bits(f, seen) for f in [*pts, *extra]]
-        other = sum(o for _d, o in counts) + 1
+        other = sum(o for _d, o in counts) + 1 + reserve
         nvars = len(self.atoms) + 2 * (other + sum(d for d, _o in counts)) + 2
         first = _DICT[0].register_anonymous_variables(nvars, self.owner)
         m = self.m = Monitor(b, first, self.atoms, set(inputs), other)
@@ -156,19 +168,25 @@ class _Game:
             self.ok = b.bdd_and(self.ok, m.value(f))
         self.env_ok, self.ctl_ok = m.value(env_inv), m.value(ctl_inv)
         self.extra = [m.value(f) for f in extra]  # encoded with their state bits
+        self.in_set = _varset(b, m.in_vars)
+        self.out_set = _varset(b, m.out_vars)
+        self.layers: list = []
+        self.relations()
+
+    def relations(self) -> None:
+        """The transition relation, first state, and state-variable sets of ``self.m``'s
+        bits (again after bits are added)."""
+        b, m = self.b, self.m
         self.trans, self.init = b.bddtrue, b.bddtrue
         for cur, nxt, init, fn in m.bits:
             self.trans = b.bdd_and(self.trans, b.bdd_biimp(b.bdd_ithvar(nxt), fn))
             self.init = b.bdd_and(self.init, b.bdd_ithvar(cur) if init
                                   else b.bdd_nithvar(cur))
-        self.in_set = _varset(b, m.in_vars)
-        self.out_set = _varset(b, m.out_vars)
         self.cur_set = _varset(b, [x[0] for x in m.bits])
         self.same = b.bddtrue
         for cur, nxt, _init, _fn in reversed(m.bits):
             self.same = b.bdd_and(self.same, b.bdd_biimp(b.bdd_ithvar(cur), b.bdd_ithvar(nxt)))
         self.nxt_set = _varset(b, [x[1] for x in m.bits])
-        self.layers: list = []
 
     def close(self) -> None:
         """Drop the BDDs and give their variables back to Spot's allocator."""

@@ -19,6 +19,8 @@ Queries (all on infinite words, Spot's LTL semantics):
   ``ltlsynt``'s engine).
 * ``("safety_game", pts, inputs, env_inv, ctl_inv, budget)``: the symbolic safety game of
   :func:`check.safety_game.solve_game` (its answer dict).
+* ``("buchi_game", pts, liveness, inputs, env_inv, ctl_inv, budget)``: the Büchi game of
+  :func:`check.buchi_game.solve_buchi_game` (its answer dict).
 """
 
 from __future__ import annotations
@@ -146,6 +148,10 @@ def run_query(query: tuple) -> Any:
         from .safety_game import solve_game  # lazy: BuDDy games only when asked
 
         return solve_game(*query[1:])
+    if kind == "buchi_game":
+        from .buchi_game import solve_buchi_game  # lazy: BuDDy games only when asked
+
+        return solve_buchi_game(*query[1:])
     if kind == "monitor_sat":
         from .monitor_sat import decide  # lazy: BuDDy fixed points only when asked
 

@@ -56,9 +56,10 @@ def render_text(result) -> str:
                 extra = f" by a Mealy machine of {c['mealy_states']} states (Spot's game)"
             elif status is True and "strategy" in c:
                 st = c["strategy"]
-                extra = (f" by a controller over {st['state_bits']} monitor state bits "
-                         f"(safety game; winning region a BDD of "
-                         f"{st['winning_region_bdd_nodes']} nodes)")
+                bits, nodes = st["state_bits"], st["winning_region_bdd_nodes"]
+                extra = (f" by a controller over {bits} state bit{'s' * (bits != 1)} "
+                         f"({st['method']}; winning region a BDD of {nodes} "
+                         f"node{'s' * (nodes != 1)})")
             elif status is False:
                 extra = f" ({c['method']})"
             lines.append(f"  {', '.join(c['requirements'])}: "
@@ -119,7 +120,7 @@ def _lasso(prefix, cycle) -> str:
         return " ".join(row(r) + (f" x{k}" if k > 1 else "") for r, k in out)
 
     text = runs(prefix)
-    return (text + " " if text else "") + "then forever (" + runs(cycle) + ")"
+    return (text + " then forever (" if text else "forever (") + runs(cycle) + ")"
 
 
 @click.command("check")

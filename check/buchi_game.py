@@ -1,0 +1,305 @@
+"""Realizability of requirement sets with ``eventually`` responses by a symbolic Büchi game
+(``fretc check``), beside the safety game of :mod:`check.safety_game`.
+
+A requirement whose ft_inf formula is not a safety property (``eventually``, ``until`` with
+a required end) has no pt monitor that decides it, but it usually has a small
+*deterministic* Büchi automaton: ``whenever p ... eventually q`` (``G(p -> F q)``) is two
+states, "nothing pending" and "waiting for q", with the accepting edges those into "nothing
+pending". Spot builds it from the ft_inf formula (``spot.translate(f, 'Buchi',
+'deterministic')``), as long as the requirement's own bounds are small; the set's long
+deadlines stay in the safety requirements' pt monitors, as counters
+(:class:`check.pt_monitor.Monitor`). The game is played on the product: the pt monitors'
+state bits and each automaton's state in ``ceil(log2 states)`` bits.
+
+The controller wins a run when every safety requirement's pt formula holds at every tick, no
+automaton is left without an edge, and each acceptance set of each automaton is met on
+infinitely many ticks: a generalized Büchi condition. The winning states are the classic
+nested fixed point (Emerson & Jutla, FOCS 1991; for games on BDDs, e.g. Piterman, Pnueli,
+Sa'ar, "Synthesis of Reactive(1) Designs", VMCAI 2006):
+
+    W = nu Z. AND_j mu Y. cpre((acc_j & next in Z) | next in Y)
+    cpre(T)(s) = forall inputs (env_ok -> exists outputs (ctl_ok & ok & T))
+
+each tick the environment sets the inputs first, the controller then sets the outputs
+knowing them (a Mealy machine, :data:`check.realizability.MACHINE`). The set is realizable
+iff the first state is in ``W``; both answers are exact on the abstraction of the
+comparisons (:mod:`check.numeric_abstraction`). Tests compare them with Spot's own synthesis
+game on random sets with small bounds.
+
+Outside the method (:class:`check.pt_monitor.Outside`; the caller falls back to Spot's
+game): a formula Spot gives no deterministic generalized Büchi automaton for (``FG``-like
+persistence), or an atom the game cannot give a player.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+from compiler.ir import Node
+from compiler.printers import to_spot
+
+from .pt_monitor import Outside
+from .safety_game import MAX_LETTERS, _Game, _Witness, bdd_dict, letter_name
+
+__all__ = ["solve_buchi_game"]
+
+
+def _automaton(formula: Node):
+    """Spot's deterministic, complete, transition-based generalized Büchi automaton of an
+    ft_inf formula; raises :class:`Outside` when Spot gives none."""
+    import spot
+
+    aut = spot.translate(to_spot(formula), "generic", "deterministic", "complete",
+                         dict=bdd_dict())
+    acc = aut.acc()
+    if not spot.is_deterministic(aut) or not (acc.is_t() or acc.is_generalized_buchi()):
+        raise Outside(f"Spot gives no deterministic Büchi automaton for {to_spot(formula)} "
+                      f"(acceptance {acc.get_acceptance()})")
+    return aut
+
+
+class _BuchiGame(_Game):
+    """The game of :func:`solve_buchi_game`: a :class:`check.safety_game._Game` over the pt
+    formulas ``pts`` with the automata of the ``liveness`` formulas in its state
+    (``self.acc``: one BDD over (state, inputs, outputs) per acceptance set: this tick's
+    edge is in it)."""
+
+    def __init__(self, pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequence[str],
+                 env_inv: Node, ctl_inv: Node):
+        self.automata = [_automaton(f) for f in liveness]
+        widths = [max(1, (a.num_states() - 1).bit_length()) for a in self.automata]
+        super().__init__(pts, inputs, env_inv, ctl_inv, atoms_of=liveness,
+                         reserve=sum(widths))
+        self.acc: list = []
+        self.iterations = 0
+        for aut, width in zip(self.automata, widths):
+            self._encode(aut, width)
+        self.relations()
+        b = self.b
+        self.step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
+        self.step_vars = b.bdd_and(self.nxt_set, self.out_set)
+        self.letter_vars = b.bdd_and(self.step_vars, self.in_set)
+
+    def _encode(self, aut, width: int) -> None:
+        """Add the automaton's state bits (its state number in binary), their next-value
+        functions, its edges' existence to ``ok`` and its acceptance sets to ``acc``."""
+        b, m = self.b, self.m
+        by_name = {letter_name(a): m.atom_var[a] for a in self.atoms}
+        dct = bdd_dict()
+        rename = [(dct.varnum(ap), by_name[str(ap)]) for ap in aut.ap()]
+        start = aut.get_init_state_number()
+        bits = [m.add_bit(bool(start >> k & 1)) for k in range(width)]
+        cubes = []
+        for s in range(aut.num_states()):
+            cube = b.bddtrue
+            for k, (var, _bit) in enumerate(bits):
+                cube = b.bdd_and(cube, var if s >> k & 1 else b.bdd_not(var))
+            cubes.append(cube)
+        nexts = [b.bddfalse] * width
+        some = b.bddfalse
+        accs = [b.bddfalse] * aut.num_sets()
+        for e in aut.edges():
+            cond = e.cond
+            for ap_var, var in rename:
+                cond = b.bdd_compose(cond, b.bdd_ithvar(var), ap_var)
+            edge = b.bdd_and(cubes[e.src], cond)
+            some = b.bdd_or(some, edge)
+            for k in range(width):
+                if e.dst >> k & 1:
+                    nexts[k] = b.bdd_or(nexts[k], edge)
+            for j in e.acc.sets():
+                accs[j] = b.bdd_or(accs[j], edge)
+        for (_var, bit), fn in zip(bits, nexts):
+            bit[3] = fn
+        self.ok = b.bdd_and(self.ok, some)
+        self.acc += accs
+
+    def _tick(self, deadline: float | None) -> None:
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeoutError("the Büchi game ran out of its budget")
+
+    def cpre(self, target):
+        """States where, whatever inputs the environment sets, the controller has outputs
+        keeping every requirement with this tick's edge in ``target`` (a BDD over the state,
+        the letter and the next state's bits, primed)."""
+        b = self.b
+        some_out = b.bdd_appex(self.step, target, b.bddop_and, self.step_vars)
+        return b.bdd_forall(b.bdd_imp(self.env_ok, some_out), self.in_set)
+
+    def winning(self, deadline: float | None):
+        """``W`` of the module docstring; stops early once the first state is out of it."""
+        b = self.b
+        accs = self.acc or [b.bddtrue]
+        z = b.bddtrue
+        while True:
+            z_next = self._primed(z)
+            new = b.bddtrue
+            for acc in accs:
+                base = b.bdd_and(acc, z_next)
+                y = b.bddfalse
+                while True:
+                    self._tick(deadline)
+                    self.iterations += 1
+                    y_new = self.cpre(b.bdd_or(base, self._primed(y)))
+                    if y_new == y:
+                        break
+                    y = y_new
+                new = b.bdd_and(new, y)
+                if b.bdd_and(self.init, new) == b.bddfalse:
+                    return new
+            if new == z:
+                return z
+            z = new
+
+
+# --------------------------------------------------------------------------- the environment
+def _defeats(game: _BuchiGame, cubes: list, start: int, deadline: float | None) -> bool:
+    """Does the input lasso ``cubes[:start]`` then ``cubes[start:]`` forever (BDD cubes of
+    the input atoms) defeat every controller: is there no output sequence along it that
+    keeps every requirement with each acceptance set met infinitely often? The same nested
+    fixed point as :meth:`_BuchiGame.winning` with the outputs alone to choose, one set of
+    states per position of the lasso."""
+    b, n = game.b, len(cubes)
+    succ = [i + 1 if i + 1 < n else start for i in range(n)]
+    steps = [b.bdd_and(game.step, c) for c in cubes]
+
+    def ex(i, target):
+        return b.bdd_appex(steps[i], target, b.bddop_and, game.letter_vars)
+
+    z = [b.bddtrue] * n
+    while True:
+        primed = [game._primed(x) for x in z]
+        new = [b.bddtrue] * n
+        for acc in game.acc or [b.bddtrue]:
+            y = [b.bddfalse] * n
+            while True:
+                game._tick(deadline)
+                y_new = [ex(i, b.bdd_or(b.bdd_and(acc, primed[succ[i]]),
+                                        game._primed(y[succ[i]]))) for i in range(n)]
+                if y_new == y:
+                    break
+                y = y_new
+            new = [b.bdd_and(x, v) for x, v in zip(new, y)]
+        if new == z:
+            return b.bdd_and(game.init, z[0]) == b.bddfalse
+        z = new
+
+
+#: the longest input lasso (prefix and cycle, in ticks) searched for
+MAX_LASSO = 4
+
+
+def _lasso(game: _BuchiGame, deadline: float | None) -> tuple[tuple | None, str]:
+    """The shortest input lasso that defeats every controller (:func:`_defeats`), as
+    ``(prefix letters, cycle letters)`` (letters ``{atom name: bool}``), searched by
+    increasing length up to :data:`MAX_LASSO` ticks within the deadline; or None and why."""
+    import itertools
+
+    w = _Witness(game)
+    letters = w._cubes(w.in_atoms, game.env_ok, MAX_LETTERS)
+    if letters is None:
+        return None, (f"no fixed input sequence searched: {len(w.in_atoms)} input atoms are "
+                      "too many letters")
+    try:
+        for length in range(1, MAX_LASSO + 1):
+            for start in range(length):
+                for seq in itertools.product(letters, repeat=length):
+                    if _defeats(game, [c for _v, c in seq], start, deadline):
+                        named = [{letter_name(a): v for a, v in zip(w.in_atoms, values)}
+                                 for values, _c in seq]
+                        return (named[:start], named[start:]), ""
+    except TimeoutError:
+        return None, ("no fixed input sequence found within the search budget: the "
+                      "environment may have to react to the outputs")
+    return None, (f"no input lasso of up to {MAX_LASSO} ticks defeats every controller: the "
+                  "environment may have to react to the outputs")
+
+
+def _play(game: _BuchiGame, prefix: list, cycle: list, length: int) -> list[dict]:
+    """A controller's best effort along the input lasso (cubes) unrolled to at least
+    ``length`` ticks: each tick outputs that keep every requirement to the end of the
+    unrolled run when any do, taking the automata's accepting edges when it can. Rows
+    ``{atom name: bool}`` (inputs and outputs)."""
+    b = game.b
+    reps = max(2, -(-(length - len(prefix)) // len(cycle)))
+    cubes = prefix + cycle * reps
+    keep = [b.bddtrue]  # keep[k]: the states from which the last k ticks can be kept
+    for cube in reversed(cubes):
+        keep.append(b.bdd_appex(b.bdd_and(game.step, cube), game._primed(keep[-1]),
+                                b.bddop_and, game.letter_vars))
+    keep.reverse()
+    accept = b.bddtrue
+    for acc in game.acc:
+        accept = b.bdd_and(accept, acc)
+    state, rows, every = game.init, [], b.bdd_and(game.in_set, game.out_set)
+    for t, cube in enumerate(cubes):
+        here = b.bdd_and(state, cube)
+        moves = b.bdd_appex(b.bdd_and(game.step, here), game._primed(keep[t + 1]),
+                            b.bddop_and, game.nxt_set)
+        if moves == b.bddfalse:  # none keeps the requirements: any the outputs allow
+            moves = b.bdd_and(here, game.ctl_ok)
+        best = b.bdd_and(moves, accept)
+        letter = b.bdd_satoneset(b.bdd_exist(best if best != b.bddfalse else moves,
+                                             game.cur_set), every, b.bddfalse)
+        rows.append({letter_name(a): b.bdd_and(letter, b.bdd_ithvar(game.m.atom_var[a]))
+                     != b.bddfalse for a in game.atoms})
+        state = game.next_state(b.bdd_and(here, letter))
+    return rows
+
+
+def _cube(game: _BuchiGame, letter: dict):
+    """The BDD cube of an input letter ``{atom name: bool}``."""
+    b, out = game.b, game.b.bddtrue
+    for a in game.atoms:
+        name = letter_name(a)
+        if name in letter:
+            v = b.bdd_ithvar(game.m.atom_var[a])
+            out = b.bdd_and(out, v if letter[name] else b.bdd_not(v))
+    return out
+
+
+def _longest_bound(formulas: Sequence[Node]) -> int:
+    from compiler import ir
+
+    return max([n.hi for f in formulas for n in ir.walk(f) if n.hi is not None] or [0])
+
+
+def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequence[str],
+                     env_inv: Node, ctl_inv: Node, budget: float | None = None,
+                     search: float | None = None) -> dict:
+    """Decide the generalized Büchi game of the safety requirements' pt formulas ``pts``
+    and the ft_inf formulas ``liveness`` of the others (module docstring).
+
+    ``inputs``: the environment's FRET variables; ``env_inv``/``ctl_inv``: propositional
+    IR formulas over the comparisons (numeric consistency of inputs / outputs); ``budget``:
+    seconds before :class:`TimeoutError` is raised; ``search``: seconds for the search of
+    an input lasso that defeats every controller when the game is lost (none when None).
+    Returns ``{"realizable": True, "strategy": {...}}`` (the strategy's size),
+    ``{"realizable": False, "inputs": (prefix, cycle) | None, "note": why none}``, or
+    ``{"outside": why}`` for formulas the game does not handle.
+    """
+    deadline = None if budget is None else time.monotonic() + budget
+    try:
+        game = _BuchiGame(pts, liveness, inputs, env_inv, ctl_inv)
+    except Outside as exc:
+        return {"outside": str(exc)}
+    try:
+        win = game.winning(deadline)
+        realizable = game.b.bdd_and(game.init, win) != game.b.bddfalse
+        out: dict = {"realizable": realizable}
+        if realizable:
+            out["strategy"] = {"method": "Büchi game", "state_bits": len(game.m.bits),
+                               "automaton_states": [a.num_states() for a in game.automata],
+                               "winning_region_bdd_nodes": game.b.bdd_nodecount(win),
+                               "iterations": game.iterations}
+        elif search is not None:
+            out["inputs"], out["note"] = _lasso(game, time.monotonic() + search)
+            out["run"] = []
+            if out["inputs"] is not None:
+                cubes = [[_cube(game, letter) for letter in part] for part in out["inputs"]]
+                out["run"] = _play(game, *cubes, 2 * _longest_bound([*pts, *liveness]) + 4)
+        return out
+    finally:
+        game.automata = []
+        game.close()
