@@ -124,8 +124,9 @@ def bound_sweep(budget: float) -> None:
 
 
 #: realizability sets (p, m inputs): a realizable one (the response the same tick, speeds in
-#: (0.2, 0.5]) and an unrealizable one (the environment re-triggers the hold before the
-#: deadline)
+#: (0.2, 0.5]), an unrealizable one (the environment re-triggers the hold before the
+#: deadline), and two with an ``eventually`` (the Büchi game): beside a deadline
+#: (realizable), and against a hold the environment re-triggers every other tick (not)
 REALIZE = {
     "realizable": ["R1: whenever p the sw shall within {n} ticks satisfy q",
                    "R2: whenever q the sw shall immediately satisfy speed <= 0.5",
@@ -133,6 +134,11 @@ REALIZE = {
                    "R4: upon p the sw shall for {m} ticks satisfy !r"],
     "unrealizable": ["U1: whenever p the sw shall within {n} ticks satisfy q",
                      "U2: upon p the sw shall for {m} ticks satisfy !q"],
+    "eventually": ["E1: whenever p the sw shall eventually satisfy q",
+                   "E2: upon p the sw shall within {n} ticks satisfy q",
+                   "E3: in m mode the sw shall always satisfy speed > 0.2"],
+    "eventually-lost": ["L1: whenever p the sw shall eventually satisfy q",
+                        "L2: upon m the sw shall for {m} ticks satisfy !q"],
 }
 
 
@@ -151,7 +157,9 @@ def _realizability(path: Path, engine: str, budget: float) -> tuple[float, str]:
     comp = summary["components"][0]
     what = str(comp["realizable"])
     if comp["realizable"] is False:
-        what += f" ({len(comp['environment'].get('prefix', []))}-tick inputs)"
+        env = comp["environment"]
+        what += (f" ({len(env['prefix'])}+{len(env['cycle'])}-tick input lasso)"
+                 if "prefix" in env else " (no fixed inputs)")
     return cpu() - t0, what
 
 
@@ -168,7 +176,8 @@ def _command(path: Path, io: list[str] | None = None) -> float:
 
 def realizability_sweep(budget: float) -> None:
     """Realizability against the bound: Spot's game (``--engine spot``) and the symbolic
-    safety game (``--engine auto``) on the same files, and the whole command."""
+    games (``--engine auto``: safety, or Büchi with an ``eventually``) on the same files,
+    and the whole command."""
     print(f"5. realizability against the bound (CPU s; budget {budget:g} s per Spot query, "
           f"{3 * budget:g} s per safety game)")
     print(f"  {'bound':>5} {'set':<13} {'Spot':>8} {'game':>8} {'command':>8}  answers "
