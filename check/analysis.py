@@ -197,26 +197,38 @@ class Checker:
         if self.engine in ("spot", "smt"):
             return None
         forms = self.monitored[finite]
-        if not formulas or any(f not in forms for f in formulas):
+        # a formula with no pt monitor (an ``eventually``) is taken on infinite runs by
+        # Spot's deterministic Büchi automaton of it, when its own bounds are small
+        live = sorted({f for f in formulas if f not in forms}, key=to_spot)
+        if not formulas or (live and (finite or max_bound(live) > SPOT_MAX_BOUND)):
             return None
         # in input order: one query, one variable order (the order changes the BDDs' sizes,
         # the answer not), so the cache and the time do not depend on how it was asked
-        formulas = sorted(set(formulas), key=lambda f: (forms[f][2], forms[f][0]))
+        formulas = sorted({f for f in formulas if f in forms},
+                          key=lambda f: (forms[f][2], forms[f][0]))
         safe = [forms[f][1] for f in formulas if forms[f][0] == "safe"]
         goals = [forms[f][1] for f in formulas if forms[f][0] == "goal"]
         try:
-            game_atoms(safe + goals)
+            game_atoms(safe + goals + live)
         except Outside:
             return None
-        inv = self.numeric.regions(sorted({v for f in formulas for v in ir.variables(f)}))
-        key = ("monitor", finite, length, tuple(formulas))
+        names = sorted({v for f in [*formulas, *live] for v in ir.variables(f)})
+        inv = self.numeric.regions(names)
+        key = ("monitor", finite, length, tuple(formulas), tuple(live))
         timeout = self.worker.timeout
-        self.monitor_queries += key not in self._cache
+        if self._cache.get(key) == "outside":
+            return None
+        fresh = key not in self._cache
         # the fixed points stop at ``timeout`` and say so; the worker is killed a little
         # later only if they do not
-        return self._cached(key, lambda: self.worker.ask(
-            ("monitor_sat", safe, goals, inv, finite, length, timeout),
+        got = self._cached(key, lambda: self.worker.ask(
+            ("monitor_sat", safe, goals, inv, finite, length, timeout, live),
             None if timeout is None else 1.2 * timeout + 1))
+        if got[0] == "outside":  # no deterministic Büchi automaton: z3's query
+            self._cache[key] = "outside"
+            return None
+        self.monitor_queries += fresh
+        return got
 
     def _ask_smt(self, formulas: list[Node]):
         self.smt_queries += ("smt", tuple(formulas)) not in self._cache

@@ -40,54 +40,77 @@ from compiler.ir import Node
 from compiler.printers import to_spot
 
 from .pt_monitor import Outside
-from .safety_game import MAX_LETTERS, _Game, _Witness, bdd_dict, letter_name
+from .safety_game import MAX_LETTERS, _Game, _varset, _Witness, bdd_dict, letter_name
 
 __all__ = ["solve_buchi_game"]
 
 
-def _automaton(formula: Node):
-    """Spot's deterministic, complete, transition-based generalized Büchi automaton of an
-    ft_inf formula; raises :class:`Outside` when Spot gives none."""
+def _automaton(formula: Node, deterministic: bool = True):
+    """Spot's complete, transition-based generalized Büchi automaton of an ft_inf formula,
+    deterministic unless ``deterministic`` is False; raises :class:`Outside` when Spot gives
+    no deterministic one."""
     import spot
 
-    aut = spot.translate(to_spot(formula), "generic", "deterministic", "complete",
-                         dict=bdd_dict())
+    aut = spot.translate(to_spot(formula), "TGBA", "complete",
+                         "deterministic" if deterministic else "small", dict=bdd_dict())
     acc = aut.acc()
-    if not spot.is_deterministic(aut) or not (acc.is_t() or acc.is_generalized_buchi()):
+    if deterministic and not spot.is_deterministic(aut) or not (
+            acc.is_t() or acc.is_generalized_buchi()):
         raise Outside(f"Spot gives no deterministic Büchi automaton for {to_spot(formula)} "
                       f"(acceptance {acc.get_acceptance()})")
     return aut
 
 
+def _degree(aut) -> int:
+    """Bits to choose among the edges leaving a state (0 for a deterministic automaton)."""
+    import spot
+
+    if spot.is_deterministic(aut):
+        return 0
+    most = max(sum(1 for _e in aut.out(s)) for s in range(aut.num_states()))
+    return (most - 1).bit_length()
+
+
 class _BuchiGame(_Game):
     """The game of :func:`solve_buchi_game`: a :class:`check.safety_game._Game` over the pt
-    formulas ``pts`` with the automata of the ``liveness`` formulas in its state
-    (``self.acc``: one BDD over (state, inputs, outputs) per acceptance set: this tick's
-    edge is in it)."""
+    formulas ``pts`` (and ``extra``, monitored beside) with the automata of the ``liveness``
+    formulas in its state (``self.acc``: one BDD over (state, inputs, outputs) per
+    acceptance set: this tick's edge is in it). Also the product of
+    :mod:`check.monitor_sat` when a query has a requirement that is not safety."""
 
     def __init__(self, pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequence[str],
-                 env_inv: Node, ctl_inv: Node):
-        self.automata = [_automaton(f) for f in liveness]
+                 env_inv: Node, ctl_inv: Node, extra: Sequence[Node] = (),
+                 deterministic: bool = True):
+        self.automata = [_automaton(f, deterministic) for f in liveness]
         widths = [max(1, (a.num_states() - 1).bit_length()) for a in self.automata]
-        super().__init__(pts, inputs, env_inv, ctl_inv, atoms_of=liveness,
-                         reserve=sum(widths))
+        choices = [_degree(a) for a in self.automata]
+        super().__init__(pts, inputs, env_inv, ctl_inv, extra=extra, atoms_of=liveness,
+                         reserve=sum(widths) + sum(choices))
         self.acc: list = []
         self.iterations = 0
-        for aut, width in zip(self.automata, widths):
-            self._encode(aut, width)
+        try:
+            for aut, width, choice in zip(self.automata, widths, choices):
+                self._encode(aut, width, choice)
+        except BaseException:
+            self.close()
+            raise
         self.relations()
+        self.out_set = _varset(self.b, self.m.out_vars)
         b = self.b
         self.step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
         self.step_vars = b.bdd_and(self.nxt_set, self.out_set)
         self.letter_vars = b.bdd_and(self.step_vars, self.in_set)
 
-    def _encode(self, aut, width: int) -> None:
+    def _encode(self, aut, width: int, choice: int) -> None:
         """Add the automaton's state bits (its state number in binary), their next-value
-        functions, its edges' existence to ``ok`` and its acceptance sets to ``acc``."""
+        functions, its edges' existence to ``ok`` and its acceptance sets to ``acc``. A
+        nondeterministic automaton's edge is picked each tick by ``choice`` more variables
+        set like outputs (the k-th edge leaving a state when they read k): exact for
+        satisfiability, where every variable is existential."""
         b, m = self.b, self.m
         by_name = {letter_name(a): m.atom_var[a] for a in self.atoms}
         dct = bdd_dict()
-        rename = [(dct.varnum(ap), by_name[str(ap)]) for ap in aut.ap()]
+        rename = [(dct.varnum(ap), by_name[ap.ap_name()]) for ap in aut.ap()]
         start = aut.get_init_state_number()
         bits = [m.add_bit(bool(start >> k & 1)) for k in range(width)]
         cubes = []
@@ -99,11 +122,16 @@ class _BuchiGame(_Game):
         nexts = [b.bddfalse] * width
         some = b.bddfalse
         accs = [b.bddfalse] * aut.num_sets()
+        picks = [m.add_choice() for _k in range(choice)]
+        rank: dict[int, int] = {}
         for e in aut.edges():
             cond = e.cond
             for ap_var, var in rename:
                 cond = b.bdd_compose(cond, b.bdd_ithvar(var), ap_var)
             edge = b.bdd_and(cubes[e.src], cond)
+            k = rank[e.src] = rank.get(e.src, -1) + 1
+            for j, var in enumerate(picks):
+                edge = b.bdd_and(edge, b.bdd_ithvar(var) if k >> j & 1 else b.bdd_nithvar(var))
             some = b.bdd_or(some, edge)
             for k in range(width):
                 if e.dst >> k & 1:
@@ -130,18 +158,26 @@ class _BuchiGame(_Game):
     def winning(self, deadline: float | None):
         """``W`` of the module docstring; stops early once the first state is out of it."""
         b = self.b
-        accs = self.acc or [b.bddtrue]
         z = b.bddtrue
-        while True:
+        while True:  # first the states where the controller keeps every requirement
+            self._tick(deadline)
+            self.iterations += 1
+            new = b.bdd_and(z, self.cpre(self._primed(z)))
+            z, stable = new, new == z
+            if stable or b.bdd_and(self.init, z) == b.bddfalse:
+                break
+        # then the acceptance, from those states on (from every state, each outer round
+        # would remove one tick's worth of the states that lose later: quadratic)
+        while self.acc and b.bdd_and(self.init, z) != b.bddfalse:
             z_next = self._primed(z)
-            new = b.bddtrue
-            for acc in accs:
+            new = z
+            for acc in self.acc:
                 base = b.bdd_and(acc, z_next)
                 y = b.bddfalse
                 while True:
                     self._tick(deadline)
                     self.iterations += 1
-                    y_new = self.cpre(b.bdd_or(base, self._primed(y)))
+                    y_new = b.bdd_and(z, self.cpre(b.bdd_or(base, self._primed(y))))
                     if y_new == y:
                         break
                     y = y_new
@@ -151,6 +187,7 @@ class _BuchiGame(_Game):
             if new == z:
                 return z
             z = new
+        return z
 
 
 # --------------------------------------------------------------------------- the environment

@@ -39,13 +39,16 @@ from collections.abc import Sequence
 from compiler import ir
 from compiler.ir import Node
 
+from .buchi_game import _BuchiGame
+from .pt_monitor import Outside
 from .safety_game import _Game, letter_name
 
 __all__ = ["decide"]
 
 
 def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
-           finite: bool, length: int | None = None, budget: float | None = None):
+           finite: bool, length: int | None = None, budget: float | None = None,
+           liveness: Sequence[Node] = ()):
     """Is there a run on which every pt formula of ``safe`` holds at every tick and every
     pt formula of ``goals`` holds at some tick (module docstring)?
 
@@ -54,12 +57,24 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
     (ft_inf); ``length``: exactly that many ticks (finite only); ``budget``: seconds before
     :class:`TimeoutError` is raised. Returns ``(False, None)``, ``(True, None)`` (infinite)
     or ``(True, (letters, []))`` (finite: the trace's letters ``{atom name: bool}``, as
-    :class:`check.solver.SpotWorker` gives words). Raises
+    :class:`check.solver.SpotWorker` gives words). ``liveness``: ft_inf formulas that hold
+    too (infinite runs only), each by Spot's Büchi automaton in the product, its
+    nondeterminism chosen like a letter (:mod:`check.buchi_game`); ``("outside", why)`` when
+    Spot gives no generalized Büchi automaton. Raises
     :class:`check.safety_game.Outside` for an atom the monitors cannot take.
     """
     deadline = None if budget is None else time.monotonic() + budget
     marks = [ir.O(g) for g in goals]
-    game = _Game(list(safe), [], ir.TRUE, invariant, extra=marks)
+    if liveness:
+        if finite:
+            raise ValueError("liveness formulas are read on infinite runs only")
+        try:
+            game = _BuchiGame(list(safe), list(liveness), [], ir.TRUE, invariant, extra=marks,
+                              deterministic=False)
+        except Outside as exc:
+            return ("outside", str(exc))
+    else:
+        game = _Game(list(safe), [], ir.TRUE, invariant, extra=marks)
     try:
         return _Search(game, deadline).run(finite, length)
     finally:
@@ -95,15 +110,35 @@ class _Search:
         return b.bdd_appex(step, self.g._primed(target), b.bddop_and, self.step_vars)
 
     def live(self):
-        """``Live``: the states from which the safe formulas can hold forever."""
+        """``Live``: the states from which the safe formulas can hold forever (and each
+        acceptance set of the liveness formulas' automata be met infinitely often: the
+        nested fixed point of Emerson and Lei, 1986)."""
         b = self.b
         z = b.bddtrue
         while True:
             self._tick()
             nxt = b.bdd_and(z, self.pre(z))
             if nxt == z:
-                return z
+                break
             z = nxt
+        # from the safe states on (else each outer round removes one tick's worth of the
+        # states that die later: measured quadratic in the bound)
+        accs = getattr(self.g, "acc", [])
+        while accs:
+            nxt = z
+            for acc in accs:
+                y = b.bddfalse
+                while True:
+                    self._tick()
+                    y_new = b.bdd_and(z, b.bdd_or(self.pre(z, acc), self.pre(y)))
+                    if y_new == y:
+                        break
+                    y = y_new
+                nxt = b.bdd_and(nxt, y)
+            if nxt == z:
+                break
+            z = nxt
+        return z
 
     def run(self, finite: bool, length: int | None):
         """The answer of :func:`decide`."""

@@ -59,6 +59,7 @@ class Monitor:
         self.delays = 0
         self.memo: dict[Node, object] = {}
         self.bits: list[list] = []
+        self.choices = 0
         self.atom_var: dict[Node, int] = {}
         self.in_vars: list[int] = []
         self.out_vars: list[int] = []
@@ -113,7 +114,7 @@ class Monitor:
             cur = self.delay_base + 2 * self.delays
             self.delays += 1
         else:
-            cur = self.base + 2 * (len(self.bits) - self.delays)
+            cur = self.base + 2 * (len(self.bits) - self.delays + self.choices)
         bit = [cur, cur + 1, init, None]
         self.bits.append(bit)
         return self.b.bdd_ithvar(cur), bit
@@ -123,6 +124,15 @@ class Monitor:
         :mod:`check.buchi_game`): ``(its BDD variable, [current, next, init, None])``; the
         caller sets the next-value function (index 3)."""
         return self._bit(init)
+
+    def add_choice(self) -> int:
+        """A free variable chosen each tick like an output, not a state (the choice among a
+        nondeterministic automaton's edges, :mod:`check.buchi_game`): its BDD variable,
+        in the slot of a state bit."""
+        var = self.base + 2 * (len(self.bits) - self.delays + self.choices)
+        self.choices += 1
+        self.out_vars.append(var)
+        return var
 
     def value(self, n: Node):
         """Truth of ``n`` at the current tick (a BDD)."""

@@ -30,6 +30,7 @@ _LIVENESS = [
     "in m mode the sw shall eventually satisfy {b}",
     "after m the sw shall eventually satisfy {b}",
     "whenever {a} the sw shall until {c} satisfy {b}",
+    "whenever {a} the sw shall eventually satisfy s > 0.6",
 ]
 _SAFETY = [
     "whenever {a} the sw shall within {k} ticks satisfy {b}",
@@ -37,6 +38,7 @@ _SAFETY = [
     "the sw shall always satisfy {a} -> {b}",
     "whenever {a} the sw shall immediately satisfy {b}",
     "in m mode upon {a} the sw shall within {k} ticks satisfy {b}",
+    "the sw shall always satisfy s <= 0.5 | {a}",
 ]
 _LITERALS = ["i", "!i", "j", "o", "!o", "p", "!p", "o | p", "i & o"]
 _INPUTS = ["i", "j", "m"]
@@ -89,6 +91,8 @@ def test_buchi_game_agrees_with_spot(tmp_path, safety, liveness):
         if UNKNOWN in (game, spot):
             return
         assert game["realizable"] == spot["realizable"], (text, game, spot)
+        # every set here is the games': Spot's only when the Büchi game failed
+        assert game["method"] in ("safety game", "Büchi game"), (text, game)
         if game["method"] != "Büchi game" or game["realizable"]:
             return
         found = decide.witness(items, game)

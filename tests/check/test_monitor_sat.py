@@ -14,10 +14,12 @@ import random
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
 
 from check.analysis import check_requirements
 from check.safety_game import _Game, pt_monitors_ft_inf
+from check.solver import UNKNOWN, SpotWorker
 from check.witness import read_expected
 from compiler import ir
 from compiler.build import compile_entries
@@ -27,7 +29,7 @@ from fretish import parse
 from fretish.files import load_requirements
 from monitors.engines.interval import verdict_of
 from tests.check._replay import audit_verdicts
-from tests.check.test_smt import _SET, _file, assert_same_answers
+from tests.check.test_smt import _FORMULA, _SET, _file, _spot_sat, assert_same_answers
 from tests.lasso import lasso_at
 from tests.compiler.test_semantics import (CONDITION_PHRASES, KEYS, SCOPE_PHRASES,
                                            TIMING_PHRASES)
@@ -125,6 +127,29 @@ def test_monitors_and_spot_agree_on_random_sets(tmp_path_factory, parts):
     assert_same_answers(*(check_requirements(compile_entries(load_requirements([path])),
                                              engine=e, timeout=10) for e in ("spot", "bdd")),
                         path)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.one_of(st.lists(_FORMULA, min_size=1, max_size=3),
+                 st.builds(lambda f, g: [ir.or_(f, g), ir.not_(f)], _FORMULA, _FORMULA)))
+@example([ir.F(ir.ap("p")), ir.G(ir.not_(ir.ap("p")))])
+@example([ir.G(ir.F(ir.ap("p"))), ir.F(ir.G(ir.ap("q"))), ir.G(ir.implies(ir.ap("q"),
+                                                                         ir.not_(ir.ap("p"))))])
+def test_buchi_product_agrees_with_spot_on_random_formulas(formulas):
+    """Random LTL formulas (``F``, ``G``, ``U``, ``V``, bounds up to 15) as liveness formulas
+    of the monitor query (their Büchi automata in the product, nondeterminism chosen like a
+    letter): satisfiable on infinite runs exactly when Spot says so. Half the sets are
+    ``f | g`` with ``!f``: satisfiable exactly when ``g & !f`` is, which an acceptance
+    condition left out gets wrong."""
+    from check.numeric_abstraction import NumericAbstraction
+
+    inv = NumericAbstraction.of(formulas).regions(
+        sorted({v for f in formulas for v in ir.variables(f)}))
+    with SpotWorker(None) as w:
+        got = w.ask(("monitor_sat", [], [], inv, False, None, None, list(formulas)))
+        assert got != UNKNOWN, w.failures
+        ref = _spot_sat(w, ir.and_all(*formulas))
+    assert got[0] == ref[0], [str(f) for f in formulas]
 
 
 def test_finally_is_not_taken_for_its_pt_formula(tmp_path):

@@ -31,6 +31,7 @@ _SENTENCES = [
     "upon {a} the sw shall within {k} ticks satisfy {b}",
     "the sw shall always satisfy {a} -> !{b}",
     "the sw shall eventually satisfy {a}",
+    "whenever {a} the sw shall eventually satisfy {b}",
     "in {a} the sw shall always satisfy {b}",
     "in {a} upon {b} the sw shall within {k} ticks satisfy !{b}",
     "whenever {a} the sw shall at the next timepoint satisfy {b}",
