@@ -57,9 +57,10 @@ def render_text(result) -> str:
             elif status is True and "strategy" in c:
                 st = c["strategy"]
                 bits, nodes = st["state_bits"], st["winning_region_bdd_nodes"]
+                region = (f"winning region a BDD of {nodes} node{'s' * (nodes != 1)}"
+                          if nodes else "every state winning")
                 extra = (f" by a controller over {bits} state bit{'s' * (bits != 1)} "
-                         f"({st['method']}; winning region a BDD of {nodes} "
-                         f"node{'s' * (nodes != 1)})")
+                         f"({st['method']}; {region})")
             elif status is False:
                 extra = f" ({c['method']})"
             lines.append(f"  {', '.join(c['requirements'])}: "
