@@ -5,14 +5,13 @@ set) and replayed through fretc audit; the Safe-ROS R1 with R2 at 50 Hz."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from check.analysis import Checker, check_requirements, make_item
+from check.analysis import Checker, make_item
 from check.buchi_game import _automaton
 from check.pt_monitor import Outside
 from check.realizability import _Decider
@@ -21,7 +20,8 @@ from compiler import ir
 from compiler.build import compile_entries
 from compiler.printers import to_spot
 from fretish.files import load_requirements
-from tests.check._replay import audit_verdicts
+from tests.check._replay import replayed_unrealizable
+from tests.check.test_safety_game import realizability_of
 
 _LIVENESS = [
     "whenever {a} the sw shall eventually satisfy {b}",
@@ -106,14 +106,11 @@ def test_safe_ros_at_50_hz(tmp_path):
     """R1 (whenever too_close eventually stopped) with R2 (upon too_close within 1 second
     stopped) at a 20 ms tick: 50 ticks, past Spot's game, decided realizable by the Büchi
     game over R2's deadline counter and R1's two-state automaton."""
-    p = tmp_path / "r.fret"
-    p.write_text("@tick_period 20 ms\n"
-                 "R1: whenever too_close agilex_agent shall eventually satisfy stopped\n"
-                 "R2: upon too_close agilex_agent shall within 1 second satisfy stopped\n",
-                 encoding="utf-8")
-    r = check_requirements(compile_entries(load_requirements([p])), inputs=["too_close"],
-                           vacuity=False, redundancy=False)
-    comp = r.realizability["components"][0]
+    comp = realizability_of(
+        tmp_path, "@tick_period 20 ms\n"
+        "R1: whenever too_close agilex_agent shall eventually satisfy stopped\n"
+        "R2: upon too_close agilex_agent shall within 1 second satisfy stopped\n",
+        ["too_close"])
     assert comp["realizable"] is True and comp["method"] == "Büchi game", comp
     assert comp["strategy"]["automaton_states"] == [2]
     assert comp["strategy"]["state_bits"] < 16
@@ -127,21 +124,11 @@ def test_lost_game_lasso_replays_through_the_audit(tmp_path):
     req = tmp_path / "set.fret"
     req.write_text("A: whenever p the sw shall eventually satisfy q\n"
                    "B: upon r the sw shall for 50 ticks satisfy !q\n", encoding="utf-8")
-    from monitors.engines.interval import verdict_of
-
-    r = check_requirements(compile_entries(load_requirements([req])), inputs=["p", "r"],
-                           witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
-    comp = r.realizability["components"][0]
-    assert comp["realizable"] is False and comp["method"] == "Büchi game", comp
+    comp = replayed_unrealizable(req, ["p", "r"], "Büchi game", tmp_path)
     assert comp["minimal_unrealizable"] == [["A", "B"]]
     env = comp["environment"]
     assert len(env["prefix"]) + len(env["cycle"]) <= 2
     assert any(row["r"] for row in env["cycle"]) and not all(row["r"] for row in env["cycle"])
-    found = [f for f in r.findings if f.kind == "unrealizable"]
-    assert found and found[0].witness, r.findings
-    promised = json.loads(json.dumps(found[0].expected))
-    got = audit_verdicts(req, Path(found[0].witness), tmp_path)
-    assert got == promised and got["A"] == "violated", got
 
 
 def test_no_deterministic_buchi_automaton():

@@ -4,7 +4,6 @@ audit, the reactive environment, and bounds of hundreds of ticks."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
@@ -18,7 +17,7 @@ from check.solver import UNKNOWN, SpotWorker
 from compiler import ir
 from compiler.build import compile_entries
 from fretish.files import load_requirements
-from tests.check._replay import audit_verdicts
+from tests.check._replay import replayed_unrealizable
 
 _TEMPLATES = [
     "whenever {a} the sw shall within {k} ticks satisfy {b}",
@@ -38,6 +37,16 @@ _LITERALS = ["i", "!i", "j", "o", "!o", "p", "!p", "o | p", "i & o"]
 
 def _items(path: Path):
     return [make_item(k, c) for k, c in enumerate(compile_entries(load_requirements([path])))]
+
+
+def realizability_of(tmp_path: Path, text: str, inputs: list[str]) -> dict:
+    """The realizability entry of the first component of the set ``text`` (satisfiability
+    checks only, no vacuity or redundancy)."""
+    p = tmp_path / "r.fret"
+    p.write_text(text, encoding="utf-8")
+    r = check_requirements(compile_entries(load_requirements([p])), inputs=inputs,
+                           vacuity=False, redundancy=False)
+    return r.realizability["components"][0]
 
 
 def _decide(items, engine: str, worker):
@@ -84,35 +93,20 @@ def test_defeating_inputs_replay_through_the_audit(tmp_path, text, inputs):
     witness header promises."""
     req = tmp_path / "set.fret"
     req.write_text(text, encoding="utf-8")
-    from monitors.engines.interval import verdict_of
-
-    r = check_requirements(compile_entries(load_requirements([req])), inputs=inputs,
-                           witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
-    comp = r.realizability["components"][0]
-    assert comp["realizable"] is False and comp["method"] == "safety game"
+    comp = replayed_unrealizable(req, inputs, "safety game", tmp_path)
     assert comp["environment"]["prefix"], comp
-    found = [f for f in r.findings if f.kind == "unrealizable"]
-    assert found and found[0].witness, r.findings
-    promised = json.loads(json.dumps(found[0].expected))
-    got = audit_verdicts(req, Path(found[0].witness), tmp_path)
-    assert got == promised
-    assert any(got[i] == "violated" for i in found[0].requirements), got
-    assert found[0].details["witness_shows_finding"] is True
 
 
 def test_reactive_environment(tmp_path):
     """The controller must guess the next input: unrealizable, yet every fixed input
     sequence has matching outputs (the search exhausts the sets of monitor states)."""
-    p = tmp_path / "r.fret"
-    p.write_text("R1: the sw shall always satisfy o | q\n"
-                 "R2: whenever o the sw shall at the next timepoint satisfy i\n"
-                 "R3: whenever q the sw shall at the next timepoint satisfy !i\n",
-                 encoding="utf-8")
-    r = check_requirements(compile_entries(load_requirements([p])), inputs=["i"],
-                           vacuity=False, redundancy=False)
-    comp = r.realizability["components"][0]
+    text = ("R1: the sw shall always satisfy o | q\n"
+            "R2: whenever o the sw shall at the next timepoint satisfy i\n"
+            "R3: whenever q the sw shall at the next timepoint satisfy !i\n")
+    comp = realizability_of(tmp_path, text, ["i"])
     assert comp["realizable"] is False and "prefix" not in comp["environment"]
     assert "must react" in comp["environment"]["note"]
+    p = tmp_path / "r.fret"
     with SpotWorker(20) as worker:
         assert _decide(_items(p), "spot", worker)["realizable"] is False
 
