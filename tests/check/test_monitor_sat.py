@@ -200,7 +200,8 @@ def test_the_step_in_parts_gives_the_sets_of_the_whole_relation(tmp_path_factory
     the successors in a set of states by one relational product per part of the
     transition relation (check/monitor_sat.py) equal BuDDy's simultaneous substitution of
     the next-value functions (``_Game.successors_in``), and the predecessors equal those of
-    the monolithic relational product, for Live's iterates and random sets of states."""
+    the monolithic relational product, for Live's iterates and random sets of states; so
+    do the successors from one state with the parts restricted to it."""
     path = _file(tmp_path_factory.mktemp("parts"), parts)
     items = [make_item(k, c) for k, c in
              enumerate(compile_entries(load_requirements([path]))) if c.error is None]
@@ -221,9 +222,16 @@ def test_the_step_in_parts_gives_the_sets_of_the_whole_relation(tmp_path_factory
             targets.append(z)
         targets += [_random_states(b, game, rnd) for _ in range(4)]
         for target in targets:
-            assert search.successors_in(target) == game.successors_in(target)
+            succ = game.successors_in(target)
+            assert search.successors_in(target) == succ
             assert search.pre(target) == b.bdd_appex(whole, game._primed(target),
                                                      b.bddop_and, step_vars)
+            state = b.bddtrue  # one state: the parts restricted to it first (witnesses)
+            for cur, _nxt, _init, _fn in game.m.bits:
+                state = b.bdd_and(state, b.bdd_ithvar(cur) if rnd.random() < 0.5
+                                  else b.bdd_nithvar(cur))
+            assert b.bdd_and(search.successors_in(target, state), state) == b.bdd_and(
+                succ, state)
     finally:
         game.close()
 
