@@ -19,8 +19,8 @@
 6. With ``--against DIR`` (only this): the command ``fretc check FILE`` of this checkout
    beside the same command of the checkout at DIR (e.g. a ``git worktree`` of the base
    commit) on the sets of part 4 and the consistent set with B4 asking ``speed > 0.6`` (a
-   vacuity, its witness written), at 250 and 1000 ticks: CPU of each, their ratio and the
-   unknown answers of each.
+   vacuity), at 250 and 1000 ticks: CPU of each, their ratio and the unknown answers of
+   each; then the same with ``--witness-dir`` (the witness CSVs written).
 
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
 queries run with the default 20 s budget (a timed-out query is counted as unknown).
@@ -182,7 +182,7 @@ def against(other: Path) -> None:
     print(f"6. fretc check FILE here and in {other} (CPU s, start-up included; unknown "
           "answers in the output)")
     print(f"  {'bound':>5} {'set':<11} {'here':>8} {'there':>8} {'ratio':>6}  unknown "
-          "(here | there)")
+          f"(here | there)   {'witnesses: here':>15} {'there':>8} {'ratio':>6}  unknown")
     sets = {"consistent": [BOUNDED[0], BOUNDED[1], BOUNDED[3], BOUNDED[4]],
             "conflict": BOUNDED[:3],
             "vacuous": [BOUNDED[0], BOUNDED[1], BOUNDED[3].replace("0.4", "0.6"), BOUNDED[4]]}
@@ -192,12 +192,14 @@ def against(other: Path) -> None:
             path = Path("/tmp") / f"fretc_bench_against_{name}_{n}.fret"
             path.write_text("\n".join(x.format(n=n, m=m) for x in lines) + "\n",
                             encoding="utf-8")
-            io = ["--witness-dir", str(path.with_suffix(""))]
-            texts: list[str] = []
-            here, there = (_command(path, io, root, texts) for root in (ROOT, other))
-            unknown = [t.count("unknown") for t in texts]
-            print(f"  {n:>5} {name:<11} {here:8.2f} {there:8.2f} {here / there:6.2f}  "
-                  f"{unknown[0]} | {unknown[1]}", flush=True)
+            row = f"  {n:>5} {name:<11}"
+            for io in ([], ["--witness-dir", str(path.with_suffix(""))]):
+                texts: list[str] = []
+                here, there = (_command(path, io, root, texts) for root in (ROOT, other))
+                unknown = [t.count("unknown") for t in texts]
+                row += (f" {here:8.2f} {there:8.2f} {here / there:6.2f}  {unknown[0]:>4} | "
+                        f"{unknown[1]:<4}")
+            print(row, flush=True)
 
 
 def realizability_sweep(budget: float) -> None:
