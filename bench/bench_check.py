@@ -19,8 +19,8 @@
 6. With ``--against DIR`` (only this): the command ``fretc check FILE`` of this checkout
    beside the same command of the checkout at DIR (e.g. a ``git worktree`` of the base
    commit) on the sets of part 4 and the consistent set with B4 asking ``speed > 0.6`` (a
-   vacuity), at 250 and 1000 ticks: CPU of each, their ratio and the unknown answers of
-   each; then the same with ``--witness-dir`` (the witness CSVs written).
+   vacuity), at 250 and 1000 ticks: CPU of each, their ratio and the checks each answered
+   unknown; then the same with ``--witness-dir`` (the witness CSVs written).
 
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
 queries run with the default 20 s budget (a timed-out query is counted as unknown).
@@ -179,8 +179,8 @@ def _command(path: Path, io: list[str] | None = None, root: Path = ROOT,
 
 def against(other: Path) -> None:
     """Part 6 (module docstring): the command here and in the checkout ``other``."""
-    print(f"6. fretc check FILE here and in {other} (CPU s, start-up included; unknown "
-          "answers in the output)")
+    print(f"6. fretc check FILE here and in {other} (CPU s, start-up included; the checks "
+          "answered unknown)")
     print(f"  {'bound':>5} {'set':<11} {'here':>8} {'there':>8} {'ratio':>6}  unknown "
           f"(here | there)   {'witnesses: here':>15} {'there':>8} {'ratio':>6}  unknown")
     sets = {"consistent": [BOUNDED[0], BOUNDED[1], BOUNDED[3], BOUNDED[4]],
@@ -196,7 +196,8 @@ def against(other: Path) -> None:
             for io in ([], ["--witness-dir", str(path.with_suffix(""))]):
                 texts: list[str] = []
                 here, there = (_command(path, io, root, texts) for root in (ROOT, other))
-                unknown = [t.count("unknown") for t in texts]
+                unknown = [sum(x.startswith("UNKNOWN") for x in t.splitlines())
+                           for t in texts]
                 row += (f" {here:8.2f} {there:8.2f} {here / there:6.2f}  {unknown[0]:>4} | "
                         f"{unknown[1]:<4}")
             print(row, flush=True)
