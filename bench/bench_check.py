@@ -16,11 +16,17 @@
    auto``), and the command a user runs (``fretc check FILE --inputs p,m --outputs
    q,r,speed``, start-up and every check included).
 
+6. With ``--against DIR`` (only this): the command ``fretc check FILE`` of this checkout
+   beside the same command of the checkout at DIR (e.g. a ``git worktree`` of the base
+   commit) on the sets of part 4 and the consistent set with B4 asking ``speed > 0.6`` (a
+   vacuity), at 250 and 1000 ticks: CPU of each, their ratio and the checks each answered
+   unknown; then the same with ``--witness-dir`` (the witness CSVs written).
+
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
 queries run with the default 20 s budget (a timed-out query is counted as unknown).
 
     python bench/bench_check.py [--corpus PATH] [--bounds-only] [--realizability-only]
-                                [--budget SECONDS]
+                                [--budget SECONDS] [--against DIR]
 """
 
 from __future__ import annotations
@@ -163,15 +169,46 @@ def _realizability(path: Path, engine: str, budget: float) -> tuple[float, str]:
     return cpu() - t0, what
 
 
-def _command(path: Path, io: list[str] | None = None) -> float:
+def _command(path: Path, io: list[str] | None = None, root: Path = ROOT,
+             out: list | None = None) -> float:
     """CPU seconds of ``fretc check FILE`` (by default with ``--inputs p,m --outputs
-    q,r,speed``), start-up and every check included (the process and its children)."""
+    q,r,speed``), start-up and every check included (the process and its children), run
+    from the checkout ``root`` (``python -m fretc`` there takes its code); its standard
+    output is appended to ``out``."""
     io = ["--inputs", "p,m", "--outputs", "q,r,speed"] if io is None else io
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([sys.executable, "-m", "fretc", "check", str(path), *io], cwd=ROOT,
-                   capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "fretc", "check", str(path), *io], cwd=root,
+                          capture_output=True, text=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if out is not None:
+        out.append(proc.stdout)
     return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+
+
+def against(other: Path) -> None:
+    """Part 6 (module docstring): the command here and in the checkout ``other``."""
+    print(f"6. fretc check FILE here and in {other} (CPU s, start-up included; the checks "
+          "answered unknown)")
+    print(f"  {'bound':>5} {'set':<11} {'here':>8} {'there':>8} {'ratio':>6}  unknown "
+          f"(here | there)   {'witnesses: here':>15} {'there':>8} {'ratio':>6}  unknown")
+    sets = {"consistent": [BOUNDED[0], BOUNDED[1], BOUNDED[3], BOUNDED[4]],
+            "conflict": BOUNDED[:3],
+            "vacuous": [BOUNDED[0], BOUNDED[1], BOUNDED[3].replace("0.4", "0.6"), BOUNDED[4]]}
+    for n in (250, 1000):
+        for name, lines in sets.items():
+            m = n + 3 if name == "conflict" else n - 3
+            path = Path("/tmp") / f"fretc_bench_against_{name}_{n}.fret"
+            path.write_text("\n".join(x.format(n=n, m=m) for x in lines) + "\n",
+                            encoding="utf-8")
+            row = f"  {n:>5} {name:<11}"
+            for io in ([], ["--witness-dir", str(path.with_suffix(""))]):
+                texts: list[str] = []
+                here, there = (_command(path, io, root, texts) for root in (ROOT, other))
+                unknown = [sum(x.startswith("UNKNOWN") for x in t.splitlines())
+                           for t in texts]
+                row += (f" {here:8.2f} {there:8.2f} {here / there:6.2f}  {unknown[0]:>4} | "
+                        f"{unknown[1]:<4}")
+            print(row, flush=True)
 
 
 def realizability_sweep(budget: float) -> None:
@@ -203,14 +240,22 @@ def main() -> int:
                     help="Only the realizability table (part 5).")
     ap.add_argument("--budget", type=float, default=20.0,
                     help="Seconds per solver query in part 4.")
+    ap.add_argument("--against", metavar="DIR",
+                    help="Only part 6: the command here beside the checkout at DIR.")
     args = ap.parse_args()
-    if args.realizability_only:
+    if args.against:
+        against(Path(args.against).resolve())
+    elif args.realizability_only:
         realizability_sweep(args.budget)
-        return 0
-    if args.bounds_only:
+    elif args.bounds_only:
         bound_sweep(args.budget)
-        return 0
+    else:
+        every_part(args)
+    return 0
 
+
+def every_part(args) -> None:
+    """Parts 1 to 5 (module docstring)."""
     print("1. case-study corpus: satisfiability + non-vacuity per project")
     total0 = cpu()
     w0 = time.perf_counter()
@@ -269,7 +314,6 @@ def main() -> int:
     print(f"  fretc check requirements/ --inputs too_close --outputs stopped: exit "
           f"{proc.returncode}, {cpu() - t0:.2f} s CPU ({time.perf_counter() - w0:.2f} s wall)")
     bound_sweep(args.budget)
-    return 0
 
 
 if __name__ == "__main__":

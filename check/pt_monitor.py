@@ -15,6 +15,20 @@ oldest ``a`` with no ``b`` after it. The value of the deadline at a tick differs
 delay line's only after a violation inside the same ``H`` or ``since``, where the enclosing
 formula is false either way, so the enclosing formula's value is exact at every tick
 (tests/check/test_monitor_sat.py compares both on random traces for every template).
+
+Variable order (the BDDs' sizes depend on it, the answers not), top to bottom: the atoms,
+the one-bit states in the order they are made (each requirement's together), the bits of
+every counter in one block interleaved by significance (the most significant bits of all
+counters first), the delay lines (each in delay order). The sets of states the fixed points
+of :mod:`check.monitor_sat` meet relate counters by differences and sums ("the hold ends
+before the deadline"), which take ``O(log N)`` nodes with interleaved bits and ``O(N)``
+with each counter's bits together; the one-bit states above the block decide when a counter
+resets. Measured on bench/bench_check.py's 1000-tick set: the states that keep every
+requirement took about 100 nodes instead of 3000. The monolithic transition relation grows
+the other way (the counters' carries multiply), so the fixed points step through it in
+parts (:meth:`Monitor.parts`). The delay lines stay last: a set that asks whether a line
+holds a bit between two counter values is then linear in the line's length, exponential
+the other way round (measured: twice the nodes per tick with the counters after the lines).
 """
 
 from __future__ import annotations
@@ -56,7 +70,9 @@ class Monitor:
     def __init__(self, bdd, first_var: int, atoms: list[Node], inputs: set[str],
                  other_bits: int = 0):
         self.b = bdd
-        self.delays = 0
+        self.delays = self.counted = 0
+        #: the bits of each counter, least significant first (:meth:`parts`)
+        self.counters: list[list] = []
         self.memo: dict[Node, object] = {}
         self.bits: list[list] = []
         self.choices = 0
@@ -70,11 +86,15 @@ class Monitor:
         self.base = first_var + len(atoms)
         self.delay_base = self.base + 2 * other_bits
         self.deadlines: dict[Node, list[Node]] = {}
+        #: (counter node, bit significance) -> its place in the counter block (:meth:`plan`)
+        self.slots: dict[tuple[Node, int], int] = {}
+        self.counter_base = self.delay_base
 
     def plan(self, formulas: list[Node]) -> None:
         """Find the deadlines of ``formulas`` that one counter may monitor (module
         docstring): ``deadline -> [the starts of the since formulas it is the left of]``.
-        Whether each start implies the deadline's ``b`` is checked when it is encoded."""
+        Whether each start implies the deadline's ``b`` is checked when it is encoded.
+        Then place the counters' bits (module docstring, variable order)."""
         parents: dict[Node, list[tuple[Node, int]]] = {}
         for f in formulas:
             for n in ir.walk(f):
@@ -100,21 +120,62 @@ class Monitor:
                 fine = False
             if fine:
                 self.deadlines[phi] = starts
+        self._layout(formulas)
+
+    def _layout(self, formulas: list[Node]) -> None:
+        """One block for the bits of every counter ``formulas`` may need (a deadline's, or
+        a bounded ``O``/``H``'s: a deadline that falls back to its delay line leaves its
+        place unused), ordered by significance, most significant first, then by counter;
+        the block ends where the delay lines start. ``state_bits`` counts at least these
+        bits for these nodes, so the one-bit states below the block have room."""
+        widths: dict[Node, int] = {}
+        for f in formulas:
+            for n in ir.walk(f):
+                if n in self.deadlines:
+                    widths.setdefault(n, (_deadline_parts(n)[2] + 1).bit_length())
+                elif n.op in ("O", "H") and n.hi is not None and n.hi > (n.lo or 0):
+                    widths.setdefault(n, (n.hi - (n.lo or 0) + 1).bit_length())
+        nodes = list(widths)
+        order = sorted((-k, j) for j, n in enumerate(nodes) for k in range(widths[n]))
+        self.slots = {(nodes[j], -minus_k): s for s, (minus_k, j) in enumerate(order)}
+        self.counter_base = self.delay_base - 2 * len(self.slots)
+
+    def parts(self) -> list[list]:
+        """The state bits (``bits`` entries) in groups for a partitioned transition
+        relation: each counter's bits together (its next value is a function of all of
+        them), every other bit alone, in the order they were made."""
+        grouped = {id(bit) for c in self.counters for bit in c}
+        return [*self.counters, *([bit] for bit in self.bits if id(bit) not in grouped)]
+
+    def _counter(self, n: Node, width: int, init: int) -> list:
+        """The state bits of ``n``'s counter, least significant first, as ``(current
+        variable BDD, bit)``, initially ``init``: in the counter block when :meth:`plan`
+        placed it."""
+        out = []
+        for k in range(width):
+            slot = self.slots.get((n, k))
+            if slot is None:
+                out.append(self._bit(bool((init >> k) & 1)))
+                continue
+            cur = self.counter_base + 2 * slot
+            bit = [cur, cur + 1, bool((init >> k) & 1), None]
+            self.bits.append(bit)
+            self.counted += 1
+            out.append((self.b.bdd_ithvar(cur), bit))
+        self.counters.append([bit for _v, bit in out])
+        return out
 
     def _bit(self, init: bool, delay: bool = False) -> tuple[object, list]:
-        """A new state bit: its current and next variables side by side, after the bits
-        made before it; the bits of delay lines after all the others (``other_bits`` of
-        them). So each requirement's bits are contiguous, a delay line's bits in delay
-        order, and the counters and one-bit states come before the delay lines they
-        decide about: a set of states that asks whether a delay line holds a bit between
-        two counter values is then linear in the line's length, exponential the other way
-        round (measured: the states that can keep two deadlines took twice the BDD nodes
-        per tick with the counters after the lines)."""
+        """A new one-bit state or delay-line bit: its current and next variables side by
+        side, after the bits of its kind made before it (module docstring, variable
+        order)."""
         if delay:
             cur = self.delay_base + 2 * self.delays
             self.delays += 1
         else:
-            cur = self.base + 2 * (len(self.bits) - self.delays + self.choices)
+            cur = self.base + 2 * (len(self.bits) - self.delays - self.counted + self.choices)
+            if cur >= self.counter_base:
+                raise RuntimeError("the one-bit states ran into the counter block")
         bit = [cur, cur + 1, init, None]
         self.bits.append(bit)
         return self.b.bdd_ithvar(cur), bit
@@ -129,7 +190,9 @@ class Monitor:
         """A free variable chosen each tick like an output, not a state (the choice among a
         nondeterministic automaton's edges, :mod:`check.buchi_game`): its BDD variable,
         in the slot of a state bit."""
-        var = self.base + 2 * (len(self.bits) - self.delays + self.choices)
+        var = self.base + 2 * (len(self.bits) - self.delays - self.counted + self.choices)
+        if var >= self.counter_base:
+            raise RuntimeError("the choices ran into the counter block")
         self.choices += 1
         self.out_vars.append(var)
         return var
@@ -194,7 +257,7 @@ class Monitor:
             x = v
         w = n.hi - (n.lo or 0)
         if w > 0:
-            x = self._since_counter(x, w)
+            x = self._since_counter(x, w, n)
         return b.bdd_not(x) if n.op == "H" else x
 
     def _deadline(self, n: Node):
@@ -214,7 +277,7 @@ class Monitor:
         a = self.value(a_node)
         none = N + 1
         width = none.bit_length()
-        bits = [self._bit(bool((none >> k) & 1)) for k in range(width)]
+        bits = self._counter(n, width, none)
         c = [v for v, _ in bits]
         missed = b.bdd_and(_equals(b, c, N - 1), b.bdd_not(resp))
         reset = b.bdd_or(resp, _equals(b, c, none))
@@ -228,17 +291,14 @@ class Monitor:
             bit[3] = b.bdd_ite(reset, start, inc)
         return b.bdd_not(missed)
 
-    def _since_counter(self, x, w: int):
+    def _since_counter(self, x, w: int, node: Node):
         """``O[0,w] x``: a counter of the ticks since ``x`` last held (before this tick),
         saturated at ``w + 1``, initially ``w + 1`` (never); true when ``x`` holds now or
         the counter is below ``w``."""
         b = self.b
         width = (w + 1).bit_length()
-        bits = []
         init = w + 1
-        for k in range(width):
-            v, bit = self._bit(bool((init >> k) & 1))
-            bits.append((v, bit))
+        bits = self._counter(node, width, init)
         cvars = [v for v, _ in bits]
         below = less_than(b, cvars, w)
         now = b.bdd_or(x, below)

@@ -174,12 +174,11 @@ class _Game:
         self.relations()
 
     def relations(self) -> None:
-        """The transition relation, first state, and state-variable sets of ``self.m``'s
-        bits (again after bits are added)."""
+        """The first state and the state-variable sets of ``self.m``'s bits, the transition
+        relation dropped (again after bits are added)."""
         b, m = self.b, self.m
-        self.trans, self.init = b.bddtrue, b.bddtrue
-        for cur, nxt, init, fn in m.bits:
-            self.trans = b.bdd_and(self.trans, b.bdd_biimp(b.bdd_ithvar(nxt), fn))
+        self._trans, self.init = None, b.bddtrue
+        for cur, _nxt, init, _fn in m.bits:
             self.init = b.bdd_and(self.init, b.bdd_ithvar(cur) if init
                                   else b.bdd_nithvar(cur))
         self.cur_set = _varset(b, [x[0] for x in m.bits])
@@ -191,9 +190,19 @@ class _Game:
     def close(self) -> None:
         """Drop the BDDs and give their variables back to Spot's allocator."""
         self.layers = []
-        self.m = self.ok = self.env_ok = self.ctl_ok = self.trans = self.init = None
+        self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None
         self.extra, self.same = [], None
         _DICT[0].unregister_all_my_variables(self.owner)
+
+    @property
+    def trans(self):
+        """The transition relation, ``next <-> next-value`` for every state bit, built
+        when first asked (:mod:`check.monitor_sat` steps through it in parts instead)."""
+        if self._trans is None:
+            b, self._trans = self.b, self.b.bddtrue
+            for _cur, nxt, _init, fn in self.m.bits:
+                self._trans = b.bdd_and(self._trans, b.bdd_biimp(b.bdd_ithvar(nxt), fn))
+        return self._trans
 
     def _primed(self, f):
         """``f`` over the state bits' next variables: a relational product with ``cur ==

@@ -5,7 +5,11 @@
 * the BDD monitor, with its one-counter deadlines, gives the pt formula's value at every tick
   of random traces for every template key (against compiler.evaluate);
 * the same answers as Spot on random sets with bounds up to 12;
-* deadlines of 250 ticks decided, with a witness fretc audit replays.
+* deadlines of 250 ticks decided, with a witness fretc audit replays;
+* the fixed points' step through the transition relation in parts (one relational product
+  per counter) gives the same sets as BuDDy's substitution of every next-value function and
+  as the monolithic relational product, on random sets and sets of states; the counters'
+  interleaved bits keep the states of a 1000-tick set a small BDD.
 """
 
 from __future__ import annotations
@@ -18,6 +22,9 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from check.analysis import check_requirements
+from check.items import make_item, monitored_forms
+from check.monitor_sat import _Search
+from check.numeric_abstraction import NumericAbstraction
 from check.safety_game import _Game, pt_monitors_ft_inf
 from check.solver import UNKNOWN, SpotWorker
 from check.witness import read_expected
@@ -167,10 +174,20 @@ def test_deadlines_of_250_ticks_are_decided_with_a_replayed_witness(tmp_path):
     """Four interacting 250-tick requirements: every answer known; B4's trigger cannot fire
     beside B5 (a vacuity with the minimal set {B4, B5}); the witness replays through the
     audit with the verdicts its header promises."""
+    _deadlines_decided(tmp_path, 250)
+
+
+@pytest.mark.slow
+def test_deadlines_of_1000_ticks_are_decided_with_a_replayed_witness(tmp_path):
+    """The same set with 1000-tick deadlines (bench/bench_check.py times it)."""
+    _deadlines_decided(tmp_path, 1000)
+
+
+def _deadlines_decided(tmp_path: Path, n: int) -> None:
     p = tmp_path / "d.fret"
-    p.write_text("B1: whenever p the sw shall within 250 ticks satisfy q\n"
-                 "B2: upon p the sw shall for 247 ticks satisfy !q\n"
-                 "B4: in m mode upon p the sw shall within 250 ticks satisfy speed > 0.6\n"
+    p.write_text(f"B1: whenever p the sw shall within {n} ticks satisfy q\n"
+                 f"B2: upon p the sw shall for {n - 3} ticks satisfy !q\n"
+                 f"B4: in m mode upon p the sw shall within {n} ticks satisfy speed > 0.6\n"
                  "B5: in m mode the sw shall always satisfy speed <= 0.5\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), timeout=20,
                            witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
@@ -185,3 +202,76 @@ def test_deadlines_of_250_ticks_are_decided_with_a_replayed_witness(tmp_path):
     promised = read_expected(vac.witness)
     assert audit_verdicts(p, Path(vac.witness), tmp_path) == promised
     assert promised["B4"] == "satisfied" and promised["B5"] == "violated"
+
+
+def _random_states(b, game, rnd: random.Random):
+    """A random set of monitor states: a union of up to four cubes over the state bits."""
+    out = b.bddfalse
+    for _ in range(rnd.randint(1, 4)):
+        cube = b.bddtrue
+        for cur, _nxt, _init, _fn in rnd.sample(game.m.bits, min(4, len(game.m.bits))):
+            cube = b.bdd_and(cube, b.bdd_ithvar(cur) if rnd.random() < 0.5
+                             else b.bdd_nithvar(cur))
+        out = b.bdd_or(out, cube)
+    return out
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[
+    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(_SET, st.integers(0, 2**16))
+def test_the_step_in_parts_gives_the_sets_of_the_whole_relation(tmp_path_factory, parts, seed):
+    """On random sets (bounds up to 12, the requirements safe and one negated as a goal):
+    the successors in a set of states by one relational product per part of the
+    transition relation (check/monitor_sat.py) equal BuDDy's simultaneous substitution of
+    the next-value functions (``_Game.successors_in``), and the predecessors equal those of
+    the monolithic relational product, for Live's iterates and random sets of states; so
+    do the successors from one state with the parts restricted to it."""
+    path = _file(tmp_path_factory.mktemp("parts"), parts)
+    items = [make_item(k, c) for k, c in
+             enumerate(compile_entries(load_requirements([path]))) if c.error is None]
+    forms = monitored_forms(items)[False]
+    safe = [v[1] for k, v in forms.items() if v[0] == "safe"]
+    goals = [v[1] for k, v in forms.items() if v[0] == "goal"][:1]
+    if not safe:
+        return
+    inv = NumericAbstraction.of(list(forms)).regions(["s"])
+    game = _Game(safe, [], ir.TRUE, inv, extra=[ir.O(g) for g in goals])
+    try:
+        search, b, rnd = _Search(game, None), game.b, random.Random(seed)
+        whole = b.bdd_and(search.ok, game.trans)
+        step_vars = b.bdd_and(game.nxt_set, search.letter_set)
+        targets, z = [], b.bddtrue
+        for _ in range(6):  # the first iterates of Live
+            z = b.bdd_and(z, search.pre(z))
+            targets.append(z)
+        targets += [_random_states(b, game, rnd) for _ in range(4)]
+        for target in targets:
+            succ = game.successors_in(target)
+            assert search.successors_in(target) == succ
+            assert search.pre(target) == b.bdd_appex(whole, game._primed(target),
+                                                     b.bddop_and, step_vars)
+            state = b.bddtrue  # one state: the parts restricted to it first (witnesses)
+            for cur, _nxt, _init, _fn in game.m.bits:
+                state = b.bdd_and(state, b.bdd_ithvar(cur) if rnd.random() < 0.5
+                                  else b.bdd_nithvar(cur))
+            assert b.bdd_and(search.successors_in(target, state), state) == b.bdd_and(
+                succ, state)
+    finally:
+        game.close()
+
+
+def test_the_states_of_a_1000_tick_set_are_a_small_bdd():
+    """With the counters' bits interleaved by significance (check/pt_monitor.py), the states
+    that keep two 1000-tick deadlines and a 997-tick hold ("the hold ends before the
+    deadline": a difference of counters) are a BDD of about a hundred nodes; with each
+    counter's bits together they took about 3000."""
+    pts = [formalize(parse(s)).pt for s in (
+        "whenever p the sw shall within 1000 ticks satisfy q",
+        "upon p the sw shall for 997 ticks satisfy !q",
+        "in m mode upon p the sw shall within 1000 ticks satisfy r")]
+    game = _Game(pts, [], ir.TRUE, ir.TRUE)
+    try:
+        live = _Search(game, None).live()
+        assert live != game.b.bddfalse and game.b.bdd_nodecount(live) < 400
+    finally:
+        game.close()
