@@ -206,10 +206,10 @@ class Checker:
         # the answer not), so the cache and the time do not depend on how it was asked
         formulas = sorted({f for f in formulas if f in forms},
                           key=lambda f: (forms[f][2], forms[f][0]))
-        safe = [forms[f][1] for f in formulas if forms[f][0] == "safe"]
-        goals = [forms[f][1] for f in formulas if forms[f][0] == "goal"]
+        safe, goals, last = ([forms[f][1] for f in formulas if forms[f][0] == kind]
+                             for kind in ("safe", "goal", "last"))
         try:
-            game_atoms(safe + goals + live)
+            game_atoms(safe + goals + last + live)
         except Outside:
             return None
         names = sorted({v for f in [*formulas, *live] for v in ir.variables(f)})
@@ -222,7 +222,7 @@ class Checker:
         # the fixed points stop at ``timeout`` and say so; the worker is killed a little
         # later only if they do not
         got = self._cached(key, lambda: self.worker.ask(
-            ("monitor_sat", safe, goals, inv, finite, length, timeout, live),
+            ("monitor_sat", safe, goals, inv, finite, length, timeout, live, last),
             None if timeout is None else 1.2 * timeout + 1))
         if got[0] == "outside":  # no deterministic Büchi automaton: z3's query
             self._cache[key] = "outside"

@@ -29,7 +29,11 @@ class CheckItem:
     response to vary; ``variables``: FRET variable names; ``pt``: the pt formula when it
     monitors ``phi`` (:func:`check.safety_game.pt_monitors_ft_inf`), else None;
     ``trigger_pt``: the pt formula true at the ticks where ``trigger`` is decided true
-    (``!pt(R[false]) | !pt(R[true])``, :mod:`check.monitor_sat`), None when ``pt`` is.
+    (``!pt(R[false]) | !pt(R[true])``, :mod:`check.monitor_sat`), None when ``pt`` is;
+    ``trigger_pt_last``: the same formula for every requirement, read at the last tick of
+    a finite trace only (where it is ``trigger_ft``'s verdict: FRET's pt formula at the
+    last tick is its ft formula, tests/compiler/test_semantics.py), None when the
+    requirement has no response to vary.
     """
 
     index: int
@@ -41,6 +45,7 @@ class CheckItem:
     variables: list[str]
     pt: Node | None = None
     trigger_pt: Node | None = None
+    trigger_pt_last: Node | None = None
 
     @property
     def id(self) -> str:
@@ -62,19 +67,21 @@ def make_item(index: int, compiled) -> CheckItem:
     f = compiled.formalization
     req = compiled.requirement
     period = compiled.entry.tick_period
-    trig = trig_ft = trig_pt = None
+    trig = trig_ft = trig_pt = last = None
     pt = f.pt if pt_monitors_ft_inf(f) else None
     try:
         lo = formalize(_with_response(req, False), period)
         hi = formalize(_with_response(req, True), period)
         trig = ir.or_(ir.not_(lo.ft_inf), ir.not_(hi.ft_inf))
         trig_ft = ir.or_(ir.not_(lo.ft), ir.not_(hi.ft))
-        if pt is not None and pt_monitors_ft_inf(lo) and pt_monitors_ft_inf(hi):
-            trig_pt = ir.or_(ir.not_(lo.pt), ir.not_(hi.pt))
+        if lo.pt is not None and hi.pt is not None:
+            last = ir.or_(ir.not_(lo.pt), ir.not_(hi.pt))
+            if pt is not None and pt_monitors_ft_inf(lo) and pt_monitors_ft_inf(hi):
+                trig_pt = last
     except SemanticsError:  # pragma: no cover - the requirement itself formalized
         pass
     return CheckItem(index, compiled, f.ft_inf, f.ft, trig, trig_ft, list(f.variables),
-                     pt, trig_pt)
+                     pt, trig_pt, last)
 
 
 def atom_variables(node: Node) -> set[str]:
@@ -86,9 +93,19 @@ def monitored_forms(items: Sequence[CheckItem]) -> dict[bool, dict[Node, tuple]]
     """The formulas of the checks that the pt monitors decide (:mod:`check.monitor_sat`),
     on infinite runs (``False``: ft_inf) and on finite traces (``True``: ft): each
     requirement's formula (``("safe", pt, index)``: pt true at every tick), its negation and
-    its trigger (``("goal", pt, index)``: true at some tick)."""
+    its trigger (``("goal", pt, index)``: true at some tick). On finite traces, those of a
+    requirement whose pt formula does not monitor its ft_inf (``eventually``, ``at the last
+    timepoint``), and a trigger with no ``trigger_pt``, are ``("last", pt, index)``: pt true
+    at the last tick (FRET's pt at the last tick is its ft)."""
     out: dict[bool, dict[Node, tuple]] = {False: {}, True: {}}
     for x in items:
+        last = out[True]
+        if x.trigger_ft is not None and x.trigger_pt_last is not None:
+            last.setdefault(x.trigger_ft, ("last", x.trigger_pt_last, x.index))
+        full = x.compiled.formalization.pt
+        if x.pt is None and full is not None:
+            last[x.phi_ft] = ("last", full, x.index)
+            last[ir.not_(x.phi_ft)] = ("last", ir.not_(full), x.index)
         if x.pt is None:
             continue
         for finite, phi, trig in ((False, x.phi, x.trigger), (True, x.phi_ft, x.trigger_ft)):

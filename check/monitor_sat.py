@@ -48,7 +48,7 @@ __all__ = ["decide"]
 
 def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
            finite: bool, length: int | None = None, budget: float | None = None,
-           liveness: Sequence[Node] = ()):
+           liveness: Sequence[Node] = (), last: Sequence[Node] = ()):
     """Is there a run on which every pt formula of ``safe`` holds at every tick and every
     pt formula of ``goals`` holds at some tick (module docstring)?
 
@@ -60,11 +60,15 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
     :class:`check.solver.SpotWorker` gives words). ``liveness``: ft_inf formulas that hold
     too (infinite runs only), each by Spot's Büchi automaton in the product, its
     nondeterminism chosen like a letter (:mod:`check.buchi_game`); ``("outside", why)`` when
-    Spot gives no generalized Büchi automaton. Raises
+    Spot gives no generalized Büchi automaton. ``last``: pt formulas that hold at the last
+    tick (finite only: FRET's pt formula at the last tick is its ft formula). Raises
     :class:`check.safety_game.Outside` for an atom the monitors cannot take.
     """
     deadline = None if budget is None else time.monotonic() + budget
-    marks = [ir.O(g) for g in goals]
+    if last and not finite:
+        raise ValueError("last-tick formulas are read on finite traces only")
+    # the first layer of the search: the goals have held, the last-tick formulas hold
+    marks = [ir.O(g) for g in goals] + list(last)
     if liveness:
         if finite:
             raise ValueError("liveness formulas are read on infinite runs only")

@@ -275,3 +275,30 @@ def test_the_states_of_a_1000_tick_set_are_a_small_bdd():
         assert live != game.b.bddfalse and game.b.bdd_nodecount(live) < 400
     finally:
         game.close()
+
+
+@pytest.mark.parametrize("text, kinds", [
+    ("B1: whenever p the sw shall within 250 ticks satisfy q\n"
+     "B2: upon p the sw shall for 253 ticks satisfy !q\n"
+     "B3: the sw shall eventually satisfy p\n", ["conflict"]),
+    ("B1: whenever p the sw shall within 250 ticks satisfy q\n"
+     "B2: upon p the sw shall for 247 ticks satisfy !q\n"
+     "B3: the sw shall eventually satisfy p\n"
+     "B6: whenever q the sw shall eventually satisfy r\n", []),
+])
+def test_eventually_beside_250_tick_deadlines(tmp_path, text, kinds):
+    """``eventually`` requirements beside 250-tick deadlines: every query decided by the
+    monitors with the Büchi automata in the product (no z3), the finite witnesses by the
+    last-tick pt formulas; each witness replays through fretc audit as its header says."""
+    req = tmp_path / "set.fret"
+    req.write_text(text, encoding="utf-8")
+    r = check_requirements(compile_entries(load_requirements([req])),
+                           witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
+    assert [f.kind for f in r.findings] == kinds, [f.message for f in r.findings]
+    assert r.smt_queries == 0 and r.unknown_queries == 0 and r.monitor_queries > 0
+    assert r.witnesses
+    for w in r.witnesses:
+        promised = read_expected(w["path"])
+        assert promised and audit_verdicts(req, Path(w["path"]), tmp_path) == promised
+    if kinds:
+        assert r.findings[0].details["witness_shows_finding"] is True
