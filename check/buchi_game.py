@@ -96,10 +96,19 @@ class _BuchiGame(_Game):
             raise
         self.relations()
         self.out_set = _varset(self.b, self.m.out_vars)
-        b = self.b
-        self.step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
-        self.step_vars = b.bdd_and(self.nxt_set, self.out_set)
-        self.letter_vars = b.bdd_and(self.step_vars, self.in_set)
+        self._step = None
+        self.step_vars = self.b.bdd_and(self.nxt_set, self.out_set)
+        self.letter_vars = self.b.bdd_and(self.step_vars, self.in_set)
+
+    @property
+    def step(self):
+        """The moves that keep every requirement: ``ok & ctl_ok & trans`` over (state,
+        letter, next state), built when the game first asks (the satisfiability fixed points
+        of :mod:`check.monitor_sat` step through the relation in parts instead)."""
+        if self._step is None:
+            b = self.b
+            self._step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
+        return self._step
 
     def _encode(self, aut, width: int, choice: int) -> None:
         """Add the automaton's state bits (its state number in binary), their next-value
@@ -338,5 +347,5 @@ def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequ
                 out["run"] = _play(game, *cubes, 2 * _longest_bound([*pts, *liveness]) + 4)
         return out
     finally:
-        game.automata = []
+        game.automata, game.acc, game._step = [], [], None
         game.close()
