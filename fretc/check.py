@@ -140,10 +140,11 @@ def _lasso(prefix, cycle) -> str:
               help="Seconds per enumeration of minimal subsets.")
 @click.option("--engine", type=click.Choice(["auto", "spot", "smt", "bdd"]), default="auto",
               show_default=True, help="Satisfiability solver: Spot up to 16 ticks, past them "
-              "fixed points over the requirements' pt monitors (safety requirements) or z3 "
-              "(auto); Spot, z3 or the monitors alone (spot, smt, bdd: z3 for what the "
-              "monitors do not take); realizability: the safety game for safety "
-              "requirements (auto, smt, bdd) or Spot's game only (spot).")
+              "fixed points over the requirements' pt monitors (with Spot's Büchi automata "
+              "of an eventually) or z3 (auto); Spot, z3 or the monitors alone (spot, smt, "
+              "bdd: z3 for what the monitors do not take); realizability: the safety game, "
+              "or the Büchi game with an eventually (auto, smt, bdd), or Spot's game only "
+              "(spot).")
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
