@@ -177,26 +177,46 @@ class _BuchiGame(_Game):
                 break
         # then the acceptance, from those states on (from every state, each outer round
         # would remove one tick's worth of the states that lose later: quadratic)
-        while self.acc and b.bdd_and(self.init, z) != b.bddfalse:
-            z_next = self._primed(z)
-            new = z
-            for acc in self.acc:
-                base = b.bdd_and(acc, z_next)
-                y = b.bddfalse
-                while True:
-                    self._tick(deadline)
-                    self.iterations += 1
-                    y_new = b.bdd_and(z, self.cpre(b.bdd_or(base, self._primed(y))))
-                    if y_new == y:
-                        break
-                    y = y_new
-                new = b.bdd_and(new, y)
-                if b.bdd_and(self.init, new) == b.bddfalse:
-                    return new
-            if new == z:
-                return z
-            z = new
-        return z
+        if b.bdd_and(self.init, z) == b.bddfalse:
+            return z
+
+        def tick():
+            self._tick(deadline)
+            self.iterations += 1
+
+        return recurrence(
+            b, z, self.acc, lambda acc, z: b.bdd_and(acc, self._primed(z)),
+            lambda base, y: self.cpre(b.bdd_or(base, self._primed(y))), tick,
+            lambda w: b.bdd_and(self.init, w) == b.bddfalse)
+
+
+def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
+    """The states of ``z`` (a BDD of states) from which each acceptance set of ``accs``
+    can be met infinitely often: ``nu Z. AND_j mu Y. Z & step(prepare(acc_j, Z), Y)``
+    (Emerson & Lei, LICS 1986; ``z`` itself when ``accs`` is empty). ``prepare(acc, Z)``:
+    what one round of ``acc``'s least fixed point reads of ``Z`` (computed once per round);
+    ``step(part, Y)``: the states that take an ``acc`` edge into ``Z`` or move into ``Y``,
+    one step (the game's controllable or the monitors' existential predecessor);
+    ``tick()``: called each iteration (raises :class:`TimeoutError` past a budget);
+    ``lost(W)``: stop early with ``W`` when true (the first state is out)."""
+    while accs:
+        new = z
+        for acc in accs:
+            part = prepare(acc, z)
+            y = b.bddfalse
+            while True:
+                tick()
+                y_new = b.bdd_and(z, step(part, y))
+                if y_new == y:
+                    break
+                y = y_new
+            new = b.bdd_and(new, y)
+            if lost is not None and lost(new):
+                return new
+        if new == z:
+            return z
+        z = new
+    return z
 
 
 # --------------------------------------------------------------------------- the environment
@@ -238,8 +258,9 @@ MAX_LASSO = 4
 
 def _lasso(game: _BuchiGame, deadline: float | None) -> tuple[tuple | None, str]:
     """The shortest input lasso that defeats every controller (:func:`_defeats`), as
-    ``(prefix letters, cycle letters)`` (letters ``{atom name: bool}``), searched by
-    increasing length up to :data:`MAX_LASSO` ticks within the deadline; or None and why."""
+    ``(prefix, cycle)`` of ``(letter, cube)`` (letters ``{atom name: bool}``, cubes their
+    BDDs), searched by increasing length up to :data:`MAX_LASSO` ticks within the deadline;
+    or None and why."""
     import itertools
 
     w = _Witness(game)
@@ -252,8 +273,8 @@ def _lasso(game: _BuchiGame, deadline: float | None) -> tuple[tuple | None, str]
             for start in range(length):
                 for seq in itertools.product(letters, repeat=length):
                     if _defeats(game, [c for _v, c in seq], start, deadline):
-                        named = [{letter_name(a): v for a, v in zip(w.in_atoms, values)}
-                                 for values, _c in seq]
+                        named = [({letter_name(a): v for a, v in zip(w.in_atoms, values)}, c)
+                                 for values, c in seq]
                         return (named[:start], named[start:]), ""
     except TimeoutError:
         return None, ("no fixed input sequence found within the search budget: the "
@@ -294,17 +315,6 @@ def _play(game: _BuchiGame, prefix: list, cycle: list, length: int) -> list[dict
     return rows
 
 
-def _cube(game: _BuchiGame, letter: dict):
-    """The BDD cube of an input letter ``{atom name: bool}``."""
-    b, out = game.b, game.b.bddtrue
-    for a in game.atoms:
-        name = letter_name(a)
-        if name in letter:
-            v = b.bdd_ithvar(game.m.atom_var[a])
-            out = b.bdd_and(out, v if letter[name] else b.bdd_not(v))
-    return out
-
-
 def _longest_bound(formulas: Sequence[Node]) -> int:
     from compiler import ir
 
@@ -340,11 +350,12 @@ def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequ
                                "winning_region_bdd_nodes": game.b.bdd_nodecount(win),
                                "iterations": game.iterations}
         elif search is not None:
-            out["inputs"], out["note"] = _lasso(game, time.monotonic() + search)
-            out["run"] = []
-            if out["inputs"] is not None:
-                cubes = [[_cube(game, letter) for letter in part] for part in out["inputs"]]
-                out["run"] = _play(game, *cubes, 2 * _longest_bound([*pts, *liveness]) + 4)
+            lasso, out["note"] = _lasso(game, time.monotonic() + search)
+            out["inputs"], out["run"] = None, []
+            if lasso is not None:
+                out["inputs"] = tuple([letter for letter, _c in part] for part in lasso)
+                out["run"] = _play(game, *([c for _l, c in part] for part in lasso),
+                                   2 * _longest_bound([*pts, *liveness]) + 4)
         return out
     finally:
         game.automata, game.acc, game._step = [], [], None

@@ -39,7 +39,7 @@ from collections.abc import Sequence
 from compiler import ir
 from compiler.ir import Node
 
-from .buchi_game import _BuchiGame
+from .buchi_game import _BuchiGame, recurrence
 from .pt_monitor import Outside
 from .safety_game import _Game, _varset, letter_name
 
@@ -139,22 +139,8 @@ class _Search:
             z = nxt
         # from the safe states on (else each outer round removes one tick's worth of the
         # states that die later: measured quadratic in the bound)
-        accs = getattr(self.g, "acc", [])
-        while accs:
-            nxt = z
-            for acc in accs:
-                y = b.bddfalse
-                while True:
-                    self._tick()
-                    y_new = b.bdd_and(z, b.bdd_or(self.pre(z, acc), self.pre(y)))
-                    if y_new == y:
-                        break
-                    y = y_new
-                nxt = b.bdd_and(nxt, y)
-            if nxt == z:
-                break
-            z = nxt
-        return z
+        return recurrence(b, z, getattr(self.g, "acc", []), lambda acc, z: self.pre(z, acc),
+                          lambda base, y: b.bdd_or(base, self.pre(y)), self._tick)
 
     def run(self, finite: bool, length: int | None):
         """The answer of :func:`decide`."""

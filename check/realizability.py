@@ -38,7 +38,7 @@ from .findings import ids as _ids
 from .solver import UNKNOWN
 from .witness import _atoms
 from .numeric_abstraction import NumericAbstraction, simple_comparison
-from .safety_game import Outside, game_atoms
+from .safety_game import Outside, game_atoms, letter_name
 from compiler.printers import mangle, to_smv, to_spot
 
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
@@ -56,10 +56,6 @@ class RealizabilityError(CheckError, ValueError):
 
 def _atom_vars(atom) -> list[str]:
     return [n.name for n in ir.walk(atom) if n.op in ("ap", "var")]
-
-
-def _spot_name(atom) -> str:
-    return mangle(atom.name) if atom.op == "ap" else to_smv(atom)
 
 
 def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequence[str]
@@ -149,18 +145,12 @@ class _Decider:
         """The safety game of ``safe`` (the safety requirements of ``items``)."""
         checker = self.checker
         pts = [x.pt for x in safe]
-        try:
-            game_atoms(pts)
-        except Outside as exc:
-            self._note(f"safety game not used for {', '.join(_ids(safe))}: {exc}")
+        regions = self._regions(pts, "safety game", safe)
+        if regions is None:
             return None
-        numeric = NumericAbstraction.of(pts)
-        env = [v for v in numeric.atoms if v in self.inputs]
-        ctl = [v for v in numeric.atoms if v not in self.inputs]
         budget = self._budget()
         checker.queries += 1
-        ans = checker.worker.ask(("safety_game", pts, self.inputs, numeric.regions(env),
-                                  numeric.regions(ctl),
+        ans = checker.worker.ask(("safety_game", pts, self.inputs, *regions,
                                   None if budget is None else budget / 4), budget)
         if ans == UNKNOWN:
             checker.unknown += 1
@@ -177,6 +167,19 @@ class _Decider:
             out["run"] = ans["run"]
         return out
 
+    def _regions(self, formulas, method: str, items) -> tuple | None:
+        """The numeric regions of the environment's and of the controller's variables in
+        ``formulas`` (the games' ``env_inv``, ``ctl_inv``), or None (noted) when an atom is
+        one the games cannot give a player."""
+        try:
+            game_atoms(formulas)
+        except Outside as exc:
+            self._note(f"{method} not used for {', '.join(_ids(items))}: {exc}")
+            return None
+        numeric = NumericAbstraction.of(formulas)
+        return (numeric.regions([v for v in numeric.atoms if v in self.inputs]),
+                numeric.regions([v for v in numeric.atoms if v not in self.inputs]))
+
     def _budget(self) -> float | None:
         timeout = self.checker.worker.timeout
         return None if timeout is None else timeout * GAME_TIMEOUT_FACTOR
@@ -188,19 +191,13 @@ class _Decider:
         checker, items = self.checker, sorted(safe + rest, key=lambda x: x.index)
         pts, live = [x.pt for x in safe], [x.phi for x in rest]
         names = ", ".join(_ids(items))
-        try:
-            game_atoms(pts + live)
-        except Outside as exc:
-            self._note(f"Büchi game not used for {names}: {exc}")
+        regions = self._regions(pts + live, "Büchi game", items)
+        if regions is None:
             return None
-        numeric = NumericAbstraction.of(pts + live)
-        env = [v for v in numeric.atoms if v in self.inputs]
-        ctl = [v for v in numeric.atoms if v not in self.inputs]
         budget = self._budget()
         lasso = None if not search or budget is None else budget / 4
         checker.queries += 1
-        ans = checker.worker.ask(("buchi_game", pts, live, self.inputs, numeric.regions(env),
-                                  numeric.regions(ctl), budget, lasso),
+        ans = checker.worker.ask(("buchi_game", pts, live, self.inputs, *regions, budget, lasso),
                                  None if budget is None else budget + (lasso or 0))
         if ans == UNKNOWN or "outside" in ans:
             if ans == UNKNOWN:
@@ -233,7 +230,7 @@ class _Decider:
         checker, inputs = self.checker, self.inputs
         phis = [x.phi for x in items]
         atoms = _atoms(phis)
-        outs = sorted({_spot_name(a) for a in atoms
+        outs = sorted({letter_name(a) for a in atoms
                        if not all(v in inputs for v in _atom_vars(a))})
         in_vars = sorted({simple_comparison(a)[0] for a in atoms if a.op == "cmp"
                           and simple_comparison(a) and simple_comparison(a)[0] in inputs})

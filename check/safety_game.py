@@ -114,7 +114,9 @@ def game_atoms(pts: Sequence[Node]) -> list[Node]:
 
 
 def letter_name(atom: Node) -> str:
-    """An atom's key in a letter, as Spot's words and :mod:`check.smt` name it."""
+    """An atom's key in a letter, as Spot's words name it (:mod:`check.solver`) and every
+    solver of ``fretc check`` gives it: the mangled name of a boolean variable, the
+    FRET/SMV text of any other atom."""
     return mangle(atom.name) if atom.op == "ap" else to_smv(atom)
 
 

@@ -37,12 +37,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from compiler import ir
 from compiler.ir import Node
-from compiler.printers import mangle, to_smv
 
 from .numeric_abstraction import simple_comparison
+from .safety_game import letter_name
 from .solver import UNKNOWN
 
-__all__ = ["SmtSolver", "max_bound", "atom_name"]
+__all__ = ["SmtSolver", "max_bound"]
 
 _TEMPORAL = ("X", "F", "G", "U", "V")
 
@@ -55,12 +55,6 @@ def max_bound(formulas: Sequence[Node]) -> int:
             if n.hi is not None and n.op in ("F", "G"):
                 out = max(out, n.hi)
     return out
-
-
-def atom_name(atom: Node) -> str:
-    """The atom's name in a word's letters, as Spot's words name it (:mod:`check.solver`):
-    the mangled name of a boolean variable, the FRET/SMV text of any other atom."""
-    return mangle(atom.name) if atom.op == "ap" else to_smv(atom)
 
 
 def _is_atom(n: Node) -> bool:
@@ -98,7 +92,7 @@ class _Atoms:
         z3 = self.z3
         sc = simple_comparison(atom) if atom.op == "cmp" else None
         if sc is None:
-            return self._fn("b:" + atom_name(atom), z3.BoolSort())(t)
+            return self._fn("b:" + letter_name(atom), z3.BoolSort())(t)
         name, op, c = sc
         v = self._fn("r:" + name, z3.RealSort())(t)
         k = z3.RealVal(f"{c.numerator}/{c.denominator}")
@@ -390,7 +384,7 @@ def _word(z3, model, enc: _Lasso, formulas) -> tuple[list, list]:
         letter = {}
         for a in atoms:
             v = model.eval(enc.series(a)[i], model_completion=True)
-            letter[atom_name(a)] = z3.is_true(v)
+            letter[letter_name(a)] = z3.is_true(v)
         letters.append(letter)
     return letters[:enc.l], letters[enc.l:]
 
