@@ -10,9 +10,9 @@
 2. Times, in one run, a plain ``mcap`` iteration with decoding over the same file (the
    ``mcap`` reader and rosbags' CDR deserializer with types from the embedded schemas: the
    floor for anything that reads the messages) and the audit of the file against 10
-   requirements (``monitors.audit.audit_log``: read, sample every 100 ms, monitor, evidence),
+   requirements (``audit.audit_log``: read, sample every 100 ms, monitor, evidence),
    and prints both CPU times and their ratio (aim: <= 0.5x; the audit decodes only the
-   fields its bindings read, a chunk's messages at once, :mod:`monitors.sources.columnar`);
+   fields its bindings read, a chunk's messages at once, :mod:`logs.columnar`);
    then the same two as commands in fresh processes (start-up included; bytecode cached as
    in an installed fretc, after one untimed run of each). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
@@ -49,7 +49,7 @@ B9: after too_close the safety_system shall eventually satisfy stop_requested
 B10: the scout_mini shall always satisfy min_range > 0.05
 """
 
-# same layout as SYN_BINDINGS in tests/monitors/test_report.py (kept: a bindings file is data; the
+# same layout as SYN_BINDINGS in tests/reports/test_report.py (kept: a bindings file is data; the
 # bench binds the robot's topics)
 BINDINGS = """[tick]
 period = "100 ms"
@@ -109,8 +109,8 @@ def plain_iteration(path: Path) -> tuple[float, int]:
 
 
 def audit_once(path: Path, fret: Path):
-    from monitors.audit import AuditConfig, audit_log, load_plan
-    from monitors.sources import decoding
+    from audit import AuditConfig, audit_log, load_plan
+    from logs import decoding
 
     decoding._build_typestore.cache_clear()  # each run builds the log's types, as a new process
 
@@ -173,7 +173,7 @@ def main() -> None:
     if args.child_heap:
         import tracemalloc
 
-        from monitors.audit import AuditConfig, audit_log, load_plan
+        from audit import AuditConfig, audit_log, load_plan
 
         plan = load_plan(AuditConfig(requirements=(args.child_heap[1],)))
         tracemalloc.start()

@@ -76,9 +76,9 @@ def main() -> None:
     args = ap.parse_args()
 
     from bench_audit import ensure_requirements, plain_iteration
-    from monitors.audit import fleet
-    from monitors.audit import AuditConfig, audit_logs, load_plan
-    from monitors.report.model import audit_json
+    from audit import fleet
+    from audit import AuditConfig, audit_logs, load_plan
+    from audit.verdict import audit_json
 
     workdir = Path(args.workdir)
     workdir.mkdir(parents=True, exist_ok=True)

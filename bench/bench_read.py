@@ -6,7 +6,7 @@ times
 
 * plain:  ``mcap.reader.make_reader(f).iter_messages()`` + rosbags ``deserialize_cdr`` of
   every message (types built from the file's schemas) — the floor for any Python reader;
-* sample: ``monitors.signals.sample(open_log(path), bindings)`` with 6 bindings on a 100 ms
+* sample: ``signals.sample(open_log(path), bindings)`` with 6 bindings on a 100 ms
   tick (CRC checks, decoding, sample-and-hold, evaluation);
 
 and prints both times and their ratio, plus each run's peak resident memory (each measured
@@ -117,7 +117,7 @@ def run_plain(path: str) -> tuple[float, int, int]:
 
     t = time.perf_counter()
     n = 0
-    # same decode loop as _decode_mcap in tests/monitors/test_audit.py (kept: the bench times it,
+    # same decode loop as _decode_mcap in tests/audit/test_audit.py (kept: the bench times it,
     # the test keeps the messages)
     stores = {}
     with open(path, "rb") as f:
@@ -132,9 +132,9 @@ def run_plain(path: str) -> tuple[float, int, int]:
 
 
 def run_sample(path: str) -> tuple[float, int, int]:
-    from monitors.bindings import parse_bindings
-    from monitors.signals import sample
-    from monitors.sources import open_log
+    from signals.bindings import parse_bindings
+    from signals import sample
+    from logs import open_log
 
     t = time.perf_counter()
     s = sample(open_log(path), parse_bindings(BINDINGS, "bench"))
@@ -146,9 +146,9 @@ def run_sample(path: str) -> tuple[float, int, int]:
 
 
 def run_arrays(path: str) -> tuple[float, int, int]:
-    from monitors.bindings import parse_bindings
-    from monitors.signals import sample_arrays
-    from monitors.sources import open_log
+    from signals.bindings import parse_bindings
+    from signals import sample_arrays
+    from logs import open_log
 
     t = time.perf_counter()
     times, _cols = sample_arrays(open_log(path), parse_bindings(BINDINGS, "bench"))
@@ -156,9 +156,9 @@ def run_arrays(path: str) -> tuple[float, int, int]:
 
 
 def run_traced(path: str) -> tuple[float, int, int]:
-    from monitors.bindings import parse_bindings
-    from monitors.signals import sample
-    from monitors.sources import open_log
+    from signals.bindings import parse_bindings
+    from signals import sample
+    from logs import open_log
 
     tracemalloc.start()
     n = sum(1 for _ in sample(open_log(path), parse_bindings(BINDINGS, "bench")))

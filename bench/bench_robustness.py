@@ -1,10 +1,10 @@
-"""Benchmark of the robustness behind every verdict (:mod:`monitors.engines.robustness`):
+"""Benchmark of the robustness behind every verdict (:mod:`monitors.robustness`):
 what it adds to ``fretc audit``.
 
     python bench/bench_robustness.py            # the shipped traces/, 3 repetitions
 
 In one run: the CPU time of auditing every log of ``traces/`` against ``requirements/``
-(``monitors.audit.audit_log``) as shipped, and with the judge's robustness switched off
+(``audit.audit_log``) as shipped, and with the judge's robustness switched off
 (patched to nothing, the audit as before robustness), and their ratio; then the CPU time of
 the command a user runs (``fretc audit requirements traces``, start-up included, a fresh
 process).
@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _audit_cpu(plan, logs, reps: int) -> float:
-    from monitors.audit import audit_log
+    from audit import audit_log
     best = float("inf")
     for _ in range(reps):
         t0 = time.process_time()
@@ -40,8 +40,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--reps", type=int, default=3)
     args = ap.parse_args()
-    from monitors.audit import AuditConfig, load_plan
-    from monitors.engines import judge as judge_mod
+    from audit import AuditConfig, load_plan
+    from monitors import judge as judge_mod
 
     plan = load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
     logs = sorted((ROOT / "traces").glob("*.mcap"))

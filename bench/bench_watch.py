@@ -41,7 +41,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _serve(trace: str, rate: float, topics, conn) -> None:
-    from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap
+    from live.serve import FoxgloveServer, advertise_mcap, replay_mcap
 
     server = FoxgloveServer(port=0)
     advertise_mcap(trace, server, topics=set(topics))
@@ -65,7 +65,7 @@ def _cpu() -> float:
 
 
 def watch_once(plan, trace: str, rate: float):
-    from monitors.live.watch import Watch, WatchOptions
+    from live.watch import Watch, WatchOptions
 
     ctx = mp.get_context("spawn")
     parent, child = ctx.Pipe()
@@ -119,7 +119,7 @@ def main() -> None:
     ap.add_argument("--trace", default=str(ROOT / "traces" / "nominal.mcap"))
     ap.add_argument("--rates", type=float, nargs="+", default=[10, 20, 50, 75, 100, 150])
     args = ap.parse_args()
-    from monitors.audit import AuditConfig, audit_log, load_plan
+    from audit import AuditConfig, audit_log, load_plan
 
     plan = load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
     c0 = _cpu()

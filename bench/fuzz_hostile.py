@@ -23,7 +23,7 @@ same seed gives the same inputs. Per class:
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
-``tests/monitors/test_damaged_logs.py`` against the intact log's verdicts and LTL3
+``tests/audit/test_damaged_logs.py`` against the intact log's verdicts and LTL3
 verdicts), or a forged schema read as if true. Printed with the class, seed and input
 number; the summary line gives inputs, tracebacks, unsupported verdicts and the peak RSS
 (``resource.getrusage``). Exit 1 when anything failed.
@@ -191,7 +191,7 @@ class Audits:
     keep the intact logs' audits."""
 
     def __init__(self, tmp: Path) -> None:
-        from monitors.audit import AuditConfig, load_plan
+        from audit import AuditConfig, load_plan
 
         (tmp / "f.fret").write_text(FRET, encoding="utf-8")
         (tmp / "f.bindings.toml").write_text(BINDINGS, encoding="utf-8")
@@ -204,13 +204,13 @@ class Audits:
     def traces(self):
         """The plan of the shipped requirements (for the shipped traces), loaded once."""
         if self._traces is None:
-            from monitors.audit import AuditConfig, load_plan
+            from audit import AuditConfig, load_plan
 
             self._traces = load_plan(AuditConfig((str(ROOT / "requirements"),)))
         return self._traces
 
     def audit(self, plan, data: bytes, name: str = "x.mcap"):
-        from monitors.audit import audit_log
+        from audit import audit_log
 
         path = self.tmp / name
         path.write_bytes(data)
@@ -296,7 +296,7 @@ def run_binding(rng: random.Random) -> list[str]:
     """Parse one hostile binding file: an input error or a binding set (an exception that is
     not an input error propagates)."""
     from common.errors import FretcError
-    from monitors.bindings.files import parse_bindings
+    from signals.bindings.files import parse_bindings
 
     try:
         parse_bindings(hostile_binding(rng), "b.toml")
@@ -384,9 +384,9 @@ def hostile_frames(rng: random.Random, foxglove: bool) -> list:
 def run_frames(rng: random.Random) -> list[str]:
     """Hand hostile frames to a client's session and its events to a watch source (an
     exception propagates)."""
-    from monitors.live.client import FoxgloveClient
-    from monitors.live.rosbridge import RosbridgeClient
-    from monitors.live.source import WatchSource
+    from live.client import FoxgloveClient
+    from live.rosbridge import RosbridgeClient
+    from live.source import WatchSource
 
     foxglove = rng.random() < 0.6
     frames = hostile_frames(rng, foxglove)
@@ -396,7 +396,7 @@ def run_frames(rng: random.Random) -> list[str]:
     else:
         client = RosbridgeClient("rosbridge://127.0.0.1:1", lambda t: t == "/a")
         state = {"clock": 0, "types": {"/a": "std_msgs/msg/Float64"}}
-        client._put("advertise", 0, [__import__("monitors.live.rosbridge", fromlist=["x"])
+        client._put("advertise", 0, [__import__("live.rosbridge", fromlist=["x"])
                                      .advertisement(1, "/a", "std_msgs/msg/Float64")])
         asyncio.run(client._read(FakeSocket(frames), {}, state))
     src = WatchSource("ws://fuzz", client)

@@ -24,7 +24,7 @@ The verdicts written in the header (``# expected: R1=satisfied, R2=violated``) a
 intended ones but those FRET's interval semantics gives on the written numbers, for every
 requirement of the checked files; when they differ from the intended ones (an uninterpreted
 atom made the abstraction spurious) the finding says so. That semantics is the audit's own
-evidence engine (:func:`monitors.engines.interval.verdict_of`), a layer above this one
+evidence engine (:func:`monitors.interval.verdict_of`), a layer above this one
 (ARCHITECTURE.md: layers import downwards only), so the caller passes it in as a
 :data:`Judge` (``fretc check`` does).
 """
@@ -49,7 +49,7 @@ __all__ = ["Judge", "finite_trace", "write_witnesses", "expected_verdicts", "rea
 #: FRET's verdict of one requirement on a finite trace: ``judge(requirement, columns, n,
 #: duration_ticks)`` -> ``"satisfied"``, ``"vacuous"``, ``"violated"`` or ``"unknown"``
 #: (``columns``: FRET variable -> numpy array of ``n`` values; ``duration_ticks`` as
-#: ``Formalization.ticks``). The audit's is :func:`monitors.engines.interval.verdict_of`.
+#: ``Formalization.ticks``). The audit's is :func:`monitors.interval.verdict_of`.
 Judge = Callable[[object, Mapping[str, np.ndarray], int, "int | None"], str]
 
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")

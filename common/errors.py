@@ -18,9 +18,9 @@ each stage has its own subclass (the model: Lark's one exception tree)::
     │   ├── LogError ── CsvError        a log that cannot be read
     │   ├── BindingError                a signal binding
     │   ├── SignalError                 a binding that cannot be evaluated on a log
-    │   ├── FieldPathError              a field path the schema lacks (monitors/sources/schema.py)
-    │   └── AuditInputError ── RayUnavailable   (monitors/audit/config.py, monitors/audit/fleet.py)
-    └── ReportError                     fretc report's inputs and output (monitors/report/write.py)
+    │   ├── FieldPathError              a field path the schema lacks (logs/schema.py)
+    │   └── AuditInputError ── RayUnavailable   (audit/config.py, audit/fleet.py)
+    └── ReportError                     fretc report's inputs and output (reports/write.py)
 
 Internal errors are not input errors and stay outside the tree (a generated monitor that is
 not valid: ``compiler.codegen.InvalidMonitorError``, exit code 4), as do the signals by which

@@ -29,7 +29,7 @@ _CMP = {"=": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le
         ">": operator.gt, ">=": operator.ge}
 
 
-# same cases as monitors.engines.arrays.arith (kept: scalars here, numpy columns with NaN masks
+# same cases as monitors.arrays.arith (kept: scalars here, numpy columns with NaN masks
 # there)
 def _arith(op: str, a: float, b: float) -> float:
     try:

@@ -9,7 +9,7 @@
 LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosbag2 folders,
 ``.csv`` traces, or folders searched for them. Binding files default to every
 ``*.bindings.toml`` beside the requirement files or folders. Exit status
-(:data:`monitors.report.model.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
+(:data:`audit.verdict.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
 complete logs, 1 a requirement is violated, 2 usage or input errors (including a
 requirement that could not be audited on some log), 3 no violation but a log is partial or
 had data problems (``--allow-partial``: 0).
@@ -66,11 +66,11 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     # lazy: the audit engine (numpy, mcap, rosbags, rich) only when the command runs
     from rich.console import Console
 
-    from monitors.audit import AuditInputError, find_logs, load_plan
-    from monitors.report.junit import junit_xml
-    from monitors.report.terminal import AuditProgress, escape, print_summary
-    from monitors.audit.fleet import expand_log_args
-    from monitors.report.model import audit_json, exit_code
+    from audit import AuditInputError, find_logs, load_plan
+    from reports.junit import junit_xml
+    from reports.terminal import AuditProgress, escape, print_summary
+    from audit.fleet import expand_log_args
+    from audit.verdict import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,

@@ -174,7 +174,7 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
     compiled = compile_entries(entries)
     judge = None
     if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
-        from monitors.engines.interval import verdict_of
+        from monitors.interval import verdict_of
         judge = verdict_of
     try:
         result = check_requirements(compiled, timeout=timeout, mus_budget=mus_budget,

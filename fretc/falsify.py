@@ -1,6 +1,6 @@
 """``fretc falsify``: search the simulator's scenario parameters for runs that violate a
 requirement (click command; the search: :mod:`sim.falsify`, its report:
-:mod:`sim.falsify_report`, the space files: :mod:`sim.space`).
+:mod:`reports.falsify`, the space files: :mod:`sim.space`).
 
 ::
 
@@ -67,10 +67,10 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
       1  a run violates a target requirement
       2  usage or input errors"""
     # lazy: the simulator, the audit engine and cma only when the command runs
-    from monitors.audit import AuditConfig, AuditInputError, load_plan
-    from monitors.audit.fleet import RayUnavailable
+    from audit import AuditConfig, AuditInputError, load_plan
+    from audit.fleet import RayUnavailable
     from sim.falsify import falsify
-    from sim.falsify_report import write_search
+    from reports.falsify import write_search
     from sim.space import load_space
 
     from .options import audit_config

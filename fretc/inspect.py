@@ -10,7 +10,7 @@ notation), for booleans how often each value occurs, for text fields their disti
 (up to :data:`MAX_VALUES`) and for fields with named constants in their message definition
 (``power_supply_status``: ``POWER_SUPPLY_STATUS_CHARGING = 1``, DiagnosticStatus ``level``:
 ``OK`` .. ``STALE``) those constants. Field types come from the schemas embedded in the log
-(:mod:`monitors.sources.schema`); values from one read of every message.
+(:mod:`logs.schema`); values from one read of every message.
 """
 
 from __future__ import annotations
@@ -145,9 +145,9 @@ def inspect_log(path: str) -> dict:
         common.problems.FretcInputError: the file is not a readable log.
     """
     # lazy: the log readers (mcap, rosbags) only when the command runs
-    from monitors.bindings.paths import topic_text
-    from monitors.sources.schema import log_schemas
-    from monitors.sources import open_log
+    from signals.bindings.paths import topic_text
+    from logs.schema import log_schemas
+    from logs import open_log
 
     source = open_log(path)
     types = source.topics()

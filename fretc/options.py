@@ -2,8 +2,8 @@
 
 ``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
 ``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
-:func:`audit_config` turns their values into a :class:`monitors.audit.AuditConfig` and
-:func:`run_audits` runs the audit locally or on Ray (:mod:`monitors.audit.fleet`) as the options
+:func:`audit_config` turns their values into a :class:`audit.AuditConfig` and
+:func:`run_audits` runs the audit locally or on Ray (:mod:`audit.fleet`) as the options
 say. Only click is imported at module level, so the command starts fast; the engine loads
 on first use.
 """
@@ -71,9 +71,9 @@ def audit_input_options(f, jobs: bool = True):
 
 
 def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window):
-    """The :class:`monitors.audit.AuditConfig` of :func:`audit_input_options`' values
+    """The :class:`audit.AuditConfig` of :func:`audit_input_options`' values
     (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
-    from monitors.audit import AuditConfig  # lazy: numpy and the engine only when run
+    from audit import AuditConfig  # lazy: numpy and the engine only when run
 
     if not requirements:
         if not os.path.isdir("requirements"):
@@ -118,7 +118,7 @@ def _check_address(ctx, param, value):
     import importlib.util  # lazy: only for --ray (start-up time)
 
     if importlib.util.find_spec("ray") is None:
-        from monitors.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
+        from audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
 
         raise click.UsageError(RAY_HINT, ctx=ctx)
     ok = (value in ("local", "auto") or value.startswith("ray://")
@@ -133,13 +133,13 @@ def _check_address(ctx, param, value):
 def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
                ctx: click.Context | None = None) -> list[Any]:
     """The commands' audit of ``paths``: on Ray when ``--ray`` was given
-    (:func:`ray_options`), else :func:`monitors.audit.audit_logs` with ``jobs`` processes.
+    (:func:`ray_options`), else :func:`audit.audit_logs` with ``jobs`` processes.
 
     Raises :class:`FleetError` (exit code 2; 130 when interrupted) when Ray cannot be
     started or reached."""
     # lazy: the audit engine (numpy, mcap, rosbags) is loaded only when a command runs
-    from monitors.audit import audit_logs
-    from monitors.audit.fleet import RayUnavailable, audit_logs_ray
+    from audit import audit_logs
+    from audit.fleet import RayUnavailable, audit_logs_ray
 
     opts = (ctx.meta.get(META) if ctx is not None else None) or {}
     if "ray" not in opts:

@@ -1,5 +1,5 @@
 """``fretc report``: the traceability report (HTML + Markdown) of an audit, run here on LOGS
-or read from ``--from-json FILE`` (the report itself: :mod:`monitors.report`).
+or read from ``--from-json FILE`` (the report itself: :mod:`reports`).
 
 ::
 
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import click
 
-from monitors.report.write import ReportError, load_audit_json, write_report
+from reports.write import ReportError, load_audit_json, write_report
 
 from .options import audit_config, audit_input_options, ray_options, run_audits
 
@@ -67,9 +67,9 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         json_dir = str(Path(from_json).resolve().parent)
     else:
         # lazy: the audit engine only when the logs are audited here
-        from monitors.audit import AuditInputError, find_logs, load_plan
-        from monitors.audit.fleet import expand_log_args
-        from monitors.report.model import audit_json
+        from audit import AuditInputError, find_logs, load_plan
+        from audit.fleet import expand_log_args
+        from audit.verdict import audit_json
 
         json_dir = None
         config = audit_config(requirements, bindings, inline, tick_period, tick_topic,

@@ -12,7 +12,7 @@ running robot over the Foxglove WebSocket protocol or rosbridge, and a server to
 The watch ends with the run: the server's orderly close, every bound topic unadvertised,
 ``--duration``, ``--until-idle`` or Ctrl-C; the final verdicts are then decided as ``fretc
 audit`` decides them at the end of a log, and the exit status is the audit's
-(:data:`monitors.report.model.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
+(:data:`audit.verdict.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
 run, 1 a requirement violated, 2 usage or input errors (a requirement that could not be
 watched, no connection), 3 no violation but the run was incomplete (a connection gap, data
 problems; 0 with ``--allow-partial``).
@@ -38,10 +38,10 @@ __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
 
 def live_table(w):
-    """The live table of a :class:`monitors.live.watch.Watch`: per requirement its own
+    """The live table of a :class:`live.watch.Watch`: per requirement its own
     clock's ticks and the time of the last one, the pt verdict now, the LTL3 status and when
     it became definite, obligations violated and pending so far
-    (:func:`monitors.live.watch.split_pending`), the last trigger (times in s from the
+    (:func:`live.watch.split_pending`), the last trigger (times in s from the
     first tick)."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Group
@@ -171,9 +171,9 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     from rich.console import Console
     from rich.markup import escape
 
-    from monitors.audit import AuditInputError, load_plan
-    from monitors.live.client import MissingDependency
-    from monitors.live.watch import Watch, WatchOptions
+    from audit import AuditInputError, load_plan
+    from live.client import MissingDependency
+    from live.watch import Watch, WatchOptions
 
     if not url.startswith(URL_SCHEMES):
         raise click.BadParameter(f"{url!r}: expected ws://host:port or rosbridge://host:port",
@@ -228,12 +228,12 @@ def _run_watch(w, err, no_live):
 
 
 def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) -> int:
-    """Print the summary, write --json; the exit code (:func:`monitors.report.model.exit_code`,
+    """Print the summary, write --json; the exit code (:func:`audit.verdict.exit_code`,
     as ``fretc audit``)."""
     from rich.console import Console
 
-    from monitors.report.model import audit_json, exit_code
-    from monitors.report.terminal import print_summary
+    from audit.verdict import audit_json, exit_code
+    from reports.terminal import print_summary
 
     out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
     print_summary(out, [la], plan, allow_partial=allow_partial, input_errors=input_errors)
@@ -267,7 +267,7 @@ def replay_cmd(log, serve, rate, host, port, wait, loop):
     times real time, with its recorded schemas, encodings and log times; then close (a
     `fretc watch` of it ends there)."""
     # lazy: foxglove-sdk (the watch extra) only when the command runs
-    from monitors.live.serve import FoxgloveServer, advertise_mcap, replay_mcap
+    from live.serve import FoxgloveServer, advertise_mcap, replay_mcap
 
     try:
         server = FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")

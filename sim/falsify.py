@@ -2,9 +2,9 @@
 that violate a requirement (``fretc falsify``), as S-TaLiRo and Breach do for STL.
 
 Each run simulates the base scenario with one point of the space (:func:`sim.space.apply`),
-records it as MCAP and audits it with the requirements (:func:`monitors.audit.audit_log`, the
+records it as MCAP and audits it with the requirements (:func:`audit.audit_log`, the
 same engine as ``fretc audit``). The search minimizes the run's *objective*, the least
-robustness (:mod:`monitors.engines.robustness`) over the target requirements (all, or those
+robustness (:mod:`monitors.robustness`) over the target requirements (all, or those
 given), with CMA-ES (the ``cma`` library; Hansen's covariance matrix adaptation) over the unit
 cube mapped onto the parameters' ranges. When CMA-ES stops before the budget (converged, or a
 flat objective) it restarts from the centre with the next seed. A run *falsifies* when a target
@@ -51,7 +51,7 @@ class Run:
         objective: the least robustness over the targets (None when none has one).
         mcap: the MCAP file written for the run (relative to the output folder), or None
             when the run was not kept (every run violating a target requirement is kept).
-        audit: the run's :class:`monitors.report.model.LogAudit`.
+        audit: the run's :class:`audit.verdict.LogAudit`.
     """
 
     index: int
@@ -129,7 +129,7 @@ class _Evaluator:
         self.ray_address = ray_address
         self.started = False
         if ray_address is not None:
-            from monitors.audit.fleet import connect  # lazy: Ray only with --ray
+            from audit.fleet import connect  # lazy: Ray only with --ray
             self.started = connect(ray_address)
 
     def path(self, index: int) -> str:
@@ -139,7 +139,7 @@ class _Evaluator:
               first: bool) -> list[Run]:
         if self.ray_address is not None:
             return self._batch_ray(start, points, targets)
-        from monitors.audit import audit_log
+        from audit import audit_log
         runs = []
         for k, p in enumerate(points):
             path = simulate(self.space, p, self.path(start + k))
@@ -151,7 +151,7 @@ class _Evaluator:
     def _batch_ray(self, start: int, points: list[dict], targets: list[str]) -> list[Run]:
         import ray  # lazy: Ray only with --ray
 
-        from monitors.audit.fleet import audit_logs_ray
+        from audit.fleet import audit_logs_ray
         task = ray.remote(simulate).options(num_cpus=1)
         paths = ray.get([task.remote(self.space, p, self.path(start + k))
                          for k, p in enumerate(points)])
@@ -172,7 +172,7 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
     """Search ``space`` for runs violating the requirements of ``plan``.
 
     Args:
-        plan: the audit plan (:func:`monitors.audit.load_plan`).
+        plan: the audit plan (:func:`audit.load_plan`).
         space: from :func:`sim.space.load_space`.
         budget: the number of simulator runs at most (``>= 1``).
         seed: CMA-ES's seed (module docstring).
@@ -184,7 +184,7 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
         progress: called with each run once it is audited.
 
     Raises:
-        monitors.audit.fleet.RayUnavailable: ``ray_address`` given and Ray cannot start.
+        audit.fleet.RayUnavailable: ``ray_address`` given and Ray cannot start.
         OSError: the output folder cannot be written.
     """
     import cma  # lazy: only fretc falsify needs it

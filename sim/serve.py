@@ -15,7 +15,7 @@ import threading
 import time
 from typing import Iterable
 
-from monitors.live.serve import FoxgloveServer, Pacer
+from live.serve import FoxgloveServer, Pacer
 
 from .recording import TOPICS, MessageFactory, schema_name
 from .scenarios import get_scenario
@@ -27,7 +27,7 @@ __all__ = ["ServeRecorder", "serve"]
 class ServeRecorder:
     """The recorder interface of :class:`sim.recording.McapRecorder` (``factory``,
     ``counts``, ``write``, ``finish``), publishing on a
-    :class:`monitors.live.serve.FoxgloveServer` instead of writing a file.
+    :class:`live.serve.FoxgloveServer` instead of writing a file.
 
     Raises ValueError for an unknown topic or a log time going backwards (as the MCAP
     recorder).

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("common", "fretish", "compiler", "check", "monitors", "fretc", "sim")
+from test_architecture import LIBRARY as PACKAGES  # noqa: E402  every source package
 
 
 def _modules() -> dict[str, Path]:
@@ -42,9 +42,14 @@ def _imports(name: str, path: Path, known) -> set[str]:
     return {m for m in out if m in known and m != name}
 
 
-def test_no_import_cycles():
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the project modules it imports (anywhere in it), for every source module."""
     mods = _modules()
-    graph = {m: _imports(m, p, mods) for m, p in mods.items()}
+    return {m: _imports(m, p, mods) for m, p in mods.items()}
+
+
+def test_no_import_cycles():
+    graph = import_graph()
     cycles = []
     for start in graph:  # a cycle through start: a path back to it
         stack, seen = [(start, [start])], set()
@@ -57,43 +62,6 @@ def test_no_import_cycles():
                     seen.add(nxt)
                     stack.append((nxt, path + [nxt]))
     assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles)
-
-
-#: ARCHITECTURE.md: layers import downwards only,
-#: fretc/ -> monitors/ -> check/ -> compiler/ -> fretish/ -> common/.
-LAYERS = {"common": 0, "fretish": 1, "compiler": 2, "check": 3, "monitors": 4, "fretc": 5}
-
-
-def upward_imports(graph: dict[str, set[str]]) -> list[str]:
-    """``a -> b`` for every import (at any depth of the module, lazy ones included) from a
-    lower layer of :data:`LAYERS` to a higher one."""
-    out = []
-    for mod, targets in sorted(graph.items()):
-        rank = LAYERS.get(mod.split(".")[0])
-        if rank is None:
-            continue
-        for t in sorted(targets):
-            if LAYERS.get(t.split(".")[0], -1) > rank:
-                out.append(f"{mod} -> {t}")
-    return out
-
-
-def test_layers_import_downwards_only():
-    mods = _modules()
-    graph = {m: _imports(m, p, mods) for m, p in mods.items()}
-    assert upward_imports(graph) == []
-
-
-def test_upward_imports_are_found():
-    # the check itself: a lazy import inside a function of compiler/ is an upward import
-    src = "def f():\n    from monitors.engines.interval import verdict_of\n"
-    known = {"compiler.x", "monitors.engines.interval"}
-    import tempfile
-    with tempfile.TemporaryDirectory() as d:
-        p = Path(d) / "x.py"
-        p.write_text(src)
-        graph = {"compiler.x": _imports("compiler.x", p, known)}
-    assert upward_imports(graph) == ["compiler.x -> monitors.engines.interval"]
 
 
 def test_emit_ltl_starts_without_heavy_libraries(tmp_path):

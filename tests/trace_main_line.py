@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("common", "fretish", "compiler", "check", "monitors", "fretc")
+PACKAGES = ("common", "fretish", "compiler", "check", "logs", "signals", "monitors", "audit",
+            "live", "sim", "reports", "fretc")
 #: attributes through which an object is found to be one of the requirement's
 _OWNER_ATTRS = ("entry", "compiled", "requirement")
 _CONTAINERS = (list, tuple, set, frozenset)

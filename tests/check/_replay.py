@@ -29,7 +29,7 @@ def replayed_unrealizable(req: Path, inputs: list[str], method: str, tmp_path: P
     from check.analysis import check_requirements
     from compiler.build import compile_entries
     from fretish.files import load_requirements
-    from monitors.engines.interval import verdict_of
+    from monitors.interval import verdict_of
 
     r = check_requirements(compile_entries(load_requirements([req])), inputs=inputs,
                            witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)

@@ -191,7 +191,7 @@ def test_cli_json_and_exit_codes(tmp_path):
 def test_witnesses_replay_through_the_audit(tmp_path, text):
     req = _write(tmp_path, "set.fret", text)
     wdir = tmp_path / "w"
-    from monitors.engines.interval import verdict_of
+    from monitors.interval import verdict_of
 
     r = _check(req, witness_dir=str(wdir), witness_judge=verdict_of)
     assert r.witnesses, "every finding here (or the consistent set) has a witness"

@@ -34,7 +34,7 @@ from compiler.evaluate import series
 from compiler.semantics import formalize
 from fretish import parse
 from fretish.files import load_requirements
-from monitors.engines.interval import verdict_of
+from monitors.interval import verdict_of
 from tests.check._replay import audit_verdicts
 from tests.check.test_smt import _FORMULA, _SET, _file, _spot_sat, assert_same_answers
 from tests.lasso import lasso_at

@@ -196,7 +196,7 @@ def test_consistent_sets_with_deadlines_are_decided(tmp_path, n):
 def test_witnesses_past_spot_bounds_replay_through_the_audit(tmp_path, text):
     """Findings at bounds z3 decides come with witness CSVs; fretc audit gives the verdicts
     their headers promise, and they show the finding."""
-    from monitors.engines.interval import verdict_of
+    from monitors.interval import verdict_of
 
     req = tmp_path / "set.fret"
     req.write_text(text, encoding="utf-8")

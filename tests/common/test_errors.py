@@ -15,11 +15,11 @@ from common.errors import (CheckError, FretcError, FretishError, FretishFileErro
     FretishSyntaxError, InputError, Where, error_text)
 from fretish.files import load_requirements
 from fretish.limits import LimitError
-from monitors.audit import AuditInputError
-from monitors.audit.fleet import RayUnavailable
+from audit import AuditInputError
+from audit.fleet import RayUnavailable
 from common.problems import BindingError, CsvError, FretcInputError, LogError, SignalError
-from monitors.report.write import ReportError
-from monitors.sources.schema import FieldPathError
+from reports.write import ReportError
+from logs.schema import FieldPathError
 
 
 @pytest.mark.parametrize("cls, stage", [

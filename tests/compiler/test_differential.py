@@ -70,12 +70,12 @@ def test_oracle_requirement_truth():
     "in m the sw shall always satisfy occurred(2, 3, p) | q",
 ])
 def test_interval_evidence_follows_the_formulas(sentence):
-    """monitors/engines/interval.py's direct interval semantics gives the ft verdict for bounded
+    """monitors/interval.py's direct interval semantics gives the ft verdict for bounded
     occurred/persisted and for functions inside scope conditions (endpoint-free)."""
     from compiler.evaluate import ft_at
     from compiler.semantics import formalize
     from fretish import parse
-    from monitors.engines.interval import evaluate_requirement
+    from monitors.interval import evaluate_requirement
     from _monitor_helpers import random_trace, samples
 
     req = parse(sentence)

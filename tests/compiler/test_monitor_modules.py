@@ -194,7 +194,7 @@ def test_each_requirement_of_a_shared_shape_has_its_own_verdict(rows, rnd):
 def test_a_requirements_monitor_source_is_found_by_its_class_name():
     """What the report shows as a requirement's generated monitor: its ``_monitor`` call
     (id, text, formulas, variables) and the shape entry with its step code."""
-    from monitors.report.trace import _class_source
+    from reports.trace import _class_source
 
     entries = [RequirementEntry(id=rid, text=text, source="shaped.fret", line=i + 1,
                                 column=1, requirement=parse(text))

@@ -57,9 +57,10 @@ def test_every_path_inspect_prints_binds_as_printed(tmp_path):
     path parses as a binding field and resolves in the log's schema; text fields list their
     values, enum fields their constants, numbers are in plain notation."""
     import _robot_logs as rl
-    from monitors.bindings.expression import ExprLocation, Field, parse_expression
-    from monitors.sources import open_log
-    from monitors.sources.schema import log_schemas
+    from signals.bindings.expression import ExprLocation, Field
+    from signals.bindings.parse import parse_expression
+    from logs import open_log
+    from logs.schema import log_schemas
     log = rl.write_robot_log(tmp_path)
     res = CliRunner().invoke(main, ["inspect", str(log.path), "--json"])
     assert res.exit_code == 0, res.output

@@ -1,4 +1,4 @@
-"""monitors.engines: the pieces the split made public. The stepwise engine's replay equals
+"""monitors: the pieces the split made public. The stepwise engine's replay equals
 stepping the generated monitor by hand; the interval engine's trigger points follow FRET's
 definition; the shared array conventions equal Python's scalar rules (compiler.evaluate, the
 reference evaluator); the log's clock summary takes each figure from the right verdicts."""
@@ -14,9 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from compiler import evaluate, ir
-from monitors.audit.log import summarize_clocks
-from monitors.engines import arrays, stepwise
-from monitors.engines.interval import trigger_points
+from audit.log import summarize_clocks
+from monitors import arrays, stepwise
+from monitors.interval import trigger_points
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 

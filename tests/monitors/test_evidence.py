@@ -1,4 +1,4 @@
-"""monitors.engines.interval: FRET's interval semantics computed directly is a second opinion that
+"""monitors.interval: FRET's interval semantics computed directly is a second opinion that
 agrees with the generated monitors' finish() on random traces for all 288 template keys and
 with every FRET interval verdict of fret_trace_verdicts.jsonl; its evidence (intervals,
 triggers, first violation) is right on hand-made traces."""
@@ -13,7 +13,7 @@ import pytest
 from compiler.evaluate import ft_at
 from compiler.semantics import formalize
 from fretish import parse
-from monitors.engines.interval import (EvidenceUnsupported, evaluate_requirement, scope_intervals)
+from monitors.interval import (EvidenceUnsupported, evaluate_requirement, scope_intervals)
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 

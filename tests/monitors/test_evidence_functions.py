@@ -1,4 +1,4 @@
-"""Differential test of the interval evidence (monitors/engines/interval.py) on random sentences
+"""Differential test of the interval evidence (monitors/interval.py) on random sentences
 that use every FRET temporal function (``persisted``, ``occurred``, ``persists``,
 ``occurs`` with 2 and 3 arguments, ``prevOcc``, ``nextOcc``, the occurrence phrases,
 ``preBool``) in conditions, responses, stop conditions and scope conditions, drawn by the
@@ -28,8 +28,8 @@ from compiler.evaluate import ft_at, pt_at
 from compiler.semantics import formalize
 from fretish import parse
 from common.errors import FretishError
-from monitors.engines.interval import EvidenceUnsupported, evaluate_requirement
-from monitors.engines.vectorized import pt_series
+from monitors.interval import EvidenceUnsupported, evaluate_requirement
+from monitors.vectorized import pt_series
 
 from _monitor_helpers import compiled, load_module
 from differential import (BOOL_VARS, MODE_VARS, NUM_VARS, _obligation, random_requirement,

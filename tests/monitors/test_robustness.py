@@ -1,4 +1,4 @@
-"""monitors.engines.robustness: the pt formula's space robustness equals a brute-force
+"""monitors.robustness: the pt formula's space robustness equals a brute-force
 evaluation of the quantitative semantics' definitions (windows and since as max/min over
 every earlier tick, no recurrence, no numpy; comparisons' truth and terms from the reference
 evaluator compiler.evaluate) on random traces, for every FRET template key; its sign is the
@@ -17,9 +17,9 @@ from hypothesis import strategies as st
 
 from compiler import evaluate
 from fretish import ast as A
-from monitors.engines.judge import judge
-from monitors.engines.robustness import TINY, robustness, robustness_series
-from monitors.engines.vectorized import pt_series
+from monitors.judge import judge
+from monitors.robustness import TINY, robustness, robustness_series
+from monitors.vectorized import pt_series
 
 from _monitor_helpers import KEYS, compiled, samples
 
@@ -81,7 +81,7 @@ def _neg(v: float) -> float:
 
 class BruteForce:
     """rho(node, i) straight from the definitions (module docstring of
-    monitors.engines.robustness), one tick at a time."""
+    monitors.robustness), one tick at a time."""
 
     def __init__(self, cols: dict, n: int):
         self.trace = samples(cols, n)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from monitors.audit import AuditConfig, audit_log, load_plan
+from audit import AuditConfig, audit_log, load_plan
 from sim.logs import read_log
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -1,4 +1,4 @@
-"""monitors.engines.vectorized: numpy evaluation of pt formulas over whole columns equals the
+"""monitors.vectorized: numpy evaluation of pt formulas over whole columns equals the
 generated step-wise monitors, tick by tick, for all 288 FRET template keys; its replay of the
 Spot monitors gives the same LTL3 status and tick."""
 
@@ -12,8 +12,8 @@ import pytest
 
 from compiler import ir
 from compiler.codegen import monitor_source
-from monitors.engines.judge import ltl3_verdict
-from monitors.engines.vectorized import (VectorizeError, node_series, pt_series,
+from monitors.judge import ltl3_verdict
+from monitors.vectorized import (VectorizeError, node_series, pt_series,
                                         supports)
 from fretish import parse
 

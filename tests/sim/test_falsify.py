@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from monitors.audit import AuditConfig, audit_log, load_plan
+from audit import AuditConfig, audit_log, load_plan
 from sim.falsify import falsify
 from sim.space import SpaceError, apply, load_space
 

@@ -1,0 +1,71 @@
+"""The per-tick columns an audit keeps for the evidence and the vectorized engine.
+
+Memory: messages are streamed (:mod:`logs`), never kept. What grows with the
+length of the log is only these columns: per evaluated tick, 8 bytes of time, 8 bytes per
+bound topic (log time of the held message), 1 byte per boolean and 8 per numeric variable -
+about 80 bytes a tick for the Safe-ROS set, 3 MB for an hour at 10 Hz (kept in chunks of
+:data:`CHUNK` ticks).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["CHUNK", "TickColumns", "column_array"]
+
+#: Ticks per column chunk.
+CHUNK = 4096
+
+
+class TickColumns:
+    """Per-tick columns of one clock (module docstring): values of ``names``, tick times, and
+    log times (ns; -1 when none yet) of the messages of ``topics`` held at each tick; kept
+    as the blocks of :func:`signals.sample_blocks`."""
+
+    def __init__(self, names: list[str], topics: list[str]):
+        self.names = names
+        self.topics = topics
+        self.n = 0
+        self._vchunks: list[list[np.ndarray]] = [[] for _ in names]
+        self._lchunks: list[list[np.ndarray]] = [[] for _ in topics]
+        self._tchunks: list[np.ndarray] = []
+
+    def append_block(self, block) -> None:
+        """Add a block of ticks (:class:`signals.TickBlock`); a variable absent
+        from it (its evaluation failed: its requirements are errors) reads False."""
+        k = len(block.times)
+        for name, chunks in zip(self.names, self._vchunks):
+            v = block.values.get(name)
+            chunks.append(v if v is not None else np.zeros(k, dtype=np.bool_))
+        for topic, chunks in zip(self.topics, self._lchunks):
+            lt = block.log_times.get(topic)
+            chunks.append(lt if lt is not None else np.full(k, -1, dtype=np.int64))
+        self._tchunks.append(block.times)
+        self.n += k
+
+    def finish(self) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """(times, variable -> values, topic -> held log times), each of length ``n``.
+        Chunks are joined one column at a time and released, so the peak is the columns
+        plus one column."""
+
+        def cat(chunks: list[np.ndarray], dtype) -> np.ndarray:
+            if not chunks:
+                return np.zeros(0, dtype=dtype)
+            if any(c.dtype != chunks[0].dtype for c in chunks):
+                out = np.concatenate([c.astype(np.float64) for c in chunks])
+            else:
+                out = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
+            chunks.clear()
+            return out
+
+        times = cat(self._tchunks, np.int64)
+        cols = {n: cat(c, np.bool_) for n, c in zip(self.names, self._vchunks)}
+        lts = {t: cat(c, np.int64) for t, c in zip(self.topics, self._lchunks)}
+        return times, cols, lts
+
+
+def column_array(values: list) -> np.ndarray:
+    """A column of values: booleans as ``bool``, anything else as ``float64``."""
+    if all(type(x) is bool for x in values):
+        return np.array(values, dtype=np.bool_)
+    return np.array(values, dtype=np.float64)

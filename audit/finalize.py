@@ -1,0 +1,216 @@
+"""Finalization: one requirement's verdict and evidence from the pass over its clock
+(:func:`finalize`).
+
+The verdict, the LTL3 verdict and the evidence come from one judge,
+:func:`monitors.judge.judge`, over the columns of the requirement's clock: FRET's
+interval semantics gives the finite-trace verdict, the vacuity, the first violated trigger,
+its scope interval and response window; the monitor automata give the earliest definite
+(LTL3) verdict. The values of the requirement's variables and the log times of the messages
+behind them are taken around the trigger and the violation. On a damaged log the verdict is
+the one the intact span decides (:mod:`audit.damage`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from signals.bindings import Bindings
+from .damage import open_obligations, verdict_at_damage
+from monitors.interval import OBLIGATIONS, EvidenceUnsupported
+from monitors.judge import judge
+from monitors.stepwise import to_python
+from .verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
+from .model import AuditPlan, RequirementPlan
+from .passes import ClockPass, clock_key
+
+__all__ = ["finalize"]
+
+
+def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
+             v, la) -> None:
+    """Set the verdict ``v`` (:class:`audit.verdict.Verdict`) of requirement ``r``
+    from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
+    violation the first violation with the values and message log times around it.
+    ``la`` is the log's :class:`audit.verdict.LogAudit`."""
+    n = len(res.times)
+    if n == 0:
+        _no_tick(res, v, la)
+        return
+    f = r.formalization
+    online = not r.offline
+    try:
+        j = judge(r.requirement, f, res.columns, n,
+                  monitor_source=r.monitor_source if online else None,
+                  monitor_cls=r.monitor_cls if online else None)
+    except EvidenceUnsupported as exc:
+        v.error = f"no online monitor and no interval semantics for it: {exc}"
+        return
+    v.engine = j.engine
+    if j.note is not None:
+        v.notes.append(j.note)
+    ev, holds, status, st_tick = j.evidence, j.holds, j.ltl3, j.ltl3_tick
+    v.ltl3 = Ltl3(status, st_tick, int(res.times[st_tick]) if st_tick is not None else None)
+    if ev is not None:
+        v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
+    if res.intact_end is not None:
+        holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+        if holds is None:
+            return
+    _robustness(r, res, bindings, v, j.robustness, holds)
+    if holds:
+        v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
+        if v.verdict == "vacuous":
+            v.notes.append("vacuous: " + ("the scope was never entered" if ev.intervals == 0
+                                          else "the trigger never fired"))
+        return
+    v.verdict = "violated"
+    _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
+
+
+def _no_tick(res: ClockPass, v, la) -> None:
+    """No tick evaluated: unknown when the damage came first, else an error saying what the
+    clock waited for."""
+    if res.intact_end is not None:
+        v.verdict = "unknown"
+        v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
+                            "read completely to judge")
+        return
+    waiting = la.missing_topics or la.waiting_for
+    v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
+                                      else ": the log has no message on the bound topics"))
+
+
+def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, status, st_tick,
+                     n: int) -> bool | None:
+    """The verdict over the intact span of a damaged log (:mod:`audit.damage`): True /
+    False for the usual satisfied-or-vacuous / violated paths of :func:`finalize`, None
+    when the verdict (``unknown``) is set here."""
+    opened = []
+    try:
+        opened = open_obligations(r.requirement, res.columns, n, r.formalization.ticks)
+    except (EvidenceUnsupported, KeyError) as exc:
+        if holds:  # cannot tell whether an obligation is open at the damage
+            v.verdict = "unknown"
+            v.unknown_reason = (f"the log is damaged and whether an obligation is open at "
+                                f"the damage cannot be decided ({exc})")
+            return None
+    verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
+                                     st_tick, n, ev, opened, has_ltl3=not r.offline)
+    if verdict == "unknown":
+        v.verdict = "unknown"
+        v.unknown_reason = why
+        return None
+    return verdict != "violated"
+
+
+class _Ticks:
+    """Tick indexes of one clock as :class:`audit.verdict.TimePoint` and times."""
+
+    def __init__(self, res: ClockPass, held: list, bindings: Bindings | None) -> None:
+        self.times = res.times
+        self.n = len(res.times)
+        self.held = held
+        self.bindings = bindings
+
+    def point(self, i: int) -> TimePoint:
+        j = min(max(i, 0), self.n - 1)
+        lts = [int(h[j]) for h in self.held if h[j] >= 0]
+        # the message that decided the tick: the newest one held among its topics
+        return TimePoint(int(i), int(self.times[j]), max(lts) if lts else None)
+
+    def time_at(self, i: int) -> int | None:
+        n, b = self.n, self.bindings
+        if 0 <= i < n:
+            return int(self.times[i])
+        if i >= n and b is not None and b.tick.period_ns:
+            return int(self.times[-1]) + (i - n + 1) * b.tick.period_ns
+        return None
+
+
+def _own_ticks(r: RequirementPlan, res: ClockPass, bindings: Bindings | None) -> _Ticks:
+    """The ticks of ``r``'s clock, with the log times of the messages its own topics held."""
+    own_topics = sorted(clock_key(r, bindings)) if bindings is not None else []
+    held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
+        list(res.log_times.values())
+    return _Ticks(res, held, bindings)
+
+
+def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v, rob,
+                holds: bool) -> None:
+    """``v.robustness`` and ``v.robustness_at`` from the judge's robustness ``rob`` (None:
+    the pt formula cannot be evaluated over columns; a note says so). A value whose sign
+    disagrees with the verdict is never reported (a note says so instead)."""
+    if rob is None:
+        v.notes.append("robustness unavailable: the pt formula has a future-time function")
+        return
+    if (rob.value < 0) == holds:
+        v.notes.append(f"robustness unavailable: its sign disagrees with the verdict "
+                       f"({rob.value!r})")
+        return
+    v.robustness = rob.value
+    # the message that decided the tick: the newest held among the clock's topics
+    v.robustness_at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
+    m, times = rob.margin, res.times
+    if len(m) <= MARGIN_POINTS:
+        ticks = range(len(m))
+    else:  # the least value of each run of consecutive ticks
+        edges = np.linspace(0, len(m), MARGIN_POINTS + 1).astype(int)
+        ticks = [int(a + np.argmin(m[a:b])) for a, b in zip(edges[:-1], edges[1:])]
+    v.margin = [(int(i), int(times[i]), float(m[i])) for i in ticks]
+
+
+def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
+                        bindings: Bindings | None, v, ev, status: str,
+                        st_tick: int | None) -> None:
+    """The first violation of a violated requirement, and the values and message log times
+    ``plan.config.window`` ticks around its trigger and violation."""
+    n = len(res.times)
+    scope_kind = r.requirement.scope.kind
+    timing = r.requirement.timing.kind
+    obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]
+    k = r.formalization.ticks
+    ticks = _own_ticks(r, res, bindings)
+    tp = ticks.point
+    if ev is not None and ev.violation is not None:
+        w = ev.violation
+        vt = min(w.violation_tick, n - 1)
+        fv = FirstViolation(
+            at=tp(vt), trigger=tp(w.trigger_tick), scope=(tp(w.interval[0]), tp(w.interval[1])),
+            window=w.window, window_time_ns=(ticks.time_at(w.window[0]),
+                                             ticks.time_at(w.window[1])),
+            obligation=obligation.replace("t+k", f"t+{k}") if k is not None else obligation,
+            reason=w.reason)
+        centres = [w.trigger_tick, vt]
+        v.violation_list = [(tp(x.trigger_tick), tp(min(x.violation_tick, n - 1)))
+                            for x in ev.listed]
+    else:
+        vt = st_tick if (status == "violated" and st_tick is not None) else n - 1
+        fv = FirstViolation(at=tp(vt), obligation=obligation,
+                            reason="the monitor's verdict (no interval evidence)")
+        centres = [vt]
+    v.first_violation = fv
+    _values_around(plan.config.window, r, res, bindings, v, centres)
+
+
+def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
+                   v, centres: list[int]) -> None:
+    """``v.values`` and ``v.sources``: the requirement's variables and its topics' held log
+    times at the ticks within ``window`` of each centre."""
+    n, times = len(res.times), res.times
+    ticks = sorted({i for c in centres for i in range(c - window, c + window + 1)
+                    if 0 <= i < n})
+    for name in r.variables:
+        col = res.columns.get(name)
+        if col is None:
+            continue
+        v.values[name] = [(i, int(times[i]), to_python(col[i])) for i in ticks]
+    if bindings is not None:
+        topics = sorted({t for name in r.variables if name in bindings.variables
+                         for t in bindings.variables[name].topics})
+    else:
+        topics = sorted(res.log_times)
+    for t in topics:
+        lt = res.log_times.get(t)
+        if lt is None:
+            continue
+        v.sources[t] = [(i, int(times[i]), int(lt[i]) if lt[i] >= 0 else None) for i in ticks]

@@ -1,0 +1,352 @@
+"""One log audited against every requirement of a plan (:func:`audit_log`).
+
+The log is opened (:func:`logs.open_log`); its inputs are checked (a binding for
+every variable, every bound topic in the log, binding types against the schemas); it is read
+once (:func:`audit.passes.run_passes`: every requirement on its own clock); each
+requirement is finalized (:func:`audit.finalize.finalize`); violated ones get the
+numbers behind their boolean variables (:func:`audit.operands.operand_values`).
+
+A CSV trace is read with its columns as the variables unless the bindings read ``/csv``
+fields. A topic whose schema is unknown makes only the requirements reading it ``error`` -
+the others are audited without it (a second pass over the log, only in that case). Damage
+(../shared/DESIGN.md "Damage is never evidence"): a damaged log is ``partial``; only the ticks
+before its first cut or gap are judged. Problems of every pass are kept.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from signals.bindings import Bindings
+from common.problems import DataProblem, FretcInputError, SignalError
+from .verdict import LogAudit, Verdict
+from logs.schema import closest
+from logs import open_log
+from .checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
+                     rate_hint, too_many_ticks)
+from .finalize import finalize
+from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
+                           silent_reasons)
+from .model import AuditPlan, RequirementPlan
+from .operands import operand_values
+from .passes import LogPasses, clock_key, restrict, run_passes
+from .plan import select_variant
+
+__all__ = ["audit_log", "summarize_clocks", "log_engine"]
+
+
+def audit_log(plan: AuditPlan, path: str,
+              progress: Callable[[float], None] | None = None) -> LogAudit:
+    """Audit one log against every requirement of ``plan``.
+
+    Args:
+        plan: from :func:`audit.plan.load_plan`.
+        path: a log file or rosbag2 folder.
+        progress: called now and then with the fraction of the log read (0..1).
+
+    Returns:
+        A :class:`~audit.verdict.LogAudit` with one verdict per requirement. Input
+        problems of this log (unreadable file, missing topic or binding) are reported in it
+        (``error`` / ``error`` verdicts), never raised.
+    """
+    if plan.variants:
+        sub, err = select_variant(plan, str(path))
+        if sub is None:
+            return _not_selected(plan, str(path), err)
+        return audit_log(sub, path, progress)
+    return _LogRun(plan, path).run(progress)
+
+
+def _not_selected(plan: AuditPlan, path: str, err: str) -> LogAudit:
+    """No binding file (or two) selects the log: every verdict an error, or ``unknown``
+    when the damage may have taken the topics that would select it."""
+    la = LogAudit(log=path, error=err)
+    damaged = damage_of(path, la)
+    if damaged:
+        la.error = None
+        la.verdicts = [Verdict(log=path, requirement=r.id, text=r.text, source=r.source,
+                               verdict="unknown", partial=True,
+                               unknown_reason=f"{err}; {damaged}")
+                       for r in plan.requirements]
+        return la
+    la.verdicts = [Verdict(log=path, requirement=r.id, text=r.text, source=r.source,
+                           error=f"log not audited: {err}")
+                   for r in plan.requirements]
+    return la
+
+
+class _LogRun:
+    """The audit of one log in steps; each returns False when the log's audit ends there."""
+
+    def __init__(self, plan: AuditPlan, path: str) -> None:
+        self.plan = plan
+        self.path = path
+        self.la = LogAudit(log=str(path))
+        self.verdicts: dict[int, Verdict] = {}
+        for r in plan.requirements:
+            self.verdicts[r.index] = Verdict(log=str(path), requirement=r.id, text=r.text,
+                                             source=r.source, notes=list(r.notes))
+            if r.error is not None:
+                self.verdicts[r.index].error = r.error
+        self.source = None
+        self.bindings: Bindings | None = None
+        self.skip: set = set()  # requirements already decided (unknown) before the pass
+        self.problems: dict[tuple, DataProblem] = {}
+        self.problem_counts: dict[str, int] = {}
+
+    def run(self, progress: Callable[[float], None] | None) -> LogAudit:
+        if self._open() and self._check_inputs():
+            result, active, b = self._read(progress)
+            self._record_source()
+            if result is not None:
+                self._judge(result, active, b)
+        return self._finish()
+
+    def _finish(self) -> LogAudit:
+        la = self.la
+        la.verdicts = [self.verdicts[r.index] for r in self.plan.requirements]
+        for v in la.verdicts:
+            if v.error is not None:
+                v.verdict = "error"
+            v.partial = la.partial
+        return la
+
+    def _fail_all(self, message: str, rs=None) -> None:
+        for r in (rs if rs is not None else self.plan.requirements):
+            if self.verdicts[r.index].error is None:
+                self.verdicts[r.index].error = message
+
+    def _fail_log(self, message: str, prefix: str = "") -> bool:
+        self.la.error = message
+        self._fail_all(prefix + message)
+        return False
+
+    def _open(self) -> bool:
+        """Open the log and choose its bindings (a CSV trace's columns, else the plan's)."""
+        plan, path, la = self.plan, self.path, self.la
+        try:
+            source = self.source = open_log(path, csv_period_ns=plan.csv_period_ns)
+        except FretcInputError as exc:
+            return self._fail_log(str(exc), "log not audited: ")
+        except OSError as exc:
+            return self._fail_log(f"{path}: {exc}", "log not audited: ")
+        la.kind = source.kind
+        bindings = plan.bindings
+        if source.kind == "csv":
+            # the same binding rules as any log (docs/guide/ticks.md "CSV traces"): with bindings, bound
+            # variables are their expressions over /csv.<column> (a missing topic or column
+            # is an error naming the columns), unbound ones read the column of their name;
+            # without bindings the columns are the variables
+            if bindings is not None and not bindings.variables:
+                bindings = None
+            elif bindings is not None:
+                bindings = csv_bindings(plan, bindings, source)
+        elif bindings is None:
+            return self._fail_log(
+                f"{path}: a {source.kind} log needs signal bindings (*.bindings.toml next to "
+                "the requirements, --bindings or --bind): signals are declared, never "
+                "guessed")
+        self.bindings = bindings
+        if bindings is not None:
+            la.tick = ({"period_ns": bindings.tick.period_ns} if bindings.tick.period_ns
+                       else {"topic": bindings.tick.topic})
+            la.time_base = bindings.time_base
+        else:
+            la.tick = {"period_ns": plan.csv_period_ns, "rows": True}
+            la.time_base = "csv"
+        too_many = too_many_ticks(source, bindings, path)
+        if too_many is not None:
+            return self._fail_log(too_many)
+        return True
+
+    def _check_inputs(self) -> bool:
+        """A binding for every variable, every bound topic in the log, binding types."""
+        source, bindings = self.source, self.bindings
+        active = [r for r in self.plan.requirements if r.error is None]
+        self._check_bound(active)
+        try:
+            log_topics = source.topics()
+        except FretcInputError as exc:
+            return self._fail_log(str(exc), "log not audited: ")
+        damaged = damage_before_topics(source, self.la)  # damage met finding the topics
+        if bindings is not None:
+            if not self._check_topics(active, log_topics, damaged):
+                return False
+            skip = {i for i, v in self.verdicts.items() if v.error is not None}
+            for i, why in binding_type_errors(source, bindings, self.plan, skip).items():
+                self.verdicts[i].error = why
+        return True
+
+    def _check_bound(self, active: list[RequirementPlan]) -> None:
+        """Variables without a binding (or CSV column) make their requirements errors."""
+        bindings, source = self.bindings, self.source
+        available = set(bindings.variables) if bindings is not None else set(source.columns)
+        for r in active:
+            missing = [v for v in r.variables if v not in available]
+            if missing:
+                where = (f"bindings ({bindings.source or '--bind'})" if bindings is not None
+                         else f"the CSV columns ({', '.join(source.columns)})")
+                hints = [(m, closest(m, sorted(available))) for m in missing]
+                hint = "; ".join([f"did you mean {h!r} for {m!r}?" for m, h in hints if h]
+                                 + [call_hint(m) for m in missing if "(" in m])
+                self.verdicts[r.index].error = (f"no binding for {', '.join(map(repr, missing))}"
+                                                f" in {where}" + (f"; {hint}" if hint else ""))
+
+    def _check_topics(self, active: list[RequirementPlan], log_topics, damaged: str | None
+                      ) -> bool:
+        """Topics absent from the log: the tick topic ends the audit, a bound topic makes its
+        requirements errors (``unknown`` when the damage may have taken it)."""
+        bindings, source, verdicts, path = self.bindings, self.source, self.verdicts, self.path
+        if bindings.tick.topic is not None and bindings.tick.topic not in log_topics:
+            msg = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
+                   f"{', '.join(log_topics) or 'no topics'})")
+            if damaged:  # the damage may have taken it: unknown, with the damage's reason
+                for r in active:
+                    if verdicts[r.index].error is None:
+                        verdicts[r.index].verdict = "unknown"
+                        verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                return False
+            return self._fail_log(msg)
+        for r in active:
+            if verdicts[r.index].error is not None:
+                continue
+            absent = sorted({t for v in r.variables for t in bindings.variables[v].topics
+                             if t not in log_topics})
+            if not absent:
+                continue
+            users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
+                     for t in absent}
+            has = (f"a CSV trace has one topic, /csv, with the columns "
+                   f"{', '.join(source.columns)}" if source.kind == "csv"
+                   else f"it has {', '.join(log_topics) or 'no topics'}")
+            msg = ("; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
+                             for t in absent) + f" ({has})")
+            if damaged:
+                verdicts[r.index].verdict = "unknown"
+                verdicts[r.index].unknown_reason = f"{msg}; {damaged}"
+                self.skip.add(r.index)
+            else:
+                verdicts[r.index].error = msg
+        return True
+
+    def _read(self, progress) -> tuple[LogPasses | None, list[RequirementPlan], Bindings | None]:
+        """Read the log for the requirements still active; a signal that fails makes its
+        requirements errors and the log is read again for the others."""
+        plan, source, verdicts = self.plan, self.source, self.verdicts
+        result, b, active = None, None, []
+        while True:
+            active = [r for r in plan.requirements if verdicts[r.index].error is None
+                      and r.index not in self.skip]
+            if not active:
+                break
+            names = sorted({v for r in active for v in r.variables})
+            b = restrict(self.bindings, names) if self.bindings is not None else None
+            try:
+                result = run_passes(plan, source, b, active, progress)
+            except SignalError as exc:
+                culprit = exc.variable
+                hit = [r for r in active if culprit in r.variables] if culprit else []
+                collect_problems(source, None, self.problems, self.problem_counts)
+                result = None
+                if hit:
+                    for r in hit:
+                        verdicts[r.index].error = str(exc)
+                    continue
+                self._fail_all(str(exc), active)
+                break
+            collect_problems(source, result.sampling, self.problems, self.problem_counts)
+            break
+        return result, active, b
+
+    def _record_source(self) -> None:
+        """The log's damage, message counts, problems and span, from its source."""
+        la, source = self.la, self.source
+        la.partial = bool(source.partial) or la.partial
+        if source.partial or la.damage_time_ns is None:
+            la.damage_time_ns = source.damage_time
+        la.damage_cut = bool(source.damage_cut) or la.damage_cut
+        la.messages = dict(sorted(source.counts.items()))
+        if self.problems or not la.problems:  # (else: only the damage found with the topics)
+            la.problems = [problem_json(p) for p in self.problems.values()]
+            la.problem_counts = dict(sorted(self.problem_counts.items()))
+        la.start_time_ns = source.start_time
+        la.end_time_ns = source.end_time
+        check_nominal_rate(la, self.bindings)
+        for r in self.plan.requirements:  # the measured rate in the nominal_rate hint
+            if r.rate_topic is not None and self.verdicts[r.index].error == r.error:
+                self.verdicts[r.index].error += rate_hint(source, r.rate_topic, la.messages)
+
+    def _judge(self, result: LogPasses, active: list[RequirementPlan],
+               b: Bindings | None) -> None:
+        """Each requirement's clock figures, then its verdict; the log's figures."""
+        la, verdicts = self.la, self.verdicts
+        by_index = {}
+        for r in active:
+            res = by_index[r.index] = result.passes[clock_key(r, b)]
+            self._clock_figures(r, res, result, b)
+        ok = [r for r in active if verdicts[r.index].error is None]
+        summarize_clocks(la, [verdicts[r.index] for r in ok])
+        la.missing_topics = sorted({t for res in result.passes.values()
+                                    for t in (res.sampling.missing_topics if b is not None
+                                              else [])})
+        if la.start_time_ns is None:
+            starts = [res.sampling.start_time for res in result.passes.values()
+                      if res.sampling.start_time is not None]
+            la.start_time_ns = min(starts) if starts else None
+        for r in ok:
+            finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index], la)
+        la.engine = log_engine(verdicts[r.index] for r in ok)
+        if self.bindings is not None:
+            operand_values(self.path, self.plan, self.bindings, ok, verdicts, by_index)
+
+    def _clock_figures(self, r: RequirementPlan, res, result: LogPasses,
+                       b: Bindings | None) -> bool:
+        """Set the verdict's ticks and times from its clock; False (with the error) when
+        its clock failed or a topic it reads gave nothing."""
+        la, v, key = self.la, self.verdicts[r.index], clock_key(r, b)
+        s = res.sampling
+        v.ticks_evaluated = len(res.times)
+        v.warmup_ticks = s.warmup_ticks
+        v.first_tick_ns = s.first_time
+        v.last_tick_ns = s.end_time
+        if res.cut:  # ticks after the damage are not judged
+            v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
+            la.ticks_after_damage = max(la.ticks_after_damage, res.cut)
+        v.waiting_for = list(s.waiting_for)
+        err = result.errors.get(key)
+        bad = [n for n in r.variables if n in result.failed.get(key, {})]
+        if err is not None:
+            v.error = str(err)
+            return False
+        if bad:
+            v.error = str(result.failed[key][bad[0]])
+            return False
+        silent = list(s.missing_topics) if b is not None else []
+        if silent:
+            why = silent_reasons(silent, self.problems.values())
+            v.error = "; ".join(why[t] for t in sorted(silent))
+            return False
+        return True
+
+
+def log_engine(verdicts) -> str | None:
+    """The log's ``engine`` figure: what decided its verdicts (:class:`~monitors.judge.
+    Judgement`'s ``engine``), ``"mixed"`` when several did, None when none was decided."""
+    engines = sorted({v.engine for v in verdicts if v.engine is not None})
+    return engines[0] if len(engines) == 1 else ("mixed" if engines else None)
+
+
+def summarize_clocks(la, verdicts: list) -> None:
+    """The log's figures from its requirements' clocks (each verdict has its own): the most
+    ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
+    after damage the end of the judged span. ``verdicts``: those without an error."""
+    if not verdicts:
+        return
+    la.ticks_evaluated = max(v.ticks_evaluated for v in verdicts)
+    la.warmup_ticks = max(v.warmup_ticks for v in verdicts)
+    firsts = [v.first_tick_ns for v in verdicts if v.first_tick_ns is not None]
+    la.first_time_ns = min(firsts) if firsts else None
+    la.waiting_for = sorted({t for v in verdicts for t in v.waiting_for})
+    if la.ticks_after_damage:  # the log's judged span ends at the damage
+        lasts = [v.last_tick_ns for v in verdicts if v.last_tick_ns is not None]
+        la.end_time_ns = max(lasts) if lasts else None

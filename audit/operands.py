@@ -1,0 +1,85 @@
+"""The numbers behind a violated requirement's boolean variables: the operands of the
+comparisons its bindings are made of, read in a second pass over the log."""
+
+from __future__ import annotations
+
+from signals.bindings import Bindings, operand_signals
+from monitors.stepwise import to_python
+from common.problems import LogError, SignalError
+from signals import sample_blocks
+from logs import open_log
+from .model import AuditPlan
+from .passes import clock_key
+
+__all__ = ["operand_values"]
+
+
+def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
+                   passes) -> None:
+    """Evidence of violations: the numbers behind their boolean variables (the operands of
+    the comparisons a binding is made of, :func:`signals.bindings.operand_signals`) at the
+    ticks whose values are shown. A second streaming pass over the log, only when something
+    was violated and only for those operands, each on its requirement's own clock (so tick
+    indexes match the first pass).
+
+    Args:
+        active: the requirements judged; ``verdicts``: requirement index -> Verdict;
+            ``passes``: requirement index -> its :class:`audit.passes.ClockPass`.
+    """
+    wanted, groups, needs = _operands_wanted(bindings, active, verdicts)
+    if not wanted:
+        return
+    at = {(key, t) for key, _a, _v, ticks in needs for t in ticks}
+    aux_bindings = Bindings({name: aux for name, (_l, aux) in wanted.items()}, bindings.tick,
+                            bindings.time_base, bindings.header_lag_ns, bindings.source)
+    got: dict[tuple[frozenset, str], dict[int, object]] = {}
+    try:
+        source = open_log(path, csv_period_ns=plan.csv_period_ns)
+        for key, blk in sample_blocks(source, aux_bindings, groups):
+            for i in range(len(blk.times)):
+                if (key, blk.start + i) not in at:
+                    continue
+                for name in groups[key][0]:
+                    if name in blk.values:
+                        got.setdefault((key, name), {})[blk.start + i] = \
+                            to_python(blk.values[name][i])
+    except (LogError, SignalError, OSError):
+        return  # the first pass already reported what is wrong with the log
+    for key, aux_name, v, ticks in needs:
+        label = wanted[aux_name][0]
+        times = None
+        for r_index, res in passes.items():
+            if verdicts[r_index] is v:
+                times = res.times
+        vals = got.get((key, aux_name), {})
+        rows = [(t, int(times[t]), vals[t]) for t in ticks if t in vals]
+        if rows:
+            v.values[label] = rows
+
+
+def _operands_wanted(bindings: Bindings, active, verdicts):
+    """(operand signal name -> (label, its binding); clock -> (signal names, clock); one
+    (clock, signal name, verdict, ticks shown) per operand of a shown variable)."""
+    wanted: dict[str, tuple[str, object]] = {}  # aux name -> (label, binding)
+    groups: dict[frozenset, tuple[list[str], frozenset]] = {}
+    needs: list[tuple[frozenset, str, object, list[int]]] = []
+    for r in active:
+        v = verdicts[r.index]
+        if v.verdict != "violated" or not v.values:
+            continue
+        key = clock_key(r, bindings)
+        for name in r.variables:
+            b = bindings.variables.get(name)
+            if b is None or name not in v.values:
+                continue
+            try:
+                pairs = operand_signals(b)
+            except Exception:  # an operand that cannot stand alone: show the boolean only
+                continue
+            for label, aux in pairs:
+                wanted[aux.name] = (label, aux)
+                names = groups.setdefault(key, ([], key))[0]
+                if aux.name not in names:
+                    names.append(aux.name)
+                needs.append((key, aux.name, v, [t for t, _ns, _x in v.values[name]]))
+    return wanted, groups, needs

@@ -1,0 +1,177 @@
+"""The passes over one log: each requirement sampled on its own clock and the columns kept
+(:func:`run_passes`); then everything cut at the damage (:func:`cut_at_damage`).
+
+A requirement's clock is the set of topics its variables read (../shared/DESIGN.md, "Each
+verdict stands alone"); requirements on the same clock share one sampled stream
+(:func:`signals.sample_groups`). The columns are judged afterwards, once, by
+:func:`monitors.judge.judge` (:mod:`audit.finalize`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from signals.bindings import Bindings
+from common.problems import SignalError
+from signals import blocks_of_ticks, sample, sample_blocks
+from signals.blocks import MAX_TICKS
+from logs import CSV_TOPIC
+from .columns import TickColumns
+from .model import AuditPlan, RequirementPlan
+
+__all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
+           "expected_ticks", "MAX_TICKS"]
+
+
+
+@dataclass
+class ClockPass:
+    """The ticks of one clock: its sampling (:class:`signals.Sampling`), tick
+    times (ns) and the columns (variable -> values, topic -> held log times)."""
+
+    sampling: Any
+    times: np.ndarray
+    columns: dict[str, np.ndarray]
+    log_times: dict[str, np.ndarray]
+    cut: int = 0  # ticks dropped after the damage (cut_at_damage)
+    intact_end: int | None = None  # exclusive bound of the judged ticks' times
+
+
+@dataclass
+class LogPasses:
+    """One read of a log: a :class:`ClockPass` per clock, and what went wrong per clock."""
+
+    sampling: Any
+    passes: dict[frozenset, ClockPass]
+    failed: dict[frozenset, dict[str, SignalError]]
+    errors: dict[frozenset, SignalError]
+
+
+def restrict(b: Bindings, names: list[str]) -> Bindings:
+    """``b`` with only the variables in ``names``."""
+    return Bindings({n: b.variables[n] for n in b.variables if n in names}, b.tick, b.time_base,
+                    b.header_lag_ns, b.source)
+
+
+def expected_ticks(source, bindings: Bindings | None) -> int | None:
+    """Ticks the log should give: a CSV trace's rows, or its span over a fixed tick period
+    (None when unknown: a topic tick, no span)."""
+    if source.kind == "csv":
+        return getattr(source, "row_count", None)
+    if bindings is None or bindings.tick.period_ns is None:
+        return None
+    st, en = source.start_time, source.end_time
+    if st is None or en is None:
+        return None
+    return (en - st) // bindings.tick.period_ns + 1
+
+
+def clock_key(r: RequirementPlan, bindings: Bindings | None) -> frozenset:
+    """The clock a requirement is sampled on: the topics of its own variables
+    (../shared/DESIGN.md, "Each verdict stands alone": its tick grid, start, end and warm-up
+    come from them and the bindings' tick, never from other requirements of the run)."""
+    if bindings is None:
+        return frozenset()
+    return frozenset(t for v in r.variables if v in bindings.variables
+                     for t in bindings.variables[v].topics)
+
+
+class _Clock:
+    """The columns of one clock's requirements while the log is read."""
+
+    def __init__(self, key: frozenset, rs: list[RequirementPlan],
+                 bindings: Bindings | None) -> None:
+        self.names: list[str] = []
+        for r in rs:
+            for v in r.variables:
+                if v not in self.names:
+                    self.names.append(v)
+        topics = sorted(key) if bindings is not None else [CSV_TOPIC]
+        self.columns = TickColumns(self.names, topics)
+
+
+def _progress(source, expected: int | None, progress: Callable[[float], None]
+              ) -> Callable[[Any], None]:
+    """Report the fraction of the log read at tick time ``time`` (ns): by log time over the log's span, or
+    by ticks over the ticks expected."""
+    start_t, end_t = source.start_time, source.end_time
+    span = (end_t - start_t) if (start_t is not None and end_t is not None
+                                 and end_t > start_t) else None
+
+    def report(time: int, count: int) -> None:
+        if span is not None:
+            progress(min(1.0, max(0.0, (time - start_t) / span)))
+        elif expected:
+            progress(min(1.0, count / expected))
+    return report
+
+
+def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
+               active: list[RequirementPlan],
+               progress: Callable[[float], None] | None) -> LogPasses:
+    """Read the log once: sample every clock of ``active``, keep the columns, then cut each
+    clock at the damage.
+
+    Raises:
+        SignalError: a signal cannot be computed (the variable is named), or more than
+            :data:`MAX_TICKS` ticks.
+    """
+    expected = expected_ticks(source, bindings)
+    groups: dict[frozenset, list[RequirementPlan]] = {}
+    for r in active:
+        groups.setdefault(clock_key(r, bindings), []).append(r)
+    clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
+    if bindings is not None:
+        sampling = sample_blocks(source, bindings,
+                                 {key: (c.names, key) for key, c in clocks.items()})
+        stream = iter(sampling)
+        failed, errors = sampling.failed, sampling.errors
+    else:
+        sampling = sample(source, None)
+        key0 = next(iter(groups))
+        c0 = clocks[key0]
+        stream = ((key0, b) for b in blocks_of_ticks(iter(sampling), c0.names,
+                                                     c0.columns.topics))
+        failed, errors = {key0: {}}, {}
+    report = _progress(source, expected, progress) if progress is not None else None
+    count = 0
+    for key, block in stream:
+        clocks[key].columns.append_block(block)
+        count += len(block.times)
+        if count > MAX_TICKS:
+            raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
+                              "choose a longer tick period")
+        if report is not None:
+            report(int(block.times[-1]), count)
+    passes: dict[frozenset, ClockPass] = {}
+    for key, clock in clocks.items():
+        times, columns, log_times = clock.columns.finish()
+        s = sampling.groups[key] if bindings is not None else sampling
+        passes[key] = ClockPass(s, times, columns, log_times)
+        cut_at_damage(passes[key], source, bindings)
+    return LogPasses(sampling, passes, failed, errors)
+
+
+def cut_at_damage(res: ClockPass, source, bindings: Bindings | None) -> None:
+    """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
+    evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
+    under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
+    precede its log time by that much). Sets ``res.cut`` to the number of ticks dropped."""
+    end = source.intact_end
+    if end is None:
+        return
+    if bindings is not None and bindings.time_base == "header":
+        end -= bindings.header_lag_ns
+    keep = int(np.searchsorted(res.times, end, side="left"))
+    n = len(res.times)
+    res.intact_end = end
+    if keep >= n:
+        return
+    res.cut = n - keep
+    res.times = res.times[:keep]
+    res.columns = {k: v[:keep] for k, v in res.columns.items()}
+    res.log_times = {k: v[:keep] for k, v in res.log_times.items()}

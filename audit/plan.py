@@ -1,0 +1,307 @@
+"""The audit plan: the requirements compiled, their generated monitors loaded and the signal
+bindings merged, ready for any number of logs (:func:`load_plan`).
+
+Requirements are compiled (:mod:`compiler.build`) with the tick period of the signal
+bindings when their file declares none (a declared period must equal a fixed bindings period,
+else that requirement is an input error naming both), and their monitors are generated
+(:func:`compiler.codegen.build_monitor_modules`, one module per requirement file) and loaded
+in-process into a fresh module: the same code ``fretc FILE --emit monitor`` gives users; the
+builder's map pairs requirements with their classes and automata (nothing built twice).
+Binding files that select their logs (``[logs]``) give one plan per file
+(:class:`signals.bindings.LogSelector`, :func:`select_variant`).
+"""
+
+from __future__ import annotations
+
+import re
+
+import dataclasses
+import types
+from fractions import Fraction
+from pathlib import Path
+
+from compiler.build import compile_entries
+from compiler.codegen import MonitorModule, MonitorSource, build_monitor_modules
+from common.errors import FretishError
+from fretish.files import load_requirements
+from fretish.parser import parse
+from common.units import NS_PER_S, format_period
+
+from signals.bindings import Bindings
+from common.problems import FretcInputError
+from logs import open_log
+from .binding_files import binding_files, load_audit_bindings
+from .config import AuditConfig, AuditInputError
+from .model import AuditPlan, RequirementPlan
+
+__all__ = ["load_plan", "select_variant", "load_module", "used_variables", "MODULE_PREFIX"]
+
+#: Name prefix of the modules the generated monitors are loaded into.
+MODULE_PREFIX = "fretc_audit_"
+
+
+def _has_time_units(entry) -> bool:
+    """The requirement's text has a duration in time units (not ``ticks``)."""
+    try:
+        req = parse(entry.text)
+    except Exception:  # reported when compiled
+        return False
+    d = getattr(req.timing, "duration", None)
+    return d is not None and d.unit != "ticks"
+
+
+def load_plan(config: AuditConfig) -> AuditPlan:
+    """Read requirements and bindings, compile, generate and load the monitors.
+
+    Raises:
+        AuditInputError: a requirement file that cannot be read (a bad sentence is not
+            this: it becomes that requirement's ``error``), bad or conflicting bindings, bad
+            options.
+    """
+    if config.select_logs:
+        split = _plan_per_log(config)
+        if split is not None:
+            return split
+    return _build_plan(config)
+
+
+def _build_plan(config: AuditConfig) -> AuditPlan:
+    """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection)."""
+    bindings, binding_files = load_audit_bindings(config)
+    notes: list[str] = []
+    entries = _read_requirements(config, notes)
+    period, nominal = _bindings_periods(bindings)
+    plans: list[RequirementPlan] = []
+    to_compile = []
+    for i, e in enumerate(entries):
+        rp = RequirementPlan(i, e.id, e.text, f"{e.source}:{e.line}", e.line)
+        e = _with_tick_period(rp, e, config, bindings, period, nominal)
+        rp.tick_period = e.tick_period
+        plans.append(rp)
+        to_compile.append(e)
+    compiled = compile_entries(to_compile)
+    if config.tick_period is not None:
+        for c, rp in zip(compiled, plans):
+            if c.error is not None and rp.error is None:
+                rp.error = (f"{c.error} (the tick period {format_period(period)} comes from "
+                            "--tick-period)")
+    ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
+    built = build_monitor_modules(ok) if ok else {}
+    modules = {m.name: m.text for m in built.values()}
+    classes, skipped, sources = _load_monitors(built)
+    for c, rp in zip(compiled, plans):
+        _attach(rp, c, classes, skipped)
+        if (c.entry.source, c.id) in sources:  # the automata built with the module, not again
+            rp._msource = sources[(c.entry.source, c.id)]
+    csv_period = bindings.tick.period_ns if (bindings is not None
+                                             and bindings.tick.period_ns) else None
+    if csv_period is None:
+        periods = {rp.tick_period for rp in plans if rp.tick_period is not None}
+        csv_period = int(periods.pop() * NS_PER_S) if len(periods) == 1 else NS_PER_S
+    freeform = [f"{rp.id} ({rp.source})" for rp in plans if rp.error == "free-form"]
+    plans = [rp for rp in plans if rp.error != "free-form"]
+    if not plans:
+        raise AuditInputError(f"only free-form requirements in {', '.join(config.requirements)}"
+                              ": nothing to audit")
+    return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
+                     freeform, notes + _unused_bindings(bindings, plans))
+
+
+def _read_requirements(config: AuditConfig, skipped: list[str]) -> list:
+    """The requirement entries of ``config.requirements``
+    (:func:`fretish.files.load_requirements`; notes of skipped files into ``skipped``)."""
+    try:
+        entries = load_requirements([Path(p) for p in config.requirements], skipped)
+    except FretishError as exc:
+        raise AuditInputError(str(exc)) from None
+    except OSError as exc:
+        raise AuditInputError(f"cannot read requirements: {exc}") from None
+    if not entries:
+        raise AuditInputError(f"no requirements in {', '.join(config.requirements)}")
+    return entries
+
+
+def _bindings_periods(bindings: Bindings | None) -> tuple[Fraction | None, Fraction | None]:
+    """(the bindings' fixed tick period, the tick topic's nominal period), in seconds."""
+    if bindings is not None and bindings.tick.period_ns is not None:
+        return Fraction(bindings.tick.period_ns, NS_PER_S), None
+    if bindings is not None and bindings.tick.nominal_period_ns is not None:
+        return None, Fraction(bindings.tick.nominal_period_ns, NS_PER_S)
+    return None, None
+
+
+def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bindings | None,
+                      period: Fraction | None, nominal: Fraction | None):
+    """The entry ``e`` with the tick period its durations convert with: ``--tick-period``
+    overrides every declared period (a note says so); else the bindings' period where the
+    file declares none. A declared period that differs from the bindings' (or from the tick
+    topic's nominal rate), or time units on a topic tick of undeclared rate, set
+    ``rp.error``."""
+    if config.tick_period is not None:
+        if e.tick_period is not None and e.tick_period != period:
+            rp.notes.append(f"durations converted with --tick-period "
+                            f"{format_period(period)} instead of the declared "
+                            f"{format_period(e.tick_period)}")
+        return dataclasses.replace(e, tick_period=period)
+    if e.tick_period is None and period is not None:
+        return dataclasses.replace(e, tick_period=period)
+    if e.tick_period is not None and period is not None and e.tick_period != period:
+        rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
+                    f"{format_period(e.tick_period)} but the bindings ({bindings.source}) "
+                    f"tick every {format_period(period)}: durations would convert with the "
+                    "wrong period; make them equal (or pass --tick-period to override "
+                    "both for this run)")
+    elif bindings is not None and bindings.tick.topic:
+        if nominal is not None and e.tick_period is not None and e.tick_period != nominal:
+            rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
+                        f"{format_period(e.tick_period)} but the bindings ({bindings.source})"
+                        f" give {bindings.tick.topic} a nominal period of "
+                        f"{format_period(nominal)}; make them equal")
+        elif nominal is not None:
+            return dataclasses.replace(e, tick_period=nominal)
+        elif _has_time_units(e):
+            rp.error = (f"{e.source}:{e.line}: {e.id} has a duration in time units but "
+                        f"the bindings ({bindings.source}) tick once per "
+                        f"{bindings.tick.topic} message, whose rate is not declared: add "
+                        "the topic's rate as nominal_rate to [tick] (fretc inspect prints "
+                        "it); the audit checks it against the log")
+            rp.rate_topic = bindings.tick.topic
+    return e
+
+
+def _load_monitors(built: dict[str, MonitorModule]
+                   ) -> tuple[dict[tuple[str, str], type], dict[tuple[str, str], str],
+                              dict[tuple[str, str], MonitorSource]]:
+    """Execute each generated module once into a fresh module object: ((source, id) ->
+    monitor class, (source, id) -> why it was skipped, (source, id) -> the
+    :class:`~compiler.codegen.MonitorSource` its class was generated from), paired through
+    :func:`compiler.codegen.build_monitor_modules`' map (keyed by requirement file)."""
+    classes: dict[tuple[str, str], type] = {}
+    skipped: dict[tuple[str, str], str] = {}
+    sources: dict[tuple[str, str], MonitorSource] = {}
+    for src, mm in built.items():
+        mod = load_module(mm.name, mm.text)
+        for rid, info in mm.monitors.items():
+            classes[(src, rid)] = mod.MONITORS[rid]
+            sources[(src, rid)] = info.source
+        for rid, why in mm.skipped.items():
+            skipped[(src, rid)] = why
+    return classes, skipped, sources
+
+
+def load_module(stem: str, text: str) -> types.ModuleType:
+    """The generated monitor module ``text`` executed into a fresh module named
+    :data:`MODULE_PREFIX` + ``stem`` (its ``MONITORS`` map requirement ids to classes)."""
+    mod = types.ModuleType(MODULE_PREFIX + stem)
+    exec(compile(text, f"<fretc monitors {stem}>", "exec"), mod.__dict__)
+    return mod
+
+
+def _attach(rp: RequirementPlan, c, classes: dict[tuple[str, str], type],
+            skipped: dict[tuple[str, str], str]) -> None:
+    """Give ``rp`` its compiled form and monitor class, or the reason it has none."""
+    rp.compiled = c
+    if rp.error is not None:
+        return
+    key = (c.entry.source, c.id)
+    if c.error is not None:
+        rp.error = str(c.error)
+    elif c.freeform:
+        rp.error = "free-form"  # dropped by load_plan: not audited, not an error
+    elif key in classes:
+        rp.monitor_cls = classes[key]
+        names = list(rp.monitor_cls.VARIABLES)
+        rp.variables = names + [v for v in c.formalization.variables if v not in names]
+        rp.notes.extend(c.formalization.warnings)
+    elif not c.formalization.pt_causal:
+        # a future-time function in the pt formula: no online monitor, but the audit is
+        # offline - decide it by the interval semantics over the whole trace
+        rp.offline = True
+        rp.variables = list(c.formalization.variables)
+        rp.notes.extend(c.formalization.warnings)
+        rp.notes.append("no online monitor (the pt formula needs a future-time function): "
+                        "decided offline by the interval semantics; no LTL3 verdict")
+    else:
+        rp.error = f"no monitor: {skipped.get(key, 'not generated')}"
+
+
+def used_variables(plans: list[RequirementPlan]) -> set[str]:
+    """The FRET variables the requirements read (their monitors' ``VARIABLES`` and the rest
+    of their formalizations)."""
+    return {v for rp in plans for v in (rp.variables or (
+        rp.formalization.variables if rp.formalization is not None else []))}
+
+
+def _unused_bindings(bindings: Bindings | None, plans: list[RequirementPlan]) -> list[str]:
+    """A remark per bound variable that no requirement uses."""
+    warnings = []
+    if bindings is not None:
+        used = used_variables(plans)
+        # a requirement that failed before its variables were known (a syntax error) may
+        # use any name of its text: never call those unused
+        failed = " ".join(rp.text for rp in plans
+                          if rp.error is not None and not rp.variables)
+        words = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", failed))
+        for name, b in bindings.variables.items():
+            if name not in used and name not in words:
+                at = f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+                warnings.append(f"{at}: {name!r} is bound but no requirement uses it")
+    return warnings
+
+
+def _plan_per_log(config: AuditConfig) -> AuditPlan | None:
+    """Binding files that select their logs (``[logs]``, :class:`signals.bindings.LogSelector`):
+    one plan per selecting file (merged with the files that select nothing, which apply to
+    every log), each compiled with its own tick. A requirement whose variables are bound
+    only by another selecting file is not applicable to that file's logs (it is left out of
+    their verdicts); one bound nowhere stays an error. None when no file selects logs."""
+    parts = binding_files(config)
+    selecting = [(f, b) for f, b in parts if b.logs is not None]
+    if not selecting:
+        return None
+    plain = [str(f) for f, b in parts if b.logs is None]
+    variants = []
+    for f, b in selecting:
+        sub = load_plan(dataclasses.replace(config, bindings=tuple([str(f)] + plain),
+                                            select_logs=False))
+        variants.append((b.logs, str(f), sub))
+    anywhere = {n for _s, _f, sub in variants for n in sub.bindings.variables}
+    union: dict[tuple[str, str], RequirementPlan] = {}
+    for _s, _f, sub in variants:
+        keep = []
+        for r in sub.requirements:
+            names = r.variables or (list(r.formalization.variables)
+                                    if r.formalization is not None else [])
+            missing = [v for v in names if v not in sub.bindings.variables]
+            if missing and all(v in anywhere for v in missing):
+                continue  # bound by another selecting file: for its logs, not these
+            keep.append(r)
+            union.setdefault((r.source, r.id), r)
+        sub.requirements = keep
+    reqs = sorted(union.values(), key=lambda r: r.index)
+    used = used_variables(reqs)
+    warnings = sorted({w for _s, _f, sub in variants for w in sub.warnings
+                       if w.split("'")[1] not in used})
+    return AuditPlan(config, reqs, None, [str(f) for f, _b in parts], {}, NS_PER_S,
+                     variants[0][2].freeform, warnings, variants)
+
+
+def select_variant(plan: AuditPlan, path: str) -> tuple[AuditPlan | None, str | None]:
+    """(plan for ``path``, None) or (None, the input error naming the binding files)."""
+    need_topics = any(sel.topics for sel, _f, _p in plan.variants)
+    topics = None
+    if need_topics:
+        try:
+            topics = list(open_log(path).topics())
+        except (FretcInputError, OSError):
+            topics = None
+    hits = [(sel, f, sub) for sel, f, sub in plan.variants if sel.matches(path, topics)]
+    if len(hits) == 1:
+        return hits[0][2], None
+    if not hits:
+        return None, (f"{path}: no binding file selects this log ("
+                      + "; ".join(f"{f}: {sel.text()}" for sel, f, _p in plan.variants)
+                      + "); add a [logs] glob or topics that match it")
+    return None, (f"{path} is selected by both {hits[0][1]} ({hits[0][0].text()}) and "
+                  f"{hits[1][1]} ({hits[1][0].text()}): make their [logs] tables exclusive")
+

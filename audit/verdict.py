@@ -1,0 +1,390 @@
+"""What an audit found, as plain dataclasses and a stable JSON document.
+
+``fretc audit --json FILE`` writes :func:`audit_json`; ``fretc report`` (another module) reads
+the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space indent)::
+
+    {
+      "schema": "fretc-audit/1",
+      "requirements": [ {id, text, source, line, key, variables, tick_period_s,
+                         duration_ticks, offline, error, notes} ... ],
+      "bindings": {sources: [...], tick: {period_ns | topic}, time_base,
+                   variables: {name: {expr, source, line, topics}}} | null,
+      "logs": [ LogAudit.to_json() ... ],              # in the order the logs were given
+      "summary": {satisfied, vacuous, violated, error, partial_logs, incomplete_logs,
+                  log_errors, exit_code}
+    }
+
+Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
+log's first message (``LogAudit.start_time_ns``), what a person reads. Each time says its
+clock: ``log_time_ns`` is always the log time of a real message (in a first violation, the
+message that decided the missed tick: where Foxglove seeks); a tick's own time is
+``tick_time_ns`` (first violation) or ``time_ns`` (other tick points), on the bindings' time
+base (``tick_time_base`` / ``LogAudit.time_base``: ``log`` or ``header``). Each
+requirement runs on its own clock (its variables' topics): ``ticks_evaluated``,
+``warmup_ticks``, ``first_tick_ns`` and ``last_tick_ns`` are per verdict; the log's own
+fields summarize them. Ticks are 0-based indexes of
+*evaluated* ticks (warm-up ticks are not numbered, see :mod:`signals`).
+
+Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
+never entered or the trigger never fired (docs/guide/audits.md "Verdicts"); ``violated`` - FRET's
+finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
+(``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
+log is damaged and the span read completely decides nothing: an obligation is still open where
+it ends (``unknown_reason`` says which; :mod:`audit.damage`). A verdict on a damaged log is
+computed on the span read completely (the ticks before ``damage_time_ns``) and has ``partial``
+true; a violation on it was decided before the damage.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_json",
+           "summary", "exit_code", "incomplete", "SCHEMA", "VERDICTS", "EXIT_CODES", "EXIT_OK",
+           "EXIT_VIOLATED", "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE"]
+
+SCHEMA = "fretc-audit/1"
+#: At most this many points of a verdict's margin over time (:attr:`Verdict.margin`).
+MARGIN_POINTS = 400
+VERDICTS = ("satisfied", "vacuous", "violated", "unknown", "error")
+
+
+def _t(ns: int | None, start: int | None) -> dict[str, Any]:
+    """``{"ns": int, "s": seconds since start}`` (None values when unknown)."""
+    if ns is None:
+        return {"ns": None, "s": None}
+    return {"ns": int(ns), "s": None if start is None else round((ns - start) / 1e9, 9)}
+
+
+@dataclass(frozen=True)
+class TimePoint:
+    """A tick: its index, its own time (``time_ns``, ns in the bindings' time base: the
+    log clock or header stamps; a fixed-period tick is usually no message's time) and the
+    log time of the message that decided it (``log_time_ns``: the newest message held at
+    the tick among the requirement's topics - a real MCAP/bag log time, what Foxglove
+    seeks to; None when unknown)."""
+
+    tick: int
+    time_ns: int
+    log_time_ns: int | None = None
+
+    def to_json(self, start: int | None) -> dict:
+        """The point as the audit JSON gives it: tick, tick time (ns, and s from ``start``, the
+        log's start in ns) and the log time (ns) of the message that decided it."""
+        return {"tick": self.tick, "time_ns": self.time_ns,
+                "time_s": _t(self.time_ns, start)["s"], "log_time_ns": self.log_time_ns}
+
+
+@dataclass
+class FirstViolation:
+    """The evidence of a violation (see :class:`monitors.interval.Violation`).
+
+    Attributes:
+        at: the tick (and time) at which the obligation was definitely missed.
+        trigger: the trigger point behind it; None when the interval semantics could not be
+            evaluated (then ``at`` is the monitor's earliest definitive violation, or the
+            last tick).
+        scope: the scope interval ``(first, last)`` holding the trigger.
+        window: the ticks the obligation was about (``(lo, hi)``; ``hi`` may lie past the
+            end of the log for ``within``-like timings cut short by the log).
+        obligation: the timing's obligation in words (``monitors.obligations.OBLIGATIONS``).
+        reason: what failed, in tick numbers.
+    """
+
+    at: TimePoint
+    trigger: TimePoint | None = None
+    scope: tuple[TimePoint, TimePoint] | None = None
+    window: tuple[int, int] | None = None
+    window_time_ns: tuple[int | None, int | None] | None = None
+    obligation: str = ""
+    reason: str = ""
+
+    def to_json(self, start: int | None, time_base: str | None = None) -> dict:
+        """The first violation as the audit JSON gives it (times in ns and in s from ``start``;
+        ``time_base`` names the tick clock's base)."""
+        lt = self.at.log_time_ns
+        out = {"tick": self.at.tick, "log_time_ns": lt, "log_time_s": _t(lt, start)["s"],
+               "tick_time_ns": self.at.time_ns, "tick_time_s": _t(self.at.time_ns, start)["s"],
+               "tick_time_base": time_base,
+               "obligation": self.obligation, "reason": self.reason,
+               "trigger": self.trigger.to_json(start) if self.trigger else None,
+               "scope_interval": None, "window": None}
+        if self.scope is not None:
+            out["scope_interval"] = {"start": self.scope[0].to_json(start),
+                                     "end": self.scope[1].to_json(start)}
+        if self.window is not None:
+            lo_ns, hi_ns = self.window_time_ns or (None, None)
+            out["window"] = {"start_tick": self.window[0], "end_tick": self.window[1],
+                             "start_time_ns": lo_ns, "end_time_ns": hi_ns,
+                             "start_time_s": _t(lo_ns, start)["s"],
+                             "end_time_s": _t(hi_ns, start)["s"]}
+        return out
+
+
+@dataclass
+class Ltl3:
+    """The earliest definitive verdict of the infinite-trace formula (LTL3: ``satisfied``,
+    ``violated`` or ``unknown``) and the tick at which it was reached (None: unknown, or
+    definitive before the first tick)."""
+
+    status: str = "unknown"
+    tick: int | None = None
+    time_ns: int | None = None
+
+    def to_json(self, start: int | None) -> dict:
+        """The LTL3 verdict as the audit JSON gives it (key ``status``: ``satisfied``,
+        ``violated`` or ``unknown``; its tick and time, in ns and in s from ``start``)."""
+        return {"status": self.status, "tick": self.tick, "time_ns": self.time_ns,
+                "time_s": _t(self.time_ns, start)["s"]}
+
+
+@dataclass
+class Verdict:
+    """One requirement on one log.
+
+    Attributes:
+        log, requirement: the log path and the requirement id; ``source`` its file:line.
+        verdict: one of :data:`VERDICTS`.
+        partial: the log is damaged and was audited up to the damage.
+        first_violation: evidence when violated.
+        ltl3: the earliest definitive LTL3 verdict.
+        values: variable -> [(tick, time_ns, value)] around the trigger and the violation.
+        sources: topic -> [(tick, time_ns, log_time_ns of the message held)] for the topics
+            those variables are bound to, at the same ticks.
+        ticks_evaluated, warmup_ticks, first_tick_ns, last_tick_ns, waiting_for: this
+            requirement's own clock (the topics of its variables and the bindings' tick;
+            never other requirements'): evaluated ticks, warm-up ticks, the times of its
+            first evaluated and last tick, the topics it waited for.
+        intervals, triggers, violations: counts from the interval semantics (None when it
+            could not be evaluated).
+        violation_list: (trigger, violation) time points of the failed triggers in order,
+            the first :data:`monitors.interval.MAX_LISTED` of them (``violations`` counts
+            all).
+        engine: ``"stepwise"`` (the generated monitor's ``step()``), ``"vectorized"``
+            (``monitors.vectorized`` over the columns; equal by test) or ``"interval"``
+            (no online monitor exists - a future-time function - so FRET's interval
+            semantics decided it, :mod:`monitors.interval`).
+        notes: remarks (evidence unavailable, warnings of the formalization).
+        error: why the verdict is ``error``.
+        robustness: the margin behind the verdict (:mod:`monitors.robustness`): in
+            the unit of the comparison that decides it, negative exactly when violated,
+            ``+-inf`` when a boolean decides it; None when ``unknown``, ``error``, or the pt
+            formula cannot be evaluated over columns (a note says why).
+        robustness_at: the first tick where the margin is that small.
+        margin: the margin over time, ``[(tick, time_ns, value)]``: every tick, or on a
+            long log the least value of each of :data:`MARGIN_POINTS` runs of consecutive
+            ticks (at the tick where it occurs), so no dip is lost.
+    """
+
+    log: str
+    requirement: str
+    text: str = ""
+    source: str = ""
+    verdict: str = "error"
+    partial: bool = False
+    first_violation: FirstViolation | None = None
+    ltl3: Ltl3 = field(default_factory=Ltl3)
+    values: dict[str, list[tuple[int, int, Any]]] = field(default_factory=dict)
+    sources: dict[str, list[tuple[int, int, int | None]]] = field(default_factory=dict)
+    ticks_evaluated: int = 0
+    warmup_ticks: int = 0
+    first_tick_ns: int | None = None
+    last_tick_ns: int | None = None
+    waiting_for: list[str] = field(default_factory=list)
+    intervals: int | None = None
+    triggers: int | None = None
+    violations: int | None = None
+    violation_list: list[tuple[TimePoint, TimePoint]] = field(default_factory=list)
+    engine: str | None = None
+    notes: list[str] = field(default_factory=list)
+    error: str | None = None
+    unknown_reason: str | None = None
+    robustness: float | None = None
+    robustness_at: TimePoint | None = None
+    margin: list[tuple[int, int, float]] = field(default_factory=list)
+
+    def to_json(self, start: int | None, time_base: str | None = None) -> dict:
+        """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
+        ns and in s from ``start`` (the log's start, ns); NaN and infinities as strings."""
+        def val(v):
+            if isinstance(v, float) and v != v:
+                return "nan"
+            if isinstance(v, float) and v in (float("inf"), float("-inf")):
+                return "inf" if v > 0 else "-inf"
+            return v
+
+        return {
+            "log": self.log, "requirement": self.requirement, "text": self.text,
+            "source": self.source, "verdict": self.verdict, "partial": self.partial,
+            "first_violation": (self.first_violation.to_json(start, time_base)
+                                if self.first_violation else None),
+            "ltl3": self.ltl3.to_json(start),
+            "values": {k: [{"tick": t, "time_ns": ns, "time_s": _t(ns, start)["s"],
+                            "value": val(v)} for t, ns, v in rows]
+                       for k, rows in self.values.items()},
+            "sources": {k: [{"tick": t, "time_ns": ns, "time_s": _t(ns, start)["s"],
+                             "message_log_time_ns": lt} for t, ns, lt in rows]
+                        for k, rows in self.sources.items()},
+            "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
+            "first_tick_ns": self.first_tick_ns, "first_tick_s": _t(self.first_tick_ns, start)["s"],
+            "last_tick_ns": self.last_tick_ns, "last_tick_s": _t(self.last_tick_ns, start)["s"],
+            "waiting_for": self.waiting_for,
+            "intervals": self.intervals, "triggers": self.triggers,
+            "violations": self.violations,
+            "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}
+                               for t, w in self.violation_list],
+            "engine": self.engine, "notes": self.notes,
+            "error": self.error, "unknown_reason": self.unknown_reason,
+            "robustness": self._robustness_json(start, val),
+        }
+
+    def _robustness_json(self, start: int | None, val) -> dict:
+        """``{"value", "tick", "time_ns", "time_s", "log_time_ns", "margin"}`` (margin:
+        ``[[tick, time_s, value]]``; None values and no margin when
+        there is no robustness; infinities as the strings inf, -inf)."""
+        at = self.robustness_at
+        out = {"value": None if self.robustness is None else val(self.robustness),
+               "margin": [[t, _t(ns, start)["s"], val(x)] for t, ns, x in self.margin]}
+        if at is None:
+            return dict(out, tick=None, time_ns=None, time_s=None, log_time_ns=None)
+        return dict(out, **at.to_json(start))
+
+
+@dataclass
+class LogAudit:
+    """One log: how it was read and the verdicts of every requirement on it.
+
+    Attributes:
+        log: the path as given; ``kind`` mcap / bag / rosbag2 / csv.
+        partial, damage_time_ns: the log is damaged (truncated, a chunk skipped, its summary
+            lost); where the span read completely ends (log time, ns; None when no message
+            was lost). Only ticks before it are judged; ``ticks_after_damage`` counts the
+            ticks sampled after it and not judged.
+        start_time_ns: time of the first tick (evaluated or not); ``first_time_ns`` of the
+            first evaluated tick; ``end_time_ns`` of the last tick.
+        ticks_evaluated, warmup_ticks: evaluated ticks, and ticks before every bound topic
+            had a message (not evaluated); ``waiting_for`` the topics still silent at the
+            first tick; ``missing_topics`` bound topics that never had a message.
+        tick, time_base: the clock used (``{"period_ns": ...}`` or ``{"topic": ...}``).
+        messages: messages read per topic.
+        problems: data problems (kind, topic, log_time_ns, end_time_ns, detail);
+            ``problem_counts`` counts all of them by ``kind topic`` (the list is capped).
+        verdicts: one per requirement, in requirement order.
+        error: a log-level input error (unreadable log, no bindings for a ROS log).
+        warnings: remarks on how far the audit can be trusted (e.g. the tick topic's
+            measured rate differs from its declared nominal rate by more than 10 %).
+    """
+
+    log: str
+    kind: str | None = None
+    partial: bool = False
+    damage_time_ns: int | None = None
+    start_time_ns: int | None = None
+    first_time_ns: int | None = None
+    end_time_ns: int | None = None
+    ticks_evaluated: int = 0
+    warmup_ticks: int = 0
+    waiting_for: list[str] = field(default_factory=list)
+    missing_topics: list[str] = field(default_factory=list)
+    tick: dict[str, Any] = field(default_factory=dict)
+    time_base: str | None = None
+    messages: dict[str, int] = field(default_factory=dict)
+    problems: list[dict[str, Any]] = field(default_factory=list)
+    problem_counts: dict[str, int] = field(default_factory=dict)
+    verdicts: list[Verdict] = field(default_factory=list)
+    engine: str | None = None
+    error: str | None = None
+    ticks_after_damage: int = 0
+    damage_cut: bool = False
+    warnings: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        """The log's audit as the audit JSON gives it (``docs/reference/audit.schema.json``)."""
+        st = self.start_time_ns
+        return {
+            "log": self.log, "kind": self.kind, "partial": self.partial,
+            "damage_time_ns": self.damage_time_ns,
+            "damage_time_s": _t(self.damage_time_ns, st)["s"],
+            "start_time_ns": st, "first_time_ns": self.first_time_ns,
+            "first_time_s": _t(self.first_time_ns, st)["s"],
+            "end_time_ns": self.end_time_ns, "end_time_s": _t(self.end_time_ns, st)["s"],
+            "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
+            "waiting_for": self.waiting_for, "missing_topics": self.missing_topics,
+            "tick": self.tick, "time_base": self.time_base, "messages": self.messages,
+            "problems": [dict(p, log_time_s=_t(p.get("log_time_ns"), st)["s"])
+                         for p in self.problems],
+            "problem_counts": self.problem_counts,
+            "verdicts": [v.to_json(st, self.time_base) for v in self.verdicts],
+            "engine": self.engine, "error": self.error,
+            "ticks_after_damage": self.ticks_after_damage, "damage_cut": self.damage_cut,
+        }
+
+
+#: Exit codes of ``fretc audit`` (docs/guide/audits.md "Exit codes"; ``fretc audit --help``).
+EXIT_OK = 0
+EXIT_VIOLATED = 1
+EXIT_INPUT_ERROR = 2
+EXIT_INCOMPLETE = 3
+EXIT_CODES = (
+    (EXIT_OK, "every verdict satisfied or vacuous, on complete logs without data problems"),
+    (EXIT_VIOLATED, "a requirement is violated on some log"),
+    (EXIT_INPUT_ERROR, "a usage or input error: bad option, requirement or binding, a log "
+                       "that cannot be read, a requirement that could not be audited on a log"),
+    (EXIT_INCOMPLETE, "no violation found, but a log is partial (truncated, damaged) or had "
+                      "data problems, or a verdict is unknown: the audit is incomplete "
+                      "(--allow-partial: 0 instead)"),
+)
+
+
+def incomplete(la: "LogAudit") -> bool:
+    """The log was not audited completely: partial (damaged, cut short), data problems
+    found while reading it, or a verdict that is neither satisfied, vacuous, violated nor
+    error (e.g. ``unknown`` at damage)."""
+    return bool(la.partial or la.problems or la.problem_counts
+                or any(v.verdict not in _DECIDED for v in la.verdicts))
+
+
+#: Verdicts that say the requirement was checked to the end of the log.
+_DECIDED = ("satisfied", "vacuous", "violated", "error")
+
+
+def summary(logs: list[LogAudit], allow_partial: bool = False) -> dict[str, int]:
+    """Counts of verdicts over all logs, and the exit code they give (:func:`exit_code`)."""
+    out = {k: 0 for k in VERDICTS}
+    for la in logs:
+        for v in la.verdicts:
+            out[v.verdict] = out.get(v.verdict, 0) + 1
+    out["partial_logs"] = sum(1 for la in logs if la.partial)
+    out["incomplete_logs"] = sum(1 for la in logs if incomplete(la))
+    out["log_errors"] = sum(1 for la in logs if la.error)
+    out["exit_code"] = exit_code(logs, allow_partial=allow_partial)
+    return out
+
+
+def exit_code(logs: list[LogAudit], input_errors: bool = False,
+              allow_partial: bool = False) -> int:
+    """The exit code of an audit (:data:`EXIT_CODES`), first that applies: 2 anything could
+    not be audited (an input error, an ``error`` verdict); 1 a requirement is violated; 3
+    (0 with ``allow_partial``) no violation but some log is incomplete (:func:`incomplete`:
+    partial, data problems, unknown verdicts - a CI gate must not pass a recording that lost
+    its last minutes); else 0."""
+    if input_errors or any(la.error for la in logs) or any(
+            v.verdict == "error" for la in logs for v in la.verdicts):
+        return EXIT_INPUT_ERROR
+    if any(v.verdict == "violated" for la in logs for v in la.verdicts):
+        return EXIT_VIOLATED
+    if not allow_partial and any(incomplete(la) for la in logs):
+        return EXIT_INCOMPLETE
+    return EXIT_OK
+
+
+def audit_json(logs: list[LogAudit], requirements: list[dict], bindings: dict | None,
+               input_errors: bool = False, allow_partial: bool = False) -> str:
+    """The ``--json`` document (module docstring), as text with sorted keys."""
+    s = summary(logs, allow_partial)
+    s["exit_code"] = exit_code(logs, input_errors, allow_partial)
+    doc = {"schema": SCHEMA, "requirements": requirements, "bindings": bindings,
+           "logs": [la.to_json() for la in logs], "summary": s}
+    return json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n"

@@ -1,0 +1,278 @@
+"""The questions ``fretc check`` asks of one set of requirements (satisfiability, minimal
+unsatisfiable subsets), each sent to the engine that decides it: Spot up to
+:data:`SPOT_MAX_BOUND` ticks, past it the pt monitors' fixed points (:mod:`check.monitor_sat`)
+when every formula has them, else z3 (:mod:`check.smt`). The checks built from these
+questions, and their order, are :mod:`check.analysis`'s.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable, Sequence
+
+from compiler import ir
+from compiler.ir import Node
+from compiler.printers import to_spot
+from .items import CheckItem, monitored_forms
+from .numeric_abstraction import NumericAbstraction
+from .safety_game import Outside, game_atoms
+from .smt import SmtSolver, max_bound
+from .solver import UNKNOWN, SpotWorker
+
+__all__ = ["ENGINES", "SPOT_MAX_BOUND", "Checker"]
+
+#: the solvers ``fretc check --engine`` names: ``auto`` Spot up to :data:`SPOT_MAX_BOUND`
+#: ticks, past it the requirements' pt monitors (:mod:`check.monitor_sat`) when they take
+#: the query, else z3 (:mod:`check.smt`); ``spot``; ``smt`` (z3 alone); ``bdd`` (the
+#: monitors whatever the bound, z3 for the queries they do not take)
+ENGINES = ("auto", "spot", "smt", "bdd")
+
+#: the largest tick bound ``engine="auto"`` gives Spot (faster there, bench/bench_check.py;
+#: past it Spot's automata grow with the bound, and it refuses bounds over 254)
+SPOT_MAX_BOUND = 16
+
+
+# --------------------------------------------------------------------------- the checker
+class Checker:
+    """Runs the checks of the module docstring on a list of :class:`CheckItem`.
+
+    ``worker`` answers Spot queries (:class:`check.solver.SpotWorker`);
+    ``mus_budget`` is the time in seconds each subset enumeration may take.
+    """
+
+    def __init__(self, items: Sequence[CheckItem], worker: SpotWorker,
+                 mus_budget: float = 10.0, smt: SmtSolver | None = None,
+                 engine: str = "auto"):
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+        self.items = list(items)
+        self.worker = worker
+        self.smt = smt if smt is not None else SmtSolver(worker.timeout)
+        self.engine = engine
+        self.smt_queries = 0
+        self.mus_budget = mus_budget
+        allf = [x.phi for x in self.items] + [x.trigger for x in self.items if x.trigger]
+        allf += [x.phi_ft for x in self.items] + [x.trigger_ft for x in self.items
+                                                  if x.trigger_ft]
+        self.numeric = NumericAbstraction.of(allf)
+        self._cache: dict[str, object] = {}
+        #: formula -> ("safe" | "goal", pt formula, requirement index), on infinite runs /
+        #: finite traces (:mod:`check.monitor_sat`)
+        self.monitored = monitored_forms(self.items)
+        self.monitor_queries = 0
+        self.queries = 0
+        self.unknown = 0
+
+    # ---------------------------------------------------------------- queries
+    def sat(self, formulas: Sequence[Node], extra: Sequence[Node] = ()) -> object:
+        """True / False / UNKNOWN: is the conjunction of ``formulas`` and ``extra`` (with the
+        numeric invariants of their comparisons) satisfiable on infinite words? (``extra``
+        apart so the worker can reuse the product of ``formulas``.)"""
+        return self.sat_word(formulas, extra)[0]
+
+    def uses_smt(self, formulas: Sequence[Node]) -> bool:
+        """Does a query on ``formulas`` go to z3 (:mod:`check.smt`) rather than Spot? With
+        ``engine="auto"``, when a bound passes :data:`SPOT_MAX_BOUND`."""
+        if self.engine != "auto":
+            return self.engine in ("smt", "bdd")
+        return max_bound(formulas) > SPOT_MAX_BOUND
+
+    def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
+                 ) -> tuple[object, tuple | None]:
+        """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
+        if self.uses_smt(list(formulas) + list(extra)):
+            got = self.monitor_word(list(formulas) + list(extra), finite=False)
+            if got is not None:
+                return got
+            return self._ask_smt(list(formulas) + list(extra))
+
+        def split(f: Node, parts: list[Node]) -> None:
+            if f.op == "&":
+                split(f.args[0], parts)
+                split(f.args[1], parts)
+            elif f.op != "true" and f not in parts:
+                parts.append(f)
+
+        base: list[Node] = []
+        more: list[Node] = []
+        for f in formulas:
+            split(f, base)
+        split(self.numeric.invariant(list(formulas) + list(extra)), base)
+        for f in extra:
+            split(f, more)
+        if not base:
+            base = [ir.TRUE]
+        return self._ask_sat((tuple(to_spot(f) for f in base),
+                              tuple(to_spot(f) for f in more if f not in base)))
+
+    def monitor_word(self, formulas: Sequence[Node], finite: bool,
+                     length: int | None = None) -> tuple[object, tuple | None] | None:
+        """:meth:`sat_word` decided on the requirements' pt monitors
+        (:mod:`check.monitor_sat`), or None when a formula of the query is not a monitored
+        requirement, trigger or negated requirement (``finite``: read on finite traces,
+        FRET's ft; ``length``: exactly that many ticks)."""
+        if self.engine in ("spot", "smt"):
+            return None
+        forms = self.monitored[finite]
+        # a formula with no pt monitor (an ``eventually``) is taken on infinite runs by
+        # Spot's deterministic Büchi automaton of it, when its own bounds are small
+        live = sorted({f for f in formulas if f not in forms}, key=to_spot)
+        if not formulas or (live and (finite or max_bound(live) > SPOT_MAX_BOUND)):
+            return None
+        # in input order: one query, one variable order (the order changes the BDDs' sizes,
+        # the answer not), so the cache and the time do not depend on how it was asked
+        formulas = sorted({f for f in formulas if f in forms},
+                          key=lambda f: (forms[f][2], forms[f][0]))
+        safe, goals, last = ([forms[f][1] for f in formulas if forms[f][0] == kind]
+                             for kind in ("safe", "goal", "last"))
+        try:
+            game_atoms(safe + goals + last + live)
+        except Outside:
+            return None
+        names = sorted({v for f in [*formulas, *live] for v in ir.variables(f)})
+        inv = self.numeric.regions(names)
+        key = ("monitor", finite, length, tuple(formulas), tuple(live))
+        timeout = self.worker.timeout
+        if self._cache.get(key) == "outside":
+            return None
+        fresh = key not in self._cache
+        # the fixed points stop at ``timeout`` and say so; the worker is killed a little
+        # later only if they do not
+        got = self._cached(key, lambda: self.worker.ask(
+            ("monitor_sat", safe, goals, inv, finite, length, timeout, live, last),
+            None if timeout is None else 1.2 * timeout + 1))
+        if got[0] == "outside":  # no deterministic Büchi automaton: z3's query
+            self._cache[key] = "outside"
+            return None
+        self.monitor_queries += fresh
+        return got
+
+    def _ask_smt(self, formulas: list[Node]):
+        self.smt_queries += ("smt", tuple(formulas)) not in self._cache
+        return self._cached(("smt", tuple(formulas)), lambda: self.smt.sat(formulas))
+
+    def _ask_sat(self, text):
+        return self._cached(text, lambda: self.worker.ask(("sat", text[0], text[1])))
+
+    def _cached(self, key, ask):
+        """The answer to a satisfiability query (``ask()`` once per ``key``): (UNKNOWN,
+        None) when the solver could not tell, counted in ``unknown``."""
+        got = self._cache.get(key)
+        if got is None:
+            self.queries += 1
+            ans = ask()
+            if ans == UNKNOWN:
+                self.unknown += 1
+                got = (UNKNOWN, None)
+            else:
+                got = ans
+            self._cache[key] = got
+        return got
+
+    # ---------------------------------------------------------------- components
+    def components(self) -> list[list[CheckItem]]:
+        """Requirements grouped by shared variables (union-find), in input order."""
+        parent = list(range(len(self.items)))
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        owner: dict[str, int] = {}
+        for k, item in enumerate(self.items):
+            for v in item.variables:
+                if v in owner:
+                    a, b = find(owner[v]), find(k)
+                    if a != b:
+                        parent[max(a, b)] = min(a, b)
+                else:
+                    owner[v] = k
+        groups: dict[int, list[CheckItem]] = {}
+        for k, item in enumerate(self.items):
+            groups.setdefault(find(k), []).append(item)
+        return list(groups.values())
+
+    # ---------------------------------------------------------------- subsets
+    def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
+                        bad: Callable[[list[CheckItem]], object]
+                        ) -> tuple[list[list[CheckItem]], bool, bool]:
+        """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
+        smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
+
+        Returns ``(subsets, cut, unknown)``: ``cut`` when the budget ran out before every
+        size was tried, ``unknown`` when some ``bad`` answer was UNKNOWN (a subset may then
+        be missing). Only subsets connected by shared variables are tried (a disconnected
+        bad subset is never minimal). A first minimal subset is found by deletion (so at
+        least one is reported whatever the budget), then sizes 1, 2, ... are enumerated.
+        """
+        deadline = time.monotonic() + self.mus_budget
+        must_ids = {x.index for x in must}
+        rest = [x for x in pool if x.index not in must_ids]
+        found: list[list[CheckItem]] = []
+        unknown = False
+        # deletion-based shrink of the whole pool: one minimal subset
+        current = list(must) + rest
+        whole = bad(current)
+        if whole is not True:
+            return [], False, whole == UNKNOWN
+        for x in list(rest):
+            trial = [y for y in current if y is not x]
+            ans = bad(trial)
+            if ans is True:
+                current = trial
+            elif ans == UNKNOWN:
+                unknown = True
+        first = sorted(current, key=lambda y: y.index)
+        found.append(first)
+        found_sets = [frozenset(y.index for y in first)]
+        cut = False
+        for size in range(0, len(rest) + 1):
+            if time.monotonic() > deadline:
+                cut = True
+                break
+            for combo in itertools.combinations(rest, size):
+                subset = list(must) + list(combo)
+                ids = frozenset(y.index for y in subset)
+                if any(s <= ids for s in found_sets):
+                    continue
+                if not _connected(subset):
+                    continue
+                if time.monotonic() > deadline:
+                    cut = True
+                    break
+                ans = bad(subset)
+                if ans is True:
+                    found.append(sorted(subset, key=lambda y: y.index))
+                    found_sets.append(ids)
+                elif ans == UNKNOWN:
+                    unknown = True
+            if cut:
+                break
+        order = sorted(range(len(found)), key=lambda k: (len(found[k]),
+                                                         [y.index for y in found[k]]))
+        out, seen = [], set()
+        for k in order:
+            key = frozenset(y.index for y in found[k])
+            if key not in seen:
+                seen.add(key)
+                out.append(found[k])
+        return out, cut, unknown
+
+
+def _connected(subset: Sequence[CheckItem]) -> bool:
+    if len(subset) <= 1:
+        return True
+    reach = {0}
+    names = set(subset[0].variables)
+    grew = True
+    while grew:
+        grew = False
+        for k, x in enumerate(subset):
+            if k not in reach and names.intersection(x.variables):
+                reach.add(k)
+                names.update(x.variables)
+                grew = True
+    return len(reach) == len(subset)

@@ -1,0 +1,46 @@
+"""The columns a watch keeps while it runs: per tick, every variable's value, the log time
+each topic's held message had, and the tick's time (the audit's columns of
+:mod:`audit.columns`, grown one tick at a time), read back as numpy arrays for the judge.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from audit.columns import column_array
+
+__all__ = ["LiveColumns"]
+
+
+class LiveColumns:
+    """Per-tick values, times and held log times kept while watching (the audit's columns,
+    as growing lists; :meth:`arrays` gives numpy views of everything so far)."""
+
+    def __init__(self, names: list[str], topics: list[str]) -> None:
+        self.names = names
+        self.topics = topics
+        self.n = 0
+        self.vals: dict[str, list] = {n: [] for n in names}
+        self.lts: dict[str, list] = {t: [] for t in topics}
+        self.times: list = []
+
+    def append(self, tick) -> None:
+        """Keep one :class:`~signals.clock.Tick`: its values, held log times and time."""
+        v = tick.values
+        for name in self.names:
+            self.vals[name].append(v[name])
+        lt = tick.log_times
+        for t in self.topics:
+            self.lts[t].append(lt.get(t, -1))
+        self.times.append(tick.time)
+        self.n += 1
+
+    def arrays(self, n: int | None = None):
+        """(times, variable -> values, topic -> held log times) of the first ``n`` ticks
+        (all by default; a snapshot of ``n`` taken first is safe while another thread
+        appends)."""
+        n = self.n if n is None else n
+        times = np.array(self.times[:n], dtype=np.int64)
+        cols = {k: column_array(v[:n]) for k, v in self.vals.items()}
+        lts = {t: np.array(v[:n], dtype=np.int64) for t, v in self.lts.items()}
+        return times, cols, lts

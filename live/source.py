@@ -1,0 +1,453 @@
+"""The watched run as a log: :class:`WatchSource`, a :class:`logs.LogSource`
+whose messages come from a Foxglove WebSocket server; the verdict events
+(:class:`WatchEvent`); and the recording of a watch (:class:`Recorder`).
+
+Faults, each a data problem of the run, never a crash:
+
+* a dropped connection is retried with backoff; the messages lost in between are a
+  :data:`CONNECTION_GAP` problem (log time of the last message before, of the first after,
+  the wall-clock length). Ticks strictly inside the gap are **not evaluated** (counted as
+  unknown, never held over the gap); the monitors keep their state and go on from the next
+  message. A run with a gap is ``partial`` and cannot exit 0. A connection that closes with
+  nothing after it before the watch ends is the end of the watched run
+  (:data:`CONNECTION_CLOSED`, reported, not a gap);
+* a topic the server stops advertising while the run goes on (a message on another topic
+  comes after): :data:`UNADVERTISED` (its last message is then held like any silent topic,
+  and the problem says since when);
+
+The end of the watched run, never a data problem: the server's orderly close (a WebSocket
+close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
+for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). The reason is
+:attr:`WatchSource.end_reason`.
+* a message that does not decode: ``undecodable`` (skipped), as in logs;
+* a log time (or, under the header time base, what the clock sees) going backwards:
+  :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);
+* a bound topic not advertised within ``wait`` seconds of connecting, or advertised with a
+  schema that cannot be decoded: the requirements reading it are ``error`` (as a topic
+  missing from a log in an audit); the others are watched;
+* a frame of the wrong shape (the client's ``protocol`` event: a JSON array where an object
+  goes, a truncated message frame, an advertisement flood): :data:`PROTOCOL` (the frame is
+  ignored, the session goes on); a server whose connections keep sending such frames and
+  dropping ends the run (the client's ``gave_up``);
+* a log time outside ``[0, 2**63)`` ns (MCAP's log times are uint64, numpy's and the
+  clocks' int64), or one that jumps further past the last message used than
+  :attr:`WatchSource.max_jump_ns` (the ticks in between would be made one by one, live):
+  :data:`TIME_RANGE` (the message is skipped).
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+from mcap.writer import CompressionType, Writer
+from rosbags.typesys.msg import normalize_msgtype
+
+from common import problems as P
+from audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+from logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
+
+__all__ = ["WatchEvent", "WatchSource", "Recorder", "CONNECTION_GAP", "UNADVERTISED",
+           "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE"]
+
+#: The connection dropped: messages between the two log times were not received.
+CONNECTION_GAP = "connection_gap"
+#: The connection closed and nothing came after it until the watch ended.
+CONNECTION_CLOSED = "connection_closed"
+#: The server stopped advertising a subscribed topic.
+UNADVERTISED = "unadvertised"
+#: A message's time is before one already used; skipped.
+CLOCK_BACKWARDS = "clock_backwards"
+#: A bound topic the server does not advertise.
+NOT_ADVERTISED = "not_advertised"
+#: A frame of the wrong shape for the protocol; ignored.
+PROTOCOL = "protocol"
+#: A message's log time is outside the range the watch can tick on; skipped.
+TIME_RANGE = "time_range"
+#: Log times are int64 nanoseconds from here on (numpy columns, the clocks' grid).
+TIME_LIMIT = 2**63
+
+
+@dataclass
+class WatchEvent:
+    """One verdict event.
+
+    Attributes:
+        kind: ``pt`` | ``ltl3`` | ``problem`` | ``gap`` | ``final`` | ``connected`` |
+            ``disconnected`` | ``closed`` (the server's orderly close) | ``end`` (the
+            watched run ended; ``detail``: why).
+        time_ns: on the run's clock (log time or header stamp), when known.
+        wall_ns: wall clock (``time.time_ns()``) when the event was produced.
+        requirement: the requirement id (verdict events).
+        tick: the tick index (verdict events).
+        verdict: ``pt``: ``holds`` / ``violated``; ``ltl3``: ``satisfied`` / ``violated``;
+            ``final``: the final verdict.
+        detail: free text (problems, gaps).
+        depends_on: log time (ns) of the newest message the tick's values came from (the
+            latency benchmark's join key).
+    """
+
+    kind: str
+    time_ns: int | None = None
+    wall_ns: int = 0
+    requirement: str | None = None
+    tick: int | None = None
+    verdict: str | None = None
+    detail: str | None = None
+    depends_on: int | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        """The event as one ``--jsonl`` line's object."""
+        out = {"event": self.kind, "time_ns": self.time_ns, "wall_ns": self.wall_ns}
+        for k in ("requirement", "tick", "verdict", "detail", "depends_on"):
+            val = getattr(self, k)
+            if val is not None:
+                out[k] = val
+        out.update(self.extra)
+        return out
+
+
+# --------------------------------------------------------------------------- the source
+class WatchSource(LogSource):
+    """Messages of a Foxglove WebSocket server as a :class:`LogSource` (kind ``"watch"``).
+
+    :meth:`messages` blocks on the client's queue and ends when :meth:`stop` is called or
+    the deadline passes. Decoders are built from each advertisement's schema. See the module
+    docstring for the faults it reports.
+    """
+
+    kind = "watch"
+
+    def __init__(self, url: str, client, *, deadline: float | None = None,
+                 idle: float | None = None,
+                 on_event: Callable[[WatchEvent], None] | None = None,
+                 on_message: Callable[[str, int, bytes], None] | None = None) -> None:
+        super().__init__(url)
+        self.client = client
+        self.deadline = deadline
+        self.idle = idle
+        self.end_reason: str | None = None
+        self._ended = False
+        self._server_ended = False  # the server ended the run (close, all unadvertised)
+        self._last_wall: float | None = None  # monotonic time of the last message (or connect)
+        self._pending_unadvertised: list[tuple[str, int | None]] = []
+        self.on_event = on_event or (lambda e: None)
+        self.on_message = on_message
+        self.advertised: dict[str, Any] = {}  # topic -> Advertised
+        self.decoders: dict[str, Callable[[bytes], Any] | None] = {}
+        self.schema_errors: dict[str, str] = {}
+        self.connected = False
+        self.ever_connected = False
+        self.first_connect_wall: float | None = None
+        self.last_reason = ""
+        self.gaps: list[tuple[int, int]] = []  # (last log time before, first after)
+        self._gap_open: tuple[float, str] | None = None  # wall start, reason
+        self._last_time: int | None = None
+        self._early: deque[tuple] = deque()
+        self._stop = threading.Event()
+        self.unadvertised: set[str] = set()
+        self._wanted: set[str] | None = None
+        #: the longest jump of log time (ns) from one message used to the next; None: no
+        #: bound (the watch sets it from the tick period)
+        self.max_jump_ns: int | None = None
+        self._reported: dict[str, int] = {}  # problem events sent per kind (capped)
+
+    def stop(self) -> None:
+        """End :meth:`messages` (thread-safe; the Ctrl-C handler calls it)."""
+        self._stop.set()
+
+    @property
+    def stopped(self) -> bool:
+        """The run ended: stopped, past the deadline, idle too long, closed by the server or
+        every subscribed topic unadvertised (:attr:`end_reason` says which)."""
+        if self._ended:
+            return True
+        now = time.monotonic()
+        if self._stop.is_set():
+            self._end("stopped")
+        elif self.deadline is not None and now >= self.deadline:
+            self._end("the watch's duration passed")
+        elif (self.idle is not None and self._last_wall is not None
+              and now - self._last_wall >= self.idle):
+            self._end(f"no message for {self.idle:g} s")
+        return self._ended
+
+    def _end(self, reason: str) -> None:
+        if not self._ended:
+            self._ended = True
+            self.end_reason = reason
+
+    def topics(self) -> dict[str, str]:
+        """Advertised topic -> its message type (ROS name)."""
+        out = {}
+        for t, ch in self.advertised.items():
+            try:
+                out[t] = normalize_msgtype(ch.schema_name) if ch.schema_name else ""
+            except Exception:
+                out[t] = ch.schema_name
+        return dict(sorted(out.items()))
+
+    # -- events -------------------------------------------------------------------------
+    def pump(self, timeout: float) -> bool:
+        """Handle one event of the client (waiting up to ``timeout`` s); messages are kept
+        for :meth:`messages`. False when nothing came."""
+        try:
+            ev = self.client.events.get(timeout=timeout)
+        except queue.Empty:
+            return False
+        self._handle(ev)
+        return True
+
+    def _handle(self, ev: tuple) -> None:
+        kind = ev[0]
+        if kind == "message":
+            self._early.append(ev)
+        elif kind == "advertise":
+            for ch in ev[2]:
+                self.advertised[ch.topic] = ch
+                if ch.topic in self.unadvertised:
+                    self.unadvertised.discard(ch.topic)
+                self._build(ch)
+        elif kind == "unadvertise":
+            for t in ev[2]:
+                self.unadvertised.add(t)
+                # a problem only if the run goes on without it (_flush_unadvertised)
+                self._pending_unadvertised.append((t, self._last_time))
+            subscribed = set(self.advertised) & (self._wanted or set(self.advertised))
+            if subscribed and subscribed <= self.unadvertised:
+                self._server_ended = True
+                self._end("the server unadvertised every subscribed topic")
+        elif kind == "protocol":
+            self._report(PROTOCOL, None, self._last_time, f"{ev[2]} (from {self.path})")
+        elif kind == "gave_up":
+            self.last_reason = ev[2]
+            self._report(PROTOCOL, None, self._last_time, ev[2])
+            self._end(ev[2])
+        elif kind == "closed":
+            self.connected = False
+            self.last_reason = ev[2]
+            self._server_ended = True
+            self._end(ev[2])
+            self.on_event(WatchEvent("closed", self._last_time, ev[1], detail=ev[2]))
+        elif kind == "connected":
+            self.connected = self.ever_connected = True
+            if self.first_connect_wall is None:
+                self.first_connect_wall = time.monotonic()
+            if self._last_wall is None:
+                self._last_wall = time.monotonic()
+            self.on_event(WatchEvent("connected", self._last_time, ev[1],
+                                     detail=f"subprotocol {ev[2]}"))
+        elif kind == "disconnected":
+            self.last_reason = ev[2]
+            if self.connected:
+                self.connected = False
+                if self._gap_open is None:
+                    self._gap_open = (time.monotonic(), ev[2])
+                self.on_event(WatchEvent("disconnected", self._last_time, ev[1],
+                                         detail=ev[2]))
+
+    def _report(self, kind: str, topic: str | None, log_time: int | None,
+                detail: str) -> None:
+        """A data problem and its ``problem`` event (events capped per kind at
+        :data:`common.problems.MAX_PROBLEMS_PER_KIND`, as the problems kept; all counted)."""
+        self._problem(kind, topic, log_time, detail)
+        n = self._reported.get(kind, 0)
+        if n < P.MAX_PROBLEMS_PER_KIND:
+            self._reported[kind] = n + 1
+            self.on_event(WatchEvent("problem", log_time, time.time_ns(),
+                                     detail=f"{kind}: {detail}" if topic is None
+                                     else f"{kind}: {topic}"))
+
+    def _build(self, ch) -> None:
+        if self._wanted is not None and ch.topic not in self._wanted:
+            return
+        try:
+            self.decoders[ch.topic] = schema_decoder(ch.encoding, ch.schema_encoding,
+                                                     ch.schema_name, ch.schema)
+            self.schema_errors.pop(ch.topic, None)
+        except _Unsupported as exc:
+            self.decoders[ch.topic] = None
+            kind = P.UNKNOWN_SCHEMA if ch.encoding in ("cdr", "ros1") else P.UNKNOWN_ENCODING
+            self.schema_errors[ch.topic] = f"{kind}: {exc}"
+            self._problem(kind, ch.topic, self._last_time,
+                          f"{exc}; messages on this topic are skipped")
+
+    def want(self, topics: set[str]) -> None:
+        """Decode only ``topics`` from now on (decoders of advertised ones are built)."""
+        self._wanted = set(topics)
+        for t in topics:
+            ch = self.advertised.get(t)
+            if ch is not None and t not in self.decoders:
+                self._build(ch)
+
+    # -- the stream ------------------------------------------------------------------------
+    def messages(self, topics=None) -> Iterator[Message]:
+        """The watched messages of ``topics`` (all wanted by default) as they arrive,
+        until stopped."""
+        self.counts = {}
+        wanted = None if topics is None else set(topics)
+        while True:
+            if self._early:
+                ev = self._early.popleft()
+            else:
+                if self.stopped:
+                    try:  # what already arrived is still used
+                        ev = self.client.events.get_nowait()
+                    except queue.Empty:
+                        break
+                else:
+                    try:
+                        ev = self.client.events.get(timeout=0.05)
+                    except queue.Empty:
+                        continue
+            if ev[0] != "message":
+                self._handle(ev)
+                continue
+            _k, topic, log_time, payload, wall = ev
+            if wanted is not None and topic not in wanted:
+                continue
+            msg = self._deliver(topic, log_time, payload)
+            if msg is not None:
+                yield msg
+        if not self._server_ended:
+            # the watch ended with some topics unadvertised and the run going on: reported
+            self._flush_unadvertised()
+        if self._gap_open is not None and self._last_time is not None:
+            # the run ends here: nothing came after the connection closed (the end of the
+            # robot's run, or of its network - the watch cannot tell), so no tick is missing
+            # from inside the run; reported, not a gap
+            wall0, reason = self._gap_open
+            self._gap_open = None
+            detail = (f"connection lost ({reason}) {time.monotonic() - wall0:.2f} s before the "
+                      f"watch ended; nothing was received after log time {self._last_time}: "
+                      "the watched run ends there")
+            self._problem(CONNECTION_CLOSED, None, self._last_time, detail)
+            self.on_event(WatchEvent("problem", self._last_time, time.time_ns(),
+                                     detail=f"{CONNECTION_CLOSED}: {detail}"))
+
+    def _flush_unadvertised(self) -> None:
+        """The run went on after topics were unadvertised: each is an :data:`UNADVERTISED`
+        problem."""
+        for t, at in self._pending_unadvertised:
+            self._problem(UNADVERTISED, t, at,
+                          "the server stopped advertising this topic; its last message is "
+                          "held from here on")
+            self.on_event(WatchEvent("problem", at, time.time_ns(),
+                                     detail=f"{UNADVERTISED}: {t}"))
+        self._pending_unadvertised.clear()
+
+    def _time_problem(self, topic: str, log_time: int) -> str | None:
+        """Why ``log_time`` cannot be ticked on (module docstring), or None."""
+        if not 0 <= log_time < TIME_LIMIT:
+            return (f"log time {log_time} ns is outside [0, 2**63) ns, the range of the "
+                    "watch's clocks; message skipped")
+        last, jump = self._last_time, self.max_jump_ns
+        if last is not None and jump is not None and log_time - last > jump:
+            return (f"log time {log_time} ns is {(log_time - last) / 1e9:.6g} s after the "
+                    f"last message used, more than the {jump / 1e9:.6g} s the watch ticks "
+                    "over at once; message skipped")
+        return None
+
+    def _deliver(self, topic: str, log_time: int, payload: bytes) -> Message | None:
+        self._last_wall = time.monotonic()
+        if self._pending_unadvertised:
+            self._flush_unadvertised()
+        dec = self.decoders.get(topic)
+        if dec is None:
+            return None
+        why = self._time_problem(topic, log_time)
+        if why is not None:
+            self._report(TIME_RANGE, topic, None, why)
+            return None
+        try:
+            data = dec(payload)
+        except DECODE_ERRORS as exc:
+            self._problem(P.UNDECODABLE, topic, log_time,
+                          f"payload of {len(payload)} bytes does not deserialize "
+                          f"({type(exc).__name__}: {exc}); message skipped")
+            self.on_event(WatchEvent("problem", log_time, time.time_ns(),
+                                     detail=f"{P.UNDECODABLE}: {topic}"))
+            return None
+        if self._last_time is not None and log_time < self._last_time:
+            self._problem(CLOCK_BACKWARDS, topic, log_time,
+                          f"log time {log_time} is {self._last_time - log_time} ns before a "
+                          "message already used; message skipped")
+            self.on_event(WatchEvent("problem", log_time, time.time_ns(),
+                                     detail=f"{CLOCK_BACKWARDS}: {topic}"))
+            return None
+        if self._gap_open is not None:
+            wall0, reason = self._gap_open
+            self._gap_open = None
+            if self._last_time is not None:
+                before = self._last_time
+                self.gaps.append((before, log_time))
+                wall = time.monotonic() - wall0
+                detail = (f"connection lost ({reason}) for {wall:.2f} s of wall time; no "
+                          f"message between log times {before} and {log_time} "
+                          f"({(log_time - before) / 1e9:.3f} s): ticks inside are not "
+                          "evaluated (unknown), the monitors keep their state")
+                self._problem(CONNECTION_GAP, None, before, detail, end_time=log_time)
+                self.on_event(WatchEvent("gap", before, time.time_ns(), detail=detail,
+                                         extra={"end_time_ns": log_time,
+                                                "length_s": (log_time - before) / 1e9}))
+        self._last_time = log_time
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+        if self._start_time is None:
+            self._start_time = log_time
+        self._end_time = log_time
+        if self.on_message is not None:
+            self.on_message(topic, log_time, payload)
+        return Message(topic, log_time, log_time, header_stamp(data), data)
+
+
+# --------------------------------------------------------------------------- recording
+class Recorder:
+    """MCAP of the watched messages (schemas and encodings as advertised) plus the
+    ``/fretc/verdicts`` foxglove.Log channel, written at the end."""
+
+    def __init__(self, path: str, source: WatchSource) -> None:
+        self.path = path
+        self.source = source
+        self._f = open(path, "wb")
+        self.writer = Writer(self._f, compression=CompressionType.ZSTD)
+        self.writer.start(profile="", library="fretc watch")
+        self.channels: dict[str, int] = {}
+        self.seq: dict[str, int] = {}
+
+    def message(self, topic: str, log_time: int, payload: bytes) -> None:
+        """Write one watched message (its channel and schema on first use)."""
+        cid = self.channels.get(topic)
+        if cid is None:
+            ch = self.source.advertised[topic]
+            sid = self.writer.register_schema(ch.schema_name, ch.schema_encoding,
+                                              ch.schema.encode("utf-8"))
+            cid = self.writer.register_channel(topic, ch.encoding, sid)
+            self.channels[topic] = cid
+            self.seq[topic] = 0
+        self.writer.add_message(cid, log_time=log_time, data=payload, publish_time=log_time,
+                                sequence=self.seq[topic])
+        self.seq[topic] += 1
+
+    def finish(self, la) -> int:
+        """Write the verdict events of ``la`` and close the file; the number of events."""
+        events = verdict_events(la.to_json())
+        sid = self.writer.register_schema("foxglove.Log", "jsonschema",
+                                          json.dumps(FOXGLOVE_LOG_SCHEMA).encode("utf-8"))
+        cid = self.writer.register_channel(VERDICT_TOPIC, "json", sid)
+        for i, e in enumerate(sorted(events, key=lambda e: e.time_ns)):
+            self.writer.add_message(cid, log_time=int(e.time_ns), publish_time=int(e.time_ns),
+                                    data=json.dumps(e.to_json()).encode("utf-8"), sequence=i)
+        self.writer.add_metadata("fretc.verdicts",
+                                 {v.requirement: v.verdict for v in la.verdicts})
+        self.writer.finish()
+        self._f.close()
+        return len(events)
+
+

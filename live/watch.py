@@ -1,0 +1,530 @@
+"""``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
+protocol (:class:`~live.client.FoxgloveClient`) or rosbridge
+(:class:`~live.rosbridge.RosbridgeClient`).
+
+One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
+of a recorded log, only fed live:
+
+* :class:`~live.source.WatchSource` is a :class:`logs.LogSource`
+  whose messages come from a client instead of a file; each channel is decoded with rosbags from the schema text the server advertised
+  (:func:`logs.schema_decoder`, shared with the MCAP reader);
+* the ticks come from :func:`signals.sample` with the same bindings (tick, time
+  base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
+* every tick steps the generated monitors the audit loads (:func:`audit.load_plan`)
+  for the live verdicts and events;
+* at the end the verdicts and evidence are made by the audit's own code
+  (:func:`audit.finalize.finalize`) over the columns kept while watching.
+
+The run ends with the server's orderly close, every bound topic unadvertised, the
+duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
+the final verdicts are FRET's finite-trace verdicts at the last tick, as the audit's at the
+end of a log. So the same messages give the same verdicts as ``fretc audit`` (tested: each
+shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
+server, watched to the end, equal its audit; a ``--record``\\ ed watch audited offline
+equals the watch).
+
+The faults of a live run are data problems (:mod:`live.source`).
+
+Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
+verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
+end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them; ``--record`` writes them to
+the ``/fretc/verdicts`` channel of the recording (foxglove.Log, like ``fretc report
+--annotate``) beside every message the watch used.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from common.problems import DataProblem
+from signals import sample_groups
+from monitors.interval import evaluate_requirement
+from audit import AuditInputError
+from audit.finalize import finalize
+from audit.log import log_engine, summarize_clocks
+from audit.log_problems import collect_problems, problem_json
+from audit.operands import operand_values
+from audit.passes import ClockPass, clock_key, restrict
+from audit.verdict import LogAudit, Verdict
+from .client import FoxgloveClient, require_websockets
+from .columns import LiveColumns
+from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
+    UNADVERTISED, Recorder, WatchEvent, WatchSource)
+
+__all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
+           "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
+
+#: The most ticks one message may move a fixed-period clock forward (a jump of log time
+#: further than this many periods is a ``time_range`` problem, the message skipped): the
+#: ticks in between are made one by one while watching.
+MAX_JUMP_TICKS = 10**6
+
+
+@dataclass
+class WatchOptions:
+    """How to watch.
+
+    Attributes:
+        url: the server (``ws://host:8765``).
+        duration: stop after this many seconds of wall time (None: until :meth:`Watch.stop`,
+            e.g. on Ctrl-C).
+        wait: seconds, after the first connection, to wait for every bound topic to be
+            advertised; topics still missing then make their requirements ``error``.
+        connect_timeout: seconds to keep trying to connect at all before giving up (None:
+            until stopped).
+        record: MCAP path to write the watched messages and the verdict events to.
+        backoff, max_backoff: reconnection delays (s), doubling.
+        until_idle: end the run when no message arrived for this many seconds (wall time).
+        types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
+            a bound topic (``--topic-type``; over the bindings' ``[types]``).
+    """
+
+    url: str
+    duration: float | None = None
+    until_idle: float | None = None
+    types: dict[str, str] | None = None
+    wait: float = 3.0
+    connect_timeout: float | None = None
+    record: str | None = None
+    backoff: float = 0.1
+    max_backoff: float = 5.0
+
+
+def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = None):
+    """The client for ``options.url``: :class:`~live.rosbridge.RosbridgeClient` for
+    ``rosbridge://`` (``rosbridge+wss://``; for topics rosapi does not type: ``types``, the
+    bindings' ``[types]``, overridden by ``options.types``), else
+    :class:`~live.client.FoxgloveClient` (``ws://``, ``wss://``)."""
+    kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
+    if options.url.startswith(("rosbridge://", "rosbridge+wss://")):
+        from .rosbridge import RosbridgeClient  # lazy: numpy's message building
+
+        given = dict(types or {})
+        given.update(options.types or {})
+        return RosbridgeClient(options.url, wanted, types=given, **kw)
+    return FoxgloveClient(options.url, wanted, **kw)
+
+
+# --------------------------------------------------------------------------- the engine
+class _Live:
+    """Per-requirement live state (read by the table)."""
+
+    __slots__ = ("pt", "status", "status_tick", "status_time", "violations", "pending",
+                 "last_trigger", "first_violation", "error", "offline")
+
+    def __init__(self) -> None:
+        self.pt: bool | None = None
+        self.status = "unknown"
+        self.status_tick: int | None = None
+        self.status_time: int | None = None
+        self.violations = 0  # obligations already failed (they fail on every continuation)
+        self.pending = 0  # obligations failing on the ticks so far that may still be met
+        self.last_trigger: int | None = None
+        self.first_violation: int | None = None
+        self.error: str | None = None
+        self.offline = False
+
+
+class Watch:
+    """Watch a server against the requirements of ``plan`` (from
+    :func:`audit.load_plan`).
+
+    Args:
+        plan: compiled requirements and bindings (bindings are required; a plan whose only
+            binding file selects logs with ``[logs]`` is watched with that file).
+        options: :class:`WatchOptions`.
+        on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
+
+    :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration,
+    idle, :meth:`stop`), then returns
+    the :class:`~audit.verdict.LogAudit` of the run (``log`` = the URL, ``kind``
+    ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
+    """
+
+    #: Seconds between two recomputations of "violations so far" / "last trigger".
+    EVIDENCE_EVERY = 1.0
+
+    def __init__(self, plan, options: WatchOptions,
+                 on_event: Callable[[WatchEvent], None] | None = None) -> None:
+        if plan.bindings is None and len(plan.variants) == 1:
+            plan = plan.variants[0][2]  # one binding file with [logs]: the watched run's
+        if plan.bindings is None:
+            raise AuditInputError("fretc watch needs signal bindings (*.bindings.toml next to "
+                                  "the requirements, --bindings or --bind; one file when "
+                                  "they select logs with [logs])")
+        self.plan = plan
+        self.options = options
+        self.on_event = on_event or (lambda e: None)
+        self.events: list[WatchEvent] = []
+        self.live: dict[int, _Live] = {r.index: _Live() for r in plan.requirements}
+        self.ticks = 0
+        self.unknown_ticks = 0
+        self.last_tick_time: int | None = None
+        self.start_time: int | None = None
+        self.status_line = "connecting"
+        b = plan.bindings
+        self.needed: set[str] = set()
+        for r in plan.requirements:
+            if r.error is None:
+                for v in r.variables:
+                    if v in b.variables:
+                        self.needed |= set(b.variables[v].topics)
+        if b.tick.topic is not None:
+            self.needed.add(b.tick.topic)
+        require_websockets()
+        self.client = make_client(options, lambda t: t in self.needed, b.types)
+        deadline = (time.monotonic() + options.duration) if options.duration else None
+        self.source = WatchSource(options.url, self.client, deadline=deadline,
+                                  idle=options.until_idle, on_event=self._event)
+        if b.tick.period_ns:
+            self.source.max_jump_ns = MAX_JUMP_TICKS * b.tick.period_ns
+        self.recorder: Recorder | None = None
+        self._lock = threading.Lock()
+        self._evidence_at = 0.0
+        self._cols = {}
+        self._group = {}
+        self._unknown = {}
+        #: called after every evaluated tick's monitors stepped, with (tick index, tick
+        #: time, log time of the newest message its values use, log time of the message
+        #: whose arrival closed it): the latency benchmark's hook.
+        self.on_tick: Callable[[int, int, int | None, int | None], None] | None = None
+
+    def stop(self) -> None:
+        """Stop watching (thread-safe): :meth:`run` finishes with the final verdicts."""
+        self.source.stop()
+
+    def _event(self, e: WatchEvent) -> None:
+        with self._lock:
+            self.events.append(e)
+        if e.kind == "connected":
+            self.status_line = f"connected to {self.options.url} ({e.detail})"
+        elif e.kind == "disconnected":
+            self.status_line = f"disconnected: {e.detail}; retrying"
+        elif e.kind == "end":
+            self.status_line = f"run ended: {e.detail}"
+        self.on_event(e)
+
+    # -- the run -----------------------------------------------------------------------------
+    def run(self) -> LogAudit:
+        """Watch until the run ends (:attr:`WatchSource.end_reason` says why); its LogAudit."""
+        plan, src = self.plan, self.source
+        url = self.options.url
+        la = LogAudit(log=url, kind="watch")
+        b = plan.bindings
+        la.tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns
+                   else {"topic": b.tick.topic})
+        la.time_base = b.time_base
+        verdicts: dict[int, Verdict] = {}
+        for r in plan.requirements:
+            verdicts[r.index] = Verdict(log=url, requirement=r.id, text=r.text,
+                                        source=r.source, notes=list(r.notes))
+            if r.error is not None:
+                verdicts[r.index].error = r.error
+        src.want(self.needed)
+        self.client.start()
+        try:
+            self._await_topics()
+            if self.options.record:
+                self.recorder = Recorder(self.options.record, src)
+                src.on_message = self.recorder.message
+            if not src.ever_connected:
+                la.error = (f"{url}: could not connect"
+                            + (f" ({src.last_reason})" if src.last_reason else ""))
+                for v in verdicts.values():
+                    v.error = v.error or f"not watched: {la.error}"
+                return self._finish(la, verdicts, None)
+            active = self._watchable(la, verdicts)
+            result = None
+            if active:
+                names = sorted({v for r in active for v in r.variables})
+                rb = restrict(b, names)
+                src.want(set(rb.topics) | ({b.tick.topic} if b.tick.topic else set()))
+                result = self._run_pass(active, rb)
+        finally:
+            self.client.stop()
+        self._event(WatchEvent("end", src._last_time, time.time_ns(),
+                               detail=src.end_reason or "stopped"))
+        self._record_problems(la, result)
+        return self._finish(la, verdicts, result, active if result is not None else [])
+
+    def _watchable(self, la: LogAudit, verdicts: dict[int, Verdict]) -> list:
+        """The requirements that can be watched: every variable bound, every topic they read
+        advertised with a schema that decodes, and the tick topic advertised; the others'
+        verdicts get the error."""
+        plan, src, url, b = self.plan, self.source, self.options.url, self.plan.bindings
+        active = []
+        for r in plan.requirements:
+            v = verdicts[r.index]
+            if v.error is not None:
+                continue
+            missing = [n for n in r.variables if n not in b.variables]
+            if missing:
+                v.error = f"no binding for {', '.join(map(repr, missing))} in bindings " \
+                          f"({b.source})"
+                continue
+            topics = sorted({t for n in r.variables for t in b.variables[n].topics})
+            bad = []
+            for t in topics:
+                if t not in src.advertised:
+                    bad.append(f"topic {t} is not advertised by {url} (it advertises "
+                               f"{_listing(src.advertised)})")
+                elif src.decoders.get(t) is None:
+                    bad.append(f"topic {t} cannot be read "
+                               f"({src.schema_errors.get(t, 'no decoder')})")
+            if bad:
+                v.error = "; ".join(bad)
+                continue
+            active.append(r)
+        for t in sorted(self.needed - set(src.advertised)):
+            src._problem(NOT_ADVERTISED, t, None,
+                         f"not advertised by {url} within {self.options.wait:g} s of "
+                         "connecting")
+        for r in plan.requirements:
+            if verdicts[r.index].error is not None:
+                self.live[r.index].error = verdicts[r.index].error
+        if b.tick.topic is not None and b.tick.topic not in src.advertised:
+            la.error = f"the tick topic {b.tick.topic} is not advertised by {url}"
+            for r in active:
+                verdicts[r.index].error = la.error
+            active = []
+        return active
+
+    def _record_problems(self, la: LogAudit, result) -> None:
+        """The run's message counts and problems; a run with a connection gap is partial."""
+        src = self.source
+        problems: dict[tuple, DataProblem] = {}
+        counts: dict[str, int] = {}
+        collect_problems(src, result.sampling if result is not None else None, problems,
+                         counts)
+        la.messages = dict(sorted(src.counts.items()))
+        la.problems = [problem_json(p) for p in problems.values()]
+        la.problem_counts = dict(sorted(counts.items()))
+        if src.gaps:
+            la.partial = True
+            la.damage_time_ns = src.gaps[0][0]
+
+    def _await_topics(self) -> None:
+        """Connect, then wait (``options.wait`` s) for the bound topics' advertisements."""
+        src, opt = self.source, self.options
+        t0 = time.monotonic()
+        while not src.stopped:
+            if src.ever_connected:
+                if self.needed <= set(src.advertised):
+                    break
+                if time.monotonic() - src.first_connect_wall >= opt.wait:
+                    break
+            elif opt.connect_timeout is not None and time.monotonic() - t0 >= opt.connect_timeout:
+                break
+            src.pump(0.05)
+
+    def _run_pass(self, active, bindings):
+        """Step the monitors over the live ticks, each requirement on its own clock (the
+        topics of its variables, :func:`signals.sample_groups`, as the audit)."""
+        src = self.source
+        engine = {r.index: ("interval" if r.offline else "stepwise") for r in active}
+        monitors = {r.index: r.monitor_cls() for r in active if engine[r.index] == "stepwise"}
+        for r in active:
+            self.live[r.index].offline = r.offline
+        groups: dict[frozenset, list] = {}
+        for r in active:
+            groups.setdefault(clock_key(r, bindings), []).append(r)
+        spec = {}
+        self._cols = {}
+        self._group = {}
+        order = {}
+        for key, rs in groups.items():
+            names: list[str] = []
+            for r in rs:
+                for v in r.variables:
+                    if v not in names:
+                        names.append(v)
+            spec[key] = (names, key)
+            self._cols[key] = LiveColumns(names, sorted(key))
+            order[key] = [(r, monitors.get(r.index), self.live[r.index]) for r in rs]
+            for r in rs:
+                self._group[r.index] = key
+        self._active = active
+        self._unknown = {key: 0 for key in groups}
+        sampling = sample_groups(src, bindings, spec)
+        gaps = src.gaps
+        self.status_line = f"watching {self.options.url}"
+        for key, tick in sampling:
+            t = tick.time
+            if gaps and any(a < t < e for a, e in gaps[-4:]):
+                self._unknown[key] += 1
+                # ticks skipped on the busiest clock (each requirement counts its own)
+                self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
+                continue
+            vals = tick.values
+            cols = self._cols[key]
+            i = cols.n
+            dep = max(tick.log_times.values()) if tick.log_times else None
+            for r, mon, st in order[key]:
+                if mon is None or any(v not in vals for v in r.variables):
+                    continue
+                pt = mon.step(vals)
+                if pt != st.pt:
+                    if st.pt is not None or not pt:
+                        self._event(WatchEvent("pt", t, time.time_ns(), r.id, i,
+                                               "holds" if pt else "violated",
+                                               depends_on=dep))
+                    if not pt and st.first_violation is None:
+                        st.first_violation = i
+                    st.pt = pt
+                if mon.status != st.status:
+                    st.status = mon.status
+                    st.status_tick = mon.status_tick
+                    st.status_time = t
+                    self._event(WatchEvent("ltl3", t, time.time_ns(), r.id, i, mon.status,
+                                           depends_on=dep,
+                                           extra={"status_tick": mon.status_tick}))
+            cols.append(tick)
+            self.ticks += 1
+            if self.on_tick is not None:
+                self.on_tick(i, t, dep, src._last_time)
+            self.last_tick_time = t
+            if self.start_time is None:  # the run's time 0, as in the audit's tables
+                self.start_time = (src.start_time if src.start_time is not None
+                                   else sampling.groups[key].start_time)
+        passes = {}
+        for key in groups:
+            times, columns, log_times = self._cols[key].arrays()
+            passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
+        self._live_evidence()
+        return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
+                            sampling.failed, self._group)
+
+    def tick_times(self, index: int):
+        """Tick times seen so far on the clock of the requirement at ``index``."""
+        cols = (getattr(self, "_cols", None) or {}).get(getattr(self, "_group", {}).get(index))
+        return cols.times if cols is not None else []
+
+    def refresh_evidence(self) -> None:
+        """Update "violations so far" and "last trigger" of the live table (at most every
+        :data:`EVIDENCE_EVERY` s; called by the table's refresh thread, so the monitors are
+        never held up by it)."""
+        now = time.monotonic()
+        if now - self._evidence_at < self.EVIDENCE_EVERY or getattr(self, "_cols", None) is None:
+            return
+        self._evidence_at = now
+        try:
+            self._live_evidence()
+        except Exception:  # a display helper: never let it stop the watch
+            pass
+
+    def _live_evidence(self) -> None:
+        """Violations so far and the last trigger, by the audit's interval semantics over
+        the ticks seen (:func:`monitors.interval.evaluate_requirement`)."""
+        arrays = {}
+        for key, cols in self._cols.items():
+            if cols.n:
+                arrays[key] = (cols.n, cols.arrays(cols.n)[1])
+        for r in self._active:
+            if self._group.get(r.index) not in arrays:
+                continue
+            n, columns = arrays[self._group[r.index]]
+            st = self.live[r.index]
+            try:
+                ev = evaluate_requirement(r.requirement, columns, n, r.formalization.ticks)
+            except Exception:  # evidence unsupported for this requirement: pt only
+                continue
+            st.violations, st.pending = split_pending(ev, n)
+            trig = None
+            for x in getattr(ev, "listed", ()) or ():
+                trig = x.trigger_tick
+            if ev.violation is not None and trig is None:
+                trig = ev.violation.trigger_tick
+            st.last_trigger = trig
+
+    def _finish(self, la, verdicts, result, active=()):
+        if result is not None:
+            src = self.source
+            groups = [res.sampling for res in result.by_req.values()]
+            starts = [g.start_time for g in groups if g.start_time is not None]
+            la.start_time_ns = (src.start_time if src.start_time is not None
+                                else (min(starts) if starts else None))
+            ends = [g.end_time for g in groups if g.end_time is not None]
+            la.end_time_ns = max(ends) if ends else None
+            la.missing_topics = sorted({t for g in groups for t in g.missing_topics})
+            ok = []
+            for r in active:
+                res = result.by_req[r.index]
+                g, v = res.sampling, verdicts[r.index]
+                unknown = self._unknown.get(self._group[r.index], 0)
+                v.ticks_evaluated = g.ticks - unknown
+                v.warmup_ticks = g.warmup_ticks
+                v.first_tick_ns, v.last_tick_ns = g.first_time, g.end_time
+                v.waiting_for = list(g.waiting_for)
+                bad = [n for n in r.variables
+                       if n in result.failed.get(self._group[r.index], {})]
+                if bad:
+                    v.error = str(result.failed[self._group[r.index]][bad[0]])
+                    continue
+                if g.missing_topics:
+                    v.error = "; ".join(f"topic {t} has no message in the run"
+                                        for t in g.missing_topics)
+                    continue
+                finalize(self.plan, r, res, self.plan.bindings, v, la)
+                ok.append(r)
+                if unknown:
+                    v.notes.append(f"{unknown} ticks inside connection gaps were not "
+                                   "evaluated (unknown)")
+            summarize_clocks(la, [verdicts[r.index] for r in ok])
+            la.engine = log_engine(verdicts[r.index] for r in ok)
+            active = ok
+        la.verdicts = [verdicts[r.index] for r in self.plan.requirements]
+        for v in la.verdicts:
+            if v.error is not None:
+                v.verdict = "error"
+            v.partial = la.partial
+        if self.recorder is not None:
+            self.recorder.finish(la)
+            if result is not None and not self.source.gaps:
+                # the numbers behind violated boolean variables: the audit's second pass,
+                # over the recording
+                operand_values(self.recorder.path, self.plan, self.plan.bindings,
+                                list(active), verdicts, result.by_req)
+        for v in la.verdicts:
+            e = WatchEvent("final", la.end_time_ns, time.time_ns(), v.requirement,
+                           verdict=v.verdict,
+                           detail=v.error,
+                           extra={"ltl3": v.ltl3.status, "violations": v.violations})
+            self._event(e)
+        return la
+
+
+def _listing(topics, most: int = 20) -> str:
+    """``topics`` for an error: sorted, at most ``most`` named, the rest counted."""
+    names = sorted(topics)
+    if not names:
+        return "no topics"
+    more = f" and {len(names) - most} more" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
+def split_pending(ev, n: int) -> tuple[int, int]:
+    """(violated, pending) of the failed obligations of ``ev`` (an
+    :class:`~monitors.interval.Evidence` over the first ``n`` ticks of a run): pending
+    when its window reaches the last tick and it failed only there (FRET's finite-trace
+    semantics reads the end of the ticks so far as the end of the run; a later tick may still
+    meet it), violated otherwise. Counted over the listed failures
+    (:data:`~monitors.interval.MAX_LISTED`); unlisted ones count as violated."""
+    total = ev.violations or 0
+    pending = sum(1 for x in (getattr(ev, "listed", ()) or ())
+                  if x.window[1] >= n - 1 and x.violation_tick >= n - 1)
+    return total - pending, pending
+
+
+@dataclass
+class _WatchPasses:
+    """The watch's ticks, one :class:`audit.passes.ClockPass` per requirement's
+    clock."""
+
+    sampling: Any
+    by_req: dict[int, Any]
+    failed: dict[Any, dict[str, Any]]
+    group: dict[int, Any]

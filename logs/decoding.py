@@ -1,0 +1,181 @@
+"""The decoder layer: rosbags types built from the schema text a log embeds, and a
+``bytes -> message`` function per channel.
+
+Schema encodings ``ros2msg``, ``ros2idl`` and ``ros1msg``, message encodings ``cdr`` (ROS 2)
+and ``ros1`` (MCAP spec, "Well-known encodings"). Decoders read every field, or only the
+fields the signal bindings read (:mod:`logs.selective`).
+"""
+
+from __future__ import annotations
+
+import functools
+import struct
+from collections.abc import Callable
+from typing import Any
+
+from rosbags.serde import SerdeError
+from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
+from rosbags.typesys.msg import normalize_msgtype
+from rosbags.typesys.store import Typestore
+
+from .columnar import ColumnarDecoder, columnar_decoder
+from .known_types import layout_mismatch
+from .selective import selective_decoder
+
+__all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
+           "schema_columnar",
+           "DECODE_ERRORS", "SCHEMA_FOR_ENCODING"]
+
+_IDL_SEP = "=" * 80 + "\n"
+
+
+class UnsupportedSchema(Exception):
+    """A channel whose messages cannot be decoded: an unsupported schema or message encoding,
+    a missing schema, or a definition rosbags cannot parse (the message says which). The
+    readers report it as an ``unknown_schema`` / ``unknown_encoding`` problem and skip the
+    channel's messages."""
+
+
+def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
+    """A rosbags Typestore holding the types of one embedded schema. Building one compiles
+    rosbags' (de)serializers of its types (tens of ms); the stores of the latest
+    :data:`_STORES_KEPT` distinct schemas are kept and shared (read only: nothing registers
+    types in a store after it is built), so a log's channels, its binding type check and the
+    logs of one fleet audit with the same schema build it once.
+
+    Args:
+        schema_encoding: ``"ros2msg"``, ``"ros1msg"`` (concatenated .msg text with
+            ``MSG: pkg/Type`` sections) or ``"ros2idl"`` (``IDL: pkg/msg/Type`` sections),
+            per the MCAP spec's well-known schema encodings.
+        name: the schema (message type) name, ROS 1 or ROS 2 spelling.
+        text: the schema data as text.
+
+    Returns:
+        (typestore, normalized type name).
+
+    Raises:
+        UnsupportedSchema: unknown schema encoding, or a definition rosbags cannot parse.
+    """
+    return _build_typestore(schema_encoding, name, text)
+
+
+#: Distinct schemas whose Typestore :func:`build_typestore` keeps.
+_STORES_KEPT = 64
+
+
+@functools.lru_cache(maxsize=_STORES_KEPT)
+def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
+    typename = normalize_msgtype(name)
+    if not text.strip():
+        raise UnsupportedSchema(f"schema {name!r} is empty")
+    if schema_encoding not in ("ros2msg", "ros1msg", "ros2idl"):
+        raise UnsupportedSchema(f"schema encoding {schema_encoding!r} is not supported "
+                                "(supported: ros2msg, ros2idl, ros1msg)")
+    try:
+        if schema_encoding == "ros2idl":
+            typs = {}
+            if text.startswith(_IDL_SEP + "IDL: "):
+                for part in text.split(_IDL_SEP)[1:]:
+                    _hdr, idl = part.split("\n", 1)
+                    typs.update(get_types_from_idl(idl))
+            else:
+                typs.update(get_types_from_idl(text))
+        else:
+            typs = get_types_from_msg(text, typename)
+        store = get_typestore(Stores.EMPTY)
+        store.register(typs)
+        store.get_msgdef(typename)  # fails now, not on the first message, if incomplete
+    except Exception as exc:  # rosbags' PEG parser raises plain exceptions on bad text
+        raise UnsupportedSchema(f"schema {name!r} ({schema_encoding}) cannot be parsed: {exc}") from None
+    return store, typename
+
+
+def decoder_for(store: Typestore, typename: str, message_encoding: str,
+                fields: Any = None) -> Callable[[bytes], Any]:
+    """A function ``bytes -> message`` of ``typename`` held in ``store``.
+
+    Args:
+        store: a rosbags Typestore holding ``typename``.
+        typename: the normalized type name (``pkg/msg/Type``).
+        message_encoding: ``"cdr"`` or ``"ros1"``.
+        fields: field paths to decode (:mod:`logs.selective`); None: every field.
+
+    Raises:
+        UnsupportedSchema: another message encoding.
+    """
+    if message_encoding == "cdr":
+        deser = store.deserialize_cdr
+    elif message_encoding == "ros1":
+        deser = store.deserialize_ros1
+    else:
+        raise UnsupportedSchema(f"message encoding {message_encoding!r} is not supported (cdr, ros1)")
+
+    def decode(raw: bytes) -> Any:
+        return deser(raw, typename)
+
+    if fields is not None:  # only the fields the bindings read (logs.selective)
+        return selective_decoder(store, typename, message_encoding, fields, decode) or decode
+    return decode
+
+
+SCHEMA_FOR_ENCODING = {"cdr": ("ros2msg", "ros2idl"), "ros1": ("ros1msg",)}
+
+
+def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
+                   schema_text: str | None, fields: Any = None) -> Callable[[bytes], Any]:
+    """A function ``bytes -> rosbags message`` for one channel, with its types built from the
+    schema text the channel carries (an MCAP Schema record, or a Foxglove WebSocket
+    ``advertise``): shared by the log readers and ``fretc watch``.
+
+    Args:
+        message_encoding: ``"cdr"`` (ROS 2) or ``"ros1"`` (MCAP well-known message encodings).
+        schema_encoding: ``"ros2msg"``, ``"ros2idl"`` or ``"ros1msg"`` (well-known schema
+            encodings), matching the message encoding; None or ``""`` when the channel has none.
+        schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
+        schema_text: the definition text (see :func:`build_typestore`).
+        fields: field paths to decode (:mod:`logs.selective`); None: every field.
+
+    Raises:
+        UnsupportedSchema: an unsupported message encoding, a channel without schema, a schema
+            encoding that does not go with the message encoding, a schema rosbags cannot
+            parse, or a definition of a standard ROS type whose layout is not ROS's
+            (:func:`logs.known_types.layout_mismatch`; the message says which).
+    """
+    if message_encoding not in SCHEMA_FOR_ENCODING:
+        raise UnsupportedSchema(f"message encoding {message_encoding!r} is not supported (cdr, ros1)")
+    if not schema_encoding or not schema_name or schema_text is None:
+        raise UnsupportedSchema("the channel has no schema")
+    if schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]:
+        raise UnsupportedSchema(f"schema encoding {schema_encoding!r} does not go with message "
+                                f"encoding {message_encoding!r}")
+    store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+    lie = layout_mismatch(schema_encoding, store, typename)
+    if lie is not None:
+        raise UnsupportedSchema(lie)
+    return decoder_for(store, typename, message_encoding, fields)
+
+
+
+#: Exceptions a decoder from :func:`schema_decoder` raises on a payload that does not match.
+DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionError,
+                 UnicodeDecodeError, KeyError, TypeError, OverflowError)
+
+
+def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
+                    schema_text: str | None, fields: Any) -> ColumnarDecoder | None:
+    """A :class:`~logs.columnar.ColumnarDecoder` of one channel's ``fields``, or
+    None wherever :func:`schema_decoder` would raise or the columnar walk does not cover the
+    type (the channel is then decoded message by message, which reports the problem). Never
+    raises; the arguments are :func:`schema_decoder`'s."""
+    if message_encoding != "cdr" or fields is None:
+        return None
+    try:
+        if (not schema_name or schema_text is None
+                or schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]):
+            return None
+        store, typename = build_typestore(schema_encoding, schema_name, schema_text)
+        if layout_mismatch(schema_encoding, store, typename) is not None:
+            return None
+        return columnar_decoder(store, typename, message_encoding, fields)
+    except Exception:  # noqa: BLE001 - whatever fails here fails again, reported, one by one
+        return None

@@ -1,0 +1,177 @@
+"""The offline judge: one requirement's verdict, its LTL3 verdict and its evidence, decided once
+over the columns of a trace (one value per tick per FRET variable).
+
+The audit (and a watch at the end of its run) asks :func:`judge` and nothing else:
+
+* **FRET's finite-trace verdict and its evidence** come from FRET's interval semantics
+  (:func:`monitors.interval.evaluate_requirement`: scope intervals, triggers, the first
+  violated obligation; ../shared/fretish/README.md sections 2-4). Where that semantics cannot
+  evaluate the requirement (uninterpreted functions), the verdict is the requirement's pt
+  formula evaluated over the columns (:func:`monitors.vectorized.pt_series`; FRET's
+  pt formula at the last tick is its finite-trace verdict), and where that is impossible too,
+  the generated monitor replayed over the columns (:mod:`monitors.stepwise`).
+* **The robustness** (the margin behind the verdict) is the pt formula's space robustness over
+  the same columns (:func:`monitors.robustness.robustness`); its sign is the
+  verdict's. None where the pt formula cannot be evaluated over columns.
+* **The LTL3 verdict** (Bauer, Leucker, Schallhart, TOSEM 2011: the earliest tick after which
+  every continuation of the trace satisfies, or every one violates, the infinite-trace
+  formula ft_inf) comes from the requirement's deterministic monitor automata run over the
+  columns (:func:`ltl3_verdict`), or from the generated monitor
+  replayed when its automata have no tables. A requirement without an online monitor (a
+  future-time function in its pt formula) has none: ``"unknown"``.
+
+The generated monitors themselves are for ``--emit monitor`` and ``fretc watch``; the tests
+cross-check them, the vectorized pt engine and this judge on random traces.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import stepwise
+from .interval import Evidence, EvidenceUnsupported, evaluate_requirement
+from .robustness import Robustness, robustness
+from .vectorized import VectorizeError, atom_letters, pt_series, supports
+
+__all__ = ["Judgement", "judge", "ltl3_verdict"]
+
+
+@dataclass
+class Judgement:
+    """What :func:`judge` decided about one requirement over ``n`` ticks.
+
+    Attributes:
+        holds: FRET's finite-trace verdict over the ticks (True: satisfied or vacuous).
+        evidence: the interval semantics' evidence (None where it cannot evaluate the
+            requirement; ``note`` says why).
+        ltl3: the LTL3 verdict, ``"satisfied"``, ``"violated"`` or ``"unknown"``.
+        ltl3_tick: the 0-based tick at which ``ltl3`` became definite (None when unknown, or
+            definite before any tick).
+        engine: what decided ``holds``: ``"interval"`` (the interval semantics),
+            ``"vectorized"`` (the pt formula over the columns) or ``"stepwise"`` (the
+            generated monitor replayed).
+        note: why the interval semantics gave no evidence, or None.
+        robustness: the pt formula's robustness over the ticks
+            (:class:`monitors.robustness.Robustness`), or None where the pt formula
+            cannot be evaluated over columns (a future-time function).
+    """
+
+    holds: bool
+    evidence: Evidence | None
+    ltl3: str
+    ltl3_tick: int | None
+    engine: str
+    note: str | None = None
+    robustness: Robustness | None = None
+
+
+def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int, *,
+          monitor_source=None,
+          monitor_cls: type | None = None) -> Judgement:
+    """Decide one requirement over the first ``n`` ticks of ``columns``.
+
+    Args:
+        requirement: the parsed requirement (:class:`fretish.ast.Requirement`).
+        formalization: its :class:`compiler.semantics.Formalization` (pt, ticks).
+        columns: FRET variable -> numpy array of at least ``n`` values (bool or float).
+        n: the number of ticks judged (``n >= 1``).
+        monitor_source: the requirement's :class:`compiler.codegen.MonitorSource` (its LTL3
+            automata tables), or None for a requirement without an online monitor.
+        monitor_cls: its generated monitor class, for the replay fallbacks, or None.
+
+    Raises:
+        EvidenceUnsupported: neither the interval semantics, nor the pt formula over the
+            columns, nor a generated monitor can decide the requirement (a free-form
+            requirement without a monitor).
+    """
+    ev, note = None, None
+    try:
+        ev = evaluate_requirement(requirement, columns, n, formalization.ticks)
+    except EvidenceUnsupported as exc:
+        if monitor_cls is None and not _pt_evaluable(formalization):
+            raise
+        note = f"interval evidence unavailable: {exc}"
+    replayed = None
+    if ev is not None:
+        holds, engine = ev.holds, "interval"
+    elif _pt_evaluable(formalization):
+        holds, engine = bool(pt_series(formalization.pt, columns, n)[-1]), "vectorized"
+    else:
+        replayed = stepwise.replay(monitor_cls, columns, n)
+        holds, engine = bool(replayed.finish()), "stepwise"
+    ltl3, tick = _ltl3(monitor_source, monitor_cls, columns, n, replayed)
+    rob = robustness(formalization.pt, columns, n) if _pt_evaluable(formalization) else None
+    return Judgement(holds, ev, ltl3, tick, engine, note, rob)
+
+
+def _pt_evaluable(formalization) -> bool:
+    """The pt formula can be evaluated over columns (causal, no future-time operator)."""
+    return bool(formalization.pt_causal) and supports(formalization.pt)
+
+
+def _ltl3(monitor_source, monitor_cls, columns, n: int, replayed) -> tuple[str, int | None]:
+    """The LTL3 verdict and its tick: the automata over the columns, else the replayed
+    generated monitor, else unknown (no online monitor)."""
+    if monitor_source is None:
+        return "unknown", None
+    try:
+        return ltl3_verdict(monitor_source, columns, n)
+    except (VectorizeError, KeyError):
+        if monitor_cls is None:
+            return "unknown", None
+    mon = replayed if replayed is not None else stepwise.replay(monitor_cls, columns, n)
+    return mon.status, mon.status_tick
+
+
+def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
+                 ) -> tuple[str, int | None]:
+    """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
+    deterministic Spot monitors embedded by :func:`compiler.codegen.monitor_source`
+    (``bad`` for ft_inf: rejection means *violated*; ``good`` for its negation: rejection
+    means *satisfied*).
+
+    Returns:
+        ``(verdict, tick)``: verdict ``"satisfied"``, ``"violated"`` or ``"unknown"``; tick
+        the 0-based tick where it became definitive (None when unknown or definitive before
+        any tick), as the generated ``status`` / ``status_tick``.
+
+    Raises:
+        VectorizeError: an automaton given as condition chains (more than
+            ``codegen.TABLE_MAX_APS`` atoms): use the step-wise monitor.
+    """
+    ms = monitor_source
+    bad, good = ms.bad, ms.good
+    if bad is not None and bad.empty:
+        return "violated", None
+    if good is not None and good.empty:
+        return "satisfied", None
+    live = [(aut, outcome) for aut, outcome in ((bad, "violated"), (good, "satisfied"))
+            if aut is not None and not aut.complete]
+    if not live:
+        return "unknown", None
+    for aut, _ in live:
+        if aut.table is None:
+            raise VectorizeError("automaton with condition chains (too many atoms to "
+                                 "tabulate): use the step-wise monitor")
+    runs = []
+    for aut, outcome in live:
+        letters = atom_letters(aut.atoms, columns, n).tolist()
+        runs.append((aut.table, aut.initial, letters, outcome))
+    # first rejection of each automaton
+    firsts = []
+    for table, state, letters, outcome in runs:
+        hit = None
+        for i, letter in enumerate(letters):
+            state = table[state][letter]
+            if state < 0:
+                hit = i
+                break
+        firsts.append(hit)
+    best: tuple[str, int | None] = ("unknown", None)
+    for (table, _s, _l, outcome), hit in zip(runs, firsts):
+        if hit is not None and (best[1] is None or hit < best[1]):
+            best = (outcome, hit)
+    return best

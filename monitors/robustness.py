@@ -1,0 +1,214 @@
+"""Robustness (the margin behind a verdict): quantitative semantics of a requirement's pt
+formula over the columns of a trace.
+
+FRET's pt formula at the last tick is the requirement's finite-trace verdict
+(../shared/fretish/README.md); this module evaluates the same formula with Donze and Maler's
+space robustness (Donze, Maler, FORMATS 2010; Fainekos, Pappas, TCS 2009) instead of truth
+values, operator by operator over the same columns :mod:`monitors.vectorized` reads:
+
+=====================  ==============================================================
+``x <= c``, ``x < c``   ``c - x``  (the signed distance to the threshold, in x's unit)
+``x >= c``, ``x > c``   ``x - c``
+``x = c`` / ``x != c``  ``-|x - c|`` / ``|x - c|``
+boolean atom ``p``      ``+inf`` when ``p`` is true, ``-inf`` when false
+``true`` / ``false``    ``+inf`` / ``-inf``; ``FTP`` ``+inf`` at tick 0, else ``-inf``
+``!p``                  ``-p``
+``p & q`` / ``p | q``   ``min`` / ``max`` (``->``, ``<->``, ``xor`` by their definitions)
+``Y p`` / ``Z p``       ``p`` one tick earlier; ``-inf`` / ``+inf`` at tick 0
+``O p`` / ``H p``       running ``max`` / ``min`` (bounded: over the window, an empty window
+                        ``-inf`` for O and ``+inf`` for H)
+``a S b``               ``max over j <= i of min(b[j], min over j < k <= i of a[k])``
+``a T b``               ``min over j <= i of max(b[j], max over j < k <= i of a[k])``
+=====================  ==============================================================
+
+Sign convention (so that the sign always tells the verdict): a value ``>= 0`` means true,
+``< 0`` false, everywhere. A comparison that is false at distance 0 (``x < c`` with
+``x == c``, ``x != c`` with ``x == c``) or that involves NaN (false, or true for ``!=``) gets
+the smallest magnitude of its sign: :data:`TINY` below zero when false, ``0.0`` when true; the
+negation of a 0 is ``-TINY``. By induction every node's value is ``>= 0`` exactly where its
+truth value is true, so the requirement's robustness is negative exactly when it is violated.
+
+A boolean FRET variable has no distance: ``+-inf`` says "decided by a boolean, no margin".
+A vacuous verdict has a value ``>= 0``: the margin by which the scope or condition stayed
+away (``+inf`` when they are boolean).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from compiler.ir import Node
+
+from .vectorized import VectorizeError, node_series
+
+_FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
+
+__all__ = ["Robustness", "TINY", "robustness", "robustness_series"]
+
+#: The smallest positive double: ``-TINY`` is the robustness of a comparison false at
+#: distance 0 (the module docstring's sign convention).
+TINY = math.ulp(0.0)
+_INF = math.inf
+
+Columns = Mapping[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Robustness:
+    """A requirement's robustness on one trace.
+
+    Attributes:
+        value: the robustness of the pt formula at the last tick (the whole trace), in the
+            unit of the comparison that decides it; ``+-inf`` when a boolean decides it.
+            Negative exactly when FRET's finite-trace verdict is false.
+        tick: the first 0-based tick whose margin equals ``value`` (where the trace came
+            closest to violating, or violated).
+        margin: float array ``(n,)``, the margin at every tick: the robustness of the body of
+            a top-level ``H`` (what must hold at every tick), else of the pt formula at that
+            tick.
+    """
+
+    value: float
+    tick: int
+    margin: np.ndarray
+
+
+def robustness(pt: Node, columns: Columns, n: int) -> Robustness:
+    """The robustness of the pt formula ``pt`` over ticks ``0..n-1`` (``n >= 1``).
+
+    Raises:
+        VectorizeError: a future-time operator or function in ``pt``, or a missing or
+            mis-shaped column (as :func:`monitors.vectorized.pt_series`).
+    """
+    if n < 1:
+        raise ValueError("robustness needs at least one tick")
+    ev = _Rho(columns, n)
+    if pt.op == "H" and pt.hi is None:
+        margin = ev.rho(pt.args[0])
+        value = float(margin.min())
+    else:
+        margin = ev.rho(pt)
+        value = float(margin[-1])
+    tick = int(np.flatnonzero(margin == value)[0])
+    return Robustness(value, tick, margin)
+
+
+def robustness_series(node: Node, columns: Columns, n: int) -> np.ndarray:
+    """The robustness of a past-time formula ``node`` at every tick (float array ``(n,)``).
+
+    Raises:
+        VectorizeError: as :func:`robustness`.
+    """
+    return _Rho(columns, n).rho(node)
+
+
+def _neg(x: np.ndarray) -> np.ndarray:
+    """``-x``, with 0 (true) mapped to ``-TINY`` (false)."""
+    return np.where(x == 0, -TINY, -x)
+
+
+def _fix_sign(rho: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """``rho`` with its sign forced to the comparison's truth (equality of a strict
+    comparison, NaN): ``0.0`` where true but not ``>= 0``, ``-TINY`` where false but not
+    ``< 0``."""
+    with np.errstate(invalid="ignore"):
+        rho = np.where(truth & ~(rho >= 0), 0.0, rho)
+        return np.where(~truth & ~(rho < 0), -TINY, rho)
+
+
+class _Rho:
+    """Memoized per-node robustness arrays over ``n`` ticks."""
+
+    def __init__(self, columns: Columns, n: int):
+        self.columns = columns
+        self.n = n
+        self.memo: dict[Node, np.ndarray] = {}
+
+    def rho(self, node: Node) -> np.ndarray:
+        got = self.memo.get(node)
+        if got is None:
+            got = self._compute(node)
+            self.memo[node] = got
+        return got
+
+    def _compute(self, node: Node) -> np.ndarray:
+        op, a, n = node.op, node.args, self.n
+        if op in _FUTURE:
+            raise VectorizeError(f"future-time operator {op!r} in a past-time formula")
+        if op == "cmp":
+            return self._comparison(node)
+        if op == "!":
+            return _neg(self.rho(a[0]))
+        if op in ("&", "|", "->", "<->", "xor"):
+            return self._connective(op, a[0], a[1])
+        if op in ("Y", "Z"):
+            out = np.empty(n)
+            out[0] = -_INF if op == "Y" else _INF
+            out[1:] = self.rho(a[0])[:-1]
+            return out
+        if op in ("O", "H"):
+            return self._once(node)
+        if op in ("S", "T"):
+            return self._since(op, a[0], a[1])
+        if op == "ite":  # a boolean if-then-else: (c & t) | (!c & e)
+            c = self.rho(a[0])
+            return np.maximum(np.minimum(c, self.rho(a[1])),
+                              np.minimum(_neg(c), self.rho(a[2])))
+        if op == "past":
+            return self.rho(a[0])
+        # constants, FTP, boolean variables and calls: +-inf by their truth
+        truth = node_series(node, self.columns, n)
+        return np.where(truth, _INF, -_INF)
+
+    def _comparison(self, node: Node) -> np.ndarray:
+        x = node_series(node.args[0], self.columns, self.n, numeric=True)
+        y = node_series(node.args[1], self.columns, self.n, numeric=True)
+        truth = node_series(node, self.columns, self.n)
+        with np.errstate(invalid="ignore", over="ignore"):
+            d = {"<": y - x, "<=": y - x, ">": x - y, ">=": x - y,
+                 "=": -np.abs(x - y), "!=": np.abs(x - y)}[node.name]
+        return _fix_sign(d, truth)
+
+    def _connective(self, op: str, p: Node, q: Node) -> np.ndarray:
+        x, y = self.rho(p), self.rho(q)
+        if op == "&":
+            return np.minimum(x, y)
+        if op == "|":
+            return np.maximum(x, y)
+        if op == "->":
+            return np.maximum(_neg(x), y)
+        iff = np.minimum(np.maximum(_neg(x), y), np.maximum(x, _neg(y)))
+        return iff if op == "<->" else _neg(iff)
+
+    def _once(self, node: Node) -> np.ndarray:
+        """``O`` / ``H``: running max / min, or over the window ``[i-hi, i-lo]``."""
+        x, n, is_once = self.rho(node.args[0]), self.n, node.op == "O"
+        if node.hi is None:
+            return (np.maximum if is_once else np.minimum).accumulate(x)
+        lo, hi = node.lo or 0, node.hi
+        pick = np.maximum if is_once else np.minimum
+        out = np.full(n, -_INF if is_once else _INF)
+        for d in range(lo, min(hi, n - 1) + 1):  # the value d ticks back, where it exists
+            out[d:] = pick(out[d:], x[:n - d])
+        return out
+
+    def _since(self, op: str, p: Node, q: Node) -> np.ndarray:
+        """``a S b``: ``s[i] = max(b[i], min(a[i], s[i-1]))`` from ``s[-1] = -inf``; its dual
+        ``a T b``: ``s[i] = min(b[i], max(a[i], s[i-1]))`` from ``+inf``."""
+        a, b = self.rho(p).tolist(), self.rho(q).tolist()
+        out = []
+        if op == "S":
+            s = -_INF
+            for ai, bi in zip(a, b):
+                s = max(bi, min(ai, s))
+                out.append(s)
+        else:
+            s = _INF
+            for ai, bi in zip(a, b):
+                s = min(bi, max(ai, s))
+                out.append(s)
+        return np.array(out, dtype=np.float64)

@@ -1,0 +1,153 @@
+"""The report's files (``fretc report``): reading the audit document, and writing the
+report folder::
+
+    report.html        self-contained: inline CSS and SVG, no script, no external asset
+    report.md          the same content (timelines as image links to timelines/)
+    audit.json         the audit document the report was made from
+    timelines/*.svg    one timeline per violation (the same SVG as inlined in the HTML)
+
+and, on request, annotated copies of the MCAP logs (:mod:`audit.annotate`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from audit.annotate import AnnotateResult, annotate_mcap
+from .context import report_context
+from audit.verdict import SCHEMA
+from .render import render_html, render_markdown
+from .trace import ReportError, resolve_input, trace_requirements
+
+__all__ = ["load_audit_json", "ReportFiles", "write_report"]
+
+
+def load_audit_json(path: str) -> dict:
+    """Read an audit document. Raises :class:`~reports.trace.ReportError` when it
+    cannot be read, is not JSON, or is not schema ``fretc-audit/1``."""
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ReportError(f"{path}: cannot read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise ReportError(f"{path}: not JSON: {exc}") from None
+    if not isinstance(doc, dict) or doc.get("schema") != SCHEMA:
+        raise ReportError(f"{path}: not a fretc audit document (schema {SCHEMA!r} expected, "
+                          f"got {doc.get('schema') if isinstance(doc, dict) else None!r})")
+    return doc
+
+
+@dataclass
+class ReportFiles:
+    """What :func:`write_report` wrote: the paths, and the annotation results."""
+
+    html: Path
+    markdown: Path
+    audit_json: Path
+    timelines: list[Path]
+    annotated: list[AnnotateResult] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def _annotate_all(doc: dict, annotate_dir: Path, base: Path | None, json_dir: Path | None,
+                  out_dir: Path, notes: list[str]
+                  ) -> tuple[dict[int, dict], list[AnnotateResult]]:
+    """Annotated copies of the document's MCAP logs in ``annotate_dir`` (names made
+    unique; never over the original): (log index -> what the report says of its copy, the
+    results). What cannot be copied becomes a note."""
+    done: dict[int, dict] = {}
+    results = []
+    used: set[str] = set()
+    for j, la in enumerate(doc.get("logs") or []):
+        src = la.get("log")
+        if not src or la.get("error"):
+            continue
+        p = resolve_input(src, base, json_dir)
+        if p is None or p.is_dir() or p.suffix.lower() != ".mcap":
+            if p is None:
+                notes.append(f"--annotate: {src} not found")
+            continue
+        name = p.name
+        k = 2
+        while name in used:
+            name = f"{p.stem}_{k}{p.suffix}"
+            k += 1
+        used.add(name)
+        dst = annotate_dir / name
+        if dst.exists() and dst.resolve() == p.resolve():
+            notes.append(f"--annotate: {dst} is the original log; not overwritten")
+            continue
+        try:
+            res = annotate_mcap(str(p), str(dst), la)
+        except (OSError, ValueError) as exc:
+            notes.append(f"--annotate: {src}: {exc}")
+            continue
+        results.append(res)
+        done[j] = {"path": os.path.relpath(dst, out_dir).replace(os.sep, "/"),
+                   "events": res.events, "partial": res.partial, "damage": res.damage,
+                   "compression": res.compression}
+    return done, results
+
+
+def _write_files(out: Path, files: ReportFiles, ctx: dict, html: str, md: str,
+                 doc: dict) -> None:
+    """Replace the timelines and write every file (``OSError`` passes through)."""
+    for old in sorted((out / "timelines").glob("*.svg")):
+        old.unlink()
+    for v in ctx["violations"]:
+        p = out / v["svg_file"]
+        p.write_text(v["svg"], encoding="utf-8")
+        files.timelines.append(p)
+    files.html.write_text(html, encoding="utf-8")
+    files.markdown.write_text(md, encoding="utf-8")
+    files.audit_json.write_text(json.dumps(doc, indent=2, sort_keys=True) + "\n",
+                                encoding="utf-8")
+
+
+def write_report(doc: dict, out_dir: str, *, plan=None, base: str | None = None,
+                 json_dir: str | None = None, psl_map: str | None = None,
+                 annotate_dir: str | None = None, title: str | None = None,
+                 generated: str | None = None) -> ReportFiles:
+    """Write the report of an audit document into ``out_dir`` (created).
+
+    Args:
+        doc: the audit document (``fretc-audit/1``).
+        out_dir: the report folder: ``report.html``, ``report.md``, ``audit.json``,
+            ``timelines/*.svg``.
+        plan: the audit's :class:`~audit.AuditPlan` when it ran in this process.
+        base, json_dir: where the document's relative paths are looked up.
+        psl_map: AJPF mapping TOML (``--psl-map``).
+        annotate_dir: also write annotated MCAP copies there (:mod:`audit.annotate`).
+        title: report title.
+        generated: the generation line (default: now, or ``SOURCE_DATE_EPOCH``).
+
+    Raises:
+        ReportError: the output cannot be written, or the psl map is bad.
+    """
+    out = Path(out_dir)
+    basep = Path(base) if base else None
+    jd = Path(json_dir) if json_dir else None
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "timelines").mkdir(exist_ok=True)
+    except OSError as exc:
+        raise ReportError(f"{out_dir}: cannot create: {exc}") from None
+    traces, modules, notes = trace_requirements(doc, plan=plan, base=basep, json_dir=jd,
+                                                psl_map=psl_map)
+    annotated: dict[int, dict] = {}
+    results: list[AnnotateResult] = []
+    if annotate_dir:
+        annotated, results = _annotate_all(doc, Path(annotate_dir), basep, jd, out, notes)
+    ctx = report_context(doc, traces, modules, notes=notes, annotated=annotated, title=title,
+                         base=basep, json_dir=jd, generated=generated)
+    html, md = render_html(ctx), render_markdown(ctx)
+    files = ReportFiles(out / "report.html", out / "report.md", out / "audit.json", [],
+                        results, notes)
+    try:
+        _write_files(out, files, ctx, html, md, doc)
+    except OSError as exc:
+        raise ReportError(f"{out_dir}: cannot write: {exc}") from None
+    return files

@@ -1,0 +1,402 @@
+"""How ``fretc audit`` shows its verdicts: the terminal summary (rich), the progress bar,
+and the damage of a partial log in one sentence (the JUnit XML file:
+:mod:`reports.junit`).
+
+All output is deterministic: same logs and requirements, same text (no wall-clock times).
+Times are printed as seconds since the log's first tick (``12.300 s``) next to the tick
+number; the JSON report (:mod:`audit.verdict`) also has the absolute ns.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from rich.markup import escape as _markup_escape
+from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+from rich.table import Table
+from rich.text import Text
+
+from common.textsafe import terminal_text
+from common.units import format_offset
+
+from audit.verdict import LogAudit, Verdict, exit_code, incomplete
+from .verdicts import format_value
+
+__all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
+
+_STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
+          "unknown": "yellow", "error": "magenta"}
+
+
+def escape(text) -> str:
+    """Text from the inputs for rich markup: control and bidi characters shown escaped
+    (:func:`common.textsafe.terminal_text`), then markup escaped."""
+    return _markup_escape(terminal_text(text))
+
+
+def _T(text) -> Text:
+    return Text(terminal_text(text))
+
+
+def short_log_name(path: str) -> str:
+    """The path relative to the working directory when it lies below it (a URL as is)."""
+    if "://" in path:
+        return path
+    try:
+        rel = os.path.relpath(path)
+    except ValueError:  # pragma: no cover - other drive on Windows
+        return path
+    return path if rel.startswith("..") else rel
+
+
+
+
+def _value(v) -> str:
+    return format_value(v)  # every digit it needs: which side of a threshold it is on
+
+
+#: The matrix (logs x requirements) is used while its smaller side has at most this many
+#: entries; beyond, a list of the verdicts that are not plain passes.
+MATRIX_MAX = 10
+
+
+def robustness_text(value: float | str | None, none: str = "") -> str:
+    """A robustness as fretc shows it (terminal, report, falsify): signed, 4 significant
+    digits, ``+inf`` / ``-inf`` when a boolean decides it; ``none`` when there is none.
+    ``value`` may also be the audit JSON's text of an infinity (``"inf"``, ``"-inf"``)."""
+    if value is None:
+        return none
+    value = float(value)
+    if math.isinf(value):
+        return "+inf" if value > 0 else "-inf"
+    return f"{value:+.4g}"
+
+
+def _cell(v: Verdict, st: int | None) -> str:
+    rob = v.robustness
+    rob = f"\n({rob:+.4g})" if rob is not None and math.isfinite(rob) else ""
+    if v.verdict == "violated":
+        fv = v.first_violation
+        at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
+        return f"VIOLATED{at}" + (" *" if v.partial else "") + rob
+    return v.verdict + (" *" if v.partial else "") + rob
+
+
+def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
+                  verbose: bool = False, allow_partial: bool = False,
+                  input_errors: bool = False) -> None:
+    """Print the verdicts to a rich Console: a header line, the verdict matrix (logs x
+    requirements; cells give the first violation's time in seconds from the log's start),
+    per-log notes, errors in full below the table (never cut inside a cell), with
+    ``details`` one evidence block per violation (trigger, obligation, the missed tick with
+    its tick time and the log time of the message that decided it) and, with ``verbose``,
+    the values around each violation; last the counts and the exit code."""
+    if plan is not None:
+        _print_plan(console, plan, len(logs))
+    reqs: list[str] = []
+    for la in logs:
+        for v in la.verdicts:
+            if v.requirement not in reqs:
+                reqs.append(v.requirement)
+    if min(len(logs), len(reqs)) <= MATRIX_MAX and logs:
+        _print_matrix(console, logs, reqs)
+    else:
+        _print_incomplete(console, logs)
+    if any(v.robustness is not None for la in logs for v in la.verdicts):
+        console.print("(n): robustness, the margin to the threshold in the variable's unit, "
+                      "negative exactly when violated; none shown: decided by booleans "
+                      "(+-inf) or no robustness", highlight=False)
+    if any(v.partial for la in logs for v in la.verdicts):
+        console.print("* partial log: audited up to the damage", highlight=False)
+    for la in logs:
+        lines = _log_notes(la, verbose)
+        if lines:
+            console.print(f"[bold]{escape(short_log_name(la.log))}[/bold]: " + "; ".join(lines),
+                          highlight=False)
+    _print_errors(console, logs)
+    if details:
+        for la in logs:
+            for v in la.verdicts:
+                if v.verdict == "violated":
+                    _print_violation(console, la, v, verbose)
+    _print_counts(console, logs, input_errors, allow_partial)
+
+
+def _print_plan(console, plan, n_logs: int) -> None:
+    """The header: requirements, logs and the clock of the bindings."""
+    b = plan.bindings
+    clock = "no bindings (CSV columns are the variables)"
+    if getattr(plan, "variants", None):
+        clock = "bindings per log: " + "; ".join(
+            f"{f} ({sel.text()})" for sel, f, _sub in plan.variants)
+    elif b is not None:
+        tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
+                else f"one tick per {b.tick.topic} message")
+        clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
+                f"{b.time_base} time)"
+    console.print(f"fretc audit: {len(plan.requirements)} requirements, {n_logs} "
+                  f"logs; {clock}", markup=False)
+    if plan.freeform:
+        console.print(f"free-form, not audited: {', '.join(plan.freeform)}", markup=False)
+
+
+def _print_matrix(console, logs: list[LogAudit], reqs: list[str]) -> None:
+    """The verdict matrix: a row per log and a column per requirement when there are no
+    more requirements than logs (or more than :data:`MATRIX_MAX` logs), else the other way
+    round."""
+    cells: dict[tuple, Verdict] = {(la.log, v.requirement): v for la in logs for v in la.verdicts}
+    starts = {la.log: la.start_time_ns for la in logs}
+    by_log = len(reqs) <= len(logs) or len(logs) > MATRIX_MAX
+    rows, cols = (logs, reqs) if by_log else (reqs, logs)
+    table = Table(show_lines=False, header_style="bold")
+    table.add_column("log" if by_log else "req", no_wrap=True)
+    for c in cols:
+        table.add_column(terminal_text(c) if by_log else terminal_text(short_log_name(c.log)),
+                         no_wrap=True)
+    for row in rows:
+        out = [_T(short_log_name(row.log) if by_log else row)]
+        for c in cols:
+            la_log, req = (row.log, c) if by_log else (c.log, row)
+            v = cells.get((la_log, req))
+            if v is None:
+                out.append(Text("-"))
+            else:
+                out.append(Text(_cell(v, starts[la_log]), style=_STYLE.get(v.verdict, "")))
+        table.add_row(*out)
+    console.print(table)
+
+
+def _print_incomplete(console, logs: list[LogAudit]) -> None:
+    """Instead of a matrix too large to read: the verdicts that are not complete passes."""
+    table = Table(show_lines=False, header_style="bold")
+    for col in ("log", "req", "verdict"):
+        table.add_column(col, no_wrap=True)
+    shown = 0
+    for la in logs:
+        for v in la.verdicts:
+            if v.verdict in ("satisfied", "vacuous") and not v.partial:
+                continue
+            shown += 1
+            table.add_row(_T(short_log_name(la.log)), _T(v.requirement),
+                          Text(_cell(v, la.start_time_ns), style=_STYLE.get(v.verdict, "")))
+    if shown:
+        console.print(table)
+    console.print("(only verdicts that are not complete passes are listed)",
+                  highlight=False)
+
+
+def _print_errors(console, logs: list[LogAudit]) -> None:
+    """Errors and unknown verdicts in full, outside the table; one requirement's error once
+    for all logs."""
+    seen: dict[tuple[str, str], list[str]] = {}
+    for la in logs:
+        for v in la.verdicts:
+            if v.verdict == "error" and v.error and not la.error:
+                seen.setdefault(("error", f"{v.requirement}: {v.error}"), []).append(
+                    short_log_name(la.log))
+            elif v.verdict == "unknown" and v.unknown_reason:
+                seen.setdefault(("unknown", f"{v.requirement}: {v.unknown_reason}"), []).append(
+                    short_log_name(la.log))
+    for (kind, text), where in seen.items():
+        on = where[0] if len(where) == 1 else f"{len(where)} logs"
+        console.print(Text(f"{kind} ", style=_STYLE[kind]) + _T(f"({on}) {text}"))
+
+
+def _print_counts(console, logs: list[LogAudit], input_errors: bool,
+                  allow_partial: bool) -> None:
+    """The last line: the count of each verdict and the exit code with its meaning."""
+    counts: dict[str, int] = {}
+    for la in logs:
+        for v in la.verdicts:
+            counts[v.verdict] = counts.get(v.verdict, 0) + 1
+    parts = [f"{counts.get(k, 0)} {k}" for k in ("satisfied", "vacuous", "violated", "unknown",
+                                                 "error")]
+    parts += [f"{n} {k}" for k, n in sorted(counts.items())
+              if k not in ("satisfied", "vacuous", "violated", "unknown", "error")]
+    code = exit_code(logs, input_errors, allow_partial)
+    why = {0: "", 1: ": a requirement is violated", 2: ": something could not be audited",
+           3: ": no violation, but a log is partial or had data problems, or a verdict is "
+              "unknown"}.get(code, "")
+    if code == 0 and allow_partial and any(incomplete(la) for la in logs):
+        # --allow-partial changes the exit code, never a verdict: say what it let through
+        why = (f": --allow-partial; {counts.get('unknown', 0)} unknown verdicts are not "
+               "passes, and partial logs were judged only up to their damage")
+    console.print(f"{', '.join(parts)} (exit {code}{why})", highlight=False)
+
+
+def _log_notes(la: LogAudit, verbose: bool = False) -> list[str]:
+    st = la.start_time_ns
+    out = []
+    if la.error:
+        out.append(f"[magenta]not audited[/magenta]: {escape(la.error)}")
+        return out
+    if la.partial:
+        out.append("[yellow]partial[/yellow]: " + escape(damage_summary(la)))
+    if verbose:
+        for v in la.verdicts:
+            if v.warmup_ticks:
+                out.append(f"{escape(v.requirement)}: {v.warmup_ticks} warm-up ticks (waiting "
+                           f"for {escape(', '.join(v.waiting_for)) or 'the first messages'}; "
+                           f"first evaluated tick at {format_offset(v.first_tick_ns, st)})")
+    for w in la.warnings:
+        out.append(f"[yellow]warning[/yellow]: {escape(w)}")
+    if la.missing_topics:
+        out.append(f"never published: {escape(', '.join(la.missing_topics))}")
+    if la.problem_counts:
+        out.append("data problems: " + escape(", ".join(f"{k} x{n}"
+                                                        for k, n in la.problem_counts.items())))
+    return out
+
+
+def _headers(names: list[str]) -> list[str]:
+    """Short column headers that stay unique: of each name (an operand label ``var: expr``
+    counts by its expression) the fewest trailing dotted components that no other name
+    ends with (``…linear.y`` for ``/cmd_vel_filtered.linear.y``); plain names as they are."""
+    keys = [n.split(": ", 1)[1] if ": " in n else n for n in names]
+    out = []
+    for i, (n, k) in enumerate(zip(names, keys)):
+        if (": " not in n and len(n) <= 20) or len(k) <= 20:
+            out.append(k)
+            continue
+        parts = k.split(".")
+        h = k
+        for j in range(min(2, len(parts)), len(parts) + 1):
+            cand = ".".join(parts[-j:])
+            if not any(o != k and (o == cand or o.endswith("." + cand) or o.endswith(cand))
+                       for o in keys[:i] + keys[i + 1:]) and cand not in out:
+                h = cand if j == len(parts) else "…" + cand
+                break
+        out.append(h)
+    return out
+
+
+def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -> None:
+    st = la.start_time_ns
+    fv = v.first_violation
+    clock = "header-stamp clock" if la.time_base == "header" else "log clock"
+    console.print(f"\n[bold red]{escape(v.requirement)} violated[/bold red] on "
+                  f"{escape(short_log_name(la.log))}: {escape(v.text)}", highlight=False)
+    if fv is None:
+        return
+    if fv.trigger is not None:
+        sc = fv.scope
+        console.print(f"  trigger at tick {fv.trigger.tick} "
+                      f"({format_offset(fv.trigger.time_ns, st)}) in the "
+                      f"scope interval [{sc[0].tick}, {sc[1].tick}] "
+                      f"({format_offset(sc[0].time_ns, st)} .. {format_offset(sc[1].time_ns, st)})"
+                      + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""),
+                      markup=False, highlight=False)
+    elif fv.obligation:
+        console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
+                      highlight=False)
+    if v.robustness_at is not None and math.isfinite(v.robustness):
+        console.print(f"  robustness {robustness_text(v.robustness)} at tick "
+                      f"{v.robustness_at.tick} ({format_offset(v.robustness_at.time_ns, st)})",
+                      markup=False, highlight=False)
+    lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
+          if fv.at.log_time_ns is not None else "")
+    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "
+                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})", markup=False,
+                  highlight=False)
+    if v.triggers is not None and v.violations:
+        console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
+                      highlight=False)
+    if not v.values or not verbose:
+        return
+    t = Table(show_header=True, header_style="bold", box=None, pad_edge=False)
+    t.add_column("tick", justify="right")
+    t.add_column("time", justify="right")
+    names = list(v.values)
+    topics = list(v.sources)
+    heads = [terminal_text(h) for h in _headers(names) + [f"{tp} @" for tp in topics]]
+    for h in heads:
+        t.add_column(h, justify="right", no_wrap=True, min_width=len(h))
+    rows = list(zip(*[v.values[n] for n in names])) if names else []
+    marks = {fv.at.tick: "<- missed"}
+    if fv.trigger is not None:
+        marks.setdefault(fv.trigger.tick, "<- trigger")
+        if fv.trigger.tick == fv.at.tick:
+            marks[fv.at.tick] = "<- trigger, missed"
+    t.add_column("", no_wrap=True, min_width=18)
+    prev = None
+    for k, row in enumerate(rows):
+        tick, ns = row[0][0], row[0][1]
+        if prev is not None and tick != prev + 1:
+            t.add_row("…", f"{tick - prev - 1} ticks", *[""] * (len(heads) + 1))
+        prev = tick
+        cells = [str(tick), format_offset(ns, st)] + [_value(c[2]) for c in row]
+        for tp in topics:
+            lt = v.sources[tp][k][2]
+            cells.append(format_offset(lt, st))
+        cells.append(marks.get(tick, ""))
+        t.add_row(*cells)
+    console.print(t)
+
+
+def damage_summary(la: LogAudit) -> str:
+    """What damaged a partial log and how far it was judged, in one sentence: the damage
+    problems (kind and log-time span, seconds from the first tick) and the end of the span
+    read completely."""
+    st = la.start_time_ns
+    kinds = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
+             "data_crc", "unknown_channel", "out_of_order")
+    parts = []
+    for p in la.problems:
+        if p.get("kind") not in kinds:
+            continue
+        lo, hi = p.get("log_time_ns"), p.get("end_time_ns")
+        span = ""
+        if lo is not None:
+            span = f" at {format_offset(lo, st)}" if hi is None or hi == lo else \
+                f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
+        parts.append(f"{p['kind']}{span}")
+        if len(parts) >= 3:
+            break
+    more = sum(n for k, n in la.problem_counts.items() if k.split(" ")[0] in kinds) - len(parts)
+    what = ", ".join(parts) + (f" and {more} more" if more > 0 else "") or "damaged"
+    if la.damage_time_ns is not None:
+        judged = f"judged up to {format_offset(la.damage_time_ns, st)}"
+        if la.ticks_after_damage:
+            judged += f" ({la.ticks_after_damage} ticks after it not judged)"
+    elif la.damage_cut:
+        judged = "nothing before the damage to judge"
+    else:
+        judged = "no message lost"
+    return f"the log is damaged ({what}); {judged}"
+
+
+class AuditProgress:
+    """A rich progress display: one bar for the logs done, one per log being read (fraction
+    of its log time). Used as the ``progress`` object of :func:`audit.audit_logs`."""
+
+    def __init__(self, console, total: int):
+        self.progress = Progress(TextColumn("{task.description}"), BarColumn(),
+                                 TaskProgressColumn(), TimeElapsedColumn(), console=console,
+                                 transient=True)
+        self.total = self.progress.add_task("logs", total=total)
+        self.tasks: dict[int, int] = {}
+
+    def __enter__(self):
+        self.progress.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.progress.stop()
+
+    def start(self, index: int, path: str) -> None:
+        """A progress bar for log ``index`` (its file name shown)."""
+        self.tasks[index] = self.progress.add_task(short_log_name(path), total=1.0)
+
+    def update(self, index: int, fraction: float) -> None:
+        """Log ``index`` read to ``fraction`` (0 to 1)."""
+        task = self.tasks.get(index)
+        if task is not None:
+            self.progress.update(task, completed=fraction)
+
+    def done(self, index: int, la) -> None:
+        """Log ``index`` audited: its bar removed, the overall bar advanced."""
+        task = self.tasks.pop(index, None)
+        if task is not None:
+            self.progress.remove_task(task)
+        self.progress.advance(self.total)

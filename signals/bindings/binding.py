@@ -1,0 +1,216 @@
+"""One FRET variable bound to an expression: :class:`Binding` and how it is made
+(:func:`compile_expression`, :func:`parse_inline` for ``--bind NAME=EXPR``), evaluated (one
+tick, or all ticks at once with numpy) and explained (:func:`operand_signals`)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from common.problems import BindingError, SignalError
+from .compile import EvalError, EvalState, compile_node
+from .expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
+                         UnaryOp, check, check_size, substitute, unparse, walk)
+from .parse import parse_expression
+from .extract import Valid, normalize_scalar
+from .operations import Ops
+
+__all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals"]
+
+#: A FRET variable name as a binding key: an identifier, or the text of a quoted FRETish
+#: variable (``"wind speed"``: a TOML quoted key ``"wind speed" = "..."``, or
+#: ``--bind '"wind speed"=...'``): no quotes, no control characters, not blank at either end.
+VARNAME = re.compile(r"(?=\S)[^\"\x00-\x1f\x7f]*(?<=\S)\Z")
+
+
+@dataclass(eq=False)
+class Binding:
+    """One FRET variable bound to an expression.
+
+    Attributes:
+        name: the FRET variable.
+        expr: the expression text.
+        source: binding file path, or ``"<--bind NAME>"``.
+        line, col: where the expression text starts in ``source`` (1-based; None unknown).
+        ast: the expression tree, references to other variables substituted.
+        topics: topics the expression reads (fields and ``age``).
+        fields: the field references, in order of appearance.
+        constants: the values of its named constants (``POWER_SUPPLY_STATUS_CHARGING``),
+            filled in by :func:`signals.bindings.check_types` from a log's schemas.
+        uses_tf: whether it reads ``tf()`` (every message of /tf and /tf_static).
+    """
+
+    name: str
+    expr: str
+    source: str
+    line: int | None
+    col: int | None
+    ast: Expr
+    topics: frozenset[str]
+    fields: tuple[Field, ...]
+    _exact: bool = True
+    constants: dict[str, Any] = field(default_factory=dict, repr=False)
+    uses_tf: bool = False
+    _scalar: Callable[[EvalState], Any] | None = field(default=None, repr=False)
+    _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
+
+    def location(self) -> ExprLocation:
+        """Where the expression is, for error messages."""
+        return ExprLocation(self.source, self.name, self.line, self.col, self._exact)
+
+    def _fail(self, exc: EvalError, context: str) -> SignalError:
+        err = self.location().error(f"{exc.message}{context}", exc.node.col)
+        return SignalError(str(err), variable=self.name)
+
+    def evaluate(self, state: EvalState, context: str = "") -> bool | float:
+        """Value at one tick: Python bool or float.
+
+        Args:
+            state: held messages, their times, and the tick time.
+            context: appended to error messages (e.g. " at log time ...").
+
+        Raises:
+            SignalError: a missing field, index out of range, or a value that is an array;
+                the message names the binding file:line:col and the variable.
+        """
+        try:
+            v = self._scalar(state)  # type: ignore[misc]
+        except EvalError as exc:
+            raise self._fail(exc, context) from None
+        t = type(v)
+        if t is bool or t is float:  # the fast path: most values are
+            return v
+        v = normalize_scalar(v)  # ints and numpy scalars (results of array operations)
+        if type(v) is bool or type(v) is float:
+            return v
+        if isinstance(v, Valid):
+            raise self._fail(EvalError(self.ast, f"value is an array of {v.data.shape[-1]} "
+                                       "items; reduce it with min/max/any/all/count"), context)
+        raise self._fail(EvalError(self.ast, f"value {v!r} is not a boolean or a number"),
+                         context)
+
+    def evaluate_columns(self, columns: Any) -> np.ndarray:
+        """Values at all ticks (vectorized): 1-D bool or float64 array.
+
+        Args:
+            columns: an object with ``n`` (number of ticks), ``field(topic, path, node)`` →
+                per-tick values (1-D array, or :class:`Valid` of 2-D) and ``age(topic)`` →
+                seconds (1-D); see :mod:`signals.arrays`.
+
+        Raises:
+            SignalError: as :meth:`evaluate`.
+        """
+        try:
+            v = self._vector(columns)  # type: ignore[misc]
+        except EvalError as exc:
+            raise self._fail(exc, "") from None
+        if isinstance(v, Valid):
+            raise self._fail(EvalError(self.ast, "value is an array; reduce it with "
+                                       "min/max/any/all/count"), "")
+        if not isinstance(v, np.ndarray):
+            v = np.full(columns.n, v)
+        if v.dtype == np.bool_:
+            return v
+        if v.dtype.kind in "iuf":
+            return v.astype(np.float64, copy=False)
+        raise self._fail(EvalError(self.ast, f"values of type {v.dtype} are not booleans or "
+                                   "numbers"), "")
+
+
+def compile_expression(name: str, expr: str, *, source: str = "<expression>",
+                       line: int | None = None, col: int | None = None, exact: bool = True,
+                       refs: dict[str, Binding] | None = None) -> Binding:
+    """Parse, check and compile one binding expression.
+
+    Args:
+        name: the FRET variable (an identifier, or the text of a quoted FRETish variable).
+        expr: the expression text.
+        source, line, col: where ``expr`` starts, for error messages (``exact`` False when
+            columns inside the expression cannot be mapped to the file, e.g. escapes).
+        refs: the other variables a bare name in ``expr`` may refer to (already compiled);
+            their expressions are substituted.
+
+    Raises:
+        BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
+            used as a value; names source:line:col and the variable.
+    """
+    where = ExprLocation(source, name, line, col, exact)
+    if not VARNAME.match(name):
+        raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
+                          "quoted FRETish variable")
+    node, topics = parse_expression(expr, where)
+    if any(isinstance(n, Ref) for n in walk(node)):
+        trees = {n: b.ast for n, b in (refs or {}).items()}
+        node = substitute(node, trees, where, name)
+        check_size(node, where, "the expression with its references substituted")
+        found: set[str] = set()
+        check(node, where, found)
+        topics = frozenset(found)
+    fields = tuple(n for n in walk(node) if isinstance(n, Field) and n.path)
+    extractors: dict[Field, Callable[[Any], Any]] = {}
+    constants: dict[str, Any] = {}
+    scalar = compile_node(node, Ops(False), extractors, constants)
+    vector = compile_node(node, Ops(True), extractors, constants)
+    uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
+    if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
+        fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
+    return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
+                   uses_tf, scalar, vector)
+
+
+def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:
+    """One inline binding ``NAME=EXPR`` (CLI ``--bind``); source is ``"<--bind NAME>"``.
+
+    Raises:
+        BindingError: no ``=``, bad name, or a bad expression (column counted in ``spec``).
+    """
+    name, sep, expr = spec.partition("=")
+    name = name.strip()
+    if len(name) >= 2 and name[0] == name[-1] == '"':
+        name = name[1:-1]  # a quoted FRETish variable: --bind '"wind speed"=...'
+    if not sep or not name:
+        raise BindingError(f"<--bind {spec}>", "expected NAME=EXPRESSION")
+    col = spec.index("=") + 2
+    return compile_expression(name, expr, source=f"<--bind {name}>", line=1, col=col,
+                              refs=refs)
+
+
+_COMPARISONS = ("<", "<=", ">", ">=", "=", "!=")
+
+
+def _operands(node: Expr, found: list[Expr]) -> None:
+    """The non-constant operands of the comparisons ``node`` is made of (through
+    ``& | -> !``), in order."""
+    if isinstance(node, UnaryOp) and node.op == "!":
+        _operands(node.arg, found)
+    elif isinstance(node, BinOp) and node.op in ("&", "|", "->"):
+        _operands(node.left, found)
+        _operands(node.right, found)
+    elif isinstance(node, BinOp) and node.op in _COMPARISONS:
+        found.extend(side for side in (node.left, node.right) if not isinstance(side, Const))
+
+
+def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding]]:
+    """The numbers behind a boolean binding: the non-constant operands of the comparisons it
+    is made of (through ``& | -> !``), as ``(label, Binding)`` pairs; e.g. ``too_close =
+    "min(/scan.ranges) < 0.9"`` gives ``("too_close: min(/scan.ranges)", ...)``. At most
+    ``limit`` of them; evidence shows them next to the boolean."""
+    found: list[Expr] = []
+    _operands(binding.ast, found)
+    out: list[tuple[str, Binding]] = []
+    seen: set[str] = set()
+    for i, side in enumerate(found):
+        text = unparse(side)
+        if text.startswith("(") and text.endswith(")"):
+            text = text[1:-1]
+        if text in seen or len(out) >= limit:
+            continue
+        seen.add(text)
+        aux = compile_expression(f"{binding.name}__operand{i}", text, source=binding.source,
+                                 line=binding.line, col=binding.col, exact=False)
+        out.append((f"{binding.name}: {text}", aux))
+    return out

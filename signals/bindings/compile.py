@@ -1,0 +1,316 @@
+"""Compilation of an expression tree to nested Python closures (no ``eval`` of user text).
+
+:func:`compile_node` gives, for one :class:`~signals.bindings.expression.Expr`, a function
+of what the evaluation sees: an :class:`EvalState` (one tick: the held messages, their times
+and the tick time) or, vectorized, a columns object (all ticks at once: ``n``,
+``field(topic, path, node)`` and ``age(topic)``, see :mod:`signals.arrays`).  Both
+evaluators apply the same :mod:`~signals.bindings.operations`, so they give the same values.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from common.units import NS_PER_S
+
+from .expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, walk
+from .extract import FieldAccessError, Valid, make_extractor
+from .frames import LookupFailed, TfBuffer, pick_joint
+from .operations import NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2, num
+
+__all__ = ["EvalState", "EvalError", "compile_node", "per_message_topic"]
+
+Evaluator = Callable[[Any], Any]
+
+
+class EvalState:
+    """What a per-tick evaluation sees.
+
+    Attributes:
+        msgs: topic → data of the latest message at or before the tick (sample-and-hold).
+        times: topic → time (ns, in the time base) of that message.
+        now: the tick time (ns).
+    """
+
+    __slots__ = ("msgs", "times", "now", "values", "tf")
+
+    def __init__(self) -> None:
+        self.msgs: dict[str, Any] = {}
+        self.times: dict[str, int] = {}
+        self.now = 0
+        #: (topic, field path) → (message data, extracted value): extraction memo.
+        self.values: dict[tuple[str, tuple], tuple[Any, Any]] = {}
+        #: every transform of /tf and /tf_static so far, when a binding reads ``tf()``
+        #: (the clock adds each message: :meth:`TfBuffer.add`); None otherwise.
+        self.tf: TfBuffer | None = None
+
+
+class EvalError(Exception):
+    """An evaluation that failed at ``node`` (its column goes into the error message)."""
+
+    def __init__(self, node: Expr, message: str) -> None:
+        super().__init__(message)
+        self.node = node
+        self.message = message
+
+
+def compile_node(node: Expr, ops: Ops, extractors: dict[Field, Evaluator],
+                 constants: dict[str, Any] | None = None) -> Evaluator:
+    """Closure evaluating ``node``; its argument is an :class:`EvalState` (``ops`` per tick)
+    or a columns object (``ops`` vectorized).  ``extractors`` (field -> extractor) is shared
+    by the per-tick and the vectorized compilation of one binding; ``constants`` (name ->
+    value: the :class:`Named` constants, filled in when the binding is checked against a
+    log's schemas) is read when the closure runs.
+
+    The closure raises :class:`EvalError` (a field missing from a message, an operation that
+    does not apply to its values).
+    """
+    consts = constants if constants is not None else {}
+    if isinstance(node, Const):
+        v = node.value
+        return lambda st: v
+    if isinstance(node, Named):
+        return _named(node, consts)
+    if isinstance(node, Field):
+        return _field(node, ops, extractors, consts)
+    if isinstance(node, UnaryOp):
+        return _unary(node, ops, extractors, consts)
+    if isinstance(node, BinOp):
+        return _binary(node, ops, extractors, consts)
+    if isinstance(node, FuncCall):
+        return _call(node, ops, extractors, consts)
+    raise AssertionError(node)  # pragma: no cover
+
+
+def _named(node: Named, consts: dict[str, Any]) -> Evaluator:
+    name = node.name
+
+    def named(st: Any) -> Any:
+        try:
+            return consts[name]
+        except KeyError:
+            raise EvalError(node, f"{name} is not a variable of this binding file, and its "
+                            "value as a named constant was not read from the log's schemas "
+                            "(fretc audit reads them before the audit; fretc watch does not: "
+                            "write the number)") from None
+    return named
+
+
+def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator],
+           consts: dict[str, Any]) -> Evaluator:
+    if ops.vec:
+        topic, path = node.topic, node.path
+        return lambda cols: cols.field(topic, path, node)
+    ex = extractors.setdefault(node, make_extractor(node, consts))
+    topic = node.topic
+    key = (topic, node.path)
+
+    def field_value(st: EvalState) -> Any:
+        msg = st.msgs[topic]
+        memo = st.values.get(key)  # shared by bindings and ticks while the message is held
+        if memo is not None and memo[0] is msg:
+            return memo[1]
+        try:
+            v = ex(msg)
+        except FieldAccessError as exc:
+            raise EvalError(node, str(exc)) from None
+        st.values[key] = (msg, v)
+        return v
+
+    return field_value
+
+
+def _unary(node: UnaryOp, ops: Ops, extractors: dict[Field, Evaluator],
+           consts: dict[str, Any]) -> Evaluator:
+    arg = compile_node(node.arg, ops, extractors, consts)
+    if node.op == "-":
+        def neg(st: Any) -> Any:
+            a = arg(st)
+            if type(a) in PY_TYPES:
+                return -a
+            return ops.lift1(np.negative, a, True)
+        return neg
+
+    def not_(st: Any) -> Any:
+        a = arg(st)
+        if type(a) in PY_TYPES:
+            return not a
+        return ops.lift1(np.logical_not, a, False)
+    return not_
+
+
+def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
+            consts: dict[str, Any]) -> Evaluator:
+    left = compile_node(node.left, ops, extractors, consts)
+    right = compile_node(node.right, ops, extractors, consts)
+    npfn, numeric = NP_BINARY[node.op]
+    pyfn = PY_BINARY[node.op]
+    text_ok = node.op in ("=", "!=")
+
+    def binary(st: Any) -> Any:
+        a = left(st)
+        b = right(st)
+        if type(a) in PY_TYPES and type(b) in PY_TYPES:
+            return pyfn(a, b)
+        if text_ok and (type(a) is str or type(b) is str):
+            if isinstance(a, list) or isinstance(b, list):  # an array of strings, item-wise
+                items, one = (a, b) if isinstance(a, list) else (b, a)
+                return Valid(np.array([pyfn(x, one) for x in items], dtype=np.bool_), None)
+            return pyfn(a, b)  # text equality (types checked: both are strings)
+        try:
+            return ops.lift2(npfn, a, b, numeric)
+        except (ValueError, TypeError) as exc:
+            raise EvalError(node, f"cannot apply {node.op!r}: {exc}") from None
+    return binary
+
+
+def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
+          consts: dict[str, Any]) -> Evaluator:
+    func = node.func
+    if func == "age":
+        topic = node.args[0].topic  # type: ignore[attr-defined]
+        if ops.vec:
+            return lambda cols: cols.age(topic)
+        return lambda st: (st.now - st.times[topic]) / NS_PER_S
+    if func == "tf":
+        return _tf(node)
+    args = [compile_node(a, ops, extractors, consts) for a in node.args]
+    if func == "joint":
+        return _joint(node, args)
+    if func == "abs":
+        a0 = args[0]
+
+        def abs_(st: Any) -> Any:
+            a = a0(st)
+            if type(a) in PY_TYPES:
+                return abs(a)
+            return ops.lift1(np.abs, a, True)
+        return abs_
+    if func in ("min", "max", "norm") and len(args) > 1:
+        return _several(node, args)
+    return _reduction(node, args[0], ops)
+
+
+def _tf(node: FuncCall) -> Evaluator:
+    """``tf(parent, child).component`` from the transforms held at the tick."""
+    parent, child, comp = (a.value for a in node.args)  # type: ignore[attr-defined]
+
+    def tf(st: Any) -> Any:
+        buf = getattr(st, "tf", None)
+        if buf is None:
+            raise EvalError(node, "tf() is evaluated tick by tick only")
+        try:
+            return buf.lookup(parent, child, comp, st.now)
+        except LookupFailed as exc:
+            raise EvalError(node, str(exc)) from None
+    return tf
+
+
+def _joint(node: FuncCall, args: list[Evaluator]) -> Evaluator:
+    """``joint(/js.position, "name")``: the item of the array whose ``name`` is given."""
+    values_of, names_of = args[0], args[2]
+    joint_name = node.args[1].value  # type: ignore[attr-defined]
+    text = node.args[0].text()  # type: ignore[attr-defined]
+
+    def joint(st: Any) -> Any:
+        try:
+            return pick_joint(values_of(st), names_of(st), joint_name, text)
+        except LookupFailed as exc:
+            raise EvalError(node, str(exc)) from None
+    return joint
+
+
+def _norm(vals: list[Any]) -> Any:
+    """sqrt(a² + b² + ...) of Python numbers or of per-tick arrays."""
+    if all(type(v) in PY_TYPES for v in vals):
+        total = 0.0
+        for v in vals:
+            total = total + v * v
+        return math.sqrt(total)
+    total = 0.0
+    for v in vals:
+        v = num(v)
+        total = total + v * v
+    return np.sqrt(total)
+
+
+def _several(node: FuncCall, args: list[Evaluator]) -> Evaluator:
+    """``min``/``max``/``norm`` of several values (numbers, not arrays)."""
+    func = node.func
+    pair = {"min": min2, "max": max2}.get(func)
+    npfn = {"min": np.minimum, "max": np.maximum}.get(func)
+
+    def several(st: Any) -> Any:
+        vals = [a(st) for a in args]
+        for v in vals:
+            if isinstance(v, Valid):
+                raise EvalError(node, f"{func}() of several values takes numbers, not arrays")
+        if func == "norm":
+            return _norm(vals)
+        acc = vals[0]
+        for v in vals[1:]:
+            if type(acc) in PY_TYPES and type(v) in PY_TYPES:
+                acc = pair(acc, v)
+            else:
+                acc = npfn(num(acc), num(v))
+        return acc
+    return several
+
+
+def _reduction(node: FuncCall, a0: Evaluator, ops: Ops) -> Evaluator:
+    """A function of one value: a reduction of an array (or the value itself for a number)."""
+    func = node.func
+
+    def reduce_(st: Any) -> Any:
+        a = a0(st)
+        if not isinstance(a, Valid):
+            if func == "len" and isinstance(a, (list, tuple, str)):
+                return float(len(a))  # e.g. len(/tf.transforms): a sequence of messages
+            if func in ("min", "max", "mean"):
+                return a  # of one number: itself
+            if func == "norm":
+                return abs(a) if type(a) in PY_TYPES else np.abs(num(a))
+            raise EvalError(node, f"{func}() takes an array")
+        return ops.reduce(func, a)
+
+    arg0 = node.args[0]
+    if ops.vec:
+        topic = per_message_topic(arg0)
+        if topic is None:
+            return reduce_
+        # a reduction of one topic's fields (``min(/scan.ranges)``) depends only on the held
+        # message: the columns compute it once per message and gather it per tick
+        scalar = _reduction(node, compile_node(arg0, Ops(False), {}), Ops(False))
+        return lambda cols: cols.per_message(node, topic, reduce_, scalar)
+    if not isinstance(arg0, Field):
+        return reduce_
+    # a reduction of one field depends only on the held message: computed once per message,
+    # shared by the bindings that use it (like the field memo)
+    key = (func, arg0.topic, arg0.path)
+    topic0 = arg0.topic
+
+    def reduce_memo(st: Any) -> Any:
+        msg = st.msgs[topic0]
+        memo = st.values.get(key)
+        if memo is not None and memo[0] is msg:
+            return memo[1]
+        v = reduce_(st)
+        st.values[key] = (msg, v)
+        return v
+    return reduce_memo
+
+
+def per_message_topic(node: Expr) -> str | None:
+    """The one topic whose message alone decides ``node`` (fields of that topic, constants,
+    operators and reductions; no ``age``, no other topic), or None."""
+    topics = set()
+    for n in walk(node):
+        if isinstance(n, FuncCall) and n.func == "age":
+            return None
+        if isinstance(n, Field):
+            topics.add(n.topic)
+    return topics.pop() if len(topics) == 1 else None

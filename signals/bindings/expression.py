@@ -1,0 +1,379 @@
+"""The binding expression language: its tree and its static checks.
+
+An expression (``"min(/scan.ranges) < 0.9"``) is parsed by :mod:`signals.bindings.parse`
+into the frozen dataclasses below (:class:`Expr` and its subclasses; ``col`` is the 1-based
+column in the expression text, for error messages).  The language itself (operators,
+functions, values) is described in ``docs/bindings.md`` and in :mod:`signals.bindings`.
+
+Errors are :class:`common.problems.BindingError` naming the binding file, line, column
+and variable (:class:`ExprLocation` maps a column in the expression to one in the file).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from common.problems import BindingError
+from fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
+from logs.schema import closest
+from .paths import quote, topic_text
+
+__all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
+           "FuncCall", "FUNCS", "TF_COMPONENTS", "TF_TOPICS",
+           "ExprLocation", "check", "check_size", "walk", "refs",
+           "substitute", "unparse", "MAX_EXPR_CHARS"]
+
+#: Characters of one binding expression (real ones have tens; the text is parsed whole)
+MAX_EXPR_CHARS = 20_000
+
+
+# ------------------------------------------------------------------------------------------------
+# The expression tree
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Expr:
+    """Base of expression nodes; ``col`` is the 1-based column in the expression text."""
+
+    col: int
+
+
+@dataclass(frozen=True)
+class Const(Expr):
+    """``1.5``, ``2e-3``, ``true``, ``false``, ``"charging"``: a float, a bool or a string."""
+
+    value: bool | float | str
+
+
+@dataclass(frozen=True)
+class Named(Expr):
+    """A named constant of a message definition (``POWER_SUPPLY_STATUS_CHARGING``,
+    DiagnosticStatus's ``ERROR``): a name in capitals that is not a variable of the binding
+    file; its value is looked up in the log's schema of the field it is compared with
+    (:mod:`signals.bindings.typecheck`)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class Slice:
+    """``[lo:hi]`` of an array field (Python slice rules; None = open end)."""
+
+    lo: int | None
+    hi: int | None
+
+    def text(self) -> str:
+        """``[lo:hi]`` as written (open ends empty)."""
+        return f"[{'' if self.lo is None else self.lo}:{'' if self.hi is None else self.hi}]"
+
+
+@dataclass(frozen=True)
+class Filter:
+    """``{name=="battery"}`` (Foxglove's message path filter): keeps the items of an array
+    of messages whose field ``path`` compares true (``op`` one of ``= != < <= > >=``) with
+    ``value`` (a :class:`Const` or a :class:`Named` constant)."""
+
+    path: tuple[str, ...]
+    op: str
+    value: Expr
+
+    def text(self) -> str:
+        """``{name=="battery"}`` as written (``=`` printed as ``==``)."""
+        op = "==" if self.op == "=" else self.op
+        return "{" + ".".join(self.path) + op + unparse(self.value) + "}"
+
+
+@dataclass(frozen=True)
+class Field(Expr):
+    """``/topic.a.b[i]``: ``path`` holds attribute names (str), indexes (int), slices
+    (:class:`Slice`) and filters (:class:`Filter`); after a slice or a filter the rest of
+    the path applies to each item and the value is the array of the results."""
+
+    topic: str
+    path: tuple[str | int | Slice | Filter, ...]
+
+    def text(self) -> str:
+        """``/topic.a[2].b`` (a topic that is not a plain ROS name quoted): the field as
+        written in a binding."""
+        out = topic_text(self.topic)
+        for p in self.path:
+            out += (p.text() if isinstance(p, (Slice, Filter)) else f"[{p}]"
+                    if isinstance(p, int) else f".{p}")
+        return out
+
+    @property
+    def multi(self) -> bool:
+        """Whether the path has a slice or a filter before its end, or a filter at the end
+        (its value is then an array of items read from each)."""
+        return any(isinstance(p, Filter) for p in self.path) or any(
+            isinstance(p, Slice) for p in self.path[:-1])
+
+
+@dataclass(frozen=True)
+class Ref(Expr):
+    """Another variable of the same binding file, by name (substituted before compiling)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class UnaryOp(Expr):
+    """``-a`` (``op`` ``"-"``) or ``!a`` (``op`` ``"!"``)."""
+
+    op: str
+    arg: Expr
+
+
+@dataclass(frozen=True)
+class BinOp(Expr):
+    """``left op right``; ``op`` one of ``+ - * / < <= > >= = != & | -> <->``."""
+
+    op: str
+    left: Expr
+    right: Expr
+
+
+@dataclass(frozen=True)
+class FuncCall(Expr):
+    """``func(args...)``, ``func`` a name of :data:`FUNCS`."""
+
+    func: str
+    args: tuple[Expr, ...]
+
+
+#: The functions of the language: name -> (min args, max args or None). ``joint`` is
+#: written with two (``joint(/joint_states.position, "wheel")``; the ``name`` array beside
+#: the first is added as a third), ``tf`` as ``tf("map", "base_link").x`` (the component
+#: is its third).
+FUNCS = {
+    "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
+    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1),
+    "joint": (3, 3), "tf": (3, 3),
+}
+#: The components of ``tf(parent, child)``: translation (m), yaw (rad) and age (s).
+TF_COMPONENTS = ("x", "y", "z", "yaw", "age")
+#: The topics ``tf()`` reads (REP 105 / tf2: dynamic and static transforms).
+TF_TOPICS = ("/tf", "/tf_static")
+
+
+def walk(node: Expr) -> Iterator[Expr]:
+    """``node`` and every node below it, depth first, left to right (pre-order)."""
+    yield node
+    if isinstance(node, UnaryOp):
+        yield from walk(node.arg)
+    elif isinstance(node, BinOp):
+        yield from walk(node.left)
+        yield from walk(node.right)
+    elif isinstance(node, FuncCall):
+        for a in node.args:
+            yield from walk(a)
+
+
+def refs(node: Expr) -> list[str]:
+    """Names of the variables ``node`` refers to, in order of appearance."""
+    return [n.name for n in walk(node) if isinstance(n, Ref)]
+
+
+def unparse(node: Expr) -> str:
+    """Expression text of a node (fully parenthesized where it matters).
+
+    Raises:
+        TypeError: a :class:`Ref` (substitute references first).
+    """
+    if isinstance(node, Const):
+        v = node.value
+        if isinstance(v, str):
+            return quote(v)
+        return ("true" if v else "false") if isinstance(v, bool) else repr(float(v))
+    if isinstance(node, Named):
+        return node.name
+    if isinstance(node, Field):
+        return node.text()
+    if isinstance(node, UnaryOp):
+        arg = unparse(node.arg) if node.op == "!" else _operand(node.arg)
+        return f"{node.op}{arg}"
+    if isinstance(node, BinOp):
+        return f"({_operand(node.left)} {node.op} {_operand(node.right)})"
+    if isinstance(node, FuncCall):
+        if node.func == "tf":
+            a = node.args
+            return f"tf({unparse(a[0])}, {unparse(a[1])}).{a[2].value}"  # type: ignore
+        args = node.args[:2] if node.func == "joint" else node.args
+        return f"{node.func}({', '.join(unparse(a) for a in args)})"
+    raise TypeError(type(node).__name__)
+
+
+def _operand(node: Expr) -> str:
+    """``unparse`` of an operand: ``!`` binds looser than comparisons, arithmetic and unary
+    minus (grammar.lark), so a negation inside them is parenthesized: ``(!a) = b``."""
+    text = unparse(node)
+    return f"({text})" if isinstance(node, UnaryOp) and node.op == "!" else text
+
+
+# ------------------------------------------------------------------------------------------------
+# Where an error is
+# ------------------------------------------------------------------------------------------------
+
+
+class ExprLocation:
+    """Maps a column in the expression to file:line:col for error messages.
+
+    ``line``/``col`` are where the expression text starts in ``source`` (1-based; None when
+    unknown); ``exact`` is False when columns inside the expression do not map one to one
+    onto the file (escapes, multi-line strings): the column in the expression is then said in
+    words.
+    """
+
+    def __init__(self, source: str, variable: str | None, line: int | None, col: int | None,
+                 exact: bool = True) -> None:
+        self.source, self.variable, self.line, self.col, self.exact = (source, variable, line,
+                                                                        col, exact)
+
+    def error(self, message: str, expr_col: int | None = None) -> BindingError:
+        """A :class:`BindingError` at column ``expr_col`` of the expression (None: at its
+        start)."""
+        line, col = self.line, self.col
+        if expr_col is not None:
+            if col is not None and self.exact:
+                col = col + expr_col - 1
+            else:
+                message = f"{message} (column {expr_col} of the expression)"
+        return BindingError(self.source, message, line=line, col=col, variable=self.variable)
+
+
+# ------------------------------------------------------------------------------------------------
+# Static checks and references
+# ------------------------------------------------------------------------------------------------
+
+
+def check_size(node: Expr, where: ExprLocation, what: str = "the expression") -> None:
+    """The limits of requirements (:mod:`fretish.limits`) for a binding expression: at most
+    :data:`~fretish.limits.MAX_EXPR_NODES` nodes counted as expanded (a variable referred to
+    twice counts twice) and :data:`~fretish.limits.MAX_EXPR_DEPTH` levels. Shared subtrees
+    (references substituted) are counted once per use without walking them again, so a
+    chain of doubling references is refused in linear time.
+
+    Raises:
+        BindingError: over a limit, naming the limit.
+    """
+    size: dict[int, int] = {}
+    depth: dict[int, int] = {}
+    stack: list[tuple[Expr, bool]] = [(node, False)]
+    while stack:
+        n, done = stack.pop()
+        if id(n) in size:
+            continue
+        kids = _children(n)
+        if not done:
+            stack.append((n, True))
+            stack.extend((k, False) for k in kids if id(k) not in size)
+            continue
+        size[id(n)] = 1 + sum(size[id(k)] for k in kids)
+        depth[id(n)] = 1 + max((depth[id(k)] for k in kids), default=0)
+        if size[id(n)] > MAX_EXPR_NODES:
+            raise where.error(f"{what} has more than {MAX_EXPR_NODES:,} names, numbers and "
+                              "operators (counting each use of a referred variable)")
+        if depth[id(n)] > MAX_EXPR_DEPTH:
+            raise where.error(f"{what} is nested more than {MAX_EXPR_DEPTH} levels deep")
+
+
+def _children(n: Expr) -> tuple[Expr, ...]:
+    if isinstance(n, UnaryOp):
+        return (n.arg,)
+    if isinstance(n, BinOp):
+        return (n.left, n.right)
+    if isinstance(n, FuncCall):
+        return tuple(n.args)
+    return ()
+
+
+def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
+    """Static checks: known functions and arities, age() of a topic, fields below topics.
+    Adds the topics ``node`` reads to ``topics``.
+
+    Raises:
+        BindingError: the first failed check, at ``where``.
+    """
+    if isinstance(node, Field):
+        names = [p for p in node.path if isinstance(p, str)]
+        names += [n for p in node.path if isinstance(p, Filter) for n in p.path]
+        for p in names:
+            if p.startswith("_"):
+                raise where.error(f"{node.text()}: {p!r} is not a message field (ROS field "
+                                  "names start with a letter; a binding reads only fields the "
+                                  "message type declares)", node.col)
+        if not node.path:
+            raise where.error(f"{node.topic} is a topic, not a value: name a field "
+                              f"(e.g. {node.topic}.data) or use age({node.topic})", node.col)
+        topics.add(node.topic)
+    elif isinstance(node, UnaryOp):
+        check(node.arg, where, topics)
+    elif isinstance(node, BinOp):
+        check(node.left, where, topics)
+        check(node.right, where, topics)
+    elif isinstance(node, FuncCall):
+        _check_call(node, where, topics)
+    # a Ref is resolved against the other variables (substitute)
+
+
+def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
+    if node.func not in FUNCS:
+        raise where.error(f"unknown function {node.func!r} (known: "
+                          f"{', '.join(sorted(FUNCS))})", node.col)
+    lo, hi = FUNCS[node.func]
+    n = len(node.args)
+    if n < lo or (hi is not None and n > hi):
+        want = f"{lo}" if lo == hi else f"at least {lo}"
+        raise where.error(f"{node.func}() takes {want} argument(s), got {n}", node.col)
+    if node.func == "tf":
+        topics.update(TF_TOPICS)
+        return
+    if node.func == "age":
+        arg = node.args[0]
+        if not isinstance(arg, Field) or arg.path:
+            raise where.error("age() takes a topic name, e.g. age(/scan)", arg.col)
+        topics.add(arg.topic)
+        return
+    for a in node.args:
+        check(a, where, topics)
+
+
+#: A name that may be a constant of a message definition (ROS writes them in capitals).
+_CONSTANT = re.compile(r"[A-Z][A-Z0-9_]*\Z")
+
+
+def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: str) -> Expr:
+    """``node`` with every :class:`Ref` replaced by the tree of the variable it names.
+
+    Args:
+        trees: variable -> its (already substituted) tree.
+        name: the variable ``node`` belongs to (it may not refer to itself).
+
+    Raises:
+        BindingError: a reference to ``name`` itself or to an unknown variable (a name in
+            capitals that is no variable becomes a :class:`Named` constant).
+    """
+    if isinstance(node, Ref):
+        if node.name == name:
+            raise where.error(f"{name!r} refers to itself", node.col)
+        tree = trees.get(node.name)
+        if tree is None and _CONSTANT.match(node.name):
+            return Named(node.col, node.name)  # resolved against the log's schemas
+        if tree is None:
+            hint = closest(node.name, [n for n in trees if n != name] + list(FUNCS))
+            raise where.error(f"unknown name {node.name!r}: not a variable of this binding file"
+                              + (f"; did you mean {hint!r}?" if hint else "")
+                              + " (a field is /topic.field, a function call f(...))", node.col)
+        return tree
+    if isinstance(node, UnaryOp):
+        return UnaryOp(node.col, node.op, substitute(node.arg, trees, where, name))
+    if isinstance(node, BinOp):
+        return BinOp(node.col, node.op, substitute(node.left, trees, where, name),
+                     substitute(node.right, trees, where, name))
+    if isinstance(node, FuncCall):
+        return FuncCall(node.col, node.func, tuple(substitute(a, trees, where, name)
+                                                   for a in node.args))
+    return node

@@ -1,0 +1,307 @@
+"""Binding files: TOML (read with :mod:`tomllib`) with the tables ``[tick]``,
+``[variables]`` and optionally ``[logs]`` (format: ``docs/bindings.md``) -> :class:`Bindings`.
+
+Errors name the file, line and column: :mod:`tomllib` does not keep positions, so
+:class:`_Locations` finds tables and keys in the text again (one per line, as binding files
+are written; anything else gets the line of its table, or none).
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from common.units import parse_duration
+
+from common.problems import BindingError
+from .binding import VARNAME, Binding, compile_expression
+from .expression import ExprLocation, refs
+from .parse import parse_expression
+from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec
+
+__all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
+
+#: How deep variables may refer to one another (``a = "b"``, ``b = "c"``, ...)
+MAX_REFERENCE_CHAIN = 100
+
+# ------------------------------------------------------------------------------------------------
+# Where things are in the TOML text
+# ------------------------------------------------------------------------------------------------
+
+_TABLE = re.compile(r"\s*\[\s*([A-Za-z0-9_.\"' -]+?)\s*\]\s*(#.*)?\Z")
+_KEY = re.compile(r"""\s*(?:"((?:[^"\\]|\\.)*)"|'([^']*)'|([A-Za-z0-9_-]+))\s*=\s*""")
+
+
+class _Locations:
+    """Lines and columns of the tables and keys of a binding file's text."""
+
+    def __init__(self, text: str) -> None:
+        #: (table, key) → (line, col of the value's first char, value text rest of line);
+        #: ("[table]", table) → the table header; ("[key]", "table.key") → the key itself.
+        self.where: dict[tuple[str, str], tuple[int, int, str]] = {}
+        table = ""
+        for i, raw in enumerate(text.splitlines(), start=1):
+            m = _TABLE.match(raw)
+            if m and not raw.lstrip().startswith("[["):
+                table = m.group(1).strip().strip("\"'")
+                self.where.setdefault(("[table]", table), (i, raw.index("[") + 1, ""))
+                continue
+            m = _KEY.match(raw)
+            if m:
+                key = next(g for g in m.groups() if g is not None)
+                self.where.setdefault((table, key), (i, m.end() + 1, raw[m.end():]))
+                self.where.setdefault(("[key]", table + "." + key),
+                                      (i, len(raw) - len(raw.lstrip()) + 1, ""))
+
+    def at(self, table: str, key: str | None = None) -> tuple[int | None, int | None]:
+        """(line, col) of ``key``'s value in ``table`` (of the table header without a key)."""
+        loc = self.where.get((table, key) if key is not None else ("[table]", table))
+        return (loc[0], loc[1]) if loc else (None, None)
+
+
+def _value_start(rest: str, value: str) -> tuple[int, bool]:
+    """Offset from the value token to the string's first char, and whether columns map exactly."""
+    for q in ('"""', "'''", '"', "'"):
+        if rest.startswith(q):
+            body = rest[len(q):]
+            if q.startswith('"') and "\\" in body.split(q)[0]:
+                return len(q), False
+            if q in ('"""', "'''"):
+                return len(q), False
+            return len(q), body.startswith(value)
+    return 0, False
+
+
+# ------------------------------------------------------------------------------------------------
+# The tables
+# ------------------------------------------------------------------------------------------------
+
+
+def _load_toml(text: str, source: str) -> dict[str, Any]:
+    try:
+        return tomllib.loads(text)
+    except RecursionError:
+        raise BindingError(source, "TOML nested too deeply (arrays or tables inside one "
+                           "another beyond Python's recursion limit)") from None
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise BindingError(source, f"TOML syntax error: {msg}",
+                           line=int(m.group(1)) if m else None,
+                           col=int(m.group(2)) if m else None) from None
+
+
+def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
+    for key in doc:
+        if key not in ("tick", "variables", "logs", "types"):
+            table = isinstance(doc[key], dict)
+            line, col = loc.at(key) if table else loc.at("", key)
+            what = f"table [{key}]" if table else f"key {key!r}"
+            raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
+                               "optionally [logs], [types])", line=line, col=col)
+
+
+def _duration(tick_t: dict[str, Any], key: str, source: str, loc: _Locations) -> int:
+    try:
+        return parse_duration(tick_t[key])
+    except ValueError as exc:
+        line, col = loc.at("tick", key)
+        raise BindingError(source, f"[tick] {key}: {exc}", line=line, col=col) from None
+
+
+def _tick_clock(tick_t: dict[str, Any], source: str, loc: _Locations) -> TickSpec:
+    has_p, has_t = "period" in tick_t, "topic" in tick_t
+    if has_p == has_t:
+        line, col = loc.at("tick")
+        raise BindingError(source, "[tick] needs exactly one of period = \"...\" and "
+                           "topic = \"/...\"", line=line, col=col)
+    if has_p:
+        return TickSpec(period_ns=_duration(tick_t, "period", source, loc))
+    topic = tick_t["topic"]
+    if not isinstance(topic, str) or not re.fullmatch(r"(/[A-Za-z0-9_]+)+", topic):
+        line, col = loc.at("tick", "topic")
+        raise BindingError(source, f"[tick] topic {topic!r} is not a topic name like \"/scan\"",
+                           line=line, col=col)
+    nominal = None
+    if "nominal_rate" in tick_t:
+        nominal = _duration(tick_t, "nominal_rate", source, loc)
+    return TickSpec(topic=topic, nominal_period_ns=nominal)
+
+
+def _tick_table(doc: dict[str, Any], source: str, loc: _Locations
+                ) -> tuple[TickSpec, str, int]:
+    """``[tick]`` -> (the clock, the time base, the header lag in ns)."""
+    tick_t = doc.get("tick")
+    if not isinstance(tick_t, dict):
+        raise BindingError(source, "missing [tick] table: say period = \"100 ms\" or topic = "
+                           "\"/scan\" (signals are declared, never guessed)", line=1)
+    for key in tick_t:
+        if key not in ("period", "topic", "time", "header_lag", "nominal_rate"):
+            line, col = loc.at("tick", key)
+            raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, "
+                               "nominal_rate, time, header_lag)", line=line, col=col)
+    tick = _tick_clock(tick_t, source, loc)
+    if "period" in tick_t and "nominal_rate" in tick_t:
+        line, col = loc.at("tick", "nominal_rate")
+        raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "
+                           "period is its own rate)", line=line, col=col)
+    time_base = tick_t.get("time", "log")
+    if time_base not in ("log", "header"):
+        line, col = loc.at("tick", "time")
+        raise BindingError(source, f"[tick] time must be \"log\" or \"header\", not "
+                           f"{time_base!r}", line=line, col=col)
+    lag = DEFAULT_HEADER_LAG_NS
+    if "header_lag" in tick_t:
+        lag = _duration(tick_t, "header_lag", source, loc)
+    return tick, time_base, lag
+
+
+def _variables_table(doc: dict[str, Any], source: str, loc: _Locations
+                     ) -> dict[str, tuple[str, int | None, int | None, bool]]:
+    """``[variables]`` -> name -> (expression, line, col, whether columns map exactly)."""
+    var_t = doc.get("variables", {})
+    if not isinstance(var_t, dict):
+        line, col = loc.at("", "variables")
+        raise BindingError(source, "variables must be a table [variables]", line=line, col=col)
+    pending: dict[str, tuple[str, int | None, int | None, bool]] = {}
+    for name, expr in var_t.items():
+        found = loc.where.get(("variables", name))
+        line, col, rest = found if found else (None, None, "")
+        if not isinstance(expr, str):
+            raise BindingError(source, "the binding must be a string expression",
+                               line=line, col=col, variable=name)
+        if not VARNAME.match(name):
+            kline, kcol, _ = loc.where.get(("[key]", "variables." + name), (line, None, ""))
+            raise BindingError(source, f"variable name {name!r} is not an identifier nor the "
+                               "text of a quoted FRETish variable",
+                               line=kline, col=kcol, variable=name)
+        exact = False
+        if col is not None:
+            off, exact = _value_start(rest, expr)
+            col = col + off
+        pending[name] = (expr, line, col, exact)
+    return pending
+
+
+def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool]],
+                      source: str) -> dict[str, Binding]:
+    """Compile the variables, each after the ones it refers to; a cycle is an error."""
+    deps: dict[str, list[str]] = {}
+    for name, (expr, line, col, exact) in pending.items():
+        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact))
+        deps[name] = [r for r in refs(node) if r in pending]
+    state: dict[str, int] = {}
+    compiled: dict[str, Binding] = {}
+
+    def visit(name: str, chain: list[str]) -> None:
+        if state.get(name) == 2:
+            return
+        _expr, line, col, _e = pending[name]
+        if state.get(name) == 1:
+            cyc = chain[chain.index(name):] + [name]
+            raise BindingError(source, "variables refer to each other in a cycle: "
+                               + " -> ".join(cyc), line=line, col=col, variable=name)
+        if len(chain) >= MAX_REFERENCE_CHAIN:
+            raise BindingError(source, f"variables refer to each other more than "
+                               f"{MAX_REFERENCE_CHAIN} deep: {chain[0]} -> {chain[1]} -> ... "
+                               f"-> {name}", line=line, col=col, variable=name)
+        state[name] = 1
+        for d in deps[name]:
+            visit(d, chain + [name])
+        expr, line, col, exact = pending[name]
+        compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
+                                            exact=exact, refs=compiled)
+        state[name] = 2
+
+    for name in pending:
+        visit(name, [])
+    return {name: compiled[name] for name in pending}
+
+
+def _types_table(table: Any, source: str, loc: _Locations) -> dict[str, str]:
+    """``[types]``: topic -> ROS message type (``"/scan" = "sensor_msgs/msg/LaserScan"``)."""
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("types")
+        raise BindingError(source, "types must be a table [types]", line=line, col=col)
+    for topic, name in table.items():
+        if not re.fullmatch(r"(/[A-Za-z0-9_]+)+", topic) or not isinstance(name, str) \
+                or not re.fullmatch(r"[A-Za-z0-9_]+(/msg)?/[A-Za-z0-9_]+", name):
+            kl, kc = loc.at("types", topic)
+            raise BindingError(source, f"[types] needs \"/topic\" = \"pkg/msg/Type\", not "
+                               f"{topic!r} = {name!r}", line=kl, col=kc)
+    return dict(table)
+
+
+def _logs_table(table: Any, source: str, loc: _Locations) -> LogSelector | None:
+    if table is None:
+        return None
+    line, col = loc.at("logs")
+    if not isinstance(table, dict):
+        raise BindingError(source, "logs must be a table [logs]", line=line, col=col)
+    for key in table:
+        if key not in ("glob", "topics"):
+            kl, kc = loc.at("logs", key)
+            raise BindingError(source, f"unknown key {key!r} in [logs] (glob, topics)",
+                               line=kl, col=kc)
+
+    def strings(key: str) -> tuple[str, ...]:
+        v = table.get(key, [])
+        v = [v] if isinstance(v, str) else v
+        if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+            kl, kc = loc.at("logs", key)
+            raise BindingError(source, f"[logs] {key} must be a string or a list of strings",
+                               line=kl, col=kc)
+        return tuple(v)
+
+    sel = LogSelector(strings("glob"), strings("topics"))
+    if not sel.glob and not sel.topics:
+        raise BindingError(source, "[logs] needs glob = \"...\" and/or topics = [...]",
+                           line=line, col=col)
+    return sel
+
+
+# ------------------------------------------------------------------------------------------------
+# Reading a binding file
+# ------------------------------------------------------------------------------------------------
+
+
+def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
+    """Bindings from binding-file text (format: ``docs/bindings.md``).
+
+    Raises:
+        BindingError: TOML syntax error; unknown table or key; [tick] without exactly one of
+            period/topic, a bad duration, time not "log"/"header"; a variable that is not a
+            string, a bad name, or a bad expression; a bad [logs] table.  Names
+            source:line:col.
+    """
+    doc = _load_toml(text, source)
+    loc = _Locations(text)
+    _check_tables(doc, source, loc)
+    tick, time_base, lag = _tick_table(doc, source, loc)
+    variables = _compile_in_order(_variables_table(doc, source, loc), source)
+    out = Bindings(variables, tick, time_base, lag, source)
+    out.logs = _logs_table(doc.get("logs"), source, loc)
+    out.types = _types_table(doc.get("types"), source, loc)
+    return out
+
+
+def load_bindings(path: str | Path, inline: Iterable[str] = ()) -> Bindings:
+    """Read a binding file (TOML), then apply ``inline`` ``NAME=EXPR`` overrides.
+
+    Raises:
+        BindingError: unreadable file, or see :func:`parse_bindings` /
+            :func:`signals.bindings.binding.parse_inline`.
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise BindingError(str(path), f"cannot read binding file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise BindingError(str(path), f"binding file is not UTF-8: {exc}") from None
+    b = parse_bindings(text, str(path))
+    return b.with_inline(inline) if inline else b

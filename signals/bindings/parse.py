@@ -1,0 +1,221 @@
+"""The binding expression parser: text -> :class:`~signals.bindings.expression.Expr`.
+
+An expression (``"min(/scan.ranges) < 0.9"``) is parsed with Lark (LALR, contextual lexer)
+from the grammar ``signals/bindings/grammar.lark``; :class:`_ToExpr`, a Lark
+``Transformer`` whose callbacks are named after the grammar's rules, turns the parse tree
+into the expression tree, which :func:`parse_expression` then checks (size, topics,
+functions; :mod:`signals.bindings.expression`). Errors are
+:class:`common.problems.BindingError` naming the binding file, line, column and variable.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from lark import Lark, Transformer, v_args
+from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
+                             UnexpectedToken, VisitError)
+
+from common.problems import BindingError
+from fretish.limits import MAX_EXPR_DEPTH
+from .expression import (MAX_EXPR_CHARS, BinOp, Const, Expr, ExprLocation, Field, Filter,
+                         FuncCall, Named, Ref, Slice, TF_COMPONENTS, UnaryOp, check,
+                         check_size)
+from .paths import unquote
+
+__all__ = ["parse_expression"]
+
+
+# ------------------------------------------------------------------------------------------------
+# Parsing
+# ------------------------------------------------------------------------------------------------
+
+
+@lru_cache(maxsize=1)
+def _parser() -> Lark:
+    return Lark.open("grammar.lark", rel_to=__file__, parser="lalr", lexer="contextual",
+                     propagate_positions=True, maybe_placeholders=False)
+
+
+def _col(meta: object) -> int:
+    return meta.column if not meta.empty else 1  # type: ignore[attr-defined]
+
+
+@v_args(meta=True)
+class _ToExpr(Transformer):
+    """Parse tree -> :class:`Expr`; one callback per rule (alias) of ``grammar.lark``."""
+
+    def __init__(self, where: ExprLocation) -> None:
+        super().__init__(visit_tokens=False)
+        self.where = where
+
+    def number(self, meta, kids):
+        return Const(_col(meta), float(kids[0]))
+
+    def neg_number(self, meta, kids):
+        return Const(_col(meta), -float(kids[0]))
+
+    def string(self, meta, kids):
+        return Const(_col(meta), unquote(str(kids[0])))
+
+    def named(self, meta, kids):
+        return Named(kids[0].column, str(kids[0]))
+
+    def true(self, meta, kids):
+        return Const(_col(meta), True)
+
+    def false(self, meta, kids):
+        return Const(_col(meta), False)
+
+    def attr(self, meta, kids):
+        return str(kids[0])
+
+    def index(self, meta, kids):
+        return int(kids[0])
+
+    def slice_lo(self, meta, kids):
+        return int(kids[0]) if kids else None
+
+    slice_hi = slice_lo
+
+    def slice(self, meta, kids):
+        return Slice(kids[0], kids[1])
+
+    def filter_path(self, meta, kids):
+        return tuple(str(k) for k in kids)
+
+    def filter(self, meta, kids):
+        path, op, value = kids
+        return Filter(path, "=" if op == "==" else str(op), value)
+
+    def field(self, meta, kids):
+        tok, path = kids[0], tuple(kids[1:])
+        topic = unquote(str(tok)) if tok.type == "STRING" else str(tok)
+        return Field(tok.column, topic, path)
+
+    def ref(self, meta, kids):
+        return Ref(kids[0].column, str(kids[0]))
+
+    def neg(self, meta, kids):
+        return UnaryOp(_col(meta), "-", kids[0])
+
+    def not_(self, meta, kids):
+        return UnaryOp(_col(meta), "!", kids[0])
+
+    def arith(self, meta, kids):
+        left, op, right = kids
+        return BinOp(op.column, "=" if op == "==" else str(op), left, right)
+
+    compare = arith
+
+    def member(self, meta, kids):
+        """``x in [a, b]``: ``(x = a) | (x = b)``."""
+        item, word, values = kids[0], kids[1], kids[2:]
+        out: Expr = BinOp(word.column, "=", item, values[0])
+        for v in values[1:]:
+            out = BinOp(word.column, "|", out, BinOp(word.column, "=", item, v))
+        return out
+
+    def and_(self, meta, kids):
+        return BinOp(_col(meta), "&", kids[0], kids[1])
+
+    def or_(self, meta, kids):
+        return BinOp(_col(meta), "|", kids[0], kids[1])
+
+    def implies(self, meta, kids):
+        return BinOp(_col(meta), "->", kids[0], kids[1])
+
+    def iff(self, meta, kids):
+        return BinOp(_col(meta), "<->", kids[0], kids[1])
+
+    def call(self, meta, kids):
+        name = kids[0]
+        args = tuple(k for k in kids[1:] if k is not None)
+        if name == "tf":
+            raise self.where.error('tf() gives a transform: name one of its components, '
+                                   'e.g. tf("map", "base_link").x (components: '
+                                   f'{", ".join(TF_COMPONENTS)})', name.column)
+        if name == "age" and len(args) == 1 and isinstance(args[0], (Const, Ref)):
+            a = args[0]  # age("ORB-SLAM"), age(groundtruth): a topic
+            topic = a.value if isinstance(a, Const) else a.name
+            if isinstance(topic, str):
+                args = (Field(a.col, topic, ()),)
+        if name == "joint":
+            args = _joint_args(args, self.where, name.column)
+        return FuncCall(name.column, str(name), args)
+
+    def call_member(self, meta, kids):
+        name, member = kids[0], kids[-1]
+        args = tuple(k for k in kids[1:-1] if k is not None)
+        if name != "tf":
+            raise self.where.error(f"{name}(...).{member}: only tf() has components",
+                                   member.column)
+        if str(member) not in TF_COMPONENTS:
+            raise self.where.error(f"tf(...) has no component {str(member)!r} (components: "
+                                   f"{', '.join(TF_COMPONENTS)})", member.column)
+        if len(args) != 2 or not all(isinstance(a, Const) and isinstance(a.value, str)
+                                     for a in args):
+            raise self.where.error('tf() takes two frame names in quotes: '
+                                   'tf("map", "base_link").x', name.column)
+        return FuncCall(name.column, "tf", args + (Const(member.column, str(member)),))
+
+
+def _joint_args(args: tuple, where: ExprLocation, col: int) -> tuple:
+    """``joint(/js.position, "wheel")`` -> (the values field, the name, the ``name`` array
+    beside the values field)."""
+    if (len(args) != 2 or not isinstance(args[0], Field) or not args[0].path
+            or not isinstance(args[0].path[-1], str) or not isinstance(args[1], Const)
+            or not isinstance(args[1].value, str)):
+        raise where.error('joint() takes an array field and a joint name in quotes: '
+                          'joint(/joint_states.position, "wheel_left_joint")', col)
+    f = args[0]
+    return (f, args[1], Field(f.col, f.topic, f.path[:-1] + ("name",)))
+
+
+def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> BindingError:
+    col = getattr(exc, "column", None)
+    if isinstance(exc, UnexpectedCharacters):
+        msg = f"unexpected character {expr[exc.pos_in_stream]!r}"
+    elif isinstance(exc, UnexpectedEOF) or (isinstance(exc, UnexpectedToken)
+                                            and exc.token.type == "$END"):
+        msg = "expression ends too early"
+        col = len(expr) + 1
+    elif isinstance(exc, UnexpectedToken):
+        msg = f"unexpected {str(exc.token)!r}"
+    else:  # pragma: no cover
+        msg = "syntax error"
+    if not isinstance(col, int) or col < 1:
+        col = None
+    return where.error(f"syntax error: {msg}", col)
+
+
+def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[str]]:
+    """Parse and check (:func:`check`) one expression.
+
+    Returns:
+        the tree and the topics it reads (fields and ``age``); references (:class:`Ref`)
+        are left in the tree.
+
+    Raises:
+        BindingError: empty text, a syntax error, or a failed static check, at ``where``.
+    """
+    if not expr.strip():
+        raise where.error("empty expression")
+    if len(expr) > MAX_EXPR_CHARS:
+        raise where.error(f"the expression has {len(expr):,} characters; the limit is "
+                          f"{MAX_EXPR_CHARS:,}")
+    try:
+        tree = _parser().parse(expr)
+    except UnexpectedInput as exc:
+        raise _syntax_error(expr, exc, where) from None
+    try:
+        node = _ToExpr(where).transform(tree)
+    except VisitError as exc:
+        raise exc.orig_exc from None
+    except RecursionError:
+        raise where.error(f"the expression is nested more than {MAX_EXPR_DEPTH} levels deep "
+                          "(operators, signs, calls)") from None
+    check_size(node, where)
+    topics: set[str] = set()
+    check(node, where, topics)
+    return node, frozenset(topics)

@@ -1,0 +1,142 @@
+"""A binding set as the audit uses it: the variables, the tick clock (:class:`TickSpec`), the
+time base and which logs it applies to (:class:`LogSelector`).  Read from a binding file by
+:mod:`signals.bindings.files`; made from a mapping by :func:`make_bindings`."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import PurePath
+
+from common.units import NS_PER_S
+
+from .binding import Binding, compile_expression, parse_inline
+
+__all__ = ["DEFAULT_HEADER_LAG_NS", "TickSpec", "LogSelector", "Bindings", "make_bindings"]
+
+#: ``[tick] header_lag`` when not given: 1 s (ns).
+DEFAULT_HEADER_LAG_NS = NS_PER_S
+
+
+@dataclass(frozen=True)
+class TickSpec:
+    """When the signals are sampled.
+
+    Exactly one of:
+        period_ns: fixed period (ns): ticks at start + k·period, sample-and-hold.
+        topic: one tick per message of this topic, other topics held.
+
+    Raises:
+        ValueError: neither or both given, or a period that is not positive.
+    """
+
+    period_ns: int | None = None
+    topic: str | None = None
+    #: topic ticks only: the tick topic's nominal period (``[tick] nominal_rate``), with
+    #: which durations in time units convert to ticks; the audit warns when the measured
+    #: rate differs by more than 10 %.
+    nominal_period_ns: int | None = None
+
+    def __post_init__(self) -> None:
+        if (self.period_ns is None) == (self.topic is None):
+            raise ValueError("TickSpec needs exactly one of period_ns and topic")
+        if self.period_ns is not None and self.period_ns <= 0:
+            raise ValueError("TickSpec.period_ns must be positive")
+
+
+@dataclass(frozen=True)
+class LogSelector:
+    """``[logs]`` of a binding file: which logs it applies to. ``glob``: patterns matched
+    against the log's path from the right (:meth:`pathlib.PurePath.match`: ``"*.bag"``,
+    ``"stage_*"``, ``"real/*.mcap"``); ``topics``: topics the log must have. A log is
+    selected when it matches some pattern (if any are given) and has every topic (if any
+    are given)."""
+
+    glob: tuple[str, ...] = ()
+    topics: tuple[str, ...] = ()
+
+    def matches(self, path: str, log_topics: Iterable[str] | None) -> bool:
+        """Whether the log at ``path`` with topics ``log_topics`` (None: unknown) is
+        selected."""
+        p = PurePath(path)
+        if self.glob and not any(p.match(g) or p.name == g for g in self.glob):
+            return False
+        if self.topics and (log_topics is None or not set(self.topics) <= set(log_topics)):
+            return False
+        return True
+
+    def text(self) -> str:
+        """``"glob *.bag; topics /scan, /odom"``: the selector in words."""
+        parts = []
+        if self.glob:
+            parts.append("glob " + ", ".join(self.glob))
+        if self.topics:
+            parts.append("topics " + ", ".join(self.topics))
+        return "; ".join(parts)
+
+
+@dataclass
+class Bindings:
+    """A set of variable bindings with a tick and a time base.
+
+    Attributes:
+        variables: FRET variable → Binding, in declaration order.
+        tick: the tick clock.
+        time_base: ``"log"`` (MCAP log time / bag timestamp) or ``"header"``
+            (``header.stamp`` of each message).
+        header_lag_ns: time_base "header" only: how far (ns, header clock) a message may
+            arrive behind the newest stamp seen and still be placed in stamp order.
+        source: the binding file, or None.
+        logs: ``[logs]``: the logs this binding file applies to (None: every log).
+        types: ``[types]``: topic -> ROS message type, for live servers that do not say
+            (rosbridge without rosapi); logs carry their own schemas.
+
+    Raises:
+        ValueError: a time base other than "log" and "header".
+    """
+
+    variables: dict[str, Binding]
+    tick: TickSpec
+    time_base: str = "log"
+    header_lag_ns: int = DEFAULT_HEADER_LAG_NS
+    source: str | None = None
+    logs: LogSelector | None = field(default=None, compare=False)
+    types: dict[str, str] = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.time_base not in ("log", "header"):
+            raise ValueError(f"time_base must be 'log' or 'header', not {self.time_base!r}")
+
+    @property
+    def topics(self) -> frozenset[str]:
+        """All topics the variables reference (fields and age())."""
+        out: set[str] = set()
+        for b in self.variables.values():
+            out |= b.topics
+        return frozenset(out)
+
+    def with_inline(self, specs: Iterable[str]) -> Bindings:
+        """A copy with ``NAME=EXPR`` bindings (CLI ``--bind``) added or replacing same-named ones.
+
+        Raises:
+            BindingError: as :func:`signals.bindings.binding.parse_inline`.
+        """
+        variables = dict(self.variables)
+        for spec in specs:
+            b = parse_inline(spec, refs=variables)
+            variables[b.name] = b
+        return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
+                        types=dict(self.types))
+
+
+def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str = "log",
+                  header_lag_ns: int = DEFAULT_HEADER_LAG_NS) -> Bindings:
+    """Bindings from a mapping of variable → expression text (source ``"<--bind NAME>"``).
+
+    Raises:
+        BindingError: a bad name or expression.
+    """
+    out = {name: compile_expression(name, expr, source=f"<--bind {name}>", line=1,
+                                    col=len(name) + 2)
+           for name, expr in variables.items()}
+    return Bindings(out, tick, time_base, header_lag_ns, None)

@@ -1,0 +1,233 @@
+"""Types of a binding against a log's message types (:func:`check_types`), before the log is
+read: a field the schema does not declare, a string in arithmetic or a boolean used as a
+number is an error naming the binding file:line:col, the variable, the topic and the field.
+
+Types are strings: ``"bool"``, ``"number"``, ``"array_bool"``, ``"array_number"``,
+``"array_string"``, ``"array_other"`` (messages), ``"string"``, ``"message"``, and ``"any"`` when the
+topic's schema is unknown (then nothing is checked).
+"""
+
+from __future__ import annotations
+
+from logs.schema import FieldPathError
+from .binding import Binding
+from .expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named,
+                         UnaryOp, unparse)
+
+__all__ = ["check_types"]
+
+_BOOLS = ("bool", "array_bool")
+_NUMS = ("number", "array_number")
+_ARRAYS = ("array_bool", "array_number")
+_WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of booleans",
+          "array_number": "an array of numbers", "string": "a string", "message": "a message",
+          "array_string": "an array of strings", "array_other": "an array of messages"}
+
+
+def check_types(binding: Binding, schemas: dict) -> str:
+    """Check ``binding`` against the message types of a log (:func:`logs.schema.log_schemas`)
+    before it is evaluated: every field path must resolve through fields the
+    schema declares (never Python attributes), strings cannot enter arithmetic or
+    comparisons, a boolean is not a number and a number is not a boolean, and the value must
+    end as a boolean or a number. Topics whose schema is unknown (None) are not checked.
+
+    Args:
+        schemas: topic -> its message schema (``resolve(path)`` -> field type), or None.
+
+    Returns:
+        the binding's type: ``"bool"``, ``"number"`` (or ``"any"`` when unknown).
+
+    Named constants (``POWER_SUPPLY_STATUS_CHARGING``) are looked up in the message
+    definition declaring the field they are compared with (or filter on) and their values
+    stored in ``binding.constants``.
+
+    Raises:
+        BindingError: naming the binding file:line:col, the variable, and the topic and
+            field at fault (with the fields that exist and the closest name); a named
+            constant the message definition does not declare (with the ones it does).
+    """
+    checker = _TypeChecker(binding.location(), schemas, binding.constants)
+    t = checker.type(binding.ast)
+    if t not in ("bool", "number", "any"):
+        raise checker.where.error(
+            f"type error: a variable must be a boolean or a number, but "
+            f"{_describe(binding.ast, t)}"
+            + ("; reduce it with min/max/any/all/count" if "array" in t else ""))
+    return t
+
+
+def _compared_field(node: Expr) -> Field | None:
+    """The field whose message definition declares a named constant compared with
+    ``node``: ``node`` itself, or the field a function takes first (``max(/d.status[:].level)``,
+    ``joint(/js.position, "w")``); None if neither ends in a field name."""
+    if isinstance(node, FuncCall) and node.args and node.func != "tf":
+        node = node.args[0]
+    if isinstance(node, Field) and node.path and isinstance(node.path[-1], str):
+        return node
+    return None
+
+
+def _kind(value) -> str:
+    """The binding type of a constant's value."""
+    return ("bool" if isinstance(value, bool) else "string" if isinstance(value, str)
+            else "number")
+
+
+def _describe(node: Expr, t: str) -> str:
+    if isinstance(node, Field):
+        path = node.text()[len(node.topic) + 1:]
+        return (f"{node.text()} (topic {node.topic}, field {path}) is "
+                f"{_WORDS.get(t, t)}")
+    return f"{unparse(node).strip('()')} is {_WORDS.get(t, t)}"
+
+
+class _TypeChecker:
+    """The type of each node, bottom up; raises at the first node that does not fit."""
+
+    def __init__(self, where: ExprLocation, schemas: dict, constants: dict) -> None:
+        self.where = where
+        self.schemas = schemas
+        self.constants = constants
+
+    def need(self, node: Expr, t: str, ok: tuple, what: str, at: Expr) -> None:
+        """Raise unless type ``t`` of ``node`` is one of ``ok`` (or unknown)."""
+        if t != "any" and t not in ok:
+            hint = ""
+            if t in _NUMS and ok == _BOOLS:
+                hint = "; compare it (e.g. x != 0) to make a boolean"
+            elif t in _BOOLS and ok == _NUMS:
+                hint = "; a boolean is not a number in a binding"
+            raise self.where.error(f"type error: {what}, but {_describe(node, t)}{hint}", at.col)
+
+    def type(self, node: Expr) -> str:
+        if isinstance(node, Const):
+            v = node.value
+            return "bool" if isinstance(v, bool) else "string" if isinstance(v, str) else "number"
+        if isinstance(node, Named):
+            if node.name in self.constants:
+                return _kind(self.constants[node.name])
+            raise self.where.error(f"{node.name} is not a variable of this binding file; a "
+                                   "named constant must be compared with a field of the "
+                                   "message that declares it (/battery.power_supply_status = "
+                                   "POWER_SUPPLY_STATUS_CHARGING)", node.col)
+        if isinstance(node, Field):
+            return self.field(node)
+        if isinstance(node, UnaryOp):
+            return self.unary(node)
+        if isinstance(node, BinOp):
+            return self.binary(node)
+        if isinstance(node, FuncCall):
+            return self.call(node)
+        return "any"  # pragma: no cover
+
+    def field(self, node: Field) -> str:
+        sch = self.schemas.get(node.topic)
+        if sch is None:
+            return "any"
+        try:
+            ft = sch.resolve(node.path)
+        except FieldPathError as exc:
+            raise self.where.error(f"{exc} (topic {node.topic}, {sch.typename})",
+                                   node.col) from None
+        for i, p in enumerate(node.path):
+            if isinstance(p, Filter) and isinstance(p.value, Named):
+                self.resolve_named(p.value, node, node.path[:i])
+        if ft.kind == "array":
+            return {"bool": "array_bool", "number": "array_number",
+                    "string": "array_string"}.get(ft.item.kind, "array_other")
+        return {"bool": "bool", "number": "number", "string": "string",
+                "message": "message"}.get(ft.kind, "any")
+
+    def unary(self, node: UnaryOp) -> str:
+        t = self.type(node.arg)
+        if node.op == "-":
+            self.need(node.arg, t, _NUMS, "unary '-' takes a number", node)
+        else:
+            self.need(node.arg, t, _BOOLS, "'!' takes a boolean", node)
+        return t
+
+    def resolve_named(self, named: Named, field: Field, owner_path: tuple) -> None:
+        """Store the value of ``named``, a constant of the message type at ``owner_path``
+        of ``field``'s topic (the items' type for an array)."""
+        sch = self.schemas.get(field.topic)
+        if sch is None or not hasattr(sch, "constants"):
+            return
+        owner = sch.resolve(owner_path)
+        while owner.kind == "array":
+            owner = owner.item
+        consts = sch.constants(owner.name) if owner.kind == "message" else {}
+        if named.name not in consts:
+            raise self.where.error(
+                f"{named.name} is not a variable of this binding file nor a constant of "
+                f"{owner.name} (its constants: {', '.join(consts) or 'none'})", named.col)
+        self.constants[named.name] = consts[named.name]
+
+    def binary(self, node: BinOp) -> str:
+        for side, other in ((node.left, node.right), (node.right, node.left)):
+            f = _compared_field(other)
+            if isinstance(side, Named) and f is not None:
+                self.type(f)  # the field exists
+                self.resolve_named(side, f, f.path[:-1])
+        a, b = self.type(node.left), self.type(node.right)
+        if node.op in ("=", "!=") and {a, b} & {"string", "array_string"}:
+            if {a, b} - {"string", "array_string", "any"} or a == b == "array_string":
+                raise self.where.error(
+                    f"type error: {node.op!r} compares a string with something else "
+                    f"({_describe(node.left, a)}; {_describe(node.right, b)})", node.col)
+            return "array_bool" if "array_string" in (a, b) else "bool"
+        arr = "array" in a or "array" in b
+        op = node.op
+        if op in ("+", "-", "*", "/"):
+            self.both(node, a, b, _NUMS, f"{op!r} takes numbers")
+            return "array_number" if arr else ("any" if "any" in (a, b) else "number")
+        if op in ("<", "<=", ">", ">="):
+            self.both(node, a, b, _NUMS, f"{op!r} compares numbers")
+        elif op in ("=", "!="):
+            self.both(node, a, b, _NUMS + _BOOLS, f"{op!r} compares numbers or booleans")
+            known = [x for x in (a, b) if x != "any"]
+            if len(known) == 2 and (known[0] in _BOOLS) != (known[1] in _BOOLS):
+                raise self.where.error(f"type error: {op!r} compares a boolean with a number "
+                                       f"({_describe(node.left, a)}; "
+                                       f"{_describe(node.right, b)})", node.col)
+        else:
+            self.both(node, a, b, _BOOLS, f"{op!r} takes booleans")
+        return "array_bool" if arr else "bool"
+
+    def both(self, node: BinOp, a: str, b: str, ok: tuple, what: str) -> None:
+        """Both operands of ``node`` (types ``a``, ``b``) must be one of ``ok``."""
+        self.need(node.left, a, ok, what, node)
+        self.need(node.right, b, ok, what, node)
+
+    def call(self, node: FuncCall) -> str:
+        f = node.func
+        if f in ("age", "tf"):
+            return "number"
+        if f == "joint":
+            values, names = self.type(node.args[0]), self.type(node.args[2])
+            self.need(node.args[0], values, _ARRAYS, "joint() picks from an array of numbers",
+                      node)
+            if names not in ("any", "array_string"):
+                raise self.where.error(f"type error: joint() needs a name array of strings "
+                                       f"beside its array, but {_describe(node.args[2], names)}",
+                                       node.col)
+            return {"array_bool": "bool", "array_number": "number"}.get(values, "any")
+        ts = [self.type(a) for a in node.args]
+        for a, t in zip(node.args, ts):
+            if f in ("any", "all", "count"):
+                self.need(a, t, _ARRAYS, f"{f}() takes an array", node)
+            elif f == "len":
+                if t not in ("any", "array_bool", "array_number", "array_string",
+                             "array_other"):
+                    self.need(a, t, ("array_number",), "len() takes an array", node)
+            else:
+                self.need(a, t, _NUMS, f"{f}() takes numbers", node)
+        if f in ("any", "all"):
+            return "bool"
+        if f == "abs":
+            return ts[0] if ts[0] != "any" else "any"
+        if f in ("min", "max") and len(ts) > 1:
+            for a, t in zip(node.args, ts):
+                if "array" in t:
+                    raise self.where.error(f"type error: {f}() of several values takes "
+                                           f"numbers, but {_describe(a, t)}", node.col)
+        return "number"

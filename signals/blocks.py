@@ -1,0 +1,436 @@
+"""Several clocks over one read of a log, evaluated block by block with numpy
+(:func:`sample_blocks`): the audit's sampling.
+
+The rules (time base, ticks, sample and hold, warm-up) are those of :mod:`signals`
+and the values equal :func:`signals.sample_groups`'s tick by tick (tested): messages
+are buffered per topic; every :data:`BLOCK` messages, each clock places its ticks that are due
+(those before the newest message of its own topics, as a streaming clock would emit them), finds
+the message each topic holds at each tick with ``np.searchsorted``, and evaluates each binding
+over all those ticks at once (:class:`~signals.columns.HeldColumns`; a binding whose
+values do not fit columns is evaluated tick by tick). Then the buffers keep only the messages
+a later tick may still hold, so memory stays flat in the log's length.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_left, bisect_right
+from collections.abc import Iterator
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from .bindings.binding import Binding
+from .bindings.compile import EvalState
+from .bindings.expression import TF_TOPICS
+from .bindings.frames import TfBuffer
+from .bindings.spec import Bindings, TickSpec
+from common.problems import SignalError
+from logs.selective import install as install_selective
+from logs import CsvSource, LogSource
+from .clock import HeaderBuffer, Sampling, Tick, check_topics
+from .columns import HeldColumns, Irregular, MessageColumns, SegmentList
+from .groups import GroupSampling, _restrict, csv_clock
+
+__all__ = ["BLOCK", "MAX_TICKS", "TickBlock", "sample_blocks", "blocks_of_ticks"]
+
+#: Messages read between two evaluations of the clocks.
+BLOCK = 4096
+#: At most this many ticks in one block (a long gap at a short period gives many ticks).
+MAX_BLOCK_TICKS = 1 << 16
+#: At most this many ticks per clock: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10; a header.stamp that jumps by centuries) is an input error
+#: that says how many, raised before any of them is made.
+MAX_TICKS = 10**8
+
+
+class TickBlock(NamedTuple):
+    """Consecutive evaluated ticks of one clock.
+
+    Attributes:
+        start: index of the first of them among the clock's evaluated ticks.
+        times: int64 tick times (ns, time base).
+        values: variable -> 1-D bool or float64 array (variables that failed are absent).
+        log_times: bound topic -> int64 log time (ns) of the message held at each tick.
+    """
+
+    start: int
+    times: np.ndarray
+    values: dict[str, np.ndarray]
+    log_times: dict[str, np.ndarray]
+
+
+class _Buffer:
+    """Messages of one topic not yet released: times (time base), log times, data; ``base``
+    counts the messages dropped before them."""
+
+    __slots__ = ("times", "log_times", "data", "base")
+
+    def __init__(self) -> None:
+        self.times: list[int] = []
+        self.log_times: list[int] = []
+        self.data: list[Any] = []
+        self.base = 0
+
+    def trim(self, k: int) -> None:
+        if k > 0:
+            del self.times[:k], self.log_times[:k], self.data[:k]
+            self.base += k
+
+
+class _Stream:
+    """The buffered messages that some clocks read (one shared stream under the log time
+    base; one per clock under the header time base, each in its own stamp order)."""
+
+    def __init__(self) -> None:
+        self.buffers: dict[str, _Buffer] = {}
+        self._arrays: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._messages: MessageColumns | None = None
+
+    def add(self, topic: str, t: int, log_time: int, data: Any) -> None:
+        b = self.buffers[topic]
+        b.times.append(t)
+        b.log_times.append(log_time)
+        b.data.append(data)
+
+    def add_block(self, topic: str, log_times: list[int], segment: Any) -> None:
+        """Messages of ``topic`` from the columnar pass (log time base): their buffer holds a
+        :class:`SegmentList`."""
+        b = self.buffers[topic]
+        if not isinstance(b.data, SegmentList):
+            assert not b.data
+            b.data = SegmentList()
+        b.times.extend(log_times)
+        b.log_times.extend(log_times)
+        b.data.add(segment)
+
+    def arrays(self, topic: str) -> tuple[np.ndarray, np.ndarray]:
+        """int64 (times, log times) of the buffered messages of ``topic``."""
+        a = self._arrays.get(topic)
+        if a is None:
+            b = self.buffers[topic]
+            a = self._arrays[topic] = (np.array(b.times, dtype=np.int64),
+                                       np.array(b.log_times, dtype=np.int64))
+        return a
+
+    def messages(self) -> MessageColumns:
+        """The buffered messages as columns (one per evaluation round)."""
+        if self._messages is None:
+            self._messages = MessageColumns({t: b.data for t, b in self.buffers.items()})
+        return self._messages
+
+    def changed(self) -> None:
+        """Forget the arrays and columns (messages were added or dropped)."""
+        self._arrays.clear()
+        self._messages = None
+
+
+class _Group:
+    """One clock: its variables, topics and where its ticks are."""
+
+    def __init__(self, sub: Bindings, required: set[str], tick: TickSpec, sampling: Sampling,
+                 stream: _Stream) -> None:
+        self.variables: list[Binding] = list(sub.variables.values())
+        self.required = sorted(required)
+        self.own = sorted(set(required) | ({tick.topic} if tick.topic else set()))
+        self.period = tick.period_ns
+        self.tick_topic = tick.topic
+        self.sampling = sampling
+        self.stream = stream
+        self.next_grid: int | None = None
+        self.next_seq = 0
+        self.index = 0
+        self.failed: dict[str, SignalError] = {}
+        self.per_tick: set[str] = set()
+        #: per binding that reads ``tf()``: its transforms so far and, per TF topic, the
+        #: count of that topic's messages already added (tf() reads every message, not the
+        #: held one: they are added in time order up to each tick)
+        self.tf: dict[str, tuple[TfBuffer, dict[str, int]]] = {
+            b.name: (TfBuffer(), {t: 0 for t in TF_TOPICS}) for b in self.variables
+            if getattr(b, "uses_tf", False)}
+
+    def next_time(self) -> float:
+        """Time of its next tick not yet evaluated (inf: none is known yet)."""
+        if self.period is not None:
+            return self.next_grid if self.next_grid is not None else float("inf")
+        b = self.stream.buffers[self.tick_topic]
+        p = self.next_seq - b.base
+        return b.times[p] if p < len(b.times) else float("inf")
+
+
+def sample_blocks(source: LogSource, bindings: Bindings,
+                  groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
+    """Per-requirement clocks in one read of the log, as :func:`signals.sample_groups`
+    (same ticks, values, warm-up and errors), but yielding ``(key, TickBlock)`` pairs. The
+    result's ``per_tick`` (key -> variable names) says which bindings were evaluated tick by
+    tick in some block (values that do not fit columns).
+
+    Raises:
+        SignalError: (at the call) a topic of some group missing from the log.  Evaluation
+            errors while iterating are kept per group (``failed`` / ``errors``), never raised.
+    """
+    g = GroupSampling(source)
+    g.per_tick = {key: set() for key in groups}
+    if source.kind == "csv":
+        assert isinstance(source, CsvSource)
+        whole = csv_clock(g, source, bindings, groups)
+        names = list(whole.bindings.variables) if whole.bindings is not None else []
+        topics = sorted({t for _n, ts in groups.values() for t in ts})
+        g._iter = ((key, blk) for blk in blocks_of_ticks(iter(whole), names, topics)
+                   for key in groups)
+        return g
+    tick = bindings.tick
+    shared = _Stream() if bindings.time_base == "log" else None
+    clocks: dict[Any, _Group] = {}
+    buffers: dict[Any, HeaderBuffer] = {}
+    fed: dict[str, list[Any]] = {}
+    for key, (names, topics) in groups.items():
+        sub = _restrict(bindings, names)
+        s = Sampling(source, sub)
+        g.groups[key] = s
+        stream = shared if shared is not None else _Stream()
+        clocks[key] = c = _Group(sub, set(topics), tick, s, stream)
+        g.failed[key] = c.failed
+        g.per_tick[key] = c.per_tick
+        if shared is None:
+            buffers[key] = HeaderBuffer(source, sub, s._problems)
+        for t in c.own:
+            stream.buffers.setdefault(t, _Buffer())
+            fed.setdefault(t, []).append(key)
+    check_topics(source, _restrict(bindings, []), extra=set(fed), users=bindings)
+    install_selective(source, _restrict(bindings, [n for names, _t in groups.values()
+                                                   for n in names]))
+    g._iter = _run(g, source, clocks, buffers, fed, shared)
+    return g
+
+
+def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
+         buffers: dict[Any, HeaderBuffer], fed: dict[str, list[Any]], shared: _Stream | None
+         ) -> Iterator[tuple[Any, TickBlock]]:
+    """One read of the log, evaluating every clock each :data:`BLOCK` messages."""
+    count = 0
+    by_blocks = getattr(source, "message_blocks", None)
+    if shared is not None and by_blocks is not None and not any(c.tf for c in clocks.values()):
+        released = by_blocks(set(fed))
+        if released is not None:  # the columnar pass (the log time base reads no header)
+            for blocks in released:
+                for topic, log_times, segment in blocks:
+                    shared.add_block(topic, log_times, segment)
+                    count += len(log_times)
+                if count >= BLOCK:
+                    count = 0
+                    yield from _evaluate_all(g, clocks, False)
+            yield from _evaluate_all(g, clocks, True)
+            _missing(clocks)
+            return
+    for m in source.messages(set(fed)):
+        if shared is not None:
+            shared.add(m.topic, m.log_time, m.log_time, m.data)
+        else:
+            for key in fed[m.topic]:
+                if key in g.errors:
+                    continue
+                try:
+                    items = buffers[key].push(m)
+                except SignalError as exc:
+                    g.errors[key] = exc
+                    continue
+                for item in items:
+                    clocks[key].stream.add(*item)
+        count += 1
+        if count >= BLOCK:
+            count = 0
+            yield from _evaluate_all(g, clocks, False)
+    for key, b in buffers.items():
+        if key not in g.errors:
+            for item in b.drain():
+                clocks[key].stream.add(*item)
+    yield from _evaluate_all(g, clocks, True)
+    _missing(clocks)
+
+
+def _missing(clocks: dict[Any, _Group]) -> None:
+    for c in clocks.values():
+        # the newest message of a topic is never trimmed: an empty buffer never had one
+        c.sampling.missing_topics = [t for t in c.required if not c.stream.buffers[t].times]
+
+
+def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
+                  ) -> Iterator[tuple[Any, TickBlock]]:
+    """Every clock's due ticks, then the buffers trimmed to what later ticks may hold."""
+    streams = {id(c.stream): c.stream for c in clocks.values()}
+    for stream in streams.values():
+        stream.changed()
+    for key, c in clocks.items():
+        if key in g.errors:
+            continue
+        for blk in _due(c, final):
+            yield key, blk
+    for stream in streams.values():
+        readers = [c for key, c in clocks.items() if c.stream is stream and key not in g.errors]
+        for topic, b in stream.buffers.items():
+            keep = len(b.times) - 1  # the newest message is always kept
+            for c in readers:
+                if topic not in c.own:
+                    continue
+                keep = min(keep, bisect_right(b.times, c.next_time()) - 1)
+                if topic == c.tick_topic and c.period is None:
+                    keep = min(keep, c.next_seq - b.base)
+                for _buf, added in c.tf.values():
+                    if topic in added:
+                        keep = min(keep, added[topic] - b.base)
+            b.trim(keep)
+        stream.changed()
+
+
+def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
+    """The blocks of ``c``'s ticks before the newest message of its own topics (all of them
+    when ``final``)."""
+    bufs = [c.stream.buffers[t] for t in c.own]
+    lasts = [b.times[-1] for b in bufs if b.times]
+    if not lasts:
+        return
+    last = max(lasts)
+    while True:
+        if c.period is not None:
+            if c.next_grid is None:
+                c.next_grid = min(b.times[0] for b in bufs if b.times)
+            end = last + 1 if final else last
+            due = 0 if c.next_grid >= end else -(-(end - c.next_grid) // c.period)
+            if c.index + c.sampling.warmup_ticks + due > MAX_TICKS:
+                raise SignalError(
+                    f"{c.sampling.source.path}: more than {MAX_TICKS:,} ticks (the limit): "
+                    f"the tick period {c.period} ns from {c.next_grid} ns to the newest "
+                    f"message at {last} ns (time base: a header.stamp jump?); choose a longer "
+                    "tick period")
+            n = min(due, MAX_BLOCK_TICKS)
+            times = c.next_grid + c.period * np.arange(n, dtype=np.int64)
+            own = None
+            c.next_grid += n * c.period
+        else:
+            tb = c.stream.buffers[c.tick_topic]
+            p = c.next_seq - tb.base
+            q = len(tb.times) if final else bisect_left(tb.times, last, lo=p)
+            n = max(0, min(q, p + MAX_BLOCK_TICKS) - p)
+            times = np.array(tb.times[p:p + n], dtype=np.int64)
+            own = np.arange(p, p + n, dtype=np.int64)
+            c.next_seq += n
+        if n == 0:
+            return
+        blk = _evaluate(c, times, own)
+        if blk is not None:
+            yield blk
+        if n < MAX_BLOCK_TICKS:
+            return
+
+
+def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock | None:
+    """The values at ticks ``times`` of clock ``c`` (``own``: per-topic ticks, the index of
+    each tick's own message of the tick topic); warm-up ticks counted, not evaluated."""
+    stream, s = c.stream, c.sampling
+    idx = {t: np.searchsorted(stream.arrays(t)[0], times, side="right") - 1 for t in c.own}
+    if own is not None:
+        idx[c.tick_topic] = own
+    if s.start_time is None:
+        s.start_time = int(times[0])
+        s.waiting_for = sorted(t for t in c.required if idx[t][0] < 0)
+    s.end_time = int(times[-1])
+    warm = max((int(np.count_nonzero(idx[t] < 0)) for t in c.required), default=0)
+    s.warmup_ticks += warm
+    if warm == len(times):
+        return None
+    times = times[warm:]
+    idx = {t: i[warm:] for t, i in idx.items()}
+    if s.first_time is None:
+        s.first_time = int(times[0])
+    held = {t: i for t, i in idx.items() if t in c.required or i[0] >= 0}
+    cols = HeldColumns(stream.messages(), times, {t: stream.arrays(t)[0] for t in held}, held)
+    values: dict[str, np.ndarray] = {}
+    for b in list(c.variables):
+        try:
+            values[b.name] = _values(b, cols, stream, times, held, c.per_tick,
+                                     c.tf.get(b.name))
+        except SignalError as err:
+            c.failed[b.name] = err
+            c.variables.remove(b)
+    log_times = {t: stream.arrays(t)[1][idx[t]] for t in c.required}
+    blk = TickBlock(c.index, times, values, log_times)
+    c.index += len(times)
+    s.ticks += len(times)
+    return blk
+
+
+def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,
+            idx: dict[str, np.ndarray], per_tick: set[str],
+            tf: tuple[TfBuffer, dict[str, int]] | None = None) -> np.ndarray:
+    """``b`` at every tick: by numpy over the columns, else tick by tick (same values and
+    errors as :class:`signals.clock.Clock`).
+
+    Raises:
+        SignalError: the evaluation fails at some tick (named with its held messages).
+    """
+    try:
+        with np.errstate(all="ignore"):
+            return b.evaluate_columns(cols)
+    except (SignalError, Irregular):
+        per_tick.add(b.name)
+    st = EvalState()
+    if tf is not None:
+        st.tf = tf[0]
+    out: list[Any] = []
+    with np.errstate(all="ignore"):
+        for i in range(len(times)):
+            if tf is not None:
+                _add_transforms(tf, stream, int(times[i]))
+            for t, ix in idx.items():
+                k = int(ix[i])
+                st.msgs[t] = stream.buffers[t].data[k]
+                st.times[t] = stream.buffers[t].times[k]
+            st.now = int(times[i])
+            try:
+                out.append(b.evaluate(st))
+            except SignalError as exc:
+                held = ", ".join(f"{t} @ log time {stream.buffers[t].log_times[int(ix[i])]}"
+                                 for t, ix in sorted(idx.items()))
+                raise SignalError(f"{exc} (tick at {st.now} ns; held: {held})",
+                                  variable=exc.variable) from None
+    if all(type(v) is bool for v in out):
+        return np.array(out, dtype=np.bool_)
+    return np.array(out, dtype=np.float64)
+
+
+def _add_transforms(tf: tuple[TfBuffer, dict[str, int]], stream: _Stream, upto: int) -> None:
+    """Add to ``tf``'s buffer the messages of /tf and /tf_static with time <= ``upto`` not
+    added yet, in time order (as the streaming clock adds them)."""
+    buf, added = tf
+    pending = []
+    for topic in TF_TOPICS:
+        b = stream.buffers.get(topic)
+        if b is None:
+            continue
+        p = max(added[topic] - b.base, 0)
+        q = bisect_right(b.times, upto, lo=p)
+        pending.extend((b.times[k], topic, b.data[k]) for k in range(p, q))
+        added[topic] = b.base + q
+    for t, topic, data in sorted(pending, key=lambda x: x[0]):
+        buf.add(topic, data, t)
+
+
+def blocks_of_ticks(ticks: Iterator[Tick], names: list[str], topics: list[str],
+                    size: int = BLOCK) -> Iterator[TickBlock]:
+    """:class:`Tick` objects (a CSV trace, or a log without bindings) as blocks of ``size``."""
+    index = 0
+    while True:
+        chunk = [t for _i, t in zip(range(size), ticks)]
+        if not chunk:
+            return
+        values = {}
+        for n in names:
+            vals = [t.values[n] for t in chunk if n in t.values]
+            if len(vals) == len(chunk):
+                values[n] = np.array(vals, dtype=np.bool_ if all(type(v) is bool for v in vals)
+                                     else np.float64)
+        log_times = {tp: np.array([t.log_times.get(tp, -1) for t in chunk], dtype=np.int64)
+                     for tp in topics}
+        yield TickBlock(index, np.array([t.time for t in chunk], dtype=np.int64), values,
+                        log_times)
+        index += len(chunk)

@@ -1,0 +1,405 @@
+"""The tick clock of one log: :func:`sample` streams the :class:`Tick` objects of a log
+under its bindings (memory flat in the log's length), one :class:`Clock` per group of
+variables; the rules (time base, ticks, sample and hold, warm-up, CSV) are in
+:mod:`signals`."""
+
+from __future__ import annotations
+
+import heapq
+from collections import deque
+from types import SimpleNamespace
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+
+from common import problems as P
+from .bindings.binding import Binding
+from .bindings.compile import EvalState
+from .bindings.expression import TF_TOPICS
+from .bindings.frames import TfBuffer
+from .bindings.spec import Bindings, TickSpec
+from common.problems import DataProblem, ProblemLog, SignalError
+from logs.selective import install as install_selective
+from logs import CSV_TOPIC, CsvSource, LogSource
+
+__all__ = ["Tick", "Sampling", "sample"]
+
+
+class Tick:
+    """One evaluated tick.
+
+    Attributes:
+        index: 0-based among evaluated ticks (warm-up ticks are not numbered).
+        time: ns in the time base (log time or header stamp).
+        values: FRET variable → bool or float, in binding order.
+        log_times: bound topic (and tick topic) → log time (ns) of the message held at this
+            tick: the evidence to jump to in Foxglove.  For CSV: ``{"/csv": time}``.
+        line: CSV only: the row's line number in the file, else None.
+    """
+
+    __slots__ = ("index", "time", "values", "log_times", "line")
+
+    def __init__(self, index: int, time: int, values: dict[str, bool | float],
+                 log_times: dict[str, int], line: int | None = None) -> None:
+        self.index = index
+        self.time = time
+        self.values = values
+        self.log_times = log_times
+        self.line = line
+
+    def __repr__(self) -> str:
+        return f"Tick({self.index}, {self.time}, {self.values!r})"
+
+    def __eq__(self, other: object) -> bool:
+        return (isinstance(other, Tick) and self.index == other.index and self.time == other.time
+                and self.values == other.values and self.log_times == other.log_times
+                and self.line == other.line)
+
+
+class Sampling:
+    """The ticks of one log under one set of bindings (iterate once), with what was skipped.
+
+    Attributes (filled while iterating; final once the iteration ends):
+        source, bindings: what is sampled.
+        ticks: number of evaluated ticks yielded.
+        warmup_ticks: ticks before every bound topic had a message (not evaluated).
+        waiting_for: bound topics without a message at the first tick (sorted).
+        missing_topics: bound topics that never had a message (then no tick is evaluated).
+        start_time: time of the first tick, evaluated or not; None if none.
+        first_time: time of the first evaluated tick; None if none.
+        end_time: time of the last tick; None if none.
+        signal_problems: problems found by the clock (header stamps).
+    """
+
+    def __init__(self, source: LogSource, bindings: Bindings | None) -> None:
+        self.source = source
+        self.bindings = bindings
+        self.ticks = 0
+        self.warmup_ticks = 0
+        self.waiting_for: list[str] = []
+        self.missing_topics: list[str] = []
+        self.start_time: int | None = None
+        self.first_time: int | None = None
+        self.end_time: int | None = None
+        self._problems = ProblemLog()
+        self._iter: Iterator[Tick] | None = None
+
+    @property
+    def signal_problems(self) -> list[DataProblem]:
+        """Problems found by the clock itself (header stamps backwards or late)."""
+        return self._problems.problems
+
+    @property
+    def problems(self) -> list[DataProblem]:
+        """The source's problems followed by the clock's."""
+        return self.source.problems + self._problems.problems
+
+    def __iter__(self) -> Iterator[Tick]:
+        if self._iter is None:
+            raise RuntimeError("Sampling is iterated once")
+        it, self._iter = self._iter, None
+        return it
+
+
+def check_topics(source: LogSource, bindings: Bindings, extra: set[str] | None = None,
+                  users: Bindings | None = None) -> set[str]:
+    """The topics to read: the bound ones, ``extra`` and the tick topic.
+
+    Raises:
+        SignalError: some of them are not in the log (naming the variables that use them,
+            from ``users`` if given).
+    """
+    available = source.topics()
+    need = set(bindings.topics) | (extra or set())
+    if bindings.tick.topic is not None:
+        need.add(bindings.tick.topic)
+    missing = sorted(need - available.keys())
+    if missing:
+        by = users if users is not None else bindings
+        who = {t: sorted(n for n, b in by.variables.items() if t in b.topics) for t in missing}
+        detail = "; ".join(f"{t} (used by {', '.join(who[t]) or 'the [tick]'})" for t in missing)
+        raise SignalError(f"{source.path}: the log has no topic {detail}; it has "
+                          f"{', '.join(available) or 'no topics'}"
+                          + (f" (bindings: {bindings.source})" if bindings.source else ""))
+    return need
+
+
+class HeaderBuffer:
+    """Header-stamp ordering of one clock's messages (module docstring, "Time base")."""
+
+    def __init__(self, source: LogSource, bindings: Bindings, problems: ProblemLog) -> None:
+        self.source, self.bindings, self.problems = source, bindings, problems
+        self.lag = bindings.header_lag_ns
+        self.heap: list[tuple[int, int, Any]] = []
+        self.newest: int | None = None
+        self.released: int | None = None
+        self.last_stamp: dict[str, int] = {}
+        self.seq = 0
+
+    def push(self, m: Any) -> list[tuple[str, int, int, Any]]:
+        """Buffer message ``m``; the messages now ``lag`` behind the newest stamp, in stamp
+        order, as (topic, stamp, log time, data).
+
+        Raises:
+            SignalError: ``m`` has no header stamp.
+        """
+        s = m.header_stamp
+        if s is None:
+            raise SignalError(f"{self.source.path}: time = \"header\" but {m.topic} messages "
+                              f"({type(m.data).__name__}) have no header.stamp (log time "
+                              f"{m.log_time}); use time = \"log\""
+                              + (f" in {self.bindings.source}" if self.bindings.source else ""))
+        # live sources bound how far time may jump at once (the ticks in between are made
+        # one by one): a stamp further past the newest one is skipped, as a log time is
+        jump = getattr(self.source, "max_jump_ns", None)
+        if jump is not None and self.newest is not None and s - self.newest > jump:
+            self.problems.add(DataProblem(P.HEADER_JUMP, m.topic, m.log_time,
+                                          f"header.stamp {s} is {(s - self.newest) / 1e9:.6g} s "
+                                          f"after the newest stamp, more than the "
+                                          f"{jump / 1e9:.6g} s ticked over at once; skipped"))
+            return []
+        prev = self.last_stamp.get(m.topic)
+        if prev is not None and s < prev:
+            self.problems.add(DataProblem(P.HEADER_BACKWARDS, m.topic, m.log_time,
+                                          f"header.stamp {s} is {prev - s} ns before the previous "
+                                          "stamp on this topic; placed in stamp order"))
+        self.last_stamp[m.topic] = s if prev is None else max(prev, s)
+        if self.released is not None and s < self.released:
+            self.problems.add(DataProblem(P.HEADER_LATE, m.topic, m.log_time,
+                                          f"header.stamp {s} is {self.released - s} ns older than "
+                                          f"a message already used (more than header_lag "
+                                          f"{self.lag} ns late); skipped"))
+            return []
+        heapq.heappush(self.heap, (s, self.seq, m))
+        self.seq += 1
+        self.newest = s if self.newest is None else max(self.newest, s)
+        out = []
+        while self.heap and self.heap[0][0] <= self.newest - self.lag:
+            s0, _, m0 = heapq.heappop(self.heap)
+            self.released = s0
+            out.append((m0.topic, s0, m0.log_time, m0.data))
+        return out
+
+    def drain(self) -> list[tuple[str, int, int, Any]]:
+        """The messages still buffered, in stamp order (at the end of the log)."""
+        out = []
+        while self.heap:
+            s0, _, m0 = heapq.heappop(self.heap)
+            out.append((m0.topic, s0, m0.log_time, m0.data))
+        return out
+
+
+def feed(source: LogSource, bindings: Bindings, topics: set[str], problems: ProblemLog
+          ) -> Iterator[tuple[str, int, int, Any]]:
+    """(topic, time, log_time, data) in non-decreasing time (time base applied)."""
+    if bindings.time_base == "log":
+        for m in source.messages(topics):
+            yield m.topic, m.log_time, m.log_time, m.data
+        return
+    buf = HeaderBuffer(source, bindings, problems)
+    for m in source.messages(topics):
+        yield from buf.push(m)
+    yield from buf.drain()
+
+
+class Clock:
+    """The ticks of one group of variables on the clock of its own topics (module docstring):
+    the grid starts at the first message of ``topics`` (or the tick topic's messages), the
+    warm-up waits for every one of ``required``, and the grid ends at their last message.
+
+    Messages are pushed in non-decreasing time (:meth:`push`); ticks come back as lists.
+    With ``keep_going``, a variable whose evaluation fails is dropped (its error kept in
+    ``failed``) and the others go on; otherwise the SignalError propagates.
+    """
+
+    def __init__(self, s: Sampling, variables: list[Binding], required: set[str],
+                 tick: TickSpec, keep_going: bool = False) -> None:
+        self.s = s
+        self.variables = list(variables)
+        self.missing = set(required)
+        self.state = EvalState()
+        if any(b.uses_tf for b in self.variables):  # tf(): every transform, not the held
+            self.state.tf = TfBuffer()
+        self.log_times: dict[str, int] = {}
+        self.period = tick.period_ns
+        self.tick_topic = tick.topic
+        self.pending: deque[tuple[int, Any, int]] = deque()
+        self.next_grid: int | None = None
+        self.last: int | None = None
+        self.index = 0
+        self.keep_going = keep_going
+        self.failed: dict[str, SignalError] = {}
+
+    def _emit(self, t: int) -> Tick | None:
+        s = self.s
+        if s.start_time is None:
+            s.start_time = t
+            s.waiting_for = sorted(self.missing)
+        s.end_time = t
+        if self.missing:
+            s.warmup_ticks += 1
+            return None
+        if s.first_time is None:
+            s.first_time = t
+        state = self.state
+        state.now = t
+        values: dict[str, bool | float] = {}
+        with np.errstate(all="ignore"):
+            for b in list(self.variables):
+                try:
+                    values[b.name] = b.evaluate(state)
+                except SignalError as exc:
+                    err = SignalError(f"{exc}{_context(state, self.log_times)}",
+                                      variable=exc.variable)
+                    if not self.keep_going:
+                        raise err from None
+                    self.failed[b.name] = err
+                    self.variables.remove(b)
+        tick = Tick(self.index, t, values, dict(self.log_times))
+        self.index += 1
+        s.ticks += 1
+        return tick
+
+    def _emit_own(self, t: int, data: Any, log_time: int) -> Tick | None:
+        """A per-topic tick, evaluated with its own message of the tick topic."""
+        st, lt, tt = self.state, self.log_times, self.tick_topic
+        held = (st.msgs[tt], st.times[tt], lt[tt])
+        st.msgs[tt], st.times[tt], lt[tt] = data, t, log_time
+        try:
+            return self._emit(t)
+        finally:
+            st.msgs[tt], st.times[tt], lt[tt] = held
+
+    def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
+        """Hold message ``data`` of ``topic`` at time ``t``; the ticks due before it."""
+        out: list[Tick] = []
+        if self.period is not None:
+            if self.next_grid is None:
+                self.next_grid = t
+            while self.next_grid < t:
+                tick = self._emit(self.next_grid)
+                self.next_grid += self.period
+                if tick is not None:
+                    out.append(tick)
+        else:
+            while self.pending and self.pending[0][0] < t:
+                tick = self._emit_own(*self.pending.popleft())
+                if tick is not None:
+                    out.append(tick)
+        st = self.state
+        st.msgs[topic] = data
+        st.times[topic] = t
+        if st.tf is not None and topic in TF_TOPICS:
+            st.tf.add(topic, data, t)
+        self.log_times[topic] = log_time
+        self.missing.discard(topic)
+        if topic == self.tick_topic:
+            self.pending.append((t, data, log_time))
+        self.last = t
+        return out
+
+    def finish(self) -> list[Tick]:
+        """The ticks left at the end of the log."""
+        out: list[Tick] = []
+        if self.last is not None:
+            if self.period is not None:
+                assert self.next_grid is not None
+                while self.next_grid <= self.last:
+                    tick = self._emit(self.next_grid)
+                    self.next_grid += self.period
+                    if tick is not None:
+                        out.append(tick)
+            else:
+                while self.pending:
+                    tick = self._emit_own(*self.pending.popleft())
+                    if tick is not None:
+                        out.append(tick)
+        self.s.missing_topics = sorted(self.missing)
+        return out
+
+
+def _context(state: EvalState, log_times: dict[str, int]) -> str:
+    held = ", ".join(f"{t} @ log time {lt}" for t, lt in sorted(log_times.items()))
+    return f" (tick at {state.now} ns; held: {held})"
+
+
+def sample(source: LogSource, bindings: Bindings | None = None) -> Sampling:
+    """Stream the ticks of ``source`` under ``bindings`` (see the module docstring).
+
+    Args:
+        source: an open log (:func:`logs.open_log`).
+        bindings: required for ROS logs; for CSV optional (columns are the variables).
+
+    Returns:
+        A :class:`Sampling`: iterate it (once) for :class:`Tick` objects; its counters
+        (warm-up, first time, problems) are final when the iteration ends.
+
+    Raises:
+        SignalError: (at the call) no bindings for a ROS log, or a bound topic missing from
+            the log; (while iterating) a field missing from a message, an array-valued
+            variable, or header time base on a topic without header — naming the binding
+            file:line:col, the variable and the tick / log times.
+    """
+    s = Sampling(source, bindings)
+    if source.kind == "csv":
+        assert isinstance(source, CsvSource)
+        s._iter = _sample_csv(s, source, bindings)
+        return s
+    if bindings is None:
+        raise SignalError(f"{source.path}: a {source.kind} log needs bindings (signals are declared, "
+                          "never guessed)")
+    topics = check_topics(source, bindings)
+    install_selective(source, bindings)  # decode only the fields the bindings read
+    s._iter = _sample_stream(s, source, bindings, topics)
+    return s
+
+
+def csv_bindings_check(source: CsvSource, bindings: Bindings) -> None:
+    """Raises SignalError when bindings read a topic other than the CSV pseudo-topic."""
+    bad = sorted(bindings.topics - {CSV_TOPIC})
+    if bad:
+        raise SignalError(f"{source.path}: a CSV trace has only the pseudo-topic {CSV_TOPIC} "
+                          f"(columns: {', '.join(source.columns)}); bindings use {', '.join(bad)}")
+
+
+def csv_period(source: CsvSource, bindings: Bindings | None) -> int:
+    """The CSV tick period (ns): the bindings' fixed period if given, else the source's."""
+    if bindings is not None and bindings.tick.period_ns is not None:
+        return bindings.tick.period_ns
+    return source.period_ns
+
+
+def _sample_csv(s: Sampling, source: CsvSource, bindings: Bindings | None) -> Iterator[Tick]:
+    period = csv_period(source, bindings)
+    use = bindings is not None and bool(bindings.variables)
+    if use:
+        assert bindings is not None
+        csv_bindings_check(source, bindings)
+        state = EvalState()
+        variables = list(bindings.variables.values())
+    source._begin_pass()
+    for row in source.rows():
+        t = row.time if row.time is not None else row.index * period
+        if s.start_time is None:
+            s.start_time = s.first_time = t
+        if use:
+            state.msgs[CSV_TOPIC] = SimpleNamespace(**row.values)
+            state.times[CSV_TOPIC] = t
+            state.now = t
+            ctx = f" ({source.path}:{row.line})"
+            values = {b.name: b.evaluate(state, ctx) for b in variables}
+        else:
+            values = dict(row.values)
+        source.counts[CSV_TOPIC] = source.counts.get(CSV_TOPIC, 0) + 1
+        s.ticks += 1
+        s.end_time = t
+        yield Tick(row.index, t, values, {CSV_TOPIC: t}, row.line)
+
+
+def _sample_stream(s: Sampling, source: LogSource, bindings: Bindings, topics: set[str]
+                   ) -> Iterator[Tick]:
+    clock = Clock(s, list(bindings.variables.values()), set(bindings.topics), bindings.tick)
+    for topic, t, log_time, data in feed(source, bindings, topics, s._problems):
+        yield from clock.push(topic, t, log_time, data)
+    yield from clock.finish()

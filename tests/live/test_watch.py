@@ -1,0 +1,324 @@
+"""``fretc watch`` against a foxglove-sdk server on 127.0.0.1: the same verdicts as the audit
+of the same trace, a recorded watch audited offline equals the watch, and faults (a dropped
+connection, an undecodable schema, a topic never advertised, an unadvertised topic, a clock
+going backwards, a payload that does not decode) are data problems, never crashes."""
+
+from __future__ import annotations
+
+import struct
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("foxglove")
+pytest.importorskip("websockets")
+
+from audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from live.watch import CLOCK_BACKWARDS, CONNECTION_GAP, UNADVERTISED, Watch, WatchOptions
+from live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
+
+pytestmark = pytest.mark.watch
+
+ROOT = Path(__file__).resolve().parents[2]
+TRACES = sorted((ROOT / "traces").glob("*.mcap"))
+REQS = str(ROOT / "requirements")
+RATE = 40.0  # times real time (>= 10x)
+S = 1_000_000_000
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return load_plan(AuditConfig(requirements=(REQS,)))
+
+
+def _key(v):
+    fv = v.first_violation
+    return (v.requirement, v.verdict, v.error is None,
+            None if fv is None else (fv.at.tick, fv.at.time_ns),
+            None if fv is None or fv.trigger is None else fv.trigger.tick,
+            v.ltl3.status, v.ltl3.tick, v.violations, v.triggers, v.ticks_evaluated,
+            v.warmup_ticks)
+
+
+def _watch_trace(plan, trace, rate=RATE, record=None, at=None, backoff=0.05):
+    """Serve ``trace`` (its bound topics) at ``rate``, then stop the server: the watch ends
+    by itself at the server's close (bounded: stopped after 60 s at most)."""
+    server = FoxgloveServer(port=0)
+    try:
+        w = Watch(plan, WatchOptions(url=server.url, wait=5.0, record=record, backoff=backoff,
+                                     max_backoff=0.2, duration=60))
+        advertise_mcap(str(trace), server, topics=w.needed)
+        done = {}
+
+        def publish():
+            try:
+                server.wait_subscribed(w.needed & set(server.channels), timeout=60)
+                done["sent"], done["last"] = replay_mcap(
+                    str(trace), server, rate, topics=w.needed,
+                    at=(lambda i: at(i, server, w)) if at else None)
+                deadline = time.monotonic() + 30  # the last messages leave
+                while (w.source._last_time or 0) < done["last"] and time.monotonic() < deadline:
+                    time.sleep(0.02)
+            finally:
+                server.stop()  # the end of the run: an orderly close
+
+        # same thread-run-join as _run_synthetic below (kept: a recorded trace served here,
+        # synthetic messages there, other waits)
+        t = threading.Thread(target=publish, daemon=True)
+        t.start()
+        la = w.run()
+        t.join(30)
+        return w, la, done
+    finally:
+        server.stop()
+
+
+@pytest.mark.parametrize("trace", TRACES, ids=[t.stem for t in TRACES])
+def test_watch_equals_audit(plan, trace):
+    w, la, done = _watch_trace(plan, trace)
+    ref = audit_log(plan, str(trace))
+    assert done["sent"] > 0 and not la.partial and la.error is None
+    assert w.source.end_reason.startswith("the server closed the connection")
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+    # the watch produced live events on the way: one ltl3 event per definite LTL3 verdict
+    definite = {v.requirement: v.ltl3.status for v in ref.verdicts
+                if v.ltl3.status in ("satisfied", "violated")}
+    got = {e.requirement: e.verdict for e in w.events if e.kind == "ltl3"}
+    assert got == definite
+    finals = {e.requirement: e.verdict for e in w.events if e.kind == "final"}
+    assert finals == {v.requirement: v.verdict for v in ref.verdicts}
+
+
+def test_recorded_watch_audits_to_the_same_verdicts(plan, tmp_path):
+    out = tmp_path / "watched.mcap"
+    _w, la, _ = _watch_trace(plan, ROOT / "traces" / "stop_delay.mcap", record=str(out))
+    again = audit_log(plan, str(out))
+    assert [_key(v) for v in again.verdicts] == [_key(v) for v in la.verdicts]
+    assert any(v.verdict == "violated" for v in la.verdicts)
+    # the recording carries the verdict events, as `fretc report --annotate` writes them
+    from mcap.reader import make_reader
+    with open(out, "rb") as f:
+        topics = {ch.topic for ch in make_reader(f).get_summary().channels.values()}
+    assert "/fretc/verdicts" in topics
+
+
+def test_dropped_connection_is_a_gap_and_the_watch_goes_on(plan):
+    trace = ROOT / "traces" / "sif_disabled.mcap"
+    state = {}
+
+    def at(i, server, w):
+        if i == 250 and not state:  # the network fails: no close frame, the server goes on
+            state["drop"] = True
+            w.client.drop()
+
+    w, la, done = _watch_trace(plan, trace, rate=10.0, at=at)
+    ref = audit_log(plan, str(trace))
+    gaps = [p for p in la.problems if p["kind"] == CONNECTION_GAP]
+    assert state and len(gaps) == 1
+    g = gaps[0]
+    assert g["end_time_ns"] > g["log_time_ns"] + 2 * 100_000_000  # longer than two ticks
+    assert "connection lost" in g["detail"]
+    assert la.partial and all(v.partial for v in la.verdicts)
+    assert w.unknown_ticks > 0
+    # ticks inside the gap are not evaluated (not held): fewer ticks than the audit, on
+    # each requirement's own clock
+    import re
+    for v, rv in zip(la.verdicts, ref.verdicts):
+        m = re.search(r"(\d+) ticks inside connection gaps", " ".join(v.notes))
+        assert m and int(m.group(1)) > 0, v.notes
+        assert v.ticks_evaluated == rv.ticks_evaluated - int(m.group(1))
+    # the watch went on to the end of the run after the gap
+    assert la.end_time_ns == ref.end_time_ns
+    assert any(e.kind == "gap" for e in w.events)
+    assert any(e.kind == "disconnected" for e in w.events)
+    # R5 (contact at 15.1 s, after the gap) is still found violated
+    r5 = next(v for v in la.verdicts if v.requirement == "R5")
+    assert r5.verdict == "violated"
+
+
+# --------------------------------------------------------------------------- synthetic servers
+FLOAT64 = ("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+
+
+def _f64(x: float) -> bytes:
+    return b"\x00\x01\x00\x00" + struct.pack("<d", x)  # CDR little-endian header + value
+
+
+def _write_reqs(tmp_path, fret, bindings):
+    (tmp_path / "w.fret").write_text(fret, encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(bindings, encoding="utf-8")
+    return load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),)))
+
+
+def _run_synthetic(plan, server, publish, wait=0.5, last=None):
+    """Watch ``server`` while ``publish(server)`` runs; stop once the watch used the message
+    at log time ``last`` (or 0.3 s after publishing)."""
+    w = Watch(plan, WatchOptions(url=server.url, wait=wait))
+
+    def go():
+        try:
+            server.wait_subscribed(timeout=60)
+            publish(server)
+            if last is None:
+                time.sleep(0.3)
+            else:
+                deadline = time.monotonic() + 60
+                while (w.source._last_time or 0) < last and time.monotonic() < deadline:
+                    time.sleep(0.02)
+        finally:
+            w.stop()
+
+    # same thread-run-join as _watch_trace above (kept: synthetic messages here, a recorded trace
+    # there, other waits)
+    t = threading.Thread(target=go, daemon=True)
+    t.start()
+    la = w.run()
+    t.join(10)
+    return w, la
+
+
+BINDINGS = """[tick]
+period = "100 ms"
+time = "log"
+[variables]
+a_ok = "/a.data > 0"
+b_ok = "/b.data > 0"
+ghost_ok = "/ghost.data > 0"
+"""
+FRET = """@tick_period 100 ms
+RA: the robot shall always satisfy a_ok
+RB: the robot shall always satisfy b_ok
+RG: the robot shall always satisfy ghost_ok
+"""
+
+
+def test_unknown_topic_and_undecodable_schema_are_errors_for_their_requirements_only(tmp_path):
+    plan = _write_reqs(tmp_path, FRET, BINDINGS)
+    server = FoxgloveServer(port=0)
+    try:
+        server.channel("/a", "cdr", *FLOAT64)
+        # /b advertises a schema rosbags cannot parse
+        server.channel("/b", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64[[ data !!")
+
+        def publish(srv):
+            t0 = 1_700_000_000 * S
+            for k in range(20):
+                srv.log("/a", _f64(1.0 if k != 12 else -1.0), t0 + k * 50_000_000)
+                srv.log("/b", _f64(1.0), t0 + k * 50_000_000)
+                time.sleep(0.005)
+
+        w, la = _run_synthetic(plan, server, publish, last=1_700_000_000 * S + 19 * 50_000_000)
+    finally:
+        server.stop()
+    by = {v.requirement: v for v in la.verdicts}
+    assert by["RG"].verdict == "error" and "/ghost is not advertised" in by["RG"].error
+    assert by["RB"].verdict == "error" and "/b cannot be read" in by["RB"].error
+    assert "unknown_schema" in by["RB"].error
+    # RA does not depend on the others being broken
+    assert by["RA"].verdict == "violated"
+    assert by["RA"].first_violation.at.tick == 6  # message 12 at 600 ms, 100 ms ticks
+    kinds = {p["kind"] for p in la.problems}
+    assert {"unknown_schema", "not_advertised"} <= kinds
+
+
+def test_bad_payload_clock_backwards_and_unadvertise_are_data_problems(tmp_path):
+    plan = _write_reqs(tmp_path, FRET.replace("RG:", "# RG:"), BINDINGS)
+    server = FoxgloveServer(port=0)
+    try:
+        server.channel("/a", "cdr", *FLOAT64)
+        server.channel("/b", "cdr", *FLOAT64)
+
+        def publish(srv):
+            t0 = 1_700_000_000 * S
+            for k in range(30):
+                t = t0 + k * 50_000_000
+                srv.log("/a", _f64(1.0), t)
+                if k == 10:
+                    srv.log("/b", b"\x00\x01", t)  # truncated payload
+                elif k == 15:
+                    srv.log("/b", _f64(1.0), t - 400_000_000)  # the clock jumps back
+                elif k < 20:
+                    srv.log("/b", _f64(1.0), t)
+                time.sleep(0.005)
+                if k == 20:
+                    srv.channels["/b"].close()  # unadvertised
+                    time.sleep(0.1)
+
+        w, la = _run_synthetic(plan, server, publish, last=1_700_000_000 * S + 29 * 50_000_000)
+    finally:
+        server.stop()
+    kinds = {p["kind"] for p in la.problems}
+    assert {"undecodable", CLOCK_BACKWARDS, UNADVERTISED} <= kinds
+    by = {v.requirement: v for v in la.verdicts}
+    assert by["RA"].verdict == "satisfied" and by["RB"].verdict == "satisfied"
+    assert la.ticks_evaluated == 15  # 0 .. 1.45 s: the watch went on to the last message
+
+
+def test_cli_watch_jsonl_and_exit_code(tmp_path):
+    """The command end to end (in-process click runner): JSON lines and the audit's exit
+    code (1: sif_disabled violates R1, R2, R5)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    trace = ROOT / "traces" / "sif_disabled.mcap"
+    server = FoxgloveServer(port=0)
+    try:
+        needed = {"/scan", "/cmd_vel_filtered", "/gwendolen_control", "/ground_truth/clearance"}
+        advertise_mcap(str(trace), server, topics=needed)
+
+        def publish():
+            try:
+                server.wait_subscribed(needed, timeout=20)
+                replay_mcap(str(trace), server, 40.0, topics=needed)
+                time.sleep(0.3)
+            finally:
+                server.stop()  # the end of the run: the watch ends without --duration
+
+        t = threading.Thread(target=publish, daemon=True)
+        t.start()
+        res = CliRunner().invoke(main, ["watch", server.url, "-r", REQS, "--jsonl",
+                                        "--no-live", "--duration", "60"])
+        t.join(20)
+    finally:
+        server.stop()
+    assert res.exit_code == 1, res.output
+    lines = [json.loads(x) for x in res.output.splitlines() if x.startswith("{")]
+    finals = {x["requirement"]: x["verdict"] for x in lines if x["event"] == "final"}
+    assert finals == {"R1": "violated", "R2": "violated", "R3": "vacuous", "R4": "satisfied",
+                      "R5": "violated", "R6": "vacuous"}
+    assert any(x["event"] == "pt" and x["verdict"] == "violated" for x in lines)
+    ends = [x for x in lines if x["event"] == "end"]
+    assert len(ends) == 1 and ends[0]["detail"].startswith("the server closed")
+
+
+def test_live_simulator_equals_the_recorded_trace(plan):
+    """``python -m sim serve``'s engine: the simulator run live on a foxglove-sdk server and
+    watched gives the verdicts of the audit of the recorded trace of that scenario."""
+    from sim.serve import serve
+
+    server = FoxgloveServer(port=0)
+    try:
+        w = Watch(plan, WatchOptions(url=server.url, wait=5.0))
+        out = {}
+
+        def run():
+            try:
+                out["res"] = serve("sif_disabled", rate=20.0, server=server, wait=True)
+                time.sleep(0.3)
+            finally:
+                w.stop()
+
+        t = threading.Thread(target=run, daemon=True)
+        t.start()
+        la = w.run()
+        t.join(30)
+    finally:
+        server.stop()
+    ref = audit_log(plan, str(ROOT / "traces" / "sif_disabled.mcap"))
+    assert out["res"].outcome == "contact"
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]

@@ -1,0 +1,84 @@
+"""The terminal output of fretc audit: a compact default (the README's first
+command prints its summary within the first screen), ``--verbose`` windows with unique
+column headers and a marker where a window jumps, parse errors outside table cells with
+their caret intact."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from fretc.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+TRACES = ROOT / "traces"
+
+
+def _run(*args):
+    return CliRunner().invoke(main, ["audit", "--no-progress", *map(str, args)])
+
+
+def test_main_job_summary_fits_one_screen():
+    res = _run("--requirements", ROOT / "requirements", TRACES)
+    assert res.exit_code == 1
+    lines = res.output.splitlines()
+    assert len(lines) <= 60, len(lines)  # was 241
+    assert lines[-1].startswith("33 satisfied, 8 vacuous, 7 violated, 0 unknown, 0 error (exit 1")
+
+
+def test_verbose_windows_have_unique_headers_and_gap_markers():
+    res = _run("-r", ROOT / "requirements", TRACES / "interceptor_fault.mcap",
+               TRACES / "sif_disabled.mcap", "--verbose")
+    heads = [l.replace(" @", "@").split() for l in res.output.splitlines()
+             if l.startswith("tick ")]
+    r3 = next(h for h in heads if "forwarded_zero" in h)
+    assert "…linear.x" in r3 and "…linear.y" in r3 and "…linear.z" in r3
+    for h in heads:
+        assert len(h) == len(set(h)), h
+    assert any("…" in l and "ticks" in l for l in res.output.splitlines())  # R1's jump
+    compact = _run("-r", ROOT / "requirements", TRACES / "interceptor_fault.mcap")
+    assert not any(l.startswith("tick ") for l in compact.output.splitlines())
+
+
+def test_parse_errors_are_printed_outside_the_table_with_the_caret(tmp_path):
+    (tmp_path / "bad.fret").write_text(
+        "B1: whenever too_close agilex_agent shall eventualy satisfy stopped\n")
+    (tmp_path / "bad.bindings.toml").write_text(
+        (ROOT / "requirements" / "safe_ros.bindings.toml").read_text())
+    res = _run("-r", tmp_path / "bad.fret", TRACES / "sif_disabled.mcap")
+    assert res.exit_code == 2
+    lines = res.output.splitlines()
+    carets = [i for i, l in enumerate(lines) if l.strip() == "^"]
+    assert carets
+    for i in carets:
+        src = lines[i - 1]
+        assert src[lines[i].index("^"):].startswith("eventualy"), (src, lines[i])
+
+
+def _speed_log(tmp_path, value):
+    from _logs import MS, twist, write_mcap
+    msgs = [("/cmd", "geometry_msgs/msg/Twist", k * 100 * MS + 7 * MS,
+             twist(value if k == 30 else 0.5)) for k in range(50)]
+    log = write_mcap(tmp_path / "speed.mcap", msgs)
+    (tmp_path / "s.fret").write_text("S1: the bot shall always satisfy speed <= 1.0\n")
+    (tmp_path / "s.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\nspeed = "/cmd.linear.x"\n')
+    return log
+
+
+def test_a_value_beside_its_threshold_shows_which_side_it_is_on(tmp_path):
+    """Before, the terminal showed ``1`` for a speed of 1.000158 at the violation of
+    ``speed <= 1.0``; every value shown reads back as the value sampled."""
+    import json
+    log = _speed_log(tmp_path, 1.000158)
+    res = _run("-r", tmp_path / "s.fret", log, "--verbose", "--json", tmp_path / "a.json")
+    assert res.exit_code == 1, res.output
+    assert "1.000158" in res.output
+    doc = json.loads((tmp_path / "a.json").read_text())
+    rows = doc["logs"][0]["verdicts"][0]["values"]["speed"]
+    assert any(r["value"] == 1.000158 for r in rows)
+    from reports.verdicts import format_value
+    for x in (1.000158, 0.1 + 0.2, 1e-9, 123456789.125, 2.0, -0.5):
+        assert float(format_value(x)) == x
+    assert format_value(2.0) == "2" and format_value(True) == "T"

@@ -1,0 +1,332 @@
+"""Binding files, the expression language, REP 117 handling, errors with file:line:col."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+from signals.columns import HeldColumns, MessageColumns
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from common.units import parse_duration
+from signals.bindings.binding import compile_expression, parse_inline
+from signals.bindings.compile import EvalState
+from signals.bindings.extract import Valid, make_extractor
+from signals.bindings.files import load_bindings, parse_bindings
+from signals.bindings.spec import Bindings, TickSpec, make_bindings
+from common.problems import BindingError, SignalError
+
+from _logs import ROS1, ROS2, scan, twist
+
+NS = SimpleNamespace
+
+
+def ev(expr, msgs, now=0, times=None):
+    b = compile_expression("v", expr)
+    st_ = EvalState()
+    st_.msgs = msgs
+    st_.times = times or {t: 0 for t in msgs}
+    st_.now = now
+    with np.errstate(all="ignore"):
+        return b.evaluate(st_)
+
+
+# ------------------------------------------------------------------------------------------------
+# Binding files
+# ------------------------------------------------------------------------------------------------
+
+GOOD = """\
+# Safe-ROS R1 on the Scout Mini
+[tick]
+period = "100 ms"
+time = "log"
+
+[variables]
+too_close = "min(/scan.ranges) < 0.9"
+stopped = "abs(/cmd_vel_filtered.linear.x) < 1e-3 & abs(/cmd_vel_filtered.angular.z) < 1e-3"
+stop_requested = "/gwendolen_control.data"
+linear_speed = "abs(/cmd_vel_filtered.linear.x)"
+scan_stale = "age(/scan) > 0.3"
+"""
+
+
+def test_load_bindings_file(tmp_path):
+    p = tmp_path / "scout.toml"
+    p.write_text(GOOD)
+    b = load_bindings(p)
+    assert list(b.variables) == ["too_close", "stopped", "stop_requested", "linear_speed", "scan_stale"]
+    assert b.tick == TickSpec(period_ns=100_000_000)
+    assert b.time_base == "log" and b.source == str(p)
+    assert b.topics == {"/scan", "/cmd_vel_filtered", "/gwendolen_control"}
+    assert b.variables["scan_stale"].topics == {"/scan"}
+    too_close = b.variables["too_close"]
+    assert (too_close.line, too_close.col) == (7, 14)  # first char inside the quotes
+
+
+def test_tick_topic_header_time_and_lag():
+    b = parse_bindings('[tick]\ntopic = "/scan"\ntime = "header"\nheader_lag = "250 ms"\n[variables]\nx = "/scan.range_max > 1"\n')
+    assert b.tick == TickSpec(topic="/scan") and b.time_base == "header"
+    assert b.header_lag_ns == 250_000_000
+
+
+@pytest.mark.parametrize("value, ns", [
+    ("100 ms", 100_000_000), ("0.1 s", 100_000_000), ("10 Hz", 100_000_000), ("1 min", 60 * 10**9),
+    ("250us", 250_000), ("7 ns", 7), (0.05, 50_000_000), (2, 2 * 10**9), ("3 Hz", 333_333_333),
+])
+def test_parse_duration(value, ns):
+    assert parse_duration(value) == ns
+
+
+@pytest.mark.parametrize("value", ["100", "fast", "0 ms", "-1 s", "10 parsecs", True, "0 Hz"])
+def test_parse_duration_rejects(value):
+    with pytest.raises(ValueError):
+        parse_duration(value)
+
+
+@pytest.mark.parametrize("text, line, col, what", [
+    ('[tick]\nperiod = "100 ms"\n[variables]\nok = "/a.x > 1"\nbad = "min(/scan.ranges) <"\n', 5, 27,
+     "expression ends too early"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "abs(/a.x) $ 3"\n', 4, 18, "unexpected character '$'"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\n  bad = "1 + sqrt(/a.x)"\n', 4, 14, "unknown function 'sqrt'"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "age(/a.x) > 1"\n', 4, 12, "age() takes a topic"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "/scan < 3"\n', 4, 8, "is a topic, not a value"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\nbad = 3\n', 4, 7, "must be a string"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\n" bad" = "/a.x"\n', 4, 1, "not an identifier"),
+    ('[tick]\nperiod = "fast"\n[variables]\n', 2, 10, "[tick] period"),
+    ('[tick]\nperiod = "1 s"\ntopic = "/a"\n[variables]\n', 1, 1, "exactly one of"),
+    ('[tick]\nperiod = "1 s"\ntime = "wall"\n[variables]\n', 3, 8, "time must be"),
+    ('[tick]\nperiod = "1 s"\nsped = 2\n[variables]\n', 3, 8, "unknown key 'sped'"),
+    ('[tick]\ntopic = "scan"\n[variables]\n', 2, 9, "not a topic name"),
+    ('[tick]\nperiod = "1 s"\n[variabels]\nx = "/a.b"\n', 3, 1, "unknown table [variabels]"),
+    ('[variables]\nx = "/a.b"\n', 1, None, "missing [tick]"),
+    ('[tick]\nperiod = "1 s"\n[variables]\nx = "/a.b\n', 4, None, "TOML syntax error"),
+])
+def test_binding_file_errors_name_file_line_col(tmp_path, text, line, col, what):
+    p = tmp_path / "b.toml"
+    p.write_text(text)
+    with pytest.raises(BindingError) as err:
+        load_bindings(p)
+    e = err.value
+    assert e.source == str(p) and e.line == line
+    if col is not None:
+        assert e.col == col
+    assert what in str(e)
+    assert str(e).startswith(f"{p}:{line}")
+
+
+def test_error_names_the_variable(tmp_path):
+    p = tmp_path / "b.toml"
+    p.write_text('[tick]\nperiod = "1 s"\n[variables]\nstopped = "abs(/v.x) <"\n')
+    with pytest.raises(BindingError, match=r"b\.toml:4:\d+: variable 'stopped': syntax error"):
+        load_bindings(p)
+
+
+def test_inline_bindings_override_and_errors(tmp_path):
+    p = tmp_path / "b.toml"
+    p.write_text(GOOD)
+    b = load_bindings(p, inline=["too_close=min(/scan.ranges) < 0.5", "extra = /odom.pose.pose.position.x > 1"])
+    assert b.variables["too_close"].expr == "min(/scan.ranges) < 0.5"
+    assert b.variables["too_close"].source == "<--bind too_close>"
+    assert "/odom" in b.topics and list(b.variables)[-1] == "extra"
+    with pytest.raises(BindingError, match=r"<--bind x>:1:10: variable 'x': syntax error"):
+        parse_inline("x=/a.b < ")
+    with pytest.raises(BindingError, match="NAME=EXPRESSION"):
+        parse_inline("just an expression")
+
+
+# ------------------------------------------------------------------------------------------------
+# Expression semantics
+# ------------------------------------------------------------------------------------------------
+
+
+def test_precedence_and_fret_spellings():
+    m = {"/a": NS(x=2.0, y=-3.0, f=True, g=False)}
+    assert ev("/a.x + /a.y * 2", m) == -4.0
+    assert ev("-/a.y - -1", m) == 4.0
+    assert ev("(/a.x + /a.y) * 2", m) == -2.0
+    assert ev("/a.x/2", m) == 1.0  # "/" after an operand divides
+    assert ev("!/a.x < 1", m) is True  # ! is looser than comparison
+    assert ev("/a.f & /a.g | true", m) is True
+    assert ev("/a.f & (/a.g | false)", m) is False
+    assert ev("/a.g -> /a.x > 100", m) is True
+    assert ev("/a.f -> /a.g -> /a.f", m) is True  # right-assoc: f -> (g -> f)
+    assert ev("/a.f <-> /a.g", m) is False
+    assert ev("/a.x = 2 & /a.x == 2 & /a.y != 2", m) is True
+    assert ev("/a.x >= 2 & /a.x <= 2 & !(/a.x > 2)", m) is True
+
+
+def test_integer_fields_become_floats_and_results_are_python_types():
+    m = {"/s": NS(level=np.int32(3), n=7, ok=np.bool_(True))}
+    assert ev("/s.level", m) == 3.0 and type(ev("/s.level", m)) is float
+    assert type(ev("/s.n", m)) is float
+    assert ev("/s.ok", m) is True
+    assert ev("/s.n / 2", m) == 3.5
+
+
+def test_division_by_zero_is_ieee():
+    m = {"/a": NS(x=1.0, z=0.0)}
+    assert ev("/a.x / /a.z", m) == math.inf
+    assert ev("-/a.x / /a.z", m) == -math.inf
+    assert math.isnan(ev("/a.z / /a.z", m))
+
+
+def test_nan_compares_false_and_is_truthy():
+    m = {"/a": NS(x=math.nan)}
+    assert ev("/a.x < 1", m) is False and ev("/a.x >= 1", m) is False
+    assert ev("/a.x != /a.x", m) is True
+    assert ev("/a.x & true", m) is True
+    assert math.isnan(ev("min(/a.x, 1)", m)) and math.isnan(ev("max(1, /a.x)", m))
+
+
+def test_indexing_norm_len_and_arrays():
+    m = {"/v": NS(items=[NS(p=1.0), NS(p=2.0), NS(p=5.0)], arr=np.array([3.0, -4.0, 12.0]))}
+    assert ev("/v.items[0].p + /v.items[-1].p", m) == 6.0
+    assert ev("/v.arr[1]", m) == -4.0
+    assert ev("norm(/v.arr[0], /v.arr[1])", m) == 5.0
+    assert ev("norm(/v.arr)", m) == 13.0
+    assert ev("len(/v.arr)", m) == 3.0
+    assert ev("count(/v.arr > 0)", m) == 2.0
+    assert ev("any(/v.arr < -3) & !all(/v.arr > 0)", m) is True
+    assert ev("max(abs(/v.arr))", m) == 12.0
+    assert ev("mean(/v.arr * 2 + 1)", m) == pytest.approx(np.mean(np.array([3.0, -4.0, 12.0]) * 2 + 1))
+    assert ev("min(/v.arr[0], /v.arr[1], 7)", m) == -4.0
+    assert ev("len(/v.items)", m) == 3.0  # a sequence of messages
+    with pytest.raises(SignalError, match=r"variable 'v': any\(\) takes an array"):
+        ev("any(/v.items[0].p)", m)
+
+
+def test_array_valued_variable_is_an_error():
+    m = {"/v": NS(arr=np.array([1.0, 2.0]))}
+    with pytest.raises(SignalError, match=r"variable 'v': value is an array of 2 items"):
+        ev("/v.arr * 2", m)
+
+
+def test_missing_field_and_index_errors_name_the_column():
+    b = compile_expression("speed", "abs(/cmd.linear.q) > 1", source="b.toml", line=9, col=10)
+    st_ = EvalState()
+    st_.msgs = {"/cmd": twist(1.0)}
+    with pytest.raises(SignalError, match=r"b\.toml:9:14: variable 'speed': /cmd\.linear\.q: a "
+                                          r"geometry_msgs/msg/Vector3 message has no field 'q'"):
+        b.evaluate(st_, " at log time 5")
+    b = compile_expression("r", "/scan.ranges[5] > 1", source="b.toml", line=2, col=5)
+    st_.msgs = {"/scan": scan([1.0, 2.0])}
+    with pytest.raises(SignalError, match=r"b\.toml:2:5: variable 'r': /scan\.ranges\[5\]: index out of range"):
+        b.evaluate(st_)
+
+
+def test_age_is_seconds_since_the_held_message():
+    assert ev("age(/a)", {"/a": NS(x=1)}, now=1_250_000_000, times={"/a": 1_000_000_000}) == 0.25
+    assert ev("age(/a) > 0.3", {"/a": NS(x=1)}, now=1_250_000_000, times={"/a": 1_000_000_000}) is False
+
+
+# -- REP 117 ------------------------------------------------------------------------------------
+
+
+def test_laserscan_rep117_ignores_nan_inf_and_out_of_range():
+    ranges = [0.05, 0.95, np.nan, np.inf, 2.5, 10.0, 10.5, 0.1]
+    m = {"/scan": scan(ranges, range_min=0.1, range_max=10.0)}
+    r = np.asarray(ranges, dtype=np.float32).astype(np.float64)
+    valid = r[(r >= np.float32(0.1)) & (r <= np.float32(10.0))]
+    assert sorted(valid) == pytest.approx([0.1, 0.95, 2.5, 10.0])
+    assert ev("min(/scan.ranges)", m) == valid.min()
+    assert ev("max(/scan.ranges)", m) == valid.max()
+    assert ev("mean(/scan.ranges)", m) == pytest.approx(valid.mean())
+    assert ev("len(/scan.ranges)", m) == 4.0
+    assert ev("count(/scan.ranges < 0.9)", m) == 1.0  # 0.1 only; 0.05 is below range_min
+    assert ev("any(/scan.ranges > 10.2)", m) is False  # 10.5 is beyond range_max
+    assert ev("all(/scan.ranges >= 0.1)", m) is True
+    assert ev("norm(/scan.ranges)", m) == pytest.approx(np.sqrt((valid ** 2).sum()))
+    # Indexing reads the raw beam.
+    assert math.isnan(ev("/scan.ranges[2]", m))
+    assert ev("/scan.ranges[0]", m) == pytest.approx(0.05)
+    # Intensities are not filtered.
+    assert ev("len(/scan.intensities)", m) == 8.0
+
+
+def test_laserscan_negative_infinity_is_a_too_close_return():
+    # REP 117: -inf = detected but closer than range_min; it must not hide an obstacle
+    m = {"/scan": scan([2.0, -np.inf, 5.0], range_min=0.1, range_max=10.0)}
+    assert ev("min(/scan.ranges)", m) == pytest.approx(0.1)
+    assert ev("min(/scan.ranges) < 0.9", m) is True
+    assert ev("len(/scan.ranges)", m) == 3.0
+    assert ev("/scan.ranges[1]", m) == -math.inf  # indexing stays raw
+
+
+def test_laserscan_with_no_valid_return():
+    m = {"/scan": scan([np.nan, np.inf, 0.01, 50.0], range_min=0.1, range_max=10.0)}
+    assert ev("min(/scan.ranges)", m) == math.inf
+    assert ev("max(/scan.ranges)", m) == -math.inf
+    assert math.isnan(ev("mean(/scan.ranges)", m))
+    assert ev("min(/scan.ranges) < 0.9", m) is False
+    assert ev("len(/scan.ranges)", m) == 0.0
+    assert ev("count(/scan.ranges < 100)", m) == 0.0
+    assert ev("any(/scan.ranges < 100)", m) is False
+    assert ev("all(/scan.ranges < 0)", m) is True
+
+
+def test_laserscan_ros1_type_is_recognized():
+    m = {"/scan": scan([0.01, 1.0], range_min=0.1, range_max=5.0, store=ROS1)}
+    assert ev("min(/scan.ranges)", m) == 1.0
+
+
+def test_plain_arrays_propagate_nan_and_empty_reductions():
+    m = {"/a": NS(v=np.array([1.0, np.nan]), e=np.array([], dtype=np.float64))}
+    assert math.isnan(ev("min(/a.v)", m))
+    assert ev("min(/a.e)", m) == math.inf and ev("max(/a.e)", m) == -math.inf
+    assert ev("count(/a.e)", m) == 0.0 and ev("len(/a.e)", m) == 0.0
+
+
+finite = st.floats(min_value=-5, max_value=20, allow_nan=False, width=32)
+cell = st.one_of(finite, st.just(float("nan")), st.just(float("inf")), st.just(float("-inf")))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(cell, min_size=0, max_size=40), st.floats(0, 1, width=32), st.floats(2, 15, width=32))
+def test_rep117_reductions_match_numpy(ranges, rmin, rmax):
+    m = {"/scan": scan(ranges, range_min=rmin, range_max=rmax)}
+    msg = m["/scan"]
+    r = np.asarray(msg.ranges, dtype=np.float64)
+    r = np.where(np.isneginf(r), msg.range_min, r)  # REP 117 -inf: closer than range_min
+    ok = (r >= msg.range_min) & (r <= msg.range_max)
+    v = r[ok]
+    assert ev("min(/scan.ranges)", m) == (v.min() if v.size else math.inf)
+    assert ev("max(/scan.ranges)", m) == (v.max() if v.size else -math.inf)
+    assert ev("count(/scan.ranges < 3)", m) == float((v < 3).sum())
+    assert ev("len(/scan.ranges)", m) == float(v.size)
+    mean = ev("mean(/scan.ranges)", m)
+    if v.size:
+        assert mean == pytest.approx(v.mean(), rel=1e-12)
+    else:
+        assert math.isnan(mean)
+
+
+def test_make_bindings_and_tickspec_validation():
+    b = make_bindings({"fast": "abs(/cmd.linear.x) > 0.5"}, TickSpec(topic="/cmd"))
+    assert isinstance(b, Bindings) and b.topics == {"/cmd"}
+    with pytest.raises(ValueError):
+        TickSpec(period_ns=10, topic="/a")
+    with pytest.raises(ValueError):
+        TickSpec()
+    with pytest.raises(ValueError):
+        Bindings({}, TickSpec(period_ns=1), time_base="wall")
+
+
+def test_ros2_laserscan_type_name_and_vectorized_agree():
+    """The per-tick and vectorized closures of one binding give identical values."""
+    b = compile_expression("v", "mean(/scan.ranges * 2) + count(/scan.ranges > 1) - min(/scan.ranges)")
+    scans = [scan(np.random.default_rng(i).uniform(-1, 12, 50)) for i in range(20)]
+    per_tick = []
+    for s in scans:
+        st_ = EvalState()
+        st_.msgs = {"/scan": s}
+        per_tick.append(b.evaluate(st_))
+    msgs = MessageColumns({"/scan": scans})
+    idx = np.arange(len(scans))
+    cols = HeldColumns(msgs, idx.astype(np.int64), {"/scan": idx.astype(np.int64)},
+                       {"/scan": idx})
+    assert b.evaluate_columns(cols).tolist() == per_tick
+    assert ROS2.types["sensor_msgs/msg/LaserScan"].__msgtype__ == "sensor_msgs/msg/LaserScan"
