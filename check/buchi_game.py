@@ -53,6 +53,14 @@ def _automaton(formula: Node, deterministic: bool = True):
 
     aut = spot.translate(to_spot(formula), "TGBA", "complete",
                          "deterministic" if deterministic else "small", dict=bdd_dict())
+    if deterministic and not spot.is_deterministic(aut):
+        # translate's "deterministic" is a preference: for some recurrence formulas it gives a
+        # nondeterministic automaton although a deterministic Büchi one exists. Determinize
+        # (a parity automaton) and let postprocess bring the acceptance down to Büchi.
+        det = spot.postprocess(spot.tgba_determinize(aut), "TGBA", "deterministic",
+                               "complete")
+        if spot.is_deterministic(det):
+            aut = det
     acc = aut.acc()
     if deterministic and not spot.is_deterministic(aut) or not (
             acc.is_t() or acc.is_generalized_buchi()):

@@ -116,6 +116,16 @@ def test_safe_ros_at_50_hz(tmp_path):
     assert comp["strategy"]["state_bits"] < 16
 
 
+def test_a_recurrence_spot_translates_nondeterministically(tmp_path):
+    """``upon o | p ... eventually o`` (outputs only): Spot's translation preferring
+    determinism gives a nondeterministic automaton, but the formula has a deterministic Büchi
+    one (found by determinizing): the Büchi game decides it, not Spot's game (a case
+    hypothesis found)."""
+    comp = realizability_of(tmp_path, "R0: upon o | p the sw shall eventually satisfy o\n",
+                            ["i", "j", "m"])
+    assert comp["realizable"] is True and comp["method"] == "Büchi game", comp
+
+
 def test_lost_game_lasso_replays_through_the_audit(tmp_path):
     """``eventually`` against a 50-tick hold the environment re-triggers every other tick:
     unrealizable; the input lasso (Spot's check: it defeats every controller) with a
