@@ -4,14 +4,18 @@ running robot over the Foxglove WebSocket protocol or rosbridge, and a server to
 ::
 
     fretc watch ws://localhost:8765 --requirements requirements/ [--bindings B.toml]
-                [--duration S] [--until-idle DURATION] [--allow-partial]
+                [--duration S] [--until-idle DURATION] [--restart-grace DURATION]
+                [--allow-partial]
                 [--record OUT.mcap] [--jsonl] [--json OUT.json] [--no-live]
     fretc watch rosbridge://localhost:9090 [--topic-type /scan=sensor_msgs/msg/LaserScan] ...
     fretc replay traces/nominal.mcap --serve [--rate 10] [--host 127.0.0.1] [--port 8765]
 
-The watch ends with the run: the server's orderly close, every bound topic unadvertised,
-``--duration``, ``--until-idle`` or Ctrl-C; the final verdicts are then decided as ``fretc
-audit`` decides them at the end of a log, and the exit status is the audit's
+The watch ends with the run: the server's orderly close, ``--duration``, ``--until-idle`` or
+Ctrl-C; the final verdicts are then decided as ``fretc audit`` decides them at the end of a
+log. A bound topic unadvertised and advertised again within ``--restart-grace`` (a node
+restart) continues the same run, the messages in between a gap; every bound topic
+unadvertised for longer ends the run cut short (exit 3; under ``--until-idle``, the run's
+end). The exit status is the audit's
 (:data:`audit.verdict.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
 run, 1 a requirement violated, 2 usage or input errors (a requirement that could not be
 watched, no connection), 3 no violation but the run was incomplete (a connection gap, data
@@ -140,6 +144,10 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://")
                    "or Ctrl-C).")
 @click.option("--until-idle", default=None, metavar="DURATION", callback=_seconds,
               help="End the run when no message came for DURATION (e.g. \"2 s\").")
+@click.option("--restart-grace", default="2 s", show_default=True, metavar="DURATION",
+              callback=_seconds,
+              help="How long a restarting publisher has to advertise its topic again before "
+                   "the run counts as cut short (0: at once).")
 @click.option("--allow-partial", is_flag=True,
               help="Exit 0 instead of 3 when a run without violations was incomplete "
                    "(connection gaps, data problems), as `fretc audit --allow-partial`.")
@@ -161,12 +169,13 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://")
 @click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              window, duration, until_idle, allow_partial, topic_types, record, jsonl,
-              json_path, wait, connect_timeout, no_live):
+              window, duration, until_idle, restart_grace, allow_partial, topic_types, record,
+              jsonl, json_path, wait, connect_timeout, no_live):
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
     rosbridge://host:9090: rosbridge v2) with the requirements and bindings that audit its
-    logs, until the run ends (the server closes or unadvertises every topic, --duration,
-    --until-idle, Ctrl-C). Exit codes as `fretc audit`."""
+    logs, until the run ends (the server closes, --duration, --until-idle, Ctrl-C, or every
+    bound topic's publisher left for longer than --restart-grace). Exit codes as
+    `fretc audit`."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Console
     from rich.markup import escape
@@ -193,7 +202,8 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         plan = load_plan(config)
         w = Watch(plan, WatchOptions(url=url, duration=duration, wait=wait,
                                      connect_timeout=connect_timeout, record=record,
-                                     until_idle=until_idle, types=topic_types or None),
+                                     until_idle=until_idle, types=topic_types or None,
+                                     restart_grace=restart_grace),
                   on_event=on_event)
     except (AuditInputError, MissingDependency) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")

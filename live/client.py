@@ -43,12 +43,13 @@ from __future__ import annotations
 
 import asyncio
 import json
-import queue
 import struct
 import threading
 import time
 from dataclasses import dataclass
 from collections.abc import Callable
+
+from .events import EventQueue
 
 __all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient", "WebSocketClient", "WATCH_HINT",
            "MissingDependency", "require_websockets", "MAX_OTHER_CHANNELS",
@@ -144,6 +145,8 @@ def json_object(frame) -> tuple[dict | None, str | None]:
         msg = json.loads(frame)
     except (ValueError, TypeError):
         return None, "a text frame that is not JSON; ignored"
+    except RecursionError:  # nesting deeper than Python's stack: one bad frame, not the session
+        return None, "a JSON text frame nested too deep to decode; ignored"
     if not isinstance(msg, dict):
         return None, f"a JSON {frame_shape(msg)} where the protocol sends an object; ignored"
     return msg, None
@@ -159,7 +162,8 @@ class WebSocketClient:
         wanted: topic -> bool, asked once per advertised topic.
         backoff, max_backoff: seconds before the first retry after a drop, and the cap of
             the doubling.
-        events: the queue to put events on (a new one by default).
+        events: the queue to put events on (a new bounded :class:`~live.events.EventQueue`
+            by default).
 
     Call :meth:`start`, read :attr:`events`, call :meth:`stop` (idempotent). :meth:`drop`
     closes the current connection as a network fault would (tests).
@@ -169,12 +173,12 @@ class WebSocketClient:
     subprotocols: tuple[str, ...] | None = None
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *, backoff: float = 0.1,
-                 max_backoff: float = 5.0, events: queue.Queue | None = None) -> None:
+                 max_backoff: float = 5.0, events: EventQueue | None = None) -> None:
         self.url = url
         self.wanted = wanted
         self.backoff = backoff
         self.max_backoff = max_backoff
-        self.events: queue.Queue = events if events is not None else queue.Queue()
+        self.events: EventQueue = events if events is not None else EventQueue()
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stop: asyncio.Event | None = None
@@ -314,42 +318,54 @@ class FoxgloveClient(WebSocketClient):
 
     async def _session(self, ws) -> None:
         """Read frames until the connection closes (``ConnectionClosed`` ends the loop); a
-        frame of the wrong shape is a ``protocol`` event and the loop goes on."""
+        frame of the wrong shape, or one whose reading fails in any way, is a ``protocol``
+        event and the loop goes on."""
         from websockets.exceptions import ConnectionClosed  # (as websockets in _main)
 
         st = _FoxgloveState()
-        put = self.events.put
-        head, head_size = _HEAD.unpack_from, _HEAD.size
         try:
             async for frame in ws:
                 now = time.time_ns()
-                if not isinstance(frame, str):
-                    frame = bytes(frame)
-                    if frame[:1] != b"\x01":
-                        continue  # other binary opcodes (time, service responses): not read
-                    if len(frame) < head_size:
-                        self._protocol(f"a messageData frame of {len(frame)} bytes, shorter "
-                                       f"than its {head_size}-byte header; ignored")
-                        continue
-                    _op, sid, log_time = head(frame)
-                    topic = st.subs.get(sid)
-                    if topic is not None:
-                        self._session_messages += 1
-                        put(("message", topic, log_time, frame[head_size:], now))
-                    continue
-                msg, problem = json_object(frame)
-                if problem is not None:
-                    self._protocol(problem)
-                    continue
                 try:
-                    await self._text(ws, msg, st, now)
+                    await self._frame(ws, frame, st, now)
                 except ConnectionClosed:
                     raise
-                except Exception as exc:  # a field of the wrong shape
-                    self._protocol(f"a {str(msg.get('op'))[:40]!r} frame of the wrong shape "
-                                   f"({type(exc).__name__}: {str(exc)[:200]}); ignored")
+                except Exception as exc:  # whatever a frame holds, it costs that frame only
+                    self._protocol(f"a frame that could not be read ({type(exc).__name__}: "
+                                   f"{str(exc)[:200]}); ignored")
         except ConnectionClosed:
             return
+
+    async def _frame(self, ws, frame, st: "_FoxgloveState", now: int) -> None:
+        """Handle one frame: a binary ``messageData`` (other binary opcodes, such as time and
+        service responses, are not read) or a JSON text frame."""
+        from websockets.exceptions import ConnectionClosed
+
+        if not isinstance(frame, str):
+            frame = bytes(frame)
+            if frame[:1] != b"\x01":
+                return
+            if len(frame) < _HEAD.size:
+                self._protocol(f"a messageData frame of {len(frame)} bytes, shorter than its "
+                               f"{_HEAD.size}-byte header; ignored")
+                return
+            _op, sid, log_time = _HEAD.unpack_from(frame)
+            topic = st.subs.get(sid)
+            if topic is not None:
+                self._session_messages += 1
+                self.events.put(("message", topic, log_time, frame[_HEAD.size:], now))
+            return
+        msg, problem = json_object(frame)
+        if problem is not None:
+            self._protocol(problem)
+            return
+        try:
+            await self._text(ws, msg, st, now)
+        except ConnectionClosed:
+            raise
+        except Exception as exc:  # a field of the wrong shape
+            self._protocol(f"a {str(msg.get('op'))[:40]!r} frame of the wrong shape "
+                           f"({type(exc).__name__}: {str(exc)[:200]}); ignored")
 
     async def _text(self, ws, msg: dict, st: "_FoxgloveState", now: int) -> None:
         """Handle one JSON object frame (module docstring); raises on a field of the wrong

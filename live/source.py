@@ -1,6 +1,6 @@
 """The watched run as a log: :class:`WatchSource`, a :class:`logs.LogSource`
-whose messages come from a Foxglove WebSocket server; the verdict events
-(:class:`WatchEvent`); and the recording of a watch (:class:`Recorder`).
+whose messages come from a Foxglove WebSocket server, and the verdict events
+(:class:`WatchEvent`). The recording of a watch is :mod:`live.record`.
 
 Faults, each a data problem of the run, never a crash:
 
@@ -37,7 +37,6 @@ for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). T
 
 from __future__ import annotations
 
-import json
 import queue
 import threading
 import time
@@ -46,15 +45,15 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from mcap.writer import CompressionType, Writer
 from rosbags.typesys.msg import normalize_msgtype
 
 from common import problems as P
-from audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
 from logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
 
-__all__ = ["WatchEvent", "WatchSource", "Recorder", "CONNECTION_GAP", "UNADVERTISED",
-           "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE"]
+__all__ = ["WatchEvent", "WatchSource", "CONNECTION_GAP", "UNADVERTISED",
+           "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE",
+           "PUBLISHER_RESTART", "PUBLISHERS_LEFT", "QUEUE_OVERFLOW", "SCHEMA_TOO_LARGE",
+           "MAX_SCHEMA_BYTES", "RESTART_GRACE"]
 
 #: The connection dropped: messages between the two log times were not received.
 CONNECTION_GAP = "connection_gap"
@@ -70,8 +69,26 @@ NOT_ADVERTISED = "not_advertised"
 PROTOCOL = "protocol"
 #: A message's log time is outside the range the watch can tick on; skipped.
 TIME_RANGE = "time_range"
+#: A bound topic was unadvertised and advertised again (its publisher restarted): the
+#: messages between were not received.
+PUBLISHER_RESTART = "publisher_restart"
+#: Every publisher of the bound topics left (unadvertised) and none came back within the
+#: grace period, before the watch's end: the run was cut short.
+PUBLISHERS_LEFT = "publishers_left"
+#: Messages dropped from the bounded queue because the watch fell behind the server.
+QUEUE_OVERFLOW = "queue_overflow"
+#: An advertised schema over :data:`MAX_SCHEMA_BYTES`: its topic is not read.
+SCHEMA_TOO_LARGE = "schema_too_large"
 #: Log times are int64 nanoseconds from here on (numpy columns, the clocks' grid).
 TIME_LIMIT = 2**63
+#: The largest advertised schema text parsed (bytes of UTF-8): message definitions of real
+#: robots are a few kB; parsing costs about 30 us a line, so this bounds one parse near 1 s.
+MAX_SCHEMA_BYTES = 1024 * 1024
+#: Seconds the watch still reads what had already arrived after it was stopped or its
+#: duration passed (a backlog is not drained without end).
+DRAIN_SECONDS = 1.0
+#: Seconds a restarting publisher has to advertise its topic again (``--restart-grace``).
+RESTART_GRACE = 2.0
 
 
 @dataclass
@@ -128,8 +145,15 @@ class WatchSource(LogSource):
     def __init__(self, url: str, client, *, deadline: float | None = None,
                  idle: float | None = None,
                  on_event: Callable[[WatchEvent], None] | None = None,
-                 on_message: Callable[[str, int, bytes], None] | None = None) -> None:
+                 on_message: Callable[[str, int, bytes], None] | None = None,
+                 restart_grace: float = RESTART_GRACE) -> None:
         super().__init__(url)
+        self.restart_grace = restart_grace
+        #: monotonic time at which every subscribed topic was unadvertised (None: some is
+        #: advertised)
+        self._all_left_at: float | None = None
+        #: the run ended because every bound publisher left before the watch's end
+        self.publishers_left = False
         self.client = client
         self.deadline = deadline
         self.idle = idle
@@ -148,7 +172,7 @@ class WatchSource(LogSource):
         self.first_connect_wall: float | None = None
         self.last_reason = ""
         self.gaps: list[tuple[int, int]] = []  # (last log time before, first after)
-        self._gap_open: tuple[float, str] | None = None  # wall start, reason
+        self._gap_open: tuple[float, str, str] | None = None  # wall start, reason, kind
         self._last_time: int | None = None
         self._early: deque[tuple] = deque()
         self._stop = threading.Event()
@@ -177,7 +201,27 @@ class WatchSource(LogSource):
         elif (self.idle is not None and self._last_wall is not None
               and now - self._last_wall >= self.idle):
             self._end(f"no message for {self.idle:g} s")
+        elif (self._all_left_at is not None
+              and now - self._all_left_at >= self.restart_grace):
+            self._publishers_left()
         return self._ended
+
+    def _publishers_left(self) -> None:
+        """Every subscribed topic stayed unadvertised for the grace period: the run ends.
+        Under ``--until-idle`` (:attr:`idle` set) that is the run's end; otherwise the watch
+        was cut short (:data:`PUBLISHERS_LEFT`, the watch's partial end)."""
+        self._server_ended = True
+        grace = f"{self.restart_grace:g} s"
+        if self.idle is not None:
+            self._end("every publisher of the bound topics left (unadvertised; none came back "
+                      f"within {grace})")
+            return
+        self.publishers_left = True
+        detail = ("every publisher of the bound topics left (unadvertised) and none came back "
+                  f"within {grace}, before the watch's end: the run was cut short here "
+                  "(--until-idle takes such an end as the run's)")
+        self._report(PUBLISHERS_LEFT, None, self._last_time, detail)
+        self._end(detail)
 
     def _end(self, reason: str) -> None:
         if not self._ended:
@@ -214,6 +258,7 @@ class WatchSource(LogSource):
                 self.advertised[ch.topic] = ch
                 if ch.topic in self.unadvertised:
                     self.unadvertised.discard(ch.topic)
+                    self._readvertised(ch)
                 self._build(ch)
         elif kind == "unadvertise":
             for t in ev[2]:
@@ -221,9 +266,10 @@ class WatchSource(LogSource):
                 # a problem only if the run goes on without it (_flush_unadvertised)
                 self._pending_unadvertised.append((t, self._last_time))
             subscribed = set(self.advertised) & (self._wanted or set(self.advertised))
-            if subscribed and subscribed <= self.unadvertised:
-                self._server_ended = True
-                self._end("the server unadvertised every subscribed topic")
+            if subscribed and subscribed <= self.unadvertised and self._all_left_at is None:
+                self._all_left_at = time.monotonic()  # ends the run after the grace period
+                if self.restart_grace <= 0:
+                    self._publishers_left()
         elif kind == "protocol":
             self._report(PROTOCOL, None, self._last_time, f"{ev[2]} (from {self.path})")
         elif kind == "gave_up":
@@ -249,9 +295,24 @@ class WatchSource(LogSource):
             if self.connected:
                 self.connected = False
                 if self._gap_open is None:
-                    self._gap_open = (time.monotonic(), ev[2])
+                    self._gap_open = (time.monotonic(), ev[2], CONNECTION_GAP)
                 self.on_event(WatchEvent("disconnected", self._last_time, ev[1],
                                          detail=ev[2]))
+
+    def _readvertised(self, ch) -> None:
+        """A topic advertised again after it was unadvertised (its publisher restarted, as
+        foxglove_bridge shows a node restart: a new channel id): the same run goes on, and
+        the messages not received in between are a gap (ticks inside unknown), never held
+        over (issue 44)."""
+        self._all_left_at = None
+        self._pending_unadvertised = [(t, at) for t, at in self._pending_unadvertised
+                                      if t != ch.topic]
+        if self._wanted is not None and ch.topic not in self._wanted:
+            return
+        if self._gap_open is None:
+            self._gap_open = (time.monotonic(), f"the publisher of {ch.topic} restarted "
+                              f"(unadvertised, then advertised again as channel {ch.id})",
+                              PUBLISHER_RESTART)
 
     def _report(self, kind: str, topic: str | None, log_time: int | None,
                 detail: str) -> None:
@@ -267,6 +328,14 @@ class WatchSource(LogSource):
 
     def _build(self, ch) -> None:
         if self._wanted is not None and ch.topic not in self._wanted:
+            return
+        size = len(ch.schema.encode("utf-8", "surrogatepass"))
+        if size > MAX_SCHEMA_BYTES:
+            self.decoders[ch.topic] = None
+            why = (f"its advertised schema is {size:,} bytes, over the {MAX_SCHEMA_BYTES:,} "
+                   "bytes read; messages on this topic are skipped")
+            self.schema_errors[ch.topic] = f"{SCHEMA_TOO_LARGE}: {why}"
+            self._report(SCHEMA_TOO_LARGE, ch.topic, self._last_time, why)
             return
         try:
             self.decoders[ch.topic] = schema_decoder(ch.encoding, ch.schema_encoding,
@@ -293,12 +362,20 @@ class WatchSource(LogSource):
         until stopped."""
         self.counts = {}
         wanted = None if topics is None else set(topics)
+        drain_until = None
         while True:
             if self._early:
                 ev = self._early.popleft()
             else:
                 if self.stopped:
-                    try:  # what already arrived is still used
+                    if self.publishers_left:
+                        break  # cut short there: what comes after is not this run's
+                    # what already arrived is still used, for DRAIN_SECONDS at most
+                    now = time.monotonic()
+                    drain_until = drain_until or now + DRAIN_SECONDS
+                    try:
+                        if now >= drain_until:
+                            raise queue.Empty
                         ev = self.client.events.get_nowait()
                     except queue.Empty:
                         break
@@ -323,14 +400,32 @@ class WatchSource(LogSource):
             # the run ends here: nothing came after the connection closed (the end of the
             # robot's run, or of its network - the watch cannot tell), so no tick is missing
             # from inside the run; reported, not a gap
-            wall0, reason = self._gap_open
+            wall0, reason, kind = self._gap_open
             self._gap_open = None
-            detail = (f"connection lost ({reason}) {time.monotonic() - wall0:.2f} s before the "
+            what = f"connection lost ({reason})" if kind == CONNECTION_GAP else reason
+            detail = (f"{what} {time.monotonic() - wall0:.2f} s before the "
                       f"watch ended; nothing was received after log time {self._last_time}: "
                       "the watched run ends there")
             self._problem(CONNECTION_CLOSED, None, self._last_time, detail)
             self.on_event(WatchEvent("problem", self._last_time, time.time_ns(),
                                      detail=f"{CONNECTION_CLOSED}: {detail}"))
+
+    def _dropped_gap(self) -> None:
+        """Messages the bounded queue dropped (:mod:`live.events`) open a gap up to the next
+        message used: the watch fell behind, and what it did not read is not held over."""
+        take = getattr(self.client.events, "take_dropped", None)
+        dropped = take() if take is not None else None
+        if not dropped:
+            return
+        n = sum(c for c, _a, _b in dropped.values())
+        self._dropped_total = getattr(self, "_dropped_total", 0) + n
+        for topic, (count, first, last) in sorted(dropped.items()):
+            self._report(QUEUE_OVERFLOW, topic, first,
+                         f"{count} message(s) between log times {first} and {last} dropped: "
+                         "the watch fell behind the server (its queue is bounded)")
+        if self._gap_open is None:
+            self._gap_open = (time.monotonic(), f"{n} message(s) dropped from the full queue",
+                              QUEUE_OVERFLOW)
 
     def _flush_unadvertised(self) -> None:
         """The run went on after topics were unadvertised: each is an :data:`UNADVERTISED`
@@ -369,31 +464,30 @@ class WatchSource(LogSource):
         try:
             data = dec(payload)
         except DECODE_ERRORS as exc:
-            self._problem(P.UNDECODABLE, topic, log_time,
-                          f"payload of {len(payload)} bytes does not deserialize "
-                          f"({type(exc).__name__}: {exc}); message skipped")
-            self.on_event(WatchEvent("problem", log_time, time.time_ns(),
-                                     detail=f"{P.UNDECODABLE}: {topic}"))
+            self._report(P.UNDECODABLE, topic, log_time,
+                         f"payload of {len(payload)} bytes does not deserialize "
+                         f"({type(exc).__name__}: {exc}); message skipped")
             return None
         if self._last_time is not None and log_time < self._last_time:
-            self._problem(CLOCK_BACKWARDS, topic, log_time,
-                          f"log time {log_time} is {self._last_time - log_time} ns before a "
-                          "message already used; message skipped")
-            self.on_event(WatchEvent("problem", log_time, time.time_ns(),
-                                     detail=f"{CLOCK_BACKWARDS}: {topic}"))
+            self._report(CLOCK_BACKWARDS, topic, log_time,
+                         f"log time {log_time} is {self._last_time - log_time} ns before a "
+                         "message already used; message skipped")
             return None
+        self._dropped_gap()
         if self._gap_open is not None:
-            wall0, reason = self._gap_open
+            wall0, reason, kind = self._gap_open
             self._gap_open = None
             if self._last_time is not None:
                 before = self._last_time
                 self.gaps.append((before, log_time))
                 wall = time.monotonic() - wall0
-                detail = (f"connection lost ({reason}) for {wall:.2f} s of wall time; no "
+                what = (f"connection lost ({reason}) for {wall:.2f} s of wall time"
+                        if kind == CONNECTION_GAP else reason)
+                detail = (f"{what}; no "
                           f"message between log times {before} and {log_time} "
                           f"({(log_time - before) / 1e9:.3f} s): ticks inside are not "
                           "evaluated (unknown), the monitors keep their state")
-                self._problem(CONNECTION_GAP, None, before, detail, end_time=log_time)
+                self._problem(kind, None, before, detail, end_time=log_time)
                 self.on_event(WatchEvent("gap", before, time.time_ns(), detail=detail,
                                          extra={"end_time_ns": log_time,
                                                 "length_s": (log_time - before) / 1e9}))
@@ -405,49 +499,3 @@ class WatchSource(LogSource):
         if self.on_message is not None:
             self.on_message(topic, log_time, payload)
         return Message(topic, log_time, log_time, header_stamp(data), data)
-
-
-# --------------------------------------------------------------------------- recording
-class Recorder:
-    """MCAP of the watched messages (schemas and encodings as advertised) plus the
-    ``/fretc/verdicts`` foxglove.Log channel, written at the end."""
-
-    def __init__(self, path: str, source: WatchSource) -> None:
-        self.path = path
-        self.source = source
-        self._f = open(path, "wb")
-        self.writer = Writer(self._f, compression=CompressionType.ZSTD)
-        self.writer.start(profile="", library="fretc watch")
-        self.channels: dict[str, int] = {}
-        self.seq: dict[str, int] = {}
-
-    def message(self, topic: str, log_time: int, payload: bytes) -> None:
-        """Write one watched message (its channel and schema on first use)."""
-        cid = self.channels.get(topic)
-        if cid is None:
-            ch = self.source.advertised[topic]
-            sid = self.writer.register_schema(ch.schema_name, ch.schema_encoding,
-                                              ch.schema.encode("utf-8"))
-            cid = self.writer.register_channel(topic, ch.encoding, sid)
-            self.channels[topic] = cid
-            self.seq[topic] = 0
-        self.writer.add_message(cid, log_time=log_time, data=payload, publish_time=log_time,
-                                sequence=self.seq[topic])
-        self.seq[topic] += 1
-
-    def finish(self, la) -> int:
-        """Write the verdict events of ``la`` and close the file; the number of events."""
-        events = verdict_events(la.to_json())
-        sid = self.writer.register_schema("foxglove.Log", "jsonschema",
-                                          json.dumps(FOXGLOVE_LOG_SCHEMA).encode("utf-8"))
-        cid = self.writer.register_channel(VERDICT_TOPIC, "json", sid)
-        for i, e in enumerate(sorted(events, key=lambda e: e.time_ns)):
-            self.writer.add_message(cid, log_time=int(e.time_ns), publish_time=int(e.time_ns),
-                                    data=json.dumps(e.to_json()).encode("utf-8"), sequence=i)
-        self.writer.add_metadata("fretc.verdicts",
-                                 {v.requirement: v.verdict for v in la.verdicts})
-        self.writer.finish()
-        self._f.close()
-        return len(events)
-
-

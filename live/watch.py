@@ -52,8 +52,9 @@ from audit.passes import ClockPass, clock_key, restrict
 from audit.verdict import LogAudit, Verdict
 from .client import FoxgloveClient, require_websockets
 from .columns import LiveColumns
+from .record import Recorder
 from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
-    UNADVERTISED, Recorder, WatchEvent, WatchSource)
+                     RESTART_GRACE, UNADVERTISED, WatchEvent, WatchSource)
 
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
            "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
@@ -81,6 +82,9 @@ class WatchOptions:
         until_idle: end the run when no message arrived for this many seconds (wall time).
         types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
             a bound topic (``--topic-type``; over the bindings' ``[types]``).
+        restart_grace: seconds a bound topic's publisher has, once every bound topic was
+            unadvertised, to advertise it again and continue the same run (a node restart);
+            0 ends the run at once (``--restart-grace``).
     """
 
     url: str
@@ -92,6 +96,7 @@ class WatchOptions:
     record: str | None = None
     backoff: float = 0.1
     max_backoff: float = 5.0
+    restart_grace: float = RESTART_GRACE
 
 
 def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = None):
@@ -179,7 +184,8 @@ class Watch:
         self.client = make_client(options, lambda t: t in self.needed, b.types)
         deadline = (time.monotonic() + options.duration) if options.duration else None
         self.source = WatchSource(options.url, self.client, deadline=deadline,
-                                  idle=options.until_idle, on_event=self._event)
+                                  idle=options.until_idle, on_event=self._event,
+                                  restart_grace=options.restart_grace)
         if b.tick.period_ns:
             self.source.max_jump_ns = MAX_JUMP_TICKS * b.tick.period_ns
         self.recorder: Recorder | None = None
@@ -306,6 +312,10 @@ class Watch:
         if src.gaps:
             la.partial = True
             la.damage_time_ns = src.gaps[0][0]
+        if src.publishers_left and src._last_time is not None:
+            la.partial = True  # the run was cut short after its last message
+            if la.damage_time_ns is None:
+                la.damage_time_ns = src._last_time + 1
 
     def _await_topics(self) -> None:
         """Connect, then wait (``options.wait`` s) for the bound topics' advertisements."""
@@ -394,6 +404,9 @@ class Watch:
         for key in groups:
             times, columns, log_times = self._cols[key].arrays()
             passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
+            if src.publishers_left and src._last_time is not None:
+                # cut short: judged as a log cut after its last message (audit.damage)
+                passes[key].intact_end = src._last_time + 1
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)
