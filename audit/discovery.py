@@ -11,7 +11,7 @@ from .config import AuditInputError
 __all__ = ["LOG_SUFFIXES", "discover_bindings", "find_logs"]
 
 #: File kinds audited when a folder is given.
-LOG_SUFFIXES = (".mcap", ".bag", ".csv")
+LOG_SUFFIXES = (".mcap", ".bag", ".csv", ".ulg", ".bin")
 
 
 def discover_bindings(requirement_paths: Sequence[str]) -> list[Path]:

@@ -35,7 +35,9 @@ from .csv_source import CSV_TOPIC, CSV_TYPE, CsvRow, CsvSource
 from .decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, schema_decoder
 from .factory import open_log
 from .mcap_source import McapSource
+from .dataflash_source import DataflashSource
 from .reorder import REORDER_WINDOW_NS
+from .ulog_source import UlogSource
 
 #: The former name of :class:`UnsupportedSchema` (``live/watch.py`` imports it).
 _Unsupported = UnsupportedSchema
@@ -49,6 +51,8 @@ __all__ = [
     "UnsupportedSchema",
     "DECODE_ERRORS",
     "McapSource",
+    "UlogSource",
+    "DataflashSource",
     "BagSource",
     "CsvSource",
     "CsvRow",

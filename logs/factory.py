@@ -15,7 +15,9 @@ from common.problems import LogError
 from .bag_source import BagSource
 from .base import LogSource
 from .csv_source import CsvSource
+from .dataflash_source import DataflashSource
 from .mcap_source import McapSource
+from .ulog_source import UlogSource
 
 __all__ = ["open_log"]
 
@@ -26,7 +28,7 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
 
     Args:
         path: ``*.mcap`` file, ROS 1 ``*.bag`` file, rosbag2 folder (with ``metadata.yaml``),
-            or ``*.csv`` trace.
+            ``*.csv`` trace, PX4 ULog ``*.ulg`` or ArduPilot DataFlash ``*.bin`` flight log.
         fallback_typestore: types for rosbag connections that carry no definition (e.g. old
             rosbag2 sqlite3 bags): a rosbags Typestore or a ``rosbags.typesys.Stores`` member.
             Never used when the log embeds its definitions.
@@ -35,7 +37,8 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         csv_period_ns: CSV only: time step between rows when there is no ``time`` column.
 
     Returns:
-        A :class:`LogSource` (McapSource, BagSource or CsvSource).
+        A :class:`LogSource` (McapSource, BagSource, CsvSource, UlogSource or
+        DataflashSource).
 
     Raises:
         LogError: missing path, unknown kind, or a file that cannot be opened as that kind.
@@ -57,4 +60,9 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         return BagSource(p, fallback_typestore=fallback_typestore)
     if suffix == ".csv":
         return CsvSource(p, period_ns=csv_period_ns)
-    raise LogError(path, "unknown log kind (expected .mcap, .bag, .csv or a rosbag2 folder)")
+    if suffix == ".ulg":
+        return UlogSource(p)
+    if suffix == ".bin":
+        return DataflashSource(p)
+    raise LogError(path, "unknown log kind (expected .mcap, .bag, .csv, .ulg, .bin or a "
+                         "rosbag2 folder)")

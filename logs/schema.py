@@ -245,7 +245,18 @@ def log_schemas(source) -> dict[str, TopicSchema | None]:
                                                      {c: "float" for c in source.columns}))}
     if kind == "mcap":
         return _mcap_schemas(source)
+    if kind in ("ulog", "dataflash"):
+        return _defined_schemas(source)
     return _bag_schemas(source)
+
+
+def _defined_schemas(source) -> dict[str, TopicSchema | None]:
+    """Schemas of a source that gives each topic's ROS 2 definition (``definitions()``)."""
+    out: dict[str, TopicSchema | None] = {}
+    for topic, (typ, text) in source.definitions().items():
+        built = _build("ros2msg", typ, text)
+        out[topic] = TopicSchema(topic, built[1], built[0]) if built else None
+    return dict(sorted(out.items()))
 
 
 def _build(encoding: str, name: str, text: str) -> tuple[Any, str] | None:

@@ -1,0 +1,311 @@
+"""PX4 flight logs (ULog, ``*.ulg``) as a :class:`~logs.base.LogSource`, read with
+``pyulog`` (PX4's own ULog library; format: PX4 "ULog File Format" documentation).
+
+Topics, named as Foxglove names them when it opens a ``.ulg``:
+
+* one topic per logged uORB topic, named after its message (``vehicle_status``,
+  ``battery_status``); PX4 logs several instances of some topics (two batteries, three
+  gyros): instance 0 keeps the plain name and instance *k* > 0 is ``NAME/k``
+  (``battery_status/1``), so instances are never interleaved on one topic (Foxglove shows
+  them merged under one name);
+* ``Log``: PX4's logged text messages (``mavlink_log``, ``PX4_INFO`` ...), with Foxglove's
+  fields: ``level`` on the rosgraph_msgs/Log scale (``DEBUG`` 1, ``INFO`` 2, ``WARN`` 4,
+  ``ERROR`` 8, ``FATAL`` 16, named constants of the topic) from ULog's syslog level, ``msg``
+  the text, ``tag`` the tag of a tagged message (0 otherwise);
+* ``Parameter``: parameter changes during the flight (``name``, ``value``).
+
+Names without a leading ``/`` are written quoted in bindings: ``'"battery_status".remaining
+< 0.2'``. Every field of a uORB message is a field of its topic (arrays as arrays:
+``"actuator_outputs".output[0]``; nested uORB types as nested messages), with the types of
+the ULog format definitions (``uint8_t`` is ``uint8``, ``float`` is ``float32``, ``char[N]``
+a string); padding fields are left out. The message types are ``px4_msgs/msg/<CamelName>``
+(the naming of PX4's ROS 2 messages), whose definitions :func:`ulog_schemas` gives for the
+binding checks and ``fretc inspect``.
+
+Log time is the message's ``timestamp`` field (microseconds of the flight controller's
+clock, usually since boot) in ns; messages are delivered in non-decreasing log time over all
+topics. A message whose timestamp is before the start the ULog header gives (0: never set;
+a timestamp kept since boot while the message was logged again and again) is skipped as an
+:data:`EARLY_TIMESTAMP` problem: its time says nothing of when it was logged. A ULog
+**dropout** (the logger lost messages for a number of milliseconds) is damage: a
+:data:`DROPOUT` problem and a gap of the log from the last timestamp before it (only the span
+before it is judged; nothing is held over it).
+
+pyulog reads the messages of the topics asked for at once (a flight log of a few hundred MB
+is read whole for one topic list); :meth:`UlogSource.messages` then builds one message
+object per row.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from common.problems import LogError
+from .base import LogSource, Message
+
+__all__ = ["UlogSource", "LOG_TOPIC", "PARAMETER_TOPIC", "DROPOUT", "EARLY_TIMESTAMP",
+           "ulog_type_name", "ulog_definition"]
+
+#: PX4's logged text messages.
+LOG_TOPIC = "Log"
+#: Parameter changes during the flight.
+PARAMETER_TOPIC = "Parameter"
+#: A ULog dropout: the logger lost messages for ``end - start``.
+DROPOUT = "dropout"
+#: A message whose ``timestamp`` is before the log's start (0: never set; a value kept from
+#: boot): it says nothing of when it was logged, so it is skipped.
+EARLY_TIMESTAMP = "early_timestamp"
+
+_ROS_TYPES = {"int8_t": "int8", "uint8_t": "uint8", "int16_t": "int16", "uint16_t": "uint16",
+              "int32_t": "int32", "uint32_t": "uint32", "int64_t": "int64",
+              "uint64_t": "uint64", "float": "float32", "double": "float64", "bool": "bool",
+              "char": "char"}
+#: ULog's syslog levels (0 emergency .. 7 debug) on the rosgraph_msgs/Log scale
+_LEVELS = {0: 16, 1: 16, 2: 16, 3: 8, 4: 4, 5: 2, 6: 2, 7: 1}
+_LOG_DEFINITION = ("uint8 DEBUG=1\nuint8 INFO=2\nuint8 WARN=4\nuint8 ERROR=8\nuint8 FATAL=16\n"
+                   "uint8 level\nstring msg\nuint16 tag\n")
+_PARAMETER_DEFINITION = "string name\nfloat64 value\n"
+_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?")
+
+
+def ulog_type_name(name: str) -> str:
+    """The message type of uORB message ``name``: ``vehicle_status`` ->
+    ``px4_msgs/msg/VehicleStatus`` (the naming of PX4's ROS 2 ``px4_msgs``)."""
+    return "px4_msgs/msg/" + "".join(p[:1].upper() + p[1:] for p in name.split("_") if p)
+
+
+def ulog_definition(formats: dict, name: str) -> str:
+    """The ROS 2 message definition text (``ros2msg``, dependencies appended as
+    ``MSG: pkg/msg/Type`` sections, as MCAP schemas hold them) of uORB message ``name`` from
+    pyulog's ``message_formats``. Raises KeyError for a format the log does not define."""
+    seen: list[str] = []
+    out: list[str] = []
+
+    def define(n: str) -> str:
+        lines = []
+        for typ, size, field in formats[n].fields:
+            if field.startswith("_padding"):
+                continue
+            if typ == "char":
+                lines.append(f"string {field}")
+                continue
+            ros = _ROS_TYPES.get(typ)
+            if ros is None:  # a nested uORB message
+                ros = ulog_type_name(typ)
+                if typ not in seen:
+                    seen.append(typ)
+                    out.append(f"MSG: {ros}\n" + define(typ))
+            lines.append(f"{ros}[{size}] {field}" if size else f"{ros} {field}")
+        return "\n".join(lines) + "\n"
+
+    top = define(name)
+    return top + "".join("=" * 80 + "\n" + part for part in out)
+
+
+class UlogSource(LogSource):
+    """A PX4 ULog file (module docstring). Opening reads its definitions and which topics it
+    holds (one pass of pyulog, the data not kept).
+
+    Raises:
+        LogError: the file is not a ULog file pyulog can read (names the file and why).
+    """
+
+    kind = "ulog"
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        super().__init__(path)
+        ulog = self._read(None)
+        self.formats = ulog.message_formats
+        self._topics: dict[str, str] = {}
+        self._subs: dict[str, tuple[str, int]] = {}  # topic -> (message name, instance)
+        for d in ulog.data_list:
+            topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
+            self._topics[topic] = ulog_type_name(d.name)
+            self._subs[topic] = (d.name, d.multi_id)
+        if ulog.logged_messages or ulog.logged_messages_tagged:
+            self._topics[LOG_TOPIC] = "rosgraph_msgs/msg/Log"
+        if ulog.changed_parameters:
+            self._topics[PARAMETER_TOPIC] = "px4_msgs/msg/Parameter"
+        self._topics = dict(sorted(self._topics.items()))
+        #: the ULog header's start (ns): earlier timestamps are skipped (module docstring)
+        self.log_start = int(ulog.start_timestamp) * 1000
+        # dropouts from the read of every topic: pyulog dates one by the last timestamp it
+        # parsed before it, so a read of fewer topics would date it earlier
+        self.dropouts = [(int(d.timestamp) * 1000, int(d.duration)) for d in ulog.dropouts]
+        times = [int(t) * 1000 for d in ulog.data_list for t in d.data["timestamp"][:1]
+                 if int(t) * 1000 >= self.log_start]
+        self._start_time = min(times) if times else None
+        self._end_time = None
+
+    def _read(self, names: list[str] | None):
+        from pyulog import ULog  # lazy: only for flight logs
+
+        try:
+            return ULog(self.path, message_name_filter_list=names,
+                        disable_str_exceptions=True)
+        except Exception as exc:  # pyulog raises plain exceptions on any malformed input
+            raise LogError(self.path, f"not a readable PX4 ULog file ({type(exc).__name__}: "
+                                      f"{exc})") from None
+
+    def topics(self) -> dict[str, str]:
+        """Topic -> message type (module docstring)."""
+        return dict(self._topics)
+
+    def definitions(self) -> dict[str, tuple[str, str]]:
+        """Topic -> (message type, ROS 2 definition text) of every topic."""
+        out = {}
+        for topic, typ in self._topics.items():
+            if topic == LOG_TOPIC:
+                out[topic] = (typ, _LOG_DEFINITION)
+            elif topic == PARAMETER_TOPIC:
+                out[topic] = (typ, _PARAMETER_DEFINITION)
+            else:
+                out[topic] = (typ, ulog_definition(self.formats, self._subs[topic][0]))
+        return out
+
+    def messages(self, topics: set[str] | frozenset[str] | None = None) -> Iterator[Message]:
+        """The messages of ``topics`` (all when None) in non-decreasing log time; dropouts
+        are recorded as gaps before the first message is delivered (they are in the file's
+        header order, known once it is read)."""
+        self._begin_pass()
+        want = set(self._topics) if topics is None else set(topics) & set(self._topics)
+        names = sorted({self._subs[t][0] for t in want if t in self._subs})
+        ulog = self._read(names)
+        for start, ms in self.dropouts:
+            end = start + ms * 1_000_000
+            self._gap(start, end)
+            self._problem(DROPOUT, None, start,
+                          f"the logger dropped messages for {ms} ms (ULog dropout record) "
+                          "after this log time: only the span before it is judged",
+                          end_time=end)
+        streams = []
+        for d in ulog.data_list:
+            topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
+            if topic in want:
+                streams.append((topic, d.data["timestamp"].astype(np.int64) * 1000,
+                                _Rows(d.data, self.formats, d.name)))
+        if LOG_TOPIC in want:
+            streams.append(_log_stream(ulog))
+        if PARAMETER_TOPIC in want:
+            streams.append(_parameter_stream(ulog))
+        yield from self._merged(streams)
+
+    def _merged(self, streams) -> Iterator[Message]:
+        if not streams:
+            return
+        for topic, t, _r in streams:
+            early = t < self.log_start
+            if early.any():
+                self._problem(EARLY_TIMESTAMP, topic, int(t[early][0]),
+                              f"{int(early.sum())} message(s) with a timestamp before the log's "
+                              f"start ({self.log_start // 1000} us; 0 is a timestamp never set) "
+                              "skipped: their time says nothing of when they were logged")
+        times = np.concatenate([t for _n, t, _r in streams])
+        which = np.concatenate([np.full(len(t), k, dtype=np.int32)
+                                for k, (_n, t, _r) in enumerate(streams)])
+        rows = np.concatenate([np.arange(len(t)) for _n, t, _r in streams])
+        order = np.argsort(times, kind="stable")
+        order = order[times[order] >= self.log_start]
+        for i in order:
+            topic, t, rows_of = streams[which[i]]
+            lt = int(times[i])
+            data = rows_of.row(int(rows[i]))
+            self.counts[topic] = self.counts.get(topic, 0) + 1
+            if self._start_time is None or lt < self._start_time:
+                self._start_time = lt
+            self._end_time = lt
+            yield Message(topic, lt, lt, None, data)
+
+
+class _Rows:
+    """Row ``i`` of a pyulog data set as a message object: one attribute per field, arrays
+    as numpy arrays (``output[0]``, ``output[1]``, ... joined), nested uORB messages as
+    objects, ``char[N]`` as a string."""
+
+    def __init__(self, data: dict[str, np.ndarray], formats: dict, name: str) -> None:
+        self.data = data
+        self.plan = _plan(formats, name, "")
+        self.stacked: dict[str, np.ndarray] = {}
+
+    def row(self, i: int) -> Any:
+        return self._build(self.plan, i)
+
+    def _build(self, plan, i: int) -> Any:
+        out = SimpleNamespace()
+        for field, how, arg in plan:
+            if how == "scalar":
+                value = self.data[arg][i].item()
+            elif how == "array":
+                arr = self.stacked.get(field + arg[0])
+                if arr is None:
+                    arr = self.stacked[field + arg[0]] = np.stack(
+                        [self.data[c] for c in arg], axis=1)
+                value = arr[i]
+            elif how == "string":
+                value = bytes(int(self.data[c][i]) for c in arg).split(b"\0", 1)[0].decode(
+                    "utf-8", "replace")
+            elif how == "nested":
+                value = self._build(arg, i)
+            else:  # nested array
+                value = [self._build(p, i) for p in arg]
+            setattr(out, field, value)
+        return out
+
+
+def _plan(formats: dict, name: str, prefix: str) -> list[tuple[str, str, Any]]:
+    """How to build a message of uORB type ``name`` from pyulog's flattened column names
+    under ``prefix``: (field, how, columns or sub-plans)."""
+    plan = []
+    for typ, size, field in formats[name].fields:
+        if field.startswith("_padding"):
+            continue
+        base = prefix + field
+        if typ in _ROS_TYPES:
+            if typ == "char" and size:
+                plan.append((field, "string", [f"{base}[{k}]" for k in range(size)]))
+            elif size:
+                plan.append((field, "array", [f"{base}[{k}]" for k in range(size)]))
+            else:
+                plan.append((field, "scalar", base))
+        elif size:
+            plan.append((field, "nested_array",
+                         [_plan(formats, typ, f"{base}[{k}].") for k in range(size)]))
+        else:
+            plan.append((field, "nested", _plan(formats, typ, base + ".")))
+    return plan
+
+
+class _Listed:
+    """Rows of a message list (logged text, parameter changes) as message objects."""
+
+    def __init__(self, items: list[SimpleNamespace]) -> None:
+        self.items = items
+
+    def row(self, i: int) -> Any:
+        return self.items[i]
+
+
+def _log_stream(ulog) -> tuple[str, np.ndarray, _Listed]:
+    items = [(int(m.timestamp), SimpleNamespace(level=_LEVELS.get(int(m.log_level) & 7, 2),
+                                                msg=m.message, tag=0))
+             for m in ulog.logged_messages]
+    for tag, msgs in (getattr(ulog, "logged_messages_tagged", None) or {}).items():
+        items += [(int(m.timestamp), SimpleNamespace(level=_LEVELS.get(int(m.log_level) & 7, 2),
+                                                     msg=m.message, tag=int(tag)))
+                  for m in msgs]
+    items.sort(key=lambda x: x[0])
+    times = np.array([t for t, _ in items], dtype=np.int64) * 1000
+    return LOG_TOPIC, times, _Listed([m for _, m in items])
+
+
+def _parameter_stream(ulog) -> tuple[str, np.ndarray, _Listed]:
+    items = sorted(((int(t), SimpleNamespace(name=str(n), value=float(v)))
+                    for t, n, v in ulog.changed_parameters), key=lambda x: x[0])
+    times = np.array([t for t, _ in items], dtype=np.int64) * 1000
+    return PARAMETER_TOPIC, times, _Listed([m for _, m in items])

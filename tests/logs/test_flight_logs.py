@@ -1,0 +1,204 @@
+"""Flight logs audited like robot logs: PX4 ULog (the three real logs of
+``../shared/data/foreign_logs/px4/``, read with pyulog) and ArduPilot DataFlash (written here
+with pymavlink's own record classes). Every verdict is recomputed independently from the
+library's plain read with numpy (sample-and-hold at the 100 ms ticks)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyulog")
+pytest.importorskip("pymavlink")
+
+from _dataflash import write_dataflash  # noqa: E402
+from _shared import SHARED, needs_shared  # noqa: E402
+from audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from logs import open_log  # noqa: E402
+from logs.schema import log_schemas  # noqa: E402
+from logs.ulog_source import DROPOUT, EARLY_TIMESTAMP  # noqa: E402
+
+PX4 = SHARED / "data" / "foreign_logs" / "px4"
+TICK = 100_000_000
+
+PX4_FRET = """@tick_period 100 ms
+PB: the drone shall always satisfy battery_high
+PL: the drone shall never satisfy error_logged
+PO: whenever armed the drone shall immediately satisfy outputs_in_range
+PR: upon rtl the drone shall within 10 seconds satisfy disarmed
+PR5: upon rtl the drone shall within 5 seconds satisfy disarmed
+"""
+PX4_BINDINGS = """[tick]
+period = "100 ms"
+[variables]
+battery_high = '"battery_status".remaining > 0.9'
+error_logged = '"Log".level >= ERROR'
+armed = '"vehicle_status".arming_state = 2'
+outputs_in_range = 'max("actuator_outputs".output[0:4]) <= 2000'
+rtl = '"vehicle_status".nav_state = 5'
+disarmed = '"vehicle_status".arming_state = 1'
+"""
+
+
+def _plan(tmp_path, fret: str, bindings: str):
+    (tmp_path / "r.fret").write_text(fret, encoding="utf-8")
+    (tmp_path / "r.bindings.toml").write_text(bindings, encoding="utf-8")
+    return load_plan(AuditConfig(requirements=(str(tmp_path / "r.fret"),)))
+
+
+def _by_id(la) -> dict:
+    return {v.requirement: v for v in la.verdicts}
+
+
+def _first_tick_at_or_after(first_tick: int, t: int) -> int:
+    return first_tick + max(0, math.ceil((t - first_tick) / TICK)) * TICK
+
+
+def _ulog(name: str, topics: list[str]):
+    from pyulog import ULog
+
+    u = ULog(str(PX4 / name), message_name_filter_list=topics)
+    start = u.start_timestamp
+    out = {}
+    for d in u.data_list:
+        keep = d.data["timestamp"] >= start
+        out[(d.name, d.multi_id)] = {k: v[keep] for k, v in d.data.items()}
+    return u, out
+
+
+@needs_shared
+def test_px4_requirements_on_a_sitl_flight_match_an_independent_recomputation(tmp_path):
+    la = audit_log(_plan(tmp_path, PX4_FRET, PX4_BINDINGS), str(PX4 / "sample_px4_events.ulg"))
+    v = _by_id(la)
+    u, data = _ulog("sample_px4_events.ulg", ["battery_status", "vehicle_status",
+                                              "actuator_outputs"])
+    bat, st = data[("battery_status", 0)], data[("vehicle_status", 0)]
+    first = v["PB"].first_tick_ns
+    # PB: remaining <= 0.9 from some message on: violated at the first tick holding it
+    bad = int(bat["timestamp"][np.argmax(bat["remaining"] <= 0.9)]) * 1000
+    assert v["PB"].verdict == "violated"
+    assert v["PB"].first_violation.at.time_ns == _first_tick_at_or_after(first, bad)
+    # PL: no logged message at ERROR or worse (syslog level <= 3)
+    assert max(int(m.log_level) for m in u.logged_messages) > 3
+    assert v["PL"].verdict == "satisfied"
+    # PO: every output of the first four channels is within range while armed
+    out = data[("actuator_outputs", 0)]
+    assert np.stack([out[f"output[{k}]"] for k in range(4)]).max() <= 2000
+    assert v["PO"].verdict == "satisfied"
+    # PR: RTL (nav_state 5) to disarmed (arming_state 1): 8 s, within 10 s but not within 5
+    t = st["timestamp"].astype(np.int64) * 1000
+    rtl = int(t[np.argmax(st["nav_state"] == 5)])
+    after = (t > rtl) & (st["arming_state"] == 1)
+    disarm = int(t[np.argmax(after)])
+    assert 5e9 < disarm - rtl <= 10e9
+    assert v["PR"].verdict == "satisfied"
+    assert v["PR5"].verdict == "violated"
+    trig = v["PR5"].first_violation.trigger.time_ns
+    assert trig == _first_tick_at_or_after(v["PR5"].first_tick_ns, rtl)
+    assert v["PR5"].first_violation.at.time_ns == trig + 50 * TICK
+    # the one vehicle_status message stamped before the log's start is skipped, and said
+    assert any(p["kind"] == EARLY_TIMESTAMP for p in la.problems)
+
+
+@needs_shared
+def test_px4_instances_are_topics_of_their_own_with_every_field():
+    src = open_log(PX4 / "sample_log_small.ulg")
+    topics = src.topics()
+    assert topics["battery_status"] == topics["battery_status/1"] == "px4_msgs/msg/BatteryStatus"
+    u, data = _ulog("sample_log_small.ulg", ["battery_status"])
+    counts = {}
+    volts = {}
+    for m in src.messages({"battery_status", "battery_status/1"}):
+        counts[m.topic] = counts.get(m.topic, 0) + 1
+        volts.setdefault(m.topic, []).append(m.data.voltage_v)
+        assert len(m.data.voltage_cell_v) == 10
+    for k, topic in ((0, "battery_status"), (1, "battery_status/1")):
+        assert counts[topic] == len(data[("battery_status", k)]["timestamp"])
+        assert np.allclose(volts[topic], data[("battery_status", k)]["voltage_v"])
+    schema = log_schemas(src)["vehicle_status"]
+    assert dict(schema.fields())["arming_state"].name == "uint8"
+    assert schema.constants() == {}
+    assert log_schemas(src)["Log"].constants()["ERROR"] == 8
+
+
+@needs_shared
+def test_px4_dropouts_are_damage_never_held_over(tmp_path):
+    la = audit_log(_plan(tmp_path, PX4_FRET, PX4_BINDINGS), str(PX4 / "sample.ulg"))
+    assert la.partial
+    assert any(p["kind"] == DROPOUT for p in la.problems)
+    v = _by_id(la)
+    assert v["PL"].verdict == "unknown"  # the first dropout comes 74 ms after the start
+    assert "battery_status" in v["PB"].error  # this older PX4 logs no battery
+
+
+def _dataflash_rows():
+    rows = []
+    for i in range(50):
+        t = 1_000_000 + i * 100_000
+        rows.append(("BAT", [t, 0, 12.0 - i * 0.05, 5.0, 90.0 - i]))
+        rows.append(("BAT", [t + 10, 1, 11.0, 1.0, 50.0]))
+    rows += [("MODE", [1_500_000, 4, 4, 1]), ("MSG", [2_000_000, "Arming motors"]),
+             ("ERR", [3_000_000, 6, 1])]
+    return sorted(rows, key=lambda r: r[1][0])
+
+
+DF_FRET = """@tick_period 100 ms
+B0: the copter shall always satisfy volt_ok
+B1: the copter shall always satisfy volt1_ok
+E: the copter shall never satisfy radio_failsafe
+"""
+DF_BINDINGS = """[tick]
+period = "100 ms"
+[variables]
+volt_ok = '"BAT".Volt > 10.0'
+volt1_ok = '"BAT/1".Volt > 10.0'
+radio_failsafe = '"ERR".Subsys = 5'
+"""
+
+
+def test_dataflash_written_by_pymavlink_audits_by_type_and_instance(tmp_path):
+    from pymavlink import DFReader
+
+    log = write_dataflash(tmp_path / "flight.bin", _dataflash_rows())
+    la = audit_log(_plan(tmp_path, DF_FRET, DF_BINDINGS), str(log))
+    v = _by_id(la)
+    assert la.problems == []
+    # independent: pymavlink's own read of BAT instance 0
+    r = DFReader.DFReader_binary(str(log), zero_time_base=False)
+    bat0 = []
+    while (m := r.recv_match(type="BAT")) is not None:
+        if m.Inst == 0:
+            bat0.append((m.TimeUS * 1000, m.Volt))
+    bad = next(t for t, volt in bat0 if volt <= 10.0)
+    assert v["B0"].verdict == "violated"
+    assert v["B0"].first_violation.at.time_ns == _first_tick_at_or_after(
+        v["B0"].first_tick_ns, bad)
+    assert v["B1"].verdict == "satisfied"  # instance 1 holds 11 V: never mixed with 0
+    assert v["E"].verdict == "satisfied"  # ERR subsystem 6, not 5
+
+
+def test_dataflash_cut_short_is_partial_and_garbage_is_an_input_error(tmp_path):
+    log = write_dataflash(tmp_path / "flight.bin", _dataflash_rows())
+    cut = tmp_path / "cut.bin"
+    cut.write_bytes(log.read_bytes()[:-40])
+    la = audit_log(_plan(tmp_path, DF_FRET, DF_BINDINGS), str(cut))
+    v = _by_id(la)
+    assert la.partial and any(p["kind"] == "truncated" for p in la.problems)
+    assert v["B1"].verdict == "unknown"  # satisfied so far, but the log was cut short
+    assert v["B0"].verdict == "violated"  # decided before the cut: stands
+    # a record whose header is damaged (DataFlash has no checksum: a damaged body cannot
+    # be seen, a damaged header can): its bytes are skipped, a gap from the message before
+    data = bytearray(log.read_bytes())
+    mid = data.find(b"\xa3\x95", len(data) // 2)
+    data[mid:mid + 2] = b"\xff\xff"
+    bad = tmp_path / "bad.bin"
+    bad.write_bytes(bytes(data))
+    la = audit_log(_plan(tmp_path, DF_FRET, DF_BINDINGS), str(bad))
+    assert la.partial and any(p["kind"] == "corrupt_record" for p in la.problems)
+    assert _by_id(la)["B1"].verdict == "unknown"
+    junk = tmp_path / "junk.bin"
+    junk.write_bytes(b"\x00\x01not a log" * 100)
+    la = audit_log(_plan(tmp_path, DF_FRET, DF_BINDINGS), str(junk))
+    assert all(x.verdict == "error" for x in la.verdicts)
