@@ -3,7 +3,9 @@
 
 Schema encodings ``ros2msg``, ``ros2idl`` and ``ros1msg``, message encodings ``cdr`` (ROS 2)
 and ``ros1`` (MCAP spec, "Well-known encodings"). Decoders read every field, or only the
-fields the signal bindings read (:mod:`logs.selective`).
+fields the signal bindings read (:mod:`logs.selective`). The self-describing encodings
+(``json``, ``protobuf``, ``cbor``) are :mod:`logs.encodings`'; :func:`schema_decoder` serves
+both.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from rosbags.typesys.msg import normalize_msgtype
 from rosbags.typesys.store import Typestore
 
 from .columnar import ColumnarDecoder, columnar_decoder
+from .encodings import SELF_DESCRIBING, UNSUPPORTED_ENCODINGS, EncodingError, other_decoder
 from .known_types import layout_mismatch
 from .selective import selective_decoder
 
@@ -122,17 +125,19 @@ SCHEMA_FOR_ENCODING = {"cdr": ("ros2msg", "ros2idl"), "ros1": ("ros1msg",)}
 
 
 def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
-                   schema_text: str | None, fields: Any = None) -> Callable[[bytes], Any]:
+                   schema_text: str | bytes | None, fields: Any = None) -> Callable[[bytes], Any]:
     """A function ``bytes -> rosbags message`` for one channel, with its types built from the
     schema text the channel carries (an MCAP Schema record, or a Foxglove WebSocket
     ``advertise``): shared by the log readers and ``fretc watch``.
 
     Args:
-        message_encoding: ``"cdr"`` (ROS 2) or ``"ros1"`` (MCAP well-known message encodings).
+        message_encoding: ``"cdr"`` (ROS 2), ``"ros1"``, or a self-describing encoding of
+            :data:`logs.encodings.SELF_DESCRIBING` (MCAP well-known message encodings).
         schema_encoding: ``"ros2msg"``, ``"ros2idl"`` or ``"ros1msg"`` (well-known schema
             encodings), matching the message encoding; None or ``""`` when the channel has none.
         schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
-        schema_text: the definition text (see :func:`build_typestore`).
+        schema_text: the definition text (see :func:`build_typestore`), or the schema's bytes
+            (MCAP Schema ``data``; binary for ``protobuf``).
         fields: field paths to decode (:mod:`logs.selective`); None: every field.
 
     Raises:
@@ -141,8 +146,19 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
             parse, or a definition of a standard ROS type whose layout is not ROS's
             (:func:`logs.known_types.layout_mismatch`; the message says which).
     """
+    if message_encoding in SELF_DESCRIBING:
+        try:
+            return other_decoder(message_encoding, schema_encoding or "", schema_name or "",
+                                 schema_text)
+        except EncodingError as exc:
+            raise UnsupportedSchema(str(exc)) from None
     if message_encoding not in SCHEMA_FOR_ENCODING:
-        raise UnsupportedSchema(f"message encoding {message_encoding!r} is not supported (cdr, ros1)")
+        why = UNSUPPORTED_ENCODINGS.get(message_encoding)
+        raise UnsupportedSchema(f"message encoding {message_encoding!r} is not supported"
+                                + (f": {why}" if why else "")
+                                + " (read: cdr, ros1, " + ", ".join(SELF_DESCRIBING) + ")")
+    if isinstance(schema_text, bytes):
+        schema_text = schema_text.decode("utf-8", errors="replace")
     if not schema_encoding or not schema_name or schema_text is None:
         raise UnsupportedSchema("the channel has no schema")
     if schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]:
@@ -162,7 +178,7 @@ DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionErro
 
 
 def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
-                    schema_text: str | None, fields: Any) -> ColumnarDecoder | None:
+                    schema_text: str | bytes | None, fields: Any) -> ColumnarDecoder | None:
     """A :class:`~logs.columnar.ColumnarDecoder` of one channel's ``fields``, or
     None wherever :func:`schema_decoder` would raise or the columnar walk does not cover the
     type (the channel is then decoded message by message, which reports the problem). Never
@@ -173,6 +189,8 @@ def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_n
         if (not schema_name or schema_text is None
                 or schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]):
             return None
+        if isinstance(schema_text, bytes):
+            schema_text = schema_text.decode("utf-8", errors="replace")
         store, typename = build_typestore(schema_encoding, schema_name, schema_text)
         if layout_mismatch(schema_encoding, store, typename) is not None:
             return None

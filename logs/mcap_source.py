@@ -33,6 +33,7 @@ from common import problems as P
 from common.problems import DataProblem, LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
+from .encodings import SELF_DESCRIBING, type_name
 from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
 from .mcap_integrity import index_disagreement, read_summary
 from .mcap_columns import TopicBlock, column_pass
@@ -143,7 +144,7 @@ class McapSource(LogSource):
         for cid in sorted(channels):
             ch = channels[cid]
             sc = schemas.get(ch.schema_id)
-            out.setdefault(ch.topic, normalize_msgtype(sc.name) if sc is not None and sc.name else "")
+            out.setdefault(ch.topic, _type_name(ch.message_encoding, sc))
         return dict(sorted(out.items()))
 
     # -- decoding -------------------------------------------------------------------------------
@@ -160,11 +161,11 @@ class McapSource(LogSource):
                                         f"{channel.schema_id})")
             dec = schema_decoder(channel.message_encoding, schema and schema.encoding,
                                  schema and schema.name,
-                                 schema and schema.data.decode("utf-8", errors="replace"),
+                                 schema and bytes(schema.data),
                                  self._fields_for(channel.topic))
         except UnsupportedSchema as exc:
-            kind = (P.UNKNOWN_ENCODING if channel.message_encoding not in SCHEMA_FOR_ENCODING
-                    else P.UNKNOWN_SCHEMA)
+            kind = (P.UNKNOWN_SCHEMA if channel.message_encoding in SCHEMA_FOR_ENCODING
+                    or channel.message_encoding in SELF_DESCRIBING else P.UNKNOWN_ENCODING)
             self._open_problems.add(DataProblem(
                 kind, channel.topic, log_time,
                 f"{exc}; messages on this topic are skipped"))
@@ -469,3 +470,14 @@ class _LinearPass:
             self.src._problem(P.DATA_CRC, None, None,
                               f"data section CRC mismatch (DataEnd says "
                               f"{de.data_section_crc:#010x}, computed {self.crc:#010x})")
+
+
+def _type_name(message_encoding: str, schema: Schema | None) -> str:
+    """The message type a channel's schema names: ROS's normalized ``pkg/msg/Type`` for the
+    ROS encodings, :func:`logs.encodings.type_name` for the self-describing ones, ``""``
+    without a schema."""
+    if schema is None or not schema.name:
+        return ""
+    if message_encoding in SELF_DESCRIBING:
+        return type_name(schema.name)
+    return normalize_msgtype(schema.name)

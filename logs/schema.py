@@ -32,6 +32,7 @@ from common.errors import InputError
 from .bag_source import connection_typestore
 from .csv_source import CSV_TOPIC
 from .decoding import UnsupportedSchema, build_typestore
+from .encodings import SELF_DESCRIBING, definition
 
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "log_schemas", "field_paths",
            "closest"]
@@ -277,7 +278,11 @@ def _mcap_schemas(source) -> dict[str, TopicSchema | None]:
             continue
         sc = schemas.get(ch.schema_id)
         built = None
-        if sc is not None and sc.name:
+        if ch.message_encoding in SELF_DESCRIBING:
+            found = definition(ch.message_encoding, sc.encoding if sc else "",
+                               sc.name if sc else "", bytes(sc.data) if sc else None)
+            built = _build("ros2msg", *found) if found else None
+        elif sc is not None and sc.name:
             built = _build(sc.encoding, sc.name, sc.data.decode("utf-8", errors="replace"))
         out[ch.topic] = TopicSchema(ch.topic, built[1], built[0]) if built else None
     return dict(sorted(out.items()))

@@ -1,0 +1,260 @@
+"""MCAP's message encodings beside ROS's (MCAP specification, "Well-known encodings"):
+``json`` (schema encoding ``jsonschema``, or none), ``protobuf`` (schema encoding
+``protobuf``: a binary ``FileDescriptorSet``) and ``cbor`` (no schema). ``flatbuffer`` is
+refused by name: no maintained Python library reads FlatBuffers by reflection from a
+``.bfbs`` schema.
+
+Each message becomes a message object like rosbags' (attribute access: ``msg.pose.x``):
+objects of ``types.SimpleNamespace``, primitive arrays as numpy arrays (the dtype of the
+protobuf field: ``float`` is float32; JSON numbers are float64, integers int64), arrays of
+messages as lists, enum values as integers. So the same message paths bind on every encoding.
+
+For the binding checks and ``fretc inspect`` each schema is turned into a ROS 2 message
+definition (:func:`definition`): JSON Schema ``number`` is ``float64``, ``integer``
+``int64``, an object a nested message; protobuf scalar types map to their ROS equivalents;
+enum values (protobuf enums, JSON Schema ``oneOf`` of titled ``const`` values as Foxglove's
+schemas write them) become named constants (``/log.level >= ERROR``). Libraries: Python's
+``json``, ``google.protobuf`` with ``mcap-protobuf-support``'s decoder factory, ``cbor2``.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+from collections.abc import Callable
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+__all__ = ["SELF_DESCRIBING", "UNSUPPORTED_ENCODINGS", "other_decoder", "definition",
+           "type_name"]
+
+#: message encodings read here, with the schema encodings each takes ("" none)
+SELF_DESCRIBING = {"json": ("jsonschema", ""), "protobuf": ("protobuf",), "cbor": ("",)}
+#: message encodings named in MCAP's registry that are refused, with the reason
+UNSUPPORTED_ENCODINGS = {
+    "flatbuffer": "no maintained Python library reads FlatBuffers by reflection from a "
+                  ".bfbs schema"}
+
+
+class EncodingError(ValueError):
+    """A schema of a self-describing encoding that cannot be used (the message says why)."""
+
+
+def _as_bytes(data: bytes | str) -> bytes:
+    """Schema data as bytes: MCAP gives bytes; the Foxglove WebSocket protocol base64-encodes
+    binary schemas (``protobuf``) in its JSON ``advertise``."""
+    if isinstance(data, bytes):
+        return data
+    try:
+        return base64.b64decode(data, validate=True)
+    except ValueError:
+        return data.encode("utf-8", "surrogatepass")
+
+
+def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
+                  schema_data: bytes | str | None) -> Callable[[bytes], Any]:
+    """A function ``bytes -> message object`` for a channel of a self-describing encoding.
+
+    Raises:
+        EncodingError: a protobuf channel whose schema is missing, is no FileDescriptorSet
+            or does not define ``schema_name``; a schema encoding that does not go with the
+            message encoding.
+    """
+    if (schema_encoding or "") not in SELF_DESCRIBING[message_encoding]:
+        raise EncodingError(f"schema encoding {schema_encoding!r} does not go with message "
+                            f"encoding {message_encoding!r}")
+    if message_encoding == "json":
+        return lambda raw: as_message(json.loads(raw))
+    if message_encoding == "cbor":
+        import cbor2  # lazy: only for cbor channels
+
+        return lambda raw: as_message(cbor2.loads(raw))
+    return _protobuf_decoder(schema_name, _as_bytes(schema_data or b""))
+
+
+def as_message(value: Any) -> Any:
+    """A decoded JSON/CBOR value as a message object (module docstring)."""
+    if isinstance(value, dict):
+        return SimpleNamespace(**{str(k): as_message(v) for k, v in value.items()})
+    if isinstance(value, list):
+        if value and all(isinstance(x, bool) for x in value):
+            return np.array(value, dtype=bool)
+        if value and all(isinstance(x, int) and not isinstance(x, bool) for x in value):
+            try:
+                return np.array(value, dtype=np.int64)
+            except OverflowError:
+                return np.array(value, dtype=np.float64)
+        if value and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                         for x in value):
+            return np.array(value, dtype=np.float64)
+        return [as_message(x) for x in value]
+    if isinstance(value, (bytes, bytearray)):
+        return np.frombuffer(bytes(value), dtype=np.uint8)
+    return value
+
+
+# --------------------------------------------------------------------------- protobuf
+_PB_DTYPES = {1: np.float64, 2: np.float32, 3: np.int64, 4: np.uint64, 5: np.int32,
+              6: np.uint64, 7: np.uint32, 8: bool, 13: np.uint32, 14: np.int32,
+              15: np.int32, 16: np.int64, 17: np.int32, 18: np.int64}
+_PB_ROS = {1: "float64", 2: "float32", 3: "int64", 4: "uint64", 5: "int32", 6: "uint64",
+           7: "uint32", 8: "bool", 9: "string", 12: "uint8[]", 13: "uint32", 14: "int32",
+           15: "int32", 16: "int64", 17: "int32", 18: "int64"}
+_MESSAGE, _ENUM, _BYTES = 11, 14, 12
+
+
+def _protobuf_decoder(name: str, fds: bytes) -> Callable[[bytes], Any]:
+    from mcap.records import Schema
+    from mcap_protobuf.decoder import DecoderFactory
+
+    if not fds:
+        raise EncodingError("the protobuf channel has no schema (a FileDescriptorSet)")
+    try:
+        make = DecoderFactory().decoder_for("protobuf", Schema(id=1, name=name,
+                                                               encoding="protobuf", data=fds))
+    except Exception as exc:  # protobuf raises its own errors on a bad descriptor set
+        raise EncodingError(f"the protobuf schema of {name!r} cannot be read "
+                            f"({type(exc).__name__}: {exc})") from None
+    if make is None:
+        raise EncodingError(f"the protobuf schema does not define {name!r}")
+    return lambda raw: _pb_message(make(raw))
+
+
+def _repeated(field) -> bool:
+    """A repeated protobuf field (``is_repeated`` in protobuf >= 5.29, ``label`` before)."""
+    flag = getattr(field, "is_repeated", None)
+    return bool(flag) if flag is not None else field.label == field.LABEL_REPEATED
+
+
+def _pb_message(msg) -> SimpleNamespace:
+    out = SimpleNamespace()
+    for f in msg.DESCRIPTOR.fields:
+        value = getattr(msg, f.name)
+        repeated = _repeated(f)
+        if f.type == _MESSAGE:
+            value = [_pb_message(x) for x in value] if repeated else _pb_message(value)
+        elif f.type == _BYTES:
+            value = ([np.frombuffer(x, dtype=np.uint8) for x in value] if repeated
+                     else np.frombuffer(value, dtype=np.uint8))
+        elif repeated:
+            dtype = _PB_DTYPES.get(f.type)
+            value = np.array(list(value), dtype=dtype) if dtype is not None else list(value)
+        setattr(out, f.name, value)
+    return out
+
+
+def type_name(name: str) -> str:
+    """A ROS-style type name for a protobuf or JSON Schema type name: ``foxglove.Log`` ->
+    ``foxglove/msg/Log``; a name without a package goes to ``msg``'s package ``schema``."""
+    parts = [p for p in name.replace("/", ".").split(".") if p]
+    if not parts:
+        return "schema/msg/Message"
+    base = "".join(c if c.isalnum() or c == "_" else "_" for c in parts[-1]) or "Message"
+    pkg = "_".join(parts[:-1]).lower() if len(parts) > 1 else "schema"
+    pkg = "".join(c if c.isalnum() or c == "_" else "_" for c in pkg)
+    return f"{pkg}/msg/{base}"
+
+
+def definition(message_encoding: str, schema_encoding: str, schema_name: str,
+               schema_data: bytes | str | None) -> tuple[str, str] | None:
+    """(ROS type name, ROS 2 message definition text with ``MSG:`` sections) of a channel's
+    schema; None when it has none (``cbor``, schemaless ``json``) or it cannot be read."""
+    try:
+        if message_encoding == "protobuf":
+            return _pb_definition(schema_name, _as_bytes(schema_data or b""))
+        if message_encoding == "json" and schema_encoding == "jsonschema" and schema_data:
+            doc = json.loads(_as_bytes(schema_data) if not isinstance(schema_data, str)
+                             else schema_data)
+            return _json_definition(schema_name, doc)
+    except Exception:  # noqa: BLE001 - no definition: the topic's fields are not checked
+        return None
+    return None
+
+
+def _sections(top: str, parts: list[tuple[str, str]]) -> str:
+    return top + "".join("=" * 80 + f"\nMSG: {n}\n{body}" for n, body in parts)
+
+
+def _pb_definition(name: str, fds: bytes) -> tuple[str, str] | None:
+    from google.protobuf import descriptor_pb2, descriptor_pool
+
+    files = descriptor_pb2.FileDescriptorSet.FromString(fds)
+    pool = descriptor_pool.DescriptorPool()
+    for fd in files.file:
+        pool.Add(fd)
+    top = pool.FindMessageTypeByName(name)
+    parts: list[tuple[str, str]] = []
+    seen: set[str] = {top.full_name}
+
+    def fields(desc) -> str:
+        lines, consts = [], {}
+        for f in desc.fields:
+            repeated = _repeated(f)
+            if f.type == _MESSAGE:
+                sub = f.message_type
+                ros = type_name(sub.full_name)
+                if sub.full_name not in seen:
+                    seen.add(sub.full_name)
+                    parts.append((ros, fields(sub)))
+            elif f.type == _ENUM:
+                ros = "int32"
+                for v in f.enum_type.values:
+                    consts.setdefault(v.name, v.number)
+            else:
+                ros = _PB_ROS.get(f.type, "string")
+            if repeated and not ros.endswith("[]"):
+                ros += "[]"
+            lines.append(f"{ros} {f.name}")
+        head = [f"int32 {k}={v}" for k, v in consts.items()
+                if k not in {f.name for f in desc.fields}]
+        return "\n".join(head + lines) + "\n"
+
+    return type_name(top.full_name), _sections(fields(top), parts)
+
+
+_JSON_ROS = {"number": "float64", "integer": "int64", "boolean": "bool", "string": "string"}
+
+
+def _json_definition(name: str, doc: dict) -> tuple[str, str]:
+    parts: list[tuple[str, str]] = []
+    root = type_name(name)
+
+    def kind(spec: dict) -> str | None:
+        t = spec.get("type")
+        if isinstance(t, list):
+            t = next((x for x in t if x != "null"), None)
+        return t
+
+    def fields(spec: dict, prefix: str) -> str:
+        lines, consts = [], {}
+        for field, sub in (spec.get("properties") or {}).items():
+            if not isinstance(sub, dict) or not field.isidentifier():
+                continue
+            ros = field_type(sub, f"{prefix}_{field}")
+            if ros is None:
+                continue
+            for choice in sub.get("oneOf") or ():
+                if isinstance(choice, dict) and "const" in choice and \
+                        str(choice.get("title", "")).isidentifier():
+                    consts.setdefault(choice["title"], choice["const"])
+            lines.append(f"{ros} {field}")
+        head = [f"int64 {k}={v}" for k, v in consts.items() if isinstance(v, int)]
+        return "\n".join(head + lines) + "\n"
+
+    def field_type(sub: dict, nested: str) -> str | None:
+        t = kind(sub)
+        if t == "object":
+            typ = type_name(nested)
+            parts.append((typ, fields(sub, nested)))
+            return typ
+        if t == "array":
+            item = sub.get("items") if isinstance(sub.get("items"), dict) else {}
+            inner = field_type(item, nested)
+            return None if inner is None or inner.endswith("[]") else inner + "[]"
+        if t is None and sub.get("oneOf"):
+            return "int64"
+        return _JSON_ROS.get(t)
+
+    return root, _sections(fields(doc, root.split("/")[-1]), parts)
