@@ -65,13 +65,37 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
     if (schema_encoding or "") not in SELF_DESCRIBING[message_encoding]:
         raise EncodingError(f"schema encoding {schema_encoding!r} does not go with message "
                             f"encoding {message_encoding!r}")
+    typ = type_name(schema_name) if schema_name else None
     if message_encoding == "json":
-        return lambda raw: as_message(json.loads(raw))
-    if message_encoding == "cbor":
+        loads = json.loads
+    elif message_encoding == "cbor":
         import cbor2  # lazy: only for cbor channels
 
-        return lambda raw: as_message(cbor2.loads(raw))
-    return _protobuf_decoder(schema_name, _as_bytes(schema_data or b""))
+        loads = cbor2.loads
+    else:
+        pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""))
+        return _checked(lambda raw: _typed(pb(raw), typ), message_encoding)
+    return _checked(lambda raw: _typed(as_message(loads(raw)), typ), message_encoding)
+
+
+def _checked(decode: Callable[[bytes], Any], encoding: str) -> Callable[[bytes], Any]:
+    """``decode`` raising ValueError (one of :data:`logs.decoding.DECODE_ERRORS`) for any
+    payload it cannot decode: the libraries raise their own errors (protobuf's
+    ``DecodeError``, cbor2's, a RecursionError on deep nesting)."""
+    def checked(raw: bytes) -> Any:
+        try:
+            return decode(raw)
+        except (RecursionError, Exception) as exc:  # noqa: BLE001 - each library its own
+            raise ValueError(f"not a {encoding} message ({type(exc).__name__}: "
+                             f"{str(exc)[:200]})") from None
+    return checked
+
+
+def _typed(msg: Any, typ: str | None) -> Any:
+    """``msg`` with its message type as rosbags objects carry it (``__msgtype__``)."""
+    if typ is not None and isinstance(msg, SimpleNamespace):
+        msg.__msgtype__ = typ
+    return msg
 
 
 def as_message(value: Any) -> Any:
@@ -147,10 +171,21 @@ def _pb_message(msg) -> SimpleNamespace:
 
 def type_name(name: str) -> str:
     """A ROS-style type name for a protobuf or JSON Schema type name: ``foxglove.Log`` ->
-    ``foxglove/msg/Log``; a name without a package goes to ``msg``'s package ``schema``."""
+    ``foxglove/msg/Log``; a ROS name stays ROS's (``sensor_msgs/msg/LaserScan``, so the
+    ROS type rules, such as REP 117 for LaserScan ranges, apply on every encoding); a name
+    without a package goes to the package ``schema``."""
+    if "/" in name:
+        from rosbags.typesys.msg import normalize_msgtype
+
+        try:
+            return normalize_msgtype(name)
+        except Exception:  # noqa: BLE001 - not a ROS name after all: made one below
+            pass
     parts = [p for p in name.replace("/", ".").split(".") if p]
     if not parts:
         return "schema/msg/Message"
+    if len(parts) > 2 and parts[-2] == "msg":  # pkg.msg.Type: a ROS type in protobuf's naming
+        parts = parts[:-3] + [parts[-3], parts[-1]]
     base = "".join(c if c.isalnum() or c == "_" else "_" for c in parts[-1]) or "Message"
     pkg = "_".join(parts[:-1]).lower() if len(parts) > 1 else "schema"
     pkg = "".join(c if c.isalnum() or c == "_" else "_" for c in pkg)

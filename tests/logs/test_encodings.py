@@ -1,0 +1,121 @@
+"""MCAP in its other well-known encodings (json with JSON Schema, protobuf with a
+FileDescriptorSet, cbor without schema), written here with the ``mcap`` writer from a shipped
+CDR trace: the same message paths bind, and the json and protobuf copies audit exactly like
+the CDR original. flatbuffer is refused by name; a payload that does not decode is an
+``undecodable`` problem, never an internal error. The protobuf log a robotics framework
+wrote with foxglove_bridge (``../shared/data/foreign_logs/basis_pb``) inspects."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mcap_protobuf")
+pytest.importorskip("cbor2")
+
+from _encode import copy_as  # noqa: E402
+from _shared import SHARED, needs_shared  # noqa: E402
+from audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from logs import open_log  # noqa: E402
+from logs.schema import log_schemas  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+TRACE = ROOT / "traces" / "stop_delay.mcap"
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
+
+
+def _summary(la) -> list:
+    """What must not change with the encoding: per requirement the verdict, the ticks, the
+    first violation's trigger and miss ticks and times, the LTL3 verdict."""
+    doc = la.to_json()
+    out = []
+    for v in doc["verdicts"]:
+        fv = v.get("first_violation") or {}
+        out.append((v["requirement"], v["verdict"], v.get("ticks_evaluated"),
+                    json.dumps(fv.get("trigger"), sort_keys=True),
+                    json.dumps(fv.get("at"), sort_keys=True),
+                    json.dumps(v.get("ltl3"), sort_keys=True), v.get("violations")))
+    return out
+
+
+@pytest.mark.parametrize("encoding", ["json", "protobuf"])
+def test_a_copy_in_another_encoding_audits_exactly_like_the_cdr_original(tmp_path, plan,
+                                                                        encoding):
+    copy = copy_as(TRACE, tmp_path / f"stop_delay_{encoding}.mcap", encoding)
+    original = audit_log(plan, str(TRACE))
+    la = audit_log(plan, str(copy))
+    assert la.problems == [] and la.error is None
+    assert _summary(la) == _summary(original)
+    assert "violated" in [v.verdict for v in la.verdicts]
+
+
+def test_cbor_messages_read_as_the_cdr_ones(tmp_path):
+    copy = copy_as(TRACE, tmp_path / "stop_delay_cbor.mcap", "cbor")
+    want = [(m.log_time, m.data.linear.x, m.data.angular.z)
+            for m in open_log(TRACE).messages({"/cmd_vel_filtered"})]
+    got = [(m.log_time, m.data.linear.x, m.data.angular.z)
+           for m in open_log(copy).messages({"/cmd_vel_filtered"})]
+    assert got == want and len(got) > 800
+    scans = [m.data for m in open_log(copy).messages({"/scan"})]
+    first = next(iter(open_log(TRACE).messages({"/scan"}))).data
+    assert scans[0].ranges.dtype.kind == "f"
+    assert scans[0].ranges.tolist() == first.ranges.tolist()
+
+
+def test_json_schemas_give_field_types_for_the_binding_checks(tmp_path):
+    copy = copy_as(TRACE, tmp_path / "j.mcap", "json")
+    sch = log_schemas(open_log(copy))
+    assert sch["/scan"].typename == "sensor_msgs/msg/LaserScan"
+    assert dict(sch["/scan"].fields())["ranges"].kind == "array"
+    assert dict(sch["/cmd_vel_filtered"].fields())["linear"].kind == "message"
+
+
+def _one_channel_mcap(path: Path, encoding: str, schema_encoding: str, schema: bytes,
+                      payloads: list[bytes]) -> Path:
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="", library="fretc tests")
+        sid = w.register_schema("pkg.Thing", schema_encoding, schema) if schema_encoding else 0
+        cid = w.register_channel("/v", encoding, sid)
+        for i, p in enumerate(payloads):
+            t = 1_700_000_000_000_000_000 + i * 100_000_000
+            w.add_message(cid, log_time=t, publish_time=t, data=p, sequence=i)
+        w.finish()
+    return path
+
+
+def test_flatbuffer_is_refused_by_name_and_a_bad_payload_is_undecodable(tmp_path):
+    fb = _one_channel_mcap(tmp_path / "fb.mcap", "flatbuffer", "flatbuffer", b"\x00" * 8,
+                           [b"\x00" * 16])
+    src = open_log(fb)
+    list(src.messages())
+    probs = [p for p in src.problems if p.topic == "/v"]
+    assert probs and probs[0].kind == "unknown_encoding"
+    assert "flatbuffer" in probs[0].detail and "reflection" in probs[0].detail
+    bad = _one_channel_mcap(tmp_path / "bad.mcap", "json", "", b"",
+                            [b'{"data": 1.0}', b"{not json", b"[" * 100_000, b'{"data": 2.0}'])
+    src = open_log(bad)
+    got = [m.data.data for m in src.messages()]
+    assert got == [1.0, 2.0]
+    assert sum(n for (k, t), n in src.problem_counts.items() if k == "undecodable") == 2
+
+
+@needs_shared
+def test_the_basis_protobuf_log_inspects_with_the_log_levels_as_constants(tmp_path):
+    log = SHARED / "data" / "foreign_logs" / "basis_pb" / "demo_81739.567984327.mcap"
+    src = open_log(log)
+    sch = log_schemas(src)
+    assert sch["/log"].typename == "foxglove/msg/Log"
+    assert sch["/log"].constants()["ERROR"] == 4
+    levels = [m.data.level for m in src.messages({"/log"})]
+    assert len(levels) == 40 and levels.count(4) == 1
+    chatter = [m.data.message for m in src.messages({"/chatter"})]
+    assert chatter and set(chatter) == {"Hello, world!"}
