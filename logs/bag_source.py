@@ -94,10 +94,10 @@ class BagSource(LogSource):
             raise
         except Exception as exc:  # rosbags ReaderError and friends
             if self.kind != "bag" or not is_ros1_bag(p):
-                raise LogError(path, f"cannot open {self.kind}: {exc}") from None
+                raise LogError(path, _bag_open_error(p, self.kind, exc)) from None
             # a ROS 1 bag whose index (at its end) is damaged or missing, as a crashed
             # recording leaves it: read its records from the start, as far as they go
-            self._linear_bag = Ros1Linear(self, str(exc))
+            self._linear_bag = Ros1Linear(self, f"{type(exc).__name__}: {exc}".rstrip(": "))
             self._open_damage = True
             self.partial = True
             self._topics = self._linear_bag.scan()
@@ -162,3 +162,19 @@ class BagSource(LogSource):
             self._gap(last)
             self._problem(P.CORRUPT_RECORD, None, last,
                           f"reading stopped: {type(exc).__name__}: {exc}")
+
+
+def _bag_open_error(path: Path, kind: str, exc: Exception) -> str:
+    """Why a bag cannot be opened, naming the format of a ROS 1 bag older than 2.0 (the
+    first line of a bag is ``#ROSBAG V<major>.<minor>``)."""
+    if kind == "bag":
+        try:
+            with open(path, "rb") as f:
+                head = f.read(16)
+        except OSError:
+            head = b""
+        if head.startswith(b"#ROSBAG V") and not head.startswith(b"#ROSBAG V2.0"):
+            version = head[9:].split(b"\n", 1)[0].decode("ascii", "replace")
+            return (f"ROS bag format {version} is not supported: only format 2.0 (every ROS 1 "
+                    "distribution since 2010) is read")
+    return f"cannot open {kind}: {exc}"

@@ -66,6 +66,17 @@ def build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typesto
 _STORES_KEPT = 64
 
 
+def _roslib_header(schema_encoding: str, text: str) -> str:
+    """ROS 1 definitions recorded before ROS Diamondback (2010) name the header type
+    ``roslib/Header``, which became ``std_msgs/Header`` with the same fields; a field of type
+    ``Header`` means ``std_msgs/Header`` to rosbags, so such a definition is read with the
+    section renamed."""
+    if (schema_encoding == "ros1msg" and "MSG: roslib/Header" in text
+            and "MSG: std_msgs/Header" not in text):
+        return text.replace("MSG: roslib/Header", "MSG: std_msgs/Header")
+    return text
+
+
 @functools.lru_cache(maxsize=_STORES_KEPT)
 def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
     typename = normalize_msgtype(name)
@@ -84,7 +95,7 @@ def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typest
             else:
                 typs.update(get_types_from_idl(text))
         else:
-            typs = get_types_from_msg(text, typename)
+            typs = get_types_from_msg(_roslib_header(schema_encoding, text), typename)
         store = get_typestore(Stores.EMPTY)
         store.register(typs)
         store.get_msgdef(typename)  # fails now, not on the first message, if incomplete

@@ -151,7 +151,8 @@ class _Ros1Pass:
             except ValueError:
                 rec = None
             if rec is None:
-                reason = f"file ends at byte {len(data)} inside the record at byte {pos}"
+                reason = (f"the record at byte {pos} reaches past the end of the file at byte "
+                          f"{len(data)} (cut short, or its length fields are damaged)")
                 break
             header, body, nxt = rec
             op = header.get(b"op", b"\x00")[:1]

@@ -290,6 +290,13 @@ def _mcap_schemas(source) -> dict[str, TopicSchema | None]:
 
 def _bag_schemas(source) -> dict[str, TopicSchema | None]:
     out: dict[str, TopicSchema | None] = {}
+    linear = getattr(source, "_linear_bag", None)
+    if linear is not None:  # a ROS 1 bag read record by record: its index is unusable
+        for topic, typ, text in linear.conns.values():
+            if out.get(topic) is None:
+                built = _build("ros1msg", typ, text)
+                out[topic] = TopicSchema(topic, built[1], built[0]) if built else None
+        return dict(sorted(out.items()))
     reader_class = Ros1Reader if source.kind == "bag" else Ros2Reader
     with reader_class(Path(source.path)) as reader:
         for c in reader.connections:

@@ -1,0 +1,55 @@
+"""Every robot and flight log of ``../shared/data/foreign_logs`` (real logs from public
+repositories, their sources in its SOURCES.md) is read by ``fretc inspect`` without an
+internal error, every topic read or named with its reason; an old ROS 1 bag with a
+non-standard index is read record by record (its 2010 ``roslib/Header`` definitions
+included); a bag of format 1.2 is refused by its format."""
+
+from __future__ import annotations
+
+import pytest
+from click.testing import CliRunner
+
+from _shared import SHARED, params  # noqa: E402
+from fretc.cli import main  # noqa: E402
+from logs import open_log  # noqa: E402
+
+FOREIGN = SHARED / "data" / "foreign_logs"
+
+
+def _logs():
+    for p in sorted(FOREIGN.rglob("*")):
+        if p.suffix in (".mcap", ".bag", ".ulg"):
+            yield pytest.param(p, id=f"{p.parent.name}/{p.name}")
+
+
+@pytest.mark.parametrize("log", params(_logs))
+def test_inspect_reads_every_foreign_log(log):
+    res = CliRunner().invoke(main, ["inspect", str(log)])
+    assert res.exit_code == 0, res.output
+    assert "internal error" not in res.output
+    assert "(schema unknown)" not in res.output
+    src = open_log(log)
+    counts = {}
+    for m in src.messages():
+        counts[m.topic] = counts.get(m.topic, 0) + 1
+    for topic in src.topics():  # every topic read, or its problem named
+        named = any(p.topic == topic for p in src.problems)
+        assert counts.get(topic) or named or src.partial, topic
+
+
+@pytest.mark.parametrize("log", params(lambda: [FOREIGN / "ccny_lsm_crash" / "demo.bag"]))
+def test_an_old_bag_with_a_non_standard_index_is_read_record_by_record(log):
+    src = open_log(log)
+    scans = [m for m in src.messages({"/scan"})]
+    assert len(scans) == 278 and len(scans[0].data.ranges) > 100
+    assert scans[0].data.header.frame_id  # the 2010 roslib/Header, read as std_msgs/Header
+    kinds = {p.kind for p in src.problems}
+    assert "truncated" in kinds and src.partial
+
+
+def test_a_bag_of_format_1_2_is_refused_by_its_format(tmp_path):
+    old = tmp_path / "old.bag"
+    old.write_bytes(b"#ROSBAG V1.2\n" + bytes(range(256)) * 8)
+    res = CliRunner().invoke(main, ["inspect", str(old)])
+    assert res.exit_code == 2
+    assert "format 1.2 is not supported" in res.output
