@@ -61,6 +61,7 @@ def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[i
     errors: dict[int, str] = {}
     bad: dict[str, str] = {}
     types: dict[str, str] = {}
+    undecodable = _undecodable_topics(source, schemas)
     for r in plan.requirements:
         if r.index in skip:
             continue
@@ -70,9 +71,13 @@ def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[i
             if b is None:
                 continue
             if v not in bad:
+                lost = sorted(set(b.topics) & set(undecodable))
                 try:
-                    types[v] = check_types(b, schemas)
-                    bad[v] = ""
+                    if lost:
+                        bad[v] = undecodable[lost[0]]
+                    else:
+                        types[v] = check_types(b, schemas)
+                        bad[v] = ""
                 except BindingError as exc:
                     bad[v] = str(exc)
             if bad[v]:
@@ -92,6 +97,22 @@ def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[i
                     "a boolean")
                 break
     return errors
+
+
+def _undecodable_topics(source, schemas: dict) -> dict[str, str]:
+    """Topic -> why its messages cannot be decoded, for the topics that name a message type
+    whose definition the log does not carry or that cannot be parsed (a custom type of a
+    bag that stores no definitions: the reason names ``--msg-path``)."""
+    from logs.msg_path import MSG_PATH_HINT
+
+    out: dict[str, str] = {}
+    if source.kind not in ("bag", "rosbag2"):  # logs that carry their schemas report them
+        return out
+    for topic, typ in source.topics().items():
+        if typ and topic in schemas and schemas[topic] is None:
+            out[topic] = (f"topic {topic}: its messages cannot be decoded: the log carries no "
+                          f"usable definition of {typ} (give it with {MSG_PATH_HINT})")
+    return out
 
 
 def variable_uses(r: RequirementPlan) -> dict[str, set]:

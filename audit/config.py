@@ -27,6 +27,8 @@ class AuditConfig:
         tick_period: override of the bindings' tick (``"100 ms"``); ``tick_topic``: one tick
             per message of this topic; ``time_base``: ``"log"`` or ``"header"``.
         window: ticks of values shown on each side of the trigger and the violation.
+        msg_path: folders of ``.msg``/``.idl`` files for types a log does not carry
+            (``--msg-path``, :mod:`logs.msg_path`).
     """
 
     requirements: tuple[str, ...]
@@ -37,4 +39,5 @@ class AuditConfig:
     time_base: str | None = None
     window: int = 5
     select_logs: bool = True
+    msg_path: tuple[str, ...] = ()
 

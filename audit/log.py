@@ -125,7 +125,8 @@ class _LogRun:
         """Open the log and choose its bindings (a CSV trace's columns, else the plan's)."""
         plan, path, la = self.plan, self.path, self.la
         try:
-            source = self.source = open_log(path, csv_period_ns=plan.csv_period_ns)
+            source = self.source = open_log(path, csv_period_ns=plan.csv_period_ns,
+                                            msg_path=plan.config.msg_path)
         except FretcInputError as exc:
             return self._fail_log(str(exc), "log not audited: ")
         except OSError as exc:

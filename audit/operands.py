@@ -34,7 +34,8 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
     got: dict[tuple[frozenset, str], dict[int, object]] = {}
     try:
-        source = open_log(path, csv_period_ns=plan.csv_period_ns)
+        source = open_log(path, csv_period_ns=plan.csv_period_ns,
+                          msg_path=plan.config.msg_path)
         for key, blk in sample_blocks(source, aux_bindings, groups):
             for i in range(len(blk.times)):
                 if (key, blk.start + i) not in at:

@@ -47,7 +47,7 @@ __all__ = ["audit_cmd"]
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, window, allow_partial,
-              verbose):
+              verbose, msg_path=()):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -77,7 +77,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
                   highlight=False)
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
-                          window)
+                          window, msg_path)
     try:
         plan = load_plan(config)
         paths = find_logs(expand_log_args(logs))

@@ -22,6 +22,8 @@ from typing import Any, Dict, List
 
 import click
 
+from .options import MSG_PATH_OPTION
+
 __all__ = ["inspect_cmd", "inspect_log", "MAX_VALUES", "plain"]
 
 #: Distinct values of a text field listed at most (more: "and more").
@@ -138,8 +140,9 @@ def _visit(schema, obj, typename: str, prefix: str, stats: Dict[str, _Stat]) -> 
                 st.false += 1
 
 
-def inspect_log(path: str) -> dict:
-    """The inventory of one log (module docstring) as a JSON-ready dict.
+def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
+    """The inventory of one log (module docstring) as a JSON-ready dict; ``msg_path``:
+    folders of the types the log does not carry (``--msg-path``).
 
     Raises:
         common.problems.FretcInputError: the file is not a readable log.
@@ -149,7 +152,7 @@ def inspect_log(path: str) -> dict:
     from logs.schema import log_schemas
     from logs import open_log
 
-    source = open_log(path)
+    source = open_log(path, msg_path=msg_path)
     types = source.topics()
     schemas = log_schemas(source)
     stats: Dict[str, Dict[str, _Stat]] = {t: {} for t in types}
@@ -228,7 +231,8 @@ def _print(doc: dict) -> None:
 @click.command("inspect")
 @click.argument("logs", nargs=-1, required=True)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list, one object per log.")
-def inspect_cmd(logs, as_json):
+@MSG_PATH_OPTION
+def inspect_cmd(logs, as_json, msg_path):
     """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
     counts, rates, time span, and every field path in binding syntax, as it binds when pasted
     (quoted topics, [:] for items), with its type, array lengths, numeric min/max, the values
@@ -240,7 +244,7 @@ def inspect_cmd(logs, as_json):
     failed = False
     for p in logs:
         try:
-            docs.append(inspect_log(p))
+            docs.append(inspect_log(p, tuple(msg_path)))
         except (FretcInputError, OSError) as exc:
             click.echo(f"error: {exc}", err=True)
             failed = True

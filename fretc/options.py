@@ -62,15 +62,24 @@ def audit_input_options(f, jobs: bool = True):
                      show_default=True, help="Audit this many logs in parallel processes."),
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
                      help="Ticks of values kept each side of a trigger and a violation."),
+        MSG_PATH_OPTION,
     ]
     if not jobs:
-        del options[-2]
+        del options[-3]
     for option in reversed(options):
         f = option(f)
     return f
 
 
-def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window):
+#: ``--msg-path DIR`` (repeatable): message types a log does not carry (logs.msg_path)
+MSG_PATH_OPTION = click.option(
+    "--msg-path", "msg_path", multiple=True, type=click.Path(exists=True, file_okay=False),
+    help="Folder of the .msg/.idl files of message types a log does not store (laid out as "
+         "PKG/msg/TYPE.msg, or a ROS 2 install/ or share/ tree); repeatable.")
+
+
+def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window,
+                 msg_path=()):
     """The :class:`audit.AuditConfig` of :func:`audit_input_options`' values
     (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
     from audit import AuditConfig  # lazy: numpy and the engine only when run
@@ -82,7 +91,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
     return AuditConfig(requirements=tuple(requirements),
                        bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
-                       window=window)
+                       window=window, msg_path=tuple(msg_path))
 
 
 class FleetError(click.ClickException):

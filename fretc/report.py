@@ -45,7 +45,7 @@ __all__ = ["report_cmd"]
 @click.pass_context
 def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
                jobs, window, from_json, base, output, annotate_dir, psl_map, title,
-               check_json=None):
+               check_json=None, msg_path=()):
     """Write the traceability report (HTML + Markdown) of an audit: requirements x runs,
     formulas, monitors, AJPF properties, verdicts, witnesses and violation timelines.
 
@@ -73,7 +73,7 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
 
         json_dir = None
         config = audit_config(requirements, bindings, inline, tick_period, tick_topic,
-                              time_base, window)
+                              time_base, window, msg_path)
         try:
             plan = load_plan(config)
             paths = find_logs(expand_log_args(logs))

@@ -170,7 +170,7 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
               window, duration, until_idle, restart_grace, allow_partial, topic_types, record,
-              jsonl, json_path, wait, connect_timeout, no_live):
+              jsonl, json_path, wait, connect_timeout, no_live, msg_path=()):
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
     rosbridge://host:9090: rosbridge v2) with the requirements and bindings that audit its
     logs, until the run ends (the server closes, --duration, --until-idle, Ctrl-C, or every
@@ -189,7 +189,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
                                  param_hint="URL")
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
-                          window)
+                          window, msg_path)
     lock = threading.Lock()
 
     def on_event(e):

@@ -6,7 +6,7 @@ queue holds at most :data:`MAX_QUEUED_MESSAGES` messages and :data:`MAX_QUEUED_B
 payload; past either, the **oldest** queued message is dropped (the newest data is what a live
 verdict needs), and the drop is counted per topic with its first and last log time.
 :meth:`EventQueue.take_dropped` hands the counts to the watch, which makes the dropped span a
-gap of the run (ticks inside it unknown, never held over: issue 44). Other events (connects,
+gap of the run (ticks inside it unknown, never held over). Other events (connects,
 advertisements, closes) are never dropped; ``status`` and ``protocol`` events past
 :data:`MAX_QUEUED_OTHER` queued are dropped and counted (:attr:`EventQueue.dropped_other`).
 Memory is therefore bounded whatever the server sends.
@@ -100,6 +100,11 @@ class EventQueue:
             elif ev[0] in _DROPPABLE:
                 self._other -= 1
             return ev
+
+    def empty(self) -> bool:
+        """No event queued now (:class:`queue.Queue`'s ``empty``)."""
+        with self._cond:
+            return not self._items
 
     def get_nowait(self) -> tuple:
         """:meth:`get` without waiting."""

@@ -303,7 +303,7 @@ class WatchSource(LogSource):
         """A topic advertised again after it was unadvertised (its publisher restarted, as
         foxglove_bridge shows a node restart: a new channel id): the same run goes on, and
         the messages not received in between are a gap (ticks inside unknown), never held
-        over (issue 44)."""
+        over."""
         self._all_left_at = None
         self._pending_unadvertised = [(t, at) for t, at in self._pending_unadvertised
                                       if t != ch.topic]

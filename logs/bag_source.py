@@ -23,6 +23,7 @@ from common.problems import DataProblem, LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, build_typestore
 from .decoding import decoder_for
+from .msg_path import MSG_PATH_HINT
 from .ros1_linear import Ros1Linear, is_ros1_bag
 
 __all__ = ["BagSource", "connection_typestore"]
@@ -50,8 +51,8 @@ def connection_typestore(kind: str, conn: Any, fallback: Typestore | None
     fmt, text = conn.msgdef.format, conn.msgdef.data
     if fmt == MessageDefinitionFormat.NONE or not text.strip():
         if fallback is None or conn.msgtype not in fallback.fielddefs:
-            raise UnsupportedSchema(f"the bag stores no definition of {conn.msgtype!r} "
-                                    "(pass a fallback typestore)")
+            raise UnsupportedSchema(f"the bag stores no definition of {conn.msgtype!r} and no "
+                                    f"folder given defines it: give its .msg with {MSG_PATH_HINT}")
         return fallback, conn.msgtype
     schema_encoding = ("ros1msg" if kind == "bag" else
                        "ros2idl" if fmt == MessageDefinitionFormat.IDL else "ros2msg")

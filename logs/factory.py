@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 from rosbags.typesys import Stores, get_typestore
@@ -17,13 +18,15 @@ from .base import LogSource
 from .csv_source import CsvSource
 from .dataflash_source import DataflashSource
 from .mcap_source import McapSource
+from .msg_path import fallback_for
 from .ulog_source import UlogSource
 
 __all__ = ["open_log"]
 
 
 def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores | None = None,
-             check_data_crc: bool = True, csv_period_ns: int = NS_PER_S) -> LogSource:
+             check_data_crc: bool = True, csv_period_ns: int = NS_PER_S,
+             msg_path: Sequence[str] = ()) -> LogSource:
     """Open a recorded run for reading.
 
     Args:
@@ -31,7 +34,9 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
             ``*.csv`` trace, PX4 ULog ``*.ulg`` or ArduPilot DataFlash ``*.bin`` flight log.
         fallback_typestore: types for rosbag connections that carry no definition (e.g. old
             rosbag2 sqlite3 bags): a rosbags Typestore or a ``rosbags.typesys.Stores`` member.
-            Never used when the log embeds its definitions.
+            Never used when the log embeds its definitions. Default: ROS 2 Humble's standard
+            types plus the types defined under ``msg_path`` (:mod:`logs.msg_path`).
+        msg_path: folders of ``.msg``/``.idl`` files (``--msg-path``).
         check_data_crc: MCAP only: check the DataEnd data-section CRC (one extra read of the
             data section after a full indexed pass).
         csv_period_ns: CSV only: time step between rows when there is no ``time`` column.
@@ -43,12 +48,15 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
     Raises:
         LogError: missing path, unknown kind, or a file that cannot be opened as that kind.
         CsvError: a bad CSV trace (names file:line).
+        InputError: a ``msg_path`` folder that is missing or holds a bad definition.
     """
     p = Path(path)
     if not p.exists():
         raise LogError(path, "no such file or folder")
     if isinstance(fallback_typestore, Stores):
         fallback_typestore = get_typestore(fallback_typestore)
+    if fallback_typestore is None and (p.is_dir() or p.suffix.lower() == ".bag"):
+        fallback_typestore = fallback_for(msg_path)
     suffix = p.suffix.lower()
     if p.is_dir():
         if not (p / "metadata.yaml").exists():

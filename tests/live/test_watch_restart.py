@@ -1,4 +1,4 @@
-"""A watch ends only when the run has ended (issue 44): a publisher that restarts (its topic
+"""A watch ends only when the run has ended: a publisher that restarts (its topic
 unadvertised, then advertised again on a new channel, as foxglove_bridge shows a node
 restart) continues the same run, the messages in between a gap; every publisher gone for
 longer than the grace period cuts the run short (unknown, exit 3), never a clean pass. Live

@@ -307,16 +307,20 @@ def test_corrupt_summary_falls_back_to_linear_read(tmp_path, chunked):
 
 def test_unknown_schema_or_encoding_is_an_error_for_that_topic_only(tmp_path):
     msgs = _series(30) + [("/odd", "std_msgs/msg/Float64", 5 * S + i * MS, float64(i)) for i in range(5)] \
-        + [("/json", "std_msgs/msg/Float64", 6 * S + i * MS, float64(i)) for i in range(4)]
+        + [("/json", "std_msgs/msg/Float64", 6 * S + i * MS, float64(i)) for i in range(4)] \
+        + [("/fb", "std_msgs/msg/Float64", 7 * S + i * MS, float64(i)) for i in range(3)]
     path = write_mcap(tmp_path / "schema.mcap", msgs,
                       schema_override={"/odd": ("protobuf", b"\x0a\x03abc")},
-                      encoding_override={"/json": "json"})
+                      encoding_override={"/json": "json", "/fb": "flatbuffer"})
     src = open_log(path)
     got = list(src.messages())
     assert {m.topic for m in got} == {"/cmd", "/flag"}
     assert [_key(m) for m in got] == _expected([m for m in msgs if m[0] in ("/cmd", "/flag")])
     kinds = {(p.kind, p.topic) for p in src.problems}
-    assert kinds == {(P.UNKNOWN_SCHEMA, "/odd"), (P.UNKNOWN_ENCODING, "/json")}
+    # json messages under a ros2msg schema: the schema does not go with the encoding;
+    # flatbuffer: an encoding fretc does not read
+    assert kinds == {(P.UNKNOWN_SCHEMA, "/odd"), (P.UNKNOWN_SCHEMA, "/json"),
+                     (P.UNKNOWN_ENCODING, "/fb")}
     assert src.problem_counts[(P.UNKNOWN_SCHEMA, "/odd")] == 1  # once per topic, not per message
     odd = next(p for p in src.problems if p.topic == "/odd")
     assert odd.log_time == 5 * S and "protobuf" in odd.detail
@@ -385,18 +389,24 @@ def test_rosbag2_folder(tmp_path):
     assert [m.log_time for m in got] == sorted(m.log_time for m in got)
 
 
-def test_rosbag2_without_definitions_needs_a_fallback_typestore(tmp_path):
+def test_rosbag2_without_definitions_reads_standard_types_and_names_the_others(tmp_path):
     bag = tmp_path / "old"
     with Rosbag2Writer(bag, version=8) as w:
         c = w.add_connection("/stop", "std_msgs/msg/Bool", msgdef="", rihs01="RIHS01_unknown")
+        d = w.add_connection("/mine", "my_msgs/msg/Bool", msgdef="", rihs01="RIHS01_unknown")
         for i in range(3):
             w.write(c, i * MS, ROS2.serialize_cdr(boolean(i == 1), "std_msgs/msg/Bool"))
+            w.write(d, i * MS, ROS2.serialize_cdr(boolean(i == 1), "std_msgs/msg/Bool"))
+    # a standard type the bag does not define: ROS 2 Humble's definition (logs.msg_path)
     src = open_log(bag)
-    assert list(src.messages()) == []
-    assert [(p.kind, p.topic, p.log_time) for p in src.problems] == [(P.UNKNOWN_SCHEMA, "/stop", 0)]
-    src = open_log(bag, fallback_typestore=Stores.ROS2_HUMBLE)
-    assert [m.data.data for m in src.messages()] == [False, True, False]
+    assert [m.data.data for m in src.messages({"/stop"})] == [False, True, False]
     assert src.problems == []
+    # a team's own type: an unknown_schema problem naming --msg-path
+    assert list(src.messages({"/mine"})) == []
+    assert [(p.kind, p.topic, p.log_time) for p in src.problems] == [(P.UNKNOWN_SCHEMA, "/mine", 0)]
+    assert "--msg-path" in src.problems[0].detail
+    src = open_log(bag, fallback_typestore=Stores.EMPTY)  # an explicit store is used alone
+    assert list(src.messages({"/stop"})) == []
 
 
 @needs_shared

@@ -1,0 +1,86 @@
+"""Types that are not in the log: a rosbag2 bag (sqlite3 and MCAP storage, written
+here by rosbags) of a team's own message type with no stored definition audits with
+``--msg-path`` and, without it, exits 2 with an error naming ``--msg-path``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from audit import AuditConfig, audit_log, load_plan
+from fretc.cli import main
+
+STATUS = ("std_msgs/Header header\nfloat64 battery_voltage\nuint8 STATE_OK=0\n"
+          "uint8 STATE_FAULT=2\nuint8 state\nstring[] faults\n")
+T0 = 1_700_000_000_000_000_000
+
+
+def _msgs(tmp_path: Path) -> Path:
+    d = tmp_path / "ws" / "src" / "my_robot_msgs" / "msg"
+    d.mkdir(parents=True)
+    (d / "Status.msg").write_text(STATUS)
+    return tmp_path / "ws"
+
+
+def _bag(tmp_path: Path, storage: str) -> Path:
+    st = get_typestore(Stores.ROS2_HUMBLE)
+    st.register(get_types_from_msg(STATUS, "my_robot_msgs/msg/Status"))
+    Status = st.types["my_robot_msgs/msg/Status"]
+    Header, Time = st.types["std_msgs/msg/Header"], st.types["builtin_interfaces/msg/Time"]
+    path = tmp_path / f"bag_{storage}"
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    with Writer(path, version=8, storage_plugin=plugin) as w:
+        # no definition stored (msgdef ""), as rosbag2 bags of the Humble era
+        c = w.add_connection("/status", "my_robot_msgs/msg/Status", msgdef="",
+                             rihs01="RIHS01_" + "0" * 64)
+        for i in range(30):
+            t = T0 + i * 100_000_000
+            m = Status(header=Header(stamp=Time(sec=t // 10**9, nanosec=t % 10**9),
+                                     frame_id="base"),
+                       battery_voltage=24.0 - i * 0.1, state=2 if i == 20 else 0, faults=[])
+            w.write(c, t, st.serialize_cdr(m, "my_robot_msgs/msg/Status"))
+    return path
+
+
+def _reqs(tmp_path: Path) -> Path:
+    d = tmp_path / "req"
+    d.mkdir()
+    (d / "c.fret").write_text("@tick_period 100 ms\nS1: the robot shall always satisfy "
+                              "!faulted\nS2: the robot shall always satisfy volts > 20\n")
+    (d / "c.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
+                                       'faulted = "/status.state = STATE_FAULT"\n'
+                                       'volts = "/status.battery_voltage"\n')
+    return d
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_a_custom_type_audits_with_msg_path_and_names_it_without(tmp_path, storage):
+    bag, msgs, reqs = _bag(tmp_path, storage), _msgs(tmp_path), _reqs(tmp_path)
+    plan = load_plan(AuditConfig(requirements=(str(reqs),), msg_path=(str(msgs),)))
+    v = {x.requirement: x for x in audit_log(plan, str(bag)).verdicts}
+    assert v["S1"].verdict == "violated"
+    assert v["S1"].first_violation.at.time_ns == T0 + 20 * 100_000_000  # state 2 at msg 20
+    assert v["S2"].verdict == "satisfied"  # 24.0 down to 21.1 V
+    res = CliRunner().invoke(main, ["audit", "-r", str(reqs), str(bag), "--no-progress"])
+    assert res.exit_code == 2
+    assert "--msg-path" in res.output and "my_robot_msgs/msg/Status" in res.output
+    res = CliRunner().invoke(main, ["audit", "-r", str(reqs), str(bag), "--no-progress",
+                                    "--msg-path", str(msgs)])
+    assert res.exit_code == 1, res.output
+    res = CliRunner().invoke(main, ["inspect", str(bag), "--msg-path", str(msgs)])
+    assert res.exit_code == 0 and "30 messages" in res.output
+    assert "STATE_FAULT = 2" in res.output
+
+
+def test_a_bad_definition_in_msg_path_is_an_input_error_naming_the_file(tmp_path):
+    bag, reqs = _bag(tmp_path, "sqlite3"), _reqs(tmp_path)
+    d = tmp_path / "bad" / "my_robot_msgs" / "msg"
+    d.mkdir(parents=True)
+    (d / "Status.msg").write_text("float64 = broken\n")
+    res = CliRunner().invoke(main, ["inspect", str(bag), "--msg-path", str(tmp_path / "bad")])
+    assert res.exit_code == 2
+    assert "Status.msg" in res.output
