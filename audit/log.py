@@ -18,6 +18,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from signals.bindings import Bindings
+from signals.clock import missing_topics
+from common import problems as P
 from common.problems import DataProblem, FretcInputError, SignalError
 from .verdict import LogAudit, Verdict
 from logs.schema import closest
@@ -211,8 +213,8 @@ class _LogRun:
         for r in active:
             if verdicts[r.index].error is not None:
                 continue
-            absent = sorted({t for v in r.variables for t in bindings.variables[v].topics
-                             if t not in log_topics})
+            absent = missing_topics({t for v in r.variables
+                                     for t in bindings.variables[v].topics}, log_topics)
             if not absent:
                 continue
             users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
@@ -287,9 +289,15 @@ class _LogRun:
             self._clock_figures(r, res, result, b)
         ok = [r for r in active if verdicts[r.index].error is None]
         summarize_clocks(la, [verdicts[r.index] for r in ok])
-        la.missing_topics = sorted({t for res in result.passes.values()
-                                    for t in (res.sampling.missing_topics if b is not None
-                                              else [])})
+        silent = {t for res in result.passes.values()
+                  for t in (res.sampling.missing_topics if b is not None else [])}
+        # never published: no message at all, not messages that could not be decoded (the
+        # requirements reading those say why, silent_reasons)
+        unread = {p.topic for p in self.problems.values()
+                  if p.kind in (P.UNKNOWN_SCHEMA, P.UNKNOWN_ENCODING, P.UNDECODABLE)}
+        records = getattr(self.source, "records", None) or {}
+        la.missing_topics = sorted(t for t in silent
+                                   if t not in unread and not records.get(t))
         if la.start_time_ns is None:
             starts = [res.sampling.start_time for res in result.passes.values()
                       if res.sampling.start_time is not None]

@@ -164,7 +164,7 @@ def cut_at_damage(res: ClockPass, source, bindings: Bindings | None) -> None:
     end = source.intact_end
     if end is None:
         return
-    if bindings is not None and bindings.time_base == "header":
+    if bindings is not None and bindings.time_base != "log":
         end -= bindings.header_lag_ns
     keep = int(np.searchsorted(res.times, end, side="left"))
     n = len(res.times)

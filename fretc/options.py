@@ -56,8 +56,10 @@ def audit_input_options(f, jobs: bool = True):
                           "bindings)."),
         click.option("--tick-topic", default=None, metavar="TOPIC",
                      help="One tick per message of TOPIC (overrides the bindings)."),
-        click.option("--time-base", type=click.Choice(["log", "header"]), default=None,
-                     help="Message time: log time (default) or header.stamp."),
+        click.option("--time-base", type=click.Choice(["log", "header", "header-where-stamped"]),
+                     default=None,
+                     help="Message time: log time (default), header.stamp, or header.stamp "
+                          "where a message has a header and log time where it has none."),
         click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
                      show_default=True, help="Audit this many logs in parallel processes."),
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,

@@ -27,7 +27,7 @@ from .bindings.spec import Bindings, TickSpec
 from common.problems import SignalError
 from logs.selective import install as install_selective
 from logs import CsvSource, LogSource
-from .clock import HeaderBuffer, Sampling, Tick, check_topics
+from .clock import HeaderBuffer, Sampling, Tick, check_topics, present_tf
 from .columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from .groups import GroupSampling, _restrict, csv_clock
 
@@ -188,7 +188,7 @@ def sample_blocks(source: LogSource, bindings: Bindings,
         s = Sampling(source, sub)
         g.groups[key] = s
         stream = shared if shared is not None else _Stream()
-        clocks[key] = c = _Group(sub, set(topics), tick, s, stream)
+        clocks[key] = c = _Group(sub, present_tf(topics, source.topics()), tick, s, stream)
         g.failed[key] = c.failed
         g.per_tick[key] = c.per_tick
         if shared is None:

@@ -102,6 +102,29 @@ class Sampling:
         return it
 
 
+def missing_topics(need, available) -> list[str]:
+    """The topics of ``need`` the log does not have (sorted). ``tf()`` reads /tf and
+    /tf_static together: a transform tree on either alone is complete (ROS 1 tf, and bags
+    from before tf2, have no /tf_static; a static tree may have no /tf), so the pair is missing
+    only when both are."""
+    missing = set(need) - set(available)
+    tf = set(TF_TOPICS)
+    if missing & tf and not tf <= missing:
+        missing -= tf
+    return sorted(missing)
+
+
+def present_tf(topics, available) -> set[str]:
+    """``topics`` less the one of /tf and /tf_static the log does not have when it has the
+    other (:func:`missing_topics`): the clock then waits for and reads the one there is."""
+    out = set(topics)
+    tf = set(TF_TOPICS)
+    absent = (out & tf) - set(available)
+    if absent and len(absent) < len(out & tf):
+        out -= absent
+    return out
+
+
 def check_topics(source: LogSource, bindings: Bindings, extra: set[str] | None = None,
                   users: Bindings | None = None) -> set[str]:
     """The topics to read: the bound ones, ``extra`` and the tick topic.
@@ -114,7 +137,7 @@ def check_topics(source: LogSource, bindings: Bindings, extra: set[str] | None =
     need = set(bindings.topics) | (extra or set())
     if bindings.tick.topic is not None:
         need.add(bindings.tick.topic)
-    missing = sorted(need - available.keys())
+    missing = missing_topics(need, available)
     if missing:
         by = users if users is not None else bindings
         who = {t: sorted(n for n, b in by.variables.items() if t in b.topics) for t in missing}
@@ -145,10 +168,13 @@ class HeaderBuffer:
             SignalError: ``m`` has no header stamp.
         """
         s = m.header_stamp
+        if s is None and self.bindings.time_base == "header-where-stamped":
+            s = m.log_time  # a message without a header is placed at its log time
         if s is None:
             raise SignalError(f"{self.source.path}: time = \"header\" but {m.topic} messages "
                               f"({type(m.data).__name__}) have no header.stamp (log time "
-                              f"{m.log_time}); use time = \"log\""
+                              f"{m.log_time}); use time = \"header-where-stamped\" (its "
+                              "log time for messages without a header) or \"log\""
                               + (f" in {self.bindings.source}" if self.bindings.source else ""))
         # live sources bound how far time may jump at once (the ticks in between are made
         # one by one): a stamp further past the newest one is skipped, as a log time is
@@ -399,7 +425,8 @@ def _sample_csv(s: Sampling, source: CsvSource, bindings: Bindings | None) -> It
 
 def _sample_stream(s: Sampling, source: LogSource, bindings: Bindings, topics: set[str]
                    ) -> Iterator[Tick]:
-    clock = Clock(s, list(bindings.variables.values()), set(bindings.topics), bindings.tick)
+    clock = Clock(s, list(bindings.variables.values()),
+                  present_tf(bindings.topics, source.topics()), bindings.tick)
     for topic, t, log_time, data in feed(source, bindings, topics, s._problems):
         yield from clock.push(topic, t, log_time, data)
     yield from clock.finish()

@@ -12,7 +12,7 @@ from .bindings.spec import Bindings, TickSpec
 from common.problems import DataProblem, SignalError
 from logs.selective import install as install_selective
 from logs import CsvSource, LogSource
-from .clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, sample
+from .clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf, sample
 
 __all__ = ["GroupSampling", "sample_groups"]
 
@@ -88,10 +88,11 @@ def sample_groups(source: LogSource, bindings: Bindings,
         sub = _restrict(bindings, names)
         s = Sampling(source, sub)
         g.groups[key] = s
-        clocks[key] = c = Clock(s, list(sub.variables.values()), set(topics), tick,
+        clocks[key] = c = Clock(s, list(sub.variables.values()),
+                                present_tf(topics, source.topics()), tick,
                                 keep_going=True)
         g.failed[key] = c.failed
-        if bindings.time_base == "header":
+        if bindings.time_base != "log":
             buffers[key] = HeaderBuffer(source, sub, s._problems)
         for t in set(topics) | ({tick.topic} if tick.topic else set()):
             fed.setdefault(t, []).append(key)

@@ -20,7 +20,7 @@ from common.problems import BindingError
 from .binding import VARNAME, Binding, compile_expression
 from .expression import ExprLocation, refs
 from .parse import parse_expression
-from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec
+from .spec import DEFAULT_HEADER_LAG_NS, TIME_BASES, Bindings, LogSelector, TickSpec
 
 __all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
 
@@ -149,10 +149,10 @@ def _tick_table(doc: dict[str, Any], source: str, loc: _Locations
         raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "
                            "period is its own rate)", line=line, col=col)
     time_base = tick_t.get("time", "log")
-    if time_base not in ("log", "header"):
+    if time_base not in TIME_BASES:
         line, col = loc.at("tick", "time")
-        raise BindingError(source, f"[tick] time must be \"log\" or \"header\", not "
-                           f"{time_base!r}", line=line, col=col)
+        raise BindingError(source, f"[tick] time must be \"log\", \"header\" or "
+                           f"\"header-where-stamped\", not {time_base!r}", line=line, col=col)
     lag = DEFAULT_HEADER_LAG_NS
     if "header_lag" in tick_t:
         lag = _duration(tick_t, "header_lag", source, loc)

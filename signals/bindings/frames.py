@@ -145,7 +145,10 @@ def pick_joint(values: Any, names: Any, joint: str, text: str) -> float:
                            f"{joint!r} (its joints: {', '.join(names) or 'none'})") from None
     data = getattr(values, "data", values)
     if i >= len(data):
-        raise LookupFailed(f"joint({text}, {joint!r}): {text} has {len(data)} items, fewer "
-                           f"than the joint's index {i} in the name array")
+        empty = " (JointState leaves an array empty when the driver does not measure it)" \
+            if len(data) == 0 else ""
+        raise LookupFailed(f"joint({text}, {joint!r}): {text} has {len(data)} items{empty}, "
+                           f"fewer than the joint's index {i} in the name array (its joints: "
+                           f"{', '.join(names)})")
     v = data[i]
     return bool(v) if isinstance(v, bool) else float(v)

@@ -12,7 +12,14 @@ from common.units import NS_PER_S
 
 from .binding import Binding, compile_expression, parse_inline
 
-__all__ = ["DEFAULT_HEADER_LAG_NS", "TickSpec", "LogSelector", "Bindings", "make_bindings"]
+__all__ = ["DEFAULT_HEADER_LAG_NS", "TIME_BASES", "TickSpec", "LogSelector", "Bindings",
+           "make_bindings"]
+
+#: The time bases of ``[tick] time``: ``log`` (the log's own time of each message),
+#: ``header`` (every bound message's ``header.stamp``; a message without one is an error),
+#: ``header-where-stamped`` (``header.stamp`` where the message has a header, its log time
+#: where it has none: a ``geometry_msgs/Twist`` ``cmd_vel`` beside stamped sensor topics).
+TIME_BASES = ("log", "header", "header-where-stamped")
 
 #: ``[tick] header_lag`` when not given: 1 s (ns).
 DEFAULT_HEADER_LAG_NS = NS_PER_S
@@ -82,7 +89,8 @@ class Bindings:
     Attributes:
         variables: FRET variable → Binding, in declaration order.
         tick: the tick clock.
-        time_base: ``"log"`` (MCAP log time / bag timestamp) or ``"header"``
+        time_base: ``"log"`` (MCAP log time / bag timestamp), ``"header"`` or
+            ``"header-where-stamped"`` (:data:`TIME_BASES`)
             (``header.stamp`` of each message).
         header_lag_ns: time_base "header" only: how far (ns, header clock) a message may
             arrive behind the newest stamp seen and still be placed in stamp order.
@@ -92,7 +100,7 @@ class Bindings:
             (rosbridge without rosapi); logs carry their own schemas.
 
     Raises:
-        ValueError: a time base other than "log" and "header".
+        ValueError: a time base not in :data:`TIME_BASES`.
     """
 
     variables: dict[str, Binding]
@@ -104,8 +112,9 @@ class Bindings:
     types: dict[str, str] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
-        if self.time_base not in ("log", "header"):
-            raise ValueError(f"time_base must be 'log' or 'header', not {self.time_base!r}")
+        if self.time_base not in TIME_BASES:
+            raise ValueError(f"time_base must be one of {', '.join(TIME_BASES)}, not "
+                             f"{self.time_base!r}")
 
     @property
     def topics(self) -> frozenset[str]:
