@@ -316,6 +316,7 @@ class _LogRun:
         s = res.sampling
         v.ticks_evaluated = len(res.times)
         v.warmup_ticks = s.warmup_ticks
+        v.unsampled_messages = dict(sorted(s.unsampled.items()))
         v.first_tick_ns = s.first_time
         v.last_tick_ns = s.end_time
         if res.cut:  # ticks after the damage are not judged

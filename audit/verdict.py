@@ -157,6 +157,9 @@ class Verdict:
             requirement's own clock (the topics of its variables and the bindings' tick;
             never other requirements'): evaluated ticks, warm-up ticks, the times of its
             first evaluated and last tick, the topics it waited for.
+        unsampled_messages: topic -> messages of a bound topic that no tick of this clock
+            sampled (superseded by a newer one between two ticks: sample-and-hold holds the
+            newest), counted from the first evaluated tick on.
         intervals, triggers, violations: counts from the interval semantics (None when it
             could not be evaluated).
         violation_list: (trigger, violation) time points of the failed triggers in order,
@@ -193,6 +196,7 @@ class Verdict:
     first_tick_ns: int | None = None
     last_tick_ns: int | None = None
     waiting_for: list[str] = field(default_factory=list)
+    unsampled_messages: dict[str, int] = field(default_factory=dict)
     intervals: int | None = None
     triggers: int | None = None
     violations: int | None = None
@@ -231,6 +235,7 @@ class Verdict:
             "first_tick_ns": self.first_tick_ns, "first_tick_s": _t(self.first_tick_ns, start)["s"],
             "last_tick_ns": self.last_tick_ns, "last_tick_s": _t(self.last_tick_ns, start)["s"],
             "waiting_for": self.waiting_for,
+            "unsampled_messages": self.unsampled_messages,
             "intervals": self.intervals, "triggers": self.triggers,
             "violations": self.violations,
             "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}

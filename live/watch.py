@@ -470,6 +470,7 @@ class Watch:
                 unknown = self._unknown.get(self._group[r.index], 0)
                 v.ticks_evaluated = g.ticks - unknown
                 v.warmup_ticks = g.warmup_ticks
+                v.unsampled_messages = dict(sorted(g.unsampled.items()))
                 v.first_tick_ns, v.last_tick_ns = g.first_time, g.end_time
                 v.waiting_for = list(g.waiting_for)
                 bad = [n for n in r.variables

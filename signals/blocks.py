@@ -139,6 +139,7 @@ class _Group:
         self.next_grid: int | None = None
         self.next_seq = 0
         self.index = 0
+        self.last_held: dict[str, int] = {}  # topic -> number of the message held last
         self.failed: dict[str, SignalError] = {}
         self.per_tick: set[str] = set()
         #: per binding that reads ``tf()``: its transforms so far and, per TF topic, the
@@ -342,6 +343,7 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     idx = {t: i[warm:] for t, i in idx.items()}
     if s.first_time is None:
         s.first_time = int(times[0])
+    _count_unsampled(c, idx)
     held = {t: i for t, i in idx.items() if t in c.required or i[0] >= 0}
     cols = HeldColumns(stream.messages(), times, {t: stream.arrays(t)[0] for t in held}, held)
     values: dict[str, np.ndarray] = {}
@@ -357,6 +359,23 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     c.index += len(times)
     s.ticks += len(times)
     return blk
+
+
+def _count_unsampled(c: _Group, idx: dict[str, np.ndarray]) -> None:
+    """Add to ``c``'s :attr:`~signals.clock.Sampling.unsampled` the messages between two
+    evaluated ticks that neither held (the held message's number in its topic jumps by more
+    than one), from the first evaluated tick on (as :class:`signals.clock.Clock`)."""
+    s, stream = c.sampling, c.stream
+    for t in c.required:
+        if t in TF_TOPICS or t == c.tick_topic:
+            continue
+        a = idx[t] + stream.buffers[t].base
+        prev = c.last_held.get(t, int(a[0]))
+        gaps = np.diff(a, prepend=prev) - 1
+        n = int(gaps[gaps > 0].sum())
+        if n:
+            s.unsampled[t] = s.unsampled.get(t, 0) + n
+        c.last_held[t] = int(a[-1])
 
 
 def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,

@@ -66,6 +66,10 @@ class Sampling:
         warmup_ticks: ticks before every bound topic had a message (not evaluated).
         waiting_for: bound topics without a message at the first tick (sorted).
         missing_topics: bound topics that never had a message (then no tick is evaluated).
+        unsampled: topic -> messages no evaluated tick held: superseded by a newer message of
+            the topic before the next tick sampled it (sample-and-hold keeps only the newest);
+            the tick topic (one tick per message) and /tf, /tf_static (``tf()`` reads every
+            transform) are not counted.
         start_time: time of the first tick, evaluated or not; None if none.
         first_time: time of the first evaluated tick; None if none.
         end_time: time of the last tick; None if none.
@@ -79,6 +83,7 @@ class Sampling:
         self.warmup_ticks = 0
         self.waiting_for: list[str] = []
         self.missing_topics: list[str] = []
+        self.unsampled: dict[str, int] = {}
         self.start_time: int | None = None
         self.first_time: int | None = None
         self.end_time: int | None = None
@@ -256,6 +261,9 @@ class Clock:
         self.index = 0
         self.keep_going = keep_going
         self.failed: dict[str, SignalError] = {}
+        #: messages of each counted topic since the last evaluated tick (Sampling.unsampled)
+        self.since: dict[str, int] = {}
+        self.counted = set(required) - set(TF_TOPICS) - {tick.topic}
 
     def _emit(self, t: int) -> Tick | None:
         s = self.s
@@ -268,6 +276,11 @@ class Clock:
             return None
         if s.first_time is None:
             s.first_time = t
+        elif self.since:
+            for topic, n in self.since.items():
+                if n > 1:
+                    s.unsampled[topic] = s.unsampled.get(topic, 0) + n - 1
+        self.since = {}
         state = self.state
         state.now = t
         values: dict[str, bool | float] = {}
@@ -320,6 +333,8 @@ class Clock:
             st.tf.add(topic, data, t)
         self.log_times[topic] = log_time
         self.missing.discard(topic)
+        if topic in self.counted:
+            self.since[topic] = self.since.get(topic, 0) + 1
         if topic == self.tick_topic:
             self.pending.append((t, data, log_time))
         self.last = t
