@@ -74,6 +74,9 @@ def _no_tick(res: ClockPass, v, la) -> None:
         v.verdict = "unknown"
         v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
                             "read completely to judge")
+        if res.lost:
+            v.unknown_reason = ("messages it reads could not be decoded before its first "
+                                f"evaluated tick ({res.lost}): nothing was read to judge")
         return
     waiting = la.missing_topics or la.waiting_for
     v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
@@ -96,6 +99,12 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
             return None
     verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
                                      st_tick, n, ev, opened, has_ltl3=not r.offline)
+    if res.lost:
+        why = (f"the judged span ends at log time {res.intact_end} ns, where messages it "
+               f"reads could not be decoded ({res.lost}); " + (why or ""))
+        if verdict != "unknown":
+            v.notes.append(f"decided before log time {res.intact_end} ns, where messages it "
+                           f"reads could not be decoded ({res.lost})")
     if verdict == "unknown":
         v.verdict = "unknown"
         v.unknown_reason = why

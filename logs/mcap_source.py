@@ -165,26 +165,27 @@ class McapSource(LogSource):
         except UnsupportedSchema as exc:
             kind = (P.UNKNOWN_ENCODING if channel.message_encoding not in SCHEMA_FOR_ENCODING
                     else P.UNKNOWN_SCHEMA)
-            self._open_problems.add(DataProblem(
-                kind, channel.topic, log_time,
-                f"{exc}; messages on this topic are skipped"))
+            self._no_decoder[channel.id] = (kind, str(exc))
         self._decoders[channel.id] = dec
         return dec
 
     def _deliver(self, channel: Channel, rec: McapMessage, schemas: dict[int, Schema]
                  ) -> Message | None:
-        """``rec`` decoded and counted, or None (no decoder, or a payload that does not
-        deserialize: an ``undecodable`` problem)."""
+        """``rec`` decoded and counted, or None: no decoder (``unknown_schema`` /
+        ``unknown_encoding``) or a payload that does not deserialize (``undecodable``), a
+        message lost (:meth:`LogSource._lose`)."""
         self.records[channel.topic] = self.records.get(channel.topic, 0) + 1
         dec = self._decoder(channel, schemas, rec.log_time)
         if dec is None:
+            kind, why = self._no_decoder[channel.id]
+            self._lose(kind, channel.topic, channel.id, rec.log_time, why)
             return None
         try:
             data = dec(rec.data)
         except DECODE_ERRORS as exc:
-            self._problem(P.UNDECODABLE, channel.topic, rec.log_time,
-                          f"payload of {len(rec.data)} bytes does not deserialize "
-                          f"({type(exc).__name__}: {exc}); message skipped")
+            self._lose(P.UNDECODABLE, channel.topic, channel.id, rec.log_time,
+                       f"a payload of {len(rec.data)} bytes does not deserialize: "
+                       f"{type(exc).__name__}: {exc}")
             return None
         topic = channel.topic
         self.counts[topic] = self.counts.get(topic, 0) + 1
