@@ -39,8 +39,9 @@ class ClockPass:
     log_times: dict[str, np.ndarray]
     cut: int = 0  # ticks dropped after the damage (cut_at_damage)
     intact_end: int | None = None  # exclusive bound of the judged ticks' times
-    #: when the judged span ends at messages of the clock's topics that were present but
-    #: not decoded: what was lost, in words (topic, count, channel, first and last log time)
+    #: when the judged span ends where something could not be read - messages of the
+    #: clock's topics present but not decoded (topic, count, channel, first and last log
+    #: time), or a comparison with NaN (audit.finalize) - that, in words
     lost: str | None = None
 
 

@@ -133,6 +133,8 @@ def _print_plan(console, plan, n_logs: int) -> None:
     elif b is not None:
         tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
                 else f"one tick per {b.tick.topic} message")
+        if b.tick.nan == "false":
+            tick += ", NaN compares false"
         clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
                 f"{b.time_base} time)"
     console.print(f"fretc audit: {len(plan.requirements)} requirements, {n_logs} "
