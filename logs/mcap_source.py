@@ -34,7 +34,7 @@ from common.problems import DataProblem, LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
 from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
-from .mcap_integrity import index_disagreement, read_summary
+from .mcap_integrity import index_disagreement, missing_records, read_summary
 from .mcap_columns import TopicBlock, column_pass
 from .mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
 from .mcap_records import crc_skip, parse_record
@@ -109,6 +109,8 @@ class McapSource(LogSource):
         self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
+        if self._index is not None and missing_records(self._index) is not None:
+            self._complete_index()
         if self._index is not None:
             st = self._index.statistics
             if st is not None and st.message_count:
@@ -117,6 +119,23 @@ class McapSource(LogSource):
                 self._start_time = min(c.message_start_time for c in self._index.chunk_indexes)
                 self._end_time = max(c.message_end_time for c in self._index.chunk_indexes)
 
+
+    def _complete_index(self) -> None:
+        """Add to the index the Schema and Channel records the summary does not repeat
+        (optional there, MCAP spec "Summary Section"), from a scan of the data section
+        (chunks decompressed, messages not decoded). Damage the scan meets is not kept: each
+        pass reports it again."""
+        assert self._index is not None
+        for _ in _LinearPass(self, wanted=frozenset(), decode=False).run():
+            pass
+        assert self._scanned is not None
+        schemas, channels = self._scanned
+        for sid, sc in schemas.items():
+            self._index.schemas.setdefault(sid, sc)
+        for cid, ch in channels.items():
+            self._index.channels.setdefault(cid, ch)
+        self._scanned = None
+        self._begin_pass()
 
     @property
     def indexed(self) -> bool:
