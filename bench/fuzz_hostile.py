@@ -15,6 +15,14 @@ same seed gives the same inputs. Per class:
   flips; audited;
 * ``schema``: the small MCAP with its Twist schema lying (fields swapped, renamed,
   retyped, dropped, added); audited;
+* ``lost``: the small MCAP with a second ``/a`` channel whose messages, at random places
+  mid-log, cannot be decoded (a schema that lies, bad CDR, a truncated body, an unknown
+  message encoding); audited: a verdict on ``/a`` must be decided (LTL3) before the first
+  such message, the requirement on ``/cmd_vel`` alone must equal the intact log's, and the
+  data problems must count every message lost;
+* ``nan``: the small MCAP with NaN values of ``/a`` at random places (or only NaN),
+  audited with ``a > 0`` compared in the requirement: a verdict must be decided (LTL3)
+  before the first NaN;
 * ``bindings``: a binding file mutated (deep nesting, long chains, chained and doubling
   references, deep TOML, huge durations, random characters); parsed;
 * ``frames``: a sequence of Foxglove or rosbridge frames (non-object JSON, fields of the
@@ -35,6 +43,7 @@ import argparse
 import asyncio
 import io
 import json
+import math
 import os
 import random
 import resource
@@ -51,7 +60,7 @@ sys.path.insert(0, str(ROOT / "tests" / "monitors"))
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
-CLASSES = ("index", "bomb", "cut", "schema", "bindings", "frames")
+CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -63,9 +72,22 @@ S = 1_000_000_000
 
 
 # --------------------------------------------------------------------------- logs
-def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700) -> bytes:
-    """A small chunked MCAP: /a (Float64, 1.0 but 0.0 at message ``dip``) and /cmd_vel
-    (Twist, linear.x 1.0, angular.x 500.0), 60 of each, 50 ms apart."""
+#: ways a message of the second /a channel is present but not decoded (``lost`` class):
+#: (schema text, message encoding, payload)
+LOST = [
+    (b"float32 data", "cdr", b"\x00\x01\x00\x00" + struct.pack("<f", 9.0)),  # a schema lie
+    (b"float64 data", "cdr", b"\x00\x01\x00\x00\x01"),  # bad CDR
+    (b"float64 data", "cdr", b"\x00\x01\x00\x00" + struct.pack("<d", 9.0)[:5]),  # cut body
+    (b"float64 data", "json", b'{"data": 9.0}'),  # an encoding fretc does not read
+]
+
+
+def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700,
+               lost: tuple | None = None, values: list[float] | None = None) -> bytes:
+    """A small chunked MCAP: /a (Float64, 1.0 but 0.0 at message ``dip``; ``values``
+    instead when given) and /cmd_vel (Twist, linear.x 1.0, angular.x 500.0), 60 of each,
+    50 ms apart; ``lost = (how, indexes)``: at those indexes /a's message is on a second
+    channel that cannot be decoded (:data:`LOST`)."""
     from mcap.writer import CompressionType, Writer
 
     out = io.BytesIO()
@@ -74,10 +96,19 @@ def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700) -> byt
     fs = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
     ts = w.register_schema("geometry_msgs/msg/Twist", "ros2msg", schema.encode())
     a, v = w.register_channel("/a", "cdr", fs), w.register_channel("/cmd_vel", "cdr", ts)
+    bad_at, bad = set(), None
+    if lost is not None:
+        (text, enc, payload), bad_at = LOST[lost[0]], set(lost[1])
+        bad = w.register_channel("/a", enc, w.register_schema("std_msgs/msg/Float64",
+                                                              "ros2msg", text))
     for k in range(60):
         t = 10 * S + k * 50_000_000
-        w.add_message(a, log_time=t, publish_time=t,
-                      data=b"\x00\x01\x00\x00" + struct.pack("<d", 0.0 if k == dip else 1.0))
+        x = values[k] if values is not None else (0.0 if k == dip else 1.0)
+        if k in bad_at:
+            w.add_message(bad, log_time=t, publish_time=t, data=LOST[lost[0]][2])
+        else:
+            w.add_message(a, log_time=t, publish_time=t,
+                          data=b"\x00\x01\x00\x00" + struct.pack("<d", x))
         w.add_message(v, log_time=t, publish_time=t, data=b"\x00\x01\x00\x00" + struct.pack(
             "<6d", 1.0, 0.0, 0.0, 500.0, 0.0, 0.0))
     w.finish()
@@ -219,6 +250,21 @@ class Audits:
         finally:
             path.unlink()
 
+    def nan_plan(self):
+        """The plan of :data:`NAN_FRET` (``a`` is ``/a.data``, compared in the requirements),
+        loaded once."""
+        if getattr(self, "_nan", None) is None:
+            from audit import AuditConfig, load_plan
+
+            d = self.tmp / "nan"
+            d.mkdir(exist_ok=True)
+            (d / "n.fret").write_text(NAN_FRET, encoding="utf-8")
+            (d / "n.bindings.toml").write_text(
+                '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na = "/a.data"\n',
+                encoding="utf-8")
+            self._nan = load_plan(AuditConfig((str(d / "n.fret"),)))
+        return self._nan
+
     def original(self, key: str, plan, data: bytes):
         if key not in self.originals:
             self.originals[key] = self.audit(plan, data)
@@ -244,6 +290,10 @@ def run_log_class(kind: str, rng: random.Random, audits: Audits) -> list[str]:
             damaged = bytes(d)
         original = audits.original(key or f"small{data[:0]}{hash(data)}", plan, data)
         return unsupported(original, audits.audit(plan, damaged))
+    if kind == "lost":
+        return run_lost(rng, audits)
+    if kind == "nan":
+        return run_nan(rng, audits)
     data = small_mcap(dip=rng.randrange(60))
     original = audits.original(f"small{hash(data)}", audits.small, data)
     if kind == "index":
@@ -254,6 +304,65 @@ def run_log_class(kind: str, rng: random.Random, audits: Audits) -> list[str]:
     la = audits.audit(audits.small, small_mcap(lie, dip=rng.randrange(60)))
     rv = next(v for v in la.verdicts if v.requirement == "RV")
     return [] if rv.verdict == "error" else [f"RV: {rv.verdict} on a lying schema"]
+
+
+def decided_before(v, end: int) -> bool:
+    """The verdict ``v`` (satisfied, vacuous or violated) is decided by LTL3 at a tick
+    strictly before log time ``end`` (ns)."""
+    want = "violated" if v.verdict == "violated" else "satisfied"
+    return (v.ltl3.status == want and v.ltl3.time_ns is not None and v.ltl3.time_ns < end)
+
+
+def run_lost(rng: random.Random, audits: Audits) -> list[str]:
+    """One ``lost`` input (module docstring); the unsupported verdicts."""
+    how = rng.randrange(len(LOST))
+    first = rng.randrange(60)
+    at = sorted({first} | {rng.randrange(first, 60) for _ in range(rng.randrange(4))})
+    dip = rng.randrange(60)
+    la = audits.audit(audits.small, small_mcap(dip=dip, lost=(how, at)))
+    intact = audits.original(f"small{dip}", audits.small, small_mcap(dip=dip))
+    end = 10 * S + at[0] * 50_000_000
+    out = []
+    for v, ov in zip(la.verdicts, intact.verdicts):
+        if v.verdict in ("unknown", "error"):
+            continue
+        if v.requirement == "RV":
+            if v.verdict != ov.verdict:
+                out.append(f"RV: {v.verdict} != {ov.verdict}, but /cmd_vel lost nothing")
+        elif not decided_before(v, end):
+            out.append(f"{v.requirement}: {v.verdict} not decided before the first message "
+                       f"of /a lost ({end} ns)")
+    lost = sum(n for k, n in la.problem_counts.items() if k.endswith(" /a"))
+    if lost != len(at):
+        out.append(f"{lost} messages of /a counted lost, {len(at)} were")
+    return out
+
+
+NAN_FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a > 0\n"
+            "RN: the robot shall always satisfy !(a <= 0)\n"
+            "RE: the robot shall eventually satisfy a <= 0\n")
+
+
+def run_nan(rng: random.Random, audits: Audits) -> list[str]:
+    """One ``nan`` input (module docstring); the unsupported verdicts."""
+    plan = audits.nan_plan()
+    if rng.random() < 0.2:
+        values = [math.nan] * 60
+    else:
+        values = [rng.choice((1.0, 1.0, 1.0, 0.0, math.nan)) for _ in range(60)]
+    la = audits.audit(plan, small_mcap(values=values))
+    out = []
+    # the ticks (every 100 ms from 10 s) hold every second message (50 ms apart): the
+    # first NaN a tick reads
+    first = next((k for k in range(0, 60, 2) if math.isnan(values[k])), None)
+    end = 10 * S + first * 50_000_000 if first is not None else None
+    for v in la.verdicts:
+        if v.verdict in ("unknown", "error") or end is None:
+            continue
+        if not decided_before(v, end):
+            out.append(f"{v.requirement}: {v.verdict} not decided before the first NaN "
+                       f"({end} ns)")
+    return out
 
 
 # --------------------------------------------------------------------------- bindings
@@ -424,7 +533,8 @@ def _arguments(argv):
 
 
 #: inputs of each class per unit of --count (logs cost far more than frames)
-WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "bindings": 40, "frames": 40}
+WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
+           "bindings": 40, "frames": 40}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
