@@ -43,7 +43,6 @@ import argparse
 import asyncio
 import io
 import json
-import math
 import os
 import random
 import resource
@@ -57,6 +56,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "monitors"))
+
+from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan classes)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
@@ -72,16 +73,6 @@ S = 1_000_000_000
 
 
 # --------------------------------------------------------------------------- logs
-#: ways a message of the second /a channel is present but not decoded (``lost`` class):
-#: (schema text, message encoding, payload)
-LOST = [
-    (b"float32 data", "cdr", b"\x00\x01\x00\x00" + struct.pack("<f", 9.0)),  # a schema lie
-    (b"float64 data", "cdr", b"\x00\x01\x00\x00\x01"),  # bad CDR
-    (b"float64 data", "cdr", b"\x00\x01\x00\x00" + struct.pack("<d", 9.0)[:5]),  # cut body
-    (b"float64 data", "json", b'{"data": 9.0}'),  # an encoding fretc does not read
-]
-
-
 def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700,
                lost: tuple | None = None, values: list[float] | None = None) -> bytes:
     """A small chunked MCAP: /a (Float64, 1.0 but 0.0 at message ``dip``; ``values``
@@ -96,7 +87,7 @@ def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700,
     fs = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
     ts = w.register_schema("geometry_msgs/msg/Twist", "ros2msg", schema.encode())
     a, v = w.register_channel("/a", "cdr", fs), w.register_channel("/cmd_vel", "cdr", ts)
-    bad_at, bad = set(), None
+    bad_at, bad, payload = set(), None, b""
     if lost is not None:
         (text, enc, payload), bad_at = LOST[lost[0]], set(lost[1])
         bad = w.register_channel("/a", enc, w.register_schema("std_msgs/msg/Float64",
@@ -105,7 +96,7 @@ def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700,
         t = 10 * S + k * 50_000_000
         x = values[k] if values is not None else (0.0 if k == dip else 1.0)
         if k in bad_at:
-            w.add_message(bad, log_time=t, publish_time=t, data=LOST[lost[0]][2])
+            w.add_message(bad, log_time=t, publish_time=t, data=payload)
         else:
             w.add_message(a, log_time=t, publish_time=t,
                           data=b"\x00\x01\x00\x00" + struct.pack("<d", x))
@@ -250,21 +241,6 @@ class Audits:
         finally:
             path.unlink()
 
-    def nan_plan(self):
-        """The plan of :data:`NAN_FRET` (``a`` is ``/a.data``, compared in the requirements),
-        loaded once."""
-        if getattr(self, "_nan", None) is None:
-            from audit import AuditConfig, load_plan
-
-            d = self.tmp / "nan"
-            d.mkdir(exist_ok=True)
-            (d / "n.fret").write_text(NAN_FRET, encoding="utf-8")
-            (d / "n.bindings.toml").write_text(
-                '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na = "/a.data"\n',
-                encoding="utf-8")
-            self._nan = load_plan(AuditConfig((str(d / "n.fret"),)))
-        return self._nan
-
     def original(self, key: str, plan, data: bytes):
         if key not in self.originals:
             self.originals[key] = self.audit(plan, data)
@@ -291,9 +267,9 @@ def run_log_class(kind: str, rng: random.Random, audits: Audits) -> list[str]:
         original = audits.original(key or f"small{data[:0]}{hash(data)}", plan, data)
         return unsupported(original, audits.audit(plan, damaged))
     if kind == "lost":
-        return run_lost(rng, audits)
+        return run_lost(rng, audits, small_mcap)
     if kind == "nan":
-        return run_nan(rng, audits)
+        return run_nan(rng, audits, small_mcap)
     data = small_mcap(dip=rng.randrange(60))
     original = audits.original(f"small{hash(data)}", audits.small, data)
     if kind == "index":
@@ -304,65 +280,6 @@ def run_log_class(kind: str, rng: random.Random, audits: Audits) -> list[str]:
     la = audits.audit(audits.small, small_mcap(lie, dip=rng.randrange(60)))
     rv = next(v for v in la.verdicts if v.requirement == "RV")
     return [] if rv.verdict == "error" else [f"RV: {rv.verdict} on a lying schema"]
-
-
-def decided_before(v, end: int) -> bool:
-    """The verdict ``v`` (satisfied, vacuous or violated) is decided by LTL3 at a tick
-    strictly before log time ``end`` (ns)."""
-    want = "violated" if v.verdict == "violated" else "satisfied"
-    return (v.ltl3.status == want and v.ltl3.time_ns is not None and v.ltl3.time_ns < end)
-
-
-def run_lost(rng: random.Random, audits: Audits) -> list[str]:
-    """One ``lost`` input (module docstring); the unsupported verdicts."""
-    how = rng.randrange(len(LOST))
-    first = rng.randrange(60)
-    at = sorted({first} | {rng.randrange(first, 60) for _ in range(rng.randrange(4))})
-    dip = rng.randrange(60)
-    la = audits.audit(audits.small, small_mcap(dip=dip, lost=(how, at)))
-    intact = audits.original(f"small{dip}", audits.small, small_mcap(dip=dip))
-    end = 10 * S + at[0] * 50_000_000
-    out = []
-    for v, ov in zip(la.verdicts, intact.verdicts):
-        if v.verdict in ("unknown", "error"):
-            continue
-        if v.requirement == "RV":
-            if v.verdict != ov.verdict:
-                out.append(f"RV: {v.verdict} != {ov.verdict}, but /cmd_vel lost nothing")
-        elif not decided_before(v, end):
-            out.append(f"{v.requirement}: {v.verdict} not decided before the first message "
-                       f"of /a lost ({end} ns)")
-    lost = sum(n for k, n in la.problem_counts.items() if k.endswith(" /a"))
-    if lost != len(at):
-        out.append(f"{lost} messages of /a counted lost, {len(at)} were")
-    return out
-
-
-NAN_FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a > 0\n"
-            "RN: the robot shall always satisfy !(a <= 0)\n"
-            "RE: the robot shall eventually satisfy a <= 0\n")
-
-
-def run_nan(rng: random.Random, audits: Audits) -> list[str]:
-    """One ``nan`` input (module docstring); the unsupported verdicts."""
-    plan = audits.nan_plan()
-    if rng.random() < 0.2:
-        values = [math.nan] * 60
-    else:
-        values = [rng.choice((1.0, 1.0, 1.0, 0.0, math.nan)) for _ in range(60)]
-    la = audits.audit(plan, small_mcap(values=values))
-    out = []
-    # the ticks (every 100 ms from 10 s) hold every second message (50 ms apart): the
-    # first NaN a tick reads
-    first = next((k for k in range(0, 60, 2) if math.isnan(values[k])), None)
-    end = 10 * S + first * 50_000_000 if first is not None else None
-    for v in la.verdicts:
-        if v.verdict in ("unknown", "error") or end is None:
-            continue
-        if not decided_before(v, end):
-            out.append(f"{v.requirement}: {v.verdict} not decided before the first NaN "
-                       f"({end} ns)")
-    return out
 
 
 # --------------------------------------------------------------------------- bindings
