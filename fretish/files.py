@@ -55,7 +55,6 @@ from dataclasses import dataclass, field
 from .ast import Requirement
 from common.errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
-from common.textsafe import visible
 from common.units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period", "is_fret_export"]
@@ -392,8 +391,8 @@ def _load_json(path: str) -> list[RequirementEntry]:
 
 
 def _check_json_strings(obj: dict, where: str, source: str, line: int, col: int) -> None:
-    """The fields of one FRET JSON requirement that fretc reads: ``reqid`` one line of
-    printable text, ``project`` absent, null or a string, and no lone surrogate (a JSON
+    """The fields of one FRET JSON requirement that fretc reads: ``project`` absent, null
+    or a string, and no lone surrogate (a JSON
     ``\\ud800`` escape, which no UTF-8 output can hold) in any string. Raises
     :class:`FretishFileError` at the requirement."""
     project = obj.get("project")
@@ -407,12 +406,6 @@ def _check_json_strings(obj: dict, where: str, source: str, line: int, col: int)
             raise FretishFileError(f"{where}: \"{key}\" holds a lone surrogate (a "
                                    "\\uD800-\\uDFFF escape without its pair), which is not "
                                    "text", source=source, line=line, column=col)
-    rid = obj["reqid"]
-    bad = next((ch for ch in rid if ord(ch) < 0x20 or 0x7F <= ord(ch) < 0xA0), None)
-    if bad is not None:
-        raise FretishFileError(f"{where}: \"reqid\" '{visible(rid)}' holds the control "
-                               f"character U+{ord(bad):04X}; an id is one line of text",
-                               source=source, line=line, column=col)
 
 
 def _json_type(value: object) -> str:
