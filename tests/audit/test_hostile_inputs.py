@@ -276,7 +276,7 @@ def test_item12_a_markdown_code_span_holds_any_text(s):
     assert all(len(run) != len(fence) for run in re.findall(r"`+", inner))
 
 
-# --------------------------------------------------------------------------- issue 38: newlines
+# --------------------------------------------------------------------------- newlines from logs
 def test_a_newline_in_log_text_cannot_forge_a_terminal_line(tmp_path):
     """A joint name (log text) with a newline, shown in a terminal error line, is escaped;
     so are topics in the data problems line."""

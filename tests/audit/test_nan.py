@@ -1,4 +1,4 @@
-"""NaN has one meaning (issue 38): a requirement's comparison with NaN is neither true nor
+"""NaN has one meaning: a requirement's comparison with NaN is neither true nor
 false. The tick is unread, reported per requirement as a data problem of kind ``nan``, and
 the verdict is ``unknown`` unless decided before it (LTL3); a binding file may choose IEEE
 754 instead (``[tick] nan = "false"``), which the report shows."""

@@ -1,4 +1,4 @@
-"""Messages present but not decoded are a gap of their topic (issue 38): a schema that lies, a
+"""Messages present but not decoded are a gap of their topic: a schema that lies, a
 payload that does not deserialize (bad CDR, a truncated body), an unknown message encoding.
 Each ends the held value of its topic at its log time, as a cut log does
 (../shared/DESIGN.md "Damage is never evidence"): no requirement reading the topic is
@@ -82,7 +82,7 @@ def plan(tmp_path_factory):
 
 
 def _issue_log(path: Path, how: str) -> Path:
-    """The log of issue 38: 10 messages of 1.0 on /v, then 10 on the bad channel (9.0);
+    """The log of the report: 10 messages of 1.0 on /v, then 10 on the bad channel (9.0);
     /w every 100 ms throughout."""
     v = [(S + i * S // 10, 1.0) for i in range(10)] + [(2 * S + i * S // 10, None)
                                                         for i in range(10)]

@@ -1,4 +1,4 @@
-"""Every input error is exit 2 with a positioned message, never an internal error (issue 44):
+"""Every input error is exit 2 with a positioned message, never an internal error:
 FRET JSON exports, .fret files and --psl-map files fed the wrongly typed forms of each of
 their values (every JSON / TOML type, surrogates, NUL, control characters)."""
 

@@ -223,7 +223,7 @@ def test_json_syntax_error_position(tmp_path):
 
 
 def test_json_same_reqid_in_two_projects_is_an_error_naming_both(tmp_path):
-    """Ids are unique across a run, whatever their FRET project (issue 44: the generated
+    """Ids are unique across a run, whatever their FRET project (the generated
     module's MONITORS would hold the id twice)."""
     data = [{"reqid": "a", "project": "P1", "fulltext": "s shall satisfy p"},
             {"reqid": "a", "project": "P2", "fulltext": "s shall satisfy q"}]

@@ -317,7 +317,7 @@ def test_unknown_schema_or_encoding_is_an_error_for_that_topic_only(tmp_path):
     assert [_key(m) for m in got] == _expected([m for m in msgs if m[0] in ("/cmd", "/flag")])
     kinds = {(p.kind, p.topic) for p in src.problems}
     assert kinds == {(P.UNKNOWN_SCHEMA, "/odd"), (P.UNKNOWN_ENCODING, "/json")}
-    # the messages lost are counted (issue 38), with the channel and first and last log time
+    # the messages lost are counted, with the channel and first and last log time
     assert src.problem_counts[(P.UNKNOWN_SCHEMA, "/odd")] == 5
     assert src.problem_counts[(P.UNKNOWN_ENCODING, "/json")] == 4
     odd = next(p for p in src.problems if p.topic == "/odd")

@@ -97,7 +97,7 @@ def test_cli_environment_space_reports_the_nominal_robots_smallest_margin(plan, 
     ("scenario = 'nominal'\n[parameters]\nobstacle_speed = [0.1, 1]\n", ":3",
      "no moving obstacle"),
     ("scenario = 'nominal'\n[parameters\n", ":2", "not a TOML file"),
-    # issue 44: wrongly typed or out-of-range values are input errors, not exit 4
+    # wrongly typed or out-of-range values are input errors, not exit 4
     ("scenario = ['nominal']\n[parameters]\nstop_delay = [0, 1]\n", ":1", "a TOML array"),
     ("scenario = {a = 1}\n[parameters]\nstop_delay = [0, 1]\n", ":1", "a TOML table"),
     ("scenario = 'nominal'\nmax_time = inf\n[parameters]\nstop_delay = [0, 1]\n", ":2",
