@@ -12,12 +12,15 @@ the one the intact span decides (:mod:`audit.damage`).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from signals.bindings import Bindings
 from .damage import open_obligations, verdict_at_damage
 from monitors.interval import OBLIGATIONS, EvidenceUnsupported
-from monitors.judge import judge
+from monitors.judge import judge, nan_ticks
+from common.problems import NAN
 from monitors.stepwise import to_python
 from .verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
@@ -32,6 +35,7 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it.
     ``la`` is the log's :class:`audit.verdict.LogAudit`."""
+    res = _cut_at_nan(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
         _no_tick(res, v, la)
@@ -67,6 +71,39 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
 
 
+def _cut_at_nan(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v,
+                la) -> ClockPass:
+    """``res`` judged only before the first tick at which a comparison of ``r`` reads NaN
+    (:mod:`monitors.nan`: that tick's value is unread), with a data problem of kind
+    ``nan`` for ``r`` in ``la``; ``res`` itself when there is none, or when the binding
+    file says ``[tick] nan = "false"`` (then a note says so)."""
+    if bindings is not None and bindings.tick.nan == "false":
+        v.notes.append("NaN policy of the binding file ([tick] nan = \"false\"): a "
+                       "comparison with NaN is false")
+        return res
+    n = len(res.times)
+    try:
+        bad = np.flatnonzero(nan_ticks(r.requirement, res.columns, n))
+    except (EvidenceUnsupported, KeyError, ValueError):
+        return res
+    if len(bad) == 0:
+        return res
+    first, t = int(bad[0]), int(res.times[bad[0]])
+    what = (f"{len(bad)} tick{'s' if len(bad) != 1 else ''} of {r.id} compare NaN (first "
+            f"at tick {first}, {t} ns; last at tick {int(bad[-1])}, "
+            f"{int(res.times[bad[-1]])} ns): a comparison with NaN is neither true nor "
+            "false, so those ticks are unread")
+    la.problems.append({"kind": NAN, "topic": None, "log_time_ns": t,
+                        "end_time_ns": int(res.times[bad[-1]]), "detail": what})
+    la.problem_counts[f"{NAN} {r.id}"] = len(bad)
+    cut = replace(res, times=res.times[:first],
+                  columns={k: c[:first] for k, c in res.columns.items()},
+                  log_times={k: c[:first] for k, c in res.log_times.items()},
+                  intact_end=t if res.intact_end is None else min(t, res.intact_end),
+                  lost="; ".join(x for x in (res.lost, what) if x))
+    return cut
+
+
 def _no_tick(res: ClockPass, v, la) -> None:
     """No tick evaluated: unknown when the damage came first, else an error saying what the
     clock waited for."""
@@ -74,6 +111,9 @@ def _no_tick(res: ClockPass, v, la) -> None:
         v.verdict = "unknown"
         v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
                             "read completely to judge")
+        if res.lost:
+            v.unknown_reason = ("what it reads could not be read before its first "
+                                f"evaluated tick ({res.lost}): nothing was read to judge")
         return
     waiting = la.missing_topics or la.waiting_for
     v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
@@ -96,6 +136,12 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
             return None
     verdict, why = verdict_at_damage(holds, bool(ev is not None and ev.vacuous), status,
                                      st_tick, n, ev, opened, has_ltl3=not r.offline)
+    if res.lost:
+        why = (f"the judged span ends at log time {res.intact_end} ns, where what it reads "
+               f"could not be read ({res.lost}); " + (why or ""))
+        if verdict != "unknown":
+            v.notes.append(f"decided before log time {res.intact_end} ns, where what it "
+                           f"reads could not be read ({res.lost})")
     if verdict == "unknown":
         v.verdict = "unknown"
         v.unknown_reason = why

@@ -147,6 +147,8 @@ class AuditPlan:
             return None
         tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns is not None
                 else {"topic": b.tick.topic})
+        if b.tick.nan != "unread":  # a binding file's own NaN policy ([tick] nan)
+            tick["nan"] = b.tick.nan
         return {"sources": self.binding_files, "tick": tick, "time_base": b.time_base,
                 "variables": {n: {"expr": v.expr, "source": v.source, "line": v.line,
                                   "topics": sorted(v.topics)}

@@ -24,7 +24,7 @@ from .columns import TickColumns
 from .model import AuditPlan, RequirementPlan
 
 __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
-           "expected_ticks", "MAX_TICKS"]
+           "expected_ticks", "lost_in_words", "MAX_TICKS"]
 
 
 
@@ -39,6 +39,10 @@ class ClockPass:
     log_times: dict[str, np.ndarray]
     cut: int = 0  # ticks dropped after the damage (cut_at_damage)
     intact_end: int | None = None  # exclusive bound of the judged ticks' times
+    #: when the judged span ends where something could not be read - messages of the
+    #: clock's topics present but not decoded (topic, count, channel, first and last log
+    #: time), or a comparison with NaN (audit.finalize) - that, in words
+    lost: str | None = None
 
 
 @dataclass
@@ -152,18 +156,24 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
         times, columns, log_times = clock.columns.finish()
         s = sampling.groups[key] if bindings is not None else sampling
         passes[key] = ClockPass(s, times, columns, log_times)
-        cut_at_damage(passes[key], source, bindings)
+        cut_at_damage(passes[key], source, bindings, key)
     return LogPasses(sampling, passes, failed, errors)
 
 
-def cut_at_damage(res: ClockPass, source, bindings: Bindings | None) -> None:
+def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
+                  topics: frozenset = frozenset()) -> None:
     """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
-    evidence"): those strictly before the source's ``intact_end`` (a cut or the first gap;
-    under the header time base, ``header_lag_ns`` earlier, since a lost message's stamp may
-    precede its log time by that much). Sets ``res.cut`` to the number of ticks dropped."""
-    end = source.intact_end
+    evidence"): those strictly before the source's ``intact_end_of(topics)`` (a cut, the
+    first gap, or the first message of one of the clock's ``topics`` that was present but
+    not decoded, which ends the held value of its topic as a cut does; under the header
+    time base, ``header_lag_ns`` earlier, since a lost message's stamp may precede its log
+    time by that much). Sets ``res.cut`` to the number of ticks dropped, and ``res.lost``
+    when messages not decoded end the span."""
+    end = source.intact_end_of(topics)
     if end is None:
         return
+    if end != source.intact_end:
+        res.lost = lost_in_words(source, topics)
     if bindings is not None and bindings.time_base != "log":
         end -= bindings.header_lag_ns
     keep = int(np.searchsorted(res.times, end, side="left"))
@@ -175,3 +185,18 @@ def cut_at_damage(res: ClockPass, source, bindings: Bindings | None) -> None:
     res.times = res.times[:keep]
     res.columns = {k: v[:keep] for k, v in res.columns.items()}
     res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+
+
+def lost_in_words(source, topics) -> str:
+    """The messages of ``topics`` present but not decoded in the source's latest pass
+    (:attr:`logs.LogSource.lost`), one clause per (kind, topic, channel), earliest first:
+    how many, the channel, the first and last log time (ns) and why."""
+    parts = []
+    for (kind, topic, channel), (first, last, count, why) in sorted(
+            source.lost.items(), key=lambda kv: (kv[1][0], kv[0][0], kv[0][1])):
+        if topic not in topics:
+            continue
+        on = f" on channel {channel}" if channel is not None else ""
+        parts.append(f"{count} message{'s' if count != 1 else ''} of {topic}{on} not "
+                     f"decoded ({kind}: {why}), log time {first}..{last} ns")
+    return "; ".join(parts)

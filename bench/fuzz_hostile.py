@@ -15,6 +15,14 @@ same seed gives the same inputs. Per class:
   flips; audited;
 * ``schema``: the small MCAP with its Twist schema lying (fields swapped, renamed,
   retyped, dropped, added); audited;
+* ``lost``: the small MCAP with a second ``/a`` channel whose messages, at random places
+  mid-log, cannot be decoded (a schema that lies, bad CDR, a truncated body, an unknown
+  message encoding); audited: a verdict on ``/a`` must be decided (LTL3) before the first
+  such message, the requirement on ``/cmd_vel`` alone must equal the intact log's, and the
+  data problems must count every message lost;
+* ``nan``: the small MCAP with NaN values of ``/a`` at random places (or only NaN),
+  audited with ``a > 0`` compared in the requirement: a verdict must be decided (LTL3)
+  before the first NaN;
 * ``bindings``: a binding file mutated (deep nesting, long chains, chained and doubling
   references, deep TOML, huge durations, random characters); parsed;
 * ``frames``: a sequence of Foxglove or rosbridge frames (non-object JSON, fields of the
@@ -49,9 +57,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "monitors"))
 
+from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan classes)
+
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
-CLASSES = ("index", "bomb", "cut", "schema", "bindings", "frames")
+CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -63,9 +73,12 @@ S = 1_000_000_000
 
 
 # --------------------------------------------------------------------------- logs
-def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700) -> bytes:
-    """A small chunked MCAP: /a (Float64, 1.0 but 0.0 at message ``dip``) and /cmd_vel
-    (Twist, linear.x 1.0, angular.x 500.0), 60 of each, 50 ms apart."""
+def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700,
+               lost: tuple | None = None, values: list[float] | None = None) -> bytes:
+    """A small chunked MCAP: /a (Float64, 1.0 but 0.0 at message ``dip``; ``values``
+    instead when given) and /cmd_vel (Twist, linear.x 1.0, angular.x 500.0), 60 of each,
+    50 ms apart; ``lost = (how, indexes)``: at those indexes /a's message is on a second
+    channel that cannot be decoded (:data:`LOST`)."""
     from mcap.writer import CompressionType, Writer
 
     out = io.BytesIO()
@@ -74,10 +87,19 @@ def small_mcap(schema: str = TWIST, dip: int = 37, chunk_size: int = 700) -> byt
     fs = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
     ts = w.register_schema("geometry_msgs/msg/Twist", "ros2msg", schema.encode())
     a, v = w.register_channel("/a", "cdr", fs), w.register_channel("/cmd_vel", "cdr", ts)
+    bad_at, bad, payload = set(), None, b""
+    if lost is not None:
+        (text, enc, payload), bad_at = LOST[lost[0]], set(lost[1])
+        bad = w.register_channel("/a", enc, w.register_schema("std_msgs/msg/Float64",
+                                                              "ros2msg", text))
     for k in range(60):
         t = 10 * S + k * 50_000_000
-        w.add_message(a, log_time=t, publish_time=t,
-                      data=b"\x00\x01\x00\x00" + struct.pack("<d", 0.0 if k == dip else 1.0))
+        x = values[k] if values is not None else (0.0 if k == dip else 1.0)
+        if k in bad_at:
+            w.add_message(bad, log_time=t, publish_time=t, data=payload)
+        else:
+            w.add_message(a, log_time=t, publish_time=t,
+                          data=b"\x00\x01\x00\x00" + struct.pack("<d", x))
         w.add_message(v, log_time=t, publish_time=t, data=b"\x00\x01\x00\x00" + struct.pack(
             "<6d", 1.0, 0.0, 0.0, 500.0, 0.0, 0.0))
     w.finish()
@@ -244,6 +266,10 @@ def run_log_class(kind: str, rng: random.Random, audits: Audits) -> list[str]:
             damaged = bytes(d)
         original = audits.original(key or f"small{data[:0]}{hash(data)}", plan, data)
         return unsupported(original, audits.audit(plan, damaged))
+    if kind == "lost":
+        return run_lost(rng, audits, small_mcap)
+    if kind == "nan":
+        return run_nan(rng, audits, small_mcap)
     data = small_mcap(dip=rng.randrange(60))
     original = audits.original(f"small{hash(data)}", audits.small, data)
     if kind == "index":
@@ -424,7 +450,8 @@ def _arguments(argv):
 
 
 #: inputs of each class per unit of --count (logs cost far more than frames)
-WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "bindings": 40, "frames": 40}
+WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
+           "bindings": 40, "frames": 40}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:

@@ -36,6 +36,7 @@ HEADER_BACKWARDS = "header_backwards"  # header.stamp earlier than the previous 
 HEADER_LATE = "header_late"  # header.stamp older than a tick already emitted; skipped
 HEADER_JUMP = "header_jump"  # live: header.stamp too far past the newest one to tick over; skipped
 NO_HEADER = "no_header"  # time base "header" but the message has no header.stamp; skipped
+NAN = "nan"  # a requirement's comparison read NaN at a tick: that tick's value is unread
 
 #: At most this many problems of one (kind, topic) are kept in ``problems``; the rest are only
 #: counted in ``problem_counts`` so memory stays flat on a badly damaged log.

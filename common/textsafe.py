@@ -9,8 +9,9 @@ shows them so that they cannot change the output's structure or the reader's scr
   marks U+200E/U+200F, zero-width characters), line and paragraph separators (Zl, Zp),
   lone surrogates (Cs) and the noncharacters U+FFFE/U+FFFF are written as Python-style
   escapes (``\\x1b``, ``\\u202e``), visible and inert. The base of every other function.
-* :func:`terminal_text` - for the terminal: :func:`visible` (an ``ESC[2J`` in an id is
-  printed as ``\\x1b[2J``, not obeyed; a U+202E cannot reorder the line).
+* :func:`terminal_text` - for the terminal: :func:`visible`, newlines included (an
+  ``ESC[2J`` in an id is printed as ``\\x1b[2J``, not obeyed; a U+202E cannot reorder the
+  line; a newline in a frame id cannot start a forged line of a CI log).
 * :func:`xml_text` - for XML 1.0 (JUnit, SVG, XHTML): :func:`visible` (XML 1.0, section 2.2,
   allows no C0 character but tab, newline and carriage return; a NUL makes the document
   unparseable). Markup characters are escaped by the XML writer afterwards.
@@ -70,10 +71,11 @@ def visible(text: Any, keep: str = "") -> str:
     return "".join(_escape(ch) if _unsafe(ch, keep) else ch for ch in s)
 
 
-def terminal_text(text: Any, keep: str = "\n") -> str:
-    """Text for the terminal (module docstring); newlines are kept by default (our own
-    multi-line messages: a parse error's source line and caret), pass ``keep=""`` for
-    one-line fields."""
+def terminal_text(text: Any, keep: str = "") -> str:
+    """Text for the terminal (module docstring), newlines escaped too (a newline in a log's
+    topic, frame id or joint name cannot forge a line); pass ``keep="\n"`` only for our own
+    multi-line messages (a parse error's source line and caret) whose parts from the inputs
+    were escaped where they were written."""
     return visible(text, keep)
 
 

@@ -32,7 +32,7 @@ from .codegen import file_stems
 from .ir import Node
 from .printers import mangle, to_smv
 
-_TERM = re.compile(r"^[a-z][A-Za-z0-9_]*$")
+_TERM = re.compile(r"[a-z][A-Za-z0-9_]*")  # fullmatch: "$" would take a final newline
 
 
 class AjpfError(FretishError):
@@ -48,14 +48,44 @@ def load_mapping(path: str | None) -> dict:
             data = tomllib.load(fh)
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise AjpfError(f"{path}: cannot read the AJPF mapping: {exc}") from None
+    _check_mapping(path, data)
+    return data
+
+
+def _toml_type(value: object) -> str:
+    """A decoded TOML value's type, in words."""
+    return {dict: "a table", list: "an array", bool: "a boolean", int: "an integer",
+            float: "a float", str: "a string"}.get(type(value), type(value).__name__)
+
+
+def _check_mapping(path: str, data: dict) -> None:
+    """Every value of a ``--psl-map`` file of the type the module docstring gives: a top
+    ``agent`` string, ``[variables.NAME]`` tables of strings (``kind`` one of belief,
+    percept, action), ``[comparisons]`` of strings. Raises :class:`AjpfError` naming the
+    file and the key."""
+    def want_str(value: object, key: str) -> None:
+        if not isinstance(value, str):
+            raise AjpfError(f"{path}: {key} must be a string, not {_toml_type(value)}")
+
+    if "agent" in data:
+        want_str(data["agent"], "agent")
+    for table in ("variables", "comparisons"):
+        if not isinstance(data.get(table, {}), dict):
+            raise AjpfError(f"{path}: {table} must be a table, not "
+                            f"{_toml_type(data[table])}")
     for var, spec in data.get("variables", {}).items():
         if not isinstance(spec, dict):
-            raise AjpfError(f"{path}: variables.{var} must be a table")
+            raise AjpfError(f"{path}: variables.{one_line(var)} must be a table, not "
+                            f"{_toml_type(spec)}")
+        for key in ("kind", "name", "agent"):
+            if key in spec:
+                want_str(spec[key], f"variables.{one_line(var)}.{key}")
         kind = spec.get("kind", "belief")
         if kind not in ("belief", "percept", "action"):
-            raise AjpfError(f"{path}: variables.{var}.kind must be belief, percept or action, "
-                            f"not {kind!r}")
-    return data
+            raise AjpfError(f"{path}: variables.{one_line(var)}.kind must be belief, percept "
+                            f"or action, not {one_line(repr(kind))}")
+    for text, name in data.get("comparisons", {}).items():
+        want_str(name, f"comparisons.{one_line(repr(text))}")
 
 
 def _label(rid: str, used: set) -> str:
@@ -68,9 +98,9 @@ def _label(rid: str, used: set) -> str:
 
 
 def _term(name: str, what: str) -> str:
-    if not _TERM.match(name):
+    if not isinstance(name, str) or not _TERM.fullmatch(name):
         raise AjpfError(
-            f"{what} '{name}' is not a Gwendolen term (it must start with a lower-case letter "
+            f"{what} '{one_line(repr(name))[1:-1]}' is not a Gwendolen term (it must start with a lower-case letter "
             "and hold only letters, digits and '_'); give it a name in the --psl-map file")
     return name
 

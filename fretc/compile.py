@@ -14,6 +14,8 @@ import sys
 
 import click
 
+from common.textsafe import visible
+
 from .options import shown as _shown
 
 __all__ = ["compile_cmd"]
@@ -356,8 +358,9 @@ def _emit_ltl(compiled) -> None:
     """``--emit ltl``'s text: per requirement its id, place, text, key, ft, ft_inf, pt and
     warnings (or its error)."""
     for c in compiled:
-        click.echo(_shown(f"{c.id}  ({c.location()})"))
-        click.echo(_shown(f"  text    {c.text}"))
+        # one line each: a newline in an id or a text (a FRET JSON string) is escaped
+        click.echo(visible(f"{c.id}  ({c.location()})"))
+        click.echo(visible(f"  text    {c.text}"))
         if c.formalization is not None:
             f = c.formalization
             click.echo(f"  key     {f.key}")

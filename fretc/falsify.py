@@ -35,7 +35,7 @@ __all__ = ["falsify_cmd"]
                    "range per parameter (sim/spaces/*.toml).")
 @click.option("--budget", type=click.IntRange(min=1), default=50, show_default=True,
               help="Simulator runs at most.")
-@click.option("--seed", type=click.IntRange(min=0), default=1, show_default=True,
+@click.option("--seed", type=click.IntRange(min=0, max=2**32 - 1), default=1, show_default=True,
               help="CMA-ES's seed: the same seed gives the same runs.")
 @click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
               help="Output folder: falsify.json/.md/.svg, runs/run-NNNN.mcap and their "
@@ -65,7 +65,8 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
     Exit status:
       0  the budget ended without a run violating a target
       1  a run violates a target requirement
-      2  usage or input errors"""
+      2  usage or input errors
+      130  interrupted (Ctrl-C) without a violating run; the runs so far are written"""
     # lazy: the simulator, the audit engine and cma only when the command runs
     from audit import AuditConfig, AuditInputError, load_plan
     from audit.fleet import RayUnavailable
@@ -118,5 +119,6 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
     kept = [r["mcap"] for r in doc["runs"] if r["mcap"]]
     click.echo(f"{len(search.runs)} runs; "
                + (f"falsified: {', '.join(kept)} in {output}" if search.falsified
-                  else "not falsified within the budget"))
+                  else "interrupted (Ctrl-C) before the budget ended, not falsified so far"
+                  if search.interrupted else "not falsified within the budget"))
     ctx.exit(doc["exit_code"])

@@ -140,13 +140,23 @@ class _Pending:
 
 
 def _read_text(path: str) -> str:
+    """The file's text (UTF-8, a BOM dropped). Raises :class:`FretishFileError`: an
+    unreadable file, or a byte that is not UTF-8 (at its line and column)."""
     try:
-        with open(path, encoding="utf-8-sig") as f:
-            return f.read()
-    except UnicodeDecodeError as e:
-        raise FretishFileError(f"not UTF-8 text ({e.reason})", source=str(path)) from None
+        with open(path, "rb") as f:
+            raw = f.read()
     except OSError as e:
         raise FretishFileError(f"cannot read: {e.strerror}", source=str(path)) from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        skip = 3 if raw.startswith(b"\xef\xbb\xbf") else 0
+        start = e.start + skip if e.object is not raw else e.start
+        line = raw.count(b"\n", 0, start) + 1
+        head = raw[raw.rfind(b"\n", 0, start) + 1:start]
+        col = len(head.decode("utf-8", errors="replace")) + 1
+        raise FretishFileError(f"not UTF-8 text: byte 0x{raw[start]:02x} ({e.reason})",
+                               source=str(path), line=line, column=col) from None
 
 
 def _load_fret(path: str) -> list[RequirementEntry]:
@@ -337,7 +347,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
     starts = [m.end() for m in re.finditer(_FULLTEXT, raw)]
     exact_positions = len(starts) == len(reqs)
     entries = []
-    seen: dict[tuple[object, str], int] = {}
+    seen: dict[str, tuple[int, int, int, str | None]] = {}
     for k, obj in enumerate(reqs):
         where = f"requirement #{k + 1}"
         line, col = _line_col(raw, starts[k]) if exact_positions else (1, 1)
@@ -352,14 +362,19 @@ def _load_json(path: str) -> list[RequirementEntry]:
         if not isinstance(text, str):
             raise FretishFileError(f"requirement {rid} has no \"fulltext\" string",
                                    source=source, line=line, column=col)
-        key = (obj.get("project"), rid)
-        if key in seen:
+        _check_json_strings(obj, where, source, line, col)
+        project = obj.get("project")
+        first = seen.get(rid)
+        if first is not None:  # ids are unique across a run, whatever their project
+            k0, line0, col0, project0 = first
             raise FretishFileError(
-                f"duplicate requirement id '{rid}'"
-                + (f" in project '{key[0]}'" if key[0] is not None else "")
-                + f" (first: requirement #{seen[key] + 1})", source=source, line=line,
+                f"duplicate requirement id {rid!r}"
+                + (f" (project {project!r})" if project is not None else "")
+                + f": requirement #{k0 + 1} at {source}:{line0}:{col0}"
+                + (f" (project {project0!r})" if project0 is not None else "")
+                + " has it too; ids are unique across a run", source=source, line=line,
                 column=col)
-        seen[key] = k
+        seen[rid] = (k, line, col, project)
         rationale = obj.get("rationale")
         parent = obj.get("parent_reqid")
         entry = RequirementEntry(
@@ -373,6 +388,30 @@ def _load_json(path: str) -> list[RequirementEntry]:
             entry.error = e
         entries.append(entry)
     return entries
+
+
+def _check_json_strings(obj: dict, where: str, source: str, line: int, col: int) -> None:
+    """The fields of one FRET JSON requirement that fretc reads: ``project`` absent, null
+    or a string, and no lone surrogate (a JSON
+    ``\\ud800`` escape, which no UTF-8 output can hold) in any string. Raises
+    :class:`FretishFileError` at the requirement."""
+    project = obj.get("project")
+    if project is not None and not isinstance(project, str):
+        raise FretishFileError(f"{where}: \"project\" must be a string, not "
+                               f"{_json_type(project)}", source=source, line=line,
+                               column=col)
+    for key in ("reqid", "project", "fulltext", "rationale", "parent_reqid"):
+        value = obj.get(key)
+        if isinstance(value, str) and any(0xD800 <= ord(ch) <= 0xDFFF for ch in value):
+            raise FretishFileError(f"{where}: \"{key}\" holds a lone surrogate (a "
+                                   "\\uD800-\\uDFFF escape without its pair), which is not "
+                                   "text", source=source, line=line, column=col)
+
+
+def _json_type(value: object) -> str:
+    """The JSON type of a decoded value, in words."""
+    return {list: "a list", dict: "an object", bool: "a boolean", int: "a number",
+            float: "a number", str: "a string"}.get(type(value), type(value).__name__)
 
 
 # --------------------------------------------------------------------------- entry point

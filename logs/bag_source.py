@@ -19,7 +19,7 @@ from rosbags.rosbag2 import Reader as Ros2Reader, ReaderError as Ros2ReaderError
 from rosbags.typesys.store import Typestore
 
 from common import problems as P
-from common.problems import DataProblem, LogError
+from common.problems import LogError
 from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, build_typestore
 from .decoding import decoder_for
@@ -120,8 +120,7 @@ class BagSource(LogSource):
             dec = decoder_for(store, typename, encoding, self._fields_for(conn.topic))
         except UnsupportedSchema as exc:
             kind = P.UNKNOWN_ENCODING if encoding not in SCHEMA_FOR_ENCODING else P.UNKNOWN_SCHEMA
-            self._open_problems.add(DataProblem(kind, conn.topic, log_time,
-                                                f"{exc}; messages on this topic are skipped"))
+            self._no_decoder[conn.id] = (kind, str(exc))
         self._decoders[conn.id] = dec
         return dec
 
@@ -148,13 +147,15 @@ class BagSource(LogSource):
                         continue
                     dec = self._decoder(conn, log_time)
                     if dec is None:
+                        kind, why = self._no_decoder[conn.id]
+                        self._lose(kind, conn.topic, conn.id, log_time, why)
                         continue
                     try:
                         data = dec(raw)
                     except DECODE_ERRORS as exc:
-                        self._problem(P.UNDECODABLE, conn.topic, log_time,
-                                      f"payload of {len(raw)} bytes does not deserialize "
-                                      f"({type(exc).__name__}: {exc}); message skipped")
+                        self._lose(P.UNDECODABLE, conn.topic, conn.id, log_time,
+                                   f"a payload of {len(raw)} bytes does not deserialize: "
+                                   f"{type(exc).__name__}: {exc}")
                         continue
                     last = log_time
                     self.counts[conn.topic] = self.counts.get(conn.topic, 0) + 1

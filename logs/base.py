@@ -80,6 +80,11 @@ class LogSource:
         damage_cut: True when the damage loses messages (truncation or gap), so that only the
             span before ``damage_time`` was read completely; False for damage that loses none
             (summary, data-section CRC).
+        lost: the messages of the latest pass that were present but not decoded (a schema
+            that lies or cannot be read, an unknown message encoding, a payload that does not
+            deserialize): ``(kind, topic, channel) -> [first, last, count, reason]`` (log
+            times in ns). Each one ends the held value of its topic at its log time, as a
+            cut does (:meth:`intact_end_of`); ../shared/DESIGN.md "Damage is never evidence".
 
     ``problems`` lists the damage found at open time and during the most recent pass (capped
     per kind and topic, see :mod:`common.problems`); ``problem_counts`` counts all of it.
@@ -102,22 +107,72 @@ class LogSource:
         self._start_time: int | None = None
         self._end_time: int | None = None
         self._decoders: dict[int, Any] = {}  # channel/connection id -> decoder or None
+        #: channel/connection id -> (problem kind, reason) of a channel without a decoder
+        self._no_decoder: dict[int, tuple[str, str]] = {}
+        self.lost: dict[tuple[str, str, int | None], list] = {}
         #: topic -> field paths to decode (:func:`logs.selective.install`); None: all
         self._wanted_fields: dict[str, frozenset[tuple]] | None = None
 
     # -- problems -------------------------------------------------------------------------------
     @property
     def problems(self) -> list[DataProblem]:
-        """Damage found when opening and during the latest pass, in the order found."""
-        return self._open_problems.problems + self._pass_problems.problems
+        """Damage found when opening and during the latest pass, in the order found, then
+        one problem per channel whose messages were not decoded (:attr:`lost`)."""
+        return (self._open_problems.problems + self._pass_problems.problems
+                + self.lost_problems())
 
     @property
     def problem_counts(self) -> dict[tuple[str, str | None], int]:
-        """Number of problems per (kind, topic), including those beyond the kept cap."""
+        """Number of problems per (kind, topic), including those beyond the kept cap; for
+        messages not decoded, the number of messages lost."""
         out = dict(self._open_problems.counts)
         for k, v in self._pass_problems.counts.items():
             out[k] = out.get(k, 0) + v
+        for (kind, topic, _ch), (_a, _b, count, _why) in self.lost.items():
+            out[(kind, topic)] = out.get((kind, topic), 0) + count
         return out
+
+    def lost_problems(self) -> list[DataProblem]:
+        """One :class:`DataProblem` per (kind, topic, channel) of :attr:`lost`, earliest
+        first: the count of messages lost, the channel, the first and last log time."""
+        out = []
+        for (kind, topic, channel), (first, last, count, why) in sorted(
+                self.lost.items(), key=lambda kv: (kv[1][0], kv[0][0], kv[0][1],
+                                                   -1 if kv[0][2] is None else kv[0][2])):
+            on = f" on channel {channel}" if channel is not None else ""
+            plural = "message" if count == 1 else "messages"
+            out.append(DataProblem(
+                kind, topic, first,
+                f"{count} {plural}{on} not decoded ({why}); the held value of {topic} ends "
+                f"at log time {first} ns: ticks from there on are not judged for the "
+                f"requirements that read it", last))
+        return out
+
+    def _lose(self, kind: str, topic: str, channel: int | None, log_time: int,
+              why: str) -> None:
+        """A message of ``topic`` present at ``log_time`` (ns) but not decoded: counted in
+        :attr:`lost` under ``(kind, topic, channel)``; ``why`` (the first one's) says why."""
+        key = (kind, topic, channel)
+        got = self.lost.get(key)
+        if got is None:
+            self.lost[key] = [log_time, log_time, 1, why]
+        else:
+            got[0] = min(got[0], log_time)
+            got[1] = max(got[1], log_time)
+            got[2] += 1
+
+    def lost_from(self, topics) -> int | None:
+        """The earliest log time (ns) of a message of ``topics`` lost in the latest pass
+        (:attr:`lost`), or None."""
+        firsts = [v[0] for (_k, t, _c), v in self.lost.items() if t in topics]
+        return min(firsts) if firsts else None
+
+    def intact_end_of(self, topics) -> int | None:
+        """Exclusive log-time bound (ns) of the span of ``topics`` read completely in the
+        latest pass: :attr:`intact_end`, or earlier when a message of one of ``topics`` was
+        present but not decoded (its log time); None when nothing was lost."""
+        ends = [e for e in (self.intact_end, self.lost_from(topics)) if e is not None]
+        return min(ends) if ends else None
 
     def _problem(self, kind: str, topic: str | None, log_time: int | None, detail: str,
                  end_time: int | None = None) -> None:
@@ -131,6 +186,7 @@ class LogSource:
         self.damage_cut = False
         self.gaps = []
         self._pass_problems = ProblemLog()
+        self.lost = {}
 
     def _gap(self, start: int | None, end: int | None = None) -> None:
         """Record data lost from log time ``start`` (None: unknown, then the intact span

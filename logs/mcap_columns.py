@@ -210,8 +210,10 @@ class _Pass:
         members = sorted(set(which.tolist()))
         typename = self.decoders[groups[members[0]].cid].typename
         fast = sum(len(idx[which == m]) for m in members if groups[m].columns is not None)
-        src.records[topic] = src.records.get(topic, 0) + fast  # the others: by _deliver
-        src.counts[topic] = src.counts.get(topic, 0) + fast
+        if fast:  # the others: by _deliver (a topic none of whose messages is decoded
+            # is not counted, as in the message-by-message pass)
+            src.records[topic] = src.records.get(topic, 0) + fast
+            src.counts[topic] = src.counts.get(topic, 0) + fast
         if any(groups[m].columns is None for m in members):
             keep, data = [], []
             for k, (w, i) in enumerate(zip(which.tolist(), idx.tolist())):

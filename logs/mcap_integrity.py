@@ -285,9 +285,11 @@ def index_disagreement(path: str, index: McapIndex) -> str | None:
 
     Disagreements: a Chunk record no ChunkIndex points to, or a ChunkIndex pointing at no
     Chunk record of its length; a ChunkIndex whose times differ from its chunk's or run
-    backwards; a Message record outside chunks (no index covers it); a channel the chunk
-    indexes name, or a schema a channel names, that the summary does not hold (the summary
-    need not repeat Schema and Channel records: the mcap writer's ``repeat_channels=False``).
+    backwards; a Message record outside chunks (no index covers it). A channel or schema
+    the summary does not repeat is none: the MCAP specification makes the summary's Schema
+    and Channel records optional (the mcap writer's ``repeat_channels=False``,
+    ``repeat_schemas=False``); :func:`missing_records` says when the reader must take them
+    from the data section.
     """
     chunks: dict[int, tuple[int, int, int]] = {}  # offset -> (record length, start, end)
     with open(path, "rb") as f:
@@ -308,7 +310,7 @@ def index_disagreement(path: str, index: McapIndex) -> str | None:
             if opcode == Opcode.CHUNK and len(head) == 25:
                 chunks[pos] = (9 + length, *struct.unpack_from("<QQ", head, 9))
             pos += 9 + length
-    return _compare_chunks(chunks, index) or _missing_channels(index)
+    return _compare_chunks(chunks, index)
 
 
 def _compare_chunks(chunks: dict[int, tuple[int, int, int]], index: McapIndex) -> str | None:
@@ -330,10 +332,11 @@ def _compare_chunks(chunks: dict[int, tuple[int, int, int]], index: McapIndex) -
     return None
 
 
-def _missing_channels(index: McapIndex) -> str | None:
+def missing_records(index: McapIndex) -> str | None:
     """A channel or schema the index needs that the summary does not hold (channels named by
     the chunks' message indexes or by the Statistics record; a chunked summary with no Channel
-    record at all cannot name the topics)."""
+    record at all cannot name the topics), in words; None when the summary holds them all.
+    Not damage: the reader takes them from the data section."""
     if index.chunk_indexes and not index.channels:
         return "the summary holds no Channel record"
     st = index.statistics

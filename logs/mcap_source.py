@@ -35,7 +35,7 @@ from .base import LogSource, Message, header_stamp
 from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
 from .encodings import SELF_DESCRIBING, type_name
 from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
-from .mcap_integrity import index_disagreement, read_summary
+from .mcap_integrity import index_disagreement, missing_records, read_summary
 from .mcap_columns import TopicBlock, column_pass
 from .mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
 from .mcap_records import crc_skip, parse_record
@@ -110,6 +110,8 @@ class McapSource(LogSource):
         self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
+        if self._index is not None and missing_records(self._index) is not None:
+            self._complete_index()
         if self._index is not None:
             st = self._index.statistics
             if st is not None and st.message_count:
@@ -118,6 +120,23 @@ class McapSource(LogSource):
                 self._start_time = min(c.message_start_time for c in self._index.chunk_indexes)
                 self._end_time = max(c.message_end_time for c in self._index.chunk_indexes)
 
+
+    def _complete_index(self) -> None:
+        """Add to the index the Schema and Channel records the summary does not repeat
+        (optional there, MCAP spec "Summary Section"), from a scan of the data section
+        (chunks decompressed, messages not decoded). Damage the scan meets is not kept: each
+        pass reports it again."""
+        assert self._index is not None
+        for _ in _LinearPass(self, wanted=frozenset(), decode=False).run():
+            pass
+        assert self._scanned is not None
+        schemas, channels = self._scanned
+        for sid, sc in schemas.items():
+            self._index.schemas.setdefault(sid, sc)
+        for cid, ch in channels.items():
+            self._index.channels.setdefault(cid, ch)
+        self._scanned = None
+        self._begin_pass()
 
     @property
     def indexed(self) -> bool:
@@ -166,26 +185,27 @@ class McapSource(LogSource):
         except UnsupportedSchema as exc:
             kind = (P.UNKNOWN_SCHEMA if channel.message_encoding in SCHEMA_FOR_ENCODING
                     or channel.message_encoding in SELF_DESCRIBING else P.UNKNOWN_ENCODING)
-            self._open_problems.add(DataProblem(
-                kind, channel.topic, log_time,
-                f"{exc}; messages on this topic are skipped"))
+            self._no_decoder[channel.id] = (kind, str(exc))
         self._decoders[channel.id] = dec
         return dec
 
     def _deliver(self, channel: Channel, rec: McapMessage, schemas: dict[int, Schema]
                  ) -> Message | None:
-        """``rec`` decoded and counted, or None (no decoder, or a payload that does not
-        deserialize: an ``undecodable`` problem)."""
+        """``rec`` decoded and counted, or None: no decoder (``unknown_schema`` /
+        ``unknown_encoding``) or a payload that does not deserialize (``undecodable``), a
+        message lost (:meth:`LogSource._lose`)."""
         self.records[channel.topic] = self.records.get(channel.topic, 0) + 1
         dec = self._decoder(channel, schemas, rec.log_time)
         if dec is None:
+            kind, why = self._no_decoder[channel.id]
+            self._lose(kind, channel.topic, channel.id, rec.log_time, why)
             return None
         try:
             data = dec(rec.data)
         except DECODE_ERRORS as exc:
-            self._problem(P.UNDECODABLE, channel.topic, rec.log_time,
-                          f"payload of {len(rec.data)} bytes does not deserialize "
-                          f"({type(exc).__name__}: {exc}); message skipped")
+            self._lose(P.UNDECODABLE, channel.topic, channel.id, rec.log_time,
+                       f"a payload of {len(rec.data)} bytes does not deserialize: "
+                       f"{type(exc).__name__}: {exc}")
             return None
         topic = channel.topic
         self.counts[topic] = self.counts.get(topic, 0) + 1

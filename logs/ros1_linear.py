@@ -139,6 +139,7 @@ class _Ros1Pass:
         self.queue = ReorderQueue()
         self.last_good: int | None = None
         self.decoders: dict[int, Callable[[bytes], Any] | None] = {}
+        self.why: dict[int, str] = {}  # connection -> why it has no decoder
 
     def run(self) -> Iterator[Message]:
         src = self.src
@@ -219,12 +220,13 @@ class _Ros1Pass:
                 continue
             dec = self._decoder(conn, c, t)
             if dec is None:
+                src._lose(P.UNKNOWN_SCHEMA, c[0], conn, t, self.why[conn])
                 continue
             try:
                 msg = dec(body)
             except DECODE_ERRORS as exc:
-                src._problem(P.UNDECODABLE, c[0], t, f"payload of {len(body)} bytes does "
-                             f"not deserialize ({type(exc).__name__}); message skipped")
+                src._lose(P.UNDECODABLE, c[0], conn, t, f"a payload of {len(body)} bytes "
+                          f"does not deserialize: {type(exc).__name__}")
                 continue
             self.queue.delivered(t)
             src.counts[c[0]] = src.counts.get(c[0], 0) + 1
@@ -239,6 +241,5 @@ class _Ros1Pass:
                 self.decoders[conn] = decoder_for(store, typename, "ros1")
             except UnsupportedSchema as exc:
                 self.decoders[conn] = None
-                self.src._problem(P.UNKNOWN_SCHEMA, c[0], t,
-                                  f"{exc}; messages on this topic are skipped")
+                self.why[conn] = str(exc)
         return self.decoders[conn]

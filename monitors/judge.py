@@ -35,8 +35,9 @@ from . import stepwise
 from .interval import Evidence, EvidenceUnsupported, evaluate_requirement
 from .robustness import Robustness, robustness
 from .vectorized import VectorizeError, atom_letters, pt_series, supports
+from .nan import nan_ticks_of
 
-__all__ = ["Judgement", "judge", "ltl3_verdict"]
+__all__ = ["Judgement", "judge", "ltl3_verdict", "nan_ticks"]
 
 
 @dataclass
@@ -175,3 +176,14 @@ def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
         if hit is not None and (best[1] is None or hit < best[1]):
             best = (outcome, hit)
     return best
+
+
+def nan_ticks(requirement, columns: Mapping[str, np.ndarray], n: int) -> np.ndarray:
+    """The ticks (bool array of ``n``) at which a comparison of ``requirement`` (scope mode,
+    condition, stop condition, response) reads NaN: unread ticks (:mod:`monitors.nan`).
+    A free-form requirement has none."""
+    if requirement.freeform:
+        return np.zeros(n, dtype=np.bool_)
+    exprs = [requirement.scope.mode, requirement.condition.expr, requirement.timing.stop,
+             requirement.response] + [p.expr for p in requirement.condition.parts]
+    return nan_ticks_of([e for e in exprs if e is not None], columns, n)

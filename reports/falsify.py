@@ -58,7 +58,8 @@ def search_json(search: Search) -> dict:
                  for r in search.runs],
         "smallest": smallest,
         "falsified": search.falsified,
-        "exit_code": 1 if search.falsified else 0,
+        "interrupted": search.interrupted,
+        "exit_code": 1 if search.falsified else (130 if search.interrupted else 0),
     }
 
 
@@ -70,6 +71,8 @@ def _markdown(doc: dict) -> str:
              f"run{'' if len(doc['runs']) == 1 else 's'} made; targets {', '.join(doc['targets'])}; simulator seed {sp['sim_seed']}.", "",
              ("**Falsified**: a run violates a target requirement (exit 1)."
               if doc["falsified"] else
+              "**Interrupted** (Ctrl-C) before the budget ended, not falsified by the runs "
+              "made (exit 130)." if doc.get("interrupted") else
               "**Not falsified** within the budget (exit 0)."), "",
              "## Smallest robustness per requirement", "",
              "| requirement | smallest robustness | run | tick |", "|---|---|---|---|"]

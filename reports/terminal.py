@@ -30,13 +30,16 @@ _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
 
 
 def escape(text) -> str:
-    """Text from the inputs for rich markup: control and bidi characters shown escaped
-    (:func:`common.textsafe.terminal_text`), then markup escaped."""
-    return _markup_escape(terminal_text(text))
+    """Text from the inputs for rich markup: newlines, control and bidi characters shown
+    escaped (:func:`common.textsafe.terminal_text`: a newline in a topic, a frame id or a
+    joint name cannot start a line of its own), then markup escaped."""
+    return _markup_escape(terminal_text(text, keep=""))
 
 
-def _T(text) -> Text:
-    return Text(terminal_text(text))
+def _T(text, keep: str = "") -> Text:
+    """``text`` as one line (``keep="\n"``: our own multi-line diagnostics, whose parts
+    from the inputs are escaped where they are written)."""
+    return Text(terminal_text(text, keep=keep))
 
 
 def short_log_name(path: str) -> str:
@@ -133,6 +136,8 @@ def _print_plan(console, plan, n_logs: int) -> None:
     elif b is not None:
         tick = (f"tick every {b.tick.period_ns / 1e6:g} ms" if b.tick.period_ns
                 else f"one tick per {b.tick.topic} message")
+        if b.tick.nan == "false":
+            tick += ", NaN compares false"
         clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
                 f"{b.time_base} time)"
     console.print(f"fretc audit: {len(plan.requirements)} requirements, {n_logs} "
@@ -200,7 +205,9 @@ def _print_errors(console, logs: list[LogAudit]) -> None:
                     short_log_name(la.log))
     for (kind, text), where in seen.items():
         on = where[0] if len(where) == 1 else f"{len(where)} logs"
-        console.print(Text(f"{kind} ", style=_STYLE[kind]) + _T(f"({on}) {text}"))
+        # an error may be a requirement's diagnostic (its source line and caret under it)
+        console.print(Text(f"{kind} ", style=_STYLE[kind])
+                      + _T(f"({on}) {text}", keep="\n" if kind == "error" else ""))
 
 
 def _print_counts(console, logs: list[LogAudit], input_errors: bool,

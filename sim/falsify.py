@@ -73,6 +73,8 @@ class Search:
     seed: int
     targets: list[str]
     runs: list[Run] = field(default_factory=list)
+    #: the search was stopped by Ctrl-C before its budget ended (``runs``: those finished)
+    interrupted: bool = False
 
     @property
     def falsified(self) -> bool:
@@ -121,6 +123,14 @@ def _make_run(index: int, parameters: dict, la, targets: list[str]) -> Run:
                _objective([rob.get(t) for t in targets]), audit=la)
 
 
+class _Interrupted(KeyboardInterrupt):
+    """Ctrl-C during a batch: ``runs`` are the batch's runs finished before it."""
+
+    def __init__(self, runs: list[Run]) -> None:
+        super().__init__()
+        self.runs = runs
+
+
 class _Evaluator:
     """Simulates and audits a batch of points, one after another or on Ray."""
 
@@ -140,12 +150,15 @@ class _Evaluator:
         if self.ray_address is not None:
             return self._batch_ray(start, points, targets)
         from audit import audit_log
-        runs = []
-        for k, p in enumerate(points):
-            path = simulate(self.space, p, self.path(start + k))
-            runs.append(_make_run(start + k, p, audit_log(self.plan, path), targets))
-            if first and runs[-1].violated:
-                break
+        runs: list[Run] = []
+        try:
+            for k, p in enumerate(points):
+                path = simulate(self.space, p, self.path(start + k))
+                runs.append(_make_run(start + k, p, audit_log(self.plan, path), targets))
+                if first and runs[-1].violated:
+                    break
+        except KeyboardInterrupt:
+            raise _Interrupted(runs) from None
         return runs
 
     def _batch_ray(self, start: int, points: list[dict], targets: list[str]) -> list[Run]:
@@ -183,6 +196,9 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
         ray_address: run on Ray (``"local"`` or a cluster address, as ``fretc audit --ray``).
         progress: called with each run once it is audited.
 
+    Ctrl-C (KeyboardInterrupt) ends the search: the runs finished so far are returned with
+    ``interrupted`` set (the run being made is dropped, its MCAP deleted).
+
     Raises:
         audit.fleet.RayUnavailable: ``ray_address`` given and Ray cannot start.
         OSError: the output folder cannot be written.
@@ -201,7 +217,9 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
         while len(search.runs) < budget:
             es = cma.CMAEvolutionStrategy(
                 [0.5] * len(space.parameters), 0.3,
-                {"seed": seed + restart + 1, "bounds": [0.0, 1.0], "verbose": -9})
+                # cma's seed: 0 means "from the clock", numpy's takes 32 bits
+                {"seed": (seed + restart) % (2**32 - 1) + 1, "bounds": [0.0, 1.0],
+                 "verbose": -9})
             made = len(search.runs)
             while not es.stop() and len(search.runs) < budget:
                 xs = es.ask()
@@ -217,6 +235,14 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
             if len(search.runs) == made:  # CMA-ES stopped before asking: nothing to gain
                 break
             restart += 1
+        return search
+    except KeyboardInterrupt as exc:  # Ctrl-C: the runs so far, marked interrupted
+        search.interrupted = True
+        if isinstance(exc, _Interrupted):
+            _take(search, exc.runs, first, violated_before, outp, progress)
+        for p in (outp / "runs").glob("run-*.mcap"):  # the run being made when it came
+            if int(p.stem[4:]) > len(search.runs):
+                os.remove(p)
         return search
     finally:
         ev.close()

@@ -29,6 +29,7 @@ from pathlib import Path
 from common.errors import FretcError, Where
 
 from .scenarios import DRUM_RADIUS, SCENARIOS, Scenario
+from .simulation import STEP_MS
 from .world import Barrel
 
 __all__ = ["PARAMETERS", "Space", "SpaceError", "load_space", "apply"]
@@ -47,6 +48,10 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "obstacle_start": ("s", "the sim time the moving obstacles start walking"),
     "lidar_sigma": ("m", "the LiDAR's range noise (standard deviation)"),
 }
+
+#: The largest magnitude of a range's bound, in the parameter's unit: far past any map
+#: (metres) or run (seconds), and small enough that squares and sums stay finite.
+MAX_MAGNITUDE = 1e9
 
 _NEEDS = {"obstacle_x": "obstacle_y", "obstacle_y": "obstacle_x",
           "dropout_duration": "dropout_start"}
@@ -79,6 +84,12 @@ class Space:
             u = min(max(float(u), 0.0), 1.0)
             out[name] = round(lo + u * (hi - lo), 6)
         return out
+
+
+def _toml_type(value: object) -> str:
+    """A decoded TOML value's type, in words."""
+    return {dict: "table", list: "array", bool: "boolean", int: "integer",
+            float: "float", str: "string"}.get(type(value), type(value).__name__)
 
 
 def _line_of(text: str, key: str) -> int | None:
@@ -119,16 +130,21 @@ def load_space(path: str | Path) -> Space:
         fail(unknown[0], f"unknown key {unknown[0]!r}; known: scenario, seed, max_time, "
                          "[parameters]")
     name = doc.get("scenario")
-    if name not in SCENARIOS:
-        fail("scenario", f"scenario {name!r} is not one of {', '.join(SCENARIOS)}")
+    if not isinstance(name, str) or name not in SCENARIOS:
+        shown = repr(name) if isinstance(name, str) else f"a TOML {_toml_type(name)}"
+        fail("scenario", f"scenario {shown} is not one of {', '.join(SCENARIOS)}")
     sc = SCENARIOS[name]
     seed = doc.get("seed", 1)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        fail("seed", "seed must be an integer >= 0")
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**32:
+        fail("seed", "seed must be an integer in [0, 2^32 - 1] (the simulator's generator "
+                     "takes 32 bits)")
     if "max_time" in doc:
         mt = doc["max_time"]
-        if not isinstance(mt, (int, float)) or isinstance(mt, bool) or not mt > 0:
-            fail("max_time", "max_time must be a number of seconds > 0")
+        tick = STEP_MS / 1000
+        if (not isinstance(mt, (int, float)) or isinstance(mt, bool) or not math.isfinite(mt)
+                or not mt >= tick):
+            fail("max_time", f"max_time must be a finite number of seconds, at least one "
+                             f"simulator step ({tick:g} s)")
         sc = replace(sc, max_time=float(mt))
     params = doc.get("parameters")
     if not isinstance(params, dict) or not params:
@@ -143,6 +159,13 @@ def load_space(path: str | Path) -> Space:
                            and math.isfinite(x) for x in rng) or rng[0] > rng[1]):
             fail(key, f"{key} must be [low, high] with finite numbers, low <= high "
                       f"({PARAMETERS[key][0]})")
+        if not math.isfinite(float(rng[1]) - float(rng[0])):
+            fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] is wider than a float can "
+                      "hold (high - low overflows)")
+        if max(abs(rng[0]), abs(rng[1])) > MAX_MAGNITUDE:
+            fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] goes beyond "
+                      f"+-{MAX_MAGNITUDE:g} {PARAMETERS[key][0]} (the simulator's arithmetic "
+                      "on it would overflow)")
         if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
             fail(key, f"{key} cannot be negative")
         if key == "obstacle_speed" and not rng[0] > 0:

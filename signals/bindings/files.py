@@ -8,6 +8,7 @@ are written; anything else gets the line of its table, or none).
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import tomllib
 from collections.abc import Iterable
@@ -20,7 +21,8 @@ from common.problems import BindingError
 from .binding import VARNAME, Binding, compile_expression
 from .expression import ExprLocation, refs
 from .parse import parse_expression
-from .spec import DEFAULT_HEADER_LAG_NS, TIME_BASES, Bindings, LogSelector, TickSpec
+from .spec import (DEFAULT_HEADER_LAG_NS, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
+                   TickSpec)
 
 __all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
 
@@ -139,11 +141,17 @@ def _tick_table(doc: dict[str, Any], source: str, loc: _Locations
         raise BindingError(source, "missing [tick] table: say period = \"100 ms\" or topic = "
                            "\"/scan\" (signals are declared, never guessed)", line=1)
     for key in tick_t:
-        if key not in ("period", "topic", "time", "header_lag", "nominal_rate"):
+        if key not in ("period", "topic", "time", "header_lag", "nominal_rate", "nan"):
             line, col = loc.at("tick", key)
             raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, "
-                               "nominal_rate, time, header_lag)", line=line, col=col)
+                               "nominal_rate, time, header_lag, nan)", line=line, col=col)
     tick = _tick_clock(tick_t, source, loc)
+    if "nan" in tick_t:
+        if tick_t["nan"] not in NAN_POLICIES:
+            line, col = loc.at("tick", "nan")
+            raise BindingError(source, f"[tick] nan must be \"unread\" or \"false\", not "
+                               f"{tick_t['nan']!r}", line=line, col=col)
+        tick = dataclasses.replace(tick, nan=tick_t["nan"])
     if "period" in tick_t and "nominal_rate" in tick_t:
         line, col = loc.at("tick", "nominal_rate")
         raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from common.textsafe import visible
 from common.units import NS_PER_S
 
 __all__ = ["LookupFailed", "TfBuffer", "pick_joint", "compose", "invert", "yaw_of"]
@@ -117,7 +118,7 @@ class TfBuffer:
             known = sorted(set(self.edges) | {e[0] for e in self.edges.values()})
             raise LookupFailed(
                 f"frames {parent!r} and {child!r} do not connect in the transforms of /tf and "
-                f"/tf_static held at this tick (frames: {', '.join(known) or 'none yet'})")
+                f"/tf_static held at this tick (frames: {', '.join(visible(k) for k in known) or 'none yet'})")
         t_p, times_p = self._to_root(up_p, common)
         t_c, times_c = self._to_root(up_c, common)
         if component == "age":
@@ -142,7 +143,7 @@ def pick_joint(values: Any, names: Any, joint: str, text: str) -> float:
         i = names.index(joint)
     except ValueError:
         raise LookupFailed(f"joint({text}, {joint!r}): the message held has no joint "
-                           f"{joint!r} (its joints: {', '.join(names) or 'none'})") from None
+                           f"{joint!r} (its joints: {', '.join(visible(x) for x in names) or 'none'})") from None
     data = getattr(values, "data", values)
     if i >= len(data):
         empty = " (JointState leaves an array empty when the driver does not measure it)" \

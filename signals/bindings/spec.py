@@ -12,8 +12,8 @@ from common.units import NS_PER_S
 
 from .binding import Binding, compile_expression, parse_inline
 
-__all__ = ["DEFAULT_HEADER_LAG_NS", "TIME_BASES", "TickSpec", "LogSelector", "Bindings",
-           "make_bindings"]
+__all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
+           "Bindings", "make_bindings"]
 
 #: The time bases of ``[tick] time``: ``log`` (the log's own time of each message),
 #: ``header`` (every bound message's ``header.stamp``; a message without one is an error),
@@ -23,6 +23,10 @@ TIME_BASES = ("log", "header", "header-where-stamped")
 
 #: ``[tick] header_lag`` when not given: 1 s (ns).
 DEFAULT_HEADER_LAG_NS = NS_PER_S
+
+
+#: The meanings a binding file may give a comparison with NaN (``[tick] nan``).
+NAN_POLICIES = ("unread", "false")
 
 
 @dataclass(frozen=True)
@@ -43,8 +47,15 @@ class TickSpec:
     #: which durations in time units convert to ticks; the audit warns when the measured
     #: rate differs by more than 10 %.
     nominal_period_ns: int | None = None
+    #: what a comparison with NaN in a requirement means (``[tick] nan``,
+    #: :data:`NAN_POLICIES`): ``"unread"`` (the default: the tick's value is neither true
+    #: nor false, the requirement is judged only before it, :mod:`monitors.nan`) or
+    #: ``"false"`` (IEEE 754: every ordered comparison with NaN is false, ``!=`` true).
+    nan: str = "unread"
 
     def __post_init__(self) -> None:
+        if self.nan not in NAN_POLICIES:
+            raise ValueError(f"TickSpec.nan must be one of {NAN_POLICIES}, not {self.nan!r}")
         if (self.period_ns is None) == (self.topic is None):
             raise ValueError("TickSpec needs exactly one of period_ns and topic")
         if self.period_ns is not None and self.period_ns <= 0:

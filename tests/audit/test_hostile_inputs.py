@@ -274,3 +274,26 @@ def test_item12_a_markdown_code_span_holds_any_text(s):
     assert span.endswith(fence)
     # no backtick run of the fence's length inside: the span cannot be closed early
     assert all(len(run) != len(fence) for run in re.findall(r"`+", inner))
+
+
+# --------------------------------------------------------------------------- newlines from logs
+def test_a_newline_in_log_text_cannot_forge_a_terminal_line(tmp_path):
+    """A joint name (log text) with a newline, shown in a terminal error line, is escaped;
+    so are topics in the data problems line."""
+    from _logs import ROS2, write_mcap
+
+    JS = "sensor_msgs/msg/JointState"
+    import numpy as np
+    from _logs import header
+
+    def js(ns):
+        return ROS2.types[JS](header=header(ns), name=["arm\nFORGED: 0 violated"],
+                              position=np.zeros(1), velocity=np.zeros(1), effort=np.zeros(1))
+    log = write_mcap(tmp_path / "j.mcap", [("/joint_states", JS, i * 10**8, js(i * 10**8))
+                                            for i in range(3)])
+    (tmp_path / "r.fret").write_text("R1: arm shall always satisfy w < 5\n")
+    res = run("audit", "-r", tmp_path / "r.fret", "--tick-period", "100 ms",
+              "--bind", 'w=joint(/joint_states.velocity, "wheel")', log, "--no-progress")
+    assert res.exit_code in (2, 3), res.output
+    assert "arm\\x0aFORGED" in res.output, res.output
+    assert not any(line.startswith("FORGED") for line in res.output.splitlines())

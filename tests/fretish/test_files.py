@@ -222,10 +222,15 @@ def test_json_syntax_error_position(tmp_path):
     assert (e.line, e.column) == (2, 17)
 
 
-def test_json_same_reqid_in_two_projects_is_fine(tmp_path):
+def test_json_same_reqid_in_two_projects_is_an_error_naming_both(tmp_path):
+    """Ids are unique across a run, whatever their FRET project (the generated
+    module's MONITORS would hold the id twice)."""
     data = [{"reqid": "a", "project": "P1", "fulltext": "s shall satisfy p"},
             {"reqid": "a", "project": "P2", "fulltext": "s shall satisfy q"}]
-    assert len(load_requirements(write(tmp_path, "x.json", json.dumps(data)))) == 2
+    with pytest.raises(FretishFileError) as e:
+        load_requirements(write(tmp_path, "x.json", json.dumps(data)))
+    msg = str(e.value)
+    assert "'P1'" in msg and "'P2'" in msg and msg.count("x.json:1:") == 2
 
 
 # --------------------------------------------------------------------------- folders

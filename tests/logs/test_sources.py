@@ -321,7 +321,13 @@ def test_unknown_schema_or_encoding_is_an_error_for_that_topic_only(tmp_path):
     # flatbuffer: an encoding fretc does not read
     assert kinds == {(P.UNKNOWN_SCHEMA, "/odd"), (P.UNKNOWN_SCHEMA, "/json"),
                      (P.UNKNOWN_ENCODING, "/fb")}
-    assert src.problem_counts[(P.UNKNOWN_SCHEMA, "/odd")] == 1  # once per topic, not per message
+    # the messages lost are counted, with the channel and first and last log time
+    assert src.problem_counts[(P.UNKNOWN_SCHEMA, "/odd")] == 5
+    assert src.problem_counts[(P.UNKNOWN_SCHEMA, "/json")] == 4
+    assert src.problem_counts[(P.UNKNOWN_ENCODING, "/fb")] == 3
+    odd = next(p for p in src.problems if p.topic == "/odd")
+    assert (odd.log_time, odd.end_time) == (5 * S, 5 * S + 4 * MS)
+    assert "5 messages on channel" in odd.detail
     odd = next(p for p in src.problems if p.topic == "/odd")
     assert odd.log_time == 5 * S and "protobuf" in odd.detail
 
@@ -350,8 +356,15 @@ def test_problems_are_capped_per_kind_and_topic(tmp_path):
     path = write_mcap(tmp_path / "many.mcap", msgs, raw_override={i: b"\x00\x01" for i in range(n)})
     src = open_log(path)
     assert list(src.messages()) == []
-    assert len(src.problems) == P.MAX_PROBLEMS_PER_KIND
+    # messages not decoded: one problem per channel, counting them all
+    assert len(src.problems) == 1
     assert src.problem_counts[(P.UNDECODABLE, "/f")] == n
+    assert (src.problems[0].log_time, src.problems[0].end_time) == (0, (n - 1) * MS)
+    log = P.ProblemLog()
+    for i in range(n):
+        log.add(P.DataProblem(P.OUT_OF_ORDER, "/f", i, "late"))
+    assert len(log.problems) == P.MAX_PROBLEMS_PER_KIND
+    assert log.counts[(P.OUT_OF_ORDER, "/f")] == n
 
 
 def test_linear_topics_scan_and_start_end(tmp_path, chunked):

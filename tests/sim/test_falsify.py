@@ -97,6 +97,19 @@ def test_cli_environment_space_reports_the_nominal_robots_smallest_margin(plan, 
     ("scenario = 'nominal'\n[parameters]\nobstacle_speed = [0.1, 1]\n", ":3",
      "no moving obstacle"),
     ("scenario = 'nominal'\n[parameters\n", ":2", "not a TOML file"),
+    # wrongly typed or out-of-range values are input errors, not exit 4
+    ("scenario = ['nominal']\n[parameters]\nstop_delay = [0, 1]\n", ":1", "a TOML array"),
+    ("scenario = {a = 1}\n[parameters]\nstop_delay = [0, 1]\n", ":1", "a TOML table"),
+    ("scenario = 'nominal'\nmax_time = inf\n[parameters]\nstop_delay = [0, 1]\n", ":2",
+     "finite number of seconds"),
+    ("scenario = 'nominal'\nmax_time = 1e-300\n[parameters]\nstop_delay = [0, 1]\n", ":2",
+     "at least one simulator step"),
+    ("scenario = 'nominal'\nseed = 4294967296\n[parameters]\nstop_delay = [0, 1]\n", ":2",
+     "2^32"),
+    ("scenario = 'nominal'\n[parameters]\nobstacle_x = [-1.7e308, 1.7e308]\n"
+     "obstacle_y = [0, 1]\n", ":3", "overflows"),
+    ("scenario = 'nominal'\n[parameters]\nobstacle_x = [-1e300, 1e300]\nobstacle_y = [0, 1]\n",
+     ":3", "goes beyond"),
 ])
 def test_space_errors_name_file_and_line(tmp_path, body, where, words):
     p = tmp_path / "bad.toml"
@@ -134,3 +147,37 @@ def test_ray_gives_the_runs_of_a_run_without_ray(plan, delay_search, tmp_path):
                   ray_address="local")
     assert [r.parameters for r in got.runs] == [r.parameters for r in search.runs]
     assert [r.robustness for r in got.runs] == [r.robustness for r in search.runs]
+
+
+def test_cli_seed_of_32_bits_or_more_is_a_usage_error(tmp_path):
+    res = CliRunner().invoke(main, ["falsify", "-r", str(ROOT / "requirements"), "--space",
+                                    str(SPACES / "environment.toml"), "-o",
+                                    str(tmp_path / "o"), "--seed", str(2**32)])
+    assert res.exit_code == 2 and "--seed" in res.output, res.output
+
+
+def test_ctrl_c_writes_the_runs_so_far_marked_interrupted(plan, tmp_path, monkeypatch):
+    """Ctrl-C during the third run: the two runs made are the search, written as JSON and
+    report, marked interrupted (exit 130); the third run's file is gone."""
+    import sim.falsify as F
+
+    made = []
+    real = F.simulate
+
+    def simulate(space, parameters, path):
+        if len(made) == 2:
+            open(path, "wb").close()  # a run half written
+            raise KeyboardInterrupt
+        made.append(path)
+        return real(space, parameters, path)
+
+    monkeypatch.setattr(F, "simulate", simulate)
+    out = tmp_path / "o"
+    res = CliRunner().invoke(main, ["falsify", "-r", str(ROOT / "requirements"), "--space",
+                                    str(SPACES / "environment.toml"), "-o", str(out),
+                                    "--budget", "5", "--only", "R5"])
+    assert res.exit_code == 130, res.output
+    doc = json.loads((out / "falsify.json").read_text())
+    assert doc["interrupted"] is True and len(doc["runs"]) == 2 and doc["exit_code"] == 130
+    assert "Interrupted" in (out / "falsify.md").read_text()
+    assert not (out / "runs" / "run-0003.mcap").exists()

@@ -1,0 +1,117 @@
+"""NaN has one meaning: a requirement's comparison with NaN is neither true nor
+false. The tick is unread, reported per requirement as a data problem of kind ``nan``, and
+the verdict is ``unknown`` unless decided before it (LTL3); a binding file may choose IEEE
+754 instead (``[tick] nan = "false"``), which the report shows."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from audit import AuditConfig, audit_log, load_plan
+from common.problems import BindingError
+from fretish.parser import parse
+from monitors.judge import nan_ticks
+from signals.bindings import parse_bindings
+
+from _logs import S, float64, write_mcap
+
+REQS = """\
+R1: agent shall always satisfy v < 5
+R2: agent shall always satisfy !(v >= 5)
+R3: agent shall always satisfy v / 0 < 5
+R4: agent shall always satisfy w < 5
+"""
+TOML = """\
+[tick]
+period = "100 ms"
+time = "log"
+{extra}
+[variables]
+v = "/v.data"
+w = "/w.data"
+"""
+
+
+def _plan(tmp_path: Path, extra: str = ""):
+    (tmp_path / "r.fret").write_text(REQS)
+    (tmp_path / "b.toml").write_text(TOML.format(extra=extra))
+    return load_plan(AuditConfig((str(tmp_path / "r.fret"),), (str(tmp_path / "b.toml"),)))
+
+
+def _log(path: Path, values: list[float]) -> Path:
+    msgs = [("/v", "std_msgs/msg/Float64", S + i * S // 10, float64(x))
+            for i, x in enumerate(values)]
+    msgs += [("/w", "std_msgs/msg/Float64", S + i * S // 10, float64(1.0))
+             for i in range(len(values))]
+    return write_mcap(path, sorted(msgs, key=lambda m: (m[2], m[0])))
+
+
+def _got(la) -> dict:
+    return {v.requirement: v for v in la.verdicts}
+
+
+def test_a_nan_only_field_decides_nothing(tmp_path):
+    la = audit_log(_plan(tmp_path), str(_log(tmp_path / "nan.mcap", [math.nan] * 5)))
+    got = _got(la)
+    for rid in ("R1", "R2", "R3"):  # two spellings of one requirement: one verdict
+        assert got[rid].verdict == "unknown", rid
+        assert "compare NaN" in got[rid].unknown_reason
+    assert got["R4"].verdict == "satisfied"  # reads no NaN
+    assert la.problem_counts["nan R1"] == la.problem_counts["nan R2"] == 5
+    p = next(p for p in la.problems if p["kind"] == "nan" and "of R1" in p["detail"])
+    assert (p["log_time_ns"], p["end_time_ns"]) == (S, S + 4 * S // 10)
+
+
+def test_division_by_zero_in_the_requirement_is_nan(tmp_path):
+    la = audit_log(_plan(tmp_path), str(_log(tmp_path / "z.mcap", [1.0, 0.0, 1.0])))
+    got = _got(la)
+    assert got["R1"].verdict == "satisfied"
+    # 1/0 is NaN in FRETish arithmetic (as the generated monitors): unread from tick 0
+    assert got["R3"].verdict == "unknown"
+
+
+@pytest.mark.parametrize("values, r1", [
+    ([1.0, 7.0, math.nan, 1.0], "violated"),  # decided before the NaN: stands
+    ([1.0, 1.0, math.nan, 1.0], "unknown"),   # an invariant that held so far
+    ([1.0, 1.0, 1.0], "satisfied"),
+])
+def test_verdicts_decided_before_the_nan_stand(tmp_path, values, r1):
+    la = audit_log(_plan(tmp_path), str(_log(tmp_path / "m.mcap", values)))
+    got = _got(la)
+    assert got["R1"].verdict == got["R2"].verdict == r1
+
+
+def test_a_binding_file_may_choose_ieee(tmp_path):
+    plan = _plan(tmp_path, 'nan = "false"')
+    assert plan.bindings_json()["tick"]["nan"] == "false"
+    la = audit_log(plan, str(_log(tmp_path / "nan.mcap", [math.nan] * 5)))
+    got = _got(la)
+    assert got["R1"].verdict == "violated" and got["R2"].verdict == "satisfied"
+    assert any("nan = \"false\"" in n for n in got["R1"].notes)
+    assert not any(p["kind"] == "nan" for p in la.problems)
+
+
+def test_an_unknown_nan_policy_is_an_input_error():
+    with pytest.raises(BindingError) as e:
+        parse_bindings(TOML.format(extra='nan = "true"'), "b.toml")
+    assert str(e.value).startswith("b.toml:4:")
+    with pytest.raises(BindingError):
+        parse_bindings(TOML.format(extra="nan = 1"), "b.toml")
+
+
+@settings(max_examples=200, deadline=None)
+@given(x=st.lists(st.sampled_from([0.0, 1.0, 7.0, math.nan, math.inf]), min_size=1,
+                  max_size=12),
+       c=st.sampled_from(["x < 5", "!(x >= 5)", "x = 1", "x", "persisted(2, x > 0)",
+                          "x + 1 < 5 & y"]))
+def test_nan_ticks_are_where_a_comparison_reads_nan(x, c):
+    req = parse(f"agent shall always satisfy {c}")
+    n = len(x)
+    cols = {"x": np.array(x, dtype=np.float64), "y": np.ones(n, dtype=np.bool_)}
+    got = nan_ticks(req, cols, n)
+    assert got.tolist() == np.isnan(cols["x"]).tolist()
