@@ -45,7 +45,8 @@ BAD = {
     "lie": (b"float32 data", "cdr", lambda v: b"\x00\x01\x00\x00" + struct.pack("<f", v)),
     "bad_cdr": (b"float64 data", "cdr", lambda v: b"\x00\x01\x00\x00\x01"),
     "truncated_body": (b"float64 data", "cdr", lambda v: _cdr(v)[:7]),
-    "encoding": (b"float64 data", "json", lambda v: b'{"data": 9.0}'),
+    # an encoding fretc does not read (json is read: a FlatBuffers table of 9.0 here)
+    "encoding": (b"float64 data", "flatbuffer", lambda v: b"\x08\x00\x00\x00" + struct.pack("<d", v)),
 }
 KIND = {"lie": "unknown_schema", "bad_cdr": "undecodable", "truncated_body": "undecodable",
         "encoding": "unknown_encoding"}
