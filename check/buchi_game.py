@@ -168,6 +168,7 @@ class _BuchiGame(_Game):
         """``W`` of the module docstring; stops early once the first state is out of it.
         Raises :class:`check.budget.BudgetSpent` past the meter's budget."""
         b = self.b
+        self.meter.relation(b, self.step)
         z = b.bddtrue
         while True:  # first the states where the controller keeps every requirement
             new = b.bdd_and(z, self.cpre(self._primed(z)))

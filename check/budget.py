@@ -2,10 +2,11 @@
 the same input gets the same answers on an idle and on a loaded machine.
 
 * **work** (``--budget``, per query, in *work units*): the BDD engines
-  (:mod:`check.monitor_sat`, :mod:`check.safety_game`, :mod:`check.buchi_game`) pay one
-  unit per BDD node of each set a fixed-point iteration computes (at least one per
-  iteration): a BDD is canonical for its function and variable order, so the count does not
-  depend on the order of the operations, on BuDDy's garbage collections or on the machine.
+  (:mod:`check.monitor_sat`, :mod:`check.safety_game`, :mod:`check.buchi_game`) pay, for
+  each fixed-point iteration, one unit per BDD node of the transition relation it steps
+  through and of the set it computes: a BDD is canonical for its function and variable
+  order, so the count does not depend on the order of the operations, on BuDDy's garbage
+  collections or on the machine, and it grows with the work of the relational products.
   z3 (:mod:`check.smt`) pays :data:`Z3_RLIMIT_PER_UNIT` of its deterministic resource count
   (``rlimit``) per unit. Spot's translations and products cannot be stopped from Python, so
   what Spot is given is bounded up front (:mod:`check.solver`: tick bounds, automaton
@@ -31,8 +32,9 @@ __all__ = ["Budget", "BudgetSpent", "RunStopped", "Meter", "DEFAULT_WORK", "DEFA
            "MIN_MEMORY", "MUS_BUDGET",
            "Z3_RLIMIT_PER_UNIT", "NODES_PER_VARIABLE", "NODES_PER_Z3_TERM"]
 
-#: work units per query by default (about 20 s of the BDD engines on the benchmark's sets)
-DEFAULT_WORK = 20_000_000
+#: work units per query by default: 9 times what the costliest query of the benchmark's
+#: sets needs (11 million units, the vacuity of the 1000-tick set), about 7 s of this machine
+DEFAULT_WORK = 100_000_000
 #: BDD nodes of BuDDy's table per query by default (about 200 MB of nodes and caches)
 DEFAULT_MEMORY = 8_000_000
 #: subset checks per enumeration of minimal subsets by default (``fretc check --mus-budget``)
@@ -93,6 +95,13 @@ class Meter:
         self.budget = budget
         self.limit = max(1, int(budget.work * share))
         self.spent = 0
+        #: units every iteration pays besides its sets: the nodes of the relation it
+        #: steps through (set by the engine, :meth:`relation`)
+        self.base = 0
+
+    def relation(self, b, *bdds) -> None:
+        """Set :attr:`base` to the nodes of ``bdds`` (the relation each iteration reads)."""
+        self.base = sum(b.bdd_nodecount(x) for x in bdds)
 
     def charge(self, units: int) -> None:
         """Pay ``units`` (at least one); raises :class:`BudgetSpent` past the limit."""
@@ -101,8 +110,9 @@ class Meter:
             raise BudgetSpent(self.budget.work_spent())
 
     def nodes(self, b, *bdds) -> None:
-        """Pay the BDD nodes of ``bdds`` (``b``: the buddy module), one iteration."""
-        self.charge(sum(b.bdd_nodecount(x) for x in bdds))
+        """Pay one iteration: the BDD nodes of ``bdds`` (``b``: the buddy module) and
+        :attr:`base`."""
+        self.charge(self.base + sum(b.bdd_nodecount(x) for x in bdds))
 
     def variables(self, count: int, what: str) -> None:
         """Check before making ``count`` BDD variables; raises :class:`BudgetSpent` when

@@ -124,6 +124,7 @@ def input_lasso(game, letters: list, meter: Meter) -> tuple[tuple | None, str]:
     ``(prefix, cycle)`` of indices into ``letters`` (``(values, cube)`` pairs, the input
     letters the environment may set), up to :data:`MAX_LASSO` ticks, then longer prefixes
     with a one-letter cycle (:func:`prefix_search`); or None and why."""
+    meter.relation(game.b, game.step)
     try:
         keeps = [keep_forever(game, c, meter) for _v, c in letters]
         for length in range(1, MAX_LASSO + 1):

@@ -100,6 +100,7 @@ class _Search:
             self.done = b.bdd_and(self.done, mark)
         self.letter_set = b.bdd_and(game.in_set, game.out_set)
         self.parts = _clusters(b, game.m.parts())
+        meter.relation(b, self.ok, *(relation for relation, _nxt in self.parts))
 
     def _tick(self, *iterates) -> None:
         """Pay one iteration: the nodes of the sets it computed (:mod:`check.budget`)."""

@@ -52,7 +52,7 @@ from compiler.printers import mangle, to_smv
 from .budget import Budget, BudgetSpent, Meter
 from .fixed_inputs import keep_forever, post, prefix_search
 from .numeric_abstraction import simple_comparison
-from .pt_monitor import Monitor, Outside, state_bits
+from .pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
 
 __all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms"]
 
@@ -162,21 +162,31 @@ class _Game:
 
         self.meter = meter if meter is not None else Meter(Budget())
         self.atoms = game_atoms(list(pts) + list(extra) + [env_inv, ctl_inv, *atoms_of])
-        seen: set = set()
-        counts = [state_bits(f, seen) for f in [*pts, *extra]]
-        other = sum(o for _d, o in counts) + 1 + reserve
-        nvars = len(self.atoms) + 2 * (other + sum(d for d, _o in counts)) + 2
-        self.meter.variables(nvars, "the monitors' state, atoms and delay lines")
         b = self.b = _buddy()
-        self.owner = spot.make_twa_graph(bdd_dict())
-        first = _DICT[0].register_anonymous_variables(nvars, self.owner)
-        m = self.m = Monitor(b, first, self.atoms, set(inputs), other)
-        m.plan([*pts, *extra])
-        self.ok = b.bddtrue
-        for f in pts:
-            self.ok = b.bdd_and(self.ok, m.value(f))
-        self.env_ok, self.ctl_ok = m.value(env_inv), m.value(ctl_inv)
-        self.extra = [m.value(f) for f in extra]  # encoded with their state bits
+        # the deadlines as counters first (a few bits each); a deadline that must be its
+        # delay line after all (NoRoom) gets every bit it may need, in a second build
+        for counted in (frozenset(deadline_uses([*pts, *extra])), frozenset()):
+            seen: set = set()
+            counts = [state_bits(f, seen, counted) for f in [*pts, *extra]]
+            other = sum(o for _d, o in counts) + 1 + reserve
+            delay = sum(d for d, _o in counts)
+            nvars = len(self.atoms) + 2 * (other + delay) + 2
+            self.meter.variables(nvars, "the monitors' state, atoms and delay lines")
+            self.owner = spot.make_twa_graph(bdd_dict())
+            first = _DICT[0].register_anonymous_variables(nvars, self.owner)
+            m = self.m = Monitor(b, first, self.atoms, set(inputs), other,
+                                 delay if counted else None)
+            try:
+                m.plan([*pts, *extra])
+                self.ok = b.bddtrue
+                for f in pts:
+                    self.ok = b.bdd_and(self.ok, m.value(f))
+                self.env_ok, self.ctl_ok = m.value(env_inv), m.value(ctl_inv)
+                self.extra = [m.value(f) for f in extra]  # encoded with their state bits
+                break
+            except NoRoom:
+                self.m = self.ok = None
+                _DICT[0].unregister_all_my_variables(self.owner)
         self.in_set = _varset(b, m.in_vars)
         self.out_set = _varset(b, m.out_vars)
         self.layers: list = []
@@ -262,6 +272,7 @@ class _Game:
         True when the controller wins (realizable). Raises
         :class:`check.budget.BudgetSpent` past the meter's work budget."""
         b = self.b
+        self.meter.relation(b, self.ok, *(fn for _c, _n, _i, fn in self.m.bits))
         lose = b.bddfalse
         while True:
             nxt = b.bdd_or(lose, self.pre(lose))
@@ -370,6 +381,7 @@ class _Witness:
             return None, (f"no fixed input sequence searched: {len(self.in_atoms)} input "
                           "atoms are too many letters")
         meter = Meter(budget, 0.25)
+        meter.relation(self.b, self.g.trans)
         start = self.g.init
         heap = [(self.rank(start), 0, 0, start, ())]
         seen = {start.id()}
@@ -406,6 +418,7 @@ class _Witness:
         """A prefix, then one input letter repeated until no output sequence keeps the
         requirements (:func:`check.fixed_inputs.prefix_search`), as input letters; None
         when none is found within ``meter``'s budget."""
+        meter.relation(self.b, self.g.step)
         try:
             keeps = [keep_forever(self.g, c, meter) for _v, c in letters]
             found = prefix_search(self.g, letters, keeps, meter)
