@@ -11,7 +11,7 @@ ticks with ``--inputs p,m --outputs q,r,speed``.
 ``--out``: write the sets into one folder of the system's temporary folder (the same for
 every run: the JSON names the files), run each and write ``DIR/NAME.json`` (the command's standard output) and
 ``DIR/times.txt`` (wall seconds per set); ``--hog N``: N busy-looping processes run beside
-the whole time (the load of issue 38); ``--root``: the checkout whose ``fretc`` runs
+the whole time (a loaded machine); ``--root``: the checkout whose ``fretc`` runs
 (default this one). ``--compare``: the sets whose JSON differ byte for byte, and the answers
 decided in A that B does not give the same (a satisfiable / non-vacuous / redundant status
 or a component's realizability that is not ``unknown`` in A). Exit 1 when either is found.

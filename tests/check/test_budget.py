@@ -1,5 +1,5 @@
-"""``fretc check``'s budgets are counted in work, not seconds (issue 38), and its memory is
-bounded (issue 44): the same input gives byte-identical JSON with and without a CPU hog
+"""``fretc check``'s budgets are counted in work, not seconds, and its memory is
+bounded: the same input gives byte-identical JSON with and without a CPU hog
 beside it, a query past a budget is unknown with the reason, subsets say what is shown of
 them, and a lost game's fixed defeating input is found at any bound."""
 
@@ -83,7 +83,7 @@ def test_meter_counts_nodes_and_stops_past_the_budget():
 
 
 def test_deadlines_near_a_million_ticks_take_counters_not_delay_lines(tmp_path):
-    """Issue 44's set, scaled down to 5 requirements: the monitors allot a counter per
+    """Deadlines near 10^6 ticks, 3 of them: the monitors allot a counter per
     deadline (not a million bits of delay line), so satisfiability of each is decided and
     the rest is unknown past the work budget, with the reason, in little memory."""
     path = tmp_path / "big.fret"
@@ -121,7 +121,7 @@ def _subsets(pool, bad, budget: int):
 
 
 def test_subsets_say_smallest_only_when_every_smaller_subset_was_checked():
-    """Issue 38: {H1, H2} and {H3, H4, H5} conflict; deletion from the whole set finds
+    """{H1, H2} and {H3, H4, H5} conflict; deletion from the whole set finds
     {H3, H4, H5} first. With no budget for more checks it is minimal, not smallest; with
     the budget, {H1, H2} is the smallest."""
     pool = _items(5)
