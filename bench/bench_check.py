@@ -23,10 +23,11 @@
    unknown; then the same with ``--witness-dir`` (the witness CSVs written).
 
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
-queries run with the default 20 s budget (a timed-out query is counted as unknown).
+queries run with the default work budget (:mod:`check.budget`; ``--budget`` sets it, in work
+units; a query past it is counted as unknown).
 
     python bench/bench_check.py [--corpus PATH] [--bounds-only] [--realizability-only]
-                                [--budget SECONDS] [--against DIR]
+                                [--budget UNITS] [--against DIR]
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ sys.path.insert(0, str(ROOT))
 
 from compiler.build import compile_entries  # noqa: E402
 from check.analysis import check_requirements  # noqa: E402
+from check.budget import DEFAULT_WORK, Budget  # noqa: E402
 from fretish.files import RequirementEntry, load_requirements  # noqa: E402
 from fretish.parser import parse  # noqa: E402
 from common.errors import FretishError  # noqa: E402
@@ -92,10 +94,10 @@ BOUNDED = [
 ]
 
 
-def _timed(path: Path, engine: str, budget: float, **kw) -> tuple[float, str]:
+def _timed(path: Path, engine: str, budget: int, **kw) -> tuple[float, str]:
     t0 = cpu()
     r = check_requirements(compile_entries(load_requirements([path])), engine=engine,
-                           timeout=budget, redundancy=False, **kw)
+                           budget=Budget(budget), redundancy=False, **kw)
     kinds = sorted({f.kind for f in r.findings})
     rz = r.realizability
     if rz:
@@ -109,7 +111,7 @@ def bound_sweep(budget: float) -> None:
     the default engine (the pt monitors, :mod:`check.monitor_sat`, past 16 ticks) in one
     run, and the ``fretc check FILE`` command (start-up included); then the realizability
     table (:func:`realizability_sweep`)."""
-    print(f"4. time against the bound (CPU s; budget {budget:g} s per query)")
+    print(f"4. time against the bound (CPU s; budget {budget} work units per query)")
     print(f"  {'bound':>5} {'check':<14} {'Spot':>8} {'z3':>8} {'monitors':>8} {'command':>8}"
           "  answers (Spot | z3 | monitors)")
     for n in (10, 50, 100, 250, 1000):
@@ -148,7 +150,7 @@ REALIZE = {
 }
 
 
-def _realizability(path: Path, engine: str, budget: float) -> tuple[float, str]:
+def _realizability(path: Path, engine: str, budget: int) -> tuple[float, str]:
     """CPU seconds of the realizability check alone (minimal subsets included)."""
     from check.analysis import Checker, CheckResult, make_item
     from check.realizability import check_realizability
@@ -157,7 +159,7 @@ def _realizability(path: Path, engine: str, budget: float) -> tuple[float, str]:
     items = [make_item(k, c) for k, c in
              enumerate(compile_entries(load_requirements([path])))]
     t0 = cpu()
-    with SpotWorker(budget) as worker:
+    with SpotWorker(Budget(budget)) as worker:
         summary = check_realizability(Checker(items, worker, engine=engine), CheckResult(),
                                       ["p", "m"], ["q", "r", "speed"])
     comp = summary["components"][0]
@@ -215,8 +217,8 @@ def realizability_sweep(budget: float) -> None:
     """Realizability against the bound: Spot's game (``--engine spot``) and the symbolic
     games (``--engine auto``: safety, or Büchi with an ``eventually``) on the same files,
     and the whole command."""
-    print(f"5. realizability against the bound (CPU s; budget {budget:g} s per Spot query, "
-          f"{3 * budget:g} s per safety game)")
+    print(f"5. realizability against the bound (CPU s; budget {budget} work units per "
+          "query)")
     print(f"  {'bound':>5} {'set':<13} {'Spot':>8} {'game':>8} {'command':>8}  answers "
           "(Spot | game)")
     for n in (10, 50, 100, 200, 250, 1000):
@@ -238,8 +240,8 @@ def main() -> int:
                     help="Only the time-against-the-bound tables (parts 4 and 5).")
     ap.add_argument("--realizability-only", action="store_true",
                     help="Only the realizability table (part 5).")
-    ap.add_argument("--budget", type=float, default=20.0,
-                    help="Seconds per solver query in part 4.")
+    ap.add_argument("--budget", type=int, default=DEFAULT_WORK,
+                    help="Work units per query in parts 4 and 5 (check.budget).")
     ap.add_argument("--against", metavar="DIR",
                     help="Only part 6: the command here beside the checkout at DIR.")
     args = ap.parse_args()

@@ -11,8 +11,9 @@ when they share a variable (a numeric variable counts as shared through its comp
 Formulas over disjoint variables are satisfiable together iff each is, so every question is
 asked per component, which keeps Spot's automata small.
 
-Checks, per component (each Spot query has the ``timeout`` budget; a query that overruns
-answers "unknown", and a check with an unknown answer says so rather than guessing):
+Checks, per component (each query has the work and memory budgets of :mod:`check.budget`,
+counted by the engines, never in seconds; a query past them answers "unknown", and a check
+with an unknown answer says so rather than guessing):
 
 1. **Satisfiability** of each requirement and of the component.
 2. **Non-vacuity** (Beer et al., CAV 1997; Kupferman & Vardi, STTT 2003, vacuity with
@@ -27,7 +28,8 @@ answers "unknown", and a check with an unknown answer says so rather than guessi
 3. **Minimal conflicts**: for an unsatisfiable component, the minimal unsatisfiable subsets;
    for a vacuous requirement, the minimal subsets containing it that are unsatisfiable with
    its trigger. Enumerated by size, smallest first, over connected subsets, within
-   ``mus_budget`` seconds (a cut enumeration says so).
+   ``mus_budget`` subset checks (a cut enumeration says so; each subset says whether it is
+   shown smallest, minimal, or not shown minimal).
 4. **Redundancy** (warning): a requirement implied by the other requirements of a
    satisfiable component (``others & !R`` unsatisfiable), or holding on every run.
 
@@ -41,9 +43,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from compiler import ir
-from .checker import ENGINES, SPOT_MAX_BOUND, Checker
+from .budget import Budget
+from .checker import ENGINES, MUS_BUDGET, SPOT_MAX_BOUND, Checker
 from .findings import Finding
 from .findings import ids as _ids
+from .findings import subsets_text
 from .items import CheckItem, atom_variables, make_item
 from .solver import UNKNOWN, SpotWorker
 
@@ -58,7 +62,7 @@ class CheckResult:
     / None when not checked); ``components`` the ids per component; ``abstractions`` the
     uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered,
     ``monitor_queries`` those the pt monitors' fixed points answered
-    (:mod:`check.smt`), ``unknown_queries`` those whose budget ran out."""
+    (:mod:`check.smt`), ``unknown_queries`` those past their budget or refused."""
 
     requirements: list[dict] = field(default_factory=list)
     components: list[list[str]] = field(default_factory=list)
@@ -99,6 +103,11 @@ class CheckResult:
                 "unknown_queries": self.unknown_queries}
 
 
+#: why an answer is unknown, in the findings (the notes give each query's reason)
+WHY_UNKNOWN = ("the query ran past its work or memory budget (--budget, --memory-budget) or "
+               "the solver could not take it (see the notes)")
+
+
 def _where(items: Sequence[CheckItem]) -> str:
     return ", ".join(f"{x.id} ({x.location})" for x in items)
 
@@ -108,17 +117,20 @@ def _tri(ans) -> object:
 
 
 # --------------------------------------------------------------------------- entry point
-def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
-                       mus_budget: float = 10.0, redundancy: bool = True,
+def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
+                       mus_budget: int = MUS_BUDGET, redundancy: bool = True,
                        vacuity: bool = True, witness_dir: str | None = None,
                        inputs: Sequence[str] | None = None,
                        outputs: Sequence[str] | None = None,
                        worker: SpotWorker | None = None,
-                       witness_judge=None, engine: str = "auto") -> CheckResult:
+                       witness_judge=None, engine: str = "auto",
+                       deadline: float | None = None) -> CheckResult:
     """Check compiled requirements (:class:`compiler.build.Compiled`, in file order).
 
-    ``timeout``: seconds per Spot query (None: no budget). ``mus_budget``: seconds per
-    subset enumeration. ``witness_dir``: write witness CSVs there
+    ``budget``: each query's work and memory budgets (:class:`check.budget.Budget`; default
+    the defaults). ``mus_budget``: subset checks per enumeration of minimal subsets.
+    ``deadline``: the run's wall-clock limit (a ``time.monotonic()`` value): past it the
+    run stops with :class:`check.budget.RunStopped` (never an answer changed). ``witness_dir``: write witness CSVs there
     (:mod:`check.witness`), their expected verdicts given by ``witness_judge``
     (:data:`check.witness.Judge`; required with ``witness_dir``: the audit's
     evidence engine lives in a layer above, ``fretc check`` passes
@@ -143,7 +155,7 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
             items.append(make_item(len(items), c))
     own = worker is None
     if own:
-        worker = SpotWorker(timeout)
+        worker = SpotWorker(budget, deadline=deadline)
     try:
         checker = Checker(items, worker, mus_budget, engine=engine)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy)
@@ -155,10 +167,10 @@ def check_requirements(compiled: Sequence, *, timeout: float | None = 10.0,
             from .witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir, witness_judge)
         result.queries = checker.queries
-        result.unknown_queries = worker.timeouts
+        result.unknown_queries = worker.spent
         result.smt_queries = checker.smt_queries
         result.monitor_queries = checker.monitor_queries
-        result.unknown_queries += checker.smt.timeouts
+        result.unknown_queries += checker.smt.spent
         if checker.smt.failures:
             result.notes.append(f"z3 left {len(checker.smt.failures)} queries unknown, e.g. "
                                 f"{checker.smt.failures[0]}")
@@ -222,8 +234,7 @@ def _check_alone(ck: Checker, comp: list[CheckItem], status: dict,
         elif ans == UNKNOWN:
             result.findings.append(Finding(
                 "unknown", "unknown", [x.id],
-                f"satisfiability of {x.id} ({x.location}) unknown: the solver query ran out "
-                "of time (--timeout) or the solver could not take it (see the notes)"))
+                f"satisfiability of {x.id} ({x.location}) unknown: " + WHY_UNKNOWN))
     return alone_bad
 
 
@@ -233,24 +244,24 @@ def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckRe
     True when it is satisfiable (the later checks are meaningful)."""
     whole = ck.sat([x.phi for x in comp]) if len(comp) > 1 else ck.sat([comp[0].phi])
     if len(comp) > 1 and whole is False and not alone_bad:
-        subsets, cut, unknown = ck.minimal_subsets(
-            comp, [], lambda s: _neg(ck.sat([y.phi for y in s])))
-        names = [_ids(s) for s in subsets]
+        found = ck.minimal_subsets(comp, [], lambda s: _neg(ck.sat([y.phi for y in s])))
+        names = [_ids(s) for s in found.subsets]
         involved = sorted({i for s in names for i in s},
                           key=lambda i: [x.id for x in comp].index(i))
-        msg = ("the requirements cannot all hold: minimal conflicting subsets "
-               + "; ".join("{" + ", ".join(s) + "}" for s in names)
-               + (" (enumeration cut by the time budget: there may be more)" if cut else "")
-               + (" (some subset checks were unknown)" if unknown else ""))
+        msg = ("the requirements cannot all hold: "
+               + subsets_text(names, found.standing, "conflicting subset")
+               + (f" (enumeration cut by its budget of {ck.mus_budget} subset checks: there "
+                  "may be more)" if found.cut else "")
+               + (" (some subset checks were unknown)" if found.unknown else ""))
         result.findings.append(Finding("conflict", "error", involved, msg, subsets=names,
-                                       cut=cut, details={"locations": {
+                                       standing=found.standing, cut=found.cut,
+                                       details={"locations": {
                                            x.id: x.location for x in comp
                                            if x.id in involved}}))
     elif len(comp) > 1 and whole == UNKNOWN:
         result.findings.append(Finding(
             "unknown", "unknown", _ids(comp),
-            "satisfiability of the set " + ", ".join(_ids(comp)) + " unknown: the solver "
-            "query ran out of time (--timeout) or the solver could not take it (see the notes)"))
+            "satisfiability of the set " + ", ".join(_ids(comp)) + " unknown: " + WHY_UNKNOWN))
     if whole is not True:
         for x in comp:
             if whole is False:
@@ -276,12 +287,11 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
         if ans == UNKNOWN:
             result.findings.append(Finding(
                 "unknown", "unknown", [x.id],
-                f"non-vacuity of {x.id} ({x.location}) unknown: the solver query ran "
-                "out of time (--timeout) or the solver could not take it (see the notes)"))
+                f"non-vacuity of {x.id} ({x.location}) unknown: " + WHY_UNKNOWN))
             continue
-        subsets, cut, unknown = ck.minimal_subsets(
+        found = ck.minimal_subsets(
             comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
-        names = [_ids(s) for s in subsets]
+        names = [_ids(s) for s in found.subsets]
         if names and names[0] == [x.id]:
             msg = (f"{x.id} ({x.location}) can only be satisfied vacuously: its scope is "
                    "never entered or its trigger never fires with room for the response "
@@ -289,12 +299,14 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
         else:
             msg = (f"{x.id} ({x.location}) can only be satisfied vacuously in the presence"
                    " of the others: no run meeting all requirements enters its scope and "
-                   "fires its trigger; minimal sets forcing this: "
-                   + "; ".join("{" + ", ".join(s) + "}" for s in names)
-                   + (" (enumeration cut by the time budget)" if cut else ""))
+                   "fires its trigger; "
+                   + subsets_text(names, found.standing, "set forcing this")
+                   + (f" (enumeration cut by its budget of {ck.mus_budget} subset checks)"
+                      if found.cut else ""))
         involved = [x.id] + sorted({i for s in names for i in s if i != x.id})
         result.findings.append(Finding("vacuous", "error", involved, msg, subsets=names,
-                                       cut=cut, details={"requirement": x.id}))
+                                       standing=found.standing, cut=found.cut,
+                                       details={"requirement": x.id}))
 
 
 def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
@@ -307,8 +319,7 @@ def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
         if ans == UNKNOWN:
             result.findings.append(Finding(
                 "unknown", "warning", [x.id],
-                f"redundancy of {x.id} ({x.location}) unknown: the solver query ran out "
-                "of time (--timeout) or the solver could not take it (see the notes)"))
+                f"redundancy of {x.id} ({x.location}) unknown: " + WHY_UNKNOWN))
         if ans is False:
             if others:
                 msg = (f"{x.id} ({x.location}) is implied by the others of its component ("

@@ -33,12 +33,13 @@ persistence), or an atom the game cannot give a player.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 
 from compiler.ir import Node
 from compiler.printers import to_spot
 
+from .budget import Budget, Meter
+from .fixed_inputs import input_lasso, recurrence
 from .pt_monitor import Outside
 from .safety_game import MAX_LETTERS, _Game, _varset, _Witness, bdd_dict, letter_name
 
@@ -88,12 +89,12 @@ class _BuchiGame(_Game):
 
     def __init__(self, pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequence[str],
                  env_inv: Node, ctl_inv: Node, extra: Sequence[Node] = (),
-                 deterministic: bool = True):
+                 deterministic: bool = True, meter: Meter | None = None):
         self.automata = [_automaton(f, deterministic) for f in liveness]
         widths = [max(1, (a.num_states() - 1).bit_length()) for a in self.automata]
         choices = [_degree(a) for a in self.automata]
         super().__init__(pts, inputs, env_inv, ctl_inv, extra=extra, atoms_of=liveness,
-                         reserve=sum(widths) + sum(choices))
+                         reserve=sum(widths) + sum(choices), meter=meter)
         self.acc: list = []
         self.iterations = 0
         try:
@@ -107,16 +108,6 @@ class _BuchiGame(_Game):
         self._step = None
         self.step_vars = self.b.bdd_and(self.nxt_set, self.out_set)
         self.letter_vars = self.b.bdd_and(self.step_vars, self.in_set)
-
-    @property
-    def step(self):
-        """The moves that keep every requirement: ``ok & ctl_ok & trans`` over (state,
-        letter, next state), built when the game first asks (the satisfiability fixed points
-        of :mod:`check.monitor_sat` step through the relation in parts instead)."""
-        if self._step is None:
-            b = self.b
-            self._step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
-        return self._step
 
     def _encode(self, aut, width: int, choice: int) -> None:
         """Add the automaton's state bits (its state number in binary), their next-value
@@ -160,9 +151,10 @@ class _BuchiGame(_Game):
         self.ok = b.bdd_and(self.ok, some)
         self.acc += accs
 
-    def _tick(self, deadline: float | None) -> None:
-        if deadline is not None and time.monotonic() > deadline:
-            raise TimeoutError("the Büchi game ran out of its budget")
+    def _tick(self, *iterates) -> None:
+        """Pay one iteration: the nodes of the sets it computed (:mod:`check.budget`)."""
+        self.iterations += 1
+        self.meter.nodes(self.b, *iterates)
 
     def cpre(self, target):
         """States where, whatever inputs the environment sets, the controller has outputs
@@ -172,14 +164,15 @@ class _BuchiGame(_Game):
         some_out = b.bdd_appex(self.step, target, b.bddop_and, self.step_vars)
         return b.bdd_forall(b.bdd_imp(self.env_ok, some_out), self.in_set)
 
-    def winning(self, deadline: float | None):
-        """``W`` of the module docstring; stops early once the first state is out of it."""
+    def winning(self):
+        """``W`` of the module docstring; stops early once the first state is out of it.
+        Raises :class:`check.budget.BudgetSpent` past the meter's budget."""
         b = self.b
+        self.meter.relation(b, self.step)
         z = b.bddtrue
         while True:  # first the states where the controller keeps every requirement
-            self._tick(deadline)
-            self.iterations += 1
             new = b.bdd_and(z, self.cpre(self._primed(z)))
+            self._tick(new)
             z, stable = new, new == z
             if stable or b.bdd_and(self.init, z) == b.bddfalse:
                 break
@@ -187,108 +180,28 @@ class _BuchiGame(_Game):
         # would remove one tick's worth of the states that lose later: quadratic)
         if b.bdd_and(self.init, z) == b.bddfalse:
             return z
-
-        def tick():
-            self._tick(deadline)
-            self.iterations += 1
-
         return recurrence(
             b, z, self.acc, lambda acc, z: b.bdd_and(acc, self._primed(z)),
-            lambda base, y: self.cpre(b.bdd_or(base, self._primed(y))), tick,
+            lambda base, y: self.cpre(b.bdd_or(base, self._primed(y))), self._tick,
             lambda w: b.bdd_and(self.init, w) == b.bddfalse)
 
 
-def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
-    """The states of ``z`` (a BDD of states) from which each acceptance set of ``accs``
-    can be met infinitely often: ``nu Z. AND_j mu Y. Z & step(prepare(acc_j, Z), Y)``
-    (Emerson & Lei, LICS 1986; ``z`` itself when ``accs`` is empty). ``prepare(acc, Z)``:
-    what one round of ``acc``'s least fixed point reads of ``Z`` (computed once per round);
-    ``step(part, Y)``: the states that take an ``acc`` edge into ``Z`` or move into ``Y``,
-    one step (the game's controllable or the monitors' existential predecessor);
-    ``tick()``: called each iteration (raises :class:`TimeoutError` past a budget);
-    ``lost(W)``: stop early with ``W`` when true (the first state is out)."""
-    while accs:
-        new = z
-        for acc in accs:
-            part = prepare(acc, z)
-            y = b.bddfalse
-            while True:
-                tick()
-                y_new = b.bdd_and(z, step(part, y))
-                if y_new == y:
-                    break
-                y = y_new
-            new = b.bdd_and(new, y)
-            if lost is not None and lost(new):
-                return new
-        if new == z:
-            return z
-        z = new
-    return z
-
-
 # --------------------------------------------------------------------------- the environment
-def _defeats(game: _BuchiGame, cubes: list, start: int, deadline: float | None) -> bool:
-    """Does the input lasso ``cubes[:start]`` then ``cubes[start:]`` forever (BDD cubes of
-    the input atoms) defeat every controller: is there no output sequence along it that
-    keeps every requirement with each acceptance set met infinitely often? The same nested
-    fixed point as :meth:`_BuchiGame.winning` with the outputs alone to choose, one set of
-    states per position of the lasso."""
-    b, n = game.b, len(cubes)
-    succ = [i + 1 if i + 1 < n else start for i in range(n)]
-    steps = [b.bdd_and(game.step, c) for c in cubes]
-
-    def ex(i, target):
-        return b.bdd_appex(steps[i], target, b.bddop_and, game.letter_vars)
-
-    z = [b.bddtrue] * n
-    while True:
-        primed = [game._primed(x) for x in z]
-        new = [b.bddtrue] * n
-        for acc in game.acc or [b.bddtrue]:
-            y = [b.bddfalse] * n
-            while True:
-                game._tick(deadline)
-                y_new = [ex(i, b.bdd_or(b.bdd_and(acc, primed[succ[i]]),
-                                        game._primed(y[succ[i]]))) for i in range(n)]
-                if y_new == y:
-                    break
-                y = y_new
-            new = [b.bdd_and(x, v) for x, v in zip(new, y)]
-        if new == z:
-            return b.bdd_and(game.init, z[0]) == b.bddfalse
-        z = new
-
-
-#: the longest input lasso (prefix and cycle, in ticks) searched for
-MAX_LASSO = 4
-
-
-def _lasso(game: _BuchiGame, deadline: float | None) -> tuple[tuple | None, str]:
-    """The shortest input lasso that defeats every controller (:func:`_defeats`), as
-    ``(prefix, cycle)`` of ``(letter, cube)`` (letters ``{atom name: bool}``, cubes their
-    BDDs), searched by increasing length up to :data:`MAX_LASSO` ticks within the deadline;
-    or None and why."""
-    import itertools
-
+def _lasso(game: _BuchiGame, meter: Meter) -> tuple[tuple | None, str]:
+    """The shortest input lasso that defeats every controller
+    (:func:`check.fixed_inputs.input_lasso`), as ``(prefix, cycle)`` of ``(letter, cube)``
+    (letters ``{atom name: bool}``, cubes their BDDs); or None and why."""
     w = _Witness(game)
     letters = w._cubes(w.in_atoms, game.env_ok, MAX_LETTERS)
     if letters is None:
         return None, (f"no fixed input sequence searched: {len(w.in_atoms)} input atoms are "
                       "too many letters")
-    try:
-        for length in range(1, MAX_LASSO + 1):
-            for start in range(length):
-                for seq in itertools.product(letters, repeat=length):
-                    if _defeats(game, [c for _v, c in seq], start, deadline):
-                        named = [({letter_name(a): v for a, v in zip(w.in_atoms, values)}, c)
-                                 for values, c in seq]
-                        return (named[:start], named[start:]), ""
-    except TimeoutError:
-        return None, ("no fixed input sequence found within the search budget: the "
-                      "environment may have to react to the outputs")
-    return None, (f"no input lasso of up to {MAX_LASSO} ticks defeats every controller: the "
-                  "environment may have to react to the outputs")
+    found, note = input_lasso(game, letters, meter)
+    if found is None:
+        return None, note
+    named = [({letter_name(a): v for a, v in zip(w.in_atoms, letters[k][0])}, letters[k][1])
+             for k in found[0] + found[1]]
+    return (named[:len(found[0])], named[len(found[0]):]), ""
 
 
 def _play(game: _BuchiGame, prefix: list, cycle: list, length: int) -> list[dict]:
@@ -330,26 +243,28 @@ def _longest_bound(formulas: Sequence[Node]) -> int:
 
 
 def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequence[str],
-                     env_inv: Node, ctl_inv: Node, budget: float | None = None,
-                     search: float | None = None) -> dict:
+                     env_inv: Node, ctl_inv: Node, budget: Budget | None = None,
+                     search: bool = False) -> dict:
     """Decide the generalized Büchi game of the safety requirements' pt formulas ``pts``
     and the ft_inf formulas ``liveness`` of the others (module docstring).
 
     ``inputs``: the environment's FRET variables; ``env_inv``/``ctl_inv``: propositional
     IR formulas over the comparisons (numeric consistency of inputs / outputs); ``budget``:
-    seconds before :class:`TimeoutError` is raised; ``search``: seconds for the search of
-    an input lasso that defeats every controller when the game is lost (none when None).
+    the query's :class:`check.budget.Budget` (past it :class:`check.budget.BudgetSpent` is
+    raised); ``search``: when the game is lost, search an input lasso that defeats every
+    controller, within a quarter of the work budget more (:mod:`check.fixed_inputs`).
     Returns ``{"realizable": True, "strategy": {...}}`` (the strategy's size),
     ``{"realizable": False, "inputs": (prefix, cycle) | None, "note": why none}``, or
     ``{"outside": why}`` for formulas the game does not handle.
     """
-    deadline = None if budget is None else time.monotonic() + budget
+    budget = budget or Budget()
+    meter = Meter(budget)
     try:
-        game = _BuchiGame(pts, liveness, inputs, env_inv, ctl_inv)
+        game = _BuchiGame(pts, liveness, inputs, env_inv, ctl_inv, meter=meter)
     except Outside as exc:
         return {"outside": str(exc)}
     try:
-        win = game.winning(deadline)
+        win = game.winning()
         realizable = game.b.bdd_and(game.init, win) != game.b.bddfalse
         out: dict = {"realizable": realizable}
         if realizable:
@@ -357,8 +272,8 @@ def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequ
                                "automaton_states": [a.num_states() for a in game.automata],
                                "winning_region_bdd_nodes": game.b.bdd_nodecount(win),
                                "iterations": game.iterations}
-        elif search is not None:
-            lasso, out["note"] = _lasso(game, time.monotonic() + search)
+        elif search:
+            lasso, out["note"] = _lasso(game, Meter(budget, 0.25))
             out["inputs"], out["run"] = None, []
             if lasso is not None:
                 out["inputs"] = tuple([letter for letter, _c in part] for part in lasso)

@@ -8,19 +8,20 @@ questions, and their order, are :mod:`check.analysis`'s.
 from __future__ import annotations
 
 import itertools
-import time
 from collections.abc import Callable, Sequence
 
 from compiler import ir
 from compiler.ir import Node
 from compiler.printers import to_spot
+from .budget import MUS_BUDGET
 from .items import CheckItem, monitored_forms
 from .numeric_abstraction import NumericAbstraction
 from .safety_game import Outside, game_atoms
 from .smt import SmtSolver, max_bound
 from .solver import UNKNOWN, SpotWorker
 
-__all__ = ["ENGINES", "SPOT_MAX_BOUND", "Checker"]
+__all__ = ["ENGINES", "SPOT_MAX_BOUND", "MUS_BUDGET", "Checker", "Subsets", "SMALLEST",
+           "MINIMAL", "NOT_SHOWN_MINIMAL"]
 
 #: the solvers ``fretc check --engine`` names: ``auto`` Spot up to :data:`SPOT_MAX_BOUND`
 #: ticks, past it the requirements' pt monitors (:mod:`check.monitor_sat`) when they take
@@ -28,8 +29,10 @@ __all__ = ["ENGINES", "SPOT_MAX_BOUND", "Checker"]
 #: monitors whatever the bound, z3 for the queries they do not take)
 ENGINES = ("auto", "spot", "smt", "bdd")
 
-#: the largest tick bound ``engine="auto"`` gives Spot (faster there, bench/bench_check.py;
-#: past it Spot's automata grow with the bound, and it refuses bounds over 254)
+#: the largest tick bound given to Spot's translation, with every engine (faster there,
+#: bench/bench_check.py; past it Spot's automata and its time grow exponentially with the
+#: bound: ``G(p -> F[0,16] q)`` takes 0.6 s, ``F[0,50]`` did not finish in 2 minutes, and a
+#: translation cannot be stopped, so a query past it is refused and answers unknown)
 SPOT_MAX_BOUND = 16
 
 
@@ -37,18 +40,20 @@ SPOT_MAX_BOUND = 16
 class Checker:
     """Runs the checks of the module docstring on a list of :class:`CheckItem`.
 
-    ``worker`` answers Spot queries (:class:`check.solver.SpotWorker`);
-    ``mus_budget`` is the time in seconds each subset enumeration may take.
+    ``worker`` answers Spot queries (:class:`check.solver.SpotWorker`, with the queries'
+    budgets); ``mus_budget`` is the number of subset checks each enumeration of minimal
+    subsets may make after its first subset (:meth:`minimal_subsets`).
     """
 
     def __init__(self, items: Sequence[CheckItem], worker: SpotWorker,
-                 mus_budget: float = 10.0, smt: SmtSolver | None = None,
+                 mus_budget: int = MUS_BUDGET, smt: SmtSolver | None = None,
                  engine: str = "auto"):
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
         self.items = list(items)
         self.worker = worker
-        self.smt = smt if smt is not None else SmtSolver(worker.timeout)
+        self.smt = smt if smt is not None else SmtSolver(worker.budget,
+                                                         deadline=worker.deadline)
         self.engine = engine
         self.smt_queries = 0
         self.mus_budget = mus_budget
@@ -104,7 +109,8 @@ class Checker:
         if not base:
             base = [ir.TRUE]
         return self._ask_sat((tuple(to_spot(f) for f in base),
-                              tuple(to_spot(f) for f in more if f not in base)))
+                              tuple(to_spot(f) for f in more if f not in base)),
+                             max_bound(base + more))
 
     def monitor_word(self, formulas: Sequence[Node], finite: bool,
                      length: int | None = None) -> tuple[object, tuple | None] | None:
@@ -133,15 +139,12 @@ class Checker:
         names = sorted({v for f in [*formulas, *live] for v in ir.variables(f)})
         inv = self.numeric.regions(names)
         key = ("monitor", finite, length, tuple(formulas), tuple(live))
-        timeout = self.worker.timeout
         if self._cache.get(key) == "outside":
             return None
         fresh = key not in self._cache
-        # the fixed points stop at ``timeout`` and say so; the worker is killed a little
-        # later only if they do not
+        # the fixed points pay their work and stop past the budget (check.budget)
         got = self._cached(key, lambda: self.worker.ask(
-            ("monitor_sat", safe, goals, inv, finite, length, timeout, live, last),
-            None if timeout is None else 1.2 * timeout + 1))
+            ("monitor_sat", safe, goals, inv, finite, length, live, last)))
         if got[0] == "outside":  # no deterministic Büchi automaton: z3's query
             self._cache[key] = "outside"
             return None
@@ -152,7 +155,10 @@ class Checker:
         self.smt_queries += ("smt", tuple(formulas)) not in self._cache
         return self._cached(("smt", tuple(formulas)), lambda: self.smt.sat(formulas))
 
-    def _ask_sat(self, text):
+    def _ask_sat(self, text, bound: int):
+        if bound > SPOT_MAX_BOUND:  # a translation past it may not end: refused up front
+            return self._cached(text, lambda: self.worker.refuse(
+                f"Spot is given tick bounds up to {SPOT_MAX_BOUND}, this query has {bound}"))
         return self._cached(text, lambda: self.worker.ask(("sat", text[0], text[1])))
 
     def _cached(self, key, ask):
@@ -197,69 +203,88 @@ class Checker:
 
     # ---------------------------------------------------------------- subsets
     def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
-                        bad: Callable[[list[CheckItem]], object]
-                        ) -> tuple[list[list[CheckItem]], bool, bool]:
+                        bad: Callable[[list[CheckItem]], object]) -> "Subsets":
         """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
         smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
 
-        Returns ``(subsets, cut, unknown)``: ``cut`` when the budget ran out before every
-        size was tried, ``unknown`` when some ``bad`` answer was UNKNOWN (a subset may then
-        be missing). Only subsets connected by shared variables are tried (a disconnected
-        bad subset is never minimal). A first minimal subset is found by deletion (so at
-        least one is reported whatever the budget), then sizes 1, 2, ... are enumerated.
+        A first subset is found by deletion from the whole pool (so one is reported whatever
+        the budget), then subsets of sizes 1, 2, ... are checked, at most ``mus_budget``
+        of them (the count, not the time: the same input gives the same subsets on any
+        machine). Only subsets connected by shared variables are tried (a disconnected bad
+        subset is never minimal). Each subset found has a standing (:class:`Subsets`).
         """
-        deadline = time.monotonic() + self.mus_budget
         must_ids = {x.index for x in must}
         rest = [x for x in pool if x.index not in must_ids]
-        found: list[list[CheckItem]] = []
-        unknown = False
-        # deletion-based shrink of the whole pool: one minimal subset
-        current = list(must) + rest
-        whole = bad(current)
+        out = Subsets()
+        whole = bad(list(must) + rest)
         if whole is not True:
-            return [], False, whole == UNKNOWN
+            out.unknown = whole == UNKNOWN
+            return out
+        # deletion-based shrink of the whole pool: minimal unless a check was unknown
+        current, shrunk = list(must) + rest, True
         for x in list(rest):
             trial = [y for y in current if y is not x]
             ans = bad(trial)
             if ans is True:
                 current = trial
             elif ans == UNKNOWN:
-                unknown = True
-        first = sorted(current, key=lambda y: y.index)
-        found.append(first)
-        found_sets = [frozenset(y.index for y in first)]
-        cut = False
+                out.unknown, shrunk = True, False
+        found = {frozenset(y.index for y in current): shrunk}
+        unknown_sets: list[frozenset] = []
+        checks, complete = 0, 0  # complete: every subset of fewer members was checked
         for size in range(0, len(rest) + 1):
-            if time.monotonic() > deadline:
-                cut = True
-                break
             for combo in itertools.combinations(rest, size):
                 subset = list(must) + list(combo)
                 ids = frozenset(y.index for y in subset)
-                if any(s <= ids for s in found_sets):
+                if any(s <= ids for s in found) or not _connected(subset):
                     continue
-                if not _connected(subset):
-                    continue
-                if time.monotonic() > deadline:
-                    cut = True
+                if checks >= self.mus_budget:
+                    out.cut = True
                     break
+                checks += 1
                 ans = bad(subset)
                 if ans is True:
-                    found.append(sorted(subset, key=lambda y: y.index))
-                    found_sets.append(ids)
+                    found[ids] = not any(u < ids for u in unknown_sets)
                 elif ans == UNKNOWN:
-                    unknown = True
-            if cut:
+                    out.unknown = True
+                    unknown_sets.append(ids)
+            if out.cut:
                 break
-        order = sorted(range(len(found)), key=lambda k: (len(found[k]),
-                                                         [y.index for y in found[k]]))
-        out, seen = [], set()
+            complete = size + len(must) + 1
+        by_index = {y.index: y for y in pool}
+        order = sorted(found, key=lambda k: (len(k), sorted(k)))
         for k in order:
-            key = frozenset(y.index for y in found[k])
-            if key not in seen:
-                seen.add(key)
-                out.append(found[k])
-        return out, cut, unknown
+            subset = [by_index[i] for i in sorted(k)]
+            if not found[k]:
+                standing = NOT_SHOWN_MINIMAL
+            elif len(k) <= complete and not any(len(u) < len(k) for u in unknown_sets):
+                standing = SMALLEST if len(k) == len(order[0]) else MINIMAL
+            else:
+                standing = MINIMAL
+            out.subsets.append(subset)
+            out.standing.append(standing)
+        return out
+
+
+#: the standings of a subset :meth:`Checker.minimal_subsets` reports: of the fewest
+#: members any bad subset has (every smaller subset checked); minimal (each smaller subset
+#: of it checked, none bad); or bad but not shown minimal (a check of a smaller one was
+#: unknown)
+SMALLEST, MINIMAL, NOT_SHOWN_MINIMAL = "smallest", "minimal", "not shown minimal"
+
+
+class Subsets:
+    """The answer of :meth:`Checker.minimal_subsets`: ``subsets`` (lists of items, fewest
+    members first), ``standing`` (one of :data:`SMALLEST`, :data:`MINIMAL`,
+    :data:`NOT_SHOWN_MINIMAL` per subset), ``cut`` (the budget of subset checks ran out
+    before every size was checked: there may be more) and ``unknown`` (some check was
+    unknown: a subset may be missing)."""
+
+    def __init__(self):
+        self.subsets: list[list[CheckItem]] = []
+        self.standing: list[str] = []
+        self.cut = False
+        self.unknown = False
 
 
 def _connected(subset: Sequence[CheckItem]) -> bool:

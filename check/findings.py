@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["Finding", "ids"]
+__all__ = ["Finding", "ids", "subsets_text"]
 
 
 @dataclass
@@ -15,9 +15,10 @@ class Finding:
 
     ``kind``: ``unsatisfiable`` (one requirement), ``conflict`` (a set), ``vacuous``,
     ``redundant``, ``unrealizable``, ``unknown``. ``severity``: ``error`` (exit 1),
-    ``warning`` or ``unknown``. ``requirements``: the ids it is about; ``subsets``: minimal
-    subsets (lists of ids, smallest first); ``cut``: the subset enumeration ran out of
-    budget; ``witness``: path of the witness CSV, ``expected`` the verdicts it promises.
+    ``warning`` or ``unknown``. ``requirements``: the ids it is about; ``subsets``: the
+    subsets found (lists of ids, fewest members first); ``standing``: per subset
+    ``smallest``, ``minimal`` or ``not shown minimal`` (:class:`check.checker.Subsets`);
+    ``cut``: the subset enumeration ran out of its budget of checks; ``witness``: path of the witness CSV, ``expected`` the verdicts it promises.
     """
 
     kind: str
@@ -25,6 +26,7 @@ class Finding:
     requirements: list[str]
     message: str
     subsets: list[list[str]] = field(default_factory=list)
+    standing: list[str] = field(default_factory=list)
     cut: bool = False
     witness: str | None = None
     expected: dict[str, str] = field(default_factory=dict)
@@ -34,10 +36,23 @@ class Finding:
         """The finding as a JSON object (every attribute, plain values)."""
         return {"kind": self.kind, "severity": self.severity,
                 "requirements": self.requirements, "message": self.message,
-                "subsets": self.subsets, "cut": self.cut, "witness": self.witness,
+                "subsets": self.subsets, "standing": self.standing, "cut": self.cut, "witness": self.witness,
                 "expected": self.expected, "details": self.details}
 
 
 def ids(items) -> list[str]:
     """The requirement ids of check items, in order."""
     return [x.id for x in items]
+
+
+def subsets_text(names: list[list[str]], standing: list[str], noun: str) -> str:
+    """The subsets of a finding in words: ``{A, B}`` with what is shown of each
+    (``smallest NOUN``, ``minimal NOUN``, ``a NOUN (not shown minimal)``), ``;`` between."""
+    out = []
+    for s, st in zip(names, standing):
+        text = "{" + ", ".join(s) + "}"
+        if st == "not shown minimal":
+            out.append(f"a {noun} (not shown minimal) {text}")
+        else:
+            out.append(f"{st} {noun} {text}")
+    return "; ".join(out)

@@ -33,13 +33,14 @@ sets. The BDDs are BuDDy's, shipped with Spot.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 
 from compiler import ir
 from compiler.ir import Node
 
-from .buchi_game import _BuchiGame, recurrence
+from .budget import Budget, Meter
+from .buchi_game import _BuchiGame
+from .fixed_inputs import recurrence
 from .pt_monitor import Outside
 from .safety_game import _Game, _varset, letter_name
 
@@ -47,15 +48,16 @@ __all__ = ["decide"]
 
 
 def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
-           finite: bool, length: int | None = None, budget: float | None = None,
+           finite: bool, length: int | None = None, budget: Budget | None = None,
            liveness: Sequence[Node] = (), last: Sequence[Node] = ()):
     """Is there a run on which every pt formula of ``safe`` holds at every tick and every
     pt formula of ``goals`` holds at some tick (module docstring)?
 
     ``invariant``: a propositional IR formula over the atoms, true at every tick (the
     numeric regions); ``finite``: a finite trace (FRET's ft) rather than an infinite run
-    (ft_inf); ``length``: exactly that many ticks (finite only); ``budget``: seconds before
-    :class:`TimeoutError` is raised. Returns ``(False, None)``, ``(True, None)`` (infinite)
+    (ft_inf); ``length``: exactly that many ticks (finite only); ``budget``: the query's
+    :class:`check.budget.Budget` (default: the defaults), past which
+    :class:`check.budget.BudgetSpent` is raised. Returns ``(False, None)``, ``(True, None)`` (infinite)
     or ``(True, (letters, []))`` (finite: the trace's letters ``{atom name: bool}``, as
     :class:`check.solver.SpotWorker` gives words). ``liveness``: ft_inf formulas that hold
     too (infinite runs only), each by Spot's Büchi automaton in the product, its
@@ -64,7 +66,7 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
     tick (finite only: FRET's pt formula at the last tick is its ft formula). Raises
     :class:`check.safety_game.Outside` for an atom the monitors cannot take.
     """
-    deadline = None if budget is None else time.monotonic() + budget
+    meter = Meter(budget or Budget())
     if last and not finite:
         raise ValueError("last-tick formulas are read on finite traces only")
     # the first layer of the search: the goals have held, the last-tick formulas hold
@@ -74,13 +76,13 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
             raise ValueError("liveness formulas are read on infinite runs only")
         try:
             game = _BuchiGame(list(safe), list(liveness), [], ir.TRUE, invariant, extra=marks,
-                              deterministic=False)
+                              deterministic=False, meter=meter)
         except Outside as exc:
             return ("outside", str(exc))
     else:
-        game = _Game(list(safe), [], ir.TRUE, invariant, extra=marks)
+        game = _Game(list(safe), [], ir.TRUE, invariant, extra=marks, meter=meter)
     try:
-        return _Search(game, deadline).run(finite, length)
+        return _Search(game, meter).run(finite, length)
     finally:
         game.close()
 
@@ -89,8 +91,8 @@ class _Search:
     """The fixed points of :func:`decide` on one product monitor (``game``: a
     :class:`check.safety_game._Game` whose atoms are all the controller's)."""
 
-    def __init__(self, game: _Game, deadline: float | None):
-        self.g, self.b, self.deadline = game, game.b, deadline
+    def __init__(self, game: _Game, meter: Meter):
+        self.g, self.b, self.meter = game, game.b, meter
         b = self.b
         self.ok = b.bdd_and(game.ok, game.ctl_ok)
         self.done = b.bddtrue
@@ -98,10 +100,11 @@ class _Search:
             self.done = b.bdd_and(self.done, mark)
         self.letter_set = b.bdd_and(game.in_set, game.out_set)
         self.parts = _clusters(b, game.m.parts())
+        meter.relation(b, self.ok, *(relation for relation, _nxt in self.parts))
 
-    def _tick(self) -> None:
-        if self.deadline is not None and time.monotonic() > self.deadline:
-            raise TimeoutError("the monitor fixed point ran out of its budget")
+    def _tick(self, *iterates) -> None:
+        """Pay one iteration: the nodes of the sets it computed (:mod:`check.budget`)."""
+        self.meter.nodes(self.b, *iterates)
 
     def successors_in(self, target, state=None):
         """BDD over (state, letter): the next state is in ``target``, by one relational
@@ -132,8 +135,8 @@ class _Search:
         b = self.b
         z = b.bddtrue
         while True:
-            self._tick()
             nxt = b.bdd_and(z, self.pre(z))
+            self._tick(nxt)
             if nxt == z:
                 break
             z = nxt
@@ -151,17 +154,17 @@ class _Search:
         layers = [self.pre(live, self.done)]
         if length is not None:  # exactly ``length`` ticks: the layers are not merged
             for _ in range(length - 1):
-                self._tick()
                 layers.append(self.pre(layers[-1]))
+                self._tick(layers[-1])
             if b.bdd_and(init, layers[-1]) == b.bddfalse:
                 return (False, None)
             return (True, (self._trace(layers, live, exact=True), []))
         reach = front = layers[0]
         while b.bdd_and(init, reach) == b.bddfalse:
-            self._tick()
             # the states first found at this step (a state whose successor was found
             # earlier was found then): measured 5 times faster than the pre of all of reach
             front = b.bdd_and(b.bdd_and(live, self.pre(front)), b.bdd_not(reach))
+            self._tick(front)
             if front == b.bddfalse:
                 return (False, None)
             reach = b.bdd_or(reach, front)

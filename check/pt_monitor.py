@@ -36,19 +36,31 @@ from __future__ import annotations
 from compiler import ir
 from compiler.ir import Node
 
-__all__ = ["Monitor", "Outside", "state_bits", "less_than"]
+__all__ = ["Monitor", "Outside", "NoRoom", "state_bits", "deadline_uses", "less_than"]
 
 
 class Outside(Exception):
     """The requirement set is outside what the monitors handle; the message says why."""
 
 
-def state_bits(n: Node, seen: set) -> tuple[int, int]:
+class NoRoom(Exception):
+    """The delay lines need more state bits than were allotted (a deadline that could not
+    be one counter: :meth:`Monitor._deadline`); allot them all and build again."""
+
+
+def state_bits(n: Node, seen: set, counted: frozenset = frozenset()) -> tuple[int, int]:
     """Upper bounds on the state bits the monitor of ``n`` needs (for one allocation):
-    ``(delay-line bits, other bits)``."""
+    ``(delay-line bits, other bits)``; a deadline of ``counted`` is counted as its counter
+    (:func:`deadline_uses`), not its delay line."""
     if n in seen:
         return (0, 0)
     seen.add(n)
+    if n in counted:
+        a, b, N = _deadline_parts(n)
+        d1, o1 = state_bits(a, seen, counted)
+        d2, o2 = state_bits(b, seen, counted)
+        # the deadline's counter, and room for the counters of its O[0,N-1] in the block
+        return d1 + d2, o1 + o2 + 2 * (N + 1).bit_length() + 4
     delay = other = 0
     if n.op in ("Y", "Z", "O", "H", "S", "T", "FTP"):
         other = 1
@@ -56,9 +68,42 @@ def state_bits(n: Node, seen: set) -> tuple[int, int]:
             lo = n.lo or 0
             delay, other = lo, (n.hi - lo + 1).bit_length() + (lo + 1).bit_length() + 2
     for a in n.args:
-        d, o = state_bits(a, seen)
+        d, o = state_bits(a, seen, counted)
         delay, other = delay + d, other + o
     return delay, other
+
+
+def deadline_uses(formulas: list[Node]) -> dict[Node, list[Node]]:
+    """The deadlines of ``formulas`` one counter may monitor (:class:`Monitor`'s
+    docstring): ``deadline -> [the starts of the since formulas it is the left of]``.
+    Whether each start implies the deadline's ``b`` is checked when it is encoded."""
+    parents: dict[Node, list[tuple[Node, int]]] = {}
+    for f in formulas:
+        for n in ir.walk(f):
+            for k, a in enumerate(n.args):
+                if (n, k) not in parents.setdefault(a, []):
+                    parents[a].append((n, k))
+    out: dict[Node, list[Node]] = {}
+    for phi, uses in parents.items():
+        if _deadline_parts(phi) is None:
+            continue
+        starts, fine = [], True
+        for parent, k in uses:
+            if parent.op == "H" and parent.hi is None:
+                continue
+            if parent.op == "S" and k == 0:
+                right = parent.args[1]
+                starts.append(next((x for x in right.args if x != phi), right)
+                              if right.op == "&" and phi in right.args else right)
+                continue
+            if parent.op == "&" and phi in parent.args and all(
+                    p.op == "S" and j == 1 and p.args[0] == phi
+                    for p, j in parents.get(parent, [(None, -1)])):
+                continue
+            fine = False
+        if fine:
+            out[phi] = starts
+    return out
 
 
 # --------------------------------------------------------------------------- the monitor
@@ -68,7 +113,7 @@ class Monitor:
     next, initial value, next-value BDD)``."""
 
     def __init__(self, bdd, first_var: int, atoms: list[Node], inputs: set[str],
-                 other_bits: int = 0):
+                 other_bits: int = 0, delay_bits: int | None = None):
         self.b = bdd
         self.delays = self.counted = 0
         #: the bits of each counter, least significant first (:meth:`parts`)
@@ -85,6 +130,8 @@ class Monitor:
             (self.in_vars if names <= inputs else self.out_vars).append(first_var + k)
         self.base = first_var + len(atoms)
         self.delay_base = self.base + 2 * other_bits
+        #: the delay-line bits allotted (None: no limit); past them :class:`NoRoom`
+        self.delay_room = delay_bits
         self.deadlines: dict[Node, list[Node]] = {}
         #: (counter node, bit significance) -> its place in the counter block (:meth:`plan`)
         self.slots: dict[tuple[Node, int], int] = {}
@@ -95,31 +142,7 @@ class Monitor:
         docstring): ``deadline -> [the starts of the since formulas it is the left of]``.
         Whether each start implies the deadline's ``b`` is checked when it is encoded.
         Then place the counters' bits (module docstring, variable order)."""
-        parents: dict[Node, list[tuple[Node, int]]] = {}
-        for f in formulas:
-            for n in ir.walk(f):
-                for k, a in enumerate(n.args):
-                    if (n, k) not in parents.setdefault(a, []):
-                        parents[a].append((n, k))
-        for phi, uses in parents.items():
-            if _deadline_parts(phi) is None:
-                continue
-            starts, fine = [], True
-            for parent, k in uses:
-                if parent.op == "H" and parent.hi is None:
-                    continue
-                if parent.op == "S" and k == 0:
-                    right = parent.args[1]
-                    starts.append(next((x for x in right.args if x != phi), right)
-                                  if right.op == "&" and phi in right.args else right)
-                    continue
-                if parent.op == "&" and phi in parent.args and all(
-                        p.op == "S" and j == 1 and p.args[0] == phi
-                        for p, j in parents.get(parent, [(None, -1)])):
-                    continue
-                fine = False
-            if fine:
-                self.deadlines[phi] = starts
+        self.deadlines = deadline_uses(formulas)
         self._layout(formulas)
 
     def _layout(self, formulas: list[Node]) -> None:
@@ -170,6 +193,8 @@ class Monitor:
         side, after the bits of its kind made before it (module docstring, variable
         order)."""
         if delay:
+            if self.delay_room is not None and self.delays >= self.delay_room:
+                raise NoRoom("a deadline needs its delay line")
             cur = self.delay_base + 2 * self.delays
             self.delays += 1
         else:

@@ -35,6 +35,9 @@ from common.errors import CheckError
 from compiler import ir
 from .findings import Finding
 from .findings import ids as _ids
+from .findings import subsets_text
+from .checker import SPOT_MAX_BOUND
+from .smt import max_bound
 from .solver import UNKNOWN
 from .witness import _atoms
 from .numeric_abstraction import NumericAbstraction, simple_comparison
@@ -86,8 +89,9 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
             entry["realizable"] = "unknown"
             result.findings.append(Finding(
                 "unknown", "unknown", _ids(comp),
-                "realizability of " + ", ".join(_ids(comp)) + " unknown: the synthesis game "
-                "ran out of time (--timeout) or Spot could not take it (see the notes)"))
+                "realizability of " + ", ".join(_ids(comp)) + " unknown: the game ran past "
+                "its work or memory budget (--budget, --memory-budget) or Spot could not take "
+                "it (see the notes)"))
         elif ans["realizable"]:
             entry["realizable"] = True
             entry["method"] = ans["method"]
@@ -99,11 +103,6 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
         summary["components"].append(entry)
     result.notes.extend(decide.notes)
     return summary
-
-
-#: the symbolic safety game's budget, as a multiple of the per-query ``timeout`` (60 s at
-#: ``fretc check``'s default 20 s): a 200-tick set fits in it (docs/guide/check.md)
-GAME_TIMEOUT_FACTOR = 3.0
 
 
 class _Decider:
@@ -148,14 +147,12 @@ class _Decider:
         regions = self._regions(pts, "safety game", safe)
         if regions is None:
             return None
-        budget = self._budget()
         checker.queries += 1
-        ans = checker.worker.ask(("safety_game", pts, self.inputs, *regions,
-                                  None if budget is None else budget / 4), budget)
+        ans = checker.worker.ask(("safety_game", pts, self.inputs, *regions))
         if ans == UNKNOWN:
             checker.unknown += 1
-            self._note(f"the safety game of {', '.join(_ids(safe))} ran out of its "
-                       f"{budget:g} s budget" if budget else "the safety game failed")
+            self._note(f"the safety game of {', '.join(_ids(safe))} answered unknown: "
+                       + self._why())
             return UNKNOWN if len(safe) == len(items) else None
         out = {"realizable": ans["realizable"], "method": "safety game"}
         if ans["realizable"]:
@@ -180,9 +177,10 @@ class _Decider:
         return (numeric.regions([v for v in numeric.atoms if v in self.inputs]),
                 numeric.regions([v for v in numeric.atoms if v not in self.inputs]))
 
-    def _budget(self) -> float | None:
-        timeout = self.checker.worker.timeout
-        return None if timeout is None else timeout * GAME_TIMEOUT_FACTOR
+    def _why(self) -> str:
+        """The reason of the worker's last unknown answer."""
+        failures = self.checker.worker.failures
+        return failures[-1] if failures else "no reason given"
 
     def _buchi(self, safe, rest, search: bool = False) -> object:
         """The Büchi game of ``safe`` (pt monitors) and ``rest`` (Spot's deterministic
@@ -194,16 +192,13 @@ class _Decider:
         regions = self._regions(pts + live, "Büchi game", items)
         if regions is None:
             return None
-        budget = self._budget()
-        lasso = None if not search or budget is None else budget / 4
         checker.queries += 1
-        ans = checker.worker.ask(("buchi_game", pts, live, self.inputs, *regions, budget, lasso),
-                                 None if budget is None else budget + (lasso or 0))
+        ans = checker.worker.ask(("buchi_game", pts, live, self.inputs, *regions, search))
         if ans == UNKNOWN or "outside" in ans:
             if ans == UNKNOWN:
                 checker.unknown += 1
             self._note(f"the Büchi game of {names} "
-                       + (f"ran out of its {budget:g} s budget" if ans == UNKNOWN
+                       + (f"answered unknown ({self._why()})" if ans == UNKNOWN
                           else f"was not used: {ans['outside']}") + "; Spot's game decides")
             return None
         if ans["realizable"]:
@@ -244,7 +239,13 @@ class _Decider:
         else:
             spec_text = to_spot(ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out)))
         checker.queries += 1
-        ans = checker.worker.ask(("realizable", spec_text, outs))
+        bound = max_bound(phis)
+        if bound > SPOT_MAX_BOUND:  # a translation past it may not end: refused up front
+            ans = checker.worker.refuse(f"Spot is given tick bounds up to {SPOT_MAX_BOUND}, "
+                                        f"the synthesis game of {', '.join(_ids(items))} "
+                                        f"has {bound}")
+        else:
+            ans = checker.worker.ask(("realizable", spec_text, outs))
         if ans == UNKNOWN:
             checker.unknown += 1
             return UNKNOWN
@@ -263,10 +264,12 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
     entry["realizable"] = False
     entry["method"] = ans["method"]
     ans = decide.witness(comp, ans)
-    subsets, cut, unknown = checker.minimal_subsets(
+    found = checker.minimal_subsets(
         comp, [], lambda s: (UNKNOWN if decide(s) == UNKNOWN else not decide(s)["realizable"]))
-    names = [_ids(s) for s in subsets]
+    names = [_ids(s) for s in found.subsets]
+    cut = found.cut
     entry["minimal_unrealizable"] = names
+    entry["standing"] = found.standing
     entry["cut"] = cut
     env = _environment(checker, ans["counter"], inputs, ans["note"])
     entry["environment"] = env
@@ -274,11 +277,12 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
         entry["run"] = [_values(checker, letter, _variables(comp)) for letter in ans["run"]]
     involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
     msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
-           + ", ".join(inputs) + ") do: minimal unrealizable subsets "
-           + "; ".join("{" + ", ".join(s) + "}" for s in names)
-           + (" (enumeration cut by the time budget)" if cut else ""))
+           + ", ".join(inputs) + ") do: "
+           + subsets_text(names, found.standing, "unrealizable subset")
+           + (f" (enumeration cut by its budget of {checker.mus_budget} subset checks)"
+              if cut else ""))
     result.findings.append(Finding("unrealizable", "error", involved, msg,
-                                   subsets=names, cut=cut,
+                                   subsets=names, standing=found.standing, cut=cut,
                                    details={"environment": env,
                                             "run": entry.get("run", [])}))
 

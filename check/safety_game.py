@@ -49,8 +49,10 @@ from compiler import ir
 from compiler.ir import Node
 from compiler.printers import mangle, to_smv
 
+from .budget import Budget, BudgetSpent, Meter
+from .fixed_inputs import keep_forever, post, prefix_search
 from .numeric_abstraction import simple_comparison
-from .pt_monitor import Monitor, Outside, state_bits
+from .pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
 
 __all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms"]
 
@@ -148,32 +150,50 @@ class _Game:
     formulas monitored beside (their values in ``self.extra``), not required to hold;
     ``atoms_of``: more formulas whose atoms the players set (not monitored here);
     ``reserve``: state bits kept free for more monitors (:mod:`check.buchi_game`), whose
-    bits are added with ``self.m`` and made part of the relations by :meth:`relations`."""
+    bits are added with ``self.m`` and made part of the relations by :meth:`relations`;
+    ``meter``: the query's work (:mod:`check.budget`; default budgets when None): the state
+    variables are checked against its memory budget before they are made
+    (:class:`check.budget.BudgetSpent`), and each iteration of :meth:`solve` is paid."""
 
     def __init__(self, pts: Sequence[Node], inputs: Sequence[str], env_inv: Node,
                  ctl_inv: Node, extra: Sequence[Node] = (), atoms_of: Sequence[Node] = (),
-                 reserve: int = 0):
+                 reserve: int = 0, meter: Meter | None = None):
         import spot  # lazy: Spot (and its BuDDy) in the query worker process only
 
-        b = self.b = _buddy()
-        self.owner = spot.make_twa_graph(bdd_dict())
+        self.meter = meter if meter is not None else Meter(Budget())
         self.atoms = game_atoms(list(pts) + list(extra) + [env_inv, ctl_inv, *atoms_of])
-        seen: set = set()
-        counts = [state_bits(f, seen) for f in [*pts, *extra]]
-        other = sum(o for _d, o in counts) + 1 + reserve
-        nvars = len(self.atoms) + 2 * (other + sum(d for d, _o in counts)) + 2
-        first = _DICT[0].register_anonymous_variables(nvars, self.owner)
-        m = self.m = Monitor(b, first, self.atoms, set(inputs), other)
-        m.plan([*pts, *extra])
-        self.ok = b.bddtrue
-        for f in pts:
-            self.ok = b.bdd_and(self.ok, m.value(f))
-        self.env_ok, self.ctl_ok = m.value(env_inv), m.value(ctl_inv)
-        self.extra = [m.value(f) for f in extra]  # encoded with their state bits
+        b = self.b = _buddy()
+        # the deadlines as counters first (a few bits each); a deadline that must be its
+        # delay line after all (NoRoom) gets every bit it may need, in a second build
+        for counted in (frozenset(deadline_uses([*pts, *extra])), frozenset()):
+            seen: set = set()
+            counts = [state_bits(f, seen, counted) for f in [*pts, *extra]]
+            other = sum(o for _d, o in counts) + 1 + reserve
+            delay = sum(d for d, _o in counts)
+            nvars = len(self.atoms) + 2 * (other + delay) + 2
+            self.meter.variables(nvars, "the monitors' state, atoms and delay lines")
+            self.owner = spot.make_twa_graph(bdd_dict())
+            first = _DICT[0].register_anonymous_variables(nvars, self.owner)
+            m = self.m = Monitor(b, first, self.atoms, set(inputs), other,
+                                 delay if counted else None)
+            try:
+                m.plan([*pts, *extra])
+                self.ok = b.bddtrue
+                for f in pts:
+                    self.ok = b.bdd_and(self.ok, m.value(f))
+                self.env_ok, self.ctl_ok = m.value(env_inv), m.value(ctl_inv)
+                self.extra = [m.value(f) for f in extra]  # encoded with their state bits
+                break
+            except NoRoom:
+                self.m = self.ok = None
+                _DICT[0].unregister_all_my_variables(self.owner)
         self.in_set = _varset(b, m.in_vars)
         self.out_set = _varset(b, m.out_vars)
         self.layers: list = []
+        self.acc: list = []  # no acceptance sets: a safety game (check.fixed_inputs)
+        self._step = None
         self.relations()
+        self.letter_vars = b.bdd_and(b.bdd_and(self.nxt_set, self.out_set), self.in_set)
 
     def relations(self) -> None:
         """The first state and the state-variable sets of ``self.m``'s bits, the transition
@@ -193,7 +213,7 @@ class _Game:
         """Drop the BDDs and give their variables back to Spot's allocator."""
         self.layers = []
         self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None
-        self.extra, self.same = [], None
+        self.extra, self.same, self._step = [], None, None
         _DICT[0].unregister_all_my_variables(self.owner)
 
     @property
@@ -205,6 +225,16 @@ class _Game:
             for _cur, nxt, _init, fn in self.m.bits:
                 self._trans = b.bdd_and(self._trans, b.bdd_biimp(b.bdd_ithvar(nxt), fn))
         return self._trans
+
+    @property
+    def step(self):
+        """The moves that keep every requirement: ``ok & ctl_ok & trans`` over (state,
+        letter, next state), built when first asked (the satisfiability fixed points of
+        :mod:`check.monitor_sat` step through the relation in parts instead)."""
+        if self._step is None:
+            b = self.b
+            self._step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
+        return self._step
 
     def _primed(self, f):
         """``f`` over the state bits' next variables: a relational product with ``cur ==
@@ -237,17 +267,16 @@ class _Game:
         every_out = b.bdd_forall(b.bdd_imp(self.ctl_ok, bad), self.out_set)
         return b.bdd_exist(b.bdd_and(self.env_ok, every_out), self.in_set)
 
-    def solve(self, deadline: float | None = None) -> bool:
+    def solve(self) -> bool:
         """Compute the layers of ``Lose`` (stopping once the initial state is in it);
-        True when the controller wins (realizable)."""
-        import time
-
+        True when the controller wins (realizable). Raises
+        :class:`check.budget.BudgetSpent` past the meter's work budget."""
         b = self.b
+        self.meter.relation(b, self.ok, *(fn for _c, _n, _i, fn in self.m.bits))
         lose = b.bddfalse
         while True:
-            if deadline is not None and time.monotonic() > deadline:
-                raise TimeoutError("the safety game ran out of its budget")
             nxt = b.bdd_or(lose, self.pre(lose))
+            self.meter.nodes(b, nxt)
             if nxt == lose:
                 return True
             lose = nxt
@@ -339,38 +368,73 @@ class _Witness:
         now = b.bdd_and(b.bdd_and(states, cube), b.bdd_and(g.ctl_ok, g.ok))
         return g._unprimed(b.bdd_appex(now, g.trans, b.bddop_and, self.all_set))
 
-    def search(self, deadline: float | None) -> tuple[list | None, str]:
+    def search(self, budget: Budget) -> tuple[list | None, str]:
         """Best-first search (by rank) over the sets of states: the input letters of a
-        prefix after which no output sequence keeps the requirements, or None and why."""
+        prefix after which no output sequence keeps the requirements, or None and why.
+        Within :data:`SEARCH_BUDGET` sets and a quarter of the work ``budget``; past them, a
+        prefix then one input letter repeated (:mod:`check.fixed_inputs`), within another
+        quarter."""
         import heapq
-        import time
 
         letters = self._cubes(self.in_atoms, self.g.env_ok, MAX_LETTERS)
         if letters is None:
             return None, (f"no fixed input sequence searched: {len(self.in_atoms)} input "
                           "atoms are too many letters")
+        meter = Meter(budget, 0.25)
+        meter.relation(self.b, self.g.trans)
         start = self.g.init
         heap = [(self.rank(start), 0, 0, start, ())]
         seen = {start.id()}
         count = 0
-        while heap:
-            if count >= SEARCH_BUDGET or (deadline is not None
-                                          and time.monotonic() > deadline):
-                return None, ("no fixed input sequence found within the search budget "
-                              f"({count} sets of monitor states): the environment may "
-                              "have to react to the outputs")
-            _r, _n, _c, states, seq = heapq.heappop(heap)
-            for k, (_values, cube) in enumerate(letters):
-                nxt = self.post(states, cube)
-                if nxt == self.b.bddfalse:
-                    return [letters[i][0] for i in seq + (k,)], ""
-                if nxt.id() not in seen:
-                    seen.add(nxt.id())
-                    count += 1
-                    heapq.heappush(heap, (self.rank(nxt), len(seq) + 1, count, nxt,
-                                          seq + (k,)))
-        return None, ("no fixed input sequence defeats every controller (every one has a "
-                      "matching output sequence): the environment must react to the outputs")
+        try:
+            while heap:
+                if count >= SEARCH_BUDGET:
+                    break
+                _r, _n, _c, states, seq = heapq.heappop(heap)
+                for k, (_values, cube) in enumerate(letters):
+                    nxt = self.post(states, cube)
+                    meter.nodes(self.b, nxt)
+                    if nxt == self.b.bddfalse:
+                        return [letters[i][0] for i in seq + (k,)], ""
+                    if nxt.id() not in seen:
+                        seen.add(nxt.id())
+                        count += 1
+                        heapq.heappush(heap, (self.rank(nxt), len(seq) + 1, count, nxt,
+                                              seq + (k,)))
+            else:
+                return None, ("no fixed input sequence defeats every controller (every one "
+                              "has a matching output sequence): the environment must react "
+                              "to the outputs")
+        except BudgetSpent:
+            pass
+        found = self._one_letter_cycle(letters, Meter(budget, 0.25))
+        if found is not None:
+            return found, ""
+        return None, ("no fixed input sequence found within the search budget "
+                      f"({count} sets of monitor states, then a prefix and one input "
+                      "repeated): the environment may have to react to the outputs")
+
+    def _one_letter_cycle(self, letters: list, meter: Meter) -> list | None:
+        """A prefix, then one input letter repeated until no output sequence keeps the
+        requirements (:func:`check.fixed_inputs.prefix_search`), as input letters; None
+        when none is found within ``meter``'s budget."""
+        meter.relation(self.b, self.g.step)
+        try:
+            keeps = [keep_forever(self.g, c, meter) for _v, c in letters]
+            found = prefix_search(self.g, letters, keeps, meter)
+            if found is None:
+                return None
+            seq, (c,) = found
+            states = self.g.init
+            for k in seq:
+                states = post(self.g, states, letters[k][1])
+            while states != self.b.bddfalse:  # outside keep(c): empty after finitely many
+                states = post(self.g, states, letters[c][1])
+                meter.nodes(self.b, states)
+                seq = seq + [c]
+        except BudgetSpent:
+            return None
+        return [letters[i][0] for i in seq]
 
     def play(self, inputs: list[tuple]) -> list[dict]:
         """A controller's best effort along ``inputs`` (letters of :meth:`search`): each
@@ -407,26 +471,25 @@ class _Witness:
 
 
 def solve_game(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_inv: Node,
-               budget: float | None = None) -> dict:
+               budget: Budget | None = None) -> dict:
     """Decide the safety game of the pt formulas ``pts`` (module docstring).
 
     ``inputs``: the environment's FRET variables (every other variable is the
     controller's); ``env_inv``/``ctl_inv``: propositional IR formulas over the comparisons
-    (numeric consistency of inputs / outputs); ``budget``: seconds for the search of a fixed
-    input sequence. Returns ``{"realizable": True, "strategy": {...}}`` or
+    (numeric consistency of inputs / outputs); ``budget``: the query's
+    :class:`check.budget.Budget` (the game, then the search of a fixed input sequence
+    within half of it more). Returns ``{"realizable": True, "strategy": {...}}`` or
     ``{"realizable": False, "inputs": [letters] | None, "run": [rows], "note": str}``
     (letters and rows: ``{atom name: bool}``). Raises :class:`Outside` for formulas the game
-    does not handle.
+    does not handle, :class:`check.budget.BudgetSpent` past the budget.
     """
-    import time
-
-    game = _Game(pts, inputs, env_inv, ctl_inv)
+    budget = budget or Budget()
+    game = _Game(pts, inputs, env_inv, ctl_inv, meter=Meter(budget))
     try:
         if game.solve():
             return {"realizable": True, "strategy": game.strategy_size()}
-        deadline = None if budget is None else time.monotonic() + budget
         w = _Witness(game)
-        seq, note = w.search(deadline)
+        seq, note = w.search(budget)
         if seq is None:
             return {"realizable": False, "inputs": None, "run": [], "note": note,
                     "iterations": len(game.layers)}

@@ -21,7 +21,8 @@ infinite words as Spot reads them) gets two encodings, tried in turn within one 
    well-ordering of the naturals that first-order logic does not prove by itself. z3
    answering **unsat** means no infinite word (none at all, lasso or not) meets the formulas.
 
-When neither settles the query within the budget the answer is :data:`UNKNOWN` and
+When neither settles the query within the budget (z3's deterministic resource count,
+``rlimit``, never seconds: :mod:`check.budget`) the answer is :data:`UNKNOWN` and
 :attr:`SmtSolver.failures` says what was tried.
 
 Atoms mean what they mean to Spot through :mod:`check.numeric_abstraction`: a boolean
@@ -38,6 +39,7 @@ from collections.abc import Sequence
 from compiler import ir
 from compiler.ir import Node
 
+from .budget import NODES_PER_Z3_TERM, Z3_RLIMIT_PER_UNIT, Budget, RunStopped
 from .numeric_abstraction import simple_comparison
 from .safety_game import letter_name
 from .solver import UNKNOWN
@@ -291,85 +293,118 @@ class _Lasso:
 class SmtSolver:
     """Answers ``fretc check``'s satisfiability queries with z3 (module docstring).
 
-    ``timeout``: seconds of budget per query (None: 600). :meth:`sat` returns ``(True,
-    (prefix, cycle))`` (letters ``{atom name: bool}`` as :class:`check.solver.SpotWorker`
-    gives them), ``(False, None)``, or :data:`UNKNOWN`; ``failures`` says for each unknown
-    answer what was tried. Raises nothing for a formula it cannot encode (a past-time
-    operator in a future formula): that answer is unknown too, with the reason.
+    ``budget``: each query's :class:`check.budget.Budget` (default the defaults): its work
+    as z3's deterministic resource count (``rlimit``, :data:`check.budget.Z3_RLIMIT_PER_UNIT`
+    per unit), shared by the attempts of the plan; its memory bounds the lasso encodings
+    before they are built (:data:`check.budget.NODES_PER_Z3_TERM` per term). ``deadline``:
+    the run's wall-clock limit (``time.monotonic()`` value): past it :meth:`sat` raises
+    :class:`check.budget.RunStopped`. :meth:`sat` returns ``(True, (prefix, cycle))``
+    (letters ``{atom name: bool}`` as :class:`check.solver.SpotWorker` gives them),
+    ``(False, None)``, or :data:`UNKNOWN`; ``failures`` says for each unknown answer what
+    was tried, ``spent`` counts them. Raises nothing for a formula it cannot encode (a
+    past-time operator in a future formula): that answer is unknown too, with the reason.
     """
 
-    def __init__(self, timeout: float | None = None):
-        self.timeout = 600.0 if timeout is None else float(timeout)
+    def __init__(self, budget: Budget | None = None, deadline: float | None = None):
+        self.budget = budget or Budget()
+        self.deadline = deadline
         self.failures: list[str] = []
-        self.timeouts = 0
+        self.spent = 0
 
     def sat(self, formulas: Sequence[Node]):
         """Is the conjunction of ``formulas`` satisfiable on infinite words?"""
-        import time
-
         z3 = _z3()
-        deadline = time.monotonic() + self.timeout
         bound = max_bound(formulas)
-        tried = 0
+        size = sum(1 for f in formulas for _n in ir.walk(f))
+        self._left = self.budget.work * Z3_RLIMIT_PER_UNIT
+        self._count = _rlimit_count(z3, z3.Solver())
+        tried, skipped = 0, 0
         try:
             shapes = [(1, 0), (2, 1), (2, 0), (4, 3), (4, 0)]
             big = [(K, loop) for K in sorted({bound + 2, 2 * bound + 3})
                    for loop in (0, K - 1, (K - 1) // 2)]
             # small lassos, short proofs by model-based instantiation then by E-matching
-            # alone (each proves what the other misses on FRET's formulas; a proof found is
-            # found in about a second), a lasso past the largest bound, a longer proof,
-            # the other lassos, and the proof again
-            plan = ([("lasso", (x, 1.0)) for x in shapes] + [("proof", (0.15, True, 2.0))]
-                    + [("proof", (0.1, False, 2.0))] + [("lasso", (big[0], 0.5))]
+            # alone (each proves what the other misses on FRET's formulas), a lasso past the
+            # largest bound, a longer proof, the other lassos, and the proof again; each
+            # attempt a share of the resource count left (``cap``: at most that share of
+            # the whole budget)
+            plan = ([("lasso", (x, 1.0)) for x in shapes] + [("proof", (0.15, True, 0.1))]
+                    + [("proof", (0.1, False, 0.1))] + [("lasso", (big[0], 0.5))]
                     + [("proof", (0.4, True, None))]
                     + [("lasso", (x, 0.5)) for x in big[1:]] + [("proof", (1.0, True, None))])
             for kind, arg in plan:
-                if time.monotonic() > deadline:
+                if self._left <= 0:
                     break
                 if kind == "lasso":
-                    got = self._lasso(z3, formulas, arg[0], deadline, arg[1])
-                    tried = max(tried, arg[0][0])
+                    K = arg[0][0]
+                    if K * size * NODES_PER_Z3_TERM > self.budget.memory:
+                        skipped = max(skipped, K)
+                        continue
+                    got = self._lasso(z3, formulas, arg[0], arg[1])
+                    tried = max(tried, K)
                 else:
-                    got = self._proof(z3, formulas, deadline, *arg)
+                    got = self._proof(z3, formulas, *arg)
                 if got is not None:
                     return got
         except (ValueError, z3.Z3Exception) as exc:
             self.failures.append(f"z3 could not take the query: {exc}")
             return UNKNOWN
-        self.timeouts += 1
+        self.spent += 1
         self.failures.append(
             f"z3: no lasso model of up to {tried} positions and no proof of "
-            f"unsatisfiability within {self.timeout:g} s")
+            f"unsatisfiability within the {self.budget.work_spent()}"
+            + (f"; lassos of {skipped} positions skipped, past the memory budget of "
+               f"{self.budget.memory} BDD nodes" if skipped else ""))
         return UNKNOWN
 
-    def _left(self, deadline: float, share: float = 1.0, cap: float | None = None) -> int:
-        """Milliseconds for one attempt: ``share`` of the time left, at most ``cap`` s."""
+    def _check(self, z3, s, share: float, cap: float | None):
+        """``s.check()`` with ``share`` of the resource count left (at most ``cap`` of the
+        whole budget), the run's deadline as z3's timeout; the count spent is taken off."""
         import time
 
-        left = (deadline - time.monotonic()) * share
-        return max(1, int((left if cap is None else min(left, cap)) * 1000))
+        whole = self.budget.work * Z3_RLIMIT_PER_UNIT
+        limit = max(1, int(min(self._left * share, whole * cap if cap else self._left)))
+        s.set("rlimit", limit)
+        if self.deadline is not None:
+            s.set("timeout", max(1, int((self.deadline - time.monotonic()) * 1000)))
+        ans = s.check()
+        count = _rlimit_count(z3, s)  # the context's: cumulative over its solvers
+        self._left -= max(1, count - self._count)
+        self._count = count
+        if ans == z3.unknown and self.deadline is not None \
+                and time.monotonic() >= self.deadline:
+            raise RunStopped("the run's wall-clock limit (--timeout) passed")
+        return ans
 
-    def _lasso(self, z3, formulas, shape, deadline, share: float):
+    def _lasso(self, z3, formulas, shape, share: float):
         K, loop = shape
         enc = _Lasso(z3, K, loop)
         s = z3.Solver()
-        s.set("timeout", self._left(deadline, share))
         for f in formulas:
             s.add(enc.series(f)[0])
         s.add(*enc.constraints)
-        if s.check() != z3.sat:
+        if self._check(z3, s, share, None) != z3.sat:
             return None
         return (True, _word(z3, s.model(), enc, formulas))
 
-    def _proof(self, z3, formulas, deadline, share: float, mbqi: bool, cap: float | None):
+    def _proof(self, z3, formulas, share: float, mbqi: bool, cap: float | None):
         enc = _FirstOrder(z3)
         s = z3.Solver()
-        s.set("timeout", self._left(deadline, share, cap))
         s.set("mbqi", mbqi)
         for f in formulas:
             s.add(enc.at(f, z3.IntVal(0)))
         s.add(*enc.axioms)
-        return (False, None) if s.check() == z3.unsat else None
+        return (False, None) if self._check(z3, s, share, cap) == z3.unsat else None
+
+
+def _rlimit_count(z3, s) -> int:
+    """z3's resource count so far (cumulative in the context), read off ``s``'s statistics
+    after a check (an unchecked solver is checked first: an empty check costs nothing)."""
+    stats = s.statistics()
+    if "rlimit count" not in stats.keys():
+        s.check()
+        stats = s.statistics()
+    return int(stats.get_key_value("rlimit count"))
 
 
 def _word(z3, model, enc: _Lasso, formulas) -> tuple[list, list]:

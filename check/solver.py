@@ -1,10 +1,16 @@
-"""Spot queries of ``fretc check`` with a time budget each.
+"""The queries of ``fretc check`` that run in Spot's process: Spot's automata and games,
+and the BDD fixed points (BuDDy, shipped with Spot), each within the query's budgets.
 
-Spot's translations and game solving run in C++ and cannot be interrupted from Python, so
-the queries run in one forked worker process (:class:`SpotWorker`); a query that overruns its
-budget has its worker killed (a new one starts for the next query) and answers
-:data:`UNKNOWN`. Queries and answers are plain Python values (formulas as Spot text), so
-they pickle cheaply through a pipe.
+Spot's translations and game solving run in C++ and cannot be stopped from Python, so the
+queries run in one forked worker process (:class:`SpotWorker`), and no answer depends on
+time: the BDD engines count their work (:mod:`check.budget`); what Spot is given is bounded
+before it starts (:data:`SPOT_MAX_STATES`, and the tick bounds :mod:`check.checker` gives
+it), so a Spot query finishes or is refused; BuDDy's node table is capped at the memory
+budget (``bdd_setmaxnodenum``: BuDDy stops the worker when it would grow past it, and the
+query answers :data:`UNKNOWN` with that reason; the next query starts a new worker). The
+run's wall-clock limit (``deadline``) only stops the whole run (:class:`check.budget.
+RunStopped`). Queries and answers are plain Python values (formulas as Spot text), so they
+pickle cheaply through a pipe.
 
 Queries (all on infinite words, Spot's LTL semantics):
 
@@ -17,22 +23,48 @@ Queries (all on infinite words, Spot's LTL semantics):
   outputs (no fixed input sequence wins). Uses Spot's synthesis games:
   ``spot.ltl_to_game``, ``spot.solve_game``, ``spot.solved_game_to_mealy`` (Spot >= 2.10,
   ``ltlsynt``'s engine).
-* ``("safety_game", pts, inputs, env_inv, ctl_inv, budget)``: the symbolic safety game of
+* ``("safety_game", pts, inputs, env_inv, ctl_inv)``: the symbolic safety game of
   :func:`check.safety_game.solve_game` (its answer dict).
-* ``("buchi_game", pts, liveness, inputs, env_inv, ctl_inv, budget)``: the Büchi game of
+* ``("buchi_game", pts, liveness, inputs, env_inv, ctl_inv, search)``: the Büchi game of
   :func:`check.buchi_game.solve_buchi_game` (its answer dict).
+* ``("monitor_sat", safe, goals, invariant, finite, length, liveness, last)``: the fixed
+  points of :func:`check.monitor_sat.decide`.
+
+The worker adds the query's :class:`check.budget.Budget` to the BDD queries.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
+import time
 from typing import Any
 
-__all__ = ["UNKNOWN", "SpotWorker", "run_query"]
+from .budget import Budget, BudgetSpent, RunStopped
 
-#: Answer of a query whose budget ran out (or whose worker died).
+__all__ = ["UNKNOWN", "SpotWorker", "run_query", "SPOT_MAX_STATES"]
+
+#: Answer of a query past its budget (or that Spot could not take).
 UNKNOWN = "unknown"
+
+#: the most states of a product automaton Spot builds for one query: a product past it is
+#: refused (the query answers unknown), so the next product and the emptiness check stay
+#: bounded (the benchmark's products at 16 ticks have at most a few thousand states)
+SPOT_MAX_STATES = 200_000
+
+#: the most states of the automaton Spot's synthesis complements to find a defeating input
+#: lasso (complementation is exponential in it): past it no lasso is searched
+SPOT_MAX_COMPLEMENT = 64
+
+
+def _bounded(aut, what: str):
+    """``aut``, or :class:`check.budget.BudgetSpent` when it has more states than
+    :data:`SPOT_MAX_STATES`."""
+    if aut.num_states() > SPOT_MAX_STATES:
+        raise BudgetSpent(f"Spot's {what} has {aut.num_states()} states, past the limit of "
+                          f"{SPOT_MAX_STATES}")
+    return aut
 
 
 def _letters(aut, bdds) -> list:
@@ -113,10 +145,12 @@ def _product_game(texts, outputs):
     return game
 
 
-def run_query(query: tuple) -> Any:
-    """Answer one query in this process (see the module docstring for the shapes)."""
+def run_query(query: tuple, budget: Budget | None = None) -> Any:
+    """Answer one query in this process (see the module docstring for the shapes) within
+    ``budget`` (default: the defaults); raises :class:`check.budget.BudgetSpent` past it."""
     import spot  # lazy: Spot loads in the query worker process only
 
+    budget = budget or Budget()
     kind = query[0]
     if kind == "sat":
         base = [query[1]] if isinstance(query[1], str) else list(query[1])
@@ -129,7 +163,7 @@ def run_query(query: tuple) -> Any:
         aut = _PRODUCTS.get(key)
         if aut is None:
             for a in sorted((_translate(t) for t in base), key=lambda a: a.num_states()):
-                aut = a if aut is None else spot.product(aut, a)
+                aut = a if aut is None else _bounded(spot.product(aut, a), "product")
                 if aut.is_empty():
                     break
             if len(_PRODUCTS) > 64:
@@ -138,7 +172,7 @@ def run_query(query: tuple) -> Any:
         if aut.is_empty():
             return (False, None)
         for t in extra:
-            aut = spot.product(aut, _translate(t))
+            aut = _bounded(spot.product(aut, _translate(t)), "product")
             if aut.is_empty():
                 return (False, None)
         if aut.is_empty():
@@ -147,15 +181,17 @@ def run_query(query: tuple) -> Any:
     if kind == "safety_game":
         from .safety_game import solve_game  # lazy: BuDDy games only when asked
 
-        return solve_game(*query[1:])
+        return solve_game(*query[1:], budget=budget)
     if kind == "buchi_game":
         from .buchi_game import solve_buchi_game  # lazy: BuDDy games only when asked
 
-        return solve_buchi_game(*query[1:])
+        pts, live, inputs, env_inv, ctl_inv, search = query[1:]
+        return solve_buchi_game(pts, live, inputs, env_inv, ctl_inv, budget, search)
     if kind == "monitor_sat":
         from .monitor_sat import decide  # lazy: BuDDy fixed points only when asked
 
-        return decide(*query[1:])
+        safe, goals, inv, finite, length, live, last = query[1:]
+        return decide(safe, goals, inv, finite, length, budget, live, last)
     if kind == "realizable":
         texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         outputs = list(query[2])
@@ -169,6 +205,8 @@ def run_query(query: tuple) -> Any:
         # a fixed input sequence that defeats every controller: an input word along which
         # no output sequence satisfies f (outputs quantified away, then complemented)
         aut = spot.translate(spot.formula(_conj(texts)))
+        if aut.num_states() > SPOT_MAX_COMPLEMENT:
+            return (False, None)
         strip = spot.remove_ap()
         for o in outputs:
             strip.add_ap(o)
@@ -177,67 +215,104 @@ def run_query(query: tuple) -> Any:
     raise ValueError(f"unknown query {kind!r}")
 
 
-def _serve(conn) -> None:  # pragma: no cover - runs in the worker process
+def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker process
+    import spot  # noqa: F401  lazy: Spot initializes BuDDy (and makes it importable)
+    import buddy  # lazy: with Spot, in the query worker process only
+
+    # BuDDy reports a full node table on the standard error before it stops the process:
+    # the parent says it in the answer instead
+    os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
+    buddy.bdd_setmaxnodenum(memory)
     while True:
         try:
-            query = conn.recv()
+            query, budget = conn.recv()
         except EOFError:
             return
         try:
-            conn.send(("ok", run_query(query)))
+            conn.send(("ok", run_query(query, budget)))
+        except BudgetSpent as exc:
+            conn.send(("budget", str(exc)))
         except Exception as exc:  # a Spot error is an answer, not a crash
             conn.send(("error", f"{type(exc).__name__}: {exc}"))
 
 
 class SpotWorker:
-    """A forked process answering :func:`run_query` queries with a time budget each.
+    """A forked process answering :func:`run_query` queries within ``budget`` (a
+    :class:`check.budget.Budget`; default the defaults).
 
-    ``timeout`` is in seconds (None: no budget, queries run in this process). Use as a
-    context manager, or call :meth:`close`. :meth:`ask` returns the answer, or
-    :data:`UNKNOWN` when the budget ran out or Spot could not take the query (a bound
-    beyond Spot's repetition limit of 254, a formula it does not parse); ``failures`` keeps
-    Spot's messages, so the answer says what was tried.
+    ``fork``: run the queries in a worker process (False: in this process, with no cap on
+    BuDDy's node table; for tests). ``deadline``: the run's wall-clock limit
+    (``time.monotonic()`` value, None for none): past it :meth:`ask` kills the worker and
+    raises :class:`check.budget.RunStopped`. Use as a context manager, or call
+    :meth:`close`. :meth:`ask` returns the answer, or :data:`UNKNOWN` when the query ran past
+    its budget or Spot could not take it (a bound beyond Spot's repetition limit of 254, a
+    formula it does not parse); ``failures`` keeps the reasons, so the answer says what was
+    tried, and ``spent`` counts the queries past their budget.
     """
 
-    def __init__(self, timeout: float | None = None):
-        self.timeout = timeout
+    def __init__(self, budget: Budget | None = None, *, fork: bool = True,
+                 deadline: float | None = None):
+        self.budget = budget or Budget()
+        self.fork = fork
+        self.deadline = deadline
         self._proc = None
         self._conn = None
-        self.timeouts = 0
+        self.spent = 0
         self.failures: list[str] = []
 
     def _start(self) -> None:
         methods = multiprocessing.get_all_start_methods()
         ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
         parent, child = ctx.Pipe()
-        self._proc = ctx.Process(target=_serve, args=(child,), daemon=True)
+        self._proc = ctx.Process(target=_serve, args=(child, self.budget.memory),
+                                 daemon=True)
         self._proc.start()
         child.close()
         self._conn = parent
 
-    def ask(self, query: tuple, timeout: float | None = None) -> Any:
-        """The answer to one :func:`run_query` query (a tuple naming the query and its formulas),
-        or :data:`UNKNOWN` when the budget ran out or Spot could not take the query (its
-        message kept in :attr:`failures`). ``timeout``: this query's budget in seconds
-        (default the worker's). Never raises for Spot's errors."""
-        if self.timeout is None:
+    def refuse(self, reason: str) -> str:
+        """Answer :data:`UNKNOWN` to a query refused before it reached an engine (a bound
+        past what Spot is given), keeping ``reason``."""
+        self.spent += 1
+        self.failures.append(reason)
+        return UNKNOWN
+
+    def ask(self, query: tuple) -> Any:
+        """The answer to one :func:`run_query` query (a tuple naming the query and its
+        formulas), or :data:`UNKNOWN` when it ran past its budget or Spot could not take it
+        (the reason kept in :attr:`failures`). Never raises for Spot's errors; raises
+        :class:`check.budget.RunStopped` past the run's deadline."""
+        if not self.fork:
             try:
-                return run_query(query)
+                return run_query(query, self.budget)
+            except BudgetSpent as exc:
+                return self.refuse(str(exc))
             except Exception as exc:  # a Spot error is an unknown answer, not a crash
                 self.failures.append(_one_line(f"{type(exc).__name__}: {exc}"))
                 return UNKNOWN
         if self._proc is None or not self._proc.is_alive():
             self._start()
-        self._conn.send(query)
-        if not self._conn.poll(self.timeout if timeout is None else timeout):
-            self.timeouts += 1
+        try:
+            self._conn.send((query, self.budget))
+        except OSError:  # the worker ended before the query: a new one takes it
             self._kill()
-            return UNKNOWN
+            self._start()
+            self._conn.send((query, self.budget))
+        wait = None if self.deadline is None else max(0.0, self.deadline - time.monotonic())
+        if not self._conn.poll(wait):
+            self._kill()
+            raise RunStopped("the run's wall-clock limit (--timeout) passed")
         try:
             status, value = self._conn.recv()
-        except EOFError:
+        except (EOFError, OSError):  # BuDDy aborts the worker when its node table is full
+            self._proc.join()
+            code = self._proc.exitcode
             self._kill()
-            return UNKNOWN
+            if code == -signal.SIGABRT:
+                return self.refuse(self.budget.memory_spent("BuDDy's node table is full"))
+            return self.refuse(f"the query's worker process ended (exit code {code})")
+        if status == "budget":
+            return self.refuse(value)
         if status == "error":
             self.failures.append(_one_line(value))
             return UNKNOWN

@@ -4,13 +4,16 @@ any robot runs (the analyses are in :mod:`check.analysis`).
 ::
 
     fretc check FILE... [--inputs a,b] [--outputs c,d] [--json] [--witness-dir DIR]
-                [--timeout SECONDS] [--mus-budget SECONDS] [--engine auto|spot|smt|bdd]
-                [--no-redundancy]
+                [--budget UNITS] [--memory-budget NODES] [--mus-budget CHECKS]
+                [--timeout SECONDS] [--engine auto|spot|smt|bdd] [--no-redundancy]
 
 Realizability is checked when inputs or outputs are given, by the flags or by the
-``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win). Exit status: 0 no
-finding (redundancy is a warning), 1 a conflict, vacuity, unrealizability or an unknown
-answer (a solver query that ran out of ``--timeout``), 2 input errors.
+``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win). The budgets are
+counted in work the engines do (:mod:`check.budget`), so the same input gives the same
+report on any machine; ``--timeout`` is a wall-clock limit of the whole run that stops it
+with no report. Exit status: 0 no finding (redundancy is a warning), 1 a conflict, vacuity,
+unrealizability or an unknown answer (a query past its budget), 2 input errors, 3 the run
+stopped by ``--timeout``.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ import sys
 from pathlib import Path
 
 import click
+
+from check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY, MUS_BUDGET
 
 from .options import shown
 
@@ -95,8 +100,8 @@ def render_text(result) -> str:
     lines.append(f"{len(result.requirements)} requirements, {len(result.components)} "
                  f"components, {result.queries} solver queries ({result.smt_queries} by z3, "
                  f"{result.monitor_queries} by pt monitors)"
-                 + (f" ({result.unknown_queries} ran out of time)" if result.unknown_queries
-                    else "") + f"; exit {result.exit_code}")
+                 + (f" ({result.unknown_queries} past their budget or refused)"
+                    if result.unknown_queries else "") + f"; exit {result.exit_code}")
     return "\n".join(lines)
 
 
@@ -133,11 +138,21 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--witness-dir", type=click.Path(file_okay=False), default=None,
               help="Write a witness CSV per finding (replay with fretc audit).")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=20.0,
-              show_default=True, help="Seconds per solver query; past it the answer is "
-              "unknown.")
-@click.option("--mus-budget", type=click.FloatRange(min=0), default=10.0, show_default=True,
-              help="Seconds per enumeration of minimal subsets.")
+@click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_WORK,
+              show_default=True, metavar="UNITS", help="Work units per query: one unit is "
+              "one BDD node of a set a fixed point computes, or 10 of z3's resource count "
+              "(rlimit); past it the answer is unknown. Counted, not timed: the same answers "
+              "on any machine.")
+@click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY), default=DEFAULT_MEMORY,
+              show_default=True, metavar="NODES", help="BDD nodes per query (BuDDy's node "
+              "table, about 20 bytes a node; a BDD variable counts as 32, a term of z3's "
+              "lasso encoding as 8); past it the answer is unknown.")
+@click.option("--mus-budget", type=click.IntRange(min=0), default=MUS_BUDGET,
+              show_default=True, metavar="CHECKS",
+              help="Subset checks per enumeration of minimal subsets.")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=None,
+              metavar="SECONDS", help="Wall-clock limit of the whole run: past it the run "
+              "stops with no report (exit 3); it never changes an answer.")
 @click.option("--engine", type=click.Choice(["auto", "spot", "smt", "bdd"]), default="auto",
               show_default=True, help="Satisfiability solver: Spot up to 16 ticks, past them "
               "fixed points over the requirements' pt monitors (with Spot's Büchi automata "
@@ -148,13 +163,16 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
-def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
-              engine, no_redundancy, output):
+def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budget, mus_budget,
+              timeout, engine, no_redundancy, output):
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
     from compiler.build import compile_entries
+    import time
+
     from check.analysis import check_requirements
+    from check.budget import Budget, RunStopped
     from check.realizability import RealizabilityError
     from common.errors import FretishError
     from fretish.files import load_requirements
@@ -176,14 +194,20 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, timeout, mus_budget,
     if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
         from monitors.interval import verdict_of
         judge = verdict_of
+    deadline = None if timeout is None else time.monotonic() + timeout
     try:
-        result = check_requirements(compiled, timeout=timeout, mus_budget=mus_budget,
-                                    redundancy=not no_redundancy, witness_dir=witness_dir,
-                                    inputs=ins, outputs=outs, witness_judge=judge,
-                                    engine=engine)
+        result = check_requirements(compiled, budget=Budget(budget, memory_budget),
+                                    mus_budget=mus_budget, redundancy=not no_redundancy,
+                                    witness_dir=witness_dir, inputs=ins, outputs=outs,
+                                    witness_judge=judge, engine=engine, deadline=deadline)
     except RealizabilityError as exc:
         click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
+    except RunStopped:
+        click.echo(f"fretc check: stopped by --timeout after {timeout:g} s of wall-clock "
+                   "time, no report (the answers do not depend on time: rerun with a larger "
+                   "--timeout or none)", err=True)
+        sys.exit(3)
     for e in result.input_errors:
         click.echo(shown(str(e)), err=True)
     doc = result.to_json()

@@ -84,7 +84,7 @@ def test_buchi_game_agrees_with_spot(tmp_path, safety, liveness):
     path = tmp_path / "r.fret"
     path.write_text(text, encoding="utf-8")
     items = _items(path)
-    with SpotWorker(20) as worker:
+    with SpotWorker() as worker:
         decide = _Decider(Checker(items, worker, engine="auto"), _INPUTS)
         game = decide(items)
         spot = _Decider(Checker(items, worker, engine="spot"), _INPUTS)(items)

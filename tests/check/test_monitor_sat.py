@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 
 from check.analysis import check_requirements
 from check.items import make_item, monitored_forms
+from check.budget import Budget, Meter
 from check.monitor_sat import _Search
 from check.numeric_abstraction import NumericAbstraction
 from check.safety_game import _Game, pt_monitors_ft_inf
@@ -132,7 +133,7 @@ def test_monitors_and_spot_agree_on_random_sets(tmp_path_factory, parts):
     take) and by Spot, on bounds up to 12, where neither is unknown."""
     path = _file(tmp_path_factory.mktemp("mon"), parts)
     assert_same_answers(*(check_requirements(compile_entries(load_requirements([path])),
-                                             engine=e, timeout=10) for e in ("spot", "bdd")),
+                                             engine=e) for e in ("spot", "bdd")),
                         path)
 
 
@@ -152,8 +153,8 @@ def test_buchi_product_agrees_with_spot_on_random_formulas(formulas):
 
     inv = NumericAbstraction.of(formulas).regions(
         sorted({v for f in formulas for v in ir.variables(f)}))
-    with SpotWorker(None) as w:
-        got = w.ask(("monitor_sat", [], [], inv, False, None, None, list(formulas)))
+    with SpotWorker(fork=False) as w:
+        got = w.ask(("monitor_sat", [], [], inv, False, None, list(formulas), []))
         assert got != UNKNOWN, w.failures
         ref = _spot_sat(w, ir.and_all(*formulas))
     assert got[0] == ref[0], [str(f) for f in formulas]
@@ -166,7 +167,7 @@ def test_finally_is_not_taken_for_its_pt_formula(tmp_path):
     p.write_text("A: the sw shall at the last timepoint satisfy r\n"
                  "B: the sw shall always satisfy !r\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
-                           outputs=["r"], timeout=20)
+                           outputs=["r"])
     assert r.realizability["components"][0]["realizable"] is True
 
 
@@ -189,7 +190,7 @@ def _deadlines_decided(tmp_path: Path, n: int) -> None:
                  f"B2: upon p the sw shall for {n - 3} ticks satisfy !q\n"
                  f"B4: in m mode upon p the sw shall within {n} ticks satisfy speed > 0.6\n"
                  "B5: in m mode the sw shall always satisfy speed <= 0.5\n", encoding="utf-8")
-    r = check_requirements(compile_entries(load_requirements([p])), timeout=20,
+    r = check_requirements(compile_entries(load_requirements([p])),
                            witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
     status = {s["id"]: s for s in r.requirements}
     assert r.unknown_queries == 0 and r.monitor_queries > 0 and r.smt_queries == 0
@@ -237,7 +238,7 @@ def test_the_step_in_parts_gives_the_sets_of_the_whole_relation(tmp_path_factory
     inv = NumericAbstraction.of(list(forms)).regions(["s"])
     game = _Game(safe, [], ir.TRUE, inv, extra=[ir.O(g) for g in goals])
     try:
-        search, b, rnd = _Search(game, None), game.b, random.Random(seed)
+        search, b, rnd = _Search(game, Meter(Budget())), game.b, random.Random(seed)
         whole = b.bdd_and(search.ok, game.trans)
         step_vars = b.bdd_and(game.nxt_set, search.letter_set)
         targets, z = [], b.bddtrue
@@ -271,7 +272,7 @@ def test_the_states_of_a_1000_tick_set_are_a_small_bdd():
         "in m mode upon p the sw shall within 1000 ticks satisfy r")]
     game = _Game(pts, [], ir.TRUE, ir.TRUE)
     try:
-        live = _Search(game, None).live()
+        live = _Search(game, Meter(Budget())).live()
         assert live != game.b.bddfalse and game.b.bdd_nodecount(live) < 400
     finally:
         game.close()

@@ -67,7 +67,7 @@ def test_game_agrees_with_spot(tmp_path, parts):
     path = tmp_path / "r.fret"
     path.write_text(text, encoding="utf-8")
     items = _items(path)
-    with SpotWorker(20) as worker:
+    with SpotWorker() as worker:
         game = _decide(items, "auto", worker)
         spot = _decide(items, "spot", worker)
     if UNKNOWN in (game, spot):
@@ -107,7 +107,7 @@ def test_reactive_environment(tmp_path):
     assert comp["realizable"] is False and "prefix" not in comp["environment"]
     assert "must react" in comp["environment"]["note"]
     p = tmp_path / "r.fret"
-    with SpotWorker(20) as worker:
+    with SpotWorker() as worker:
         assert _decide(_items(p), "spot", worker)["realizable"] is False
 
 

@@ -1,0 +1,121 @@
+"""The budgets of ``fretc check``'s queries, counted in work the engines do, never in seconds:
+the same input gets the same answers on an idle and on a loaded machine.
+
+* **work** (``--budget``, per query, in *work units*): the BDD engines
+  (:mod:`check.monitor_sat`, :mod:`check.safety_game`, :mod:`check.buchi_game`) pay, for
+  each fixed-point iteration, one unit per BDD node of the transition relation it steps
+  through and of the set it computes: a BDD is canonical for its function and variable
+  order, so the count does not depend on the order of the operations, on BuDDy's garbage
+  collections or on the machine, and it grows with the work of the relational products.
+  z3 (:mod:`check.smt`) pays :data:`Z3_RLIMIT_PER_UNIT` of its deterministic resource count
+  (``rlimit``) per unit. Spot's translations and products cannot be stopped from Python, so
+  what Spot is given is bounded up front (:mod:`check.solver`: tick bounds, automaton
+  states) and a Spot query either finishes or is refused.
+* **memory** (``--memory-budget``, per query, in *BDD nodes*): the size of BuDDy's node
+  table in the worker process (``bdd_setmaxnodenum``; BuDDy stops the process when it would
+  grow past it), and, in the same unit, the state variables of the monitors
+  (:data:`NODES_PER_VARIABLE` each, checked before they are made) and z3's lasso encodings
+  (:data:`NODES_PER_Z3_TERM` per term, checked before they are built).
+
+A query past a budget answers ``unknown`` with the reason (:class:`BudgetSpent`). Defaults
+(:data:`DEFAULT_WORK`, :data:`DEFAULT_MEMORY`) are chosen so that every query the benchmark
+sets of docs/guide/check.md decided within 20 s on an idle machine stays decided, and so
+that 20 requirements with bounds near 10^6 ticks stay under 1 GB (docs/guide/check.md,
+"Budgets").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Budget", "BudgetSpent", "RunStopped", "Meter", "DEFAULT_WORK", "DEFAULT_MEMORY",
+           "MIN_MEMORY", "MUS_BUDGET",
+           "Z3_RLIMIT_PER_UNIT", "NODES_PER_VARIABLE", "NODES_PER_Z3_TERM"]
+
+#: work units per query by default: 9 times what the costliest query of the benchmark's
+#: sets needs (11 million units, the vacuity of the 1000-tick set), about 7 s of this machine
+DEFAULT_WORK = 100_000_000
+#: BDD nodes of BuDDy's table per query by default (about 200 MB of nodes and caches)
+DEFAULT_MEMORY = 8_000_000
+#: subset checks per enumeration of minimal subsets by default (``fretc check --mus-budget``)
+MUS_BUDGET = 256
+#: z3's ``rlimit`` per work unit (z3 spends about 10^7 rlimit a second on these queries)
+Z3_RLIMIT_PER_UNIT = 10
+#: the memory one BDD variable takes in BuDDy and Spot's dictionary, in BDD nodes (measured:
+#: 2 million variables took about 900 MB, some 23 nodes of 20 bytes each)
+NODES_PER_VARIABLE = 32
+#: the memory one term of z3's lasso encoding takes, in BDD nodes (measured about 150
+#: bytes a term)
+NODES_PER_Z3_TERM = 8
+
+
+class BudgetSpent(Exception):
+    """A query ran past its work or memory budget; the message says which, in its unit."""
+
+
+class RunStopped(Exception):
+    """The run's wall-clock limit (``fretc check --timeout``) passed: the whole run stops
+    with no report (no answer is changed by it; exit code 3)."""
+
+
+@dataclass(frozen=True)
+class Budget:
+    """The budgets of one query: ``work`` in work units, ``memory`` in BDD nodes (module
+    docstring). Raises ``ValueError`` for a budget under 1 (work) or under
+    :data:`MIN_MEMORY` (memory: BuDDy's table starts that large)."""
+
+    work: int = DEFAULT_WORK
+    memory: int = DEFAULT_MEMORY
+
+    def __post_init__(self):
+        if self.work < 1:
+            raise ValueError(f"the work budget must be at least 1 unit, not {self.work}")
+        if self.memory < MIN_MEMORY:
+            raise ValueError(f"the memory budget must be at least {MIN_MEMORY} BDD nodes, "
+                             f"not {self.memory}")
+
+    def work_spent(self) -> str:
+        """The reason of an answer past the work budget."""
+        return f"work budget of {self.work} units spent"
+
+    def memory_spent(self, what: str) -> str:
+        """The reason of an answer past the memory budget (``what`` needed it)."""
+        return f"memory budget of {self.memory} BDD nodes spent ({what})"
+
+
+#: the smallest memory budget: BuDDy's node table as Spot starts it is about this large
+MIN_MEMORY = 1_000_000
+
+
+class Meter:
+    """The work one query has done, against ``budget`` (a :class:`Budget`); ``share``
+    (0 < share <= 1): the part of the work budget this meter may spend."""
+
+    def __init__(self, budget: Budget, share: float = 1.0):
+        self.budget = budget
+        self.limit = max(1, int(budget.work * share))
+        self.spent = 0
+        #: units every iteration pays besides its sets: the nodes of the relation it
+        #: steps through (set by the engine, :meth:`relation`)
+        self.base = 0
+
+    def relation(self, b, *bdds) -> None:
+        """Set :attr:`base` to the nodes of ``bdds`` (the relation each iteration reads)."""
+        self.base = sum(b.bdd_nodecount(x) for x in bdds)
+
+    def charge(self, units: int) -> None:
+        """Pay ``units`` (at least one); raises :class:`BudgetSpent` past the limit."""
+        self.spent += max(1, units)
+        if self.spent > self.limit:
+            raise BudgetSpent(self.budget.work_spent())
+
+    def nodes(self, b, *bdds) -> None:
+        """Pay one iteration: the BDD nodes of ``bdds`` (``b``: the buddy module) and
+        :attr:`base`."""
+        self.charge(self.base + sum(b.bdd_nodecount(x) for x in bdds))
+
+    def variables(self, count: int, what: str) -> None:
+        """Check before making ``count`` BDD variables; raises :class:`BudgetSpent` when
+        they alone pass the memory budget."""
+        if count * NODES_PER_VARIABLE > self.budget.memory:
+            raise BudgetSpent(self.budget.memory_spent(f"{what}: {count} BDD variables"))
