@@ -14,6 +14,7 @@ internal error (a generated monitor that is not valid: nothing is written).
 from __future__ import annotations
 
 import os
+import sys
 
 import click
 
@@ -78,6 +79,11 @@ class _DefaultGroup(click.Group):
         except (click.exceptions.Exit, click.ClickException, click.Abort, SystemExit,
                 KeyboardInterrupt):
             raise
+        except BrokenPipeError:
+            # the reader of the output went away (``fretc inspect LOG | head``): the usual
+            # end of a Unix filter, exit 141 (128 + SIGPIPE) as a shell reports it
+            _quiet_stdout()
+            ctx.exit(141)
         except Exception as exc:  # noqa: BLE001 - the last line of defence
             if os.environ.get("FRETC_TRACEBACK"):
                 raise
@@ -85,6 +91,16 @@ class _DefaultGroup(click.Group):
                        + " (please report it with the command and its inputs; "
                        "FRETC_TRACEBACK=1 shows the traceback)", err=True)
             ctx.exit(4)
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null so that Python's flush at exit does not fail again on the
+    closed pipe."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
 
 
 def _names_a_file(arg: str) -> bool:

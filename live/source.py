@@ -418,7 +418,6 @@ class WatchSource(LogSource):
         if not dropped:
             return
         n = sum(c for c, _a, _b in dropped.values())
-        self._dropped_total = getattr(self, "_dropped_total", 0) + n
         for topic, (count, first, last) in sorted(dropped.items()):
             self._report(QUEUE_OVERFLOW, topic, first,
                          f"{count} message(s) between log times {first} and {last} dropped: "

@@ -121,3 +121,21 @@ def test_an_internal_error_is_one_line_and_exit_4(monkeypatch):
     assert res.exit_code == 4
     assert res.output.startswith("internal error: RecursionError")
     assert len(res.output.strip().splitlines()) == 1 and "Traceback" not in res.output
+
+
+def test_a_reader_that_leaves_early_is_no_internal_error(tmp_path):
+    """``fretc inspect LOG | head``: the pipe closes under fretc; it ends quietly (141, as a
+    shell reports SIGPIPE, or 0 when everything was written first), never an internal
+    error."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    p = subprocess.Popen([sys.executable, "-m", "fretc", "inspect",
+                          str(root / "traces" / "nominal.mcap")], cwd=root,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.readline()
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) in (0, 141)
+    assert "internal error" not in err and "Traceback" not in err
