@@ -65,8 +65,18 @@ def load_plan(config: AuditConfig) -> AuditPlan:
     return _build_plan(config)
 
 
+def _with_msg_path(config: AuditConfig) -> AuditConfig:
+    """``config`` with the ``[types] msg_path`` folders of its binding files after the
+    ``--msg-path`` ones."""
+    extra = tuple(p for _f, b in binding_files(config) for p in b.msg_path)
+    if not extra:
+        return config
+    return dataclasses.replace(config, msg_path=tuple(config.msg_path) + extra)
+
+
 def _build_plan(config: AuditConfig) -> AuditPlan:
     """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection)."""
+    config = _with_msg_path(config)
     bindings, binding_files = load_audit_bindings(config)
     notes: list[str] = []
     entries = _read_requirements(config, notes)

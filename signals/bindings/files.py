@@ -229,13 +229,31 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
     return {name: compiled[name] for name in pending}
 
 
+def _msg_path(table: Any, source: str, loc: _Locations) -> tuple[str, ...]:
+    """``[types] msg_path = ["DIR", ...]``: folders of ``.msg``/``.idl`` files (as
+    ``--msg-path``), relative to the binding file's folder."""
+    if not isinstance(table, dict) or "msg_path" not in table:
+        return ()
+    value = table["msg_path"]
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
+        line, col = loc.at("types", "msg_path")
+        raise BindingError(source, "[types] msg_path is a folder or a list of folders "
+                           "(\"msgs\" or [\"msgs\", \"../ws/src\"])", line=line, col=col)
+    base = Path(source).parent if not source.startswith("<") else Path(".")
+    return tuple(str(base / v) for v in value)
+
+
 def _types_table(table: Any, source: str, loc: _Locations) -> dict[str, str]:
-    """``[types]``: topic -> ROS message type (``"/scan" = "sensor_msgs/msg/LaserScan"``)."""
+    """``[types]``: topic -> ROS message type (``"/scan" = "sensor_msgs/msg/LaserScan"``);
+    the key ``msg_path`` is :func:`_msg_path`'s."""
     if table is None:
         return {}
     if not isinstance(table, dict):
         line, col = loc.at("types")
         raise BindingError(source, "types must be a table [types]", line=line, col=col)
+    table = {k: v for k, v in table.items() if k != "msg_path"}
     for topic, name in table.items():
         if not re.fullmatch(r"(/[A-Za-z0-9_]+)+", topic) or not isinstance(name, str) \
                 or not re.fullmatch(r"[A-Za-z0-9_]+(/msg)?/[A-Za-z0-9_]+", name):
@@ -295,6 +313,7 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     out = Bindings(variables, tick, time_base, lag, source)
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)
+    out.msg_path = _msg_path(doc.get("types"), source, loc)
     return out
 
 

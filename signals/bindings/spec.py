@@ -109,6 +109,8 @@ class Bindings:
         logs: ``[logs]``: the logs this binding file applies to (None: every log).
         types: ``[types]``: topic -> ROS message type, for live servers that do not say
             (rosbridge without rosapi); logs carry their own schemas.
+        msg_path: ``[types] msg_path``: folders of the ``.msg``/``.idl`` files of types a
+            log does not carry (as ``--msg-path``; :mod:`logs.msg_path`).
 
     Raises:
         ValueError: a time base not in :data:`TIME_BASES`.
@@ -121,6 +123,7 @@ class Bindings:
     source: str | None = None
     logs: LogSelector | None = field(default=None, compare=False)
     types: dict[str, str] = field(default_factory=dict, compare=False)
+    msg_path: tuple[str, ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in TIME_BASES:

@@ -84,3 +84,15 @@ def test_a_bad_definition_in_msg_path_is_an_input_error_naming_the_file(tmp_path
     res = CliRunner().invoke(main, ["inspect", str(bag), "--msg-path", str(tmp_path / "bad")])
     assert res.exit_code == 2
     assert "Status.msg" in res.output
+
+
+def test_msg_path_in_the_bindings_file(tmp_path):
+    bag, msgs, reqs = _bag(tmp_path, "sqlite3"), _msgs(tmp_path), _reqs(tmp_path)
+    b = reqs / "c.bindings.toml"
+    rel = Path("..") / msgs.name  # relative to the binding file's folder
+    b.write_text(b.read_text() + f'[types]\nmsg_path = ["{rel.as_posix()}"]\n')
+    res = CliRunner().invoke(main, ["audit", "-r", str(reqs), str(bag), "--no-progress"])
+    assert res.exit_code == 1, res.output  # S1 violated: the type was read
+    b.write_text(b.read_text().replace(f'["{rel.as_posix()}"]', "3"))
+    res = CliRunner().invoke(main, ["audit", "-r", str(reqs), str(bag), "--no-progress"])
+    assert res.exit_code == 2 and "msg_path" in res.output
