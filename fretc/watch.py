@@ -203,7 +203,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         w = Watch(plan, WatchOptions(url=url, duration=duration, wait=wait,
                                      connect_timeout=connect_timeout, record=record,
                                      until_idle=until_idle, types=topic_types or None,
-                                     restart_grace=restart_grace),
+                                     restart_grace=restart_grace, msg_path=tuple(msg_path)),
                   on_event=on_event)
     except (AuditInputError, MissingDependency) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")

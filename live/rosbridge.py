@@ -115,18 +115,21 @@ def build_message(store, typename: str, doc: dict[str, Any]):
     return store.types[typename](**kwargs)
 
 
-def json_to_cdr(typename: str, doc: dict[str, Any]) -> bytes:
-    """rosbridge's JSON message -> CDR bytes of ``typename`` (a ROS 2 ``pkg/msg/Type``)."""
-    store = _store()
+def json_to_cdr(typename: str, doc: dict[str, Any], store=None) -> bytes:
+    """rosbridge's JSON message -> CDR bytes of ``typename`` (a ROS 2 ``pkg/msg/Type``), with
+    the types of ``store`` (default: ROS 2 Humble's standard types)."""
+    store = store if store is not None else _store()
     return bytes(store.serialize_cdr(build_message(store, typename, doc), typename))
 
 
-def advertisement(cid: int, topic: str, type_name: str) -> Advertised:
+def advertisement(cid: int, topic: str, type_name: str, store=None) -> Advertised:
     """The :class:`~live.client.Advertised` of a rosbridge topic: CDR with the
-    type's ``ros2msg`` definition, or no schema when the type store does not know it."""
+    type's ``ros2msg`` definition, or no schema when the type store (``store``, default ROS
+    2 Humble's standard types) does not know it."""
     try:
         name = _typename(type_name)
-        text = _store().generate_msgdef(name, ros_version=2)[0]
+        text = (store if store is not None else _store()).generate_msgdef(name,
+                                                                           ros_version=2)[0]
     except Exception:  # an unknown type: no schema (the watch reports the topic unreadable)
         return Advertised(cid, topic, "json", type_name, "", "")
     return Advertised(cid, topic, "cdr", name, text, "ros2msg")
@@ -143,14 +146,22 @@ class RosbridgeClient(WebSocketClient):
         wanted: topic -> bool.
         types: topic -> message type for topics rosapi does not type.
         poll: seconds between two rosapi queries while a wanted topic is not yet listed.
+        msg_path: folders of the ``.msg``/``.idl`` files of the robot's own types
+            (``--msg-path``; :mod:`logs.msg_path`), beside ROS 2 Humble's standard ones.
         backoff, max_backoff, events: as :class:`~live.client.WebSocketClient`.
     """
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *,
-                 types: dict[str, str] | None = None, poll: float = 1.0, **kw) -> None:
+                 types: dict[str, str] | None = None, poll: float = 1.0,
+                 msg_path: tuple[str, ...] = (), **kw) -> None:
         super().__init__(ros_url(url), wanted, **kw)
         self.types = dict(types or {})
         self.poll = poll
+        self.store = None
+        if msg_path:
+            from logs.msg_path import msg_path_typestore
+
+            self.store = msg_path_typestore(tuple(msg_path))
 
     async def _call(self, ws, replies: dict, service: str, args: dict, timeout: float = 3.0):
         """Call a rosapi service; its ``values`` or None (no rosapi, refused, timeout)."""
@@ -199,7 +210,7 @@ class RosbridgeClient(WebSocketClient):
                 if t == CLOCK_TOPIC and not self.wanted(t):
                     state["clock"] = 0  # use sim time from now on
                 else:
-                    chans.append(advertisement(len(advertised), t, types[t]))
+                    chans.append(advertisement(len(advertised), t, types[t], self.store))
                 await ws.send(json.dumps({"op": "subscribe", "topic": t, "type": types[t],
                                           "id": f"fretc:{t}"}))
             chans += self._others(types, state)
@@ -277,7 +288,7 @@ class RosbridgeClient(WebSocketClient):
                 return
             log_time = state["clock"] if state["clock"] else now
             try:
-                payload = json_to_cdr(_typename(type_name), doc)
+                payload = json_to_cdr(_typename(type_name), doc, self.store)
             except Exception:  # unknown type or a value that does not fit: undecodable
                 payload = b""
             self._session_messages += 1

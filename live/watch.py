@@ -82,6 +82,8 @@ class WatchOptions:
         until_idle: end the run when no message arrived for this many seconds (wall time).
         types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
             a bound topic (``--topic-type``; over the bindings' ``[types]``).
+        msg_path: rosbridge: folders of the robot's own ``.msg``/``.idl`` files
+            (``--msg-path``); Foxglove WebSocket servers send their schemas.
         restart_grace: seconds a bound topic's publisher has, once every bound topic was
             unadvertised, to advertise it again and continue the same run (a node restart);
             0 ends the run at once (``--restart-grace``).
@@ -97,6 +99,7 @@ class WatchOptions:
     backoff: float = 0.1
     max_backoff: float = 5.0
     restart_grace: float = RESTART_GRACE
+    msg_path: tuple[str, ...] = ()
 
 
 def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = None):
@@ -110,7 +113,8 @@ def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = No
 
         given = dict(types or {})
         given.update(options.types or {})
-        return RosbridgeClient(options.url, wanted, types=given, **kw)
+        return RosbridgeClient(options.url, wanted, types=given, msg_path=options.msg_path,
+                               **kw)
     return FoxgloveClient(options.url, wanted, **kw)
 
 

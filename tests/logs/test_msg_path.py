@@ -96,3 +96,21 @@ def test_msg_path_in_the_bindings_file(tmp_path):
     b.write_text(b.read_text().replace(f'["{rel.as_posix()}"]', "3"))
     res = CliRunner().invoke(main, ["audit", "-r", str(reqs), str(bag), "--no-progress"])
     assert res.exit_code == 2 and "msg_path" in res.output
+
+
+def test_a_rosbridge_watch_reads_the_robots_own_types_with_msg_path(tmp_path):
+    # rosbridge sends JSON and names the type; fretc builds CDR from the type's definition,
+    # found in the --msg-path folders beside ROS 2's standard types
+    from live.rosbridge import advertisement, json_to_cdr
+    from logs import schema_decoder
+    from logs.msg_path import msg_path_typestore
+
+    store = msg_path_typestore((str(_msgs(tmp_path)),))
+    assert advertisement(1, "/status", "my_robot_msgs/msg/Status").encoding == "json"  # unknown
+    adv = advertisement(1, "/status", "my_robot_msgs/msg/Status", store)
+    assert (adv.encoding, adv.schema_encoding) == ("cdr", "ros2msg")
+    raw = json_to_cdr("my_robot_msgs/msg/Status",
+                      {"header": {"stamp": {"sec": 1, "nanosec": 2}, "frame_id": "base"},
+                       "battery_voltage": 23.5, "state": 2, "faults": ["overheat"]}, store)
+    msg = schema_decoder(adv.encoding, adv.schema_encoding, adv.schema_name, adv.schema)(raw)
+    assert (msg.state, msg.battery_voltage, list(msg.faults)) == (2, 23.5, ["overheat"])
