@@ -320,6 +320,25 @@ class McapSource(LogSource):
         self._gap(start if last_good is None else min(start, last_good), chunk.message_end_time)
 
 
+def _data_follows(f: BinaryIO, at: int, size: int) -> bool:
+    """Whether a Chunk or Message record starts at or after byte ``at`` (record headers
+    walked to the end of the file, bodies skipped); the file position is restored."""
+    back = f.tell()
+    try:
+        while at + 9 <= size:
+            f.seek(at)
+            head = f.read(9)
+            if len(head) < 9:
+                return False
+            opcode, length = RECORD_HEAD.unpack(head)
+            if opcode in (Opcode.CHUNK, Opcode.MESSAGE) and at + 9 + length <= size:
+                return True
+            at += 9 + length
+        return False
+    finally:
+        f.seek(back)
+
+
 class _LinearPass:
     """One record-by-record pass over an MCAP file from byte 0, for a file without a usable
     index (framing: 1-byte opcode, 8-byte length; MCAP spec, "Records").
@@ -354,6 +373,11 @@ class _LinearPass:
                     self._truncated(f, pos, head)
                     break
                 opcode, length = RECORD_HEAD.unpack(head)
+                if opcode in (Opcode.DATA_END, Opcode.FOOTER) and \
+                        _data_follows(f, pos + 9 + length, src._size):
+                    self._false_end(opcode, pos)  # a flipped opcode, not the end
+                    self.crc = crc_skip(f, length, zlib.crc32(head, self.crc))
+                    continue
                 if opcode == Opcode.DATA_END:
                     self._data_end(f.read(length))
                     break  # the data section is over; the summary is not needed here
@@ -470,6 +494,16 @@ class _LinearPass:
             if msg is not None:
                 self.queue.delivered(log_time)
                 yield msg
+
+    def _false_end(self, opcode: int, pos: int) -> None:
+        """A DataEnd or Footer record at ``pos`` with Chunk or Message records after it:
+        damage (MCAP spec: no data record follows the data section), skipped as a record
+        whose content is lost; what it held is a gap from the last good message on."""
+        self.src._gap(self.last_good)
+        self.src._problem(P.CORRUPT_RECORD, None, self.last_good,
+                          f"{Opcode(opcode).name} record at byte {pos} is followed by Chunk "
+                          "or Message records (a damaged record, not the end of the data); "
+                          "skipped")
 
     def _truncated(self, f: BinaryIO, pos: int, head: bytes) -> None:
         """The record at ``pos`` runs past the end of the file: the pass ends here."""

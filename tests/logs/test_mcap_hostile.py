@@ -114,3 +114,33 @@ def test_a_chunk_with_a_lying_size_is_a_gap_not_a_crash(tmp_path):
     assert src.partial and 0 < len(times) < 150
     assert src.intact_end is not None and src.intact_end <= 10**9 + 150 * 10**7
     assert any("above the cap" in p.detail for p in src.problems), src.problems
+
+
+@pytest.mark.parametrize("opcode", [0x02, 0x0F])  # Footer, DataEnd
+def test_an_end_record_followed_by_data_is_damage_not_the_end(tmp_path, opcode):
+    """A chunk's opcode flipped into a Footer or DataEnd (one bit: 0x06 -> 0x02) mid-file,
+    the summary damaged too: the linear reader does not stop there as at the end of the
+    data (which would judge the rest as never written); the record is a gap and the chunks
+    after it are read."""
+    from _logs import float64, write_mcap
+
+    msgs = [("/f", "std_msgs/msg/Float64", i * 10**8, float64(i)) for i in range(60)]
+    path = write_mcap(tmp_path / "c.mcap", msgs, chunk_size=200)
+    data = bytearray(path.read_bytes())
+    chunks, pos = [], 8
+    while pos + 9 <= len(data):
+        op, length = RECORD_HEAD.unpack_from(data, pos)
+        if op == 0x06:
+            chunks.append(pos)
+        if op == 0x0F:
+            break
+        pos += 9 + length
+    data[chunks[1]] = opcode
+    data[-12] ^= 0xFF  # the summary CRC: the file is read without its index
+    path.write_bytes(bytes(data))
+    src = open_log(path)
+    got = [m.log_time for m in src.messages()]
+    assert src.partial and src.damage_cut
+    assert any(p.kind == "corrupt_record" for p in src.problems)
+    assert got[-1] == 59 * 10**8  # read past the damaged record
+    assert src.intact_end is not None and src.intact_end <= got[0] + 10**9
