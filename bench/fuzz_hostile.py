@@ -2,7 +2,7 @@
 decompression bombs, cut and bit-flipped logs, schemas that lie, hostile binding files and
 hostile live frames (Foxglove and rosbridge).
 
-    python bench/fuzz_hostile.py --count 2000 [--seed N] [--classes index,bomb,...]
+    python bench/fuzz_hostile.py --count 2000 [--seed N] [--classes index,bomb,...] [--shard K/N]
 
 Each run takes a fresh seed unless ``--seed`` is given; the seed is printed first, and the
 same seed gives the same inputs. Per class:
@@ -446,6 +446,9 @@ def _arguments(argv):
     ap.add_argument("--classes", default=",".join(CLASSES),
                     help="comma-separated; also NAME:WEIGHT (default weights below)")
     ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--shard", default="0/1", metavar="K/N",
+                    help="run only the inputs i with i mod N = K (the same inputs as in the "
+                         "whole run: shards of one seed add up to it)")
     return ap.parse_args(argv)
 
 
@@ -480,7 +483,11 @@ def main(argv=None) -> int:
     tmp = Path(tempfile.mkdtemp(prefix="fretc_hostile_"))
     audits = None
     t0 = time.time()
+    k, _, n = args.shard.partition("/")
+    shard, shards = int(k), int(n)
     for i, kind in enumerate(kinds):
+        if i % shards != shard:
+            continue
         rng = random.Random(f"{seed}:{i}")
         stats["inputs"] += 1
         stats[kind] += 1
@@ -503,6 +510,7 @@ def main(argv=None) -> int:
     stats["seconds"] = round(time.time() - t0, 1)
     stats["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
     stats["seed"] = seed
+    stats["shard"] = args.shard
     print(json.dumps(stats), flush=True)
     return 1 if stats["tracebacks"] or stats["unsupported"] else 0
 
