@@ -22,7 +22,7 @@ from rosbags.typesys.store import Typestore
 
 from common.errors import InputError
 
-__all__ = ["MSG_PATH_HINT", "msg_path_typestore", "definitions_in"]
+__all__ = ["MSG_PATH_HINT", "msg_path_typestore", "definitions_in", "fallback_for"]
 
 #: How a user gives fretc the types a log does not carry (the option's own words).
 MSG_PATH_HINT = ("--msg-path DIR (a folder of .msg/.idl files laid out as PKG/msg/TYPE.msg, "

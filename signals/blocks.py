@@ -184,12 +184,13 @@ def sample_blocks(source: LogSource, bindings: Bindings,
     clocks: dict[Any, _Group] = {}
     buffers: dict[Any, HeaderBuffer] = {}
     fed: dict[str, list[Any]] = {}
+    available = source.topics()
     for key, (names, topics) in groups.items():
         sub = _restrict(bindings, names)
         s = Sampling(source, sub)
         g.groups[key] = s
         stream = shared if shared is not None else _Stream()
-        clocks[key] = c = _Group(sub, present_tf(topics, source.topics()), tick, s, stream)
+        clocks[key] = c = _Group(sub, present_tf(topics, available), tick, s, stream)
         g.failed[key] = c.failed
         g.per_tick[key] = c.per_tick
         if shared is None:

@@ -112,11 +112,7 @@ def missing_topics(need, available) -> list[str]:
     /tf_static together: a transform tree on either alone is complete (ROS 1 tf, and bags
     from before tf2, have no /tf_static; a static tree may have no /tf), so the pair is missing
     only when both are."""
-    missing = set(need) - set(available)
-    tf = set(TF_TOPICS)
-    if missing & tf and not tf <= missing:
-        missing -= tf
-    return sorted(missing)
+    return sorted(present_tf(need, available) - set(available))
 
 
 def present_tf(topics, available) -> set[str]:

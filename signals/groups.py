@@ -84,12 +84,13 @@ def sample_groups(source: LogSource, bindings: Bindings,
     clocks: dict[Any, Clock] = {}
     buffers: dict[Any, HeaderBuffer] = {}
     fed: dict[str, list[Any]] = {}
+    available = source.topics()
     for key, (names, topics) in groups.items():
         sub = _restrict(bindings, names)
         s = Sampling(source, sub)
         g.groups[key] = s
         clocks[key] = c = Clock(s, list(sub.variables.values()),
-                                present_tf(topics, source.topics()), tick,
+                                present_tf(topics, available), tick,
                                 keep_going=True)
         g.failed[key] = c.failed
         if bindings.time_base != "log":
