@@ -123,7 +123,8 @@ class Binding:
 
 def compile_expression(name: str, expr: str, *, source: str = "<expression>",
                        line: int | None = None, col: int | None = None, exact: bool = True,
-                       refs: dict[str, Binding] | None = None) -> Binding:
+                       refs: dict[str, Binding] | None = None, nan: str = "unread"
+                       ) -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -133,6 +134,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
             columns inside the expression cannot be mapped to the file, e.g. escapes).
         refs: the other variables a bare name in ``expr`` may refer to (already compiled);
             their expressions are substituted.
+        nan: the binding file's ``[tick] nan``: ``"unread"`` (a comparison with NaN is NaN,
+            logic three-valued) or ``"false"`` (IEEE 754); :mod:`signals.bindings.operations`.
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
@@ -153,8 +156,9 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     fields = tuple(n for n in walk(node) if isinstance(n, Field) and n.path)
     extractors: dict[Field, Callable[[Any], Any]] = {}
     constants: dict[str, Any] = {}
-    scalar = compile_node(node, Ops(False), extractors, constants)
-    vector = compile_node(node, Ops(True), extractors, constants)
+    unread = nan != "false"
+    scalar = compile_node(node, Ops(False, unread), extractors, constants)
+    vector = compile_node(node, Ops(True, unread), extractors, constants)
     uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)

@@ -20,7 +20,8 @@ from common.units import NS_PER_S
 from .expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, walk
 from .extract import FieldAccessError, Valid, make_extractor
 from .frames import LookupFailed, TfBuffer, pick_joint
-from .operations import NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2, num
+from .operations import (COMPARISONS, LOGICAL, NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2,
+                         np_three_valued, num, py_three_valued)
 
 __all__ = ["EvalState", "EvalError", "compile_node", "per_message_topic"]
 
@@ -135,6 +136,14 @@ def _unary(node: UnaryOp, ops: Ops, extractors: dict[Field, Evaluator],
             return ops.lift1(np.negative, a, True)
         return neg
 
+    if ops.nan_unread:
+        def not3(st: Any) -> Any:
+            a = arg(st)
+            if type(a) in PY_TYPES:
+                return py_three_valued("!", a) if a != a else not a
+            return ops.lift1(lambda x: np_three_valued("!", x), a, False)
+        return not3
+
     def not_(st: Any) -> Any:
         a = arg(st)
         if type(a) in PY_TYPES:
@@ -150,6 +159,10 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
     npfn, numeric = NP_BINARY[node.op]
     pyfn = PY_BINARY[node.op]
     text_ok = node.op in ("=", "!=")
+    if ops.nan_unread and node.op in COMPARISONS:
+        return _compare3(node, left, right, ops, npfn, pyfn, text_ok)
+    if ops.nan_unread and node.op in LOGICAL:
+        return _logic3(node, left, right, ops)
 
     def binary(st: Any) -> Any:
         a = left(st)
@@ -166,6 +179,60 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
         except (ValueError, TypeError) as exc:
             raise EvalError(node, f"cannot apply {node.op!r}: {exc}") from None
     return binary
+
+
+def _compare3(node: BinOp, left: Evaluator, right: Evaluator, ops: Ops, npfn, pyfn,
+              text_ok: bool) -> Evaluator:
+    """A comparison under the policy "unread": NaN when an operand is NaN (per item for
+    arrays), else the comparison (:mod:`signals.bindings.operations`)."""
+    def nan_of(da: Any, db: Any) -> Any:
+        out = npfn(num(da), num(db))
+        bad = None
+        for d in (da, db):
+            if isinstance(d, np.ndarray) and d.dtype.kind == "f":
+                m = np.isnan(d)
+                bad = m if bad is None else bad | m
+        if bad is None or not bad.any():
+            return out
+        bad = np.broadcast_to(bad, np.shape(out))
+        return np.where(bad, np.nan, np.asarray(out, dtype=np.float64))
+
+    def compare(st: Any) -> Any:
+        a = left(st)
+        b = right(st)
+        if type(a) in PY_TYPES and type(b) in PY_TYPES:
+            if a != a or b != b:
+                return math.nan
+            return pyfn(a, b)
+        if text_ok and (type(a) is str or type(b) is str):
+            if isinstance(a, list) or isinstance(b, list):  # an array of strings, item-wise
+                items, one = (a, b) if isinstance(a, list) else (b, a)
+                return Valid(np.array([pyfn(x, one) for x in items], dtype=np.bool_), None)
+            return pyfn(a, b)  # text equality (types checked: both are strings)
+        try:
+            return ops.lift2(nan_of, a, b, False)
+        except (ValueError, TypeError) as exc:
+            raise EvalError(node, f"cannot apply {node.op!r}: {exc}") from None
+    return compare
+
+
+def _logic3(node: BinOp, left: Evaluator, right: Evaluator, ops: Ops) -> Evaluator:
+    """``& | -> <->`` under the policy "unread": Kleene's three-valued logic, NaN unknown."""
+    op = node.op
+    pyfn = PY_BINARY[op]
+
+    def logic(st: Any) -> Any:
+        a = left(st)
+        b = right(st)
+        if type(a) in PY_TYPES and type(b) in PY_TYPES:
+            if a != a or b != b:
+                return py_three_valued(op, a, b)
+            return pyfn(a, b)
+        try:
+            return ops.lift2(lambda x, y: np_three_valued(op, x, y), a, b, False)
+        except (ValueError, TypeError) as exc:
+            raise EvalError(node, f"cannot apply {op!r}: {exc}") from None
+    return logic
 
 
 def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
@@ -284,7 +351,8 @@ def _reduction(node: FuncCall, a0: Evaluator, ops: Ops) -> Evaluator:
             return reduce_
         # a reduction of one topic's fields (``min(/scan.ranges)``) depends only on the held
         # message: the columns compute it once per message and gather it per tick
-        scalar = _reduction(node, compile_node(arg0, Ops(False), {}), Ops(False))
+        one = Ops(False, ops.nan_unread)
+        scalar = _reduction(node, compile_node(arg0, one, {}), one)
         return lambda cols: cols.per_message(node, topic, reduce_, scalar)
     if not isinstance(arg0, Field):
         return reduce_

@@ -195,7 +195,7 @@ def _variables_table(doc: dict[str, Any], source: str, loc: _Locations
 
 
 def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool]],
-                      source: str) -> dict[str, Binding]:
+                      source: str, nan: str = "unread") -> dict[str, Binding]:
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
     deps: dict[str, list[str]] = {}
     for name, (expr, line, col, exact) in pending.items():
@@ -221,7 +221,7 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
             visit(d, chain + [name])
         expr, line, col, exact = pending[name]
         compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
-                                            exact=exact, refs=compiled)
+                                            exact=exact, refs=compiled, nan=nan)
         state[name] = 2
 
     for name in pending:
@@ -309,7 +309,7 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     loc = _Locations(text)
     _check_tables(doc, source, loc)
     tick, time_base, lag = _tick_table(doc, source, loc)
-    variables = _compile_in_order(_variables_table(doc, source, loc), source)
+    variables = _compile_in_order(_variables_table(doc, source, loc), source, tick.nan)
     out = Bindings(variables, tick, time_base, lag, source)
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)

@@ -6,6 +6,14 @@ through numpy, item by item, keeping the validity mask of :class:`Valid` arrays.
 is ±inf (nan for 0/0) as IEEE 754; NaN propagates through ``min``/``max`` of several values,
 as ``np.minimum``/``np.maximum``.  Reductions of an empty array: ``min`` → +inf, ``max`` →
 -inf, ``mean`` → nan, ``any`` → false, ``all`` → true, ``count``/``len``/``norm`` → 0.
+
+NaN in comparisons (docs/bindings.md, "NaN"): under the default policy (``[tick] nan =
+"unread"``) a comparison with a NaN operand is neither true nor false: its value is NaN, and
+the logical operators follow Kleene's three-valued logic (``false & NaN`` is false, ``true |
+NaN`` is true, anything else with NaN is NaN; ``any``/``all`` of items likewise, ``count`` of
+items of which one is NaN is NaN). A boolean binding that is NaN at a tick makes that tick
+unread for the requirements that read it (:mod:`monitors.nan`). Under ``[tick] nan =
+"false"`` comparisons follow IEEE 754 (false; ``!=`` true).
 """
 
 from __future__ import annotations
@@ -19,7 +27,8 @@ import numpy as np
 
 from .extract import Valid
 
-__all__ = ["PY_TYPES", "Ops", "num", "min2", "max2", "NP_BINARY", "PY_BINARY"]
+__all__ = ["PY_TYPES", "Ops", "num", "min2", "max2", "NP_BINARY", "PY_BINARY", "COMPARISONS",
+           "LOGICAL", "py_three_valued", "np_three_valued"]
 
 #: The Python types of one tick's values (the fast path).
 PY_TYPES = (float, bool, int)
@@ -33,11 +42,14 @@ def num(x: Any) -> Any:
 
 
 class Ops:
-    """Array semantics; ``axis`` None evaluates one tick, 1 evaluates ticks × items."""
+    """Array semantics; ``axis`` None evaluates one tick, 1 evaluates ticks × items.
+    ``nan_unread``: comparisons with NaN are NaN and logic is three-valued (the default
+    policy); False: IEEE 754 (``[tick] nan = "false"``)."""
 
-    def __init__(self, vectorized: bool) -> None:
+    def __init__(self, vectorized: bool, nan_unread: bool = True) -> None:
         self.vec = vectorized
         self.axis = 1 if vectorized else None
+        self.nan_unread = nan_unread
 
     def _split(self, x: Any) -> tuple[Any, Any]:
         if isinstance(x, Valid):
@@ -75,6 +87,16 @@ class Ops:
         t = a.data != 0
         return t if a.mask is None else t & a.mask
 
+    def _unknown_items(self, a: Valid) -> np.ndarray | None:
+        """Items that are NaN truth values (a comparison with NaN, three-valued), among the
+        valid ones; None when there is none or NaN compares false."""
+        if not self.nan_unread or a.data.dtype.kind != "f":
+            return None
+        u = np.isnan(a.data)
+        if a.mask is not None:
+            u &= a.mask
+        return u if u.any() else None
+
     def _count(self, a: Valid) -> Any:
         if a.mask is None:
             n = a.data.shape[-1]
@@ -84,6 +106,8 @@ class Ops:
     def _out(self, x: Any) -> Any:
         if self.vec:
             return np.asarray(x, dtype=np.float64) if np.asarray(x).dtype != np.bool_ else np.asarray(x)
+        if isinstance(x, np.ndarray) and x.ndim == 0:
+            x = x[()]
         return x.item() if isinstance(x, np.generic) else x
 
     def reduce(self, func: str, a: Valid) -> Any:
@@ -107,18 +131,38 @@ class Ops:
             if a.mask is not None:
                 sq = np.where(a.mask, sq, 0.0)
             return self._out(np.sqrt(sq.sum(axis=ax)))
+        unknown = self._unknown_items(a)
         if func == "any":
-            return self._out(self._truthy(a).any(axis=ax))
+            got = (self._truthy(a) & ~unknown).any(axis=ax) if unknown is not None else \
+                self._truthy(a).any(axis=ax)
+            return self._out(_or_unknown(got, unknown, ax, when=False))
         if func == "all":
             t = a.data != 0
             if a.mask is not None:
                 t = t | ~a.mask
-            return self._out(t.all(axis=ax))
+            if unknown is not None:
+                t = t | unknown
+            return self._out(_or_unknown(t.all(axis=ax), unknown, ax, when=True))
         if func == "count":
-            return self._out(self._truthy(a).sum(axis=ax).astype(np.float64))
+            got = self._truthy(a).sum(axis=ax).astype(np.float64)
+            if unknown is not None:
+                got = np.where(unknown.any(axis=ax), np.nan, got)
+            return self._out(got)
         if func == "len":
             return self._count(a)
         raise AssertionError(func)  # pragma: no cover
+
+
+def _or_unknown(got: np.ndarray, unknown: np.ndarray | None, ax: int | None, when: bool
+                ) -> Any:
+    """``got`` (bool per tick), NaN where it equals ``when`` and an item was unknown
+    (``any``: no item true but one unknown; ``all``: no item false but one unknown)."""
+    if unknown is None:
+        return got
+    undecided = (got == when) & unknown.any(axis=ax)
+    if not np.any(undecided):
+        return got
+    return np.where(undecided, np.nan, np.asarray(got, dtype=np.float64))
 
 
 def min2(a: Any, b: Any) -> Any:
@@ -159,3 +203,69 @@ PY_BINARY: dict[str, Callable[[Any, Any], Any]] = {
     "&": lambda a, b: bool(a) and bool(b), "|": lambda a, b: bool(a) or bool(b),
     "->": lambda a, b: (not a) or bool(b), "<->": lambda a, b: bool(a) == bool(b),
 }
+
+
+#: The comparison operators (their value is NaN when an operand is NaN, policy "unread").
+COMPARISONS = frozenset(("<", "<=", ">", ">=", "=", "!="))
+#: The logical operators (three-valued when an operand is NaN, policy "unread").
+LOGICAL = frozenset(("&", "|", "->", "<->", "!"))
+
+
+def _truth(x: Any) -> Any:
+    """A Python value as True / False / NaN (unknown)."""
+    if x != x:
+        return math.nan
+    return bool(x)
+
+
+def py_three_valued(op: str, a: Any, b: Any = None) -> Any:
+    """Kleene's strong three-valued ``op`` (``& | -> <-> !``) of Python bools/numbers, NaN
+    being unknown; ``b`` unused for ``!``. Returns bool, or NaN when unknown."""
+    x = _truth(a)
+    if op == "!":
+        return x if x != x else not x
+    y = _truth(b)
+    if op == "->":
+        op, x = "|", (x if x != x else not x)
+    if op == "&":
+        if x is False or y is False:
+            return False
+        return math.nan if (x != x or y != y) else True
+    if op == "|":
+        if x is True or y is True:
+            return True
+        return math.nan if (x != x or y != y) else False
+    # <->
+    return math.nan if (x != x or y != y) else x == y
+
+
+def _np_truth(x: Any) -> tuple[Any, Any]:
+    """(truth, unknown) of a numpy value: bool arrays, ``unknown`` where x is NaN."""
+    x = np.asarray(x)
+    if x.dtype.kind == "f":
+        unknown = np.isnan(x)
+        return (x != 0) & ~unknown, unknown
+    return x.astype(np.bool_), np.zeros(x.shape, dtype=np.bool_)
+
+
+def np_three_valued(op: str, a: Any, b: Any = None) -> Any:
+    """:func:`py_three_valued` item by item on numpy values: a bool array when nothing is
+    unknown, else float64 with 0/1 and NaN where unknown."""
+    x, ux = _np_truth(a)
+    if op == "!":
+        out, unknown = ~x, ux
+    else:
+        y, uy = _np_truth(b)
+        if op == "->":
+            x = ~x & ~ux  # not(unknown) stays unknown
+        if op == "&":
+            false = (~x & ~ux) | (~y & ~uy)
+            out, unknown = x & y, (ux | uy) & ~false
+        elif op in ("|", "->"):
+            true = x | y
+            out, unknown = true, (ux | uy) & ~true
+        else:  # <->
+            out, unknown = x == y, ux | uy
+    if not unknown.any():
+        return out
+    return np.where(unknown, np.nan, out.astype(np.float64))

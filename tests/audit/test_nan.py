@@ -115,3 +115,47 @@ def test_nan_ticks_are_where_a_comparison_reads_nan(x, c):
     cols = {"x": np.array(x, dtype=np.float64), "y": np.ones(n, dtype=np.bool_)}
     got = nan_ticks(req, cols, n)
     assert got.tolist() == np.isnan(cols["x"]).tolist()
+
+
+BOOL_TOML = """\
+[tick]
+period = "100 ms"
+time = "log"
+{extra}
+[variables]
+high = "/v.data > 5"
+low = "!(/v.data >= 5)"
+ok = "/w.data < 5"
+"""
+BOOL_REQS = """\
+H1: agent shall always satisfy !high
+H2: agent shall always satisfy low
+H3: agent shall always satisfy ok
+"""
+
+
+@pytest.mark.parametrize("values, want", [
+    ([1.0, 1.0, math.nan, 1.0], {"H1": "unknown", "H2": "unknown", "H3": "satisfied"}),
+    ([1.0, 7.0, math.nan, 1.0], {"H1": "violated", "H2": "violated", "H3": "satisfied"}),
+])
+def test_a_comparison_with_nan_inside_a_binding_is_unread(tmp_path, values, want):
+    """The schema-free spelling of the NaN case: the comparison sits in the binding file, not
+    in the requirement; the two spellings (``high``/``low``) still get one verdict."""
+    (tmp_path / "r.fret").write_text(BOOL_REQS)
+    (tmp_path / "b.toml").write_text(BOOL_TOML.format(extra=""))
+    plan = load_plan(AuditConfig((str(tmp_path / "r.fret"),), (str(tmp_path / "b.toml"),)))
+    la = audit_log(plan, str(_log(tmp_path / "b.mcap", values)))
+    assert {r: v.verdict for r, v in _got(la).items()} == want
+    assert la.problem_counts["nan H1"] == la.problem_counts["nan H2"] == 1
+    assert "nan H3" not in la.problem_counts
+
+
+def test_the_binding_nan_policy_false_is_ieee_inside_bindings_too(tmp_path):
+    (tmp_path / "r.fret").write_text(BOOL_REQS)
+    (tmp_path / "b.toml").write_text(BOOL_TOML.format(extra='nan = "false"'))
+    plan = load_plan(AuditConfig((str(tmp_path / "r.fret"),), (str(tmp_path / "b.toml"),)))
+    la = audit_log(plan, str(_log(tmp_path / "f.mcap", [1.0, 1.0, math.nan, 1.0])))
+    # IEEE 754: NaN > 5 is false (H1 holds) and !(NaN >= 5) is true (H2 holds)
+    assert {r: v.verdict for r, v in _got(la).items()} == {
+        "H1": "satisfied", "H2": "satisfied", "H3": "satisfied"}
+    assert not any(k.startswith("nan ") for k in la.problem_counts)

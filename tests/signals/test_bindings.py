@@ -174,12 +174,59 @@ def test_division_by_zero_is_ieee():
     assert math.isnan(ev("/a.z / /a.z", m))
 
 
-def test_nan_compares_false_and_is_truthy():
-    m = {"/a": NS(x=math.nan)}
-    assert ev("/a.x < 1", m) is False and ev("/a.x >= 1", m) is False
-    assert ev("/a.x != /a.x", m) is True
-    assert ev("/a.x & true", m) is True
+def test_nan_compares_unknown_and_logic_is_three_valued():
+    """[tick] nan = "unread" (the default): a comparison with NaN is NaN, Kleene logic."""
+    m = {"/a": NS(x=math.nan, y=1.0, arr=np.array([1.0, math.nan, 7.0]))}
+    for e in ("/a.x < 1", "/a.x >= 1", "!(/a.x >= 1)", "/a.x != /a.x", "/a.x = /a.x"):
+        assert math.isnan(ev(e, m)), e
+    assert ev("/a.x < 1 & /a.y > 5", m) is False       # false & unknown = false
+    assert ev("/a.x < 1 | /a.y < 5", m) is True        # true | unknown = true
+    assert ev("/a.y > 5 -> /a.x < 1", m) is True       # false -> unknown = true
+    for e in ("/a.x < 1 & /a.y < 5", "/a.x < 1 | /a.y > 5", "/a.x < 1 <-> /a.y < 5",
+              "/a.y < 5 -> /a.x < 1"):
+        assert math.isnan(ev(e, m)), e
+    assert ev("any(/a.arr > 5)", m) is True            # one item true decides any
+    assert math.isnan(ev("any(/a.arr > 9)", m))        # none true, one unknown
+    assert ev("all(/a.arr < 5)", m) is False           # one item false decides all
+    assert math.isnan(ev("all(/a.arr < 9)", m))
+    assert math.isnan(ev("count(/a.arr > 0)", m))
     assert math.isnan(ev("min(/a.x, 1)", m)) and math.isnan(ev("max(1, /a.x)", m))
+
+
+def test_nan_policy_false_is_ieee():
+    m = {"/a": NS(x=math.nan)}
+
+    def ev_false(expr):
+        b = compile_expression("v", expr, nan="false")
+        st_ = EvalState()
+        st_.msgs, st_.times, st_.now = m, {"/a": 0}, 0
+        return b.evaluate(st_)
+    assert ev_false("/a.x < 1") is False and ev_false("/a.x >= 1") is False
+    assert ev_false("/a.x != /a.x") is True
+    assert ev_false("/a.x & true") is True  # a number read as a boolean: != 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.sampled_from([0.0, 1.0, 6.0, math.nan]), min_size=1, max_size=8),
+       st.lists(st.sampled_from([0.0, 3.0, math.nan]), min_size=1, max_size=8),
+       st.sampled_from(["/a.x > 5 & /a.y < 1", "/a.x > 5 | !(/a.y < 1)",
+                        "/a.x < 2 -> /a.y = 0", "(/a.x > 0) <-> (/a.y > 0)",
+                        "!(/a.x >= 1)"]))
+def test_three_valued_is_the_same_per_tick_and_vectorized(xs, ys, expr):
+    """The vectorized evaluator gives the per-tick one's values, NaN included."""
+    n = min(len(xs), len(ys))
+    b = compile_expression("v", expr)
+    per_tick = []
+    for i in range(n):
+        per_tick.append(ev(expr, {"/a": NS(x=xs[i], y=ys[i])}))
+
+    class Cols:
+        def field(self, topic, path, node):
+            return np.array((xs if path == ("x",) else ys)[:n])
+    with np.errstate(all="ignore"):
+        vec = np.asarray(b._vector(Cols()), dtype=np.float64)
+    want = np.array(per_tick, dtype=np.float64)
+    assert np.array_equal(vec, want, equal_nan=True), (expr, xs, ys)
 
 
 def test_indexing_norm_len_and_arrays():
