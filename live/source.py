@@ -19,7 +19,11 @@ The end of the watched run, never a data problem: the server's orderly close (a 
 close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
 for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). The reason is
 :attr:`WatchSource.end_reason`.
-* a message that does not decode: ``undecodable`` (skipped), as in logs;
+* a message on a watched topic that does not decode (its payload, or every payload of a
+  channel whose schema could not be read): ``undecodable``, counted per message, and a gap
+  (:data:`UNDECODABLE_GAP`) from the last message used to the next one: its value is never
+  held over the message that was lost (issue 38, as :mod:`audit.damage` for logs). A run that
+  ends inside such a gap is ``partial`` from the last message used;
 * a log time (or, under the header time base, what the clock sees) going backwards:
   :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);
 * a bound topic not advertised within ``wait`` seconds of connecting, or advertised with a
@@ -53,10 +57,13 @@ from logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, 
 __all__ = ["WatchEvent", "WatchSource", "CONNECTION_GAP", "UNADVERTISED",
            "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE",
            "PUBLISHER_RESTART", "PUBLISHERS_LEFT", "QUEUE_OVERFLOW", "SCHEMA_TOO_LARGE",
-           "MAX_SCHEMA_BYTES", "RESTART_GRACE"]
+           "MAX_SCHEMA_BYTES", "RESTART_GRACE", "UNDECODABLE_GAP"]
 
 #: The connection dropped: messages between the two log times were not received.
 CONNECTION_GAP = "connection_gap"
+#: A message of a watched topic was received but could not be decoded: a gap from the last
+#: message used to the next one.
+UNDECODABLE_GAP = "undecodable_gap"
 #: The connection closed and nothing came after it until the watch ended.
 CONNECTION_CLOSED = "connection_closed"
 #: The server stopped advertising a subscribed topic.
@@ -172,6 +179,9 @@ class WatchSource(LogSource):
         self.first_connect_wall: float | None = None
         self.last_reason = ""
         self.gaps: list[tuple[int, int]] = []  # (last log time before, first after)
+        #: the run ended inside an undecodable gap: the last log time used before it
+        self.lost_after: int | None = None
+        self.undecodable_end: int | None = None
         self._gap_open: tuple[float, str, str] | None = None  # wall start, reason, kind
         self._last_time: int | None = None
         self._early: deque[tuple] = deque()
@@ -396,6 +406,17 @@ class WatchSource(LogSource):
         if not self._server_ended:
             # the watch ended with some topics unadvertised and the run going on: reported
             self._flush_unadvertised()
+        if (self._gap_open is not None and self._gap_open[2] == UNDECODABLE_GAP
+                and self._last_time is not None):
+            # messages were lost at the end of the run: judged up to the last one used
+            _w, reason, _k = self._gap_open
+            self._gap_open = None
+            self.lost_after = self._last_time
+            detail = (f"{reason}; nothing decodable came after it until the watch ended: the "
+                      f"run is judged up to log time {self._last_time}")
+            self._problem(UNDECODABLE_GAP, None, self._last_time, detail,
+                          end_time=self.undecodable_end)
+            self.on_event(WatchEvent("gap", self._last_time, time.time_ns(), detail=detail))
         if self._gap_open is not None and self._last_time is not None:
             # the run ends here: nothing came after the connection closed (the end of the
             # robot's run, or of its network - the watch cannot tell), so no tick is missing
@@ -409,6 +430,16 @@ class WatchSource(LogSource):
             self._problem(CONNECTION_CLOSED, None, self._last_time, detail)
             self.on_event(WatchEvent("problem", self._last_time, time.time_ns(),
                                      detail=f"{CONNECTION_CLOSED}: {detail}"))
+
+    def _undecodable(self, topic: str, log_time: int, why: str) -> None:
+        """A message of ``topic`` that was received but not decoded: an ``undecodable``
+        problem (counted per message) and a gap up to the next message used."""
+        self._report(P.UNDECODABLE, topic, log_time,
+                     f"{why}; message lost: its value is not held over it")
+        if self._gap_open is None:
+            self._gap_open = (time.monotonic(), f"a message of {topic} at log time "
+                              f"{log_time} could not be decoded", UNDECODABLE_GAP)
+        self.undecodable_end = log_time
 
     def _dropped_gap(self) -> None:
         """Messages the bounded queue dropped (:mod:`live.events`) open a gap up to the next
@@ -455,6 +486,10 @@ class WatchSource(LogSource):
             self._flush_unadvertised()
         dec = self.decoders.get(topic)
         if dec is None:
+            if topic in self.schema_errors and (self._wanted is None or topic in self._wanted):
+                self._undecodable(topic, log_time, f"payload of {len(payload)} bytes on a "
+                                  f"channel whose schema could not be read "
+                                  f"({self.schema_errors[topic]})")
             return None
         why = self._time_problem(topic, log_time)
         if why is not None:
@@ -463,9 +498,8 @@ class WatchSource(LogSource):
         try:
             data = dec(payload)
         except DECODE_ERRORS as exc:
-            self._report(P.UNDECODABLE, topic, log_time,
-                         f"payload of {len(payload)} bytes does not deserialize "
-                         f"({type(exc).__name__}: {exc}); message skipped")
+            self._undecodable(topic, log_time, f"payload of {len(payload)} bytes does not "
+                              f"deserialize ({type(exc).__name__}: {exc})")
             return None
         if self._last_time is not None and log_time < self._last_time:
             self._report(CLOCK_BACKWARDS, topic, log_time,

@@ -316,6 +316,10 @@ class Watch:
         if src.gaps:
             la.partial = True
             la.damage_time_ns = src.gaps[0][0]
+        if src.lost_after is not None:
+            la.partial = True  # messages lost at the end: judged up to the last one used
+            if la.damage_time_ns is None:
+                la.damage_time_ns = src.lost_after + 1
         if src.publishers_left and src._last_time is not None:
             la.partial = True  # the run was cut short after its last message
             if la.damage_time_ns is None:
@@ -411,6 +415,9 @@ class Watch:
             if src.publishers_left and src._last_time is not None:
                 # cut short: judged as a log cut after its last message (audit.damage)
                 passes[key].intact_end = src._last_time + 1
+            elif src.lost_after is not None:
+                # messages lost at the end (undecodable): judged up to the last one used
+                passes[key].intact_end = src.lost_after + 1
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)
@@ -489,8 +496,14 @@ class Watch:
                 finalize(self.plan, r, res, self.plan.bindings, v, la)
                 ok.append(r)
                 if unknown:
-                    v.notes.append(f"{unknown} ticks inside connection gaps were not "
+                    v.notes.append(f"{unknown} ticks inside gaps of the run were not "
                                    "evaluated (unknown)")
+                    if v.verdict in ("satisfied", "vacuous"):
+                        # held on the ticks read; the unread ones could have violated it
+                        v.unknown_reason = (f"{v.verdict} on the ticks read, but {unknown} "
+                                            "ticks inside gaps of the run (lost or "
+                                            "undecodable messages) were not read")
+                        v.verdict = "unknown"
             summarize_clocks(la, [verdicts[r.index] for r in ok])
             la.engine = log_engine(verdicts[r.index] for r in ok)
             active = ok

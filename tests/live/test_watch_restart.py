@@ -218,3 +218,32 @@ def test_the_bounded_queue_drops_the_oldest_messages_and_the_watch_makes_them_a_
     assert src.gaps == [(T0, T0 + 800 * MS)]
     kinds = {p.kind for p in src.problems}
     assert QUEUE_OVERFLOW in kinds
+
+
+def _bad_cdr_after_good(resume: bool):
+    """10 good /a messages; 10 whose CDR payload is cut short (undecodable); then, if
+    ``resume``, 10 good ones again; close."""
+    async def script(ws, k):
+        await ws.send(advertise([(1, "/a")]))
+        sid = await subscription(ws, 1)
+        await publish_a(ws, sid, n=10)
+        for i in range(10):
+            await ws.send(message_data(sid, T0 + 500 * MS + i * 50 * MS, b"\x00\x01\x00\x00\x00"))
+            await asyncio.sleep(0.002)
+        if resume:
+            await publish_a(ws, sid, n=10, start=T0 + 1000 * MS)
+        await asyncio.sleep(0.2)
+        await ws.close(1000, "end of the run")
+    return script
+
+
+@pytest.mark.parametrize("resume", [False, True])
+def test_undecodable_messages_are_a_gap_never_held_over(plan, resume):
+    """Issue 38 live: the last readable value is not carried over the messages that could
+    not be decoded; the run is partial and never exits 0."""
+    w, la, _c, _s = _watch(plan, _bad_cdr_after_good(resume))
+    (v,) = la.verdicts
+    assert v.verdict == "unknown", (v.verdict, la.problems)
+    assert la.partial and exit_code([la]) == 3
+    assert la.problem_counts.get("undecodable /a") == 10, la.problem_counts
+    assert "undecodable_gap" in _kinds(la) or resume

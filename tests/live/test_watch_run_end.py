@@ -140,7 +140,9 @@ def test_data_problems_exit_3_and_0_with_allow_partial(reqs, tmp_path):
             t.join(10)
         finally:
             server.stop()
-        assert [p["kind"] for p in doc["logs"][0]["problems"]] == ["undecodable"]
+        # the lost message is a gap of the run: its value is not held over it (issue 38)
+        assert [p["kind"] for p in doc["logs"][0]["problems"]] == ["undecodable",
+                                                                    "undecodable_gap"]
         assert doc["summary"]["exit_code"] == res.exit_code
         codes.append(res.exit_code)
     assert codes == [3, 0]
