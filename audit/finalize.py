@@ -17,6 +17,7 @@ from dataclasses import replace
 import numpy as np
 
 from signals.bindings import Bindings
+from signals.clock import unsampled_of
 from .damage import open_obligations, verdict_at_damage
 from monitors.interval import OBLIGATIONS, EvidenceUnsupported
 from monitors.judge import judge, nan_ticks
@@ -26,7 +27,22 @@ from .verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from .model import AuditPlan, RequirementPlan
 from .passes import ClockPass, clock_key
 
-__all__ = ["finalize"]
+__all__ = ["finalize", "between_ticks"]
+
+
+def between_ticks(v, s, r: RequirementPlan, bindings: Bindings | None) -> None:
+    """Set ``v.unsampled_messages`` and ``v.missed_changes`` from requirement ``r``'s clock
+    ``s`` (:class:`signals.clock.Sampling`), with a note per variable that could miss events
+    between ticks (never silently)."""
+    v.unsampled_messages = unsampled_of(s, r.variables, bindings)
+    v.missed_changes = {n: s.missed_changes[n] for n in r.variables
+                        if s.missed_changes.get(n)}
+    for n, k in v.missed_changes.items():
+        b = bindings.variables[n] if bindings is not None else None
+        topic = ", ".join(sorted(b.topics)) if b is not None else "its topic"
+        v.notes.append(f"{n}: {k} message{'s' if k != 1 else ''} of {topic} that no tick "
+                       f"sampled would have changed its value (events between ticks); "
+                       f"bind it as any_of_messages({b.expr if b else '...'}) to see them")
 
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,

@@ -26,7 +26,7 @@ from logs.schema import closest
 from logs import open_log
 from .checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
-from .finalize import finalize
+from .finalize import between_ticks, finalize
 from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
 from .model import AuditPlan, RequirementPlan
@@ -316,7 +316,7 @@ class _LogRun:
         s = res.sampling
         v.ticks_evaluated = len(res.times)
         v.warmup_ticks = s.warmup_ticks
-        v.unsampled_messages = dict(sorted(s.unsampled.items()))
+        between_ticks(v, s, r, b)
         v.first_tick_ns = s.first_time
         v.last_tick_ns = s.end_time
         if res.cut:  # ticks after the damage are not judged

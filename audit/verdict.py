@@ -160,6 +160,10 @@ class Verdict:
         unsampled_messages: topic -> messages of a bound topic that no tick of this clock
             sampled (superseded by a newer one between two ticks: sample-and-hold holds the
             newest), counted from the first evaluated tick on.
+        missed_changes: variable -> how many of those messages would have changed its
+            value (a boolean binding of one topic without aggregation: its value on the
+            skipped message differs from the tick before); such a variable can miss events
+            between ticks (bind it with ``any_of_messages``; docs/bindings.md).
         intervals, triggers, violations: counts from the interval semantics (None when it
             could not be evaluated).
         violation_list: (trigger, violation) time points of the failed triggers in order,
@@ -197,6 +201,7 @@ class Verdict:
     last_tick_ns: int | None = None
     waiting_for: list[str] = field(default_factory=list)
     unsampled_messages: dict[str, int] = field(default_factory=dict)
+    missed_changes: dict[str, int] = field(default_factory=dict)
     intervals: int | None = None
     triggers: int | None = None
     violations: int | None = None
@@ -236,6 +241,7 @@ class Verdict:
             "last_tick_ns": self.last_tick_ns, "last_tick_s": _t(self.last_tick_ns, start)["s"],
             "waiting_for": self.waiting_for,
             "unsampled_messages": self.unsampled_messages,
+            "missed_changes": self.missed_changes,
             "intervals": self.intervals, "triggers": self.triggers,
             "violations": self.violations,
             "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}

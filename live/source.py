@@ -22,7 +22,7 @@ for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). T
 * a message on a watched topic that does not decode (its payload, or every payload of a
   channel whose schema could not be read): ``undecodable``, counted per message, and a gap
   (:data:`UNDECODABLE_GAP`) from the last message used to the next one: its value is never
-  held over the message that was lost (issue 38, as :mod:`audit.damage` for logs). A run that
+  held over the message that was lost (as :mod:`audit.damage` for logs). A run that
   ends inside such a gap is ``partial`` from the last message used;
 * a log time (or, under the header time base, what the clock sees) going backwards:
   :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);

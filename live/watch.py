@@ -44,7 +44,7 @@ from common.problems import DataProblem
 from signals import sample_groups
 from monitors.interval import evaluate_requirement
 from audit import AuditInputError
-from audit.finalize import finalize
+from audit.finalize import between_ticks, finalize
 from audit.log import log_engine, summarize_clocks
 from audit.log_problems import collect_problems, problem_json
 from audit.operands import operand_values
@@ -412,12 +412,10 @@ class Watch:
         for key in groups:
             times, columns, log_times = self._cols[key].arrays()
             passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
-            if src.publishers_left and src._last_time is not None:
-                # cut short: judged as a log cut after its last message (audit.damage)
-                passes[key].intact_end = src._last_time + 1
-            elif src.lost_after is not None:
-                # messages lost at the end (undecodable): judged up to the last one used
-                passes[key].intact_end = src.lost_after + 1
+            # cut short, or lost at the end (undecodable): a log cut after the last message
+            cut = src._last_time if src.publishers_left else src.lost_after
+            if cut is not None:
+                passes[key].intact_end = cut + 1
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)
@@ -481,7 +479,7 @@ class Watch:
                 unknown = self._unknown.get(self._group[r.index], 0)
                 v.ticks_evaluated = g.ticks - unknown
                 v.warmup_ticks = g.warmup_ticks
-                v.unsampled_messages = dict(sorted(g.unsampled.items()))
+                between_ticks(v, g, r, self.plan.bindings)
                 v.first_tick_ns, v.last_tick_ns = g.first_time, g.end_time
                 v.waiting_for = list(g.waiting_for)
                 bad = [n for n in r.variables
@@ -498,11 +496,9 @@ class Watch:
                 if unknown:
                     v.notes.append(f"{unknown} ticks inside gaps of the run were not "
                                    "evaluated (unknown)")
-                    if v.verdict in ("satisfied", "vacuous"):
-                        # held on the ticks read; the unread ones could have violated it
+                    if v.verdict in ("satisfied", "vacuous"):  # unread ticks could violate it
                         v.unknown_reason = (f"{v.verdict} on the ticks read, but {unknown} "
-                                            "ticks inside gaps of the run (lost or "
-                                            "undecodable messages) were not read")
+                                            "ticks inside gaps of the run were not read")
                         v.verdict = "unknown"
             summarize_clocks(la, [verdicts[r.index] for r in ok])
             la.engine = log_engine(verdicts[r.index] for r in ok)

@@ -248,6 +248,11 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> list[str]:
                            f"first evaluated tick at {format_offset(v.first_tick_ns, st)})")
     for w in la.warnings:
         out.append(f"[yellow]warning[/yellow]: {escape(w)}")
+    for v in la.verdicts:  # events a plain binding could not see (docs/bindings.md)
+        for n in v.notes:
+            if any(n.startswith(f"{var}: ") for var in v.missed_changes):
+                out.append(f"[yellow]between ticks[/yellow] {escape(v.requirement)}: "
+                           f"{escape(n)}")
     if la.missing_topics:
         out.append(f"never published: {escape(', '.join(la.missing_topics))}")
     if la.problem_counts:

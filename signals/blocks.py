@@ -20,6 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .bindings.binding import Binding
+from .between_ticks import closing_end, folded, missed_changes, windows_of
 from .bindings.compile import EvalState
 from .bindings.expression import TF_TOPICS
 from .bindings.frames import TfBuffer
@@ -27,7 +28,7 @@ from .bindings.spec import Bindings, TickSpec
 from common.problems import SignalError
 from logs.selective import install as install_selective
 from logs import CsvSource, LogSource
-from .clock import HeaderBuffer, Sampling, Tick, check_topics, present_tf
+from .clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
 from .columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from .groups import GroupSampling, _restrict, csv_clock
 
@@ -142,6 +143,10 @@ class _Group:
         self.last_held: dict[str, int] = {}  # topic -> number of the message held last
         self.failed: dict[str, SignalError] = {}
         self.per_tick: set[str] = set()
+        #: per aggregated binding's topic: the number of the message held at the previous
+        #: grid tick (-1: none yet); its window at a tick starts after it
+        self.window_start: dict[str, int] = {next(iter(b.topics)): -1 for b in self.variables
+                                             if b.aggregate is not None}
         #: per binding that reads ``tf()``: its transforms so far and, per TF topic, the
         #: count of that topic's messages already added (tf() reads every message, not the
         #: held one: they are added in time order up to each tick)
@@ -297,6 +302,8 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
             if c.next_grid is None:
                 c.next_grid = min(b.times[0] for b in bufs if b.times)
             end = last + 1 if final else last
+            if final and c.window_start:
+                end = max(end, closing_end(c, last))
             due = 0 if c.next_grid >= end else -(-(end - c.next_grid) // c.period)
             if c.index + c.sampling.warmup_ticks + due > MAX_TICKS:
                 raise SignalError(
@@ -337,6 +344,7 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
         s.waiting_for = sorted(t for t in c.required if idx[t][0] < 0)
     s.end_time = int(times[-1])
     warm = max((int(np.count_nonzero(idx[t] < 0)) for t in c.required), default=0)
+    windows = windows_of(c, times, warm)
     s.warmup_ticks += warm
     if warm == len(times):
         return None
@@ -350,6 +358,9 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     values: dict[str, np.ndarray] = {}
     for b in list(c.variables):
         try:
+            if b.aggregate is not None:
+                values[b.name] = folded(b, stream, windows[next(iter(b.topics))])
+                continue
             values[b.name] = _values(b, cols, stream, times, held, c.per_tick,
                                      c.tf.get(b.name))
         except SignalError as err:
@@ -367,8 +378,9 @@ def _count_unsampled(c: _Group, idx: dict[str, np.ndarray]) -> None:
     evaluated ticks that neither held (the held message's number in its topic jumps by more
     than one), from the first evaluated tick on (as :class:`signals.clock.Clock`)."""
     s, stream = c.sampling, c.stream
+    folded = folded_topics(c.variables)
     for t in c.required:
-        if t in TF_TOPICS or t == c.tick_topic:
+        if t in TF_TOPICS or t == c.tick_topic or t in folded:
             continue
         a = idx[t] + stream.buffers[t].base
         prev = c.last_held.get(t, int(a[0]))
@@ -376,6 +388,8 @@ def _count_unsampled(c: _Group, idx: dict[str, np.ndarray]) -> None:
         n = int(gaps[gaps > 0].sum())
         if n:
             s.unsampled[t] = s.unsampled.get(t, 0) + n
+            missed_changes(c.variables, stream, t, np.concatenate(([prev], a[:-1])), a,
+                           s.missed_changes)
         c.last_held[t] = int(a[-1])
 
 

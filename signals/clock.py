@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from common import problems as P
-from .bindings.binding import Binding
+from .bindings.binding import EMPTY_FOLD, Binding, fold
+from .between_ticks import single_topic
 from .bindings.compile import EvalState
 from .bindings.expression import TF_TOPICS
 from .bindings.frames import TfBuffer
@@ -23,7 +24,7 @@ from common.problems import DataProblem, ProblemLog, SignalError
 from logs.selective import install as install_selective
 from logs import CSV_TOPIC, CsvSource, LogSource
 
-__all__ = ["Tick", "Sampling", "sample"]
+__all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of"]
 
 
 class Tick:
@@ -70,6 +71,10 @@ class Sampling:
             the topic before the next tick sampled it (sample-and-hold keeps only the newest);
             the tick topic (one tick per message) and /tf, /tf_static (``tf()`` reads every
             transform) are not counted.
+        missed_changes: variable -> how many of those messages would have changed its value
+            (boolean bindings of one topic without aggregation: the binding's value on the
+            skipped message differs from its value at the tick before;
+            :func:`signals.between_ticks.is_boolean`).
         start_time: time of the first tick, evaluated or not; None if none.
         first_time: time of the first evaluated tick; None if none.
         end_time: time of the last tick; None if none.
@@ -84,6 +89,7 @@ class Sampling:
         self.waiting_for: list[str] = []
         self.missing_topics: list[str] = []
         self.unsampled: dict[str, int] = {}
+        self.missed_changes: dict[str, int] = {}
         self.start_time: int | None = None
         self.first_time: int | None = None
         self.end_time: int | None = None
@@ -230,6 +236,27 @@ def feed(source: LogSource, bindings: Bindings, topics: set[str], problems: Prob
     yield from buf.drain()
 
 
+def folded_topics(variables: list[Binding]) -> set[str]:
+    """Topics read only by aggregated bindings (``any_of_messages`` ...) among
+    ``variables``: every message of them is folded, none goes unsampled."""
+    folded = {t for b in variables if b.aggregate is not None for t in b.topics}
+    return folded - {t for b in variables if b.aggregate is None for t in b.topics}
+
+
+def s_first(s: "Sampling") -> bool:
+    """Whether ``s`` has evaluated a tick (skipped messages count from then on)."""
+    return s.first_time is not None
+
+
+def unsampled_of(s: "Sampling", names: list[str], bindings: Bindings | None) -> dict[str, int]:
+    """The unsampled messages of clock ``s`` that count for variables ``names`` (one
+    requirement's): those of topics its non-aggregated bindings read, sorted by topic."""
+    own = [bindings.variables[n] for n in names
+           if bindings is not None and n in bindings.variables]
+    folded = folded_topics(own)
+    return {t: n for t, n in sorted(s.unsampled.items()) if t not in folded}
+
+
 class Clock:
     """The ticks of one group of variables on the clock of its own topics (module docstring):
     the grid starts at the first message of ``topics`` (or the tick topic's messages), the
@@ -259,10 +286,42 @@ class Clock:
         self.failed: dict[str, SignalError] = {}
         #: messages of each counted topic since the last evaluated tick (Sampling.unsampled)
         self.since: dict[str, int] = {}
-        self.counted = set(required) - set(TF_TOPICS) - {tick.topic}
+        self.counted = (set(required) - set(TF_TOPICS) - {tick.topic}
+                        - folded_topics(self.variables))
+        #: aggregated bindings (``any_of_messages`` ...): name -> the values (or the error)
+        #: of their topic's messages since the previous tick, and the topic
+        self.window: dict[str, list[Any]] = {b.name: [] for b in self.variables
+                                             if b.aggregate is not None}
+        self.window_topic = {b.name: next(iter(b.topics)) for b in self.variables
+                             if b.aggregate is not None}
+        #: boolean bindings of one topic without aggregation (topic -> them), whose value on
+        #: a message no tick samples is compared with their value at the tick before
+        self.watched: dict[str, list[Binding]] = {}
+        for b in self.variables:
+            t = single_topic(b)
+            if t is not None and t in self.counted:
+                self.watched.setdefault(t, []).append(b)
+        self.last_values: dict[str, Any] = {}
+
+    def _value(self, b: Binding, window: dict[str, list[Any]]) -> bool | float:
+        """``b`` at the tick: the held message's value, or its aggregation over the
+        messages since the previous tick (:func:`signals.bindings.binding.fold`)."""
+        if b.aggregate is None:
+            return b.evaluate(self.state)
+        vals = window.get(b.name) or []
+        for v in vals:
+            if isinstance(v, SignalError):
+                raise v
+        if not vals:
+            empty = EMPTY_FOLD[b.aggregate]
+            return b.evaluate(self.state) if empty is None else empty
+        return fold(b.aggregate, vals)
 
     def _emit(self, t: int) -> Tick | None:
         s = self.s
+        window = self.window
+        if window:  # every grid tick (warm-up ones too) starts a new window
+            self.window = {k: [] for k in window}
         if s.start_time is None:
             s.start_time = t
             s.waiting_for = sorted(self.missing)
@@ -283,7 +342,7 @@ class Clock:
         with np.errstate(all="ignore"):
             for b in list(self.variables):
                 try:
-                    values[b.name] = b.evaluate(state)
+                    values[b.name] = self._value(b, window)
                 except SignalError as exc:
                     err = SignalError(f"{exc}{_context(state, self.log_times)}",
                                       variable=exc.variable)
@@ -292,6 +351,7 @@ class Clock:
                     self.failed[b.name] = err
                     self.variables.remove(b)
         tick = Tick(self.index, t, values, dict(self.log_times))
+        self.last_values = values
         self.index += 1
         s.ticks += 1
         return tick
@@ -323,18 +383,50 @@ class Clock:
                 if tick is not None:
                     out.append(tick)
         st = self.state
+        if self.since.get(topic) and topic in self.watched and s_first(self.s):
+            self._missed(topic)  # the held message is superseded before a tick sampled it
         st.msgs[topic] = data
         st.times[topic] = t
         if st.tf is not None and topic in TF_TOPICS:
             st.tf.add(topic, data, t)
         self.log_times[topic] = log_time
         self.missing.discard(topic)
+        if self.window:
+            self._fold_in(topic)
         if topic in self.counted:
             self.since[topic] = self.since.get(topic, 0) + 1
         if topic == self.tick_topic:
             self.pending.append((t, data, log_time))
         self.last = t
         return out
+
+    def _missed(self, topic: str) -> None:
+        """Count a change of a watched binding on the held message of ``topic``, which no
+        tick sampled (:attr:`Sampling.missed_changes`)."""
+        mc = self.s.missed_changes
+        for b in self.watched[topic]:
+            if b.name not in self.last_values or b not in self.variables:
+                continue
+            with np.errstate(all="ignore"):
+                try:
+                    v = b.evaluate(self.state)
+                except SignalError:
+                    continue
+            w = self.last_values[b.name]
+            if not (v == w or (v != v and w != w)):
+                mc[b.name] = mc.get(b.name, 0) + 1
+
+    def _fold_in(self, topic: str) -> None:
+        """The value of the message of ``topic`` just held, for the aggregated bindings
+        that read it (an evaluation error is kept and raised at the tick)."""
+        for b in self.variables:
+            if b.aggregate is None or self.window_topic[b.name] != topic:
+                continue
+            with np.errstate(all="ignore"):
+                try:
+                    self.window[b.name].append(b.evaluate(self.state))
+                except SignalError as exc:
+                    self.window[b.name].append(exc)
 
     def finish(self) -> list[Tick]:
         """The ticks left at the end of the log."""
@@ -343,6 +435,13 @@ class Clock:
             if self.period is not None:
                 assert self.next_grid is not None
                 while self.next_grid <= self.last:
+                    tick = self._emit(self.next_grid)
+                    self.next_grid += self.period
+                    if tick is not None:
+                        out.append(tick)
+                if any(self.window.values()):
+                    # messages folded by an aggregation after the last tick: one closing tick
+                    # on the grid, so an event in the last period is never lost
                     tick = self._emit(self.next_grid)
                     self.next_grid += self.period
                     if tick is not None:

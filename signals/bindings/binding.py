@@ -14,12 +14,13 @@ import numpy as np
 from common.problems import BindingError, SignalError
 from .compile import EvalError, EvalState, compile_node
 from .expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
-                         UnaryOp, check, check_size, substitute, unparse, walk)
+                         UnaryOp, check, check_aggregate, check_size, substitute, unparse, walk)
 from .parse import parse_expression
 from .extract import Valid, normalize_scalar
 from .operations import Ops
 
-__all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals"]
+__all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals",
+           "fold", "EMPTY_FOLD"]
 
 #: A FRET variable name as a binding key: an identifier, or the text of a quoted FRETish
 #: variable (``"wind speed"``: a TOML quoted key ``"wind speed" = "..."``, or
@@ -42,6 +43,11 @@ class Binding:
         constants: the values of its named constants (``POWER_SUPPLY_STATUS_CHARGING``),
             filled in by :func:`signals.bindings.check_types` from a log's schemas.
         uses_tf: whether it reads ``tf()`` (every message of /tf and /tf_static).
+        aggregate: how the values of the messages of its one topic since the previous tick
+            are folded (``"any"``, ``"all"``, ``"count"``, ``"min"``, ``"max"``: written
+            ``any_of_messages(EXPR)`` etc.), or None: the held message's value (sample and
+            hold). Then :meth:`evaluate` gives EXPR on the held message, and the clocks fold
+            (:func:`fold`).
     """
 
     name: str
@@ -57,6 +63,7 @@ class Binding:
     uses_tf: bool = False
     _scalar: Callable[[EvalState], Any] | None = field(default=None, repr=False)
     _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
+    aggregate: str | None = None
 
     def location(self) -> ExprLocation:
         """Where the expression is, for error messages."""
@@ -157,13 +164,15 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     extractors: dict[Field, Callable[[Any], Any]] = {}
     constants: dict[str, Any] = {}
     unread = nan != "false"
-    scalar = compile_node(node, Ops(False, unread), extractors, constants)
-    vector = compile_node(node, Ops(True, unread), extractors, constants)
+    aggregate = check_aggregate(node, where)
+    body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
+    scalar = compile_node(body, Ops(False, unread), extractors, constants)
+    vector = compile_node(body, Ops(True, unread), extractors, constants)
     uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
     return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
-                   uses_tf, scalar, vector)
+                   uses_tf, scalar, vector, aggregate)
 
 
 def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:
@@ -218,3 +227,31 @@ def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding
                                  line=binding.line, col=binding.col, exact=False)
         out.append((f"{binding.name}: {text}", aux))
     return out
+
+
+#: The value of an aggregation over no message since the previous tick (None: the held
+#: message's value, as without aggregation).
+EMPTY_FOLD = {"any": False, "all": True, "count": 0.0, "min": None, "max": None}
+
+
+def fold(aggregate: str, values: list) -> bool | float:
+    """The values (bool/float, NaN unknown) of the messages since the previous tick folded
+    by ``aggregate`` (docs/bindings.md, "Events between ticks"): ``any`` true when one is
+    true, else NaN when one is NaN, else false; ``all`` the dual; ``count`` the number of
+    true ones (NaN when one is NaN); ``min``/``max`` (NaN when one is NaN). ``values`` is
+    not empty (:data:`EMPTY_FOLD` says what no message gives)."""
+    unknown = any(v != v for v in values)
+    if aggregate == "any":
+        if any(v == v and v for v in values):
+            return True
+        return float("nan") if unknown else False
+    if aggregate == "all":
+        if any(v == v and not v for v in values):
+            return False
+        return float("nan") if unknown else True
+    if aggregate == "count":
+        return float("nan") if unknown else float(sum(1 for v in values if v))
+    if unknown:
+        return float("nan")
+    nums = [float(v) for v in values]
+    return min(nums) if aggregate == "min" else max(nums)

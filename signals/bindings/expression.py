@@ -21,7 +21,7 @@ from logs.schema import closest
 from .paths import quote, topic_text
 
 __all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "FUNCS", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "FUNCS", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -152,7 +152,15 @@ FUNCS = {
     "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
     "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1),
     "joint": (3, 3), "tf": (3, 3),
+    "any_of_messages": (1, 1), "all_of_messages": (1, 1), "count_of_messages": (1, 1),
+    "min_of_messages": (1, 1), "max_of_messages": (1, 1),
 }
+#: Aggregations over the messages of one topic since the previous tick (docs/bindings.md, "events
+#: between ticks"): function -> how the per-message values are folded. Only as the whole
+#: binding; :func:`check_aggregate`.
+AGGREGATES = {"any_of_messages": "any", "all_of_messages": "all",
+              "count_of_messages": "count", "min_of_messages": "min",
+              "max_of_messages": "max"}
 #: The components of ``tf(parent, child)``: translation (m), yaw (rad) and age (s).
 TF_COMPONENTS = ("x", "y", "z", "yaw", "age")
 #: The topics ``tf()`` reads (REP 105 / tf2: dynamic and static transforms).
@@ -339,6 +347,44 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         return
     for a in node.args:
         check(a, where, topics)
+
+
+def check_aggregate(node: Expr, where: ExprLocation) -> str | None:
+    """The aggregation of a binding (``"any"``, ``"all"``, ``"count"``, ``"min"``,
+    ``"max"``: :data:`AGGREGATES`) when ``node``, the whole binding, is one, else None.
+
+    Raises:
+        BindingError: an aggregation that is not the whole binding, or whose argument reads
+            other than the fields of one topic (``age()``, ``tf()``, two topics), at its
+            column.
+    """
+    agg = None
+    if isinstance(node, FuncCall) and node.func in AGGREGATES:
+        agg = AGGREGATES[node.func]
+        inner = node.args[0]
+        topics = set()
+        for n in walk(inner):
+            if isinstance(n, FuncCall) and n.func in ("age", "tf"):
+                raise where.error(f"{node.func}() folds the fields of one topic's messages; "
+                                  f"{n.func}() is not a field of a message", n.col)
+            if isinstance(n, FuncCall) and n.func in AGGREGATES:
+                raise where.error(f"{n.func}() inside {node.func}(): aggregations over "
+                                  "messages do not nest", n.col)
+            if isinstance(n, Field):
+                topics.add(n.topic)
+        if len(topics) != 1:
+            raise where.error(f"{node.func}() folds the messages of one topic, but its "
+                              f"argument reads {len(topics)} ({', '.join(sorted(topics))})"
+                              if topics else f"{node.func}() needs a field of a topic",
+                              node.col)
+        return agg
+    for n in walk(node):
+        if isinstance(n, FuncCall) and n.func in AGGREGATES:
+            raise where.error(f"{n.func}() is the whole binding (e.g. error_logged = "
+                              f"\"{n.func}(/log.level >= 8)\"), not a part of one: bind it "
+                              "to its own variable and combine the variables in the "
+                              "requirement", n.col)
+    return None
 
 
 #: A name that may be a constant of a message definition (ROS writes them in capitals).

@@ -212,6 +212,13 @@ class _TypeChecker:
                                        node.col)
             return {"array_bool": "bool", "array_number": "number"}.get(values, "any")
         ts = [self.type(a) for a in node.args]
+        if f.endswith("_of_messages"):  # aggregations over messages (one value each)
+            fold = f[:-len("_of_messages")]
+            if fold in ("any", "all", "count"):
+                self.need(node.args[0], ts[0], ("bool",), f"{f}() folds booleans", node)
+                return "bool" if fold != "count" else "number"
+            self.need(node.args[0], ts[0], ("number",), f"{f}() folds numbers", node)
+            return "number"
         for a, t in zip(node.args, ts):
             if f in ("any", "all", "count"):
                 self.need(a, t, _ARRAYS, f"{f}() takes an array", node)

@@ -239,7 +239,7 @@ def _bad_cdr_after_good(resume: bool):
 
 @pytest.mark.parametrize("resume", [False, True])
 def test_undecodable_messages_are_a_gap_never_held_over(plan, resume):
-    """Issue 38 live: the last readable value is not carried over the messages that could
+    """Live: the last readable value is not carried over the messages that could
     not be decoded; the run is partial and never exits 0."""
     w, la, _c, _s = _watch(plan, _bad_cdr_after_good(resume))
     (v,) = la.verdicts

@@ -140,7 +140,7 @@ def test_data_problems_exit_3_and_0_with_allow_partial(reqs, tmp_path):
             t.join(10)
         finally:
             server.stop()
-        # the lost message is a gap of the run: its value is not held over it (issue 38)
+        # the lost message is a gap of the run: its value is not held over it
         assert [p["kind"] for p in doc["logs"][0]["problems"]] == ["undecodable",
                                                                     "undecodable_gap"]
         assert doc["summary"]["exit_code"] == res.exit_code
