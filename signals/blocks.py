@@ -22,7 +22,7 @@ import numpy as np
 from .bindings.binding import Binding
 from .between_ticks import closing_end, folded, missed_changes, windows_of
 from .bindings.compile import EvalState
-from .bindings.expression import TF_TOPICS
+from .bindings.expression import TF_TOPICS, stateful_topics
 from .bindings.frames import TfBuffer
 from .bindings.spec import Bindings, TickSpec
 from common.problems import SignalError
@@ -143,6 +143,9 @@ class _Group:
         self.last_held: dict[str, int] = {}  # topic -> number of the message held last
         self.failed: dict[str, SignalError] = {}
         self.per_tick: set[str] = set()
+        #: topics whose previous message a binding reads (@delta ...): one more message kept
+        #: in the buffer, and warm-up until their second message
+        self.stateful: set[str] = set().union(*(stateful_topics(b.ast) for b in self.variables))
         #: per aggregated binding's topic: the number of the message held at the previous
         #: grid tick (-1: none yet); its window at a tick starts after it
         self.window_start: dict[str, int] = {next(iter(b.topics)): -1 for b in self.variables
@@ -279,7 +282,8 @@ def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
             for c in readers:
                 if topic not in c.own:
                     continue
-                keep = min(keep, bisect_right(b.times, c.next_time()) - 1)
+                keep = min(keep, bisect_right(b.times, c.next_time()) - 1
+                           - (topic in c.stateful))
                 if topic == c.tick_topic and c.period is None:
                     keep = min(keep, c.next_seq - b.base)
                 for _buf, added in c.tf.values():
@@ -341,9 +345,10 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
         idx[c.tick_topic] = own
     if s.start_time is None:
         s.start_time = int(times[0])
-        s.waiting_for = sorted(t for t in c.required if idx[t][0] < 0)
+        s.waiting_for = sorted(t for t in c.required if idx[t][0] < _first_held(c, t))
     s.end_time = int(times[-1])
-    warm = max((int(np.count_nonzero(idx[t] < 0)) for t in c.required), default=0)
+    warm = max((int(np.count_nonzero(idx[t] < _first_held(c, t))) for t in c.required),
+               default=0)
     windows = windows_of(c, times, warm)
     s.warmup_ticks += warm
     if warm == len(times):
@@ -371,6 +376,12 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     c.index += len(times)
     s.ticks += len(times)
     return blk
+
+
+def _first_held(c: _Group, topic: str) -> int:
+    """The smallest buffer index of ``topic`` a tick may be evaluated with: its first
+    message, or its second for a topic whose previous message a binding reads."""
+    return 1 - c.stream.buffers[topic].base if topic in c.stateful else 0
 
 
 def _count_unsampled(c: _Group, idx: dict[str, np.ndarray]) -> None:
@@ -417,8 +428,12 @@ def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,
                 _add_transforms(tf, stream, int(times[i]))
             for t, ix in idx.items():
                 k = int(ix[i])
-                st.msgs[t] = stream.buffers[t].data[k]
-                st.times[t] = stream.buffers[t].times[k]
+                buf = stream.buffers[t]
+                st.msgs[t], st.times[t] = buf.data[k], buf.times[k]
+                if k >= 1:  # the message before (@delta ...; kept for the topics that need it)
+                    st.prev_msgs[t], st.prev_times[t] = buf.data[k - 1], buf.times[k - 1]
+                else:
+                    st.prev_msgs.pop(t, None)
             st.now = int(times[i])
             try:
                 out.append(b.evaluate(st))

@@ -17,7 +17,7 @@ from common import problems as P
 from .bindings.binding import EMPTY_FOLD, Binding, fold
 from .between_ticks import single_topic
 from .bindings.compile import EvalState
-from .bindings.expression import TF_TOPICS
+from .bindings.expression import TF_TOPICS, stateful_topics
 from .bindings.frames import TfBuffer
 from .bindings.spec import Bindings, TickSpec
 from common.problems import DataProblem, ProblemLog, SignalError
@@ -278,7 +278,7 @@ class Clock:
         self.log_times: dict[str, int] = {}
         self.period = tick.period_ns
         self.tick_topic = tick.topic
-        self.pending: deque[tuple[int, Any, int]] = deque()
+        self.pending: deque[tuple[int, Any, int, Any, int | None]] = deque()
         self.next_grid: int | None = None
         self.last: int | None = None
         self.index = 0
@@ -302,6 +302,9 @@ class Clock:
             if t is not None and t in self.counted:
                 self.watched.setdefault(t, []).append(b)
         self.last_values: dict[str, Any] = {}
+        #: topics whose previous message a binding reads (@delta ...): held too, and
+        #: waited for (warm-up) until the second message
+        self.stateful: set[str] = set().union(*(stateful_topics(b.ast) for b in self.variables))
 
     def _value(self, b: Binding, window: dict[str, list[Any]]) -> bool | float:
         """``b`` at the tick: the held message's value, or its aggregation over the
@@ -356,15 +359,21 @@ class Clock:
         s.ticks += 1
         return tick
 
-    def _emit_own(self, t: int, data: Any, log_time: int) -> Tick | None:
-        """A per-topic tick, evaluated with its own message of the tick topic."""
+    def _emit_own(self, t: int, data: Any, log_time: int, prev: Any = None,
+                  prev_t: int | None = None) -> Tick | None:
+        """A per-topic tick, evaluated with its own message of the tick topic (and the one
+        before it, for @delta and the like)."""
         st, lt, tt = self.state, self.log_times, self.tick_topic
-        held = (st.msgs[tt], st.times[tt], lt[tt])
+        held = (st.msgs[tt], st.times[tt], lt[tt], st.prev_msgs.get(tt), st.prev_times.get(tt))
         st.msgs[tt], st.times[tt], lt[tt] = data, t, log_time
+        if prev is not None:
+            st.prev_msgs[tt], st.prev_times[tt] = prev, prev_t  # type: ignore[assignment]
         try:
             return self._emit(t)
         finally:
-            st.msgs[tt], st.times[tt], lt[tt] = held
+            st.msgs[tt], st.times[tt], lt[tt] = held[:3]
+            if held[3] is not None:
+                st.prev_msgs[tt], st.prev_times[tt] = held[3], held[4]  # type: ignore[assignment]
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
         """Hold message ``data`` of ``topic`` at time ``t``; the ticks due before it."""
@@ -385,18 +394,22 @@ class Clock:
         st = self.state
         if self.since.get(topic) and topic in self.watched and s_first(self.s):
             self._missed(topic)  # the held message is superseded before a tick sampled it
+        prev = st.msgs.get(topic) if topic in self.stateful else None
+        if prev is not None:
+            st.prev_msgs[topic], st.prev_times[topic] = prev, st.times[topic]
         st.msgs[topic] = data
         st.times[topic] = t
         if st.tf is not None and topic in TF_TOPICS:
             st.tf.add(topic, data, t)
         self.log_times[topic] = log_time
-        self.missing.discard(topic)
+        if topic not in self.stateful or topic in st.prev_msgs:
+            self.missing.discard(topic)
         if self.window:
             self._fold_in(topic)
         if topic in self.counted:
             self.since[topic] = self.since.get(topic, 0) + 1
         if topic == self.tick_topic:
-            self.pending.append((t, data, log_time))
+            self.pending.append((t, data, log_time, prev, st.prev_times.get(topic)))
         self.last = t
         return out
 

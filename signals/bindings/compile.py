@@ -37,7 +37,7 @@ class EvalState:
         now: the tick time (ns).
     """
 
-    __slots__ = ("msgs", "times", "now", "values", "tf")
+    __slots__ = ("msgs", "times", "now", "values", "tf", "prev_msgs", "prev_times")
 
     def __init__(self) -> None:
         self.msgs: dict[str, Any] = {}
@@ -48,6 +48,10 @@ class EvalState:
         #: every transform of /tf and /tf_static so far, when a binding reads ``tf()``
         #: (the clock adds each message: :meth:`TfBuffer.add`); None otherwise.
         self.tf: TfBuffer | None = None
+        #: topic -> the message before the held one and its time (``@delta``,
+        #: ``@timedelta``, ``@derivative``), for the topics some binding reads so.
+        self.prev_msgs: dict[str, Any] = {}
+        self.prev_times: dict[str, int] = {}
 
 
 class EvalError(Exception):
@@ -245,7 +249,18 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
         return lambda st: (st.now - st.times[topic]) / NS_PER_S
     if func == "tf":
         return _tf(node)
+    if func in ("delta", "timedelta", "derivative"):
+        return _stateful(node, ops, consts)
     args = [compile_node(a, ops, extractors, consts) for a in node.args]
+    if func == "sqrt":
+        a0 = args[0]
+
+        def sqrt_(st: Any) -> Any:
+            a = a0(st)
+            if type(a) in PY_TYPES:
+                return math.sqrt(a) if a >= 0 else math.nan  # NaN compares as unread
+            return ops.lift1(np.sqrt, a, True)
+        return sqrt_
     if func == "joint":
         return _joint(node, args)
     if func == "abs":
@@ -275,6 +290,39 @@ def _tf(node: FuncCall) -> Evaluator:
         except LookupFailed as exc:
             raise EvalError(node, str(exc)) from None
     return tf
+
+
+def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
+    """``delta``/``timedelta``/``derivative`` of a field (Foxglove's ``@delta`` etc.):
+    between the held message of its topic and the one before it (times on the time base,
+    seconds); ``derivative`` is per second, NaN (unread) when both have one time. Tick by
+    tick only: the vectorized evaluator raises, so the sampler evaluates it per tick."""
+    field = node.args[0]
+    assert isinstance(field, Field)
+    topic, func = field.topic, node.func
+    ex = make_extractor(field, consts)
+
+    def stateful(st: Any) -> Any:
+        if ops.vec or not isinstance(st, EvalState):
+            raise EvalError(node, f"@{func} is evaluated tick by tick")
+        prev = st.prev_msgs.get(topic)
+        if prev is None:
+            raise EvalError(node, f"@{func} needs the message before the held one of {topic}")
+        dt = (st.times[topic] - st.prev_times[topic]) / NS_PER_S
+        if func == "timedelta":
+            return dt
+        try:
+            now, before = ex(st.msgs[topic]), ex(prev)
+        except FieldAccessError as exc:
+            raise EvalError(node, str(exc)) from None
+        try:
+            d = float(now) - float(before)  # numbers (numpy scalars too), not arrays
+        except (TypeError, ValueError):
+            raise EvalError(node, f"@{func} takes a number, not an array") from None
+        if func == "delta":
+            return d
+        return d / dt if dt != 0 else math.nan
+    return stateful
 
 
 def _joint(node: FuncCall, args: list[Evaluator]) -> Evaluator:
@@ -377,7 +425,7 @@ def per_message_topic(node: Expr) -> str | None:
     operators and reductions; no ``age``, no other topic), or None."""
     topics = set()
     for n in walk(node):
-        if isinstance(n, FuncCall) and n.func == "age":
+        if isinstance(n, FuncCall) and n.func in ("age", "delta", "timedelta", "derivative"):
             return None
         if isinstance(n, Field):
             topics.add(n.topic)

@@ -21,7 +21,7 @@ from logs.schema import closest
 from .paths import quote, topic_text
 
 __all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "FUNCS", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -154,7 +154,16 @@ FUNCS = {
     "joint": (3, 3), "tf": (3, 3),
     "any_of_messages": (1, 1), "all_of_messages": (1, 1), "count_of_messages": (1, 1),
     "min_of_messages": (1, 1), "max_of_messages": (1, 1),
+    "sqrt": (1, 1), "delta": (1, 1), "timedelta": (1, 1), "derivative": (1, 1),
 }
+#: Foxglove's message path modifiers a field may end in (``/odom.x@derivative``).
+MODIFIERS = ("derivative", "delta", "timedelta", "abs", "negative", "sqrt", "rad2deg",
+             "deg2rad")
+#: The modifiers (and functions) that read the message before the held one of the field's
+#: topic: ``delta`` (value - previous value), ``timedelta`` (seconds between the two, on
+#: the time base), ``derivative`` (delta / timedelta, per second). A tick is evaluated
+#: once the topic has two messages (warm-up until then).
+STATEFUL = ("delta", "timedelta", "derivative")
 #: Aggregations over the messages of one topic since the previous tick (docs/bindings.md, "events
 #: between ticks"): function -> how the per-message values are folded. Only as the whole
 #: binding; :func:`check_aggregate`.
@@ -339,6 +348,11 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
     if node.func == "tf":
         topics.update(TF_TOPICS)
         return
+    if node.func in STATEFUL:
+        arg = node.args[0]
+        if not isinstance(arg, Field) or not arg.path:
+            raise where.error(f"{node.func}() (the @{node.func} modifier) takes a field of a "
+                              "message, e.g. /odom.twist.twist.linear.x@" + node.func, node.col)
     if node.func == "age":
         arg = node.args[0]
         if not isinstance(arg, Field) or arg.path:
@@ -347,6 +361,13 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         return
     for a in node.args:
         check(a, where, topics)
+
+
+def stateful_topics(node: Expr) -> set[str]:
+    """The topics whose previous message ``node`` reads (``@delta``, ``@timedelta``,
+    ``@derivative``: :data:`STATEFUL`)."""
+    return {n.args[0].topic for n in walk(node)  # type: ignore[attr-defined]
+            if isinstance(n, FuncCall) and n.func in STATEFUL}
 
 
 def check_aggregate(node: Expr, where: ExprLocation) -> str | None:

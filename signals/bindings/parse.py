@@ -10,6 +10,7 @@ functions; :mod:`signals.bindings.expression`). Errors are
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 from lark import Lark, Transformer, v_args
@@ -18,9 +19,9 @@ from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInpu
 
 from common.problems import BindingError
 from fretish.limits import MAX_EXPR_DEPTH
-from .expression import (MAX_EXPR_CHARS, BinOp, Const, Expr, ExprLocation, Field, Filter,
-                         FuncCall, Named, Ref, Slice, TF_COMPONENTS, UnaryOp, check,
-                         check_size)
+from .expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
+                         ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice,
+                         TF_COMPONENTS, UnaryOp, check, check_size)
 from .paths import unquote
 
 __all__ = ["parse_expression"]
@@ -88,10 +89,18 @@ class _ToExpr(Transformer):
         path, op, value = kids
         return Filter(path, "=" if op == "==" else str(op), value)
 
+    def modifier(self, meta, kids):
+        return kids[0]  # the NAME token (its column for errors)
+
     def field(self, meta, kids):
-        tok, path = kids[0], tuple(kids[1:])
+        tok = kids[0]
+        mods = [k for k in kids[1:] if getattr(k, "type", None) == "NAME"]
+        path = tuple(k for k in kids[1:] if getattr(k, "type", None) != "NAME")
         topic = unquote(str(tok)) if tok.type == "STRING" else str(tok)
-        return Field(tok.column, topic, path)
+        out: Expr = Field(tok.column, topic, path)
+        for i, m in enumerate(mods):
+            out = apply_modifier(out, str(m), m.column, first=i == 0, where=self.where)
+        return out
 
     def ref(self, meta, kids):
         return Ref(kids[0].column, str(kids[0]))
@@ -158,6 +167,33 @@ class _ToExpr(Transformer):
             raise self.where.error('tf() takes two frame names in quotes: '
                                    'tf("map", "base_link").x', name.column)
         return FuncCall(name.column, "tf", args + (Const(member.column, str(member)),))
+
+
+def apply_modifier(e: Expr, name: str, col: int, first: bool, where: ExprLocation) -> Expr:
+    """``e@name`` (Foxglove's message path modifiers, as its plot panel has them) as an
+    expression of the language: ``@abs`` -> ``abs(e)``, ``@negative`` -> ``-e``, ``@sqrt`` ->
+    ``sqrt(e)``, ``@rad2deg``/``@deg2rad`` -> ``e * 180/pi`` / ``e * pi/180``; ``@delta``,
+    ``@timedelta``, ``@derivative`` -> ``delta(e)`` etc. (between the held message of the
+    field's topic and the one before it; only right after the field).
+
+    Raises:
+        BindingError: an unknown modifier, or a message-to-message one after another
+            modifier, at ``col``.
+    """
+    if name == "abs" or name == "sqrt":
+        return FuncCall(col, name, (e,))
+    if name == "negative":
+        return UnaryOp(col, "-", e)
+    if name in ("rad2deg", "deg2rad"):
+        k = 180.0 / math.pi if name == "rad2deg" else math.pi / 180.0
+        return BinOp(col, "*", e, Const(col, k))
+    if name in STATEFUL:
+        if not first:
+            raise where.error(f"@{name} compares a field's value with the previous message's: "
+                              "write it right after the field (e.g. /odom.twist.twist.linear.x"
+                              f"@{name}@abs)", col)
+        return FuncCall(col, name, (e,))
+    raise where.error(f"unknown modifier @{name} (known: {', '.join(MODIFIERS)})", col)
 
 
 def _joint_args(args: tuple, where: ExprLocation, col: int) -> tuple:

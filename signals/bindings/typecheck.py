@@ -200,7 +200,11 @@ class _TypeChecker:
 
     def call(self, node: FuncCall) -> str:
         f = node.func
-        if f in ("age", "tf"):
+        if f in ("age", "tf", "timedelta"):
+            return "number"
+        if f in ("delta", "derivative", "sqrt"):
+            t = self.type(node.args[0])
+            self.need(node.args[0], t, ("number",), f"{f}() takes a number", node)
             return "number"
         if f == "joint":
             values, names = self.type(node.args[0]), self.type(node.args[2])
