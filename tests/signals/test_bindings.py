@@ -91,7 +91,7 @@ def test_parse_duration_rejects(value):
     ('[tick]\nperiod = "100 ms"\n[variables]\nok = "/a.x > 1"\nbad = "min(/scan.ranges) <"\n', 5, 27,
      "expression ends too early"),
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "abs(/a.x) $ 3"\n', 4, 18, "unexpected character '$'"),
-    ('[tick]\nperiod = "100 ms"\n[variables]\n  bad = "1 + sqrt(/a.x)"\n', 4, 14, "unknown function 'sqrt'"),
+    ('[tick]\nperiod = "100 ms"\n[variables]\n  bad = "1 + hypot(/a.x)"\n', 4, 14, "unknown function 'hypot'"),
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "age(/a.x) > 1"\n', 4, 12, "age() takes a topic"),
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = "/scan < 3"\n', 4, 8, "is a topic, not a value"),
     ('[tick]\nperiod = "100 ms"\n[variables]\nbad = 3\n', 4, 7, "must be a string"),
