@@ -293,14 +293,16 @@ def _tf(node: FuncCall) -> Evaluator:
 
 
 def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
-    """``delta``/``timedelta``/``derivative`` of a field (Foxglove's ``@delta`` etc.):
-    between the held message of its topic and the one before it (times on the time base,
-    seconds); ``derivative`` is per second, NaN (unread) when both have one time. Tick by
-    tick only: the vectorized evaluator raises, so the sampler evaluates it per tick."""
-    field = node.args[0]
-    assert isinstance(field, Field)
-    topic, func = field.topic, node.func
-    ex = make_extractor(field, consts)
+    """``delta``/``timedelta``/``derivative`` of an expression of one topic's fields
+    (Foxglove's ``@delta`` etc. on a field): its value on the held message of the topic
+    against its value on the one before it (times on the time base, seconds);
+    ``derivative`` is per second, NaN (unread) when both have one time. Tick by tick only:
+    the vectorized evaluator raises, so the sampler evaluates it per tick."""
+    arg = node.args[0]
+    topic = next(n.topic for n in walk(arg) if isinstance(n, Field))
+    func = node.func
+    inner = compile_node(arg, Ops(False, ops.nan_unread), {}, consts)
+    before_state = EvalState()
 
     def stateful(st: Any) -> Any:
         if ops.vec or not isinstance(st, EvalState):
@@ -311,10 +313,9 @@ def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
         dt = (st.times[topic] - st.prev_times[topic]) / NS_PER_S
         if func == "timedelta":
             return dt
-        try:
-            now, before = ex(st.msgs[topic]), ex(prev)
-        except FieldAccessError as exc:
-            raise EvalError(node, str(exc)) from None
+        before_state.msgs[topic], before_state.times[topic] = prev, st.prev_times[topic]
+        before_state.now = st.prev_times[topic]
+        now, before = inner(st), inner(before_state)
         try:
             d = float(now) - float(before)  # numbers (numpy scalars too), not arrays
         except (TypeError, ValueError):

@@ -350,9 +350,15 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         return
     if node.func in STATEFUL:
         arg = node.args[0]
-        if not isinstance(arg, Field) or not arg.path:
+        fields = {n.topic for n in walk(arg) if isinstance(n, Field)}
+        other = [n for n in walk(arg) if isinstance(n, FuncCall)
+                 and n.func in ("age", "tf") + STATEFUL + tuple(AGGREGATES)]
+        if (isinstance(arg, Field) and not arg.path) or len(fields) != 1 or other:
             raise where.error(f"{node.func}() (the @{node.func} modifier) takes a field of a "
-                              "message, e.g. /odom.twist.twist.linear.x@" + node.func, node.col)
+                              "message, or an expression of the fields of one topic, e.g. "
+                              f"/odom.twist.twist.linear.x@{node.func} or "
+                              f"{node.func}(joint(/joint_states.position, \"wheel\"))",
+                              node.col)
     if node.func == "age":
         arg = node.args[0]
         if not isinstance(arg, Field) or arg.path:
@@ -366,8 +372,8 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
 def stateful_topics(node: Expr) -> set[str]:
     """The topics whose previous message ``node`` reads (``@delta``, ``@timedelta``,
     ``@derivative``: :data:`STATEFUL`)."""
-    return {n.args[0].topic for n in walk(node)  # type: ignore[attr-defined]
-            if isinstance(n, FuncCall) and n.func in STATEFUL}
+    return {f.topic for n in walk(node) if isinstance(n, FuncCall) and n.func in STATEFUL
+            for f in walk(n.args[0]) if isinstance(f, Field)}
 
 
 def check_aggregate(node: Expr, where: ExprLocation) -> str | None:

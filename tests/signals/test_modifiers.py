@@ -91,3 +91,22 @@ def test_modifier_errors_are_positioned(expr, msg):
     with pytest.raises(BindingError, match=msg) as e:
         compile_expression("v", expr)
     assert "column" in str(e.value)
+
+
+def test_a_wheel_speed_from_joint_positions(tmp_path):
+    """JointState without velocities: the rate of change of one joint's position."""
+    from _logs import ROS2, T, header
+
+    def joint_state(names, positions, ns):
+        return T(ROS2, "sensor_msgs/msg/JointState")(
+            header=header(ns), name=list(names), position=np.array(positions, dtype=np.float64),
+            velocity=np.array([], dtype=np.float64), effort=np.array([], dtype=np.float64))
+    pos = [0.0, 0.5, 1.0, 1.5, 2.5]
+    msgs = [("/joint_states", "sensor_msgs/msg/JointState", S + i * S // 10,
+             joint_state(["left", "wheel"], [9.0, p], S + i * S // 10))
+            for i, p in enumerate(pos)]
+    log = write_mcap(tmp_path / "j.mcap", msgs)
+    b = make_bindings({"w": 'derivative(joint(/joint_states.position, "wheel"))'},
+                      TickSpec(topic="/joint_states"))
+    got = [t.values["w"] for t in sample(open_log(log), b)]
+    assert got == pytest.approx([5.0, 5.0, 5.0, 10.0])  # rad/s, from the second message on
