@@ -66,7 +66,7 @@ def load_audit_bindings(config: AuditConfig) -> tuple[Bindings | None, list[str]
     if b is not None:
         if tick is not None or config.time_base is not None:
             if tick is not None:  # the binding file's NaN policy stays
-                tick = dataclasses.replace(tick, nan=b.tick.nan)
+                tick = dataclasses.replace(tick, nan=b.tick.nan, inf=b.tick.inf)
             b = Bindings(dict(b.variables), tick or b.tick, config.time_base or b.time_base,
                          b.header_lag_ns, b.source, types=dict(b.types))
         if config.inline:

@@ -149,6 +149,8 @@ class AuditPlan:
                 else {"topic": b.tick.topic})
         if b.tick.nan != "unread":  # a binding file's own NaN policy ([tick] nan)
             tick["nan"] = b.tick.nan
+        if b.tick.inf != "unread":  # and its ±inf policy ([tick] inf)
+            tick["inf"] = b.tick.inf
         return {"sources": self.binding_files, "tick": tick, "time_base": b.time_base,
                 "variables": {n: {"expr": v.expr, "source": v.source, "line": v.line,
                                   "topics": sorted(v.topics)}

@@ -138,6 +138,8 @@ def _print_plan(console, plan, n_logs: int) -> None:
                 else f"one tick per {b.tick.topic} message")
         if b.tick.nan == "false":
             tick += ", NaN compares false"
+        if b.tick.inf == "value":
+            tick += ", ±inf read as numbers"
         clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
                 f"{b.time_base} time)"
     console.print(f"fretc audit: {len(plan.requirements)} requirements, {n_logs} "

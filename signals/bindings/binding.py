@@ -130,8 +130,8 @@ class Binding:
 
 def compile_expression(name: str, expr: str, *, source: str = "<expression>",
                        line: int | None = None, col: int | None = None, exact: bool = True,
-                       refs: dict[str, Binding] | None = None, nan: str = "unread"
-                       ) -> Binding:
+                       refs: dict[str, Binding] | None = None, nan: str = "unread",
+                       inf: str = "unread") -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -143,6 +143,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
             their expressions are substituted.
         nan: the binding file's ``[tick] nan``: ``"unread"`` (a comparison with NaN is NaN,
             logic three-valued) or ``"false"`` (IEEE 754); :mod:`signals.bindings.operations`.
+        inf: the binding file's ``[tick] inf``: ``"unread"`` (±inf read from a log field is
+            NaN, but for REP 117 fields) or ``"value"``.
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
@@ -163,11 +165,11 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     fields = tuple(n for n in walk(node) if isinstance(n, Field) and n.path)
     extractors: dict[Field, Callable[[Any], Any]] = {}
     constants: dict[str, Any] = {}
-    unread = nan != "false"
+    unread, inf_unread = nan != "false", inf != "value"
     aggregate = check_aggregate(node, where)
     body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
-    scalar = compile_node(body, Ops(False, unread), extractors, constants)
-    vector = compile_node(body, Ops(True, unread), extractors, constants)
+    scalar = compile_node(body, Ops(False, unread, inf_unread), extractors, constants)
+    vector = compile_node(body, Ops(True, unread, inf_unread), extractors, constants)
     uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)

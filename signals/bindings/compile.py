@@ -21,7 +21,7 @@ from .expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, wal
 from .extract import FieldAccessError, Valid, make_extractor
 from .frames import LookupFailed, TfBuffer, pick_joint
 from .operations import (COMPARISONS, LOGICAL, NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2,
-                         np_three_valued, num, py_three_valued)
+                         np_three_valued, num, py_three_valued, undeclared_inf)
 
 __all__ = ["EvalState", "EvalError", "compile_node", "per_message_topic"]
 
@@ -109,7 +109,13 @@ def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator],
            consts: dict[str, Any]) -> Evaluator:
     if ops.vec:
         topic, path = node.topic, node.path
+        if ops.inf_unread:
+            return lambda cols: undeclared_inf(cols.field(topic, path, node), path)
         return lambda cols: cols.field(topic, path, node)
+    if ops.inf_unread:
+        plain = _field(node, Ops(False, ops.nan_unread, False), extractors, consts)
+        fpath = node.path
+        return lambda st: undeclared_inf(plain(st), fpath)
     ex = extractors.setdefault(node, make_extractor(node, consts))
     topic = node.topic
     key = (topic, node.path)
@@ -301,7 +307,7 @@ def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
     arg = node.args[0]
     topic = next(n.topic for n in walk(arg) if isinstance(n, Field))
     func = node.func
-    inner = compile_node(arg, Ops(False, ops.nan_unread), {}, consts)
+    inner = compile_node(arg, Ops(False, ops.nan_unread, ops.inf_unread), {}, consts)
     before_state = EvalState()
 
     def stateful(st: Any) -> Any:
@@ -400,7 +406,7 @@ def _reduction(node: FuncCall, a0: Evaluator, ops: Ops) -> Evaluator:
             return reduce_
         # a reduction of one topic's fields (``min(/scan.ranges)``) depends only on the held
         # message: the columns compute it once per message and gather it per tick
-        one = Ops(False, ops.nan_unread)
+        one = Ops(False, ops.nan_unread, ops.inf_unread)
         scalar = _reduction(node, compile_node(arg0, one, {}), one)
         return lambda cols: cols.per_message(node, topic, reduce_, scalar)
     if not isinstance(arg0, Field):

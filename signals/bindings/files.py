@@ -21,7 +21,7 @@ from common.problems import BindingError
 from .binding import VARNAME, Binding, compile_expression
 from .expression import ExprLocation, refs
 from .parse import parse_expression
-from .spec import (DEFAULT_HEADER_LAG_NS, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
+from .spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
                    TickSpec)
 
 __all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
@@ -141,10 +141,10 @@ def _tick_table(doc: dict[str, Any], source: str, loc: _Locations
         raise BindingError(source, "missing [tick] table: say period = \"100 ms\" or topic = "
                            "\"/scan\" (signals are declared, never guessed)", line=1)
     for key in tick_t:
-        if key not in ("period", "topic", "time", "header_lag", "nominal_rate", "nan"):
+        if key not in ("period", "topic", "time", "header_lag", "nominal_rate", "nan", "inf"):
             line, col = loc.at("tick", key)
             raise BindingError(source, f"unknown key {key!r} in [tick] (period, topic, "
-                               "nominal_rate, time, header_lag, nan)", line=line, col=col)
+                               "nominal_rate, time, header_lag, nan, inf)", line=line, col=col)
     tick = _tick_clock(tick_t, source, loc)
     if "nan" in tick_t:
         if tick_t["nan"] not in NAN_POLICIES:
@@ -152,6 +152,12 @@ def _tick_table(doc: dict[str, Any], source: str, loc: _Locations
             raise BindingError(source, f"[tick] nan must be \"unread\" or \"false\", not "
                                f"{tick_t['nan']!r}", line=line, col=col)
         tick = dataclasses.replace(tick, nan=tick_t["nan"])
+    if "inf" in tick_t:
+        if tick_t["inf"] not in INF_POLICIES:
+            line, col = loc.at("tick", "inf")
+            raise BindingError(source, f"[tick] inf must be \"unread\" or \"value\", not "
+                               f"{tick_t['inf']!r}", line=line, col=col)
+        tick = dataclasses.replace(tick, inf=tick_t["inf"])
     if "period" in tick_t and "nominal_rate" in tick_t:
         line, col = loc.at("tick", "nominal_rate")
         raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "
@@ -195,7 +201,8 @@ def _variables_table(doc: dict[str, Any], source: str, loc: _Locations
 
 
 def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool]],
-                      source: str, nan: str = "unread") -> dict[str, Binding]:
+                      source: str, nan: str = "unread", inf: str = "unread"
+                      ) -> dict[str, Binding]:
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
     deps: dict[str, list[str]] = {}
     for name, (expr, line, col, exact) in pending.items():
@@ -221,7 +228,7 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
             visit(d, chain + [name])
         expr, line, col, exact = pending[name]
         compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
-                                            exact=exact, refs=compiled, nan=nan)
+                                            exact=exact, refs=compiled, nan=nan, inf=inf)
         state[name] = 2
 
     for name in pending:
@@ -309,7 +316,8 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     loc = _Locations(text)
     _check_tables(doc, source, loc)
     tick, time_base, lag = _tick_table(doc, source, loc)
-    variables = _compile_in_order(_variables_table(doc, source, loc), source, tick.nan)
+    variables = _compile_in_order(_variables_table(doc, source, loc), source, tick.nan,
+                                  tick.inf)
     out = Bindings(variables, tick, time_base, lag, source)
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)

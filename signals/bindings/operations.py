@@ -28,7 +28,7 @@ import numpy as np
 from .extract import Valid
 
 __all__ = ["PY_TYPES", "Ops", "num", "min2", "max2", "NP_BINARY", "PY_BINARY", "COMPARISONS",
-           "LOGICAL", "py_three_valued", "np_three_valued"]
+           "LOGICAL", "py_three_valued", "np_three_valued", "undeclared_inf"]
 
 #: The Python types of one tick's values (the fast path).
 PY_TYPES = (float, bool, int)
@@ -44,12 +44,15 @@ def num(x: Any) -> Any:
 class Ops:
     """Array semantics; ``axis`` None evaluates one tick, 1 evaluates ticks × items.
     ``nan_unread``: comparisons with NaN are NaN and logic is three-valued (the default
-    policy); False: IEEE 754 (``[tick] nan = "false"``)."""
+    policy); False: IEEE 754 (``[tick] nan = "false"``). ``inf_unread``: ±inf read from a
+    log field is NaN (:func:`undeclared_inf`; ``[tick] inf = "value"`` turns it off)."""
 
-    def __init__(self, vectorized: bool, nan_unread: bool = True) -> None:
+    def __init__(self, vectorized: bool, nan_unread: bool = True, inf_unread: bool = True
+                 ) -> None:
         self.vec = vectorized
         self.axis = 1 if vectorized else None
         self.nan_unread = nan_unread
+        self.inf_unread = inf_unread
 
     def _split(self, x: Any) -> tuple[Any, Any]:
         if isinstance(x, Valid):
@@ -151,6 +154,26 @@ class Ops:
         if func == "len":
             return self._count(a)
         raise AssertionError(func)  # pragma: no cover
+
+
+def undeclared_inf(v: Any, path: tuple) -> Any:
+    """A field's value with ±inf read as NaN (unread: no number was measured; bindings
+    docs, "NaN, ±inf"), item by item in arrays. Kept: a field named ``range``
+    (``sensor_msgs/Range``, whose ±inf REP 117 defines) and LaserScan ranges (a
+    :class:`Valid` with a REP 117 mask)."""
+    if path and path[-1] == "range":
+        return v
+    if type(v) is float:
+        return math.nan if v in (math.inf, -math.inf) else v
+    if isinstance(v, Valid):
+        if v.mask is not None or v.data.dtype.kind != "f" or not np.isinf(v.data).any():
+            return v
+        return Valid(np.where(np.isinf(v.data), np.nan, v.data), None)
+    if isinstance(v, np.ndarray) and v.dtype.kind == "f" and np.isinf(v).any():
+        return np.where(np.isinf(v), np.nan, v)
+    if isinstance(v, np.floating) and np.isinf(v):
+        return math.nan
+    return v
 
 
 def _or_unknown(got: np.ndarray, unknown: np.ndarray | None, ax: int | None, when: bool

@@ -27,6 +27,8 @@ DEFAULT_HEADER_LAG_NS = NS_PER_S
 
 #: The meanings a binding file may give a comparison with NaN (``[tick] nan``).
 NAN_POLICIES = ("unread", "false")
+#: The meanings a binding file may give ±inf read from a log field (``[tick] inf``).
+INF_POLICIES = ("unread", "value")
 
 
 @dataclass(frozen=True)
@@ -52,8 +54,14 @@ class TickSpec:
     #: nor false, the requirement is judged only before it, :mod:`monitors.nan`) or
     #: ``"false"`` (IEEE 754: every ordered comparison with NaN is false, ``!=`` true).
     nan: str = "unread"
+    #: what ±inf read from a log field means (``[tick] inf``, :data:`INF_POLICIES`):
+    #: ``"unread"`` (the default: no number was measured, read as NaN; REP 117 fields keep
+    #: their meaning) or ``"value"`` (a number like any other).
+    inf: str = "unread"
 
     def __post_init__(self) -> None:
+        if self.inf not in INF_POLICIES:
+            raise ValueError(f"TickSpec.inf must be one of {INF_POLICIES}, not {self.inf!r}")
         if self.nan not in NAN_POLICIES:
             raise ValueError(f"TickSpec.nan must be one of {NAN_POLICIES}, not {self.nan!r}")
         if (self.period_ns is None) == (self.topic is None):

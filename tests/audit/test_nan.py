@@ -159,3 +159,33 @@ def test_the_binding_nan_policy_false_is_ieee_inside_bindings_too(tmp_path):
     assert {r: v.verdict for r, v in _got(la).items()} == {
         "H1": "satisfied", "H2": "satisfied", "H3": "satisfied"}
     assert not any(k.startswith("nan ") for k in la.problem_counts)
+
+
+@pytest.mark.parametrize("extra, want", [
+    ("", {"R1": "unknown", "R2": "unknown", "R4": "satisfied"}),  # undeclared: unread
+    ('inf = "value"', {"R1": "violated", "R2": "violated", "R4": "satisfied"}),
+])
+def test_inf_read_from_a_log_field_is_unread_unless_declared(tmp_path, extra, want):
+    la = audit_log(_plan(tmp_path, extra), str(_log(tmp_path / "inf.mcap",
+                                                    [1.0, math.inf, 1.0, -math.inf])))
+    got = {r: _got(la)[r].verdict for r in want}
+    assert got == want
+    if not extra:
+        assert la.problem_counts["nan R1"] == 2
+
+
+def test_range_inf_keeps_its_rep117_meaning(tmp_path):
+    """sensor_msgs/Range: +inf is "no object detected" (REP 117), a declared value."""
+    from _logs import ROS2, T, header
+    R = T(ROS2, "sensor_msgs/msg/Range")
+    msgs = [("/sonar", "sensor_msgs/msg/Range", S + i * S // 10,
+             R(header=header(S + i * S // 10), radiation_type=0, field_of_view=0.5,
+               min_range=0.02, max_range=4.0, range=r))
+            for i, r in enumerate([1.0, math.inf, 2.0])]
+    log = write_mcap(tmp_path / "r.mcap", msgs)
+    (tmp_path / "r.fret").write_text("C: agent shall always satisfy clear\n")
+    (tmp_path / "b.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
+                                     'clear = "/sonar.range > 0.5"\n')
+    la = audit_log(load_plan(AuditConfig((str(tmp_path / "r.fret"),),
+                                         (str(tmp_path / "b.toml"),))), str(log))
+    assert la.verdicts[0].verdict == "satisfied" and not la.problem_counts
