@@ -27,7 +27,11 @@ same seed gives the same inputs. Per class:
   references, deep TOML, huge durations, random characters); parsed;
 * ``frames``: a sequence of Foxglove or rosbridge frames (non-object JSON, fields of the
   wrong type, huge log times, truncated message frames, advertisement floods) handed to the
-  client's session and the watch source.
+  client's session and the watch source;
+* ``ws``: a hostile Foxglove WebSocket server (publisher restarts, deep frames, huge schemas,
+  old and huge log times, cut payloads) watched by ``fretc watch --duration 3``;
+* ``typed``: a command fed a wrongly typed value in a FRET JSON export, a binding file, a
+  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has both).
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
@@ -58,10 +62,12 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "monitors"))
 
 from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan classes)
+from fuzz_live_inputs import run_inputs, run_ws  # noqa: E402  (the ws and inputs classes)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
-CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames")
+CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
+           "typed")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -454,7 +460,7 @@ def _arguments(argv):
 
 #: inputs of each class per unit of --count (logs cost far more than frames)
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
-           "bindings": 40, "frames": 40}
+           "bindings": 40, "frames": 40, "ws": 0.2, "typed": 8}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -496,6 +502,10 @@ def main(argv=None) -> int:
                 bad = run_binding(rng)
             elif kind == "frames":
                 bad = run_frames(rng)
+            elif kind == "ws":
+                bad = run_ws(rng, tmp)
+            elif kind == "typed":
+                bad = run_inputs(rng, tmp)
             else:
                 audits = audits or Audits(tmp)
                 bad = run_log_class(kind, rng, audits)
