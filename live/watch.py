@@ -5,9 +5,8 @@ protocol (:class:`~live.client.FoxgloveClient`) or rosbridge
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
 
-* :class:`~live.source.WatchSource` is a :class:`logs.LogSource`
-  whose messages come from a client instead of a file; each channel is decoded with rosbags from the schema text the server advertised
-  (:func:`logs.schema_decoder`, shared with the MCAP reader);
+* :class:`~live.source.WatchSource` is a :class:`logs.LogSource` whose messages come from a
+  client; each channel is decoded from the schema the server advertised (as in an MCAP);
 * the ticks come from :func:`signals.sample` with the same bindings (tick, time
   base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
 * every tick steps the generated monitors the audit loads (:func:`audit.load_plan`)
@@ -20,16 +19,13 @@ duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data
 the final verdicts are FRET's finite-trace verdicts at the last tick, as the audit's at the
 end of a log. So the same messages give the same verdicts as ``fretc audit`` (tested: each
 shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
-server, watched to the end, equal its audit; a ``--record``\\ ed watch audited offline
-equals the watch).
+server, watched to the end, equal its audit; so does a ``--record``\\ ed watch).
 
 The faults of a live run are data problems (:mod:`live.source`).
-
 Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
 verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
-end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them; ``--record`` writes them to
-the ``/fretc/verdicts`` channel of the recording (foxglove.Log, like ``fretc report
---annotate``) beside every message the watch used.
+end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them;
+``--record`` writes them to the ``/fretc/verdicts`` channel of the recording (foxglove.Log).
 """
 
 from __future__ import annotations
@@ -123,7 +119,7 @@ class _Live:
     """Per-requirement live state (read by the table)."""
 
     __slots__ = ("pt", "status", "status_tick", "status_time", "violations", "pending",
-                 "last_trigger", "first_violation", "error", "offline")
+                 "last_trigger", "first_violation", "error", "offline", "nan_at")
 
     def __init__(self) -> None:
         self.pt: bool | None = None
@@ -136,6 +132,7 @@ class _Live:
         self.first_violation: int | None = None
         self.error: str | None = None
         self.offline = False
+        self.nan_at: int | None = None  # its first tick that read NaN (not stepped from there)
 
 
 class Watch:
@@ -381,25 +378,7 @@ class Watch:
             cols = self._cols[key]
             i = cols.n
             dep = max(tick.log_times.values()) if tick.log_times else None
-            for r, mon, st in order[key]:
-                if mon is None or any(v not in vals for v in r.variables):
-                    continue
-                pt = mon.step(vals)
-                if pt != st.pt:
-                    if st.pt is not None or not pt:
-                        self._event(WatchEvent("pt", t, time.time_ns(), r.id, i,
-                                               "holds" if pt else "violated",
-                                               depends_on=dep))
-                    if not pt and st.first_violation is None:
-                        st.first_violation = i
-                    st.pt = pt
-                if mon.status != st.status:
-                    st.status = mon.status
-                    st.status_tick = mon.status_tick
-                    st.status_time = t
-                    self._event(WatchEvent("ltl3", t, time.time_ns(), r.id, i, mon.status,
-                                           depends_on=dep,
-                                           extra={"status_tick": mon.status_tick}))
+            self._step(order[key], vals, t, i, dep)
             cols.append(tick)
             self.ticks += 1
             if self.on_tick is not None:
@@ -419,6 +398,30 @@ class Watch:
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)
+
+    def _step(self, rows, vals: dict, t: int, i: int, dep) -> None:
+        """Step one clock's monitors (``rows``: requirement, monitor, live state) over tick
+        ``i`` at time ``t``, with their events; not from a requirement's first tick that
+        reads NaN (unread, :mod:`monitors.nan`) unless ``[tick] nan = "false"``."""
+        unread = self.plan.bindings is None or self.plan.bindings.tick.nan != "false"
+        for r, mon, st in rows:
+            if mon is None or st.nan_at is not None or any(v not in vals for v in r.variables):
+                continue
+            if unread and any(vals[v] != vals[v] for v in r.variables):
+                st.nan_at = i
+                continue
+            pt = mon.step(vals)
+            if pt != st.pt:
+                if st.pt is not None or not pt:
+                    self._event(WatchEvent("pt", t, time.time_ns(), r.id, i,
+                                           "holds" if pt else "violated", depends_on=dep))
+                if not pt and st.first_violation is None:
+                    st.first_violation = i
+                st.pt = pt
+            if mon.status != st.status:
+                st.status, st.status_tick, st.status_time = mon.status, mon.status_tick, t
+                self._event(WatchEvent("ltl3", t, time.time_ns(), r.id, i, mon.status,
+                                       depends_on=dep, extra={"status_tick": mon.status_tick}))
 
     def tick_times(self, index: int):
         """Tick times seen so far on the clock of the requirement at ``index``."""

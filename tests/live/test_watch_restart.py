@@ -247,3 +247,25 @@ def test_undecodable_messages_are_a_gap_never_held_over(plan, resume):
     assert la.partial and exit_code([la]) == 3
     assert la.problem_counts.get("undecodable /a") == 10, la.problem_counts
     assert "undecodable_gap" in _kinds(la) or resume
+
+
+def test_a_nan_tick_stops_the_live_monitor_and_the_run_is_judged_before_it(plan):
+    """NaN is unread live too: no pt event is made from a NaN value (``!(NaN > 0)`` would be
+    a violation in Python), and the final verdict is the audit's: judged before it."""
+    async def script(ws, k):
+        await ws.send(advertise([(1, "/a")]))
+        sid = await subscription(ws, 1)
+        await publish_a(ws, sid, n=6)
+        await ws.send(message_data(sid, T0 + 300 * MS, f64(float("nan"))))
+        await publish_a(ws, sid, n=6, start=T0 + 350 * MS)
+        await asyncio.sleep(0.2)
+        await ws.close(1000, "end of the run")
+
+    events = []
+    with ScriptServer(script) as srv:
+        w = Watch(plan, WatchOptions(url=srv.url, wait=3.0, duration=20, backoff=0.02,
+                                     max_backoff=0.05), on_event=events.append)
+        la = w.run()
+    assert [v.verdict for v in la.verdicts] == ["unknown"]
+    assert not [e for e in events if e.kind == "pt" and e.verdict == "violated"]
+    assert la.problem_counts.get("nan RA") == 1
