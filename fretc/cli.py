@@ -105,7 +105,8 @@ def _quiet_stdout() -> None:
 
 def _names_a_file(arg: str) -> bool:
     """Can ``arg`` only be a requirement file (never a sub-command name)?"""
-    return "/" in arg or os.sep in arg or arg.lower().endswith((".fret", ".json"))
+    return "/" in arg or os.sep in arg or arg.lower().endswith((".fret", ".json", ".reqif",
+                                                                       ".reqifz"))
 
 
 @click.group(cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
