@@ -50,47 +50,16 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 
-from .ast import Requirement
 from common.errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
-from .sources import Origin, fret_origin, load_tool_source, tool_source_kind
+from .entry import RequirementEntry
+from .sources import fret_origin, load_tool_source, tool_source_kind
 from common.units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period", "is_fret_export"]
 
 PathLike = str | os.PathLike
-
-
-@dataclass
-class RequirementEntry:
-    """One requirement read from a file.
-
-    ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
-    it starts (1-based). ``tick_period`` is in seconds (None: not declared). Exactly one
-    of ``requirement`` (the parsed AST) and ``error`` (why it does not parse) is set.
-    ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
-    the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
-    realizability), the same for every requirement of the file. ``origin`` says where
-    a requirement kept in a tool came from (:class:`fretish.sources.Origin`: ReqIF, Doorstop,
-    FRET export; None for ``.fret`` files).
-    """
-
-    id: str
-    text: str
-    source: str
-    line: int
-    column: int
-    rationale: str | None = None
-    parent: str | None = None
-    tick_period: Fraction | None = None
-    requirement: Requirement | None = None
-    error: FretishError | None = None
-    extra: dict = field(default_factory=dict)
-    inputs: tuple[str, ...] = ()
-    outputs: tuple[str, ...] = ()
-    origin: Origin | None = None
 
 
 # --------------------------------------------------------------------------- durations

@@ -23,7 +23,7 @@ import os
 
 from common.errors import FretishFileError, FretishSyntaxError
 
-from . import DEFAULT_TEXT_ATTRIBUTE, Origin
+from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
 
 __all__ = ["load_doorstop", "build_tree", "custom_attributes"]
 
@@ -117,7 +117,6 @@ def load_doorstop(path: str, text_attribute: str | None = None):
     """(entries, not formalized) of the Doorstop tree under ``path`` (module docstring; both
     lists of :class:`fretish.files.RequirementEntry`, ``source`` the item file). Raises
     :class:`FretishFileError`: a tree Doorstop cannot build, a missing parent, a cycle."""
-    from fretish.files import RequirementEntry
     from fretish.parser import parse
 
     tree = build_tree(path)

@@ -21,7 +21,7 @@ import re
 
 from common.errors import FretishFileError, FretishSyntaxError
 
-from . import DEFAULT_TEXT_ATTRIBUTE, Origin
+from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
 from .safe_xml import checked_text, read_reqif_members
 
 __all__ = ["load_reqif", "parse_reqif_bundles", "attribute_names", "ID_ATTRIBUTES"]
@@ -128,7 +128,6 @@ def _containers(content) -> dict[str, str]:
 
 
 def _read_bundle(source: str, content, text_attribute: str | None):
-    from fretish.files import RequirementEntry
     from fretish.parser import parse
 
     names = attribute_names(content, source)
