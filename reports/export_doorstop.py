@@ -10,7 +10,8 @@ valid and the tree passes ``doorstop``'s validation as before. The keys (:data:`
 
 The original bytes of every file are kept: fretc's block is appended to the item file after a
 marker comment (:data:`MARKER`); exporting again cuts the file at the marker and writes the
-new block, so nothing is added twice. Files of the tree that are not judged items are copied
+new block (and drops ``fretc_*`` keys Doorstop moved when it saved an item: ``doorstop``'s
+validation saves items in its own layout, keys sorted), so nothing is added twice. Files of the tree that are not judged items are copied
 unchanged.
 """
 
@@ -42,12 +43,28 @@ def item_block(result: RequirementResult) -> str:
                                    allow_unicode=True, width=1 << 30)
 
 
-def _with_block(raw: bytes, result: RequirementResult) -> bytes:
-    """The item file ``raw`` with fretc's block (an earlier one replaced)."""
-    marker = MARKER.encode()
-    at = raw.find(marker)
+def _without_ours(raw: bytes) -> bytes:
+    """``raw`` without an earlier export's block: cut at :data:`MARKER`, and without any
+    top-level ``fretc_*`` key (with its indented continuation lines) that Doorstop moved
+    when it saved the item again (``doorstop`` sorts an item's keys when it saves it)."""
+    at = raw.find(MARKER.encode())
     if at >= 0:
         raw = raw[:at]
+    out, skipping = [], False
+    for line in raw.splitlines(keepends=True):
+        if line.startswith(b"fretc_"):
+            skipping = True
+            continue
+        if skipping and line[:1] in (b" ", b"\t"):
+            continue
+        skipping = False
+        out.append(line)
+    return b"".join(out)
+
+
+def _with_block(raw: bytes, result: RequirementResult) -> bytes:
+    """The item file ``raw`` with fretc's block (an earlier one replaced)."""
+    raw = _without_ours(raw)
     if raw and not raw.endswith(b"\n"):
         raw += b"\n"
     return raw + item_block(result).encode("utf-8")
