@@ -11,8 +11,13 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
                    variables: {name: {expr, source, line, topics}}} | null,
       "logs": [ LogAudit.to_json() ... ],              # in the order the logs were given
       "summary": {satisfied, vacuous, violated, error, partial_logs, incomplete_logs,
-                  log_errors, exit_code}
+                  log_errors, exit_code},
+      "not_formalized": [ {id, source, line, origin} ... ]  # only when there are any
     }
+
+A requirement read from a requirements tool (ReqIF, Doorstop, FRET's export) has an
+``origin`` (:class:`fretish.entry.Origin`), and each of its verdicts a ``tool_id``; a
+``.fret`` requirement has neither, so those documents are as before.
 
 Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
 log's first message (``LogAudit.start_time_ns``), what a person reads. Each time says its

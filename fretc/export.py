@@ -138,7 +138,7 @@ def _write_export(kind: str, src: str, output: str, results, current) -> int:
     if kind == "doorstop":
         from reports.export_doorstop import export_doorstop
 
-        files = {e.id: e.source for e in current.values()
+        files = {e.id: e.origin.file for e in current.values()
                  if e.origin is not None and e.origin.format == "doorstop"}
         try:
             return export_doorstop(src, output, results, files)

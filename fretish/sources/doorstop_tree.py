@@ -115,7 +115,8 @@ def _check_links(items: list, all_uids: set[str]) -> None:
 
 def load_doorstop(path: str, text_attribute: str | None = None):
     """(entries, not formalized) of the Doorstop tree under ``path`` (module docstring; both
-    lists of :class:`fretish.files.RequirementEntry`, ``source`` the item file). Raises
+    lists of :class:`fretish.files.RequirementEntry`, ``source`` the tree ``path``, the item
+    file in ``origin.file``; ``line`` the line of the text attribute in it). Raises
     :class:`FretishFileError`: a tree Doorstop cannot build, a missing parent, a cycle."""
     from fretish.parser import parse
 
@@ -141,7 +142,9 @@ def load_doorstop(path: str, text_attribute: str | None = None):
                         rationale=rationale, container=str(item.document.prefix),
                         level=str(item.level), text_attribute=key, text=text)
         line = _line_of(item.path, key)
-        entry = RequirementEntry(str(item.uid), text, source, line, 1, rationale=rationale,
+        # the entry's source is the tree (what the audit is given again to rebuild it; the
+        # item file is the origin's), its syntax errors name the item file
+        entry = RequirementEntry(str(item.uid), text, path, line, 1, rationale=rationale,
                                  parent=origin.parents[0] if origin.parents else None,
                                  origin=origin)
         if not text:

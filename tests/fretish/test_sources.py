@@ -61,7 +61,8 @@ def test_doorstop_tree_made_by_doorstop():
     for e in entries:
         assert e.text == fret[e.id].text and e.rationale == fret[e.id].rationale
         assert e.origin.format == "doorstop" and e.origin.tool_id == e.id
-        assert e.source.endswith(f"{e.id}.yml") and e.origin.container == "R"
+        assert e.origin.file.endswith(f"{e.id}.yml") and e.origin.container == "R"
+        assert e.source == str(DOORSTOP)           # the tree: an audit can read it again
         assert e.origin.version and e.origin.level
     by = {e.id: e for e in entries}
     assert by["R2"].origin.parents == ("R1",) and by["R1"].origin.parents == ("SYS1",)
@@ -81,7 +82,7 @@ def test_doorstop_link_cycle_is_an_error_naming_the_item(tmp_path):
     with pytest.raises(FretishFileError) as err:
         load_requirements(tree)
     assert "cycle" in str(err.value) and "R1 -> R2 -> R1" in err.value.message
-    assert err.value.source.endswith(("R1.yml", "R2.yml"))
+    assert err.value.source.endswith(("R1.yml", "R2.yml"))  # the item file
 
 
 def test_doorstop_missing_parent_is_an_error_naming_the_item(tmp_path):

@@ -178,3 +178,16 @@ def test_export_of_a_hostile_source_writes_nothing(audits, tmp_path):
     (full / "x").mkdir(parents=True)
     code, text = _run("export", "-r", DOORSTOP, "--from-json", audits["doorstop"], "-o", full)
     assert code == 2 and "not empty" in text and [p.name for p in full.iterdir()] == ["x"]
+
+
+def test_report_has_the_matrix_page_with_every_tool_id(audits, tmp_path):
+    out = tmp_path / "report"
+    code, text = _run("report", "--from-json", audits["reqif"], "-o", out, "--base", ROOT)
+    assert code == 1, text
+    page = (out / "matrix.html").read_text()
+    for e in load_requirements(REQIF):
+        assert e.origin.tool_id in page
+    assert 'href="matrix.html"' in (out / "report.html").read_text()
+    rows = list(csv.DictReader(io.StringIO((out / "matrix.csv").read_text())))
+    assert {r["stale"] for r in rows} == {""}       # the sources are as audited
+    assert [r["verdict"] for r in rows if r["requirement"] == "SR-0"] == ["not formalized"]
