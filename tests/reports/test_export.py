@@ -191,3 +191,31 @@ def test_report_has_the_matrix_page_with_every_tool_id(audits, tmp_path):
     rows = list(csv.DictReader(io.StringIO((out / "matrix.csv").read_text())))
     assert {r["stale"] for r in rows} == {""}       # the sources are as audited
     assert [r["verdict"] for r in rows if r["requirement"] == "SR-0"] == ["not formalized"]
+
+
+def test_reqifz_export_rewrites_its_reqif_member_and_copies_the_others(audits, tmp_path):
+    import zipfile
+
+    src = tmp_path / "safe_ros.reqifz"
+    with zipfile.ZipFile(src, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(REQIF, "safe_ros.reqif")
+        z.writestr("attachments/readme.txt", b"kept as it is\n")
+    out = tmp_path / "out.reqifz"
+    code, text = _run("export", "-r", src, "--from-json", audits["reqif"], "-o", out)
+    assert code == 0, text
+    with zipfile.ZipFile(out) as z:
+        assert z.namelist() == ["safe_ros.reqif", "attachments/readme.txt"]
+        assert z.read("attachments/readme.txt") == b"kept as it is\n"
+        assert _only_insertions(REQIF.read_text().splitlines(),
+                                z.read("safe_ros.reqif").decode().splitlines())
+    verdicts = load_requirements(out, text_attribute="fretc verdict")
+    assert {e.id: e.text for e in verdicts}["R4"] == "satisfied"
+
+
+def test_audit_of_a_hostile_reqif_is_an_input_error(tmp_path):
+    bad = tmp_path / "laughs.reqif"
+    bad.write_text('<?xml version="1.0"?>\n<!DOCTYPE l [<!ENTITY a "aaaa">'
+                   '<!ENTITY b "&a;&a;&a;&a;">]>\n<REQ-IF>&b;</REQ-IF>\n')
+    code, text = _run("audit", "-r", bad, "-b", BINDINGS, ROOT / "traces" / "nominal.mcap",
+                      "--no-progress")
+    assert code == 2 and "laughs.reqif:2:" in text and "DOCTYPE declaration refused" in text
