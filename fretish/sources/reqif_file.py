@@ -17,12 +17,13 @@ One entry per SPEC-OBJECT (ReqIF 1.2 section 10.8.20) in document order:
 
 from __future__ import annotations
 
+import os
 import re
 
 from common.errors import FretishFileError, FretishSyntaxError
 
 from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
-from .safe_xml import checked_text, read_reqif_members
+from .safe_xml import MAX_BYTES, checked_text, read_reqif_members
 
 __all__ = ["load_reqif", "parse_reqif_bundles", "attribute_names", "ID_ATTRIBUTES"]
 
@@ -41,8 +42,12 @@ def parse_reqif_bundles(path: str) -> list[tuple[str, object]]:
         members = [(f"{path}!{name}", raw) for name, raw in read_reqif_members(path)]
     else:
         try:
+            size = os.path.getsize(path)
+            if size > MAX_BYTES:  # refused before a byte is read
+                raise FretishFileError(f"ReqIF file of {size} bytes: more than the "
+                                       f"{MAX_BYTES // 2**20} MiB fretc reads", source=path)
             with open(path, "rb") as f:
-                members = [(path, f.read())]
+                members = [(path, f.read(MAX_BYTES + 1))]
         except OSError as e:
             raise FretishFileError(f"cannot read: {e.strerror}", source=path) from None
     from reqif.parser import ReqIFParser  # lazy: lxml only for ReqIF

@@ -201,3 +201,13 @@ def test_real_doors_excerpt_with_a_missing_datatype_is_a_clear_error():
     with pytest.raises(FretishFileError) as err:
         load_requirements(SHARED / "data" / "reqif" / "doors_user_06.reqif")
     assert "DATATYPES does not define" in err.value.message and err.value.line == 29
+
+
+def test_a_huge_reqif_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from fretish.sources import reqif_file
+
+    p = tmp_path / "huge.reqif"
+    p.write_bytes(b"<REQ-IF>" + b" " * 2048 + b"</REQ-IF>")
+    monkeypatch.setattr(reqif_file, "MAX_BYTES", 1024)
+    with pytest.raises(FretishFileError, match="more than the"):
+        load_requirements(p)
