@@ -29,6 +29,8 @@ class AuditConfig:
         window: ticks of values shown on each side of the trigger and the violation.
         msg_path: folders of ``.msg``/``.idl`` files for types a log does not carry
             (``--msg-path``, :mod:`logs.msg_path`).
+        text_attribute: the attribute of ReqIF / Doorstop requirements holding the FRETish
+            text (``--text-attribute``; None: :mod:`fretish.sources`' default).
     """
 
     requirements: tuple[str, ...]
@@ -40,4 +42,5 @@ class AuditConfig:
     window: int = 5
     select_logs: bool = True
     msg_path: tuple[str, ...] = ()
+    text_attribute: str | None = None
 

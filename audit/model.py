@@ -91,6 +91,8 @@ class RequirementPlan:
             return {}
         out = {"parent": c.entry.parent, "rationale": c.entry.rationale,
                "source_hash": c.source_hash}
+        if getattr(c.entry, "origin", None) is not None:  # a ReqIF, Doorstop or FRET source
+            out["origin"] = c.entry.origin.to_json()
         if c.formalization is not None:
             out.update(ft=c.smv_text["ft"], ft_inf=c.smv_text["ft_inf"], pt=c.smv_text["pt"])
         if self.monitor_cls is not None:
@@ -125,6 +127,19 @@ class AuditPlan:
     warnings: list[str] = field(default_factory=list)
     #: binding files with ``[logs]``: (selector, file, the plan for the logs it selects)
     variants: list[tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
+    #: items of ReqIF / Doorstop sources without FRETish text (RequirementEntry): listed as
+    #: not formalized, never audited
+    not_formalized: list = field(default_factory=list)
+
+    def sources_json(self) -> dict:
+        """The audit JSON's ``not_formalized`` list (``{id, source, line, origin}`` each),
+        as ``{"not_formalized": [...]}``; ``{}`` when every item had FRETish text."""
+        if not self.not_formalized:
+            return {}
+        return {"not_formalized": [
+            {"id": e.id, "source": e.source, "line": e.line,
+             "origin": e.origin.to_json() if e.origin is not None else None}
+            for e in self.not_formalized]}
 
     def requirements_json(self) -> list[dict]:
         """Every requirement's :meth:`RequirementPlan.to_json`."""

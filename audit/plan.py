@@ -79,7 +79,8 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
     config = _with_msg_path(config)
     bindings, binding_files = load_audit_bindings(config)
     notes: list[str] = []
-    entries = _read_requirements(config, notes)
+    unformalized: list = []
+    entries = _read_requirements(config, notes, unformalized)
     period, nominal = _bindings_periods(bindings)
     plans: list[RequirementPlan] = []
     to_compile = []
@@ -114,20 +115,26 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
         raise AuditInputError(f"only free-form requirements in {', '.join(config.requirements)}"
                               ": nothing to audit")
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
-                     freeform, notes + _unused_bindings(bindings, plans))
+                     freeform, notes + _unused_bindings(bindings, plans),
+                     not_formalized=unformalized)
 
 
-def _read_requirements(config: AuditConfig, skipped: list[str]) -> list:
+def _read_requirements(config: AuditConfig, skipped: list[str],
+                       unformalized: list | None = None) -> list:
     """The requirement entries of ``config.requirements``
-    (:func:`fretish.files.load_requirements`; notes of skipped files into ``skipped``)."""
+    (:func:`fretish.files.load_requirements`; notes of skipped files into ``skipped``, the
+    items of ReqIF / Doorstop sources without FRETish text into ``unformalized``)."""
     try:
-        entries = load_requirements([Path(p) for p in config.requirements], skipped)
+        entries = load_requirements([Path(p) for p in config.requirements], skipped,
+                                    config.text_attribute, unformalized)
     except FretishError as exc:
         raise AuditInputError(str(exc)) from None
     except OSError as exc:
         raise AuditInputError(f"cannot read requirements: {exc}") from None
     if not entries:
-        raise AuditInputError(f"no requirements in {', '.join(config.requirements)}")
+        raise AuditInputError(f"no requirements in {', '.join(config.requirements)}"
+                              + (f" ({len(unformalized)} items without FRETish text)"
+                                 if unformalized else ""))
     return entries
 
 
@@ -293,7 +300,8 @@ def _plan_per_log(config: AuditConfig) -> AuditPlan | None:
     warnings = sorted({w for _s, _f, sub in variants for w in sub.warnings
                        if w.split("'")[1] not in used})
     return AuditPlan(config, reqs, None, [str(f) for f, _b in parts], {}, NS_PER_S,
-                     variants[0][2].freeform, warnings, variants)
+                     variants[0][2].freeform, warnings, variants,
+                     variants[0][2].not_formalized)
 
 
 def select_variant(plan: AuditPlan, path: str) -> tuple[AuditPlan | None, str | None]:

@@ -11,8 +11,13 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
                    variables: {name: {expr, source, line, topics}}} | null,
       "logs": [ LogAudit.to_json() ... ],              # in the order the logs were given
       "summary": {satisfied, vacuous, violated, error, partial_logs, incomplete_logs,
-                  log_errors, exit_code}
+                  log_errors, exit_code},
+      "not_formalized": [ {id, source, line, origin} ... ]  # only when there are any
     }
+
+A requirement read from a requirements tool (ReqIF, Doorstop, FRET's export) has an
+``origin`` (:class:`fretish.entry.Origin`), and each of its verdicts a ``tool_id``; a
+``.fret`` requirement has neither, so those documents are as before.
 
 Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
 log's first message (``LogAudit.start_time_ns``), what a person reads. Each time says its
@@ -392,10 +397,23 @@ def exit_code(logs: list[LogAudit], input_errors: bool = False,
 
 
 def audit_json(logs: list[LogAudit], requirements: list[dict], bindings: dict | None,
-               input_errors: bool = False, allow_partial: bool = False) -> str:
-    """The ``--json`` document (module docstring), as text with sorted keys."""
+               input_errors: bool = False, allow_partial: bool = False,
+               extra: dict | None = None) -> str:
+    """The ``--json`` document (module docstring), as text with sorted keys. ``extra``: more
+    top-level members (``not_formalized``, :meth:`audit.model.AuditPlan.sources_json`).
+    Each verdict of a requirement read from a tool (its ``origin``) names the tool's
+    identifier as ``tool_id``."""
     s = summary(logs, allow_partial)
     s["exit_code"] = exit_code(logs, input_errors, allow_partial)
+    tool_ids = {r["id"]: r["origin"]["tool_id"] for r in requirements
+                if isinstance(r.get("origin"), dict)}
+    out_logs = []
+    for la in logs:
+        j = la.to_json()
+        for v in j["verdicts"]:
+            if v["requirement"] in tool_ids:
+                v["tool_id"] = tool_ids[v["requirement"]]
+        out_logs.append(j)
     doc = {"schema": SCHEMA, "requirements": requirements, "bindings": bindings,
-           "logs": [la.to_json() for la in logs], "summary": s}
+           "logs": out_logs, "summary": s, **(extra or {})}
     return json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n"

@@ -101,7 +101,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors)
     doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,
-                     allow_partial)
+                     allow_partial, plan.sources_json())
     if json_path:
         if to_stdout_json:
             click.echo(doc, nl=False)

@@ -26,7 +26,7 @@ import click
 
 from check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY, MUS_BUDGET
 
-from .options import shown
+from .options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
 
 __all__ = ["check_cmd", "render_text"]
 
@@ -163,6 +163,7 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
+@TEXT_ATTRIBUTE_OPTION
 def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budget, mus_budget,
               timeout, engine, no_redundancy, output):
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
@@ -178,7 +179,7 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budge
     from fretish.files import load_requirements
 
     try:
-        entries = load_requirements([Path(p) for p in files])
+        entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
     except (FretishError, OSError) as exc:
         click.echo(shown(str(exc)), err=True)
         sys.exit(2)

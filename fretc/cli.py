@@ -5,7 +5,7 @@ module per sub-command in this folder (shared options: :mod:`fretc.options`).
 ``fretc compile``: :mod:`fretc.compile`); ``fretc audit`` checks recorded runs
 (:mod:`fretc.audit`); ``fretc report`` writes the traceability report (:mod:`fretc.report`);
 ``fretc check`` (:mod:`fretc.check`), ``fretc inspect`` (:mod:`fretc.inspect`), ``fretc
-watch`` and ``fretc replay`` (:mod:`fretc.watch`). Exit codes: 0 success, 1 a requirement
+watch`` and ``fretc replay`` (:mod:`fretc.watch`), ``fretc export`` (:mod:`fretc.export`). Exit codes: 0 success, 1 a requirement
 failed (or, for ``audit``, a violation), 2 usage or input errors (every
 :class:`common.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
 internal error (a generated monitor that is not valid: nothing is written).
@@ -105,7 +105,8 @@ def _quiet_stdout() -> None:
 
 def _names_a_file(arg: str) -> bool:
     """Can ``arg`` only be a requirement file (never a sub-command name)?"""
-    return "/" in arg or os.sep in arg or arg.lower().endswith((".fret", ".json"))
+    return "/" in arg or os.sep in arg or arg.lower().endswith((".fret", ".json", ".reqif",
+                                                                       ".reqifz"))
 
 
 @click.group(cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -122,6 +123,7 @@ main.add_command(compile_cmd, "compile")
 _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
              "falsify": ("falsify", "falsify_cmd"), "inspect": ("inspect", "inspect_cmd"),
              "report": ("report", "report_cmd"), "watch": ("watch", "watch_cmd"),
+             "export": ("export", "export_cmd"),
              "replay": ("watch", "replay_cmd")}
 
 

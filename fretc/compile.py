@@ -16,6 +16,7 @@ import click
 
 from common.textsafe import visible
 
+from .options import TEXT_ATTRIBUTE_OPTION, text_attribute
 from .options import shown as _shown
 
 __all__ = ["compile_cmd"]
@@ -28,7 +29,7 @@ def _entries(paths) -> list:
     from fretish.files import load_requirements  # lazy: the parser only when a command compiles
 
     try:
-        return load_requirements(list(paths))
+        return load_requirements(list(paths), text_attribute=text_attribute())
     except OSError as exc:
         click.echo(_shown(f"error: {exc}"), err=True)
         sys.exit(2)
@@ -51,8 +52,10 @@ def _load(paths) -> list:
               help="monitor/psl: output file (one input) or directory; default: stdout.")
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
+@TEXT_ATTRIBUTE_OPTION
 def compile_cmd(files, emit, as_json, output, psl_map):
-    """Compile requirement FILES (.fret or FRET JSON exports)."""
+    """Compile requirement FILES (.fret, FRET JSON exports, .reqif/.reqifz, Doorstop
+    trees)."""
     if emit == "ltl":
         if as_json:
             texts, failed = _ltl_json_texts(files)

@@ -17,7 +17,7 @@ import click
 
 from common.textsafe import visible
 
-__all__ = ["audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
+__all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
 
 #: Key of the Ray options in the click context's ``meta``.
@@ -42,7 +42,8 @@ def audit_input_options(f, jobs: bool = True):
     options = [
         click.option("-r", "--requirements", "requirements", multiple=True,
                      type=click.Path(exists=True),
-                     help="Requirement file (.fret, FRET JSON export) or folder; repeatable. "
+                     help="Requirement file (.fret, FRET JSON export, .reqif/.reqifz) or "
+                          "folder (of them, or a Doorstop tree); repeatable. "
                           "Default: ./requirements."),
         click.option("-b", "--bindings", "bindings", multiple=True,
                      type=click.Path(exists=True),
@@ -65,9 +66,10 @@ def audit_input_options(f, jobs: bool = True):
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
                      help="Ticks of values kept each side of a trigger and a violation."),
         MSG_PATH_OPTION,
+        TEXT_ATTRIBUTE_OPTION,
     ]
     if not jobs:
-        del options[-3]
+        del options[-4]
     for option in reversed(options):
         f = option(f)
     return f
@@ -78,6 +80,32 @@ MSG_PATH_OPTION = click.option(
     "--msg-path", "msg_path", multiple=True, type=click.Path(exists=True, file_okay=False),
     help="Folder of the .msg/.idl files of message types a log does not store (laid out as "
          "PKG/msg/TYPE.msg, or a ROS 2 install/ or share/ tree); repeatable.")
+
+
+#: Key of ``--text-attribute``'s value in the click context's ``meta``.
+TEXT_META = "fretc.text_attribute"
+
+
+def _store_text_attribute(ctx, param, value):
+    if value is not None:
+        ctx.meta[TEXT_META] = value
+    return value
+
+
+#: ``--text-attribute NAME``: the attribute of a ReqIF / Doorstop requirement holding its
+#: FRETish text (:mod:`fretish.sources`); kept in the context (:func:`text_attribute`)
+TEXT_ATTRIBUTE_OPTION = click.option(
+    "--text-attribute", default=None, metavar="NAME", expose_value=False,
+    callback=_store_text_attribute,
+    help="ReqIF/Doorstop requirements: the attribute holding the FRETish text. Default: "
+         "the attribute named FRETish, else the requirement text (ReqIF.Text, Doorstop "
+         "text).")
+
+
+def text_attribute() -> str | None:
+    """The running command's ``--text-attribute`` (None: not given, or no command runs)."""
+    ctx = click.get_current_context(silent=True)
+    return ctx.meta.get(TEXT_META) if ctx is not None else None
 
 
 def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window,
@@ -93,7 +121,8 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
     return AuditConfig(requirements=tuple(requirements),
                        bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
-                       window=window, msg_path=tuple(msg_path))
+                       window=window, msg_path=tuple(msg_path),
+                       text_attribute=text_attribute())
 
 
 class FleetError(click.ClickException):

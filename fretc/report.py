@@ -84,7 +84,7 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         input_errors = any(r.error is not None for r in plan.requirements)
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
         doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
-                                    input_errors))
+                                    input_errors, extra=plan.sources_json()))
     try:
         files = write_report(doc, output, plan=plan, base=base, json_dir=json_dir,
                              psl_map=psl_map, annotate_dir=annotate_dir, title=title)

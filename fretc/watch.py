@@ -254,7 +254,7 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
         out.print(f"recorded {record}", markup=False)
     if json_path:
         doc = audit_json([la], plan.requirements_json(), plan.bindings_json(), input_errors,
-                         allow_partial)
+                         allow_partial, plan.sources_json())
         with open(json_path, "w", encoding="utf-8") as f:
             f.write(doc)
     return exit_code([la], input_errors, allow_partial)

@@ -50,43 +50,16 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 
-from .ast import Requirement
 from common.errors import FretishError, FretishFileError, FretishSyntaxError
 from .parser import parse
+from .entry import RequirementEntry
+from .sources import fret_origin, load_tool_source, tool_source_kind
 from common.units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "parse_tick_period", "is_fret_export"]
 
 PathLike = str | os.PathLike
-
-
-@dataclass
-class RequirementEntry:
-    """One requirement read from a file.
-
-    ``text`` is the sentence exactly as parsed; ``source``/``line``/``column`` give where
-    it starts (1-based). ``tick_period`` is in seconds (None: not declared). Exactly one
-    of ``requirement`` (the parsed AST) and ``error`` (why it does not parse) is set.
-    ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
-    the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
-    realizability), the same for every requirement of the file.
-    """
-
-    id: str
-    text: str
-    source: str
-    line: int
-    column: int
-    rationale: str | None = None
-    parent: str | None = None
-    tick_period: Fraction | None = None
-    requirement: Requirement | None = None
-    error: FretishError | None = None
-    extra: dict = field(default_factory=dict)
-    inputs: tuple[str, ...] = ()
-    outputs: tuple[str, ...] = ()
 
 
 # --------------------------------------------------------------------------- durations
@@ -381,7 +354,8 @@ def _load_json(path: str) -> list[RequirementEntry]:
             id=rid, text=text, source=source, line=line, column=col,
             rationale=rationale if isinstance(rationale, str) and rationale else None,
             parent=parent if isinstance(parent, str) and parent else None,
-            extra={k2: v for k2, v in obj.items() if k2 not in _KNOWN})
+            extra={k2: v for k2, v in obj.items() if k2 not in _KNOWN},
+            origin=fret_origin(source, obj))
         try:
             entry.requirement = parse(text, source=source, line=line, column=col)
         except FretishSyntaxError as e:
@@ -453,16 +427,22 @@ def is_fret_export(path: str) -> bool:
         isinstance(x, dict) and ("reqid" in x or "fulltext" in x) for x in data))
 
 
+#: The files a folder contributes (ReqIF files by their name, :mod:`fretish.sources`).
+_FOLDER_SUFFIXES = (".fret", ".json", ".reqif", ".reqifz")
+
+
 def _files_of(paths, skipped: list[str] | None = None) -> list[str]:
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     out: list[str] = []
     for p in paths:
         path = _path_text(p)
-        if os.path.isdir(path):
+        if os.path.isdir(path) and tool_source_kind(path) == "doorstop":
+            out.append(path)                                  # a Doorstop tree: one source
+        elif os.path.isdir(path):
             names = sorted(os.listdir(path))
             for f in (_path_text(os.path.join(path, n)) for n in names):
-                if not os.path.isfile(f) or _suffix(f) not in (".fret", ".json"):
+                if not os.path.isfile(f) or _suffix(f).lower() not in _FOLDER_SUFFIXES:
                     continue
                 if _suffix(f) == ".json" and not is_fret_export(f):
                     if skipped is not None:
@@ -478,8 +458,22 @@ def _files_of(paths, skipped: list[str] | None = None) -> list[str]:
     return out
 
 
+def _read_one(f: str, text_attribute: str | None,
+              not_formalized: list[RequirementEntry] | None) -> list[RequirementEntry]:
+    """The entries of one file or tool source (:func:`load_requirements`)."""
+    kind = tool_source_kind(f)
+    if kind is not None:
+        got, unformalized = load_tool_source(f, kind, text_attribute)
+        if not_formalized is not None:
+            not_formalized.extend(unformalized)
+        return got
+    return _load_json(f) if _suffix(f).lower() == ".json" else _load_fret(f)
+
+
 def load_requirements(paths: PathLike | Iterable[PathLike],
-                      skipped: list[str] | None = None) -> list[RequirementEntry]:
+                      skipped: list[str] | None = None, text_attribute: str | None = None,
+                      not_formalized: list[RequirementEntry] | None = None
+                      ) -> list[RequirementEntry]:
     """Read requirements from files and folders, in the order given.
 
     ``paths`` is one path or an iterable of paths; a folder contributes its ``*.fret``
@@ -487,7 +481,10 @@ def load_requirements(paths: PathLike | Iterable[PathLike],
     another JSON file there, an audit's ``--json`` output say, is skipped and a note for it
     appended to ``skipped``), not recursively, sorted by name; a file named itself is read
     as JSON if its name ends in ``.json`` and as ``.fret`` otherwise (formats: module
-    docstring).
+    docstring). ReqIF files (``.reqif``, ``.reqifz``, also in folders) and Doorstop trees
+    (a folder holding ``.doorstop.yml`` files) are read by :mod:`fretish.sources`, the
+    FRETish text from ``text_attribute`` (default ``FRETish``); their items without FRETish
+    text are appended to ``not_formalized`` (when given) and not returned.
 
     Returns one :class:`RequirementEntry` per requirement. A sentence that does not parse
     gives an entry with ``error`` set (a :class:`FretishSyntaxError` in file coordinates)
@@ -503,7 +500,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike],
         if key in read:  # the same file named twice (a folder and a file in it)
             continue
         read.add(key)
-        got = _load_json(f) if _suffix(f).lower() == ".json" else _load_fret(f)
+        got = _read_one(f, text_attribute, not_formalized)
         for e in got:
             # ids are unique across all the files of a run: verdicts, monitors and reports
             # are keyed by id; duplicates inside one file are caught by

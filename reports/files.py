@@ -5,6 +5,8 @@ report folder::
     report.md          the same content (timelines as image links to timelines/)
     audit.json         the audit document the report was made from
     timelines/*.svg    one timeline per violation (the same SVG as inlined in the HTML)
+    matrix.html        the traceability matrix for auditors (:mod:`reports.matrix`)
+    matrix.csv         the same rows as CSV
 
 and, on request, annotated copies of the MCAP logs (:mod:`audit.annotate`).
 """
@@ -20,7 +22,8 @@ from audit.annotate import AnnotateResult, annotate_mcap
 from .context import report_context
 from audit.verdict import SCHEMA
 from .render import render_html, render_markdown
-from .trace import ReportError, resolve_input, trace_requirements
+from .matrix import matrix_csv, matrix_html, matrix_rows
+from .trace import ReportError, resolve_input, split_source, trace_requirements
 
 __all__ = ["load_audit_json", "ReportFiles", "write_report"]
 
@@ -105,6 +108,31 @@ def _write_files(out: Path, files: ReportFiles, ctx: dict, html: str, md: str,
     files.markdown.write_text(md, encoding="utf-8")
     files.audit_json.write_text(json.dumps(doc, indent=2, sort_keys=True) + "\n",
                                 encoding="utf-8")
+    (out / "matrix.html").write_text(matrix_html(ctx["matrix_rows"]), encoding="utf-8")
+    (out / "matrix.csv").write_text(matrix_csv(ctx["matrix_rows"]), encoding="utf-8")
+
+
+def _current_entries(doc: dict, base: Path | None, json_dir: Path | None) -> dict | None:
+    """Requirement id -> :class:`fretish.files.RequirementEntry` as the requirement sources the
+    audit names read now (to flag stale evidence in the matrix); None when they cannot be
+    found or read (staleness is then not shown)."""
+    from common.errors import FretcError
+    from fretish.files import load_requirements
+
+    files = []
+    for r in (doc.get("requirements") or []) + (doc.get("not_formalized") or []):
+        f, _ = split_source(r.get("source") or "")
+        if f and f not in files:
+            files.append(f)
+    found = [resolve_input(f, base, json_dir) for f in files]
+    if not files or not all(found):
+        return None
+    unformalized: list = []
+    try:
+        entries = load_requirements([str(p) for p in found], not_formalized=unformalized)
+    except (FretcError, OSError):
+        return None
+    return {e.id: e for e in entries + unformalized}
 
 
 def write_report(doc: dict, out_dir: str, *, plan=None, base: str | None = None,
@@ -143,6 +171,7 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: str | None = None,
         annotated, results = _annotate_all(doc, Path(annotate_dir), basep, jd, out, notes)
     ctx = report_context(doc, traces, modules, notes=notes, annotated=annotated, title=title,
                          base=basep, json_dir=jd, generated=generated)
+    ctx["matrix_rows"] = matrix_rows(doc, _current_entries(doc, basep, jd))
     html, md = render_html(ctx), render_markdown(ctx)
     files = ReportFiles(out / "report.html", out / "report.md", out / "audit.json", [],
                         results, notes)

@@ -119,10 +119,11 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
                           highlight=False)
     _print_errors(console, logs)
     if details:
+        ids = tool_ids(plan)
         for la in logs:
             for v in la.verdicts:
                 if v.verdict == "violated":
-                    _print_violation(console, la, v, verbose)
+                    _print_violation(console, la, v, verbose, ids.get(v.requirement))
     _print_counts(console, logs, input_errors, allow_partial)
 
 
@@ -146,6 +147,39 @@ def _print_plan(console, plan, n_logs: int) -> None:
                   f"logs; {clock}", markup=False)
     if plan.freeform:
         console.print(f"free-form, not audited: {', '.join(plan.freeform)}", markup=False)
+    for line in tool_lines(plan):
+        console.print(line, markup=False, highlight=False)
+
+
+def tool_ids(plan) -> dict[str, str]:
+    """Requirement id -> the identifier of the tool it was read from (ReqIF SPEC-OBJECT,
+    Doorstop UID, FRET reqid), for the requirements that have one."""
+    out = {}
+    for r in getattr(plan, "requirements", None) or []:
+        origin = getattr(getattr(r.compiled, "entry", None), "origin", None)
+        if origin is not None:
+            out[r.id] = origin.tool_id
+    return out
+
+
+def tool_lines(plan) -> list[str]:
+    """The header lines of requirements read from tools: each id with its tool id (one line
+    per source file), then the items listed as not formalized (no FRETish text)."""
+    by_file: dict[str, list[str]] = {}
+    for r in getattr(plan, "requirements", None) or []:
+        origin = getattr(getattr(r.compiled, "entry", None), "origin", None)
+        if origin is not None and origin.format != "fret":
+            where = (f"document {origin.container} ({os.path.dirname(origin.file)})"
+                     if origin.format == "doorstop" else origin.file)
+            by_file.setdefault(f"{origin.format} {where}", []).append(
+                r.id if r.id == origin.tool_id else f"{r.id} = {origin.tool_id}")
+    lines = [f"from {k}: {', '.join(v)}" for k, v in by_file.items()]
+    missing = [e.id if e.origin is None or e.id == e.origin.tool_id
+               else f"{e.id} = {e.origin.tool_id}"
+               for e in getattr(plan, "not_formalized", None) or []]
+    if missing:
+        lines.append(f"not formalized (no FRETish text), not audited: {', '.join(missing)}")
+    return lines
 
 
 def _print_matrix(console, logs: list[LogAudit], reqs: list[str]) -> None:
@@ -285,11 +319,14 @@ def _headers(names: list[str]) -> list[str]:
     return out
 
 
-def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False) -> None:
+def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
+                     tool_id: str | None = None) -> None:
     st = la.start_time_ns
     fv = v.first_violation
     clock = "header-stamp clock" if la.time_base == "header" else "log clock"
-    console.print(f"\n[bold red]{escape(v.requirement)} violated[/bold red] on "
+    named = v.requirement if tool_id in (None, v.requirement) else \
+        f"{v.requirement} ({tool_id})"
+    console.print(f"\n[bold red]{escape(named)} violated[/bold red] on "
                   f"{escape(short_log_name(la.log))}: {escape(v.text)}", highlight=False)
     if fv is None:
         return

@@ -315,4 +315,4 @@ def test_entry_fields_in_the_order_the_reader_passes_them():
     from fretish import files
     assert tuple(f.name for f in dataclasses.fields(files.RequirementEntry)) == (
         "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
-        "requirement", "error", "extra", "inputs", "outputs")
+        "requirement", "error", "extra", "inputs", "outputs", "origin")

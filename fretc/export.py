@@ -1,0 +1,172 @@
+"""``fretc export``: an audit's results written back into the requirements' own format, and
+the traceability matrix (click command; the writers are :mod:`reports.export_reqif`,
+:mod:`reports.export_doorstop`, :mod:`reports.export_fret`, :mod:`reports.matrix`).
+
+::
+
+    fretc export -r requirements.reqif --from-json audit.json -o out.reqif
+    fretc export -r doorstop_tree/ --from-json audit.json -o out_tree/ --matrix matrix.csv
+    fretc export -r fret_export.json --from-json audit.json -o out.json
+
+Everything is computed before anything is written, and each file is written through a
+temporary file renamed into place: on an error nothing is written (exit code 2).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+
+import click
+
+from .options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+
+__all__ = ["export_cmd"]
+
+
+def _kind(src: str) -> str:
+    """``reqif``, ``doorstop`` or ``fret`` for the source ``src`` (a UsageError otherwise)."""
+    from fretish.files import is_fret_export
+    from fretish.sources import tool_source_kind
+
+    kind = tool_source_kind(src)
+    if kind is not None:
+        return kind
+    if os.path.isfile(src) and src.lower().endswith(".json") and is_fret_export(src):
+        return "fret"
+    raise click.UsageError(f"{src}: fretc export writes into a ReqIF file (.reqif, .reqifz), "
+                           "a Doorstop tree or a FRET export (.json)")
+
+
+def _audit_date(value: str | None) -> str | None:
+    """``--audit-date`` as an ISO 8601 date-time in UTC (a date alone: its midnight)."""
+    if value is None:
+        return None
+    try:
+        when = _dt.datetime.fromisoformat(value.replace("Z", "+00:00"))
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not an ISO 8601 date or date-time",
+                                 param_hint="--audit-date") from None
+    if when.tzinfo is None:
+        when = when.replace(tzinfo=_dt.timezone.utc)
+    return when.astimezone(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+@click.command("export")
+@click.option("-r", "--requirements", "src", required=True, type=click.Path(exists=True),
+              help="The requirements the audit read: a .reqif/.reqifz file, a Doorstop tree "
+                   "or a FRET export (.json).")
+@click.option("--from-json", "from_json", required=True,
+              type=click.Path(exists=True, dir_okay=False),
+              help="The audit document (fretc audit --json FILE).")
+@click.option("-o", "--output", required=True, type=click.Path(),
+              help="Where to write the requirements with the results: a file of the same "
+                   "format, or for a Doorstop tree a new (or empty) folder.")
+@click.option("--audit-date", default=None, metavar="DATE",
+              help="The audit's date (ISO 8601) written with the results. Default: the "
+                   "modification time of the --from-json file.")
+@click.option("--matrix", "matrix_csv", type=click.Path(dir_okay=False), default=None,
+              help="Also write the traceability matrix as CSV to FILE.")
+@click.option("--matrix-html", type=click.Path(dir_okay=False), default=None,
+              help="Also write the traceability matrix as an HTML page to FILE.")
+@click.option("--check", "check_json", type=click.Path(exists=True, dir_okay=False),
+              default=None, help="fretc check -o FILE: its results in the matrix.")
+@TEXT_ATTRIBUTE_OPTION
+@click.pass_context
+def export_cmd(ctx, src, from_json, output, audit_date, matrix_csv, matrix_html, check_json):
+    """Write an audit's verdicts back into the requirements' format (ReqIF attributes,
+    Doorstop custom attributes, a member of each FRET requirement), keeping everything that
+    was there, and the traceability matrix (--matrix, --matrix-html). Requirements changed
+    since the audit are flagged "stale evidence"."""
+    # lazy: the readers and writers only when the command runs
+    from fretish.files import load_requirements
+    from reports.export_results import audit_identity, requirement_results, write_atomic
+    from reports.write import ReportError, load_audit_json
+
+    kind = _kind(src)
+    try:
+        doc = load_audit_json(from_json)
+    except ReportError as exc:
+        click.echo(shown(f"error: {exc}"), err=True)
+        ctx.exit(2)
+        return
+    with open(from_json, "rb") as f:
+        audit_id, date = audit_identity(from_json, f.read(), _audit_date(audit_date))
+    results = requirement_results(doc, audit_id, date)
+    unformalized: list = []
+    entries = load_requirements(src, text_attribute=text_attribute(),
+                                not_formalized=unformalized)
+    current = {e.id: e for e in entries + unformalized}
+    if not set(results) & set(current):
+        click.echo(shown(f"error: {from_json} judged none of the requirements of {src}"),
+                   err=True)
+        ctx.exit(2)
+        return
+    outputs = _matrix_outputs(doc, current, check_json, matrix_csv, matrix_html)
+    written = _write_export(kind, src, output, results, current)
+    for path, data in outputs:
+        write_atomic(path, data)
+    _report(doc, current, written, output, [p for p, _d in outputs])
+
+
+def _matrix_outputs(doc, current, check_json, csv_path, html_path) -> list[tuple[str, bytes]]:
+    """The matrix files to write: (path, bytes)."""
+    if not csv_path and not html_path:
+        return []
+    from reports.matrix import matrix_csv, matrix_html, matrix_rows
+
+    check = None
+    if check_json:
+        from check.report import load_check  # lazy: only with --check
+        try:
+            check = load_check(check_json)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="--check") from None
+    rows = matrix_rows(doc, current, check)
+    out = []
+    if csv_path:
+        out.append((csv_path, matrix_csv(rows).encode("utf-8")))
+    if html_path:
+        out.append((html_path, matrix_html(rows).encode("utf-8")))
+    return out
+
+
+def _write_export(kind: str, src: str, output: str, results, current) -> int:
+    """Write the export of ``kind``; returns how many requirements got results."""
+    from reports.export_results import write_atomic
+
+    if kind == "doorstop":
+        from reports.export_doorstop import export_doorstop
+
+        files = {e.id: e.origin.file for e in current.values()
+                 if e.origin is not None and e.origin.format == "doorstop"}
+        try:
+            return export_doorstop(src, output, results, files)
+        except (FileExistsError, ValueError) as exc:
+            raise click.UsageError(str(exc)) from None
+    if os.path.isdir(output):
+        raise click.UsageError(f"{output} is a folder: give the file to write")
+    if kind == "reqif":
+        from reports.export_reqif import export_reqif
+        data, n = export_reqif(src, results)
+    else:
+        from reports.export_fret import export_fret
+        data, n = export_fret(src, results)
+    write_atomic(output, data)
+    return n
+
+
+def _report(doc, current, written: int, output: str, matrices: list[str]) -> None:
+    """The command's lines on stderr: what was written, and the stale requirements."""
+    from reports.matrix import STALE, stale_state
+
+    for req in doc.get("requirements") or []:
+        state = stale_state(req, current)
+        if state:
+            click.echo(shown(f"warning: {req['id']}: {state} (changed since the audit)"
+                             if state == STALE else
+                             f"warning: {req['id']}: removed from the sources since the "
+                             "audit"), err=True)
+    click.echo(shown(f"wrote {output}: results on {written} requirements"), err=True)
+    for m in matrices:
+        click.echo(shown(f"wrote {m}"), err=True)

@@ -1,0 +1,83 @@
+"""Requirements kept in engineers' tools: ReqIF files (``.reqif``, ``.reqifz``) and Doorstop
+trees, read into :class:`fretish.files.RequirementEntry` objects that remember where each
+requirement came from (:class:`Origin`).
+
+:func:`fretish.files.load_requirements` calls :func:`tool_source_kind` on every path it is
+given and :func:`load_tool_source` for the ones it names; FRET's own JSON export is read by
+:mod:`fretish.files` (its origin is made there, :func:`fret_origin`).
+
+Which attribute holds the FRETish sentence is the caller's choice (``text_attribute``): by
+default an attribute named ``FRETish`` (any case), else the format's requirement text
+(ReqIF ``ReqIF.Text``, Doorstop ``text``). An item without that attribute, or with it empty,
+is *not formalized*: it is returned in the second list, never an error for the file.
+
+Modules: :mod:`.safe_xml` (the byte checks before any XML parser sees a file: no DTD, no
+entity, size and zip caps), :mod:`.reqif_file` (ReqIF via the ``reqif`` library),
+:mod:`.doorstop_tree` (Doorstop via the ``doorstop`` library).
+"""
+
+from __future__ import annotations
+
+import os
+
+from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin
+
+__all__ = ["Origin", "tool_source_kind", "load_tool_source", "fret_origin",
+           "DEFAULT_TEXT_ATTRIBUTE", "REQIF_SUFFIXES"]
+
+REQIF_SUFFIXES = (".reqif", ".reqifz")
+
+
+def tool_source_kind(path: str) -> str | None:
+    """``"reqif"`` for a ``.reqif``/``.reqifz`` file, ``"doorstop"`` for a folder that is a
+    Doorstop document or holds one (a ``.doorstop.yml`` in it or in a sub-folder, at most
+    four levels down, hidden folders skipped), None for anything else."""
+    if os.path.isfile(path):
+        return "reqif" if path.lower().endswith(REQIF_SUFFIXES) else None
+    if not os.path.isdir(path):
+        return None
+    for depth, (folder, dirs, files) in enumerate(_walk(path)):
+        if ".doorstop.yml" in files:
+            return "doorstop"
+        if depth > 200:  # a very wide tree is not worth searching for one
+            break
+    return None
+
+
+def _walk(path: str):
+    """``os.walk`` down to four levels below ``path``, sorted, hidden folders skipped."""
+    base = path.rstrip(os.sep).count(os.sep)
+    for folder, dirs, files in os.walk(path):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        if folder.count(os.sep) - base >= 4:
+            dirs[:] = []
+        yield folder, dirs, files
+
+
+def load_tool_source(path: str, kind: str, text_attribute: str | None = None):
+    """(entries, not formalized) of the ReqIF file or Doorstop tree at ``path`` (``kind`` from
+    :func:`tool_source_kind`): two lists of :class:`fretish.files.RequirementEntry`, the
+    second of the items without FRETish text (their ``text`` empty, ``requirement`` and
+    ``error`` None). Raises :class:`common.errors.FretishFileError` naming the file and
+    element of a structural problem (bad or hostile XML, a missing datatype, a Doorstop
+    link to nothing, a cycle, a duplicate id)."""
+    if kind == "reqif":
+        from .reqif_file import load_reqif  # lazy: lxml and reqif only for ReqIF
+        return load_reqif(path, text_attribute)
+    from .doorstop_tree import load_doorstop  # lazy: doorstop only for its trees
+    return load_doorstop(path, text_attribute)
+
+
+def fret_origin(source: str, obj: dict) -> Origin:
+    """The origin of one requirement object of a FRET export (FRET's fields ``reqid``,
+    ``project``, ``parent_reqid``, ``rationale``, ``_rev``)."""
+    parent = obj.get("parent_reqid")
+    rev = obj.get("_rev")
+    return Origin("fret", source, str(obj.get("reqid")),
+                  version=rev if isinstance(rev, str) and rev else None,
+                  parents=(parent,) if isinstance(parent, str) and parent else (),
+                  rationale=obj.get("rationale") if isinstance(obj.get("rationale"), str)
+                  else None,
+                  container=obj.get("project") if isinstance(obj.get("project"), str)
+                  else None,
+                  text_attribute="fulltext", text=obj.get("fulltext"))

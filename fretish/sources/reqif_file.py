@@ -1,0 +1,204 @@
+"""ReqIF files (OMG ReqIF 1.2, ``.reqif``; ``.reqifz`` archives of them) as requirement
+entries, parsed by the ``reqif`` library (the one StrictDoc uses) once :mod:`.safe_xml`
+passed the bytes.
+
+One entry per SPEC-OBJECT (ReqIF 1.2 section 10.8.20) in document order:
+
+* id: the value of its ``ReqIF.ForeignID``, ``UID`` or ``ID`` attribute (the id people use:
+  StrictDoc writes its UID there, DOORS its absolute number), else its ``IDENTIFIER``;
+* text: the attribute named ``text_attribute`` (an attribute's name is its definition's
+  LONG-NAME, else the definition's IDENTIFIER; compared without case); by default
+  ``FRETish``, or ``ReqIF.Text`` when no type of the file defines ``FRETish``. XHTML values
+  (section 10.8.38) are read as their text; an enumeration's as its values' LONG-NAMEs;
+* origin: the IDENTIFIER, LONG-NAME (else ``ReqIF.Name``), LAST-CHANGE, the SPEC-RELATIONs
+  with it as SOURCE (section 10.8.23; their targets are its parents), the ``rationale``
+  attribute (any attribute whose name holds "rationale"), the SPECIFICATION holding it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+from common.errors import FretishFileError, FretishSyntaxError
+
+from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
+from .safe_xml import MAX_BYTES, checked_text, read_reqif_members
+
+__all__ = ["load_reqif", "parse_reqif_bundles", "attribute_names", "ID_ATTRIBUTES"]
+
+#: Attributes holding the id people use, looked for in this order (names without case).
+ID_ATTRIBUTES = ("reqif.foreignid", "uid", "id")
+#: The requirement text of a ReqIF file (the ReqIF Implementation Guide's standard name).
+REQIF_TEXT = "ReqIF.Text"
+
+
+def parse_reqif_bundles(path: str) -> list[tuple[str, object]]:
+    """``[(source, ReqIFBundle)]`` of the file at ``path``: one for a ``.reqif``, one per
+    ``.reqif`` member of a ``.reqifz`` (source ``archive!member``). Raises
+    :class:`FretishFileError` for unreadable, hostile (:func:`.safe_xml.checked_text`) or
+    malformed ReqIF, naming the file (and the element the library stopped at)."""
+    if path.lower().endswith(".reqifz"):
+        members = [(f"{path}!{name}", raw) for name, raw in read_reqif_members(path)]
+    else:
+        try:
+            size = os.path.getsize(path)
+            if size > MAX_BYTES:  # refused before a byte is read
+                raise FretishFileError(f"ReqIF file of {size} bytes: more than the "
+                                       f"{MAX_BYTES // 2**20} MiB fretc reads", source=path)
+            with open(path, "rb") as f:
+                members = [(path, f.read(MAX_BYTES + 1))]
+        except OSError as e:
+            raise FretishFileError(f"cannot read: {e.strerror}", source=path) from None
+    from reqif.parser import ReqIFParser  # lazy: lxml only for ReqIF
+
+    out = []
+    for source, raw in members:
+        text = checked_text(raw, source)
+        try:
+            bundle = ReqIFParser.parse_from_string(text)
+        except Exception as e:  # noqa: BLE001 - the library's errors have no common base
+            raise FretishFileError(f"not a ReqIF document the reqif library reads: "
+                                   f"{type(e).__name__}: {e}".rstrip(": "),
+                                   source=source) from None
+        if bundle.core_content is None or bundle.core_content.req_if_content is None:
+            raise FretishFileError("no CORE-CONTENT/REQ-IF-CONTENT element", source=source)
+        out.append((source, bundle))
+    return out
+
+
+def _line(node) -> int:
+    """The source line of an lxml element (1 when unknown)."""
+    return getattr(node, "sourceline", None) or 1
+
+
+def attribute_names(content, source: str) -> dict[str, tuple[str, object]]:
+    """Attribute definition IDENTIFIER -> (its name, its datatype) over every SPEC-OBJECT-TYPE
+    of ``content``. Raises :class:`FretishFileError` at a definition whose datatype is not
+    among the DATATYPES (ReqIF 1.2 section 10.8.4: a definition's TYPE references one)."""
+    types = {d.identifier: d for d in (content.data_types or [])}
+    out = {}
+    for spec_type in content.spec_types or []:
+        for d in getattr(spec_type, "attribute_definitions", None) or []:
+            if d.datatype_definition not in types:
+                raise FretishFileError(
+                    f"ATTRIBUTE-DEFINITION {d.identifier!r} of {spec_type.identifier!r} "
+                    f"refers to datatype {d.datatype_definition!r}, which DATATYPES does not "
+                    "define", source=source, line=_line(d.xml_node))
+            out[d.identifier] = (d.long_name or d.identifier, types[d.datatype_definition])
+    return out
+
+
+def _value_text(attr, datatype) -> str:
+    """An attribute value as text: XHTML without its markup, enumerations as the LONG-NAMEs
+    of their values joined by ", "."""
+    value = attr.value
+    if isinstance(value, list):  # enumeration: ENUM-VALUE refs
+        names = {v.identifier: (v.long_name or v.key or v.identifier)
+                 for v in getattr(datatype, "values", None) or []}
+        return ", ".join(names.get(v, v) for v in value)
+    if attr.attribute_type.name == "XHTML":
+        raw = attr.value_stripped_xhtml if attr.value_stripped_xhtml is not None else value
+        import html
+        return html.unescape(re.sub(r"<[^>]+>", " ", raw or "")).strip()
+    return "" if value is None else str(value)
+
+
+def load_reqif(path: str, text_attribute: str | None = None):
+    """(entries, not formalized) of the ReqIF file at ``path`` (module docstring; both lists of
+    :class:`fretish.files.RequirementEntry`). Raises :class:`FretishFileError` (file, line of
+    the element): hostile or malformed XML, a SPEC-OBJECT whose type or attribute definition
+    is missing, a missing datatype, two SPEC-OBJECTs with one id."""
+    entries, unformalized = [], []
+    for source, bundle in parse_reqif_bundles(path):
+        got, skipped = _read_bundle(source, bundle.core_content.req_if_content,
+                                    text_attribute)
+        entries.extend(got)
+        unformalized.extend(skipped)
+    return entries, unformalized
+
+
+def _containers(content) -> dict[str, str]:
+    """SPEC-OBJECT IDENTIFIER -> the LONG-NAME (else IDENTIFIER) of the SPECIFICATION that
+    holds it (the first one, in document order)."""
+    out: dict[str, str] = {}
+    for spec in content.specifications or []:
+        name = spec.long_name or spec.identifier
+        stack = list(reversed(spec.children or []))
+        while stack:
+            h = stack.pop()
+            out.setdefault(h.spec_object, name)
+            stack.extend(reversed(h.children or []))
+    return out
+
+
+def _read_bundle(source: str, content, text_attribute: str | None):
+    from fretish.parser import parse
+
+    names = attribute_names(content, source)
+    wanted = _text_attribute(names, text_attribute)
+    objects = content.spec_objects or []
+    ids, first = {}, {}
+    for so in objects:
+        values = _values(so, names, source)
+        rid = next((values[k] for k in ID_ATTRIBUTES if values.get(k)), so.identifier)
+        if rid in first:
+            raise FretishFileError(
+                f"SPEC-OBJECT {so.identifier!r} has the id {rid!r} of SPEC-OBJECT "
+                f"{first[rid][0]!r} (line {first[rid][1]}); ids must be unique",
+                source=source, line=_line(so.xml_node))
+        first[rid] = (so.identifier, _line(so.xml_node))
+        ids[so.identifier] = (rid, values)
+    parents: dict[str, list[str]] = {}
+    for rel in content.spec_relations or []:
+        target = ids.get(rel.target)
+        parents.setdefault(rel.source, []).append(target[0] if target else rel.target)
+    holder = _containers(content)
+    entries, unformalized = [], []
+    for so in objects:
+        rid, values = ids[so.identifier]
+        text = values.get(wanted.lower(), "").strip()
+        rationale = next((v for k, v in sorted(values.items()) if "rationale" in k and v),
+                         None)
+        origin = Origin("reqif", source, so.identifier,
+                        long_name=so.long_name or values.get("reqif.name") or None,
+                        version=so.last_change, parents=tuple(sorted(parents.get(
+                            so.identifier, []))), rationale=rationale,
+                        container=holder.get(so.identifier), text_attribute=wanted,
+                        text=text)
+        line = _line(so.xml_node)
+        entry = RequirementEntry(rid, text, source, line, 1, rationale=rationale,
+                                 parent=origin.parents[0] if origin.parents else None,
+                                 origin=origin)
+        if not text:
+            unformalized.append(entry)
+            continue
+        try:
+            entry.requirement = parse(text, source=source, line=line, column=1)
+        except FretishSyntaxError as e:
+            entry.error = e
+        entries.append(entry)
+    return entries, unformalized
+
+
+def _text_attribute(names: dict, asked: str | None) -> str:
+    """The attribute name the FRETish text is read from (module docstring)."""
+    if asked:
+        return asked
+    known = {n.lower() for n, _dt in names.values()}
+    return DEFAULT_TEXT_ATTRIBUTE if DEFAULT_TEXT_ATTRIBUTE.lower() in known else REQIF_TEXT
+
+
+def _values(so, names: dict, source: str) -> dict[str, str]:
+    """A SPEC-OBJECT's attribute values by lower-case attribute name. Raises
+    :class:`FretishFileError` at a value whose definition is not defined."""
+    out = {}
+    for attr in so.attributes:
+        got = names.get(attr.definition_ref)
+        if got is None:
+            raise FretishFileError(
+                f"SPEC-OBJECT {so.identifier!r}: its value refers to attribute definition "
+                f"{attr.definition_ref!r}, which no SPEC-OBJECT-TYPE defines", source=source,
+                line=_line(attr.xml_node if attr.xml_node is not None else so.xml_node))
+        out[got[0].lower()] = _value_text(attr, got[1])
+    return out

@@ -1,0 +1,102 @@
+"""``fretc export`` into a Doorstop tree: a copy of the tree in which each item the audit
+judged (or listed as not formalized) carries fretc's results as custom attributes.
+
+Doorstop keeps any key of an item file it does not know as a custom attribute (Doorstop docs,
+"Item" reference, extended attributes) and leaves it out of the item's fingerprint unless the
+document lists it under ``attributes: reviewed``; so the items' ``reviewed`` stamps stay
+valid and the tree passes ``doorstop``'s validation as before. The keys (:data:`KEYS`):
+``fretc_verdict``, ``fretc_evidence``, ``fretc_formula_ft``, ``fretc_formula_pt``,
+``fretc_audit_id``, ``fretc_audit_date``.
+
+The original bytes of every file are kept: fretc's block is appended to the item file after a
+marker comment (:data:`MARKER`); exporting again cuts the file at the marker and writes the
+new block (and drops ``fretc_*`` keys Doorstop moved when it saved an item: ``doorstop``'s
+validation saves items in its own layout, keys sorted), so nothing is added twice. Files of the tree that are not judged items are copied
+unchanged.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+from .export_results import RequirementResult, replace_tree
+
+__all__ = ["export_doorstop", "item_block", "MARKER", "KEYS"]
+
+MARKER = "# fretc export: the results of an audit (replaced by the next fretc export)\n"
+#: (item file key, field of :class:`RequirementResult`)
+KEYS = (("fretc_verdict", "verdict"), ("fretc_evidence", "evidence"),
+        ("fretc_formula_ft", "ft"), ("fretc_formula_pt", "pt"),
+        ("fretc_audit_id", "audit_id"), ("fretc_audit_date", "audit_date"))
+
+
+def item_block(result: RequirementResult) -> str:
+    """The YAML lines fretc appends to an item file (after :data:`MARKER`): each key of
+    :data:`KEYS` with a value, as a YAML string on one line (PyYAML's safe dumper, so
+    ``doorstop`` reads it back exactly)."""
+    import yaml  # lazy: PyYAML, doorstop's own dependency
+
+    data = {key: str(getattr(result, field)) for key, field in KEYS
+            if getattr(result, field) is not None}
+    return MARKER + yaml.safe_dump(data, default_flow_style=False, sort_keys=False,
+                                   allow_unicode=True, width=1 << 30)
+
+
+def _without_ours(raw: bytes) -> bytes:
+    """``raw`` without an earlier export's block: cut at :data:`MARKER`, and without any
+    top-level ``fretc_*`` key (with its indented continuation lines) that Doorstop moved
+    when it saved the item again (``doorstop`` sorts an item's keys when it saves it)."""
+    at = raw.find(MARKER.encode())
+    if at >= 0:
+        raw = raw[:at]
+    out, skipping = [], False
+    for line in raw.splitlines(keepends=True):
+        if line.startswith(b"fretc_"):
+            skipping = True
+            continue
+        if skipping and line[:1] in (b" ", b"\t"):
+            continue
+        skipping = False
+        out.append(line)
+    return b"".join(out)
+
+
+def _with_block(raw: bytes, result: RequirementResult) -> bytes:
+    """The item file ``raw`` with fretc's block (an earlier one replaced)."""
+    raw = _without_ours(raw)
+    if raw and not raw.endswith(b"\n"):
+        raw += b"\n"
+    return raw + item_block(result).encode("utf-8")
+
+
+def export_doorstop(src: str, out: str, results: dict[str, RequirementResult],
+                    item_files: dict[str, str]) -> int:
+    """Write the Doorstop tree under ``src`` to the new folder ``out`` with the results added
+    to the items (``item_files``: UID -> the item's file, inside ``src``); returns how many
+    items got them. Atomic: ``out`` appears complete or not at all
+    (:func:`~reports.export_results.replace_tree`); raises :class:`FileExistsError` for a
+    non-empty ``out`` and :class:`ValueError` for an item file outside ``src``."""
+    root = os.path.realpath(src)
+    targets: dict[str, RequirementResult] = {}
+    for uid, path in item_files.items():
+        result = results.get(uid)
+        if result is None:
+            continue
+        rel = os.path.relpath(os.path.realpath(path), root)
+        if rel.startswith(".."):
+            raise ValueError(f"{path}: item {uid} lies outside the tree {src}")
+        targets[rel] = result
+
+    def build(tmp: str) -> None:
+        os.rmdir(tmp)
+        shutil.copytree(root, tmp, symlinks=True)
+        for rel, result in sorted(targets.items()):
+            path = os.path.join(tmp, rel)
+            with open(path, "rb") as f:
+                raw = f.read()
+            with open(path, "wb") as f:
+                f.write(_with_block(raw, result))
+
+    replace_tree(build, out)
+    return len(targets)

@@ -1,0 +1,189 @@
+"""The traceability matrix for auditors: requirement (its tool, tool id, version) ->
+formalization -> check result -> monitor module hash -> run audited -> verdict and
+robustness, one row per requirement and run (one row for a requirement no run judged or
+that was not formalized), as CSV (:func:`matrix_csv`) and as an HTML page (:func:`matrix_html`,
+``matrix.html`` of ``fretc report``).
+
+A row's ``stale`` says ``stale evidence`` when the requirement as it is now (``current``,
+re-read from its source) differs from the one audited: another version (ReqIF
+LAST-CHANGE, Doorstop fingerprint, FRET ``_rev``) or another text; ``removed`` when it is no
+longer in the sources; empty when it is the same, or when the sources were not re-read.
+
+The HTML page needs no script: it holds the table once per sort order (requirement, tool id,
+verdict, robustness, stale), and the header links show one of them (CSS ``:target``).
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import io
+from dataclasses import astuple, dataclass, fields
+
+from common.textsafe import one_line
+
+__all__ = ["MatrixRow", "matrix_rows", "matrix_csv", "matrix_html", "STALE", "COLUMNS", "stale_state"]
+
+STALE = "stale evidence"
+
+
+@dataclass(frozen=True)
+class MatrixRow:
+    """One row of the matrix (module docstring); every field text."""
+
+    requirement: str
+    tool: str
+    tool_id: str
+    version: str
+    text: str
+    formalization: str
+    check: str
+    monitor_hash: str
+    run: str
+    verdict: str
+    robustness: str
+    stale: str
+
+
+COLUMNS = tuple(f.name for f in fields(MatrixRow))
+
+
+def stale_state(req: dict, current: dict | None) -> str:
+    """:data:`STALE`, ``removed`` or "" for the audited requirement ``req`` (audit JSON)."""
+    if current is None:
+        return ""
+    now = current.get(req["id"])
+    if now is None:
+        return "removed"
+    origin = req.get("origin") or {}
+    then_version = origin.get("version")
+    now_version = now.origin.version if now.origin is not None else None
+    if then_version != now_version or (req.get("text") or "").strip() != now.text.strip():
+        return STALE
+    return ""
+
+
+def _check_cells(check: dict | None) -> dict[str, str]:
+    """Requirement id -> its ``fretc check`` result in one cell."""
+    if check is None:
+        return {}
+    from check.report import findings_rows  # lazy: only with a check document
+
+    return {r["id"]: "; ".join([f"satisfiable {r['satisfiable']}",
+                                f"non-vacuous {r['non_vacuous']}",
+                                f"redundant {r['redundant']}"] + r["findings"])
+            for r in findings_rows(check)}
+
+
+def _requirement_cells(req: dict, checks: dict, current) -> list[str]:
+    origin = req.get("origin") or {}
+    form = req.get("key") or ""
+    if req.get("ft"):
+        form = f"{form}: ft {req['ft']}" if form else f"ft {req['ft']}"
+    return [req["id"], origin.get("format") or "fret-text", origin.get("tool_id") or req["id"],
+            origin.get("version") or "", one_line(req.get("text") or ""),
+            one_line(form or (req.get("error") or "").split("\n")[0]),
+            checks.get(req["id"], "not checked"), req.get("source_hash") or "",
+            ]
+
+
+def matrix_rows(doc: dict, current: dict | None = None,
+                check: dict | None = None) -> list[MatrixRow]:
+    """The rows of the audit document ``doc`` (``fretc audit --json``), in its requirement
+    and run order, then its ``not_formalized`` items. ``current``: requirement id ->
+    :class:`fretish.files.RequirementEntry` as the sources hold it now (None: staleness not
+    checked); ``check``: a ``fretc check -o`` document (None: "not checked")."""
+    checks = _check_cells(check)
+    per: dict[str, list[tuple[str, dict]]] = {}
+    for la in doc.get("logs") or []:
+        for v in la.get("verdicts") or []:
+            per.setdefault(v.get("requirement"), []).append((la.get("log") or "", v))
+    rows = []
+    for req in doc.get("requirements") or []:
+        head = _requirement_cells(req, checks, current)
+        stale = stale_state(req, current)
+        runs = per.get(req["id"]) or [("", {"verdict": "not judged"})]
+        for log, v in runs:
+            rob = (v.get("robustness") or {}).get("value")
+            rows.append(MatrixRow(*head, log, v.get("verdict") or "",
+                                  "" if rob is None else str(rob), stale))
+    for item in doc.get("not_formalized") or []:
+        origin = item.get("origin") or {}
+        rows.append(MatrixRow(item["id"], origin.get("format") or "", origin.get("tool_id")
+                              or item["id"], origin.get("version") or "", "",
+                              "not formalized (no FRETish text)", "not checked", "", "",
+                              "not formalized", "", ""))
+    return rows
+
+
+def _csv_cell(text: str) -> str:
+    """A cell a spreadsheet shows as text: a leading ``= + - @`` (a formula to Excel)
+    quoted by a leading apostrophe, unless the cell is a number."""
+    if text[:1] in ("=", "+", "-", "@"):
+        try:
+            float(text)
+        except ValueError:
+            return "'" + text
+    return text
+
+
+def matrix_csv(rows: list[MatrixRow]) -> str:
+    """The rows as CSV (RFC 4180, ``\\n`` line ends), with a header of :data:`COLUMNS`."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
+    for r in rows:
+        w.writerow([_csv_cell(c) for c in astuple(r)])
+    return buf.getvalue()
+
+
+#: Sort orders of the HTML page: (anchor, column, key of a row)
+_SORTS = (("by-requirement", "requirement", lambda r: ()),
+          ("by-tool-id", "tool_id", lambda r: (r.tool_id,)),
+          ("by-verdict", "verdict", lambda r: (_VERDICT_RANK.get(r.verdict, 9),)),
+          ("by-robustness", "robustness", lambda r: (_number(r.robustness),)),
+          ("by-stale", "stale", lambda r: (r.stale != STALE, r.stale)))
+_VERDICT_RANK = {"error": 0, "violated": 1, "unknown": 2, "not formalized": 3,
+                 "not judged": 4, "vacuous": 5, "satisfied": 6}
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        return float("inf")
+
+
+def matrix_html(rows: list[MatrixRow], title: str = "Traceability matrix") -> str:
+    """A self-contained page of the matrix (inline CSS, no script), sortable by the header
+    links (module docstring); the first order (requirement) shows by default."""
+    e = html.escape
+    links = {col: anchor for anchor, col, _k in _SORTS}
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             f"<title>{e(title)}</title><style>",
+             "body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;"
+             "font-size:90%}td,th{border:1px solid #bbb;padding:3px 6px;vertical-align:top}"
+             "th{background:#eee}.v-violated,.v-error{background:#fdd}.v-satisfied"
+             "{background:#dfd}.stale{font-weight:bold;color:#a00}"
+             "section.order{display:none}section.order:target{display:block}"
+             "section.order:last-of-type{display:block}"
+             "section.order:target~section.order:last-of-type{display:none}",
+             "</style></head><body>", f"<h1>{e(title)}</h1>",
+             f"<p>{len(rows)} rows; sort by a linked column header.</p>"]
+    orders = list(_SORTS[1:]) + [_SORTS[0]]  # the default order last (CSS above)
+    for anchor, col, key in orders:
+        ordered = sorted(enumerate(rows), key=lambda ir: (key(ir[1]), ir[0]))
+        parts.append(f'<section class="order" id="{anchor}"><table><tr>')
+        for c in COLUMNS:
+            label = e(c.replace("_", " "))
+            parts.append(f'<th><a href="#{links[c]}">{label}</a></th>' if c in links
+                         else f"<th>{label}</th>")
+        parts.append("</tr>")
+        for _i, r in ordered:
+            cells = astuple(r)
+            parts.append(f'<tr class="v-{e(r.verdict.replace(" ", "-"))}">' + "".join(
+                f'<td class="stale">{e(c)}</td>' if name == "stale" and c == STALE
+                else f"<td>{e(c)}</td>" for name, c in zip(COLUMNS, cells)) + "</tr>")
+        parts.append("</table></section>")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"

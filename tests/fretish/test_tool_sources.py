@@ -1,0 +1,213 @@
+"""Requirements read from tools (fretish/sources): the ReqIF StrictDoc wrote and the Doorstop
+tree the doorstop command made (tests/fixtures/requirements_tools/README.md), ReqIF files of
+real tools (../shared/data/reqif, SOURCES.md there), and hostile or broken inputs."""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from _shared import SHARED, needs_shared
+from common.errors import FretishFileError
+from fretish.files import load_requirements
+
+ROOT = Path(__file__).resolve().parents[2]
+FIX = ROOT / "tests" / "fixtures" / "requirements_tools"
+REQIF = FIX / "strictdoc" / "safe_ros.reqif"
+DOORSTOP = FIX / "doorstop"
+SAFE_ROS = [ROOT / "requirements" / "r1.fret", ROOT / "requirements" / "safe_ros.fret"]
+
+
+def _load(path, **kw):
+    unformalized: list = []
+    return load_requirements(path, not_formalized=unformalized, **kw), unformalized
+
+
+def test_strictdoc_reqif_holds_the_safe_ros_requirements_with_their_identity():
+    entries, unformalized = _load(REQIF)
+    fret = {e.id: e for e in load_requirements(SAFE_ROS)}
+    assert [e.id for e in entries] == ["R1", "R2", "R3", "R4", "R5", "R6"]
+    for e in entries:
+        assert e.error is None and e.requirement is not None
+        assert e.text == fret[e.id].text                      # the FRETish attribute
+        assert e.rationale == fret[e.id].rationale
+        o = e.origin
+        assert o.format == "reqif" and o.tool_id.startswith("REQUIREMENT-")
+        assert o.version and o.container == "Safe-ROS requirements"
+        assert o.text_attribute == "FRETish" and o.long_name     # ReqIF.Name: the title
+    by = {e.id: e for e in entries}
+    assert by["R2"].origin.parents == ("R1",) and by["R2"].parent == "R1"
+    assert by["R4"].origin.parents == ("SR-0",)
+    assert len({e.origin.tool_id for e in entries}) == 6
+    assert [(u.id, u.text) for u in unformalized] == [("SR-0", "")]
+
+
+def test_text_attribute_picks_another_field_and_bad_sentences_stay_per_requirement():
+    entries, _ = _load(REQIF, text_attribute="ReqIF.Text")
+    assert len(entries) == 7                       # every item has a statement
+    assert all(e.origin.text_attribute == "ReqIF.Text" for e in entries)
+    assert sum(e.error is not None for e in entries) == 7   # prose is not FRETish: no raise
+
+
+def test_doorstop_tree_made_by_doorstop():
+    entries, unformalized = _load(DOORSTOP)
+    fret = {e.id: e for e in load_requirements(SAFE_ROS)}
+    assert [e.id for e in entries] == ["R1", "R2", "R3", "R4", "R5", "R6"]
+    for e in entries:
+        assert e.text == fret[e.id].text and e.rationale == fret[e.id].rationale
+        assert e.origin.format == "doorstop" and e.origin.tool_id == e.id
+        assert e.origin.file.endswith(f"{e.id}.yml") and e.origin.container == "R"
+        assert e.source == str(DOORSTOP)           # the tree: an audit can read it again
+        assert e.origin.version and e.origin.level
+    by = {e.id: e for e in entries}
+    assert by["R2"].origin.parents == ("R1",) and by["R1"].origin.parents == ("SYS1",)
+    assert [u.id for u in unformalized] == ["SYS1"]
+
+
+def _tree_copy(tmp_path) -> Path:
+    out = tmp_path / "tree"
+    shutil.copytree(DOORSTOP, out)
+    return out
+
+
+def test_doorstop_link_cycle_is_an_error_naming_the_item(tmp_path):
+    tree = _tree_copy(tmp_path)
+    r1 = tree / "r" / "R1.yml"
+    r1.write_text(r1.read_text().replace("links:\n", "links:\n- R2: null\n"))
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(tree)
+    assert "cycle" in str(err.value) and "R1 -> R2 -> R1" in err.value.message
+    assert err.value.source.endswith(("R1.yml", "R2.yml"))  # the item file
+
+
+def test_doorstop_missing_parent_is_an_error_naming_the_item(tmp_path):
+    tree = _tree_copy(tmp_path)
+    r4 = tree / "r" / "R4.yml"
+    r4.write_text(r4.read_text().replace("links:\n", "links:\n- R99: null\n"))
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(tree)
+    assert "R99" in err.value.message and "missing parent" in err.value.message
+    assert err.value.source.endswith("R4.yml") and err.value.line > 1
+
+
+def test_duplicate_ids_across_sources_name_both_files():
+    with pytest.raises(FretishFileError) as err:
+        load_requirements([REQIF, DOORSTOP])
+    assert "R1" in str(err.value) and "safe_ros.reqif" in str(err.value)
+
+
+LAUGHS = ('<?xml version="1.0"?>\n<!DOCTYPE lolz [<!ENTITY lol "lol">'
+          + "".join(f'<!ENTITY lol{i} "{("&lol%s;" % (i - 1 if i > 1 else "")) * 10}">'
+                    for i in range(1, 10))
+          + ']>\n<REQ-IF>&lol9;</REQ-IF>\n')
+
+
+def test_billion_laughs_is_refused_fast(tmp_path):
+    p = tmp_path / "laughs.reqif"
+    p.write_text(LAUGHS)
+    t0 = time.perf_counter()
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(p)
+    assert time.perf_counter() - t0 < 1.0
+    assert "DOCTYPE declaration refused" in err.value.message and err.value.line == 2
+
+
+def test_external_entity_is_refused_without_reading_the_file(tmp_path):
+    secret = tmp_path / "secret.txt"
+    secret.write_text("TOP-SECRET-CONTENT")
+    p = tmp_path / "xxe.reqif"
+    p.write_text(f'<?xml version="1.0"?>\n<!DOCTYPE r [<!ENTITY x SYSTEM "file://{secret}">]>'
+                 "\n<REQ-IF>&x;</REQ-IF>\n")
+    opened: list[str] = []
+
+    def hook(event, args):
+        if event == "open" and args and str(args[0]) == str(secret):
+            opened.append(event)
+
+    sys.addaudithook(hook)  # stays for the session: cheap, it compares one path
+    t0 = time.perf_counter()
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(p)
+    assert time.perf_counter() - t0 < 1.0
+    assert opened == [] and "TOP-SECRET" not in str(err.value)
+
+
+def test_malformed_xml_names_the_line(tmp_path):
+    p = tmp_path / "broken.reqif"
+    p.write_text('<?xml version="1.0"?>\n<REQ-IF>\n  <THE-HEADER>\n</REQ-IF>\n')
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(p)
+    assert "not well-formed" in err.value.message and err.value.line == 4
+
+
+def test_missing_datatype_names_the_definition(tmp_path):
+    text = REQIF.read_text()
+    p = tmp_path / "nodt.reqif"
+    p.write_text(text.replace('<DATATYPE-DEFINITION-STRING IDENTIFIER='
+                              '"SDOC_DATATYPE_MULTI_LINE_STRING"',
+                              '<DATATYPE-DEFINITION-STRING IDENTIFIER="RENAMED"'))
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(p)
+    assert "SDOC_DATATYPE_MULTI_LINE_STRING" in err.value.message
+    assert "ATTRIBUTE-DEFINITION" in err.value.message and err.value.line > 1
+
+
+def test_reqifz_reads_like_its_reqif_and_refuses_bombs_and_escapes(tmp_path):
+    good = tmp_path / "good.reqifz"
+    with zipfile.ZipFile(good, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(REQIF, "safe_ros.reqif")
+    assert [e.text for e in load_requirements(good)] == [e.text for e in _load(REQIF)[0]]
+    bomb = tmp_path / "bomb.reqifz"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("a.reqif", b" " * (8 * 1024 * 1024))
+    with pytest.raises(FretishFileError, match="zip bomb"):
+        load_requirements(bomb)
+    escape = tmp_path / "escape.reqifz"
+    with zipfile.ZipFile(escape, "w") as z:
+        z.writestr("../../evil.reqif", REQIF.read_bytes())
+    with pytest.raises(FretishFileError, match="outside the archive"):
+        load_requirements(escape)
+
+
+@needs_shared
+@pytest.mark.parametrize("name, ids, tool_ids", [
+    ("polarion_sample1.reqif", ["rmf-bd312f1z-fa7c-4de3-b8f3-ab105179fccc", "LOREM-818"],
+     ["rmf-bd312f1z-fa7c-4de3-b8f3-ab105179fccc", "rmf-1d312f18-fa7c-4de3-b8f3-ab105179fddf"]),
+    ("capella_requirements_vp.reqif", ["_xen_QMkhEee8KsfWrp9EJQ"],
+     ["_xen_QMkhEee8KsfWrp9EJQ"]),
+])
+def test_real_tool_exports_read_with_their_identifiers(name, ids, tool_ids):
+    entries, _ = _load(SHARED / "data" / "reqif" / name)
+    assert [e.id for e in entries] == ids                # ReqIF.ForeignID where it is set
+    assert [e.origin.tool_id for e in entries] == tool_ids
+    assert all(e.origin.version for e in entries)   # LAST-CHANGE
+
+
+@needs_shared
+@pytest.mark.parametrize("name", ["enterprise_architect_8.reqif",
+                                  "reqif_testcase_TC1100.reqif", "eclipse_rmf_sample.reqif"])
+def test_real_tool_exports_without_text_list_items_as_not_formalized(name):
+    entries, unformalized = _load(SHARED / "data" / "reqif" / name)
+    assert entries == [] and unformalized and all(u.origin.tool_id for u in unformalized)
+
+
+@needs_shared
+def test_real_doors_excerpt_with_a_missing_datatype_is_a_clear_error():
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(SHARED / "data" / "reqif" / "doors_user_06.reqif")
+    assert "DATATYPES does not define" in err.value.message and err.value.line == 29
+
+
+def test_a_huge_reqif_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from fretish.sources import reqif_file
+
+    p = tmp_path / "huge.reqif"
+    p.write_bytes(b"<REQ-IF>" + b" " * 2048 + b"</REQ-IF>")
+    monkeypatch.setattr(reqif_file, "MAX_BYTES", 1024)
+    with pytest.raises(FretishFileError, match="more than the"):
+        load_requirements(p)

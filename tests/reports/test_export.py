@@ -1,0 +1,221 @@
+"""fretc export and the traceability matrix, on the Safe-ROS requirements as StrictDoc's ReqIF
+and as a Doorstop tree (tests/fixtures/requirements_tools): their audits of traces/ equal the
+audit of requirements/, and the exports keep every original byte and re-import."""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import io
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from fretc.cli import main
+from fretish.files import load_requirements
+
+ROOT = Path(__file__).resolve().parents[2]
+FIX = ROOT / "tests" / "fixtures" / "requirements_tools"
+REQIF = FIX / "strictdoc" / "safe_ros.reqif"
+DOORSTOP = FIX / "doorstop"
+BINDINGS = ROOT / "requirements" / "safe_ros.bindings.toml"
+pytestmark = pytest.mark.skipif(not (ROOT / "traces" / "nominal.mcap").exists(),
+                                reason="traces/ is absent")
+
+
+def _run(*args) -> tuple[int, str]:
+    r = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    return r.exit_code, r.output
+
+
+@pytest.fixture(scope="module")
+def audits(tmp_path_factory):
+    """The audit JSON of traces/ for requirements/, the ReqIF and the Doorstop tree."""
+    out = tmp_path_factory.mktemp("audits")
+    docs = {}
+    for name, src in (("fret", ROOT / "requirements"), ("reqif", REQIF),
+                      ("doorstop", DOORSTOP)):
+        path = out / f"{name}.json"
+        code, _ = _run("audit", "-r", src, "-b", BINDINGS, ROOT / "traces", "--json", path,
+                       "--no-progress")
+        assert code == 1, name                      # traces/ holds violations
+        docs[name] = path
+    return docs
+
+
+def _verdicts(path) -> dict:
+    doc = json.loads(Path(path).read_text())
+    return {(la["log"], v["requirement"]): (v["verdict"], v["robustness"]["value"],
+                                            v.get("tool_id"))
+            for la in doc["logs"] for v in la["verdicts"]}
+
+
+def test_tool_sources_audit_like_requirements_and_name_their_tool_ids(audits):
+    fret = _verdicts(audits["fret"])
+    tool_ids = {e.id: e.origin.tool_id for e in load_requirements(REQIF)}
+    for name in ("reqif", "doorstop"):
+        got = _verdicts(audits[name])
+        assert {k: v[:2] for k, v in got.items()} == {k: v[:2] for k, v in fret.items()}
+        for (_log, rid), (_v, _r, tool_id) in got.items():
+            assert tool_id == (tool_ids[rid] if name == "reqif" else rid)
+    doc = json.loads(audits["reqif"].read_text())
+    assert [x["id"] for x in doc["not_formalized"]] == ["SR-0"]
+    assert all(r["origin"]["format"] == "reqif" for r in doc["requirements"])
+
+
+def _only_insertions(before: list[str], after: list[str]) -> bool:
+    ops = difflib.SequenceMatcher(None, before, after, autojunk=False).get_opcodes()
+    return all(op in ("equal", "insert") for op, *_ in ops)
+
+
+def test_reqif_export_keeps_the_file_adds_one_verdict_each_and_reimports(audits, tmp_path):
+    from reqif.parser import ReqIFParser
+    from reqif.unparser import ReqIFUnparser
+
+    out = tmp_path / "out.reqif"
+    code, text = _run("export", "-r", REQIF, "--from-json", audits["reqif"], "-o", out,
+                      "--audit-date", "2026-01-02")
+    assert code == 0, text
+    data = out.read_text(encoding="utf-8")
+    assert _only_insertions(REQIF.read_text(encoding="utf-8").splitlines(),
+                            data.splitlines())
+    assert ReqIFUnparser.unparse(ReqIFParser.parse_from_string(data)) == data  # lossless
+    entries = load_requirements(out, text_attribute="fretc verdict")
+    unformalized: list = []
+    again = load_requirements(out, not_formalized=unformalized)
+    assert [(e.id, e.text) for e in again] == [(e.id, e.text) for e in
+                                               load_requirements(REQIF)]
+    fret = _verdicts(audits["fret"])
+    for e in entries:                               # one verdict per requirement
+        runs = {v for (_log, rid), (v, _r, _t) in fret.items() if rid == e.id}
+        assert e.text == ("not formalized" if e.id == "SR-0" else
+                          "violated" if "violated" in runs else "satisfied")
+    assert len(entries) == 7 and data.count('LONG-NAME="fretc verdict"') == 1
+    assert data.count("2026-01-02T00:00:00Z") >= 7
+    out2 = tmp_path / "again.reqif"                 # deterministic, and idempotent
+    assert _run("export", "-r", out, "--from-json", audits["reqif"], "-o", out2,
+                "--audit-date", "2026-01-02")[0] == 0
+    assert out2.read_bytes() == out.read_bytes()
+
+
+def test_doorstop_export_keeps_every_byte_validates_and_carries_verdicts(audits, tmp_path):
+    import doorstop
+
+    out = tmp_path / "tree"
+    code, text = _run("export", "-r", DOORSTOP, "--from-json", audits["doorstop"], "-o", out)
+    assert code == 0, text
+    for f in DOORSTOP.rglob("*"):
+        if f.is_file():
+            assert (out / f.relative_to(DOORSTOP)).read_bytes().startswith(f.read_bytes())
+    again = tmp_path / "again"                      # an export of an export: one block
+    assert _run("export", "-r", out, "--from-json", audits["doorstop"], "-o", again)[0] == 0
+    assert (again / "r" / "R2.yml").read_bytes() == (out / "r" / "R2.yml").read_bytes()
+    before = doorstop.build(cwd=str(DOORSTOP), root=str(DOORSTOP))
+    tree = doorstop.build(cwd=str(out), root=str(out))
+    assert tree.validate()
+    for uid in ("R1", "R2", "R3", "R4", "R5", "R6", "SYS1"):
+        item = tree.find_item(uid)
+        assert item.get("fretc_verdict") in ("satisfied", "violated", "not formalized")
+        assert item.get("fretc_audit_id").startswith("sha256:")
+        assert item.stamp() == before.find_item(uid).stamp()   # reviews stay valid
+    assert tree.find_item("R4").get("fretc_verdict") == "satisfied"
+    assert tree.find_item("R2").get("fretc_formula_pt").startswith("(H ")
+    # doorstop's validation saved the items in its layout (keys sorted): exported again,
+    # each item still holds one set of fretc's keys
+    third = tmp_path / "third"
+    assert _run("export", "-r", out, "--from-json", audits["doorstop"], "-o", third)[0] == 0
+    r2 = (third / "r" / "R2.yml").read_text()
+    assert r2.count("fretc_verdict:") == 1 and r2.count("fretc_formula_ft:") == 1
+    assert doorstop.build(cwd=str(third), root=str(third)).validate()
+
+
+def test_fret_export_gains_a_fretc_member_and_keeps_the_rest(audits, tmp_path):
+    src = tmp_path / "fret.json"
+    objs = [{"reqid": e.id, "project": "Safe-ROS", "fulltext": e.text,
+             "semantics": {"ft": "kept"}} for e in load_requirements(
+        [ROOT / "requirements" / "r1.fret", ROOT / "requirements" / "safe_ros.fret"])]
+    src.write_text(json.dumps(objs, indent=4))
+    out = tmp_path / "out.json"
+    code, text = _run("export", "-r", src, "--from-json", audits["fret"], "-o", out)
+    assert code == 0, text
+    got = json.loads(out.read_text())
+    assert [{k: v for k, v in o.items() if k != "fretc"} for o in got] == objs
+    assert {o["reqid"]: o["fretc"]["verdict"] for o in got}["R4"] == "satisfied"
+    assert out.read_text().startswith("[\n    {")
+
+
+def test_matrix_lists_every_requirement_with_its_tool_id_and_flags_stale(audits, tmp_path):
+    tree = tmp_path / "tree"
+    shutil.copytree(DOORSTOP, tree)
+    r4 = tree / "r" / "R4.yml"
+    r4.write_text(r4.read_text().replace("linear_speed <= 0.5", "linear_speed <= 0.6"))
+    matrix, page = tmp_path / "m.csv", tmp_path / "m.html"
+    code, text = _run("export", "-r", tree, "--from-json", audits["doorstop"], "-o",
+                      tmp_path / "out", "--matrix", matrix, "--matrix-html", page)
+    assert code == 0 and "R4: stale evidence" in text
+    rows = list(csv.DictReader(io.StringIO(matrix.read_text())))
+    assert {r["requirement"] for r in rows} == {"R1", "R2", "R3", "R4", "R5", "R6", "SYS1"}
+    assert len([r for r in rows if r["requirement"] == "R1"]) == 8   # one per run
+    assert {r["requirement"] for r in rows if r["stale"] == "stale evidence"} == {"R4"}
+    assert all(r["tool_id"] and r["monitor_hash"] for r in rows if r["requirement"] != "SYS1")
+    html = page.read_text()
+    assert "<script" not in html and html.count('<section class="order"') == 5
+    assert 'href="#by-verdict"' in html
+
+
+def test_export_of_a_hostile_source_writes_nothing(audits, tmp_path):
+    bad = tmp_path / "bad.reqif"
+    bad.write_text('<?xml version="1.0"?>\n<!DOCTYPE r [<!ENTITY a "b">]>\n<REQ-IF/>\n')
+    out = tmp_path / "out.reqif"
+    code, text = _run("export", "-r", bad, "--from-json", audits["reqif"], "-o", out,
+                      "--matrix", tmp_path / "m.csv")
+    assert code == 2 and "DOCTYPE declaration refused" in text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.reqif"]
+    full = tmp_path / "full"
+    (full / "x").mkdir(parents=True)
+    code, text = _run("export", "-r", DOORSTOP, "--from-json", audits["doorstop"], "-o", full)
+    assert code == 2 and "not empty" in text and [p.name for p in full.iterdir()] == ["x"]
+
+
+def test_report_has_the_matrix_page_with_every_tool_id(audits, tmp_path):
+    out = tmp_path / "report"
+    code, text = _run("report", "--from-json", audits["reqif"], "-o", out, "--base", ROOT)
+    assert code == 1, text
+    page = (out / "matrix.html").read_text()
+    for e in load_requirements(REQIF):
+        assert e.origin.tool_id in page
+    assert 'href="matrix.html"' in (out / "report.html").read_text()
+    rows = list(csv.DictReader(io.StringIO((out / "matrix.csv").read_text())))
+    assert {r["stale"] for r in rows} == {""}       # the sources are as audited
+    assert [r["verdict"] for r in rows if r["requirement"] == "SR-0"] == ["not formalized"]
+
+
+def test_reqifz_export_rewrites_its_reqif_member_and_copies_the_others(audits, tmp_path):
+    import zipfile
+
+    src = tmp_path / "safe_ros.reqifz"
+    with zipfile.ZipFile(src, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(REQIF, "safe_ros.reqif")
+        z.writestr("attachments/readme.txt", b"kept as it is\n")
+    out = tmp_path / "out.reqifz"
+    code, text = _run("export", "-r", src, "--from-json", audits["reqif"], "-o", out)
+    assert code == 0, text
+    with zipfile.ZipFile(out) as z:
+        assert z.namelist() == ["safe_ros.reqif", "attachments/readme.txt"]
+        assert z.read("attachments/readme.txt") == b"kept as it is\n"
+        assert _only_insertions(REQIF.read_text().splitlines(),
+                                z.read("safe_ros.reqif").decode().splitlines())
+    verdicts = load_requirements(out, text_attribute="fretc verdict")
+    assert {e.id: e.text for e in verdicts}["R4"] == "satisfied"
+
+
+def test_audit_of_a_hostile_reqif_is_an_input_error(tmp_path):
+    bad = tmp_path / "laughs.reqif"
+    bad.write_text('<?xml version="1.0"?>\n<!DOCTYPE l [<!ENTITY a "aaaa">'
+                   '<!ENTITY b "&a;&a;&a;&a;">]>\n<REQ-IF>&b;</REQ-IF>\n')
+    code, text = _run("audit", "-r", bad, "-b", BINDINGS, ROOT / "traces" / "nominal.mcap",
+                      "--no-progress")
+    assert code == 2 and "laughs.reqif:2:" in text and "DOCTYPE declaration refused" in text
