@@ -104,6 +104,13 @@ def requirement_results(doc: dict, audit_id: str, audit_date: str
     return out
 
 
+def _umask() -> int:
+    """The process's umask (read by setting it and putting it back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def write_atomic(path: str, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder renamed over
     it: a reader (or a failure half-way) never sees a part of the file."""
@@ -112,6 +119,7 @@ def write_atomic(path: str, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+        os.chmod(tmp, 0o666 & ~_umask())  # as open() would make it (mkstemp makes 0600)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -128,6 +136,7 @@ def replace_tree(build, out: str) -> None:
         raise FileExistsError(f"{out}: the output folder exists and is not empty")
     parent = os.path.dirname(os.path.abspath(out))
     tmp = tempfile.mkdtemp(dir=parent, prefix=".fretc-export-")
+    os.chmod(tmp, 0o777 & ~_umask())  # as mkdir would make it (mkdtemp makes 0700)
     try:
         build(tmp)
         if os.path.isdir(out):

@@ -219,3 +219,16 @@ def test_audit_of_a_hostile_reqif_is_an_input_error(tmp_path):
     code, text = _run("audit", "-r", bad, "-b", BINDINGS, ROOT / "traces" / "nominal.mcap",
                       "--no-progress")
     assert code == 2 and "laughs.reqif:2:" in text and "DOCTYPE declaration refused" in text
+
+
+def test_written_files_have_the_permissions_of_any_new_file(tmp_path):
+    """Atomic writes go through mkstemp (0600): the result is made as open() would make it."""
+    import os
+    from reports.export_results import write_atomic
+
+    old = os.umask(0o022)
+    try:
+        write_atomic(str(tmp_path / "out.txt"), b"x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "out.txt").stat().st_mode & 0o777 == 0o644
