@@ -60,7 +60,6 @@ class Expander:
         self.left_pt = left_pt
         self.right_ft = right_ft
         self.free = free
-        self.has_future_atom = False
 
     # boolean context
     def bool(self, e: A.Expr) -> Node:
@@ -119,7 +118,6 @@ class Expander:
             expansion = self._future_function(e)
             if self.kind == "ft":
                 return expansion
-            self.has_future_atom = True
             return Node("future", (expansion,), name=_call_text(e))
         if name in _NUMERIC_FUNCS:
             raise SemanticsError(f"'{name}' gives a number where a condition is expected",

@@ -54,6 +54,7 @@ from .fallback import inspected, opaque_safe, plain_compared_safe
 from .instantiate_atoms import (TIMED, PlainExpander, SharingExpander, Timed,
                                 has_future_function, is_shared_leaf, named_endpoints,
                                 variables_into)
+from . import ir
 from .ir import FALSE, FTP, LAST
 from .printers import to_smv, to_spot
 from .scope_timing import fn_right, pt_endpoints
@@ -333,8 +334,11 @@ def _timed(req, tick_period, shape: tuple, exprs: tuple, one: list,
             variables_into(a, variables, done)
         else:
             variables.update(d)
+    # pt is causal when no atom of it (the scope mode's included: its own Expander) holds
+    # a future-time function
+    causal = not any(a is not None and ir.has_op(a, ("future",)) for a in atoms[2 * _ATOMS:])
     return InstantiatedFormalization(req, tick_period, tmpl, atoms, texts, list(variables),
-                                     warnings, n, not px.has_future_atom)
+                                     warnings, n, causal)
 
 
 def formula_text(f: Formalization, which: str) -> str:

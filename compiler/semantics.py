@@ -139,8 +139,10 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
     ft, ft_inf, pt, used, px = construct(scope, cond, timing, n, mode, fields)
     # variables in sentence order: mode, condition, stop, response
     variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
+    # pt_causal from the pt tree itself: the scope mode is expanded by its own Expander,
+    # whose future-time functions px does not see
     return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
-                         pt_causal=not px.has_future_atom)
+                         pt_causal=not ir.has_op(pt, ("future",)))
 
 
 def template_parts(req: A.Requirement, tick_period: Fraction | None):

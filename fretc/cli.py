@@ -123,7 +123,7 @@ main.add_command(compile_cmd, "compile")
 _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
              "falsify": ("falsify", "falsify_cmd"), "inspect": ("inspect", "inspect_cmd"),
              "report": ("report", "report_cmd"), "watch": ("watch", "watch_cmd"),
-             "export": ("export", "export_cmd"),
+             "export": ("export", "export_cmd"), "simulate": ("simulate", "simulate_cmd"),
              "replay": ("watch", "replay_cmd")}
 
 

@@ -1,0 +1,62 @@
+"""``fretc simulate FILE TRACE``: FRET's simulator without NuSMV (:mod:`monitors.simulate`):
+the requirements' ft and pt values and their parts at every tick of a small trace, several
+requirements side by side; a table in the terminal, SVG and HTML with ``-o DIR``, JSON with
+``--json FILE``.
+
+Exit codes: 0 every requirement holds on the whole trace, 1 one is violated, 2 an input error
+(a requirement file, a trace, an id that does not exist).
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from .options import TEXT_ATTRIBUTE_OPTION
+from .options import shown as _shown
+
+__all__ = ["simulate_cmd"]
+
+
+@click.command("simulate")
+@click.argument("file", type=click.Path(exists=True))
+@click.argument("trace", type=click.Path(exists=True, dir_okay=False))
+@click.option("--id", "ids", multiple=True, metavar="ID",
+              help="Only this requirement (repeatable); default: every one of FILE.")
+@click.option("-o", "--output", type=click.Path(file_okay=False), default=None,
+              help="Write one SVG per requirement and simulation.html into this folder.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
+              help='Write {"ticks", "requirements": [{"id", "ft", "pt", "parts"}]} here.')
+@TEXT_ATTRIBUTE_OPTION
+def simulate_cmd(file, trace, ids, output, json_path):
+    """Simulate the requirements of FILE on TRACE (a .csv as the audit's, or a timeline
+    text: one line per variable, 'p: 0-3, 7' for the ticks a boolean holds, 'speed: 0.0 0.2
+    0.6' for one value per tick, '@ticks N' for the length)."""
+    from compiler.build import compile_entries
+    from fretish.files import load_requirements
+    from monitors.simulate import read_trace, simulate
+    from reports.simulation import text_table, write_outputs
+
+    from .options import text_attribute
+
+    compiled = compile_entries(load_requirements([file], text_attribute=text_attribute()))
+    known = {c.id for c in compiled}
+    unknown = [i for i in ids if i not in known]
+    if unknown:
+        click.echo(_shown(f"error: {file}: no requirement {', '.join(map(repr, unknown))} "
+                          f"(it has {', '.join(sorted(known))})"), err=True)
+        sys.exit(2)
+    chosen = [c for c in compiled if not ids or c.id in ids]
+    failed = [c for c in chosen if c.error is not None]
+    for c in failed:
+        click.echo(_shown(str(c.error)), err=True)
+    if failed:
+        sys.exit(2)
+    data = read_trace(trace)
+    n = len(next(iter(data.values()), []))
+    sims = [simulate(c, data) for c in chosen if c.formalization is not None]
+    click.echo(_shown(text_table(sims, n)))
+    for p in write_outputs(sims, n, output, json_path):
+        click.echo(_shown(f"wrote {p}"), err=True)
+    sys.exit(1 if any(s.ft and not s.ft[0] for s in sims) else 0)

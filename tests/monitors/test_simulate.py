@@ -1,0 +1,108 @@
+"""``fretc simulate``: FRET's simulator without NuSMV. At every tick, ft on the suffix from
+that tick and pt on the prefix up to it, checked against an independent oracle read from the
+requirement's English meaning (tests/differential.py) and against FRET's own trace verdicts;
+the timeline text and the CLI's errors."""
+
+from __future__ import annotations
+
+import json
+import random
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from differential import oracle, random_requirement, random_trace  # noqa: E402
+
+from _shared import SHARED, needs_shared  # noqa: E402
+from common.errors import InputError  # noqa: E402
+from compiler.build import compile_entries  # noqa: E402
+from fretc.cli import main  # noqa: E402
+from fretish.files import load_requirements  # noqa: E402
+from monitors.simulate import parse_timeline, simulate  # noqa: E402
+
+
+def _compiled(tmp_path: Path, text: str):
+    p = tmp_path / "s.fret"
+    p.write_text(text)
+    return compile_entries(load_requirements([p]))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_every_tick_against_the_oracle_of_the_meaning(tmp_path, seed):
+    rnd = random.Random(seed)
+    for k in range(8):
+        text, meaning = random_requirement(rnd)
+        (c,) = _compiled(tmp_path, f"R: {text}\n")
+        for _ in range(4):
+            trace = random_trace(rnd, rnd.randint(1, 7))
+            cols = {v: [row[v] for row in trace] for v in trace[0]}
+            sim = simulate(c, cols)
+            n = len(trace)
+            assert sim.ft == [oracle(meaning, trace[i:]) for i in range(n)], (text, trace)
+            assert sim.pt == [oracle(meaning, trace[:i + 1]) for i in range(n)], (text, trace)
+
+
+@needs_shared
+def test_fret_s_trace_verdicts_at_the_first_and_last_tick(tmp_path):
+    cases = [json.loads(x) for x in
+             (SHARED / "fretish" / "fret_trace_verdicts.jsonl").read_text().splitlines()]
+    rnd = random.Random(1)
+    checked = 0
+    for c in rnd.sample(cases, 6):  # a bounded sample (the audit's test runs them all)
+        cols = {v: [any(a <= i <= b for a, b in iv) for i in range(c["length"])]
+                for v, iv in c["intervals"].items()}
+        sentences = rnd.sample(c["cases"], 15)
+        compiled = _compiled(tmp_path, "".join(f"S{i}: {x['sentence']}\n"
+                                               for i, x in enumerate(sentences)))
+        for x, comp in zip(sentences, compiled):
+            sim = simulate(comp, cols)
+            assert sim.ft[0] == x["expected"] == sim.pt[-1], (c["trace"], x)
+            checked += 1
+    assert checked == 90
+
+
+def test_the_timeline_text():
+    got = parse_timeline("# a trace\np: 0-2, 5\nspeed: 0 0.5 1 1.5 2 2.5\nq:\n")
+    assert got == {"p": [True, True, True, False, False, True],
+                   "q": [False] * 6, "speed": [0.0, 0.5, 1.0, 1.5, 2.0, 2.5]}
+    assert parse_timeline("@ticks 4\np: 1\n") == {"p": [False, True, False, False]}
+    for bad, where in [("p 0-2\n", ":1:1"), ("p: 0-2\np: 3\n", ":2:1"),
+                       ("p: 3-1\n", ":1:4"), ("v: 1 2 x\n", ":1:4"),
+                       ("@ticks 3\nv: 1 2\n", ":2:1"), ("@ticks 2\np: 5\n", ":2:1")]:
+        with pytest.raises(InputError, match=where):
+            parse_timeline(bad, "t.txt")
+
+
+def test_the_command_writes_json_svg_and_html_and_exits_1_on_a_violation(tmp_path):
+    (tmp_path / "r.fret").write_text(
+        "@tick_period 100 ms\n"
+        "R2: upon too_close the robot shall within 300 milliseconds satisfy stopped\n")
+    (tmp_path / "t.txt").write_text("too_close: 2-3, 8\nstopped: 5-6\n@ticks 12\n")
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"), str(tmp_path / "t.txt"),
+                                    "--json", str(tmp_path / "s.json"), "-o", str(tmp_path / "o")])
+    assert res.exit_code == 1, res.output
+    doc = json.loads((tmp_path / "s.json").read_text())
+    assert doc["ticks"] == 12 and doc["requirements"][0]["id"] == "R2"
+    r = doc["requirements"][0]
+    assert r["pt"][-1] is False and r["ft"][0] is False and r["pt"][7] is True
+    assert r["parts"]["condition"][2] is True and r["parts"]["response"][5] is True
+    assert (tmp_path / "o" / "R2.svg").read_text().startswith("<svg")
+    assert "R2" in (tmp_path / "o" / "simulation.html").read_text()
+
+
+@pytest.mark.parametrize("trace, args, msg", [
+    ("p: 1\n", [], "the trace has no 'q'"),
+    ("p: 1\nq: 2\n", ["--id", "R9"], "no requirement 'R9'"),
+    ("p,q\ntrue,false\ntrue\n", [], "t.csv:3"),
+])
+def test_bad_traces_and_ids_are_input_errors(tmp_path, trace, args, msg):
+    (tmp_path / "r.fret").write_text("R1: the sw shall always satisfy p & q\n")
+    name = "t.csv" if "," in trace else "t.txt"
+    (tmp_path / name).write_text(trace)
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"),
+                                    str(tmp_path / name), *args])
+    assert res.exit_code == 2, res.output
+    assert msg in res.output and "Traceback" not in res.output
