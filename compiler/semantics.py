@@ -57,6 +57,9 @@ class Formalization:
     warnings: list[str] = field(default_factory=list)
     ticks: int | None = None
     pt_causal: bool = True
+    #: FRETish's ``with probability OP p`` (:class:`compiler.ir.ProbabilityBound`), or None:
+    #: the bound applies across runs, the formulas to each run
+    probability: ir.ProbabilityBound | None = None
 
 
 # --------------------------------------------------------------------------- durations
@@ -140,7 +143,8 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
     # variables in sentence order: mode, condition, stop, response
     variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
     return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
-                         pt_causal=not px.has_future_atom)
+                         pt_causal=not px.has_future_atom,
+                         probability=ir.probability_bound(req.probability))
 
 
 def template_parts(req: A.Requirement, tick_period: Fraction | None):
