@@ -102,8 +102,6 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
     # lazy: the simulator, the audit engine, scipy only when the command runs
     from audit import AuditInputError, load_plan
     from audit.fleet import RayUnavailable
-    from audit.verdict import audit_json
-    from reports.estimate import write_estimate
     from sim.space import load_space
 
     if os.path.isdir(output) and os.listdir(output):
@@ -131,39 +129,46 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
     if rare and not kill < particles:
         raise click.BadParameter("--kill must be less than --particles", param_hint="--kill")
 
-    def one_log_json(la) -> str:
-        return audit_json([la], plan.requirements_json(), plan.bindings_json())
-
     try:
-        if rare:
-            from sim.rare import rare_estimate
-
-            def said(rid, n):
-                click.echo(f"{rid}: {n} runs", err=True)
-
-            result = rare_estimate(plan, space, seed, output, list(targets) or ids,
-                                   particles=particles, kill=kill, moves=moves,
-                                   confidence=confidence, budget=budget, ray_address=ray,
-                                   audit_json=one_log_json, progress=said)
-            doc = write_estimate(output, None, result)
-        else:
-            from sim.estimate import estimate
-
-            def progress(run) -> None:
-                viol = f"  VIOLATED {', '.join(run.violated())}" if run.violated() else ""
-                params = ", ".join(f"{k}={v:g}" for k, v in run.parameters.items())
-                click.echo(shown(f"run {run.index}: {params}{viol}"), err=True)
-
-            result = estimate(plan, space, seed, output, budget=budget, test=test,
-                              delta=delta, alpha=alpha, beta=beta, confidence=confidence,
-                              unknown=unknown_runs, ray_address=ray, audit_json=one_log_json,
-                              progress=progress)
-            doc = write_estimate(output, result, None)
+        doc = _campaign(plan, space, seed, budget, output, test, delta, alpha, beta,
+                        confidence, unknown_runs, rare, list(targets) or ids, particles,
+                        kill, moves, ray)
     except RayUnavailable as exc:
         raise FleetError(str(exc)) from None
-    except ValueError as exc:  # bad test parameters (e.g. an SPRT on an impossible region)
-        raise click.BadParameter(str(exc)) from None
     for line in doc["summary_lines"]:
         click.echo(shown(line))
     click.echo(f"report: {os.path.join(output, 'estimate.md')}")
     ctx.exit(doc["exit_code"])
+
+
+def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confidence,
+              unknown_runs, rare, targets, particles, kill, moves, ray) -> dict:
+    """Run the campaign (or the splitting with ``rare``) and write its report; returns the
+    report document (:func:`reports.estimate.write_estimate`)."""
+    from audit.verdict import audit_json
+    from reports.estimate import write_estimate
+
+    def one_log_json(la) -> str:
+        return audit_json([la], plan.requirements_json(), plan.bindings_json())
+
+    if rare:
+        from sim.rare import rare_estimate
+
+        def said(rid, n):
+            click.echo(f"{rid}: {n} runs", err=True)
+
+        result = rare_estimate(plan, space, seed, output, targets, particles=particles,
+                               kill=kill, moves=moves, confidence=confidence, budget=budget,
+                               ray_address=ray, audit_json=one_log_json, progress=said)
+        return write_estimate(output, None, result)
+    from sim.estimate import estimate
+
+    def progress(run) -> None:
+        viol = f"  VIOLATED {', '.join(run.violated())}" if run.violated() else ""
+        params = ", ".join(f"{k}={v:g}" for k, v in run.parameters.items())
+        click.echo(shown(f"run {run.index}: {params}{viol}"), err=True)
+
+    result = estimate(plan, space, seed, output, budget=budget, test=test, delta=delta,
+                      alpha=alpha, beta=beta, confidence=confidence, unknown=unknown_runs,
+                      ray_address=ray, audit_json=one_log_json, progress=progress)
+    return write_estimate(output, result, None)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from .estimate import Runner
+from .estimate import Runner, _finite
 from .space import Space
 from .splitting import SplittingError, SplittingResult, adaptive_multilevel_splitting
 
@@ -81,7 +81,7 @@ def rare_estimate(plan, space: Space, seed: int, out: str | Path, targets: list[
                                                                    encoding="utf-8")
                         kept.append({"mcap": str(path.relative_to(outp)),
                                      "parameters": run.parameters,
-                                     "robustness": run.robustness.get(rid)})
+                                     "robustness": _finite(run.robustness.get(rid))})
                     elif path.exists():
                         os.remove(path)
                 if progress is not None:

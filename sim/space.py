@@ -194,44 +194,52 @@ def load_space(path: str | Path) -> Space:
                              "parameter")
     out, dists = [], []
     for key, rng in params.items():
-        if key not in PARAMETERS:
-            fail(key, f"unknown parameter {key!r}; known: {', '.join(PARAMETERS)}")
-        if isinstance(rng, dict):
-            try:
-                dist = parse_distribution(key, rng, key not in ("obstacle_x", "obstacle_y"),
-                                          lambda msg: _raise(msg))
-            except DistributionError as exc:
-                fail(key, str(exc))
-            if dist.fault is not None and key in ("obstacle_x", "obstacle_y"):
-                fail(key, f"{key}: a fault share is not supported for the obstacle's "
-                          "position (it needs its partner); use dropout or a delay")
-            rng = list(dist.range)
-        else:
-            dist = None
-        if (not isinstance(rng, list) or len(rng) != 2
-                or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                           and math.isfinite(x) for x in rng) or rng[0] > rng[1]):
-            fail(key, f"{key} must be [low, high] with finite numbers, low <= high "
-                      f"({PARAMETERS[key][0]})")
-        if not math.isfinite(float(rng[1]) - float(rng[0])):
-            fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] is wider than a float can "
-                      "hold (high - low overflows)")
-        if max(abs(rng[0]), abs(rng[1])) > MAX_MAGNITUDE:
-            fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] goes beyond "
-                      f"+-{MAX_MAGNITUDE:g} {PARAMETERS[key][0]} (the simulator's arithmetic "
-                      "on it would overflow)")
-        if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
-            fail(key, f"{key} cannot be negative")
-        if key == "obstacle_speed" and not rng[0] > 0:
-            fail(key, "obstacle_speed must be > 0 m/s")
-        if key in _NEEDS and _NEEDS[key] not in params and not (
-                key == "dropout_duration" and sc.dropout_start is not None):
-            fail(key, f"{key} needs {_NEEDS[key]} too")
-        if key.startswith("obstacle_s") and not sc.movers:
-            fail(key, f"{key}: scenario {name!r} has no moving obstacle")
+        rng, dist = _parameter(key, rng, params, sc, name, fail)
         out.append((key, float(rng[0]), float(rng[1])))
         dists.append(dist or Distribution(key, "uniform", float(rng[0]), float(rng[1])))
     return Space(p, sc, seed, tuple(out), tuple(dists))
+
+
+def _parameter(key: str, rng, params: dict, sc: Scenario, name: str, fail):
+    """``([low, high], distribution or None)`` of one ``[parameters]`` entry (a range or a
+    distribution table), checked as :func:`load_space` documents (``fail(key, msg)``
+    raises)."""
+    if key not in PARAMETERS:
+        fail(key, f"unknown parameter {key!r}; known: {', '.join(PARAMETERS)}")
+    if isinstance(rng, dict):
+        try:
+            dist = parse_distribution(key, rng, key not in ("obstacle_x", "obstacle_y"),
+                                      lambda msg: _raise(msg))
+        except DistributionError as exc:
+            fail(key, str(exc))
+        if dist.fault is not None and key in ("obstacle_x", "obstacle_y"):
+            fail(key, f"{key}: a fault share is not supported for the obstacle's "
+                      "position (it needs its partner); use dropout or a delay")
+        rng = list(dist.range)
+    else:
+        dist = None
+    if (not isinstance(rng, list) or len(rng) != 2
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                       and math.isfinite(x) for x in rng) or rng[0] > rng[1]):
+        fail(key, f"{key} must be [low, high] with finite numbers, low <= high "
+                  f"({PARAMETERS[key][0]})")
+    if not math.isfinite(float(rng[1]) - float(rng[0])):
+        fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] is wider than a float can "
+                  "hold (high - low overflows)")
+    if max(abs(rng[0]), abs(rng[1])) > MAX_MAGNITUDE:
+        fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] goes beyond "
+                  f"+-{MAX_MAGNITUDE:g} {PARAMETERS[key][0]} (the simulator's arithmetic "
+                  "on it would overflow)")
+    if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
+        fail(key, f"{key} cannot be negative")
+    if key == "obstacle_speed" and not rng[0] > 0:
+        fail(key, "obstacle_speed must be > 0 m/s")
+    if key in _NEEDS and _NEEDS[key] not in params and not (
+            key == "dropout_duration" and sc.dropout_start is not None):
+        fail(key, f"{key} needs {_NEEDS[key]} too")
+    if key.startswith("obstacle_s") and not sc.movers:
+        fail(key, f"{key}: scenario {name!r} has no moving obstacle")
+    return rng, dist
 
 
 def _raise(msg: str):

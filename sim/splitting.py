@@ -83,6 +83,26 @@ def _score(x: float | None) -> float:
     return -math.inf if x is None or x != x else float(x)
 
 
+def _resample(robustness, rng, z, r, dead, level: float, moves: int, rho: float) -> int:
+    """Step 3 of the module docstring, in place on ``z``/``r``: the ``dead`` particles
+    become copies of survivors (``r < level``) moved by ``moves`` pCN steps restricted to
+    ``r < level``; returns the accepted moves."""
+    import numpy as np
+
+    alive = np.flatnonzero(r < level)
+    parents = rng.choice(alive, size=dead.size)
+    z[dead], r[dead] = z[parents], r[parents]
+    accepted = 0
+    for _ in range(moves):
+        noise = rng.standard_normal((dead.size, z.shape[1]))
+        prop = rho * z[dead] + math.sqrt(1 - rho * rho) * noise
+        rp = np.array([_score(x) for x in robustness(prop.tolist())])
+        ok = rp < level
+        z[dead[ok]], r[dead[ok]] = prop[ok], rp[ok]
+        accepted += int(ok.sum())
+    return accepted
+
+
 def adaptive_multilevel_splitting(
         robustness: Callable[[Sequence[Sequence[float]]], Sequence[float | None]],
         dim: int, seed: int, *, particles: int = 100, kill: int = 10, moves: int = 5,
@@ -113,7 +133,7 @@ def adaptive_multilevel_splitting(
     r = np.array([_score(x) for x in robustness(z.tolist())])
     samples = particles
     finite = r[np.isfinite(r)]
-    if finite.size == 0 and not np.any(r < 0):
+    if finite.size == 0:
         raise SplittingError("the robustness of this requirement is boolean (+-inf on every "
                              "run): splitting has no levels; estimate it by crude Monte Carlo "
                              "(fretc estimate without --rare)")
@@ -141,17 +161,10 @@ def adaptive_multilevel_splitting(
         log_p += math.log(share)
         var += (dead.size / particles) / (share * particles)
         levels.append(float(level))
-        alive = np.flatnonzero(r < level)
-        parents = rng.choice(alive, size=dead.size)
-        z[dead], r[dead] = z[parents], r[parents]
-        for _ in range(moves):
-            prop = rho * z[dead] + math.sqrt(1 - rho * rho) * rng.standard_normal((dead.size, dim))
-            rp = np.array([_score(x) for x in robustness(prop.tolist())])
-            samples += dead.size
-            ok = rp < level
-            z[dead[ok]], r[dead[ok]] = prop[ok], rp[ok]
-            accepted += int(ok.sum())
-            proposed += dead.size
+        acc = _resample(robustness, rng, z, r, dead, level, moves, rho)
+        samples += dead.size * moves
+        accepted += acc
+        proposed += dead.size * moves
     final = float(np.mean(r < 0))
     if final == 0.0:
         est, rel = 0.0, math.inf
