@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -18,6 +19,7 @@ from compiler.ir import ProbabilityBound
 from fretc.cli import main
 
 N, K = 1000, 630
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
@@ -56,6 +58,9 @@ def test_630_of_1000_holds_at_half_with_scipys_interval(fleet):
     suite = junit.find("testsuite[@name='statistics']")
     assert suite.get("failures") == "0" and suite.get("errors") == "0"
     assert junit.get("failures") == "0"  # violated runs of P1 are not failures
+    import jsonschema
+    schema = json.loads((ROOT / "docs" / "reference" / "audit.schema.json").read_text())
+    jsonschema.validate(st, dict(schema["$defs"]["statistics"], **{"$defs": schema["$defs"]}))
 
 
 def test_630_of_1000_fails_at_0_7(fleet):
@@ -137,3 +142,12 @@ def test_exit_codes_follow_the_statistical_verdict():
     assert exit_code(worse, statistics=fleet_statistics(worse, b)) == 1
     good = _logs(["satisfied"] * 30)
     assert exit_code(good, statistics=fleet_statistics(good, b)) == 0
+
+
+@pytest.mark.parametrize("p,clean,one", [(0.5, 6, 9), (0.9, 36, 54), (0.95, 72, 110),
+                                         (0.99, 368, 555), (0.999, 3688, 5570)])
+def test_the_guides_table_of_runs_needed(p, clean, one):
+    """docs/guide/statistics.md "How many runs a bound needs"."""
+    for fails, n in ((0, clean), (1, one)):
+        assert decide(">=", p, *clopper_pearson(n - fails, n)) == "holds"
+        assert decide(">=", p, *clopper_pearson(n - 1 - fails, n - 1)) != "holds"
