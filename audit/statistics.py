@@ -30,7 +30,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["RequirementStatistics", "fleet_statistics", "clopper_pearson", "decide",
+__all__ = ["RequirementStatistics", "fleet_statistics", "plan_statistics", "clopper_pearson", "decide",
            "more_runs", "UNKNOWN_POLICIES", "STAT_VERDICTS"]
 
 UNKNOWN_POLICIES = ("fail", "exclude")
@@ -202,6 +202,17 @@ def fleet_statistics(logs: list, bounds: dict[str, Any], confidence: float = 0.9
                      None if bound is None else bound.p)
         out.append(st)
     return out
+
+
+def plan_statistics(plan, logs: list, confidence: float = 0.95,
+                    unknown: str = "fail") -> list[RequirementStatistics] | None:
+    """The fleet statistics of an audit plan's requirements (:class:`audit.model.AuditPlan`)
+    over ``logs``, or None when the audit is of one log and no requirement has a
+    probability bound (the audit JSON then has no ``statistics``)."""
+    bounds = {r.id: getattr(r.compiled, "probability", None) for r in plan.requirements}
+    if len(logs) <= 1 and not any(bounds.values()):
+        return None
+    return fleet_statistics(logs, bounds, confidence, unknown)
 
 
 def statistical_exit(stats: list[RequirementStatistics] | None) -> tuple[bool, bool]:

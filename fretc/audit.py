@@ -90,7 +90,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from reports.junit import junit_xml
     from reports.terminal import AuditProgress, escape, print_summary
     from audit.fleet import expand_log_args
-    from audit.statistics import fleet_statistics
+    from audit.statistics import plan_statistics
     from audit.verdict import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
@@ -119,9 +119,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
             results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
-    bounds = {r.id: getattr(r.compiled, "probability", None) for r in plan.requirements}
-    stats = (fleet_statistics(results, bounds, confidence, unknown_runs)
-             if len(results) > 1 or any(bounds.values()) else None)
+    stats = plan_statistics(plan, results, confidence, unknown_runs)
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors, statistics=stats)
     doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,

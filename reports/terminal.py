@@ -95,8 +95,9 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
     ``details`` one evidence block per violation (trigger, obligation, the missed tick with
     its tick time and the log time of the message that decided it) and, with ``verbose``,
     the values around each violation; last the counts and the exit code (with
-    ``statistics``, :mod:`audit.statistics`: the fleet table first, and probability
-    requirements judged by their statistical verdict)."""
+    ``statistics``, :mod:`audit.statistics`: the fleet table first when a requirement has
+    a probability bound or with ``verbose``, and probability requirements judged by their
+    statistical verdict)."""
     if plan is not None:
         _print_plan(console, plan, len(logs))
     reqs: list[str] = []
@@ -125,7 +126,8 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
             for v in la.verdicts:
                 if v.verdict == "violated":
                     _print_violation(console, la, v, verbose)
-    if statistics is not None:
+    if statistics is not None and (verbose or any(st.bound is not None for st in statistics)):
+        # (plain requirements' fleet statistics: in the JSON, and here with --verbose)
         from .statistics import print_statistics
 
         print_statistics(console, statistics)

@@ -151,3 +151,29 @@ def test_the_guides_table_of_runs_needed(p, clean, one):
     for fails, n in ((0, clean), (1, one)):
         assert decide(">=", p, *clopper_pearson(n - fails, n)) == "holds"
         assert decide(">=", p, *clopper_pearson(n - 1 - fails, n - 1)) != "holds"
+
+
+def test_mixed_set_each_judged_its_own_way(fleet):
+    """A probability requirement that holds beside a plain one violated on some runs: the
+    plain one gives exit 1; the probability one stays 'holds' and its runs pass in JUnit."""
+    (fleet / "mixed.fret").write_text(
+        "P1: the robot shall with probability >= 0.5 always satisfy ok\n"
+        "Q: the robot shall always satisfy ok\n")
+    out = fleet / "mixed.json"
+    res = CliRunner().invoke(main, ["audit", "-r", str(fleet / "mixed.fret"),
+                                    str(fleet / "runs"), "--no-progress", "--json", str(out),
+                                    "--junit", str(fleet / "mixed.xml")])
+    assert res.exit_code == 1
+    p1, q = json.loads(out.read_text())["statistics"]
+    assert p1["verdict"] == "holds" and q["bound"] is None and q["verdict"] is None
+    assert q["violated"] == N - K
+    junit = ET.parse(fleet / "mixed.xml").getroot()
+    failed = {c.get("name") for c in junit.iter("testcase") if c.find("failure") is not None}
+    assert failed == {"Q"}
+
+
+def test_a_probability_outside_0_1_is_refused_with_its_position(tmp_path):
+    f = tmp_path / "bad.fret"
+    f.write_text("P: the robot shall with probability >= 1.5 always satisfy ok\n")
+    res = CliRunner().invoke(main, [str(f), "--emit", "ltl"])
+    assert res.exit_code == 1 and "outside [0, 1]" in res.output and f"{f}:1:" in res.output
