@@ -220,6 +220,9 @@ def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 10
     except KeyboardInterrupt:
         result.interrupted = True
         result.stopped = f"interrupted after {len(result.runs)} runs"
+        for mcap in (outp / "runs").glob("run-*.mcap"):  # runs made but not taken
+            if int(mcap.stem[4:]) > len(result.runs):
+                os.remove(mcap)
     finally:
         runner.close()
     _judge(result, plan, bounds, confidence, unknown)
