@@ -13,7 +13,14 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
       "summary": {satisfied, vacuous, violated, error, partial_logs, incomplete_logs,
                   log_errors, exit_code},
       "not_formalized": [ {id, source, line, origin} ... ]  # only when there are any
-    }
+      "statistics": [ RequirementStatistics.to_json() ... ]  # only with several logs or a
+    }                                                         # probability requirement
+
+``statistics`` (:mod:`audit.statistics`): per requirement the runs of each verdict, the
+estimate of P(satisfied), its Clopper-Pearson ``interval`` at ``confidence``, and for a
+requirement ``with probability OP p`` its ``bound`` and statistical ``verdict`` (holds /
+fails / undecided). A probability requirement's exit code follows that verdict, never its
+per-run violations.
 
 A requirement read from a requirements tool (ReqIF, Doorstop, FRET's export) has an
 ``origin`` (:class:`fretish.entry.Origin`), and each of its verdicts a ``tool_id``; a
@@ -48,7 +55,7 @@ from typing import Any
 
 __all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_json",
            "summary", "exit_code", "incomplete", "SCHEMA", "VERDICTS", "EXIT_CODES", "EXIT_OK",
-           "EXIT_VIOLATED", "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE"]
+           "EXIT_VIOLATED", "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE", "EXIT_UNDECIDED"]
 
 SCHEMA = "fretc-audit/1"
 #: At most this many points of a verdict's margin over time (:attr:`Verdict.margin`).
@@ -343,14 +350,19 @@ EXIT_OK = 0
 EXIT_VIOLATED = 1
 EXIT_INPUT_ERROR = 2
 EXIT_INCOMPLETE = 3
+EXIT_UNDECIDED = 5
 EXIT_CODES = (
     (EXIT_OK, "every verdict satisfied or vacuous, on complete logs without data problems"),
-    (EXIT_VIOLATED, "a requirement is violated on some log"),
+    (EXIT_VIOLATED, "a requirement is violated on some log, or a probability requirement "
+                    "fails statistically over the logs"),
     (EXIT_INPUT_ERROR, "a usage or input error: bad option, requirement or binding, a log "
                        "that cannot be read, a requirement that could not be audited on a log"),
     (EXIT_INCOMPLETE, "no violation found, but a log is partial (truncated, damaged) or had "
                       "data problems, or a verdict is unknown: the audit is incomplete "
                       "(--allow-partial: 0 instead)"),
+    (EXIT_UNDECIDED, "no violation, but a probability requirement is undecided: too few "
+                     "runs for its bound at the confidence asked (--allow-partial does not "
+                     "change it)"),
 )
 
 
@@ -366,7 +378,8 @@ def incomplete(la: "LogAudit") -> bool:
 _DECIDED = ("satisfied", "vacuous", "violated", "error")
 
 
-def summary(logs: list[LogAudit], allow_partial: bool = False) -> dict[str, int]:
+def summary(logs: list[LogAudit], allow_partial: bool = False,
+            statistics: list | None = None) -> dict[str, int]:
     """Counts of verdicts over all logs, and the exit code they give (:func:`exit_code`)."""
     out = {k: 0 for k in VERDICTS}
     for la in logs:
@@ -375,22 +388,34 @@ def summary(logs: list[LogAudit], allow_partial: bool = False) -> dict[str, int]
     out["partial_logs"] = sum(1 for la in logs if la.partial)
     out["incomplete_logs"] = sum(1 for la in logs if incomplete(la))
     out["log_errors"] = sum(1 for la in logs if la.error)
-    out["exit_code"] = exit_code(logs, allow_partial=allow_partial)
+    out["exit_code"] = exit_code(logs, allow_partial=allow_partial, statistics=statistics)
     return out
 
 
 def exit_code(logs: list[LogAudit], input_errors: bool = False,
-              allow_partial: bool = False) -> int:
+              allow_partial: bool = False, statistics: list | None = None) -> int:
     """The exit code of an audit (:data:`EXIT_CODES`), first that applies: 2 anything could
     not be audited (an input error, an ``error`` verdict); 1 a requirement is violated; 3
     (0 with ``allow_partial``) no violation but some log is incomplete (:func:`incomplete`:
     partial, data problems, unknown verdicts - a CI gate must not pass a recording that lost
-    its last minutes); else 0."""
+    its last minutes); else 0.
+
+    ``statistics`` (:class:`audit.statistics.RequirementStatistics` list): a requirement
+    with a probability bound is judged by its statistical verdict, not by its runs: 1 when
+    it ``fails``, 5 (:data:`EXIT_UNDECIDED`, after 1 and before 3) when ``undecided``; its
+    violated runs alone do not give 1."""
+    from .statistics import statistical_exit
+
+    bounded = {s.id for s in statistics or () if s.bound is not None}
+    failed, undecided = statistical_exit(statistics)
     if input_errors or any(la.error for la in logs) or any(
             v.verdict == "error" for la in logs for v in la.verdicts):
         return EXIT_INPUT_ERROR
-    if any(v.verdict == "violated" for la in logs for v in la.verdicts):
+    if failed or any(v.verdict == "violated" and v.requirement not in bounded
+                     for la in logs for v in la.verdicts):
         return EXIT_VIOLATED
+    if undecided:
+        return EXIT_UNDECIDED
     if not allow_partial and any(incomplete(la) for la in logs):
         return EXIT_INCOMPLETE
     return EXIT_OK
@@ -398,13 +423,14 @@ def exit_code(logs: list[LogAudit], input_errors: bool = False,
 
 def audit_json(logs: list[LogAudit], requirements: list[dict], bindings: dict | None,
                input_errors: bool = False, allow_partial: bool = False,
-               extra: dict | None = None) -> str:
+               extra: dict | None = None, statistics: list | None = None) -> str:
     """The ``--json`` document (module docstring), as text with sorted keys. ``extra``: more
-    top-level members (``not_formalized``, :meth:`audit.model.AuditPlan.sources_json`).
-    Each verdict of a requirement read from a tool (its ``origin``) names the tool's
-    identifier as ``tool_id``."""
-    s = summary(logs, allow_partial)
-    s["exit_code"] = exit_code(logs, input_errors, allow_partial)
+    top-level members (``not_formalized``, :meth:`audit.model.AuditPlan.sources_json`);
+    the ``statistics`` list when ``statistics`` is given (None: no key). Each verdict of a
+    requirement read from a tool (its ``origin``) names the tool's identifier as
+    ``tool_id``."""
+    s = summary(logs, allow_partial, statistics)
+    s["exit_code"] = exit_code(logs, input_errors, allow_partial, statistics)
     tool_ids = {r["id"]: r["origin"]["tool_id"] for r in requirements
                 if isinstance(r.get("origin"), dict)}
     out_logs = []
@@ -416,4 +442,6 @@ def audit_json(logs: list[LogAudit], requirements: list[dict], bindings: dict | 
         out_logs.append(j)
     doc = {"schema": SCHEMA, "requirements": requirements, "bindings": bindings,
            "logs": out_logs, "summary": s, **(extra or {})}
+    if statistics is not None:
+        doc["statistics"] = [st.to_json() for st in statistics]
     return json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n"

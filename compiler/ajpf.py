@@ -8,6 +8,8 @@ One ``label: formula`` line per requirement, from its ft_inf. AJPF syntax: ``[]`
 binary sub-formula is parenthesized. ``<->`` and ``xor`` are rewritten with ``->``, ``&`` and
 ``||``. What AJPF cannot express (next, bounded and past operators, a comparison with no
 belief name, the constants TRUE/FALSE) is refused with the reason and what to write instead.
+A probability requirement (``with probability >= 0.95``) stops the whole output with a
+positioned error (:func:`refuse_probability`): AJPF has no probability operator.
 
 Variable mapping (TOML, ``--psl-map``)::
 
@@ -188,6 +190,8 @@ def emit_psl(compiled, mapping_path: str | None = None) -> dict[str, str]:
     reads every other line as ``label: formula`` (a ``//`` line would be read as a property
     labelled ``//...``, or glued onto the property above)."""
     mapping = load_mapping(mapping_path)
+    for c in compiled:
+        refuse_probability(c)
     groups: dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
@@ -213,10 +217,37 @@ def emit_psl(compiled, mapping_path: str | None = None) -> dict[str, str]:
     return out
 
 
+def refuse_probability(compiled) -> None:
+    """Raise :class:`AjpfError` positioned at the ``with probability`` phrase of a
+    probability requirement (``file:line:col: error: ...``): AJPF checks that *every*
+    execution of the agent satisfies a property and has no probability operator, so a .psl
+    property of the path formula alone would claim more than the requirement does (a 95%
+    requirement checked as a 100% one). Nothing is written for the file then."""
+    b = getattr(compiled, "probability", None)
+    if b is None:
+        return
+    from common.errors import render_diagnostic
+
+    e, span = compiled.entry, compiled.requirement.probability.span
+    line = span.line if span.line else e.line
+    column = span.column if span.line else e.column
+    msg = (f"requirement {one_line(compiled.id)} has 'with probability {b.op} {b.text}': "
+           "AJPF has no probabilities (it checks that every run satisfies a property), so "
+           "no .psl property states this requirement; judge it over runs instead (fretc "
+           "audit of several logs, fretc estimate) or drop the probability field to "
+           "demand it on every run")
+    err = AjpfError(render_diagnostic(e.source, line, column, msg))
+    err.source, err.line, err.column, err.message = e.source, line, column, msg
+    raise err
+
+
 def psl_label_and_formula(compiled, mapping: dict | None = None):
     """``(label, formula)`` of one compiled requirement, or ``(None, reason)``."""
     if compiled.formalization is None:
         return None, "not formalized"
+    if compiled.probability is not None:
+        return None, ("AJPF has no probabilities: 'with probability' is judged over runs, "
+                      "not by a .psl property")
     mapping = mapping or {}
     try:
         agent = mapping.get("agent") or compiled.requirement.component

@@ -83,6 +83,20 @@ class Compiled:
             self._cache[key] = formula_text(self.formalization, which + "_spot")
         return self._cache[key]
 
+    @property
+    def probability(self):
+        """The requirement's probability bound (:class:`compiler.ir.ProbabilityBound`), or
+        None: a requirement without ``with probability``, or one that did not formalize."""
+        f = self.formalization
+        return None if f is None else getattr(f, "probability", None)
+
+    def pctl(self) -> str | None:
+        """FRET's PCTL* form of a probability requirement, ``P>=0.95 [ ft_inf ]`` (the
+        bound around the infinite-trace path formula, FRET/SMV syntax); None without a
+        bound."""
+        b = self.probability
+        return None if b is None else b.pctl(self.smv_text["ft_inf"])
+
     def location(self) -> str:
         """``file:line`` of the requirement."""
         return f"{self.entry.source}:{self.entry.line}"
@@ -112,8 +126,8 @@ class Compiled:
         requirement that formalized (no error); None for any other (free-form, failed).
         ``texts=False``: None in place of the five printed forms (nothing printed)."""
         f = self.formalization
-        if f is None or self.error is not None:
-            return None
+        if f is None or self.error is not None or self.probability is not None:
+            return None  # (a probability requirement has two more keys: to_json's own)
         e = self.entry
         ft, ft_inf, pt, ft_spot, ft_inf_spot = self.printed() if texts else (None,) * 5
         variables = f.variables
@@ -126,8 +140,8 @@ class Compiled:
         ``pt`` (FRET syntax), ``ft_spot``, ``ft_inf_spot``, ``variables`` (the names as
         written, quotes removed, as FRET's list), ``variables_fret`` (the same names as
         FRET's formulas print them: ``"weird var"`` -> ``_DQT_weird_SPC_var_DQT_``),
-        ``warnings``,
-        and ``error`` (``message``, ``line``, ``column``) when it failed. A formalized
+        ``warnings``, for a probability requirement ``probability`` (``{"op", "p",
+        "text"}``) and ``pctl`` (:meth:`pctl`), and ``error`` (``message``, ``line``, ``column``) when it failed. A formalized
         requirement's keys are :data:`FORMALIZED_KEYS`, its values :meth:`json_values`."""
         values = self.json_values()
         if values is not None:
@@ -144,6 +158,10 @@ class Compiled:
                 "variables_fret": [mangle(v) for v in f.variables],
                 "ticks": f.ticks, "warnings": f.warnings, "pt_causal": f.pt_causal,
             })
+            b = self.probability
+            if b is not None:
+                out["probability"] = dict(b.to_json(), text=b.text)
+                out["pctl"] = self.pctl()
         elif self.freeform:
             out.update({"key": None, "freeform": True})
         if self.error is not None:

@@ -91,6 +91,10 @@ class MonitorSource:
     bad_table: int | None = None  # index in the module's _TABLES (render_module)
     good_table: int | None = None
     shape: int | None = None  # index in the module's _SHAPES (render_module)
+    #: a probability requirement's FRET PCTL* form (``P>=0.95 [ ft_inf ]``), else None: the
+    #: monitor judges the path formula on one run; the bound applies across runs
+    pctl: str | None = None
+    probability: tuple | None = None  # (op, p) of the bound, with pctl
 
     # read-only delegations, same shape as compiler.build.Compiled's (kept: one property per field)
     @property
@@ -149,6 +153,9 @@ def monitor_source(compiled, index: int) -> MonitorSource:
         index=index, class_name=_class_name(compiled.id, index), id=compiled.id,
         text=compiled.text, key=f.key, ft=compiled.smv_text["ft"], ft_inf=compiled.smv_text["ft_inf"],
         pt=compiled.smv_text["pt"], source_hash=compiled.source_hash,
+        pctl=compiled.pctl() if getattr(compiled, "probability", None) is not None else None,
+        probability=((compiled.probability.op, compiled.probability.p)
+                     if getattr(compiled, "probability", None) is not None else None),
         variables=[v[0] for v in var_locals], var_locals=var_locals,
         slots_init=slots_init,
         slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))) + "tick, _",

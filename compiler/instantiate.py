@@ -55,7 +55,7 @@ from .instantiate_atoms import (TIMED, PlainExpander, SharingExpander, Timed,
                                 has_future_function, is_shared_leaf, named_endpoints,
                                 variables_into)
 from . import ir
-from .ir import FALSE, FTP, LAST
+from .ir import FALSE, FTP, LAST, probability_bound
 from .printers import to_smv, to_spot
 from .scope_timing import fn_right, pt_endpoints
 from .semantics import Formalization, formalize, template_parts
@@ -97,6 +97,7 @@ class InstantiatedFormalization(Formalization):
         self.warnings = warnings
         self.ticks = ticks
         self.pt_causal = pt_causal
+        self.probability = probability_bound(req.probability)
         self._req, self._period, self._tmpl = req, tick_period, tmpl
         self._atoms, self._texts = atoms, texts
         self._full = None
@@ -115,7 +116,7 @@ class InstantiatedFormalization(Formalization):
         the printers give on it are the template's (module docstring)."""
         f = self._build()
         return (Formalization, (f.key, f.ft, f.ft_inf, f.pt, f.variables, f.warnings,
-                                f.ticks, f.pt_causal))
+                                f.ticks, f.pt_causal, f.probability))
 
     ft = property(lambda self: self._build().ft, doc="ft (IR), built on first use")
     ft_inf = property(lambda self: self._build().ft_inf,

@@ -398,3 +398,63 @@ def rebuild(n: Node, args: tuple[Node, ...]) -> Node:
     if f is not None:
         return f(n, args)
     return Node(n.op, args, n.name, n.lo, n.hi)
+
+
+class ProbabilityBound:
+    """FRETish's probability field (``with probability OP p``) as the IR carries it beside the
+    path formulas: the requirement is a statement about the *share of runs* whose path
+    satisfies ft_inf (a PCTL* state formula ``P OP p [ path ]``), not about one run.
+
+    ``op`` is one of ``>= > <= < =``; ``p`` the bound as a float in [0, 1]; ``text`` the
+    number as written (printed back unchanged). Immutable and hashable. :meth:`pctl`
+    prints FRET's probabilistic form around a path formula's text (PRISM's syntax
+    ``P>=0.95 [ path ]``, the form FRET's probabilistic formalization prints; the
+    parser (:mod:`fretish.parser`) has already refused a bound outside [0, 1]).
+    """
+
+    __slots__ = ("op", "p", "text")
+
+    def __init__(self, op: str, text: str):
+        if op not in (">=", ">", "<=", "<", "="):
+            raise ValueError(f"not a probability operator: {op!r}")
+        p = float(text)
+        if not 0.0 <= p <= 1.0:
+            raise ValueError(f"probability {text} is outside [0, 1]")
+        object.__setattr__(self, "op", op)
+        object.__setattr__(self, "p", p)
+        object.__setattr__(self, "text", text)
+
+    def __setattr__(self, name, value):
+        raise AttributeError("ProbabilityBound is immutable")
+
+    def __eq__(self, other) -> bool:
+        return (isinstance(other, ProbabilityBound) and self.op == other.op
+                and self.p == other.p)
+
+    def __hash__(self) -> int:
+        return hash((self.op, self.p))
+
+    def __repr__(self) -> str:
+        return f"ProbabilityBound({self.op!r}, {self.text!r})"
+
+    def __reduce__(self):
+        return (ProbabilityBound, (self.op, self.text))
+
+    def pctl(self, path: str) -> str:
+        """``P<op><p> [ path ]``: the bound around the path formula's printed text."""
+        return f"P{self.op}{self.text} [ {path} ]"
+
+    def to_json(self) -> dict:
+        """``{"op": ">=", "p": 0.95}`` (the audit JSON's ``bound``)."""
+        return {"op": self.op, "p": self.p}
+
+    def holds_at(self, rate: float) -> bool:
+        """True when a probability ``rate`` satisfies the bound (``rate OP p``)."""
+        return {">=": rate >= self.p, ">": rate > self.p, "<=": rate <= self.p,
+                "<": rate < self.p, "=": rate == self.p}[self.op]
+
+
+def probability_bound(prob) -> ProbabilityBound | None:
+    """The :class:`ProbabilityBound` of a parsed ``fretish.ast.Probability`` (None for
+    None)."""
+    return None if prob is None else ProbabilityBound(prob.op, prob.value)

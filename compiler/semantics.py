@@ -57,6 +57,9 @@ class Formalization:
     warnings: list[str] = field(default_factory=list)
     ticks: int | None = None
     pt_causal: bool = True
+    #: FRETish's ``with probability OP p`` (:class:`compiler.ir.ProbabilityBound`), or None:
+    #: the bound applies across runs, the formulas to each run
+    probability: ir.ProbabilityBound | None = None
 
 
 # --------------------------------------------------------------------------- durations
@@ -142,7 +145,8 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
     # pt_causal from the pt tree itself: the scope mode is expanded by its own Expander,
     # whose future-time functions px does not see
     return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
-                         pt_causal=not ir.has_op(pt, ("future",)))
+                         pt_causal=not ir.has_op(pt, ("future",)),
+                         probability=ir.probability_bound(req.probability))
 
 
 def template_parts(req: A.Requirement, tick_period: Fraction | None):

@@ -10,9 +10,10 @@ LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosba
 ``.csv`` traces, or folders searched for them. Binding files default to every
 ``*.bindings.toml`` beside the requirement files or folders. Exit status
 (:data:`audit.verdict.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
-complete logs, 1 a requirement is violated, 2 usage or input errors (including a
+complete logs, 1 a requirement is violated (a probability requirement: fails over the
+logs, :mod:`audit.statistics`), 2 usage or input errors (including a
 requirement that could not be audited on some log), 3 no violation but a log is partial or
-had data problems (``--allow-partial``: 0).
+had data problems (``--allow-partial``: 0), 5 a probability requirement is undecided.
 
 Only click is imported at module level; the engine loads on first use.
 """
@@ -41,13 +42,22 @@ __all__ = ["audit_cmd"]
               help="Exit 0 instead of 3 when nothing is violated but a log is partial, had "
                    "data problems or a verdict is unknown (the verdicts stay as they are: "
                    "an unknown is never a pass).")
+@click.option("--confidence", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+              default=0.95, show_default=True,
+              help="Confidence of the fleet statistics' Clopper-Pearson intervals (audits of "
+                   "several logs, or of a 'with probability' requirement).")
+@click.option("--unknown-runs", type=click.Choice(["fail", "exclude"]), default="fail",
+              show_default=True,
+              help="How the fleet statistics count unknown and error runs: as runs that did "
+                   "not satisfy (fail: a conservative bound) or not at all (exclude). Never "
+                   "as satisfied.")
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
 @ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, window, allow_partial,
-              verbose, msg_path=()):
+              confidence, unknown_runs, verbose, msg_path=()):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -59,6 +69,16 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
          requirement that could not be audited on some log)
       3  no violation, but a log is partial (cut short, damaged) or had data
          problems, or a verdict is unknown (--allow-partial: 0)
+      4  internal error of fretc
+      5  no violation, but a 'with probability' requirement is undecided: too
+         few runs for its bound (docs/guide/statistics.md)
+
+    \b
+    Requirements 'with probability OP p' are judged over the logs (one log = one
+    run): exit 1 when the Clopper-Pearson interval of P(satisfied) lies on the wrong
+    side of p, never for a violated run alone. Audits of several logs print and write
+    (--json "statistics") per requirement the runs of each verdict, the estimate
+    and its interval.
 
     \b
     Binding reference (expressions, functions, slices, units, NaN/inf rules,
@@ -70,6 +90,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     from reports.junit import junit_xml
     from reports.terminal import AuditProgress, escape, print_summary
     from audit.fleet import expand_log_args
+    from audit.statistics import plan_statistics
     from audit.verdict import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
@@ -98,16 +119,17 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
             results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
+    stats = plan_statistics(plan, results, confidence, unknown_runs)
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
-                  input_errors=input_errors)
+                  input_errors=input_errors, statistics=stats)
     doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,
-                     allow_partial, plan.sources_json())
+                     allow_partial, plan.sources_json(), stats)
     if json_path:
         if to_stdout_json:
             click.echo(doc, nl=False)
         else:
             Path(json_path).write_text(doc, encoding="utf-8")
     if junit_path:
-        Path(junit_path).write_text(junit_xml(results), encoding="utf-8")
-    code = exit_code(results, input_errors, allow_partial)
+        Path(junit_path).write_text(junit_xml(results, stats), encoding="utf-8")
+    code = exit_code(results, input_errors, allow_partial, stats)
     ctx.exit(code)

@@ -5,10 +5,12 @@ module per sub-command in this folder (shared options: :mod:`fretc.options`).
 ``fretc compile``: :mod:`fretc.compile`); ``fretc audit`` checks recorded runs
 (:mod:`fretc.audit`); ``fretc report`` writes the traceability report (:mod:`fretc.report`);
 ``fretc check`` (:mod:`fretc.check`), ``fretc inspect`` (:mod:`fretc.inspect`), ``fretc
-watch`` and ``fretc replay`` (:mod:`fretc.watch`), ``fretc export`` (:mod:`fretc.export`). Exit codes: 0 success, 1 a requirement
+watch`` and ``fretc replay`` (:mod:`fretc.watch`), ``fretc export`` (:mod:`fretc.export`),
+``fretc estimate`` (:mod:`fretc.estimate`). Exit codes: 0 success, 1 a requirement
 failed (or, for ``audit``, a violation), 2 usage or input errors (every
 :class:`common.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
-internal error (a generated monitor that is not valid: nothing is written).
+internal error (a generated monitor that is not valid: nothing is written), 5 a probability
+requirement undecided (too few runs: ``audit``, ``estimate``).
 """
 
 from __future__ import annotations
@@ -121,7 +123,8 @@ main.add_command(compile_cmd, "compile")
 
 #: The sub-commands other than ``compile``: name -> (module of this package, its command).
 _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
-             "falsify": ("falsify", "falsify_cmd"), "inspect": ("inspect", "inspect_cmd"),
+             "falsify": ("falsify", "falsify_cmd"),
+             "estimate": ("estimate", "estimate_cmd"), "inspect": ("inspect", "inspect_cmd"),
              "report": ("report", "report_cmd"), "watch": ("watch", "watch_cmd"),
              "export": ("export", "export_cmd"), "simulate": ("simulate", "simulate_cmd"),
              "replay": ("watch", "replay_cmd")}

@@ -370,6 +370,13 @@ def _emit_ltl(compiled) -> None:
             click.echo(f"  ft      {c.smv_text['ft']}")
             click.echo(f"  ft_inf  {c.smv_text['ft_inf']}")
             click.echo(f"  pt      {c.smv_text['pt']}")
+            if c.probability is not None:
+                # FRET's PCTL* form: the bound is across runs; ft/ft_inf/pt judge one run
+                click.echo(f"  pctl    {c.pctl()}")
+                click.echo(f"  note    probability {c.probability.op} {c.probability.text} "
+                           "applies across runs: one log is judged by the path formulas; "
+                           "fleets and 'fretc estimate' judge the bound (docs/guide/"
+                           "statistics.md)")
             for w in f.warnings:
                 click.echo(f"  warning {w}")
         elif c.freeform:

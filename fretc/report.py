@@ -69,6 +69,7 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         # lazy: the audit engine only when the logs are audited here
         from audit import AuditInputError, find_logs, load_plan
         from audit.fleet import expand_log_args
+        from audit.statistics import plan_statistics
         from audit.verdict import audit_json
 
         json_dir = None
@@ -84,7 +85,8 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         input_errors = any(r.error is not None for r in plan.requirements)
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
         doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
-                                    input_errors, extra=plan.sources_json()))
+                                    input_errors, extra=plan.sources_json(),
+                                    statistics=plan_statistics(plan, results)))
     try:
         files = write_report(doc, output, plan=plan, base=base, json_dir=json_dir,
                              psl_map=psl_map, annotate_dir=annotate_dir, title=title)

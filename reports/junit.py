@@ -17,11 +17,18 @@ from audit.verdict import LogAudit
 __all__ = ["junit_xml"]
 
 
-def junit_xml(logs: list[LogAudit]) -> str:
+def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
     """JUnit XML: a ``testsuite`` per log, a ``testcase`` per requirement (``failure`` when
-    violated, ``error`` when not audited; vacuous passes say so in ``system-out``)."""
+    violated, ``error`` when not audited; vacuous passes say so in ``system-out``).
+
+    With ``statistics`` (:class:`audit.statistics.RequirementStatistics` list) a requirement
+    with a probability bound follows its statistical verdict: its per-log cases pass
+    (a violated run says so in ``system-out``: one run does not decide a probability), and a
+    ``statistics`` suite has one case per such requirement: a ``failure`` when it fails, an
+    ``error`` (type ``undecided``) when undecided."""
     root = ET.Element("testsuites", name="fretc audit")
     tot = {"tests": 0, "failures": 0, "errors": 0}
+    bounded = {s.id for s in statistics or () if s.bound is not None}
     for la in logs:
         suite = ET.SubElement(root, "testsuite", name=short_log_name(la.log))
         props = ET.SubElement(suite, "properties")
@@ -36,7 +43,10 @@ def junit_xml(logs: list[LogAudit]) -> str:
             counts["tests"] += 1
             case = ET.SubElement(suite, "testcase", classname=cls, name=v.requirement, time="0")
             out = [v.text]
-            if v.verdict == "violated":
+            if v.verdict == "violated" and v.requirement in bounded:
+                out.append("verdict: violated on this run; a probability requirement is "
+                           "judged over the runs (suite 'statistics')")
+            elif v.verdict == "violated":
                 counts["failures"] += 1
                 fv = v.first_violation
                 msg = f"{v.requirement} violated"
@@ -75,11 +85,42 @@ def junit_xml(logs: list[LogAudit]) -> str:
             suite.set(k, str(n))
             tot[k] += n
         suite.set("time", "0")
+    if bounded:
+        _statistics_suite(root, [s for s in statistics if s.bound is not None], tot)
     for k, n in tot.items():
         root.set(k, str(n))
     _xml_safe(root)
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _statistics_suite(root, stats: list, tot: dict) -> None:
+    """The ``statistics`` testsuite: one case per probability requirement, its statistical
+    verdict (``holds`` passes)."""
+    suite = ET.SubElement(root, "testsuite", name="statistics")
+    counts = {"tests": 0, "failures": 0, "errors": 0}
+    for st in stats:
+        counts["tests"] += 1
+        case = ET.SubElement(suite, "testcase", classname="fretc.audit.statistics",
+                             name=st.id, time="0")
+        b = st.bound
+        lo, hi = st.interval
+        line = (f"P(satisfied) {b['op']} {b['p']:g}: {st.successes}/{st.trials} runs, "
+                f"interval [{lo:.6g}, {hi:.6g}] at {100 * st.confidence:g} % "
+                f"(unknown runs: {st.unknown_policy}); verdict {st.verdict}")
+        if st.verdict == "fails":
+            counts["failures"] += 1
+            ET.SubElement(case, "failure", message=f"{st.id} fails: {line}",
+                          type="fails").text = line
+        elif st.verdict == "undecided":
+            counts["errors"] += 1
+            ET.SubElement(case, "error", message=f"{st.id} undecided: {st.why}",
+                          type="undecided").text = f"{line}\n{st.why}"
+        ET.SubElement(case, "system-out").text = line
+    for k, n in counts.items():
+        suite.set(k, str(n))
+        tot[k] += n
+    suite.set("time", "0")
 
 
 def _xml_safe(root) -> None:

@@ -88,13 +88,16 @@ def _cell(v: Verdict, st: int | None) -> str:
 
 def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
                   verbose: bool = False, allow_partial: bool = False,
-                  input_errors: bool = False) -> None:
+                  input_errors: bool = False, statistics: list | None = None) -> None:
     """Print the verdicts to a rich Console: a header line, the verdict matrix (logs x
     requirements; cells give the first violation's time in seconds from the log's start),
     per-log notes, errors in full below the table (never cut inside a cell), with
     ``details`` one evidence block per violation (trigger, obligation, the missed tick with
     its tick time and the log time of the message that decided it) and, with ``verbose``,
-    the values around each violation; last the counts and the exit code."""
+    the values around each violation; last the counts and the exit code (with
+    ``statistics``, :mod:`audit.statistics`: the fleet table first when a requirement has
+    a probability bound or with ``verbose``, and probability requirements judged by their
+    statistical verdict)."""
     if plan is not None:
         _print_plan(console, plan, len(logs))
     reqs: list[str] = []
@@ -124,7 +127,12 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
             for v in la.verdicts:
                 if v.verdict == "violated":
                     _print_violation(console, la, v, verbose, ids.get(v.requirement))
-    _print_counts(console, logs, input_errors, allow_partial)
+    if statistics is not None and (verbose or any(st.bound is not None for st in statistics)):
+        # (plain requirements' fleet statistics: in the JSON, and here with --verbose)
+        from .statistics import print_statistics
+
+        print_statistics(console, statistics)
+    _print_counts(console, logs, input_errors, allow_partial, statistics)
 
 
 def _print_plan(console, plan, n_logs: int) -> None:
@@ -247,7 +255,7 @@ def _print_errors(console, logs: list[LogAudit]) -> None:
 
 
 def _print_counts(console, logs: list[LogAudit], input_errors: bool,
-                  allow_partial: bool) -> None:
+                  allow_partial: bool, statistics: list | None = None) -> None:
     """The last line: the count of each verdict and the exit code with its meaning."""
     counts: dict[str, int] = {}
     for la in logs:
@@ -257,10 +265,13 @@ def _print_counts(console, logs: list[LogAudit], input_errors: bool,
                                                  "error")]
     parts += [f"{n} {k}" for k, n in sorted(counts.items())
               if k not in ("satisfied", "vacuous", "violated", "unknown", "error")]
-    code = exit_code(logs, input_errors, allow_partial)
-    why = {0: "", 1: ": a requirement is violated", 2: ": something could not be audited",
+    code = exit_code(logs, input_errors, allow_partial, statistics)
+    why = {0: "", 1: ": a requirement is violated" + (
+               " or a probability requirement fails" if statistics else ""),
+           2: ": something could not be audited",
            3: ": no violation, but a log is partial or had data problems, or a verdict is "
-              "unknown"}.get(code, "")
+              "unknown", 5: ": a probability requirement is undecided (too few runs)"
+           }.get(code, "")
     if code == 0 and allow_partial and any(incomplete(la) for la in logs):
         # --allow-partial changes the exit code, never a verdict: say what it let through
         why = (f": --allow-partial; {counts.get('unknown', 0)} unknown verdicts are not "

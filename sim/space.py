@@ -13,6 +13,12 @@ A space file (``sim/spaces/*.toml``)::
     obstacle_x = [0.8, 1.7]
     obstacle_y = [-0.9, -0.3]
 
+A parameter may instead be a distribution (``fretc estimate`` samples it; ``fretc
+falsify`` searches its range), :mod:`sim.distributions`::
+
+    interceptor_delay = {dist = "normal", mean = 0.3, sd = 0.4, low = 0.0, high = 2.0}
+    dropout_start = {dist = "uniform", low = 2.0, high = 8.0, fault = 0.05}
+
 The parameters (:data:`PARAMETERS`) and what a value does to the scenario are applied by
 :func:`apply`; a space whose base scenario lacks what a parameter changes (``obstacle_speed``
 without a moving obstacle) is refused when it is loaded.
@@ -28,6 +34,7 @@ from pathlib import Path
 
 from common.errors import FretcError, Where
 
+from .distributions import Distribution, DistributionError, parse_distribution
 from .scenarios import DRUM_RADIUS, SCENARIOS, Scenario
 from .simulation import STEP_MS
 from .world import Barrel
@@ -64,12 +71,47 @@ class SpaceError(FretcError):
 @dataclass(frozen=True)
 class Space:
     """A parameter space: ``scenario`` (the base :class:`~sim.scenarios.Scenario`), the
-    simulator's ``seed``, and ``parameters``: ``(name, low, high)`` in file order."""
+    simulator's ``seed``, and ``parameters``: ``(name, low, high)`` in file order;
+    ``distributions``: one :class:`~sim.distributions.Distribution` per parameter, same
+    order (a plain range is uniform on it)."""
 
     path: str
     scenario: Scenario
     seed: int
     parameters: tuple[tuple[str, float, float], ...]
+    distributions: tuple[Distribution, ...] = ()
+
+    @property
+    def latent_dims(self) -> int:
+        """The number of latent standard normal coordinates of one run
+        (:mod:`sim.distributions`)."""
+        return sum(d.latent_dims for d in self.distributions)
+
+    def at_latent(self, z) -> dict[str, float]:
+        """The parameter values at latent coordinates ``z`` (``latent_dims`` floats); a
+        fault that does not happen is left out (the scenario's own value)."""
+        out, i = {}, 0
+        for d in self.distributions:
+            v = d.value(z[i:i + d.latent_dims])
+            i += d.latent_dims
+            if v is not None:
+                out[d.name] = v
+        return out
+
+    def check_sampling(self) -> None:
+        """Raise :class:`SpaceError` (``file:line``) when a parameter's distribution is
+        degenerate for sampling (a plain range ``[x, x]``: one value)."""
+        for d in self.distributions:
+            if not d.low < d.high and d.kind == "uniform":
+                try:
+                    text = Path(self.path).read_text(encoding="utf-8")
+                except OSError:
+                    text = ""
+                line = _line_of(text, d.name)
+                raise SpaceError(f"{self.path}:{line}: {d.name}: the range [{d.low:g}, "
+                                 f"{d.high:g}] is a single value: a degenerate distribution "
+                                 "for sampling (widen it, or fix the value in the scenario)",
+                                 where=Where(self.path, line))
 
     @property
     def names(self) -> list[str]:
@@ -150,33 +192,58 @@ def load_space(path: str | Path) -> Space:
     if not isinstance(params, dict) or not params:
         fail("[parameters]", "the space needs a [parameters] table with at least one "
                              "parameter")
-    out = []
+    out, dists = [], []
     for key, rng in params.items():
-        if key not in PARAMETERS:
-            fail(key, f"unknown parameter {key!r}; known: {', '.join(PARAMETERS)}")
-        if (not isinstance(rng, list) or len(rng) != 2
-                or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                           and math.isfinite(x) for x in rng) or rng[0] > rng[1]):
-            fail(key, f"{key} must be [low, high] with finite numbers, low <= high "
-                      f"({PARAMETERS[key][0]})")
-        if not math.isfinite(float(rng[1]) - float(rng[0])):
-            fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] is wider than a float can "
-                      "hold (high - low overflows)")
-        if max(abs(rng[0]), abs(rng[1])) > MAX_MAGNITUDE:
-            fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] goes beyond "
-                      f"+-{MAX_MAGNITUDE:g} {PARAMETERS[key][0]} (the simulator's arithmetic "
-                      "on it would overflow)")
-        if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
-            fail(key, f"{key} cannot be negative")
-        if key == "obstacle_speed" and not rng[0] > 0:
-            fail(key, "obstacle_speed must be > 0 m/s")
-        if key in _NEEDS and _NEEDS[key] not in params and not (
-                key == "dropout_duration" and sc.dropout_start is not None):
-            fail(key, f"{key} needs {_NEEDS[key]} too")
-        if key.startswith("obstacle_s") and not sc.movers:
-            fail(key, f"{key}: scenario {name!r} has no moving obstacle")
+        rng, dist = _parameter(key, rng, params, sc, name, fail)
         out.append((key, float(rng[0]), float(rng[1])))
-    return Space(p, sc, seed, tuple(out))
+        dists.append(dist or Distribution(key, "uniform", float(rng[0]), float(rng[1])))
+    return Space(p, sc, seed, tuple(out), tuple(dists))
+
+
+def _parameter(key: str, rng, params: dict, sc: Scenario, name: str, fail):
+    """``([low, high], distribution or None)`` of one ``[parameters]`` entry (a range or a
+    distribution table), checked as :func:`load_space` documents (``fail(key, msg)``
+    raises)."""
+    if key not in PARAMETERS:
+        fail(key, f"unknown parameter {key!r}; known: {', '.join(PARAMETERS)}")
+    if isinstance(rng, dict):
+        try:
+            dist = parse_distribution(key, rng, key not in ("obstacle_x", "obstacle_y"),
+                                      lambda msg: _raise(msg))
+        except DistributionError as exc:
+            fail(key, str(exc))
+        if dist.fault is not None and key in ("obstacle_x", "obstacle_y"):
+            fail(key, f"{key}: a fault share is not supported for the obstacle's "
+                      "position (it needs its partner); use dropout or a delay")
+        rng = list(dist.range)
+    else:
+        dist = None
+    if (not isinstance(rng, list) or len(rng) != 2
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                       and math.isfinite(x) for x in rng) or rng[0] > rng[1]):
+        fail(key, f"{key} must be [low, high] with finite numbers, low <= high "
+                  f"({PARAMETERS[key][0]})")
+    if not math.isfinite(float(rng[1]) - float(rng[0])):
+        fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] is wider than a float can "
+                  "hold (high - low overflows)")
+    if max(abs(rng[0]), abs(rng[1])) > MAX_MAGNITUDE:
+        fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] goes beyond "
+                  f"+-{MAX_MAGNITUDE:g} {PARAMETERS[key][0]} (the simulator's arithmetic "
+                  "on it would overflow)")
+    if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
+        fail(key, f"{key} cannot be negative")
+    if key == "obstacle_speed" and not rng[0] > 0:
+        fail(key, "obstacle_speed must be > 0 m/s")
+    if key in _NEEDS and _NEEDS[key] not in params and not (
+            key == "dropout_duration" and sc.dropout_start is not None):
+        fail(key, f"{key} needs {_NEEDS[key]} too")
+    if key.startswith("obstacle_s") and not sc.movers:
+        fail(key, f"{key}: scenario {name!r} has no moving obstacle")
+    return rng, dist
+
+
+def _raise(msg: str):
+    raise DistributionError(msg)
 
 
 def apply(scenario: Scenario, values: dict[str, float]) -> Scenario:

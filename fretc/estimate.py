@@ -1,0 +1,174 @@
+"""``fretc estimate``: judge requirements ``with probability OP p`` over the simulator's
+scenario space by sampling it (click command; the campaign: :mod:`sim.estimate`, the
+sequential tests: :mod:`sim.sequential`, rare violations: :mod:`sim.rare`, the report:
+:mod:`reports.estimate`).
+::
+
+    fretc estimate --requirements R --space SPACE.toml -o OUT [--seed N] [--budget N]
+                   [--test sprt|cp] [--delta D] [--alpha A] [--beta B] [--confidence C]
+                   [--unknown-runs fail|exclude] [--rare [--target ID]...] [--ray [ADDRESS]]
+
+Exit status: 0 every probability requirement holds (and no other requirement was violated
+on a run; with --rare: every target estimated), 1 a probability requirement fails or a
+requirement without a bound was violated on some run, 2 usage or input errors (a degenerate
+distribution included; with --rare, a target whose robustness gives no levels), 5 the
+budget ended before a probability requirement was decided, 130 interrupted.
+
+Only click is imported at module level; the simulator and the engine load on first use.
+"""
+
+from __future__ import annotations
+
+import os
+
+import click
+
+from .options import FleetError, audit_config, shown
+
+__all__ = ["estimate_cmd"]
+
+
+@click.command("estimate")
+@click.option("-r", "--requirements", "requirements", multiple=True, type=click.Path(exists=True),
+              help="Requirement file or folder; repeatable. Default: ./requirements.")
+@click.option("-b", "--bindings", "bindings", multiple=True, type=click.Path(exists=True),
+              help="Signal binding file (TOML); repeatable. Default: *.bindings.toml beside "
+                   "the requirements.")
+@click.option("--space", "space_path", required=True,
+              type=click.Path(exists=True, dir_okay=False),
+              help="The scenario space (TOML) with a distribution per parameter "
+                   "(sim/spaces/*.toml; a [low, high] range is uniform).")
+@click.option("--seed", type=click.IntRange(min=0, max=2**32 - 1), default=1, show_default=True,
+              help="The campaign's seed: the same seed gives the same runs and answer, "
+                   "locally and on Ray.")
+@click.option("--budget", type=click.IntRange(min=1), default=1000, show_default=True,
+              help="Simulator runs at most (with --rare: per target requirement).")
+@click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
+              help="Output folder: estimate.json, estimate.md, one SVG per test, "
+                   "runs/run-NNNNN.mcap + .audit.json of the violating runs.")
+@click.option("--test", type=click.Choice(["sprt", "cp"]), default="sprt", show_default=True,
+              help="Sequential test: Wald's SPRT (with --delta) or repeated Clopper-Pearson.")
+@click.option("--delta", type=click.FloatRange(0, 0.5, min_open=True), default=0.05,
+              show_default=True,
+              help="SPRT: half-width of the indifference region around p.")
+@click.option("--alpha", type=click.FloatRange(0, 0.5, min_open=True, max_open=True),
+              default=0.05, show_default=True,
+              help="Error of deciding 'holds' when the bound is false (by delta or more).")
+@click.option("--beta", type=click.FloatRange(0, 0.5, min_open=True, max_open=True),
+              default=0.05, show_default=True,
+              help="SPRT: error of deciding 'fails' when the bound holds (by delta or more).")
+@click.option("--confidence", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+              default=0.95, show_default=True, help="Confidence of the reported intervals.")
+@click.option("--unknown-runs", type=click.Choice(["fail", "exclude"]), default="fail",
+              show_default=True,
+              help="Unknown and error runs count as failures (fail) or not at all; never as "
+                   "satisfied.")
+@click.option("--rare", is_flag=True,
+              help="Estimate small violation probabilities (down to 1e-6) by adaptive "
+                   "multilevel splitting on the robustness, instead of the sequential test.")
+@click.option("--target", "targets", multiple=True, metavar="ID",
+              help="--rare: the requirement(s) to estimate (default: every requirement).")
+@click.option("--particles", type=click.IntRange(min=2), default=100, show_default=True,
+              help="--rare: particles per level.")
+@click.option("--kill", type=click.IntRange(min=1), default=10, show_default=True,
+              help="--rare: particles replaced per level (fewer: more levels, less error).")
+@click.option("--moves", type=click.IntRange(min=1), default=5, show_default=True,
+              help="--rare: Markov chain steps per replaced particle.")
+@click.option("--ray", "ray", is_flag=False, flag_value="local", default=None,
+              metavar="[ADDRESS]",
+              help="Simulate and audit the runs in parallel on Ray (a local Ray, or ADDRESS "
+                   "of a cluster); the same answer as without.")
+@click.pass_context
+def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, test, delta,
+                 alpha, beta, confidence, unknown_runs, rare, targets, particles, kill, moves,
+                 ray):
+    """Judge requirements 'with probability OP p' over the simulator's scenario space:
+    sample its distributions with SEED, simulate and audit each run, and stop when every
+    probability requirement is decided by the sequential test or the budget ends. The
+    report gives per requirement the estimate of P(satisfied), its Clopper-Pearson
+    interval, the runs used and the test's path (SVG); violating runs are kept
+    (MCAP + audit). --rare estimates violation probabilities by adaptive multilevel
+    splitting instead (estimate, relative error, interval).
+
+    \b
+    Exit status:
+      0  every probability requirement holds (--rare: every target estimated)
+      1  a probability requirement fails, or a requirement without a bound is
+         violated on some run
+      2  usage or input errors (a degenerate distribution; --rare: a target
+         whose robustness is boolean)
+      5  undecided: the budget ended before the test decided
+      130  interrupted (Ctrl-C); the runs so far are reported"""
+    # lazy: the simulator, the audit engine, scipy only when the command runs
+    from audit import AuditInputError, load_plan
+    from audit.fleet import RayUnavailable
+    from sim.space import load_space
+
+    if os.path.isdir(output) and os.listdir(output):
+        raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "
+                                 "campaign would mix with this one's)", param_hint="-o")
+    config = audit_config(requirements, bindings, (), None, None, None, 5)
+    space = load_space(space_path)  # SpaceError: the group's handler, exit 2
+    try:
+        plan = load_plan(config)
+    except AuditInputError as exc:
+        click.echo(shown(f"error: {exc}"), err=True)
+        ctx.exit(2)
+        return
+    bad = [r for r in plan.requirements if r.error is not None]
+    for r in bad:
+        click.echo(shown(f"error: {r.id} ({r.source}): {r.error}"), err=True)
+    if bad:
+        ctx.exit(2)
+        return
+    ids = [r.id for r in plan.requirements]
+    unknown = [t for t in targets if t not in ids]
+    if unknown:
+        raise click.BadParameter(f"no requirement {', '.join(unknown)} (known: "
+                                 f"{', '.join(ids)})", param_hint="--target")
+    if rare and not kill < particles:
+        raise click.BadParameter("--kill must be less than --particles", param_hint="--kill")
+
+    try:
+        doc = _campaign(plan, space, seed, budget, output, test, delta, alpha, beta,
+                        confidence, unknown_runs, rare, list(targets) or ids, particles,
+                        kill, moves, ray)
+    except RayUnavailable as exc:
+        raise FleetError(str(exc)) from None
+    for line in doc["summary_lines"]:
+        click.echo(shown(line))
+    click.echo(f"report: {os.path.join(output, 'estimate.md')}")
+    ctx.exit(doc["exit_code"])
+
+
+def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confidence,
+              unknown_runs, rare, targets, particles, kill, moves, ray) -> dict:
+    """Run the campaign (or the splitting with ``rare``) and write its report; returns the
+    report document (:func:`reports.estimate.write_estimate`)."""
+    from audit.verdict import audit_json
+    from reports.estimate import write_estimate
+
+    def one_log_json(la) -> str:
+        return audit_json([la], plan.requirements_json(), plan.bindings_json())
+
+    if rare:
+        from sim.rare import rare_estimate
+
+        def said(rid, n):
+            click.echo(f"{rid}: {n} runs", err=True)
+
+        result = rare_estimate(plan, space, seed, output, targets, particles=particles,
+                               kill=kill, moves=moves, confidence=confidence, budget=budget,
+                               ray_address=ray, audit_json=one_log_json, progress=said)
+        return write_estimate(output, None, result)
+    from sim.estimate import estimate
+
+    def progress(run) -> None:
+        viol = f"  VIOLATED {', '.join(run.violated())}" if run.violated() else ""
+        params = ", ".join(f"{k}={v:g}" for k, v in run.parameters.items())
+        click.echo(shown(f"run {run.index}: {params}{viol}"), err=True)
+
+    result = estimate(plan, space, seed, output, budget=budget, test=test, delta=delta,
+                      alpha=alpha, beta=beta, confidence=confidence, unknown=unknown_runs,
+                      ray_address=ray, audit_json=one_log_json, progress=progress)
+    return write_estimate(output, result, None)

@@ -1,0 +1,169 @@
+"""The report of ``fretc estimate`` (:mod:`sim.estimate`, :mod:`sim.rare`), in the output
+folder:
+
+* ``estimate.json`` - the campaign (:meth:`sim.estimate.Estimate.to_json`, or the ``rare``
+  section of :meth:`sim.rare.RareResult.to_json`) with ``exit_code``; no wall-clock time,
+  so the same seed gives byte-identical files, locally and on Ray;
+* ``estimate.md`` - per requirement: runs of each verdict, the estimate of P(satisfied),
+  its Clopper-Pearson interval, the bound and decision with the runs used, the example
+  failures (kept runs); with ``--rare`` the splitting estimate, relative error, interval,
+  levels and runs;
+* ``<id>.svg`` - the sequential test's path (SPRT: log-likelihood ratio against runs with
+  its two thresholds; repeated Clopper-Pearson: the interval at each look and p).
+
+Exit codes: :func:`exit_code_of`.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+__all__ = ["write_estimate", "exit_code_of"]
+
+
+def exit_code_of(doc: dict) -> int:
+    """``fretc estimate``'s exit code from the report document (:mod:`fretc.estimate`): 1 a
+    probability requirement fails or a requirement without a bound was violated on a run;
+    130 interrupted; 5 a probability requirement undecided; 2 a --rare target without
+    levels; else 0."""
+    stats = doc.get("statistics", [])
+    if any(s["verdict"] == "fails" or (s["bound"] is None and s["violated"]) for s in stats):
+        return 1
+    if doc.get("interrupted"):
+        return 130
+    if any(s["verdict"] == "undecided" for s in stats):
+        return 5
+    if doc.get("rare", {}).get("errors"):
+        return 2
+    return 0
+
+
+def _svg(st: dict) -> str:
+    """The test's path as an SVG (matplotlib, fixed ids and no date)."""
+    import io
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams["svg.hashsalt"] = "fretc-estimate"
+    seq = st["sequential"]
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    if seq["test"] == "sprt":
+        path = [x if isinstance(x, float) else None for x in seq["path"]]
+        ax.plot(range(1, len(path) + 1), [x if x is not None else float("nan") for x in path],
+                lw=1.2, label="log-likelihood ratio")
+        ax.axhline(seq["upper"], color="green", lw=0.8, ls="--", label="holds")
+        ax.axhline(seq["lower"], color="red", lw=0.8, ls="--", label="fails")
+        ax.set_ylabel("log-likelihood ratio")
+    else:
+        looks = seq["path"]
+        if looks:
+            n, lo, hi = zip(*looks)
+            ax.fill_between(n, lo, hi, alpha=0.3, step="post", label="interval at each look")
+        ax.axhline(st["bound"]["p"], color="black", lw=0.8, label="p")
+        ax.set_ylabel("P(satisfied)")
+    ax.set_xlabel("runs")
+    b = st["bound"]
+    ax.set_title(f"{st['id']}: P(satisfied) {b['op']} {b['p']:g} -> {st['verdict']}")
+    ax.legend(loc="best", fontsize=8)
+    buf = io.StringIO()
+    fig.savefig(buf, format="svg", metadata={"Date": None})
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _fmt(x) -> str:
+    return "-" if x is None else f"{x:.4g}" if isinstance(x, float) else str(x)
+
+
+def _markdown(doc: dict) -> tuple[str, list[str]]:
+    """The Markdown page and the summary lines printed by the command."""
+    lines = [f"# fretc estimate: {doc['space']}", "",
+             f"seed {doc['seed']}, budget {doc['budget']}, stopped: {doc.get('stopped', '-')}",
+             ""]
+    summary = []
+    stats = doc.get("statistics", [])
+    if stats:
+        lines += ["| requirement | runs | sat | vac | viol | unk/err | P(sat) | interval "
+                  "| bound | verdict | decided at run |", "|" + "---|" * 11]
+    for s in stats:
+        lo, hi = s["interval"]
+        b = s["bound"]
+        seq = s.get("sequential") or {}
+        bound = "" if b is None else f"{b['op']} {b['p']:g}"
+        lines.append(f"| {s['id']} | {s['runs']} | {s['satisfied']} | {s['vacuous']} | "
+                     f"{s['violated']} | {s['unknown'] + s['error']} | {_fmt(s['estimate'])} | "
+                     f"[{lo:.4g}, {hi:.4g}] | {bound} | {s['verdict'] or ''} | "
+                     f"{_fmt(seq.get('at'))} |")
+        text = (f"{s['id']}: P(satisfied) {_fmt(s['estimate'])} in [{lo:.4g}, {hi:.4g}] "
+                f"({100 * s['confidence']:g} %, {s['trials']} runs)")
+        if b is not None:
+            text += f"; {b['op']} {b['p']:g}: {s['verdict']}"
+            if s["why"]:
+                text += f" ({s['why']})"
+        summary.append(text)
+    if stats:
+        lines += ["", f"Unknown runs: {stats[0]['unknown_policy']} (never counted as "
+                  "satisfied). The intervals assume independent runs from the space's "
+                  "distributions (docs/guide/statistics.md).", ""]
+    for s in stats:
+        if s.get("sequential"):
+            lines.append(f"![{s['id']}]({_svg_name(s['id'])})")
+    failures = [r for r in doc.get("runs", []) if r["mcap"]]
+    if failures:
+        lines += ["", "## Example failures", ""]
+        for r in failures[:20]:
+            viol = [k for k, v in r["verdicts"].items() if v == "violated"]
+            params = ", ".join(f"{k}={v:g}" for k, v in r["parameters"].items())
+            lines.append(f"- run {r['index']} ({params}): violates {', '.join(viol)}: "
+                         f"`{r['mcap']}` (audit: `{r['mcap'][:-5]}.audit.json`)")
+        if len(failures) > 20:
+            lines.append(f"- ... {len(failures) - 20} more in runs/")
+    rare = doc.get("rare")
+    if rare:
+        lines += ["", "## Rare violations (adaptive multilevel splitting)", "",
+                  "| requirement | P(violated) | relative error | interval | levels | runs "
+                  "| acceptance |", "|" + "---|" * 7]
+        for rid, r in rare["requirements"].items():
+            lo, hi = r["interval"]
+            lines.append(f"| {rid} | {r['estimate']:.4g} | {_fmt(r['relative_error'])} | "
+                         f"[{lo:.4g}, {hi:.4g}] | {len(r['levels'])} | {r['samples']} | "
+                         f"{r['acceptance']:.2f} |")
+            summary.append(f"{rid}: P(violated) {r['estimate']:.4g} (relative error "
+                           f"{_fmt(r['relative_error'])}, interval [{lo:.4g}, {hi:.4g}], "
+                           f"{r['samples']} runs)" + (f"; {r['why']}" if r["why"] else ""))
+        for rid, why in rare["errors"].items():
+            lines.append(f"\n{rid}: no estimate: {why}")
+            summary.append(f"{rid}: no estimate: {why}")
+    return "\n".join(lines) + "\n", summary
+
+
+def _svg_name(rid: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", rid) + ".svg"
+
+
+def write_estimate(out: str | Path, result=None, rare=None) -> dict:
+    """Write ``estimate.json``, ``estimate.md`` and the SVGs (module docstring) for a
+    campaign ``result`` (:class:`sim.estimate.Estimate`) or a ``rare`` result
+    (:class:`sim.rare.RareResult`); returns the JSON document with ``summary_lines`` (the
+    command's output) added after writing. Raises ``OSError`` when ``out`` is not
+    writable."""
+    outp = Path(out)
+    outp.mkdir(parents=True, exist_ok=True)
+    if result is not None:
+        doc = result.to_json()
+    else:
+        doc = {"schema": "fretc-estimate/1", "space": rare.space.path, "seed": rare.seed,
+               "budget": None, "rare": rare.to_json()}
+    doc["exit_code"] = exit_code_of(doc)
+    (outp / "estimate.json").write_text(
+        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", "utf-8")
+    for s in doc.get("statistics", []):
+        if s.get("sequential"):
+            (outp / _svg_name(s["id"])).write_text(_svg(s), "utf-8")
+    md, summary = _markdown(doc)
+    (outp / "estimate.md").write_text(md, "utf-8")
+    return dict(doc, summary_lines=summary)

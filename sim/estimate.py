@@ -1,0 +1,272 @@
+"""Statistical campaigns over a scenario space (``fretc estimate``): sample the space's
+distributions (:mod:`sim.distributions`), simulate and audit each run, and stop when every
+probability requirement is decided by its sequential test (:mod:`sim.sequential`) or the
+budget ends.
+
+Determinism: run ``i`` (1-based) draws its latent coordinates from
+``numpy.random.default_rng([seed, i])`` (:func:`sample_point`): a function of the seed and the
+index alone, never of completion order. The simulator's own seed (sensor noise) is the
+space file's ``seed`` in every run, as for ``fretc falsify``: a run is a function of its
+parameters, which is what :mod:`sim.splitting` needs (its moves must not change the noise). Locally the runs are made one by one;
+on Ray (``ray_address``) in batches whose results are taken in index order, and the runs
+after the one where the last test decided are dropped, so both give the same runs, the
+same decisions and byte-identical JSON.
+
+Counting: a run is one Bernoulli trial per requirement: satisfied or vacuous is a success;
+violated is not; unknown and error runs are failures under the ``fail`` policy (default) or
+skipped under ``exclude``, never successes (:mod:`audit.statistics`).
+
+Kept runs: every run that violates a requirement is kept under ``out/runs/`` as MCAP and
+its audit JSON (``run-0007.mcap``, ``run-0007.audit.json``); the other runs' files are
+deleted.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from audit.statistics import RequirementStatistics, fleet_statistics, judge_counts
+
+from .run import record_scenario
+from .sequential import make_test
+from .space import Space, apply
+
+__all__ = ["EstimateRun", "Estimate", "estimate", "sample_point", "Runner", "simulate_run"]
+
+
+def sample_point(space: Space, seed: int, index: int) -> tuple[list[float], dict, int]:
+    """``(z, parameters, sim_seed)`` of run ``index`` (1-based) of a campaign seeded with
+    ``seed``: its latent standard normal coordinates, the parameter values they give, and
+    the simulator's seed (the space's, module docstring)."""
+    import numpy as np
+
+    rng = np.random.default_rng([int(seed), int(index)])
+    z = [float(x) for x in rng.standard_normal(space.latent_dims)]
+    return z, space.at_latent(z), space.seed
+
+
+def simulate_run(space: Space, parameters: dict, sim_seed: int, path: str) -> str:
+    """Simulate the space's scenario with ``parameters`` and simulator seed ``sim_seed``;
+    write the MCAP to ``path`` and return it."""
+    record_scenario(apply(space.scenario, parameters), sim_seed, path)
+    return path
+
+
+@dataclass
+class EstimateRun:
+    """One run: ``index`` (1-based), ``parameters``, ``sim_seed``, ``z`` (latent
+    coordinates), per requirement its ``verdicts`` and ``robustness`` (None: unknown or
+    error), ``audit`` (:class:`audit.verdict.LogAudit`) and ``mcap`` (kept file, relative to
+    the output folder, or None)."""
+
+    index: int
+    parameters: dict[str, float]
+    sim_seed: int
+    z: list[float]
+    verdicts: dict[str, str]
+    robustness: dict[str, float | None]
+    audit: Any = None
+    mcap: str | None = None
+
+    def violated(self) -> list[str]:
+        """The requirements violated on this run."""
+        return [r for r, v in self.verdicts.items() if v == "violated"]
+
+
+class Runner:
+    """Simulates and audits runs given as ``(index, z, parameters, sim_seed)``, one after
+    another or on Ray, returning :class:`EstimateRun` in the order given."""
+
+    def __init__(self, plan, space: Space, out: Path, ray_address: str | None = None):
+        self.plan, self.space, self.out, self.ray_address = plan, space, out, ray_address
+        self.started = False
+        (out / "runs").mkdir(parents=True, exist_ok=True)
+        if ray_address is not None:
+            from audit.fleet import connect  # lazy: Ray only with --ray
+            self.started = connect(ray_address)
+
+    def path(self, index: int) -> str:
+        """The MCAP path of run ``index``."""
+        return str(self.out / "runs" / f"run-{index:05d}.mcap")
+
+    def run(self, points: list[tuple[int, list[float], dict, int]]) -> list[EstimateRun]:
+        """Simulate and audit ``points``; results in the same order."""
+        if self.ray_address is not None:
+            import ray  # lazy: Ray only with --ray
+
+            from audit.fleet import audit_logs_ray
+            task = ray.remote(simulate_run).options(num_cpus=1)
+            paths = ray.get([task.remote(self.space, p, s, self.path(i))
+                             for i, _z, p, s in points])
+            audits = audit_logs_ray(self.plan, paths, address=self.ray_address)
+        else:
+            from audit import audit_log
+            audits = [audit_log(self.plan, simulate_run(self.space, p, s, self.path(i)))
+                      for i, _z, p, s in points]
+        return [EstimateRun(i, p, s, z, {v.requirement: v.verdict for v in la.verdicts},
+                            {v.requirement: v.robustness for v in la.verdicts}, la)
+                for (i, z, p, s), la in zip(points, audits)]
+
+    def keep_or_drop(self, run: EstimateRun, audit_json: Callable[[Any], str]) -> None:
+        """Keep a violating run's MCAP and write its audit JSON beside it; delete the
+        MCAP of any other run."""
+        mcap = Path(self.path(run.index))
+        if run.violated():
+            mcap.with_suffix(".audit.json").write_text(audit_json(run.audit), encoding="utf-8")
+            run.mcap = str(mcap.relative_to(self.out))
+        elif mcap.exists():
+            os.remove(mcap)
+
+    def close(self) -> None:
+        """Stop the Ray this runner started."""
+        if self.started:
+            import ray
+            ray.shutdown()
+
+
+@dataclass
+class Estimate:
+    """A campaign's result: its inputs, the runs used (in order), per requirement its
+    :class:`~audit.statistics.RequirementStatistics` and sequential test (None for a
+    requirement without a probability bound), and why it stopped."""
+
+    space: Space
+    seed: int
+    budget: int
+    test: str
+    runs: list[EstimateRun] = field(default_factory=list)
+    statistics: list[RequirementStatistics] = field(default_factory=list)
+    tests: dict[str, Any] = field(default_factory=dict)
+    stopped: str = ""
+    interrupted: bool = False
+
+    def to_json(self) -> dict:
+        """The campaign as ``estimate.json`` gives it (no wall-clock time: byte-identical
+        for the same seed, locally and on Ray)."""
+        return {
+            "schema": "fretc-estimate/1", "space": self.space.path, "seed": self.seed,
+            "budget": self.budget, "test": self.test, "runs_used": len(self.runs),
+            "stopped": self.stopped, "interrupted": self.interrupted,
+            "statistics": [dict(st.to_json(), sequential=(
+                self.tests[st.id].to_json() if self.tests.get(st.id) else None))
+                for st in self.statistics],
+            "runs": [{"index": r.index, "parameters": r.parameters, "sim_seed": r.sim_seed,
+                      "verdicts": r.verdicts,
+                      "robustness": {k: _finite(v) for k, v in r.robustness.items()},
+                      "mcap": r.mcap} for r in self.runs],
+        }
+
+
+def _finite(v):
+    if v is None or v != v:
+        return None if v is None else "nan"
+    if v in (float("inf"), float("-inf")):
+        return "inf" if v > 0 else "-inf"
+    return v
+
+
+def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 1000,
+             test: str = "sprt", delta: float = 0.05, alpha: float = 0.05,
+             beta: float = 0.05, confidence: float = 0.95, unknown: str = "fail",
+             ray_address: str | None = None, batch: int = 8,
+             audit_json: Callable[[Any], str] = lambda la: "",
+             progress: Callable[[EstimateRun], None] | None = None) -> Estimate:
+    """Run the campaign (module docstring).
+
+    Args:
+        plan: the audit plan (:func:`audit.load_plan`); its requirements ``with probability``
+            get a sequential test each (``test``: ``sprt`` or ``cp``, with ``delta``,
+            ``alpha``, ``beta``); the others are counted.
+        space: from :func:`sim.space.load_space` (checked for degenerate distributions).
+        seed: the campaign's seed; ``budget``: the most runs (>= 1).
+        confidence, unknown: of the reported intervals (:func:`audit.statistics.fleet_statistics`).
+        ray_address: simulate and audit on Ray, ``batch`` runs at a time (same answer).
+        audit_json: a kept run's audit JSON text from its LogAudit (the caller's writer).
+        progress: called with each run taken, in order.
+
+    Without any probability requirement the campaign spends its budget. Ctrl-C ends it
+    with the runs taken so far (``interrupted``).
+
+    Raises:
+        sim.space.SpaceError: a degenerate distribution; ValueError: bad test parameters;
+        audit.fleet.RayUnavailable: Ray cannot start.
+    """
+    space.check_sampling()
+    bounds = {r.id: getattr(r.compiled, "probability", None) for r in plan.requirements}
+    tests = {rid: make_test(test, b.op, b.p, delta, alpha, beta)
+             for rid, b in bounds.items() if b is not None}
+    result = Estimate(space, seed, budget, test, tests=tests)
+    outp = Path(out)
+    runner = Runner(plan, space, outp, ray_address)
+    step = batch if ray_address is not None else 1
+    try:
+        while len(result.runs) < budget and not result.stopped:
+            start = len(result.runs) + 1
+            points = [(i, *sample_point(space, seed, i))
+                      for i in range(start, min(start + step, budget + 1))]
+            for run in runner.run(points):
+                if result.stopped:  # after the deciding run: dropped, as locally
+                    mcap = Path(runner.path(run.index))
+                    if mcap.exists():
+                        os.remove(mcap)
+                    continue
+                _take(result, run, runner, audit_json, unknown, progress)
+        if not result.stopped:
+            result.stopped = (f"the budget of {budget} runs ended" if tests else
+                              f"{budget} runs (no probability requirement to decide)")
+    except KeyboardInterrupt:
+        result.interrupted = True
+        result.stopped = f"interrupted after {len(result.runs)} runs"
+        for mcap in (outp / "runs").glob("run-*.mcap"):  # runs made but not taken
+            if int(mcap.stem[4:]) > len(result.runs):
+                os.remove(mcap)
+    finally:
+        runner.close()
+    _judge(result, plan, bounds, confidence, unknown)
+    return result
+
+
+def _take(result: Estimate, run: EstimateRun, runner: Runner, audit_json, unknown: str,
+          progress) -> None:
+    result.runs.append(run)
+    runner.keep_or_drop(run, audit_json)
+    for rid, t in result.tests.items():
+        v = run.verdicts.get(rid, "error")
+        if v in ("unknown", "error") and unknown == "exclude":
+            continue
+        t.update(v in ("satisfied", "vacuous"))
+    if progress is not None:
+        progress(run)
+    if result.tests and all(t.decision is not None for t in result.tests.values()):
+        result.stopped = f"every probability requirement decided after {len(result.runs)} runs"
+
+
+def _judge(result: Estimate, plan, bounds: dict, confidence: float, unknown: str) -> None:
+    """The statistics of the runs taken; a probability requirement's verdict is its
+    sequential test's decision (``undecided`` with why when it has none)."""
+    stats = fleet_statistics([r.audit for r in result.runs], bounds, confidence, unknown)
+    for st in stats:
+        t = result.tests.get(st.id)
+        if t is None:
+            continue
+        st.verdict = t.decision or "undecided"
+        st.more_runs = None
+        st.why = None if t.decision else (f"{result.stopped}: " + t.why_undecided())
+    result.statistics = stats
+
+
+def stats_of(runs: list, rid: str, bound, confidence: float) -> RequirementStatistics:
+    """The statistics of one requirement over ``runs`` (EstimateRun list) as counts only
+    (for a bench comparing campaigns without keeping their audits)."""
+    st = RequirementStatistics(rid, confidence=confidence)
+    for r in runs:
+        v = r.verdicts.get(rid, "error")
+        setattr(st, v, getattr(st, v) + 1)
+        st.runs += 1
+    st.successes = st.satisfied + st.vacuous
+    st.trials = st.runs
+    judge_counts(st, None if bound is None else bound.op, None if bound is None else bound.p)
+    return st
