@@ -158,11 +158,11 @@ class Ops:
 
 def undeclared_inf(v: Any, path: tuple) -> Any:
     """A field's value with ±inf read as NaN (unread: no number was measured; bindings
-    docs, "NaN, ±inf"), item by item in arrays. Kept: a field named ``range``
-    (``sensor_msgs/Range``, whose ±inf REP 117 defines) and LaserScan ranges (a
-    :class:`Valid` with a REP 117 mask)."""
-    if path and path[-1] == "range":
-        return v
+    docs, "NaN, ±inf"), item by item in arrays. Kept: a path through a field named
+    ``range`` or ``ranges`` (``sensor_msgs/Range``, LaserScan ranges and their beams, whose
+    ±inf REP 117 defines)."""
+    if any(p in ("range", "ranges") for p in path if isinstance(p, str)):
+        return v  # REP 117 fields (Range.range, LaserScan ranges and their beams)
     if type(v) is float:
         return math.nan if v in (math.inf, -math.inf) else v
     if isinstance(v, Valid):
