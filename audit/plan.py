@@ -74,13 +74,38 @@ def _with_msg_path(config: AuditConfig) -> AuditConfig:
     return dataclasses.replace(config, msg_path=tuple(config.msg_path) + extra)
 
 
+def _with_constants(entries: list, config: AuditConfig) -> list:
+    """``entries`` whose named durations not declared in their own file take the value of
+    the binding files' ``[constants]`` (:mod:`fretish.constants`).
+
+    Raises:
+        AuditInputError: one constant given two values by two binding files.
+    """
+    from fretish.constants import resolve, unresolved
+
+    if not any(unresolved(e.requirement) for e in entries):
+        return entries
+    constants: dict = {}
+    where: dict = {}
+    for f, b in binding_files(config):
+        for name, value in b.constants.items():
+            if name in constants and constants[name] != value:
+                raise AuditInputError(f"[constants] {name} is {' '.join(constants[name])} in "
+                                      f"{where[name]} but {' '.join(value)} in {f}")
+            constants[name], where[name] = value, f
+    for e in entries:
+        if unresolved(e.requirement):
+            e.requirement = resolve(e.requirement, constants)
+    return entries
+
+
 def _build_plan(config: AuditConfig) -> AuditPlan:
     """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection)."""
     config = _with_msg_path(config)
     bindings, binding_files = load_audit_bindings(config)
     notes: list[str] = []
     unformalized: list = []
-    entries = _read_requirements(config, notes, unformalized)
+    entries = _with_constants(_read_requirements(config, notes, unformalized), config)
     period, nominal = _bindings_periods(bindings)
     plans: list[RequirementPlan] = []
     to_compile = []

@@ -73,6 +73,11 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     an error (FRET would print ``F[<=2.5]``, a defect, ../shared/fretish/README.md section
     7.5).
     """
+    if not d.resolved:
+        raise SemanticsError(
+            f"duration {d.name} is not declared: declare it in the requirement file "
+            f"('@constant {d.name} 1.5 s') or, for audits, in the bindings file "
+            f"('[constants] {d.name} = \"1.5 s\"')", d.span)
     text = d.amount
     # a whole number as written: its int (what Fraction(text) equals), without parsing it
     # as a decimal
@@ -86,10 +91,11 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
             "tick period (tick_period: 100 ms) to convert time units exactly")
     else:
         ticks = amount * A.UNIT_SECONDS[d.unit] / tick_period
+    named = f"{d.name} = " if d.name else ""
     if ticks.denominator != 1:
         if d.unit != "ticks" and tick_period is not None:
             raise SemanticsError(
-                f"'{d.amount} {d.unit}' is {float(ticks):g} ticks of "
+                f"'{named}{d.amount} {d.unit}' is {float(ticks):g} ticks of "
                 f"{format_period_ms(tick_period)}: "
                 "not a whole number of ticks; change the duration or the tick period", d.span)
         raise SemanticsError(
@@ -97,6 +103,8 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
             + ("" if tick_period else "; declare a tick period to use time units"), d.span)
     if ticks < 0:
         raise SemanticsError("a duration cannot be negative", d.span)
+    if d.name:  # a named duration: every output shows the value used
+        warnings.append(f"{d.name} = {d.amount} {d.unit} ({int(ticks)} ticks)")
     if ticks > MAX_DURATION_TICKS:
         raise SemanticsError(duration_too_long(ticks), d.span)
     return int(ticks)

@@ -183,11 +183,14 @@ class Condition:
 @dataclass(frozen=True)
 class Duration:
     """``amount`` as written (``"10"``, ``"2.5"``) and ``unit`` canonical: ``ticks`` or a key
-    of :data:`UNIT_SECONDS`."""
+    of :data:`UNIT_SECONDS`. A named duration (``within T_stop``) has its ``name``; its
+    ``amount`` and ``unit`` are those of the constant's declaration once resolved
+    (:mod:`fretish.constants`), empty before."""
 
     amount: str
     unit: str
     span: Span = _span()
+    name: str | None = None
 
     @property
     def value(self) -> Fraction:
@@ -195,6 +198,11 @@ class Duration:
         from fractions import Fraction  # lazy (start-up time)
 
         return Fraction(self.amount)
+
+    @property
+    def resolved(self) -> bool:
+        """Whether the duration has a value (a number, or a declared constant's)."""
+        return bool(self.amount)
 
 
 @dataclass(frozen=True)

@@ -150,6 +150,9 @@ class _FretReader:
         self.io: dict[str, tuple[str, ...]] = {}
         self.io_line: dict[str, int] = {}
         self.current: _Pending | None = None
+        #: ``@constant NAME DURATION``: name -> (amount, unit), and its line
+        self.constants: dict[str, tuple[str, str]] = {}
+        self.constant_line: dict[str, int] = {}
 
     def fail(self, msg: str, ln: int, col: int = 1, hint: str | None = None):
         raise FretishFileError(msg, source=self.source, line=ln, column=col,
@@ -201,10 +204,13 @@ class _FretReader:
         if m and m.group(1) in ("inputs", "outputs"):
             self._io_directive(ln, content, m)
             return
+        if m and m.group(1) == "constant":
+            self._constant(ln, content, m)
+            return
         if not m or m.group(1) != "tick_period":
             self.fail(f"unknown directive '{content.split()[0]}'", ln, 1,
-                      "the directives are '@tick_period <number> <unit>', '@inputs NAMES' "
-                      "and '@outputs NAMES'")
+                      "the directives are '@tick_period <number> <unit>', '@inputs NAMES', "
+                      "'@outputs NAMES' and '@constant NAME <number> <unit>'")
         if self.period_line:
             self.fail(f"second @tick_period (the first is on line {self.period_line})", ln)
         try:
@@ -227,6 +233,24 @@ class _FretReader:
         clash = sorted(set(self.io.get("inputs", ())) & set(self.io.get("outputs", ())))
         if clash:
             self.fail("declared both @inputs and @outputs: " + ", ".join(clash), ln)
+        self.current = None
+
+    def _constant(self, ln: int, content: str, m: re.Match) -> None:
+        """``@constant T_stop 1.5 s``: a named duration (:mod:`fretish.constants`)."""
+        from .constants import CONSTANT_NAME, parse_constant
+
+        name, _, value = (m.group(2) or "").strip().partition(" ")
+        if not CONSTANT_NAME.match(name):
+            self.fail(f"bad constant name {name!r}: write '@constant T_stop 1.5 s'", ln,
+                      (m.start(2) + 1) if m.group(2) else 1)
+        if name in self.constants:
+            self.fail(f"second @constant {name} (the first is on line "
+                      f"{self.constant_line[name]})", ln)
+        try:
+            self.constants[name] = parse_constant(value)
+        except ValueError as e:
+            self.fail(f"bad @constant {name}: {e}", ln, content.index(name) + len(name) + 2)
+        self.constant_line[name] = ln
         self.current = None
 
     def _id_line(self, ln: int, content: str) -> None:
@@ -280,6 +304,10 @@ class _FretReader:
             period, None, None, {}, self.io.get("inputs", ()), self.io.get("outputs", ()))
         try:
             entry.requirement = parse(text, source=source, line=line0, column=col0)
+            if self.constants:
+                from .constants import resolve
+
+                entry.requirement = resolve(entry.requirement, self.constants)
         except FretishSyntaxError as e:
             if 0 < e.line <= len(lines):                      # show the whole file line
                 e.text_line = lines[e.line - 1].rstrip("\r")

@@ -345,6 +345,8 @@ class _Builder:
         return A.Probability(_BINOPS[op.type], value, self.join(c[0], num))
 
     def duration(self, c):
+        if len(c) == 1:  # a named duration, resolved by fretish.constants
+            return A.Duration("", "", self.span(c[0]), name=c[0].value)
         num, unit = c
         if not _DURATION_AMOUNT.match(num.value):
             raise _Fail(self.span(num), f"a duration is a whole or decimal number, not "

@@ -98,12 +98,12 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
-        if key not in ("tick", "variables", "logs", "types"):
+        if key not in ("tick", "variables", "logs", "types", "constants"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
-                               "optionally [logs], [types])", line=line, col=col)
+                               "optionally [logs], [types], [constants])", line=line, col=col)
 
 
 def _duration(tick_t: dict[str, Any], key: str, source: str, loc: _Locations) -> int:
@@ -322,6 +322,35 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)
     out.msg_path = _msg_path(doc.get("types"), source, loc)
+    out.constants = _constants(doc.get("constants"), source, loc)
+    return out
+
+
+def _constants(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str]]:
+    """``[constants] T_stop = "1.5 s"``: named durations of the requirements
+    (:mod:`fretish.constants`): name -> (amount, unit)."""
+    from fretish.constants import CONSTANT_NAME, parse_constant
+
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("", "constants")
+        raise BindingError(source, "constants must be a table: [constants] then "
+                           "T_stop = \"1.5 s\"", line=line, col=col)
+    out = {}
+    for name, value in table.items():
+        line, col = loc.at("constants", name)
+        if not CONSTANT_NAME.match(name):
+            raise BindingError(source, f"[constants] {name!r} is not a name (letters, digits, "
+                               "_)", line=line, col=col)
+        if not isinstance(value, str):
+            raise BindingError(source, f"[constants] {name}: a duration in quotes, e.g. "
+                               "\"1.5 s\"", line=line, col=col)
+        try:
+            out[name] = parse_constant(value)
+        except ValueError as exc:
+            raise BindingError(source, f"[constants] {name}: {exc}", line=line,
+                               col=col) from None
     return out
 
 

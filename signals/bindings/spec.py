@@ -119,6 +119,8 @@ class Bindings:
             (rosbridge without rosapi); logs carry their own schemas.
         msg_path: ``[types] msg_path``: folders of the ``.msg``/``.idl`` files of types a
             log does not carry (as ``--msg-path``; :mod:`logs.msg_path`).
+        constants: ``[constants]``: named durations of the requirements (name -> (amount,
+            unit), :mod:`fretish.constants`), read by the audit before it compiles.
 
     Raises:
         ValueError: a time base not in :data:`TIME_BASES`.
@@ -132,6 +134,7 @@ class Bindings:
     logs: LogSelector | None = field(default=None, compare=False)
     types: dict[str, str] = field(default_factory=dict, compare=False)
     msg_path: tuple[str, ...] = field(default=(), compare=False)
+    constants: dict[str, tuple[str, str]] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in TIME_BASES:
