@@ -81,10 +81,14 @@ def _with_constants(entries: list, config: AuditConfig) -> list:
     Raises:
         AuditInputError: one constant given two values by two binding files.
     """
+    def named(req) -> bool:  # (attributes only: the main line of plain requirements)
+        d = req.timing.duration if req is not None and not req.freeform else None
+        return d is not None and d.name is not None and not d.amount
+
+    if not any(named(e.requirement) for e in entries):
+        return entries
     from fretish.constants import resolve, unresolved
 
-    if not any(unresolved(e.requirement) for e in entries):
-        return entries
     constants: dict = {}
     where: dict = {}
     for f, b in binding_files(config):

@@ -57,7 +57,8 @@ from .entry import RequirementEntry
 from .sources import fret_origin, load_tool_source, tool_source_kind
 from common.units import parse_seconds
 
-__all__ = ["RequirementEntry", "load_requirements", "parse_tick_period", "is_fret_export"]
+__all__ = ["RequirementEntry", "load_requirements", "load_fret_text", "parse_tick_period",
+           "is_fret_export"]
 
 PathLike = str | os.PathLike
 
@@ -140,9 +141,9 @@ class _FretReader:
     """One pass over the lines of a .fret file (the format of this module's docstring):
     requirements, their attributes and the file's directives; then the entries."""
 
-    def __init__(self, path: str):
+    def __init__(self, path: str, text: str | None = None):
         self.source = str(path)
-        self.lines = _read_text(path).split("\n")
+        self.lines = (_read_text(path) if text is None else text).split("\n")
         self.pending: list[_Pending] = []
         self.seen: dict[str, int] = {}
         self.file_period: Fraction | None = None
@@ -319,6 +320,16 @@ class _FretReader:
 # --------------------------------------------------------------------------- JSON exports
 _FULLTEXT = r'"fulltext"\s*:\s*"'  # compiled on first use (re's cache), as _ATTRIBUTE
 _KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
+
+
+def load_fret_text(text: str, source: str) -> list[RequirementEntry]:
+    """The requirements of a ``.fret`` document given as text (an editor's buffer), as
+    :func:`load_requirements` reads a ``.fret`` file named ``source``.
+
+    Raises:
+        FretishFileError: the file structure is wrong (positioned, as for a file).
+    """
+    return _FretReader(source, text).read()
 
 
 def _line_col(raw: str, offset: int) -> tuple[int, int]:

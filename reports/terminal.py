@@ -267,7 +267,8 @@ def _print_counts(console, logs: list[LogAudit], input_errors: bool,
               if k not in ("satisfied", "vacuous", "violated", "unknown", "error")]
     code = exit_code(logs, input_errors, allow_partial, statistics)
     why = {0: "", 1: ": a requirement is violated" + (
-               " or a probability requirement fails" if statistics else ""),
+               " or a probability requirement fails"
+               if any(st.bound is not None for st in statistics or ()) else ""),
            2: ": something could not be audited",
            3: ": no violation, but a log is partial or had data problems, or a verdict is "
               "unknown", 5: ": a probability requirement is undecided (too few runs)"

@@ -71,7 +71,7 @@ def test_r1_main_line_within_the_limits():
 #: it (lazy imports inside functions included). ``signals.bindings`` (the binding language)
 #: sits below the rest of ``signals`` (sampling), which uses it.
 PACKAGE_ORDER = ("common", "fretish", "compiler", "check", "logs", "signals.bindings", "signals",
-                 "monitors", "audit", "live", "sim", "reports", "fretc")
+                 "monitors", "audit", "live", "sim", "reports", "editor", "fretc")
 LIBRARY = tuple(dict.fromkeys(p.split(".")[0] for p in PACKAGE_ORDER))
 
 

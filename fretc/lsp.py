@@ -1,0 +1,26 @@
+"""``fretc lsp``: the FRETish language server over stdio (:mod:`editor.server`), for any
+editor with a Language Server Protocol client (VS Code, Neovim, Emacs' eglot; see
+docs/guide/editors.md). Needs the ``editor`` extra (``pip install 'fretc[editor]'``)."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+__all__ = ["lsp_cmd"]
+
+
+@click.command("lsp")
+@click.option("--stdio", is_flag=True, help="Serve over stdin/stdout (the default; "
+              "accepted because editors pass it).")
+def lsp_cmd(stdio):
+    """Serve the FRETish language server over stdio: diagnostics, hover, completion, go to
+    definition, document symbols for .fret files."""
+    try:
+        from editor.server import main
+    except ImportError as exc:
+        click.echo(f"error: fretc lsp needs pygls ({exc.name} is missing): "
+                   "pip install 'fretc[editor]'", err=True)
+        sys.exit(2)
+    main()

@@ -1,0 +1,34 @@
+"""What the language server knows of a document (:mod:`editor.document`), without the
+protocol: diagnostics for bad durations, undeclared constants and unbound variables, and no
+exception on any document."""
+
+from __future__ import annotations
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from editor.document import analyse
+
+
+def test_durations_constants_and_unbound_variables(tmp_path):
+    (tmp_path / "x.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
+                                              'p = "/a.data > 0"\n')
+    text = ("@tick_period 100 ms\n"
+            "R1: the sw shall within 150 milliseconds satisfy p\n"
+            "R2: the sw shall within T_go satisfy p\n"
+            "R3: the sw shall always satisfy q\n")
+    a = analyse(text, str(tmp_path / "x.fret"))
+    got = {(p.line, p.severity): p.message for p in a.problems}
+    assert "not a whole number of ticks" in got[(1, 1)]
+    assert "T_go is not declared" in got[(2, 1)]
+    assert "'q' is not bound" in got[(3, 2)]
+    assert len(a.problems) == 3
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.text(alphabet=st.sampled_from(list("R1: theswhalyfrin@_ 0123\n\t&|!()<>=\"#\x00")),
+               max_size=120))
+def test_no_document_makes_the_analysis_raise(text):
+    a = analyse(text, "/nonexistent/dir/x.fret")
+    for p in a.problems:
+        assert p.line >= 0 and p.col >= 0 and p.end_col >= p.col
