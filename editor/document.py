@@ -17,7 +17,11 @@ from compiler.build import compile_entries
 from fretish.files import load_fret_text
 from fretish.words import RESERVED_WORDS
 
-__all__ = ["Problem", "Analysis", "analyse", "KEYWORDS"]
+__all__ = ["Problem", "Analysis", "analyse", "check_problems", "KEYWORDS", "SAVE_WORK"]
+
+#: The work budget of each check query on save (check.budget's units): small, so that a
+#: save answers in about a second; past it a query is unknown and says nothing.
+SAVE_WORK = 2_000_000
 
 #: FRETish's words offered by completion (the reserved words of the grammar).
 KEYWORDS = sorted(w for w in RESERVED_WORDS if w.isalpha())
@@ -153,6 +157,31 @@ def analyse(text: str, path: str) -> Analysis:
                                               f"{c.id}: variable {v!r} is not bound in the "
                                               "bindings file beside this file"))
     return a
+
+
+def check_problems(a: Analysis, work: int = SAVE_WORK) -> list[Problem]:
+    """``fretc check``'s conflicts, unsatisfiable and vacuous requirements of the analysed
+    document, under a work budget of ``work`` units a query (answers past it say nothing
+    here): one diagnostic per requirement involved, at its first line (error for a
+    conflict or an unsatisfiable requirement, warning for vacuity)."""
+    from check.analysis import check_requirements
+    from check.budget import Budget
+
+    ok = [c for c in a.compiled if c.error is None and c.formalization is not None]
+    if not ok:
+        return []
+    res = check_requirements(ok, budget=Budget(work), redundancy=False, mus_budget=20)
+    first = {c.id: start for c, start in zip(a.compiled, a.starts)}
+    out = []
+    for f in res.findings:
+        if f.kind not in ("unsatisfiable", "conflict", "vacuous"):
+            continue
+        for rid in f.requirements:
+            ln = first.get(rid, 0)
+            out.append(Problem(ln, 0, len(a.lines[ln]) if ln < len(a.lines) else 0,
+                               _ERROR if f.severity == "error" else _WARNING,
+                               f"{f.kind}: {f.message}"))
+    return out
 
 
 def _problem_of(exc: Exception, lines: list[str]) -> Problem:

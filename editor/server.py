@@ -4,7 +4,8 @@ Protocol 3.17, with ``pygls``). What it knows of a document is :mod:`editor.docu
 * diagnostics, published when a document is opened, changed or saved: syntax and file
   errors at their line and column with the CLI's messages, formalization errors (a duration
   that is not a whole number of ticks, an undeclared named duration), variables that the
-  bindings file beside the document does not bind;
+  bindings file beside the document does not bind; on save also ``fretc check``'s
+  conflicts, unsatisfiable and vacuous requirements under a small work budget;
 * hover on a requirement: its template key and ft_inf, ft and pt (FRET/SMV text);
 * completion: the components the document names, the variables of the bindings and
   FRETish's words (components first after a condition);
@@ -21,7 +22,7 @@ from lsprotocol import types as T
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
-from .document import Analysis, analyse
+from .document import Analysis, analyse, check_problems
 
 __all__ = ["make_server", "main"]
 
@@ -38,10 +39,12 @@ def make_server() -> LanguageServer:
     server = LanguageServer("fretc", version("fretc"))
     cache: dict[str, Analysis] = {}
 
-    def refresh(uri: str) -> Analysis:
+    def refresh(uri: str, check: bool = False) -> Analysis:
         doc = server.workspace.get_text_document(uri)
         try:
             a = analyse(doc.source, to_fs_path(uri) or uri)
+            if check:  # on save: fretc check's conflicts and vacuity, small budget
+                a.problems = a.problems + check_problems(a)
         except Exception as exc:  # never exit on a document: say so in the editor
             a = Analysis(lines=doc.source.split("\n"))
             a.problems = []
@@ -69,7 +72,7 @@ def make_server() -> LanguageServer:
 
     @server.feature(T.TEXT_DOCUMENT_DID_SAVE)
     def did_save(ls, params: T.DidSaveTextDocumentParams):
-        refresh(params.text_document.uri)
+        refresh(params.text_document.uri, check=True)
 
     @server.feature(T.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls, params: T.DidCloseTextDocumentParams):

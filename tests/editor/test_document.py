@@ -32,3 +32,15 @@ def test_no_document_makes_the_analysis_raise(text):
     a = analyse(text, "/nonexistent/dir/x.fret")
     for p in a.problems:
         assert p.line >= 0 and p.col >= 0 and p.end_col >= p.col
+
+
+def test_on_save_check_finds_a_conflict(tmp_path):
+    from editor.document import check_problems
+
+    text = ("R1: the sw shall always satisfy p\n"
+            "R2: the sw shall always satisfy !p\n"
+            "R3: the sw shall always satisfy q\n")
+    a = analyse(text, str(tmp_path / "c.fret"))
+    got = check_problems(a)
+    assert {p.line for p in got} == {0, 1}  # R1 and R2, not R3
+    assert all("conflict" in p.message and p.severity == 1 for p in got)
