@@ -32,6 +32,30 @@ def _kind(kind: str) -> T.CompletionItemKind:
             "variable": T.CompletionItemKind.Variable}[kind]
 
 
+def _analysed(server: LanguageServer, uri: str, text: str, check: bool) -> Analysis:
+    """The document's analysis (and on save ``fretc check``'s findings); an analysis that
+    fails is logged to the client, never the server's end."""
+    try:
+        a = analyse(text, to_fs_path(uri) or uri)
+        if check:  # on save: fretc check's conflicts and vacuity, small budget
+            a.problems = a.problems + check_problems(a)
+        return a
+    except Exception as exc:  # never exit on a document: say so in the editor
+        server.window_log_message(T.LogMessageParams(
+            T.MessageType.Error, f"fretc could not analyse {uri}: {exc!r}"))
+        return Analysis(lines=text.split("\n"))
+
+
+def _publish(server: LanguageServer, uri: str, version, a: Analysis) -> None:
+    """The document's problems as LSP diagnostics (source ``fretc``)."""
+    server.text_document_publish_diagnostics(T.PublishDiagnosticsParams(
+        uri=uri, version=version, diagnostics=[
+            T.Diagnostic(range=T.Range(T.Position(p.line, p.col),
+                                       T.Position(p.line, max(p.end_col, p.col + 1))),
+                         message=p.message, severity=T.DiagnosticSeverity(p.severity),
+                         source="fretc") for p in a.problems]))
+
+
 def make_server() -> LanguageServer:
     """A server with the features of the module docstring (not started)."""
     from importlib.metadata import version
@@ -41,22 +65,8 @@ def make_server() -> LanguageServer:
 
     def refresh(uri: str, check: bool = False) -> Analysis:
         doc = server.workspace.get_text_document(uri)
-        try:
-            a = analyse(doc.source, to_fs_path(uri) or uri)
-            if check:  # on save: fretc check's conflicts and vacuity, small budget
-                a.problems = a.problems + check_problems(a)
-        except Exception as exc:  # never exit on a document: say so in the editor
-            a = Analysis(lines=doc.source.split("\n"))
-            a.problems = []
-            server.window_log_message(T.LogMessageParams(
-                T.MessageType.Error, f"fretc could not analyse {uri}: {exc!r}"))
-        cache[uri] = a
-        server.text_document_publish_diagnostics(T.PublishDiagnosticsParams(
-            uri=uri, version=doc.version, diagnostics=[
-                T.Diagnostic(range=T.Range(T.Position(p.line, p.col),
-                                           T.Position(p.line, max(p.end_col, p.col + 1))),
-                             message=p.message, severity=T.DiagnosticSeverity(p.severity),
-                             source="fretc") for p in a.problems]))
+        cache[uri] = a = _analysed(server, uri, doc.source, check)
+        _publish(server, uri, doc.version, a)
         return a
 
     def analysis(uri: str) -> Analysis:

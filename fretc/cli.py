@@ -127,7 +127,7 @@ _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
              "estimate": ("estimate", "estimate_cmd"), "inspect": ("inspect", "inspect_cmd"),
              "report": ("report", "report_cmd"), "watch": ("watch", "watch_cmd"),
              "export": ("export", "export_cmd"), "simulate": ("simulate", "simulate_cmd"),
-             "lsp": ("lsp", "lsp_cmd"),
+             "lsp": ("lsp", "lsp_cmd"), "explain": ("explain", "explain_cmd"),
              "replay": ("watch", "replay_cmd")}
 
 

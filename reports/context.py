@@ -180,6 +180,7 @@ def _requirement_fields(r: dict, rt: RequirementTrace | None, bvars: dict,
         "monitor": None, "ajpf": None,
         "warnings": list(rt.warnings) if rt else [],
         "notes": list(r.get("notes") or []), "error": r.get("error"),
+        "reading": rt.reading if rt else None, "diagram": rt.diagram_svg if rt else None,
         "changed": rt.changed if rt else "not found in the requirement files: shown from "
                                          "the audit JSON only",
         "cells": [],

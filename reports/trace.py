@@ -213,6 +213,8 @@ class RequirementTrace:
     thresholds: list[Threshold] = field(default_factory=list)
     error: str | None = None
     changed: str | None = None
+    reading: str | None = None
+    diagram_svg: str | None = None
 
 
 def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
@@ -230,6 +232,7 @@ def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
         rt.ft, rt.ft_inf, rt.pt = compiled.smv_text["ft"], compiled.smv_text["ft_inf"], compiled.smv_text["pt"]
         rt.ft_spot, rt.ft_inf_spot = compiled.spot("ft"), compiled.spot("ft_inf")
         rt.source_hash = compiled.source_hash
+        _explained(rt, compiled)
         label, formula = psl_label_and_formula(compiled, psl_mapping)
         if label is None:
             rt.ajpf_reason = formula
@@ -249,6 +252,19 @@ def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
             rt.module = stem
             rt.class_source = _class_source(mod.text, rt.class_name)
     return rt
+
+
+def _explained(rt: RequirementTrace, compiled) -> None:
+    """The reading and diagram of ``fretc explain`` on the requirement's card."""
+    from monitors.explain import explain
+
+    from .explanation import svg
+
+    try:
+        x = explain(compiled)
+    except (ValueError, KeyError):  # free-form, or nothing to draw: the card goes without
+        return
+    rt.reading, rt.diagram_svg = x.reading, svg(x)
 
 
 def _modules_of(plan) -> dict[str, ModuleInfo]:

@@ -113,12 +113,14 @@ def tour(tmp_path_factory):
 
 
 def test_the_page_has_the_tour():
-    """The parse finds the tour's steps: formalize, emit, audit, report, check, watch."""
+    """The parse finds the tour's steps: formalize, explain, simulate, emit, audit, report,
+    check, watch; every step shows what it prints (but a step writing a file)."""
     commands = [s.command for s in STEPS]
-    for start in ("fretc requirements/r1.fret --emit ltl", "fretc requirements/r1.fret --emit monitor",
-                  "fretc audit", "fretc report", "fretc check", "python -m sim serve", "fretc watch"):
+    for start in ("fretc requirements/r1.fret --emit ltl", "fretc explain", "fretc simulate",
+                  "fretc requirements/r1.fret --emit monitor", "fretc audit", "fretc report",
+                  "fretc check", "python -m sim serve", "fretc watch"):
         assert any(c.startswith(start) for c in commands), start
-    assert all(s.shown for s in STEPS if not s.background)
+    assert all(s.shown or " > " in s.command for s in STEPS if not s.background)
 
 
 def _marks(step: Step):

@@ -1,0 +1,63 @@
+"""``fretc explain FILE [ID...]``: each requirement's reading in plain English, its template
+key, durations in ticks and time, and its diagram in FRET's manner (:mod:`monitors.explain`)
+in the terminal, and as SVG with ``-o DIR``.
+
+Exit codes: 0 explained, 1 a requirement did not formalize (its error printed), 2 an input
+error (a file, an id that does not exist).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from .options import TEXT_ATTRIBUTE_OPTION
+from .options import shown as _shown
+
+__all__ = ["explain_cmd"]
+
+
+@click.command("explain")
+@click.argument("file", type=click.Path(exists=True))
+@click.argument("ids", nargs=-1)
+@click.option("-o", "--output", type=click.Path(file_okay=False), default=None,
+              help="Write one SVG diagram per requirement into this folder.")
+@TEXT_ATTRIBUTE_OPTION
+def explain_cmd(file, ids, output):
+    """Explain the requirements of FILE (or only IDS): plain English, template key and a
+    diagram of the scope, the triggers and the response windows."""
+    from compiler.build import compile_entries
+    from fretish.files import load_requirements
+    from monitors.explain import explain
+    from reports.explanation import svg, text
+
+    from .options import text_attribute
+
+    compiled = compile_entries(load_requirements([file], text_attribute=text_attribute()))
+    known = [c.id for c in compiled]
+    unknown = [i for i in ids if i not in known]
+    if unknown:
+        click.echo(_shown(f"error: {file}: no requirement {', '.join(map(repr, unknown))} "
+                          f"(it has {', '.join(known)})"), err=True)
+        sys.exit(2)
+    code = 0
+    if output is not None:
+        Path(output).mkdir(parents=True, exist_ok=True)
+    for c in compiled:
+        if ids and c.id not in ids:
+            continue
+        if c.formalization is None:
+            click.echo(_shown(str(c.error) if c.error else f"{c.id}: free-form, not "
+                              "formalized"), err=True)
+            code = 1 if c.error else code
+            continue
+        x = explain(c)
+        click.echo(_shown(text(x)))
+        if output is not None:
+            name = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in c.id)
+            path = Path(output) / f"{name}.svg"
+            path.write_text(svg(x), encoding="utf-8")
+            click.echo(_shown(f"wrote {path}"), err=True)
+    sys.exit(code)

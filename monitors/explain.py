@@ -1,0 +1,227 @@
+"""``fretc explain``: a requirement's reading in plain English and its diagram in FRET's
+manner (the scope interval, the trigger points, the window in which the response must or
+must not hold), as FRET's assistant shows them (FRET's manual, "Semantics" panel).
+
+The diagram is not drawn from a table of pictures: it is *computed* by the audit's interval
+semantics (:mod:`monitors.interval`, :mod:`monitors.obligations`) on an example trace laid
+out for the requirement's template: its scope mode holds (or not) so that one scope
+interval is wide, its condition rises two ticks into it, its stop condition comes a few
+ticks after the trigger. The windows are those the obligation checker looks at for the
+first trigger, found by running it on a response that never holds (where the response is
+required) and on one that always holds (where it is forbidden). So every one of FRET's 288
+template keys has a diagram, and the diagram says what the audit checks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+
+from fretish import ast as A
+from compiler.printers import expr_text
+
+from .interval import scope_intervals, trigger_points
+from .obligations import OBLIGATIONS, ObligationChecker
+
+__all__ = ["Diagram", "Explanation", "explain", "diagram"]
+
+Interval = tuple[int, int]
+
+
+@dataclass
+class Diagram:
+    """The example trace of a requirement and what the semantics makes of it: ``n`` ticks;
+    ``signals`` (name -> bool per tick: the scope mode, the condition, the stop condition
+    as laid out); ``scope`` intervals; ``triggers`` (of every interval); the ``required``
+    and ``forbidden`` windows of the first trigger (inclusive ticks; None when the
+    obligation has none) and its ``obligation`` text; ``negated``: an only* scope."""
+
+    n: int
+    signals: dict[str, list[bool]] = field(default_factory=dict)
+    scope: list[Interval] = field(default_factory=list)
+    triggers: list[int] = field(default_factory=list)
+    required: Interval | None = None
+    forbidden: Interval | None = None
+    obligation: str = ""
+    negated: bool = False
+
+
+@dataclass
+class Explanation:
+    """One requirement explained: ``id``, ``text``, template ``key``, the plain-English
+    ``reading``, the durations (``ticks`` and the tick period's seconds), the ``diagram``."""
+
+    id: str
+    text: str
+    key: str
+    reading: str
+    ticks: int | None
+    period_s: Fraction | None
+    diagram: Diagram
+
+
+def _mode_layout(kind: str, n: int, w: int) -> np.ndarray | None:
+    """The scope mode's truth at each tick so that the interesting scope interval is
+    ``[4, 4 + w]`` (or starts at 4 and runs to the end)."""
+    m = np.zeros(n, dtype=np.bool_)
+    if kind == "null":
+        return None
+    if kind == "in":
+        m[4:5 + w] = True
+    elif kind in ("notin", "onlyIn"):
+        m[:4] = True
+        m[5 + w:] = True
+    elif kind == "after":
+        m[2:4] = True
+    elif kind == "onlyAfter":
+        m[3 + w:5 + w] = True
+    elif kind == "before":
+        m[5 + w:] = True
+    elif kind == "onlyBefore":
+        m[4:6] = True
+    return m
+
+
+def diagram(req: A.Requirement, k: int | None) -> Diagram:
+    """The :class:`Diagram` of ``req`` (parsed, not free-form) with its duration ``k`` in
+    ticks (None without one): module docstring.
+
+    Raises:
+        ValueError: a free-form requirement.
+    """
+    if req.freeform:
+        raise ValueError("a free-form requirement has no diagram")
+    kk = k or 0
+    w = 12 + kk
+    n = w + 10
+    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
+    mode = _mode_layout(scope, n, w)
+    intervals = scope_intervals(scope, mode, n)
+    d = Diagram(n=n, scope=intervals, negated=scope.startswith("only"))
+    if mode is not None:
+        d.signals["scope mode"] = mode.tolist()
+    if not intervals:
+        return d
+    s, e = intervals[0]
+    C = np.zeros(n, dtype=np.bool_)
+    C[min(s + 2, e):min(s + 5, e + 1)] = True
+    if cond != "null":
+        d.signals["condition"] = C.tolist()
+    for a, b in intervals:
+        d.triggers += trigger_points(cond, C if cond != "null" else None, a, b)
+    S = None
+    t = d.triggers[0] if d.triggers else s
+    if timing in A.STOP_TIMINGS:
+        S = np.zeros(n, dtype=np.bool_)
+        S[min(t + 4 + kk // 2, e)] = True
+        d.signals["stop condition"] = S.tolist()
+    d.obligation = OBLIGATIONS.get(timing, ("", ""))[1 if d.negated else 0]
+    if not d.triggers:
+        return d
+    for value in (False, True):
+        R = np.full(n, value, dtype=np.bool_)
+        bad = ObligationChecker(timing, d.negated, R, S, k).check(t, e)
+        if bad is None:
+            continue
+        window, _tick, _why = bad
+        if value is False:
+            d.required = tuple(window)  # R never holds: where it was required
+        else:
+            d.forbidden = tuple(window)  # R always holds: where it was forbidden
+    if timing == "after" and not d.negated and d.required is not None:
+        # "after k": R must not hold on [t, t+k] and must hold at t+k+1 (the checker
+        # reports the whole [t, t+k+1] either way)
+        lo, hi = d.required
+        d.required, d.forbidden = (hi, hi), (lo, hi - 1)
+    return d
+
+
+_SCOPES = {
+    "null": "At every tick of the run",
+    "in": "While {m} holds (each interval where it holds is a scope interval)",
+    "notin": "While {m} does not hold",
+    "after": "After {m}: from the tick after the first interval in which {m} holds, to the "
+             "end",
+    "before": "Before {m}: from the start until {m} first holds",
+    "onlyIn": "Only while {m} holds: outside it (where this is checked) the response must "
+              "not be given",
+    "onlyAfter": "Only after {m}: up to the end of its first interval (where this is "
+                 "checked) the response must not be given",
+    "onlyBefore": "Only before {m}: from the tick {m} first holds (where this is checked) "
+                  "the response must not be given",
+}
+_CONDITIONS = {
+    "null": "from the start of each scope interval",
+    "regular": "each time {c} becomes true (the tick it turns true, or the interval's first "
+               "tick if it holds there)",
+    "holding": "at every tick at which {c} holds",
+}
+_TIMINGS = {
+    "immediately": "satisfy {r} at that very tick",
+    "next": "satisfy {r} at the next tick (if the interval has one)",
+    "finally": "satisfy {r} at the last tick of the scope interval",
+    "eventually": "satisfy {r} at some tick from then until the scope interval ends",
+    "null": "satisfy {r} at some tick from then until the scope interval ends",
+    "always": "satisfy {r} at every tick from then until the scope interval ends",
+    "never": "satisfy {r} at no tick from then until the scope interval ends",
+    "within": "satisfy {r} at least once within {d} of it (that tick and the next {k} "
+              "ticks; nothing is owed if the interval ends sooner)",
+    "for": "satisfy {r} at every tick for {d} (that tick and the next {k} ticks, cut at the "
+           "interval's end)",
+    "after": "not satisfy {r} for {d} (that tick and the next {k}) and satisfy it at the "
+             "tick after",
+    "until": "satisfy {r} at every tick until {s} holds (or the interval ends)",
+    "before": "satisfy {r} at least once before {s} holds (if it ever does)",
+}
+
+
+def _duration_text(d: A.Duration | None, k: int | None, period: Fraction | None) -> str:
+    if d is None:
+        return ""
+    unit = d.unit[:-1] if d.amount == "1" and d.unit.endswith("s") else d.unit
+    written = f"{d.amount} {unit}" + (f" (= {d.name})" if d.name else "")
+    if k is None:
+        return written
+    secs = f", {float(k * period):g} s" if period is not None else ""
+    return f"{written} ({k} ticks{secs})"
+
+
+def _as_written(req: A.Requirement, e) -> str:
+    """An expression of ``req`` as the sentence writes it (FRET's printed form when its
+    span is not in the text)."""
+    if e is None:
+        return ""
+    text = req.text[e.span.start:e.span.end] if e.span.end > e.span.start else ""
+    return text.strip() or expr_text(e)
+
+
+def reading(req: A.Requirement, k: int | None, period: Fraction | None) -> str:
+    """FRET's reading of ``req`` in plain English (scope, trigger, what must hold and when,
+    durations in ticks and time)."""
+    m = _as_written(req, req.scope.mode)
+    c = _as_written(req, req.condition.expr)
+    r = _as_written(req, req.response)
+    s = _as_written(req, req.timing.stop)
+    dtext = _duration_text(req.timing.duration, k, period)
+    comp = req.component or "the component"
+    first = _SCOPES[req.scope.kind].format(m=m)
+    second = _CONDITIONS[req.condition.kind].format(c=c)
+    third = _TIMINGS[req.timing.kind].format(r=r, s=s, d=dtext, k=k if k is not None else "k")
+    return f"{first}, {second}, {comp} shall {third}."
+
+
+def explain(compiled) -> Explanation:
+    """The :class:`Explanation` of a compiled requirement (formalized, not free-form).
+
+    Raises:
+        ValueError: a requirement that did not formalize, or a free-form one.
+    """
+    f = compiled.formalization
+    if f is None:
+        raise ValueError(f"{compiled.id} has no formalization: {compiled.error}")
+    req = compiled.requirement
+    period = getattr(compiled.entry, "tick_period", None)
+    return Explanation(compiled.id, compiled.text, f.key, reading(req, f.ticks, period),
+                       f.ticks, period, diagram(req, f.ticks))

@@ -1,0 +1,78 @@
+"""How ``fretc explain`` shows a requirement (:mod:`monitors.explain`): its reading and a
+diagram in the terminal (one text row per signal, the scope, the triggers and the windows)
+and as SVG (``-o DIR``). Same input, same bytes."""
+
+from __future__ import annotations
+
+import html
+
+__all__ = ["text", "svg"]
+
+_CELL, _ROW, _LABEL = 14, 20, 130
+
+
+def _rows(d) -> list[tuple[str, str, list[int]]]:
+    """(label, kind, ticks) rows: ``signal`` ticks that hold, ``scope``/``window``
+    intervals as ticks, ``trigger`` ticks."""
+    rows = [(name, "signal", [i for i, v in enumerate(vals) if v])
+            for name, vals in d.signals.items()]
+    rows.append(("scope interval" + ("s (only*: negated)" if d.negated else "s"), "scope",
+                 [i for a, b in d.scope for i in range(a, b + 1)]))
+    rows.append(("triggers", "trigger", list(d.triggers)))
+    if d.required is not None:
+        rows.append(("response required", "window", list(range(d.required[0],
+                                                               d.required[1] + 1))))
+    if d.forbidden is not None:
+        rows.append(("response forbidden", "forbidden", list(range(d.forbidden[0],
+                                                                  d.forbidden[1] + 1))))
+    return rows
+
+
+def text(x) -> str:
+    """The explanation ``x`` (:class:`monitors.explain.Explanation`) for the terminal."""
+    d = x.diagram
+    mark = {"signal": "T", "scope": "=", "trigger": "^", "window": "#", "forbidden": "x"}
+    out = [f"{x.id}  ({x.key})", f"  {x.text}", "", f"  {x.reading}", ""]
+    width = max(len(r[0]) for r in _rows(d))
+    out.append(f"  {'tick':<{width}}  " + "".join(str(i % 10) for i in range(d.n)))
+    for label, kind, ticks in _rows(d):
+        on = set(ticks)
+        out.append(f"  {label:<{width}}  " + "".join(mark[kind] if i in on else "."
+                                                      for i in range(d.n)))
+    if d.obligation:
+        out += ["", f"  obligation from each trigger t (scope interval [s, e]): {d.obligation}"]
+    return "\n".join(out) + "\n"
+
+
+def svg(x) -> str:
+    """The diagram of ``x`` as an SVG: a row per signal, the scope intervals shaded, the
+    triggers as arrows, the required window green and the forbidden one red."""
+    d = x.diagram
+    rows = _rows(d)
+    w = _LABEL + _CELL * d.n + 10
+    h = _ROW * (len(rows) + 3)
+    colour = {"signal": "#455a64", "scope": "#bbdefb", "trigger": "#f57c00",
+              "window": "#2e7d32", "forbidden": "#c62828"}
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
+           f'font-family="sans-serif" font-size="11">',
+           f"<title>{html.escape(x.id)}: {html.escape(x.text)}</title>",
+           f'<text x="4" y="13">{html.escape(x.id)} ({html.escape(x.key)})</text>']
+    for r, (label, kind, ticks) in enumerate(rows):
+        y = _ROW * (r + 1) + 4
+        out.append(f'<text x="4" y="{y + 12}">{html.escape(label)}</text>')
+        out.append(f'<line x1="{_LABEL}" y1="{y + 14}" x2="{_LABEL + _CELL * d.n}" '
+                   f'y2="{y + 14}" stroke="#ccc"/>')
+        for i in ticks:
+            x0 = _LABEL + _CELL * i
+            if kind == "trigger":
+                out.append(f'<path d="M{x0 + 6},{y + 2} l-5,10 h10 z" fill="{colour[kind]}"/>')
+            else:
+                out.append(f'<rect x="{x0}" y="{y + 2}" width="{_CELL}" height="12" '
+                           f'fill="{colour[kind]}"/>')
+    y = _ROW * (len(rows) + 1) + 14
+    for i in range(0, d.n, 5):
+        out.append(f'<text x="{_LABEL + _CELL * i}" y="{y}">{i}</text>')
+    if d.obligation:
+        out.append(f'<text x="4" y="{y + 16}">{html.escape(d.obligation)}</text>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"

@@ -1,0 +1,98 @@
+"""``fretc explain``: every one of FRET's 288 template keys has a reading and a diagram, and
+each diagram says what the requirement means. Checked independently of the interval
+semantics the diagram is computed by: scope intervals and triggers against the oracle of
+tests/differential.py, and the drawn windows against FRET's ft formula (the reference
+evaluator): the response given exactly on the required window satisfies the requirement,
+never given violates it, given on the forbidden window violates it."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from compiler.build import compile_entries  # noqa: E402
+from compiler.evaluate import ft_at  # noqa: E402
+from compiler.template_table import ALL_KEYS  # noqa: E402
+from fretc.cli import main  # noqa: E402
+from fretish.files import load_requirements  # noqa: E402
+from monitors.explain import explain  # noqa: E402
+
+SCOPE = {"null": "", "in": "in m mode ", "notin": "when not in m mode ",
+         "onlyIn": "only in m mode ", "after": "after m mode ", "before": "before m mode ",
+         "onlyAfter": "only after m mode ", "onlyBefore": "only before m mode "}
+COND = {"null": "", "regular": "upon c ", "holding": "whenever c "}
+TIMING = {"null": "", "immediately": "immediately ", "next": "at the next timepoint ",
+          "finally": "finally ", "eventually": "eventually ", "always": "always ",
+          "never": "never ", "within": "within 3 ticks ", "for": "for 3 ticks ",
+          "after": "after 3 ticks ", "until": "until s ", "before": "before s "}
+KEYS = sorted({(s, c, t) for s, c, t, _n in ALL_KEYS})
+
+
+def _compiled(tmp_path: Path):
+    text = "".join(f"K{i}: {SCOPE[s]}{COND[c]}the sw shall {TIMING[t]}satisfy r\n"
+                   for i, (s, c, t) in enumerate(KEYS))
+    (tmp_path / "keys.fret").write_text(text)
+    return compile_entries(load_requirements([tmp_path / "keys.fret"]))
+
+
+def _trace(d, r_ticks: set[int], trigger: int | None):
+    """The diagram's example trace with the condition a single pulse at the first trigger
+    (one obligation to look at) and the response true exactly at ``r_ticks``."""
+    rows = []
+    for i in range(d.n):
+        rows.append({"m": d.signals.get("scope mode", [False] * d.n)[i],
+                     "c": i == trigger,
+                     "s": d.signals.get("stop condition", [False] * d.n)[i],
+                     "r": i in r_ticks})
+    return rows
+
+
+def test_every_template_key_has_a_reading_and_a_diagram_that_means_it(tmp_path):
+    from differential import _intervals
+
+    compiled = _compiled(tmp_path)
+    assert len(compiled) == len(KEYS) == 288
+    checked = 0
+    for c, (scope, cond, timing) in zip(compiled, KEYS):
+        assert c.error is None, (c.id, c.error)
+        x = explain(c)
+        d = x.diagram
+        assert x.reading and x.key == f"{scope},{cond},{timing},satisfaction"
+        mode = d.signals.get("scope mode")
+        want = _intervals(scope, mode, d.n, False)
+        assert [tuple(iv) for iv in want] == [tuple(iv) for iv in d.scope], (c.id, want, d.scope)
+        if not d.triggers:
+            continue
+        t = d.triggers[0]
+        trig = None if cond == "null" else t  # a null condition triggers at the interval start
+        if d.required is not None:
+            lo, hi = d.required
+            ok = _trace(d, set(range(lo, hi + 1)), trig)
+            assert ft_at(c.formalization.ft, ok), (c.id, "required window given", d.required)
+            assert not ft_at(c.formalization.ft, _trace(d, set(), trig)), (c.id, "never given")
+            checked += 1
+        if d.forbidden is not None:
+            lo, hi = d.forbidden
+            bad = _trace(d, set(range(lo, hi + 1)), trig)
+            assert not ft_at(c.formalization.ft, bad), (c.id, "forbidden window given")
+            checked += 1
+    assert checked >= 80
+
+
+def test_the_command_prints_the_reading_and_writes_svgs(tmp_path):
+    root = Path(__file__).resolve().parents[2]
+    res = CliRunner().invoke(main, ["explain", str(root / "requirements" / "safe_ros.fret"),
+                                    "R2", "-o", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    assert "each time too_close becomes true" in res.output
+    assert "within 1 second (10 ticks, 1 s)" in res.output
+    assert "response required  ..###########" in res.output
+    assert (tmp_path / "R2.svg").read_text().startswith("<svg")
+    res = CliRunner().invoke(main, ["explain", str(root / "requirements" / "safe_ros.fret"),
+                                    "R9"])
+    assert res.exit_code == 2 and "no requirement 'R9'" in res.output
