@@ -95,6 +95,8 @@ class MonitorSource:
     #: monitor judges the path formula on one run; the bound applies across runs
     pctl: str | None = None
     probability: tuple | None = None  # (op, p) of the bound, with pctl
+    #: the named durations' values used (``["T_stop = 1.5 seconds"]``), else empty
+    constants: tuple = ()
 
     # read-only delegations, same shape as compiler.build.Compiled's (kept: one property per field)
     @property
@@ -125,6 +127,13 @@ class MonitorSource:
     def status_live(self) -> bool:
         """Can the status still change after reset()? (some automaton can reject)"""
         return any(a is not None and not a.complete for a in (self.good, self.bad))
+
+
+def _constant_notes(compiled) -> list[str]:
+    """The named durations of ``compiled``'s requirement with their values."""
+    from fretish.constants import constant_notes
+
+    return constant_notes(compiled.requirement)
 
 
 def _class_name(rid: str, index: int) -> str:
@@ -168,6 +177,7 @@ def monitor_source(compiled, index: int) -> MonitorSource:
                       + "tick, verdict)",
         verdict=verdict, atom_locals=atom_locals, automata=automata,
         uses_first=code.uses_first,
+        constants=tuple(_constant_notes(compiled)),
         bad_sub=_letter_code(bad, atom_nodes, atom_locals),
         good_sub=_letter_code(good, atom_nodes, atom_locals))
 
