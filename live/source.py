@@ -218,11 +218,12 @@ class WatchSource(LogSource):
 
     def _publishers_left(self) -> None:
         """Every subscribed topic stayed unadvertised for the grace period: the run ends.
-        Under ``--until-idle`` (:attr:`idle` set) that is the run's end; otherwise the watch
-        was cut short (:data:`PUBLISHERS_LEFT`, the watch's partial end)."""
+        Under ``--until-idle`` (:attr:`idle` set), and on transports without a close of their
+        own (DDS, Zenoh: the client's ``leaving_ends_run``), that is the run's end; otherwise
+        the watch was cut short (:data:`PUBLISHERS_LEFT`, the watch's partial end)."""
         self._server_ended = True
         grace = f"{self.restart_grace:g} s"
-        if self.idle is not None:
+        if self.idle is not None or getattr(self.client, "leaving_ends_run", False):
             self._end("every publisher of the bound topics left (unadvertised; none came back "
                       f"within {grace})")
             return
