@@ -174,11 +174,14 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
 @click.option("--zenoh-config", type=click.Path(exists=True, dir_okay=False), default=None,
               help="zenoh://: a Zenoh JSON5 session configuration (TLS, access control) read "
                    "before fretc sets peer mode and the endpoint.")
+@click.option("--publish-diagnostics", is_flag=True,
+              help="dds://, zenoh://: publish the verdicts as a diagnostic_msgs/DiagnosticArray "
+                   "on /diagnostics over the watched transport, at 1 Hz and on every change.")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
               window, duration, until_idle, restart_grace, allow_partial, topic_types, record,
               jsonl, json_path, wait, connect_timeout, no_live, dds_config, zenoh_config,
-              msg_path=()):
+              publish_diagnostics, msg_path=()):
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
     rosbridge://host:9090: rosbridge v2; dds://DOMAIN: the robot's DDS (Cyclone DDS);
     zenoh://host:7447: rmw_zenoh) with the requirements and bindings that audit its
@@ -197,12 +200,18 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         raise click.BadParameter(f"{url!r}: expected ws://host:port, rosbridge://host:port, "
                                  "dds://DOMAIN or zenoh://host:port", param_hint="URL")
     _check_ros2_url(url, "URL")
+    if publish_diagnostics and not url.startswith(("dds://", "zenoh://")):
+        raise click.BadParameter("--publish-diagnostics needs a dds:// or zenoh:// URL",
+                                 param_hint="--publish-diagnostics")
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window, msg_path)
     lock = threading.Lock()
+    diagnostics = []
 
     def on_event(e):
+        if diagnostics and e.kind in ("pt", "ltl3", "problem", "gap"):
+            diagnostics[0].changed()
         if jsonl:
             with lock:
                 sys.stdout.write(json.dumps(e.to_json(), sort_keys=True) + "\n")
@@ -225,7 +234,12 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         if r.error is not None:
             input_errors = True
             err.print(f"[red]error:[/red] {escape(f'{r.id} ({r.source}): {r.error}')}")
+    if publish_diagnostics:
+        diagnostics.append(_diagnostics(w, url, dds_config).start())
     la = _run_watch(w, err, no_live)
+    if diagnostics:
+        diagnostics[0].finish(la)
+        getattr(w.client, "close", lambda: None)()
     ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
 
 
@@ -238,6 +252,21 @@ def _check_ros2_url(url: str, hint: str) -> None:
             parse_url(url)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint=hint) from None
+
+
+def _diagnostics(w, url: str, dds_config: str | None):
+    """The /diagnostics publisher of a watch of ``url`` (its transport, in this process)."""
+    from live.diagnostics import DiagnosticsPublisher
+
+    if url.startswith("dds://"):
+        from live.dds_serve import DdsServer
+
+        return DiagnosticsPublisher(w, lambda: DdsServer(url, config_file=dds_config))
+    from live.zenoh_serve import ZenohServer
+
+    w.client.keep_session = True  # the final verdicts go out after the watch stopped reading
+    return DiagnosticsPublisher(w, lambda: ZenohServer(url, name="fretc_watch",
+                                                       session=w.client._session))
 
 
 def _run_watch(w, err, no_live):

@@ -54,13 +54,13 @@ def require_zenoh():
 
 
 def zenoh_config(*, listen: str | None = None, connect: str | None = None,
-                 config_file: str | None = None):
-    """A Zenoh peer's configuration: multicast scouting off, listening on and/or connecting
-    to the given ``tcp/host:port`` endpoints (``config_file``: a Zenoh JSON5 configuration
-    read first, e.g. TLS or access control)."""
+                 config_file: str | None = None, mode: str = "peer"):
+    """A Zenoh session's configuration (``mode`` ``peer`` or ``router``): multicast scouting
+    off, listening on and/or connecting to the given ``tcp/host:port`` endpoints
+    (``config_file``: a Zenoh JSON5 configuration read first, e.g. TLS or access control)."""
     zenoh = require_zenoh()
     cfg = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
-    cfg.insert_json5("mode", '"peer"')
+    cfg.insert_json5("mode", f'"{mode}"')
     cfg.insert_json5("scouting/multicast/enabled", "false")
     cfg.insert_json5("listen/endpoints", f'["{listen}"]' if listen else "[]")
     cfg.insert_json5("connect/endpoints", f'["{connect}"]' if connect else "[]")
@@ -86,6 +86,8 @@ class ZenohClient:
     #: every publisher of the bound topics leaving is the end of the run (no close frame on
     #: this transport)
     leaving_ends_run = True
+    #: :meth:`stop` leaves the session open (closed by :meth:`close`)
+    keep_session = False
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
                  types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),
@@ -128,20 +130,27 @@ class ZenohClient:
         return self
 
     def stop(self) -> None:
-        """Undeclare and close the session (idempotent)."""
+        """Undeclare the subscribers and close the session (idempotent); with
+        :attr:`keep_session` the session stays open until :meth:`close` (the final
+        ``/diagnostics`` of ``--publish-diagnostics`` goes out on it)."""
         self._stop.set()
         if self._watcher is not None:
             self._watcher.join(2)
+        for d in self._decls:
+            try:
+                d.undeclare()
+            except Exception:  # already gone with the session
+                pass
+        self._decls.clear()
+        self._merge.stop()
+        if not self.keep_session:
+            self.close()
+
+    def close(self) -> None:
+        """Close the session (idempotent)."""
         session, self._session = self._session, None
         if session is not None:
-            for d in self._decls:
-                try:
-                    d.undeclare()
-                except Exception:  # already gone with the session
-                    pass
-            self._decls.clear()
             session.close()
-        self._merge.stop()
 
     def _watch_peers(self) -> None:
         """``connected`` when the first peer or router is reached, ``disconnected`` when none

@@ -9,8 +9,9 @@ zenoh://...`` sees the log's messages at the log's times. At the end the tokens 
 (the node left) and the session closed. Channels of other encodings (ROS 1, JSON, protobuf)
 are not published (listed in :attr:`ZenohServer.skipped`).
 
-The session is a Zenoh peer listening on ``tcp/HOST:PORT`` with multicast scouting off:
-watchers connect to it. The object has the interface of :class:`live.serve.FoxgloveServer`
+The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as
+the robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes
+between them (a watch's ``--publish-diagnostics`` reaches the others). The object has the interface of :class:`live.serve.FoxgloveServer`
 that :func:`live.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``,
 ``stop``).
 """
@@ -36,6 +37,8 @@ class ZenohServer:
         url: ``zenoh://HOST:PORT[?domain=D]`` (the endpoint listened on).
         name: the node name in the liveliness tokens.
         config_file: a Zenoh JSON5 configuration read first.
+        session: publish on this open session (the watch's, for ``--publish-diagnostics``)
+            instead of a new one listening on the URL's endpoint; not closed by :meth:`stop`.
 
     Raises:
         ValueError: a URL of the wrong form; MissingDependency: no eclipse-zenoh;
@@ -43,13 +46,14 @@ class ZenohServer:
     """
 
     def __init__(self, url: str, name: str = "fretc_replay",
-                 config_file: str | None = None) -> None:
+                 config_file: str | None = None, session=None) -> None:
         require_zenoh()
         self.address = parse_url(url)
         self.url = url
         self.node = "".join(c if c.isalnum() else "_" for c in name)[:60] or "fretc_replay"
-        self.session = __import__("zenoh").open(
-            zenoh_config(listen=self.address.endpoint, config_file=config_file))
+        self._own = session is None
+        self.session = session if session is not None else __import__("zenoh").open(
+            zenoh_config(listen=self.address.endpoint, config_file=config_file, mode="router"))
         self.channels: dict[str, object] = {}
         self.skipped: dict[str, str] = {}
         self._tokens: list = []
@@ -111,4 +115,5 @@ class ZenohServer:
             pub.undeclare()
         self._tokens.clear()
         self.channels.clear()
-        self.session.close()
+        if self._own:
+            self.session.close()
