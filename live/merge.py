@@ -16,10 +16,13 @@ import heapq
 import threading
 import time
 
-__all__ = ["MergeBuffer", "HOLD_SECONDS"]
+__all__ = ["MergeBuffer", "HOLD_SECONDS", "MAX_HELD"]
 
 #: Wall-clock seconds a message is held before it is released in log-time order.
 HOLD_SECONDS = 0.1
+#: Messages held at most: past it (a flood) the oldest held message is released at once, so
+#: memory stays bounded by the event queue's own bounds (:mod:`live.events`).
+MAX_HELD = 10_000
 
 
 class MergeBuffer:
@@ -46,12 +49,17 @@ class MergeBuffer:
         return self
 
     def put(self, topic: str, log_time: int, payload: bytes, wall_ns: int) -> None:
-        """Hold one message."""
+        """Hold one message (past :data:`MAX_HELD` held, the oldest goes on at once)."""
+        spill = None
         with self._cond:
             self._seq += 1
             heapq.heappush(self._heap, (log_time, self._seq, time.monotonic(),
                                         ("message", topic, log_time, payload, wall_ns)))
+            if len(self._heap) > MAX_HELD:
+                spill = heapq.heappop(self._heap)[3]
             self._cond.notify()
+        if spill is not None:
+            self.events.put(spill)
 
     def _due(self) -> list[tuple]:
         """The messages to release now (lock held): every message at or before the log time of
@@ -69,7 +77,7 @@ class MergeBuffer:
     def _run(self) -> None:
         while True:
             with self._cond:
-                self._cond.wait(self.hold / 4)
+                self._cond.wait(self.hold / 10)  # released within a tenth of the hold
                 out = self._due()
                 done = self._stopped and not self._heap
             for ev in out:
@@ -84,3 +92,7 @@ class MergeBuffer:
             self._cond.notify()
         if self._thread is not None:
             self._thread.join(2)
+        with self._cond:  # what the thread did not release (never started, or stuck)
+            rest = [heapq.heappop(self._heap)[3] for _ in range(len(self._heap))]
+        for ev in rest:
+            self.events.put(ev)

@@ -210,7 +210,16 @@ class ZenohClient:
 
     # -- the data ----------------------------------------------------------------------------------
     def _on_sample(self, sample) -> None:
-        """One message of a bound topic (or of ``/clock``)."""
+        """One message of a bound topic (or of ``/clock``); whatever it holds, it costs that
+        message only (a ``protocol`` event)."""
+        try:
+            self._sample(sample)
+        except Exception as exc:
+            self.events.put(("protocol", time.time_ns(), f"a Zenoh sample on "
+                             f"{str(sample.key_expr)[:200]} could not be read "
+                             f"({type(exc).__name__}: {str(exc)[:200]})"))
+
+    def _sample(self, sample) -> None:
         now = time.time_ns()
         parsed = parse_zenoh_key(str(sample.key_expr))
         if parsed is None:
