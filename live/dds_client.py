@@ -160,25 +160,21 @@ class DdsClient:
         if topic in self._readers:
             if self.wanted(topic) and topic not in self._advertised:
                 self._advertised.add(topic)  # a publisher came back (a restart)
-                self.events.put(("advertise", now, [advertisement(0, topic, ros,
-                                                                  self.store)]))
+                self.events.put(("advertise", now, [advertisement(
+                    0, topic, ros, self.store, self.types.get(topic))]))
             return
-        expected = self.types.get(topic)
-        shown = ros
-        if expected and _norm(expected) != _norm(ros):
-            self.events.put(("protocol", now, f"{topic} carries {ros}, the bindings expect "
-                             f"{expected}: the topic is not read"))
-            shown = f"{ros} (the bindings expect {expected})"
+        adv = advertisement(len(self._readers) + 1, topic, ros, self.store,
+                            self.types.get(topic))
+        if adv.unreadable:
+            self.events.put(("protocol", now, f"{adv.unreadable}: the topic is not read"))
         if self.wanted(topic):
             self._advertised.add(topic)
-            self.events.put(("advertise", now, [advertisement(len(self._readers) + 1, topic,
-                                                              shown, self.store)]))
-        if shown != ros:
-            self._readers[topic] = (None, ros)
-            return
+            self.events.put(("advertise", now, [adv]))
         try:
-            cls = idl_struct(self.store, _norm(ros))
-        except Exception:  # a type the store does not know: advertised without a schema
+            cls = None if adv.unreadable else idl_struct(self.store, _norm(ros))
+        except Exception:  # a definition Cyclone DDS's IDL cannot take
+            cls = None
+        if cls is None:
             self._readers[topic] = (None, ros)
             return
         tp = Topic(self._dp, dds_topic(topic), cls)

@@ -197,13 +197,26 @@ def standard_store(msg_path: tuple[str, ...] = ()):
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
-def advertisement(cid: int, topic: str, ros: str, store) -> Advertised:
+def advertisement(cid: int, topic: str, ros: str, store, expected: str | None = None
+                  ) -> Advertised:
     """The :class:`~live.client.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
-    with the ``ros2msg`` definition ``store`` gives; an advertisement without a schema
-    (the watch then reports the topic unreadable) when ``store`` does not know the type."""
+    with the ``ros2msg`` definition ``store`` gives; an unreadable one (the watch then makes
+    the topic's requirements ``error`` saying why) when ``store`` does not know the type or
+    it is not ``expected`` (the bindings' ``[types]``)."""
+    if expected and _norm(expected) != _norm(ros):
+        return Advertised(cid, topic, "cdr", ros, "", "", unreadable=(
+            f"{topic} carries {ros}, the bindings expect {expected}"))
     try:
         name = normalize_msgtype(ros)
         text = store.generate_msgdef(name, ros_version=2)[0]
     except Exception:  # a type the store lacks, or a name that is not a ROS type
-        return Advertised(cid, topic, "cdr", ros, "", "")
+        return Advertised(cid, topic, "cdr", ros, "", "", unreadable=(
+            f"no definition of {ros} in ROS 2's standard types or the --msg-path folders"))
     return Advertised(cid, topic, "cdr", name, text, "ros2msg")
+
+
+def _norm(name: str) -> str:
+    try:
+        return normalize_msgtype(name)
+    except Exception:  # not a ROS type name
+        return name

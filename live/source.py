@@ -348,6 +348,12 @@ class WatchSource(LogSource):
             self.schema_errors[ch.topic] = f"{SCHEMA_TOO_LARGE}: {why}"
             self._report(SCHEMA_TOO_LARGE, ch.topic, self._last_time, why)
             return
+        if ch.unreadable:
+            self.decoders[ch.topic] = None
+            self.schema_errors[ch.topic] = f"{P.UNKNOWN_SCHEMA}: {ch.unreadable}"
+            self._problem(P.UNKNOWN_SCHEMA, ch.topic, self._last_time,
+                          f"{ch.unreadable}; messages on this topic are skipped")
+            return
         try:
             self.decoders[ch.topic] = schema_decoder(ch.encoding, ch.schema_encoding,
                                                      ch.schema_name, ch.schema)

@@ -201,12 +201,10 @@ class ZenohClient:
             return
         self._advertised[topic] = ros
         expected = self.types.get(topic)
-        if expected and _norm(expected) != _norm(ros):
-            self.events.put(("protocol", now, f"{topic} carries {ros}, the bindings expect "
-                             f"{expected}: the topic is not read"))
-            ros = f"{ros} (the bindings expect {expected})"
-        self.events.put(("advertise", now, [advertisement(len(self._advertised), topic, ros,
-                                                         self.store)]))
+        adv = advertisement(len(self._advertised), topic, ros, self.store, expected)
+        if adv.unreadable:
+            self.events.put(("protocol", now, f"{adv.unreadable}: the topic is not read"))
+        self.events.put(("advertise", now, [adv]))
 
     # -- the data ----------------------------------------------------------------------------------
     def _on_sample(self, sample) -> None:

@@ -83,7 +83,7 @@ def _audit(trace: Path, tmp_path) -> tuple[int, dict]:
     return res.exit_code, json.loads(out.read_text())
 
 
-def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str):
+def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str, *extra: str):
     """Replay ``trace`` over ``transport`` in one process, watch it in another until it ends
     by itself; (exit code, watch JSON, replay's stderr)."""
     url = _url(transport)
@@ -92,7 +92,7 @@ def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str):
     try:
         res = subprocess.run(_fretc("watch", url, "-r", REQS, "--json", str(out), "--no-live",
                                     "--wait", "10", "--duration", "120",
-                                    *_config(url, dds_xml)),
+                                    *_config(url, dds_xml), *extra),
                              cwd=ROOT, capture_output=True, text=True, timeout=150,
                              env={**os.environ, "PYTHONPATH": str(ROOT)})
         _o, err = rep.communicate(timeout=30)
@@ -102,18 +102,24 @@ def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str):
     return res.returncode, json.loads(out.read_text()), err.decode()
 
 
-def _assert_same(trace, transport, tmp_path, dds_xml):
+def _assert_same(trace, transport, tmp_path, dds_xml, *extra):
     code, audit = _audit(trace, tmp_path)
-    wcode, watch, err = _watch_replayed(trace, transport, tmp_path, dds_xml)
+    wcode, watch, err = _watch_replayed(trace, transport, tmp_path, dds_xml, *extra)
     assert "sent" in err
     assert _verdicts(watch) == _verdicts(audit)
     assert watch["logs"][0].get("problems", []) == []
     assert wcode == code
+    return audit
 
 
 @pytest.mark.parametrize("transport", ["dds", "zenoh"])
 def test_replayed_trace_watched_to_its_end_equals_the_audit(transport, tmp_path, dds_xml):
-    _assert_same(ROOT / "traces" / "stop_delay.mcap", transport, tmp_path, dds_xml)
+    """... and so does the audit of the watch's --record."""
+    rec = tmp_path / "rec.mcap"
+    audit = _assert_same(ROOT / "traces" / "stop_delay.mcap", transport, tmp_path, dds_xml,
+                         "--record", str(rec))
+    code, recorded = _audit(rec, tmp_path)
+    assert _verdicts(recorded) == _verdicts(audit)
 
 
 @pytest.mark.slow
@@ -260,6 +266,43 @@ def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
     kinds = {p["kind"] for p in doc["logs"][0]["problems"]}
     assert "undecodable" in kinds, res.output
     assert res.exit_code == 3, res.output
+
+
+def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
+    """/a is bound as std_msgs/Bool ([types]) but carries Float64: reported, its
+    requirement is error (exit 2), never judged from a misread value."""
+    import threading
+
+    from live.zenoh_serve import ZenohServer
+
+    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
+                                     "satisfy a_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
+        '[types]\n"/a" = "std_msgs/msg/Bool"\n', encoding="utf-8")
+    url = f"zenoh://127.0.0.1:{_port()}"
+    server = ZenohServer(url)
+    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+
+    def publish():
+        server.wait_subscribed(timeout=30)
+        for k in range(10):
+            server.log("/a", b"\x00\x01\x00\x00" + struct.pack("<d", 1.0),
+                       1_700_000_000 * 10**9 + k * 50_000_000)
+        time.sleep(0.3)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "20", "--wait", "5",
+                                    "--restart-grace", "0.5"])
+    t.join(10)
+    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
+    assert v["verdict"] == "error"
+    assert "std_msgs/msg/Bool" in v["error"] and "/a" in v["error"], v["error"]
+    assert res.exit_code == 2, res.output
 
 
 def test_a_malformed_url_is_a_usage_error():
