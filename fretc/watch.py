@@ -132,8 +132,9 @@ def _topic_types(ctx, param, values):
     return out
 
 
-#: URL schemes ``fretc watch`` speaks: Foxglove WebSocket, rosbridge v2.
-URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://")
+#: URL schemes ``fretc watch`` speaks: Foxglove WebSocket, rosbridge v2, DDS, Zenoh (kept equal
+#: to live.transports.URL_SCHEMES, which is not imported at start-up).
+URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", "zenoh://")
 
 
 @click.command("watch")
@@ -167,12 +168,23 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://")
               help="Give up when no connection was made within this time (default: retry "
                    "until stopped).")
 @click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
+@click.option("--dds-config", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="dds://: a Cyclone DDS XML configuration (network interfaces, peers, DDS "
+                   "Security / SROS2) used instead of the default loopback-free one.")
+@click.option("--zenoh-config", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="zenoh://: a Zenoh JSON5 session configuration (TLS, access control) read "
+                   "before fretc sets peer mode and the endpoint.")
+@click.option("--publish-diagnostics", is_flag=True,
+              help="dds://, zenoh://: publish the verdicts as a diagnostic_msgs/DiagnosticArray "
+                   "on /diagnostics over the watched transport, at 1 Hz and on every change.")
 @click.pass_context
 def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
               window, duration, until_idle, restart_grace, allow_partial, topic_types, record,
-              jsonl, json_path, wait, connect_timeout, no_live, msg_path=()):
+              jsonl, json_path, wait, connect_timeout, no_live, dds_config, zenoh_config,
+              publish_diagnostics, msg_path=()):
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
-    rosbridge://host:9090: rosbridge v2) with the requirements and bindings that audit its
+    rosbridge://host:9090: rosbridge v2; dds://DOMAIN: the robot's DDS (Cyclone DDS);
+    zenoh://host:7447: rmw_zenoh) with the requirements and bindings that audit its
     logs, until the run ends (the server closes, --duration, --until-idle, Ctrl-C, or every
     bound topic's publisher left for longer than --restart-grace). Exit codes as
     `fretc audit`."""
@@ -185,14 +197,21 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     from live.watch import Watch, WatchOptions
 
     if not url.startswith(URL_SCHEMES):
-        raise click.BadParameter(f"{url!r}: expected ws://host:port or rosbridge://host:port",
-                                 param_hint="URL")
+        raise click.BadParameter(f"{url!r}: expected ws://host:port, rosbridge://host:port, "
+                                 "dds://DOMAIN or zenoh://host:port", param_hint="URL")
+    _check_ros2_url(url, "URL")
+    if publish_diagnostics and not url.startswith(("dds://", "zenoh://")):
+        raise click.BadParameter("--publish-diagnostics needs a dds:// or zenoh:// URL",
+                                 param_hint="--publish-diagnostics")
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window, msg_path)
     lock = threading.Lock()
+    diagnostics = []
 
     def on_event(e):
+        if diagnostics and e.kind in ("pt", "ltl3", "problem", "gap"):
+            diagnostics[0].changed()
         if jsonl:
             with lock:
                 sys.stdout.write(json.dumps(e.to_json(), sort_keys=True) + "\n")
@@ -203,7 +222,8 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         w = Watch(plan, WatchOptions(url=url, duration=duration, wait=wait,
                                      connect_timeout=connect_timeout, record=record,
                                      until_idle=until_idle, types=topic_types or None,
-                                     restart_grace=restart_grace, msg_path=tuple(msg_path)),
+                                     restart_grace=restart_grace, msg_path=tuple(msg_path),
+                                     config=dds_config or zenoh_config),
                   on_event=on_event)
     except (AuditInputError, MissingDependency) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
@@ -214,8 +234,39 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
         if r.error is not None:
             input_errors = True
             err.print(f"[red]error:[/red] {escape(f'{r.id} ({r.source}): {r.error}')}")
+    if publish_diagnostics:
+        diagnostics.append(_diagnostics(w, url, dds_config).start())
     la = _run_watch(w, err, no_live)
+    if diagnostics:
+        diagnostics[0].finish(la)
+        getattr(w.client, "close", lambda: None)()
     ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
+
+
+def _check_ros2_url(url: str, hint: str) -> None:
+    """A dds:// or zenoh:// URL of the wrong form is a usage error (exit 2)."""
+    if url.startswith(("dds://", "zenoh://")):
+        from live.ros2_names import parse_url
+
+        try:
+            parse_url(url)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint=hint) from None
+
+
+def _diagnostics(w, url: str, dds_config: str | None):
+    """The /diagnostics publisher of a watch of ``url`` (its transport, in this process)."""
+    from live.diagnostics import DiagnosticsPublisher
+
+    if url.startswith("dds://"):
+        from live.dds_serve import DdsServer
+
+        return DiagnosticsPublisher(w, lambda: DdsServer(url, config_file=dds_config))
+    from live.zenoh_serve import ZenohServer
+
+    w.client.keep_session = True  # the final verdicts go out after the watch stopped reading
+    return DiagnosticsPublisher(w, lambda: ZenohServer(url, name="fretc_watch",
+                                                       session=w.client._session))
 
 
 def _run_watch(w, err, no_live):
@@ -262,8 +313,10 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
 
 @click.command("replay")
 @click.argument("log", type=click.Path(exists=True, dir_okay=False))
-@click.option("--serve", is_flag=True, required=True,
-              help="Publish the log over the Foxglove WebSocket protocol (foxglove-sdk).")
+@click.option("--serve", is_flag=False, flag_value="ws", default=None, metavar="[URL]",
+              help="Publish the log: alone, over the Foxglove WebSocket protocol (foxglove-sdk, "
+                   "--host/--port); dds://DOMAIN as ROS 2 topics on Cyclone DDS; "
+                   "zenoh://HOST:PORT as rmw_zenoh would (a Zenoh peer listening there).")
 @click.option("--rate", type=float, default=1.0, show_default=True,
               help="Times real time (0: as fast as possible).")
 @click.option("--host", default="127.0.0.1", show_default=True,
@@ -272,18 +325,25 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
 @click.option("--wait/--no-wait", default=True, show_default=True,
               help="Start publishing once a client subscribed.")
 @click.option("--loop", is_flag=True, help="Start again at the end.")
-def replay_cmd(log, serve, rate, host, port, wait, loop):
-    """Publish a recorded MCAP LOG over the Foxglove WebSocket protocol, paced at RATE
-    times real time, with its recorded schemas, encodings and log times; then close (a
-    `fretc watch` of it ends there)."""
-    # lazy: foxglove-sdk (the watch extra) only when the command runs
-    from live.serve import FoxgloveServer, advertise_mcap, replay_mcap
+@click.option("--dds-config", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="dds://: a Cyclone DDS XML configuration instead of the loopback one.")
+@click.option("--zenoh-config", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="zenoh://: a Zenoh JSON5 session configuration read first.")
+def replay_cmd(log, serve, rate, host, port, wait, loop, dds_config, zenoh_config):
+    """Publish a recorded MCAP LOG (--serve: over the Foxglove WebSocket protocol; --serve
+    dds://DOMAIN or zenoh://HOST:PORT: on the robot's middleware, with ROS 2's names and
+    types and each message's log time as its source timestamp), paced at RATE times real
+    time; then close (a `fretc watch` of it ends there)."""
+    if serve is None:
+        raise click.UsageError("--serve is required (alone for the Foxglove WebSocket, or "
+                               "--serve dds://DOMAIN, --serve zenoh://HOST:PORT)")
+    # lazy: foxglove-sdk, Cyclone DDS, Zenoh only when the command runs
+    from live.serve import advertise_mcap, replay_mcap
 
-    try:
-        server = FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")
-    except RuntimeError as exc:
-        raise MissingExtra(str(exc)) from None
+    server = _replay_server(log, serve, host, port, dds_config or zenoh_config)
     advertise_mcap(log, server)
+    for topic, why in sorted(getattr(server, "skipped", {}).items()):
+        click.echo(f"not published: {topic}: {why}", err=True)
     click.echo(f"serving {log} on {server.url} at {rate:g}x", err=True)
     try:
         while True:
@@ -300,6 +360,31 @@ def replay_cmd(log, serve, rate, host, port, wait, loop):
         pass
     finally:
         server.stop()
+
+
+def _replay_server(log: str, serve: str, host: str, port: int, config: str | None):
+    """The server of ``--serve`` (``ws``: the Foxglove WebSocket server on host:port)."""
+    from live.client import MissingDependency
+
+    if serve != "ws":
+        _check_ros2_url(serve, "--serve")
+    try:
+        if serve.startswith("dds://"):
+            from live.dds_serve import DdsServer
+
+            return DdsServer(serve, config_file=config)
+        if serve.startswith("zenoh://"):
+            from live.zenoh_serve import ZenohServer
+
+            return ZenohServer(serve, name=f"fretc_replay_{log}", config_file=config)
+        if serve != "ws":
+            raise click.BadParameter(f"{serve!r}: expected dds://DOMAIN or zenoh://HOST:PORT "
+                                     "(or --serve alone)", param_hint="--serve")
+        from live.serve import FoxgloveServer
+
+        return FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")
+    except (RuntimeError, MissingDependency) as exc:
+        raise MissingExtra(str(exc)) from None
 
 
 class MissingExtra(click.ClickException):

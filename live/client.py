@@ -111,6 +111,9 @@ class Advertised:
     schema_name: str
     schema: str
     schema_encoding: str
+    #: why the channel cannot be read although advertised (DDS, Zenoh: a type other than the
+    #: bindings', a type fretc has no definition of); empty when it can
+    unreadable: str = ""
 
     @staticmethod
     def from_json(ch: dict) -> "Advertised":

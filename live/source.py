@@ -218,11 +218,12 @@ class WatchSource(LogSource):
 
     def _publishers_left(self) -> None:
         """Every subscribed topic stayed unadvertised for the grace period: the run ends.
-        Under ``--until-idle`` (:attr:`idle` set) that is the run's end; otherwise the watch
-        was cut short (:data:`PUBLISHERS_LEFT`, the watch's partial end)."""
+        Under ``--until-idle`` (:attr:`idle` set), and on transports without a close of their
+        own (DDS, Zenoh: the client's ``leaving_ends_run``), that is the run's end; otherwise
+        the watch was cut short (:data:`PUBLISHERS_LEFT`, the watch's partial end)."""
         self._server_ended = True
         grace = f"{self.restart_grace:g} s"
-        if self.idle is not None:
+        if self.idle is not None or getattr(self.client, "leaving_ends_run", False):
             self._end("every publisher of the bound topics left (unadvertised; none came back "
                       f"within {grace})")
             return
@@ -346,6 +347,12 @@ class WatchSource(LogSource):
                    "bytes read; messages on this topic are skipped")
             self.schema_errors[ch.topic] = f"{SCHEMA_TOO_LARGE}: {why}"
             self._report(SCHEMA_TOO_LARGE, ch.topic, self._last_time, why)
+            return
+        if ch.unreadable:
+            self.decoders[ch.topic] = None
+            self.schema_errors[ch.topic] = f"{P.UNKNOWN_SCHEMA}: {ch.unreadable}"
+            self._problem(P.UNKNOWN_SCHEMA, ch.topic, self._last_time,
+                          f"{ch.unreadable}; messages on this topic are skipped")
             return
         try:
             self.decoders[ch.topic] = schema_decoder(ch.encoding, ch.schema_encoding,

@@ -1,6 +1,6 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
-protocol (:class:`~live.client.FoxgloveClient`) or rosbridge
-(:class:`~live.rosbridge.RosbridgeClient`).
+protocol (:class:`~live.client.FoxgloveClient`), rosbridge
+(:class:`~live.rosbridge.RosbridgeClient`), DDS or Zenoh (:mod:`live.transports`).
 
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
@@ -46,9 +46,9 @@ from audit.log_problems import collect_problems, problem_json
 from audit.operands import operand_values
 from audit.passes import ClockPass, clock_key, restrict
 from audit.verdict import LogAudit, Verdict
-from .client import FoxgloveClient, require_websockets
 from .columns import LiveColumns
 from .record import Recorder
+from .transports import make_client
 from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
                      RESTART_GRACE, UNADVERTISED, WatchEvent, WatchSource)
 
@@ -78,8 +78,10 @@ class WatchOptions:
         until_idle: end the run when no message arrived for this many seconds (wall time).
         types: topic -> ROS message type, for rosbridge servers whose rosapi does not type
             a bound topic (``--topic-type``; over the bindings' ``[types]``).
-        msg_path: rosbridge: folders of the robot's own ``.msg``/``.idl`` files
+        msg_path: rosbridge, DDS, Zenoh: folders of the robot's own ``.msg``/``.idl`` files
             (``--msg-path``); Foxglove WebSocket servers send their schemas.
+        config: DDS: a Cyclone DDS XML configuration (``--dds-config``); Zenoh: a JSON5
+            session configuration (``--zenoh-config``).
         restart_grace: seconds a bound topic's publisher has, once every bound topic was
             unadvertised, to advertise it again and continue the same run (a node restart);
             0 ends the run at once (``--restart-grace``).
@@ -96,22 +98,7 @@ class WatchOptions:
     max_backoff: float = 5.0
     restart_grace: float = RESTART_GRACE
     msg_path: tuple[str, ...] = ()
-
-
-def make_client(options: WatchOptions, wanted, types: dict[str, str] | None = None):
-    """The client for ``options.url``: :class:`~live.rosbridge.RosbridgeClient` for
-    ``rosbridge://`` (``rosbridge+wss://``; for topics rosapi does not type: ``types``, the
-    bindings' ``[types]``, overridden by ``options.types``), else
-    :class:`~live.client.FoxgloveClient` (``ws://``, ``wss://``)."""
-    kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
-    if options.url.startswith(("rosbridge://", "rosbridge+wss://")):
-        from .rosbridge import RosbridgeClient  # lazy: numpy's message building
-
-        given = dict(types or {})
-        given.update(options.types or {})
-        return RosbridgeClient(options.url, wanted, types=given, msg_path=options.msg_path,
-                               **kw)
-    return FoxgloveClient(options.url, wanted, **kw)
+    config: str | None = None
 
 
 # --------------------------------------------------------------------------- the engine
@@ -181,8 +168,7 @@ class Watch:
                         self.needed |= set(b.variables[v].topics)
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
-        require_websockets()
-        self.client = make_client(options, lambda t: t in self.needed, b.types)
+        self.client = make_client(options, lambda t: t in self.needed, b.types, self.needed)
         deadline = (time.monotonic() + options.duration) if options.duration else None
         self.source = WatchSource(options.url, self.client, deadline=deadline,
                                   idle=options.until_idle, on_event=self._event,

@@ -1,0 +1,214 @@
+"""``fretc watch dds://DOMAIN``: a Cyclone DDS participant that reads the bound ROS 2 topics
+of the robot's DDS domain and hands them to the watch engine as the Foxglove client does
+(:mod:`live.client`'s events on an :class:`~live.events.EventQueue`).
+
+What it reads (ROS 2's DDS mapping: :mod:`live.ros2_names`; types: :mod:`live.dds_types`):
+
+* the graph: DDS's built-in publication topic (``DCPSPublication``, what ``ros2 topic list
+  -t`` reads). A publication of ``rt/<topic>`` for a bound topic advertises the topic with the
+  ROS type of its DDS type name (``ros2msg`` definition from rosbags' type store and the
+  ``--msg-path`` folders) and creates a reader of that type with the QoS a ROS 2
+  subscription would use to match the offered one (:func:`~live.dds_types.reader_qos`).
+  When the last publication of a bound topic is gone (its writer deleted, or its
+  participant's lease expired: DDS liveliness) the topic is unadvertised; every bound topic's
+  publishers gone is the end of the robot's run (:attr:`DdsClient.leaving_ends_run`, after
+  the watch's restart grace);
+* the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
+  (the writer's clock), or the last ``/clock`` received when a ``/clock`` publication exists
+  (simulated time); messages merged into log-time order (:mod:`live.merge`);
+* faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
+  ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
+  type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
+
+Needs ``cyclonedds`` (the ``watch`` extra).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from .client import WATCH_HINT, MissingDependency
+from .events import EventQueue
+from .merge import MergeBuffer
+from .ros2_names import advertisement, dds_topic, parse_url, ros_topic_of_dds, ros_type, \
+    standard_store
+from .zenoh_client import CLOCK_TOPIC, _clock_ns, _norm
+
+__all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
+
+#: Seconds between two polls of the readers.
+POLL_SECONDS = 0.005
+
+
+def require_cyclonedds() -> None:
+    """Raise :class:`~live.client.MissingDependency` naming the install hint when the
+    ``cyclonedds`` package is not installed."""
+    try:
+        import cyclonedds.domain  # noqa: F401
+    except ImportError:
+        raise MissingDependency(f"the DDS transport needs cyclonedds: {WATCH_HINT}") from None
+
+
+class DdsClient:
+    """Watch ROS 2 topics on a DDS domain (module docstring).
+
+    Args:
+        url: ``dds://DOMAIN``.
+        wanted: topic -> bool (the bound topics).
+        topics: the bound topics (readers are created for these only).
+        types: topic -> expected ROS type (the bindings' ``[types]``, ``--topic-type``).
+        msg_path: folders of the robot's own ``.msg``/``.idl`` files.
+        config_file: a Cyclone DDS XML configuration (``--dds-config``).
+        events: the queue (a new bounded :class:`~live.events.EventQueue` by default).
+
+    Raises:
+        ValueError: a URL of the wrong form; MissingDependency: no cyclonedds.
+    """
+
+    leaving_ends_run = True
+
+    def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
+                 types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),
+                 config_file: str | None = None, events: EventQueue | None = None,
+                 **_ignored) -> None:
+        require_cyclonedds()
+        self.url = parse_url(url)
+        self.wanted = wanted
+        self.topics = set(topics)
+        self.types = dict(types or {})
+        self.store = standard_store(tuple(msg_path))
+        self.config_file = config_file
+        self.events: EventQueue = events if events is not None else EventQueue()
+        self._merge = MergeBuffer(self.events)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._pubs: dict[str, set] = {}  # topic -> publication keys alive
+        self._readers: dict[str, tuple] = {}  # topic -> (reader, ROS type)
+        self._advertised: set[str] = set()
+        self._clock: int | None = None
+        self._qos_reported: set[str] = set()
+
+    def start(self) -> "DdsClient":
+        """Join the domain and start reading in a background thread (returns at once)."""
+        from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
+
+        from .dds_types import open_participant
+
+        self._dp = open_participant(self.url.domain, self.config_file)
+        self._builtin = BuiltinDataReader(self._dp, BuiltinTopicDcpsPublication)
+        self._merge.start()
+        self.events.put(("connected", time.time_ns(), "dds", f"domain {self.url.domain}"))
+        self._thread = threading.Thread(target=self._run, daemon=True, name="fretc-dds")
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop reading and leave the domain (idempotent)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(5)
+        self._merge.stop()
+        self._readers.clear()
+        self._builtin = self._dp = None
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._discover()
+                busy = self._read()
+            except Exception as exc:  # one bad sample or entity costs that poll only
+                self.events.put(("protocol", time.time_ns(),
+                                 f"DDS: {type(exc).__name__}: {str(exc)[:200]}"))
+                busy = False
+            if not busy:
+                self._stop.wait(POLL_SECONDS)
+
+    def _discover(self) -> None:
+        """Read the built-in publications: new ones of bound topics (and ``/clock``)
+        advertise and get a reader; gone ones unadvertise their topic when it was the last."""
+        from cyclonedds.core import InstanceState
+
+        for p in self._builtin.take(64):
+            topic = ros_topic_of_dds(getattr(p, "topic_name", "") or "")
+            info = getattr(p, "sample_info", None)
+            alive = info is None or info.instance_state == InstanceState.Alive
+            key, now = p.key, time.time_ns()
+            if alive:
+                if topic is None or not (self.wanted(topic) or topic == CLOCK_TOPIC):
+                    continue
+                self._pubs.setdefault(topic, set()).add(key)
+                self._add(topic, ros_type(p.type_name), p.qos, now)
+                continue
+            for t, keys in self._pubs.items():
+                if key in keys:
+                    keys.discard(key)
+                    if not keys and t in self._advertised:
+                        self._advertised.discard(t)
+                        self.events.put(("unadvertise", now, [t]))
+
+    def _add(self, topic: str, ros: str, qos, now: int) -> None:
+        """Advertise ``topic`` and create its reader (once)."""
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+
+        from .dds_types import idl_struct, reader_qos
+
+        if topic == CLOCK_TOPIC and self._clock is None:
+            self._clock = 0
+        if topic in self._readers:
+            if self.wanted(topic) and topic not in self._advertised:
+                self._advertised.add(topic)  # a publisher came back (a restart)
+                self.events.put(("advertise", now, [advertisement(
+                    0, topic, ros, self.store, self.types.get(topic))]))
+            return
+        adv = advertisement(len(self._readers) + 1, topic, ros, self.store,
+                            self.types.get(topic))
+        if adv.unreadable:
+            self.events.put(("protocol", now, f"{adv.unreadable}: the topic is not read"))
+        if self.wanted(topic):
+            self._advertised.add(topic)
+            self.events.put(("advertise", now, [adv]))
+        try:
+            cls = None if adv.unreadable else idl_struct(self.store, _norm(ros))
+        except Exception:  # a definition Cyclone DDS's IDL cannot take
+            cls = None
+        if cls is None:
+            self._readers[topic] = (None, ros)
+            return
+        tp = Topic(self._dp, dds_topic(topic), cls)
+        self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
+
+    def _read(self) -> bool:
+        """Take every reader's samples; True when some came."""
+        from .dds_types import take_raw
+
+        got = False
+        for topic, (reader, _ros) in list(self._readers.items()):
+            if reader is None:
+                continue
+            self._check_qos(topic, reader)
+            for data, info in take_raw(reader):
+                got = True
+                now = time.time_ns()
+                if topic == CLOCK_TOPIC:
+                    self._clock = _clock_ns(data)
+                    if not self.wanted(topic):
+                        continue
+                stamp = info.source_timestamp
+                log_time = self._clock if self._clock else (stamp if stamp > 0 else now)
+                self._merge.put(topic, log_time, data, now)
+        return got
+
+    def _check_qos(self, topic: str, reader) -> None:
+        """A reader whose QoS cannot match a publisher's is a ``protocol`` event (once)."""
+        if topic in self._qos_reported:
+            return
+        status = reader.get_requested_incompatible_qos_status()
+        if getattr(status, "total_count", 0):
+            self._qos_reported.add(topic)
+            self.events.put(("protocol", time.time_ns(), f"{topic}: a publisher's QoS is "
+                             "incompatible with the subscription's (policy id "
+                             f"{getattr(status, 'last_policy_id', '?')}); its messages are not "
+                             "received"))

@@ -1,0 +1,158 @@
+"""Cyclone DDS's side of ROS 2 topics for ``fretc watch dds://`` and ``fretc replay --serve
+dds://``: IDL struct types built at run time from rosbags' message definitions, the domain,
+and the raw CDR samples read and written.
+
+Cyclone DDS's Python binding hands a reader's samples to Python as their serialized bytes
+(CDR with the 4-byte encapsulation header) and writes bytes given to it, so fretc reads and
+writes each sample's CDR as it is on the wire (``ddspy_take`` / ``ddspy_write_ts``) and
+decodes it with the same decoders as a log's (:func:`logs.schema_decoder`). The struct type
+is still needed: its name ``pkg::msg::dds_::Type_`` is what DDS matches a reader to a writer
+by (ROS 2's DDS mapping, rosidl_generator_dds_idl), and its members make the XTypes type
+information Cyclone DDS sends. Members keep the ROS field names (Python keywords get a
+trailing ``_``), in the definition's order; ``bool`` is ``boolean``, ``byte`` ``octet``,
+``char`` ``uint8``, strings unbounded unless bounded in the definition.
+"""
+
+from __future__ import annotations
+
+import keyword
+import threading
+
+__all__ = ["idl_struct", "open_participant", "take_raw", "write_raw", "reader_qos",
+           "writer_qos", "LOOPBACK_XML"]
+
+#: A Cyclone DDS configuration that keeps a domain on the loopback interface, multicast
+#: off, peers found by unicast on 127.0.0.1 (tests, rehearsals on one machine).
+LOOPBACK_XML = """<CycloneDDS><Domain id="any"><General><Interfaces>
+<NetworkInterface address="127.0.0.1"/></Interfaces><AllowMulticast>false</AllowMulticast>
+</General><Discovery><ParticipantIndex>auto</ParticipantIndex>
+<MaxAutoParticipantIndex>30</MaxAutoParticipantIndex><Peers><Peer address="127.0.0.1"/>
+</Peers></Discovery></Domain></CycloneDDS>"""
+
+_BASE = {"bool": "bool", "byte": "byte", "octet": "byte", "char": "uint8", "int8": "int8",
+         "uint8": "uint8", "int16": "int16", "uint16": "uint16", "int32": "int32",
+         "uint32": "uint32", "int64": "int64", "uint64": "uint64", "float32": "float32",
+         "float64": "float64"}
+_lock = threading.Lock()
+_structs: dict[tuple[int, str], type] = {}
+_domains: dict[int, object] = {}
+
+
+def _member_type(store, node):
+    from cyclonedds.idl import types as T
+
+    kind, args = node
+    kind = int(kind)
+    if kind == 1:  # BASE: (name, string bound)
+        name, bound = args
+        if name in ("string", "wstring"):
+            return T.bounded_str[bound] if bound else str
+        t = _BASE[name]
+        return bool if t == "bool" else getattr(T, t)
+    if kind == 2:  # NAME: a nested message
+        return idl_struct(store, args)
+    inner, n = args
+    sub = _member_type(store, inner)
+    if kind == 3:  # ARRAY
+        return T.array[sub, n]
+    return T.sequence[sub, n] if n else T.sequence[sub]
+
+
+def idl_struct(store, typename: str) -> type:
+    """The ``cyclonedds.idl.IdlStruct`` of ROS type ``typename`` (``pkg/msg/Type``) named
+    ``pkg::msg::dds_::Type_``, built from ``store``'s definition (module docstring); one
+    class per store and type.
+
+    Raises:
+        KeyError: ``store`` does not know the type or one it nests.
+    """
+    from cyclonedds.idl import make_idl_struct
+
+    from .ros2_names import dds_type
+
+    key = (id(store), typename)
+    with _lock:
+        got = _structs.get(key)
+    if got is not None:
+        return got
+    _consts, fields = store.fielddefs[typename]
+    members = {}
+    for name, node in fields:
+        members[name + "_" if keyword.iskeyword(name) else name] = _member_type(store, node)
+    dds = dds_type(typename)
+    cls = make_idl_struct(dds.rsplit("::", 1)[1], dds, members)
+    with _lock:
+        return _structs.setdefault(key, cls)
+
+
+def open_participant(domain: int, config_file: str | None = None):
+    """A ``DomainParticipant`` on ``domain``: with ``config_file`` (Cyclone DDS XML, e.g.
+    interfaces, peers, DDS Security / SROS2 settings) the domain is configured from it, else
+    from ``CYCLONEDDS_URI`` or Cyclone DDS's defaults. One configuration per domain and
+    process (Cyclone DDS's rule); a second one is ignored.
+
+    Raises:
+        OSError: the file cannot be read; cyclonedds.core.DDSException: the configuration is
+        refused.
+    """
+    from cyclonedds.domain import Domain, DomainParticipant
+
+    if config_file is not None:
+        with _lock:
+            if domain not in _domains:
+                with open(config_file, encoding="utf-8") as f:
+                    _domains[domain] = Domain(domain, f.read())
+    return DomainParticipant(domain)
+
+
+def reader_qos(offered=None, topic: str = ""):
+    """The QoS a ROS 2 subscription to a publisher offering ``offered`` (a
+    ``cyclonedds.qos.Qos``, or None) would use so as to match it: reliable when offered
+    reliable, else best effort; transient-local when offered (and always for ``/tf_static``,
+    REP 105's latched transforms), else volatile; keep the last 1000 samples."""
+    from cyclonedds.qos import Policy, Qos
+
+    rel = getattr(offered, "reliability", None) if offered is not None else None
+    dur = getattr(offered, "durability", None) if offered is not None else None
+    reliable = rel is None or "Reliable" in type(rel).__name__
+    transient = topic == "/tf_static" or (dur is not None and "Volatile" not in
+                                          type(dur).__name__)
+    return Qos(Policy.Reliability.Reliable(max_blocking_time=100_000_000) if reliable
+               else Policy.Reliability.BestEffort,
+               Policy.Durability.TransientLocal if transient else Policy.Durability.Volatile,
+               Policy.History.KeepLast(1000))
+
+
+def writer_qos(topic: str = ""):
+    """The replay's writer QoS: reliable, keep all (a slow reader slows the replay down
+    rather than losing messages), transient-local for ``/tf_static``."""
+    from cyclonedds.qos import Policy, Qos
+
+    return Qos(Policy.Reliability.Reliable(max_blocking_time=5_000_000_000),
+               Policy.History.KeepAll,
+               Policy.Durability.TransientLocal if topic == "/tf_static"
+               else Policy.Durability.Volatile)
+
+
+def take_raw(reader, n: int = 256) -> list[tuple[bytes, object]]:
+    """Up to ``n`` samples of ``reader`` as (CDR bytes with header, SampleInfo); samples
+    without data (an instance disposed, its writers gone) are skipped."""
+    from cyclonedds._clayer import ddspy_take
+    from cyclonedds.core import InstanceState, SampleState, ViewState
+
+    got = ddspy_take(reader._ref, SampleState.Any | ViewState.Any | InstanceState.Any, n)
+    if isinstance(got, int):
+        return []
+    return [(bytes(d), info) for d, info in got if info.valid_data]
+
+
+def write_raw(writer, data: bytes, source_ns: int) -> None:
+    """Write the CDR bytes ``data`` (with header) with ``source_ns`` as the sample's source
+    timestamp. Raises RuntimeError when Cyclone DDS refuses it."""
+    from cyclonedds._clayer import ddspy_write_ts
+
+    data = bytes(data)
+    data = data.ljust((len(data) + 3) & ~3, b"\0")
+    ret = ddspy_write_ts(writer._ref, data, int(source_ns))
+    if ret < 0:
+        raise RuntimeError(f"Cyclone DDS refused a sample (return code {ret})")

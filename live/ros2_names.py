@@ -1,0 +1,222 @@
+"""ROS 2's naming rules on its middlewares, shared by the DDS and Zenoh transports of
+``fretc watch`` and ``fretc replay --serve``: the watch's URLs, topic and type names on the
+wire, rmw_zenoh's key expressions, liveliness tokens and attachments, and the ``ros2msg``
+advertisement of a ROS type the watch decodes with :func:`logs.schema_decoder`.
+
+Sources of the rules:
+
+* DDS (ROS 2 design article "Topic and Service name mapping to DDS"; rosidl_generator_dds_idl):
+  a ROS topic ``/a/b`` is the DDS topic ``rt/a/b``; a type ``pkg/msg/Type`` is the IDL struct
+  ``pkg::msg::dds_::Type_``; samples are CDR (XCDR1) with their 4-byte encapsulation header.
+* Zenoh (rmw_zenoh's ``docs/design.md``, "Topic and Service name mapping to Zenoh key
+  expressions"): a message of topic ``/a/b`` in domain ``D`` is put on the key expression
+  ``D/a/b/pkg::msg::dds_::Type_/RIHS01_<sha256>`` (the type hash of REP 2011); the payload is
+  the same CDR; the attachment carries the publisher's sequence number (int64 LE), the source
+  timestamp (int64 LE, ns since the epoch) and its 16-byte GID (a length byte, then the bytes).
+  Graph entities are liveliness tokens ``@ros2_lv/D/<zid>/<nid>/<eid>/<kind>/<enclave>/
+  <namespace>/<node>/<topic>/<type>/<hash>/<qos>``, kind ``MP`` a publisher, ``MS`` a
+  subscription, names with ``/`` written ``%`` (an empty one ``%``).
+"""
+
+from __future__ import annotations
+
+import functools
+import struct
+from dataclasses import dataclass
+from urllib.parse import parse_qs, urlsplit
+
+from rosbags.typesys.msg import normalize_msgtype
+
+from .client import Advertised
+
+__all__ = ["Ros2Url", "parse_url", "dds_topic", "ros_topic_of_dds", "dds_type", "ros_type",
+           "zenoh_key", "zenoh_topic_key", "parse_zenoh_key", "LivelinessToken",
+           "liveliness_token", "parse_liveliness", "attachment", "attachment_time",
+           "standard_store", "advertisement", "DEFAULT_ZENOH_PORT", "LIVELINESS_PREFIX"]
+
+#: rmw_zenoh's router and peers listen on TCP port 7447 by default.
+DEFAULT_ZENOH_PORT = 7447
+#: rmw_zenoh's admin space of graph liveliness tokens.
+LIVELINESS_PREFIX = "@ros2_lv"
+_ATTACH = struct.Struct("<qq")
+
+
+@dataclass(frozen=True)
+class Ros2Url:
+    """A watch or serve address on a ROS 2 middleware.
+
+    Attributes:
+        transport: ``"dds"`` or ``"zenoh"``.
+        domain: the ROS domain id (``ROS_DOMAIN_ID``; 0..232 for DDS, REP 2000's range).
+        host, port: the Zenoh endpoint (``tcp/host:port``); empty / 0 for DDS.
+    """
+
+    transport: str
+    domain: int
+    host: str = ""
+    port: int = 0
+
+    @property
+    def endpoint(self) -> str:
+        """Zenoh's locator of the endpoint, ``tcp/host:port``."""
+        return f"tcp/{self.host}:{self.port}"
+
+
+def parse_url(url: str) -> Ros2Url:
+    """``dds://DOMAIN`` (``dds://`` alone: domain 0) or ``zenoh://HOST:PORT[?domain=D]`` ->
+    :class:`Ros2Url`.
+
+    Raises:
+        ValueError: another scheme, a domain outside 0..232, a missing host.
+    """
+    parts = urlsplit(url)
+    if parts.scheme == "dds":
+        text = (parts.netloc or parts.path.strip("/") or "0")
+        if not text.isdigit() or not 0 <= int(text) <= 232:
+            raise ValueError(f"{url!r}: the DDS domain is an integer 0..232 (dds://DOMAIN)")
+        return Ros2Url("dds", int(text))
+    if parts.scheme == "zenoh":
+        if not parts.hostname:
+            raise ValueError(f"{url!r}: expected zenoh://HOST:PORT")
+        q = parse_qs(parts.query).get("domain", ["0"])[0]
+        if not q.isdigit():
+            raise ValueError(f"{url!r}: domain must be an integer")
+        return Ros2Url("zenoh", int(q), parts.hostname, parts.port or DEFAULT_ZENOH_PORT)
+    raise ValueError(f"{url!r}: expected dds://DOMAIN or zenoh://HOST:PORT")
+
+
+def dds_topic(topic: str) -> str:
+    """ROS topic ``/a/b`` -> DDS topic ``rt/a/b``."""
+    return "rt/" + topic.lstrip("/")
+
+
+def ros_topic_of_dds(name: str) -> str | None:
+    """DDS topic ``rt/a/b`` -> ``/a/b``; None for a DDS topic that is no ROS topic (services
+    ``rq/``/``rr/``, plain DDS)."""
+    return "/" + name[3:] if name.startswith("rt/") else None
+
+
+def dds_type(ros: str) -> str:
+    """``pkg/msg/Type`` (or ``pkg/Type``) -> ``pkg::msg::dds_::Type_``."""
+    pkg, _msg, name = normalize_msgtype(ros).split("/")
+    return f"{pkg}::msg::dds_::{name}_"
+
+
+def ros_type(dds: str) -> str:
+    """``pkg::msg::dds_::Type_`` -> ``pkg/msg/Type`` (another name is returned as it is, with
+    ``::`` as ``/``)."""
+    parts = dds.split("::")
+    if len(parts) == 4 and parts[2] == "dds_" and parts[3].endswith("_"):
+        return f"{parts[0]}/{parts[1]}/{parts[3][:-1]}"
+    return dds.replace("::", "/")
+
+
+def zenoh_topic_key(domain: int, topic: str) -> str:
+    """The key expression of every message of ``topic`` whatever its type:
+    ``D/a/b/*/*``."""
+    return f"{domain}/{topic.strip('/')}/*/*"
+
+
+def zenoh_key(domain: int, topic: str, ros: str, type_hash: str) -> str:
+    """The key expression of rmw_zenoh for a message of ``topic`` of type ``ros``."""
+    return f"{domain}/{topic.strip('/')}/{dds_type(ros)}/{type_hash}"
+
+
+def parse_zenoh_key(key: str) -> tuple[int, str, str, str] | None:
+    """rmw_zenoh's data key expression -> (domain, topic, ROS type, type hash); None when it
+    is not one."""
+    parts = key.split("/")
+    if len(parts) < 4 or not parts[0].isdigit() or "::" not in parts[-2]:
+        return None
+    return int(parts[0]), "/" + "/".join(parts[1:-2]), ros_type(parts[-2]), parts[-1]
+
+
+def _mangle(name: str) -> str:
+    return name.replace("/", "%") or "%"
+
+
+def _unmangle(name: str) -> str:
+    return name.replace("%", "/")
+
+
+@dataclass(frozen=True)
+class LivelinessToken:
+    """A graph entity of rmw_zenoh (module docstring): ``kind`` ``MP`` / ``MS`` / ``NN`` /
+    ``SS`` / ``SC``, its ``topic`` and ROS ``type`` (empty for a node), ``domain``."""
+
+    domain: int
+    kind: str
+    topic: str
+    type: str
+    type_hash: str
+
+
+def liveliness_token(domain: int, zid: str, entity: int, kind: str, node: str, topic: str,
+                     ros: str, type_hash: str, qos: str = "::,10:,:,:,,") -> str:
+    """The key expression of a publisher's (``kind`` ``MP``) or subscription's (``MS``)
+    liveliness token, as rmw_zenoh declares it (node ``node`` in the root namespace)."""
+    return "/".join([LIVELINESS_PREFIX, str(domain), zid, "0", str(entity), kind, "%", "%",
+                     node, _mangle(topic), dds_type(ros), type_hash, qos])
+
+
+def parse_liveliness(key: str) -> LivelinessToken | None:
+    """A liveliness token's key expression -> :class:`LivelinessToken`; None when it is not
+    one of rmw_zenoh's publisher or subscription tokens."""
+    parts = key.split("/")
+    if len(parts) < 12 or parts[0] != LIVELINESS_PREFIX or not parts[1].isdigit():
+        return None
+    kind = parts[5]
+    if kind not in ("MP", "MS"):
+        return None
+    return LivelinessToken(int(parts[1]), kind, _unmangle(parts[9]), ros_type(parts[10]),
+                           parts[11])
+
+
+def attachment(sequence: int, source_ns: int, gid: bytes) -> bytes:
+    """rmw_zenoh's attachment of a message (module docstring)."""
+    return _ATTACH.pack(sequence, source_ns) + bytes([len(gid)]) + gid
+
+
+def attachment_time(data: bytes | None) -> int | None:
+    """The source timestamp (ns) of rmw_zenoh's attachment; None when there is none."""
+    if data is None or len(data) < _ATTACH.size:
+        return None
+    return _ATTACH.unpack_from(data)[1]
+
+
+@functools.lru_cache(maxsize=8)
+def standard_store(msg_path: tuple[str, ...] = ()):
+    """rosbags' type store of ROS 2 Humble's standard types, with the ``.msg``/``.idl``
+    types of ``msg_path`` (``--msg-path``, :mod:`logs.msg_path`) when given."""
+    if msg_path:
+        from logs.msg_path import msg_path_typestore
+
+        return msg_path_typestore(tuple(msg_path))
+    from rosbags.typesys import Stores, get_typestore
+
+    return get_typestore(Stores.ROS2_HUMBLE)
+
+
+def advertisement(cid: int, topic: str, ros: str, store, expected: str | None = None
+                  ) -> Advertised:
+    """The :class:`~live.client.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
+    with the ``ros2msg`` definition ``store`` gives; an unreadable one (the watch then makes
+    the topic's requirements ``error`` saying why) when ``store`` does not know the type or
+    it is not ``expected`` (the bindings' ``[types]``)."""
+    if expected and _norm(expected) != _norm(ros):
+        return Advertised(cid, topic, "cdr", ros, "", "", unreadable=(
+            f"{topic} carries {ros}, the bindings expect {expected}"))
+    try:
+        name = normalize_msgtype(ros)
+        text = store.generate_msgdef(name, ros_version=2)[0]
+    except Exception:  # a type the store lacks, or a name that is not a ROS type
+        return Advertised(cid, topic, "cdr", ros, "", "", unreadable=(
+            f"no definition of {ros} in ROS 2's standard types or the --msg-path folders"))
+    return Advertised(cid, topic, "cdr", name, text, "ros2msg")
+
+
+def _norm(name: str) -> str:
+    try:
+        return normalize_msgtype(name)
+    except Exception:  # not a ROS type name
+        return name

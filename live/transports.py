@@ -1,0 +1,48 @@
+"""The client of a watch's URL (one per transport, all feeding the same
+:class:`~live.source.WatchSource` through an :class:`~live.events.EventQueue`):
+
+* ``ws://``, ``wss://``: the Foxglove WebSocket protocol (:class:`~live.client.FoxgloveClient`);
+* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2 (:class:`~live.rosbridge.RosbridgeClient`);
+* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS (:class:`~live.dds_client.DdsClient`);
+* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions (:class:`~live.zenoh_client.ZenohClient`).
+"""
+
+from __future__ import annotations
+
+__all__ = ["make_client", "URL_SCHEMES"]
+
+#: The URL schemes ``fretc watch`` speaks.
+URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", "zenoh://")
+
+
+def make_client(options, wanted, types: dict[str, str] | None = None, topics=()):
+    """The client for ``options.url`` (a :class:`~live.watch.WatchOptions`): ``wanted``
+    topic -> bool; ``types`` the bindings' ``[types]`` (overridden by ``options.types``);
+    ``topics`` the bound topics (the DDS and Zenoh clients subscribe to exactly these).
+
+    Raises:
+        MissingDependency: the transport's package is not installed (the message names the
+            install hint); ValueError: a DDS or Zenoh URL of the wrong form.
+    """
+    kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
+    given = dict(types or {})
+    given.update(options.types or {})
+    url = options.url
+    if url.startswith("zenoh://"):
+        from .zenoh_client import ZenohClient
+
+        return ZenohClient(url, wanted, topics=topics, types=given,
+                           msg_path=options.msg_path, config_file=options.config)
+    if url.startswith("dds://"):
+        from .dds_client import DdsClient
+
+        return DdsClient(url, wanted, topics=topics, types=given, msg_path=options.msg_path,
+                         config_file=options.config)
+    from .client import FoxgloveClient, require_websockets
+
+    require_websockets()
+    if url.startswith(("rosbridge://", "rosbridge+wss://")):
+        from .rosbridge import RosbridgeClient  # lazy: numpy's message building
+
+        return RosbridgeClient(url, wanted, types=given, msg_path=options.msg_path, **kw)
+    return FoxgloveClient(url, wanted, **kw)

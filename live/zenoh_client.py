@@ -1,0 +1,273 @@
+"""``fretc watch zenoh://HOST:PORT``: a Zenoh session (a peer of the robot's rmw_zenoh
+router or sessions) that hands the bound topics' messages to the watch engine as the
+Foxglove client does (:mod:`live.client`'s events on an :class:`~live.events.EventQueue`).
+
+What it reads (naming rules and sources: :mod:`live.ros2_names`):
+
+* the graph: rmw_zenoh's liveliness tokens under ``@ros2_lv/<domain>/**`` (the ones alive
+  when the session opens, then each change). A publisher token (``MP``) of a bound topic
+  advertises the topic with its type (``ros2msg`` definition from rosbags' type store and the
+  ``--msg-path`` folders); when the last publisher token of a bound topic is undeclared the
+  topic is unadvertised. Every bound topic's publishers gone is the end of the robot's run
+  (:attr:`ZenohClient.leaving_ends_run`, after the watch's restart grace);
+* the data: one subscriber per bound topic on ``<domain>/<topic>/*/*`` (any type, any hash),
+  so only the bound topics cross the network; messages are merged into log-time order
+  (:mod:`live.merge`). A message's log time is the source timestamp of
+  rmw_zenoh's attachment, else the Zenoh timestamp, else the time it was received; when a
+  ``/clock`` publisher exists (simulated time, ``use_sim_time``) it is the last ``/clock``
+  received, as ``ros2 bag record`` stamps messages;
+* a message whose type (from its key expression) differs from the topic's advertised type or
+  from the bindings' ``[types]``: a ``protocol`` event naming topic and types, the message
+  passed on with an empty payload (an undecodable message: a gap, never held over).
+
+The session is a Zenoh peer with multicast scouting off that connects to ``tcp/HOST:PORT``
+(a router, or a peer such as ``fretc replay --serve zenoh://...``); Zenoh retries the
+connection itself. Needs ``eclipse-zenoh`` (the ``watch`` extra).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from .client import WATCH_HINT, MissingDependency
+from .events import EventQueue
+from .merge import MergeBuffer
+from .ros2_names import (LIVELINESS_PREFIX, advertisement, attachment_time, parse_liveliness,
+                         parse_url, parse_zenoh_key, standard_store, zenoh_topic_key)
+
+__all__ = ["ZenohClient", "zenoh_config", "require_zenoh", "CLOCK_TOPIC"]
+
+CLOCK_TOPIC = "/clock"
+
+
+def require_zenoh():
+    """The ``zenoh`` module; raises :class:`~live.client.MissingDependency` naming the
+    install hint when ``eclipse-zenoh`` is not installed."""
+    try:
+        import zenoh
+    except ImportError:
+        raise MissingDependency(f"the Zenoh transport needs eclipse-zenoh: {WATCH_HINT}") \
+            from None
+    return zenoh
+
+
+def zenoh_config(*, listen: str | None = None, connect: str | None = None,
+                 config_file: str | None = None, mode: str = "peer"):
+    """A Zenoh session's configuration (``mode`` ``peer`` or ``router``): multicast scouting
+    off, listening on and/or connecting to the given ``tcp/host:port`` endpoints
+    (``config_file``: a Zenoh JSON5 configuration read first, e.g. TLS or access control)."""
+    zenoh = require_zenoh()
+    cfg = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
+    cfg.insert_json5("mode", f'"{mode}"')
+    cfg.insert_json5("scouting/multicast/enabled", "false")
+    cfg.insert_json5("listen/endpoints", f'["{listen}"]' if listen else "[]")
+    cfg.insert_json5("connect/endpoints", f'["{connect}"]' if connect else "[]")
+    return cfg
+
+
+class ZenohClient:
+    """Watch the ROS 2 topics ``topics`` over Zenoh (module docstring); the events of
+    :mod:`live.client` on :attr:`events`.
+
+    Args:
+        url: ``zenoh://HOST:PORT[?domain=D]``.
+        wanted: topic -> bool (the bound topics).
+        topics: the bound topics (subscribed to; nothing else is).
+        types: topic -> expected ROS type (the bindings' ``[types]``, ``--topic-type``).
+        msg_path: folders of the robot's own ``.msg``/``.idl`` files.
+        events: the queue (a new bounded :class:`~live.events.EventQueue` by default).
+
+    Raises:
+        ValueError: a URL of the wrong form; MissingDependency: no eclipse-zenoh.
+    """
+
+    #: every publisher of the bound topics leaving is the end of the run (no close frame on
+    #: this transport)
+    leaving_ends_run = True
+    #: :meth:`stop` leaves the session open (closed by :meth:`close`)
+    keep_session = False
+
+    def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
+                 types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),
+                 events: EventQueue | None = None, config_file: str | None = None,
+                 **_ignored) -> None:
+        require_zenoh()
+        self.url = parse_url(url)
+        self.wanted = wanted
+        self.topics = sorted(set(topics))
+        self.types = dict(types or {})
+        self.store = standard_store(tuple(msg_path))
+        self.config_file = config_file
+        self.events: EventQueue = events if events is not None else EventQueue()
+        self._lock = threading.Lock()
+        self._publishers: dict[str, set[str]] = {}  # topic -> live publisher token keys
+        self._advertised: dict[str, str] = {}  # topic -> ROS type
+        self._clock: int | None = None
+        self._session = None
+        self._decls: list = []
+        self._stop = threading.Event()
+        self._watcher: threading.Thread | None = None
+        self._merge = MergeBuffer(self.events)
+
+    # -- thread control ----------------------------------------------------------------------
+    def start(self) -> "ZenohClient":
+        """Open the session and declare the subscribers (returns at once)."""
+        zenoh = require_zenoh()
+        self._merge.start()
+        self._session = zenoh.open(zenoh_config(connect=self.url.endpoint,
+                                                config_file=self.config_file))
+        lv = f"{LIVELINESS_PREFIX}/{self.url.domain}/**"
+        self._decls.append(self._session.liveliness().declare_subscriber(
+            lv, self._on_token, history=True))
+        for t in sorted(set(self.topics) | {CLOCK_TOPIC}):
+            self._decls.append(self._session.declare_subscriber(
+                zenoh_topic_key(self.url.domain, t), self._on_sample))
+        self._watcher = threading.Thread(target=self._watch_peers, daemon=True,
+                                         name="fretc-zenoh-peers")
+        self._watcher.start()
+        return self
+
+    def stop(self) -> None:
+        """Undeclare the subscribers and close the session (idempotent); with
+        :attr:`keep_session` the session stays open until :meth:`close` (the final
+        ``/diagnostics`` of ``--publish-diagnostics`` goes out on it)."""
+        self._stop.set()
+        if self._watcher is not None:
+            self._watcher.join(2)
+        for d in self._decls:
+            try:
+                d.undeclare()
+            except Exception:  # already gone with the session
+                pass
+        self._decls.clear()
+        self._merge.stop()
+        if not self.keep_session:
+            self.close()
+
+    def close(self) -> None:
+        """Close the session (idempotent)."""
+        session, self._session = self._session, None
+        if session is not None:
+            session.close()
+
+    def _watch_peers(self) -> None:
+        """``connected`` when the first peer or router is reached, ``disconnected`` when none
+        is left (Zenoh reconnects by itself)."""
+        up = False
+        while not self._stop.wait(0.05):
+            session = self._session
+            if session is None:
+                return
+            try:
+                info = session.info
+                now = bool(list(info.peers_zid()) or list(info.routers_zid()))
+            except Exception:  # the session is closing
+                return
+            if now and not up:
+                self.events.put(("connected", time.time_ns(), "zenoh", ""))
+            elif up and not now and self._advertised:  # not after every publisher left
+                self.events.put(("disconnected", time.time_ns(),
+                                 f"no Zenoh peer or router reachable at {self.url.endpoint}"))
+            up = now
+
+    # -- the graph -------------------------------------------------------------------------------
+    def _on_token(self, sample) -> None:
+        """A liveliness token appeared (PUT) or went (DELETE)."""
+        tok = parse_liveliness(str(sample.key_expr))
+        if tok is None or tok.kind != "MP" or tok.domain != self.url.domain:
+            return
+        key, now = str(sample.key_expr), time.time_ns()
+        with self._lock:
+            pubs = self._publishers.setdefault(tok.topic, set())
+            if str(sample.kind).endswith("PUT"):
+                pubs.add(key)
+                if tok.topic == CLOCK_TOPIC and self._clock is None:
+                    self._clock = 0  # simulated time from now on
+                if self.wanted(tok.topic):
+                    self._advertise(tok.topic, tok.type, now)
+            elif key in pubs:
+                pubs.discard(key)
+                if not pubs and tok.topic in self._advertised:
+                    del self._advertised[tok.topic]
+                    self.events.put(("unadvertise", now, [tok.topic]))
+
+    def _advertise(self, topic: str, ros: str, now: int) -> None:
+        """Advertise ``topic`` once with type ``ros`` (lock held); a type other than the
+        bindings' expectation advertises no schema (its requirements are ``error``) and is a
+        ``protocol`` event."""
+        if topic in self._advertised:
+            return
+        self._advertised[topic] = ros
+        expected = self.types.get(topic)
+        adv = advertisement(len(self._advertised), topic, ros, self.store, expected)
+        if adv.unreadable:
+            self.events.put(("protocol", now, f"{adv.unreadable}: the topic is not read"))
+        self.events.put(("advertise", now, [adv]))
+
+    # -- the data ----------------------------------------------------------------------------------
+    def _on_sample(self, sample) -> None:
+        """One message of a bound topic (or of ``/clock``); whatever it holds, it costs that
+        message only (a ``protocol`` event)."""
+        try:
+            self._sample(sample)
+        except Exception as exc:
+            self.events.put(("protocol", time.time_ns(), f"a Zenoh sample on "
+                             f"{str(sample.key_expr)[:200]} could not be read "
+                             f"({type(exc).__name__}: {str(exc)[:200]})"))
+
+    def _sample(self, sample) -> None:
+        now = time.time_ns()
+        parsed = parse_zenoh_key(str(sample.key_expr))
+        if parsed is None:
+            return
+        _d, topic, ros, _hash = parsed
+        payload = sample.payload.to_bytes()
+        att = sample.attachment
+        stamp = attachment_time(att.to_bytes() if att is not None else None)
+        if stamp is None and sample.timestamp is not None:
+            stamp = _ntp64_ns(sample.timestamp)
+        with self._lock:
+            if topic == CLOCK_TOPIC:
+                self._clock = _clock_ns(payload)
+                if not self.wanted(topic):
+                    return
+            if not self.wanted(topic):
+                return
+            if topic not in self._advertised:  # data before its publisher's token
+                self._advertise(topic, ros, now)
+            elif _norm(self._advertised[topic]) != _norm(ros):
+                self.events.put(("protocol", now, f"a message of {topic} of type {ros}, "
+                                 f"advertised as {self._advertised[topic]}: not decoded"))
+                payload = b""
+            log_time = self._clock if self._clock else (stamp if stamp is not None else now)
+        self._merge.put(topic, log_time, payload, now)
+
+
+def _norm(name: str) -> str:
+    from rosbags.typesys.msg import normalize_msgtype
+
+    try:
+        return normalize_msgtype(name)
+    except Exception:  # not a ROS type name
+        return name
+
+
+def _ntp64_ns(ts) -> int | None:
+    """A Zenoh timestamp (NTP64 since the epoch) in ns; None when it cannot be read."""
+    try:
+        return int(ts.get_time().timestamp() * 1e9)
+    except Exception:  # another binding's timestamp object
+        return None
+
+
+def _clock_ns(payload: bytes) -> int | None:
+    """The time of a CDR ``rosgraph_msgs/Clock`` (int32 sec, uint32 nanosec after the 4-byte
+    encapsulation header); None when too short."""
+    if len(payload) < 12:
+        return None
+    little = payload[1] & 1
+    sec = int.from_bytes(payload[4:8], "little" if little else "big", signed=True)
+    nsec = int.from_bytes(payload[8:12], "little" if little else "big")
+    return sec * 1_000_000_000 + nsec

@@ -1,0 +1,176 @@
+"""`fretc watch --publish-diagnostics`: the verdicts come back on /diagnostics as
+diagnostic_msgs/DiagnosticArray over the transport watched, read here by subscribers that are
+not fretc's (DDS: the test's own IDL types; Zenoh: the key expression and rosbags' decoder):
+the last array names each requirement `fretc: <id>` with the level and verdict of
+`fretc audit` of the same log. Everything on 127.0.0.1, multicast off."""
+
+import json
+import os
+import random
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
+                    "pip install 'fretc[watch]'")
+pytest.importorskip("zenoh", reason="eclipse-zenoh is not installed: pip install 'fretc[watch]'")
+
+from click.testing import CliRunner  # noqa: E402
+from cyclonedds.idl import IdlStruct  # noqa: E402
+from cyclonedds.idl.types import byte, int32, sequence, uint32  # noqa: E402
+
+from fretc.cli import main  # noqa: E402
+from live.dds_types import LOOPBACK_XML  # noqa: E402
+
+pytestmark = pytest.mark.watch
+
+ROOT = Path(__file__).resolve().parents[2]
+REQS = str(ROOT / "requirements")
+TRACE = ROOT / "traces" / "stop_delay.mcap"
+LEVEL = {"satisfied": 0, "vacuous": 0, "violated": 2, "error": 2, "unknown": 3}
+
+
+@dataclass
+class Time_(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
+    sec: int32
+    nanosec: uint32
+
+
+@dataclass
+class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time_
+    frame_id: str
+
+
+@dataclass
+class KeyValue_(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
+    key: str
+    value: str
+
+
+@dataclass
+class DiagnosticStatus_(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticStatus_"):
+    level: byte
+    name: str
+    message: str
+    hardware_id: str
+    values: sequence[KeyValue_]
+
+
+@dataclass
+class DiagnosticArray_(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticArray_"):
+    header: Header_
+    status: sequence[DiagnosticStatus_]
+
+
+def _port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _run(url: str, extra: list[str], tmp_path) -> tuple[int, dict]:
+    """Replay the trace on ``url`` and watch it with --publish-diagnostics, each in its own
+    process; (watch exit code, watch JSON)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    fretc = [sys.executable, "-m", "fretc"]
+    rep = subprocess.Popen([*fretc, "replay", str(TRACE), "--serve", url, "--rate", "30",
+                            *extra], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL)
+    out = tmp_path / "w.json"
+    try:
+        res = subprocess.run([*fretc, "watch", url, "-r", REQS, "--no-live", "--json",
+                              str(out), "--wait", "10", "--duration", "120",
+                              "--publish-diagnostics", *extra],
+                             cwd=ROOT, env=env, capture_output=True, text=True, timeout=150)
+        rep.wait(30)
+    finally:
+        rep.kill()
+    assert out.exists(), res.stderr
+    return res.returncode, json.loads(out.read_text())
+
+
+def _audit(tmp_path) -> dict[str, str]:
+    out = tmp_path / "a.json"
+    CliRunner().invoke(main, ["audit", "-r", REQS, str(TRACE), "--json", str(out)])
+    doc = json.loads(out.read_text())
+    return {v["requirement"]: v["verdict"] for log in doc["logs"] for v in log["verdicts"]}
+
+
+def _check(last: list[tuple[str, int, dict]], audit: dict[str, str]) -> None:
+    assert [name for name, _l, _v in last] == [f"fretc: {r}" for r in audit]
+    for (name, level, values), (rid, verdict) in zip(last, audit.items()):
+        assert values["verdict"] == verdict, name
+        assert level == LEVEL[verdict], name
+        assert values["text"]
+        assert (values["first_violation_s"] != "") == (verdict == "violated")
+
+
+def test_diagnostics_over_dds_read_back_with_own_idl_types(tmp_path):
+    from cyclonedds.domain import Domain, DomainParticipant
+    from cyclonedds.qos import Policy, Qos
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+
+    xml = tmp_path / "lo.xml"
+    xml.write_text(LOOPBACK_XML, encoding="utf-8")
+    domain = random.randint(100, 200)
+    keep = Domain(domain, LOOPBACK_XML)  # noqa: F841 - configures the domain
+    dp = DomainParticipant(domain)
+    reader = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray_),
+                        qos=Qos(Policy.Reliability.Reliable(max_blocking_time=10**8),
+                                Policy.History.KeepAll))
+    code, _doc = _run(f"dds://{domain}", ["--dds-config", str(xml)], tmp_path)
+    time.sleep(0.5)
+    arrays = [a for a in reader.take(10_000) if a.sample_info.valid_data]
+    assert len(arrays) >= 2  # while watching, and the final verdicts
+    last = [(s.name, s.level, {kv.key: kv.value for kv in s.values})
+            for s in arrays[-1].status]
+    _check(last, _audit(tmp_path))
+    assert code == 1  # R2 is violated on this trace
+
+
+def test_diagnostics_over_zenoh_read_back_by_key_expression(tmp_path):
+    import zenoh
+    from rosbags.typesys import Stores, get_typestore
+
+    port = _port()
+    got: list[tuple[str, bytes]] = []
+    cfg = zenoh.Config()
+    cfg.insert_json5("mode", '"peer"')
+    cfg.insert_json5("scouting/multicast/enabled", "false")
+    cfg.insert_json5("connect/endpoints", f'["tcp/127.0.0.1:{port}"]')
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    url = f"zenoh://127.0.0.1:{port}"
+    holder = {}
+
+    def listen():  # the replay's router is up once it listens; retry until connected
+        session = zenoh.open(cfg)
+        session.declare_subscriber("0/diagnostics/**",
+                                   lambda s: got.append((str(s.key_expr),
+                                                         s.payload.to_bytes())))
+        holder["s"] = session
+
+    import threading
+
+    t = threading.Timer(1.0, listen)
+    t.start()
+    try:
+        code, _doc = _run(url, [], tmp_path)
+    finally:
+        t.join()
+        time.sleep(0.3)
+        holder["s"].close()
+    rihs = store.hash_rihs01("diagnostic_msgs/msg/DiagnosticArray")
+    assert got and {k for k, _p in got} == {
+        f"0/diagnostics/diagnostic_msgs::msg::dds_::DiagnosticArray_/{rihs}"}
+    arr = store.deserialize_cdr(got[-1][1], "diagnostic_msgs/msg/DiagnosticArray")
+    last = [(s.name, s.level, {kv.key: kv.value for kv in s.values}) for s in arr.status]
+    _check(last, _audit(tmp_path))
+    assert code == 1

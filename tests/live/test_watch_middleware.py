@@ -1,0 +1,311 @@
+"""`fretc watch` over the robot's own middleware: `fretc replay LOG --serve dds://D` (Cyclone
+DDS) and `--serve zenoh://127.0.0.1:P` (rmw_zenoh's key expressions), each in its own
+process, watched by `fretc watch` in another until the publishers leave: the JSON verdicts
+and the exit code equal `fretc audit`'s of the same log. Independent subscribers written here
+(their own IDL types for std_msgs/Bool and geometry_msgs/Twist, their own key expressions)
+receive the replay's messages under ROS 2's wire names. A truncated payload over Zenoh is an
+undecodable message, never a held-over pass. Everything on 127.0.0.1, multicast off."""
+
+import json
+import os
+import random
+import socket
+import struct
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
+                    "pip install 'fretc[watch]'")
+pytest.importorskip("zenoh", reason="eclipse-zenoh is not installed: pip install 'fretc[watch]'")
+
+from click.testing import CliRunner  # noqa: E402
+
+from fretc.cli import main  # noqa: E402
+from cyclonedds.idl import IdlStruct  # noqa: E402
+from cyclonedds.idl.types import float64  # noqa: E402
+from live.dds_types import LOOPBACK_XML  # noqa: E402
+
+pytestmark = pytest.mark.watch
+
+ROOT = Path(__file__).resolve().parents[2]
+TRACES = sorted((ROOT / "traces").glob("*.mcap"))
+REQS = str(ROOT / "requirements")
+RATE = "30"
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture()
+def dds_xml(tmp_path):
+    path = tmp_path / "loopback.xml"
+    path.write_text(LOOPBACK_XML, encoding="utf-8")
+    return str(path)
+
+
+def _url(transport: str) -> str:
+    if transport == "dds":
+        return f"dds://{random.randint(100, 200)}"
+    return f"zenoh://127.0.0.1:{_port()}"
+
+
+def _config(url: str, dds_xml: str) -> list[str]:
+    return ["--dds-config", dds_xml] if url.startswith("dds://") else []
+
+
+def _fretc(*args: str) -> list[str]:
+    return [sys.executable, "-m", "fretc", *args]
+
+
+def _replay(trace: Path, url: str, dds_xml: str, rate: str = RATE) -> "subprocess.Popen":
+    return subprocess.Popen(_fretc("replay", str(trace), "--serve", url, "--rate", rate,
+                                   *_config(url, dds_xml)),
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env={**os.environ, "PYTHONPATH": str(ROOT)})
+
+
+def _verdicts(doc: dict) -> list[tuple]:
+    return [(v["requirement"], v["verdict"], v.get("first_violation"), v.get("robustness"))
+            for log in doc["logs"] for v in log["verdicts"]]
+
+
+def _audit(trace: Path, tmp_path) -> tuple[int, dict]:
+    out = tmp_path / "audit.json"
+    res = CliRunner().invoke(main, ["audit", "-r", REQS, str(trace), "--json", str(out)])
+    return res.exit_code, json.loads(out.read_text())
+
+
+def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str, *extra: str):
+    """Replay ``trace`` over ``transport`` in one process, watch it in another until it ends
+    by itself; (exit code, watch JSON, replay's stderr)."""
+    url = _url(transport)
+    out = tmp_path / f"watch-{transport}.json"
+    rep = _replay(trace, url, dds_xml)
+    try:
+        res = subprocess.run(_fretc("watch", url, "-r", REQS, "--json", str(out), "--no-live",
+                                    "--wait", "10", "--duration", "120",
+                                    *_config(url, dds_xml), *extra),
+                             cwd=ROOT, capture_output=True, text=True, timeout=150,
+                             env={**os.environ, "PYTHONPATH": str(ROOT)})
+        _o, err = rep.communicate(timeout=30)
+    finally:
+        rep.kill()
+    assert out.exists(), res.stderr + res.stdout
+    return res.returncode, json.loads(out.read_text()), err.decode()
+
+
+def _assert_same(trace, transport, tmp_path, dds_xml, *extra):
+    code, audit = _audit(trace, tmp_path)
+    wcode, watch, err = _watch_replayed(trace, transport, tmp_path, dds_xml, *extra)
+    assert "sent" in err
+    assert _verdicts(watch) == _verdicts(audit)
+    assert watch["logs"][0].get("problems", []) == []
+    assert wcode == code
+    return audit
+
+
+@pytest.mark.parametrize("transport", ["dds", "zenoh"])
+def test_replayed_trace_watched_to_its_end_equals_the_audit(transport, tmp_path, dds_xml):
+    """... and so does the audit of the watch's --record."""
+    rec = tmp_path / "rec.mcap"
+    audit = _assert_same(ROOT / "traces" / "stop_delay.mcap", transport, tmp_path, dds_xml,
+                         "--record", str(rec))
+    code, recorded = _audit(rec, tmp_path)
+    assert _verdicts(recorded) == _verdicts(audit)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("transport", ["dds", "zenoh"])
+@pytest.mark.parametrize("trace", TRACES, ids=[t.stem for t in TRACES])
+def test_every_shipped_trace_over_each_transport_equals_the_audit(trace, transport, tmp_path,
+                                                                  dds_xml):
+    if trace.stem.endswith("_ros1"):
+        pytest.skip("a ROS 1 log: its messages are not CDR, not published on ROS 2 transports")
+    _assert_same(trace, transport, tmp_path, dds_xml)
+
+
+# ------------------------------------------------------------- independent subscribers
+def _mcap_values(trace: Path, topic: str, n: int) -> list[bytes]:
+    from mcap.reader import make_reader
+
+    with open(trace, "rb") as f:
+        return [m.data for _s, c, m in make_reader(f).iter_messages(topics=[topic])][:n]
+
+
+def _twist(payload: bytes) -> tuple:
+    return struct.unpack_from("<6d", payload, 4)
+
+
+# The test's own IDL types (ROS 2's DDS mapping of geometry_msgs/Twist and std_msgs/Bool),
+# not fretc's run-time ones
+@dataclass
+class Vector3_(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    x: float64
+    y: float64
+    z: float64
+
+
+@dataclass
+class Twist_(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
+    linear: Vector3_
+    angular: Vector3_
+
+
+@dataclass
+class Bool_(IdlStruct, typename="std_msgs::msg::dds_::Bool_"):
+    data: bool
+
+
+def test_an_independent_dds_subscriber_reads_ros2_wire_names(tmp_path, dds_xml):
+    from cyclonedds.domain import Domain, DomainParticipant
+    from cyclonedds.qos import Policy, Qos
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+
+    domain = random.randint(100, 200)
+    keep = Domain(domain, LOOPBACK_XML)  # noqa: F841 - configures the domain
+    dp = DomainParticipant(domain)
+    qos = Qos(Policy.Reliability.Reliable(max_blocking_time=10**8), Policy.History.KeepAll)
+    tw = DataReader(dp, Topic(dp, "rt/cmd_vel_filtered", Twist_), qos=qos)
+    bo = DataReader(dp, Topic(dp, "rt/gwendolen_control", Bool_), qos=qos)
+    trace = ROOT / "traces" / "stop_delay.mcap"
+    rep = _replay(trace, f"dds://{domain}", dds_xml, rate="60")
+    twists, bools = [], []
+    deadline = time.monotonic() + 40
+    while rep.poll() is None and time.monotonic() < deadline:
+        twists += tw.take(256)
+        bools += bo.take(256)
+        time.sleep(0.01)
+    twists += tw.take(4096)
+    bools += bo.take(4096)
+    rep.kill()
+    twists = [t for t in twists if t.sample_info.valid_data]  # not the writer's disposal
+    bools = [b for b in bools if b.sample_info.valid_data]
+    want = _mcap_values(trace, "/cmd_vel_filtered", 10_000)
+    assert len(twists) == len(want)
+    got = [(t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z)
+           for t in twists]
+    assert got == [_twist(p) for p in want]
+    assert [b.data for b in bools] == [bool(p[4]) for p in
+                                       _mcap_values(trace, "/gwendolen_control", 10_000)]
+
+
+def test_an_independent_zenoh_subscriber_reads_rmw_zenoh_key_expressions(tmp_path, dds_xml):
+    import zenoh
+
+    port = _port()
+    trace = ROOT / "traces" / "stop_delay.mcap"
+    rep = _replay(trace, f"zenoh://127.0.0.1:{port}?domain=3", dds_xml, rate="60")
+    cfg = zenoh.Config()
+    cfg.insert_json5("mode", '"peer"')
+    cfg.insert_json5("scouting/multicast/enabled", "false")
+    cfg.insert_json5("connect/endpoints", f'["tcp/127.0.0.1:{port}"]')
+    keys, payloads, tokens = set(), [], set()
+    with zenoh.open(cfg) as session:
+        session.declare_subscriber("3/cmd_vel_filtered/**",
+                                   lambda s: (keys.add(str(s.key_expr)),
+                                              payloads.append(s.payload.to_bytes())))
+        session.liveliness().declare_subscriber("@ros2_lv/3/**",
+                                                lambda s: tokens.add(str(s.key_expr)),
+                                                history=True)
+        rep.communicate(timeout=60)
+        time.sleep(0.3)
+    from rosbags.typesys import Stores, get_typestore
+
+    rihs = get_typestore(Stores.ROS2_HUMBLE).hash_rihs01("geometry_msgs/msg/Twist")
+    assert keys == {f"3/cmd_vel_filtered/geometry_msgs::msg::dds_::Twist_/{rihs}"}
+    assert [_twist(p) for p in payloads] == [
+        _twist(p) for p in _mcap_values(trace, "/cmd_vel_filtered", 10_000)]
+    assert any(t.split("/")[5] == "MP" and t.split("/")[9] == "%cmd_vel_filtered"
+               for t in tokens)
+
+
+# ------------------------------------------------------------- bad input
+def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
+    """A message that does not decode opens a gap: the run is partial (exit 3), never a
+    clean pass; the watch ends by itself when the publisher leaves."""
+    from live.zenoh_serve import ZenohServer
+
+    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
+                                     "satisfy a_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
+        encoding="utf-8")
+    port = _port()
+    url = f"zenoh://127.0.0.1:{port}"
+    server = ZenohServer(url)
+    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    import threading
+
+    def publish():
+        server.wait_subscribed(timeout=30)
+        t0 = 1_700_000_000 * 10**9
+        for k in range(30):
+            data = b"\x00\x01" if k == 15 else b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
+            server.log("/a", data, t0 + k * 50_000_000)
+            time.sleep(0.005)
+        time.sleep(0.5)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "60",
+                                    "--restart-grace", "0.5"])
+    t.join(10)
+    doc = json.loads(out.read_text())
+    kinds = {p["kind"] for p in doc["logs"][0]["problems"]}
+    assert "undecodable" in kinds, res.output
+    assert res.exit_code == 3, res.output
+
+
+def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
+    """/a is bound as std_msgs/Bool ([types]) but carries Float64: reported, its
+    requirement is error (exit 2), never judged from a misread value."""
+    import threading
+
+    from live.zenoh_serve import ZenohServer
+
+    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
+                                     "satisfy a_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
+        '[types]\n"/a" = "std_msgs/msg/Bool"\n', encoding="utf-8")
+    url = f"zenoh://127.0.0.1:{_port()}"
+    server = ZenohServer(url)
+    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+
+    def publish():
+        server.wait_subscribed(timeout=30)
+        for k in range(10):
+            server.log("/a", b"\x00\x01\x00\x00" + struct.pack("<d", 1.0),
+                       1_700_000_000 * 10**9 + k * 50_000_000)
+        time.sleep(0.3)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "20", "--wait", "5",
+                                    "--restart-grace", "0.5"])
+    t.join(10)
+    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
+    assert v["verdict"] == "error"
+    assert "std_msgs/msg/Bool" in v["error"] and "/a" in v["error"], v["error"]
+    assert res.exit_code == 2, res.output
+
+
+def test_a_malformed_url_is_a_usage_error():
+    res = CliRunner().invoke(main, ["watch", "dds://999", "-r", REQS, "--no-live"])
+    assert res.exit_code == 2
+    assert "0..232" in res.output
