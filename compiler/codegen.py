@@ -131,9 +131,13 @@ class MonitorSource:
 
 def _constant_notes(compiled) -> list[str]:
     """The named durations of ``compiled``'s requirement with their values."""
+    req = compiled.requirement
+    d = req.timing.duration if req is not None and not req.freeform else None
+    if d is None or d.name is None:  # (attributes only: the main line of plain requirements)
+        return []
     from fretish.constants import constant_notes
 
-    return constant_notes(compiled.requirement)
+    return constant_notes(req)
 
 
 def _class_name(rid: str, index: int) -> str:

@@ -77,6 +77,9 @@ class Analysis:
                f"ft: `{smv['ft']}`", "", f"pt: `{smv['pt']}`"]
         if f.warnings:
             out += [""] + [f"note: {w}" for w in f.warnings]
+        picture = _diagram_image(c)
+        if picture:
+            out += ["", picture]
         return "\n".join(out)
 
     def completions(self, line: int, col: int) -> list[tuple[str, str]]:
@@ -100,6 +103,22 @@ class Analysis:
     def definition(self, word: str) -> tuple[str, int] | None:
         """Where variable ``word`` is bound: (bindings file, 0-based line), or None."""
         return self.bound.get(word)
+
+
+def _diagram_image(compiled) -> str | None:
+    """``fretc explain``'s reading and diagram as Markdown (the SVG as a data URI image, for
+    the clients that show one), or None when there is none."""
+    import base64
+
+    from monitors.explain import explain
+    from reports.explanation import svg
+
+    try:
+        x = explain(compiled)
+    except (ValueError, KeyError):
+        return None
+    data = base64.b64encode(svg(x).encode("utf-8")).decode("ascii")
+    return f"{x.reading}\n\n![diagram of {compiled.id}](data:image/svg+xml;base64,{data})"
 
 
 def _bindings_of(path: Path) -> dict[str, tuple[str, int]]:

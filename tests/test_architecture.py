@@ -88,8 +88,9 @@ def layer(module: str) -> int | None:
 
 def back_arrows(graph: dict[str, set[str]]) -> list[str]:
     """``a -> b`` for every import (at any depth of the module, lazy ones included) from a
-    package to one after it in :data:`PACKAGE_ORDER`, and from anything but ``fretc`` into
-    ``reports`` (the reports read the audit's model; only the commands call them)."""
+    package to one after it in :data:`PACKAGE_ORDER`, and from anything but the front ends
+    (``fretc``, the commands; ``editor``, the language server) into ``reports`` (the
+    reports read the audit's model; only the front ends call them)."""
     out = []
     for mod, targets in sorted(graph.items()):
         rank = layer(mod)
@@ -100,7 +101,7 @@ def back_arrows(graph: dict[str, set[str]]) -> list[str]:
             if trank is None:
                 continue
             into_reports = PACKAGE_ORDER[trank] == "reports" and mod.split(".")[0] not in (
-                "reports", "fretc")
+                "reports", "editor", "fretc")
             if trank > rank or into_reports:
                 out.append(f"{mod} -> {t}")
     return out
