@@ -83,26 +83,52 @@ class Analysis:
         return "\n".join(out)
 
     def completions(self, line: int, col: int) -> list[tuple[str, str]]:
-        """(label, kind) pairs at 0-based ``line``/``col``: FRETish words, the components the
-        document names, the variables of the bindings; ``kind`` is ``keyword``,
-        ``component`` or ``variable``. After ``upon``/``when``/... and a condition, the
-        component comes first."""
+        """(label, kind) pairs at 0-based ``line``/``col``: the FRETish words the grammar
+        accepts there (Lark's interactive parser on the sentence so far), and where a name
+        may come the components the document names and the variables of the bindings;
+        ``kind`` is ``keyword``, ``component`` or ``variable``. After a condition the
+        components come first."""
         text = self.lines[line][:col] if line < len(self.lines) else ""
-        words = re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text)
-        out = [(c, "component") for c in self.components]
-        after_condition = bool(words) and any(w.lower() in ("upon", "when", "whenever", "if",
-                                                             "unless", "where")
-                                              for w in words) and "shall" not in \
-            [w.lower() for w in words]
-        variables = [(v, "variable") for v in sorted(self.bound)]
-        keywords = [(k, "keyword") for k in KEYWORDS]
+        m = re.match(r"\s*[A-Za-z0-9_.\-]+\s*:", text)
+        sentence = text[m.end():] if m and not text.lstrip().startswith("@") else text
+        accepted = _accepted(sentence)
+        words = re.findall(r"[A-Za-z_][A-Za-z0-9_]*", sentence)
+        lowered = [w.lower() for w in words]
+        after_condition = any(w in ("upon", "when", "whenever", "if", "unless", "where")
+                              for w in lowered) and "shall" not in lowered
+        if accepted is None:
+            keywords = [(k, "keyword") for k in KEYWORDS]
+            names = True
+        else:
+            keywords = [(k, "keyword") for k in KEYWORDS
+                        if k.upper() in accepted and k.upper() not in _UNITS]
+            keywords += [(u, "keyword") for t, u in _UNITS.items() if t in accepted]
+            names = bool(accepted & {"NAME", "STRING"})
+        components = [(c, "component") for c in self.components] if names else []
+        variables = [(v, "variable") for v in sorted(self.bound)] if names else []
         if after_condition:
-            return out + keywords + variables
-        return variables + out + keywords
+            return components + keywords + variables
+        return variables + components + keywords
 
     def definition(self, word: str) -> tuple[str, int] | None:
         """Where variable ``word`` is bound: (bindings file, 0-based line), or None."""
         return self.bound.get(word)
+
+
+#: Unit terminals of the grammar -> the word completion offers.
+_UNITS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "milliseconds",
+          "SECOND": "seconds", "MINUTE": "minutes", "HOUR": "hours"}
+
+
+def _accepted(sentence: str) -> set | None:
+    """The grammar's terminals accepted after ``sentence`` (None when it cannot tell)."""
+    from fretish.diagnostics import accepted_before
+    from fretish.parser import cached_lark
+
+    try:
+        return accepted_before(cached_lark(), sentence, "start", len(sentence))
+    except Exception:  # completion must never fail: offer everything then
+        return None
 
 
 def _diagram_image(compiled) -> str | None:

@@ -44,3 +44,19 @@ def test_on_save_check_finds_a_conflict(tmp_path):
     got = check_problems(a)
     assert {p.line for p in got} == {0, 1}  # R1 and R2, not R3
     assert all("conflict" in p.message and p.severity == 1 for p in got)
+
+
+def test_completion_offers_what_the_grammar_accepts_there(tmp_path):
+    (tmp_path / "x.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
+                                              'p = "/a.data > 0"\n')
+    lines = ["R1: upon p the robot shall within 3 ticks satisfy p",
+             "R2: the robot shall ", "R3: the robot shall within 3 "]
+    a = analyse("\n".join(lines) + "\n", str(tmp_path / "x.fret"))
+    after_shall = [label for label, _k in a.completions(1, len(lines[1]))]
+    assert "within" in after_shall and "satisfy" in after_shall
+    assert "upon" not in after_shall and "p" not in after_shall  # no name comes there
+    units = [label for label, _k in a.completions(2, len(lines[2]))]
+    assert set(units) == {"ticks", "microseconds", "milliseconds", "seconds", "minutes",
+                          "hours"}
+    after_cond = a.completions(0, len("R1: upon p "))
+    assert after_cond[0] == ("robot", "component") and ("p", "variable") in after_cond
