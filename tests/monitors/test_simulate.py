@@ -106,3 +106,31 @@ def test_bad_traces_and_ids_are_input_errors(tmp_path, trace, args, msg):
                                     str(tmp_path / name), *args])
     assert res.exit_code == 2, res.output
     assert msg in res.output and "Traceback" not in res.output
+
+
+def _vector_cases():
+    if not (SHARED / "fretish" / "fret_trace_verdicts.jsonl").exists():
+        return []
+    return [json.loads(x) for x in
+            (SHARED / "fretish" / "fret_trace_verdicts.jsonl").read_text().splitlines()]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", _vector_cases(), ids=lambda c: f"trace{c['trace']}")
+def test_every_fret_trace_vector_through_the_command(tmp_path, case):
+    """``fretc simulate FILE T.csv --json OUT`` on each FRET trace vector: FRET's verdict at
+    the last tick (pt) and from the first (ft), for every sentence of the vector."""
+    names = sorted(case["intervals"])
+    rows = [",".join(names)] + [",".join("true" if any(a <= i <= b for a, b in
+                                                       case["intervals"][v]) else "false"
+                                         for v in names) for i in range(case["length"])]
+    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    (tmp_path / "r.fret").write_text("".join(f"S{i}: {x['sentence']}\n"
+                                             for i, x in enumerate(case["cases"])))
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"),
+                                    str(tmp_path / "t.csv"), "--json", str(tmp_path / "o.json")])
+    assert res.exit_code in (0, 1), res.output
+    got = {r["id"]: r for r in json.loads((tmp_path / "o.json").read_text())["requirements"]}
+    for i, x in enumerate(case["cases"]):
+        r = got[f"S{i}"]
+        assert r["pt"][-1] == x["expected"] == r["ft"][0], (case["trace"], x)
