@@ -6,6 +6,14 @@ from __future__ import annotations
 
 import html
 
+from common.textsafe import xml_text
+
+def _x(text) -> str:
+    """Text for SVG/XHTML: control and bidi characters made visible, then XML-escaped (a
+    hostile requirement id or text must not make the file unparseable)."""
+    return html.escape(xml_text(text))
+
+
 __all__ = ["text", "svg"]
 
 _CELL, _ROW, _LABEL = 14, 20, 130
@@ -55,11 +63,11 @@ def svg(x) -> str:
               "window": "#2e7d32", "forbidden": "#c62828"}
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
            f'font-family="sans-serif" font-size="11">',
-           f"<title>{html.escape(x.id)}: {html.escape(x.text)}</title>",
-           f'<text x="4" y="13">{html.escape(x.id)} ({html.escape(x.key)})</text>']
+           f"<title>{_x(x.id)}: {_x(x.text)}</title>",
+           f'<text x="4" y="13">{_x(x.id)} ({_x(x.key)})</text>']
     for r, (label, kind, ticks) in enumerate(rows):
         y = _ROW * (r + 1) + 4
-        out.append(f'<text x="4" y="{y + 12}">{html.escape(label)}</text>')
+        out.append(f'<text x="4" y="{y + 12}">{_x(label)}</text>')
         out.append(f'<line x1="{_LABEL}" y1="{y + 14}" x2="{_LABEL + _CELL * d.n}" '
                    f'y2="{y + 14}" stroke="#ccc"/>')
         for i in ticks:
@@ -73,6 +81,6 @@ def svg(x) -> str:
     for i in range(0, d.n, 5):
         out.append(f'<text x="{_LABEL + _CELL * i}" y="{y}">{i}</text>')
     if d.obligation:
-        out.append(f'<text x="4" y="{y + 16}">{html.escape(d.obligation)}</text>')
+        out.append(f'<text x="4" y="{y + 16}">{_x(d.obligation)}</text>')
     out.append("</svg>")
     return "\n".join(out) + "\n"

@@ -6,9 +6,17 @@ Same input, same bytes: no time or path of the machine is written."""
 from __future__ import annotations
 
 import html
+
+from common.textsafe import xml_text
 import json
 from pathlib import Path
 from typing import Any
+
+def _x(text) -> str:
+    """Text for SVG/XHTML: control and bidi characters made visible, then XML-escaped (a
+    hostile requirement id or text must not make the file unparseable)."""
+    return html.escape(xml_text(text))
+
 
 __all__ = ["text_table", "svg", "write_outputs", "json_document"]
 
@@ -45,11 +53,11 @@ def svg(sim, n: int) -> str:
     h = _ROW * (len(rows) + 2)
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
            f'font-family="sans-serif" font-size="11">',
-           f'<title>{html.escape(sim.id)}: {html.escape(sim.text)}</title>',
-           f'<text x="4" y="12">{html.escape(sim.id)}: {html.escape(sim.text[:120])}</text>']
+           f'<title>{_x(sim.id)}: {_x(sim.text)}</title>',
+           f'<text x="4" y="12">{_x(sim.id)}: {_x(sim.text[:120])}</text>']
     for r, (name, vals) in enumerate(rows):
         y = _ROW * (r + 1) + 4
-        out.append(f'<text x="4" y="{y + 11}">{html.escape(name)}</text>')
+        out.append(f'<text x="4" y="{y + 11}">{_x(name)}</text>')
         for i, v in enumerate(vals):
             x = _LABEL + _CELL * i
             fill = "#d9d9d9" if v is None else ("#2e7d32" if v else "#ffffff")
@@ -80,8 +88,8 @@ def write_outputs(sims: list, n: int, out_dir: str | None, json_path: str | None
             text = svg(s, n)
             (d / name).write_text(text, encoding="utf-8")
             written.append(str(d / name))
-            parts.append(f"<section><h2>{html.escape(s.id)}</h2>"
-                         f"<p>{html.escape(s.text)}</p>{text}</section>")
+            parts.append(f"<section><h2>{_x(s.id)}</h2>"
+                         f"<p>{_x(s.text)}</p>{text}</section>")
         page = ("<!doctype html><html><head><meta charset='utf-8'><title>fretc simulate"
                 "</title></head><body><h1>fretc simulate</h1><p>Filled: true; empty: false; "
                 "grey: unread (NaN). ft at a tick: on the trace from that tick; pt: on the "
