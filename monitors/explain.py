@@ -25,7 +25,10 @@ from compiler.printers import expr_text
 from .interval import scope_intervals, trigger_points
 from .obligations import OBLIGATIONS, ObligationChecker
 
-__all__ = ["Diagram", "Explanation", "explain", "diagram"]
+__all__ = ["Diagram", "Explanation", "explain", "diagram", "shortest_traces", "MAX_SEARCH"]
+
+#: The shortest-trace search: at most this many ticks and boolean variables (2^v letters).
+MAX_SEARCH = (12, 5)
 
 Interval = tuple[int, int]
 
@@ -51,7 +54,9 @@ class Diagram:
 @dataclass
 class Explanation:
     """One requirement explained: ``id``, ``text``, template ``key``, the plain-English
-    ``reading``, the durations (``ticks`` and the tick period's seconds), the ``diagram``."""
+    ``reading``, the durations (``ticks`` and the tick period's seconds), the ``diagram``,
+    the shortest ``satisfying`` and ``violating`` traces (variable -> bool per tick, or None
+    with ``search_note`` saying why: :func:`shortest_traces`)."""
 
     id: str
     text: str
@@ -60,6 +65,9 @@ class Explanation:
     ticks: int | None
     period_s: Fraction | None
     diagram: Diagram
+    satisfying: dict | None = None
+    violating: dict | None = None
+    search_note: str | None = None
 
 
 def _mode_layout(kind: str, n: int, w: int) -> np.ndarray | None:
@@ -223,5 +231,65 @@ def explain(compiled) -> Explanation:
         raise ValueError(f"{compiled.id} has no formalization: {compiled.error}")
     req = compiled.requirement
     period = getattr(compiled.entry, "tick_period", None)
-    return Explanation(compiled.id, compiled.text, f.key, reading(req, f.ticks, period),
-                       f.ticks, period, diagram(req, f.ticks))
+    x = Explanation(compiled.id, compiled.text, f.key, reading(req, f.ticks, period),
+                    f.ticks, period, diagram(req, f.ticks))
+    x.satisfying, x.violating, x.search_note = shortest_traces(compiled)
+    return x
+
+
+def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MAX_SEARCH[1]):
+    """(shortest trace that satisfies, shortest that violates, note) of a compiled
+    requirement: a breadth-first search over the states of its generated runtime monitor
+    (the pt formula's state machine, :mod:`compiler.codegen`), one letter per valuation of
+    its boolean variables, so the first trace found of each verdict is a shortest one (FRET's
+    finite-trace verdict at its last tick). Traces are ``{variable: [bool per tick]}``; None
+    (and the note) when none exists within ``max_ticks``, when a variable is a number (the
+    letters would not be finite), or when there are more than ``max_vars`` variables."""
+    import copy
+    from itertools import product
+
+    from compiler import ir
+    from compiler.codegen import build_monitor_modules
+
+    f = compiled.formalization
+    if any(n.op in ("cmp", "num", "call", "pre") for n in ir.walk(f.ft)):
+        return None, None, "a variable is a number: no trace searched (use fretc check's witnesses)"
+    names = list(f.variables)
+    if len(names) > max_vars:
+        return None, None, f"{len(names)} variables: no trace searched (at most {max_vars})"
+    modules = build_monitor_modules([compiled])
+    if not modules:
+        return None, None, "no runtime monitor: no trace searched"
+    ns: dict = {"__name__": "fretc_explain_monitor"}
+    exec(compile(next(iter(modules.values())).text, "<fretc explain>", "exec"), ns)
+    cls = ns["MONITORS"].get(compiled.id)
+    if cls is None:
+        return None, None, "no runtime monitor: no trace searched"
+    letters = [dict(zip(names, bits)) for bits in product((False, True), repeat=len(names))]
+    found: dict[bool, list] = {}
+    frontier = [(None, [])]
+    seen = set()
+    for _depth in range(max_ticks):
+        nxt = []
+        for state, trace in frontier:
+            for letter in letters:
+                m = cls()
+                if state is not None:  # (a copy: a window's deque is changed in place)
+                    m._s, m.status, m.status_tick, m._bad, m._good = copy.deepcopy(state)
+                verdict = bool(m.step(letter))
+                run = trace + [letter]
+                if verdict not in found:
+                    found[verdict] = run
+                key = repr((m._s[:-2], m._s[-1], m._bad, m._good))
+                if key not in seen:
+                    seen.add(key)
+                    nxt.append(((m._s, m.status, m.status_tick, m._bad, m._good), run))
+        if len(found) == 2 or not nxt:
+            break
+        frontier = nxt
+
+    def columns(run):
+        return None if run is None else {v: [row[v] for row in run] for v in names}
+    note = None if len(found) == 2 else (f"no {'satisfying' if True not in found else 'violating'} "
+                                         f"trace of at most {max_ticks} ticks")
+    return columns(found.get(True)), columns(found.get(False)), note

@@ -49,6 +49,15 @@ def text(x) -> str:
                                                       for i in range(d.n)))
     if d.obligation:
         out += ["", f"  obligation from each trigger t (scope interval [s, e]): {d.obligation}"]
+    for what, trace in (("satisfies", x.satisfying), ("violates", x.violating)):
+        if trace:
+            n = len(next(iter(trace.values())))
+            out += ["", f"  shortest trace that {what} ({n} tick{'s' if n != 1 else ''}):"]
+            w = max(len(v) for v in trace)
+            out += [f"    {v:<{w}}  " + "".join("T" if b else "." for b in vals)
+                    for v, vals in trace.items()]
+    if x.search_note:
+        out += ["", f"  shortest traces: {x.search_note}"]
     return "\n".join(out) + "\n"
 
 

@@ -96,3 +96,28 @@ def test_the_command_prints_the_reading_and_writes_svgs(tmp_path):
     res = CliRunner().invoke(main, ["explain", str(root / "requirements" / "safe_ros.fret"),
                                     "R9"])
     assert res.exit_code == 2 and "no requirement 'R9'" in res.output
+
+
+def test_the_shortest_traces_are_verdicts_of_fret_and_shortest(tmp_path):
+    """The satisfying and violating traces get those verdicts from FRET's ft formula, and no
+    shorter trace gets them (brute force over every trace up to the found length - 1)."""
+    import itertools
+    import random
+
+    from monitors.explain import shortest_traces
+
+    compiled = _compiled(tmp_path)
+    for c in random.Random(3).sample(compiled, 40):
+        sat, viol, _note = shortest_traces(c)
+        names = list(c.formalization.variables)
+        for trace, want in ((sat, True), (viol, False)):
+            if trace is None:
+                continue
+            n = len(trace[names[0]])
+            rows = [{v: trace[v][i] for v in names} for i in range(n)]
+            assert ft_at(c.formalization.ft, rows) is want, (c.id, c.text, trace)
+            for length in range(1, min(n, 4)):
+                for bits in itertools.product((False, True), repeat=length * len(names)):
+                    rows = [dict(zip(names, bits[i * len(names):(i + 1) * len(names)]))
+                            for i in range(length)]
+                    assert ft_at(c.formalization.ft, rows) is not want, (c.id, length, rows)
