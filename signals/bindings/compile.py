@@ -170,7 +170,7 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
     pyfn = PY_BINARY[node.op]
     text_ok = node.op in ("=", "!=")
     if ops.nan_unread and node.op in COMPARISONS:
-        return _compare3(node, left, right, ops, npfn, pyfn, text_ok)
+        npfn, pyfn = _nan_aware(npfn, pyfn)
     if ops.nan_unread and node.op in LOGICAL:
         return _logic3(node, left, right, ops)
 
@@ -191,11 +191,14 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
     return binary
 
 
-def _compare3(node: BinOp, left: Evaluator, right: Evaluator, ops: Ops, npfn, pyfn,
-              text_ok: bool) -> Evaluator:
-    """A comparison under the policy "unread": NaN when an operand is NaN (per item for
-    arrays), else the comparison (:mod:`signals.bindings.operations`)."""
-    def nan_of(da: Any, db: Any) -> Any:
+def _nan_aware(npfn, pyfn):
+    """A comparison's numpy and Python functions under the policy "unread": NaN when an
+    operand is NaN (per item for arrays), else the comparison
+    (:mod:`signals.bindings.operations`)."""
+    def py(a: Any, b: Any) -> Any:
+        return math.nan if (a != a or b != b) else pyfn(a, b)
+
+    def np_(da: Any, db: Any) -> Any:
         out = npfn(num(da), num(db))
         bad = None
         for d in (da, db):
@@ -206,24 +209,7 @@ def _compare3(node: BinOp, left: Evaluator, right: Evaluator, ops: Ops, npfn, py
             return out
         bad = np.broadcast_to(bad, np.shape(out))
         return np.where(bad, np.nan, np.asarray(out, dtype=np.float64))
-
-    def compare(st: Any) -> Any:
-        a = left(st)
-        b = right(st)
-        if type(a) in PY_TYPES and type(b) in PY_TYPES:
-            if a != a or b != b:
-                return math.nan
-            return pyfn(a, b)
-        if text_ok and (type(a) is str or type(b) is str):
-            if isinstance(a, list) or isinstance(b, list):  # an array of strings, item-wise
-                items, one = (a, b) if isinstance(a, list) else (b, a)
-                return Valid(np.array([pyfn(x, one) for x in items], dtype=np.bool_), None)
-            return pyfn(a, b)  # text equality (types checked: both are strings)
-        try:
-            return ops.lift2(nan_of, a, b, False)
-        except (ValueError, TypeError) as exc:
-            raise EvalError(node, f"cannot apply {node.op!r}: {exc}") from None
-    return compare
+    return np_, py
 
 
 def _logic3(node: BinOp, left: Evaluator, right: Evaluator, ops: Ops) -> Evaluator:
