@@ -14,6 +14,8 @@ from compiler.ir import ProbabilityBound
 from fretc.cli import main
 from fretish.files import load_requirements
 
+from _shared import needs_shared
+
 ROOT = Path(__file__).resolve().parents[2]
 VECTORS = ROOT.parent / "shared" / "fretish" / "fret_vectors.jsonl"
 TEXT = ("P1: the robot shall with probability >= 0.95 within 2 ticks satisfy stopped\n"
@@ -43,6 +45,7 @@ def test_emit_ltl_shows_the_pctl_form(tmp_path):
     assert doc[0]["pctl"].startswith("P>=0.95 [") and "probability" not in doc[1]
 
 
+@needs_shared
 def test_every_probability_vector_of_fret_prints_its_bound(tmp_path):
     rows = [json.loads(line) for line in VECTORS.read_text().splitlines() if line.strip()]
     rows = [r for r in rows if "probability" in r["text"] and not r["parse_error"]]
