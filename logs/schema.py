@@ -19,7 +19,7 @@ fixed length or None for a sequence) - the kinds the binding language distinguis
 from __future__ import annotations
 
 import difflib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,8 +34,8 @@ from .csv_source import CSV_TOPIC
 from .decoding import UnsupportedSchema, build_typestore
 from .encodings import SELF_DESCRIBING, definition
 
-__all__ = ["FieldType", "TopicSchema", "FieldPathError", "log_schemas", "field_paths",
-           "closest"]
+__all__ = ["FieldType", "TopicSchema", "FieldPathError", "LogSchemas", "log_schemas",
+           "field_paths", "closest"]
 
 _NUMBER = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
            "float32", "float64", "byte", "char", "octet"}
@@ -235,11 +235,38 @@ def field_paths(schema: TopicSchema, limit_depth: int = 8) -> Iterator[tuple[str
 
 
 # --------------------------------------------------------------------------- reading
-def log_schemas(source) -> dict[str, TopicSchema | None]:
-    """Topic -> :class:`TopicSchema` of an open log (:func:`logs.open_log`);
-    None for a topic whose schema is missing or cannot be parsed (the reader reports it as
-    ``unknown_schema``). Reads only the schema and channel records (the summary of an MCAP,
-    the connection headers of a bag), never the messages."""
+class LogSchemas(Mapping):
+    """Topic -> :class:`TopicSchema` (or None) of one log, each topic's built on its first
+    access: building one parses its definition and compiles rosbags' (de)serializers (tens
+    of ms a type), and an audit reads the few topics its bindings name, where a flight log
+    defines sixty types or more. Keys are sorted; the values are what an eager build gives.
+
+    Args:
+        builders: topic -> a function giving its schema (None: no usable schema).
+    """
+
+    def __init__(self, builders: dict[str, Callable[[], TopicSchema | None]]) -> None:
+        self._builders = dict(sorted(builders.items()))
+        self._built: dict[str, TopicSchema | None] = {}
+
+    def __getitem__(self, topic: str) -> TopicSchema | None:
+        if topic not in self._built:
+            self._built[topic] = self._builders[topic]()
+        return self._built[topic]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._builders)
+
+    def __len__(self) -> int:
+        return len(self._builders)
+
+
+def log_schemas(source) -> Mapping[str, TopicSchema | None]:
+    """Topic -> :class:`TopicSchema` of an open log (:func:`logs.open_log`), built on first
+    access (:class:`LogSchemas`); None for a topic whose schema is missing or cannot be
+    parsed (the reader reports it as ``unknown_schema``). Reads only the schema and channel
+    records (the summary of an MCAP, the connection headers of a bag), never the
+    messages."""
     kind = source.kind
     if kind == "csv":
         return {CSV_TOPIC: CsvSchema(CSV_TOPIC, dict(getattr(source, "types", {}) or
@@ -251,13 +278,15 @@ def log_schemas(source) -> dict[str, TopicSchema | None]:
     return _bag_schemas(source)
 
 
-def _defined_schemas(source) -> dict[str, TopicSchema | None]:
+def _defined_schemas(source) -> LogSchemas:
     """Schemas of a source that gives each topic's ROS 2 definition (``definitions()``)."""
-    out: dict[str, TopicSchema | None] = {}
-    for topic, (typ, text) in source.definitions().items():
-        built = _build("ros2msg", typ, text)
-        out[topic] = TopicSchema(topic, built[1], built[0]) if built else None
-    return dict(sorted(out.items()))
+    def builder(topic: str, typ: str, text: str) -> Callable[[], TopicSchema | None]:
+        def build() -> TopicSchema | None:
+            built = _build("ros2msg", typ, text)
+            return TopicSchema(topic, built[1], built[0]) if built else None
+        return build
+    return LogSchemas({topic: builder(topic, typ, text)
+                       for topic, (typ, text) in source.definitions().items()})
 
 
 def _build(encoding: str, name: str, text: str) -> tuple[Any, str] | None:
@@ -267,25 +296,35 @@ def _build(encoding: str, name: str, text: str) -> tuple[Any, str] | None:
         return None
 
 
-def _mcap_schemas(source) -> dict[str, TopicSchema | None]:
+def _mcap_schemas(source) -> LogSchemas:
     # the source's own Schema and Channel records (its summary, or its bounded linear scan
     # of the data section): never the mcap library's stream reader, which decompresses a
-    # chunk whatever size it declares
+    # chunk whatever size it declares. A topic's schema is that of its first channel (by
+    # id) whose schema can be built.
     schemas, channels = source._channels()
-    out: dict[str, TopicSchema | None] = {}
+    by_topic: dict[str, list] = {}
     for ch in sorted(channels.values(), key=lambda c: c.id):
-        if ch.topic in out and out[ch.topic] is not None:
-            continue
+        by_topic.setdefault(ch.topic, []).append(ch)
+
+    def one(ch) -> tuple[Any, str] | None:
         sc = schemas.get(ch.schema_id)
-        built = None
         if ch.message_encoding in SELF_DESCRIBING:
             found = definition(ch.message_encoding, sc.encoding if sc else "",
                                sc.name if sc else "", bytes(sc.data) if sc else None)
-            built = _build("ros2msg", *found) if found else None
-        elif sc is not None and sc.name:
-            built = _build(sc.encoding, sc.name, sc.data.decode("utf-8", errors="replace"))
-        out[ch.topic] = TopicSchema(ch.topic, built[1], built[0]) if built else None
-    return dict(sorted(out.items()))
+            return _build("ros2msg", *found) if found else None
+        if sc is not None and sc.name:
+            return _build(sc.encoding, sc.name, sc.data.decode("utf-8", errors="replace"))
+        return None
+
+    def builder(topic: str, chans: list) -> Callable[[], TopicSchema | None]:
+        def build() -> TopicSchema | None:
+            for ch in chans:
+                built = one(ch)
+                if built:
+                    return TopicSchema(topic, built[1], built[0])
+            return None
+        return build
+    return LogSchemas({t: builder(t, chans) for t, chans in by_topic.items()})
 
 
 def _bag_schemas(source) -> dict[str, TopicSchema | None]:
