@@ -306,7 +306,8 @@ class _LogRun:
             finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index], la)
         la.engine = log_engine(verdicts[r.index] for r in ok)
         if self.bindings is not None:
-            operand_values(self.path, self.plan, self.bindings, ok, verdicts, by_index)
+            operand_values(self.path, self.plan, self.bindings, ok, verdicts, by_index,
+                           self.source)
 
     def _clock_figures(self, r: RequirementPlan, res, result: LogPasses,
                        b: Bindings | None) -> bool:

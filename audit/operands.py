@@ -15,7 +15,7 @@ __all__ = ["operand_values"]
 
 
 def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
-                   passes) -> None:
+                   passes, first=None) -> None:
     """Evidence of violations: the numbers behind their boolean variables (the operands of
     the comparisons a binding is made of, :func:`signals.bindings.operand_signals`) at the
     ticks whose values are shown. A second streaming pass over the log, only when something
@@ -24,7 +24,9 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
 
     Args:
         active: the requirements judged; ``verdicts``: requirement index -> Verdict;
-            ``passes``: requirement index -> its :class:`audit.passes.ClockPass`.
+            ``passes``: requirement index -> its :class:`audit.passes.ClockPass`;
+            ``first``: the first pass's source (its ``reopen()`` spares a second read of a
+            flight log), or None.
     """
     wanted, groups, needs = _operands_wanted(bindings, active, verdicts)
     if not wanted:
@@ -34,8 +36,8 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
     got: dict[tuple[frozenset, str], dict[int, object]] = {}
     try:
-        source = open_log(path, csv_period_ns=plan.csv_period_ns,
-                          msg_path=plan.config.msg_path)
+        source = (first.reopen() if first is not None else None) or open_log(
+            path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
         for key, blk in sample_blocks(source, aux_bindings, groups):
             for i in range(len(blk.times)):
                 if (key, blk.start + i) not in at:

@@ -232,6 +232,12 @@ class LogSource:
         """
         raise NotImplementedError
 
+    def reopen(self) -> "LogSource | None":
+        """A new source of this file for another pass (its own counts, problems and times)
+        without reading the file again, or None: open it again (the default; a reader that
+        streams keeps nothing to reopen from)."""
+        return None
+
     def close(self) -> None:
         """Release resources (sources open files only while iterating; this is a no-op)."""
 

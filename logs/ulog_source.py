@@ -31,13 +31,14 @@ a timestamp kept since boot while the message was logged again and again) is ski
 :data:`DROPOUT` problem and a gap of the log from the last timestamp before it (only the span
 before it is judged; nothing is held over it).
 
-pyulog reads the messages of the topics asked for at once (a flight log of a few hundred MB
-is read whole for one topic list); :meth:`UlogSource.messages` then builds one message
-object per row.
+Opening a ULog reads it whole with pyulog, once (every topic's rows as numpy arrays, kept
+for the passes of the audit: dropouts are dated only by a read of every topic, so that read
+is needed anyway); :meth:`UlogSource.messages` then builds one message object per row.
 """
 
 from __future__ import annotations
 
+import copy
 import os
 import re
 from collections.abc import Iterator
@@ -109,8 +110,8 @@ def ulog_definition(formats: dict, name: str) -> str:
 
 
 class UlogSource(LogSource):
-    """A PX4 ULog file (module docstring). Opening reads its definitions and which topics it
-    holds (one pass of pyulog, the data not kept).
+    """A PX4 ULog file (module docstring). Opening reads it whole (one pass of pyulog, the
+    rows kept for every pass over the messages).
 
     Raises:
         LogError: the file is not a ULog file pyulog can read (names the file and why).
@@ -120,7 +121,7 @@ class UlogSource(LogSource):
 
     def __init__(self, path: str | os.PathLike) -> None:
         super().__init__(path)
-        ulog = self._read(None)
+        ulog = self._ulog = self._read(None)
         self.formats = ulog.message_formats
         self._topics: dict[str, str] = {}
         self._subs: dict[str, tuple[str, int]] = {}  # topic -> (message name, instance)
@@ -142,6 +143,18 @@ class UlogSource(LogSource):
                  if int(t) * 1000 >= self.log_start]
         self._start_time = min(times) if times else None
         self._end_time = None
+        self._opened = (self._start_time, self._open_problems)
+
+    def reopen(self) -> "UlogSource":
+        """A new source of this file from the rows read when it was opened (the operands
+        pass of a violated requirement reads them again without a second pyulog read)."""
+        new = copy.copy(self)
+        new._start_time, problems = self._opened
+        new._open_problems = copy.deepcopy(problems)
+        new._end_time = None
+        new._decoders, new._no_decoder, new._wanted_fields = {}, {}, None
+        new._begin_pass()
+        return new
 
     def _read(self, names: list[str] | None):
         from pyulog import ULog  # lazy: only for flight logs
@@ -175,8 +188,7 @@ class UlogSource(LogSource):
         header order, known once it is read)."""
         self._begin_pass()
         want = set(self._topics) if topics is None else set(topics) & set(self._topics)
-        names = sorted({self._subs[t][0] for t in want if t in self._subs})
-        ulog = self._read(names)
+        ulog = self._ulog
         for start, ms in self.dropouts:
             end = start + ms * 1_000_000
             self._gap(start, end)

@@ -133,6 +133,27 @@ def test_px4_dropouts_are_damage_never_held_over(tmp_path):
     assert "battery_status" in v["PB"].error  # this older PX4 logs no battery
 
 
+@needs_shared
+@pytest.mark.parametrize("name", ["sample.ulg", "sample_log_small.ulg",
+                                  "sample_px4_events.ulg"])
+def test_px4_reopen_gives_what_a_new_open_gives(name):
+    """The operands pass reads a ULog again through ``reopen()`` (no second pyulog read):
+    the same messages, counts, problems, gaps and times as the file opened anew, and the
+    first source's pass is left as it was."""
+    def one_pass(src, topics):
+        msgs = [(m.topic, m.log_time, repr(vars(m.data)) if hasattr(m.data, "__dict__")
+                 else repr(m.data)) for m in src.messages(topics)]
+        return (msgs, dict(src.counts), [repr(p) for p in src.problems], list(src.gaps),
+                src.start_time, src.end_time, src.partial)
+
+    first = open_log(str(PX4 / name))
+    topics = set(list(first.topics())[:4])
+    before = one_pass(first, None)
+    again = first.reopen()
+    assert one_pass(again, topics) == one_pass(open_log(str(PX4 / name)), topics)
+    assert (dict(first.counts), first.end_time) == (before[1], before[5])
+
+
 def _dataflash_rows():
     rows = []
     for i in range(50):
