@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 
 __all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "remove", "entry_path",
-           "read_file", "write_file"]
+           "read_file", "write_file", "lark_cache_file"]
 
 
 def _root() -> str | None:
@@ -144,3 +144,24 @@ def write_file(path: str, data: bytes) -> bool:
             except OSError:
                 pass
         return False
+
+
+def lark_cache_file(name: str, grammar: str, lark_version: str, options: dict) -> str | None:
+    """Where Lark keeps the tables of one grammar (Lark's ``cache=PATH`` option): the file
+    ``lark/NAME-KEY.lark`` of the cache folder, KEY a hash of the grammar text, the Lark
+    and Python versions and the parser ``options`` (Lark also stores a hash of them in the
+    file and rebuilds when it does not match). Editing the grammar, upgrading Lark or Python
+    gives a new file, never a stale one. None when the cache is off or its folder cannot be
+    created (then Lark builds the tables in memory: the same parser, slower to start)."""
+    import sys
+
+    key = key_of(f"{name}-grammar", grammar, lark_version, "%d.%d" % sys.version_info[:2],
+                 repr(sorted(options.items())))
+    path = _entry("lark", f"{name}-{key[:40]}.lark")
+    if path is None:
+        return None
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+    except OSError:
+        return None
+    return path

@@ -5,7 +5,7 @@ phrasings and the expression precedence, one rule per level. :class:`_Builder` i
 transformer, applied while parsing (no intermediate parse tree): one method per rule or
 alias, each given the rule's children (AST nodes and the named tokens, ``lark.Token``).
 Lark's tables are kept in Lark's own cache (``Lark(..., cache=PATH)``), the file
-``lark/grammar-KEY.lark`` of fretc's cache folder (:mod:`common.cache`; KEY names the
+``lark/fretish-KEY.lark`` of fretc's cache folder (:mod:`common.cache`; KEY names the
 grammar text and the Lark and Python versions, and Lark checks a hash of them when it loads
 the file); with the disk cache off the tables are built in each process (about a second).
 
@@ -410,23 +410,15 @@ def build_lark(**options) -> lark.Lark:
 
 def cached_lark() -> lark.Lark:
     """The parser of :func:`build_lark`, its tables in Lark's cache (Lark's ``cache``
-    option) at ``lark/grammar-KEY.lark`` in fretc's cache folder (:mod:`common.cache`):
+    option) at ``lark/fretish-KEY.lark`` in fretc's cache folder (:mod:`common.cache`):
     loaded when the file is there and Lark finds it matches (Lark stores a SHA-256 of the
     grammar, its options, Lark's and Python's versions in it), else built and written.
     KEY is a hash of the same inputs, so editing the grammar or upgrading Lark or Python
     gives a new file, never a stale one. A file that cannot be read or loaded is built and
     written again; when the folder cannot be written, or the cache is off
     (``FRETC_CACHE_DIR=""``), the tables are built in memory."""
-    grammar = _read_grammar()
-    key = cache.key_of("fretish-grammar", grammar, lark.__version__,
-                       "%d.%d" % sys.version_info[:2], repr(sorted(_LARK_OPTIONS.items())))
-    path = cache.entry_path("lark", f"grammar-{key[:40]}.lark")
-    if path is not None:
-        try:
-            os.makedirs(path.parent, exist_ok=True)
-        except OSError:
-            path = None
-    return build_lark(**({} if path is None else {"cache": str(path)}))
+    path = cache.lark_cache_file("fretish", _read_grammar(), lark.__version__, _LARK_OPTIONS)
+    return build_lark(**({} if path is None else {"cache": path}))
 
 
 _lock = threading.Lock()

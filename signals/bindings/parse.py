@@ -11,12 +11,14 @@ functions; :mod:`signals.bindings.expression`). Errors are
 from __future__ import annotations
 
 import math
+import os
 from functools import lru_cache
 
-from lark import Lark, Transformer, v_args
+from lark import Lark, Transformer, __version__ as lark_version, v_args
 from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
                              UnexpectedToken, VisitError)
 
+from common import cache
 from common.problems import BindingError
 from fretish.limits import MAX_EXPR_DEPTH
 from .expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
@@ -32,10 +34,18 @@ __all__ = ["parse_expression"]
 # ------------------------------------------------------------------------------------------------
 
 
+_LARK_OPTIONS = dict(parser="lalr", lexer="contextual", propagate_positions=True,
+                     maybe_placeholders=False)
+
+
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
-    return Lark.open("grammar.lark", rel_to=__file__, parser="lalr", lexer="contextual",
-                     propagate_positions=True, maybe_placeholders=False)
+    """The Lark parser of ``grammar.lark``, its tables kept in fretc's cache folder
+    (:func:`common.cache.lark_cache_file`; built in memory when the cache is off)."""
+    with open(os.path.join(os.path.dirname(__file__), "grammar.lark"), encoding="utf-8") as f:
+        grammar = f.read()
+    path = cache.lark_cache_file("bindings", grammar, lark_version, _LARK_OPTIONS)
+    return Lark(grammar, **_LARK_OPTIONS, **({} if path is None else {"cache": path}))
 
 
 def _col(meta: object) -> int:

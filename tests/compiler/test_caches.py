@@ -293,3 +293,29 @@ def test_templates_compiled_once_and_reloaded_from_disk(tmp_path, monkeypatch):
         compiles.clear()
         assert render_module(compiled, "m") == first and len(compiles) == 1
     codegen._env.cache_clear()
+
+
+def test_binding_grammar_tables_cached_and_same_parse(tmp_path, monkeypatch):
+    """The binding expression parser keeps its Lark tables in the same cache folder; a
+    parser loaded from the file and one built in memory (cache off) give the same trees, and
+    a damaged file is rebuilt."""
+    from signals.bindings import parse as BP
+
+    text = 'max("actuator_outputs".output[0:4]) <= 2000 & /odom.twist.twist.linear.x@abs < 1'
+
+    def tree():
+        BP._parser.cache_clear()
+        return BP._parser().parse(text)  # Tree equality: rule names and tokens
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", "")
+    ref = tree()
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    assert tree() == ref
+    (entry_file,) = (tmp_path / "lark").glob("bindings-*.lark")
+    stamp = entry_file.stat().st_mtime_ns
+    assert tree() == ref  # loaded, not written again
+    assert entry_file.stat().st_mtime_ns == stamp
+    entry_file.write_bytes(entry_file.read_bytes()[:500])  # truncated
+    assert tree() == ref
+    assert entry_file.stat().st_size > 500
+    BP._parser.cache_clear()
