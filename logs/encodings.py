@@ -103,15 +103,15 @@ def as_message(value: Any) -> Any:
     if isinstance(value, dict):
         return SimpleNamespace(**{str(k): as_message(v) for k, v in value.items()})
     if isinstance(value, list):
-        if value and all(isinstance(x, bool) for x in value):
+        kinds = set(map(type, value))  # the decoders give exact built-in types
+        if kinds == {bool}:
             return np.array(value, dtype=bool)
-        if value and all(isinstance(x, int) and not isinstance(x, bool) for x in value):
+        if kinds == {int}:
             try:
                 return np.array(value, dtype=np.int64)
             except OverflowError:
                 return np.array(value, dtype=np.float64)
-        if value and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                         for x in value):
+        if kinds and kinds <= {int, float}:
             return np.array(value, dtype=np.float64)
         return [as_message(x) for x in value]
     if isinstance(value, (bytes, bytearray)):
@@ -152,20 +152,53 @@ def _repeated(field) -> bool:
     return bool(flag) if flag is not None else field.label == field.LABEL_REPEATED
 
 
+def _pb_plan(descriptor) -> list[tuple[str, int, Any]]:
+    """(field name, how to convert it, numpy dtype) per field of a protobuf message type:
+    0 as it is, 1 a message, 2 repeated messages, 3 bytes, 4 repeated bytes, 5 a repeated
+    number or bool (an array), 6 another repeated value (a list). Made once per type."""
+    plan = _PB_PLANS.get(descriptor)
+    if plan is None:
+        plan = []
+        for f in descriptor.fields:
+            rep = _repeated(f)
+            if f.type == _MESSAGE:
+                how = 2 if rep else 1
+            elif f.type == _BYTES:
+                how = 4 if rep else 3
+            elif rep:
+                how = 5 if f.type in _PB_DTYPES else 6
+            else:
+                how = 0
+            plan.append((f.name, how, _PB_DTYPES.get(f.type)))
+        _PB_PLANS[descriptor] = plan
+    return plan
+
+
+_PB_PLANS: dict[Any, list[tuple[str, int, Any]]] = {}
+
+
 def _pb_message(msg) -> SimpleNamespace:
+    """A decoded protobuf message as a message object: nested messages as objects, repeated
+    numbers as numpy arrays of the field's type, bytes as uint8 arrays (module docstring)."""
     out = SimpleNamespace()
-    for f in msg.DESCRIPTOR.fields:
-        value = getattr(msg, f.name)
-        repeated = _repeated(f)
-        if f.type == _MESSAGE:
-            value = [_pb_message(x) for x in value] if repeated else _pb_message(value)
-        elif f.type == _BYTES:
-            value = ([np.frombuffer(x, dtype=np.uint8) for x in value] if repeated
-                     else np.frombuffer(value, dtype=np.uint8))
-        elif repeated:
-            dtype = _PB_DTYPES.get(f.type)
-            value = np.array(list(value), dtype=dtype) if dtype is not None else list(value)
-        setattr(out, f.name, value)
+    d = out.__dict__
+    for name, how, dtype in _pb_plan(msg.DESCRIPTOR):
+        value = getattr(msg, name)
+        if how == 0:
+            pass
+        elif how == 5:
+            value = np.array(value, dtype=dtype)
+        elif how == 1:
+            value = _pb_message(value)
+        elif how == 2:
+            value = [_pb_message(x) for x in value]
+        elif how == 3:
+            value = np.frombuffer(value, dtype=np.uint8)
+        elif how == 4:
+            value = [np.frombuffer(x, dtype=np.uint8) for x in value]
+        else:
+            value = list(value)
+        d[name] = value
     return out
 
 

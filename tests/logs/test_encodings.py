@@ -119,3 +119,60 @@ def test_the_basis_protobuf_log_inspects_with_the_log_levels_as_constants(tmp_pa
     assert len(levels) == 40 and levels.count(4) == 1
     chatter = [m.data.message for m in src.messages({"/chatter"})]
     assert chatter and set(chatter) == {"Hello, world!"}
+
+
+def _as_message_by_rule(value):
+    """as_message's rule written out element by element (the reference for the test below):
+    a list of bools -> bool array; of non-bool ints -> int64 (float64 past int64); of
+    non-bool numbers -> float64; anything else -> a list."""
+    import numpy as np
+    from types import SimpleNamespace
+
+    if isinstance(value, dict):
+        return SimpleNamespace(**{k: _as_message_by_rule(v) for k, v in value.items()})
+    if isinstance(value, list):
+        if value and all(isinstance(x, bool) for x in value):
+            return np.array(value, dtype=bool)
+        if value and all(isinstance(x, int) and not isinstance(x, bool) for x in value):
+            try:
+                return np.array(value, dtype=np.int64)
+            except OverflowError:
+                return np.array(value, dtype=np.float64)
+        if value and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                         for x in value):
+            return np.array(value, dtype=np.float64)
+        return [_as_message_by_rule(x) for x in value]
+    return value
+
+
+def _same(a, b) -> bool:
+    import numpy as np
+    from types import SimpleNamespace
+
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (type(a) is type(b) and a.dtype == b.dtype
+                and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
+    if isinstance(a, SimpleNamespace):
+        return (isinstance(b, SimpleNamespace) and vars(a).keys() == vars(b).keys()
+                and all(_same(vars(a)[k], vars(b)[k]) for k in vars(a)))
+    if isinstance(a, list):
+        return isinstance(b, list) and len(a) == len(b) and all(map(_same, a, b))
+    return type(a) is type(b) and (a == b or a != a and b != b)
+
+
+def test_json_values_become_the_arrays_and_objects_of_the_rule():
+    from hypothesis import given, settings, strategies as st
+    from logs.encodings import as_message
+
+    scalars = st.one_of(st.booleans(), st.integers(min_value=-2**70, max_value=2**70),
+                        st.floats(allow_nan=True), st.text(max_size=3), st.none())
+    values = st.recursive(scalars, lambda inner: st.one_of(
+        st.lists(inner, max_size=6),
+        st.dictionaries(st.sampled_from(["a", "b", "c"]), inner, max_size=3)), max_leaves=20)
+
+    @settings(max_examples=300, deadline=None, derandomize=True)
+    @given(values)
+    def check(v):
+        assert _same(as_message(v), _as_message_by_rule(v))
+
+    check()
