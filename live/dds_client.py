@@ -10,7 +10,9 @@ What it reads (ROS 2's DDS mapping: :mod:`live.ros2_names`; types: :mod:`live.dd
   ``--msg-path`` folders) and creates a reader of that type with the QoS a ROS 2
   subscription would use to match the offered one (:func:`~live.dds_types.reader_qos`).
   When the last publication of a bound topic is gone (its writer deleted, or its
-  participant's lease expired: DDS liveliness) the topic is unadvertised; every bound topic's
+  participant's lease expired: DDS liveliness) the topic is unadvertised (behind the
+  messages already merged: :meth:`~live.merge.MergeBuffer.put_event`; its value is then not
+  held, :class:`~live.source.WatchSource`); every bound topic's
   publishers gone is the end of the robot's run (:attr:`DdsClient.leaving_ends_run`, after
   the watch's restart grace);
 * the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
@@ -146,7 +148,7 @@ class DdsClient:
                     keys.discard(key)
                     if not keys and t in self._advertised:
                         self._advertised.discard(t)
-                        self.events.put(("unadvertise", now, [t]))
+                        self._merge.put_event(("unadvertise", now, [t]))
 
     def _add(self, topic: str, ros: str, qos, now: int) -> None:
         """Advertise ``topic`` and create its reader (once)."""

@@ -93,6 +93,21 @@ class DdsServer:
             time.sleep(0.05)
         return False
 
+    def unpublish(self, topic: str) -> None:
+        """Delete the writer of ``topic`` once its samples are acknowledged (up to 5 s):
+        that publisher left (its publication disposed), the others go on."""
+        w = self.channels.pop(topic, None)
+        if w is None:
+            return
+        try:
+            w.wait_for_acks(5_000_000_000)
+        except Exception:  # a reader gone: nothing to wait for
+            pass
+        import gc
+
+        del w
+        gc.collect()  # cyclonedds deletes an entity when its Python object goes
+
     def stop(self) -> None:
         """Wait (up to 5 s) for the readers to acknowledge every sample, then delete the
         writers and leave the domain."""

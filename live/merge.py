@@ -61,6 +61,16 @@ class MergeBuffer:
         if spill is not None:
             self.events.put(spill)
 
+    def put_event(self, event: tuple) -> None:
+        """Hold another event (an ``unadvertise``: a publisher left) behind every message
+        held now, released with them: the messages that publisher sent before it left reach
+        the watch before its leaving does."""
+        with self._cond:
+            self._seq += 1
+            after = max((e[0] for e in self._heap), default=-(2**63))
+            heapq.heappush(self._heap, (after, self._seq, time.monotonic(), event))
+            self._cond.notify()
+
     def _due(self) -> list[tuple]:
         """The messages to release now (lock held): every message at or before the log time of
         the newest one whose hold passed, in log-time order."""

@@ -11,9 +11,13 @@ Faults, each a data problem of the run, never a crash:
   message. A run with a gap is ``partial`` and cannot exit 0. A connection that closes with
   nothing after it before the watch ends is the end of the watched run
   (:data:`CONNECTION_CLOSED`, reported, not a gap);
-* a topic the server stops advertising while the run goes on (a message on another topic
-  comes after): :data:`UNADVERTISED` (its last message is then held like any silent topic,
-  and the problem says since when);
+* a bound topic the server stops advertising while the run goes on (its publisher left: a
+  node restarted or died, a DDS writer or Zenoh token gone): :data:`UNADVERTISED`, and its
+  value is **not held**: from the last message used before it until the topic's next
+  message, ticks of the requirements that read it are not evaluated (unknown; the span is
+  a :data:`PUBLISHER_RESTART` problem when the topic comes back); when it never comes back
+  before the run ends, those requirements are judged up to that log time (an obligation
+  still open there is ``unknown``), the others are not affected (:attr:`WatchSource.absent`);
 
 The end of the watched run, never a data problem: the server's orderly close (a WebSocket
 close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
@@ -192,6 +196,12 @@ class WatchSource(LogSource):
         #: bound (the watch sets it from the tick period)
         self.max_jump_ns: int | None = None
         self._reported: dict[str, int] = {}  # problem events sent per kind (capped)
+        #: bound topic -> its spans without a publisher: ``[start, end, delivered]``, log
+        #: times (ns) of the last message used before it left and of its own next message
+        #: (None: not back yet), and the count of messages used when it left (the run went
+        #: on after it when more were used since)
+        self.absent: dict[str, list[list]] = {}
+        self._delivered = 0
 
     def stop(self) -> None:
         """End :meth:`messages` (thread-safe; the Ctrl-C handler calls it)."""
@@ -276,6 +286,11 @@ class WatchSource(LogSource):
                 self.unadvertised.add(t)
                 # a problem only if the run goes on without it (_flush_unadvertised)
                 self._pending_unadvertised.append((t, self._last_time))
+                if self._wanted is None or t in self._wanted:
+                    spans = self.absent.setdefault(t, [])
+                    if not spans or spans[-1][1] is not None:
+                        start = self._last_time if self._last_time is not None else -(2**63)
+                        spans.append([start, None, self._delivered])
             subscribed = set(self.advertised) & (self._wanted or set(self.advertised))
             if subscribed and subscribed <= self.unadvertised and self._all_left_at is None:
                 self._all_left_at = time.monotonic()  # ends the run after the grace period
@@ -312,18 +327,33 @@ class WatchSource(LogSource):
 
     def _readvertised(self, ch) -> None:
         """A topic advertised again after it was unadvertised (its publisher restarted, as
-        foxglove_bridge shows a node restart: a new channel id): the same run goes on, and
-        the messages not received in between are a gap (ticks inside unknown), never held
-        over."""
+        foxglove_bridge shows a node restart: a new channel id): the same run goes on; the
+        topic's span without a publisher (:attr:`absent`) lasts until its next message, and
+        its ticks are not evaluated for the requirements that read it, never held over."""
         self._all_left_at = None
         self._pending_unadvertised = [(t, at) for t, at in self._pending_unadvertised
                                       if t != ch.topic]
-        if self._wanted is not None and ch.topic not in self._wanted:
-            return
-        if self._gap_open is None:
-            self._gap_open = (time.monotonic(), f"the publisher of {ch.topic} restarted "
-                              f"(unadvertised, then advertised again as channel {ch.id})",
-                              PUBLISHER_RESTART)
+        spans = self.absent.get(ch.topic)
+        if spans and spans[-1][1] is None:
+            spans[-1].append(ch.id)  # advertised again: the channel it came back on
+
+    def absent_at(self, topics, t: int) -> bool:
+        """Whether some topic of ``topics`` had no publisher at log time ``t`` (ns): ``t``
+        after the last message used before it left and before its own next message."""
+        for topic in topics:
+            for span in self.absent.get(topic, ()):
+                if span[0] < t and (span[1] is None or t < span[1]):
+                    return True
+        return False
+
+    def left_for_good(self, topics) -> int | None:
+        """The earliest log time (ns) after which a topic of ``topics`` had no publisher
+        until the run ended, while the run went on without it; None when there is none (a
+        topic that left with every other, at the run's end, is the run's end)."""
+        starts = [spans[-1][0] for topic in topics
+                  for spans in (self.absent.get(topic),)
+                  if spans and spans[-1][1] is None and self._delivered > spans[-1][2]]
+        return min(starts) if starts else None
 
     def _report(self, kind: str, topic: str | None, log_time: int | None,
                 detail: str) -> None:
@@ -464,13 +494,34 @@ class WatchSource(LogSource):
             self._gap_open = (time.monotonic(), f"{n} message(s) dropped from the full queue",
                               QUEUE_OVERFLOW)
 
+    def _back(self, topic: str, span: list, log_time: int) -> None:
+        """The first message of ``topic`` after its publisher left: the span is closed and
+        reported (:data:`PUBLISHER_RESTART`)."""
+        span[1] = log_time
+        start = span[0]
+        how = (f"advertised again as channel {span[3]}" if len(span) > 3
+               else "its messages came again")
+        since = "the start of the run" if start < 0 else f"log time {start}"
+        detail = (f"the publisher of {topic} restarted (unadvertised, then {how}): no message "
+                  f"of {topic} from {since} to log time {log_time}: ticks inside are not "
+                  f"evaluated (unknown) for the requirements that read {topic}, never held "
+                  "over; the monitors keep their state")
+        self._problem(PUBLISHER_RESTART, topic, None if start < 0 else start, detail,
+                      end_time=log_time)
+        self.on_event(WatchEvent("gap", None if start < 0 else start, time.time_ns(),
+                                 detail=detail, extra={"end_time_ns": log_time}))
+
     def _flush_unadvertised(self) -> None:
         """The run went on after topics were unadvertised: each is an :data:`UNADVERTISED`
         problem."""
         for t, at in self._pending_unadvertised:
+            held = ("its value is not held: ticks after it are not evaluated for the "
+                    "requirements that read it until its next message"
+                    if self._wanted is None or t in self._wanted else
+                    "no requirement reads it")
             self._problem(UNADVERTISED, t, at,
-                          "the server stopped advertising this topic; its last message is "
-                          "held from here on")
+                          f"the server stopped advertising this topic (its publisher left); "
+                          f"{held}")
             self.on_event(WatchEvent("problem", at, time.time_ns(),
                                      detail=f"{UNADVERTISED}: {t}"))
         self._pending_unadvertised.clear()
@@ -531,7 +582,11 @@ class WatchSource(LogSource):
                 self.on_event(WatchEvent("gap", before, time.time_ns(), detail=detail,
                                          extra={"end_time_ns": log_time,
                                                 "length_s": (log_time - before) / 1e9}))
+        spans = self.absent.get(topic)
+        if spans and spans[-1][1] is None:
+            self._back(topic, spans[-1], log_time)
         self._last_time = log_time
+        self._delivered += 1
         self.counts[topic] = self.counts.get(topic, 0) + 1
         if self._start_time is None:
             self._start_time = log_time

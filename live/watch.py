@@ -299,6 +299,13 @@ class Watch:
         if src.gaps:
             la.partial = True
             la.damage_time_ns = src.gaps[0][0]
+        lost = [span[0] for spans in src.absent.values() for span in spans
+                if span[1] is not None or src._delivered > span[2]]
+        if lost:  # a bound topic's publisher left while the run went on
+            la.partial = True
+            first = min(lost) + 1 if min(lost) >= 0 else (src.start_time or 0)
+            la.damage_time_ns = (first if la.damage_time_ns is None
+                                 else min(first, la.damage_time_ns))
         if src.lost_after is not None:
             la.partial = True  # messages lost at the end: judged up to the last one used
             if la.damage_time_ns is None:
@@ -355,7 +362,8 @@ class Watch:
         self.status_line = f"watching {self.options.url}"
         for key, tick in sampling:
             t = tick.time
-            if gaps and any(a < t < e for a, e in gaps[-4:]):
+            if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
+                    src.absent and src.absent_at(key, t)):
                 self._unknown[key] += 1
                 # ticks skipped on the busiest clock (each requirement counts its own)
                 self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
@@ -381,6 +389,14 @@ class Watch:
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
                 passes[key].intact_end = cut + 1
+            left = src.left_for_good(key)
+            if left is not None:  # a publisher it reads left and the run went on without it
+                end = left + 1 if left >= 0 else -(2**63)  # none before it: nothing judged
+                res = passes[key]
+                res.intact_end = end if res.intact_end is None else min(end, res.intact_end)
+                gone = sorted(t for t in key if src.left_for_good((t,)) is not None)
+                res.lost = (f"the publisher of {', '.join(gone)} left (unadvertised) and did "
+                            "not come back before the run ended")
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)

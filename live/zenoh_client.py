@@ -8,8 +8,9 @@ What it reads (naming rules and sources: :mod:`live.ros2_names`):
   when the session opens, then each change). A publisher token (``MP``) of a bound topic
   advertises the topic with its type (``ros2msg`` definition from rosbags' type store and the
   ``--msg-path`` folders); when the last publisher token of a bound topic is undeclared the
-  topic is unadvertised. Every bound topic's publishers gone is the end of the robot's run
-  (:attr:`ZenohClient.leaving_ends_run`, after the watch's restart grace);
+  topic is unadvertised (behind the messages already merged; its value is then not held,
+  :class:`~live.source.WatchSource`). Every bound topic's publishers gone is the end of the
+  robot's run (:attr:`ZenohClient.leaving_ends_run`, after the watch's restart grace);
 * the data: one subscriber per bound topic on ``<domain>/<topic>/*/*`` (any type, any hash),
   so only the bound topics cross the network; messages are merged into log-time order
   (:mod:`live.merge`). A message's log time is the source timestamp of
@@ -191,7 +192,7 @@ class ZenohClient:
                 pubs.discard(key)
                 if not pubs and tok.topic in self._advertised:
                     del self._advertised[tok.topic]
-                    self.events.put(("unadvertise", now, [tok.topic]))
+                    self._merge.put_event(("unadvertise", now, [tok.topic]))
 
     def _advertise(self, topic: str, ros: str, now: int) -> None:
         """Advertise ``topic`` once with type ``ros`` (lock held); a type other than the

@@ -11,9 +11,10 @@ are not published (listed in :attr:`ZenohServer.skipped`).
 
 The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as
 the robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes
-between them (a watch's ``--publish-diagnostics`` reaches the others). The object has the interface of :class:`live.serve.FoxgloveServer`
-that :func:`live.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``,
-``stop``).
+between them (a watch's ``--publish-diagnostics`` reaches the others). The object has the
+interface of :class:`live.serve.FoxgloveServer` that :func:`live.serve.replay_mcap` drives
+(``channel``, ``log``, ``wait_subscribed``, ``stop``), and ``unpublish`` (one publisher
+leaves, the others go on).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ class ZenohServer:
             zenoh_config(listen=self.address.endpoint, config_file=config_file, mode="router"))
         self.channels: dict[str, object] = {}
         self.skipped: dict[str, str] = {}
-        self._tokens: list = []
+        self._tokens: dict[str, object] = {}  # topic -> its liveliness token
         self._seq = 0
         self._gid = os.urandom(16)
 
@@ -78,9 +79,9 @@ class ZenohServer:
             return None
         d = self.address.domain
         pub = self.session.declare_publisher(zenoh_key(d, topic, typename, type_hash))
-        self._tokens.append(self.session.liveliness().declare_token(liveliness_token(
+        self._tokens[topic] = self.session.liveliness().declare_token(liveliness_token(
             d, str(self.session.zid()), len(self.channels) + 10, "MP", self.node, topic,
-            typename, type_hash)))
+            typename, type_hash))
         self.channels[topic] = pub
         return pub
 
@@ -107,9 +108,19 @@ class ZenohServer:
             time.sleep(0.05)
         return False
 
+    def unpublish(self, topic: str) -> None:
+        """Undeclare the publisher of ``topic`` and its liveliness token (that publisher
+        left; the others go on)."""
+        tok = self._tokens.pop(topic, None)
+        if tok is not None:
+            tok.undeclare()
+        pub = self.channels.pop(topic, None)
+        if pub is not None:
+            pub.undeclare()
+
     def stop(self) -> None:
         """Undeclare the tokens and publishers (the node left) and close the session."""
-        for tok in self._tokens:
+        for tok in self._tokens.values():
             tok.undeclare()
         for pub in self.channels.values():
             pub.undeclare()

@@ -252,7 +252,13 @@ def test_bad_payload_clock_backwards_and_unadvertise_are_data_problems(tmp_path)
     kinds = {p["kind"] for p in la.problems}
     assert {"undecodable", CLOCK_BACKWARDS, UNADVERTISED} <= kinds
     by = {v.requirement: v for v in la.verdicts}
-    assert by["RA"].verdict == "satisfied" and by["RB"].verdict == "satisfied"
+    # /b's publisher left at k = 20 and the run went on with /a: RB ("always") has an
+    # obligation open there, so it is unknown, never judged on a held value; RA, which
+    # does not read /b, is not affected
+    assert by["RA"].verdict == "satisfied"
+    assert by["RB"].verdict == "unknown"
+    assert "publisher of /b left" in by["RB"].unknown_reason
+    assert la.partial
     assert la.ticks_evaluated == 15  # 0 .. 1.45 s: the watch went on to the last message
 
 

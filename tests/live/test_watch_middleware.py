@@ -309,3 +309,57 @@ def test_a_malformed_url_is_a_usage_error():
     res = CliRunner().invoke(main, ["watch", "dds://999", "-r", REQS, "--no-live"])
     assert res.exit_code == 2
     assert "0..232" in res.output
+
+
+@pytest.mark.parametrize("transport", ["dds", "zenoh"])
+def test_one_publisher_leaving_while_the_run_goes_on_is_unknown_not_held(transport, tmp_path,
+                                                                        dds_xml):
+    """/b's publisher leaves after 10 messages while /a's goes on for 30: the requirement
+    reading /b is ``unknown`` (its "always" obligation is open where /b's publisher left;
+    its last value is never held over the rest of the run), the one reading only /a is
+    ``satisfied`` (not affected), the run is partial and the exit code 3."""
+    import threading
+
+    from live.dds_serve import DdsServer
+    from live.zenoh_serve import ZenohServer
+
+    (tmp_path / "w.fret").write_text(
+        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
+        "RB: the robot shall always satisfy b_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
+        'b_ok = "/b.data > 0"\n', encoding="utf-8")
+    url = _url(transport)
+    server = (DdsServer(url, dds_xml) if transport == "dds" else ZenohServer(url))
+    for topic in ("/a", "/b"):
+        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    one = b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
+
+    def publish():
+        server.wait_subscribed(["/a", "/b"], timeout=30)
+        t0 = 1_700_000_000 * 10**9
+        for k in range(30):
+            server.log("/a", one, t0 + k * 100_000_000)
+            if k < 10:
+                server.log("/b", one, t0 + k * 100_000_000 + 1)
+            if k == 10:
+                server.unpublish("/b")
+            time.sleep(0.05)
+        time.sleep(0.3)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    args = ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live", "--json", str(out),
+            "--duration", "30", "--wait", "10", "--restart-grace", "1"]
+    res = CliRunner().invoke(main, args + _config(url, dds_xml))
+    t.join(20)
+    log = json.loads(out.read_text())["logs"][0]
+    by = {v["requirement"]: v for v in log["verdicts"]}
+    assert log["messages"] == {"/a": 30, "/b": 10}
+    assert by["RA"]["verdict"] == "satisfied"
+    assert by["RB"]["verdict"] == "unknown", by["RB"]
+    assert "publisher of /b left" in by["RB"]["unknown_reason"]
+    assert log["partial"] and "unadvertised" in {p["kind"] for p in log["problems"]}
+    assert res.exit_code == 3, res.output
