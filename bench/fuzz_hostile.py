@@ -30,8 +30,10 @@ same seed gives the same inputs. Per class:
   client's session and the watch source;
 * ``ws``: a hostile Foxglove WebSocket server (publisher restarts, deep frames, huge schemas,
   old and huge log times, cut payloads) watched by ``fretc watch --duration 3``;
+* ``bus``: hostile DDS or Zenoh publishers (random payloads, one publisher leaving while the
+  others go on, a publisher leaving and coming back, floods) watched for 4 s;
 * ``typed``: a command fed a wrongly typed value in a FRET JSON export, a binding file, a
-  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has both).
+  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has these three).
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
@@ -62,12 +64,12 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "monitors"))
 
 from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan classes)
-from fuzz_live_inputs import run_inputs, run_ws  # noqa: E402  (the ws and inputs classes)
+from fuzz_live_inputs import run_bus, run_inputs, run_ws  # noqa: E402  (ws, bus, typed)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
 CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
-           "typed")
+           "bus", "typed")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -460,7 +462,7 @@ def _arguments(argv):
 
 #: inputs of each class per unit of --count (logs cost far more than frames)
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
-           "bindings": 40, "frames": 40, "ws": 0.2, "typed": 8}
+           "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -504,6 +506,8 @@ def main(argv=None) -> int:
                 bad = run_frames(rng)
             elif kind == "ws":
                 bad = run_ws(rng, tmp)
+            elif kind == "bus":
+                bad = run_bus(rng, tmp)
             elif kind == "typed":
                 bad = run_inputs(rng, tmp)
             else:

@@ -132,10 +132,15 @@ class DdsClient:
         advertise and get a reader; gone ones unadvertise their topic when it was the last."""
         from cyclonedds.core import InstanceState
 
-        for p in self._builtin.take(64):
-            topic = ros_topic_of_dds(getattr(p, "topic_name", "") or "")
+        def alive_of(p) -> bool:
             info = getattr(p, "sample_info", None)
-            alive = info is None or info.instance_state == InstanceState.Alive
+            return info is None or info.instance_state == InstanceState.Alive
+
+        # publications gone before new ones in one batch: a writer replaced by another
+        # (a node restart) is seen as its topic leaving and coming back, never as nothing
+        for p in sorted(self._builtin.take(64), key=alive_of):
+            topic = ros_topic_of_dds(getattr(p, "topic_name", "") or "")
+            alive = alive_of(p)
             key, now = p.key, time.time_ns()
             if alive:
                 if topic is None or not (self.wanted(topic) or topic == CLOCK_TOPIC):
@@ -148,6 +153,10 @@ class DdsClient:
                     keys.discard(key)
                     if not keys and t in self._advertised:
                         self._advertised.discard(t)
+                        # what its writers sent before they left is still in the reader:
+                        # taken first, so the unadvertisement comes after it
+                        if t in self._readers:
+                            self._take(t, until_empty=True)
                         self._merge.put_event(("unadvertise", now, [t]))
 
     def _add(self, topic: str, ros: str, qos, now: int) -> None:
@@ -161,8 +170,9 @@ class DdsClient:
             self._clock = 0
         if topic in self._readers:
             if self.wanted(topic) and topic not in self._advertised:
-                self._advertised.add(topic)  # a publisher came back (a restart)
-                self.events.put(("advertise", now, [advertisement(
+                self._advertised.add(topic)  # a publisher came back (a restart): behind
+                # its unadvertisement, which waits with the messages merged
+                self._merge.put_event(("advertise", now, [advertisement(
                     0, topic, ros, self.store, self.types.get(topic))]))
             return
         adv = advertisement(len(self._readers) + 1, topic, ros, self.store,
@@ -184,14 +194,24 @@ class DdsClient:
 
     def _read(self) -> bool:
         """Take every reader's samples; True when some came."""
+        got = False
+        for topic in list(self._readers):
+            got |= self._take(topic)
+        return got
+
+    def _take(self, topic: str, until_empty: bool = False) -> bool:
+        """Take ``topic``'s samples into the merge (one batch, or every sample the reader
+        holds when ``until_empty``); True when some came."""
         from .dds_types import take_raw
 
+        reader = self._readers[topic][0]
+        if reader is None:
+            return False
+        self._check_qos(topic, reader)
         got = False
-        for topic, (reader, _ros) in list(self._readers.items()):
-            if reader is None:
-                continue
-            self._check_qos(topic, reader)
-            for data, info in take_raw(reader):
+        while True:
+            batch = take_raw(reader)
+            for data, info in batch:
                 got = True
                 now = time.time_ns()
                 if topic == CLOCK_TOPIC:
@@ -201,7 +221,8 @@ class DdsClient:
                 stamp = info.source_timestamp
                 log_time = self._clock if self._clock else (stamp if stamp > 0 else now)
                 self._merge.put(topic, log_time, data, now)
-        return got
+            if not (until_empty and batch):
+                return got
 
     def _check_qos(self, topic: str, reader) -> None:
         """A reader whose QoS cannot match a publisher's is a ``protocol`` event (once)."""

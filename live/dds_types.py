@@ -105,11 +105,19 @@ def open_participant(domain: int, config_file: str | None = None):
     return DomainParticipant(domain)
 
 
+#: Samples a watch's DDS reader keeps before it takes them (KeepLast): a burst the reading
+#: thread has not taken beyond this many overwrites the oldest ones, and DDS counts no such
+#: loss (docs/guide/limits.md). Large, so that the watch's own bounded queue, which counts
+#: and reports what it drops, is where a flood is cut.
+READER_DEPTH = 20_000
+
+
 def reader_qos(offered=None, topic: str = ""):
     """The QoS a ROS 2 subscription to a publisher offering ``offered`` (a
     ``cyclonedds.qos.Qos``, or None) would use so as to match it: reliable when offered
     reliable, else best effort; transient-local when offered (and always for ``/tf_static``,
-    REP 105's latched transforms), else volatile; keep the last 1000 samples."""
+    REP 105's latched transforms), else volatile; keep the last :data:`READER_DEPTH`
+    samples."""
     from cyclonedds.qos import Policy, Qos
 
     rel = getattr(offered, "reliability", None) if offered is not None else None
@@ -120,7 +128,7 @@ def reader_qos(offered=None, topic: str = ""):
     return Qos(Policy.Reliability.Reliable(max_blocking_time=100_000_000) if reliable
                else Policy.Reliability.BestEffort,
                Policy.Durability.TransientLocal if transient else Policy.Durability.Volatile,
-               Policy.History.KeepLast(1000))
+               Policy.History.KeepLast(READER_DEPTH))
 
 
 def writer_qos(topic: str = ""):

@@ -105,6 +105,7 @@ class ZenohClient:
         self._lock = threading.Lock()
         self._publishers: dict[str, set[str]] = {}  # topic -> live publisher token keys
         self._advertised: dict[str, str] = {}  # topic -> ROS type
+        self._seen: set[str] = set()  # topics advertised once (a second time: a restart)
         self._clock: int | None = None
         self._session = None
         self._decls: list = []
@@ -205,7 +206,11 @@ class ZenohClient:
         adv = advertisement(len(self._advertised), topic, ros, self.store, expected)
         if adv.unreadable:
             self.events.put(("protocol", now, f"{adv.unreadable}: the topic is not read"))
-        self.events.put(("advertise", now, [adv]))
+        if topic in self._seen:  # a publisher came back (a restart): behind its
+            self._merge.put_event(("advertise", now, [adv]))  # unadvertisement, merged
+        else:
+            self._seen.add(topic)
+            self.events.put(("advertise", now, [adv]))
 
     # -- the data ----------------------------------------------------------------------------------
     def _on_sample(self, sample) -> None:
