@@ -140,10 +140,89 @@ def run_ws(rng: random.Random, tmp: Path) -> list[str]:
 
 
 # --------------------------------------------------------------------------- bus
+def _bus_server(transport: str, rng: random.Random, dds_xml: Path):
+    """(URL, server) of a DDS domain or a Zenoh router on a free port of 127.0.0.1."""
+    import socket
+
+    if transport == "dds":
+        from live.dds_serve import DdsServer
+
+        url = f"dds://{rng.randrange(100, 230)}"
+        return url, DdsServer(url, str(dds_xml))
+    from live.zenoh_serve import ZenohServer
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        url = f"zenoh://127.0.0.1:{sock.getsockname()[1]}"
+    return url, ZenohServer(url)
+
+
+def _bus_lost(done: list[str], grace: float, pause: float) -> tuple[bool, bool]:
+    """(whether ``/a`` lost messages the run should have had, whether that is ambiguous)
+    from the steps that reached the bus. On DDS and Zenoh every bound publisher gone past
+    the grace period is the run's end: a restart slower than the grace ends the run there;
+    one close to it may or may not (discovery takes some time)."""
+    ambiguous = False
+    if "restart" in done:
+        margin = grace - pause
+        if grace == 0 or margin <= 0:
+            done = done[:done.index("restart")]
+        elif margin < 0.5:
+            ambiguous = True
+    sent = [i for i, s in enumerate(done) if s in ("good", "bad_value", "flood")]
+    lost = False
+    for i, s in enumerate(done):
+        hole = s == "restart" and sent and sent[0] < i < sent[-1]
+        lost |= bool(hole) or s in ("garbage", "bad_value")
+    return lost, ambiguous
+
+
+def _bus_publish(server, steps: list[str], schema: tuple, pause: float,
+                 rng: random.Random, done: list[str]) -> None:
+    """Play ``steps`` on ``server`` (``/a`` and ``/b``), appending to ``done`` what reached
+    the bus; the server stops at the end."""
+    import struct
+
+    def f64(x: float) -> bytes:
+        return b"\x00\x01\x00\x00" + struct.pack("<d", x)
+
+    try:
+        server.wait_subscribed(["/a"], timeout=10)
+        t = T0
+        for step in steps:
+            if step in ("good", "bad_value"):
+                for _ in range(5):
+                    server.log("/a", f64(-1.0 if step == "bad_value" else 1.0), t)
+                    server.log("/b", f64(1.0), t + 1)
+                    t += 50 * MS
+                    time.sleep(0.01)
+            elif step == "flood":
+                for _ in range(2000):
+                    server.log("/a", f64(1.0), t)
+                    t += MS
+            elif step == "garbage":
+                try:
+                    server.log("/a", bytes(rng.randrange(256)
+                                           for _ in range(rng.randrange(12))), t)
+                except RuntimeError:  # Cyclone DDS checks a raw sample's header
+                    done.append("refused")
+                    continue
+                t += 50 * MS
+            elif step == "restart":
+                server.unpublish("/a")
+                time.sleep(pause)
+                server.channel("/a", *schema)
+                server.wait_subscribed(["/a"], timeout=3)
+            elif step == "b_leaves":
+                server.unpublish("/b")
+            done.append(step)
+        time.sleep(0.3)
+    finally:
+        server.stop()
+
+
 def run_bus(rng: random.Random, tmp: Path) -> list[str]:
     """One ``bus`` input (module docstring); the unsupported outcomes."""
-    import socket
-    import struct
     import threading
 
     from audit import AuditConfig, load_plan
@@ -158,18 +237,7 @@ def run_bus(rng: random.Random, tmp: Path) -> list[str]:
     (d / "dds.xml").write_text(LOOPBACK_XML)
     plan = load_plan(AuditConfig(requirements=(str(d / "w.fret"),)))
     transport = rng.choice(["dds", "zenoh"])
-    if transport == "dds":
-        from live.dds_serve import DdsServer
-
-        url = f"dds://{rng.randrange(100, 230)}"
-        server = DdsServer(url, str(d / "dds.xml"))
-    else:
-        from live.zenoh_serve import ZenohServer
-
-        with socket.socket() as sock:
-            sock.bind(("127.0.0.1", 0))
-            url = f"zenoh://127.0.0.1:{sock.getsockname()[1]}"
-        server = ZenohServer(url)
+    url, server = _bus_server(transport, rng, d / "dds.xml")
     schema = ("cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
     for topic in ("/a", "/b"):
         server.channel(topic, *schema)
@@ -180,45 +248,8 @@ def run_bus(rng: random.Random, tmp: Path) -> list[str]:
     facts = {"lost": False, "violating": "bad_value" in steps, "transport": transport,
              "steps": steps, "done": [], "pause": pause, "grace": grace}
 
-    def f64(x: float) -> bytes:
-        return b"\x00\x01\x00\x00" + struct.pack("<d", x)
-
-    def publish():
-        try:
-            server.wait_subscribed(["/a"], timeout=10)
-            t = T0
-            for step in steps:
-                if step in ("good", "bad_value"):
-                    for _ in range(5):
-                        server.log("/a", f64(-1.0 if step == "bad_value" else 1.0), t)
-                        server.log("/b", f64(1.0), t + 1)
-                        t += 50 * MS
-                        time.sleep(0.01)
-                elif step == "flood":
-                    for _ in range(2000):
-                        server.log("/a", f64(1.0), t)
-                        t += MS
-                elif step == "garbage":
-                    try:
-                        server.log("/a", bytes(rng.randrange(256)
-                                               for _ in range(rng.randrange(12))), t)
-                    except RuntimeError:  # Cyclone DDS checks a raw sample's header
-                        facts["done"].append("refused")
-                        continue
-                    t += 50 * MS
-                elif step == "restart":
-                    server.unpublish("/a")
-                    time.sleep(pause)
-                    server.channel("/a", *schema)
-                    server.wait_subscribed(["/a"], timeout=3)
-                elif step == "b_leaves":
-                    server.unpublish("/b")
-                facts["done"].append(step)
-            time.sleep(0.3)
-        finally:
-            server.stop()
-
-    th = threading.Thread(target=publish, daemon=True)
+    th = threading.Thread(target=_bus_publish, daemon=True,
+                          args=(server, steps, schema, pause, rng, facts["done"]))
     th.start()
     duration = 4.0
     w = Watch(plan, WatchOptions(url=url, wait=3.0, duration=duration,
@@ -228,21 +259,8 @@ def run_bus(rng: random.Random, tmp: Path) -> list[str]:
     la = w.run()
     took = time.monotonic() - t0
     th.join(15)
-    done = facts["done"]  # what reached the bus (a refused sample did not)
-    ambiguous = False
-    if "restart" in done:
-        # on DDS and Zenoh every bound publisher gone past the grace period is the run's
-        # end: a restart slower than the grace ends the run there; one close to it may or
-        # may not (discovery takes some time), so then nothing is asserted of a pass
-        margin = grace - pause
-        if grace == 0 or margin <= 0:
-            done = done[:done.index("restart")]
-        elif margin < 0.5:
-            ambiguous = True
-    sent = [i for i, s in enumerate(done) if s in ("good", "bad_value", "flood")]
-    for i, s in enumerate(done):
-        hole = s == "restart" and sent and sent[0] < i < sent[-1]
-        facts["lost"] |= bool(hole) or s in ("garbage", "bad_value")
+    # what reached the bus (a sample Cyclone DDS refused did not)
+    facts["lost"], ambiguous = _bus_lost(facts["done"], grace, pause)
     out = []
     if took > duration + 10:
         out.append(f"the watch took {took:.1f} s for --duration {duration}")

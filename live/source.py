@@ -17,7 +17,7 @@ Faults, each a data problem of the run, never a crash:
   message, ticks of the requirements that read it are not evaluated (unknown; the span is
   a :data:`PUBLISHER_RESTART` problem when the topic comes back); when it never comes back
   before the run ends, those requirements are judged up to that log time (an obligation
-  still open there is ``unknown``), the others are not affected (:attr:`WatchSource.absent`);
+  still open there is ``unknown``), the others are not affected (:mod:`live.absence`);
 
 The end of the watched run, never a data problem: the server's orderly close (a WebSocket
 close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
@@ -57,6 +57,7 @@ from rosbags.typesys.msg import normalize_msgtype
 
 from common import problems as P
 from logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
+from .absence import Absences
 
 __all__ = ["WatchEvent", "WatchSource", "CONNECTION_GAP", "UNADVERTISED",
            "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE",
@@ -196,11 +197,8 @@ class WatchSource(LogSource):
         #: bound (the watch sets it from the tick period)
         self.max_jump_ns: int | None = None
         self._reported: dict[str, int] = {}  # problem events sent per kind (capped)
-        #: bound topic -> its spans without a publisher: ``[start, end, delivered]``, log
-        #: times (ns) of the last message used before it left and of its own next message
-        #: (None: not back yet), and the count of messages used when it left (the run went
-        #: on after it when more were used since)
-        self.absent: dict[str, list[list]] = {}
+        #: the bound topics' spans without a publisher (:mod:`live.absence`)
+        self.absent = Absences()
         self._delivered = 0
 
     def stop(self) -> None:
@@ -287,10 +285,7 @@ class WatchSource(LogSource):
                 # a problem only if the run goes on without it (_flush_unadvertised)
                 self._pending_unadvertised.append((t, self._last_time))
                 if self._wanted is None or t in self._wanted:
-                    spans = self.absent.setdefault(t, [])
-                    if not spans or spans[-1][1] is not None:
-                        start = self._last_time if self._last_time is not None else -(2**63)
-                        spans.append([start, None, self._delivered])
+                    self.absent.left(t, self._last_time, self._delivered)
             subscribed = set(self.advertised) & (self._wanted or set(self.advertised))
             if subscribed and subscribed <= self.unadvertised and self._all_left_at is None:
                 self._all_left_at = time.monotonic()  # ends the run after the grace period
@@ -333,27 +328,13 @@ class WatchSource(LogSource):
         self._all_left_at = None
         self._pending_unadvertised = [(t, at) for t, at in self._pending_unadvertised
                                       if t != ch.topic]
-        spans = self.absent.get(ch.topic)
-        if spans and spans[-1][1] is None:
-            spans[-1].append(ch.id)  # advertised again: the channel it came back on
-
-    def absent_at(self, topics, t: int) -> bool:
-        """Whether some topic of ``topics`` had no publisher at log time ``t`` (ns): ``t``
-        after the last message used before it left and before its own next message."""
-        for topic in topics:
-            for span in self.absent.get(topic, ()):
-                if span[0] < t and (span[1] is None or t < span[1]):
-                    return True
-        return False
+        span = self.absent.open_span(ch.topic)
+        if span is not None:
+            span.append(ch.id)  # advertised again: the channel it came back on
 
     def left_for_good(self, topics) -> int | None:
-        """The earliest log time (ns) after which a topic of ``topics`` had no publisher
-        until the run ended, while the run went on without it; None when there is none (a
-        topic that left with every other, at the run's end, is the run's end)."""
-        starts = [spans[-1][0] for topic in topics
-                  for spans in (self.absent.get(topic),)
-                  if spans and spans[-1][1] is None and self._delivered > spans[-1][2]]
-        return min(starts) if starts else None
+        """:meth:`live.absence.Absences.left_for_good` of this run."""
+        return self.absent.left_for_good(topics, self._delivered)
 
     def _report(self, kind: str, topic: str | None, log_time: int | None,
                 detail: str) -> None:
@@ -494,34 +475,15 @@ class WatchSource(LogSource):
             self._gap_open = (time.monotonic(), f"{n} message(s) dropped from the full queue",
                               QUEUE_OVERFLOW)
 
-    def _back(self, topic: str, span: list, log_time: int) -> None:
-        """The first message of ``topic`` after its publisher left: the span is closed and
-        reported (:data:`PUBLISHER_RESTART`)."""
-        span[1] = log_time
-        start = span[0]
-        how = (f"advertised again as channel {span[3]}" if len(span) > 3
-               else "its messages came again")
-        since = "the start of the run" if start < 0 else f"log time {start}"
-        detail = (f"the publisher of {topic} restarted (unadvertised, then {how}): no message "
-                  f"of {topic} from {since} to log time {log_time}: ticks inside are not "
-                  f"evaluated (unknown) for the requirements that read {topic}, never held "
-                  "over; the monitors keep their state")
-        self._problem(PUBLISHER_RESTART, topic, None if start < 0 else start, detail,
-                      end_time=log_time)
-        self.on_event(WatchEvent("gap", None if start < 0 else start, time.time_ns(),
-                                 detail=detail, extra={"end_time_ns": log_time}))
-
     def _flush_unadvertised(self) -> None:
         """The run went on after topics were unadvertised: each is an :data:`UNADVERTISED`
         problem."""
         for t, at in self._pending_unadvertised:
             held = ("its value is not held: ticks after it are not evaluated for the "
                     "requirements that read it until its next message"
-                    if self._wanted is None or t in self._wanted else
-                    "no requirement reads it")
-            self._problem(UNADVERTISED, t, at,
-                          f"the server stopped advertising this topic (its publisher left); "
-                          f"{held}")
+                    if self._wanted is None or t in self._wanted else "no requirement reads it")
+            self._problem(UNADVERTISED, t, at, "the server stopped advertising this topic (its "
+                          f"publisher left); {held}")
             self.on_event(WatchEvent("problem", at, time.time_ns(),
                                      detail=f"{UNADVERTISED}: {t}"))
         self._pending_unadvertised.clear()
@@ -582,9 +544,11 @@ class WatchSource(LogSource):
                 self.on_event(WatchEvent("gap", before, time.time_ns(), detail=detail,
                                          extra={"end_time_ns": log_time,
                                                 "length_s": (log_time - before) / 1e9}))
-        spans = self.absent.get(topic)
-        if spans and spans[-1][1] is None:
-            self._back(topic, spans[-1], log_time)
+        back = self.absent.back(topic, log_time)
+        if back is not None:  # its publisher had left: the span without it is reported
+            self._problem(PUBLISHER_RESTART, topic, back[0], back[1], end_time=log_time)
+            self.on_event(WatchEvent("gap", back[0], time.time_ns(), detail=back[1],
+                                     extra={"end_time_ns": log_time}))
         self._last_time = log_time
         self._delivered += 1
         self.counts[topic] = self.counts.get(topic, 0) + 1

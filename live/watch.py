@@ -46,6 +46,7 @@ from audit.log_problems import collect_problems, problem_json
 from audit.operands import operand_values
 from audit.passes import ClockPass, clock_key, restrict
 from audit.verdict import LogAudit, Verdict
+from .absence import NO_TIME
 from .columns import LiveColumns
 from .record import Recorder
 from .transports import make_client
@@ -299,13 +300,11 @@ class Watch:
         if src.gaps:
             la.partial = True
             la.damage_time_ns = src.gaps[0][0]
-        lost = [span[0] for spans in src.absent.values() for span in spans
-                if span[1] is not None or src._delivered > span[2]]
-        if lost:  # a bound topic's publisher left while the run went on
+        lost = src.absent.lost_start(src._delivered)
+        if lost is not None:  # a bound topic's publisher left while the run went on
             la.partial = True
-            first = min(lost) + 1 if min(lost) >= 0 else (src.start_time or 0)
-            la.damage_time_ns = (first if la.damage_time_ns is None
-                                 else min(first, la.damage_time_ns))
+            first = lost + 1 if lost != NO_TIME else (src.start_time or 0)
+            la.damage_time_ns = min(x for x in (first, la.damage_time_ns) if x is not None)
         if src.lost_after is not None:
             la.partial = True  # messages lost at the end: judged up to the last one used
             if la.damage_time_ns is None:
@@ -363,7 +362,7 @@ class Watch:
         for key, tick in sampling:
             t = tick.time
             if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
-                    src.absent and src.absent_at(key, t)):
+                    src.absent and src.absent.at(key, t)):
                 self._unknown[key] += 1
                 # ticks skipped on the busiest clock (each requirement counts its own)
                 self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
@@ -391,9 +390,8 @@ class Watch:
                 passes[key].intact_end = cut + 1
             left = src.left_for_good(key)
             if left is not None:  # a publisher it reads left and the run went on without it
-                end = left + 1 if left >= 0 else -(2**63)  # none before it: nothing judged
-                res = passes[key]
-                res.intact_end = end if res.intact_end is None else min(end, res.intact_end)
+                end, res = left + 1 if left != NO_TIME else NO_TIME, passes[key]
+                res.intact_end = min(end, end if res.intact_end is None else res.intact_end)
                 gone = sorted(t for t in key if src.left_for_good((t,)) is not None)
                 res.lost = (f"the publisher of {', '.join(gone)} left (unadvertised) and did "
                             "not come back before the run ended")

@@ -363,3 +363,58 @@ def test_one_publisher_leaving_while_the_run_goes_on_is_unknown_not_held(transpo
     assert "publisher of /b left" in by["RB"]["unknown_reason"]
     assert log["partial"] and "unadvertised" in {p["kind"] for p in log["problems"]}
     assert res.exit_code == 3, res.output
+
+
+def test_a_qos_that_cannot_match_is_reported_and_its_requirement_is_not_judged(tmp_path,
+                                                                              dds_xml,
+                                                                              monkeypatch):
+    """A ``/tf_static`` publisher that is not transient-local (REP 105 latches it; the
+    watch's reader asks for transient-local) cannot match: a ``protocol`` problem naming
+    the topic and the incompatible QoS; the requirement reading it is ``error`` (no
+    message), the one reading ``/a`` is judged as usual."""
+    import threading
+
+    from cyclonedds.qos import Policy, Qos
+    from live import dds_types
+    from live.dds_serve import DdsServer
+
+    monkeypatch.setattr(dds_types, "writer_qos", lambda topic="": Qos(
+        Policy.Reliability.Reliable(max_blocking_time=10**9), Policy.History.KeepAll,
+        Policy.Durability.Volatile))
+    (tmp_path / "w.fret").write_text(
+        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
+        "RT: the robot shall always satisfy t_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
+        't_ok = "/tf_static.data > 0"\n', encoding="utf-8")
+    url = _url("dds")
+    server = DdsServer(url, dds_xml)
+    for topic in ("/a", "/tf_static"):
+        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    one = b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
+
+    def publish():
+        server.wait_subscribed(["/a"], timeout=30)
+        time.sleep(0.5)
+        t0 = 1_700_000_000 * 10**9
+        for k in range(20):
+            server.log("/a", one, t0 + k * 100_000_000)
+            server.log("/tf_static", one, t0 + k * 100_000_000 + 1)
+            time.sleep(0.02)
+        time.sleep(0.3)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "30", "--wait", "10",
+                                    "--restart-grace", "1", *_config(url, dds_xml)])
+    t.join(20)
+    log = json.loads(out.read_text())["logs"][0]
+    by = {v["requirement"]: v for v in log["verdicts"]}
+    assert by["RA"]["verdict"] == "satisfied"
+    assert by["RT"]["verdict"] == "error" and "/tf_static" in by["RT"]["error"]
+    qos = [p for p in log["problems"] if p["kind"] == "protocol" and "QoS" in p["detail"]]
+    assert qos and "/tf_static" in qos[0]["detail"], log["problems"]
+    assert res.exit_code == 2, res.output

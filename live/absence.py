@@ -1,0 +1,81 @@
+"""Spans in which a bound topic of a watched run had no publisher (:class:`Absences`).
+
+A topic's publisher leaves (foxglove_bridge's unadvertisement, a DDS writer deleted or its
+participant's lease expired, a Zenoh liveliness token gone) while the run goes on with the
+others: from the last message used before it left until the topic's own next message, its
+value is unknown, never held over (../shared/DESIGN.md, "Damage is never evidence"). Ticks of
+the requirements that read it inside the span are not evaluated; a span still open when the
+run ends cuts those requirements there (an obligation open at the cut is ``unknown``); the
+requirements that do not read the topic are not affected.
+"""
+
+from __future__ import annotations
+
+__all__ = ["Absences", "NO_TIME"]
+
+#: The start of a span opened before any message was used: below every log time.
+NO_TIME = -(2**63)
+
+
+class Absences:
+    """Per topic, its spans without a publisher: ``[start, end, used]`` with ``start`` the
+    log time (ns) of the last message used before it left (:data:`NO_TIME`: none), ``end``
+    the log time of its own next message (None: not back yet), ``used`` the count of
+    messages used when it left (the run went on without it when more were used since)."""
+
+    def __init__(self) -> None:
+        self.spans: dict[str, list[list]] = {}
+
+    def __bool__(self) -> bool:
+        return bool(self.spans)
+
+    def left(self, topic: str, last_time: int | None, used: int) -> None:
+        """``topic``'s publisher left after the message at ``last_time`` (``used`` messages
+        used so far); nothing when a span of it is already open."""
+        spans = self.spans.setdefault(topic, [])
+        if not spans or spans[-1][1] is not None:
+            spans.append([NO_TIME if last_time is None else last_time, None, used])
+
+    def open_span(self, topic: str) -> list | None:
+        """``topic``'s open span, or None."""
+        spans = self.spans.get(topic)
+        return spans[-1] if spans and spans[-1][1] is None else None
+
+    def back(self, topic: str, log_time: int) -> tuple[int | None, str] | None:
+        """A message of ``topic`` at ``log_time`` (ns) closes its open span: (its start,
+        None when before any message; the problem's text), or None when none was open."""
+        span = self.open_span(topic)
+        if span is None:
+            return None
+        span[1], start = log_time, span[0]
+        how = (f"advertised again as channel {span[3]}" if len(span) > 3
+               else "its messages came again")
+        since = "the start of the run" if start == NO_TIME else f"log time {start}"
+        return (None if start == NO_TIME else start,
+                f"the publisher of {topic} restarted (unadvertised, then {how}): no message "
+                f"of {topic} from {since} to log time {log_time}: ticks inside are not "
+                f"evaluated (unknown) for the requirements that read {topic}, never held "
+                "over; the monitors keep their state")
+
+    def at(self, topics, t: int) -> bool:
+        """Whether some topic of ``topics`` had no publisher at log time ``t`` (ns)."""
+        for topic in topics:
+            for start, end, *_rest in self.spans.get(topic, ()):
+                if start < t and (end is None or t < end):
+                    return True
+        return False
+
+    def left_for_good(self, topics, used: int) -> int | None:
+        """The earliest start of a span of ``topics`` still open at the run's end while the
+        run went on without it (``used``: messages used in all); None when there is none (a
+        topic that left with every other, at the run's end, is the run's end)."""
+        starts = [s[0] for s in (self.open_span(t) for t in topics)
+                  if s is not None and used > s[2]]
+        return min(starts) if starts else None
+
+    def lost_start(self, used: int) -> int | None:
+        """The earliest start of a span that cost the run data (closed, or open while the
+        run went on), or None."""
+        starts = [s[0] for spans in self.spans.values() for s in spans
+                  if s[1] is not None or used > s[2]]
+        return min(starts) if starts else None
