@@ -418,3 +418,56 @@ def test_a_qos_that_cannot_match_is_reported_and_its_requirement_is_not_judged(t
     qos = [p for p in log["problems"] if p["kind"] == "protocol" and "QoS" in p["detail"]]
     assert qos and "/tf_static" in qos[0]["detail"], log["problems"]
     assert res.exit_code == 2, res.output
+
+
+@pytest.mark.parametrize("transport", ["dds", "zenoh"])
+def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xml):
+    """A robot on simulated time publishes ``/clock`` (rosgraph_msgs/Clock): the watch's
+    log times are the last ``/clock`` received, not the samples' source timestamps (here a
+    wall clock 1.7e9 s away): the violation at simulated second 100.5 is reported there."""
+    import threading
+
+    from live.dds_serve import DdsServer
+    from live.zenoh_serve import ZenohServer
+
+    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
+                                     "satisfy a_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
+        encoding="utf-8")
+    url = _url(transport)
+    server = DdsServer(url, dds_xml) if transport == "dds" else ZenohServer(url)
+    server.channel("/clock", "cdr", "rosgraph_msgs/msg/Clock", "ros2msg",
+                   b"builtin_interfaces/Time clock\n" + b"=" * 80
+                   + b"\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
+    assert "/clock" not in server.skipped
+    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    wall = 1_700_000_000 * 10**9
+
+    def publish():
+        server.wait_subscribed(["/a"], timeout=30)
+        time.sleep(0.5)
+        for k in range(20):
+            sec, ns = divmod(100 * 10**9 + k * 100_000_000, 10**9)
+            server.log("/clock", b"\x00\x01\x00\x00" + struct.pack("<iI", sec, ns), wall)
+            time.sleep(0.03)  # the clock first, then the message it dates
+            server.log("/a", b"\x00\x01\x00\x00" + struct.pack("<d", -1.0 if k >= 5 else 1.0),
+                       wall + k)
+            time.sleep(0.03)
+        time.sleep(0.3)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "30", "--wait", "10",
+                                    "--restart-grace", "1", *_config(url, dds_xml)])
+    t.join(20)
+    log = json.loads(out.read_text())["logs"][0]
+    (v,) = log["verdicts"]
+    assert v["verdict"] == "violated", v
+    # on /clock's time (a message may, under load, overtake the /clock before it: one tick)
+    assert abs(v["first_violation"]["tick_time_ns"] - (100 * 10**9 + 500_000_000)) <= 10**8
+    assert abs(v["first_tick_ns"] - 100 * 10**9) <= 10**8
+    assert res.exit_code == 1, res.output
