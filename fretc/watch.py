@@ -184,8 +184,9 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
               publish_diagnostics, msg_path=()):
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
     rosbridge://host:9090: rosbridge v2; dds://DOMAIN: the robot's DDS (Cyclone DDS);
-    zenoh://host:7447: rmw_zenoh) with the requirements and bindings that audit its
-    logs, until the run ends (the server closes, --duration, --until-idle, Ctrl-C, or every
+    zenoh://host:7447: rmw_zenoh; zenoh://host:7447?layout=bridge: zenoh-bridge-ros2dds)
+    with the requirements and bindings that audit its logs, until the run ends (the server
+    closes, --duration, --until-idle, Ctrl-C, or every
     bound topic's publisher left for longer than --restart-grace). Exit codes as
     `fretc audit`."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)

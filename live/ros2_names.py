@@ -16,6 +16,12 @@ Sources of the rules:
   Graph entities are liveliness tokens ``@ros2_lv/D/<zid>/<nid>/<eid>/<kind>/<enclave>/
   <namespace>/<node>/<topic>/<type>/<hash>/<qos>``, kind ``MP`` a publisher, ``MS`` a
   subscription, names with ``/`` written ``%`` (an empty one ``%``).
+* zenoh-bridge-ros2dds (eclipse-zenoh/zenoh-plugin-ros2dds: its README and its liveliness
+  key formats), which routes a DDS robot's topics over Zenoh (``?layout=bridge`` in the
+  URL): a message of topic ``/a/b`` is put on the key expression ``a/b`` (the bridge's
+  namespace, ``-n /ns``, in front: ``ns/a/b``), with the same CDR payload and no attachment;
+  each routed publisher is a liveliness token ``@ros2_lv/<zid>/MP/<key>/<type>/<qos>`` with
+  ``/`` in the key and in the type ``pkg/msg/Type`` written ``§``.
 """
 
 from __future__ import annotations
@@ -32,7 +38,8 @@ from .client import Advertised
 __all__ = ["Ros2Url", "parse_url", "dds_topic", "ros_topic_of_dds", "dds_type", "ros_type",
            "zenoh_key", "zenoh_topic_key", "parse_zenoh_key", "LivelinessToken",
            "liveliness_token", "parse_liveliness", "attachment", "attachment_time",
-           "standard_store", "advertisement", "DEFAULT_ZENOH_PORT", "LIVELINESS_PREFIX"]
+           "standard_store", "advertisement", "DEFAULT_ZENOH_PORT", "LIVELINESS_PREFIX",
+           "bridge_key", "bridge_liveliness", "parse_bridge_liveliness"]
 
 #: rmw_zenoh's router and peers listen on TCP port 7447 by default.
 DEFAULT_ZENOH_PORT = 7447
@@ -49,12 +56,16 @@ class Ros2Url:
         transport: ``"dds"`` or ``"zenoh"``.
         domain: the ROS domain id (``ROS_DOMAIN_ID``; 0..232 for DDS, REP 2000's range).
         host, port: the Zenoh endpoint (``tcp/host:port``); empty / 0 for DDS.
+        layout: Zenoh's key expressions: ``"rmw"`` (rmw_zenoh) or ``"bridge"``
+            (zenoh-bridge-ros2dds); namespace: the bridge's namespace (``/``: none).
     """
 
     transport: str
     domain: int
     host: str = ""
     port: int = 0
+    layout: str = "rmw"
+    namespace: str = "/"
 
     @property
     def endpoint(self) -> str:
@@ -63,11 +74,13 @@ class Ros2Url:
 
 
 def parse_url(url: str) -> Ros2Url:
-    """``dds://DOMAIN`` (``dds://`` alone: domain 0) or ``zenoh://HOST:PORT[?domain=D]`` ->
+    """``dds://DOMAIN`` (``dds://`` alone: domain 0) or ``zenoh://HOST:PORT[?domain=D]``,
+    ``zenoh://HOST:PORT?layout=bridge[&namespace=/NS]`` (zenoh-bridge-ros2dds) ->
     :class:`Ros2Url`.
 
     Raises:
-        ValueError: another scheme, a domain outside 0..232, a missing host.
+        ValueError: another scheme, a domain outside 0..232, a missing host, another layout,
+            a namespace not starting with ``/``.
     """
     parts = urlsplit(url)
     if parts.scheme == "dds":
@@ -78,10 +91,17 @@ def parse_url(url: str) -> Ros2Url:
     if parts.scheme == "zenoh":
         if not parts.hostname:
             raise ValueError(f"{url!r}: expected zenoh://HOST:PORT")
-        q = parse_qs(parts.query).get("domain", ["0"])[0]
+        query = parse_qs(parts.query)
+        q = query.get("domain", ["0"])[0]
         if not q.isdigit():
             raise ValueError(f"{url!r}: domain must be an integer")
-        return Ros2Url("zenoh", int(q), parts.hostname, parts.port or DEFAULT_ZENOH_PORT)
+        layout = query.get("layout", ["rmw"])[0]
+        ns = query.get("namespace", ["/"])[0]
+        if layout not in ("rmw", "bridge") or not ns.startswith("/"):
+            raise ValueError(f"{url!r}: layout is rmw (rmw_zenoh) or bridge "
+                             "(zenoh-bridge-ros2dds); a namespace starts with /")
+        return Ros2Url("zenoh", int(q), parts.hostname, parts.port or DEFAULT_ZENOH_PORT,
+                       layout, ns.rstrip("/") or "/")
     raise ValueError(f"{url!r}: expected dds://DOMAIN or zenoh://HOST:PORT")
 
 
@@ -170,6 +190,34 @@ def parse_liveliness(key: str) -> LivelinessToken | None:
         return None
     return LivelinessToken(int(parts[1]), kind, _unmangle(parts[9]), ros_type(parts[10]),
                            parts[11])
+
+
+def bridge_key(namespace: str, topic: str) -> str:
+    """zenoh-bridge-ros2dds's key expression of ``topic`` (module docstring)."""
+    ns = namespace.strip("/")
+    return f"{ns}/{topic.strip('/')}" if ns else topic.strip("/")
+
+
+def bridge_liveliness(zid: str, key: str, ros: str, qos: str = ":::") -> str:
+    """The liveliness token zenoh-bridge-ros2dds declares for a routed publisher of the key
+    expression ``key`` and type ``ros`` (module docstring)."""
+    return "/".join([LIVELINESS_PREFIX, zid, "MP", key.replace("/", "§"),
+                     normalize_msgtype(ros).replace("/", "§"), qos])
+
+
+def parse_bridge_liveliness(key: str, namespace: str = "/") -> LivelinessToken | None:
+    """A zenoh-bridge-ros2dds publisher or subscriber token -> :class:`LivelinessToken`
+    (domain 0, the topic without the bridge's namespace); None when it is not one."""
+    parts = key.split("/")
+    if len(parts) != 6 or parts[0] != LIVELINESS_PREFIX or parts[2] not in ("MP", "MS"):
+        return None
+    topic = "/" + parts[3].replace("§", "/")
+    ns = namespace.rstrip("/")
+    if ns:
+        if not topic.startswith(ns + "/"):
+            return None
+        topic = topic[len(ns):]
+    return LivelinessToken(0, parts[2], topic, ros_type(parts[4].replace("§", "/")), "")
 
 
 def attachment(sequence: int, source_ns: int, gid: bytes) -> bytes:

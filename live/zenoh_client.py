@@ -35,8 +35,9 @@ from collections.abc import Callable
 from .client import WATCH_HINT, MissingDependency
 from .events import EventQueue
 from .merge import MergeBuffer
-from .ros2_names import (LIVELINESS_PREFIX, advertisement, attachment_time, parse_liveliness,
-                         parse_url, parse_zenoh_key, standard_store, zenoh_topic_key)
+from .ros2_names import (LIVELINESS_PREFIX, advertisement, attachment_time, bridge_key,
+                         parse_bridge_liveliness, parse_liveliness, parse_url, parse_zenoh_key,
+                         standard_store, zenoh_topic_key)
 
 __all__ = ["ZenohClient", "zenoh_config", "require_zenoh", "CLOCK_TOPIC"]
 
@@ -120,12 +121,15 @@ class ZenohClient:
         self._merge.start()
         self._session = zenoh.open(zenoh_config(connect=self.url.endpoint,
                                                 config_file=self.config_file))
-        lv = f"{LIVELINESS_PREFIX}/{self.url.domain}/**"
+        bridge = self.url.layout == "bridge"
+        lv = f"{LIVELINESS_PREFIX}/{'*/MP' if bridge else self.url.domain}/**"
         self._decls.append(self._session.liveliness().declare_subscriber(
             lv, self._on_token, history=True))
         for t in sorted(set(self.topics) | {CLOCK_TOPIC}):
+            key = (bridge_key(self.url.namespace, t) if bridge
+                   else zenoh_topic_key(self.url.domain, t))
             self._decls.append(self._session.declare_subscriber(
-                zenoh_topic_key(self.url.domain, t), self._on_sample))
+                key, lambda sample, t=t: self._on_sample(sample, t)))
         self._watcher = threading.Thread(target=self._watch_peers, daemon=True,
                                          name="fretc-zenoh-peers")
         self._watcher.start()
@@ -177,7 +181,10 @@ class ZenohClient:
     # -- the graph -------------------------------------------------------------------------------
     def _on_token(self, sample) -> None:
         """A liveliness token appeared (PUT) or went (DELETE)."""
-        tok = parse_liveliness(str(sample.key_expr))
+        if self.url.layout == "bridge":
+            tok = parse_bridge_liveliness(str(sample.key_expr), self.url.namespace)
+        else:
+            tok = parse_liveliness(str(sample.key_expr))
         if tok is None or tok.kind != "MP" or tok.domain != self.url.domain:
             return
         key, now = str(sample.key_expr), time.time_ns()
@@ -213,22 +220,30 @@ class ZenohClient:
             self.events.put(("advertise", now, [adv]))
 
     # -- the data ----------------------------------------------------------------------------------
-    def _on_sample(self, sample) -> None:
-        """One message of a bound topic (or of ``/clock``); whatever it holds, it costs that
-        message only (a ``protocol`` event)."""
+    def _on_sample(self, sample, topic: str) -> None:
+        """One message of a bound topic (or of ``/clock``), from the subscriber of
+        ``topic``; whatever it holds, it costs that message only (a ``protocol`` event)."""
         try:
-            self._sample(sample)
+            self._sample(sample, topic)
         except Exception as exc:
             self.events.put(("protocol", time.time_ns(), f"a Zenoh sample on "
                              f"{str(sample.key_expr)[:200]} could not be read "
                              f"({type(exc).__name__}: {str(exc)[:200]})"))
 
-    def _sample(self, sample) -> None:
+    def _sample(self, sample, topic: str) -> None:
         now = time.time_ns()
-        parsed = parse_zenoh_key(str(sample.key_expr))
-        if parsed is None:
-            return
-        _d, topic, ros, _hash = parsed
+        if self.url.layout == "bridge":  # the key names no type: the token's, or [types]
+            ros = self._advertised.get(topic) or self.types.get(topic) or ""
+            if not ros and topic != CLOCK_TOPIC:
+                self.events.put(("protocol", now, f"a message of {topic} before its "
+                                 "publisher's liveliness token (its type is not known): "
+                                 "not read"))
+                return
+        else:
+            parsed = parse_zenoh_key(str(sample.key_expr))
+            if parsed is None:
+                return
+            _d, topic, ros, _hash = parsed
         payload = sample.payload.to_bytes()
         att = sample.attachment
         stamp = attachment_time(att.to_bytes() if att is not None else None)

@@ -7,7 +7,10 @@ publisher liveliness token (``MP``) under ``@ros2_lv``; each message keeps its C
 carries rmw_zenoh's attachment with its log time as the source timestamp, so ``fretc watch
 zenoh://...`` sees the log's messages at the log's times. At the end the tokens are undeclared
 (the node left) and the session closed. Channels of other encodings (ROS 1, JSON, protobuf)
-are not published (listed in :attr:`ZenohServer.skipped`).
+are not published (listed in :attr:`ZenohServer.skipped`). With ``?layout=bridge`` the
+messages go out as zenoh-bridge-ros2dds routes a DDS robot's: on the topic's key
+(``cmd_vel``), with a bridge liveliness token and no attachment (so no source timestamp: a
+watch dates them when they arrive).
 
 The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as
 the robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes
@@ -25,7 +28,8 @@ from collections.abc import Iterable
 
 from logs.decoding import build_typestore
 
-from .ros2_names import attachment, liveliness_token, parse_url, zenoh_key
+from .ros2_names import (attachment, bridge_key, bridge_liveliness, liveliness_token, parse_url,
+                         zenoh_key)
 from .zenoh_client import require_zenoh, zenoh_config
 
 __all__ = ["ZenohServer"]
@@ -77,22 +81,30 @@ class ZenohServer:
         except Exception as exc:  # a schema rosbags cannot read
             self.skipped[topic] = f"schema {schema_name!r} cannot be read ({exc})"
             return None
-        d = self.address.domain
-        pub = self.session.declare_publisher(zenoh_key(d, topic, typename, type_hash))
-        self._tokens[topic] = self.session.liveliness().declare_token(liveliness_token(
-            d, str(self.session.zid()), len(self.channels) + 10, "MP", self.node, topic,
-            typename, type_hash))
+        d, zid = self.address.domain, str(self.session.zid())
+        if self.address.layout == "bridge":  # zenoh-bridge-ros2dds's keys (ros2_names)
+            key = bridge_key(self.address.namespace, topic)
+            pub = self.session.declare_publisher(key)
+            token = bridge_liveliness(zid, key, typename)
+        else:
+            pub = self.session.declare_publisher(zenoh_key(d, topic, typename, type_hash))
+            token = liveliness_token(d, zid, len(self.channels) + 10, "MP", self.node, topic,
+                                     typename, type_hash)
+        self._tokens[topic] = self.session.liveliness().declare_token(token)
         self.channels[topic] = pub
         return pub
 
     def log(self, topic: str, data: bytes, log_time: int) -> None:
-        """Publish one message of ``topic`` with ``log_time`` (ns) as its source timestamp;
-        a skipped channel's messages are dropped."""
+        """Publish one message of ``topic`` with ``log_time`` (ns) as its source timestamp
+        (the bridge layout carries none); a skipped channel's messages are dropped."""
         pub = self.channels.get(topic)
         if pub is None:
             return
         self._seq += 1
-        pub.put(bytes(data), attachment=attachment(self._seq, int(log_time), self._gid))
+        if self.address.layout == "bridge":  # the bridge forwards the DDS payload alone
+            pub.put(bytes(data))
+        else:
+            pub.put(bytes(data), attachment=attachment(self._seq, int(log_time), self._gid))
 
     def wait_subscribed(self, topics: Iterable[str] | None = None, timeout: float = 30.0,
                         settle: float = 0.2) -> bool:

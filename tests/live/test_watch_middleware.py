@@ -471,3 +471,59 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
     assert abs(v["first_violation"]["tick_time_ns"] - (100 * 10**9 + 500_000_000)) <= 10**8
     assert abs(v["first_tick_ns"] - 100 * 10**9) <= 10**8
     assert res.exit_code == 1, res.output
+
+
+def test_zenoh_bridge_ros2dds_layout(tmp_path):
+    """``zenoh://HOST:PORT?layout=bridge``: topics on zenoh-bridge-ros2dds's key expressions
+    (``a``, no domain, type or hash) with its liveliness tokens (``@ros2_lv/<zid>/MP/a/
+    std_msgs§msg§Float64/:::``); the type comes from the token, the log time is the arrival
+    (the bridge forwards no source timestamp); a violating value is seen, and ``/b``'s
+    publisher leaving while ``/a`` goes on makes the requirement reading it unknown."""
+    import threading
+
+    from live.ros2_names import bridge_liveliness
+    from live.zenoh_serve import ZenohServer
+
+    assert bridge_liveliness("z1", "ns/a", "std_msgs/msg/Float64") == \
+        "@ros2_lv/z1/MP/ns§a/std_msgs§msg§Float64/:::"
+    (tmp_path / "w.fret").write_text(
+        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
+        "RB: the robot shall always satisfy b_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
+        'b_ok = "/b.data > 0"\n', encoding="utf-8")
+    url = f"zenoh://127.0.0.1:{_port()}?layout=bridge"
+    server = ZenohServer(url)
+    for topic in ("/a", "/b"):
+        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+
+    def f64(x: float) -> bytes:
+        return b"\x00\x01\x00\x00" + struct.pack("<d", x)
+
+    def publish():
+        server.wait_subscribed(["/a", "/b"], timeout=30)
+        time.sleep(0.3)
+        for k in range(30):
+            server.log("/a", f64(-1.0 if 20 <= k < 25 else 1.0), 0)  # 250 ms: ticks see it
+            if k < 10:
+                server.log("/b", f64(1.0), 0)
+            if k == 10:
+                server.unpublish("/b")
+            time.sleep(0.05)
+        time.sleep(0.3)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "30", "--wait", "10",
+                                    "--restart-grace", "1"])
+    t.join(20)
+    log = json.loads(out.read_text())["logs"][0]
+    by = {v["requirement"]: v for v in log["verdicts"]}
+    assert log["messages"] == {"/a": 30, "/b": 10}
+    assert by["RA"]["verdict"] == "violated"
+    assert by["RB"]["verdict"] == "unknown" and "publisher of /b left" in by["RB"]["unknown_reason"]
+    assert abs(log["start_time_ns"] - time.time_ns()) < 120 * 10**9  # dated on arrival
+    assert res.exit_code == 1, res.output
