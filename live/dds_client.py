@@ -136,6 +136,18 @@ class DdsClient:
             info = getattr(p, "sample_info", None)
             return info is None or info.instance_state == InstanceState.Alive
 
+        gone: list[str] = []
+
+        def flush() -> None:
+            # what any writer sent before these left is still in the readers: taken first,
+            # so each unadvertisement comes after it (and after the others' data of then)
+            if gone:
+                for t in list(self._readers):
+                    self._take(t, until_empty=True)
+                for t in gone:
+                    self._merge.put_event(("unadvertise", time.time_ns(), [t]))
+                gone.clear()
+
         # publications gone before new ones in one batch: a writer replaced by another
         # (a node restart) is seen as its topic leaving and coming back, never as nothing
         for p in sorted(self._builtin.take(64), key=alive_of):
@@ -143,6 +155,7 @@ class DdsClient:
             alive = alive_of(p)
             key, now = p.key, time.time_ns()
             if alive:
+                flush()
                 if topic is None or not (self.wanted(topic) or topic == CLOCK_TOPIC):
                     continue
                 self._pubs.setdefault(topic, set()).add(key)
@@ -153,11 +166,8 @@ class DdsClient:
                     keys.discard(key)
                     if not keys and t in self._advertised:
                         self._advertised.discard(t)
-                        # what its writers sent before they left is still in the reader:
-                        # taken first, so the unadvertisement comes after it
-                        if t in self._readers:
-                            self._take(t, until_empty=True)
-                        self._merge.put_event(("unadvertise", now, [t]))
+                        gone.append(t)
+        flush()
 
     def _add(self, topic: str, ros: str, qos, now: int) -> None:
         """Advertise ``topic`` and create its reader (once)."""
