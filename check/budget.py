@@ -14,8 +14,11 @@ the same input gets the same answers on an idle and on a loaded machine.
 * **memory** (``--memory-budget``, per query, in *BDD nodes*): the size of BuDDy's node
   table in the worker process (``bdd_setmaxnodenum``; BuDDy stops the process when it would
   grow past it), and, in the same unit, the state variables of the monitors
-  (:data:`NODES_PER_VARIABLE` each, checked before they are made) and z3's lasso encodings
-  (:data:`NODES_PER_Z3_TERM` per term, checked before they are built).
+  (:data:`NODES_PER_VARIABLE` each, checked before they are made), z3's lasso encodings
+  (:data:`NODES_PER_Z3_TERM` per term, checked before they are built) and everything z3
+  allocates for a query (:data:`BYTES_PER_NODE` bytes a node, z3's own count of the bytes
+  it asked for, ``memory_max_size``: deterministic, not the process's resident size; z3
+  runs in the worker process too, so a query it cannot finish within it stops there).
 
 A query past a budget answers ``unknown`` with the reason (:class:`BudgetSpent`). Defaults
 (:data:`DEFAULT_WORK`, :data:`DEFAULT_MEMORY`) are chosen so that every query the benchmark
@@ -29,8 +32,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = ["Budget", "BudgetSpent", "RunStopped", "Meter", "DEFAULT_WORK", "DEFAULT_MEMORY",
-           "MIN_MEMORY", "MUS_BUDGET",
-           "Z3_RLIMIT_PER_UNIT", "NODES_PER_VARIABLE", "NODES_PER_Z3_TERM"]
+           "MIN_MEMORY", "MUS_BUDGET", "UNKNOWN",
+           "Z3_RLIMIT_PER_UNIT", "NODES_PER_VARIABLE", "NODES_PER_Z3_TERM", "BYTES_PER_NODE"]
+
+#: Answer of a query past its budget (or that its engine could not take).
+UNKNOWN = "unknown"
 
 #: work units per query by default: 9 times what the costliest query of the benchmark's
 #: sets needs (11 million units, the vacuity of the 1000-tick set), about 7 s of this machine
@@ -47,6 +53,10 @@ NODES_PER_VARIABLE = 32
 #: the memory one term of z3's lasso encoding takes, in BDD nodes (measured about 150
 #: bytes a term)
 NODES_PER_Z3_TERM = 8
+#: the bytes one BDD node of the memory budget stands for where an engine counts bytes (z3):
+#: a BuDDy node is 20 bytes, its caches add about a quarter (the default budget of 8 million
+#: nodes is about 200 MB)
+BYTES_PER_NODE = 25
 
 
 class BudgetSpent(Exception):

@@ -53,7 +53,8 @@ class Checker:
         self.items = list(items)
         self.worker = worker
         self.smt = smt if smt is not None else SmtSolver(worker.budget,
-                                                         deadline=worker.deadline)
+                                                         deadline=worker.deadline,
+                                                         worker=worker)
         self.engine = engine
         self.smt_queries = 0
         self.mus_budget = mus_budget

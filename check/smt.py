@@ -39,12 +39,12 @@ from collections.abc import Sequence
 from compiler import ir
 from compiler.ir import Node
 
-from .budget import NODES_PER_Z3_TERM, Z3_RLIMIT_PER_UNIT, Budget, RunStopped
+from .budget import (BYTES_PER_NODE, NODES_PER_Z3_TERM, UNKNOWN, Z3_RLIMIT_PER_UNIT, Budget,
+                     BudgetSpent, RunStopped)
 from .numeric_abstraction import simple_comparison
 from .safety_game import letter_name
-from .solver import UNKNOWN
 
-__all__ = ["SmtSolver", "max_bound"]
+__all__ = ["SmtSolver", "max_bound", "solve_capped"]
 
 _TEMPORAL = ("X", "F", "G", "U", "V")
 
@@ -296,23 +296,41 @@ class SmtSolver:
     ``budget``: each query's :class:`check.budget.Budget` (default the defaults): its work
     as z3's deterministic resource count (``rlimit``, :data:`check.budget.Z3_RLIMIT_PER_UNIT`
     per unit), shared by the attempts of the plan; its memory bounds the lasso encodings
-    before they are built (:data:`check.budget.NODES_PER_Z3_TERM` per term). ``deadline``:
-    the run's wall-clock limit (``time.monotonic()`` value): past it :meth:`sat` raises
-    :class:`check.budget.RunStopped`. :meth:`sat` returns ``(True, (prefix, cycle))``
-    (letters ``{atom name: bool}`` as :class:`check.solver.SpotWorker` gives them),
-    ``(False, None)``, or :data:`UNKNOWN`; ``failures`` says for each unknown answer what
-    was tried, ``spent`` counts them. Raises nothing for a formula it cannot encode (a
-    past-time operator in a future formula): that answer is unknown too, with the reason.
+    before they are built (:data:`check.budget.NODES_PER_Z3_TERM` per term) and, when the
+    query runs in ``worker``, everything z3 allocates for it (:func:`solve_capped`).
+    ``deadline``: the run's wall-clock limit (``time.monotonic()`` value): past it
+    :meth:`sat` raises :class:`check.budget.RunStopped`. ``worker``: a
+    :class:`check.solver.SpotWorker` whose process runs the queries (None, or one that does
+    not fork: in this process, z3's memory not capped). :meth:`sat` returns
+    ``(True, (prefix, cycle))`` (letters ``{atom name: bool}`` as
+    :class:`check.solver.SpotWorker` gives them), ``(False, None)``, or :data:`UNKNOWN`;
+    ``failures`` says for each unknown answer what was tried, ``spent`` counts them. Raises
+    nothing for a formula it cannot encode (a past-time operator in a future formula): that
+    answer is unknown too, with the reason.
     """
 
-    def __init__(self, budget: Budget | None = None, deadline: float | None = None):
+    def __init__(self, budget: Budget | None = None, deadline: float | None = None,
+                 worker=None):
         self.budget = budget or Budget()
         self.deadline = deadline
+        self.worker = worker
         self.failures: list[str] = []
         self.spent = 0
+        #: a query of this solver ran past z3's memory cap (z3's state is unusable after)
+        self.out_of_memory = False
 
     def sat(self, formulas: Sequence[Node]):
         """Is the conjunction of ``formulas`` satisfiable on infinite words?"""
+        if self.worker is not None and self.worker.fork:
+            status, value = self.worker.call(("smt", list(formulas)))
+            if status == "ok":
+                answer, failures, spent = value
+                self.failures += failures
+                self.spent += spent
+                return answer
+            self.spent += 1
+            self.failures.append(f"z3's query ended without an answer: {value}")
+            return UNKNOWN
         z3 = _z3()
         bound = max_bound(formulas)
         size = sum(1 for f in formulas for _n in ir.walk(f))
@@ -346,7 +364,16 @@ class SmtSolver:
                     got = self._proof(z3, formulas, *arg)
                 if got is not None:
                     return got
+        except BudgetSpent as exc:
+            self.spent += 1
+            self.failures.append(f"z3: {exc}")
+            return UNKNOWN
         except (ValueError, z3.Z3Exception) as exc:
+            if _memory_out(str(exc)):
+                self.out_of_memory = True
+                self.spent += 1
+                self.failures.append(f"z3: {self._memory_spent()}")
+                return UNKNOWN
             self.failures.append(f"z3 could not take the query: {exc}")
             return UNKNOWN
         self.spent += 1
@@ -368,6 +395,9 @@ class SmtSolver:
         if self.deadline is not None:
             s.set("timeout", max(1, int((self.deadline - time.monotonic()) * 1000)))
         ans = s.check()
+        if ans == z3.unknown and _memory_out(s.reason_unknown()):
+            self.out_of_memory = True
+            raise BudgetSpent(self._memory_spent())
         count = _rlimit_count(z3, s)  # the context's: cumulative over its solvers
         self._left -= max(1, count - self._count)
         self._count = count
@@ -375,6 +405,10 @@ class SmtSolver:
                 and time.monotonic() >= self.deadline:
             raise RunStopped("the run's wall-clock limit (--timeout) passed")
         return ans
+
+    def _memory_spent(self) -> str:
+        mb = self.budget.memory * BYTES_PER_NODE / 2 ** 20
+        return self.budget.memory_spent(f"z3 allocated more than its {mb:.0f} MB")
 
     def _lasso(self, z3, formulas, shape, share: float):
         K, loop = shape
@@ -395,6 +429,32 @@ class SmtSolver:
             s.add(enc.at(f, z3.IntVal(0)))
         s.add(*enc.axioms)
         return (False, None) if self._check(z3, s, share, cap) == z3.unsat else None
+
+
+def _memory_out(reason: str) -> bool:
+    """Is z3's reason (of an unknown answer or an exception) its memory cap?"""
+    return "out of memory" in reason or "max. memory" in reason
+
+
+def solve_capped(formulas: Sequence[Node], budget: Budget) -> tuple:
+    """Answer one query in this process with z3's memory capped at ``budget.memory`` BDD
+    nodes of :data:`check.budget.BYTES_PER_NODE` bytes, counted from what z3 holds before
+    the query (z3's ``memory_max_size`` is process-wide; z3 counts the bytes it asks for, so
+    the cap falls at the same point on every machine). Returns ``(answer, failures, spent,
+    out_of_memory)`` (:class:`SmtSolver`'s). Meant for a worker process
+    (:mod:`check.solver`): past the cap z3's state is unusable, and the caller ends the
+    process when ``out_of_memory``."""
+    z3 = _z3()
+    z3.main_ctx()  # made before the count: its tables are not the query's
+    held = z3.z3core.Z3_get_estimated_alloc_size()
+    cap = held + budget.memory * BYTES_PER_NODE
+    z3.set_param("memory_max_size", max(1, -(-cap // 2 ** 20)))
+    solver = SmtSolver(budget)
+    try:
+        answer = solver.sat(formulas)
+    finally:
+        z3.set_param("memory_max_size", 0)
+    return answer, solver.failures, solver.spent, solver.out_of_memory
 
 
 def _rlimit_count(z3, s) -> int:

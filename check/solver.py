@@ -29,6 +29,10 @@ Queries (all on infinite words, Spot's LTL semantics):
   :func:`check.buchi_game.solve_buchi_game` (its answer dict).
 * ``("monitor_sat", safe, goals, invariant, finite, length, liveness, last)``: the fixed
   points of :func:`check.monitor_sat.decide`.
+* ``("smt", formulas)``: z3's answer to :meth:`check.smt.SmtSolver.sat` (IR formulas) as
+  ``(answer, failures, spent)``, with z3's memory capped at the query's memory budget
+  (:func:`check.smt.solve_capped`); a query that ran out of it leaves z3's state unusable,
+  so the worker ends after answering and the next query starts a new one.
 
 The worker adds the query's :class:`check.budget.Budget` to the BDD queries.
 """
@@ -41,12 +45,9 @@ import signal
 import time
 from typing import Any
 
-from .budget import Budget, BudgetSpent, RunStopped
+from .budget import UNKNOWN, Budget, BudgetSpent, RunStopped
 
 __all__ = ["UNKNOWN", "SpotWorker", "run_query", "SPOT_MAX_STATES"]
-
-#: Answer of a query past its budget (or that Spot could not take).
-UNKNOWN = "unknown"
 
 #: the most states of a product automaton Spot builds for one query: a product past it is
 #: refused (the query answers unknown), so the next product and the emptiness check stay
@@ -192,6 +193,10 @@ def run_query(query: tuple, budget: Budget | None = None) -> Any:
 
         safe, goals, inv, finite, length, live, last = query[1:]
         return decide(safe, goals, inv, finite, length, budget, live, last)
+    if kind == "smt":
+        from .smt import solve_capped  # lazy: z3 only when a query needs it
+
+        return solve_capped(query[1], budget)
     if kind == "realizable":
         texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         outputs = list(query[2])
@@ -229,11 +234,19 @@ def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker 
         except EOFError:
             return
         try:
-            conn.send(("ok", run_query(query, budget)))
+            answer = run_query(query, budget)
         except BudgetSpent as exc:
             conn.send(("budget", str(exc)))
+            continue
         except Exception as exc:  # a Spot error is an answer, not a crash
             conn.send(("error", f"{type(exc).__name__}: {exc}"))
+            continue
+        if query[0] == "smt":
+            if answer[3]:  # z3 ran out of memory: its state is unusable, the worker ends
+                conn.send(("last", answer[:3]))
+                return
+            answer = answer[:3]
+        conn.send(("ok", answer))
 
 
 class SpotWorker:
@@ -290,6 +303,20 @@ class SpotWorker:
             except Exception as exc:  # a Spot error is an unknown answer, not a crash
                 self.failures.append(_one_line(f"{type(exc).__name__}: {exc}"))
                 return UNKNOWN
+        status, value = self.call(query)
+        if status in ("budget", "ended"):
+            return self.refuse(value)
+        if status == "error":
+            self.failures.append(_one_line(value))
+            return UNKNOWN
+        return value
+
+    def call(self, query: tuple) -> tuple[str, Any]:
+        """Send ``query`` to the worker process (started when there is none) and return
+        ``(status, value)``: ``("ok", answer)``; ``("budget", reason)`` past a budget;
+        ``("error", message)`` for an engine's error; ``("ended", reason)`` when the worker
+        ended before answering (BuDDy's full node table, or a crash). Counts nothing (the
+        caller does); raises :class:`check.budget.RunStopped` past the run's deadline."""
         if self._proc is None or not self._proc.is_alive():
             self._start()
         try:
@@ -309,14 +336,13 @@ class SpotWorker:
             code = self._proc.exitcode
             self._kill()
             if code == -signal.SIGABRT:
-                return self.refuse(self.budget.memory_spent("BuDDy's node table is full"))
-            return self.refuse(f"the query's worker process ended (exit code {code})")
-        if status == "budget":
-            return self.refuse(value)
-        if status == "error":
-            self.failures.append(_one_line(value))
-            return UNKNOWN
-        return value
+                return "ended", self.budget.memory_spent("BuDDy's node table is full")
+            return "ended", f"the query's worker process ended (exit code {code})"
+        if status == "last":  # the worker ends after this answer (z3 out of memory)
+            self._proc.join()
+            self._kill()
+            status = "ok"
+        return status, value
 
     def _kill(self) -> None:
         if self._proc is not None:
