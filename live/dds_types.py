@@ -8,14 +8,17 @@ writes each sample's CDR as it is on the wire (``ddspy_take`` / ``ddspy_write_ts
 decodes it with the same decoders as a log's (:func:`logs.schema_decoder`). The struct type
 is still needed: its name ``pkg::msg::dds_::Type_`` is what DDS matches a reader to a writer
 by (ROS 2's DDS mapping, rosidl_generator_dds_idl), and its members make the XTypes type
-information Cyclone DDS sends. Members keep the ROS field names (Python keywords get a
-trailing ``_``), in the definition's order; ``bool`` is ``boolean``, ``byte`` ``octet``,
-``char`` ``uint8``, strings unbounded unless bounded in the definition.
+information Cyclone DDS sends. Members are named as ROS 2's DDS IDL names them (the field
+name and a trailing ``_``: ``boolean data_``, rosidl_generator_dds_idl's ``msg.idl.em``), in
+the definition's order; ``bool`` is ``boolean``, ``byte`` ``octet``, ``char`` ``uint8``,
+strings unbounded unless bounded in the definition. A watch's readers ignore member names
+when they match a writer's type (XTypes' type consistency, ``ignore_member_names``): a
+publisher whose types name members without the ``_`` (plain Cyclone DDS or Fast DDS
+programs) is read too, since DDS would otherwise refuse the match without a word.
 """
 
 from __future__ import annotations
 
-import keyword
 import threading
 
 __all__ = ["idl_struct", "open_participant", "take_raw", "write_raw", "reader_qos",
@@ -78,7 +81,7 @@ def idl_struct(store, typename: str) -> type:
     _consts, fields = store.fielddefs[typename]
     members = {}
     for name, node in fields:
-        members[name + "_" if keyword.iskeyword(name) else name] = _member_type(store, node)
+        members[name + "_"] = _member_type(store, node)
     dds = dds_type(typename)
     cls = make_idl_struct(dds.rsplit("::", 1)[1], dds, members)
     with _lock:
@@ -117,7 +120,7 @@ def reader_qos(offered=None, topic: str = ""):
     ``cyclonedds.qos.Qos``, or None) would use so as to match it: reliable when offered
     reliable, else best effort; transient-local when offered (and always for ``/tf_static``,
     REP 105's latched transforms), else volatile; keep the last :data:`READER_DEPTH`
-    samples."""
+    samples; member names ignored in matching types (module docstring)."""
     from cyclonedds.qos import Policy, Qos
 
     rel = getattr(offered, "reliability", None) if offered is not None else None
@@ -128,7 +131,8 @@ def reader_qos(offered=None, topic: str = ""):
     return Qos(Policy.Reliability.Reliable(max_blocking_time=100_000_000) if reliable
                else Policy.Reliability.BestEffort,
                Policy.Durability.TransientLocal if transient else Policy.Durability.Volatile,
-               Policy.History.KeepLast(READER_DEPTH))
+               Policy.History.KeepLast(READER_DEPTH),
+               Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True))
 
 
 def writer_qos(topic: str = ""):

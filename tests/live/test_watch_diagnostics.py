@@ -36,35 +36,35 @@ LEVEL = {"satisfied": 0, "vacuous": 0, "violated": 2, "error": 2, "unknown": 3}
 
 @dataclass
 class Time_(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: int32
-    nanosec: uint32
+    sec_: int32
+    nanosec_: uint32
 
 
 @dataclass
 class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time_
-    frame_id: str
+    stamp_: Time_
+    frame_id_: str
 
 
 @dataclass
 class KeyValue_(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
-    key: str
-    value: str
+    key_: str
+    value_: str
 
 
 @dataclass
 class DiagnosticStatus_(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticStatus_"):
-    level: byte
-    name: str
-    message: str
-    hardware_id: str
-    values: sequence[KeyValue_]
+    level_: byte
+    name_: str
+    message_: str
+    hardware_id_: str
+    values_: sequence[KeyValue_]
 
 
 @dataclass
 class DiagnosticArray_(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticArray_"):
-    header: Header_
-    status: sequence[DiagnosticStatus_]
+    header_: Header_
+    status_: sequence[DiagnosticStatus_]
 
 
 def _port() -> int:
@@ -130,8 +130,8 @@ def test_diagnostics_over_dds_read_back_with_own_idl_types(tmp_path):
     time.sleep(0.5)
     arrays = [a for a in reader.take(10_000) if a.sample_info.valid_data]
     assert len(arrays) >= 2  # while watching, and the final verdicts
-    last = [(s.name, s.level, {kv.key: kv.value for kv in s.values})
-            for s in arrays[-1].status]
+    last = [(s.name_, s.level_, {kv.key_: kv.value_ for kv in s.values_})
+            for s in arrays[-1].status_]
     _check(last, _audit(tmp_path))
     assert code == 1  # R2 is violated on this trace
 
