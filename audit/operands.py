@@ -19,8 +19,8 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
     """Evidence of violations: the numbers behind their boolean variables (the operands of
     the comparisons a binding is made of, :func:`signals.bindings.operand_signals`) at the
     ticks whose values are shown. A second streaming pass over the log, only when something
-    was violated and only for those operands, each on its requirement's own clock (so tick
-    indexes match the first pass).
+    was violated, only for those operands, each on its requirement's own clock (so tick
+    indexes match the first pass), and only up to the last tick shown.
 
     Args:
         active: the requirements judged; ``verdicts``: requirement index -> Verdict;
@@ -32,13 +32,18 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
     if not wanted:
         return
     at = {(key, t) for key, _a, _v, ticks in needs for t in ticks}
+    last: dict[frozenset, int] = {}  # clock -> its last tick shown: the pass ends after it
+    for key, t in at:
+        last[key] = max(last.get(key, -1), t)
     aux_bindings = Bindings({name: aux for name, (_l, aux) in wanted.items()}, bindings.tick,
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
     got: dict[tuple[frozenset, str], dict[int, object]] = {}
     try:
         source = (first.reopen() if first is not None else None) or open_log(
             path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
-        for key, blk in sample_blocks(source, aux_bindings, groups):
+        done: set[frozenset] = set()
+        blocks = iter(sample_blocks(source, aux_bindings, groups))
+        for key, blk in blocks:
             for i in range(len(blk.times)):
                 if (key, blk.start + i) not in at:
                     continue
@@ -46,6 +51,13 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
                     if name in blk.values:
                         got.setdefault((key, name), {})[blk.start + i] = \
                             to_python(blk.values[name][i])
+            if blk.start + len(blk.times) > last.get(key, -1):
+                done.add(key)
+            if len(done) >= len(last):  # every tick shown is read: the rest of the log is not
+                break
+        close = getattr(blocks, "close", None)
+        if close is not None:  # the reader's file closed now, not when collected
+            close()
     except (LogError, SignalError, OSError):
         return  # the first pass already reported what is wrong with the log
     for key, aux_name, v, ticks in needs:

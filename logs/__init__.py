@@ -29,15 +29,26 @@ rosbag ``timestamp``).
 
 from __future__ import annotations
 
-from .bag_source import BagSource
+import importlib
+
 from .base import LogSource, Message, header_stamp
 from .csv_source import CSV_TOPIC, CSV_TYPE, CsvRow, CsvSource
 from .decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, schema_decoder
 from .factory import open_log
-from .mcap_source import McapSource
-from .dataflash_source import DataflashSource
 from .reorder import REORDER_WINDOW_NS
-from .ulog_source import UlogSource
+
+#: the readers of one kind of log each, imported when first named (an audit of a flight log
+#: does not load the bag readers, nor an audit of an MCAP file pyulog)
+_READERS = {"McapSource": ".mcap_source", "BagSource": ".bag_source",
+            "UlogSource": ".ulog_source", "DataflashSource": ".dataflash_source"}
+
+
+def __getattr__(name: str):
+    module = _READERS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(module, __name__), name)
+
 
 #: The former name of :class:`UnsupportedSchema` (``live/watch.py`` imports it).
 _Unsupported = UnsupportedSchema

@@ -7,19 +7,17 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
+from typing import TYPE_CHECKING
 
 from common.units import NS_PER_S
 
 from common.problems import LogError
-from .bag_source import BagSource
 from .base import LogSource
 from .csv_source import CsvSource
-from .dataflash_source import DataflashSource
-from .mcap_source import McapSource
-from .msg_path import fallback_for
-from .ulog_source import UlogSource
+
+if TYPE_CHECKING:
+    from rosbags.typesys import Stores
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["open_log"]
 
@@ -50,27 +48,36 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         CsvError: a bad CSV trace (names file:line).
         InputError: a ``msg_path`` folder that is missing or holds a bad definition.
     """
+    # each reader is imported only for its kind of log (start-up of an audit)
     p = Path(path)
     if not p.exists():
         raise LogError(path, "no such file or folder")
-    if isinstance(fallback_typestore, Stores):
-        fallback_typestore = get_typestore(fallback_typestore)
-    if fallback_typestore is None and (p.is_dir() or p.suffix.lower() == ".bag"):
-        fallback_typestore = fallback_for(msg_path)
     suffix = p.suffix.lower()
-    if p.is_dir():
-        if not (p / "metadata.yaml").exists():
+    if p.is_dir() or suffix == ".bag":
+        from rosbags.typesys import Stores, get_typestore
+        from .bag_source import BagSource
+        from .msg_path import fallback_for
+
+        if isinstance(fallback_typestore, Stores):
+            fallback_typestore = get_typestore(fallback_typestore)
+        if fallback_typestore is None:
+            fallback_typestore = fallback_for(msg_path)
+        if p.is_dir() and not (p / "metadata.yaml").exists():
             raise LogError(path, "a folder but not a rosbag2 bag (no metadata.yaml)")
         return BagSource(p, fallback_typestore=fallback_typestore)
     if suffix == ".mcap":
+        from .mcap_source import McapSource
+
         return McapSource(p, check_data_crc=check_data_crc)
-    if suffix == ".bag":
-        return BagSource(p, fallback_typestore=fallback_typestore)
     if suffix == ".csv":
         return CsvSource(p, period_ns=csv_period_ns)
     if suffix == ".ulg":
+        from .ulog_source import UlogSource
+
         return UlogSource(p)
     if suffix == ".bin":
+        from .dataflash_source import DataflashSource
+
         return DataflashSource(p)
     raise LogError(path, "unknown log kind (expected .mcap, .bag, .csv, .ulg, .bin or a "
                          "rosbag2 folder)")

@@ -24,12 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rosbags.rosbag1 import Reader as Ros1Reader
-from rosbags.rosbag2 import Reader as Ros2Reader
-
 from common.errors import InputError
 
-from .bag_source import connection_typestore
 from .csv_source import CSV_TOPIC
 from .decoding import UnsupportedSchema, build_typestore
 from .encodings import SELF_DESCRIBING, definition
@@ -328,6 +324,10 @@ def _mcap_schemas(source) -> LogSchemas:
 
 
 def _bag_schemas(source) -> dict[str, TopicSchema | None]:
+    from rosbags.rosbag1 import Reader as Ros1Reader  # lazy: bags only (start-up)
+    from rosbags.rosbag2 import Reader as Ros2Reader
+    from .bag_source import connection_typestore
+
     out: dict[str, TopicSchema | None] = {}
     linear = getattr(source, "_linear_bag", None)
     if linear is not None:  # a ROS 1 bag read record by record: its index is unusable
