@@ -329,7 +329,8 @@ class SmtSolver:
                 self.spent += spent
                 return answer
             self.spent += 1
-            self.failures.append(f"z3's query ended without an answer: {value}")
+            self.failures.append(f"z3's worker process ended without an answer (exit code "
+                                 f"{value})" if status == "ended" else f"z3: {value}")
             return UNKNOWN
         z3 = _z3()
         bound = max_bound(formulas)

@@ -30,9 +30,11 @@ Queries (all on infinite words, Spot's LTL semantics):
 * ``("monitor_sat", safe, goals, invariant, finite, length, liveness, last)``: the fixed
   points of :func:`check.monitor_sat.decide`.
 * ``("smt", formulas)``: z3's answer to :meth:`check.smt.SmtSolver.sat` (IR formulas) as
-  ``(answer, failures, spent)``, with z3's memory capped at the query's memory budget
-  (:func:`check.smt.solve_capped`); a query that ran out of it leaves z3's state unusable,
-  so the worker ends after answering and the next query starts a new one.
+  ``(answer, failures, spent, out_of_memory)``, with z3's memory capped at the query's
+  memory budget (:func:`check.smt.solve_capped`; the cap is process-wide, so this query is
+  meant for the worker). The worker sends the first three; a query that ran out of memory
+  leaves z3's state unusable, so the worker ends after answering it and the next query
+  starts a new one.
 
 The worker adds the query's :class:`check.budget.Budget` to the BDD queries.
 """
@@ -304,7 +306,11 @@ class SpotWorker:
                 self.failures.append(_one_line(f"{type(exc).__name__}: {exc}"))
                 return UNKNOWN
         status, value = self.call(query)
-        if status in ("budget", "ended"):
+        if status == "ended":
+            return self.refuse(self.budget.memory_spent("BuDDy's node table is full")
+                               if value == -signal.SIGABRT else
+                               f"the query's worker process ended (exit code {value})")
+        if status == "budget":
             return self.refuse(value)
         if status == "error":
             self.failures.append(_one_line(value))
@@ -314,9 +320,10 @@ class SpotWorker:
     def call(self, query: tuple) -> tuple[str, Any]:
         """Send ``query`` to the worker process (started when there is none) and return
         ``(status, value)``: ``("ok", answer)``; ``("budget", reason)`` past a budget;
-        ``("error", message)`` for an engine's error; ``("ended", reason)`` when the worker
-        ended before answering (BuDDy's full node table, or a crash). Counts nothing (the
-        caller does); raises :class:`check.budget.RunStopped` past the run's deadline."""
+        ``("error", message)`` for an engine's error; ``("ended", exit code)`` when the
+        worker ended before answering (BuDDy stops it with SIGABRT when its node table is
+        full; any other crash). Counts nothing (the caller does); raises
+        :class:`check.budget.RunStopped` past the run's deadline."""
         if self._proc is None or not self._proc.is_alive():
             self._start()
         try:
@@ -335,9 +342,7 @@ class SpotWorker:
             self._proc.join()
             code = self._proc.exitcode
             self._kill()
-            if code == -signal.SIGABRT:
-                return "ended", self.budget.memory_spent("BuDDy's node table is full")
-            return "ended", f"the query's worker process ended (exit code {code})"
+            return "ended", code
         if status == "last":  # the worker ends after this answer (z3 out of memory)
             self._proc.join()
             self._kill()

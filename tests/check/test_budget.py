@@ -133,6 +133,41 @@ def test_z3_past_its_memory_budget_is_unknown_and_the_next_query_answers():
         assert got != UNKNOWN and got[0] is True
 
 
+def test_a_worker_that_ends_without_an_answer_is_unknown_with_the_reason(monkeypatch):
+    """The worker process ending mid-query: BuDDy's abort (SIGABRT, its node table full) is
+    the memory budget, any other end says its exit code; a z3 query says z3's worker ended;
+    the next query gets a new worker and its answer."""
+    import signal
+
+    from compiler import ir
+    from check import solver
+    from check.smt import SmtSolver
+    from check.solver import SpotWorker
+
+    real = solver.run_query
+
+    def run_query(query, budget=None):  # runs in the forked worker
+        if query[0] == "smt" or query == ("sat", "abort"):
+            os.kill(os.getpid(), signal.SIGABRT)
+        if query == ("sat", "exit"):
+            os._exit(3)
+        return real(query, budget)
+
+    monkeypatch.setattr(solver, "run_query", run_query)
+    with SpotWorker(Budget(memory=1_000_000)) as w:
+        assert w.ask(("sat", "abort")) == UNKNOWN
+        assert w.failures[-1] == ("memory budget of 1000000 BDD nodes spent (BuDDy's node "
+                                  "table is full)")
+        assert w.ask(("sat", "exit")) == UNKNOWN
+        assert w.failures[-1] == "the query's worker process ended (exit code 3)"
+        s = SmtSolver(w.budget, worker=w)
+        assert s.sat([ir.ap("p")]) == UNKNOWN
+        assert s.failures == [f"z3's worker process ended without an answer (exit code "
+                              f"{-signal.SIGABRT})"]
+        assert w.ask(("sat", "G p")) == (True, ([], [{"p": True}]))
+        assert w.spent == 2 and s.spent == 1
+
+
 # --------------------------------------------------------------------------- subsets
 def _items(n: int):
     return [SimpleNamespace(index=k, id=f"H{k + 1}", variables=["x"]) for k in range(n)]
