@@ -40,7 +40,7 @@ from compiler import ir
 from compiler.ir import Node
 
 from .budget import (BYTES_PER_NODE, NODES_PER_Z3_TERM, UNKNOWN, Z3_RLIMIT_PER_UNIT, Budget,
-                     BudgetSpent, RunStopped)
+                     RunStopped)
 from .numeric_abstraction import simple_comparison
 from .safety_game import letter_name
 
@@ -365,15 +365,13 @@ class SmtSolver:
                     got = self._proof(z3, formulas, *arg)
                 if got is not None:
                     return got
-        except BudgetSpent as exc:
-            self.spent += 1
-            self.failures.append(f"z3: {exc}")
-            return UNKNOWN
         except (ValueError, z3.Z3Exception) as exc:
-            if _memory_out(str(exc)):
+            if _memory_out(str(exc)):  # building terms or checking (:meth:`_check`)
                 self.out_of_memory = True
                 self.spent += 1
-                self.failures.append(f"z3: {self._memory_spent()}")
+                mb = self.budget.memory * BYTES_PER_NODE / 2 ** 20
+                self.failures.append("z3: " + self.budget.memory_spent(
+                    f"z3 allocated more than its {mb:.0f} MB"))
                 return UNKNOWN
             self.failures.append(f"z3 could not take the query: {exc}")
             return UNKNOWN
@@ -397,8 +395,7 @@ class SmtSolver:
             s.set("timeout", max(1, int((self.deadline - time.monotonic()) * 1000)))
         ans = s.check()
         if ans == z3.unknown and _memory_out(s.reason_unknown()):
-            self.out_of_memory = True
-            raise BudgetSpent(self._memory_spent())
+            raise z3.Z3Exception("out of memory")  # as z3 raises it while building terms
         count = _rlimit_count(z3, s)  # the context's: cumulative over its solvers
         self._left -= max(1, count - self._count)
         self._count = count
@@ -406,10 +403,6 @@ class SmtSolver:
                 and time.monotonic() >= self.deadline:
             raise RunStopped("the run's wall-clock limit (--timeout) passed")
         return ans
-
-    def _memory_spent(self) -> str:
-        mb = self.budget.memory * BYTES_PER_NODE / 2 ** 20
-        return self.budget.memory_spent(f"z3 allocated more than its {mb:.0f} MB")
 
     def _lasso(self, z3, formulas, shape, share: float):
         K, loop = shape
