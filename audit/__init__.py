@@ -11,7 +11,7 @@ One module per step:
    with every requirement on its own clock (:mod:`.passes`, columns in :mod:`.columns`) and
    cut at the damage.
 3. **Verdicts** (:mod:`.finalize`): each requirement judged once over its clock's columns by
-   :func:`monitors.judge.judge` (FRET's interval semantics for the verdict and its
+   :func:`fretc.monitors.judge.judge` (FRET's interval semantics for the verdict and its
    evidence, the monitor automata for the LTL3 verdict), the verdict at the damage
    (:mod:`.damage`), the values around the first violation and the numbers behind its boolean
    variables (:mod:`.operands`); the problems of every pass (:mod:`.log_problems`).
@@ -24,14 +24,14 @@ This package re-exports the public names of those modules.
 
 from __future__ import annotations
 
-from .columns import CHUNK
-from .config import AuditConfig, AuditInputError
-from .discovery import LOG_SUFFIXES, discover_bindings, find_logs
-from .log import audit_log
-from .model import AuditPlan, RequirementPlan
-from .passes import MAX_TICKS
-from .plan import load_plan
-from .workers import audit_logs
+from fretc.audit.columns import CHUNK
+from fretc.audit.config import AuditConfig, AuditInputError
+from fretc.audit.discovery import LOG_SUFFIXES, discover_bindings, find_logs
+from fretc.audit.log import audit_log
+from fretc.audit.model import AuditPlan, RequirementPlan
+from fretc.audit.passes import MAX_TICKS
+from fretc.audit.plan import load_plan
+from fretc.audit.workers import audit_logs
 
 __all__ = ["AuditConfig", "AuditPlan", "RequirementPlan", "AuditInputError", "load_plan",
            "discover_bindings", "find_logs", "audit_log", "audit_logs", "CHUNK",

@@ -38,8 +38,8 @@ from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, 
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
-from common.units import format_offset
-from logs.mcap_records import chunk_records
+from fretc.common.units import format_offset
+from fretc.logs.mcap_records import chunk_records
 
 __all__ = ["VERDICT_TOPIC", "FOXGLOVE_LOG_SCHEMA", "VerdictEvent", "AnnotateResult",
            "verdict_events", "annotate_mcap", "LEVELS"]

@@ -1,5 +1,5 @@
 """The signal bindings of an audit: the binding files read and merged into one
-:class:`~signals.bindings.Bindings`, with the command line's overrides (``--tick-period``,
+:class:`~fretc.signals.bindings.Bindings`, with the command line's overrides (``--tick-period``,
 ``--tick-topic``, ``--time-base``, ``--bind``) applied last."""
 
 from __future__ import annotations
@@ -8,12 +8,12 @@ import dataclasses
 import re
 from pathlib import Path
 
-from common.units import format_ns
+from fretc.common.units import format_ns
 
-from signals.bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
-from common.problems import BindingError
-from .config import AuditConfig, AuditInputError
-from .discovery import discover_bindings
+from fretc.signals.bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
+from fretc.common.problems import BindingError
+from fretc.audit.config import AuditConfig, AuditInputError
+from fretc.audit.discovery import discover_bindings
 
 __all__ = ["load_audit_bindings", "merge_bindings", "binding_files", "tick_text"]
 

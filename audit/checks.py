@@ -4,14 +4,14 @@ tick topic's measured rate against its nominal rate."""
 
 from __future__ import annotations
 
-from common.units import NS_PER_S, format_ns
+from fretc.common.units import NS_PER_S, format_ns
 
-from signals.bindings import Bindings, check_types, compile_expression
-from common.problems import BindingError
-from logs.schema import log_schemas
-from logs import CSV_TOPIC
-from .model import AuditPlan, RequirementPlan
-from .passes import MAX_TICKS, expected_ticks
+from fretc.signals.bindings import Bindings, check_types, compile_expression
+from fretc.common.problems import BindingError
+from fretc.logs.schema import log_schemas
+from fretc.logs import CSV_TOPIC
+from fretc.audit.model import AuditPlan, RequirementPlan
+from fretc.audit.passes import MAX_TICKS, expected_ticks
 
 __all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "binding_type_errors",
            "check_nominal_rate", "rate_hint", "call_hint"]
@@ -50,7 +50,7 @@ def too_many_ticks(source, bindings: Bindings | None, path: str) -> str | None:
 def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[int]
                         ) -> dict[int, str]:
     """The bindings the requirements use checked against the log's message types
-    (:func:`signals.bindings.check_types`): requirement index -> why it is an ``error``
+    (:func:`fretc.signals.bindings.check_types`): requirement index -> why it is an ``error``
     (a binding that names a field the schema does not declare, mixes strings, booleans and
     numbers, or is used as the other kind), before anything is evaluated. Requirements whose
     index is in ``skip`` (already in error) are not checked."""
@@ -103,7 +103,7 @@ def _undecodable_topics(source, schemas: dict) -> dict[str, str]:
     """Topic -> why its messages cannot be decoded, for the topics that name a message type
     whose definition the log does not carry or that cannot be parsed (a custom type of a
     bag that stores no definitions: the reason names ``--msg-path``)."""
-    from logs.msg_path import MSG_PATH_HINT
+    from fretc.logs.msg_path import MSG_PATH_HINT
 
     out: dict[str, str] = {}
     if source.kind not in ("bag", "rosbag2"):  # logs that carry their schemas report them

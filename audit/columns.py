@@ -1,6 +1,6 @@
 """The per-tick columns an audit keeps for the evidence and the vectorized engine.
 
-Memory: messages are streamed (:mod:`logs`), never kept. What grows with the
+Memory: messages are streamed (:mod:`fretc.logs`), never kept. What grows with the
 length of the log is only these columns: per evaluated tick, 8 bytes of time, 8 bytes per
 bound topic (log time of the held message), 1 byte per boolean and 8 per numeric variable -
 about 80 bytes a tick for the Safe-ROS set, 3 MB for an hour at 10 Hz (kept in chunks of
@@ -20,7 +20,7 @@ CHUNK = 4096
 class TickColumns:
     """Per-tick columns of one clock (module docstring): values of ``names``, tick times, and
     log times (ns; -1 when none yet) of the messages of ``topics`` held at each tick; kept
-    as the blocks of :func:`signals.sample_blocks`."""
+    as the blocks of :func:`fretc.signals.sample_blocks`."""
 
     def __init__(self, names: list[str], topics: list[str]):
         self.names = names
@@ -31,7 +31,7 @@ class TickColumns:
         self._tchunks: list[np.ndarray] = []
 
     def append_block(self, block) -> None:
-        """Add a block of ticks (:class:`signals.TickBlock`); a variable absent
+        """Add a block of ticks (:class:`fretc.signals.TickBlock`); a variable absent
         from it (its evaluation failed: its requirements are errors) reads False."""
         k = len(block.times)
         for name, chunks in zip(self.names, self._vchunks):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from common.problems import FretcInputError
+from fretc.common.problems import FretcInputError
 
 __all__ = ["AuditConfig", "AuditInputError"]
 
@@ -28,9 +28,9 @@ class AuditConfig:
             per message of this topic; ``time_base``: ``"log"`` or ``"header"``.
         window: ticks of values shown on each side of the trigger and the violation.
         msg_path: folders of ``.msg``/``.idl`` files for types a log does not carry
-            (``--msg-path``, :mod:`logs.msg_path`).
+            (``--msg-path``, :mod:`fretc.logs.msg_path`).
         text_attribute: the attribute of ReqIF / Doorstop requirements holding the FRETish
-            text (``--text-attribute``; None: :mod:`fretish.sources`' default).
+            text (``--text-attribute``; None: :mod:`fretc.fretish.sources`' default).
     """
 
     requirements: tuple[str, ...]

@@ -1,7 +1,7 @@
 """Verdicts on a damaged log: what the span read completely decides, and nothing more.
 
 ../shared/DESIGN.md, "Damage is never evidence": only the span of a log that was read completely
-is judged (the ticks strictly before :attr:`logs.LogSource.intact_end`); an
+is judged (the ticks strictly before :attr:`fretc.logs.LogSource.intact_end`); an
 obligation still open where that span ends (a cut, or the first gap) is *unknown*, not
 violated; a violation decided entirely before the damage stands.
 
@@ -34,11 +34,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from monitors.interval import (Evidence, EvidenceUnsupported, scope_of, trace_signals,
+from fretc.monitors.interval import (Evidence, EvidenceUnsupported, scope_of, trace_signals,
     trigger_points)
-from monitors.obligations import ObligationChecker
+from fretc.monitors.obligations import ObligationChecker
 
 __all__ = ["OpenObligation", "open_obligations", "verdict_at_damage"]
 
@@ -63,7 +63,7 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
                      ) -> list[OpenObligation]:
     """Triggers of ``req`` whose obligation is neither met nor missed at the end of a trace
     of ``n`` ticks that a damage cut short (FRET's interval semantics, as
-    :func:`monitors.interval.evaluate_requirement`; only the scope interval reaching
+    :func:`fretc.monitors.interval.evaluate_requirement`; only the scope interval reaching
     the last tick can hold one).
 
     Args:
@@ -77,7 +77,7 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
         Up to ``limit`` :class:`OpenObligation`, earliest trigger first.
 
     Raises:
-        EvidenceUnsupported: as :func:`monitors.interval.evaluate_requirement`.
+        EvidenceUnsupported: as :func:`fretc.monitors.interval.evaluate_requirement`.
     """
     if req.freeform or req.response is None:
         raise EvidenceUnsupported("a free-form requirement has no semantics")
@@ -117,7 +117,7 @@ def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int,
           chk: ObligationChecker, nWant, nUnwant) -> str | None:
     """Why the obligation of trigger ``t`` is open at the end ``e`` of the intact span, or
     None when it is met or missed already (the semantics of
-    :class:`monitors.obligations.ObligationChecker`)."""
+    :class:`fretc.monitors.obligations.ObligationChecker`)."""
     rname = "R" if want else "!R"
     if kind == "immediately":
         return None

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from .config import AuditInputError
+from fretc.audit.config import AuditInputError
 
 __all__ = ["LOG_SUFFIXES", "discover_bindings", "find_logs"]
 

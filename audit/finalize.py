@@ -2,12 +2,12 @@
 (:func:`finalize`).
 
 The verdict, the LTL3 verdict and the evidence come from one judge,
-:func:`monitors.judge.judge`, over the columns of the requirement's clock: FRET's
+:func:`fretc.monitors.judge.judge`, over the columns of the requirement's clock: FRET's
 interval semantics gives the finite-trace verdict, the vacuity, the first violated trigger,
 its scope interval and response window; the monitor automata give the earliest definite
 (LTL3) verdict. The values of the requirement's variables and the log times of the messages
 behind them are taken around the trigger and the violation. On a damaged log the verdict is
-the one the intact span decides (:mod:`audit.damage`).
+the one the intact span decides (:mod:`fretc.audit.damage`).
 """
 
 from __future__ import annotations
@@ -16,23 +16,23 @@ from dataclasses import replace
 
 import numpy as np
 
-from signals.bindings import Bindings
-from signals.clock import unsampled_of
-from .damage import open_obligations, verdict_at_damage
-from monitors.interval import OBLIGATIONS, EvidenceUnsupported
-from monitors.judge import judge, nan_ticks
-from common.problems import NAN
-from monitors.stepwise import to_python
-from .verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
-from .model import AuditPlan, RequirementPlan
-from .passes import ClockPass, clock_key
+from fretc.signals.bindings import Bindings
+from fretc.signals.clock import unsampled_of
+from fretc.audit.damage import open_obligations, verdict_at_damage
+from fretc.monitors.interval import OBLIGATIONS, EvidenceUnsupported
+from fretc.monitors.judge import judge, nan_ticks
+from fretc.common.problems import NAN
+from fretc.monitors.stepwise import to_python
+from fretc.audit.verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
+from fretc.audit.model import AuditPlan, RequirementPlan
+from fretc.audit.passes import ClockPass, clock_key
 
 __all__ = ["finalize", "between_ticks"]
 
 
 def between_ticks(v, s, r: RequirementPlan, bindings: Bindings | None) -> None:
     """Set ``v.unsampled_messages`` and ``v.missed_changes`` from requirement ``r``'s clock
-    ``s`` (:class:`signals.clock.Sampling`), with a note per variable that could miss events
+    ``s`` (:class:`fretc.signals.clock.Sampling`), with a note per variable that could miss events
     between ticks (never silently)."""
     v.unsampled_messages = unsampled_of(s, r.variables, bindings)
     v.missed_changes = {n: s.missed_changes[n] for n in r.variables
@@ -47,10 +47,10 @@ def between_ticks(v, s, r: RequirementPlan, bindings: Bindings | None) -> None:
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
              v, la) -> None:
-    """Set the verdict ``v`` (:class:`audit.verdict.Verdict`) of requirement ``r``
+    """Set the verdict ``v`` (:class:`fretc.audit.verdict.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it.
-    ``la`` is the log's :class:`audit.verdict.LogAudit`."""
+    ``la`` is the log's :class:`fretc.audit.verdict.LogAudit`."""
     res = _cut_at_nan(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
@@ -90,7 +90,7 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
 def _cut_at_nan(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v,
                 la) -> ClockPass:
     """``res`` judged only before the first tick at which a comparison of ``r`` reads NaN
-    (:mod:`monitors.nan`: that tick's value is unread), with a data problem of kind
+    (:mod:`fretc.monitors.nan`: that tick's value is unread), with a data problem of kind
     ``nan`` for ``r`` in ``la``; ``res`` itself when there is none, or when the binding
     file says ``[tick] nan = "false"`` (then a note says so)."""
     if bindings is not None and bindings.tick.nan == "false":
@@ -138,7 +138,7 @@ def _no_tick(res: ClockPass, v, la) -> None:
 
 def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, status, st_tick,
                      n: int) -> bool | None:
-    """The verdict over the intact span of a damaged log (:mod:`audit.damage`): True /
+    """The verdict over the intact span of a damaged log (:mod:`fretc.audit.damage`): True /
     False for the usual satisfied-or-vacuous / violated paths of :func:`finalize`, None
     when the verdict (``unknown``) is set here."""
     opened = []
@@ -166,7 +166,7 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
 
 
 class _Ticks:
-    """Tick indexes of one clock as :class:`audit.verdict.TimePoint` and times."""
+    """Tick indexes of one clock as :class:`fretc.audit.verdict.TimePoint` and times."""
 
     def __init__(self, res: ClockPass, held: list, bindings: Bindings | None) -> None:
         self.times = res.times

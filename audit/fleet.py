@@ -1,11 +1,11 @@
 """Fleet audits on Ray: ``fretc audit --ray [ADDRESS]`` and ``fretc report --ray``.
 
 One Ray task per log (a log's messages are needed in order, so a log is the unit of work).
-The requirements are compiled once, on the driver (:func:`audit.load_plan`), and
+The requirements are compiled once, on the driver (:func:`fretc.audit.load_plan`), and
 shipped to the workers as a :class:`ShippedPlan`: the compiled requirements, the generated
 monitor module texts (each worker ``exec``\\s them once, as the local audit does) and the
 binding expressions (recompiled on the worker: their evaluators are closures). Each task
-runs :func:`audit.audit_log`, the same engine as a local run, so the JSON, JUnit,
+runs :func:`fretc.audit.audit_log`, the same engine as a local run, so the JSON, JUnit,
 report and exit code are those of ``-j 1``; results are put back in the order of the logs.
 
 Faults (the rule: nothing is reported satisfied that was not audited):
@@ -14,7 +14,7 @@ Faults (the rule: nothing is reported satisfied that was not audited):
   gives that log an error entry (:func:`error_audit`: every verdict ``error`` with the
   reason, exit code 2) and the other logs complete;
 * the driver's raylet lost (killed, out of memory): Ray ends its driver process, so the
-  driver runs in a child process (:mod:`audit.ray_driver`); the logs whose results
+  driver runs in a child process (:mod:`fretc.audit.ray_driver`); the logs whose results
   had arrived keep their verdicts, every other log gets an error entry naming the loss, and
   the JSON, reports and exit code (2) are written as for any error entry;
 * ``retries``: a task whose worker died is run again up to this many times (Ray's
@@ -56,12 +56,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from . import AuditInputError, AuditPlan, audit_log
-from .plan import MODULE_PREFIX, load_module
-from signals.bindings import Bindings, compile_expression
-from common.problems import BindingError
-from common.textsafe import visible
-from .verdict import LogAudit, Verdict
+from fretc.audit import AuditInputError, AuditPlan, audit_log
+from fretc.audit.plan import MODULE_PREFIX, load_module
+from fretc.signals.bindings import Bindings, compile_expression
+from fretc.common.problems import BindingError
+from fretc.common.textsafe import visible
+from fretc.audit.verdict import LogAudit, Verdict
 
 __all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
            "audit_logs_ray", "error_audit", "RAY_HINT"]
@@ -81,7 +81,7 @@ def expand_log_args(args: Sequence[str]) -> list[str]:
     ``@FILE``: one path or glob per line; blank lines and ``#`` comments skipped; a relative
     path starts at FILE's folder. A glob (``*``, ``?``, ``[``) that is not an existing path
     is expanded with ``**`` recursion, sorted. Other arguments are kept as given (folders are
-    searched later by :func:`audit.find_logs`).
+    searched later by :func:`fretc.audit.find_logs`).
 
     Raises:
         AuditInputError: an unreadable list file, or a glob that matches nothing (naming
@@ -119,7 +119,7 @@ def _glob_one(p: str, where: str | None) -> list[str]:
 # --------------------------------------------------------------------------- shipping a plan
 @dataclass
 class ShippedPlan:
-    """A picklable :class:`~audit.AuditPlan` (built by :func:`ship_plan`).
+    """A picklable :class:`~fretc.audit.AuditPlan` (built by :func:`ship_plan`).
 
     Attributes:
         plan: the plan with its monitor classes and binding evaluators taken out.
@@ -270,7 +270,7 @@ def _audit_task(shipped: ShippedPlan, path: str, kill: tuple[str, str] | None = 
 
 
 def error_audit(plan: AuditPlan, path: str, reason: str):
-    """A :class:`~audit.verdict.LogAudit` of a log that could not be audited: the
+    """A :class:`~fretc.audit.verdict.LogAudit` of a log that could not be audited: the
     log's ``error`` is ``reason`` and every requirement's verdict is ``error`` with it (so the
     exit code is 2 and nothing reads as satisfied)."""
     la = LogAudit(log=str(path), error=f"{path}: {reason}")
@@ -288,22 +288,22 @@ def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = 
                    _kill: tuple[str, str] | None = None) -> list[Any]:
     """Audit ``paths`` on Ray, one task per log; results in the order of ``paths``.
 
-    Ray is driven from a child process (:mod:`audit.ray_driver`), because Ray ends
+    Ray is driven from a child process (:mod:`fretc.audit.ray_driver`), because Ray ends
     its driver when the driver's raylet dies: the logs whose results arrived before keep
     their verdicts, the others get :func:`error_audit` entries naming the failure. When this
     process already has Ray initialized, the child joins that session (as :func:`connect`
     keeps an initialized Ray, whatever ``address`` says).
 
     Args:
-        plan: from :func:`audit.load_plan` (compiled here, once).
+        plan: from :func:`fretc.audit.load_plan` (compiled here, once).
         address: see :func:`connect`.
         retries: times a task is re-run after its worker died (not after an exception).
-        progress: as :func:`audit.audit_logs` (``start``, ``done``; ``update`` is
+        progress: as :func:`fretc.audit.audit_logs` (``start``, ``done``; ``update`` is
             not called: a task reports when it finishes).
         num_cpus: CPUs of a local Ray (default: all).
 
     Returns:
-        One :class:`~audit.verdict.LogAudit` per path; a log whose task failed has
+        One :class:`~fretc.audit.verdict.LogAudit` per path; a log whose task failed has
         an :func:`error_audit` entry naming the failure.
 
     Raises:
@@ -343,7 +343,7 @@ def _run_driver(job: dict, said, results: dict, progress) -> int:
     read_fd, write_fd = os.pipe()
     job["fd"] = write_fd
     try:
-        child = subprocess.Popen([sys.executable, "-m", "audit.ray_driver"],
+        child = subprocess.Popen([sys.executable, "-m", "fretc.audit.ray_driver"],
                                  stdin=subprocess.PIPE, stdout=said, stderr=said,
                                  pass_fds=(write_fd,), env=_driver_env(),
                                  start_new_session=True)  # Ctrl-C is forwarded once, below

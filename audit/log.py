@@ -1,10 +1,10 @@
 """One log audited against every requirement of a plan (:func:`audit_log`).
 
-The log is opened (:func:`logs.open_log`); its inputs are checked (a binding for
+The log is opened (:func:`fretc.logs.open_log`); its inputs are checked (a binding for
 every variable, every bound topic in the log, binding types against the schemas); it is read
-once (:func:`audit.passes.run_passes`: every requirement on its own clock); each
-requirement is finalized (:func:`audit.finalize.finalize`); violated ones get the
-numbers behind their boolean variables (:func:`audit.operands.operand_values`).
+once (:func:`fretc.audit.passes.run_passes`: every requirement on its own clock); each
+requirement is finalized (:func:`fretc.audit.finalize.finalize`); violated ones get the
+numbers behind their boolean variables (:func:`fretc.audit.operands.operand_values`).
 
 A CSV trace is read with its columns as the variables unless the bindings read ``/csv``
 fields. A topic whose schema is unknown makes only the requirements reading it ``error`` -
@@ -17,22 +17,22 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from signals.bindings import Bindings
-from signals.clock import missing_topics
-from common import problems as P
-from common.problems import DataProblem, FretcInputError, SignalError
-from .verdict import LogAudit, Verdict
-from logs.schema import closest
-from logs import open_log
-from .checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
+from fretc.signals.bindings import Bindings
+from fretc.signals.clock import missing_topics
+from fretc.common import problems as P
+from fretc.common.problems import DataProblem, FretcInputError, SignalError
+from fretc.audit.verdict import LogAudit, Verdict
+from fretc.logs.schema import closest
+from fretc.logs import open_log
+from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
-from .finalize import between_ticks, finalize
-from .log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
+from fretc.audit.finalize import between_ticks, finalize
+from fretc.audit.log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
-from .model import AuditPlan, RequirementPlan
-from .operands import operand_values
-from .passes import LogPasses, clock_key, restrict, run_passes
-from .plan import select_variant
+from fretc.audit.model import AuditPlan, RequirementPlan
+from fretc.audit.operands import operand_values
+from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
+from fretc.audit.plan import select_variant
 
 __all__ = ["audit_log", "summarize_clocks", "log_engine"]
 
@@ -42,12 +42,12 @@ def audit_log(plan: AuditPlan, path: str,
     """Audit one log against every requirement of ``plan``.
 
     Args:
-        plan: from :func:`audit.plan.load_plan`.
+        plan: from :func:`fretc.audit.plan.load_plan`.
         path: a log file or rosbag2 folder.
         progress: called now and then with the fraction of the log read (0..1).
 
     Returns:
-        A :class:`~audit.verdict.LogAudit` with one verdict per requirement. Input
+        A :class:`~fretc.audit.verdict.LogAudit` with one verdict per requirement. Input
         problems of this log (unreadable file, missing topic or binding) are reported in it
         (``error`` / ``error`` verdicts), never raised.
     """
@@ -341,7 +341,7 @@ class _LogRun:
 
 
 def log_engine(verdicts) -> str | None:
-    """The log's ``engine`` figure: what decided its verdicts (:class:`~monitors.judge.
+    """The log's ``engine`` figure: what decided its verdicts (:class:`~fretc.monitors.judge.
     Judgement`'s ``engine``), ``"mixed"`` when several did, None when none was decided."""
     engines = sorted({v.engine for v in verdicts if v.engine is not None})
     return engines[0] if len(engines) == 1 else ("mixed" if engines else None)

@@ -4,9 +4,9 @@ chunk: :func:`damage_before_topics`), and why a silent topic gave nothing."""
 
 from __future__ import annotations
 
-from common import problems as P
-from common.problems import DataProblem, FretcInputError
-from logs import open_log
+from fretc.common import problems as P
+from fretc.common.problems import DataProblem, FretcInputError
+from fretc.logs import open_log
 
 __all__ = ["DAMAGE_KINDS", "problem_json", "collect_problems", "silent_reasons", "damage_of",
            "damage_before_topics"]

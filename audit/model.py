@@ -1,6 +1,6 @@
 """The audit plan as data: one :class:`RequirementPlan` per requirement (its compiled form,
 monitor class, variables, or why it cannot be audited) in an :class:`AuditPlan` with the
-merged bindings (built by :func:`audit.plan.load_plan`)."""
+merged bindings (built by :func:`fretc.audit.plan.load_plan`)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
-from compiler.codegen import monitor_source
+from fretc.compiler.codegen import monitor_source
 
-from signals.bindings import Bindings
-from .config import AuditConfig
+from fretc.signals.bindings import Bindings
+from fretc.audit.config import AuditConfig
 
 __all__ = ["RequirementPlan", "AuditPlan"]
 
@@ -23,7 +23,7 @@ class RequirementPlan:
     Attributes:
         index: position in the requirement files (order of the report).
         id, text, source (``file:line``): from the requirement file.
-        compiled: the :class:`compiler.build.Compiled` (None if the period check failed).
+        compiled: the :class:`fretc.compiler.build.Compiled` (None if the period check failed).
         monitor_cls: the generated monitor class (``MONITORS[id]`` of its module), or None.
         variables: the FRET variables the monitor reads (``VARIABLES``), then any others of
             the formalization.
@@ -35,7 +35,7 @@ class RequirementPlan:
             audit of each log adds to the error as the ``nominal_rate`` to write.
         offline: no generated monitor because the pt formula needs a future-time function
             (``persists``, ``occurs``, ``nextOcc``); the verdict then comes from
-            :mod:`monitors.interval` over the whole trace (engine ``"interval"``).
+            :mod:`fretc.monitors.interval` over the whole trace (engine ``"interval"``).
     """
 
     index: int
@@ -55,18 +55,18 @@ class RequirementPlan:
 
     @property
     def formalization(self):
-        """The :class:`compiler.semantics.Formalization`, or None."""
+        """The :class:`fretc.compiler.semantics.Formalization`, or None."""
         return self.compiled.formalization if self.compiled is not None else None
 
     @property
     def requirement(self):
-        """The parsed requirement (:class:`fretish.ast.Requirement`), or None."""
+        """The parsed requirement (:class:`fretc.fretish.ast.Requirement`), or None."""
         return self.compiled.requirement if self.compiled is not None else None
 
     @property
     def monitor_source(self):
-        """codegen's :class:`~compiler.codegen.MonitorSource` (the LTL3 automata tables the
-        judge runs, :mod:`monitors.judge`), built on first use and kept."""
+        """codegen's :class:`~fretc.compiler.codegen.MonitorSource` (the LTL3 automata tables the
+        judge runs, :mod:`fretc.monitors.judge`), built on first use and kept."""
         if self._msource is None:
             self._msource = monitor_source(self.compiled, self.index)
         return self._msource

@@ -3,13 +3,13 @@ comparisons its bindings are made of, read in a second pass over the log."""
 
 from __future__ import annotations
 
-from signals.bindings import Bindings, operand_signals
-from monitors.stepwise import to_python
-from common.problems import LogError, SignalError
-from signals import sample_blocks
-from logs import open_log
-from .model import AuditPlan
-from .passes import clock_key
+from fretc.signals.bindings import Bindings, operand_signals
+from fretc.monitors.stepwise import to_python
+from fretc.common.problems import LogError, SignalError
+from fretc.signals import sample_blocks
+from fretc.logs import open_log
+from fretc.audit.model import AuditPlan
+from fretc.audit.passes import clock_key
 
 __all__ = ["operand_values"]
 
@@ -17,14 +17,14 @@ __all__ = ["operand_values"]
 def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
                    passes, first=None) -> None:
     """Evidence of violations: the numbers behind their boolean variables (the operands of
-    the comparisons a binding is made of, :func:`signals.bindings.operand_signals`) at the
+    the comparisons a binding is made of, :func:`fretc.signals.bindings.operand_signals`) at the
     ticks whose values are shown. A second streaming pass over the log, only when something
     was violated, only for those operands, each on its requirement's own clock (so tick
     indexes match the first pass), and only up to the last tick shown.
 
     Args:
         active: the requirements judged; ``verdicts``: requirement index -> Verdict;
-            ``passes``: requirement index -> its :class:`audit.passes.ClockPass`;
+            ``passes``: requirement index -> its :class:`fretc.audit.passes.ClockPass`;
             ``first``: the first pass's source (its ``reopen()`` spares a second read of a
             flight log), or None.
     """

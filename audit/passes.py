@@ -3,8 +3,8 @@
 
 A requirement's clock is the set of topics its variables read (../shared/DESIGN.md, "Each
 verdict stands alone"); requirements on the same clock share one sampled stream
-(:func:`signals.sample_groups`). The columns are judged afterwards, once, by
-:func:`monitors.judge.judge` (:mod:`audit.finalize`).
+(:func:`fretc.signals.sample_groups`). The columns are judged afterwards, once, by
+:func:`fretc.monitors.judge.judge` (:mod:`fretc.audit.finalize`).
 """
 
 from __future__ import annotations
@@ -15,13 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from signals.bindings import Bindings
-from common.problems import SignalError
-from signals import blocks_of_ticks, sample, sample_blocks
-from signals.blocks import MAX_TICKS
-from logs import CSV_TOPIC
-from .columns import TickColumns
-from .model import AuditPlan, RequirementPlan
+from fretc.signals.bindings import Bindings
+from fretc.common.problems import SignalError
+from fretc.signals import blocks_of_ticks, sample, sample_blocks
+from fretc.signals.blocks import MAX_TICKS
+from fretc.logs import CSV_TOPIC
+from fretc.audit.columns import TickColumns
+from fretc.audit.model import AuditPlan, RequirementPlan
 
 __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
            "expected_ticks", "lost_in_words", "MAX_TICKS"]
@@ -30,7 +30,7 @@ __all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key",
 
 @dataclass
 class ClockPass:
-    """The ticks of one clock: its sampling (:class:`signals.Sampling`), tick
+    """The ticks of one clock: its sampling (:class:`fretc.signals.Sampling`), tick
     times (ns) and the columns (variable -> values, topic -> held log times)."""
 
     sampling: Any
@@ -189,7 +189,7 @@ def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
 
 def lost_in_words(source, topics) -> str:
     """The messages of ``topics`` present but not decoded in the source's latest pass
-    (:attr:`logs.LogSource.lost`), one clause per (kind, topic, channel), earliest first:
+    (:attr:`fretc.logs.LogSource.lost`), one clause per (kind, topic, channel), earliest first:
     how many, the channel, the first and last log time (ns) and why."""
     parts = []
     for (kind, topic, channel), (first, last, count, why) in sorted(

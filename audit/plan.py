@@ -1,14 +1,14 @@
 """The audit plan: the requirements compiled, their generated monitors loaded and the signal
 bindings merged, ready for any number of logs (:func:`load_plan`).
 
-Requirements are compiled (:mod:`compiler.build`) with the tick period of the signal
+Requirements are compiled (:mod:`fretc.compiler.build`) with the tick period of the signal
 bindings when their file declares none (a declared period must equal a fixed bindings period,
 else that requirement is an input error naming both), and their monitors are generated
-(:func:`compiler.codegen.build_monitor_modules`, one module per requirement file) and loaded
+(:func:`fretc.compiler.codegen.build_monitor_modules`, one module per requirement file) and loaded
 in-process into a fresh module: the same code ``fretc FILE --emit monitor`` gives users; the
 builder's map pairs requirements with their classes and automata (nothing built twice).
 Binding files that select their logs (``[logs]``) give one plan per file
-(:class:`signals.bindings.LogSelector`, :func:`select_variant`).
+(:class:`fretc.signals.bindings.LogSelector`, :func:`select_variant`).
 """
 
 from __future__ import annotations
@@ -20,19 +20,19 @@ import types
 from fractions import Fraction
 from pathlib import Path
 
-from compiler.build import compile_entries
-from compiler.codegen import MonitorModule, MonitorSource, build_monitor_modules
-from common.errors import FretishError
-from fretish.files import load_requirements
-from fretish.parser import parse
-from common.units import NS_PER_S, format_period
+from fretc.compiler.build import compile_entries
+from fretc.compiler.codegen import MonitorModule, MonitorSource, build_monitor_modules
+from fretc.common.errors import FretishError
+from fretc.fretish.files import load_requirements
+from fretc.fretish.parser import parse
+from fretc.common.units import NS_PER_S, format_period
 
-from signals.bindings import Bindings
-from common.problems import FretcInputError
-from logs import open_log
-from .binding_files import binding_files, load_audit_bindings
-from .config import AuditConfig, AuditInputError
-from .model import AuditPlan, RequirementPlan
+from fretc.signals.bindings import Bindings
+from fretc.common.problems import FretcInputError
+from fretc.logs import open_log
+from fretc.audit.binding_files import binding_files, load_audit_bindings
+from fretc.audit.config import AuditConfig, AuditInputError
+from fretc.audit.model import AuditPlan, RequirementPlan
 
 __all__ = ["load_plan", "select_variant", "load_module", "used_variables", "MODULE_PREFIX"]
 
@@ -76,7 +76,7 @@ def _with_msg_path(config: AuditConfig) -> AuditConfig:
 
 def _with_constants(entries: list, config: AuditConfig) -> list:
     """``entries`` whose named durations not declared in their own file take the value of
-    the binding files' ``[constants]`` (:mod:`fretish.constants`).
+    the binding files' ``[constants]`` (:mod:`fretc.fretish.constants`).
 
     Raises:
         AuditInputError: one constant given two values by two binding files.
@@ -87,7 +87,7 @@ def _with_constants(entries: list, config: AuditConfig) -> list:
 
     if not any(named(e.requirement) for e in entries):
         return entries
-    from fretish.constants import resolve, unresolved
+    from fretc.fretish.constants import resolve, unresolved
 
     constants: dict = {}
     where: dict = {}
@@ -151,7 +151,7 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
 def _read_requirements(config: AuditConfig, skipped: list[str],
                        unformalized: list | None = None) -> list:
     """The requirement entries of ``config.requirements``
-    (:func:`fretish.files.load_requirements`; notes of skipped files into ``skipped``, the
+    (:func:`fretc.fretish.files.load_requirements`; notes of skipped files into ``skipped``, the
     items of ReqIF / Doorstop sources without FRETish text into ``unformalized``)."""
     try:
         entries = load_requirements([Path(p) for p in config.requirements], skipped,
@@ -220,8 +220,8 @@ def _load_monitors(built: dict[str, MonitorModule]
                               dict[tuple[str, str], MonitorSource]]:
     """Execute each generated module once into a fresh module object: ((source, id) ->
     monitor class, (source, id) -> why it was skipped, (source, id) -> the
-    :class:`~compiler.codegen.MonitorSource` its class was generated from), paired through
-    :func:`compiler.codegen.build_monitor_modules`' map (keyed by requirement file)."""
+    :class:`~fretc.compiler.codegen.MonitorSource` its class was generated from), paired through
+    :func:`fretc.compiler.codegen.build_monitor_modules`' map (keyed by requirement file)."""
     classes: dict[tuple[str, str], type] = {}
     skipped: dict[tuple[str, str], str] = {}
     sources: dict[tuple[str, str], MonitorSource] = {}
@@ -296,7 +296,7 @@ def _unused_bindings(bindings: Bindings | None, plans: list[RequirementPlan]) ->
 
 
 def _plan_per_log(config: AuditConfig) -> AuditPlan | None:
-    """Binding files that select their logs (``[logs]``, :class:`signals.bindings.LogSelector`):
+    """Binding files that select their logs (``[logs]``, :class:`fretc.signals.bindings.LogSelector`):
     one plan per selecting file (merged with the files that select nothing, which apply to
     every log), each compiled with its own tick. A requirement whose variables are bound
     only by another selecting file is not applicable to that file's logs (it is left out of

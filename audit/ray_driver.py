@@ -3,8 +3,8 @@
 Ray ends its driver process when the driver's raylet dies (the core worker exits at once,
 from C++, after printing the raylet's last lines to standard output): a fleet audit driven
 from the ``fretc`` process would then end with no verdicts, no JSON and an exit code that
-reads as "violated". So :func:`audit.fleet.audit_logs_ray` starts this module as a
-child process (``python -m audit.ray_driver``) and reads its results:
+reads as "violated". So :func:`fretc.audit.fleet.audit_logs_ray` starts this module as a
+child process (``python -m fretc.audit.ray_driver``) and reads its results:
 
 * the job arrives pickled on standard input: ``{"shipped": ShippedPlan, "paths": [...],
   "address": str | None, "retries": int, "num_cpus": int | None, "kill": tuple | None,
@@ -16,7 +16,7 @@ child process (``python -m audit.ray_driver``) and reads its results:
   sends them (a temporary file), never to the user's terminal or ``--json -``.
 
 A log whose result never arrives (the driver was ended by Ray, or killed) is an error entry
-in the parent (:func:`audit.fleet.error_audit`); the results that did arrive keep
+in the parent (:func:`fretc.audit.fleet.error_audit`); the results that did arrive keep
 their verdicts.
 """
 
@@ -27,7 +27,7 @@ import pickle
 import sys
 from typing import Any, BinaryIO
 
-from .fleet import (RayUnavailable, _audit_task, _first_line, _import_ray, connect,
+from fretc.audit.fleet import (RayUnavailable, _audit_task, _first_line, _import_ray, connect,
                     error_audit)
 
 __all__ = ["drive", "main"]

@@ -179,8 +179,8 @@ def judge_counts(st: RequirementStatistics, op: str | None, p: float | None) -> 
 
 def fleet_statistics(logs: list, bounds: dict[str, Any], confidence: float = 0.95,
                      unknown: str = "fail") -> list[RequirementStatistics]:
-    """Per requirement (in ``bounds``' order: id -> :class:`compiler.ir.ProbabilityBound`
-    or None), its :class:`RequirementStatistics` over ``logs`` (:class:`audit.verdict.LogAudit`
+    """Per requirement (in ``bounds``' order: id -> :class:`fretc.compiler.ir.ProbabilityBound`
+    or None), its :class:`RequirementStatistics` over ``logs`` (:class:`fretc.audit.verdict.LogAudit`
     list: one run each). Raises ``ValueError`` for an unknown policy or a confidence
     outside (0, 1)."""
     if unknown not in UNKNOWN_POLICIES:
@@ -206,7 +206,7 @@ def fleet_statistics(logs: list, bounds: dict[str, Any], confidence: float = 0.9
 
 def plan_statistics(plan, logs: list, confidence: float = 0.95,
                     unknown: str = "fail") -> list[RequirementStatistics] | None:
-    """The fleet statistics of an audit plan's requirements (:class:`audit.model.AuditPlan`)
+    """The fleet statistics of an audit plan's requirements (:class:`fretc.audit.model.AuditPlan`)
     over ``logs``, or None when the audit is of one log and no requirement has a
     probability bound (the audit JSON then has no ``statistics``)."""
     bounds = {r.id: getattr(r.compiled, "probability", None) for r in plan.requirements}
@@ -217,7 +217,7 @@ def plan_statistics(plan, logs: list, confidence: float = 0.95,
 
 def statistical_exit(stats: list[RequirementStatistics] | None) -> tuple[bool, bool]:
     """``(failed, undecided)``: a probability requirement's statistical verdict is
-    ``fails``, or ``undecided`` (for :func:`audit.verdict.exit_code`)."""
+    ``fails``, or ``undecided`` (for :func:`fretc.audit.verdict.exit_code`)."""
     stats = stats or []
     return (any(s.verdict == "fails" for s in stats),
             any(s.verdict == "undecided" for s in stats))

@@ -16,14 +16,14 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
       "statistics": [ RequirementStatistics.to_json() ... ]  # only with several logs or a
     }                                                         # probability requirement
 
-``statistics`` (:mod:`audit.statistics`): per requirement the runs of each verdict, the
+``statistics`` (:mod:`fretc.audit.statistics`): per requirement the runs of each verdict, the
 estimate of P(satisfied), its Clopper-Pearson ``interval`` at ``confidence``, and for a
 requirement ``with probability OP p`` its ``bound`` and statistical ``verdict`` (holds /
 fails / undecided). A probability requirement's exit code follows that verdict, never its
 per-run violations.
 
 A requirement read from a requirements tool (ReqIF, Doorstop, FRET's export) has an
-``origin`` (:class:`fretish.entry.Origin`), and each of its verdicts a ``tool_id``; a
+``origin`` (:class:`fretc.fretish.entry.Origin`), and each of its verdicts a ``tool_id``; a
 ``.fret`` requirement has neither, so those documents are as before.
 
 Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
@@ -35,14 +35,14 @@ base (``tick_time_base`` / ``LogAudit.time_base``: ``log`` or ``header``). Each
 requirement runs on its own clock (its variables' topics): ``ticks_evaluated``,
 ``warmup_ticks``, ``first_tick_ns`` and ``last_tick_ns`` are per verdict; the log's own
 fields summarize them. Ticks are 0-based indexes of
-*evaluated* ticks (warm-up ticks are not numbered, see :mod:`signals`).
+*evaluated* ticks (warm-up ticks are not numbered, see :mod:`fretc.signals`).
 
 Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
 never entered or the trigger never fired (docs/guide/audits.md "Verdicts"); ``violated`` - FRET's
 finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
 (``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
 log is damaged and the span read completely decides nothing: an obligation is still open where
-it ends (``unknown_reason`` says which; :mod:`audit.damage`). A verdict on a damaged log is
+it ends (``unknown_reason`` says which; :mod:`fretc.audit.damage`). A verdict on a damaged log is
 computed on the span read completely (the ticks before ``damage_time_ns``) and has ``partial``
 true; a violation on it was decided before the damage.
 """
@@ -91,7 +91,7 @@ class TimePoint:
 
 @dataclass
 class FirstViolation:
-    """The evidence of a violation (see :class:`monitors.interval.Violation`).
+    """The evidence of a violation (see :class:`fretc.monitors.interval.Violation`).
 
     Attributes:
         at: the tick (and time) at which the obligation was definitely missed.
@@ -179,15 +179,15 @@ class Verdict:
         intervals, triggers, violations: counts from the interval semantics (None when it
             could not be evaluated).
         violation_list: (trigger, violation) time points of the failed triggers in order,
-            the first :data:`monitors.interval.MAX_LISTED` of them (``violations`` counts
+            the first :data:`fretc.monitors.interval.MAX_LISTED` of them (``violations`` counts
             all).
         engine: ``"stepwise"`` (the generated monitor's ``step()``), ``"vectorized"``
             (``monitors.vectorized`` over the columns; equal by test) or ``"interval"``
             (no online monitor exists - a future-time function - so FRET's interval
-            semantics decided it, :mod:`monitors.interval`).
+            semantics decided it, :mod:`fretc.monitors.interval`).
         notes: remarks (evidence unavailable, warnings of the formalization).
         error: why the verdict is ``error``.
-        robustness: the margin behind the verdict (:mod:`monitors.robustness`): in
+        robustness: the margin behind the verdict (:mod:`fretc.monitors.robustness`): in
             the unit of the comparison that decides it, negative exactly when violated,
             ``+-inf`` when a boolean decides it; None when ``unknown``, ``error``, or the pt
             formula cannot be evaluated over columns (a note says why).
@@ -400,11 +400,11 @@ def exit_code(logs: list[LogAudit], input_errors: bool = False,
     partial, data problems, unknown verdicts - a CI gate must not pass a recording that lost
     its last minutes); else 0.
 
-    ``statistics`` (:class:`audit.statistics.RequirementStatistics` list): a requirement
+    ``statistics`` (:class:`fretc.audit.statistics.RequirementStatistics` list): a requirement
     with a probability bound is judged by its statistical verdict, not by its runs: 1 when
     it ``fails``, 5 (:data:`EXIT_UNDECIDED`, after 1 and before 3) when ``undecided``; its
     violated runs alone do not give 1."""
-    from .statistics import statistical_exit
+    from fretc.audit.statistics import statistical_exit
 
     bounded = {s.id for s in statistics or () if s.bound is not None}
     failed, undecided = statistical_exit(statistics)
@@ -425,7 +425,7 @@ def audit_json(logs: list[LogAudit], requirements: list[dict], bindings: dict | 
                input_errors: bool = False, allow_partial: bool = False,
                extra: dict | None = None, statistics: list | None = None) -> str:
     """The ``--json`` document (module docstring), as text with sorted keys. ``extra``: more
-    top-level members (``not_formalized``, :meth:`audit.model.AuditPlan.sources_json`);
+    top-level members (``not_formalized``, :meth:`fretc.audit.model.AuditPlan.sources_json`);
     the ``statistics`` list when ``statistics`` is given (None: no key). Each verdict of a
     requirement read from a tool (its ``origin``) names the tool's identifier as
     ``tool_id``."""

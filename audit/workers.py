@@ -10,11 +10,11 @@ from collections.abc import Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
-from .verdict import LogAudit
-from .config import AuditConfig
-from .log import audit_log
-from .model import AuditPlan
-from .plan import load_plan
+from fretc.audit.verdict import LogAudit
+from fretc.audit.config import AuditConfig
+from fretc.audit.log import audit_log
+from fretc.audit.model import AuditPlan
+from fretc.audit.plan import load_plan
 
 __all__ = ["audit_logs"]
 
@@ -51,7 +51,7 @@ def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=No
             and ``done(index, log_audit)`` methods (the CLI's progress bar).
 
     Returns:
-        One :class:`~audit.verdict.LogAudit` per path, in the order of ``paths``.
+        One :class:`~fretc.audit.verdict.LogAudit` per path, in the order of ``paths``.
     """
     results: dict[int, Any] = {}
     if jobs <= 1 or len(paths) <= 1:

@@ -12,7 +12,7 @@
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``audit.audit_log``: read, sample every 100 ms, monitor, evidence),
    and prints both CPU times and their ratio (aim: <= 0.5x; the audit decodes only the
-   fields its bindings read, a chunk's messages at once, :mod:`logs.columnar`);
+   fields its bindings read, a chunk's messages at once, :mod:`fretc.logs.columnar`);
    then the same two as commands in fresh processes (start-up included; bytecode cached as
    in an installed fretc, after one untimed run of each). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
@@ -109,8 +109,8 @@ def plain_iteration(path: Path) -> tuple[float, int]:
 
 
 def audit_once(path: Path, fret: Path):
-    from audit import AuditConfig, audit_log, load_plan
-    from logs import decoding
+    from fretc.audit import AuditConfig, audit_log, load_plan
+    from fretc.logs import decoding
 
     decoding._build_typestore.cache_clear()  # each run builds the log's types, as a new process
 
@@ -173,7 +173,7 @@ def main() -> None:
     if args.child_heap:
         import tracemalloc
 
-        from audit import AuditConfig, audit_log, load_plan
+        from fretc.audit import AuditConfig, audit_log, load_plan
 
         plan = load_plan(AuditConfig(requirements=(args.child_heap[1],)))
         tracemalloc.start()

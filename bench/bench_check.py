@@ -23,7 +23,7 @@
    unknown; then the same with ``--witness-dir`` (the witness CSVs written).
 
 Times are CPU seconds of this process plus its Spot worker (``resource`` RUSAGE_CHILDREN);
-queries run with the default work budget (:mod:`check.budget`; ``--budget`` sets it, in work
+queries run with the default work budget (:mod:`fretc.check.budget`; ``--budget`` sets it, in work
 units; a query past it is counted as unknown).
 
     python bench/bench_check.py [--corpus PATH] [--bounds-only] [--realizability-only]
@@ -43,12 +43,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from compiler.build import compile_entries  # noqa: E402
-from check.analysis import check_requirements  # noqa: E402
-from check.budget import DEFAULT_WORK, Budget  # noqa: E402
-from fretish.files import RequirementEntry, load_requirements  # noqa: E402
-from fretish.parser import parse  # noqa: E402
-from common.errors import FretishError  # noqa: E402
+from fretc.compiler.build import compile_entries  # noqa: E402
+from fretc.check.analysis import check_requirements  # noqa: E402
+from fretc.check.budget import DEFAULT_WORK, Budget  # noqa: E402
+from fretc.fretish.files import RequirementEntry, load_requirements  # noqa: E402
+from fretc.fretish.parser import parse  # noqa: E402
+from fretc.common.errors import FretishError  # noqa: E402
 
 
 def cpu() -> float:
@@ -107,8 +107,8 @@ def _timed(path: Path, engine: str, budget: int, **kw) -> tuple[float, str]:
 
 def bound_sweep(budget: float) -> None:
     """Time against the bound: a consistent set (B1, B2 with a shorter `for`, B4, B5), a
-    conflict (B1, B2 longer than B1's window, B3), by Spot, by z3 (:mod:`check.smt`) and by
-    the default engine (the pt monitors, :mod:`check.monitor_sat`, past 16 ticks) in one
+    conflict (B1, B2 longer than B1's window, B3), by Spot, by z3 (:mod:`fretc.check.smt`) and by
+    the default engine (the pt monitors, :mod:`fretc.check.monitor_sat`, past 16 ticks) in one
     run, and the ``fretc check FILE`` command (start-up included); then the realizability
     table (:func:`realizability_sweep`)."""
     print(f"4. time against the bound (CPU s; budget {budget} work units per query)")
@@ -152,9 +152,9 @@ REALIZE = {
 
 def _realizability(path: Path, engine: str, budget: int) -> tuple[float, str]:
     """CPU seconds of the realizability check alone (minimal subsets included)."""
-    from check.analysis import Checker, CheckResult, make_item
-    from check.realizability import check_realizability
-    from check.solver import SpotWorker
+    from fretc.check.analysis import Checker, CheckResult, make_item
+    from fretc.check.realizability import check_realizability
+    from fretc.check.solver import SpotWorker
 
     items = [make_item(k, c) for k, c in
              enumerate(compile_entries(load_requirements([path])))]

@@ -78,9 +78,9 @@ PHASES = r"""
 import json, sys, time
 from pathlib import Path
 t0 = time.process_time()
-from compiler import codegen
-from compiler.build import compile_entries
-from fretish.files import load_requirements
+from fretc.compiler import codegen
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_requirements
 t1 = time.process_time()
 spent = {"automata": 0.0, "compile": 0.0}
 
@@ -120,9 +120,9 @@ print(json.dumps({"imports": t1 - t0, "formalize": t2 - t1,
 PER_REQ = r"""
 import json, sys, time
 from pathlib import Path
-from compiler.build import compile_entries
-from compiler.codegen import CodegenError, monitor_source
-from fretish.files import load_requirements
+from fretc.compiler.build import compile_entries
+from fretc.compiler.codegen import CodegenError, monitor_source
+from fretc.fretish.files import load_requirements
 cs = compile_entries(load_requirements([Path(sys.argv[1])]))
 out = []
 for i, c in enumerate(cs):

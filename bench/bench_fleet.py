@@ -76,9 +76,9 @@ def main() -> None:
     args = ap.parse_args()
 
     from bench_audit import ensure_requirements, plain_iteration
-    from audit import fleet
-    from audit import AuditConfig, audit_logs, load_plan
-    from audit.verdict import audit_json
+    from fretc.audit import fleet
+    from fretc.audit import AuditConfig, audit_logs, load_plan
+    from fretc.audit.verdict import audit_json
 
     workdir = Path(args.workdir)
     workdir.mkdir(parents=True, exist_ok=True)

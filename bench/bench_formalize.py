@@ -60,8 +60,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from compiler.instantiate import formula_text, instantiate  # noqa: E402
-from fretish import parse  # noqa: E402
+from fretc.compiler.instantiate import formula_text, instantiate  # noqa: E402
+from fretc.fretish import parse  # noqa: E402
 
 SCOPES = ["", "in m", "when not in m", "only in m", "after m", "before m", "only after m",
           "only before m", "while alt > 10", "during flight mode"]
@@ -88,11 +88,11 @@ def sentences(n: int, seed: int = 1) -> list:
 def corpus_sentences(path: Path) -> list:
     """The texts of the JSON-lines corpus ``path`` (``{"id": ..., "text": ...}`` per line),
     each on one line, that fretc compiles without error (read as a ``.fret`` file and
-    compiled in-process: :func:`compiler.build.compile_entries`)."""
+    compiled in-process: :func:`fretc.compiler.build.compile_entries`)."""
     import json
 
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
 
     texts = []
     for line in path.read_text(encoding="utf-8").splitlines():

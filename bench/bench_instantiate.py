@@ -8,10 +8,10 @@ The sentences are bench_formalize.py's (all 288 template keys), parsed once outs
 timings. For each requirement both paths produce what ``fretc FILE --emit ltl --json``
 prints: ft, ft_inf, pt (FRET/SMV) and the Spot text of ft and ft_inf.
 
-* full: :func:`compiler.semantics.formalize` then the printers (the path before
-  :mod:`compiler.instantiate`);
-* template: :func:`compiler.instantiate.instantiate` then
-  :func:`compiler.instantiate.formula_text`; "cold" is the first pass of the process
+* full: :func:`fretc.compiler.semantics.formalize` then the printers (the path before
+  :mod:`fretc.compiler.instantiate`);
+* template: :func:`fretc.compiler.instantiate.instantiate` then
+  :func:`fretc.compiler.instantiate.formula_text`; "cold" is the first pass of the process
   (each template key's file of ``compiler/table/`` read on its first use), "warm" the best
   later pass.
 
@@ -22,8 +22,8 @@ Then the per-sentence part of ``--emit ltl --json`` after parsing, on two inputs
 sentences above (``generated.fret``) and the 198 real requirements of
 ``../shared/corpora/fret_casestudies.jsonl`` (``corpus.fret``, whitespace runs joined; the
 generator repeats its expressions, the corpus mostly does not). Each pass reads the file
-(:func:`fretish.files.load_requirements`, untimed: fresh entries, nothing cached from the
-pass before), then times :func:`compiler.build.compile_entries` and the JSON text of
+(:func:`fretc.fretish.files.load_requirements`, untimed: fresh entries, nothing cached from the
+pass before), then times :func:`fretc.compiler.build.compile_entries` and the JSON text of
 ``--json`` (``fretc.compile.ltl_json``, or ``json_indent2`` of ``to_json()`` in a checkout
 without it). It runs in a child process per checkout (this one, and ``--baseline DIR``,
 e.g. ``git archive main | tar -x -C DIR``), the children alternating, ``--rounds`` times;
@@ -48,10 +48,10 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from bench_formalize import sentences  # noqa: E402
-from compiler.instantiate import InstantiatedFormalization, formula_text, instantiate  # noqa: E402
-from compiler.printers import to_smv, to_spot  # noqa: E402
-from compiler.semantics import formalize  # noqa: E402
-from fretish import parse  # noqa: E402
+from fretc.compiler.instantiate import InstantiatedFormalization, formula_text, instantiate  # noqa: E402
+from fretc.compiler.printers import to_smv, to_spot  # noqa: E402
+from fretc.compiler.semantics import formalize  # noqa: E402
+from fretc.fretish import parse  # noqa: E402
 
 FORMS = ("ft", "ft_inf", "pt", "ft_spot", "ft_inf_spot")
 
@@ -82,9 +82,9 @@ CHILD = r"""
 import gc, json, sys, time, zlib
 root, repeat, files = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
 sys.path.insert(0, root)
-from compiler.build import compile_entries
-from fretish.files import load_requirements
-import fretc.compile as fc
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_requirements
+import fretc.cli.compile as fc
 
 def emit(compiled):
     if hasattr(fc, "ltl_json"):

@@ -29,10 +29,10 @@ import time
 import types
 from types import SimpleNamespace
 
-from compiler.build import compile_entry
-from compiler.codegen import render_module
-from compiler.ir import Node
-from fretish import parse
+from fretc.compiler.build import compile_entry
+from fretc.compiler.codegen import render_module
+from fretc.compiler.ir import Node
+from fretc.fretish import parse
 
 REQUIREMENTS = {
     "R1": "whenever too_close agilex_agent shall eventually satisfy stopped",
@@ -87,9 +87,9 @@ def to_rye(n: Node, witness: str) -> str:
 RENDER = r"""
 import json, sys
 from types import SimpleNamespace
-from compiler.build import compile_entry
-from compiler.codegen import render_module
-from fretish import parse
+from fretc.compiler.build import compile_entry
+from fretc.compiler.codegen import render_module
+from fretc.fretish import parse
 entries = [SimpleNamespace(id=rid, text=text, source="bench.fret", line=1, column=1,
                            rationale=None, parent=None, tick_period=None,
                            requirement=parse(text), error=None, extra={})

@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from fretish import parse  # noqa: E402
+from fretc.fretish import parse  # noqa: E402
 
 CASE_STUDIES = ROOT / ".." / "shared" / "corpora" / "fret_casestudies.jsonl"
 

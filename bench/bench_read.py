@@ -132,9 +132,9 @@ def run_plain(path: str) -> tuple[float, int, int]:
 
 
 def run_sample(path: str) -> tuple[float, int, int]:
-    from signals.bindings import parse_bindings
-    from signals import sample
-    from logs import open_log
+    from fretc.signals.bindings import parse_bindings
+    from fretc.signals import sample
+    from fretc.logs import open_log
 
     t = time.perf_counter()
     s = sample(open_log(path), parse_bindings(BINDINGS, "bench"))
@@ -146,9 +146,9 @@ def run_sample(path: str) -> tuple[float, int, int]:
 
 
 def run_arrays(path: str) -> tuple[float, int, int]:
-    from signals.bindings import parse_bindings
-    from signals import sample_arrays
-    from logs import open_log
+    from fretc.signals.bindings import parse_bindings
+    from fretc.signals import sample_arrays
+    from fretc.logs import open_log
 
     t = time.perf_counter()
     times, _cols = sample_arrays(open_log(path), parse_bindings(BINDINGS, "bench"))
@@ -156,9 +156,9 @@ def run_arrays(path: str) -> tuple[float, int, int]:
 
 
 def run_traced(path: str) -> tuple[float, int, int]:
-    from signals.bindings import parse_bindings
-    from signals import sample
-    from logs import open_log
+    from fretc.signals.bindings import parse_bindings
+    from fretc.signals import sample
+    from fretc.logs import open_log
 
     tracemalloc.start()
     n = sum(1 for _ in sample(open_log(path), parse_bindings(BINDINGS, "bench")))

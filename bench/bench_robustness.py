@@ -1,4 +1,4 @@
-"""Benchmark of the robustness behind every verdict (:mod:`monitors.robustness`):
+"""Benchmark of the robustness behind every verdict (:mod:`fretc.monitors.robustness`):
 what it adds to ``fretc audit``.
 
     python bench/bench_robustness.py            # the shipped traces/, 3 repetitions
@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _audit_cpu(plan, logs, reps: int) -> float:
-    from audit import audit_log
+    from fretc.audit import audit_log
     best = float("inf")
     for _ in range(reps):
         t0 = time.process_time()
@@ -40,8 +40,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--reps", type=int, default=3)
     args = ap.parse_args()
-    from audit import AuditConfig, load_plan
-    from monitors import judge as judge_mod
+    from fretc.audit import AuditConfig, load_plan
+    from fretc.monitors import judge as judge_mod
 
     plan = load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
     logs = sorted((ROOT / "traces").glob("*.mcap"))

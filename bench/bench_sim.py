@@ -14,7 +14,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from sim.run import record  # noqa: E402
+from fretc.sim.run import record  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -25,7 +25,7 @@ the watch ends by itself at its orderly close.
     python bench/bench_watch.py [--trace traces/nominal.mcap] [--rates 10 20 50 75 100 150]
                                 [--transports ws dds zenoh]
 
-DDS and Zenoh messages are held 0.1 s to be merged into log-time order (:mod:`live.merge`):
+DDS and Zenoh messages are held 0.1 s to be merged into log-time order (:mod:`fretc.live.merge`):
 their latencies include that hold.
 """
 
@@ -48,21 +48,21 @@ sys.path.insert(0, str(ROOT))
 def _server(url: str, config: str | None):
     """The replay server of ``url`` (``ws``: a foxglove-sdk server on a free port)."""
     if url.startswith("dds://"):
-        from live.dds_serve import DdsServer
+        from fretc.live.dds_serve import DdsServer
 
         return DdsServer(url, config_file=config)
     if url.startswith("zenoh://"):
-        from live.zenoh_serve import ZenohServer
+        from fretc.live.zenoh_serve import ZenohServer
 
         return ZenohServer(url)
-    from live.serve import FoxgloveServer
+    from fretc.live.serve import FoxgloveServer
 
     return FoxgloveServer(port=0)
 
 
 def _serve(trace: str, rate: float, topics, conn, url: str = "ws",
            config: str | None = None) -> None:
-    from live.serve import advertise_mcap, replay_mcap
+    from fretc.live.serve import advertise_mcap, replay_mcap
 
     server = _server(url, config)
     advertise_mcap(trace, server, topics=set(topics))
@@ -99,7 +99,7 @@ def _url(transport: str, run: int) -> str:
 
 
 def watch_once(plan, trace: str, rate: float, url: str = "ws", config: str | None = None):
-    from live.watch import Watch, WatchOptions
+    from fretc.live.watch import Watch, WatchOptions
 
     ctx = mp.get_context("spawn")
     parent, child = ctx.Pipe()
@@ -158,8 +158,8 @@ def main() -> None:
     args = ap.parse_args()
     import tempfile
 
-    from audit import AuditConfig, audit_log, load_plan
-    from live.dds_types import LOOPBACK_XML
+    from fretc.audit import AuditConfig, audit_log, load_plan
+    from fretc.live.dds_types import LOOPBACK_XML
 
     plan = load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
     c0 = _cpu()
@@ -195,7 +195,7 @@ def _rates(plan, args, transport: str, key, audit_cpu: float, period_ms: float,
            config: str | None):
     """One transport at every rate: its table; (the highest rate kept up with or None,
     rate -> latencies)."""
-    from live.merge import HOLD_SECONDS
+    from fretc.live.merge import HOLD_SECONDS
     print("rate  ticks  data->verdict ms (median / p99)  closing msg->verdict ms (median / p99)"
           "  lag at end s  watch CPU s  CPU vs audit  verdicts = audit  kept up")
     best = None

@@ -191,10 +191,10 @@ def _alarm(signum, frame):
 
 def front(text: str, rid: str, source: str = "fuzz.fret"):
     """Parse and formalize ``text``; ``(compiled or None, rejected error or None)``."""
-    from compiler.build import compile_entry
-    from common.errors import FretishError
-    from fretish.files import RequirementEntry
-    from fretish.parser import parse
+    from fretc.compiler.build import compile_entry
+    from fretc.common.errors import FretishError
+    from fretc.fretish.files import RequirementEntry
+    from fretc.fretish.parser import parse
 
     try:
         req = parse(text, source=source, line=1, column=1)
@@ -299,7 +299,7 @@ class _Fuzzer:
     rendered into a module and the modules waiting to be stepped in a child."""
 
     def __init__(self, args):
-        from compiler import codegen  # after sys.path has the repository
+        from fretc.compiler import codegen  # after sys.path has the repository
 
         self.codegen = codegen
         self.args = args

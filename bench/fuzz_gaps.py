@@ -88,7 +88,7 @@ def nan_plan(audits):
     """The plan of :data:`NAN_FRET` (``a`` is ``/a.data``, compared in the requirements),
     loaded once per ``audits``."""
     if getattr(audits, "_nan", None) is None:
-        from audit import AuditConfig, load_plan
+        from fretc.audit import AuditConfig, load_plan
 
         d = audits.tmp / "nan"
         d.mkdir(exist_ok=True)

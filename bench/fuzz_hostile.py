@@ -221,7 +221,7 @@ class Audits:
     keep the intact logs' audits."""
 
     def __init__(self, tmp: Path) -> None:
-        from audit import AuditConfig, load_plan
+        from fretc.audit import AuditConfig, load_plan
 
         (tmp / "f.fret").write_text(FRET, encoding="utf-8")
         (tmp / "f.bindings.toml").write_text(BINDINGS, encoding="utf-8")
@@ -234,13 +234,13 @@ class Audits:
     def traces(self):
         """The plan of the shipped requirements (for the shipped traces), loaded once."""
         if self._traces is None:
-            from audit import AuditConfig, load_plan
+            from fretc.audit import AuditConfig, load_plan
 
             self._traces = load_plan(AuditConfig((str(ROOT / "requirements"),)))
         return self._traces
 
     def audit(self, plan, data: bytes, name: str = "x.mcap"):
-        from audit import audit_log
+        from fretc.audit import audit_log
 
         path = self.tmp / name
         path.write_bytes(data)
@@ -329,8 +329,8 @@ def hostile_binding(rng: random.Random) -> str:
 def run_binding(rng: random.Random) -> list[str]:
     """Parse one hostile binding file: an input error or a binding set (an exception that is
     not an input error propagates)."""
-    from common.errors import FretcError
-    from signals.bindings.files import parse_bindings
+    from fretc.common.errors import FretcError
+    from fretc.signals.bindings.files import parse_bindings
 
     try:
         parse_bindings(hostile_binding(rng), "b.toml")
@@ -418,9 +418,9 @@ def hostile_frames(rng: random.Random, foxglove: bool) -> list:
 def run_frames(rng: random.Random) -> list[str]:
     """Hand hostile frames to a client's session and its events to a watch source (an
     exception propagates)."""
-    from live.client import FoxgloveClient
-    from live.rosbridge import RosbridgeClient
-    from live.source import WatchSource
+    from fretc.live.client import FoxgloveClient
+    from fretc.live.rosbridge import RosbridgeClient
+    from fretc.live.source import WatchSource
 
     foxglove = rng.random() < 0.6
     frames = hostile_frames(rng, foxglove)
@@ -430,7 +430,7 @@ def run_frames(rng: random.Random) -> list[str]:
     else:
         client = RosbridgeClient("rosbridge://127.0.0.1:1", lambda t: t == "/a")
         state = {"clock": 0, "types": {"/a": "std_msgs/msg/Float64"}}
-        client._put("advertise", 0, [__import__("live.rosbridge", fromlist=["x"])
+        client._put("advertise", 0, [__import__("fretc.live.rosbridge", fromlist=["x"])
                                      .advertisement(1, "/a", "std_msgs/msg/Float64")])
         asyncio.run(client._read(FakeSocket(frames), {}, state))
     src = WatchSource("ws://fuzz", client)

@@ -108,10 +108,10 @@ def _script(rng: random.Random):
 
 def run_ws(rng: random.Random, tmp: Path) -> list[str]:
     """One ``ws`` input (module docstring); the unsupported outcomes."""
-    from audit import AuditConfig, load_plan
-    from audit.verdict import exit_code
+    from fretc.audit import AuditConfig, load_plan
+    from fretc.audit.verdict import exit_code
     from hostile_ws import ScriptServer
-    from live.watch import Watch, WatchOptions
+    from fretc.live.watch import Watch, WatchOptions
 
     d = tmp / "ws"
     d.mkdir(exist_ok=True)
@@ -145,11 +145,11 @@ def _bus_server(transport: str, rng: random.Random, dds_xml: Path):
     import socket
 
     if transport == "dds":
-        from live.dds_serve import DdsServer
+        from fretc.live.dds_serve import DdsServer
 
         url = f"dds://{rng.randrange(100, 230)}"
         return url, DdsServer(url, str(dds_xml))
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh_serve import ZenohServer
 
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
@@ -225,10 +225,10 @@ def run_bus(rng: random.Random, tmp: Path) -> list[str]:
     """One ``bus`` input (module docstring); the unsupported outcomes."""
     import threading
 
-    from audit import AuditConfig, load_plan
-    from audit.verdict import exit_code
-    from live.dds_types import LOOPBACK_XML
-    from live.watch import Watch, WatchOptions
+    from fretc.audit import AuditConfig, load_plan
+    from fretc.audit.verdict import exit_code
+    from fretc.live.dds_types import LOOPBACK_XML
+    from fretc.live.watch import Watch, WatchOptions
 
     d = tmp / "bus"
     d.mkdir(exist_ok=True)
@@ -356,8 +356,8 @@ def run_inputs(rng: random.Random, tmp: Path) -> list[str]:
     d.mkdir()
     kind = rng.choice(["json", "bindings", "psl", "space"])
     if kind == "space":
-        from common.errors import FretcError
-        from sim.space import load_space
+        from fretc.common.errors import FretcError
+        from fretc.sim.space import load_space
 
         p = _space(rng, d)
         try:

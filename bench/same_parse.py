@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from bench_parse import load_baseline  # noqa: E402
-from fretish.files import load_requirements  # noqa: E402
+from fretc.fretish.files import load_requirements  # noqa: E402
 
 
 def deep(x):

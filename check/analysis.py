@@ -1,17 +1,17 @@
 """``fretc check``: consistency, non-vacuity, minimal conflicts and redundancy of a set of
 requirements, decided by Spot on their formulas (../shared/DESIGN.md, "Check requirements before
 runs"); for queries with a bound past :data:`SPOT_MAX_BOUND`, by fixed points over the
-requirements' pt monitors (:mod:`check.monitor_sat`) when every formula has one, else by z3
-(:mod:`check.smt`).
+requirements' pt monitors (:mod:`fretc.check.monitor_sat`) when every formula has one, else by z3
+(:mod:`fretc.check.smt`).
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
-abstracted by :mod:`check.numeric_abstraction` (its invariants are conjoined to every
+abstracted by :mod:`fretc.check.numeric_abstraction` (its invariants are conjoined to every
 query). Requirements are split into **components**: two requirements are in one component
 when they share a variable (a numeric variable counts as shared through its comparisons).
 Formulas over disjoint variables are satisfiable together iff each is, so every question is
 asked per component, which keeps Spot's automata small.
 
-Checks, per component (each query has the work and memory budgets of :mod:`check.budget`,
+Checks, per component (each query has the work and memory budgets of :mod:`fretc.check.budget`,
 counted by the engines, never in seconds; a query past them answers "unknown", and a check
 with an unknown answer says so rather than guessing):
 
@@ -33,8 +33,8 @@ with an unknown answer says so rather than guessing):
 4. **Redundancy** (warning): a requirement implied by the other requirements of a
    satisfiable component (``others & !R`` unsatisfiable), or holding on every run.
 
-Witness traces for the findings are built by :mod:`check.witness`, realizability by
-:mod:`check.realizability`.
+Witness traces for the findings are built by :mod:`fretc.check.witness`, realizability by
+:mod:`fretc.check.realizability`.
 """
 
 from __future__ import annotations
@@ -42,14 +42,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from compiler import ir
-from .budget import Budget
-from .checker import ENGINES, MUS_BUDGET, SPOT_MAX_BOUND, Checker
-from .findings import Finding
-from .findings import ids as _ids
-from .findings import subsets_text
-from .items import CheckItem, atom_variables, make_item
-from .solver import UNKNOWN, SpotWorker
+from fretc.compiler import ir
+from fretc.check.budget import Budget
+from fretc.check.checker import ENGINES, MUS_BUDGET, SPOT_MAX_BOUND, Checker
+from fretc.check.findings import Finding
+from fretc.check.findings import ids as _ids
+from fretc.check.findings import subsets_text
+from fretc.check.items import CheckItem, atom_variables, make_item
+from fretc.check.solver import UNKNOWN, SpotWorker
 
 __all__ = ["CheckItem", "CheckResult", "Finding", "Checker", "check_requirements",
            "atom_variables", "make_item", "ENGINES", "SPOT_MAX_BOUND"]
@@ -62,7 +62,7 @@ class CheckResult:
     / None when not checked); ``components`` the ids per component; ``abstractions`` the
     uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered,
     ``monitor_queries`` those the pt monitors' fixed points answered
-    (:mod:`check.smt`), ``unknown_queries`` those past their budget or refused."""
+    (:mod:`fretc.check.smt`), ``unknown_queries`` those past their budget or refused."""
 
     requirements: list[dict] = field(default_factory=list)
     components: list[list[str]] = field(default_factory=list)
@@ -125,20 +125,20 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
                        worker: SpotWorker | None = None,
                        witness_judge=None, engine: str = "auto",
                        deadline: float | None = None) -> CheckResult:
-    """Check compiled requirements (:class:`compiler.build.Compiled`, in file order).
+    """Check compiled requirements (:class:`fretc.compiler.build.Compiled`, in file order).
 
-    ``budget``: each query's work and memory budgets (:class:`check.budget.Budget`; default
+    ``budget``: each query's work and memory budgets (:class:`fretc.check.budget.Budget`; default
     the defaults). ``mus_budget``: subset checks per enumeration of minimal subsets.
     ``deadline``: the run's wall-clock limit (a ``time.monotonic()`` value): past it the
-    run stops with :class:`check.budget.RunStopped` (never an answer changed). ``witness_dir``: write witness CSVs there
-    (:mod:`check.witness`), their expected verdicts given by ``witness_judge``
-    (:data:`check.witness.Judge`; required with ``witness_dir``: the audit's
+    run stops with :class:`fretc.check.budget.RunStopped` (never an answer changed). ``witness_dir``: write witness CSVs there
+    (:mod:`fretc.check.witness`), their expected verdicts given by ``witness_judge``
+    (:data:`fretc.check.witness.Judge`; required with ``witness_dir``: the audit's
     evidence engine lives in a layer above, ``fretc check`` passes
-    :func:`monitors.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
-    either is given, realizability is checked too (:mod:`check.realizability`).
+    :func:`fretc.monitors.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
+    either is given, realizability is checked too (:mod:`fretc.check.realizability`).
     Requirements that failed to formalize are listed in ``input_errors``; free-form ones
     are skipped with a note. ``engine``: one of :data:`ENGINES` (satisfiability queries;
-    realizability: :mod:`check.safety_game` for safety requirements unless ``spot``).
+    realizability: :mod:`fretc.check.safety_game` for safety requirements unless ``spot``).
     Raises ``ValueError`` for another engine.
     """
     if witness_dir is not None and witness_judge is None:
@@ -160,11 +160,11 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
         checker = Checker(items, worker, mus_budget, engine=engine)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy)
         if inputs is not None or outputs is not None:
-            from .realizability import check_realizability  # lazy: numpy, if asked
+            from fretc.check.realizability import check_realizability  # lazy: numpy, if asked
             result.realizability = check_realizability(checker, result, inputs or [],
                                                        outputs or [])
         if witness_dir is not None:
-            from .witness import write_witnesses  # lazy: numpy, if asked
+            from fretc.check.witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir, witness_judge)
         result.queries = checker.queries
         result.unknown_queries = worker.spent

@@ -1,5 +1,5 @@
 """Realizability of requirement sets with ``eventually`` responses by a symbolic Büchi game
-(``fretc check``), beside the safety game of :mod:`check.safety_game`.
+(``fretc check``), beside the safety game of :mod:`fretc.check.safety_game`.
 
 A requirement whose ft_inf formula is not a safety property (``eventually``, ``until`` with
 a required end) has no pt monitor that decides it, but it usually has a small
@@ -8,7 +8,7 @@ states, "nothing pending" and "waiting for q", with the accepting edges those in
 pending". Spot builds it from the ft_inf formula (``spot.translate(f, 'Buchi',
 'deterministic')``), as long as the requirement's own bounds are small; the set's long
 deadlines stay in the safety requirements' pt monitors, as counters
-(:class:`check.pt_monitor.Monitor`). The game is played on the product: the pt monitors'
+(:class:`fretc.check.pt_monitor.Monitor`). The game is played on the product: the pt monitors'
 state bits and each automaton's state in ``ceil(log2 states)`` bits.
 
 The controller wins a run when every safety requirement's pt formula holds at every tick, no
@@ -21,12 +21,12 @@ Sa'ar, "Synthesis of Reactive(1) Designs", VMCAI 2006):
     cpre(T)(s) = forall inputs (env_ok -> exists outputs (ctl_ok & ok & T))
 
 each tick the environment sets the inputs first, the controller then sets the outputs
-knowing them (a Mealy machine, :data:`check.realizability.MACHINE`). The set is realizable
+knowing them (a Mealy machine, :data:`fretc.check.realizability.MACHINE`). The set is realizable
 iff the first state is in ``W``; both answers are exact on the abstraction of the
-comparisons (:mod:`check.numeric_abstraction`). Tests compare them with Spot's own synthesis
+comparisons (:mod:`fretc.check.numeric_abstraction`). Tests compare them with Spot's own synthesis
 game on random sets with small bounds.
 
-Outside the method (:class:`check.pt_monitor.Outside`; the caller falls back to Spot's
+Outside the method (:class:`fretc.check.pt_monitor.Outside`; the caller falls back to Spot's
 game): a formula Spot gives no deterministic generalized Büchi automaton for (``FG``-like
 persistence), or an atom the game cannot give a player.
 """
@@ -35,13 +35,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from compiler.ir import Node
-from compiler.printers import to_spot
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_spot
 
-from .budget import Budget, Meter
-from .fixed_inputs import input_lasso, recurrence
-from .pt_monitor import Outside
-from .safety_game import MAX_LETTERS, _Game, _varset, _Witness, bdd_dict, letter_name
+from fretc.check.budget import Budget, Meter
+from fretc.check.fixed_inputs import input_lasso, recurrence
+from fretc.check.pt_monitor import Outside
+from fretc.check.safety_game import MAX_LETTERS, _Game, _varset, _Witness, bdd_dict, letter_name
 
 __all__ = ["solve_buchi_game"]
 
@@ -81,11 +81,11 @@ def _degree(aut) -> int:
 
 
 class _BuchiGame(_Game):
-    """The game of :func:`solve_buchi_game`: a :class:`check.safety_game._Game` over the pt
+    """The game of :func:`solve_buchi_game`: a :class:`fretc.check.safety_game._Game` over the pt
     formulas ``pts`` (and ``extra``, monitored beside) with the automata of the ``liveness``
     formulas in its state (``self.acc``: one BDD over (state, inputs, outputs) per
     acceptance set: this tick's edge is in it). Also the product of
-    :mod:`check.monitor_sat` when a query has a requirement that is not safety."""
+    :mod:`fretc.check.monitor_sat` when a query has a requirement that is not safety."""
 
     def __init__(self, pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequence[str],
                  env_inv: Node, ctl_inv: Node, extra: Sequence[Node] = (),
@@ -152,7 +152,7 @@ class _BuchiGame(_Game):
         self.acc += accs
 
     def _tick(self, *iterates) -> None:
-        """Pay one iteration: the nodes of the sets it computed (:mod:`check.budget`)."""
+        """Pay one iteration: the nodes of the sets it computed (:mod:`fretc.check.budget`)."""
         self.iterations += 1
         self.meter.nodes(self.b, *iterates)
 
@@ -166,7 +166,7 @@ class _BuchiGame(_Game):
 
     def winning(self):
         """``W`` of the module docstring; stops early once the first state is out of it.
-        Raises :class:`check.budget.BudgetSpent` past the meter's budget."""
+        Raises :class:`fretc.check.budget.BudgetSpent` past the meter's budget."""
         b = self.b
         self.meter.relation(b, self.step)
         z = b.bddtrue
@@ -189,7 +189,7 @@ class _BuchiGame(_Game):
 # --------------------------------------------------------------------------- the environment
 def _lasso(game: _BuchiGame, meter: Meter) -> tuple[tuple | None, str]:
     """The shortest input lasso that defeats every controller
-    (:func:`check.fixed_inputs.input_lasso`), as ``(prefix, cycle)`` of ``(letter, cube)``
+    (:func:`fretc.check.fixed_inputs.input_lasso`), as ``(prefix, cycle)`` of ``(letter, cube)``
     (letters ``{atom name: bool}``, cubes their BDDs); or None and why."""
     w = _Witness(game)
     letters = w._cubes(w.in_atoms, game.env_ok, MAX_LETTERS)
@@ -237,7 +237,7 @@ def _play(game: _BuchiGame, prefix: list, cycle: list, length: int) -> list[dict
 
 
 def _longest_bound(formulas: Sequence[Node]) -> int:
-    from compiler import ir
+    from fretc.compiler import ir
 
     return max([n.hi for f in formulas for n in ir.walk(f) if n.hi is not None] or [0])
 
@@ -250,9 +250,9 @@ def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequ
 
     ``inputs``: the environment's FRET variables; ``env_inv``/``ctl_inv``: propositional
     IR formulas over the comparisons (numeric consistency of inputs / outputs); ``budget``:
-    the query's :class:`check.budget.Budget` (past it :class:`check.budget.BudgetSpent` is
+    the query's :class:`fretc.check.budget.Budget` (past it :class:`fretc.check.budget.BudgetSpent` is
     raised); ``search``: when the game is lost, search an input lasso that defeats every
-    controller, within a quarter of the work budget more (:mod:`check.fixed_inputs`).
+    controller, within a quarter of the work budget more (:mod:`fretc.check.fixed_inputs`).
     Returns ``{"realizable": True, "strategy": {...}}`` (the strategy's size),
     ``{"realizable": False, "inputs": (prefix, cycle) | None, "note": why none}``, or
     ``{"outside": why}`` for formulas the game does not handle.

@@ -2,14 +2,14 @@
 the same input gets the same answers on an idle and on a loaded machine.
 
 * **work** (``--budget``, per query, in *work units*): the BDD engines
-  (:mod:`check.monitor_sat`, :mod:`check.safety_game`, :mod:`check.buchi_game`) pay, for
+  (:mod:`fretc.check.monitor_sat`, :mod:`fretc.check.safety_game`, :mod:`fretc.check.buchi_game`) pay, for
   each fixed-point iteration, one unit per BDD node of the transition relation it steps
   through and of the set it computes: a BDD is canonical for its function and variable
   order, so the count does not depend on the order of the operations, on BuDDy's garbage
   collections or on the machine, and it grows with the work of the relational products.
-  z3 (:mod:`check.smt`) pays :data:`Z3_RLIMIT_PER_UNIT` of its deterministic resource count
+  z3 (:mod:`fretc.check.smt`) pays :data:`Z3_RLIMIT_PER_UNIT` of its deterministic resource count
   (``rlimit``) per unit. Spot's translations and products cannot be stopped from Python, so
-  what Spot is given is bounded up front (:mod:`check.solver`: tick bounds, automaton
+  what Spot is given is bounded up front (:mod:`fretc.check.solver`: tick bounds, automaton
   states) and a Spot query either finishes or is refused.
 * **memory** (``--memory-budget``, per query, in *BDD nodes*): the size of BuDDy's node
   table in the worker process (``bdd_setmaxnodenum``; BuDDy stops the process when it would

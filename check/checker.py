@@ -1,8 +1,8 @@
 """The questions ``fretc check`` asks of one set of requirements (satisfiability, minimal
 unsatisfiable subsets), each sent to the engine that decides it: Spot up to
-:data:`SPOT_MAX_BOUND` ticks, past it the pt monitors' fixed points (:mod:`check.monitor_sat`)
-when every formula has them, else z3 (:mod:`check.smt`). The checks built from these
-questions, and their order, are :mod:`check.analysis`'s.
+:data:`SPOT_MAX_BOUND` ticks, past it the pt monitors' fixed points (:mod:`fretc.check.monitor_sat`)
+when every formula has them, else z3 (:mod:`fretc.check.smt`). The checks built from these
+questions, and their order, are :mod:`fretc.check.analysis`'s.
 """
 
 from __future__ import annotations
@@ -10,22 +10,22 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Sequence
 
-from compiler import ir
-from compiler.ir import Node
-from compiler.printers import to_spot
-from .budget import MUS_BUDGET
-from .items import CheckItem, monitored_forms
-from .numeric_abstraction import NumericAbstraction
-from .safety_game import Outside, game_atoms
-from .smt import SmtSolver, max_bound
-from .solver import UNKNOWN, SpotWorker
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_spot
+from fretc.check.budget import MUS_BUDGET
+from fretc.check.items import CheckItem, monitored_forms
+from fretc.check.numeric_abstraction import NumericAbstraction
+from fretc.check.safety_game import Outside, game_atoms
+from fretc.check.smt import SmtSolver, max_bound
+from fretc.check.solver import UNKNOWN, SpotWorker
 
 __all__ = ["ENGINES", "SPOT_MAX_BOUND", "MUS_BUDGET", "Checker", "Subsets", "SMALLEST",
            "MINIMAL", "NOT_SHOWN_MINIMAL"]
 
 #: the solvers ``fretc check --engine`` names: ``auto`` Spot up to :data:`SPOT_MAX_BOUND`
-#: ticks, past it the requirements' pt monitors (:mod:`check.monitor_sat`) when they take
-#: the query, else z3 (:mod:`check.smt`); ``spot``; ``smt`` (z3 alone); ``bdd`` (the
+#: ticks, past it the requirements' pt monitors (:mod:`fretc.check.monitor_sat`) when they take
+#: the query, else z3 (:mod:`fretc.check.smt`); ``spot``; ``smt`` (z3 alone); ``bdd`` (the
 #: monitors whatever the bound, z3 for the queries they do not take)
 ENGINES = ("auto", "spot", "smt", "bdd")
 
@@ -40,7 +40,7 @@ SPOT_MAX_BOUND = 16
 class Checker:
     """Runs the checks of the module docstring on a list of :class:`CheckItem`.
 
-    ``worker`` answers Spot queries (:class:`check.solver.SpotWorker`, with the queries'
+    ``worker`` answers Spot queries (:class:`fretc.check.solver.SpotWorker`, with the queries'
     budgets); ``mus_budget`` is the number of subset checks each enumeration of minimal
     subsets may make after its first subset (:meth:`minimal_subsets`).
     """
@@ -64,7 +64,7 @@ class Checker:
         self.numeric = NumericAbstraction.of(allf)
         self._cache: dict[str, object] = {}
         #: formula -> ("safe" | "goal", pt formula, requirement index), on infinite runs /
-        #: finite traces (:mod:`check.monitor_sat`)
+        #: finite traces (:mod:`fretc.check.monitor_sat`)
         self.monitored = monitored_forms(self.items)
         self.monitor_queries = 0
         self.queries = 0
@@ -78,7 +78,7 @@ class Checker:
         return self.sat_word(formulas, extra)[0]
 
     def uses_smt(self, formulas: Sequence[Node]) -> bool:
-        """Does a query on ``formulas`` go to z3 (:mod:`check.smt`) rather than Spot? With
+        """Does a query on ``formulas`` go to z3 (:mod:`fretc.check.smt`) rather than Spot? With
         ``engine="auto"``, when a bound passes :data:`SPOT_MAX_BOUND`."""
         if self.engine != "auto":
             return self.engine in ("smt", "bdd")
@@ -116,7 +116,7 @@ class Checker:
     def monitor_word(self, formulas: Sequence[Node], finite: bool,
                      length: int | None = None) -> tuple[object, tuple | None] | None:
         """:meth:`sat_word` decided on the requirements' pt monitors
-        (:mod:`check.monitor_sat`), or None when a formula of the query is not a monitored
+        (:mod:`fretc.check.monitor_sat`), or None when a formula of the query is not a monitored
         requirement, trigger or negated requirement (``finite``: read on finite traces,
         FRET's ft; ``length``: exactly that many ticks)."""
         if self.engine in ("spot", "smt"):

@@ -1,5 +1,5 @@
-"""A finding of ``fretc check`` (:mod:`check.analysis`, :mod:`check.realizability`,
-:mod:`check.witness`): what was found, about which requirements, and the witness
+"""A finding of ``fretc check`` (:mod:`fretc.check.analysis`, :mod:`fretc.check.realizability`,
+:mod:`fretc.check.witness`): what was found, about which requirements, and the witness
 trace that shows it."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ class Finding:
     ``redundant``, ``unrealizable``, ``unknown``. ``severity``: ``error`` (exit 1),
     ``warning`` or ``unknown``. ``requirements``: the ids it is about; ``subsets``: the
     subsets found (lists of ids, fewest members first); ``standing``: per subset
-    ``smallest``, ``minimal`` or ``not shown minimal`` (:class:`check.checker.Subsets`);
+    ``smallest``, ``minimal`` or ``not shown minimal`` (:class:`fretc.check.checker.Subsets`);
     ``cut``: the subset enumeration ran out of its budget of checks; ``witness``: path of the witness CSV, ``expected`` the verdicts it promises.
     """
 

@@ -1,7 +1,7 @@
 """Fixed input sequences that defeat every controller of a lost game (``fretc check``'s
 realizability), and the nested fixed point the games and the monitors share.
 
-A game lost by the controller (:mod:`check.safety_game`, :mod:`check.buchi_game`) may be
+A game lost by the controller (:mod:`fretc.check.safety_game`, :mod:`fretc.check.buchi_game`) may be
 lost only because the environment reacts to the outputs; when a *fixed* input sequence
 defeats every controller, ``fretc check`` shows it: an input lasso (a prefix, then a cycle
 repeated forever) along which no output sequence meets the set. For one lasso that is the
@@ -18,7 +18,7 @@ games' own fixed point with the inputs fixed and the outputs alone to choose
   leads to (:func:`prefix_search`): "request and halt at tick 0, then halt forever" is found
   at any bound, in one fixed point per input letter.
 
-Every search is paid in work units (:mod:`check.budget`); past its budget it says so and the
+Every search is paid in work units (:mod:`fretc.check.budget`); past its budget it says so and the
 report says the environment *may* have to react, never that it must.
 """
 
@@ -27,7 +27,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 
-from .budget import BudgetSpent, Meter
+from fretc.check.budget import BudgetSpent, Meter
 
 __all__ = ["recurrence", "keep_forever", "defeats", "post", "input_lasso", "prefix_search",
            "MAX_LASSO", "SEARCH_SETS"]
@@ -46,7 +46,7 @@ def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
     ``step(part, Y)``: the states that take an ``acc`` edge into ``Z`` or move into ``Y``,
     one step (the game's controllable or the monitors' existential predecessor);
     ``tick(iterate)``: called each iteration with the set it computed (raises
-    :class:`check.budget.BudgetSpent` past the budget); ``lost(W)``: stop early with ``W``
+    :class:`fretc.check.budget.BudgetSpent` past the budget); ``lost(W)``: stop early with ``W``
     when true (the first state is out)."""
     while accs:
         new = z
@@ -70,8 +70,8 @@ def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
 
 def defeats(game, cubes: list, start: int, meter: Meter) -> bool:
     """Does the input lasso ``cubes[:start]`` then ``cubes[start:]`` forever (BDD cubes of
-    the input atoms) defeat every controller of ``game`` (a :class:`check.safety_game.
-    _Game` or :class:`check.buchi_game._BuchiGame`): is there no output sequence along it
+    the input atoms) defeat every controller of ``game`` (a :class:`fretc.check.safety_game.
+    _Game` or :class:`fretc.check.buchi_game._BuchiGame`): is there no output sequence along it
     that keeps every requirement with each acceptance set met infinitely often? The games'
     nested fixed point with the outputs alone to choose, one set of states per position."""
     return game.b.bdd_and(game.init, _keep(game, cubes, start, meter)[0]) == game.b.bddfalse
@@ -155,7 +155,7 @@ def prefix_search(game, letters: list, keeps: list, meter: Meter) -> tuple | Non
     """Breadth first over input prefixes: the first prefix after which every state the
     monitors can be in (:func:`post`) is outside ``keeps[c]`` (:func:`keep_forever` of
     letter ``c``) for some ``c``, as ``(prefix indices, [c])``; None when every set of
-    states was visited. Raises :class:`check.budget.BudgetSpent` past the meter's budget
+    states was visited. Raises :class:`fretc.check.budget.BudgetSpent` past the meter's budget
     or past :data:`SEARCH_SETS` sets."""
     b = game.b
     frontier = [(game.init, ())]

@@ -1,7 +1,7 @@
 """The requirements as ``fretc check`` sees them (:class:`CheckItem`): the ft_inf and ft
 formulas of each, the formulas saying its trigger fires (vacuity with respect to the response,
 Kupferman & Vardi, STTT 2003), and its pt formula when that monitors it
-(:mod:`check.monitor_sat`); and the map from the checks' formulas to those monitors."""
+(:mod:`fretc.check.monitor_sat`); and the map from the checks' formulas to those monitors."""
 
 from __future__ import annotations
 
@@ -9,13 +9,13 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from compiler import ir
-from compiler.ir import Node
-from compiler.semantics import SemanticsError, formalize
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.semantics import SemanticsError, formalize
 
-from .safety_game import pt_monitors_ft_inf
+from fretc.check.safety_game import pt_monitors_ft_inf
 
 __all__ = ["CheckItem", "make_item", "atom_variables", "monitored_forms"]
 
@@ -27,9 +27,9 @@ class CheckItem:
     ``phi``/``phi_ft``: ft_inf / ft formula; ``trigger``/``trigger_ft``: the formula saying a
     trigger fires in scope (module docstring, item 2), None when the requirement has no
     response to vary; ``variables``: FRET variable names; ``pt``: the pt formula when it
-    monitors ``phi`` (:func:`check.safety_game.pt_monitors_ft_inf`), else None;
+    monitors ``phi`` (:func:`fretc.check.safety_game.pt_monitors_ft_inf`), else None;
     ``trigger_pt``: the pt formula true at the ticks where ``trigger`` is decided true
-    (``!pt(R[false]) | !pt(R[true])``, :mod:`check.monitor_sat`), None when ``pt`` is;
+    (``!pt(R[false]) | !pt(R[true])``, :mod:`fretc.check.monitor_sat`), None when ``pt`` is;
     ``trigger_pt_last``: the same formula for every requirement, read at the last tick of
     a finite trace only (where it is ``trigger_ft``'s verdict: FRET's pt formula at the
     last tick is its ft formula, tests/compiler/test_semantics.py), None when the
@@ -63,7 +63,7 @@ def _with_response(req: A.Requirement, value: bool) -> A.Requirement:
 
 
 def make_item(index: int, compiled) -> CheckItem:
-    """A :class:`CheckItem` of a formalized :class:`compiler.build.Compiled`."""
+    """A :class:`CheckItem` of a formalized :class:`fretc.compiler.build.Compiled`."""
     f = compiled.formalization
     req = compiled.requirement
     period = compiled.entry.tick_period
@@ -90,7 +90,7 @@ def atom_variables(node: Node) -> set[str]:
 
 
 def monitored_forms(items: Sequence[CheckItem]) -> dict[bool, dict[Node, tuple]]:
-    """The formulas of the checks that the pt monitors decide (:mod:`check.monitor_sat`),
+    """The formulas of the checks that the pt monitors decide (:mod:`fretc.check.monitor_sat`),
     on infinite runs (``False``: ft_inf) and on finite traces (``True``: ft): each
     requirement's formula (``("safe", pt, index)``: pt true at every tick), its negation and
     its trigger (``("goal", pt, index)``: true at some tick). On finite traces, those of a

@@ -1,17 +1,17 @@
 """Satisfiability of safety requirements by symbolic model checking of their pt monitors
 (``fretc check`` at deadlines of hundreds of ticks).
 
-The queries of :mod:`check.analysis` are conjunctions of three kinds of formulas:
+The queries of :mod:`fretc.check.analysis` are conjunctions of three kinds of formulas:
 a requirement (it holds), a requirement's trigger (it fires in scope: non-vacuity) and a
 negated requirement (it is violated: redundancy, witnesses). When every requirement's ft_inf
-is monitored by its FRET pt formula (:func:`check.safety_game.pt_monitors_ft_inf`: ft_inf
+is monitored by its FRET pt formula (:func:`fretc.check.safety_game.pt_monitors_ft_inf`: ft_inf
 holds on an infinite run iff pt holds at every tick), each kind is a property of the product
-of the pt monitors (:class:`check.pt_monitor.Monitor`: one bit per ``Y``/``O``/``H``/``S``,
+of the pt monitors (:class:`fretc.check.pt_monitor.Monitor`: one bit per ``Y``/``O``/``H``/``S``,
 a counter of ``log2 w`` bits per ``O[0,w]``, one per deadline), so no bound is unrolled into states:
 
 * a requirement holding: its pt formula true at every tick (a *safe* formula);
 * a trigger firing: ``!pt(R[false]) | !pt(R[true])`` true at some tick, a *goal* (the
-  trigger of :func:`check.analysis.make_item` is ``!R[false] | !R[true]``, and each of these
+  trigger of :func:`fretc.check.analysis.make_item` is ``!R[false] | !R[true]``, and each of these
   ft_inf formulas is false iff its pt formula is false at some tick);
 * a requirement violated: ``!pt(R)`` true at some tick, a goal too.
 
@@ -21,12 +21,12 @@ point ``Live = nu Z. exists letter (ok & next in Z)``; the query is satisfiable 
 of ``Live`` where every goal bit is set is reachable from the first state through ``Live``,
 a least fixed point computed backwards from those states (symbolic model checking, McMillan
 1993; Clarke, Grumberg, Peled, "Model Checking", ch. 6). On finite traces (FRET's ft, for the
-witness traces of :mod:`check.witness`), a requirement holds on a trace iff its pt formula
+witness traces of :mod:`fretc.check.witness`), a requirement holds on a trace iff its pt formula
 holds at the last tick; the pt formulas monitored here are false from their first false
 tick on (tested), so the same reachability without ``Live`` gives a shortest trace, read
 off the layers of the fixed point.
 
-Both answers are exact on the abstraction of the comparisons (:mod:`check.numeric_abstraction`,
+Both answers are exact on the abstraction of the comparisons (:mod:`fretc.check.numeric_abstraction`,
 its region invariant conjoined at every tick); tests compare them with Spot's on random
 sets. The BDDs are BuDDy's, shipped with Spot.
 """
@@ -35,14 +35,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from compiler import ir
-from compiler.ir import Node
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
 
-from .budget import Budget, Meter
-from .buchi_game import _BuchiGame
-from .fixed_inputs import recurrence
-from .pt_monitor import Outside
-from .safety_game import _Game, _varset, letter_name
+from fretc.check.budget import Budget, Meter
+from fretc.check.buchi_game import _BuchiGame
+from fretc.check.fixed_inputs import recurrence
+from fretc.check.pt_monitor import Outside
+from fretc.check.safety_game import _Game, _varset, letter_name
 
 __all__ = ["decide"]
 
@@ -56,15 +56,15 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
     ``invariant``: a propositional IR formula over the atoms, true at every tick (the
     numeric regions); ``finite``: a finite trace (FRET's ft) rather than an infinite run
     (ft_inf); ``length``: exactly that many ticks (finite only); ``budget``: the query's
-    :class:`check.budget.Budget` (default: the defaults), past which
-    :class:`check.budget.BudgetSpent` is raised. Returns ``(False, None)``, ``(True, None)`` (infinite)
+    :class:`fretc.check.budget.Budget` (default: the defaults), past which
+    :class:`fretc.check.budget.BudgetSpent` is raised. Returns ``(False, None)``, ``(True, None)`` (infinite)
     or ``(True, (letters, []))`` (finite: the trace's letters ``{atom name: bool}``, as
-    :class:`check.solver.SpotWorker` gives words). ``liveness``: ft_inf formulas that hold
+    :class:`fretc.check.solver.SpotWorker` gives words). ``liveness``: ft_inf formulas that hold
     too (infinite runs only), each by Spot's Büchi automaton in the product, its
-    nondeterminism chosen like a letter (:mod:`check.buchi_game`); ``("outside", why)`` when
+    nondeterminism chosen like a letter (:mod:`fretc.check.buchi_game`); ``("outside", why)`` when
     Spot gives no generalized Büchi automaton. ``last``: pt formulas that hold at the last
     tick (finite only: FRET's pt formula at the last tick is its ft formula). Raises
-    :class:`check.safety_game.Outside` for an atom the monitors cannot take.
+    :class:`fretc.check.safety_game.Outside` for an atom the monitors cannot take.
     """
     meter = Meter(budget or Budget())
     if last and not finite:
@@ -89,7 +89,7 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
 
 class _Search:
     """The fixed points of :func:`decide` on one product monitor (``game``: a
-    :class:`check.safety_game._Game` whose atoms are all the controller's)."""
+    :class:`fretc.check.safety_game._Game` whose atoms are all the controller's)."""
 
     def __init__(self, game: _Game, meter: Meter):
         self.g, self.b, self.meter = game, game.b, meter
@@ -103,7 +103,7 @@ class _Search:
         meter.relation(b, self.ok, *(relation for relation, _nxt in self.parts))
 
     def _tick(self, *iterates) -> None:
-        """Pay one iteration: the nodes of the sets it computed (:mod:`check.budget`)."""
+        """Pay one iteration: the nodes of the sets it computed (:mod:`fretc.check.budget`)."""
         self.meter.nodes(self.b, *iterates)
 
     def successors_in(self, target, state=None):
@@ -204,7 +204,7 @@ PART_NODES = 3000
 def _clusters(b, groups: list[list]) -> list[tuple]:
     """The transition relation in parts ``(relation, its next variables)``: one per
     counter, the one-bit states' merged in order while under :data:`PART_NODES` nodes
-    (``groups``: :meth:`check.pt_monitor.Monitor.parts`)."""
+    (``groups``: :meth:`fretc.check.pt_monitor.Monitor.parts`)."""
     out: list[list] = []
     for group in groups:
         relation = b.bddtrue

@@ -25,9 +25,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 from fractions import Fraction
 
-from compiler import ir
-from compiler.ir import Node
-from compiler.printers import to_smv
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
 
 __all__ = ["NumericAbstraction", "simple_comparison"]
 

@@ -1,5 +1,5 @@
 """The monitor of FRET pt formulas as BDDs (BuDDy, shipped with Spot), shared by the safety
-game (:mod:`check.safety_game`) and the satisfiability fixed points (:mod:`check.monitor_sat`).
+game (:mod:`fretc.check.safety_game`) and the satisfiability fixed points (:mod:`fretc.check.monitor_sat`).
 
 A pt formula's monitor is a deterministic machine whose state is the previous tick's value of
 each past-time sub-formula (Havelund & Rosu, "Synthesizing monitors for safety properties",
@@ -20,7 +20,7 @@ Variable order (the BDDs' sizes depend on it, the answers not), top to bottom: t
 the one-bit states in the order they are made (each requirement's together), the bits of
 every counter in one block interleaved by significance (the most significant bits of all
 counters first), the delay lines (each in delay order). The sets of states the fixed points
-of :mod:`check.monitor_sat` meet relate counters by differences and sums ("the hold ends
+of :mod:`fretc.check.monitor_sat` meet relate counters by differences and sums ("the hold ends
 before the deadline"), which take ``O(log N)`` nodes with interleaved bits and ``O(N)``
 with each counter's bits together; the one-bit states above the block decide when a counter
 resets. Measured on bench/bench_check.py's 1000-tick set: the states that keep every
@@ -33,8 +33,8 @@ the other way round (measured: twice the nodes per tick with the counters after 
 
 from __future__ import annotations
 
-from compiler import ir
-from compiler.ir import Node
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
 
 __all__ = ["Monitor", "Outside", "NoRoom", "state_bits", "deadline_uses", "less_than"]
 
@@ -207,13 +207,13 @@ class Monitor:
 
     def add_bit(self, init: bool) -> tuple[object, list]:
         """A state bit for another machine in the product (an automaton of
-        :mod:`check.buchi_game`): ``(its BDD variable, [current, next, init, None])``; the
+        :mod:`fretc.check.buchi_game`): ``(its BDD variable, [current, next, init, None])``; the
         caller sets the next-value function (index 3)."""
         return self._bit(init)
 
     def add_choice(self) -> int:
         """A free variable chosen each tick like an output, not a state (the choice among a
-        nondeterministic automaton's edges, :mod:`check.buchi_game`): its BDD variable,
+        nondeterministic automaton's edges, :mod:`fretc.check.buchi_game`): its BDD variable,
         in the slot of a state bit."""
         var = self.base + 2 * (len(self.bits) - self.delays - self.counted + self.choices)
         if var >= self.counter_base:

@@ -8,13 +8,13 @@ outputs so that every requirement holds on every infinite run whatever the input
 (Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
 connected component of requirements sharing variables.
 
-Safety requirements are decided by the symbolic safety game of :mod:`check.safety_game`
+Safety requirements are decided by the symbolic safety game of :mod:`fretc.check.safety_game`
 (their pt monitors, numeric outputs as constrained controller choices) unless the engine
 is ``spot``; an unrealizable safety part makes the component unrealizable; otherwise a
 component with a requirement that is not safety goes to Spot's game, as follows.
 
 Each component's specification, on the ft_inf formulas with the numeric abstraction
-(:mod:`check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
+(:mod:`fretc.check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
 invariants of input comparisons are assumptions on the environment, those of output
 comparisons obligations of the controller. A comparison is an output when it reads an output
 variable. Spot decides it with a synthesis game (``spot.ltl_to_game``, ``spot.solve_game``);
@@ -30,19 +30,19 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from common.errors import CheckError
+from fretc.common.errors import CheckError
 
-from compiler import ir
-from .findings import Finding
-from .findings import ids as _ids
-from .findings import subsets_text
-from .checker import SPOT_MAX_BOUND
-from .smt import max_bound
-from .solver import UNKNOWN
-from .witness import _atoms
-from .numeric_abstraction import NumericAbstraction, simple_comparison
-from .safety_game import Outside, game_atoms, letter_name
-from compiler.printers import mangle, to_smv, to_spot
+from fretc.compiler import ir
+from fretc.check.findings import Finding
+from fretc.check.findings import ids as _ids
+from fretc.check.findings import subsets_text
+from fretc.check.checker import SPOT_MAX_BOUND
+from fretc.check.smt import max_bound
+from fretc.check.solver import UNKNOWN
+from fretc.check.witness import _atoms
+from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
+from fretc.check.safety_game import Outside, game_atoms, letter_name
+from fretc.compiler.printers import mangle, to_smv, to_spot
 
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
 
@@ -107,7 +107,7 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
 
 class _Decider:
     """Realizability of a set of requirement items, memoized by the set. Safety
-    requirements go to the symbolic safety game (:mod:`check.safety_game`) unless the
+    requirements go to the symbolic safety game (:mod:`fretc.check.safety_game`) unless the
     engine is ``spot``; the rest to Spot's synthesis game. An unrealizable safety part makes
     the whole set unrealizable (a subset's environment strategy defeats the superset);
     otherwise a set with a requirement that is not safety is Spot's. Returns UNKNOWN or a
@@ -131,7 +131,7 @@ class _Decider:
     def _game(self, items) -> object:
         """The symbolic games' answer, or None when Spot has to decide (module docstring):
         the safety game of the safety requirements; when it is won and other requirements
-        remain, the Büchi game of the whole set (:mod:`check.buchi_game`)."""
+        remain, the Büchi game of the whole set (:mod:`fretc.check.buchi_game`)."""
         safe = [x for x in items if x.pt is not None]
         rest = [x for x in items if x.pt is None]
         if safe:

@@ -14,7 +14,7 @@ unrolled into explicit states.
 
 The game (Pnueli & Rosner, POPL 1989; safety games solved by the attractor, Thomas, STACS
 1995): each tick the environment sets the inputs, then the controller sets the outputs
-knowing them (a Mealy machine, :data:`check.realizability.MACHINE`); the controller loses
+knowing them (a Mealy machine, :data:`fretc.check.realizability.MACHINE`); the controller loses
 when a requirement's pt formula is false. The states from which the environment forces a
 loss are the least fixed point ``Lose = pre(Lose)`` with
 
@@ -22,7 +22,7 @@ loss are the least fixed point ``Lose = pre(Lose)`` with
 
 computed on BDDs (BuDDy, shipped with Spot: ``import buddy``). ``env_ok`` / ``ctl_ok``
 say the comparisons of each numeric input / output variable take the truth values of one
-real value (:mod:`check.numeric_abstraction`): a comparison over an output is a choice of the
+real value (:mod:`fretc.check.numeric_abstraction`): a comparison over an output is a choice of the
 controller, constrained like the number it stands for. The set is **realizable** iff the
 initial state is outside ``Lose``; the winning region's BDD is then a controller (its size
 is reported).
@@ -45,14 +45,14 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 
-from compiler import ir
-from compiler.ir import Node
-from compiler.printers import mangle, to_smv
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import mangle, to_smv
 
-from .budget import Budget, BudgetSpent, Meter
-from .fixed_inputs import keep_forever, post, prefix_search
-from .numeric_abstraction import simple_comparison
-from .pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
+from fretc.check.budget import Budget, BudgetSpent, Meter
+from fretc.check.fixed_inputs import keep_forever, post, prefix_search
+from fretc.check.numeric_abstraction import simple_comparison
+from fretc.check.pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
 
 __all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms"]
 
@@ -89,7 +89,7 @@ def is_safety(n: Node, positive: bool = True) -> bool:
 
 
 def pt_monitors_ft_inf(formalization) -> bool:
-    """Does FRET's pt formula of ``formalization`` (a :class:`compiler.semantics.
+    """Does FRET's pt formula of ``formalization`` (a :class:`fretc.compiler.semantics.
     Formalization`) monitor its ft_inf formula: ft_inf holds on an infinite run iff pt holds
     at every tick? True when ft_inf is syntactically safe (:func:`is_safety`), except for the
     ``finally`` timing ("at the last timepoint"): its pt formula reads the last tick of a
@@ -116,7 +116,7 @@ def game_atoms(pts: Sequence[Node]) -> list[Node]:
 
 
 def letter_name(atom: Node) -> str:
-    """An atom's key in a letter, as Spot's words name it (:mod:`check.solver`) and every
+    """An atom's key in a letter, as Spot's words name it (:mod:`fretc.check.solver`) and every
     solver of ``fretc check`` gives it: the mangled name of a boolean variable, the
     FRET/SMV text of any other atom."""
     return mangle(atom.name) if atom.op == "ap" else to_smv(atom)
@@ -149,11 +149,11 @@ class _Game:
     over the atoms (the numeric consistency of inputs / outputs); ``extra``: more pt
     formulas monitored beside (their values in ``self.extra``), not required to hold;
     ``atoms_of``: more formulas whose atoms the players set (not monitored here);
-    ``reserve``: state bits kept free for more monitors (:mod:`check.buchi_game`), whose
+    ``reserve``: state bits kept free for more monitors (:mod:`fretc.check.buchi_game`), whose
     bits are added with ``self.m`` and made part of the relations by :meth:`relations`;
-    ``meter``: the query's work (:mod:`check.budget`; default budgets when None): the state
+    ``meter``: the query's work (:mod:`fretc.check.budget`; default budgets when None): the state
     variables are checked against its memory budget before they are made
-    (:class:`check.budget.BudgetSpent`), and each iteration of :meth:`solve` is paid."""
+    (:class:`fretc.check.budget.BudgetSpent`), and each iteration of :meth:`solve` is paid."""
 
     def __init__(self, pts: Sequence[Node], inputs: Sequence[str], env_inv: Node,
                  ctl_inv: Node, extra: Sequence[Node] = (), atoms_of: Sequence[Node] = (),
@@ -219,7 +219,7 @@ class _Game:
     @property
     def trans(self):
         """The transition relation, ``next <-> next-value`` for every state bit, built
-        when first asked (:mod:`check.monitor_sat` steps through it in parts instead)."""
+        when first asked (:mod:`fretc.check.monitor_sat` steps through it in parts instead)."""
         if self._trans is None:
             b, self._trans = self.b, self.b.bddtrue
             for _cur, nxt, _init, fn in self.m.bits:
@@ -230,7 +230,7 @@ class _Game:
     def step(self):
         """The moves that keep every requirement: ``ok & ctl_ok & trans`` over (state,
         letter, next state), built when first asked (the satisfiability fixed points of
-        :mod:`check.monitor_sat` step through the relation in parts instead)."""
+        :mod:`fretc.check.monitor_sat` step through the relation in parts instead)."""
         if self._step is None:
             b = self.b
             self._step = b.bdd_and(b.bdd_and(self.ok, self.ctl_ok), self.trans)
@@ -270,7 +270,7 @@ class _Game:
     def solve(self) -> bool:
         """Compute the layers of ``Lose`` (stopping once the initial state is in it);
         True when the controller wins (realizable). Raises
-        :class:`check.budget.BudgetSpent` past the meter's work budget."""
+        :class:`fretc.check.budget.BudgetSpent` past the meter's work budget."""
         b = self.b
         self.meter.relation(b, self.ok, *(fn for _c, _n, _i, fn in self.m.bits))
         lose = b.bddfalse
@@ -372,7 +372,7 @@ class _Witness:
         """Best-first search (by rank) over the sets of states: the input letters of a
         prefix after which no output sequence keeps the requirements, or None and why.
         Within :data:`SEARCH_BUDGET` sets and a quarter of the work ``budget``; past them, a
-        prefix then one input letter repeated (:mod:`check.fixed_inputs`), within another
+        prefix then one input letter repeated (:mod:`fretc.check.fixed_inputs`), within another
         quarter."""
         import heapq
 
@@ -416,7 +416,7 @@ class _Witness:
 
     def _one_letter_cycle(self, letters: list, meter: Meter) -> list | None:
         """A prefix, then one input letter repeated until no output sequence keeps the
-        requirements (:func:`check.fixed_inputs.prefix_search`), as input letters; None
+        requirements (:func:`fretc.check.fixed_inputs.prefix_search`), as input letters; None
         when none is found within ``meter``'s budget."""
         meter.relation(self.b, self.g.step)
         try:
@@ -477,11 +477,11 @@ def solve_game(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
     ``inputs``: the environment's FRET variables (every other variable is the
     controller's); ``env_inv``/``ctl_inv``: propositional IR formulas over the comparisons
     (numeric consistency of inputs / outputs); ``budget``: the query's
-    :class:`check.budget.Budget` (the game, then the search of a fixed input sequence
+    :class:`fretc.check.budget.Budget` (the game, then the search of a fixed input sequence
     within half of it more). Returns ``{"realizable": True, "strategy": {...}}`` or
     ``{"realizable": False, "inputs": [letters] | None, "run": [rows], "note": str}``
     (letters and rows: ``{atom name: bool}``). Raises :class:`Outside` for formulas the game
-    does not handle, :class:`check.budget.BudgetSpent` past the budget.
+    does not handle, :class:`fretc.check.budget.BudgetSpent` past the budget.
     """
     budget = budget or Budget()
     game = _Game(pts, inputs, env_inv, ctl_inv, meter=Meter(budget))

@@ -22,10 +22,10 @@ infinite words as Spot reads them) gets two encodings, tried in turn within one 
    answering **unsat** means no infinite word (none at all, lasso or not) meets the formulas.
 
 When neither settles the query within the budget (z3's deterministic resource count,
-``rlimit``, never seconds: :mod:`check.budget`) the answer is :data:`UNKNOWN` and
+``rlimit``, never seconds: :mod:`fretc.check.budget`) the answer is :data:`UNKNOWN` and
 :attr:`SmtSolver.failures` says what was tried.
 
-Atoms mean what they mean to Spot through :mod:`check.numeric_abstraction`: a boolean
+Atoms mean what they mean to Spot through :mod:`fretc.check.numeric_abstraction`: a boolean
 variable is a z3 ``Bool`` per position; a comparison of one variable with a constant
 (``s <= 0.5``) is that comparison on a z3 ``Real`` per position and variable (exact, where the
 abstraction's region invariant says the same); every other atom (``x + y > 2``, a boolean
@@ -36,13 +36,13 @@ function, a past-time function, ``LAST``) is an independent proposition per posi
 from __future__ import annotations
 
 from collections.abc import Sequence
-from compiler import ir
-from compiler.ir import Node
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
 
-from .budget import (BYTES_PER_NODE, NODES_PER_Z3_TERM, UNKNOWN, Z3_RLIMIT_PER_UNIT, Budget,
+from fretc.check.budget import (BYTES_PER_NODE, NODES_PER_Z3_TERM, UNKNOWN, Z3_RLIMIT_PER_UNIT, Budget,
                      RunStopped)
-from .numeric_abstraction import simple_comparison
-from .safety_game import letter_name
+from fretc.check.numeric_abstraction import simple_comparison
+from fretc.check.safety_game import letter_name
 
 __all__ = ["SmtSolver", "max_bound", "solve_capped"]
 
@@ -293,17 +293,17 @@ class _Lasso:
 class SmtSolver:
     """Answers ``fretc check``'s satisfiability queries with z3 (module docstring).
 
-    ``budget``: each query's :class:`check.budget.Budget` (default the defaults): its work
-    as z3's deterministic resource count (``rlimit``, :data:`check.budget.Z3_RLIMIT_PER_UNIT`
+    ``budget``: each query's :class:`fretc.check.budget.Budget` (default the defaults): its work
+    as z3's deterministic resource count (``rlimit``, :data:`fretc.check.budget.Z3_RLIMIT_PER_UNIT`
     per unit), shared by the attempts of the plan; its memory bounds the lasso encodings
-    before they are built (:data:`check.budget.NODES_PER_Z3_TERM` per term) and, when the
+    before they are built (:data:`fretc.check.budget.NODES_PER_Z3_TERM` per term) and, when the
     query runs in ``worker``, everything z3 allocates for it (:func:`solve_capped`).
     ``deadline``: the run's wall-clock limit (``time.monotonic()`` value): past it
-    :meth:`sat` raises :class:`check.budget.RunStopped`. ``worker``: a
-    :class:`check.solver.SpotWorker` whose process runs the queries (None, or one that does
+    :meth:`sat` raises :class:`fretc.check.budget.RunStopped`. ``worker``: a
+    :class:`fretc.check.solver.SpotWorker` whose process runs the queries (None, or one that does
     not fork: in this process, z3's memory not capped). :meth:`sat` returns
     ``(True, (prefix, cycle))`` (letters ``{atom name: bool}`` as
-    :class:`check.solver.SpotWorker` gives them), ``(False, None)``, or :data:`UNKNOWN`;
+    :class:`fretc.check.solver.SpotWorker` gives them), ``(False, None)``, or :data:`UNKNOWN`;
     ``failures`` says for each unknown answer what was tried, ``spent`` counts them. Raises
     nothing for a formula it cannot encode (a past-time operator in a future formula): that
     answer is unknown too, with the reason.
@@ -432,11 +432,11 @@ def _memory_out(reason: str) -> bool:
 
 def solve_capped(formulas: Sequence[Node], budget: Budget) -> tuple:
     """Answer one query in this process with z3's memory capped at ``budget.memory`` BDD
-    nodes of :data:`check.budget.BYTES_PER_NODE` bytes, counted from what z3 holds before
+    nodes of :data:`fretc.check.budget.BYTES_PER_NODE` bytes, counted from what z3 holds before
     the query (z3's ``memory_max_size`` is process-wide; z3 counts the bytes it asks for, so
     the cap falls at the same point on every machine). Returns ``(answer, failures, spent,
     out_of_memory)`` (:class:`SmtSolver`'s). Meant for a worker process
-    (:mod:`check.solver`): past the cap z3's state is unusable, and the caller ends the
+    (:mod:`fretc.check.solver`): past the cap z3's state is unusable, and the caller ends the
     process when ``out_of_memory``."""
     z3 = _z3()
     z3.main_ctx()  # made before the count: its tables are not the query's

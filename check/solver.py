@@ -3,12 +3,12 @@ and the BDD fixed points (BuDDy, shipped with Spot), each within the query's bud
 
 Spot's translations and game solving run in C++ and cannot be stopped from Python, so the
 queries run in one forked worker process (:class:`SpotWorker`), and no answer depends on
-time: the BDD engines count their work (:mod:`check.budget`); what Spot is given is bounded
-before it starts (:data:`SPOT_MAX_STATES`, and the tick bounds :mod:`check.checker` gives
+time: the BDD engines count their work (:mod:`fretc.check.budget`); what Spot is given is bounded
+before it starts (:data:`SPOT_MAX_STATES`, and the tick bounds :mod:`fretc.check.checker` gives
 it), so a Spot query finishes or is refused; BuDDy's node table is capped at the memory
 budget (``bdd_setmaxnodenum``: BuDDy stops the worker when it would grow past it, and the
 query answers :data:`UNKNOWN` with that reason; the next query starts a new worker). The
-run's wall-clock limit (``deadline``) only stops the whole run (:class:`check.budget.
+run's wall-clock limit (``deadline``) only stops the whole run (:class:`fretc.check.budget.
 RunStopped`). Queries and answers are plain Python values (formulas as Spot text), so they
 pickle cheaply through a pipe.
 
@@ -24,19 +24,19 @@ Queries (all on infinite words, Spot's LTL semantics):
   ``spot.ltl_to_game``, ``spot.solve_game``, ``spot.solved_game_to_mealy`` (Spot >= 2.10,
   ``ltlsynt``'s engine).
 * ``("safety_game", pts, inputs, env_inv, ctl_inv)``: the symbolic safety game of
-  :func:`check.safety_game.solve_game` (its answer dict).
+  :func:`fretc.check.safety_game.solve_game` (its answer dict).
 * ``("buchi_game", pts, liveness, inputs, env_inv, ctl_inv, search)``: the Büchi game of
-  :func:`check.buchi_game.solve_buchi_game` (its answer dict).
+  :func:`fretc.check.buchi_game.solve_buchi_game` (its answer dict).
 * ``("monitor_sat", safe, goals, invariant, finite, length, liveness, last)``: the fixed
-  points of :func:`check.monitor_sat.decide`.
-* ``("smt", formulas)``: z3's answer to :meth:`check.smt.SmtSolver.sat` (IR formulas) as
+  points of :func:`fretc.check.monitor_sat.decide`.
+* ``("smt", formulas)``: z3's answer to :meth:`fretc.check.smt.SmtSolver.sat` (IR formulas) as
   ``(answer, failures, spent, out_of_memory)``, with z3's memory capped at the query's
-  memory budget (:func:`check.smt.solve_capped`; the cap is process-wide, so this query is
+  memory budget (:func:`fretc.check.smt.solve_capped`; the cap is process-wide, so this query is
   meant for the worker). The worker sends the first three; a query that ran out of memory
   leaves z3's state unusable, so the worker ends after answering it and the next query
   starts a new one.
 
-The worker adds the query's :class:`check.budget.Budget` to the BDD queries.
+The worker adds the query's :class:`fretc.check.budget.Budget` to the BDD queries.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ import signal
 import time
 from typing import Any
 
-from .budget import UNKNOWN, Budget, BudgetSpent, RunStopped
+from fretc.check.budget import UNKNOWN, Budget, BudgetSpent, RunStopped
 
 __all__ = ["UNKNOWN", "SpotWorker", "run_query", "SPOT_MAX_STATES"]
 
@@ -62,7 +62,7 @@ SPOT_MAX_COMPLEMENT = 64
 
 
 def _bounded(aut, what: str):
-    """``aut``, or :class:`check.budget.BudgetSpent` when it has more states than
+    """``aut``, or :class:`fretc.check.budget.BudgetSpent` when it has more states than
     :data:`SPOT_MAX_STATES`."""
     if aut.num_states() > SPOT_MAX_STATES:
         raise BudgetSpent(f"Spot's {what} has {aut.num_states()} states, past the limit of "
@@ -150,7 +150,7 @@ def _product_game(texts, outputs):
 
 def run_query(query: tuple, budget: Budget | None = None) -> Any:
     """Answer one query in this process (see the module docstring for the shapes) within
-    ``budget`` (default: the defaults); raises :class:`check.budget.BudgetSpent` past it."""
+    ``budget`` (default: the defaults); raises :class:`fretc.check.budget.BudgetSpent` past it."""
     import spot  # lazy: Spot loads in the query worker process only
 
     budget = budget or Budget()
@@ -182,21 +182,21 @@ def run_query(query: tuple, budget: Budget | None = None) -> Any:
             return (False, None)
         return (True, _word(aut))
     if kind == "safety_game":
-        from .safety_game import solve_game  # lazy: BuDDy games only when asked
+        from fretc.check.safety_game import solve_game  # lazy: BuDDy games only when asked
 
         return solve_game(*query[1:], budget=budget)
     if kind == "buchi_game":
-        from .buchi_game import solve_buchi_game  # lazy: BuDDy games only when asked
+        from fretc.check.buchi_game import solve_buchi_game  # lazy: BuDDy games only when asked
 
         pts, live, inputs, env_inv, ctl_inv, search = query[1:]
         return solve_buchi_game(pts, live, inputs, env_inv, ctl_inv, budget, search)
     if kind == "monitor_sat":
-        from .monitor_sat import decide  # lazy: BuDDy fixed points only when asked
+        from fretc.check.monitor_sat import decide  # lazy: BuDDy fixed points only when asked
 
         safe, goals, inv, finite, length, live, last = query[1:]
         return decide(safe, goals, inv, finite, length, budget, live, last)
     if kind == "smt":
-        from .smt import solve_capped  # lazy: z3 only when a query needs it
+        from fretc.check.smt import solve_capped  # lazy: z3 only when a query needs it
 
         return solve_capped(query[1], budget)
     if kind == "realizable":
@@ -227,7 +227,12 @@ def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker 
     import buddy  # lazy: with Spot, in the query worker process only
 
     # BuDDy reports a full node table on the standard error before it stops the process:
-    # the parent says it in the answer instead
+    # the parent says it in the answer instead; a fault handler inherited from the parent
+    # (python -X faulthandler, pytest's) would print "Fatal Python error" and a traceback
+    # of this process on its own copy of the standard error
+    import faulthandler
+
+    faulthandler.disable()
     os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
     buddy.bdd_setmaxnodenum(memory)
     while True:
@@ -253,12 +258,12 @@ def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker 
 
 class SpotWorker:
     """A forked process answering :func:`run_query` queries within ``budget`` (a
-    :class:`check.budget.Budget`; default the defaults).
+    :class:`fretc.check.budget.Budget`; default the defaults).
 
     ``fork``: run the queries in a worker process (False: in this process, with no cap on
     BuDDy's node table; for tests). ``deadline``: the run's wall-clock limit
     (``time.monotonic()`` value, None for none): past it :meth:`ask` kills the worker and
-    raises :class:`check.budget.RunStopped`. Use as a context manager, or call
+    raises :class:`fretc.check.budget.RunStopped`. Use as a context manager, or call
     :meth:`close`. :meth:`ask` returns the answer, or :data:`UNKNOWN` when the query ran past
     its budget or Spot could not take it (a bound beyond Spot's repetition limit of 254, a
     formula it does not parse); ``failures`` keeps the reasons, so the answer says what was
@@ -296,7 +301,7 @@ class SpotWorker:
         """The answer to one :func:`run_query` query (a tuple naming the query and its
         formulas), or :data:`UNKNOWN` when it ran past its budget or Spot could not take it
         (the reason kept in :attr:`failures`). Never raises for Spot's errors; raises
-        :class:`check.budget.RunStopped` past the run's deadline."""
+        :class:`fretc.check.budget.RunStopped` past the run's deadline."""
         if not self.fork:
             try:
                 return run_query(query, self.budget)
@@ -323,7 +328,7 @@ class SpotWorker:
         ``("error", message)`` for an engine's error; ``("ended", exit code)`` when the
         worker ended before answering (BuDDy stops it with SIGABRT when its node table is
         full; any other crash). Counts nothing (the caller does); raises
-        :class:`check.budget.RunStopped` past the run's deadline."""
+        :class:`fretc.check.budget.RunStopped` past the run's deadline."""
         if self._proc is None or not self._proc.is_alive():
             self._start()
         try:

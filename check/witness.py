@@ -8,7 +8,7 @@ semantics, the one the audit's verdict uses) under FRET's trace model
 
 where ``absorbing`` gives every atom its value in the absorbing state after the last tick
 (booleans false, numbers 0); the ticks up to ``LAST`` are the CSV rows. Comparisons get
-numbers back through :meth:`check.numeric_abstraction.NumericAbstraction.values`.
+numbers back through :meth:`fretc.check.numeric_abstraction.NumericAbstraction.values`.
 
 What each witness shows (intended verdicts):
 
@@ -24,7 +24,7 @@ The verdicts written in the header (``# expected: R1=satisfied, R2=violated``) a
 intended ones but those FRET's interval semantics gives on the written numbers, for every
 requirement of the checked files; when they differ from the intended ones (an uninterpreted
 atom made the abstraction spurious) the finding says so. That semantics is the audit's own
-evidence engine (:func:`monitors.interval.verdict_of`), a layer above this one
+evidence engine (:func:`fretc.monitors.interval.verdict_of`), a layer above this one
 (ARCHITECTURE.md: layers import downwards only), so the caller passes it in as a
 :data:`Judge` (``fretc check`` does).
 """
@@ -38,18 +38,18 @@ from pathlib import Path
 
 import numpy as np
 
-from compiler import ir
-from .solver import UNKNOWN
-from compiler.evaluate import ft_at
-from compiler.ir import LAST, Node
-from compiler.printers import mangle, to_smv
+from fretc.compiler import ir
+from fretc.check.solver import UNKNOWN
+from fretc.compiler.evaluate import ft_at
+from fretc.compiler.ir import LAST, Node
+from fretc.compiler.printers import mangle, to_smv
 
 __all__ = ["Judge", "finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
 
 #: FRET's verdict of one requirement on a finite trace: ``judge(requirement, columns, n,
 #: duration_ticks)`` -> ``"satisfied"``, ``"vacuous"``, ``"violated"`` or ``"unknown"``
 #: (``columns``: FRET variable -> numpy array of ``n`` values; ``duration_ticks`` as
-#: ``Formalization.ticks``). The audit's is :func:`monitors.interval.verdict_of`.
+#: ``Formalization.ticks``). The audit's is :func:`fretc.monitors.interval.verdict_of`.
 Judge = Callable[[object, Mapping[str, np.ndarray], int, "int | None"], str]
 
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
@@ -258,7 +258,7 @@ def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
 
 def _controller_run(w: "_Witnesses", finding, path: Path) -> None:
     """The witness of an unrealizable set: the defeating inputs with a controller's best
-    effort (:mod:`check.safety_game`); some requirement of the set is violated whatever
+    effort (:mod:`fretc.check.safety_game`); some requirement of the set is violated whatever
     the controller does, so on this run too."""
     blank = {name: (False if kind == "bool" else 0.0) for name, kind in w.cols.items()}
     rows = [{**blank, **r} for r in finding.details["run"]]

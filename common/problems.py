@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from common.errors import InputError, Where
+from fretc.common.errors import InputError, Where
 
 # Kinds of DataProblem.  Strings (not an Enum) so reports and JSON stay plain.
 TRUNCATED = "truncated"  # the log ends inside a record (crashed recording)
@@ -96,7 +96,7 @@ class ProblemLog:
             self.problems.append(problem)
 
 
-#: The audit's input errors derive from :class:`common.errors.InputError` (kept here under
+#: The audit's input errors derive from :class:`fretc.common.errors.InputError` (kept here under
 #: its former name; ``except FretcError`` catches them with every other stage's errors).
 FretcInputError = InputError
 

@@ -27,12 +27,12 @@ from __future__ import annotations
 import re
 import tomllib
 
-from common.errors import FretishError
-from common.textsafe import one_line
+from fretc.common.errors import FretishError
+from fretc.common.textsafe import one_line
 
-from .codegen import file_stems
-from .ir import Node
-from .printers import mangle, to_smv
+from fretc.compiler.codegen import file_stems
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import mangle, to_smv
 
 _TERM = re.compile(r"[a-z][A-Za-z0-9_]*")  # fullmatch: "$" would take a final newline
 
@@ -227,7 +227,7 @@ def refuse_probability(compiled) -> None:
     b = getattr(compiled, "probability", None)
     if b is None:
         return
-    from common.errors import render_diagnostic
+    from fretc.common.errors import render_diagnostic
 
     e, span = compiled.entry, compiled.requirement.probability.span
     line = span.line if span.line else e.line
@@ -260,12 +260,12 @@ def psl_label_and_formula(compiled, mapping: dict | None = None):
 
 def _named(c) -> list[str]:
     """The named durations of ``c``'s requirement with their values (a comment each)."""
-    from fretish.constants import constant_notes
+    from fretc.fretish.constants import constant_notes
 
     return constant_notes(c.requirement)
 
 
 def _comment(text: str) -> str:
     """One ``#`` comment line's text: white space folded, control and bidi characters escaped
-    (:func:`common.textsafe.one_line`; a NUL or U+202E in an id must not reach the file)."""
+    (:func:`fretc.common.textsafe.one_line`; a NUL or U+202E in an id must not reach the file)."""
     return one_line(text)

@@ -8,7 +8,7 @@ has no run on exactly the bad prefixes (no infinite continuation satisfies ft_in
 :class:`LTL3Automata`.
 
 Construction: Spot's deterministic monitors of ft_inf and of its negation (exact LTL3,
-:mod:`compiler.spot_monitors`) while the bounds stay small; formula progression (:mod:`compiler.ltl3`: sound, bounds kept
+:mod:`fretc.compiler.spot_monitors`) while the bounds stay small; formula progression (:mod:`fretc.compiler.ltl3`: sound, bounds kept
 symbolic) beyond.
 """
 
@@ -20,12 +20,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from common import cache
+from fretc.common import cache
 
-from . import ir, ltl3, spot_monitors
-from .ir import Node
-from .printers import to_spot
-from .spot_monitors import spot_automata, spot_version
+from fretc.compiler import ir, ltl3, spot_monitors
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_spot
+from fretc.compiler.spot_monitors import spot_automata, spot_version
 
 #: Above this many atomic propositions the automaton step uses condition chains instead of a
 #: letter-indexed table.
@@ -37,7 +37,7 @@ MAX_AUTOMATON_STATES = 5000
 #: over a minute for 16. Spot's monitors are built only when ft_inf's largest bound and the
 #: sum of its bounds stay within these limits (a deterministic rule, so the same input always
 #: gives the same module); beyond them the LTL3 automaton comes from formula progression
-#: (:mod:`compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
+#: (:mod:`fretc.compiler.ltl3`: sound, bounds kept symbolic) and ``STATUS_NOTE`` says so.
 MAX_LTL3_BOUND = 12
 MAX_LTL3_BOUND_SUM = 96
 #: LTL3 monitors are built for at most this many atoms: beyond it an edge condition written
@@ -108,7 +108,7 @@ def ltl3_automata(ft_inf: Node) -> LTL3Automata:
     with a cold or a warm cache. Spot (exact LTL3) while ft_inf's bounds are at most
     :data:`MAX_LTL3_BOUND` ticks and sum to at most :data:`MAX_LTL3_BOUND_SUM`; formula
     progression (sound, bounds symbolic) beyond, unless a bound exceeds
-    :data:`compiler.ltl3.MAX_STATES` (progression would need at least that many residuals:
+    :data:`fretc.compiler.ltl3.MAX_STATES` (progression would need at least that many residuals:
     decided before any construction). Never raises for a formula's size: the automata are
     None and the note says why."""
     shape, atoms = canonical_shape(ft_inf)
@@ -240,7 +240,7 @@ def canonical_shape(formula: Node) -> tuple[Node, list[Node]]:
 
 def _source_key() -> str:
     """A key of the construction's code: the text of this module, of
-    :mod:`compiler.spot_monitors` and of :mod:`compiler.ltl3`."""
+    :mod:`fretc.compiler.spot_monitors` and of :mod:`fretc.compiler.ltl3`."""
     global _SOURCE_KEY
     if _SOURCE_KEY is None:
         _SOURCE_KEY = cache.key_of(*(Path(f).read_text(encoding="utf-8")
@@ -259,7 +259,7 @@ def shape_automata(kind: str, shape: Node, n_atoms: int, max_states: int,
     (Python condition over ``sub``, destination)).
 
     ``kind`` is ``"spot"`` (Spot's monitors of ft_inf and of its negation: exact LTL3) or
-    ``"progression"`` (:func:`compiler.ltl3.progression_tables`: sound, bounds kept
+    ``"progression"`` (:func:`fretc.compiler.ltl3.progression_tables`: sound, bounds kept
     symbolic). Memoized in the process and in the disk cache; the result depends only on the
     arguments, Spot's version and the construction's code (:func:`_source_key`)."""
     text = to_spot(shape)

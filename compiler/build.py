@@ -7,11 +7,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from common.errors import FretishError, render_diagnostic
+from fretc.common.errors import FretishError, render_diagnostic
 
-from .instantiate import formula_text, instantiate
-from .printers import mangle
-from .semantics import Formalization, SemanticsError
+from fretc.compiler.instantiate import formula_text, instantiate
+from fretc.compiler.printers import mangle
+from fretc.compiler.semantics import Formalization, SemanticsError
 
 PT_FTP = "(Z FALSE)"
 
@@ -25,7 +25,7 @@ FORMALIZED_KEYS = ("id", "text", "source", "line", "parent", "rationale", "key",
 class Compiled:
     """One requirement after compilation.
 
-    ``entry`` is the :class:`fretish.files.RequirementEntry`; ``formalization`` is set when
+    ``entry`` is the :class:`fretc.fretish.files.RequirementEntry`; ``formalization`` is set when
     it formalized, ``error`` (a :class:`FretishError`) otherwise; free-form requirements
     have neither.
     """
@@ -49,7 +49,7 @@ class Compiled:
 
     @property
     def requirement(self):
-        """The parsed requirement (:class:`fretish.ast.Requirement`), or None if it did not parse."""
+        """The parsed requirement (:class:`fretc.fretish.ast.Requirement`), or None if it did not parse."""
         return self.entry.requirement
 
     @property
@@ -70,7 +70,7 @@ class Compiled:
     def smv_text(self) -> dict[str, str]:
         """FRET/SMV text of the formulas: ``{"ft": ..., "ft_inf": ..., "pt": ...}`` (pt with
         FTP printed ``(Z FALSE)``, as FRET does), printed once (from the template key's
-        printed form where it applies, :func:`compiler.instantiate.formula_text`)."""
+        printed form where it applies, :func:`fretc.compiler.instantiate.formula_text`)."""
         if "smv" not in self._cache:
             self._cache["smv"] = {w: formula_text(self.formalization, w)
                                   for w in ("ft", "ft_inf", "pt")}
@@ -85,7 +85,7 @@ class Compiled:
 
     @property
     def probability(self):
-        """The requirement's probability bound (:class:`compiler.ir.ProbabilityBound`), or
+        """The requirement's probability bound (:class:`fretc.compiler.ir.ProbabilityBound`), or
         None: a requirement without ``with probability``, or one that did not formalize."""
         f = self.formalization
         return None if f is None else getattr(f, "probability", None)
@@ -105,7 +105,7 @@ class Compiled:
         """The five printed forms ``(ft, ft_inf, pt, ft_spot, ft_inf_spot)`` (FRET/SMV, pt
         with FTP as ``(Z FALSE)``; Spot), computed in that order, each as :meth:`smv` and
         :meth:`spot` give it; ``ValueError`` where Spot has no form. A template
-        instantiation (:class:`compiler.instantiate.InstantiatedFormalization`) fills its
+        instantiation (:class:`fretc.compiler.instantiate.InstantiatedFormalization`) fills its
         atoms' texts in once for all five."""
         f = self.formalization
         forms = getattr(f, "printed", None)
@@ -117,7 +117,7 @@ class Compiled:
     def json_forms(self, enc, seps: tuple) -> str | None:
         """The five printed forms as JSON strings escaped by ``enc`` and separated by
         ``seps``, in one piece, where the formalization gives them so
-        (:meth:`compiler.instantiate.InstantiatedFormalization.json_forms`); else None."""
+        (:meth:`fretc.compiler.instantiate.InstantiatedFormalization.json_forms`); else None."""
         forms = getattr(self.formalization, "json_forms", None)
         return None if forms is None else forms(enc, seps)
 
@@ -174,7 +174,7 @@ class Compiled:
 
 
 def compile_entry(entry) -> Compiled:
-    """Formalize one :class:`fretish.files.RequirementEntry` (never raises for bad input)."""
+    """Formalize one :class:`fretc.fretish.files.RequirementEntry` (never raises for bad input)."""
     if entry.error is not None:
         return Compiled(entry, error=entry.error)
     req = entry.requirement

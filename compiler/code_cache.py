@@ -1,6 +1,6 @@
 """The bytecode of a checked monitor module, kept on disk like Python's ``__pycache__``.
 
-:func:`compiler.codegen.check_module` compiles a generated module and the step code of each
+:func:`fretc.compiler.codegen.check_module` compiles a generated module and the step code of each
 of its shapes (``_SHAPES``) before it runs them: on the 696 sentences of
 ``fret_trace_verdicts.jsonl`` that is 0.6 s of CPU, a fifth of a warm ``fretc FILE --emit
 monitor``. Regenerating the monitors of an unchanged requirement file gives byte-identical
@@ -15,7 +15,7 @@ number: code objects are not portable between Python versions) and the module na
 entry holds the SHA-256 of the module text it was compiled from and of its payload
 (``marshal`` of the module's code object and the tuple of its shapes' code objects). An
 entry for another text, damaged, or of another layout is a miss: the module is compiled
-again (:mod:`common.cache`: the cache changes speed, never output).
+again (:mod:`fretc.common.cache`: the cache changes speed, never output).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import importlib.util
 import marshal
 import types
 
-from common import cache
+from fretc.common import cache
 
 __all__ = ["load", "store"]
 

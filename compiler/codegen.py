@@ -6,9 +6,9 @@ class has ``VARIABLES``, ``step(sample) -> bool``, ``status``, ``finish() -> boo
 ``reset()`` (see the template's docstring).
 
 * ``step`` evaluates the pt formula with the Havelund-Rosu dynamic-programming scheme
-  (:mod:`compiler.pt_step`): constant time and memory per tick.
+  (:mod:`fretc.compiler.pt_step`): constant time and memory per tick.
 * ``status`` follows the two deterministic LTL3 automata of ft_inf
-  (:mod:`compiler.automata`): a prefix with no run in ``bad`` is a bad prefix (no infinite
+  (:mod:`fretc.compiler.automata`): a prefix with no run in ``bad`` is a bad prefix (no infinite
   continuation satisfies ft_inf: *violated*), a prefix with no run in ``good`` a good prefix
   (*satisfied*); otherwise *unknown* (LTL3; Bauer, Leucker & Schallhart, TOSEM 2011).
 
@@ -42,12 +42,12 @@ import sys
 import types
 from dataclasses import dataclass
 
-from common import cache as fretc_cache
+from fretc.common import cache as fretc_cache
 
-from . import code_cache
-from .automata import LTL3Automata, ltl3_automata
-from .ir import Node
-from .pt_step import CodegenError, StepCode, check_monitorable, compile_nodes
+from fretc.compiler import code_cache
+from fretc.compiler.automata import LTL3Automata, ltl3_automata
+from fretc.compiler.ir import Node
+from fretc.compiler.pt_step import CodegenError, StepCode, check_monitorable, compile_nodes
 
 __all__ = ["CodegenError", "InvalidMonitorError", "MonitorInfo", "MonitorModule",
            "MonitorSource", "build_monitor_modules", "check_module", "emit_monitors",
@@ -58,7 +58,7 @@ __all__ = ["CodegenError", "InvalidMonitorError", "MonitorInfo", "MonitorModule"
 @dataclass
 class MonitorSource:
     """Everything the template needs for one requirement's monitor class: the requirement's
-    identity and formulas (FRET syntax), the tick code (:class:`compiler.pt_step.StepCode`
+    identity and formulas (FRET syntax), the tick code (:class:`fretc.compiler.pt_step.StepCode`
     pieces: ``step_lines``, the state tuple's ``slots_*``, the local of the pt ``verdict``)
     and the LTL3 ``automata`` with the Python code of each automaton's letter
     (``bad_sub``, ``good_sub``: an int of the atom bits, or for condition chains the tuple
@@ -135,7 +135,7 @@ def _constant_notes(compiled) -> list[str]:
     d = req.timing.duration if req is not None and not req.freeform else None
     if d is None or d.name is None:  # (attributes only: the main line of plain requirements)
         return []
-    from fretish.constants import constant_notes
+    from fretc.fretish.constants import constant_notes
 
     return constant_notes(req)
 
@@ -238,7 +238,7 @@ def _env():
     import jinja2  # lazy: start-up of the commands that render nothing (--emit ltl)
 
     class BytecodeCache(jinja2.BytecodeCache):
-        """Jinja's compiled templates in fretc's disk cache (:mod:`common.cache`: skipped
+        """Jinja's compiled templates in fretc's disk cache (:mod:`fretc.common.cache`: skipped
         when off or not writable). Jinja checks an entry's header (its bytecode format,
         Python's version) and the template source's checksum; the SHA-256 of the entry
         written before it makes a damaged entry a miss too (compiled again), never a
@@ -259,7 +259,7 @@ def _env():
                                     hashlib.sha256(payload).digest() + payload)
 
     env = jinja2.Environment(
-        loader=jinja2.PackageLoader("templates", ""),
+        loader=jinja2.PackageLoader("fretc.templates", ""),
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
         undefined=jinja2.StrictUndefined, autoescape=False, bytecode_cache=BytecodeCache())
     env.filters["py"] = repr
@@ -289,7 +289,7 @@ def check_module(text: str, module_name: str, cache: bool = False) -> None:
     through two ticks (all variables 0, then 1) and finishes.
 
     With ``cache``, the code objects of the module and of its shapes come from the disk
-    cache when a previous check compiled this very text (:mod:`compiler.code_cache`; the
+    cache when a previous check compiled this very text (:mod:`fretc.compiler.code_cache`; the
     names check, the load and the steps run all the same), and are stored there after a
     check that passed.
 

@@ -23,7 +23,7 @@ tables:
 
 Spot's ``tgba_powerset`` + ``minimize_monitor`` compute the same automaton (the minimal DFA of
 a language is unique up to the names of its states, and
-:func:`compiler.spot_monitors._bfs_tables` renames them canonically) but take seconds where this
+:func:`fretc.compiler.spot_monitors._bfs_tables` renames them canonically) but take seconds where this
 takes milliseconds; ``tests/compiler/test_dfa.py`` compares the two.
 
 Tables: ``rows[state][letter]`` is the destination state or -1 (no transition: reject).

@@ -20,8 +20,8 @@ import operator
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from .ir import Node
-from .printers import to_smv
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
 
 Trace = Sequence[Mapping[str, Any]]
 

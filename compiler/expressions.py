@@ -3,19 +3,19 @@
 Temporal functions of the formula's own direction are expanded with FRET's definitions
 (``../shared/fretish/README.md`` section 6b: past functions in pt, future ones in ft and
 ft_inf); functions of the other direction become derived atoms (IR ``past``/``future``
-nodes named by FRET's printed call). :mod:`compiler.semantics` uses :class:`Expander` for
+nodes named by FRET's printed call). :mod:`fretc.compiler.semantics` uses :class:`Expander` for
 the response, condition, stop and scope expressions of a requirement.
 """
 
 from __future__ import annotations
 
-from fretish import ast as A
-from common.errors import FretishError
-from fretish.limits import MAX_DURATION_TICKS, duration_too_long
+from fretc.fretish import ast as A
+from fretc.common.errors import FretishError
+from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long
 
-from . import ir
-from .ir import FALSE, FTP, TRUE, F, G, H, Node, O, S, U, X, Y, and_, implies, not_, or_
-from .printers import expr_text
+from fretc.compiler import ir
+from fretc.compiler.ir import FALSE, FTP, TRUE, F, G, H, Node, O, S, U, X, Y, and_, implies, not_, or_
+from fretc.compiler.printers import expr_text
 
 __all__ = ["Expander", "SemanticsError", "mentions_time"]
 

@@ -20,14 +20,14 @@ import itertools
 import re
 from collections.abc import Iterable
 
-from fretish import ast as A
-from common.errors import FretishError
-from fretish.parser import parse_expression
+from fretc.fretish import ast as A
+from fretc.common.errors import FretishError
+from fretc.fretish.parser import parse_expression
 
-from . import ir
-from .expressions import Expander, SemanticsError
-from .ir import Node
-from .printers import expr_text
+from fretc.compiler import ir
+from fretc.compiler.expressions import Expander, SemanticsError
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import expr_text
 
 _THEN_WORD = re.compile(r"\bthen\b", re.IGNORECASE)
 _IF = re.compile(r"\bif\s+", re.IGNORECASE)

@@ -1,5 +1,5 @@
-"""A requirement's atoms converted for :mod:`compiler.instantiate`, as
-:mod:`compiler.semantics` converts them, with the work kept to the atoms.
+"""A requirement's atoms converted for :mod:`fretc.compiler.instantiate`, as
+:mod:`fretc.compiler.semantics` converts them, with the work kept to the atoms.
 
 An expression without temporal functions or FTP means the same in ft, ft_inf and pt and is
 converted once (:class:`PlainExpander`, which also collects its variables); the others are
@@ -12,12 +12,12 @@ requirement's expression or text.
 
 from __future__ import annotations
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from . import ir
-from .expressions import _TIME_NAMES, Expander
-from .ir import FALSE, FTP, LAST, Node
-from .scope_timing import fn_right, pt_endpoints
+from fretc.compiler import ir
+from fretc.compiler.expressions import _TIME_NAMES, Expander
+from fretc.compiler.ir import FALSE, FTP, LAST, Node
+from fretc.compiler.scope_timing import fn_right, pt_endpoints
 
 __all__ = ["PlainExpander", "SharingExpander", "Timed", "TIMED", "has_future_function",
            "is_shared_leaf", "name_node", "named_endpoints", "variables_into"]
@@ -30,15 +30,15 @@ TIMED = object()  # an expression with temporal functions or FTP (converted per 
 
 
 class PlainExpander(Expander):
-    """:class:`~compiler.expressions.Expander` for ft (``FTP``, ``LAST``) that converts an
+    """:class:`~fretc.compiler.expressions.Expander` for ft (``FTP``, ``LAST``) that converts an
     expression *without* temporal functions or FTP - which then means the same in ft,
-    ft_inf and pt (:mod:`compiler.semantics` converts it once) - and collects its
+    ft_inf and pt (:mod:`fretc.compiler.semantics` converts it once) - and collects its
     variables on the way: ``names`` holds the ``ap``/``var`` names in the order the
     conversion creates them, which is the pre-order of the IR it returns (children are
     converted left to right, nothing converted is dropped: ``!!a`` folds to ``a``, which
-    keeps ``a``'s names), i.e. :func:`compiler.ir.variables` of the result. At a temporal
+    keeps ``a``'s names), i.e. :func:`fretc.compiler.ir.variables` of the result. At a temporal
     function or FTP it raises :class:`Timed` (the caller converts per formula), so one
-    walk replaces :func:`~compiler.expressions.mentions_time`'s scan and the conversion."""
+    walk replaces :func:`~fretc.compiler.expressions.mentions_time`'s scan and the conversion."""
 
     def __init__(self):
         super().__init__("ft", FTP, LAST)
@@ -49,7 +49,7 @@ class PlainExpander(Expander):
     # Expander builds for them, in the same order (children left to right); any other
     # shape, or an error, is Expander's own code.
     def bool(self, e: A.Expr) -> Node:
-        """``e`` as a boolean IR formula, as :meth:`compiler.expressions.Expander.bool` builds it
+        """``e`` as a boolean IR formula, as :meth:`fretc.compiler.expressions.Expander.bool` builds it
         for an expression without temporal functions."""
         t = type(e)
         if t is _Var:
@@ -81,7 +81,7 @@ class PlainExpander(Expander):
         return Expander._bool_call(self, e)
 
     def term(self, e: A.Expr) -> Node:
-        """``e`` as a numeric IR term, as :meth:`compiler.expressions.Expander.term` builds it."""
+        """``e`` as a numeric IR term, as :meth:`fretc.compiler.expressions.Expander.term` builds it."""
         t = type(e)
         if t is _Var:
             return self._name(e.name, "var")
@@ -114,8 +114,8 @@ _ENDPOINTS: dict = {}
 
 
 def named_endpoints(scope: str, m: Node | None) -> tuple:
-    """``(Left, Right, Right_inf)``: :func:`~compiler.scope_timing.pt_endpoints`'s left of
-    ``m``, :func:`~compiler.scope_timing.fn_right` of ``m`` with ``LAST`` and with FALSE;
+    """``(Left, Right, Right_inf)``: :func:`~fretc.compiler.scope_timing.pt_endpoints`'s left of
+    ``m``, :func:`~fretc.compiler.scope_timing.fn_right` of ``m`` with ``LAST`` and with FALSE;
     ``m`` is None or a leaf of :data:`_LEAVES` (a name), whose endpoints are functions of
     the scope and the name only: made once per pair (:data:`_ENDPOINTS`)."""
     key = (scope, None if m is None else m.name)
@@ -145,7 +145,7 @@ def name_node(op: str, name: str) -> Node:
 
 
 class SharingExpander(Expander):
-    """:class:`~compiler.expressions.Expander` whose temporal functions' expansions are
+    """:class:`~fretc.compiler.expressions.Expander` whose temporal functions' expansions are
     shared, through ``memo``, by the expanders of one requirement: an expansion is built
     in a pt expander whatever the formula kind, from the call, ``Left``, ``Right`` and
     the endpoint-free flag only (:meth:`Expander._past_function`), so ft's derived
@@ -161,7 +161,7 @@ class SharingExpander(Expander):
     # the common shapes as in PlainExpander (same nodes, same order; leaves shared)
     def bool(self, e: A.Expr) -> Node:
         """``e`` as a boolean IR formula whose name nodes are shared between the formulas of one
-        requirement (:meth:`compiler.expressions.Expander.bool`'s result otherwise)."""
+        requirement (:meth:`fretc.compiler.expressions.Expander.bool`'s result otherwise)."""
         t = type(e)
         if t is _Var:
             name = e.name
@@ -218,7 +218,7 @@ def has_future_function(e: A.Expr) -> bool:
 
 
 def variables_into(node: Node, seen: dict, done: set) -> None:
-    """:func:`compiler.ir.variables` of ``node`` added to ``seen`` (a dict used as an
+    """:func:`fretc.compiler.ir.variables` of ``node`` added to ``seen`` (a dict used as an
     ordered set), in the same order: pre-order, first appearance; a sub-formula met again
     (``done``: node identities) is skipped, its names are in ``seen`` already."""
     op = node.op

@@ -76,7 +76,7 @@ class Node:
 
     def __repr__(self) -> str:
         """A short structural form for debugging (``Node<& 2 args>``, ``Node<ap p>``);
-        :func:`compiler.printers.to_smv` prints a formula."""
+        :func:`fretc.compiler.printers.to_smv` prints a formula."""
         head = " ".join(str(x) for x in (self.op, self.name) if x is not None)
         bounds = f"[{self.lo},{self.hi}]" if self.hi is not None else ""
         args = f" {len(self.args)} args" if self.args else ""
@@ -90,7 +90,7 @@ class Node:
 
 #: while not None, the list :func:`and_`, :func:`or_` and :func:`S` append each pair of
 #: formulas they compared and found different (``a & a = a``, ``a | a = a``, FRET's since
-#: identity): :mod:`compiler.instantiate` records a template's comparisons with
+#: identity): :mod:`fretc.compiler.instantiate` records a template's comparisons with
 #: :class:`recording_comparisons` to redo them on a requirement's atoms
 _compared: list | None = None
 
@@ -409,7 +409,7 @@ class ProbabilityBound:
     number as written (printed back unchanged). Immutable and hashable. :meth:`pctl`
     prints FRET's probabilistic form around a path formula's text (PRISM's syntax
     ``P>=0.95 [ path ]``, the form FRET's probabilistic formalization prints; the
-    parser (:mod:`fretish.parser`) has already refused a bound outside [0, 1]).
+    parser (:mod:`fretc.fretish.parser`) has already refused a bound outside [0, 1]).
     """
 
     __slots__ = ("op", "p", "text")

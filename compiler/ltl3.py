@@ -1,7 +1,7 @@
 """LTL3 monitors by formula progression, for formulas whose bounds are too large for Spot.
 
 Spot determinizes bounded operators by unrolling ``F[0,n]`` into n nested ``X``, which grows
-exponentially with n (see :data:`compiler.automata.MAX_LTL3_BOUND`). Formula progression
+exponentially with n (see :data:`fretc.compiler.automata.MAX_LTL3_BOUND`). Formula progression
 (Bacchus & Kabanza, "Planning for temporally extended goals", AMAI 1998; used for LTL3 by
 Bauer, Leucker & Schallhart, TOSEM 2011, section 4) keeps bounds symbolic instead: reading one
 letter turns a formula into its *residual*, the formula the rest of the word must satisfy
@@ -21,9 +21,9 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
-from . import ir
-from .ir import FALSE, TRUE, Node
-from .printers import to_smv
+from fretc.compiler import ir
+from fretc.compiler.ir import FALSE, TRUE, Node
+from fretc.compiler.printers import to_smv
 
 #: Give up beyond this many residual states (the module then has no LTL3 automaton).
 MAX_STATES = 4096
@@ -225,7 +225,7 @@ def progression_tables(formula: Node, atoms: list[Node],
                        max_progressions: int | None = MAX_PROGRESSIONS
                        ) -> tuple[list, list, int] | None:
     """Deterministic residual automaton of ``formula`` over the letters of ``atoms`` (bit i
-    of a letter = value of ``atoms[i]``), as two tables in :mod:`compiler.automata`'s format:
+    of a letter = value of ``atoms[i]``), as two tables in :mod:`fretc.compiler.automata`'s format:
     ``bad[state][letter]`` (-1 when the residual is FALSE: violated) and
     ``good[state][letter]`` (-1 when it is TRUE: satisfied), and the initial state 0.
     Returns None when there are more than :data:`MAX_ATOMS` atoms or :data:`MAX_STATES`

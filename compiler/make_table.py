@@ -1,15 +1,15 @@
-"""Generate the template table (:mod:`compiler.template_table`) from :mod:`compiler.semantics`.
+"""Generate the template table (:mod:`fretc.compiler.template_table`) from :mod:`fretc.compiler.semantics`.
 
-    python -m compiler.make_table [--out DIR]
+    python -m fretc.compiler.make_table [--out DIR]
 
 writes one JSON file per template key (default: ``compiler/table/``, checked in), as FRET
 generates its ``semantics.json`` from its templates. Each key's three formulas are built
 with placeholder atoms through the very construction of a requirement
-(:func:`compiler.semantics.construct`) and printed with each placeholder as a field
+(:func:`fretc.compiler.semantics.construct`) and printed with each placeholder as a field
 ``{i}``; the pairs of formulas the simplifying constructors compared and found different
-while building (:class:`compiler.ir.recording_comparisons`) are reduced to the conditions
+while building (:class:`fretc.compiler.ir.recording_comparisons`) are reduced to the conditions
 on the atoms under which they would be equal (:func:`unify`), which
-:mod:`compiler.fallback` checks per requirement. The duration of a key of class ``n >= 2``
+:mod:`fretc.compiler.fallback` checks per requirement. The duration of a key of class ``n >= 2``
 is a symbolic bound (:class:`SymbolicBound`): ``within``/``for``/``after`` use bounds from
 ``n - 1`` to ``n + 1``, which for every ``n >= 2`` compare alike with each other and with
 0, so one template serves them all. The files are deterministic (keys sorted, the
@@ -23,13 +23,13 @@ import json
 import os
 import re
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from . import ir
-from .ir import LAST, Node
-from .printers import to_smv, to_spot
-from .semantics import construct
-from .template_table import (ALL_KEYS, ATOMS, BOUND0, MAX_OFFSET, MIN_OFFSET, TABLE_DIR,
+from fretc.compiler import ir
+from fretc.compiler.ir import LAST, Node
+from fretc.compiler.printers import to_smv, to_spot
+from fretc.compiler.semantics import construct
+from fretc.compiler.template_table import (ALL_KEYS, ATOMS, BOUND0, MAX_OFFSET, MIN_OFFSET, TABLE_DIR,
                              file_name)
 
 __all__ = ["SymbolicBound", "build_template", "unify", "write_table", "main"]
@@ -79,8 +79,8 @@ _FIELD_OF = {id(p): i for i, p in enumerate(PLACEHOLDERS)}
 
 
 def build_template(scope: str, cond: str, timing: str, n: int | None) -> dict:
-    """The table file's data (module docstring of :mod:`compiler.template_table`) of one
-    key, built with placeholder atoms by :func:`compiler.semantics.construct` (``n``:
+    """The table file's data (module docstring of :mod:`fretc.compiler.template_table`) of one
+    key, built with placeholder atoms by :func:`fretc.compiler.semantics.construct` (``n``:
     ticks, or a :class:`SymbolicBound`)."""
     ph = PLACEHOLDERS
     sets = [(ph[k + 3], None if cond == "null" else ph[k + 1],
@@ -191,7 +191,7 @@ def file_text(key: tuple) -> str:
 
 
 def write_table(folder: str) -> int:
-    """Write the file of every key of :data:`~compiler.template_table.ALL_KEYS` into
+    """Write the file of every key of :data:`~fretc.compiler.template_table.ALL_KEYS` into
     ``folder`` (created when missing); returns the number of files."""
     os.makedirs(folder, exist_ok=True)
     for key in ALL_KEYS:
@@ -202,7 +202,7 @@ def write_table(folder: str) -> int:
 
 
 def main(argv=None) -> None:
-    """``python -m compiler.make_table [--out DIR]``."""
+    """``python -m fretc.compiler.make_table [--out DIR]``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=TABLE_DIR, help="folder (default: %(default)s)")
     args = ap.parse_args(argv)

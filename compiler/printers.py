@@ -16,10 +16,10 @@ from __future__ import annotations
 import functools
 import re
 
-from fretish import ast as A
-from fretish.words import FRET_RESERVED, RESERVED_LETTERS, RESERVED_WORDS
+from fretc.fretish import ast as A
+from fretc.fretish.words import FRET_RESERVED, RESERVED_LETTERS, RESERVED_WORDS
 
-from .ir import Node
+from fretc.compiler.ir import Node
 
 #: FRET's names for the special characters of identifiers (../shared/fretish/README.md section
 #: 6b, "Names"); each prints as ``_XXX_``.
@@ -37,7 +37,7 @@ _BARE = re.compile(r"^[A-Za-z](?:[A-Za-z0-9_%]|\.(?=[A-Za-z0-9_%]))*$")
 def _is_bare(name: str) -> bool:
     """Can ``name`` be written without quotes in FRETish (grammar rule NAME: a letter, then
     letters, digits, ``_``, ``%`` and inner ``.``; never a reserved word, nor one of the
-    names FRET refuses bare, :data:`fretish.words.FRET_RESERVED`)?"""
+    names FRET refuses bare, :data:`fretc.fretish.words.FRET_RESERVED`)?"""
     return (bool(_BARE.match(name)) and name.lower() not in RESERVED_WORDS
             and name not in RESERVED_LETTERS and name not in FRET_RESERVED)
 

@@ -9,7 +9,7 @@ constant whatever the trace length. Bounded past operators keep a counter (``O[0
 
 Identifiers in the code are generated (``v0``, ``n3``, ``s1``), never copied from the
 requirement: a variable's FRET name reaches the module only as a string literal
-(:mod:`compiler.codegen` writes it with ``repr``).
+(:mod:`fretc.compiler.codegen` writes it with ``repr``).
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from common.errors import FretishError
+from fretc.common.errors import FretishError
 
-from . import ir
-from .ir import Node
-from .printers import to_smv
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
 
 #: An expression read once is inlined into the expression that reads it up to this nesting
 #: depth; deeper ones get a local of their own, so the emitted code's nesting is bounded

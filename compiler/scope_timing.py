@@ -3,13 +3,13 @@
 wrapper).
 
 Restated from FRET's ``formalizations_future`` / ``formalizations_past`` building blocks and
-``../shared/fretish/README.md`` section 4; :mod:`compiler.semantics` composes them (scope
+``../shared/fretish/README.md`` section 4; :mod:`fretc.compiler.semantics` composes them (scope
 wrapper (condition wrapper (timing))).
 """
 
 from __future__ import annotations
 
-from .ir import FTP, LAST, F, G, H, Node, O, S, U, V, X, Y, and_, and_all, implies, not_, or_
+from fretc.compiler.ir import FTP, LAST, F, G, H, Node, O, S, U, V, X, Y, and_, and_all, implies, not_, or_
 
 __all__ = ["ft_timing", "pt_timing", "ft_markers", "pt_markers", "ft_right", "fn_right",
            "pt_endpoints", "ft_scope", "pt_scope"]

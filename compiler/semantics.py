@@ -1,7 +1,7 @@
-"""FRET's semantics: a FRETish :class:`~fretish.ast.Requirement` to its three formulas.
+"""FRET's semantics: a FRETish :class:`~fretc.fretish.ast.Requirement` to its three formulas.
 
 For each of FRET's 288 template keys (8 scopes x 3 condition kinds x 12 timings) this module
-builds, in the formula IR (:mod:`compiler.ir`):
+builds, in the formula IR (:mod:`fretc.compiler.ir`):
 
 * **ft** - future-time LTL over finite traces, evaluated at position 0, with ``LAST`` true
   exactly at the last position;
@@ -27,14 +27,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from fretish import ast as A
-from fretish.limits import MAX_DURATION_TICKS, duration_too_long
-from common.units import format_period_ms
+from fretc.fretish import ast as A
+from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long
+from fretc.common.units import format_period_ms
 
-from . import ir
-from .expressions import Expander, SemanticsError, mentions_time
-from .ir import FALSE, FTP, LAST, Node, S, V, X, Y, and_, and_all, implies, not_, or_
-from .scope_timing import (fn_right, ft_right, ft_scope, ft_timing, pt_endpoints, pt_scope,
+from fretc.compiler import ir
+from fretc.compiler.expressions import Expander, SemanticsError, mentions_time
+from fretc.compiler.ir import FALSE, FTP, LAST, Node, S, V, X, Y, and_, and_all, implies, not_, or_
+from fretc.compiler.scope_timing import (fn_right, ft_right, ft_scope, ft_timing, pt_endpoints, pt_scope,
                            pt_timing)
 
 
@@ -57,7 +57,7 @@ class Formalization:
     warnings: list[str] = field(default_factory=list)
     ticks: int | None = None
     pt_causal: bool = True
-    #: FRETish's ``with probability OP p`` (:class:`compiler.ir.ProbabilityBound`), or None:
+    #: FRETish's ``with probability OP p`` (:class:`fretc.compiler.ir.ProbabilityBound`), or None:
     #: the bound applies across runs, the formulas to each run
     probability: ir.ProbabilityBound | None = None
 
@@ -165,7 +165,7 @@ def template_parts(req: A.Requirement, tick_period: Fraction | None):
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     warnings: list[str] = []
     if "then" in req.text.lower():
-        from .ifthen import regrouping_warnings  # lazy: only for 'then' (start-up time)
+        from fretc.compiler.ifthen import regrouping_warnings  # lazy: only for 'then' (start-up time)
 
         warnings.extend(regrouping_warnings(req))
     n = None
@@ -183,7 +183,7 @@ def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields):
     converted by that :class:`Expander`. Returns ``(ft, ft_inf, pt, used, px)``: the IR
     nodes, the atoms of ft ``(mode, condition, stop, response)`` and pt's expander. Both
     the full build (:func:`formalize`) and the per-template-key instantiation
-    (:mod:`compiler.instantiate`, with placeholder atoms) run this one construction.
+    (:mod:`fretc.compiler.instantiate`, with placeholder atoms) run this one construction.
     """
     negate = scope.startswith("only")
     m_pt = mode("pt", LAST)

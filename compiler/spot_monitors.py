@@ -3,10 +3,10 @@
 ``bad`` is the deterministic monitor of the formula (no run on exactly its bad prefixes),
 ``good`` that of its negation (LTL3; Bauer, Leucker & Schallhart, TOSEM 2011), built by
 Spot's ``monitor`` translation (:func:`spot_automata`), or for safety and guarantee formulas
-by our subset construction and minimization (:mod:`compiler.dfa`).
+by our subset construction and minimization (:mod:`fretc.compiler.dfa`).
 
 Output is canonical, whatever the process did before: the deterministic monitor is
-minimized (Spot's ``minimize_monitor`` or :func:`compiler.dfa.minimize`: the minimal DFA of
+minimized (Spot's ``minimize_monitor`` or :func:`fretc.compiler.dfa.minimize`: the minimal DFA of
 a prefix language is unique up to renaming states) and its states renumbered breadth-first
 from the initial state, letters in increasing order (:func:`_bfs_tables`); Spot runs with a
 fresh BDD dictionary whose variables are registered in atom order.
@@ -14,8 +14,8 @@ fresh BDD dictionary whose variables are registered in atom order.
 
 from __future__ import annotations
 
-from . import dfa
-from .pt_step import CodegenError
+from fretc.compiler import dfa
+from fretc.compiler.pt_step import CodegenError
 
 #: Above this many states, the powerset of Spot's low-effort monitor is not minimized
 #: (``minimize_monitor`` takes about a minute on 80,000 states); Spot's reduced translation
@@ -29,7 +29,7 @@ LOW_XARGS = "branch-post=0,exprop=0"
 
 def bdd_code(f, aps: list[str]) -> str:
     """Python code of a Spot Boolean formula ``f`` over the letter ``sub`` (atom ``aps[i]``
-    is bit ``i``). Raises :class:`~compiler.pt_step.CodegenError` for an operator that is not
+    is bit ``i``). Raises :class:`~fretc.compiler.pt_step.CodegenError` for an operator that is not
     Boolean."""
     import spot  # lazy: only automaton construction needs Spot (start-up of --emit ltl)
 
@@ -57,7 +57,7 @@ def spot_version() -> str:
 
 def spot_automata(text: str, n_atoms: int, max_states: int, table_max_aps: int) -> dict:
     """The exact LTL3 monitors of the Spot formula ``text`` over atoms ``a0`` ..
-    ``a{n_atoms-1}`` as :func:`compiler.automata.shape_automata`'s data ``{"bad": aut, "good": aut}``.
+    ``a{n_atoms-1}`` as :func:`fretc.compiler.automata.shape_automata`'s data ``{"bad": aut, "good": aut}``.
 
     ``bad`` is Spot's monitor of ``text``, ``good`` of its negation (:func:`_spot_monitor`),
     except that one translation is skipped when ``text`` is a safety (or guarantee)
@@ -73,7 +73,7 @@ def spot_automata(text: str, n_atoms: int, max_states: int, table_max_aps: int) 
       before (the negation's automaton can be much larger there: 1.2 s against 0.01 s for
       ``... upon c ... within 9 ticks`` under an ``only after`` scope);
 
-    then ``good`` is derived from ``bad`` by :func:`compiler.dfa.safety_complement`,
+    then ``good`` is derived from ``bad`` by :func:`fretc.compiler.dfa.safety_complement`,
     minimized and renamed breadth-first. Guarantee formulas symmetrically (the negation is
     safety, ``good`` comes first). The tables are those the translations give (the minimal
     DFA of a prefix language is unique): ``tests/compiler/test_ltl3_exact.py`` compares
@@ -126,12 +126,12 @@ def _terminal_monitor(h, n_atoms: int, max_states: int) -> dict | None:
 
     Spot translates a guarantee formula quickly into a terminal automaton (10 to 40 times
     faster than the monitor of its safety negation on the 696 sentences of FRET's trace
-    vectors); :func:`compiler.dfa.guarantee_bad_prefixes` turns it into a deterministic
+    vectors); :func:`fretc.compiler.dfa.guarantee_bad_prefixes` turns it into a deterministic
     automaton of the prefixes that are not good for ``h`` (= not bad for ``not h``), made
     minimal and renamed breadth-first: the table of Spot's monitor of ``not h``, since the
     minimal DFA of a prefix language is unique. None (the caller translates ``not h``) when
     Spot's automaton is not weak with complete accepting SCCs, or has more than
-    :data:`compiler.dfa.SUBSET_MAX_CLASSES` letter classes, or the subset construction
+    :data:`fretc.compiler.dfa.SUBSET_MAX_CLASSES` letter classes, or the subset construction
     exceeds :data:`TERMINAL_MAX_SUBSETS` sets, or the monitor more than ``max_states``
     states."""
     import spot  # lazy: only automaton construction needs Spot (start-up of --emit ltl)
@@ -172,7 +172,7 @@ def _terminal_monitor(h, n_atoms: int, max_states: int) -> dict | None:
 
 def _safety_complement_data(data: dict | None, max_states: int) -> dict | None:
     """The data of the monitor of ``not g`` from ``data``, the monitor of a safety property
-    ``g`` (:func:`compiler.dfa.safety_complement`, minimized, renamed breadth-first); None
+    ``g`` (:func:`fretc.compiler.dfa.safety_complement`, minimized, renamed breadth-first); None
     when ``data`` is None or has no table (the caller translates instead) or the result
     has more than ``max_states`` states."""
     if data is None or data["table"] is None:
@@ -199,7 +199,7 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
     branching postponement and the expansion of propositions: :data:`LOW_XARGS`) gives a
     nondeterministic monitor quickly (``translate(f, 'monitor', 'det')`` takes seconds to
     minutes on 12-tick bounds); its powerset is a deterministic monitor of the same prefix
-    language, which :mod:`compiler.dfa` (or Spot's ``minimize_monitor``) makes minimal.
+    language, which :mod:`fretc.compiler.dfa` (or Spot's ``minimize_monitor``) makes minimal.
     The minimal monitor does not depend on which nondeterministic monitor it comes from, so
     the translator's options change the time, never the table."""
     import spot  # lazy: only automaton construction needs Spot (start-up of --emit ltl)
@@ -267,7 +267,7 @@ def _letter_classes(aut, n_atoms: int):
     letters satisfying the same edge conditions lead everywhere to the same states.
     Returns ``(succ, class_of, n_classes)``, ``succ[s][c]`` the bit mask of the successors
     of state ``s`` on class ``c`` and ``class_of[letter]`` the class of a letter; None
-    beyond :data:`compiler.dfa.SUBSET_MAX_CLASSES` classes."""
+    beyond :data:`fretc.compiler.dfa.SUBSET_MAX_CLASSES` classes."""
     names = [f"a{i}" for i in range(n_atoms)]
     var = {name: aut.register_ap(name) for name in names}
     width = 1 << n_atoms
@@ -296,10 +296,10 @@ def _letter_classes(aut, n_atoms: int):
 
 def _table_monitor(aut, n_atoms: int) -> dict | None:
     """The minimal deterministic monitor of Spot's nondeterministic monitor ``aut`` by
-    :mod:`compiler.dfa` (the same automaton as Spot's powerset and ``minimize_monitor``,
+    :mod:`fretc.compiler.dfa` (the same automaton as Spot's powerset and ``minimize_monitor``,
     faster), as :func:`_spot_monitor`'s data; None when there are more than
-    :data:`compiler.dfa.SUBSET_MAX_CLASSES` letter classes or the subset construction exceeds
-    :data:`compiler.dfa.SUBSET_MAX_STATES`.
+    :data:`fretc.compiler.dfa.SUBSET_MAX_CLASSES` letter classes or the subset construction exceeds
+    :data:`fretc.compiler.dfa.SUBSET_MAX_STATES`.
 
     Letters that satisfy the same edge conditions of ``aut`` lead everywhere to the same
     states, so the construction runs over these classes (``rr | p0 | ... | p9`` is one class

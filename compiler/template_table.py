@@ -3,9 +3,9 @@
 FRET ships its formalizations as data (``semantics.json``, generated from its templates);
 fretc ships, in the same spirit, the printed formulas of every *template key* (scope,
 condition kind, timing, duration class) built with placeholder atoms, as
-``compiler/make_table.py`` generates them from :mod:`compiler.semantics`
-(``python -m compiler.make_table``; ``tests/compiler/test_template_table.py`` fails when
-the files are not what that command writes). :mod:`compiler.instantiate` fills them in.
+``compiler/make_table.py`` generates them from :mod:`fretc.compiler.semantics`
+(``python -m fretc.compiler.make_table``; ``tests/compiler/test_template_table.py`` fails when
+the files are not what that command writes). :mod:`fretc.compiler.instantiate` fills them in.
 
 A file holds (all lists, keys sorted):
 
@@ -17,7 +17,7 @@ A file holds (all lists, keys sorted):
   response) of ft (fields 0-3), of ft_inf (4-7) and of pt (8-11), then the duration's
   bounds ``n - 2 .. n + 3`` (fields 12-17);
 * ``fallback``: the conditions under which a requirement must take the full build
-  (:mod:`compiler.fallback`, rule 2): a list of conjunctions, each a list of ``[0, f, g]``
+  (:mod:`fretc.compiler.fallback`, rule 2): a list of conjunctions, each a list of ``[0, f, g]``
   (atom ``f`` equals atom ``g``), ``[1, f, node]`` (atom ``f`` equals the template node
   ``node`` instantiated: a field number, or ``[op, name, lo, hi, [args]]`` with a bound
   ``n + k`` as ``[k]``) and ``[2, k, v]`` (``n + k == v``).
@@ -32,7 +32,7 @@ import operator
 import os
 import re
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
 __all__ = ["ALL_KEYS", "Template", "file_name", "template", "TABLE_DIR"]
 
@@ -100,8 +100,8 @@ class Template:
     where Spot has no form): ``format % getter(values)`` fills in the twelve atoms' texts
     and the bounds (from field :data:`BOUND0`). ``forms`` holds them as ``(format,
     order)``; ``compared`` is the file's ``fallback`` as tuples. ``json`` and
-    ``plain_compared`` are slots for :mod:`compiler.instantiate` and
-    :mod:`compiler.fallback` to keep what they derive from the template."""
+    ``plain_compared`` are slots for :mod:`fretc.compiler.instantiate` and
+    :mod:`fretc.compiler.fallback` to keep what they derive from the template."""
 
     __slots__ = ("forms", "compared", "json", "plain_compared", "ft", "ft_inf", "pt",
                  "ft_spot", "ft_inf_spot")
@@ -158,7 +158,7 @@ def json_format(forms: tuple, enc, seps: tuple):
     separated by ``seps`` (the four texts between them). ``format`` is a list of the
     escaped literal texts with a slot (None) between each two for a field's value;
     ``getter`` picks, from the values of
-    :meth:`compiler.instantiate.InstantiatedFormalization.json_forms`, each field's value
+    :meth:`fretc.compiler.instantiate.InstantiatedFormalization.json_forms`, each field's value
     in order (``plain getter``: from those of atoms that are the same in ft, ft_inf and
     pt). None when Spot has no form for ft or ft_inf. JSON's escaping maps each character
     on its own, so the escaped text of a filled-in form is its escaped format filled in

@@ -1,5 +1,5 @@
 """What the FRETish language server knows about one ``.fret`` document, without the
-protocol (:mod:`editor.server` speaks LSP): its diagnostics, the requirement at a line, the
+protocol (:mod:`fretc.editor.server` speaks LSP): its diagnostics, the requirement at a line, the
 hover text of a requirement, the completions at a position and where a variable is bound.
 
 Positions here are 0-based lines and UTF-16-agnostic character columns as LSP counts them
@@ -12,10 +12,10 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from common.errors import FretishError
-from compiler.build import compile_entries
-from fretish.files import load_fret_text
-from fretish.words import RESERVED_WORDS
+from fretc.common.errors import FretishError
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_fret_text
+from fretc.fretish.words import RESERVED_WORDS
 
 __all__ = ["Problem", "Analysis", "analyse", "check_problems", "KEYWORDS", "SAVE_WORK"]
 
@@ -122,8 +122,8 @@ _UNITS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "millis
 
 def _accepted(sentence: str) -> set | None:
     """The grammar's terminals accepted after ``sentence`` (None when it cannot tell)."""
-    from fretish.diagnostics import accepted_before
-    from fretish.parser import cached_lark
+    from fretc.fretish.diagnostics import accepted_before
+    from fretc.fretish.parser import cached_lark
 
     try:
         return accepted_before(cached_lark(), sentence, "start", len(sentence))
@@ -136,8 +136,8 @@ def _diagram_image(compiled) -> str | None:
     the clients that show one), or None when there is none."""
     import base64
 
-    from monitors.explain import explain
-    from reports.explanation import svg
+    from fretc.monitors.explain import explain
+    from fretc.reports.explanation import svg
 
     try:
         x = explain(compiled)
@@ -209,8 +209,8 @@ def check_problems(a: Analysis, work: int = SAVE_WORK) -> list[Problem]:
     document, under a work budget of ``work`` units a query (answers past it say nothing
     here): one diagnostic per requirement involved, at its first line (error for a
     conflict or an unsatisfiable requirement, warning for vacuity)."""
-    from check.analysis import check_requirements
-    from check.budget import Budget
+    from fretc.check.analysis import check_requirements
+    from fretc.check.budget import Budget
 
     ok = [c for c in a.compiled if c.error is None and c.formalization is not None]
     if not ok:

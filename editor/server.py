@@ -1,5 +1,5 @@
 """``fretc lsp``: a language server for ``.fret`` files over stdio (the Language Server
-Protocol 3.17, with ``pygls``). What it knows of a document is :mod:`editor.document`'s:
+Protocol 3.17, with ``pygls``). What it knows of a document is :mod:`fretc.editor.document`'s:
 
 * diagnostics, published when a document is opened, changed or saved: syntax and file
   errors at their line and column with the CLI's messages, formalization errors (a duration
@@ -22,7 +22,7 @@ from lsprotocol import types as T
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
-from .document import Analysis, analyse, check_problems
+from fretc.editor.document import Analysis, analyse, check_problems
 
 __all__ = ["make_server", "main"]
 

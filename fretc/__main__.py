@@ -1,4 +1,4 @@
 """``python -m fretc`` is the ``fretc`` command."""
-from .cli import main
+from fretc.cli import main
 
 main()

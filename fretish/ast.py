@@ -185,7 +185,7 @@ class Duration:
     """``amount`` as written (``"10"``, ``"2.5"``) and ``unit`` canonical: ``ticks`` or a key
     of :data:`UNIT_SECONDS`. A named duration (``within T_stop``) has its ``name``; its
     ``amount`` and ``unit`` are those of the constant's declaration once resolved
-    (:mod:`fretish.constants`), empty before."""
+    (:mod:`fretc.fretish.constants`), empty before."""
 
     amount: str
     unit: str

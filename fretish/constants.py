@@ -5,7 +5,7 @@ the bindings file (``[constants] T_stop = "1.5 s"``). FRET's users asked for it 
 
 A constant's value is a duration as FRETish writes one (``1.5 s``, ``500 milliseconds``,
 ``15 ticks``); it is converted to ticks as the same number written in the sentence would be
-(:func:`compiler.semantics.duration_ticks`), so ``within T_stop`` with ``T_stop = 1 s``
+(:func:`fretc.compiler.semantics.duration_ticks`), so ``within T_stop`` with ``T_stop = 1 s``
 means exactly ``within 1 second``.
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import re
 
-from . import ast as A
+from fretc.fretish import ast as A
 
 __all__ = ["CONSTANT_NAME", "parse_constant", "resolve", "unresolved", "constant_notes"]
 
@@ -29,9 +29,9 @@ def parse_constant(text: str) -> tuple[str, str]:
     Raises:
         ValueError: not a number and a unit FRETish knows (the message says what is).
     """
-    from common.errors import FretishError
+    from fretc.common.errors import FretishError
 
-    from .parser import parse
+    from fretc.fretish.parser import parse
 
     try:
         d = parse(f"the c shall within {text.strip()} satisfy p").timing.duration
@@ -39,7 +39,7 @@ def parse_constant(text: str) -> tuple[str, str]:
         d = None
     if d is not None and d.resolved:
         return d.amount, d.unit
-    from common.units import parse_seconds  # the bindings' spelling: "1.5 s", "100 ms"
+    from fretc.common.units import parse_seconds  # the bindings' spelling: "1.5 s", "100 ms"
 
     try:
         seconds = parse_seconds(text)

@@ -1,5 +1,5 @@
 """Syntax errors of FRETish sentences: a Lark failure becomes a
-:class:`~common.errors.FretishSyntaxError` at the right file position, with what the
+:class:`~fretc.common.errors.FretishSyntaxError` at the right file position, with what the
 parser expected in FRETish words ("a timing", "'satisfy'") and a hint for the common
 mistakes ('and' in an expression, '==', 'globally', a reserved word as a name, a missing
 'shall' or 'satisfy').
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from common.errors import FretishSyntaxError
-from .words import RESERVED_LETTERS, UNIT_TOKENS
+from fretc.common.errors import FretishSyntaxError
+from fretc.fretish.words import RESERVED_LETTERS, UNIT_TOKENS
 
 __all__ = ["accepted_before", "expected_names", "failure_error", "make_error", "translate"]
 

@@ -1,15 +1,15 @@
 """A requirement as read from a file or a requirements tool (:class:`RequirementEntry`), and
 where a requirement kept in a tool came from (:class:`Origin`): the data
-:mod:`fretish.files` and :mod:`fretish.sources` give the compiler."""
+:mod:`fretc.fretish.files` and :mod:`fretc.fretish.sources` give the compiler."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from common.errors import FretishError
+from fretc.common.errors import FretishError
 
-from .ast import Requirement
+from fretc.fretish.ast import Requirement
 
 __all__ = ["RequirementEntry", "Origin", "DEFAULT_TEXT_ATTRIBUTE"]
 
@@ -75,7 +75,7 @@ class RequirementEntry:
     ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
     the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
     realizability), the same for every requirement of the file. ``origin`` says where
-    a requirement kept in a tool came from (:class:`fretish.sources.Origin`: ReqIF, Doorstop,
+    a requirement kept in a tool came from (:class:`fretc.fretish.sources.Origin`: ReqIF, Doorstop,
     FRET export; None for ``.fret`` files).
     """
 

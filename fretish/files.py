@@ -24,7 +24,7 @@
   one space).
 * ``@tick_period <number> <unit>`` (at most once, anywhere in the file) is the tick period
   of every requirement of the file that has no ``tick_period:`` attribute. Its grammar is
-  the one of every fretc duration (:mod:`common.units`: ns, us/µs, ms, s, min, h, their
+  the one of every fretc duration (:mod:`fretc.common.units`: ns, us/µs, ms, s, min, h, their
   long names such as ``milliseconds``, and ``Hz``). The period is stored in seconds as an
   exact :class:`~fractions.Fraction` of the decimal text.
 * ``@inputs a, b`` and ``@outputs c`` (each at most once; names separated by commas or
@@ -51,11 +51,11 @@ import os
 import re
 from collections.abc import Iterable
 
-from common.errors import FretishError, FretishFileError, FretishSyntaxError
-from .parser import parse
-from .entry import RequirementEntry
-from .sources import fret_origin, load_tool_source, tool_source_kind
-from common.units import parse_seconds
+from fretc.common.errors import FretishError, FretishFileError, FretishSyntaxError
+from fretc.fretish.parser import parse
+from fretc.fretish.entry import RequirementEntry
+from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
+from fretc.common.units import parse_seconds
 
 __all__ = ["RequirementEntry", "load_requirements", "load_fret_text", "parse_tick_period",
            "is_fret_export"]
@@ -66,7 +66,7 @@ PathLike = str | os.PathLike
 # --------------------------------------------------------------------------- durations
 def parse_tick_period(text: str) -> Fraction:
     """``"<number> <unit>"`` (e.g. ``"100 ms"``, ``"0.05 seconds"``, ``"10 Hz"``) -> seconds,
-    exactly: the duration grammar of :mod:`common.units` (the same as the bindings').
+    exactly: the duration grammar of :mod:`fretc.common.units` (the same as the bindings').
 
     Raises :class:`ValueError` (with a readable message) for anything else, for ``ticks`` (a
     tick period must be a time) and for a period that is not positive.
@@ -237,8 +237,8 @@ class _FretReader:
         self.current = None
 
     def _constant(self, ln: int, content: str, m: re.Match) -> None:
-        """``@constant T_stop 1.5 s``: a named duration (:mod:`fretish.constants`)."""
-        from .constants import CONSTANT_NAME, parse_constant
+        """``@constant T_stop 1.5 s``: a named duration (:mod:`fretc.fretish.constants`)."""
+        from fretc.fretish.constants import CONSTANT_NAME, parse_constant
 
         name, _, value = (m.group(2) or "").strip().partition(" ")
         if not CONSTANT_NAME.match(name):
@@ -306,7 +306,7 @@ class _FretReader:
         try:
             entry.requirement = parse(text, source=source, line=line0, column=col0)
             if self.constants:
-                from .constants import resolve
+                from fretc.fretish.constants import resolve
 
                 entry.requirement = resolve(entry.requirement, self.constants)
         except FretishSyntaxError as e:
@@ -466,7 +466,7 @@ def is_fret_export(path: str) -> bool:
         isinstance(x, dict) and ("reqid" in x or "fulltext" in x) for x in data))
 
 
-#: The files a folder contributes (ReqIF files by their name, :mod:`fretish.sources`).
+#: The files a folder contributes (ReqIF files by their name, :mod:`fretc.fretish.sources`).
 _FOLDER_SUFFIXES = (".fret", ".json", ".reqif", ".reqifz")
 
 
@@ -521,7 +521,7 @@ def load_requirements(paths: PathLike | Iterable[PathLike],
     appended to ``skipped``), not recursively, sorted by name; a file named itself is read
     as JSON if its name ends in ``.json`` and as ``.fret`` otherwise (formats: module
     docstring). ReqIF files (``.reqif``, ``.reqifz``, also in folders) and Doorstop trees
-    (a folder holding ``.doorstop.yml`` files) are read by :mod:`fretish.sources`, the
+    (a folder holding ``.doorstop.yml`` files) are read by :mod:`fretc.fretish.sources`, the
     FRETish text from ``text_attribute`` (default ``FRETish``); their items without FRETish
     text are appended to ``not_formalized`` (when given) and not returned.
 

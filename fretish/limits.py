@@ -23,9 +23,9 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 
-from . import ast as A
-from common.errors import FretishError
-from .words import FRET_RESERVED
+from fretc.fretish import ast as A
+from fretc.common.errors import FretishError
+from fretc.fretish.words import FRET_RESERVED
 
 MAX_EXPR_DEPTH = 200
 #: A function call counts for this many levels: FRET's past- and future-time functions
@@ -40,7 +40,7 @@ __all__ = ["MAX_EXPR_DEPTH", "MAX_EXPR_NODES", "MAX_NUMBER_CHARS", "MAX_DURATION
 
 
 class LimitError(FretishError):
-    """A limit exceeded at ``span`` (a :class:`fretish.ast.Span`), with a hint."""
+    """A limit exceeded at ``span`` (a :class:`fretc.fretish.ast.Span`), with a hint."""
 
     def __init__(self, span, message: str, hint: str | None = None):
         super().__init__(message)
@@ -99,10 +99,10 @@ _RESERVED_WORD = re.compile(r"(?<![A-Za-z0-9_])(" + "|".join(sorted(FRET_RESERVE
 
 def check_reserved(req: A.Requirement) -> None:
     """FRET's rule on names (../shared/fretish/README.md section 5): a variable or function
-    named by one of NuSMV's or R2U2's reserved words (:data:`fretish.words.FRET_RESERVED`,
+    named by one of NuSMV's or R2U2's reserved words (:data:`fretc.fretish.words.FRET_RESERVED`,
     case sensitive: ``count``, ``abs``, ``min``, ``init``, ``E``, ``R``, ...) is refused with
     FRET's message; a quoted one (``"count"``) is not (FRET prints it ``_DQT_count_DQT_``,
-    and so does :func:`compiler.printers.mangle`). Raises :class:`LimitError` at the first
+    and so does :func:`fretc.compiler.printers.mangle`). Raises :class:`LimitError` at the first
     such name."""
     if not _RESERVED_WORD.search(req.text):
         return

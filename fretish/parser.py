@@ -1,11 +1,11 @@
-"""FRETish sentence -> :class:`fretish.ast.Requirement`, by Lark.
+"""FRETish sentence -> :class:`fretc.fretish.ast.Requirement`, by Lark.
 
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
 phrasings and the expression precedence, one rule per level. :class:`_Builder` is Lark's
 transformer, applied while parsing (no intermediate parse tree): one method per rule or
 alias, each given the rule's children (AST nodes and the named tokens, ``lark.Token``).
 Lark's tables are kept in Lark's own cache (``Lark(..., cache=PATH)``), the file
-``lark/fretish-KEY.lark`` of fretc's cache folder (:mod:`common.cache`; KEY names the
+``lark/fretish-KEY.lark`` of fretc's cache folder (:mod:`fretc.common.cache`; KEY names the
 grammar text and the Lark and Python versions, and Lark checks a hash of them when it loads
 the file); with the disk cache off the tables are built in each process (about a second).
 
@@ -53,12 +53,12 @@ import threading
 import lark
 from lark.exceptions import LarkError, UnexpectedInput
 
-from common import cache
+from fretc.common import cache
 
-from . import ast as A
-from .diagnostics import make_error, translate
-from .limits import LimitError, check_expression, check_requirement
-from .words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
+from fretc.fretish import ast as A
+from fretc.fretish.diagnostics import make_error, translate
+from fretc.fretish.limits import LimitError, check_expression, check_requirement
+from fretc.fretish.words import RESERVED_LETTERS, RESERVED_WORDS, UNIT_TOKENS
 
 __all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_WORDS",
            "RESERVED_LETTERS"]
@@ -85,7 +85,7 @@ _DURATION_AMOUNT = re.compile(r"[0-9]+(?:\.[0-9]+)?\Z")
 
 class _Fail(Exception):
     """A rule the grammar accepts but FRETish forbids, found while building the AST:
-    ``span`` (an :class:`fretish.ast.Span`) where, ``message`` and ``hint``."""
+    ``span`` (an :class:`fretc.fretish.ast.Span`) where, ``message`` and ``hint``."""
 
     def __init__(self, span: A.Span, message: str, hint: str | None = None):
         super().__init__(message)
@@ -410,7 +410,7 @@ def build_lark(**options) -> lark.Lark:
 
 def cached_lark() -> lark.Lark:
     """The parser of :func:`build_lark`, its tables in Lark's cache (Lark's ``cache``
-    option) at ``lark/fretish-KEY.lark`` in fretc's cache folder (:mod:`common.cache`):
+    option) at ``lark/fretish-KEY.lark`` in fretc's cache folder (:mod:`fretc.common.cache`):
     loaded when the file is there and Lark finds it matches (Lark stores a SHA-256 of the
     grammar, its options, Lark's and Python's versions in it), else built and written.
     KEY is a hash of the same inputs, so editing the grammar or upgrading Lark or Python
@@ -459,12 +459,12 @@ def parse(text: str, *, source: str = "<string>", line: int = 1,
     """Parse one FRETish requirement sentence.
 
     ``text`` is the sentence (a trailing ``.`` is allowed); ``source``, ``line`` and
-    ``column`` say where ``text`` starts in its file, so every :class:`~fretish.ast.Span`
+    ``column`` say where ``text`` starts in its file, so every :class:`~fretc.fretish.ast.Span`
     and error position is in file coordinates (1-based), while ``Span.start``/``end`` are
     0-based offsets into ``text``. A sentence that is one double-quoted string is free
     form: ``Requirement(text, freeform=True)``.
 
-    Returns a :class:`fretish.ast.Requirement`. Raises :class:`FretishSyntaxError` for any
+    Returns a :class:`fretc.fretish.ast.Requirement`. Raises :class:`FretishSyntaxError` for any
     text that is not FRETish (FRET 3.x grammar, with the fixes of
     ../shared/fretish/README.md section 7),
     including a probability outside [0, 1], a reserved word used as a name and

@@ -18,7 +18,7 @@ RESERVED_WORDS = frozenset("""
 #: case-sensitive.
 RESERVED_LETTERS = frozenset("XFGUVYZHOST")
 
-#: The grammar's unit terminals (``grammar.lark``) -> the :class:`fretish.ast.Duration`
+#: The grammar's unit terminals (``grammar.lark``) -> the :class:`fretc.fretish.ast.Duration`
 #: unit.
 UNIT_TOKENS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "milliseconds",
                "SECOND": "seconds", "MINUTE": "minutes", "HOUR": "hours"}

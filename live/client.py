@@ -49,7 +49,7 @@ import time
 from dataclasses import dataclass
 from collections.abc import Callable
 
-from .events import EventQueue
+from fretc.live.events import EventQueue
 
 __all__ = ["SUBPROTOCOLS", "Advertised", "FoxgloveClient", "WebSocketClient", "WATCH_HINT",
            "MissingDependency", "require_websockets", "MAX_OTHER_CHANNELS",
@@ -165,7 +165,7 @@ class WebSocketClient:
         wanted: topic -> bool, asked once per advertised topic.
         backoff, max_backoff: seconds before the first retry after a drop, and the cap of
             the doubling.
-        events: the queue to put events on (a new bounded :class:`~live.events.EventQueue`
+        events: the queue to put events on (a new bounded :class:`~fretc.live.events.EventQueue`
             by default).
 
     Call :meth:`start`, read :attr:`events`, call :meth:`stop` (idempotent). :meth:`drop`

@@ -1,13 +1,13 @@
 """The columns a watch keeps while it runs: per tick, every variable's value, the log time
 each topic's held message had, and the tick's time (the audit's columns of
-:mod:`audit.columns`, grown one tick at a time), read back as numpy arrays for the judge.
+:mod:`fretc.audit.columns`, grown one tick at a time), read back as numpy arrays for the judge.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from audit.columns import column_array
+from fretc.audit.columns import column_array
 
 __all__ = ["LiveColumns"]
 
@@ -25,7 +25,7 @@ class LiveColumns:
         self.times: list = []
 
     def append(self, tick) -> None:
-        """Keep one :class:`~signals.clock.Tick`: its values, held log times and time."""
+        """Keep one :class:`~fretc.signals.clock.Tick`: its values, held log times and time."""
         v = tick.values
         for name in self.names:
             self.vals[name].append(v[name])

@@ -1,23 +1,23 @@
 """``fretc watch dds://DOMAIN``: a Cyclone DDS participant that reads the bound ROS 2 topics
 of the robot's DDS domain and hands them to the watch engine as the Foxglove client does
-(:mod:`live.client`'s events on an :class:`~live.events.EventQueue`).
+(:mod:`fretc.live.client`'s events on an :class:`~fretc.live.events.EventQueue`).
 
-What it reads (ROS 2's DDS mapping: :mod:`live.ros2_names`; types: :mod:`live.dds_types`):
+What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types: :mod:`fretc.live.dds_types`):
 
 * the graph: DDS's built-in publication topic (``DCPSPublication``, what ``ros2 topic list
   -t`` reads). A publication of ``rt/<topic>`` for a bound topic advertises the topic with the
   ROS type of its DDS type name (``ros2msg`` definition from rosbags' type store and the
   ``--msg-path`` folders) and creates a reader of that type with the QoS a ROS 2
-  subscription would use to match the offered one (:func:`~live.dds_types.reader_qos`).
+  subscription would use to match the offered one (:func:`~fretc.live.dds_types.reader_qos`).
   When the last publication of a bound topic is gone (its writer deleted, or its
   participant's lease expired: DDS liveliness) the topic is unadvertised (behind the
-  messages already merged: :meth:`~live.merge.MergeBuffer.put_event`; its value is then not
-  held, :class:`~live.source.WatchSource`); every bound topic's
+  messages already merged: :meth:`~fretc.live.merge.MergeBuffer.put_event`; its value is then not
+  held, :class:`~fretc.live.source.WatchSource`); every bound topic's
   publishers gone is the end of the robot's run (:attr:`DdsClient.leaving_ends_run`, after
   the watch's restart grace);
 * the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
   (the writer's clock), or the last ``/clock`` received when a ``/clock`` publication exists
-  (simulated time); messages merged into log-time order (:mod:`live.merge`);
+  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`);
 * faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
   ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
   type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
@@ -31,12 +31,12 @@ import threading
 import time
 from collections.abc import Callable
 
-from .client import WATCH_HINT, MissingDependency
-from .events import EventQueue
-from .merge import MergeBuffer
-from .ros2_names import advertisement, dds_topic, parse_url, ros_topic_of_dds, ros_type, \
+from fretc.live.client import WATCH_HINT, MissingDependency
+from fretc.live.events import EventQueue
+from fretc.live.merge import MergeBuffer
+from fretc.live.ros2_names import advertisement, dds_topic, parse_url, ros_topic_of_dds, ros_type, \
     standard_store
-from .zenoh_client import CLOCK_TOPIC, _clock_ns, _norm
+from fretc.live.zenoh_client import CLOCK_TOPIC, _clock_ns, _norm
 
 __all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
 
@@ -45,7 +45,7 @@ POLL_SECONDS = 0.005
 
 
 def require_cyclonedds() -> None:
-    """Raise :class:`~live.client.MissingDependency` naming the install hint when the
+    """Raise :class:`~fretc.live.client.MissingDependency` naming the install hint when the
     ``cyclonedds`` package is not installed."""
     try:
         import cyclonedds.domain  # noqa: F401
@@ -63,7 +63,7 @@ class DdsClient:
         types: topic -> expected ROS type (the bindings' ``[types]``, ``--topic-type``).
         msg_path: folders of the robot's own ``.msg``/``.idl`` files.
         config_file: a Cyclone DDS XML configuration (``--dds-config``).
-        events: the queue (a new bounded :class:`~live.events.EventQueue` by default).
+        events: the queue (a new bounded :class:`~fretc.live.events.EventQueue` by default).
 
     Raises:
         ValueError: a URL of the wrong form; MissingDependency: no cyclonedds.
@@ -96,7 +96,7 @@ class DdsClient:
         """Join the domain and start reading in a background thread (returns at once)."""
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
-        from .dds_types import open_participant
+        from fretc.live.dds_types import open_participant
 
         self._dp = open_participant(self.url.domain, self.config_file)
         self._builtin = BuiltinDataReader(self._dp, BuiltinTopicDcpsPublication)
@@ -174,7 +174,7 @@ class DdsClient:
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
-        from .dds_types import idl_struct, reader_qos
+        from fretc.live.dds_types import idl_struct, reader_qos
 
         if topic == CLOCK_TOPIC and self._clock is None:
             self._clock = 0
@@ -212,7 +212,7 @@ class DdsClient:
     def _take(self, topic: str, until_empty: bool = False) -> bool:
         """Take ``topic``'s samples into the merge (one batch, or every sample the reader
         holds when ``until_empty``); True when some came."""
-        from .dds_types import take_raw
+        from fretc.live.dds_types import take_raw
 
         reader = self._readers[topic][0]
         if reader is None:

@@ -1,13 +1,13 @@
 """``fretc replay LOG --serve dds://DOMAIN``: a recorded log's messages published on a DDS
 domain (Cyclone DDS) as a ROS 2 node would publish them: topic ``rt/<name>``, type
-``pkg::msg::dds_::Type_`` (:mod:`live.ros2_names`, :mod:`live.dds_types`), each message's
+``pkg::msg::dds_::Type_`` (:mod:`fretc.live.ros2_names`, :mod:`fretc.live.dds_types`), each message's
 CDR bytes as recorded, its log time as the sample's source timestamp. Writers are reliable,
 keep-all (transient-local for ``/tf_static``). At the end the writers are deleted (their
 publications disposed: a watch sees the publishers leave). Channels of other encodings are
 not published (:attr:`DdsServer.skipped`).
 
-The object has the interface of :class:`live.serve.FoxgloveServer` that
-:func:`live.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``, ``stop``).
+The object has the interface of :class:`fretc.live.serve.FoxgloveServer` that
+:func:`fretc.live.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``, ``stop``).
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable
 
-from logs.decoding import build_typestore
+from fretc.logs.decoding import build_typestore
 
-from .dds_client import require_cyclonedds
-from .ros2_names import dds_topic, parse_url
+from fretc.live.dds_client import require_cyclonedds
+from fretc.live.ros2_names import dds_topic, parse_url
 
 __all__ = ["DdsServer"]
 
@@ -36,7 +36,7 @@ class DdsServer:
 
     def __init__(self, url: str, config_file: str | None = None) -> None:
         require_cyclonedds()
-        from .dds_types import open_participant
+        from fretc.live.dds_types import open_participant
 
         self.url = url
         self.domain = parse_url(url).domain
@@ -51,7 +51,7 @@ class DdsServer:
         from cyclonedds.pub import DataWriter
         from cyclonedds.topic import Topic
 
-        from .dds_types import idl_struct, writer_qos
+        from fretc.live.dds_types import idl_struct, writer_qos
 
         if topic in self.channels or topic in self.skipped:
             return self.channels.get(topic)
@@ -73,7 +73,7 @@ class DdsServer:
     def log(self, topic: str, data: bytes, log_time: int) -> None:
         """Write one message of ``topic`` with ``log_time`` (ns) as its source timestamp;
         a skipped channel's messages are dropped."""
-        from .dds_types import write_raw
+        from fretc.live.dds_types import write_raw
 
         w = self.channels.get(topic)
         if w is not None:

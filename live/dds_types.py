@@ -5,7 +5,7 @@ and the raw CDR samples read and written.
 Cyclone DDS's Python binding hands a reader's samples to Python as their serialized bytes
 (CDR with the 4-byte encapsulation header) and writes bytes given to it, so fretc reads and
 writes each sample's CDR as it is on the wire (``ddspy_take`` / ``ddspy_write_ts``) and
-decodes it with the same decoders as a log's (:func:`logs.schema_decoder`). The struct type
+decodes it with the same decoders as a log's (:func:`fretc.logs.schema_decoder`). The struct type
 is still needed: its name ``pkg::msg::dds_::Type_`` is what DDS matches a reader to a writer
 by (ROS 2's DDS mapping, rosidl_generator_dds_idl), and its members make the XTypes type
 information Cyclone DDS sends. Members are named as ROS 2's DDS IDL names them (the field
@@ -71,7 +71,7 @@ def idl_struct(store, typename: str) -> type:
     """
     from cyclonedds.idl import make_idl_struct
 
-    from .ros2_names import dds_type
+    from fretc.live.ros2_names import dds_type
 
     key = (id(store), typename)
     with _lock:

@@ -23,7 +23,7 @@ import threading
 import time
 from collections.abc import Callable
 
-from .ros2_names import standard_store
+from fretc.live.ros2_names import standard_store
 
 __all__ = ["DIAGNOSTICS_TOPIC", "DIAGNOSTIC_ARRAY", "Status", "live_statuses",
            "final_statuses", "diagnostic_array", "DiagnosticsPublisher", "LEVELS"]
@@ -38,7 +38,7 @@ Status = tuple[str, str, float | None, float | None, str]
 
 
 def live_statuses(watch) -> list[Status]:
-    """The statuses of a running :class:`~live.watch.Watch` from its live state: violated
+    """The statuses of a running :class:`~fretc.live.watch.Watch` from its live state: violated
     once an obligation failed or the LTL3 verdict is violated; satisfied when the LTL3
     verdict is; unknown before any tick; pending otherwise."""
     out = []
@@ -64,7 +64,7 @@ def live_statuses(watch) -> list[Status]:
 
 
 def final_statuses(la, start_ns: int | None) -> list[Status]:
-    """The statuses of the final verdicts of a watch's :class:`~audit.verdict.LogAudit`."""
+    """The statuses of the final verdicts of a watch's :class:`~fretc.audit.verdict.LogAudit`."""
     out = []
     for v in la.verdicts:
         fv = v.first_violation
@@ -98,9 +98,9 @@ class DiagnosticsPublisher:
     """Publish a watch's verdicts on ``/diagnostics`` once a second and on every change.
 
     Args:
-        watch: the :class:`~live.watch.Watch`.
+        watch: the :class:`~fretc.live.watch.Watch`.
         open_server: () -> a server with ``channel``/``log``/``stop`` (a
-            :class:`~live.dds_serve.DdsServer` or :class:`~live.zenoh_serve.ZenohServer`
+            :class:`~fretc.live.dds_serve.DdsServer` or :class:`~fretc.live.zenoh_serve.ZenohServer`
             on the watched transport), called once the watch is connected.
         period: seconds between two arrays when nothing changes (1 Hz).
 

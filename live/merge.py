@@ -2,7 +2,7 @@
 
 A DDS reader or a Zenoh subscriber per topic hands messages over on its own thread (or in
 its own batch), so two topics' messages can reach the watch in an order other than their log
-times' even when the robot sent them in order, and :class:`~live.source.WatchSource` skips a
+times' even when the robot sent them in order, and :class:`~fretc.live.source.WatchSource` skips a
 message older than one already used (``clock_backwards``). :class:`MergeBuffer` holds each
 message for :data:`HOLD_SECONDS` of wall time after it arrived and releases the held ones in
 log-time order (equal times in arrival order): a message overtaken by less than the hold
@@ -21,13 +21,13 @@ __all__ = ["MergeBuffer", "HOLD_SECONDS", "MAX_HELD"]
 #: Wall-clock seconds a message is held before it is released in log-time order.
 HOLD_SECONDS = 0.1
 #: Messages held at most: past it (a flood) the oldest held message is released at once, so
-#: memory stays bounded by the event queue's own bounds (:mod:`live.events`).
+#: memory stays bounded by the event queue's own bounds (:mod:`fretc.live.events`).
 MAX_HELD = 10_000
 
 
 class MergeBuffer:
     """Hold ``("message", topic, log_time_ns, payload, wall_ns)`` events and put them on
-    ``events`` (an :class:`~live.events.EventQueue`) in log-time order, :data:`HOLD_SECONDS`
+    ``events`` (an :class:`~fretc.live.events.EventQueue`) in log-time order, :data:`HOLD_SECONDS`
     (``hold``) after each arrived. Thread-safe: any number of producer threads.
 
     Call :meth:`start`, :meth:`put` messages, :meth:`stop` (releases what is held).

@@ -1,6 +1,6 @@
 """The recording of a watch (``fretc watch --record``): an MCAP of the watched messages, with
 their schemas and encodings as advertised, plus the ``/fretc/verdicts`` ``foxglove.Log``
-channel of verdict events (:mod:`audit.annotate`), written at the end. ``fretc audit`` of the
+channel of verdict events (:mod:`fretc.audit.annotate`), written at the end. ``fretc audit`` of the
 recording gives the watch's verdicts."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import json
 
 from mcap.writer import CompressionType, Writer
 
-from audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
 
 __all__ = ["Recorder"]
 

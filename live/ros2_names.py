@@ -1,7 +1,7 @@
 """ROS 2's naming rules on its middlewares, shared by the DDS and Zenoh transports of
 ``fretc watch`` and ``fretc replay --serve``: the watch's URLs, topic and type names on the
 wire, rmw_zenoh's key expressions, liveliness tokens and attachments, and the ``ros2msg``
-advertisement of a ROS type the watch decodes with :func:`logs.schema_decoder`.
+advertisement of a ROS type the watch decodes with :func:`fretc.logs.schema_decoder`.
 
 Sources of the rules:
 
@@ -33,7 +33,7 @@ from urllib.parse import parse_qs, urlsplit
 
 from rosbags.typesys.msg import normalize_msgtype
 
-from .client import Advertised
+from fretc.live.client import Advertised
 
 __all__ = ["Ros2Url", "parse_url", "dds_topic", "ros_topic_of_dds", "dds_type", "ros_type",
            "zenoh_key", "zenoh_topic_key", "parse_zenoh_key", "LivelinessToken",
@@ -235,9 +235,9 @@ def attachment_time(data: bytes | None) -> int | None:
 @functools.lru_cache(maxsize=8)
 def standard_store(msg_path: tuple[str, ...] = ()):
     """rosbags' type store of ROS 2 Humble's standard types, with the ``.msg``/``.idl``
-    types of ``msg_path`` (``--msg-path``, :mod:`logs.msg_path`) when given."""
+    types of ``msg_path`` (``--msg-path``, :mod:`fretc.logs.msg_path`) when given."""
     if msg_path:
-        from logs.msg_path import msg_path_typestore
+        from fretc.logs.msg_path import msg_path_typestore
 
         return msg_path_typestore(tuple(msg_path))
     from rosbags.typesys import Stores, get_typestore
@@ -247,7 +247,7 @@ def standard_store(msg_path: tuple[str, ...] = ()):
 
 def advertisement(cid: int, topic: str, ros: str, store, expected: str | None = None
                   ) -> Advertised:
-    """The :class:`~live.client.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
+    """The :class:`~fretc.live.client.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
     with the ``ros2msg`` definition ``store`` gives; an unreadable one (the watch then makes
     the topic's requirements ``error`` saying why) when ``store`` does not know the type or
     it is not ``expected`` (the bindings' ``[types]``)."""

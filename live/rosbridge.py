@@ -1,5 +1,5 @@
 """A client of the rosbridge v2 protocol (``rosbridge_suite``, ROS 1 and ROS 2), handing what
-it receives to the watch engine as the Foxglove client does (:mod:`live.client`).
+it receives to the watch engine as the Foxglove client does (:mod:`fretc.live.client`).
 
 Protocol (github.com/RobotWebTools/rosbridge_suite, ``ROSBRIDGE_PROTOCOL.md``): JSON text
 frames, each an object with ``op``:
@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .client import MAX_OTHER_CHANNELS, Advertised, WebSocketClient, frame_shape, json_object
+from fretc.live.client import MAX_OTHER_CHANNELS, Advertised, WebSocketClient, frame_shape, json_object
 
 __all__ = ["RosbridgeClient", "json_to_cdr", "ros_url", "CLOCK_TOPIC"]
 
@@ -123,7 +123,7 @@ def json_to_cdr(typename: str, doc: dict[str, Any], store=None) -> bytes:
 
 
 def advertisement(cid: int, topic: str, type_name: str, store=None) -> Advertised:
-    """The :class:`~live.client.Advertised` of a rosbridge topic: CDR with the
+    """The :class:`~fretc.live.client.Advertised` of a rosbridge topic: CDR with the
     type's ``ros2msg`` definition, or no schema when the type store (``store``, default ROS
     2 Humble's standard types) does not know it."""
     try:
@@ -138,7 +138,7 @@ def advertisement(cid: int, topic: str, type_name: str, store=None) -> Advertise
 class RosbridgeClient(WebSocketClient):
     """Connect to a rosbridge server (``rosbridge://host:port`` or ``ws://``), learn the
     topics' types from rosapi (or ``types``), subscribe to the wanted ones and put the
-    module docstring's events of :mod:`live.client` on :attr:`events` (messages as
+    module docstring's events of :mod:`fretc.live.client` on :attr:`events` (messages as
     CDR with their log time on the ROS clock).
 
     Args:
@@ -147,8 +147,8 @@ class RosbridgeClient(WebSocketClient):
         types: topic -> message type for topics rosapi does not type.
         poll: seconds between two rosapi queries while a wanted topic is not yet listed.
         msg_path: folders of the ``.msg``/``.idl`` files of the robot's own types
-            (``--msg-path``; :mod:`logs.msg_path`), beside ROS 2 Humble's standard ones.
-        backoff, max_backoff, events: as :class:`~live.client.WebSocketClient`.
+            (``--msg-path``; :mod:`fretc.logs.msg_path`), beside ROS 2 Humble's standard ones.
+        backoff, max_backoff, events: as :class:`~fretc.live.client.WebSocketClient`.
     """
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *,
@@ -159,7 +159,7 @@ class RosbridgeClient(WebSocketClient):
         self.poll = poll
         self.store = None
         if msg_path:
-            from logs.msg_path import msg_path_typestore
+            from fretc.logs.msg_path import msg_path_typestore
 
             self.store = msg_path_typestore(tuple(msg_path))
 
@@ -222,7 +222,7 @@ class RosbridgeClient(WebSocketClient):
 
     def _others(self, types: dict[str, str], state: dict) -> list[Advertised]:
         """The listed topics no requirement reads, not subscribed, not seen before: kept (to
-        name what the server has) up to :data:`~live.client.MAX_OTHER_CHANNELS`
+        name what the server has) up to :data:`~fretc.live.client.MAX_OTHER_CHANNELS`
         per connection, one ``protocol`` event when more are listed."""
         seen: set[str] = state.setdefault("others", set())
         out = []

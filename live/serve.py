@@ -1,6 +1,6 @@
 """Serve robot data over the Foxglove WebSocket protocol with ``foxglove-sdk``'s server:
 a recorded MCAP log (``fretc replay LOG.mcap --serve``) or the live simulator
-(``python -m sim serve``), so the Foxglove app and ``fretc watch`` can connect.
+(``python -m fretc.sim serve``), so the Foxglove app and ``fretc watch`` can connect.
 
 Messages keep their bytes, their channel's message encoding and their schema (name,
 encoding, text) as recorded, and their log time: a client sees what ``foxglove_bridge``

@@ -1,6 +1,6 @@
-"""The watched run as a log: :class:`WatchSource`, a :class:`logs.LogSource`
+"""The watched run as a log: :class:`WatchSource`, a :class:`fretc.logs.LogSource`
 whose messages come from a Foxglove WebSocket server, and the verdict events
-(:class:`WatchEvent`). The recording of a watch is :mod:`live.record`.
+(:class:`WatchEvent`). The recording of a watch is :mod:`fretc.live.record`.
 
 Faults, each a data problem of the run, never a crash:
 
@@ -17,7 +17,7 @@ Faults, each a data problem of the run, never a crash:
   message, ticks of the requirements that read it are not evaluated (unknown; the span is
   a :data:`PUBLISHER_RESTART` problem when the topic comes back); when it never comes back
   before the run ends, those requirements are judged up to that log time (an obligation
-  still open there is ``unknown``), the others are not affected (:mod:`live.absence`);
+  still open there is ``unknown``), the others are not affected (:mod:`fretc.live.absence`);
 
 The end of the watched run, never a data problem: the server's orderly close (a WebSocket
 close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
@@ -26,7 +26,7 @@ for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). T
 * a message on a watched topic that does not decode (its payload, or every payload of a
   channel whose schema could not be read): ``undecodable``, counted per message, and a gap
   (:data:`UNDECODABLE_GAP`) from the last message used to the next one: its value is never
-  held over the message that was lost (as :mod:`audit.damage` for logs). A run that
+  held over the message that was lost (as :mod:`fretc.audit.damage` for logs). A run that
   ends inside such a gap is ``partial`` from the last message used;
 * a log time (or, under the header time base, what the clock sees) going backwards:
   :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);
@@ -55,9 +55,9 @@ from typing import Any
 
 from rosbags.typesys.msg import normalize_msgtype
 
-from common import problems as P
-from logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
-from .absence import Absences
+from fretc.common import problems as P
+from fretc.logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
+from fretc.live.absence import Absences
 
 __all__ = ["WatchEvent", "WatchSource", "CONNECTION_GAP", "UNADVERTISED",
            "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE",
@@ -197,7 +197,7 @@ class WatchSource(LogSource):
         #: bound (the watch sets it from the tick period)
         self.max_jump_ns: int | None = None
         self._reported: dict[str, int] = {}  # problem events sent per kind (capped)
-        #: the bound topics' spans without a publisher (:mod:`live.absence`)
+        #: the bound topics' spans without a publisher (:mod:`fretc.live.absence`)
         self.absent = Absences()
         self._delivered = 0
 
@@ -333,13 +333,13 @@ class WatchSource(LogSource):
             span.append(ch.id)  # advertised again: the channel it came back on
 
     def left_for_good(self, topics) -> int | None:
-        """:meth:`live.absence.Absences.left_for_good` of this run."""
+        """:meth:`fretc.live.absence.Absences.left_for_good` of this run."""
         return self.absent.left_for_good(topics, self._delivered)
 
     def _report(self, kind: str, topic: str | None, log_time: int | None,
                 detail: str) -> None:
         """A data problem and its ``problem`` event (events capped per kind at
-        :data:`common.problems.MAX_PROBLEMS_PER_KIND`, as the problems kept; all counted)."""
+        :data:`fretc.common.problems.MAX_PROBLEMS_PER_KIND`, as the problems kept; all counted)."""
         self._problem(kind, topic, log_time, detail)
         n = self._reported.get(kind, 0)
         if n < P.MAX_PROBLEMS_PER_KIND:
@@ -460,7 +460,7 @@ class WatchSource(LogSource):
         self.undecodable_end = log_time
 
     def _dropped_gap(self) -> None:
-        """Messages the bounded queue dropped (:mod:`live.events`) open a gap up to the next
+        """Messages the bounded queue dropped (:mod:`fretc.live.events`) open a gap up to the next
         message used: the watch fell behind, and what it did not read is not held over."""
         take = getattr(self.client.events, "take_dropped", None)
         dropped = take() if take is not None else None

@@ -1,10 +1,10 @@
 """The client of a watch's URL (one per transport, all feeding the same
-:class:`~live.source.WatchSource` through an :class:`~live.events.EventQueue`):
+:class:`~fretc.live.source.WatchSource` through an :class:`~fretc.live.events.EventQueue`):
 
-* ``ws://``, ``wss://``: the Foxglove WebSocket protocol (:class:`~live.client.FoxgloveClient`);
-* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2 (:class:`~live.rosbridge.RosbridgeClient`);
-* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS (:class:`~live.dds_client.DdsClient`);
-* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions (:class:`~live.zenoh_client.ZenohClient`).
+* ``ws://``, ``wss://``: the Foxglove WebSocket protocol (:class:`~fretc.live.client.FoxgloveClient`);
+* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2 (:class:`~fretc.live.rosbridge.RosbridgeClient`);
+* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS (:class:`~fretc.live.dds_client.DdsClient`);
+* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions (:class:`~fretc.live.zenoh_client.ZenohClient`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
 
 
 def make_client(options, wanted, types: dict[str, str] | None = None, topics=()):
-    """The client for ``options.url`` (a :class:`~live.watch.WatchOptions`): ``wanted``
+    """The client for ``options.url`` (a :class:`~fretc.live.watch.WatchOptions`): ``wanted``
     topic -> bool; ``types`` the bindings' ``[types]`` (overridden by ``options.types``);
     ``topics`` the bound topics (the DDS and Zenoh clients subscribe to exactly these).
 
@@ -29,20 +29,20 @@ def make_client(options, wanted, types: dict[str, str] | None = None, topics=())
     given.update(options.types or {})
     url = options.url
     if url.startswith("zenoh://"):
-        from .zenoh_client import ZenohClient
+        from fretc.live.zenoh_client import ZenohClient
 
         return ZenohClient(url, wanted, topics=topics, types=given,
                            msg_path=options.msg_path, config_file=options.config)
     if url.startswith("dds://"):
-        from .dds_client import DdsClient
+        from fretc.live.dds_client import DdsClient
 
         return DdsClient(url, wanted, topics=topics, types=given, msg_path=options.msg_path,
                          config_file=options.config)
-    from .client import FoxgloveClient, require_websockets
+    from fretc.live.client import FoxgloveClient, require_websockets
 
     require_websockets()
     if url.startswith(("rosbridge://", "rosbridge+wss://")):
-        from .rosbridge import RosbridgeClient  # lazy: numpy's message building
+        from fretc.live.rosbridge import RosbridgeClient  # lazy: numpy's message building
 
         return RosbridgeClient(url, wanted, types=given, msg_path=options.msg_path, **kw)
     return FoxgloveClient(url, wanted, **kw)

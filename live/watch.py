@@ -1,18 +1,18 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
-protocol (:class:`~live.client.FoxgloveClient`), rosbridge
-(:class:`~live.rosbridge.RosbridgeClient`), DDS or Zenoh (:mod:`live.transports`).
+protocol (:class:`~fretc.live.client.FoxgloveClient`), rosbridge
+(:class:`~fretc.live.rosbridge.RosbridgeClient`), DDS or Zenoh (:mod:`fretc.live.transports`).
 
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
 
-* :class:`~live.source.WatchSource` is a :class:`logs.LogSource` whose messages come from a
+* :class:`~fretc.live.source.WatchSource` is a :class:`fretc.logs.LogSource` whose messages come from a
   client; each channel is decoded from the schema the server advertised (as in an MCAP);
-* the ticks come from :func:`signals.sample` with the same bindings (tick, time
+* the ticks come from :func:`fretc.signals.sample` with the same bindings (tick, time
   base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
-* every tick steps the generated monitors the audit loads (:func:`audit.load_plan`)
+* every tick steps the generated monitors the audit loads (:func:`fretc.audit.load_plan`)
   for the live verdicts and events;
 * at the end the verdicts and evidence are made by the audit's own code
-  (:func:`audit.finalize.finalize`) over the columns kept while watching.
+  (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching.
 
 The run ends with the server's orderly close, every bound topic unadvertised, the
 duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
@@ -21,7 +21,7 @@ end of a log. So the same messages give the same verdicts as ``fretc audit`` (te
 shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
 server, watched to the end, equal its audit; so does a ``--record``\\ ed watch).
 
-The faults of a live run are data problems (:mod:`live.source`).
+The faults of a live run are data problems (:mod:`fretc.live.source`).
 Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
 verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
 end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them;
@@ -36,21 +36,21 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from common.problems import DataProblem
-from signals import sample_groups
-from monitors.interval import evaluate_requirement
-from audit import AuditInputError
-from audit.finalize import between_ticks, finalize
-from audit.log import log_engine, summarize_clocks
-from audit.log_problems import collect_problems, problem_json
-from audit.operands import operand_values
-from audit.passes import ClockPass, clock_key, restrict
-from audit.verdict import LogAudit, Verdict
-from .absence import NO_TIME
-from .columns import LiveColumns
-from .record import Recorder
-from .transports import make_client
-from .source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
+from fretc.common.problems import DataProblem
+from fretc.signals import sample_groups
+from fretc.monitors.interval import evaluate_requirement
+from fretc.audit import AuditInputError
+from fretc.audit.finalize import between_ticks, finalize
+from fretc.audit.log import log_engine, summarize_clocks
+from fretc.audit.log_problems import collect_problems, problem_json
+from fretc.audit.operands import operand_values
+from fretc.audit.passes import ClockPass, clock_key, restrict
+from fretc.audit.verdict import LogAudit, Verdict
+from fretc.live.absence import NO_TIME
+from fretc.live.columns import LiveColumns
+from fretc.live.record import Recorder
+from fretc.live.transports import make_client
+from fretc.live.source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
                      RESTART_GRACE, UNADVERTISED, WatchEvent, WatchSource)
 
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
@@ -125,7 +125,7 @@ class _Live:
 
 class Watch:
     """Watch a server against the requirements of ``plan`` (from
-    :func:`audit.load_plan`).
+    :func:`fretc.audit.load_plan`).
 
     Args:
         plan: compiled requirements and bindings (bindings are required; a plan whose only
@@ -135,7 +135,7 @@ class Watch:
 
     :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration,
     idle, :meth:`stop`), then returns
-    the :class:`~audit.verdict.LogAudit` of the run (``log`` = the URL, ``kind``
+    the :class:`~fretc.audit.verdict.LogAudit` of the run (``log`` = the URL, ``kind``
     ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
     """
 
@@ -330,7 +330,7 @@ class Watch:
 
     def _run_pass(self, active, bindings):
         """Step the monitors over the live ticks, each requirement on its own clock (the
-        topics of its variables, :func:`signals.sample_groups`, as the audit)."""
+        topics of its variables, :func:`fretc.signals.sample_groups`, as the audit)."""
         src = self.source
         engine = {r.index: ("interval" if r.offline else "stepwise") for r in active}
         monitors = {r.index: r.monitor_cls() for r in active if engine[r.index] == "stepwise"}
@@ -402,7 +402,7 @@ class Watch:
     def _step(self, rows, vals: dict, t: int, i: int, dep) -> None:
         """Step one clock's monitors (``rows``: requirement, monitor, live state) over tick
         ``i`` at time ``t``, with their events; not from a requirement's first tick that
-        reads NaN (unread, :mod:`monitors.nan`) unless ``[tick] nan = "false"``."""
+        reads NaN (unread, :mod:`fretc.monitors.nan`) unless ``[tick] nan = "false"``."""
         unread = self.plan.bindings is None or self.plan.bindings.tick.nan != "false"
         for r, mon, st in rows:
             if mon is None or st.nan_at is not None or any(v not in vals for v in r.variables):
@@ -443,7 +443,7 @@ class Watch:
 
     def _live_evidence(self) -> None:
         """Violations so far and the last trigger, by the audit's interval semantics over
-        the ticks seen (:func:`monitors.interval.evaluate_requirement`)."""
+        the ticks seen (:func:`fretc.monitors.interval.evaluate_requirement`)."""
         arrays = {}
         for key, cols in self._cols.items():
             if cols.n:
@@ -538,11 +538,11 @@ def _listing(topics, most: int = 20) -> str:
 
 def split_pending(ev, n: int) -> tuple[int, int]:
     """(violated, pending) of the failed obligations of ``ev`` (an
-    :class:`~monitors.interval.Evidence` over the first ``n`` ticks of a run): pending
+    :class:`~fretc.monitors.interval.Evidence` over the first ``n`` ticks of a run): pending
     when its window reaches the last tick and it failed only there (FRET's finite-trace
     semantics reads the end of the ticks so far as the end of the run; a later tick may still
     meet it), violated otherwise. Counted over the listed failures
-    (:data:`~monitors.interval.MAX_LISTED`); unlisted ones count as violated."""
+    (:data:`~fretc.monitors.interval.MAX_LISTED`); unlisted ones count as violated."""
     total = ev.violations or 0
     pending = sum(1 for x in (getattr(ev, "listed", ()) or ())
                   if x.window[1] >= n - 1 and x.violation_tick >= n - 1)
@@ -551,7 +551,7 @@ def split_pending(ev, n: int) -> tuple[int, int]:
 
 @dataclass
 class _WatchPasses:
-    """The watch's ticks, one :class:`audit.passes.ClockPass` per requirement's
+    """The watch's ticks, one :class:`fretc.audit.passes.ClockPass` per requirement's
     clock."""
 
     sampling: Any

@@ -1,19 +1,19 @@
 """``fretc watch zenoh://HOST:PORT``: a Zenoh session (a peer of the robot's rmw_zenoh
 router or sessions) that hands the bound topics' messages to the watch engine as the
-Foxglove client does (:mod:`live.client`'s events on an :class:`~live.events.EventQueue`).
+Foxglove client does (:mod:`fretc.live.client`'s events on an :class:`~fretc.live.events.EventQueue`).
 
-What it reads (naming rules and sources: :mod:`live.ros2_names`):
+What it reads (naming rules and sources: :mod:`fretc.live.ros2_names`):
 
 * the graph: rmw_zenoh's liveliness tokens under ``@ros2_lv/<domain>/**`` (the ones alive
   when the session opens, then each change). A publisher token (``MP``) of a bound topic
   advertises the topic with its type (``ros2msg`` definition from rosbags' type store and the
   ``--msg-path`` folders); when the last publisher token of a bound topic is undeclared the
   topic is unadvertised (behind the messages already merged; its value is then not held,
-  :class:`~live.source.WatchSource`). Every bound topic's publishers gone is the end of the
+  :class:`~fretc.live.source.WatchSource`). Every bound topic's publishers gone is the end of the
   robot's run (:attr:`ZenohClient.leaving_ends_run`, after the watch's restart grace);
 * the data: one subscriber per bound topic on ``<domain>/<topic>/*/*`` (any type, any hash),
   so only the bound topics cross the network; messages are merged into log-time order
-  (:mod:`live.merge`). A message's log time is the source timestamp of
+  (:mod:`fretc.live.merge`). A message's log time is the source timestamp of
   rmw_zenoh's attachment, else the Zenoh timestamp, else the time it was received; when a
   ``/clock`` publisher exists (simulated time, ``use_sim_time``) it is the last ``/clock``
   received, as ``ros2 bag record`` stamps messages;
@@ -32,10 +32,10 @@ import threading
 import time
 from collections.abc import Callable
 
-from .client import WATCH_HINT, MissingDependency
-from .events import EventQueue
-from .merge import MergeBuffer
-from .ros2_names import (LIVELINESS_PREFIX, advertisement, attachment_time, bridge_key,
+from fretc.live.client import WATCH_HINT, MissingDependency
+from fretc.live.events import EventQueue
+from fretc.live.merge import MergeBuffer
+from fretc.live.ros2_names import (LIVELINESS_PREFIX, advertisement, attachment_time, bridge_key,
                          parse_bridge_liveliness, parse_liveliness, parse_url, parse_zenoh_key,
                          standard_store, zenoh_topic_key)
 
@@ -45,7 +45,7 @@ CLOCK_TOPIC = "/clock"
 
 
 def require_zenoh():
-    """The ``zenoh`` module; raises :class:`~live.client.MissingDependency` naming the
+    """The ``zenoh`` module; raises :class:`~fretc.live.client.MissingDependency` naming the
     install hint when ``eclipse-zenoh`` is not installed."""
     try:
         import zenoh
@@ -71,7 +71,7 @@ def zenoh_config(*, listen: str | None = None, connect: str | None = None,
 
 class ZenohClient:
     """Watch the ROS 2 topics ``topics`` over Zenoh (module docstring); the events of
-    :mod:`live.client` on :attr:`events`.
+    :mod:`fretc.live.client` on :attr:`events`.
 
     Args:
         url: ``zenoh://HOST:PORT[?domain=D]``.
@@ -79,7 +79,7 @@ class ZenohClient:
         topics: the bound topics (subscribed to; nothing else is).
         types: topic -> expected ROS type (the bindings' ``[types]``, ``--topic-type``).
         msg_path: folders of the robot's own ``.msg``/``.idl`` files.
-        events: the queue (a new bounded :class:`~live.events.EventQueue` by default).
+        events: the queue (a new bounded :class:`~fretc.live.events.EventQueue` by default).
 
     Raises:
         ValueError: a URL of the wrong form; MissingDependency: no eclipse-zenoh.

@@ -1,5 +1,5 @@
 """``fretc replay LOG --serve zenoh://HOST:PORT``: a recorded log's messages published as a
-ROS 2 node on rmw_zenoh would publish them (naming rules: :mod:`live.ros2_names`).
+ROS 2 node on rmw_zenoh would publish them (naming rules: :mod:`fretc.live.ros2_names`).
 
 Each CDR channel of the log becomes a Zenoh publisher on ``<domain>/<topic>/<dds type>/
 <RIHS01 hash>`` (the hash of REP 2011, computed by rosbags from the log's schema) with a
@@ -15,7 +15,7 @@ watch dates them when they arrive).
 The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as
 the robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes
 between them (a watch's ``--publish-diagnostics`` reaches the others). The object has the
-interface of :class:`live.serve.FoxgloveServer` that :func:`live.serve.replay_mcap` drives
+interface of :class:`fretc.live.serve.FoxgloveServer` that :func:`fretc.live.serve.replay_mcap` drives
 (``channel``, ``log``, ``wait_subscribed``, ``stop``), and ``unpublish`` (one publisher
 leaves, the others go on).
 """
@@ -26,11 +26,11 @@ import os
 import time
 from collections.abc import Iterable
 
-from logs.decoding import build_typestore
+from fretc.logs.decoding import build_typestore
 
-from .ros2_names import (attachment, bridge_key, bridge_liveliness, liveliness_token, parse_url,
+from fretc.live.ros2_names import (attachment, bridge_key, bridge_liveliness, liveliness_token, parse_url,
                          zenoh_key)
-from .zenoh_client import require_zenoh, zenoh_config
+from fretc.live.zenoh_client import require_zenoh, zenoh_config
 
 __all__ = ["ZenohServer"]
 

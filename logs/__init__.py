@@ -1,26 +1,26 @@
 """Log sources: recorded robot runs read as a stream of decoded messages in log-time order.
 
-``open_log(path)`` (:mod:`logs.factory`) picks a reader by what ``path`` is:
+``open_log(path)`` (:mod:`fretc.logs.factory`) picks a reader by what ``path`` is:
 
-* ``*.mcap`` — any MCAP profile (:mod:`logs.mcap_source`).  Messages on channels
+* ``*.mcap`` — any MCAP profile (:mod:`fretc.logs.mcap_source`).  Messages on channels
   with ``cdr`` (ROS 2) or ``ros1`` message encoding are deserialized with rosbags types built
   from the schema *embedded in the file* (``ros2msg``, ``ros2idl``, ``ros1msg`` schema
-  encodings; MCAP spec, "Well-known encodings"; :mod:`logs.decoding`).  Chunk
+  encodings; MCAP spec, "Well-known encodings"; :mod:`fretc.logs.decoding`).  Chunk
   CRCs and the data-section CRC are checked.  A file with a valid footer and summary is read
   through its chunk indexes; a file without one (a crashed recording) is read record by
-  record from the start, as far as it goes (:mod:`logs.mcap_integrity`).
+  record from the start, as far as it goes (:mod:`fretc.logs.mcap_integrity`).
 * ``*.bag`` — a ROS 1 bag (rosbags.rosbag1), types from the connection headers; without its
-  index it is read record by record (:mod:`logs.ros1_linear`).
+  index it is read record by record (:mod:`fretc.logs.ros1_linear`).
 * a folder with ``metadata.yaml`` — a rosbag2 bag (rosbags.rosbag2, sqlite3 or mcap storage),
   types from the definitions stored in the bag (or a fallback typestore, see ``open_log``)
-  (:mod:`logs.bag_source`).
+  (:mod:`fretc.logs.bag_source`).
 * ``*.csv`` — a trace of FRET variables: a header row of variable names, one row per tick
-  (:mod:`logs.csv_source`).
+  (:mod:`fretc.logs.csv_source`).
 
 Every source gives :class:`Message` tuples in non-decreasing log time, streaming: memory does
-not grow with the length of the log (:mod:`logs.base`; the passes without an
-index restore log-time order with :mod:`logs.reorder`).  Damage is recorded as
-:class:`~common.problems.DataProblem` in ``source.problems`` and reading goes on; see
+not grow with the length of the log (:mod:`fretc.logs.base`; the passes without an
+index restore log-time order with :mod:`fretc.logs.reorder`).  Damage is recorded as
+:class:`~fretc.common.problems.DataProblem` in ``source.problems`` and reading goes on; see
 :class:`LogSource`.
 
 Times are integer nanoseconds since the epoch of the recording clock (MCAP ``log_time``,
@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import importlib
 
-from .base import LogSource, Message, header_stamp
-from .csv_source import CSV_TOPIC, CSV_TYPE, CsvRow, CsvSource
-from .decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, schema_decoder
-from .factory import open_log
-from .reorder import REORDER_WINDOW_NS
+from fretc.logs.base import LogSource, Message, header_stamp
+from fretc.logs.csv_source import CSV_TOPIC, CSV_TYPE, CsvRow, CsvSource
+from fretc.logs.decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, schema_decoder
+from fretc.logs.factory import open_log
+from fretc.logs.reorder import REORDER_WINDOW_NS
 
 #: the readers of one kind of log each, imported when first named (an audit of a flight log
 #: does not load the bag readers, nor an audit of an MCAP file pyulog)

@@ -1,7 +1,7 @@
-"""ROS 1 bags (``*.bag``) and rosbag2 folders as a :class:`~logs.base.LogSource`,
+"""ROS 1 bags (``*.bag``) and rosbag2 folders as a :class:`~fretc.logs.base.LogSource`,
 read with the rosbags readers (:mod:`rosbags.rosbag1`, :mod:`rosbags.rosbag2`: sqlite3 or
 mcap storage). A ROS 1 bag whose index is damaged or missing is read without it
-(:mod:`logs.ros1_linear`).
+(:mod:`fretc.logs.ros1_linear`).
 """
 
 from __future__ import annotations
@@ -18,13 +18,13 @@ from rosbags.rosbag1 import Reader as Ros1Reader, ReaderError as Ros1ReaderError
 from rosbags.rosbag2 import Reader as Ros2Reader, ReaderError as Ros2ReaderError
 from rosbags.typesys.store import Typestore
 
-from common import problems as P
-from common.problems import LogError
-from .base import LogSource, Message, header_stamp
-from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, build_typestore
-from .decoding import decoder_for
-from .msg_path import MSG_PATH_HINT
-from .ros1_linear import Ros1Linear, is_ros1_bag
+from fretc.common import problems as P
+from fretc.common.problems import LogError
+from fretc.logs.base import LogSource, Message, header_stamp
+from fretc.logs.decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, build_typestore
+from fretc.logs.decoding import decoder_for
+from fretc.logs.msg_path import MSG_PATH_HINT
+from fretc.logs.ros1_linear import Ros1Linear, is_ros1_bag
 
 __all__ = ["BagSource", "connection_typestore"]
 
@@ -69,7 +69,7 @@ class BagSource(LogSource):
     Bags do not record a publish time: ``Message.publish_time == log_time``.
 
     A ROS 1 bag whose index is damaged or missing (a crashed recording) is read record by
-    record from the start (:class:`~logs.ros1_linear.Ros1Linear`), as far as
+    record from the start (:class:`~fretc.logs.ros1_linear.Ros1Linear`), as far as
     it goes; the log is then ``partial``.
 
     Raises:

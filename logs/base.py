@@ -2,7 +2,7 @@
 
 A source reads a recorded run as a stream of decoded messages in non-decreasing log time,
 streaming (memory does not grow with the length of the log). Damage is recorded as
-:class:`~common.problems.DataProblem` in ``source.problems`` and reading goes on; the
+:class:`~fretc.common.problems.DataProblem` in ``source.problems`` and reading goes on; the
 span read completely before the damage is ``source.intact_end`` (../shared/DESIGN.md
 "Damage is never evidence").
 
@@ -16,9 +16,9 @@ import os
 from collections.abc import Iterator
 from typing import Any, NamedTuple
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from common.problems import DataProblem, ProblemLog
+from fretc.common.problems import DataProblem, ProblemLog
 
 __all__ = ["Message", "LogSource", "header_stamp"]
 
@@ -87,7 +87,7 @@ class LogSource:
             cut does (:meth:`intact_end_of`); ../shared/DESIGN.md "Damage is never evidence".
 
     ``problems`` lists the damage found at open time and during the most recent pass (capped
-    per kind and topic, see :mod:`common.problems`); ``problem_counts`` counts all of it.
+    per kind and topic, see :mod:`fretc.common.problems`); ``problem_counts`` counts all of it.
     """
 
     path: str
@@ -110,7 +110,7 @@ class LogSource:
         #: channel/connection id -> (problem kind, reason) of a channel without a decoder
         self._no_decoder: dict[int, tuple[str, str]] = {}
         self.lost: dict[tuple[str, str, int | None], list] = {}
-        #: topic -> field paths to decode (:func:`logs.selective.install`); None: all
+        #: topic -> field paths to decode (:func:`fretc.logs.selective.install`); None: all
         self._wanted_fields: dict[str, frozenset[tuple]] | None = None
 
     # -- problems -------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """Columnar CDR decoding: the bound fields of many messages of one channel at once, by numpy.
 
-The per-message selective decoder (:mod:`logs.selective`) walks each message in
+The per-message selective decoder (:mod:`fretc.logs.selective`) walks each message in
 Python; on a one-hour log that walk is most of an audit's cost. A :class:`ColumnarDecoder`
 walks the same layout for a whole group of messages at once (the messages of one channel in
 one MCAP chunk): every message's offset is an element of an int64 array, each field moves
@@ -8,7 +8,7 @@ all of them with one numpy operation, and each bound field is gathered from the 
 bytes into one column.
 
 Layout rules (XCDR version 1, OMG DDS-XTypes 1.3 §7.4.3 "Data representation", as ROS 2
-middlewares write it and :mod:`logs.selective` reads it): a 4-byte encapsulation
+middlewares write it and :mod:`fretc.logs.selective` reads it): a 4-byte encapsulation
 header (``00 01``: little-endian CDR); offsets count from its end; a primitive of size n is
 aligned to n; a string is a uint32 length (aligned to 4, counting its NUL terminator) and its
 bytes; a sequence is a uint32 count then its elements, aligned to the element size only when
@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .selective import HEADER_STAMP, Path, _NotCovered, _tree
+from fretc.logs.selective import HEADER_STAMP, Path, _NotCovered, _tree
 
 __all__ = ["ColumnarDecoder", "columnar_decoder", "Segment", "RANGES"]
 

@@ -1,4 +1,4 @@
-"""CSV traces of FRET variables as a :class:`~logs.base.LogSource`: a header row
+"""CSV traces of FRET variables as a :class:`~fretc.logs.base.LogSource`: a header row
 of variable names, one row per tick (format in :class:`CsvSource`)."""
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from decimal import Decimal, InvalidOperation
 from types import SimpleNamespace
 from typing import NamedTuple
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from common.problems import CsvError, LogError
-from .base import LogSource, Message
+from fretc.common.problems import CsvError, LogError
+from fretc.logs.base import LogSource, Message
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE"]
 
@@ -57,7 +57,7 @@ class CsvSource(LogSource):
     The file is checked completely when opened (two streaming passes: types, then rows).
 
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
-    ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`signals`)
+    ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`fretc.signals`)
     uses :meth:`rows` directly so columns are variables without bindings.
 
     Raises:

@@ -1,4 +1,4 @@
-"""ArduPilot flight logs (DataFlash binary, ``*.bin``) as a :class:`~logs.base.LogSource`,
+"""ArduPilot flight logs (DataFlash binary, ``*.bin``) as a :class:`~fretc.logs.base.LogSource`,
 read with ``pymavlink``'s ``DFReader`` (ArduPilot's own log library; format: ArduPilot
 "Downloading and Analyzing Data Logs", the self-describing ``FMT`` records).
 
@@ -6,7 +6,7 @@ Topics are the log's message types (``BAT``, ``GPS``, ``ATT``, ``MODE``, ``MSG``
 ``EV``, ...), as Mission Planner and MAVExplorer name them. A type logged for several
 instances (its ``FMTU`` unit string marks an instance field with ``#``, e.g. two batteries
 in ``BAT.Inst``) has one topic per instance: instance 0 keeps the type's name and instance
-*k* > 0 is ``TYPE/k`` (``BAT/1``), as for PX4 instances (:mod:`logs.ulog_source`). Names
+*k* > 0 is ``TYPE/k`` (``BAT/1``), as for PX4 instances (:mod:`fretc.logs.ulog_source`). Names
 without a leading ``/`` are written quoted in bindings: ``'"BAT".Volt < 10.5'``.
 
 Every column of a type is a field, named as in the log (``TimeUS``, ``Volt``), with the
@@ -14,7 +14,7 @@ type of its format character and the scaling pymavlink applies (``c``/``C``/``e`
 centi-units and ``L`` 1e-7 degrees as float64). Log time is ``TimeUS`` (microseconds since
 boot) in ns; types without it (``FMT``, ``FMTU``, ``MULT``, ``UNIT``: the format records) are
 not topics. Messages are delivered in log-time order with the reordering window of the other
-unindexed readers (:mod:`logs.reorder`); a message later than the window is an
+unindexed readers (:mod:`fretc.logs.reorder`); a message later than the window is an
 ``out_of_order`` problem. Bytes between records that are no record (pymavlink skips them)
 are a ``corrupt_record`` gap; a file whose end is no whole record (a crashed recording) is
 read up to there: a ``truncated`` gap.
@@ -28,10 +28,10 @@ import os
 from collections.abc import Iterator
 from types import SimpleNamespace
 
-from common import problems as P
-from common.problems import LogError
-from .base import LogSource, Message
-from .reorder import REORDER_WINDOW_NS, ReorderQueue
+from fretc.common import problems as P
+from fretc.common.problems import LogError
+from fretc.logs.base import LogSource, Message
+from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 __all__ = ["DataflashSource", "dataflash_definition"]
 

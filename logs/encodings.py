@@ -79,7 +79,7 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
 
 
 def _checked(decode: Callable[[bytes], Any], encoding: str) -> Callable[[bytes], Any]:
-    """``decode`` raising ValueError (one of :data:`logs.decoding.DECODE_ERRORS`) for any
+    """``decode`` raising ValueError (one of :data:`fretc.logs.decoding.DECODE_ERRORS`) for any
     payload it cannot decode: the libraries raise their own errors (protobuf's
     ``DecodeError``, cbor2's, a RecursionError on deep nesting)."""
     def checked(raw: bytes) -> Any:

@@ -9,11 +9,11 @@ from pathlib import Path
 
 from typing import TYPE_CHECKING
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from common.problems import LogError
-from .base import LogSource
-from .csv_source import CsvSource
+from fretc.common.problems import LogError
+from fretc.logs.base import LogSource
+from fretc.logs.csv_source import CsvSource
 
 if TYPE_CHECKING:
     from rosbags.typesys import Stores
@@ -33,7 +33,7 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         fallback_typestore: types for rosbag connections that carry no definition (e.g. old
             rosbag2 sqlite3 bags): a rosbags Typestore or a ``rosbags.typesys.Stores`` member.
             Never used when the log embeds its definitions. Default: ROS 2 Humble's standard
-            types plus the types defined under ``msg_path`` (:mod:`logs.msg_path`).
+            types plus the types defined under ``msg_path`` (:mod:`fretc.logs.msg_path`).
         msg_path: folders of ``.msg``/``.idl`` files (``--msg-path``).
         check_data_crc: MCAP only: check the DataEnd data-section CRC (one extra read of the
             data section after a full indexed pass).
@@ -55,8 +55,8 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
     suffix = p.suffix.lower()
     if p.is_dir() or suffix == ".bag":
         from rosbags.typesys import Stores, get_typestore
-        from .bag_source import BagSource
-        from .msg_path import fallback_for
+        from fretc.logs.bag_source import BagSource
+        from fretc.logs.msg_path import fallback_for
 
         if isinstance(fallback_typestore, Stores):
             fallback_typestore = get_typestore(fallback_typestore)
@@ -66,17 +66,17 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
             raise LogError(path, "a folder but not a rosbag2 bag (no metadata.yaml)")
         return BagSource(p, fallback_typestore=fallback_typestore)
     if suffix == ".mcap":
-        from .mcap_source import McapSource
+        from fretc.logs.mcap_source import McapSource
 
         return McapSource(p, check_data_crc=check_data_crc)
     if suffix == ".csv":
         return CsvSource(p, period_ns=csv_period_ns)
     if suffix == ".ulg":
-        from .ulog_source import UlogSource
+        from fretc.logs.ulog_source import UlogSource
 
         return UlogSource(p)
     if suffix == ".bin":
-        from .dataflash_source import DataflashSource
+        from fretc.logs.dataflash_source import DataflashSource
 
         return DataflashSource(p)
     raise LogError(path, "unknown log kind (expected .mcap, .bag, .csv, .ulg, .bin or a "

@@ -8,7 +8,7 @@ still deserializes when the sizes agree and every value read from it is silently
 field's. ROS identifies a message type by its name (ROS 1 by the MD5 sum of its definition,
 ROS 2 by its type hash, REP 2011), so such a definition is damage, not a variant: the topic
 is reported and skipped as an unknown schema (:func:`layout_mismatch` is called by
-:func:`logs.decoding.schema_decoder`).
+:func:`fretc.logs.decoding.schema_decoder`).
 
 A definition is accepted when its layout equals that of the same type in any ROS
 distribution rosbags knows (ROS 1 Noetic for ``ros1msg``; Dashing to the newest ROS 2 for

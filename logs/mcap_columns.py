@@ -1,13 +1,13 @@
 """The indexed MCAP pass by columns: the messages of a log as blocks of columns per topic
-(:func:`column_pass`), for the audit's sampler (:func:`signals.sample_blocks`).
+(:func:`column_pass`), for the audit's sampler (:func:`fretc.signals.sample_blocks`).
 
 It gives what :meth:`McapSource.messages` gives on the same file - the same messages, in the
 same order within each topic, with the same damage, problems, counts and data-section check
 - but a chunk at a time instead of a message at a time: a chunk's Message records are
-located by one walk over its record headers (:func:`~logs.mcap_records.
+located by one walk over its record headers (:func:`~fretc.logs.mcap_records.
 chunk_message_table`), their channel ids and log times gathered by numpy, and the bound
 fields of each channel's messages decoded by a
-:class:`~logs.columnar.ColumnarDecoder`. A group the columnar decoder does not
+:class:`~fretc.logs.columnar.ColumnarDecoder`. A group the columnar decoder does not
 read (big-endian CDR, a malformed message, ...) is decoded message by message as
 :meth:`McapSource.messages` decodes it, problems included.
 
@@ -25,10 +25,10 @@ from typing import Any, NamedTuple
 import numpy as np
 from mcap.records import ChunkIndex, Message as McapMessage
 
-from common import problems as P
-from .columnar import ColumnarDecoder, Segment
-from .decoding import schema_columnar
-from .mcap_records import chunk_message_table
+from fretc.common import problems as P
+from fretc.logs.columnar import ColumnarDecoder, Segment
+from fretc.logs.decoding import schema_columnar
+from fretc.logs.mcap_records import chunk_message_table
 
 __all__ = ["TopicBlock", "column_pass"]
 

@@ -22,9 +22,9 @@ from typing import Any, BinaryIO, NamedTuple
 from mcap.opcode import Opcode
 from mcap.records import Channel, ChunkIndex, Message as McapMessage, Schema, Statistics
 
-from common import problems as P
-from common.problems import DataProblem
-from .mcap_records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
+from fretc.common import problems as P
+from fretc.common.problems import DataProblem
+from fretc.logs.mcap_records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
                            crc_skip, decompress, parse_record)
 
 __all__ = ["McapIndex", "SummaryRead", "read_summary", "check_data_section", "cut_record",
@@ -237,7 +237,7 @@ def _truncated_chunk_records(tail: bytes) -> list[Any]:
     spec, "Chunk"): message_start_time u64, message_end_time u64, uncompressed_size u64,
     uncompressed_crc u32, compression (u32 length + bytes), records (u64 length + bytes).
     The compressed prefix is decompressed as a stream (zstd, lz4 frames or none; at most the
-    chunk's declared uncompressed size, :func:`logs.mcap_records.decompress`) and parsed
+    chunk's declared uncompressed size, :func:`fretc.logs.mcap_records.decompress`) and parsed
     record by record until a record is incomplete. Returns [] when nothing can be recovered.
     """
     try:

@@ -1,4 +1,4 @@
-"""MCAP framing: the record layer under :class:`~logs.mcap_source.McapSource`.
+"""MCAP framing: the record layer under :class:`~fretc.logs.mcap_source.McapSource`.
 
 Records are a 1-byte opcode, a u64 length and a body (MCAP spec, "Records"); bodies are
 parsed with the ``mcap`` library's record classes (:mod:`mcap.records`). The framing itself

@@ -1,16 +1,16 @@
-"""MCAP files (any profile) as a :class:`~logs.base.LogSource`.
+"""MCAP files (any profile) as a :class:`~fretc.logs.base.LogSource`.
 
 Messages on channels with ``cdr`` (ROS 2) or ``ros1`` message encoding are deserialized with
 rosbags types built from the schema *embedded in the file* (``ros2msg``, ``ros2idl``,
 ``ros1msg`` schema encodings; MCAP spec, "Well-known encodings";
-:mod:`logs.decoding`). Chunk CRCs and the data-section CRC are checked. A file
+:mod:`fretc.logs.decoding`). Chunk CRCs and the data-section CRC are checked. A file
 with a valid footer and summary is read through its chunk indexes; a file without one (a
 crashed recording) is read record by record from the start, as far as it goes
-(:mod:`logs.mcap_integrity` reads the damage).
+(:mod:`fretc.logs.mcap_integrity` reads the damage).
 
-The layers follow the ``mcap`` library's: records (:mod:`logs.mcap_records`,
+The layers follow the ``mcap`` library's: records (:mod:`fretc.logs.mcap_records`,
 the library's record classes), the stream of records read here, and the decoder
-(:mod:`logs.decoding`). The library's readers are not used for the passes:
+(:mod:`fretc.logs.decoding`). The library's readers are not used for the passes:
 :class:`mcap.reader.SeekingReader` raises on the first damaged chunk and
 :class:`mcap.stream_reader.StreamReader` on the first damaged record, where an audit must
 skip the damage, say where it is and go on.
@@ -29,17 +29,17 @@ from mcap.records import Channel, Chunk, ChunkIndex, Message as McapMessage, Sch
 from mcap.stream_reader import CRCValidationError
 from rosbags.typesys.msg import normalize_msgtype
 
-from common import problems as P
-from common.problems import DataProblem, LogError
-from .base import LogSource, Message, header_stamp
-from .decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
-from .encodings import SELF_DESCRIBING, type_name
-from .mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
-from .mcap_integrity import index_disagreement, missing_records, read_summary
-from .mcap_columns import TopicBlock, column_pass
-from .mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
-from .mcap_records import crc_skip, parse_record
-from .reorder import REORDER_WINDOW_NS, ReorderQueue
+from fretc.common import problems as P
+from fretc.common.problems import DataProblem, LogError
+from fretc.logs.base import LogSource, Message, header_stamp
+from fretc.logs.decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
+from fretc.logs.encodings import SELF_DESCRIBING, type_name
+from fretc.logs.mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
+from fretc.logs.mcap_integrity import index_disagreement, missing_records, read_summary
+from fretc.logs.mcap_columns import TopicBlock, column_pass
+from fretc.logs.mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
+from fretc.logs.mcap_records import crc_skip, parse_record
+from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 __all__ = ["McapSource"]
 
@@ -227,7 +227,7 @@ class McapSource(LogSource):
     def message_blocks(self, topics: set[str] | frozenset[str]
                        ) -> Iterator[list[TopicBlock]] | None:
         """The messages of ``topics`` as blocks of columns per topic
-        (:func:`logs.mcap_columns.column_pass`: the same messages, order within
+        (:func:`fretc.logs.mcap_columns.column_pass`: the same messages, order within
         each topic, damage and problems as :meth:`messages`), or None when that pass does
         not apply to this file and these topics (then use :meth:`messages`)."""
         return column_pass(self, topics)
@@ -528,7 +528,7 @@ class _LinearPass:
 
 def _type_name(message_encoding: str, schema: Schema | None) -> str:
     """The message type a channel's schema names: ROS's normalized ``pkg/msg/Type`` for the
-    ROS encodings, :func:`logs.encodings.type_name` for the self-describing ones, ``""``
+    ROS encodings, :func:`fretc.logs.encodings.type_name` for the self-describing ones, ``""``
     without a schema."""
     if schema is None or not schema.name:
         return ""

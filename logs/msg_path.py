@@ -20,7 +20,7 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from common.errors import InputError
+from fretc.common.errors import InputError
 
 __all__ = ["MSG_PATH_HINT", "msg_path_typestore", "definitions_in", "fallback_for"]
 

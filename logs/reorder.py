@@ -17,7 +17,7 @@ import heapq
 from collections.abc import Iterator
 from typing import Any
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
 __all__ = ["REORDER_WINDOW_NS", "ReorderQueue"]
 

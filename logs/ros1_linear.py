@@ -5,7 +5,7 @@ a header (u32 length, then ``name=value`` fields each with a u32 length) and dat
 length, bytes); the header field ``op`` gives the kind: 0x05 Chunk (bz2, lz4 or uncompressed
 records), 0x07 Connection, 0x02 Message data (``time``: sec, nsec u32). Everything up to the
 first record cut short or unreadable is delivered in log-time order (held back by the
-:class:`~logs.reorder.ReorderQueue`); what follows is a truncation.
+:class:`~fretc.logs.reorder.ReorderQueue`); what follows is a truncation.
 
 rosbags' reader needs the index at the end of the bag, so the records are framed here.
 """
@@ -21,12 +21,12 @@ from typing import Any
 import lz4.frame
 from rosbags.typesys.msg import normalize_msgtype
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from common import problems as P
-from .base import LogSource, Message, header_stamp
-from .decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, decoder_for
-from .reorder import ReorderQueue
+from fretc.common import problems as P
+from fretc.logs.base import LogSource, Message, header_stamp
+from fretc.logs.decoding import DECODE_ERRORS, UnsupportedSchema, build_typestore, decoder_for
+from fretc.logs.reorder import ReorderQueue
 
 __all__ = ["Ros1Linear", "is_ros1_bag"]
 
@@ -108,7 +108,7 @@ def _chunk_records(header: dict[bytes, bytes], body: bytes
 
 class Ros1Linear:
     """Record-by-record reading of the ROS 1 bag of ``source`` (a
-    :class:`~logs.bag_source.BagSource`) without its index; ``why`` is the
+    :class:`~fretc.logs.bag_source.BagSource`) without its index; ``why`` is the
     reader's error that made the index unusable (quoted in the problems)."""
 
     def __init__(self, source: LogSource, why: str) -> None:

@@ -7,7 +7,7 @@ declare - each an error naming the variable, the topic and the field) and by
 
 Types come from the schemas embedded in the log (MCAP Schema records, the ROS 1 bag
 connection headers, rosbag2 metadata), parsed by rosbags exactly as the reader does
-(:func:`logs.decoding.build_typestore`). A field path resolves only through the fields
+(:func:`fretc.logs.decoding.build_typestore`). A field path resolves only through the fields
 a schema declares, so a binding can never walk Python attributes of the decoded objects
 (``/scan.__class__`` or ``/scan.ranges.size`` are errors).
 
@@ -24,11 +24,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from common.errors import InputError
+from fretc.common.errors import InputError
 
-from .csv_source import CSV_TOPIC
-from .decoding import UnsupportedSchema, build_typestore
-from .encodings import SELF_DESCRIBING, definition
+from fretc.logs.csv_source import CSV_TOPIC
+from fretc.logs.decoding import UnsupportedSchema, build_typestore
+from fretc.logs.encodings import SELF_DESCRIBING, definition
 
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "LogSchemas", "log_schemas",
            "field_paths", "closest"]
@@ -106,7 +106,7 @@ class TopicSchema:
 
     def resolve(self, path: tuple) -> FieldType:
         """The type at ``path`` (field names, integer indexes, slices and filters, as in
-        :class:`signals.bindings.expression.Field`). From the first slice or filter on,
+        :class:`fretc.signals.bindings.expression.Field`). From the first slice or filter on,
         the path applies to each item of the array and the type is an array of the result
         (Foxglove's message path semantics).
 
@@ -196,7 +196,7 @@ class CsvSchema(TopicSchema):
 
     def resolve(self, path: tuple) -> FieldType:
         """The type of the column ``path`` names. Raises
-        :class:`common.problems.FieldPathError` for an unknown column (the closest one named)."""
+        :class:`fretc.common.problems.FieldPathError` for an unknown column (the closest one named)."""
         cols = [c for c, _ in self.fields()]
         if not path or not isinstance(path[0], str) or path[0] not in self.columns:
             name = path[0] if path else ""
@@ -258,7 +258,7 @@ class LogSchemas(Mapping):
 
 
 def log_schemas(source) -> Mapping[str, TopicSchema | None]:
-    """Topic -> :class:`TopicSchema` of an open log (:func:`logs.open_log`), built on first
+    """Topic -> :class:`TopicSchema` of an open log (:func:`fretc.logs.open_log`), built on first
     access (:class:`LogSchemas`); None for a topic whose schema is missing or cannot be
     parsed (the reader reports it as ``unknown_schema``). Reads only the schema and channel
     records (the summary of an MCAP, the connection headers of a bag), never the
@@ -326,7 +326,7 @@ def _mcap_schemas(source) -> LogSchemas:
 def _bag_schemas(source) -> dict[str, TopicSchema | None]:
     from rosbags.rosbag1 import Reader as Ros1Reader  # lazy: bags only (start-up)
     from rosbags.rosbag2 import Reader as Ros2Reader
-    from .bag_source import connection_typestore
+    from fretc.logs.bag_source import connection_typestore
 
     out: dict[str, TopicSchema | None] = {}
     linear = getattr(source, "_linear_bag", None)

@@ -8,7 +8,7 @@ of the encoding - and returns a small object holding only the wanted fields, wit
 rosbags would give them: scalars as the same Python ``int``/``float``/``bool``/``str``,
 primitive arrays as numpy arrays that are views of the message bytes (``np.frombuffer``,
 no copy), nested messages as nested objects. Field access (``data.twist.linear.x``) and
-``__msgtype__`` work as on a rosbags message, so :func:`signals.bindings.make_extractor`
+``__msgtype__`` work as on a rosbags message, so :func:`fretc.signals.bindings.make_extractor`
 reads either the same way.
 
 Layout rules (as rosbags' generated CDR / ROS 1 deserializers implement them):
@@ -30,7 +30,7 @@ full decoder; and a message the fast path fails on (short or malformed bytes) is
 full, so errors and their messages are those of rosbags. Both paths give identical values
 (``tests/logs/test_selective.py`` over every shipped log and the real logs).
 
-Hook: :func:`install` (called by :func:`signals.sample`) records on the source the
+Hook: :func:`install` (called by :func:`fretc.signals.sample`) records on the source the
 fields each topic's bindings read; the sources pass them to :func:`selective_decoder` when
 they build a topic's decoder.
 """
@@ -46,7 +46,7 @@ import numpy as np
 
 __all__ = ["selective_decoder", "wanted_fields", "install", "stats", "HEADER_STAMP"]
 
-#: Field paths as in :class:`signals.bindings.Field`: attribute names and indexes.
+#: Field paths as in :class:`fretc.signals.bindings.Field`: attribute names and indexes.
 Path = tuple[Any, ...]
 
 _SIZE = {"bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2,

@@ -1,4 +1,4 @@
-"""PX4 flight logs (ULog, ``*.ulg``) as a :class:`~logs.base.LogSource`, read with
+"""PX4 flight logs (ULog, ``*.ulg``) as a :class:`~fretc.logs.base.LogSource`, read with
 ``pyulog`` (PX4's own ULog library; format: PX4 "ULog File Format" documentation).
 
 Topics, named as Foxglove names them when it opens a ``.ulg``:
@@ -47,8 +47,8 @@ from typing import Any
 
 import numpy as np
 
-from common.problems import LogError
-from .base import LogSource, Message
+from fretc.common.problems import LogError
+from fretc.logs.base import LogSource, Message
 
 __all__ = ["UlogSource", "LOG_TOPIC", "PARAMETER_TOPIC", "DROPOUT", "EARLY_TIMESTAMP",
            "ulog_type_name", "ulog_definition"]

@@ -1,8 +1,8 @@
 """The value conventions the offline engines share with the generated monitors, over numpy
-arrays of one value per tick (:mod:`monitors.vectorized` over the IR,
-:mod:`monitors.interval` over the requirement's expressions): ``/`` by zero, ``mod``
+arrays of one value per tick (:mod:`fretc.monitors.vectorized` over the IR,
+:mod:`fretc.monitors.interval` over the requirement's expressions): ``/`` by zero, ``mod``
 by zero and an overflowing ``^`` give NaN; ``min``/``max`` keep Python's ``min(a, b)`` /
-``max(a, b)`` choice when NaN is involved. (:mod:`compiler.evaluate` holds the same rules
+``max(a, b)`` choice when NaN is involved. (:mod:`fretc.compiler.evaluate` holds the same rules
 for single Python values.)"""
 
 from __future__ import annotations

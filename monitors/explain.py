@@ -3,7 +3,7 @@ manner (the scope interval, the trigger points, the window in which the response
 must not hold), as FRET's assistant shows them (FRET's manual, "Semantics" panel).
 
 The diagram is not drawn from a table of pictures: it is *computed* by the audit's interval
-semantics (:mod:`monitors.interval`, :mod:`monitors.obligations`) on an example trace laid
+semantics (:mod:`fretc.monitors.interval`, :mod:`fretc.monitors.obligations`) on an example trace laid
 out for the requirement's template: its scope mode holds (or not) so that one scope
 interval is wide, its condition rises two ticks into it, its stop condition comes a few
 ticks after the trigger. The windows are those the obligation checker looks at for the
@@ -19,11 +19,11 @@ from fractions import Fraction
 
 import numpy as np
 
-from fretish import ast as A
-from compiler.printers import expr_text
+from fretc.fretish import ast as A
+from fretc.compiler.printers import expr_text
 
-from .interval import scope_intervals, trigger_points
-from .obligations import OBLIGATIONS, ObligationChecker
+from fretc.monitors.interval import scope_intervals, trigger_points
+from fretc.monitors.obligations import OBLIGATIONS, ObligationChecker
 
 __all__ = ["Diagram", "Explanation", "explain", "diagram", "shortest_traces", "MAX_SEARCH"]
 
@@ -240,7 +240,7 @@ def explain(compiled) -> Explanation:
 def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MAX_SEARCH[1]):
     """(shortest trace that satisfies, shortest that violates, note) of a compiled
     requirement: a breadth-first search over the states of its generated runtime monitor
-    (the pt formula's state machine, :mod:`compiler.codegen`), one letter per valuation of
+    (the pt formula's state machine, :mod:`fretc.compiler.codegen`), one letter per valuation of
     its boolean variables, so the first trace found of each verdict is a shortest one (FRET's
     finite-trace verdict at its last tick). Traces are ``{variable: [bool per tick]}``; None
     (and the note) when none exists within ``max_ticks``, when a variable is a number (the
@@ -248,8 +248,8 @@ def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MA
     import copy
     from itertools import product
 
-    from compiler import ir
-    from compiler.codegen import build_monitor_modules
+    from fretc.compiler import ir
+    from fretc.compiler.codegen import build_monitor_modules
 
     f = compiled.formalization
     if any(n.op in ("cmp", "num", "call", "pre") for n in ir.walk(f.ft)):

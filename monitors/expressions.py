@@ -1,11 +1,11 @@
 """FRETish expressions and FRET's temporal functions evaluated over the columns of a sampled
 trace (one numpy array per FRET variable, one item per tick), for FRET's interval semantics
-(:mod:`monitors.interval`).
+(:mod:`fretc.monitors.interval`).
 
 Values follow the generated monitors' conventions (a number read as a condition is
 ``bool(x)``; ``/`` by zero is NaN). Each temporal function is computed from the "meaning"
 column of ``../shared/fretish/README.md`` section 6b, relative to the scope's ``Left`` /
-``Right`` (:func:`monitors.interval.endpoints`) or in FRET's endpoint-free forms inside scope
+``Right`` (:func:`fretc.monitors.interval.endpoints`) or in FRET's endpoint-free forms inside scope
 conditions; index ``n`` is FRET's absorbing state after the trace (section 6's trace model).
 """
 
@@ -15,9 +15,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
+from fretc.monitors.arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 
 __all__ = ["ColumnExpressions", "EvidenceUnsupported"]
 

@@ -17,7 +17,7 @@ says *why*:
    first point; ``holding`` (``whenever``) - every point where ``C`` holds; ``regular`` -
    every point where ``C`` becomes true, or holds at the interval's first point.
 3. **The timing's obligation** from each trigger ``t`` until the interval end ``e``
-   (../shared/fretish/README.md section 4, :mod:`monitors.obligations`), e.g.
+   (../shared/fretish/README.md section 4, :mod:`fretc.monitors.obligations`), e.g.
    ``within k``: ``R`` somewhere in ``[t, t+k]``, vacuous when ``e < t+k``; ``only*`` scopes
    use the negated obligation.
 
@@ -26,7 +26,7 @@ no scope interval or no trigger. The first violation is the earliest trigger (in
 whose obligation fails; :class:`Violation` gives its scope interval, the response window
 looked at and the tick at which the obligation was definitely missed.
 
-Expressions are evaluated over numpy columns by :mod:`monitors.expressions` (one value per tick
+Expressions are evaluated over numpy columns by :mod:`fretc.monitors.expressions` (one value per tick
 per FRET variable) with the
 same value conventions as the generated monitors (a number read as a condition is
 ``bool(x)``; ``/`` by zero is NaN). Every FRET temporal function is evaluated from the
@@ -56,10 +56,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from .expressions import ColumnExpressions, EvidenceUnsupported
-from .obligations import OBLIGATIONS, Interval, ObligationChecker
+from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
+from fretc.monitors.obligations import OBLIGATIONS, Interval, ObligationChecker
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
            "endpoints", "scope_mode",
@@ -127,7 +127,7 @@ def endpoints(kind: str, mode: np.ndarray | None, n: int) -> tuple[np.ndarray, n
     conditions see them.
 
     Args:
-        kind: a scope kind of :data:`fretish.ast.SCOPE_KINDS`.
+        kind: a scope kind of :data:`fretc.fretish.ast.SCOPE_KINDS`.
         mode: the mode's truth at each tick (None for ``null``).
         n: ticks (>= 1).
 
@@ -187,7 +187,7 @@ def scope_intervals(kind: str, mode: np.ndarray | None, n: int) -> list[Interval
     """Scope intervals of a trace of ``n`` ticks (module docstring, point 1).
 
     Args:
-        kind: a scope kind of :data:`fretish.ast.SCOPE_KINDS`.
+        kind: a scope kind of :data:`fretc.fretish.ast.SCOPE_KINDS`.
         mode: the mode's truth at each tick (None for ``null``).
 
     Returns:
@@ -347,7 +347,7 @@ def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
     ``"vacuous"``, ``"violated"``, or ``"unknown"`` when the interval semantics cannot
     evaluate it (:class:`EvidenceUnsupported`: an uninterpreted function, a free-form
     sentence). Arguments and other errors as :func:`evaluate_requirement`; this is the
-    :data:`check.witness.Judge` ``fretc check`` passes for its witnesses."""
+    :data:`fretc.check.witness.Judge` ``fretc check`` passes for its witnesses."""
     try:
         ev = evaluate_requirement(req, columns, n, duration_ticks)
     except EvidenceUnsupported:

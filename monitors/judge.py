@@ -4,14 +4,14 @@ over the columns of a trace (one value per tick per FRET variable).
 The audit (and a watch at the end of its run) asks :func:`judge` and nothing else:
 
 * **FRET's finite-trace verdict and its evidence** come from FRET's interval semantics
-  (:func:`monitors.interval.evaluate_requirement`: scope intervals, triggers, the first
+  (:func:`fretc.monitors.interval.evaluate_requirement`: scope intervals, triggers, the first
   violated obligation; ../shared/fretish/README.md sections 2-4). Where that semantics cannot
   evaluate the requirement (uninterpreted functions), the verdict is the requirement's pt
-  formula evaluated over the columns (:func:`monitors.vectorized.pt_series`; FRET's
+  formula evaluated over the columns (:func:`fretc.monitors.vectorized.pt_series`; FRET's
   pt formula at the last tick is its finite-trace verdict), and where that is impossible too,
-  the generated monitor replayed over the columns (:mod:`monitors.stepwise`).
+  the generated monitor replayed over the columns (:mod:`fretc.monitors.stepwise`).
 * **The robustness** (the margin behind the verdict) is the pt formula's space robustness over
-  the same columns (:func:`monitors.robustness.robustness`); its sign is the
+  the same columns (:func:`fretc.monitors.robustness.robustness`); its sign is the
   verdict's. None where the pt formula cannot be evaluated over columns.
 * **The LTL3 verdict** (Bauer, Leucker, Schallhart, TOSEM 2011: the earliest tick after which
   every continuation of the trace satisfies, or every one violates, the infinite-trace
@@ -31,11 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import stepwise
-from .interval import Evidence, EvidenceUnsupported, evaluate_requirement
-from .robustness import Robustness, robustness
-from .vectorized import VectorizeError, atom_letters, pt_series, supports
-from .nan import nan_ticks_of
+from fretc.monitors import stepwise
+from fretc.monitors.interval import Evidence, EvidenceUnsupported, evaluate_requirement
+from fretc.monitors.robustness import Robustness, robustness
+from fretc.monitors.vectorized import VectorizeError, atom_letters, pt_series, supports
+from fretc.monitors.nan import nan_ticks_of
 
 __all__ = ["Judgement", "judge", "ltl3_verdict", "nan_ticks"]
 
@@ -56,7 +56,7 @@ class Judgement:
             generated monitor replayed).
         note: why the interval semantics gave no evidence, or None.
         robustness: the pt formula's robustness over the ticks
-            (:class:`monitors.robustness.Robustness`), or None where the pt formula
+            (:class:`fretc.monitors.robustness.Robustness`), or None where the pt formula
             cannot be evaluated over columns (a future-time function).
     """
 
@@ -75,11 +75,11 @@ def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int,
     """Decide one requirement over the first ``n`` ticks of ``columns``.
 
     Args:
-        requirement: the parsed requirement (:class:`fretish.ast.Requirement`).
-        formalization: its :class:`compiler.semantics.Formalization` (pt, ticks).
+        requirement: the parsed requirement (:class:`fretc.fretish.ast.Requirement`).
+        formalization: its :class:`fretc.compiler.semantics.Formalization` (pt, ticks).
         columns: FRET variable -> numpy array of at least ``n`` values (bool or float).
         n: the number of ticks judged (``n >= 1``).
-        monitor_source: the requirement's :class:`compiler.codegen.MonitorSource` (its LTL3
+        monitor_source: the requirement's :class:`fretc.compiler.codegen.MonitorSource` (its LTL3
             automata tables), or None for a requirement without an online monitor.
         monitor_cls: its generated monitor class, for the replay fallbacks, or None.
 
@@ -130,7 +130,7 @@ def _ltl3(monitor_source, monitor_cls, columns, n: int, replayed) -> tuple[str, 
 def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
                  ) -> tuple[str, int | None]:
     """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
-    deterministic Spot monitors embedded by :func:`compiler.codegen.monitor_source`
+    deterministic Spot monitors embedded by :func:`fretc.compiler.codegen.monitor_source`
     (``bad`` for ft_inf: rejection means *violated*; ``good`` for its negation: rejection
     means *satisfied*).
 
@@ -180,7 +180,7 @@ def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
 
 def nan_ticks(requirement, columns: Mapping[str, np.ndarray], n: int) -> np.ndarray:
     """The ticks (bool array of ``n``) at which a comparison of ``requirement`` (scope mode,
-    condition, stop condition, response) reads NaN: unread ticks (:mod:`monitors.nan`).
+    condition, stop condition, response) reads NaN: unread ticks (:mod:`fretc.monitors.nan`).
     A free-form requirement has none."""
     if requirement.freeform:
         return np.zeros(n, dtype=np.bool_)

@@ -6,8 +6,8 @@ gives NaN one meaning instead (docs/guide/ticks.md, "NaN"): a comparison of a FR
 expression with a NaN operand (a NaN in a column, or ``0/0`` in the requirement's
 arithmetic), and a number read as a condition that is NaN, make that tick *unread* for the
 requirement; the audit judges only the ticks before the first unread one
-(:mod:`audit.damage`), as it does before a cut (:func:`monitors.judge.nan_ticks`). LaserScan ranges under REP 117 never get
-here: the bindings drop their NaN before any comparison (:mod:`signals.bindings`).
+(:mod:`fretc.audit.damage`), as it does before a cut (:func:`fretc.monitors.judge.nan_ticks`). LaserScan ranges under REP 117 never get
+here: the bindings drop their NaN before any comparison (:mod:`fretc.signals.bindings`).
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from fretish import ast as A
+from fretc.fretish import ast as A
 
-from .expressions import ColumnExpressions, EvidenceUnsupported
+from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 
 __all__ = ["nan_ticks_of"]
 
@@ -26,7 +26,7 @@ __all__ = ["nan_ticks_of"]
 def nan_ticks_of(exprs: list[A.Expr], columns: Mapping[str, np.ndarray], n: int
                  ) -> np.ndarray:
     """The ticks (of ``n``) at which a comparison inside ``exprs`` (a requirement's scope
-    mode, condition, stop condition and response: :func:`monitors.judge.nan_ticks`) has a
+    mode, condition, stop condition and response: :func:`fretc.monitors.judge.nan_ticks`) has a
     NaN operand, or a number read as a condition is NaN.
 
     Args:

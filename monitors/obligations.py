@@ -65,7 +65,7 @@ class ObligationChecker:
     """The obligation of one timing from each trigger over a trace (module docstring).
 
     Args:
-        timing: a timing kind of :data:`fretish.ast.TIMING_KINDS`.
+        timing: a timing kind of :data:`fretc.fretish.ast.TIMING_KINDS`.
         negate: an ``only*`` scope (the negated obligation is checked).
         R, S: the response and stop condition at each tick (bool arrays; S None without one).
         k: the duration in ticks (``within``/``for``/``after``).

@@ -4,7 +4,7 @@ formula over the columns of a trace.
 FRET's pt formula at the last tick is the requirement's finite-trace verdict
 (../shared/fretish/README.md); this module evaluates the same formula with Donze and Maler's
 space robustness (Donze, Maler, FORMATS 2010; Fainekos, Pappas, TCS 2009) instead of truth
-values, operator by operator over the same columns :mod:`monitors.vectorized` reads:
+values, operator by operator over the same columns :mod:`fretc.monitors.vectorized` reads:
 
 =====================  ==============================================================
 ``x <= c``, ``x < c``   ``c - x``  (the signed distance to the threshold, in x's unit)
@@ -41,9 +41,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compiler.ir import Node
+from fretc.compiler.ir import Node
 
-from .vectorized import VectorizeError, node_series
+from fretc.monitors.vectorized import VectorizeError, node_series
 
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
@@ -82,7 +82,7 @@ def robustness(pt: Node, columns: Columns, n: int) -> Robustness:
 
     Raises:
         VectorizeError: a future-time operator or function in ``pt``, or a missing or
-            mis-shaped column (as :func:`monitors.vectorized.pt_series`).
+            mis-shaped column (as :func:`fretc.monitors.vectorized.pt_series`).
     """
     if n < 1:
         raise ValueError("robustness needs at least one tick")

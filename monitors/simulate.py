@@ -11,9 +11,9 @@ requirements"): for each requirement and each tick ``i`` of a trace of ``n`` tic
 * ``parts``: the values of the requirement's parts at ``i``: its scope mode, its condition
   (the trigger), its stop condition and its response (None where a value is NaN).
 
-Both formulas are evaluated by the reference evaluator (:mod:`compiler.evaluate`), the
+Both formulas are evaluated by the reference evaluator (:mod:`fretc.compiler.evaluate`), the
 oracle the monitors are tested against. A trace is a CSV (the audit's format,
-:class:`logs.CsvSource`) or a timeline text (:func:`parse_timeline`).
+:class:`fretc.logs.CsvSource`) or a timeline text (:func:`parse_timeline`).
 """
 
 from __future__ import annotations
@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from common.errors import InputError, Where
-from compiler.evaluate import ft_at, pt_at, series
+from fretc.common.errors import InputError, Where
+from fretc.compiler.evaluate import ft_at, pt_at, series
 
-from .expressions import ColumnExpressions, EvidenceUnsupported
+from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 
 __all__ = ["MAX_SIMULATED_TICKS", "Simulation", "parse_timeline", "read_trace", "simulate"]
 
@@ -148,14 +148,14 @@ def _value(v: str, path: str, no: int, col: int) -> Any:
 
 
 def read_trace(path: str) -> dict[str, list[Any]]:
-    """The trace of ``path``: a ``.csv`` (the audit's CSV, :class:`logs.CsvSource`; a
+    """The trace of ``path``: a ``.csv`` (the audit's CSV, :class:`fretc.logs.CsvSource`; a
     ``time`` column is ignored: ticks are rows) or any other file as a timeline text.
 
     Raises:
         InputError: an unreadable file or a bad trace (positioned), or more than
             :data:`MAX_SIMULATED_TICKS` ticks.
     """
-    from logs import CsvSource
+    from fretc.logs import CsvSource
 
     if path.lower().endswith(".csv"):
         src = CsvSource(path)  # CsvError (an input error) names file:line and column
@@ -178,7 +178,7 @@ def read_trace(path: str) -> dict[str, list[Any]]:
 
 def simulate(compiled, trace: dict[str, list[Any]]) -> Simulation:
     """The simulation (module docstring) of one compiled requirement
-    (:class:`compiler.build.Compiled` with a formalization) over ``trace`` (variable ->
+    (:class:`fretc.compiler.build.Compiled` with a formalization) over ``trace`` (variable ->
     values, one per tick, all of one length).
 
     Raises:

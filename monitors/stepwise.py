@@ -1,7 +1,7 @@
 """The stepwise engine: a generated monitor class (``MONITORS[id]`` of the module
-:mod:`compiler.codegen` renders) driven tick by tick over columns.
+:mod:`fretc.compiler.codegen` renders) driven tick by tick over columns.
 
-The audit steps the monitors while it reads the log (:mod:`audit.passes`); this
+The audit steps the monitors while it reads the log (:mod:`fretc.audit.passes`); this
 module replays them over kept columns (after a cut at the damage) and reads their verdicts.
 """
 

@@ -1,6 +1,6 @@
 """Vectorized (numpy) evaluation of past-time formulas over a whole sampled trace.
 
-The generated monitors (:mod:`compiler.codegen`) compute the pt formula tick by tick in
+The generated monitors (:mod:`fretc.compiler.codegen`) compute the pt formula tick by tick in
 Python; for an offline audit of a long log the same values can be computed for all ticks
 at once from the columns of the sampled trace (one 1-D array per FRET variable). This module
 does that, operator by operator, with exactly the semantics of the generated ``step()``
@@ -33,10 +33,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from compiler.ir import Node, walk
-from compiler.printers import to_smv
+from fretc.compiler.ir import Node, walk
+from fretc.compiler.printers import to_smv
 
-from .arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
+from fretc.monitors.arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 
 __all__ = ["VectorizeError", "pt_series", "node_series", "atom_letters", "supports"]
 

@@ -5,5 +5,5 @@
 report of ``fretc falsify`` (:mod:`.falsify`).
 
 The last step of the pipeline: every module here reads the audit's verdict model
-(:mod:`audit.verdict`) and nothing but the commands (``fretc/``) imports this package
+(:mod:`fretc.audit.verdict`) and nothing but the commands (``fretc/``) imports this package
 (tests/test_architecture.py)."""

@@ -1,8 +1,8 @@
 """The report's data record (``fretc report``): everything the templates
 (``templates/report.html.j2``, ``templates/report.md.j2``) show, built from the audit document
-(``fretc-audit/1``) and the requirement traces (:mod:`reports.trace`) as plain dicts
+(``fretc-audit/1``) and the requirement traces (:mod:`fretc.reports.trace`) as plain dicts
 and lists: the header and inputs, the runs, one row per requirement with its matrix cells,
-the violations with their timelines (:mod:`reports.timeline`), and the coverage.
+the violations with their timelines (:mod:`fretc.reports.timeline`), and the coverage.
 
 Deterministic: the same inputs give the same record except the generation line (UTC;
 ``SOURCE_DATE_EPOCH`` fixes it).
@@ -19,13 +19,13 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Sequence
 
-from common.units import format_seconds
+from fretc.common.units import format_seconds
 
-from .margin import margin_svg
-from .terminal import damage_summary, robustness_text
-from .trace import FIELD_NAMES, ModuleInfo, RequirementTrace, resolve_input, split_source
-from .verdicts import cell_label, values_table, verdict_for, witness
-from .timeline import COLORS, timeline_svg
+from fretc.reports.margin import margin_svg
+from fretc.reports.terminal import damage_summary, robustness_text
+from fretc.reports.trace import FIELD_NAMES, ModuleInfo, RequirementTrace, resolve_input, split_source
+from fretc.reports.verdicts import cell_label, values_table, verdict_for, witness
+from fretc.reports.timeline import COLORS, timeline_svg
 
 __all__ = ["report_context", "GENERATED_PREFIX"]
 
@@ -100,7 +100,7 @@ def _version() -> str:
 
 def _damage_text(la: dict) -> str:
     """Where and how a partial log is damaged, and how far it was judged
-    (:func:`reports.terminal.damage_summary` on the JSON document)."""
+    (:func:`fretc.reports.terminal.damage_summary` on the JSON document)."""
     fields = ("start_time_ns", "damage_time_ns", "ticks_after_damage", "damage_cut")
     ns = SimpleNamespace(problems=la.get("problems") or [],
                          problem_counts=la.get("problem_counts") or {},
@@ -375,7 +375,7 @@ def report_context(doc: dict, traces: dict[int, RequirementTrace],
 
     Args:
         doc: the audit document.
-        traces, modules, notes: from :func:`reports.trace.trace_requirements`.
+        traces, modules, notes: from :func:`fretc.reports.trace.trace_requirements`.
         annotated: log index -> ``{"path": annotated MCAP (relative to the report),
             "events": n, "partial": bool, "damage": str}``.
         title: the report title.

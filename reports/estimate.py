@@ -1,8 +1,8 @@
-"""The report of ``fretc estimate`` (:mod:`sim.estimate`, :mod:`sim.rare`), in the output
+"""The report of ``fretc estimate`` (:mod:`fretc.sim.estimate`, :mod:`fretc.sim.rare`), in the output
 folder:
 
-* ``estimate.json`` - the campaign (:meth:`sim.estimate.Estimate.to_json`, or the ``rare``
-  section of :meth:`sim.rare.RareResult.to_json`) with ``exit_code``; no wall-clock time,
+* ``estimate.json`` - the campaign (:meth:`fretc.sim.estimate.Estimate.to_json`, or the ``rare``
+  section of :meth:`fretc.sim.rare.RareResult.to_json`) with ``exit_code``; no wall-clock time,
   so the same seed gives byte-identical files, locally and on Ray;
 * ``estimate.md`` - per requirement: runs of each verdict, the estimate of P(satisfied),
   its Clopper-Pearson interval, the bound and decision with the runs used, the example
@@ -24,7 +24,7 @@ __all__ = ["write_estimate", "exit_code_of"]
 
 
 def exit_code_of(doc: dict) -> int:
-    """``fretc estimate``'s exit code from the report document (:mod:`fretc.estimate`): 1 a
+    """``fretc estimate``'s exit code from the report document (:mod:`fretc.cli.estimate`): 1 a
     probability requirement fails or a requirement without a bound was violated on a run;
     130 interrupted; 5 a probability requirement undecided; 2 a --rare target without
     levels; else 0."""
@@ -147,8 +147,8 @@ def _svg_name(rid: str) -> str:
 
 def write_estimate(out: str | Path, result=None, rare=None) -> dict:
     """Write ``estimate.json``, ``estimate.md`` and the SVGs (module docstring) for a
-    campaign ``result`` (:class:`sim.estimate.Estimate`) or a ``rare`` result
-    (:class:`sim.rare.RareResult`); returns the JSON document with ``summary_lines`` (the
+    campaign ``result`` (:class:`fretc.sim.estimate.Estimate`) or a ``rare`` result
+    (:class:`fretc.sim.rare.RareResult`); returns the JSON document with ``summary_lines`` (the
     command's output) added after writing. Raises ``OSError`` when ``out`` is not
     writable."""
     outp = Path(out)

@@ -1,4 +1,4 @@
-"""How ``fretc explain`` shows a requirement (:mod:`monitors.explain`): its reading and a
+"""How ``fretc explain`` shows a requirement (:mod:`fretc.monitors.explain`): its reading and a
 diagram in the terminal (one text row per signal, the scope, the triggers and the windows)
 and as SVG (``-o DIR``). Same input, same bytes."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import html
 
-from common.textsafe import xml_text
+from fretc.common.textsafe import xml_text
 
 def _x(text) -> str:
     """Text for SVG/XHTML: control and bidi characters made visible, then XML-escaped (a
@@ -37,7 +37,7 @@ def _rows(d) -> list[tuple[str, str, list[int]]]:
 
 
 def text(x) -> str:
-    """The explanation ``x`` (:class:`monitors.explain.Explanation`) for the terminal."""
+    """The explanation ``x`` (:class:`fretc.monitors.explain.Explanation`) for the terminal."""
     d = x.diagram
     mark = {"signal": "T", "scope": "=", "trigger": "^", "window": "#", "forbidden": "x"}
     out = [f"{x.id}  ({x.key})", f"  {x.text}", "", f"  {x.reading}", ""]

@@ -20,7 +20,7 @@ from __future__ import annotations
 import os
 import shutil
 
-from .export_results import RequirementResult, replace_tree
+from fretc.reports.export_results import RequirementResult, replace_tree
 
 __all__ = ["export_doorstop", "item_block", "MARKER", "KEYS"]
 
@@ -75,7 +75,7 @@ def export_doorstop(src: str, out: str, results: dict[str, RequirementResult],
     """Write the Doorstop tree under ``src`` to the new folder ``out`` with the results added
     to the items (``item_files``: UID -> the item's file, inside ``src``); returns how many
     items got them. Atomic: ``out`` appears complete or not at all
-    (:func:`~reports.export_results.replace_tree`); raises :class:`FileExistsError` for a
+    (:func:`~fretc.reports.export_results.replace_tree`); raises :class:`FileExistsError` for a
     non-empty ``out`` and :class:`ValueError` for an item file outside ``src``."""
     root = os.path.realpath(src)
     targets: dict[str, RequirementResult] = {}

@@ -3,7 +3,7 @@
 fretc's results; every other member and object is kept as it was, in its order.
 
 ``fretc``: ``{"verdict", "evidence", "ft", "pt", "audit_id", "audit_date"}`` (the fields of
-:class:`~reports.export_results.RequirementResult`). FRET keeps requirement objects as
+:class:`~fretc.reports.export_results.RequirementResult`). FRET keeps requirement objects as
 documents and ignores members it does not know, so the file still imports into FRET's GUI;
 FRET's own ``semantics`` are not touched (fretc's formulas sit beside them, to compare).
 
@@ -16,9 +16,9 @@ from __future__ import annotations
 import json
 import re
 
-from common.errors import FretishFileError
+from fretc.common.errors import FretishFileError
 
-from .export_results import RequirementResult
+from fretc.reports.export_results import RequirementResult
 
 __all__ = ["export_fret", "FRETC_MEMBER"]
 

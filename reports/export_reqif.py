@@ -22,11 +22,11 @@ from __future__ import annotations
 import io
 import zipfile
 
-from common.errors import FretishFileError
-from fretish.sources.reqif_file import parse_reqif_bundles
-from fretish.sources.safe_xml import read_reqif_members
+from fretc.common.errors import FretishFileError
+from fretc.fretish.sources.reqif_file import parse_reqif_bundles
+from fretc.fretish.sources.safe_xml import read_reqif_members
 
-from .export_results import RequirementResult
+from fretc.reports.export_results import RequirementResult
 
 __all__ = ["export_reqif", "ATTRIBUTES", "DATATYPE_ID"]
 
@@ -123,7 +123,7 @@ def _exported_text(source: str, bundle, results: dict[str, RequirementResult]
 def export_reqif(src: str, results: dict[str, RequirementResult]) -> tuple[bytes, int]:
     """(the bytes of ``src`` with the results added, how many SPEC-OBJECTs got them): a
     ``.reqif`` text or a ``.reqifz`` archive, as ``src`` is. Raises
-    :class:`FretishFileError` for a file :mod:`fretish.sources.reqif_file` refuses. Writes
+    :class:`FretishFileError` for a file :mod:`fretc.fretish.sources.reqif_file` refuses. Writes
     nothing."""
     bundles = parse_reqif_bundles(src)
     if not src.lower().endswith(".reqifz"):

@@ -1,4 +1,4 @@
-"""The report of a falsification search (:mod:`sim.falsify`), written to its output folder:
+"""The report of a falsification search (:mod:`fretc.sim.falsify`), written to its output folder:
 
 * ``falsify.json`` - schema ``fretc-falsify/1``: the space, the seed, the budget, the target
   requirements, every run (its parameters, each requirement's verdict and robustness, the
@@ -19,9 +19,9 @@ import json
 import math
 from pathlib import Path
 
-from .terminal import robustness_text
+from fretc.reports.terminal import robustness_text
 
-from sim.falsify import Search
+from fretc.sim.falsify import Search
 
 __all__ = ["write_search", "search_json", "SCHEMA"]
 
@@ -127,7 +127,7 @@ def write_search(search: Search, out: str | Path, plan) -> dict:
     Raises:
         OSError: a file cannot be written.
     """
-    from audit.verdict import audit_json
+    from fretc.audit.verdict import audit_json
 
     outp = Path(out)
     doc = search_json(search)

@@ -5,10 +5,10 @@ report folder::
     report.md          the same content (timelines as image links to timelines/)
     audit.json         the audit document the report was made from
     timelines/*.svg    one timeline per violation (the same SVG as inlined in the HTML)
-    matrix.html        the traceability matrix for auditors (:mod:`reports.matrix`)
+    matrix.html        the traceability matrix for auditors (:mod:`fretc.reports.matrix`)
     matrix.csv         the same rows as CSV
 
-and, on request, annotated copies of the MCAP logs (:mod:`audit.annotate`).
+and, on request, annotated copies of the MCAP logs (:mod:`fretc.audit.annotate`).
 """
 
 from __future__ import annotations
@@ -18,18 +18,18 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from audit.annotate import AnnotateResult, annotate_mcap
-from .context import report_context
-from audit.verdict import SCHEMA
-from .render import render_html, render_markdown
-from .matrix import matrix_csv, matrix_html, matrix_rows
-from .trace import ReportError, resolve_input, split_source, trace_requirements
+from fretc.audit.annotate import AnnotateResult, annotate_mcap
+from fretc.reports.context import report_context
+from fretc.audit.verdict import SCHEMA
+from fretc.reports.render import render_html, render_markdown
+from fretc.reports.matrix import matrix_csv, matrix_html, matrix_rows
+from fretc.reports.trace import ReportError, resolve_input, split_source, trace_requirements
 
 __all__ = ["load_audit_json", "ReportFiles", "write_report"]
 
 
 def load_audit_json(path: str) -> dict:
-    """Read an audit document. Raises :class:`~reports.trace.ReportError` when it
+    """Read an audit document. Raises :class:`~fretc.reports.trace.ReportError` when it
     cannot be read, is not JSON, or is not schema ``fretc-audit/1``."""
     try:
         doc = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -113,11 +113,11 @@ def _write_files(out: Path, files: ReportFiles, ctx: dict, html: str, md: str,
 
 
 def _current_entries(doc: dict, base: Path | None, json_dir: Path | None) -> dict | None:
-    """Requirement id -> :class:`fretish.files.RequirementEntry` as the requirement sources the
+    """Requirement id -> :class:`fretc.fretish.files.RequirementEntry` as the requirement sources the
     audit names read now (to flag stale evidence in the matrix); None when they cannot be
     found or read (staleness is then not shown)."""
-    from common.errors import FretcError
-    from fretish.files import load_requirements
+    from fretc.common.errors import FretcError
+    from fretc.fretish.files import load_requirements
 
     files = []
     for r in (doc.get("requirements") or []) + (doc.get("not_formalized") or []):
@@ -145,10 +145,10 @@ def write_report(doc: dict, out_dir: str, *, plan=None, base: str | None = None,
         doc: the audit document (``fretc-audit/1``).
         out_dir: the report folder: ``report.html``, ``report.md``, ``audit.json``,
             ``timelines/*.svg``.
-        plan: the audit's :class:`~audit.AuditPlan` when it ran in this process.
+        plan: the audit's :class:`~fretc.audit.AuditPlan` when it ran in this process.
         base, json_dir: where the document's relative paths are looked up.
         psl_map: AJPF mapping TOML (``--psl-map``).
-        annotate_dir: also write annotated MCAP copies there (:mod:`audit.annotate`).
+        annotate_dir: also write annotated MCAP copies there (:mod:`fretc.audit.annotate`).
         title: report title.
         generated: the generation line (default: now, or ``SOURCE_DATE_EPOCH``).
 

@@ -8,11 +8,11 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 
-from common.textsafe import xml_text
-from common.units import format_offset
+from fretc.common.textsafe import xml_text
+from fretc.common.units import format_offset
 
-from .terminal import short_log_name
-from audit.verdict import LogAudit
+from fretc.reports.terminal import short_log_name
+from fretc.audit.verdict import LogAudit
 
 __all__ = ["junit_xml"]
 
@@ -21,7 +21,7 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
     """JUnit XML: a ``testsuite`` per log, a ``testcase`` per requirement (``failure`` when
     violated, ``error`` when not audited; vacuous passes say so in ``system-out``).
 
-    With ``statistics`` (:class:`audit.statistics.RequirementStatistics` list) a requirement
+    With ``statistics`` (:class:`fretc.audit.statistics.RequirementStatistics` list) a requirement
     with a probability bound follows its statistical verdict: its per-log cases pass
     (a violated run says so in ``system-out``: one run does not decide a probability), and a
     ``statistics`` suite has one case per such requirement: a ``failure`` when it fails, an
@@ -125,7 +125,7 @@ def _statistics_suite(root, stats: list, tot: dict) -> None:
 
 def _xml_safe(root) -> None:
     """Make every attribute and text of the tree legal XML 1.0 (a NUL in a requirement id
-    must not make the file unparseable): :func:`common.textsafe.xml_text`."""
+    must not make the file unparseable): :func:`fretc.common.textsafe.xml_text`."""
     for el in root.iter():
         for k, val in list(el.attrib.items()):
             el.set(k, xml_text(val, keep=""))

@@ -1,6 +1,6 @@
 """The margin over time of one requirement, as inline SVG for the traceability report
 (``fretc report``): one line per run, from the verdicts' ``robustness.margin`` in the audit
-JSON (:mod:`audit.verdict`), time in seconds since each log's first tick, the zero
+JSON (:mod:`fretc.audit.verdict`), time in seconds since each log's first tick, the zero
 line dashed (below it the requirement is violated).
 
 Only finite margins are drawn; a point of ``+inf`` / ``-inf`` (decided by a boolean, no
@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from xml.sax.saxutils import escape as _xml_escape
 
-from common.textsafe import xml_text
+from fretc.common.textsafe import xml_text
 
 __all__ = ["margin_svg"]
 

@@ -20,7 +20,7 @@ import html
 import io
 from dataclasses import astuple, dataclass, fields
 
-from common.textsafe import one_line
+from fretc.common.textsafe import one_line
 
 __all__ = ["MatrixRow", "matrix_rows", "matrix_csv", "matrix_html", "STALE", "COLUMNS", "stale_state"]
 
@@ -67,7 +67,7 @@ def _check_cells(check: dict | None) -> dict[str, str]:
     """Requirement id -> its ``fretc check`` result in one cell."""
     if check is None:
         return {}
-    from check.report import findings_rows  # lazy: only with a check document
+    from fretc.check.report import findings_rows  # lazy: only with a check document
 
     return {r["id"]: "; ".join([f"satisfiable {r['satisfiable']}",
                                 f"non-vacuous {r['non_vacuous']}",
@@ -91,7 +91,7 @@ def matrix_rows(doc: dict, current: dict | None = None,
                 check: dict | None = None) -> list[MatrixRow]:
     """The rows of the audit document ``doc`` (``fretc audit --json``), in its requirement
     and run order, then its ``not_formalized`` items. ``current``: requirement id ->
-    :class:`fretish.files.RequirementEntry` as the sources hold it now (None: staleness not
+    :class:`fretc.fretish.files.RequirementEntry` as the sources hold it now (None: staleness not
     checked); ``check``: a ``fretc check -o`` document (None: "not checked")."""
     checks = _check_cells(check)
     per: dict[str, list[tuple[str, dict]]] = {}

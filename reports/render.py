@@ -1,4 +1,4 @@
-"""Rendering the report's data record (:func:`reports.context.report_context`) with
+"""Rendering the report's data record (:func:`fretc.reports.context.report_context`) with
 the Jinja2 templates ``templates/report.html.j2`` and ``templates/report.md.j2``: the
 template environment (every printed value made visible and safe), the HTML page and the
 Markdown document.
@@ -13,7 +13,7 @@ from typing import Any
 import jinja2
 import markupsafe
 
-from common.textsafe import md_code, visible
+from fretc.common.textsafe import md_code, visible
 
 __all__ = ["render_html", "render_markdown"]
 
@@ -45,13 +45,13 @@ def _md(text: Any) -> str:
 
 def _code(text: Any) -> str:
     """Inline Markdown code span that no backtick run in the text can close
-    (:func:`common.textsafe.md_code`)."""
+    (:func:`fretc.common.textsafe.md_code`)."""
     return md_code("" if text is None else str(text).replace("\n", " "))
 
 
 def _env(autoescape: bool) -> jinja2.Environment:
     env = jinja2.Environment(
-        loader=jinja2.PackageLoader("templates", ""), autoescape=autoescape,
+        loader=jinja2.PackageLoader("fretc.templates", ""), autoescape=autoescape,
         keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
         undefined=jinja2.StrictUndefined, finalize=_finalize)
     env.filters["md"] = _md

@@ -1,4 +1,4 @@
-"""How ``fretc simulate`` shows its results (:mod:`monitors.simulate`): a text table in the
+"""How ``fretc simulate`` shows its results (:mod:`fretc.monitors.simulate`): a text table in the
 terminal (one row per requirement's ft, pt and part, one column per tick), one SVG per
 requirement and an HTML page holding them (``-o DIR``), and the JSON document (``--json``).
 Same input, same bytes: no time or path of the machine is written."""
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import html
 
-from common.textsafe import xml_text
+from fretc.common.textsafe import xml_text
 import json
 from pathlib import Path
 from typing import Any

@@ -1,7 +1,7 @@
 """The fleet statistics in the terminal (``fretc audit`` of several logs, ``fretc estimate``):
 one row per requirement: runs of each verdict, the estimate of P(satisfied), its
 Clopper-Pearson interval and, for a probability requirement, the bound and its statistical
-verdict (:mod:`audit.statistics`)."""
+verdict (:mod:`fretc.audit.statistics`)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ _STYLE = {"holds": "green", "fails": "red", "undecided": "yellow"}
 
 def statistics_rows(stats: list) -> list[tuple[str, ...]]:
     """The table's rows as plain text: ``(id, sat, vac, viol, unknown+error, estimate,
-    interval, bound, verdict)``, one per :class:`audit.statistics.RequirementStatistics`."""
+    interval, bound, verdict)``, one per :class:`fretc.audit.statistics.RequirementStatistics`."""
     rows = []
     for st in stats:
         lo, hi = st.interval

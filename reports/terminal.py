@@ -1,10 +1,10 @@
 """How ``fretc audit`` shows its verdicts: the terminal summary (rich), the progress bar,
 and the damage of a partial log in one sentence (the JUnit XML file:
-:mod:`reports.junit`).
+:mod:`fretc.reports.junit`).
 
 All output is deterministic: same logs and requirements, same text (no wall-clock times).
 Times are printed as seconds since the log's first tick (``12.300 s``) next to the tick
-number; the JSON report (:mod:`audit.verdict`) also has the absolute ns.
+number; the JSON report (:mod:`fretc.audit.verdict`) also has the absolute ns.
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, T
 from rich.table import Table
 from rich.text import Text
 
-from common.textsafe import terminal_text
-from common.units import format_offset
+from fretc.common.textsafe import terminal_text
+from fretc.common.units import format_offset
 
-from audit.verdict import LogAudit, Verdict, exit_code, incomplete
-from .verdicts import format_value
+from fretc.audit.verdict import LogAudit, Verdict, exit_code, incomplete
+from fretc.reports.verdicts import format_value
 
 __all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
 
@@ -31,7 +31,7 @@ _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
 
 def escape(text) -> str:
     """Text from the inputs for rich markup: newlines, control and bidi characters shown
-    escaped (:func:`common.textsafe.terminal_text`: a newline in a topic, a frame id or a
+    escaped (:func:`fretc.common.textsafe.terminal_text`: a newline in a topic, a frame id or a
     joint name cannot start a line of its own), then markup escaped."""
     return _markup_escape(terminal_text(text, keep=""))
 
@@ -95,7 +95,7 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
     ``details`` one evidence block per violation (trigger, obligation, the missed tick with
     its tick time and the log time of the message that decided it) and, with ``verbose``,
     the values around each violation; last the counts and the exit code (with
-    ``statistics``, :mod:`audit.statistics`: the fleet table first when a requirement has
+    ``statistics``, :mod:`fretc.audit.statistics`: the fleet table first when a requirement has
     a probability bound or with ``verbose``, and probability requirements judged by their
     statistical verdict)."""
     if plan is not None:
@@ -129,7 +129,7 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
                     _print_violation(console, la, v, verbose, ids.get(v.requirement))
     if statistics is not None and (verbose or any(st.bound is not None for st in statistics)):
         # (plain requirements' fleet statistics: in the JSON, and here with --verbose)
-        from .statistics import print_statistics
+        from fretc.reports.statistics import print_statistics
 
         print_statistics(console, statistics)
     _print_counts(console, logs, input_errors, allow_partial, statistics)
@@ -431,7 +431,7 @@ def damage_summary(la: LogAudit) -> str:
 
 class AuditProgress:
     """A rich progress display: one bar for the logs done, one per log being read (fraction
-    of its log time). Used as the ``progress`` object of :func:`audit.audit_logs`."""
+    of its log time). Used as the ``progress`` object of :func:`fretc.audit.audit_logs`."""
 
     def __init__(self, console, total: int):
         self.progress = Progress(TextColumn("{task.description}"), BarColumn(),

@@ -2,7 +2,7 @@
 
 A small deterministic SVG writer (no matplotlib, no JavaScript, no external fonts): the same
 verdict gives byte-identical text. Input is the audit's JSON (schema ``fretc-audit/1``, see
-:mod:`audit.verdict`): one verdict object and the log object it belongs to.
+:mod:`fretc.audit.verdict`): one verdict object and the log object it belongs to.
 
 The picture, top to bottom, all in log time (seconds since the log's start
 ``start_time_ns``, the log time of its first message, what Foxglove shows as elapsed time;
@@ -32,10 +32,10 @@ from dataclasses import dataclass, field
 from typing import Sequence
 from xml.sax.saxutils import escape as _xml_escape, quoteattr as _xml_quoteattr
 
-from common.textsafe import xml_text
-from common.units import format_offset
+from fretc.common.textsafe import xml_text
+from fretc.common.units import format_offset
 
-from .timeline_layout import (LANE_GAP, BOOL_H, NUM_H, PLOT_X1, TOPIC_H, WIDTH, Axis, Segment,
+from fretc.reports.timeline_layout import (LANE_GAP, BOOL_H, NUM_H, PLOT_X1, TOPIC_H, WIDTH, Axis, Segment,
     Threshold, Timeline, cells, cells_by_segment, lane_label, nice_step_ns, plan_timeline,
     step_decimals)
 
@@ -67,7 +67,7 @@ FONT = "system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif"
 
 def escape(s: str) -> str:
     """XML character data from the inputs: control and bidi characters shown escaped
-    (:func:`common.textsafe.xml_text`: a NUL must not make the SVG unparseable)."""
+    (:func:`fretc.common.textsafe.xml_text`: a NUL must not make the SVG unparseable)."""
     return _xml_escape(xml_text(s, keep=""))
 
 

@@ -1,4 +1,4 @@
-"""The layout of a violation's timeline (:mod:`reports.timeline` draws it): from one verdict
+"""The layout of a violation's timeline (:mod:`fretc.reports.timeline` draws it): from one verdict
 of the audit JSON and its log object, the marks (trigger, violation, LTL3 verdict), the
 scope interval, response window and damage, the lanes, the detail windows of sampled ticks
 and the broken time axis that maps log time (ns) to pixels. No drawing here.
@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
-from common.units import format_offset
+from fretc.common.units import format_offset
 
 __all__ = ["Threshold", "Segment", "Axis", "Timeline", "plan_timeline", "nice_step_ns",
            "step_decimals", "lane_label", "cells", "cells_by_segment"]
@@ -257,7 +257,7 @@ def _lanes(values: dict[str, list], sources: dict[str, list]) -> list[tuple[str,
 def plan_timeline(verdict: dict, log: dict, period_ns: int | None,
                   thresholds: Sequence[Threshold]) -> Timeline:
     """The :class:`Timeline` of a violated verdict (arguments as
-    :func:`reports.timeline.timeline_svg`).
+    :func:`fretc.reports.timeline.timeline_svg`).
 
     Raises:
         ValueError: the verdict has no ``first_violation`` or the log no ``start_time_ns``.

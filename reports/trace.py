@@ -2,7 +2,7 @@
 requirement beyond the audit JSON (parent, rationale, the FRETish fields marked in its text,
 ft / ft_inf / pt, the generated monitor class and module, the AJPF property), obtained by
 compiling the requirement files the audit document names, exactly as ``fretc audit`` does
-(:func:`audit.load_plan`).
+(:func:`fretc.audit.load_plan`).
 """
 
 from __future__ import annotations
@@ -12,13 +12,13 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from compiler.ajpf import AjpfError, load_mapping, psl_label_and_formula
-from compiler.codegen import file_stems
-from fretish import ast as A
-from common.errors import FretcError
+from fretc.compiler.ajpf import AjpfError, load_mapping, psl_label_and_formula
+from fretc.compiler.codegen import file_stems
+from fretc.fretish import ast as A
+from fretc.common.errors import FretcError
 
-from audit import AuditConfig, AuditInputError, load_plan
-from .timeline import Threshold
+from fretc.audit import AuditConfig, AuditInputError, load_plan
+from fretc.reports.timeline import Threshold
 
 __all__ = ["ReportError", "FIELD_NAMES", "ModuleInfo", "RequirementTrace", "marked_fields",
            "thresholds", "trace_requirements", "resolve_input", "split_source"]
@@ -89,7 +89,7 @@ def _class_source(module_text: str, class_name: str) -> str:
 def marked_fields(text: str, requirement) -> list[tuple[str, str | None]]:
     """The FRETish text cut into ``(piece, field)`` pieces in order, ``field`` one of
     :data:`FIELD_NAMES` or None for the words between fields ("shall", ...), from the
-    :class:`fretish.ast.Requirement` spans (0-based character offsets into ``text``).
+    :class:`fretc.fretish.ast.Requirement` spans (0-based character offsets into ``text``).
     Empty spans (null scope, null condition, null timing) are left out; the pieces always
     join back to ``text``."""
     if requirement is None or getattr(requirement, "freeform", False):
@@ -132,7 +132,7 @@ def _const(e) -> float | None:
 
 def thresholds(requirement) -> list[Threshold]:
     """``var OP constant`` comparisons of the condition and response of a
-    :class:`fretish.ast.Requirement` (the timeline's dashed lines), in tree order without
+    :class:`fretc.fretish.ast.Requirement` (the timeline's dashed lines), in tree order without
     repeats; ``constant OP var`` is turned round. None or free-form: none."""
     out: list[Threshold] = []
     if requirement is None or requirement.freeform:
@@ -219,7 +219,7 @@ class RequirementTrace:
 
 def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
               ) -> RequirementTrace:
-    """A :class:`RequirementTrace` from a :class:`audit.RequirementPlan`."""
+    """A :class:`RequirementTrace` from a :class:`fretc.audit.RequirementPlan`."""
     e = compiled.entry
     rt = RequirementTrace(id=rp.id, text=e.text, file=e.source, line=e.line, parent=e.parent,
                           rationale=e.rationale)
@@ -256,9 +256,9 @@ def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
 
 def _explained(rt: RequirementTrace, compiled) -> None:
     """The reading and diagram of ``fretc explain`` on the requirement's card."""
-    from monitors.explain import explain
+    from fretc.monitors.explain import explain
 
-    from .explanation import svg
+    from fretc.reports.explanation import svg
 
     try:
         x = explain(compiled)
@@ -283,7 +283,7 @@ def trace_requirements(doc: dict, *, plan=None, base: Path | None = None,
 
     Args:
         doc: the audit document (``fretc-audit/1``).
-        plan: the :class:`audit.AuditPlan` the audit ran (``fretc report`` with
+        plan: the :class:`fretc.audit.AuditPlan` the audit ran (``fretc report`` with
             logs); None to rebuild it from the files ``doc`` names (``--from-json``).
         base, json_dir: where relative paths of ``doc`` are looked up (in this order;
             default the current folder).
@@ -333,7 +333,7 @@ def trace_requirements(doc: dict, *, plan=None, base: Path | None = None,
 
 
 def _rebuild_plan(doc: dict, base: Path | None, json_dir: Path | None, notes: list[str]):
-    """The :class:`audit.AuditPlan` of the requirement and binding files ``doc``
+    """The :class:`fretc.audit.AuditPlan` of the requirement and binding files ``doc``
     names, found under ``base`` / ``json_dir``, with the sources spelled as in ``doc``; None
     (and a note) when no requirement file is found or they do not compile."""
     files: list[str] = []

@@ -1,4 +1,4 @@
-"""One verdict of the audit JSON (``fretc-audit/1``, :mod:`audit.verdict`) as the
+"""One verdict of the audit JSON (``fretc-audit/1``, :mod:`fretc.audit.verdict`) as the
 report shows it: its matrix cell, its witness as (label, text) facts, and the table of the
 values sampled around a violation. Plain functions of the JSON objects, no I/O.
 """
@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from common.units import format_offset, format_seconds
+from fretc.common.units import format_offset, format_seconds
 
 __all__ = ["verdict_for", "cell_label", "witness", "values_table", "format_value"]
 

@@ -28,17 +28,17 @@ Semantics (all times integer ns):
 ``sample()`` streams (memory flat in the log's length); ``sample_arrays()`` reads everything
 and evaluates with numpy, giving the same values (tested).
 
-Modules: :mod:`~signals.clock` (:class:`Tick`, :class:`Sampling`, :func:`sample`:
-one log's clock), :mod:`~signals.groups` (:func:`sample_groups`: one clock per
-requirement in one read), :mod:`~signals.arrays` (:func:`sample_arrays`: numpy).
+Modules: :mod:`~fretc.signals.clock` (:class:`Tick`, :class:`Sampling`, :func:`sample`:
+one log's clock), :mod:`~fretc.signals.groups` (:func:`sample_groups`: one clock per
+requirement in one read), :mod:`~fretc.signals.arrays` (:func:`sample_arrays`: numpy).
 """
 
 from __future__ import annotations
 
-from .arrays import SampledArrays, sample_arrays
-from .clock import Sampling, Tick, sample
-from .groups import GroupSampling, sample_groups
-from .blocks import TickBlock, blocks_of_ticks, sample_blocks
+from fretc.signals.arrays import SampledArrays, sample_arrays
+from fretc.signals.clock import Sampling, Tick, sample
+from fretc.signals.groups import GroupSampling, sample_groups
+from fretc.signals.blocks import TickBlock, blocks_of_ticks, sample_blocks
 
 __all__ = ["Tick", "Sampling", "GroupSampling", "SampledArrays", "sample", "sample_groups",
            "sample_arrays", "TickBlock", "sample_blocks", "blocks_of_ticks"]

@@ -1,16 +1,16 @@
 """All ticks of one clock at once, as numpy arrays (:func:`sample_arrays`): the clock of
-:func:`signals.sample` evaluated block by block (:func:`signals.
+:func:`fretc.signals.sample` evaluated block by block (:func:`fretc.signals.
 sample_blocks`) and joined; for tests, benchmarks and short logs."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .bindings.spec import Bindings
-from common.problems import SignalError
-from logs import CSV_TOPIC, LogSource
-from .blocks import blocks_of_ticks, sample_blocks
-from .clock import sample
+from fretc.signals.bindings.spec import Bindings
+from fretc.common.problems import SignalError
+from fretc.logs import CSV_TOPIC, LogSource
+from fretc.signals.blocks import blocks_of_ticks, sample_blocks
+from fretc.signals.clock import sample
 
 __all__ = ["SampledArrays", "sample_arrays"]
 
@@ -47,7 +47,7 @@ class SampledArrays(tuple):
 
 
 def sample_arrays(source: LogSource, bindings: Bindings | None = None) -> SampledArrays:
-    """All evaluated ticks of :func:`signals.sample`'s clock at once.
+    """All evaluated ticks of :func:`fretc.signals.sample`'s clock at once.
 
     Returns:
         ``(times, columns)`` (a :class:`SampledArrays`): int64 tick times and variable →

@@ -1,8 +1,8 @@
-"""Messages between ticks, for the block sampler (:mod:`signals.blocks`): the windows of
+"""Messages between ticks, for the block sampler (:mod:`fretc.signals.blocks`): the windows of
 messages each tick of a clock folds for its aggregated bindings (``any_of_messages`` ...,
 docs/bindings.md "Events between ticks"), their folded values, and the closing tick that
 folds the messages after the last grid tick. The tick-by-tick clock
-(:class:`signals.clock.Clock`) folds the same windows message by message (tested equal).
+(:class:`fretc.signals.clock.Clock`) folds the same windows message by message (tested equal).
 
 ``c`` below is a block clock (``signals.blocks._Group``): ``window_start`` (topic -> number
 of the message held at the previous grid tick), ``stream`` (the buffered messages),
@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from common.problems import SignalError
-from .bindings.binding import EMPTY_FOLD, Binding, fold
-from .bindings.compile import EvalState, per_message_topic
-from .bindings.expression import BinOp, Const, Expr, FuncCall, UnaryOp
+from fretc.common.problems import SignalError
+from fretc.signals.bindings.binding import EMPTY_FOLD, Binding, fold
+from fretc.signals.bindings.compile import EvalState, per_message_topic
+from fretc.signals.bindings.expression import BinOp, Const, Expr, FuncCall, UnaryOp
 
 _BOOLEAN_OPS = ("<", "<=", ">", ">=", "=", "!=", "&", "|", "->", "<->")
 
@@ -52,7 +52,7 @@ def missed_changes(variables: list[Binding], stream: Any, topic: str, starts: np
     the tick before and at the tick (counted from the topic's first message); the messages
     strictly between are the skipped ones. A binding that cannot be evaluated on them
     column-wise is not counted (the count is advice, never a verdict)."""
-    from .columns import HeldColumns, Irregular
+    from fretc.signals.columns import HeldColumns, Irregular
 
     gaps = held - starts - 1
     some = gaps > 0
@@ -87,7 +87,7 @@ def closing_end(c: Any, last: int) -> int:
     """Where the grid of a clock with aggregated bindings ends at the end of the log: one
     tick past the last message when a folded topic has messages after the last grid tick at
     or before ``last`` (their fold is that closing tick's value, as
-    :meth:`signals.clock.Clock.finish`); else ``last + 1``."""
+    :meth:`fretc.signals.clock.Clock.finish`); else ``last + 1``."""
     assert c.next_grid is not None and c.period is not None
     if c.next_grid <= last:
         grid = c.next_grid + ((last - c.next_grid) // c.period) * c.period
@@ -104,7 +104,7 @@ def windows_of(c: Any, times: np.ndarray, warm: int) -> dict[str, tuple[np.ndarr
     """Per topic of an aggregated binding, the messages each evaluated tick folds: numbers
     (counted from the topic's first message) from ``first`` to ``last`` inclusive, those
     after the message held at the previous grid tick (warm-up ticks included) up to the one
-    held at the tick, as :class:`signals.clock.Clock` folds them message by message."""
+    held at the tick, as :class:`fretc.signals.clock.Clock` folds them message by message."""
     out = {}
     for topic, prev in c.window_start.items():
         buf = c.stream.buffers[topic]
@@ -119,7 +119,7 @@ def windows_of(c: Any, times: np.ndarray, warm: int) -> dict[str, tuple[np.ndarr
 def folded(b: Binding, stream: Any, window: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """An aggregated binding at each tick: its expression on each message of its topic in
     the tick's window (:func:`windows_of`), folded; an empty window gives
-    :data:`~signals.bindings.binding.EMPTY_FOLD` (or the held message's value).
+    :data:`~fretc.signals.bindings.binding.EMPTY_FOLD` (or the held message's value).
 
     Raises:
         SignalError: the expression fails on a message of a window (named with its log time).

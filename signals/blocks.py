@@ -1,12 +1,12 @@
 """Several clocks over one read of a log, evaluated block by block with numpy
 (:func:`sample_blocks`): the audit's sampling.
 
-The rules (time base, ticks, sample and hold, warm-up) are those of :mod:`signals`
-and the values equal :func:`signals.sample_groups`'s tick by tick (tested): messages
+The rules (time base, ticks, sample and hold, warm-up) are those of :mod:`fretc.signals`
+and the values equal :func:`fretc.signals.sample_groups`'s tick by tick (tested): messages
 are buffered per topic; every :data:`BLOCK` messages, each clock places its ticks that are due
 (those before the newest message of its own topics, as a streaming clock would emit them), finds
 the message each topic holds at each tick with ``np.searchsorted``, and evaluates each binding
-over all those ticks at once (:class:`~signals.columns.HeldColumns`; a binding whose
+over all those ticks at once (:class:`~fretc.signals.columns.HeldColumns`; a binding whose
 values do not fit columns is evaluated tick by tick). Then the buffers keep only the messages
 a later tick may still hold, so memory stays flat in the log's length.
 """
@@ -19,18 +19,18 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .bindings.binding import Binding
-from .between_ticks import closing_end, folded, missed_changes, windows_of
-from .bindings.compile import EvalState
-from .bindings.expression import TF_TOPICS, stateful_topics
-from .bindings.frames import TfBuffer
-from .bindings.spec import Bindings, TickSpec
-from common.problems import SignalError
-from logs.selective import install as install_selective
-from logs import CsvSource, LogSource
-from .clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
-from .columns import HeldColumns, Irregular, MessageColumns, SegmentList
-from .groups import GroupSampling, _restrict, csv_clock
+from fretc.signals.bindings.binding import Binding
+from fretc.signals.between_ticks import closing_end, folded, missed_changes, windows_of
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
+from fretc.signals.bindings.frames import TfBuffer
+from fretc.signals.bindings.spec import Bindings, TickSpec
+from fretc.common.problems import SignalError
+from fretc.logs.selective import install as install_selective
+from fretc.logs import CsvSource, LogSource
+from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
+from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
+from fretc.signals.groups import GroupSampling, _restrict, csv_clock
 
 __all__ = ["BLOCK", "MAX_TICKS", "TickBlock", "sample_blocks", "blocks_of_ticks"]
 
@@ -168,7 +168,7 @@ class _Group:
 
 def sample_blocks(source: LogSource, bindings: Bindings,
                   groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
-    """Per-requirement clocks in one read of the log, as :func:`signals.sample_groups`
+    """Per-requirement clocks in one read of the log, as :func:`fretc.signals.sample_groups`
     (same ticks, values, warm-up and errors), but yielding ``(key, TickBlock)`` pairs. The
     result's ``per_tick`` (key -> variable names) says which bindings were evaluated tick by
     tick in some block (values that do not fit columns).
@@ -385,9 +385,9 @@ def _first_held(c: _Group, topic: str) -> int:
 
 
 def _count_unsampled(c: _Group, idx: dict[str, np.ndarray]) -> None:
-    """Add to ``c``'s :attr:`~signals.clock.Sampling.unsampled` the messages between two
+    """Add to ``c``'s :attr:`~fretc.signals.clock.Sampling.unsampled` the messages between two
     evaluated ticks that neither held (the held message's number in its topic jumps by more
-    than one), from the first evaluated tick on (as :class:`signals.clock.Clock`)."""
+    than one), from the first evaluated tick on (as :class:`fretc.signals.clock.Clock`)."""
     s, stream = c.sampling, c.stream
     folded = folded_topics(c.variables)
     for t in c.required:
@@ -408,7 +408,7 @@ def _values(b: Binding, cols: HeldColumns, stream: _Stream, times: np.ndarray,
             idx: dict[str, np.ndarray], per_tick: set[str],
             tf: tuple[TfBuffer, dict[str, int]] | None = None) -> np.ndarray:
     """``b`` at every tick: by numpy over the columns, else tick by tick (same values and
-    errors as :class:`signals.clock.Clock`).
+    errors as :class:`fretc.signals.clock.Clock`).
 
     Raises:
         SignalError: the evaluation fails at some tick (named with its held messages).

@@ -1,7 +1,7 @@
 """The tick clock of one log: :func:`sample` streams the :class:`Tick` objects of a log
 under its bindings (memory flat in the log's length), one :class:`Clock` per group of
 variables; the rules (time base, ticks, sample and hold, warm-up, CSV) are in
-:mod:`signals`."""
+:mod:`fretc.signals`."""
 
 from __future__ import annotations
 
@@ -13,16 +13,16 @@ from typing import Any
 
 import numpy as np
 
-from common import problems as P
-from .bindings.binding import EMPTY_FOLD, Binding, fold
-from .between_ticks import single_topic
-from .bindings.compile import EvalState
-from .bindings.expression import TF_TOPICS, stateful_topics
-from .bindings.frames import TfBuffer
-from .bindings.spec import Bindings, TickSpec
-from common.problems import DataProblem, ProblemLog, SignalError
-from logs.selective import install as install_selective
-from logs import CSV_TOPIC, CsvSource, LogSource
+from fretc.common import problems as P
+from fretc.signals.bindings.binding import EMPTY_FOLD, Binding, fold
+from fretc.signals.between_ticks import single_topic
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
+from fretc.signals.bindings.frames import TfBuffer
+from fretc.signals.bindings.spec import Bindings, TickSpec
+from fretc.common.problems import DataProblem, ProblemLog, SignalError
+from fretc.logs.selective import install as install_selective
+from fretc.logs import CSV_TOPIC, CsvSource, LogSource
 
 __all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of"]
 
@@ -74,7 +74,7 @@ class Sampling:
         missed_changes: variable -> how many of those messages would have changed its value
             (boolean bindings of one topic without aggregation: the binding's value on the
             skipped message differs from its value at the tick before;
-            :func:`signals.between_ticks.is_boolean`).
+            :func:`fretc.signals.between_ticks.is_boolean`).
         start_time: time of the first tick, evaluated or not; None if none.
         first_time: time of the first evaluated tick; None if none.
         end_time: time of the last tick; None if none.
@@ -308,7 +308,7 @@ class Clock:
 
     def _value(self, b: Binding, window: dict[str, list[Any]]) -> bool | float:
         """``b`` at the tick: the held message's value, or its aggregation over the
-        messages since the previous tick (:func:`signals.bindings.binding.fold`)."""
+        messages since the previous tick (:func:`fretc.signals.bindings.binding.fold`)."""
         if b.aggregate is None:
             return b.evaluate(self.state)
         vals = window.get(b.name) or []
@@ -477,7 +477,7 @@ def sample(source: LogSource, bindings: Bindings | None = None) -> Sampling:
     """Stream the ticks of ``source`` under ``bindings`` (see the module docstring).
 
     Args:
-        source: an open log (:func:`logs.open_log`).
+        source: an open log (:func:`fretc.logs.open_log`).
         bindings: required for ROS logs; for CSV optional (columns are the variables).
 
     Returns:

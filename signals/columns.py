@@ -1,14 +1,14 @@
 """Binding values over many ticks at once: the per-message columns of the messages a block of
 ticks holds (:class:`MessageColumns`), and what a binding's vectorized evaluation reads
 (:class:`HeldColumns`: the held message of each topic at each tick, found by
-``np.searchsorted``; :meth:`signals.bindings.Binding.evaluate_columns`).
+``np.searchsorted``; :meth:`fretc.signals.bindings.Binding.evaluate_columns`).
 
 Each bound field is extracted once per message, a reduction of one topic's fields
 (``min(/scan.ranges)``) is computed once per message (:meth:`HeldColumns.per_message`), and
 the values are gathered per tick by index. Values the columns cannot hold (arrays whose length
 changes between messages, text, nested messages, a field missing from some message) raise
 :class:`Irregular`; the caller then evaluates that binding tick by tick with
-:meth:`signals.bindings.Binding.evaluate`, which gives the same values and the same errors.
+:meth:`fretc.signals.bindings.Binding.evaluate`, which gives the same values and the same errors.
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from .bindings.compile import EvalError, EvalState
-from .bindings.expression import Field, unparse
-from .bindings.extract import LASER_SCAN, FieldAccessError, Valid, make_extractor, rep117
+from fretc.signals.bindings.compile import EvalError, EvalState
+from fretc.signals.bindings.expression import Field, unparse
+from fretc.signals.bindings.extract import LASER_SCAN, FieldAccessError, Valid, make_extractor, rep117
 
 __all__ = ["Irregular", "MessageColumns", "HeldColumns", "regular_column", "SegmentList"]
 
@@ -184,7 +184,7 @@ class _OneTopic:
 
 
 class HeldColumns:
-    """What :meth:`signals.bindings.Binding.evaluate_columns` reads for ``n`` ticks: the field
+    """What :meth:`fretc.signals.bindings.Binding.evaluate_columns` reads for ``n`` ticks: the field
     values and ages of the message each topic holds at each tick.
 
     Args:
@@ -236,8 +236,8 @@ class HeldColumns:
 
 class SegmentList:
     """The messages of one topic as a list (indexing decodes a message on demand), held as
-    :class:`~logs.columnar.Segment` s whose columns :meth:`column` joins: what the
-    columnar MCAP pass (:mod:`logs.mcap_columns`) gives the block sampler."""
+    :class:`~fretc.logs.columnar.Segment` s whose columns :meth:`column` joins: what the
+    columnar MCAP pass (:mod:`fretc.logs.mcap_columns`) gives the block sampler."""
 
     def __init__(self) -> None:
         self.segments: list[Any] = []
@@ -287,7 +287,7 @@ class SegmentList:
     def column(self, path: tuple) -> Any:
         """The column of field ``path`` of every message, as :func:`_plain_column` gives it
         from the messages, when every segment holds it (LaserScan ``ranges``: REP 117 applied,
-        :func:`~signals.bindings.extract.rep117`); None otherwise (read the messages)."""
+        :func:`~fretc.signals.bindings.extract.rep117`); None otherwise (read the messages)."""
         segs = self.segments
         if not segs or any(seg.columns is None for seg in segs):
             return None

@@ -1,18 +1,18 @@
 """Several clocks over one read of a log (:func:`sample_groups`): one per group of
 variables (normally one requirement's), each on the clock of its own topics
 (../shared/DESIGN.md, "Each verdict stands alone"); the clock rules are in
-:mod:`signals`."""
+:mod:`fretc.signals`."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from typing import Any
 
-from .bindings.spec import Bindings, TickSpec
-from common.problems import DataProblem, SignalError
-from logs.selective import install as install_selective
-from logs import CsvSource, LogSource
-from .clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf, sample
+from fretc.signals.bindings.spec import Bindings, TickSpec
+from fretc.common.problems import DataProblem, SignalError
+from fretc.logs.selective import install as install_selective
+from fretc.logs import CsvSource, LogSource
+from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf, sample
 
 __all__ = ["GroupSampling", "sample_groups"]
 

@@ -1,4 +1,4 @@
-"""Command line: ``python -m sim record|serve|list|verdicts`` (see ``python -m sim --help``)."""
+"""Command line: ``python -m fretc.sim record|serve|list|verdicts`` (see ``python -m fretc.sim --help``)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ from pathlib import Path
 
 import click
 
-from .logs import REQUIREMENTS, counts, expected_verdicts, read_log
-from .run import record as do_record
-from .scenarios import SCENARIOS
-from .serve import serve as do_serve
+from fretc.sim.logs import REQUIREMENTS, counts, expected_verdicts, read_log
+from fretc.sim.run import record as do_record
+from fretc.sim.scenarios import SCENARIOS
+from fretc.sim.serve import serve as do_serve
 
 
 @click.group()

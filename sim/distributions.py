@@ -18,7 +18,7 @@ a normal without bounds ``mean +- 4 sd``; choice: its least and greatest value).
 Sampling is by the *latent* standard normal coordinates ``z`` (one per parameter, one more
 per fault): :meth:`Distribution.value` maps them through the normal CDF onto the
 distribution (inverse-CDF sampling), so a run is a point of ``R^d`` under ``N(0, I)``, the
-space in which :mod:`sim.splitting` moves its particles.
+space in which :mod:`fretc.sim.splitting` moves its particles.
 """
 
 from __future__ import annotations

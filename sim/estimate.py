@@ -1,20 +1,20 @@
 """Statistical campaigns over a scenario space (``fretc estimate``): sample the space's
-distributions (:mod:`sim.distributions`), simulate and audit each run, and stop when every
-probability requirement is decided by its sequential test (:mod:`sim.sequential`) or the
+distributions (:mod:`fretc.sim.distributions`), simulate and audit each run, and stop when every
+probability requirement is decided by its sequential test (:mod:`fretc.sim.sequential`) or the
 budget ends.
 
 Determinism: run ``i`` (1-based) draws its latent coordinates from
 ``numpy.random.default_rng([seed, i])`` (:func:`sample_point`): a function of the seed and the
 index alone, never of completion order. The simulator's own seed (sensor noise) is the
 space file's ``seed`` in every run, as for ``fretc falsify``: a run is a function of its
-parameters, which is what :mod:`sim.splitting` needs (its moves must not change the noise). Locally the runs are made one by one;
+parameters, which is what :mod:`fretc.sim.splitting` needs (its moves must not change the noise). Locally the runs are made one by one;
 on Ray (``ray_address``) in batches whose results are taken in index order, and the runs
 after the one where the last test decided are dropped, so both give the same runs, the
 same decisions and byte-identical JSON.
 
 Counting: a run is one Bernoulli trial per requirement: satisfied or vacuous is a success;
 violated is not; unknown and error runs are failures under the ``fail`` policy (default) or
-skipped under ``exclude``, never successes (:mod:`audit.statistics`).
+skipped under ``exclude``, never successes (:mod:`fretc.audit.statistics`).
 
 Kept runs: every run that violates a requirement is kept under ``out/runs/`` as MCAP and
 its audit JSON (``run-0007.mcap``, ``run-0007.audit.json``); the other runs' files are
@@ -28,11 +28,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from audit.statistics import RequirementStatistics, fleet_statistics, judge_counts
+from fretc.audit.statistics import RequirementStatistics, fleet_statistics, judge_counts
 
-from .run import record_scenario
-from .sequential import make_test
-from .space import Space, apply
+from fretc.sim.run import record_scenario
+from fretc.sim.sequential import make_test
+from fretc.sim.space import Space, apply
 
 __all__ = ["EstimateRun", "Estimate", "estimate", "sample_point", "Runner", "simulate_run"]
 
@@ -59,7 +59,7 @@ def simulate_run(space: Space, parameters: dict, sim_seed: int, path: str) -> st
 class EstimateRun:
     """One run: ``index`` (1-based), ``parameters``, ``sim_seed``, ``z`` (latent
     coordinates), per requirement its ``verdicts`` and ``robustness`` (None: unknown or
-    error), ``audit`` (:class:`audit.verdict.LogAudit`) and ``mcap`` (kept file, relative to
+    error), ``audit`` (:class:`fretc.audit.verdict.LogAudit`) and ``mcap`` (kept file, relative to
     the output folder, or None)."""
 
     index: int
@@ -85,7 +85,7 @@ class Runner:
         self.started = False
         (out / "runs").mkdir(parents=True, exist_ok=True)
         if ray_address is not None:
-            from audit.fleet import connect  # lazy: Ray only with --ray
+            from fretc.audit.fleet import connect  # lazy: Ray only with --ray
             self.started = connect(ray_address)
 
     def path(self, index: int) -> str:
@@ -97,13 +97,13 @@ class Runner:
         if self.ray_address is not None:
             import ray  # lazy: Ray only with --ray
 
-            from audit.fleet import audit_logs_ray
+            from fretc.audit.fleet import audit_logs_ray
             task = ray.remote(simulate_run).options(num_cpus=1)
             paths = ray.get([task.remote(self.space, p, s, self.path(i))
                              for i, _z, p, s in points])
             audits = audit_logs_ray(self.plan, paths, address=self.ray_address)
         else:
-            from audit import audit_log
+            from fretc.audit import audit_log
             audits = [audit_log(self.plan, simulate_run(self.space, p, s, self.path(i)))
                       for i, _z, p, s in points]
         return [EstimateRun(i, p, s, z, {v.requirement: v.verdict for v in la.verdicts},
@@ -130,7 +130,7 @@ class Runner:
 @dataclass
 class Estimate:
     """A campaign's result: its inputs, the runs used (in order), per requirement its
-    :class:`~audit.statistics.RequirementStatistics` and sequential test (None for a
+    :class:`~fretc.audit.statistics.RequirementStatistics` and sequential test (None for a
     requirement without a probability bound), and why it stopped."""
 
     space: Space
@@ -177,12 +177,12 @@ def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 10
     """Run the campaign (module docstring).
 
     Args:
-        plan: the audit plan (:func:`audit.load_plan`); its requirements ``with probability``
+        plan: the audit plan (:func:`fretc.audit.load_plan`); its requirements ``with probability``
             get a sequential test each (``test``: ``sprt`` or ``cp``, with ``delta``,
             ``alpha``, ``beta``); the others are counted.
-        space: from :func:`sim.space.load_space` (checked for degenerate distributions).
+        space: from :func:`fretc.sim.space.load_space` (checked for degenerate distributions).
         seed: the campaign's seed; ``budget``: the most runs (>= 1).
-        confidence, unknown: of the reported intervals (:func:`audit.statistics.fleet_statistics`).
+        confidence, unknown: of the reported intervals (:func:`fretc.audit.statistics.fleet_statistics`).
         ray_address: simulate and audit on Ray, ``batch`` runs at a time (same answer).
         audit_json: a kept run's audit JSON text from its LogAudit (the caller's writer).
         progress: called with each run taken, in order.

@@ -1,10 +1,10 @@
-"""Falsification: search a space of scenario parameters (:mod:`sim.space`) for simulator runs
+"""Falsification: search a space of scenario parameters (:mod:`fretc.sim.space`) for simulator runs
 that violate a requirement (``fretc falsify``), as S-TaLiRo and Breach do for STL.
 
-Each run simulates the base scenario with one point of the space (:func:`sim.space.apply`),
-records it as MCAP and audits it with the requirements (:func:`audit.audit_log`, the
+Each run simulates the base scenario with one point of the space (:func:`fretc.sim.space.apply`),
+records it as MCAP and audits it with the requirements (:func:`fretc.audit.audit_log`, the
 same engine as ``fretc audit``). The search minimizes the run's *objective*, the least
-robustness (:mod:`monitors.robustness`) over the target requirements (all, or those
+robustness (:mod:`fretc.monitors.robustness`) over the target requirements (all, or those
 given), with CMA-ES (the ``cma`` library; Hansen's covariance matrix adaptation) over the unit
 cube mapped onto the parameters' ranges. When CMA-ES stops before the budget (converged, or a
 flat objective) it restarts from the centre with the next seed. A run *falsifies* when a target
@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from .run import record_scenario
-from .space import Space, apply
+from fretc.sim.run import record_scenario
+from fretc.sim.space import Space, apply
 
 __all__ = ["Run", "Search", "falsify", "CLIP"]
 
@@ -51,7 +51,7 @@ class Run:
         objective: the least robustness over the targets (None when none has one).
         mcap: the MCAP file written for the run (relative to the output folder), or None
             when the run was not kept (every run violating a target requirement is kept).
-        audit: the run's :class:`audit.verdict.LogAudit`.
+        audit: the run's :class:`fretc.audit.verdict.LogAudit`.
     """
 
     index: int
@@ -139,7 +139,7 @@ class _Evaluator:
         self.ray_address = ray_address
         self.started = False
         if ray_address is not None:
-            from audit.fleet import connect  # lazy: Ray only with --ray
+            from fretc.audit.fleet import connect  # lazy: Ray only with --ray
             self.started = connect(ray_address)
 
     def path(self, index: int) -> str:
@@ -149,7 +149,7 @@ class _Evaluator:
               first: bool) -> list[Run]:
         if self.ray_address is not None:
             return self._batch_ray(start, points, targets)
-        from audit import audit_log
+        from fretc.audit import audit_log
         runs: list[Run] = []
         try:
             for k, p in enumerate(points):
@@ -164,7 +164,7 @@ class _Evaluator:
     def _batch_ray(self, start: int, points: list[dict], targets: list[str]) -> list[Run]:
         import ray  # lazy: Ray only with --ray
 
-        from audit.fleet import audit_logs_ray
+        from fretc.audit.fleet import audit_logs_ray
         task = ray.remote(simulate).options(num_cpus=1)
         paths = ray.get([task.remote(self.space, p, self.path(start + k))
                          for k, p in enumerate(points)])
@@ -185,8 +185,8 @@ def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
     """Search ``space`` for runs violating the requirements of ``plan``.
 
     Args:
-        plan: the audit plan (:func:`audit.load_plan`).
-        space: from :func:`sim.space.load_space`.
+        plan: the audit plan (:func:`fretc.audit.load_plan`).
+        space: from :func:`fretc.sim.space.load_space`.
         budget: the number of simulator runs at most (``>= 1``).
         seed: CMA-ES's seed (module docstring).
         out: the output folder; runs are written to ``out/runs/``.

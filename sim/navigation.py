@@ -10,7 +10,7 @@
   ``/cmd_vel`` at 10 Hz within |v| <= 0.5 m/s, |w| <= 0.5 rad/s and a dynamic window of
   0.5 m/s^2, 0.5 rad/s^2 around the odometry twist, and slows to ``slow_speed`` when the
   nearest LiDAR return is closer than ``slow_range`` (a speed-limit zone; it is what lets the
-  Safety System's monitored release, see :mod:`sim.safety`, be slow).
+  Safety System's monitored release, see :mod:`fretc.sim.safety`, be slow).
 * :class:`Mission` — the inspection route (Safe-ROS ``simple_navigation_goals``): goals
   (0.0, 0.0), (2.30, -1.11), (2.61, 2.42), then home.
 """
@@ -26,8 +26,8 @@ from scipy import ndimage
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from .robot import wrap_angle
-from .world import OccupancyMap
+from fretc.sim.robot import wrap_angle
+from fretc.sim.world import OccupancyMap
 
 
 @dataclass(frozen=True)

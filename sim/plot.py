@@ -12,8 +12,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 
-from .simulation import RunResult  # noqa: E402
-from .world import OCCUPIED, UNKNOWN  # noqa: E402
+from fretc.sim.simulation import RunResult  # noqa: E402
+from fretc.sim.world import OCCUPIED, UNKNOWN  # noqa: E402
 
 
 def _footprint(x, y, yaw, hl, hw):

@@ -1,11 +1,11 @@
 """``fretc estimate --rare``: the violation probability of each target requirement over a
-scenario space by adaptive multilevel splitting (:mod:`sim.splitting`), each robustness
-value from one simulator run audited as ``fretc audit`` does (:class:`sim.estimate.Runner`).
+scenario space by adaptive multilevel splitting (:mod:`fretc.sim.splitting`), each robustness
+value from one simulator run audited as ``fretc audit`` does (:class:`fretc.sim.estimate.Runner`).
 
 Each target gets its own splitting (its own levels), seeded with ``seed`` and the
 requirement's position; the runs of one level's moves go to Ray together when ``--ray``
 is given (the result is the same: the splitting's random numbers do not depend on which
-run finishes first). Violating runs met on the way are kept as in :mod:`sim.estimate`
+run finishes first). Violating runs met on the way are kept as in :mod:`fretc.sim.estimate`
 (MCAP + audit JSON), at most ``keep`` of them per requirement.
 """
 
@@ -16,17 +16,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from .estimate import Runner, _finite
-from .space import Space
-from .splitting import SplittingError, SplittingResult, adaptive_multilevel_splitting
+from fretc.sim.estimate import Runner, _finite
+from fretc.sim.space import Space
+from fretc.sim.splitting import SplittingError, SplittingResult, adaptive_multilevel_splitting
 
 __all__ = ["RareResult", "rare_estimate"]
 
 
 @dataclass
 class RareResult:
-    """Per target requirement its :class:`~sim.splitting.SplittingResult` (or the
-    :class:`~sim.splitting.SplittingError` text in ``errors``) and its kept violating runs
+    """Per target requirement its :class:`~fretc.sim.splitting.SplittingResult` (or the
+    :class:`~fretc.sim.splitting.SplittingError` text in ``errors``) and its kept violating runs
     (``examples``: ``{"mcap", "parameters", "robustness"}``)."""
 
     space: Space
@@ -51,12 +51,12 @@ def rare_estimate(plan, space: Space, seed: int, out: str | Path, targets: list[
                   progress: Callable[[str, int], None] | None = None) -> RareResult:
     """Splitting estimates of each requirement of ``targets`` (ids of ``plan``).
 
-    Args: as :func:`sim.splitting.adaptive_multilevel_splitting` (``budget``: runs per
-        requirement) and :func:`sim.estimate.estimate` (``out``, ``ray_address``,
+    Args: as :func:`fretc.sim.splitting.adaptive_multilevel_splitting` (``budget``: runs per
+        requirement) and :func:`fretc.sim.estimate.estimate` (``out``, ``ray_address``,
         ``audit_json``); ``progress(requirement, runs so far)`` after each batch.
 
     A requirement whose robustness gives no levels is reported in ``errors``, the others
-    go on. Raises :class:`sim.space.SpaceError` for a degenerate distribution and
+    go on. Raises :class:`fretc.sim.space.SpaceError` for a degenerate distribution and
     ``audit.fleet.RayUnavailable`` when Ray cannot start.
     """
     space.check_sampling()

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .world import World
+from fretc.sim.world import World
 
 
 def wrap_angle(a: float) -> float:

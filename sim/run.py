@@ -1,13 +1,13 @@
-"""Record one scenario to an MCAP file (the library entry point behind ``python -m sim record``)."""
+"""Record one scenario to an MCAP file (the library entry point behind ``python -m fretc.sim record``)."""
 
 from __future__ import annotations
 
 import io
 from pathlib import Path
 
-from .recording import McapRecorder
-from .scenarios import Scenario, get_scenario
-from .simulation import RunResult, Simulation
+from fretc.sim.recording import McapRecorder
+from fretc.sim.scenarios import Scenario, get_scenario
+from fretc.sim.simulation import RunResult, Simulation
 
 
 def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase | None = None,
@@ -16,7 +16,7 @@ def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase 
     """Simulate ``scenario`` with ``seed`` and write the run to ``output`` (a path or a binary
     stream; ``None`` discards it), as ROS 2 (CDR) or, with ``ros1``, ROS 1 messages; draw it to
     ``png`` if given. ``threshold`` m is the SIF threshold, ``stop_delay`` s overrides the
-    ``stop_delay`` scenario's delay. Returns the :class:`~sim.simulation.RunResult`.
+    ``stop_delay`` scenario's delay. Returns the :class:`~fretc.sim.simulation.RunResult`.
 
     Raises ``KeyError`` for an unknown scenario, ``ValueError`` for bad parameters and
     ``OSError`` if the output cannot be written.
@@ -24,7 +24,7 @@ def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase 
     result = record_scenario(get_scenario(scenario, stop_delay), seed, output, ros1=ros1,
                              threshold=threshold, compression=compression)
     if png is not None:
-        from .plot import draw_run  # lazy: matplotlib takes ~1 s to import, only for --png
+        from fretc.sim.plot import draw_run  # lazy: matplotlib takes ~1 s to import, only for --png
         draw_run(result, png)
     return result
 
@@ -32,7 +32,7 @@ def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase 
 def record_scenario(sc: Scenario, seed: int = 1,
                     output: str | Path | io.BufferedIOBase | None = None, ros1: bool = False,
                     threshold: float = 0.9, compression: str = "zstd") -> RunResult:
-    """Simulate the scenario ``sc`` (for instance with :func:`sim.space.apply`'s parameters)
+    """Simulate the scenario ``sc`` (for instance with :func:`fretc.sim.space.apply`'s parameters)
     and write the run to ``output`` as :func:`record` does.
 
     Raises ``ValueError`` for bad parameters and ``OSError`` if the output cannot be

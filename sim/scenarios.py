@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from .world import Barrel, MovingObstacle, RemovedObject
+from fretc.sim.world import Barrel, MovingObstacle, RemovedObject
 
 #: The mapped drum at (4.80, -3.55), 0.30 m across (measured on the map), and its twin.
 DRUM_RADIUS = 0.15
@@ -48,15 +48,15 @@ _DRUMS = (Barrel(1.25, -0.60, DRUM_RADIUS, "drum A"),
 class Scenario:
     """A world and its fault injections.
 
-    ``barrels``/``movers``/``removed``: unmapped objects (see :mod:`sim.world`);
+    ``barrels``/``movers``/``removed``: unmapped objects (see :mod:`fretc.sim.world`);
     ``sif_enabled``: the SIF runs; ``interceptor_faulty``: the interceptor ignores stops;
     ``stop_delay`` s: delay of every ``/gwendolen_control`` decision; ``dropout_start`` /
     ``dropout_duration`` s: no scans in ``[start, start + duration)`` (sim time from the start
     of the run); ``home``: start and final pose ``(x, y, yaw)`` in m, rad;
     ``interceptor_delay`` s: the interceptor acts on each ``/gwendolen_control`` message that
     long after it arrives (until then it keeps forwarding ``/cmd_vel`` as before);
-    ``lidar_sigma`` m: the LiDAR's range noise (None: :class:`sim.robot.LidarParams`'
-    default); ``max_time`` s: the mission's time limit (None: :class:`sim.simulation.SimParams`'
+    ``lidar_sigma`` m: the LiDAR's range noise (None: :class:`fretc.sim.robot.LidarParams`'
+    default); ``max_time`` s: the mission's time limit (None: :class:`fretc.sim.simulation.SimParams`'
     default). The defaults leave the shipped scenarios as recorded.
     """
 

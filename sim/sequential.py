@@ -15,7 +15,7 @@ the two hypotheses' rates); the test says ``holds`` once ``llr >= log((1 - beta)
 :class:`SequentialCP` is a repeated Clopper-Pearson test: at looks ``n = 10, 15, 23, ...``
 (x1.5 each) it computes the exact interval with error ``alpha / 2^(j+1)`` at look ``j``
 (so the errors of all looks add up to at most ``alpha``, a union bound) and decides as
-:func:`audit.statistics.decide` does. Slower to decide than the SPRT, but with no
+:func:`fretc.audit.statistics.decide` does. Slower to decide than the SPRT, but with no
 indifference region.
 
 An ``=`` bound is never accepted by either (no finite sample confirms an equality).
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-from audit.statistics import clopper_pearson, decide
+from fretc.audit.statistics import clopper_pearson, decide
 
 __all__ = ["SPRT", "SequentialCP", "effective_delta", "make_test", "TESTS"]
 

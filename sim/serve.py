@@ -1,9 +1,9 @@
-"""Run the simulator live: ``python -m sim serve --scenario S [--rate 10]`` publishes the
+"""Run the simulator live: ``python -m fretc.sim serve --scenario S [--rate 10]`` publishes the
 simulated robot's topics over the Foxglove WebSocket protocol (foxglove-sdk's server,
 loopback by default) while it runs, paced at ``rate`` times real time, so the Foxglove app
 and ``fretc watch`` can connect to it as to a robot running ``foxglove_bridge``.
 
-Channels, schemas and bytes are those :class:`sim.recording.McapRecorder` writes (ROS 2:
+Channels, schemas and bytes are those :class:`fretc.sim.recording.McapRecorder` writes (ROS 2:
 ``cdr`` / ``ros2msg``; ROS 1 with ``ros1=True``); log times are the simulation clock (from
 1 700 000 000 s, as in the recorded traces), so a served run and the recorded run of the same
 scenario and seed carry the same messages at the same log times.
@@ -15,19 +15,19 @@ import threading
 import time
 from typing import Iterable
 
-from live.serve import FoxgloveServer, Pacer
+from fretc.live.serve import FoxgloveServer, Pacer
 
-from .recording import TOPICS, MessageFactory, schema_name
-from .scenarios import get_scenario
-from .simulation import Simulation
+from fretc.sim.recording import TOPICS, MessageFactory, schema_name
+from fretc.sim.scenarios import get_scenario
+from fretc.sim.simulation import Simulation
 
 __all__ = ["ServeRecorder", "serve"]
 
 
 class ServeRecorder:
-    """The recorder interface of :class:`sim.recording.McapRecorder` (``factory``,
+    """The recorder interface of :class:`fretc.sim.recording.McapRecorder` (``factory``,
     ``counts``, ``write``, ``finish``), publishing on a
-    :class:`live.serve.FoxgloveServer` instead of writing a file.
+    :class:`fretc.live.serve.FoxgloveServer` instead of writing a file.
 
     Raises ValueError for an unknown topic or a log time going backwards (as the MCAP
     recorder).
@@ -78,7 +78,7 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
           on_ready=None):
     """Simulate ``scenario`` live on a foxglove-sdk server (a new one on ``host:port``
     unless ``server`` is given); with ``wait``, start once a client subscribed. Returns the
-    :class:`~sim.simulation.RunResult`.
+    :class:`~fretc.sim.simulation.RunResult`.
 
     Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
     """

@@ -32,14 +32,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .navigation import (INSPECTION_POINTS, ControllerParams, GlobalPlanner, LocalController,
+from fretc.sim.navigation import (INSPECTION_POINTS, ControllerParams, GlobalPlanner, LocalController,
                          Mission, PlannerParams)
-from .recording import McapRecorder
-from .robot import (Lidar, LidarParams, OdometryNoise, ScoutMini, ScoutMiniParams,
+from fretc.sim.recording import McapRecorder
+from fretc.sim.robot import (Lidar, LidarParams, OdometryNoise, ScoutMini, ScoutMiniParams,
                     WheelOdometry, min_valid_range, wrap_angle)
-from .safety import CmdVelInterceptor, SafetyAgent, SafetyParams
-from .scenarios import Scenario
-from .world import OccupancyMap, World
+from fretc.sim.safety import CmdVelInterceptor, SafetyAgent, SafetyParams
+from fretc.sim.scenarios import Scenario
+from fretc.sim.world import OccupancyMap, World
 
 #: Sim clock epoch (ns since the Unix epoch): 2023-11-14T22:13:20Z.
 EPOCH_NS = 1_700_000_000 * 1_000_000_000

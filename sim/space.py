@@ -1,10 +1,10 @@
 """Scenario parameter spaces for falsification (``fretc falsify --space FILE.toml``): a base
-scenario of :mod:`sim.scenarios`, the simulator's seed, and a range for each parameter the
+scenario of :mod:`fretc.sim.scenarios`, the simulator's seed, and a range for each parameter the
 search may change.
 
 A space file (``sim/spaces/*.toml``)::
 
-    scenario = "nominal"        # the scenario the parameters change (python -m sim list)
+    scenario = "nominal"        # the scenario the parameters change (python -m fretc.sim list)
     seed = 1                    # the simulator's seed (sensor noise), the same for every run
     max_time = 30.0             # optional: the mission's time limit (s): shorter runs
 
@@ -14,7 +14,7 @@ A space file (``sim/spaces/*.toml``)::
     obstacle_y = [-0.9, -0.3]
 
 A parameter may instead be a distribution (``fretc estimate`` samples it; ``fretc
-falsify`` searches its range), :mod:`sim.distributions`::
+falsify`` searches its range), :mod:`fretc.sim.distributions`::
 
     interceptor_delay = {dist = "normal", mean = 0.3, sd = 0.4, low = 0.0, high = 2.0}
     dropout_start = {dist = "uniform", low = 2.0, high = 8.0, fault = 0.05}
@@ -32,12 +32,12 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from common.errors import FretcError, Where
+from fretc.common.errors import FretcError, Where
 
-from .distributions import Distribution, DistributionError, parse_distribution
-from .scenarios import DRUM_RADIUS, SCENARIOS, Scenario
-from .simulation import STEP_MS
-from .world import Barrel
+from fretc.sim.distributions import Distribution, DistributionError, parse_distribution
+from fretc.sim.scenarios import DRUM_RADIUS, SCENARIOS, Scenario
+from fretc.sim.simulation import STEP_MS
+from fretc.sim.world import Barrel
 
 __all__ = ["PARAMETERS", "Space", "SpaceError", "load_space", "apply"]
 
@@ -70,9 +70,9 @@ class SpaceError(FretcError):
 
 @dataclass(frozen=True)
 class Space:
-    """A parameter space: ``scenario`` (the base :class:`~sim.scenarios.Scenario`), the
+    """A parameter space: ``scenario`` (the base :class:`~fretc.sim.scenarios.Scenario`), the
     simulator's ``seed``, and ``parameters``: ``(name, low, high)`` in file order;
-    ``distributions``: one :class:`~sim.distributions.Distribution` per parameter, same
+    ``distributions``: one :class:`~fretc.sim.distributions.Distribution` per parameter, same
     order (a plain range is uniform on it)."""
 
     path: str
@@ -84,7 +84,7 @@ class Space:
     @property
     def latent_dims(self) -> int:
         """The number of latent standard normal coordinates of one run
-        (:mod:`sim.distributions`)."""
+        (:mod:`fretc.sim.distributions`)."""
         return sum(d.latent_dims for d in self.distributions)
 
     def at_latent(self, z) -> dict[str, float]:

@@ -3,7 +3,7 @@ coordinates of a scenario space, with levels on the robustness every verdict car
 
 The rule (F. Cérou and A. Guyader, "Adaptive multilevel splitting for rare event analysis",
 Stochastic Analysis and Applications 25(2), 2007), in our words. A run is a point ``z`` of
-``R^d`` drawn from ``N(0, I)`` (:mod:`sim.distributions`); ``r(z)`` its robustness for one
+``R^d`` drawn from ``N(0, I)`` (:mod:`fretc.sim.distributions`); ``r(z)`` its robustness for one
 requirement, negative exactly when violated. To estimate ``P(r(z) < 0)``:
 
 1. draw ``n`` particles from ``N(0, I)`` and score them;

@@ -9,10 +9,10 @@ from typing import Dict, List
 
 import numpy as np
 
-from compiler.build import compile_entry
-from compiler.codegen import monitor_source, render_module
-from fretish import ast as A
-from fretish.files import RequirementEntry
+from fretc.compiler.build import compile_entry
+from fretc.compiler.codegen import monitor_source, render_module
+from fretc.fretish import ast as A
+from fretc.fretish.files import RequirementEntry
 
 KEYS = [(s, c, t) for s in A.SCOPE_KINDS for c in A.CONDITION_KINDS for t in A.TIMING_KINDS]
 assert len(KEYS) == 288
@@ -58,7 +58,7 @@ def entry(rid: str, text: str, tick_period=None, source: str = "test.fret"):
     """A requirement entry as fretish.files makes them (without a file), its text parsed."""
     from types import SimpleNamespace
 
-    from fretish import parse
+    from fretc.fretish import parse
     return SimpleNamespace(id=rid, text=text, source=source, line=1, column=1,
                            rationale=None, parent=None, tick_period=tick_period,
                            requirement=parse(text), error=None, extra={})

@@ -7,7 +7,7 @@ with its meaning as a small tuple tree. :func:`oracle` evaluates that meaning on
 directly from the definitions of ``../shared/fretish/README.md``: scope intervals (section 2),
 triggers (section 3), timings (section 4) and the "meaning" column of section 6b for the
 temporal functions. It never looks at a formula, so it is independent of
-:mod:`compiler.semantics` (which builds FRET's expansions).
+:mod:`fretc.compiler.semantics` (which builds FRET's expansions).
 
 :func:`check_requirement` compares ft at 0, pt at the end (finite traces) and ft_inf
 (infinite words: the trace followed by the all-false state forever) with the oracle.
@@ -441,9 +441,9 @@ def random_trace(rnd: random.Random, length: int) -> List[dict]:
 def check_requirement(text: str, meaning: dict, rnd: random.Random, traces: int = 30):
     """Compare fretc's ft, pt and ft_inf with the oracle on random traces. Returns None or
     a description of the first disagreement."""
-    from compiler.evaluate import ft_at, pt_at
-    from compiler.semantics import formalize
-    from fretish import parse
+    from fretc.compiler.evaluate import ft_at, pt_at
+    from fretc.compiler.semantics import formalize
+    from fretc.fretish import parse
 
     f = formalize(parse(text))
     for _ in range(traces):
@@ -466,8 +466,8 @@ def ft_inf_at(node, trace: Sequence[dict]) -> bool:
     """ft_inf at 0 on the infinite word ``trace`` + all-false state forever. The word is
     unrolled by 12 all-false states so that derived past atoms (past functions inside a
     future formula, evaluated pointwise) reach their steady value, which the absorbing
-    state then keeps (:mod:`compiler.evaluate` would read them as false there)."""
-    from compiler.evaluate import _Evaluator
+    state then keeps (:mod:`fretc.compiler.evaluate` would read them as false there)."""
+    from fretc.compiler.evaluate import _Evaluator
 
     class _Inf(_Evaluator):
         def _compute(self, n):

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from lark import Lark, Transformer
 
-from compiler import ir
-from compiler.ir import Node
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
 
 _GRAMMAR = r"""
 start: f

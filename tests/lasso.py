@@ -9,7 +9,7 @@ read from the states: a derived atom under the key of its printed name."""
 
 from __future__ import annotations
 
-from compiler.evaluate import _Evaluator
+from fretc.compiler.evaluate import _Evaluator
 
 
 class _Lasso(_Evaluator):

@@ -68,11 +68,27 @@ def test_r1_main_line_within_the_limits():
 
 
 #: ARCHITECTURE.md, "Packages in the pipeline's order": a package imports only packages before
-#: it (lazy imports inside functions included). ``signals.bindings`` (the binding language)
-#: sits below the rest of ``signals`` (sampling), which uses it.
-PACKAGE_ORDER = ("common", "fretish", "compiler", "check", "logs", "signals.bindings", "signals",
-                 "monitors", "audit", "live", "sim", "reports", "editor", "fretc")
-LIBRARY = tuple(dict.fromkeys(p.split(".")[0] for p in PACKAGE_ORDER))
+#: it (lazy imports inside functions included). ``fretc.signals.bindings`` (the binding
+#: language) sits below the rest of ``fretc.signals`` (sampling), which uses it; ``fretc.cli``
+#: (the commands) and the package's own ``__init__``/``__main__`` come last.
+PACKAGE_ORDER = ("fretc.common", "fretc.fretish", "fretc.compiler", "fretc.check", "fretc.logs",
+                 "fretc.signals.bindings", "fretc.signals", "fretc.monitors", "fretc.audit",
+                 "fretc.live", "fretc.sim", "fretc.reports", "fretc.editor", "fretc.cli", "fretc")
+#: the repository's source folders: each installs as ``fretc.<folder>`` (``fretc/`` as
+#: ``fretc`` itself, holding ``fretc.cli``): pyproject.toml's package-dir
+LIBRARY = ("common", "fretish", "compiler", "check", "logs", "signals", "monitors", "audit",
+           "live", "sim", "reports", "editor", "fretc")
+#: the packages whose modules may import ``fretc.reports``: the reports and the front ends
+FRONT_ENDS = ("fretc.reports", "fretc.editor", "fretc.cli", "fretc")
+
+
+def installed_name(path: Path, root: Path = REPO) -> str:
+    """The import name of the source file ``path`` once installed: ``audit/log.py`` ->
+    ``fretc.audit.log``, ``fretc/cli/audit.py`` -> ``fretc.cli.audit``."""
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts if parts[0] == "fretc" else ["fretc"] + parts)
 
 
 def layer(module: str) -> int | None:
@@ -89,7 +105,7 @@ def layer(module: str) -> int | None:
 def back_arrows(graph: dict[str, set[str]]) -> list[str]:
     """``a -> b`` for every import (at any depth of the module, lazy ones included) from a
     package to one after it in :data:`PACKAGE_ORDER`, and from anything but the front ends
-    (``fretc``, the commands; ``editor``, the language server) into ``reports`` (the
+    (:data:`FRONT_ENDS`: the commands, the language server) into ``fretc.reports`` (the
     reports read the audit's model; only the front ends call them)."""
     out = []
     for mod, targets in sorted(graph.items()):
@@ -100,8 +116,8 @@ def back_arrows(graph: dict[str, set[str]]) -> list[str]:
             trank = layer(t)
             if trank is None:
                 continue
-            into_reports = PACKAGE_ORDER[trank] == "reports" and mod.split(".")[0] not in (
-                "reports", "editor", "fretc")
+            into_reports = (PACKAGE_ORDER[trank] == "fretc.reports"
+                            and PACKAGE_ORDER[rank] not in FRONT_ENDS)
             if trank > rank or into_reports:
                 out.append(f"{mod} -> {t}")
     return out
@@ -119,13 +135,14 @@ def test_a_back_arrow_is_found(tmp_path):
     from test_layering import _imports
 
     p = tmp_path / "x.py"
-    p.write_text("def f():\n    from audit.verdict import Verdict\n")
-    known = {"logs.x", "audit.verdict", "reports.terminal", "sim.y"}
-    graph = {"logs.x": _imports("logs.x", p, known)}
+    p.write_text("def f():\n    from fretc.audit.verdict import Verdict\n")
+    known = {"fretc.logs.x", "fretc.audit.verdict", "fretc.reports.terminal", "fretc.sim.y"}
+    graph = {"fretc.logs.x": _imports("fretc.logs.x", p, known)}
     q = tmp_path / "y.py"
-    q.write_text("from reports.terminal import robustness_text\n")
-    graph["sim.y"] = _imports("sim.y", q, known)
-    assert back_arrows(graph) == ["logs.x -> audit.verdict", "sim.y -> reports.terminal"]
+    q.write_text("from fretc.reports.terminal import robustness_text\n")
+    graph["fretc.sim.y"] = _imports("fretc.sim.y", q, known)
+    assert back_arrows(graph) == ["fretc.logs.x -> fretc.audit.verdict",
+                                  "fretc.sim.y -> fretc.reports.terminal"]
 
 
 def undocumented(files: list[Path], root: Path = REPO) -> list[str]:

@@ -10,18 +10,12 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-from test_architecture import LIBRARY as PACKAGES  # noqa: E402  every source package
+from test_architecture import LIBRARY as PACKAGES, installed_name  # noqa: E402
 
 
 def _modules() -> dict[str, Path]:
-    out = {}
-    for pkg in PACKAGES:
-        for p in sorted((REPO / pkg).rglob("*.py")):
-            parts = list(p.relative_to(REPO).with_suffix("").parts)
-            if parts[-1] == "__init__":
-                parts.pop()
-            out[".".join(parts)] = p
-    return out
+    """Installed module name -> source file, for every module of every source folder."""
+    return {installed_name(p): p for pkg in PACKAGES for p in sorted((REPO / pkg).rglob("*.py"))}
 
 
 def _imports(name: str, path: Path, known) -> set[str]:
@@ -87,6 +81,28 @@ def test_every_package_is_installed():
 
     listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
                  ["packages"])
-    found = {".".join(p.parent.relative_to(REPO).parts) for pkg in PACKAGES + ("templates",)
+    found = {installed_name(p.parent / "__init__.py") for pkg in PACKAGES + ("templates",)
              for p in (REPO / pkg).rglob("__init__.py")}
     assert found <= listed, sorted(found - listed)
+
+
+def test_one_import_rule():
+    # every import of fretc's own code, in the sources, tests and benchmarks, is absolute
+    # and names ``fretc.``: a bare ``compiler`` or ``audit`` would import another
+    # distribution's package of that name once installed (or nothing)
+    bare = {name for name in PACKAGES if name != "fretc"} | {"templates"}
+    found = []
+    files = subprocess.run(["git", "ls-files", "*.py"], cwd=REPO, capture_output=True,
+                           text=True).stdout.split() or [
+        str(p.relative_to(REPO)) for p in REPO.rglob("*.py") if ".venv" not in p.parts]
+    for name in files:
+        path = REPO / name
+        if not path.exists():
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.level:
+                found.append(f"{name}:{node.lineno} relative import")
+            mods = ([node.module or ""] if isinstance(node, ast.ImportFrom) else
+                    [a.name for a in node.names] if isinstance(node, ast.Import) else [])
+            found += [f"{name}:{node.lineno} {m}" for m in mods if m.split(".")[0] in bare]
+    assert found == []

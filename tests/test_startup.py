@@ -1,6 +1,6 @@
 """Start-up of ``fretc`` as a user sees it: the first run stores the parser's tables in
 fretc's cache folder and later runs read them, with the same output (a damaged entry or
-no cache included); :class:`common.errors.Where`'s defaults, ``repr`` and ``str``.
+no cache included); :class:`fretc.common.errors.Where`'s defaults, ``repr`` and ``str``.
 (That ``fretc FILE --emit ltl`` loads no Spot, numpy, Jinja2 or MCAP code is checked by
 ``tests/test_layering.py``.)"""
 
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from common.errors import Where
+from fretc.common.errors import Where
 
 ROOT = Path(__file__).resolve().parents[1]
 

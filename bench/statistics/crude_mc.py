@@ -32,9 +32,9 @@ def main() -> None:
     ap.add_argument("-o", "--output", required=True)
     a = ap.parse_args()
 
-    from audit import AuditConfig, load_plan
-    from sim.estimate import Runner, sample_point
-    from sim.space import load_space
+    from fretc.audit import AuditConfig, load_plan
+    from fretc.sim.estimate import Runner, sample_point
+    from fretc.sim.space import load_space
 
     plan = load_plan(AuditConfig(requirements=(a.requirements,), bindings=(a.bindings,)))
     space = load_space(a.space)

@@ -83,7 +83,7 @@ def crude(path: str) -> None:
 def analytic(seeds: int = 20) -> None:
     from scipy.stats import norm
 
-    from sim.splitting import adaptive_multilevel_splitting
+    from fretc.sim.splitting import adaptive_multilevel_splitting
     p = 1e-5
     c = float(norm.isf(p))
 

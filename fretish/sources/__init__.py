@@ -1,10 +1,10 @@
 """Requirements kept in engineers' tools: ReqIF files (``.reqif``, ``.reqifz``) and Doorstop
-trees, read into :class:`fretish.files.RequirementEntry` objects that remember where each
+trees, read into :class:`fretc.fretish.files.RequirementEntry` objects that remember where each
 requirement came from (:class:`Origin`).
 
-:func:`fretish.files.load_requirements` calls :func:`tool_source_kind` on every path it is
+:func:`fretc.fretish.files.load_requirements` calls :func:`tool_source_kind` on every path it is
 given and :func:`load_tool_source` for the ones it names; FRET's own JSON export is read by
-:mod:`fretish.files` (its origin is made there, :func:`fret_origin`).
+:mod:`fretc.fretish.files` (its origin is made there, :func:`fret_origin`).
 
 Which attribute holds the FRETish sentence is the caller's choice (``text_attribute``): by
 default an attribute named ``FRETish`` (any case), else the format's requirement text
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 
-from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin
+from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin
 
 __all__ = ["Origin", "tool_source_kind", "load_tool_source", "fret_origin",
            "DEFAULT_TEXT_ATTRIBUTE", "REQIF_SUFFIXES"]
@@ -56,15 +56,15 @@ def _walk(path: str):
 
 def load_tool_source(path: str, kind: str, text_attribute: str | None = None):
     """(entries, not formalized) of the ReqIF file or Doorstop tree at ``path`` (``kind`` from
-    :func:`tool_source_kind`): two lists of :class:`fretish.files.RequirementEntry`, the
+    :func:`tool_source_kind`): two lists of :class:`fretc.fretish.files.RequirementEntry`, the
     second of the items without FRETish text (their ``text`` empty, ``requirement`` and
-    ``error`` None). Raises :class:`common.errors.FretishFileError` naming the file and
+    ``error`` None). Raises :class:`fretc.common.errors.FretishFileError` naming the file and
     element of a structural problem (bad or hostile XML, a missing datatype, a Doorstop
     link to nothing, a cycle, a duplicate id)."""
     if kind == "reqif":
-        from .reqif_file import load_reqif  # lazy: lxml and reqif only for ReqIF
+        from fretc.fretish.sources.reqif_file import load_reqif  # lazy: lxml and reqif only for ReqIF
         return load_reqif(path, text_attribute)
-    from .doorstop_tree import load_doorstop  # lazy: doorstop only for its trees
+    from fretc.fretish.sources.doorstop_tree import load_doorstop  # lazy: doorstop only for its trees
     return load_doorstop(path, text_attribute)
 
 

@@ -21,9 +21,9 @@ from __future__ import annotations
 import logging
 import os
 
-from common.errors import FretishFileError, FretishSyntaxError
+from fretc.common.errors import FretishFileError, FretishSyntaxError
 
-from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
+from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
 
 __all__ = ["load_doorstop", "build_tree", "custom_attributes"]
 
@@ -115,10 +115,10 @@ def _check_links(items: list, all_uids: set[str]) -> None:
 
 def load_doorstop(path: str, text_attribute: str | None = None):
     """(entries, not formalized) of the Doorstop tree under ``path`` (module docstring; both
-    lists of :class:`fretish.files.RequirementEntry`, ``source`` the tree ``path``, the item
+    lists of :class:`fretc.fretish.files.RequirementEntry`, ``source`` the tree ``path``, the item
     file in ``origin.file``; ``line`` the line of the text attribute in it). Raises
     :class:`FretishFileError`: a tree Doorstop cannot build, a missing parent, a cycle."""
-    from fretish.parser import parse
+    from fretc.fretish.parser import parse
 
     tree = build_tree(path)
     items = _items(tree)

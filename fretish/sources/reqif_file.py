@@ -20,10 +20,10 @@ from __future__ import annotations
 import os
 import re
 
-from common.errors import FretishFileError, FretishSyntaxError
+from fretc.common.errors import FretishFileError, FretishSyntaxError
 
-from fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
-from .safe_xml import MAX_BYTES, checked_text, read_reqif_members
+from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
+from fretc.fretish.sources.safe_xml import MAX_BYTES, checked_text, read_reqif_members
 
 __all__ = ["load_reqif", "parse_reqif_bundles", "attribute_names", "ID_ATTRIBUTES"]
 
@@ -106,7 +106,7 @@ def _value_text(attr, datatype) -> str:
 
 def load_reqif(path: str, text_attribute: str | None = None):
     """(entries, not formalized) of the ReqIF file at ``path`` (module docstring; both lists of
-    :class:`fretish.files.RequirementEntry`). Raises :class:`FretishFileError` (file, line of
+    :class:`fretc.fretish.files.RequirementEntry`). Raises :class:`FretishFileError` (file, line of
     the element): hostile or malformed XML, a SPEC-OBJECT whose type or attribute definition
     is missing, a missing datatype, two SPEC-OBJECTs with one id."""
     entries, unformalized = [], []
@@ -133,7 +133,7 @@ def _containers(content) -> dict[str, str]:
 
 
 def _read_bundle(source: str, content, text_attribute: str | None):
-    from fretish.parser import parse
+    from fretc.fretish.parser import parse
 
     names = attribute_names(content, source)
     wanted = _text_attribute(names, text_attribute)

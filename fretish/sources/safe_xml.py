@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import zipfile
 
-from common.errors import FretishFileError
+from fretc.common.errors import FretishFileError
 
 __all__ = ["checked_text", "read_reqif_members", "MAX_BYTES", "MAX_MEMBERS", "MAX_RATIO"]
 

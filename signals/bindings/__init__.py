@@ -16,7 +16,7 @@ binding file.  A binding file is TOML (read with :mod:`tomllib`)::
     stopped = "abs(/cmd_vel.linear.x) < 1e-3 & abs(/cmd_vel.angular.z) < 1e-3"
     scan_stale = "age(/scan) > 0.3"
 
-Durations are a number with a unit (:mod:`common.units`, the grammar of the requirement
+Durations are a number with a unit (:mod:`fretc.common.units`, the grammar of the requirement
 files' ``tick_period`` too): ``ns``, ``us``, ``ms``, ``s``, ``min``, ``h`` (or their long
 names, ``milliseconds``), or a frequency in ``Hz`` (period = 1/f); a bare TOML number is
 seconds.
@@ -65,30 +65,30 @@ ticks at once with numpy.  Errors name the binding file, line and column and the
 
 The modules, in the order they build on each other:
 
-* :mod:`~signals.bindings.expression`: the expression tree and its static checks;
-* :mod:`~signals.bindings.parse`: the parser (Lark, ``grammar.lark``) that builds the tree;
-* :mod:`~signals.bindings.paths`: topic names and strings as written in bindings;
-* :mod:`~signals.bindings.extract`: a message field as a value (:func:`make_extractor`);
-* :mod:`~signals.bindings.frames`: transforms between TF frames, joints by name;
-* :mod:`~signals.bindings.operations`: the operations on values (per tick and vectorized);
-* :mod:`~signals.bindings.compile`: an expression tree to closures;
-* :mod:`~signals.bindings.binding`: :class:`Binding`, one variable, compiled;
-* :mod:`~signals.bindings.typecheck`: a binding against a log's message types;
-* :mod:`~signals.bindings.spec`: :class:`Bindings`, :class:`TickSpec`, :class:`LogSelector`;
-* :mod:`~signals.bindings.files`: binding files (TOML).
+* :mod:`~fretc.signals.bindings.expression`: the expression tree and its static checks;
+* :mod:`~fretc.signals.bindings.parse`: the parser (Lark, ``grammar.lark``) that builds the tree;
+* :mod:`~fretc.signals.bindings.paths`: topic names and strings as written in bindings;
+* :mod:`~fretc.signals.bindings.extract`: a message field as a value (:func:`make_extractor`);
+* :mod:`~fretc.signals.bindings.frames`: transforms between TF frames, joints by name;
+* :mod:`~fretc.signals.bindings.operations`: the operations on values (per tick and vectorized);
+* :mod:`~fretc.signals.bindings.compile`: an expression tree to closures;
+* :mod:`~fretc.signals.bindings.binding`: :class:`Binding`, one variable, compiled;
+* :mod:`~fretc.signals.bindings.typecheck`: a binding against a log's message types;
+* :mod:`~fretc.signals.bindings.spec`: :class:`Bindings`, :class:`TickSpec`, :class:`LogSelector`;
+* :mod:`~fretc.signals.bindings.files`: binding files (TOML).
 """
 
 from __future__ import annotations
 
-from .binding import Binding, compile_expression, operand_signals, parse_inline
-from .compile import EvalState
-from .expression import Field, unparse
-from .extract import LASER_SCAN, Valid, make_extractor
-from common.units import parse_duration
+from fretc.signals.bindings.binding import Binding, compile_expression, operand_signals, parse_inline
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.expression import Field, unparse
+from fretc.signals.bindings.extract import LASER_SCAN, Valid, make_extractor
+from fretc.common.units import parse_duration
 
-from .files import load_bindings, parse_bindings
-from .spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec, make_bindings
-from .typecheck import check_types
+from fretc.signals.bindings.files import load_bindings, parse_bindings
+from fretc.signals.bindings.spec import DEFAULT_HEADER_LAG_NS, Bindings, LogSelector, TickSpec, make_bindings
+from fretc.signals.bindings.typecheck import check_types
 
 __all__ = [
     "Binding",

@@ -11,13 +11,13 @@ from typing import Any
 
 import numpy as np
 
-from common.problems import BindingError, SignalError
-from .compile import EvalError, EvalState, compile_node
-from .expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
+from fretc.common.problems import BindingError, SignalError
+from fretc.signals.bindings.compile import EvalError, EvalState, compile_node
+from fretc.signals.bindings.expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
                          UnaryOp, check, check_aggregate, check_size, substitute, unparse, walk)
-from .parse import parse_expression
-from .extract import Valid, normalize_scalar
-from .operations import Ops
+from fretc.signals.bindings.parse import parse_expression
+from fretc.signals.bindings.extract import Valid, normalize_scalar
+from fretc.signals.bindings.operations import Ops
 
 __all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals",
            "fold", "EMPTY_FOLD"]
@@ -41,7 +41,7 @@ class Binding:
         topics: topics the expression reads (fields and ``age``).
         fields: the field references, in order of appearance.
         constants: the values of its named constants (``POWER_SUPPLY_STATUS_CHARGING``),
-            filled in by :func:`signals.bindings.check_types` from a log's schemas.
+            filled in by :func:`fretc.signals.bindings.check_types` from a log's schemas.
         uses_tf: whether it reads ``tf()`` (every message of /tf and /tf_static).
         aggregate: how the values of the messages of its one topic since the previous tick
             are folded (``"any"``, ``"all"``, ``"count"``, ``"min"``, ``"max"``: written
@@ -106,7 +106,7 @@ class Binding:
         Args:
             columns: an object with ``n`` (number of ticks), ``field(topic, path, node)`` →
                 per-tick values (1-D array, or :class:`Valid` of 2-D) and ``age(topic)`` →
-                seconds (1-D); see :mod:`signals.arrays`.
+                seconds (1-D); see :mod:`fretc.signals.arrays`.
 
         Raises:
             SignalError: as :meth:`evaluate`.
@@ -142,7 +142,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
         refs: the other variables a bare name in ``expr`` may refer to (already compiled);
             their expressions are substituted.
         nan: the binding file's ``[tick] nan``: ``"unread"`` (a comparison with NaN is NaN,
-            logic three-valued) or ``"false"`` (IEEE 754); :mod:`signals.bindings.operations`.
+            logic three-valued) or ``"false"`` (IEEE 754); :mod:`fretc.signals.bindings.operations`.
         inf: the binding file's ``[tick] inf``: ``"unread"`` (±inf read from a log field is
             NaN, but for REP 117 fields) or ``"value"``.
 

@@ -1,10 +1,10 @@
 """Compilation of an expression tree to nested Python closures (no ``eval`` of user text).
 
-:func:`compile_node` gives, for one :class:`~signals.bindings.expression.Expr`, a function
+:func:`compile_node` gives, for one :class:`~fretc.signals.bindings.expression.Expr`, a function
 of what the evaluation sees: an :class:`EvalState` (one tick: the held messages, their times
 and the tick time) or, vectorized, a columns object (all ticks at once: ``n``,
-``field(topic, path, node)`` and ``age(topic)``, see :mod:`signals.arrays`).  Both
-evaluators apply the same :mod:`~signals.bindings.operations`, so they give the same values.
+``field(topic, path, node)`` and ``age(topic)``, see :mod:`fretc.signals.arrays`).  Both
+evaluators apply the same :mod:`~fretc.signals.bindings.operations`, so they give the same values.
 """
 
 from __future__ import annotations
@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from .expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, walk
-from .extract import FieldAccessError, Valid, make_extractor
-from .frames import LookupFailed, TfBuffer, pick_joint
-from .operations import (COMPARISONS, LOGICAL, NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2,
+from fretc.signals.bindings.expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, walk
+from fretc.signals.bindings.extract import FieldAccessError, Valid, make_extractor
+from fretc.signals.bindings.frames import LookupFailed, TfBuffer, pick_joint
+from fretc.signals.bindings.operations import (COMPARISONS, LOGICAL, NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2,
                          np_three_valued, num, py_three_valued, undeclared_inf)
 
 __all__ = ["EvalState", "EvalError", "compile_node", "per_message_topic"]
@@ -194,7 +194,7 @@ def _binary(node: BinOp, ops: Ops, extractors: dict[Field, Evaluator],
 def _nan_aware(npfn, pyfn):
     """A comparison's numpy and Python functions under the policy "unread": NaN when an
     operand is NaN (per item for arrays), else the comparison
-    (:mod:`signals.bindings.operations`)."""
+    (:mod:`fretc.signals.bindings.operations`)."""
     def py(a: Any, b: Any) -> Any:
         return math.nan if (a != a or b != b) else pyfn(a, b)
 

@@ -1,11 +1,11 @@
 """The binding expression language: its tree and its static checks.
 
-An expression (``"min(/scan.ranges) < 0.9"``) is parsed by :mod:`signals.bindings.parse`
+An expression (``"min(/scan.ranges) < 0.9"``) is parsed by :mod:`fretc.signals.bindings.parse`
 into the frozen dataclasses below (:class:`Expr` and its subclasses; ``col`` is the 1-based
 column in the expression text, for error messages).  The language itself (operators,
-functions, values) is described in ``docs/bindings.md`` and in :mod:`signals.bindings`.
+functions, values) is described in ``docs/bindings.md`` and in :mod:`fretc.signals.bindings`.
 
-Errors are :class:`common.problems.BindingError` naming the binding file, line, column
+Errors are :class:`fretc.common.problems.BindingError` naming the binding file, line, column
 and variable (:class:`ExprLocation` maps a column in the expression to one in the file).
 """
 
@@ -15,10 +15,10 @@ import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from common.problems import BindingError
-from fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
-from logs.schema import closest
-from .paths import quote, topic_text
+from fretc.common.problems import BindingError
+from fretc.fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
+from fretc.logs.schema import closest
+from fretc.signals.bindings.paths import quote, topic_text
 
 __all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
            "FuncCall", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
@@ -53,7 +53,7 @@ class Named(Expr):
     """A named constant of a message definition (``POWER_SUPPLY_STATUS_CHARGING``,
     DiagnosticStatus's ``ERROR``): a name in capitals that is not a variable of the binding
     file; its value is looked up in the log's schema of the field it is compared with
-    (:mod:`signals.bindings.typecheck`)."""
+    (:mod:`fretc.signals.bindings.typecheck`)."""
 
     name: str
 
@@ -267,9 +267,9 @@ class ExprLocation:
 
 
 def check_size(node: Expr, where: ExprLocation, what: str = "the expression") -> None:
-    """The limits of requirements (:mod:`fretish.limits`) for a binding expression: at most
-    :data:`~fretish.limits.MAX_EXPR_NODES` nodes counted as expanded (a variable referred to
-    twice counts twice) and :data:`~fretish.limits.MAX_EXPR_DEPTH` levels. Shared subtrees
+    """The limits of requirements (:mod:`fretc.fretish.limits`) for a binding expression: at most
+    :data:`~fretc.fretish.limits.MAX_EXPR_NODES` nodes counted as expanded (a variable referred to
+    twice counts twice) and :data:`~fretc.fretish.limits.MAX_EXPR_DEPTH` levels. Shared subtrees
     (references substituted) are counted once per use without walking them again, so a
     chain of doubling references is refused in linear time.
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .expression import Const, Field, Filter, Slice
+from fretc.signals.bindings.expression import Const, Field, Filter, Slice
 
 __all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
 

@@ -15,13 +15,13 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from common.units import parse_duration
+from fretc.common.units import parse_duration
 
-from common.problems import BindingError
-from .binding import VARNAME, Binding, compile_expression
-from .expression import ExprLocation, refs
-from .parse import parse_expression
-from .spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
+from fretc.common.problems import BindingError
+from fretc.signals.bindings.binding import VARNAME, Binding, compile_expression
+from fretc.signals.bindings.expression import ExprLocation, refs
+from fretc.signals.bindings.parse import parse_expression
+from fretc.signals.bindings.spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
                    TickSpec)
 
 __all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
@@ -328,8 +328,8 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
 
 def _constants(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str]]:
     """``[constants] T_stop = "1.5 s"``: named durations of the requirements
-    (:mod:`fretish.constants`): name -> (amount, unit)."""
-    from fretish.constants import CONSTANT_NAME, parse_constant
+    (:mod:`fretc.fretish.constants`): name -> (amount, unit)."""
+    from fretc.fretish.constants import CONSTANT_NAME, parse_constant
 
     if table is None:
         return {}
@@ -359,7 +359,7 @@ def load_bindings(path: str | Path, inline: Iterable[str] = ()) -> Bindings:
 
     Raises:
         BindingError: unreadable file, or see :func:`parse_bindings` /
-            :func:`signals.bindings.binding.parse_inline`.
+            :func:`fretc.signals.bindings.binding.parse_inline`.
     """
     try:
         text = Path(path).read_text(encoding="utf-8")

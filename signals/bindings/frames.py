@@ -17,8 +17,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from common.textsafe import visible
-from common.units import NS_PER_S
+from fretc.common.textsafe import visible
+from fretc.common.units import NS_PER_S
 
 __all__ = ["LookupFailed", "TfBuffer", "pick_joint", "compose", "invert", "yaw_of"]
 

@@ -1,5 +1,5 @@
 """The operations of binding expressions on values, shared by the per-tick and the vectorized
-evaluators (:mod:`signals.bindings.compile`).
+evaluators (:mod:`fretc.signals.bindings.compile`).
 
 Python ``bool``/``float`` go through Python operators (fast path for one tick); anything else
 through numpy, item by item, keeping the validity mask of :class:`Valid` arrays.  ``x / 0``
@@ -12,7 +12,7 @@ NaN in comparisons (docs/bindings.md, "NaN"): under the default policy (``[tick]
 the logical operators follow Kleene's three-valued logic (``false & NaN`` is false, ``true |
 NaN`` is true, anything else with NaN is NaN; ``any``/``all`` of items likewise, ``count`` of
 items of which one is NaN is NaN). A boolean binding that is NaN at a tick makes that tick
-unread for the requirements that read it (:mod:`monitors.nan`). Under ``[tick] nan =
+unread for the requirements that read it (:mod:`fretc.monitors.nan`). Under ``[tick] nan =
 "false"`` comparisons follow IEEE 754 (false; ``!=`` true).
 """
 
@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .extract import Valid
+from fretc.signals.bindings.extract import Valid
 
 __all__ = ["PY_TYPES", "Ops", "num", "min2", "max2", "NP_BINARY", "PY_BINARY", "COMPARISONS",
            "LOGICAL", "py_three_valued", "np_three_valued", "undeclared_inf"]

@@ -1,11 +1,11 @@
-"""The binding expression parser: text -> :class:`~signals.bindings.expression.Expr`.
+"""The binding expression parser: text -> :class:`~fretc.signals.bindings.expression.Expr`.
 
 An expression (``"min(/scan.ranges) < 0.9"``) is parsed with Lark (LALR, contextual lexer)
 from the grammar ``signals/bindings/grammar.lark``; :class:`_ToExpr`, a Lark
 ``Transformer`` whose callbacks are named after the grammar's rules, turns the parse tree
 into the expression tree, which :func:`parse_expression` then checks (size, topics,
-functions; :mod:`signals.bindings.expression`). Errors are
-:class:`common.problems.BindingError` naming the binding file, line, column and variable.
+functions; :mod:`fretc.signals.bindings.expression`). Errors are
+:class:`fretc.common.problems.BindingError` naming the binding file, line, column and variable.
 """
 
 from __future__ import annotations
@@ -18,13 +18,13 @@ from lark import Lark, Transformer, __version__ as lark_version, v_args
 from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
                              UnexpectedToken, VisitError)
 
-from common import cache
-from common.problems import BindingError
-from fretish.limits import MAX_EXPR_DEPTH
-from .expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
+from fretc.common import cache
+from fretc.common.problems import BindingError
+from fretc.fretish.limits import MAX_EXPR_DEPTH
+from fretc.signals.bindings.expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
                          ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice,
                          TF_COMPONENTS, UnaryOp, check, check_size)
-from .paths import unquote
+from fretc.signals.bindings.paths import unquote
 
 __all__ = ["parse_expression"]
 
@@ -41,7 +41,7 @@ _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", propagate_positions=True
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
     """The Lark parser of ``grammar.lark``, its tables kept in fretc's cache folder
-    (:func:`common.cache.lark_cache_file`; built in memory when the cache is off)."""
+    (:func:`fretc.common.cache.lark_cache_file`; built in memory when the cache is off)."""
     with open(os.path.join(os.path.dirname(__file__), "grammar.lark"), encoding="utf-8") as f:
         grammar = f.read()
     path = cache.lark_cache_file("bindings", grammar, lark_version, _LARK_OPTIONS)

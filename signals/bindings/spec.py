@@ -1,6 +1,6 @@
 """A binding set as the audit uses it: the variables, the tick clock (:class:`TickSpec`), the
 time base and which logs it applies to (:class:`LogSelector`).  Read from a binding file by
-:mod:`signals.bindings.files`; made from a mapping by :func:`make_bindings`."""
+:mod:`fretc.signals.bindings.files`; made from a mapping by :func:`make_bindings`."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import PurePath
 
-from common.units import NS_PER_S
+from fretc.common.units import NS_PER_S
 
-from .binding import Binding, compile_expression, parse_inline
+from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
            "Bindings", "make_bindings"]
@@ -51,7 +51,7 @@ class TickSpec:
     nominal_period_ns: int | None = None
     #: what a comparison with NaN in a requirement means (``[tick] nan``,
     #: :data:`NAN_POLICIES`): ``"unread"`` (the default: the tick's value is neither true
-    #: nor false, the requirement is judged only before it, :mod:`monitors.nan`) or
+    #: nor false, the requirement is judged only before it, :mod:`fretc.monitors.nan`) or
     #: ``"false"`` (IEEE 754: every ordered comparison with NaN is false, ``!=`` true).
     nan: str = "unread"
     #: what ±inf read from a log field means (``[tick] inf``, :data:`INF_POLICIES`):
@@ -118,9 +118,9 @@ class Bindings:
         types: ``[types]``: topic -> ROS message type, for live servers that do not say
             (rosbridge without rosapi); logs carry their own schemas.
         msg_path: ``[types] msg_path``: folders of the ``.msg``/``.idl`` files of types a
-            log does not carry (as ``--msg-path``; :mod:`logs.msg_path`).
+            log does not carry (as ``--msg-path``; :mod:`fretc.logs.msg_path`).
         constants: ``[constants]``: named durations of the requirements (name -> (amount,
-            unit), :mod:`fretish.constants`), read by the audit before it compiles.
+            unit), :mod:`fretc.fretish.constants`), read by the audit before it compiles.
 
     Raises:
         ValueError: a time base not in :data:`TIME_BASES`.
@@ -153,7 +153,7 @@ class Bindings:
         """A copy with ``NAME=EXPR`` bindings (CLI ``--bind``) added or replacing same-named ones.
 
         Raises:
-            BindingError: as :func:`signals.bindings.binding.parse_inline`.
+            BindingError: as :func:`fretc.signals.bindings.binding.parse_inline`.
         """
         variables = dict(self.variables)
         for spec in specs:

@@ -9,9 +9,9 @@ topic's schema is unknown (then nothing is checked).
 
 from __future__ import annotations
 
-from logs.schema import FieldPathError
-from .binding import Binding
-from .expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named,
+from fretc.logs.schema import FieldPathError
+from fretc.signals.bindings.binding import Binding
+from fretc.signals.bindings.expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named,
                          UnaryOp, unparse)
 
 __all__ = ["check_types"]
@@ -25,7 +25,7 @@ _WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of 
 
 
 def check_types(binding: Binding, schemas: dict) -> str:
-    """Check ``binding`` against the message types of a log (:func:`logs.schema.log_schemas`)
+    """Check ``binding`` against the message types of a log (:func:`fretc.logs.schema.log_schemas`)
     before it is evaluated: every field path must resolve through fields the
     schema declares (never Python attributes), strings cannot enter arithmetic or
     comparisons, a boolean is not a number and a number is not a boolean, and the value must

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from audit import AuditConfig, audit_log, audit_logs, find_logs, load_plan
-from audit.verdict import audit_json
+from fretc.audit import AuditConfig, audit_log, audit_logs, find_logs, load_plan
+from fretc.audit.verdict import audit_json
 
 from _logs import MS, S, boolean, scan, twist, write_mcap
 from _shared import SHARED, needs_shared
@@ -244,7 +244,7 @@ def test_csv_traces_reproduce_every_fret_interval_verdict(tmp_path, monkeypatch)
     """Every ``expected`` of fret_trace_verdicts.jsonl, by auditing CSV traces written from
     its intervals. (Spot's LTL3 automata are skipped here - slow for durations up to 8 and
     not what this test is about; test_vectorized checks them.)"""
-    import compiler.codegen as codegen
+    import fretc.compiler.codegen as codegen
 
     monkeypatch.setattr(codegen, "ltl3_automata", lambda *a, **k: (None, None, "skipped"))
     cases = [json.loads(l) for l in (SHARED / "fretish/fret_trace_verdicts.jsonl").open()]
@@ -436,10 +436,10 @@ def test_warm_up_ticks_are_not_evaluated_and_reported(tmp_path):
 def _judge_against_monitors(plan, log: str) -> int:
     """Every online requirement of ``plan`` on ``log``: the judge's verdict and LTL3 verdict
     equal the generated monitor's stepped over the same columns. Returns how many."""
-    from audit.passes import clock_key, run_passes
-    from monitors import stepwise
-    from monitors.judge import judge
-    from logs import open_log
+    from fretc.audit.passes import clock_key, run_passes
+    from fretc.monitors import stepwise
+    from fretc.monitors.judge import judge
+    from fretc.logs import open_log
 
     bindings = _bindings_of(plan)
     active = [r for r in plan.requirements if r.error is None and not r.offline]

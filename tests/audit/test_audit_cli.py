@@ -128,7 +128,7 @@ def test_violations_are_listed_and_annotated(tmp_path):
     from mcap.reader import make_reader
 
     from fretc.cli import main as fretc_main
-    from monitors.interval import MAX_LISTED
+    from fretc.monitors.interval import MAX_LISTED
 
     root = Path(__file__).resolve().parents[2]
     out = tmp_path / "audit.json"

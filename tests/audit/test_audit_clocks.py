@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from audit import AuditConfig, audit_log, load_plan
+from fretc.audit import AuditConfig, audit_log, load_plan
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))

@@ -4,7 +4,7 @@ decided offline by the interval semantics."""
 
 from __future__ import annotations
 
-from audit import audit_log
+from fretc.audit import audit_log
 from test_audit import SYN_BINDINGS, SYN_FRET, _by_req, _plan, _synthetic
 
 
@@ -21,7 +21,7 @@ def test_a_binding_that_fails_on_the_log_is_an_error_of_its_requirements_only(tm
 def test_future_time_function_is_decided_offline(tmp_path):
     """No online monitor exists for persists(...) (pt needs the future); the audit decides it
     by the interval semantics, equal to the reference ft evaluator."""
-    from compiler.evaluate import ft_at
+    from fretc.compiler.evaluate import ft_at
 
     (tmp_path / "f.fret").write_text("F1: whenever p the sw shall immediately satisfy "
                                      "persists(2, q)\n")

@@ -13,9 +13,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from audit import AuditConfig, audit_log, load_plan
-from reports.junit import junit_xml
-from audit.verdict import EXIT_INCOMPLETE, exit_code
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.reports.junit import junit_xml
+from fretc.audit.verdict import EXIT_INCOMPLETE, exit_code
 
 from _logs import MS, S, twist_stamped, write_mcap
 

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from audit import AuditConfig, audit_log, load_plan
+from fretc.audit import AuditConfig, audit_log, load_plan
 
 import _shared
 

@@ -15,9 +15,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from audit import fleet
-from audit import AuditConfig, AuditInputError, audit_log, audit_logs, load_plan
-from audit.verdict import audit_json, exit_code
+from fretc.audit import fleet
+from fretc.audit import AuditConfig, AuditInputError, audit_log, audit_logs, load_plan
+from fretc.audit.verdict import audit_json, exit_code
 
 ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "logs"  # needs the shared fixture

@@ -14,9 +14,9 @@ from click.testing import CliRunner
 from mcap.reader import make_reader
 
 from fretc.cli import main
-from common.textsafe import md_code, visible
-from audit import AuditConfig, audit_log, load_plan
-from audit.verdict import EXIT_INCOMPLETE, exit_code
+from fretc.common.textsafe import md_code, visible
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.audit.verdict import EXIT_INCOMPLETE, exit_code
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
@@ -243,7 +243,7 @@ def test_item13_one_file_named_twice_is_read_once(tmp_path):
 # --------------------------------------------------------------------------- item 12, properties
 from hypothesis import given, settings, strategies as st  # noqa: E402
 
-from common.textsafe import is_unsafe, one_line, xml_text  # noqa: E402
+from fretc.common.textsafe import is_unsafe, one_line, xml_text  # noqa: E402
 
 _HOSTILE_CHARS = st.text(alphabet=st.one_of(
     st.sampled_from("`|<>&\\\x00\x1b\x7f\x85\u202e\u2066\u200b\u2028\ufeff\ufffe\n\t\r "),

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from audit import AuditConfig, audit_log, load_plan
-from common.problems import BindingError
-from fretish.parser import parse
-from monitors.judge import nan_ticks
-from signals.bindings import parse_bindings
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.common.problems import BindingError
+from fretc.fretish.parser import parse
+from fretc.monitors.judge import nan_ticks
+from fretc.signals.bindings import parse_bindings
 
 from _logs import S, float64, write_mcap
 

@@ -12,10 +12,10 @@ import pytest
 from click.testing import CliRunner
 from scipy.stats import binomtest
 
-from audit.statistics import (RequirementStatistics, clopper_pearson, decide, fleet_statistics,
+from fretc.audit.statistics import (RequirementStatistics, clopper_pearson, decide, fleet_statistics,
                               more_runs)
-from audit.verdict import EXIT_UNDECIDED, LogAudit, Verdict, exit_code
-from compiler.ir import ProbabilityBound
+from fretc.audit.verdict import EXIT_UNDECIDED, LogAudit, Verdict, exit_code
+from fretc.compiler.ir import ProbabilityBound
 from fretc.cli import main
 
 N, K = 1000, 630
@@ -80,7 +80,7 @@ def test_confidence_option_changes_the_interval(fleet):
 @pytest.mark.ray
 @pytest.mark.xdist_group("ray")
 def test_ray_gives_the_same_statistics(fleet):
-    from audit import fleet as fl
+    from fretc.audit import fleet as fl
     started = fl.connect(num_cpus=2)
     try:
         a, da, _ = _audit(fleet, "0.7")
@@ -119,7 +119,7 @@ def test_decide(op, p, lo, hi, want):
 
 def test_undecided_says_how_many_more_runs():
     st = RequirementStatistics("P", successes=19, trials=20)
-    from audit.statistics import judge_counts
+    from fretc.audit.statistics import judge_counts
     judge_counts(st, ">=", 0.9)
     assert st.verdict == "undecided" and st.more_runs is not None and "more runs" in st.why
     m = st.more_runs

@@ -15,8 +15,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 from mcap.writer import CompressionType, Writer
 
-from audit import AuditConfig, audit_log, load_plan
-from logs.mcap_source import McapSource
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.logs.mcap_source import McapSource
 
 from _logs import ROS2, S
 

@@ -26,10 +26,10 @@ def replayed_unrealizable(req: Path, inputs: list[str], method: str, tmp_path: P
     defeating inputs with a controller's best effort) replays through ``fretc audit`` with
     the promised verdicts, and that a requirement of the set is violated on it. Returns the
     component's realizability entry."""
-    from check.analysis import check_requirements
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
-    from monitors.interval import verdict_of
+    from fretc.check.analysis import check_requirements
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.monitors.interval import verdict_of
 
     r = check_requirements(compile_entries(load_requirements([req])), inputs=inputs,
                            witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)

@@ -11,15 +11,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from check.analysis import Checker, make_item
-from check.buchi_game import _automaton
-from check.pt_monitor import Outside
-from check.realizability import _Decider
-from check.solver import UNKNOWN, SpotWorker
-from compiler import ir
-from compiler.build import compile_entries
-from compiler.printers import to_spot
-from fretish.files import load_requirements
+from fretc.check.analysis import Checker, make_item
+from fretc.check.buchi_game import _automaton
+from fretc.check.pt_monitor import Outside
+from fretc.check.realizability import _Decider
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.compiler import ir
+from fretc.compiler.build import compile_entries
+from fretc.compiler.printers import to_spot
+from fretc.fretish.files import load_requirements
 from tests.check._replay import replayed_unrealizable
 from tests.check.test_safety_game import realizability_of
 

@@ -14,12 +14,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from check.analysis import check_requirements
-from check.budget import Budget, BudgetSpent, Meter
-from check.checker import MINIMAL, NOT_SHOWN_MINIMAL, SMALLEST, Checker
-from check.solver import UNKNOWN
-from compiler.build import compile_entries
-from fretish.files import load_requirements
+from fretc.check.analysis import check_requirements
+from fretc.check.budget import Budget, BudgetSpent, Meter
+from fretc.check.checker import MINIMAL, NOT_SHOWN_MINIMAL, SMALLEST, Checker
+from fretc.check.solver import UNKNOWN
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_requirements
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -97,8 +97,8 @@ def test_deadlines_near_a_million_ticks_take_counters_not_delay_lines(tmp_path):
 
 
 def test_z3_lassos_past_the_memory_budget_are_skipped():
-    from compiler import ir
-    from check.smt import SmtSolver
+    from fretc.compiler import ir
+    from fretc.check.smt import SmtSolver
 
     s = SmtSolver(Budget(work=100_000, memory=1_000_000))
     p, q = ir.ap("p"), ir.ap("q")
@@ -115,9 +115,9 @@ def test_z3_past_its_memory_budget_is_unknown_and_the_next_query_answers():
     that needs more answers unknown with the reason, twice alike, and the next query gets a
     new worker and its answer. (Before, z3 had no cap: one query of a random set reached
     4.2 GB.)"""
-    from compiler import ir
-    from check.smt import SmtSolver
-    from check.solver import SpotWorker
+    from fretc.compiler import ir
+    from fretc.check.smt import SmtSolver
+    from fretc.check.solver import SpotWorker
 
     p, q, r = ir.ap("p"), ir.ap("q"), ir.ap("r")
     hard = [ir.G(ir.implies(p, ir.F(q, 0, 300))), ir.G(ir.implies(q, ir.G(ir.not_(r), 1, 290))),
@@ -139,10 +139,10 @@ def test_a_worker_that_ends_without_an_answer_is_unknown_with_the_reason(monkeyp
     the next query gets a new worker and its answer."""
     import signal
 
-    from compiler import ir
-    from check import solver
-    from check.smt import SmtSolver
-    from check.solver import SpotWorker
+    from fretc.compiler import ir
+    from fretc.check import solver
+    from fretc.check.smt import SmtSolver
+    from fretc.check.solver import SpotWorker
 
     real = solver.run_query
 

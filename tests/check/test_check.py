@@ -11,11 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from click.testing import CliRunner
 
-from compiler.build import compile_entries
-from check.analysis import check_requirements
-from check.witness import read_expected
+from fretc.compiler.build import compile_entries
+from fretc.check.analysis import check_requirements
+from fretc.check.witness import read_expected
 from fretc.cli import main
-from fretish.files import load_requirements
+from fretc.fretish.files import load_requirements
 from tests.check._replay import audit_verdicts
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -147,7 +147,7 @@ def test_reactive_environment_needs_no_fixed_sequence(tmp_path):
                "P2: the robot shall always satisfy i2 <-> i\n")
     r = _check(p, inputs=["i"], outputs=["o", "i2"])
     assert r.findings == []  # o can follow i within the same tick
-    from check.solver import run_query
+    from fretc.check.solver import run_query
     ok, counter = run_query(("realizable", "G(o <-> X i)", ["o"]))
     assert ok is False and counter is None
 
@@ -194,7 +194,7 @@ def test_cli_json_and_exit_codes(tmp_path):
 def test_witnesses_replay_through_the_audit(tmp_path, text):
     req = _write(tmp_path, "set.fret", text)
     wdir = tmp_path / "w"
-    from monitors.interval import verdict_of
+    from fretc.monitors.interval import verdict_of
 
     r = _check(req, witness_dir=str(wdir), witness_judge=verdict_of)
     assert r.witnesses, "every finding here (or the consistent set) has a witness"
@@ -249,7 +249,7 @@ def test_product_game_agrees_with_ltl_to_game(parts):
     realizability alike (inputs i, j; outputs o, p)."""
     import spot
 
-    from check.solver import _conj, _product_game
+    from fretc.check.solver import _conj, _product_game
 
     texts = [t.format(k=k) for t, k in parts]
     game = _product_game(texts, ["o", "p"])

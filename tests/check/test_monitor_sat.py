@@ -21,21 +21,21 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from check.analysis import check_requirements
-from check.items import make_item, monitored_forms
-from check.budget import Budget, Meter
-from check.monitor_sat import _Search
-from check.numeric_abstraction import NumericAbstraction
-from check.safety_game import _Game, pt_monitors_ft_inf
-from check.solver import UNKNOWN, SpotWorker
-from check.witness import read_expected
-from compiler import ir
-from compiler.build import compile_entries
-from compiler.evaluate import series
-from compiler.semantics import formalize
-from fretish import parse
-from fretish.files import load_requirements
-from monitors.interval import verdict_of
+from fretc.check.analysis import check_requirements
+from fretc.check.items import make_item, monitored_forms
+from fretc.check.budget import Budget, Meter
+from fretc.check.monitor_sat import _Search
+from fretc.check.numeric_abstraction import NumericAbstraction
+from fretc.check.safety_game import _Game, pt_monitors_ft_inf
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.check.witness import read_expected
+from fretc.compiler import ir
+from fretc.compiler.build import compile_entries
+from fretc.compiler.evaluate import series
+from fretc.compiler.semantics import formalize
+from fretc.fretish import parse
+from fretc.fretish.files import load_requirements
+from fretc.monitors.interval import verdict_of
 from tests.check._replay import audit_verdicts
 from tests.check.test_smt import _FORMULA, _SET, _file, _spot_sat, assert_same_answers
 from tests.lasso import lasso_at
@@ -149,7 +149,7 @@ def test_buchi_product_agrees_with_spot_on_random_formulas(formulas):
     letter): satisfiable on infinite runs exactly when Spot says so. Half the sets are
     ``f | g`` with ``!f``: satisfiable exactly when ``g & !f`` is, which an acceptance
     condition left out gets wrong."""
-    from check.numeric_abstraction import NumericAbstraction
+    from fretc.check.numeric_abstraction import NumericAbstraction
 
     inv = NumericAbstraction.of(formulas).regions(
         sorted({v for f in formulas for v in ir.variables(f)}))

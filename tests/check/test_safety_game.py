@@ -10,13 +10,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from check.analysis import Checker, check_requirements, make_item
-from check.realizability import _Decider
-from check.safety_game import is_safety
-from check.solver import UNKNOWN, SpotWorker
-from compiler import ir
-from compiler.build import compile_entries
-from fretish.files import load_requirements
+from fretc.check.analysis import Checker, check_requirements, make_item
+from fretc.check.realizability import _Decider
+from fretc.check.safety_game import is_safety
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.compiler import ir
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_requirements
 from tests.check._replay import replayed_unrealizable
 
 _TEMPLATES = [

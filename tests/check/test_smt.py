@@ -12,15 +12,15 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from check.analysis import check_requirements
-from check.budget import Budget
-from check.smt import SmtSolver
-from check.solver import UNKNOWN, SpotWorker
-from check.witness import read_expected
-from compiler import ir
-from compiler.build import compile_entries
+from fretc.check.analysis import check_requirements
+from fretc.check.budget import Budget
+from fretc.check.smt import SmtSolver
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.check.witness import read_expected
+from fretc.compiler import ir
+from fretc.compiler.build import compile_entries
 from fretc.cli import main
-from fretish.files import load_requirements
+from fretc.fretish.files import load_requirements
 from tests.lasso import lasso_at
 from tests.check._replay import audit_verdicts
 
@@ -121,8 +121,8 @@ _FORMULA = st.recursive(_atoms(), _grow, max_leaves=6)
 
 
 def _spot_sat(worker, formula):
-    from check.numeric_abstraction import NumericAbstraction
-    from compiler.printers import to_spot
+    from fretc.check.numeric_abstraction import NumericAbstraction
+    from fretc.compiler.printers import to_spot
 
     inv = NumericAbstraction.of([formula]).invariant([formula])
     return worker.ask(("sat", [to_spot(ir.and_(formula, inv))], []))
@@ -145,7 +145,7 @@ def test_smt_formulas_agree_with_spot_and_models_hold(formulas):
         def state(letter):
             return {k: v for k, v in letter.items()}
 
-        from compiler.printers import to_smv
+        from fretc.compiler.printers import to_smv
         # the evaluator reads atoms by name; comparisons by their printed text
         named = [_named(f) for f in formulas]
         u, v = [state(x) for x in prefix], [state(x) for x in cycle]
@@ -154,7 +154,7 @@ def test_smt_formulas_agree_with_spot_and_models_hold(formulas):
 
 def _named(f):
     """Comparisons as boolean atoms named by their text (the letters' names)."""
-    from compiler.printers import to_smv
+    from fretc.compiler.printers import to_smv
 
     if f.op == "cmp":
         return ir.ap(to_smv(f))
@@ -201,7 +201,7 @@ def test_consistent_sets_with_deadlines_are_decided(tmp_path, n):
 def test_witnesses_past_spot_bounds_replay_through_the_audit(tmp_path, text):
     """Findings at bounds z3 decides come with witness CSVs; fretc audit gives the verdicts
     their headers promise, and they show the finding."""
-    from monitors.interval import verdict_of
+    from fretc.monitors.interval import verdict_of
 
     req = tmp_path / "set.fret"
     req.write_text(text, encoding="utf-8")

@@ -8,7 +8,7 @@ import hashlib
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.cache import key_of
+from fretc.common.cache import key_of
 
 
 def _reference(*parts: str) -> str:

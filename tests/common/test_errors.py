@@ -6,20 +6,20 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from compiler.ajpf import AjpfError
-from check.realizability import RealizabilityError
-from compiler.codegen import CodegenError, InvalidMonitorError
-from compiler.semantics import SemanticsError
+from fretc.compiler.ajpf import AjpfError
+from fretc.check.realizability import RealizabilityError
+from fretc.compiler.codegen import CodegenError, InvalidMonitorError
+from fretc.compiler.semantics import SemanticsError
 from fretc.cli import main
-from common.errors import (CheckError, FretcError, FretishError, FretishFileError,
+from fretc.common.errors import (CheckError, FretcError, FretishError, FretishFileError,
     FretishSyntaxError, InputError, Where, error_text)
-from fretish.files import load_requirements
-from fretish.limits import LimitError
-from audit import AuditInputError
-from audit.fleet import RayUnavailable
-from common.problems import BindingError, CsvError, FretcInputError, LogError, SignalError
-from reports.write import ReportError
-from logs.schema import FieldPathError
+from fretc.fretish.files import load_requirements
+from fretc.fretish.limits import LimitError
+from fretc.audit import AuditInputError
+from fretc.audit.fleet import RayUnavailable
+from fretc.common.problems import BindingError, CsvError, FretcInputError, LogError, SignalError
+from fretc.reports.write import ReportError
+from fretc.logs.schema import FieldPathError
 
 
 @pytest.mark.parametrize("cls, stage", [

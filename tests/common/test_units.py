@@ -7,10 +7,10 @@ from fractions import Fraction
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fretish.files import load_requirements, parse_tick_period
-from common.units import (NS_PER_S, format_ns, format_offset, format_period, format_period_ms,
+from fretc.fretish.files import load_requirements, parse_tick_period
+from fretc.common.units import (NS_PER_S, format_ns, format_offset, format_period, format_period_ms,
     format_seconds, parse_duration, parse_seconds)
-from signals.bindings import parse_bindings
+from fretc.signals.bindings import parse_bindings
 
 # Each written both ways: the disagreement the issue names ('10 Hz' and '500 ns' used to be
 # bindings-only, '1 h' and '100 milliseconds' requirement-file-only).

@@ -6,10 +6,10 @@ from types import SimpleNamespace
 
 import pytest
 
-from compiler.ajpf import AjpfError, emit_psl, to_ajpf
-from compiler.build import compile_entry
-from compiler.semantics import formalize
-from fretish import parse
+from fretc.compiler.ajpf import AjpfError, emit_psl, to_ajpf
+from fretc.compiler.build import compile_entry
+from fretc.compiler.semantics import formalize
+from fretc.fretish import parse
 
 
 def compiled(rid: str, text: str):
@@ -84,9 +84,9 @@ def _ajpf_read(text: str) -> list[tuple[str, str]]:
 
 
 def test_psl_comments_are_hash_lines_ajpf_skips(tmp_path):
-    from compiler.ajpf import emit_psl
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
+    from fretc.compiler.ajpf import emit_psl
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
 
     f = tmp_path / "req.fret"
     f.write_text("R1: whenever p the sw shall eventually satisfy q\n"

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import pytest
 
-from compiler import automata, codegen, ltl3, spot_monitors
-from compiler.build import compile_entry
-from compiler.codegen import render_module
-from fretish import parser as P
+from fretc.compiler import automata, codegen, ltl3, spot_monitors
+from fretc.compiler.build import compile_entry
+from fretc.compiler.codegen import render_module
+from fretc.fretish import parser as P
 
 
 # same helpers as entry/load in tests/compiler/test_monitors_codegen.py (kept: each test file
@@ -64,7 +64,7 @@ def test_monitor_built_from_cache_agrees_with_spot_det(tmp_path, monkeypatch):
     for text in SENTENCES:
         ft_inf = compile_entry(entry("R", text)).formalization.ft_inf
         shape, atoms = automata.canonical_shape(ft_inf)
-        from compiler.printers import to_spot
+        from fretc.compiler.printers import to_spot
         for negate in (False, True):
             ours = spot_monitors._spot_monitor(to_spot(shape), negate, len(atoms), 5000, 10)
             d = spot.make_bdd_dict()
@@ -195,7 +195,7 @@ def test_lark_cache_key_follows_the_grammar(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("value", [""])
 def test_cache_off(value, tmp_path, monkeypatch):
-    from common import cache
+    from fretc.common import cache
     monkeypatch.setenv("FRETC_CACHE_DIR", value)
     assert cache.cache_dir() is None and not cache.write_bytes("x", "y", b"z")
     assert _parsed(P.cached_lark()) == _reference()
@@ -299,7 +299,7 @@ def test_binding_grammar_tables_cached_and_same_parse(tmp_path, monkeypatch):
     """The binding expression parser keeps its Lark tables in the same cache folder; a
     parser loaded from the file and one built in memory (cache off) give the same trees, and
     a damaged file is rebuilt."""
-    from signals.bindings import parse as BP
+    from fretc.signals.bindings import parse as BP
 
     text = 'max("actuator_outputs".output[0:4]) <= 2000 & /odom.twist.twist.linear.x@abs < 1'
 

@@ -14,10 +14,10 @@ from hypothesis import strategies as st
 
 spot = pytest.importorskip("spot")
 
-from compiler import automata, dfa, spot_monitors  # noqa: E402
-from compiler.printers import to_spot  # noqa: E402
-from compiler.semantics import formalize  # noqa: E402
-from fretish import parse  # noqa: E402
+from fretc.compiler import automata, dfa, spot_monitors  # noqa: E402
+from fretc.compiler.printers import to_spot  # noqa: E402
+from fretc.compiler.semantics import formalize  # noqa: E402
+from fretc.fretish import parse  # noqa: E402
 from _shared import jsonl, params  # noqa: E402
 
 

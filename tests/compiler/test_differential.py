@@ -72,10 +72,10 @@ def test_oracle_requirement_truth():
 def test_interval_evidence_follows_the_formulas(sentence):
     """monitors/interval.py's direct interval semantics gives the ft verdict for bounded
     occurred/persisted and for functions inside scope conditions (endpoint-free)."""
-    from compiler.evaluate import ft_at
-    from compiler.semantics import formalize
-    from fretish import parse
-    from monitors.interval import evaluate_requirement
+    from fretc.compiler.evaluate import ft_at
+    from fretc.compiler.semantics import formalize
+    from fretc.fretish import parse
+    from fretc.monitors.interval import evaluate_requirement
     from _monitor_helpers import random_trace, samples
 
     req = parse(sentence)

@@ -16,9 +16,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from fretish import limits
-from common.errors import FretishSyntaxError
-from fretish.parser import parse
+from fretc.fretish import limits
+from fretc.common.errors import FretishSyntaxError
+from fretc.fretish.parser import parse
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -104,7 +104,7 @@ def test_overflowing_constant_is_infinity(tmp_path):
 def test_invalid_module_is_an_internal_error_not_exit_0(tmp_path, monkeypatch):
     """Should code generation ever produce a module that does not load or run, the CLI
     says so and exits 3; the other requirements of the file keep their monitors."""
-    from compiler import codegen, pt_step
+    from fretc.compiler import codegen, pt_step
 
     monkeypatch.setattr(pt_step, "_number", lambda text: "inf" if "e" in text else text)
     f = tmp_path / "t.fret"
@@ -114,8 +114,8 @@ def test_invalid_module_is_an_internal_error_not_exit_0(tmp_path, monkeypatch):
     assert "internal error" in res.output and "undefined names inf" in res.output
     assert not (tmp_path / "o.py").exists()
     errors: list = []
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
     text = codegen.render_module(compile_entries(load_requirements([f])), "m", errors)
     ns = {}
     exec(text, ns)
@@ -229,9 +229,9 @@ def test_previous_word_hints_still_work():
     + " & ".join(f"w{k}" for k in range(30)),  # minutes and gigabytes in Spot
 ])
 def test_fuzzed_slow_requirements_generate_quickly(text):
-    from compiler.build import compile_entry
-    from compiler.codegen import monitor_source
-    from fretish.files import RequirementEntry
+    from fretc.compiler.build import compile_entry
+    from fretc.compiler.codegen import monitor_source
+    from fretc.fretish.files import RequirementEntry
 
     entry = RequirementEntry(id="R", text=text, source="f", line=1, column=1,
                              requirement=parse(text))

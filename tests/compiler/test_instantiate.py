@@ -18,15 +18,15 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from compiler import fallback, ir
-from compiler import instantiate as I
-from compiler import instantiate_atoms as IA
-from compiler import template_table as TT
-from compiler.printers import to_smv, to_spot
-from compiler.semantics import formalize, template_parts as _shape
+from fretc.compiler import fallback, ir
+from fretc.compiler import instantiate as I
+from fretc.compiler import instantiate_atoms as IA
+from fretc.compiler import template_table as TT
+from fretc.compiler.printers import to_smv, to_spot
+from fretc.compiler.semantics import formalize, template_parts as _shape
 from differential import random_requirement
-from fretish import FretishError, parse
-from fretish import ast as A
+from fretc.fretish import FretishError, parse
+from fretc.fretish import ast as A
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 ENC = json.encoder.encode_basestring_ascii  # json.dumps's escaper (ensure_ascii)
@@ -427,7 +427,7 @@ def test_variables_walk_matches_ir_variables(text):
 
 
 def test_future_function_names_are_the_expanders():
-    from compiler.expressions import _FUTURE_FUNCS
+    from fretc.compiler.expressions import _FUTURE_FUNCS
     assert IA._FUTURE_FUNCTIONS == frozenset(_FUTURE_FUNCS)
 
 
@@ -476,8 +476,8 @@ class _NotDigits(str):
 def test_whole_durations_read_without_fraction(amount, unit, period):
     """duration_ticks reads a whole number as written (``007``) as its int: the same
     ticks, warnings and errors as the exact Fraction of the text."""
-    from compiler import semantics
-    from fretish import ast as A
+    from fretc.compiler import semantics
+    from fretc.fretish import ast as A
 
     def outcome(d):
         warnings: list = []

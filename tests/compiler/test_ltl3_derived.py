@@ -22,10 +22,10 @@ from hypothesis import strategies as st
 
 spot = pytest.importorskip("spot")
 
-from compiler import automata, dfa, spot_monitors  # noqa: E402
-from compiler.printers import to_spot  # noqa: E402
-from compiler.semantics import formalize  # noqa: E402
-from fretish import parse  # noqa: E402
+from fretc.compiler import automata, dfa, spot_monitors  # noqa: E402
+from fretc.compiler.printers import to_spot  # noqa: E402
+from fretc.compiler.semantics import formalize  # noqa: E402
+from fretc.fretish import parse  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))

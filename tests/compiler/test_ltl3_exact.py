@@ -5,7 +5,7 @@ its negation; Bauer, Leucker & Schallhart, TOSEM 2011): the tables of
 ``compiler.spot_monitors.spot_automata`` (what the disk cache stores: for a safety or guarantee
 shape one monitor from Spot's terminal automaton of the guarantee side and the other derived
 from it; otherwise Spot's ``low`` translation with ``spot_monitors.LOW_XARGS``, then
-:mod:`compiler.dfa`'s subset construction pruned by simulation and its minimization) equal the table of Spot's own construction from its default ``low``
+:mod:`fretc.compiler.dfa`'s subset construction pruned by simulation and its minimization) equal the table of Spot's own construction from its default ``low``
 translation (``tgba_powerset`` + ``minimize_monitor``; Moore's refinement instead of
 ``minimize_monitor`` on powersets of more than 3000 states), both renamed breadth-first.
 
@@ -25,10 +25,10 @@ import pytest
 
 spot = pytest.importorskip("spot")
 
-from compiler import automata, dfa, ir, spot_monitors  # noqa: E402
-from compiler.printers import to_spot  # noqa: E402
-from compiler.semantics import formalize  # noqa: E402
-from fretish import parse  # noqa: E402
+from fretc.compiler import automata, dfa, ir, spot_monitors  # noqa: E402
+from fretc.compiler.printers import to_spot  # noqa: E402
+from fretc.compiler.semantics import formalize  # noqa: E402
+from fretc.fretish import parse  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))

@@ -1,4 +1,4 @@
-"""The compiler -> audit contract: :func:`compiler.codegen.build_monitor_modules`
+"""The compiler -> audit contract: :func:`fretc.compiler.codegen.build_monitor_modules`
 returns, per requirement file, the module text ``--emit monitor`` writes and, per
 requirement, its class name, template input and LTL3 automata, built once."""
 
@@ -10,11 +10,11 @@ import types
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from compiler import codegen
-from compiler.automata import Automaton, LTL3Automata
-from compiler.build import compile_entries
-from fretish.files import RequirementEntry
-from fretish.parser import parse
+from fretc.compiler import codegen
+from fretc.compiler.automata import Automaton, LTL3Automata
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import RequirementEntry
+from fretc.fretish.parser import parse
 
 FILES = {
     "a/r.fret": [("R1", "whenever p the sw shall within 3 ticks satisfy q"),
@@ -194,7 +194,7 @@ def test_each_requirement_of_a_shared_shape_has_its_own_verdict(rows, rnd):
 def test_a_requirements_monitor_source_is_found_by_its_class_name():
     """What the report shows as a requirement's generated monitor: its ``_monitor`` call
     (id, text, formulas, variables) and the shape entry with its step code."""
-    from reports.trace import _class_source
+    from fretc.reports.trace import _class_source
 
     entries = [RequirementEntry(id=rid, text=text, source="shaped.fret", line=i + 1,
                                 column=1, requirement=parse(text))

@@ -13,12 +13,12 @@ import spot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from compiler.build import compile_entry
-from compiler.codegen import render_module
-from compiler.evaluate import ft_at, series
-from compiler.printers import to_spot
-from fretish import ast as A
-from fretish import parse
+from fretc.compiler.build import compile_entry
+from fretc.compiler.codegen import render_module
+from fretc.compiler.evaluate import ft_at, series
+from fretc.compiler.printers import to_spot
+from fretc.fretish import ast as A
+from fretc.fretish import parse
 
 from _shared import jsonl, needs_shared  # noqa: E402
 
@@ -272,7 +272,7 @@ def test_progression_ltl3_agrees_with_spot(all_templates, monkeypatch):
     """LTL3 by formula progression (used when bounds are too large for Spot) against Spot's
     exact monitors on the same formulas: never a different verdict, never earlier, and
     nearly always at the same tick."""
-    from compiler import automata
+    from fretc.compiler import automata
 
     compiled, spot_mod = all_templates
     monkeypatch.setattr(automata, "MAX_LTL3_BOUND", -1)

@@ -10,8 +10,8 @@ import sys
 import time
 from pathlib import Path
 
-from compiler import codegen
-from compiler.evaluate import _arith
+from fretc.compiler import codegen
+from fretc.compiler.evaluate import _arith
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 import fuzz  # noqa: E402

@@ -9,10 +9,10 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from compiler.build import compile_entries
-from compiler.ir import ProbabilityBound
+from fretc.compiler.build import compile_entries
+from fretc.compiler.ir import ProbabilityBound
 from fretc.cli import main
-from fretish.files import load_requirements
+from fretc.fretish.files import load_requirements
 
 from _shared import needs_shared
 

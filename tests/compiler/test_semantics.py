@@ -21,12 +21,12 @@ import spot
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from compiler import ir
-from compiler.evaluate import ft_at, pt_at
-from compiler.printers import mangle, to_smv, to_spot
-from compiler.semantics import SemanticsError, formalize
-from fretish import ast as A
-from fretish import FretishError, parse
+from fretc.compiler import ir
+from fretc.compiler.evaluate import ft_at, pt_at
+from fretc.compiler.printers import mangle, to_smv, to_spot
+from fretc.compiler.semantics import SemanticsError, formalize
+from fretc.fretish import ast as A
+from fretc.fretish import FretishError, parse
 
 from fret_formulas import parse_fret
 from _shared import jsonl, needs_shared
@@ -334,8 +334,8 @@ def test_fret_name_mangling():
 
 
 def test_json_lists_raw_and_fret_variable_names(tmp_path):
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
 
     p = tmp_path / "r.fret"
     p.write_text('r1: the sw shall always satisfy "weird var" | a.b\n')

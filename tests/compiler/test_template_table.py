@@ -1,5 +1,5 @@
 """The checked-in template table (compiler/table/, compiler.template_table): it is exactly
-what ``python -m compiler.make_table`` writes from compiler.semantics today, one file per
+what ``python -m fretc.compiler.make_table`` writes from compiler.semantics today, one file per
 template key; a key without a file takes the full build. (That the filled-in templates
 print what the full build prints: tests/compiler/test_instantiate.py.)"""
 
@@ -13,21 +13,21 @@ from pathlib import Path
 
 import pytest
 
-from compiler import instantiate as I
-from compiler import template_table as TT
-from compiler.printers import to_smv, to_spot
-from compiler.semantics import formalize
-from fretish import parse
+from fretc.compiler import instantiate as I
+from fretc.compiler import template_table as TT
+from fretc.compiler.printers import to_smv, to_spot
+from fretc.compiler.semantics import formalize
+from fretc.fretish import parse
 
 ROOT = Path(__file__).resolve().parents[2]
-REGENERATE = "python -m compiler.make_table"
+REGENERATE = "python -m fretc.compiler.make_table"
 
 
 def test_checked_in_table_is_what_make_table_writes(tmp_path):
     """A change to the construction (compiler/semantics.py and the modules it uses) that
     forgets to regenerate the table fails here."""
     out = tmp_path / "table"
-    subprocess.run([sys.executable, "-m", "compiler.make_table", "--out", str(out)],
+    subprocess.run([sys.executable, "-m", "fretc.compiler.make_table", "--out", str(out)],
                    cwd=ROOT, check=True, capture_output=True)
     made = sorted(os.listdir(out))
     checked_in = sorted(os.listdir(TT.TABLE_DIR))

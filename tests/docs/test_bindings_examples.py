@@ -14,7 +14,7 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from signals.bindings import parse_bindings
+from fretc.signals.bindings import parse_bindings
 
 import _robot_logs as rl
 

@@ -92,3 +92,15 @@ def test_no_issue_numbers_in_docs_or_code_comments():
             if ISSUE.search(line):
                 hits.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
     assert not hits, "\n".join(hits[:40])
+
+
+def test_python_api_examples_run():
+    # every ```python block of the Python API page, in order, from the top of the clone: the
+    # page's imports are the installed names (fretc.*), and what it asserts holds
+    page = (ROOT / "docs" / "reference" / "python-api.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"^```python\n(.*?)^```", page, re.M | re.S)
+    assert len(blocks) >= 2 and all("from fretc." in b for b in blocks)
+    proc = subprocess.run([sys.executable, "-c", "\n".join(blocks)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "(G (too_close -> (F stopped)))" in proc.stdout

@@ -118,7 +118,7 @@ def test_the_page_has_the_tour():
     commands = [s.command for s in STEPS]
     for start in ("fretc requirements/r1.fret --emit ltl", "fretc explain", "fretc simulate",
                   "fretc requirements/r1.fret --emit monitor", "fretc audit", "fretc report",
-                  "fretc check", "python -m sim serve", "fretc watch"):
+                  "fretc check", "python -m fretc.sim serve", "fretc watch"):
         assert any(c.startswith(start) for c in commands), start
     assert all(s.shown or " > " in s.command for s in STEPS if not s.background)
 

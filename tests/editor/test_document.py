@@ -1,4 +1,4 @@
-"""What the language server knows of a document (:mod:`editor.document`), without the
+"""What the language server knows of a document (:mod:`fretc.editor.document`), without the
 protocol: diagnostics for bad durations, undeclared constants and unbound variables, and no
 exception on any document."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from editor.document import analyse
+from fretc.editor.document import analyse
 
 
 def test_durations_constants_and_unbound_variables(tmp_path):
@@ -35,7 +35,7 @@ def test_no_document_makes_the_analysis_raise(text):
 
 
 def test_on_save_check_finds_a_conflict(tmp_path):
-    from editor.document import check_problems
+    from fretc.editor.document import check_problems
 
     text = ("R1: the sw shall always satisfy p\n"
             "R2: the sw shall always satisfy !p\n"

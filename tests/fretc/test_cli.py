@@ -111,7 +111,7 @@ def test_user_text_reaches_the_terminal_escaped(tmp_path):
 def test_an_internal_error_is_one_line_and_exit_4(monkeypatch):
     """A defect escaping a command (here a RecursionError) is not a traceback with exit 1,
     the code of "violated": one line asking for a report, exit 4."""
-    import fretc.compile as compile_cmd
+    import fretc.cli.compile as compile_cmd
 
     def boom(*_a, **_k):
         raise RecursionError("maximum recursion depth exceeded")

@@ -57,10 +57,10 @@ def test_every_path_inspect_prints_binds_as_printed(tmp_path):
     path parses as a binding field and resolves in the log's schema; text fields list their
     values, enum fields their constants, numbers are in plain notation."""
     import _robot_logs as rl
-    from signals.bindings.expression import ExprLocation, Field
-    from signals.bindings.parse import parse_expression
-    from logs import open_log
-    from logs.schema import log_schemas
+    from fretc.signals.bindings.expression import ExprLocation, Field
+    from fretc.signals.bindings.parse import parse_expression
+    from fretc.logs import open_log
+    from fretc.logs.schema import log_schemas
     log = rl.write_robot_log(tmp_path)
     res = CliRunner().invoke(main, ["inspect", str(log.path), "--json"])
     assert res.exit_code == 0, res.output
@@ -89,6 +89,6 @@ def test_every_path_inspect_prints_binds_as_printed(tmp_path):
 
 
 def test_plain_numbers_keep_the_digits_that_tell_them_apart():
-    from fretc.inspect import plain
+    from fretc.cli.inspect import plain
     assert plain(1.000158) == "1.000158" and plain(1432240000.25) == "1432240000.25"
     assert plain(1.5e-7) == "0.00000015" and plain(-2.0) == "-2"

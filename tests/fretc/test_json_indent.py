@@ -8,7 +8,7 @@ import json
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.compile import json_indent2
+from fretc.cli.compile import json_indent2
 
 SCALARS = st.one_of(st.none(), st.booleans(), st.integers(), st.text(max_size=6),
                     st.floats(allow_nan=True))
@@ -24,8 +24,8 @@ def test_same_text_as_json_dumps(value):
 
 
 def test_compiled_requirements():
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
     from pathlib import Path
     root = Path(__file__).resolve().parents[2]
     objs = [c.to_json() for c in compile_entries(load_requirements([root / "requirements"]))]

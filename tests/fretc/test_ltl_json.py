@@ -15,12 +15,12 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from compiler.build import FORMALIZED_KEYS, Compiled, compile_entries
+from fretc.compiler.build import FORMALIZED_KEYS, Compiled, compile_entries
 from differential import random_requirement
 from fretc.cli import main
-from fretc.compile import json_indent2, ltl_json
-from fretish.files import RequirementEntry, load_requirements
-from fretish.parser import parse
+from fretc.cli.compile import json_indent2, ltl_json
+from fretc.fretish.files import RequirementEntry, load_requirements
+from fretc.fretish.parser import parse
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -128,7 +128,7 @@ def test_json_list_written_in_batches_is_the_joined_list(items):
     items, across the batch boundaries (0, 1, 31, 32, 33, 64, 65 ... items)."""
     import io
 
-    from fretc.compile import _WRITE_BATCH, _write_json_list
+    from fretc.cli.compile import _WRITE_BATCH, _write_json_list
 
     assert _WRITE_BATCH < 70
     out = io.StringIO()
@@ -140,7 +140,7 @@ def test_json_list_written_in_batches_is_the_joined_list(items):
 def test_json_list_batches_at_the_boundaries():
     import io
 
-    from fretc.compile import _WRITE_BATCH, _write_json_list
+    from fretc.cli.compile import _WRITE_BATCH, _write_json_list
 
     for n in (0, 1, _WRITE_BATCH - 1, _WRITE_BATCH, _WRITE_BATCH + 1, 2 * _WRITE_BATCH,
               2 * _WRITE_BATCH + 1):
@@ -158,7 +158,7 @@ def test_command_drops_each_requirement_once_its_text_is_made(tmp_path, monkeypa
     import gc
     import weakref
 
-    import compiler.build as build
+    import fretc.compiler.build as build
 
     f = tmp_path / "r.fret"
     f.write_text("".join(f"R{i}: upon p{i} the sw shall within {i + 2} ticks satisfy q\n"

@@ -11,11 +11,11 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from audit import AuditConfig, audit_log, load_plan
-from common.errors import FretishError
-from compiler.build import compile_entries
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.common.errors import FretishError
+from fretc.compiler.build import compile_entries
 from fretc.cli import main
-from fretish.files import load_requirements
+from fretc.fretish.files import load_requirements
 
 ROOT = Path(__file__).resolve().parents[2]
 R2 = "R2: upon too_close agilex_agent shall within {} satisfy stopped\n"
@@ -77,8 +77,8 @@ def test_within_a_bindings_constant_audits_the_traces_like_within_1_second(tmp_p
 
 
 def test_bad_bindings_constants_name_the_file_and_line(tmp_path):
-    from common.problems import BindingError
-    from signals.bindings import parse_bindings
+    from fretc.common.problems import BindingError
+    from fretc.signals.bindings import parse_bindings
 
     for body, msg in [('T = 5', "a duration in quotes"), ('T = "soon"', "not a duration")]:
         with pytest.raises(BindingError, match=msg) as e:

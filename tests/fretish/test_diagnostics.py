@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from fretish import FretishSyntaxError, parse
-from fretish import ast as A
+from fretc.fretish import FretishSyntaxError, parse
+from fretc.fretish import ast as A
 
 
 

@@ -12,11 +12,11 @@ import re
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from compiler.printers import expr_text as fret_text
-from fretish import FretishSyntaxError, parse
-from fretish import ast as A
-from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, parse_expression
-from fretish.words import FRET_RESERVED
+from fretc.compiler.printers import expr_text as fret_text
+from fretc.fretish import FretishSyntaxError, parse
+from fretc.fretish import ast as A
+from fretc.fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, parse_expression
+from fretc.fretish.words import FRET_RESERVED
 
 
 @pytest.mark.parametrize("text,expected", [

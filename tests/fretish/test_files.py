@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fretish import (FretishError, FretishFileError, FretishSyntaxError, RequirementEntry,
+from fretc.fretish import (FretishError, FretishFileError, FretishSyntaxError, RequirementEntry,
                      load_requirements)
-from fretish import ast as A
-from fretish.files import parse_tick_period
+from fretc.fretish import ast as A
+from fretc.fretish.files import parse_tick_period
 
 R1 = "whenever too_close agilex_agent shall eventually satisfy stopped"
 
@@ -299,7 +299,7 @@ def test_path_text_and_suffix_are_pathlibs(parts, lead, trail):
     ``str(Path(p))`` and the same ``suffix``."""
     from pathlib import Path
 
-    from fretish.files import _path_text, _suffix
+    from fretc.fretish.files import _path_text, _suffix
     p = lead + "/".join(parts) + trail
     if not p:
         return
@@ -312,7 +312,7 @@ def test_entry_fields_in_the_order_the_reader_passes_them():
     positional arguments in this order: it must be the dataclass's field order."""
     import dataclasses
 
-    from fretish import files
+    from fretc.fretish import files
     assert tuple(f.name for f in dataclasses.fields(files.RequirementEntry)) == (
         "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
         "requirement", "error", "extra", "inputs", "outputs", "origin")

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import pytest
 
-from common.errors import FretishSyntaxError
-from compiler.printers import to_smv
-from compiler.semantics import formalize
-from fretish.parser import parse
+from fretc.common.errors import FretishSyntaxError
+from fretc.compiler.printers import to_smv
+from fretc.compiler.semantics import formalize
+from fretc.fretish.parser import parse
 
 
 @pytest.mark.parametrize("sentence, name", [

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from fretish import FretishSyntaxError, parse
-from compiler.printers import expr_text
-from fretish import ast as A
-from fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
+from fretc.fretish import FretishSyntaxError, parse
+from fretc.compiler.printers import expr_text
+from fretc.fretish import ast as A
+from fretc.fretish.parser import RESERVED_LETTERS, RESERVED_WORDS, build_lark, parse_expression
 
 from _shared import jsonl, needs_shared  # ../shared beside the repository
 

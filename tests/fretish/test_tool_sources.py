@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from _shared import SHARED, needs_shared
-from common.errors import FretishFileError
-from fretish.files import load_requirements
+from fretc.common.errors import FretishFileError
+from fretc.fretish.files import load_requirements
 
 ROOT = Path(__file__).resolve().parents[2]
 FIX = ROOT / "tests" / "fixtures" / "requirements_tools"
@@ -204,7 +204,7 @@ def test_real_doors_excerpt_with_a_missing_datatype_is_a_clear_error():
 
 
 def test_a_huge_reqif_is_refused_before_it_is_read(tmp_path, monkeypatch):
-    from fretish.sources import reqif_file
+    from fretc.fretish.sources import reqif_file
 
     p = tmp_path / "huge.reqif"
     p.write_bytes(b"<REQ-IF>" + b" " * 2048 + b"</REQ-IF>")

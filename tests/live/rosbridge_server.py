@@ -11,7 +11,7 @@ served topic, is paced at ``rate`` times real time, and ends with an orderly Web
 (code 1000): the end of the run.
 
 The messages are decoded with rosbags (``mcap``'s reader and
-:func:`logs.schema_decoder`) - the client side builds them back from JSON with
+:func:`fretc.logs.schema_decoder`) - the client side builds them back from JSON with
 rosbags' type store, so the round trip is checked, not assumed.
 """
 
@@ -26,7 +26,7 @@ import time
 import numpy as np
 from mcap.reader import make_reader
 
-from logs import schema_decoder
+from fretc.logs import schema_decoder
 
 CLOCK = "/clock"
 

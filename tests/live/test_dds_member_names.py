@@ -18,7 +18,7 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from live.dds_types import LOOPBACK_XML  # noqa: E402
+from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -41,7 +41,7 @@ def test_a_publisher_naming_members_without_the_underscore_is_read(tmp_path, dds
     from cyclonedds.pub import DataWriter
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.topic import Topic
-    from live.dds_types import open_participant
+    from fretc.live.dds_types import open_participant
 
     @dataclass
     class Float64_(IdlStruct, typename="std_msgs::msg::dds_::Float64_"):

@@ -15,9 +15,9 @@ import pytest
 pytest.importorskip("foxglove")
 pytest.importorskip("websockets")
 
-from audit import AuditConfig, audit_log, load_plan  # noqa: E402
-from live.watch import CLOCK_BACKWARDS, CONNECTION_GAP, UNADVERTISED, Watch, WatchOptions
-from live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.live.watch import CLOCK_BACKWARDS, CONNECTION_GAP, UNADVERTISED, Watch, WatchOptions
+from fretc.live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -303,9 +303,9 @@ def test_cli_watch_jsonl_and_exit_code(tmp_path):
 
 
 def test_live_simulator_equals_the_recorded_trace(plan):
-    """``python -m sim serve``'s engine: the simulator run live on a foxglove-sdk server and
+    """``python -m fretc.sim serve``'s engine: the simulator run live on a foxglove-sdk server and
     watched gives the verdicts of the audit of the recorded trace of that scenario."""
-    from sim.serve import serve
+    from fretc.sim.serve import serve
 
     server = FoxgloveServer(port=0)
     try:

@@ -24,7 +24,7 @@ from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import byte, int32, sequence, uint32  # noqa: E402
 
 from fretc.cli import main  # noqa: E402
-from live.dds_types import LOOPBACK_XML  # noqa: E402
+from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
 
 pytestmark = pytest.mark.watch
 

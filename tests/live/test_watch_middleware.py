@@ -28,7 +28,7 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from live.dds_types import LOOPBACK_XML  # noqa: E402
+from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -233,7 +233,7 @@ def test_an_independent_zenoh_subscriber_reads_rmw_zenoh_key_expressions(tmp_pat
 def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
     """A message that does not decode opens a gap: the run is partial (exit 3), never a
     clean pass; the watch ends by itself when the publisher leaves."""
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh_serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")
@@ -274,7 +274,7 @@ def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
     requirement is error (exit 2), never judged from a misread value."""
     import threading
 
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh_serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")
@@ -321,8 +321,8 @@ def test_one_publisher_leaving_while_the_run_goes_on_is_unknown_not_held(transpo
     ``satisfied`` (not affected), the run is partial and the exit code 3."""
     import threading
 
-    from live.dds_serve import DdsServer
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.dds_serve import DdsServer
+    from fretc.live.zenoh_serve import ZenohServer
 
     (tmp_path / "w.fret").write_text(
         "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
@@ -376,8 +376,8 @@ def test_a_qos_that_cannot_match_is_reported_and_its_requirement_is_not_judged(t
     import threading
 
     from cyclonedds.qos import Policy, Qos
-    from live import dds_types
-    from live.dds_serve import DdsServer
+    from fretc.live import dds_types
+    from fretc.live.dds_serve import DdsServer
 
     monkeypatch.setattr(dds_types, "writer_qos", lambda topic="": Qos(
         Policy.Reliability.Reliable(max_blocking_time=10**9), Policy.History.KeepAll,
@@ -428,8 +428,8 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
     wall clock 1.7e9 s away): the violation at simulated second 100.5 is reported there."""
     import threading
 
-    from live.dds_serve import DdsServer
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.dds_serve import DdsServer
+    from fretc.live.zenoh_serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")
@@ -482,8 +482,8 @@ def test_zenoh_bridge_ros2dds_layout(tmp_path):
     publisher leaving while ``/a`` goes on makes the requirement reading it unknown."""
     import threading
 
-    from live.ros2_names import bridge_liveliness
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.ros2_names import bridge_liveliness
+    from fretc.live.zenoh_serve import ZenohServer
 
     assert bridge_liveliness("z1", "ns/a", "std_msgs/msg/Float64") == \
         "@ros2_lv/z1/MP/ns§a/std_msgs§msg§Float64/:::"

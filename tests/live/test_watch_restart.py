@@ -18,13 +18,13 @@ pytest.importorskip("websockets")
 
 from hostile_ws import (BINDINGS, FRET, T0, ScriptServer, advertise, f64,  # noqa: E402
                         message_data, publish_a, subscription)
-from audit import AuditConfig, load_plan  # noqa: E402
-from audit.verdict import exit_code  # noqa: E402
-from common.problems import MAX_PROBLEMS_PER_KIND  # noqa: E402
-from live.events import EventQueue  # noqa: E402
-from live.source import (CLOCK_BACKWARDS, PROTOCOL, PUBLISHER_RESTART,  # noqa: E402
+from fretc.audit import AuditConfig, load_plan  # noqa: E402
+from fretc.audit.verdict import exit_code  # noqa: E402
+from fretc.common.problems import MAX_PROBLEMS_PER_KIND  # noqa: E402
+from fretc.live.events import EventQueue  # noqa: E402
+from fretc.live.source import (CLOCK_BACKWARDS, PROTOCOL, PUBLISHER_RESTART,  # noqa: E402
                          PUBLISHERS_LEFT, QUEUE_OVERFLOW, SCHEMA_TOO_LARGE, WatchSource)
-from live.watch import Watch, WatchOptions  # noqa: E402
+from fretc.live.watch import Watch, WatchOptions  # noqa: E402
 
 pytestmark = pytest.mark.watch
 MS = 1_000_000
@@ -142,7 +142,7 @@ def test_a_deep_json_frame_costs_one_frame_not_the_session(plan):
 
 
 def test_a_schema_over_the_limit_is_a_problem_of_its_topic(plan, monkeypatch):
-    from live import source
+    from fretc.live import source
     monkeypatch.setattr(source, "MAX_SCHEMA_BYTES", 4096)
 
     async def script(ws, k):

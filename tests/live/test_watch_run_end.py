@@ -23,11 +23,11 @@ pytest.importorskip("websockets")
 from click.testing import CliRunner  # noqa: E402
 
 from fretc.cli import main  # noqa: E402
-from audit import AuditConfig, load_plan  # noqa: E402
-from monitors.interval import Evidence, Violation  # noqa: E402
-from live.serve import FoxgloveServer  # noqa: E402
-from live.watch import UNADVERTISED, Watch, WatchOptions, split_pending  # noqa: E402
-from audit.verdict import exit_code  # noqa: E402
+from fretc.audit import AuditConfig, load_plan  # noqa: E402
+from fretc.monitors.interval import Evidence, Violation  # noqa: E402
+from fretc.live.serve import FoxgloveServer  # noqa: E402
+from fretc.live.watch import UNADVERTISED, Watch, WatchOptions, split_pending  # noqa: E402
+from fretc.audit.verdict import exit_code  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -151,7 +151,7 @@ def test_data_problems_exit_3_and_0_with_allow_partial(reqs, tmp_path):
 def test_live_table_shows_each_clock_and_pending_apart(reqs):
     from rich.console import Console
 
-    from fretc.watch import live_table
+    from fretc.cli.watch import live_table
 
     plan = load_plan(AuditConfig(requirements=(reqs,)))
     server = _server()
@@ -212,8 +212,8 @@ def test_missing_watch_extra_is_one_line_and_exit_2(monkeypatch, reqs):
 
 
 def test_bindings_types_table():
-    from common.problems import BindingError
-    from signals.bindings.files import parse_bindings
+    from fretc.common.problems import BindingError
+    from fretc.signals.bindings.files import parse_bindings
 
     b = parse_bindings(BINDINGS + '[types]\n"/a" = "std_msgs/msg/Float64"\n')
     assert b.types == {"/a": "std_msgs/msg/Float64"}

@@ -27,11 +27,11 @@ from hypothesis import strategies as st
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from signals.bindings.extract import Valid
-from signals.columns import SegmentList, _plain_column
-from logs import open_log
-from logs.columnar import RANGES, columnar_decoder
-from logs.selective import selective_decoder
+from fretc.signals.bindings.extract import Valid
+from fretc.signals.columns import SegmentList, _plain_column
+from fretc.logs import open_log
+from fretc.logs.columnar import RANGES, columnar_decoder
+from fretc.logs.selective import selective_decoder
 
 STRESS = """
 string label

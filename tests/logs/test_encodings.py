@@ -17,9 +17,9 @@ pytest.importorskip("cbor2")
 
 from _encode import copy_as  # noqa: E402
 from _shared import SHARED, needs_shared  # noqa: E402
-from audit import AuditConfig, audit_log, load_plan  # noqa: E402
-from logs import open_log  # noqa: E402
-from logs.schema import log_schemas  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.logs import open_log  # noqa: E402
+from fretc.logs.schema import log_schemas  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACE = ROOT / "traces" / "stop_delay.mcap"
@@ -162,7 +162,7 @@ def _same(a, b) -> bool:
 
 def test_json_values_become_the_arrays_and_objects_of_the_rule():
     from hypothesis import given, settings, strategies as st
-    from logs.encodings import as_message
+    from fretc.logs.encodings import as_message
 
     scalars = st.one_of(st.booleans(), st.integers(min_value=-2**70, max_value=2**70),
                         st.floats(allow_nan=True), st.text(max_size=3), st.none())

@@ -15,10 +15,10 @@ pytest.importorskip("pymavlink")
 
 from _dataflash import write_dataflash  # noqa: E402
 from _shared import SHARED, needs_shared  # noqa: E402
-from audit import AuditConfig, audit_log, load_plan  # noqa: E402
-from logs import open_log  # noqa: E402
-from logs.schema import log_schemas  # noqa: E402
-from logs.ulog_source import DROPOUT, EARLY_TIMESTAMP  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.logs import open_log  # noqa: E402
+from fretc.logs.schema import log_schemas  # noqa: E402
+from fretc.logs.ulog_source import DROPOUT, EARLY_TIMESTAMP  # noqa: E402
 
 PX4 = SHARED / "data" / "foreign_logs" / "px4"
 TICK = 100_000_000

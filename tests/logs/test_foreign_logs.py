@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from _shared import SHARED, params  # noqa: E402
 from fretc.cli import main  # noqa: E402
-from logs import open_log  # noqa: E402
+from fretc.logs import open_log  # noqa: E402
 
 FOREIGN = SHARED / "data" / "foreign_logs"
 

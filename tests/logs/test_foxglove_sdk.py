@@ -13,7 +13,7 @@ import pytest
 
 foxglove = pytest.importorskip("foxglove")
 
-from audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 
 S = 1_000_000_000
 TICK = S // 10

@@ -11,7 +11,7 @@ import json
 
 import pytest
 
-from logs import open_log
+from fretc.logs import open_log
 
 import _shared
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, IndexType
 
-from logs import open_log
+from fretc.logs import open_log
 from test_mcap_variants import _write
 
 TWIST = ("Vector3 linear\nVector3 angular\n" + "=" * 80 + "\nMSG: geometry_msgs/Vector3\n"
@@ -125,7 +125,7 @@ def test_the_binding_type_check_reads_a_bomb_with_bounded_memory(tmp_path):
     import sys
     import tracemalloc
 
-    from logs.schema import log_schemas
+    from fretc.logs.schema import log_schemas
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
     import fuzz_hostile

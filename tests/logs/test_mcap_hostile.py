@@ -13,8 +13,8 @@ import pytest
 import zstandard
 from mcap.writer import CompressionType, Writer
 
-from logs import open_log
-from logs.mcap_records import RECORD_HEAD, decompress
+from fretc.logs import open_log
+from fretc.logs.mcap_records import RECORD_HEAD, decompress
 
 _MB = 2**20
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from mcap.writer import CompressionType, IndexType, Writer
 
-from logs import open_log
+from fretc.logs import open_log
 
 #: (topic, log times) written per channel: a decodable ROS 2 channel, a second one on the same
 #: schema, and a JSON channel fretc reads but cannot decode

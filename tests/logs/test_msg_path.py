@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from audit import AuditConfig, audit_log, load_plan
+from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.cli import main
 
 STATUS = ("std_msgs/Header header\nfloat64 battery_voltage\nuint8 STATE_OK=0\n"
@@ -101,9 +101,9 @@ def test_msg_path_in_the_bindings_file(tmp_path):
 def test_a_rosbridge_watch_reads_the_robots_own_types_with_msg_path(tmp_path):
     # rosbridge sends JSON and names the type; fretc builds CDR from the type's definition,
     # found in the --msg-path folders beside ROS 2's standard types
-    from live.rosbridge import advertisement, json_to_cdr
-    from logs import schema_decoder
-    from logs.msg_path import msg_path_typestore
+    from fretc.live.rosbridge import advertisement, json_to_cdr
+    from fretc.logs import schema_decoder
+    from fretc.logs.msg_path import msg_path_typestore
 
     store = msg_path_typestore((str(_msgs(tmp_path)),))
     assert advertisement(1, "/status", "my_robot_msgs/msg/Status").encoding == "json"  # unknown

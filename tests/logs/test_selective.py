@@ -20,11 +20,11 @@ from hypothesis import strategies as st
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from logs import selective
-from audit import AuditConfig, load_plan
-from common.problems import SignalError
-from signals import sample
-from logs import open_log
+from fretc.logs import selective
+from fretc.audit import AuditConfig, load_plan
+from fretc.common.problems import SignalError
+from fretc.signals import sample
+from fretc.logs import open_log
 
 from _shared import SHARED as _SHARED, needs_shared
 

@@ -14,9 +14,9 @@ from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import Writer as Rosbag2Writer
 from rosbags.typesys import Stores
 
-from common import problems as P
-from common.problems import CsvError, LogError
-from logs import CSV_TOPIC, REORDER_WINDOW_NS, open_log
+from fretc.common import problems as P
+from fretc.common.problems import CsvError, LogError
+from fretc.logs import CSV_TOPIC, REORDER_WINDOW_NS, open_log
 
 from _shared import needs_shared
 from _logs import (CMD_VEL_MCAP, MS, ROS1, ROS2, S, STAGE_BAG, boolean, float64, scan, twist,

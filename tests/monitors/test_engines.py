@@ -13,10 +13,10 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from compiler import evaluate, ir
-from audit.log import summarize_clocks
-from monitors import arrays, stepwise
-from monitors.interval import trigger_points
+from fretc.compiler import evaluate, ir
+from fretc.audit.log import summarize_clocks
+from fretc.monitors import arrays, stepwise
+from fretc.monitors.interval import trigger_points
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 

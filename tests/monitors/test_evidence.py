@@ -10,10 +10,10 @@ import random
 import numpy as np
 import pytest
 
-from compiler.evaluate import ft_at
-from compiler.semantics import formalize
-from fretish import parse
-from monitors.interval import (EvidenceUnsupported, evaluate_requirement, scope_intervals)
+from fretc.compiler.evaluate import ft_at
+from fretc.compiler.semantics import formalize
+from fretc.fretish import parse
+from fretc.monitors.interval import (EvidenceUnsupported, evaluate_requirement, scope_intervals)
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 

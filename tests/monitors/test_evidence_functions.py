@@ -24,12 +24,12 @@ import random
 import numpy as np
 import pytest
 
-from compiler.evaluate import ft_at, pt_at
-from compiler.semantics import formalize
-from fretish import parse
-from common.errors import FretishError
-from monitors.interval import EvidenceUnsupported, evaluate_requirement
-from monitors.vectorized import pt_series
+from fretc.compiler.evaluate import ft_at, pt_at
+from fretc.compiler.semantics import formalize
+from fretc.fretish import parse
+from fretc.common.errors import FretishError
+from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement
+from fretc.monitors.vectorized import pt_series
 
 from _monitor_helpers import compiled, load_module
 from differential import (BOOL_VARS, MODE_VARS, NUM_VARS, _obligation, random_requirement,

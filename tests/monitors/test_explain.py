@@ -15,12 +15,12 @@ from click.testing import CliRunner
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from compiler.build import compile_entries  # noqa: E402
-from compiler.evaluate import ft_at  # noqa: E402
-from compiler.template_table import ALL_KEYS  # noqa: E402
+from fretc.compiler.build import compile_entries  # noqa: E402
+from fretc.compiler.evaluate import ft_at  # noqa: E402
+from fretc.compiler.template_table import ALL_KEYS  # noqa: E402
 from fretc.cli import main  # noqa: E402
-from fretish.files import load_requirements  # noqa: E402
-from monitors.explain import explain  # noqa: E402
+from fretc.fretish.files import load_requirements  # noqa: E402
+from fretc.monitors.explain import explain  # noqa: E402
 
 SCOPE = {"null": "", "in": "in m mode ", "notin": "when not in m mode ",
          "onlyIn": "only in m mode ", "after": "after m mode ", "before": "before m mode ",
@@ -104,7 +104,7 @@ def test_the_shortest_traces_are_verdicts_of_fret_and_shortest(tmp_path):
     import itertools
     import random
 
-    from monitors.explain import shortest_traces
+    from fretc.monitors.explain import shortest_traces
 
     compiled = _compiled(tmp_path)
     for c in random.Random(3).sample(compiled, 40):

@@ -15,11 +15,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from compiler import evaluate
-from fretish import ast as A
-from monitors.judge import judge
-from monitors.robustness import TINY, robustness, robustness_series
-from monitors.vectorized import pt_series
+from fretc.compiler import evaluate
+from fretc.fretish import ast as A
+from fretc.monitors.judge import judge
+from fretc.monitors.robustness import TINY, robustness, robustness_series
+from fretc.monitors.vectorized import pt_series
 
 from _monitor_helpers import KEYS, compiled, samples
 
@@ -170,7 +170,7 @@ def test_numeric_margin_is_the_distance_to_the_threshold():
     """``always x <= 0.5``: the least margin, where it first occurs; a strict comparison at
     its threshold is violated at distance 0 (-TINY), a non-strict one satisfied (0.0)."""
     from _monitor_helpers import entry
-    from compiler.build import compile_entry
+    from fretc.compiler.build import compile_entry
 
     def value(text, xs):
         c = compile_entry(entry("R", text))

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from audit import AuditConfig, audit_log, load_plan
-from sim.logs import read_log
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.sim.logs import read_log
 
 ROOT = Path(__file__).resolve().parents[2]
 PERIOD_NS = 100_000_000

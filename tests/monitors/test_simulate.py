@@ -17,11 +17,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from differential import oracle, random_requirement, random_trace  # noqa: E402
 
 from _shared import SHARED, needs_shared  # noqa: E402
-from common.errors import InputError  # noqa: E402
-from compiler.build import compile_entries  # noqa: E402
+from fretc.common.errors import InputError  # noqa: E402
+from fretc.compiler.build import compile_entries  # noqa: E402
 from fretc.cli import main  # noqa: E402
-from fretish.files import load_requirements  # noqa: E402
-from monitors.simulate import parse_timeline, simulate  # noqa: E402
+from fretc.fretish.files import load_requirements  # noqa: E402
+from fretc.monitors.simulate import parse_timeline, simulate  # noqa: E402
 
 
 def _compiled(tmp_path: Path, text: str):

@@ -10,12 +10,12 @@ import random
 import numpy as np
 import pytest
 
-from compiler import ir
-from compiler.codegen import monitor_source
-from monitors.judge import ltl3_verdict
-from monitors.vectorized import (VectorizeError, node_series, pt_series,
+from fretc.compiler import ir
+from fretc.compiler.codegen import monitor_source
+from fretc.monitors.judge import ltl3_verdict
+from fretc.monitors.vectorized import (VectorizeError, node_series, pt_series,
                                         supports)
-from fretish import parse
+from fretc.fretish import parse
 
 from _monitor_helpers import (KEYS, compiled, load_module, random_trace, requirement,
                               step_all)
@@ -76,8 +76,8 @@ def test_long_random_traces_agree(all_keys):
 def test_functions_and_arithmetic_agree(sentence):
     """Past-time functions (bounded O/H, S with interval markers), previous values and the
     arithmetic helpers (division by zero, mod, power overflow, NaN) agree with step()."""
-    from fretish.files import RequirementEntry
-    from compiler.build import compile_entry
+    from fretc.fretish.files import RequirementEntry
+    from fretc.compiler.build import compile_entry
 
     req = parse(sentence)
     comp = compile_entry(RequirementEntry("F", sentence, "<t>", 1, 1, requirement=req))

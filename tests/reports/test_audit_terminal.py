@@ -78,7 +78,7 @@ def test_a_value_beside_its_threshold_shows_which_side_it_is_on(tmp_path):
     doc = json.loads((tmp_path / "a.json").read_text())
     rows = doc["logs"][0]["verdicts"][0]["values"]["speed"]
     assert any(r["value"] == 1.000158 for r in rows)
-    from reports.verdicts import format_value
+    from fretc.reports.verdicts import format_value
     for x in (1.000158, 0.1 + 0.2, 1e-9, 123456789.125, 2.0, -0.5):
         assert float(format_value(x)) == x
     assert format_value(2.0) == "2" and format_value(True) == "T"

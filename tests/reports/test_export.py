@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from fretish.files import load_requirements
+from fretc.fretish.files import load_requirements
 
 ROOT = Path(__file__).resolve().parents[2]
 FIX = ROOT / "tests" / "fixtures" / "requirements_tools"
@@ -224,7 +224,7 @@ def test_audit_of_a_hostile_reqif_is_an_input_error(tmp_path):
 def test_written_files_have_the_permissions_of_any_new_file(tmp_path):
     """Atomic writes go through mkstemp (0600): the result is made as open() would make it."""
     import os
-    from reports.export_results import write_atomic
+    from fretc.reports.export_results import write_atomic
 
     old = os.umask(0o022)
     try:

@@ -22,11 +22,11 @@ from mcap.reader import make_reader
 from mcap.writer import CompressionType
 
 from fretc.cli import main
-from audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
-from reports.context import GENERATED_PREFIX
-from reports.trace import marked_fields
-from reports.timeline import timeline_svg
-from reports.timeline_layout import Threshold
+from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+from fretc.reports.context import GENERATED_PREFIX
+from fretc.reports.trace import marked_fields
+from fretc.reports.timeline import timeline_svg
+from fretc.reports.timeline_layout import Threshold
 
 from _logs import MS, boolean, float64, scan, twist, write_mcap
 
@@ -196,10 +196,10 @@ def test_timeline_files_are_the_inlined_svgs(shipped):
 
 def test_requirements_are_traced_to_formulas_monitor_and_ajpf(shipped):
     """Against an independent compilation of the requirement files."""
-    from compiler.ajpf import psl_label_and_formula
-    from compiler.build import compile_entries
-    from compiler.codegen import emit_monitors
-    from fretish.files import load_requirements
+    from fretc.compiler.ajpf import psl_label_and_formula
+    from fretc.compiler.build import compile_entries
+    from fretc.compiler.codegen import emit_monitors
+    from fretc.fretish.files import load_requirements
 
     doc, ids = shipped["doc"], shipped["ids"]
     # the bindings tick every 100 ms: the period of a file that declares none (r1.fret)
@@ -362,7 +362,7 @@ def test_annotated_mcaps_read_back_with_the_verdicts(shipped):
 
 
 def test_annotated_copy_is_deterministic(shipped, tmp_path):
-    from audit.annotate import annotate_mcap
+    from fretc.audit.annotate import annotate_mcap
 
     la = next(l for l in shipped["doc"]["logs"] if l["log"].endswith("sif_disabled.mcap"))
     annotate_mcap(la["log"], str(tmp_path / "a.mcap"), la)

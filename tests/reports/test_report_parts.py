@@ -7,10 +7,10 @@ from __future__ import annotations
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fretish.parser import parse
-from reports.trace import split_source, thresholds
-from reports.verdicts import cell_label, values_table, verdict_for
-from reports.timeline_layout import (PLOT_X1, Threshold, nice_step_ns, plan_timeline,
+from fretc.fretish.parser import parse
+from fretc.reports.trace import split_source, thresholds
+from fretc.reports.verdicts import cell_label, values_table, verdict_for
+from fretc.reports.timeline_layout import (PLOT_X1, Threshold, nice_step_ns, plan_timeline,
     step_decimals)
 
 
@@ -113,7 +113,7 @@ def test_markdown_text_renders_as_itself(text):
     image, tag, heading or emphasis (CommonMark with GFM tables and linkify)."""
     from markdown_it import MarkdownIt
 
-    from reports.render import _md
+    from fretc.reports.render import _md
 
     md = MarkdownIt("commonmark").enable("table")
     try:

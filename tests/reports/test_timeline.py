@@ -7,17 +7,17 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from fretish.parser import parse
-from reports.trace import marked_fields
-from reports.timeline import timeline_svg
-from reports.timeline_layout import Threshold
+from fretc.fretish.parser import parse
+from fretc.reports.trace import marked_fields
+from fretc.reports.timeline import timeline_svg
+from fretc.reports.timeline_layout import Threshold
 
 from _logs import MS
 
 SVG = "{http://www.w3.org/2000/svg}"
 
 def test_marked_fields_join_back_to_the_text():
-    from fretish.parser import parse
+    from fretc.fretish.parser import parse
 
     for text in ["in docking mode, upon p & q the sw shall within 3 ticks satisfy r",
                  "the sw shall always satisfy x > 0", "when p the sw shall satisfy q",
@@ -124,7 +124,7 @@ def _marks(v, log, P):
 def test_markers_keep_the_order_of_their_ticks_and_the_label_gives_the_tick_time():
     """Before, the violation was drawn at 29.775 s (its deciding message) before its
     trigger at 29.800 s, and labelled 6.900 s where the terminal said 6.903 s."""
-    from common.units import format_offset
+    from fretc.common.units import format_offset
     v, log = _verdict()
     P = 100 * MS
     start = log["start_time_ns"]

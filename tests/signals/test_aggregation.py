@@ -16,13 +16,13 @@ from hypothesis import strategies as st
 
 from _logs import MS, S, float64, write_mcap
 from _shared import SHARED, params
-from audit import AuditConfig, audit_log, load_plan
-from common.problems import BindingError
-from logs import open_log
-from signals.arrays import sample_arrays
-from signals.bindings.binding import compile_expression
-from signals.bindings.spec import TickSpec, make_bindings
-from signals.clock import sample
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.common.problems import BindingError
+from fretc.logs import open_log
+from fretc.signals.arrays import sample_arrays
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.spec import TickSpec, make_bindings
+from fretc.signals.clock import sample
 
 BASIS = SHARED / "data" / "foreign_logs" / "basis_pb" / "demo_81739.567984327.mcap"
 
@@ -165,7 +165,7 @@ def test_a_boolean_that_skipped_a_change_says_so(tmp_path):
     assert any("any_of_messages(/v.data >= 8)" in n for n in got["E2"].notes)
     assert got["E3"].missed_changes == {}  # numbers change with every message: not counted
     # the watch's tick-by-tick clock counts the same
-    from signals.bindings.files import load_bindings
+    from fretc.signals.bindings.files import load_bindings
     b = load_bindings(str(tmp_path / "g.bindings.toml"))
     s = sample(open_log(log), b)
     for _ in s:

@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import pytest
 
-from signals.bindings import EvalState
+from fretc.signals.bindings import EvalState
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from signals.bindings.binding import compile_expression
-from signals.bindings.expression import (BinOp, Const, ExprLocation, Field, FuncCall, Ref,
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.expression import (BinOp, Const, ExprLocation, Field, FuncCall, Ref,
                                           UnaryOp, refs, unparse, walk)
-from signals.bindings.parse import parse_expression
-from common.problems import BindingError
+from fretc.signals.bindings.parse import parse_expression
+from fretc.common.problems import BindingError
 
 FIELDS = ["/scan.ranges", "/odom.pose.x", "/odom.v[2]", "/a.b[-1]", "/scan.ranges[1:3]",
           "/imu.q[:2]"]

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import pytest
 
-from common.problems import BindingError
-from common.units import parse_seconds
-from signals.bindings.files import MAX_REFERENCE_CHAIN, parse_bindings
+from fretc.common.problems import BindingError
+from fretc.common.units import parse_seconds
+from fretc.signals.bindings.files import MAX_REFERENCE_CHAIN, parse_bindings
 
 HEAD = '[tick]\nperiod = "100 ms"\n[variables]\n'
 FIELD = "/scan.ranges[0]"

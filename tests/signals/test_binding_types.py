@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from audit import AuditConfig, audit_log, load_plan
-from signals.bindings.binding import compile_expression
-from signals.bindings.files import parse_bindings
-from common.problems import BindingError
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.files import parse_bindings
+from fretc.common.problems import BindingError
 
 ROOT = Path(__file__).resolve().parents[2]
 NOMINAL = str(ROOT / "traces" / "nominal.mcap")
@@ -53,7 +53,7 @@ def test_a_boolean_inside_arithmetic_is_an_error():
 
 def test_an_attribute_walk_is_refused_before_the_audit():
     """Item 13: ``/scan.__class__.__init__.__code__.co_argcount`` evaluated."""
-    from audit import AuditInputError
+    from fretc.audit import AuditInputError
     with pytest.raises(AuditInputError, match="not a message field"):
         _audit(["too_close=/scan.__class__.__init__.__code__.co_argcount > 0"])
 

@@ -7,18 +7,18 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from signals.columns import HeldColumns, MessageColumns
+from fretc.signals.columns import HeldColumns, MessageColumns
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.units import parse_duration
-from signals.bindings.binding import compile_expression, parse_inline
-from signals.bindings.compile import EvalState
-from signals.bindings.extract import Valid, make_extractor
-from signals.bindings.files import load_bindings, parse_bindings
-from signals.bindings.spec import Bindings, TickSpec, make_bindings
-from common.problems import BindingError, SignalError
+from fretc.common.units import parse_duration
+from fretc.signals.bindings.binding import compile_expression, parse_inline
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.extract import Valid, make_extractor
+from fretc.signals.bindings.files import load_bindings, parse_bindings
+from fretc.signals.bindings.spec import Bindings, TickSpec, make_bindings
+from fretc.common.problems import BindingError, SignalError
 
 from _logs import ROS1, ROS2, scan, twist
 

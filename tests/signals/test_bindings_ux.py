@@ -11,10 +11,10 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from signals.bindings.binding import compile_expression
-from signals.bindings.compile import EvalState
-from signals.bindings.files import parse_bindings
-from common.problems import BindingError
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.files import parse_bindings
+from fretc.common.problems import BindingError
 
 from _logs import scan
 

@@ -1,4 +1,4 @@
-"""TF lookups (:class:`signals.bindings.frames.TfBuffer`) against homogeneous matrices
+"""TF lookups (:class:`fretc.signals.bindings.frames.TfBuffer`) against homogeneous matrices
 built with numpy from the same random tree (property-based), and paths as bindings print
 them read back as the same field."""
 
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from signals.bindings.expression import ExprLocation, Field
-from signals.bindings.parse import parse_expression
-from signals.bindings.frames import LookupFailed, TfBuffer
+from fretc.signals.bindings.expression import ExprLocation, Field
+from fretc.signals.bindings.parse import parse_expression
+from fretc.signals.bindings.frames import LookupFailed, TfBuffer
 
 unit = st.floats(-1, 1, allow_nan=False)
 coord = st.floats(-50, 50, allow_nan=False)

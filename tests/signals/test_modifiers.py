@@ -14,13 +14,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from _logs import MS, S, float64, write_mcap
-from audit import AuditConfig, audit_log, load_plan
-from common.problems import BindingError
-from logs import open_log
-from signals.arrays import sample_arrays
-from signals.bindings.binding import compile_expression
-from signals.bindings.spec import TickSpec, make_bindings
-from signals.clock import sample
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.common.problems import BindingError
+from fretc.logs import open_log
+from fretc.signals.arrays import sample_arrays
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.spec import TickSpec, make_bindings
+from fretc.signals.clock import sample
 
 MODS = {"d": "/a.data@derivative", "dt": "/a.data@timedelta", "dl": "/a.data@delta",
         "mag": "/a.data@negative@abs", "root": "/a.data@abs@sqrt",

@@ -109,9 +109,9 @@ def test_mode_scope_on_text_judges_only_the_charging_ticks(tmp_path, robot_log):
 
 def test_tf_values_equal_an_independent_composition(robot_log):
     """tf() at every tick: x, y and yaw of base_link in map, and the chain's age."""
-    from signals.bindings import TickSpec, make_bindings
-    from signals import sample
-    from logs import open_log
+    from fretc.signals.bindings import TickSpec, make_bindings
+    from fretc.signals import sample
+    from fretc.logs import open_log
     b = make_bindings({"x": 'tf("map", "base_link").x', "y": 'tf("/map", "base_link").y',
                        "yaw": 'tf("map", "base_link").yaw', "age": 'tf("map", "base_link").age',
                        "back": 'tf("base_link", "map").x', "laser": 'tf("odom", "laser").x'},
@@ -165,13 +165,13 @@ def test_all_ticks_at_once_equal_the_streamed_ticks(robot_log):
     """sample_arrays (numpy over all ticks; falls back to the stream for text, filters,
     joints and TF) gives the values of sample() for every new form."""
     import numpy as np
-    from signals.bindings import parse_bindings
-    from signals import sample, sample_arrays
-    from logs import open_log
+    from fretc.signals.bindings import parse_bindings
+    from fretc.signals import sample, sample_arrays
+    from fretc.logs import open_log
     extra = ('names = \'count(/joint_states.name = "wheel_left_joint")\'\n'
              'first_level = "/diagnostics.status[0].level"\n')
-    from signals.bindings import check_types
-    from logs.schema import log_schemas
+    from fretc.signals.bindings import check_types
+    from fretc.logs.schema import log_schemas
     b = parse_bindings(BINDINGS + extra)
     schemas = log_schemas(open_log(str(robot_log.path)))
     for v in b.variables.values():  # named constants from the log's schemas, as the audit

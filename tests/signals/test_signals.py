@@ -9,13 +9,13 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 
-from common import problems as P
-from signals.bindings.files import parse_bindings
-from signals.bindings.spec import TickSpec, make_bindings
-from common.problems import SignalError
-from signals.arrays import sample_arrays
-from signals.clock import sample
-from logs import open_log
+from fretc.common import problems as P
+from fretc.signals.bindings.files import parse_bindings
+from fretc.signals.bindings.spec import TickSpec, make_bindings
+from fretc.common.problems import SignalError
+from fretc.signals.arrays import sample_arrays
+from fretc.signals.clock import sample
+from fretc.logs import open_log
 
 from _shared import needs_shared
 from _logs import (CMD_VEL_MCAP, MS, ROS2, S, STAGE_BAG, boolean, float64, scan, twist_stamped,

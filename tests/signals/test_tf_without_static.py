@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from _shared import SHARED, params  # noqa: E402
-from audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 
 BAG = SHARED / "data" / "foreign_logs" / "husky_ekf" / "gps_data.bag"
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from audit import AuditConfig, audit_log, load_plan
+from fretc.audit import AuditConfig, audit_log, load_plan
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACE = ROOT / "traces" / "stop_delay.mcap"

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from _shared import SHARED, params  # noqa: E402
-from audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACE = ROOT / "traces" / "stop_delay.mcap"
@@ -33,7 +33,7 @@ def _audit(tmp_path: Path, fret: str, bindings: str, log: Path):
 
 
 def test_a_20_hz_topic_on_a_10_hz_clock_loses_every_other_message(tmp_path):
-    from logs import open_log
+    from fretc.logs import open_log
 
     la = _audit(tmp_path, "@tick_period 100 ms\nU: the robot shall always satisfy far\n",
                 '[tick]\nperiod = "100 ms"\n[variables]\n'
@@ -47,9 +47,9 @@ def test_a_20_hz_topic_on_a_10_hz_clock_loses_every_other_message(tmp_path):
 
 
 def test_the_watch_clock_counts_as_the_audit(tmp_path):
-    from logs import open_log
-    from signals import sample
-    from signals.bindings.files import load_bindings
+    from fretc.logs import open_log
+    from fretc.signals import sample
+    from fretc.signals.bindings.files import load_bindings
 
     (tmp_path / "b.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
                                      'far = "/ground_truth/clearance.data > -1"\n'

@@ -15,9 +15,9 @@ from scipy.stats import truncnorm
 from click.testing import CliRunner
 
 from fretc.cli import main
-from sim.distributions import DistributionError, parse_distribution
-from sim.estimate import sample_point
-from sim.space import SpaceError, load_space
+from fretc.sim.distributions import DistributionError, parse_distribution
+from fretc.sim.estimate import sample_point
+from fretc.sim.space import SpaceError, load_space
 
 ROOT = Path(__file__).resolve().parents[2]
 BINDINGS = str(ROOT / "requirements" / "safe_ros.bindings.toml")

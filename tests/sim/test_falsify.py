@@ -13,9 +13,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from audit import AuditConfig, audit_log, load_plan
-from sim.falsify import falsify
-from sim.space import SpaceError, apply, load_space
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.sim.falsify import falsify
+from fretc.sim.space import SpaceError, apply, load_space
 
 ROOT = Path(__file__).resolve().parents[2]
 SPACES = ROOT / "sim" / "spaces"
@@ -77,7 +77,7 @@ def test_cli_environment_space_reports_the_nominal_robots_smallest_margin(plan, 
     # and it is the clearance of that run, from an audit of the run redone here
     run = doc["runs"][best["run"] - 1]
     space = load_space(SPACES / "environment.toml")
-    from sim.run import record_scenario
+    from fretc.sim.run import record_scenario
     path = tmp_path / "again.mcap"
     record_scenario(apply(space.scenario, run["parameters"]), space.seed, path)
     la = audit_log(plan, str(path))
@@ -159,7 +159,7 @@ def test_cli_seed_of_32_bits_or_more_is_a_usage_error(tmp_path):
 def test_ctrl_c_writes_the_runs_so_far_marked_interrupted(plan, tmp_path, monkeypatch):
     """Ctrl-C during the third run: the two runs made are the search, written as JSON and
     report, marked interrupted (exit 130); the third run's file is gone."""
-    import sim.falsify as F
+    import fretc.sim.falsify as F
 
     made = []
     real = F.simulate

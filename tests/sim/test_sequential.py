@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.sequential import SPRT, SequentialCP, effective_delta, make_test
+from fretc.sim.sequential import SPRT, SequentialCP, effective_delta, make_test
 
 
 def _decide(test, rng, p, cap=20000):

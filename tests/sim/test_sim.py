@@ -82,7 +82,7 @@ class Log:
 
 def record(tmp_path, scenario, *extra, seed=1, name=None):
     out = tmp_path / (name or f"{scenario}.mcap")
-    subprocess.run([sys.executable, "-m", "sim", "record", "--scenario", scenario,
+    subprocess.run([sys.executable, "-m", "fretc.sim", "record", "--scenario", scenario,
                     "--seed", str(seed), "-o", str(out), *extra], cwd=ROOT, check=True,
                    capture_output=True)
     return out
@@ -364,7 +364,7 @@ def test_map_is_the_safe_ros_map_with_notice():
 
 def test_readme_verdict_table_matches_the_logs():
     """traces/README.md's expected-verdict table is what the reference evaluator computes."""
-    from sim.logs import REQUIREMENTS, expected_verdicts, read_log
+    from fretc.sim.logs import REQUIREMENTS, expected_verdicts, read_log
 
     text = (TRACES / "README.md").read_text()
     rows = {}

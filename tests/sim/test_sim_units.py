@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from sim.navigation import GlobalPlanner, INSPECTION_POINTS
-from sim.recording import McapRecorder
-from sim.robot import Lidar, LidarParams, ScoutMini, ScoutMiniParams, min_valid_range
-from sim.safety import ARMED, MONITORED, STOPPED, CmdVelInterceptor, SafetyAgent, SafetyParams
-from sim.scenarios import SCENARIOS, get_scenario
-from sim.world import Barrel, MovingObstacle, OccupancyMap, RemovedObject, World
+from fretc.sim.navigation import GlobalPlanner, INSPECTION_POINTS
+from fretc.sim.recording import McapRecorder
+from fretc.sim.robot import Lidar, LidarParams, ScoutMini, ScoutMiniParams, min_valid_range
+from fretc.sim.safety import ARMED, MONITORED, STOPPED, CmdVelInterceptor, SafetyAgent, SafetyParams
+from fretc.sim.scenarios import SCENARIOS, get_scenario
+from fretc.sim.world import Barrel, MovingObstacle, OccupancyMap, RemovedObject, World
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.stats import binomtest, norm
 
-from sim.splitting import SplittingError, adaptive_multilevel_splitting
+from fretc.sim.splitting import SplittingError, adaptive_multilevel_splitting
 
 
 def _halfspace(p: float):

@@ -1,6 +1,6 @@
 """``fretc falsify``: search the simulator's scenario parameters for runs that violate a
-requirement (click command; the search: :mod:`sim.falsify`, its report:
-:mod:`reports.falsify`, the space files: :mod:`sim.space`).
+requirement (click command; the search: :mod:`fretc.sim.falsify`, its report:
+:mod:`fretc.reports.falsify`, the space files: :mod:`fretc.sim.space`).
 
 ::
 
@@ -18,7 +18,7 @@ import os
 
 import click
 
-from .options import FleetError, shown
+from fretc.cli.options import FleetError, shown
 
 __all__ = ["falsify_cmd"]
 
@@ -68,13 +68,13 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
       2  usage or input errors
       130  interrupted (Ctrl-C) without a violating run; the runs so far are written"""
     # lazy: the simulator, the audit engine and cma only when the command runs
-    from audit import AuditConfig, AuditInputError, load_plan
-    from audit.fleet import RayUnavailable
-    from sim.falsify import falsify
-    from reports.falsify import write_search
-    from sim.space import load_space
+    from fretc.audit import AuditConfig, AuditInputError, load_plan
+    from fretc.audit.fleet import RayUnavailable
+    from fretc.sim.falsify import falsify
+    from fretc.reports.falsify import write_search
+    from fretc.sim.space import load_space
 
-    from .options import audit_config
+    from fretc.cli.options import audit_config
 
     if os.path.isdir(output) and os.listdir(output):
         raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "

@@ -1,4 +1,4 @@
-"""``fretc simulate FILE TRACE``: FRET's simulator without NuSMV (:mod:`monitors.simulate`):
+"""``fretc simulate FILE TRACE``: FRET's simulator without NuSMV (:mod:`fretc.monitors.simulate`):
 the requirements' ft and pt values and their parts at every tick of a small trace, several
 requirements side by side; a table in the terminal, SVG and HTML with ``-o DIR``, JSON with
 ``--json FILE``.
@@ -13,8 +13,8 @@ import sys
 
 import click
 
-from .options import TEXT_ATTRIBUTE_OPTION
-from .options import shown as _shown
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION
+from fretc.cli.options import shown as _shown
 
 __all__ = ["simulate_cmd"]
 
@@ -33,12 +33,12 @@ def simulate_cmd(file, trace, ids, output, json_path):
     """Simulate the requirements of FILE on TRACE (a .csv as the audit's, or a timeline
     text: one line per variable, 'p: 0-3, 7' for the ticks a boolean holds, 'speed: 0.0 0.2
     0.6' for one value per tick, '@ticks N' for the length)."""
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
-    from monitors.simulate import read_trace, simulate
-    from reports.simulation import text_table, write_outputs
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.monitors.simulate import read_trace, simulate
+    from fretc.reports.simulation import text_table, write_outputs
 
-    from .options import text_attribute
+    from fretc.cli.options import text_attribute
 
     compiled = compile_entries(load_requirements([file], text_attribute=text_attribute()))
     known = {c.id for c in compiled}

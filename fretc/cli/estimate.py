@@ -1,7 +1,7 @@
 """``fretc estimate``: judge requirements ``with probability OP p`` over the simulator's
-scenario space by sampling it (click command; the campaign: :mod:`sim.estimate`, the
-sequential tests: :mod:`sim.sequential`, rare violations: :mod:`sim.rare`, the report:
-:mod:`reports.estimate`).
+scenario space by sampling it (click command; the campaign: :mod:`fretc.sim.estimate`, the
+sequential tests: :mod:`fretc.sim.sequential`, rare violations: :mod:`fretc.sim.rare`, the report:
+:mod:`fretc.reports.estimate`).
 ::
 
     fretc estimate --requirements R --space SPACE.toml -o OUT [--seed N] [--budget N]
@@ -23,7 +23,7 @@ import os
 
 import click
 
-from .options import FleetError, audit_config, shown
+from fretc.cli.options import FleetError, audit_config, shown
 
 __all__ = ["estimate_cmd"]
 
@@ -100,9 +100,9 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
       5  undecided: the budget ended before the test decided
       130  interrupted (Ctrl-C); the runs so far are reported"""
     # lazy: the simulator, the audit engine, scipy only when the command runs
-    from audit import AuditInputError, load_plan
-    from audit.fleet import RayUnavailable
-    from sim.space import load_space
+    from fretc.audit import AuditInputError, load_plan
+    from fretc.audit.fleet import RayUnavailable
+    from fretc.sim.space import load_space
 
     if os.path.isdir(output) and os.listdir(output):
         raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "
@@ -144,15 +144,15 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
 def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confidence,
               unknown_runs, rare, targets, particles, kill, moves, ray) -> dict:
     """Run the campaign (or the splitting with ``rare``) and write its report; returns the
-    report document (:func:`reports.estimate.write_estimate`)."""
-    from audit.verdict import audit_json
-    from reports.estimate import write_estimate
+    report document (:func:`fretc.reports.estimate.write_estimate`)."""
+    from fretc.audit.verdict import audit_json
+    from fretc.reports.estimate import write_estimate
 
     def one_log_json(la) -> str:
         return audit_json([la], plan.requirements_json(), plan.bindings_json())
 
     if rare:
-        from sim.rare import rare_estimate
+        from fretc.sim.rare import rare_estimate
 
         def said(rid, n):
             click.echo(f"{rid}: {n} runs", err=True)
@@ -161,7 +161,7 @@ def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confi
                                kill=kill, moves=moves, confidence=confidence, budget=budget,
                                ray_address=ray, audit_json=one_log_json, progress=said)
         return write_estimate(output, None, result)
-    from sim.estimate import estimate
+    from fretc.sim.estimate import estimate
 
     def progress(run) -> None:
         viol = f"  VIOLATED {', '.join(run.violated())}" if run.violated() else ""

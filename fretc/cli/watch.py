@@ -16,7 +16,7 @@ log. A bound topic unadvertised and advertised again within ``--restart-grace`` 
 restart) continues the same run, the messages in between a gap; every bound topic
 unadvertised for longer ends the run cut short (exit 3; under ``--until-idle``, the run's
 end). The exit status is the audit's
-(:data:`audit.verdict.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
+(:data:`fretc.audit.verdict.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
 run, 1 a requirement violated, 2 usage or input errors (a requirement that could not be
 watched, no connection), 3 no violation but the run was incomplete (a connection gap, data
 problems; 0 with ``--allow-partial``).
@@ -34,18 +34,18 @@ import time
 
 import click
 
-from common.units import format_offset
+from fretc.common.units import format_offset
 
-from .options import audit_config, live_input_options
+from fretc.cli.options import audit_config, live_input_options
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
 
 def live_table(w):
-    """The live table of a :class:`live.watch.Watch`: per requirement its own
+    """The live table of a :class:`fretc.live.watch.Watch`: per requirement its own
     clock's ticks and the time of the last one, the pt verdict now, the LTL3 status and when
     it became definite, obligations violated and pending so far
-    (:func:`live.watch.split_pending`), the last trigger (times in s from the
+    (:func:`fretc.live.watch.split_pending`), the last trigger (times in s from the
     first tick)."""
     # lazy: rich and the watch engine only when the command runs (start-up of fretc)
     from rich.console import Group
@@ -105,7 +105,7 @@ def _seconds(ctx, param, value):
     """A click callback: a duration (``"2 s"``, ``"500 ms"``, a number of seconds) in s."""
     if value is None:
         return None
-    from common.units import parse_seconds
+    from fretc.common.units import parse_seconds
 
     try:
         return float(parse_seconds(value if not _number(value) else float(value)))
@@ -193,9 +193,9 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     from rich.console import Console
     from rich.markup import escape
 
-    from audit import AuditInputError, load_plan
-    from live.client import MissingDependency
-    from live.watch import Watch, WatchOptions
+    from fretc.audit import AuditInputError, load_plan
+    from fretc.live.client import MissingDependency
+    from fretc.live.watch import Watch, WatchOptions
 
     if not url.startswith(URL_SCHEMES):
         raise click.BadParameter(f"{url!r}: expected ws://host:port, rosbridge://host:port, "
@@ -247,7 +247,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
 def _check_ros2_url(url: str, hint: str) -> None:
     """A dds:// or zenoh:// URL of the wrong form is a usage error (exit 2)."""
     if url.startswith(("dds://", "zenoh://")):
-        from live.ros2_names import parse_url
+        from fretc.live.ros2_names import parse_url
 
         try:
             parse_url(url)
@@ -257,13 +257,13 @@ def _check_ros2_url(url: str, hint: str) -> None:
 
 def _diagnostics(w, url: str, dds_config: str | None):
     """The /diagnostics publisher of a watch of ``url`` (its transport, in this process)."""
-    from live.diagnostics import DiagnosticsPublisher
+    from fretc.live.diagnostics import DiagnosticsPublisher
 
     if url.startswith("dds://"):
-        from live.dds_serve import DdsServer
+        from fretc.live.dds_serve import DdsServer
 
         return DiagnosticsPublisher(w, lambda: DdsServer(url, config_file=dds_config))
-    from live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh_serve import ZenohServer
 
     w.client.keep_session = True  # the final verdicts go out after the watch stopped reading
     return DiagnosticsPublisher(w, lambda: ZenohServer(url, name="fretc_watch",
@@ -290,12 +290,12 @@ def _run_watch(w, err, no_live):
 
 
 def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) -> int:
-    """Print the summary, write --json; the exit code (:func:`audit.verdict.exit_code`,
+    """Print the summary, write --json; the exit code (:func:`fretc.audit.verdict.exit_code`,
     as ``fretc audit``)."""
     from rich.console import Console
 
-    from audit.verdict import audit_json, exit_code
-    from reports.terminal import print_summary
+    from fretc.audit.verdict import audit_json, exit_code
+    from fretc.reports.terminal import print_summary
 
     out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
     print_summary(out, [la], plan, allow_partial=allow_partial, input_errors=input_errors)
@@ -339,7 +339,7 @@ def replay_cmd(log, serve, rate, host, port, wait, loop, dds_config, zenoh_confi
         raise click.UsageError("--serve is required (alone for the Foxglove WebSocket, or "
                                "--serve dds://DOMAIN, --serve zenoh://HOST:PORT)")
     # lazy: foxglove-sdk, Cyclone DDS, Zenoh only when the command runs
-    from live.serve import advertise_mcap, replay_mcap
+    from fretc.live.serve import advertise_mcap, replay_mcap
 
     server = _replay_server(log, serve, host, port, dds_config or zenoh_config)
     advertise_mcap(log, server)
@@ -365,23 +365,23 @@ def replay_cmd(log, serve, rate, host, port, wait, loop, dds_config, zenoh_confi
 
 def _replay_server(log: str, serve: str, host: str, port: int, config: str | None):
     """The server of ``--serve`` (``ws``: the Foxglove WebSocket server on host:port)."""
-    from live.client import MissingDependency
+    from fretc.live.client import MissingDependency
 
     if serve != "ws":
         _check_ros2_url(serve, "--serve")
     try:
         if serve.startswith("dds://"):
-            from live.dds_serve import DdsServer
+            from fretc.live.dds_serve import DdsServer
 
             return DdsServer(serve, config_file=config)
         if serve.startswith("zenoh://"):
-            from live.zenoh_serve import ZenohServer
+            from fretc.live.zenoh_serve import ZenohServer
 
             return ZenohServer(serve, name=f"fretc_replay_{log}", config_file=config)
         if serve != "ws":
             raise click.BadParameter(f"{serve!r}: expected dds://DOMAIN or zenoh://HOST:PORT "
                                      "(or --serve alone)", param_hint="--serve")
-        from live.serve import FoxgloveServer
+        from fretc.live.serve import FoxgloveServer
 
         return FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")
     except (RuntimeError, MissingDependency) as exc:

@@ -1,6 +1,6 @@
 """``fretc export``: an audit's results written back into the requirements' own format, and
-the traceability matrix (click command; the writers are :mod:`reports.export_reqif`,
-:mod:`reports.export_doorstop`, :mod:`reports.export_fret`, :mod:`reports.matrix`).
+the traceability matrix (click command; the writers are :mod:`fretc.reports.export_reqif`,
+:mod:`fretc.reports.export_doorstop`, :mod:`fretc.reports.export_fret`, :mod:`fretc.reports.matrix`).
 
 ::
 
@@ -19,15 +19,15 @@ import os
 
 import click
 
-from .options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
 
 __all__ = ["export_cmd"]
 
 
 def _kind(src: str) -> str:
     """``reqif``, ``doorstop`` or ``fret`` for the source ``src`` (a UsageError otherwise)."""
-    from fretish.files import is_fret_export
-    from fretish.sources import tool_source_kind
+    from fretc.fretish.files import is_fret_export
+    from fretc.fretish.sources import tool_source_kind
 
     kind = tool_source_kind(src)
     if kind is not None:
@@ -79,9 +79,9 @@ def export_cmd(ctx, src, from_json, output, audit_date, matrix_csv, matrix_html,
     was there, and the traceability matrix (--matrix, --matrix-html). Requirements changed
     since the audit are flagged "stale evidence"."""
     # lazy: the readers and writers only when the command runs
-    from fretish.files import load_requirements
-    from reports.export_results import audit_identity, requirement_results, write_atomic
-    from reports.write import ReportError, load_audit_json
+    from fretc.fretish.files import load_requirements
+    from fretc.reports.export_results import audit_identity, requirement_results, write_atomic
+    from fretc.reports.write import ReportError, load_audit_json
 
     kind = _kind(src)
     try:
@@ -113,11 +113,11 @@ def _matrix_outputs(doc, current, check_json, csv_path, html_path) -> list[tuple
     """The matrix files to write: (path, bytes)."""
     if not csv_path and not html_path:
         return []
-    from reports.matrix import matrix_csv, matrix_html, matrix_rows
+    from fretc.reports.matrix import matrix_csv, matrix_html, matrix_rows
 
     check = None
     if check_json:
-        from check.report import load_check  # lazy: only with --check
+        from fretc.check.report import load_check  # lazy: only with --check
         try:
             check = load_check(check_json)
         except ValueError as exc:
@@ -133,10 +133,10 @@ def _matrix_outputs(doc, current, check_json, csv_path, html_path) -> list[tuple
 
 def _write_export(kind: str, src: str, output: str, results, current) -> int:
     """Write the export of ``kind``; returns how many requirements got results."""
-    from reports.export_results import write_atomic
+    from fretc.reports.export_results import write_atomic
 
     if kind == "doorstop":
-        from reports.export_doorstop import export_doorstop
+        from fretc.reports.export_doorstop import export_doorstop
 
         files = {e.id: e.origin.file for e in current.values()
                  if e.origin is not None and e.origin.format == "doorstop"}
@@ -147,10 +147,10 @@ def _write_export(kind: str, src: str, output: str, results, current) -> int:
     if os.path.isdir(output):
         raise click.UsageError(f"{output} is a folder: give the file to write")
     if kind == "reqif":
-        from reports.export_reqif import export_reqif
+        from fretc.reports.export_reqif import export_reqif
         data, n = export_reqif(src, results)
     else:
-        from reports.export_fret import export_fret
+        from fretc.reports.export_fret import export_fret
         data, n = export_fret(src, results)
     write_atomic(output, data)
     return n
@@ -158,7 +158,7 @@ def _write_export(kind: str, src: str, output: str, results, current) -> int:
 
 def _report(doc, current, written: int, output: str, matrices: list[str]) -> None:
     """The command's lines on stderr: what was written, and the stale requirements."""
-    from reports.matrix import STALE, stale_state
+    from fretc.reports.matrix import STALE, stale_state
 
     for req in doc.get("requirements") or []:
         state = stale_state(req, current)

@@ -1,5 +1,5 @@
 """``fretc report``: the traceability report (HTML + Markdown) of an audit, run here on LOGS
-or read from ``--from-json FILE`` (the report itself: :mod:`reports`).
+or read from ``--from-json FILE`` (the report itself: :mod:`fretc.reports`).
 
 ::
 
@@ -14,9 +14,9 @@ from pathlib import Path
 
 import click
 
-from reports.write import ReportError, load_audit_json, write_report
+from fretc.reports.write import ReportError, load_audit_json, write_report
 
-from .options import audit_config, audit_input_options, ray_options, run_audits
+from fretc.cli.options import audit_config, audit_input_options, ray_options, run_audits
 
 __all__ = ["report_cmd"]
 
@@ -67,10 +67,10 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         json_dir = str(Path(from_json).resolve().parent)
     else:
         # lazy: the audit engine only when the logs are audited here
-        from audit import AuditInputError, find_logs, load_plan
-        from audit.fleet import expand_log_args
-        from audit.statistics import plan_statistics
-        from audit.verdict import audit_json
+        from fretc.audit import AuditInputError, find_logs, load_plan
+        from fretc.audit.fleet import expand_log_args
+        from fretc.audit.statistics import plan_statistics
+        from fretc.audit.verdict import audit_json
 
         json_dir = None
         config = audit_config(requirements, bindings, inline, tick_period, tick_topic,
@@ -95,7 +95,7 @@ def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topi
         ctx.exit(2)
         return
     if check_json:  # fretc check findings beside the requirements (check/report.py)
-        from check.report import add_to_report, load_check  # lazy: only with --check
+        from fretc.check.report import add_to_report, load_check  # lazy: only with --check
         add_to_report(str(files.markdown), str(files.html), load_check(check_json))
     for n in files.notes:
         click.echo(f"note: {n}", err=True)

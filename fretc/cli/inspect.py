@@ -10,7 +10,7 @@ notation), for booleans how often each value occurs, for text fields their disti
 (up to :data:`MAX_VALUES`) and for fields with named constants in their message definition
 (``power_supply_status``: ``POWER_SUPPLY_STATUS_CHARGING = 1``, DiagnosticStatus ``level``:
 ``OK`` .. ``STALE``) those constants. Field types come from the schemas embedded in the log
-(:mod:`logs.schema`); values from one read of every message.
+(:mod:`fretc.logs.schema`); values from one read of every message.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Any, Dict, List
 
 import click
 
-from .options import MSG_PATH_OPTION
+from fretc.cli.options import MSG_PATH_OPTION
 
 __all__ = ["inspect_cmd", "inspect_log", "MAX_VALUES", "plain"]
 
@@ -148,9 +148,9 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
         common.problems.FretcInputError: the file is not a readable log.
     """
     # lazy: the log readers (mcap, rosbags) only when the command runs
-    from signals.bindings.paths import topic_text
-    from logs.schema import log_schemas
-    from logs import open_log
+    from fretc.signals.bindings.paths import topic_text
+    from fretc.logs.schema import log_schemas
+    from fretc.logs import open_log
 
     source = open_log(path, msg_path=msg_path)
     types = source.topics()
@@ -238,7 +238,7 @@ def inspect_cmd(logs, as_json, msg_path):
     (quoted topics, [:] for items), with its type, array lengths, numeric min/max, the values
     of text fields and the constants of enum fields - what a binding file can name
     (docs/bindings.md)."""
-    from common.problems import FretcInputError  # lazy: as the readers
+    from fretc.common.problems import FretcInputError  # lazy: as the readers
 
     docs: List[dict] = []
     failed = False

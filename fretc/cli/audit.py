@@ -9,9 +9,9 @@
 LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosbag2 folders,
 ``.csv`` traces, or folders searched for them. Binding files default to every
 ``*.bindings.toml`` beside the requirement files or folders. Exit status
-(:data:`audit.verdict.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
+(:data:`fretc.audit.verdict.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
 complete logs, 1 a requirement is violated (a probability requirement: fails over the
-logs, :mod:`audit.statistics`), 2 usage or input errors (including a
+logs, :mod:`fretc.audit.statistics`), 2 usage or input errors (including a
 requirement that could not be audited on some log), 3 no violation but a log is partial or
 had data problems (``--allow-partial``: 0), 5 a probability requirement is undecided.
 
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import click
 
-from .options import audit_config, audit_input_options, ray_options, run_audits
+from fretc.cli.options import audit_config, audit_input_options, ray_options, run_audits
 
 __all__ = ["audit_cmd"]
 
@@ -86,12 +86,12 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     # lazy: the audit engine (numpy, mcap, rosbags, rich) only when the command runs
     from rich.console import Console
 
-    from audit import AuditInputError, find_logs, load_plan
-    from reports.junit import junit_xml
-    from reports.terminal import AuditProgress, escape, print_summary
-    from audit.fleet import expand_log_args
-    from audit.statistics import plan_statistics
-    from audit.verdict import audit_json, exit_code
+    from fretc.audit import AuditInputError, find_logs, load_plan
+    from fretc.reports.junit import junit_xml
+    from fretc.reports.terminal import AuditProgress, escape, print_summary
+    from fretc.audit.fleet import expand_log_args
+    from fretc.audit.statistics import plan_statistics
+    from fretc.audit.verdict import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,

@@ -1,5 +1,5 @@
 """``fretc check``: find conflicting, vacuous, redundant and unrealizable requirements before
-any robot runs (the analyses are in :mod:`check.analysis`).
+any robot runs (the analyses are in :mod:`fretc.check.analysis`).
 
 ::
 
@@ -9,7 +9,7 @@ any robot runs (the analyses are in :mod:`check.analysis`).
 
 Realizability is checked when inputs or outputs are given, by the flags or by the
 ``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win). The budgets are
-counted in work the engines do (:mod:`check.budget`), so the same input gives the same
+counted in work the engines do (:mod:`fretc.check.budget`), so the same input gives the same
 report on any machine; ``--timeout`` is a wall-clock limit of the whole run that stops it
 with no report. Exit status: 0 no finding (redundancy is a warning), 1 a conflict, vacuity,
 unrealizability or an unknown answer (a query past its budget), 2 input errors, 3 the run
@@ -24,9 +24,9 @@ from pathlib import Path
 
 import click
 
-from check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY, MUS_BUDGET
+from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY, MUS_BUDGET
 
-from .options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
 
 __all__ = ["check_cmd", "render_text"]
 
@@ -38,7 +38,7 @@ def _names(text):
 
 
 def render_text(result) -> str:
-    """The terminal report of a :class:`check.analysis.CheckResult`."""
+    """The terminal report of a :class:`fretc.check.analysis.CheckResult`."""
     lines = []
     mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN"}
     for r in result.requirements:
@@ -169,14 +169,14 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budge
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
-    from compiler.build import compile_entries
+    from fretc.compiler.build import compile_entries
     import time
 
-    from check.analysis import check_requirements
-    from check.budget import Budget, RunStopped
-    from check.realizability import RealizabilityError
-    from common.errors import FretishError
-    from fretish.files import load_requirements
+    from fretc.check.analysis import check_requirements
+    from fretc.check.budget import Budget, RunStopped
+    from fretc.check.realizability import RealizabilityError
+    from fretc.common.errors import FretishError
+    from fretc.fretish.files import load_requirements
 
     try:
         entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
@@ -193,7 +193,7 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budge
     compiled = compile_entries(entries)
     judge = None
     if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
-        from monitors.interval import verdict_of
+        from fretc.monitors.interval import verdict_of
         judge = verdict_of
     deadline = None if timeout is None else time.monotonic() + timeout
     try:

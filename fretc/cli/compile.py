@@ -14,19 +14,19 @@ import sys
 
 import click
 
-from common.textsafe import visible
+from fretc.common.textsafe import visible
 
-from .options import TEXT_ATTRIBUTE_OPTION, text_attribute
-from .options import shown as _shown
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, text_attribute
+from fretc.cli.options import shown as _shown
 
 __all__ = ["compile_cmd"]
 
 
 def _entries(paths) -> list:
-    """The :class:`fretish.files.RequirementEntry` list of ``paths``, parsed (an unreadable
-    file: its error printed, exit code 2; a :class:`common.errors.FretishError` of a file
+    """The :class:`fretc.fretish.files.RequirementEntry` list of ``paths``, parsed (an unreadable
+    file: its error printed, exit code 2; a :class:`fretc.common.errors.FretishError` of a file
     goes to the command group's handler: printed, exit code 2)."""
-    from fretish.files import load_requirements  # lazy: the parser only when a command compiles
+    from fretc.fretish.files import load_requirements  # lazy: the parser only when a command compiles
 
     try:
         return load_requirements(list(paths), text_attribute=text_attribute())
@@ -38,7 +38,7 @@ def _entries(paths) -> list:
 def _load(paths) -> list:
     """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler)."""
     # lazy: the compiler (Lark tables, Spot) only when a command compiles
-    from compiler.build import compile_entries
+    from fretc.compiler.build import compile_entries
 
     return compile_entries(_entries(paths))
 
@@ -72,7 +72,7 @@ def compile_cmd(files, emit, as_json, output, psl_map):
     if emit == "ltl":
         _emit_ltl(compiled)  # text; --json took _ltl_json_texts above
     elif emit == "monitor":
-        from compiler.codegen import build_monitor_modules  # lazy: Jinja2 and Spot
+        from fretc.compiler.codegen import build_monitor_modules  # lazy: Jinja2 and Spot
         internal: list = []
         modules = build_monitor_modules(compiled, internal).values()
         outputs = {m.name: m.text for m in modules}
@@ -89,7 +89,7 @@ def compile_cmd(files, emit, as_json, output, psl_map):
                     click.echo(_shown(f"skipped {rid} ({m.name}): {reason}".replace(
                         "\n", " ")), err=True)
     elif emit == "psl":
-        from compiler.ajpf import emit_psl  # lazy: only for psl
+        from fretc.compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler
         _check_output(outputs, output, ".psl")
         _write_outputs(outputs, output, ".psl")
@@ -111,7 +111,7 @@ def _ltl_json_texts(paths) -> tuple:
     the run keeps the texts, not a thousand requirements' trees (a third of the peak
     memory of a thousand requirements). Errors, exit codes and texts are those of
     :func:`_load` then :func:`ltl_json`."""
-    from compiler.build import compile_entry
+    from fretc.compiler.build import compile_entry
 
     entries = _entries(paths)
     if not entries:
@@ -284,18 +284,18 @@ def ltl_json_item():
     """``item(compiled) -> str``: the text of ``compiled.to_json()`` as an item of
     :func:`ltl_json`'s list (``json.dumps(..., indent=2)``'s text nested one level: every
     line after the first indented by two more spaces), for one
-    :class:`compiler.build.Compiled`.
+    :class:`fretc.compiler.build.Compiled`.
 
     A requirement that formalized is one join of the texts between its values, made once
-    from :data:`compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes
-    it), and :meth:`compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
+    from :data:`fretc.compiler.build.FORMALIZED_KEYS` (its layout as :func:`json_indent2` makes
+    it), and :meth:`fretc.compiler.build.Compiled.json_values`, the strings escaped by ``json``'s C
     escaper; its five printed forms come escaped in one piece from its template where
-    there is one (:meth:`compiler.build.Compiled.json_forms`). Any other requirement, or a
-    value of another type than those :meth:`~compiler.build.Compiled.json_values`
+    there is one (:meth:`fretc.compiler.build.Compiled.json_forms`). Any other requirement, or a
+    value of another type than those :meth:`~fretc.compiler.build.Compiled.json_values`
     documents, takes :func:`json_indent2`'s general path, and a value that path cannot
     write ``json.dumps(value, indent=2)`` nested one level (JSON strings escape newlines,
     so its only newlines are its layout's)."""
-    from compiler.build import FORMALIZED_KEYS
+    from fretc.compiler.build import FORMALIZED_KEYS
 
     enc = _string_encoder()
     go, parts = _indent2_writer(enc)

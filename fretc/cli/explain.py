@@ -1,5 +1,5 @@
 """``fretc explain FILE [ID...]``: each requirement's reading in plain English, its template
-key, durations in ticks and time, and its diagram in FRET's manner (:mod:`monitors.explain`)
+key, durations in ticks and time, and its diagram in FRET's manner (:mod:`fretc.monitors.explain`)
 in the terminal, and as SVG with ``-o DIR``.
 
 Exit codes: 0 explained, 1 a requirement did not formalize (its error printed), 2 an input
@@ -13,8 +13,8 @@ from pathlib import Path
 
 import click
 
-from .options import TEXT_ATTRIBUTE_OPTION
-from .options import shown as _shown
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION
+from fretc.cli.options import shown as _shown
 
 __all__ = ["explain_cmd"]
 
@@ -28,12 +28,12 @@ __all__ = ["explain_cmd"]
 def explain_cmd(file, ids, output):
     """Explain the requirements of FILE (or only IDS): plain English, template key and a
     diagram of the scope, the triggers and the response windows."""
-    from compiler.build import compile_entries
-    from fretish.files import load_requirements
-    from monitors.explain import explain
-    from reports.explanation import svg, text
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.monitors.explain import explain
+    from fretc.reports.explanation import svg, text
 
-    from .options import text_attribute
+    from fretc.cli.options import text_attribute
 
     compiled = compile_entries(load_requirements([file], text_attribute=text_attribute()))
     known = [c.id for c in compiled]

@@ -2,8 +2,8 @@
 
 ``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
 ``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
-:func:`audit_config` turns their values into a :class:`audit.AuditConfig` and
-:func:`run_audits` runs the audit locally or on Ray (:mod:`audit.fleet`) as the options
+:func:`audit_config` turns their values into a :class:`fretc.audit.AuditConfig` and
+:func:`run_audits` runs the audit locally or on Ray (:mod:`fretc.audit.fleet`) as the options
 say. Only click is imported at module level, so the command starts fast; the engine loads
 on first use.
 """
@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import click
 
-from common.textsafe import visible
+from fretc.common.textsafe import visible
 
 __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
@@ -26,7 +26,7 @@ META = "fretc.fleet"
 
 def shown(text: str) -> str:
     """Text for the terminal: control and bidi characters escaped, lines kept
-    (:func:`common.textsafe.visible`)."""
+    (:func:`fretc.common.textsafe.visible`)."""
     return visible(text, keep="\n")
 
 
@@ -93,7 +93,7 @@ def _store_text_attribute(ctx, param, value):
 
 
 #: ``--text-attribute NAME``: the attribute of a ReqIF / Doorstop requirement holding its
-#: FRETish text (:mod:`fretish.sources`); kept in the context (:func:`text_attribute`)
+#: FRETish text (:mod:`fretc.fretish.sources`); kept in the context (:func:`text_attribute`)
 TEXT_ATTRIBUTE_OPTION = click.option(
     "--text-attribute", default=None, metavar="NAME", expose_value=False,
     callback=_store_text_attribute,
@@ -110,9 +110,9 @@ def text_attribute() -> str | None:
 
 def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window,
                  msg_path=()):
-    """The :class:`audit.AuditConfig` of :func:`audit_input_options`' values
+    """The :class:`fretc.audit.AuditConfig` of :func:`audit_input_options`' values
     (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
-    from audit import AuditConfig  # lazy: numpy and the engine only when run
+    from fretc.audit import AuditConfig  # lazy: numpy and the engine only when run
 
     if not requirements:
         if not os.path.isdir("requirements"):
@@ -158,7 +158,7 @@ def _check_address(ctx, param, value):
     import importlib.util  # lazy: only for --ray (start-up time)
 
     if importlib.util.find_spec("ray") is None:
-        from audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
+        from fretc.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
 
         raise click.UsageError(RAY_HINT, ctx=ctx)
     ok = (value in ("local", "auto") or value.startswith("ray://")
@@ -173,13 +173,13 @@ def _check_address(ctx, param, value):
 def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
                ctx: click.Context | None = None) -> list[Any]:
     """The commands' audit of ``paths``: on Ray when ``--ray`` was given
-    (:func:`ray_options`), else :func:`audit.audit_logs` with ``jobs`` processes.
+    (:func:`ray_options`), else :func:`fretc.audit.audit_logs` with ``jobs`` processes.
 
     Raises :class:`FleetError` (exit code 2; 130 when interrupted) when Ray cannot be
     started or reached."""
     # lazy: the audit engine (numpy, mcap, rosbags) is loaded only when a command runs
-    from audit import audit_logs
-    from audit.fleet import RayUnavailable, audit_logs_ray
+    from fretc.audit import audit_logs
+    from fretc.audit.fleet import RayUnavailable, audit_logs_ray
 
     opts = (ctx.meta.get(META) if ctx is not None else None) or {}
     if "ray" not in opts:

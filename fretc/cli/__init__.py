@@ -1,14 +1,14 @@
 """The ``fretc`` command (click): the group and the registration of its sub-commands, one
-module per sub-command in this folder (shared options: :mod:`fretc.options`).
+module per sub-command in this folder (shared options: :mod:`fretc.cli.options`).
 
 ``fretc FILE... --emit ltl|monitor|psl`` compiles requirement files (the default command,
-``fretc compile``: :mod:`fretc.compile`); ``fretc audit`` checks recorded runs
-(:mod:`fretc.audit`); ``fretc report`` writes the traceability report (:mod:`fretc.report`);
-``fretc check`` (:mod:`fretc.check`), ``fretc inspect`` (:mod:`fretc.inspect`), ``fretc
-watch`` and ``fretc replay`` (:mod:`fretc.watch`), ``fretc export`` (:mod:`fretc.export`),
-``fretc estimate`` (:mod:`fretc.estimate`). Exit codes: 0 success, 1 a requirement
+``fretc compile``: :mod:`fretc.cli.compile`); ``fretc audit`` checks recorded runs
+(:mod:`fretc.cli.audit`); ``fretc report`` writes the traceability report (:mod:`fretc.cli.report`);
+``fretc check`` (:mod:`fretc.cli.check`), ``fretc inspect`` (:mod:`fretc.cli.inspect`), ``fretc
+watch`` and ``fretc replay`` (:mod:`fretc.cli.watch`), ``fretc export`` (:mod:`fretc.cli.export`),
+``fretc estimate`` (:mod:`fretc.cli.estimate`). Exit codes: 0 success, 1 a requirement
 failed (or, for ``audit``, a violation), 2 usage or input errors (every
-:class:`common.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
+:class:`fretc.common.errors.FretcError` that reaches the group), 3 an incomplete audit, 4 an
 internal error (a generated monitor that is not valid: nothing is written), 5 a probability
 requirement undecided (too few runs: ``audit``, ``estimate``).
 """
@@ -20,10 +20,10 @@ import sys
 
 import click
 
-from common.errors import FretcError, error_text
+from fretc.common.errors import FretcError, error_text
 
-from .compile import compile_cmd
-from .options import shown
+from fretc.cli.compile import compile_cmd
+from fretc.cli.options import shown
 
 
 class _DefaultGroup(click.Group):
@@ -68,7 +68,7 @@ class _DefaultGroup(click.Group):
 
     def invoke(self, ctx):
         """Run the sub-command; an input error of any stage (:class:`FretcError`) that it
-        does not report itself is printed here (:func:`common.errors.error_text`, control
+        does not report itself is printed here (:func:`fretc.common.errors.error_text`, control
         characters escaped) with exit code 2. Anything else that escapes (a defect of fretc:
         a RecursionError, an OverflowError, ...) is an internal error: one line naming it and
         asking for a report, exit code 4, never a traceback with exit 1 (the code of

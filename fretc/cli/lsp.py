@@ -1,4 +1,4 @@
-"""``fretc lsp``: the FRETish language server over stdio (:mod:`editor.server`), for any
+"""``fretc lsp``: the FRETish language server over stdio (:mod:`fretc.editor.server`), for any
 editor with a Language Server Protocol client (VS Code, Neovim, Emacs' eglot; see
 docs/guide/editors.md). Needs the ``editor`` extra (``pip install 'fretc[editor]'``)."""
 
@@ -18,7 +18,7 @@ def lsp_cmd(stdio):
     """Serve the FRETish language server over stdio: diagnostics, hover, completion, go to
     definition, document symbols for .fret files."""
     try:
-        from editor.server import main
+        from fretc.editor.server import main
     except ImportError as exc:
         click.echo(f"error: fretc lsp needs pygls ({exc.name} is missing): "
                    "pip install 'fretc[editor]'", err=True)
