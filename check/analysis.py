@@ -244,7 +244,8 @@ def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckRe
     True when it is satisfiable (the later checks are meaningful)."""
     whole = ck.sat([x.phi for x in comp]) if len(comp) > 1 else ck.sat([comp[0].phi])
     if len(comp) > 1 and whole is False and not alone_bad:
-        found = ck.minimal_subsets(comp, [], lambda s: _neg(ck.sat([y.phi for y in s])))
+        found = ck.minimal_subsets(comp, [], lambda s: _neg(ck.sat([y.phi for y in s])),
+                                   known_bad=True)
         names = [_ids(s) for s in found.subsets]
         involved = sorted({i for s in names for i in s},
                           key=lambda i: [x.id for x in comp].index(i))
@@ -290,7 +291,8 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
                 f"non-vacuity of {x.id} ({x.location}) unknown: " + WHY_UNKNOWN))
             continue
         found = ck.minimal_subsets(
-            comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])))
+            comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])),
+            known_bad=True)
         names = [_ids(s) for s in found.subsets]
         if names and names[0] == [x.id]:
             msg = (f"{x.id} ({x.location}) can only be satisfied vacuously: its scope is "
@@ -302,7 +304,8 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
                    "fires its trigger; "
                    + subsets_text(names, found.standing, "set forcing this")
                    + (f" (enumeration cut by its budget of {ck.mus_budget} subset checks)"
-                      if found.cut else ""))
+                      if found.cut else "")
+                   + (" (some subset checks were unknown)" if found.unknown else ""))
         involved = [x.id] + sorted({i for s in names for i in s if i != x.id})
         result.findings.append(Finding("vacuous", "error", involved, msg, subsets=names,
                                        standing=found.standing, cut=found.cut,

@@ -204,7 +204,8 @@ class Checker:
 
     # ---------------------------------------------------------------- subsets
     def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
-                        bad: Callable[[list[CheckItem]], object]) -> "Subsets":
+                        bad: Callable[[list[CheckItem]], object],
+                        known_bad: bool = False) -> "Subsets":
         """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
         smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
 
@@ -213,11 +214,14 @@ class Checker:
         of them (the count, not the time: the same input gives the same subsets on any
         machine). Only subsets connected by shared variables are tried (a disconnected bad
         subset is never minimal). Each subset found has a standing (:class:`Subsets`).
+        ``known_bad``: the caller has already found the whole pool bad (it is not asked
+        again: a second query of the same set, its parts in another order, could run past
+        the budget where the first did not, and lose the one subset known).
         """
         must_ids = {x.index for x in must}
         rest = [x for x in pool if x.index not in must_ids]
         out = Subsets()
-        whole = bad(list(must) + rest)
+        whole = True if known_bad else bad(list(must) + rest)
         if whole is not True:
             out.unknown = whole == UNKNOWN
             return out
