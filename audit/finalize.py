@@ -191,7 +191,7 @@ class _Ticks:
 
 def _own_ticks(r: RequirementPlan, res: ClockPass, bindings: Bindings | None) -> _Ticks:
     """The ticks of ``r``'s clock, with the log times of the messages its own topics held."""
-    own_topics = sorted(clock_key(r, bindings)) if bindings is not None else []
+    own_topics = sorted(clock_key(r, bindings).topics) if bindings is not None else []
     held = [res.log_times[t] for t in own_topics if t in res.log_times] or \
         list(res.log_times.values())
     return _Ticks(res, held, bindings)

@@ -9,7 +9,7 @@ from fretc.common.problems import LogError, SignalError
 from fretc.signals import sample_blocks
 from fretc.logs import open_log
 from fretc.audit.model import AuditPlan
-from fretc.audit.passes import clock_key
+from fretc.audit.passes import ClockKey, clock_key
 
 __all__ = ["operand_values"]
 
@@ -32,16 +32,16 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
     if not wanted:
         return
     at = {(key, t) for key, _a, _v, ticks in needs for t in ticks}
-    last: dict[frozenset, int] = {}  # clock -> its last tick shown: the pass ends after it
+    last: dict[ClockKey, int] = {}  # clock -> its last tick shown: the pass ends after it
     for key, t in at:
         last[key] = max(last.get(key, -1), t)
     aux_bindings = Bindings({name: aux for name, (_l, aux) in wanted.items()}, bindings.tick,
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
-    got: dict[tuple[frozenset, str], dict[int, object]] = {}
+    got: dict[tuple[ClockKey, str], dict[int, object]] = {}
     try:
         source = (first.reopen() if first is not None else None) or open_log(
             path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
-        done: set[frozenset] = set()
+        done: set[ClockKey] = set()
         blocks = iter(sample_blocks(source, aux_bindings, groups))
         for key, blk in blocks:
             for i in range(len(blk.times)):
@@ -76,8 +76,8 @@ def _operands_wanted(bindings: Bindings, active, verdicts):
     """(operand signal name -> (label, its binding); clock -> (signal names, clock); one
     (clock, signal name, verdict, ticks shown) per operand of a shown variable)."""
     wanted: dict[str, tuple[str, object]] = {}  # aux name -> (label, binding)
-    groups: dict[frozenset, tuple[list[str], frozenset]] = {}
-    needs: list[tuple[frozenset, str, object, list[int]]] = []
+    groups: dict[ClockKey, tuple[list[str], frozenset]] = {}
+    needs: list[tuple[ClockKey, str, object, list[int]]] = []
     for r in active:
         v = verdicts[r.index]
         if v.verdict != "violated" or not v.values:
@@ -93,7 +93,7 @@ def _operands_wanted(bindings: Bindings, active, verdicts):
                 continue
             for label, aux in pairs:
                 wanted[aux.name] = (label, aux)
-                names = groups.setdefault(key, ([], key))[0]
+                names = groups.setdefault(key, ([], key.topics))[0]
                 if aux.name not in names:
                     names.append(aux.name)
                 needs.append((key, aux.name, v, [t for t, _ns, _x in v.values[name]]))

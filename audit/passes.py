@@ -1,9 +1,12 @@
 """The passes over one log: each requirement sampled on its own clock and the columns kept
 (:func:`run_passes`); then everything cut at the damage (:func:`cut_at_damage`).
 
-A requirement's clock is the set of topics its variables read (../shared/DESIGN.md, "Each
-verdict stands alone"); requirements on the same clock share one sampled stream
-(:func:`fretc.signals.sample_groups`). The columns are judged afterwards, once, by
+A requirement's clock is its own variables (their bindings, and so the topics they read):
+../shared/DESIGN.md, "Each verdict stands alone". Its tick grid, first and last tick,
+warm-up (a binding that reads a topic's previous message waits for its second), gaps and
+closing tick are those of its own variables only, so no other requirement of the run can
+change them; requirements whose variables are the same share one sampled stream
+(:func:`fretc.signals.sample_groups`), which for them is the same thing. The columns are judged afterwards, once, by
 :func:`fretc.monitors.judge.judge` (:mod:`fretc.audit.finalize`).
 """
 
@@ -11,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -23,7 +26,8 @@ from fretc.logs import CSV_TOPIC
 from fretc.audit.columns import TickColumns
 from fretc.audit.model import AuditPlan, RequirementPlan
 
-__all__ = ["ClockPass", "LogPasses", "run_passes", "cut_at_damage", "clock_key", "restrict",
+__all__ = ["ClockPass", "ClockKey", "LogPasses", "run_passes", "cut_at_damage", "clock_key",
+           "restrict",
            "expected_ticks", "lost_in_words", "MAX_TICKS"]
 
 
@@ -50,9 +54,9 @@ class LogPasses:
     """One read of a log: a :class:`ClockPass` per clock, and what went wrong per clock."""
 
     sampling: Any
-    passes: dict[frozenset, ClockPass]
-    failed: dict[frozenset, dict[str, SignalError]]
-    errors: dict[frozenset, SignalError]
+    passes: dict[ClockKey, ClockPass]
+    failed: dict[ClockKey, dict[str, SignalError]]
+    errors: dict[ClockKey, SignalError]
 
 
 def restrict(b: Bindings, names: list[str]) -> Bindings:
@@ -74,27 +78,36 @@ def expected_ticks(source, bindings: Bindings | None) -> int | None:
     return (en - st) // bindings.tick.period_ns + 1
 
 
-def clock_key(r: RequirementPlan, bindings: Bindings | None) -> frozenset:
-    """The clock a requirement is sampled on: the topics of its own variables
-    (../shared/DESIGN.md, "Each verdict stands alone": its tick grid, start, end and warm-up
-    come from them and the bindings' tick, never from other requirements of the run)."""
+class ClockKey(NamedTuple):
+    """The clock a requirement is sampled on (:func:`clock_key`): ``variables`` its bound
+    FRET variables, ``topics`` the topics they read."""
+
+    variables: frozenset
+    topics: frozenset
+
+
+def clock_key(r: RequirementPlan, bindings: Bindings | None) -> ClockKey:
+    """The clock a requirement is sampled on: its own bound variables and their topics
+    (../shared/DESIGN.md, "Each verdict stands alone": its tick grid, start, end, warm-up
+    and gaps come from them and the bindings' tick, never from other requirements of the
+    run; two requirements share a clock only when their variables are the same)."""
     if bindings is None:
-        return frozenset()
-    return frozenset(t for v in r.variables if v in bindings.variables
-                     for t in bindings.variables[v].topics)
+        return ClockKey(frozenset(), frozenset())
+    names = frozenset(v for v in r.variables if v in bindings.variables)
+    return ClockKey(names, frozenset(t for v in names for t in bindings.variables[v].topics))
 
 
 class _Clock:
     """The columns of one clock's requirements while the log is read."""
 
-    def __init__(self, key: frozenset, rs: list[RequirementPlan],
+    def __init__(self, key: ClockKey, rs: list[RequirementPlan],
                  bindings: Bindings | None) -> None:
         self.names: list[str] = []
         for r in rs:
             for v in r.variables:
                 if v not in self.names:
                     self.names.append(v)
-        topics = sorted(key) if bindings is not None else [CSV_TOPIC]
+        topics = sorted(key.topics) if bindings is not None else [CSV_TOPIC]
         self.columns = TickColumns(self.names, topics)
 
 
@@ -125,13 +138,13 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
             :data:`MAX_TICKS` ticks.
     """
     expected = expected_ticks(source, bindings)
-    groups: dict[frozenset, list[RequirementPlan]] = {}
+    groups: dict[ClockKey, list[RequirementPlan]] = {}
     for r in active:
         groups.setdefault(clock_key(r, bindings), []).append(r)
     clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
     if bindings is not None:
         sampling = sample_blocks(source, bindings,
-                                 {key: (c.names, key) for key, c in clocks.items()})
+                                 {key: (c.names, key.topics) for key, c in clocks.items()})
         stream = iter(sampling)
         failed, errors = sampling.failed, sampling.errors
     else:
@@ -156,7 +169,7 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
         times, columns, log_times = clock.columns.finish()
         s = sampling.groups[key] if bindings is not None else sampling
         passes[key] = ClockPass(s, times, columns, log_times)
-        cut_at_damage(passes[key], source, bindings, key)
+        cut_at_damage(passes[key], source, bindings, key.topics)
     return LogPasses(sampling, passes, failed, errors)
 
 

@@ -44,7 +44,7 @@ from fretc.audit.finalize import between_ticks, finalize
 from fretc.audit.log import log_engine, summarize_clocks
 from fretc.audit.log_problems import collect_problems, problem_json
 from fretc.audit.operands import operand_values
-from fretc.audit.passes import ClockPass, clock_key, restrict
+from fretc.audit.passes import ClockKey, ClockPass, clock_key, restrict
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME
 from fretc.live.columns import LiveColumns
@@ -336,7 +336,7 @@ class Watch:
         monitors = {r.index: r.monitor_cls() for r in active if engine[r.index] == "stepwise"}
         for r in active:
             self.live[r.index].offline = r.offline
-        groups: dict[frozenset, list] = {}
+        groups: dict[ClockKey, list] = {}
         for r in active:
             groups.setdefault(clock_key(r, bindings), []).append(r)
         spec = {}
@@ -349,8 +349,8 @@ class Watch:
                 for v in r.variables:
                     if v not in names:
                         names.append(v)
-            spec[key] = (names, key)
-            self._cols[key] = LiveColumns(names, sorted(key))
+            spec[key] = (names, key.topics)
+            self._cols[key] = LiveColumns(names, sorted(key.topics))
             order[key] = [(r, monitors.get(r.index), self.live[r.index]) for r in rs]
             for r in rs:
                 self._group[r.index] = key
@@ -362,7 +362,7 @@ class Watch:
         for key, tick in sampling:
             t = tick.time
             if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
-                    src.absent and src.absent.at(key, t)):
+                    src.absent and src.absent.at(key.topics, t)):
                 self._unknown[key] += 1
                 # ticks skipped on the busiest clock (each requirement counts its own)
                 self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
@@ -388,11 +388,11 @@ class Watch:
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
                 passes[key].intact_end = cut + 1
-            left = src.left_for_good(key)
+            left = src.left_for_good(key.topics)
             if left is not None:  # a publisher it reads left and the run went on without it
                 end, res = left + 1 if left != NO_TIME else NO_TIME, passes[key]
                 res.intact_end = min(end, end if res.intact_end is None else res.intact_end)
-                gone = sorted(t for t in key if src.left_for_good((t,)) is not None)
+                gone = sorted(t for t in key.topics if src.left_for_good((t,)) is not None)
                 res.lost = (f"the publisher of {', '.join(gone)} left (unadvertised) and did "
                             "not come back before the run ended")
         self._live_evidence()

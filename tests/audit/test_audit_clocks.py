@@ -71,3 +71,36 @@ def test_alone_and_in_random_groups_agree_on_every_trace(plan, log):
     ids = [r.id for r in plan.requirements]
     groups = [rng.sample(ids, rng.randint(2, len(ids))) for _ in range(6)] + [ids]
     _check(plan, log, groups)
+
+
+def test_a_binding_that_reads_the_previous_message_shifts_no_neighbour(tmp_path):
+    """``x_step = "/v.x@delta"`` waits for the second message of /v; ``A: always x_val <= 5``
+    on the same topic is still judged from the first, where x = 10 violates it, alone and
+    beside the @delta requirement alike (it used to be satisfied beside it)."""
+    import json as _json
+
+    from mcap.writer import Writer
+
+    log = tmp_path / "v.mcap"
+    with open(log, "wb") as f:
+        w = Writer(f)
+        w.start()
+        sid = w.register_schema("V", "jsonschema", _json.dumps(
+            {"type": "object", "properties": {"x": {"type": "number"}}}).encode())
+        cid = w.register_channel("/v", "json", sid)
+        for i, x in enumerate([10, 1, 2, 3, 2, 1]):
+            t = 1_000_000_000 + i * 100_000_000
+            w.add_message(cid, t, _json.dumps({"x": x}).encode(), t)
+        w.finish()
+    (tmp_path / "r.fret").write_text("A: the sw shall always satisfy x_val <= 5\n"
+                                     "B: the sw shall always satisfy x_step <= 100\n")
+    (tmp_path / "r.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\nx_val = "/v.x"\nx_step = "/v.x@delta"\n')
+    both = load_plan(AuditConfig(requirements=(str(tmp_path / "r.fret"),)))
+    got = _verdicts(both, log)
+    alone = _verdicts(_subset(both, {"A"}), log)
+    assert got["A"] == alone["A"]
+    a, b = _json.loads(got["A"]), _json.loads(got["B"])
+    assert a["verdict"] == "violated" and a["first_violation"]["tick"] == 0
+    assert a["warmup_ticks"] == 0 and b["warmup_ticks"] == 1
+    assert b["verdict"] == "satisfied"
