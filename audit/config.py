@@ -31,6 +31,9 @@ class AuditConfig:
             (``--msg-path``, :mod:`fretc.logs.msg_path`).
         text_attribute: the attribute of ReqIF / Doorstop requirements holding the FRETish
             text (``--text-attribute``; None: :mod:`fretc.fretish.sources`' default).
+        bridge_gaps_ns: ``--bridge-gaps``: gaps of a log shorter than this (ns) are bridged
+            (the value before held over them, each listed) instead of leaving their ticks
+            unknown (:mod:`fretc.audit.gaps`); None bridges none (the default).
     """
 
     requirements: tuple[str, ...]
@@ -43,4 +46,5 @@ class AuditConfig:
     select_logs: bool = True
     msg_path: tuple[str, ...] = ()
     text_attribute: str | None = None
+    bridge_gaps_ns: int | None = None
 

@@ -12,20 +12,18 @@ the one the intact span decides (:mod:`fretc.audit.damage`).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from fretc.signals.bindings import Bindings
 from fretc.signals.clock import unsampled_of
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.monitors.interval import OBLIGATIONS, EvidenceUnsupported
-from fretc.monitors.judge import judge, nan_ticks
-from fretc.common.problems import NAN
+from fretc.monitors.judge import judge
 from fretc.monitors.stepwise import to_python
 from fretc.audit.verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.passes import ClockPass, clock_key
+from fretc.audit.unknown_ticks import judge_three, prepare, unknown_of
 
 __all__ = ["finalize", "between_ticks"]
 
@@ -49,9 +47,11 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
              v, la) -> None:
     """Set the verdict ``v`` (:class:`fretc.audit.verdict.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
-    violation the first violation with the values and message log times around it.
-    ``la`` is the log's :class:`fretc.audit.verdict.LogAudit`."""
-    res = _cut_at_nan(r, res, bindings, v, la)
+    violation the first violation with the values and message log times around it. Ticks
+    a gap or a NaN leaves unknown are judged in three-valued semantics
+    (:mod:`fretc.audit.unknown_ticks`). ``la`` is the log's
+    :class:`fretc.audit.verdict.LogAudit`."""
+    res, nan_unknown = prepare(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
         _no_tick(res, v, la)
@@ -69,14 +69,22 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     if j.note is not None:
         v.notes.append(j.note)
     ev, holds, status, st_tick = j.evidence, j.holds, j.ltl3, j.ltl3_tick
-    v.ltl3 = Ltl3(status, st_tick, int(res.times[st_tick]) if st_tick is not None else None)
     if ev is not None:
         v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
-    if res.intact_end is not None:
-        holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+    three = unknown_of(r, res, nan_unknown).any()
+    if three:
+        holds, ev, status, st_tick = judge_three(r, res, v, j, nan_unknown)
+    v.ltl3 = Ltl3(status, st_tick, int(res.times[st_tick]) if st_tick is not None else None)
+    if three:
         if holds is None:
             return
-    _robustness(r, res, bindings, v, j.robustness, holds)
+        v.notes.append(f"robustness unavailable: {v.unknown_ticks} of its ticks are unknown")
+    else:
+        if res.intact_end is not None:
+            holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
+            if holds is None:
+                return
+        _robustness(r, res, bindings, v, j.robustness, holds)
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous":
@@ -85,39 +93,6 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
         return
     v.verdict = "violated"
     _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
-
-
-def _cut_at_nan(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v,
-                la) -> ClockPass:
-    """``res`` judged only before the first tick at which a comparison of ``r`` reads NaN
-    (:mod:`fretc.monitors.nan`: that tick's value is unread), with a data problem of kind
-    ``nan`` for ``r`` in ``la``; ``res`` itself when there is none, or when the binding
-    file says ``[tick] nan = "false"`` (then a note says so)."""
-    if bindings is not None and bindings.tick.nan == "false":
-        v.notes.append("NaN policy of the binding file ([tick] nan = \"false\"): a "
-                       "comparison with NaN is false")
-        return res
-    n = len(res.times)
-    try:
-        bad = np.flatnonzero(nan_ticks(r.requirement, res.columns, n))
-    except (EvidenceUnsupported, KeyError, ValueError):
-        return res
-    if len(bad) == 0:
-        return res
-    first, t = int(bad[0]), int(res.times[bad[0]])
-    what = (f"{len(bad)} tick{'s' if len(bad) != 1 else ''} of {r.id} compare NaN (first "
-            f"at tick {first}, {t} ns; last at tick {int(bad[-1])}, "
-            f"{int(res.times[bad[-1]])} ns): a comparison with NaN is neither true nor "
-            "false, so those ticks are unread")
-    la.problems.append({"kind": NAN, "topic": None, "log_time_ns": t,
-                        "end_time_ns": int(res.times[bad[-1]]), "detail": what})
-    la.problem_counts[f"{NAN} {r.id}"] = len(bad)
-    cut = replace(res, times=res.times[:first],
-                  columns={k: c[:first] for k, c in res.columns.items()},
-                  log_times={k: c[:first] for k, c in res.log_times.items()},
-                  intact_end=t if res.intact_end is None else min(t, res.intact_end),
-                  lost="; ".join(x for x in (res.lost, what) if x))
-    return cut
 
 
 def _no_tick(res: ClockPass, v, la) -> None:
@@ -265,7 +240,9 @@ def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bi
         col = res.columns.get(name)
         if col is None:
             continue
-        v.values[name] = [(i, int(times[i]), to_python(col[i])) for i in ticks]
+        unknown = res.unknown.get(name)  # a value a gap left unknown is shown as None
+        v.values[name] = [(i, int(times[i]), None if unknown is not None and unknown[i]
+                           else to_python(col[i])) for i in ticks]
     if bindings is not None:
         topics = sorted({t for name in r.variables if name in bindings.variables
                          for t in bindings.variables[name].topics})

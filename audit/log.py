@@ -27,6 +27,7 @@ from fretc.logs import open_log
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
 from fretc.audit.finalize import between_ticks, finalize
+from fretc.audit.gaps import merged_gaps
 from fretc.audit.log_problems import (collect_problems, damage_before_topics, damage_of, problem_json,
                            silent_reasons)
 from fretc.audit.model import AuditPlan, RequirementPlan
@@ -258,6 +259,7 @@ class _LogRun:
                 self._fail_all(str(exc), active)
                 break
             collect_problems(source, result.sampling, self.problems, self.problem_counts)
+            self.la.gaps = merged_gaps(result.gaps, result.bridged)
             break
         return result, active, b
 

@@ -13,7 +13,7 @@ change them; requirements whose variables are the same share one sampled stream
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -24,11 +24,11 @@ from fretc.signals import blocks_of_ticks, sample, sample_blocks
 from fretc.signals.blocks import MAX_TICKS
 from fretc.logs import CSV_TOPIC
 from fretc.audit.columns import TickColumns
+from fretc.audit.gaps import gaps_of_clock, inner_gaps, insert_gap_ticks, split_bridged, unknown_masks
 from fretc.audit.model import AuditPlan, RequirementPlan
 
-__all__ = ["ClockPass", "ClockKey", "LogPasses", "run_passes", "cut_at_damage", "clock_key",
-           "restrict",
-           "expected_ticks", "lost_in_words", "MAX_TICKS"]
+__all__ = ["ClockPass", "ClockKey", "LogPasses", "run_passes", "cut_at_damage", "mark_gaps",
+           "clock_key", "restrict", "expected_ticks", "lost_in_words", "MAX_TICKS"]
 
 
 
@@ -42,11 +42,20 @@ class ClockPass:
     columns: dict[str, np.ndarray]
     log_times: dict[str, np.ndarray]
     cut: int = 0  # ticks dropped after the damage (cut_at_damage)
-    intact_end: int | None = None  # exclusive bound of the judged ticks' times
+    intact_end: int | None = None  # exclusive bound of the judged ticks' times (a cut)
     #: when the judged span ends where something could not be read - messages of the
     #: clock's topics present but not decoded (topic, count, channel, first and last log
     #: time), or a comparison with NaN (audit.finalize) - that, in words
     lost: str | None = None
+    #: variable -> bool array over the ticks: where a gap leaves it unknown (only variables
+    #: with an unknown tick; :func:`mark_gaps`)
+    unknown: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the log's gaps that may hold messages of this clock's topics (:class:`fretc.logs.Gap`)
+    gaps: list = field(default_factory=list)
+    #: ticks inserted for gaps of a tick topic (indexes), unknown for every variable
+    tick_gaps: list[int] = field(default_factory=list)
+    #: the messages of its topics present but not decoded, in words (for reasons)
+    lost_words: str = ""
 
 
 @dataclass
@@ -57,6 +66,9 @@ class LogPasses:
     passes: dict[ClockKey, ClockPass]
     failed: dict[ClockKey, dict[str, SignalError]]
     errors: dict[ClockKey, SignalError]
+    #: the log's inner gaps judged as unknown ticks, and those bridged (``--bridge-gaps``)
+    gaps: list = field(default_factory=list)
+    bridged: list = field(default_factory=list)
 
 
 def restrict(b: Bindings, names: list[str]) -> Bindings:
@@ -164,29 +176,29 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
                               "choose a longer tick period")
         if report is not None:
             report(int(block.times[-1]), count)
-    passes: dict[frozenset, ClockPass] = {}
+    passes: dict[ClockKey, ClockPass] = {}
+    gaps, bridged = split_bridged(inner_gaps(source), plan.config.bridge_gaps_ns)
     for key, clock in clocks.items():
         times, columns, log_times = clock.columns.finish()
         s = sampling.groups[key] if bindings is not None else sampling
-        passes[key] = ClockPass(s, times, columns, log_times)
-        cut_at_damage(passes[key], source, bindings, key.topics)
-    return LogPasses(sampling, passes, failed, errors)
+        passes[key] = res = ClockPass(s, times, columns, log_times)
+        cut_at_damage(res, source, bindings, key.topics)
+        mark_gaps(res, clock.names, bindings, gaps, key.topics,
+                  lost_in_words(source, key.topics if bindings is not None else [CSV_TOPIC]))
+    return LogPasses(sampling, passes, failed, errors, gaps, bridged)
 
 
 def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
                   topics: frozenset = frozenset()) -> None:
-    """Keep only the ticks of the span read completely (../shared/DESIGN.md "Damage is never
-    evidence"): those strictly before the source's ``intact_end_of(topics)`` (a cut, the
-    first gap, or the first message of one of the clock's ``topics`` that was present but
-    not decoded, which ends the held value of its topic as a cut does; under the header
-    time base, ``header_lag_ns`` earlier, since a lost message's stamp may precede its log
-    time by that much). Sets ``res.cut`` to the number of ticks dropped, and ``res.lost``
-    when messages not decoded end the span."""
-    end = source.intact_end_of(topics)
+    """Keep only the ticks before the cut at the end of the log (../shared/DESIGN.md "Damage
+    is a gap"): those strictly before :attr:`fretc.logs.LogSource.cut_start`, the start of
+    a gap nothing after which was read (a truncation); under the header time base
+    ``header_lag_ns`` earlier, since a lost message's stamp may precede its log time by that
+    much. Sets ``res.cut`` to the number of ticks dropped. Gaps the log was read on after
+    are not cuts: they leave ticks unknown (:func:`mark_gaps`)."""
+    end = getattr(source, "cut_start", None)
     if end is None:
         return
-    if end != source.intact_end:
-        res.lost = lost_in_words(source, topics)
     if bindings is not None and bindings.time_base != "log":
         end -= bindings.header_lag_ns
     keep = int(np.searchsorted(res.times, end, side="left"))
@@ -198,6 +210,75 @@ def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
     res.times = res.times[:keep]
     res.columns = {k: v[:keep] for k, v in res.columns.items()}
     res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+
+
+def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
+              gaps: list, topics: frozenset, lost: str = "") -> None:
+    """Set ``res.unknown`` (variable -> ticks it is unknown at) and ``res.gaps`` (the gaps
+    that may hold messages of the clock's ``topics``) from the log's inner ``gaps``
+    (:func:`fretc.audit.gaps.inner_gaps`, bridged ones removed).
+
+    A gap reaching past the clock's last tick is a cut there (the run went on, unread:
+    :func:`cut_at_damage`'s rule); one before its first tick leaves the start of the run
+    unknown: one tick is put before the first, unknown for every variable; on a clock that
+    ticks on a topic's messages, a gap of that topic is one unknown tick of its own
+    (:func:`fretc.audit.gaps.insert_gap_ticks`). Inserted ticks are listed in
+    ``res.tick_gaps`` (how many ticks they stand for is not known). ``lost``: the
+    messages of the clock's topics present but not decoded, in words
+    (:func:`lost_in_words`), for the reasons given."""
+    own = gaps_of_clock(gaps, topics if bindings is not None else [CSV_TOPIC])
+    res.gaps = own
+    res.lost_words = lost
+    if not own or not len(res.times):
+        return
+    _cut_at_trailing_gap(res, own)
+    if not len(res.times):
+        return
+    lag = bindings.header_lag_ns if bindings is not None and bindings.time_base != "log" else 0
+    tick_topic = bindings.tick.topic if bindings is not None else None
+    if tick_topic is not None:
+        res.tick_gaps = insert_gap_ticks(res, own, tick_topic)
+    res.unknown = unknown_masks(res.times, res.log_times, names, bindings, own, lag)
+    first = int(res.times[0])
+    early = [g.start for g in own if g.start is None or g.start - lag < first]
+    if early:
+        at = min((s - lag for s in early if s is not None), default=first - 1)
+        _insert_first(res, min(at, first - 1))
+    for i in res.tick_gaps:
+        for name in names:
+            mask = res.unknown.setdefault(name, np.zeros(len(res.times), np.bool_))
+            mask[i] = True
+
+
+def _cut_at_trailing_gap(res: ClockPass, own: list) -> None:
+    """A gap that ends at or after the clock's last tick: nothing after its start was read
+    for this clock, as after a cut; the ticks from its start on are dropped."""
+    last = int(res.times[-1])
+    starts = [g.start for g in own if g.end is None or g.end >= last]
+    if not starts:
+        return
+    end = -(2**63) if any(s is None for s in starts) else min(starts)
+    keep = int(np.searchsorted(res.times, end, side="left"))
+    res.intact_end = end if res.intact_end is None else min(end, res.intact_end)
+    causes = sorted({g.cause or "gap" for g in own if g.end is None or g.end >= last})
+    res.lost = "; ".join(x for x in (res.lost, res.lost_words or (
+        f"a gap ({', '.join(causes)}) from log time {end} ns to past its last tick")) if x)
+    if keep < len(res.times):
+        res.cut += len(res.times) - keep
+        res.times = res.times[:keep]
+        res.columns = {k: v[:keep] for k, v in res.columns.items()}
+        res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+
+
+def _insert_first(res: ClockPass, at: int) -> None:
+    """One tick at time ``at`` before the first, standing for the unknown start of the run
+    (its placeholder values are the first tick's; every variable unknown there)."""
+    res.times = np.concatenate(([at], res.times)).astype(np.int64)
+    res.columns = {k: np.concatenate((c[:1], c)) for k, c in res.columns.items()}
+    res.log_times = {k: np.concatenate(([-1], c)).astype(c.dtype)
+                     for k, c in res.log_times.items()}
+    res.unknown = {k: np.concatenate(([True], m)) for k, m in res.unknown.items()}
+    res.tick_gaps = [0] + [i + 1 for i in res.tick_gaps]
 
 
 def lost_in_words(source, topics) -> str:

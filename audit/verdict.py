@@ -192,6 +192,9 @@ class Verdict:
             ``+-inf`` when a boolean decides it; None when ``unknown``, ``error``, or the pt
             formula cannot be evaluated over columns (a note says why).
         robustness_at: the first tick where the margin is that small.
+        unknown_ticks: ticks of this requirement's clock at which something it reads is
+            unknown (a gap of the log, a comparison with NaN): judged in three-valued
+            semantics (:mod:`fretc.audit.unknown_ticks`).
         margin: the margin over time, ``[(tick, time_ns, value)]``: every tick, or on a
             long log the least value of each of :data:`MARGIN_POINTS` runs of consecutive
             ticks (at the tick where it occurs), so no dip is lost.
@@ -225,6 +228,7 @@ class Verdict:
     robustness: float | None = None
     robustness_at: TimePoint | None = None
     margin: list[tuple[int, int, float]] = field(default_factory=list)
+    unknown_ticks: int = 0
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
@@ -261,6 +265,7 @@ class Verdict:
             "engine": self.engine, "notes": self.notes,
             "error": self.error, "unknown_reason": self.unknown_reason,
             "robustness": self._robustness_json(start, val),
+            "unknown_ticks": self.unknown_ticks,
         }
 
     def _robustness_json(self, start: int | None, val) -> dict:
@@ -298,6 +303,10 @@ class LogAudit:
         error: a log-level input error (unreadable log, no bindings for a ROS log).
         warnings: remarks on how far the audit can be trusted (e.g. the tick topic's
             measured rate differs from its declared nominal rate by more than 10 %).
+        gaps: the log's gaps (:func:`fretc.audit.gaps.gap_json`: log-time span, topics,
+            cause, bridged): the spans in which messages were lost and the log was read on
+            after; their ticks are unknown for the requirements reading those topics, unless
+            bridged (``--bridge-gaps``).
     """
 
     log: str
@@ -322,6 +331,7 @@ class LogAudit:
     ticks_after_damage: int = 0
     damage_cut: bool = False
     warnings: list[str] = field(default_factory=list)
+    gaps: list[dict[str, Any]] = field(default_factory=list)
 
     def to_json(self) -> dict:
         """The log's audit as the audit JSON gives it (``docs/reference/audit.schema.json``)."""
@@ -342,6 +352,8 @@ class LogAudit:
             "verdicts": [v.to_json(st, self.time_base) for v in self.verdicts],
             "engine": self.engine, "error": self.error,
             "ticks_after_damage": self.ticks_after_damage, "damage_cut": self.damage_cut,
+            "gaps": [dict(g, start_s=_t(g["start_ns"], st)["s"], end_s=_t(g["end_ns"], st)["s"])
+                     for g in self.gaps],
         }
 
 

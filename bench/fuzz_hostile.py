@@ -189,30 +189,27 @@ SCHEMA_LIES = [
 # --------------------------------------------------------------------------- the oracle
 def unsupported(original, damaged) -> list[str]:
     """The verdicts of ``damaged`` (a LogAudit of a damaged copy) that the damaged log does not
-    support, judged against ``original`` (the intact log's): a pass on a prefix that does not
-    decide it, a violation the intact log does not decide before the damage, a changed verdict
-    where nothing was lost, a partial log without its reason."""
+    support, judged against ``original`` (the intact log's, one way of filling what the
+    damage lost: ../shared/DESIGN.md "Damage is a gap"): a violation or a pass the intact log
+    does not have, a changed verdict where nothing was lost, a verdict on an unreadable
+    log."""
     out = []
     if damaged.error is not None:
         return [f"{v.requirement}: {v.verdict} on an unreadable log"
                 for v in damaged.verdicts if v.verdict != "error"]
-    end = damaged.damage_time_ns if damaged.damage_cut else None
+    passed = ("satisfied", "vacuous")
     for ov, dv in zip(original.verdicts, damaged.verdicts):
         who, verdict = dv.requirement, dv.verdict
-        decided = ov.ltl3.time_ns if ov.ltl3.status == "violated" else None
         if verdict in ("error", "unknown"):
             continue
         if not damaged.partial or not damaged.damage_cut:
             if verdict != ov.verdict:
                 out.append(f"{who}: {verdict} != {ov.verdict} with nothing lost")
             continue
-        if verdict == "violated" and (ov.verdict != "violated" or decided is None
-                                      or (end is not None and decided >= end)):
-            out.append(f"{who}: violated, the intact log decides no violation before {end}")
-        if verdict in ("satisfied", "vacuous") and (dv.ltl3.status != "satisfied"
-                                                   or ov.verdict not in ("satisfied",
-                                                                         "vacuous")):
-            out.append(f"{who}: {verdict} on a prefix that does not decide it")
+        if verdict == "violated" and ov.verdict != "violated":
+            out.append(f"{who}: violated, the intact log is {ov.verdict}")
+        if verdict in passed and ov.verdict not in passed:
+            out.append(f"{who}: {verdict}, the intact log is {ov.verdict}")
     return out
 
 

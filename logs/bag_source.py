@@ -161,7 +161,7 @@ class BagSource(LogSource):
                     self.counts[conn.topic] = self.counts.get(conn.topic, 0) + 1
                     yield Message(conn.topic, log_time, log_time, header_stamp(data), data)
         except _BAG_ERRORS as exc:  # data corrupt part-way
-            self._gap(last)
+            self._gap(last, cause=P.CORRUPT_RECORD)
             self._problem(P.CORRUPT_RECORD, None, last,
                           f"reading stopped: {type(exc).__name__}: {exc}")
 

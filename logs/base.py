@@ -20,7 +20,11 @@ from fretc.common.units import NS_PER_S
 
 from fretc.common.problems import DataProblem, ProblemLog
 
-__all__ = ["Message", "LogSource", "header_stamp"]
+__all__ = ["Message", "Gap", "LogSource", "header_stamp", "LOST_TIMES_CAP"]
+
+#: Log times kept per (kind, topic, channel) of messages present but not decoded; past it,
+#: the rest of them is one gap from the first one past the cap to the last one.
+LOST_TIMES_CAP = 100_000
 
 
 class Message(NamedTuple):
@@ -57,6 +61,29 @@ def header_stamp(data: Any) -> int | None:
         return None
 
 
+class Gap(NamedTuple):
+    """A span of a log whose messages were lost (../shared/DESIGN.md, "Damage is a gap").
+
+    Attributes:
+        start: log time (ns) from which messages may be missing; None: from the log's start.
+        end: log time (ns, inclusive) up to which they may be missing; None: to the end of
+            the log (a cut: nothing after it was read).
+        topics: the topics whose messages it may have held; None: any topic (a ULog
+            dropout, a chunk whose channels are not known).
+        cause: the data problem kind behind it (``dropout``, ``chunk_crc``, ``truncated``,
+            ``undecodable``, ...), as in the log's problems.
+    """
+
+    start: int | None
+    end: int | None
+    topics: frozenset | None = None
+    cause: str = ""
+
+    def affects(self, topic: str) -> bool:
+        """Whether the gap may have held messages of ``topic``."""
+        return self.topics is None or topic in self.topics
+
+
 class LogSource:
     """A recorded run, read as a stream of :class:`Message` in log-time order.
 
@@ -75,8 +102,11 @@ class LogSource:
             read before a truncation, or the first log time of the first gap; None when the
             damage loses no message (summary, data CRC) or when nothing was read before it.
             Only ticks strictly before it are judged (../shared/DESIGN.md "Damage is never evidence").
-        gaps: ``(start, end)`` log-time spans (ns, inclusive; ``end`` None when unknown) of the
-            data skipped in the latest pass, in the order found.
+        gaps: the :class:`Gap` s of the latest pass (log-time spans, ns, inclusive, of the
+            data skipped; ``end`` None when nothing after it was read), in the order found.
+            A gap whose end was not known when it was found (a record that does not parse,
+            read without an index) ends at the log time of the next message read after it
+            (:meth:`_close_gaps`).
         damage_cut: True when the damage loses messages (truncation or gap), so that only the
             span before ``damage_time`` was read completely; False for damage that loses none
             (summary, data-section CRC).
@@ -100,7 +130,8 @@ class LogSource:
         self.partial = False
         self.damage_time: int | None = None
         self.damage_cut = False
-        self.gaps: list[tuple[int | None, int | None]] = []
+        self.gaps: list[Gap] = []
+        self._open_gaps: list[int] = []  # indexes in gaps whose end comes with the next message
         self._open_damage = False  # damage found at open time (summary): every pass is partial
         self._open_problems = ProblemLog()
         self._pass_problems = ProblemLog()
@@ -110,6 +141,9 @@ class LogSource:
         #: channel/connection id -> (problem kind, reason) of a channel without a decoder
         self._no_decoder: dict[int, tuple[str, str]] = {}
         self.lost: dict[tuple[str, str, int | None], list] = {}
+        #: the log times of the messages counted in :attr:`lost` (the first
+        #: :data:`LOST_TIMES_CAP` of each key)
+        self.lost_times: dict[tuple[str, str, int | None], list[int]] = {}
         #: topic -> field paths to decode (:func:`fretc.logs.selective.install`); None: all
         self._wanted_fields: dict[str, frozenset[tuple]] | None = None
 
@@ -156,10 +190,30 @@ class LogSource:
         got = self.lost.get(key)
         if got is None:
             self.lost[key] = [log_time, log_time, 1, why]
+            self.lost_times[key] = [log_time]
         else:
             got[0] = min(got[0], log_time)
             got[1] = max(got[1], log_time)
             got[2] += 1
+            times = self.lost_times[key]
+            if len(times) < LOST_TIMES_CAP:
+                times.append(log_time)
+
+    def lost_gaps(self) -> list[Gap]:
+        """The messages present but not decoded (:attr:`lost`) as gaps of their own topic:
+        one point gap per message (its log time), or past :data:`LOST_TIMES_CAP` of them
+        one gap to the last; cause the problem kind (``undecodable``, ...)."""
+        out = []
+        for key, (_first, last, count, _why) in sorted(self.lost.items(),
+                                                       key=lambda kv: (kv[1][0], kv[0][0],
+                                                                       kv[0][1])):
+            kind, topic, _ch = key
+            times = sorted(self.lost_times.get(key, ()))
+            topics = frozenset((topic,))
+            out.extend(Gap(t, t, topics, kind) for t in times)
+            if count > len(times) and times:
+                out.append(Gap(times[-1], last, topics, kind))
+        return out
 
     def lost_from(self, topics) -> int | None:
         """The earliest log time (ns) of a message of ``topics`` lost in the latest pass
@@ -185,18 +239,47 @@ class LogSource:
         self.damage_time = None
         self.damage_cut = False
         self.gaps = []
+        self._open_gaps = []
         self._pass_problems = ProblemLog()
         self.lost = {}
+        self.lost_times = {}
 
-    def _gap(self, start: int | None, end: int | None = None) -> None:
-        """Record data lost from log time ``start`` (None: unknown, then the intact span
-        ends at ``start``'s best bound the caller passes) to ``end``: the log is partial and
-        its intact span ends at the earliest gap."""
+    def _gap(self, start: int | None, end: int | None = None, *,
+             topics: frozenset | None = None, cause: str = "", open_end: bool = False
+             ) -> None:
+        """Record data lost from log time ``start`` (None: from the start of the log) to
+        ``end`` (None: to its end) on ``topics`` (None: any), for the problem kind
+        ``cause``: the log is partial. ``open_end``: the end is not known yet; it is the
+        log time of the next message read (:meth:`_close_gaps`), or the log's end when
+        none comes (a cut)."""
         self.partial = True
         self.damage_cut = True
-        self.gaps.append((start, end))
+        if open_end:
+            self._open_gaps.append(len(self.gaps))
+        self.gaps.append(Gap(start, end, topics, cause))
         if start is not None and (self.damage_time is None or start < self.damage_time):
             self.damage_time = start
+
+    def _close_gaps(self, log_time: int) -> None:
+        """A message at ``log_time`` (ns) was read after gaps of unknown end: they end
+        there."""
+        for i in self._open_gaps:
+            g = self.gaps[i]
+            self.gaps[i] = g._replace(end=log_time if g.start is None
+                                      else max(log_time, g.start))
+        self._open_gaps = []
+
+    @property
+    def cut_start(self) -> int | None:
+        """Log time (ns) from which nothing was read to the end of the log (the start of a
+        gap without an end: truncation), or None when the log was read to its end. A value
+        below every log time when the cut's start is not known."""
+        starts = [g.start for g in self.gaps if g.end is None]
+        if not starts:
+            return None
+        if any(s is None for s in starts):
+            return -(2**63)
+        return min(starts)
 
     @property
     def intact_end(self) -> int | None:
@@ -205,7 +288,7 @@ class LogSource:
         nothing before the damage is intact."""
         if not self.damage_cut:
             return None
-        if self.damage_time is None or any(start is None for start, _ in self.gaps):
+        if self.damage_time is None or any(g.start is None for g in self.gaps):
             return -(2**63)
         return self.damage_time
 

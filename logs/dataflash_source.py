@@ -113,7 +113,7 @@ class DataflashSource(LogSource):
             start = reader.offset - fmt.len
             if start > prev_end:
                 lt = int(m.TimeUS) * 1000 if "TimeUS" in fmt.colhash else None
-                self._gap(prev_time, lt)
+                self._gap(prev_time, lt, cause=P.CORRUPT_RECORD)
                 self._problem(P.CORRUPT_RECORD, None, prev_time,
                               f"{start - prev_end} bytes at offset {prev_end} are no record "
                               "(skipped): messages may be lost there", end_time=lt)
@@ -133,7 +133,7 @@ class DataflashSource(LogSource):
 
     def _truncated(self, at: int | None, why: str) -> None:
         """The read ends after the message read last (log time ``at``, ns)."""
-        self._gap(at, None)
+        self._gap(at, None, cause=P.TRUNCATED)
         self._problem(P.TRUNCATED, None, at, f"the log cannot be read past log time {at} "
                                              f"({why}); read up to there")
 

@@ -131,7 +131,7 @@ class _Pass:
         unknown = np.flatnonzero(~self.known[cids])
         for k in unknown.tolist():
             t = int(times[k])
-            self.src._gap(t, t)
+            self.src._gap(t, t, cause=P.UNKNOWN_CHANNEL)
             self.src._problem(P.UNKNOWN_CHANNEL, None, t,
                               f"message on channel id {int(cids[k])} that the summary does "
                               "not define; skipped")

@@ -261,7 +261,7 @@ class McapSource(LogSource):
                                               (rec.channel_id, rec)))
                         n += 1
                     elif rec.channel_id not in index.channels:
-                        self._gap(rec.log_time, rec.log_time)
+                        self._gap(rec.log_time, rec.log_time, cause=P.UNKNOWN_CHANNEL)
                         self._problem(P.UNKNOWN_CHANNEL, None, rec.log_time,
                                       f"message on channel id {rec.channel_id} that the summary "
                                       "does not define; skipped")
@@ -290,17 +290,31 @@ class McapSource(LogSource):
                 raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
             return parse(parse_record(Opcode.CHUNK, raw[9:]))
         except CRCValidationError as exc:
-            self._gap(ci.message_start_time, ci.message_end_time)
+            self._gap(ci.message_start_time, ci.message_end_time, topics=self._chunk_topics(ci),
+                      cause=P.CHUNK_CRC)
             self._problem(P.CHUNK_CRC, None, ci.message_start_time,
                           f"chunk at byte {ci.chunk_start_offset}: {exc}; its messages "
                           f"are skipped: a gap in the log{GAP_NOTE}", ci.message_end_time)
         except Exception as exc:  # mcap, struct, zstd and lz4 raise their own errors
-            self._gap(ci.message_start_time, ci.message_end_time)
+            self._gap(ci.message_start_time, ci.message_end_time, topics=self._chunk_topics(ci),
+                      cause=P.CHUNK_CORRUPT)
             self._problem(P.CHUNK_CORRUPT, None, ci.message_start_time,
                           f"chunk at byte {ci.chunk_start_offset} unreadable "
                           f"({type(exc).__name__}: {exc}); its messages are skipped: a "
                           f"gap in the log{GAP_NOTE}", ci.message_end_time)
         return damaged
+
+    def _chunk_topics(self, ci: ChunkIndex) -> frozenset | None:
+        """The topics of the channels whose messages the chunk ``ci`` holds, from the
+        summary's ChunkIndex (its message index offsets, one per channel; the summary has
+        its own CRC); None (any topic) when it names none or a channel the summary does not
+        define."""
+        index = self._index
+        offsets = getattr(ci, "message_index_offsets", None) or {}
+        if index is None or not offsets:
+            return None
+        topics = [index.channels[c].topic for c in offsets if c in index.channels]
+        return frozenset(topics) if len(topics) == len(offsets) else None
 
     def _check_data_crc(self) -> None:
         """Check the DataEnd data_section_crc (MCAP spec): CRC-32 of bytes [0, DataEnd)."""
@@ -317,7 +331,8 @@ class McapSource(LogSource):
         """A skipped chunk read without the index: its header's times are not covered by a
         CRC, so the gap starts no later than the last good message read before it."""
         start = chunk.message_start_time
-        self._gap(start if last_good is None else min(start, last_good), chunk.message_end_time)
+        self._gap(start if last_good is None else min(start, last_good), chunk.message_end_time,
+                  open_end=True, cause=P.CHUNK_CORRUPT)
 
 
 def _data_follows(f: BinaryIO, at: int, size: int) -> bool:
@@ -405,7 +420,9 @@ class _LinearPass:
             rec = parse_record(opcode, body)
         except RECORD_ERRORS as exc:
             kind = P.CHUNK_CORRUPT if opcode == Opcode.CHUNK else P.CORRUPT_RECORD
-            self.src._gap(self.last_good)  # what it held is lost; its times are unknown
+            # what it held is lost; its times are unknown: from the last message read to
+            # the next one
+            self.src._gap(self.last_good, open_end=True, cause=kind)
             self.src._problem(kind, None, self.last_good,
                               f"{Opcode(opcode).name} record at byte {pos} unreadable "
                               f"({type(exc).__name__}: {exc}); skipped")
@@ -460,12 +477,14 @@ class _LinearPass:
     def _take(self, rec: McapMessage, pos: int) -> None:
         """Note a message's log time; queue it when its topic is wanted."""
         t = rec.log_time
+        if self.src._open_gaps:
+            self.src._close_gaps(t)
         self.last_good = t if self.last_good is None else max(self.last_good, t)
         self.first_time = t if self.first_time is None else min(self.first_time, t)
         ch = self.channels.get(rec.channel_id)
         if ch is None:
             if self.decode:
-                self.src._gap(t, t)
+                self.src._gap(t, t, cause=P.UNKNOWN_CHANNEL)
             if rec.channel_id not in self.reported_channels:
                 self.reported_channels.add(rec.channel_id)
                 self.src._problem(P.UNKNOWN_CHANNEL, None, t,
@@ -485,8 +504,9 @@ class _LinearPass:
             if late:
                 # without an index only damage (a log time or chunk header changed) puts a
                 # message this far out of order: a gap at its log time
-                src._gap(log_time, log_time)
-                src._problem(P.OUT_OF_ORDER, self.channels[rec.channel_id].topic, log_time,
+                topic = self.channels[rec.channel_id].topic
+                src._gap(log_time, log_time, topics=frozenset((topic,)), cause=P.OUT_OF_ORDER)
+                src._problem(P.OUT_OF_ORDER, topic, log_time,
                              f"message is {late} ns older than one already delivered (beyond "
                              f"the {REORDER_WINDOW_NS} ns reorder window); skipped")
                 continue
@@ -499,7 +519,7 @@ class _LinearPass:
         """A DataEnd or Footer record at ``pos`` with Chunk or Message records after it:
         damage (MCAP spec: no data record follows the data section), skipped as a record
         whose content is lost; what it held is a gap from the last good message on."""
-        self.src._gap(self.last_good)
+        self.src._gap(self.last_good, open_end=True, cause=P.CORRUPT_RECORD)
         self.src._problem(P.CORRUPT_RECORD, None, self.last_good,
                           f"{Opcode(opcode).name} record at byte {pos} is followed by Chunk "
                           "or Message records (a damaged record, not the end of the data); "
@@ -509,7 +529,7 @@ class _LinearPass:
         """The record at ``pos`` runs past the end of the file: the pass ends here."""
         what, records = cut_record(f, pos, self.src._size, head)
         self._absorb(records, pos)
-        self.src._gap(self.last_good)
+        self.src._gap(self.last_good, cause=P.TRUNCATED)
         self.src._problem(P.TRUNCATED, None, self.last_good,
                           f"{what}; read up to there (crashed or cut recording)")
 

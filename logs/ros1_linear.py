@@ -163,9 +163,15 @@ class _Ros1Pass:
                         self._take(h, b)
                 elif op in (_OP_CONN, _OP_MSG):
                     self._take(header, body)
-            except Exception as exc:  # bz2/lz4/struct errors: the record is damaged
-                reason = f"record at byte {pos} unreadable ({type(exc).__name__}: {exc})"
-                break
+            except Exception as exc:  # bz2/lz4/struct errors: the record's body is damaged
+                # its framing held: what it held is a gap from the last message read to the
+                # next one, and the read goes on after it
+                self.src._gap(self.last_good, open_end=True, cause=P.CORRUPT_RECORD)
+                self.src._problem(P.CORRUPT_RECORD, None, self.last_good,
+                                  f"record at byte {pos} unreadable ({type(exc).__name__}: "
+                                  f"{exc}); skipped: a gap in the log")
+                pos = nxt
+                continue
             if self.last_good is not None:
                 yield from self._release(self.last_good)
             pos = nxt
@@ -178,7 +184,7 @@ class _Ros1Pass:
         (``summary_corrupt``)."""
         src = self.src
         if reason is not None:
-            src._gap(self.last_good)
+            src._gap(self.last_good, cause=P.TRUNCATED)
             src._problem(P.TRUNCATED, None, self.last_good,
                          f"{reason}; read up to there without the bag index ({self.bag.why})")
         else:
@@ -202,6 +208,8 @@ class _Ros1Pass:
             conn = struct.unpack("<I", header[b"conn"])[0]
             sec, nsec = struct.unpack("<II", header[b"time"])
             t = sec * NS_PER_S + nsec
+            if self.src._open_gaps:
+                self.src._close_gaps(t)
             self.last_good = t if self.last_good is None else max(self.last_good, t)
             if self.decode:
                 self.queue.push(t, 0, (conn, body))
@@ -214,7 +222,7 @@ class _Ros1Pass:
             if c is None or (self.topics is not None and c[0] not in self.topics):
                 continue
             if self.queue.late_by(t):
-                src._gap(t, t)
+                src._gap(t, t, topics=frozenset((c[0],)), cause=P.OUT_OF_ORDER)
                 src._problem(P.OUT_OF_ORDER, c[0], t, "message older than one already "
                              "delivered beyond the reorder window (no index); skipped")
                 continue

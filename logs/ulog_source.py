@@ -191,7 +191,7 @@ class UlogSource(LogSource):
         ulog = self._ulog
         for start, ms in self.dropouts:
             end = start + ms * 1_000_000
-            self._gap(start, end)
+            self._gap(start, end, cause=DROPOUT)
             self._problem(DROPOUT, None, start,
                           f"the logger dropped messages for {ms} ms (ULog dropout record) "
                           "after this log time: only the span before it is judged",

@@ -28,7 +28,8 @@ from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
-from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
+from fretc.signals.clock import (HeaderBuffer, Sampling, Tick, check_topics, folded_topics,
+                                 grid_start, present_tf)
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from fretc.signals.groups import GroupSampling, _restrict, csv_clock
 
@@ -304,7 +305,7 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
     while True:
         if c.period is not None:
             if c.next_grid is None:
-                c.next_grid = min(b.times[0] for b in bufs if b.times)
+                c.next_grid = grid_start(min(b.times[0] for b in bufs if b.times), c.period)
             end = last + 1 if final else last
             if final and c.window_start:
                 end = max(end, closing_end(c, last))

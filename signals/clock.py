@@ -24,7 +24,7 @@ from fretc.common.problems import DataProblem, ProblemLog, SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CSV_TOPIC, CsvSource, LogSource
 
-__all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of"]
+__all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of", "grid_start"]
 
 
 class Tick:
@@ -257,10 +257,20 @@ def unsampled_of(s: "Sampling", names: list[str], bindings: Bindings | None) -> 
     return {t: n for t, n in sorted(s.unsampled.items()) if t not in folded}
 
 
+def grid_start(first: int, period: int) -> int:
+    """The first tick of a fixed-period clock whose first message is at ``first`` (ns): the
+    first multiple of ``period`` at or after it. Ticks lie on the multiples of the period
+    (of log time since the epoch, or of the header time base), never on where the first
+    message read happens to lie: a lost first message (a gap) cannot shift the grid, and
+    clocks of one period share it (docs/guide/ticks.md, "The tick grid")."""
+    return -(-first // period) * period
+
+
 class Clock:
     """The ticks of one group of variables on the clock of its own topics (module docstring):
-    the grid starts at the first message of ``topics`` (or the tick topic's messages), the
-    warm-up waits for every one of ``required``, and the grid ends at their last message.
+    the grid (:func:`grid_start`) starts at or after the first message of ``topics`` (or
+    the tick topic's messages), the warm-up waits for every one of ``required``, and the
+    grid ends at their last message.
 
     Messages are pushed in non-decreasing time (:meth:`push`); ticks come back as lists.
     With ``keep_going``, a variable whose evaluation fails is dropped (its error kept in
@@ -380,7 +390,7 @@ class Clock:
         out: list[Tick] = []
         if self.period is not None:
             if self.next_grid is None:
-                self.next_grid = t
+                self.next_grid = grid_start(t, self.period)
             while self.next_grid < t:
                 tick = self._emit(self.next_grid)
                 self.next_grid += self.period

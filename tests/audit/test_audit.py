@@ -298,9 +298,9 @@ flag = "/flag.data"
 
 def _synthetic(tmp_path, seconds=20, **kw):
     """A 10 Hz run: an obstacle approaches between 8 and 9 s; the bot halts at 8.3 s and the
-    flag is raised then; the flag is lowered at 9.52 s and the bot moves again at 9.61 s (on
-    A3's own clock, ticks at 10 ms past each 100 ms, a bot moving while the flag is still up
-    would be a violation); 1 kB chunks so that a log has many chunks."""
+    flag is raised then; the flag is lowered at 9.52 s and the bot moves again at 9.61 s (a
+    bot moving while the flag is still up would be a violation); 1 kB chunks so that a log
+    has many chunks."""
     msgs = []
     for k in range(seconds * 10):
         t = k * 100 * MS
@@ -324,10 +324,11 @@ def test_synthetic_log_baseline(tmp_path):
     v = _by_req(la)
     assert [v[r].verdict for r in ("A1", "A2", "A3")] == ["satisfied"] * 3
     assert not la.partial and not la.problems
-    # A1 (/scan, /cmd): /cmd starts 10 ms late; A2 (/cmd alone) has its own grid from 10 ms
+    # A1 (/scan, /cmd): /cmd starts 10 ms late, the grid (multiples of 100 ms) at 0: one
+    # warm-up tick; A2 (/cmd alone) starts at the first multiple after its first message
     assert (v["A1"].ticks_evaluated, v["A1"].warmup_ticks) == (199, 1)
-    assert (v["A2"].ticks_evaluated, v["A2"].warmup_ticks) == (200, 0)
-    assert v["A2"].first_tick_ns - v["A1"].first_tick_ns == -90 * MS
+    assert (v["A2"].ticks_evaluated, v["A2"].warmup_ticks) == (199, 0)
+    assert v["A2"].first_tick_ns == v["A1"].first_tick_ns
     assert la.messages == {"/cmd": 200, "/flag": 200, "/scan": 200}
 
 
@@ -387,7 +388,7 @@ def test_unknown_schema_is_an_error_for_that_topic_only(tmp_path):
     assert v["A3"].verdict == "error" and "/flag" in v["A3"].error
     assert v["A1"].verdict == "satisfied" and v["A2"].verdict == "satisfied"
     assert any(p["kind"] == "unknown_schema" and p["topic"] == "/flag" for p in la.problems)
-    assert v["A1"].ticks_evaluated == 199 and v["A2"].ticks_evaluated == 200
+    assert v["A1"].ticks_evaluated == 199 and v["A2"].ticks_evaluated == 199
 
 
 def test_missing_topic_and_binding_are_errors_of_the_requirement(tmp_path):
@@ -429,7 +430,8 @@ def test_warm_up_ticks_are_not_evaluated_and_reported(tmp_path):
     assert v["A1"].warmup_ticks == 11 and v["A1"].waiting_for == ["/cmd"]
     assert v["A1"].ticks_evaluated == 39
     assert (v["A1"].first_tick_ns - la.start_time_ns) == 1100 * MS
-    assert v["A2"].warmup_ticks == 0 and v["A2"].ticks_evaluated == 40  # /cmd's own clock
+    # /cmd's own clock: from the first multiple of 100 ms after its first message (1.001 s)
+    assert v["A2"].warmup_ticks == 0 and v["A2"].ticks_evaluated == 39
     assert la.warmup_ticks == 11 and la.waiting_for == ["/cmd"]
 
 

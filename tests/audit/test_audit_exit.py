@@ -129,5 +129,6 @@ def test_first_violation_log_time_is_a_message_log_time_under_header_time(tmp_pa
     log_times = {m[2] for m in msgs}
     assert fv["log_time_ns"] in log_times
     assert fv["log_time_ns"] == 10 * S + 30 * 100 * MS + 3 * MS + 3700 * MS
-    assert fv["tick_time_ns"] == 10 * S + 30 * 100 * MS + 3 * MS
+    # the first tick that holds message 30: the multiple of 100 ms after its stamp
+    assert fv["tick_time_ns"] == 10 * S + 31 * 100 * MS
     assert fv["tick_time_base"] == "header"

@@ -5,11 +5,12 @@ flips, the summary lost - and audited. For each damaged copy:
 
 * the log is partial and says why (a damage problem in its problems, or a log error naming
   the damage when nothing can be read at all);
-* no verdict differs from the undamaged log's verdict restricted to the intact span: a
-  requirement violated on the damaged copy was violated on the original by a violation
-  decided (earliest LTL3 "violated") before the damage; one decided before the damage on the
-  original is violated on the copy too; without message loss (summary, data CRC) every
-  verdict equals the original's.
+* no verdict contradicts the undamaged log's (../shared/DESIGN.md "Damage is a gap"): the
+  original is one way of filling what the damage lost, so a requirement violated on the
+  damaged copy is violated on the original, and one satisfied or vacuous on the copy is
+  satisfied or vacuous on the original; a violation the original decides (earliest LTL3
+  "violated") before the first damage is violated on the copy too; without message loss
+  (summary, data CRC) every verdict equals the original's.
 
 The default run takes a deterministic sample (a few cut points and one flip count per log);
 the full sweep is ``pytest -m slow tests/audit/test_damaged_logs.py``.
@@ -139,18 +140,12 @@ def _check(original, damaged, label: str) -> None:
             continue
         if dv.verdict == "violated":
             assert ov.verdict == "violated", f"{who}: violated only on the damaged copy"
-            assert decided is not None and (end is None or decided < end), \
-                f"{who}: violated, but the original's violation is decided at {decided} " \
-                f"and the damage starts at {end}"
-            assert dv.first_violation.at.time_ns <= (end if end is not None else 2**63)
         elif decided is not None and end is not None and decided < end \
                 and damaged.first_time_ns == original.first_time_ns:
             assert dv.verdict == "violated", \
                 f"{who}: {dv.verdict}, but violated at {decided} before the damage at {end}"
         if dv.verdict in ("satisfied", "vacuous"):
-            # only a prefix that decides the requirement (LTL3 "satisfied" before the
-            # damage) may give a pass, and then the intact log passes too
-            assert dv.ltl3.status == "satisfied", f"{who}: {dv.verdict} on an undecided prefix"
+            # what every way of filling the damage agrees on: the intact log too
             assert ov.verdict in ("satisfied", "vacuous"), f"{who}: {dv.verdict} != {ov.verdict}"
 
 

@@ -24,7 +24,9 @@ def test_every_class_once_without_traceback(capsys, monkeypatch):
 
 
 def test_the_oracle_refuses_a_pass_on_an_undecided_prefix(tmp_path):
-    """The oracle itself: a cut log whose verdict is made 'satisfied' by hand is flagged."""
+    """The oracle itself: a cut log whose verdict is made 'satisfied' by hand (the intact
+    log violates it) is flagged, and so is a violation made by hand on a requirement the
+    intact log satisfies."""
     audits = fuzz_hostile.Audits(tmp_path)
     data = fuzz_hostile.small_mcap(dip=50)
     original = audits.audit(audits.small, data)
@@ -33,7 +35,12 @@ def test_the_oracle_refuses_a_pass_on_an_undecided_prefix(tmp_path):
     ra = next(v for v in damaged.verdicts if v.requirement == "RA")
     assert ra.verdict in ("unknown", "violated")
     ra.verdict = "satisfied"
-    assert any("does not decide" in r for r in fuzz_hostile.unsupported(original, damaged))
+    assert any("RA: satisfied, the intact log is violated" in r
+               for r in fuzz_hostile.unsupported(original, damaged))
+    rv = next(v for v in damaged.verdicts if v.requirement == "RV")
+    rv.verdict = "violated"
+    assert any("RV: violated, the intact log is satisfied" in r
+               for r in fuzz_hostile.unsupported(original, damaged))
 
 
 def test_hostile_frames_reach_the_watch_source_without_traceback():

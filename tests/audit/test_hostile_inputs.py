@@ -87,11 +87,19 @@ def test_item9_a_chunk_failing_its_crc_is_a_gap(tmp_path, plan):
     gap = [p for p in la.problems if p["kind"] in ("chunk_crc", "chunk_corrupt")]
     assert gap and gap[0]["log_time_ns"] == bad.message_start_time
     assert gap[0]["end_time_ns"] == bad.message_end_time  # the gap's time span
-    # no tick inside or after the gap is judged (values are not held across it)
-    assert la.end_time_ns < bad.message_start_time
-    assert la.ticks_after_damage > 0
+    # the gap is listed with the chunk's span, cause and topics (the summary's message
+    # indexes); values are not held across it (its ticks are unknown), and the log is
+    # judged on after it, to its end
+    (g,) = la.gaps
+    assert (g["start_ns"], g["end_ns"], g["cause"]) == (bad.message_start_time,
+                                                        bad.message_end_time, gap[0]["kind"])
+    assert "/scan" in g["topics"]
+    assert la.end_time_ns == full.end_time_ns and la.ticks_after_damage == 0
+    assert any(v.unknown_ticks > 0 for v in la.verdicts)
     for d, o in zip(la.verdicts, full.verdicts):
         assert d.verdict != "violated" or o.verdict == "violated", d.requirement
+        assert d.verdict not in ("satisfied", "vacuous") or o.verdict in ("satisfied",
+                                                                          "vacuous")
     assert exit_code([la]) != 0
 
 

@@ -1,7 +1,9 @@
 """NaN has one meaning: a requirement's comparison with NaN is neither true nor
-false. The tick is unread, reported per requirement as a data problem of kind ``nan``, and
-the verdict is ``unknown`` unless decided before it (LTL3); a binding file may choose IEEE
-754 instead (``[tick] nan = "false"``), which the report shows."""
+false. The tick is unknown, reported per requirement as a data problem of kind ``nan``, and
+judged in three-valued semantics with the rest of the run: a violation on another tick
+stands, before or after it, and a verdict that the tick could change is ``unknown``; a
+binding file may choose IEEE 754 instead (``[tick] nan = "false"``), which the report
+shows."""
 
 from __future__ import annotations
 
@@ -60,7 +62,7 @@ def test_a_nan_only_field_decides_nothing(tmp_path):
     got = _got(la)
     for rid in ("R1", "R2", "R3"):  # two spellings of one requirement: one verdict
         assert got[rid].verdict == "unknown", rid
-        assert "compare NaN" in got[rid].unknown_reason
+        assert "comparisons with NaN" in got[rid].unknown_reason
     assert got["R4"].verdict == "satisfied"  # reads no NaN
     assert la.problem_counts["nan R1"] == la.problem_counts["nan R2"] == 5
     p = next(p for p in la.problems if p["kind"] == "nan" and "of R1" in p["detail"])
@@ -77,10 +79,11 @@ def test_division_by_zero_in_the_requirement_is_nan(tmp_path):
 
 @pytest.mark.parametrize("values, r1", [
     ([1.0, 7.0, math.nan, 1.0], "violated"),  # decided before the NaN: stands
-    ([1.0, 1.0, math.nan, 1.0], "unknown"),   # an invariant that held so far
+    ([1.0, 1.0, math.nan, 7.0], "violated"),  # and after it
+    ([1.0, 1.0, math.nan, 1.0], "unknown"),   # an invariant that held on every tick read
     ([1.0, 1.0, 1.0], "satisfied"),
 ])
-def test_verdicts_decided_before_the_nan_stand(tmp_path, values, r1):
+def test_verdicts_decided_around_the_nan_stand(tmp_path, values, r1):
     la = audit_log(_plan(tmp_path), str(_log(tmp_path / "m.mcap", values)))
     got = _got(la)
     assert got["R1"].verdict == got["R2"].verdict == r1

@@ -1,7 +1,8 @@
 """The robustness of R4 and R5 in the audit of the shipped runs equals an independent
 computation from the raw messages (sim.logs.read_log decodes them; the tick grid, sample and
-hold and the margins are computed here in plain Python: every 100 ms from the first message
-of the requirement's own topic, each tick holding the newest message at or before it)."""
+hold and the margins are computed here in plain Python: on the multiples of 100 ms from the
+first at or after the first message of the requirement's own topic, each tick holding the
+newest message at or before it)."""
 
 from __future__ import annotations
 
@@ -24,10 +25,10 @@ def plan():
 
 
 def _held(messages, value):
-    """[(tick time, value of the newest message at or before it)] on the 100 ms grid from
-    the first message to the last."""
+    """[(tick time, value of the newest message at or before it)] on the 100 ms grid (the
+    multiples of 100 ms) from the first message to the last."""
     times = [t for t, _p, _m in messages]
-    out, g = [], times[0]
+    out, g = [], -(-times[0] // PERIOD_NS) * PERIOD_NS
     while g <= times[-1]:
         k = bisect.bisect_right(times, g) - 1
         out.append((g, value(messages[k][2])))

@@ -76,7 +76,8 @@ def test_period_not_dividing_the_log(tmp_path):
     src = open_log(_ab_log(tmp_path))
     b = make_bindings({"av": "/a.data"}, TickSpec(period_ns=300 * MS))
     ticks = list(sample(src, b))
-    assert [(t.time, t.values["av"]) for t in ticks] == [(1000 * MS, 1.0), (1300 * MS, 2.0)]
+    # the multiples of 300 ms from the first message on (1200, 1500 ms), not 1000 + k * 300
+    assert [(t.time, t.values["av"]) for t in ticks] == [(1200 * MS, 1.0), (1500 * MS, 3.0)]
     _equal_paths(src, b)
 
 
@@ -212,10 +213,11 @@ def test_real_mcap_bindings_against_numpy():
             per[ch.topic][2].append(d.twist.angular.z)
     t0 = min(v[0][0] for v in per.values())
     t1 = max(v[0][-1] for v in per.values())
+    t0 = -(-t0 // (50 * MS)) * (50 * MS)  # the grid: multiples of the period
     grid = np.arange(t0, t1 + 1, 50 * MS, dtype=np.int64)
     idx = {k: np.searchsorted(np.array(v[0]), grid, side="right") - 1 for k, v in per.items()}
     ok = (idx["/vehicle/cmd_vel"] >= 0) & (idx["/scaled/cmd_vel"] >= 0)
-    assert s.warmup_ticks == int((~ok).sum()) == 1
+    assert s.warmup_ticks == int((~ok).sum())
     grid = grid[ok]
     iv, isc = idx["/vehicle/cmd_vel"][ok], idx["/scaled/cmd_vel"][ok]
     cmd = np.array(per["/vehicle/cmd_vel"][1])[iv]

@@ -1,0 +1,184 @@
+"""Gaps in a log and the ticks they leave unknown (../shared/DESIGN.md, "Damage is a gap:
+never evidence, never the end").
+
+A gap (:class:`fretc.logs.base.Gap`: a ULog dropout, a chunk that fails its CRC, a record
+that does not parse, a message present but not decoded) is a log-time span in which messages
+of some topics may be missing. Nothing is held over it: at a tick ``t`` a topic's value is
+*unknown* when a gap on that topic started at or before ``t`` and the message the tick holds
+is not newer than the gap's end (a lost message could be the newer one); it is known again
+from the first message after the gap. A binding that reads a topic's previous message
+(``@delta`` ...) is unknown one message longer (its previous message may be lost); an
+aggregation over the messages between two ticks (``any_of_messages`` ...) is unknown at every
+tick whose span since the previous tick meets a gap. A variable is unknown where any topic
+it reads is.
+
+Under the header time base, tick times are header stamps: a gap counts from ``header_lag_ns``
+before its start (a lost message's stamp may precede its log time by that much).
+
+``--bridge-gaps D`` (:func:`split_bridged`) holds values over the gaps shorter than ``D``
+instead: those are listed as bridged and leave no tick unknown.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+
+from fretc.logs.base import Gap
+from fretc.signals.bindings import Bindings
+from fretc.signals.bindings.expression import stateful_topics
+
+__all__ = ["split_bridged", "inner_gaps", "unknown_masks", "gap_json", "gaps_of_clock",
+           "insert_gap_ticks", "merged_gaps"]
+
+_NEG, _POS = -(2**63), 2**63 - 1
+
+
+def inner_gaps(source) -> list[Gap]:
+    """The gaps of ``source``'s latest pass that the log was read on after (every gap with
+    an end, and its messages present but not decoded, one gap each:
+    :meth:`fretc.logs.base.LogSource.lost_gaps`), in log-time order. A gap without an end is
+    the cut at the end of the log (``source.cut_start``), judged as today's damage."""
+    gaps = [g for g in getattr(source, "gaps", ()) if g.end is not None]
+    lost = getattr(source, "lost_gaps", None)
+    if lost is not None:
+        gaps += lost()
+    return sorted(gaps, key=lambda g: (_NEG if g.start is None else g.start, g.end, g.cause))
+
+
+def split_bridged(gaps: Iterable[Gap], bridge_ns: int | None) -> tuple[list[Gap], list[Gap]]:
+    """``(kept, bridged)``: the gaps shorter than ``bridge_ns`` (``--bridge-gaps``; known
+    start and end, ``end - start < bridge_ns``) are bridged (values held over them, as
+    sample-and-hold holds a value between messages); None bridges none."""
+    kept, bridged = [], []
+    for g in gaps:
+        short = (bridge_ns is not None and g.start is not None and g.end is not None
+                 and g.end - g.start < bridge_ns)
+        (bridged if short else kept).append(g)
+    return kept, bridged
+
+
+def gaps_of_clock(gaps: Iterable[Gap], topics: Iterable[str]) -> list[Gap]:
+    """The gaps that may have held messages of any of ``topics``."""
+    ts = list(topics)
+    return [g for g in gaps if any(g.affects(t) for t in ts)]
+
+
+def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
+                stateful: bool, folded: bool) -> np.ndarray:
+    """Unknown ticks of one topic (module docstring); ``held`` the log time of the message
+    each tick holds (-1: none)."""
+    n = len(times)
+    out = np.zeros(n, np.bool_)
+    prev = np.concatenate(([_NEG], times[:-1])) if n else times
+    for g in gaps:
+        start = _NEG if g.start is None else g.start - lag
+        end = _POS if g.end is None else g.end
+        after = times >= start
+        stale = after & (held <= end)
+        out |= stale
+        if stateful:  # the first message after the gap has a lost previous one
+            fresh = np.flatnonzero(after & (held > end))
+            if len(fresh):
+                out |= held == held[fresh[0]]
+        if folded:  # the span since the previous tick meets the gap
+            out |= (times >= start) & (prev < end)
+    return out
+
+
+def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: Iterable[str],
+                  bindings: Bindings | None, gaps: list[Gap], header_lag_ns: int = 0
+                  ) -> dict[str, np.ndarray]:
+    """Variable -> bool array over ``times`` (the clock's ticks), True where the variable is
+    unknown because of ``gaps`` (module docstring); only variables with an unknown tick.
+
+    Args:
+        times: the clock's tick times (ns, time base).
+        log_times: topic -> log time (ns) of the message held at each tick (-1: none).
+        names: the clock's variables.
+        bindings: their bindings (None: a CSV trace read as its columns, topic ``/csv``).
+        gaps: the log's gaps (:func:`inner_gaps`, bridged ones removed).
+        header_lag_ns: under the header time base, how much earlier than its log time a
+            message's stamp may be.
+    """
+    if not gaps or not len(times):
+        return {}
+    masks: dict[tuple[str, bool, bool], np.ndarray] = {}
+    out: dict[str, np.ndarray] = {}
+    for name in names:
+        b = bindings.variables.get(name) if bindings is not None else None
+        topics = sorted(b.topics) if b is not None else sorted(log_times)
+        stateful = stateful_topics(b.ast) if b is not None else set()
+        folded = b is not None and b.aggregate is not None
+        mask = np.zeros(len(times), np.bool_)
+        for t in topics:
+            own = [g for g in gaps if g.affects(t)]
+            held = log_times.get(t)
+            if not own or held is None:
+                continue
+            key = (t, t in stateful, folded)
+            if key not in masks:
+                masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded)
+            mask |= masks[key]
+        if mask.any():
+            out[name] = mask
+    return out
+
+
+def insert_gap_ticks(res, gaps: list[Gap], tick_topic: str) -> list[int]:
+    """On a clock that ticks on each message of ``tick_topic``, the ticks a gap of that topic
+    lost are not known (not even how many): one tick is put in their place, at the gap's
+    start, unknown for every variable (:func:`fretc.audit.passes.mark_gaps` marks it), so
+    that nothing joins the ticks on both sides of the gap. Only gaps between two ticks of the
+    clock get one. ``res`` (a :class:`fretc.audit.passes.ClockPass`) is changed in place:
+    its times, columns and held log times (the tick before's values, which no verdict reads).
+
+    Returns:
+        The indexes of the inserted ticks, ascending.
+    """
+    times = res.times
+    if len(times) < 2:
+        return []
+    at = sorted({int(g.start) for g in gaps if g.affects(tick_topic) and g.start is not None
+                 and g.end is not None and times[0] < g.start <= times[-1]})
+    if not at:
+        return []
+    pos = np.searchsorted(times, np.array(at, np.int64), side="left")
+    src = pos - 1  # the tick before each inserted one gives its placeholder values
+    res.times = np.insert(times, pos, np.array(at, np.int64))
+    res.columns = {k: np.insert(c, pos, c[src]) for k, c in res.columns.items()}
+    res.log_times = {k: np.insert(c, pos, c[src]) for k, c in res.log_times.items()}
+    return (pos + np.arange(len(pos))).tolist()
+
+
+def gap_json(g: Gap, bridged: bool = False) -> dict:
+    """A gap as the audit JSON gives it: ``start_ns``, ``end_ns`` (inclusive; None: unknown),
+    ``topics`` (None: any topic), ``cause`` (the data problem kind), ``bridged``."""
+    return {"start_ns": g.start, "end_ns": g.end,
+            "topics": sorted(g.topics) if g.topics is not None else None,
+            "cause": g.cause, "bridged": bridged}
+
+
+def merged_gaps(gaps: list[Gap], bridged: list[Gap]) -> list[dict]:
+    """The log's gaps as the audit JSON lists them (:func:`gap_json`), in log-time order,
+    the point gaps of messages not decoded merged per topic and cause into one entry from
+    the first to the last (``messages``: how many; a log of 712 undecodable messages lists
+    one entry, not 712). The spans merged are a listing only: each message was its own gap."""
+    out: list[dict] = []
+    runs: dict[tuple, dict] = {}
+    for g, is_bridged in sorted([(g, False) for g in gaps] + [(g, True) for g in bridged],
+                                key=lambda x: (_NEG if x[0].start is None else x[0].start,
+                                               _POS if x[0].end is None else x[0].end)):
+        point = g.start is not None and g.start == g.end and g.topics is not None
+        key = (g.cause, g.topics, is_bridged)
+        if point and key in runs:
+            run = runs[key]
+            run["end_ns"] = g.end
+            run["messages"] += 1
+            continue
+        entry = dict(gap_json(g, is_bridged), messages=1 if point else None)
+        out.append(entry)
+        if point:
+            runs[key] = entry
+    return out
