@@ -5,12 +5,12 @@
 from __future__ import annotations
 
 import dataclasses
-import re
 from pathlib import Path
 
 from fretc.common.units import format_ns
 
 from fretc.signals.bindings import Binding, Bindings, TickSpec, load_bindings, parse_duration
+from fretc.signals.bindings.paths import topic_name
 from fretc.common.problems import BindingError
 from fretc.audit.config import AuditConfig, AuditInputError
 from fretc.audit.discovery import discover_bindings
@@ -55,9 +55,11 @@ def load_audit_bindings(config: AuditConfig) -> tuple[Bindings | None, list[str]
         except ValueError as exc:
             raise AuditInputError(f"--tick-period: {exc}") from None
     elif config.tick_topic is not None:
-        if not re.fullmatch(r"(/[A-Za-z0-9_]+)+", config.tick_topic):
-            raise AuditInputError(f"--tick-topic {config.tick_topic!r} is not a topic name")
-        tick = TickSpec(topic=config.tick_topic)
+        topic = topic_name(config.tick_topic)
+        if topic is None:
+            raise AuditInputError(f"--tick-topic {config.tick_topic!r} is not a topic name "
+                                  "(one as fretc inspect lists it)")
+        tick = TickSpec(topic=topic)
     if b is None and (config.inline or tick is not None):
         if tick is None:
             raise AuditInputError("--bind without a binding file needs --tick-period or "

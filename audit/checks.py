@@ -7,6 +7,7 @@ from __future__ import annotations
 from fretc.common.units import NS_PER_S, format_ns
 
 from fretc.signals.bindings import Bindings, check_types, compile_expression
+from fretc.signals.bindings.expression import FUNCS
 from fretc.common.problems import BindingError
 from fretc.logs.schema import log_schemas
 from fretc.logs import CSV_TOPIC
@@ -171,12 +172,22 @@ def rate_hint(source, topic: str, counts: dict[str, int]) -> str:
     return f"; {topic} runs at {rate} in this log: nominal_rate = \"{rate}\""
 
 
+#: The binding language's functions that FRETish does not have (FRETish has abs, min and max
+#: as absReal/absInt, minReal/minInt, maxReal/maxInt): a requirement that calls one reads it
+#: as an unknown variable.
+BINDING_FUNCTIONS = frozenset(FUNCS) - {"abs", "min", "max"}
+
+
 def call_hint(name: str) -> str:
     """What to write instead of a call FRET does not know (``abs(x)``, ``fabs(x)``, which a
     requirement reads as one variable): FRET's own functions (FRET's manual, "Arithmetic
     expressions": absReal/absInt, minReal/minInt, maxReal/maxInt), or the binding's."""
     func, _, rest = name.partition("(")
     f = func.strip().lower()
+    if func.strip() in BINDING_FUNCTIONS:
+        return (f"{name!r} calls {func.strip()!r}, a function of the binding language, not "
+                "of FRETish: bind a variable to it in a binding file (e.g. "
+                f"x = \"{func.strip()}(/topic.field)\") and use x in the requirement")
     fret = {"abs": "absReal(...) or absInt(...)", "fabs": "absReal(...) or absInt(...)",
             "min": "minReal(...) or minInt(...)", "max": "maxReal(...) or maxInt(...)"}.get(f)
     spelled = f"FRET spells it {fret}" if fret else (

@@ -12,20 +12,25 @@ the one the intact span decides (:mod:`fretc.audit.damage`).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from fretc.signals.bindings import Bindings
 from fretc.signals.clock import unsampled_of
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.monitors.interval import OBLIGATIONS, EvidenceUnsupported
-from fretc.monitors.judge import judge
+from fretc.monitors.judge import judge, nan_ticks
 from fretc.monitors.stepwise import to_python
 from fretc.audit.verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.passes import ClockPass, clock_key
-from fretc.audit.unknown_ticks import judge_three, prepare, unknown_of
+from fretc.audit.unknown_ticks import judge_three
+from fretc.common.problems import NAN
+from fretc.compiler.ir import walk
+from fretc.monitors.vectorized import supports
 
-__all__ = ["finalize", "between_ticks"]
+__all__ = ["finalize", "between_ticks", "prepare", "unknown_of"]
 
 
 def between_ticks(v, s, r: RequirementPlan, bindings: Bindings | None) -> None:
@@ -71,9 +76,10 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     ev, holds, status, st_tick = j.evidence, j.holds, j.ltl3, j.ltl3_tick
     if ev is not None:
         v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
-    three = unknown_of(r, res, nan_unknown).any()
+    unknown = unknown_of(r, res, nan_unknown)
+    three = bool(unknown.any())
     if three:
-        holds, ev, status, st_tick = judge_three(r, res, v, j, nan_unknown)
+        holds, ev, status, st_tick = judge_three(r, res, v, j, nan_unknown, unknown)
     v.ltl3 = Ltl3(status, st_tick, int(res.times[st_tick]) if st_tick is not None else None)
     if three:
         if holds is None:
@@ -93,6 +99,92 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
         return
     v.verdict = "violated"
     _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
+
+
+def _nan_unknown(bindings) -> bool:
+    return bindings is None or bindings.tick.nan != "false"
+
+
+def unknown_of(r, res: ClockPass, nan_unknown: bool) -> np.ndarray:
+    """The ticks of ``res`` at which ``r`` reads something unknown: a gap leaves one of its
+    variables unknown, or (``nan_unknown``) one of its comparisons reads NaN."""
+    n = len(res.times)
+    out = np.zeros(n, np.bool_)
+    for name in r.variables:
+        m = res.unknown.get(name)
+        if m is not None:
+            out |= m[:n]
+    if nan_unknown and n:
+        try:
+            out |= nan_ticks(r.requirement, res.columns, n)
+        except (EvidenceUnsupported, KeyError, ValueError):
+            pass
+    return out
+
+
+def _three_valued_takes(r, res: ClockPass) -> str | None:
+    """None when the three-valued judge can take ``r`` on ``res``, else why not."""
+    f = r.formalization
+    if not f.pt_causal or not supports(f.pt):
+        return "its pt formula has a future-time function"
+    if res.tick_gaps and (r.requirement.timing.kind in ("within", "for", "after")
+                          or any(getattr(x, "hi", None) is not None for x in walk(f.pt))):
+        return ("it counts ticks on a clock that ticks on a topic's messages, and a gap of "
+                "that topic lost an unknown number of them")
+    return None
+
+
+def prepare(r, res: ClockPass, bindings, v, la) -> tuple[ClockPass, bool]:
+    """Before judging ``r``: its NaN ticks reported as a ``nan`` data problem of ``la`` (or
+    the binding file's IEEE 754 policy noted); a requirement the three-valued judge cannot
+    take is cut at its first unknown tick (judged as on a cut log, a note says why).
+
+    Returns:
+        ``(res, nan_unknown)``: the clock's pass to judge, and whether a comparison with NaN
+        is unknown (fretc's NaN rule) rather than IEEE 754's false.
+    """
+    nan_unknown = _nan_unknown(bindings)
+    n = len(res.times)
+    if not nan_unknown:
+        v.notes.append("NaN policy of the binding file ([tick] nan = \"false\"): a "
+                       "comparison with NaN is false")
+    elif n:
+        _nan_problem(r, res, la)
+    unknown = unknown_of(r, res, nan_unknown)
+    why = _three_valued_takes(r, res) if unknown.any() else None
+    if why is None:
+        return res, nan_unknown
+    first = int(np.argmax(unknown))
+    t = int(res.times[first])
+    v.notes.append(f"judged up to its first unknown tick ({first}, {t} ns): {why}")
+    cut = replace(res, times=res.times[:first],
+                  columns={k: c[:first] for k, c in res.columns.items()},
+                  log_times={k: c[:first] for k, c in res.log_times.items()},
+                  unknown={}, tick_gaps=[],
+                  intact_end=t if res.intact_end is None else min(t, res.intact_end),
+                  lost="; ".join(x for x in (res.lost, f"tick {first} is unknown ({why})")
+                                 if x))
+    return cut, nan_unknown
+
+
+def _nan_problem(r, res: ClockPass, la) -> None:
+    """A ``nan`` data problem in ``la`` for the ticks at which ``r`` compares NaN."""
+    n = len(res.times)
+    try:
+        bad = np.flatnonzero(nan_ticks(r.requirement, res.columns, n))
+    except (EvidenceUnsupported, KeyError, ValueError):
+        return
+    if len(bad) == 0:
+        return
+    first, t = int(bad[0]), int(res.times[bad[0]])
+    what = (f"{len(bad)} tick{'s' if len(bad) != 1 else ''} of {r.id} compare NaN (first "
+            f"at tick {first}, {t} ns; last at tick {int(bad[-1])}, "
+            f"{int(res.times[bad[-1]])} ns): a comparison with NaN is neither true nor "
+            "false, so those ticks are unknown")
+    la.problems.append({"kind": NAN, "topic": None, "log_time_ns": t,
+                        "end_time_ns": int(res.times[bad[-1]]), "detail": what})
+    la.problem_counts[f"{NAN} {r.id}"] = len(bad)
+
 
 
 def _no_tick(res: ClockPass, v, la) -> None:
@@ -184,7 +276,7 @@ def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v
         v.notes.append(f"robustness unavailable: its sign disagrees with the verdict "
                        f"({rob.value!r})")
         return
-    v.robustness = rob.value
+    v.robustness = rob.value + 0.0  # never -0.0: its sign is the verdict's
     # the message that decided the tick: the newest held among the clock's topics
     v.robustness_at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
     m, times = rob.margin, res.times

@@ -190,7 +190,7 @@ class _LogRun:
             if missing:
                 where = (f"bindings ({bindings.source or '--bind'})" if bindings is not None
                          else f"the CSV columns ({', '.join(source.columns)})")
-                hints = [(m, closest(m, sorted(available))) for m in missing]
+                hints = [(m, closest(m, sorted(available))) for m in missing if "(" not in m]
                 hint = "; ".join([f"did you mean {h!r} for {m!r}?" for m, h in hints if h]
                                  + [call_hint(m) for m in missing if "(" in m])
                 self.verdicts[r.index].error = (f"no binding for {', '.join(map(repr, missing))}"
@@ -270,6 +270,7 @@ class _LogRun:
         if source.partial or la.damage_time_ns is None:
             la.damage_time_ns = source.damage_time
         la.damage_cut = bool(source.damage_cut) or la.damage_cut
+        la.cut_time_ns = getattr(source, "cut_start", None)
         la.messages = dict(sorted(source.counts.items()))
         if self.problems or not la.problems:  # (else: only the damage found with the topics)
             la.problems = [problem_json(p) for p in self.problems.values()]
@@ -336,7 +337,8 @@ class _LogRun:
             return False
         silent = list(s.missing_topics) if b is not None else []
         if silent:
-            why = silent_reasons(silent, self.problems.values())
+            why = silent_reasons(silent, self.problems.values(),
+                                 getattr(self.source, "lost", None))
             v.error = "; ".join(why[t] for t in sorted(silent))
             return False
         return True

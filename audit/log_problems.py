@@ -42,16 +42,25 @@ def collect_problems(source, sampling, problems: dict[tuple, DataProblem],
             counts[k] = max(counts.get(k, 0), n)
 
 
-def silent_reasons(silent, problems) -> dict[str, str]:
-    """Topic -> why it gave no message: a schema or encoding that cannot be read, or none
-    in the log."""
+def silent_reasons(silent, problems, lost=None) -> dict[str, str]:
+    """Topic -> why it gave no message: messages present but not decoded (how many, and
+    why: a schema or encoding that cannot be read, payloads that do not deserialize), or
+    none in the log. ``lost``: the source's :attr:`fretc.logs.LogSource.lost`."""
+    kinds = (P.UNKNOWN_SCHEMA, P.UNKNOWN_ENCODING, P.UNDECODABLE)
     out = {}
     for t in silent:
-        detail = next((f"{p.kind}: {p.detail}" for p in problems
-                       if p.topic == t and p.kind in (P.UNKNOWN_SCHEMA, P.UNKNOWN_ENCODING)),
-                      None)
-        out[t] = (f"topic {t} cannot be read ({detail})" if detail
-                  else f"topic {t} has no message in the log")
+        n = sum(v[2] for (_k, topic, _c), v in (lost or {}).items() if topic == t)
+        why = next((f"{kind}: {v[3]}" for (kind, topic, _c), v in sorted(
+            (lost or {}).items(), key=lambda kv: kv[1][0]) if topic == t), None)
+        detail = why or next((f"{p.kind}: {p.detail}" for p in problems
+                              if p.topic == t and p.kind in kinds), None)
+        if n:
+            out[t] = (f"{n} message{'s' if n != 1 else ''} of {t} could not be decoded "
+                      f"({detail}); none was read")
+        elif detail:
+            out[t] = f"topic {t} cannot be read ({detail})"
+        else:
+            out[t] = f"topic {t} has no message in the log"
     return out
 
 

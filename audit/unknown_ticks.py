@@ -14,116 +14,28 @@ the end").
   without it (a future-time function, FRET leaves those unexpanded in pt) and, on a clock
   that ticks on a topic's messages, requirements that count ticks (a duration, a bounded
   operator) across a gap of that topic (how many ticks it lost is not known) are judged
-  as on a cut log instead: up to their first unknown tick.
+  as on a cut log instead: up to their first unknown tick (:func:`fretc.audit.finalize.
+  prepare`).
 """
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 import numpy as np
 
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.audit.passes import ClockPass
-from fretc.common.problems import NAN
-from fretc.compiler.ir import walk
-from fretc.monitors.interval import EvidenceUnsupported
-from fretc.monitors.judge import nan_ticks
+from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement
 from fretc.monitors.judge3 import Unknowns, definite_evidence, possible_trigger
 from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
-from fretc.monitors.vectorized import VectorizeError, supports
+from fretc.monitors.vectorized import VectorizeError
 
-__all__ = ["prepare", "judge_three", "unknown_of"]
-
-
-def _nan_unknown(bindings) -> bool:
-    return bindings is None or bindings.tick.nan != "false"
+__all__ = ["judge_three"]
 
 
-def unknown_of(r, res: ClockPass, nan_unknown: bool) -> np.ndarray:
-    """The ticks of ``res`` at which ``r`` reads something unknown: a gap leaves one of its
-    variables unknown, or (``nan_unknown``) one of its comparisons reads NaN."""
-    n = len(res.times)
-    out = np.zeros(n, np.bool_)
-    for name in r.variables:
-        m = res.unknown.get(name)
-        if m is not None:
-            out |= m[:n]
-    if nan_unknown and n:
-        try:
-            out |= nan_ticks(r.requirement, res.columns, n)
-        except (EvidenceUnsupported, KeyError, ValueError):
-            pass
-    return out
-
-
-def _three_valued_takes(r, res: ClockPass) -> str | None:
-    """None when the three-valued judge can take ``r`` on ``res``, else why not."""
-    f = r.formalization
-    if not f.pt_causal or not supports(f.pt):
-        return "its pt formula has a future-time function"
-    if res.tick_gaps and (r.requirement.timing.kind in ("within", "for", "after")
-                          or any(getattr(x, "hi", None) is not None for x in walk(f.pt))):
-        return ("it counts ticks on a clock that ticks on a topic's messages, and a gap of "
-                "that topic lost an unknown number of them")
-    return None
-
-
-def prepare(r, res: ClockPass, bindings, v, la) -> tuple[ClockPass, bool]:
-    """Before judging ``r``: its NaN ticks reported as a ``nan`` data problem of ``la`` (or
-    the binding file's IEEE 754 policy noted); a requirement the three-valued judge cannot
-    take is cut at its first unknown tick (judged as on a cut log, a note says why).
-
-    Returns:
-        ``(res, nan_unknown)``: the clock's pass to judge, and whether a comparison with NaN
-        is unknown (fretc's NaN rule) rather than IEEE 754's false.
-    """
-    nan_unknown = _nan_unknown(bindings)
-    n = len(res.times)
-    if not nan_unknown:
-        v.notes.append("NaN policy of the binding file ([tick] nan = \"false\"): a "
-                       "comparison with NaN is false")
-    elif n:
-        _nan_problem(r, res, la)
-    unknown = unknown_of(r, res, nan_unknown)
-    why = _three_valued_takes(r, res) if unknown.any() else None
-    if why is None:
-        return res, nan_unknown
-    first = int(np.argmax(unknown))
-    t = int(res.times[first])
-    v.notes.append(f"judged up to its first unknown tick ({first}, {t} ns): {why}")
-    cut = replace(res, times=res.times[:first],
-                  columns={k: c[:first] for k, c in res.columns.items()},
-                  log_times={k: c[:first] for k, c in res.log_times.items()},
-                  unknown={}, tick_gaps=[],
-                  intact_end=t if res.intact_end is None else min(t, res.intact_end),
-                  lost="; ".join(x for x in (res.lost, f"tick {first} is unknown ({why})")
-                                 if x))
-    return cut, nan_unknown
-
-
-def _nan_problem(r, res: ClockPass, la) -> None:
-    """A ``nan`` data problem in ``la`` for the ticks at which ``r`` compares NaN."""
-    n = len(res.times)
-    try:
-        bad = np.flatnonzero(nan_ticks(r.requirement, res.columns, n))
-    except (EvidenceUnsupported, KeyError, ValueError):
-        return
-    if len(bad) == 0:
-        return
-    first, t = int(bad[0]), int(res.times[bad[0]])
-    what = (f"{len(bad)} tick{'s' if len(bad) != 1 else ''} of {r.id} compare NaN (first "
-            f"at tick {first}, {t} ns; last at tick {int(bad[-1])}, "
-            f"{int(res.times[bad[-1]])} ns): a comparison with NaN is neither true nor "
-            "false, so those ticks are unknown")
-    la.problems.append({"kind": NAN, "topic": None, "log_time_ns": t,
-                        "end_time_ns": int(res.times[bad[-1]]), "detail": what})
-    la.problem_counts[f"{NAN} {r.id}"] = len(bad)
-
-
-def judge_three(r, res: ClockPass, v, j, nan_unknown: bool):
-    """The verdict of ``r`` over ``res`` with unknown ticks (module docstring), from the
-    judge's result ``j`` over the ticks as sampled (its interval evidence).
+def judge_three(r, res: ClockPass, v, j, nan_unknown: bool, unknown: np.ndarray):
+    """The verdict of ``r`` over ``res`` with unknown ticks ``unknown`` (bool array over its
+    ticks: :func:`fretc.audit.finalize.unknown_of`; module docstring), from the judge's
+    result ``j`` over the ticks as sampled (its interval evidence).
 
     Returns:
         ``(holds, evidence, status, status_tick)``: ``holds`` True (satisfied or vacuous),
@@ -140,12 +52,14 @@ def judge_three(r, res: ClockPass, v, j, nan_unknown: bool):
             status, st_tick = ltl3_verdict(r.monitor_source, ev3)
         except VectorizeError:
             status, st_tick = "unknown", None
-    unknown = unknown_of(r, res, nan_unknown)
     v.unknown_ticks = int(unknown.sum())
     ev = j.evidence
     parts = None
     if ev is not None:
         parts = Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown)
+        # the failed triggers the known ticks make: unknown ticks set to meet the obligation
+        ev = evaluate_requirement(r.requirement, res.columns, n, r.formalization.ticks,
+                                  favour=parts)
         ev = definite_evidence(r.requirement, ev, parts, res.columns)
         v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
     if res.intact_end is not None:  # and a cut at the end: a definite LTL3 verdict decides

@@ -159,7 +159,8 @@ class Verdict:
     Attributes:
         log, requirement: the log path and the requirement id; ``source`` its file:line.
         verdict: one of :data:`VERDICTS`.
-        partial: the log is damaged and was audited up to the damage.
+        partial: the log is damaged: judged on the messages read (a gap's ticks are
+            unknown, nothing after a cut is read).
         first_violation: evidence when violated.
         ltl3: the earliest definitive LTL3 verdict.
         values: variable -> [(tick, time_ns, value)] around the trigger and the violation.
@@ -307,6 +308,8 @@ class LogAudit:
             cause, bridged): the spans in which messages were lost and the log was read on
             after; their ticks are unknown for the requirements reading those topics, unless
             bridged (``--bridge-gaps``).
+        cut_time_ns: where a cut ends what was read (log time, ns: a truncation, nothing
+            read after it; None when the log was read to its end).
     """
 
     log: str
@@ -332,6 +335,7 @@ class LogAudit:
     damage_cut: bool = False
     warnings: list[str] = field(default_factory=list)
     gaps: list[dict[str, Any]] = field(default_factory=list)
+    cut_time_ns: int | None = None
 
     def to_json(self) -> dict:
         """The log's audit as the audit JSON gives it (``docs/reference/audit.schema.json``)."""
@@ -354,6 +358,7 @@ class LogAudit:
             "ticks_after_damage": self.ticks_after_damage, "damage_cut": self.damage_cut,
             "gaps": [dict(g, start_s=_t(g["start_ns"], st)["s"], end_s=_t(g["end_ns"], st)["s"])
                      for g in self.gaps],
+            "cut_time_ns": self.cut_time_ns, "cut_time_s": _t(self.cut_time_ns, st)["s"],
         }
 
 

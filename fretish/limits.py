@@ -114,10 +114,20 @@ def check_reserved(req: A.Requirement) -> None:
             if (type(e) in (A.Var, A.Call) and name in FRET_RESERVED
                     and not req.text[e.span.start:e.span.end].lstrip("( \t").startswith('"')):
                 raise LimitError(e.span, "These reserved letter combinations cannot be used: "
-                                 f"{name}", "rename it"
-                                 + ("; FRET's functions are absReal/absInt, minReal/minInt, "
-                                    "maxReal/maxInt" if name in ("abs", "min", "max") else ""))
+                                 f"{name}", _reserved_hint(name, type(e) is A.Call))
             stack.extend(_children(e))
+
+
+def _reserved_hint(name: str, call: bool) -> str:
+    """What to write instead of a reserved word: FRET's own function for ``abs``, ``min``,
+    ``max`` (the binding language's spellings), else another name."""
+    fret = {"abs": "absReal(...) or absInt(...)", "min": "minReal(...) or minInt(...)",
+            "max": "maxReal(...) or maxInt(...)"}.get(name)
+    if fret is None:
+        return "rename it"
+    return (f"FRET spells it {fret}" + ("; or compute it in a binding file (x = "
+                                        f"\"{name}(/topic.field)\") and use x here"
+                                        if call else "; or rename it"))
 
 
 def _children(e: A.Expr) -> list:

@@ -11,7 +11,7 @@ requirements that do not read the topic are not affected.
 
 from __future__ import annotations
 
-__all__ = ["Absences", "NO_TIME"]
+__all__ = ["Absences", "NO_TIME", "run_gaps"]
 
 #: The start of a span opened before any message was used: below every log time.
 NO_TIME = -(2**63)
@@ -79,3 +79,19 @@ class Absences:
         starts = [s[0] for spans in self.spans.values() for s in spans
                   if s[1] is not None or used > s[2]]
         return min(starts) if starts else None
+
+
+def run_gaps(src) -> list:
+    """The gaps of a watched run (``src``: its :class:`fretc.live.source.WatchSource`) as
+    the audit's (:class:`fretc.logs.base.Gap`): a lost connection (every topic, between the
+    last message before it and the first after it) and a publisher that left and came back
+    (its topic, until its next message); the messages lost lie strictly inside."""
+    from fretc.logs.base import Gap
+
+    out = [Gap(a + 1, e - 1, None, "connection_gap") for a, e in src.gaps if e - a > 1]
+    for topic, spans in (src.absent.spans if src.absent else {}).items():
+        for start, end, *_rest in spans:
+            if end is not None:
+                out.append(Gap(None if start == NO_TIME else start + 1, end - 1,
+                               frozenset((topic,)), "publisher_left"))
+    return out

@@ -44,9 +44,10 @@ from fretc.audit.finalize import between_ticks, finalize
 from fretc.audit.log import log_engine, summarize_clocks
 from fretc.audit.log_problems import collect_problems, problem_json
 from fretc.audit.operands import operand_values
-from fretc.audit.passes import ClockKey, ClockPass, clock_key, restrict
+from fretc.audit.gaps import merged_gaps, split_bridged
+from fretc.audit.passes import ClockKey, ClockPass, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
-from fretc.live.absence import NO_TIME
+from fretc.live.absence import NO_TIME, run_gaps
 from fretc.live.columns import LiveColumns
 from fretc.live.record import Recorder
 from fretc.live.transports import make_client
@@ -297,6 +298,8 @@ class Watch:
         la.messages = dict(sorted(src.counts.items()))
         la.problems = [problem_json(p) for p in problems.values()]
         la.problem_counts = dict(sorted(counts.items()))
+        kept, bridged = split_bridged(run_gaps(self.source), self.plan.config.bridge_gaps_ns)
+        la.gaps = merged_gaps(kept, bridged)
         if src.gaps:
             la.partial = True
             la.damage_time_ns = src.gaps[0][0]
@@ -361,17 +364,18 @@ class Watch:
         self.status_line = f"watching {self.options.url}"
         for key, tick in sampling:
             t = tick.time
-            if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
-                    src.absent and src.absent.at(key.topics, t)):
-                self._unknown[key] += 1
-                # ticks skipped on the busiest clock (each requirement counts its own)
-                self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
-                continue
             vals = tick.values
             cols = self._cols[key]
             i = cols.n
             dep = max(tick.log_times.values()) if tick.log_times else None
-            self._step(order[key], vals, t, i, dep)
+            if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
+                    src.absent and src.absent.at(key.topics, t)):
+                # inside a gap: kept (the judge reads it as unknown), the monitors not
+                # stepped over it
+                self._unknown[key] += 1
+                self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
+            else:
+                self._step(order[key], vals, t, i, dep)
             cols.append(tick)
             self.ticks += 1
             if self.on_tick is not None:
@@ -381,9 +385,11 @@ class Watch:
                 self.start_time = (src.start_time if src.start_time is not None
                                    else sampling.groups[key].start_time)
         passes = {}
+        live_gaps = split_bridged(run_gaps(self.source), self.plan.config.bridge_gaps_ns)[0]
         for key in groups:
             times, columns, log_times = self._cols[key].arrays()
             passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
+            mark_gaps(passes[key], spec[key][0], bindings, live_gaps, key.topics)
             # cut short, or lost at the end (undecodable): a log cut after the last message
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
@@ -479,8 +485,7 @@ class Watch:
             for r in active:
                 res = result.by_req[r.index]
                 g, v = res.sampling, verdicts[r.index]
-                unknown = self._unknown.get(self._group[r.index], 0)
-                v.ticks_evaluated = g.ticks - unknown
+                v.ticks_evaluated = g.ticks
                 v.warmup_ticks = g.warmup_ticks
                 between_ticks(v, g, r, self.plan.bindings)
                 v.first_tick_ns, v.last_tick_ns = g.first_time, g.end_time
@@ -496,13 +501,6 @@ class Watch:
                     continue
                 finalize(self.plan, r, res, self.plan.bindings, v, la)
                 ok.append(r)
-                if unknown:
-                    v.notes.append(f"{unknown} ticks inside gaps of the run were not "
-                                   "evaluated (unknown)")
-                    if v.verdict in ("satisfied", "vacuous"):  # unread ticks could violate it
-                        v.unknown_reason = (f"{v.verdict} on the ticks read, but {unknown} "
-                                            "ticks inside gaps of the run were not read")
-                        v.verdict = "unknown"
             summarize_clocks(la, [verdicts[r.index] for r in ok])
             la.engine = log_engine(verdicts[r.index] for r in ok)
             active = ok

@@ -19,6 +19,8 @@ schemas write them) become named constants (``/log.level >= ERROR``). Libraries:
 
 from __future__ import annotations
 
+import re
+
 import base64
 import json
 from collections.abc import Callable
@@ -283,6 +285,16 @@ def _pb_definition(name: str, fds: bytes) -> tuple[str, str] | None:
 
 
 _JSON_ROS = {"number": "float64", "integer": "int64", "boolean": "bool", "string": "string"}
+_NOT_NAME = re.compile(r"[^A-Z0-9_]+")
+
+
+def constant_name(title: str) -> str | None:
+    """A JSON Schema enum choice's ``title`` as a constant of the ROS definition built for
+    it: upper case, other characters as ``_`` (ROS constants are ``[A-Z][A-Z0-9_]*``;
+    ``"Video"`` is ``VIDEO``); a binding names it as the schema writes it, in any case
+    (:mod:`fretc.signals.bindings.typecheck`). None when nothing of it is a name."""
+    name = _NOT_NAME.sub("_", title.strip().upper()).strip("_")
+    return name if name and name[0].isalpha() else None
 
 
 def _json_definition(name: str, doc: dict) -> tuple[str, str]:
@@ -303,10 +315,11 @@ def _json_definition(name: str, doc: dict) -> tuple[str, str]:
             ros = field_type(sub, f"{prefix}_{field}")
             if ros is None:
                 continue
-            for choice in sub.get("oneOf") or ():
-                if isinstance(choice, dict) and "const" in choice and \
-                        str(choice.get("title", "")).isidentifier():
-                    consts.setdefault(choice["title"], choice["const"])
+            for choice in sub.get("oneOf") or sub.get("anyOf") or ():
+                if isinstance(choice, dict) and "const" in choice:
+                    const = constant_name(str(choice.get("title", "")))
+                    if const:
+                        consts.setdefault(const, choice["const"])
             lines.append(f"{ros} {field}")
         head = [f"int64 {k}={v}" for k, v in consts.items() if isinstance(v, int)]
         return "\n".join(head + lines) + "\n"

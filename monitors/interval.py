@@ -277,7 +277,7 @@ def trigger_points(cond: str, C: np.ndarray | None, s: int, e: int) -> list[int]
 
 # --------------------------------------------------------------------------- entry point
 def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                         duration_ticks: int | None = None) -> Evidence:
+                         duration_ticks: int | None = None, favour=None) -> Evidence:
     """Decide ``req`` on a trace of ``n`` ticks by FRET's interval semantics.
 
     Args:
@@ -287,6 +287,11 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         duration_ticks: the timing's duration in ticks (``within``/``for``/``after``), as
             converted by the compiler (``Formalization.ticks``); None reads the duration's
             amount as ticks.
+        favour: where the condition, response and stop condition are unknown (an object
+            with bool arrays ``C``, ``R``, ``S``: :class:`fretc.monitors.judge3.Unknowns`):
+            there they take the value that meets the obligation (no trigger, the response
+            the timing wants, the stop condition that ends it), so the failures left are
+            those the known ticks make; None: the columns as they are.
 
     Returns:
         An :class:`Evidence`.
@@ -306,6 +311,8 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
     mode = scope_mode(req, columns, n)
     intervals = scope_intervals(scope, mode, n)
     R, C, S = _signals(req, columns, n, mode)
+    if favour is not None:
+        R, C, S = _favoured(req, R, C, S, favour)
     k = None
     if timing in A.DURATION_TIMINGS:
         if duration_ticks is not None:
@@ -339,6 +346,19 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
                     violation=first, ticks=n,
                     first_interval=intervals[0] if intervals else None,
                     first_trigger=first_trigger, listed=listed)
+
+
+def _favoured(req: A.Requirement, R, C, S, favour):
+    """``R, C, S`` with their unknown ticks (``favour``) set to meet the obligation: no
+    trigger; the response the timing wants (true, false for ``never``, negated in ``only*``
+    scopes); the stop condition that ends an ``until`` and does not end a ``before``."""
+    want = (not req.scope.kind.startswith("only")) != (req.timing.kind == "never")
+    R = np.where(favour.R[:len(R)], want, R)
+    if C is not None:
+        C = np.where(favour.C[:len(C)], False, C)
+    if S is not None:
+        S = np.where(favour.S[:len(S)], req.timing.kind == "until", S)
+    return R, C, S
 
 
 def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,

@@ -126,6 +126,16 @@ class Unknowns:
         lo, hi = max(lo, 0), min(hi, self.n - 1)
         return hi < lo or not (self.R[lo:hi + 1].any() or self.S[lo:hi + 1].any())
 
+    def missed_known(self, w: Violation, timing: str, negate: bool) -> bool:
+        """The failed obligation ``w`` fails in every completion: for an invariant over a
+        window (``always``, ``never``, ``for``, not in an ``only*`` scope) the response known
+        at the tick it failed; for the others the response (and stop condition) known from
+        the trigger to that tick."""
+        vt = min(w.violation_tick, self.n - 1)
+        if not negate and timing in ("always", "never", "for"):
+            return not self.R[vt]
+        return self.obligation_known(min(w.trigger_tick, w.window[0]), vt)
+
 
 def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,
                       columns: Mapping[str, np.ndarray]) -> Evidence:
@@ -134,12 +144,12 @@ def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,
     docstring). Its ``holds`` and ``vacuous`` are left to the caller (the three-valued
     verdict decides them)."""
     scope, cond = req.scope.kind, req.condition.kind
+    negate = scope.startswith("only")
     listed: list[Violation] = []
     for w in ev.listed:
         s, e = w.interval
         if (u.scope_known(s, e, scope) and u.trigger_known(w.trigger_tick, s, cond)
-                and u.obligation_known(min(w.trigger_tick, w.window[0]),
-                                       min(w.violation_tick, u.n - 1))):
+                and u.missed_known(w, req.timing.kind, negate)):
             listed.append(w)
     triggers = 0
     first_trigger = None

@@ -101,10 +101,11 @@ def _version() -> str:
 def _damage_text(la: dict) -> str:
     """Where and how a partial log is damaged, and how far it was judged
     (:func:`fretc.reports.terminal.damage_summary` on the JSON document)."""
-    fields = ("start_time_ns", "damage_time_ns", "ticks_after_damage", "damage_cut")
+    fields = ("start_time_ns", "damage_time_ns", "ticks_after_damage", "damage_cut",
+              "cut_time_ns")
     ns = SimpleNamespace(problems=la.get("problems") or [],
                          problem_counts=la.get("problem_counts") or {},
-                         **{k: la.get(k) for k in fields})
+                         gaps=la.get("gaps") or [], **{k: la.get(k) for k in fields})
     return damage_summary(ns)
 
 

@@ -68,10 +68,11 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
             elif v.partial or v.verdict not in ("satisfied", "vacuous"):
                 # not checked to the end: an error case, never a pass (exit code 3)
                 counts["errors"] += 1
-                where = (f" (damage after {format_offset(la.damage_time_ns, st)})"
+                where = (f" (damage from {format_offset(la.damage_time_ns, st)})"
                          if la.damage_time_ns is not None else "")
-                why = (f"partial log{where}: {v.verdict} up to the damage, the rest was not "
-                       "audited" if v.partial else f"verdict {v.verdict}")
+                why = (f"partial log{where}: {v.verdict} on the messages read "
+                       f"({v.unknown_ticks} ticks unknown)" if v.partial
+                       else f"verdict {v.verdict}")
                 if v.verdict == "unknown" and v.unknown_reason:
                     why += f" (unknown: {v.unknown_reason})"
 

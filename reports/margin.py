@@ -75,7 +75,7 @@ def margin_svg(series: list[tuple[str, list]], title: str) -> str:
            f'<line x1="{_X0}" x2="{_X1}" y1="{_f(y(0.0))}" y2="{_f(y(0.0))}" stroke="#000" '
            'stroke-dasharray="4 3" data-mark="zero"/>']
     for v in (lo, hi):
-        out.append(f'<text x="{_X0 - 4}" y="{_f(y(v) + 4)}" text-anchor="end">{v:+.4g}</text>')
+        out.append(f'<text x="{_X0 - 4}" y="{_f(y(v) + 4)}" text-anchor="end">{v + 0.0:+.4g}</text>')
     out.append(f'<text x="{_X0}" y="{_H - 8}">0 s</text>')
     out.append(f'<text x="{_X1}" y="{_H - 8}" text-anchor="end">{tmax:.1f} s</text>')
     for k, (name, rows) in enumerate(pts):

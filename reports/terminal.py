@@ -70,7 +70,7 @@ def robustness_text(value: float | str | None, none: str = "") -> str:
     ``value`` may also be the audit JSON's text of an infinity (``"inf"``, ``"-inf"``)."""
     if value is None:
         return none
-    value = float(value)
+    value = float(value) + 0.0  # a zero is +0, whichever sign it was computed with
     if math.isinf(value):
         return "+inf" if value > 0 else "-inf"
     return f"{value:+.4g}"
@@ -78,7 +78,7 @@ def robustness_text(value: float | str | None, none: str = "") -> str:
 
 def _cell(v: Verdict, st: int | None) -> str:
     rob = v.robustness
-    rob = f"\n({rob:+.4g})" if rob is not None and math.isfinite(rob) else ""
+    rob = f"\n({robustness_text(rob)})" if rob is not None and math.isfinite(rob) else ""
     if v.verdict == "violated":
         fv = v.first_violation
         at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
@@ -88,7 +88,8 @@ def _cell(v: Verdict, st: int | None) -> str:
 
 def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
                   verbose: bool = False, allow_partial: bool = False,
-                  input_errors: bool = False, statistics: list | None = None) -> None:
+                  input_errors: bool = False, statistics: list | None = None,
+                  command: str = "fretc audit") -> None:
     """Print the verdicts to a rich Console: a header line, the verdict matrix (logs x
     requirements; cells give the first violation's time in seconds from the log's start),
     per-log notes, errors in full below the table (never cut inside a cell), with
@@ -97,9 +98,10 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
     the values around each violation; last the counts and the exit code (with
     ``statistics``, :mod:`fretc.audit.statistics`: the fleet table first when a requirement has
     a probability bound or with ``verbose``, and probability requirements judged by their
-    statistical verdict)."""
+    statistical verdict). ``command`` heads the output (``fretc watch``: one run, no log
+    count)."""
     if plan is not None:
-        _print_plan(console, plan, len(logs))
+        _print_plan(console, plan, len(logs) if command == "fretc audit" else None, command)
     reqs: list[str] = []
     for la in logs:
         for v in la.verdicts:
@@ -114,7 +116,8 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
                       "negative exactly when violated; none shown: decided by booleans "
                       "(+-inf) or no robustness", highlight=False)
     if any(v.partial for la in logs for v in la.verdicts):
-        console.print("* partial log: audited up to the damage", highlight=False)
+        console.print("* partial log: judged on the messages read (gaps: unknown ticks; a cut: "
+                      "nothing after it)", highlight=False)
     for la in logs:
         lines = _log_notes(la, verbose)
         if lines:
@@ -135,8 +138,14 @@ def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True
     _print_counts(console, logs, input_errors, allow_partial, statistics)
 
 
-def _print_plan(console, plan, n_logs: int) -> None:
-    """The header: requirements, logs and the clock of the bindings."""
+def _plural(n: int, word: str) -> str:
+    """``1 log``, ``2 logs``."""
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def _print_plan(console, plan, n_logs: int, command: str = "fretc audit") -> None:
+    """The header: the command, requirements, logs (``n_logs`` None: a watch, one run) and
+    the clock of the bindings."""
     b = plan.bindings
     clock = "no bindings (CSV columns are the variables)"
     if getattr(plan, "variants", None):
@@ -151,8 +160,9 @@ def _print_plan(console, plan, n_logs: int) -> None:
             tick += ", ±inf read as numbers"
         clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
                 f"{b.time_base} time)"
-    console.print(f"fretc audit: {len(plan.requirements)} requirements, {n_logs} "
-                  f"logs; {clock}", markup=False)
+    what = _plural(len(plan.requirements), "requirement")
+    what += "" if n_logs is None else f", {_plural(n_logs, 'log')}"
+    console.print(f"{command}: {what}; {clock}", markup=False)
     if plan.freeform:
         console.print(f"free-form, not audited: {', '.join(plan.freeform)}", markup=False)
     for line in tool_lines(plan):
@@ -397,13 +407,31 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
     console.print(t)
 
 
+def gap_text(g: dict, st: int | None) -> str:
+    """One gap of the audit JSON (:func:`fretc.audit.gaps.gap_json`) in words: its cause,
+    log-time span (s from ``st``), the messages it counts and the topics it may hold."""
+    lo, hi = g.get("start_ns"), g.get("end_ns")
+    if lo is None:
+        span = " from the start"
+    elif hi is None or hi == lo:
+        span = f" at {format_offset(lo, st)}"
+    else:
+        span = f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
+    n = g.get("messages")
+    count = f"{n} message{'s' if n != 1 else ''} " if n else ""
+    topics = g.get("topics")
+    on = (f" of {', '.join(topics[:3])}{' ...' if len(topics) > 3 else ''}" if topics
+          else " of every topic")
+    return f"{count}{g.get('cause') or 'gap'}{span}{on}"
+
+
 def damage_summary(la: LogAudit) -> str:
-    """What damaged a partial log and how far it was judged, in one sentence: the damage
-    problems (kind and log-time span, seconds from the first tick) and the end of the span
-    read completely."""
+    """What damaged a partial log and how it was judged, in one sentence: the damage
+    problems (kind and log-time span, seconds from the first tick), the gaps judged as
+    unknown ticks or bridged, and where a cut ends what was read."""
     st = la.start_time_ns
     kinds = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
-             "data_crc", "unknown_channel", "out_of_order")
+             "data_crc", "unknown_channel", "out_of_order", "dropout")
     parts = []
     for p in la.problems:
         if p.get("kind") not in kinds:
@@ -418,15 +446,27 @@ def damage_summary(la: LogAudit) -> str:
             break
     more = sum(n for k, n in la.problem_counts.items() if k.split(" ")[0] in kinds) - len(parts)
     what = ", ".join(parts) + (f" and {more} more" if more > 0 else "") or "damaged"
-    if la.damage_time_ns is not None:
-        judged = f"judged up to {format_offset(la.damage_time_ns, st)}"
+    said = []
+    gaps = [g for g in la.gaps if not g.get("bridged")]
+    bridged = [g for g in la.gaps if g.get("bridged")]
+    if gaps:
+        listed = "; ".join(gap_text(g, st) for g in gaps[:4])
+        said.append(f"{len(gaps)} gap{'s' if len(gaps) != 1 else ''} ({listed}"
+                    f"{' ...' if len(gaps) > 4 else ''}): their ticks are unknown, the log "
+                    "is judged on after them")
+    if bridged:
+        listed = "; ".join(gap_text(g, st) for g in bridged[:4])
+        said.append(f"{len(bridged)} gap{'s' if len(bridged) != 1 else ''} bridged, the value "
+                    f"before held over {'them' if len(bridged) != 1 else 'it'} ({listed}"
+                    f"{' ...' if len(bridged) > 4 else ''})")
+    if la.cut_time_ns is not None:
+        cut = f"nothing read after {format_offset(la.cut_time_ns, st)} (cut)"
         if la.ticks_after_damage:
-            judged += f" ({la.ticks_after_damage} ticks after it not judged)"
-    elif la.damage_cut:
-        judged = "nothing before the damage to judge"
-    else:
-        judged = "no message lost"
-    return f"the log is damaged ({what}); {judged}"
+            cut += f", {la.ticks_after_damage} ticks after it not judged"
+        said.append(cut)
+    if not said:
+        said.append("no message lost" if not la.damage_cut else "judged on after it")
+    return f"the log is damaged ({what}); " + "; ".join(said)
 
 
 class AuditProgress:

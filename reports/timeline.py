@@ -27,6 +27,8 @@ and tools can check the picture against the JSON.
 
 from __future__ import annotations
 
+import textwrap
+
 import math
 from dataclasses import dataclass, field
 from typing import Sequence
@@ -63,6 +65,9 @@ COLORS = {
 }
 
 FONT = "system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif"
+#: Width of a character of the 10 px notes, for wrapping them (a sans-serif font's average
+#: plus a margin: a line never runs past the picture's right edge)
+NOTE_CHAR_W = 6.0
 
 
 def escape(s: str) -> str:
@@ -385,16 +390,21 @@ def _draw_notes(svg: _Svg, lay: Timeline, y: float) -> float:
                      + (f" (tick {lay.window['end_tick']})" if lay.window else ""))
     if lay.damage is not None:
         notes.append(f"log damaged at {format_offset(lay.damage, start)} (partial)")
-    svg.text(lay.x0, y, f"time: s since the log's start, its first message (t0 = {start} ns "
-             "log time); "
-             f"tick k drawn from its time to the next tick ({lay.period / 1e6:g} ms)", size=10,
-             fill=COLORS["muted"])
-    y += 14
-    svg.text(lay.x0, y, "boolean lanes: filled where true; topic lanes: a dot at the log time "
-             "of each message held (sample-and-hold)", size=10, fill=COLORS["muted"])
+    paragraphs = [f"time: s since the log's start, its first message (t0 = {start} ns log "
+                  f"time); tick k drawn from its time to the next tick "
+                  f"({lay.period / 1e6:g} ms)",
+                  "boolean lanes: filled where true; topic lanes: a dot at the log time of "
+                  "each message held (sample-and-hold)"]
     if notes:
-        y += 14
-        svg.text(lay.x0, y, "; ".join(notes), size=10, fill=COLORS["muted"])
+        paragraphs.append("; ".join(notes))
+    width = int((WIDTH - lay.x0 - 8) / NOTE_CHAR_W)  # characters that fit on a line
+    first = True
+    for text in paragraphs:
+        for line in textwrap.wrap(text, width) or [""]:
+            if not first:
+                y += 14
+            first = False
+            svg.text(lay.x0, y, line, size=10, fill=COLORS["muted"])
     return y
 
 

@@ -105,12 +105,19 @@ def witness(v: dict) -> list[tuple[str, str]]:
                                 f"{v.get('violations')} failed"))
     listed = v.get("violation_list") or []
     if len(listed) > 1:
-        shown = ", ".join(f"{format_seconds(x['violation']['time_s'])} (#{x['violation']['tick']})"
-                          for x in listed[:20])
-        more = len(listed) - 20
+        # one entry per tick where obligations were missed (many triggers of one scope
+        # interval can be missed at its end), with how many
+        ticks: dict[int, list] = {}
+        for x in listed:
+            ticks.setdefault(x["violation"]["tick"], [x["violation"], 0])[1] += 1
+        items = list(ticks.values())
+        shown = ", ".join(f"{format_seconds(w['time_s'])} (#{w['tick']})"
+                          + (f" x{n}" if n > 1 else "") for w, n in items[:20])
+        more = len(items) - 20
         total = v.get("violations") or len(listed)
-        out.append(("violations at", shown + (f", ... ({more} more listed)" if more > 0 else "")
-                    + (f"; {total} in all" if total > len(listed[:20]) else "")))
+        out.append(("violations at", shown + (f", ... ({more} more ticks listed)"
+                                              if more > 0 else "")
+                    + (f"; {total} in all" if total > sum(n for _w, n in items[:20]) else "")))
     out.append(("ticks", f"{v.get('ticks_evaluated')} evaluated"
                          + (f", {v['warmup_ticks']} warm-up" if v.get("warmup_ticks") else "")
                          + (f" ({v['engine']} engine)" if v.get("engine") else "")))

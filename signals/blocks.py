@@ -28,8 +28,8 @@ from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
-from fretc.signals.clock import (HeaderBuffer, Sampling, Tick, check_topics, folded_topics,
-                                 grid_start, present_tf)
+from fretc.signals.bindings.spec import grid_start
+from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from fretc.signals.groups import GroupSampling, _restrict, csv_clock
 

@@ -19,12 +19,12 @@ from fretc.signals.between_ticks import single_topic
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
-from fretc.signals.bindings.spec import Bindings, TickSpec
+from fretc.signals.bindings.spec import Bindings, TickSpec, grid_start
 from fretc.common.problems import DataProblem, ProblemLog, SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CSV_TOPIC, CsvSource, LogSource
 
-__all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of", "grid_start"]
+__all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of"]
 
 
 class Tick:
@@ -255,15 +255,6 @@ def unsampled_of(s: "Sampling", names: list[str], bindings: Bindings | None) -> 
            if bindings is not None and n in bindings.variables]
     folded = folded_topics(own)
     return {t: n for t, n in sorted(s.unsampled.items()) if t not in folded}
-
-
-def grid_start(first: int, period: int) -> int:
-    """The first tick of a fixed-period clock whose first message is at ``first`` (ns): the
-    first multiple of ``period`` at or after it. Ticks lie on the multiples of the period
-    (of log time since the epoch, or of the header time base), never on where the first
-    message read happens to lie: a lost first message (a gap) cannot shift the grid, and
-    clocks of one period share it (docs/guide/ticks.md, "The tick grid")."""
-    return -(-first // period) * period
 
 
 class Clock:

@@ -109,10 +109,9 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     for w in plan.warnings:
         err.print(f"[yellow]warning:[/yellow] {escape(w)}")
     input_errors = False
-    for r in plan.requirements:
-        if r.error is not None:
-            input_errors = True
-            err.print(f"[red]error:[/red] {escape(f'{r.id} ({r.source}): {r.error}')}")
+    # a requirement that does not formalize is an error verdict on every log: its
+    # diagnostic (source line and caret) is printed once, with the other errors
+    input_errors = any(r.error is not None for r in plan.requirements)
     show = not no_progress and sys.stderr.isatty()
     if show:
         with AuditProgress(err, len(paths)) as prog:

@@ -30,9 +30,13 @@ __all__ = ["inspect_cmd", "inspect_log", "MAX_VALUES", "plain"]
 MAX_VALUES = 40
 
 
+#: Scalar values a field keeps before they are reduced to its minimum and maximum at once.
+_PENDING = 65536
+
+
 class _Stat:
     __slots__ = ("type", "min", "max", "nonfinite", "lengths", "true", "false", "n", "texts",
-                 "constants")
+                 "constants", "pending", "arrays", "kept")
 
     def __init__(self, type_text: str, constants: dict | None = None) -> None:
         self.type = type_text
@@ -43,6 +47,34 @@ class _Stat:
         self.nonfinite = 0
         self.lengths: set = set()
         self.true = self.false = self.n = 0
+        self.pending: list = []
+        self.arrays: list = []
+        self.kept = 0
+
+    def scalar(self, value) -> None:
+        """One number (kept, then reduced with the others: one numpy call per many)."""
+        self.pending.append(value)
+        if len(self.pending) >= _PENDING:
+            self.flush()
+
+    def array(self, values) -> None:
+        """An array of numbers (kept, then reduced with the others)."""
+        self.arrays.append(values)
+        self.kept += len(values)
+        if self.kept >= _PENDING:
+            self.flush()
+
+    def flush(self) -> None:
+        """Reduce the numbers kept by :meth:`scalar` and :meth:`array`."""
+        import numpy as np  # lazy: numpy only when a log is read
+
+        if self.pending:
+            values, self.pending = self.pending, []
+            self.numbers(values)
+        if self.arrays:
+            parts, self.arrays, self.kept = self.arrays, [], 0
+            self.numbers(np.concatenate([np.asarray(a, dtype=np.float64).ravel()
+                                         for a in parts]))
 
     def numbers(self, values) -> None:
         import numpy as np  # lazy: numpy only when a log is read
@@ -51,9 +83,9 @@ class _Stat:
             return
         fin = np.isfinite(a)
         self.nonfinite += int((~fin).sum())
-        if fin.any():
-            self.min = min(self.min, float(a[fin].min()))
-            self.max = max(self.max, float(a[fin].max()))
+        if fin.any():  # (+ 0.0: a zero is printed 0, whichever sign it was stored with)
+            self.min = min(self.min, float(a[fin].min()) + 0.0)
+            self.max = max(self.max, float(a[fin].max()) + 0.0)
 
     def text(self, values) -> None:
         for v in values:
@@ -62,6 +94,7 @@ class _Stat:
             self.texts.add(str(v))
 
     def to_json(self) -> dict:
+        self.flush()
         out: Dict[str, Any] = {"type": self.type}
         if self.texts:
             out["values"] = sorted(self.texts)[:MAX_VALUES]
@@ -106,34 +139,57 @@ def _constants(schema, typename: str) -> dict:
     return {c[0]: (c[1], c[2]) for c in consts}
 
 
-def _visit(schema, obj, typename: str, prefix: str, stats: Dict[str, _Stat]) -> None:
+def _plan(schema, typename: str, prefix: str, stats: Dict[str, _Stat], plans: dict) -> list:
+    """The fields of ``typename`` as visited under path ``prefix``: ``(attribute, kind,
+    item kind, stat, sub-plan)`` per field, made once per (type, path) and kept in ``plans``
+    (the schema's field list is not walked again for every message)."""
+    key = (typename, prefix)
+    got = plans.get(key)
+    if got is not None:
+        return got
+    out: list = []
+    plans[key] = out
     for name, t in schema.fields(typename):
         path = f"{prefix}.{name}"
-        v = getattr(obj, name, None)
         st = stats.get(path)
         if st is None:
             st = stats[path] = _Stat(t.text(), _field_constants(schema, typename, name, t))
+        sub = None
+        item = t.item.kind if t.kind == "array" else None
         if t.kind == "message":
-            _visit(schema, v, t.name, path, stats)
-        elif t.kind == "array":
+            sub = _plan(schema, t.name, path, stats, plans)
+        elif item == "message":
+            sub = _plan(schema, t.item.name, f"{path}[:]", stats, plans)
+        out.append((name, t.kind, item, st, sub))
+    return out
+
+
+def _visit(plan: list, obj) -> None:
+    """Add the values of message ``obj`` to the stats of its fields (``plan``: :func:`_plan`)."""
+    for name, kind, item, st, sub in plan:
+        v = getattr(obj, name, None)
+        if kind == "message":
+            _visit(sub, v)
+        elif kind == "array":
             n = len(v) if v is not None else 0
             st.lengths.add(n)
-            if t.item.kind == "message":
+            if item == "message":
                 for x in v:
-                    _visit(schema, x, t.item.name, f"{path}[:]", stats)
-            elif t.item.kind == "number":
-                st.numbers(v)
-            elif t.item.kind == "bool":
+                    _visit(sub, x)
+            elif item == "number":
+                st.array(v)
+            elif item == "bool":
                 k = sum(1 for x in v if x)
                 st.true += k
                 st.false += n - k
-            elif t.item.kind == "string":
+            elif item == "string":
                 st.text(v)
-        elif t.kind == "number":
-            st.numbers([v])
-        elif t.kind == "string":
-            st.text([v])
-        elif t.kind == "bool":
+        elif kind == "number":
+            st.scalar(v)
+        elif kind == "string":
+            if len(st.texts) <= MAX_VALUES:
+                st.text([v])
+        elif kind == "bool":
             if v:
                 st.true += 1
             else:
@@ -159,13 +215,16 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
     first: Dict[str, int] = {}
     last: Dict[str, int] = {}
     counts: Dict[str, int] = {}
+    plans: dict = {}
+    visit = {t: _plan(s, s.typename, topic_text(t), stats[t], plans)
+             for t, s in schemas.items() if t in stats and source.kind != "csv"}
     for m in source.messages(None):
         counts[m.topic] = counts.get(m.topic, 0) + 1
         first.setdefault(m.topic, m.log_time)
         last[m.topic] = m.log_time
-        sch = schemas.get(m.topic)
-        if sch is not None and source.kind != "csv":
-            _visit(sch, m.data, sch.typename, topic_text(m.topic), stats[m.topic])
+        plan = visit.get(m.topic)
+        if plan is not None:
+            _visit(plan, m.data)
         elif source.kind == "csv":
             for c in source.columns:
                 st = stats[m.topic].setdefault(f"{m.topic}.{c}",
@@ -178,9 +237,15 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
                     st.numbers([v])
     topics = []
     for t, typ in types.items():
-        n = source.records.get(t, counts.get(t, 0))  # read, decoded or not
-        span = (last[t] - first[t]) / 1e9 if n > 1 else None
+        lost = [v for (_k, topic, _c), v in source.lost.items() if topic == t]
+        undecoded = sum(v[2] for v in lost)
+        n = max(source.records.get(t, 0), counts.get(t, 0) + undecoded)  # decoded or not
+        times = [x for x in (first.get(t), last.get(t)) if x is not None]
+        times += [x for v in lost for x in v[:2]]
+        span = (max(times) - min(times)) / 1e9 if n > 1 and times else None
         topics.append({"topic": t, "type": typ or None, "messages": n,
+                       "not_decoded": undecoded,
+                       "not_decoded_why": lost[0][3] if lost else None,
                        "rate_hz": (n - 1) / span if span else None,
                        "schema": schemas.get(t) is not None,
                        "fields": {p: s.to_json() for p, s in stats[t].items()}})
@@ -204,8 +269,11 @@ def _print(doc: dict) -> None:
                + (" [partial: damaged]" if doc["partial"] else ""))
     for t in doc["topics"]:
         rate = f"{t['rate_hz']:.3g} Hz" if t["rate_hz"] else "-"
-        click.echo(f"  {t['topic']}  {t['type'] or '?'}  {t['messages']} messages  {rate}"
-                   + ("" if t["schema"] else "  (schema unknown)"))
+        plural = "message" if t["messages"] == 1 else "messages"
+        lost = (f"  ({t['not_decoded']} not decoded: {t['not_decoded_why']})"
+                if t.get("not_decoded") else "")
+        click.echo(f"  {t['topic']}  {t['type'] or '?'}  {t['messages']} {plural}  {rate}"
+                   + ("" if t["schema"] else "  (schema unknown)") + lost)
         for p, f in t["fields"].items():
             extra = []
             if "lengths" in f:

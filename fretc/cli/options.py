@@ -17,7 +17,7 @@ import click
 
 from fretc.common.textsafe import visible
 
-__all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
+__all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
 
 #: Key of the Ray options in the click context's ``meta``.
@@ -67,9 +67,10 @@ def audit_input_options(f, jobs: bool = True):
                      help="Ticks of values kept each side of a trigger and a violation."),
         MSG_PATH_OPTION,
         TEXT_ATTRIBUTE_OPTION,
+        BRIDGE_GAPS_OPTION,
     ]
     if not jobs:
-        del options[-4]
+        del options[-5]
     for option in reversed(options):
         f = option(f)
     return f
@@ -102,6 +103,37 @@ TEXT_ATTRIBUTE_OPTION = click.option(
          "text).")
 
 
+#: Key of ``--bridge-gaps``' value (ns) in the click context's ``meta``.
+BRIDGE_META = "fretc.bridge_gaps"
+
+
+def _store_bridge_gaps(ctx, param, value):
+    if value is None:
+        return None
+    from fretc.common.units import parse_duration
+
+    try:
+        ctx.meta[BRIDGE_META] = parse_duration(value)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), ctx=ctx, param=param) from None
+    return value
+
+
+#: ``--bridge-gaps DURATION``: hold values over gaps shorter than it (docs/guide/audits.md)
+BRIDGE_GAPS_OPTION = click.option(
+    "--bridge-gaps", default=None, metavar="DURATION", expose_value=False,
+    callback=_store_bridge_gaps,
+    help="Hold the value before a gap over it when the gap (a ULog dropout, a damaged chunk, "
+         "a message not decoded) is shorter than DURATION, e.g. 50ms; every gap bridged is "
+         "listed. Default: none (a gap's ticks are unknown).")
+
+
+def bridge_gaps() -> int | None:
+    """The running command's ``--bridge-gaps`` in ns (None: not given)."""
+    ctx = click.get_current_context(silent=True)
+    return ctx.meta.get(BRIDGE_META) if ctx is not None else None
+
+
 def text_attribute() -> str | None:
     """The running command's ``--text-attribute`` (None: not given, or no command runs)."""
     ctx = click.get_current_context(silent=True)
@@ -122,7 +154,7 @@ def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_b
                        bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
                        window=window, msg_path=tuple(msg_path),
-                       text_attribute=text_attribute())
+                       text_attribute=text_attribute(), bridge_gaps_ns=bridge_gaps())
 
 
 class FleetError(click.ClickException):

@@ -298,7 +298,8 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
     from fretc.reports.terminal import print_summary
 
     out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
-    print_summary(out, [la], plan, allow_partial=allow_partial, input_errors=input_errors)
+    print_summary(out, [la], plan, allow_partial=allow_partial, input_errors=input_errors,
+                  command="fretc watch")
     if la.partial:
         out.print(f"connection gaps: {len(w.source.gaps)}; {w.unknown_ticks} ticks not "
                   "evaluated (unknown)", markup=False)

@@ -418,6 +418,14 @@ def check_aggregate(node: Expr, where: ExprLocation) -> str | None:
 _CONSTANT = re.compile(r"[A-Z][A-Z0-9_]*\Z")
 
 
+def _enum_name(side: Expr, other: Expr, trees: dict[str, Expr]) -> Expr:
+    """``side`` as a :class:`Named` constant when it is a name that is no variable and
+    ``other`` is a field (``/v.kind == Video``), else ``side``."""
+    if isinstance(side, Ref) and side.name not in trees and isinstance(other, Field):
+        return Named(side.col, side.name)
+    return side
+
+
 def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: str) -> Expr:
     """``node`` with every :class:`Ref` replaced by the tree of the variable it names.
 
@@ -444,8 +452,12 @@ def substitute(node: Expr, trees: dict[str, Expr], where: ExprLocation, name: st
     if isinstance(node, UnaryOp):
         return UnaryOp(node.col, node.op, substitute(node.arg, trees, where, name))
     if isinstance(node, BinOp):
-        return BinOp(node.col, node.op, substitute(node.left, trees, where, name),
-                     substitute(node.right, trees, where, name))
+        left, right = node.left, node.right
+        if node.op in ("=", "!="):  # compared with a field: an enum's name as its schema
+            # writes it ("Video"), resolved against the log's schemas like a capital one
+            left, right = _enum_name(left, right, trees), _enum_name(right, left, trees)
+        return BinOp(node.col, node.op, substitute(left, trees, where, name),
+                     substitute(right, trees, where, name))
     if isinstance(node, FuncCall):
         return FuncCall(node.col, node.func, tuple(substitute(a, trees, where, name)
                                                    for a in node.args))

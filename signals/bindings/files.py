@@ -21,6 +21,7 @@ from fretc.common.problems import BindingError
 from fretc.signals.bindings.binding import VARNAME, Binding, compile_expression
 from fretc.signals.bindings.expression import ExprLocation, refs
 from fretc.signals.bindings.parse import parse_expression
+from fretc.signals.bindings.paths import topic_name
 from fretc.signals.bindings.spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
                    TickSpec)
 
@@ -122,11 +123,12 @@ def _tick_clock(tick_t: dict[str, Any], source: str, loc: _Locations) -> TickSpe
                            "topic = \"/...\"", line=line, col=col)
     if has_p:
         return TickSpec(period_ns=_duration(tick_t, "period", source, loc))
-    topic = tick_t["topic"]
-    if not isinstance(topic, str) or not re.fullmatch(r"(/[A-Za-z0-9_]+)+", topic):
+    topic = topic_name(tick_t["topic"])
+    if topic is None:
         line, col = loc.at("tick", "topic")
-        raise BindingError(source, f"[tick] topic {topic!r} is not a topic name like \"/scan\"",
-                           line=line, col=col)
+        raise BindingError(source, f"[tick] topic {tick_t['topic']!r} is not a topic name "
+                           "(one as fretc inspect lists it: \"/scan\", "
+                           "\"vehicle_local_position\")", line=line, col=col)
     nominal = None
     if "nominal_rate" in tick_t:
         nominal = _duration(tick_t, "nominal_rate", source, loc)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["PLAIN_TOPIC", "topic_text", "quote", "unquote"]
+__all__ = ["PLAIN_TOPIC", "topic_text", "quote", "unquote", "topic_name"]
 
 #: A topic written without quotes: ``/`` and name characters, as grammar.lark's TOPIC.
 PLAIN_TOPIC = re.compile(r"(/[A-Za-z0-9_]+)+\Z")
@@ -30,3 +30,21 @@ def topic_text(topic: str) -> str:
     """A topic as it is written in a binding: bare when :data:`PLAIN_TOPIC` matches, else
     quoted (a topic without a leading ``/`` or with ``-``, ``.``, spaces)."""
     return topic if PLAIN_TOPIC.match(topic) else quote(topic)
+
+
+def topic_name(text: str) -> str | None:
+    """A topic named as a user copies it from ``fretc inspect`` (a tick topic): a ROS name
+    (``/scan``), a flight log's topic without a leading ``/`` (``vehicle_local_position``,
+    ``sensor_accel/1``, ``GPS``), or either in double quotes as a binding writes it
+    (``"vehicle_local_position"``); None when it cannot be a topic name (empty, blank, a
+    control character, unbalanced quotes)."""
+    if not isinstance(text, str):
+        return None
+    name = text.strip()
+    if len(name) >= 2 and name[0] == name[-1] == '"':
+        name = unquote(name)
+    elif '"' in name:
+        return None
+    if not name or name != name.strip() or any(ord(c) < 32 or ord(c) == 127 for c in name):
+        return None
+    return name

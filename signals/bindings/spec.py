@@ -13,7 +13,7 @@ from fretc.common.units import NS_PER_S
 from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
-           "Bindings", "make_bindings"]
+           "Bindings", "make_bindings", "grid_start"]
 
 #: The time bases of ``[tick] time``: ``log`` (the log's own time of each message),
 #: ``header`` (every bound message's ``header.stamp``; a message without one is an error),
@@ -174,3 +174,12 @@ def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str =
                                     col=len(name) + 2)
            for name, expr in variables.items()}
     return Bindings(out, tick, time_base, header_lag_ns, None)
+
+
+def grid_start(first: int, period: int) -> int:
+    """The first tick of a fixed-period clock whose first message is at ``first`` (ns): the
+    first multiple of ``period`` at or after it. Ticks lie on the multiples of the period
+    (of log time since the epoch, or of the header time base), never on where the first
+    message read happens to lie: a lost first message (a gap) cannot shift the grid, and
+    clocks of one period share it (docs/guide/ticks.md, "The tick grid")."""
+    return -(-first // period) * period

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
+from fretc.logs.encodings import constant_name
 from fretc.signals.bindings.expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named,
                          UnaryOp, unparse)
 
@@ -156,11 +157,15 @@ class _TypeChecker:
         while owner.kind == "array":
             owner = owner.item
         consts = sch.constants(owner.name) if owner.kind == "message" else {}
-        if named.name not in consts:
+        name = named.name
+        if name not in consts:  # a schema's enum title as written (any case): its constant
+            folded = [c for c in consts if c.upper() == constant_name(name)]
+            name = folded[0] if len(folded) == 1 else name
+        if name not in consts:
             raise self.where.error(
                 f"{named.name} is not a variable of this binding file nor a constant of "
                 f"{owner.name} (its constants: {', '.join(consts) or 'none'})", named.col)
-        self.constants[named.name] = consts[named.name]
+        self.constants[named.name] = consts[name]
 
     def binary(self, node: BinOp) -> str:
         for side, other in ((node.left, node.right), (node.right, node.left)):
@@ -185,7 +190,8 @@ class _TypeChecker:
         elif op in ("=", "!="):
             self.both(node, a, b, _NUMS + _BOOLS, f"{op!r} compares numbers or booleans")
             known = [x for x in (a, b) if x != "any"]
-            if len(known) == 2 and (known[0] in _BOOLS) != (known[1] in _BOOLS):
+            if len(known) == 2 and (known[0] in _BOOLS) != (known[1] in _BOOLS) \
+                    and not _zero_or_one(node):
                 raise self.where.error(f"type error: {op!r} compares a boolean with a number "
                                        f"({_describe(node.left, a)}; "
                                        f"{_describe(node.right, b)})", node.col)
@@ -242,3 +248,12 @@ class _TypeChecker:
                     raise self.where.error(f"type error: {f}() of several values takes "
                                            f"numbers, but {_describe(a, t)}", node.col)
         return "number"
+
+
+def _zero_or_one(node: BinOp) -> bool:
+    """``node`` (``=`` or ``!=``) compares with the number 0 or 1, as flight logs' users write
+    a boolean (uORB's and DataFlash's ``bool`` fields are stored as 0/1 bytes: ``landed ==
+    1``): read as false/true."""
+    return any(isinstance(x, Const) and not isinstance(x.value, bool)
+               and isinstance(x.value, (int, float)) and x.value in (0, 1)
+               for x in (node.left, node.right))

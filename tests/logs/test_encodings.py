@@ -176,3 +176,49 @@ def test_json_values_become_the_arrays_and_objects_of_the_rule():
         assert _same(as_message(v), _as_message_by_rule(v))
 
     check()
+
+
+#: a JSON Schema as a non-ROS writer (a camera SDK) writes one: enum choices whose titles are
+#: not in capitals, keywords no ROS type has
+_CAMERA_SCHEMA = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema", "title": "ImgFrame",
+    "$comment": "written by a camera SDK", "type": "object", "additionalProperties": False,
+    "properties": {
+        "sequenceNumber": {"type": "integer", "minimum": 0, "examples": [1]},
+        "iso": {"type": "number", "format": "float"},
+        "kind": {"title": "kind", "description": "frame kind",
+                 "oneOf": [{"title": "Video", "const": 0}, {"title": "Still", "const": 1},
+                           {"title": "raw 8-bit", "const": 2}]},
+        "meta": {"type": "object", "properties": {"exposureUs": {"type": "integer"}},
+                 "required": ["exposureUs"], "patternProperties": {"^x-": {}}},
+    },
+}
+
+
+def test_a_schema_from_any_writer_keeps_its_fields_and_named_constants(tmp_path):
+    payloads = [json.dumps({"sequenceNumber": i, "iso": 100 + 400 * (i == 3),
+                            "kind": 1 if i == 3 else 0, "meta": {"exposureUs": 5000}}).encode()
+                for i in range(6)]
+    log = _one_channel_mcap(tmp_path / "cam.mcap", "json", "jsonschema",
+                            json.dumps(_CAMERA_SCHEMA).encode(), payloads)
+    sch = log_schemas(open_log(log))["/v"]
+    fields = dict(sch.fields())
+    assert {"sequenceNumber", "iso", "kind", "meta"} <= set(fields)
+    assert fields["meta"].kind == "message"
+    assert sch.constants(sch.typename) == {"VIDEO": 0, "STILL": 1, "RAW_8_BIT": 2}
+    (tmp_path / "r.fret").write_text("R1: the camera shall always satisfy is_video\n"
+                                     "R2: the camera shall always satisfy low_iso\n")
+    base = '[tick]\nperiod = "100 ms"\n[variables]\nlow_iso = "/v.iso < 300"\n'
+    for written in ("Video", "VIDEO", "video"):  # the title as written, in any case
+        (tmp_path / "r.bindings.toml").write_text(base + f'is_video = "/v.kind == {written}"\n')
+        la = audit_log(load_plan(AuditConfig((str(tmp_path / "r.fret"),))), str(log))
+        got = {v.requirement: v for v in la.verdicts}
+        assert got["R1"].verdict == "violated", (written, got["R1"].error)
+        assert got["R1"].first_violation.at.tick == 3 and got["R2"].verdict == "violated"
+    # a misspelt field is an input error when the plan meets the log, naming the topic, the
+    # field and the fields there are (not at the first tick)
+    (tmp_path / "r.bindings.toml").write_text(base + 'is_video = "/v.exposre > 0"\n')
+    la = audit_log(load_plan(AuditConfig((str(tmp_path / "r.fret"),))), str(log))
+    err = {v.requirement: v for v in la.verdicts}["R1"].error
+    assert "exposre" in err and "/v" in err and "sequenceNumber" in err, err
+    assert "SimpleNamespace" not in err

@@ -19,6 +19,7 @@ from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.logs import open_log  # noqa: E402
 from fretc.logs.schema import log_schemas  # noqa: E402
 from fretc.logs.ulog_source import DROPOUT, EARLY_TIMESTAMP  # noqa: E402
+from fretc.audit.verdict import exit_code  # noqa: E402
 
 PX4 = SHARED / "data" / "foreign_logs" / "px4"
 TICK = 100_000_000
@@ -129,8 +130,32 @@ def test_px4_dropouts_are_damage_never_held_over(tmp_path):
     assert la.partial
     assert any(p["kind"] == DROPOUT for p in la.problems)
     v = _by_id(la)
-    assert v["PL"].verdict == "unknown"  # the first dropout comes 74 ms after the start
+    # the logger's ERROR message at 45.6 s is read after the dropouts: violated there
+    assert v["PL"].verdict == "violated"
+    assert v["PL"].first_violation.at.log_time_ns == 158_215_813_000
     assert "battery_status" in v["PB"].error  # this older PX4 logs no battery
+
+
+@needs_shared
+def test_px4_a_violation_after_the_dropouts_is_violated(tmp_path):
+    """The flight's logger dropped messages for 0, 26 and 31 ms near its start and for
+    62 ms at 41 s; the vertical speed breaks 0.15 m/s at 3.74 s in the messages recorded
+    (log time 116.2428 s): violated at the first tick after it (exit 1), on a fixed period
+    and on one tick per message, every dropout a gap of the log (every topic)."""
+    fret = "R1: the vehicle shall always satisfy vz < 0.15\n"
+    vz = 'vz = \'abs("vehicle_local_position".vz)\'\n'
+    for tick in ('period = "100 ms"', 'topic = "vehicle_local_position"',
+                 'topic = \'"vehicle_local_position"\''):
+        la = audit_log(_plan(tmp_path, fret, f"[tick]\n{tick}\n[variables]\n{vz}"),
+                       str(PX4 / "sample.ulg"))
+        (r1,) = la.verdicts
+        assert r1.verdict == "violated", (tick, r1.verdict, r1.unknown_reason)
+        fv = r1.first_violation
+        assert fv.at.log_time_ns == 116_242_849_000 and fv.at.time_ns >= 116_242_849_000
+        assert [(g["cause"], g["topics"]) for g in la.gaps] == [(DROPOUT, None)] * 4
+        assert sorted(g["end_ns"] - g["start_ns"] for g in la.gaps) == [
+            0, 26_000_000, 31_000_000, 62_000_000]
+        assert exit_code([la]) == 1
 
 
 @needs_shared

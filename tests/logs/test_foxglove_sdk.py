@@ -71,10 +71,12 @@ def test_an_sdk_log_audits_as_recomputed_from_its_raw_messages(tmp_path):
     la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "f.fret"),))), str(log))
     got = {v.requirement: v for v in la.verdicts}
     st, lg = _raw(log)
-    # independent: ticks every 100 ms from the first message; sample and hold of /state
+    # independent: ticks on the multiples of 100 ms from the first at or after the first
+    # message; sample and hold of /state
     times = np.array([t for t, _s, _m in st])
     speed = np.array([s for _t, s, _m in st])
-    ticks = times[0] + TICK * np.arange((times[-1] - times[0]) // TICK + 1)
+    t0 = -(-int(times[0]) // TICK) * TICK
+    ticks = t0 + TICK * np.arange((times[-1] - t0) // TICK + 1)
     held = np.searchsorted(times, ticks, side="right") - 1
     bad = np.flatnonzero(speed[held] >= 1.5)
     assert got["S1"].verdict == "violated"
@@ -85,7 +87,8 @@ def test_an_sdk_log_audits_as_recomputed_from_its_raw_messages(tmp_path):
     # E1's own clock runs on /log (each verdict stands alone): the ERROR is folded into
     # the first of its ticks at or after it
     err = min(t for t, level in lg if level >= 4)
-    log_ticks = lg[0][0] + TICK * np.arange((lg[-1][0] - lg[0][0]) // TICK + 2)
+    l0 = -(-lg[0][0] // TICK) * TICK
+    log_ticks = l0 + TICK * np.arange((lg[-1][0] - l0) // TICK + 2)
     assert got["E1"].verdict == "violated"
     assert got["E1"].first_violation.at.time_ns == int(
         log_ticks[np.searchsorted(log_ticks, err)])
