@@ -111,7 +111,8 @@ class _LogRun:
         for v in la.verdicts:
             if v.error is not None:
                 v.verdict = "error"
-            v.partial = la.partial
+            # a verdict that read the log is partial with it; an error read nothing of it
+            v.partial = la.partial and v.error is None
         return la
 
     def _fail_all(self, message: str, rs=None) -> None:

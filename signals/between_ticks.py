@@ -62,6 +62,8 @@ def missed_changes(variables: list[Binding], stream: Any, topic: str, starts: np
     skipped = np.concatenate([np.arange(a + 1, e) for a, e in zip(starts[some], held[some])])
     refs = np.repeat(starts[some], gaps[some])
     at = np.concatenate((skipped, refs)) - buf.base
+    if len(at) and at.min() < 0:  # released from the buffer: never read others in their place
+        raise AssertionError(f"messages of {topic} were released before they were counted")
     times = stream.arrays(topic)[0]
     for b in variables:
         if single_topic(b) != topic:
@@ -133,6 +135,8 @@ def folded(b: Binding, stream: Any, window: tuple[np.ndarray, np.ndarray]) -> np
     def value(k: int) -> Any:
         if k not in memo:
             j = k - buf.base
+            if j < 0:  # released from the buffer: never read another message in its place
+                raise AssertionError(f"message {k} of {topic} was released before its fold")
             st.msgs[topic], st.times[topic], st.now = buf.data[j], buf.times[j], buf.times[j]
             try:
                 memo[k] = b.evaluate(st)

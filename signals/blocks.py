@@ -287,6 +287,12 @@ def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
                            - (topic in c.stateful))
                 if topic == c.tick_topic and c.period is None:
                     keep = min(keep, c.next_seq - b.base)
+                if topic in c.last_held:  # the messages since the one held last: the next
+                    # ticks read those they skip (missed changes), whatever other clocks keep
+                    keep = min(keep, c.last_held[topic] - b.base)
+                if c.window_start.get(topic, -1) >= 0:  # an aggregation's next window:
+                    # the messages after the one held at the last tick (and that one)
+                    keep = min(keep, c.window_start[topic] - b.base)
                 for _buf, added in c.tf.values():
                     if topic in added:
                         keep = min(keep, added[topic] - b.base)

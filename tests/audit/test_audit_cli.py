@@ -191,7 +191,7 @@ def test_abs_in_a_requirement_hints_fret_spelling_and_its_variable_is_not_unused
     log = _synthetic(tmp_path)
     (tmp_path / "syn.bindings.toml").unlink()
     fret = tmp_path / "a.fret"
-    for text, hint in [("abs(speed) < 0.4", "absReal/absInt"),
+    for text, hint in [("abs(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)"),
                        ("fabs(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)"),
                        ("ABS(speed) < 0.4", "FRET spells it absReal(...) or absInt(...)")]:
         fret.write_text(f"A1: the bot shall always satisfy {text}\n")

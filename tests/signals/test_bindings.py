@@ -100,7 +100,7 @@ def test_parse_duration_rejects(value):
     ('[tick]\nperiod = "1 s"\ntopic = "/a"\n[variables]\n', 1, 1, "exactly one of"),
     ('[tick]\nperiod = "1 s"\ntime = "wall"\n[variables]\n', 3, 8, "time must be"),
     ('[tick]\nperiod = "1 s"\nsped = 2\n[variables]\n', 3, 8, "unknown key 'sped'"),
-    ('[tick]\ntopic = "scan"\n[variables]\n', 2, 9, "not a topic name"),
+    ('[tick]\ntopic = " "\n[variables]\n', 2, 9, "not a topic name"),
     ('[tick]\nperiod = "1 s"\n[variabels]\nx = "/a.b"\n', 3, 1, "unknown table [variabels]"),
     ('[variables]\nx = "/a.b"\n', 1, None, "missing [tick]"),
     ('[tick]\nperiod = "1 s"\n[variables]\nx = "/a.b\n', 4, None, "TOML syntax error"),
@@ -377,3 +377,20 @@ def test_ros2_laserscan_type_name_and_vectorized_agree():
                        {"/scan": idx})
     assert b.evaluate_columns(cols).tolist() == per_tick
     assert ROS2.types["sensor_msgs/msg/LaserScan"].__msgtype__ == "sensor_msgs/msg/LaserScan"
+
+
+def test_a_tick_topic_is_named_as_inspect_lists_it():
+    """A flight log's topics have no leading ``/`` (``vehicle_local_position``, ``GPS/1``):
+    a tick topic is any name inspect lists, quoted as a binding quotes it or not."""
+    import json as _json
+
+    from fretc.signals.bindings.paths import topic_name
+
+    for text, name in [("/scan", "/scan"), ("vehicle_local_position", "vehicle_local_position"),
+                       ('"vehicle_local_position"', "vehicle_local_position"),
+                       ("GPS/1", "GPS/1"), ('"ORB-SLAM"', "ORB-SLAM")]:
+        assert topic_name(text) == name
+        b = parse_bindings(f"[tick]\ntopic = {_json.dumps(text)}\n[variables]\n", "b.toml")
+        assert b.tick.topic == name
+    for bad in ("", " ", "a\x00b", '"unbalanced', '""'):
+        assert topic_name(bad) is None, bad
