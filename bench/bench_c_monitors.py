@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import re
 import subprocess
 import sys
 import tempfile
@@ -105,17 +106,18 @@ def time_python(cls, trace, steps: int) -> tuple[float, float, list]:
     reps = max(1, steps // len(trace))
     m = cls()
     verdicts = [m.step(s) for s in trace]
+    step = cls().step  # one monitor over the repeated trace (construction not timed)
     t0 = time.perf_counter()
     for _ in range(reps):
-        m = cls()
-        step = m.step
         for s in trace:
             step(s)
     t_step = (time.perf_counter() - t0) / (reps * len(trace)) * 1e9
+    run = cls().run
     t0 = time.perf_counter()
     for _ in range(reps):
-        assert cls().run(trace) == verdicts
+        run(trace)
     t_run = (time.perf_counter() - t0) / (reps * len(trace)) * 1e9
+    assert cls().run(trace) == verdicts
     return t_step, t_run, verdicts
 
 
@@ -140,15 +142,18 @@ def time_reelay(pt, trace, steps: int, verdicts) -> float | None:
         pattern = to_rye(_predicates(pt), next(iter(trace[0])))
     except ValueError:
         return None
-    reps = max(1, steps // len(trace) // 4)
+    reps = max(1, steps // len(trace))
     m = reelay.discrete_timed_monitor(pattern=pattern, condense=False)
     got = [m.update(s)["value"] for s in trace]
     assert got[20:] == [bool(v) for v in verdicts][20:]
+    names = sorted(set(re.findall(r"\{(\w+)", pattern)))
+    samples = [{k: s[k] for k in names} for s in trace]  # the formula's variables only
+    m = reelay.discrete_timed_monitor(pattern=pattern, condense=False)
+    update = m.update  # one monitor over the repeated trace (its construction not timed)
     t0 = time.perf_counter()
     for _ in range(reps):
-        m = reelay.discrete_timed_monitor(pattern=pattern, condense=False)
-        for s in trace:
-            m.update(s)
+        for s in samples:
+            update(s)
     return (time.perf_counter() - t0) / (reps * len(trace)) * 1e9
 
 
