@@ -98,7 +98,7 @@ def compile_cmd(files, emit, as_json, output, psl_map, split):
         write_c(compiled, output, split)
     elif emit == "c2po":
         from fretc.cli.emit_c import write_c2po
-        write_c2po(compiled, output)
+        write_c2po(compiled, output, _check_output, _write_outputs)
     elif emit == "psl":
         from fretc.compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler

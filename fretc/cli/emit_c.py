@@ -37,16 +37,15 @@ def write_c(compiled, output: str | None, split: bool) -> None:
             click.echo(shown(f"skipped {rid} ({stem}): {why}".replace("\n", " ")), err=True)
 
 
-def write_c2po(compiled, output: str | None) -> None:
+def write_c2po(compiled, output: str | None, check_output, write_outputs) -> None:
     """Write one C2PO specification per requirement file (``-o`` a file for one, a
-    folder for several; stdout without ``-o``) and report on stderr what could not be
-    expressed."""
+    folder for several; stdout without ``-o``: ``fretc compile``'s ``check_output`` and
+    ``write_outputs``) and report on stderr what could not be expressed."""
     from fretc.compiler.c2po import emit_c2po
-    from fretc.cli.compile import _check_output, _write_outputs
 
     outputs, skipped = emit_c2po(compiled)
-    _check_output(outputs, output, ".c2po")
-    _write_outputs(outputs, output, ".c2po")
+    check_output(outputs, output, ".c2po")
+    write_outputs(outputs, output, ".c2po")
     reported = {c.id for c in compiled if c.error is not None}
     for stem, rid, why in skipped:
         if rid not in reported:
