@@ -343,15 +343,30 @@ def _unit(file_stem: str, source: str, stem: str, items, automata,
             continue
         prefix = stem if own_prefix else f"{stem}_{_identifier(c.id)}"
         base, k = prefix, 2
-        while prefix in used:
+        while _names(prefix) & used:
             prefix, k = f"{base}_{k}", k + 1
-        used.add(prefix)
+        used |= _names(prefix)
         try:
             got = (automata or {}).get((source, c.id))
             monitors.append(c_monitor(c, prefix, got))
         except CodegenError as exc:
             skipped.append((c.id, str(exc)))
     return CUnit(file_stem, source, monitors, skipped)
+
+
+#: the identifiers a monitor of prefix P defines: P_<suffix> and the macros P_<SUFFIX> in
+#: upper case (templates/c_monitors.{h,c}.j2)
+_SUFFIXES = ("inputs", "state", "state_bytes_check", "init", "step", "unread", "ltl3",
+             "ltl3_tick", "finish", "verdict", "ticks", "unread_tick", "bad", "good")
+_MACROS = ("ID", "TEXT", "KEY", "FT", "FT_INF", "PT", "SOURCE_HASH", "LTL3_NOTE",
+           "STATE_BYTES")
+
+
+def _names(prefix: str) -> set[str]:
+    """Every identifier of a monitor of ``prefix`` (two requirements whose ids differ only
+    in case or by one of these suffixes must not define the same one)."""
+    return ({f"{prefix}_{x}" for x in _SUFFIXES}
+            | {f"{prefix.upper()}_{x}" for x in _MACROS})
 
 
 def emit_c(compiled, split: bool = False, automata: dict | None = None
