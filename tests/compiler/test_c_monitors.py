@@ -296,3 +296,21 @@ def test_hostile_names_and_texts(tmp_path):
     got = subprocess.run([str(exe), str(tmp_path / "t.csv")], capture_output=True, text=True)
     assert got.returncode == 2
     assert got.stdout.startswith('R"*/??/\\x5c\\x0a\u00c4\terror\tno column we?ird */ var')
+
+
+def test_command_needs_a_folder_and_reports_skipped(tmp_path):
+    """``--emit c`` without ``-o DIR``: exit 2 with the reason; a requirement without an
+    online monitor is named on stderr and in the header."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    fret = tmp_path / "f.fret"
+    fret.write_text("A: the sw shall always satisfy p\n"
+                    "B: the sw shall always satisfy persists(2, p)\n")
+    res = CliRunner().invoke(main, [str(fret), "--emit", "c"])
+    assert res.exit_code == 2 and "give the folder with -o DIR" in res.output
+    res = CliRunner().invoke(main, [str(fret), "--emit", "c", "-o", str(tmp_path / "c")])
+    assert res.exit_code == 0
+    assert "skipped B (f_monitors): the pt formula needs the future-time function" in res.output
+    assert " *   B: the pt formula needs" in (tmp_path / "c" / "f_monitors.h").read_text()
