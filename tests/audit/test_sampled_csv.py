@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from fretc.audit import AuditConfig, audit_log, find_logs, load_plan
 from fretc.cli import main
 
-from _c_monitors import build, needs_cc, write
+from _c_monitors import build, needs_cc
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
