@@ -10,9 +10,12 @@ clock starts at another time or tick than the file's (a topic that starts later,
 message off the tick grid) may get another verdict from the file than from the log:
 :func:`clock_notes` names them, from the audit of the same log.
 
-Format (:class:`fretc.logs.csv_source.CsvSource`): ``time`` (the tick's time in seconds,
-exact) then one column per variable in the requirements' order; booleans ``true``/``false``,
-numbers as Python prints a float (``nan``, ``inf`` and ``-inf`` included).
+Format (:class:`fretc.logs.csv_source.CsvSource`): a first comment line starting with
+:data:`fretc.logs.csv_source.SAMPLED_MARK` (so an audit with binding files reads the columns
+as the variables they are, :func:`fretc.audit.checks.csv_bindings`), ``time`` (the tick's
+time in seconds, exact) then one column per variable in the requirements' order; booleans
+``true``/``false``, numbers as Python prints a float (``nan``, ``inf`` and ``-inf``
+included).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import os
 from pathlib import Path
 
 from fretc.logs import open_log
+from fretc.logs.csv_source import SAMPLED_MARK
 from fretc.signals import sample
 
 from fretc.audit.model import AuditPlan
@@ -73,6 +77,8 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     count = 0
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="", encoding="utf-8") as f:
+        f.write(f"{SAMPLED_MARK} of {Path(log_path).name}: the FRET variables as fretc "
+                "audit samples them (bindings applied); time in seconds\n")
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["time"] + names)
         for tick in sample(source, bindings):
