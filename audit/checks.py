@@ -23,11 +23,15 @@ RATE_TOLERANCE = 0.10
 
 def csv_bindings(plan: AuditPlan, bindings: Bindings, source) -> Bindings:
     """CSV with bindings: the bound variables as bound; every other variable of the
-    requirements that names a column reads it (``/csv.<column>``)."""
+    requirements that names a column reads it (``/csv.<column>``). A sampled trace (its
+    first line :data:`fretc.logs.csv_source.SAMPLED_MARK`, as ``fretc audit --write-csv``
+    writes it) holds the variables with the bindings already applied: a variable that
+    names one of its columns reads it, whatever the binding files bind it to."""
     variables = dict(bindings.variables)
+    sampled = getattr(source, "sampled", False)
     for r in plan.requirements:
         for v in r.variables:
-            if v not in variables and v in source.columns:
+            if (v not in variables or sampled) and v in source.columns:
                 variables[v] = compile_expression(v, f"{CSV_TOPIC}.{v}",
                                                   source=f"<CSV column {v}>")
     return Bindings(variables, bindings.tick, bindings.time_base, bindings.header_lag_ns,

@@ -35,7 +35,9 @@ def discover_bindings(requirement_paths: Sequence[str]) -> list[Path]:
 def find_logs(paths: Sequence[str]) -> list[str]:
     """Logs named by ``paths``: files as given; a rosbag2 folder (``metadata.yaml``) as one
     log; other folders searched recursively (sorted) for ``*.mcap``, ``*.bag``, ``*.csv``
-    and rosbag2 folders.
+    and rosbag2 folders, except a ``X.csv`` beside a log ``X.mcap`` (or another kind) of
+    the same stem: the same run as ``fretc audit --write-csv`` samples it, which would count
+    twice in the fleet statistics (name it to audit it).
 
     Raises:
         AuditInputError: a path that does not exist, or a folder holding no log.
@@ -68,5 +70,7 @@ def _walk_logs(folder: Path) -> list[str]:
                 out.extend(_walk_logs(child))
         elif child.suffix.lower() in LOG_SUFFIXES:
             out.append(str(child))
-    return out
+    logs = {Path(x).stem for x in out if Path(x).suffix.lower() not in ("", ".csv")}
+    return [x for x in out if not (Path(x).suffix.lower() == ".csv" and Path(x).stem in logs
+                                   and Path(x).parent == folder)]
 

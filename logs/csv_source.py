@@ -16,12 +16,16 @@ from fretc.common.units import NS_PER_S
 from fretc.common.problems import CsvError, LogError
 from fretc.logs.base import LogSource, Message
 
-__all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE"]
+__all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
 CSV_TOPIC = "/csv"
 #: Type name reported by ``CsvSource.topics()``.
 CSV_TYPE = "fretc/msg/CsvRow"
+
+#: The first line of a CSV trace written by ``fretc audit --write-csv``: its columns are FRET
+#: variables already sampled through the binding files (:mod:`fretc.audit.sampled_csv`).
+SAMPLED_MARK = "# fretc sampled trace"
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _BOOL_WORDS = {"true": True, "false": False, "1": True, "0": False}
@@ -77,6 +81,8 @@ class CsvSource(LogSource):
         self.types: dict[str, str] = {}
         self.has_time = False
         self.row_count = 0
+        #: the file starts with :data:`SAMPLED_MARK`: its columns are sampled FRET variables
+        self.sampled = False
         self._check()
 
     def _lines(self) -> Iterator[tuple[int, list[str]]]:
@@ -99,6 +105,10 @@ class CsvSource(LogSource):
             except UnicodeDecodeError as exc:
                 raise CsvError(self.path, reader.line_num + 1, f"not UTF-8 text: {exc}") from None
 
+    def _first_line(self) -> str:
+        with open(self.path, encoding="utf-8", errors="replace") as f:
+            return f.readline()
+
     def _check(self) -> None:
         lines = self._lines()
         try:
@@ -117,6 +127,7 @@ class CsvSource(LogSource):
                 raise CsvError(self.path, line, f"column {name!r} appears twice", column=name)
             seen.add(name)
         self._header = header
+        self.sampled = self._first_line().startswith(SAMPLED_MARK)
         self.has_time = "time" in header
         self.columns = [c for c in header if c != "time"]
         numeric_at: dict[str, int] = {}  # first line with a non-boolean cell

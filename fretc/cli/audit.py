@@ -53,11 +53,16 @@ __all__ = ["audit_cmd"]
                    "as satisfied.")
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
+@click.option("--write-csv", "csv_dir", type=click.Path(file_okay=False), default=None,
+              help="Also write each log's FRET variables as the audit samples them, one "
+                   "CSV trace per log in DIR (LOG-STEM.csv; the input of fretc audit and "
+                   "of the C monitors' runner), and name the requirements whose own clock "
+                   "differs from the file's.")
 @ray_options
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, window, allow_partial,
-              confidence, unknown_runs, verbose, msg_path=()):
+              confidence, unknown_runs, verbose, csv_dir=None, msg_path=()):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -131,4 +136,31 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     if junit_path:
         Path(junit_path).write_text(junit_xml(results, stats), encoding="utf-8")
     code = exit_code(results, input_errors, allow_partial, stats)
+    if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
+        code = 2
     ctx.exit(code)
+
+
+def _write_csvs(plan, paths, results, folder: str, err) -> bool:
+    """``--write-csv``: the sampled variables of each log (:mod:`fretc.audit.sampled_csv`);
+    False when one could not be written (reported on ``err``)."""
+    from fretc.audit.sampled_csv import clock_notes, csv_name, write_sampled_csv
+    from fretc.common.errors import FretcError
+    from fretc.reports.terminal import escape
+
+    used: set[str] = set()
+    ok = True
+    audits = {la.log: la for la in results}
+    for path in paths:
+        out = Path(folder) / csv_name(str(path), used)
+        try:
+            ticks, first, last = write_sampled_csv(plan, str(path), out)
+        except (FretcError, ValueError, OSError) as exc:
+            err.print(f"[red]error:[/red] {escape(f'{path}: cannot write {out}: {exc}')}")
+            ok = False
+            continue
+        err.print(escape(f"wrote {out} ({ticks} ticks)"))
+        la = audits.get(str(path))
+        for note in clock_notes(la, ticks, first, last) if la is not None else ():
+            err.print(escape(f"  note: {note}"))
+    return ok

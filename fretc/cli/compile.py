@@ -1,6 +1,7 @@
 """``fretc compile`` (also ``fretc FILE...``, the default command): requirement files to
-FRET's LTL (``--emit ltl``, text or ``--json``), Python runtime monitors (``--emit monitor``)
-or AJPF properties (``--emit psl``).
+FRET's LTL (``--emit ltl``, text or ``--json``), Python runtime monitors (``--emit monitor``),
+AJPF properties (``--emit psl``), C99 monitors (``--emit c -o DIR``,
+:mod:`fretc.cli.emit_c`) or R2U2's C2PO specifications (``--emit c2po``).
 
 Exit codes: 0 success, 1 a requirement failed, 2 usage or input errors, 4 an internal error
 (a generated monitor that is not valid: nothing is written). Only click and the standard
@@ -45,15 +46,19 @@ def _load(paths) -> list:
 
 @click.command("compile")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl"]), default="ltl",
-              show_default=True, help="What to produce.")
+@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl", "c", "c2po"]),
+              default="ltl", show_default=True,
+              help="What to produce: FRET's LTL, Python monitors, AJPF properties, C99 "
+                   "monitors with a CSV runner (-o DIR), or R2U2's C2PO specifications.")
 @click.option("--json", "as_json", is_flag=True, help="ltl: print a JSON list instead of text.")
 @click.option("-o", "--output", type=click.Path(), default=None,
               help="monitor/psl: output file (one input) or directory; default: stdout.")
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
+@click.option("--split", is_flag=True,
+              help="c: one header and source per requirement instead of one per file.")
 @TEXT_ATTRIBUTE_OPTION
-def compile_cmd(files, emit, as_json, output, psl_map):
+def compile_cmd(files, emit, as_json, output, psl_map, split):
     """Compile requirement FILES (.fret, FRET JSON exports, .reqif/.reqifz, Doorstop
     trees)."""
     if emit == "ltl":
@@ -88,6 +93,12 @@ def compile_cmd(files, emit, as_json, output, psl_map):
                 if rid not in reported:
                     click.echo(_shown(f"skipped {rid} ({m.name}): {reason}".replace(
                         "\n", " ")), err=True)
+    elif emit == "c":
+        from fretc.cli.emit_c import write_c
+        write_c(compiled, output, split)
+    elif emit == "c2po":
+        from fretc.cli.emit_c import write_c2po
+        write_c2po(compiled, output, _check_output, _write_outputs)
     elif emit == "psl":
         from fretc.compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler

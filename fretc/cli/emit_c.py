@@ -1,0 +1,53 @@
+"""``fretc FILE --emit c -o DIR`` and ``--emit c2po``: the C99 monitors of
+:mod:`fretc.compiler.c_codegen` and the R2U2 specifications of :mod:`fretc.compiler.c2po`,
+written by ``fretc compile`` (:mod:`fretc.cli.compile`)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from fretc.cli.options import shown
+
+__all__ = ["write_c", "write_c2po"]
+
+
+def write_c(compiled, output: str | None, split: bool) -> None:
+    """Write the C files of ``compiled`` into the folder ``output`` (required: several
+    files) and report the requirements without a monitor on stderr; exit 2 without
+    ``-o``."""
+    if output is None or output.endswith((".c", ".h")):
+        click.echo("error: --emit c writes a header, a source and runner.c: give the folder "
+                   "with -o DIR", err=True)
+        sys.exit(2)
+    from fretc.compiler.c_codegen import emit_c  # lazy: Jinja2 and Spot
+
+    files, skipped = emit_c(compiled, split=split)
+    folder = Path(output)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        path = folder / name
+        path.write_text(text, encoding="utf-8")
+        click.echo(f"wrote {path}", err=True)
+    reported = {c.id for c in compiled if c.error is not None}
+    for stem, rid, why in skipped:
+        if rid not in reported:
+            click.echo(shown(f"skipped {rid} ({stem}): {why}".replace("\n", " ")), err=True)
+
+
+def write_c2po(compiled, output: str | None, check_output, write_outputs) -> None:
+    """Write one C2PO specification per requirement file (``-o`` a file for one, a
+    folder for several; stdout without ``-o``: ``fretc compile``'s ``check_output`` and
+    ``write_outputs``) and report on stderr what could not be expressed."""
+    from fretc.compiler.c2po import emit_c2po
+
+    outputs, skipped = emit_c2po(compiled)
+    check_output(outputs, output, ".c2po")
+    write_outputs(outputs, output, ".c2po")
+    reported = {c.id for c in compiled if c.error is not None}
+    for stem, rid, why in skipped:
+        if rid not in reported:
+            click.echo(shown(f"not in {stem}.c2po: {rid}: {why}".replace("\n", " ")),
+                       err=True)

@@ -1,0 +1,184 @@
+"""``fretc audit --write-csv``: the shipped runs' CSV traces (traces/*.csv) are what the
+command writes; the audit of each CSV gives the verdicts of its MCAP, and so does the C
+monitors' runner (``fretc --emit c``), built here with the system C compiler; on random CSV
+traces with NaN and numbers read as conditions the runner's words are the audit's."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fretc.audit import AuditConfig, audit_log, find_logs, load_plan
+from fretc.cli import main
+
+from _c_monitors import build, needs_cc
+
+ROOT = Path(__file__).resolve().parents[2]
+TRACES = ROOT / "traces"
+LOGS = sorted(TRACES.glob("*.mcap"))
+REQS = (ROOT / "requirements" / "r1.fret", ROOT / "requirements" / "safe_ros.fret")
+#: the command that writes traces/*.csv (traces/README.md)
+COMMAND = ["audit", "-r", "requirements/r1.fret", "-r", "requirements/safe_ros.fret",
+           "traces/*.mcap", "--write-csv", "traces"]
+
+
+def _plan(*reqs):
+    return load_plan(AuditConfig(requirements=tuple(str(r) for r in reqs)))
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return _plan(*REQS)
+
+
+@pytest.fixture(scope="module")
+def mcap_audits(plan):
+    return {p.stem: audit_log(plan, str(p)) for p in LOGS}
+
+
+def _words(la):
+    return {v.requirement: v.verdict for v in la.verdicts}
+
+
+def test_shipped_csvs_are_what_the_command_writes(tmp_path, monkeypatch):
+    """traces/*.csv byte for byte as ``fretc audit ... --write-csv`` writes them now; the
+    command names the requirements whose own clock differs from the file's."""
+    monkeypatch.chdir(ROOT)
+    args = COMMAND[:5] + [str(p.relative_to(ROOT)) for p in LOGS] + ["--write-csv",
+                                                                      str(tmp_path)]
+    res = CliRunner().invoke(main, args + ["--no-progress"])
+    assert res.exit_code == 1, res.output  # some runs violate a requirement
+    assert sorted(p.name for p in tmp_path.glob("*.csv")) == sorted(
+        p.stem + ".csv" for p in LOGS)
+    for p in LOGS:
+        assert (tmp_path / (p.stem + ".csv")).read_bytes() == \
+            (TRACES / (p.stem + ".csv")).read_bytes(), p.name
+    assert "R4: its own clock has 877 ticks from 1700000000.05 s, this file 876 ticks from " \
+           "1700000000.1 s" in res.output
+
+
+def test_csv_audit_gives_the_verdicts_of_the_mcap(plan, mcap_audits):
+    """Every requirement on every run: the CSV's verdict is the MCAP's. Where the clocks
+    agree (same ticks) that must be; where they do not (R4 on a grid 50 ms off, R5 and R6
+    one tick more at the start, R3 on sif_disabled one tick less), it is so on these runs."""
+    agree = set()
+    for stem, la in mcap_audits.items():
+        csv = audit_log(plan, str(TRACES / f"{stem}.csv"))
+        assert _words(csv) == _words(la), stem
+        for v, w in zip(la.verdicts, csv.verdicts):
+            if (v.first_tick_ns, v.ticks_evaluated) == (w.first_tick_ns, w.ticks_evaluated):
+                agree.add((stem, v.requirement))
+                assert (v.ltl3.status, v.ltl3.tick) == (w.ltl3.status, w.ltl3.tick)
+    assert agree == {(p.stem, r) for p in LOGS for r in ("R1", "R2", "R3")} - {
+        ("sif_disabled", "R3")}
+
+
+def test_folder_audit_skips_the_csv_of_a_log():
+    """A folder search does not count a run twice (X.csv beside X.mcap); named, the CSV
+    is audited."""
+    found = find_logs([str(TRACES)])
+    assert found == [str(p) for p in LOGS]
+    assert find_logs([str(TRACES / "nominal.csv")]) == [str(TRACES / "nominal.csv")]
+
+
+@pytest.fixture(scope="module")
+def runner(tmp_path_factory):
+    """``fretc requirements/r1.fret requirements/safe_ros.fret --emit c -o DIR``, built
+    with every .c file of DIR under the strict flags and the sanitizers."""
+    needs_cc()
+    out = tmp_path_factory.mktemp("c")
+    res = CliRunner().invoke(main, [str(r) for r in REQS] + ["--emit", "c", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    return build(out, sorted(p.name for p in out.glob("*.c")), "runner")
+
+
+def _run(exe, *csvs):
+    got = subprocess.run([str(exe), *map(str, csvs)], capture_output=True, text=True)
+    rows = [line.split("\t") for line in got.stdout.splitlines() if not line.startswith("==")]
+    return got.returncode, rows
+
+
+def test_runner_on_the_shipped_csvs(runner, mcap_audits):
+    """The runner on traces/*.csv: one line per requirement, the audit's verdict of the
+    MCAP, and the LTL3 tick of the CSV's audit."""
+    plan = _plan(*REQS)
+    for stem, la in mcap_audits.items():
+        code, rows = _run(runner, TRACES / f"{stem}.csv")
+        assert {r[0]: r[1] for r in rows} == _words(la), stem
+        csv = audit_log(plan, str(TRACES / f"{stem}.csv"))
+        for row, v in zip(rows, csv.verdicts):
+            assert row[2] == "ltl3=" + v.ltl3.status + (
+                f"@{v.ltl3.tick}" if v.ltl3.tick is not None else "")
+        assert code == (1 if "violated" in _words(la).values() else 0)
+    code, rows = _run(runner, *(TRACES / f"{s}.csv" for s in mcap_audits))
+    assert code == 1 and len(rows) == 6 * len(mcap_audits)
+
+
+RANDOM_REQS = """\
+@tick_period 1 s
+A1: whenever p the sw shall within 2 ticks satisfy x > 1
+A2: in m the sw shall always satisfy y
+A3: upon q the sw shall eventually satisfy x / y >= 0.5
+A4: only after p the sw shall never satisfy x <= 0
+A5: the sw shall always satisfy y | persisted(2, p)
+"""
+
+_cell = st.one_of(st.sampled_from(["0", "1", "2", "-1", "0.5", "nan", "inf", "-inf"]),
+                  st.integers(-2, 3).map(str))
+
+
+@pytest.fixture(scope="module")
+def random_runner(tmp_path_factory):
+    needs_cc()
+    folder = tmp_path_factory.mktemp("random")
+    fret = folder / "rnd.fret"
+    fret.write_text(RANDOM_REQS)
+    out = folder / "c"
+    res = CliRunner().invoke(main, [str(fret), "--emit", "c", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    return folder, _plan(fret), build(out, sorted(p.name for p in out.glob("*.c")), "runner")
+
+
+@settings(max_examples=60, deadline=None)
+@given(rows=st.lists(st.tuples(st.booleans(), st.booleans(), st.booleans(), _cell, _cell),
+                     min_size=0, max_size=12),
+       y_numeric=st.booleans())
+def test_runner_words_are_the_audits_on_random_csvs(random_runner, rows, y_numeric):
+    """Random CSV traces (NaN and infinities in the numbers; y a boolean column or a
+    number read as a condition): per requirement the runner's word is the audit's
+    (satisfied, vacuous, violated, unknown after a NaN, error without a tick) and so is the
+    exit status."""
+    folder, plan, exe = random_runner
+    path = folder / "t.csv"
+    lines = ["m,p,q,x,y"]
+    for m, p, q, x, y in rows:
+        yv = y if y_numeric else ("true" if y not in ("0", "-1", "nan") else "false")
+        lines.append(f"{str(m).lower()},{str(p).lower()},{str(q).lower()},{x},{yv}")
+    path.write_text("\n".join(lines) + "\n")
+    la = audit_log(plan, str(path))
+    code, got = _run(exe, path)
+    assert {r[0]: r[1] for r in got} == _words(la), path.read_text()
+    want = 2 if any(w == "error" for w in _words(la).values()) else 1 if "violated" in \
+        _words(la).values() else 3 if (la.problems or "unknown" in _words(la).values()) else 0
+    assert code == want, (path.read_text(), got, la.problems)
+
+
+def test_runner_input_errors(runner, tmp_path):
+    """A CSV the audit refuses, the runner refuses: file:line, the column, exit 2."""
+    bad = {"mix.csv": "too_close,stopped\ntrue,1\n2,false\n",
+           "cells.csv": "too_close,stopped\ntrue\n",
+           "name.csv": "too close,stopped\ntrue,true\n",
+           "time.csv": "time,too_close\n1,true\n0.5,false\n"}
+    for name, text in bad.items():
+        (tmp_path / name).write_text(text)
+        got = subprocess.run([str(runner), str(tmp_path / name)], capture_output=True,
+                             text=True)
+        assert got.returncode == 2 and f"{tmp_path / name}:" in got.stderr, (name, got)
+    (tmp_path / "missing.csv").write_text("too_close\ntrue\n")
+    code, rows = _run(runner, tmp_path / "missing.csv")
+    assert code == 2 and rows[0][:3] == ["R1", "error", "no column stopped"]
