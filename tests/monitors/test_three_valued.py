@@ -1,0 +1,107 @@
+"""The three-valued judge against brute force: on random traces with unknown ticks, a
+verdict it gives is the one every way of filling the unknown ticks gives (FRET's
+finite-trace verdict by the pt formula, the LTL3 verdict by the monitor automata); with no
+unknown tick it is the two-valued one; and the unknown ticks a gap leaves are the ticks at
+which a lost message would be newer than the one held."""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+from hypothesis import given, settings, strategies as st
+
+from fretc.audit.gaps import unknown_masks
+from fretc.compiler.build import compile_entries
+from fretc.compiler.codegen import monitor_source
+from fretc.fretish import load_requirements
+from fretc.logs.base import Gap
+from fretc.monitors.judge import ltl3_verdict as ltl3_two
+from fretc.monitors.three_valued import ThreeValued, ltl3_verdict, pt_verdict
+from fretc.monitors.vectorized import pt_series
+
+SENTENCES = [
+    "the sw shall always satisfy p",
+    "the sw shall never satisfy p & q",
+    "upon p the sw shall within 2 ticks satisfy q",
+    "whenever p the sw shall immediately satisfy q",
+    "in m mode the sw shall always satisfy q",
+    "the sw shall eventually satisfy p",
+    "upon p the sw shall for 2 ticks satisfy q",
+    "after m the sw shall always satisfy p",
+    "only in m mode the sw shall eventually satisfy q",
+    "upon p the sw shall until q satisfy m",
+    "when x > 1 the sw shall within 1 ticks satisfy x + 1 < 3",
+    "the sw shall always satisfy persisted(2, p) -> q",
+]
+_compiled: dict = {}
+
+
+def _compiled_of(text: str):
+    if text not in _compiled:
+        import tempfile
+
+        path = Path(tempfile.mkdtemp()) / "t.fret"
+        path.write_text(f"R: {text}\n")
+        (c,) = compile_entries(load_requirements([str(path)]))
+        _compiled[text] = (c, monitor_source(c, 0))
+    return _compiled[text]
+
+
+def _columns(rows, names):
+    cols = {n: np.array([r[i] for r in rows], dtype=np.bool_) for i, n in enumerate("pqm")}
+    cols["x"] = np.array([r[3] for r in rows], dtype=np.float64)
+    return {n: c for n, c in cols.items() if n in names}
+
+
+_row = st.tuples(st.booleans(), st.booleans(), st.booleans(), st.sampled_from([0.0, 1.0, 2.0]))
+
+
+@settings(max_examples=150, deadline=None)
+@given(text=st.sampled_from(SENTENCES), rows=st.lists(_row, min_size=1, max_size=7),
+       holes=st.lists(st.tuples(st.integers(0, 6), st.sampled_from("pqmx")), max_size=3))
+def test_a_verdict_is_what_every_completion_gives(text, rows, holes):
+    c, ms = _compiled_of(text)
+    f = c.formalization
+    names = set(f.variables)
+    n = len(rows)
+    cols = _columns(rows, names)
+    unknown = {}
+    cells = sorted({(i, v) for i, v in holes if i < n and v in cols})
+    for i, v in cells:
+        unknown.setdefault(v, np.zeros(n, np.bool_))[i] = True
+    got, _pair = pt_verdict(f.pt, cols, unknown, n)
+    status, tick = ltl3_verdict(ms, ThreeValued(cols, unknown, n))
+    outcomes, ltl3s = set(), []
+    values = {"p": (False, True), "q": (False, True), "m": (False, True),
+              "x": (0.0, 1.0, 2.0)}
+    for combo in itertools.product(*(values[v] for _i, v in cells)):
+        filled = {k: a.copy() for k, a in cols.items()}
+        for (i, v), val in zip(cells, combo):
+            filled[v][i] = val
+        outcomes.add(bool(pt_series(f.pt, filled, n)[-1]))
+        ltl3s.append(ltl3_two(ms, filled, n))
+    if got is not None:
+        assert outcomes == {got}, (text, rows, cells)
+    if not cells:
+        assert got is not None and (status, tick) == ltl3s[0]
+    if status != "unknown":
+        assert all(s == status and (t is not None and t <= tick) for s, t in ltl3s), \
+            (text, rows, cells, status, tick, ltl3s)
+
+
+@settings(max_examples=200, deadline=None)
+@given(kept=st.lists(st.integers(0, 40), min_size=1, max_size=12, unique=True),
+       lost=st.lists(st.integers(0, 40), max_size=4, unique=True),
+       ticks=st.lists(st.integers(0, 45), min_size=1, max_size=10, unique=True))
+def test_a_gap_leaves_unknown_the_ticks_a_lost_message_could_hold(kept, lost, ticks):
+    """Point gaps (one lost message each): a tick is unknown exactly when a lost message is
+    at or before it and not older than the message it holds."""
+    lost = [t for t in lost if t not in kept]
+    kept, ticks = sorted(kept), np.array(sorted(ticks), np.int64)
+    held = np.array([max([k for k in kept if k <= t], default=-1) for t in ticks], np.int64)
+    got = unknown_masks(ticks, {"/a": held}, ["a"], None, [Gap(t, t, frozenset({"/a"}), "x")
+                                                          for t in lost])
+    want = np.array([any(h <= m <= t for m in lost) for t, h in zip(ticks, held)], np.bool_)
+    assert np.array_equal(got.get("a", np.zeros(len(ticks), np.bool_)), want)
