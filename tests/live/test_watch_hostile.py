@@ -278,3 +278,16 @@ def test_a_header_stamp_jump_is_skipped_as_a_header_jump_problem(tmp_path):
     assert took < 10
     assert la.problem_counts.get("header_jump /a") == 1, la.problem_counts
     assert [v.verdict for v in la.verdicts] == ["satisfied"]
+
+
+def test_rosbridge_a_deep_frame_costs_one_frame(plan):
+    """A JSON frame nested 200,000 deep (and one whose member is): one problem each, and
+    every message after them judged."""
+    frames = ["[" * 200_000 + "]" * 200_000,
+              '{"op": "publish", "topic": "/a", "msg": ' + "[" * 100_000 + "]" * 100_000 + "}"]
+    w, la, connections, _ = _watch(plan, _rosbridge(frames), url_of=_ros_url,
+                                   subprotocol=None)
+    assert connections == 1
+    assert la.messages == {"/a": 20}
+    assert [v.verdict for v in la.verdicts] == ["satisfied"]
+    assert "nested too deep" in " ".join(p["detail"] for p in la.problems)
