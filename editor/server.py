@@ -27,9 +27,13 @@ cannot read gives a diagnostic, never an exit: every handler catches what the an
 from __future__ import annotations
 
 import asyncio
+import functools
+import gc
+import logging
 import re
 
 from lsprotocol import types as T
+from pygls.exceptions import JsonRpcInvalidParams
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
@@ -40,8 +44,36 @@ from fretc.editor.workspace import Place, Workspace, valid_id, valid_variable_na
 __all__ = ["make_server", "main", "DISTINGUISH_COMMAND"]
 
 DISTINGUISH_COMMAND = "fretc.distinguish"
+#: analyses between two full collections of cyclic garbage (:meth:`_State._tidy`)
+TIDY_EVERY = 200
+#: seconds without an analysis before the collection of :meth:`_State._tidy`
+TIDY_PAUSE = 1.0
 _ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
 _PARENT = re.compile(r"[ \t]+parent[ \t]*:[ \t]*([A-Za-z0-9_.-]+)")
+log = logging.getLogger("fretc.editor")
+
+
+def _guarded(default=None):
+    """A handler that answers ``default`` (and logs one line on the standard error, "fretc
+    lsp: internal error ...": a defect of fretc the fuzzer looks for) when it raises
+    anything but a refusal of the request (:class:`JsonRpcInvalidParams`)."""
+    def wrap(f):
+        @functools.wraps(f)
+        def guarded(ls, params):
+            try:
+                return f(ls, params)
+            except JsonRpcInvalidParams:
+                raise
+            except Exception as exc:  # noqa: BLE001 - the server answers, and says so
+                log.error("fretc lsp: internal error in %s: %s: %s", f.__name__,
+                          type(exc).__name__, str(exc).splitlines()[0] if str(exc) else "")
+                return default() if callable(default) else default
+        return guarded
+    return wrap
+
+
+def _empty_completion() -> T.CompletionList:
+    return T.CompletionList(is_incomplete=False, items=[])
 
 
 def _kind(kind: str) -> T.CompletionItemKind:
@@ -79,6 +111,9 @@ class _State:
         self.cache: dict[str, Analysis] = {}
         self.saved: dict[str, str] = {}
         self.jobs: dict[str, asyncio.Task] = {}
+        self.analyses = 0
+        self._tidied = 0
+        self._tidy_handle = None
         self._workspace: Workspace | None = None
 
     def workspace(self) -> Workspace:
@@ -90,26 +125,61 @@ class _State:
             self._workspace = Workspace(roots, self.memory, self.open_text)
         return self._workspace
 
+    def document(self, uri: str):
+        """The open document ``uri`` (pygls's), or None when the client has not opened it."""
+        return self.server.workspace.text_documents.get(uri)
+
     def open_text(self, path: str) -> str | None:
-        uri = from_fs_path(path)
-        if uri in self.cache:
-            return self.server.workspace.get_text_document(uri).source
-        return None
+        doc = self.document(from_fs_path(path))
+        return doc.source if doc is not None else None
 
     def analyse(self, uri: str) -> Analysis:
-        """The open document's analysis, published; an analysis that fails is logged to the
-        client, never the server's end."""
-        doc = self.server.workspace.get_text_document(uri)
+        """The open document's analysis, published (an empty one for a document the client
+        has not opened); an analysis that fails is logged to the client, never the server's
+        end."""
+        doc = self.document(uri)
+        if doc is None:
+            return Analysis()
         path = to_fs_path(uri) or uri
         try:
             elsewhere = self.workspace().uses_elsewhere(path)
             a = analyse(doc.source, path, self.memory, elsewhere)
         except Exception as exc:  # noqa: BLE001 - never exit on a document: say so
             self.log(f"fretc could not analyse {uri}: {exc!r}", T.MessageType.Error)
+            log.error("fretc lsp: internal error in the analysis: %s: %s",
+                      type(exc).__name__, str(exc).splitlines()[0] if str(exc) else "")
             a = Analysis(lines=doc.source.split("\n"))
         self.cache[uri] = a
         self.publish(uri, doc.version, a.problems)
+        self._tidy()
         return a
+
+    def _tidy(self) -> None:
+        """After :data:`TIDY_EVERY` analyses (and after the first), at the first pause of
+        :data:`TIDY_PAUSE` s without an analysis (at the latest after five times as many): a
+        full collection of cyclic garbage, then the survivors frozen out of the collector's
+        sight (``gc.freeze``), so that no keystroke waits for a full collection over the
+        session's thousands of kept sentences (one took 130 ms at 1,000 requirements:
+        bench/bench_lsp.py; :func:`main` leaves full collections to this method). Frozen
+        objects are still freed when no longer referenced."""
+        self.analyses += 1
+        if self._tidy_handle is not None:
+            self._tidy_handle.cancel()
+            self._tidy_handle = None
+        if self.analyses - self._tidied >= 5 * TIDY_EVERY:  # no pause came: now
+            self._tidy_now()
+        elif self.analyses - self._tidied >= TIDY_EVERY or self._tidied == 0:
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:  # not serving (a test's direct call)
+                return
+            self._tidy_handle = loop.call_later(TIDY_PAUSE, self._tidy_now)
+
+    def _tidy_now(self) -> None:
+        self._tidy_handle = None
+        self._tidied = self.analyses
+        gc.collect()
+        gc.freeze()
 
     def analysis(self, uri: str) -> Analysis:
         return self.cache.get(uri) or self.analyse(uri)
@@ -140,8 +210,8 @@ class _State:
                 extra = [Problem(0, 0, 1, 3, f"fretc check on save failed: {out['error']}")]
             else:
                 extra = [Problem(*p) for p in out.get("problems", [])]
-        doc = self.server.workspace.get_text_document(uri)
-        if doc.version == version and self.cache.get(uri) is a:
+        doc = self.document(uri)
+        if doc is not None and doc.version == version and self.cache.get(uri) is a:
             self.publish(uri, version, a.problems + extra)
 
 
@@ -164,20 +234,21 @@ def _name_at(st: _State, uri: str, pos: T.Position) -> tuple[str, str] | None:
 def _rename(st: _State, uri: str, pos: T.Position, new: str) -> T.WorkspaceEdit:
     found = _name_at(st, uri, pos)
     if found is None:
-        raise ValueError("no variable or requirement id here to rename")
+        raise JsonRpcInvalidParams("no variable or requirement id here to rename")
     kind, old = found
     ws = st.workspace()
+    shown = new if len(new) <= 80 else new[:80] + "..."
     if kind == "variable":
         if not valid_variable_name(new):
-            raise ValueError(f"{new!r} is not a FRETish variable name (a letter, then "
-                             "letters, digits and '_'; not a reserved word)")
+            raise JsonRpcInvalidParams(f"{shown!r} is not a FRETish variable name (a letter, "
+                                       "then letters, digits and '_'; not a reserved word)")
         places = ws.variable_places(old)
     else:
         if not valid_id(new):
-            raise ValueError(f"{new!r} is not a requirement id (letters, digits, '_', '.', "
-                             "'-')")
+            raise JsonRpcInvalidParams(f"{shown!r} is not a requirement id (letters, digits, "
+                                       "'_', '.', '-')")
         if new in ws.ids():
-            raise ValueError(f"the requirement id {new!r} exists already")
+            raise JsonRpcInvalidParams(f"the requirement id {new!r} exists already")
         places = ws.id_places(old)
     changes: dict[str, list[T.TextEdit]] = {}
     for p in places:
@@ -210,26 +281,32 @@ def make_server() -> LanguageServer:
     server.fretc_state = st  # (the tests and main() reach the jobs through it)
 
     @server.feature(T.TEXT_DOCUMENT_DID_OPEN)
+    @_guarded(None)
     def did_open(ls, params: T.DidOpenTextDocumentParams):
         st.saved[params.text_document.uri] = params.text_document.text
         st.cache.pop(params.text_document.uri, None)
         st.analyse(params.text_document.uri)
 
     @server.feature(T.TEXT_DOCUMENT_DID_CHANGE)
+    @_guarded(None)
     def did_change(ls, params: T.DidChangeTextDocumentParams):
         st.cancel(params.text_document.uri)
         st.analyse(params.text_document.uri)
 
     @server.feature(T.TEXT_DOCUMENT_DID_SAVE)
+    @_guarded(None)
     def did_save(ls, params: T.DidSaveTextDocumentParams):
         uri = params.text_document.uri
         st.cancel(uri)
+        doc = st.document(uri)
+        if doc is None:  # a save of a document the client has not opened
+            return
         a = st.analyse(uri)
-        doc = server.workspace.get_text_document(uri)
         st.saved[uri] = doc.source
         st.jobs[uri] = asyncio.ensure_future(st.check_on_save(uri, doc.version, doc.source, a))
 
     @server.feature(T.TEXT_DOCUMENT_DID_CLOSE)
+    @_guarded(None)
     def did_close(ls, params: T.DidCloseTextDocumentParams):
         st.cancel(params.text_document.uri)
         st.cache.pop(params.text_document.uri, None)
@@ -244,6 +321,7 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
     """Hover, completion, definition, references, symbols."""
 
     @server.feature(T.TEXT_DOCUMENT_HOVER)
+    @_guarded(None)
     def hover(ls, params: T.HoverParams):
         a = st.analysis(params.text_document.uri)
         text = a.hover(params.position.line, params.position.character)
@@ -252,6 +330,7 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
         return T.Hover(contents=T.MarkupContent(kind=T.MarkupKind.Markdown, value=text))
 
     @server.feature(T.TEXT_DOCUMENT_COMPLETION, T.CompletionOptions(trigger_characters=[" "]))
+    @_guarded(_empty_completion)
     def completion(ls, params: T.CompletionParams):
         a = st.analysis(params.text_document.uri)
         items = []
@@ -267,6 +346,7 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
         return T.CompletionList(is_incomplete=False, items=items)
 
     @server.feature(T.TEXT_DOCUMENT_DEFINITION)
+    @_guarded(None)
     def definition(ls, params: T.DefinitionParams):
         found = _name_at(st, params.text_document.uri, params.position)
         if found is None:
@@ -281,6 +361,7 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
         return T.Location(uri=from_fs_path(where[0]), range=_range(where[1], 0, 0))
 
     @server.feature(T.TEXT_DOCUMENT_REFERENCES)
+    @_guarded(list)
     def references(ls, params: T.ReferenceParams):
         found = _name_at(st, params.text_document.uri, params.position)
         if found is None:
@@ -291,6 +372,7 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
                           else ws.id_places(name))
 
     @server.feature(T.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
+    @_guarded(list)
     def symbols(ls, params: T.DocumentSymbolParams):
         a = st.analysis(params.text_document.uri)
         out = []
@@ -305,6 +387,7 @@ def _editing_features(server: LanguageServer, st: _State) -> None:
     """Rename, the distinguish code action and its command."""
 
     @server.feature(T.TEXT_DOCUMENT_PREPARE_RENAME)
+    @_guarded(None)
     def prepare_rename(ls, params: T.PrepareRenameParams):
         found = _name_at(st, params.text_document.uri, params.position)
         if found is None:
@@ -318,11 +401,13 @@ def _editing_features(server: LanguageServer, st: _State) -> None:
         return _range(places[0].line, places[0].col, places[0].end_col) if places else None
 
     @server.feature(T.TEXT_DOCUMENT_RENAME)
+    @_guarded(None)
     def rename(ls, params: T.RenameParams):
         return _rename(st, params.text_document.uri, params.position, params.new_name)
 
     @server.feature(T.TEXT_DOCUMENT_CODE_ACTION, T.CodeActionOptions(
         code_action_kinds=[T.CodeActionKind.Source]))
+    @_guarded(list)
     def code_action(ls, params: T.CodeActionParams):
         edited = _edited(st, params.text_document.uri, params.range.start.line)
         if edited is None:
@@ -360,6 +445,7 @@ def main() -> None:
     """Serve over stdio until the client exits; the jobs still running end with it."""
     from fretc.editor.transport import serve_stdio
 
+    gc.set_threshold(700, 10, 1 << 30)  # full collections: _State._tidy's, at pauses
     server = make_server()
     try:
         serve_stdio(server)

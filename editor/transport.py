@@ -4,13 +4,14 @@ can make the server allocate without limit, wait on a body that will never come 
 cannot leave, or end.
 
 * a header line longer than :data:`MAX_HEADER` bytes is read in pieces and dropped;
-* a ``Content-Length`` that is not a number of at most 12 digits, or over
+* a ``Content-Length`` that is not a number of at most 20 digits, or over
   :data:`MAX_MESSAGE` bytes, makes the message malformed: it is logged and the reader looks
   for the next ``Content-Length`` header line (a JSON body holds no raw line break followed
   by that text: JSON escapes line breaks inside strings), so the next well-formed message
   is served;
-* a body that is not JSON, or a message the protocol cannot take, is logged and skipped (by
-  pygls's own handling).
+* a body that is not JSON, or a message the protocol cannot take, is logged and skipped; a
+  request among them (its parameters of the wrong types) is answered with an error, so the
+  client never waits for an answer that will not come.
 
 Everything else is pygls's own loop (``pygls.io_.run_async``), with this reader.
 """
@@ -31,7 +32,7 @@ MAX_HEADER = 8192
 #: the largest message body read (bytes)
 MAX_MESSAGE = 64 << 20
 
-_LENGTH = re.compile(rb"Content-Length:[ \t]*([0-9]{1,12})[ \t]*\r?\n\Z", re.I)
+_LENGTH = re.compile(rb"Content-Length:[ \t]*([0-9]{1,20})[ \t]*\r?\n\Z", re.I)
 log = logging.getLogger("fretc.editor")
 
 
@@ -93,23 +94,44 @@ async def read_messages(reader, problem=lambda text: None):
         yield body
 
 
-async def _serve(stop: threading.Event, reader, protocol, error_handler) -> None:
+async def _serve(stop: threading.Event, reader, protocol) -> None:
     async for body in read_messages(reader, lambda text: log.warning("fretc lsp: %s", text)):
         if stop.is_set():
             return
         try:
             message = json.loads(body, object_hook=protocol.structure_message)
-            protocol.handle_message(message)
         except Exception as exc:  # noqa: BLE001 - one bad message never ends the server
+            log.warning("fretc lsp: a message that cannot be read was skipped: %s",
+                        str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+            _refuse(protocol, body, exc)
+            continue
+        try:
+            protocol.handle_message(message)
+        except Exception as exc:  # noqa: BLE001
             log.warning("fretc lsp: a message that cannot be handled was skipped: %s",
                         str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
-            if error_handler is not None:
-                try:
-                    from pygls.exceptions import JsonRpcException
+            _refuse(protocol, body, exc)
 
-                    error_handler(exc, JsonRpcException)
-                except Exception:  # noqa: BLE001
-                    pass
+
+def _refuse(protocol, body: bytes, exc: Exception) -> None:
+    """Answer a request that could not be read or handled (its parameters of the wrong
+    types: pygls cannot structure it, so nothing else answers it) with an error, so the
+    client does not wait for ever; a notification or a body without an id gets none."""
+    from pygls.exceptions import JsonRpcException, JsonRpcInvalidParams
+
+    try:
+        data = json.loads(body)
+    except ValueError:
+        return
+    if not isinstance(data, dict) or "method" not in data or \
+            not isinstance(data.get("id"), (int, str)) or isinstance(data.get("id"), bool):
+        return
+    error = exc if isinstance(exc, JsonRpcException) else JsonRpcInvalidParams(
+        f"the request could not be read: {type(exc).__name__}")
+    try:
+        protocol._send_response(data["id"], error=error.to_response_error())
+    except Exception:  # noqa: BLE001 - a client gone: nothing to answer
+        pass
 
 
 def serve_stdio(server, stdin=None, stdout=None) -> None:
@@ -121,7 +143,7 @@ def serve_stdio(server, stdin=None, stdout=None) -> None:
     reader = _Reader(stdin or sys.stdin.buffer, server.thread_pool)
     server.protocol.set_writer(StdoutWriter(stdout or sys.stdout.buffer))
     try:
-        asyncio.run(_serve(stop, reader, server.protocol, server.report_server_error))
+        asyncio.run(_serve(stop, reader, server.protocol))
     except BrokenPipeError:
         log.error("fretc lsp: the connection to the client is lost")
     except (KeyboardInterrupt, SystemExit):
