@@ -283,6 +283,7 @@ def make_server() -> LanguageServer:
     @server.feature(T.TEXT_DOCUMENT_DID_OPEN)
     @_guarded(None)
     def did_open(ls, params: T.DidOpenTextDocumentParams):
+        st.workspace().forget()
         st.saved[params.text_document.uri] = params.text_document.text
         st.cache.pop(params.text_document.uri, None)
         st.analyse(params.text_document.uri)
@@ -301,6 +302,7 @@ def make_server() -> LanguageServer:
         doc = st.document(uri)
         if doc is None:  # a save of a document the client has not opened
             return
+        st.workspace().forget()
         a = st.analyse(uri)
         st.saved[uri] = doc.source
         st.jobs[uri] = asyncio.ensure_future(st.check_on_save(uri, doc.version, doc.source, a))

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import os
 import re
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +26,10 @@ __all__ = ["Workspace", "Place", "MAX_FILES", "valid_variable_name", "valid_id"]
 
 #: the most requirement files (and bindings files) a workspace is searched for
 MAX_FILES = 2_000
+#: the most folders a listing of the workspace looks into
+MAX_FOLDERS = 5_000
+#: seconds a listing of the workspace's files is used before the folders are walked again
+LIST_AGAIN = 5.0
 _ID = re.compile(r"[A-Za-z0-9_.-]+\Z")
 _PARENT = re.compile(r"([ \t]+parent[ \t]*:[ \t]*)([A-Za-z0-9_.-]+)[ \t]*(?:#.*)?\Z")
 _ID_LINE = re.compile(r"([A-Za-z0-9_.-]+)[ \t]*:")
@@ -64,17 +69,33 @@ class Workspace:
         self.open_text = open_text
         self._analyses: dict[str, tuple[tuple, Analysis]] = {}
         self._uses: tuple[tuple, dict] | None = None
+        self._listed: dict[str, tuple[float, list[str]]] = {}
+
+    def forget(self) -> None:
+        """List the files again at the next request (a file was saved, opened or closed)."""
+        self._listed.clear()
 
     def files(self, suffix: str) -> list[str]:
         """The files under the roots whose name ends in ``suffix``, sorted, at most
-        :data:`MAX_FILES`."""
-        out = []
+        :data:`MAX_FILES`; listed again when :data:`LIST_AGAIN` seconds have passed or after
+        :meth:`forget` (a keystroke does not walk the folders)."""
+        got = self._listed.get(suffix)
+        if got is not None and time.monotonic() - got[0] < LIST_AGAIN:
+            return got[1]
+        out = self._walk(suffix)
+        self._listed[suffix] = (time.monotonic(), out)
+        return out
+
+    def _walk(self, suffix: str) -> list[str]:
+        """The walk of :meth:`files`: at most :data:`MAX_FOLDERS` folders are looked into."""
+        out, folders = [], 0
         for root in self.roots:
             for folder, dirs, names in os.walk(root):
                 dirs[:] = sorted(d for d in dirs if not d.startswith(".")
                                  and d not in ("node_modules", "__pycache__"))
                 out += [os.path.join(folder, n) for n in sorted(names) if n.endswith(suffix)]
-                if len(out) >= MAX_FILES:
+                folders += 1
+                if len(out) >= MAX_FILES or folders >= MAX_FOLDERS:
                     return out[:MAX_FILES]
         return out
 

@@ -6,7 +6,18 @@ found or proved. Same input, same text."""
 
 from __future__ import annotations
 
-__all__ = ["distinction_text"]
+import html
+
+from fretc.common.textsafe import xml_text
+
+__all__ = ["distinction_text", "distinction_svg"]
+
+_CELL, _ROW, _LABEL = 14, 20, 130
+
+
+def _x(text) -> str:
+    """Text for SVG: control and bidi characters made visible, then XML-escaped."""
+    return html.escape(xml_text(str(text)))
 
 
 def _cell(value) -> str:
@@ -54,4 +65,43 @@ def distinction_text(d, label_a: str, text_a: str, label_b: str, text_b: str) ->
                f"  {label_a:<{wa}}  {text_a}", f"  {label_b:<{wa}}  {text_b}", "",
                f"  why: {d.why}"]
     out += [f"  note: {n}" for n in d.notes]
+    return "\n".join(out) + "\n"
+
+
+def distinction_svg(d, label_a: str, text_a: str, label_b: str, text_b: str) -> str:
+    """The distinguishing trace of ``d`` as an SVG, drawn as ``fretc explain`` draws its
+    diagrams (a row per variable: a filled cell where a boolean holds, the value where it is
+    a number), under the two wordings and their verdicts; raises ``ValueError`` when ``d``
+    has no trace (equivalent or unknown)."""
+    if d.trace is None:
+        raise ValueError("no distinguishing trace to draw")
+    n = len(next(iter(d.trace.values())))
+    numeric = any(not isinstance(v, bool) for vals in d.trace.values() for v in vals)
+    cell = max(_CELL, 7 * max(len(_cell(v)) for vals in d.trace.values() for v in vals)
+               if numeric else _CELL)
+    w = _LABEL + cell * n + 10
+    h = _ROW * (len(d.trace) + 5)
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{max(w, 480)}" height="{h}" '
+           'font-family="sans-serif" font-size="11">',
+           f"<title>{_x(label_a)} and {_x(label_b)}: not equivalent</title>",
+           f'<text x="4" y="13">{_x(label_a)}: {_x(d.verdicts[0])} ({_x(text_a)})</text>',
+           f'<text x="4" y="{13 + _ROW}">{_x(label_b)}: {_x(d.verdicts[1])} '
+           f'({_x(text_b)})</text>']
+    for r, (name, vals) in enumerate(d.trace.items()):
+        y = _ROW * (r + 2) + 4
+        out.append(f'<text x="4" y="{y + 12}">{_x(name)}</text>')
+        out.append(f'<line x1="{_LABEL}" y1="{y + 14}" x2="{_LABEL + cell * n}" '
+                   f'y2="{y + 14}" stroke="#ccc"/>')
+        for i, v in enumerate(vals):
+            x0 = _LABEL + cell * i
+            if isinstance(v, bool):
+                if v:
+                    out.append(f'<rect x="{x0}" y="{y + 2}" width="{cell}" height="12" '
+                               'fill="#455a64"/>')
+            else:
+                out.append(f'<text x="{x0 + 2}" y="{y + 12}">{_x(_cell(v))}</text>')
+    y = _ROW * (len(d.trace) + 2) + 14
+    for i in range(0, n, 5):
+        out.append(f'<text x="{_LABEL + cell * i}" y="{y}">{i}</text>')
+    out.append("</svg>")
     return "\n".join(out) + "\n"

@@ -55,8 +55,10 @@ def _entry(arg: str, which: str, files: tuple[str, ...], period, by_id: dict):
                    "default: the -r file's @tick_period.")
 @click.option("--max-ticks", type=click.IntRange(1, 100_000), default=2048, show_default=True,
               help="The longest trace the breadth-first search builds.")
+@click.option("--svg", "svg_path", type=click.Path(dir_okay=False), default=None,
+              help="Also draw the distinguishing trace as an SVG in FILE (when there is one).")
 @TEXT_ATTRIBUTE_OPTION
-def distinguish_cmd(a, b, files, tick_period, max_ticks):
+def distinguish_cmd(a, b, files, tick_period, max_ticks, svg_path):
     """Compare two wordings A and B (texts, or ids of -r FILE): "not equivalent" and the
     shortest trace on which their verdicts differ (exit 1), "equivalent" and the proof
     (exit 0), or "unknown" and why (exit 3)."""
@@ -89,4 +91,11 @@ def distinguish_cmd(a, b, files, tick_period, max_ticks):
             sys.exit(2)
     d = distinguish(ca, cb, max_ticks=max_ticks)
     click.echo(_shown(distinction_text(d, la, ta, lb, tb)), nl=False)
+    if svg_path is not None and d.trace is not None:
+        from pathlib import Path
+
+        from fretc.reports.distinction import distinction_svg
+
+        Path(svg_path).write_text(distinction_svg(d, la, ta, lb, tb), encoding="utf-8")
+        click.echo(_shown(f"wrote {svg_path}"), err=True)
     sys.exit(0 if d.equivalent else 1 if d.equivalent is False else 3)

@@ -169,9 +169,14 @@ def _run(*args):
 
 
 def test_command_exit_codes_and_what_it_prints(tmp_path):
+    svg = tmp_path / "d.svg"
     code, out = _run("distinguish", "upon p the sw shall within 5 ticks satisfy q",
-                     "upon p the sw shall within 6 ticks satisfy q")
+                     "upon p the sw shall within 6 ticks satisfy q", "--svg", str(svg))
     assert code == 1 and out.startswith("not equivalent: ")
+    import xml.etree.ElementTree as ET
+
+    drawn = ET.parse(svg).getroot()             # well-formed; p holds at tick 0 only
+    assert len([e for e in drawn.iter() if e.tag.endswith("rect")]) == 1
     assert "A  violated " in out and "B  satisfied " in out
     assert "    p     T....." in out and "    q     ......" in out
     code, out = _run("distinguish", "the sw shall always satisfy p & q",
