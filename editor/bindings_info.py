@@ -20,7 +20,6 @@ A file that does not parse gives its variables' places by a scan of its ``[varia
 
 from __future__ import annotations
 
-import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -277,7 +276,3 @@ def _field_unit(node, schemas: dict) -> str | None:
             return unit
     return None
 
-
-def same_folder(a: str, b: str) -> bool:
-    """Whether the files ``a`` and ``b`` are in one folder."""
-    return os.path.dirname(os.path.abspath(a)) == os.path.dirname(os.path.abspath(b))
