@@ -43,7 +43,10 @@ async def run_job(request: dict, timeout: float) -> dict:
     own session; raises :class:`JobFailed` past ``timeout`` seconds or when the child ends
     without an answer. Cancelling the awaiting task kills the child (and anything it
     started)."""
-    env = dict(os.environ, FRETC_LSP_PARENT=str(os.getpid()))
+    # one thread for numpy's BLAS: a thread per core would reserve address space past the
+    # job's cap on a many-core machine
+    env = dict(os.environ, FRETC_LSP_PARENT=str(os.getpid()), OPENBLAS_NUM_THREADS="1",
+               OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     proc = await asyncio.create_subprocess_exec(
         sys.executable, "-m", "fretc.editor.jobs", stdin=asyncio.subprocess.PIPE,
         stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.DEVNULL,

@@ -251,17 +251,18 @@ def distinguish(ca, cb, *, max_ticks: int = DEFAULT_MAX_TICKS, max_states: int =
     # the trace's variables: the formulas' (ft, and pt, which may read one ft does not)
     names = list(dict.fromkeys(list(ca.formalization.variables)
                                + list(cb.formalization.variables) + list(_kinds(read))))
-    count = int(np.prod([len(v) for v in domains.values()])) if domains else 1
-    if blocked is None and count > MAX_LETTERS:
-        blocked = f"{count} letters a tick (at most {MAX_LETTERS})"
+    count = int(np.prod([len(v) for v in domains.values()], dtype=float)) if domains else 1
     exhausted = False
-    if blocked is None:
+    if blocked is None and count <= MAX_LETTERS:
         found, exhausted, out.states, out.depth = _search(classes, domains, max_ticks,
                                                           max_states)
         if found is not None:
             return _separated(out, ca, cb, classes, found, names, shortest=True,
                               proof="a breadth-first search of the two requirements' "
                                     "generated monitors (no shorter trace separates them)")
+    elif blocked is None:  # too many letters for the search: the symbolic engines take it
+        out.notes.append(f"no breadth-first search: {count:,} letters a tick (at most "
+                         f"{MAX_LETTERS})")
     return _solve(out, ca, cb, classes, names, blocked, exhausted, budget, fork)
 
 
@@ -367,8 +368,10 @@ def _solve(out: Distinction, ca, cb, classes, names, blocked: str | None, exhaus
             out.notes.append(f"{engine} could not decide it"
                              + (f": {failures[0]}" if failures else ""))
             return out
-        out.why = (blocked or f"the search stopped at its bounds ({out.states} states, "
-                   f"{out.depth} ticks)") + f"; {engine} could not decide it" + \
+        out.why = (blocked or ("the search stopped at its bounds" if out.states else
+                               "the letters were too many to search")
+                   + f" ({out.states} states, {out.depth} ticks)") + \
+            f"; {engine} could not decide it" + \
             (f": {failures[0]}" if failures else "")
         return out
     if exhausted or out.equivalent:

@@ -195,3 +195,11 @@ def test_command_exit_codes_and_what_it_prints(tmp_path):
     code, out = _run("distinguish", "the sw shall always satisfy x + y > 5",
                      "the sw shall always satisfy y + x > 5")
     assert code == 3 and out.startswith("unknown: ")
+
+
+def test_too_many_letters_for_the_search_go_to_the_fixed_points():
+    a = "upon a & b & c & d & e the sw shall within 3 ticks satisfy f & g & h & i"
+    b = "upon a & b & c & d & e the sw shall within 4 ticks satisfy f & g & h & i"
+    d = _check_against_spot(a, b)                 # 2^9 letters a tick: past the search
+    assert d.equivalent is False and d.shortest and "BuDDy" in d.proof
+    assert len(d.trace["a"]) == 4 and "512 letters" in d.notes[0]
