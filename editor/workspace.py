@@ -7,8 +7,9 @@ A variable is written in requirement sentences (their spans, :mod:`fretc.editor.
 a key of a bindings file's ``[variables]`` table, and as a reference inside another variable's
 expression (the binding language's ``Ref``, at its column in the expression text). A
 requirement id is written on its ``ID:`` line and in ``parent:`` lines. Files are found under
-the workspace folders (at most :data:`MAX_FILES` of each kind, hidden folders skipped) and read
-again when their size or modification time changes; an open document is read from the editor.
+the workspace folders (at most :data:`MAX_FILES` of each kind and :data:`MAX_WORKSPACE_BYTES` in
+all, hidden folders skipped) and read again when their size or modification time changes; an
+open document is read from the editor.
 """
 
 from __future__ import annotations
@@ -26,6 +27,9 @@ __all__ = ["Workspace", "Place", "MAX_FILES", "valid_variable_name", "valid_id"]
 
 #: the most requirement files (and bindings files) a workspace is searched for
 MAX_FILES = 2_000
+#: the most bytes of the files of one kind the workspace is read for (about 20,000
+#: requirements: the first analysis of them all takes a few seconds)
+MAX_WORKSPACE_BYTES = 2_000_000
 #: the most folders a listing of the workspace looks into
 MAX_FOLDERS = 5_000
 #: seconds a listing of the workspace's files is used before the folders are walked again
@@ -87,16 +91,27 @@ class Workspace:
         return out
 
     def _walk(self, suffix: str) -> list[str]:
-        """The walk of :meth:`files`: at most :data:`MAX_FOLDERS` folders are looked into."""
-        out, folders = [], 0
+        """The walk of :meth:`files`: at most :data:`MAX_FOLDERS` folders are looked into,
+        and the files found add up to at most :data:`MAX_WORKSPACE_BYTES`."""
+        out, folders, size = [], 0, 0
         for root in self.roots:
             for folder, dirs, names in os.walk(root):
                 dirs[:] = sorted(d for d in dirs if not d.startswith(".")
                                  and d not in ("node_modules", "__pycache__"))
-                out += [os.path.join(folder, n) for n in sorted(names) if n.endswith(suffix)]
+                for n in sorted(names):
+                    if not n.endswith(suffix):
+                        continue
+                    path = os.path.join(folder, n)
+                    try:
+                        size += os.stat(path).st_size
+                    except OSError:
+                        continue
+                    if size > MAX_WORKSPACE_BYTES or len(out) >= MAX_FILES:
+                        return out
+                    out.append(path)
                 folders += 1
-                if len(out) >= MAX_FILES or folders >= MAX_FOLDERS:
-                    return out[:MAX_FILES]
+                if folders >= MAX_FOLDERS:
+                    return out
         return out
 
     def _text(self, path: str) -> tuple[tuple, str | None]:
