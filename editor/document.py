@@ -1,9 +1,18 @@
 """What the FRETish language server knows about one ``.fret`` document, without the
-protocol (:mod:`fretc.editor.server` speaks LSP): its diagnostics, the requirement at a line, the
-hover text of a requirement, the completions at a position and where a variable is bound.
+protocol (:mod:`fretc.editor.server` speaks LSP): its diagnostics, the requirement at a line,
+the hover text of a requirement or a variable, the completions at a position, where each
+variable is written and where it is bound.
 
 Positions here are 0-based lines and UTF-16-agnostic character columns as LSP counts them
 for ASCII text (FRETish sentences are ASCII; other text is counted in code points).
+
+An analysis reads the document's structure again on each edit but parses and compiles only
+the sentences it has not seen (:mod:`fretc.editor.sentences`: a sentence is kept with
+positions relative to its first line, so an edit above it costs nothing); pass the same
+:class:`Memory` to each :func:`analyse` of a session. Bounds: a document over
+:data:`MAX_DOCUMENT` characters is not analysed (one diagnostic says so); at most
+:data:`MAX_PROBLEMS` diagnostics; a hover of at most :data:`MAX_HOVER` characters, with a
+diagram only for a requirement whose diagram is at most :data:`MAX_DIAGRAM_TICKS` ticks wide.
 """
 
 from __future__ import annotations
@@ -13,15 +22,26 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fretc.common.errors import FretishError
-from fretc.compiler.build import compile_entries
 from fretc.fretish.files import load_fret_text
 from fretc.fretish.words import RESERVED_WORDS
 
-__all__ = ["Problem", "Analysis", "analyse", "check_problems", "KEYWORDS", "SAVE_WORK"]
+from fretc.editor.bindings_info import VariableInfo, bindings_beside
+from fretc.editor.sentences import CompileCache, SentenceCache
+
+__all__ = ["Problem", "Analysis", "Memory", "analyse", "check_problems", "KEYWORDS",
+           "SAVE_WORK", "MAX_DOCUMENT", "MAX_PROBLEMS", "MAX_HOVER", "MAX_DIAGRAM_TICKS"]
 
 #: The work budget of each check query on save (check.budget's units): small, so that a
 #: save answers in about a second; past it a query is unknown and says nothing.
 SAVE_WORK = 2_000_000
+#: the largest document analysed (characters, about 20,000 requirements)
+MAX_DOCUMENT = 2_000_000
+#: the most diagnostics published for one document
+MAX_PROBLEMS = 1_000
+#: the longest hover text (characters)
+MAX_HOVER = 64_000
+#: the widest diagram a hover draws (ticks)
+MAX_DIAGRAM_TICKS = 200
 
 #: FRETish's words offered by completion (the reserved words of the grammar).
 KEYWORDS = sorted(w for w in RESERVED_WORDS if w.isalpha())
@@ -41,17 +61,32 @@ class Problem:
 
 
 @dataclass
+class Memory:
+    """What a session of the server keeps between analyses: the parsed sentences and the
+    compiled requirements."""
+
+    sentences: SentenceCache = field(default_factory=SentenceCache)
+    compiled: CompileCache = field(default_factory=CompileCache)
+
+
+@dataclass
 class Analysis:
-    """A document read: ``problems``, the compiled requirements, the first line (0-based)
-    of each requirement, the variables bound by the bindings file beside the document
-    (name -> (file, 0-based line)), and the components the document names."""
+    """A document read: ``problems``, the compiled requirements (positions relative to each
+    one's first line: add ``offsets[i]``), the first line (0-based) of each requirement, the
+    variables the bindings files beside the document bind (name -> (file, 0-based line), and
+    with their type and unit in ``variables``), how each requirement reads each variable
+    (``uses[i]``: name -> ``boolean``/``number``), the components the document names."""
 
     problems: list[Problem] = field(default_factory=list)
     compiled: list = field(default_factory=list)
     starts: list[int] = field(default_factory=list)
+    offsets: list[int] = field(default_factory=list)
+    uses: list[dict] = field(default_factory=list)
     bound: dict[str, tuple[str, int]] = field(default_factory=dict)
+    variables: dict[str, VariableInfo] = field(default_factory=dict)
     components: list[str] = field(default_factory=list)
     lines: list[str] = field(default_factory=list)
+    memory: Memory | None = None
 
     def requirement_at(self, line: int):
         """The compiled requirement whose text spans 0-based ``line``, or None."""
@@ -61,14 +96,60 @@ class Analysis:
                 best = c
         return best
 
-    def hover(self, line: int) -> str | None:
-        """Markdown for the requirement at ``line``: its key, ft, ft_inf and pt (FRET/SMV
-        text), or its error."""
+    def occurrences(self) -> list[tuple[str, int, int, int]]:
+        """Every variable written in the document: (name, 0-based line, col, end col)."""
+        out = []
+        for c, off in zip(self.compiled, self.offsets):
+            req = c.requirement
+            if req is None or req.freeform:
+                continue
+            spans = (self.memory.sentences.spans(req) if self.memory is not None
+                     else _spans(req))
+            out += [(name, off + ln - 1, col, end) for name, ln, col, end in spans]
+        return out
+
+    def word_at(self, line: int, col: int) -> str | None:
+        """The variable written at 0-based ``line``/``col`` (on its characters or just
+        after), or None."""
+        for name, ln, a, b in self.occurrences():
+            if ln == line and a <= col <= b:
+                return name
+        return None
+
+    def hover(self, line: int, col: int | None = None) -> str | None:
+        """Markdown for the variable at ``line``/``col`` (its binding, type and unit, and how
+        the requirements read it), else for the requirement at ``line``: its key, ft,
+        ft_inf and pt (FRET/SMV text) and its diagram, or its error. At most
+        :data:`MAX_HOVER` characters."""
+        name = self.word_at(line, col) if col is not None else None
+        text = self._variable_hover(name) if name else self._requirement_hover(line)
+        if text is not None and len(text) > MAX_HOVER:
+            text = text[:MAX_HOVER] + "\n\n(cut: the hover is at most " \
+                                      f"{MAX_HOVER:,} characters)"
+        return text
+
+    def _variable_hover(self, name: str) -> str:
+        info = self.variables.get(name)
+        readers = [(c.id, u[name]) for c, u in zip(self.compiled, self.uses) if name in u]
+        out = [f"**{name}**"]
+        if info is None:
+            out.append("not bound in a bindings file beside this file")
+        else:
+            out += [f"type: {info.type}" + (f", unit: {info.unit}" if info.unit else
+                                            ", unit: not known" if info.type == "number"
+                                            else ""), f"({info.how})", "",
+                    f"`{info.expr}`", "", f"bound in {Path(info.file).name}:{info.line + 1}"]
+        if readers:
+            out += ["", "read as " + ", ".join(f"{kind} by {rid}" for rid, kind in readers[:20])
+                    + (f" and {len(readers) - 20} more" if len(readers) > 20 else "")]
+        return "\n".join(out)
+
+    def _requirement_hover(self, line: int) -> str | None:
         c = self.requirement_at(line)
         if c is None:
             return None
         if c.error is not None:
-            return f"**{c.id}**: {c.error}"
+            return f"**{c.id}**: {getattr(c.error, 'message', c.error)}"
         f = c.formalization
         if f is None:
             return f"**{c.id}**: free-form (no formalization)"
@@ -77,9 +158,13 @@ class Analysis:
                f"ft: `{smv['ft']}`", "", f"pt: `{smv['pt']}`"]
         if f.warnings:
             out += [""] + [f"note: {w}" for w in f.warnings]
-        picture = _diagram_image(c)
-        if picture:
-            out += ["", picture]
+        if (f.ticks or 0) > MAX_DIAGRAM_TICKS:
+            out += ["", f"(no diagram: {f.ticks:,} ticks is wider than the "
+                        f"{MAX_DIAGRAM_TICKS} a hover draws; fretc explain -o DIR draws it)"]
+        else:
+            picture = _diagram_image(c)
+            if picture:
+                out += ["", picture]
         return "\n".join(out)
 
     def completions(self, line: int, col: int) -> list[tuple[str, str]]:
@@ -91,7 +176,7 @@ class Analysis:
         text = self.lines[line][:col] if line < len(self.lines) else ""
         m = re.match(r"\s*[A-Za-z0-9_.\-]+\s*:", text)
         sentence = text[m.end():] if m and not text.lstrip().startswith("@") else text
-        accepted = _accepted(sentence)
+        accepted = _accepted(sentence[-2000:])
         words = re.findall(r"[A-Za-z_][A-Za-z0-9_]*", sentence)
         lowered = [w.lower() for w in words]
         after_condition = any(w in ("upon", "when", "whenever", "if", "unless", "where")
@@ -118,6 +203,12 @@ class Analysis:
 #: Unit terminals of the grammar -> the word completion offers.
 _UNITS = {"TICK": "ticks", "MICROSECOND": "microseconds", "MILLISECOND": "milliseconds",
           "SECOND": "seconds", "MINUTE": "minutes", "HOUR": "hours"}
+
+
+def _spans(req):
+    from fretc.editor.sentences import variable_spans
+
+    return variable_spans(req)
 
 
 def _accepted(sentence: str) -> set | None:
@@ -147,75 +238,119 @@ def _diagram_image(compiled) -> str | None:
     return f"{x.reading}\n\n![diagram of {compiled.id}](data:image/svg+xml;base64,{data})"
 
 
-def _bindings_of(path: Path) -> dict[str, tuple[str, int]]:
-    """The variables bound by the ``*.bindings.toml`` files beside ``path``: name ->
-    (file, 0-based line of its key)."""
-    out: dict[str, tuple[str, int]] = {}
-    if not path.parent.is_dir():
-        return out
-    for f in sorted(path.parent.glob("*.bindings.toml")):
-        try:
-            lines = f.read_text(encoding="utf-8").splitlines()
-        except (OSError, UnicodeDecodeError):
-            continue
-        table = None
-        for i, raw in enumerate(lines):
-            s = raw.strip()
-            if s.startswith("["):
-                table = s.strip("[] ")
-                continue
-            m = re.match(r'("?)([^"=]+?)\1\s*=', s)
-            if table == "variables" and m:
-                out.setdefault(m.group(2).strip(), (str(f), i))
-    return out
-
-
-def analyse(text: str, path: str) -> Analysis:
+def analyse(text: str, path: str, memory: Memory | None = None,
+            elsewhere: dict[str, tuple[str, str]] | None = None) -> Analysis:
     """Read the document ``text`` (the file ``path``, whose folder gives the bindings):
     syntax and file errors at their line and column, formalization errors (a duration that
-    is not a whole number of ticks, an undeclared constant), and variables that no
-    bindings file beside it binds (warnings, when one exists). Never raises on a bad
-    document."""
-    a = Analysis(lines=text.split("\n"))
+    is not a whole number of ticks, an undeclared constant), variables that no bindings file
+    beside it binds (warnings, when one exists), and variables read as a boolean in one
+    requirement and as a number in another (or bound to the other type: errors).
+    ``memory``: the session's :class:`Memory` (a new one when None); ``elsewhere``: how other
+    requirement files of the workspace read variables (name -> (``boolean``/``number``,
+    where)). Never raises on a bad document."""
+    memory = memory or Memory()
+    a = Analysis(lines=text.split("\n"), memory=memory)
+    if len(text) > MAX_DOCUMENT:
+        a.problems.append(Problem(0, 0, 1, _WARNING,
+                                  f"this document has {len(text):,} characters: the language "
+                                  f"server analyses documents of at most {MAX_DOCUMENT:,} "
+                                  "(run fretc on the file)"))
+        return a
     try:
-        entries = load_fret_text(text, path)
+        entries = load_fret_text(text, path, memory.sentences.parse)
     except FretishError as exc:
         a.problems.append(_problem_of(exc, a.lines))
         return a
-    a.compiled = compile_entries(entries)
-    a.starts = [max(e.line - 1, 0) for e in entries]
-    a.bound = _bindings_of(Path(path))
-    for c in a.compiled:
-        req = c.requirement
-        if c.error is not None:
-            a.problems.append(_problem_of(c.error, a.lines))
-            continue
-        if req is not None and not req.freeform and req.component:
-            if req.component not in a.components:
-                a.components.append(req.component)
-        if a.bound and c.formalization is not None:
-            for v in c.formalization.variables:
-                if v not in a.bound:
-                    ln = max(c.entry.line - 1, 0)
-                    a.problems.append(Problem(ln, 0, len(a.lines[ln]) if ln < len(a.lines)
-                                              else 0, _WARNING,
-                                              f"{c.id}: variable {v!r} is not bound in the "
-                                              "bindings file beside this file"))
+    files = bindings_beside(path)
+    for bf in files:
+        for name, info in bf.variables.items():
+            a.variables.setdefault(name, info)
+            a.bound.setdefault(name, (info.file, info.line))
+    for e in entries:
+        off = max(e.line - 1, 0)
+        e.line = 1  # relative, as its parse (the entry is this analysis's own)
+        c, uses = memory.compiled.compile(e)
+        a.compiled.append(c)
+        a.uses.append(uses)
+        a.offsets.append(off)
+        a.starts.append(off)
+        _entry_problems(a, c, uses, off)
+    _type_problems(a, elsewhere or {})
+    if len(a.problems) > MAX_PROBLEMS:
+        more = len(a.problems) - MAX_PROBLEMS
+        a.problems = a.problems[:MAX_PROBLEMS] + [Problem(0, 0, 1, _WARNING, f"{more:,} more "
+                                                          "problems are not shown")]
     return a
 
 
-def check_problems(a: Analysis, work: int = SAVE_WORK) -> list[Problem]:
+def _entry_problems(a: Analysis, c, uses: dict, off: int) -> None:
+    """The problems of one requirement: its error, its unbound variables."""
+    req = c.requirement
+    if c.error is not None:
+        p = _problem_of(c.error, a.lines, off)
+        a.problems.append(p)
+        return
+    if req is not None and not req.freeform and req.component:
+        if req.component not in a.components:
+            a.components.append(req.component)
+    if a.bound and c.formalization is not None:
+        for v in c.formalization.variables:
+            if v not in a.bound:
+                a.problems.append(Problem(off, 0, _width(a.lines, off), _WARNING,
+                                          f"{c.id}: variable {v!r} is not bound in the "
+                                          "bindings file beside this file"))
+
+
+def _type_problems(a: Analysis, elsewhere: dict[str, tuple[str, str]]) -> None:
+    """Errors at each use of a variable read as a boolean in one requirement and as a number
+    in another (of this document or, by ``elsewhere``, another file), or as the other type
+    than its binding gives."""
+    first: dict[str, tuple[str, str]] = {}
+    for c, uses in zip(a.compiled, a.uses):
+        for name, kind in uses.items():
+            first.setdefault(name, (kind, c.id))
+    spans = None
+    for i, (c, uses) in enumerate(zip(a.compiled, a.uses)):
+        for name, kind in uses.items():
+            other = None
+            info = a.variables.get(name)
+            if info is not None and info.type not in ("unknown", kind):
+                other = f"bound to a {info.type} in {Path(info.file).name}:{info.line + 1}"
+            elif first[name][0] != kind:
+                other = f"read as a {first[name][0]} by {first[name][1]}"
+            elif name in elsewhere and elsewhere[name][0] != kind:
+                other = f"read as a {elsewhere[name][0]} by {elsewhere[name][1]}"
+            if other is None:
+                continue
+            if spans is None:
+                spans = a.occurrences()
+            ln, col, end = next(((ln, x, y) for n, ln, x, y in spans if n == name
+                                 and a.offsets[i] <= ln and (i + 1 == len(a.offsets) or
+                                                             ln < a.offsets[i + 1])),
+                                (a.offsets[i], 0, _width(a.lines, a.offsets[i])))
+            a.problems.append(Problem(ln, col, end, _ERROR,
+                                      f"{c.id} reads {name!r} as a {kind}, but it is "
+                                      f"{other}: a variable is a boolean or a number"))
+
+
+def _width(lines: list[str], ln: int) -> int:
+    return len(lines[ln]) if ln < len(lines) else 0
+
+
+def check_problems(a: Analysis, work: int = SAVE_WORK, worker=None) -> list[Problem]:
     """``fretc check``'s conflicts, unsatisfiable and vacuous requirements of the analysed
     document, under a work budget of ``work`` units a query (answers past it say nothing
     here): one diagnostic per requirement involved, at its first line (error for a
-    conflict or an unsatisfiable requirement, warning for vacuity)."""
+    conflict or an unsatisfiable requirement, warning for vacuity). ``worker``: the
+    :class:`fretc.check.solver.SpotWorker` to ask (default: a forked one of its own)."""
     from fretc.check.analysis import check_requirements
     from fretc.check.budget import Budget
 
     ok = [c for c in a.compiled if c.error is None and c.formalization is not None]
     if not ok:
         return []
-    res = check_requirements(ok, budget=Budget(work), redundancy=False, mus_budget=20)
+    res = check_requirements(ok, budget=Budget(work), redundancy=False, mus_budget=20,
+                             worker=worker)
     first = {c.id: start for c, start in zip(a.compiled, a.starts)}
     out = []
     for f in res.findings:
@@ -223,15 +358,16 @@ def check_problems(a: Analysis, work: int = SAVE_WORK) -> list[Problem]:
             continue
         for rid in f.requirements:
             ln = first.get(rid, 0)
-            out.append(Problem(ln, 0, len(a.lines[ln]) if ln < len(a.lines) else 0,
+            out.append(Problem(ln, 0, _width(a.lines, ln),
                                _ERROR if f.severity == "error" else _WARNING,
                                f"{f.kind}: {f.message}"))
     return out
 
 
-def _problem_of(exc: Exception, lines: list[str]) -> Problem:
-    """A diagnostic for a positioned error (its line and column, 1-based), or line 1."""
-    line = getattr(exc, "line", None) or 1
+def _problem_of(exc: Exception, lines: list[str], offset: int = 0) -> Problem:
+    """A diagnostic for a positioned error (its line and column, 1-based; ``offset`` lines
+    added to a position relative to a sentence), or line 1."""
+    line = (getattr(exc, "line", None) or 1) + offset
     col = getattr(exc, "column", None) or 1
     ln = min(max(line - 1, 0), max(len(lines) - 1, 0))
     end = len(lines[ln]) if ln < len(lines) else col

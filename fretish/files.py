@@ -141,8 +141,9 @@ class _FretReader:
     """One pass over the lines of a .fret file (the format of this module's docstring):
     requirements, their attributes and the file's directives; then the entries."""
 
-    def __init__(self, path: str, text: str | None = None):
+    def __init__(self, path: str, text: str | None = None, parse_sentence=None):
         self.source = str(path)
+        self.parse = parse_sentence or parse
         self.lines = (_read_text(path) if text is None else text).split("\n")
         self.pending: list[_Pending] = []
         self.seen: dict[str, int] = {}
@@ -304,7 +305,7 @@ class _FretReader:
             (attrs["parent"][0] or None) if "parent" in attrs else None,
             period, None, None, {}, self.io.get("inputs", ()), self.io.get("outputs", ()))
         try:
-            entry.requirement = parse(text, source=source, line=line0, column=col0)
+            entry.requirement = self.parse(text, source=source, line=line0, column=col0)
             if self.constants:
                 from fretc.fretish.constants import resolve
 
@@ -322,14 +323,16 @@ _FULLTEXT = r'"fulltext"\s*:\s*"'  # compiled on first use (re's cache), as _ATT
 _KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
 
 
-def load_fret_text(text: str, source: str) -> list[RequirementEntry]:
+def load_fret_text(text: str, source: str, parse_sentence=None) -> list[RequirementEntry]:
     """The requirements of a ``.fret`` document given as text (an editor's buffer), as
-    :func:`load_requirements` reads a ``.fret`` file named ``source``.
+    :func:`load_requirements` reads a ``.fret`` file named ``source``. ``parse_sentence``:
+    called instead of :func:`fretc.fretish.parser.parse` with the same arguments (the
+    language server's cache of parsed sentences, :mod:`fretc.editor.document`).
 
     Raises:
         FretishFileError: the file structure is wrong (positioned, as for a file).
     """
-    return _FretReader(source, text).read()
+    return _FretReader(source, text, parse_sentence).read()
 
 
 def _line_col(raw: str, offset: int) -> tuple[int, int]:

@@ -21,7 +21,9 @@ from typing import Sequence
 
 from fretc.common.units import format_seconds
 
+from fretc.reports.export_results import requirement_results
 from fretc.reports.margin import margin_svg
+from fretc.reports.rollup import rollups
 from fretc.reports.terminal import damage_summary, robustness_text
 from fretc.reports.trace import FIELD_NAMES, ModuleInfo, RequirementTrace, resolve_input, split_source
 from fretc.reports.verdicts import cell_label, values_table, verdict_for, witness
@@ -367,6 +369,23 @@ def _coverage(req_ctx: list[dict], reqs: list[dict], logs: list[dict], runs: lis
             "warmup": [r for r in runs if r["warmup"]]}
 
 
+def _parents(doc: dict, req_ctx: list[dict]) -> list[dict]:
+    """The parent requirements (those others refine) with their rolled-up verdicts
+    (:mod:`fretc.reports.rollup`), each id linked to its section when the report has one;
+    each requirement record of ``req_ctx`` gets its ``rollup`` line."""
+    anchor = {rc["id"]: rc["anchor"] for rc in req_ctx}
+    rolled = rollups(doc, {k: r.verdict for k, r in requirement_results(doc, "", "").items()})
+    for rc in req_ctx:
+        rc["rollup"] = rolled[rc["id"]].text() if rc["id"] in rolled else None
+
+    def link(rid: str) -> dict:
+        return {"id": rid, "anchor": anchor.get(rid)}
+    return [{"id": ru.id, "anchor": anchor.get(ru.id), "own": ru.own, "verdict": ru.verdict,
+             "text": ru.text(), "decided_by": ru.decided_by,
+             "path": [link(x) for x in ru.path], "children": [link(c) for c in ru.children]}
+            for ru in rolled.values()]
+
+
 def report_context(doc: dict, traces: dict[int, RequirementTrace],
                    modules: dict[str, ModuleInfo], *, notes: Sequence[str] = (),
                    annotated: dict[int, dict] | None = None, title: str | None = None,
@@ -393,6 +412,7 @@ def report_context(doc: dict, traces: dict[int, RequirementTrace],
     req_ctx, violations = _requirement_rows(reqs, logs, runs, traces, modules, bindings,
                                             anchors)
     coverage = _coverage(req_ctx, reqs, logs, runs, bindings.get("variables") or {})
+    parents = _parents(doc, req_ctx)
     req_files = []
     for rc in req_ctx:
         if rc["file"] and rc["file"] not in [f["path"] for f in req_files]:
@@ -407,7 +427,7 @@ def report_context(doc: dict, traces: dict[int, RequirementTrace],
         "exit_meaning": _EXIT_MEANING.get(summary.get("exit_code"), ""),
         "requirement_files": req_files, "binding_files": bind_files,
         "tick": _tick_text(bindings.get("tick")), "time_base": bindings.get("time_base") or "-",
-        "runs": runs, "requirements": req_ctx, "violations": violations,
+        "runs": runs, "requirements": req_ctx, "violations": violations, "parents": parents,
         "coverage": coverage, "modules": [
             {"name": m.name, "sha256": m.sha256, "digest": m.digest, "text": m.text,
              "anchor": f"mod-{_slug(m.name)}", "lines": len(m.text.splitlines())}

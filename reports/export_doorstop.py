@@ -6,7 +6,9 @@ Doorstop keeps any key of an item file it does not know as a custom attribute (D
 document lists it under ``attributes: reviewed``; so the items' ``reviewed`` stamps stay
 valid and the tree passes ``doorstop``'s validation as before. The keys (:data:`KEYS`):
 ``fretc_verdict``, ``fretc_evidence``, ``fretc_formula_ft``, ``fretc_formula_pt``,
-``fretc_audit_id``, ``fretc_audit_date``.
+``fretc_rollup`` and ``fretc_rollup_path`` (parent items only: the verdict rolled up over the
+items that link to them, :mod:`fretc.reports.rollup`), ``fretc_audit_id``,
+``fretc_audit_date``.
 
 The original bytes of every file are kept: fretc's block is appended to the item file after a
 marker comment (:data:`MARKER`); exporting again cuts the file at the marker and writes the
@@ -28,6 +30,7 @@ MARKER = "# fretc export: the results of an audit (replaced by the next fretc ex
 #: (item file key, field of :class:`RequirementResult`)
 KEYS = (("fretc_verdict", "verdict"), ("fretc_evidence", "evidence"),
         ("fretc_formula_ft", "ft"), ("fretc_formula_pt", "pt"),
+        ("fretc_rollup", "rollup"), ("fretc_rollup_path", "rollup_path"),
         ("fretc_audit_id", "audit_id"), ("fretc_audit_date", "audit_date"))
 
 

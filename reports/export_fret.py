@@ -3,7 +3,8 @@
 fretc's results; every other member and object is kept as it was, in its order.
 
 ``fretc``: ``{"verdict", "evidence", "ft", "pt", "audit_id", "audit_date"}`` (the fields of
-:class:`~fretc.reports.export_results.RequirementResult`). FRET keeps requirement objects as
+:class:`~fretc.reports.export_results.RequirementResult`), and for a requirement others name as
+their ``parent_reqid`` also ``"rollup"`` and ``"rollup_path"`` (:mod:`fretc.reports.rollup`). FRET keeps requirement objects as
 documents and ignores members it does not know, so the file still imports into FRET's GUI;
 FRET's own ``semantics`` are not touched (fretc's formulas sit beside them, to compare).
 
@@ -56,6 +57,8 @@ def export_fret(src: str, results: dict[str, RequirementResult]) -> tuple[bytes,
         obj[FRETC_MEMBER] = {"verdict": result.verdict, "evidence": result.evidence,
                              "ft": result.ft, "pt": result.pt, "audit_id": result.audit_id,
                              "audit_date": result.audit_date}
+        if result.rollup is not None:
+            obj[FRETC_MEMBER].update(rollup=result.rollup, rollup_path=result.rollup_path)
         done += 1
     out = json.dumps(data, indent=_indent(text), ensure_ascii=False) + "\n"
     return out.encode("utf-8"), done

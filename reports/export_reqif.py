@@ -7,7 +7,9 @@ a SPEC-OBJECT-TYPE, ATTRIBUTE-VALUE-STRINGs in a SPEC-OBJECT's VALUES):
 * one datatype ``FRETC-STRING`` (LONG-NAME ``fretc text``);
 * on every SPEC-OBJECT-TYPE with a requirement of the audit, the attribute definitions
   :data:`ATTRIBUTES` (LONG-NAMEs ``fretc verdict``, ``fretc evidence``, ``fretc formula
-  ft``, ``fretc formula pt``, ``fretc audit id``, ``fretc audit date``), IDENTIFIERs
+  ft``, ``fretc formula pt``, ``fretc rolled-up verdict``, ``fretc rolled-up path``, ``fretc
+  audit id``, ``fretc audit date``; the two rolled-up values only on parent requirements,
+  :mod:`fretc.reports.rollup`), IDENTIFIERs
   ``FRETC-<key>-<type identifier>`` (unique in the file, as section 10.8.20 asks);
 * on each SPEC-OBJECT the audit judged or listed as not formalized (matched by its
   IDENTIFIER, the audit's ``origin.tool_id``), their values.
@@ -36,6 +38,8 @@ ATTRIBUTES = (("VERDICT", "fretc verdict", "verdict"),
               ("EVIDENCE", "fretc evidence", "evidence"),
               ("FORMULA-FT", "fretc formula ft", "ft"),
               ("FORMULA-PT", "fretc formula pt", "pt"),
+              ("ROLLUP", "fretc rolled-up verdict", "rollup"),
+              ("ROLLUP-PATH", "fretc rolled-up path", "rollup_path"),
               ("AUDIT-ID", "fretc audit id", "audit_id"),
               ("AUDIT-DATE", "fretc audit date", "audit_date"))
 

@@ -9,6 +9,9 @@ A requirement's result over all the runs of the audit (:func:`requirement_result
 * ``evidence``: one line: the counts per verdict over the runs and, for each violating
   run, where it first failed (tick, seconds, reason);
 * ``ft``, ``pt``: FRET's formulas (SMV syntax) as the audit compiled them;
+* ``rollup``, ``rollup_path``: for a requirement that others refine (a parent), its verdict
+  rolled up over them and the path to the requirement that decides it
+  (:mod:`fretc.reports.rollup`); None for the others;
 * ``audit_id``: ``sha256:`` and the first 16 hex digits of the audit document's bytes (the
   same document, the same id); ``audit_date``: given by the caller (``--audit-date``), else
   the document file's modification time (UTC): never the time of the export, so the same
@@ -17,12 +20,15 @@ A requirement's result over all the runs of the audit (:func:`requirement_result
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import hashlib
 import os
 import shutil
 import tempfile
 from dataclasses import dataclass
+
+from fretc.reports.rollup import rollups
 
 __all__ = ["RequirementResult", "requirement_results", "audit_identity", "write_atomic",
            "replace_tree", "VERDICT_ORDER", "NOT_FORMALIZED"]
@@ -46,6 +52,8 @@ class RequirementResult:
     audit_id: str
     audit_date: str
     runs: int
+    rollup: str | None = None
+    rollup_path: str | None = None
 
 
 def audit_identity(path: str, raw: bytes, date: str | None = None) -> tuple[str, str]:
@@ -101,6 +109,9 @@ def requirement_results(doc: dict, audit_id: str, audit_date: str
         out.setdefault(item["id"], RequirementResult(
             item["id"], origin.get("tool_id"), NOT_FORMALIZED,
             "no FRETish text: not audited", None, None, audit_id, audit_date, 0))
+    for rid, ru in rollups(doc, {k: r.verdict for k, r in out.items()}).items():
+        if rid in out:
+            out[rid] = dataclasses.replace(out[rid], rollup=ru.verdict, rollup_path=ru.text())
     return out
 
 

@@ -1,6 +1,24 @@
 """The JUnit XML file of ``fretc audit --junit FILE``: a ``testsuite`` per log, a ``testcase``
 per requirement, for CI. Deterministic (no wall-clock times: every ``time`` is 0); every
 text and attribute made legal XML 1.0.
+
+Each ``testcase`` carries ``<properties>`` for the traceability tools that read JUnit
+(sphinx-test-reports maps a property to a sphinx-needs link with its
+``tr_property_link_types``; StrictDoc and CI dashboards show them), :data:`CASE_PROPERTIES`
+in this order, each present only when it has a value:
+
+* ``verifies``: the requirement's id (the need id of ``fretc export --needs``);
+* ``tool``, ``tool_id``: the requirements tool it came from (``reqif``, ``doorstop``,
+  ``fret``) and its identifier there (ReqIF SPEC-OBJECT ``IDENTIFIER``, Doorstop UID,
+  FRET ``reqid``), when it was read from one;
+* ``verdict``: the verdict on this log (``satisfied``, ``vacuous``, ``violated``,
+  ``unknown``, ``error``); ``vacuous``: ``true`` or ``false``; ``partial``: ``true`` when the
+  log is damaged and was judged up to the damage;
+* ``log``: the log as given to the audit;
+* ``first_violation_log_time_ns``: the log time (ns) of the message that decided the first
+  missed tick, ``first_violation_s`` that tick in seconds from the log's first tick;
+* ``robustness``: the margin behind the verdict (:mod:`fretc.monitors.robustness`; ``inf``,
+  ``-inf`` for booleans).
 """
 
 from __future__ import annotations
@@ -14,12 +32,20 @@ from fretc.common.units import format_offset
 from fretc.reports.terminal import short_log_name
 from fretc.audit.verdict import LogAudit
 
-__all__ = ["junit_xml"]
+__all__ = ["junit_xml", "CASE_PROPERTIES"]
+
+#: The properties of each test case, in order (module docstring).
+CASE_PROPERTIES = ("verifies", "tool", "tool_id", "verdict", "vacuous", "partial", "log",
+                   "first_violation_log_time_ns", "first_violation_s", "robustness")
 
 
-def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
+def junit_xml(logs: list[LogAudit], statistics: list | None = None,
+              requirements: list[dict] | None = None) -> str:
     """JUnit XML: a ``testsuite`` per log, a ``testcase`` per requirement (``failure`` when
-    violated, ``error`` when not audited; vacuous passes say so in ``system-out``).
+    violated, ``error`` when not audited; vacuous passes say so in ``system-out``), each
+    with the ``<properties>`` of the module docstring. ``requirements``: the audit JSON's
+    ``requirements`` list, whose ``origin`` gives the ``tool`` and ``tool_id`` properties
+    (None: no tool properties).
 
     With ``statistics`` (:class:`fretc.audit.statistics.RequirementStatistics` list) a requirement
     with a probability bound follows its statistical verdict: its per-log cases pass
@@ -29,6 +55,8 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
     root = ET.Element("testsuites", name="fretc audit")
     tot = {"tests": 0, "failures": 0, "errors": 0}
     bounded = {s.id for s in statistics or () if s.bound is not None}
+    origins = {r["id"]: r["origin"] for r in requirements or ()
+               if isinstance(r.get("origin"), dict)}
     for la in logs:
         suite = ET.SubElement(root, "testsuite", name=short_log_name(la.log))
         props = ET.SubElement(suite, "properties")
@@ -42,25 +70,14 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
         for v in la.verdicts:
             counts["tests"] += 1
             case = ET.SubElement(suite, "testcase", classname=cls, name=v.requirement, time="0")
+            _case_properties(case, la, v, origins.get(v.requirement))
             out = [v.text]
             if v.verdict == "violated" and v.requirement in bounded:
                 out.append("verdict: violated on this run; a probability requirement is "
                            "judged over the runs (suite 'statistics')")
             elif v.verdict == "violated":
                 counts["failures"] += 1
-                fv = v.first_violation
-                msg = f"{v.requirement} violated"
-                body = []
-                if fv is not None:
-                    msg += f" at {format_offset(fv.at.time_ns, st)} (tick {fv.at.tick})"
-                    if fv.trigger is not None:
-                        msg += (f"; trigger at {format_offset(fv.trigger.time_ns, st)} "
-                                f"(tick {fv.trigger.tick})")
-                    body = [fv.obligation, fv.reason]
-                if v.partial:
-                    msg += " [partial log]"
-                ET.SubElement(case, "failure", message=msg, type="violated").text = \
-                    "\n".join(x for x in [v.text] + body if x)
+                _failure(case, v, st)
             elif v.verdict == "error":
                 counts["errors"] += 1
                 ET.SubElement(case, "error", message=v.error or "error", type="error").text = \
@@ -93,6 +110,49 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None) -> str:
     _xml_safe(root)
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _failure(case, v, st: int | None) -> None:
+    """The ``failure`` element of a violated requirement: where it first failed."""
+    fv = v.first_violation
+    msg = f"{v.requirement} violated"
+    body = []
+    if fv is not None:
+        msg += f" at {format_offset(fv.at.time_ns, st)} (tick {fv.at.tick})"
+        if fv.trigger is not None:
+            msg += (f"; trigger at {format_offset(fv.trigger.time_ns, st)} "
+                    f"(tick {fv.trigger.tick})")
+        body = [fv.obligation, fv.reason]
+    if v.partial:
+        msg += " [partial log]"
+    ET.SubElement(case, "failure", message=msg, type="violated").text = \
+        "\n".join(x for x in [v.text] + body if x)
+
+
+def _number(x: float) -> str:
+    """A float as the property's text: ``repr`` (exact, round-trips), ``inf``/``-inf``."""
+    return "inf" if x == float("inf") else "-inf" if x == float("-inf") else repr(float(x))
+
+
+def _case_properties(case, la: LogAudit, v, origin: dict | None) -> None:
+    """The ``<properties>`` of one test case (module docstring)."""
+    fv = v.first_violation
+    at = fv.at if fv is not None else None
+    values = {"verifies": v.requirement,
+              "tool": origin.get("format") if origin else None,
+              "tool_id": origin.get("tool_id") if origin else None,
+              "verdict": v.verdict, "vacuous": str(v.verdict == "vacuous").lower(),
+              "partial": "true" if v.partial else None, "log": la.log,
+              "first_violation_log_time_ns": (str(at.log_time_ns) if at is not None
+                                              and at.log_time_ns is not None else None),
+              "first_violation_s": (repr(round((at.time_ns - la.start_time_ns) / 1e9, 9))
+                                    if at is not None and la.start_time_ns is not None
+                                    else None),
+              "robustness": None if v.robustness is None else _number(v.robustness)}
+    props = ET.SubElement(case, "properties")
+    for name in CASE_PROPERTIES:
+        if values[name] is not None:
+            ET.SubElement(props, "property", name=name, value=str(values[name]))
 
 
 def _statistics_suite(root, stats: list, tot: dict) -> None:

@@ -4,6 +4,11 @@ robustness, one row per requirement and run (one row for a requirement no run ju
 that was not formalized), as CSV (:func:`matrix_csv`) and as an HTML page (:func:`matrix_html`,
 ``matrix.html`` of ``fretc report``).
 
+``parents`` lists a requirement's parent links (``;``-separated); a requirement that others
+refine has its verdict rolled up over them in ``rolled_up`` (:mod:`fretc.reports.rollup`:
+``violated via SR-0 > R1 (R1 violated)``; empty for the others), and a parent the links
+name that is not in the audit gets a row of its own (verdict ``not in the audit``).
+
 A row's ``stale`` says ``stale evidence`` when the requirement as it is now (``current``,
 re-read from its source) differs from the one audited: another version (ReqIF
 LAST-CHANGE, Doorstop fingerprint, FRET ``_rev``) or another text; ``removed`` when it is no
@@ -21,6 +26,9 @@ import io
 from dataclasses import astuple, dataclass, fields
 
 from fretc.common.textsafe import one_line
+
+from fretc.reports.export_results import requirement_results
+from fretc.reports.rollup import NOT_IN_AUDIT, parents_of, rollups
 
 __all__ = ["MatrixRow", "matrix_rows", "matrix_csv", "matrix_html", "STALE", "COLUMNS", "stale_state"]
 
@@ -42,6 +50,8 @@ class MatrixRow:
     run: str
     verdict: str
     robustness: str
+    parents: str
+    rolled_up: str
     stale: str
 
 
@@ -94,6 +104,11 @@ def matrix_rows(doc: dict, current: dict | None = None,
     :class:`fretc.fretish.files.RequirementEntry` as the sources hold it now (None: staleness not
     checked); ``check``: a ``fretc check -o`` document (None: "not checked")."""
     checks = _check_cells(check)
+    parents = parents_of(doc)
+    rolled = rollups(doc, {k: r.verdict for k, r in requirement_results(doc, "", "").items()})
+
+    def tree(rid: str) -> list[str]:
+        return ["; ".join(parents.get(rid, ())), rolled[rid].text() if rid in rolled else ""]
     per: dict[str, list[tuple[str, dict]]] = {}
     for la in doc.get("logs") or []:
         for v in la.get("verdicts") or []:
@@ -106,13 +121,17 @@ def matrix_rows(doc: dict, current: dict | None = None,
         for log, v in runs:
             rob = (v.get("robustness") or {}).get("value")
             rows.append(MatrixRow(*head, log, v.get("verdict") or "",
-                                  "" if rob is None else str(rob), stale))
+                                  "" if rob is None else str(rob), *tree(req["id"]), stale))
     for item in doc.get("not_formalized") or []:
         origin = item.get("origin") or {}
         rows.append(MatrixRow(item["id"], origin.get("format") or "", origin.get("tool_id")
                               or item["id"], origin.get("version") or "", "",
                               "not formalized (no FRETish text)", "not checked", "", "",
-                              "not formalized", "", ""))
+                              "not formalized", "", *tree(item["id"]), ""))
+    for rid, ru in rolled.items():
+        if ru.own == NOT_IN_AUDIT:
+            rows.append(MatrixRow(rid, "", rid, "", "", "", "not checked", "", "", NOT_IN_AUDIT,
+                                  "", "", ru.text(), ""))
     return rows
 
 
@@ -144,7 +163,7 @@ _SORTS = (("by-requirement", "requirement", lambda r: ()),
           ("by-robustness", "robustness", lambda r: (_number(r.robustness),)),
           ("by-stale", "stale", lambda r: (r.stale != STALE, r.stale)))
 _VERDICT_RANK = {"error": 0, "violated": 1, "unknown": 2, "not formalized": 3,
-                 "not judged": 4, "vacuous": 5, "satisfied": 6}
+                 "not judged": 4, NOT_IN_AUDIT: 4, "vacuous": 5, "satisfied": 6}
 
 
 def _number(text: str) -> float:

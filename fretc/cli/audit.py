@@ -126,7 +126,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     stats = plan_statistics(plan, results, confidence, unknown_runs)
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors, statistics=stats)
-    doc = audit_json(results, plan.requirements_json(), plan.bindings_json(), input_errors,
+    reqs = plan.requirements_json()
+    doc = audit_json(results, reqs, plan.bindings_json(), input_errors,
                      allow_partial, plan.sources_json(), stats)
     if json_path:
         if to_stdout_json:
@@ -134,7 +135,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
         else:
             Path(json_path).write_text(doc, encoding="utf-8")
     if junit_path:
-        Path(junit_path).write_text(junit_xml(results, stats), encoding="utf-8")
+        Path(junit_path).write_text(junit_xml(results, stats, reqs), encoding="utf-8")
     code = exit_code(results, input_errors, allow_partial, stats)
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
         code = 2

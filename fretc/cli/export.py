@@ -1,12 +1,15 @@
-"""``fretc export``: an audit's results written back into the requirements' own format, and
-the traceability matrix (click command; the writers are :mod:`fretc.reports.export_reqif`,
-:mod:`fretc.reports.export_doorstop`, :mod:`fretc.reports.export_fret`, :mod:`fretc.reports.matrix`).
+"""``fretc export``: an audit's results written back into the requirements' own format, as a
+sphinx-needs ``needs.json`` and a StrictDoc document, and the traceability matrix (click
+command; the writers are :mod:`fretc.reports.export_reqif`, :mod:`fretc.reports.export_doorstop`,
+:mod:`fretc.reports.export_fret`, :mod:`fretc.reports.export_needs`,
+:mod:`fretc.reports.export_sdoc`, :mod:`fretc.reports.matrix`).
 
 ::
 
     fretc export -r requirements.reqif --from-json audit.json -o out.reqif
     fretc export -r doorstop_tree/ --from-json audit.json -o out_tree/ --matrix matrix.csv
     fretc export -r fret_export.json --from-json audit.json -o out.json
+    fretc export --from-json audit.json --needs needs.json --sdoc results.sdoc
 
 Everything is computed before anything is written, and each file is written through a
 temporary file renamed into place: on an error nothing is written (exit code 2).
@@ -53,15 +56,22 @@ def _audit_date(value: str | None) -> str | None:
 
 
 @click.command("export")
-@click.option("-r", "--requirements", "src", required=True, type=click.Path(exists=True),
-              help="The requirements the audit read: a .reqif/.reqifz file, a Doorstop tree "
-                   "or a FRET export (.json).")
+@click.option("-r", "--requirements", "src", default=None, type=click.Path(exists=True),
+              help="The requirements the audit read, as they are now: a .reqif/.reqifz file, "
+                   "a Doorstop tree or a FRET export (.json) to write the results into "
+                   "(-o); any requirement source to flag stale evidence.")
 @click.option("--from-json", "from_json", required=True,
               type=click.Path(exists=True, dir_okay=False),
               help="The audit document (fretc audit --json FILE).")
-@click.option("-o", "--output", required=True, type=click.Path(),
-              help="Where to write the requirements with the results: a file of the same "
-                   "format, or for a Doorstop tree a new (or empty) folder.")
+@click.option("-o", "--output", default=None, type=click.Path(),
+              help="Where to write the requirements (-r) with the results: a file of the "
+                   "same format, or for a Doorstop tree a new (or empty) folder.")
+@click.option("--needs", "needs_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the results as a sphinx-needs needs.json to FILE: a need per "
+                   "requirement with its verdicts, parents rolled up.")
+@click.option("--sdoc", "sdoc_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the results as a StrictDoc document (.sdoc) to FILE: test "
+                   "results linked to the requirements by Parent relations.")
 @click.option("--audit-date", default=None, metavar="DATE",
               help="The audit's date (ISO 8601) written with the results. Default: the "
                    "modification time of the --from-json file.")
@@ -73,17 +83,25 @@ def _audit_date(value: str | None) -> str | None:
               default=None, help="fretc check -o FILE: its results in the matrix.")
 @TEXT_ATTRIBUTE_OPTION
 @click.pass_context
-def export_cmd(ctx, src, from_json, output, audit_date, matrix_csv, matrix_html, check_json):
+def export_cmd(ctx, src, from_json, output, needs_path, sdoc_path, audit_date, matrix_csv,
+               matrix_html, check_json):
     """Write an audit's verdicts back into the requirements' format (ReqIF attributes,
     Doorstop custom attributes, a member of each FRET requirement), keeping everything that
-    was there, and the traceability matrix (--matrix, --matrix-html). Requirements changed
-    since the audit are flagged "stale evidence"."""
+    was there; as a sphinx-needs needs.json (--needs) and a StrictDoc document (--sdoc); and
+    the traceability matrix (--matrix, --matrix-html). A parent requirement gets its
+    children's verdicts rolled up. Requirements changed since the audit are flagged
+    "stale evidence" (with -r)."""
     # lazy: the readers and writers only when the command runs
-    from fretc.fretish.files import load_requirements
     from fretc.reports.export_results import audit_identity, requirement_results, write_atomic
     from fretc.reports.write import ReportError, load_audit_json
 
-    kind = _kind(src)
+    if output is not None and src is None:
+        raise click.UsageError("-o writes the results into the requirements' file: give it "
+                               "with -r")
+    if not any((output, needs_path, sdoc_path, matrix_csv, matrix_html)):
+        raise click.UsageError("nothing to write: give -o (with -r), --needs, --sdoc, "
+                               "--matrix or --matrix-html")
+    kind = _kind(src) if output is not None else None
     try:
         doc = load_audit_json(from_json)
     except ReportError as exc:
@@ -93,20 +111,39 @@ def export_cmd(ctx, src, from_json, output, audit_date, matrix_csv, matrix_html,
     with open(from_json, "rb") as f:
         audit_id, date = audit_identity(from_json, f.read(), _audit_date(audit_date))
     results = requirement_results(doc, audit_id, date)
-    unformalized: list = []
-    entries = load_requirements(src, text_attribute=text_attribute(),
-                                not_formalized=unformalized)
-    current = {e.id: e for e in entries + unformalized}
-    if not set(results) & set(current):
-        click.echo(shown(f"error: {from_json} judged none of the requirements of {src}"),
-                   err=True)
-        ctx.exit(2)
-        return
+    current = None
+    if src is not None:
+        from fretc.fretish.files import load_requirements
+
+        unformalized: list = []
+        entries = load_requirements(src, text_attribute=text_attribute(),
+                                    not_formalized=unformalized)
+        current = {e.id: e for e in entries + unformalized}
+        if not set(results) & set(current):
+            click.echo(shown(f"error: {from_json} judged none of the requirements of {src}"),
+                       err=True)
+            ctx.exit(2)
+            return
     outputs = _matrix_outputs(doc, current, check_json, matrix_csv, matrix_html)
-    written = _write_export(kind, src, output, results, current)
+    outputs += _tool_outputs(doc, results, needs_path, sdoc_path)
+    written = _write_export(kind, src, output, results, current) if kind else None
     for path, data in outputs:
         write_atomic(path, data)
     _report(doc, current, written, output, [p for p, _d in outputs])
+
+
+def _tool_outputs(doc, results, needs_path, sdoc_path) -> list[tuple[str, bytes]]:
+    """The needs.json and .sdoc files to write: (path, bytes)."""
+    out = []
+    if needs_path:
+        from fretc.reports.export_needs import needs_json
+
+        out.append((needs_path, needs_json(doc, results).encode("utf-8")))
+    if sdoc_path:
+        from fretc.reports.export_sdoc import sdoc_text
+
+        out.append((sdoc_path, sdoc_text(doc, results).encode("utf-8")))
+    return out
 
 
 def _matrix_outputs(doc, current, check_json, csv_path, html_path) -> list[tuple[str, bytes]]:
@@ -156,17 +193,21 @@ def _write_export(kind: str, src: str, output: str, results, current) -> int:
     return n
 
 
-def _report(doc, current, written: int, output: str, matrices: list[str]) -> None:
-    """The command's lines on stderr: what was written, and the stale requirements."""
+def _report(doc, current, written: int | None, output: str | None,
+            others: list[str]) -> None:
+    """The command's lines on stderr: what was written, and the stale requirements (when
+    the sources were read: ``current``)."""
     from fretc.reports.matrix import STALE, stale_state
 
-    for req in doc.get("requirements") or []:
+    audited = (doc.get("requirements") or []) if current is not None else []
+    for req in audited:
         state = stale_state(req, current)
         if state:
             click.echo(shown(f"warning: {req['id']}: {state} (changed since the audit)"
                              if state == STALE else
                              f"warning: {req['id']}: removed from the sources since the "
                              "audit"), err=True)
-    click.echo(shown(f"wrote {output}: results on {written} requirements"), err=True)
-    for m in matrices:
+    if output is not None:
+        click.echo(shown(f"wrote {output}: results on {written} requirements"), err=True)
+    for m in others:
         click.echo(shown(f"wrote {m}"), err=True)

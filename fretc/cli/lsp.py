@@ -15,8 +15,9 @@ __all__ = ["lsp_cmd"]
 @click.option("--stdio", is_flag=True, help="Serve over stdin/stdout (the default; "
               "accepted because editors pass it).")
 def lsp_cmd(stdio):
-    """Serve the FRETish language server over stdio: diagnostics, hover, completion, go to
-    definition, document symbols for .fret files."""
+    """Serve the FRETish language server over stdio: diagnostics, hover (with a variable's
+    type and unit), completion, go to definition, find references, rename, a code action
+    comparing a requirement with its saved wording, document symbols for .fret files."""
     try:
         from fretc.editor.server import main
     except ImportError as exc:

@@ -64,7 +64,7 @@ async def test_hover_completion_definition_and_symbols(client: LanguageClient):
     uri = await _open(client, GOOD)
     doc = T.TextDocumentIdentifier(uri=uri)
     hover = await client.text_document_hover_async(T.HoverParams(
-        text_document=doc, position=T.Position(1, 10)))
+        text_document=doc, position=T.Position(1, 1)))  # on the id: the requirement
     assert "ft_inf" in hover.contents.value and "F[0,10] stopped" in hover.contents.value
     items = await client.text_document_completion_async(T.CompletionParams(
         text_document=doc, position=T.Position(1, len("R1: upon too_close "))))

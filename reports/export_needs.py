@@ -1,0 +1,102 @@
+"""``fretc export --needs FILE``: an audit's results as a ``needs.json``, the import format
+of sphinx-needs (its ``needimport`` directive and ``needs_external_needs`` read it; the
+envelope of ``sphinx_needs.needsfile``: ``project``, ``current_version``, ``versions`` ->
+version -> ``needs`` by id, ``needs_amount``, ``creator``).
+
+One need per requirement of the audit document and per item without FRETish text, in the
+document's order, of type :data:`NEED_TYPE` (sphinx-needs' default requirement type):
+
+* ``id``: the requirement's id (the ``verifies`` property of each test case of ``fretc audit
+  --junit``, so sphinx-test-reports links the cases to it); ``title``: the tool's long name
+  (ReqIF ``LONG-NAME``, Doorstop header) or the id; ``content``: the FRETish text;
+* ``status``: the requirement's result over the runs (``satisfied``, ``vacuous``,
+  ``violated``, ``unknown``, ``error``, ``not formalized``:
+  :func:`fretc.reports.export_results.requirement_results`); ``tags``: ``fretc`` and it;
+* ``links``: the parent requirements that are needs of the same file (a child links to what it
+  refines, :mod:`fretc.reports.rollup`); every parent link is in ``fretc_parents``;
+* the fields of :data:`FIELDS` (declare them in ``needs_fields``, or ``needs_extra_options``
+  before sphinx-needs 6, to see them: docs/guide/requirements-tools.md):
+  ``fretc_verdict``, ``fretc_verdicts`` (``log: verdict`` per run), ``fretc_evidence``,
+  ``fretc_rollup`` and ``fretc_rollup_path`` (parents only), ``fretc_tool``,
+  ``fretc_tool_id``, ``fretc_ft``, ``fretc_pt``, ``fretc_parents``, ``fretc_audit_id``,
+  ``fretc_audit_date``.
+
+Deterministic: ``created`` is the audit's date (``--audit-date``, else the audit document's
+modification time), never the time of the export; keys sorted.
+"""
+
+from __future__ import annotations
+
+import json
+from importlib.metadata import PackageNotFoundError, version
+
+from fretc.reports.export_results import RequirementResult
+from fretc.reports.rollup import parents_of
+
+__all__ = ["needs_json", "NEED_TYPE", "FIELDS", "NEEDS_VERSION"]
+
+NEED_TYPE = "req"
+#: the version the needs are filed under (``current_version``)
+NEEDS_VERSION = "1.0"
+#: the extra need fields fretc fills (strings; empty when there is no value)
+FIELDS = ("fretc_verdict", "fretc_verdicts", "fretc_evidence", "fretc_rollup",
+          "fretc_rollup_path", "fretc_tool", "fretc_tool_id", "fretc_ft", "fretc_pt",
+          "fretc_parents", "fretc_audit_id", "fretc_audit_date")
+
+
+def _fretc_version() -> str:
+    try:
+        return version("fretc")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that is not installed
+        return "unknown"
+
+
+def _runs(doc: dict) -> dict[str, str]:
+    """Requirement id -> ``log: verdict; log: verdict`` over the runs of ``doc``."""
+    out: dict[str, list[str]] = {}
+    for la in doc.get("logs") or []:
+        for v in la.get("verdicts") or []:
+            out.setdefault(v.get("requirement"), []).append(f"{la.get('log')}: "
+                                                            f"{v.get('verdict')}")
+    return {k: "; ".join(v) for k, v in out.items()}
+
+
+def _need(item: dict, result: RequirementResult, parents: tuple[str, ...], known: set[str],
+          runs: str) -> dict:
+    origin = item.get("origin") if isinstance(item.get("origin"), dict) else {}
+    fields = {"fretc_verdict": result.verdict, "fretc_verdicts": runs,
+              "fretc_evidence": result.evidence, "fretc_rollup": result.rollup,
+              "fretc_rollup_path": result.rollup_path, "fretc_tool": origin.get("format"),
+              "fretc_tool_id": origin.get("tool_id"), "fretc_ft": result.ft,
+              "fretc_pt": result.pt, "fretc_parents": ", ".join(parents),
+              "fretc_audit_id": result.audit_id, "fretc_audit_date": result.audit_date}
+    return {"id": item["id"], "type": NEED_TYPE,
+            "title": origin.get("long_name") or item["id"],
+            "content": item.get("text") or (origin.get("text") or ""),
+            "status": result.verdict, "tags": ["fretc", result.verdict.replace(" ", "_")],
+            "links": [p for p in parents if p in known],
+            **{k: "" if v is None else str(v) for k, v in fields.items()}}
+
+
+def needs_json(doc: dict, results: dict[str, RequirementResult],
+               project: str = "fretc audit") -> str:
+    """The ``needs.json`` text (module docstring) of the audit document ``doc`` and its
+    results (:func:`fretc.reports.export_results.requirement_results`, which has every id
+    of ``doc``). ``project``: the project name written in the envelope."""
+    parents = parents_of(doc)
+    items = list(doc.get("requirements") or []) + list(doc.get("not_formalized") or [])
+    known = {i["id"] for i in items}
+    runs = _runs(doc)
+    needs = {}
+    for item in items:
+        if item["id"] in needs:
+            continue
+        needs[item["id"]] = _need(item, results[item["id"]], parents.get(item["id"], ()),
+                                  known, runs.get(item["id"], ""))
+    date = next(iter(results.values())).audit_date if results else ""
+    envelope = {"created": date, "current_version": NEEDS_VERSION, "project": project,
+                "versions": {NEEDS_VERSION: {
+                    "created": date, "creator": {"program": "fretc",
+                                                 "version": _fretc_version()},
+                    "needs": needs, "needs_amount": len(needs)}}}
+    return json.dumps(envelope, indent=2, sort_keys=True, ensure_ascii=False) + "\n"

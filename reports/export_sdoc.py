@@ -1,0 +1,127 @@
+"""``fretc export --sdoc FILE``: an audit's results as a StrictDoc document (``.sdoc``) of test
+results linked to the requirements, for a StrictDoc project that holds the requirements
+(StrictDoc resolves a relation by the UID of a node of any document of the project).
+
+The document declares its own grammar (StrictDoc's "custom grammar": ``[GRAMMAR]``,
+``ELEMENTS``) with two elements, each with a ``Parent`` relation to the requirement it
+verifies (the requirement's id is its UID; the Parent relation is how StrictDoc links a
+node to what it refines or verifies):
+
+* ``VERIFICATION``, one per requirement of the audit (and item without FRETish text), UID
+  ``FRETC-<id>``: its result over the runs (``VERDICT``, ``STATUS``), the evidence
+  (``STATEMENT``), the formulas (``FT``, ``PT``), for a parent the roll-up (``ROLLUP``,
+  ``ROLLUP_PATH``, :mod:`fretc.reports.rollup`), ``AUDIT_ID``, ``AUDIT_DATE``;
+* ``TEST_RESULT``, one per requirement and run, UID ``FRETC-<id>-<n>`` (``n`` the run's
+  1-based place in the audit): ``STATUS`` (``PASSED`` satisfied or vacuous, ``FAILED``
+  violated, ``ERROR`` otherwise: StrictDoc's JUnit test-report words), ``VERDICT``,
+  ``VACUOUS``, ``LOG``, ``FIRST_VIOLATION_LOG_TIME_NS``, ``FIRST_VIOLATION``,
+  ``ROBUSTNESS``.
+
+StrictDoc's own rules for the text (its grammar, ``strictdoc/backend/sdoc/grammar``): a
+single-line value starts with a non-space character and holds no line break; a field with
+no value is left out; a UID matches ``[\\w]+[\\w()\\-/.: ]*``: a requirement whose id does not
+gets no Parent relation (the result names it in ``TITLE``). Deterministic.
+"""
+
+from __future__ import annotations
+
+import re
+
+from fretc.reports.export_results import RequirementResult
+
+__all__ = ["sdoc_text", "UID_PATTERN"]
+
+#: StrictDoc's UID (REGEX_UID of its grammar)
+UID_PATTERN = re.compile(r"[\w]+[\w()\-/.: ]*\Z")
+
+_GRAMMAR = """[GRAMMAR]
+ELEMENTS:
+- TAG: VERIFICATION
+  FIELDS:
+{verification}
+  RELATIONS:
+  - TYPE: Parent
+- TAG: TEST_RESULT
+  FIELDS:
+{test}
+  RELATIONS:
+  - TYPE: Parent
+"""
+_VERIFICATION = ("UID", "TITLE", "STATUS", "VERDICT", "STATEMENT", "ROLLUP", "ROLLUP_PATH",
+                 "FT", "PT", "AUDIT_ID", "AUDIT_DATE")
+_TEST = ("UID", "TITLE", "STATUS", "VERDICT", "VACUOUS", "LOG",
+         "FIRST_VIOLATION_LOG_TIME_NS", "FIRST_VIOLATION", "ROBUSTNESS")
+_REQUIRED = ("UID", "TITLE", "STATUS")
+_STATUS = {"satisfied": "PASSED", "vacuous": "PASSED", "violated": "FAILED"}
+
+
+def _fields(names: tuple[str, ...]) -> str:
+    return "\n".join(f"  - TITLE: {n}\n    TYPE: String\n    REQUIRED: "
+                     f"{'True' if n in _REQUIRED else 'False'}" for n in names)
+
+
+def _value(text) -> str | None:
+    """A single-line field value as StrictDoc reads it (module docstring), or None."""
+    if text is None:
+        return None
+    s = " ".join(str(text).split())
+    # "[LINK: X]" and "[ANCHOR: X]" are StrictDoc markup inside any text
+    s = s.replace("[LINK: ", "[ LINK: ").replace("[ANCHOR: ", "[ ANCHOR: ")
+    return s or None
+
+
+def _node(tag: str, values: dict, parent: str | None) -> list[str]:
+    out = [f"[{tag}]"]
+    for name, value in values.items():
+        v = _value(value)
+        if v is not None:
+            out.append(f"{name}: {v}")
+    if parent is not None and UID_PATTERN.match(parent):
+        out += ["RELATIONS:", "- TYPE: Parent", f"  VALUE: {parent}"]
+    return out + [""]
+
+
+def _uid(text: str) -> str:
+    """``text`` as a UID: characters StrictDoc's UID does not take replaced by ``_``."""
+    s = re.sub(r"[^\w()\-/.: ]", "_", text)
+    return s if UID_PATTERN.match(s) else "X" + s
+
+
+def _run_node(rid: str, n: int, log: str, v: dict) -> list[str]:
+    fv = v.get("first_violation") or {}
+    at = fv.get("log_time_ns")
+    where = None
+    if fv:
+        where = (f"tick {fv.get('tick')}"
+                 + (f" ({fv.get('tick_time_s'):g} s)" if isinstance(fv.get("tick_time_s"),
+                                                               (int, float)) else "")
+                 + (f": {fv.get('reason')}" if fv.get("reason") else ""))
+    rob = (v.get("robustness") or {}).get("value")
+    verdict = v.get("verdict") or "error"
+    return _node("TEST_RESULT", {
+        "UID": _uid(f"FRETC-{rid}-{n}"), "TITLE": f"{rid} on {log}",
+        "STATUS": _STATUS.get(verdict, "ERROR"), "VERDICT": verdict,
+        "VACUOUS": str(verdict == "vacuous").lower(), "LOG": log,
+        "FIRST_VIOLATION_LOG_TIME_NS": at, "FIRST_VIOLATION": where,
+        "ROBUSTNESS": None if rob is None else rob}, rid)
+
+
+def sdoc_text(doc: dict, results: dict[str, RequirementResult],
+              title: str = "fretc audit results") -> str:
+    """The ``.sdoc`` text (module docstring) of the audit document ``doc`` and its results
+    (:func:`fretc.reports.export_results.requirement_results`)."""
+    out = ["[DOCUMENT]", f"TITLE: {_value(title) or 'fretc audit results'}", "",
+           _GRAMMAR.format(verification=_fields(_VERIFICATION), test=_fields(_TEST))]
+    runs: dict[str, list[tuple[int, str, dict]]] = {}
+    for n, la in enumerate(doc.get("logs") or [], start=1):
+        for v in la.get("verdicts") or []:
+            runs.setdefault(v.get("requirement"), []).append((n, la.get("log") or "", v))
+    for rid, r in results.items():
+        out += _node("VERIFICATION", {
+            "UID": _uid(f"FRETC-{rid}"), "TITLE": f"{rid}: result over {r.runs} runs",
+            "STATUS": _STATUS.get(r.verdict, "ERROR"), "VERDICT": r.verdict,
+            "STATEMENT": r.evidence, "ROLLUP": r.rollup, "ROLLUP_PATH": r.rollup_path,
+            "FT": r.ft, "PT": r.pt, "AUDIT_ID": r.audit_id, "AUDIT_DATE": r.audit_date}, rid)
+        for n, log, v in runs.get(rid, []):
+            out += _run_node(rid, n, log, v)
+    return "\n".join(out).rstrip("\n") + "\n"
