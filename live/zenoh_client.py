@@ -234,23 +234,29 @@ class ZenohClient:
         now = time.time_ns()
         if self.url.layout == "bridge":  # the key names no type: the token's, or [types]
             ros = self._advertised.get(topic) or self.types.get(topic) or ""
-            if not ros and topic != CLOCK_TOPIC:
+            if not ros and topic == CLOCK_TOPIC \
+                    and str(sample.key_expr) == bridge_key(self.url.namespace, topic):
+                ros = "rosgraph_msgs/msg/Clock"  # the bridge's /clock key (not a wildcard)
+            if not ros:
                 self.events.put(("protocol", now, f"a message of {topic} before its "
                                  "publisher's liveliness token (its type is not known): "
                                  "not read"))
                 return
         else:
-            parsed = parse_zenoh_key(str(sample.key_expr))
-            if parsed is None:
+            ros = self._key_type(str(sample.key_expr), topic)
+            if ros is None:
+                self.events.put(("protocol", now, f"a message of {topic} on the key "
+                                 f"expression {str(sample.key_expr)[:200]} names no type "
+                                 "and its publisher's liveliness token none either (give "
+                                 "[types] in the bindings or --topic-type): not read"))
                 return
-            _d, topic, ros, _hash = parsed
         payload = sample.payload.to_bytes()
         att = sample.attachment
         stamp = attachment_time(att.to_bytes() if att is not None else None)
         if stamp is None and sample.timestamp is not None:
             stamp = _ntp64_ns(sample.timestamp)
         with self._lock:
-            if topic == CLOCK_TOPIC:
+            if topic == CLOCK_TOPIC and _norm(ros) == "rosgraph_msgs/msg/Clock":
                 self._clock = _clock_ns(payload)
                 if not self.wanted(topic):
                     return
@@ -264,6 +270,25 @@ class ZenohClient:
                 payload = b""
             log_time = self._clock if self._clock else (stamp if stamp is not None else now)
         self._merge.put(topic, log_time, payload, now)
+
+
+    def _key_type(self, key: str, topic: str) -> str | None:
+        """The ROS type of a sample that the subscriber of ``topic`` received on ``key``.
+
+        Zenoh delivers a sample to every subscriber whose key expression intersects the
+        sample's, wildcards included (Zenoh's key expression language: ``*`` one chunk,
+        ``**`` any chunks): a put on ``0/v/**`` or ``**`` reaches the subscriber of ``/v``
+        and is a message of ``/v``, as a ROS subscriber on rmw_zenoh would take it. The
+        type is the key's when its type chunk is concrete (rmw_zenoh's ``D/topic/type/hash``
+        of this topic), else the one the topic was advertised with (its publisher's
+        liveliness token) or given in the bindings' ``[types]``; None when none is
+        known (``/clock`` included: a wildcard put that no clock publisher advertised is
+        not read as the clock)."""
+        parsed = parse_zenoh_key(key)
+        if parsed is not None and parsed[1] == topic and "*" not in parsed[2] \
+                and "$" not in parsed[2]:
+            return parsed[2]
+        return self._advertised.get(topic) or self.types.get(topic) or None
 
 
 def _norm(name: str) -> str:

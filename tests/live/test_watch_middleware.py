@@ -306,6 +306,49 @@ def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
     assert res.exit_code == 2, res.output
 
 
+@pytest.mark.parametrize("wildcard", ["0/a/**", "**", "0/a/*/*"])
+def test_samples_on_wildcard_keys_are_messages_of_the_topic_they_reach(tmp_path, wildcard):
+    """Zenoh delivers a put on ``0/a/**``, ``**`` or ``0/a/*/*`` to the subscriber of /a
+    (its key expression intersects theirs): those are messages of /a, typed by /a's
+    liveliness token, and the violating value among them is found (was: ignored, satisfied,
+    exit 0)."""
+    import threading
+
+    from fretc.live.ros2_names import attachment
+    from fretc.live.zenoh_serve import ZenohServer
+
+    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
+                                     "satisfy a_ok\n", encoding="utf-8")
+    (tmp_path / "w.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
+        encoding="utf-8")
+    url = f"zenoh://127.0.0.1:{_port()}"
+    server = ZenohServer(url)
+    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+
+    def publish():
+        server.wait_subscribed(timeout=30)
+        t0 = 1_700_000_000 * 10**9
+        for k in range(20):  # rmw_zenoh's attachment gives each its log time, 50 ms apart
+            value = -1.0 if 8 <= k < 12 else 1.0  # 200 ms: over a tick
+            server.session.put(wildcard, b"\x00\x01\x00\x00" + struct.pack("<d", value),
+                               attachment=attachment(k + 1, t0 + k * 50_000_000, bytes(16)))
+            time.sleep(0.005)
+        time.sleep(0.5)
+        server.stop()
+
+    t = threading.Thread(target=publish, daemon=True)
+    t.start()
+    out = tmp_path / "w.json"
+    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
+                                    "--json", str(out), "--duration", "30",
+                                    "--restart-grace", "0.5"])
+    t.join(10)
+    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
+    assert v["verdict"] == "violated", (v, res.output)
+    assert res.exit_code == 1, res.output
+
+
 def test_a_malformed_url_is_a_usage_error():
     res = CliRunner().invoke(main, ["watch", "dds://999", "-r", REQS, "--no-live"])
     assert res.exit_code == 2
