@@ -27,7 +27,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
-__all__ = ["visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe"]
+__all__ = ["visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe",
+           "file_stems"]
 
 _UNSAFE_CATEGORIES = frozenset({"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"})
 
@@ -102,3 +103,54 @@ def one_line(text: Any) -> str:
     """One line of a comment (``.psl`` ``//`` lines): white space runs folded to one space,
     then :func:`visible`."""
     return visible(" ".join(str(text).split()))
+
+
+def file_stems(ids: Any) -> dict[str, str]:
+    """A file name stem for each of ``ids`` (requirement ids), distinct in one folder.
+
+    A stem keeps letters, digits, ``-``, ``_`` and ``.`` of the id and turns every other
+    character into ``_``, at most 80 characters, never starting with ``.``; where two ids
+    would share a stem (case-insensitively, as on macOS and Windows file systems) every
+    one of them whose stem is not the id itself, or every one when all are, gets ``~`` and
+    the first 10 hex digits of the id's SHA-256 (and ``~2``, ``~3`` ... in the ids' sorted
+    order should that still meet another id's stem). The same ids give the same stems in
+    any order.
+
+    Returns:
+        id -> stem (without extension).
+    """
+    import hashlib
+    import re
+
+    def plain(i: str) -> str:
+        stem = re.sub(r"[^A-Za-z0-9_.-]", "_", i)[:80] or "_"
+        return "_" + stem[1:] if stem.startswith(".") else stem
+
+    def tagged(i: str) -> str:
+        return plain(i)[:69] + "~" + hashlib.sha256(i.encode("utf-8", "surrogatepass"))\
+            .hexdigest()[:10]
+
+    ids = sorted(set(ids))
+    plains = {i: plain(i) for i in ids}
+    groups: dict[str, list[str]] = {}
+    for i in ids:
+        groups.setdefault(plains[i].casefold(), []).append(i)
+    stems = dict(plains)
+    for rivals in groups.values():
+        if len(rivals) < 2:
+            continue
+        keep = [j for j in rivals if plains[j] == j]
+        for j in rivals:
+            if j not in keep or len(keep) > 1:
+                stems[j] = tagged(j)
+    taken = {stems[i].casefold() for i in ids if stems[i] == plains[i]}
+    for i in ids:  # an id spelled like another's tagged stem: numbered, in sorted order
+        if stems[i] == plains[i]:
+            continue
+        stem, n = stems[i], 1
+        while stem.casefold() in taken:
+            n += 1
+            stem = f"{stems[i]}~{n}"
+        stems[i] = stem
+        taken.add(stem.casefold())
+    return stems

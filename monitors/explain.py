@@ -29,6 +29,9 @@ __all__ = ["Diagram", "Explanation", "explain", "diagram", "shortest_traces", "M
 
 #: The shortest-trace search: at most this many ticks and boolean variables (2^v letters).
 MAX_SEARCH = (12, 5)
+#: The longest duration drawn to scale: a diagram of a longer one draws it this long and
+#: says so (a 10^6-tick window drawn tick by tick was a 138 MB SVG)
+MAX_DRAWN_TICKS = 40
 
 Interval = tuple[int, int]
 
@@ -49,6 +52,9 @@ class Diagram:
     forbidden: Interval | None = None
     obligation: str = ""
     negated: bool = False
+    #: the duration as drawn when the requirement's is longer than :data:`MAX_DRAWN_TICKS`
+    #: (the diagram is then not to scale); None when drawn as it is
+    drawn_ticks: int | None = None
 
 
 @dataclass
@@ -94,20 +100,25 @@ def _mode_layout(kind: str, n: int, w: int) -> np.ndarray | None:
 
 def diagram(req: A.Requirement, k: int | None) -> Diagram:
     """The :class:`Diagram` of ``req`` (parsed, not free-form) with its duration ``k`` in
-    ticks (None without one): module docstring.
+    ticks (None without one): module docstring. A duration past :data:`MAX_DRAWN_TICKS` is
+    drawn that long (``drawn_ticks``), so a diagram has at most ``MAX_DRAWN_TICKS + 22``
+    ticks whatever the requirement's.
 
     Raises:
         ValueError: a free-form requirement.
     """
     if req.freeform:
         raise ValueError("a free-form requirement has no diagram")
+    drawn = None
+    if k is not None and k > MAX_DRAWN_TICKS:
+        drawn = k = MAX_DRAWN_TICKS
     kk = k or 0
     w = 12 + kk
     n = w + 10
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     mode = _mode_layout(scope, n, w)
     intervals = scope_intervals(scope, mode, n)
-    d = Diagram(n=n, scope=intervals, negated=scope.startswith("only"))
+    d = Diagram(n=n, scope=intervals, negated=scope.startswith("only"), drawn_ticks=drawn)
     if mode is not None:
         d.signals["scope mode"] = mode.tolist()
     if not intervals:

@@ -11,6 +11,9 @@ requirements"): for each requirement and each tick ``i`` of a trace of ``n`` tic
 * ``parts``: the values of the requirement's parts at ``i``: its scope mode, its condition
   (the trigger), its stop condition and its response (None where a value is NaN).
 
+A NaN value is unknown, as in the audit (docs/guide/ticks.md, "NaN"): ``ft`` and ``pt`` are
+None at the ticks whose value depends on it (three-valued, :func:`_three_valued`).
+
 Both formulas are evaluated by the reference evaluator (:mod:`fretc.compiler.evaluate`), the
 oracle the monitors are tested against. A trace is a CSV (the audit's format,
 :class:`fretc.logs.CsvSource`) or a timeline text (:func:`parse_timeline`).
@@ -42,12 +45,12 @@ _WORDS = {"true": True, "false": False, "t": True, "f": False}
 @dataclass
 class Simulation:
     """One requirement over a trace of ``n`` ticks (module docstring): ``ft``, ``pt`` (bool
-    per tick) and ``parts`` (part name -> bool or float per tick, None where unread)."""
+    per tick, None where a NaN leaves it unknown) and ``parts`` (part name -> bool or float per tick, None where unread)."""
 
     id: str
     text: str
-    ft: list[bool] = field(default_factory=list)
-    pt: list[bool] = field(default_factory=list)
+    ft: list[bool | None] = field(default_factory=list)
+    pt: list[bool | None] = field(default_factory=list)
     parts: dict[str, list[Any]] = field(default_factory=dict)
 
     def to_json(self) -> dict:
@@ -88,6 +91,11 @@ def parse_timeline(text: str, path: str = "<timeline>") -> dict[str, list[Any]]:
             if not m:
                 raise _fail(path, no, 1, "write '@ticks N' (the trace's length in ticks)")
             length = int(m.group(1))
+            if not 0 < length <= MAX_SIMULATED_TICKS:
+                raise _fail(path, no, line.index(m.group(1)) + 1,
+                            f"@ticks {_short(m.group(1))}: a simulation has 1 to "
+                            f"{MAX_SIMULATED_TICKS} ticks (audit a longer trace with fretc "
+                            "audit)")
             continue
         name, sep, spec = line.partition(":")
         name = name.strip()
@@ -101,6 +109,9 @@ def parse_timeline(text: str, path: str = "<timeline>") -> dict[str, list[Any]]:
                                                              or len(items) == 1):
             ticks[name] = (no, _ticks(spec, path, no, col))
         else:
+            if len(items) > MAX_SIMULATED_TICKS:
+                raise _fail(path, no, col, f"{name}: {len(items)} values; a simulation has "
+                            f"at most {MAX_SIMULATED_TICKS} ticks")
             values[name] = (no, [_value(v, path, no, col) for v in items])
     if length is None:
         length = max([len(v) for _n, v in values.values()]
@@ -119,12 +130,16 @@ def parse_timeline(text: str, path: str = "<timeline>") -> dict[str, list[Any]]:
     return out
 
 
+def _short(digits: str) -> str:
+    return digits if len(digits) <= 12 else f"{digits[:6]}...({len(digits)} digits)"
+
+
 def _ticks(spec: str, path: str, no: int, col: int) -> set[int]:
     out: set[int] = set()
     for part in (p.strip() for p in spec.split(",")):
         if not part:
             continue
-        m = re.fullmatch(r"(\d+)\s*(?:-\s*(\d+))?", part)
+        m = re.fullmatch(r"(\d{1,12})\s*(?:-\s*(\d{1,12}))?", part)
         if not m or (m.group(2) and int(m.group(2)) < int(m.group(1))):
             raise _fail(path, no, col, f"{part!r} is not a tick or a range of ticks (e.g. "
                         "0-3, 7)")
@@ -173,6 +188,9 @@ def read_trace(path: str) -> dict[str, list[Any]]:
     if n > MAX_SIMULATED_TICKS:
         raise InputError(f"{path}: {n} ticks; a simulation has at most "
                          f"{MAX_SIMULATED_TICKS} (audit a longer trace with fretc audit)")
+    if n == 0:
+        raise InputError(f"{path}: the trace has no ticks: nothing to simulate (give values "
+                         "or '@ticks N')")
     return trace
 
 
@@ -195,13 +213,57 @@ def simulate(compiled, trace: dict[str, list[Any]]) -> Simulation:
     sim = Simulation(compiled.id, compiled.text)
     if n == 0:
         return sim
-    sim.ft = [bool(ft_at(f.ft, rows[i:])) for i in range(n)]
-    if f.pt_causal:
-        sim.pt = [bool(x) for x in series(f.pt, rows)]
-    else:  # a future-time function inside pt: each prefix on its own
-        sim.pt = [bool(pt_at(f.pt, rows[:i + 1])) for i in range(n)]
+    nan = np.zeros(n, np.bool_)
+    for v in f.variables:
+        nan |= np.array([isinstance(x, float) and math.isnan(x) for x in trace[v]], np.bool_)
+    if not nan.any():
+        sim.ft = [bool(ft_at(f.ft, rows[i:])) for i in range(n)]
+        if f.pt_causal:
+            sim.pt = [bool(x) for x in series(f.pt, rows)]
+        else:  # a future-time function inside pt: each prefix on its own
+            sim.pt = [bool(pt_at(f.pt, rows[:i + 1])) for i in range(n)]
+    else:
+        sim.ft, sim.pt = _three_valued(f, trace, nan, rows)
     sim.parts = _parts(compiled.requirement, trace, n)
     return sim
+
+
+def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[dict]):
+    """``(ft, pt)`` of a trace with NaN values: True or False where every value the NaN
+    could stand for gives it, None (unknown) where it depends on them, as the audit judges
+    a NaN (docs/guide/ticks.md, "NaN"; :mod:`fretc.monitors.three_valued`, Kleene's
+    three-valued logic). ``pt`` at tick i is the pt formula's pair at i; ``ft`` at i is the
+    pt formula's at the last tick of the trace from i (FRET's ft verdict of a trace is its pt
+    formula at the last tick: tests/semantics); both exact where no NaN is read. A pt formula
+    with a future-time function inside is unknown wherever a NaN is in the trace."""
+    from fretc.monitors.three_valued import ThreeValued
+    from fretc.monitors.vectorized import VectorizeError
+
+    n = len(nan)
+    cols = {v: np.asarray(trace[v], dtype=np.bool_ if all(type(x) is bool for x in trace[v])
+                          else np.float64) for v in f.variables}
+
+    def three(lo, hi):
+        return True if lo else (False if not hi else None)
+
+    last_nan = int(np.flatnonzero(nan)[-1])
+    try:
+        if not f.pt_causal:
+            raise VectorizeError("a future-time function inside the pt formula")
+        lo, hi = ThreeValued(cols, {}, n).pair(f.pt)
+        pt = [three(a, b) for a, b in zip(lo.tolist(), hi.tolist())]
+        ft = []
+        for i in range(n):
+            if i > last_nan:  # no NaN in the trace from i: exact
+                ft.append(bool(ft_at(f.ft, rows[i:])))
+                continue
+            sl, sh = ThreeValued({v: c[i:] for v, c in cols.items()}, {}, n - i).pair(f.pt)
+            ft.append(three(bool(sl[-1]), bool(sh[-1])))
+    except VectorizeError:
+        first_nan = int(np.flatnonzero(nan)[0])
+        pt = [bool(pt_at(f.pt, rows[:i + 1])) if i < first_nan else None for i in range(n)]
+        ft = [None if i <= last_nan else bool(ft_at(f.ft, rows[i:])) for i in range(n)]
+    return ft, pt
 
 
 def _parts(req, trace: dict[str, list[Any]], n: int) -> dict[str, list[Any]]:
@@ -220,4 +282,28 @@ def _parts(req, trace: dict[str, list[Any]], n: int) -> dict[str, list[Any]]:
             continue
         out[name] = [None if isinstance(x, float) and math.isnan(x) else bool(x)
                      for x in vals.tolist()]
+        if any(np.isnan(c).any() for c in cols.values() if c.dtype != np.bool_):
+            out[name] = _part_three_valued(e, cols, n, out[name])
     return out
+
+
+def _part_three_valued(e, cols: dict[str, np.ndarray], n: int, known: list) -> list:
+    """A part's values where NaN values are read: True or False where every value a NaN
+    could stand for gives it, None where it depends on them (Kleene's three-valued logic,
+    :class:`fretc.monitors.three_valued.ThreeValued`, on the part's pt expansion); a part
+    that cannot be evaluated so is None from the first NaN on."""
+    from fretc.compiler import ir
+    from fretc.compiler.expressions import Expander
+    from fretc.monitors.three_valued import ThreeValued
+
+    try:
+        lo, hi = ThreeValued(cols, {}, n).pair(Expander("pt", ir.FTP, ir.LAST,
+                                                        free=True).bool(e))
+    except Exception:  # a future-time function, a call the columns cannot evaluate
+        nan = np.zeros(n, np.bool_)
+        for c in cols.values():
+            if c.dtype != np.bool_:
+                nan |= np.isnan(c)
+        first = int(np.flatnonzero(nan)[0])
+        return [v if i < first else None for i, v in enumerate(known)]
+    return [True if a else (False if not b else None) for a, b in zip(lo.tolist(), hi.tolist())]

@@ -47,6 +47,9 @@ def text(x) -> str:
         on = set(ticks)
         out.append(f"  {label:<{width}}  " + "".join(mark[kind] if i in on else "."
                                                       for i in range(d.n)))
+    if d.drawn_ticks is not None:
+        out += ["", f"  not to scale: the duration of {x.ticks} ticks is drawn as "
+                    f"{d.drawn_ticks}"]
     if d.obligation:
         out += ["", f"  obligation from each trigger t (scope interval [s, e]): {d.obligation}"]
     for what, trace in (("satisfies", x.satisfying), ("violates", x.violating)):
@@ -67,7 +70,7 @@ def svg(x) -> str:
     d = x.diagram
     rows = _rows(d)
     w = _LABEL + _CELL * d.n + 10
-    h = _ROW * (len(rows) + 3)
+    h = _ROW * (len(rows) + 4)
     colour = {"signal": "#455a64", "scope": "#bbdefb", "trigger": "#f57c00",
               "window": "#2e7d32", "forbidden": "#c62828"}
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
@@ -91,5 +94,8 @@ def svg(x) -> str:
         out.append(f'<text x="{_LABEL + _CELL * i}" y="{y}">{i}</text>')
     if d.obligation:
         out.append(f'<text x="4" y="{y + 16}">{_x(d.obligation)}</text>')
+    if d.drawn_ticks is not None:
+        out.append(f'<text x="4" y="{y + 32}">not to scale: the duration of {x.ticks} '
+                   f'ticks is drawn as {d.drawn_ticks}</text>')
     out.append("</svg>")
     return "\n".join(out) + "\n"

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import html
 
-from fretc.common.textsafe import xml_text
+from fretc.common.textsafe import file_stems, xml_text
 import json
 from pathlib import Path
 from typing import Any
@@ -25,13 +25,18 @@ _ROW = 18
 _LABEL = 110
 
 
+_VERDICT = {True: "satisfied", False: "violated",
+            None: "unknown (the NaN values leave it undecided)"}
+
+
 def _mark(v: Any) -> str:
     return "?" if v is None else ("T" if v else ".")
 
 
 def text_table(sims: list, n: int) -> str:
     """Rows ``ID ft``, ``ID pt``, ``ID part`` of marks (``T`` true, ``.`` false, ``?``
-    unread), one column per tick, with a tick ruler every 10 ticks."""
+    unread or unknown: a NaN), one column per tick, with a tick ruler every 10 ticks, then
+    each requirement's verdict on the whole trace."""
     rows = [("", "".join(str(i // 10 % 10) if i % 10 == 0 else " " for i in range(n)))]
     for s in sims:
         rows.append((f"{s.id} ft", "".join(_mark(v) for v in s.ft)))
@@ -40,8 +45,8 @@ def text_table(sims: list, n: int) -> str:
             rows.append((f"  {name}", "".join(_mark(v) for v in vals)))
     width = max(len(a) for a, _b in rows)
     lines = [f"{a:<{width}}  {b}" for a, b in rows]
-    verdicts = [f"{s.id}: {'satisfied' if s.ft and s.ft[0] else 'violated'} on the whole "
-                f"trace (ft at tick 0, pt at tick {n - 1})" for s in sims if s.ft]
+    verdicts = [f"{s.id}: {_VERDICT[s.ft[0]]} on the whole trace (ft at tick 0, pt at tick "
+                f"{n - 1})" for s in sims if s.ft]
     return "\n".join(lines + [""] + verdicts)
 
 
@@ -83,8 +88,9 @@ def write_outputs(sims: list, n: int, out_dir: str | None, json_path: str | None
         d = Path(out_dir)
         d.mkdir(parents=True, exist_ok=True)
         parts = []
+        stems = file_stems([s.id for s in sims])
         for s in sims:
-            name = "".join(c if c.isalnum() or c in "-_." else "_" for c in s.id) + ".svg"
+            name = stems[s.id] + ".svg"
             text = svg(s, n)
             (d / name).write_text(text, encoding="utf-8")
             written.append(str(d / name))
@@ -92,7 +98,7 @@ def write_outputs(sims: list, n: int, out_dir: str | None, json_path: str | None
                          f"<p>{_x(s.text)}</p>{text}</section>")
         page = ("<!doctype html><html><head><meta charset='utf-8'><title>fretc simulate"
                 "</title></head><body><h1>fretc simulate</h1><p>Filled: true; empty: false; "
-                "grey: unread (NaN). ft at a tick: on the trace from that tick; pt: on the "
+                "grey: unknown (a NaN read). ft at a tick: on the trace from that tick; pt: on the "
                 "trace up to it.</p>" + "".join(parts) + "</body></html>\n")
         (d / "simulation.html").write_text(page, encoding="utf-8")
         written.append(str(d / "simulation.html"))

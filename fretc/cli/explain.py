@@ -31,6 +31,7 @@ def explain_cmd(file, ids, output):
     from fretc.compiler.build import compile_entries
     from fretc.fretish.files import load_requirements
     from fretc.monitors.explain import explain
+    from fretc.common.textsafe import file_stems
     from fretc.reports.explanation import svg, text
 
     from fretc.cli.options import text_attribute
@@ -43,6 +44,7 @@ def explain_cmd(file, ids, output):
                           f"(it has {', '.join(known)})"), err=True)
         sys.exit(2)
     code = 0
+    stems = file_stems(known)
     if output is not None:
         Path(output).mkdir(parents=True, exist_ok=True)
     for c in compiled:
@@ -56,8 +58,7 @@ def explain_cmd(file, ids, output):
         x = explain(c)
         click.echo(_shown(text(x)))
         if output is not None:
-            name = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in c.id)
-            path = Path(output) / f"{name}.svg"
+            path = Path(output) / f"{stems[c.id]}.svg"
             path.write_text(svg(x), encoding="utf-8")
             click.echo(_shown(f"wrote {path}"), err=True)
     sys.exit(code)

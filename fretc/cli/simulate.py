@@ -4,7 +4,9 @@ requirements side by side; a table in the terminal, SVG and HTML with ``-o DIR``
 ``--json FILE``.
 
 Exit codes: 0 every requirement holds on the whole trace, 1 one is violated, 2 an input error
-(a requirement file, a trace, an id that does not exist).
+(a requirement file, a trace without ticks or past 2000, an id that does not exist), 3 none
+is violated but one is unknown (NaN values in the trace leave it undecided, as in the
+audit).
 """
 
 from __future__ import annotations
@@ -59,4 +61,5 @@ def simulate_cmd(file, trace, ids, output, json_path):
     click.echo(_shown(text_table(sims, n)))
     for p in write_outputs(sims, n, output, json_path):
         click.echo(_shown(f"wrote {p}"), err=True)
-    sys.exit(1 if any(s.ft and not s.ft[0] for s in sims) else 0)
+    first = [s.ft[0] for s in sims if s.ft]
+    sys.exit(1 if False in first else 3 if None in first else 0)

@@ -121,3 +121,37 @@ def test_the_shortest_traces_are_verdicts_of_fret_and_shortest(tmp_path):
                     rows = [dict(zip(names, bits[i * len(names):(i + 1) * len(names)]))
                             for i in range(length)]
                     assert ft_at(c.formalization.ft, rows) is not want, (c.id, length, rows)
+
+
+def test_a_million_tick_window_is_drawn_short_and_says_so(tmp_path):
+    """A 10^6-tick window was drawn tick by tick: a 138 MB SVG and a megabyte per terminal
+    row. Now drawn MAX_DRAWN_TICKS long, marked not to scale, in a small file."""
+    from fretc.monitors.explain import MAX_DRAWN_TICKS
+
+    (tmp_path / "r.fret").write_text("R1: upon p the robot shall within 1000000 ticks "
+                                     "satisfy q\nR2: upon p the robot shall within 5 ticks "
+                                     "satisfy q\n")
+    res = CliRunner().invoke(main, ["explain", str(tmp_path / "r.fret"), "-o",
+                                    str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    assert "not to scale: the duration of 1000000 ticks is drawn as " \
+        f"{MAX_DRAWN_TICKS}" in res.output
+    rows = [line for line in res.output.splitlines() if "response required" in line]
+    assert rows and max(map(len, rows)) < 200
+    big = (tmp_path / "o" / "R1.svg").read_text()
+    assert len(big) < 50_000 and "not to scale" in big
+    assert "not to scale" not in (tmp_path / "o" / "R2.svg").read_text()
+
+
+def test_ids_that_map_to_one_file_name_get_their_own_svgs(tmp_path):
+    import json
+
+    reqs = [{"reqid": i, "fulltext": "upon p the robot shall within 2 ticks satisfy q"}
+            for i in ("a/b", "a_b", "a b")]
+    (tmp_path / "r.json").write_text(json.dumps(reqs))
+    res = CliRunner().invoke(main, ["explain", str(tmp_path / "r.json"), "-o",
+                                    str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    titles = sorted(p.read_text().split("<title>")[1].split(":")[0]
+                    for p in (tmp_path / "o").glob("*.svg"))
+    assert titles == ["a b", "a/b", "a_b"]

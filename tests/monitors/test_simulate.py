@@ -134,3 +134,98 @@ def test_every_fret_trace_vector_through_the_command(tmp_path, case):
     for i, x in enumerate(case["cases"]):
         r = got[f"S{i}"]
         assert r["pt"][-1] == x["expected"] == r["ft"][0], (case["trace"], x)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_nan_is_unknown_and_every_known_tick_holds_for_every_value_it_could_be(tmp_path,
+                                                                                seed):
+    """NaN in a numeric variable: wherever simulate says True or False (ft and pt), every
+    value the NaN could stand for (a value on each side of and at every constant the
+    generator compares with) gives that answer by the oracle; was: NaN read as a value
+    (every comparison false), so `never x >= 5` over NaNs was satisfied."""
+    import itertools
+
+    from differential import NUM_VARS
+
+    domain = [c / 2 for c in range(-3, 8)]  # -1.5 .. 3.5: each side of -1 .. 3
+    rnd = random.Random(seed)
+    decided = unknown = 0
+    for _ in range(12):
+        text, meaning = random_requirement(rnd)
+        (c,) = _compiled(tmp_path, f"R: {text}\n")
+        used = [v for v in NUM_VARS if v in c.formalization.variables]
+        if not used:
+            continue
+        trace = random_trace(rnd, rnd.randint(1, 6))
+        holes = rnd.sample([(i, v) for i in range(len(trace)) for v in used],
+                           min(2, len(trace) * len(used)))
+        for i, v in holes:
+            trace[i][v] = float("nan")
+        sim = simulate(c, {v: [row[v] for row in trace] for v in trace[0]})
+        n = len(trace)
+        for fill in itertools.product(domain, repeat=len(holes)):
+            t = [dict(row) for row in trace]
+            for (i, v), x in zip(holes, fill):
+                t[i][v] = x
+            for k in range(n):
+                if sim.ft[k] is not None:
+                    assert sim.ft[k] == oracle(meaning, t[k:]), (text, trace, fill, k)
+                if sim.pt[k] is not None:
+                    assert sim.pt[k] == oracle(meaning, t[:k + 1]), (text, trace, fill, k)
+        decided += sum(x is not None for x in sim.ft + sim.pt)
+        unknown += sum(x is None for x in sim.ft + sim.pt)
+    assert decided and unknown
+
+
+def test_nan_is_unknown_in_the_command_and_an_empty_trace_is_an_error(tmp_path):
+    (tmp_path / "r.fret").write_text("S1: the robot shall never satisfy speed >= 5\n")
+    (tmp_path / "t.txt").write_text("speed: nan nan nan\n")
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"), str(tmp_path / "t.txt"),
+                                    "--json", str(tmp_path / "s.json")])
+    assert res.exit_code == 3, res.output
+    assert "S1: unknown" in res.output
+    r = json.loads((tmp_path / "s.json").read_text())["requirements"][0]
+    assert r["ft"] == r["pt"] == [None, None, None]
+    (tmp_path / "t.txt").write_text("speed: 1 nan 7\n")  # the 7 violates whatever the NaN
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"), str(tmp_path / "t.txt")])
+    assert res.exit_code == 1 and "S1: violated" in res.output, res.output
+    for empty in ("", "# nothing\n", "@ticks 0\n"):
+        (tmp_path / "e.txt").write_text(empty)
+        res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"),
+                                        str(tmp_path / "e.txt")])
+        assert res.exit_code == 2 and "tick" in res.output, (empty, res.output)
+
+
+@pytest.mark.parametrize("text", ["@ticks 100000000\nspeed: 1\n",
+                                  "@ticks 10000000000\n",
+                                  "@ticks " + "9" * 20 + "\n",
+                                  "p: 0-99999999\n",
+                                  "p: " + "9" * 30 + "\n"])
+def test_a_huge_timeline_is_refused_before_it_is_built(tmp_path, text):
+    """@ticks 10^8 took 2.4 GB, 10^10 a MemoryError, 10^20 grew without end: refused at
+    the line, named file:line:col, before any list is built."""
+    import resource
+
+    (tmp_path / "r.fret").write_text("S1: the robot shall never satisfy speed >= 5\n")
+    (tmp_path / "t.txt").write_text(text)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.fret"), str(tmp_path / "t.txt")])
+    assert res.exit_code == 2, res.output
+    assert "t.txt:1:" in res.output and "Traceback" not in res.output
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 100_000  # KB
+
+
+def test_ids_that_map_to_one_file_name_keep_their_own_svgs(tmp_path):
+    """Ids from FRET's JSON export may hold any character: 'a/b' and 'a_b' (and 'A_B' on a
+    case-insensitive file system) once wrote one SVG over another."""
+    reqs = [{"reqid": i, "fulltext": f"the robot shall {t} satisfy p"}
+            for i, t in (("a/b", "always"), ("a_b", "never"), ("A_B", "eventually"))]
+    (tmp_path / "r.json").write_text(json.dumps(reqs))
+    (tmp_path / "t.txt").write_text("p: 0-1\n@ticks 3\n")
+    res = CliRunner().invoke(main, ["simulate", str(tmp_path / "r.json"), str(tmp_path / "t.txt"),
+                                    "-o", str(tmp_path / "o")])
+    assert res.exit_code == 1, res.output
+    svgs = sorted((tmp_path / "o").glob("*.svg"))
+    assert len(svgs) == 3
+    titles = sorted(p.read_text().split("<title>")[1].split(":")[0] for p in svgs)
+    assert titles == ["A_B", "a/b", "a_b"]
