@@ -291,7 +291,8 @@ class _LogRun:
         for r in active:
             res = by_index[r.index] = result.passes[clock_key(r, b)]
             self._clock_figures(r, res, result, b)
-        ok = [r for r in active if verdicts[r.index].error is None]
+        ok = [r for r in active if verdicts[r.index].error is None
+              and r.index not in self.skip]
         summarize_clocks(la, [verdicts[r.index] for r in ok])
         silent = {t for res in result.passes.values()
                   for t in (res.sampling.missing_topics if b is not None else [])}
@@ -340,9 +341,31 @@ class _LogRun:
         if silent:
             why = silent_reasons(silent, self.problems.values(),
                                  getattr(self.source, "lost", None))
-            v.error = "; ".join(why[t] for t in sorted(silent))
+            text = "; ".join(why[t] for t in sorted(silent))
+            lost = self._damage_may_hold(silent)
+            if lost:  # the damage may have taken its messages: not an input error
+                v.verdict, v.unknown_reason = "unknown", f"{text}; {lost}"
+                self.skip.add(r.index)
+            else:
+                v.error = text
             return False
         return True
+
+    def _damage_may_hold(self, topics: list[str]) -> str | None:
+        """Why the log's damage may have held messages of ``topics`` (a cut, or a gap whose
+        topics are not known or include one of them), else None."""
+        la, source = self.la, self.source
+        if not (la.partial or source.partial):
+            return None
+        if la.damage_cut or source.damage_cut:
+            return "the log is cut by damage: its messages may be in what was lost"
+        for g in self.la.gaps:
+            held = g.get("topics")
+            if held is None or set(held) & set(topics):
+                return (f"a gap ({g.get('cause') or 'damage'}) may have held its messages")
+        if not self.la.gaps:
+            return "the log is damaged: its messages may be in what could not be read"
+        return None
 
 
 def log_engine(verdicts) -> str | None:
