@@ -170,13 +170,16 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
         result.unknown_queries = worker.spent
         result.smt_queries = checker.smt_queries
         result.monitor_queries = checker.monitor_queries
-        result.unknown_queries += checker.smt.spent
+        # a query the monitors left unknown and z3 was then asked is one query
+        result.unknown_queries += checker.smt.spent - checker.fallbacks
         if checker.smt.failures:
             result.notes.append(f"z3 left {len(checker.smt.failures)} queries unknown, e.g. "
                                 f"{checker.smt.failures[0]}")
         if worker.failures:
             result.notes.append(f"{len(worker.failures)} queries got no answer from Spot or "
-                                f"the pt monitors (unknown), e.g. {worker.failures[0]}")
+                                f"the pt monitors (unknown), e.g. {worker.failures[0]}"
+                                + (f"; z3 answered {checker.rescued} of them"
+                                   if checker.rescued else ""))
     finally:
         if own:
             worker.close()

@@ -67,6 +67,10 @@ class Checker:
         #: finite traces (:mod:`fretc.check.monitor_sat`)
         self.monitored = monitored_forms(self.items)
         self.monitor_queries = 0
+        #: queries the monitors left unknown and z3 was asked (:meth:`sat_word`), and those
+        #: of them z3 answered
+        self.fallbacks = 0
+        self.rescued = 0
         self.queries = 0
         self.unknown = 0
 
@@ -88,10 +92,22 @@ class Checker:
                  ) -> tuple[object, tuple | None]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
         if self.uses_smt(list(formulas) + list(extra)):
-            got = self.monitor_word(list(formulas) + list(extra), finite=False)
-            if got is not None:
+            query = list(formulas) + list(extra)
+            got = self.monitor_word(query, finite=False)
+            if got is None:
+                return self._ask_smt(query)
+            if got[0] != UNKNOWN or self.engine == "bdd":
                 return got
-            return self._ask_smt(list(formulas) + list(extra))
+            # the monitors ran past their budget (a relation too large for one step: deadlines
+            # near 10^6 ticks): z3's lassos and proofs, whose encoding does not grow with the
+            # bounds, within their own budget
+            fresh = ("smt", tuple(query)) not in self._cache
+            answer = self._ask_smt(query)
+            if fresh:  # one query: counted unknown once, or not at all when z3 answered it
+                self.unknown -= 1
+                self.fallbacks += 1
+                self.rescued += answer[0] != UNKNOWN
+            return answer
 
         def split(f: Node, parts: list[Node]) -> None:
             if f.op == "&":

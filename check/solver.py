@@ -47,7 +47,7 @@ import signal
 import time
 from typing import Any
 
-from fretc.check.budget import UNKNOWN, Budget, BudgetSpent, RunStopped
+from fretc.check.budget import DEFAULT_QUERY_CPU, UNKNOWN, Budget, BudgetSpent, RunStopped
 
 __all__ = ["UNKNOWN", "SpotWorker", "run_query", "SPOT_MAX_STATES"]
 
@@ -240,6 +240,7 @@ def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker 
             query, budget = conn.recv()
         except EOFError:
             return
+        _cpu_limit(budget.cpu if budget is not None else DEFAULT_QUERY_CPU)
         try:
             answer = run_query(query, budget)
         except BudgetSpent as exc:
@@ -254,6 +255,24 @@ def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker 
                 return
             answer = answer[:3]
         conn.send(("ok", answer))
+
+
+def _cpu_limit(seconds: float) -> None:  # pragma: no cover - runs in the worker process
+    """End this process (SIGXCPU) when the next query takes more than ``seconds`` of CPU:
+    the soft RLIMIT_CPU set that far above what the process has used."""
+    import resource
+
+    used = resource.getrusage(resource.RUSAGE_SELF)
+    soft = int(used.ru_utime + used.ru_stime + seconds) + 1
+    hard = resource.getrlimit(resource.RLIMIT_CPU)[1]
+    if hard != resource.RLIM_INFINITY:
+        soft = min(soft, hard)
+    resource.setrlimit(resource.RLIMIT_CPU, (soft, hard))
+
+
+#: deaths of the query worker in a row (killed from outside, a crash: not its own limits)
+#: after which no new worker is started and the rest of the run's queries are unknown
+MAX_DEATHS = 3
 
 
 class SpotWorker:
@@ -279,6 +298,7 @@ class SpotWorker:
         self._conn = None
         self.spent = 0
         self.failures: list[str] = []
+        self.deaths = 0  # worker deaths in a row not caused by its limits
 
     def _start(self) -> None:
         methods = multiprocessing.get_all_start_methods()
@@ -310,11 +330,19 @@ class SpotWorker:
             except Exception as exc:  # a Spot error is an unknown answer, not a crash
                 self.failures.append(_one_line(f"{type(exc).__name__}: {exc}"))
                 return UNKNOWN
+        if self.deaths >= MAX_DEATHS:
+            return self.refuse(f"the query's worker process ended {self.deaths} times in a "
+                               "row (killed from outside or crashed): no further queries")
         status, value = self.call(query)
         if status == "ended":
-            return self.refuse(self.budget.memory_spent("BuDDy's node table is full")
-                               if value == -signal.SIGABRT else
-                               f"the query's worker process ended (exit code {value})")
+            if value == -signal.SIGABRT:
+                return self.refuse(self.budget.memory_spent("BuDDy's node table is full"))
+            if value == -signal.SIGXCPU:
+                return self.refuse(f"the query took its CPU limit of {self.budget.cpu:g} s "
+                                   "(--query-cpu): a step past what the work budget foresaw")
+            self.deaths += 1
+            return self.refuse(f"the query's worker process ended (exit code {value})")
+        self.deaths = 0
         if status == "budget":
             return self.refuse(value)
         if status == "error":

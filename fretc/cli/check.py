@@ -24,9 +24,10 @@ from pathlib import Path
 
 import click
 
-from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY, MUS_BUDGET
+from fretc.check.budget import (DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK, MIN_MEMORY,
+                                 MUS_BUDGET)
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, Finite, shown, text_attribute
 
 __all__ = ["check_cmd", "render_text"]
 
@@ -150,7 +151,12 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--mus-budget", type=click.IntRange(min=0), default=MUS_BUDGET,
               show_default=True, metavar="CHECKS",
               help="Subset checks per enumeration of minimal subsets.")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=None,
+@click.option("--query-cpu", type=Finite(low_open=True),
+              default=DEFAULT_QUERY_CPU, show_default=True, metavar="SECONDS",
+              help="CPU seconds a query may take: a safety net for the one step of a fixed "
+              "point that the work budget does not foresee (a BDD operation cannot be "
+              "metered); past it the answer is unknown and says so.")
+@click.option("--timeout", type=Finite(low_open=True), default=None,
               metavar="SECONDS", help="Wall-clock limit of the whole run: past it the run "
               "stops with no report (exit 3); it never changes an answer.")
 @click.option("--engine", type=click.Choice(["auto", "spot", "smt", "bdd"]), default="auto",
@@ -165,7 +171,7 @@ def _lasso(prefix, cycle) -> str:
               help="Also write the JSON result to FILE (for fretc report --check).")
 @TEXT_ATTRIBUTE_OPTION
 def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budget, mus_budget,
-              timeout, engine, no_redundancy, output):
+              query_cpu, timeout, engine, no_redundancy, output):
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
@@ -197,7 +203,7 @@ def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budge
         judge = verdict_of
     deadline = None if timeout is None else time.monotonic() + timeout
     try:
-        result = check_requirements(compiled, budget=Budget(budget, memory_budget),
+        result = check_requirements(compiled, budget=Budget(budget, memory_budget, query_cpu),
                                     mus_budget=mus_budget, redundancy=not no_redundancy,
                                     witness_dir=witness_dir, inputs=ins, outputs=outs,
                                     witness_judge=judge, engine=engine, deadline=deadline)

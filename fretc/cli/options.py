@@ -17,11 +17,38 @@ import click
 
 from fretc.common.textsafe import visible
 
-__all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
+__all__ = ["Finite", "TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
            "FleetError", "shown"]
 
 #: Key of the Ray options in the click context's ``meta``.
 META = "fretc.fleet"
+
+
+class Finite(click.ParamType):
+    """A click parameter type: a finite number in ``[low, high]`` (``low`` excluded when
+    ``low_open``), ``what`` naming it in errors (default seconds). Unlike ``click.FloatRange`` it refuses ``nan`` (which
+    compares false with every bound and so passes a range) and ``inf``; the error names the
+    option and the accepted range."""
+
+    name = "number"
+
+    def __init__(self, low: float = 0.0, high: float = 1e7, low_open: bool = False,
+                 what: str = "a number of seconds"):
+        self.low, self.high, self.low_open, self.what = low, high, low_open, what
+
+    def convert(self, value, param, ctx):
+        import math
+
+        try:
+            seconds = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not {self.what}", param, ctx)
+        above = seconds > self.low if self.low_open else seconds >= self.low
+        if not (math.isfinite(seconds) and above and seconds <= self.high):
+            bound = ">" if self.low_open else ">="
+            self.fail(f"{value!r} is not {self.what} {bound} {self.low:g} and "
+                      f"<= {self.high:g}", param, ctx)
+        return seconds
 
 
 def shown(text: str) -> str:
