@@ -67,8 +67,11 @@ def decide(op: str, p: float, lo: float, hi: float) -> str:
         return "holds" if hi <= p else "fails" if lo > p else "undecided"
     if op == "<":
         return "holds" if hi < p else "fails" if lo >= p else "undecided"
+    outside = p < lo or p > hi
+    if op == "!=":  # shown when p is outside; never refuted (no sample confirms P = p)
+        return "holds" if outside else "undecided"
     # "=": an equality is never confirmed by sampling; refuted when p is outside
-    return "fails" if (p < lo or p > hi) else "undecided"
+    return "fails" if outside else "undecided"
 
 
 def more_runs(op: str, p: float, k: int, n: int, confidence: float) -> int | None:

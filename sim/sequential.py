@@ -84,12 +84,13 @@ class SPRT:
         if self.decision is not None:
             return self.decision
         self.n += 1
-        if self.op != "=":
+        two_sided = self.op in ("=", "!=")
+        if not two_sided:
             self.llr += self.win if satisfied else self.loss
         self.path.append(self.llr)
-        if self.op != "=" and self.llr >= self.upper:
+        if not two_sided and self.llr >= self.upper:
             self.decision, self.at = "holds", self.n
-        elif self.op != "=" and self.llr <= self.lower:
+        elif not two_sided and self.llr <= self.lower:
             self.decision, self.at = "fails", self.n
         return self.decision
 
@@ -97,6 +98,8 @@ class SPRT:
         """Why there is no decision yet, in a sentence."""
         if self.op == "=":
             return "the SPRT never accepts an equality bound (write >= or <=)"
+        if self.op == "!=":
+            return "the SPRT tests one-sided bounds: decide '!=' with --test cp"
         return (f"after {self.n} runs the log-likelihood ratio is {self.llr:.3g}, between "
                 f"the thresholds {self.lower:.3g} (fails) and {self.upper:.3g} (holds)")
 
