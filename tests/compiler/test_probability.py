@@ -82,3 +82,15 @@ def test_monitor_module_says_the_bound_is_per_trigger(tmp_path):
     mon = m()
     mon.run([{"stopped": False}] * 4)
     assert mon.finish() is False  # the path formula of this one run
+
+
+def test_check_and_explain_read_the_bound_per_trigger(tmp_path):
+    f = _file(tmp_path, "P2: upon too_close the robot shall with probability >= 0.9 within 1 "
+                        "tick satisfy stopped\nQ: the robot shall always satisfy !stopped\n")
+    res = CliRunner().invoke(main, ["check", str(f)])
+    assert res.exit_code == 0, res.output  # P2 is no property of every run: no conflict
+    assert "P2 (" in res.output and "bounds the chance of each trigger's obligation" in res.output
+    out = CliRunner().invoke(main, ["explain", str(f), "P2"]).output
+    assert "P2  (null,regular,bound,within,satisfaction)" in out
+    assert "shall, with probability >= 0.9 at each trigger, satisfy stopped" in out
+    assert "triggers (P>=0.9 each)" in out and "a failed trial, not a violation" in out
