@@ -141,6 +141,9 @@ def judge_counts(st: RequirementStatistics, op: str | None, p: float | None) -> 
     st.verdict = decide(op, p, *st.interval)
     if st.blocked is not None:
         st.verdict, st.why = "undecided", st.blocked
+    elif c.trials == 0:  # nothing judged: even a bound every p meets (<= 1) was not checked
+        st.verdict = "undecided"
+        _why_undecided(st, op, p, c)
     elif st.trial == "trigger" and c.runs == 1:
         st.verdict = "undecided"
         st.why = (f"one run ({c.size} trigger{'s' if c.size != 1 else ''}): the triggers "
@@ -155,6 +158,10 @@ def _why_undecided(st: RequirementStatistics, op: str, p: float, c: Counts) -> N
     unit = "triggers" if st.trial == "trigger" else "runs"
     if c.size == 0:
         st.why = f"no trial: no {unit[:-1]} was judged, no estimate"
+        return
+    if c.trials == 0:
+        st.why = (f"no trial of known outcome: the {c.unknown} {unit} of unknown outcome "
+                  "(unknown or error) could each have gone either way")
         return
     st.more_runs = more_runs(op, p, c, st.confidence)
     pct = f"{100 * st.confidence:g} %"

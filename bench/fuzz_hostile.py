@@ -33,7 +33,10 @@ same seed gives the same inputs. Per class:
 * ``bus``: hostile DDS or Zenoh publishers (random payloads, one publisher leaving while the
   others go on, a publisher leaving and coming back, floods) watched for 4 s;
 * ``typed``: a command fed a wrongly typed value in a FRET JSON export, a binding file, a
-  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has these three).
+  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has these three);
+* ``statistics``: hostile fleets, campaigns and option values against the statistics of
+  probability requirements (``bench/fuzz_statistics.py``: its oracle, never a bound decided
+  that the trials do not support).
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
@@ -65,11 +68,12 @@ sys.path.insert(0, str(ROOT / "tests" / "monitors"))
 
 from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan classes)
 from fuzz_live_inputs import run_bus, run_inputs, run_ws  # noqa: E402  (ws, bus, typed)
+from fuzz_statistics import run_statistics  # noqa: E402  (the statistics class)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
 CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
-           "bus", "typed")
+           "bus", "typed", "statistics")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -459,7 +463,7 @@ def _arguments(argv):
 
 #: inputs of each class per unit of --count (logs cost far more than frames)
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
-           "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8}
+           "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8, "statistics": 20}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -507,6 +511,8 @@ def main(argv=None) -> int:
                 bad = run_bus(rng, tmp)
             elif kind == "typed":
                 bad = run_inputs(rng, tmp)
+            elif kind == "statistics":
+                bad = run_statistics(rng, tmp)
             else:
                 audits = audits or Audits(tmp)
                 bad = run_log_class(kind, rng, audits)

@@ -181,3 +181,17 @@ def test_statistics_options_are_validated(fleet, option, value):
                                     "--no-progress", option, value])
     assert res.exit_code == 2 and "Invalid value for '--confidence'" in res.output
     assert "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("trial", ["trigger", "run"])
+@pytest.mark.parametrize("op,p", [("<=", "1"), (">=", "0")])
+def test_a_bound_every_probability_meets_is_not_decided_without_trials(trial, op, p):
+    """Found by bench/fuzz_statistics.py: '<= 1' was 'holds' over no judged run at all.
+    A bound is decided by trials; with none it is undecided, saying so."""
+    logs = [LogAudit(f"e{i}", error="cannot read", verdicts=[]) for i in range(3)]
+    for policy in ("worst-case", "exclude"):
+        (st,) = fleet_statistics(logs, {"P": ProbabilityBound(op, p)}, unknown=policy,
+                                 trial=trial)
+        assert st.verdict == "undecided" and st.why, (policy, st)
+    (st,) = fleet_statistics([], {"P": ProbabilityBound(op, p)}, trial=trial)
+    assert st.verdict == "undecided" and "no trial" in st.why
