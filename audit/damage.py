@@ -40,7 +40,7 @@ from fretc.monitors.interval import (Evidence, EvidenceUnsupported, scope_of, tr
     trigger_points)
 from fretc.monitors.obligations import ObligationChecker
 
-__all__ = ["OpenObligation", "open_obligations", "verdict_at_damage"]
+__all__ = ["OpenObligation", "open_obligations", "open_reason", "verdict_at_damage"]
 
 
 @dataclass(frozen=True)
@@ -111,6 +111,18 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
             if len(out) >= limit:
                 break
     return out
+
+
+def open_reason(timing: str, negate: bool, t: int, e: int, k: int,
+                chk: ObligationChecker) -> str | None:
+    """Why the obligation of the trigger ``t`` is still open at ``e``, the last tick read
+    (its interval reaching it), or None when the ticks up to ``e`` meet or miss it: the rule
+    of :func:`open_obligations` for one trigger (``chk`` over those ticks, ``k`` the
+    duration in ticks or 0, ``negate`` an only* scope)."""
+    want = not negate
+    nWant, nUnwant = (chk.nR, chk.nNR) if want else (chk.nNR, chk.nR)
+    kind = "eventually" if timing == "null" else timing
+    return _open(kind, negate, want, t, e, k, chk, nWant, nUnwant)
 
 
 def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int,

@@ -21,10 +21,12 @@ from fretc.signals.clock import unsampled_of
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.monitors.interval import OBLIGATIONS, EvidenceUnsupported
 from fretc.monitors.judge import judge, nan_ticks
+from fretc.monitors.judge3 import Unknowns
 from fretc.monitors.stepwise import to_python
 from fretc.audit.verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.passes import ClockPass, clock_key
+from fretc.audit.trials import trigger_trials
 from fretc.audit.unknown_ticks import judge_three
 from fretc.common.problems import NAN
 from fretc.compiler.ir import walk
@@ -55,12 +57,47 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     violation the first violation with the values and message log times around it. Ticks
     a gap or a NaN leaves unknown are judged in three-valued semantics
     (:mod:`fretc.audit.unknown_ticks`). ``la`` is the log's
-    :class:`fretc.audit.verdict.LogAudit`."""
+    :class:`fretc.audit.verdict.LogAudit`. A requirement with a probability bound also gets
+    its triggers as trials (:mod:`fretc.audit.trials`)."""
     res, nan_unknown = prepare(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
         _no_tick(res, v, la)
         return
+    _verdict(plan, r, res, bindings, v, nan_unknown)
+    if getattr(r.compiled, "probability", None) is not None and v.error is None:
+        _trials(r, res, v, nan_unknown)
+
+
+def _trials(r, res: ClockPass, v, nan_unknown: bool) -> None:
+    """``v.trials`` of a probability requirement (:func:`fretc.audit.trials.trigger_trials`),
+    with a note when a trigger may have fired in unknown ticks; a note when the interval
+    semantics cannot count them (an uninterpreted function)."""
+    n = len(res.times)
+    unknown = unknown_of(r, res, nan_unknown)
+    parts = (Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown)
+             if unknown.any() else None)
+    try:
+        v.trials = trigger_trials(r.requirement, res.columns, n, r.formalization.ticks,
+                                  parts, damaged=res.intact_end is not None)
+    except (EvidenceUnsupported, KeyError) as exc:
+        v.notes.append(f"its triggers cannot be counted as trials ({exc}): the fleet "
+                       "statistics count this run as unknown")
+        return
+    t = v.trials
+    if t.hidden:
+        v.notes.append("a trigger may have fired in unknown ticks: not seen, not counted as "
+                       "a trial")
+    if t.cut or t.unknown:
+        v.notes.append(f"triggers that are no trials: {t.cut} cut by the end of the log "
+                       f"inside their timing window, {t.unknown} with an outcome unknown "
+                       "ticks or the damage hide")
+
+
+def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
+             v, nan_unknown: bool) -> None:
+    """The verdict of :func:`finalize` over the prepared pass ``res`` (at least one tick)."""
+    n = len(res.times)
     f = r.formalization
     online = not r.offline
     try:

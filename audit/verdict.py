@@ -199,6 +199,10 @@ class Verdict:
         margin: the margin over time, ``[(tick, time_ns, value)]``: every tick, or on a
             long log the least value of each of :data:`MARGIN_POINTS` runs of consecutive
             ticks (at the tick where it occurs), so no dip is lost.
+        trials: for a requirement with a probability bound, its triggers on this log as
+            trials (:class:`fretc.audit.trials.Trials`: satisfied, violated, and the cut and
+            unknown ones that are no trials); None for the others, and when it was not
+            judged.
     """
 
     log: str
@@ -230,6 +234,7 @@ class Verdict:
     robustness_at: TimePoint | None = None
     margin: list[tuple[int, int, float]] = field(default_factory=list)
     unknown_ticks: int = 0
+    trials: Any = None
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
@@ -267,6 +272,7 @@ class Verdict:
             "error": self.error, "unknown_reason": self.unknown_reason,
             "robustness": self._robustness_json(start, val),
             "unknown_ticks": self.unknown_ticks,
+            "trials": None if self.trials is None else self.trials.to_json(),
         }
 
     def _robustness_json(self, start: int | None, val) -> dict:

@@ -37,6 +37,9 @@ same seed gives the same inputs. Per class:
 * ``lsp``: a hostile session of ``fretc lsp`` (framing, documents, requests at random
   places; ``bench/fuzz_lsp.py``): no traceback, every request answered within 15 s, under
   1 GB, a clean exit.
+* ``statistics``: hostile fleets, campaigns and option values against the statistics of
+  probability requirements (``bench/fuzz_statistics.py``: its oracle, never a bound decided
+  that the trials do not support).
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
@@ -69,11 +72,12 @@ sys.path.insert(0, str(ROOT / "tests" / "monitors"))
 from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan classes)
 from fuzz_live_inputs import run_bus, run_inputs, run_ws  # noqa: E402  (ws, bus, typed)
 from fuzz_lsp import run_lsp  # noqa: E402  (lsp)
+from fuzz_statistics import run_statistics  # noqa: E402  (the statistics class)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
 CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
-           "bus", "typed", "lsp")
+           "bus", "typed", "lsp", "statistics")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -463,7 +467,8 @@ def _arguments(argv):
 
 #: inputs of each class per unit of --count (logs cost far more than frames)
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
-           "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8, "lsp": 0.2}
+           "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8, "lsp": 0.2,
+           "statistics": 20}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -513,6 +518,8 @@ def main(argv=None) -> int:
                 bad = run_inputs(rng, tmp)
             elif kind == "lsp":
                 bad = run_lsp(rng, tmp)
+            elif kind == "statistics":
+                bad = run_statistics(rng, tmp)
             else:
                 audits = audits or Audits(tmp)
                 bad = run_log_class(kind, rng, audits)

@@ -137,6 +137,7 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
     :func:`fretc.monitors.interval.verdict_of`). ``inputs``/``outputs``: FRET variable names; when
     either is given, realizability is checked too (:mod:`fretc.check.realizability`).
     Requirements that failed to formalize are listed in ``input_errors``; free-form ones
+    and probability requirements (a bound at each trigger, never a property of every run)
     are skipped with a note. ``engine``: one of :data:`ENGINES` (satisfiability queries;
     realizability: :mod:`fretc.check.safety_game` for safety requirements unless ``spot``).
     Raises ``ValueError`` for another engine.
@@ -151,6 +152,13 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
             result.input_errors.append(str(c.error))
         elif c.freeform:
             result.notes.append(f"{c.id} ({c.location()}): free-form, not checked")
+        elif c.probability is not None:  # FRET 3.1: a bound at each trigger, not every run
+            b = c.probability
+            result.notes.append(
+                f"{c.id} ({c.location()}): 'with probability {b.op} {b.text}' bounds the "
+                "chance of each trigger's obligation, which no single run satisfies or "
+                "violates: not checked with the requirements every run must satisfy (judge "
+                "it over runs: fretc audit of several logs, fretc estimate)")
         else:
             items.append(make_item(len(items), c))
     own = worker is None

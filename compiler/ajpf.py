@@ -222,8 +222,8 @@ def refuse_probability(compiled) -> None:
     """Raise :class:`AjpfError` positioned at the ``with probability`` phrase of a
     probability requirement (``file:line:col: error: ...``): AJPF checks that *every*
     execution of the agent satisfies a property and has no probability operator, so a .psl
-    property of the path formula alone would claim more than the requirement does (a 95%
-    requirement checked as a 100% one). Nothing is written for the file then."""
+    property of the path formula alone would claim more than the requirement does (a bound
+    of 95 % at each trigger checked as 100 %). Nothing is written for the file then."""
     b = getattr(compiled, "probability", None)
     if b is None:
         return
@@ -234,9 +234,10 @@ def refuse_probability(compiled) -> None:
     column = span.column if span.line else e.column
     msg = (f"requirement {one_line(compiled.id)} has 'with probability {b.op} {b.text}': "
            "AJPF has no probabilities (it checks that every run satisfies a property), so "
-           "no .psl property states this requirement; judge it over runs instead (fretc "
-           "audit of several logs, fretc estimate) or drop the probability field to "
-           "demand it on every run")
+           "no .psl property states this requirement (a bound at each trigger); judge it "
+           "over triggers instead (fretc audit of several logs, fretc estimate), write its "
+           "PCTL for PRISM (--emit prism), or drop the probability field to demand it on "
+           "every run")
     err = AjpfError(render_diagnostic(e.source, line, column, msg))
     err.source, err.line, err.column, err.message = e.source, line, column, msg
     raise err
@@ -247,8 +248,8 @@ def psl_label_and_formula(compiled, mapping: dict | None = None):
     if compiled.formalization is None:
         return None, "not formalized"
     if compiled.probability is not None:
-        return None, ("AJPF has no probabilities: 'with probability' is judged over runs, "
-                      "not by a .psl property")
+        return None, ("AJPF has no probabilities: 'with probability' bounds each trigger's "
+                      "chance and is judged over triggers, not by a .psl property")
     mapping = mapping or {}
     try:
         agent = mapping.get("agent") or compiled.requirement.component

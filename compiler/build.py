@@ -90,12 +90,35 @@ class Compiled:
         f = self.formalization
         return None if f is None else getattr(f, "probability", None)
 
+    def pctl_form(self):
+        """The requirement's probabilistic form (:class:`fretc.compiler.pctl.Pctl`: FRET's
+        five-part key, the bounds where FRET 3.1 puts them, per trigger, around ft_inf),
+        computed once; None for a requirement that did not formalize or is free-form."""
+        if self.formalization is None or self.requirement is None:
+            return None
+        if "pctl" not in self._cache:
+            from fretc.compiler.pctl import pctl_of  # lazy: only probability requirements
+            self._cache["pctl"] = pctl_of(self.requirement, self.entry.tick_period)
+        return self._cache["pctl"]
+
     def pctl(self) -> str | None:
-        """FRET's PCTL* form of a probability requirement, ``P>=0.95 [ ft_inf ]`` (the
-        bound around the infinite-trace path formula, FRET/SMV syntax); None without a
-        bound."""
-        b = self.probability
-        return None if b is None else b.pctl(self.smv_text["ft_inf"])
+        """The PCTL of a probability requirement in PRISM's syntax, its bounds where FRET
+        puts them (per trigger, :mod:`fretc.compiler.pctl`), e.g. ``P>=1 [ ((G (((!
+        too_close) & (X too_close)) => (X P>=0.9 [ (F<=1 stopped) ]))) & (too_close =>
+        P>=0.9 [ (F<=1 stopped) ])) ]``; None without a bound."""
+        if self.probability is None:
+            return None
+        return self.pctl_form().text
+
+    @property
+    def key_pctl(self) -> str | None:
+        """FRET's five-part key ``scope,condition,probability,timing,response``
+        (:func:`fretc.compiler.pctl.pctl_key`); None when not formalized."""
+        f = self.formalization
+        if f is None:
+            return None
+        from fretc.compiler.pctl import pctl_key
+        return pctl_key(f.key, self.probability is not None)
 
     def location(self) -> str:
         """``file:line`` of the requirement."""
@@ -140,8 +163,10 @@ class Compiled:
         ``pt`` (FRET syntax), ``ft_spot``, ``ft_inf_spot``, ``variables`` (the names as
         written, quotes removed, as FRET's list), ``variables_fret`` (the same names as
         FRET's formulas print them: ``"weird var"`` -> ``_DQT_weird_SPC_var_DQT_``),
-        ``warnings``, for a probability requirement ``probability`` (``{"op", "p",
-        "text"}``) and ``pctl`` (:meth:`pctl`), and ``error`` (``message``, ``line``, ``column``) when it failed. A formalized
+        ``warnings``, for a probability requirement FRET's five-part ``key`` with the four-part
+        one as ``key_ltl``, ``probability`` (``{"op", "p", "text"}``), ``pctl``
+        (:meth:`pctl`) and ``pctl_bounds`` (where its bounds sit,
+        :func:`fretc.compiler.pctl.bound_structure`), and ``error`` (``message``, ``line``, ``column``) when it failed. A formalized
         requirement's keys are :data:`FORMALIZED_KEYS`, its values :meth:`json_values`."""
         values = self.json_values()
         if values is not None:
@@ -159,9 +184,12 @@ class Compiled:
                 "ticks": f.ticks, "warnings": f.warnings, "pt_causal": f.pt_causal,
             })
             b = self.probability
-            if b is not None:
+            if b is not None:  # FRET's keys: key (five-part), key_ltl (four-part)
+                form = self.pctl_form()
+                out["key"], out["key_ltl"] = form.key, f.key
                 out["probability"] = dict(b.to_json(), text=b.text)
-                out["pctl"] = self.pctl()
+                out["pctl"] = form.text
+                out["pctl_bounds"] = form.bounds
         elif self.freeform:
             out.update({"key": None, "freeform": True})
         if self.error is not None:

@@ -91,8 +91,9 @@ class MonitorSource:
     bad_table: int | None = None  # index in the module's _TABLES (render_module)
     good_table: int | None = None
     shape: int | None = None  # index in the module's _SHAPES (render_module)
-    #: a probability requirement's FRET PCTL* form (``P>=0.95 [ ft_inf ]``), else None: the
-    #: monitor judges the path formula on one run; the bound applies across runs
+    #: a probability requirement's PCTL (FRET's bounds at each trigger around ft_inf,
+    #: :mod:`fretc.compiler.pctl`), else None: the monitor judges the path formula on one
+    #: run; the bound applies to each trigger across runs
     pctl: str | None = None
     probability: tuple | None = None  # (op, p) of the bound, with pctl
     #: the named durations' values used (``["T_stop = 1.5 seconds"]``), else empty

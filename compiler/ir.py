@@ -400,22 +400,28 @@ def rebuild(n: Node, args: tuple[Node, ...]) -> Node:
     return Node(n.op, args, n.name, n.lo, n.hi)
 
 
+#: the probability bounds FRETish accepts (FRET 3.1 accepts ``!=`` too)
+BOUND_OPS = (">=", ">", "<=", "<", "=", "!=")
+
+
 class ProbabilityBound:
     """FRETish's probability field (``with probability OP p``) as the IR carries it beside the
-    path formulas: the requirement is a statement about the *share of runs* whose path
-    satisfies ft_inf (a PCTL* state formula ``P OP p [ path ]``), not about one run.
+    path formulas. FRET reads it per trigger (FRET 3.1's probabilistic templates,
+    :mod:`fretc.compiler.pctl`): at each trigger of the requirement, the probability that
+    the timing's obligation is met satisfies ``OP p``; never a statement about one run.
 
-    ``op`` is one of ``>= > <= < =``; ``p`` the bound as a float in [0, 1]; ``text`` the
+    ``op`` is one of :data:`BOUND_OPS`; ``p`` the bound as a float in [0, 1]; ``text`` the
     number as written (printed back unchanged). Immutable and hashable. :meth:`pctl`
-    prints FRET's probabilistic form around a path formula's text (PRISM's syntax
-    ``P>=0.95 [ path ]``, the form FRET's probabilistic formalization prints; the
-    parser (:mod:`fretc.fretish.parser`) has already refused a bound outside [0, 1]).
+    prints ``P<op><p> [ path ]`` around a path formula's text (PRISM's syntax; ``=`` and
+    ``!=`` as FRET prints them, which PRISM has not). The parser
+    (:mod:`fretc.fretish.parser`) has already refused a bound outside [0, 1]; ``ValueError``
+    for another operator or value.
     """
 
     __slots__ = ("op", "p", "text")
 
     def __init__(self, op: str, text: str):
-        if op not in (">=", ">", "<=", "<", "="):
+        if op not in BOUND_OPS:
             raise ValueError(f"not a probability operator: {op!r}")
         p = float(text)
         if not 0.0 <= p <= 1.0:
@@ -444,6 +450,11 @@ class ProbabilityBound:
         """``P<op><p> [ path ]``: the bound around the path formula's printed text."""
         return f"P{self.op}{self.text} [ {path} ]"
 
+    @property
+    def lower(self) -> bool:
+        """A lower bound on the probability (``>=``, ``>``)."""
+        return self.op in (">=", ">")
+
     def to_json(self) -> dict:
         """``{"op": ">=", "p": 0.95}`` (the audit JSON's ``bound``)."""
         return {"op": self.op, "p": self.p}
@@ -451,7 +462,7 @@ class ProbabilityBound:
     def holds_at(self, rate: float) -> bool:
         """True when a probability ``rate`` satisfies the bound (``rate OP p``)."""
         return {">=": rate >= self.p, ">": rate > self.p, "<=": rate <= self.p,
-                "<": rate < self.p, "=": rate == self.p}[self.op]
+                "<": rate < self.p, "=": rate == self.p, "!=": rate != self.p}[self.op]
 
 
 def probability_bound(prob) -> ProbabilityBound | None:

@@ -58,7 +58,8 @@ class Formalization:
     ticks: int | None = None
     pt_causal: bool = True
     #: FRETish's ``with probability OP p`` (:class:`fretc.compiler.ir.ProbabilityBound`), or None:
-    #: the bound applies across runs, the formulas to each run
+    #: the bound applies to each trigger (FRET 3.1, :mod:`fretc.compiler.pctl`), the formulas
+    #: to each run
     probability: ir.ProbabilityBound | None = None
 
 
@@ -121,7 +122,15 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
     return _formalize(req, tick_period)
 
 
-def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalization:
+def marked_ft_inf(req: A.Requirement, tick_period: Fraction | None, mark) -> Node:
+    """The ft_inf formula of ``req`` (as :func:`formalize` builds it) with each occurrence of
+    the timing's obligation wrapped by ``mark(T) -> Node`` (:func:`construct`): where FRET's
+    probabilistic templates put a trigger's bound (:mod:`fretc.compiler.pctl`). Raises as
+    :func:`formalize`."""
+    return _formalize(req, tick_period, mark)
+
+
+def _formalize(req: A.Requirement, tick_period: Fraction | None, mark=None):
     scope, cond, timing, n, warnings = template_parts(req, tick_period)
     exprs = [req.response, req.condition.expr if cond != "null" else None,
              req.timing.stop if timing in A.STOP_TIMINGS else None]
@@ -147,7 +156,9 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None) -> Formalizatio
             return None
         return Expander(kind, FTP, last, free=True).bool(req.scope.mode)
 
-    ft, ft_inf, pt, used, px = construct(scope, cond, timing, n, mode, fields)
+    ft, ft_inf, pt, used, px = construct(scope, cond, timing, n, mode, fields, mark)
+    if mark is not None:
+        return ft_inf
     # variables in sentence order: mode, condition, stop, response
     variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
     # pt_causal from the pt tree itself: the scope mode is expanded by its own Expander,
@@ -174,7 +185,7 @@ def template_parts(req: A.Requirement, tick_period: Fraction | None):
     return scope, cond, timing, n, warnings
 
 
-def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields):
+def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields, mark=None):
     """The three formulas of one template key, from its atoms.
 
     ``mode(kind, last)`` gives the scope condition (None for the null scope) for formula
@@ -184,6 +195,8 @@ def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields):
     nodes, the atoms of ft ``(mode, condition, stop, response)`` and pt's expander. Both
     the full build (:func:`formalize`) and the per-template-key instantiation
     (:mod:`fretc.compiler.instantiate`, with placeholder atoms) run this one construction.
+    ``mark(T) -> Node``, when given, wraps each occurrence of the timing's obligation ``T``
+    in ft_inf (the place of a trigger's probability bound, :mod:`fretc.compiler.pctl`).
     """
     negate = scope.startswith("only")
     m_pt = mode("pt", LAST)
@@ -195,6 +208,8 @@ def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields):
         right = ft_right(scope, m, last)
         R, c, s = fields(Expander("ft", left, fn_right(scope, m, last)))
         T = ft_timing(timing, negate, R, right, n, s)
+        if mark is not None and last is FALSE:
+            T = mark(T)
         if cond == "null":
             body = T
         elif cond == "holding":

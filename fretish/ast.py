@@ -219,7 +219,8 @@ class Timing:
 
 @dataclass(frozen=True)
 class Probability:
-    """``with probability OP value``; ``op`` one of ``< <= > >= =``, value in [0, 1]."""
+    """``with probability OP value``; ``op`` one of ``< <= > >= = !=`` (``!=`` accepted as FRET
+    accepts it), value in [0, 1]."""
 
     op: str
     value: str

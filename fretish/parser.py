@@ -329,9 +329,6 @@ class _Builder:
     def probability(self, c):
         op, num = c[2], c[-1]
         value = ("-" if c[-2].type == "MINUS" else "") + num.value
-        if op.type == "NE":
-            raise _Fail(self.span(op), "a probability bound uses <, <=, >, >= or =, not '!='",
-                        "write e.g. 'with probability >= 0.99'")
         from fractions import Fraction
 
         v = Fraction(value)

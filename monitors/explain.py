@@ -42,7 +42,8 @@ class Diagram:
     ``signals`` (name -> bool per tick: the scope mode, the condition, the stop condition
     as laid out); ``scope`` intervals; ``triggers`` (of every interval); the ``required``
     and ``forbidden`` windows of the first trigger (inclusive ticks; None when the
-    obligation has none) and its ``obligation`` text; ``negated``: an only* scope."""
+    obligation has none) and its ``obligation`` text; ``negated``: an only* scope;
+    ``bound``: the probability bound each trigger carries (FRET 3.1: per trigger)."""
 
     n: int
     signals: dict[str, list[bool]] = field(default_factory=dict)
@@ -55,6 +56,8 @@ class Diagram:
     #: the duration as drawn when the requirement's is longer than :data:`MAX_DRAWN_TICKS`
     #: (the diagram is then not to scale); None when drawn as it is
     drawn_ticks: int | None = None
+    #: a probability requirement's bound at each trigger (``"P>=0.9"``), else None
+    bound: str | None = None
 
 
 @dataclass
@@ -218,7 +221,8 @@ def _as_written(req: A.Requirement, e) -> str:
 
 def reading(req: A.Requirement, k: int | None, period: Fraction | None) -> str:
     """FRET's reading of ``req`` in plain English (scope, trigger, what must hold and when,
-    durations in ticks and time)."""
+    durations in ticks and time; a probability bound at each trigger, as FRET's
+    ``probabilistic_description`` reads it)."""
     m = _as_written(req, req.scope.mode)
     c = _as_written(req, req.condition.expr)
     r = _as_written(req, req.response)
@@ -228,7 +232,14 @@ def reading(req: A.Requirement, k: int | None, period: Fraction | None) -> str:
     first = _SCOPES[req.scope.kind].format(m=m)
     second = _CONDITIONS[req.condition.kind].format(c=c)
     third = _TIMINGS[req.timing.kind].format(r=r, s=s, d=dtext, k=k if k is not None else "k")
-    return f"{first}, {second}, {comp} shall {third}."
+    p = req.probability
+    if p is None:
+        return f"{first}, {second}, {comp} shall {third}."
+    bound = f"{p.op} {p.value}"
+    return (f"{first}, {second}, {comp} shall, with probability {bound} at each trigger, "
+            f"{third}. The bound is per trigger (FRET's probabilistic reading): each trigger "
+            f"is one trial, and across runs the probability that a trigger's obligation is "
+            f"met must be {bound}; one run does not decide it.")
 
 
 def explain(compiled) -> Explanation:
@@ -242,8 +253,11 @@ def explain(compiled) -> Explanation:
         raise ValueError(f"{compiled.id} has no formalization: {compiled.error}")
     req = compiled.requirement
     period = getattr(compiled.entry, "tick_period", None)
-    x = Explanation(compiled.id, compiled.text, f.key, reading(req, f.ticks, period),
+    key = compiled.key_pctl if req.probability is not None else f.key  # FRET's five parts
+    x = Explanation(compiled.id, compiled.text, key, reading(req, f.ticks, period),
                     f.ticks, period, diagram(req, f.ticks))
+    if req.probability is not None:
+        x.diagram.bound = f"P{req.probability.op}{req.probability.value}"
     x.satisfying, x.violating, x.search_note = shortest_traces(compiled)
     return x
 

@@ -4,9 +4,10 @@ folder:
 * ``estimate.json`` - the campaign (:meth:`fretc.sim.estimate.Estimate.to_json`, or the ``rare``
   section of :meth:`fretc.sim.rare.RareResult.to_json`) with ``exit_code``; no wall-clock time,
   so the same seed gives byte-identical files, locally and on Ray;
-* ``estimate.md`` - per requirement: runs of each verdict, the estimate of P(satisfied),
-  its Clopper-Pearson interval, the bound and decision with the runs used, the example
-  failures (kept runs); with ``--rare`` the splitting estimate, relative error, interval,
+* ``estimate.md`` - per requirement: runs of each verdict, what one trial is (a trigger or
+  a run) and the triggers per run, the estimate of the probability of a satisfied trial,
+  its Clopper-Pearson interval, the bound and decision with the runs used, the runs that
+  could not be judged, the example failures (kept runs); with ``--rare`` the splitting estimate, relative error, interval,
   levels and runs;
 * ``<id>.svg`` - the sequential test's path (SPRT: log-likelihood ratio against runs with
   its two thresholds; repeated Clopper-Pearson: the interval at each look and p).
@@ -17,18 +18,23 @@ Exit codes: :func:`exit_code_of`.
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
+
+from fretc.common.textsafe import file_stems
+from fretc.reports.statistics import COLUMNS, statistics_rows, summary_line
 
 __all__ = ["write_estimate", "exit_code_of"]
 
 
 def exit_code_of(doc: dict) -> int:
-    """``fretc estimate``'s exit code from the report document (:mod:`fretc.cli.estimate`): 1 a
-    probability requirement fails or a requirement without a bound was violated on a run;
-    130 interrupted; 5 a probability requirement undecided; 2 a --rare target without
-    levels; else 0."""
+    """``fretc estimate``'s exit code from the report document (:mod:`fretc.cli.estimate`),
+    first that applies: 2 a run could not be judged (an ``error`` verdict: as ``fretc
+    audit``, nothing it could not check supports an answer); 1 a probability requirement
+    fails or a requirement without a bound was violated on a run; 130 interrupted; 5 a
+    probability requirement undecided; 2 a --rare target without levels; else 0."""
     stats = doc.get("statistics", [])
+    if doc.get("errors") or any(s["error"] for s in stats):
+        return 2
     if any(s["verdict"] == "fails" or (s["bound"] is None and s["violated"]) for s in stats):
         return 1
     if doc.get("interrupted"):
@@ -52,9 +58,13 @@ def _svg(st: dict) -> str:
     seq = st["sequential"]
     fig, ax = plt.subplots(figsize=(7, 3.5))
     if seq["test"] == "sprt":
-        path = [x if isinstance(x, float) else None for x in seq["path"]]
-        ax.plot(range(1, len(path) + 1), [x if x is not None else float("nan") for x in path],
-                lw=1.2, label="log-likelihood ratio")
+        for key, label in (("path", "log-likelihood ratio"),
+                           ("path_fails", "ratio with the unknown trials for the bound")):
+            if key not in seq:
+                continue
+            path = [x if isinstance(x, float) else None for x in seq[key]]
+            ax.plot(range(1, len(path) + 1),
+                    [x if x is not None else float("nan") for x in path], lw=1.2, label=label)
         ax.axhline(seq["upper"], color="green", lw=0.8, ls="--", label="holds")
         ax.axhline(seq["lower"], color="red", lw=0.8, ls="--", label="fails")
         ax.set_ylabel("log-likelihood ratio")
@@ -64,10 +74,11 @@ def _svg(st: dict) -> str:
             n, lo, hi = zip(*looks)
             ax.fill_between(n, lo, hi, alpha=0.3, step="post", label="interval at each look")
         ax.axhline(st["bound"]["p"], color="black", lw=0.8, label="p")
-        ax.set_ylabel("P(satisfied)")
+        ax.set_ylabel("P(satisfied trial)")
     ax.set_xlabel("runs")
     b = st["bound"]
-    ax.set_title(f"{st['id']}: P(satisfied) {b['op']} {b['p']:g} -> {st['verdict']}")
+    ax.set_title(f"{st['id']}: P(satisfied {st['trial']}) {b['op']} {b['p']:g} -> "
+                 f"{st['verdict']}")
     ax.legend(loc="best", fontsize=8)
     buf = io.StringIO()
     fig.savefig(buf, format="svg", metadata={"Date": None})
@@ -87,31 +98,29 @@ def _markdown(doc: dict) -> tuple[str, list[str]]:
     summary = []
     stats = doc.get("statistics", [])
     if stats:
-        lines += ["| requirement | runs | sat | vac | viol | unk/err | P(sat) | interval "
-                  "| bound | verdict | decided at run |", "|" + "---|" * 11]
-    for s in stats:
-        lo, hi = s["interval"]
-        b = s["bound"]
+        lines += ["| " + " | ".join(COLUMNS + ("runs", "decided at run")) + " |",
+                  "|" + "---|" * (len(COLUMNS) + 2)]
+    for s, row in zip(stats, statistics_rows(stats)):
         seq = s.get("sequential") or {}
-        bound = "" if b is None else f"{b['op']} {b['p']:g}"
-        lines.append(f"| {s['id']} | {s['runs']} | {s['satisfied']} | {s['vacuous']} | "
-                     f"{s['violated']} | {s['unknown'] + s['error']} | {_fmt(s['estimate'])} | "
-                     f"[{lo:.4g}, {hi:.4g}] | {bound} | {s['verdict'] or ''} | "
-                     f"{_fmt(seq.get('at'))} |")
-        text = (f"{s['id']}: P(satisfied) {_fmt(s['estimate'])} in [{lo:.4g}, {hi:.4g}] "
-                f"({100 * s['confidence']:g} %, {s['trials']} runs)")
-        if b is not None:
-            text += f"; {b['op']} {b['p']:g}: {s['verdict']}"
-            if s["why"]:
-                text += f" ({s['why']})"
+        lines.append("| " + " | ".join(row + (str(s["runs"]), _fmt(seq.get("at")))) + " |")
+        summary.append(summary_line(s))
+    errors = doc.get("errors") or []
+    if errors:
+        first = errors[0]
+        text = (f"error: {len(errors)} verdict{'s' if len(errors) != 1 else ''} could not be "
+                f"judged, the first run {first['run']}, {first['requirement']}: "
+                f"{first['error']}")
         summary.append(text)
+        lines += ["", text]
     if stats:
-        lines += ["", f"Unknown runs: {stats[0]['unknown_policy']} (never counted as "
-                  "satisfied). The intervals assume independent runs from the space's "
-                  "distributions (docs/guide/statistics.md).", ""]
+        lines += ["", f"Unknown outcomes: {stats[0]['unknown_policy']} (never counted as "
+                  "satisfied). A probability requirement's trials are its triggers (FRET's "
+                  "bound is per trigger; `--trial run`: its runs), clustered by run; the "
+                  "intervals assume independent runs from the space's distributions "
+                  "(docs/guide/statistics.md).", ""]
     for s in stats:
         if s.get("sequential"):
-            lines.append(f"![{s['id']}]({_svg_name(s['id'])})")
+            lines.append(f"![{s['id']}]({_svg_names(doc)[s['id']]})")
     failures = [r for r in doc.get("runs", []) if r["mcap"]]
     if failures:
         lines += ["", "## Example failures", ""]
@@ -141,8 +150,11 @@ def _markdown(doc: dict) -> tuple[str, list[str]]:
     return "\n".join(lines) + "\n", summary
 
 
-def _svg_name(rid: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]", "_", rid) + ".svg"
+def _svg_names(doc: dict) -> dict[str, str]:
+    """Requirement id -> its SVG's file name, distinct even for ids that map to one name
+    (:func:`fretc.common.textsafe.file_stems`)."""
+    stems = file_stems([s["id"] for s in doc.get("statistics", [])])
+    return {rid: stem + ".svg" for rid, stem in stems.items()}
 
 
 def write_estimate(out: str | Path, result=None, rare=None) -> dict:
@@ -163,7 +175,7 @@ def write_estimate(out: str | Path, result=None, rare=None) -> dict:
         json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", "utf-8")
     for s in doc.get("statistics", []):
         if s.get("sequential"):
-            (outp / _svg_name(s["id"])).write_text(_svg(s), "utf-8")
+            (outp / _svg_names(doc)[s["id"]]).write_text(_svg(s), "utf-8")
     md, summary = _markdown(doc)
     (outp / "estimate.md").write_text(md, "utf-8")
     return dict(doc, summary_lines=summary)

@@ -26,7 +26,8 @@ def _rows(d) -> list[tuple[str, str, list[int]]]:
             for name, vals in d.signals.items()]
     rows.append(("scope interval" + ("s (only*: negated)" if d.negated else "s"), "scope",
                  [i for a, b in d.scope for i in range(a, b + 1)]))
-    rows.append(("triggers", "trigger", list(d.triggers)))
+    label = "triggers" if d.bound is None else f"triggers ({d.bound} each)"
+    rows.append((label, "trigger", list(d.triggers)))
     if d.required is not None:
         rows.append(("response required", "window", list(range(d.required[0],
                                                                d.required[1] + 1))))
@@ -52,7 +53,10 @@ def text(x) -> str:
                     f"{d.drawn_ticks}"]
     if d.obligation:
         out += ["", f"  obligation from each trigger t (scope interval [s, e]): {d.obligation}"]
-    for what, trace in (("satisfies", x.satisfying), ("violates", x.violating)):
+    words = (("satisfies", "violates") if d.bound is None else
+             ("meets every trigger's obligation", "fails a trigger's obligation (a failed "
+              "trial, not a violation)"))
+    for what, trace in zip(words, (x.satisfying, x.violating)):
         if trace:
             n = len(next(iter(trace.values())))
             out += ["", f"  shortest trace that {what} ({n} tick{'s' if n != 1 else ''}):"]

@@ -12,9 +12,14 @@ on Ray (``ray_address``) in batches whose results are taken in index order, and 
 after the one where the last test decided are dropped, so both give the same runs, the
 same decisions and byte-identical JSON.
 
-Counting: a run is one Bernoulli trial per requirement: satisfied or vacuous is a success;
-violated is not; unknown and error runs are failures under the ``fail`` policy (default) or
-skipped under ``exclude``, never successes (:mod:`fretc.audit.statistics`).
+Counting (:mod:`fretc.audit.statistics`): a probability requirement's trials are its
+triggers (``trial="trigger"``, the default: FRET's bound is per trigger; each run gives its
+triggers' outcomes, :mod:`fretc.audit.trials`) or its runs (``trial="run"``: one trial a
+run, satisfied or vacuous a success). Unknown outcomes (unknown runs or triggers) count
+against every decision under the ``worst-case`` policy (default) or not at all under
+``exclude``, never as successes; per trigger, a run that could not be judged (an error)
+stops its test (``worst-case``: it may hide any number of triggers). A campaign in which a
+run could not be judged is an error (exit 2), as an audit is.
 
 Kept runs: every run that violates a requirement is kept under ``out/runs/`` as MCAP and
 its audit JSON (``run-0007.mcap``, ``run-0007.audit.json``); the other runs' files are
@@ -28,13 +33,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from fretc.audit.statistics import RequirementStatistics, fleet_statistics, judge_counts
+from fretc.audit.statistics import RequirementStatistics, fleet_statistics, unknown_policy
 
 from fretc.sim.run import record_scenario
 from fretc.sim.sequential import make_test
 from fretc.sim.space import Space, apply
 
-__all__ = ["EstimateRun", "Estimate", "estimate", "sample_point", "Runner", "simulate_run"]
+__all__ = ["EstimateRun", "Estimate", "estimate", "sample_point", "Runner", "simulate_run",
+           "observation"]
 
 
 def sample_point(space: Space, seed: int, index: int) -> tuple[list[float], dict, int]:
@@ -142,14 +148,20 @@ class Estimate:
     tests: dict[str, Any] = field(default_factory=dict)
     stopped: str = ""
     interrupted: bool = False
+    trial: str = "trigger"
+    #: per requirement, why its test can decide nothing more (a run it could not judge)
+    blocked: dict[str, str] = field(default_factory=dict)
+    #: the runs that could not be judged: ``{"run", "requirement", "error"}``, in order
+    errors: list[dict] = field(default_factory=list)
 
     def to_json(self) -> dict:
         """The campaign as ``estimate.json`` gives it (no wall-clock time: byte-identical
         for the same seed, locally and on Ray)."""
         return {
             "schema": "fretc-estimate/1", "space": self.space.path, "seed": self.seed,
-            "budget": self.budget, "test": self.test, "runs_used": len(self.runs),
-            "stopped": self.stopped, "interrupted": self.interrupted,
+            "budget": self.budget, "test": self.test, "trial": self.trial,
+            "runs_used": len(self.runs), "stopped": self.stopped,
+            "interrupted": self.interrupted, "errors": self.errors,
             "statistics": [dict(st.to_json(), sequential=(
                 self.tests[st.id].to_json() if self.tests.get(st.id) else None))
                 for st in self.statistics],
@@ -170,8 +182,8 @@ def _finite(v):
 
 def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 1000,
              test: str = "sprt", delta: float = 0.05, alpha: float = 0.05,
-             beta: float = 0.05, confidence: float = 0.95, unknown: str = "fail",
-             ray_address: str | None = None, batch: int = 8,
+             beta: float = 0.05, confidence: float = 0.95, unknown: str = "worst-case",
+             trial: str = "trigger", ray_address: str | None = None, batch: int = 8,
              audit_json: Callable[[Any], str] = lambda la: "",
              progress: Callable[[EstimateRun], None] | None = None) -> Estimate:
     """Run the campaign (module docstring).
@@ -182,7 +194,8 @@ def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 10
             ``alpha``, ``beta``); the others are counted.
         space: from :func:`fretc.sim.space.load_space` (checked for degenerate distributions).
         seed: the campaign's seed; ``budget``: the most runs (>= 1).
-        confidence, unknown: of the reported intervals (:func:`fretc.audit.statistics.fleet_statistics`).
+        confidence, unknown, trial: of the tests and the reported intervals
+            (:func:`fretc.audit.statistics.fleet_statistics`).
         ray_address: simulate and audit on Ray, ``batch`` runs at a time (same answer).
         audit_json: a kept run's audit JSON text from its LogAudit (the caller's writer).
         progress: called with each run taken, in order.
@@ -191,14 +204,16 @@ def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 10
     with the runs taken so far (``interrupted``).
 
     Raises:
-        sim.space.SpaceError: a degenerate distribution; ValueError: bad test parameters;
-        audit.fleet.RayUnavailable: Ray cannot start.
+        sim.space.SpaceError: a degenerate distribution; ValueError: bad test parameters,
+        policy, unit or confidence; audit.fleet.RayUnavailable: Ray cannot start.
     """
     space.check_sampling()
+    unknown = unknown_policy(unknown)
     bounds = {r.id: getattr(r.compiled, "probability", None) for r in plan.requirements}
     tests = {rid: make_test(test, b.op, b.p, delta, alpha, beta)
              for rid, b in bounds.items() if b is not None}
-    result = Estimate(space, seed, budget, test, tests=tests)
+    fleet_statistics([], bounds, confidence, unknown, trial)  # the arguments checked first
+    result = Estimate(space, seed, budget, test, tests=tests, trial=trial)
     outp = Path(out)
     runner = Runner(plan, space, outp, ray_address)
     step = batch if ray_address is not None else 1
@@ -225,48 +240,80 @@ def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 10
                 os.remove(mcap)
     finally:
         runner.close()
-    _judge(result, plan, bounds, confidence, unknown)
+    _judge(result, bounds, confidence, unknown)
     return result
+
+
+def observation(la, rid: str, trial: str, unknown: str) -> tuple[int, int, int] | None:
+    """What one run (:class:`fretc.audit.verdict.LogAudit`) gives requirement ``rid``'s
+    test: ``(k, n, u)``, ``k`` satisfied of ``n`` trials of known outcome and ``u`` of
+    unknown outcome (0 under ``exclude``); None when the run could not be judged per trigger
+    under ``worst-case`` (module docstring)."""
+    v = None if la.error else next((x for x in la.verdicts if x.requirement == rid), None)
+    keep = unknown == "worst-case"
+    if trial == "run":
+        verdict = "error" if v is None else v.verdict
+        if verdict in ("satisfied", "vacuous", "violated"):
+            return int(verdict != "violated"), 1, 0
+        return 0, 0, int(keep)
+    t = None if v is None or v.verdict == "error" else v.trials
+    if t is None:
+        return None if keep else (0, 0, 0)
+    return t.satisfied, t.trials, t.unknown if keep else 0
 
 
 def _take(result: Estimate, run: EstimateRun, runner: Runner, audit_json, unknown: str,
           progress) -> None:
     result.runs.append(run)
     runner.keep_or_drop(run, audit_json)
+    _errors(result, run)
     for rid, t in result.tests.items():
-        v = run.verdicts.get(rid, "error")
-        if v in ("unknown", "error") and unknown == "exclude":
+        if rid in result.blocked or t.decision is not None:
             continue
-        t.update(v in ("satisfied", "vacuous"))
+        obs = observation(run.audit, rid, result.trial, unknown)
+        if obs is None:
+            result.blocked[rid] = (f"run {run.index} could not be judged per trigger, and may "
+                                   "hide any number of triggers of any outcome; nothing "
+                                   "after it is decided (--unknown-runs exclude leaves such "
+                                   "runs out)")
+            continue
+        t.observe(*obs)
     if progress is not None:
         progress(run)
-    if result.tests and all(t.decision is not None for t in result.tests.values()):
-        result.stopped = f"every probability requirement decided after {len(result.runs)} runs"
+    if result.tests and all(t.decision is not None or rid in result.blocked
+                            for rid, t in result.tests.items()):
+        done = "decided" if not result.blocked else "decided or blocked"
+        result.stopped = (f"every probability requirement {done} after {len(result.runs)} "
+                          "runs")
 
 
-def _judge(result: Estimate, plan, bounds: dict, confidence: float, unknown: str) -> None:
+def _errors(result: Estimate, run: EstimateRun) -> None:
+    """Record the requirements ``run`` could not judge (``result.errors``)."""
+    la = run.audit
+    for rid, v in run.verdicts.items():
+        if v != "error":
+            continue
+        x = next((x for x in la.verdicts if x.requirement == rid), None) if la else None
+        why = (la.error if la is not None and la.error else None) or (x.error if x else None)
+        result.errors.append({"run": run.index, "requirement": rid,
+                              "error": why or "not judged"})
+
+
+def _judge(result: Estimate, bounds: dict, confidence: float, unknown: str) -> None:
     """The statistics of the runs taken; a probability requirement's verdict is its
     sequential test's decision (``undecided`` with why when it has none)."""
-    stats = fleet_statistics([r.audit for r in result.runs], bounds, confidence, unknown)
+    stats = fleet_statistics([r.audit for r in result.runs], bounds, confidence, unknown,
+                             result.trial)
     for st in stats:
         t = result.tests.get(st.id)
         if t is None:
             continue
         st.verdict = t.decision or "undecided"
         st.more_runs = None
-        st.why = None if t.decision else (f"{result.stopped}: " + t.why_undecided())
+        if t.decision:
+            st.why = None
+        elif st.id in result.blocked:
+            st.why = result.blocked[st.id]
+        else:
+            st.why = f"{result.stopped}: " + t.why_undecided()
     result.statistics = stats
-
-
-def stats_of(runs: list, rid: str, bound, confidence: float) -> RequirementStatistics:
-    """The statistics of one requirement over ``runs`` (EstimateRun list) as counts only
-    (for a bench comparing campaigns without keeping their audits)."""
-    st = RequirementStatistics(rid, confidence=confidence)
-    for r in runs:
-        v = r.verdicts.get(rid, "error")
-        setattr(st, v, getattr(st, v) + 1)
-        st.runs += 1
-    st.successes = st.satisfied + st.vacuous
-    st.trials = st.runs
-    judge_counts(st, None if bound is None else bound.op, None if bound is None else bound.p)
-    return st

@@ -1,33 +1,45 @@
 """Sequential tests of a probability bound (``fretc estimate``): after each run, decide
 ``holds``, ``fails`` or go on, so a campaign stops as soon as the runs say enough.
 
+A run gives the test its trials (:meth:`SPRT.observe`): ``k`` satisfied of ``n`` of known
+outcome and ``u`` of unknown outcome; per trigger (the default unit, FRET's per-trigger
+bound) a run's triggers, per run one trial. As the fleet statistics do
+(:mod:`fretc.audit.intervals`), the trials are counted with runs as clusters, at the
+effective sample size ``n* = M^2 / sum(m_i^2)`` of the runs so far (``m_i`` a run's trials,
+``M`` their sum; one trial a run: ``n*`` is the number of runs), and every decision counts
+the unknown outcomes against it: ``holds`` is decided with them all going against the
+bound, ``fails`` with them all going its way.
+
 :class:`SPRT` is Wald's sequential probability ratio test (A. Wald, "Sequential tests of
 statistical hypotheses", Ann. Math. Statist. 16(2), 1945), as statistical model checkers use
-it (Younes & Simmons 2002): for ``P(satisfied) >= p`` it tests ``H_holds: P >= p + delta``
-against ``H_fails: P <= p - delta`` (the *indifference region* ``(p - delta, p + delta)``,
-where either answer is acceptable). Each run adds ``log(P_h(x) / P_f(x))`` to the
-log-likelihood ratio ``llr`` (``x`` satisfied or not, ``P_h``/``P_f`` the Bernoulli laws at
-the two hypotheses' rates); the test says ``holds`` once ``llr >= log((1 - beta) / alpha)``,
+it (Younes & Simmons 2002): for ``P >= p`` it tests ``H_holds: P >= p + delta`` against
+``H_fails: P <= p - delta`` (the *indifference region* ``(p - delta, p + delta)``, where
+either answer is acceptable). After the runs so far, the log-likelihood ratio is
+``llr = n* (q log(P_h / P_f) + (1 - q) log((1 - P_h) / (1 - P_f)))`` at the share ``q`` of
+satisfied trials (``P_h``/``P_f`` the two hypotheses' rates): with one trial a run, Wald's
+sum over the runs. The test says ``holds`` once ``llr >= log((1 - beta) / alpha)``,
 ``fails`` once ``llr <= log(beta / (1 - alpha))``. Wald's bounds: the probability of
 ``holds`` when ``P <= p - delta`` is at most about ``alpha``, of ``fails`` when
-``P >= p + delta`` at most about ``beta``. ``<=``/``<`` bounds swap the two rates.
+``P >= p + delta`` at most about ``beta`` (for clustered triggers with equal run sizes each
+run is one trial of fractional outcome, whose likelihood ratio is bounded by the convex
+combination of a success's and a failure's, so the bounds hold by Ville's inequality;
+otherwise the effective counts approximate them as the interval does). ``<=``/``<`` bounds
+swap the two rates; ``=`` and ``!=`` bounds are two-sided: the SPRT decides neither.
 
-:class:`SequentialCP` is a repeated Clopper-Pearson test: at looks ``n = 10, 15, 23, ...``
-(x1.5 each) it computes the exact interval with error ``alpha / 2^(j+1)`` at look ``j``
-(so the errors of all looks add up to at most ``alpha``, a union bound) and decides as
-:func:`fretc.audit.statistics.decide` does. Slower to decide than the SPRT, but with no
-indifference region.
-
-An ``=`` bound is never accepted by either (no finite sample confirms an equality).
+:class:`SequentialCP` is a repeated Clopper-Pearson test: at looks after 10, 15, 23, ...
+runs (x1.5 each) it computes the clustered, widened interval with error ``alpha / 2^(j+1)``
+at look ``j`` (so the errors of all looks add up to at most ``alpha``, a union bound) and
+decides as :func:`fretc.audit.intervals.decide` does (``!=`` included). Slower to decide
+than the SPRT, but with no indifference region. No finite sample confirms an ``=`` bound.
 """
 
 from __future__ import annotations
 
 import math
 
-from fretc.audit.statistics import clopper_pearson, decide
+from fretc.audit.intervals import Counts, cluster_interval, decide
 
-__all__ = ["SPRT", "SequentialCP", "effective_delta", "make_test", "TESTS"]
+__all__ = ["SPRT", "SequentialCP", "effective_delta", "make_test", "TESTS", "check_parameters"]
 
 TESTS = ("sprt", "cp")
 
@@ -42,106 +54,159 @@ def effective_delta(p: float, delta: float) -> float:
     return d
 
 
+def check_parameters(delta: float, alpha: float, beta: float) -> None:
+    """``ValueError`` unless ``delta`` is in (0, 0.5] and ``alpha``, ``beta`` in (0, 0.5)
+    (NaN and infinities never are)."""
+    ok = (isinstance(delta, (int, float)) and 0 < delta <= 0.5
+          and all(isinstance(x, (int, float)) and 0 < x < 0.5 for x in (alpha, beta)))
+    if not ok:
+        raise ValueError("the sequential tests need delta in (0, 0.5] and alpha, beta in "
+                         f"(0, 0.5); got delta={delta}, alpha={alpha}, beta={beta}")
+
+
 def _log(x: float) -> float:
     return math.log(x) if x > 0 else -math.inf
 
 
-class SPRT:
-    """Wald's SPRT of ``P(satisfied) OP p`` (module docstring).
+class _Test:
+    """What both tests share: the runs' trials (``counts``), ``n`` runs seen, ``decision``
+    (None / ``holds`` / ``fails``) and ``at``, the run that decided."""
+
+    name = ""
+
+    def __init__(self, op: str, p: float):
+        self.op, self.p = op, p
+        self.counts = Counts()
+        self.n = 0
+        self.decision: str | None = None
+        self.at: int | None = None
+
+    def update(self, satisfied: bool | None) -> str | None:
+        """One run as one trial: satisfied (True), not (False), or of unknown outcome
+        (None); as :meth:`observe`."""
+        if satisfied is None:
+            return self.observe(0, 0, 1)
+        return self.observe(int(bool(satisfied)), 1)
+
+    def observe(self, k: int, n: int, u: int = 0) -> str | None:
+        """Add one run: ``k`` satisfied of ``n`` trials of known outcome and ``u`` of
+        unknown outcome; returns the decision (None while undecided). Runs after the
+        decision are not counted."""
+        if self.decision is not None:
+            return self.decision
+        self.n += 1
+        self.counts.add(k, n, u)
+        self._decide()
+        return self.decision
+
+    def _decide(self) -> None:
+        raise NotImplementedError
+
+
+class SPRT(_Test):
+    """Wald's SPRT of ``P OP p`` (module docstring).
 
     Args:
-        op, p: the bound (``>= > <= <``; ``=`` never decides).
-        delta: the indifference half-width (> 0), see :func:`effective_delta`.
+        op, p: the bound (``>= > <= <``; ``=`` and ``!=`` never decide).
+        delta: the indifference half-width (in (0, 0.5]), see :func:`effective_delta`.
         alpha: the error of deciding ``holds`` when the bound is false by ``delta`` or more;
         beta: of deciding ``fails`` when it is true by ``delta`` or more (both in (0, 0.5)).
 
-    Attributes: ``n`` runs seen, ``llr`` the log-likelihood ratio, ``path`` its value after
-    each run, ``decision`` None / ``holds`` / ``fails`` and ``at`` the run that decided.
-    Raises ``ValueError`` for parameters outside those ranges.
+    Attributes: as :class:`_Test`, ``llr`` the log-likelihood ratio for ``holds`` (unknown
+    trials against the bound), ``path`` its value after each run and ``path_fails`` the
+    ratio for ``fails`` (unknown trials for the bound) when it differs.
+    Raises ``ValueError`` for parameters outside those ranges (NaN included).
     """
 
     name = "sprt"
 
     def __init__(self, op: str, p: float, delta: float = 0.05, alpha: float = 0.05,
                  beta: float = 0.05):
-        if not delta > 0 or not 0 < alpha < 0.5 or not 0 < beta < 0.5:
-            raise ValueError("the SPRT needs delta > 0 and alpha, beta in (0, 0.5)")
-        self.op, self.p = op, p
+        check_parameters(delta, alpha, beta)
+        super().__init__(op, p)
         self.delta = effective_delta(p, delta)
         up, down = min(p + self.delta, 1.0), max(p - self.delta, 0.0)
         self.p_holds, self.p_fails = (up, down) if op in (">=", ">") else (down, up)
         self.upper = math.log((1 - beta) / alpha)   # holds at or above
         self.lower = math.log(beta / (1 - alpha))   # fails at or below
-        self.win = _log(self.p_holds) - _log(self.p_fails)          # a satisfied run
-        self.loss = _log(1 - self.p_holds) - _log(1 - self.p_fails)  # a run that did not
-        self.n, self.llr, self.path = 0, 0.0, []
-        self.decision: str | None = None
-        self.at: int | None = None
+        self.win = _log(self.p_holds) - _log(self.p_fails)          # a satisfied trial
+        self.loss = _log(1 - self.p_holds) - _log(1 - self.p_fails)  # one that was not
+        self.llr = 0.0
+        self.path: list[float] = []
+        self.path_fails: list[float] = []
 
-    def update(self, satisfied: bool) -> str | None:
-        """Add one run; returns the decision (None while undecided). Runs after the
-        decision are not counted."""
-        if self.decision is not None:
-            return self.decision
-        self.n += 1
-        if self.op != "=":
-            self.llr += self.win if satisfied else self.loss
-        self.path.append(self.llr)
-        if self.op != "=" and self.llr >= self.upper:
+    def _ratio(self, q: float) -> float:
+        """``n* (q win + (1 - q) loss)``, a zero share of an infinite term being zero."""
+        c = self.counts
+        s = (q * self.win if q else 0.0) + ((1 - q) * self.loss if q < 1 else 0.0)
+        return c.effective * s if s == s else 0.0
+
+    def _decide(self) -> None:
+        c = self.counts
+        two_sided = self.op in ("=", "!=")
+        if c.size == 0 or two_sided:
+            hold = fail = 0.0
+        else:
+            ends = (self._ratio(c.successes / c.size),
+                    self._ratio((c.successes + c.unknown) / c.size))
+            hold, fail = min(ends), max(ends)
+        self.llr = hold
+        self.path.append(hold)
+        self.path_fails.append(fail)
+        if not two_sided and hold >= self.upper:
             self.decision, self.at = "holds", self.n
-        elif self.op != "=" and self.llr <= self.lower:
+        elif not two_sided and fail <= self.lower:
             self.decision, self.at = "fails", self.n
-        return self.decision
 
     def why_undecided(self) -> str:
         """Why there is no decision yet, in a sentence."""
         if self.op == "=":
             return "the SPRT never accepts an equality bound (write >= or <=)"
+        if self.op == "!=":
+            return "the SPRT tests one-sided bounds: decide '!=' with --test cp"
         return (f"after {self.n} runs the log-likelihood ratio is {self.llr:.3g}, between "
                 f"the thresholds {self.lower:.3g} (fails) and {self.upper:.3g} (holds)")
 
     def to_json(self) -> dict:
-        """The test's parameters, decision and path (for the report)."""
-        return {"test": "sprt", "delta": self.delta, "p_holds": self.p_holds,
-                "p_fails": self.p_fails, "upper": self.upper, "lower": self.lower,
-                "decision": self.decision, "at": self.at,
-                "path": [x if math.isfinite(x) else ("inf" if x > 0 else "-inf")
-                         for x in self.path]}
+        """The test's parameters, decision and path (for the report; infinities as
+        strings)."""
+        def enc(xs):
+            return [x if math.isfinite(x) else ("inf" if x > 0 else "-inf") for x in xs]
+
+        out = {"test": "sprt", "delta": self.delta, "p_holds": self.p_holds,
+               "p_fails": self.p_fails, "upper": self.upper, "lower": self.lower,
+               "decision": self.decision, "at": self.at, "path": enc(self.path)}
+        if self.path_fails != self.path:
+            out["path_fails"] = enc(self.path_fails)
+        return out
 
 
-class SequentialCP:
+class SequentialCP(_Test):
     """The repeated Clopper-Pearson test (module docstring); same interface as
-    :class:`SPRT` (``path``: ``(n, lo, hi)`` at each look)."""
+    :class:`SPRT` (``path``: ``(runs, lo, hi)`` at each look). Raises ``ValueError`` for
+    an ``alpha`` outside (0, 0.5)."""
 
     name = "cp"
 
     def __init__(self, op: str, p: float, alpha: float = 0.05, first: int = 10,
                  growth: float = 1.5):
-        if not 0 < alpha < 0.5:
-            raise ValueError("alpha must be in (0, 0.5)")
-        self.op, self.p, self.alpha = op, p, alpha
-        self.k = self.n = 0
+        check_parameters(0.5, alpha, 0.25)
+        super().__init__(op, p)
+        self.alpha = alpha
         self.next_look, self.looks, self.growth = first, 0, growth
         self.path: list[tuple[int, float, float]] = []
-        self.decision: str | None = None
-        self.at: int | None = None
 
-    def update(self, satisfied: bool) -> str | None:
-        """Add one run; returns the decision (None while undecided)."""
-        if self.decision is not None:
-            return self.decision
-        self.n += 1
-        self.k += bool(satisfied)
-        if self.n >= self.next_look:
-            err = self.alpha / 2 ** (self.looks + 1)
-            lo, hi = clopper_pearson(self.k, self.n, 1 - err)
-            self.path.append((self.n, lo, hi))
-            self.looks += 1
-            self.next_look = max(self.n + 1, math.ceil(self.next_look * self.growth))
-            d = decide(self.op, self.p, lo, hi)
-            if d != "undecided":
-                self.decision, self.at = d, self.n
-        return self.decision
+    def _decide(self) -> None:
+        if self.n < self.next_look:
+            return
+        err = self.alpha / 2 ** (self.looks + 1)
+        lo, hi = cluster_interval(self.counts, 1 - err)
+        self.path.append((self.n, lo, hi))
+        self.looks += 1
+        self.next_look = max(self.n + 1, math.ceil(self.next_look * self.growth))
+        d = decide(self.op, self.p, lo, hi)
+        if d != "undecided":
+            self.decision, self.at = d, self.n
 
     def why_undecided(self) -> str:
         """Why there is no decision yet, in a sentence."""
@@ -158,7 +223,8 @@ class SequentialCP:
 
 
 def make_test(kind: str, op: str, p: float, delta: float, alpha: float, beta: float):
-    """An :class:`SPRT` (``kind="sprt"``) or :class:`SequentialCP` (``"cp"``) of the bound."""
+    """An :class:`SPRT` (``kind="sprt"``) or :class:`SequentialCP` (``"cp"``) of the bound;
+    ``ValueError`` for another kind or parameters out of range."""
     if kind == "sprt":
         return SPRT(op, p, delta, alpha, beta)
     if kind == "cp":

@@ -25,7 +25,8 @@ from pathlib import Path
 
 import click
 
-from fretc.cli.options import audit_config, audit_input_options, ray_options, run_audits
+from fretc.cli.options import (audit_config, audit_input_options, ray_options, run_audits,
+                               statistics_options)
 
 __all__ = ["audit_cmd"]
 
@@ -42,15 +43,7 @@ __all__ = ["audit_cmd"]
               help="Exit 0 instead of 3 when nothing is violated but a log is partial, had "
                    "data problems or a verdict is unknown (the verdicts stay as they are: "
                    "an unknown is never a pass).")
-@click.option("--confidence", type=click.FloatRange(0, 1, min_open=True, max_open=True),
-              default=0.95, show_default=True,
-              help="Confidence of the fleet statistics' Clopper-Pearson intervals (audits of "
-                   "several logs, or of a 'with probability' requirement).")
-@click.option("--unknown-runs", type=click.Choice(["fail", "exclude"]), default="fail",
-              show_default=True,
-              help="How the fleet statistics count unknown and error runs: as runs that did "
-                   "not satisfy (fail: a conservative bound) or not at all (exclude). Never "
-                   "as satisfied.")
+@statistics_options
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
 @click.option("--write-csv", "csv_dir", type=click.Path(file_okay=False), default=None,
@@ -62,7 +55,7 @@ __all__ = ["audit_cmd"]
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, window, allow_partial,
-              confidence, unknown_runs, verbose, csv_dir=None, msg_path=()):
+              confidence, trial, unknown_runs, verbose, csv_dir=None, msg_path=()):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -79,11 +72,12 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
          few runs for its bound (docs/guide/statistics.md)
 
     \b
-    Requirements 'with probability OP p' are judged over the logs (one log = one
-    run): exit 1 when the Clopper-Pearson interval of P(satisfied) lies on the wrong
-    side of p, never for a violated run alone. Audits of several logs print and write
-    (--json "statistics") per requirement the runs of each verdict, the estimate
-    and its interval.
+    Requirements 'with probability OP p' bound each trigger (FRET's reading) and are
+    judged over the triggers of the logs, each log's triggers a cluster (--trial run:
+    one trial a log): exit 1 when the Clopper-Pearson interval of the probability
+    lies on the wrong side of p, never for a violated run alone. Audits of several
+    logs print and write (--json "statistics") per requirement the runs of each
+    verdict, the triggers per run, the estimate and its interval.
 
     \b
     Binding reference (expressions, functions, slices, units, NaN/inf rules,
@@ -123,7 +117,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
             results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
-    stats = plan_statistics(plan, results, confidence, unknown_runs)
+    stats = plan_statistics(plan, results, confidence, unknown_runs, trial)
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors, statistics=stats)
     reqs = plan.requirements_json()

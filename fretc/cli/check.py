@@ -27,7 +27,7 @@ import click
 from fretc.check.budget import (DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK, MIN_MEMORY,
                                  MUS_BUDGET)
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, Finite, shown, text_attribute
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, FiniteRange, shown, text_attribute
 
 __all__ = ["check_cmd", "render_text"]
 
@@ -151,12 +151,12 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--mus-budget", type=click.IntRange(min=0), default=MUS_BUDGET,
               show_default=True, metavar="CHECKS",
               help="Subset checks per enumeration of minimal subsets.")
-@click.option("--query-cpu", type=Finite(low_open=True),
+@click.option("--query-cpu", type=FiniteRange(0, 1e7, min_open=True),
               default=DEFAULT_QUERY_CPU, show_default=True, metavar="SECONDS",
               help="CPU seconds a query may take: a safety net for the one step of a fixed "
               "point that the work budget does not foresee (a BDD operation cannot be "
               "metered); past it the answer is unknown and says so.")
-@click.option("--timeout", type=Finite(low_open=True), default=None,
+@click.option("--timeout", type=FiniteRange(0, 1e7, min_open=True), default=None,
               metavar="SECONDS", help="Wall-clock limit of the whole run: past it the run "
               "stops with no report (exit 3); it never changes an answer.")
 @click.option("--engine", type=click.Choice(["auto", "spot", "smt", "bdd"]), default="auto",

@@ -1,7 +1,8 @@
 """``fretc compile`` (also ``fretc FILE...``, the default command): requirement files to
-FRET's LTL (``--emit ltl``, text or ``--json``), Python runtime monitors (``--emit monitor``),
-AJPF properties (``--emit psl``), C99 monitors (``--emit c -o DIR``,
-:mod:`fretc.cli.emit_c`) or R2U2's C2PO specifications (``--emit c2po``).
+FRET's LTL and PCTL (``--emit ltl``, text or ``--json``), Python runtime monitors (``--emit
+monitor``), AJPF properties (``--emit psl``), PRISM properties (``--emit prism``), C99
+monitors (``--emit c -o DIR``, :mod:`fretc.cli.emit_c`) or R2U2's C2PO specifications
+(``--emit c2po``).
 
 Exit codes: 0 success, 1 a requirement failed, 2 usage or input errors, 4 an internal error
 (a generated monitor that is not valid: nothing is written). Only click and the standard
@@ -46,13 +47,14 @@ def _load(paths) -> list:
 
 @click.command("compile")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl", "c", "c2po"]),
+@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl", "prism", "c", "c2po"]),
               default="ltl", show_default=True,
-              help="What to produce: FRET's LTL, Python monitors, AJPF properties, C99 "
-                   "monitors with a CSV runner (-o DIR), or R2U2's C2PO specifications.")
+              help="What to produce: FRET's LTL (and PCTL), Python monitors, AJPF properties, "
+                   "PRISM properties (FRET's bounds at each trigger), C99 monitors with a CSV "
+                   "runner (-o DIR), or R2U2's C2PO specifications.")
 @click.option("--json", "as_json", is_flag=True, help="ltl: print a JSON list instead of text.")
 @click.option("-o", "--output", type=click.Path(), default=None,
-              help="monitor/psl: output file (one input) or directory; default: stdout.")
+              help="monitor/psl/prism: output file (one input) or directory; default: stdout.")
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
 @click.option("--split", is_flag=True,
@@ -99,6 +101,11 @@ def compile_cmd(files, emit, as_json, output, psl_map, split):
     elif emit == "c2po":
         from fretc.cli.emit_c import write_c2po
         write_c2po(compiled, output, _check_output, _write_outputs)
+    elif emit == "prism":
+        from fretc.compiler.prism import emit_prism  # lazy: only for prism
+        outputs = emit_prism(compiled)
+        _check_output(outputs, output, ".props")
+        _write_outputs(outputs, output, ".props")
     elif emit == "psl":
         from fretc.compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler
@@ -377,16 +384,21 @@ def _emit_ltl(compiled) -> None:
         click.echo(visible(f"  text    {c.text}"))
         if c.formalization is not None:
             f = c.formalization
-            click.echo(f"  key     {f.key}")
+            b = c.probability
+            if b is not None:  # FRET's keys: the five-part one, and the LTL's
+                click.echo(f"  key     {c.key_pctl}")
+                click.echo(f"  key_ltl {f.key}")
+            else:
+                click.echo(f"  key     {f.key}")
             click.echo(f"  ft      {c.smv_text['ft']}")
             click.echo(f"  ft_inf  {c.smv_text['ft_inf']}")
             click.echo(f"  pt      {c.smv_text['pt']}")
-            if c.probability is not None:
-                # FRET's PCTL* form: the bound is across runs; ft/ft_inf/pt judge one run
+            if b is not None:
+                # FRET's PCTL: the bound at each trigger; ft/ft_inf/pt judge one run
                 click.echo(f"  pctl    {c.pctl()}")
-                click.echo(f"  note    probability {c.probability.op} {c.probability.text} "
-                           "applies across runs: one log is judged by the path formulas; "
-                           "fleets and 'fretc estimate' judge the bound (docs/guide/"
+                click.echo(f"  note    probability {b.op} {b.text} applies to each trigger: "
+                           "one log gives its triggers' outcomes; fleets and 'fretc "
+                           "estimate' judge the bound over triggers (docs/guide/"
                            "statistics.md)")
             for w in f.warnings:
                 click.echo(f"  warning {w}")

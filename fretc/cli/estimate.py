@@ -6,13 +6,15 @@ sequential tests: :mod:`fretc.sim.sequential`, rare violations: :mod:`fretc.sim.
 
     fretc estimate --requirements R --space SPACE.toml -o OUT [--seed N] [--budget N]
                    [--test sprt|cp] [--delta D] [--alpha A] [--beta B] [--confidence C]
-                   [--unknown-runs fail|exclude] [--rare [--target ID]...] [--ray [ADDRESS]]
+                   [--trial trigger|run] [--unknown-runs worst-case|exclude]
+                   [--rare [--target ID]...] [--ray [ADDRESS]]
 
 Exit status: 0 every probability requirement holds (and no other requirement was violated
 on a run; with --rare: every target estimated), 1 a probability requirement fails or a
 requirement without a bound was violated on some run, 2 usage or input errors (a degenerate
-distribution included; with --rare, a target whose robustness gives no levels), 5 the
-budget ended before a probability requirement was decided, 130 interrupted.
+distribution included; with --rare, a target whose robustness gives no levels) or a run
+that could not be judged, 5 the budget ended before a probability requirement was decided,
+130 interrupted.
 
 Only click is imported at module level; the simulator and the engine load on first use.
 """
@@ -23,7 +25,7 @@ import os
 
 import click
 
-from fretc.cli.options import FleetError, audit_config, shown
+from fretc.cli.options import FiniteRange, FleetError, audit_config, shown, statistics_options
 
 __all__ = ["estimate_cmd"]
 
@@ -48,21 +50,16 @@ __all__ = ["estimate_cmd"]
                    "runs/run-NNNNN.mcap + .audit.json of the violating runs.")
 @click.option("--test", type=click.Choice(["sprt", "cp"]), default="sprt", show_default=True,
               help="Sequential test: Wald's SPRT (with --delta) or repeated Clopper-Pearson.")
-@click.option("--delta", type=click.FloatRange(0, 0.5, min_open=True), default=0.05,
+@click.option("--delta", type=FiniteRange(0, 0.5, min_open=True), default=0.05,
               show_default=True,
               help="SPRT: half-width of the indifference region around p.")
-@click.option("--alpha", type=click.FloatRange(0, 0.5, min_open=True, max_open=True),
+@click.option("--alpha", type=FiniteRange(0, 0.5, min_open=True, max_open=True),
               default=0.05, show_default=True,
               help="Error of deciding 'holds' when the bound is false (by delta or more).")
-@click.option("--beta", type=click.FloatRange(0, 0.5, min_open=True, max_open=True),
+@click.option("--beta", type=FiniteRange(0, 0.5, min_open=True, max_open=True),
               default=0.05, show_default=True,
               help="SPRT: error of deciding 'fails' when the bound holds (by delta or more).")
-@click.option("--confidence", type=click.FloatRange(0, 1, min_open=True, max_open=True),
-              default=0.95, show_default=True, help="Confidence of the reported intervals.")
-@click.option("--unknown-runs", type=click.Choice(["fail", "exclude"]), default="fail",
-              show_default=True,
-              help="Unknown and error runs count as failures (fail) or not at all; never as "
-                   "satisfied.")
+@statistics_options
 @click.option("--rare", is_flag=True,
               help="Estimate small violation probabilities (down to 1e-6) by adaptive "
                    "multilevel splitting on the robustness, instead of the sequential test.")
@@ -80,14 +77,15 @@ __all__ = ["estimate_cmd"]
                    "of a cluster); the same answer as without.")
 @click.pass_context
 def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, test, delta,
-                 alpha, beta, confidence, unknown_runs, rare, targets, particles, kill, moves,
-                 ray):
+                 alpha, beta, confidence, trial, unknown_runs, rare, targets, particles, kill,
+                 moves, ray):
     """Judge requirements 'with probability OP p' over the simulator's scenario space:
     sample its distributions with SEED, simulate and audit each run, and stop when every
-    probability requirement is decided by the sequential test or the budget ends. The
-    report gives per requirement the estimate of P(satisfied), its Clopper-Pearson
-    interval, the runs used and the test's path (SVG); violating runs are kept
-    (MCAP + audit). --rare estimates violation probabilities by adaptive multilevel
+    probability requirement is decided by the sequential test or the budget ends. A
+    trial is a trigger (FRET's bound is per trigger; --trial run: a run). The report
+    gives per requirement the estimate of the probability of a satisfied trial, its
+    Clopper-Pearson interval, the triggers per run, the runs used and the test's path
+    (SVG); violating runs are kept (MCAP + audit). --rare estimates violation probabilities by adaptive multilevel
     splitting instead (estimate, relative error, interval).
 
     \b
@@ -96,7 +94,7 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
       1  a probability requirement fails, or a requirement without a bound is
          violated on some run
       2  usage or input errors (a degenerate distribution; --rare: a target
-         whose robustness is boolean)
+         whose robustness is boolean), or a run could not be judged
       5  undecided: the budget ended before the test decided
       130  interrupted (Ctrl-C); the runs so far are reported"""
     # lazy: the simulator, the audit engine, scipy only when the command runs
@@ -131,8 +129,8 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
 
     try:
         doc = _campaign(plan, space, seed, budget, output, test, delta, alpha, beta,
-                        confidence, unknown_runs, rare, list(targets) or ids, particles,
-                        kill, moves, ray)
+                        confidence, (trial, unknown_runs), rare, list(targets) or ids,
+                        particles, kill, moves, ray)
     except RayUnavailable as exc:
         raise FleetError(str(exc)) from None
     for line in doc["summary_lines"]:
@@ -142,9 +140,11 @@ def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, 
 
 
 def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confidence,
-              unknown_runs, rare, targets, particles, kill, moves, ray) -> dict:
+              counting, rare, targets, particles, kill, moves, ray) -> dict:
     """Run the campaign (or the splitting with ``rare``) and write its report; returns the
-    report document (:func:`fretc.reports.estimate.write_estimate`)."""
+    report document (:func:`fretc.reports.estimate.write_estimate`). ``counting``: the
+    ``(trial, unknown_runs)`` options."""
+    trial, unknown_runs = counting
     from fretc.audit.verdict import audit_json
     from fretc.reports.estimate import write_estimate
 
@@ -170,5 +170,6 @@ def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confi
 
     result = estimate(plan, space, seed, output, budget=budget, test=test, delta=delta,
                       alpha=alpha, beta=beta, confidence=confidence, unknown=unknown_runs,
-                      ray_address=ray, audit_json=one_log_json, progress=progress)
+                      trial=trial, ray_address=ray, audit_json=one_log_json,
+                      progress=progress)
     return write_estimate(output, result, None)

@@ -10,6 +10,7 @@ on first use.
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any, Sequence
 
@@ -17,38 +18,50 @@ import click
 
 from fretc.common.textsafe import visible
 
-__all__ = ["Finite", "TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps", "audit_input_options", "live_input_options", "audit_config", "ray_options", "run_audits", "META",
-           "FleetError", "shown"]
+__all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps",
+           "audit_input_options", "live_input_options", "audit_config", "ray_options",
+           "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options"]
+
+
+class FiniteRange(click.FloatRange):
+    """click's ``FloatRange`` that also refuses NaN and the infinities, which click's range
+    lets through (every comparison with NaN is false): a usage error, exit 2."""
+
+    def convert(self, value, param, ctx):
+        """The float of ``value`` in the range; fails (usage error) otherwise."""
+        rv = super().convert(value, param, ctx)
+        if not math.isfinite(rv):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return rv
+
+
+def statistics_options(f):
+    """``--confidence``, ``--trial`` and ``--unknown-runs`` of the statistics of probability
+    requirements (``fretc audit``, ``fretc estimate``; :mod:`fretc.audit.statistics`)."""
+    for opt in reversed((
+        click.option("--confidence", type=FiniteRange(0.5, 1, max_open=True), default=0.95,
+                     show_default=True,
+                     help="Confidence of the intervals, in [0.5, 1) (a lower one shrinks the "
+                          "interval to about the estimate, deciding bounds the trials do not "
+                          "support)."),
+        click.option("--trial", type=click.Choice(["trigger", "run"]), default="trigger",
+                     show_default=True,
+                     help="What one trial of a 'with probability' requirement is: each "
+                          "trigger whose obligation the log decides (FRET's bound is per "
+                          "trigger; the triggers of a run counted as a cluster), or each run "
+                          "(the stronger per-run reading)."),
+        click.option("--unknown-runs", type=click.Choice(["worst-case", "exclude", "fail"]),
+                     default="worst-case", show_default=True,
+                     help="Unknown and error runs, and triggers of unknown outcome: trials "
+                          "that could have gone either way, the interval spanning every "
+                          "outcome ('fail' is an old name of it), or left out (exclude). "
+                          "Never as satisfied."))):
+        f = opt(f)
+    return f
+
 
 #: Key of the Ray options in the click context's ``meta``.
 META = "fretc.fleet"
-
-
-class Finite(click.ParamType):
-    """A click parameter type: a finite number in ``[low, high]`` (``low`` excluded when
-    ``low_open``), ``what`` naming it in errors (default seconds). Unlike ``click.FloatRange`` it refuses ``nan`` (which
-    compares false with every bound and so passes a range) and ``inf``; the error names the
-    option and the accepted range."""
-
-    name = "number"
-
-    def __init__(self, low: float = 0.0, high: float = 1e7, low_open: bool = False,
-                 what: str = "a number of seconds"):
-        self.low, self.high, self.low_open, self.what = low, high, low_open, what
-
-    def convert(self, value, param, ctx):
-        import math
-
-        try:
-            seconds = float(value)
-        except (TypeError, ValueError):
-            self.fail(f"{value!r} is not {self.what}", param, ctx)
-        above = seconds > self.low if self.low_open else seconds >= self.low
-        if not (math.isfinite(seconds) and above and seconds <= self.high):
-            bound = ">" if self.low_open else ">="
-            self.fail(f"{value!r} is not {self.what} {bound} {self.low:g} and "
-                      f"<= {self.high:g}", param, ctx)
-        return seconds
 
 
 def shown(text: str) -> str:

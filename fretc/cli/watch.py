@@ -36,7 +36,7 @@ import click
 
 from fretc.common.units import format_offset
 
-from fretc.cli.options import Finite, audit_config, live_input_options
+from fretc.cli.options import FiniteRange, audit_config, live_input_options
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
@@ -140,7 +140,8 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
 @click.command("watch")
 @click.argument("url")
 @live_input_options
-@click.option("--duration", type=Finite(low_open=True), default=None, metavar="SECONDS",
+@click.option("--duration", type=FiniteRange(0, 1e7, min_open=True), default=None,
+              metavar="SECONDS",
               help="End the run after this many seconds (default: until the server ends it "
                    "or Ctrl-C).")
 @click.option("--until-idle", default=None, metavar="DURATION", callback=_seconds,
@@ -162,9 +163,10 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
 @click.option("--jsonl", is_flag=True, help="One JSON line per verdict event on stdout.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the final verdicts and evidence as the audit's JSON to FILE.")
-@click.option("--wait", type=Finite(), default=3.0, show_default=True, metavar="SECONDS",
+@click.option("--wait", type=FiniteRange(0, 1e7), default=3.0, show_default=True, metavar="SECONDS",
               help="After connecting, wait this long for the bound topics' advertisements.")
-@click.option("--connect-timeout", type=Finite(low_open=True), default=None, metavar="SECONDS",
+@click.option("--connect-timeout", type=FiniteRange(0, 1e7, min_open=True), default=None,
+              metavar="SECONDS",
               help="Give up when no connection was made within this time (default: retry "
                    "until stopped).")
 @click.option("--no-live", is_flag=True, help="No live table (also when stderr is no terminal).")
@@ -319,7 +321,7 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
               help="Publish the log: alone, over the Foxglove WebSocket protocol (foxglove-sdk, "
                    "--host/--port); dds://DOMAIN as ROS 2 topics on Cyclone DDS; "
                    "zenoh://HOST:PORT as rmw_zenoh would (a Zenoh peer listening there).")
-@click.option("--rate", type=Finite(high=1e6, what="a rate"), default=1.0, show_default=True,
+@click.option("--rate", type=FiniteRange(0, 1e6), default=1.0, show_default=True,
               help="Times real time (0: as fast as possible).")
 @click.option("--host", default="127.0.0.1", show_default=True,
               help="Interface to bind (loopback by default).")

@@ -102,11 +102,17 @@ def _logs(verdicts: list[str]) -> list[LogAudit]:
 def test_unknown_runs_are_never_satisfied():
     logs = _logs(["satisfied"] * 18 + ["unknown"] * 2)
     b = {"P": ProbabilityBound(">=", "0.5")}
-    fail, = fleet_statistics(logs, b, unknown="fail")
-    excl, = fleet_statistics(logs, b, unknown="exclude")
-    assert (fail.successes, fail.trials) == (18, 20) and (excl.successes, excl.trials) == (18, 18)
-    assert fail.estimate == 0.9 and excl.estimate == 1.0
-    assert fail.unknown == 2 and fail.to_json()["unknown_policy"] == "fail"
+    worst, = fleet_statistics(logs, b, unknown="worst-case", trial="run")
+    excl, = fleet_statistics(logs, b, unknown="exclude", trial="run")
+    assert (worst.successes, worst.trials, worst.unknown_trials) == (18, 18, 2)
+    assert (excl.successes, excl.trials, excl.unknown_trials) == (18, 18, 0)
+    assert worst.estimate == excl.estimate == 1.0
+    # worst case: the lower end as if both failed, the upper as if both succeeded
+    assert worst.interval == (clopper_pearson(18, 20)[0], clopper_pearson(20, 20)[1])
+    assert excl.interval == clopper_pearson(18, 18)
+    assert worst.unknown == 2 and worst.to_json()["unknown_policy"] == "worst-case"
+    old, = fleet_statistics(logs, b, unknown="fail", trial="run")  # the old name
+    assert old.to_json() == worst.to_json()
 
 
 @pytest.mark.parametrize("op,p,lo,hi,want", [
@@ -119,29 +125,31 @@ def test_decide(op, p, lo, hi, want):
 
 def test_undecided_says_how_many_more_runs():
     st = RequirementStatistics("P", successes=19, trials=20)
+    from fretc.audit.intervals import Counts
     from fretc.audit.statistics import judge_counts
     judge_counts(st, ">=", 0.9)
     assert st.verdict == "undecided" and st.more_runs is not None and "more runs" in st.why
     m = st.more_runs
     # at the observed rate, n + m runs decide and n + m - 1 do not
-    k = lambda n: round(0.95 * n)  # noqa: E731
-    assert decide(">=", 0.9, *clopper_pearson(k(20 + m), 20 + m)) == "holds"
-    assert decide(">=", 0.9, *clopper_pearson(k(19 + m), 19 + m)) == "undecided"
-    assert more_runs(">=", 0.5, 5, 10, 0.95) is None  # the rate is the bound: never
+    k = lambda j: 19 + round(0.95 * j)  # noqa: E731
+    assert decide(">=", 0.9, *clopper_pearson(k(m), 20 + m)) == "holds"
+    assert decide(">=", 0.9, *clopper_pearson(k(m - 1), 19 + m)) == "undecided"
+    half = Counts(5, 10, 0, 10, 10, 10)
+    assert more_runs(">=", 0.5, half, 0.95) is None  # the rate is the bound: never
 
 
 def test_exit_codes_follow_the_statistical_verdict():
     logs = _logs(["satisfied"] * 3 + ["violated"])
     b = {"P": ProbabilityBound(">=", "0.5")}
-    stats = fleet_statistics(logs, b)
+    stats = fleet_statistics(logs, b, trial="run")
     assert stats[0].verdict == "undecided"
     assert exit_code(logs, statistics=stats) == EXIT_UNDECIDED == 5
     assert exit_code(logs, statistics=stats, allow_partial=True) == 5
     assert exit_code(logs) == 1  # without statistics: a plain requirement
     worse = _logs(["violated"] * 30)
-    assert exit_code(worse, statistics=fleet_statistics(worse, b)) == 1
+    assert exit_code(worse, statistics=fleet_statistics(worse, b, trial="run")) == 1
     good = _logs(["satisfied"] * 30)
-    assert exit_code(good, statistics=fleet_statistics(good, b)) == 0
+    assert exit_code(good, statistics=fleet_statistics(good, b, trial="run")) == 0
 
 
 @pytest.mark.parametrize("p,clean,one", [(0.5, 6, 9), (0.9, 36, 54), (0.95, 72, 110),

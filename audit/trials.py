@@ -1,0 +1,148 @@
+"""The triggers of a probability requirement on one log as trials (FRET 3.1 reads ``with
+probability OP p`` per trigger: :mod:`fretc.compiler.pctl`): each trigger of FRET's interval
+semantics (:mod:`fretc.monitors.interval`) whose obligation the log decides is one trial,
+satisfied or violated; the others are counted apart, never as trials of either outcome.
+
+* **satisfied** / **violated**: the obligation from the trigger (:mod:`fretc.monitors.
+  obligations`) is met / missed on the ticks read, whatever the unknown ticks held (the
+  scope interval's bounds and the trigger are known, and so are the response and stop
+  condition on the ticks that decide it: :class:`fretc.monitors.judge3.Unknowns`).
+* **cut**: the log ends (a complete log: the run ended there) inside the trigger's timing
+  window, which reaches past its last tick, before the ticks read decide the obligation:
+  ``within``, ``for``, ``after`` and ``next`` near the end. FRET's finite-trace semantics
+  reads such a trigger as met (the interval ended first); it is no trial. The untimed
+  obligations (``eventually``, ``always``, ``until``...) end with the run, as FRET's
+  finite-trace verdict of the run reads them.
+* **unknown**: a trigger whose interval bounds, trigger point or deciding ticks are unknown
+  (a gap of the log, a comparison with NaN), or whose obligation is still open where a
+  damaged log stops being read (the run went on: :func:`fretc.audit.damage.open_reason`).
+  What they count for is the fleet statistics' unknown policy
+  (:mod:`fretc.audit.statistics`): never a success.
+* **hidden**: a trigger may have fired in unknown ticks (the scope mode or the condition is
+  unknown somewhere): such triggers are not seen, so not counted; a note says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fretc.fretish import ast as A
+from fretc.monitors.interval import Violation, scope_of, trace_signals, trigger_points
+from fretc.monitors.judge3 import Unknowns, possible_trigger
+from fretc.monitors.obligations import ObligationChecker
+
+from fretc.audit.damage import open_reason
+
+__all__ = ["Trials", "trigger_trials", "trigger_outcomes", "TIMED_WINDOWS"]
+
+#: the timings whose window from a trigger can reach past the end of a run
+TIMED_WINDOWS = ("within", "for", "after", "next")
+
+
+@dataclass
+class Trials:
+    """One requirement's triggers on one log (module docstring): ``satisfied``,
+    ``violated`` (the trials), ``cut`` and ``unknown`` (no trials), and ``hidden`` (a
+    trigger may have fired in unknown ticks)."""
+
+    satisfied: int = 0
+    violated: int = 0
+    cut: int = 0
+    unknown: int = 0
+    hidden: bool = False
+
+    @property
+    def trials(self) -> int:
+        """``satisfied + violated``."""
+        return self.satisfied + self.violated
+
+    def to_json(self) -> dict:
+        """The audit JSON's ``trials`` object of a verdict (docs/reference/audit-json.md)."""
+        return {"satisfied": self.satisfied, "violated": self.violated, "cut": self.cut,
+                "unknown": self.unknown, "hidden": self.hidden}
+
+
+def trigger_trials(req: A.Requirement, columns, n: int, duration_ticks: int | None,
+                   unknowns: Unknowns | None = None, damaged: bool = False) -> Trials:
+    """The :class:`Trials` of ``req`` on a trace of ``n`` ticks (>= 1; module docstring):
+    the outcomes of :func:`trigger_outcomes` counted; arguments and errors as there."""
+    out = Trials(hidden=bool(unknowns is not None and possible_trigger(unknowns)))
+    for _t, kind in trigger_outcomes(req, columns, n, duration_ticks, unknowns, damaged):
+        setattr(out, kind, getattr(out, kind) + 1)
+    return out
+
+
+def trigger_outcomes(req: A.Requirement, columns, n: int, duration_ticks: int | None,
+                     unknowns: Unknowns | None = None, damaged: bool = False):
+    """Each trigger of ``req`` on a trace of ``n`` ticks (>= 1) with its outcome, in tick
+    order: ``(t, kind)``, ``kind`` one of ``satisfied``, ``violated``, ``cut``, ``unknown``
+    (module docstring).
+
+    Args:
+        req: a parsed, not free-form requirement.
+        columns: FRET variable -> 1-D array of ``n`` values (as sampled; unknown ticks hold
+            any value).
+        duration_ticks: the timing's duration in ticks (``Formalization.ticks``).
+        unknowns: where its parts are unknown (None: every tick known).
+        damaged: the trace ends where a damaged log stops being read, not where the run
+            ended.
+
+    Raises:
+        fretc.monitors.interval.EvidenceUnsupported: an uninterpreted function.
+        KeyError: a variable missing from ``columns``.
+    """
+    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
+    negate = scope.startswith("only")
+    k = int(duration_ticks or 0) if timing in A.DURATION_TIMINGS else 0
+    R, C, S = trace_signals(req, columns, n)
+    chk = ObligationChecker(timing, negate, R, S, k)
+    for s, e in scope_of(req, columns, n):
+        known_scope = unknowns is None or unknowns.scope_known(s, e, scope)
+        for t in trigger_points(cond, C, s, e):
+            if not known_scope or (unknowns is not None
+                                   and not unknowns.trigger_known(t, s, cond)):
+                yield t, "unknown"
+            else:
+                yield t, _outcome(timing, negate, t, (s, e), k, chk, unknowns, damaged, n)
+
+
+def _outcome(timing: str, negate: bool, t: int, interval: tuple[int, int], k: int,
+             chk: ObligationChecker, u: Unknowns | None, damaged: bool, n: int) -> str:
+    """``satisfied``, ``violated``, ``cut`` or ``unknown`` for the known trigger ``t``."""
+    s, e = interval
+    if e == n - 1 and open_reason(timing, negate, t, e, k, chk) is not None:
+        if damaged:
+            return "unknown"
+        if timing in TIMED_WINDOWS:
+            return "cut"
+    bad = chk.check(t, e)
+    if bad is not None:
+        window, vt, reason = bad
+        if u is None or u.missed_known(Violation(t, interval, window, vt, reason), timing,
+                                       negate):
+            return "violated"
+        return "unknown"
+    return "satisfied" if _met_known(timing, negate, t, e, k, chk, u) else "unknown"
+
+
+#: (timing, only* scope) whose obligation one tick meets: the one the checker looks for
+#: holds somewhere in the window (True: the response, False: its negation)
+_SOMEWHERE = {("eventually", False): True, ("null", False): True, ("within", False): True,
+              ("never", True): True, ("always", True): False, ("for", True): False}
+
+
+def _met_known(timing: str, negate: bool, t: int, e: int, k: int, chk: ObligationChecker,
+               u: Unknowns | None) -> bool:
+    """A met obligation is met whatever the unknown ticks held: for the obligations one
+    tick meets, that tick is known (or none was needed: the interval ended first); for the
+    others the response and stop condition are known on the whole window."""
+    if u is None:
+        return True
+    target = _SOMEWHERE.get((timing, negate))
+    if target is not None:
+        hi = min(t + k, e) if timing in ("within", "for") else e
+        j = (chk.nR if target else chk.nNR)[t]
+        return j > hi or not u.R[j]
+    hi = {"immediately": t, "next": min(t + 1, e), "within": min(t + k, e),
+          "for": min(t + k, e), "after": min(t + k + 1, e)}.get(timing, e)
+    return u.obligation_known(t, hi)

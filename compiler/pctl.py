@@ -1,0 +1,239 @@
+"""FRET's probabilistic form of a requirement: where FRET 3.1 puts the bounds, around fretc's
+own (FRET-exact) infinite-trace formula.
+
+FRET 3.1 formalizes a requirement ``with probability OP p`` by its probabilistic templates
+(``probabilisticSemantics.json``, one template per five-part key
+``scope,condition,probability,timing,response``; probability ``bound`` or ``null``, 8 x 3
+x 2 x 12 = 576 keys). The bound is **per trigger**: at each triggering point the templates
+name (the first point of each scope interval, each point where a ``regular`` condition
+becomes true or holds at an interval's first point, every point of a ``holding``
+condition), the timing's obligation from that point holds with probability ``OP p``; and the
+whole, ``P>=1 [ ... ]``, holds almost surely. Only the keys without scope and condition
+(``null,null,...``) put one bound around the whole path formula. A requirement without a
+probability has the key's ``null`` probability: ``P>=1`` at each trigger.
+
+FRET's own path formulas inside those templates contradict FRET's LTL (ft_inf) in 19 of the
+45 sentences of ``../shared/fretish/fret_probabilistic_vectors.jsonl`` (checked with Spot;
+docs/reference/semantics.md lists the template families and a trace that separates each).
+fretc keeps FRET's *placement* of the bounds and puts them around its own ft_inf: the same
+construction (:func:`fretc.compiler.semantics.construct`) with each occurrence of the
+timing's obligation wrapped in a bound node, so that removing the bounds gives back ft_inf
+exactly (tests/compiler/test_pctl.py, on FRET's vectors and all 576 keys).
+
+The bound node is ``Node("P", (path,), name=OP + p)`` (e.g. ``">=0.9"``); the printed form
+is PRISM's property syntax (``P>=0.9 [ F<=1 stopped ]``, PRISM manual, "The P operator"),
+names mangled as FRET prints them; ``=`` and ``!=`` bounds, which PRISM has not, print as
+FRET prints them (``P=0.5 [ ... ]``) and :func:`prism_property` writes them as PRISM's
+conjunction or disjunction of two bounds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import mangle, to_smv
+from fretc.compiler.semantics import marked_ft_inf
+
+__all__ = ["Pctl", "pctl_of", "pctl_key", "prism_text", "strip_bounds", "bound_structure",
+           "prism_property", "ALMOST_SURE", "PROBABILITY_KEYS"]
+
+#: the probability field of FRET's five-part keys
+PROBABILITY_KEYS = ("bound", "null")
+#: the bound of the ``null`` probability, and of the whole around the per-trigger bounds
+ALMOST_SURE = ">=1"
+
+
+def pctl_key(key: str, bounded: bool) -> str:
+    """FRET's five-part key ``scope,condition,probability,timing,response`` of a four-part
+    template key ``scope,condition,timing,response`` (``probability``: ``bound`` for a
+    requirement with a probability bound, else ``null``)."""
+    scope, cond, timing, response = key.split(",")
+    return ",".join((scope, cond, "bound" if bounded else "null", timing, response))
+
+
+@dataclass(frozen=True)
+class Pctl:
+    """The probabilistic form of one requirement.
+
+    Attributes:
+        key: FRET's five-part key (:func:`pctl_key`).
+        tree: the formula with its bounds: ``P`` nodes (``name`` = the bound, e.g.
+            ``">=0.9"``) around each occurrence of the timing's obligation, and around the
+            whole (``>=1``) unless scope and condition are both ``null``.
+        bound: the requirement's :class:`fretc.compiler.ir.ProbabilityBound`, or None (the
+            ``null`` probability: every bound ``>=1``).
+    """
+
+    key: str
+    tree: Node
+    bound: object = None
+
+    @property
+    def text(self) -> str:
+        """The formula in PRISM's syntax (:func:`prism_text`)."""
+        return prism_text(self.tree)
+
+    @property
+    def path(self) -> Node:
+        """The formula with its bounds removed: ft_inf (:func:`strip_bounds`)."""
+        return strip_bounds(self.tree)
+
+    @property
+    def bounds(self) -> list[dict]:
+        """Where the bounds sit (:func:`bound_structure`)."""
+        return bound_structure(self.tree)
+
+
+def pctl_of(req, tick_period=None) -> Pctl:
+    """The :class:`Pctl` of a parsed requirement (not free-form) with the tick period
+    ``tick_period`` (seconds, or None as :func:`fretc.compiler.semantics.formalize`).
+    Raises :class:`fretc.compiler.expressions.SemanticsError` as ``formalize`` does."""
+    b = ir.probability_bound(req.probability)
+    name = ALMOST_SURE if b is None else f"{b.op}{b.text}"
+    tree = marked_ft_inf(req, tick_period, lambda t: Node("P", (t,), name=name))
+    if (req.scope.kind, req.condition.kind) != ("null", "null"):
+        tree = Node("P", (tree,), name=ALMOST_SURE)
+    return Pctl(pctl_key(req.key, b is not None), tree, b)
+
+
+def strip_bounds(n: Node) -> Node:
+    """``n`` without its ``P`` nodes, rebuilt by the IR's simplifying constructors
+    (:func:`fretc.compiler.ir.rebuild`): for a :class:`Pctl` tree, exactly the ft_inf
+    formula of the requirement."""
+    memo: dict = {}
+
+    def go(x: Node) -> Node:
+        got = memo.get(id(x))
+        if got is not None:
+            return got
+        if x.op == "P":
+            out = go(x.args[0])
+        elif not x.args or x.op in _ATOMS:
+            out = x
+        else:
+            out = ir.rebuild(x, tuple(go(a) for a in x.args))
+        memo[id(x)] = out
+        return out
+
+    return go(n)
+
+
+#: IR nodes printed whole, never entered (terms and derived atoms)
+_ATOMS = ("cmp", "call", "fn", "pre", "past", "future", "arith", "neg", "ite", "var", "num")
+#: the temporal operators a bound's place is described by, as PRISM names them
+_TEMPORAL = {"X": "X", "F": "F", "G": "G", "U": "U", "V": "R"}
+
+
+def bound_structure(tree: Node) -> list[dict]:
+    """The bounds of a :class:`Pctl` tree in pre-order: per bound ``{"bound": "P>=0.9",
+    "parent": index of the enclosing bound or None, "under": [...]}``, ``under`` the
+    temporal operators between the enclosing bound (or the root) and this one, outermost
+    first (``X``, ``F``, ``G``; ``U.1``/``U.2``, ``R.1``/``R.2`` with the operand taken)."""
+    out: list[dict] = []
+
+    def go(x: Node, parent, under: tuple) -> None:
+        if x.op == "P":
+            out.append({"bound": f"P{x.name}", "parent": parent, "under": list(under)})
+            here = len(out) - 1
+            go(x.args[0], here, ())
+            return
+        if x.op in _ATOMS:
+            return
+        t = _TEMPORAL.get(x.op)
+        for i, a in enumerate(x.args):
+            if t is None:
+                go(a, parent, under)
+            else:
+                go(a, parent, under + ((t if len(x.args) == 1 else f"{t}.{i + 1}"),))
+
+    go(tree, None, ())
+    return out
+
+
+# --------------------------------------------------------------------------- PRISM's syntax
+_PRISM_BIN = {"&": "&", "|": "|", "->": "=>", "<->": "<=>", "U": "U", "V": "R"}
+
+
+def prism_text(n: Node) -> str:
+    """A formula of the IR (future time, with ``P`` bound nodes) in PRISM's property syntax,
+    every binary operation and every bound inside the formula in parentheses as FRET
+    prints them: ``! & | => <=>``, ``X F G U R``,
+    bounded ``F<=k`` (``F[l,h]`` for a lower bound above 0), ``true``/``false``, names
+    mangled as FRET does, ``P>=0.9 [ ... ]``. ``xor`` is written with ``&``, ``|`` and
+    ``!``; ``mod`` and ``^`` as PRISM's ``mod(a, b)`` and ``pow(a, b)``. Past-time
+    operators and FRETish functions PRISM has not (``absReal``, ``persisted`` left
+    uninterpreted...) print in FRET's syntax (:func:`fretc.compiler.printers.to_smv`):
+    the model must define them."""
+    memo: dict = {}
+
+    def go(x: Node) -> str:
+        s = memo.get(id(x))
+        if s is None:
+            s = memo[id(x)] = _prism(x, go)
+        return s
+
+    text = go(n)
+    return text[1:-1] if n.op == "P" else text
+
+
+def _bounds(x: Node) -> str:
+    if x.hi is None:
+        return ""
+    return f"<={x.hi}" if not x.lo else f"[{x.lo},{x.hi}]"
+
+
+def _prism(x: Node, go) -> str:
+    op, a = x.op, x.args
+    if op in ("true", "false"):
+        return op
+    if op in ("ap", "var"):
+        return mangle(x.name)
+    if op == "num":
+        return x.name
+    if op == "P":  # parenthesized inside a formula, as FRET does (prism_text: not at the top)
+        return f"(P{x.name} [ {go(a[0])} ])"
+    if op == "!":
+        return f"(! {go(a[0])})"
+    if op in _PRISM_BIN:
+        return f"({go(a[0])} {_PRISM_BIN[op]} {go(a[1])})"
+    if op == "xor":
+        p, q = go(a[0]), go(a[1])
+        return f"(({p} & (! {q})) | ((! {p}) & {q}))"
+    if op in ("X", "F", "G"):
+        return f"({op}{_bounds(x)} {go(a[0])})"
+    if op == "cmp":
+        return f"({go(a[0])} {x.name} {go(a[1])})"
+    if op == "arith":
+        if x.name in ("mod", "^"):
+            return f"{'mod' if x.name == 'mod' else 'pow'}({go(a[0])}, {go(a[1])})"
+        return f"({go(a[0])} {x.name} {go(a[1])})"
+    if op == "neg":
+        return f"(- {go(a[0])})"
+    return to_smv(x)
+
+
+def prism_property(pctl: Pctl, name: str) -> str:
+    """One property of a PRISM properties file: ``"name": formula;`` (PRISM's named
+    properties), the formula :attr:`Pctl.text` with its ``=`` and ``!=`` bounds written
+    in PRISM's bounds (``P=p [ f ]`` as ``(P>=p [ f ] & P<=p [ f ])``, ``P!=p [ f ]`` as
+    ``(P<p [ f ] | P>p [ f ])``; at p = 0 or 1 the one bound that says it)."""
+    return f'"{name}": {prism_text(_prism_bounds(pctl.tree))};'
+
+
+def _prism_bounds(n: Node) -> Node:
+    """``n`` with ``=``/``!=`` bounds written as PRISM's (:func:`prism_property`)."""
+    args = tuple(_prism_bounds(a) for a in n.args)
+    if n.op != "P" or not n.name.startswith(("=", "!=")):
+        return n if args == n.args else Node(n.op, args, n.name, n.lo, n.hi)
+    eq = n.name.startswith("=")
+    text = n.name[1:] if eq else n.name[2:]
+    p = float(text)
+
+    def b(op: str) -> Node:
+        return Node("P", args, name=op + text)
+
+    if eq:
+        return b(">=") if p == 1 else b("<=") if p == 0 else Node("&", (b(">="), b("<=")))
+    return b("<") if p == 1 else b(">") if p == 0 else Node("|", (b("<"), b(">")))
