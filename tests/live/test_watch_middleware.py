@@ -3,8 +3,8 @@ DDS) and `--serve zenoh://127.0.0.1:P` (rmw_zenoh's key expressions), each in it
 process, watched by `fretc watch` in another until the publishers leave: the JSON verdicts
 and the exit code equal `fretc audit`'s of the same log. Independent subscribers written here
 (their own IDL types for std_msgs/Bool and geometry_msgs/Twist, their own key expressions)
-receive the replay's messages under ROS 2's wire names. A truncated payload over Zenoh is an
-undecodable message, never a held-over pass. Everything on 127.0.0.1, multicast off."""
+receive the replay's messages under ROS 2's wire names (more Zenoh cases:
+tests/live/test_watch_zenoh.py). Everything on 127.0.0.1, multicast off."""
 
 import json
 import os
@@ -230,125 +230,6 @@ def test_an_independent_zenoh_subscriber_reads_rmw_zenoh_key_expressions(tmp_pat
 
 
 # ------------------------------------------------------------- bad input
-def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
-    """A message that does not decode opens a gap: the run is partial (exit 3), never a
-    clean pass; the watch ends by itself when the publisher leaves."""
-    from fretc.live.zenoh_serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
-        encoding="utf-8")
-    port = _port()
-    url = f"zenoh://127.0.0.1:{port}"
-    server = ZenohServer(url)
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-    import threading
-
-    def publish():
-        server.wait_subscribed(timeout=30)
-        t0 = 1_700_000_000 * 10**9
-        for k in range(30):
-            data = b"\x00\x01" if k == 15 else b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
-            server.log("/a", data, t0 + k * 50_000_000)
-            time.sleep(0.005)
-        time.sleep(0.5)
-        server.stop()
-
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "60",
-                                    "--restart-grace", "0.5"])
-    t.join(10)
-    doc = json.loads(out.read_text())
-    kinds = {p["kind"] for p in doc["logs"][0]["problems"]}
-    assert "undecodable" in kinds, res.output
-    assert res.exit_code == 3, res.output
-
-
-def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
-    """/a is bound as std_msgs/Bool ([types]) but carries Float64: reported, its
-    requirement is error (exit 2), never judged from a misread value."""
-    import threading
-
-    from fretc.live.zenoh_serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
-        '[types]\n"/a" = "std_msgs/msg/Bool"\n', encoding="utf-8")
-    url = f"zenoh://127.0.0.1:{_port()}"
-    server = ZenohServer(url)
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-
-    def publish():
-        server.wait_subscribed(timeout=30)
-        for k in range(10):
-            server.log("/a", b"\x00\x01\x00\x00" + struct.pack("<d", 1.0),
-                       1_700_000_000 * 10**9 + k * 50_000_000)
-        time.sleep(0.3)
-        server.stop()
-
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "20", "--wait", "5",
-                                    "--restart-grace", "0.5"])
-    t.join(10)
-    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
-    assert v["verdict"] == "error"
-    assert "std_msgs/msg/Bool" in v["error"] and "/a" in v["error"], v["error"]
-    assert res.exit_code == 2, res.output
-
-
-@pytest.mark.parametrize("wildcard", ["0/a/**", "**", "0/a/*/*"])
-def test_samples_on_wildcard_keys_are_messages_of_the_topic_they_reach(tmp_path, wildcard):
-    """Zenoh delivers a put on ``0/a/**``, ``**`` or ``0/a/*/*`` to the subscriber of /a
-    (its key expression intersects theirs): those are messages of /a, typed by /a's
-    liveliness token, and the violating value among them is found (was: ignored, satisfied,
-    exit 0)."""
-    import threading
-
-    from fretc.live.ros2_names import attachment
-    from fretc.live.zenoh_serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
-        encoding="utf-8")
-    url = f"zenoh://127.0.0.1:{_port()}"
-    server = ZenohServer(url)
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-
-    def publish():
-        server.wait_subscribed(timeout=30)
-        t0 = 1_700_000_000 * 10**9
-        for k in range(20):  # rmw_zenoh's attachment gives each its log time, 50 ms apart
-            value = -1.0 if 8 <= k < 12 else 1.0  # 200 ms: over a tick
-            server.session.put(wildcard, b"\x00\x01\x00\x00" + struct.pack("<d", value),
-                               attachment=attachment(k + 1, t0 + k * 50_000_000, bytes(16)))
-            time.sleep(0.005)
-        time.sleep(0.5)
-        server.stop()
-
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "30",
-                                    "--restart-grace", "0.5"])
-    t.join(10)
-    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
-    assert v["verdict"] == "violated", (v, res.output)
-    assert res.exit_code == 1, res.output
-
-
 def test_a_malformed_url_is_a_usage_error():
     res = CliRunner().invoke(main, ["watch", "dds://999", "-r", REQS, "--no-live"])
     assert res.exit_code == 2
@@ -516,58 +397,3 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
     assert abs(v["first_tick_ns"] - 100 * 10**9) <= 10**8
     assert res.exit_code == 1, res.output
 
-
-def test_zenoh_bridge_ros2dds_layout(tmp_path):
-    """``zenoh://HOST:PORT?layout=bridge``: topics on zenoh-bridge-ros2dds's key expressions
-    (``a``, no domain, type or hash) with its liveliness tokens (``@ros2_lv/<zid>/MP/a/
-    std_msgs§msg§Float64/:::``); the type comes from the token, the log time is the arrival
-    (the bridge forwards no source timestamp); a violating value is seen, and ``/b``'s
-    publisher leaving while ``/a`` goes on makes the requirement reading it unknown."""
-    import threading
-
-    from fretc.live.ros2_names import bridge_liveliness
-    from fretc.live.zenoh_serve import ZenohServer
-
-    assert bridge_liveliness("z1", "ns/a", "std_msgs/msg/Float64") == \
-        "@ros2_lv/z1/MP/ns§a/std_msgs§msg§Float64/:::"
-    (tmp_path / "w.fret").write_text(
-        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
-        "RB: the robot shall always satisfy b_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
-        'b_ok = "/b.data > 0"\n', encoding="utf-8")
-    url = f"zenoh://127.0.0.1:{_port()}?layout=bridge"
-    server = ZenohServer(url)
-    for topic in ("/a", "/b"):
-        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-
-    def f64(x: float) -> bytes:
-        return b"\x00\x01\x00\x00" + struct.pack("<d", x)
-
-    def publish():
-        server.wait_subscribed(["/a", "/b"], timeout=30)
-        time.sleep(0.3)
-        for k in range(30):
-            server.log("/a", f64(-1.0 if 20 <= k < 25 else 1.0), 0)  # 250 ms: ticks see it
-            if k < 10:
-                server.log("/b", f64(1.0), 0)
-            if k == 10:
-                server.unpublish("/b")
-            time.sleep(0.05)
-        time.sleep(0.3)
-        server.stop()
-
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "30", "--wait", "10",
-                                    "--restart-grace", "1"])
-    t.join(20)
-    log = json.loads(out.read_text())["logs"][0]
-    by = {v["requirement"]: v for v in log["verdicts"]}
-    assert log["messages"] == {"/a": 30, "/b": 10}
-    assert by["RA"]["verdict"] == "violated"
-    assert by["RB"]["verdict"] == "unknown" and "publisher of /b left" in by["RB"]["unknown_reason"]
-    assert abs(log["start_time_ns"] - time.time_ns()) < 120 * 10**9  # dated on arrival
-    assert res.exit_code == 1, res.output
