@@ -107,12 +107,10 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
         return
     for w in plan.warnings:
         err.print(f"[yellow]warning:[/yellow] {escape(w)}")
-    input_errors = False
     # a requirement that does not formalize is an error verdict on every log: its
     # diagnostic (source line and caret) is printed once, with the other errors
     input_errors = any(r.error is not None for r in plan.requirements)
-    show = not no_progress and sys.stderr.isatty()
-    if show:
+    if not no_progress and sys.stderr.isatty():
         with AuditProgress(err, len(paths)) as prog:
             results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
