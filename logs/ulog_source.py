@@ -29,7 +29,11 @@ a timestamp kept since boot while the message was logged again and again) is ski
 :data:`EARLY_TIMESTAMP` problem: its time says nothing of when it was logged. A ULog
 **dropout** (the logger lost messages for a number of milliseconds) is damage: a
 :data:`DROPOUT` problem and a gap of the log from the last timestamp before it (only the span
-before it is judged; nothing is held over it).
+before it is judged; nothing is held over it). A file cut short (its last message runs past
+its end) or with bytes that are not ULog messages (zeroed, overwritten) is damage too, which
+pyulog reads quietly as a shorter flight: the framing is checked first
+(:mod:`fretc.logs.ulog_framing`), a cut is a gap to the end of the log, and a damaged span a
+gap to the first message after the next sync message (each intact run read on its own).
 
 Opening a ULog reads it whole with pyulog, once (every topic's rows as numpy arrays, kept
 for the passes of the audit: dropouts are dated only by a read of every topic, so that read
@@ -49,6 +53,7 @@ import numpy as np
 
 from fretc.common.problems import LogError
 from fretc.logs.base import LogSource, Message
+from fretc.logs.ulog_framing import segment_bytes, ulog_framing
 
 __all__ = ["UlogSource", "LOG_TOPIC", "PARAMETER_TOPIC", "DROPOUT", "EARLY_TIMESTAMP",
            "ulog_type_name", "ulog_definition"]
@@ -121,29 +126,62 @@ class UlogSource(LogSource):
 
     def __init__(self, path: str | os.PathLike) -> None:
         super().__init__(path)
-        ulog = self._ulog = self._read(None)
+        self._ulogs, self.framing = self._read_runs()
+        ulog = self._ulog = self._ulogs[0]
         self.formats = ulog.message_formats
         self._topics: dict[str, str] = {}
         self._subs: dict[str, tuple[str, int]] = {}  # topic -> (message name, instance)
-        for d in ulog.data_list:
-            topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
-            self._topics[topic] = ulog_type_name(d.name)
-            self._subs[topic] = (d.name, d.multi_id)
-        if ulog.logged_messages or ulog.logged_messages_tagged:
-            self._topics[LOG_TOPIC] = "rosgraph_msgs/msg/Log"
-        if ulog.changed_parameters:
-            self._topics[PARAMETER_TOPIC] = "px4_msgs/msg/Parameter"
+        for u in self._ulogs:
+            for d in u.data_list:
+                topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
+                self._topics[topic] = ulog_type_name(d.name)
+                self._subs[topic] = (d.name, d.multi_id)
+            if u.logged_messages or u.logged_messages_tagged:
+                self._topics[LOG_TOPIC] = "rosgraph_msgs/msg/Log"
+            if u.changed_parameters:
+                self._topics[PARAMETER_TOPIC] = "px4_msgs/msg/Parameter"
         self._topics = dict(sorted(self._topics.items()))
         #: the ULog header's start (ns): earlier timestamps are skipped (module docstring)
         self.log_start = int(ulog.start_timestamp) * 1000
         # dropouts from the read of every topic: pyulog dates one by the last timestamp it
-        # parsed before it, so a read of fewer topics would date it earlier
-        self.dropouts = [(int(d.timestamp) * 1000, int(d.duration)) for d in ulog.dropouts]
-        times = [int(t) * 1000 for d in ulog.data_list for t in d.data["timestamp"][:1]
-                 if int(t) * 1000 >= self.log_start]
+        # parsed before it, so a read of fewer topics would date it earlier; in a run after
+        # damage, one before the run's first data is dated at the damage's end
+        self.dropouts = []
+        for k, u in enumerate(self._ulogs):
+            floor = self._run_floor(k)
+            self.dropouts += [(max(int(d.timestamp) * 1000, floor), int(d.duration))
+                              for d in u.dropouts]
+        times = [int(t) * 1000 for u in self._ulogs for d in u.data_list
+                 for t in d.data["timestamp"][:1] if int(t) * 1000 >= self.log_start]
         self._start_time = min(times) if times else None
         self._end_time = None
         self._opened = (self._start_time, self._open_problems)
+
+    def _run_floor(self, k: int) -> int:
+        """The earliest log time (ns) of run ``k`` (after damage: the damage's end)."""
+        if k == 0:
+            return -(2**63)
+        d = [x for x in self.framing.damages if x.next_time_us is not None][k - 1]
+        return d.next_time_us * 1000
+
+    def _read_runs(self):
+        """The pyulog reads of the file's intact runs (:mod:`fretc.logs.ulog_framing`): the
+        whole file in one read when its framing is sound."""
+        import io
+
+        try:
+            with open(self.path, "rb") as f:
+                data = f.read()
+        except OSError as exc:
+            raise LogError(self.path, f"cannot read: {exc.strerror or exc}") from None
+        framing = ulog_framing(data)
+        if not framing.damages:
+            return [self._read(None)], framing
+        if not framing.runs:
+            raise LogError(self.path, "not a readable PX4 ULog file (damaged before its "
+                                      f"first data: {framing.damages[0].detail})")
+        return [self._read(None, io.BytesIO(segment_bytes(data, framing, k)))
+                for k in range(len(framing.runs))], framing
 
     def reopen(self) -> "UlogSource":
         """A new source of this file from the rows read when it was opened (the operands
@@ -156,11 +194,12 @@ class UlogSource(LogSource):
         new._begin_pass()
         return new
 
-    def _read(self, names: list[str] | None):
+    def _read(self, names: list[str] | None, file=None):
         from pyulog import ULog  # lazy: only for flight logs
 
         try:
-            return ULog(self.path, message_name_filter_list=names,
+            return ULog(file if file is not None else str(self.path),
+                        message_name_filter_list=names,
                         disable_str_exceptions=True)
         except Exception as exc:  # pyulog raises plain exceptions on any malformed input
             raise LogError(self.path, f"not a readable PX4 ULog file ({type(exc).__name__}: "
@@ -188,7 +227,13 @@ class UlogSource(LogSource):
         header order, known once it is read)."""
         self._begin_pass()
         want = set(self._topics) if topics is None else set(topics) & set(self._topics)
-        ulog = self._ulog
+        for d in self.framing.damages:
+            start = None if d.last_time_us is None else d.last_time_us * 1000
+            end = None if d.next_time_us is None else d.next_time_us * 1000
+            self._gap(start, end, cause=d.kind)
+            self._problem(d.kind, None, start, d.detail + (
+                " (only the span before it is judged)" if end is None else
+                " (the messages between are lost: nothing is held over them)"), end_time=end)
         for start, ms in self.dropouts:
             end = start + ms * 1_000_000
             self._gap(start, end, cause=DROPOUT)
@@ -197,15 +242,17 @@ class UlogSource(LogSource):
                           "after this log time: only the span before it is judged",
                           end_time=end)
         streams = []
-        for d in ulog.data_list:
-            topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
-            if topic in want:
-                streams.append((topic, d.data["timestamp"].astype(np.int64) * 1000,
-                                _Rows(d.data, self.formats, d.name)))
-        if LOG_TOPIC in want:
-            streams.append(_log_stream(ulog))
-        if PARAMETER_TOPIC in want:
-            streams.append(_parameter_stream(ulog))
+        for k, ulog in enumerate(self._ulogs):
+            for d in ulog.data_list:
+                topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
+                if topic in want:
+                    streams.append((topic, d.data["timestamp"].astype(np.int64) * 1000,
+                                    _Rows(d.data, ulog.message_formats, d.name)))
+            if LOG_TOPIC in want:
+                streams.append(_log_stream(ulog))
+            if PARAMETER_TOPIC in want:  # a change before the run's first data: at its floor
+                name, t, rows = _parameter_stream(ulog)
+                streams.append((name, np.maximum(t, self._run_floor(k)), rows))
         yield from self._merged(streams)
 
     def _merged(self, streams) -> Iterator[Message]:
