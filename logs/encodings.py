@@ -23,6 +23,7 @@ import re
 
 import base64
 import json
+import math
 from collections.abc import Callable
 from types import SimpleNamespace
 from typing import Any
@@ -77,7 +78,64 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
     else:
         pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""))
         return _checked(lambda raw: _typed(pb(raw), typ), message_encoding)
+    check = (json_type_check(schema_data) if message_encoding == "json"
+             and schema_encoding == "jsonschema" and schema_data else None)
+    if check is not None:
+        return _checked(lambda raw: _typed(as_message(check(loads(raw))), typ),
+                        message_encoding)
     return _checked(lambda raw: _typed(as_message(loads(raw)), typ), message_encoding)
+
+
+_JSON_TYPES: dict[str, Callable[[Any], bool]] = {
+    "number": lambda v: type(v) in (int, float),
+    "integer": lambda v: type(v) is int or (type(v) is float and v.is_integer()),
+    "boolean": lambda v: type(v) is bool,
+    "string": lambda v: type(v) is str,
+    "object": lambda v: type(v) is dict,
+    "array": lambda v: type(v) is list,
+    "null": lambda v: v is None,
+}
+
+
+def json_type_check(schema_data: bytes | str) -> Callable[[Any], Any] | None:
+    """A function that returns a decoded JSON message unchanged when the scalar values of
+    the properties its JSON Schema declares have the declared ``type`` (JSON Schema
+    draft 2020-12, "type": a JSON ``true`` is no number, a number no boolean), and raises
+    ``ValueError`` naming the first field that does not (an undecodable message: the schema
+    does not describe it). Properties the schema does not declare, and schemas that cannot
+    be read, are not checked (None)."""
+    try:
+        doc = json.loads(schema_data if isinstance(schema_data, str) else
+                         _as_bytes(schema_data))
+    except (ValueError, RecursionError):
+        return None
+    if not isinstance(doc, dict):
+        return None
+
+    def check(value: Any, spec: Any, where: str, depth: int = 0) -> None:
+        if not isinstance(spec, dict) or depth > 64:
+            return
+        t = spec.get("type")
+        allowed = [t] if isinstance(t, str) else [x for x in t if isinstance(x, str)] \
+            if isinstance(t, list) else []
+        tests = [_JSON_TYPES[x] for x in allowed if x in _JSON_TYPES]
+        if tests and not any(f(value) for f in tests):
+            shown = json.dumps(value)[:40] if not isinstance(value, (dict, list)) else \
+                type(value).__name__
+            raise ValueError(f"{where or 'the message'} is {shown}, but the schema says "
+                             f"{' or '.join(allowed)}")
+        if isinstance(value, dict):
+            for name, sub in (spec.get("properties") or {}).items():
+                if name in value:
+                    check(value[name], sub, f"{where}.{name}" if where else name, depth + 1)
+        elif isinstance(value, list) and isinstance(spec.get("items"), dict):
+            for i, item in enumerate(value):
+                check(item, spec["items"], f"{where}[{i}]", depth + 1)
+
+    def checked(value: Any) -> Any:
+        check(value, doc, "")
+        return value
+    return checked
 
 
 def _checked(decode: Callable[[bytes], Any], encoding: str) -> Callable[[bytes], Any]:
@@ -112,13 +170,28 @@ def as_message(value: Any) -> Any:
             try:
                 return np.array(value, dtype=np.int64)
             except OverflowError:
-                return np.array(value, dtype=np.float64)
+                return np.array([_big(x) for x in value], dtype=np.float64)
         if kinds and kinds <= {int, float}:
-            return np.array(value, dtype=np.float64)
+            return np.array([_big(x) if type(x) is int else x for x in value],
+                            dtype=np.float64)
         return [as_message(x) for x in value]
     if isinstance(value, (bytes, bytearray)):
         return np.frombuffer(bytes(value), dtype=np.uint8)
+    if type(value) is int and not _INT64[0] <= value <= _INT64[1]:
+        return _big(value)
     return value
+
+
+_INT64 = (-(2**63), 2**63 - 1)
+
+
+def _big(value: int) -> float:
+    """An integer past int64 as the nearest float64; past the largest float, +-inf (as
+    IEEE 754 rounds an overflow; a JSON ``1e999`` is read as inf too)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
 
 
 # --------------------------------------------------------------------------- protobuf
@@ -179,9 +252,29 @@ def _pb_plan(descriptor) -> list[tuple[str, int, Any]]:
 _PB_PLANS: dict[Any, list[tuple[str, int, Any]]] = {}
 
 
+def _pb_lies(msg) -> None:
+    """Raise ``ValueError`` when the payload holds a field the schema declares with another
+    wire type (a float field over varint bytes, say): protobuf keeps such a field as an
+    unknown field and leaves the declared one at its default, 0, which would be read as a
+    value (protobuf encoding, "Message Structure": wire types). Unknown field numbers are
+    newer fields, not lies."""
+    from google.protobuf.unknown_fields import UnknownFieldSet
+
+    declared = msg.DESCRIPTOR.fields_by_number
+    for f in UnknownFieldSet(msg):
+        if f.field_number in declared:
+            field = declared[f.field_number]
+            raise ValueError(f"field {field.name} (number {f.field_number}) is declared "
+                             f"{_PB_ROS.get(field.type, 'of another type')} but the payload "
+                             f"has wire type {f.wire_type} there: the schema does not "
+                             "describe these bytes")
+
+
 def _pb_message(msg) -> SimpleNamespace:
     """A decoded protobuf message as a message object: nested messages as objects, repeated
-    numbers as numpy arrays of the field's type, bytes as uint8 arrays (module docstring)."""
+    numbers as numpy arrays of the field's type, bytes as uint8 arrays (module docstring).
+    Raises ``ValueError`` for a payload the schema does not describe (:func:`_pb_lies`)."""
+    _pb_lies(msg)
     out = SimpleNamespace()
     d = out.__dict__
     for name, how, dtype in _pb_plan(msg.DESCRIPTOR):

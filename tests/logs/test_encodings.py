@@ -124,7 +124,8 @@ def test_the_basis_protobuf_log_inspects_with_the_log_levels_as_constants(tmp_pa
 def _as_message_by_rule(value):
     """as_message's rule written out element by element (the reference for the test below):
     a list of bools -> bool array; of non-bool ints -> int64 (float64 past int64); of
-    non-bool numbers -> float64; anything else -> a list."""
+    non-bool numbers -> float64; anything else -> a list; an int past int64 -> float (inf
+    past the largest float)."""
     import numpy as np
     from types import SimpleNamespace
 
@@ -137,12 +138,20 @@ def _as_message_by_rule(value):
             try:
                 return np.array(value, dtype=np.int64)
             except OverflowError:
-                return np.array(value, dtype=np.float64)
+                return np.array([_float(x) for x in value], dtype=np.float64)
         if value and all(isinstance(x, (int, float)) and not isinstance(x, bool)
                          for x in value):
-            return np.array(value, dtype=np.float64)
+            return np.array([_float(x) for x in value], dtype=np.float64)
         return [_as_message_by_rule(x) for x in value]
+    if type(value) is int and not -2**63 <= value < 2**63:  # past int64: the float
+        return _float(value)
     return value
+
+
+def _float(x):
+    if isinstance(x, float) or abs(x) < 2**1024 - 2**970:  # (rounds below the largest)
+        return float(x)
+    return float("inf") if x > 0 else float("-inf")
 
 
 def _same(a, b) -> bool:
@@ -164,7 +173,7 @@ def test_json_values_become_the_arrays_and_objects_of_the_rule():
     from hypothesis import given, settings, strategies as st
     from fretc.logs.encodings import as_message
 
-    scalars = st.one_of(st.booleans(), st.integers(min_value=-2**70, max_value=2**70),
+    scalars = st.one_of(st.booleans(), st.integers(min_value=-2**70, max_value=2**70), st.integers(min_value=10**300, max_value=10**400),
                         st.floats(allow_nan=True), st.text(max_size=3), st.none())
     values = st.recursive(scalars, lambda inner: st.one_of(
         st.lists(inner, max_size=6),
