@@ -99,16 +99,66 @@ def _value_text(attr, datatype) -> str:
         return ", ".join(names.get(v, v) for v in value)
     if attr.attribute_type.name == "XHTML":
         raw = attr.value_stripped_xhtml if attr.value_stripped_xhtml is not None else value
-        import html
-        return html.unescape(re.sub(r"<[^>]+>", " ", raw or "")).strip()
+        return visible_text(raw or "")
     return "" if value is None else str(value)
+
+
+#: elements whose content a reader does not see as the text: deleted text (``del``: a
+#: tracked change), scripts, styles, the document head
+_HIDDEN_TAGS = frozenset({"del", "script", "style", "head", "template"})
+_VOID = frozenset({"br", "hr", "img", "input", "meta", "link", "area", "base", "col",
+                   "embed", "param", "source", "track", "wbr"})
+_HIDDEN_STYLE = re.compile(r"(?:^|;)\s*(?:display\s*:\s*none|visibility\s*:\s*hidden)",
+                           re.IGNORECASE)
+
+
+def visible_text(markup: str) -> str:
+    """The text of an XHTML value as a reader sees it: the markup dropped (an element
+    boundary is a space), character references resolved, and the content of elements a
+    reader does not see left out: ``del``, ``script``, ``style``, ``head``, ``template``,
+    and elements with the ``hidden`` attribute or a ``display: none`` or ``visibility:
+    hidden`` style (HTML Living Standard, "The hidden attribute"; CSS 2.1 "display").
+    Whitespace runs become one space."""
+    from html.parser import HTMLParser
+
+    parts: list[str] = []
+    stack: list[bool] = []  # per open element: hidden
+
+    class _Reader(HTMLParser):
+        def handle_starttag(self, tag, attrs):
+            a = dict(attrs)
+            local = tag.rsplit(":", 1)[-1].lower()
+            if local in _VOID:  # no content, no end tag
+                parts.append(" ")
+                return
+            hide = (local in _HIDDEN_TAGS or "hidden" in a
+                    or bool(_HIDDEN_STYLE.search(a.get("style") or "")))
+            stack.append(hide or (bool(stack) and stack[-1]))
+            parts.append(" ")
+
+        def handle_startendtag(self, tag, attrs):
+            parts.append(" ")
+
+        def handle_endtag(self, tag):
+            if stack:
+                stack.pop()
+            parts.append(" ")
+
+        def handle_data(self, data):
+            if not (stack and stack[-1]):
+                parts.append(data)
+
+    reader = _Reader(convert_charrefs=True)
+    reader.feed(markup)
+    reader.close()
+    return " ".join("".join(parts).split())
 
 
 def load_reqif(path: str, text_attribute: str | None = None):
     """(entries, not formalized) of the ReqIF file at ``path`` (module docstring; both lists of
     :class:`fretc.fretish.files.RequirementEntry`). Raises :class:`FretishFileError` (file, line of
     the element): hostile or malformed XML, a SPEC-OBJECT whose type or attribute definition
-    is missing, a missing datatype, two SPEC-OBJECTs with one id."""
+    is missing, a missing datatype, two SPEC-OBJECTs with one id or one IDENTIFIER."""
     entries, unformalized = [], []
     for source, bundle in parse_reqif_bundles(path):
         got, skipped = _read_bundle(source, bundle.core_content.req_if_content,
@@ -140,6 +190,11 @@ def _read_bundle(source: str, content, text_attribute: str | None):
     objects = content.spec_objects or []
     ids, first = {}, {}
     for so in objects:
+        if so.identifier in ids:  # IDENTIFIERs are unique in a ReqIF document (ReqIF 1.2)
+            raise FretishFileError(
+                f"two SPEC-OBJECTs have the IDENTIFIER {so.identifier!r} (lines "
+                f"{_line(ids[so.identifier][2])} and {_line(so.xml_node)}); a ReqIF "
+                "IDENTIFIER must be unique", source=source, line=_line(so.xml_node))
         values = _values(so, names, source)
         rid = next((values[k] for k in ID_ATTRIBUTES if values.get(k)), so.identifier)
         if rid in first:
@@ -148,7 +203,7 @@ def _read_bundle(source: str, content, text_attribute: str | None):
                 f"{first[rid][0]!r} (line {first[rid][1]}); ids must be unique",
                 source=source, line=_line(so.xml_node))
         first[rid] = (so.identifier, _line(so.xml_node))
-        ids[so.identifier] = (rid, values)
+        ids[so.identifier] = (rid, values, so.xml_node)
     parents: dict[str, list[str]] = {}
     for rel in content.spec_relations or []:
         target = ids.get(rel.target)
@@ -156,7 +211,7 @@ def _read_bundle(source: str, content, text_attribute: str | None):
     holder = _containers(content)
     entries, unformalized = [], []
     for so in objects:
-        rid, values = ids[so.identifier]
+        rid, values, _node = ids[so.identifier]
         text = values.get(wanted.lower(), "").strip()
         rationale = next((v for k, v in sorted(values.items()) if "rationale" in k and v),
                          None)

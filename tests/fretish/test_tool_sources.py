@@ -211,3 +211,73 @@ def test_a_huge_reqif_is_refused_before_it_is_read(tmp_path, monkeypatch):
     monkeypatch.setattr(reqif_file, "MAX_BYTES", 1024)
     with pytest.raises(FretishFileError, match="more than the"):
         load_requirements(p)
+
+
+def test_two_spec_objects_with_one_identifier_are_refused_naming_both(tmp_path):
+    """Both had their own ids (ReqIF.ForeignID): one requirement was lost and the other
+    read twice."""
+    text = REQIF.read_text()
+    first = "REQUIREMENT-464b68b1-fa31-442f-9b42-981f70179f22"
+    second = "REQUIREMENT-714dc3bf-6b7d-45bb-a560-764bfcd1a314"
+    p = tmp_path / "dup.reqif"
+    p.write_text(text.replace(f'<SPEC-OBJECT IDENTIFIER="{second}"',
+                              f'<SPEC-OBJECT IDENTIFIER="{first}"'))
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(p)
+    assert first in err.value.message and "lines 66 and 93" in err.value.message
+    assert err.value.line == 93
+
+
+_XHTML_REQIF = """<?xml version="1.0" encoding="UTF-8"?>
+<REQ-IF xmlns="http://www.omg.org/spec/ReqIF/20110401/reqif.xsd"
+        xmlns:xhtml="http://www.w3.org/1999/xhtml">
+  <THE-HEADER><REQ-IF-HEADER IDENTIFIER="h"><TITLE>t</TITLE></REQ-IF-HEADER></THE-HEADER>
+  <CORE-CONTENT><REQ-IF-CONTENT>
+    <DATATYPES>
+      <DATATYPE-DEFINITION-XHTML IDENTIFIER="DT-X" LAST-CHANGE="2026-01-01T00:00:00Z"/>
+      <DATATYPE-DEFINITION-STRING IDENTIFIER="DT-S" LAST-CHANGE="2026-01-01T00:00:00Z"
+                                  MAX-LENGTH="100"/>
+    </DATATYPES>
+    <SPEC-TYPES>
+      <SPEC-OBJECT-TYPE IDENTIFIER="T" LAST-CHANGE="2026-01-01T00:00:00Z">
+        <SPEC-ATTRIBUTES>
+          <ATTRIBUTE-DEFINITION-STRING IDENTIFIER="A-ID" LONG-NAME="ReqIF.ForeignID"
+              LAST-CHANGE="2026-01-01T00:00:00Z">
+            <TYPE><DATATYPE-DEFINITION-STRING-REF>DT-S</DATATYPE-DEFINITION-STRING-REF></TYPE>
+          </ATTRIBUTE-DEFINITION-STRING>
+          <ATTRIBUTE-DEFINITION-XHTML IDENTIFIER="A-F" LONG-NAME="FRETish"
+              LAST-CHANGE="2026-01-01T00:00:00Z">
+            <TYPE><DATATYPE-DEFINITION-XHTML-REF>DT-X</DATATYPE-DEFINITION-XHTML-REF></TYPE>
+          </ATTRIBUTE-DEFINITION-XHTML>
+        </SPEC-ATTRIBUTES>
+      </SPEC-OBJECT-TYPE>
+    </SPEC-TYPES>
+    <SPEC-OBJECTS>
+      <SPEC-OBJECT IDENTIFIER="O1" LAST-CHANGE="2026-01-01T00:00:00Z">
+        <TYPE><SPEC-OBJECT-TYPE-REF>T</SPEC-OBJECT-TYPE-REF></TYPE>
+        <VALUES>
+          <ATTRIBUTE-VALUE-STRING THE-VALUE="X1">
+            <DEFINITION><ATTRIBUTE-DEFINITION-STRING-REF>A-ID</ATTRIBUTE-DEFINITION-STRING-REF></DEFINITION>
+          </ATTRIBUTE-VALUE-STRING>
+          <ATTRIBUTE-VALUE-XHTML>
+            <DEFINITION><ATTRIBUTE-DEFINITION-XHTML-REF>A-F</ATTRIBUTE-DEFINITION-XHTML-REF></DEFINITION>
+            <THE-VALUE><xhtml:div>the robot shall <xhtml:del>never</xhtml:del> always satisfy
+              <xhtml:span style="display: none">!</xhtml:span>ok<xhtml:span hidden="hidden">
+              &amp; broken</xhtml:span></xhtml:div></THE-VALUE>
+          </ATTRIBUTE-VALUE-XHTML>
+        </VALUES>
+      </SPEC-OBJECT>
+    </SPEC-OBJECTS>
+  </REQ-IF-CONTENT></CORE-CONTENT>
+</REQ-IF>
+"""
+
+
+def test_only_the_visible_text_of_an_xhtml_value_is_formalized(tmp_path):
+    """Deleted text (``del``, a tracked change) and hidden spans (``display: none``, the
+    ``hidden`` attribute) were formalized into the sentence."""
+    p = tmp_path / "x.reqif"
+    p.write_text(_XHTML_REQIF, encoding="utf-8")
+    (e,) = load_requirements(p)
+    assert e.id == "X1" and e.error is None
+    assert e.text == "the robot shall always satisfy ok"
