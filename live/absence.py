@@ -85,7 +85,9 @@ def run_gaps(src) -> list:
     """The gaps of a watched run (``src``: its :class:`fretc.live.source.WatchSource`) as
     the audit's (:class:`fretc.logs.base.Gap`): a lost connection (every topic, between the
     last message before it and the first after it) and a publisher that left and came back
-    (its topic, until its next message); the messages lost lie strictly inside."""
+    (its topic, until its next message); the messages lost lie strictly inside. Messages
+    received but not used at a known log time (a clock reset) are point gaps of their topic
+    (:meth:`fretc.logs.base.LogSource.lost_gaps`)."""
     from fretc.logs.base import Gap
 
     out = [Gap(a + 1, e - 1, None, "connection_gap") for a, e in src.gaps if e - a > 1]
@@ -94,4 +96,7 @@ def run_gaps(src) -> list:
             if end is not None:
                 out.append(Gap(None if start == NO_TIME else start + 1, end - 1,
                                frozenset((topic,)), "publisher_left"))
+    lost = getattr(src, "lost_gaps", None)  # messages received but not used, at their times
+    if lost is not None:
+        out += lost()
     return out

@@ -29,7 +29,8 @@ for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). T
   held over the message that was lost (as :mod:`fretc.audit.damage` for logs). A run that
   ends inside such a gap is ``partial`` from the last message used;
 * a log time (or, under the header time base, what the clock sees) going backwards:
-  :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten);
+  :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten), and a gap
+  from the last message used to the next one, as for a message not decoded;
 * a bound topic not advertised within ``wait`` seconds of connecting, or advertised with a
   schema that cannot be decoded: the requirements reading it are ``error`` (as a topic
   missing from a log in an audit); the others are watched;
@@ -40,7 +41,7 @@ for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). T
 * a log time outside ``[0, 2**63)`` ns (MCAP's log times are uint64, numpy's and the
   clocks' int64), or one that jumps further past the last message used than
   :attr:`WatchSource.max_jump_ns` (the ticks in between would be made one by one, live):
-  :data:`TIME_RANGE` (the message is skipped).
+  :data:`TIME_RANGE` (the message is skipped, a gap as for a message not decoded).
 """
 
 from __future__ import annotations
@@ -50,7 +51,6 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
 from typing import Any
 
 from rosbags.typesys.msg import normalize_msgtype
@@ -58,6 +58,7 @@ from rosbags.typesys.msg import normalize_msgtype
 from fretc.common import problems as P
 from fretc.logs import DECODE_ERRORS, LogSource, Message, _Unsupported, header_stamp, schema_decoder
 from fretc.live.absence import Absences
+from fretc.live.watch_event import WatchEvent
 
 __all__ = ["WatchEvent", "WatchSource", "CONNECTION_GAP", "UNADVERTISED",
            "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED", "PROTOCOL", "TIME_RANGE",
@@ -101,46 +102,6 @@ MAX_SCHEMA_BYTES = 1024 * 1024
 DRAIN_SECONDS = 1.0
 #: Seconds a restarting publisher has to advertise its topic again (``--restart-grace``).
 RESTART_GRACE = 2.0
-
-
-@dataclass
-class WatchEvent:
-    """One verdict event.
-
-    Attributes:
-        kind: ``pt`` | ``ltl3`` | ``problem`` | ``gap`` | ``final`` | ``connected`` |
-            ``disconnected`` | ``closed`` (the server's orderly close) | ``end`` (the
-            watched run ended; ``detail``: why).
-        time_ns: on the run's clock (log time or header stamp), when known.
-        wall_ns: wall clock (``time.time_ns()``) when the event was produced.
-        requirement: the requirement id (verdict events).
-        tick: the tick index (verdict events).
-        verdict: ``pt``: ``holds`` / ``violated``; ``ltl3``: ``satisfied`` / ``violated``;
-            ``final``: the final verdict.
-        detail: free text (problems, gaps).
-        depends_on: log time (ns) of the newest message the tick's values came from (the
-            latency benchmark's join key).
-    """
-
-    kind: str
-    time_ns: int | None = None
-    wall_ns: int = 0
-    requirement: str | None = None
-    tick: int | None = None
-    verdict: str | None = None
-    detail: str | None = None
-    depends_on: int | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    def to_json(self) -> dict:
-        """The event as one ``--jsonl`` line's object."""
-        out = {"event": self.kind, "time_ns": self.time_ns, "wall_ns": self.wall_ns}
-        for k in ("requirement", "tick", "verdict", "detail", "depends_on"):
-            val = getattr(self, k)
-            if val is not None:
-                out[k] = val
-        out.update(self.extra)
-        return out
 
 
 # --------------------------------------------------------------------------- the source
@@ -449,6 +410,23 @@ class WatchSource(LogSource):
             self.on_event(WatchEvent("problem", self._last_time, time.time_ns(),
                                      detail=f"{CONNECTION_CLOSED}: {detail}"))
 
+    def _skipped(self, topic: str, log_time: int, kind: str, why: str,
+                 at: int | None) -> None:
+        """A message of ``topic`` received but not used: a ``kind`` problem, and what it
+        said is not known, so nothing is judged as if it had not been sent. A message
+        whose log time is before one already used (``at``: its log time; a clock reset)
+        is a message lost at that log time (:meth:`fretc.logs.base.LogSource.lost_gaps`,
+        as an offline log's message out of order): the ticks its value would have held at
+        are unknown, never a pass over it. One whose time cannot be placed (``at`` None)
+        opens a gap from the last message used to the next one, as a message not
+        decoded."""
+        self._report(kind, topic, at, f"{why}; its value is not held over it")
+        if at is not None:
+            self._lose(kind, topic, None, at, why)
+        elif self._gap_open is None:
+            self._gap_open = (time.monotonic(), f"a message of {topic} at log time {log_time} "
+                              f"was skipped ({kind})", UNDECODABLE_GAP)
+
     def _undecodable(self, topic: str, log_time: int, why: str) -> None:
         """A message of ``topic`` that was received but not decoded: an ``undecodable``
         problem (counted per message) and a gap up to the next message used."""
@@ -513,7 +491,7 @@ class WatchSource(LogSource):
             return None
         why = self._time_problem(topic, log_time)
         if why is not None:
-            self._report(TIME_RANGE, topic, None, why)
+            self._skipped(topic, log_time, TIME_RANGE, why, None)
             return None
         try:
             data = dec(payload)
@@ -522,9 +500,9 @@ class WatchSource(LogSource):
                               f"deserialize ({type(exc).__name__}: {exc})")
             return None
         if self._last_time is not None and log_time < self._last_time:
-            self._report(CLOCK_BACKWARDS, topic, log_time,
-                         f"log time {log_time} is {self._last_time - log_time} ns before a "
-                         "message already used; message skipped")
+            self._skipped(topic, log_time, CLOCK_BACKWARDS,
+                          f"log time {log_time} is {self._last_time - log_time} ns before a "
+                          "message already used (a clock reset?); message skipped", log_time)
             return None
         self._dropped_gap()
         if self._gap_open is not None:

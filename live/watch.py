@@ -135,8 +135,7 @@ class Watch:
         on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
 
     :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration,
-    idle, :meth:`stop`), then returns
-    the :class:`~fretc.audit.verdict.LogAudit` of the run (``log`` = the URL, ``kind``
+    idle, :meth:`stop`), then returns the :class:`~fretc.audit.verdict.LogAudit` of the run (``log`` = the URL, ``kind``
     ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
     """
 
@@ -289,7 +288,7 @@ class Watch:
         return active
 
     def _record_problems(self, la: LogAudit, result) -> None:
-        """The run's message counts and problems; a run with a connection gap is partial."""
+        """The run's message counts and problems; a run with a gap is partial."""
         src = self.source
         problems: dict[tuple, DataProblem] = {}
         counts: dict[str, int] = {}
@@ -303,6 +302,9 @@ class Watch:
         if src.gaps:
             la.partial = True
             la.damage_time_ns = src.gaps[0][0]
+        if src.lost:  # messages received but not used at their log times (a clock reset)
+            la.partial, first = True, min(v[0] for v in src.lost.values())
+            la.damage_time_ns = min(x for x in (first, la.damage_time_ns) if x is not None)
         lost = src.absent.lost_start(src._delivered)
         if lost is not None:  # a bound topic's publisher left while the run went on
             la.partial = True

@@ -329,3 +329,32 @@ def test_live_simulator_equals_the_recorded_trace(plan):
     ref = audit_log(plan, str(ROOT / "traces" / "sif_disabled.mcap"))
     assert out["res"].outcome == "contact"
     assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+
+
+def test_a_clock_reset_is_never_a_pass_over_the_messages_it_skipped(tmp_path):
+    """The run's clock goes back (a simulator reset): the messages stamped before the last
+    one used are skipped, and they held violating values. Was: 'satisfied' (exit 3) over
+    them. Each is a message lost at its log time, so the ticks it would have held at are
+    unknown: never satisfied."""
+    plan = _write_reqs(tmp_path, "@tick_period 100 ms\nRA: the robot shall always satisfy "
+                                 "a_ok\n", BINDINGS)
+    server = FoxgloveServer(port=0)
+    t0 = 1_700_000_000 * S
+    try:
+        server.channel("/a", "cdr", *FLOAT64)
+
+        def publish(srv):
+            for k in range(10):
+                srv.log("/a", _f64(1.0), t0 + k * 50_000_000)
+                time.sleep(0.005)
+            for k in range(10):  # the clock starts again from t0: violating values
+                srv.log("/a", _f64(-1.0), t0 + k * 40_000_000)
+                time.sleep(0.005)
+
+        w, la = _run_synthetic(plan, server, publish, last=t0 + 9 * 50_000_000)
+    finally:
+        server.stop()
+    (ra,) = la.verdicts
+    assert CLOCK_BACKWARDS in {p["kind"] for p in la.problems}
+    assert ra.verdict == "unknown", (ra.verdict, ra.unknown_reason)
+    assert la.partial
