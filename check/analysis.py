@@ -179,10 +179,18 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
         result.smt_queries = checker.smt_queries
         result.monitor_queries = checker.monitor_queries
         # a query the monitors left unknown and z3 was then asked is one query
-        result.unknown_queries += checker.smt.spent - checker.fallbacks
-        if checker.smt.failures:
-            result.notes.append(f"z3 left {len(checker.smt.failures)} queries unknown, e.g. "
-                                f"{checker.smt.failures[0]}")
+        smt_failures = checker.smt.failures + checker.smt_fallback.failures
+        result.unknown_queries += (checker.smt.spent + checker.smt_fallback.spent
+                                   - checker.fallbacks)
+        if smt_failures:
+            result.notes.append(f"z3 left {len(smt_failures)} queries unknown, e.g. "
+                                f"{smt_failures[0]}")
+        if checker.not_tried:
+            result.notes.append(
+                f"{checker.spent} queries spent their whole work budget, so "
+                f"{checker.not_tried} later queries on the same requirements were not tried "
+                "and are unknown (the run ends in bounded time; a larger --budget tries "
+                "them)")
         if worker.failures:
             result.notes.append(f"{len(worker.failures)} queries got no answer from Spot or "
                                 f"the pt monitors (unknown), e.g. {worker.failures[0]}"

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 __all__ = ["Budget", "BudgetSpent", "RunStopped", "Meter", "DEFAULT_WORK", "DEFAULT_MEMORY",
            "MIN_MEMORY", "MUS_BUDGET", "UNKNOWN", "STEP_KNEE", "DEFAULT_QUERY_CPU", "step_cost",
-           "Z3_RLIMIT_PER_UNIT", "NODES_PER_VARIABLE", "NODES_PER_Z3_TERM", "BYTES_PER_NODE"]
+           "Z3_RLIMIT_PER_UNIT", "FALLBACK_SHARE", "MAX_SPENT_QUERIES", "NODES_PER_VARIABLE", "NODES_PER_Z3_TERM", "BYTES_PER_NODE"]
 
 #: Answer of a query past its budget (or that its engine could not take).
 UNKNOWN = "unknown"
@@ -53,6 +53,14 @@ DEFAULT_QUERY_CPU = 60
 DEFAULT_MEMORY = 8_000_000
 #: subset checks per enumeration of minimal subsets by default (``fretc check --mus-budget``)
 MUS_BUDGET = 256
+#: the share of the work budget z3 has where it is asked after the monitors ran past theirs
+#: (or first, once it answered such a query): z3 spends about 2 * 10^6 rlimit a second on
+#: the lassos of deadlines near 10^6 ticks, so a tenth is some 20 s of this machine
+FALLBACK_SHARE = 0.1
+#: queries of a run that may spend their whole work budget on one set of formulas; a later
+#: query on any of those formulas is unknown at once (the run ends in bounded time:
+#: ``fretc check``'s 20-requirement set with 10^6-tick deadlines in about a minute of CPU)
+MAX_SPENT_QUERIES = 2
 #: z3's ``rlimit`` per work unit (z3 spends about 10^7 rlimit a second on these queries)
 Z3_RLIMIT_PER_UNIT = 10
 #: the memory one BDD variable takes in BuDDy and Spot's dictionary, in BDD nodes (measured:
@@ -97,6 +105,11 @@ class Budget:
         if self.memory < MIN_MEMORY:
             raise ValueError(f"the memory budget must be at least {MIN_MEMORY} BDD nodes, "
                              f"not {self.memory}")
+
+    def share(self, fraction: float) -> "Budget":
+        """This budget with ``fraction`` of its work (at least 1 unit), the same memory and
+        CPU limit."""
+        return Budget(max(1, int(self.work * fraction)), self.memory, self.cpu)
 
     def work_spent(self) -> str:
         """The reason of an answer past the work budget."""

@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_spot
-from fretc.check.budget import MUS_BUDGET
+from fretc.check.budget import FALLBACK_SHARE, MAX_SPENT_QUERIES, MUS_BUDGET
 from fretc.check.items import CheckItem, monitored_forms
 from fretc.check.numeric_abstraction import NumericAbstraction
 from fretc.check.safety_game import Outside, game_atoms
@@ -71,6 +71,14 @@ class Checker:
         #: of them z3 answered
         self.fallbacks = 0
         self.rescued = 0
+        #: queries that spent their whole work budget, and the formulas they were on
+        #: (:meth:`_large_word`); the (engine, query) pairs asked
+        self.spent = 0
+        self.not_tried = 0
+        self.hard: set[Node] = set()
+        self._seen: set[tuple] = set()
+        self.smt_fallback = SmtSolver(worker.budget.share(FALLBACK_SHARE),
+                                      deadline=worker.deadline, worker=worker)
         self.queries = 0
         self.unknown = 0
 
@@ -92,22 +100,7 @@ class Checker:
                  ) -> tuple[object, tuple | None]:
         """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
         if self.uses_smt(list(formulas) + list(extra)):
-            query = list(formulas) + list(extra)
-            got = self.monitor_word(query, finite=False)
-            if got is None:
-                return self._ask_smt(query)
-            if got[0] != UNKNOWN or self.engine == "bdd":
-                return got
-            # the monitors ran past their budget (a relation too large for one step: deadlines
-            # near 10^6 ticks): z3's lassos and proofs, whose encoding does not grow with the
-            # bounds, within their own budget
-            fresh = ("smt", tuple(query)) not in self._cache
-            answer = self._ask_smt(query)
-            if fresh:  # one query: counted unknown once, or not at all when z3 answered it
-                self.unknown -= 1
-                self.fallbacks += 1
-                self.rescued += answer[0] != UNKNOWN
-            return answer
+            return self._large_word(list(formulas) + list(extra))
 
         def split(f: Node, parts: list[Node]) -> None:
             if f.op == "&":
@@ -168,7 +161,50 @@ class Checker:
         self.monitor_queries += fresh
         return got
 
-    def _ask_smt(self, formulas: list[Node]):
+    def _large_word(self, query: list[Node]) -> tuple[object, tuple | None]:
+        """:meth:`sat_word` of a query whose bounds Spot is not given: the requirements'
+        monitors (:mod:`fretc.check.monitor_sat`), and where they run past their work budget
+        (a relation too large for one step: deadlines near 10^6 ticks) z3's lassos and
+        proofs, whose encoding does not grow with the bounds, within a tenth of the budget
+        (:data:`fretc.check.budget.FALLBACK_SHARE`). Once z3 answered such a query it is
+        asked first. Once :data:`fretc.check.budget.MAX_SPENT_QUERIES` queries spent their
+        whole budget, a later query on any of their formulas is unknown at once: the run
+        ends in bounded time, and the same on every machine (the budget counts work)."""
+        if self.engine != "auto":
+            got = self.monitor_word(query, finite=False)
+            return self._ask_smt(query) if got is None else got
+        order = ("smt", "monitors") if self.rescued else ("monitors", "smt")
+        asked = 0
+        for engine in order:
+            if self.spent >= MAX_SPENT_QUERIES and self.hard.intersection(query):
+                why = (f"{self.spent} queries on these requirements spent their whole work "
+                       "budget, so this one was not tried (a larger --budget tries it)")
+                fresh = ("spent", tuple(query)) not in self._cache
+                got = self._cached(("spent", tuple(query)), lambda: self.worker.refuse(why))
+                self.not_tried += fresh
+                break
+            fresh = (engine, tuple(query)) not in self._seen
+            self._seen.add((engine, tuple(query)))
+            got = (self.monitor_word(query, finite=False) if engine == "monitors"
+                   else self._ask_smt(query, fallback=asked > 0 or order[0] == "smt"))
+            if got is None:  # a formula without a monitor: z3 alone
+                continue
+            asked += fresh
+            if asked > 1:  # one query: counted unknown once at most
+                self.unknown -= 1
+                self.fallbacks += 1
+            if got[0] != UNKNOWN:
+                self.rescued += engine == "smt" and asked > 1 and order[0] == "monitors"
+                return got
+            if fresh:
+                self.spent += 1
+                self.hard.update(query)
+        return got if got is not None else (UNKNOWN, None)
+
+    def _ask_smt(self, formulas: list[Node], fallback: bool = False):
+        if fallback:
+            return self._cached(("smt", tuple(formulas)),
+                                lambda: self.smt_fallback.sat(formulas))
         self.smt_queries += ("smt", tuple(formulas)) not in self._cache
         return self._cached(("smt", tuple(formulas)), lambda: self.smt.sat(formulas))
 

@@ -233,3 +233,53 @@ def test_lost_game_at_a_thousand_ticks_has_its_fixed_defeating_input(tmp_path):
     assert "prefix" in env, env
     assert all(row["halt"] for row in env["cycle"])
     assert any(row["req"] for row in env["prefix"] + env["cycle"])
+
+
+# --------------------------------------------------------------------------- bounded runs
+_H8 = """@inputs r0, r1, r2
+@outputs a0, a1, a2, a3
+H0: upon r0 the ctrl shall within 1000000 ticks satisfy a0
+H1: upon a1 the ctrl shall for 999000 ticks satisfy !a2
+H2: whenever r2 & a2 the ctrl shall within 998000 ticks satisfy a3
+H3: upon a0 the ctrl shall within 997000 ticks satisfy !a3
+H4: upon r1 the ctrl shall for 996000 ticks satisfy a1 | a0
+H5: upon r2 the ctrl shall within 995000 ticks satisfy a1
+H6: upon a2 the ctrl shall for 994000 ticks satisfy !a3
+H7: whenever r1 & a3 the ctrl shall within 993000 ticks satisfy a0
+"""
+
+
+def test_a_set_past_the_monitors_budget_is_answered_by_z3_and_the_run_is_bounded(tmp_path):
+    """Deadlines near 10^6 ticks in a set of 8 (the shape that ran for an hour): each alone
+    is decided by its monitor; the set's monitors run past the budget and z3's lasso answers
+    it; after MAX_SPENT_QUERIES queries spent their whole budget, the later ones on these
+    requirements are unknown without being tried, saying so. The same answers twice."""
+    from fretc.check.budget import MAX_SPENT_QUERIES
+
+    path = tmp_path / "h8.fret"
+    path.write_text(_H8, encoding="utf-8")
+    runs = []
+    for _ in range(2):
+        r = check_requirements(compile_entries(load_requirements([path])),
+                               budget=Budget(work=300_000))
+        runs.append(json.dumps(r.to_json(), sort_keys=True))
+    assert runs[0] == runs[1]
+    doc = json.loads(runs[0])
+    assert all(s["satisfiable"] is True for s in doc["requirements"])
+    assert any("z3 answered 1 of them" in n for n in doc["notes"]), doc["notes"]
+    spent = next(n for n in doc["notes"] if "were not tried" in n)
+    assert spent.startswith(f"{MAX_SPENT_QUERIES} queries spent their whole work budget")
+    assert doc["monitor_queries"] <= 8 + MAX_SPENT_QUERIES + 1
+    assert "unknown" in {s["non_vacuous"] for s in doc["requirements"]}
+
+
+@pytest.mark.parametrize("option", ["--query-cpu", "--timeout"])
+@pytest.mark.parametrize("value", ["nan", "inf", "-1", "0"])
+def test_check_time_options_refuse_nan_infinities_and_non_positive(tmp_path, option, value):
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    (tmp_path / "a.fret").write_text("R: the sw shall always satisfy p\n", encoding="utf-8")
+    res = CliRunner().invoke(main, ["check", str(tmp_path / "a.fret"), option, value])
+    assert res.exit_code == 2 and f"Invalid value for '{option}'" in res.output, res.output

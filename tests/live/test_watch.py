@@ -358,3 +358,15 @@ def test_a_clock_reset_is_never_a_pass_over_the_messages_it_skipped(tmp_path):
     assert CLOCK_BACKWARDS in {p["kind"] for p in la.problems}
     assert ra.verdict == "unknown", (ra.verdict, ra.unknown_reason)
     assert la.partial
+
+
+@pytest.mark.parametrize("args", [["--duration", "nan"], ["--duration", "inf"],
+                                  ["--wait", "nan"], ["--connect-timeout", "-inf"]])
+def test_watch_time_options_refuse_nan_and_infinities(args):
+    """``--duration nan`` compared false with every bound and watched forever."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    res = CliRunner().invoke(main, ["watch", "ws://127.0.0.1:9", "-r", REQS, *args])
+    assert res.exit_code == 2 and f"Invalid value for '{args[0]}'" in res.output, res.output
