@@ -16,6 +16,11 @@
    auto``), and the command a user runs (``fretc check FILE --inputs p,m --outputs
    q,r,speed``, start-up and every check included).
 
+7. With ``--large`` (only this): the 20-requirement set with deadlines near 10^6 ticks
+   (``@inputs r0, r1, r2``, ``@outputs a0..a3``): the command ``fretc check FILE --json``
+   twice, its CPU (the process and its worker), peak memory and answers, and whether the two
+   JSON reports are the same (the budget counts work: loaded or idle, the same answer).
+
 6. With ``--against DIR`` (only this): the command ``fretc check FILE`` of this checkout
    beside the same command of the checkout at DIR (e.g. a ``git worktree`` of the base
    commit) on the sets of part 4 and the consistent set with B4 asking ``speed > 0.6`` (a
@@ -242,10 +247,14 @@ def main() -> int:
                     help="Only the realizability table (part 5).")
     ap.add_argument("--budget", type=int, default=DEFAULT_WORK,
                     help="Work units per query in parts 4 and 5 (check.budget).")
+    ap.add_argument("--large", action="store_true",
+                    help="Only part 7: the 20-requirement set near 10^6 ticks.")
     ap.add_argument("--against", metavar="DIR",
                     help="Only part 6: the command here beside the checkout at DIR.")
     args = ap.parse_args()
-    if args.against:
+    if args.large:
+        large_set()
+    elif args.against:
         against(Path(args.against).resolve())
     elif args.realizability_only:
         realizability_sweep(args.budget)
@@ -254,6 +263,59 @@ def main() -> int:
     else:
         every_part(args)
     return 0
+
+
+#: the 20-requirement set of part 7: deadlines and holds near 10^6 ticks over 3 inputs and
+#: 4 outputs (the hostile input that ran for an hour)
+LARGE = """@inputs r0, r1, r2
+@outputs a0, a1, a2, a3
+H0: upon r0 the ctrl shall within 1000000 ticks satisfy a0
+H1: upon a1 the ctrl shall for 999000 ticks satisfy !a2
+H2: whenever r2 & a2 the ctrl shall within 998000 ticks satisfy a3
+H3: upon a0 the ctrl shall within 997000 ticks satisfy !a3
+H4: upon r1 the ctrl shall for 996000 ticks satisfy a1 | a0
+H5: upon r2 the ctrl shall within 995000 ticks satisfy a1
+H6: upon a2 the ctrl shall for 994000 ticks satisfy !a3
+H7: whenever r1 & a3 the ctrl shall within 993000 ticks satisfy a0
+H8: upon a1 the ctrl shall within 992000 ticks satisfy !a0
+H9: upon r0 the ctrl shall for 991000 ticks satisfy a2 | a1
+H10: upon r1 the ctrl shall within 990000 ticks satisfy a2
+H11: upon a3 the ctrl shall for 989000 ticks satisfy !a0
+H12: whenever r0 & a0 the ctrl shall within 988000 ticks satisfy a1
+H13: upon a2 the ctrl shall within 987000 ticks satisfy !a1
+H14: upon r2 the ctrl shall for 986000 ticks satisfy a3 | a2
+H15: upon r0 the ctrl shall within 985000 ticks satisfy a3
+H16: upon a0 the ctrl shall for 984000 ticks satisfy !a1
+H17: whenever r2 & a1 the ctrl shall within 983000 ticks satisfy a2
+H18: upon a3 the ctrl shall within 982000 ticks satisfy !a2
+H19: upon r1 the ctrl shall for 981000 ticks satisfy a0 | a3
+"""
+
+
+def large_set() -> None:
+    """Part 7 (module docstring)."""
+    import tempfile
+
+    print("7. 20 requirements with deadlines near 10^6 ticks: fretc check FILE --json")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "h20.fret"
+        path.write_text(LARGE, encoding="utf-8")
+        docs = []
+        for run in (1, 2):
+            out = Path(tmp) / f"h20.{run}.json"
+            t0, w0 = cpu(), time.perf_counter()
+            cmd = [sys.executable, "-m", "fretc", "check", str(path), "--json", "-o", str(out)]
+            code = subprocess.run(cmd, capture_output=True).returncode
+            peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+            doc = json.loads(out.read_text())
+            docs.append(out.read_text())
+            answers = {k: sorted({str(r[k]) for r in doc["requirements"]})
+                       for k in ("satisfiable", "non_vacuous", "redundant")}
+            real = [c["realizable"] for c in doc["realizability"]["components"]]
+            print(f"  run {run}: {cpu() - t0:.1f} s CPU ({time.perf_counter() - w0:.1f} s "
+                  f"wall), peak {peak:.0f} MB, exit {code}; answers {answers}, realizable "
+                  f"{real}; unknown queries {doc['unknown_queries']} of {doc['queries']}")
+        print(f"  same JSON both runs: {docs[0] == docs[1]}")
 
 
 def every_part(args) -> None:

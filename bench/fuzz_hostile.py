@@ -37,6 +37,8 @@ same seed gives the same inputs. Per class:
 * ``lsp``: a hostile session of ``fretc lsp`` (framing, documents, requests at random
   places; ``bench/fuzz_lsp.py``): no traceback, every request answered within 15 s, under
   1 GB, a clean exit.
+* ``flight``: damaged PX4 ULogs and ArduPilot DataFlash logs (cut, zeroed spans, garbage
+  after the formats; ``bench/fuzz_flight.py``), audited against the intact log's verdicts;
 * ``statistics``: hostile fleets, campaigns and option values against the statistics of
   probability requirements (``bench/fuzz_statistics.py``: its oracle, never a bound decided
   that the trials do not support).
@@ -73,11 +75,12 @@ from fuzz_gaps import LOST, run_lost, run_nan  # noqa: E402  (the lost and nan c
 from fuzz_live_inputs import run_bus, run_inputs, run_ws  # noqa: E402  (ws, bus, typed)
 from fuzz_lsp import run_lsp  # noqa: E402  (lsp)
 from fuzz_statistics import run_statistics  # noqa: E402  (the statistics class)
+from fuzz_flight import run_flight  # noqa: E402  (the flight class)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
 CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
-           "bus", "typed", "lsp", "statistics")
+           "bus", "typed", "lsp", "statistics", "flight")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -468,7 +471,7 @@ def _arguments(argv):
 #: inputs of each class per unit of --count (logs cost far more than frames)
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
            "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8, "lsp": 0.2,
-           "statistics": 20}
+           "statistics": 20, "flight": 1}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -496,6 +499,7 @@ def main(argv=None) -> int:
     stats.update({k: 0 for k in CLASSES})
     tmp = Path(tempfile.mkdtemp(prefix="fretc_hostile_"))
     audits = None
+    flight_cache: dict = {}  # the flight class's plans and intact audits
     t0 = time.time()
     k, _, n = args.shard.partition("/")
     shard, shards = int(k), int(n)
@@ -520,6 +524,8 @@ def main(argv=None) -> int:
                 bad = run_lsp(rng, tmp)
             elif kind == "statistics":
                 bad = run_statistics(rng, tmp)
+            elif kind == "flight":
+                bad = run_flight(rng, tmp, flight_cache)
             else:
                 audits = audits or Audits(tmp)
                 bad = run_log_class(kind, rng, audits)

@@ -81,7 +81,7 @@ class DataflashSource(LogSource):
 
         try:
             with contextlib.redirect_stdout(io.StringIO()), \
-                    contextlib.redirect_stderr(io.StringIO()):
+                    contextlib.redirect_stderr(io.StringIO()), _c_stdout_closed():
                 return DFReader.DFReader_binary(self.path, zero_time_base=False)
         except Exception as exc:  # pymavlink raises plain exceptions on malformed input
             raise LogError(self.path, f"not a readable ArduPilot DataFlash log "
@@ -104,7 +104,7 @@ class DataflashSource(LogSource):
                 self._truncated(prev_time, f"{type(exc).__name__}: {exc}")
                 return
             if m is None:
-                left = reader.data_len - max(prev_end, reader.offset)
+                left = reader.data_len - prev_end  # (pymavlink may have read a header past it)
                 if left > 0:
                     self._truncated(prev_time,
                                     f"the last {left} bytes of the file are no whole record")
@@ -174,3 +174,31 @@ class DataflashSource(LogSource):
                 self._start_time = lt
             self._end_time = lt
             yield Message(topic, lt, lt, None, data)
+
+
+@contextlib.contextmanager
+def _c_stdout_closed():
+    """File descriptors 1 and 2 to the null device for the block: pymavlink's C indexer of
+    DataFlash records prints every bad header (``bad header 0x0000 at N``, thousands on a
+    zeroed span) with C's stdio, which Python's ``redirect_stdout`` does not reach; the
+    damage is reported as problems instead, and the terminal stays readable."""
+    import os
+    import sys
+
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = [os.dup(1), os.dup(2)]
+    except (OSError, ValueError, AttributeError):  # no such descriptors: nothing to quiet
+        yield
+        return
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        for fd, old in ((1, saved[0]), (2, saved[1])):
+            os.dup2(old, fd)
+            os.close(old)
+        os.close(null)

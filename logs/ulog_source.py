@@ -195,12 +195,16 @@ class UlogSource(LogSource):
         return new
 
     def _read(self, names: list[str] | None, file=None):
+        import contextlib
+        import io
+
         from pyulog import ULog  # lazy: only for flight logs
 
-        try:
-            return ULog(file if file is not None else str(self.path),
-                        message_name_filter_list=names,
-                        disable_str_exceptions=True)
+        try:  # pyulog prints its warnings (a corrupt file): the problems report the damage
+            with contextlib.redirect_stdout(io.StringIO()):
+                return ULog(file if file is not None else str(self.path),
+                            message_name_filter_list=names,
+                            disable_str_exceptions=True)
         except Exception as exc:  # pyulog raises plain exceptions on any malformed input
             raise LogError(self.path, f"not a readable PX4 ULog file ({type(exc).__name__}: "
                                       f"{exc})") from None

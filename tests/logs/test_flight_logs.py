@@ -6,6 +6,7 @@ library's plain read with numpy (sample-and-hold at the 100 ms ticks)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -248,3 +249,27 @@ def test_dataflash_cut_short_is_partial_and_garbage_is_an_input_error(tmp_path):
     junk.write_bytes(b"\x00\x01not a log" * 100)
     la = audit_log(_plan(tmp_path, DF_FRET, DF_BINDINGS), str(junk))
     assert all(x.verdict == "error" for x in la.verdicts)
+
+
+def test_dataflash_cut_at_any_byte_inside_its_last_record_is_partial(tmp_path, capfd):
+    """A cut 3 bytes into a record (its header read, no body) read as a complete, shorter
+    log (pymavlink had already stepped past the header); and pymavlink's C indexer printed
+    a line per bad byte on the terminal."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from fuzz_flight import boundaries
+
+    data = write_dataflash(tmp_path / "flight.bin", _dataflash_rows()).read_bytes()
+    starts = sorted(boundaries(data, ".bin"))
+    last = starts[-2]  # the last record's start (the last entry is the end)
+    plan = _plan(tmp_path, DF_FRET, DF_BINDINGS)
+    for cut in range(last + 1, len(data)):
+        path = tmp_path / f"cut{cut}.bin"
+        path.write_bytes(data[:cut])
+        la = audit_log(plan, str(path))
+        assert la.partial and any(p["kind"] == "truncated" for p in la.problems), cut
+    zeroed = tmp_path / "zeroed.bin"
+    zeroed.write_bytes(data[:last] + bytes(4000) + data[last:])
+    audit_log(plan, str(zeroed))
+    assert "bad header" not in "".join(capfd.readouterr())
