@@ -20,12 +20,14 @@ from __future__ import annotations
 
 import logging
 import os
+import stat
 
 from fretc.common.errors import FretishFileError, FretishSyntaxError
 
 from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
 
-__all__ = ["load_doorstop", "build_tree", "custom_attributes"]
+__all__ = ["load_doorstop", "build_tree", "custom_attributes", "check_tree_files",
+           "MAX_YAML_BYTES", "MAX_YAML_NODES"]
 
 
 def build_tree(path: str):
@@ -35,6 +37,7 @@ def build_tree(path: str):
     import doorstop  # lazy: only for Doorstop trees
     from doorstop.common import DoorstopError
 
+    check_tree_files(path)
     quiet = logging.getLogger("doorstop")
     level = quiet.level
     quiet.setLevel(logging.ERROR)
@@ -48,6 +51,76 @@ def build_tree(path: str):
                                source=path) from None
     finally:
         quiet.setLevel(level)
+
+
+#: the largest item or document file read (bytes), and the most YAML nodes it may expand to
+#: with its aliases resolved: an alias of an alias of ... (a "billion laughs" YAML bomb) is
+#: small on disk and exponential once a consumer walks it (doorstop's fingerprint of the
+#: ``reviewed`` attributes hung on one)
+MAX_YAML_BYTES = 1024 * 1024
+MAX_YAML_NODES = 100_000
+
+
+def check_tree_files(path: str) -> None:
+    """Refuse, before doorstop reads anything, the YAML files of the tree under ``path``
+    that are not regular files (a FIFO would block the read), lead outside the tree
+    (a symbolic link), are larger than :data:`MAX_YAML_BYTES` or expand to more than
+    :data:`MAX_YAML_NODES` nodes with their aliases resolved (counted on PyYAML's node
+    graph, which shares an alias's node and constructs no object: linear in the file).
+    Raises :class:`FretishFileError` naming the file."""
+    import yaml
+
+    top = os.path.realpath(path)
+    for folder, dirs, files in os.walk(path):
+        dirs[:] = [d for d in dirs if not d.startswith(".")]
+        for name in files:
+            if not name.endswith((".yml", ".yaml")):
+                continue
+            f = os.path.join(folder, name)
+            real = os.path.realpath(f)
+            if os.path.commonpath([top, real]) != top:
+                raise FretishFileError(f"{f} is a link to {real}, outside the tree {path}: "
+                                       "not read", source=f, line=1)
+            st = os.stat(real)
+            if not stat.S_ISREG(st.st_mode):
+                raise FretishFileError(f"{f} is not a regular file: not read", source=f,
+                                       line=1)
+            if st.st_size > MAX_YAML_BYTES:
+                raise FretishFileError(f"{f} is {st.st_size} bytes, more than the "
+                                       f"{MAX_YAML_BYTES} an item file may be", source=f,
+                                       line=1)
+            with open(real, "rb") as fh:
+                data = fh.read()
+            try:
+                nodes = _expanded_nodes(yaml.compose(data, Loader=yaml.SafeLoader))
+            except (yaml.YAMLError, RecursionError):
+                continue  # doorstop reports the invalid YAML, naming the file
+            if nodes > MAX_YAML_NODES:
+                raise FretishFileError(f"{f} expands to {nodes} YAML nodes with its aliases "
+                                       f"resolved, more than {MAX_YAML_NODES} (a YAML bomb?): "
+                                       "not read", source=f, line=1)
+
+
+def _expanded_nodes(root) -> int:
+    """The nodes of a composed YAML document with every alias expanded, computed once per
+    shared node (so a bomb's count costs its size on disk, not its expansion)."""
+    if root is None:
+        return 0
+    sizes: dict[int, int] = {}
+    stack = [(root, False)]
+    while stack:
+        node, done = stack.pop()
+        if id(node) in sizes:
+            continue
+        kids = ([c for pair in node.value for c in pair] if isinstance(node.value, list)
+                and node.value and isinstance(node.value[0], tuple)
+                else node.value if isinstance(node.value, list) else [])
+        if done:
+            sizes[id(node)] = 1 + sum(sizes.get(id(k), 1) for k in kids)
+            continue
+        stack.append((node, True))
+        stack.extend((k, False) for k in kids if id(k) not in sizes)
+    return sizes[id(root)]
 
 
 def custom_attributes(item) -> dict[str, object]:
@@ -71,11 +144,70 @@ def _line_of(path: str, key: str) -> int:
     return 1
 
 
-def _items(tree) -> list:
-    """Active, normative items: documents in tree order, items by level."""
+#: what reading an item can raise besides Doorstop's own error: attributes of the wrong
+#: type (``level: {a: 1}``, ``links: 5``, ``text: [1, 2]``) fail inside doorstop
+_ITEM_ERRORS = (ValueError, TypeError, AttributeError, KeyError, OSError, RecursionError)
+
+
+def _item_error(item_path: str, exc: BaseException) -> FretishFileError:
+    """An error reading one item file, naming it (its first line: doorstop does not say
+    where in the file)."""
+    import re
+
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    named = re.search(r"(\S+\.ya?ml)\b", text)  # doorstop's messages name the file
+    where = named.group(1).strip("'\"") if named else item_path
+    return FretishFileError(f"Doorstop item cannot be read: {text[:300]}", source=where,
+                            line=1)
+
+
+def _culprit(doc, root: str) -> str | None:
+    """The first item file of ``doc`` (in name order) that doorstop cannot load on its own
+    with its level and links read (what listing a document's items reads), or None."""
+    from doorstop.core.item import Item
+
+    folder = str(doc.path)
+    for name in sorted(os.listdir(folder)):
+        if not name.endswith(".yml") or name.startswith("."):
+            continue
+        path = os.path.join(folder, name)
+        try:
+            item = Item(doc, path, root=root)
+            item.load()
+            str(item.level), [str(u) for u in item.links], item.text
+        except Exception:  # noqa: BLE001 - any failure names this file
+            return path
+    return None
+
+
+def _items(tree, root: str) -> list:
+    """Active, normative items: documents in tree order, items by level. Raises
+    :class:`FretishFileError` naming the item file for one doorstop cannot read (invalid
+    YAML, a YAML tag such as ``!!python/object`` or ``!include``, not UTF-8, an attribute of
+    the wrong type) and for an item file that is a link to outside the tree (``root``)."""
+    from doorstop.common import DoorstopError
+
+    top = os.path.realpath(root)
     out = []
     for doc in tree:
-        out.extend(i for i in doc.items if i.active and i.normative)
+        try:
+            listed = list(doc.items)
+        except (DoorstopError, *_ITEM_ERRORS) as e:
+            raise _item_error(_culprit(doc, root) or str(doc.path), e) from None
+        for i in listed:
+            real = os.path.realpath(i.path)
+            if os.path.commonpath([top, real]) != top:
+                raise FretishFileError(f"item {i.path} is a link to {real}, outside the tree "
+                                       f"{root}: not read", source=str(i.path), line=1)
+            try:
+                keep = bool(i.active and i.normative)
+                if keep:  # every attribute the entry reads, read here where it is named
+                    str(i.uid), i.text, i.header, str(i.level), [str(u) for u in i.links]
+                    i.stamp()
+            except (DoorstopError, *_ITEM_ERRORS) as e:
+                raise _item_error(str(i.path), e) from None
+            if keep:
+                out.append(i)
     return out
 
 
@@ -117,11 +249,13 @@ def load_doorstop(path: str, text_attribute: str | None = None):
     """(entries, not formalized) of the Doorstop tree under ``path`` (module docstring; both
     lists of :class:`fretc.fretish.files.RequirementEntry`, ``source`` the tree ``path``, the item
     file in ``origin.file``; ``line`` the line of the text attribute in it). Raises
-    :class:`FretishFileError`: a tree Doorstop cannot build, a missing parent, a cycle."""
+    :class:`FretishFileError`: a tree Doorstop cannot build, an item it cannot read or one
+    outside the tree (:func:`_items`), a missing parent, a cycle, a text attribute that is
+    not text."""
     from fretc.fretish.parser import parse
 
     tree = build_tree(path)
-    items = _items(tree)
+    items = _items(tree, path)
     all_uids = {str(i.uid) for doc in tree for i in doc.items}
     _check_links(items, all_uids)
     wanted = text_attribute or _default_attribute(items)
@@ -132,6 +266,10 @@ def load_doorstop(path: str, text_attribute: str | None = None):
             key, value = "text", item.text
         else:
             key, value = custom.get(wanted.lower(), (wanted, None))
+        if value is not None and not isinstance(value, str):
+            raise FretishFileError(f"item {item.uid}: its {key} attribute is a "
+                                   f"{type(value).__name__}, not text", source=item.path,
+                                   line=_line_of(item.path, key))
         text = value.strip() if isinstance(value, str) else ""
         rationale = custom.get("rationale", (None, None))[1]
         rationale = rationale.strip() if isinstance(rationale, str) and rationale else None

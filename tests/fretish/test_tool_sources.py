@@ -4,6 +4,7 @@ real tools (../shared/data/reqif, SOURCES.md there), and hostile or broken input
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import time
@@ -281,3 +282,53 @@ def test_only_the_visible_text_of_an_xhtml_value_is_formalized(tmp_path):
     (e,) = load_requirements(p)
     assert e.id == "X1" and e.error is None
     assert e.text == "the robot shall always satisfy ok"
+
+
+_BOMB = "".join(f"{a}: &{a} [{', '.join([f'*{p}'] * 9) if p else ', '.join(['x'] * 9)}]\n"
+                for p, a in zip([None, "a", "b", "c", "d", "e", "f", "g"], "abcdefgh"))
+
+
+def _hostile_item(tree: Path, how: str) -> str:
+    """Damage the tree's item R1 (or add a file) as ``how`` says; the file the error names."""
+    r1 = tree / "r" / "R1.yml"
+    text = r1.read_text()
+    if how == "invalid_yaml":
+        r1.write_text("text: [unclosed\n")
+    elif how == "python_tag":
+        r1.write_text("text: !!python/object/apply:os.system ['echo hi']\nactive: true\n")
+    elif how == "non_utf8":
+        r1.write_bytes(b"text: \xff\xfe\nactive: true\n")
+    elif how == "level_mapping":
+        r1.write_text(text.replace("level:", "level: {a: 1}\nold_level:"))
+    elif how == "links_number":
+        r1.write_text(text.replace("links:", "links: 5\nold_links:"))
+    elif how == "fretish_mapping":
+        r1.write_text(text + "\nFRETish: {a: 1}\n")
+    elif how == "yaml_bomb":
+        (tree / "r" / ".doorstop.yml").write_text(
+            (tree / "r" / ".doorstop.yml").read_text() + "\nattributes:\n  reviewed: [h]\n")
+        r1.write_text(text + "\n" + _BOMB)
+    elif how == "fifo":
+        os.mkfifo(tree / "r" / "R9.yml")
+        return str(tree / "r" / "R9.yml")
+    elif how == "link_outside":
+        outside = tree.parent / "outside.yml"
+        outside.write_text("active: true\nlevel: 9\nnormative: true\ntext: outside\n")
+        os.symlink(outside, tree / "r" / "R9.yml")
+        return str(tree / "r" / "R9.yml")
+    return str(r1)
+
+
+@pytest.mark.parametrize("how", ["invalid_yaml", "python_tag", "non_utf8", "level_mapping",
+                                 "links_number", "fretish_mapping", "yaml_bomb", "fifo",
+                                 "link_outside"])
+def test_a_hostile_doorstop_item_is_an_input_error_naming_its_file(tmp_path, how):
+    """Each was an internal error (exit 4), a hang (a FIFO, a YAML bomb under ``reviewed``)
+    or a file read from outside the tree; the entry point must answer within seconds."""
+    tree = _tree_copy(tmp_path)
+    named = _hostile_item(tree, how)
+    t0 = time.monotonic()
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(tree)
+    assert time.monotonic() - t0 < 20
+    assert err.value.source == named or named in err.value.message, (how, str(err.value))
