@@ -12,8 +12,11 @@ items that link to them, :mod:`fretc.reports.rollup`), ``fretc_audit_id``,
 
 The original bytes of every file are kept: fretc's block is appended to the item file after a
 marker comment (:data:`MARKER`); exporting again cuts the file at the marker and writes the
-new block (and drops ``fretc_*`` keys Doorstop moved when it saved an item: ``doorstop``'s
-validation saves items in its own layout, keys sorted), so nothing is added twice. Files of the tree that are not judged items are copied
+new block (and drops fretc's keys Doorstop moved when it saved an item: ``doorstop``'s
+validation saves items in its own layout, keys sorted), so nothing is added twice. Every
+file written is checked to read back (PyYAML's safe loader, as doorstop reads it) as the
+item's own keys and fretc's; where appending cannot give that (a flow mapping, a ``...``
+document end), the item is written again as YAML. Files of the tree that are not judged items are copied
 unchanged.
 """
 
@@ -46,31 +49,76 @@ def item_block(result: RequirementResult) -> str:
                                    allow_unicode=True, width=1 << 30)
 
 
+_OURS = frozenset(key for key, _field in KEYS)
+
+
+def _load(raw: bytes):
+    """The item file's mapping (PyYAML's safe loader, as doorstop reads it), or None when
+    it is not one."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(raw.decode("utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError, RecursionError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
 def _without_ours(raw: bytes) -> bytes:
-    """``raw`` without an earlier export's block: cut at :data:`MARKER`, and without any
-    top-level ``fretc_*`` key (with its indented continuation lines) that Doorstop moved
-    when it saved the item again (``doorstop`` sorts an item's keys when it saves it)."""
-    at = raw.find(MARKER.encode())
-    if at >= 0:
-        raw = raw[:at]
+    """``raw`` without an earlier export's block: cut at :data:`MARKER` when the marker is a
+    line of its own and what follows it holds only fretc's keys (:data:`KEYS`), and
+    without top-level keys of :data:`KEYS` (with their indented continuation lines) that
+    Doorstop moved when it saved the item (it sorts an item's keys). A user's own
+    ``fretc_*`` key, or the marker's text inside a value, stay (each cut is checked on the
+    parsed file: only fretc's keys may go)."""
+    mine = _load(raw)
+    if mine is None:
+        return raw
+    want = {k: v for k, v in mine.items() if k not in _OURS}
+    marker = MARKER.encode()
+    at = raw.find(marker)
+    while at >= 0:  # the marker as a line of its own, with only fretc's keys after it
+        if (at == 0 or raw[at - 1:at] == b"\n") and _load(raw[:at]) == want:
+            raw = raw[:at]
+            break
+        at = raw.find(marker, at + 1)
     out, skipping = [], False
     for line in raw.splitlines(keepends=True):
-        if line.startswith(b"fretc_"):
+        key = line.split(b":", 1)[0].decode("utf-8", "replace")
+        if key in _OURS and b":" in line:
             skipping = True
             continue
         if skipping and line[:1] in (b" ", b"\t"):
             continue
         skipping = False
         out.append(line)
-    return b"".join(out)
+    cut = b"".join(out)
+    return cut if _load(cut) == want else raw
 
 
 def _with_block(raw: bytes, result: RequirementResult) -> bytes:
-    """The item file ``raw`` with fretc's block (an earlier one replaced)."""
-    raw = _without_ours(raw)
-    if raw and not raw.endswith(b"\n"):
-        raw += b"\n"
-    return raw + item_block(result).encode("utf-8")
+    """The item file ``raw`` with fretc's block (an earlier one replaced). The original
+    bytes are kept and the block appended when the result reads back as the item's own
+    keys and fretc's (checked with PyYAML's safe loader, doorstop's); otherwise (a flow
+    mapping, a ``...`` document end, a layout appending cannot extend) the item is
+    written again as YAML with its keys in their order and fretc's after them."""
+    import yaml
+
+    mine = _load(raw)
+    block = item_block(result)
+    ours = yaml.safe_load(block) or {}
+    if mine is None:  # not a mapping doorstop reads: left as it is
+        return raw
+    want = {**{k: v for k, v in mine.items() if k not in _OURS}, **ours}
+    base = _without_ours(raw)
+    if base and not base.endswith(b"\n"):
+        base += b"\n"
+    candidate = base + block.encode("utf-8")
+    if _load(candidate) == want:
+        return candidate
+    own = {k: v for k, v in mine.items() if k not in _OURS}
+    return (yaml.safe_dump(own, default_flow_style=False, sort_keys=False,
+                           allow_unicode=True, width=1 << 30) + block).encode("utf-8")
 
 
 def export_doorstop(src: str, out: str, results: dict[str, RequirementResult],

@@ -232,3 +232,39 @@ def test_written_files_have_the_permissions_of_any_new_file(tmp_path):
     finally:
         os.umask(old)
     assert (tmp_path / "out.txt").stat().st_mode & 0o777 == 0o644
+
+
+MARKER_TEXT = "# fretc export: the results of an audit (replaced by the next fretc export)\n"
+_VALID_ITEMS = {
+    "user_fretc_key": "active: true\ntext: t\nfretc_notes: mine, not fretc's\n",
+    "document_end": "active: true\ntext: t\n...\n",
+    "flow_mapping": "{active: true, text: t, level: 1.1}\n",
+    "marker_in_text": ("active: true\ntext: |\n  see\n  " + MARKER_TEXT + "  more\nlevel: 1\n"),
+    "quoted_scalar": "active: true\ntext: \"a long\n  fretc_verdict: inside the quote\"\n",
+    "no_final_newline": "active: true\ntext: t",
+    "comments": "# a comment\nactive: true  # inline\ntext: t\n",
+    "ours_moved": "active: true\nfretc_verdict: violated\ntext: t\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(_VALID_ITEMS))
+def test_doorstop_export_of_any_valid_item_reads_back_as_its_keys_and_ours(name):
+    """Five of eleven valid items were broken by the export: a user's own fretc_* key
+    deleted, a '...' end and a flow mapping made unreadable, an item cut at the marker's
+    text, a quoted scalar broken. Now each exported file reads back (PyYAML's safe loader,
+    doorstop's) as the item's own keys and fretc's, exported twice the same."""
+    import yaml
+
+    from fretc.reports.export_doorstop import KEYS, _with_block
+    from fretc.reports.export_results import RequirementResult
+
+    raw = _VALID_ITEMS[name].encode()
+    mine = yaml.safe_load(raw)
+    result = RequirementResult(id="R1", tool_id="R1", verdict="satisfied",
+                               evidence="e: 'x'\nline", ft="G p", pt="H p",
+                               audit_id="sha256:1", audit_date="2026-11-24", runs=1)
+    once = _with_block(raw, result)
+    back = yaml.safe_load(once)
+    ours = {k: str(getattr(result, f)) for k, f in KEYS if getattr(result, f) is not None}
+    assert back == {**{k: v for k, v in mine.items() if k not in ours}, **ours}
+    assert _with_block(once, result) == once
