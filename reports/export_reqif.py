@@ -46,8 +46,36 @@ ATTRIBUTES = (("VERDICT", "fretc verdict", "verdict"),
 
 def _one_line(text: str | None) -> str:
     """A value for an XML attribute: line breaks (which XML would read as spaces) as
-    spaces already, so the value reads back as written."""
-    return " ".join((text or "").split("\n")).replace("\r", " ").replace("\t", " ")
+    spaces already, so the value reads back as written; characters XML 1.0 does not allow
+    (control characters, from a log's name, say) as visible escapes
+    (:func:`fretc.common.textsafe.xml_text`), so the file stays well-formed."""
+    from fretc.common.textsafe import xml_text
+
+    flat = " ".join((text or "").split("\n")).replace("\r", " ").replace("\t", " ")
+    return xml_text(flat, keep="")
+
+
+_ATTRIBUTE = None
+
+
+def _whitespace_as_references(xml: str) -> str:
+    """``xml`` with the tabs, line feeds and carriage returns inside attribute values
+    written as character references: the ``reqif`` library reads ``&#9;`` in an
+    IDENTIFIER as a tab and writes the tab back, which an XML parser then reads as a space
+    (XML 1.0 section 3.3.3, attribute-value normalization): ids changed on export."""
+    import re
+
+    global _ATTRIBUTE
+    if _ATTRIBUTE is None:
+        _ATTRIBUTE = re.compile(r'(\s[\w:.-]+=")([^"<]*)(")')
+    refs = {"\t": "&#9;", "\n": "&#10;", "\r": "&#13;"}
+
+    def fix(m):
+        value = m.group(2)
+        if not any(c in value for c in refs):
+            return m.group(0)
+        return m.group(1) + "".join(refs.get(c, c) for c in value) + m.group(3)
+    return _ATTRIBUTE.sub(fix, xml)
 
 
 def _ensure_datatype(content, date: str) -> None:
@@ -121,7 +149,7 @@ def _exported_text(source: str, bundle, results: dict[str, RequirementResult]
     from reqif.unparser import ReqIFUnparser
 
     n = _annotate(bundle.core_content.req_if_content, results, source)
-    return ReqIFUnparser.unparse(bundle), n
+    return _whitespace_as_references(ReqIFUnparser.unparse(bundle)), n
 
 
 def export_reqif(src: str, results: dict[str, RequirementResult]) -> tuple[bytes, int]:

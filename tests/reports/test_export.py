@@ -268,3 +268,35 @@ def test_doorstop_export_of_any_valid_item_reads_back_as_its_keys_and_ours(name)
     ours = {k: str(getattr(result, f)) for k, f in KEYS if getattr(result, f) is not None}
     assert back == {**{k: v for k, v in mine.items() if k not in ours}, **ours}
     assert _with_block(once, result) == once
+
+
+def test_reqif_export_stays_well_formed_keeps_id_references_and_is_idempotent(tmp_path):
+    """Control characters in a value (a log's name in the evidence) made ill-formed XML;
+    an IDENTIFIER written with ``&#9;`` came back with a space; exporting an export changed
+    its bytes."""
+    import defusedxml.ElementTree as ET
+
+    from fretc.reports.export_reqif import export_reqif
+    from fretc.reports.export_results import RequirementResult
+
+    src = tmp_path / "tab.reqif"
+    src.write_text(REQIF.read_text().replace("REQUIREMENT-714dc3bf",
+                                             "REQ&#9;UIREMENT-714dc3bf"))
+
+    def results(path):
+        return {e.id: RequirementResult(
+            id=e.id, tool_id=e.origin.tool_id, verdict="violated",
+            evidence="log\x01name\x7f\x1b[31m\there\nnext", ft="G p", pt="H p",
+            audit_id="sha256:1", audit_date="2026-11-24T00:00:00Z", runs=1)
+            for e in load_requirements(path)}
+
+    ids = sorted(e.origin.tool_id for e in load_requirements(src))
+    assert any("\t" in i for i in ids)
+    once, n = export_reqif(str(src), results(src))
+    assert n == 6
+    ET.fromstring(once)  # well-formed
+    out = tmp_path / "once.reqif"
+    out.write_bytes(once)
+    assert sorted(e.origin.tool_id for e in load_requirements(out)) == ids
+    twice, _ = export_reqif(str(out), results(out))
+    assert twice == once
