@@ -18,6 +18,7 @@ from fretc.signals.bindings.expression import (TF_TOPICS, BinOp, Const, Expr, Ex
 from fretc.signals.bindings.parse import parse_expression
 from fretc.signals.bindings.extract import Valid, normalize_scalar
 from fretc.signals.bindings.operations import Ops
+from fretc.signals.bindings.windowing import WindowSpec, check_window
 
 __all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals",
            "fold", "EMPTY_FOLD"]
@@ -48,6 +49,10 @@ class Binding:
             ``any_of_messages(EXPR)`` etc.), or None: the held message's value (sample and
             hold). Then :meth:`evaluate` gives EXPR on the held message, and the clocks fold
             (:func:`fold`).
+        window: a window function over the messages of its one topic
+            (``mean(/battery.current, 2s)``: :mod:`fretc.signals.bindings.windowing`), or
+            None. Then :meth:`evaluate` gives the aggregated expression on the held message,
+            and the clocks keep the window (:class:`fretc.signals.windows.SlidingWindow`).
     """
 
     name: str
@@ -64,6 +69,7 @@ class Binding:
     _scalar: Callable[[EvalState], Any] | None = field(default=None, repr=False)
     _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
     aggregate: str | None = None
+    window: WindowSpec | None = None
 
     def location(self) -> ExprLocation:
         """Where the expression is, for error messages."""
@@ -168,13 +174,17 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     unread, inf_unread = nan != "false", inf != "value"
     aggregate = check_aggregate(node, where)
     body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
+    windowed = check_window(node, where)
+    window = None
+    if windowed is not None:
+        window, body = windowed
     scalar = compile_node(body, Ops(False, unread, inf_unread), extractors, constants)
     vector = compile_node(body, Ops(True, unread, inf_unread), extractors, constants)
     uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
     return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
-                   uses_tf, scalar, vector, aggregate)
+                   uses_tf, scalar, vector, aggregate, window)
 
 
 def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:

@@ -21,7 +21,7 @@ from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
 
 __all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -137,6 +137,18 @@ class BinOp(Expr):
 
 
 @dataclass(frozen=True)
+class Span(Expr):
+    """The window of a window function, its last argument (``mean(/battery.current, 2s)``):
+    a duration (``ns``, from ``2s``, ``500 ms``, ``1 min``) or a count of messages
+    (``messages``, from ``50 messages``); ``text`` as written
+    (:mod:`fretc.signals.bindings.windowing`)."""
+
+    text: str
+    ns: int | None
+    messages: int | None
+
+
+@dataclass(frozen=True)
 class FuncCall(Expr):
     """``func(args...)``, ``func`` a name of :data:`FUNCS`."""
 
@@ -214,6 +226,8 @@ def unparse(node: Expr) -> str:
         return f"{node.op}{arg}"
     if isinstance(node, BinOp):
         return f"({_operand(node.left)} {node.op} {_operand(node.right)})"
+    if isinstance(node, Span):
+        return node.text
     if isinstance(node, FuncCall):
         if node.func == "tf":
             a = node.args
@@ -337,6 +351,17 @@ def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
 
 
 def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
+    if node.args and isinstance(node.args[-1], Span):  # a window (windowing.check_window)
+        for a in node.args[:-1]:
+            if isinstance(a, Field) and not a.path:  # rate(/scan, 1s), count(/estop, 1min)
+                topics.add(a.topic)
+            else:
+                check(a, where, topics)
+        return
+    if node.func in ("sum", "median", "percentile", "variance", "rate"):
+        raise where.error(f"{node.func}() is a window function: its last argument is the "
+                          f"window, e.g. {node.func}(/topic.field, 2s) or "
+                          f"{node.func}(/topic.field, 50 messages)", node.col)
     if node.func not in FUNCS:
         raise where.error(f"unknown function {node.func!r} (known: "
                           f"{', '.join(sorted(FUNCS))})", node.col)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from functools import lru_cache
 
 from lark import Lark, Transformer, __version__ as lark_version, v_args
@@ -20,9 +21,10 @@ from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInpu
 
 from fretc.common import cache
 from fretc.common.problems import BindingError
+from fretc.common.units import parse_duration
 from fretc.fretish.limits import MAX_EXPR_DEPTH
 from fretc.signals.bindings.expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
-                         ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice,
+                         ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice, Span,
                          TF_COMPONENTS, UnaryOp, check, check_size)
 from fretc.signals.bindings.paths import unquote
 
@@ -62,6 +64,23 @@ class _ToExpr(Transformer):
 
     def number(self, meta, kids):
         return Const(_col(meta), float(kids[0]))
+
+    def span(self, meta, kids):
+        """``2s``, ``500 ms``, ``50 messages``: a window's :class:`Span` (durations by
+        :func:`fretc.common.units.parse_duration`)."""
+        text = str(kids[0])
+        m = re.match(r"([0-9.eE+-]+) ?([a-z]+)", text)
+        assert m is not None
+        number, unit = m.group(1), m.group(2)
+        if unit.startswith("message"):
+            if not number.isdigit() or int(number) < 1:
+                raise self.where.error(f"{text}: a count of messages is a whole number of at "
+                                       "least 1", _col(meta))
+            return Span(_col(meta), text, None, int(number))
+        try:
+            return Span(_col(meta), text, parse_duration(f"{number} {unit}"), None)
+        except ValueError as exc:
+            raise self.where.error(f"window {text}: {exc}", _col(meta)) from None
 
     def neg_number(self, meta, kids):
         return Const(_col(meta), -float(kids[0]))

@@ -1,0 +1,251 @@
+"""Sliding windows over the messages of one topic (docs/bindings.md, "Windows over time"):
+the value at a tick of ``mean(/battery.current, 2s)`` and the other window functions of
+:data:`fretc.signals.bindings.windowing.WINDOW_FUNCS`, computed incrementally as the
+messages arrive in time order.
+
+A window at tick ``t`` holds the messages of its topic with time in ``(t - span, t]`` (a
+duration; pandas' ``rolling("2s")`` on the message series, closed on the right), or the
+last ``count`` messages at or before ``t``. Cost per message: constant (amortized) for
+``sum``, ``count``, ``mean``, ``rate`` (a running compensated sum), ``min`` and ``max``
+(monotone deques, Lemire's streaming minimum/maximum), ``variance`` (Welford's update with
+removal); ``median`` and ``percentile`` keep the window's values sorted (insertion and
+removal by bisection: linear in the window's size, a memory move). Memory: every window
+holds at most the messages of one span (or ``count`` of them), never more.
+
+The rules a value follows: a NaN (unread) value in the window makes it NaN (three-valued:
+the window's value is unknown); an empty window gives 0 for ``sum``, ``count`` and
+``rate`` and NaN for the others (no value to take a mean of); ``variance`` is the sample
+variance (divisor n - 1, pandas' and numpy's ``ddof=1``: NaN for one message);
+``percentile(x, q, span)`` interpolates linearly between the closest ranks (numpy's and
+pandas' default). A window is *complete* at ``t`` once it starts at or after the topic's
+first message (``t - span >= first``), or once ``count`` messages were seen: the ticks
+before are the clock's warm-up (per requirement, :mod:`fretc.signals.clock`).
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_left, insort
+from collections import deque
+from typing import Any
+
+from fretc.signals.bindings.windowing import WindowSpec
+
+__all__ = ["SlidingWindow"]
+
+
+class SlidingWindow:
+    """The window of one binding: :meth:`push` each message's value in time order, then
+    :meth:`value` at a tick (at or after the last pushed message's time).
+
+    Args:
+        spec: the window (function, span in ns or count of messages, percentile).
+    """
+
+    def __init__(self, spec: WindowSpec) -> None:
+        self.spec = spec
+        self.items: deque[tuple[int, float]] = deque()  # (time ns, value) in the window
+        self.seen = 0  # messages pushed since the start
+        self.first: int | None = None  # time of the first message pushed
+        self.error: Exception | None = None  # an evaluation error, raised at the next tick
+        self.nans = 0
+        self.total = 0.0  # Neumaier's compensated running sum: total + comp
+        self.comp = 0.0
+        self.mean = 0.0  # Welford: mean and sum of squared deviations of the window
+        self.m2 = 0.0
+        self.lo: deque[tuple[int, float]] = deque()  # (sequence, value), values increasing
+        self.hi: deque[tuple[int, float]] = deque()  # (sequence, value), values decreasing
+        self.ordered: list[float] = []
+
+    def push(self, t: int, v: Any) -> None:
+        """Add the value ``v`` (bool, float; NaN unread; an exception: the message failed to
+        evaluate, raised by :meth:`value`) of a message at time ``t`` (ns)."""
+        if isinstance(v, Exception):
+            self.error = v
+            return
+        x = float(v)
+        if self.first is None:
+            self.first = t
+        seq = self.seen
+        self.seen += 1
+        self.items.append((t, x))
+        if x != x:
+            self.nans += 1
+            return
+        self._add_sum(x)
+        kind = self.spec.func
+        if kind == "variance":
+            n = len(self.items) - self.nans
+            d = x - self.mean
+            self.mean += d / n
+            self.m2 += d * (x - self.mean)
+        elif kind == "min":
+            while self.lo and self.lo[-1][1] >= x:
+                self.lo.pop()
+            self.lo.append((seq, x))
+        elif kind == "max":
+            while self.hi and self.hi[-1][1] <= x:
+                self.hi.pop()
+            self.hi.append((seq, x))
+        elif kind in ("median", "percentile"):
+            insort(self.ordered, x)
+
+    def _add_sum(self, x: float) -> None:
+        s = self.total + x
+        if abs(self.total) >= abs(x):
+            self.comp += (self.total - s) + x
+        else:
+            self.comp += (x - s) + self.total
+        self.total = s
+
+    def _evict(self, t: int) -> None:
+        """Drop the messages that left the window at tick ``t``."""
+        spec, items = self.spec, self.items
+        while items and (items[0][0] <= t - spec.span_ns if spec.span_ns is not None
+                         else len(items) > spec.count):  # type: ignore[operator]
+            _, x = items.popleft()
+            oldest = self.seen - len(items) - 1  # the sequence number of the dropped one
+            if x != x:
+                self.nans -= 1
+                continue
+            self._add_sum(-x)
+            kind = spec.func
+            if kind == "variance":
+                n = len(items) - self.nans
+                if n == 0:
+                    self.mean = self.m2 = 0.0
+                else:
+                    d = x - self.mean
+                    self.mean -= d / n
+                    self.m2 -= d * (x - self.mean)
+            elif kind == "min" and self.lo and self.lo[0][0] == oldest:
+                self.lo.popleft()
+            elif kind == "max" and self.hi and self.hi[0][0] == oldest:
+                self.hi.popleft()
+            elif kind in ("median", "percentile"):
+                del self.ordered[bisect_left(self.ordered, x)]
+        if len(items) == self.nans:  # empty of numbers: restart the sums exactly
+            self.total = self.comp = self.mean = self.m2 = 0.0
+
+    def complete(self, t: int) -> bool:
+        """Whether the window at tick ``t`` lies wholly after the topic's first message (a
+        span) or holds ``count`` messages (module docstring)."""
+        if self.spec.span_ns is not None:
+            return self.first is not None and t - self.spec.span_ns >= self.first
+        return self.seen >= self.spec.count  # type: ignore[operator]
+
+    def value(self, t: int) -> float:
+        """The window's value at tick ``t`` (module docstring for the rules).
+
+        Raises:
+            Exception: the evaluation error of a message pushed since the last tick.
+        """
+        if self.error is not None:
+            err, self.error = self.error, None
+            raise err
+        self._evict(t)
+        kind, n = self.spec.func, len(self.items)
+        if self.nans:
+            return math.nan
+        if kind in ("sum", "count"):
+            return self.total + self.comp if n else 0.0
+        if kind == "rate":
+            return n / (self.spec.span_ns / 1e9)  # type: ignore[operator]
+        if n == 0:
+            return math.nan
+        if kind == "mean":
+            return (self.total + self.comp) / n
+        if kind == "min":
+            return self.lo[0][1]
+        if kind == "max":
+            return self.hi[0][1]
+        if kind == "variance":
+            return max(self.m2, 0.0) / (n - 1) if n > 1 else math.nan
+        q = 0.5 if kind == "median" else self.spec.q / 100.0  # type: ignore[operator]
+        pos = q * (n - 1)
+        i = int(math.floor(pos))
+        j = min(i + 1, n - 1)
+        a, b = self.ordered[i], self.ordered[j]
+        return a + (b - a) * (pos - i)
+
+
+def sliding_windows(variables: list) -> dict[str, SlidingWindow]:
+    """A fresh :class:`SlidingWindow` per window binding among ``variables`` (Bindings):
+    variable name -> its window."""
+    return {b.name: SlidingWindow(b.window) for b in variables
+            if getattr(b, "window", None) is not None}
+
+
+def push_message(windows: dict[str, SlidingWindow], variables: list, topic: str, t: int,
+                 evaluate: Any) -> None:
+    """Add the message of ``topic`` at time ``t`` (ns) to the windows of the bindings that
+    read it; ``evaluate(binding)`` gives its value on that message (an exception it raises
+    is kept and raised at the next tick, as the folds between ticks do)."""
+    for b in variables:
+        w = windows.get(b.name)
+        if w is None or w.spec.topic != topic:
+            continue
+        try:
+            w.push(t, evaluate(b))
+        except Exception as exc:  # noqa: BLE001 - SignalError, kept for the tick
+            w.push(t, exc)
+
+
+def windows_complete(windows: dict[str, SlidingWindow], t: int) -> bool:
+    """Whether every window is complete at tick ``t`` (else the tick is warm-up)."""
+    return all(w.complete(t) for w in windows.values())
+
+
+def window_block(windows: dict[str, SlidingWindow], fed: dict[str, int], variables: list,
+                 times: Any, held: dict[str, Any], values_of: Any) -> tuple[int, dict]:
+    """The windows of one clock over a block of ticks (the block sampler,
+    :mod:`fretc.signals.blocks`; the same values as :class:`fretc.signals.clock.Clock` pushing
+    message by message).
+
+    Args:
+        windows: name -> window (:func:`sliding_windows`), advanced in place.
+        fed: topic -> number of the last message pushed (counted from the topic's first
+            message; -1 none), advanced in place.
+        variables: the clock's bindings.
+        times: the block's tick times (ns, int64 array).
+        held: topic -> per tick, the number of the message held (counted as ``fed``).
+        values_of: ``values_of(binding, first, last)`` -> (times, values) of the messages
+            numbered ``first..last`` of its topic (values: list, an exception kept as a value).
+
+    Returns:
+        (ticks at the start that are warm-up because a window is not complete, name -> list
+        of values per tick from there on; an exception as a value is the error of that tick
+        on).
+    """
+    names = [b.name for b in variables if b.name in windows]
+    msgs = {}
+    for b in variables:
+        if b.name in windows:
+            w = windows[b.name]
+            first = fed.get(w.spec.topic, -1) + 1
+            last = int(held[w.spec.topic][-1])
+            msgs[b.name] = (first, values_of(b, first, last) if last >= first else ([], []))
+    for topic in {windows[n].spec.topic for n in names}:
+        fed[topic] = max(fed.get(topic, -1), int(held[topic][-1]))
+    out: dict[str, list] = {n: [] for n in names}
+    pos = {n: 0 for n in names}
+    warm = 0
+    for i, t in enumerate(times.tolist()):
+        for n in names:
+            w = windows[n]
+            base, (ts, vs) = msgs[n]
+            upto = int(held[w.spec.topic][i]) - base + 1
+            while pos[n] < upto:
+                w.push(ts[pos[n]], vs[pos[n]])
+                pos[n] += 1
+        if warm == i and not all(windows[n].complete(t) for n in names):
+            warm += 1
+            for n in names:
+                windows[n]._evict(t)
+            continue
+        for n in names:
+            try:
+                out[n].append(windows[n].value(t))
+            except Exception as exc:  # noqa: BLE001 - the binding's error from this tick
+                out[n].append(exc)
+    return warm, out
