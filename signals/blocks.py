@@ -418,6 +418,9 @@ def _message_values(stream: _Stream, b: Binding, first: int, last: int) -> tuple
     try:
         with np.errstate(all="ignore"):
             cols = HeldColumns(stream.messages(), times[at], {topic: times}, {topic: at})
+            if b.parts:  # waiting(): a tuple of fields per message
+                return times[at].tolist(), list(zip(*(p.evaluate_columns(cols).tolist()
+                                                      for p in b.parts)))
             return times[at].tolist(), b.evaluate_columns(cols).tolist()
     except (SignalError, Irregular):
         pass
@@ -426,7 +429,8 @@ def _message_values(stream: _Stream, b: Binding, first: int, last: int) -> tuple
         for j in at.tolist():
             st.msgs[topic], st.times[topic], st.now = buf.data[j], buf.times[j], buf.times[j]
             try:
-                vals.append(b.evaluate(st))
+                vals.append(tuple(p.evaluate(st) for p in b.parts) if b.parts
+                            else b.evaluate(st))
             except SignalError as exc:
                 vals.append(SignalError(f"{exc} (message of {topic} at log time "
                                         f"{buf.log_times[j]})", variable=exc.variable))

@@ -31,7 +31,11 @@ from typing import Any
 
 from fretc.signals.bindings.windowing import WindowSpec
 
-__all__ = ["SlidingWindow"]
+__all__ = ["SlidingWindow", "PendingCalls", "sliding_windows", "push_message",
+           "windows_complete", "window_block", "MAX_PENDING_CALLS"]
+
+#: Calls of one service waiting for their response that ``waiting()`` keeps (memory bound).
+MAX_PENDING_CALLS = 100_000
 
 
 class SlidingWindow:
@@ -169,11 +173,68 @@ class SlidingWindow:
         return a + (b - a) * (pos - i)
 
 
-def sliding_windows(variables: list) -> dict[str, SlidingWindow]:
-    """A fresh :class:`SlidingWindow` per window binding among ``variables`` (Bindings):
-    variable name -> its window."""
-    return {b.name: SlidingWindow(b.window) for b in variables
-            if getattr(b, "window", None) is not None}
+class PendingCalls:
+    """``waiting(/arm)``: the calls of a service not answered yet, from its rosbag2 event
+    topic (``/arm/_service_event``, ROS 2 Jazzy's service introspection). Each event message
+    pushes ``(event_type, sequence_number, *client_gid)``; a request (REQUEST_SENT 0,
+    REQUEST_RECEIVED 1) opens its call, keyed by its client's gid and sequence number (the
+    ids ``service_msgs/msg/ServiceEventInfo`` gives), a response (RESPONSE_SENT 2,
+    RESPONSE_RECEIVED 3) with the same key closes it. The value at a tick is the wait of the
+    oldest open call in seconds (0 when none): ``waiting_arm <= 0.1`` is "every call to /arm
+    is answered within 100 ms", its margin in seconds. Memory: the open calls, at most
+    :data:`MAX_PENDING_CALLS` (past it, an error naming the topic).
+    """
+
+    def __init__(self, spec: WindowSpec) -> None:
+        self.spec = spec
+        self.open: dict[tuple, int] = {}  # key -> time of its first request, oldest first
+        self.error: Exception | None = None
+
+    def push(self, t: int, v: Any) -> None:
+        """Add the event ``v`` (a tuple as above, or an evaluation error) at time ``t``."""
+        if isinstance(v, Exception):
+            self.error = v
+            return
+        etype, key = v[0], (v[1],) + tuple(v[2:])
+        if etype != etype or any(x != x for x in key):
+            return  # an unread id: nothing to match (NaN)
+        if etype <= 1:
+            if key not in self.open:
+                if len(self.open) >= MAX_PENDING_CALLS:
+                    self.error = RuntimeError(
+                        f"{self.spec.topic}: more than {MAX_PENDING_CALLS:,} calls wait for "
+                        "their response (the limit of waiting())")
+                    return
+                self.open[key] = t
+        else:
+            self.open.pop(key, None)
+
+    def complete(self, t: int) -> bool:
+        """Always: no warm-up (a call before the log's start is not known to exist)."""
+        return True
+
+    def _evict(self, t: int) -> None:
+        """Nothing leaves by time."""
+
+    def value(self, t: int) -> float:
+        """Seconds the oldest open call has waited at tick ``t`` (0 when none).
+
+        Raises:
+            Exception: an evaluation error of an event since the last tick, or the limit.
+        """
+        if self.error is not None:
+            err, self.error = self.error, None
+            raise err
+        for since in self.open.values():
+            return (t - since) / 1e9
+        return 0.0
+
+
+def sliding_windows(variables: list) -> dict[str, Any]:
+    """A fresh :class:`SlidingWindow` (or :class:`PendingCalls` for ``waiting``) per window
+    binding among ``variables`` (Bindings): variable name -> its window."""
+    return {b.name: (PendingCalls if b.window.func == "waiting" else SlidingWindow)(b.window)
+            for b in variables if getattr(b, "window", None) is not None}
 
 
 def push_message(windows: dict[str, SlidingWindow], variables: list, topic: str, t: int,
@@ -186,7 +247,7 @@ def push_message(windows: dict[str, SlidingWindow], variables: list, topic: str,
         if w is None or w.spec.topic != topic:
             continue
         try:
-            w.push(t, evaluate(b))
+            w.push(t, tuple(evaluate(p) for p in b.parts) if b.parts else evaluate(b))
         except Exception as exc:  # noqa: BLE001 - SignalError, kept for the tick
             w.push(t, exc)
 

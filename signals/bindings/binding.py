@@ -53,6 +53,8 @@ class Binding:
             (``mean(/battery.current, 2s)``: :mod:`fretc.signals.bindings.windowing`), or
             None. Then :meth:`evaluate` gives the aggregated expression on the held message,
             and the clocks keep the window (:class:`fretc.signals.windows.SlidingWindow`).
+        parts: for a window with parts (``waiting(/arm)``), one compiled binding per field
+            each message contributes (:attr:`WindowSpec.parts`).
     """
 
     name: str
@@ -70,6 +72,7 @@ class Binding:
     _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
     aggregate: str | None = None
     window: WindowSpec | None = None
+    parts: tuple = ()
 
     def location(self) -> ExprLocation:
         """Where the expression is, for error messages."""
@@ -175,16 +178,20 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     aggregate = check_aggregate(node, where)
     body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
     windowed = check_window(node, where)
-    window = None
+    window, parts = None, ()
     if windowed is not None:
         window, body = windowed
+        parts = tuple(compile_expression(f"{name}__part{i}", unparse(p), source=source,
+                                         line=line, col=col, exact=False)
+                      for i, p in enumerate(window.parts))
+        fields += tuple(f for p in parts for f in p.fields)
     scalar = compile_node(body, Ops(False, unread, inf_unread), extractors, constants)
     vector = compile_node(body, Ops(True, unread, inf_unread), extractors, constants)
     uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
     return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
-                   uses_tf, scalar, vector, aggregate, window)
+                   uses_tf, scalar, vector, aggregate, window, parts)
 
 
 def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:

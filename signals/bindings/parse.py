@@ -178,6 +178,8 @@ class _ToExpr(Transformer):
             topic = a.value if isinstance(a, Const) else a.name
             if isinstance(topic, str):
                 args = (Field(a.col, topic, ()),)
+        if name in ("called", "answered", "waiting"):
+            return _service_call(str(name), args, self.where, name.column)
         if name == "joint":
             args = _joint_args(args, self.where, name.column)
         return FuncCall(name.column, str(name), args)
@@ -196,6 +198,36 @@ class _ToExpr(Transformer):
             raise self.where.error('tf() takes two frame names in quotes: '
                                    'tf("map", "base_link").x', name.column)
         return FuncCall(name.column, "tf", args + (Const(member.column, str(member)),))
+
+
+#: The events of a service on its rosbag2 topic ``<service>/_service_event`` (ROS 2 Jazzy's
+#: service introspection, service_msgs/msg/ServiceEventInfo's ``event_type``): a request
+#: (REQUEST_SENT 0, REQUEST_RECEIVED 1) and a response (RESPONSE_SENT 2, RESPONSE_RECEIVED 3).
+SERVICE_EVENT_TOPIC = "/_service_event"
+
+
+def _service_call(name: str, args: tuple, where: ExprLocation, col: int) -> Expr:
+    """``called(/arm)`` -> ``any_of_messages(/arm/_service_event.info.event_type <= 1)`` (a
+    request since the previous tick), ``answered(/arm)`` the same with ``>= 2`` (a response),
+    ``waiting(/arm)`` -> the call to ``waiting`` of the event topic (the oldest unanswered
+    call's wait, :mod:`fretc.signals.windows`).
+
+    Raises:
+        BindingError: the argument is not a service name (``/arm``, ``"arm"``).
+    """
+    a = args[0] if len(args) == 1 else None
+    if isinstance(a, Const) and isinstance(a.value, str):
+        a = Field(a.col, a.value, ())
+    if not isinstance(a, Field) or a.path:
+        raise where.error(f"{name}() takes a service's name, e.g. {name}(/arm): its events are "
+                          f"the topic /arm{SERVICE_EVENT_TOPIC}", col)
+    topic = a.topic.rstrip("/") + SERVICE_EVENT_TOPIC
+    if name == "waiting":
+        return FuncCall(col, "waiting", (Field(a.col, topic, ()),))
+    etype = Field(a.col, topic, ("info", "event_type"))
+    test = BinOp(col, "<=", etype, Const(col, 1.0)) if name == "called" else BinOp(
+        col, ">=", etype, Const(col, 2.0))
+    return FuncCall(col, "any_of_messages", (test,))
 
 
 def apply_modifier(e: Expr, name: str, col: int, first: bool, where: ExprLocation) -> Expr:

@@ -34,6 +34,9 @@ class WindowSpec:
         count: the number of messages (a count window), or None.
         q: the percentile (0..100) of ``percentile``, else None.
         text: the span as written (``"2s"``).
+        parts: for ``waiting`` (a service's calls), the fields read from each event message:
+            ``info.event_type``, ``info.sequence_number`` and the 16 bytes of
+            ``info.client_gid`` (a call is matched with its response by the last two).
     """
 
     func: str
@@ -42,6 +45,7 @@ class WindowSpec:
     count: int | None
     q: float | None
     text: str
+    parts: tuple = ()
 
 
 def is_window_call(node: Expr) -> bool:
@@ -60,6 +64,16 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
             messages), a span inside the argument, or an argument reading other than the
             fields of one topic (``age()``, ``tf()``, two topics), at its column.
     """
+    if isinstance(node, FuncCall) and node.func == "waiting":
+        topic = node.args[0].topic  # type: ignore[attr-defined]
+        parts = ((Field(node.col, topic, ("info", "event_type")),
+                  Field(node.col, topic, ("info", "sequence_number")))
+                 + tuple(Field(node.col, topic, ("info", "client_gid", i)) for i in range(16)))
+        return WindowSpec("waiting", topic, None, 0, None, "", parts), Const(node.col, True)
+    for n in walk(node):
+        if isinstance(n, FuncCall) and n.func == "waiting" and n is not node:
+            raise where.error("waiting() is the whole binding: bind it to its own variable and "
+                              "compare it in the requirement (waiting_arm <= 0.1)", n.col)
     inner_spans = [n for n in walk(node) if isinstance(n, Span)]
     if not is_window_call(node):
         if inner_spans:
