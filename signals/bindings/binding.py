@@ -140,7 +140,7 @@ class Binding:
 def compile_expression(name: str, expr: str, *, source: str = "<expression>",
                        line: int | None = None, col: int | None = None, exact: bool = True,
                        refs: dict[str, Binding] | None = None, nan: str = "unread",
-                       inf: str = "unread") -> Binding:
+                       inf: str = "unread", path_vars: dict | None = None) -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -154,6 +154,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
             logic three-valued) or ``"false"`` (IEEE 754); :mod:`fretc.signals.bindings.operations`.
         inf: the binding file's ``[tick] inf``: ``"unread"`` (±inf read from a log field is
             NaN, but for REP 117 fields) or ``"value"``.
+        path_vars: the binding file's ``[path_variables]`` (FoxQL's ``$name`` in filters and
+            slices): name -> bool, int, float or string.
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
@@ -163,7 +165,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     if not VARNAME.match(name):
         raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
                           "quoted FRETish variable")
-    node, topics = parse_expression(expr, where)
+    node, topics = parse_expression(expr, where, path_vars)
     if any(isinstance(n, Ref) for n in walk(node)):
         trees = {n: b.ast for n, b in (refs or {}).items()}
         node = substitute(node, trees, where, name)

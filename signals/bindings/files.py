@@ -99,12 +99,13 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
-        if key not in ("tick", "variables", "logs", "types", "constants"):
+        if key not in ("tick", "variables", "logs", "types", "constants", "path_variables"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
-                               "optionally [logs], [types], [constants])", line=line, col=col)
+                               "optionally [logs], [types], [constants], [path_variables])",
+                               line=line, col=col)
 
 
 def _duration(tick_t: dict[str, Any], key: str, source: str, loc: _Locations) -> int:
@@ -203,12 +204,13 @@ def _variables_table(doc: dict[str, Any], source: str, loc: _Locations
 
 
 def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool]],
-                      source: str, nan: str = "unread", inf: str = "unread"
-                      ) -> dict[str, Binding]:
+                      source: str, nan: str = "unread", inf: str = "unread",
+                      path_vars: dict | None = None) -> dict[str, Binding]:
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
     deps: dict[str, list[str]] = {}
     for name, (expr, line, col, exact) in pending.items():
-        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact))
+        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact),
+                                    path_vars)
         deps[name] = [r for r in refs(node) if r in pending]
     state: dict[str, int] = {}
     compiled: dict[str, Binding] = {}
@@ -230,7 +232,8 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
             visit(d, chain + [name])
         expr, line, col, exact = pending[name]
         compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
-                                            exact=exact, refs=compiled, nan=nan, inf=inf)
+                                            exact=exact, refs=compiled, nan=nan, inf=inf,
+                                            path_vars=path_vars)
         state[name] = 2
 
     for name in pending:
@@ -319,13 +322,39 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     _check_tables(doc, source, loc)
     tick, time_base, lag = _tick_table(doc, source, loc)
     variables = _compile_in_order(_variables_table(doc, source, loc), source, tick.nan,
-                                  tick.inf)
+                                  tick.inf, _path_variables(doc.get("path_variables"), source,
+                                                            loc))
     out = Bindings(variables, tick, time_base, lag, source)
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)
     out.msg_path = _msg_path(doc.get("types"), source, loc)
     out.constants = _constants(doc.get("constants"), source, loc)
     return out
+
+
+def _path_variables(table: Any, source: str, loc: _Locations) -> dict[str, Any]:
+    """``[path_variables] track = 7``: the values of FoxQL's message path variables
+    (``{id==$track}``, ``[$lo:$hi]``), as Foxglove's panels take them: name -> bool, number
+    or string.
+
+    Raises:
+        BindingError: not a table, a name that is not an identifier, or another value.
+    """
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("", "path_variables")
+        raise BindingError(source, "path_variables must be a table: [path_variables] then "
+                           "track = 7", line=line, col=col)
+    for name, value in table.items():
+        line, col = loc.at("path_variables", name)
+        if not re.match(r"[A-Za-z_][A-Za-z0-9_]*\Z", name):
+            raise BindingError(source, f"[path_variables] {name!r} is not a name (letters, "
+                               "digits, _)", line=line, col=col)
+        if not isinstance(value, (bool, int, float, str)):
+            raise BindingError(source, f"[path_variables] {name}: a number, a string or "
+                               "true/false", line=line, col=col)
+    return dict(table)
 
 
 def _constants(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str]]:

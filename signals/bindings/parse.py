@@ -58,9 +58,28 @@ def _col(meta: object) -> int:
 class _ToExpr(Transformer):
     """Parse tree -> :class:`Expr`; one callback per rule (alias) of ``grammar.lark``."""
 
-    def __init__(self, where: ExprLocation) -> None:
+    def __init__(self, where: ExprLocation, path_vars: dict | None = None) -> None:
         super().__init__(visit_tokens=False)
         self.where = where
+        self.path_vars = path_vars or {}
+
+    def _variable(self, tok) -> bool | float | str:
+        """The value of FoxQL variable ``$name`` (the binding file's ``[path_variables]``).
+
+        Raises:
+            BindingError: a variable the file does not define, at its column.
+        """
+        name = str(tok)[1:]
+        if name not in self.path_vars:
+            known = ", ".join(f"${k}" for k in sorted(self.path_vars)) or "none"
+            raise self.where.error(f"message path variable ${name} has no value: give it in "
+                                   f"the binding file's [path_variables] table ({name} = 3) "
+                                   f"(defined: {known})", tok.column)
+        return self.path_vars[name]
+
+    def path_variable(self, meta, kids):
+        v = self._variable(kids[0])
+        return Const(kids[0].column, v if isinstance(v, (bool, str)) else float(v))
 
     def number(self, meta, kids):
         return Const(_col(meta), float(kids[0]))
@@ -104,6 +123,12 @@ class _ToExpr(Transformer):
         return int(kids[0])
 
     def slice_lo(self, meta, kids):
+        if kids and kids[0].type == "VARIABLE":
+            v = self._variable(kids[0])
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise self.where.error(f"{kids[0]} is {v!r}: a slice bound is an integer",
+                                       kids[0].column)
+            return v
         return int(kids[0]) if kids else None
 
     slice_hi = slice_lo
@@ -286,8 +311,10 @@ def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> Bindi
     return where.error(f"syntax error: {msg}", col)
 
 
-def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[str]]:
-    """Parse and check (:func:`check`) one expression.
+def parse_expression(expr: str, where: ExprLocation, path_vars: dict | None = None
+                     ) -> tuple[Expr, frozenset[str]]:
+    """Parse and check (:func:`check`) one expression; ``path_vars`` the values of FoxQL's
+    message path variables (``$track``: name -> bool, number or string).
 
     Returns:
         the tree and the topics it reads (fields and ``age``); references (:class:`Ref`)
@@ -306,7 +333,7 @@ def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[st
     except UnexpectedInput as exc:
         raise _syntax_error(expr, exc, where) from None
     try:
-        node = _ToExpr(where).transform(tree)
+        node = _ToExpr(where, path_vars).transform(tree)
     except VisitError as exc:
         raise exc.orig_exc from None
     except RecursionError:
