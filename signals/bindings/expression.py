@@ -359,9 +359,12 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
                 check(a, where, topics)
         return
     if node.func in ("sum", "median", "percentile", "variance", "rate"):
+        q = ", 95" if node.func == "percentile" else ""
+        arg = "/topic" if node.func == "rate" else "/topic.field"
         raise where.error(f"{node.func}() is a window function: its last argument is the "
-                          f"window, e.g. {node.func}(/topic.field, 2s) or "
-                          f"{node.func}(/topic.field, 50 messages)", node.col)
+                          f"window, e.g. {node.func}({arg}{q}, 2s)"
+                          + ("" if node.func == "rate" else
+                             f" or {node.func}({arg}{q}, 50 messages)"), node.col)
     if node.func not in FUNCS:
         raise where.error(f"unknown function {node.func!r} (known: "
                           f"{', '.join(sorted(FUNCS))})", node.col)
