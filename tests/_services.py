@@ -76,3 +76,56 @@ def write_service_bag(folder: Path, events: list[tuple[int, int, int, int, bool]
             msg = T[_MANGLED](info=info, request=req, response=res)
             w.write(conn, t, store.serialize_cdr(msg, _MANGLED))
     return next(bag.glob("*.mcap"))
+
+
+#: Kilted's action topics: the feedback of ``example_interfaces/action/Fibonacci`` as rosbag2
+#: stores its definition (package-relative names), and the goals' status array
+FEEDBACK = "example_interfaces/action/Fibonacci_FeedbackMessage"
+FEEDBACK_DEF = ("unique_identifier_msgs/UUID goal_id\nFibonacci_Feedback feedback\n" + _SEP
+                + "MSG: unique_identifier_msgs/UUID\nuint8[16] uuid\n" + _SEP
+                + "MSG: example_interfaces/Fibonacci_Feedback\nint32[] sequence\n")
+
+
+def write_action_bag(folder: Path, feedback: list[tuple[int, int, list[int]]],
+                     status: list[tuple[int, list[tuple[int, int]]]]) -> Path:
+    """A rosbag2 (MCAP storage) of ``/fib/_action/feedback`` messages ``(log time ns, goal
+    (its uuid's first byte), sequence)`` and ``/fib/_action/status`` arrays ``(log time ns,
+    [(goal, status)])`` (action_msgs/msg/GoalStatus: SUCCEEDED 4, ABORTED 6); returns the
+    ``.mcap`` file."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register(get_types_from_msg("int32[] sequence",
+                                      "example_interfaces/msg/Fibonacci_Feedback"))
+    store.register(get_types_from_msg("unique_identifier_msgs/UUID goal_id\n"
+                                      "example_interfaces/msg/Fibonacci_Feedback feedback",
+                                      "example_interfaces/msg/Fibonacci_FeedbackMessage"))
+    T = store.types
+
+    def uuid(goal: int):
+        u = np.zeros(16, np.uint8)
+        u[0] = goal
+        return T["unique_identifier_msgs/msg/UUID"](uuid=u)
+
+    bag = folder / "action_bag"
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        fb = w.add_connection("/fib/_action/feedback", FEEDBACK, msgdef=FEEDBACK_DEF,
+                              rihs01="RIHS01_" + "0" * 64)
+        st = w.add_connection("/fib/_action/status", "action_msgs/msg/GoalStatusArray",
+                              typestore=store)
+        rows = [(t, 0, (g, seq)) for t, g, seq in feedback] + [(t, 1, s) for t, s in status]
+        for t, kind, data in sorted(rows, key=lambda r: (r[0], r[1])):
+            if kind == 0:
+                msg = T["example_interfaces/msg/Fibonacci_FeedbackMessage"](
+                    goal_id=uuid(data[0]), feedback=T["example_interfaces/msg/Fibonacci_Feedback"](
+                        sequence=np.array(data[1], np.int32)))
+                w.write(fb, t, store.serialize_cdr(
+                    msg, "example_interfaces/msg/Fibonacci_FeedbackMessage"))
+                continue
+            arr = T["action_msgs/msg/GoalStatusArray"](status_list=[
+                T["action_msgs/msg/GoalStatus"](goal_info=T["action_msgs/msg/GoalInfo"](
+                    goal_id=uuid(g), stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)),
+                    status=s) for g, s in data])
+            w.write(st, t, store.serialize_cdr(arr, "action_msgs/msg/GoalStatusArray"))
+    return next(bag.glob("*.mcap"))

@@ -108,3 +108,26 @@ def test_a_service_requirement_audits_a_rosbag2_with_service_events(tmp_path):
 def test_service_functions_take_a_service_and_are_the_whole_binding(expr):
     with pytest.raises(BindingError):
         compile_expression("v", expr, source="b.toml", line=1, col=1)
+
+
+def test_action_topics_as_kilted_records_them_decode_and_bind(tmp_path):
+    """The feedback topic's type is ``pkg/action/Name_FeedbackMessage`` with package-relative
+    field types (undecodable before); a goal's status binds through a filter on the status
+    array, its named constants read from action_msgs/msg/GoalStatus."""
+    from _services import write_action_bag
+
+    log = write_action_bag(tmp_path, [(S + k * 100 * MS, 1, list(range(k + 1))) for k in range(10)],
+                           [(S, [(1, 2)]), (2 * S, [(1, 4)])])
+    (tmp_path / "a.fret").write_text(
+        "@tick_period 100 ms\n"
+        "DONE: the fib_server shall eventually satisfy succeeded\n"
+        "SHORT: the fib_server shall always satisfy feedback_length <= 8\n")
+    (tmp_path / "a.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\n'
+        'succeeded = "count(/fib/_action/status.status_list[:]{status==STATUS_SUCCEEDED}.status) = 1"\n'
+        'feedback_length = "len(/fib/_action/feedback.feedback.sequence)"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "a.fret"),))), str(log))
+    v = {x.requirement: x for x in la.verdicts}
+    assert v["DONE"].verdict == "satisfied", v["DONE"].error
+    assert v["SHORT"].verdict == "violated", v["SHORT"].error
+    assert v["SHORT"].first_violation.at.time_ns == S + 800 * MS  # 9 numbers from then on
