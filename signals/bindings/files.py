@@ -99,12 +99,14 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
-        if key not in ("tick", "variables", "logs", "types", "constants", "path_variables"):
+        if key not in ("tick", "variables", "logs", "types", "constants", "path_variables",
+                       "entities"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
-                               "optionally [logs], [types], [constants], [path_variables])",
+                               "optionally [logs], [types], [constants], [path_variables], "
+                               "[entities])",
                                line=line, col=col)
 
 
@@ -321,14 +323,69 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     loc = _Locations(text)
     _check_tables(doc, source, loc)
     tick, time_base, lag = _tick_table(doc, source, loc)
-    variables = _compile_in_order(_variables_table(doc, source, loc), source, tick.nan,
-                                  tick.inf, _path_variables(doc.get("path_variables"), source,
-                                                            loc))
-    out = Bindings(variables, tick, time_base, lag, source)
+    path_vars = _path_variables(doc.get("path_variables"), source, loc)
+    entities = _entities(doc.get("entities"), source, loc)
+    pending = _variables_table(doc, source, loc)
+    later = _per_entity(pending, entities)
+    variables = _compile_in_order({k: v for k, v in pending.items() if k not in later}, source,
+                                  tick.nan, tick.inf, path_vars)
+    out = Bindings(variables, tick, time_base, lag, source, entities=entities,
+                   per_entity={k: pending[k] + (tick.nan, tick.inf) for k in later},
+                   path_vars=path_vars)
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)
     out.msg_path = _msg_path(doc.get("types"), source, loc)
     out.constants = _constants(doc.get("constants"), source, loc)
+    return out
+
+
+def _per_entity(pending: dict, entities: dict) -> list[str]:
+    """The variables that read an entity (``$track``, a name of ``[entities]``) or refer to
+    one that does, in declaration order (compiled per entity, not now)."""
+    out: set[str] = set()
+    grew = True
+    while grew:
+        grew = False
+        for name, (expr, *_rest) in pending.items():
+            if name in out:
+                continue
+            uses = set(re.findall(r"\$([A-Za-z_][A-Za-z0-9_]*)", expr)) & set(entities)
+            if uses or any(re.search(rf"(?<![\w/.$]){re.escape(o)}(?!\w)", expr) for o in out):
+                out.add(name)
+                grew = True
+    return [n for n in pending if n in out]
+
+
+def _entities(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str | None]]:
+    """``[entities] track = "/tracks.tracks[:].id"`` or ``motor = { key =
+    "/diagnostics.status[:].name", matching = "motor*" }``: name -> (key path, glob or None).
+
+    Raises:
+        BindingError: not a table, a bad name, a key that is not a string path, a bad glob.
+    """
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("", "entities")
+        raise BindingError(source, "entities must be a table: [entities] then track = "
+                           "\"/tracks.tracks[:].id\"", line=line, col=col)
+    out: dict[str, tuple[str, str | None]] = {}
+    for name, value in table.items():
+        line, col = loc.at("entities", name)
+        if not re.match(r"[A-Za-z_][A-Za-z0-9_]*\Z", name):
+            raise BindingError(source, f"[entities] {name!r} is not a name (letters, digits, "
+                               "_)", line=line, col=col)
+        key, matching = value, None
+        if isinstance(value, dict):
+            key, matching = value.get("key"), value.get("matching")
+            extra = set(value) - {"key", "matching"}
+            if extra or not isinstance(matching, (str, type(None))):
+                raise BindingError(source, f"[entities] {name}: key = \"PATH\" and optionally "
+                                   "matching = \"GLOB\"", line=line, col=col)
+        if not isinstance(key, str) or not key.strip():
+            raise BindingError(source, f"[entities] {name}: the key is a field path in quotes, "
+                               "e.g. \"/tracks.tracks[:].id\"", line=line, col=col)
+        out[name] = (key, matching)
     return out
 
 
