@@ -124,9 +124,11 @@ def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
     entity (module docstring); ``run(plan, path, progress)`` audits a plan (the plain audit).
 
     Returns:
-        the log's audit: the other requirements' verdicts, then per requirement one verdict
-        per entity in order of first appearance (none appeared: one ``vacuous`` verdict
-        saying so; an error reading the key: one ``error`` verdict naming it).
+        the log's audit: the other requirements' verdicts, then per requirement its verdict
+        over all entities (named as the requirement: violated when one entity violates it,
+        satisfied when all satisfy it) and one verdict per entity in order of first
+        appearance (none appeared: one ``vacuous`` verdict saying so; an error reading the
+        key: one ``error`` verdict naming it).
     """
     groups = entity_of_requirements(plan)
     plain = [r for r in plan.requirements if r.index not in groups]
@@ -178,4 +180,32 @@ def _instances(plan: Any, r: Any, names: list[str], path: str, run: Any) -> list
     if cut:
         out += alone("error", error=f"more than {MAX_ENTITIES:,} entities {name} ({key}) in the "
                      f"log: only the first {MAX_ENTITIES:,} are judged")
-    return out
+    return [_summary(r, path, out, summary)] + out
+
+
+#: The verdict over all entities: the first of these that some entity has (an error or an
+#: unjudged entity leaves the whole undecided, a violation decides it).
+_PRECEDENCE = ("error", "violated", "unknown", "satisfied", "vacuous")
+
+
+def _summary(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
+    """The requirement's verdict over its entities (every entity satisfies it: satisfied;
+    one violates it: violated, with the earliest violation's evidence), named ``r.id``."""
+    verdict = next(k for k in _PRECEDENCE if any(v.verdict == k for v in out))
+    v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
+    bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]
+    if verdict == "violated" and bad:
+        first = min(bad, key=lambda x: x.first_violation.at.time_ns)
+        v.first_violation = first.first_violation
+        v.notes.append(f"first violated by {first.requirement}")
+    margins = [x.robustness for x in out if x.robustness is not None]
+    v.robustness = min(margins) if margins else None
+    if verdict == "error":
+        v.error = "; ".join(f"{x.requirement}: {x.error}" for x in out if x.error)
+    if verdict == "unknown":
+        v.unknown_reason = "; ".join(f"{x.requirement}: {x.unknown_reason}" for x in out
+                                     if x.verdict == "unknown")
+    v.notes.append(summary)
+    v.notes.append("violated by: " + (", ".join(x.requirement for x in out
+                                                if x.verdict == "violated") or "none"))
+    return v

@@ -71,3 +71,18 @@ def test_one_verdict_per_entity_equals_a_recomputation(tmp_path_factory, rows):
         if bad:
             assert v.first_violation.at.time_ns == S + bad[0] * S // 10
         assert any("over" in n and "entities motor" in n for n in v.notes)
+
+
+def test_the_requirement_has_a_verdict_over_its_entities_in_the_reports(tmp_path):
+    rows = [[("motor_l", 0)], [("motor_l", 0), ("motor_r", 1)], [("motor_r", 2)],
+            [("lidar", 2)], [("motor_l", 0)]]
+    msgs = [("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", S + k * S // 10,
+             _diag(list(r) + [("battery", 0)])) for k, r in enumerate(rows)]
+    got = _audit(tmp_path, write_mcap(tmp_path / "d.mcap", msgs))
+    assert got["M[motor=motor_l]"].verdict == "satisfied"
+    assert got["M[motor=motor_r]"].verdict == "violated"
+    m = got["M"]  # all entities: violated by one
+    assert m.verdict == "violated"
+    assert m.first_violation.at.time_ns == S + 2 * S // 10
+    assert "M over 2 entities motor: 1 satisfied, 1 violated" in m.notes
+    assert "violated by: M[motor=motor_r]" in m.notes
