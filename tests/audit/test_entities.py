@@ -86,3 +86,54 @@ def test_the_requirement_has_a_verdict_over_its_entities_in_the_reports(tmp_path
     assert m.first_violation.at.time_ns == S + 2 * S // 10
     assert "M over 2 entities motor: 1 satisfied, 1 violated" in m.notes
     assert "violated by: M[motor=motor_r]" in m.notes
+
+
+TRACK_BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+track = "/tracks.tracks[:].id"
+[variables]
+dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
+present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
+'''
+
+
+def _track_types():
+    from rosbags.typesys import get_types_from_msg
+
+    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
+        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
+        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
+                                         "tracking_msgs/msg/TrackArray"))
+    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.dictionaries(st.integers(1, 4), st.sampled_from([0.2, 0.8, 2.0]),
+                                     max_size=3), min_size=2, max_size=20))
+def test_one_verdict_per_tracked_object(tmp_path_factory, rows):
+    """Obstacles by numeric id: each judged while tracked, equal to a recomputation."""
+    Track, TrackArray = _track_types()
+    tmp = tmp_path_factory.mktemp("trk")
+    msgs = [("/tracks", "tracking_msgs/msg/TrackArray", S + k * S // 10,
+             TrackArray(tracks=[Track(id=i, distance=d) for i, d in sorted(r.items())]))
+            for k, r in enumerate(rows)]
+    (tmp / "t.fret").write_text("@tick_period 100 ms\n"
+                                "T: in present mode the robot shall always satisfy dist > 0.5\n")
+    (tmp / "t.bindings.toml").write_text(TRACK_BINDINGS)
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp / "t.fret"),))),
+                   str(write_mcap(tmp / "t.mcap", msgs)))
+    got = {v.requirement: v for v in la.verdicts}
+    ids = list(dict.fromkeys(i for r in rows for i in sorted(r)))
+    assert [k for k in got if k != "T"] == [f"T[track={i}]" for i in ids]
+    for i in ids:
+        bad = [k for k, r in enumerate(rows) if r.get(i, 1.0) <= 0.5]
+        v = got[f"T[track={i}]"]
+        assert v.verdict == ("violated" if bad else "satisfied"), (i, rows, v.error)
+        if bad:
+            assert v.first_violation.at.time_ns == S + bad[0] * S // 10
+    if not ids:
+        assert got["T"].verdict == "vacuous"
+    else:
+        assert got["T"].verdict == ("violated" if any(
+            got[f"T[track={i}]"].verdict == "violated" for i in ids) else "satisfied")
