@@ -20,7 +20,11 @@
    and a 95th percentile audited on the same log, CPU time against the plain read, and their
    verdicts and first violations checked equal to a pandas recomputation (rolling windows at
    the tick grid over an independent read: mcap + rosbags).
-4. Peak memory (max RSS of a fresh process auditing the log) for two log lengths
+4. One verdict per entity (``--entities``): a per-entity requirement over the obstacles of
+   a one-hour ``/tracks`` recording (``bench/tracks_run.py``), CPU time against the plain
+   read of that log, and the per-obstacle verdicts checked equal to a recomputation from
+   the generated values. Each entity costs one read of the log.
+5. Peak memory (max RSS of a fresh process auditing the log) for two log lengths
    (``--memory A B`` minutes): memory must stay flat in the log's length.
 """
 
@@ -258,6 +262,53 @@ def bench_windows(log: Path, workdir: Path, t_plain: float, repeat: int) -> None
         sys.exit(1)
 
 
+ENTITY_REQUIREMENTS = """@tick_period 100 ms
+T: in present mode the robot shall always satisfy dist > 1
+"""
+ENTITY_BINDINGS = """[tick]
+period = "100 ms"
+[entities]
+track = "/tracks.tracks[:].id"
+[variables]
+dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
+present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
+"""
+
+
+def bench_entities(workdir: Path, minutes: float, repeat: int) -> None:
+    """Time the per-entity audit of :data:`ENTITY_REQUIREMENTS` on a ``minutes`` tracks log
+    (best of ``repeat``), print its ratio to the plain read of that log and check each
+    obstacle's verdict against :func:`tracks_run.tracks_reference` (exits 1 on a
+    difference)."""
+    from tracks_run import tracks_reference, write_tracks
+
+    edir = workdir / "entities"
+    edir.mkdir(exist_ok=True)
+    log = edir / f"tracks_{minutes:g}min.mcap"
+    if not log.exists():
+        write_tracks(log, minutes)
+    fret = edir / "tracks.fret"
+    fret.write_text(ENTITY_REQUIREMENTS)
+    (edir / "tracks.bindings.toml").write_text(ENTITY_BINDINGS)
+    plains, runs = [], []
+    for _ in range(repeat):
+        plains.append(plain_iteration(log)[0])
+        _t_plan, t_audit, la = audit_once(log, fret)
+        runs.append(t_audit)
+    want = tracks_reference(minutes, 1.0)
+    got = {int(v.requirement.split("=")[1][:-1]): v for v in la.verdicts if "[" in v.requirement}
+    same = sorted(got) == sorted(want) and all(
+        (got[i].verdict == ("violated" if want[i] is not None else "satisfied"))
+        and (want[i] is None or got[i].first_violation.at.time_ns == want[i]) for i in want)
+    print(f"per-entity requirement over {len(got)} tracked obstacles ({log.name}): "
+          f"{min(runs):.2f} s CPU against {min(plains):.2f} s for the plain read "
+          f"(ratio {min(runs) / min(plains):.2f} x; {min(runs) / max(1, len(got)):.2f} s per "
+          f"entity); verdicts {'equal' if same else 'DIFFER from'} the recomputation "
+          f"({sum(w is not None for w in want.values())} obstacles violated)")
+    if not same:
+        sys.exit(1)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=5.0, help="length of the timed log")
@@ -267,6 +318,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="alternated runs of each (best kept)")
     ap.add_argument("--windows", action="store_true",
                     help="only the window requirements: time and pandas check")
+    ap.add_argument("--entities", action="store_true",
+                    help="only the per-entity requirement: time and recomputation check")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--child-plain", help=argparse.SUPPRESS)
     ap.add_argument("--child-heap", nargs=2, help=argparse.SUPPRESS)
@@ -293,6 +346,9 @@ def main() -> None:
     workdir = Path(args.workdir)
     workdir.mkdir(parents=True, exist_ok=True)
     fret = ensure_requirements(workdir)
+    if args.entities:
+        bench_entities(workdir, args.minutes, args.repeat)
+        return
     log = ensure_log(workdir, args.minutes)
     if args.windows:
         t_plain = min(plain_iteration(log)[0] for _ in range(args.repeat))
