@@ -367,7 +367,7 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
         held_abs = {w.spec.topic: idx[w.spec.topic] + stream.buffers[w.spec.topic].base
                     for w in c.sliding.values()}
         wwarm, wvals = window_block(c.sliding, c.window_fed, c.variables, times, held_abs,
-                                    lambda b, f, la: _message_values(stream, b, f, la))
+                                    lambda b, f, la: _message_values(stream, b, f, la), warm)
         warm = max(warm, wwarm)
     windows = windows_of(c, times, warm)
     s.warmup_ticks += warm

@@ -64,8 +64,10 @@ class SlidingWindow:
     def push(self, t: int, v: Any) -> None:
         """Add the value ``v`` (bool, float; NaN unread; an exception: the message failed to
         evaluate, raised by :meth:`value`) of a message at time ``t`` (ns)."""
-        if isinstance(v, Exception):
+        if isinstance(v, Exception):  # the binding fails at the next tick (warm-up counts it)
             self.error = v
+            self.first = t if self.first is None else self.first
+            self.seen += 1
             return
         x = float(v)
         if self.first is None:
@@ -258,7 +260,8 @@ def windows_complete(windows: dict[str, SlidingWindow], t: int) -> bool:
 
 
 def window_block(windows: dict[str, SlidingWindow], fed: dict[str, int], variables: list,
-                 times: Any, held: dict[str, Any], values_of: Any) -> tuple[int, dict]:
+                 times: Any, held: dict[str, Any], values_of: Any, warm_before: int = 0
+                 ) -> tuple[int, dict]:
     """The windows of one clock over a block of ticks (the block sampler,
     :mod:`fretc.signals.blocks`; the same values as :class:`fretc.signals.clock.Clock` pushing
     message by message).
@@ -272,6 +275,8 @@ def window_block(windows: dict[str, SlidingWindow], fed: dict[str, int], variabl
         held: topic -> per tick, the number of the message held (counted as ``fed``).
         values_of: ``values_of(binding, first, last)`` -> (times, values) of the messages
             numbered ``first..last`` of its topic (values: list, an exception kept as a value).
+        warm_before: the block's first ticks that are warm-up anyway (a topic without a
+            message yet): not evaluated, so an error stays for the first evaluated tick.
 
     Returns:
         (ticks at the start that are warm-up because a window is not complete, name -> list
@@ -299,7 +304,7 @@ def window_block(windows: dict[str, SlidingWindow], fed: dict[str, int], variabl
             while pos[n] < upto:
                 w.push(ts[pos[n]], vs[pos[n]])
                 pos[n] += 1
-        if warm == i and not all(windows[n].complete(t) for n in names):
+        if warm == i and (i < warm_before or not all(windows[n].complete(t) for n in names)):
             warm += 1
             for n in names:
                 windows[n]._evict(t)

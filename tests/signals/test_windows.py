@@ -151,3 +151,23 @@ def test_bad_windows_are_errors_naming_the_column(expr, message):
     with pytest.raises(BindingError, match=message) as info:
         compile_expression("v", expr, source="b.toml", line=3, col=5)
     assert "b.toml:3:" in str(info.value)
+
+
+def test_an_error_on_a_message_of_a_window_is_raised_by_both_clocks(tmp_path):
+    """A message its window cannot read is an error at the first evaluated tick, also when
+    that tick waits for another topic (warm-up): never lost."""
+    from _logs import scan
+
+    from fretc.common.problems import SignalError
+
+    msgs = [("/scan", "sensor_msgs/msg/LaserScan", k * 100 * MS, scan([1.0] * 10, k * 100 * MS))
+            for k in range(30)]
+    msgs += [("/b", "std_msgs/msg/Float64", 2000 * MS, float64(1.0))]
+    path = write_mcap(tmp_path / "e.mcap", sorted(msgs, key=lambda m: m[2]))
+    b = make_bindings({"w": "mean(/scan.ranges[800], 1s)", "late": "/b.data"},
+                      TickSpec(period_ns=100 * MS))
+    with pytest.raises(SignalError, match="800") as one:
+        list(sample(open_log(path), b))
+    with pytest.raises(SignalError, match="800") as two:
+        sample_arrays(open_log(path), b)
+    assert "variable 'w'" in str(one.value) and "variable 'w'" in str(two.value)
