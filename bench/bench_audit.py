@@ -309,7 +309,8 @@ def bench_entities(workdir: Path, minutes: float, repeat: int) -> None:
         sys.exit(1)
 
 
-def main() -> None:
+def _arguments() -> argparse.Namespace:
+    """The command line (module docstring)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=5.0, help="length of the timed log")
     ap.add_argument("--memory", type=float, nargs=2, default=(2.0, 10.0), metavar=("A", "B"),
@@ -323,7 +324,11 @@ def main() -> None:
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--child-plain", help=argparse.SUPPRESS)
     ap.add_argument("--child-heap", nargs=2, help=argparse.SUPPRESS)
-    args = ap.parse_args()
+    return ap.parse_args()
+
+
+def main() -> None:
+    args = _arguments()
     if args.child_plain:
         plain_iteration(Path(args.child_plain))
         return
