@@ -70,7 +70,7 @@ _SAME_UNIT = ("abs", "min", "max", "mean", "norm", "min_of_messages", "max_of_me
 _NUMBER_FUNCS = ("abs", "norm", "min", "max", "mean", "count", "len", "age", "joint",
                  "sqrt", "delta", "timedelta", "derivative", "count_of_messages",
                  "min_of_messages", "max_of_messages", "sum", "median", "percentile",
-                 "variance", "rate", "waiting")
+                 "variance", "rate", "waiting", "goal_waiting")
 _BOOL_OPS = ("<", "<=", ">", ">=", "=", "!=", "&", "|", "->", "<->")
 
 
@@ -243,7 +243,7 @@ def unit_of(node, schemas: dict) -> str | None:
         f = node.func
         if f in ("count", "len", "count_of_messages"):
             return "count"
-        if f in ("age", "timedelta", "waiting"):
+        if f in ("age", "timedelta", "waiting", "goal_waiting"):
             return "s"
         if f == "rate":
             return "Hz"

@@ -29,7 +29,7 @@ from fretc.common.problems import SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.bindings.spec import grid_start
-from fretc.signals.windows import sliding_windows, window_block
+from fretc.signals.windows import message_value, sliding_windows, window_block
 from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from fretc.signals.groups import GroupSampling, _restrict, csv_clock
@@ -416,6 +416,8 @@ def _message_values(stream: _Stream, b: Binding, first: int, last: int) -> tuple
     if len(at) and at[0] < 0:  # released from the buffer: never read others in their place
         raise AssertionError(f"messages of {topic} were released before their window")
     try:
+        if b.window.func == "goal_waiting":  # type: ignore[union-attr]
+            raise Irregular("arrays of a status array: message by message")
         with np.errstate(all="ignore"):
             cols = HeldColumns(stream.messages(), times[at], {topic: times}, {topic: at})
             if b.parts:  # waiting(): a tuple of fields per message
@@ -429,8 +431,8 @@ def _message_values(stream: _Stream, b: Binding, first: int, last: int) -> tuple
         for j in at.tolist():
             st.msgs[topic], st.times[topic], st.now = buf.data[j], buf.times[j], buf.times[j]
             try:
-                vals.append(tuple(p.evaluate(st) for p in b.parts) if b.parts
-                            else b.evaluate(st))
+                vals.append(message_value(b, lambda x, raw=False: x.raw(st) if raw
+                                          else x.evaluate(st)))
             except SignalError as exc:
                 vals.append(SignalError(f"{exc} (message of {topic} at log time "
                                         f"{buf.log_times[j]})", variable=exc.variable))

@@ -406,7 +406,8 @@ class Clock:
             self._fold_in(topic)
         if self.sliding:
             with np.errstate(all="ignore"):
-                push_message(self.sliding, self.variables, topic, t, lambda b: b.evaluate(st))
+                push_message(self.sliding, self.variables, topic, t,
+                             lambda b, raw=False: b.raw(st) if raw else b.evaluate(st))
         if topic in self.counted:
             self.since[topic] = self.since.get(topic, 0) + 1
         if topic == self.tick_topic:

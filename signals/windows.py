@@ -31,7 +31,8 @@ from typing import Any
 
 from fretc.signals.bindings.windowing import WindowSpec
 
-__all__ = ["SlidingWindow", "PendingCalls", "sliding_windows", "push_message",
+__all__ = ["SlidingWindow", "PendingCalls", "OpenGoals", "message_value", "sliding_windows",
+           "push_message",
            "windows_complete", "window_block", "MAX_PENDING_CALLS"]
 
 #: Calls of one service waiting for their response that ``waiting()`` keeps (memory bound).
@@ -232,24 +233,77 @@ class PendingCalls:
         return 0.0
 
 
+class OpenGoals(PendingCalls):
+    """``goal_waiting(/navigate)``: the goals of an action not finished yet, from its status
+    topic (``/navigate/_action/status``, action_msgs/msg/GoalStatusArray). Each message
+    pushes ``(statuses, goal uuids)`` of its ``status_list``; a goal listed ACCEPTED 1,
+    EXECUTING 2 or CANCELING 3 is open from the first message that lists it so, until one
+    lists it SUCCEEDED 4, CANCELED 5 or ABORTED 6 (action_msgs/msg/GoalStatus); a finished
+    goal never opens again. The value at a tick is the wait of the oldest open goal in
+    seconds (0 when none): ``goal_waiting_nav <= 60`` is "every accepted goal ends with a
+    result within 60 s". Memory: the open goals and the finished ones still listed, each at
+    most :data:`MAX_PENDING_CALLS`.
+    """
+
+    def __init__(self, spec: WindowSpec) -> None:
+        super().__init__(spec)
+        self.done: dict[bytes, None] = {}
+
+    def push(self, t: int, v: Any) -> None:
+        """Add one status array ``v`` (statuses, uuids; or an evaluation error) at ``t``."""
+        if isinstance(v, Exception):
+            self.error = v
+            return
+        statuses = v[0].data if hasattr(v[0], "data") else v[0]
+        for s, u in zip(list(statuses), list(v[1])):
+            key = bytes(bytearray(int(x) for x in u))
+            if key in self.done or s != s:
+                continue
+            if 1 <= s <= 3:
+                if key not in self.open and len(self.open) >= MAX_PENDING_CALLS:
+                    self.error = RuntimeError(f"{self.spec.topic}: more than "
+                                              f"{MAX_PENDING_CALLS:,} goals are open")
+                    return
+                self.open.setdefault(key, t)
+            elif s >= 4:
+                self.open.pop(key, None)
+                self.done[key] = None
+                if len(self.done) > MAX_PENDING_CALLS:
+                    del self.done[next(iter(self.done))]
+
+
+_KINDS = {"waiting": PendingCalls, "goal_waiting": OpenGoals}
+
+
 def sliding_windows(variables: list) -> dict[str, Any]:
-    """A fresh :class:`SlidingWindow` (or :class:`PendingCalls` for ``waiting``) per window
-    binding among ``variables`` (Bindings): variable name -> its window."""
-    return {b.name: (PendingCalls if b.window.func == "waiting" else SlidingWindow)(b.window)
+    """A fresh :class:`SlidingWindow` (:class:`PendingCalls` for ``waiting``,
+    :class:`OpenGoals` for ``goal_waiting``) per window binding among ``variables``
+    (Bindings): variable name -> its window."""
+    return {b.name: _KINDS.get(b.window.func, SlidingWindow)(b.window)
             for b in variables if getattr(b, "window", None) is not None}
+
+
+def message_value(b: Any, evaluate: Any) -> Any:
+    """What one message gives a window binding ``b``: ``evaluate(binding)`` of it, or of
+    each of its parts (a tuple); ``goal_waiting`` takes its parts' arrays as read
+    (``evaluate(part, raw=True)``: :meth:`~fretc.signals.bindings.binding.Binding.raw`)."""
+    if b.window.func == "goal_waiting":
+        return tuple(evaluate(p, raw=True) for p in b.parts)
+    return tuple(evaluate(p) for p in b.parts) if b.parts else evaluate(b)
 
 
 def push_message(windows: dict[str, SlidingWindow], variables: list, topic: str, t: int,
                  evaluate: Any) -> None:
     """Add the message of ``topic`` at time ``t`` (ns) to the windows of the bindings that
-    read it; ``evaluate(binding)`` gives its value on that message (an exception it raises
-    is kept and raised at the next tick, as the folds between ticks do)."""
+    read it; ``evaluate(binding, raw=False)`` gives its value on that message (``raw``: as
+    read, arrays too; :func:`message_value`); an exception it raises is kept and raised at
+    the next tick, as the folds between ticks do."""
     for b in variables:
         w = windows.get(b.name)
         if w is None or w.spec.topic != topic:
             continue
         try:
-            w.push(t, tuple(evaluate(p) for p in b.parts) if b.parts else evaluate(b))
+            w.push(t, message_value(b, evaluate))
         except Exception as exc:  # noqa: BLE001 - SignalError, kept for the tick
             w.push(t, exc)
 

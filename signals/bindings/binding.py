@@ -109,6 +109,18 @@ class Binding:
         raise self._fail(EvalError(self.ast, f"value {v!r} is not a boolean or a number"),
                          context)
 
+    def raw(self, state: EvalState) -> Any:
+        """Value at one tick as read, arrays included (``goal_waiting``'s status arrays):
+        no check that it is a boolean or a number.
+
+        Raises:
+            SignalError: a missing field or an index out of range, as :meth:`evaluate`.
+        """
+        try:
+            return self._scalar(state)  # type: ignore[misc]
+        except EvalError as exc:
+            raise self._fail(exc, "") from None
+
     def evaluate_columns(self, columns: Any) -> np.ndarray:
         """Values at all ticks (vectorized): 1-D bool or float64 array.
 

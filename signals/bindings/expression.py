@@ -162,7 +162,7 @@ class FuncCall(Expr):
 #: is its third).
 FUNCS = {
     "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
-    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1), "waiting": (1, 1),
+    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1), "waiting": (1, 1), "goal_waiting": (1, 1),
     "joint": (3, 3), "tf": (3, 3),
     "any_of_messages": (1, 1), "all_of_messages": (1, 1), "count_of_messages": (1, 1),
     "min_of_messages": (1, 1), "max_of_messages": (1, 1),
@@ -387,7 +387,7 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
                               f"/odom.twist.twist.linear.x@{node.func} or "
                               f"{node.func}(joint(/joint_states.position, \"wheel\"))",
                               node.col)
-    if node.func == "waiting":  # a service's event topic (parse.py wrote it)
+    if node.func in ("waiting", "goal_waiting"):  # a service's or an action's topic (parse.py)
         topics.add(node.args[0].topic)  # type: ignore[attr-defined]
         return
     if node.func == "age":

@@ -203,7 +203,7 @@ class _ToExpr(Transformer):
             topic = a.value if isinstance(a, Const) else a.name
             if isinstance(topic, str):
                 args = (Field(a.col, topic, ()),)
-        if name in ("called", "answered", "waiting"):
+        if name in ("called", "answered", "waiting", "goal_waiting"):
             return _service_call(str(name), args, self.where, name.column)
         if name == "joint":
             args = _joint_args(args, self.where, name.column)
@@ -235,7 +235,8 @@ def _service_call(name: str, args: tuple, where: ExprLocation, col: int) -> Expr
     """``called(/arm)`` -> ``any_of_messages(/arm/_service_event.info.event_type <= 1)`` (a
     request since the previous tick), ``answered(/arm)`` the same with ``>= 2`` (a response),
     ``waiting(/arm)`` -> the call to ``waiting`` of the event topic (the oldest unanswered
-    call's wait, :mod:`fretc.signals.windows`).
+    call's wait, :mod:`fretc.signals.windows`); ``goal_waiting(/navigate)`` -> the call of
+    the action's status topic ``/navigate/_action/status`` (the oldest active goal's wait).
 
     Raises:
         BindingError: the argument is not a service name (``/arm``, ``"arm"``).
@@ -246,6 +247,9 @@ def _service_call(name: str, args: tuple, where: ExprLocation, col: int) -> Expr
     if not isinstance(a, Field) or a.path:
         raise where.error(f"{name}() takes a service's name, e.g. {name}(/arm): its events are "
                           f"the topic /arm{SERVICE_EVENT_TOPIC}", col)
+    if name == "goal_waiting":  # an action's goals: its status topic (ROS 2 actions)
+        return FuncCall(col, "goal_waiting", (Field(a.col, a.topic.rstrip("/")
+                                                    + "/_action/status", ()),))
     topic = a.topic.rstrip("/") + SERVICE_EVENT_TOPIC
     if name == "waiting":
         return FuncCall(col, "waiting", (Field(a.col, topic, ()),))

@@ -217,7 +217,7 @@ class _TypeChecker:
             else:
                 self.need(arg, t, ("number",), f"{f}() over a window takes numbers", node)
             return "number"
-        if f in ("age", "tf", "timedelta", "waiting"):
+        if f in ("age", "tf", "timedelta", "waiting", "goal_waiting"):
             return "number"
         if f in ("delta", "derivative", "sqrt"):
             t = self.type(node.args[0])

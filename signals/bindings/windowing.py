@@ -12,7 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fretc.signals.bindings.expression import Const, Expr, ExprLocation, Field, FuncCall, Span, walk
+from fretc.signals.bindings.expression import (Const, Expr, ExprLocation, Field, FuncCall, Slice,
+                                               Span, walk)
 
 __all__ = ["WINDOW_FUNCS", "WindowSpec", "check_window", "is_window_call"]
 
@@ -70,8 +71,14 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
                   Field(node.col, topic, ("info", "sequence_number")))
                  + tuple(Field(node.col, topic, ("info", "client_gid", i)) for i in range(16)))
         return WindowSpec("waiting", topic, None, 0, None, "", parts), Const(node.col, True)
+    if isinstance(node, FuncCall) and node.func == "goal_waiting":
+        topic = node.args[0].topic  # type: ignore[attr-defined]
+        parts = (Field(node.col, topic, ("status_list", Slice(None, None), "status")),
+                 Field(node.col, topic, ("status_list", Slice(None, None), "goal_info",
+                                         "goal_id", "uuid")))
+        return WindowSpec("goal_waiting", topic, None, 0, None, "", parts), Const(node.col, True)
     for n in walk(node):
-        if isinstance(n, FuncCall) and n.func == "waiting" and n is not node:
+        if isinstance(n, FuncCall) and n.func in ("waiting", "goal_waiting") and n is not node:
             raise where.error("waiting() is the whole binding: bind it to its own variable and "
                               "compare it in the requirement (waiting_arm <= 0.1)", n.col)
     inner_spans = [n for n in walk(node) if isinstance(n, Span)]

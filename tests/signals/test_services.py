@@ -131,3 +131,65 @@ def test_action_topics_as_kilted_records_them_decode_and_bind(tmp_path):
     assert v["DONE"].verdict == "satisfied", v["DONE"].error
     assert v["SHORT"].verdict == "violated", v["SHORT"].error
     assert v["SHORT"].first_violation.at.time_ns == S + 800 * MS  # 9 numbers from then on
+
+
+def _goals_reference(status, t):
+    """The oldest active goal's wait at ``t`` (s), from the status arrays alone."""
+    open_at, done = {}, set()
+    for tm, goals in sorted(status, key=lambda s: s[0]):
+        if tm > t:
+            break
+        for g, s in goals:
+            if g in done:
+                continue
+            if 1 <= s <= 3:
+                open_at.setdefault(g, tm)
+            elif s >= 4:
+                open_at.pop(g, None)
+                done.add(g)
+    return (t - min(open_at.values())) / S if open_at else 0.0
+
+
+@settings(max_examples=12, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(goals=st.lists(st.tuples(st.integers(0, 1500), st.one_of(st.none(), st.integers(1, 800)),
+                                st.sampled_from([4, 5, 6])), min_size=1, max_size=6))
+def test_goal_waiting_follows_each_goal_from_accepted_to_its_result(tmp_path_factory, goals):
+    """Status arrays as an action server publishes them (every goal it tracks, at each
+    change): goal_waiting equals a recomputation, in both clocks."""
+    from _services import write_action_bag
+
+    events = []  # (time, goal, status)
+    for g, (start, duration, end_status) in enumerate(goals, start=1):
+        events += [(S + start * MS, g, 1), (S + start * MS + 5 * MS, g, 2)]
+        if duration is not None:
+            events.append((S + start * MS + duration * MS, g, end_status))
+    state, status = {}, []
+    for t, g, s in sorted(events):
+        state[g] = s
+        status.append((t, sorted(state.items())))
+    log = write_action_bag(tmp_path_factory.mktemp("act"), [], status)
+    b = make_bindings({"g": "goal_waiting(/fib)"}, TickSpec(period_ns=10 * MS))
+    ticks = list(sample(open_log(log), b))
+    arr = sample_arrays(open_log(log), b)
+    assert arr.columns["g"].tolist() == [t.values["g"] for t in ticks]
+    for t in ticks:
+        assert t.values["g"] == pytest.approx(_goals_reference(status, t.time), abs=1e-12)
+
+
+def test_every_accepted_goal_ends_with_a_result_within_its_bound(tmp_path):
+    from _services import write_action_bag
+
+    # goal 1 accepted at 1 s, succeeded at 1.4 s; goal 2 accepted at 1.2 s, aborted at 2.0 s
+    status = [(S, [(1, 1)]), (S + 200 * MS, [(1, 2), (2, 1)]), (S + 400 * MS, [(1, 4), (2, 2)]),
+              (2 * S, [(1, 4), (2, 6)])]
+    log = write_action_bag(tmp_path, [], status)
+    (tmp_path / "g.fret").write_text(
+        "@tick_period 100 ms\nRESULT: the fib_server shall always satisfy goal_wait <= 0.5\n")
+    (tmp_path / "g.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\ngoal_wait = "goal_waiting(/fib)"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "g.fret"),))), str(log))
+    v = la.verdicts[0]
+    assert v.verdict == "violated", v.error
+    assert v.first_violation.at.time_ns == S + 800 * MS  # goal 2 has waited 0.6 s
+    assert v.robustness == pytest.approx(0.5 - 0.7)  # 0.7 s at 1.9 s, its last open tick
