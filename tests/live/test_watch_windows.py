@@ -65,3 +65,18 @@ def test_a_service_requirement_watched_equals_its_audit(tmp_path):
     ref = audit_log(plan, str(log))
     assert ref.verdicts[0].verdict == "violated"
     assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+
+
+def test_an_action_requirement_watched_equals_its_audit(tmp_path):
+    from _services import write_action_bag
+
+    status = [(S, [(1, 1)]), (S + 200 * MS, [(1, 2), (2, 1)]), (S + 400 * MS, [(1, 4), (2, 2)]),
+              (2 * S, [(1, 4), (2, 6)])]
+    log = write_action_bag(tmp_path, [(S + k * 100 * MS, 1, [k]) for k in range(12)], status)
+    plan = _plan(tmp_path, "@tick_period 100 ms\n"
+                 "RESULT: the fib_server shall always satisfy goal_wait <= 0.5\n",
+                 '[tick]\nperiod = "100 ms"\n[variables]\ngoal_wait = "goal_waiting(/fib)"\n')
+    w, la, done = _watch_trace(plan, log)
+    ref = audit_log(plan, str(log))
+    assert ref.verdicts[0].verdict == "violated"
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
