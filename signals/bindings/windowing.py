@@ -65,18 +65,9 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
             messages), a span inside the argument, or an argument reading other than the
             fields of one topic (``age()``, ``tf()``, two topics), at its column.
     """
-    if isinstance(node, FuncCall) and node.func == "waiting":
-        topic = node.args[0].topic  # type: ignore[attr-defined]
-        parts = ((Field(node.col, topic, ("info", "event_type")),
-                  Field(node.col, topic, ("info", "sequence_number")))
-                 + tuple(Field(node.col, topic, ("info", "client_gid", i)) for i in range(16)))
-        return WindowSpec("waiting", topic, None, 0, None, "", parts), Const(node.col, True)
-    if isinstance(node, FuncCall) and node.func == "goal_waiting":
-        topic = node.args[0].topic  # type: ignore[attr-defined]
-        parts = (Field(node.col, topic, ("status_list", Slice(None, None), "status")),
-                 Field(node.col, topic, ("status_list", Slice(None, None), "goal_info",
-                                         "goal_id", "uuid")))
-        return WindowSpec("goal_waiting", topic, None, 0, None, "", parts), Const(node.col, True)
+    events = _event_window(node)
+    if events is not None:
+        return events
     for n in walk(node):
         if isinstance(n, FuncCall) and n.func in ("waiting", "goal_waiting") and n is not node:
             raise where.error("waiting() is the whole binding: bind it to its own variable and "
@@ -138,3 +129,21 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
                           "those where a condition holds: count(CONDITION, 1s))", body.col)
     spec = WindowSpec(node.func, topics.pop(), span.ns, span.messages, q, span.text)
     return spec, body
+
+
+def _event_window(node: Expr) -> tuple[WindowSpec, Expr] | None:
+    """``waiting(/arm/_service_event)`` and ``goal_waiting(/nav/_action/status)`` (as
+    parse.py writes them) as windows whose messages give their :attr:`WindowSpec.parts`."""
+    if isinstance(node, FuncCall) and node.func == "waiting":
+        topic = node.args[0].topic  # type: ignore[attr-defined]
+        parts = ((Field(node.col, topic, ("info", "event_type")),
+                  Field(node.col, topic, ("info", "sequence_number")))
+                 + tuple(Field(node.col, topic, ("info", "client_gid", i)) for i in range(16)))
+        return WindowSpec("waiting", topic, None, 0, None, "", parts), Const(node.col, True)
+    if isinstance(node, FuncCall) and node.func == "goal_waiting":
+        topic = node.args[0].topic  # type: ignore[attr-defined]
+        parts = (Field(node.col, topic, ("status_list", Slice(None, None), "status")),
+                 Field(node.col, topic, ("status_list", Slice(None, None), "goal_info",
+                                         "goal_id", "uuid")))
+        return WindowSpec("goal_waiting", topic, None, 0, None, "", parts), Const(node.col, True)
+    return None
