@@ -70,7 +70,8 @@ def load_audit_bindings(config: AuditConfig) -> tuple[Bindings | None, list[str]
             if tick is not None:  # the binding file's NaN policy stays
                 tick = dataclasses.replace(tick, nan=b.tick.nan, inf=b.tick.inf)
             b = Bindings(dict(b.variables), tick or b.tick, config.time_base or b.time_base,
-                         b.header_lag_ns, b.source, types=dict(b.types))
+                         b.header_lag_ns, b.source, types=dict(b.types), entities=b.entities,
+                         per_entity=b.per_entity, path_vars=b.path_vars)
         if config.inline:
             try:
                 b = b.with_inline(config.inline)
@@ -85,7 +86,13 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
     first = parts[0]
     variables: dict[str, Binding] = {}
     types: dict[str, str] = {}
+    entities: dict = {}
+    per_entity: dict = {}
+    path_vars: dict = {}
     for b in parts:
+        entities.update(b.entities)
+        per_entity.update(b.per_entity)
+        path_vars.update(b.path_vars)
         for topic, name in b.types.items():
             if types.setdefault(topic, name) != name:
                 raise AuditInputError(f"{b.source}: [types] gives {topic} the type {name}, "
@@ -105,7 +112,7 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
             variables.setdefault(name, v)
     source = ", ".join(str(b.source) for b in parts)
     return Bindings(variables, first.tick, first.time_base, first.header_lag_ns, source,
-                    types=types)
+                    types=types, entities=entities, per_entity=per_entity, path_vars=path_vars)
 
 
 def tick_text(tick: TickSpec) -> str:

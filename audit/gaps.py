@@ -9,8 +9,10 @@ is not newer than the gap's end (a lost message could be the newer one); it is k
 from the first message after the gap. A binding that reads a topic's previous message
 (``@delta`` ...) is unknown one message longer (its previous message may be lost); an
 aggregation over the messages between two ticks (``any_of_messages`` ...) is unknown at every
-tick whose span since the previous tick meets a gap. A variable is unknown where any topic
-it reads is.
+tick whose span since the previous tick meets a gap; a window over a duration
+(``mean(x, 2s)``) at every tick whose window ``(t - span, t]`` meets a gap, and a window over
+a count of messages from the gap on (how many messages the gap held is not known). A
+variable is unknown where any topic it reads is.
 
 Under the header time base, tick times are header stamps: a gap counts from ``header_lag_ns``
 before its start (a lost message's stamp may precede its log time by that much).
@@ -66,9 +68,9 @@ def gaps_of_clock(gaps: Iterable[Gap], topics: Iterable[str]) -> list[Gap]:
 
 
 def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
-                stateful: bool, folded: bool) -> np.ndarray:
+                stateful: bool, folded: bool, span: int | None = None) -> np.ndarray:
     """Unknown ticks of one topic (module docstring); ``held`` the log time of the message
-    each tick holds (-1: none)."""
+    each tick holds (-1: none); ``span`` a window's duration (ns; 0 a count of messages)."""
     n = len(times)
     out = np.zeros(n, np.bool_)
     prev = np.concatenate(([_NEG], times[:-1])) if n else times
@@ -84,6 +86,8 @@ def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
                 out |= held == held[fresh[0]]
         if folded:  # the span since the previous tick meets the gap
             out |= (times >= start) & (prev < end)
+        if span is not None:  # the window (t - span, t] meets the gap
+            out |= (times >= start) & ((times - span < end) if span else True)
     return out
 
 
@@ -104,22 +108,24 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
     """
     if not gaps or not len(times):
         return {}
-    masks: dict[tuple[str, bool, bool], np.ndarray] = {}
+    masks: dict[tuple, np.ndarray] = {}
     out: dict[str, np.ndarray] = {}
     for name in names:
         b = bindings.variables.get(name) if bindings is not None else None
         topics = sorted(b.topics) if b is not None else sorted(log_times)
         stateful = stateful_topics(b.ast) if b is not None else set()
         folded = b is not None and b.aggregate is not None
+        w = b.window if b is not None else None
+        span = None if w is None else (w.span_ns or 0)
         mask = np.zeros(len(times), np.bool_)
         for t in topics:
             own = [g for g in gaps if g.affects(t)]
             held = log_times.get(t)
             if not own or held is None:
                 continue
-            key = (t, t in stateful, folded)
+            key = (t, t in stateful, folded, span)
             if key not in masks:
-                masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded)
+                masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded, span)
             mask |= masks[key]
         if mask.any():
             out[name] = mask

@@ -57,6 +57,11 @@ def audit_log(plan: AuditPlan, path: str,
         if sub is None:
             return _not_selected(plan, str(path), err)
         return audit_log(sub, path, progress)
+    if plan.bindings is not None and plan.bindings.per_entity:
+        from fretc.audit.entities import audit_entities
+
+        return audit_entities(plan, str(path), progress,
+                              lambda p, f, pr: _LogRun(p, f).run(pr))
     return _LogRun(plan, path).run(progress)
 
 

@@ -16,7 +16,15 @@
    then the same two as commands in fresh processes (start-up included; bytecode cached as
    in an installed fretc, after one untimed run of each). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.
-3. Peak memory (max RSS of a fresh process auditing the log) for two log lengths
+3. Windows over time (``--windows``, docs/bindings.md): a 2-second mean, a count per minute
+   and a 95th percentile audited on the same log, CPU time against the plain read, and their
+   verdicts and first violations checked equal to a pandas recomputation (rolling windows at
+   the tick grid over an independent read: mcap + rosbags).
+4. One verdict per entity (``--entities``): a per-entity requirement over the obstacles of
+   a one-hour ``/tracks`` recording (``bench/tracks_run.py``), CPU time against the plain
+   read of that log, and the per-obstacle verdicts checked equal to a recomputation from
+   the generated values. Each entity costs one read of the log.
+5. Peak memory (max RSS of a fresh process auditing the log) for two log lengths
    (``--memory A B`` minutes): memory must stay flat in the log's length.
 """
 
@@ -65,6 +73,31 @@ scan_stale = "age(/scan) > 0.3"
 measured_speed = "abs(/odom.twist.twist.linear.x)"
 commanded_speed = "abs(/cmd_vel.linear.x)"
 """
+
+
+WINDOW_REQUIREMENTS = """# windows over time on the benchmark log's topics
+@tick_period 100 ms
+W1: the scout_mini shall always satisfy mean_speed_2s < 0.4
+W2: the safety_system shall always satisfy stops_per_minute <= 1
+W3: the scout_mini shall always satisfy p95_speed_10s < 0.4
+"""
+WINDOW_BINDINGS = """[tick]
+period = "100 ms"
+[variables]
+mean_speed_2s = "mean(/odom.twist.twist.linear.x, 2s)"
+stops_per_minute = "count(/gwendolen_control.data, 1min)"
+p95_speed_10s = "percentile(abs(/odom.twist.twist.linear.x), 95, 10s)"
+"""
+#: requirement -> (topic, value of a decoded message, span ns, pandas aggregation, bound
+#: holds) for the recomputation
+WINDOW_REFERENCE = {
+    "W1": ("/odom", lambda m: m.twist.twist.linear.x, 2_000_000_000, lambda r: r.mean(),
+           lambda x: x < 0.4),
+    "W2": ("/gwendolen_control", lambda m: float(m.data), 60_000_000_000, lambda r: r.sum(),
+           lambda x: x <= 1),
+    "W3": ("/odom", lambda m: abs(m.twist.twist.linear.x), 10_000_000_000,
+           lambda r: r.quantile(0.95), lambda x: x < 0.4),
+}
 
 
 def ensure_log(workdir: Path, minutes: float) -> Path:
@@ -156,17 +189,146 @@ def command_cpu(log: Path, fret: Path) -> tuple[float, float]:
     return plain, audit
 
 
-def main() -> None:
+def _decoded(path: Path, topics: set) -> dict:
+    """Topic -> [(log time, decoded message)], read by mcap + rosbags (not fretc)."""
+    from mcap.reader import make_reader
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    out: dict = {t: [] for t in topics}
+    stores: dict = {}
+    with open(path, "rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages(topics=sorted(topics),
+                                                                     log_time_order=True):
+            st = stores.get(schema.id)
+            if st is None:
+                st = stores[schema.id] = get_typestore(Stores.EMPTY)
+                st.register(get_types_from_msg(schema.data.decode(), schema.name))
+            out[channel.topic].append((message.log_time,
+                                       st.deserialize_cdr(message.data, schema.name)))
+    return out
+
+
+def pandas_window_verdicts(path: Path, period_ns: int = 100_000_000) -> dict:
+    """Requirement -> (verdict, first violation tick ns) of :data:`WINDOW_REQUIREMENTS`
+    recomputed by pandas: the tick grid of the requirement's topic (multiples of the period
+    from its first message to its last), warm-up until the window starts at or after the
+    first message, the time-based rolling window ``(t - span, t]`` at each tick."""
+    import math
+
+    import numpy as np
+    import pandas as pd
+
+    msgs = _decoded(path, {ref[0] for ref in WINDOW_REFERENCE.values()})
+    out = {}
+    for req, (topic, value, span, how, holds) in WINDOW_REFERENCE.items():
+        mt = np.array([t for t, _m in msgs[topic]], dtype=np.int64)
+        mx = [value(m) for _t, m in msgs[topic]]
+        ticks = np.arange(-(-mt[0] // period_ns) * period_ns, mt[-1] + 1, period_ns)
+        rows = sorted([(int(t), 0, x) for t, x in zip(mt, mx)]
+                      + [(int(t), 1, math.nan) for t in ticks])
+        df = pd.DataFrame(rows, columns=["t", "tick", "x"])
+        df.index = pd.to_datetime(df["t"], unit="ns")
+        vals = how(df["x"].rolling(pd.Timedelta(span, "ns"), closed="right", min_periods=0))
+        vals = vals[df["tick"].to_numpy() == 1].to_numpy()
+        first = next((int(t) for t, x in zip(ticks, vals)
+                      if t - span >= mt[0] and not holds(x)), None)
+        out[req] = ("violated" if first is not None else "satisfied", first)
+    return out
+
+
+def bench_windows(log: Path, workdir: Path, t_plain: float, repeat: int) -> None:
+    """Time the audit of :data:`WINDOW_REQUIREMENTS` on ``log`` (best of ``repeat``), print
+    its ratio to the plain read ``t_plain`` (CPU s) and check its verdicts against
+    :func:`pandas_window_verdicts` (exits 1 on a difference)."""
+    wdir = workdir / "windows"
+    wdir.mkdir(exist_ok=True)
+    fret = wdir / "windows.fret"
+    fret.write_text(WINDOW_REQUIREMENTS)
+    (wdir / "windows.bindings.toml").write_text(WINDOW_BINDINGS)
+    runs = []
+    for _ in range(repeat):
+        _t_plan, t_audit, la = audit_once(log, fret)
+        runs.append(t_audit)
+    got = {v.requirement: (v.verdict, v.first_violation.at.time_ns if v.first_violation
+                           else None) for v in la.verdicts}
+    want = pandas_window_verdicts(log)
+    print(f"fretc audit, 3 window requirements (2 s mean, count per minute, 95th percentile "
+          f"over 10 s): {min(runs):.2f} s CPU, ratio to the plain read "
+          f"{min(runs) / t_plain:.2f} x")
+    for req in sorted(want):
+        print(f"  {req}: fretc {got[req][0]} (first violation {got[req][1]}), pandas "
+              f"{want[req][0]} ({want[req][1]}): {'equal' if got[req] == want[req] else 'DIFFER'}")
+    if got != want:
+        sys.exit(1)
+
+
+ENTITY_REQUIREMENTS = """@tick_period 100 ms
+T: in present mode the robot shall always satisfy dist > 1
+"""
+ENTITY_BINDINGS = """[tick]
+period = "100 ms"
+[entities]
+track = "/tracks.tracks[:].id"
+[variables]
+dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
+present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
+"""
+
+
+def bench_entities(workdir: Path, minutes: float, repeat: int) -> None:
+    """Time the per-entity audit of :data:`ENTITY_REQUIREMENTS` on a ``minutes`` tracks log
+    (best of ``repeat``), print its ratio to the plain read of that log and check each
+    obstacle's verdict against :func:`tracks_run.tracks_reference` (exits 1 on a
+    difference)."""
+    from tracks_run import tracks_reference, write_tracks
+
+    edir = workdir / "entities"
+    edir.mkdir(exist_ok=True)
+    log = edir / f"tracks_{minutes:g}min.mcap"
+    if not log.exists():
+        write_tracks(log, minutes)
+    fret = edir / "tracks.fret"
+    fret.write_text(ENTITY_REQUIREMENTS)
+    (edir / "tracks.bindings.toml").write_text(ENTITY_BINDINGS)
+    plains, runs = [], []
+    for _ in range(repeat):
+        plains.append(plain_iteration(log)[0])
+        _t_plan, t_audit, la = audit_once(log, fret)
+        runs.append(t_audit)
+    want = tracks_reference(minutes, 1.0)
+    got = {int(v.requirement.split("=")[1][:-1]): v for v in la.verdicts if "[" in v.requirement}
+    same = sorted(got) == sorted(want) and all(
+        (got[i].verdict == ("violated" if want[i] is not None else "satisfied"))
+        and (want[i] is None or got[i].first_violation.at.time_ns == want[i]) for i in want)
+    print(f"per-entity requirement over {len(got)} tracked obstacles ({log.name}): "
+          f"{min(runs):.2f} s CPU against {min(plains):.2f} s for the plain read "
+          f"(ratio {min(runs) / min(plains):.2f} x; {min(runs) / max(1, len(got)):.2f} s per "
+          f"entity); verdicts {'equal' if same else 'DIFFER from'} the recomputation "
+          f"({sum(w is not None for w in want.values())} obstacles violated)")
+    if not same:
+        sys.exit(1)
+
+
+def _arguments() -> argparse.Namespace:
+    """The command line (module docstring)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=5.0, help="length of the timed log")
     ap.add_argument("--memory", type=float, nargs=2, default=(2.0, 10.0), metavar=("A", "B"),
                     help="two log lengths (minutes) whose peak memory is compared")
     ap.add_argument("--workdir", default="/tmp/fretc-bench", help="where logs are kept")
     ap.add_argument("--repeat", type=int, default=3, help="alternated runs of each (best kept)")
+    ap.add_argument("--windows", action="store_true",
+                    help="only the window requirements: time and pandas check")
+    ap.add_argument("--entities", action="store_true",
+                    help="only the per-entity requirement: time and recomputation check")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--child-plain", help=argparse.SUPPRESS)
     ap.add_argument("--child-heap", nargs=2, help=argparse.SUPPRESS)
-    args = ap.parse_args()
+    return ap.parse_args()
+
+
+def main() -> None:
+    args = _arguments()
     if args.child_plain:
         plain_iteration(Path(args.child_plain))
         return
@@ -189,7 +351,15 @@ def main() -> None:
     workdir = Path(args.workdir)
     workdir.mkdir(parents=True, exist_ok=True)
     fret = ensure_requirements(workdir)
+    if args.entities:
+        bench_entities(workdir, args.minutes, args.repeat)
+        return
     log = ensure_log(workdir, args.minutes)
+    if args.windows:
+        t_plain = min(plain_iteration(log)[0] for _ in range(args.repeat))
+        print(f"log: {log.name}; plain mcap read + rosbags decode: {t_plain:.2f} s CPU")
+        bench_windows(log, workdir, t_plain, args.repeat)
+        return
 
     plains, audits = [], []
     for _ in range(args.repeat):  # alternated, best of each: CPU time is less noisy than wall
@@ -212,6 +382,7 @@ def main() -> None:
           f"fretc audit {c_audit:.2f} s CPU, ratio {c_audit / c_plain:.2f} x")
     verdicts = ", ".join(f"{v.requirement} {v.verdict}" for v in la.verdicts)
     print(f"verdicts: {verdicts}")
+    bench_windows(log, workdir, t_plain, args.repeat)
 
     print("\npeak memory of a fresh process auditing a log (max RSS):")
     rows = []

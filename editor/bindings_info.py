@@ -65,10 +65,12 @@ FIELD_UNITS = {
     ("sensor_msgs/msg/NavSatFix", ("longitude",)): "deg",
     ("sensor_msgs/msg/NavSatFix", ("altitude",)): "m",
 }
-_SAME_UNIT = ("abs", "min", "max", "mean", "norm", "min_of_messages", "max_of_messages")
+_SAME_UNIT = ("abs", "min", "max", "mean", "norm", "min_of_messages", "max_of_messages",
+              "sum", "median", "percentile")
 _NUMBER_FUNCS = ("abs", "norm", "min", "max", "mean", "count", "len", "age", "joint",
                  "sqrt", "delta", "timedelta", "derivative", "count_of_messages",
-                 "min_of_messages", "max_of_messages")
+                 "min_of_messages", "max_of_messages", "sum", "median", "percentile",
+                 "variance", "rate", "waiting", "goal_waiting")
 _BOOL_OPS = ("<", "<=", ">", ">=", "=", "!=", "&", "|", "->", "<->")
 
 
@@ -241,13 +243,16 @@ def unit_of(node, schemas: dict) -> str | None:
         f = node.func
         if f in ("count", "len", "count_of_messages"):
             return "count"
-        if f in ("age", "timedelta"):
+        if f in ("age", "timedelta", "waiting", "goal_waiting"):
             return "s"
+        if f == "rate":
+            return "Hz"
         if f == "tf":
             comp = node.args[-1].value if isinstance(node.args[-1], Const) else None
             return {"x": "m", "y": "m", "z": "m", "yaw": "rad", "age": "s"}.get(comp)
         if f in _SAME_UNIT or f == "delta":
-            units = {unit_of(a, schemas) for a in node.args}
+            args = node.args[:1] if type(node.args[-1]).__name__ == "Span" else node.args
+            units = {unit_of(a, schemas) for a in args}
             return units.pop() if len(units) == 1 else None
         if f == "derivative":
             u = unit_of(node.args[0], schemas)

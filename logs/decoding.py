@@ -77,9 +77,22 @@ def _roslib_header(schema_encoding: str, text: str) -> str:
     return text
 
 
+def _service_type(name: str) -> str:
+    """The name a ros2msg definition of a service's or an action's message is parsed under:
+    rosbag2 records a service's events as ``pkg/srv/Name_Event`` (ROS 2 Jazzy's service
+    introspection) and an action's as ``pkg/action/Name_FeedbackMessage``, their definitions
+    naming the request and response types relative to the package (``Name_Request``,
+    ``MSG: pkg/Name_Request``), which rosbags resolves under ``pkg/msg/``; the type is read as
+    ``pkg/msg/Name_Event`` (its CDR is the same)."""
+    parts = name.split("/")
+    if len(parts) == 3 and parts[1] in ("srv", "action"):
+        return f"{parts[0]}/msg/{parts[2]}"
+    return name
+
+
 @functools.lru_cache(maxsize=_STORES_KEPT)
 def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
-    typename = normalize_msgtype(name)
+    typename = normalize_msgtype(_service_type(name) if schema_encoding == "ros2msg" else name)
     if not text.strip():
         raise UnsupportedSchema(f"schema {name!r} is empty")
     if schema_encoding not in ("ros2msg", "ros1msg", "ros2idl"):

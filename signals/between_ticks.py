@@ -39,7 +39,7 @@ def single_topic(b: Binding) -> str | None:
     """The topic of a boolean binding without aggregation that reads the fields of one
     topic only (its value on a skipped message can be compared with its value at a tick),
     else None."""
-    if b.aggregate is not None or b.uses_tf or not is_boolean(b.ast):
+    if b.aggregate is not None or b.window is not None or b.uses_tf or not is_boolean(b.ast):
         return None
     return per_message_topic(b.ast)
 
@@ -81,7 +81,7 @@ def missed_changes(variables: list[Binding], stream: Any, topic: str, starts: np
         if n:
             out[b.name] = out.get(b.name, 0) + n
 
-__all__ = ["closing_end", "windows_of", "folded", "is_boolean", "single_topic",
+__all__ = ["folded_topics", "closing_end", "windows_of", "folded", "is_boolean", "single_topic",
            "missed_changes"]
 
 
@@ -155,3 +155,11 @@ def folded(b: Binding, stream: Any, window: tuple[np.ndarray, np.ndarray]) -> np
     if all(type(v) is bool for v in out):
         return np.array(out, dtype=np.bool_)
     return np.array(out, dtype=np.float64)
+
+
+def folded_topics(variables: list[Binding]) -> set[str]:
+    """Topics read only by aggregated bindings (``any_of_messages`` ..., windows) among
+    ``variables``: every message of them is folded, none goes unsampled."""
+    agg = [b.aggregate is not None or b.window is not None for b in variables]
+    folded = {t for b, a in zip(variables, agg) if a for t in b.topics}
+    return folded - {t for b, a in zip(variables, agg) if not a for t in b.topics}

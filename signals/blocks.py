@@ -29,6 +29,7 @@ from fretc.common.problems import SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.bindings.spec import grid_start
+from fretc.signals.windows import message_value, sliding_windows, window_block
 from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from fretc.signals.groups import GroupSampling, _restrict, csv_clock
@@ -154,6 +155,9 @@ class _Group:
         #: per binding that reads ``tf()``: its transforms so far and, per TF topic, the
         #: count of that topic's messages already added (tf() reads every message, not the
         #: held one: they are added in time order up to each tick)
+        #: window bindings (mean(x, 2s) ...): name -> window; topic -> last message pushed
+        self.sliding = sliding_windows(self.variables)
+        self.window_fed: dict[str, int] = {}
         self.tf: dict[str, tuple[TfBuffer, dict[str, int]]] = {
             b.name: (TfBuffer(), {t: 0 for t in TF_TOPICS}) for b in self.variables
             if getattr(b, "uses_tf", False)}
@@ -290,6 +294,8 @@ def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
                 if topic in c.last_held:  # the messages since the one held last: the next
                     # ticks read those they skip (missed changes), whatever other clocks keep
                     keep = min(keep, c.last_held[topic] - b.base)
+                if topic in c.window_fed:  # a window's messages not yet pushed
+                    keep = min(keep, c.window_fed[topic] + 1 - b.base)
                 if c.window_start.get(topic, -1) >= 0:  # an aggregation's next window:
                     # the messages after the one held at the last tick (and that one)
                     keep = min(keep, c.window_start[topic] - b.base)
@@ -356,6 +362,13 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     s.end_time = int(times[-1])
     warm = max((int(np.count_nonzero(idx[t] < _first_held(c, t))) for t in c.required),
                default=0)
+    wwarm, wvals = 0, {}
+    if c.sliding:
+        held_abs = {w.spec.topic: idx[w.spec.topic] + stream.buffers[w.spec.topic].base
+                    for w in c.sliding.values()}
+        wwarm, wvals = window_block(c.sliding, c.window_fed, c.variables, times, held_abs,
+                                    lambda b, f, la: _message_values(stream, b, f, la), warm)
+        warm = max(warm, wwarm)
     windows = windows_of(c, times, warm)
     s.warmup_ticks += warm
     if warm == len(times):
@@ -373,6 +386,13 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
             if b.aggregate is not None:
                 values[b.name] = folded(b, stream, windows[next(iter(b.topics))])
                 continue
+            if b.name in wvals:
+                vals = wvals[b.name][warm - wwarm:]
+                for v in vals:
+                    if isinstance(v, SignalError):
+                        raise v
+                values[b.name] = np.array(vals, dtype=np.float64)
+                continue
             values[b.name] = _values(b, cols, stream, times, held, c.per_tick,
                                      c.tf.get(b.name))
         except SignalError as err:
@@ -383,6 +403,40 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     c.index += len(times)
     s.ticks += len(times)
     return blk
+
+
+def _message_values(stream: _Stream, b: Binding, first: int, last: int) -> tuple[list, list]:
+    """(times, values) of the messages numbered ``first..last`` of a window binding's topic
+    (by numpy over them, else message by message; an evaluation error is the value of its
+    message, named with its log time)."""
+    topic = b.window.topic  # type: ignore[union-attr]
+    buf = stream.buffers[topic]
+    times = stream.arrays(topic)[0]
+    at = np.arange(first, last + 1) - buf.base
+    if len(at) and at[0] < 0:  # released from the buffer: never read others in their place
+        raise AssertionError(f"messages of {topic} were released before their window")
+    try:
+        if b.window.func == "goal_waiting":  # type: ignore[union-attr]
+            raise Irregular("arrays of a status array: message by message")
+        with np.errstate(all="ignore"):
+            cols = HeldColumns(stream.messages(), times[at], {topic: times}, {topic: at})
+            if b.parts:  # waiting(): a tuple of fields per message
+                return times[at].tolist(), list(zip(*(p.evaluate_columns(cols).tolist()
+                                                      for p in b.parts)))
+            return times[at].tolist(), b.evaluate_columns(cols).tolist()
+    except (SignalError, Irregular):
+        pass
+    st, vals = EvalState(), []
+    with np.errstate(all="ignore"):
+        for j in at.tolist():
+            st.msgs[topic], st.times[topic], st.now = buf.data[j], buf.times[j], buf.times[j]
+            try:
+                vals.append(message_value(b, lambda x, raw=False: x.raw(st) if raw
+                                          else x.evaluate(st)))
+            except SignalError as exc:
+                vals.append(SignalError(f"{exc} (message of {topic} at log time "
+                                        f"{buf.log_times[j]})", variable=exc.variable))
+    return times[at].tolist(), vals
 
 
 def _first_held(c: _Group, topic: str) -> int:

@@ -15,11 +15,12 @@ import numpy as np
 
 from fretc.common import problems as P
 from fretc.signals.bindings.binding import EMPTY_FOLD, Binding, fold
-from fretc.signals.between_ticks import single_topic
+from fretc.signals.between_ticks import folded_topics, single_topic
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
 from fretc.signals.bindings.spec import Bindings, TickSpec, grid_start
+from fretc.signals.windows import push_message, sliding_windows, windows_complete
 from fretc.common.problems import DataProblem, ProblemLog, SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CSV_TOPIC, CsvSource, LogSource
@@ -236,13 +237,6 @@ def feed(source: LogSource, bindings: Bindings, topics: set[str], problems: Prob
     yield from buf.drain()
 
 
-def folded_topics(variables: list[Binding]) -> set[str]:
-    """Topics read only by aggregated bindings (``any_of_messages`` ...) among
-    ``variables``: every message of them is folded, none goes unsampled."""
-    folded = {t for b in variables if b.aggregate is not None for t in b.topics}
-    return folded - {t for b in variables if b.aggregate is None for t in b.topics}
-
-
 def s_first(s: "Sampling") -> bool:
     """Whether ``s`` has evaluated a tick (skipped messages count from then on)."""
     return s.first_time is not None
@@ -306,10 +300,13 @@ class Clock:
         #: topics whose previous message a binding reads (@delta ...): held too, and
         #: waited for (warm-up) until the second message
         self.stateful: set[str] = set().union(*(stateful_topics(b.ast) for b in self.variables))
+        self.sliding = sliding_windows(self.variables)  # window bindings: name -> window
 
     def _value(self, b: Binding, window: dict[str, list[Any]]) -> bool | float:
         """``b`` at the tick: the held message's value, or its aggregation over the
         messages since the previous tick (:func:`fretc.signals.bindings.binding.fold`)."""
+        if b.name in self.sliding:
+            return self.sliding[b.name].value(self.state.now)  # type: ignore[arg-type]
         if b.aggregate is None:
             return b.evaluate(self.state)
         vals = window.get(b.name) or []
@@ -330,7 +327,7 @@ class Clock:
             s.start_time = t
             s.waiting_for = sorted(self.missing)
         s.end_time = t
-        if self.missing:
+        if self.missing or not windows_complete(self.sliding, t):
             s.warmup_ticks += 1
             return None
         if s.first_time is None:
@@ -407,6 +404,10 @@ class Clock:
             self.missing.discard(topic)
         if self.window:
             self._fold_in(topic)
+        if self.sliding:
+            with np.errstate(all="ignore"):
+                push_message(self.sliding, self.variables, topic, t,
+                             lambda b, raw=False: b.raw(st) if raw else b.evaluate(st))
         if topic in self.counted:
             self.since[topic] = self.since.get(topic, 0) + 1
         if topic == self.tick_topic:

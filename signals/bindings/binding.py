@@ -18,6 +18,7 @@ from fretc.signals.bindings.expression import (TF_TOPICS, BinOp, Const, Expr, Ex
 from fretc.signals.bindings.parse import parse_expression
 from fretc.signals.bindings.extract import Valid, normalize_scalar
 from fretc.signals.bindings.operations import Ops
+from fretc.signals.bindings.windowing import WindowSpec, check_window
 
 __all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals",
            "fold", "EMPTY_FOLD"]
@@ -48,6 +49,12 @@ class Binding:
             ``any_of_messages(EXPR)`` etc.), or None: the held message's value (sample and
             hold). Then :meth:`evaluate` gives EXPR on the held message, and the clocks fold
             (:func:`fold`).
+        window: a window function over the messages of its one topic
+            (``mean(/battery.current, 2s)``: :mod:`fretc.signals.bindings.windowing`), or
+            None. Then :meth:`evaluate` gives the aggregated expression on the held message,
+            and the clocks keep the window (:class:`fretc.signals.windows.SlidingWindow`).
+        parts: for a window with parts (``waiting(/arm)``), one compiled binding per field
+            each message contributes (:attr:`WindowSpec.parts`).
     """
 
     name: str
@@ -64,6 +71,8 @@ class Binding:
     _scalar: Callable[[EvalState], Any] | None = field(default=None, repr=False)
     _vector: Callable[[Any], Any] | None = field(default=None, repr=False)
     aggregate: str | None = None
+    window: WindowSpec | None = None
+    parts: tuple = ()
 
     def location(self) -> ExprLocation:
         """Where the expression is, for error messages."""
@@ -100,6 +109,18 @@ class Binding:
         raise self._fail(EvalError(self.ast, f"value {v!r} is not a boolean or a number"),
                          context)
 
+    def raw(self, state: EvalState) -> Any:
+        """Value at one tick as read, arrays included (``goal_waiting``'s status arrays):
+        no check that it is a boolean or a number.
+
+        Raises:
+            SignalError: a missing field or an index out of range, as :meth:`evaluate`.
+        """
+        try:
+            return self._scalar(state)  # type: ignore[misc]
+        except EvalError as exc:
+            raise self._fail(exc, "") from None
+
     def evaluate_columns(self, columns: Any) -> np.ndarray:
         """Values at all ticks (vectorized): 1-D bool or float64 array.
 
@@ -131,7 +152,7 @@ class Binding:
 def compile_expression(name: str, expr: str, *, source: str = "<expression>",
                        line: int | None = None, col: int | None = None, exact: bool = True,
                        refs: dict[str, Binding] | None = None, nan: str = "unread",
-                       inf: str = "unread") -> Binding:
+                       inf: str = "unread", path_vars: dict | None = None) -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -145,6 +166,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
             logic three-valued) or ``"false"`` (IEEE 754); :mod:`fretc.signals.bindings.operations`.
         inf: the binding file's ``[tick] inf``: ``"unread"`` (±inf read from a log field is
             NaN, but for REP 117 fields) or ``"value"``.
+        path_vars: the binding file's ``[path_variables]`` (FoxQL's ``$name`` in filters and
+            slices): name -> bool, int, float or string.
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
@@ -154,7 +177,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     if not VARNAME.match(name):
         raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
                           "quoted FRETish variable")
-    node, topics = parse_expression(expr, where)
+    node, topics = parse_expression(expr, where, path_vars)
     if any(isinstance(n, Ref) for n in walk(node)):
         trees = {n: b.ast for n, b in (refs or {}).items()}
         node = substitute(node, trees, where, name)
@@ -168,13 +191,21 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     unread, inf_unread = nan != "false", inf != "value"
     aggregate = check_aggregate(node, where)
     body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
+    windowed = check_window(node, where)
+    window, parts = None, ()
+    if windowed is not None:
+        window, body = windowed
+        parts = tuple(compile_expression(f"{name}__part{i}", unparse(p), source=source,
+                                         line=line, col=col, exact=False)
+                      for i, p in enumerate(window.parts))
+        fields += tuple(f for p in parts for f in p.fields)
     scalar = compile_node(body, Ops(False, unread, inf_unread), extractors, constants)
     vector = compile_node(body, Ops(True, unread, inf_unread), extractors, constants)
     uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
     return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
-                   uses_tf, scalar, vector, aggregate)
+                   uses_tf, scalar, vector, aggregate, window, parts)
 
 
 def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:

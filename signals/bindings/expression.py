@@ -21,7 +21,7 @@ from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
 
 __all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -137,6 +137,18 @@ class BinOp(Expr):
 
 
 @dataclass(frozen=True)
+class Span(Expr):
+    """The window of a window function, its last argument (``mean(/battery.current, 2s)``):
+    a duration (``ns``, from ``2s``, ``500 ms``, ``1 min``) or a count of messages
+    (``messages``, from ``50 messages``); ``text`` as written
+    (:mod:`fretc.signals.bindings.windowing`)."""
+
+    text: str
+    ns: int | None
+    messages: int | None
+
+
+@dataclass(frozen=True)
 class FuncCall(Expr):
     """``func(args...)``, ``func`` a name of :data:`FUNCS`."""
 
@@ -150,7 +162,7 @@ class FuncCall(Expr):
 #: is its third).
 FUNCS = {
     "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
-    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1),
+    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1), "waiting": (1, 1), "goal_waiting": (1, 1),
     "joint": (3, 3), "tf": (3, 3),
     "any_of_messages": (1, 1), "all_of_messages": (1, 1), "count_of_messages": (1, 1),
     "min_of_messages": (1, 1), "max_of_messages": (1, 1),
@@ -214,6 +226,8 @@ def unparse(node: Expr) -> str:
         return f"{node.op}{arg}"
     if isinstance(node, BinOp):
         return f"({_operand(node.left)} {node.op} {_operand(node.right)})"
+    if isinstance(node, Span):
+        return node.text
     if isinstance(node, FuncCall):
         if node.func == "tf":
             a = node.args
@@ -337,6 +351,20 @@ def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
 
 
 def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
+    if node.args and isinstance(node.args[-1], Span):  # a window (windowing.check_window)
+        for a in node.args[:-1]:
+            if isinstance(a, Field) and not a.path:  # rate(/scan, 1s), count(/estop, 1min)
+                topics.add(a.topic)
+            else:
+                check(a, where, topics)
+        return
+    if node.func in ("sum", "median", "percentile", "variance", "rate"):
+        q = ", 95" if node.func == "percentile" else ""
+        arg = "/topic" if node.func == "rate" else "/topic.field"
+        raise where.error(f"{node.func}() is a window function: its last argument is the "
+                          f"window, e.g. {node.func}({arg}{q}, 2s)"
+                          + ("" if node.func == "rate" else
+                             f" or {node.func}({arg}{q}, 50 messages)"), node.col)
     if node.func not in FUNCS:
         raise where.error(f"unknown function {node.func!r} (known: "
                           f"{', '.join(sorted(FUNCS))})", node.col)
@@ -359,6 +387,9 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
                               f"/odom.twist.twist.linear.x@{node.func} or "
                               f"{node.func}(joint(/joint_states.position, \"wheel\"))",
                               node.col)
+    if node.func in ("waiting", "goal_waiting"):  # a service's or an action's topic (parse.py)
+        topics.add(node.args[0].topic)  # type: ignore[attr-defined]
+        return
     if node.func == "age":
         arg = node.args[0]
         if not isinstance(arg, Field) or arg.path:

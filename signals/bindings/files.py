@@ -99,12 +99,15 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
-        if key not in ("tick", "variables", "logs", "types", "constants"):
+        if key not in ("tick", "variables", "logs", "types", "constants", "path_variables",
+                       "entities"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
-                               "optionally [logs], [types], [constants])", line=line, col=col)
+                               "optionally [logs], [types], [constants], [path_variables], "
+                               "[entities])",
+                               line=line, col=col)
 
 
 def _duration(tick_t: dict[str, Any], key: str, source: str, loc: _Locations) -> int:
@@ -203,12 +206,13 @@ def _variables_table(doc: dict[str, Any], source: str, loc: _Locations
 
 
 def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool]],
-                      source: str, nan: str = "unread", inf: str = "unread"
-                      ) -> dict[str, Binding]:
+                      source: str, nan: str = "unread", inf: str = "unread",
+                      path_vars: dict | None = None) -> dict[str, Binding]:
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
     deps: dict[str, list[str]] = {}
     for name, (expr, line, col, exact) in pending.items():
-        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact))
+        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact),
+                                    path_vars)
         deps[name] = [r for r in refs(node) if r in pending]
     state: dict[str, int] = {}
     compiled: dict[str, Binding] = {}
@@ -230,7 +234,8 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
             visit(d, chain + [name])
         expr, line, col, exact = pending[name]
         compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
-                                            exact=exact, refs=compiled, nan=nan, inf=inf)
+                                            exact=exact, refs=compiled, nan=nan, inf=inf,
+                                            path_vars=path_vars)
         state[name] = 2
 
     for name in pending:
@@ -318,14 +323,95 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     loc = _Locations(text)
     _check_tables(doc, source, loc)
     tick, time_base, lag = _tick_table(doc, source, loc)
-    variables = _compile_in_order(_variables_table(doc, source, loc), source, tick.nan,
-                                  tick.inf)
-    out = Bindings(variables, tick, time_base, lag, source)
+    path_vars = _path_variables(doc.get("path_variables"), source, loc)
+    entities = _entities(doc.get("entities"), source, loc)
+    pending = _variables_table(doc, source, loc)
+    later = _per_entity(pending, entities)
+    variables = _compile_in_order({k: v for k, v in pending.items() if k not in later}, source,
+                                  tick.nan, tick.inf, path_vars)
+    out = Bindings(variables, tick, time_base, lag, source, entities=entities,
+                   per_entity={k: pending[k] + (tick.nan, tick.inf) for k in later},
+                   path_vars=path_vars)
     out.logs = _logs_table(doc.get("logs"), source, loc)
     out.types = _types_table(doc.get("types"), source, loc)
     out.msg_path = _msg_path(doc.get("types"), source, loc)
     out.constants = _constants(doc.get("constants"), source, loc)
     return out
+
+
+def _per_entity(pending: dict, entities: dict) -> list[str]:
+    """The variables that read an entity (``$track``, a name of ``[entities]``) or refer to
+    one that does, in declaration order (compiled per entity, not now)."""
+    out: set[str] = set()
+    grew = True
+    while grew:
+        grew = False
+        for name, (expr, *_rest) in pending.items():
+            if name in out:
+                continue
+            uses = set(re.findall(r"\$([A-Za-z_][A-Za-z0-9_]*)", expr)) & set(entities)
+            if uses or any(re.search(rf"(?<![\w/.$]){re.escape(o)}(?!\w)", expr) for o in out):
+                out.add(name)
+                grew = True
+    return [n for n in pending if n in out]
+
+
+def _entities(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str | None]]:
+    """``[entities] track = "/tracks.tracks[:].id"`` or ``motor = { key =
+    "/diagnostics.status[:].name", matching = "motor*" }``: name -> (key path, glob or None).
+
+    Raises:
+        BindingError: not a table, a bad name, a key that is not a string path, a bad glob.
+    """
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("", "entities")
+        raise BindingError(source, "entities must be a table: [entities] then track = "
+                           "\"/tracks.tracks[:].id\"", line=line, col=col)
+    out: dict[str, tuple[str, str | None]] = {}
+    for name, value in table.items():
+        line, col = loc.at("entities", name)
+        if not re.match(r"[A-Za-z_][A-Za-z0-9_]*\Z", name):
+            raise BindingError(source, f"[entities] {name!r} is not a name (letters, digits, "
+                               "_)", line=line, col=col)
+        key, matching = value, None
+        if isinstance(value, dict):
+            key, matching = value.get("key"), value.get("matching")
+            extra = set(value) - {"key", "matching"}
+            if extra or not isinstance(matching, (str, type(None))):
+                raise BindingError(source, f"[entities] {name}: key = \"PATH\" and optionally "
+                                   "matching = \"GLOB\"", line=line, col=col)
+        if not isinstance(key, str) or not key.strip():
+            raise BindingError(source, f"[entities] {name}: the key is a field path in quotes, "
+                               "e.g. \"/tracks.tracks[:].id\"", line=line, col=col)
+        out[name] = (key, matching)
+    return out
+
+
+def _path_variables(table: Any, source: str, loc: _Locations) -> dict[str, Any]:
+    """``[path_variables] track = 7``: the values of FoxQL's message path variables
+    (``{id==$track}``, ``[$lo:$hi]``), as Foxglove's panels take them: name -> bool, number
+    or string.
+
+    Raises:
+        BindingError: not a table, a name that is not an identifier, or another value.
+    """
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("", "path_variables")
+        raise BindingError(source, "path_variables must be a table: [path_variables] then "
+                           "track = 7", line=line, col=col)
+    for name, value in table.items():
+        line, col = loc.at("path_variables", name)
+        if not re.match(r"[A-Za-z_][A-Za-z0-9_]*\Z", name):
+            raise BindingError(source, f"[path_variables] {name!r} is not a name (letters, "
+                               "digits, _)", line=line, col=col)
+        if not isinstance(value, (bool, int, float, str)):
+            raise BindingError(source, f"[path_variables] {name}: a number, a string or "
+                               "true/false", line=line, col=col)
+    return dict(table)
 
 
 def _constants(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str]]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from functools import lru_cache
 
 from lark import Lark, Transformer, __version__ as lark_version, v_args
@@ -20,9 +21,10 @@ from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInpu
 
 from fretc.common import cache
 from fretc.common.problems import BindingError
+from fretc.common.units import parse_duration
 from fretc.fretish.limits import MAX_EXPR_DEPTH
 from fretc.signals.bindings.expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
-                         ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice,
+                         ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice, Span,
                          TF_COMPONENTS, UnaryOp, check, check_size)
 from fretc.signals.bindings.paths import unquote
 
@@ -56,12 +58,48 @@ def _col(meta: object) -> int:
 class _ToExpr(Transformer):
     """Parse tree -> :class:`Expr`; one callback per rule (alias) of ``grammar.lark``."""
 
-    def __init__(self, where: ExprLocation) -> None:
+    def __init__(self, where: ExprLocation, path_vars: dict | None = None) -> None:
         super().__init__(visit_tokens=False)
         self.where = where
+        self.path_vars = path_vars or {}
+
+    def _variable(self, tok) -> bool | float | str:
+        """The value of FoxQL variable ``$name`` (the binding file's ``[path_variables]``).
+
+        Raises:
+            BindingError: a variable the file does not define, at its column.
+        """
+        name = str(tok)[1:]
+        if name not in self.path_vars:
+            known = ", ".join(f"${k}" for k in sorted(self.path_vars)) or "none"
+            raise self.where.error(f"message path variable ${name} has no value: give it in "
+                                   f"the binding file's [path_variables] table ({name} = 3) "
+                                   f"(defined: {known})", tok.column)
+        return self.path_vars[name]
+
+    def path_variable(self, meta, kids):
+        v = self._variable(kids[0])
+        return Const(kids[0].column, v if isinstance(v, (bool, str)) else float(v))
 
     def number(self, meta, kids):
         return Const(_col(meta), float(kids[0]))
+
+    def span(self, meta, kids):
+        """``2s``, ``500 ms``, ``50 messages``: a window's :class:`Span` (durations by
+        :func:`fretc.common.units.parse_duration`)."""
+        text = str(kids[0])
+        m = re.match(r"([0-9.eE+-]+) ?([a-z]+)", text)
+        assert m is not None
+        number, unit = m.group(1), m.group(2)
+        if unit.startswith("message"):
+            if not number.isdigit() or int(number) < 1:
+                raise self.where.error(f"{text}: a count of messages is a whole number of at "
+                                       "least 1", _col(meta))
+            return Span(_col(meta), text, None, int(number))
+        try:
+            return Span(_col(meta), text, parse_duration(f"{number} {unit}"), None)
+        except ValueError as exc:
+            raise self.where.error(f"window {text}: {exc}", _col(meta)) from None
 
     def neg_number(self, meta, kids):
         return Const(_col(meta), -float(kids[0]))
@@ -85,6 +123,12 @@ class _ToExpr(Transformer):
         return int(kids[0])
 
     def slice_lo(self, meta, kids):
+        if kids and kids[0].type == "VARIABLE":
+            v = self._variable(kids[0])
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise self.where.error(f"{kids[0]} is {v!r}: a slice bound is an integer",
+                                       kids[0].column)
+            return v
         return int(kids[0]) if kids else None
 
     slice_hi = slice_lo
@@ -159,6 +203,8 @@ class _ToExpr(Transformer):
             topic = a.value if isinstance(a, Const) else a.name
             if isinstance(topic, str):
                 args = (Field(a.col, topic, ()),)
+        if name in ("called", "answered", "waiting", "goal_waiting"):
+            return _service_call(str(name), args, self.where, name.column)
         if name == "joint":
             args = _joint_args(args, self.where, name.column)
         return FuncCall(name.column, str(name), args)
@@ -177,6 +223,40 @@ class _ToExpr(Transformer):
             raise self.where.error('tf() takes two frame names in quotes: '
                                    'tf("map", "base_link").x', name.column)
         return FuncCall(name.column, "tf", args + (Const(member.column, str(member)),))
+
+
+#: The events of a service on its rosbag2 topic ``<service>/_service_event`` (ROS 2 Jazzy's
+#: service introspection, service_msgs/msg/ServiceEventInfo's ``event_type``): a request
+#: (REQUEST_SENT 0, REQUEST_RECEIVED 1) and a response (RESPONSE_SENT 2, RESPONSE_RECEIVED 3).
+SERVICE_EVENT_TOPIC = "/_service_event"
+
+
+def _service_call(name: str, args: tuple, where: ExprLocation, col: int) -> Expr:
+    """``called(/arm)`` -> ``any_of_messages(/arm/_service_event.info.event_type <= 1)`` (a
+    request since the previous tick), ``answered(/arm)`` the same with ``>= 2`` (a response),
+    ``waiting(/arm)`` -> the call to ``waiting`` of the event topic (the oldest unanswered
+    call's wait, :mod:`fretc.signals.windows`); ``goal_waiting(/navigate)`` -> the call of
+    the action's status topic ``/navigate/_action/status`` (the oldest active goal's wait).
+
+    Raises:
+        BindingError: the argument is not a service name (``/arm``, ``"arm"``).
+    """
+    a = args[0] if len(args) == 1 else None
+    if isinstance(a, Const) and isinstance(a.value, str):
+        a = Field(a.col, a.value, ())
+    if not isinstance(a, Field) or a.path:
+        raise where.error(f"{name}() takes a service's name, e.g. {name}(/arm): its events are "
+                          f"the topic /arm{SERVICE_EVENT_TOPIC}", col)
+    if name == "goal_waiting":  # an action's goals: its status topic (ROS 2 actions)
+        return FuncCall(col, "goal_waiting", (Field(a.col, a.topic.rstrip("/")
+                                                    + "/_action/status", ()),))
+    topic = a.topic.rstrip("/") + SERVICE_EVENT_TOPIC
+    if name == "waiting":
+        return FuncCall(col, "waiting", (Field(a.col, topic, ()),))
+    etype = Field(a.col, topic, ("info", "event_type"))
+    test = BinOp(col, "<=", etype, Const(col, 1.0)) if name == "called" else BinOp(
+        col, ">=", etype, Const(col, 2.0))
+    return FuncCall(col, "any_of_messages", (test,))
 
 
 def apply_modifier(e: Expr, name: str, col: int, first: bool, where: ExprLocation) -> Expr:
@@ -235,8 +315,10 @@ def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> Bindi
     return where.error(f"syntax error: {msg}", col)
 
 
-def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[str]]:
-    """Parse and check (:func:`check`) one expression.
+def parse_expression(expr: str, where: ExprLocation, path_vars: dict | None = None
+                     ) -> tuple[Expr, frozenset[str]]:
+    """Parse and check (:func:`check`) one expression; ``path_vars`` the values of FoxQL's
+    message path variables (``$track``: name -> bool, number or string).
 
     Returns:
         the tree and the topics it reads (fields and ``age``); references (:class:`Ref`)
@@ -255,7 +337,7 @@ def parse_expression(expr: str, where: ExprLocation) -> tuple[Expr, frozenset[st
     except UnexpectedInput as exc:
         raise _syntax_error(expr, exc, where) from None
     try:
-        node = _ToExpr(where).transform(tree)
+        node = _ToExpr(where, path_vars).transform(tree)
     except VisitError as exc:
         raise exc.orig_exc from None
     except RecursionError:

@@ -121,6 +121,13 @@ class Bindings:
             log does not carry (as ``--msg-path``; :mod:`fretc.logs.msg_path`).
         constants: ``[constants]``: named durations of the requirements (name -> (amount,
             unit), :mod:`fretc.fretish.constants`), read by the audit before it compiles.
+        entities: ``[entities]``: entity name -> (key path, ``matching`` glob or None): the
+            values of the key in a log are the entities a per-entity requirement is judged
+            for (docs/bindings.md, "One verdict per entity").
+        per_entity: the variables whose expression reads an entity (``$track``) or such a
+            variable, not compiled yet: name -> (expression, line, col, exact), compiled
+            per entity by :meth:`for_entity`.
+        path_vars: ``[path_variables]`` (FoxQL's ``$name`` values).
 
     Raises:
         ValueError: a time base not in :data:`TIME_BASES`.
@@ -135,6 +142,9 @@ class Bindings:
     types: dict[str, str] = field(default_factory=dict, compare=False)
     msg_path: tuple[str, ...] = field(default=(), compare=False)
     constants: dict[str, tuple[str, str]] = field(default_factory=dict, compare=False)
+    entities: dict[str, tuple[str, str | None]] = field(default_factory=dict, compare=False)
+    per_entity: dict[str, tuple] = field(default_factory=dict, compare=False)
+    path_vars: dict[str, object] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in TIME_BASES:
@@ -149,6 +159,36 @@ class Bindings:
             out |= b.topics
         return frozenset(out)
 
+    def for_entity(self, values: dict[str, object]) -> Bindings:
+        """A copy whose per-entity variables are compiled with the entities' values
+        (``{"track": 7}``: ``$track`` reads 7), in declaration order, each after the ones it
+        refers to.
+
+        Raises:
+            BindingError: a per-entity expression that does not compile with these values.
+        """
+        variables = dict(self.variables)
+        pending = dict(self.per_entity)
+        pvars = {**self.path_vars, **values}
+        while pending:
+            for name, (expr, line, col, exact, nan, inf) in list(pending.items()):
+                if any(other in expr for other in pending if other != name):
+                    continue  # refers to another pending one: after it
+                variables[name] = compile_expression(
+                    name, expr, source=str(self.source), line=line, col=col, exact=exact,
+                    refs=variables, nan=nan, inf=inf, path_vars=pvars)
+                del pending[name]
+                break
+            else:  # only mutual references left: compile in order (an error names them)
+                name, (expr, line, col, exact, nan, inf) = next(iter(pending.items()))
+                variables[name] = compile_expression(
+                    name, expr, source=str(self.source), line=line, col=col, exact=exact,
+                    refs=variables, nan=nan, inf=inf, path_vars=pvars)
+                del pending[name]
+        return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
+                        types=dict(self.types), msg_path=self.msg_path,
+                        constants=self.constants)
+
     def with_inline(self, specs: Iterable[str]) -> Bindings:
         """A copy with ``NAME=EXPR`` bindings (CLI ``--bind``) added or replacing same-named ones.
 
@@ -160,7 +200,9 @@ class Bindings:
             b = parse_inline(spec, refs=variables)
             variables[b.name] = b
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
-                        types=dict(self.types))
+                        types=dict(self.types), entities=self.entities,
+                        per_entity={k: v for k, v in self.per_entity.items()
+                                    if k not in variables}, path_vars=self.path_vars)
 
 
 def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str = "log",

@@ -12,7 +12,7 @@ from __future__ import annotations
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
 from fretc.logs.encodings import constant_name
-from fretc.signals.bindings.expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named,
+from fretc.signals.bindings.expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named, Span,
                          UnaryOp, unparse)
 
 __all__ = ["check_types"]
@@ -206,7 +206,18 @@ class _TypeChecker:
 
     def call(self, node: FuncCall) -> str:
         f = node.func
-        if f in ("age", "tf", "timedelta"):
+        if node.args and isinstance(node.args[-1], Span):  # a window (windowing.py)
+            arg = node.args[0]
+            if isinstance(arg, Field) and not arg.path:  # rate(/scan, 1s), count(/estop, 1s)
+                return "number"
+            t = self.type(arg)
+            if f == "count":
+                self.need(arg, t, ("bool",), "count() over a window counts the messages on "
+                          "which a condition held (count(/estop.data, 1min))", node)
+            else:
+                self.need(arg, t, ("number",), f"{f}() over a window takes numbers", node)
+            return "number"
+        if f in ("age", "tf", "timedelta", "waiting", "goal_waiting"):
             return "number"
         if f in ("delta", "derivative", "sqrt"):
             t = self.type(node.args[0])

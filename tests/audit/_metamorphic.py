@@ -80,11 +80,15 @@ NUMBER_FORMS = ["{p}", "abs({p})", "{p}@abs", "{p}@negative", "{p}@delta", "{p}@
                 "{p}@timedelta", "derivative({p})", "sqrt(abs({p}))", "{p}@rad2deg",
                 "{p}@deg2rad", "delta({p})", "timedelta({p})", "{p}@sqrt",
                 "max_of_messages({p})", "min_of_messages({p})", "age({t})",
-                "min({p}, {p} + 1)", "max({p}, 0)"]
+                "min({p}, {p} + 1)", "max({p}, 0)",
+                # windows over time (the whole binding): a duration, a count of messages
+                "mean({p}, 500 ms)", "percentile({p}, 90, 1 s)", "sum({p}, 3 messages)",
+                "variance({p}, 1 s)", "median({p}, 2 messages)", "rate({t}, 1 s)"]
 #: aggregations over the messages between ticks: the whole binding, compared in the
 #: requirement (a numeric variable) or a condition in itself
 WHOLE = ("max_of_messages(", "min_of_messages(", "any_of_messages(", "all_of_messages(",
-         "count_of_messages(")
+         "count_of_messages(", "mean(", "percentile(", "sum(", "variance(", "median(",
+         "rate(")
 #: forms of an array of numbers ``{p}`` (its items ``{p}[:]``)
 ARRAY_FORMS = ["min({p}[:])", "max({p}[:])", "mean({p}[:])", "norm({p}[:])", "len({p})",
                "count({p}[:] > {c})"]

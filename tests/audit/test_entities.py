@@ -1,0 +1,139 @@
+"""One verdict per entity (docs/bindings.md, "One verdict per entity"): a requirement reading
+``$motor`` (an entity of ``[entities]``) is judged for every status name matching ``motor*``
+that appears in the log, each verdict equal to an independent recomputation from the
+generated messages; an entity is read through a filter, so a disappeared one is not held
+over; no entity at all is vacuous."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from _logs import ROS2, S, T, write_mcap
+from fretc.audit import AuditConfig, audit_log, load_plan
+
+BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+motor = { key = "/diagnostics.status[:].name", matching = "motor*" }
+[variables]
+motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'
+present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'
+battery_ok = 'max(/diagnostics.status[:]{name=="battery"}.level) < 2'
+'''
+FRET = ("@tick_period 100 ms\n"
+        "M: in present mode the robot shall always satisfy motor_level < 2\n"
+        "B: the robot shall always satisfy battery_ok\n")
+
+
+def _diag(statuses):
+    St, Arr = T(ROS2, "diagnostic_msgs/msg/DiagnosticStatus"), T(ROS2, "diagnostic_msgs/msg/DiagnosticArray")
+    return Arr(header=T(ROS2, "std_msgs/msg/Header")(
+        stamp=T(ROS2, "builtin_interfaces/msg/Time")(sec=0, nanosec=0), frame_id=""),
+        status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
+                for n, lvl in statuses])
+
+
+def _audit(tmp: Path, log: Path):
+    (tmp / "e.fret").write_text(FRET)
+    (tmp / "e.bindings.toml").write_text(BINDINGS)
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp / "e.fret"),))), str(log))
+    return {v.requirement: v for v in la.verdicts}
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.lists(st.tuples(st.sampled_from(["motor_l", "motor_r", "motor_3",
+                                                            "lidar"]), st.integers(0, 2)),
+                              max_size=4, unique_by=lambda x: x[0]),
+                     min_size=2, max_size=25))
+def test_one_verdict_per_entity_equals_a_recomputation(tmp_path_factory, rows):
+    tmp = tmp_path_factory.mktemp("ent")
+    msgs = [("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", S + k * S // 10,
+             _diag(list(r) + [("battery", 0)])) for k, r in enumerate(rows)]
+    got = _audit(tmp, write_mcap(tmp / "d.mcap", msgs))
+    assert got["B"].verdict == "satisfied"
+    motors = []
+    for r in rows:  # first appearance order
+        for n, _l in r:
+            if n.startswith("motor") and n not in motors:
+                motors.append(n)
+    if not motors:
+        assert got["M"].verdict == "vacuous"
+        return
+    assert sorted(k for k in got if k.startswith("M[")) == sorted(f"M[motor={m}]" for m in motors)
+    for m in motors:
+        # while present: violated at the first message whose level for m is >= 2
+        bad = [k for k, r in enumerate(rows) if dict(r).get(m, -1) >= 2]
+        v = got[f"M[motor={m}]"]
+        assert v.verdict == ("violated" if bad else "satisfied"), (m, rows, v.error)
+        if bad:
+            assert v.first_violation.at.time_ns == S + bad[0] * S // 10
+        assert any("over" in n and "entities motor" in n for n in v.notes)
+
+
+def test_the_requirement_has_a_verdict_over_its_entities_in_the_reports(tmp_path):
+    rows = [[("motor_l", 0)], [("motor_l", 0), ("motor_r", 1)], [("motor_r", 2)],
+            [("lidar", 2)], [("motor_l", 0)]]
+    msgs = [("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", S + k * S // 10,
+             _diag(list(r) + [("battery", 0)])) for k, r in enumerate(rows)]
+    got = _audit(tmp_path, write_mcap(tmp_path / "d.mcap", msgs))
+    assert got["M[motor=motor_l]"].verdict == "satisfied"
+    assert got["M[motor=motor_r]"].verdict == "violated"
+    m = got["M"]  # all entities: violated by one
+    assert m.verdict == "violated"
+    assert m.first_violation.at.time_ns == S + 2 * S // 10
+    assert "M over 2 entities motor: 1 satisfied, 1 violated" in m.notes
+    assert "violated by: M[motor=motor_r]" in m.notes
+
+
+TRACK_BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+track = "/tracks.tracks[:].id"
+[variables]
+dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
+present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
+'''
+
+
+def _track_types():
+    from rosbags.typesys import get_types_from_msg
+
+    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
+        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
+        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
+                                         "tracking_msgs/msg/TrackArray"))
+    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.dictionaries(st.integers(1, 4), st.sampled_from([0.2, 0.8, 2.0]),
+                                     max_size=3), min_size=2, max_size=20))
+def test_one_verdict_per_tracked_object(tmp_path_factory, rows):
+    """Obstacles by numeric id: each judged while tracked, equal to a recomputation."""
+    Track, TrackArray = _track_types()
+    tmp = tmp_path_factory.mktemp("trk")
+    msgs = [("/tracks", "tracking_msgs/msg/TrackArray", S + k * S // 10,
+             TrackArray(tracks=[Track(id=i, distance=d) for i, d in sorted(r.items())]))
+            for k, r in enumerate(rows)]
+    (tmp / "t.fret").write_text("@tick_period 100 ms\n"
+                                "T: in present mode the robot shall always satisfy dist > 0.5\n")
+    (tmp / "t.bindings.toml").write_text(TRACK_BINDINGS)
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp / "t.fret"),))),
+                   str(write_mcap(tmp / "t.mcap", msgs)))
+    got = {v.requirement: v for v in la.verdicts}
+    ids = list(dict.fromkeys(i for r in rows for i in sorted(r)))
+    assert [k for k in got if k != "T"] == [f"T[track={i}]" for i in ids]
+    for i in ids:
+        bad = [k for k, r in enumerate(rows) if r.get(i, 1.0) <= 0.5]
+        v = got[f"T[track={i}]"]
+        assert v.verdict == ("violated" if bad else "satisfied"), (i, rows, v.error)
+        if bad:
+            assert v.first_violation.at.time_ns == S + bad[0] * S // 10
+    if not ids:
+        assert got["T"].verdict == "vacuous"
+    else:
+        assert got["T"].verdict == ("violated" if any(
+            got[f"T[track={i}]"].verdict == "violated" for i in ids) else "satisfied")

@@ -1,0 +1,173 @@
+"""Windows over time (docs/bindings.md, "Windows over time"): ``mean(/a.data, 2s)`` and the
+other window functions over a sliding window of a topic's messages. Both clocks (the
+tick-by-tick one of the watch and the block sampler of the audit) are checked against
+pandas' rolling functions on generated logs: time-based windows (``rolling("2s")``, closed
+on the right) and counts of messages (``rolling(50)``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from _logs import MS, float64, write_mcap
+from fretc.common.problems import BindingError
+from fretc.logs import open_log
+from fretc.signals.arrays import sample_arrays
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.spec import TickSpec, make_bindings
+from fretc.signals.bindings.windowing import WindowSpec
+from fretc.signals.clock import sample
+from fretc.signals.windows import SlidingWindow
+
+FUNCS = {
+    "w_mean": ("mean(/a.data, {w})", lambda r: r.mean()),
+    "w_sum": ("sum(/a.data, {w})", lambda r: r.sum()),
+    "w_min": ("min(/a.data, {w})", lambda r: r.min()),
+    "w_max": ("max(/a.data * 2, {w})", lambda r: r.max() * 2),
+    "w_median": ("median(/a.data, {w})", lambda r: r.median()),
+    "w_p90": ("percentile(/a.data, 90, {w})", lambda r: r.quantile(0.9)),
+    "w_var": ("variance(/a.data, {w})", lambda r: r.var()),
+}
+
+
+def _log(tmp_path_factory, a, t_times):
+    msgs = [("/a", "std_msgs/msg/Float64", t * MS, float64(x)) for t, x in a]
+    msgs += [("/t", "std_msgs/msg/Float64", t * MS, float64(0.0)) for t in t_times]
+    return write_mcap(tmp_path_factory.mktemp("win") / "w.mcap",
+                      sorted(msgs, key=lambda m: (m[2], m[0])), chunk_size=256)
+
+
+def _both_clocks(path, bindings):
+    """The ticks of the watch's clock, checked equal to the audit's block sampler."""
+    src = open_log(path)
+    ticks = list(sample(src, bindings))
+    arr = sample_arrays(src, bindings)
+    assert arr.times.tolist() == [t.time for t in ticks]
+    for name in bindings.variables:
+        got, want = arr.columns[name].tolist(), [t.values[name] for t in ticks]
+        assert all((g != g and w != w) or g == w for g, w in zip(got, want)), (name, got, want)
+    return ticks
+
+
+def _reference(a, times, span_ms, frame_fn, **kw):
+    """pandas' time-based rolling window at each tick: the ticks are rows with no value,
+    after the messages of their time, so each tick's window is its (t - span, t]."""
+    rows = [(t, 0, x) for t, x in a] + [(t, 1, math.nan) for t in times]
+    rows.sort(key=lambda r: (r[0], r[1]))
+    df = pd.DataFrame(rows, columns=["t", "tick", "x"])
+    df.index = pd.to_datetime(df["t"], unit="ms")
+    r = df["x"].rolling(f"{span_ms}ms", closed="right", **kw)
+    out = frame_fn(r)
+    return out[df["tick"].to_numpy() == 1].to_numpy()
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(a=st.lists(st.tuples(st.integers(0, 3000), st.floats(-50, 50, allow_nan=False)),
+                  min_size=1, max_size=60),
+       t_times=st.lists(st.integers(0, 3000), min_size=1, max_size=20),
+       span=st.integers(1, 1500), period=st.integers(20, 300), per_topic=st.booleans())
+def test_time_windows_equal_pandas_rolling(tmp_path_factory, a, t_times, span, period,
+                                           per_topic):
+    a = [(t, round(x, 3)) for t, x in a]
+    path = _log(tmp_path_factory, a, t_times)
+    tick = TickSpec(topic="/t") if per_topic else TickSpec(period_ns=period * MS)
+    b = make_bindings({k: e.format(w=f"{span} ms") for k, (e, _f) in FUNCS.items()}
+                      | {"w_count": f"count(/a.data > 0, {span}ms)",
+                         "w_rate": f"rate(/a, {span} ms)"}, tick)
+    ticks = _both_clocks(path, b)
+    a_sorted = sorted(a, key=lambda m: m[0])
+    first = a_sorted[0][0]
+    times_ms = [t.time / MS for t in ticks]
+    assert all(t - span >= first for t in times_ms)  # warm-up: only complete windows
+    if not ticks:
+        return
+    for name, (_e, f) in FUNCS.items():
+        want = _reference(a_sorted, times_ms, span, f, min_periods=0 if name == "w_sum" else 1)
+        got = np.array([t.values[name] for t in ticks])
+        assert np.allclose(got, want, rtol=1e-9, atol=1e-9, equal_nan=True), (name, got, want)
+    pos = [(t, 1.0 if x > 0 else 0.0) for t, x in a_sorted]
+    want = _reference(pos, times_ms, span, lambda r: r.sum(), min_periods=0)
+    assert [t.values["w_count"] for t in ticks] == want.tolist()
+    n = _reference(a_sorted, times_ms, span, lambda r: r.count(), min_periods=0)
+    assert np.allclose([t.values["w_rate"] for t in ticks], n / (span / 1000))
+
+
+@settings(max_examples=30, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(a=st.lists(st.tuples(st.integers(0, 3000), st.floats(-50, 50, allow_nan=False)),
+                  min_size=1, max_size=60),
+       t_times=st.lists(st.integers(0, 3000), min_size=1, max_size=20),
+       n=st.integers(1, 12), period=st.integers(20, 300))
+def test_windows_of_a_count_of_messages_equal_pandas_rolling(tmp_path_factory, a, t_times, n,
+                                                             period):
+    a = [(t, round(x, 3)) for t, x in a]
+    path = _log(tmp_path_factory, a, t_times)
+    b = make_bindings({"m": f"mean(/a.data, {n} messages)", "lo": f"min(/a.data, {n} messages)",
+                       "p": f"percentile(/a.data, 25, {n} messages)"},
+                      TickSpec(period_ns=period * MS))
+    ticks = _both_clocks(path, b)
+    s = pd.Series([x for _t, x in sorted(a, key=lambda m: m[0])])
+    mt = np.array(sorted(t for t, _x in a)) * MS
+    ref = {"m": s.rolling(n).mean(), "lo": s.rolling(n).min(), "p": s.rolling(n).quantile(0.25)}
+    for t in ticks:
+        held = int(np.searchsorted(mt, t.time, side="right")) - 1
+        assert held >= n - 1  # warm-up until the window holds n messages
+        for name, r in ref.items():
+            assert math.isclose(t.values[name], r.iloc[held], rel_tol=1e-9, abs_tol=1e-9)
+
+
+def test_a_nan_in_the_window_is_unread_and_an_empty_window_is_zero_or_nan():
+    w = SlidingWindow(WindowSpec("mean", "/a", 1000, None, None, "1 us"))
+    w.push(0, 1.0)
+    w.push(500, math.nan)
+    assert math.isnan(w.value(900))
+    assert w.value(1499) != w.value(1499)  # the NaN still in (499, 1499]
+    w.push(1600, 3.0)
+    assert w.value(1600) == 3.0  # the NaN left the window
+    assert math.isnan(w.value(5000))  # no message: no mean
+    c = SlidingWindow(WindowSpec("count", "/a", 1000, None, None, "1 us"))
+    c.push(0, True)
+    assert c.value(0) == 1.0 and c.value(5000) == 0.0
+
+
+@pytest.mark.parametrize("expr, message", [
+    ("mean(/a.data, 2s) < 3", "the whole binding"),
+    ("sum(/a.data)", "window function"),
+    ("rate(/a.data, 1s)", "counts every message"),
+    ("rate(/a, 10 messages)", "over a duration"),
+    ("percentile(/a.data, 101, 2s)", "from 0 to 100"),
+    ("mean(/a.data + /b.data, 2s)", "one topic"),
+    ("mean(/a.data, 0 messages)", "at least 1"),
+    ("mean(age(/a), 2s)", "not a field"),
+    ("len(/a.data, 2s)", "no window"),
+])
+def test_bad_windows_are_errors_naming_the_column(expr, message):
+    with pytest.raises(BindingError, match=message) as info:
+        compile_expression("v", expr, source="b.toml", line=3, col=5)
+    assert "b.toml:3:" in str(info.value)
+
+
+def test_an_error_on_a_message_of_a_window_is_raised_by_both_clocks(tmp_path):
+    """A message its window cannot read is an error at the first evaluated tick, also when
+    that tick waits for another topic (warm-up): never lost."""
+    from _logs import scan
+
+    from fretc.common.problems import SignalError
+
+    msgs = [("/scan", "sensor_msgs/msg/LaserScan", k * 100 * MS, scan([1.0] * 10, k * 100 * MS))
+            for k in range(30)]
+    msgs += [("/b", "std_msgs/msg/Float64", 2000 * MS, float64(1.0))]
+    path = write_mcap(tmp_path / "e.mcap", sorted(msgs, key=lambda m: m[2]))
+    b = make_bindings({"w": "mean(/scan.ranges[800], 1s)", "late": "/b.data"},
+                      TickSpec(period_ns=100 * MS))
+    with pytest.raises(SignalError, match="800") as one:
+        list(sample(open_log(path), b))
+    with pytest.raises(SignalError, match="800") as two:
+        sample_arrays(open_log(path), b)
+    assert "variable 'w'" in str(one.value) and "variable 'w'" in str(two.value)
