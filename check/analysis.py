@@ -174,32 +174,37 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
         if witness_dir is not None:
             from fretc.check.witness import write_witnesses  # lazy: numpy, if asked
             write_witnesses(checker, result, witness_dir, witness_judge)
-        result.queries = checker.queries
-        result.unknown_queries = worker.spent
-        result.smt_queries = checker.smt_queries
-        result.monitor_queries = checker.monitor_queries
-        # a query the monitors left unknown and z3 was then asked is one query
-        smt_failures = checker.smt.failures + checker.smt_fallback.failures
-        result.unknown_queries += (checker.smt.spent + checker.smt_fallback.spent
-                                   - checker.fallbacks)
-        if smt_failures:
-            result.notes.append(f"z3 left {len(smt_failures)} queries unknown, e.g. "
-                                f"{smt_failures[0]}")
-        if checker.not_tried:
-            result.notes.append(
-                f"{checker.spent} queries spent their whole work budget, so "
-                f"{checker.not_tried} later queries on the same requirements were not tried "
-                "and are unknown (the run ends in bounded time; a larger --budget tries "
-                "them)")
-        if worker.failures:
-            result.notes.append(f"{len(worker.failures)} queries got no answer from Spot or "
-                                f"the pt monitors (unknown), e.g. {worker.failures[0]}"
-                                + (f"; z3 answered {checker.rescued} of them"
-                                   if checker.rescued else ""))
+        _figures(checker, worker, result)
     finally:
         if own:
             worker.close()
     return result
+
+
+def _figures(checker: Checker, worker: SpotWorker, result: CheckResult) -> None:
+    """The run's query counts and the notes on what stayed unknown and why."""
+    result.queries = checker.queries
+    result.unknown_queries = worker.spent
+    result.smt_queries = checker.smt_queries
+    result.monitor_queries = checker.monitor_queries
+    # a query the monitors left unknown and z3 was then asked is one query
+    smt_failures = checker.smt.failures + checker.smt_fallback.failures
+    result.unknown_queries += (checker.smt.spent + checker.smt_fallback.spent
+                               - checker.fallbacks)
+    if smt_failures:
+        result.notes.append(f"z3 left {len(smt_failures)} queries unknown, e.g. "
+                            f"{smt_failures[0]}")
+    if checker.not_tried:
+        result.notes.append(
+            f"{checker.spent} queries spent their whole work budget, so "
+            f"{checker.not_tried} later queries on the same requirements were not tried "
+            "and are unknown (the run ends in bounded time; a larger --budget tries "
+            "them)")
+    if worker.failures:
+        result.notes.append(f"{len(worker.failures)} queries got no answer from Spot or "
+                            f"the pt monitors (unknown), e.g. {worker.failures[0]}"
+                            + (f"; z3 answered {checker.rescued} of them"
+                               if checker.rescued else ""))
 
 
 def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool) -> None:
