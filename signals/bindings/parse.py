@@ -198,11 +198,12 @@ class _ToExpr(Transformer):
             raise self.where.error('tf() gives a transform: name one of its components, '
                                    'e.g. tf("map", "base_link").x (components: '
                                    f'{", ".join(TF_COMPONENTS)})', name.column)
-        if name == "age" and len(args) == 1 and isinstance(args[0], (Const, Ref)):
-            a = args[0]  # age("ORB-SLAM"), age(groundtruth): a topic
+        if ((name == "age" and len(args) == 1 or name == "rate" and len(args) == 2)
+                and isinstance(args[0], (Const, Ref))):
+            a = args[0]  # age("ORB-SLAM"), age(groundtruth), rate("ORB-SLAM", 1s): a topic
             topic = a.value if isinstance(a, Const) else a.name
             if isinstance(topic, str):
-                args = (Field(a.col, topic, ()),)
+                args = (Field(a.col, topic, ()),) + args[1:]
         if name in ("called", "answered", "waiting", "goal_waiting"):
             return _service_call(str(name), args, self.where, name.column)
         if name == "joint":

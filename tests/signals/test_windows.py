@@ -171,3 +171,15 @@ def test_an_error_on_a_message_of_a_window_is_raised_by_both_clocks(tmp_path):
     with pytest.raises(SignalError, match="800") as two:
         sample_arrays(open_log(path), b)
     assert "variable 'w'" in str(one.value) and "variable 'w'" in str(two.value)
+
+
+def test_rate_takes_a_quoted_topic_as_age_does():
+    """``rate("vehicle_status", 1 s)``: a topic without a leading / (a flight log's) is
+    written quoted, as in ``age("vehicle_status")`` (found by the metamorphic sweep)."""
+    from fretc.signals.bindings.expression import ExprLocation, Field, Span
+    from fretc.signals.bindings.parse import parse_expression
+
+    node, topics = parse_expression('rate("vehicle_status", 1 s)', ExprLocation("f", "v", 1, 1))
+    assert isinstance(node.args[0], Field) and node.args[0].topic == "vehicle_status"
+    assert isinstance(node.args[1], Span) and node.args[1].ns == 1_000_000_000
+    assert topics == frozenset({"vehicle_status"})
