@@ -25,7 +25,7 @@ from fretc.reports.render import render_html, render_markdown
 from fretc.reports.matrix import matrix_csv, matrix_html, matrix_rows
 from fretc.reports.trace import ReportError, resolve_input, split_source, trace_requirements
 
-__all__ = ["load_audit_json", "ReportFiles", "write_report"]
+__all__ = ["load_audit_json", "schema_problem", "ReportFiles", "write_report"]
 
 
 def load_audit_json(path: str) -> dict:
@@ -35,12 +35,34 @@ def load_audit_json(path: str) -> dict:
         doc = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise ReportError(f"{path}: cannot read: {exc}") from None
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ReportError(f"{path}: not JSON: {exc}") from None
+    except RecursionError:
+        raise ReportError(f"{path}: not an audit document: JSON nested too deeply") from None
     if not isinstance(doc, dict) or doc.get("schema") != SCHEMA:
         raise ReportError(f"{path}: not a fretc audit document (schema {SCHEMA!r} expected, "
                           f"got {doc.get('schema') if isinstance(doc, dict) else None!r})")
+    problem = schema_problem(doc)
+    if problem is not None:
+        raise ReportError(f"{path}: not a valid fretc audit document: {problem}")
     return doc
+
+
+def schema_problem(doc: dict) -> str | None:
+    """Where ``doc`` breaks the audit document's JSON Schema (``audit.schema.json``, installed
+    with :mod:`fretc.reports`; the reference page shows it), as ``$.logs[0].log: None is not
+    of type 'string'`` (the first error in document order), or None. Checked with the
+    ``jsonschema`` library (JSON Schema 2020-12)."""
+    import jsonschema  # lazy: only where an audit document is read back
+
+    schema = json.loads((Path(__file__).parent / "audit.schema.json").read_text("utf-8"))
+    errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(doc),
+                    key=lambda e: [str(p) for p in e.absolute_path])
+    if not errors:
+        return None
+    first = errors[0]
+    more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+    return f"{first.json_path}: {first.message[:200]}{more}"
 
 
 @dataclass

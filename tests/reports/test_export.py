@@ -300,3 +300,32 @@ def test_reqif_export_stays_well_formed_keeps_id_references_and_is_idempotent(tm
     assert sorted(e.origin.tool_id for e in load_requirements(out)) == ids
     twice, _ = export_reqif(str(out), results(out))
     assert twice == once
+
+
+@pytest.mark.parametrize("mutate", ["logs_str", "verdict_list", "log_none", "ticks_str",
+                                    "reqs_str", "deep"])
+def test_a_from_json_document_that_breaks_the_schema_is_an_input_error(audits, tmp_path,
+                                                                        mutate):
+    """18 internal errors (exit 4) of export and report on audit documents of the right
+    schema name and the wrong shape; each is now an input error naming where it breaks."""
+    doc = json.loads(Path(audits["reqif"]).read_text())
+    bad = tmp_path / "bad.json"
+    if mutate == "deep":
+        bad.write_text("[" * 100_000 + "]" * 100_000)
+    else:
+        if mutate == "logs_str":
+            doc["logs"] = "x"
+        elif mutate == "verdict_list":
+            doc["logs"][0]["verdicts"][0]["verdict"] = ["x"]
+        elif mutate == "log_none":
+            doc["logs"][0]["log"] = None
+        elif mutate == "ticks_str":
+            doc["logs"][0]["verdicts"][0]["ticks_evaluated"] = "many"
+        else:
+            doc["requirements"] = "x"
+        bad.write_text(json.dumps(doc))
+    for args in (["report", "--from-json", bad, "-o", tmp_path / "rep"],
+                 ["export", "-r", REQIF, "--from-json", bad, "-o", tmp_path / "x.reqif"]):
+        code, text = _run(*args)
+        assert code == 2 and "internal error" not in text, (args[0], text)
+        assert "bad.json" in text and ("$." in text or "nested too deeply" in text), text
