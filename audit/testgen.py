@@ -1,0 +1,301 @@
+"""Requirements-based tests (``fretc testgen``): for every coverage obligation of a set of
+requirements (:mod:`fretc.compiler.coverage`) that some finite trace meets, a trace meeting
+it, and for every test the expected verdict of every requirement of the set on it.
+
+How a trace is found: a verdict-difference obligation (the requirement ``R`` and its variant
+``V`` must get different verdicts) is asked as one finite-trace query per pair of distinct
+verdicts, ``cls(R, v1) & cls(V, v2)``, where ``cls(x, violated) = !ft_x``, ``cls(x,
+vacuous) = ft_x & !trigger_x`` and ``cls(x, satisfied) = ft_x & trigger_x``
+(:class:`fretc.check.items.CheckItem`'s ``trigger_ft``), pairs with ``R`` satisfied first;
+each query goes to ``check``'s engines (:func:`fretc.check.witness.finite_trace`: Spot up
+to 16 ticks in a bound, past it the pt monitors' fixed points or z3), so deadlines of
+hundreds of ticks are handled as ``fretc check`` handles them. A threshold obligation asks
+``ft_R & trigger_R & F(comparison)`` (then without the trigger, then the comparison alone).
+When no pair has a finite trace the obligation is *unmeetable*, with the engine's answer as
+the reason; when an engine ran out of its budget it is *unknown*.
+
+Every trace found is believed only after the audit's judge agrees: the obligation is
+evaluated again on it by :func:`fretc.monitors.coverage.exercised` (interval semantics),
+and a trace that does not meet its obligation is dropped and the obligation reported as not
+generated. The tests kept are a greedy set cover of the traces (each trace exercises the
+obligations of every requirement it happens to meet; the one meeting most of those not yet
+covered is kept first), and every test's ``expected`` holds the verdict of every
+requirement of the set by :func:`fretc.monitors.interval.verdict_of`, the audit's verdict.
+Variables a trace's query does not constrain are false (booleans) and 0 (numbers).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from fractions import Fraction
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fretc.check.budget import Budget
+from fretc.check.checker import Checker
+from fretc.check.items import make_item
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.check.witness import finite_trace
+from fretc.compiler import ir
+from fretc.compiler.build import Compiled
+from fretc.compiler.coverage import Obligation, obligations
+from fretc.compiler.semantics import SemanticsError, formalize
+from fretc.fretish import ast as A
+from fretc.logs.csv_source import SAMPLED_MARK
+from fretc.monitors.coverage import exercised
+from fretc.monitors.interval import verdict_of
+
+__all__ = ["Generated", "TestCase", "generate", "column_kinds", "expected_of", "covered_by"]
+
+#: :meth:`_Finder.find`'s answer when the engines found traces the judge did not confirm
+SPURIOUS = "spurious"
+
+_PAIRS = (("satisfied", "violated"), ("satisfied", "vacuous"), ("violated", "satisfied"),
+          ("vacuous", "satisfied"), ("violated", "vacuous"), ("vacuous", "violated"))
+
+
+@dataclass
+class TestCase:
+    """One generated test: ``rows`` (one mapping FRET variable -> value per tick),
+    ``covers`` (``(requirement id, obligation id, tick)`` it exercises), ``expected``
+    (requirement id -> verdict) and ``origin`` (the obligation it was generated for)."""
+
+    rows: list[dict]
+    covers: list[tuple[str, str, int | None]] = field(default_factory=list)
+    expected: dict[str, str] = field(default_factory=dict)
+    origin: tuple[str, str] = ("", "")
+
+
+@dataclass
+class Generated:
+    """What :func:`generate` found: the kept ``tests``, the ``unmeetable`` and ``unknown``
+    obligations as ``(obligation, reason)``, and every obligation of the set
+    (``obligations``: requirement id -> list)."""
+
+    tests: list[TestCase]
+    unmeetable: list[tuple[Obligation, str]]
+    unknown: list[tuple[Obligation, str]]
+    obligations: dict[str, list[Obligation]]
+
+
+def column_kinds(compiled: Sequence[Compiled]) -> dict[str, str]:
+    """FRET variable -> ``"bool"`` or ``"float"`` over the ft formulas of ``compiled``, in
+    order of first use (a variable used as a number anywhere is ``float``)."""
+    cols: dict[str, str] = {}
+    for c in compiled:
+        for n in ir.walk(c.formalization.ft):
+            if n.op == "var":
+                cols[n.name] = "float"
+            elif n.op == "ap" and n.name not in cols:
+                cols[n.name] = "bool"
+    return cols
+
+
+def _columns(rows: list[dict], kinds: dict[str, str]) -> dict[str, np.ndarray]:
+    return {k: np.array([r[k] for r in rows], dtype=bool if t == "bool" else float)
+            for k, t in kinds.items()}
+
+
+def expected_of(compiled: Sequence[Compiled], rows: list[dict], kinds: dict[str, str]
+                ) -> dict[str, str]:
+    """The audit's verdict of every requirement of ``compiled`` on ``rows``
+    (:func:`fretc.monitors.interval.verdict_of`)."""
+    cols = _columns(rows, kinds)
+    return {c.id: verdict_of(c.requirement, cols, len(rows), c.formalization.ticks)
+            for c in compiled}
+
+
+def covered_by(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
+               rows: list[dict], kinds: dict[str, str]) -> list[tuple[str, str, int | None]]:
+    """``(requirement id, obligation id, tick)`` of every obligation ``rows`` exercises."""
+    cols = _columns(rows, kinds)
+    out = []
+    for c in compiled:
+        got = exercised(obs[c.id], c.requirement, cols, len(rows), c.formalization.ticks)
+        out.extend((c.id, o.id, e.tick) for o, e in zip(obs[c.id], got) if e.met)
+    return out
+
+
+def _variant(c: Compiled, req: A.Requirement, suffix: str) -> Compiled:
+    entry = dataclasses.replace(c.entry, id=f"{c.id}~{suffix}", requirement=req)
+    return Compiled(entry, formalize(req, c.entry.tick_period))
+
+
+def _classes(item, verdict: str) -> list:
+    phi, trig = item.phi_ft, item.trigger_ft
+    if verdict == "violated":
+        return [ir.not_(phi)]
+    if trig is None:
+        return [phi]
+    return [phi, trig if verdict == "satisfied" else ir.not_(trig)]
+
+
+class _Finder:
+    """The queries of one requirement's obligations (module docstring) in one Spot worker."""
+
+    def __init__(self, worker: SpotWorker, kinds: dict[str, str]):
+        self.worker = worker
+        self.kinds = kinds
+
+    def _rows(self, items, queries, accept) -> tuple[object, str]:
+        ck = Checker(items, self.worker)
+        engine = "z3 or the pt monitors" if ck.uses_smt(queries[0]) else "Spot"
+        unknown = spurious = False
+        for q in queries:
+            got = finite_trace(ck, q, self.kinds)
+            if got == UNKNOWN:
+                unknown = True
+            elif got:
+                rows = _complete(got, self.kinds)
+                if accept(rows):
+                    return rows, engine
+                spurious = True
+        why = (self.worker.failures[-1] if self.worker.failures else "") or \
+            (ck.smt.failures[-1] if ck.smt.failures else "")
+        if spurious and not unknown:
+            return SPURIOUS, engine
+        return (UNKNOWN if unknown else None), (engine + (f": {why}" if why else ""))
+
+    def find(self, c: Compiled, ob: Obligation, accept) -> tuple[object, str]:
+        """Rows meeting ``ob`` (every variable of :attr:`kinds`) that ``accept(rows)``
+        confirms, None (no finite trace), UNKNOWN or SPURIOUS (traces found, none
+        confirmed); and the engine's words."""
+        base = make_item(0, c)
+        if ob.kind == "threshold":
+            atom = ob.atom if ob.side else A.Unary("!", ob.atom)
+            aux_req = A.Requirement(text="", component="c", timing=A.Timing("eventually"),
+                                    response=atom)
+            aux = make_item(1, _variant(c, aux_req, "seen"))
+            trig = [base.trigger_ft] if base.trigger_ft is not None else []
+            queries = [[base.phi_ft] + trig + [aux.phi_ft], [base.phi_ft, aux.phi_ft],
+                       [aux.phi_ft]]
+            return self._rows([base, aux], queries, accept)
+        other = make_item(1, _variant(c, ob.variant, "variant"))
+        queries = [_classes(base, v1) + _classes(other, v2) for v1, v2 in _PAIRS]
+        return self._rows([base, other], queries, accept)
+
+
+def _complete(rows: list[dict], kinds: dict[str, str]) -> list[dict]:
+    return [{k: r.get(k, False if t == "bool" else 0.0) for k, t in kinds.items()}
+            for r in rows]
+
+
+def _candidates(compiled, obs, kinds, budget, fork):
+    """One checked trace per meetable obligation; the unmeetable and unknown ones."""
+    found: list[TestCase] = []
+    unmeetable, unknown = [], []
+    covered: set[tuple[str, str]] = set()
+    with SpotWorker(budget or Budget(), fork=fork) as worker:
+        finder = _Finder(worker, kinds)
+        for c in compiled:
+            for ob in obs[c.id]:
+                if (c.id, ob.id) in covered:
+                    continue  # an earlier trace meets it already
+                def accept(rows, key=(c.id, ob.id)):
+                    return key in {(r, o) for r, o, _ in covered_by(compiled, obs, rows, kinds)}
+
+                try:
+                    rows, engine = finder.find(c, ob, accept)
+                except SemanticsError as exc:
+                    unknown.append((ob, f"the variant does not formalize: {exc}"))
+                    continue
+                if rows is None:
+                    unmeetable.append((ob, f"no finite trace meets it ({engine})"))
+                    continue
+                if rows == UNKNOWN:
+                    unknown.append((ob, f"not decided within the budget ({engine})"))
+                    continue
+                if rows == SPURIOUS:
+                    unknown.append((ob, f"{engine}'s traces do not meet it by the audit's "
+                                        "judge (an abstraction of the atoms was spurious)"))
+                    continue
+                cov = covered_by(compiled, obs, rows, kinds)
+                covered.update((r, o) for r, o, _ in cov)
+                found.append(TestCase(rows, cov, origin=(c.id, ob.id)))
+    return found, unmeetable, unknown
+
+
+def _cover(found: list[TestCase]) -> list[TestCase]:
+    """Greedy set cover of the obligations the candidates meet (ties: the earlier)."""
+    left = {(r, o) for t in found for r, o, _ in t.covers}
+    kept = []
+    while left:
+        best = max(found, key=lambda t: len(left & {(r, o) for r, o, _ in t.covers}))
+        gain = left & {(r, o) for r, o, _ in best.covers}
+        if not gain:
+            break
+        kept.append(best)
+        left -= gain
+    return kept
+
+
+def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
+             fork: bool = True) -> Generated:
+    """The tests of ``compiled`` (formalized, not free-form requirements of one set): see the
+    module docstring. ``budget``: the engines' work budget per query
+    (:class:`fretc.check.budget.Budget`); ``fork``: run Spot in a worker process."""
+    compiled = [c for c in compiled if c.formalization is not None]
+    obs = {c.id: obligations(c.id, c.requirement, c.formalization.ticks) for c in compiled}
+    kinds = column_kinds(compiled)
+    found, unmeetable, unknown = _candidates(compiled, obs, kinds, budget, fork)
+    tests = _cover(found)
+    for t in tests:
+        t.expected = expected_of(compiled, t.rows, kinds)
+    return Generated(tests, unmeetable, unknown, obs)
+
+
+def _cell(v) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    return repr(float(v))
+
+
+def _obligation_json(ob: Obligation, reason: str | None = None) -> dict:
+    out = {"requirement": ob.requirement, "obligation": ob.id, "kind": ob.kind,
+           "description": ob.description}
+    if reason is not None:
+        out["reason"] = reason
+    return out
+
+
+def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
+                period: Fraction | None = None) -> dict:
+    """Write ``DIR/T01.csv``... (one per test: comment lines, the first one
+    :data:`fretc.logs.csv_source.SAMPLED_MARK` so that an audit with binding files reads the
+    columns as the FRET variables they are; then a header row, ``time`` (tick ``k`` at ``k *
+    period`` seconds, when ``period`` is given) and the FRET variables, one row per tick) and
+    ``DIR/tests.json``; return the JSON document written (format in the module docstring of
+    :mod:`fretc.cli.testgen`). ``sources``: the requirement files, for the replay line."""
+    from pathlib import Path
+    import json
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    replay = "fretc audit " + " ".join(f"-r {s}" for s in sources)
+    tests = []
+    for k, t in enumerate(gen.tests, 1):
+        name = f"T{k:02d}"
+        names = list(t.rows[0])
+        lines = [f"{SAMPLED_MARK}: fretc testgen test {name}, generated for {t.origin[0]} "
+                 f"{t.origin[1]}; FRET variables, one row per tick",
+                 f"# replay: {replay} {out / (name + '.csv')}",
+                 "# one row per tick; expected verdicts (FRET finite-trace semantics):",
+                 "# expected: " + ", ".join(f"{r}={v}" for r, v in t.expected.items()),
+                 ",".join((["time"] if period else []) + names)]
+        lines += [",".join(([f"{float(i * period):.9f}"] if period else [])
+                           + [_cell(r[n]) for n in names]) for i, r in enumerate(t.rows)]
+        (out / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        tests.append({"id": name, "trace": f"{name}.csv", "ticks": len(t.rows),
+                      "generated_for": {"requirement": t.origin[0], "obligation": t.origin[1]},
+                      "covers": [{"requirement": r, "obligation": o, "tick": tick}
+                                 for r, o, tick in t.covers],
+                      "expected": dict(t.expected)})
+    doc = {"requirements": list(sources), "tests": tests,
+           "obligations": [_obligation_json(o) for obs in gen.obligations.values()
+                           for o in obs],
+           "unmeetable": [_obligation_json(o, why) for o, why in gen.unmeetable],
+           "unknown": [_obligation_json(o, why) for o, why in gen.unknown]}
+    (out / "tests.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    return doc
