@@ -47,9 +47,10 @@ from fretc.logs.csv_source import SAMPLED_MARK
 from fretc.monitors.coverage import exercised
 from fretc.monitors.interval import verdict_of
 
-__all__ = ["Generated", "TestCase", "generate", "column_kinds", "expected_of", "covered_by"]
+__all__ = ["Generated", "TestCase", "generate", "column_kinds", "expected_of", "covered_by",
+           "separating_trace", "Finder", "SPURIOUS", "write_tests"]
 
-#: :meth:`_Finder.find`'s answer when the engines found traces the judge did not confirm
+#: :meth:`Finder.find`'s answer when the engines found traces the judge did not confirm
 SPURIOUS = "spurious"
 
 _PAIRS = (("satisfied", "violated"), ("satisfied", "vacuous"), ("violated", "satisfied"),
@@ -132,8 +133,9 @@ def _classes(item, verdict: str) -> list:
     return [phi, trig if verdict == "satisfied" else ir.not_(trig)]
 
 
-class _Finder:
-    """The queries of one requirement's obligations (module docstring) in one Spot worker."""
+class Finder:
+    """The queries of one requirement's obligations (module docstring) in one Spot worker
+    (``worker``); ``kinds``: FRET variable -> ``"bool"``/``"float"`` of the rows built."""
 
     def __init__(self, worker: SpotWorker, kinds: dict[str, str]):
         self.worker = worker
@@ -177,6 +179,23 @@ class _Finder:
         return self._rows([base, other], queries, accept)
 
 
+def separating_trace(finder: "Finder", c: Compiled, other: A.Requirement
+                     ) -> tuple[object, str]:
+    """A trace on which ``c`` and the requirement ``other`` (same tick period) get different
+    verdicts from the audit's judge: rows, None (no finite trace separates their verdict
+    classes: equivalent as far as those classes go), UNKNOWN or SPURIOUS; and the engine."""
+    v = _variant(c, other, "other")
+    kinds = finder.kinds
+
+    def accept(rows):
+        cols = _columns(rows, kinds)
+        return (verdict_of(c.requirement, cols, len(rows), c.formalization.ticks)
+                != verdict_of(other, cols, len(rows), v.formalization.ticks))
+
+    ob = Obligation(c.id, "other", "other", "", other, v.formalization.ticks)
+    return finder.find(c, ob, accept)
+
+
 def _complete(rows: list[dict], kinds: dict[str, str]) -> list[dict]:
     return [{k: r.get(k, False if t == "bool" else 0.0) for k, t in kinds.items()}
             for r in rows]
@@ -188,7 +207,7 @@ def _candidates(compiled, obs, kinds, budget, fork):
     unmeetable, unknown = [], []
     covered: set[tuple[str, str]] = set()
     with SpotWorker(budget or Budget(), fork=fork) as worker:
-        finder = _Finder(worker, kinds)
+        finder = Finder(worker, kinds)
         for c in compiled:
             for ob in obs[c.id]:
                 if (c.id, ob.id) in covered:
@@ -232,17 +251,20 @@ def _cover(found: list[TestCase]) -> list[TestCase]:
 
 
 def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
-             fork: bool = True) -> Generated:
+             fork: bool = True, kinds: frozenset[str] | None = None) -> Generated:
     """The tests of ``compiled`` (formalized, not free-form requirements of one set): see the
     module docstring. ``budget``: the engines' work budget per query
-    (:class:`fretc.check.budget.Budget`); ``fork``: run Spot in a worker process."""
+    (:class:`fretc.check.budget.Budget`); ``fork``: run Spot in a worker process;
+    ``kinds``: only the obligations of these kinds (:class:`Obligation`'s ``kind``; None:
+    all), e.g. ``{"atom"}`` for FLIP's one obligation per atom and value."""
     compiled = [c for c in compiled if c.formalization is not None]
-    obs = {c.id: obligations(c.id, c.requirement, c.formalization.ticks) for c in compiled}
-    kinds = column_kinds(compiled)
-    found, unmeetable, unknown = _candidates(compiled, obs, kinds, budget, fork)
+    obs = {c.id: [o for o in obligations(c.id, c.requirement, c.formalization.ticks)
+                  if kinds is None or o.kind in kinds] for c in compiled}
+    cols = column_kinds(compiled)
+    found, unmeetable, unknown = _candidates(compiled, obs, cols, budget, fork)
     tests = _cover(found)
     for t in tests:
-        t.expected = expected_of(compiled, t.rows, kinds)
+        t.expected = expected_of(compiled, t.rows, cols)
     return Generated(tests, unmeetable, unknown, obs)
 
 

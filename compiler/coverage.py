@@ -30,6 +30,9 @@ deadlines. The obligations:
   differ (the trace decides the requirement at the deadline's last tick);
   ``deadline-missed``: with ``n+1`` ticks it would differ (one tick past the deadline
   decides it). These two are the boundary tests of the deadline.
+* ``timing:<kind>``: the timing replaced by another of FRET's timings (``immediately``,
+  ``next``, ``eventually``, ``always``, ``never``, ``within/for/after n``) would change the
+  verdict: the trace shows when the response must come (the timing field's own effect).
 * ``<field>:<comparison>:true`` / ``:false`` for a numeric variable compared with a number
   (``distance < 0.9``): the comparison seen on that side of its threshold at some tick,
   with the closest margin seen (:func:`fretc.monitors.coverage.exercised`).
@@ -43,7 +46,7 @@ from dataclasses import dataclass
 from fretc.fretish import ast as A
 
 __all__ = ["Obligation", "obligations", "atoms_of", "expr_text", "replace_atom",
-           "with_ticks", "FIELDS"]
+           "with_ticks", "FIELDS", "TIMINGS"]
 
 #: the fields whose atoms get obligations, in sentence order
 FIELDS = ("scope", "condition", "stop", "response")
@@ -72,7 +75,7 @@ class Obligation:
         requirement: the requirement's id.
         id: the obligation's id within the requirement (``response:stopped+``,
             ``trigger``, ``deadline-reached``, ``condition:distance < 0.9:true``).
-        kind: ``atom``, ``trigger``, ``scope``, ``deadline`` or ``threshold``.
+        kind: ``atom``, ``trigger``, ``scope``, ``deadline``, ``timing`` or ``threshold``.
         description: the rule behind it, in plain English.
         variant: the requirement whose verdict must differ (None for ``threshold``).
         variant_ticks: the variant's duration in ticks (``within/for/after``), else None.
@@ -258,6 +261,32 @@ def _structural(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligat
     return out
 
 
+#: FRET's timings a requirement's timing is compared with (``timing:<kind>`` obligations)
+TIMINGS = ("immediately", "next", "eventually", "always", "never", "within", "for", "after")
+
+
+def _timing_effects(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligation]:
+    """The timing's own effect against each other timing of FRET (durations keep ``n``)."""
+    if req.timing.kind in A.STOP_TIMINGS or req.response is None:
+        return []
+    own = req.timing.phrase or req.timing.kind
+    out = []
+    for kind in TIMINGS:
+        if kind == req.timing.kind:
+            continue
+        n = None
+        if kind in A.DURATION_TIMINGS:
+            n = ticks if ticks is not None else 1
+        timing = A.Timing(kind, A.Duration(str(n), "ticks") if n is not None else None)
+        word = f"{kind} {n} ticks" if n is not None else kind
+        out.append(Obligation(
+            rid, f"timing:{kind}", "timing",
+            f"the timing's own effect: judged '{word}' instead of '{own}', the verdict "
+            "would differ (the trace shows when the response must come)",
+            dataclasses.replace(req, timing=timing), n))
+    return out
+
+
 def obligations(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligation]:
     """The coverage obligations of requirement ``rid`` (module docstring), structural ones
     first. ``req``: the parsed, not free-form requirement; ``ticks``: its duration in ticks
@@ -265,4 +294,5 @@ def obligations(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligat
     requirements have none (an empty list)."""
     if req is None or req.freeform:
         return []
-    return _structural(rid, req, ticks) + _atom_obligations(rid, req, ticks)
+    return (_structural(rid, req, ticks) + _timing_effects(rid, req, ticks)
+            + _atom_obligations(rid, req, ticks))
