@@ -17,9 +17,9 @@ the reason; when an engine ran out of its budget it is *unknown*.
 Every trace found is believed only after the audit's judge agrees: the obligation is
 evaluated again on it by :func:`fretc.monitors.coverage.exercised` (interval semantics),
 and a trace that does not meet its obligation is dropped and the obligation reported as not
-generated. The tests kept are a greedy set cover of the traces (each trace exercises the
-obligations of every requirement it happens to meet; the one meeting most of those not yet
-covered is kept first), and every test's ``expected`` holds the verdict of every
+generated. The tests kept are a greedy set cover of the traces (each trace counted for the
+obligations still uncovered when it was found; the one meeting most of those not yet covered
+is kept first), each listing every obligation of the set it exercises, and every test's ``expected`` holds the verdict of every
 requirement of the set by :func:`fretc.monitors.interval.verdict_of`, the audit's verdict.
 Variables a trace's query does not constrain are false (booleans) and 0 (numbers).
 """
@@ -109,13 +109,18 @@ def expected_of(compiled: Sequence[Compiled], rows: list[dict], kinds: dict[str,
 
 
 def covered_by(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
-               rows: list[dict], kinds: dict[str, str]) -> list[tuple[str, str, int | None]]:
-    """``(requirement id, obligation id, tick)`` of every obligation ``rows`` exercises."""
+               rows: list[dict], kinds: dict[str, str],
+               only: set[tuple[str, str]] | None = None) -> list[tuple[str, str, int | None]]:
+    """``(requirement id, obligation id, tick)`` of every obligation ``rows`` exercises
+    (``only``: of these ``(requirement id, obligation id)`` alone)."""
     cols = _columns(rows, kinds)
     out = []
     for c in compiled:
-        got = exercised(obs[c.id], c.requirement, cols, len(rows), c.formalization.ticks)
-        out.extend((c.id, o.id, e.tick) for o, e in zip(obs[c.id], got) if e.met)
+        mine = [o for o in obs[c.id] if only is None or (c.id, o.id) in only]
+        if not mine:
+            continue
+        got = exercised(mine, c.requirement, cols, len(rows), c.formalization.ticks)
+        out.extend((c.id, o.id, e.tick) for o, e in zip(mine, got) if e.met)
     return out
 
 
@@ -205,15 +210,17 @@ def _candidates(compiled, obs, kinds, budget, fork):
     """One checked trace per meetable obligation; the unmeetable and unknown ones."""
     found: list[TestCase] = []
     unmeetable, unknown = [], []
-    covered: set[tuple[str, str]] = set()
+    left = {(c.id, o.id) for c in compiled for o in obs[c.id]}
     with SpotWorker(budget or Budget(), fork=fork) as worker:
         finder = Finder(worker, kinds)
         for c in compiled:
             for ob in obs[c.id]:
-                if (c.id, ob.id) in covered:
+                if (c.id, ob.id) not in left:
                     continue  # an earlier trace meets it already
-                def accept(rows, key=(c.id, ob.id)):
-                    return key in {(r, o) for r, o, _ in covered_by(compiled, obs, rows, kinds)}
+
+                def accept(rows, c=c, ob=ob):
+                    return exercised([ob], c.requirement, _columns(rows, kinds), len(rows),
+                                     c.formalization.ticks)[0].met
 
                 try:
                     rows, engine = finder.find(c, ob, accept)
@@ -230,8 +237,8 @@ def _candidates(compiled, obs, kinds, budget, fork):
                     unknown.append((ob, f"{engine}'s traces do not meet it by the audit's "
                                         "judge (an abstraction of the atoms was spurious)"))
                     continue
-                cov = covered_by(compiled, obs, rows, kinds)
-                covered.update((r, o) for r, o, _ in cov)
+                cov = covered_by(compiled, obs, rows, kinds, left)
+                left.difference_update((r, o) for r, o, _ in cov)
                 found.append(TestCase(rows, cov, origin=(c.id, ob.id)))
     return found, unmeetable, unknown
 
@@ -263,7 +270,8 @@ def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
     cols = column_kinds(compiled)
     found, unmeetable, unknown = _candidates(compiled, obs, cols, budget, fork)
     tests = _cover(found)
-    for t in tests:
+    for t in tests:  # every obligation each kept test exercises, not only its new ones
+        t.covers = covered_by(compiled, obs, t.rows, cols)
         t.expected = expected_of(compiled, t.rows, cols)
     return Generated(tests, unmeetable, unknown, obs)
 
