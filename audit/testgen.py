@@ -19,7 +19,8 @@ evaluated again on it by :func:`fretc.monitors.coverage.exercised` (interval sem
 and a trace that does not meet its obligation is dropped and the obligation reported as not
 generated. The tests kept are a greedy set cover of the traces (each trace counted for the
 obligations still uncovered when it was found; the one meeting most of those not yet covered
-is kept first), each listing every obligation of the set it exercises, and every test's ``expected`` holds the verdict of every
+is kept first), each listing every obligation of the set it exercises; a kept test whose
+obligations the others all cover is dropped, and every test's ``expected`` holds the verdict of every
 requirement of the set by :func:`fretc.monitors.interval.verdict_of`, the audit's verdict.
 Variables a trace's query does not constrain are false (booleans) and 0 (numbers).
 """
@@ -257,6 +258,16 @@ def _cover(found: list[TestCase]) -> list[TestCase]:
     return kept
 
 
+def _drop_redundant(tests: list[TestCase]) -> list[TestCase]:
+    """``tests`` without those whose every obligation the others cover (the last first)."""
+    kept = list(tests)
+    for t in reversed(tests):
+        others = {(r, o) for u in kept if u is not t for r, o, _ in u.covers}
+        if {(r, o) for r, o, _ in t.covers} <= others:
+            kept.remove(t)
+    return kept
+
+
 def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
              fork: bool = True, kinds: frozenset[str] | None = None) -> Generated:
     """The tests of ``compiled`` (formalized, not free-form requirements of one set): see the
@@ -272,6 +283,8 @@ def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
     tests = _cover(found)
     for t in tests:  # every obligation each kept test exercises, not only its new ones
         t.covers = covered_by(compiled, obs, t.rows, cols)
+    tests = _drop_redundant(tests)
+    for t in tests:
         t.expected = expected_of(compiled, t.rows, cols)
     return Generated(tests, unmeetable, unknown, obs)
 

@@ -269,7 +269,8 @@ def _timing_effects(rid: str, req: A.Requirement, ticks: int | None) -> list[Obl
     """The timing's own effect against each other timing of FRET (durations keep ``n``)."""
     if req.timing.kind in A.STOP_TIMINGS or req.response is None:
         return []
-    own = req.timing.phrase or req.timing.kind
+    own = req.timing.kind + (f" {ticks} ticks" if req.timing.kind in A.DURATION_TIMINGS
+                             and ticks is not None else "")
     out = []
     for kind in TIMINGS:
         if kind == req.timing.kind:
