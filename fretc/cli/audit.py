@@ -60,8 +60,7 @@ __all__ = ["audit_cmd"]
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, window, allow_partial,
-              confidence, trial, unknown_runs, verbose, csv_dir=None, msg_path=(),
-              coverage=False):
+              confidence, trial, unknown_runs, verbose, coverage, csv_dir=None, msg_path=()):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -111,17 +110,13 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
-    if coverage:
-        for p in [plan] + [sub for _s, _f, sub in plan.variants]:
-            p.coverage = True
+    _mark_coverage(plan, coverage)
     for w in plan.warnings:
         err.print(f"[yellow]warning:[/yellow] {escape(w)}")
-    input_errors = False
     # a requirement that does not formalize is an error verdict on every log: its
     # diagnostic (source line and caret) is printed once, with the other errors
     input_errors = any(r.error is not None for r in plan.requirements)
-    show = not no_progress and sys.stderr.isatty()
-    if show:
+    if not no_progress and sys.stderr.isatty():
         with AuditProgress(err, len(paths)) as prog:
             results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
     else:
@@ -130,15 +125,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors, statistics=stats)
     reqs = plan.requirements_json()
-    extra = plan.sources_json()
-    if coverage:
-        from fretc.audit.coverage import coverage_text, fleet_coverage
-
-        extra = {**extra, "coverage": fleet_coverage(plan, results)}
-        for line in coverage_text(extra["coverage"]).splitlines():
-            out.print(escape(line))
-    doc = audit_json(results, reqs, plan.bindings_json(), input_errors,
-                     allow_partial, extra, stats)
+    doc = audit_json(results, reqs, plan.bindings_json(), input_errors, allow_partial,
+                     {**plan.sources_json(), **_coverage(plan, results, out, coverage)}, stats)
     if json_path:
         if to_stdout_json:
             click.echo(doc, nl=False)
@@ -150,6 +138,27 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
         code = 2
     ctx.exit(code)
+
+
+def _mark_coverage(plan, coverage: bool) -> None:
+    """``--coverage``: every plan (the binding files' ``[logs]`` variants too) records each
+    verdict's coverage obligations."""
+    for p in [plan] + [sub for _s, _f, sub in plan.variants]:
+        p.coverage = coverage
+
+
+def _coverage(plan, results, out, coverage: bool) -> dict:
+    """``--coverage``: the fleet's coverage printed on ``out`` and as the JSON member
+    (:mod:`fretc.audit.coverage`); ``{}`` without it."""
+    if not coverage:
+        return {}
+    from fretc.audit.coverage import coverage_text, fleet_coverage
+    from fretc.reports.terminal import escape
+
+    cov = fleet_coverage(plan, results)
+    for line in coverage_text(cov).splitlines():
+        out.print(escape(line))
+    return {"coverage": cov}
 
 
 def _write_csvs(plan, paths, results, folder: str, err) -> bool:
