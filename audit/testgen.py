@@ -42,6 +42,7 @@ from fretc.check.witness import finite_trace
 from fretc.compiler import ir
 from fretc.compiler.build import Compiled
 from fretc.compiler.coverage import Obligation, obligations
+from fretc.compiler.printers import to_smv
 from fretc.compiler.semantics import SemanticsError, formalize
 from fretc.fretish import ast as A
 from fretc.logs.csv_source import SAMPLED_MARK
@@ -152,7 +153,10 @@ class Finder:
         engine = "z3 or the pt monitors" if ck.uses_smt(queries[0]) else "Spot"
         unknown = spurious = False
         for q in queries:
-            got = finite_trace(ck, q, self.kinds)
+            letters: list = []
+            got = finite_trace(ck, q, self.kinds, letters_out=letters)
+            if got and got != UNKNOWN:
+                got = _equalities(got, letters, q, set(ck.numeric.atoms))
             if got == UNKNOWN:
                 unknown = True
             elif got:
@@ -183,6 +187,55 @@ class Finder:
         other = make_item(1, _variant(c, ob.variant, "variant"))
         queries = [_classes(base, v1) + _classes(other, v2) for v1, v2 in _PAIRS]
         return self._rows([base, other], queries, accept)
+
+
+def _variable_pairs(formulas) -> dict[str, tuple[str, str, str]]:
+    """SMV text -> (op, a, b) of every ``a = b`` / ``a != b`` between two variables."""
+    out = {}
+    for f in formulas:
+        for n in ir.walk(f):
+            if (n.op == "cmp" and n.name in ("=", "!=") and n.args[0].op == "var"
+                    and n.args[1].op == "var"):
+                out[to_smv(n)] = (n.name, n.args[0].name, n.args[1].name)
+    return out
+
+
+def _equalities(rows: list[dict], letters: list[dict], formulas, fixed: set[str]
+                ) -> list[dict]:
+    """Numbers for the variables compared with each other by ``=``/``!=``, which the
+    numeric abstraction leaves free (:mod:`fretc.check.numeric_abstraction`): at each tick
+    the variables the model's letter makes equal share one value (a variable also compared
+    with constants keeps its own, ``fixed``), the other classes get distinct values above
+    every number of the row. The judge confirms the result or rejects it."""
+    pairs = _variable_pairs(formulas)
+    if not pairs:
+        return rows
+    out = []
+    for row, letter in zip(rows, letters):
+        parent = {v: v for _, a, b in pairs.values() for v in (a, b)}
+
+        def root(v):
+            while parent[v] != v:
+                v = parent[v]
+            return v
+
+        for key, (op, a, b) in sorted(pairs.items()):
+            if letter.get(key) is (op == "="):
+                parent[root(a)] = root(b)
+        row = dict(row)
+        classes: dict[str, list[str]] = {}
+        for v in sorted(parent):
+            classes.setdefault(root(v), []).append(v)
+        top = 1 + max([abs(float(x)) for x in row.values()
+                       if not isinstance(x, bool)] + [0.0])
+        for k, members in enumerate(sorted(classes.values())):
+            own = [row[v] for v in members if v in fixed]
+            value = own[0] if own else float(int(top) + 1 + k)
+            for v in members:
+                if v not in fixed:
+                    row[v] = value
+        out.append(row)
+    return out
 
 
 def separating_trace(finder: "Finder", c: Compiled, other: A.Requirement
