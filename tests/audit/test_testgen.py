@@ -127,3 +127,16 @@ def test_bad_input_exit_2(tmp_path):
     res = CliRunner().invoke(main, ["testgen", str(p), "-o", str(tmp_path / "o")])
     assert res.exit_code == 2
     assert "bad.fret" in res.output
+
+
+def test_variables_compared_with_each_other(tmp_path):
+    """An enumeration written as variables compared with each other (the case studies'
+    ``state = ap_standby_state``): every obligation gets a test the judge confirms."""
+    p = tmp_path / "enum.fret"
+    p.write_text("E: whenever state = standby_state & go the fsm shall at the next timepoint "
+                 "satisfy state = nominal_state\n")
+    c = compile_entries(load_requirements([p]))
+    gen = generate(c, fork=False)
+    assert not gen.unknown, gen.unknown
+    met = {o for t in gen.tests for _, o, _ in t.covers}
+    assert "condition:state = standby_state+" in met and "timing:immediately" in met
