@@ -40,8 +40,12 @@ __all__ = ["testgen_cmd"]
 @click.option("-o", "--output", "out_dir", required=True,
               type=click.Path(file_okay=False), metavar="DIR",
               help="Folder to write the tests (T01.csv, ...) and tests.json into.")
+@click.option("--pytest", "with_pytest", is_flag=True,
+              help="Also write DIR/test_fretc_generated.py: a pytest file auditing each test "
+                   "(its trace, or the log the command in FRETC_RUN_TRACE makes of it: "
+                   "'COMMAND TRACE.csv LOG') against its expected verdicts.")
 @TEXT_ATTRIBUTE_OPTION
-def testgen_cmd(files, out_dir):
+def testgen_cmd(files, out_dir, with_pytest):
     """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
     tests.json (what each covers, the expected verdict of every requirement)."""
     from fretc.audit.testgen import generate, write_tests
@@ -67,6 +71,10 @@ def testgen_cmd(files, out_dir):
     sources = list(dict.fromkeys(c.entry.source for c in compiled))
     period = next((e.tick_period for e in entries if e.tick_period is not None), None)
     doc = write_tests(gen, out_dir, sources, period)
+    if with_pytest:
+        from fretc.audit.testgen_pytest import PYTEST_FILE, pytest_file
+
+        (Path(out_dir) / PYTEST_FILE).write_text(pytest_file(), encoding="utf-8")
     total = len(doc["obligations"])
     met = len({(c["requirement"], c["obligation"]) for t in doc["tests"] for c in t["covers"]})
     click.echo(shown(f"{len(doc['tests'])} tests in {out_dir}: {met} of {total} obligations "

@@ -140,3 +140,35 @@ def test_variables_compared_with_each_other(tmp_path):
     assert not gen.unknown, gen.unknown
     met = {o for t in gen.tests for _, o, _ in t.covers}
     assert "condition:state = standby_state+" in met and "timing:immediately" in met
+
+
+def test_generated_pytest_file_runs(tmp_path):
+    """``--pytest``: the generated file, run by pytest, passes on the generated traces and
+    fails when FRETC_RUN_TRACE's command makes a log with other verdicts."""
+    import os
+    import subprocess
+    import sys
+
+    p = tmp_path / "one.fret"
+    p.write_text("A: upon p the sw shall within 2 ticks satisfy q\n")
+    res = CliRunner().invoke(main, ["testgen", str(p), "-o", str(tmp_path / "t"), "--pytest"])
+    assert res.exit_code == 0, res.output
+    gen = tmp_path / "t" / "test_fretc_generated.py"
+    cmd = [sys.executable, "-m", "pytest", str(gen), "-q", "-p", "no:cacheprovider",
+           "-p", "no:randomly"]
+    env = {k: v for k, v in os.environ.items() if k != "FRETC_RUN_TRACE"}
+    ok = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    # a "system" that never responds: q false throughout
+    fake = tmp_path / "never.py"
+    fake.write_text("import sys\nrows = open(sys.argv[1]).read().splitlines()\n"
+                    "head = [i for i, r in enumerate(rows) if not r.startswith('#')][0]\n"
+                    "names = rows[head].split(',')\nq = names.index('q')\n"
+                    "out = rows[:head + 1] + [','.join('false' if i == q else c for i, c in "
+                    "enumerate(r.split(','))) for r in rows[head + 1:]]\n"
+                    "open(sys.argv[2], 'w').write('\\n'.join(out) + '\\n')\n")
+    env["FRETC_RUN_TRACE"] = f"{sys.executable} {fake}"
+    env["FRETC_RUN_LOG"] = "run.csv"
+    bad = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert bad.returncode == 1, bad.stdout + bad.stderr
+    assert "'A': 'violated'" in bad.stdout and "passed" in bad.stdout  # vacuous ones pass
