@@ -117,3 +117,12 @@ def test_difference_agrees_with_reference_evaluator(tmp_path_factory, text, data
         assert ex.met == (ex.verdicts[0] != ex.verdicts[1])
         if ex.met:
             assert ex.tick is not None and 0 <= ex.tick <= n
+
+
+def test_coverage_json_follows_the_schema(tmp_path):
+    import jsonschema
+
+    doc = _audit(tmp_path, ROOT / "traces" / "stop_delay.mcap")
+    schema = json.loads((ROOT / "docs" / "reference" / "audit.schema.json").read_text())
+    jsonschema.validate(doc, schema)
+    assert doc["coverage"]["total"] == sum(r["total"] for r in doc["coverage"]["requirements"])
