@@ -65,6 +65,10 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
         _no_tick(res, v, la)
         return
     _verdict(plan, r, res, bindings, v, nan_unknown)
+    if plan.coverage:
+        from fretc.audit.coverage import record_coverage  # lazy: only with --coverage
+
+        record_coverage(r, res, v, unknown_of(r, res, nan_unknown))
     if getattr(r.compiled, "probability", None) is not None and v.error is None:
         _trials(r, res, v, nan_unknown)
 

@@ -130,6 +130,9 @@ class AuditPlan:
     #: items of ReqIF / Doorstop sources without FRETish text (RequirementEntry): listed as
     #: not formalized, never audited
     not_formalized: list = field(default_factory=list)
+    #: ``fretc audit --coverage``: record each verdict's coverage obligations
+    #: (:mod:`fretc.audit.coverage`)
+    coverage: bool = False
 
     def sources_json(self) -> dict:
         """The audit JSON's ``not_formalized`` list (``{id, source, line, origin}`` each),

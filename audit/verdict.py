@@ -203,6 +203,8 @@ class Verdict:
             trials (:class:`fretc.audit.trials.Trials`: satisfied, violated, and the cut and
             unknown ones that are no trials); None for the others, and when it was not
             judged.
+        coverage: with ``fretc audit --coverage``, the coverage obligations this log
+            exercised (:func:`fretc.audit.coverage.record_coverage`); None without it.
     """
 
     log: str
@@ -235,6 +237,7 @@ class Verdict:
     margin: list[tuple[int, int, float]] = field(default_factory=list)
     unknown_ticks: int = 0
     trials: Any = None
+    coverage: Any = None
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         """The verdict as the audit JSON gives it (``docs/reference/audit.schema.json``): times in
@@ -273,6 +276,7 @@ class Verdict:
             "robustness": self._robustness_json(start, val),
             "unknown_ticks": self.unknown_ticks,
             "trials": None if self.trials is None else self.trials.to_json(),
+            **({} if self.coverage is None else {"coverage": self.coverage}),
         }
 
     def _robustness_json(self, start: int | None, val) -> dict:

@@ -7,6 +7,8 @@ report folder::
     timelines/*.svg    one timeline per violation (the same SVG as inlined in the HTML)
     matrix.html        the traceability matrix for auditors (:mod:`fretc.reports.matrix`)
     matrix.csv         the same rows as CSV
+    coverage.html      with an audit run with --coverage: the coverage matrix
+                       (:mod:`fretc.reports.coverage`)
 
 and, on request, annotated copies of the MCAP logs (:mod:`fretc.audit.annotate`).
 """
@@ -132,6 +134,10 @@ def _write_files(out: Path, files: ReportFiles, ctx: dict, html: str, md: str,
                                 encoding="utf-8")
     (out / "matrix.html").write_text(matrix_html(ctx["matrix_rows"]), encoding="utf-8")
     (out / "matrix.csv").write_text(matrix_csv(ctx["matrix_rows"]), encoding="utf-8")
+    if isinstance(doc.get("coverage"), dict):
+        from fretc.reports.coverage import coverage_html  # lazy: only with coverage
+
+        (out / "coverage.html").write_text(coverage_html(doc), encoding="utf-8")
 
 
 def _current_entries(doc: dict, base: Path | None, json_dir: Path | None) -> dict | None:

@@ -44,6 +44,11 @@ __all__ = ["audit_cmd"]
                    "data problems or a verdict is unknown (the verdicts stay as they are: "
                    "an unknown is never a pass).")
 @statistics_options
+@click.option("--coverage", "coverage", is_flag=True,
+              help="Also measure which coverage obligations of each requirement (each atom's "
+                   "own effect, the trigger, the scope entered and left, the deadline reached "
+                   "and missed, each threshold's two sides) the runs exercised: per log and "
+                   "over the fleet, in the JSON ('coverage') and as a summary.")
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
 @click.option("--write-csv", "csv_dir", type=click.Path(file_okay=False), default=None,
@@ -55,7 +60,7 @@ __all__ = ["audit_cmd"]
 @click.pass_context
 def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
               jobs, json_path, junit_path, no_progress, window, allow_partial,
-              confidence, trial, unknown_runs, verbose, csv_dir=None, msg_path=()):
+              confidence, trial, unknown_runs, verbose, coverage, csv_dir=None, msg_path=()):
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -105,6 +110,7 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
+    _mark_coverage(plan, coverage)
     for w in plan.warnings:
         err.print(f"[yellow]warning:[/yellow] {escape(w)}")
     # a requirement that does not formalize is an error verdict on every log: its
@@ -119,8 +125,8 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors, statistics=stats)
     reqs = plan.requirements_json()
-    doc = audit_json(results, reqs, plan.bindings_json(), input_errors,
-                     allow_partial, plan.sources_json(), stats)
+    doc = audit_json(results, reqs, plan.bindings_json(), input_errors, allow_partial,
+                     {**plan.sources_json(), **_coverage(plan, results, out, coverage)}, stats)
     if json_path:
         if to_stdout_json:
             click.echo(doc, nl=False)
@@ -132,6 +138,27 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
         code = 2
     ctx.exit(code)
+
+
+def _mark_coverage(plan, coverage: bool) -> None:
+    """``--coverage``: every plan (the binding files' ``[logs]`` variants too) records each
+    verdict's coverage obligations."""
+    for p in [plan] + [sub for _s, _f, sub in plan.variants]:
+        p.coverage = coverage
+
+
+def _coverage(plan, results, out, coverage: bool) -> dict:
+    """``--coverage``: the fleet's coverage printed on ``out`` and as the JSON member
+    (:mod:`fretc.audit.coverage`); ``{}`` without it."""
+    if not coverage:
+        return {}
+    from fretc.audit.coverage import coverage_text, fleet_coverage
+    from fretc.reports.terminal import escape
+
+    cov = fleet_coverage(plan, results)
+    for line in coverage_text(cov).splitlines():
+        out.print(escape(line))
+    return {"coverage": cov}
 
 
 def _write_csvs(plan, paths, results, folder: str, err) -> bool:

@@ -1,0 +1,397 @@
+"""Requirements-based tests (``fretc testgen``): for every coverage obligation of a set of
+requirements (:mod:`fretc.compiler.coverage`) that some finite trace meets, a trace meeting
+it, and for every test the expected verdict of every requirement of the set on it.
+
+How a trace is found: a verdict-difference obligation (the requirement ``R`` and its variant
+``V`` must get different verdicts) is asked as one finite-trace query per pair of distinct
+verdicts, ``cls(R, v1) & cls(V, v2)``, where ``cls(x, violated) = !ft_x``, ``cls(x,
+vacuous) = ft_x & !trigger_x`` and ``cls(x, satisfied) = ft_x & trigger_x``
+(:class:`fretc.check.items.CheckItem`'s ``trigger_ft``), pairs with ``R`` satisfied first;
+each query goes to ``check``'s engines (:func:`fretc.check.witness.finite_trace`: Spot up
+to 16 ticks in a bound, past it the pt monitors' fixed points or z3), so deadlines of
+hundreds of ticks are handled as ``fretc check`` handles them. A threshold obligation asks
+``ft_R & trigger_R & F(comparison)`` (then without the trigger, then the comparison alone).
+When no pair has a finite trace the obligation is *unmeetable*, with the engine's answer as
+the reason; when an engine ran out of its budget it is *unknown*.
+
+Every trace found is believed only after the audit's judge agrees: the obligation is
+evaluated again on it by :func:`fretc.monitors.coverage.exercised` (interval semantics),
+and a trace that does not meet its obligation is dropped and the obligation reported as not
+generated. The tests kept are a greedy set cover of the traces (each trace counted for the
+obligations still uncovered when it was found; the one meeting most of those not yet covered
+is kept first), each listing every obligation of the set it exercises; a kept test whose
+obligations the others all cover is dropped, and every test's ``expected`` holds the verdict of every
+requirement of the set by :func:`fretc.monitors.interval.verdict_of`, the audit's verdict.
+Variables a trace's query does not constrain are false (booleans) and 0 (numbers).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from fractions import Fraction
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fretc.check.budget import Budget
+from fretc.check.checker import Checker
+from fretc.check.items import make_item
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.check.witness import finite_trace
+from fretc.compiler import ir
+from fretc.compiler.build import Compiled
+from fretc.compiler.coverage import Obligation, obligations
+from fretc.compiler.printers import to_smv
+from fretc.compiler.semantics import SemanticsError, formalize
+from fretc.fretish import ast as A
+from fretc.logs.csv_source import SAMPLED_MARK
+from fretc.monitors.coverage import exercised
+from fretc.monitors.interval import verdict_of
+
+__all__ = ["Generated", "TestCase", "generate", "column_kinds", "expected_of", "covered_by",
+           "separating_trace", "Finder", "SPURIOUS", "write_tests"]
+
+#: :meth:`Finder.find`'s answer when the engines found traces the judge did not confirm
+SPURIOUS = "spurious"
+
+_PAIRS = (("satisfied", "violated"), ("satisfied", "vacuous"), ("violated", "satisfied"),
+          ("vacuous", "satisfied"), ("violated", "vacuous"), ("vacuous", "violated"))
+
+
+@dataclass
+class TestCase:
+    """One generated test: ``rows`` (one mapping FRET variable -> value per tick),
+    ``covers`` (``(requirement id, obligation id, tick)`` it exercises), ``expected``
+    (requirement id -> verdict) and ``origin`` (the obligation it was generated for)."""
+
+    rows: list[dict]
+    covers: list[tuple[str, str, int | None]] = field(default_factory=list)
+    expected: dict[str, str] = field(default_factory=dict)
+    origin: tuple[str, str] = ("", "")
+
+
+@dataclass
+class Generated:
+    """What :func:`generate` found: the kept ``tests``, the ``unmeetable`` and ``unknown``
+    obligations as ``(obligation, reason)``, and every obligation of the set
+    (``obligations``: requirement id -> list)."""
+
+    tests: list[TestCase]
+    unmeetable: list[tuple[Obligation, str]]
+    unknown: list[tuple[Obligation, str]]
+    obligations: dict[str, list[Obligation]]
+
+
+def column_kinds(compiled: Sequence[Compiled]) -> dict[str, str]:
+    """FRET variable -> ``"bool"`` or ``"float"`` over the ft formulas of ``compiled``, in
+    order of first use (a variable used as a number anywhere is ``float``)."""
+    cols: dict[str, str] = {}
+    for c in compiled:
+        for n in ir.walk(c.formalization.ft):
+            if n.op == "var":
+                cols[n.name] = "float"
+            elif n.op == "ap" and n.name not in cols:
+                cols[n.name] = "bool"
+    return cols
+
+
+def _columns(rows: list[dict], kinds: dict[str, str]) -> dict[str, np.ndarray]:
+    return {k: np.array([r[k] for r in rows], dtype=bool if t == "bool" else float)
+            for k, t in kinds.items()}
+
+
+def expected_of(compiled: Sequence[Compiled], rows: list[dict], kinds: dict[str, str]
+                ) -> dict[str, str]:
+    """The audit's verdict of every requirement of ``compiled`` on ``rows``
+    (:func:`fretc.monitors.interval.verdict_of`)."""
+    cols = _columns(rows, kinds)
+    return {c.id: verdict_of(c.requirement, cols, len(rows), c.formalization.ticks)
+            for c in compiled}
+
+
+def covered_by(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
+               rows: list[dict], kinds: dict[str, str],
+               only: set[tuple[str, str]] | None = None) -> list[tuple[str, str, int | None]]:
+    """``(requirement id, obligation id, tick)`` of every obligation ``rows`` exercises
+    (``only``: of these ``(requirement id, obligation id)`` alone)."""
+    cols = _columns(rows, kinds)
+    out = []
+    for c in compiled:
+        mine = [o for o in obs[c.id] if only is None or (c.id, o.id) in only]
+        if not mine:
+            continue
+        got = exercised(mine, c.requirement, cols, len(rows), c.formalization.ticks)
+        out.extend((c.id, o.id, e.tick) for o, e in zip(mine, got) if e.met)
+    return out
+
+
+def _variant(c: Compiled, req: A.Requirement, suffix: str) -> Compiled:
+    entry = dataclasses.replace(c.entry, id=f"{c.id}~{suffix}", requirement=req)
+    return Compiled(entry, formalize(req, c.entry.tick_period))
+
+
+def _classes(item, verdict: str) -> list:
+    phi, trig = item.phi_ft, item.trigger_ft
+    if verdict == "violated":
+        return [ir.not_(phi)]
+    if trig is None:
+        return [phi]
+    return [phi, trig if verdict == "satisfied" else ir.not_(trig)]
+
+
+class Finder:
+    """The queries of one requirement's obligations (module docstring) in one Spot worker
+    (``worker``); ``kinds``: FRET variable -> ``"bool"``/``"float"`` of the rows built."""
+
+    def __init__(self, worker: SpotWorker, kinds: dict[str, str]):
+        self.worker = worker
+        self.kinds = kinds
+
+    def _rows(self, items, queries, accept) -> tuple[object, str]:
+        ck = Checker(items, self.worker)
+        engine = "z3 or the pt monitors" if ck.uses_smt(queries[0]) else "Spot"
+        unknown = spurious = False
+        for q in queries:
+            letters: list = []
+            got = finite_trace(ck, q, self.kinds, letters_out=letters)
+            if got and got != UNKNOWN:
+                got = _equalities(got, letters, q, set(ck.numeric.atoms))
+            if got == UNKNOWN:
+                unknown = True
+            elif got:
+                rows = _complete(got, self.kinds)
+                if accept(rows):
+                    return rows, engine
+                spurious = True
+        why = (self.worker.failures[-1] if self.worker.failures else "") or \
+            (ck.smt.failures[-1] if ck.smt.failures else "")
+        if spurious and not unknown:
+            return SPURIOUS, engine
+        return (UNKNOWN if unknown else None), (engine + (f": {why}" if why else ""))
+
+    def find(self, c: Compiled, ob: Obligation, accept) -> tuple[object, str]:
+        """Rows meeting ``ob`` (every variable of :attr:`kinds`) that ``accept(rows)``
+        confirms, None (no finite trace), UNKNOWN or SPURIOUS (traces found, none
+        confirmed); and the engine's words."""
+        base = make_item(0, c)
+        if ob.kind == "threshold":
+            atom = ob.atom if ob.side else A.Unary("!", ob.atom)
+            aux_req = A.Requirement(text="", component="c", timing=A.Timing("eventually"),
+                                    response=atom)
+            aux = make_item(1, _variant(c, aux_req, "seen"))
+            trig = [base.trigger_ft] if base.trigger_ft is not None else []
+            queries = [[base.phi_ft] + trig + [aux.phi_ft], [base.phi_ft, aux.phi_ft],
+                       [aux.phi_ft]]
+            return self._rows([base, aux], queries, accept)
+        other = make_item(1, _variant(c, ob.variant, "variant"))
+        queries = [_classes(base, v1) + _classes(other, v2) for v1, v2 in _PAIRS]
+        return self._rows([base, other], queries, accept)
+
+
+def _variable_pairs(formulas) -> dict[str, tuple[str, str, str]]:
+    """SMV text -> (op, a, b) of every ``a = b`` / ``a != b`` between two variables."""
+    out = {}
+    for f in formulas:
+        for n in ir.walk(f):
+            if (n.op == "cmp" and n.name in ("=", "!=") and n.args[0].op == "var"
+                    and n.args[1].op == "var"):
+                out[to_smv(n)] = (n.name, n.args[0].name, n.args[1].name)
+    return out
+
+
+def _equalities(rows: list[dict], letters: list[dict], formulas, fixed: set[str]
+                ) -> list[dict]:
+    """Numbers for the variables compared with each other by ``=``/``!=``, which the
+    numeric abstraction leaves free (:mod:`fretc.check.numeric_abstraction`): at each tick
+    the variables the model's letter makes equal share one value (a variable also compared
+    with constants keeps its own, ``fixed``), the other classes get distinct values above
+    every number of the row. The judge confirms the result or rejects it."""
+    pairs = _variable_pairs(formulas)
+    if not pairs:
+        return rows
+    out = []
+    for row, letter in zip(rows, letters):
+        parent = {v: v for _, a, b in pairs.values() for v in (a, b)}
+
+        def root(v):
+            while parent[v] != v:
+                v = parent[v]
+            return v
+
+        for key, (op, a, b) in sorted(pairs.items()):
+            if letter.get(key) is (op == "="):
+                parent[root(a)] = root(b)
+        row = dict(row)
+        classes: dict[str, list[str]] = {}
+        for v in sorted(parent):
+            classes.setdefault(root(v), []).append(v)
+        top = 1 + max([abs(float(x)) for x in row.values()
+                       if not isinstance(x, bool)] + [0.0])
+        for k, members in enumerate(sorted(classes.values())):
+            own = [row[v] for v in members if v in fixed]
+            value = own[0] if own else float(int(top) + 1 + k)
+            for v in members:
+                if v not in fixed:
+                    row[v] = value
+        out.append(row)
+    return out
+
+
+def separating_trace(finder: "Finder", c: Compiled, other: A.Requirement
+                     ) -> tuple[object, str]:
+    """A trace on which ``c`` and the requirement ``other`` (same tick period) get different
+    verdicts from the audit's judge: rows, None (no finite trace separates their verdict
+    classes: equivalent as far as those classes go), UNKNOWN or SPURIOUS; and the engine."""
+    v = _variant(c, other, "other")
+    kinds = finder.kinds
+
+    def accept(rows):
+        cols = _columns(rows, kinds)
+        return (verdict_of(c.requirement, cols, len(rows), c.formalization.ticks)
+                != verdict_of(other, cols, len(rows), v.formalization.ticks))
+
+    ob = Obligation(c.id, "other", "other", "", other, v.formalization.ticks)
+    return finder.find(c, ob, accept)
+
+
+def _complete(rows: list[dict], kinds: dict[str, str]) -> list[dict]:
+    return [{k: r.get(k, False if t == "bool" else 0.0) for k, t in kinds.items()}
+            for r in rows]
+
+
+def _candidates(compiled, obs, kinds, budget, fork):
+    """One checked trace per meetable obligation; the unmeetable and unknown ones."""
+    found: list[TestCase] = []
+    unmeetable, unknown = [], []
+    left = {(c.id, o.id) for c in compiled for o in obs[c.id]}
+    with SpotWorker(budget or Budget(), fork=fork) as worker:
+        finder = Finder(worker, kinds)
+        for c in compiled:
+            for ob in obs[c.id]:
+                if (c.id, ob.id) not in left:
+                    continue  # an earlier trace meets it already
+
+                def accept(rows, c=c, ob=ob):
+                    return exercised([ob], c.requirement, _columns(rows, kinds), len(rows),
+                                     c.formalization.ticks)[0].met
+
+                try:
+                    rows, engine = finder.find(c, ob, accept)
+                except SemanticsError as exc:
+                    unknown.append((ob, f"the variant does not formalize: {exc}"))
+                    continue
+                if rows is None:
+                    unmeetable.append((ob, f"no finite trace meets it ({engine})"))
+                    continue
+                if rows == UNKNOWN:
+                    unknown.append((ob, f"not decided within the budget ({engine})"))
+                    continue
+                if rows == SPURIOUS:
+                    unknown.append((ob, f"{engine}'s traces do not meet it by the audit's "
+                                        "judge (an abstraction of the atoms was spurious)"))
+                    continue
+                cov = covered_by(compiled, obs, rows, kinds, left)
+                left.difference_update((r, o) for r, o, _ in cov)
+                found.append(TestCase(rows, cov, origin=(c.id, ob.id)))
+    return found, unmeetable, unknown
+
+
+def _cover(found: list[TestCase]) -> list[TestCase]:
+    """Greedy set cover of the obligations the candidates meet (ties: the earlier)."""
+    left = {(r, o) for t in found for r, o, _ in t.covers}
+    kept = []
+    while left:
+        best = max(found, key=lambda t: len(left & {(r, o) for r, o, _ in t.covers}))
+        gain = left & {(r, o) for r, o, _ in best.covers}
+        if not gain:
+            break
+        kept.append(best)
+        left -= gain
+    return kept
+
+
+def _drop_redundant(tests: list[TestCase]) -> list[TestCase]:
+    """``tests`` without those whose every obligation the others cover (the last first)."""
+    kept = list(tests)
+    for t in reversed(tests):
+        others = {(r, o) for u in kept if u is not t for r, o, _ in u.covers}
+        if {(r, o) for r, o, _ in t.covers} <= others:
+            kept.remove(t)
+    return kept
+
+
+def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
+             fork: bool = True, kinds: frozenset[str] | None = None) -> Generated:
+    """The tests of ``compiled`` (formalized, not free-form requirements of one set): see the
+    module docstring. ``budget``: the engines' work budget per query
+    (:class:`fretc.check.budget.Budget`); ``fork``: run Spot in a worker process;
+    ``kinds``: only the obligations of these kinds (:class:`Obligation`'s ``kind``; None:
+    all), e.g. ``{"atom"}`` for FLIP's one obligation per atom and value."""
+    compiled = [c for c in compiled if c.formalization is not None]
+    obs = {c.id: [o for o in obligations(c.id, c.requirement, c.formalization.ticks)
+                  if kinds is None or o.kind in kinds] for c in compiled}
+    cols = column_kinds(compiled)
+    found, unmeetable, unknown = _candidates(compiled, obs, cols, budget, fork)
+    tests = _cover(found)
+    for t in tests:  # every obligation each kept test exercises, not only its new ones
+        t.covers = covered_by(compiled, obs, t.rows, cols)
+    tests = _drop_redundant(tests)
+    for t in tests:
+        t.expected = expected_of(compiled, t.rows, cols)
+    return Generated(tests, unmeetable, unknown, obs)
+
+
+def _cell(v) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    return repr(float(v))
+
+
+def _obligation_json(ob: Obligation, reason: str | None = None) -> dict:
+    out = {"requirement": ob.requirement, "obligation": ob.id, "kind": ob.kind,
+           "description": ob.description}
+    if reason is not None:
+        out["reason"] = reason
+    return out
+
+
+def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
+                period: Fraction | None = None) -> dict:
+    """Write ``DIR/T01.csv``... (one per test: comment lines, the first one
+    :data:`fretc.logs.csv_source.SAMPLED_MARK` so that an audit with binding files reads the
+    columns as the FRET variables they are; then a header row, ``time`` (tick ``k`` at ``k *
+    period`` seconds, when ``period`` is given) and the FRET variables, one row per tick) and
+    ``DIR/tests.json``; return the JSON document written (format in the module docstring of
+    :mod:`fretc.cli.testgen`). ``sources``: the requirement files, for the replay line."""
+    from pathlib import Path
+    import json
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    replay = "fretc audit " + " ".join(f"-r {s}" for s in sources)
+    tests = []
+    for k, t in enumerate(gen.tests, 1):
+        name = f"T{k:02d}"
+        names = list(t.rows[0])
+        lines = [f"{SAMPLED_MARK}: fretc testgen test {name}, generated for {t.origin[0]} "
+                 f"{t.origin[1]}; FRET variables, one row per tick",
+                 f"# replay: {replay} {out / (name + '.csv')}",
+                 "# one row per tick; expected verdicts (FRET finite-trace semantics):",
+                 "# expected: " + ", ".join(f"{r}={v}" for r, v in t.expected.items()),
+                 ",".join((["time"] if period else []) + names)]
+        lines += [",".join(([f"{float(i * period):.9f}"] if period else [])
+                           + [_cell(r[n]) for n in names]) for i, r in enumerate(t.rows)]
+        (out / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        tests.append({"id": name, "trace": f"{name}.csv", "ticks": len(t.rows),
+                      "generated_for": {"requirement": t.origin[0], "obligation": t.origin[1]},
+                      "covers": [{"requirement": r, "obligation": o, "tick": tick}
+                                 for r, o, tick in t.covers],
+                      "expected": dict(t.expected)})
+    doc = {"requirements": list(sources), "tests": tests,
+           "obligations": [_obligation_json(o) for obs in gen.obligations.values()
+                           for o in obs],
+           "unmeetable": [_obligation_json(o, why) for o, why in gen.unmeetable],
+           "unknown": [_obligation_json(o, why) for o, why in gen.unknown]}
+    (out / "tests.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    return doc

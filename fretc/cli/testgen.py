@@ -1,0 +1,87 @@
+"""``fretc testgen FILE... -o DIR``: requirements-based tests. For every coverage obligation
+of the requirements of FILES (:mod:`fretc.compiler.coverage`: each atom's own effect, the
+trigger, the scope entered and left, the deadline reached and missed, each threshold's two
+sides) a finite trace meeting it, found by ``fretc check``'s engines and confirmed by the
+audit's judge (:mod:`fretc.audit.testgen`); traces meeting several obligations are merged by
+a greedy cover.
+
+Written into DIR: ``T01.csv``, ``T02.csv``... (the audit's CSV traces: one column per FRET
+variable, one row per tick; ``fretc audit -r FILE DIR/T01.csv`` judges one) and
+``tests.json``::
+
+    {"requirements": [files],
+     "tests": [{"id": "T01", "trace": "T01.csv", "ticks": 12,
+                "generated_for": {"requirement": "R2", "obligation": "deadline-missed"},
+                "covers": [{"requirement": "R2", "obligation": "trigger", "tick": 3}, ...],
+                "expected": {"R1": "satisfied", "R2": "violated", ...}}],
+     "obligations": [{"requirement", "obligation", "kind", "description"}],
+     "unmeetable": [{... , "reason"}], "unknown": [{..., "reason"}]}
+
+``expected`` holds the audit's verdict of every requirement of the set on the test's trace,
+so each test is an oracle for the whole set. Exit codes: 0 every obligation has a test or is
+unmeetable, 3 some obligation is unknown (an engine's budget ran out; listed), 2 an input
+error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+
+__all__ = ["testgen_cmd"]
+
+
+@click.command("testgen")
+@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("-o", "--output", "out_dir", required=True,
+              type=click.Path(file_okay=False), metavar="DIR",
+              help="Folder to write the tests (T01.csv, ...) and tests.json into.")
+@click.option("--pytest", "with_pytest", is_flag=True,
+              help="Also write DIR/test_fretc_generated.py: a pytest file auditing each test "
+                   "(its trace, or the log the command in FRETC_RUN_TRACE makes of it: "
+                   "'COMMAND TRACE.csv LOG') against its expected verdicts.")
+@TEXT_ATTRIBUTE_OPTION
+def testgen_cmd(files, out_dir, with_pytest):
+    """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
+    tests.json (what each covers, the expected verdict of every requirement)."""
+    from fretc.audit.testgen import generate, write_tests
+    from fretc.common.errors import FretishError
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+
+    try:
+        entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
+    except (FretishError, OSError) as exc:
+        click.echo(shown(str(exc)), err=True)
+        sys.exit(2)
+    compiled = compile_entries(entries)
+    bad = [c for c in compiled if c.error is not None]
+    for c in bad:
+        click.echo(shown(str(c.error)), err=True)
+    if bad:
+        sys.exit(2)
+    if not compiled:
+        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
+        sys.exit(2)
+    gen = generate(compiled)
+    sources = list(dict.fromkeys(c.entry.source for c in compiled))
+    period = next((e.tick_period for e in entries if e.tick_period is not None), None)
+    doc = write_tests(gen, out_dir, sources, period)
+    if with_pytest:
+        from fretc.audit.testgen_pytest import PYTEST_FILE, pytest_file
+
+        (Path(out_dir) / PYTEST_FILE).write_text(pytest_file(), encoding="utf-8")
+    total = len(doc["obligations"])
+    met = len({(c["requirement"], c["obligation"]) for t in doc["tests"] for c in t["covers"]})
+    click.echo(shown(f"{len(doc['tests'])} tests in {out_dir}: {met} of {total} obligations "
+                     f"covered, {len(doc['unmeetable'])} unmeetable, "
+                     f"{len(doc['unknown'])} unknown"))
+    for which in ("unmeetable", "unknown"):
+        for o in doc[which]:
+            click.echo(shown(f"  {which}: {o['requirement']} {o['obligation']}: "
+                             f"{o['reason']}"))
+    sys.exit(3 if doc["unknown"] else 0)
