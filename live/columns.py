@@ -1,15 +1,20 @@
 """The columns a watch keeps while it runs: per tick, every variable's value, the log time
 each topic's held message had, and the tick's time (the audit's columns of
-:mod:`fretc.audit.columns`, grown one tick at a time), read back as numpy arrays for the judge.
+:mod:`fretc.audit.columns`, grown one tick at a time), read back as numpy arrays for the judge;
+what the watch hands its judge (:class:`WatchPasses`) and the live table's pending count
+(:func:`split_pending`).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from fretc.audit.columns import column_array
 
-__all__ = ["LiveColumns"]
+__all__ = ["LiveColumns", "WatchPasses", "split_pending"]
 
 
 class LiveColumns:
@@ -44,3 +49,27 @@ class LiveColumns:
         cols = {k: column_array(v[:n]) for k, v in self.vals.items()}
         lts = {t: np.array(v[:n], dtype=np.int64) for t, v in self.lts.items()}
         return times, cols, lts
+
+
+def split_pending(ev, n: int) -> tuple[int, int]:
+    """(violated, pending) of the failed obligations of ``ev`` (an
+    :class:`~fretc.monitors.interval.Evidence` over the first ``n`` ticks of a run): pending
+    when its window reaches the last tick and it failed only there (FRET's finite-trace
+    semantics reads the end of the ticks so far as the end of the run; a later tick may still
+    meet it), violated otherwise. Counted over the listed failures
+    (:data:`~fretc.monitors.interval.MAX_LISTED`); unlisted ones count as violated."""
+    total = ev.violations or 0
+    pending = sum(1 for x in (getattr(ev, "listed", ()) or ())
+                  if x.window[1] >= n - 1 and x.violation_tick >= n - 1)
+    return total - pending, pending
+
+
+@dataclass
+class WatchPasses:
+    """The watch's ticks, one :class:`fretc.audit.passes.ClockPass` per requirement's
+    clock."""
+
+    sampling: Any
+    by_req: dict[int, Any]
+    failed: dict[Any, dict[str, Any]]
+    group: dict[int, Any]

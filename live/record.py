@@ -52,8 +52,12 @@ class Recorder:
                                     data=json.dumps(e.to_json()).encode("utf-8"), sequence=i)
         self.writer.add_metadata("fretc.verdicts",
                                  {v.requirement: v.verdict for v in la.verdicts})
+        self.close()
+        return len(events)
+
+    def close(self) -> None:
+        """Close the file (its summary written), without verdict events."""
         self.writer.finish()
         self._f.close()
-        return len(events)
 
 

@@ -137,6 +137,9 @@ class WatchSource(LogSource):
         self._pending_unadvertised: list[tuple[str, int | None]] = []
         self.on_event = on_event or (lambda e: None)
         self.on_message = on_message
+        #: topics whose messages are used (:attr:`on_message`) even when the iteration of
+        #: :meth:`messages` does not ask for them (a watch's per-entity requirements)
+        self.keep: set[str] = set()
         self.advertised: dict[str, Any] = {}  # topic -> Advertised
         self.decoders: dict[str, Callable[[bytes], Any] | None] = {}
         self.schema_errors: dict[str, str] = {}
@@ -378,6 +381,8 @@ class WatchSource(LogSource):
                 continue
             _k, topic, log_time, payload, wall = ev
             if wanted is not None and topic not in wanted:
+                if topic in self.keep:  # used (recorded), read by no clock of this pass
+                    self._deliver(topic, log_time, payload)
                 continue
             msg = self._deliver(topic, log_time, payload)
             if msg is not None:

@@ -12,7 +12,9 @@ of a recorded log, only fed live:
 * every tick steps the generated monitors the audit loads (:func:`fretc.audit.load_plan`)
   for the live verdicts and events;
 * at the end the verdicts and evidence are made by the audit's own code
-  (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching.
+  (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching;
+* per-entity requirements (``$track``) are judged at the end only, by the audit's own code
+  over the messages kept for them (:mod:`fretc.live.entities`; no live events).
 
 The run ends with the server's orderly close, every bound topic unadvertised, the
 duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
@@ -34,7 +36,6 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 from fretc.common.problems import DataProblem
 from fretc.signals import sample_groups
@@ -48,14 +49,16 @@ from fretc.audit.gaps import merged_gaps, split_bridged
 from fretc.audit.passes import ClockKey, ClockPass, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, run_gaps
-from fretc.live.columns import LiveColumns
+from fretc.live.columns import LiveColumns, WatchPasses as _WatchPasses, split_pending
+from fretc.live.entities import EntityRecording
 from fretc.live.record import Recorder
 from fretc.live.transports import make_client
 from fretc.live.source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
                      RESTART_GRACE, UNADVERTISED, WatchEvent, WatchSource)
 
 __all__ = ["WatchOptions", "WatchEvent", "WatchSource", "Watch", "CONNECTION_GAP",
-           "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED"]
+           "UNADVERTISED", "CLOCK_BACKWARDS", "NOT_ADVERTISED", "CONNECTION_CLOSED",
+           "split_pending"]
 
 #: The most ticks one message may move a fixed-period clock forward (a jump of log time
 #: further than this many periods is a ``time_range`` problem, the message skipped): the
@@ -161,9 +164,10 @@ class Watch:
         self.start_time: int | None = None
         self.status_line = "connecting"
         b = plan.bindings
-        self.needed: set[str] = set()
+        self.entities = EntityRecording(plan)  # judged at the end (fretc.live.entities)
+        self.needed: set[str] = set(self.entities.topics)
         for r in plan.requirements:
-            if r.error is None:
+            if r.error is None and r.index not in self.entities.indexes:
                 for v in r.variables:
                     if v in b.variables:
                         self.needed |= set(b.variables[v].topics)
@@ -224,7 +228,8 @@ class Watch:
             self._await_topics()
             if self.options.record:
                 self.recorder = Recorder(self.options.record, src)
-                src.on_message = self.recorder.message
+            self.entities.start(src)
+            src.on_message = self._used
             if not src.ever_connected:
                 la.error = (f"{url}: could not connect"
                             + (f" ({src.last_reason})" if src.last_reason else ""))
@@ -236,14 +241,27 @@ class Watch:
             if active:
                 names = sorted({v for r in active for v in r.variables})
                 rb = restrict(b, names)
-                src.want(set(rb.topics) | ({b.tick.topic} if b.tick.topic else set()))
+                src.want(set(rb.topics) | ({b.tick.topic} if b.tick.topic else set())
+                         | self.entities.topics)
+                src.keep = self.entities.topics
                 result = self._run_pass(active, rb)
+            elif self.entities.indexes:  # per-entity requirements only: their messages kept
+                src.want(self.entities.topics)
+                for _m in src.messages():
+                    pass
         finally:
             self.client.stop()
         self._event(WatchEvent("end", src._last_time, time.time_ns(),
                                detail=src.end_reason or "stopped"))
         self._record_problems(la, result)
         return self._finish(la, verdicts, result, active if result is not None else [])
+
+    def _used(self, topic: str, log_time: int, payload: bytes) -> None:
+        """A message the watch used: recorded (``--record``), kept for the per-entity
+        requirements."""
+        if self.recorder is not None:
+            self.recorder.message(topic, log_time, payload)
+        self.entities.message(topic, log_time, payload)
 
     def _watchable(self, la: LogAudit, verdicts: dict[int, Verdict]) -> list:
         """The requirements that can be watched: every variable bound, every topic they read
@@ -253,7 +271,7 @@ class Watch:
         active = []
         for r in plan.requirements:
             v = verdicts[r.index]
-            if v.error is not None:
+            if v.error is not None or r.index in self.entities.indexes:
                 continue
             missing = [n for n in r.variables if n not in b.variables]
             if missing:
@@ -506,11 +524,13 @@ class Watch:
             summarize_clocks(la, [verdicts[r.index] for r in ok])
             la.engine = log_engine(verdicts[r.index] for r in ok)
             active = ok
-        la.verdicts = [verdicts[r.index] for r in self.plan.requirements]
+        la.verdicts = [verdicts[r.index] for r in self.plan.requirements
+                       if r.index not in self.entities.indexes]
         for v in la.verdicts:
             if v.error is not None:
                 v.verdict = "error"
             v.partial = la.partial
+        la.verdicts += self.entities.verdicts(la)  # the audit's, over the messages used
         if self.recorder is not None:
             self.recorder.finish(la)
             if result is not None and not self.source.gaps:
@@ -534,27 +554,3 @@ def _listing(topics, most: int = 20) -> str:
         return "no topics"
     more = f" and {len(names) - most} more" if len(names) > most else ""
     return ", ".join(names[:most]) + more
-
-
-def split_pending(ev, n: int) -> tuple[int, int]:
-    """(violated, pending) of the failed obligations of ``ev`` (an
-    :class:`~fretc.monitors.interval.Evidence` over the first ``n`` ticks of a run): pending
-    when its window reaches the last tick and it failed only there (FRET's finite-trace
-    semantics reads the end of the ticks so far as the end of the run; a later tick may still
-    meet it), violated otherwise. Counted over the listed failures
-    (:data:`~fretc.monitors.interval.MAX_LISTED`); unlisted ones count as violated."""
-    total = ev.violations or 0
-    pending = sum(1 for x in (getattr(ev, "listed", ()) or ())
-                  if x.window[1] >= n - 1 and x.violation_tick >= n - 1)
-    return total - pending, pending
-
-
-@dataclass
-class _WatchPasses:
-    """The watch's ticks, one :class:`fretc.audit.passes.ClockPass` per requirement's
-    clock."""
-
-    sampling: Any
-    by_req: dict[int, Any]
-    failed: dict[Any, dict[str, Any]]
-    group: dict[int, Any]

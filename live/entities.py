@@ -1,0 +1,128 @@
+"""Per-entity requirements in ``fretc watch`` (docs/bindings.md, "One verdict per entity"):
+a requirement whose variables read an entity of ``[entities]`` (``$track``) is judged at the
+end of the run by the audit's own code (:func:`fretc.audit.entities.audit_entities`, through
+:func:`fretc.audit.log.audit_log`) over the messages the watch used on the topics those
+requirements read, kept in a temporary MCAP while watching (their bytes, schemas and log
+times as received: what ``--record`` writes). So its verdicts (one per entity seen, in order
+of first appearance, and the one over all entities) equal ``fretc audit``'s of the same
+messages by construction. No live ``pt``/``ltl3`` events are made for them (their monitors
+are not stepped while watching); their ``final`` events are.
+
+Memory stays bounded: the messages are on disk, not in memory (as many bytes as those topics
+carried in the run), and at most :data:`fretc.audit.entities.MAX_ENTITIES` entities of a key
+are judged (past it, the audit's error verdict says how many were left unjudged). The file is
+deleted once judged.
+
+Damage: the kept messages are those the watch used; a run with a gap or a cut (``partial``,
+from :attr:`~fretc.audit.verdict.LogAudit.damage_time_ns`) is never a pass over what it
+lost: a per-entity verdict stays ``violated`` only when its first violation is before the
+damage, ``error`` stays ``error``, every other becomes ``unknown`` naming the damage.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tempfile
+from typing import Any
+
+from fretc.audit.entities import entity_of_requirements
+from fretc.audit.log import audit_log
+from fretc.audit.verdict import LogAudit, Verdict
+from fretc.common.problems import BindingError
+from fretc.live.record import Recorder
+from fretc.signals.bindings.binding import compile_expression
+
+__all__ = ["EntityRecording", "entity_topics"]
+
+
+def entity_topics(plan: Any, indexes: set[int]) -> set[str]:
+    """The topics the requirements of ``plan`` at ``indexes`` read: their variables' (the
+    per-entity ones compiled with a placeholder value for every entity), the entities' key
+    topics and the tick topic. A per-entity expression that does not compile adds nothing
+    (the audit at the end gives its error)."""
+    b = plan.bindings
+    out: set[str] = {b.tick.topic} if b.tick.topic else set()
+    for name, (key, _matching) in b.entities.items():
+        try:
+            out |= compile_expression(f"entity_{name}", key, source=str(b.source)).topics
+        except BindingError:
+            pass
+    try:
+        bound = b.for_entity({name: 0 for name in b.entities}).variables
+    except BindingError:
+        bound = b.variables
+    for r in plan.requirements:
+        if r.index in indexes:
+            for v in r.variables:
+                if v in bound:
+                    out |= set(bound[v].topics)
+    return out
+
+
+class EntityRecording:
+    """The per-entity requirements of ``plan`` in a watch: which they are
+    (:attr:`indexes`), the topics they read (:attr:`topics`), the messages of those topics
+    kept while watching (:meth:`start`, :meth:`message`) and their verdicts at the end
+    (:meth:`verdicts`)."""
+
+    def __init__(self, plan: Any) -> None:
+        self.plan = plan
+        self.indexes: set[int] = set(entity_of_requirements(plan)) if plan.bindings else set()
+        self.topics: set[str] = entity_topics(plan, self.indexes) if self.indexes else set()
+        self.path: str | None = None
+        self._recorder: Recorder | None = None
+
+    def start(self, source: Any) -> None:
+        """Open the temporary MCAP the kept messages go to (``source``: the
+        :class:`~fretc.live.source.WatchSource`, whose advertisements give the schemas)."""
+        if not self.indexes or self._recorder is not None:
+            return
+        fd, self.path = tempfile.mkstemp(prefix="fretc-watch-entities-", suffix=".mcap")
+        os.close(fd)
+        self._recorder = Recorder(self.path, source)
+
+    def message(self, topic: str, log_time: int, payload: bytes) -> None:
+        """Keep one message the watch used (log time in ns, payload as received) when a
+        per-entity requirement reads its topic."""
+        if self._recorder is not None and topic in self.topics:
+            self._recorder.message(topic, log_time, payload)
+
+    def verdicts(self, la: LogAudit) -> list[Verdict]:
+        """The per-entity requirements' verdicts over the kept messages (module docstring),
+        named by ``la.log`` (the URL), in the audit's order; the temporary file is deleted.
+        Without a started recording (the run never connected): one ``error`` verdict each,
+        naming ``la.error``."""
+        reqs = [r for r in self.plan.requirements if r.index in self.indexes]
+        if not reqs:
+            return []
+        if self._recorder is None:
+            return [Verdict(log=la.log, requirement=r.id, text=r.text, source=r.source,
+                            verdict="error", error=r.error or f"not watched: {la.error}")
+                    for r in reqs]
+        try:
+            self._recorder.close()
+            got = audit_log(dataclasses.replace(self.plan, requirements=reqs), self.path)
+        finally:
+            self._recorder = None
+            os.unlink(self.path)
+        out = got.verdicts
+        for v in out:
+            v.log = la.log
+            if la.damage_time_ns is not None:
+                _damaged(v, la.damage_time_ns)
+            v.partial = la.partial and v.error is None
+        return out
+
+
+def _damaged(v: Verdict, at: int) -> None:
+    """``v`` judged over a run damaged from log time ``at`` (ns): unknown unless violated
+    before it or an error (module docstring)."""
+    fv = v.first_violation
+    if v.verdict == "error" or (v.verdict == "violated" and fv is not None
+                                and fv.at.time_ns < at):
+        return
+    v.verdict, v.first_violation = "unknown", None
+    v.unknown_reason = (f"the watched run was damaged from log time {at} (a gap or a cut): "
+                        "a per-entity requirement is judged over the messages used, and "
+                        "what was lost is not judged as if it had not been sent")
