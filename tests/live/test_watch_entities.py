@@ -1,0 +1,221 @@
+"""Per-entity requirements in ``fretc watch`` (docs/bindings.md, "One verdict per entity"):
+a foxglove-sdk server on 127.0.0.1 publishes a ``/tracks`` topic whose track ids appear and
+disappear (the messages of a generated MCAP, replayed); the watch gives one verdict per track
+(ids, verdicts, first violations) equal to ``fretc audit``'s of the same MCAP and to a
+recomputation in plain Python from the published values, and the verdict over all tracks."""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("foxglove")
+pytest.importorskip("websockets")
+
+from _logs import ROS2, S, float64, write_mcap  # noqa: E402
+from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
+from fretc.live.watch import Watch, WatchOptions  # noqa: E402
+
+pytestmark = pytest.mark.watch
+
+BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+track = "/tracks.tracks[:].id"
+[variables]
+dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
+present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
+slow = '/speed.data < 2'
+'''
+FRET_T = "T: in present mode the robot shall always satisfy dist > 0.5\n"
+FRET_P = "P: the robot shall always satisfy slow\n"
+
+#: track id -> distance per message (every 100 ms): ids appear, disappear and come back
+ROWS = [{1: 2.0}, {1: 2.0, 2: 0.8}, {2: 0.8, 3: 2.0}, {2: 0.4, 3: 2.0}, {3: 2.0}, {},
+        {1: 0.3}, {4: 2.0}, {4: 2.0, 3: 0.9}, {4: 0.9}, {5: 1.5, 4: 0.7}, {5: 1.5},
+        {}, {6: 0.2, 5: 1.0}, {5: 1.0}, {5: 0.6, 3: 2.0}, {3: 0.5}, {}, {7: 3.0}, {7: 3.0}]
+SPEED = [1.0] * 9 + [2.5] + [1.0] * 10  # P violated at message 9
+
+
+def _types():
+    from rosbags.typesys import get_types_from_msg
+
+    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
+        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
+        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
+                                         "tracking_msgs/msg/TrackArray"))
+    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
+
+
+def _log(tmp: Path, rows, speed=None) -> Path:
+    Track, TrackArray = _types()
+    msgs = []
+    for k, r in enumerate(rows):
+        t = S + k * S // 10
+        msgs.append(("/tracks", "tracking_msgs/msg/TrackArray", t,
+                     TrackArray(tracks=[Track(id=i, distance=d) for i, d in r.items()])))
+        if speed is not None:
+            msgs.append(("/speed", "std_msgs/msg/Float64", t, float64(speed[k])))
+    return write_mcap(tmp / "tracks.mcap", msgs)
+
+
+def _plan(tmp: Path, fret: str):
+    (tmp / "t.fret").write_text("@tick_period 100 ms\n" + fret, encoding="utf-8")
+    (tmp / "t.bindings.toml").write_text(BINDINGS, encoding="utf-8")
+    return load_plan(AuditConfig(requirements=(str(tmp / "t.fret"),)))
+
+
+def _watch(plan, log: Path, record=None, rate=40.0, at=None):
+    """Serve the messages of ``log`` on a foxglove-sdk server, then close it: the watch ends
+    at the close (bounded: 60 s)."""
+    server = FoxgloveServer(port=0)
+    try:
+        w = Watch(plan, WatchOptions(url=server.url, wait=5.0, backoff=0.05, max_backoff=0.2,
+                                     duration=60, record=record))
+        advertise_mcap(str(log), server, topics=w.needed)
+        done = {}
+
+        def publish():
+            try:
+                server.wait_subscribed(w.needed & set(server.channels), timeout=60)
+                done["sent"], done["last"] = replay_mcap(
+                    str(log), server, rate, topics=w.needed,
+                    at=(lambda i: at(i, w)) if at else None)
+                deadline = time.monotonic() + 30
+                while (w.source._last_time or 0) < done["last"] and time.monotonic() < deadline:
+                    time.sleep(0.02)
+            finally:
+                server.stop()
+
+        t = threading.Thread(target=publish, daemon=True)
+        t.start()
+        la = w.run()
+        t.join(30)
+        return w, la, done
+    finally:
+        server.stop()
+
+
+def _key(v):
+    fv = v.first_violation
+    return (v.requirement, v.verdict, v.error,
+            None if fv is None else (fv.at.tick, fv.at.time_ns),
+            v.ltl3.status, v.violations, v.ticks_evaluated, v.warmup_ticks, tuple(v.notes))
+
+
+def _recompute(rows):
+    """Plain Python over the published values: track id -> log time (ns) of its first
+    distance <= 0.5 while present (None: never), in order of first appearance."""
+    out = {}
+    for k, r in enumerate(rows):
+        for i, d in r.items():
+            out.setdefault(i, None)
+            if d <= 0.5 and out[i] is None:
+                out[i] = S + k * S // 10
+    return out
+
+
+def test_watch_gives_one_verdict_per_track_equal_to_the_audit(tmp_path):
+    plan = _plan(tmp_path, FRET_T + FRET_P)
+    log = _log(tmp_path, ROWS, SPEED)
+    w, la, done = _watch(plan, log)
+    ref = audit_log(plan, str(log))
+    assert done["sent"] == 2 * len(ROWS) and la.error is None and not la.partial
+    assert "/tracks" in w.needed and "/speed" in w.needed
+    # the watch's verdicts are the audit's, entity by entity and over all entities
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+    got = {v.requirement: v for v in la.verdicts}
+    # and a recomputation from the published values
+    want = _recompute(ROWS)
+    assert [v.requirement for v in la.verdicts] == (
+        ["P", "T"] + [f"T[track={i}]" for i in want])
+    for i, bad in want.items():
+        v = got[f"T[track={i}]"]
+        assert v.verdict == ("violated" if bad else "satisfied"), (i, v.error, v.notes)
+        if bad:
+            assert v.first_violation.at.time_ns == bad
+            assert v.first_violation.at.tick == (bad - S) // (S // 10)
+    assert got["T"].verdict == "violated"
+    first = min(t for t in want.values() if t is not None)
+    assert got["T"].first_violation.at.time_ns == first
+    assert "violated by: " + ", ".join(f"T[track={i}]" for i, t in want.items() if t) in (
+        got["T"].notes)
+    # the ordinary requirement on another topic is still watched live
+    assert got["P"].verdict == "violated"
+    assert got["P"].first_violation.at.time_ns == S + 9 * S // 10
+    assert any(e.kind == "ltl3" and e.requirement == "P" for e in w.events)
+    finals = {e.requirement: e.verdict for e in w.events if e.kind == "final"}
+    assert finals == {v.requirement: v.verdict for v in ref.verdicts}
+
+
+def test_watch_of_per_entity_requirements_only(tmp_path):
+    """No ordinary requirement: the watch still reads the run (every track satisfies it);
+    its recording audits to the same verdicts."""
+    rows = [{1: 2.0}, {1: 2.0, 2: 0.9}, {2: 0.9}, {}, {3: 1.0}, {3: 1.0, 1: 0.7}]
+    plan = _plan(tmp_path, FRET_T)
+    log = _log(tmp_path, rows)
+    _w, la, _done = _watch(plan, log, record=str(tmp_path / "watched.mcap"))
+    ref = audit_log(plan, str(log))
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+    again = audit_log(plan, str(tmp_path / "watched.mcap"))
+    assert [_key(v) for v in again.verdicts] == [_key(v) for v in ref.verdicts]
+    assert [(v.requirement, v.verdict) for v in la.verdicts] == [
+        ("T", "satisfied"), ("T[track=1]", "satisfied"), ("T[track=2]", "satisfied"),
+        ("T[track=3]", "satisfied")]
+
+
+def test_watch_with_no_entity_is_vacuous(tmp_path):
+    plan = _plan(tmp_path, FRET_T)
+    log = _log(tmp_path, [{}, {}, {}])
+    _w, la, _done = _watch(plan, log)
+    ref = audit_log(plan, str(log))
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+    assert [(v.requirement, v.verdict) for v in la.verdicts] == [("T", "vacuous")]
+
+
+def test_watch_judges_at_most_max_entities(tmp_path, monkeypatch):
+    """The audit's bound holds in the watch: past it, an error verdict counts the rest."""
+    import fretc.audit.entities as E
+
+    monkeypatch.setattr(E, "MAX_ENTITIES", 3)
+    plan = _plan(tmp_path, FRET_T)
+    log = _log(tmp_path, ROWS)
+    _w, la, _done = _watch(plan, log)
+    ref = audit_log(plan, str(log))
+    assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
+    assert [v.requirement for v in la.verdicts] == ["T", "T[track=1]", "T[track=2]",
+                                                    "T[track=3]", "T"]
+    assert "only the first 3 are judged" in la.verdicts[-1].error
+
+
+def test_a_gap_is_never_a_pass_for_an_entity(tmp_path):
+    """The connection drops mid-run: a track violated before the gap stays violated, every
+    other per-entity verdict is unknown (what was lost is not judged as if not sent)."""
+    plan = _plan(tmp_path, FRET_T + FRET_P)
+    log = _log(tmp_path, ROWS, SPEED)
+    state = {}
+
+    def at(i, w):
+        if i == 20 and not state:  # row 10: the network fails, the server goes on
+            state["drop"] = True
+            w.client.drop()
+
+    _w, la, _done = _watch(plan, log, rate=5.0, at=at)
+    assert state and la.partial and la.damage_time_ns is not None
+    got = {v.requirement: v for v in la.verdicts}
+    assert got["T[track=2]"].verdict == "violated"  # at row 3, before the gap
+    assert got["T"].verdict == "violated"
+    for name, v in got.items():
+        if name.startswith("T"):
+            assert v.partial
+            assert v.verdict in ("violated", "unknown"), (name, v.verdict)
+            if v.verdict == "violated":
+                assert v.first_violation.at.time_ns < la.damage_time_ns
+            else:
+                assert "damaged from log time" in v.unknown_reason
+    # satisfied over the messages used (track 7 after the gap, at least): unknown
+    assert any(v.verdict == "unknown" for n, v in got.items() if n.startswith("T["))
