@@ -165,6 +165,8 @@ class Watch:
         self.status_line = "connecting"
         b = plan.bindings
         self.entities = EntityRecording(plan)  # judged at the end (fretc.live.entities)
+        for i in self.entities.indexes:
+            self.live[i].offline = True  # the live table: no monitor steps live
         self.needed: set[str] = set(self.entities.topics)
         for r in plan.requirements:
             if r.error is None and r.index not in self.entities.indexes:

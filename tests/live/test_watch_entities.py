@@ -219,3 +219,45 @@ def test_a_gap_is_never_a_pass_for_an_entity(tmp_path):
                 assert "damaged from log time" in v.unknown_reason
     # satisfied over the messages used (track 7 after the gap, at least): unknown
     assert any(v.verdict == "unknown" for n, v in got.items() if n.startswith("T["))
+
+
+def test_cli_watch_prints_and_exits_with_the_per_entity_verdicts(tmp_path):
+    """``fretc watch --jsonl --json``: one ``final`` event per verdict, the audit JSON of the
+    per-entity verdicts, exit 1 (a track violates T)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    _plan(tmp_path, FRET_T)
+    log = _log(tmp_path, ROWS)
+    server = FoxgloveServer(port=0)
+    try:
+        advertise_mcap(str(log), server)
+
+        def publish():
+            try:
+                server.wait_subscribed({"/tracks"}, timeout=20)
+                replay_mcap(str(log), server, 40.0)
+                time.sleep(0.3)
+            finally:
+                server.stop()
+
+        t = threading.Thread(target=publish, daemon=True)
+        t.start()
+        res = CliRunner().invoke(main, ["watch", server.url, "-r", str(tmp_path / "t.fret"),
+                                        "--jsonl", "--no-live", "--duration", "60",
+                                        "--json", str(tmp_path / "w.json")])
+        t.join(20)
+    finally:
+        server.stop()
+    assert res.exit_code == 1, res.output
+    lines = [json.loads(x) for x in res.output.splitlines() if x.startswith("{")]
+    finals = {x["requirement"]: x["verdict"] for x in lines if x["event"] == "final"}
+    ref = {v.requirement: v.verdict for v in audit_log(_plan(tmp_path, FRET_T),
+                                                        str(log)).verdicts}
+    assert finals == ref and finals["T[track=2]"] == "violated"
+    doc = json.loads((tmp_path / "w.json").read_text())
+    got = {v["requirement"]: v["verdict"] for lg in doc["logs"] for v in lg["verdicts"]}
+    assert got == ref
