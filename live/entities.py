@@ -13,6 +13,9 @@ carried in the run), and at most :data:`fretc.audit.entities.MAX_ENTITIES` entit
 are judged (past it, the audit's error verdict says how many were left unjudged). The file is
 deleted once judged.
 
+A topic they read that the server did not advertise, or cannot be decoded, makes them
+``error`` (as the watch's other requirements), never ``vacuous`` over no entity.
+
 Damage: the kept messages are those the watch used; a run with a gap or a cut (``partial``,
 from :attr:`~fretc.audit.verdict.LogAudit.damage_time_ns`) is never a pass over what it
 lost: a per-entity verdict stays ``violated`` only when its first violation is before the
@@ -69,9 +72,24 @@ class EntityRecording:
     def __init__(self, plan: Any) -> None:
         self.plan = plan
         self.indexes: set[int] = set(entity_of_requirements(plan)) if plan.bindings else set()
-        self.topics: set[str] = entity_topics(plan, self.indexes) if self.indexes else set()
+        #: requirement index -> the topics it reads
+        self.reads = {i: entity_topics(plan, {i}) for i in self.indexes}
+        self.topics: set[str] = set().union(*self.reads.values())
+        #: topic -> why it cannot be read in this run (:meth:`check`)
+        self.unreadable: dict[str, str] = {}
         self.path: str | None = None
         self._recorder: Recorder | None = None
+
+    def check(self, source: Any, url: str) -> None:
+        """Once the topics were waited for: the topics read that ``source`` did not
+        advertise or cannot decode make their requirements ``error`` at the end, as a
+        watch's other requirements (a log without them would judge no entity: vacuous)."""
+        for t in sorted(self.topics):
+            if t not in source.advertised:
+                self.unreadable[t] = f"topic {t} is not advertised by {url}"
+            elif source.decoders.get(t) is None:
+                why = source.schema_errors.get(t, "no decoder")
+                self.unreadable[t] = f"topic {t} cannot be read ({why})"
 
     def start(self, source: Any) -> None:
         """Open the temporary MCAP the kept messages go to (``source``: the
@@ -96,19 +114,33 @@ class EntityRecording:
         reqs = [r for r in self.plan.requirements if r.index in self.indexes]
         if not reqs:
             return []
+
+        def error(r: Any, why: str) -> Verdict:
+            return Verdict(log=la.log, requirement=r.id, text=r.text, source=r.source,
+                           verdict="error", error=r.error or why)
+
         if self._recorder is None:
-            return [Verdict(log=la.log, requirement=r.id, text=r.text, source=r.source,
-                            verdict="error", error=r.error or f"not watched: {la.error}")
-                    for r in reqs]
+            return [error(r, f"not watched: {la.error}") for r in reqs]
+        bad = {r.index: "; ".join(self.unreadable[t] for t in sorted(self.reads[r.index])
+                                  if t in self.unreadable) for r in reqs}
+        judged = [r for r in reqs if not bad[r.index]]
         try:
             self._recorder.close()
-            got = audit_log(dataclasses.replace(self.plan, requirements=reqs), self.path)
+            got = audit_log(dataclasses.replace(self.plan, requirements=judged),
+                            self.path) if judged else LogAudit(log=la.log)
         finally:
             self._recorder = None
             os.unlink(self.path)
-        out = got.verdicts
+        out: list[Verdict] = []
+        for r in reqs:  # the plan's order, as the audit's
+            out += ([error(r, bad[r.index])] if bad[r.index] else
+                    [v for v in got.verdicts
+                     if v.requirement == r.id or v.requirement.startswith(r.id + "[")])
         for v in out:
             v.log = la.log
+            v.error = v.error and v.error.replace(self.path, la.log)
+            v.unknown_reason = v.unknown_reason and v.unknown_reason.replace(self.path, la.log)
+            v.notes = [n.replace(self.path, la.log) for n in v.notes]
             if la.damage_time_ns is not None:
                 _damaged(v, la.damage_time_ns)
             v.partial = la.partial and v.error is None

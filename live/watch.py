@@ -239,6 +239,7 @@ class Watch:
                     v.error = v.error or f"not watched: {la.error}"
                 return self._finish(la, verdicts, None)
             active = self._watchable(la, verdicts)
+            self.entities.check(src, url)
             result = None
             if active:
                 names = sorted({v for r in active for v in r.variables})

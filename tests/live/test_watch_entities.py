@@ -261,3 +261,18 @@ def test_cli_watch_prints_and_exits_with_the_per_entity_verdicts(tmp_path):
     doc = json.loads((tmp_path / "w.json").read_text())
     got = {v["requirement"]: v["verdict"] for lg in doc["logs"] for v in lg["verdicts"]}
     assert got == ref
+
+
+def test_a_key_topic_never_advertised_is_an_error_not_vacuous(tmp_path):
+    """The server never advertises /tracks: T is an error naming it (as a watch's other
+    requirements reading a topic not advertised), never vacuous over no entity; P is
+    watched."""
+    plan = _plan(tmp_path, FRET_T + FRET_P)
+    log = write_mcap(tmp_path / "speed.mcap", [
+        ("/speed", "std_msgs/msg/Float64", S + k * S // 10, float64(1.0)) for k in range(10)])
+    _w, la, _done = _watch(plan, log)
+    got = {v.requirement: v for v in la.verdicts}
+    assert list(got) == ["P", "T"]
+    assert got["P"].verdict == "satisfied"
+    assert got["T"].verdict == "error" and "topic /tracks is not advertised" in got["T"].error
+    assert "not_advertised" in {p["kind"] for p in la.problems}
