@@ -161,12 +161,9 @@ class Watch:
         self.start_time: int | None = None
         self.status_line = "connecting"
         b = plan.bindings
-        self.needed: set[str] = set()
-        for r in plan.requirements:
-            if r.error is None:
-                for v in r.variables:
-                    if v in b.variables:
-                        self.needed |= set(b.variables[v].topics)
+        self.needed: set[str] = {t for r in plan.requirements if r.error is None
+                                 for v in r.variables if v in b.variables
+                                 for t in b.variables[v].topics}
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
         self.client = make_client(options, lambda t: t in self.needed, b.types, self.needed)
@@ -174,6 +171,7 @@ class Watch:
         self.source = WatchSource(options.url, self.client, deadline=deadline,
                                   idle=options.until_idle, on_event=self._event,
                                   restart_grace=options.restart_grace)
+        self.source.declared_types = {**(b.types or {}), **(options.types or {})}
         if b.tick.period_ns:
             self.source.max_jump_ns = MAX_JUMP_TICKS * b.tick.period_ns
         self.recorder: Recorder | None = None
