@@ -39,6 +39,9 @@ same seed gives the same inputs. Per class:
   1 GB, a clean exit.
 * ``flight``: damaged PX4 ULogs and ArduPilot DataFlash logs (cut, zeroed spans, garbage
   after the formats; ``bench/fuzz_flight.py``), audited against the intact log's verdicts;
+* ``reqif``, ``doorstop``, ``exports``, ``explain``: hostile ReqIF files and XHTML values,
+  Doorstop trees, exported results read back by each format's library, and ``fretc
+  explain``/``simulate`` of random requirements and traces (``bench/fuzz_sources.py``);
 * ``statistics``: hostile fleets, campaigns and option values against the statistics of
   probability requirements (``bench/fuzz_statistics.py``: its oracle, never a bound decided
   that the trials do not support).
@@ -76,11 +79,13 @@ from fuzz_live_inputs import run_bus, run_inputs, run_ws  # noqa: E402  (ws, bus
 from fuzz_lsp import run_lsp  # noqa: E402  (lsp)
 from fuzz_statistics import run_statistics  # noqa: E402  (the statistics class)
 from fuzz_flight import run_flight  # noqa: E402  (the flight class)
+from fuzz_sources import run_doorstop, run_explain, run_exports, run_reqif  # noqa: E402
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
 CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
-           "bus", "typed", "lsp", "statistics", "flight")
+           "bus", "typed", "lsp", "statistics", "flight", "reqif", "doorstop", "exports",
+           "explain")
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -468,10 +473,14 @@ def _arguments(argv):
     return ap.parse_args(argv)
 
 
+#: the classes of bench/fuzz_sources.py
+SOURCE_CLASSES = {"reqif": run_reqif, "doorstop": run_doorstop, "exports": run_exports,
+                  "explain": run_explain}
 #: inputs of each class per unit of --count (logs cost far more than frames)
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
            "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8, "lsp": 0.2,
-           "statistics": 20, "flight": 1}
+           "statistics": 20, "flight": 1, "reqif": 2, "doorstop": 1, "exports": 1,
+           "explain": 2}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -526,6 +535,8 @@ def main(argv=None) -> int:
                 bad = run_statistics(rng, tmp)
             elif kind == "flight":
                 bad = run_flight(rng, tmp, flight_cache)
+            elif kind in SOURCE_CLASSES:
+                bad = SOURCE_CLASSES[kind](rng, tmp)
             else:
                 audits = audits or Audits(tmp)
                 bad = run_log_class(kind, rng, audits)

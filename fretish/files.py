@@ -346,6 +346,9 @@ def _load_json(path: str) -> list[RequirementEntry]:
     import json  # lazy: only FRET's JSON exports need it (start-up time)
     try:
         data = json.loads(raw)
+    except RecursionError:
+        raise FretishFileError("invalid FRET export: JSON nested too deeply",
+                               source=source) from None
     except json.JSONDecodeError as e:
         lines = raw.split("\n")
         raise FretishFileError(f"invalid JSON: {e.msg}", source=source, line=e.lineno,
@@ -461,7 +464,7 @@ def is_fret_export(path: str) -> bool:
     import json  # lazy: as _load_json
     try:
         data = json.loads(_read_text(path))
-    except (OSError, ValueError, FretishError):
+    except (OSError, ValueError, FretishError, RecursionError):
         return False
     if isinstance(data, dict):
         data = data.get("requirements")

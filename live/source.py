@@ -122,6 +122,8 @@ class WatchSource(LogSource):
                  restart_grace: float = RESTART_GRACE) -> None:
         super().__init__(url)
         self.restart_grace = restart_grace
+        #: topic -> the message type the bindings' ``[types]`` declare (``--topic-type``)
+        self.declared_types: dict[str, str] = {}
         #: monotonic time at which every subscribed topic was unadvertised (None: some is
         #: advertised)
         self._all_left_at: float | None = None
@@ -323,11 +325,12 @@ class WatchSource(LogSource):
             self.schema_errors[ch.topic] = f"{SCHEMA_TOO_LARGE}: {why}"
             self._report(SCHEMA_TOO_LARGE, ch.topic, self._last_time, why)
             return
-        if ch.unreadable:
+        unreadable = ch.unreadable or self._type_mismatch(ch)
+        if unreadable:
             self.decoders[ch.topic] = None
-            self.schema_errors[ch.topic] = f"{P.UNKNOWN_SCHEMA}: {ch.unreadable}"
+            self.schema_errors[ch.topic] = f"{P.UNKNOWN_SCHEMA}: {unreadable}"
             self._problem(P.UNKNOWN_SCHEMA, ch.topic, self._last_time,
-                          f"{ch.unreadable}; messages on this topic are skipped")
+                          f"{unreadable}; messages on this topic are skipped")
             return
         try:
             self.decoders[ch.topic] = schema_decoder(ch.encoding, ch.schema_encoding,
@@ -339,6 +342,20 @@ class WatchSource(LogSource):
             self.schema_errors[ch.topic] = f"{kind}: {exc}"
             self._problem(kind, ch.topic, self._last_time,
                           f"{exc}; messages on this topic are skipped")
+
+    def _type_mismatch(self, ch) -> str | None:
+        """Why a channel advertised with another message type than the bindings' ``[types]``
+        declare for its topic is not read (its fields would be read under the wrong names or
+        types), or None."""
+        declared = self.declared_types.get(ch.topic)
+        if not declared or not ch.schema_name:
+            return None
+        try:
+            same = normalize_msgtype(declared) == normalize_msgtype(ch.schema_name)
+        except Exception:  # noqa: BLE001 - a name rosbags cannot normalize: compare as written
+            same = declared == ch.schema_name
+        return None if same else (f"advertised as {ch.schema_name}, but the bindings' [types] "
+                                  f"declare {declared}")
 
     def want(self, topics: set[str]) -> None:
         """Decode only ``topics`` from now on (decoders of advertised ones are built)."""

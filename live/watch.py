@@ -167,12 +167,10 @@ class Watch:
         self.entities = EntityRecording(plan)  # judged at the end (fretc.live.entities)
         for i in self.entities.indexes:
             self.live[i].offline = True  # the live table: no monitor steps live
-        self.needed: set[str] = set(self.entities.topics)
-        for r in plan.requirements:
-            if r.error is None and r.index not in self.entities.indexes:
-                for v in r.variables:
-                    if v in b.variables:
-                        self.needed |= set(b.variables[v].topics)
+        self.needed: set[str] = set(self.entities.topics) | {
+            t for r in plan.requirements if r.error is None and r.index not in
+            self.entities.indexes for v in r.variables if v in b.variables
+            for t in b.variables[v].topics}
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
         self.client = make_client(options, lambda t: t in self.needed, b.types, self.needed)
@@ -180,6 +178,7 @@ class Watch:
         self.source = WatchSource(options.url, self.client, deadline=deadline,
                                   idle=options.until_idle, on_event=self._event,
                                   restart_grace=options.restart_grace)
+        self.source.declared_types = {**(b.types or {}), **(options.types or {})}
         if b.tick.period_ns:
             self.source.max_jump_ns = MAX_JUMP_TICKS * b.tick.period_ns
         self.recorder: Recorder | None = None

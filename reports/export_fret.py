@@ -38,12 +38,17 @@ def _indent(text: str) -> int | None:
 def export_fret(src: str, results: dict[str, RequirementResult]) -> tuple[bytes, int]:
     """(the FRET export at ``src`` with the results added, how many requirements got them).
     Raises :class:`FretishFileError` when ``src`` is not a FRET export. Writes nothing."""
+    def no_constant(name: str):
+        raise ValueError(f"{name} is not JSON")
+
     try:
         with open(src, encoding="utf-8-sig") as f:
             text = f.read()
-        data = json.loads(text)
+        data = json.loads(text, parse_constant=no_constant)
     except (OSError, ValueError) as e:
         raise FretishFileError(f"not a FRET export: {e}", source=src) from None
+    except RecursionError:
+        raise FretishFileError("not a FRET export: JSON nested too deeply", source=src) from None
     reqs = data.get("requirements") if isinstance(data, dict) else data
     if not isinstance(reqs, list):
         raise FretishFileError("not a FRET export (no list of requirements)", source=src)
@@ -60,5 +65,14 @@ def export_fret(src: str, results: dict[str, RequirementResult]) -> tuple[bytes,
         if result.rollup is not None:
             obj[FRETC_MEMBER].update(rollup=result.rollup, rollup_path=result.rollup_path)
         done += 1
-    out = json.dumps(data, indent=_indent(text), ensure_ascii=False) + "\n"
-    return out.encode("utf-8"), done
+    try:  # a number past float's range (1e999) would be written as Infinity: not JSON
+        out = json.dumps(data, indent=_indent(text), ensure_ascii=False, allow_nan=False)
+    except ValueError:
+        raise FretishFileError("holds a number too large for a float (such as 1e999): it "
+                               "could not be written back as it was; not exported",
+                               source=src) from None
+    try:
+        return (out + "\n").encode("utf-8"), done
+    except UnicodeEncodeError:  # a lone surrogate (\ud800): kept as its escape
+        out = json.dumps(data, indent=_indent(text), ensure_ascii=True, allow_nan=False)
+        return (out + "\n").encode("utf-8"), done

@@ -370,3 +370,28 @@ def test_watch_time_options_refuse_nan_and_infinities(args):
 
     res = CliRunner().invoke(main, ["watch", "ws://127.0.0.1:9", "-r", REQS, *args])
     assert res.exit_code == 2 and f"Invalid value for '{args[0]}'" in res.output, res.output
+
+
+def test_a_topic_advertised_with_another_type_than_the_bindings_declare_is_not_read(tmp_path):
+    """[types] says std_msgs/msg/Bool, the server advertises /a as Float64: its fields were
+    read under the declared names (1.0 as true: satisfied); the audit of such a log is an
+    error. Now the topic is unreadable with the reason, its requirement an error."""
+    b = ('[tick]\nperiod = "100 ms"\ntime = "log"\n[types]\n"/a" = "std_msgs/Bool"\n'
+         '[variables]\na_ok = "/a.data"\n')
+    plan = _write_reqs(tmp_path, "@tick_period 100 ms\nRA: the robot shall always satisfy "
+                                 "a_ok\n", b)
+    server = FoxgloveServer(port=0)
+    t0 = 1_700_000_000 * S
+    try:
+        server.channel("/a", "cdr", *FLOAT64)
+
+        def publish(srv):
+            for k in range(10):
+                srv.log("/a", _f64(1.0), t0 + k * 50_000_000)
+                time.sleep(0.005)
+
+        w, la = _run_synthetic(plan, server, publish, last=t0 + 9 * 50_000_000)
+    finally:
+        server.stop()
+    (ra,) = la.verdicts
+    assert ra.verdict == "error" and "advertised as std_msgs/msg/Float64" in ra.error

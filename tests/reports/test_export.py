@@ -329,3 +329,27 @@ def test_a_from_json_document_that_breaks_the_schema_is_an_input_error(audits, t
         code, text = _run(*args)
         assert code == 2 and "internal error" not in text, (args[0], text)
         assert "bad.json" in text and ("$." in text or "nested too deeply" in text), text
+
+
+@pytest.mark.parametrize("case", ["deep", "overflow", "surrogate"])
+def test_fret_export_of_hostile_json(audits, tmp_path, case):
+    """A FRET export nested 100,000 deep was an internal error; 1e999 was written back as
+    Infinity (not JSON); a lone surrogate (\\ud800) was an internal error on writing."""
+    src = tmp_path / "fret.json"
+    obj = {"reqid": "R1", "project": "P", "fulltext": "the sw shall always satisfy p"}
+    if case == "deep":
+        src.write_text("[" * 100_000 + "]" * 100_000)
+    elif case == "overflow":
+        src.write_text(json.dumps([dict(obj, n=1)]).replace('"n": 1', '"n": 1e999'))
+    else:
+        src.write_text(json.dumps([dict(obj, note="\ud800")]))
+    out = tmp_path / "out.json"
+    code, text = _run("export", "-r", src, "--from-json", audits["fret"], "-o", out)
+    assert "internal error" not in text
+    if case == "surrogate":
+        assert code == 0, text
+        back = json.loads(out.read_text())
+        assert back[0]["note"] == "\ud800" and back[0]["fretc"]["verdict"]
+    else:
+        assert code == 2 and not out.exists(), text
+        assert case == "deep" or "1e999" in text
