@@ -347,14 +347,12 @@ def _load_json(path: str) -> list[RequirementEntry]:
     try:
         data = json.loads(raw)
     except RecursionError:
-        raise FretishFileError("invalid FRET export: JSON nested too deeply",
-                               source=source) from None
+        raise FretishFileError("invalid FRET export: nested too deeply", source=source) from None
     except json.JSONDecodeError as e:
         lines = raw.split("\n")
         raise FretishFileError(f"invalid JSON: {e.msg}", source=source, line=e.lineno,
-                               column=e.colno,
-                               text_line=lines[e.lineno - 1] if e.lineno <= len(lines)
-                               else None) from None
+                               column=e.colno, text_line=lines[e.lineno - 1]
+                               if e.lineno <= len(lines) else None) from None
     if isinstance(data, dict) and isinstance(data.get("requirements"), list):
         reqs = data["requirements"]
     elif isinstance(data, list):
