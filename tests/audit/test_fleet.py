@@ -115,7 +115,7 @@ def test_cli_writes_the_json_when_the_raylet_is_killed(tmp_path):
     marker = tmp_path / "kill-raylet-once"
     marker.write_text("")
     script = (
-        "import sys; from audit import fleet; real = fleet.audit_logs_ray\n"
+        "import sys; from fretc.audit import fleet; real = fleet.audit_logs_ray\n"
         "def hooked(*a, **k):\n"
         f"    k['_kill'] = ('nominal.mcap', ':raylet:{marker}'); k['num_cpus'] = 1\n"
         "    return real(*a, **k)\n"
