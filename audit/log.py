@@ -359,16 +359,16 @@ class _LogRun:
     def _damage_may_hold(self, topics: list[str]) -> str | None:
         """Why the log's damage may have held messages of ``topics`` (a cut, or a gap whose
         topics are not known or include one of them), else None."""
-        la, source = self.la, self.source
-        if not (la.partial or source.partial):
+        la = self.la  # (its damage is the source's, recorded before the judge)
+        if not la.partial:
             return None
-        if la.damage_cut or source.damage_cut:
+        if la.damage_cut:
             return "the log is cut by damage: its messages may be in what was lost"
-        for g in self.la.gaps:
+        for g in la.gaps:
             held = g.get("topics")
             if held is None or set(held) & set(topics):
                 return (f"a gap ({g.get('cause') or 'damage'}) may have held its messages")
-        if not self.la.gaps:
+        if not la.gaps:
             return "the log is damaged: its messages may be in what could not be read"
         return None
 

@@ -37,6 +37,9 @@ _MAGIC = b"ULog\x01\x12\x35"
 _TYPES = frozenset(b"BFIMPQARDLCSO")
 _HEADER = struct.Struct("<HB")
 _U64 = struct.Struct("<Q")
+#: where the timestamp is in a message's payload: data (after its msg_id), logged text
+#: (after its level), tagged logged text (after level and tag)
+_TIME_AT = {ord("D"): 2, ord("L"): 1, ord("C"): 3}
 
 
 @dataclass(frozen=True)
@@ -70,7 +73,7 @@ class UlogFraming:
 def _time_of(data: bytes, pos: int, size: int, typ: int) -> int | None:
     """The timestamp (µs) of the message at ``pos`` (its header), if it has one."""
     start = pos + 3
-    offset = {ord("D"): 2, ord("L"): 1, ord("C"): 3}.get(typ)
+    offset = _TIME_AT.get(typ)
     if offset is None or size < offset + 8:
         return None
     return _U64.unpack_from(data, start + offset)[0]

@@ -64,17 +64,13 @@ def _load(raw: bytes):
     return data if isinstance(data, dict) else None
 
 
-def _without_ours(raw: bytes) -> bytes:
+def _without_ours(raw: bytes, want: dict) -> bytes:
     """``raw`` without an earlier export's block: cut at :data:`MARKER` when the marker is a
     line of its own and what follows it holds only fretc's keys (:data:`KEYS`), and
     without top-level keys of :data:`KEYS` (with their indented continuation lines) that
     Doorstop moved when it saved the item (it sorts an item's keys). A user's own
     ``fretc_*`` key, or the marker's text inside a value, stay (each cut is checked on the
-    parsed file: only fretc's keys may go)."""
-    mine = _load(raw)
-    if mine is None:
-        return raw
-    want = {k: v for k, v in mine.items() if k not in _OURS}
+    parsed file: only fretc's keys may go). ``want``: the item's own keys, parsed."""
     marker = MARKER.encode()
     at = raw.find(marker)
     while at >= 0:  # the marker as a line of its own, with only fretc's keys after it
@@ -109,14 +105,14 @@ def _with_block(raw: bytes, result: RequirementResult) -> bytes:
     ours = yaml.safe_load(block) or {}
     if mine is None:  # not a mapping doorstop reads: left as it is
         return raw
-    want = {**{k: v for k, v in mine.items() if k not in _OURS}, **ours}
-    base = _without_ours(raw)
+    own = {k: v for k, v in mine.items() if k not in _OURS}
+    want = {**own, **ours}
+    base = _without_ours(raw, own)
     if base and not base.endswith(b"\n"):
         base += b"\n"
     candidate = base + block.encode("utf-8")
     if _load(candidate) == want:
         return candidate
-    own = {k: v for k, v in mine.items() if k not in _OURS}
     return (yaml.safe_dump(own, default_flow_style=False, sort_keys=False,
                            allow_unicode=True, width=1 << 30) + block).encode("utf-8")
 

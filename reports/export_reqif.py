@@ -55,9 +55,6 @@ def _one_line(text: str | None) -> str:
     return xml_text(flat, keep="")
 
 
-_ATTRIBUTE = None
-
-
 def _whitespace_as_references(xml: str) -> str:
     """``xml`` with the tabs, line feeds and carriage returns inside attribute values
     written as character references: the ``reqif`` library reads ``&#9;`` in an
@@ -65,9 +62,6 @@ def _whitespace_as_references(xml: str) -> str:
     (XML 1.0 section 3.3.3, attribute-value normalization): ids changed on export."""
     import re
 
-    global _ATTRIBUTE
-    if _ATTRIBUTE is None:
-        _ATTRIBUTE = re.compile(r'(\s[\w:.-]+=")([^"<]*)(")')
     refs = {"\t": "&#9;", "\n": "&#10;", "\r": "&#13;"}
 
     def fix(m):
@@ -75,7 +69,7 @@ def _whitespace_as_references(xml: str) -> str:
         if not any(c in value for c in refs):
             return m.group(0)
         return m.group(1) + "".join(refs.get(c, c) for c in value) + m.group(3)
-    return _ATTRIBUTE.sub(fix, xml)
+    return re.sub(r'(\s[\w:.-]+=")([^"<]*)(")', fix, xml)
 
 
 def _ensure_datatype(content, date: str) -> None:

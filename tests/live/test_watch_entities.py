@@ -18,7 +18,7 @@ pytest.importorskip("websockets")
 from _logs import ROS2, S, float64, write_mcap  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
-from fretc.live.watch import Watch, WatchOptions  # noqa: E402
+from test_watch import _watch_trace  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -71,33 +71,9 @@ def _plan(tmp: Path, fret: str):
 
 def _watch(plan, log: Path, record=None, rate=40.0, at=None):
     """Serve the messages of ``log`` on a foxglove-sdk server, then close it: the watch ends
-    at the close (bounded: 60 s)."""
-    server = FoxgloveServer(port=0)
-    try:
-        w = Watch(plan, WatchOptions(url=server.url, wait=5.0, backoff=0.05, max_backoff=0.2,
-                                     duration=60, record=record))
-        advertise_mcap(str(log), server, topics=w.needed)
-        done = {}
-
-        def publish():
-            try:
-                server.wait_subscribed(w.needed & set(server.channels), timeout=60)
-                done["sent"], done["last"] = replay_mcap(
-                    str(log), server, rate, topics=w.needed,
-                    at=(lambda i: at(i, w)) if at else None)
-                deadline = time.monotonic() + 30
-                while (w.source._last_time or 0) < done["last"] and time.monotonic() < deadline:
-                    time.sleep(0.02)
-            finally:
-                server.stop()
-
-        t = threading.Thread(target=publish, daemon=True)
-        t.start()
-        la = w.run()
-        t.join(30)
-        return w, la, done
-    finally:
-        server.stop()
+    at the close (bounded: 60 s); ``at(i, watch)`` runs before message ``i``."""
+    return _watch_trace(plan, log, rate=rate, record=record,
+                        at=(lambda i, _server, w: at(i, w)) if at else None)
 
 
 def _key(v):
