@@ -362,7 +362,7 @@ class _LogRun:
         la = self.la  # (its damage is the source's, recorded before the judge)
         if not la.partial:
             return None
-        if la.damage_cut:
+        if la.cut_time_ns is not None:  # (damage_cut is set by any gap too)
             return "the log is cut by damage: its messages may be in what was lost"
         for g in la.gaps:
             held = g.get("topics")
