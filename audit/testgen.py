@@ -22,7 +22,10 @@ obligations still uncovered when it was found; the one meeting most of those not
 is kept first), each listing every obligation of the set it exercises; a kept test whose
 obligations the others all cover is dropped, and every test's ``expected`` holds the verdict of every
 requirement of the set by :func:`fretc.monitors.interval.verdict_of`, the audit's verdict.
-Variables a trace's query does not constrain are false (booleans) and 0 (numbers).
+Variables a trace's query does not constrain are false (booleans) and 0 (numbers). The
+engines read a comparison of several variables (``yout = timeStep * (xin + ypv)``) as a
+proposition; the numbers that make it true or false at each tick as the model asks are then
+chosen by z3 (:mod:`fretc.check.atom_values`), and the judge still confirms the trace.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from fretc.check.budget import Budget
 from fretc.check.checker import Checker
 from fretc.check.items import make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
-from fretc.check.witness import finite_trace
+from fretc.check.witness import finite_trace, trace_columns
 from fretc.compiler import ir
 from fretc.compiler.build import Compiled
 from fretc.compiler.coverage import Obligation, obligations
@@ -85,15 +88,9 @@ class Generated:
 
 def column_kinds(compiled: Sequence[Compiled]) -> dict[str, str]:
     """FRET variable -> ``"bool"`` or ``"float"`` over the ft formulas of ``compiled``, in
-    order of first use (a variable used as a number anywhere is ``float``)."""
-    cols: dict[str, str] = {}
-    for c in compiled:
-        for n in ir.walk(c.formalization.ft):
-            if n.op == "var":
-                cols[n.name] = "float"
-            elif n.op == "ap" and n.name not in cols:
-                cols[n.name] = "bool"
-    return cols
+    order of first use (:func:`fretc.check.witness.trace_columns`: a variable used as a
+    number anywhere is ``float``; an uninterpreted function is its own column)."""
+    return trace_columns([c.formalization.ft for c in compiled])
 
 
 def _columns(rows: list[dict], kinds: dict[str, str]) -> dict[str, np.ndarray]:
@@ -153,10 +150,7 @@ class Finder:
         engine = "z3 or the pt monitors" if ck.uses_smt(queries[0]) else "Spot"
         unknown = spurious = False
         for q in queries:
-            letters: list = []
-            got = finite_trace(ck, q, self.kinds, letters_out=letters)
-            if got and got != UNKNOWN:
-                got = _equalities(got, letters, q, set(ck.numeric.atoms))
+            got = finite_trace(ck, q, self.kinds)
             if got == UNKNOWN:
                 unknown = True
             elif got:
@@ -187,55 +181,6 @@ class Finder:
         other = make_item(1, _variant(c, ob.variant, "variant"))
         queries = [_classes(base, v1) + _classes(other, v2) for v1, v2 in _PAIRS]
         return self._rows([base, other], queries, accept)
-
-
-def _variable_pairs(formulas) -> dict[str, tuple[str, str, str]]:
-    """SMV text -> (op, a, b) of every ``a = b`` / ``a != b`` between two variables."""
-    out = {}
-    for f in formulas:
-        for n in ir.walk(f):
-            if (n.op == "cmp" and n.name in ("=", "!=") and n.args[0].op == "var"
-                    and n.args[1].op == "var"):
-                out[to_smv(n)] = (n.name, n.args[0].name, n.args[1].name)
-    return out
-
-
-def _equalities(rows: list[dict], letters: list[dict], formulas, fixed: set[str]
-                ) -> list[dict]:
-    """Numbers for the variables compared with each other by ``=``/``!=``, which the
-    numeric abstraction leaves free (:mod:`fretc.check.numeric_abstraction`): at each tick
-    the variables the model's letter makes equal share one value (a variable also compared
-    with constants keeps its own, ``fixed``), the other classes get distinct values above
-    every number of the row. The judge confirms the result or rejects it."""
-    pairs = _variable_pairs(formulas)
-    if not pairs:
-        return rows
-    out = []
-    for row, letter in zip(rows, letters):
-        parent = {v: v for _, a, b in pairs.values() for v in (a, b)}
-
-        def root(v):
-            while parent[v] != v:
-                v = parent[v]
-            return v
-
-        for key, (op, a, b) in sorted(pairs.items()):
-            if letter.get(key) is (op == "="):
-                parent[root(a)] = root(b)
-        row = dict(row)
-        classes: dict[str, list[str]] = {}
-        for v in sorted(parent):
-            classes.setdefault(root(v), []).append(v)
-        top = 1 + max([abs(float(x)) for x in row.values()
-                       if not isinstance(x, bool)] + [0.0])
-        for k, members in enumerate(sorted(classes.values())):
-            own = [row[v] for v in members if v in fixed]
-            value = own[0] if own else float(int(top) + 1 + k)
-            for v in members:
-                if v not in fixed:
-                    row[v] = value
-        out.append(row)
-    return out
 
 
 def separating_trace(finder: "Finder", c: Compiled, other: A.Requirement

@@ -8,7 +8,8 @@ semantics, the one the audit's verdict uses) under FRET's trace model
 
 where ``absorbing`` gives every atom its value in the absorbing state after the last tick
 (booleans false, numbers 0); the ticks up to ``LAST`` are the CSV rows. Comparisons get
-numbers back through :meth:`fretc.check.numeric_abstraction.NumericAbstraction.values`.
+numbers back through :meth:`fretc.check.numeric_abstraction.NumericAbstraction.values`, and
+comparisons of several variables through z3, tick by tick (:mod:`fretc.check.atom_values`).
 
 What each witness shows (intended verdicts):
 
@@ -38,13 +39,15 @@ from pathlib import Path
 
 import numpy as np
 
-from fretc.compiler import ir
+from fretc.check.atom_values import concrete_rows, free_atoms
 from fretc.check.solver import UNKNOWN
-from fretc.compiler.evaluate import ft_at
+from fretc.compiler import ir
+from fretc.compiler.evaluate import INTERPRETED_FUNCTIONS, ft_at
 from fretc.compiler.ir import LAST, Node
 from fretc.compiler.printers import mangle, to_smv
 
-__all__ = ["Judge", "finite_trace", "write_witnesses", "expected_verdicts", "read_expected"]
+__all__ = ["trace_columns", "Judge", "finite_trace", "write_witnesses", "expected_verdicts",
+           "read_expected"]
 
 #: FRET's verdict of one requirement on a finite trace: ``judge(requirement, columns, n,
 #: duration_ticks)`` -> ``"satisfied"``, ``"vacuous"``, ``"violated"`` or ``"unknown"``
@@ -110,12 +113,12 @@ def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
         numbers = checker.numeric.values(truth)
         row = {}
         for name, kind in columns.items():
-            if kind == "bool":
-                row[name] = bool(letter.get(mangle(name), False))
+            if kind == "bool":  # a variable by FRET's name; a call by its text
+                row[name] = bool(letter.get(mangle(name), letter.get(name, False)))
             else:
                 row[name] = numbers.get(name, 0.0)
         rows.append(row)
-    return rows
+    return concrete_rows(rows, letters, free_atoms(formulas))
 
 
 def _spot_trace(checker, formulas: Sequence[Node], length: int | None):
@@ -145,16 +148,28 @@ def _spot_trace(checker, formulas: Sequence[Node], length: int | None):
             return None
 
 
-def _columns(items) -> dict[str, str]:
-    cols: dict[str, str] = {}
-    for x in items:
-        for f in (x.phi_ft, x.phi):
-            for n in ir.walk(f):
-                if n.op == "var":
-                    cols[n.name] = "float"
-                elif n.op == "ap" and n.name not in cols:
-                    cols[n.name] = "bool"
+def trace_columns(formulas: Sequence[Node], cols: dict[str, str] | None = None
+                  ) -> dict[str, str]:
+    """The columns a trace of ``formulas`` needs: name -> ``"bool"`` or ``"float"``, in
+    order of first use (a variable used as a number anywhere is ``float``). An
+    uninterpreted function application (``sqrt(weight)``, ``det_3x3(...)``) is a column
+    named by its printed text, as the audit reads it (``compiler/evaluate.py``): numeric
+    for a function of a term, boolean for one read as a condition. ``cols``: extended in
+    place when given."""
+    cols = {} if cols is None else cols
+    for f in formulas:
+        for n in ir.walk(f):
+            if n.op == "var" or (n.op == "fn" and n.name not in INTERPRETED_FUNCTIONS):
+                cols[n.name if n.op == "var" else to_smv(n)] = "float"
+            elif n.op == "ap" and n.name not in cols:
+                cols[n.name] = "bool"
+            elif n.op == "call":
+                cols.setdefault(to_smv(n), "bool")
     return cols
+
+
+def _columns(items) -> dict[str, str]:
+    return trace_columns([f for x in items for f in (x.phi_ft, x.phi)])
 
 
 def expected_verdicts(items, rows: list[dict], judge: Judge) -> dict[str, str]:

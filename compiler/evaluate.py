@@ -58,6 +58,10 @@ _FUNCS = {
     "maxInt": max,
 }
 
+#: the functions computed from their arguments; any other function application is
+#: uninterpreted and read from the trace under its printed name (its own column)
+INTERPRETED_FUNCTIONS = frozenset(_FUNCS)
+
 
 class _Evaluator:
     """Series of truth values of every sub-formula over positions ``0..L`` (``L`` = the

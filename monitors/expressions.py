@@ -15,6 +15,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from fretc.compiler.expressions import Expander, SemanticsError
+from fretc.compiler.ir import TRUE
+from fretc.compiler.printers import to_smv
 from fretc.fretish import ast as A
 
 from fretc.monitors.arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
@@ -138,7 +141,28 @@ class ColumnExpressions:
             if name in ("preInt", "preReal") and len(args) == 2:
                 init, x = self.num(args[0]), self.num(args[1])
                 return shifted(x, init[0], np.float64)
+            return self.uninterpreted(e, numeric=True)
         raise EvidenceUnsupported(f"cannot evaluate {type(e).__name__} as a number")
+
+    def uninterpreted(self, e: A.Call, numeric: bool) -> np.ndarray:
+        """A function FRET does not define (``sqrt(weight)``, ``det_3x3(...)``), read as the
+        generated monitors read it: the trace's column named by the printed call
+        (:func:`fretc.compiler.printers.to_smv` of its IR, e.g. ``sqrt(weight)``),
+        ``n + 1`` items. Raises :class:`EvidenceUnsupported` when the trace has no such
+        column (the semantics cannot compute it)."""
+        try:
+            x = Expander("ft", TRUE, TRUE, free=True)
+            key = to_smv(x.term(e) if numeric else x.bool(e))
+        except SemanticsError as exc:
+            raise EvidenceUnsupported(str(exc)) from exc
+        if key not in self.columns:
+            raise EvidenceUnsupported(f"function {e.name}/{len(e.args)} is not evaluated by "
+                                      f"the interval semantics and the trace has no column "
+                                      f"{key!r}")
+        c = self.column(key)
+        if numeric:
+            return c.astype(np.float64)
+        return c if c.dtype == np.bool_ else c.astype(np.bool_)
 
     def _int(self, a: A.Expr) -> int:
         if isinstance(a, A.NumLit) and isinstance(a.value, int) and a.value >= 0:
@@ -180,8 +204,7 @@ class ColumnExpressions:
         if name in ("prevOcc", "nextOcc") and len(args) == 2:
             p, q = self.bool(args[0]), self.bool(args[1])
             return self._prev_occ(p, q) if name == "prevOcc" else self._next_occ(p, q)
-        raise EvidenceUnsupported(f"function {name}/{len(args)} is not evaluated by the "
-                                  "interval semantics")
+        return self.uninterpreted(e, numeric=False)
 
     def _window(self, name: str, m: int, k: int, p: np.ndarray) -> np.ndarray:
         """``persisted``/``occurred``/``persists``/``occurs`` with bounds ``[m, k]``

@@ -25,6 +25,8 @@ import numpy as np
 import pytest
 
 from fretc.compiler.evaluate import ft_at, pt_at
+from fretc.compiler.ir import walk
+from fretc.compiler.printers import to_smv
 from fretc.compiler.semantics import formalize
 from fretc.fretish import parse
 from fretc.common.errors import FretishError
@@ -195,6 +197,33 @@ def test_only_uninterpreted_functions_are_unsupported(sentence):
     cols = {"p": np.array([True, False]), "q": np.array([True, True])}
     with pytest.raises(EvidenceUnsupported):
         evaluate_requirement(parse(sentence), cols, 2)
+
+
+@pytest.mark.parametrize("sentence", [
+    "the sw shall always satisfy f(p)",
+    "whenever p the sw shall immediately satisfy g(p, q) | q",
+    "whenever q the sw shall within 2 ticks satisfy x = 1.5 * sqrt(w) + 10",
+    "when in m the sw shall always satisfy det_3x3(a, w * 2, -a) > 0",
+])
+def test_uninterpreted_functions_read_their_column(sentence):
+    """With a column under the printed call (as the generated monitors and FRET's ft read
+    it), the evidence agrees with FRET's ft formula under the reference evaluator on random
+    traces; the column's values, not the arguments', decide."""
+    rnd = random.Random(7)
+    req = parse(sentence)
+    ft = formalize(req).ft
+    calls = sorted({to_smv(n) for n in walk(ft) if n.op in ("fn", "call")})
+    assert calls
+    for _ in range(60):
+        n = rnd.randint(1, 6)
+        rows = [{"p": rnd.random() < 0.5, "q": rnd.random() < 0.5, "m": rnd.random() < 0.7,
+                 "x": rnd.choice([0.0, 11.5, 13.0]), "w": rnd.choice([0.0, 1.0, 4.0]),
+                 "a": rnd.choice([-1.0, 0.0, 2.0])} for _ in range(n)]
+        for r in rows:
+            r.update({c: (rnd.random() < 0.5 if c.startswith(("f(", "g("))
+                          else rnd.choice([-1.0, 0.0, 1.0, 2.0])) for c in calls})
+        cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+        assert evaluate_requirement(req, cols, n).holds == ft_at(ft, rows), (sentence, rows)
 
 
 def test_fret_function_vectors(shared):

@@ -1,0 +1,208 @@
+"""Numbers for the comparison atoms the propositional abstraction leaves free, by z3.
+
+Spot and the lasso encoding of :mod:`fretc.check.smt` read every comparison as a proposition;
+:mod:`fretc.check.numeric_abstraction` ties together the comparisons of *one* variable with
+constants (``x <= 0.5``, ``x > 3``) and gives them numbers back. A comparison of terms over
+several variables (``yout = timeStep * 0.5 * (xin + xinpv) + ypv``, ``a = b``, ``(p - q) / q
+<= 0.1``) stays an independent proposition: a model of the abstraction says at each tick
+whether it holds, but nothing chooses numbers that make it so, and a trace with every free
+number 0 makes ``yout = ...`` true whatever the model asked.
+
+:func:`concrete_rows` closes that gap one tick at a time (the atoms are state formulas: their
+truth at a tick depends on that tick's values only): the truth values the model gives every
+comparison atom it names become a quantifier-free arithmetic query over the tick's numeric
+variables (z3 reals, first asked for integer values, whose sums and products the audit's
+floating point computes exactly, then for any real values), with every divisor non-zero (the
+audit reads ``x / 0`` as unread, never as a number). A tick whose query z3 answers takes
+the model's numbers when the audit's floating point reads every comparison as asked (an
+irrational model may round the other way); a tick it cannot answer (unsat: the abstraction's
+letter is spurious; or out of its resource limit) keeps the abstraction's numbers, and the
+caller's judge rejects the trace as before. This is the concretization step of counterexample-guided abstraction
+refinement (Clarke, Grumberg, Jha, Lu, Veith, CAV 2000), without the refinement: the judge
+is the arbiter, so a wrong number can cost a test, never a wrong verdict.
+
+Terms translated: variables, numerals, ``+ - * /``, unary minus, ``absReal``/``absInt``,
+``minReal``/``minInt``/``maxReal``/``maxInt``; an uninterpreted function application
+(``sqrt(weight)``) is a number of its own, as the audit reads it (its column); FRET's
+``preReal(init, x)`` is a constant, the previous tick's ``x`` (``init`` at the first tick),
+since the ticks are solved in order. A comparison holding anything else (``mod``, ``^``,
+boolean past-time functions inside it) is left out of the query.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from fractions import Fraction
+
+from fretc.check.numeric_abstraction import simple_comparison
+from fretc.compiler import ir
+from fretc.compiler.evaluate import INTERPRETED_FUNCTIONS, ft_at, series
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
+
+__all__ = ["free_atoms", "concrete_rows", "RLIMIT"]
+
+#: z3's deterministic resource limit per tick's query (never seconds: same input, same rows)
+RLIMIT = 2_000_000
+
+_ABS = ("absReal", "absInt")
+_MIN = ("minReal", "minInt")
+_MAX = ("maxReal", "maxInt")
+
+
+def free_atoms(formulas: Sequence[Node]) -> dict[str, Node]:
+    """SMV text -> comparison node of every comparison in ``formulas`` that the numeric
+    abstraction does not interpret (not one variable against constants), and of the
+    one-variable comparisons of the variables those share (their numbers must agree with
+    both); empty when the abstraction is exact for every comparison."""
+    free: dict[str, Node] = {}
+    simple: dict[str, tuple[str, Node]] = {}
+    for f in formulas:
+        for n in ir.walk(f):
+            if n.op != "cmp":
+                continue
+            one = simple_comparison(n)
+            if one is None:
+                free[to_smv(n)] = n
+            else:
+                simple[to_smv(n)] = (one[0], n)
+    if not free:
+        return {}
+    shared = {v for n in free.values() for v in ir.variables(n)}
+    free.update({k: n for k, (name, n) in simple.items() if name in shared})
+    return free
+
+
+class _Terms:
+    """IR terms as z3 expressions over one Real per numeric variable (and per uninterpreted
+    function application, a column of its own); ``prev``: the previous tick's row (None at
+    the first tick), whose values make ``pre`` terms constants."""
+
+    def __init__(self, z3, prev: dict | None):
+        self.z3 = z3
+        self.prev = prev
+        self.vars: dict[str, object] = {}
+        self.divisors: list = []
+
+    def var(self, name: str):
+        """The z3 Real of variable ``name``."""
+        if name not in self.vars:
+            self.vars[name] = self.z3.Real(name)
+        return self.vars[name]
+
+    def term(self, n: Node):
+        """``n`` as a z3 arithmetic expression; None when it holds an operator outside the
+        module docstring's list."""
+        z3 = self.z3
+        if n.op == "var":
+            return self.var(n.name)
+        if n.op == "fn" and n.name not in INTERPRETED_FUNCTIONS:
+            return self.var(to_smv(n))
+        if n.op == "num":
+            try:
+                return _real(z3, Fraction(n.name))
+            except (ValueError, ZeroDivisionError):
+                return None
+        if n.op == "pre":  # FRET's preReal(init, x): init at the first tick, else x before
+            v = series(n.args[0] if self.prev is None else n.args[1], [self.prev or {}])[0]
+            if isinstance(v, bool) or not math.isfinite(v):
+                return None
+            return _real(z3, Fraction(v))
+        args = [self.term(a) for a in n.args]
+        if any(a is None for a in args):
+            return None
+        if n.op == "neg":
+            return -args[0]
+        if n.op == "arith" and n.name in ("+", "-", "*"):
+            a, b = args
+            return a + b if n.name == "+" else a - b if n.name == "-" else a * b
+        if n.op == "arith" and n.name == "/":
+            self.divisors.append(args[1])
+            return args[0] / args[1]
+        if n.op == "fn" and len(args) == 1 and n.name in _ABS:
+            return z3.If(args[0] >= 0, args[0], -args[0])
+        if n.op == "fn" and len(args) == 2 and n.name in _MIN + _MAX:
+            a, b = args
+            return z3.If(a <= b, a, b) if n.name in _MIN else z3.If(a >= b, a, b)
+        return None
+
+    def comparison(self, n: Node):
+        """The z3 formula of comparison ``n``; None when a side does not translate."""
+        a, b = self.term(n.args[0]), self.term(n.args[1])
+        if a is None or b is None:
+            return None
+        return {"=": a == b, "!=": a != b, "<": a < b, "<=": a <= b, ">": a > b,
+                ">=": a >= b}[n.name]
+
+
+def _real(z3, q: Fraction):
+    return z3.RealVal(f"{q.numerator}/{q.denominator}")
+
+
+def _number(z3, value) -> float:
+    if z3.is_rational_value(value):
+        return float(Fraction(value.numerator_as_long(), value.denominator_as_long()))
+    return float(value.approx(20).as_fraction())  # an algebraic number (products)
+
+
+def _solve(z3, atoms: dict[str, Node], letter: dict, prev: dict | None
+           ) -> dict[str, float] | None:
+    """Numbers giving the comparisons of ``atoms`` the truth values ``letter`` names (SMV
+    text -> bool), after the row ``prev``; None when z3 finds none within :data:`RLIMIT`."""
+    terms = _Terms(z3, prev)
+    wanted = []
+    for key, node in sorted(atoms.items()):
+        if key not in letter:
+            continue
+        f = terms.comparison(node)
+        if f is not None:
+            wanted.append(f if letter[key] else z3.Not(f))
+    if not wanted:
+        return {}
+    wanted += [d != 0 for d in terms.divisors]
+    for integral in (True, False):
+        s = z3.Solver()
+        s.set("rlimit", RLIMIT)
+        s.add(*wanted)
+        if integral:
+            s.add(*[z3.IsInt(v) for v in terms.vars.values()])
+        if s.check() == z3.sat:
+            m = s.model()
+            got = {name: _number(z3, m.eval(v, model_completion=True))
+                   for name, v in terms.vars.items()}
+            trace = [got] if prev is None else [prev, got]
+            if all(ft_at(atoms[k], trace, len(trace) - 1) is letter[k]
+                   for k in atoms if k in letter):
+                return got
+            # an irrational model (a product's root) that floats round the other way
+    return None
+
+
+def concrete_rows(rows: list[dict], letters: list[dict], atoms: dict[str, Node]
+                  ) -> list[dict]:
+    """``rows`` (one ``{variable: value}`` per tick, from the abstraction's model whose
+    letters, SMV text -> bool per tick, are ``letters``) with the numeric variables of the
+    free comparison ``atoms`` (:func:`free_atoms`) set, tick by tick, to numbers giving
+    those comparisons the letter's truth values (module docstring). Ticks z3 cannot answer
+    keep their numbers. Deterministic: z3's answer under a resource limit, not a time."""
+    if not atoms:
+        return rows
+    import z3
+    cache: dict[tuple, dict | None] = {}
+    stateful = any(ir.has_op(a, ("pre",)) for a in atoms.values())
+    out: list[dict] = []
+    for row, letter in zip(rows, letters):
+        prev = out[-1] if out else None
+        key = tuple((k, letter.get(k)) for k in sorted(atoms))
+        if stateful:
+            key += (tuple(sorted(prev.items())) if prev else None,)
+        if key not in cache:
+            cache[key] = _solve(z3, atoms, letter, prev)
+        got = cache[key]
+        row = dict(row)
+        for name, v in (got or {}).items():
+            if name in row and not isinstance(row[name], bool):
+                row[name] = v
+        out.append(row)
+    return out
