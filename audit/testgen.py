@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fretc.check.budget import Budget
+from fretc.common.textsafe import csv_line
 from fretc.check.checker import Checker
 from fretc.check.items import make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
@@ -324,7 +325,7 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
                  f"# replay: {replay} {out / (name + '.csv')}",
                  "# one row per tick; expected verdicts (FRET finite-trace semantics):",
                  "# expected: " + ", ".join(f"{r}={v}" for r, v in t.expected.items()),
-                 ",".join((["time"] if period else []) + names)]
+                 csv_line((["time"] if period else []) + names)]
         lines += [",".join(([f"{float(i * period):.9f}"] if period else [])
                            + [_cell(r[n]) for n in names]) for i, r in enumerate(t.rows)]
         (out / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")

@@ -41,6 +41,7 @@ import numpy as np
 
 from fretc.check.atom_values import concrete_rows, free_atoms
 from fretc.check.solver import UNKNOWN
+from fretc.common.textsafe import csv_line
 from fretc.compiler import ir
 from fretc.compiler.evaluate import INTERPRETED_FUNCTIONS, ft_at
 from fretc.compiler.ir import LAST, Node
@@ -211,7 +212,7 @@ def _write(path: Path, title: str, sources: list[str], rows: list[dict],
              "# replay: fretc audit " + " ".join(f"-r {s}" for s in sources) + f" {path}",
              "# one row per tick; expected verdicts (FRET finite-trace semantics):",
              "# expected: " + ", ".join(f"{k}={v}" for k, v in expected.items()),
-             ",".join(names)]
+             csv_line(names)]
     for r in rows:
         lines.append(",".join(_cell(r[n]) for n in names))
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")

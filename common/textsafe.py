@@ -27,7 +27,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-__all__ = ["visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe",
+__all__ = ["csv_line", "visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe",
            "file_stems"]
 
 _UNSAFE_CATEGORIES = frozenset({"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"})
@@ -154,3 +154,11 @@ def file_stems(ids: Any) -> dict[str, str]:
         stems[i] = stem
         taken.add(stem.casefold())
     return stems
+
+
+def csv_line(cells: list[str]) -> str:
+    """One CSV row of ``cells`` without its line end, each quoted where RFC 4180 requires it
+    (a comma, a double quote or a line break in it: a printed call ``det_3x3(a,b,c)`` as a
+    column name), quotes doubled."""
+    return ",".join('"' + c.replace('"', '""') + '"' if any(x in c for x in ',"\r\n') else c
+                    for c in cells)

@@ -28,6 +28,9 @@ CSV_TYPE = "fretc/msg/CsvRow"
 SAMPLED_MARK = "# fretc sampled trace"
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+#: a column of an uninterpreted function's values, named by its printed call (``sqrt(w)``),
+#: as the monitors read it (FRET's ``det_3x3(a,b,c)`` in the case studies)
+_CALL = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\(.*\)\Z")
 _BOOL_WORDS = {"true": True, "false": False, "1": True, "0": False}
 
 
@@ -120,8 +123,9 @@ class CsvSource(LogSource):
         for name in header:
             if not name:
                 raise CsvError(self.path, line, "empty column name in the header")
-            if not _IDENT.match(name):
-                raise CsvError(self.path, line, f"column name {name!r} is not an identifier",
+            if not (_IDENT.match(name) or _CALL.match(name)):
+                raise CsvError(self.path, line, f"column name {name!r} is not an identifier "
+                               "(nor a function call's printed text)",
                                column=name)
             if name in seen:
                 raise CsvError(self.path, line, f"column {name!r} appears twice", column=name)
