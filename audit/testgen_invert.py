@@ -139,7 +139,7 @@ def _age(f: Expr, op: str, c: float, target: bool) -> list[dict]:
 def _comparison(e: BinOp, target: Any) -> list[dict]:
     if not isinstance(target, bool):
         raise NotWritable(f"{unparse(e)}: a comparison given a number")
-    term, const, op = e.left, e.right, e.op
+    term, const, op = _folded(e.left), _folded(e.right), e.op
     if isinstance(term, Const) and not isinstance(const, Const):
         term, const, op = const, term, _FLIP[op]
     if not isinstance(const, Const) or isinstance(term, Const):
@@ -160,6 +160,14 @@ def _comparison(e: BinOp, target: Any) -> list[dict]:
     nonneg = isinstance(term, FuncCall) and term.func == "abs"
     x = point(op, float(c), target, nonneg)
     return [] if x is None else alternatives(term, x)
+
+
+def _folded(e: Expr) -> Expr:
+    """``-c`` of a numeric constant as the constant ``-c`` (the parser reads ``-2.5`` so)."""
+    if (isinstance(e, UnaryOp) and e.op == "-" and isinstance(e.arg, Const)
+            and isinstance(e.arg.value, float) and not isinstance(e.arg.value, bool)):
+        return Const(e.col, -e.arg.value)
+    return e
 
 
 def _function(e: FuncCall, target: Any) -> list[dict]:

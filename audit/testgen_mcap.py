@@ -188,9 +188,13 @@ def _age_plan(ticks: list[dict], topics: list[str], period: int) -> dict[str, li
             need_before = min(need_before, min(quiet) - 1)
         for k, a in enumerate(ticks):
             c = a.get((topic, AGE))
-            if c is not None and not c[0] and k not in keep:
+            if c is None or c[0]:
+                continue
+            _, c_ns, strict = c  # fresh: a message at j <= k with (k - j) * period <= c
+            if not any((k - j) * period <= c_ns if strict else (k - j) * period < c_ns
+                       for j in keep if j <= k):
                 raise NotWritable(f"tick {k}: age({topic}) must be small there but a later "
-                                  "tick needs it silent")
+                                  "tick needs the topic silent before it")
         plan[topic] = ([need_before] if need_before < 0 else []) + sorted(keep)
     return plan
 
