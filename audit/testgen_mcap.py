@@ -262,10 +262,14 @@ def read_back(rows: list[dict], bindings: Bindings, path: str | Path,
     """The rows the audit's sampler reads from ``path`` under ``bindings`` and None when
     they are ``rows`` (same ticks, every variable but those of ``free`` equal); else None
     and the first difference."""
+    from dataclasses import replace
+
     from fretc.logs import open_log
     from fretc.signals.clock import sample
     from fretc.common.problems import SignalError
 
+    names = list(rows[0]) if rows else []
+    bindings = replace(bindings, variables={n: bindings.variables[n] for n in names})
     src = open_log(path)
     try:
         got = [t.values for t in sample(src, bindings)]
