@@ -11,8 +11,9 @@ What is inverted (anything else raises :class:`NotWritable`, nothing is guessed)
   field (a one-element array holding the value);
 * ``a & b``, ``a | b``, ``a -> b``, ``a <-> b``: each way of making the operands give the
   value, tried in turn (an operand's fields must not be set to two values);
-* a comparison of an invertible numeric term with a constant (either side): a value on the
-  wanted side of the constant, :func:`point`; ``=``/``!=`` with a string constant (true
+* a comparison of an invertible numeric term with a constant (either side): any value on
+  the wanted side of the constant (a :class:`Range`), written as :func:`point` unless
+  another variable gives the field a value on that side; ``=``/``!=`` with a string constant (true
   only for ``!=``: another string);
 * ``age(/topic) OP c``: whether the topic is silent (no message for more than / at least
   ``c`` seconds) or fresh at the tick; :mod:`fretc.audit.testgen_mcap` schedules the
@@ -27,12 +28,14 @@ finds one assignment that makes several variables give theirs at one tick.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from typing import Any
 
 from fretc.signals.bindings.expression import (BinOp, Const, Expr, Field, FuncCall, UnaryOp,
                                                unparse)
 
-__all__ = ["NotWritable", "AGE", "MIN_MARGIN", "REL_MARGIN", "MAX_ALTERNATIVES", "margin",
+__all__ = ["NotWritable", "Range", "AGE", "MIN_MARGIN", "REL_MARGIN", "MAX_ALTERNATIVES", "margin",
            "point", "alternatives", "solve", "holds", "field_defaults"]
 
 #: the relative margin of a value written for a comparison: 10 % of the constant's magnitude
@@ -80,12 +83,90 @@ def point(op: str, c: float, target: bool, nonneg: bool = False) -> float | None
     return float(x)
 
 
+@dataclass(frozen=True)
+class Range:
+    """Any number between ``lo`` and ``hi`` (each end included when ``lo_in``/``hi_in``;
+    +-inf for none), written as ``pref`` unless another constraint on the same field needs
+    another value inside: what a comparison asks of its term (``abs(/cmd.linear.x) >= 1e-3``
+    is any x >= 1e-3, preferably 0.002), so that another variable giving the field 1.5
+    agrees with it."""
+
+    lo: float
+    hi: float
+    lo_in: bool
+    hi_in: bool
+    pref: float
+
+    def contains(self, x: float) -> bool:
+        """Whether the number ``x`` lies in the range."""
+        return ((self.lo < x or (self.lo_in and x == self.lo))
+                and (x < self.hi or (self.hi_in and x == self.hi)))
+
+    def meet(self, other: "Range") -> "Range | None":
+        """The numbers in both ranges (None when none), preferring this one's ``pref``,
+        then the other's, then a point inside by :func:`margin`."""
+        lo, lo_in = max((self.lo, self.lo_in), (other.lo, other.lo_in),
+                        key=lambda e: (e[0], not e[1]))
+        hi, hi_in = min((self.hi, self.hi_in), (other.hi, other.hi_in),
+                        key=lambda e: (e[0], e[1]))
+        out = Range(lo, hi, lo_in, hi_in, self.pref)
+        inside = [(lo + hi) / 2 if math.isfinite(lo) and math.isfinite(hi) else None,
+                  lo + margin(lo) if math.isfinite(lo) else None,
+                  hi - margin(hi) if math.isfinite(hi) else None, 0.0, lo, hi]
+        for x in [self.pref, other.pref] + inside:
+            if x is not None and math.isfinite(x) and out.contains(x):
+                return Range(lo, hi, lo_in, hi_in, float(x))
+        return None
+
+    def neg(self) -> "Range":
+        """The range of ``-x``."""
+        return Range(-self.hi, -self.lo, self.hi_in, self.lo_in, -self.pref)
+
+
+def _range(op: str, c: float, pref: float) -> "Range | float":
+    """The numbers ``x`` with ``x op c`` as a :class:`Range` (``=``/``!=``: the point)."""
+    inf = math.inf
+    return {"<": Range(-inf, c, False, False, pref), "<=": Range(-inf, c, False, True, pref),
+            ">": Range(c, inf, False, False, pref), ">=": Range(c, inf, True, False, pref)
+            }.get(op, pref)
+
+
+def _meet(a: Any, b: Any) -> Any:
+    """The value satisfying both ``a`` and ``b`` (numbers, strings, bools, :class:`Range`,
+    one-element lists of them), or :data:`_NONE`."""
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b) == 1:
+        m = _meet(a[0], b[0])
+        return _NONE if m is _NONE else [m]
+    if isinstance(a, Range) and isinstance(b, Range):
+        m = a.meet(b)
+        return _NONE if m is None else m
+    if isinstance(a, Range) or isinstance(b, Range):
+        r, x = (a, b) if isinstance(a, Range) else (b, a)
+        ok = isinstance(x, float) and not isinstance(x, bool) and r.contains(x)
+        return x if ok else _NONE
+    return a if a == b and type(a) is type(b) else _NONE
+
+
+_NONE = object()
+
+
+def _resolved(v: Any) -> Any:
+    if isinstance(v, Range):
+        return v.pref
+    if isinstance(v, list):
+        return [_resolved(x) for x in v]
+    return v
+
+
 def _merge(a: dict, b: dict) -> dict | None:
-    """The union of two assignments, None when they set one key to two values."""
+    """The union of two assignments, None when they set one key to values no one value
+    satisfies."""
     out = dict(a)
     for k, v in b.items():
-        if k in out and out[k] != v:
-            return None
+        if k in out:
+            v = _meet(out[k], v)
+            if v is _NONE:
+                return None
         out[k] = v
     return out
 
@@ -159,7 +240,9 @@ def _comparison(e: BinOp, target: Any) -> list[dict]:
         return _age(term.args[0], op, float(c), target)
     nonneg = isinstance(term, FuncCall) and term.func == "abs"
     x = point(op, float(c), target, nonneg)
-    return [] if x is None else alternatives(term, x)
+    if x is None:
+        return []
+    return alternatives(term, _range(op if target else _NEGATE[op], float(c), x))
 
 
 def _folded(e: Expr) -> Expr:
@@ -174,9 +257,13 @@ def _function(e: FuncCall, target: Any) -> list[dict]:
     if isinstance(target, bool):
         raise NotWritable(f"{unparse(e)}: a number given a boolean")
     if e.func == "abs" and len(e.args) == 1:
+        if isinstance(target, Range):  # the x >= 0 branch
+            r = target.meet(Range(0.0, math.inf, True, False, max(target.pref, 0.0)))
+            return [] if r is None else alternatives(e.args[0], r)
         return [] if target < 0 else alternatives(e.args[0], float(target))
     if e.func in ("min", "max") and len(e.args) == 1 and isinstance(e.args[0], Field):
-        return [{_field_key(e.args[0]): [float(target)]}]
+        return [{_field_key(e.args[0]): [target if isinstance(target, Range)
+                                         else float(target)]}]
     raise NotWritable(f"{unparse(e)}: {e.func}() is not inverted")
 
 
@@ -190,6 +277,9 @@ def alternatives(e: Expr, target: Any) -> list[dict]:
     if isinstance(e, Field):
         return [{_field_key(e): target}]
     if isinstance(e, Const):
+        if isinstance(target, Range):
+            ok = isinstance(e.value, float) and target.contains(e.value)
+            return [{}] if ok else []
         return [{}] if e.value == target else []
     if isinstance(e, UnaryOp):
         if e.op == "!":
@@ -198,7 +288,8 @@ def alternatives(e: Expr, target: Any) -> list[dict]:
             return alternatives(e.arg, not target)
         if isinstance(target, (bool, str)):
             raise NotWritable(f"{unparse(e)}: a number given {target!r}")
-        return alternatives(e.arg, -float(target))
+        return alternatives(e.arg, target.neg() if isinstance(target, Range)
+                            else -float(target))
     if isinstance(e, BinOp) and e.op in ("&", "|", "->", "<->"):
         return _logical(e, target)
     if isinstance(e, BinOp) and e.op in _CMP:
@@ -233,7 +324,7 @@ def solve(wanted: list[tuple[str, Expr, Any]]) -> tuple[dict | None, str, str]:
     depth = [0]
     got = search(0, {}, depth)
     if got is not None:
-        return got, "", ""
+        return {k: _resolved(v) for k, v in got.items()}, "", ""
     name, alts, value = options[depth[0]]
     if not alts:
         return None, name, f"{name}={_show(value)} is not a value its binding can give"

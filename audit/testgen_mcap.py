@@ -43,12 +43,18 @@ import json
 from pathlib import Path
 from typing import Any
 
+from collections.abc import Callable, Iterable
+
 from mcap.writer import CompressionType, Writer
 
-from fretc.audit.testgen_invert import AGE, NotWritable, field_defaults, solve
+from fretc.audit.testgen_invert import AGE, NotWritable, field_defaults, margin, solve
 from fretc.signals.bindings.spec import Bindings
 
-__all__ = ["EPOCH_NS", "plan_messages", "write_mcap", "read_back", "bind_tests"]
+#: other values to try for a numeric variable: (variable, trace value) -> values
+Candidates = Callable[[str, float], list]
+
+__all__ = ["EPOCH_NS", "Candidates", "plan_messages", "write_mcap", "read_back", "bind_tests",
+           "thresholds", "same_side"]
 
 #: log time of tick 0 (ns since the Unix epoch): 2023-11-14T22:13:20Z, as the simulator's
 EPOCH_NS = 1_700_000_000 * 1_000_000_000
@@ -64,9 +70,10 @@ def _check_clock(bindings: Bindings) -> int:
     return bindings.tick.period_ns
 
 
-def _assignments(rows: list[dict], bindings: Bindings) -> tuple[list[dict], list[str]]:
-    """One assignment per tick (:func:`fretc.audit.testgen_invert.solve`), and the numeric
-    variables left to the messages at some tick (module docstring, "adjusted")."""
+def _assignments(rows: list[dict], bindings: Bindings, candidates: Candidates | None
+                 ) -> tuple[list[dict], list[str]]:
+    """One assignment per tick (:func:`fretc.audit.testgen_invert.solve`), and the
+    variables given other values at some tick (module docstring, "adjusted")."""
     names = list(rows[0]) if rows else []
     missing = [n for n in names if n not in bindings.variables]
     if missing:
@@ -83,16 +90,33 @@ def _assignments(rows: list[dict], bindings: Bindings) -> tuple[list[dict], list
         try:
             got, _, why = solve(wanted)
             kept = wanted
-            if got is None:  # leave numbers to the messages, then booleans: fewest possible
+            if got is None:  # other numbers, then leave some to the messages
+                wanted = _substitute(wanted, candidates)
                 got, kept = _relax(wanted)
         except NotWritable as exc:
             raise NotWritable(f"tick {k}: {exc}") from None
         if got is None:
             raise NotWritable(f"tick {k}: {why} (no message of the bound topics gives "
                               "these values together)")
-        relaxed.update(w[0] for w in wanted if w not in kept)
+        relaxed.update(n for n, _, v in wanted if (n, v) not in {(x, y) for x, _, y in kept}
+                       or v != row[n])
         out.append(got)
     return out, [n for n in names if n in relaxed]
+
+
+def _substitute(wanted: list, candidates: Candidates | None) -> list:
+    """``wanted`` with each number no message can give (``abs(x)`` = -0.5) replaced by the
+    first of its ``candidates(name, value)`` one can."""
+    out = list(wanted)
+    for i, (name, expr, value) in enumerate(out):
+        if (candidates is None or isinstance(value, bool)
+                or solve([(name, expr, value)])[0] is not None):
+            continue
+        for c in candidates(name, value):
+            if solve([(name, expr, c)])[0] is not None:
+                out[i] = (name, expr, float(c))
+                break
+    return out
 
 
 def _relax(wanted: list) -> tuple[dict | None, list]:
@@ -135,16 +159,19 @@ def _held_fields(ticks: list[dict], defaults: dict[tuple, Any]) -> dict[str, lis
     return topics
 
 
-def plan_messages(rows: list[dict], bindings: Bindings
+def plan_messages(rows: list[dict], bindings: Bindings,
+                  candidates: Candidates | None = None
                   ) -> tuple[list[tuple[int, str, dict]], list[str]]:
     """The messages of a trace: ``(log time ns, topic, JSON object)`` in log-time order
     (topics by name within a tick), and the numeric variables left to the messages
-    (module docstring, "adjusted").
+    (module docstring, "adjusted"). ``candidates(variable, value)``: other values of a
+    numeric variable to try, in order, where the trace's cannot be given
+    (:func:`write_mcap`).
 
     Raises:
         NotWritable: the trace cannot be written (module docstring)."""
     period = _check_clock(bindings)
-    ticks, relaxed = _assignments(rows, bindings)
+    ticks, relaxed = _assignments(rows, bindings, candidates)
     defaults: dict[tuple, Any] = {}
     for n in rows[0]:
         defaults.update(field_defaults(bindings.variables[n].ast))
@@ -180,12 +207,11 @@ def _age_plan(ticks: list[dict], topics: list[str], period: int) -> dict[str, li
             if c is None or not c[0]:
                 continue
             _, c_ns, strict = c
-            # age > c (strict) needs no message at j with (k - j) * period <= c
-            quiet = [j for j in range(k - n - 1, k + 1) if ((k - j) * period <= c_ns
-                                                            if strict else
-                                                            (k - j) * period < c_ns)]
-            keep.difference_update(quiet)
-            need_before = min(need_before, min(quiet) - 1)
+            # age > c (strict) needs no message at j with (k - j) * period <= c, age >= c
+            # none with (k - j) * period < c: the last m ticks up to k are quiet
+            m = c_ns // period if strict else -(-c_ns // period) - 1
+            keep.difference_update(range(k - m, k + 1))
+            need_before = min(need_before, k - m - 1)
         for k, a in enumerate(ticks):
             c = a.get((topic, AGE))
             if c is None or c[0]:
@@ -219,16 +245,19 @@ def _schema(obj: Any) -> dict:
     return {"type": "string"} if isinstance(obj, str) else {"type": "number"}
 
 
-def write_mcap(rows: list[dict], bindings: Bindings, path: str | Path
+def write_mcap(rows: list[dict], bindings: Bindings, path: str | Path,
+               candidates: Candidates | None = None
                ) -> tuple[list[dict] | None, list[str], str | None]:
     """Write the MCAP log of ``rows`` (one mapping FRET variable -> value per tick) under
     ``bindings`` to ``path`` and check it by reading it back (module docstring). Returns the
     rows the audit reads from it (equal to ``rows`` but for the adjusted variables), the
     adjusted variables and None; or None, [] and why it is not written (nothing is left at
-    ``path`` then)."""
+    ``path`` then). ``candidates(variable, value)``: values to try instead of a numeric
+    trace value no message gives (:func:`bind_tests`: values on the same side of every
+    threshold the requirements compare the variable with, :func:`same_side`)."""
     path = Path(path)
     try:
-        msgs, relaxed = plan_messages(rows, bindings)
+        msgs, relaxed = plan_messages(rows, bindings, candidates)
     except NotWritable as exc:
         return None, [], str(exc)
     schemas: dict[str, dict] = {}
@@ -290,6 +319,39 @@ def read_back(rows: list[dict], bindings: Bindings, path: str | Path,
     return out, None
 
 
+def thresholds(compiled) -> dict[str, list[float]]:
+    """FRET variable -> the constants it is compared with in the ft formulas of ``compiled``
+    (sorted, without repeats)."""
+    from fretc.compiler import ir
+
+    out: dict[str, set[float]] = {}
+    for c in compiled:
+        if c.formalization is None:
+            continue
+        for n in ir.walk(c.formalization.ft):
+            if n.op != "cmp":
+                continue
+            a, b = n.args
+            for var, k in ((a, b), (b, a)):
+                if var.op == "var" and k.op == "num":
+                    out.setdefault(var.name, set()).add(float(k.name))
+    return {v: sorted(cs) for v, cs in out.items()}
+
+
+def same_side(value: float, limits: Iterable[float]) -> list[float]:
+    """Values on the same side of every threshold of ``limits`` as ``value`` (so every
+    comparison of the variable with a constant keeps its truth), the non-negative ones
+    first: none when ``value`` is a threshold itself."""
+    limits = sorted(limits)
+    if value in limits:
+        return []
+    lo = max((t for t in limits if t < value), default=-float("inf"))
+    hi = min((t for t in limits if t > value), default=float("inf"))
+    picks = [0.0, abs(value), (lo + hi) / 2, hi - margin(hi), lo + margin(lo)]
+    ok = [p for p in picks if lo < p < hi and p == p]
+    return sorted(dict.fromkeys(ok), key=lambda p: (p < 0, ok.index(p)))
+
+
 def bind_tests(gen, compiled, bindings: Bindings, out_dir: str | Path) -> None:
     """Write ``DIR/T01.mcap``... for the tests of ``gen`` (a
     :class:`fretc.audit.testgen.Generated` of ``compiled``) under ``bindings``, setting each
@@ -304,9 +366,11 @@ def bind_tests(gen, compiled, bindings: Bindings, out_dir: str | Path) -> None:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     kinds = column_kinds([c for c in compiled if c.formalization is not None])
+    limits = thresholds(compiled)
     for k, t in enumerate(gen.tests, 1):
         name = f"T{k:02d}.mcap"
-        rows, adjusted, why = write_mcap(t.rows, bindings, out / name)
+        rows, adjusted, why = write_mcap(t.rows, bindings, out / name,
+                                         lambda n, v: same_side(v, limits.get(n, ())))
         if rows is None:
             t.log, t.log_why, t.adjusted = None, why, []
             continue
