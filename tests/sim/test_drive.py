@@ -151,3 +151,24 @@ def test_testrun_on_the_simulator(generated, tmp_path):
     assert got[target]["outcome"] == "not exercised", res.output
     assert got[stale]["outcome"] == "fail" and "R6" in got[stale]["violated"], res.output
     assert got[clean]["outcome"] == "pass", res.output
+
+
+def test_input_errors_exit_2(tmp_path):
+    res = CliRunner().invoke(main, ["testrun", str(tmp_path), "--command", "true"])
+    assert res.exit_code == 2 and "tests.json" in res.output
+    from fretc.sim.__main__ import main as sim_main
+
+    bad = tmp_path / "t.csv"
+    bad.write_text("time,battery_low\n0.0,true\n")
+    res = CliRunner().invoke(sim_main, ["drive", str(bad), str(tmp_path / "x.mcap"),
+                                        "-b", str(BINDINGS)])
+    assert res.exit_code == 2 and "battery_low: no binding" in res.output
+
+
+def test_command_without_log_is_unknown(generated, tmp_path):
+    out, doc = generated
+    first = doc["tests"][0]["id"]
+    res = CliRunner().invoke(main, ["testrun", str(out), "--command", "true", "--test", first,
+                                    "--logs", str(tmp_path)])
+    assert res.exit_code == 3, res.output
+    assert f"{first}: unknown: the command exited 0 without a log" in res.output
