@@ -106,16 +106,27 @@ def _assignments(rows: list[dict], bindings: Bindings, candidates: Candidates | 
 
 def _substitute(wanted: list, candidates: Candidates | None) -> list:
     """``wanted`` with each number no message can give (``abs(x)`` = -0.5) replaced by the
-    first of its ``candidates(name, value)`` one can."""
+    first of its ``candidates(name, value)`` one can; then, if the values still conflict,
+    with the first one number replaced by a candidate that makes them agree (in order)."""
+    if candidates is None:
+        return wanted
     out = list(wanted)
     for i, (name, expr, value) in enumerate(out):
-        if (candidates is None or isinstance(value, bool)
-                or solve([(name, expr, value)])[0] is not None):
+        if isinstance(value, bool) or solve([(name, expr, value)])[0] is not None:
             continue
         for c in candidates(name, value):
             if solve([(name, expr, c)])[0] is not None:
                 out[i] = (name, expr, float(c))
                 break
+    if solve(out)[0] is not None:
+        return out
+    for i, (name, expr, value) in enumerate(out):
+        if isinstance(value, bool):
+            continue
+        for c in candidates(name, value):
+            trial = out[:i] + [(name, expr, float(c))] + out[i + 1:]
+            if solve(trial)[0] is not None:
+                return trial
     return out
 
 
@@ -171,6 +182,8 @@ def plan_messages(rows: list[dict], bindings: Bindings,
     Raises:
         NotWritable: the trace cannot be written (module docstring)."""
     period = _check_clock(bindings)
+    if not rows:
+        raise NotWritable("the trace has no ticks")
     ticks, relaxed = _assignments(rows, bindings, candidates)
     defaults: dict[tuple, Any] = {}
     for n in rows[0]:

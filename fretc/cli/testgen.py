@@ -50,9 +50,10 @@ __all__ = ["testgen_cmd"]
               type=click.Path(file_okay=False), metavar="DIR",
               help="Folder to write the tests (T01.csv, ...) and tests.json into.")
 @click.option("--pytest", "with_pytest", is_flag=True,
-              help="Also write DIR/test_fretc_generated.py: a pytest file auditing each test "
-                   "(its trace, or the log the command in FRETC_RUN_TRACE makes of it: "
-                   "'COMMAND TRACE.csv LOG') against its expected verdicts.")
+              help="Also write DIR/test_fretc_generated.py: a pytest file auditing each "
+                   "test's trace against its expected verdicts, or, with FRETC_RUN_TRACE set, "
+                   "the log that command makes of it ('COMMAND TRACE.csv LOG') by the pass "
+                   "rule of fretc testrun.")
 @click.option("-b", "--bindings", "bindings_file", type=click.Path(exists=True, dir_okay=False),
               metavar="FILE",
               help="A binding file (*.bindings.toml): also write DIR/T01.mcap... , each "
