@@ -45,6 +45,7 @@ from typing import Any
 
 from collections.abc import Callable, Iterable
 
+import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from fretc.audit.testgen_invert import AGE, NotWritable, field_defaults, margin, solve
@@ -85,23 +86,29 @@ def _assignments(rows: list[dict], bindings: Bindings, candidates: Candidates | 
                               "tf() are not inverted")
     out, relaxed = [], set()
     for k, row in enumerate(rows):
-        wanted = [(n, bindings.variables[n].ast, row[n] if isinstance(row[n], bool)
-                   else float(row[n])) for n in names]
+        wanted = [(n, bindings.variables[n].ast, _value(row[n])) for n in names]
         try:
             got, _, why = solve(wanted)
             kept = wanted
             if got is None:  # other numbers, then leave some to the messages
                 wanted = _substitute(wanted, candidates)
-                got, kept = _relax(wanted)
+                got = solve(wanted)[0]
+                if got is None:
+                    got, kept = _relax(wanted)
         except NotWritable as exc:
             raise NotWritable(f"tick {k}: {exc}") from None
         if got is None:
             raise NotWritable(f"tick {k}: {why} (no message of the bound topics gives "
                               "these values together)")
         relaxed.update(n for n, _, v in wanted if (n, v) not in {(x, y) for x, _, y in kept}
-                       or v != row[n])
+                       or v != _value(row[n]))
         out.append(got)
     return out, [n for n in names if n in relaxed]
+
+
+def _value(v: Any) -> bool | float:
+    """A trace value as the bindings give it: a bool (numpy's too) or a float."""
+    return bool(v) if isinstance(v, (bool, np.bool_)) else float(v)
 
 
 def _substitute(wanted: list, candidates: Candidates | None) -> list:
@@ -325,7 +332,7 @@ def read_back(rows: list[dict], bindings: Bindings, path: str | Path,
     out = []
     for k, (g, r) in enumerate(zip(got, rows)):
         for n, v in r.items():
-            if n not in free and g.get(n) != (v if isinstance(v, bool) else float(v)):
+            if n not in free and g.get(n) != _value(v):
                 return None, (f"tick {k}: the log written reads back {n}={g.get(n)!r}, the "
                               f"trace has {v!r} (variables sharing a topic's messages)")
         out.append({n: g[n] for n in r})
