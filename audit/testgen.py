@@ -67,12 +67,18 @@ _PAIRS = (("satisfied", "violated"), ("satisfied", "vacuous"), ("violated", "sat
 class TestCase:
     """One generated test: ``rows`` (one mapping FRET variable -> value per tick),
     ``covers`` (``(requirement id, obligation id, tick)`` it exercises), ``expected``
-    (requirement id -> verdict) and ``origin`` (the obligation it was generated for)."""
+    (requirement id -> verdict) and ``origin`` (the obligation it was generated for); with
+    bindings (:func:`fretc.audit.testgen_mcap.bind_tests`) ``log`` (its MCAP file name or
+    None), ``log_why`` (why none) and ``adjusted`` (variables the bindings gave other
+    values)."""
 
     rows: list[dict]
     covers: list[tuple[str, str, int | None]] = field(default_factory=list)
     expected: dict[str, str] = field(default_factory=dict)
     origin: tuple[str, str] = ("", "")
+    log: str | None = None
+    log_why: str | None = None
+    adjusted: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -303,13 +309,15 @@ def _obligation_json(ob: Obligation, reason: str | None = None) -> dict:
 
 
 def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
-                period: Fraction | None = None) -> dict:
+                period: Fraction | None = None, bindings: str | None = None) -> dict:
     """Write ``DIR/T01.csv``... (one per test: comment lines, the first one
     :data:`fretc.logs.csv_source.SAMPLED_MARK` so that an audit with binding files reads the
     columns as the FRET variables they are; then a header row, ``time`` (tick ``k`` at ``k *
     period`` seconds, when ``period`` is given) and the FRET variables, one row per tick) and
     ``DIR/tests.json``; return the JSON document written (format in the module docstring of
-    :mod:`fretc.cli.testgen`). ``sources``: the requirement files, for the replay line."""
+    :mod:`fretc.cli.testgen`). ``sources``: the requirement files, for the replay line;
+    ``bindings``: the binding file the tests' MCAP logs were written with
+    (:func:`fretc.audit.testgen_mcap.bind_tests`), or None."""
     from pathlib import Path
     import json
 
@@ -334,7 +342,11 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
                       "covers": [{"requirement": r, "obligation": o, "tick": tick}
                                  for r, o, tick in t.covers],
                       "expected": dict(t.expected)})
-    doc = {"requirements": list(sources), "tests": tests,
+        if bindings is not None:
+            tests[-1].update({"log": t.log, "log_not_written": t.log_why,
+                              "adjusted": list(t.adjusted)})
+    doc = {"requirements": list(sources), **({"bindings": bindings} if bindings else {}),
+           "tests": tests,
            "obligations": [_obligation_json(o) for obs in gen.obligations.values()
                            for o in obs],
            "unmeetable": [_obligation_json(o, why) for o, why in gen.unmeetable],

@@ -1,4 +1,4 @@
-"""Command line: ``python -m fretc.sim record|serve|list|verdicts`` (see ``python -m fretc.sim --help``)."""
+"""Command line: ``python -m fretc.sim record|serve|list|verdicts|drive`` (see ``python -m fretc.sim --help``)."""
 
 from __future__ import annotations
 
@@ -110,6 +110,51 @@ def verdicts(files, threshold, markdown):
             click.echo(f"{name} ({prof}, {dur:.2f} s, {size} bytes)")
             for r in REQUIREMENTS:
                 click.echo(f"  {r}: {v[r].text()}  [{v[r].triggers} triggering ticks]")
+
+
+@main.command()
+@click.argument("trace", type=click.Path(exists=True, dir_okay=False))
+@click.argument("log", type=click.Path(dir_okay=False))
+@click.option("--bindings", "-b", "bindings_file", required=True,
+              type=click.Path(exists=True, dir_okay=False),
+              help="The binding file of the trace's variables (requirements/"
+                   "safe_ros.bindings.toml).")
+@click.option("--scenario", "-s", type=click.Choice(list(SCENARIOS)), default="nominal",
+              show_default=True, help="Scenario (world and faults) the robot runs in.")
+@click.option("--seed", type=int, default=1, show_default=True, help="Random seed.")
+@click.option("--lead-in", type=float, default=None,
+              help="Seconds simulated before the trace's first tick (default 3.0).")
+@click.option("--lead-out", type=float, default=None,
+              help="Seconds simulated after the trace's last tick, its inputs held "
+                   "(default 2.0).")
+def drive(trace, log, bindings_file, scenario, seed, lead_in, lead_out):
+    """Drive the robot with TRACE's input variables (a fretc testgen CSV) and record the run to
+    LOG (MCAP). The robot's SIF, interceptor and navigation produce the outputs."""
+    import sys
+
+    from fretc.common.errors import FretcError
+    from fretc.monitors.simulate import read_trace
+    from fretc.signals.bindings.files import load_bindings
+    from fretc.sim.drive import LEAD_IN_S, LEAD_OUT_S, DriveError
+    from fretc.sim.drive import drive as do_drive
+
+    try:
+        b = load_bindings(bindings_file)
+        data = read_trace(trace)
+        n = len(next(iter(data.values()), []))
+        rows = [{k: v[i] for k, v in data.items()} for i in range(n)]
+        roles, res = do_drive(rows, b, log, scenario=scenario, seed=seed,
+                              lead_in=LEAD_IN_S if lead_in is None else lead_in,
+                              lead_out=LEAD_OUT_S if lead_out is None else lead_out)
+    except (FretcError, DriveError, OSError) as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(2)
+    click.echo(f"{log}: {scenario} seed {seed} driven by {trace} ({n} ticks): "
+               f"{res.duration:.1f} s sim; {res.outcome or 'mission under way'}", err=True)
+    click.echo(f"  driven from the trace: {', '.join(roles.driven) or 'none'}", err=True)
+    click.echo(f"  the robot's own: {', '.join(roles.system) or 'none'}", err=True)
+    for name, why in roles.not_drivable.items():
+        click.echo(f"  not drivable: {name}: {why}", err=True)
 
 
 if __name__ == "__main__":

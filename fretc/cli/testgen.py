@@ -18,9 +18,18 @@ variable, one row per tick; ``fretc audit -r FILE DIR/T01.csv`` judges one) and
      "unmeetable": [{... , "reason"}], "unknown": [{..., "reason"}]}
 
 ``expected`` holds the audit's verdict of every requirement of the set on the test's trace,
-so each test is an oracle for the whole set. Exit codes: 0 every obligation has a test or is
-unmeetable, 3 some obligation is unknown (an engine's budget ran out; listed), 2 an input
-error.
+so each test is an oracle for the whole set.
+
+With ``--bindings FILE`` each test is also written as ``T01.mcap``..., the messages on the
+topics FILE binds that make every variable's binding give the trace's value at every tick
+(:mod:`fretc.audit.testgen_mcap`); each test in ``tests.json`` gains ``"log"`` (the MCAP
+file name or null), ``"log_not_written"`` (why not, or null) and ``"adjusted"`` (variables
+the bindings could not give the trace's values at some tick: the trace, its ``covers`` and
+``expected`` are then those of the log), and the document ``"bindings"``.
+
+Exit codes: 0 every obligation has a test or is unmeetable, 3 some obligation is unknown
+(an engine's budget ran out; listed), 1 ``--bindings`` was given and no test could be
+written as MCAP, 2 an input error.
 """
 
 from __future__ import annotations
@@ -41,11 +50,17 @@ __all__ = ["testgen_cmd"]
               type=click.Path(file_okay=False), metavar="DIR",
               help="Folder to write the tests (T01.csv, ...) and tests.json into.")
 @click.option("--pytest", "with_pytest", is_flag=True,
-              help="Also write DIR/test_fretc_generated.py: a pytest file auditing each test "
-                   "(its trace, or the log the command in FRETC_RUN_TRACE makes of it: "
-                   "'COMMAND TRACE.csv LOG') against its expected verdicts.")
+              help="Also write DIR/test_fretc_generated.py: a pytest file auditing each "
+                   "test's trace against its expected verdicts, or, with FRETC_RUN_TRACE set, "
+                   "the log that command makes of it ('COMMAND TRACE.csv LOG') by the pass "
+                   "rule of fretc testrun.")
+@click.option("-b", "--bindings", "bindings_file", type=click.Path(exists=True, dir_okay=False),
+              metavar="FILE",
+              help="A binding file (*.bindings.toml): also write DIR/T01.mcap... , each "
+                   "test's messages on the bound topics, read back by fretc audit with the "
+                   "same file.")
 @TEXT_ATTRIBUTE_OPTION
-def testgen_cmd(files, out_dir, with_pytest):
+def testgen_cmd(files, out_dir, with_pytest, bindings_file):
     """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
     tests.json (what each covers, the expected verdict of every requirement)."""
     from fretc.audit.testgen import generate, write_tests
@@ -67,10 +82,15 @@ def testgen_cmd(files, out_dir, with_pytest):
     if not compiled:
         click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
         sys.exit(2)
+    bindings = _load_bindings(bindings_file) if bindings_file else None
     gen = generate(compiled)
+    if bindings is not None:
+        from fretc.audit.testgen_mcap import bind_tests
+
+        bind_tests(gen, compiled, bindings, out_dir)
     sources = list(dict.fromkeys(c.entry.source for c in compiled))
     period = next((e.tick_period for e in entries if e.tick_period is not None), None)
-    doc = write_tests(gen, out_dir, sources, period)
+    doc = write_tests(gen, out_dir, sources, period, bindings_file)
     if with_pytest:
         from fretc.audit.testgen_pytest import PYTEST_FILE, pytest_file
 
@@ -84,4 +104,28 @@ def testgen_cmd(files, out_dir, with_pytest):
         for o in doc[which]:
             click.echo(shown(f"  {which}: {o['requirement']} {o['obligation']}: "
                              f"{o['reason']}"))
+    if bindings is not None:
+        logs = [t for t in doc["tests"] if t["log"]]
+        click.echo(shown(f"{len(logs)} of {len(doc['tests'])} tests written as MCAP logs "
+                         f"of the topics bound in {bindings_file}"))
+        for t in doc["tests"]:
+            if t["adjusted"]:
+                click.echo(shown(f"  {t['id']}: adjusted to the bindings: "
+                                 f"{', '.join(t['adjusted'])} (verdicts re-judged)"))
+            if not t["log"]:
+                click.echo(shown(f"  {t['id']}: no MCAP log: {t['log_not_written']}"))
+        if doc["tests"] and not logs:
+            sys.exit(1)
     sys.exit(3 if doc["unknown"] else 0)
+
+
+def _load_bindings(path: str):
+    """The binding file ``path``, or exit 2 naming the error."""
+    from fretc.common.problems import BindingError
+    from fretc.signals.bindings.files import load_bindings
+
+    try:
+        return load_bindings(path)
+    except (BindingError, OSError) as exc:
+        click.echo(shown(str(exc)), err=True)
+        sys.exit(2)

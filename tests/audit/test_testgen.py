@@ -159,19 +159,29 @@ def test_generated_pytest_file_runs(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "FRETC_RUN_TRACE"}
     ok = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True)
     assert ok.returncode == 0, ok.stdout + ok.stderr
-    # a "system" that never responds: q false throughout
-    fake = tmp_path / "never.py"
-    fake.write_text("import sys\nrows = open(sys.argv[1]).read().splitlines()\n"
-                    "head = [i for i, r in enumerate(rows) if not r.startswith('#')][0]\n"
-                    "names = rows[head].split(',')\nq = names.index('q')\n"
-                    "out = rows[:head + 1] + [','.join('false' if i == q else c for i, c in "
-                    "enumerate(r.split(','))) for r in rows[head + 1:]]\n"
-                    "open(sys.argv[2], 'w').write('\\n'.join(out) + '\\n')\n")
-    env["FRETC_RUN_TRACE"] = f"{sys.executable} {fake}"
+    # a "system" that never responds (q false throughout) and one that always does
+    def system(value: str) -> str:
+        fake = tmp_path / f"q_{value}.py"
+        fake.write_text("import sys\nrows = open(sys.argv[1]).read().splitlines()\n"
+                        "head = [i for i, r in enumerate(rows) if not r.startswith('#')][0]\n"
+                        "names = rows[head].split(',')\nq = names.index('q')\n"
+                        f"out = rows[:head + 1] + [','.join('{value}' if i == q else c for i, "
+                        "c in enumerate(r.split(','))) for r in rows[head + 1:]]\n"
+                        "open(sys.argv[2], 'w').write('\\n'.join(out) + '\\n')\n")
+        return f"{sys.executable} {fake}"
+
     env["FRETC_RUN_LOG"] = "run.csv"
-    bad = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True)
+    env["FRETC_RUN_TRACE"] = system("false")
+    bad = subprocess.run(cmd + ["-rs"], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert bad.returncode == 1, bad.stdout + bad.stderr
-    assert "'A': 'violated'" in bad.stdout and "passed" in bad.stdout  # vacuous ones pass
+    assert "fail: violated: A" in bad.stdout, bad.stdout
+    # the pass rule: a correct system fails no test; a test whose obligation its log does
+    # not exercise (deadline missed, trigger absent...) is skipped as not exercised
+    env["FRETC_RUN_TRACE"] = system("true")
+    good = subprocess.run(cmd + ["-rs"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True)
+    assert good.returncode == 0, good.stdout + good.stderr
+    assert "failed" not in good.stdout and "not exercised" in good.stdout, good.stdout
 
 
 def test_arithmetic_and_uninterpreted_functions_replay(tmp_path):

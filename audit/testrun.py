@@ -1,0 +1,161 @@
+"""Running generated requirements-based tests (``fretc testgen``) against a system
+(``fretc testrun DIR --command CMD``, and the pytest file ``fretc testgen --pytest`` writes):
+each test's trace is turned into a log of the system by a command (``CMD TRACE.csv LOG``: a
+simulator driven by the trace's inputs, a test bench), and the log is audited with the
+test set's requirements (and binding file) with coverage.
+
+The pass rule. On the system's log the requirements are judged on the system's own outputs,
+not on the trace's, so a test's ``expected`` verdicts (those of its trace) are not the
+oracle; instead a test
+
+* **fails** when some requirement is violated on the system's log;
+* is **unknown** when none is violated but some verdict is not decided (unknown, an error,
+  no log): nothing was shown;
+* is **not exercised** when no requirement is violated but the obligation the test was
+  generated for (its ``generated_for``; with ``require="all"``: any obligation of its
+  ``covers``) is not exercised on the system's log: the system did not go where the test was
+  meant to take it, so the test shows nothing about that obligation (a test generated to
+  show a violation, ``deadline-missed``, is never exercised on a correct system);
+* **passes** when no requirement is violated, every verdict is decided, and the obligation
+  it was generated for (``require="all"``: every one it covers) is exercised on the log.
+
+Only ``pass`` is a pass. The other obligations a test's trace covers are reported (how many
+the system's log exercises, and which not) without deciding the outcome by default: a test
+also covers obligations by the values it gives variables the system decides (a ground-truth
+clearance of 0), which a correct system's log never shows.
+"""
+
+from __future__ import annotations
+
+import json
+import shlex
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["OUTCOMES", "Outcome", "judge", "run_test", "audit_log"]
+
+#: the outcomes of a test against a system, worst first
+OUTCOMES = ("fail", "unknown", "not exercised", "pass")
+
+_DECIDED = ("satisfied", "vacuous", "violated")
+
+
+@dataclass
+class Outcome:
+    """One test against a system: ``outcome`` (one of :data:`OUTCOMES`), the ``verdicts`` of
+    the system's log (requirement id -> verdict), ``violated``/``undecided`` requirement ids,
+    ``not_exercised`` (``(requirement id, obligation id)`` the test covers that the log does
+    not exercise), ``exercised`` (how many of the test's obligations it does), ``log`` and
+    ``error`` (the command's or the audit's failure, or None), ``target`` (the obligation the
+    test was generated for, as text)."""
+
+    test: str
+    outcome: str
+    verdicts: dict[str, str] = field(default_factory=dict)
+    violated: list[str] = field(default_factory=list)
+    undecided: list[str] = field(default_factory=list)
+    not_exercised: list[tuple[str, str]] = field(default_factory=list)
+    exercised: int = 0
+    log: str = ""
+    error: str | None = None
+    target: str = ""
+
+    def text(self) -> str:
+        """One line: the outcome and why."""
+        if self.error:
+            return f"{self.test}: {self.outcome}: {self.error}"
+        why = {"fail": "violated: " + ", ".join(self.violated),
+               "unknown": "undecided: " + ", ".join(f"{r} ({self.verdicts.get(r)})"
+                                                     for r in self.undecided),
+               "not exercised": f"{self.target} not exercised on the system's log",
+               "pass": f"no requirement violated, {self.target} exercised"}[self.outcome]
+        if self.not_exercised:
+            why += "; also not exercised: " + ", ".join(f"{r} {o}" for r, o in
+                                                        self.not_exercised
+                                                        if f"{r} {o}" != self.target)
+        total = self.exercised + len(self.not_exercised)
+        return f"{self.test}: {self.outcome}: {why} ({self.exercised} of {total} " \
+               "obligations exercised)"
+
+
+def judge(test: dict, doc: dict, require: str = "target") -> Outcome:
+    """The outcome (module docstring) of ``test`` (an entry of ``tests.json``) on the
+    system's log audited as ``doc`` (``fretc audit --coverage --json``'s document);
+    ``require``: ``"target"`` (the obligation it was generated for must be exercised) or
+    ``"all"`` (every obligation it covers).
+
+    Raises:
+        ValueError: another ``require``."""
+    if require not in ("target", "all"):
+        raise ValueError(f"require must be 'target' or 'all', not {require!r}")
+    logs = doc.get("logs") or []
+    verdicts = {v["requirement"]: v["verdict"] for lg in logs for v in lg["verdicts"]}
+    covered = {(r["requirement"], o["obligation"])
+               for r in (doc.get("coverage") or {}).get("requirements", [])
+               for o in r["obligations"] if o["status"] == "covered"}
+    wanted = list(dict.fromkeys((c["requirement"], c["obligation"]) for c in test["covers"]))
+    out = Outcome(test["id"], "pass", verdicts,
+                  violated=[r for r, v in verdicts.items() if v == "violated"],
+                  undecided=[r for r, v in verdicts.items() if v not in _DECIDED],
+                  not_exercised=[w for w in wanted if w not in covered],
+                  exercised=sum(w in covered for w in wanted),
+                  log=logs[0]["log"] if logs else "",
+                  target=" ".join(str(x) for x in (test.get("generated_for") or {}).values()))
+    if logs and logs[0].get("error"):
+        out.undecided = out.undecided or ["(log)"]
+        out.error = f"the audit could not read the log: {logs[0]['error']}"
+    g = test.get("generated_for") or {}
+    target = (g.get("requirement"), g.get("obligation"))
+    if out.violated:
+        out.outcome = "fail"
+    elif out.undecided or not verdicts:
+        out.outcome = "unknown"
+    elif (out.not_exercised if require == "all" or not g else target in out.not_exercised):
+        out.outcome = "not exercised"
+    return out
+
+
+def audit_log(requirements: list[str], bindings: str | None, log: Path, out: Path) -> dict:
+    """``fretc audit -r REQ... [--bindings B] LOG --coverage --json OUT`` in a fresh process;
+    its JSON document.
+
+    Raises:
+        RuntimeError: the audit wrote no document (its exit code and last error line)."""
+    cmd = [sys.executable, "-m", "fretc", "audit", *[x for r in requirements for x in ("-r", r)],
+           *(["--bindings", bindings] if bindings else []), str(log), "--coverage",
+           "--json", str(out), "--no-progress"]
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    if not out.exists():
+        last = (res.stderr.strip().splitlines() or ["no output"])[-1]
+        raise RuntimeError(f"fretc audit exited {res.returncode}: {last}")
+    return json.loads(out.read_text(encoding="utf-8"))
+
+
+def run_test(test: dict, doc: dict, folder: Path, command: str, work: Path,
+             bindings: str | None = None, require: str = "target",
+             log_name: str | None = None) -> Outcome:
+    """Run ``command`` (split as a shell would, then ``TRACE LOG`` appended) on ``test``'s
+    trace in ``folder`` (the test folder; ``doc``: its ``tests.json``), audit the log it
+    writes in ``work`` and judge it (module docstring). ``bindings``: the binding file
+    (default: ``doc``'s ``"bindings"``, else the audit's own search beside the
+    requirements); ``require``: as :func:`judge`'s; ``log_name``: the log's file name in
+    ``work`` (default ``<test id>.mcap``; its suffix tells the audit the format). A command
+    that fails or writes no log gives ``unknown`` with its error."""
+    work.mkdir(parents=True, exist_ok=True)
+    log = work / (log_name or f"{test['id']}.mcap")
+    trace = folder / test["trace"]
+    res = subprocess.run(shlex.split(command) + [str(trace), str(log)], capture_output=True,
+                         text=True)
+    if res.returncode != 0 or not log.exists():
+        last = (res.stderr.strip().splitlines() or ["no output"])[-1]
+        return Outcome(test["id"], "unknown", error=f"the command exited {res.returncode} "
+                       f"without a log: {last}" if not log.exists() else
+                       f"the command exited {res.returncode}: {last}", log=str(log))
+    try:
+        audited = audit_log(doc["requirements"], bindings or doc.get("bindings"), log,
+                            work / f"{test['id']}.audit.json")
+    except RuntimeError as exc:
+        return Outcome(test["id"], "unknown", error=str(exc), log=str(log))
+    return judge(test, audited, require)

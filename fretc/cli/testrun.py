@@ -1,0 +1,91 @@
+"""``fretc testrun DIR --command CMD``: run the tests ``fretc testgen`` wrote into DIR against a
+system. For each test, ``CMD TRACE.csv LOG`` turns its trace into a log of the system (the
+Safe-ROS simulator: ``python -m fretc.sim drive -b requirements/safe_ros.bindings.toml``),
+``fretc audit --coverage`` judges the log with the test set's requirements and binding file,
+and the test passes, fails, is unknown or not exercised by the pass rule of
+:mod:`fretc.audit.testrun` (no requirement violated, every verdict decided, and the
+obligation the test was generated for exercised on the system's log; with
+``--all-obligations`` every obligation the test covers).
+
+Run from the folder ``fretc testgen`` ran in (tests.json names the requirement files as it
+was given them). ``--json FILE`` writes ``{"tests": [{"id", "outcome", "verdicts",
+"violated", "undecided", "not_exercised": [{"requirement", "obligation"}], "exercised",
+"log", "error", "generated_for"}], "summary": {outcome: count}}``.
+
+Exit codes: 0 every test passed, 1 some test failed (a requirement violated on the system's
+log), 3 none failed but some is unknown or not exercised, 2 an input error.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from fretc.cli.options import shown
+
+__all__ = ["testrun_cmd"]
+
+
+@click.command("testrun")
+@click.argument("folder", type=click.Path(exists=True, file_okay=False))
+@click.option("--command", "command", required=True, metavar="CMD",
+              help="Run as 'CMD TRACE.csv LOG' for each test: writes the system's log of "
+                   "the trace.")
+@click.option("-b", "--bindings", "bindings", type=click.Path(exists=True, dir_okay=False),
+              default=None, metavar="FILE",
+              help="Binding file for the system's logs (default: tests.json's, else the "
+                   "audit's search beside the requirement files).")
+@click.option("--logs", "logs_dir", type=click.Path(file_okay=False), default=None,
+              metavar="DIR", help="Keep the logs and audits here (default: DIR/runs).")
+@click.option("--test", "only", multiple=True, metavar="ID",
+              help="Only this test (repeatable).")
+@click.option("--all-obligations", "all_obligations", is_flag=True,
+              help="A test passes only if the system's log exercises every obligation its "
+                   "trace covers (default: the one it was generated for).")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
+              help="Write the outcomes as JSON here.")
+def testrun_cmd(folder, command, bindings, logs_dir, only, all_obligations, json_path):
+    """Run the generated tests in FOLDER against the system CMD makes logs of."""
+    from fretc.audit.testrun import OUTCOMES, run_test
+
+    folder = Path(folder)
+    try:
+        doc = json.loads((folder / "tests.json").read_text(encoding="utf-8"))
+        tests = doc["tests"]
+    except (OSError, ValueError, KeyError) as exc:
+        click.echo(shown(f"error: {folder / 'tests.json'}: {exc}"), err=True)
+        sys.exit(2)
+    missing = [i for i in only if i not in {t["id"] for t in tests}]
+    if missing:
+        click.echo(shown(f"error: {folder / 'tests.json'}: no test {', '.join(missing)}"),
+                   err=True)
+        sys.exit(2)
+    work = Path(logs_dir) if logs_dir else folder / "runs"
+    outcomes = []
+    for t in tests:
+        if only and t["id"] not in only:
+            continue
+        o = run_test(t, doc, folder, command, work, bindings,
+                     "all" if all_obligations else "target")
+        click.echo(shown(o.text()))
+        outcomes.append(o)
+    summary = {k: sum(o.outcome == k for o in outcomes) for k in OUTCOMES}
+    click.echo(shown(f"{len(outcomes)} tests: " + ", ".join(f"{v} {k}" for k, v in
+                                                            summary.items())))
+    if json_path:
+        Path(json_path).write_text(json.dumps({"tests": [_json(o) for o in outcomes],
+                                               "summary": summary}, indent=2) + "\n",
+                                   encoding="utf-8")
+    sys.exit(1 if summary["fail"] else 3 if summary["unknown"] or summary["not exercised"]
+             else 0)
+
+
+def _json(o) -> dict:
+    return {"id": o.test, "outcome": o.outcome, "verdicts": o.verdicts,
+            "violated": o.violated, "undecided": o.undecided,
+            "not_exercised": [{"requirement": r, "obligation": b} for r, b in o.not_exercised],
+            "exercised": o.exercised, "log": o.log, "error": o.error,
+            "generated_for": o.target}

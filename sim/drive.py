@@ -1,0 +1,197 @@
+"""The simulated Safe-ROS robot driven by a test trace (``python -m fretc.sim drive TRACE LOG
+--bindings FILE``): the trace's *input* variables drive what the robot senses, the robot's
+own SIF (:class:`fretc.sim.safety.SafetyAgent`), ``cmd_vel_interceptor`` and navigation
+produce everything else, and the run is recorded as the simulator records (ROS 2 CDR MCAP,
+:mod:`fretc.sim.recording`). It is the command ``FRETC_RUN_TRACE`` names for the pytest file
+``fretc testgen --pytest`` writes, and the ``--command`` of ``fretc testrun``.
+
+Which variables a trace can drive (:func:`classify`), by the topics their bindings read:
+
+* **driven**: every topic it reads is one the driver writes, :data:`DRIVEN_TOPICS`
+  (``/scan``: the LiDAR). In Safe-ROS: ``too_close`` (``min(/scan.ranges) < 0.9``) and
+  ``scan_stale`` (``age(/scan) > 0.3``). Their values are turned into ``/scan`` messages by
+  the same inversion as ``fretc testgen --bindings`` (:mod:`fretc.audit.testgen_mcap`):
+  every beam of a scan reads the value written for the tick (0.81 m for ``too_close``,
+  0.99 m for not), and no scan at all where the topic must be silent (the SIF then hears
+  nothing, as in the ``lidar_dropout`` scenario).
+* **not drivable**: it reads the simulated world's ground truth (``/ground_truth/...``:
+  ``clearance`` follows from where the robot drives and what stands in the room) or a
+  driven topic together with the robot's own. Its trace values are not used.
+* **system**: the rest are the robot's outputs (``stopped``, ``stop_requested``,
+  ``forwarded_zero``, ``linear_speed``, ``angular_speed``); their trace values are not used.
+
+Timing: the run starts with ``lead_in`` seconds (default :data:`LEAD_IN_S`, so that the
+mission, which starts at 1 s, is under way) in which the scans carry the trace's first
+tick's values; trace tick ``k`` is the scan at ``lead_in + k * 100 ms``; after the trace's
+last tick the run goes on for ``lead_out`` seconds (default :data:`LEAD_OUT_S`) with the
+last tick's inputs held, so that the robot can answer an input of the last ticks (a run cut
+at the trace's end would violate every "eventually" whose trigger came late). The binding
+file's tick must be the LiDAR's 100 ms period.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from fretc.audit.testgen_mcap import EPOCH_NS, plan_messages, write_mcap
+from fretc.signals.bindings.spec import Bindings, make_bindings
+from fretc.sim.recording import McapRecorder
+from fretc.sim.scenarios import Scenario, get_scenario
+from fretc.sim.simulation import RunResult, SimParams, Simulation
+
+__all__ = ["DRIVEN_TOPICS", "LEAD_IN_S", "LEAD_OUT_S", "DriveError", "Classified", "classify", "scan_plan",
+           "TraceDrivenSimulation", "drive"]
+
+#: topics the driver writes from a trace
+DRIVEN_TOPICS = ("/scan",)
+#: seconds simulated before the trace's first tick
+LEAD_IN_S = 3.0
+#: seconds simulated after the trace's last tick, its inputs held
+LEAD_OUT_S = 2.0
+_SCAN_MS = 100
+_CLOCK = "fretc_drive_clock"
+
+
+class DriveError(ValueError):
+    """A trace the simulator cannot be driven by (the message says why)."""
+
+
+@dataclass
+class Classified:
+    """The trace's variables by role (:func:`classify`): ``driven`` and ``system`` names,
+    ``not_drivable`` name -> why."""
+
+    driven: list[str]
+    system: list[str]
+    not_drivable: dict[str, str]
+
+
+def classify(names: list[str], bindings: Bindings) -> Classified:
+    """The role of each FRET variable of ``names`` under ``bindings`` (module docstring).
+
+    Raises:
+        DriveError: a variable without a binding."""
+    out = Classified([], [], {})
+    for n in names:
+        b = bindings.variables.get(n)
+        if b is None:
+            raise DriveError(f"{n}: no binding in {bindings.source}")
+        topics = set(b.topics)
+        if topics and topics <= set(DRIVEN_TOPICS):
+            out.driven.append(n)
+        elif any(t.startswith("/ground_truth/") for t in topics):
+            out.not_drivable[n] = ("the simulated world's ground truth "
+                                   f"({', '.join(sorted(topics))}): it follows from where the "
+                                   "robot drives")
+        elif topics & set(DRIVEN_TOPICS):
+            out.not_drivable[n] = (f"reads {', '.join(sorted(topics))}: a driven topic with "
+                                   "the robot's own")
+        else:
+            out.system.append(n)
+    return out
+
+
+def scan_plan(rows: list[dict], bindings: Bindings, driven: list[str]
+              ) -> dict[int, float]:
+    """Trace tick (< 0: before the trace) -> the range every beam of that tick's scan reads;
+    ticks absent have no scan. Ticks before the first planned one are not in the map.
+
+    Raises:
+        DriveError: the tick is not 100 ms, or the driven values cannot be written."""
+    if bindings.tick.period_ns != _SCAN_MS * 1_000_000:
+        raise DriveError(f"{bindings.source}: the tick must be the LiDAR's 100 ms period")
+    if not driven:
+        return {k: 5.0 for k in range(len(rows))}
+    driven_rows = [{n: r[n] for n in driven} for r in rows]
+    # checked as testgen's logs are, read back; with a clock topic at every tick, so that the
+    # log spans the trace even where /scan is silent at its start or end
+    clock = make_bindings({_CLOCK: "/fretc_drive/clock.data"}, bindings.tick).variables
+    check = replace(bindings, variables={**bindings.variables, **clock})
+    with tempfile.TemporaryDirectory() as tmp:
+        _, adjusted, why = write_mcap([{**r, _CLOCK: True} for r in driven_rows], check,
+                                      Path(tmp) / "inputs.mcap")
+    if why is not None:
+        raise DriveError(f"the trace's inputs cannot be written as /scan messages: {why}")
+    if adjusted:
+        raise DriveError(f"the trace's inputs {', '.join(adjusted)} cannot be given together "
+                         "by /scan messages")
+    msgs, _ = plan_messages(driven_rows, bindings)
+    period = bindings.tick.period_ns
+    out = {}
+    for t, topic, obj in msgs:
+        if topic == "/scan":
+            out[(t - EPOCH_NS) // period] = float(obj.get("ranges", [5.0])[0])
+    return out
+
+
+class _TraceLidar:
+    """A LiDAR whose every beam reads ``value`` (set per scan by the simulation)."""
+
+    def __init__(self, real):
+        self.p = real.p
+        self.value = 5.0
+
+    def scan(self, world, x, y, yaw, t):
+        """``n_beams`` ranges, all :attr:`value` (float32, as the real LiDAR's)."""
+        return np.full(self.p.n_beams, self.value, dtype=np.float32)
+
+
+class TraceDrivenSimulation(Simulation):
+    """A :class:`Simulation` whose scans come from ``plan`` (:func:`scan_plan`): tick ``k``
+    at sim time ``lead_ms + k * 100`` ms; the trace's last tick is ``last``, after which the
+    run goes on ``out_ms`` with its inputs held."""
+
+    def __init__(self, scenario: Scenario, plan: dict[int, float], last: int, lead_ms: int,
+                 seed: int = 1, out_ms: int = 0):
+        super().__init__(scenario, seed=seed, sim=SimParams(max_time=1e6, final_linger=0.0))
+        self.plan = plan
+        self.last = last
+        self.end = last + out_ms // _SCAN_MS
+        self.lead_ms = lead_ms
+        self.first = min(plan) if plan else 0
+        self.lidar = _TraceLidar(self.lidar)
+
+    def _scan_10hz(self, rec, st, t_ms, t, s) -> None:
+        k = (t_ms - self.lead_ms) // _SCAN_MS
+        if k >= self.end:
+            st.end_ms = t_ms
+        k = min(k, self.last)  # the lead-out: the last tick's inputs held
+        if k < 0:  # the lead-in: as the first planned scan (silent after one before 0)
+            p = self.first
+            value = self.plan.get(p) if p >= 0 or k <= p else None
+        else:
+            value = self.plan.get(k)
+        if value is None:
+            return  # silent: no scan, the SIF hears nothing
+        self.lidar.value = value
+        super()._scan_10hz(rec, st, t_ms, t, s)
+
+
+def drive(rows: list[dict], bindings: Bindings, output: str | Path, *,
+          scenario: str = "nominal", seed: int = 1, lead_in: float = LEAD_IN_S,
+          lead_out: float = LEAD_OUT_S) -> tuple[Classified, RunResult]:
+    """Drive the simulator with the trace ``rows`` (one mapping FRET variable -> value per
+    tick) under ``bindings`` and record the run to ``output`` (MCAP, ROS 2).
+
+    Raises:
+        DriveError: the trace cannot drive the simulator (module docstring).
+        KeyError: an unknown scenario. OSError: ``output`` cannot be written."""
+    if not rows:
+        raise DriveError("the trace has no ticks")
+    roles = classify(list(rows[0]), bindings)
+    plan = scan_plan(rows, bindings, roles.driven)
+    lead_ms = max(int(round(lead_in * 1000)), -min(plan) * _SCAN_MS if plan else 0)
+    lead_ms -= lead_ms % _SCAN_MS
+    sc = replace(get_scenario(scenario), max_time=None)
+    sim = TraceDrivenSimulation(sc, plan, len(rows) - 1, lead_ms, seed,
+                                int(round(lead_out * 1000)))
+    Path(output).parent.mkdir(parents=True, exist_ok=True)
+    with open(output, "wb") as f:
+        rec = McapRecorder(f)
+        result = sim.run(rec)
+        rec.finish()
+    return roles, result
