@@ -38,6 +38,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from fretc.common.problems import DataProblem
+from fretc.common.streams import log_topics
 from fretc.signals import sample_groups
 from fretc.monitors.interval import evaluate_requirement
 from fretc.audit import AuditInputError
@@ -170,7 +171,7 @@ class Watch:
         self.needed: set[str] = set(self.entities.topics) | {
             t for r in plan.requirements if r.error is None and r.index not in
             self.entities.indexes for v in r.variables if v in b.variables
-            for t in b.variables[v].topics}
+            for t in log_topics(b.variables[v].topics)}  # a stream (/a{id==3}): its topic
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
         self.client = make_client(options, lambda t: t in self.needed, b.types, self.needed)
@@ -243,7 +244,7 @@ class Watch:
             if active:
                 names = sorted({v for r in active for v in r.variables})
                 rb = restrict(b, names)
-                src.want(set(rb.topics) | ({b.tick.topic} if b.tick.topic else set())
+                src.want(log_topics(rb.topics) | ({b.tick.topic} if b.tick.topic else set())
                          | self.entities.topics)
                 src.keep = self.entities.topics
                 result = self._run_pass(active, rb)
@@ -280,7 +281,7 @@ class Watch:
                 v.error = f"no binding for {', '.join(map(repr, missing))} in bindings " \
                           f"({b.source})"
                 continue
-            topics = sorted({t for n in r.variables for t in b.variables[n].topics})
+            topics = sorted({t for n in r.variables for t in log_topics(b.variables[n].topics)})
             bad = []
             for t in topics:
                 if t not in src.advertised:
@@ -391,7 +392,7 @@ class Watch:
             i = cols.n
             dep = max(tick.log_times.values()) if tick.log_times else None
             if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
-                    src.absent and src.absent.at(key.topics, t)):
+                    src.absent and src.absent.at(log_topics(key.topics), t)):
                 # inside a gap: kept (the judge reads it as unknown), the monitors not
                 # stepped over it
                 self._unknown[key] += 1

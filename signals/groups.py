@@ -8,10 +8,12 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
+from fretc.common.streams import log_topics
 from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import DataProblem, SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
+from fretc.signals.streams import Streams
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf, sample
 
 __all__ = ["GroupSampling", "sample_groups"]
@@ -139,8 +141,14 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, Clock],
          buffers: dict[Any, HeaderBuffer], fed: dict[str, list[Any]]
          ) -> Iterator[tuple[Any, Tick]]:
     """One read of the log feeding every group's clock; ``(key, Tick)`` pairs. A group whose
-    header buffer fails stops (``g.errors``); the others go on."""
-    for m in source.messages(set(fed)):
+    header buffer fails stops (``g.errors``); the others go on, as do those not reading a
+    stream (``/track{id==3}``) whose filter fails on a message."""
+    def stream_failed(stream: str, exc: SignalError) -> None:
+        for key in fed[stream]:
+            g.errors.setdefault(key, exc)
+
+    streams = Streams([b for c in clocks.values() for b in c.variables])
+    for m in streams.messages(source.messages(log_topics(fed)), fed, stream_failed):
         for key in fed[m.topic]:
             if key in g.errors:
                 continue

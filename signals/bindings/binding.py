@@ -185,7 +185,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
         found: set[str] = set()
         check(node, where, found)
         topics = frozenset(found)
-    fields = tuple(n for n in walk(node) if isinstance(n, Field) and n.path)
+    fields = tuple(n for n in walk(node) if isinstance(n, Field) and (n.path or n.filters))
     extractors: dict[Field, Callable[[Any], Any]] = {}
     constants: dict[str, Any] = {}
     unread, inf_unread = nan != "false", inf != "value"
