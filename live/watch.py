@@ -417,11 +417,11 @@ class Watch:
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
                 passes[key].intact_end = cut + 1
-            left = src.left_for_good(key.topics)
+            left = src.left_for_good(log_topics(key.topics))
             if left is not None:  # a publisher it reads left and the run went on without it
                 end, res = left + 1 if left != NO_TIME else NO_TIME, passes[key]
                 res.intact_end = min(end, end if res.intact_end is None else res.intact_end)
-                gone = sorted(t for t in key.topics if src.left_for_good((t,)) is not None)
+                gone = sorted(t for t in log_topics(key.topics) if src.left_for_good((t,)) is not None)
                 res.lost = (f"the publisher of {', '.join(gone)} left (unadvertised) and did "
                             "not come back before the run ended")
         self._live_evidence()
