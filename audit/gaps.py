@@ -129,6 +129,10 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
             if key not in masks:
                 masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded, span)
             mask |= masks[key]
+        tw = getattr(b, "tick_window", None)
+        if tw is not None and mask.any():  # count_ticks: unknown while such a tick is counted
+            last = np.maximum.accumulate(np.where(mask, times, np.iinfo(np.int64).min))
+            mask = last > times - tw.span_ns
         if mask.any():
             out[name] = mask
     return out

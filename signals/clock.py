@@ -22,6 +22,7 @@ from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
 from fretc.signals.bindings.spec import Bindings, TickSpec, grid_start
 from fretc.signals.streams import Streams
+from fretc.signals.tick_windows import one_clock
 from fretc.signals.windows import push_message, sliding_windows, windows_complete
 from fretc.common.problems import DataProblem, ProblemLog, SignalError
 from fretc.logs.selective import install as install_selective
@@ -113,7 +114,7 @@ class Sampling:
         if self._iter is None:
             raise RuntimeError("Sampling is iterated once")
         it, self._iter = self._iter, None
-        return it
+        return one_clock(it, self)  # count_ticks(...) bindings counted
 
 
 def missing_topics(need, available) -> list[str]:

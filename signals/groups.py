@@ -14,6 +14,7 @@ from fretc.common.problems import DataProblem, SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.streams import Streams
+from fretc.signals.tick_windows import with_tick_windows
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf, sample
 
 __all__ = ["GroupSampling", "sample_groups"]
@@ -61,7 +62,9 @@ class GroupSampling:
         if self._iter is None:
             raise RuntimeError("GroupSampling is iterated once")
         it, self._iter = self._iter, None
-        return it
+        return with_tick_windows(it, self.groups, {  # count_ticks(...) bindings counted
+            k: list(s.bindings.variables.values()) for k, s in self.groups.items()
+            if s.bindings is not None})
 
 
 def sample_groups(source: LogSource, bindings: Bindings,

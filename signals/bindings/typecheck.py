@@ -217,9 +217,10 @@ class _TypeChecker:
             if isinstance(arg, Field) and not arg.path:  # rate(/scan, 1s), count(/estop, 1s)
                 return "number"
             t = self.type(arg)
-            if f == "count":
-                self.need(arg, t, ("bool",), "count() over a window counts the messages on "
-                          "which a condition held (count(/estop.data, 1min))", node)
+            if f in ("count", "count_ticks"):
+                self.need(arg, t, ("bool",), f"{f}() over a window counts the "
+                          f"{'ticks' if f == 'count_ticks' else 'messages'} on which a "
+                          "condition held (count(/estop.data, 1min))", node)
             else:
                 self.need(arg, t, ("number",), f"{f}() over a window takes numbers", node)
             return "number"
