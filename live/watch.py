@@ -13,8 +13,8 @@ of a recorded log, only fed live:
   for the live verdicts and events;
 * at the end the verdicts and evidence are made by the audit's own code
   (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching;
-* per-entity requirements (``$track``) are judged at the end only, by the audit's own code
-  over the messages kept for them (:mod:`fretc.live.entities`; no live events).
+* per-entity requirements (``$track``) get their verdicts at the end, from the audit's own code
+  over the messages kept for them (:mod:`fretc.live.entities`; live events: :mod:`fretc.live.entity_events`).
 
 The run ends with the server's orderly close, every bound topic unadvertised, the
 duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
@@ -52,6 +52,7 @@ from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, run_gaps
 from fretc.live.columns import LiveColumns, WatchPasses as _WatchPasses, split_pending
 from fretc.live.entities import EntityRecording
+from fretc.live.entity_events import EntityEvents
 from fretc.live.record import Recorder
 from fretc.live.transports import make_client
 from fretc.live.source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
@@ -185,9 +186,8 @@ class Watch:
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
-        self._cols = {}
-        self._group = {}
-        self._unknown = {}
+        self._cols, self._group, self._unknown = {}, {}, {}
+        self.entity_events = EntityEvents(plan, self.source, self._step, _Live)
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
         #: whose arrival closed it): the latency benchmark's hook.
@@ -254,17 +254,18 @@ class Watch:
                     pass
         finally:
             self.client.stop()
+        self.entity_events.finish()
         self._event(WatchEvent("end", src._last_time, time.time_ns(),
                                detail=src.end_reason or "stopped"))
         self._record_problems(la, result)
         return self._finish(la, verdicts, result, active if result is not None else [])
 
     def _used(self, topic: str, log_time: int, payload: bytes) -> None:
-        """A message the watch used: recorded (``--record``), kept for the per-entity
-        requirements."""
+        """A message the watch used: recorded, kept and stepped for per-entity requirements."""
         if self.recorder is not None:
             self.recorder.message(topic, log_time, payload)
         self.entities.message(topic, log_time, payload)
+        self.entity_events.message(topic, log_time, payload)
 
     def _watchable(self, la: LogAudit, verdicts: dict[int, Verdict]) -> list:
         """The requirements that can be watched: every variable bound, every topic they read

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TickCount", "with_tick_windows", "one_clock"]
+__all__ = ["TickCount", "TickWindows", "with_tick_windows", "one_clock"]
 
 
 class TickCount:
@@ -58,40 +58,63 @@ class TickCount:
         return math.nan if self.unknown else float(self.held)
 
 
+class TickWindows:
+    """The ``count_ticks`` windows of several clocks: :meth:`apply` turns each tick (or
+    block of ticks) of a clock into its counts (module docstring).
+
+    Args:
+        samplings: key -> the clock's :class:`~fretc.signals.clock.Sampling` (its
+            ``warmup_ticks``, ``ticks`` and ``first_time`` count the window's warm-up).
+        names: key -> the clock's bindings (those with a ``tick_window`` are counted).
+    """
+
+    def __init__(self, samplings: dict[Any, Any], names: dict[Any, list]) -> None:
+        self.samplings = samplings
+        self.counts = {key: {b.name: TickCount(b.tick_window.span_ns) for b in bs
+                             if getattr(b, "tick_window", None) is not None}
+                       for key, bs in names.items()}
+        self.dropped = {key: 0 for key in names}
+
+    def __bool__(self) -> bool:
+        return any(self.counts.values())
+
+    def apply(self, key: Any, item: Any) -> Any:
+        """``item`` (a Tick or a TickBlock of clock ``key``) with its counts, renumbered
+        after the window's warm-up; None when all of it is warm-up."""
+        tc = self.counts.get(key)
+        if not tc:
+            return item
+        out = _block(item, tc) if hasattr(item, "start") else _tick(item, tc)
+        s = self.samplings[key]
+        if out is None:
+            _warm(s, 1 if not hasattr(item, "start") else len(item.times))
+            self.dropped[key] += 1 if not hasattr(item, "start") else len(item.times)
+            return None
+        out, warm = out
+        if warm:
+            _warm(s, warm)
+            self.dropped[key] += warm
+        if self.dropped[key]:
+            out = _renumbered(out, self.dropped[key])
+            if s.first_time is None:
+                s.first_time = int(out.times[0]) if hasattr(out, "start") else out.time
+        return out
+
+
 def with_tick_windows(pairs: Iterator[tuple[Any, Any]], samplings: dict[Any, Any],
                       names: dict[Any, list]) -> Iterator[tuple[Any, Any]]:
     """``pairs`` of a group sampling (``(key, Tick)`` or ``(key, TickBlock)``) with the
-    ``count_ticks`` bindings' values turned into their counts (module docstring): ticks of
-    a warm-up are left out and counted in ``samplings[key]`` (its ``warmup_ticks``,
-    ``ticks``, ``first_time``), the ticks after renumbered. ``names``: key -> the clock's
-    bindings (those with a ``tick_window`` are counted)."""
-    counts = {key: {b.name: TickCount(b.tick_window.span_ns) for b in bs
-                    if getattr(b, "tick_window", None) is not None}
-              for key, bs in names.items()}
-    if not any(counts.values()):
+    ``count_ticks`` bindings' values turned into their counts (:class:`TickWindows`): ticks
+    of a warm-up are left out and counted in ``samplings[key]``, the ticks after
+    renumbered."""
+    tw = TickWindows(samplings, names)
+    if not tw:
         yield from pairs
         return
-    dropped = {key: 0 for key in names}
     for key, item in pairs:
-        tc = counts.get(key)
-        if not tc:
-            yield key, item
-            continue
-        out = _block(item, tc) if hasattr(item, "start") else _tick(item, tc)
-        if out is None:
-            _warm(samplings[key], 1)
-            dropped[key] += 1
-            continue
-        out, warm = out
-        if warm:
-            _warm(samplings[key], warm)
-            dropped[key] += warm
-        if dropped[key]:
-            out = _renumbered(out, dropped[key])
-            s = samplings[key]
-            if s.first_time is None:
-                s.first_time = int(out.times[0]) if hasattr(out, "start") else out.time
-        yield key, out
+        out = tw.apply(key, item)
+        if out is not None:
+            yield key, out
 
 
 def one_clock(ticks: Iterator[Any], s: Any) -> Iterator[Any]:

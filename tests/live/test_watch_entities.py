@@ -320,3 +320,35 @@ def test_audit_and_watch_give_the_same_per_entity_verdicts(tmp_path, case):
         assert verdicts == {"T": "vacuous"}
     else:
         assert len(verdicts) > 2  # the entities were judged
+
+
+@pytest.mark.parametrize("case", ["tracks", "motors"])
+def test_live_events_per_entity_agree_with_the_final_verdicts(tmp_path, case):
+    """Each entity's ``pt``/``ltl3`` events are made while watching, named by the instance:
+    an entity's first ``ltl3`` violated event is at its final verdict's first violation (tick
+    and time); an entity that satisfies the requirement has none; the ``pt`` violations of
+    an entity are at ticks of its own clock."""
+    if case == "motors":
+        (tmp_path / "t.fret").write_text("@tick_period 100 ms\n" + FRET_M, encoding="utf-8")
+        (tmp_path / "t.bindings.toml").write_text(DIAG_BINDINGS, encoding="utf-8")
+        plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+        log, base = _diagnostics_log(tmp_path), "M"
+    else:
+        plan, log, base = _plan(tmp_path, FRET_T), _log(tmp_path, ROWS), "T"
+    w, la, _done = _watch(plan, log)
+    finals = {v.requirement: v for v in la.verdicts if v.requirement.startswith(base + "[")}
+    assert finals and any(v.verdict == "violated" for v in finals.values())
+    ltl3 = {}
+    for e in w.events:
+        if e.kind == "ltl3" and e.verdict == "violated":
+            ltl3.setdefault(e.requirement, (e.extra["status_tick"], e.time_ns))
+    assert set(ltl3) <= set(finals)  # named by the instance, never the plain id
+    for name, v in finals.items():
+        if v.verdict == "violated":
+            fv = v.first_violation
+            assert ltl3[name][0] == fv.at.tick, (name, ltl3[name], fv.at)
+            assert ltl3[name][1] >= fv.at.time_ns
+        else:
+            assert name not in ltl3, (name, v.verdict)
+    pts = [e for e in w.events if e.kind == "pt" and e.requirement in finals]
+    assert pts and all(e.verdict in ("holds", "violated") for e in pts)
