@@ -124,3 +124,22 @@ def test_a_gap_makes_the_count_unknown_while_its_ticks_are_in_the_window():
                           [Gap(350 * MS, 420 * MS, frozenset({"/a"}), "chunk_crc")])
     assert np.flatnonzero(masks["c"]).tolist() == [4]  # it holds the message before the gap
     assert np.flatnonzero(masks["n"]).tolist() == [4, 5, 6]  # (t - 300 ms, t] holds tick 4
+
+
+def test_count_ticks_on_a_csv_trace_in_the_audit(tmp_path):
+    """A CSV trace's one clock counts once (a row per tick): violated at the first complete
+    window with more than 3 true rows."""
+    from fretc.audit import AuditConfig, audit_log, load_plan
+
+    rows = [1 if i % 3 else 0 for i in range(40)]
+    (tmp_path / "t.csv").write_text("time,a\n" + "".join(f"{i / 10:.1f},{a}\n"
+                                                          for i, a in enumerate(rows)))
+    (tmp_path / "r.fret").write_text("R: the robot shall always satisfy n <= 3\n")
+    (tmp_path / "r.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\nn = "count_ticks(/csv.a, 500 ms)"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "r.fret"),))),
+                   str(tmp_path / "t.csv"))
+    v = la.verdicts[0]
+    first = next(i for i in range(5, 40) if sum(rows[i - 4:i + 1]) > 3)
+    assert (v.verdict, v.warmup_ticks, v.ticks_evaluated) == ("violated", 5, 35)
+    assert v.first_violation.at.time_ns == first * 100 * MS
