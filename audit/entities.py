@@ -24,11 +24,13 @@ from typing import Any
 import numpy as np
 
 from fretc.audit.verdict import LogAudit, Verdict
-from fretc.common.problems import BindingError, SignalError
+from fretc.common.problems import BindingError, FretcInputError, SignalError
+from fretc.common.streams import base_topic, log_topics
 from fretc.logs import open_log
 from fretc.signals.bindings.binding import compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.extract import Valid
+from fretc.signals.streams import Streams
 
 __all__ = ["MAX_ENTITIES", "entity_of_requirements", "find_entities", "audit_entities"]
 
@@ -98,7 +100,7 @@ def find_entities(path: str, bindings: Any, name: str) -> tuple[list, dict, bool
     topic = next(iter(b.topics))
     st, seen, cut = EvalState(), {}, False
     src = open_log(path)
-    for m in src.messages({topic}):
+    for m in Streams([b]).messages(src.messages({base_topic(topic)}), {topic}):
         st.msgs[topic], st.times[topic], st.now = m.data, m.log_time, m.log_time
         try:
             values = _items(b._scalar(st))  # type: ignore[misc]
@@ -117,6 +119,29 @@ def find_entities(path: str, bindings: Any, name: str) -> tuple[list, dict, bool
                 seen[x] = [m.log_time, m.log_time]
             seen[x][1] = m.log_time
     return list(seen), {k: tuple(v) for k, v in seen.items()}, cut
+
+
+def _key_topic_absent(path: str, bindings: Any, name: str) -> tuple[str, str] | None:
+    """When the topic of entity ``name``'s key is not in the log at ``path``: the verdict of
+    its requirement, as a plain requirement's whose bound topic is absent (``error``, or
+    ``unknown`` when the damage found reading the log's topics may have taken it), with the
+    reason. None when the topic is there (no entity in its messages is then ``vacuous``)
+    or the key does not compile (:func:`find_entities` says why)."""
+    key = bindings.entities[name][0]
+    try:
+        topics = compile_expression(f"entity_{name}", key, source=str(bindings.source)).topics
+        src = open_log(path)
+        available = src.topics()
+    except (BindingError, OSError, FretcInputError):
+        return None
+    absent = sorted(t for t in log_topics(topics) if t not in available)
+    if not absent:
+        return None
+    why = (f"topic {', '.join(absent)} (the key {key} of entity {name}) is not in the log "
+           f"(it has {', '.join(available) or 'no topics'}): no entity was looked for")
+    if src.partial:
+        return "unknown", f"{why}; the log is damaged: the damage may have taken it"
+    return "error", why
 
 
 def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
@@ -153,6 +178,11 @@ def _instances(plan: Any, r: Any, names: list[str], path: str, run: Any) -> list
         return alone("error", error=f"{r.id} reads the entities {', '.join(names)}: a "
                      "requirement is judged per entity of one key")
     name = names[0]
+    absent = _key_topic_absent(path, plan.bindings, name)
+    if absent is not None:
+        verdict, why = absent
+        return alone(verdict, **({"unknown_reason": why} if verdict == "unknown" else
+                                 {"error": why}))
     try:
         values, span, cut = find_entities(path, plan.bindings, name)
     except (BindingError, SignalError, OSError) as exc:

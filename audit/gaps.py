@@ -27,6 +27,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from fretc.common.streams import base_topic, log_topics
 from fretc.logs.base import Gap
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import stateful_topics
@@ -62,8 +63,9 @@ def split_bridged(gaps: Iterable[Gap], bridge_ns: int | None) -> tuple[list[Gap]
 
 
 def gaps_of_clock(gaps: Iterable[Gap], topics: Iterable[str]) -> list[Gap]:
-    """The gaps that may have held messages of any of ``topics``."""
-    ts = list(topics)
+    """The gaps that may have held messages of any of ``topics`` (a stream's: of its
+    topic)."""
+    ts = sorted(log_topics(topics))
     return [g for g in gaps if any(g.affects(t) for t in ts)]
 
 
@@ -119,7 +121,7 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
         span = None if w is None else (w.span_ns or 0)
         mask = np.zeros(len(times), np.bool_)
         for t in topics:
-            own = [g for g in gaps if g.affects(t)]
+            own = [g for g in gaps if g.affects(base_topic(t))]  # a stream: its topic's
             held = log_times.get(t)
             if not own or held is None:
                 continue
@@ -127,6 +129,10 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
             if key not in masks:
                 masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded, span)
             mask |= masks[key]
+        tw = getattr(b, "tick_window", None)
+        if tw is not None and mask.any():  # count_ticks: unknown while such a tick is counted
+            last = np.maximum.accumulate(np.where(mask, times, np.iinfo(np.int64).min))
+            mask = last > times - tw.span_ns
         if mask.any():
             out[name] = mask
     return out

@@ -21,6 +21,7 @@ from fretc.signals.bindings import Bindings
 from fretc.signals.clock import missing_topics
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem, FretcInputError, SignalError
+from fretc.common.streams import log_topics as log_topics_of
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
@@ -220,11 +221,13 @@ class _LogRun:
         for r in active:
             if verdicts[r.index].error is not None:
                 continue
-            absent = missing_topics({t for v in r.variables
-                                     for t in bindings.variables[v].topics}, log_topics)
+            absent = missing_topics(log_topics_of({t for v in r.variables  # streams' topics
+                                                   for t in bindings.variables[v].topics}),
+                                    log_topics)
             if not absent:
                 continue
-            users = {t: sorted(v for v in r.variables if t in bindings.variables[v].topics)
+            users = {t: sorted(v for v in r.variables
+                               if t in log_topics_of(bindings.variables[v].topics))
                      for t in absent}
             has = (f"a CSV trace has one topic, /csv, with the columns "
                    f"{', '.join(source.columns)}" if source.kind == "csv"

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from fretc.common.streams import log_topics
 from fretc.signals.bindings import Bindings
 from fretc.common.problems import SignalError
 from fretc.signals import blocks_of_ticks, sample, sample_blocks
@@ -184,7 +185,8 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
         passes[key] = res = ClockPass(s, times, columns, log_times)
         cut_at_damage(res, source, bindings, key.topics)
         mark_gaps(res, clock.names, bindings, gaps, key.topics,
-                  lost_in_words(source, key.topics if bindings is not None else [CSV_TOPIC]))
+                  lost_in_words(source, log_topics(key.topics) if bindings is not None
+                                else [CSV_TOPIC]))
     return LogPasses(sampling, passes, failed, errors, gaps, bridged)
 
 

@@ -33,6 +33,7 @@ from fretc.audit.entities import entity_of_requirements
 from fretc.audit.log import audit_log
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.common.problems import BindingError
+from fretc.common.streams import log_topics
 from fretc.live.record import Recorder
 from fretc.signals.bindings.binding import compile_expression
 
@@ -48,7 +49,8 @@ def entity_topics(plan: Any, indexes: set[int]) -> set[str]:
     out: set[str] = {b.tick.topic} if b.tick.topic else set()
     for name, (key, _matching) in b.entities.items():
         try:
-            out |= compile_expression(f"entity_{name}", key, source=str(b.source)).topics
+            out |= log_topics(compile_expression(f"entity_{name}", key,
+                                                 source=str(b.source)).topics)
         except BindingError:
             pass
     try:
@@ -59,7 +61,7 @@ def entity_topics(plan: Any, indexes: set[int]) -> set[str]:
         if r.index in indexes:
             for v in r.variables:
                 if v in bound:
-                    out |= set(bound[v].topics)
+                    out |= log_topics(bound[v].topics)  # a stream: its topic
     return out
 
 

@@ -13,8 +13,8 @@ of a recorded log, only fed live:
   for the live verdicts and events;
 * at the end the verdicts and evidence are made by the audit's own code
   (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching;
-* per-entity requirements (``$track``) are judged at the end only, by the audit's own code
-  over the messages kept for them (:mod:`fretc.live.entities`; no live events).
+* per-entity requirements (``$track``) get their verdicts at the end, from the audit's own code
+  over the messages kept for them (:mod:`fretc.live.entities`; live events: :mod:`fretc.live.entity_events`).
 
 The run ends with the server's orderly close, every bound topic unadvertised, the
 duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
@@ -38,6 +38,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from fretc.common.problems import DataProblem
+from fretc.common.streams import log_topics
 from fretc.signals import sample_groups
 from fretc.monitors.interval import evaluate_requirement
 from fretc.audit import AuditInputError
@@ -51,6 +52,7 @@ from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, run_gaps
 from fretc.live.columns import LiveColumns, WatchPasses as _WatchPasses, split_pending
 from fretc.live.entities import EntityRecording
+from fretc.live.entity_events import EntityEvents
 from fretc.live.record import Recorder
 from fretc.live.transports import make_client
 from fretc.live.source import (CLOCK_BACKWARDS, CONNECTION_CLOSED, CONNECTION_GAP, NOT_ADVERTISED,
@@ -170,7 +172,7 @@ class Watch:
         self.needed: set[str] = set(self.entities.topics) | {
             t for r in plan.requirements if r.error is None and r.index not in
             self.entities.indexes for v in r.variables if v in b.variables
-            for t in b.variables[v].topics}
+            for t in log_topics(b.variables[v].topics)}  # a stream (/a{id==3}): its topic
         if b.tick.topic is not None:
             self.needed.add(b.tick.topic)
         self.client = make_client(options, lambda t: t in self.needed, b.types, self.needed)
@@ -184,9 +186,8 @@ class Watch:
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
-        self._cols = {}
-        self._group = {}
-        self._unknown = {}
+        self._cols, self._group, self._unknown = {}, {}, {}
+        self.entity_events = EntityEvents(plan, self.source, self._step, _Live)
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
         #: whose arrival closed it): the latency benchmark's hook.
@@ -243,7 +244,7 @@ class Watch:
             if active:
                 names = sorted({v for r in active for v in r.variables})
                 rb = restrict(b, names)
-                src.want(set(rb.topics) | ({b.tick.topic} if b.tick.topic else set())
+                src.want(log_topics(rb.topics) | ({b.tick.topic} if b.tick.topic else set())
                          | self.entities.topics)
                 src.keep = self.entities.topics
                 result = self._run_pass(active, rb)
@@ -253,17 +254,18 @@ class Watch:
                     pass
         finally:
             self.client.stop()
+        self.entity_events.finish()
         self._event(WatchEvent("end", src._last_time, time.time_ns(),
                                detail=src.end_reason or "stopped"))
         self._record_problems(la, result)
         return self._finish(la, verdicts, result, active if result is not None else [])
 
     def _used(self, topic: str, log_time: int, payload: bytes) -> None:
-        """A message the watch used: recorded (``--record``), kept for the per-entity
-        requirements."""
+        """A message the watch used: recorded, kept and stepped for per-entity requirements."""
         if self.recorder is not None:
             self.recorder.message(topic, log_time, payload)
         self.entities.message(topic, log_time, payload)
+        self.entity_events.message(topic, log_time, payload)
 
     def _watchable(self, la: LogAudit, verdicts: dict[int, Verdict]) -> list:
         """The requirements that can be watched: every variable bound, every topic they read
@@ -280,7 +282,7 @@ class Watch:
                 v.error = f"no binding for {', '.join(map(repr, missing))} in bindings " \
                           f"({b.source})"
                 continue
-            topics = sorted({t for n in r.variables for t in b.variables[n].topics})
+            topics = sorted({t for n in r.variables for t in log_topics(b.variables[n].topics)})
             bad = []
             for t in topics:
                 if t not in src.advertised:
@@ -391,7 +393,7 @@ class Watch:
             i = cols.n
             dep = max(tick.log_times.values()) if tick.log_times else None
             if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
-                    src.absent and src.absent.at(key.topics, t)):
+                    src.absent and src.absent.at(log_topics(key.topics), t)):
                 # inside a gap: kept (the judge reads it as unknown), the monitors not
                 # stepped over it
                 self._unknown[key] += 1
@@ -416,11 +418,11 @@ class Watch:
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
                 passes[key].intact_end = cut + 1
-            left = src.left_for_good(key.topics)
+            left = src.left_for_good(log_topics(key.topics))
             if left is not None:  # a publisher it reads left and the run went on without it
                 end, res = left + 1 if left != NO_TIME else NO_TIME, passes[key]
                 res.intact_end = min(end, end if res.intact_end is None else res.intact_end)
-                gone = sorted(t for t in key.topics if src.left_for_good((t,)) is not None)
+                gone = sorted(t for t in log_topics(key.topics) if src.left_for_good((t,)) is not None)
                 res.lost = (f"the publisher of {', '.join(gone)} left (unadvertised) and did "
                             "not come back before the run ended")
         self._live_evidence()

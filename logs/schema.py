@@ -162,6 +162,15 @@ class TopicSchema:
                 valid, hint)
         return fields[p]
 
+    def check_message_filter(self, flt: Any) -> None:
+        """A filter written right after the topic (``/track{id==3}``, FoxQL): its field must
+        be a bool, number or string of the topic's message, of the kind of the literal.
+
+        Raises:
+            FieldPathError: as :meth:`resolve`.
+        """
+        self._check_filter(FieldType("message", self.typename), flt, self.topic + flt.text())
+
     def _check_filter(self, item: FieldType, flt: Any, walked: str) -> None:
         """A filter's field must be a bool, number or string of the item message, and a
         literal it is compared with of the same kind."""

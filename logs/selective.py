@@ -44,6 +44,8 @@ from typing import Any
 
 import numpy as np
 
+from fretc.common.streams import base_topic
+
 __all__ = ["selective_decoder", "wanted_fields", "install", "stats", "HEADER_STAMP"]
 
 #: Field paths as in :class:`fretc.signals.bindings.Field`: attribute names and indexes.
@@ -73,12 +75,14 @@ def wanted_fields(bindings) -> dict[str, frozenset[Path]]:
     """Topic -> field paths the variables of ``bindings`` read (``/scan.ranges`` gives
     ``("ranges",)``); the tick topic and topics read only by ``age()`` get an empty set;
     with the header time base every topic also gets :data:`HEADER_STAMP`."""
-    out: dict[str, set] = {t: set() for t in bindings.topics}
+    out: dict[str, set] = {base_topic(t): set() for t in bindings.topics}
     if bindings.tick.topic is not None:
         out.setdefault(bindings.tick.topic, set())
     for b in bindings.variables.values():
-        for f in b.fields:
-            out.setdefault(f.topic, set()).add(tuple(f.path))
+        for f in b.fields:  # a stream's fields and filtered fields are its topic's
+            paths = out.setdefault(base_topic(f.topic), set())
+            paths.add(tuple(f.path))
+            paths.update(tuple(flt.path) for flt in getattr(f, "filters", ()))
     if bindings.time_base != "log":  # the clock reads header.stamp of every message
         for paths in out.values():
             paths.add(HEADER_STAMP)

@@ -26,6 +26,8 @@ from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
 from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import SignalError
+from fretc.common.streams import log_topics
+from fretc.signals.streams import Streams
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.bindings.spec import grid_start
@@ -224,7 +226,14 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
     """One read of the log, evaluating every clock each :data:`BLOCK` messages."""
     count = 0
     by_blocks = getattr(source, "message_blocks", None)
-    if shared is not None and by_blocks is not None and not any(c.tf for c in clocks.values()):
+    streams = Streams([b for c in clocks.values() for b in c.variables])
+
+    def stream_failed(stream: str, exc: SignalError) -> None:
+        for key in fed[stream]:
+            g.errors.setdefault(key, exc)
+
+    if (shared is not None and by_blocks is not None and not streams
+            and not any(c.tf for c in clocks.values())):
         released = by_blocks(set(fed))
         if released is not None:  # the columnar pass (the log time base reads no header)
             for blocks in released:
@@ -237,7 +246,7 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
             yield from _evaluate_all(g, clocks, True)
             _missing(clocks)
             return
-    for m in source.messages(set(fed)):
+    for m in streams.messages(source.messages(log_topics(fed)), fed, stream_failed):
         if shared is not None:
             shared.add(m.topic, m.log_time, m.log_time, m.data)
         else:

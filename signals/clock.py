@@ -14,12 +14,15 @@ from typing import Any
 import numpy as np
 
 from fretc.common import problems as P
+from fretc.common.streams import log_topics
 from fretc.signals.bindings.binding import EMPTY_FOLD, Binding, fold
 from fretc.signals.between_ticks import folded_topics, single_topic
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
 from fretc.signals.bindings.spec import Bindings, TickSpec, grid_start
+from fretc.signals.streams import Streams
+from fretc.signals.tick_windows import one_clock
 from fretc.signals.windows import push_message, sliding_windows, windows_complete
 from fretc.common.problems import DataProblem, ProblemLog, SignalError
 from fretc.logs.selective import install as install_selective
@@ -111,7 +114,7 @@ class Sampling:
         if self._iter is None:
             raise RuntimeError("Sampling is iterated once")
         it, self._iter = self._iter, None
-        return it
+        return one_clock(it, self)  # count_ticks(...) bindings counted
 
 
 def missing_topics(need, available) -> list[str]:
@@ -135,20 +138,17 @@ def present_tf(topics, available) -> set[str]:
 
 def check_topics(source: LogSource, bindings: Bindings, extra: set[str] | None = None,
                   users: Bindings | None = None) -> set[str]:
-    """The topics to read: the bound ones, ``extra`` and the tick topic.
-
-    Raises:
-        SignalError: some of them are not in the log (naming the variables that use them,
-            from ``users`` if given).
-    """
+    """The topics to read: the bound ones (a stream: itself, its topic read for it),
+    ``extra`` and the tick topic. Raises SignalError when some of them are not in the log
+    (naming the variables that use them, from ``users`` if given)."""
     available = source.topics()
     need = set(bindings.topics) | (extra or set())
     if bindings.tick.topic is not None:
         need.add(bindings.tick.topic)
-    missing = missing_topics(need, available)
+    missing = missing_topics(log_topics(need), available)
     if missing:
         by = users if users is not None else bindings
-        who = {t: sorted(n for n, b in by.variables.items() if t in b.topics) for t in missing}
+        who = {t: sorted(n for n, b in by.variables.items() if t in log_topics(b.topics)) for t in missing}
         detail = "; ".join(f"{t} (used by {', '.join(who[t]) or 'the [tick]'})" for t in missing)
         raise SignalError(f"{source.path}: the log has no topic {detail}; it has "
                           f"{', '.join(available) or 'no topics'}"
@@ -226,13 +226,16 @@ class HeaderBuffer:
 
 def feed(source: LogSource, bindings: Bindings, topics: set[str], problems: ProblemLog
           ) -> Iterator[tuple[str, int, int, Any]]:
-    """(topic, time, log_time, data) in non-decreasing time (time base applied)."""
+    """(topic, time, log_time, data) in non-decreasing time (time base applied); a stream's
+    messages (``/a{id==3}``) follow their topic's (:class:`fretc.signals.streams.Streams`)."""
+    msgs = Streams(bindings.variables.values()).messages(source.messages(log_topics(topics)),
+                                                         topics)
     if bindings.time_base == "log":
-        for m in source.messages(topics):
+        for m in msgs:
             yield m.topic, m.log_time, m.log_time, m.data
         return
     buf = HeaderBuffer(source, bindings, problems)
-    for m in source.messages(topics):
+    for m in msgs:
         yield from buf.push(m)
     yield from buf.drain()
 

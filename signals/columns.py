@@ -64,8 +64,11 @@ class MessageColumns:
 
     def __init__(self, data: dict[str, list[Any]]) -> None:
         self.data = data
-        self._fields: dict[tuple[str, tuple], Any] = {}
+        self._fields: dict[tuple[str, str], Any] = {}  # (topic, field text) -> column
         self._reduced: dict[tuple[str, str], Any] = {}
+        #: (topic, field text) -> (the values read from each message, why they are no column):
+        #: read once, for every binding and the message-by-message fallback
+        self._irregular: dict[tuple[str, tuple], tuple[list, str]] = {}
 
     def field(self, topic: str, path: tuple, node: Field) -> Any:
         """Field ``path`` of every message of ``topic`` (:func:`regular_column`).
@@ -73,7 +76,9 @@ class MessageColumns:
         Raises:
             Irregular: values that do not fit a column, or a message without the field.
         """
-        key = (topic, path)
+        key = (topic, node.text())  # the same field at other columns of other bindings
+        if key in self._irregular:
+            raise Irregular(self._irregular[key][1])
         col = self._fields.get(key)
         if col is None:
             msgs = self.data[topic]
@@ -87,7 +92,11 @@ class MessageColumns:
                 values = [ex(d) for d in self.data[topic]]
             except FieldAccessError as exc:
                 raise Irregular(str(exc)) from None
-            col = self._fields[key] = regular_column(values, node.text())
+            try:
+                col = self._fields[key] = regular_column(values, node.text())
+            except Irregular as exc:
+                self._irregular[key] = (values, str(exc))
+                raise
         return col
 
     def reduced(self, node: Any, topic: str, vector: Any, scalar: Any) -> np.ndarray:
@@ -109,9 +118,12 @@ class MessageColumns:
         except (Irregular, EvalError):
             st = EvalState()
             values = []
+            known = [(k, v) for k, (v, _why) in self._irregular.items() if k[0] == topic]
             try:
-                for d in msgs:
+                for i, d in enumerate(msgs):
                     st.msgs[topic] = d
+                    for k, v in known:  # fields already read: the evaluators' memo
+                        st.values[k] = (d, v[i])
                     values.append(scalar(st))
             except EvalError as exc:
                 raise Irregular(exc.message) from None

@@ -8,10 +8,13 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
+from fretc.common.streams import log_topics
 from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import DataProblem, SignalError
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
+from fretc.signals.streams import Streams
+from fretc.signals.tick_windows import with_tick_windows
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf, sample
 
 __all__ = ["GroupSampling", "sample_groups"]
@@ -59,7 +62,11 @@ class GroupSampling:
         if self._iter is None:
             raise RuntimeError("GroupSampling is iterated once")
         it, self._iter = self._iter, None
-        return it
+        if self.source.kind == "csv":  # one clock, a Sampling of its own: counted there
+            return it
+        return with_tick_windows(it, self.groups, {  # count_ticks(...) bindings counted
+            k: list(s.bindings.variables.values()) for k, s in self.groups.items()
+            if s.bindings is not None})
 
 
 def sample_groups(source: LogSource, bindings: Bindings,
@@ -139,8 +146,14 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, Clock],
          buffers: dict[Any, HeaderBuffer], fed: dict[str, list[Any]]
          ) -> Iterator[tuple[Any, Tick]]:
     """One read of the log feeding every group's clock; ``(key, Tick)`` pairs. A group whose
-    header buffer fails stops (``g.errors``); the others go on."""
-    for m in source.messages(set(fed)):
+    header buffer fails stops (``g.errors``); the others go on, as do those not reading a
+    stream (``/track{id==3}``) whose filter fails on a message."""
+    def stream_failed(stream: str, exc: SignalError) -> None:
+        for key in fed[stream]:
+            g.errors.setdefault(key, exc)
+
+    streams = Streams([b for c in clocks.values() for b in c.variables])
+    for m in streams.messages(source.messages(log_topics(fed)), fed, stream_failed):
         for key in fed[m.topic]:
             if key in g.errors:
                 continue

@@ -55,6 +55,9 @@ class Binding:
             and the clocks keep the window (:class:`fretc.signals.windows.SlidingWindow`).
         parts: for a window with parts (``waiting(/arm)``), one compiled binding per field
             each message contributes (:attr:`WindowSpec.parts`).
+        tick_window: ``count_ticks(COND, 1min)``, the ticks of the clock in a window where
+            COND held, or None. Then :meth:`evaluate` gives COND at the tick, and the
+            samplings count (:mod:`fretc.signals.tick_windows`).
     """
 
     name: str
@@ -73,6 +76,7 @@ class Binding:
     aggregate: str | None = None
     window: WindowSpec | None = None
     parts: tuple = ()
+    tick_window: WindowSpec | None = None
 
     def location(self) -> ExprLocation:
         """Where the expression is, for error messages."""
@@ -185,14 +189,16 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
         found: set[str] = set()
         check(node, where, found)
         topics = frozenset(found)
-    fields = tuple(n for n in walk(node) if isinstance(n, Field) and n.path)
+    fields = tuple(n for n in walk(node) if isinstance(n, Field) and (n.path or n.filters))
     extractors: dict[Field, Callable[[Any], Any]] = {}
     constants: dict[str, Any] = {}
     unread, inf_unread = nan != "false", inf != "value"
     aggregate = check_aggregate(node, where)
     body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
     windowed = check_window(node, where)
-    window, parts = None, ()
+    window, parts, tick_window = None, (), None
+    if windowed is not None and windowed[0].func == "count_ticks":
+        (tick_window, body), windowed = windowed, None
     if windowed is not None:
         window, body = windowed
         parts = tuple(compile_expression(f"{name}__part{i}", unparse(p), source=source,
@@ -205,7 +211,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
     return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,
-                   uses_tf, scalar, vector, aggregate, window, parts)
+                   uses_tf, scalar, vector, aggregate, window, parts, tick_window)
 
 
 def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:

@@ -118,7 +118,7 @@ def _field(node: Field, ops: Ops, extractors: dict[Field, Evaluator],
         return lambda st: undeclared_inf(plain(st), fpath)
     ex = extractors.setdefault(node, make_extractor(node, consts))
     topic = node.topic
-    key = (topic, node.path)
+    key = (topic, node.text())  # not its path: the same field at another column is the same
 
     def field_value(st: EvalState) -> Any:
         msg = st.msgs[topic]

@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from fretc.common.problems import BindingError
+from fretc.common.streams import base_topic
 from fretc.fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
 from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
@@ -94,12 +95,16 @@ class Field(Expr):
 
     topic: str
     path: tuple[str | int | Slice | Filter, ...]
+    #: filters written right after the topic (``/track{id==3}.x``): ``topic`` is then the
+    #: stream of the messages that pass them (``/track{id==3}``, :mod:`fretc.common.streams`)
+    #: and ``path`` the rest of the path
+    filters: tuple[Filter, ...] = ()
 
     def text(self) -> str:
         """``/topic.a[2].b`` (a topic that is not a plain ROS name quoted): the field as
         written in a binding."""
-        out = topic_text(self.topic)
-        for p in self.path:
+        out = topic_text(base_topic(self.topic) if self.filters else self.topic)
+        for p in self.filters + self.path:
             out += (p.text() if isinstance(p, (Slice, Filter)) else f"[{p}]"
                     if isinstance(p, int) else f".{p}")
         return out

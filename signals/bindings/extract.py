@@ -17,7 +17,8 @@ import numpy as np
 
 from fretc.signals.bindings.expression import Const, Field, Filter, Slice
 
-__all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "normalize_scalar"]
+__all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "message_filter",
+           "normalize_scalar"]
 
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 
@@ -169,6 +170,28 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
             return False
         return bool(op(v, want))
     return keep
+
+
+def message_filter(filters: tuple[Filter, ...], constants: dict[str, Any], text: str
+                   ) -> Callable[[Any], bool]:
+    """message -> whether it passes every filter of ``filters`` (written right after the
+    topic: ``/track{id==3}{ok==true}``), each as a filter on the items of an array compares
+    (a string only with a string; FoxQL's filter semantics).
+
+    Raises (from the returned function):
+        FieldAccessError: the message has no field a filter names (``text``: the field as
+            written, first in the message).
+    """
+    tests = [_filter_test(f, constants, text) for f in filters]
+
+    def passes(data: Any) -> bool:
+        try:
+            return all(t(data) for t in tests)
+        except AttributeError as exc:
+            typename = getattr(data, "__msgtype__", type(data).__name__)
+            raise FieldAccessError(f"{text}: a {typename} message has no field "
+                                   f"{exc.name!r}") from None
+    return passes
 
 
 def _select(items: list, many: bool, kind: str, fn: Any, text: str) -> tuple[list, bool]:

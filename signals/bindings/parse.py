@@ -151,7 +151,13 @@ class _ToExpr(Transformer):
         mods = [k for k in kids[1:] if getattr(k, "type", None) == "NAME"]
         path = tuple(k for k in kids[1:] if getattr(k, "type", None) != "NAME")
         topic = unquote(str(tok)) if tok.type == "STRING" else str(tok)
-        out: Expr = Field(tok.column, topic, path)
+        lead = 0  # filters right after the topic select whole messages: a stream
+        while lead < len(path) and isinstance(path[lead], Filter):
+            lead += 1
+        filters = path[:lead]
+        if filters:
+            topic += "".join(f.text() for f in filters)
+        out: Expr = Field(tok.column, topic, path[lead:], filters)
         for i, m in enumerate(mods):
             out = apply_modifier(out, str(m), m.column, first=i == 0, where=self.where)
         return out

@@ -9,6 +9,7 @@ topic's schema is unknown (then nothing is checked).
 
 from __future__ import annotations
 
+from fretc.common.streams import base_topic
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
 from fretc.logs.encodings import constant_name
@@ -122,13 +123,18 @@ class _TypeChecker:
         return "any"  # pragma: no cover
 
     def field(self, node: Field) -> str:
-        sch = self.schemas.get(node.topic)
+        topic = base_topic(node.topic) if node.filters else node.topic
+        sch = self.schemas.get(topic)
         if sch is None:
             return "any"
         try:
+            for flt in node.filters:  # filters of whole messages (a stream's)
+                sch.check_message_filter(flt)
+                if isinstance(flt.value, Named):
+                    self.resolve_named(flt.value, node, ())
             ft = sch.resolve(node.path)
         except FieldPathError as exc:
-            raise self.where.error(f"{exc} (topic {node.topic}, {sch.typename})",
+            raise self.where.error(f"{exc} (topic {topic}, {sch.typename})",
                                    node.col) from None
         for i, p in enumerate(node.path):
             if isinstance(p, Filter) and isinstance(p.value, Named):
@@ -150,7 +156,7 @@ class _TypeChecker:
     def resolve_named(self, named: Named, field: Field, owner_path: tuple) -> None:
         """Store the value of ``named``, a constant of the message type at ``owner_path``
         of ``field``'s topic (the items' type for an array)."""
-        sch = self.schemas.get(field.topic)
+        sch = self.schemas.get(base_topic(field.topic) if field.filters else field.topic)
         if sch is None or not hasattr(sch, "constants"):
             return
         owner = sch.resolve(owner_path)
@@ -211,9 +217,10 @@ class _TypeChecker:
             if isinstance(arg, Field) and not arg.path:  # rate(/scan, 1s), count(/estop, 1s)
                 return "number"
             t = self.type(arg)
-            if f == "count":
-                self.need(arg, t, ("bool",), "count() over a window counts the messages on "
-                          "which a condition held (count(/estop.data, 1min))", node)
+            if f in ("count", "count_ticks"):
+                self.need(arg, t, ("bool",), f"{f}() over a window counts the "
+                          f"{'ticks' if f == 'count_ticks' else 'messages'} on which a "
+                          "condition held (count(/estop.data, 1min))", node)
             else:
                 self.need(arg, t, ("number",), f"{f}() over a window takes numbers", node)
             return "number"

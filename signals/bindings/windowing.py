@@ -82,6 +82,8 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
     assert isinstance(node, FuncCall)
     span = node.args[-1]
     assert isinstance(span, Span)
+    if node.func == "count_ticks":
+        return _tick_window(node, span, inner_spans, where)
     if node.func not in WINDOW_FUNCS:
         raise where.error(f"{node.func}() has no window: the window functions are "
                           f"{', '.join(WINDOW_FUNCS)} (e.g. mean(/battery.current, 2s))",
@@ -129,6 +131,28 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
                           "those where a condition holds: count(CONDITION, 1s))", body.col)
     spec = WindowSpec(node.func, topics.pop(), span.ns, span.messages, q, span.text)
     return spec, body
+
+
+def _tick_window(node: FuncCall, span: Span, inner_spans: list, where: ExprLocation
+                 ) -> tuple[WindowSpec, Expr]:
+    """``count_ticks(COND, 1min)``: the ticks of the clock in the window where COND held
+    (:mod:`fretc.signals.tick_windows`); COND reads any variables and topics.
+
+    Raises:
+        BindingError: not two arguments, a span that is not a duration, a span or a window
+            inside COND, at its column.
+    """
+    if len(node.args) != 2:
+        raise where.error("count_ticks() takes a condition and a duration, e.g. "
+                          "count_ticks(too_close, 1min)", node.col)
+    if span.ns is None:
+        raise where.error("count_ticks() counts the ticks of a duration (count_ticks(x, "
+                          "1min)); to count messages: count(/topic.field > 0, 50 messages)",
+                          span.col)
+    if len(inner_spans) > 1:
+        raise where.error("a window's argument has no span of its own: windows do not nest",
+                          inner_spans[0].col)
+    return WindowSpec("count_ticks", "", span.ns, None, None, span.text), node.args[0]
 
 
 def _event_window(node: Expr) -> tuple[WindowSpec, Expr] | None:

@@ -137,3 +137,15 @@ def test_one_verdict_per_tracked_object(tmp_path_factory, rows):
     else:
         assert got["T"].verdict == ("violated" if any(
             got[f"T[track={i}]"].verdict == "violated" for i in ids) else "satisfied")
+
+
+def test_a_key_topic_absent_from_the_log_is_an_error_not_vacuous(tmp_path):
+    """As a plain requirement whose bound topic is not in the log: no entity was looked
+    for, so nothing holds of none of them."""
+    from _logs import float64
+
+    log = write_mcap(tmp_path / "s.mcap", [("/speed", "std_msgs/msg/Float64", S, float64(1.0))])
+    got = _audit(tmp_path, log)
+    assert got["M"].verdict == "error"
+    assert got["M"].error.startswith("topic /diagnostics (the key /diagnostics.status[:].name "
+                                     "of entity motor) is not in the log (it has /speed)")

@@ -252,3 +252,103 @@ def test_a_key_topic_never_advertised_is_an_error_not_vacuous(tmp_path):
     assert got["P"].verdict == "satisfied"
     assert got["T"].verdict == "error" and "topic /tracks is not advertised" in got["T"].error
     assert "not_advertised" in {p["kind"] for p in la.problems}
+
+
+def _diagnostics_log(tmp: Path) -> Path:
+    """The motors of tests/audit/test_entities.py: entities by name, through a glob."""
+    St = ROS2.types["diagnostic_msgs/msg/DiagnosticStatus"]
+    Arr, H = ROS2.types["diagnostic_msgs/msg/DiagnosticArray"], ROS2.types["std_msgs/msg/Header"]
+    Time = ROS2.types["builtin_interfaces/msg/Time"]
+    rows = [[("motor_l", 0)], [("motor_l", 0), ("motor_r", 1)], [("motor_r", 2)],
+            [("lidar", 2)], [("motor_l", 0), ("motor_3", 1)], [("motor_3", 2)]]
+    msgs = [("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", S + k * S // 10,
+             Arr(header=H(stamp=Time(sec=0, nanosec=0), frame_id=""),
+                 status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
+                         for n, lvl in r + [("battery", 0)]]))
+            for k, r in enumerate(rows)]
+    return write_mcap(tmp / "diag.mcap", msgs)
+
+
+DIAG_BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+motor = { key = "/diagnostics.status[:].name", matching = "motor*" }
+[variables]
+motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'
+present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'
+'''
+FRET_M = "M: in present mode the robot shall always satisfy motor_level < 2\n"
+
+
+def _evidence(v):
+    """A verdict as the metamorphic test compares it (an error's text names the log or the
+    server: only that there is one)."""
+    fv = v.first_violation
+    return (v.requirement, v.verdict, v.error is not None,
+            None if fv is None else (fv.at.tick, fv.at.time_ns), v.violations,
+            v.ticks_evaluated, v.warmup_ticks)
+
+
+@pytest.mark.parametrize("case", ["tracks", "tracks_and_speed", "no_entity", "motors",
+                                  "key_topic_absent"])
+def test_audit_and_watch_give_the_same_per_entity_verdicts(tmp_path, case):
+    """Metamorphic: one per-entity requirement over one log, audited and watched (the log
+    replayed on a server), gives the same verdicts entity by entity, on every log of the
+    entity tests; a key topic absent from the log is an error in both (as a plain
+    requirement's absent topic), never vacuous."""
+    if case == "motors":
+        (tmp_path / "t.fret").write_text("@tick_period 100 ms\n" + FRET_M, encoding="utf-8")
+        (tmp_path / "t.bindings.toml").write_text(DIAG_BINDINGS, encoding="utf-8")
+        plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+        log = _diagnostics_log(tmp_path)
+    else:
+        speed = case in ("tracks_and_speed", "key_topic_absent")
+        plan = _plan(tmp_path, FRET_T + (FRET_P if speed else ""))
+        log = {"tracks": lambda: _log(tmp_path, ROWS),
+               "tracks_and_speed": lambda: _log(tmp_path, ROWS, SPEED),
+               "no_entity": lambda: _log(tmp_path, [{}, {}, {}]),
+               "key_topic_absent": lambda: write_mcap(tmp_path / "speed.mcap", [
+                   ("/speed", "std_msgs/msg/Float64", S + k * S // 10, float64(1.0))
+                   for k in range(10)])}[case]()
+    _w, la, _done = _watch(plan, log)
+    ref = audit_log(plan, str(log))
+    assert [_evidence(v) for v in la.verdicts] == [_evidence(v) for v in ref.verdicts]
+    verdicts = {v.requirement: v.verdict for v in ref.verdicts}
+    if case == "key_topic_absent":
+        assert verdicts["T"] == "error" and "/tracks" in ref.verdicts[-1].error
+    elif case == "no_entity":
+        assert verdicts == {"T": "vacuous"}
+    else:
+        assert len(verdicts) > 2  # the entities were judged
+
+
+@pytest.mark.parametrize("case", ["tracks", "motors"])
+def test_live_events_per_entity_agree_with_the_final_verdicts(tmp_path, case):
+    """Each entity's ``pt``/``ltl3`` events are made while watching, named by the instance:
+    an entity's first ``ltl3`` violated event is at its final verdict's first violation (tick
+    and time); an entity that satisfies the requirement has none; the ``pt`` violations of
+    an entity are at ticks of its own clock."""
+    if case == "motors":
+        (tmp_path / "t.fret").write_text("@tick_period 100 ms\n" + FRET_M, encoding="utf-8")
+        (tmp_path / "t.bindings.toml").write_text(DIAG_BINDINGS, encoding="utf-8")
+        plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+        log, base = _diagnostics_log(tmp_path), "M"
+    else:
+        plan, log, base = _plan(tmp_path, FRET_T), _log(tmp_path, ROWS), "T"
+    w, la, _done = _watch(plan, log)
+    finals = {v.requirement: v for v in la.verdicts if v.requirement.startswith(base + "[")}
+    assert finals and any(v.verdict == "violated" for v in finals.values())
+    ltl3 = {}
+    for e in w.events:
+        if e.kind == "ltl3" and e.verdict == "violated":
+            ltl3.setdefault(e.requirement, (e.extra["status_tick"], e.time_ns))
+    assert set(ltl3) <= set(finals)  # named by the instance, never the plain id
+    for name, v in finals.items():
+        if v.verdict == "violated":
+            fv = v.first_violation
+            assert ltl3[name][0] == fv.at.tick, (name, ltl3[name], fv.at)
+            assert ltl3[name][1] >= fv.at.time_ns
+        else:
+            assert name not in ltl3, (name, v.verdict)
+    pts = [e for e in w.events if e.kind == "pt" and e.requirement in finals]
+    assert pts and all(e.verdict in ("holds", "violated") for e in pts)

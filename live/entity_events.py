@@ -1,0 +1,188 @@
+"""Live events of per-entity requirements in ``fretc watch`` (docs/bindings.md, "One verdict
+per entity"): while watching, each entity of a per-entity requirement gets its own clock and
+generated monitor, and its ``pt`` and ``ltl3`` events are made as a plain requirement's,
+named by the instance (``T[track=7]``). Their verdicts are still those of the audit at the
+end (:mod:`fretc.live.entities`); the live events follow the same rules, so an entity's
+``ltl3`` violation is at its verdict's first violation.
+
+An entity found on a message of the key's topic gets its clock from the start of the run:
+the messages the watch used on the topics its requirement reads are kept in memory (at most
+:data:`MAX_LIVE_MESSAGES`) and replayed into the new clock, so its ticks are those the audit
+of the run gives it. Past the bound, entities found later have no live events (their final
+verdict is unchanged); so do entities under the header time base (the audit orders by
+header stamps: a later message may come before a tick already stepped), and requirements
+without a generated monitor (``offline``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from fnmatch import fnmatchcase
+from types import SimpleNamespace
+from typing import Any, Callable
+
+from fretc.audit.entities import MAX_ENTITIES, entity_of_requirements
+from fretc.audit.passes import clock_key
+from fretc.common.problems import BindingError, SignalError
+from fretc.common.streams import log_topics
+from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.extract import Valid
+from fretc.audit.passes import restrict as restrict_bindings
+from fretc.signals.clock import Clock, Sampling, present_tf
+from fretc.signals.streams import Streams
+from fretc.signals.tick_windows import TickWindows
+
+__all__ = ["MAX_LIVE_MESSAGES", "EntityEvents"]
+
+#: Messages kept in memory to start the clock of an entity found later in the run.
+MAX_LIVE_MESSAGES = 200_000
+
+
+@dataclasses.dataclass
+class _Instance:
+    req: Any  # id (``T[track=7]``) and variables, as Watch._step reads them
+    clock: Clock
+    streams: Streams
+    windows: TickWindows
+    monitor: Any
+    state: Any
+    topics: set
+    n: int = 0  # ticks stepped
+
+
+class _Kind:
+    """One per-entity requirement: its entity's key and the instances found so far."""
+
+    def __init__(self, r: Any, name: str, bindings: Any) -> None:
+        self.r, self.name = r, name
+        key, self.matching = bindings.entities[name]
+        self.key = compile_expression(f"entity_{name}", key, source=str(bindings.source))
+        self.key_topic = next(iter(self.key.topics)) if len(self.key.topics) == 1 else None
+        self.seen: set = set()
+        self.instances: list[_Instance] = []
+
+    def values(self, data: Any, log_time: int) -> list:
+        """The key's values on one message of its topic (as fretc.audit.entities reads them)."""
+        st = EvalState()
+        st.msgs[self.key_topic], st.times[self.key_topic], st.now = data, log_time, log_time
+        try:
+            v = self.key._scalar(st)  # type: ignore[misc]
+        except Exception:  # noqa: BLE001 - the audit at the end names the error
+            return []
+        if isinstance(v, Valid):
+            v = (v.data if v.mask is None else v.data[v.mask]).tolist()
+        items = list(v) if isinstance(v, (list, tuple)) else [v]
+        out = []
+        for x in items:
+            if isinstance(x, float) and x.is_integer():
+                x = int(x)
+            if self.matching is None or fnmatchcase(str(x), self.matching):
+                out.append(x)
+        return out
+
+
+class EntityEvents:
+    """The live events of the per-entity requirements of ``plan`` (module docstring).
+
+    Args:
+        plan: the watch's plan.
+        source: the watch's source (decoders, gaps).
+        step: ``step(rows, values, time, tick, depends_on)``: steps monitors and makes their
+            events (the watch's own, :meth:`fretc.live.watch.Watch._step`).
+        new_state: a fresh live state of one requirement (the watch's ``_Live``).
+    """
+
+    def __init__(self, plan: Any, source: Any, step: Callable, new_state: Callable) -> None:
+        self.plan, self.source, self.step, self.new_state = plan, source, step, new_state
+        b = plan.bindings
+        self.kinds: list[_Kind] = []
+        if b is not None and b.time_base == "log":
+            for i, names in entity_of_requirements(plan).items():
+                r = plan.requirements[i] if plan.requirements[i].index == i else next(
+                    x for x in plan.requirements if x.index == i)
+                if len(names) == 1 and r.error is None and not r.offline and r.monitor_cls:
+                    try:
+                        kind = _Kind(r, names[0], b)
+                    except BindingError:
+                        continue
+                    if kind.key_topic is not None:
+                        self.kinds.append(kind)
+        self.history: list[tuple[str, int, Any]] = []
+        self.full = False
+
+    def message(self, topic: str, log_time: int, payload: bytes) -> None:
+        """One message the watch used (log time ns, payload as received)."""
+        if not self.kinds:
+            return
+        dec = self.source.decoders.get(topic)
+        if dec is None:
+            return
+        data = dec(payload)
+        if len(self.history) < MAX_LIVE_MESSAGES:
+            self.history.append((topic, log_time, data))
+        else:
+            self.full = True
+        for kind in self.kinds:
+            for inst in kind.instances:
+                self._push(inst, topic, log_time, data)
+            if topic == kind.key_topic and not self.full:
+                for value in kind.values(data, log_time):
+                    if value not in kind.seen and len(kind.seen) < MAX_ENTITIES:
+                        kind.seen.add(value)
+                        self._start(kind, value)
+
+    def finish(self) -> None:
+        """The run ended: the ticks left on every instance's clock."""
+        for kind in self.kinds:
+            for inst in kind.instances:
+                self._ticks(inst, inst.clock.finish())
+
+    def _start(self, kind: _Kind, value: Any) -> None:
+        b, r = self.plan.bindings, kind.r
+        try:
+            sub = b.for_entity({kind.name: value})
+        except BindingError:
+            return
+        names = [v for v in r.variables if v in sub.variables]
+        own = restrict_bindings(sub, names)
+        variables = list(own.variables.values())
+        topics = set(clock_key(r, own).topics)
+        s = Sampling(self.source, own)
+        clock = Clock(s, variables, present_tf(topics, self.source.topics()), own.tick,
+                      keep_going=True)
+        windows = TickWindows({None: s}, {None: variables})
+        req = SimpleNamespace(id=f"{r.id}[{kind.name}={value}]", variables=r.variables)
+        inst = _Instance(req, clock, Streams(variables), windows, r.monitor_cls(),
+                         self.new_state(), topics | ({own.tick.topic} if own.tick.topic
+                                                     else set()))
+        kind.instances.append(inst)
+        for topic, log_time, data in self.history:
+            self._push(inst, topic, log_time, data)
+
+    def _push(self, inst: _Instance, topic: str, log_time: int, data: Any) -> None:
+        ticks = []
+        try:
+            if topic in inst.topics:
+                ticks += inst.clock.push(topic, log_time, log_time, data)
+            for stream in inst.streams.fan_out(topic, log_time, data, inst.topics):
+                ticks += inst.clock.push(stream, log_time, log_time, data)
+        except SignalError:
+            inst.topics = set()  # no more live events; the audit at the end names the error
+            return
+        self._ticks(inst, ticks)
+
+    def _ticks(self, inst: _Instance, ticks: list) -> None:
+        src = self.source
+        for tick in ticks:
+            tick = inst.windows.apply(None, tick)
+            if tick is None:
+                continue
+            t, i = tick.time, inst.n
+            inst.n += 1
+            gaps = src.gaps
+            if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
+                    src.absent and src.absent.at(log_topics(inst.topics), t)):
+                continue  # inside a gap: the monitor not stepped over it, as the watch's
+            dep = max(tick.log_times.values()) if tick.log_times else None
+            self.step([(inst.req, inst.monitor, inst.state)], tick.values, t, i, dep)
