@@ -363,6 +363,13 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
             else:
                 check(a, where, topics)
         return
+    last = node.args[-1] if node.args else None
+    if isinstance(last, UnaryOp) and last.op == "-" and isinstance(last.arg, Span):
+        raise where.error(f"{node.func}(): a window's span must be positive, not "
+                          f"-{last.arg.text}", node.col)
+    if node.func == "count_ticks":
+        raise where.error("count_ticks() takes a condition and a duration, e.g. "
+                          "count_ticks(too_close, 1min)", node.col)
     if node.func in ("sum", "median", "percentile", "variance", "rate"):
         q = ", 95" if node.func == "percentile" else ""
         arg = "/topic" if node.func == "rate" else "/topic.field"

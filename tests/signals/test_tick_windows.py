@@ -103,6 +103,9 @@ def test_count_ticks_equals_pandas_rolling_over_the_ticks(tmp_path_factory, a, b
     ("count_ticks(/a.data > 0, /b.data > 0, 1s)", "takes a condition and a duration"),
     ("count_ticks(/a.data > 0, 1s) > 3", "is the whole binding"),
     ("count_ticks(mean(/a.data, 1s) > 0, 1s)", "windows do not nest"),
+    ("count_ticks(/a.data > 0)", "takes a condition and a duration"),
+    ("count_ticks(/a.data > 0, -2 min)", "span must be positive, not -2 min"),
+    ("mean(/a.data, -1s)", "span must be positive, not -1s"),
 ])
 def test_bad_count_ticks_name_where(expr, message):
     with pytest.raises(BindingError, match=message) as info:
