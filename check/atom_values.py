@@ -191,10 +191,11 @@ def concrete_rows(rows: list[dict], letters: list[dict], atoms: dict[str, Node]
     import z3
     cache: dict[tuple, dict | None] = {}
     stateful = any(ir.has_op(a, ("pre",)) for a in atoms.values())
+    names = sorted(atoms)
     out: list[dict] = []
     for row, letter in zip(rows, letters):
         prev = out[-1] if out else None
-        key = tuple((k, letter.get(k)) for k in sorted(atoms))
+        key = tuple((k, letter.get(k)) for k in names)
         if stateful:
             key += (tuple(sorted(prev.items())) if prev else None,)
         if key not in cache:

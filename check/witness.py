@@ -86,12 +86,11 @@ def _finite_model(nodes: Sequence[Node]) -> Node:
 
 
 def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
-                 length: int | None = None, letters_out: list | None = None) -> object:
+                 length: int | None = None) -> object:
     """A finite trace meeting the ft ``formulas`` (list of rows ``{variable: value}`` over
     ``columns``, name -> ``"bool"``/``"float"``), None when there is none, or UNKNOWN.
-    ``length``: exactly that many ticks. ``letters_out``: when given, the model's letters
-    (one ``{proposition: bool}`` per row, propositions named by their SMV text) are
-    appended to it, for callers that give numbers to atoms the abstraction leaves free."""
+    ``length``: exactly that many ticks. Comparisons of one variable with constants get
+    the numeric abstraction's numbers, the others z3's (:mod:`fretc.check.atom_values`)."""
     got = None
     if checker.uses_smt(formulas):  # past Spot's bounds: the pt monitors, when they take it
         got = checker.monitor_word(formulas, finite=True, length=length)
@@ -104,8 +103,6 @@ def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
         letters = _spot_trace(checker, formulas, length)
         if letters is None or letters == UNKNOWN:
             return letters
-    if letters_out is not None:
-        letters_out.extend(letters)
     cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
                  for a in checker.numeric.atoms[name]}
     rows = []
