@@ -126,6 +126,7 @@ def audit_log(requirements: list[str], bindings: str | None, log: Path, out: Pat
     cmd = [sys.executable, "-m", "fretc", "audit", *[x for r in requirements for x in ("-r", r)],
            *(["--bindings", bindings] if bindings else []), str(log), "--coverage",
            "--json", str(out), "--no-progress"]
+    out.unlink(missing_ok=True)  # an earlier run's document is never this run's
     res = subprocess.run(cmd, capture_output=True, text=True)
     if not out.exists():
         last = (res.stderr.strip().splitlines() or ["no output"])[-1]
@@ -146,13 +147,15 @@ def run_test(test: dict, doc: dict, folder: Path, command: str, work: Path,
     work.mkdir(parents=True, exist_ok=True)
     log = work / (log_name or f"{test['id']}.mcap")
     trace = folder / test["trace"]
+    log.unlink(missing_ok=True)  # an earlier run's log is never judged as this run's
     res = subprocess.run(shlex.split(command) + [str(trace), str(log)], capture_output=True,
                          text=True)
     if res.returncode != 0 or not log.exists():
         last = (res.stderr.strip().splitlines() or ["no output"])[-1]
-        return Outcome(test["id"], "unknown", error=f"the command exited {res.returncode} "
-                       f"without a log: {last}" if not log.exists() else
-                       f"the command exited {res.returncode}: {last}", log=str(log))
+        error = f"the command exited {res.returncode}: {last}"
+        if not log.exists():
+            error = f"the command exited {res.returncode} without a log: {last}"
+        return Outcome(test["id"], "unknown", error=error, log=str(log))
     try:
         audited = audit_log(doc["requirements"], bindings or doc.get("bindings"), log,
                             work / f"{test['id']}.audit.json")

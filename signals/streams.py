@@ -47,10 +47,6 @@ class Streams:
     def __bool__(self) -> bool:
         return bool(self.by_topic)
 
-    def names(self) -> set[str]:
-        """The streams' names."""
-        return {s for lst in self.by_topic.values() for s, _t, _f in lst}
-
     def fan_out(self, topic: str, log_time: int, data: Any, wanted: Any = None,
                 on_error: Callable[[str, SignalError], None] | None = None) -> list[str]:
         """The streams of ``topic`` (of ``wanted`` only, when given) that message ``data``

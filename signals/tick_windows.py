@@ -106,11 +106,12 @@ def with_tick_windows(pairs: Iterator[tuple[Any, Any]], samplings: dict[Any, Any
     """``pairs`` of a group sampling (``(key, Tick)`` or ``(key, TickBlock)``) with the
     ``count_ticks`` bindings' values turned into their counts (:class:`TickWindows`): ticks
     of a warm-up are left out and counted in ``samplings[key]``, the ticks after
-    renumbered."""
+    renumbered. ``pairs`` itself when no clock counts ticks (nothing added per tick)."""
     tw = TickWindows(samplings, names)
-    if not tw:
-        yield from pairs
-        return
+    return _counted(pairs, tw) if tw else pairs
+
+
+def _counted(pairs: Iterator[tuple[Any, Any]], tw: TickWindows) -> Iterator[tuple[Any, Any]]:
     for key, item in pairs:
         out = tw.apply(key, item)
         if out is not None:
@@ -119,8 +120,10 @@ def with_tick_windows(pairs: Iterator[tuple[Any, Any]], samplings: dict[Any, Any
 
 def one_clock(ticks: Iterator[Any], s: Any) -> Iterator[Any]:
     """The ticks of one clock (a :class:`~fretc.signals.clock.Sampling` ``s`` of them) with
-    its ``count_ticks`` bindings counted, as :func:`with_tick_windows`."""
-    if s.bindings is None:
+    its ``count_ticks`` bindings counted, as :func:`with_tick_windows`; ``ticks`` itself
+    when none of its bindings counts ticks."""
+    if s.bindings is None or all(getattr(b, "tick_window", None) is None
+                                 for b in s.bindings.variables.values()):
         return ticks
     pairs = with_tick_windows(((None, t) for t in ticks), {None: s},
                               {None: list(s.bindings.variables.values())})

@@ -54,11 +54,16 @@ def testrun_cmd(folder, command, bindings, logs_dir, only, all_obligations, json
     folder = Path(folder)
     try:
         doc = json.loads((folder / "tests.json").read_text(encoding="utf-8"))
-        tests = doc["tests"]
-    except (OSError, ValueError, KeyError) as exc:
+        tests, _ = doc["tests"], doc["requirements"]
+        ids = {t["id"] for t in tests}
+    except KeyError as exc:
+        click.echo(shown(f"error: {folder / 'tests.json'}: no {exc} (not a tests.json of "
+                         "fretc testgen)"), err=True)
+        sys.exit(2)
+    except (OSError, ValueError, TypeError) as exc:
         click.echo(shown(f"error: {folder / 'tests.json'}: {exc}"), err=True)
         sys.exit(2)
-    missing = [i for i in only if i not in {t["id"] for t in tests}]
+    missing = [i for i in only if i not in ids]
     if missing:
         click.echo(shown(f"error: {folder / 'tests.json'}: no test {', '.join(missing)}"),
                    err=True)
