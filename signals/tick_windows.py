@@ -17,45 +17,38 @@ the same way for the audit's blocks of ticks and the watch's ticks.
 from __future__ import annotations
 
 import copy
-import math
-from collections import deque
+import dataclasses
 from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
+from fretc.signals.bindings.windowing import WindowSpec
+from fretc.signals.windows import SlidingWindow
+
 __all__ = ["TickCount", "TickWindows", "with_tick_windows", "one_clock"]
 
 
 class TickCount:
-    """The window of one ``count_ticks`` binding on one clock: :meth:`push` each tick's
-    COND value in time order; it returns the count at that tick (float; NaN unknown), or
-    None while the window is incomplete (warm-up)."""
+    """The window of one ``count_ticks`` binding on one clock: a ``count`` window
+    (:class:`fretc.signals.windows.SlidingWindow`) over the clock's ticks instead of a
+    topic's messages. :meth:`push` each tick's COND value in time order; it returns the
+    count at that tick (float; NaN unknown), or None while the window is incomplete
+    (warm-up).
 
-    def __init__(self, span_ns: int) -> None:
-        self.span = span_ns
-        self.items: deque[tuple[int, bool, bool]] = deque()  # (time, held, unknown)
-        self.held = 0
-        self.unknown = 0
-        self.first: int | None = None
+    Args:
+        spec: the binding's ``tick_window`` (its span, ns).
+    """
+
+    def __init__(self, spec: WindowSpec) -> None:
+        self.window = SlidingWindow(dataclasses.replace(spec, func="count"))
 
     def push(self, t: int, v: Any) -> float | None:
         """Add tick ``t`` (ns) whose COND is ``v`` (bool; a float: NaN unknown, else held
         when non-zero); the count at ``t`` or None (warm-up)."""
-        if self.first is None:
-            self.first = t
-        unknown = v != v
-        held = not unknown and bool(v)
-        self.items.append((t, held, unknown))
-        self.held += held
-        self.unknown += unknown
-        while self.items[0][0] <= t - self.span:
-            _t, h, u = self.items.popleft()
-            self.held -= h
-            self.unknown -= u
-        if t - self.span < self.first:
-            return None
-        return math.nan if self.unknown else float(self.held)
+        w = self.window
+        w.push(t, v if v != v else float(bool(v)))
+        return w.value(t) if w.complete(t) else None
 
 
 class TickWindows:
@@ -70,7 +63,7 @@ class TickWindows:
 
     def __init__(self, samplings: dict[Any, Any], names: dict[Any, list]) -> None:
         self.samplings = samplings
-        self.counts = {key: {b.name: TickCount(b.tick_window.span_ns) for b in bs
+        self.counts = {key: {b.name: TickCount(b.tick_window) for b in bs
                              if getattr(b, "tick_window", None) is not None}
                        for key, bs in names.items()}
         self.dropped = {key: 0 for key in names}
