@@ -146,7 +146,10 @@ def drive(trace, log, bindings_file, scenario, seed, lead_in, lead_out):
         roles, res = do_drive(rows, b, log, scenario=scenario, seed=seed,
                               lead_in=LEAD_IN_S if lead_in is None else lead_in,
                               lead_out=LEAD_OUT_S if lead_out is None else lead_out)
-    except (FretcError, DriveError, OSError) as exc:
+    except DriveError as exc:  # a trace's tick or column: named with the trace
+        click.echo(f"error: {trace}: {exc}", err=True)
+        sys.exit(2)
+    except (FretcError, OSError) as exc:  # these name their file
         click.echo(f"error: {exc}", err=True)
         sys.exit(2)
     click.echo(f"{log}: {scenario} seed {seed} driven by {trace} ({n} ticks): "
