@@ -382,7 +382,9 @@ def _run_driver(job: dict, said, results: dict, progress) -> int:
 def _driver_env() -> dict[str, str]:
     """The driver's environment: this one, with this checkout of fretc first on the path."""
     env = dict(os.environ)
-    root = str(Path(__file__).resolve().parents[2])
+    # the folder holding this fretc package (src/ of a checkout, or site-packages): __file__
+    # as imported, not resolved (src/fretc links the checkout's folders)
+    root = str(Path(__file__).parents[2])
     env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
     return env
 

@@ -4,7 +4,7 @@ For each requirement set (the Safe-ROS requirements of ``requirements/``; the 19
 requirements of ``../shared/corpora/fret_casestudies.jsonl`` grouped by project, the id's
 part before ``#``; skipped when ../shared is absent):
 
-1. the tests are generated (:func:`fretc.audit.testgen.generate`), once with every
+1. the tests are generated (:func:`fretc.testing.generate.generate`), once with every
    obligation and once with the atoms' obligations only (FLIP's kind of obligation: one per
    atomic proposition and value, Katis, Mavridou, Pressburger, NFM 2025);
 2. each requirement's mutants (:mod:`fretc.compiler.mutants`) are classified: a mutant is
@@ -43,7 +43,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from fretc.audit.testgen import (SPURIOUS, Finder, column_kinds, generate,  # noqa: E402
+from fretc.testing.generate import (SPURIOUS, Finder, column_kinds, generate,  # noqa: E402
                                  separating_trace)
 from fretc.check.budget import Budget  # noqa: E402
 from fretc.check.solver import UNKNOWN, SpotWorker  # noqa: E402

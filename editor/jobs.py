@@ -134,7 +134,7 @@ def _distinguish(req: dict) -> dict:
     from fretc.compiler.build import compile_entries
     from fretc.fretish.entry import RequirementEntry
     from fretc.fretish.parser import parse
-    from fretc.monitors.distinguish import distinguish
+    from fretc.check.distinguish import distinguish
     from fretc.reports.distinction import distinction_text
 
     period = Fraction(req["period"]) if req.get("period") else None

@@ -1,4 +1,4 @@
-"""How ``fretc distinguish`` shows its answer (:mod:`fretc.monitors.distinguish`): the words
+"""How ``fretc distinguish`` shows its answer (:mod:`fretc.check.distinguish`): the words
 ``not equivalent`` / ``equivalent`` / ``unknown`` first, then each wording with its verdict on
 the distinguishing trace, and the trace drawn as ``fretc explain`` draws its traces (a row
 per variable, ``T``/``.`` per tick for a boolean, the values for a number), then how it was
@@ -44,7 +44,7 @@ def _rows(trace: dict[str, list]) -> list[str]:
 
 
 def distinction_text(d, label_a: str, text_a: str, label_b: str, text_b: str) -> str:
-    """The answer ``d`` (:class:`fretc.monitors.distinguish.Distinction`) for the terminal;
+    """The answer ``d`` (:class:`fretc.check.distinguish.Distinction`) for the terminal;
     ``label_*`` name the two wordings (an id, or ``A``/``B``), ``text_*`` are their texts."""
     wa = max(len(label_a), len(label_b))
     if d.equivalent is False:

@@ -5,12 +5,12 @@ produce everything else, and the run is recorded as the simulator records (ROS 2
 :mod:`fretc.sim.recording`). It is the command ``FRETC_RUN_TRACE`` names for the pytest file
 ``fretc testgen --pytest`` writes, and the ``--command`` of ``fretc testrun``.
 
-Which variables a trace can drive (:func:`classify`), by the topics their bindings read:
+Which variables a trace can drive (:func:`fretc.testing.drive_plan.classify`), by the topics their bindings read:
 
-* **driven**: every topic it reads is one the driver writes, :data:`DRIVEN_TOPICS`
+* **driven**: every topic it reads is one the driver writes, :data:`fretc.testing.drive_plan.DRIVEN_TOPICS`
   (``/scan``: the LiDAR). In Safe-ROS: ``too_close`` (``min(/scan.ranges) < 0.9``) and
   ``scan_stale`` (``age(/scan) > 0.3``). Their values are turned into ``/scan`` messages by
-  the same inversion as ``fretc testgen --bindings`` (:mod:`fretc.audit.testgen_mcap`):
+  the same inversion as ``fretc testgen --bindings`` (:mod:`fretc.testing.mcap_log`):
   every beam of a scan reads the value written for the tick (0.81 m for ``too_close``,
   0.99 m for not), and no scan at all where the topic must be silent (the SIF then hears
   nothing, as in the ``lidar_dropout`` scenario).
@@ -31,101 +31,23 @@ file's tick must be the LiDAR's 100 ms period.
 
 from __future__ import annotations
 
-import tempfile
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from fretc.audit.testgen_mcap import EPOCH_NS, plan_messages, write_mcap
-from fretc.signals.bindings.spec import Bindings, make_bindings
+from fretc.signals.bindings.spec import Bindings
+from fretc.testing.drive_plan import SCAN_MS, Classified, DriveError, classify, scan_plan
 from fretc.sim.recording import McapRecorder
 from fretc.sim.scenarios import Scenario, get_scenario
 from fretc.sim.simulation import RunResult, SimParams, Simulation
 
-__all__ = ["DRIVEN_TOPICS", "LEAD_IN_S", "LEAD_OUT_S", "DriveError", "Classified", "classify", "scan_plan",
-           "TraceDrivenSimulation", "drive"]
+__all__ = ["LEAD_IN_S", "LEAD_OUT_S", "DriveError", "Classified", "TraceDrivenSimulation", "drive"]
 
-#: topics the driver writes from a trace
-DRIVEN_TOPICS = ("/scan",)
 #: seconds simulated before the trace's first tick
 LEAD_IN_S = 3.0
 #: seconds simulated after the trace's last tick, its inputs held
 LEAD_OUT_S = 2.0
-_SCAN_MS = 100
-_CLOCK = "fretc_drive_clock"
-
-
-class DriveError(ValueError):
-    """A trace the simulator cannot be driven by (the message says why)."""
-
-
-@dataclass
-class Classified:
-    """The trace's variables by role (:func:`classify`): ``driven`` and ``system`` names,
-    ``not_drivable`` name -> why."""
-
-    driven: list[str]
-    system: list[str]
-    not_drivable: dict[str, str]
-
-
-def classify(names: list[str], bindings: Bindings) -> Classified:
-    """The role of each FRET variable of ``names`` under ``bindings`` (module docstring).
-
-    Raises:
-        DriveError: a variable without a binding."""
-    out = Classified([], [], {})
-    for n in names:
-        b = bindings.variables.get(n)
-        if b is None:
-            raise DriveError(f"{n}: no binding in {bindings.source}")
-        topics = set(b.topics)
-        if topics and topics <= set(DRIVEN_TOPICS):
-            out.driven.append(n)
-        elif any(t.startswith("/ground_truth/") for t in topics):
-            out.not_drivable[n] = ("the simulated world's ground truth "
-                                   f"({', '.join(sorted(topics))}): it follows from where the "
-                                   "robot drives")
-        elif topics & set(DRIVEN_TOPICS):
-            out.not_drivable[n] = (f"reads {', '.join(sorted(topics))}: a driven topic with "
-                                   "the robot's own")
-        else:
-            out.system.append(n)
-    return out
-
-
-def scan_plan(rows: list[dict], bindings: Bindings, driven: list[str]
-              ) -> dict[int, float]:
-    """Trace tick (< 0: before the trace) -> the range every beam of that tick's scan reads;
-    ticks absent have no scan. Ticks before the first planned one are not in the map.
-
-    Raises:
-        DriveError: the tick is not 100 ms, or the driven values cannot be written."""
-    if bindings.tick.period_ns != _SCAN_MS * 1_000_000:
-        raise DriveError(f"{bindings.source}: the tick must be the LiDAR's 100 ms period")
-    if not driven:
-        return {k: 5.0 for k in range(len(rows))}
-    driven_rows = [{n: r[n] for n in driven} for r in rows]
-    # checked as testgen's logs are, read back; with a clock topic at every tick, so that the
-    # log spans the trace even where /scan is silent at its start or end
-    clock = make_bindings({_CLOCK: "/fretc_drive/clock.data"}, bindings.tick).variables
-    check = replace(bindings, variables={**bindings.variables, **clock})
-    with tempfile.TemporaryDirectory() as tmp:
-        _, adjusted, why = write_mcap([{**r, _CLOCK: True} for r in driven_rows], check,
-                                      Path(tmp) / "inputs.mcap")
-    if why is not None:
-        raise DriveError(f"the trace's inputs cannot be written as /scan messages: {why}")
-    if adjusted:
-        raise DriveError(f"the trace's inputs {', '.join(adjusted)} cannot be given together "
-                         "by /scan messages")
-    msgs, _ = plan_messages(driven_rows, bindings)
-    period = bindings.tick.period_ns
-    out = {}
-    for t, topic, obj in msgs:
-        if topic == "/scan":
-            out[(t - EPOCH_NS) // period] = float(obj.get("ranges", [5.0])[0])
-    return out
 
 
 class _TraceLidar:
@@ -150,13 +72,13 @@ class TraceDrivenSimulation(Simulation):
         super().__init__(scenario, seed=seed, sim=SimParams(max_time=1e6, final_linger=0.0))
         self.plan = plan
         self.last = last
-        self.end = last + out_ms // _SCAN_MS
+        self.end = last + out_ms // SCAN_MS
         self.lead_ms = lead_ms
         self.first = min(plan) if plan else 0
         self.lidar = _TraceLidar(self.lidar)
 
     def _scan_10hz(self, rec, st, t_ms, t, s) -> None:
-        k = (t_ms - self.lead_ms) // _SCAN_MS
+        k = (t_ms - self.lead_ms) // SCAN_MS
         if k >= self.end:
             st.end_ms = t_ms
         k = min(k, self.last)  # the lead-out: the last tick's inputs held
@@ -184,8 +106,8 @@ def drive(rows: list[dict], bindings: Bindings, output: str | Path, *,
         raise DriveError("the trace has no ticks")
     roles = classify(list(rows[0]), bindings)
     plan = scan_plan(rows, bindings, roles.driven)
-    lead_ms = max(int(round(lead_in * 1000)), -min(plan) * _SCAN_MS if plan else 0)
-    lead_ms -= lead_ms % _SCAN_MS
+    lead_ms = max(int(round(lead_in * 1000)), -min(plan) * SCAN_MS if plan else 0)
+    lead_ms -= lead_ms % SCAN_MS
     sc = replace(get_scenario(scenario), max_time=None)
     sim = TraceDrivenSimulation(sc, plan, len(rows) - 1, lead_ms, seed,
                                 int(round(lead_out * 1000)))

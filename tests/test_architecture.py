@@ -71,21 +71,36 @@ def test_r1_main_line_within_the_limits():
 #: it (lazy imports inside functions included). ``fretc.signals.bindings`` (the binding
 #: language) sits below the rest of ``fretc.signals`` (sampling), which uses it; ``fretc.cli``
 #: (the commands) and the package's own ``__init__``/``__main__`` come last.
-PACKAGE_ORDER = ("fretc.common", "fretc.fretish", "fretc.compiler", "fretc.check", "fretc.logs",
-                 "fretc.signals.bindings", "fretc.signals", "fretc.monitors", "fretc.audit",
-                 "fretc.live", "fretc.sim", "fretc.reports", "fretc.editor", "fretc.cli", "fretc")
-#: the repository's source folders: each installs as ``fretc.<folder>`` (``fretc/`` as
-#: ``fretc`` itself, holding ``fretc.cli``): pyproject.toml's package-dir
-LIBRARY = ("common", "fretish", "compiler", "check", "logs", "signals", "monitors", "audit",
-           "live", "sim", "reports", "editor", "fretc")
+PACKAGE_ORDER = ("fretc.common", "fretc.fretish", "fretc.compiler", "fretc.logs",
+                 "fretc.signals.bindings", "fretc.signals", "fretc.monitors", "fretc.check",
+                 "fretc.audit", "fretc.testing", "fretc.shield", "fretc.live", "fretc.sim",
+                 "fretc.reports", "fretc.editor", "fretc.cli", "fretc")
+#: the repository's source folders: each installs as ``fretc.<folder>`` (src/fretc/ links each
+#: of them); ``src/fretc/`` itself is ``fretc``, holding ``fretc.cli``
+LIBRARY = ("common", "fretish", "compiler", "logs", "signals", "monitors", "check", "audit",
+           "testing", "shield", "live", "sim", "reports", "editor", "src/fretc")
 #: the packages whose modules may import ``fretc.reports``: the reports and the front ends
 FRONT_ENDS = ("fretc.reports", "fretc.editor", "fretc.cli", "fretc")
 
 
+def source_files(folder: Path) -> list[Path]:
+    """The ``*.py`` files under ``folder``, sorted, not following links to folders (src/fretc
+    links the pipeline's folders, which are listed on their own)."""
+    import os
+
+    out = []
+    for here, dirs, files in os.walk(folder, followlinks=False):
+        dirs[:] = sorted(d for d in dirs if not (Path(here) / d).is_symlink())
+        out += [Path(here) / f for f in files if f.endswith(".py")]
+    return sorted(out)
+
+
 def installed_name(path: Path, root: Path = REPO) -> str:
     """The import name of the source file ``path`` once installed: ``audit/log.py`` ->
-    ``fretc.audit.log``, ``fretc/cli/audit.py`` -> ``fretc.cli.audit``."""
+    ``fretc.audit.log``, ``src/fretc/cli/audit.py`` -> ``fretc.cli.audit``."""
     parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[:2] == ["src", "fretc"]:
+        parts = parts[1:]
     if parts[-1] == "__init__":
         parts.pop()
     return ".".join(parts if parts[0] == "fretc" else ["fretc"] + parts)
@@ -161,7 +176,8 @@ def undocumented(files: list[Path], root: Path = REPO) -> list[str]:
 
 
 def test_public_functions_and_classes_have_docstrings(tmp_path):
-    files = [p for p in _python_files() if p.relative_to(REPO).parts[0] in LIBRARY]
+    files = [p for p in _python_files()
+             if any(p.relative_to(REPO).as_posix().startswith(f + "/") for f in LIBRARY)]
     assert undocumented(files) == []
     bare = tmp_path / "bare.py"
     bare.write_text("def f():\n    pass\n\n\nclass C:\n    def g(self):\n        pass\n")

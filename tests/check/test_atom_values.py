@@ -8,7 +8,7 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.audit.testgen import generate
+from fretc.testing.generate import generate
 from fretc.check.atom_values import concrete_rows, free_atoms
 from fretc.compiler import ir
 from fretc.compiler.build import compile_entries

@@ -32,9 +32,9 @@ DATA = ("fretc/fretish/grammar.lark", "fretc/signals/bindings/grammar.lark",
 
 
 #: what the wheel is built from: pyproject.toml's package folders and the README it names
-SOURCES = ("pyproject.toml", "README.md", "fretc", "common", "fretish", "compiler", "check",
-           "logs", "signals", "monitors", "audit", "live", "sim", "reports", "editor",
-           "templates")
+SOURCES = ("pyproject.toml", "README.md", "src", "common", "fretish", "compiler", "check",
+           "logs", "signals", "monitors", "audit", "testing", "shield", "live", "sim", "reports",
+           "editor", "templates")
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +44,7 @@ def wheel(tmp_path_factory) -> Path:
     src = tmp_path_factory.mktemp("source")  # a copy: the build writes build/ and egg-info
     for name in SOURCES:
         if (ROOT / name).is_dir():
-            shutil.copytree(ROOT / name, src / name,
+            shutil.copytree(ROOT / name, src / name, symlinks=True,  # src/fretc's links
                             ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         else:
             shutil.copy(ROOT / name, src / name)
@@ -67,7 +67,7 @@ def test_the_wheel_holds_one_import_package_and_its_data(wheel):
     assert not missing, missing
     # every source module is in it, as fretc.<folder>...
     for folder in ("common", "fretish", "compiler", "check", "logs", "signals", "monitors",
-                   "audit", "live", "sim", "reports", "editor"):
+                   "audit", "testing", "shield", "live", "sim", "reports", "editor"):
         for p in (ROOT / folder).rglob("*.py"):
             assert f"fretc/{p.relative_to(ROOT).as_posix()}" in names, p
     assert "fretc/cli/__init__.py" in names and "fretc/__main__.py" in names
@@ -142,3 +142,19 @@ def test_installed_beside_another_editor_package_both_work(wheel, tmp_path):
     version = subprocess.run([str(python), "-m", "fretc", "--version"], cwd=outside, env=env,
                              capture_output=True, text=True, timeout=120)
     assert version.returncode == 0 and "fretc" in version.stdout
+
+
+def test_run_from_the_clone_the_installed_package_is_found(wheel, tmp_path):
+    # the README's `pip install .`, then commands run from the clone's top (where the tour
+    # runs): nothing there is named fretc, so the installed package answers, all of it
+    python = _venv_beside_this_one(tmp_path / "env")
+    _pip_install(python, wheel)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    for args in (["-m", "fretc", "--version"], ["-m", "fretc.sim", "serve", "--help"],
+                 ["-c", "import fretc.testing.generate, fretc.shield, fretc.check.distinguish"]):
+        proc = subprocess.run([str(python), *args], cwd=ROOT, env=env, capture_output=True,
+                              text=True, timeout=120)
+        assert proc.returncode == 0, (args, proc.stderr[-2000:])
+    where = subprocess.run([str(python), "-c", "import fretc.cli; print(fretc.cli.__file__)"],
+                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert str(tmp_path / "env") in where.stdout, where.stdout

@@ -12,12 +12,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from fretc.audit.testrun import judge
+from fretc.testing.testrun import judge
 from fretc.cli import main
 from fretc.logs import open_log
 from fretc.signals.bindings.files import load_bindings
 from fretc.signals.clock import sample
-from fretc.sim.drive import DriveError, classify, drive
+from fretc.sim.drive import DriveError, drive
+from fretc.testing.drive_plan import classify
 
 ROOT = Path(__file__).resolve().parents[2]
 REQS = ROOT / "requirements"

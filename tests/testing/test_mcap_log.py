@@ -13,8 +13,8 @@ import pytest
 from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from fretc.audit.testgen_invert import MIN_MARGIN, holds, margin, point, solve
-from fretc.audit.testgen_mcap import same_side, write_mcap
+from fretc.testing.invert import MIN_MARGIN, holds, margin, point, solve
+from fretc.testing.mcap_log import same_side, write_mcap
 from fretc.cli import main
 from fretc.logs import open_log
 from fretc.signals.bindings.files import parse_bindings

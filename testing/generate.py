@@ -68,7 +68,7 @@ class TestCase:
     """One generated test: ``rows`` (one mapping FRET variable -> value per tick),
     ``covers`` (``(requirement id, obligation id, tick)`` it exercises), ``expected``
     (requirement id -> verdict) and ``origin`` (the obligation it was generated for); with
-    bindings (:func:`fretc.audit.testgen_mcap.bind_tests`) ``log`` (its MCAP file name or
+    bindings (:func:`fretc.testing.mcap_log.bind_tests`) ``log`` (its MCAP file name or
     None), ``log_why`` (why none) and ``adjusted`` (variables the bindings gave other
     values)."""
 
@@ -317,7 +317,7 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
     ``DIR/tests.json``; return the JSON document written (format in the module docstring of
     :mod:`fretc.cli.testgen`). ``sources``: the requirement files, for the replay line;
     ``bindings``: the binding file the tests' MCAP logs were written with
-    (:func:`fretc.audit.testgen_mcap.bind_tests`), or None."""
+    (:func:`fretc.testing.mcap_log.bind_tests`), or None."""
     from pathlib import Path
     import json
 

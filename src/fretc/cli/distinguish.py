@@ -1,7 +1,7 @@
 """``fretc distinguish A B``: are two wordings of a requirement equivalent? Each of A and B is
 a requirement text (``"upon p the sw shall within 5 ticks satisfy q"``, an ``ID:`` before it
 allowed) or, with ``-r FILE``, the id of a requirement of FILE. The answer
-(:mod:`fretc.monitors.distinguish`) comes first: ``not equivalent`` with the shortest trace on
+(:mod:`fretc.check.distinguish`) comes first: ``not equivalent`` with the shortest trace on
 which they disagree and each one's verdict on it, drawn as ``fretc explain`` draws traces;
 ``equivalent`` with the proof's source (Spot); or ``unknown`` and why.
 
@@ -64,7 +64,7 @@ def distinguish_cmd(a, b, files, tick_period, max_ticks, svg_path):
     (exit 0), or "unknown" and why (exit 3)."""
     from fretc.compiler.build import compile_entries
     from fretc.fretish.files import load_requirements, parse_tick_period
-    from fretc.monitors.distinguish import distinguish
+    from fretc.check.distinguish import distinguish
     from fretc.reports.distinction import distinction_text
 
     entries = load_requirements(list(files), text_attribute=text_attribute()) if files else []

@@ -2,7 +2,7 @@
 of the requirements of FILES (:mod:`fretc.compiler.coverage`: each atom's own effect, the
 trigger, the scope entered and left, the deadline reached and missed, each threshold's two
 sides) a finite trace meeting it, found by ``fretc check``'s engines and confirmed by the
-audit's judge (:mod:`fretc.audit.testgen`); traces meeting several obligations are merged by
+audit's judge (:mod:`fretc.testing.generate`); traces meeting several obligations are merged by
 a greedy cover.
 
 Written into DIR: ``T01.csv``, ``T02.csv``... (the audit's CSV traces: one column per FRET
@@ -22,7 +22,7 @@ so each test is an oracle for the whole set.
 
 With ``--bindings FILE`` each test is also written as ``T01.mcap``..., the messages on the
 topics FILE binds that make every variable's binding give the trace's value at every tick
-(:mod:`fretc.audit.testgen_mcap`); each test in ``tests.json`` gains ``"log"`` (the MCAP
+(:mod:`fretc.testing.mcap_log`); each test in ``tests.json`` gains ``"log"`` (the MCAP
 file name or null), ``"log_not_written"`` (why not, or null) and ``"adjusted"`` (variables
 the bindings could not give the trace's values at some tick: the trace, its ``covers`` and
 ``expected`` are then those of the log), and the document ``"bindings"``.
@@ -63,7 +63,7 @@ __all__ = ["testgen_cmd"]
 def testgen_cmd(files, out_dir, with_pytest, bindings_file):
     """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
     tests.json (what each covers, the expected verdict of every requirement)."""
-    from fretc.audit.testgen import generate, write_tests
+    from fretc.testing.generate import generate, write_tests
     from fretc.common.errors import FretishError
     from fretc.compiler.build import compile_entries
     from fretc.fretish.files import load_requirements
@@ -85,14 +85,14 @@ def testgen_cmd(files, out_dir, with_pytest, bindings_file):
     bindings = _load_bindings(bindings_file) if bindings_file else None
     gen = generate(compiled)
     if bindings is not None:
-        from fretc.audit.testgen_mcap import bind_tests
+        from fretc.testing.mcap_log import bind_tests
 
         bind_tests(gen, compiled, bindings, out_dir)
     sources = list(dict.fromkeys(c.entry.source for c in compiled))
     period = next((e.tick_period for e in entries if e.tick_period is not None), None)
     doc = write_tests(gen, out_dir, sources, period, bindings_file)
     if with_pytest:
-        from fretc.audit.testgen_pytest import PYTEST_FILE, pytest_file
+        from fretc.testing.pytest_file import PYTEST_FILE, pytest_file
 
         (Path(out_dir) / PYTEST_FILE).write_text(pytest_file(), encoding="utf-8")
     total = len(doc["obligations"])

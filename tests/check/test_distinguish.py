@@ -1,4 +1,4 @@
-"""``fretc distinguish`` (:mod:`fretc.monitors.distinguish`) checked against Spot, called here
+"""``fretc distinguish`` (:mod:`fretc.check.distinguish`) checked against Spot, called here
 directly: a separating trace is a finite word on which Spot finds one ft formula true and the
 other false (and FRET's reference evaluator agrees), no shorter word separates them, and an
 "equivalent" answer is one for which Spot finds no separating finite word at all. On the
@@ -19,7 +19,7 @@ from fretc.compiler.evaluate import ft_at
 from fretc.compiler.printers import to_spot
 from fretc.fretish.entry import RequirementEntry
 from fretc.fretish.parser import parse
-from fretc.monitors.distinguish import distinguish
+from fretc.check.distinguish import distinguish
 
 spot = pytest.importorskip("spot")
 

@@ -10,9 +10,9 @@ The rules:
   ``[tick] period``). Every bound topic of the trace's variables gets one message at each
   tick (log time = publish time), so the first tick is the first evaluated one (no
   warm-up) and the log ends at the last tick.
-* At each tick the field values come from :func:`fretc.audit.testgen_invert.solve`:
+* At each tick the field values come from :func:`fretc.testing.invert.solve`:
   booleans and numbers as the trace has them, a comparison's side by a margin
-  (:func:`fretc.audit.testgen_invert.point`). A field no variable sets at a tick keeps its
+  (:func:`fretc.testing.invert.point`). A field no variable sets at a tick keeps its
   value of the tick before (the first value it is given, before that; 0, false, ``[0.0]``
   or ``""`` when never given).
 * ``age(/t) > c`` true at tick ``k``: no message of ``/t`` in the ``c`` seconds up to the
@@ -33,7 +33,7 @@ The rules:
 
 A trace is not written (:func:`write_mcap` returns the reason) when the binding file ticks
 by a topic or on header stamps, when a variable has no binding or its binding is not
-inverted (:class:`fretc.audit.testgen_invert.NotWritable`), or when the values of one tick
+inverted (:class:`fretc.testing.invert.NotWritable`), or when the values of one tick
 cannot be given together even with variables left to the messages.
 """
 
@@ -48,7 +48,7 @@ from collections.abc import Callable, Iterable
 import numpy as np
 from mcap.writer import CompressionType, Writer
 
-from fretc.audit.testgen_invert import AGE, NotWritable, field_defaults, margin, solve
+from fretc.testing.invert import AGE, NotWritable, field_defaults, margin, solve
 from fretc.signals.bindings.spec import Bindings
 
 #: other values to try for a numeric variable: (variable, trace value) -> values
@@ -73,7 +73,7 @@ def _check_clock(bindings: Bindings) -> int:
 
 def _assignments(rows: list[dict], bindings: Bindings, candidates: Candidates | None
                  ) -> tuple[list[dict], list[str]]:
-    """One assignment per tick (:func:`fretc.audit.testgen_invert.solve`), and the
+    """One assignment per tick (:func:`fretc.testing.invert.solve`), and the
     variables given other values at some tick (module docstring, "adjusted")."""
     names = list(rows[0]) if rows else []
     missing = [n for n in names if n not in bindings.variables]
@@ -158,7 +158,7 @@ def _relax(wanted: list) -> tuple[dict | None, list]:
 
 def _held_fields(ticks: list[dict], defaults: dict[tuple, Any]) -> dict[str, list[dict]]:
     """Topic -> one ``{path: value}`` per tick, every field the trace sets or the bindings
-    read (``defaults``: :func:`fretc.audit.testgen_invert.field_defaults`) on the topic at
+    read (``defaults``: :func:`fretc.testing.invert.field_defaults`) on the topic at
     every tick (held from the tick before; module docstring)."""
     keys: dict[tuple, Any] = {}
     for a in ticks:
@@ -374,14 +374,14 @@ def same_side(value: float, limits: Iterable[float]) -> list[float]:
 
 def bind_tests(gen, compiled, bindings: Bindings, out_dir: str | Path) -> None:
     """Write ``DIR/T01.mcap``... for the tests of ``gen`` (a
-    :class:`fretc.audit.testgen.Generated` of ``compiled``) under ``bindings``, setting each
+    :class:`fretc.testing.generate.Generated` of ``compiled``) under ``bindings``, setting each
     test's ``log`` (the file name) or ``log_why`` (why none was written) and ``adjusted``.
 
     A test whose trace the bindings can give only with some variables left to the messages
     (``adjusted``, module docstring) becomes the trace read back from its log: its
     ``covers`` and ``expected`` are the audit's again on it, and it is kept only if it still
     exercises every obligation it covered (else no log, and the reason)."""
-    from fretc.audit.testgen import column_kinds, covered_by, expected_of
+    from fretc.testing.generate import column_kinds, covered_by, expected_of
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

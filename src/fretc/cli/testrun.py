@@ -3,7 +3,7 @@ system. For each test, ``CMD TRACE.csv LOG`` turns its trace into a log of the s
 Safe-ROS simulator: ``python -m fretc.sim drive -b requirements/safe_ros.bindings.toml``),
 ``fretc audit --coverage`` judges the log with the test set's requirements and binding file,
 and the test passes, fails, is unknown or not exercised by the pass rule of
-:mod:`fretc.audit.testrun` (no requirement violated, every verdict decided, and the
+:mod:`fretc.testing.testrun` (no requirement violated, every verdict decided, and the
 obligation the test was generated for exercised on the system's log; with
 ``--all-obligations`` every obligation the test covers).
 
@@ -49,7 +49,7 @@ __all__ = ["testrun_cmd"]
               help="Write the outcomes as JSON here.")
 def testrun_cmd(folder, command, bindings, logs_dir, only, all_obligations, json_path):
     """Run the generated tests in FOLDER against the system CMD makes logs of."""
-    from fretc.audit.testrun import OUTCOMES, run_test
+    from fretc.testing.testrun import OUTCOMES, run_test
 
     folder = Path(folder)
     try:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from fretc.audit.testgen import generate
+from fretc.testing.generate import generate
 from fretc.cli import main
 from fretc.compiler.build import compile_entries
 from fretc.compiler.coverage import obligations

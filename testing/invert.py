@@ -1,7 +1,7 @@
 """Inverting signal bindings: the message field values that make a binding expression
 (:mod:`fretc.signals.bindings.expression`) evaluate to a given value, so that a generated
 test's trace (FRET variable -> value per tick) can be written as messages of the bound topics
-(:mod:`fretc.audit.testgen_mcap`).
+(:mod:`fretc.testing.mcap_log`).
 
 What is inverted (anything else raises :class:`NotWritable`, nothing is guessed):
 
@@ -16,7 +16,7 @@ What is inverted (anything else raises :class:`NotWritable`, nothing is guessed)
   another variable gives the field a value on that side; ``=``/``!=`` with a string constant (true
   only for ``!=``: another string);
 * ``age(/topic) OP c``: whether the topic is silent (no message for more than / at least
-  ``c`` seconds) or fresh at the tick; :mod:`fretc.audit.testgen_mcap` schedules the
+  ``c`` seconds) or fresh at the tick; :mod:`fretc.testing.mcap_log` schedules the
   topic's messages from it.
 
 An assignment maps a key to a value: ``(topic, path)`` of a field (a path of attribute
