@@ -90,9 +90,63 @@ def _service_type(name: str) -> str:
     return name
 
 
+#: service_msgs/msg/ServiceEventInfo and builtin_interfaces/msg/Time (ROS 2 Jazzy), the
+#: dependencies of every service event a bare ``.srv`` schema leaves out
+_EVENT_INFO = ("MSG: service_msgs/ServiceEventInfo\nuint8 REQUEST_SENT = 0\n"
+               "uint8 REQUEST_RECEIVED = 1\nuint8 RESPONSE_SENT = 2\nuint8 RESPONSE_RECEIVED = 3\n"
+               "uint8 event_type\nbuiltin_interfaces/Time stamp\nchar[16] client_gid\n"
+               "int64 sequence_number\n" + _IDL_SEP
+               + "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
+
+
+def service_event_text(name: str, text: str) -> str:
+    """The full ros2msg definition of a service's event type ``pkg/srv/Name_Event`` when a
+    log stores the service's ``.srv`` text instead (rosbag2_cpp's writer looks up the
+    service's own definition: the bare ``request --- response`` text in its test bags, an
+    ``SRV: pkg/srv/Name`` section in Jazzy's); ``text`` unchanged for anything else. The event
+    is ``service_msgs/ServiceEventInfo info``, ``Name_Request[<=1] request``,
+    ``Name_Response[<=1] response`` (ROS 2 service introspection, REP 2012 era Iron/Jazzy);
+    the ``.srv``'s own ``MSG:`` sections are kept for the types its fields name."""
+    parts = name.split("/")
+    if len(parts) != 3 or parts[1] != "srv" or not parts[2].endswith("_Event"):
+        return text
+    sections = text.split(_IDL_SEP)
+    body, rest = None, []
+    for k, sec in enumerate(sections):
+        head = sec.split("\n", 1)[0].strip()
+        if head.startswith("SRV:"):
+            body = sec.split("\n", 1)[1] if "\n" in sec else ""
+        elif k == 0 and not head.startswith("MSG:") and _has_separator(sec):
+            body = sec
+        else:
+            rest.append(sec)
+    if body is None:
+        return text
+    lines = body.splitlines()
+    cut = next(i for i, ln in enumerate(lines) if ln.strip() == "---") if _has_separator(
+        body) else len(lines)
+    pkg, svc = parts[0], parts[2][:-len("_Event")]
+    request, response = "\n".join(lines[:cut]), "\n".join(lines[cut + 1:])
+    out = (f"service_msgs/ServiceEventInfo info\n{svc}_Request[<=1] request\n"
+           f"{svc}_Response[<=1] response\n" + _IDL_SEP + _EVENT_INFO + _IDL_SEP
+           + f"MSG: {pkg}/{svc}_Request\n{request}\n" + _IDL_SEP
+           + f"MSG: {pkg}/{svc}_Response\n{response}\n")
+    kept = [sec for sec in rest if sec.strip()]
+    return out + "".join(_IDL_SEP + sec for sec in kept)
+
+
+def _has_separator(text: str) -> bool:
+    return any(ln.strip() == "---" for ln in text.splitlines())
+
+
 @functools.lru_cache(maxsize=_STORES_KEPT)
 def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
     typename = normalize_msgtype(_service_type(name) if schema_encoding == "ros2msg" else name)
+    if schema_encoding in ("ros2msg", "unknown"):
+        text = service_event_text(name, text)
+        if schema_encoding == "unknown" and text.startswith("service_msgs/ServiceEventInfo info"):
+            schema_encoding = "ros2msg"
+            typename = normalize_msgtype(_service_type(name))
     if not text.strip():
         raise UnsupportedSchema(f"schema {name!r} is empty")
     if schema_encoding not in ("ros2msg", "ros1msg", "ros2idl"):

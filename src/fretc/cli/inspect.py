@@ -216,8 +216,11 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
     last: Dict[str, int] = {}
     counts: Dict[str, int] = {}
     plans: dict = {}
+    # a topic whose schema is missing or not parsed is listed without fields ("schema
+    # unknown"), its messages counted
     visit = {t: _plan(s, s.typename, topic_text(t), stats[t], plans)
-             for t, s in schemas.items() if t in stats and source.kind != "csv"}
+             for t, s in schemas.items()
+             if s is not None and t in stats and source.kind != "csv"}
     for m in source.messages(None):
         counts[m.topic] = counts.get(m.topic, 0) + 1
         first.setdefault(m.topic, m.log_time)
