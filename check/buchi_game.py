@@ -41,7 +41,7 @@ from fretc.compiler.printers import to_spot
 from fretc.check.budget import Budget, Meter
 from fretc.check.fixed_inputs import input_lasso, recurrence
 from fretc.check.pt_monitor import Outside
-from fretc.check.safety_game import MAX_LETTERS, _Game, _varset, _Witness, bdd_dict, letter_name
+from fretc.check.safety_game import MAX_LETTERS, Game, _varset, Witness, bdd_dict, letter_name
 
 __all__ = ["solve_buchi_game"]
 
@@ -80,8 +80,8 @@ def _degree(aut) -> int:
     return (most - 1).bit_length()
 
 
-class _BuchiGame(_Game):
-    """The game of :func:`solve_buchi_game`: a :class:`fretc.check.safety_game._Game` over the pt
+class _BuchiGame(Game):
+    """The game of :func:`solve_buchi_game`: a :class:`fretc.check.safety_game.Game` over the pt
     formulas ``pts`` (and ``extra``, monitored beside) with the automata of the ``liveness``
     formulas in its state (``self.acc``: one BDD over (state, inputs, outputs) per
     acceptance set: this tick's edge is in it). Also the product of
@@ -191,7 +191,7 @@ def _lasso(game: _BuchiGame, meter: Meter) -> tuple[tuple | None, str]:
     """The shortest input lasso that defeats every controller
     (:func:`fretc.check.fixed_inputs.input_lasso`), as ``(prefix, cycle)`` of ``(letter, cube)``
     (letters ``{atom name: bool}``, cubes their BDDs); or None and why."""
-    w = _Witness(game)
+    w = Witness(game)
     letters = w._cubes(w.in_atoms, game.env_ok, MAX_LETTERS)
     if letters is None:
         return None, (f"no fixed input sequence searched: {len(w.in_atoms)} input atoms are "

@@ -71,7 +71,7 @@ def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
 def defeats(game, cubes: list, start: int, meter: Meter) -> bool:
     """Does the input lasso ``cubes[:start]`` then ``cubes[start:]`` forever (BDD cubes of
     the input atoms) defeat every controller of ``game`` (a :class:`fretc.check.safety_game.
-    _Game` or :class:`fretc.check.buchi_game._BuchiGame`): is there no output sequence along it
+    Game` or :class:`fretc.check.buchi_game._BuchiGame`): is there no output sequence along it
     that keeps every requirement with each acceptance set met infinitely often? The games'
     nested fixed point with the outputs alone to choose, one set of states per position."""
     return game.b.bdd_and(game.init, _keep(game, cubes, start, meter)[0]) == game.b.bddfalse

@@ -42,7 +42,7 @@ from fretc.check.budget import Budget, Meter
 from fretc.check.buchi_game import _BuchiGame
 from fretc.check.fixed_inputs import recurrence
 from fretc.check.pt_monitor import Outside
-from fretc.check.safety_game import _Game, _varset, letter_name
+from fretc.check.safety_game import Game, _varset, letter_name
 
 __all__ = ["decide"]
 
@@ -80,7 +80,7 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
         except Outside as exc:
             return ("outside", str(exc))
     else:
-        game = _Game(list(safe), [], ir.TRUE, invariant, extra=marks, meter=meter)
+        game = Game(list(safe), [], ir.TRUE, invariant, extra=marks, meter=meter)
     try:
         return _Search(game, meter).run(finite, length)
     finally:
@@ -89,9 +89,9 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
 
 class _Search:
     """The fixed points of :func:`decide` on one product monitor (``game``: a
-    :class:`fretc.check.safety_game._Game` whose atoms are all the controller's)."""
+    :class:`fretc.check.safety_game.Game` whose atoms are all the controller's)."""
 
-    def __init__(self, game: _Game, meter: Meter):
+    def __init__(self, game: Game, meter: Meter):
         self.g, self.b, self.meter = game, game.b, meter
         b = self.b
         self.ok = b.bdd_and(game.ok, game.ctl_ok)

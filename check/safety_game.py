@@ -54,7 +54,8 @@ from fretc.check.fixed_inputs import keep_forever, post, prefix_search
 from fretc.check.numeric_abstraction import simple_comparison
 from fretc.check.pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
 
-__all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms"]
+__all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms", "letter_name",
+           "Game", "Witness", "bdd_dict"]
 
 #: fixed-input-sequence search: sets of states visited before giving up
 SEARCH_BUDGET = 4000
@@ -66,13 +67,17 @@ MAX_LETTERS = 1024
 def is_safety(n: Node, positive: bool = True) -> bool:
     """Is ``n`` (an ft_inf IR formula, read with polarity ``positive``) in the syntactic
     safety fragment (Sistla, "Safety, liveness and fairness in temporal logic", 1994):
-    negation normal form with only ``X``, ``G``, ``V`` (release) and bounded ``F``/``G``
-    over atoms? ``F`` and ``U`` are allowed under negation only."""
+    negation normal form with only ``X``, ``G``, ``V`` (release), the weak until ``(p U q) |
+    G p`` and bounded ``F``/``G`` over atoms? ``F`` and ``U`` are allowed under negation
+    only."""
     op = n.op
     if not n.args or op in ("cmp", "call", "past", "future"):
         return True
     if op == "!":
         return is_safety(n.args[0], not positive)
+    if op == "|" and positive and _weak_until(n) is not None:
+        p, q = _weak_until(n)
+        return is_safety(p, positive) and is_safety(q, positive)
     if op in ("&", "|"):
         return all(is_safety(a, positive) for a in n.args)
     if op == "->":
@@ -86,6 +91,17 @@ def is_safety(n: Node, positive: bool = True) -> bool:
     if op in ("F", "U"):
         return (not positive) and all(is_safety(a, positive) for a in n.args)
     return False
+
+
+def _weak_until(n: Node) -> tuple[Node, Node] | None:
+    """``(p, q)`` of ``(p U q) | G p`` (either order): the weak until ``p W q``, a safety
+    property when ``p`` and ``q`` are (FRET writes its ``after`` scopes so); else None."""
+    if len(n.args) != 2:
+        return None
+    for u, g in (n.args, n.args[::-1]):
+        if u.op == "U" and g.op == "G" and g.hi is None and g.args[0] == u.args[0]:
+            return u.args[0], u.args[1]
+    return None
 
 
 def pt_monitors_ft_inf(formalization) -> bool:
@@ -143,7 +159,7 @@ def bdd_dict():
     return _DICT[0]
 
 
-class _Game:
+class Game:
     """The safety game of a set of pt formulas (module docstring). ``inputs``: FRET
     variable names of the environment; ``env_inv``/``ctl_inv``: propositional IR formulas
     over the atoms (the numeric consistency of inputs / outputs); ``extra``: more pt
@@ -321,11 +337,11 @@ def _varset(b, variables: Sequence[int]):
 
 
 # --------------------------------------------------------------------------- the environment
-class _Witness:
+class Witness:
     """A fixed input sequence that defeats every controller, and a controller's best
     effort along it (module docstring)."""
 
-    def __init__(self, game: _Game):
+    def __init__(self, game: Game):
         self.g, self.b = game, game.b
         m = game.m
         self.in_atoms = [a for a in game.atoms if m.atom_var[a] in m.in_vars]
@@ -484,11 +500,11 @@ def solve_game(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
     does not handle, :class:`fretc.check.budget.BudgetSpent` past the budget.
     """
     budget = budget or Budget()
-    game = _Game(pts, inputs, env_inv, ctl_inv, meter=Meter(budget))
+    game = Game(pts, inputs, env_inv, ctl_inv, meter=Meter(budget))
     try:
         if game.solve():
             return {"realizable": True, "strategy": game.strategy_size()}
-        w = _Witness(game)
+        w = Witness(game)
         seq, note = w.search(budget)
         if seq is None:
             return {"realizable": False, "inputs": None, "run": [], "note": note,

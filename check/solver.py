@@ -23,6 +23,9 @@ Queries (all on infinite words, Spot's LTL semantics):
   outputs (no fixed input sequence wins). Uses Spot's synthesis games:
   ``spot.ltl_to_game``, ``spot.solve_game``, ``spot.solved_game_to_mealy`` (Spot >= 2.10,
   ``ltlsynt``'s engine).
+* ``("call", function, args)``: ``function(*args, budget=budget)``, a module-level function
+  of a later layer (pickled by name) that works with Spot or BuDDy in this process under the
+  query's budget: ``fretc shield``'s synthesis (:mod:`fretc.shield.synthesis`);
 * ``("safety_game", pts, inputs, env_inv, ctl_inv)``: the symbolic safety game of
   :func:`fretc.check.safety_game.solve_game` (its answer dict).
 * ``("buchi_game", pts, liveness, inputs, env_inv, ctl_inv, search)``: the Büchi game of
@@ -181,6 +184,9 @@ def run_query(query: tuple, budget: Budget | None = None) -> Any:
         if aut.is_empty():
             return (False, None)
         return (True, _word(aut))
+    if kind == "call":  # a later layer's function run here (the caller passes it in)
+        fn, args = query[1], query[2]
+        return fn(*args, budget=budget)
     if kind == "safety_game":
         from fretc.check.safety_game import solve_game  # lazy: BuDDy games only when asked
 

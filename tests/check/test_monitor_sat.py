@@ -26,7 +26,7 @@ from fretc.check.items import make_item, monitored_forms
 from fretc.check.budget import Budget, Meter
 from fretc.check.monitor_sat import _Search
 from fretc.check.numeric_abstraction import NumericAbstraction
-from fretc.check.safety_game import _Game, pt_monitors_ft_inf
+from fretc.check.safety_game import Game, pt_monitors_ft_inf
 from fretc.check.solver import UNKNOWN, SpotWorker
 from fretc.check.witness import read_expected
 from fretc.compiler import ir
@@ -79,7 +79,7 @@ def test_pt_monitors_ft_inf_on_random_lassos():
 def _monitor_series(pt, trace: list[dict]) -> tuple[list[bool], int]:
     """The BDD monitor of ``pt`` run on ``trace``: its value at each tick, and how many
     deadlines it monitors by a counter."""
-    g = _Game([pt], [], ir.TRUE, ir.TRUE)
+    g = Game([pt], [], ir.TRUE, ir.TRUE)
     try:
         b, m = g.b, g.m
         state, out = g.init, []
@@ -118,7 +118,7 @@ def test_bdd_monitor_gives_the_pt_value_at_every_tick(bound):
 
 def test_a_deadline_is_a_counter_not_a_delay_line():
     f = formalize(parse("whenever p the sw shall within 250 ticks satisfy q"))
-    g = _Game([f.pt], [], ir.TRUE, ir.TRUE)
+    g = Game([f.pt], [], ir.TRUE, ir.TRUE)
     try:
         assert len(g.m.deadlines) == 1 and len(g.m.bits) < 32
     finally:
@@ -224,7 +224,7 @@ def test_the_step_in_parts_gives_the_sets_of_the_whole_relation(tmp_path_factory
     """On random sets (bounds up to 12, the requirements safe and one negated as a goal):
     the successors in a set of states by one relational product per part of the
     transition relation (check/monitor_sat.py) equal BuDDy's simultaneous substitution of
-    the next-value functions (``_Game.successors_in``), and the predecessors equal those of
+    the next-value functions (``Game.successors_in``), and the predecessors equal those of
     the monolithic relational product, for Live's iterates and random sets of states; so
     do the successors from one state with the parts restricted to it."""
     path = _file(tmp_path_factory.mktemp("parts"), parts)
@@ -236,7 +236,7 @@ def test_the_step_in_parts_gives_the_sets_of_the_whole_relation(tmp_path_factory
     if not safe:
         return
     inv = NumericAbstraction.of(list(forms)).regions(["s"])
-    game = _Game(safe, [], ir.TRUE, inv, extra=[ir.O(g) for g in goals])
+    game = Game(safe, [], ir.TRUE, inv, extra=[ir.O(g) for g in goals])
     try:
         search, b, rnd = _Search(game, Meter(Budget())), game.b, random.Random(seed)
         whole = b.bdd_and(search.ok, game.trans)
@@ -270,7 +270,7 @@ def test_the_states_of_a_1000_tick_set_are_a_small_bdd():
         "whenever p the sw shall within 1000 ticks satisfy q",
         "upon p the sw shall for 997 ticks satisfy !q",
         "in m mode upon p the sw shall within 1000 ticks satisfy r")]
-    game = _Game(pts, [], ir.TRUE, ir.TRUE)
+    game = Game(pts, [], ir.TRUE, ir.TRUE)
     try:
         live = _Search(game, Meter(Budget())).live()
         assert live != game.b.bddfalse and game.b.bdd_nodecount(live) < 400
