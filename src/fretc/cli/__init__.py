@@ -130,6 +130,7 @@ _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
              "lsp": ("lsp", "lsp_cmd"), "explain": ("explain", "explain_cmd"),
              "distinguish": ("distinguish", "distinguish_cmd"),
              "testgen": ("testgen", "testgen_cmd"), "testrun": ("testrun", "testrun_cmd"),
+             "shield": ("shield", "shield_cmd"),
              "replay": ("watch", "replay_cmd")}
 
 

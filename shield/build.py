@@ -1,0 +1,202 @@
+"""``fretc shield``'s synthesis end to end: requirements -> :class:`Shield` (one
+:class:`fretc.shield.machine.Machine` per component), or the reason no shield exists.
+
+Each component's game runs in ``fretc check``'s query worker with ``fretc check``'s budgets
+(:class:`fretc.check.solver.SpotWorker`): a game past its budget makes no shield (exit 1,
+as ``fretc check``'s unknown answers); an unrealizable component is an input error naming
+the inputs that defeat every controller (found as ``fretc check`` finds them).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+from fretc.check.budget import Budget
+from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
+from fretc.check.safety_game import letter_name
+from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
+from fretc.shield.machine import Atom, Machine
+from fretc.shield.plan import Component, Plan, ShieldError, plan
+from fretc.shield.synthesis import synthesize
+from fretc.signals.bindings.spec import Bindings
+
+__all__ = ["Requirement", "Shield", "ShieldUnknown", "build_shield", "parse_preferences"]
+
+
+class ShieldUnknown(Exception):
+    """A component's game ran past its budget (or Spot/BuDDy could not take it): no shield;
+    the message says which and why."""
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """An enforced requirement as the shield carries it: ``id``, ``text`` (FRETish),
+    ``source`` (``file:line``), ``pt`` (FRET's pt formula, FRET/SMV text), ``component``
+    (index of its machine)."""
+
+    id: str
+    text: str
+    source: str
+    pt: str
+    component: int
+
+
+@dataclass(frozen=True)
+class Shield:
+    """The synthesized shield: ``machines`` one per component; ``inputs``/``outputs`` the
+    FRET variables (outputs no requirement reads pass through unchanged); ``requirements``
+    the enforced ones; ``monitored`` id -> why not enforced; ``preferences`` ``(output atom
+    text, wanted value)`` in the user's order; ``period`` the requirements' tick (seconds,
+    None when they declare none); ``messages`` the output variables corrected together (bound
+    to one topic); ``numbers`` the variables that are numbers (compared in a formula; the
+    others are booleans); ``read`` the variables some requirement reads; ``digest`` a hash of the requirements and choices (traceability)."""
+
+    name: str
+    machines: tuple[Machine, ...]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    requirements: tuple[Requirement, ...]
+    monitored: dict[str, str]
+    preferences: tuple[tuple[str, bool], ...]
+    period: Fraction | None
+    messages: tuple[tuple[str, ...], ...] = ()
+    numbers: frozenset[str] = frozenset()
+    read: frozenset[str] = frozenset()
+    notes: tuple[str, ...] = ()
+    digest: str = ""
+    stats: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def weights(self, k: int) -> dict[int, tuple[bool, int]]:
+        """Machine ``k``'s preferences as :func:`fretc.shield.machine.correct` takes them:
+        output atom index -> (wanted value, weight), weights ``2**(P-1) .. 1`` in order."""
+        m, p = self.machines[k], len(self.preferences)
+        out = {}
+        for rank, (text, want) in enumerate(self.preferences):
+            for j, a in enumerate(m.outputs):
+                if a.text == text:
+                    out[j] = (want, 1 << (p - 1 - rank))
+        return out
+
+
+def parse_preferences(text: str | None) -> list[tuple[str, bool]]:
+    """``"stopped, !moving"`` -> ``[("stopped", True), ("moving", False)]``: output atoms
+    (a boolean variable or a comparison's FRET text) and the value to prefer among equally
+    few changes."""
+    out = []
+    for part in (text or "").split(","):
+        part = part.strip()
+        if part:
+            neg = part.startswith("!")
+            out.append((part[1:].strip() if neg else part, not neg))
+    return out
+
+
+def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str], *,
+                 bindings: Bindings | None = None, prefer: Sequence[tuple[str, bool]] = (),
+                 budget: Budget | None = None, name: str = "shield",
+                 fork: bool = True) -> Shield:
+    """Synthesize the shield of ``compiled`` (:class:`fretc.compiler.build.Compiled`) for the
+    FRET variables ``inputs`` (the environment's) and ``outputs`` (the controller's), with
+    ``bindings`` relating outputs of one message, ``prefer`` the tie-breaking preferences,
+    ``budget`` each game's (``fretc check``'s defaults), ``fork`` the games in a worker
+    process (False: in this one, for tests).
+
+    Raises:
+        ShieldError: a requirement that cannot be enforced, an unrealizable component (with
+            the inputs that defeat every controller), an unknown preference.
+        ShieldUnknown: a component's game past its budget."""
+    p = plan(compiled, inputs, outputs, bindings)
+    machines = []
+    with SpotWorker(budget, fork=fork) as worker:
+        for comp in p.components:
+            machines.append(_machine(worker, comp, p))
+    reqs = tuple(Requirement(x.id, x.compiled.entry.text, x.location,
+                             to_smv(x.pt), k)
+                 for k, comp in enumerate(p.components) for x in comp.items)
+    texts = {a.text for m in machines for a in m.outputs}
+    unknown = [t for t, _v in prefer if t not in texts]
+    if unknown:
+        raise ShieldError("--prefer names " + ", ".join(unknown) + ", not an output atom of "
+                          "an enforced requirement (" + ", ".join(sorted(texts)) + ")")
+    periods = {c.entry.tick_period for c in compiled if c.entry.tick_period is not None}
+    digest = hashlib.sha256("\n".join(
+        [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
+                                              f"out:{','.join(p.outputs)}",
+                                              f"prefer:{list(prefer)}"]
+        + [str(m.nodes) for m in machines]).encode()).hexdigest()
+    return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
+                  dict(p.monitored), tuple(prefer), min(periods) if periods else None,
+                  tuple(tuple(g.variables) for c in p.components for g in c.messages),
+                  _numbers(compiled),
+                  frozenset(v for c in compiled for v in c.formalization.variables),
+                  tuple(p.notes), digest)
+
+
+def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
+    """The FRET variables read as numbers (under a comparison or arithmetic) in any formula."""
+    out: set[str] = set()
+    for c in compiled:
+        for n in ir.walk(c.formalization.ft_inf):
+            if n.op in ("cmp", "arith"):
+                out.update(x.name for x in ir.walk(n) if x.op == "var")
+    return frozenset(out)
+
+
+def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
+    """The machine of one component (module docstring)."""
+    pts = [x.pt for x in comp.items]
+    ans = worker.ask(("call", synthesize, (pts, p.inputs, comp.env_inv, comp.ctl_inv)))
+    if ans == UNKNOWN:
+        why = worker.failures[-1] if worker.failures else "no reason given"
+        raise ShieldUnknown(f"the shield of {', '.join(comp.ids)} could not be synthesized: "
+                            f"{why} (raise --budget or --memory-budget)")
+    if not ans["realizable"]:
+        raise ShieldError(_unrealizable(comp, p, ans))
+    atoms = [(_atom(a), is_in) for a, is_in in ans["atoms"]]
+    return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i),
+                   tuple(a for a, i in atoms if not i), tuple(ans["init"]),
+                   tuple(tuple(n) for n in ans["nodes"]), ans["safe"], tuple(ans["next"]),
+                   tuple(ans["keep"]), ans["env_ok"], tuple(comp.messages), ans["stats"])
+
+
+def _atom(node: Node) -> Atom:
+    """An IR atom (a boolean variable or a comparison with a constant) as an :class:`Atom`."""
+    if node.op == "ap":
+        return Atom(to_smv(node), node.name, name=letter_name(node))
+    sc = simple_comparison(node)
+    assert sc is not None  # the game takes no other atom
+    var, op, c = sc
+    return Atom(to_smv(node), var, op, float(c), letter_name(node))
+
+
+def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
+    """The refusal of an unrealizable component, with the inputs that defeat every
+    controller when the search found them."""
+    head = (f"no shield exists for {', '.join(comp.ids)} ({', '.join(x.location for x in comp.items)}): "
+            "the requirements are unrealizable (no controller meets them whatever the inputs "
+            f"{', '.join(p.inputs)} do)")
+    if not ans.get("inputs"):
+        return head + "; " + (ans.get("note") or "the environment must react to the outputs")
+    numeric = NumericAbstraction.of([x.pt for x in comp.items])
+    atoms = {to_smv(a): a for name in numeric.atoms for a in numeric.atoms[name]}
+    rows = []
+    for letter in ans["inputs"]:
+        truth = {atoms[k]: v for k, v in letter.items() if k in atoms}
+        numbers = numeric.values(truth)
+        row = {}
+        for v in p.inputs:
+            if v in numeric.atoms:
+                row[v] = numbers[v]
+            elif any(k == v or k.strip('"') == v for k in letter):
+                row[v] = next(val for k, val in letter.items() if k == v or k.strip('"') == v)
+        rows.append("{" + ", ".join(f"{k}={str(x).lower() if isinstance(x, bool) else x}"
+                                    for k, x in row.items()) + "}")
+    return (head + "; these inputs, tick by tick, defeat every controller: "
+            + " ".join(rows) + " (fretc check gives the same finding)")

@@ -1,0 +1,131 @@
+"""``fretc shield --emit c``: the shield in C99, with the rules of ``--emit c``'s monitors:
+standard headers only, no allocation, no recursion, constant time and memory per step.
+
+Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
+``<name>_shield_run.c``, a program that runs the shield over a CSV of inputs and proposals
+(its comment gives the format):
+
+* ``P_shield_inputs`` / ``P_shield_outputs``: one field per FRET variable a requirement reads
+  (``bool``, or ``double`` for one compared with numbers); a declared variable no
+  requirement reads has no field (the caller passes such an output on unchanged); ``P_shield_state``: the monitors' state bits and the correction's scratch;
+* ``P_shield_init(s)``; ``P_shield_step(s, inputs, proposed, corrected)``: the rule of
+  :mod:`fretc.shield.machine` (as :class:`fretc.shield.runtime.ShieldRuntime`, compared on
+  random runs in the tests); returns 1 when the proposal was changed (``s->reasons``: bit
+  ``r`` set when ``P_SHIELD_REQUIREMENT_IDS[r]`` forced it), 0 when not, -1 when an input or
+  a proposed number is NaN (no decision: ``corrected`` and the state untouched).
+"""
+
+from __future__ import annotations
+
+import keyword
+from dataclasses import dataclass
+from typing import Any
+
+from fretc.compiler.c_step import c_string
+from fretc.shield.build import Shield
+from fretc.shield.emit_python import tables
+
+__all__ = ["render_c", "c_name"]
+
+_C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto "
+    "if inline int long register restrict return short signed sizeof static struct switch "
+    "typedef union unsigned void volatile while _Bool _Complex _Imaginary bool true false "
+    "NULL".split())
+_C_OPS = {"<": "<", "<=": "<=", ">": ">", ">=": ">=", "=": "==", "!=": "!="}
+
+
+def c_name(variable: str) -> str:
+    """A FRET variable as a C field name: itself, or with ``_`` after it when it is a C
+    keyword (FRET names are identifiers)."""
+    return variable + "_" if variable in _C_KEYWORDS or keyword.iskeyword(variable) else variable
+
+
+def _double(x: float) -> str:
+    """A finite double as a C literal that reads back to the same value."""
+    text = repr(float(x))
+    return text if any(ch in text for ch in ".en") else text + ".0"
+
+
+def _comment(text: str) -> str:
+    t = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
+    t = t.replace("*/", "* /").replace("/*", "/ *")
+    while "??" in t:
+        t = t.replace("??", "? ?")
+    return t
+
+
+@dataclass
+class _CMachine:
+    """One machine's tables as the templates read them."""
+
+    k: int
+    t: dict[str, Any]
+    first_req: int
+    numeric_outputs: list[tuple[str, list[tuple[str, str]], list[int]]]
+    groups: list[dict[str, Any]]
+
+    @property
+    def n_in(self) -> int:
+        """Input atoms."""
+        return len(self.t["inputs"])
+
+    @property
+    def n_out(self) -> int:
+        """Output atoms."""
+        return len(self.t["outputs"])
+
+    @property
+    def n_bits(self) -> int:
+        """State bits (at least one: C has no empty arrays)."""
+        return max(1, len(self.t["init"]))
+
+    @property
+    def n_vars(self) -> int:
+        """Variables of the node table."""
+        return self.n_in + self.n_out + len(self.t["init"])
+
+
+def _machines(shield: Shield) -> list[_CMachine]:
+    out, first = [], 0
+    for k, t in enumerate(tables(shield)["machines"]):
+        numeric = []
+        for v in dict.fromkeys(s[0] for s in t["outputs"]):
+            idx = [j for j, s in enumerate(t["outputs"]) if s[0] == v]
+            if t["outputs"][idx[0]][1] is not None:
+                numeric.append((v, [(_C_OPS[t["outputs"][j][1]], _double(t["outputs"][j][2]))
+                                    for j in idx], idx))
+        groups = []
+        names = [v for v, _s, _i in numeric]
+        for g in t["groups"]:
+            rows = []
+            for key, nums in g["numbers"].items():
+                rows.append((key, [_double(nums[v]) if v in nums else "NAN" for v in names]))
+            groups.append({"atoms": g["atoms"], "rows": rows})
+        out.append(_CMachine(k, t, first, numeric, groups))
+        first += len(t["requirements"])
+    return out
+
+
+def render_c(shield: Shield, base: str) -> dict[str, str]:
+    """``{file name: text}`` of the C form (module docstring); ``base`` the C prefix."""
+    from fretc.compiler.codegen import _env  # lazy: Jinja2 only when C is written
+
+    env = _env()
+    env.filters["cstr"] = c_string
+    env.filters["ccom"] = _comment
+    env.filters["cname"] = c_name
+    env.filters["double"] = _double
+    t = tables(shield)
+    machines = _machines(shield)
+    ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,
+           "inputs": [(v, v in shield.numbers) for v in shield.inputs if v in shield.read],
+           "outputs": [(v, v in shield.numbers) for v in shield.outputs
+                       if v in shield.read],
+           "requirements": [r for m in t["machines"] for r in m["requirements"]],
+           "op_map": _C_OPS,
+           "numeric": any(m.numeric_outputs for m in machines),
+           "max_atoms": max([1] + [len(i) for m in machines for _v, _s, i in m.numeric_outputs])}
+    return {f"{base}_shield.h": env.get_template("shield.h.j2").render(**ctx),
+            f"{base}_shield.c": env.get_template("shield.c.j2").render(**ctx),
+            f"{base}_shield_run.c": env.get_template("shield_runner.c.j2").render(**ctx)}

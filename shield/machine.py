@@ -1,0 +1,109 @@
+"""The synthesized shield as data, and its reference step.
+
+A shield (Bloem, Könighofer, Könighofer, Wang, "Shield Synthesis", TACAS 2015) is made of one
+:class:`Machine` per connected component of the enforced requirements. A machine reads, each
+tick, the truth values of its **input atoms** (the environment's boolean variables and the
+comparisons of its numeric variables with constants), the **proposed** truth values of its
+**output atoms** (the controller's), and its **state**: the bits of the requirements' pt
+monitors (:class:`fretc.check.pt_monitor.Monitor`: one bit per ``Y``/``O``/``H``/``S``
+sub-formula, binary counters for bounded ones). Its functions are BDDs exported from BuDDy
+into one node table (:mod:`fretc.shield.synthesis`):
+
+* ``safe``: the move keeps every requirement's pt formula true now and the monitors' next
+  state inside the safety game's winning region (:mod:`fretc.check.safety_game`), with the
+  outputs' numeric and message consistency (``ctl_ok``);
+* ``next[k]``: the next value of state bit ``k``;
+* ``keep[j]``: the same as ``safe`` for requirement ``j`` alone (its own winning region):
+  a proposal that fails it is *a reason* for an override;
+* ``env_ok``: the input atoms take the truth values of real numbers (the proof's
+  environment, :mod:`fretc.shield.prove`).
+
+The rule every form implements (:class:`fretc.shield.runtime.ShieldRuntime`, the one Python
+implementation, written into ``--emit python``'s module; the C form; the tests compare them
+with a brute-force reference on random inputs): the proposal unchanged when ``safe`` holds
+for it (minimal interference), otherwise the outputs with ``safe`` that change the fewest
+output atoms, ties broken by the user's preferences, then by the node table's order.
+
+Variables of the node table: ``0 .. I-1`` the input atoms, ``I .. I+O-1`` the output atoms,
+``I+O ..`` the state bits. Node 0 is false, node 1 true; node ``k >= 2`` is
+``(variable, low, high)`` with ``low, high < k`` (children first).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["Atom", "Machine", "evaluate"]
+
+_TESTS = {"<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
+          ">=": lambda x, c: x >= c, "=": lambda x, c: x == c, "!=": lambda x, c: x != c}
+
+
+@dataclass(frozen=True)
+class Atom:
+    """An atom of the game: the boolean FRET variable ``variable`` (``op`` None) or the
+    comparison ``variable op constant`` (``op`` in ``< <= > >= = !=``, the variable on the
+    left, the constant as a float of FRET's text). ``text``: its FRET/SMV text (the name
+    ``fretc check`` gives it)."""
+
+    text: str
+    variable: str
+    op: str | None = None
+    constant: float | None = None
+    #: the atom's name in Spot's formulas (``fretc check``'s letters): the mangled variable,
+    #: or the comparison's FRET/SMV text
+    name: str = ""
+
+    def value(self, x: bool | float) -> bool:
+        """The atom's truth for the variable's value ``x`` (a bool for a boolean variable,
+        a float for a numeric one). Raises ValueError for a NaN (no truth value)."""
+        if self.op is None:
+            return bool(x)
+        v = float(x)
+        if math.isnan(v):
+            raise ValueError(f"{self.variable} is NaN: {self.text} has no truth value")
+        return _TESTS[self.op](v, self.constant)
+
+
+@dataclass(frozen=True)
+class Machine:
+    """One component's shield (module docstring): ``requirements`` the enforced ids,
+    ``inputs``/``outputs`` the atoms, ``init`` the state bits' initial values, ``nodes`` the
+    node table, ``safe``/``next``/``keep``/``env_ok`` its roots (``keep`` one per
+    requirement), ``messages`` its outputs corrected together
+    (:class:`fretc.shield.plan.MessageGroup`), ``stats`` sizes (state bits, BDD nodes of the
+    winning region, iterations)."""
+
+    requirements: tuple[str, ...]
+    inputs: tuple[Atom, ...]
+    outputs: tuple[Atom, ...]
+    init: tuple[bool, ...]
+    nodes: tuple[tuple[int, int, int], ...]
+    safe: int
+    next: tuple[int, ...]
+    keep: tuple[int, ...]
+    env_ok: int
+    messages: tuple[Any, ...] = ()
+    stats: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def output_variables(self) -> list[str]:
+        """The FRET variables of the output atoms, in first-seen order."""
+        return list(dict.fromkeys(a.variable for a in self.outputs))
+
+    @property
+    def input_variables(self) -> list[str]:
+        """The FRET variables of the input atoms, in first-seen order."""
+        return list(dict.fromkeys(a.variable for a in self.inputs))
+
+
+def evaluate(nodes: tuple[tuple[int, int, int], ...], root: int, values: list[bool]) -> bool:
+    """The BDD ``root`` of ``nodes`` at the variable values ``values`` (one bool per
+    variable of the node table)."""
+    n = root
+    while n > 1:
+        var, lo, hi = nodes[n]
+        n = hi if values[var] else lo
+    return n == 1

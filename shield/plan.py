@@ -1,0 +1,301 @@
+"""What ``fretc shield`` enforces: the requirements sorted into enforced, monitored and refused,
+the enforced ones into components, and the consistency of the outputs' atoms.
+
+* **Enforced**: a requirement reading an output whose ft_inf is a safety property monitored
+  by its FRET pt formula (:func:`fretc.check.safety_game.pt_monitors_ft_inf`) and whose atoms
+  the game takes (boolean variables, comparisons of one variable with a constant).
+* **Monitored only**: a requirement over inputs only: no output can keep it (Safe-ROS's R5,
+  ``clearance > 0``, is the environment's); listed, not enforced.
+* **Refused** (input errors, exit 2, :class:`ShieldError`): not a safety property (an
+  ``eventually`` without a bound: "give a deadline"), an atom the game cannot take, a variable
+  declared neither input nor output.
+
+Components (as ``fretc check``'s realizability: requirements sharing a variable) are joined
+further when the bindings bind their outputs to one topic: the shield corrects such outputs
+together. Their atoms' valuations that no single message gives (``forwarded_zero`` true with
+``stopped`` false: both read ``/cmd_vel_filtered``) are excluded from the controller's moves,
+found by inverting the bindings as ``fretc testgen --bindings`` does
+(:func:`fretc.testing.invert.solve`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from fretc.check.items import CheckItem, make_item
+from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
+from fretc.check.pt_monitor import Outside
+from fretc.check.safety_game import game_atoms
+from fretc.common.errors import FretcError
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
+from fretc.signals.bindings.expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
+from fretc.signals.bindings.spec import Bindings
+from fretc.testing.invert import AGE, NotWritable, solve
+
+__all__ = ["ShieldError", "MessageGroup", "Component", "Plan", "plan", "MAX_GROUP_ATOMS"]
+
+#: the most output atoms of one message whose valuations are enumerated (2^12 inversions)
+MAX_GROUP_ATOMS = 12
+
+
+class ShieldError(FretcError, ValueError):
+    """Requirements ``fretc shield`` cannot enforce, or inputs it cannot use; the message says
+    why (and, for an unrealizable set, gives the inputs that defeat every controller)."""
+
+
+@dataclass
+class MessageGroup:
+    """Output variables bound to one topic (``variables``) and the valuations of their atoms
+    some message gives: ``valuations`` ``(atom text -> value, the message's fields
+    ((topic, path) -> value), numeric variable -> its value on that message)``, the
+    numbers of a variable whose binding is not evaluated here left out. Empty when the
+    bindings are not inverted (any valuation allowed, noted)."""
+
+    variables: list[str]
+    valuations: list[tuple[dict[str, bool], dict[tuple[str, tuple[str, ...]], Any],
+                           dict[str, float]]] = field(default_factory=list)
+
+
+@dataclass
+class Component:
+    """Enforced requirements sharing variables or messages: ``items`` (check's view of each),
+    ``env_inv``/``ctl_inv`` the consistency of the input / output atoms (propositional IR:
+    numeric regions, and for outputs the message constraints), ``messages`` the groups of
+    output variables bound to one topic (the shield corrects each group together)."""
+
+    items: list[CheckItem]
+    env_inv: Node = ir.TRUE
+    ctl_inv: Node = ir.TRUE
+    messages: list[MessageGroup] = field(default_factory=list)
+
+    @property
+    def ids(self) -> list[str]:
+        """The requirement ids, in input order."""
+        return [x.id for x in self.items]
+
+
+@dataclass
+class Plan:
+    """The requirements as the shield sees them (module docstring): ``components`` of the
+    enforced ones, ``monitored`` id -> why not enforced, ``notes`` what the plan could not
+    relate (a binding that is not inverted)."""
+
+    inputs: list[str]
+    outputs: list[str]
+    components: list[Component]
+    monitored: dict[str, str]
+    notes: list[str]
+
+
+def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
+         bindings: Bindings | None = None) -> Plan:
+    """Sort ``compiled`` (:class:`fretc.compiler.build.Compiled`) into the plan of the module
+    docstring, ``inputs``/``outputs`` the FRET variables of the environment / controller.
+
+    Raises:
+        ShieldError: a requirement that cannot be enforced, a variable both input and
+            output or neither, a requirement that did not formalize."""
+    inputs, outputs = list(dict.fromkeys(inputs)), list(dict.fromkeys(outputs))
+    both = sorted(set(inputs) & set(outputs))
+    if both:
+        raise ShieldError("declared both input and output: " + ", ".join(both))
+    enforced: list[CheckItem] = []
+    monitored: dict[str, str] = {}
+    for k, c in enumerate(compiled):
+        if c.formalization is None:
+            raise ShieldError(f"{_where(c)}: {c.id} has no formalization"
+                              + (f" ({c.error})" if c.error else " (free-form text)"))
+        item = make_item(k, c)
+        undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
+        if undeclared:
+            raise ShieldError(f"{_where(c)}: {c.id} reads {', '.join(undeclared)}, declared "
+                              "neither input nor output (--inputs/--outputs, or @inputs/"
+                              "@outputs in the file): the shield must know who sets each")
+        if all(v in inputs for v in item.variables):
+            monitored[c.id] = ("over inputs only (" + ", ".join(item.variables) + "): the "
+                               "environment's, no output can keep it; monitored, not enforced")
+            continue
+        if item.pt is None:
+            raise ShieldError(f"{_where(c)}: {c.id} is not a safety property: "
+                              + _not_safety(c.formalization.key))
+        try:
+            game_atoms([item.pt])
+        except Outside as exc:
+            raise ShieldError(f"{_where(c)}: {c.id}: {exc}") from None
+        enforced.append(item)
+    notes: list[str] = []
+    groups = _message_groups(outputs, bindings)
+    components = [_component(items, inputs, groups, bindings, notes)
+                  for items in _components(enforced, groups)]
+    return Plan(inputs, outputs, components, monitored, notes)
+
+
+def _not_safety(key: str) -> str:
+    """Why a requirement of template key ``key`` (``scope,condition,timing``) has no
+    run-time enforcement, and what to write instead."""
+    scope, _cond, timing = (key.split(",") + ["", "", ""])[:3]
+    if timing in ("eventually", "null"):
+        return ("its response is required eventually, with no bound, so no finite run "
+                "shows it failed and no shield can enforce it; give a deadline (e.g. "
+                "'within 1 second')")
+    if timing == "finally":
+        return ("'at the last timepoint' speaks of the run's end, which a shield never "
+                "sees; write the obligation with a deadline instead")
+    return (f"in the {scope} scope with the {timing} timing its ft_inf formula asks for "
+            "something to happen eventually (a strong until), so no shield can enforce it "
+            "at run time; a deadline or another scope makes it a safety property")
+
+
+def _where(c: Any) -> str:
+    return f"{c.entry.source}:{c.entry.line}"
+
+
+def _message_groups(outputs: list[str], bindings: Bindings | None) -> list[list[str]]:
+    """Output variables joined when their bindings read a common topic (union-find)."""
+    if bindings is None:
+        return []
+    owner: dict[str, str] = {}
+    parent = {v: v for v in outputs if v in bindings.variables}
+
+    def find(v: str) -> str:
+        while parent[v] != v:
+            v = parent[v]
+        return v
+
+    for v in parent:
+        for t in bindings.variables[v].topics:
+            if t in owner:
+                a, b = find(owner[t]), find(v)
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+            else:
+                owner[t] = v
+    out: dict[str, list[str]] = {}
+    for v in parent:
+        out.setdefault(find(v), []).append(v)
+    return [g for g in out.values() if len(g) > 1]
+
+
+def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[CheckItem]]:
+    """Requirements grouped by shared variables and by outputs of one message, input order."""
+    parent = list(range(len(items)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    linked = {v: min(g) for g in groups for v in g}
+    owner: dict[str, int] = {}
+    for k, item in enumerate(items):
+        for v in item.variables:
+            v = linked.get(v, v)
+            if v in owner:
+                a, b = find(owner[v]), find(k)
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+            else:
+                owner[v] = k
+    out: dict[int, list[CheckItem]] = {}
+    for k, item in enumerate(items):
+        out.setdefault(find(k), []).append(item)
+    return list(out.values())
+
+
+def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
+               bindings: Bindings | None, notes: list[str]) -> Component:
+    """A :class:`Component` with its invariants (module docstring)."""
+    pts = [x.pt for x in items]
+    numeric = NumericAbstraction.of(pts)
+    env_inv = numeric.regions([v for v in numeric.atoms if v in inputs])
+    ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs])
+    atoms = game_atoms(pts)
+    used = {v for x in items for v in x.variables}
+    messages = []
+    for g in groups:
+        if len(set(g) & used) > 1:
+            group = MessageGroup([v for v in g if v in used])
+            ctl_inv = ir.and_(ctl_inv, _message_constraint(
+                [a for a in atoms if _variable(a) in g], bindings, notes, group))
+            messages.append(group)
+    return Component(items, env_inv, ctl_inv, messages)
+
+
+def _variable(atom: Node) -> str:
+    if atom.op == "ap":
+        return atom.name
+    sc = simple_comparison(atom)
+    assert sc is not None  # game_atoms took it
+    return sc[0]
+
+
+def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: list[str],
+                        group: MessageGroup) -> Node:
+    """The valuations of ``atoms`` (outputs bound to one topic) some message gives, as a
+    propositional IR formula (the conjunction of the negated cubes of the others), each
+    given valuation kept in ``group``; TRUE when the bindings cannot be inverted (noted)."""
+    if bindings is None or len(atoms) < 2:
+        return ir.TRUE
+    names = ", ".join(to_smv(a) for a in atoms)
+    if len(atoms) > MAX_GROUP_ATOMS:
+        notes.append(f"the valuations of {names} are not related: more than "
+                     f"{MAX_GROUP_ATOMS} atoms of one message")
+        return ir.TRUE
+    out = ir.TRUE
+    numeric = {_variable(a) for a in atoms if a.op != "ap"}
+    try:
+        wanted_of = [_wanted(a, bindings) for a in atoms]
+        for values in itertools.product((False, True), repeat=len(atoms)):
+            wanted = [(name, expr, v) for (name, expr), v in zip(wanted_of, values)]
+            got = solve(wanted)[0]
+            if got is None:
+                cube = ir.and_all(*(a if v else ir.not_(a) for a, v in zip(atoms, values)))
+                out = ir.and_(out, ir.not_(cube))
+                continue
+            fields = {k: v for k, v in got.items() if k[1] != AGE}
+            numbers = {}
+            for var in sorted(numeric):
+                x = _number(bindings.variables[var].ast, fields)
+                if x is not None:
+                    numbers[var] = x
+            group.valuations.append(({to_smv(a): v for a, v in zip(atoms, values)},
+                                     fields, numbers))
+    except NotWritable as exc:
+        notes.append(f"the valuations of {names} are not related (a message could give "
+                     f"any of them as far as the shield knows): {exc}")
+        group.valuations.clear()
+        return ir.TRUE
+    return out
+
+
+def _number(e: Expr, fields: dict[tuple[str, tuple[str, ...]], Any]) -> float | None:
+    """A numeric binding's value on the message ``fields`` (unset fields read 0), for the
+    forms :mod:`fretc.testing.invert` inverts; None for any other."""
+    if isinstance(e, Const) and isinstance(e.value, float) and not isinstance(e.value, bool):
+        return e.value
+    if isinstance(e, Field) and e.path and all(isinstance(x, str) for x in e.path):
+        v = fields.get((e.topic, tuple(e.path)), 0.0)
+        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+    if isinstance(e, UnaryOp) and e.op == "-":
+        x = _number(e.arg, fields)
+        return None if x is None else -x
+    if isinstance(e, FuncCall) and e.func == "abs" and len(e.args) == 1:
+        x = _number(e.args[0], fields)
+        return None if x is None else abs(x)
+    return None
+
+
+def _wanted(atom: Node, bindings: Bindings) -> tuple[str, Expr]:
+    """``(variable, expression)`` whose truth is the atom's, over the bound message."""
+    if atom.op == "ap":
+        return atom.name, bindings.variables[atom.name].ast
+    sc = simple_comparison(atom)
+    assert sc is not None
+    var, op, c = sc
+    expr = bindings.variables[var].ast
+    return var, BinOp(expr.col, op, expr, Const(expr.col, float(c)))

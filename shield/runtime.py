@@ -1,0 +1,270 @@
+"""The shield's step at run time: the one implementation of the rule of
+:mod:`fretc.shield.machine`, standard library only.
+
+``fretc shield --emit python`` writes this module's source, unchanged, into the generated
+module, followed by the shield's tables (:func:`fretc.shield.emit_python.tables`), so the
+generated module needs nothing but Python; in process (the simulator, the tests) the same
+class runs from here.
+
+Tables: ``{"name", "digest", "inputs", "outputs", "machines": [...]}``; a machine is
+``{"requirements": [ids], "inputs": [(variable, op, constant)], "outputs": [...], "texts":
+[output atom texts], "init": [0/1], "nodes": [(var, low, high)], "safe": int, "next":
+[int], "keep": [int], "weights": {output atom: (wanted 0/1, weight)}, "groups": [...]}``
+(``op`` None for a boolean variable). A group is the output atoms of one message:
+``{"atoms": [indices], "numbers": {valuation: {variable: value}}}``, a valuation being the
+atoms' values as bits (first atom least significant): the numbers of the message the
+bindings give for it (:mod:`fretc.shield.plan`); a numeric output of a group whose atoms an
+override changed takes them.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT"]
+
+#: moves remembered per machine, keyed by (state, input atoms, output atoms): the BDD walks
+#: of a tick are done once per distinct key; past the limit the memory is cleared
+CACHE_LIMIT = 1 << 16
+
+_OPS = {"<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
+        ">=": lambda x, c: x >= c, "=": lambda x, c: x == c, "!=": lambda x, c: x != c}
+_NOT = {"<": ">=", "<=": ">", ">": "<=", ">=": "<", "=": "!=", "!=": "="}
+
+
+class Decision(NamedTuple):
+    """One tick's answer: ``outputs`` FRET variable -> value to use; ``overridden`` whether
+    the proposal was changed; ``reasons`` the requirement ids that forced the change (empty
+    when not overridden); ``changed`` the output atoms changed (FRET/SMV text)."""
+
+    outputs: dict[str, Any]
+    overridden: bool
+    reasons: tuple[str, ...]
+    changed: tuple[str, ...]
+
+
+def _truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
+    var, op, c = spec
+    if op is None:
+        if value is True or value is False:
+            return value
+        if not isinstance(value, int):
+            raise TypeError(f"{var} must be a boolean, not {value!r}")
+        return bool(value)
+    x = float(value)
+    if x != x:
+        raise ValueError(f"{var} is NaN: its comparisons have no truth value")
+    return _OPS[op](x, c)
+
+
+def _tester(spec: tuple[str, str | None, float | None]) -> Any:
+    """A function: the variable's value -> the atom's truth (as :func:`_truth`)."""
+    var, op, c = spec
+    if op is None:
+        def boolean(value: Any) -> bool:
+            if value is True or value is False:
+                return value
+            return _truth(spec, value)
+        return boolean
+    test = _OPS[op]
+
+    def compare(value: Any) -> bool:
+        x = float(value)
+        if x != x:
+            raise ValueError(f"{var} is NaN: its comparisons have no truth value")
+        return test(x, c)
+    return compare
+
+
+def _walk(nodes: list[tuple[int, int, int]], root: int, values: list[int]) -> int:
+    n = root
+    while n > 1:
+        var, lo, hi = nodes[n]
+        n = hi if values[var] else lo
+    return n
+
+
+def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int],
+            x: float) -> float:
+    """The number nearest ``x`` giving the comparisons ``specs`` (of one variable) the
+    values ``truths``: ``x`` when it does, else the nearest end of their region (an open end
+    one float inside). Raises ValueError when no number gives them."""
+    if not math.isnan(x) and all(_truth(s, x) == bool(t) for s, t in zip(specs, truths)):
+        return x
+    lo, hi = -math.inf, math.inf
+    points = []
+    for (_v, op, c), t in zip(specs, truths):
+        op = op if t else _NOT[op]
+        if op in ("<", "<="):
+            hi = min(hi, c)
+        elif op in (">", ">="):
+            lo = max(lo, c)
+        elif op == "=":
+            points.append(c)
+    start = min(max(x, lo), hi) if not math.isnan(x) else (
+        lo if math.isfinite(lo) else hi if math.isfinite(hi) else 0.0)
+    for v in points + [start]:
+        for w in (v, math.nextafter(v, math.inf), math.nextafter(v, -math.inf)):
+            if all(_truth(s, w) == bool(t) for s, t in zip(specs, truths)):
+                return w
+    raise ValueError("no number gives the comparisons of " + specs[0][0] + " those values")
+
+
+class _Machine:
+    """One component's tables and state (module docstring)."""
+
+    def __init__(self, t: dict[str, Any], preferences: int):
+        self.reqs = tuple(t["requirements"])
+        self.ins, self.outs, self.texts = t["inputs"], t["outputs"], t["texts"]
+        self.nodes, self.safe = t["nodes"], t["safe"]
+        self.next, self.keep = t["next"], t["keep"]
+        self.init = tuple(t["init"])
+        self.state = self.init
+        self.weights = t["weights"]
+        self.big = 1 << preferences
+        self.groups = t["groups"]
+        self.cache: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
+                         tuple[bool, tuple[int, ...]]] = {}
+        self.variables = list(dict.fromkeys(s[0] for s in self.outs))
+        self.in_tests = [(s[0], _tester(s)) for s in self.ins]
+        self.out_tests = [(s[0], _tester(s)) for s in self.outs]
+        self.atoms_of = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
+                         for v in self.variables}
+
+    def move(self, ins: tuple[int, ...], outs: tuple[int, ...]) -> tuple[bool, tuple[int, ...]]:
+        """Whether ``outs`` is safe from the current state with ``ins``, and the next
+        state when it is (remembered)."""
+        key = (self.state, ins, outs)
+        got = self.cache.get(key)
+        if got is None:
+            values = list(ins + outs + self.state)
+            safe = _walk(self.nodes, self.safe, values) == 1
+            nxt = tuple(_walk(self.nodes, r, values) for r in self.next) if safe else ()
+            if len(self.cache) >= CACHE_LIMIT:
+                self.cache.clear()
+            got = self.cache[key] = (safe, nxt)
+        return got
+
+    def correct(self, ins: tuple[int, ...], prop: tuple[int, ...]) -> tuple[int, ...]:
+        """The safe output atoms nearest ``prop``: the fewest changes, then the preferences
+        in order (a shortest path through the ``safe`` BDD; untested atoms keep their
+        proposed values; equal costs take the low branch)."""
+        n_in, n_out = len(ins), len(prop)
+        values = list(ins + prop + self.state)
+        costs: list[float] = [math.inf, 0.0]
+        for var, lo, hi in self.nodes[2:]:
+            j = var - n_in
+            if 0 <= j < n_out:
+                costs.append(min(costs[lo] + self._cost(j, 0, prop),
+                                 costs[hi] + self._cost(j, 1, prop)))
+            else:
+                costs.append(costs[hi] if values[var] else costs[lo])
+        if costs[self.safe] == math.inf:
+            raise RuntimeError("no safe output: the state left the winning region")
+        out = list(prop)
+        n = self.safe
+        while n > 1:
+            var, lo, hi = self.nodes[n]
+            j = var - n_in
+            if 0 <= j < n_out:
+                low = costs[lo] + self._cost(j, 0, prop) <= costs[hi] + self._cost(j, 1, prop)
+                out[j] = 0 if low else 1
+                n = lo if low else hi
+            else:
+                n = hi if values[var] else lo
+        return tuple(out)
+
+    def _cost(self, j: int, v: int, prop: tuple[int, ...]) -> int:
+        p = prop[j]
+        if v == p:
+            return 0
+        c = self.big
+        w = self.weights.get(j)
+        if w is not None:
+            c += (w[1] if v != w[0] else 0) - (w[1] if p != w[0] else 0)
+        return c
+
+    def step(self, inputs: dict[str, Any], proposed: dict[str, Any]
+             ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...]]:
+        """This machine's corrected outputs (empty when the proposal is kept), reasons and
+        changed atoms for one tick; advances."""
+        ins = tuple([f(inputs[v]) for v, f in self.in_tests])
+        prop = tuple([f(proposed[v]) for v, f in self.out_tests])
+        safe, nxt = self.move(ins, prop)
+        if safe:
+            self.state = nxt
+            return {}, (), ()
+        outs = self.correct(ins, prop)
+        values = list(ins + prop + self.state)
+        reasons = tuple(r for r, k in zip(self.reqs, self.keep)
+                        if _walk(self.nodes, k, values) != 1) or self.reqs
+        self.state = self.move(ins, outs)[1]
+        changed = tuple(t for t, p, o in zip(self.texts, prop, outs) if p != o)
+        return self._values(outs, proposed, changed), (reasons if changed else ()), changed
+
+    def _values(self, outs: tuple[int, ...], proposed: dict[str, Any],
+                changed: tuple[str, ...]) -> dict[str, Any]:
+        """The output variables' values: a boolean its atom's; a number the proposal's when
+        its comparisons keep their truth, else the nearest number giving them. A number of
+        a message group (module docstring) whose boolean atoms an override changed takes
+        the number of the message the bindings give for the group's new valuation."""
+        result: dict[str, Any] = {}
+        fixed: dict[str, float] = {}
+        for g in self.groups:
+            if any(self.texts[j] in changed and self.outs[j][1] is None for j in g["atoms"]):
+                key = sum(int(outs[j]) << k for k, j in enumerate(g["atoms"]))
+                fixed.update(g["numbers"].get(key, {}))
+        for v, idx in self.atoms_of.items():
+            if self.outs[idx[0]][1] is None:
+                result[v] = bool(outs[idx[0]])
+            elif v in fixed and all(_truth(self.outs[j], fixed[v]) == bool(outs[j])
+                                    for j in idx):
+                result[v] = fixed[v]
+            else:
+                result[v] = nearest([self.outs[j] for j in idx], [outs[j] for j in idx],
+                                    float(proposed[v]))
+        return result
+
+
+class ShieldRuntime:
+    """A shield from its tables (module docstring): :meth:`step` each tick, :meth:`reset` to
+    the initial state."""
+
+    def __init__(self, tables: dict[str, Any]):
+        self.tables = tables
+        self.name = tables["name"]
+        self.inputs = tuple(tables["inputs"])
+        self.outputs = tuple(tables["outputs"])
+        prefs = len(tables.get("preferences", ()))
+        self.machines = [_Machine(t, prefs) for t in tables["machines"]]
+
+    def reset(self) -> None:
+        """Back to the initial state (before the first tick)."""
+        for m in self.machines:
+            m.state = m.init
+
+    @property
+    def state(self) -> tuple[tuple[int, ...], ...]:
+        """Each machine's state bits."""
+        return tuple(m.state for m in self.machines)
+
+    def step(self, inputs: dict[str, Any], proposed: dict[str, Any]) -> Decision:
+        """One tick: ``inputs`` maps every input variable to its value (bool, or a number
+        for a numeric one), ``proposed`` every output variable to the controller's value.
+        Returns the :class:`Decision`: the proposal unchanged when it keeps every
+        requirement winnable, else the nearest safe outputs and the requirements that forced
+        them. Output variables no enforced requirement reads are passed through.
+
+        Raises:
+            KeyError: a variable is missing. ValueError: a numeric value is NaN.
+            TypeError: a boolean variable given a non-boolean."""
+        outputs = {v: proposed[v] for v in self.outputs}
+        reasons: list[str] = []
+        changed: list[str] = []
+        for m in self.machines:
+            values, why, what = m.step(inputs, proposed)
+            outputs.update(values)
+            reasons += why
+            changed += what
+        return Decision(outputs, bool(changed), tuple(reasons), tuple(changed))

@@ -1,0 +1,158 @@
+"""``fretc shield``: the Safety System synthesized from the requirements (:mod:`fretc.shield`).
+
+::
+
+    fretc shield FILE... [--inputs A,B] [--outputs C,D] [-b BINDINGS] [--prefer LITERALS]
+                 [--emit python|c|ros2|gwendolen]... [-o DIR] [--prove] [--explain]
+                 [--budget UNITS] [--memory-budget NODES]
+
+Inputs and outputs default to the files' ``@inputs``/``@outputs`` (as ``fretc check``). Exit
+status: 0 the shield was synthesized (and written, and proved with ``--prove``); 1 a game or
+the proof ran past its budget (unknown), or the proof found a run violating an enforced
+requirement; 2 input errors and refusals (a requirement that cannot be enforced, an
+unrealizable set: the message says why).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+
+__all__ = ["shield_cmd", "FORMS"]
+
+#: the forms ``--emit`` writes: name -> the writer module of :mod:`fretc.shield`
+FORMS = ("python", "c")
+
+
+def _names(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    return [n for n in text.replace(",", " ").split() if n]
+
+
+@click.command("shield")
+@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--inputs", default=None, metavar="A,B",
+              help="The environment's variables; default: @inputs of the files.")
+@click.option("--outputs", default=None, metavar="C,D",
+              help="The controller's variables, which the shield corrects; default: "
+              "@outputs of the files.")
+@click.option("-b", "--bindings", "bindings_file", type=click.Path(exists=True, dir_okay=False),
+              default=None, help="A binding file: outputs bound to one topic are corrected "
+              "together, never to values no single message gives; the ros2 form reads and "
+              "writes the bound topics.")
+@click.option("--prefer", default=None, metavar="LITERALS",
+              help="Among corrections changing equally few output atoms, prefer these "
+              "values, first first: e.g. 'stopped,!stop_requested'.")
+@click.option("--emit", "forms", multiple=True, type=click.Choice(FORMS),
+              help="Write the shield in this form into DIR (repeatable).")
+@click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False), default=None,
+              help="The folder the forms are written to.")
+@click.option("--prove", is_flag=True, help="Prove with Spot that the shield, with any "
+              "environment and any controller, satisfies every enforced requirement's "
+              "ft_inf.")
+@click.option("--explain", is_flag=True, help="Say, per enforced requirement, what the "
+              "controller may still do under the shield.")
+@click.option("--name", default=None, help="The shield's name (default: the first file's "
+              "stem).")
+@click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_WORK, show_default=True,
+              metavar="UNITS", help="Work units per game (as fretc check's).")
+@click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY), default=DEFAULT_MEMORY,
+              show_default=True, metavar="NODES", help="BDD nodes per game (as fretc "
+              "check's).")
+@TEXT_ATTRIBUTE_OPTION
+def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
+               bindings_file: str | None, prefer: str | None, forms: tuple[str, ...],
+               out_dir: str | None, prove: bool, explain: bool, name: str | None,
+               budget: int, memory_budget: int) -> None:
+    """Synthesize the shield of requirement FILES: each tick it passes the controller's
+    proposed outputs unchanged when they keep every requirement winnable, and otherwise
+    changes the fewest outputs needed (the Safety System of Safe-ROS, generated)."""
+    from fretc.check.budget import Budget
+    from fretc.common.errors import FretcError
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences
+
+    if forms and out_dir is None:
+        raise click.UsageError("--emit needs -o DIR")
+    entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
+    compiled = compile_entries(entries)
+    bad = [c for c in compiled if c.error is not None]
+    for c in bad:
+        click.echo(shown(str(c.error)), err=True)
+    if bad:
+        sys.exit(2)
+    if not compiled:
+        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
+        sys.exit(2)
+    ins = _names(inputs)
+    outs = _names(outputs)
+    if ins is None:
+        ins = list(dict.fromkeys(n for e in entries for n in e.inputs))
+    if outs is None:
+        outs = list(dict.fromkeys(n for e in entries for n in e.outputs))
+    if not outs:
+        click.echo(shown("error: no outputs: give --outputs or @outputs in the files (the "
+                         "variables the shield corrects)"), err=True)
+        sys.exit(2)
+    bindings = None
+    if bindings_file:
+        from fretc.signals.bindings.files import load_bindings
+
+        bindings = load_bindings(bindings_file)
+    try:
+        shield = build_shield(compiled, ins, outs, bindings=bindings,
+                              prefer=parse_preferences(prefer),
+                              budget=Budget(work=budget, memory=memory_budget),
+                              name=name or Path(files[0]).stem)
+    except ShieldUnknown as exc:
+        click.echo(shown(f"unknown: {exc}"), err=True)
+        sys.exit(1)
+    click.echo(shown(_summary(shield)))
+    code = 0
+    if explain:
+        from fretc.shield.explain import explain_text
+
+        click.echo(shown(explain_text(shield)))
+    if prove:
+        from fretc.shield.prove import prove_shield
+
+        proof = prove_shield(shield, compiled)
+        click.echo(shown(proof.text()))
+        code = 0 if proof.holds else 1
+    if forms:
+        from fretc.shield.emit import write_forms
+
+        try:
+            written = write_forms(shield, forms, Path(out_dir), bindings=bindings,
+                                  bindings_file=bindings_file, compiled=compiled)
+        except FretcError:
+            raise
+        for path in written:
+            click.echo(shown(f"wrote {path}"))
+    sys.exit(code)
+
+
+def _summary(shield) -> str:
+    """The terminal summary: per component its requirements and size; what is monitored
+    only; the notes."""
+    lines = [f"shield {shield.name}: inputs {', '.join(shield.inputs) or '-'}; outputs "
+             f"{', '.join(shield.outputs)}"]
+    for m in shield.machines:
+        st = m.stats
+        lines.append(f"  enforces {', '.join(m.requirements)}: {st.get('state_bits', 0)} state "
+                     f"bits, winning region a BDD of {st.get('winning_region_bdd_nodes', 0)} "
+                     f"nodes, {len(m.nodes)} table nodes")
+    for g in shield.messages:
+        lines.append(f"  corrected together (one message): {', '.join(g)}")
+    for rid, why in shield.monitored.items():
+        lines.append(f"  monitored only: {rid}: {why}")
+    for n in shield.notes:
+        lines.append(f"  note: {n}")
+    return "\n".join(lines)

@@ -1,0 +1,114 @@
+"""The C form of the shield against the Python one, on random requirement sets, runs and
+proposals: the same corrected outputs, overrides and reasons at every tick; built with the
+strict flags of ``--emit c`` and run under AddressSanitizer and UBSan."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import subprocess
+import tempfile
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+
+from fretc.shield.emit_c import render_c
+from fretc.shield.emit_python import tables
+from fretc.shield.plan import ShieldError
+from fretc.shield.runtime import ShieldRuntime
+
+from _c_monitors import build, needs_cc, write
+from _gen import INPUTS, OUTPUTS, build as build_shield, compile_text, requirement_sets, runs
+
+
+def run_c(shield, rows: list[tuple[dict, dict]], folder: Path) -> list[dict]:
+    """The C runner of ``shield`` (built with sanitizers) over ``rows``: per tick the
+    corrected outputs, ``overridden`` and ``reasons``."""
+    write(render_c(shield, "t"), folder)
+    exe = build(folder, ["t_shield.c", "t_shield_run.c"], "run")
+    text = io.StringIO()
+    w = csv.writer(text, lineterminator="\n")
+    w.writerow(INPUTS + OUTPUTS)
+    for ins, prop in rows:
+        w.writerow([_cell(ins[v]) for v in INPUTS] + [_cell(prop[v]) for v in OUTPUTS])
+    got = subprocess.run([str(exe)], input=text.getvalue(), capture_output=True, text=True,
+                         timeout=60)
+    assert got.returncode == 0 and not got.stderr, got.stderr
+    return list(csv.DictReader(io.StringIO(got.stdout)))
+
+
+def _cell(x) -> str:
+    return ("true" if x else "false") if isinstance(x, bool) else repr(float(x))
+
+
+def _same(shield, rows, c_rows) -> None:
+    rt = ShieldRuntime(tables(shield))
+    for (ins, prop), c in zip(rows, c_rows, strict=True):
+        d = rt.step(ins, prop)
+        for v in OUTPUTS:
+            if v not in shield.read:
+                assert v not in c
+                continue
+            want, got = d.outputs[v], c[v]
+            if isinstance(want, bool):
+                assert got == str(int(want)), (v, d, c)
+            else:
+                assert float(got) == want or (math.isnan(want) and math.isnan(float(got))), \
+                    (v, d, c)
+        assert c["overridden"] == str(int(d.overridden)), (d, c)
+        assert set(filter(None, c["reasons"].split("|"))) == set(d.reasons), (d, c)
+
+
+@settings(max_examples=12, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(text=requirement_sets(), rows=runs(length=60))
+def test_c_and_python_shields_decide_alike(text, rows):
+    needs_cc()
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            shield = build_shield(compile_text(text, Path(tmp)))
+        except ShieldError:
+            assume(False)
+        _same(shield, rows, run_c(shield, rows, Path(tmp) / "c"))
+
+
+def test_the_c_runner_refuses_a_nul_byte_and_names_the_line(tmp_path):
+    needs_cc()
+    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy x\n",
+                                       tmp_path))
+    write(render_c(shield, "t"), tmp_path / "c")
+    exe = build(tmp_path / "c", ["t_shield.c", "t_shield_run.c"], "run")
+    head = ",".join(INPUTS + OUTPUTS) + "\n"
+    good = "true,false,false,false,false,0.0\n"
+    got = subprocess.run([str(exe)], input=(head + good + "tr\0ue,false,false,false,false,0\n"
+                                            + good).encode(), capture_output=True, timeout=60)
+    assert got.returncode == 2 and b"line 3: a NUL byte" in got.stderr
+    got = subprocess.run([str(exe)], input=(head + "true,false,false,maybe,false,0\n").encode(),
+                         capture_output=True, timeout=60)
+    assert got.returncode == 2 and b"line 2: x: not a boolean" in got.stderr
+    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy v < 1\n",
+                                       tmp_path))
+    write(render_c(shield, "u"), tmp_path / "d")
+    exe = build(tmp_path / "d", ["u_shield.c", "u_shield_run.c"], "run")
+    got = subprocess.run([str(exe)], input=(head + "true,false,false,false,false,nan\n").encode(),
+                         capture_output=True, timeout=60)
+    assert got.returncode == 3 and b"NaN" in got.stderr
+
+
+@pytest.mark.parametrize("prefer", [(), (("x", True),), (("x", False), ("y", True))])
+def test_preferences_break_ties_alike_in_c_and_python(tmp_path, prefer):
+    # x | y must hold: an unsafe proposal (both false) has two corrections of one change;
+    # the preference picks one, the same in both forms
+    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy x | y\n",
+                                       tmp_path), prefer=list(prefer))
+    rows = [({"a": True, "b": False, "m": False}, {"x": False, "y": False, "v": 0.0})] * 3
+    rt = ShieldRuntime(tables(shield))
+    d = rt.step(*rows[0])
+    if prefer and prefer[0] == ("x", True):
+        assert d.outputs["x"] and not d.outputs["y"]
+    if prefer and prefer[0] == ("x", False):
+        assert d.outputs["y"] and not d.outputs["x"]
+    if needs_cc():
+        _same(shield, rows, run_c(shield, rows, tmp_path / "c"))

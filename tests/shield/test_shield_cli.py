@@ -1,0 +1,166 @@
+"""``fretc shield`` on the Safe-ROS requirements and on the requirements it must refuse:
+what it enforces, monitors and refuses (exit codes), the forms it writes (deterministic,
+standalone), and outputs of one message corrected together."""
+
+from __future__ import annotations
+
+import itertools
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from fretc.cli import main
+from fretc.shield.emit_python import load_shield, render_python, tables
+from fretc.shield.machine import evaluate
+from fretc.shield.runtime import ShieldRuntime
+
+from _gen import compile_text
+
+REPO = Path(__file__).resolve().parents[2]
+SAFE_ROS = [str(REPO / "requirements" / "safe_ros.fret"), "-b",
+            str(REPO / "requirements" / "safe_ros.bindings.toml"), "--inputs",
+            "too_close,scan_stale,clearance", "--outputs",
+            "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed"]
+
+
+def shield_cli(*args: str):
+    return CliRunner().invoke(main, ["shield", *args])
+
+
+@pytest.fixture(scope="module")
+def safe_ros():
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.shield.build import build_shield
+    from fretc.signals.bindings.files import load_bindings
+
+    compiled = compile_entries(load_requirements([REPO / "requirements" / "safe_ros.fret"]))
+    bindings = load_bindings(REPO / "requirements" / "safe_ros.bindings.toml")
+    return compiled, build_shield(compiled, ["too_close", "scan_stale", "clearance"],
+                                  ["stopped", "stop_requested", "forwarded_zero",
+                                   "linear_speed", "angular_speed"], bindings=bindings,
+                                  fork=False, name="safe_ros")
+
+
+def test_safe_ros_enforces_r2_r3_r4_r6_monitors_r5_and_is_proved(tmp_path):
+    got = shield_cli(*SAFE_ROS, "--prove", "--emit", "python", "--emit", "c", "-o",
+                     str(tmp_path))
+    assert got.exit_code == 0, got.output
+    assert "enforces R2, R3, R4, R6" in got.output
+    assert "monitored only: R5" in got.output
+    for rid in ("R2", "R3", "R4", "R6"):
+        assert f"  {rid}: holds" in got.output
+    assert "the shield satisfies every enforced requirement" in got.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "safe_ros_shield.c", "safe_ros_shield.h", "safe_ros_shield.py", "safe_ros_shield_run.c"]
+    again = tmp_path / "again"
+    assert shield_cli(*SAFE_ROS, "--emit", "python", "--emit", "c", "-o", str(again)).exit_code == 0
+    for p in again.iterdir():
+        assert p.read_bytes() == (tmp_path / p.name).read_bytes(), p.name
+
+
+def test_the_python_form_runs_on_the_standard_library_alone(tmp_path, safe_ros):
+    _compiled, shield = safe_ros
+    path = tmp_path / "safe_ros_shield.py"
+    path.write_text(render_python(shield), encoding="utf-8")
+    code = ("import importlib.util as u, sys\n"
+            "s = u.spec_from_file_location('m', sys.argv[1]); m = u.module_from_spec(s)\n"
+            "s.loader.exec_module(m)\n"
+            "print(sorted(k for k in sys.modules if k.split('.')[0] == 'fretc'))\n"
+            "sh = m.Shield()\n"
+            "d = sh.step({'too_close': True, 'scan_stale': False, 'clearance': 1.0},\n"
+            "            {'stopped': False, 'stop_requested': False, 'forwarded_zero': False,\n"
+            "             'linear_speed': 0.9, 'angular_speed': 0.1})\n"
+            "print(d.overridden, d.reasons)\n")
+    out = subprocess.run([sys.executable, "-I", "-S", "-c", code, str(path)],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines() == ["[]", "True ('R4',)"]
+
+
+def test_outputs_of_one_message_never_take_values_no_message_gives(safe_ros):
+    # stopped, forwarded_zero, linear_speed, angular_speed all read /cmd_vel_filtered:
+    # forwarded_zero (every component 0) gives stopped and both speeds within their limits
+    _compiled, shield = safe_ros
+    (m,) = shield.machines
+    texts = [a.text for a in m.outputs]
+    fz, st = texts.index("forwarded_zero"), texts.index("stopped")
+    lin = texts.index("(linear_speed <= 0.5)")
+    for ins in itertools.product((0, 1), repeat=len(m.inputs)):
+        for outs in itertools.product((0, 1), repeat=len(m.outputs)):
+            if outs[fz] and not (outs[st] and outs[lin]):
+                values = list(ins) + list(outs) + [int(b) for b in m.init]
+                assert not evaluate(m.nodes, m.safe, values), outs
+    rt = ShieldRuntime(tables(shield))
+    prop = {"stopped": False, "stop_requested": False, "forwarded_zero": False,
+            "linear_speed": 0.4, "angular_speed": 0.1}
+    seen = set()
+    for t in range(40):
+        d = rt.step({"too_close": t >= 3, "scan_stale": t >= 20, "clearance": 1.0}, prop)
+        o = d.outputs
+        if o["forwarded_zero"]:
+            assert o["stopped"] and o["linear_speed"] == 0.0 and o["angular_speed"] == 0.0
+        if d.overridden:
+            seen.add((t, d.reasons))
+    # R2 forces the stop at its deadline (10 ticks after the trigger at tick 3), R6 the stop
+    # request 5 ticks after scan_stale (tick 20), with R3's forwarded zero
+    assert (13, ("R2",)) in seen and (25, ("R6",)) in seen
+
+
+def test_a_mutated_shield_fails_its_proof(safe_ros):
+    # the proof is not vacuous: a shield letting every move through violates R2
+    from dataclasses import replace
+
+    from fretc.shield.prove import prove_shield
+
+    compiled, shield = safe_ros
+    (m,) = shield.machines
+    loose = replace(shield, machines=(replace(m, safe=m.env_ok),))
+    proof = prove_shield(loose, compiled)
+    assert not proof.holds and proof.results["R2"] == "violated", proof.text()
+    assert "a run of the closed loop violates it" in proof.why["R2"]
+
+
+@pytest.mark.parametrize("text, args, words", [
+    ("R1: whenever a sw shall eventually satisfy x\n", ["--inputs", "a", "--outputs", "x"],
+     "give a deadline"),
+    ("R1: only in m mode sw shall always satisfy x\n", ["--inputs", "m", "--outputs", "x"],
+     "strong until"),
+    ("R1: whenever a sw shall immediately satisfy x\n", ["--inputs", "a", "--outputs", "y"],
+     "declared neither input nor output"),
+    ("R1: whenever a sw shall immediately satisfy x\nR2: whenever a sw shall immediately "
+     "satisfy !x\n", ["--inputs", "a", "--outputs", "x"],
+     "these inputs, tick by tick, defeat every controller: {a=true}"),
+    ("R1: whenever a sw shall immediately satisfy x\n", ["--inputs", "a,x", "--outputs", "x"],
+     "declared both input and output"),
+])
+def test_refusals_are_input_errors_that_say_why(tmp_path, text, args, words):
+    f = tmp_path / "r.fret"
+    f.write_text(text, encoding="utf-8")
+    got = shield_cli(str(f), *args)
+    assert got.exit_code == 2, got.output
+    assert words in got.output
+
+
+def test_over_inputs_only_is_monitored_not_enforced(tmp_path):
+    compiled = compile_text("R1: sw shall always satisfy a\nR2: whenever a sw shall "
+                            "immediately satisfy x\n", tmp_path)
+    from fretc.shield.build import build_shield
+
+    shield = build_shield(compiled, ["a"], ["x"], fork=False)
+    assert list(shield.monitored) == ["R1"]
+    assert [r.id for r in shield.requirements] == ["R2"]
+    sh = load_shield(render_python(shield))()
+    assert sh.step({"a": True}, {"x": False}).outputs == {"x": True}
+
+
+def test_an_unknown_preference_is_refused(tmp_path):
+    f = tmp_path / "r.fret"
+    f.write_text("R1: whenever a sw shall immediately satisfy x | y\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x,y", "--prefer", "z")
+    assert got.exit_code == 2 and "--prefer names z" in got.output
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x,y", "--prefer", "!x")
+    assert got.exit_code == 0, got.output
