@@ -133,7 +133,8 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         + [str(m.nodes) for m in machines]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
                   dict(p.monitored), tuple(prefer), min(periods) if periods else None,
-                  tuple(tuple(g.variables) for c in p.components for g in c.messages),
+                  tuple(tuple(g.variables) for c in p.components for g in c.messages
+                        if len(g.variables) > 1),
                   _numbers(compiled),
                   frozenset(v for c in compiled for v in c.formalization.variables),
                   tuple(p.notes), digest)

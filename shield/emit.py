@@ -43,6 +43,10 @@ def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
             path = out_dir / f"{base}_shield.py"
             path.write_text(render_python(shield), encoding="utf-8")
             written.append(path)
+            if bindings_file is not None:  # what a host reads the messages with
+                copy = out_dir / f"{base}.bindings.toml"
+                copy.write_bytes(Path(bindings_file).read_bytes())
+                written.append(copy)
         elif form == "c":
             from fretc.shield.emit_c import render_c
 

@@ -29,11 +29,14 @@ def tables(shield: Shield) -> dict[str, Any]:
                 continue
             atoms = sorted({j for vals, _f, _n in g.valuations for j, t in enumerate(texts)
                             if t in vals})
-            numbers = {}
-            for vals, _fields, nums in g.valuations:
+            numbers, fields = {}, {}
+            for vals, flds, nums in g.valuations:
                 key = sum(int(vals[texts[j]]) << i for i, j in enumerate(atoms))
                 numbers[key] = dict(sorted(nums.items()))
-            groups.append({"atoms": atoms, "numbers": dict(sorted(numbers.items()))})
+                fields[key] = [(t, list(path), v) for (t, path), v in sorted(flds.items())]
+            groups.append({"atoms": atoms, "topics": list(g.topics),
+                           "numbers": dict(sorted(numbers.items())),
+                           "fields": dict(sorted(fields.items()))})
         machines.append({
             "requirements": list(m.requirements),
             "inputs": [(a.variable, a.op, a.constant) for a in m.inputs],

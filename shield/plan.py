@@ -54,11 +54,13 @@ class MessageGroup:
     some message gives: ``valuations`` ``(atom text -> value, the message's fields
     ((topic, path) -> value), numeric variable -> its value on that message)``, the
     numbers of a variable whose binding is not evaluated here left out. Empty when the
-    bindings are not inverted (any valuation allowed, noted)."""
+    bindings are not inverted (any valuation allowed, noted). ``topics``: the topics their
+    bindings read."""
 
     variables: list[str]
     valuations: list[tuple[dict[str, bool], dict[tuple[str, tuple[str, ...]], Any],
                            dict[str, float]]] = field(default_factory=list)
+    topics: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -156,7 +158,8 @@ def _where(c: Any) -> str:
 
 
 def _message_groups(outputs: list[str], bindings: Bindings | None) -> list[list[str]]:
-    """Output variables joined when their bindings read a common topic (union-find)."""
+    """Output variables joined when their bindings read a common topic (union-find); a
+    variable alone on its topics is a group of one (its messages are made the same way)."""
     if bindings is None:
         return []
     owner: dict[str, str] = {}
@@ -178,7 +181,7 @@ def _message_groups(outputs: list[str], bindings: Bindings | None) -> list[list[
     out: dict[str, list[str]] = {}
     for v in parent:
         out.setdefault(find(v), []).append(v)
-    return [g for g in out.values() if len(g) > 1]
+    return list(out.values())
 
 
 def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[CheckItem]]:
@@ -190,7 +193,7 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
             i = parent[i]
         return i
 
-    linked = {v: min(g) for g in groups for v in g}
+    linked = {v: min(g) for g in groups if len(g) > 1 for v in g}
     owner: dict[str, int] = {}
     for k, item in enumerate(items):
         for v in item.variables:
@@ -218,8 +221,9 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     used = {v for x in items for v in x.variables}
     messages = []
     for g in groups:
-        if len(set(g) & used) > 1:
-            group = MessageGroup([v for v in g if v in used])
+        if set(g) & used:
+            group = MessageGroup([v for v in g if v in used], topics=sorted(
+                {t for v in g for t in bindings.variables[v].topics} if bindings else ()))
             ctl_inv = ir.and_(ctl_inv, _message_constraint(
                 [a for a in atoms if _variable(a) in g], bindings, notes, group))
             messages.append(group)
@@ -239,7 +243,7 @@ def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: lis
     """The valuations of ``atoms`` (outputs bound to one topic) some message gives, as a
     propositional IR formula (the conjunction of the negated cubes of the others), each
     given valuation kept in ``group``; TRUE when the bindings cannot be inverted (noted)."""
-    if bindings is None or len(atoms) < 2:
+    if bindings is None or not atoms:
         return ir.TRUE
     names = ", ".join(to_smv(a) for a in atoms)
     if len(atoms) > MAX_GROUP_ATOMS:

@@ -11,10 +11,11 @@ Tables: ``{"name", "digest", "inputs", "outputs", "machines": [...]}``; a machin
 [output atom texts], "init": [0/1], "nodes": [(var, low, high)], "safe": int, "next":
 [int], "keep": [int], "weights": {output atom: (wanted 0/1, weight)}, "groups": [...]}``
 (``op`` None for a boolean variable). A group is the output atoms of one message:
-``{"atoms": [indices], "numbers": {valuation: {variable: value}}}``, a valuation being the
-atoms' values as bits (first atom least significant): the numbers of the message the
-bindings give for it (:mod:`fretc.shield.plan`); a numeric output of a group whose atoms an
-override changed takes them.
+``{"atoms": [indices], "topics": [...], "numbers": {valuation: {variable: value}}, "fields":
+{valuation: [(topic, path, value)]}}``, a valuation being the atoms' values as bits (first
+atom least significant): the message fields the bindings give it by and that message's
+numbers (:mod:`fretc.shield.plan`); a numeric output of a group whose boolean atoms an
+override changed takes them (:mod:`fretc.shield.messages` publishes the fields).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT"]
+__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest"]
 
 #: moves remembered per machine, keyed by (state, input atoms, output atoms): the BDD walks
 #: of a tick are done once per distinct key; past the limit the memory is cleared
@@ -44,7 +45,7 @@ class Decision(NamedTuple):
     changed: tuple[str, ...]
 
 
-def _truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
+def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
     var, op, c = spec
     if op is None:
         if value is True or value is False:
@@ -59,13 +60,13 @@ def _truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
 
 
 def _tester(spec: tuple[str, str | None, float | None]) -> Any:
-    """A function: the variable's value -> the atom's truth (as :func:`_truth`)."""
+    """A function: the variable's value -> the atom's truth (as :func:`truth`)."""
     var, op, c = spec
     if op is None:
         def boolean(value: Any) -> bool:
             if value is True or value is False:
                 return value
-            return _truth(spec, value)
+            return truth(spec, value)
         return boolean
     test = _OPS[op]
 
@@ -90,7 +91,7 @@ def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int]
     """The number nearest ``x`` giving the comparisons ``specs`` (of one variable) the
     values ``truths``: ``x`` when it does, else the nearest end of their region (an open end
     one float inside). Raises ValueError when no number gives them."""
-    if not math.isnan(x) and all(_truth(s, x) == bool(t) for s, t in zip(specs, truths)):
+    if not math.isnan(x) and all(truth(s, x) == bool(t) for s, t in zip(specs, truths)):
         return x
     lo, hi = -math.inf, math.inf
     points = []
@@ -106,7 +107,7 @@ def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int]
         lo if math.isfinite(lo) else hi if math.isfinite(hi) else 0.0)
     for v in points + [start]:
         for w in (v, math.nextafter(v, math.inf), math.nextafter(v, -math.inf)):
-            if all(_truth(s, w) == bool(t) for s, t in zip(specs, truths)):
+            if all(truth(s, w) == bool(t) for s, t in zip(specs, truths)):
                 return w
     raise ValueError("no number gives the comparisons of " + specs[0][0] + " those values")
 
@@ -218,7 +219,7 @@ class _Machine:
         for v, idx in self.atoms_of.items():
             if self.outs[idx[0]][1] is None:
                 result[v] = bool(outs[idx[0]])
-            elif v in fixed and all(_truth(self.outs[j], fixed[v]) == bool(outs[j])
+            elif v in fixed and all(truth(self.outs[j], fixed[v]) == bool(outs[j])
                                     for j in idx):
                 result[v] = fixed[v]
             else:

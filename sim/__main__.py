@@ -40,16 +40,34 @@ def list_scenarios():
               help="Delay of /gwendolen_control [s] in the stop_delay scenario (default 2.0).")
 @click.option("--compression", type=click.Choice(["zstd", "lz4"]), default="zstd",
               show_default=True, help="MCAP chunk compression.")
-def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression):
+@click.option("--safety", default="sif", show_default=True, metavar="sif|shield:DIR",
+              help="The Safety System: the hand-written SIF and cmd_vel_interceptor, or the "
+              "shield fretc shield --emit python -b BINDINGS wrote into DIR.")
+def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression, safety):
     """Record one scenario to an MCAP file."""
     t0 = time.perf_counter()
-    res = do_record(scenario, seed=seed, output=output, ros1=ros1, png=png,
-                    threshold=threshold, stop_delay=stop_delay, compression=compression)
+    try:
+        res = do_record(scenario, seed=seed, output=output, ros1=ros1, png=png,
+                        threshold=threshold, stop_delay=stop_delay, compression=compression,
+                        safety=safety)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--safety") from None
     wall = time.perf_counter() - t0
     reached = ", ".join(f"goal {g + 1} at {t:.1f} s" for g, t, _, _ in res.reached)
     clr = ("<= 0 (contact)" if res.min_clearance <= 0 else f"{res.min_clearance:.3f} m")
     click.echo(f"{output}: {scenario} seed {seed}: {res.outcome}; {res.duration:.2f} s sim "
                f"in {wall:.1f} s wall; reached: {reached or 'none'}; min clearance {clr}")
+    if safety != "sif":
+        why: dict[str, int] = {}
+        for _t, reasons, _changed in res.overrides:
+            for r in reasons:
+                why[r] = why.get(r, 0) + 1
+        click.echo(f"  shield: {len(res.overrides)} of {res.shield_ticks} ticks overridden"
+                   + (" (" + ", ".join(f"{k}: {v}" for k, v in sorted(why.items())) + ")"
+                      if why else ""))
+    else:
+        stops = sum(1 for e in res.sif_events if e.stop)
+        click.echo(f"  SIF: {stops} stop requests")
 
 
 @main.command()

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from fretc.sim.run import record_scenario
+from fretc.sim.run import record_scenario, shield_of
 from fretc.sim.space import Space, apply
 
 __all__ = ["Run", "Search", "falsify", "CLIP"]
@@ -110,8 +110,10 @@ def _to_cma(obj: float | None) -> float:
 
 
 def simulate(space: Space, parameters: dict[str, float], path: str) -> str:
-    """Simulate one point of ``space`` and write the run to ``path`` (MCAP); returns it."""
-    record_scenario(apply(space.scenario, parameters), space.seed, path)
+    """Simulate one point of ``space`` and write the run to ``path`` (MCAP); returns it. The
+    space's ``safety`` (a generated shield) replaces the hand-written SIF when given."""
+    record_scenario(apply(space.scenario, parameters), space.seed, path,
+                    shield=shield_of(space.safety))
     return path
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -98,6 +99,10 @@ class RunResult:
     trace: Trace
     world: World
     goals: list[tuple[float, float]]
+    #: with a generated shield (:mod:`fretc.sim.shielded`): (t s, reasons, changed atoms) of
+    #: each override, and its ticks
+    overrides: list = field(default_factory=list)
+    shield_ticks: int = 0
 
 
 def _ns(t_ms: int) -> int:
@@ -142,7 +147,7 @@ class Simulation:
                  odom_noise: OdometryNoise = OdometryNoise(),
                  planner: PlannerParams = PlannerParams(),
                  controller: ControllerParams | None = None,
-                 safety: SafetyParams | None = None):
+                 safety: SafetyParams | None = None, shield: Any = None):
         if not threshold > 0:
             raise ValueError("threshold must be > 0")
         self.scenario = scenario
@@ -169,6 +174,8 @@ class Simulation:
             threshold=self.threshold, enabled=scenario.sif_enabled, delay=scenario.stop_delay))
         self.interceptor = CmdVelInterceptor(faulty=scenario.interceptor_faulty)
         self.mission = Mission(INSPECTION_POINTS, (hx, hy), dwell=sim.dwell)
+        #: a generated shield in place of the SIF and the interceptor (sim.shielded), or None
+        self.shield = shield
 
     # ------------------------------------------------------------------ helpers
     def _loc_estimate(self):
@@ -208,7 +215,10 @@ class Simulation:
         f, m = rec.factory, self.omap
         rec.write("/map", _ns(0), f.occupancy_grid(_ns(0), m.resolution, m.width, m.height,
                                                    m.origin_x, m.origin_y, m.grid))
-        self._publish_control(rec, st, 0, False)
+        if self.shield is None:
+            self._publish_control(rec, st, 0, False)
+        else:
+            self.shield.start(f)
         t_ms = 0
         while True:
             t = t_ms / 1000.0
@@ -224,6 +234,8 @@ class Simulation:
                 self._sample_20hz(rec, st, t_ms, t, s)
             if t_ms % 100 == 0 and not (st.drop and st.drop[0] <= t_ms < st.drop[1]):
                 self._scan_10hz(rec, st, t_ms, t, s)
+            if t_ms % 100 == 0 and self.shield is not None:
+                self._shield_tick(rec, st, t_ms)
             if t_ms % 100 == 50:
                 self._publish_cmd(rec, st, t_ms, *self._sras(rec, st, t_ms, t, s))
             if st.end_ms is not None and t_ms >= st.end_ms:
@@ -235,7 +247,9 @@ class Simulation:
             scenario=sc, seed=self.seed, threshold=self.threshold, duration=duration,
             counts=dict(rec.counts), outcome=st.outcome, reached=list(self.mission.reached),
             min_clearance=st.min_clear, contact=st.contact, sif_events=list(self.safety.events),
-            trace=st.trace, world=self.world, goals=self.mission.goals)
+            trace=st.trace, world=self.world, goals=self.mission.goals,
+            overrides=list(self.shield.overrides) if self.shield is not None else [],
+            shield_ticks=self.shield.ticks if self.shield is not None else 0)
 
     def _publish_control(self, rec: McapRecorder, st: _RunState, t_ms: int, stop) -> None:
         rec.write("/gwendolen_control", _ns(t_ms), rec.factory.bool(stop))
@@ -261,8 +275,24 @@ class Simulation:
 
     def _publish_cmd(self, rec: McapRecorder, st: _RunState, t_ms: int, v: float,
                      w: float) -> None:
-        rec.write("/cmd_vel", _ns(t_ms), rec.factory.twist(v, w))
+        msg = rec.factory.twist(v, w)
+        rec.write("/cmd_vel", _ns(t_ms), msg)
+        if self.shield is not None:  # the proposal: the shield decides at its next tick
+            self.shield.hear("/cmd_vel", msg, _ns(t_ms))
+            return
         self._publish_filtered(rec, st, t_ms, *self.interceptor.on_cmd_vel(v, w))
+
+    def _shield_tick(self, rec: McapRecorder, st: _RunState, t_ms: int) -> None:
+        """The generated shield's tick (:mod:`fretc.sim.shielded`), at the scan's log time."""
+        for topic, msg in self.shield.tick(t_ms / 1000.0, _ns(t_ms)):
+            if topic == "/cmd_vel_filtered":
+                self._publish_filtered(rec, st, t_ms, float(msg.linear.x),
+                                       float(msg.angular.z))
+            else:
+                rec.write(topic, _ns(t_ms), msg)
+                if topic == "/gwendolen_control" and (
+                        not st.trace.control or st.trace.control[-1][1] != bool(msg.data)):
+                    st.trace.control.append((t_ms / 1000.0, bool(msg.data)))
 
     def _physics(self, st: _RunState, t_ms: int, t: float, s) -> None:
         """1. The base executes the last ``/cmd_vel_filtered``; the contact check (a contact
@@ -310,9 +340,12 @@ class Simulation:
         decide (published now, or ``stop_delay`` later)."""
         f, lid = rec.factory, self.lidar.p
         ranges = self.lidar.scan(self.world, s.x, s.y, s.yaw, t)
-        rec.write("/scan", _ns(t_ms), f.laser_scan(
-            _ns(t_ms), "base_link", lid.angle_min, lid.angle_max, lid.angle_increment,
-            lid.scan_time, lid.range_min, lid.range_max, ranges))
+        scan = f.laser_scan(_ns(t_ms), "base_link", lid.angle_min, lid.angle_max,
+                            lid.angle_increment, lid.scan_time, lid.range_min, lid.range_max,
+                            ranges)
+        rec.write("/scan", _ns(t_ms), scan)
+        if self.shield is not None:
+            self.shield.hear("/scan", scan, _ns(t_ms))
         self.map_odom = self._loc_estimate()
         rec.write("/tf", _ns(t_ms), f.tf([f.transform(_ns(t_ms), "map", "odom",
                                                       *self.map_odom)]))

@@ -80,6 +80,9 @@ class Space:
     seed: int
     parameters: tuple[tuple[str, float, float], ...]
     distributions: tuple[Distribution, ...] = ()
+    #: the Safety System of every run: ``None`` the hand-written SIF and interceptor,
+    #: ``"shield:DIR"`` a generated shield (``fretc falsify --safety``, :mod:`fretc.sim.run`)
+    safety: str | None = None
 
     @property
     def latent_dims(self) -> int:

@@ -50,9 +50,12 @@ __all__ = ["falsify_cmd"]
               metavar="[ADDRESS]",
               help="Simulate and audit each population's runs in parallel on Ray: a local "
                    "Ray for the run, or ADDRESS of a cluster. Needs pip install 'fretc[ray]'.")
+@click.option("--safety", default=None, metavar="shield:DIR",
+              help="Every run with the shield fretc shield --emit python -b BINDINGS wrote into "
+                   "DIR in place of the hand-written SIF and interceptor.")
 @click.pass_context
 def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, only, first,
-                ray):
+                ray, safety):
     """Search the simulator's scenario parameters for runs that violate a requirement:
     CMA-ES minimizes the least robustness (the margin behind each verdict, as fretc audit
     gives it) over the target requirements, one simulator run per evaluation.
@@ -82,6 +85,16 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
     config = audit_config(requirements, bindings, (), None, None, None, 5)
     assert isinstance(config, AuditConfig)
     space = load_space(space_path)
+    if safety is not None:
+        from dataclasses import replace
+
+        from fretc.sim.run import shield_of
+
+        try:
+            shield_of(safety)  # refused now, not in the first run
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="--safety") from None
+        space = replace(space, safety=safety)
     try:
         plan = load_plan(config)
     except AuditInputError as exc:
