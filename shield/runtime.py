@@ -46,6 +46,11 @@ class Decision(NamedTuple):
 
 
 def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
+    """The truth of the atom ``spec`` ``(variable, op, constant)`` for the variable's
+    ``value`` (op None: a boolean variable, which must be given a bool or an int).
+
+    Raises:
+        TypeError: a boolean variable given something else. ValueError: a NaN."""
     var, op, c = spec
     if op is None:
         if value is True or value is False:

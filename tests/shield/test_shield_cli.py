@@ -55,7 +55,8 @@ def test_safe_ros_enforces_r2_r3_r4_r6_monitors_r5_and_is_proved(tmp_path):
         assert f"  {rid}: holds" in got.output
     assert "the shield satisfies every enforced requirement" in got.output
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        "safe_ros_shield.c", "safe_ros_shield.h", "safe_ros_shield.py", "safe_ros_shield_run.c"]
+        "safe_ros.bindings.toml", "safe_ros_shield.c", "safe_ros_shield.h", "safe_ros_shield.py",
+        "safe_ros_shield_run.c"]
     again = tmp_path / "again"
     assert shield_cli(*SAFE_ROS, "--emit", "python", "--emit", "c", "-o", str(again)).exit_code == 0
     for p in again.iterdir():

@@ -84,17 +84,7 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
                                  "search would mix with this one's)", param_hint="-o")
     config = audit_config(requirements, bindings, (), None, None, None, 5)
     assert isinstance(config, AuditConfig)
-    space = load_space(space_path)
-    if safety is not None:
-        from dataclasses import replace
-
-        from fretc.sim.run import shield_of
-
-        try:
-            shield_of(safety)  # refused now, not in the first run
-        except ValueError as exc:
-            raise click.BadParameter(str(exc), param_hint="--safety") from None
-        space = replace(space, safety=safety)
+    space = _with_safety(load_space(space_path), safety)
     try:
         plan = load_plan(config)
     except AuditInputError as exc:
@@ -135,3 +125,19 @@ def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, o
                   else "interrupted (Ctrl-C) before the budget ended, not falsified so far"
                   if search.interrupted else "not falsified within the budget"))
     ctx.exit(doc["exit_code"])
+
+
+def _with_safety(space, safety: str | None):
+    """``space`` with every run's Safety System ``safety`` (a shield folder), checked now
+    rather than in the first run."""
+    if safety is None:
+        return space
+    from dataclasses import replace
+
+    from fretc.sim.run import shield_of
+
+    try:
+        shield_of(safety)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--safety") from None
+    return replace(space, safety=safety)
