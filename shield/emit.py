@@ -54,6 +54,13 @@ def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
                 path = out_dir / fname
                 path.write_text(text, encoding="utf-8")
                 written.append(path)
+        elif form == "gwendolen":
+            from fretc.shield.emit_gwendolen import render_gwendolen
+
+            for fname, text in render_gwendolen(shield, compiled, base).items():
+                path = out_dir / fname
+                path.write_text(text, encoding="utf-8")
+                written.append(path)
         else:
             raise ShieldError(f"unknown form {form!r}")
     return written

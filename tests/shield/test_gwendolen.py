@@ -1,0 +1,106 @@
+"""``fretc shield --emit gwendolen``: the Safe-ROS Safety System as a Gwendolen agent, its
+AJPF verification environment and properties (the untimed reading), and AJPF itself
+(``../shared/tools/ajpf``, built once per test session) verifying the generated agent: the
+untimed R2 (Safe-ROS's R1, ``[] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))``)
+holds; a mutated agent violates it."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_requirements
+from fretc.shield.build import build_shield
+from fretc.shield.emit_gwendolen import render_gwendolen
+from fretc.signals.bindings.files import load_bindings
+
+from _shared import PRESENT, REASON, SHARED
+
+REPO = Path(__file__).resolve().parents[2]
+REQS = REPO / "requirements"
+NO_JAVAC = "javac is missing: AJPF (MCAPL) cannot be built here"
+
+
+@pytest.fixture(scope="module")
+def files():
+    compiled = compile_entries(load_requirements([REQS / "safe_ros.fret"]))
+    shield = build_shield(compiled, ["too_close", "scan_stale", "clearance"],
+                          ["stopped", "stop_requested", "forwarded_zero", "linear_speed",
+                           "angular_speed"], bindings=load_bindings(REQS / "safe_ros.bindings.toml"),
+                          fork=False, name="safe_ros")
+    return render_gwendolen(shield, compiled, "safe_ros")
+
+
+def test_the_agent_acts_on_each_condition_and_says_what_it_leaves_out(files):
+    gwen = files["safe_ros.gwen"]
+    assert ":name: agilex_agent" in gwen
+    assert "+too_close: {~B stopped} <- set_stopped, +stopped;" in gwen
+    assert "+scan_stale: {~B stop_requested} <- set_stop_requested, +stop_requested;" in gwen
+    assert "+stop_requested: {~B forwarded_zero} <- set_forwarded_zero, +forwarded_zero;" in gwen
+    assert "// R4: not in the agent" in gwen and "untimed reading of 'within'" in gwen
+    psl = files["safe_ros.psl"]
+    assert "R2: [] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))" in psl
+    assert "# R2: untimed reading of its 'within' timing" in psl
+    assert "R4:" not in psl.replace("# R4:", "")
+    assert 'percepts.add(new Predicate("too_close"))' in files["safe_ros_env.java"]
+    assert "clearance" not in files["safe_ros_env.java"].split("public class")[1]
+
+
+@pytest.fixture(scope="session")
+def ajpf(tmp_path_factory):
+    """AJPF built from ../shared/tools/ajpf (its ``ajpf-check.sh`` and MCAPL), or a skip."""
+    if not PRESENT:
+        pytest.skip(REASON)
+    if shutil.which("javac") is None:
+        pytest.skip(NO_JAVAC)
+    build = tmp_path_factory.mktemp("ajpf")
+    got = subprocess.run(["bash", str(SHARED / "tools" / "ajpf" / "build.sh"), str(build)],
+                         capture_output=True, text=True, timeout=900)
+    assert got.returncode == 0 and got.stdout.strip().endswith("ok"), got.stdout[-3000:] + got.stderr[-3000:]
+    return build
+
+
+def _check(ajpf: Path, folder: Path, files: dict, label: str) -> str:
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        (folder / name).write_text(text, encoding="utf-8")
+    mcapl = ajpf / "mcapl"
+    classes = folder / "classes"
+    subprocess.run(["javac", "--release", "11", "-nowarn", "-d", str(classes), "-cp",
+                    f"{mcapl}/bin:{mcapl}/lib/3rdparty/eis-0.7.0.jar",
+                    str(folder / "safe_ros_env.java")], check=True, capture_output=True,
+                   timeout=300)
+    got = subprocess.run([str(ajpf / "ajpf" / "ajpf-check.sh"), "safe_ros.ail", "safe_ros.psl",
+                          label], cwd=folder, capture_output=True, text=True, timeout=900,
+                         env={**os.environ, "EXTRA_CP": str(classes), "AJPF_TIMEOUT": "800"})
+    return got.stdout
+
+
+@pytest.mark.xdist_group("ajpf")
+def test_ajpf_verifies_the_generated_agent_r1_holds(ajpf, files, tmp_path):
+    out = _check(ajpf, tmp_path, files, "R2")
+    assert "RESULT: HOLDS" in out, out
+    assert "constraints=0" in out
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("ajpf")
+def test_ajpf_verifies_the_other_untimed_requirements(ajpf, files, tmp_path):
+    for label in ("R3", "R6"):  # one test, not parametrized: slow cases stay out by default
+        assert "RESULT: HOLDS" in _check(ajpf, tmp_path / label, files, label), label
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("ajpf")
+def test_a_mutated_agent_violates_the_property(ajpf, files, tmp_path):
+    # the property is not vacuous: an agent whose too_close plan does nothing violates it
+    mutated = dict(files)
+    mutated["safe_ros.gwen"] = files["safe_ros.gwen"].replace(
+        "+too_close: {~B stopped} <- set_stopped, +stopped;", "+too_close: {True} <- print(\"x\");")
+    assert mutated["safe_ros.gwen"] != files["safe_ros.gwen"]
+    assert "RESULT: VIOLATED" in _check(ajpf, tmp_path, mutated, "R2")
