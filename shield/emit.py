@@ -54,6 +54,14 @@ def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
                 path = out_dir / fname
                 path.write_text(text, encoding="utf-8")
                 written.append(path)
+        elif form == "ros2":
+            from fretc.shield.emit_ros2 import render_ros2
+
+            for fname, text in render_ros2(shield, base, bindings, bindings_file).items():
+                path = out_dir / fname
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(text, encoding="utf-8")
+                written.append(path)
         elif form == "gwendolen":
             from fretc.shield.emit_gwendolen import render_gwendolen
 

@@ -34,7 +34,7 @@ from fretc.shield.runtime import Decision, ShieldRuntime, truth
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.spec import Bindings
 
-__all__ = ["MessageShield", "ShieldInputError", "proposals_of"]
+__all__ = ["MessageShield", "ShieldInputError", "proposals_of", "default_message"]
 
 
 class ShieldInputError(Exception):
@@ -181,3 +181,37 @@ def _overlay(message: Any, topic: str, fields: list[tuple[str, list[str], Any]])
         else:
             setattr(owner, path[-1], type(old)(value))
     return msg
+
+
+def default_message(store: Any, typename: str) -> Any:
+    """A message of ``typename`` (``pkg/msg/Type``, held in the rosbags type store ``store``)
+    with every field at its default: 0, false, "", empty sequences, fixed arrays of defaults.
+
+    Raises:
+        KeyError: a type the store does not hold."""
+    import numpy as np
+
+    fields = {}
+    for name, (kind, detail) in store.get_msgdef(typename).fields:
+        fields[name] = _default_field(store, int(kind), detail, np)
+    return store.types[typename](**fields)
+
+
+_NUMPY = {"bool": "bool", "byte": "uint8", "char": "uint8", "int8": "int8", "uint8": "uint8",
+          "int16": "int16", "uint16": "uint16", "int32": "int32", "uint32": "uint32",
+          "int64": "int64", "uint64": "uint64", "float32": "float32", "float64": "float64"}
+
+
+def _default_field(store: Any, kind: int, detail: Any, np: Any) -> Any:
+    """The default of one field (rosbags' node types: 1 base, 2 name, 3 array, 4 sequence)."""
+    if kind == 1:
+        base = detail[0]
+        return "" if base in ("string", "wstring") else False if base == "bool" else (
+            0.0 if base.startswith("float") else 0)
+    if kind == 2:
+        return default_message(store, detail)
+    (sub_kind, sub_detail), length = detail[0], detail[1]
+    if int(sub_kind) == 1 and sub_detail[0] in _NUMPY:
+        return np.zeros(length if kind == 3 else 0, dtype=_NUMPY[sub_detail[0]])
+    return [_default_field(store, int(sub_kind), sub_detail, np)
+            for _ in range(length if kind == 3 else 0)]

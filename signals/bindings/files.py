@@ -100,13 +100,13 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
         if key not in ("tick", "variables", "logs", "types", "constants", "path_variables",
-                       "entities"):
+                       "entities", "shield"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
                                "optionally [logs], [types], [constants], [path_variables], "
-                               "[entities])",
+                               "[entities], [shield])",
                                line=line, col=col)
 
 

@@ -26,7 +26,7 @@ from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
 __all__ = ["shield_cmd", "FORMS"]
 
 #: the forms ``--emit`` writes: name -> the writer module of :mod:`fretc.shield`
-FORMS = ("python", "c", "gwendolen")
+FORMS = ("python", "c", "ros2", "gwendolen")
 
 
 def _names(text: str | None) -> list[str] | None:
