@@ -165,3 +165,17 @@ def test_an_unknown_preference_is_refused(tmp_path):
     assert got.exit_code == 2 and "--prefer names z" in got.output
     got = shield_cli(str(f), "--inputs", "a", "--outputs", "x,y", "--prefer", "!x")
     assert got.exit_code == 0, got.output
+
+
+def test_explain_says_what_r2_permits_and_what_r7_takes_away(tmp_path):
+    got = shield_cli(*SAFE_ROS, "--explain")
+    assert got.exit_code == 0, got.output
+    assert ("R2: stopped may wait up to 10 ticks (1 s) after too_close becomes true; once it "
+            "holds, stopped may stop holding again while too_close still holds") in got.output
+    assert "R3: forwarded_zero must hold at once after stop_requested becomes true" in got.output
+    assert "R6: stop_requested may wait up to 5 ticks (0.5 s)" in got.output
+    stay = str(REPO / "requirements" / "shield" / "stay_stopped.fret")
+    got = shield_cli(SAFE_ROS[0], stay, *SAFE_ROS[1:], "--explain")
+    assert got.exit_code == 0, got.output
+    assert "R2: stopped must hold at once after too_close becomes true" in got.output
+    assert "R2: stopped may stop holding" not in got.output

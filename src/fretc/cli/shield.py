@@ -119,7 +119,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     if explain:
         from fretc.shield.explain import explain_text
 
-        click.echo(shown(explain_text(shield)))
+        click.echo(shown(explain_text(shield, compiled)))
     if prove:
         from fretc.shield.prove import prove_shield
 

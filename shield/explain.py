@@ -1,0 +1,155 @@
+"""``fretc shield --explain``: what the controller may still do under the shield, per enforced
+requirement, read off the closed loop (:func:`fretc.shield.prove.closed_loop`: every run of
+the shield with any environment and any controller).
+
+For a requirement with condition ``C`` (none: every tick) and response ``R``:
+
+* **wait**: the most consecutive ticks at which ``C`` holds and ``R`` does not, starting where
+  ``C`` becomes true (or at the first tick): how late the shield lets the response come
+  (``upon too_close ... within 1 second``: 10 ticks); unbounded when some run keeps ``C``
+  without ``R`` for ever;
+* **release**: whether ``R`` may stop holding again while ``C`` still holds (one response per
+  trigger: R2 lets the robot move on while the obstacle is still too close).
+
+These are facts of the closed loop, so they hold for the Python, C and ROS 2 forms alike.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from fractions import Fraction
+from typing import Any
+
+from fretc.check.safety_game import letter_name
+from fretc.compiler import ir
+from fretc.compiler.expressions import Expander
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
+from fretc.shield.build import Shield
+from fretc.shield.machine import Machine
+from fretc.shield.prove import closed_loop
+
+__all__ = ["Permission", "permissions", "explain_text"]
+
+Graph = dict[tuple[int, ...], dict[tuple[int, ...], list[tuple[int, ...]]]]
+
+
+class Permission:
+    """What requirement ``rid`` leaves the controller: ``wait`` ticks (None: unbounded,
+    -1: the closed loop was too large to read), ``release``, and its ``condition`` and
+    ``response`` as FRET/SMV text."""
+
+    def __init__(self, rid: str, condition: str, response: str, wait: int | None,
+                 release: bool):
+        self.rid, self.condition, self.response = rid, condition, response
+        self.wait, self.release = wait, release
+
+    def text(self, period: Fraction | None) -> str:
+        """One sentence per liberty."""
+        if self.wait == -1:
+            return f"{self.rid}: the closed loop is too large to read its permissions"
+        when = (f"after {self.condition} becomes true" if self.condition != "TRUE"
+                else "at any tick")
+        if self.wait is None:
+            head = f"{self.response} may never come while {self.condition} holds"
+        elif self.wait == 0:
+            head = f"{self.response} must hold at once {when}"
+        else:
+            secs = f" ({float(self.wait * period):g} s)" if period else ""
+            head = f"{self.response} may wait up to {self.wait} ticks{secs} {when}"
+        tail = (f"; once it holds, {self.response} may stop holding again while "
+                f"{self.condition} still holds" if self.release else "")
+        return f"{self.rid}: {head}{tail}"
+
+
+def _value(n: Node, letter: dict[str, bool]) -> bool:
+    """A propositional IR formula's truth on a letter (atom name -> bool)."""
+    if n.op in ("ap", "cmp"):
+        return letter.get(letter_name(n), False)
+    if n.op in ("true", "false"):
+        return n.op == "true"
+    args = [_value(a, letter) for a in n.args]
+    return {"!": lambda: not args[0], "&": lambda: all(args), "|": lambda: any(args),
+            "->": lambda: (not args[0]) or args[1], "<->": lambda: args[0] == args[1],
+            "xor": lambda: args[0] != args[1]}[n.op]()
+
+
+def _wait(graph: Graph, m: Machine, c: Node, r: Node) -> int | None:
+    """The longest run of ``c & !r`` ticks from a tick where ``c`` becomes true (module
+    docstring); None when unbounded."""
+    names = [a.name for a in (*m.inputs, *m.outputs)]
+    memo: dict[tuple[int, ...], int | None] = {}
+    active: set[tuple[int, ...]] = set()
+
+    def longest(s: tuple[int, ...]) -> int | None:
+        if s in memo:
+            return memo[s]
+        if s in active:
+            return None  # a cycle of c & !r: unbounded
+        active.add(s)
+        best: int | None = 0
+        for nxt, letters in graph[s].items():
+            for letter in letters:
+                vals = dict(zip(names, map(bool, letter)))
+                if _value(c, vals) and not _value(r, vals):
+                    sub = longest(nxt)
+                    best = None if sub is None or best is None else max(best, 1 + sub)
+        active.discard(s)
+        memo[s] = best
+        return best
+
+    starts = {tuple(int(b) for b in m.init)}
+    for s, edges in graph.items():
+        for nxt, letters in edges.items():
+            if any(not _value(c, dict(zip(names, map(bool, x)))) for x in letters):
+                starts.add(nxt)
+    out = 0
+    for s in starts:
+        got = longest(s)
+        if got is None:
+            return None
+        out = max(out, got)
+    return out
+
+
+def _release(graph: Graph, m: Machine, c: Node, r: Node) -> bool:
+    """Whether some tick with ``c & r`` may be followed by one with ``c & !r``."""
+    names = [a.name for a in (*m.inputs, *m.outputs)]
+    after: set[tuple[int, ...]] = set()
+    for _s, edges in graph.items():
+        for nxt, letters in edges.items():
+            if any(_value(c, v) and _value(r, v)
+                   for v in (dict(zip(names, map(bool, x))) for x in letters)):
+                after.add(nxt)
+    return any(_value(c, v) and not _value(r, v)
+               for s in after for letters in graph[s].values()
+               for v in (dict(zip(names, map(bool, x))) for x in letters))
+
+
+def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
+    """The :class:`Permission` of each enforced requirement (module docstring)."""
+    by_id = {c.id: c for c in compiled}
+    ex = Expander("pt", ir.TRUE, ir.TRUE)
+    out = []
+    for m in shield.machines:
+        loop = closed_loop(m)
+        for rid in m.requirements:
+            req = by_id[rid].entry.requirement
+            c = ir.TRUE if req.condition.expr is None else ex.bool(req.condition.expr)
+            r = ex.bool(req.response)
+            if req.timing.kind == "never":
+                r = ir.not_(r)
+            if loop is None:
+                out.append(Permission(rid, to_smv(c), to_smv(r), -1, False))
+                continue
+            graph = loop[0]
+            out.append(Permission(rid, to_smv(c), to_smv(r), _wait(graph, m, c, r),
+                                  _release(graph, m, c, r)))
+    return out
+
+
+def explain_text(shield: Shield, compiled: Sequence[Any] = ()) -> str:
+    """The terminal report of ``--explain``."""
+    lines = ["what the controller may still do under the shield:"]
+    lines += ["  " + p.text(shield.period) for p in permissions(shield, compiled)]
+    return "\n".join(lines)
