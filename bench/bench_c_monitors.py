@@ -45,7 +45,7 @@ R2U2_PUBLISHED = "0.27-0.80 µs/step (C, 3-8 node formulas; R2U2 v3.0, CAV 2023)
 
 def read_trace(path: Path) -> list[dict]:
     with path.open(newline="") as f:
-        rows = list(csv.DictReader(f))
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     out = []
     for r in rows:
         out.append({k: (v == "true") if v in ("true", "false") else float(v)

@@ -25,8 +25,9 @@ from typing import Any, NamedTuple
 
 __all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest"]
 
-#: moves remembered per machine, keyed by (state, input atoms, output atoms): the BDD walks
-#: of a tick are done once per distinct key; past the limit the memory is cleared
+#: moves (and corrections) remembered per machine, keyed by (state, input atoms, output
+#: atoms): the BDD walks of a tick are done once per distinct key; past the limit the memory
+#: is cleared (the answers never depend on it)
 CACHE_LIMIT = 1 << 16
 
 _OPS = {"<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
@@ -132,6 +133,9 @@ class _Machine:
         self.groups = t["groups"]
         self.cache: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
                          tuple[bool, tuple[int, ...]]] = {}
+        #: the corrections made, by the same key (state, input atoms, proposed atoms)
+        self.corrections: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
+                               tuple[tuple[int, ...], tuple[str, ...]]] = {}
         self.variables = list(dict.fromkeys(s[0] for s in self.outs))
         self.in_tests = [(s[0], _tester(s)) for s in self.ins]
         self.out_tests = [(s[0], _tester(s)) for s in self.outs]
@@ -159,7 +163,7 @@ class _Machine:
         n_in, n_out = len(ins), len(prop)
         values = list(ins + prop + self.state)
         costs: list[float] = [math.inf, 0.0]
-        for var, lo, hi in self.nodes[2:]:
+        for var, lo, hi in self.nodes[2:self.safe + 1]:  # safe's nodes come first
             j = var - n_in
             if 0 <= j < n_out:
                 costs.append(min(costs[lo] + self._cost(j, 0, prop),
@@ -201,10 +205,17 @@ class _Machine:
         if safe:
             self.state = nxt
             return {}, (), ()
-        outs = self.correct(ins, prop)
-        values = list(ins + prop + self.state)
-        reasons = tuple(r for r, k in zip(self.reqs, self.keep)
-                        if _walk(self.nodes, k, values) != 1) or self.reqs
+        key = (self.state, ins, prop)
+        got = self.corrections.get(key)
+        if got is None:
+            outs = self.correct(ins, prop)
+            values = list(ins + prop + self.state)
+            reasons = tuple(r for r, k in zip(self.reqs, self.keep)
+                            if _walk(self.nodes, k, values) != 1) or self.reqs
+            if len(self.corrections) >= CACHE_LIMIT:
+                self.corrections.clear()
+            got = self.corrections[key] = (outs, reasons)
+        outs, reasons = got
         self.state = self.move(ins, outs)[1]
         changed = tuple(t for t, p, o in zip(self.texts, prop, outs) if p != o)
         return self._values(outs, proposed, changed), (reasons if changed else ()), changed

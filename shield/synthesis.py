@@ -73,6 +73,8 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         for k, bit in enumerate(m.bits):
             varmap[bit[0]] = len(ins) + len(outs) + k
         table = _Table(b, varmap)
+        # safe first: its nodes are the table's first (the correction's shortest path reads
+        # only them, :mod:`fretc.shield.runtime`)
         roots = [table.add(f) for f in [safe, *nexts, *keeps, game.env_ok]]
         return {"realizable": True,
                 "atoms": [(a, True) for a in ins] + [(a, False) for a in outs],
