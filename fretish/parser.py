@@ -54,6 +54,7 @@ import lark
 from lark.exceptions import LarkError, UnexpectedInput
 
 from fretc.common import cache
+from fretc.common.libraries import check_lark
 
 from fretc.fretish import ast as A
 from fretc.fretish.diagnostics import make_error, translate
@@ -401,7 +402,9 @@ def build_lark(**options) -> lark.Lark:
     with the contextual lexer and a new :class:`_Builder` applied while parsing. ``options``
     go to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts, :func:`cached_lark`
     ``cache=``). Without ``cache`` it builds the LALR tables from the grammar (about a
-    second)."""
+    second). Raises :class:`fretc.common.libraries.LibraryError` when the ``lark`` imported
+    is not Lark 1.x (ROS 2's lark-parser 0.12 in its place)."""
+    check_lark(lark.__version__)
     return lark.Lark(_read_grammar(), transformer=_Builder(), **_LARK_OPTIONS, **options)
 
 

@@ -42,6 +42,15 @@ __all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
 
 #: Seconds between two polls of the readers.
 POLL_SECONDS = 0.005
+#: a publisher known this long (s) whose topic has sent nothing is reported once
+#: (:meth:`DdsClient._check_silent`)
+SILENT_SECONDS = 3.0
+#: what to do when a discovered publisher's messages never arrive (Fast DDS may send to a
+#: reader on the same host over shared memory only, a transport Cyclone DDS cannot read)
+SILENT_HINT = ("if it is publishing, its middleware may be sending over a transport fretc "
+               "cannot read (Fast DDS's shared memory, to a reader on the same host): on the "
+               "robot, start the node with FASTDDS_BUILTIN_TRANSPORTS=UDPv4, or watch from "
+               "another host (docs/guide/watch.md, 'ROS 2 on its defaults')")
 
 
 def require_cyclonedds() -> None:
@@ -91,6 +100,10 @@ class DdsClient:
         self._advertised: set[str] = set()
         self._clock: int | None = None
         self._qos_reported: set[str] = set()
+        #: topic -> wall time (ns) its first publisher was discovered; topics heard from
+        self._known_since: dict[str, int] = {}
+        self._heard: set[str] = set()
+        self._silent_reported: set[str] = set()
 
     def start(self) -> "DdsClient":
         """Join the domain and start reading in a background thread (returns at once)."""
@@ -120,6 +133,7 @@ class DdsClient:
             try:
                 self._discover()
                 busy = self._read()
+                self._check_silent(time.time_ns())
             except Exception as exc:  # one bad sample or entity costs that poll only
                 self.events.put(("protocol", time.time_ns(),
                                  f"DDS: {type(exc).__name__}: {str(exc)[:200]}"))
@@ -159,6 +173,7 @@ class DdsClient:
                 if topic is None or not (self.wanted(topic) or topic == CLOCK_TOPIC):
                     continue
                 self._pubs.setdefault(topic, set()).add(key)
+                self._known_since.setdefault(topic, now)
                 self._add(topic, ros_type(p.type_name), p.qos, now)
                 continue
             for t, keys in self._pubs.items():
@@ -223,6 +238,7 @@ class DdsClient:
             batch = take_raw(reader)
             for data, info in batch:
                 got = True
+                self._heard.add(topic)
                 now = time.time_ns()
                 if topic == CLOCK_TOPIC:
                     self._clock = _clock_ns(data)
@@ -233,6 +249,20 @@ class DdsClient:
                 self._merge.put(topic, log_time, data, now)
             if not (until_empty and batch):
                 return got
+
+    def _check_silent(self, now: int) -> None:
+        """A ``protocol`` event (once per topic) for a bound topic whose publisher has been
+        known for :data:`SILENT_SECONDS` with no message of it read: never a silent "never
+        published" while the topic may be publishing."""
+        for topic, since in self._known_since.items():
+            if (topic in self._heard or topic in self._silent_reported
+                    or not self._pubs.get(topic) or not self.wanted(topic)
+                    or now - since < SILENT_SECONDS * 1e9):
+                continue
+            self._silent_reported.add(topic)
+            self.events.put(("protocol", now, f"{topic}: a publisher is known since "
+                             f"{(now - since) / 1e9:.0f} s but no message of it has arrived; "
+                             + SILENT_HINT))
 
     def _check_qos(self, topic: str, reader) -> None:
         """A reader whose QoS cannot match a publisher's is a ``protocol`` event (once)."""

@@ -316,6 +316,11 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> list[str]:
     if la.problem_counts:
         out.append("data problems: " + escape(", ".join(f"{k} x{n}"
                                                         for k, n in la.problem_counts.items())))
+    # what a live transport said about topics it could not read (a publisher known but
+    # silent, an incompatible QoS): said in full, never only counted
+    for p in la.problems:
+        if p.get("kind") == "protocol" and p.get("detail"):
+            out.append(f"transport: {escape(str(p['detail']))}")
     return out
 
 

@@ -114,8 +114,10 @@ class MessageShield:
                 continue
             try:
                 inputs[v] = self.bindings.variables[v].evaluate(st, f" at {now_ns} ns")
-            except (SignalError, KeyError) as exc:
+            except SignalError as exc:
                 raise ShieldInputError(f"{v}: {exc}") from None
+            except KeyError as exc:  # a topic not heard yet
+                raise ShieldInputError(f"{v}: no message of {exc.args[0]} yet") from None
         props = {t: self.proposed.get(t) or self.make(t) for t in self.output_topics}
         proposal = self._values(props, now_ns)
         for v in self.runtime.outputs:

@@ -20,6 +20,7 @@ from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInpu
                              UnexpectedToken, VisitError)
 
 from fretc.common import cache
+from fretc.common.libraries import check_lark
 from fretc.common.problems import BindingError
 from fretc.common.units import parse_duration
 from fretc.fretish.limits import MAX_EXPR_DEPTH
@@ -44,6 +45,7 @@ _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", propagate_positions=True
 def _parser() -> Lark:
     """The Lark parser of ``grammar.lark``, its tables kept in fretc's cache folder
     (:func:`fretc.common.cache.lark_cache_file`; built in memory when the cache is off)."""
+    check_lark(lark_version)
     with open(os.path.join(os.path.dirname(__file__), "grammar.lark"), encoding="utf-8") as f:
         grammar = f.read()
     path = cache.lark_cache_file("bindings", grammar, lark_version, _LARK_OPTIONS)
