@@ -136,8 +136,9 @@ def verdict_events(log: dict) -> list[VerdictEvent]:
         def add(ns, level, kind, message):
             if ns is None:
                 return
-            ev = VerdictEvent(int(ns), level, kind, rid, message, file, int(line))
-            out.append((int(ns), i, order[kind], ev))
+            # add is called in this iteration only: the loop's variables are this verdict's
+            ev = VerdictEvent(int(ns), level, kind, rid, message, file, int(line))  # noqa: B023
+            out.append((int(ns), i, order[kind], ev))  # noqa: B023
 
         fv = v.get("first_violation")
         verdict = v.get("verdict")

@@ -192,7 +192,7 @@ def _instances(plan: Any, r: Any, names: list[str], path: str, run: Any) -> list
         return alone("vacuous", notes=[f"no entity {name} ({key}) appeared in the log: the "
                                        "requirement holds of none"])
     out: list[Verdict] = []
-    for i, value in enumerate(values):
+    for _i, value in enumerate(values):
         sub = dataclasses.replace(plan, bindings=plan.bindings.for_entity({name: value}),
                                   requirements=[dataclasses.replace(
                                       r, id=f"{r.id}[{name}={value}]", index=0)])

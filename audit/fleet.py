@@ -134,7 +134,7 @@ class ShippedPlan:
     bindings: list[tuple] | None
     key: str
     #: binding files that select their logs: (selector, file, ShippedPlan of that file)
-    variants: list[tuple[Any, str, "ShippedPlan"]] = field(default_factory=list)
+    variants: list[tuple[Any, str, ShippedPlan]] = field(default_factory=list)
 
     def rebuild(self) -> AuditPlan:
         """The runnable plan: monitor modules ``exec``'d, binding expressions compiled."""

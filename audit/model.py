@@ -126,7 +126,7 @@ class AuditPlan:
     #: remarks on the inputs (bound variables no requirement uses)
     warnings: list[str] = field(default_factory=list)
     #: binding files with ``[logs]``: (selector, file, the plan for the logs it selects)
-    variants: list[tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
+    variants: list[tuple[Any, str, AuditPlan]] = field(default_factory=list)
     #: items of ReqIF / Doorstop sources without FRETish text (RequirementEntry): listed as
     #: not formalized, never audited
     not_formalized: list = field(default_factory=list)

@@ -106,7 +106,7 @@ class Budget:
             raise ValueError(f"the memory budget must be at least {MIN_MEMORY} BDD nodes, "
                              f"not {self.memory}")
 
-    def share(self, fraction: float) -> "Budget":
+    def share(self, fraction: float) -> Budget:
         """This budget with ``fraction`` of its work (at least 1 unit), the same memory and
         CPU limit."""
         return Budget(max(1, int(self.work * fraction)), self.memory, self.cpu)

@@ -180,7 +180,8 @@ class Checker:
                 why = (f"{self.spent} queries on these requirements spent their whole work "
                        "budget, so this one was not tried (a larger --budget tries it)")
                 fresh = ("spent", tuple(query)) not in self._cache
-                got = self._cached(("spent", tuple(query)), lambda: self.worker.refuse(why))
+                # _cached calls the lambda at once (never later): why is this iteration's
+                got = self._cached(("spent", tuple(query)), lambda: self.worker.refuse(why))  # noqa: B023
                 self.not_tried += fresh
                 break
             fresh = (engine, tuple(query)) not in self._seen
@@ -257,7 +258,7 @@ class Checker:
     # ---------------------------------------------------------------- subsets
     def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
                         bad: Callable[[list[CheckItem]], object],
-                        known_bad: bool = False) -> "Subsets":
+                        known_bad: bool = False) -> Subsets:
         """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
         smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
 

@@ -73,7 +73,7 @@ class NumericAbstraction:
         self._uninterpreted: dict[str, str] = {}
 
     @classmethod
-    def of(cls, formulas: Iterable[Node]) -> "NumericAbstraction":
+    def of(cls, formulas: Iterable[Node]) -> NumericAbstraction:
         """Collect the atoms of ``formulas`` (IR nodes)."""
         self = cls()
         seen = set()

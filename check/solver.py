@@ -403,7 +403,7 @@ class SpotWorker:
             self._proc.join(timeout=1)
         self._kill()
 
-    def __enter__(self) -> "SpotWorker":
+    def __enter__(self) -> SpotWorker:
         return self
 
     def __exit__(self, *exc) -> None:

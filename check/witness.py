@@ -273,7 +273,7 @@ def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
                                      "expected": f.expected})
 
 
-def _controller_run(w: "_Witnesses", finding, path: Path) -> None:
+def _controller_run(w: _Witnesses, finding, path: Path) -> None:
     """The witness of an unrealizable set: the defeating inputs with a controller's best
     effort (:mod:`fretc.check.safety_game`); some requirement of the set is violated whatever
     the controller does, so on this run too."""

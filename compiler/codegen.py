@@ -336,7 +336,7 @@ def _check_module(text: str, module_name: str, cache: bool) -> None:
             shape_ns = {}
             exec(shape_code, ns, shape_ns)  # what the module's _bind does, compiled once
             ns["_MAKE"][i] = shape_ns["make"]
-        for rid, cls in ns["MONITORS"].items():
+        for _rid, cls in ns["MONITORS"].items():
             m = cls()
             for value in (0, 1):
                 m.step({v: value for v in cls.VARIABLES})

@@ -135,7 +135,7 @@ class Expander:
         raise SemanticsError(f"{e.name}: the bound must be a non-negative integer literal",
                              getattr(a, "span", e.span))
 
-    def _bounds(self, e: A.Call, x: "Expander"):
+    def _bounds(self, e: A.Call, x: Expander):
         """(m, n, p) of ``f(n, p)`` (m = 0) or ``f(m, n, p)``."""
         args = e.args
         if len(args) == 2:

@@ -47,6 +47,11 @@ random sentences over the whole grammar, FRET's vectors and the case-study corpu
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
+
 from fretc.fretish import ast as A
 
 from fretc.compiler.expressions import Expander, SemanticsError, mentions_time

@@ -43,7 +43,7 @@ class Node:
 
     __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext", "stext")
 
-    def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
+    def __init__(self, op: str, args: tuple[Node, ...] = (), name: str | None = None,
                  lo: int | None = None, hi: int | None = None):
         # plain attribute stores, same shape as common.errors' __init__s (kept: a __slots__
         # class's fields)

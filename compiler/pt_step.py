@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 
 from fretc.common.errors import FretishError
 
-from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 

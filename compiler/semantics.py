@@ -26,6 +26,10 @@ rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
 
 from fretc.fretish import ast as A
 from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long

@@ -15,7 +15,10 @@ spans.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
 
 SCOPE_KINDS = ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter", "onlyBefore")
 CONDITION_KINDS = ("null", "regular", "holding")
@@ -107,7 +110,7 @@ class Unary:
     """``op`` is ``"!"`` (logical not; FRETish ``!`` and ``~``) or ``"-"`` (arithmetic)."""
 
     op: str
-    operand: "Expr"
+    operand: Expr
     span: Span = _span()
 
 
@@ -124,8 +127,8 @@ class Binary:
     :data:`ARITH_OPS`."""
 
     op: str
-    left: "Expr"
-    right: "Expr"
+    left: Expr
+    right: Expr
     span: Span = _span()
 
 
@@ -137,7 +140,7 @@ class Call:
     is ``prevOcc(P, Q)``, ``at the next occurrence of P, Q`` is ``nextOcc(P, Q)``)."""
 
     name: str
-    args: tuple["Expr", ...]
+    args: tuple[Expr, ...]
     span: Span = _span()
 
 

@@ -53,7 +53,7 @@ from collections.abc import Iterable
 
 from fretc.common.errors import FretishError, FretishFileError, FretishSyntaxError
 from fretc.fretish.parser import parse
-from fretc.fretish.entry import RequirementEntry
+from fretc.fretish.entry import Fraction, RequirementEntry  # entry's fractions.Fraction
 from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
 from fretc.common.units import parse_seconds
 

@@ -47,7 +47,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
-import sys
 import threading
 
 import lark

@@ -116,7 +116,7 @@ class Advertised:
     unreadable: str = ""
 
     @staticmethod
-    def from_json(ch: dict) -> "Advertised":
+    def from_json(ch: dict) -> Advertised:
         """An advertisement of the Foxglove protocol's ``advertise`` message.
 
         Raises:
@@ -191,7 +191,7 @@ class WebSocketClient:
         self._session_problems = 0  # protocol problems in the current session
 
     # -- thread control --------------------------------------------------------------------
-    def start(self) -> "WebSocketClient":
+    def start(self) -> WebSocketClient:
         """Connect in a background thread (returns at once). Raises
         :class:`MissingDependency` without ``websockets``."""
         require_websockets()
@@ -284,7 +284,7 @@ class WebSocketClient:
                 return
             try:
                 await asyncio.wait_for(self._stop.wait(), delay)
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 pass
             delay = min(self.max_backoff, delay * 2)
 
@@ -339,7 +339,7 @@ class FoxgloveClient(WebSocketClient):
         except ConnectionClosed:
             return
 
-    async def _frame(self, ws, frame, st: "_FoxgloveState", now: int) -> None:
+    async def _frame(self, ws, frame, st: _FoxgloveState, now: int) -> None:
         """Handle one frame: a binary ``messageData`` (other binary opcodes, such as time and
         service responses, are not read) or a JSON text frame."""
         from websockets.exceptions import ConnectionClosed
@@ -370,7 +370,7 @@ class FoxgloveClient(WebSocketClient):
             self._protocol(f"a {str(msg.get('op'))[:40]!r} frame of the wrong shape "
                            f"({type(exc).__name__}: {str(exc)[:200]}); ignored")
 
-    async def _text(self, ws, msg: dict, st: "_FoxgloveState", now: int) -> None:
+    async def _text(self, ws, msg: dict, st: _FoxgloveState, now: int) -> None:
         """Handle one JSON object frame (module docstring); raises on a field of the wrong
         shape (the caller reports it)."""
         op = msg.get("op")

@@ -92,7 +92,7 @@ class DdsClient:
         self._clock: int | None = None
         self._qos_reported: set[str] = set()
 
-    def start(self) -> "DdsClient":
+    def start(self) -> DdsClient:
         """Join the domain and start reading in a background thread (returns at once)."""
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 

@@ -120,7 +120,7 @@ class DiagnosticsPublisher:
         self._thread = threading.Thread(target=self._run, daemon=True,
                                         name="fretc-diagnostics")
 
-    def start(self) -> "DiagnosticsPublisher":
+    def start(self) -> DiagnosticsPublisher:
         """Start the publishing thread."""
         self._thread.start()
         return self

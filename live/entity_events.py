@@ -19,7 +19,8 @@ from __future__ import annotations
 import dataclasses
 from fnmatch import fnmatchcase
 from types import SimpleNamespace
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 from fretc.audit.entities import MAX_ENTITIES, entity_of_requirements
 from fretc.audit.passes import clock_key

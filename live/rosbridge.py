@@ -172,7 +172,7 @@ class RosbridgeClient(WebSocketClient):
                                   "id": cid}))
         try:
             msg = await asyncio.wait_for(fut, timeout)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             return None
         finally:
             replies.pop(cid, None)

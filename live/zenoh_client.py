@@ -115,7 +115,7 @@ class ZenohClient:
         self._merge = MergeBuffer(self.events)
 
     # -- thread control ----------------------------------------------------------------------
-    def start(self) -> "ZenohClient":
+    def start(self) -> ZenohClient:
         """Open the session and declare the subscribers (returns at once)."""
         zenoh = require_zenoh()
         self._merge.start()

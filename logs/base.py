@@ -315,7 +315,7 @@ class LogSource:
         """
         raise NotImplementedError
 
-    def reopen(self) -> "LogSource | None":
+    def reopen(self) -> LogSource | None:
         """A new source of this file for another pass (its own counts, problems and times)
         without reading the file again, or None: open it again (the default; a reader that
         streams keeps nothing to reopen from)."""

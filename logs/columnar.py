@@ -285,7 +285,7 @@ class Segment:
             d = self._decoded[k] = self._message(k + self._skip)
         return d
 
-    def dropped(self, k: int) -> "Segment":
+    def dropped(self, k: int) -> Segment:
         """This segment without its first ``k`` messages."""
         cols = None if self.columns is None else {p: c[k:] for p, c in self.columns.items()}
         seg = Segment(cols, self.n - k, self._message, self.typename, self._skip + k)

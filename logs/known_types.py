@@ -20,7 +20,7 @@ project's own message) is not checked.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, cache
 from typing import Any
 
 __all__ = ["layout_mismatch", "layout"]
@@ -30,7 +30,7 @@ _ROS2 = ("ros2_humble", "ros2_jazzy", "ros2_iron", "ros2_kilted", "ros2_lyrical"
 _MAX_DEPTH = 32
 
 
-@lru_cache(maxsize=None)
+@cache
 def _store(name: str):
     from rosbags.typesys import Stores, get_typestore
 

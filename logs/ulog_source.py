@@ -183,7 +183,7 @@ class UlogSource(LogSource):
         return [self._read(None, io.BytesIO(segment_bytes(data, framing, k)))
                 for k in range(len(framing.runs))], framing
 
-    def reopen(self) -> "UlogSource":
+    def reopen(self) -> UlogSource:
         """A new source of this file from the rows read when it was opened (the operands
         pass of a violated requirement reads them again without a second pyulog read)."""
         new = copy.copy(self)

@@ -163,7 +163,7 @@ def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
         runs.append((aut.table, aut.initial, letters, outcome))
     # first rejection of each automaton
     firsts = []
-    for table, state, letters, outcome in runs:
+    for table, state, letters, _outcome in runs:
         hit = None
         for i, letter in enumerate(letters):
             state = table[state][letter]
@@ -172,7 +172,7 @@ def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
                 break
         firsts.append(hit)
     best: tuple[str, int | None] = ("unknown", None)
-    for (table, _s, _l, outcome), hit in zip(runs, firsts):
+    for (_t, _s, _l, outcome), hit in zip(runs, firsts):
         if hit is not None and (best[1] is None or hit < best[1]):
             best = (outcome, hit)
     return best

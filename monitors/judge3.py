@@ -92,7 +92,7 @@ class Unknowns:
 
     @classmethod
     def of(cls, req: A.Requirement, unknown: Mapping[str, np.ndarray],
-           columns: Mapping[str, np.ndarray], n: int, nan_unknown: bool) -> "Unknowns":
+           columns: Mapping[str, np.ndarray], n: int, nan_unknown: bool) -> Unknowns:
         """The unknown ticks of ``req``'s parts (:func:`expression_unknown`)."""
         def part(e):
             return expression_unknown(e, unknown, columns, n, nan_unknown)

@@ -17,7 +17,7 @@ import re
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Sequence
+from collections.abc import Sequence
 
 from fretc.common.units import format_seconds
 
@@ -87,10 +87,10 @@ def _generated_line(when: _dt.datetime | None = None) -> str:
     if when is None:
         epoch = os.environ.get("SOURCE_DATE_EPOCH")
         if epoch and epoch.strip().isdigit():
-            when = _dt.datetime.fromtimestamp(int(epoch), tz=_dt.timezone.utc)
+            when = _dt.datetime.fromtimestamp(int(epoch), tz=_dt.UTC)
         else:
-            when = _dt.datetime.now(tz=_dt.timezone.utc)
-    return GENERATED_PREFIX + when.astimezone(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+            when = _dt.datetime.now(tz=_dt.UTC)
+    return GENERATED_PREFIX + when.astimezone(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
 def _version() -> str:

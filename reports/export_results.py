@@ -62,7 +62,7 @@ def audit_identity(path: str, raw: bytes, date: str | None = None) -> tuple[str,
     digest = "sha256:" + hashlib.sha256(raw).hexdigest()[:16]
     if date:
         return digest, date
-    stamp = _dt.datetime.fromtimestamp(int(os.stat(path).st_mtime), _dt.timezone.utc)
+    stamp = _dt.datetime.fromtimestamp(int(os.stat(path).st_mtime), _dt.UTC)
     return digest, stamp.strftime("%Y-%m-%dT%H:%M:%SZ")
 
 

@@ -190,7 +190,7 @@ def matrix_html(rows: list[MatrixRow], title: str = "Traceability matrix") -> st
              "</style></head><body>", f"<h1>{e(title)}</h1>",
              f"<p>{len(rows)} rows; sort by a linked column header.</p>"]
     orders = list(_SORTS[1:]) + [_SORTS[0]]  # the default order last (CSS above)
-    for anchor, col, key in orders:
+    for anchor, _col, key in orders:
         ordered = sorted(enumerate(rows), key=lambda ir: (key(ir[1]), ir[0]))
         parts.append(f'<section class="order" id="{anchor}"><table><tr>')
         for c in COLUMNS:

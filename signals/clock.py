@@ -240,12 +240,12 @@ def feed(source: LogSource, bindings: Bindings, topics: set[str], problems: Prob
     yield from buf.drain()
 
 
-def s_first(s: "Sampling") -> bool:
+def s_first(s: Sampling) -> bool:
     """Whether ``s`` has evaluated a tick (skipped messages count from then on)."""
     return s.first_time is not None
 
 
-def unsampled_of(s: "Sampling", names: list[str], bindings: Bindings | None) -> dict[str, int]:
+def unsampled_of(s: Sampling, names: list[str], bindings: Bindings | None) -> dict[str, int]:
     """The unsampled messages of clock ``s`` that count for variables ``names`` (one
     requirement's): those of topics its non-aggregated bindings read, sorted by topic."""
     own = [bindings.variables[n] for n in names

@@ -124,7 +124,7 @@ def verdicts(files, threshold, markdown):
             click.echo(f"| {name} | {prof} | {dur:.2f} | {size} | "
                        + " | ".join(str(cnt.get(t, 0)) for t in topics) + " |")
     else:
-        for name, prof, dur, size, cnt, v in rows:
+        for name, prof, dur, size, _cnt, v in rows:
             click.echo(f"{name} ({prof}, {dur:.2f} s, {size} bytes)")
             for r in REQUIREMENTS:
                 click.echo(f"  {r}: {v[r].text()}  [{v[r].triggers} triggering ticks]")

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from collections.abc import Callable
 
 __all__ = ["Distribution", "parse_distribution", "DistributionError", "DISTRIBUTIONS"]
 

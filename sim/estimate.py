@@ -31,7 +31,8 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 from fretc.audit.statistics import RequirementStatistics, fleet_statistics, unknown_policy
 

@@ -27,7 +27,8 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 from fretc.sim.run import record_scenario, shield_of
 from fretc.sim.space import Space, apply

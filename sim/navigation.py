@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from scipy import ndimage
@@ -48,7 +48,7 @@ class NavigationFunction:
     ``dist`` (float, one per traversable cell) and ``pred`` (next cell towards the goal, -1 at
     the goal or where unreachable)."""
 
-    def __init__(self, planner: "GlobalPlanner", goal: tuple[float, float],
+    def __init__(self, planner: GlobalPlanner, goal: tuple[float, float],
                  dist: np.ndarray, pred: np.ndarray):
         self.planner = planner
         self.goal = goal

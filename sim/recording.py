@@ -25,7 +25,8 @@ byte-identical files.
 from __future__ import annotations
 
 import math
-from typing import BinaryIO, Iterable, Sequence
+from typing import BinaryIO
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 from mcap.writer import CompressionType, Writer

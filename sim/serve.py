@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Iterable
+from collections.abc import Iterable
 
 from fretc.live.serve import FoxgloveServer, Pacer
 

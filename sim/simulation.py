@@ -143,9 +143,11 @@ class Simulation:
 
     def __init__(self, scenario: Scenario, seed: int = 1, threshold: float = 0.9,
                  omap: OccupancyMap | None = None, sim: SimParams = SimParams(),
-                 robot: ScoutMiniParams = ScoutMiniParams(), lidar: LidarParams = LidarParams(),
-                 odom_noise: OdometryNoise = OdometryNoise(),
-                 planner: PlannerParams = PlannerParams(),
+                 # frozen dataclasses: one shared default instance is safe
+                 robot: ScoutMiniParams = ScoutMiniParams(),  # noqa: B008
+                 lidar: LidarParams = LidarParams(),  # noqa: B008
+                 odom_noise: OdometryNoise = OdometryNoise(),  # noqa: B008
+                 planner: PlannerParams = PlannerParams(),  # noqa: B008
                  controller: ControllerParams | None = None,
                  safety: SafetyParams | None = None, shield: Any = None):
         if not threshold > 0:

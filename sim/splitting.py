@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 __all__ = ["SplittingResult", "SplittingError", "adaptive_multilevel_splitting"]
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import yaml
@@ -75,7 +75,7 @@ class OccupancyMap:
         self.grid = grid
 
     @classmethod
-    def load(cls, yaml_path: str | Path = REACTOR_ROOM_YAML) -> "OccupancyMap":
+    def load(cls, yaml_path: str | Path = REACTOR_ROOM_YAML) -> OccupancyMap:
         """Read a map_server YAML and the image it names (PGM, via Pillow).
 
         Raises ``FileNotFoundError`` if either file is missing and ``KeyError`` if the YAML

@@ -46,7 +46,6 @@ from fretc.check.witness import finite_trace, trace_columns
 from fretc.compiler import ir
 from fretc.compiler.build import Compiled
 from fretc.compiler.coverage import Obligation, obligations
-from fretc.compiler.printers import to_smv
 from fretc.compiler.semantics import SemanticsError, formalize
 from fretc.fretish import ast as A
 from fretc.logs.csv_source import SAMPLED_MARK
@@ -190,7 +189,7 @@ class Finder:
         return self._rows([base, other], queries, accept)
 
 
-def separating_trace(finder: "Finder", c: Compiled, other: A.Requirement
+def separating_trace(finder: Finder, c: Compiled, other: A.Requirement
                      ) -> tuple[object, str]:
     """A trace on which ``c`` and the requirement ``other`` (same tick period) get different
     verdicts from the audit's judge: rows, None (no finite trace separates their verdict

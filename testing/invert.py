@@ -102,7 +102,7 @@ class Range:
         return ((self.lo < x or (self.lo_in and x == self.lo))
                 and (x < self.hi or (self.hi_in and x == self.hi)))
 
-    def meet(self, other: "Range") -> "Range | None":
+    def meet(self, other: Range) -> Range | None:
         """The numbers in both ranges (None when none), preferring this one's ``pref``,
         then the other's, then a point inside by :func:`margin`."""
         lo, lo_in = max((self.lo, self.lo_in), (other.lo, other.lo_in),
@@ -118,12 +118,12 @@ class Range:
                 return Range(lo, hi, lo_in, hi_in, float(x))
         return None
 
-    def neg(self) -> "Range":
+    def neg(self) -> Range:
         """The range of ``-x``."""
         return Range(-self.hi, -self.lo, self.hi_in, self.lo_in, -self.pref)
 
 
-def _range(op: str, c: float, pref: float) -> "Range | float":
+def _range(op: str, c: float, pref: float) -> Range | float:
     """The numbers ``x`` with ``x op c`` as a :class:`Range` (``=``/``!=``: the point)."""
     inf = math.inf
     return {"<": Range(-inf, c, False, False, pref), "<=": Range(-inf, c, False, True, pref),

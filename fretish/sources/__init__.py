@@ -36,7 +36,7 @@ def tool_source_kind(path: str) -> str | None:
         return "reqif" if path.lower().endswith(REQIF_SUFFIXES) else None
     if not os.path.isdir(path):
         return None
-    for depth, (folder, dirs, files) in enumerate(_walk(path)):
+    for depth, (_folder, _dirs, files) in enumerate(_walk(path)):
         if ".doorstop.yml" in files:
             return "doorstop"
         if depth > 200:  # a very wide tree is not worth searching for one

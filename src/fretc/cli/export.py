@@ -51,8 +51,8 @@ def _audit_date(value: str | None) -> str | None:
         raise click.BadParameter(f"{value!r} is not an ISO 8601 date or date-time",
                                  param_hint="--audit-date") from None
     if when.tzinfo is None:
-        when = when.replace(tzinfo=_dt.timezone.utc)
-    return when.astimezone(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        when = when.replace(tzinfo=_dt.UTC)
+    return when.astimezone(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 @click.command("export")

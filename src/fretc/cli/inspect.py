@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from typing import Any, Dict, List
+from typing import Any
 
 import click
 
@@ -95,7 +95,7 @@ class _Stat:
 
     def to_json(self) -> dict:
         self.flush()
-        out: Dict[str, Any] = {"type": self.type}
+        out: dict[str, Any] = {"type": self.type}
         if self.texts:
             out["values"] = sorted(self.texts)[:MAX_VALUES]
             if len(self.texts) > MAX_VALUES:
@@ -139,7 +139,7 @@ def _constants(schema, typename: str) -> dict:
     return {c[0]: (c[1], c[2]) for c in consts}
 
 
-def _plan(schema, typename: str, prefix: str, stats: Dict[str, _Stat], plans: dict) -> list:
+def _plan(schema, typename: str, prefix: str, stats: dict[str, _Stat], plans: dict) -> list:
     """The fields of ``typename`` as visited under path ``prefix``: ``(attribute, kind,
     item kind, stat, sub-plan)`` per field, made once per (type, path) and kept in ``plans``
     (the schema's field list is not walked again for every message)."""
@@ -211,10 +211,10 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
     source = open_log(path, msg_path=msg_path)
     types = source.topics()
     schemas = log_schemas(source)
-    stats: Dict[str, Dict[str, _Stat]] = {t: {} for t in types}
-    first: Dict[str, int] = {}
-    last: Dict[str, int] = {}
-    counts: Dict[str, int] = {}
+    stats: dict[str, dict[str, _Stat]] = {t: {} for t in types}
+    first: dict[str, int] = {}
+    last: dict[str, int] = {}
+    counts: dict[str, int] = {}
     plans: dict = {}
     # a topic whose schema is missing or not parsed is listed without fields ("schema
     # unknown"), its messages counted
@@ -311,7 +311,7 @@ def inspect_cmd(logs, as_json, msg_path):
     (docs/bindings.md)."""
     from fretc.common.problems import FretcInputError  # lazy: as the readers
 
-    docs: List[dict] = []
+    docs: list[dict] = []
     failed = False
     for p in logs:
         try:
