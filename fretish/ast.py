@@ -15,6 +15,7 @@ spans.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
@@ -258,7 +259,7 @@ class Requirement:
         return f"{self.scope.kind},{self.condition.kind},{self.timing.kind},satisfaction"
 
 
-def walk(expr: Expr):
+def walk(expr: Expr) -> Iterator[Expr]:
     """Yield ``expr`` and all its sub-expressions, pre-order."""
     stack = [expr]
     while stack:

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 
-from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin
+from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
 
 __all__ = ["Origin", "tool_source_kind", "load_tool_source", "fret_origin",
            "DEFAULT_TEXT_ATTRIBUTE", "REQIF_SUFFIXES"]
@@ -54,7 +54,8 @@ def _walk(path: str):
         yield folder, dirs, files
 
 
-def load_tool_source(path: str, kind: str, text_attribute: str | None = None):
+def load_tool_source(path: str, kind: str, text_attribute: str | None = None
+                     ) -> tuple[list[RequirementEntry], list[RequirementEntry]]:
     """(entries, not formalized) of the ReqIF file or Doorstop tree at ``path`` (``kind`` from
     :func:`tool_source_kind`): two lists of :class:`fretc.fretish.files.RequirementEntry`, the
     second of the items without FRETish text (their ``text`` empty, ``requirement`` and
