@@ -88,7 +88,7 @@ class Unknowns:
     C: np.ndarray
     R: np.ndarray
     S: np.ndarray
-    ticks: np.ndarray = field(default=None)  # any part unknown
+    ticks: np.ndarray = field(default=None)  # type: ignore[arg-type]  # any part unknown; set by of()
 
     @classmethod
     def of(cls, req: A.Requirement, unknown: Mapping[str, np.ndarray],
