@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
@@ -62,7 +63,7 @@ class Checker:
         allf += [x.phi_ft for x in self.items] + [x.trigger_ft for x in self.items
                                                   if x.trigger_ft]
         self.numeric = NumericAbstraction.of(allf)
-        self._cache: dict[str, object] = {}
+        self._cache: dict[tuple, Any] = {}
         #: formula -> ("safe" | "goal", pt formula, requirement index), on infinite runs /
         #: finite traces (:mod:`fretc.check.monitor_sat`)
         self.monitored = monitored_forms(self.items)

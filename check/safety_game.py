@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING
 
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
@@ -53,6 +54,9 @@ from fretc.check.budget import Budget, BudgetSpent, Meter
 from fretc.check.fixed_inputs import keep_forever, post, prefix_search
 from fretc.check.numeric_abstraction import simple_comparison
 from fretc.check.pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
+
+if TYPE_CHECKING:
+    from fretc.compiler.semantics import Formalization
 
 __all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms", "letter_name",
            "Game", "Witness", "bdd_dict"]
@@ -104,7 +108,7 @@ def _weak_until(n: Node) -> tuple[Node, Node] | None:
     return None
 
 
-def pt_monitors_ft_inf(formalization) -> bool:
+def pt_monitors_ft_inf(formalization: Formalization) -> bool:
     """Does FRET's pt formula of ``formalization`` (a :class:`fretc.compiler.semantics.
     Formalization`) monitor its ft_inf formula: ft_inf holds on an infinite run iff pt holds
     at every tick? True when ft_inf is syntactically safe (:func:`is_safety`), except for the
@@ -149,7 +153,7 @@ def _buddy():
 _DICT: list = []
 
 
-def bdd_dict():
+def bdd_dict() -> Any:  # a spot.bdd_dict
     """The one Spot BDD dictionary of the games and the automata they read (so their BDD
     variables live in one BuDDy space)."""
     import spot  # lazy: Spot (and its BuDDy) in the query worker process only
@@ -201,7 +205,7 @@ class Game:
                 self.extra = [m.value(f) for f in extra]  # encoded with their state bits
                 break
             except NoRoom:
-                self.m = self.ok = None
+                self.m = self.ok = None  # type: ignore[assignment]  # planned again below
                 _DICT[0].unregister_all_my_variables(self.owner)
         self.in_set = _varset(b, m.in_vars)
         self.out_set = _varset(b, m.out_vars)
@@ -228,7 +232,7 @@ class Game:
     def close(self) -> None:
         """Drop the BDDs and give their variables back to Spot's allocator."""
         self.layers = []
-        self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None
+        self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None  # type: ignore[assignment]  # closed
         self.extra, self.same, self._step = [], None, None
         _DICT[0].unregister_all_my_variables(self.owner)
 
@@ -349,7 +353,7 @@ class Witness:
         self.all_set = game.b.bdd_and(game.b.bdd_and(game.cur_set, game.in_set),
                                       game.out_set)
 
-    def _cubes(self, atoms: list[Node], allowed, limit: int) -> list[tuple]:
+    def _cubes(self, atoms: list[Node], allowed, limit: int) -> list[tuple] | None:
         """Assignments of ``atoms`` allowed by ``allowed`` (a BDD over them), as
         ``(values, cube)``, at most ``limit`` (None when there are more)."""
         b, var = self.b, self.g.m.atom_var
@@ -399,7 +403,8 @@ class Witness:
         meter = Meter(budget, 0.25)
         meter.relation(self.b, self.g.trans)
         start = self.g.init
-        heap = [(self.rank(start), 0, 0, start, ())]
+        # (rank, length, count, states BDD, letters)
+        heap: list[tuple[Any, int, int, Any, tuple[int, ...]]] = [(self.rank(start), 0, 0, start, ())]
         seen = {start.id()}
         count = 0
         try:
