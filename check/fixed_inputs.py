@@ -31,7 +31,7 @@ from typing import Any, TYPE_CHECKING
 from fretc.check.budget import BudgetSpent, Meter
 
 if TYPE_CHECKING:
-    from fretc.check.safety_game import _Game
+    from fretc.check.safety_game import Game
 
 __all__ = ["recurrence", "keep_forever", "defeats", "post", "input_lasso", "prefix_search",
            "MAX_LASSO", "SEARCH_SETS"]
@@ -74,7 +74,7 @@ def recurrence(b: Any, z: Any, accs: Sequence, prepare: Callable[[Any, Any], Any
     return z
 
 
-def defeats(game: _Game, cubes: list, start: int, meter: Meter) -> bool:
+def defeats(game: Game, cubes: list, start: int, meter: Meter) -> bool:
     """Does the input lasso ``cubes[:start]`` then ``cubes[start:]`` forever (BDD cubes of
     the input atoms) defeat every controller of ``game`` (a :class:`fretc.check.safety_game.
     Game` or :class:`fretc.check.buchi_game._BuchiGame`): is there no output sequence along it
@@ -83,7 +83,7 @@ def defeats(game: _Game, cubes: list, start: int, meter: Meter) -> bool:
     return game.b.bdd_and(game.init, _keep(game, cubes, start, meter)[0]) == game.b.bddfalse
 
 
-def keep_forever(game: _Game, cube: Any, meter: Meter) -> Any:  # BDDs
+def keep_forever(game: Game, cube: Any, meter: Meter) -> Any:  # BDDs
     """The states from which, with the inputs ``cube`` at every tick, some output sequence
     keeps every requirement of ``game`` (and meets each acceptance set infinitely often)."""
     return _keep(game, [cube], 0, meter)[0]
@@ -116,7 +116,7 @@ def _keep(game, cubes: list, start: int, meter: Meter) -> list:
         z = new
 
 
-def post(game: _Game, states: Any, cube: Any) -> Any:  # BDDs
+def post(game: Game, states: Any, cube: Any) -> Any:  # BDDs
     """The states ``game``'s monitors can be in one tick after ``states`` with the inputs
     ``cube``, over every output that keeps every requirement."""
     b = game.b
@@ -125,7 +125,7 @@ def post(game: _Game, states: Any, cube: Any) -> Any:  # BDDs
                                       every))
 
 
-def input_lasso(game: _Game, letters: list, meter: Meter) -> tuple[tuple | None, str]:
+def input_lasso(game: Game, letters: list, meter: Meter) -> tuple[tuple | None, str]:
     """The shortest input lasso that defeats every controller (module docstring), as
     ``(prefix, cycle)`` of indices into ``letters`` (``(values, cube)`` pairs, the input
     letters the environment may set), up to :data:`MAX_LASSO` ticks, then longer prefixes
@@ -157,7 +157,7 @@ def input_lasso(game: _Game, letters: list, meter: Meter) -> tuple[tuple | None,
                   "react to the outputs")
 
 
-def prefix_search(game: _Game, letters: list, keeps: list, meter: Meter) -> tuple | None:
+def prefix_search(game: Game, letters: list, keeps: list, meter: Meter) -> tuple | None:
     """Breadth first over input prefixes: the first prefix after which every state the
     monitors can be in (:func:`post`) is outside ``keeps[c]`` (:func:`keep_forever` of
     letter ``c``) for some ``c``, as ``(prefix indices, [c])``; None when every set of

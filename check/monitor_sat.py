@@ -72,7 +72,7 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
         raise ValueError("last-tick formulas are read on finite traces only")
     # the first layer of the search: the goals have held, the last-tick formulas hold
     marks = [ir.O(g) for g in goals] + list(last)
-    game: _Game
+    game: Game
     if liveness:
         if finite:
             raise ValueError("liveness formulas are read on infinite runs only")

@@ -79,8 +79,8 @@ def is_safety(n: Node, positive: bool = True) -> bool:
         return True
     if op == "!":
         return is_safety(n.args[0], not positive)
-    if op == "|" and positive and _weak_until(n) is not None:
-        p, q = _weak_until(n)
+    if op == "|" and positive and (weak := _weak_until(n)) is not None:
+        p, q = weak
         return is_safety(p, positive) and is_safety(q, positive)
     if op in ("&", "|"):
         return all(is_safety(a, positive) for a in n.args)
@@ -237,7 +237,7 @@ class Game:
         _DICT[0].unregister_all_my_variables(self.owner)
 
     @property
-    def trans(self):
+    def trans(self) -> Any:  # a BDD
         """The transition relation, ``next <-> next-value`` for every state bit, built
         when first asked (:mod:`fretc.check.monitor_sat` steps through it in parts instead)."""
         if self._trans is None:
@@ -247,7 +247,7 @@ class Game:
         return self._trans
 
     @property
-    def step(self):
+    def step(self) -> Any:  # a BDD
         """The moves that keep every requirement: ``ok & ctl_ok & trans`` over (state,
         letter, next state), built when first asked (the satisfiability fixed points of
         :mod:`fretc.check.monitor_sat` step through the relation in parts instead)."""
@@ -266,7 +266,7 @@ class Game:
         """``f`` over the state bits' current variables (:meth:`_primed` the other way)."""
         return self.b.bdd_appex(self.same, f, self.b.bddop_and, self.nxt_set)
 
-    def successors_in(self, target):
+    def successors_in(self, target: Any) -> Any:  # BDDs
         """BDD over (state, inputs, outputs): the next state is in ``target``
         (``target`` with each state bit replaced by its next-value function: renamed to
         its next variable first, so the substitution is simultaneous)."""
@@ -280,7 +280,7 @@ class Game:
             f = b.bdd_compose(f, fn, nxt)
         return f
 
-    def pre(self, lose):
+    def pre(self, lose: Any) -> Any:  # BDDs
         """States from which the environment forces a loss now or a move into ``lose``."""
         b = self.b
         bad = b.bdd_or(b.bdd_not(self.ok), self.successors_in(lose))
@@ -304,7 +304,7 @@ class Game:
             if b.bdd_and(self.init, lose) != b.bddfalse:
                 return False
 
-    def next_state(self, here):
+    def next_state(self, here: Any) -> Any:  # BDDs
         """The state after ``here`` (a cube of every state bit and atom), as a cube of the
         state bits."""
         b, out = self.b, self.b.bddtrue
@@ -368,7 +368,7 @@ class Witness:
                 out.append((values, cube))
         return out
 
-    def rank(self, states) -> int:
+    def rank(self, states: Any) -> int:  # a BDD
         """Fewest ticks in which the environment forces a loss from every state of
         ``states`` (``len(layers)`` when some state is not known to lose)."""
         b, layers = self.b, self.g.layers
@@ -381,7 +381,7 @@ class Witness:
                 lo = mid + 1
         return lo
 
-    def post(self, states, cube):
+    def post(self, states: Any, cube: Any) -> Any:  # BDDs
         """The states the monitors can be in after one tick with inputs ``cube``, over
         every output that keeps every requirement."""
         b, g = self.b, self.g
