@@ -159,16 +159,17 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
         groups.setdefault(clock_key(r, bindings), []).append(r)
     clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
     stream: Iterator[tuple[Any, Any]]  # (clock key, TickBlock)
+    sampling: Any  # a GroupSampling, or the Sampling of a CSV trace
     if bindings is not None:
         sampling = sample_blocks(source, bindings,
                                  {key: (c.names, key.topics) for key, c in clocks.items()})
         stream = iter(sampling)
         failed, errors = sampling.failed, sampling.errors
     else:
-        csv_sampling = sample(source, None)
+        sampling = sample(source, None)
         key0 = next(iter(groups))
         c0 = clocks[key0]
-        stream = ((key0, b) for b in blocks_of_ticks(iter(csv_sampling), c0.names,
+        stream = ((key0, b) for b in blocks_of_ticks(iter(sampling), c0.names,
                                                      c0.columns.topics))
         failed, errors = {key0: {}}, {}
     report = _progress(source, expected, progress) if progress is not None else None
