@@ -46,8 +46,9 @@ import json
 import struct
 import threading
 import time
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 from fretc.live.events import EventQueue
 
@@ -83,7 +84,7 @@ def require_websockets() -> None:
         raise MissingDependency(f"fretc watch needs the websockets package: {WATCH_HINT}")
 
 
-def closed_in_order(ws) -> bool:
+def closed_in_order(ws: Any) -> bool:  # a websockets connection, new or legacy
     """The server sent a close frame (RFC 6455 section 5.5.1) before the connection ended:
     an orderly close, not a network fault. Works with websockets' new (``protocol``) and
     legacy (``close_rcvd``) connection objects."""
@@ -133,14 +134,14 @@ class Advertised:
                           str(ch.get("schemaEncoding", "") or ""))
 
 
-def frame_shape(value) -> str:
+def frame_shape(value: object) -> str:
     """The JSON kind of a decoded frame or field (``array``, ``number``, ``string``, ...),
     for protocol problems."""
     return {dict: "object", list: "array", str: "string", int: "number", float: "number",
             bool: "boolean", type(None): "null"}.get(type(value), type(value).__name__)
 
 
-def json_object(frame) -> tuple[dict | None, str | None]:
+def json_object(frame: str | bytes) -> tuple[dict | None, str | None]:
     """A text frame of a JSON protocol (Foxglove WebSocket, rosbridge v2: every text frame
     is one JSON object) decoded: ``(object, None)``, or ``(None, problem)`` with the
     sentence of the protocol problem when it is not JSON text or not an object."""
@@ -185,7 +186,7 @@ class WebSocketClient:
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stop: asyncio.Event | None = None
-        self._ws = None
+        self._ws: Any = None  # the open websockets connection
         self._started = threading.Event()
         self._session_messages = 0  # messages put in the current session
         self._session_problems = 0  # protocol problems in the current session
@@ -245,7 +246,7 @@ class WebSocketClient:
             self._session_messages = self._session_problems = 0
             try:
                 async with websockets.connect(
-                        self.url, subprotocols=list(self.subprotocols or ()) or None,
+                        self.url, subprotocols=list(self.subprotocols or ()) or None,  # type: ignore[arg-type]  # (Subprotocol is a str)
                         max_size=MAX_FRAME_BYTES, open_timeout=5, ping_interval=5, ping_timeout=10,
                         compression=None) as ws:
                     self._check(ws)
@@ -362,6 +363,7 @@ class FoxgloveClient(WebSocketClient):
         if problem is not None:
             self._protocol(problem)
             return
+        assert msg is not None  # (no problem: an object)
         try:
             await self._text(ws, msg, st, now)
         except ConnectionClosed:
@@ -393,9 +395,9 @@ class FoxgloveClient(WebSocketClient):
             if any(type(cid) is not int for cid in ids):
                 raise ValueError("channelIds holds other values than integers")
             for cid in ids:
-                sid = st.by_channel.pop(cid, None)
-                if sid is not None:
-                    topics.append(st.subs.pop(sid))
+                gone = st.by_channel.pop(cid, -1)  # (subscription ids are >= 0)
+                if gone >= 0:
+                    topics.append(st.subs.pop(gone))
             if topics:
                 self._put("unadvertise", now, topics)
         elif op == "serverInfo":
