@@ -221,7 +221,7 @@ def _draw_sif(ax, res: RunResult, img) -> None:
     for (tc, stop) in tr.control:
         if not stop:
             continue
-        i = min(np.searchsorted(t, tc), len(t) - 1)
+        i = min(int(np.searchsorted(t, tc)), len(t) - 1)
         ax.add_patch(Polygon(_footprint(tr.x[i], tr.y[i], tr.yaw[i], hl, hw), closed=True,
                              fc="none", ec="red", lw=1.0, zorder=7))
         ax.plot(tr.x[i], tr.y[i], "x", color="red", ms=8, mew=2.2, zorder=9,
@@ -231,7 +231,7 @@ def _draw_sif(ax, res: RunResult, img) -> None:
     for (tc, stop) in tr.control[1:]:
         if stop:
             continue
-        i = min(np.searchsorted(t, tc), len(t) - 1)
+        i = min(int(np.searchsorted(t, tc)), len(t) - 1)
         ax.plot(tr.x[i], tr.y[i], "o", color="tab:green", ms=4, mec="k", mew=0.4, zorder=8,
                 label="stop released (false)" if first else None)
         first = False
