@@ -27,11 +27,10 @@ and tools can check the picture against the JSON.
 
 from __future__ import annotations
 
-import textwrap
-
 import math
-from dataclasses import dataclass, field
+import textwrap
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from xml.sax.saxutils import escape as _xml_escape, quoteattr as _xml_quoteattr
 
 from fretc.common.textsafe import xml_text
