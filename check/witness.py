@@ -49,6 +49,7 @@ from fretc.compiler.ir import LAST, Node, name_of
 from fretc.compiler.printers import mangle, to_smv
 
 if TYPE_CHECKING:
+    from fretc.fretish.ast import Requirement
     from fretc.check.items import CheckItem
     from fretc.check.analysis import CheckResult
     from fretc.check.checker import Checker
@@ -60,7 +61,7 @@ __all__ = ["trace_columns", "Judge", "finite_trace", "write_witnesses", "expecte
 #: duration_ticks)`` -> ``"satisfied"``, ``"vacuous"``, ``"violated"`` or ``"unknown"``
 #: (``columns``: FRET variable -> numpy array of ``n`` values; ``duration_ticks`` as
 #: ``Formalization.ticks``). The audit's is :func:`fretc.monitors.interval.verdict_of`.
-Judge = Callable[[object, Mapping[str, np.ndarray], int, "int | None"], str]
+Judge = Callable[["Requirement", Mapping[str, np.ndarray], int, "int | None"], str]
 
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
 
@@ -184,10 +185,10 @@ def expected_verdicts(items: Iterable[CheckItem], rows: list[dict], judge: Judge
     cols = {name: np.array([r[name] for r in rows]) for name in (rows[0] if rows else {})}
     out = {}
     for x in items:
-        f = x.compiled.formalization
-        assert f is not None  # (an item is of a formalized requirement)
+        f, req = x.compiled.formalization, x.compiled.requirement
+        assert f is not None and req is not None  # (an item is of a formalized requirement)
         try:
-            out[x.id] = judge(x.compiled.requirement, cols, n, f.ticks)
+            out[x.id] = judge(req, cols, n, f.ticks)
         except (KeyError, ValueError):
             out[x.id] = "unknown"
     return out

@@ -149,8 +149,7 @@ class WatchSource(LogSource):
         self.ever_connected = False
         self.first_connect_wall: float | None = None
         self.last_reason = ""
-        # (last log time before, first after): a connection's gaps, not a log's Gap records
-        self.gaps: list[tuple[int, int]] = []  # type: ignore[assignment]
+        self.gaps: list[tuple[int, int]] = []  # type: ignore[assignment]  # (last log time before, first after): a connection's, not a log's Gap records
         #: the run ended inside an undecodable gap: the last log time used before it
         self.lost_after: int | None = None
         self.undecodable_end: int | None = None

@@ -36,7 +36,6 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 from fretc.common.problems import DataProblem
 from fretc.common.streams import log_topics
@@ -187,9 +186,7 @@ class Watch:
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
-        self._cols: dict[Any, Any] = {}
-        self._group: dict[Any, Any] = {}
-        self._unknown: dict[Any, Any] = {}
+        self._cols, self._group, self._unknown = {}, {}, {}  # type: dict[object, LiveColumns], dict[int, object], dict[object, int]
         self.entity_events = EntityEvents(plan, self.source, self._step, _Live)
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
