@@ -53,7 +53,7 @@ def _member_type(store, node):
     if kind == 1:  # BASE: (name, string bound)
         name, bound = args
         if name in ("string", "wstring"):
-            return T.bounded_str[bound] if bound else str
+            return T.bounded_str[bound] if bound else str  # type: ignore[misc]  # (subscripted at run time)
         t = _BASE[name]
         return bool if t == "bool" else getattr(T, t)
     if kind == 2:  # NAME: a nested message
@@ -61,8 +61,8 @@ def _member_type(store, node):
     inner, n = args
     sub = _member_type(store, inner)
     if kind == 3:  # ARRAY
-        return T.array[sub, n]
-    return T.sequence[sub, n] if n else T.sequence[sub]
+        return T.array[sub, n]  # type: ignore[misc]  # (cyclonedds' types are subscripted at run time)
+    return T.sequence[sub, n] if n else T.sequence[sub]  # type: ignore[misc]
 
 
 def idl_struct(store: Typestore, typename: str) -> type:

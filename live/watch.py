@@ -186,7 +186,7 @@ class Watch:
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
-        self._cols, self._group, self._unknown = {}, {}, {}  # type: dict[object, LiveColumns], dict[int, object], dict[object, int]
+        self._cols, self._group, self._unknown = {}, {}, {}  # type: dict[ClockKey, LiveColumns], dict[int, ClockKey], dict[ClockKey, int]
         self.entity_events = EntityEvents(plan, self.source, self._step, _Live)
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
