@@ -284,7 +284,7 @@ class Simulation:
             return
         self._publish_filtered(rec, st, t_ms, *self.interceptor.on_cmd_vel(v, w))
 
-    def _shield_tick(self, rec: McapRecorder, st: _RunState, t_ms: int) -> None:
+    def _shield_tick(self, rec: Recorder, st: _RunState, t_ms: int) -> None:
         """The generated shield's tick (:mod:`fretc.sim.shielded`), at the scan's log time."""
         for topic, msg in self.shield.tick(t_ms / 1000.0, _ns(t_ms)):
             if topic == "/cmd_vel_filtered":
