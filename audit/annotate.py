@@ -136,8 +136,9 @@ def verdict_events(log: dict) -> list[VerdictEvent]:
         def add(ns, level, kind, message):
             if ns is None:
                 return
-            ev = VerdictEvent(int(ns), level, kind, rid, message, file, int(line))
-            out.append((int(ns), i, order[kind], ev))
+            # add is called in this iteration only: the loop's variables are this verdict's
+            ev = VerdictEvent(int(ns), level, kind, rid, message, file, int(line))  # noqa: B023
+            out.append((int(ns), i, order[kind], ev))  # noqa: B023
 
         fv = v.get("first_violation")
         verdict = v.get("verdict")
@@ -223,6 +224,7 @@ class _Copy:
     def emit_events(self, until_ns: int | None) -> None:
         """Write the events before ``until_ns`` (all when None)."""
         events, writer = self.events, self.writer
+        assert writer is not None  # (start() made it)
         while self.ev_i < len(events) and (until_ns is None
                                            or events[self.ev_i].time_ns < until_ns):
             if self.verdict_channel is None:
@@ -241,6 +243,7 @@ class _Copy:
     def handle(self, rec) -> None:
         """Copy one record of the original's data section (not a chunk)."""
         writer = self.writer
+        assert writer is not None  # (start() made it)
         if isinstance(rec, Schema):
             if rec.id not in self.schemas:
                 self.schemas[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
@@ -297,6 +300,7 @@ class _Copy:
         if self.writer is None:
             self.start("", "")
         self.emit_events(None)
+        assert self.writer is not None  # (start() made it)
         self.writer.add_metadata("fretc.verdicts", {
             str(v.get("requirement")): str(v.get("verdict")) + (" (partial log)"
                                                                if v.get("partial") else "")

@@ -4,15 +4,23 @@ tick topic's measured rate against its nominal rate."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 from fretc.common.units import NS_PER_S, format_ns
+from fretc.compiler import ir
 
 from fretc.signals.bindings import Bindings, check_types, compile_expression
 from fretc.signals.bindings.expression import FUNCS
 from fretc.common.problems import BindingError
-from fretc.logs.schema import log_schemas
+from fretc.logs.schema import TopicSchema, log_schemas
 from fretc.logs import CSV_TOPIC
 from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.passes import MAX_TICKS, expected_ticks
+
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit
+    from fretc.logs.base import LogSource
 
 __all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "binding_type_errors",
            "check_nominal_rate", "rate_hint", "call_hint"]
@@ -21,7 +29,7 @@ __all__ = ["RATE_TOLERANCE", "csv_bindings", "too_many_ticks", "binding_type_err
 RATE_TOLERANCE = 0.10
 
 
-def csv_bindings(plan: AuditPlan, bindings: Bindings, source) -> Bindings:
+def csv_bindings(plan: AuditPlan, bindings: Bindings, source: LogSource) -> Bindings:
     """CSV with bindings: the bound variables as bound; every other variable of the
     requirements that names a column reads it (``/csv.<column>``). A sampled trace (its
     first line :data:`fretc.logs.csv_source.SAMPLED_MARK`, as ``fretc audit --write-csv``
@@ -31,14 +39,14 @@ def csv_bindings(plan: AuditPlan, bindings: Bindings, source) -> Bindings:
     sampled = getattr(source, "sampled", False)
     for r in plan.requirements:
         for v in r.variables:
-            if (v not in variables or sampled) and v in source.columns:
+            if (v not in variables or sampled) and v in source.columns:  # type: ignore[attr-defined]  # a CsvSource
                 variables[v] = compile_expression(v, f"{CSV_TOPIC}.{v}",
                                                   source=f"<CSV column {v}>")
     return Bindings(variables, bindings.tick, bindings.time_base, bindings.header_lag_ns,
                     bindings.source)
 
 
-def too_many_ticks(source, bindings: Bindings | None, path: str) -> str | None:
+def too_many_ticks(source: LogSource, bindings: Bindings | None, path: str) -> str | None:
     """The error when the fixed tick period would give more than :data:`MAX_TICKS` ticks
     over the log's span (first to last message), else None."""
     if bindings is None or not bindings.tick.period_ns or source.kind == "csv":
@@ -46,13 +54,14 @@ def too_many_ticks(source, bindings: Bindings | None, path: str) -> str | None:
     n = expected_ticks(source, bindings)
     if n is None or n <= MAX_TICKS:
         return None
+    assert source.end_time is not None and source.start_time is not None  # (n: a span)
     span = (source.end_time - source.start_time) / NS_PER_S
     return (f"{path}: the tick period {format_ns(bindings.tick.period_ns)} ({bindings.source}) "
             f"would give {n:,} ticks over the {span:.3f} s of the log, more than the limit of "
             f"{MAX_TICKS:,}; choose a longer period")
 
 
-def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[int]
+def binding_type_errors(source: LogSource, bindings: Bindings, plan: AuditPlan, skip: set[int]
                         ) -> dict[int, str]:
     """The bindings the requirements use checked against the log's message types
     (:func:`fretc.signals.bindings.check_types`): requirement index -> why it is an ``error``
@@ -104,7 +113,7 @@ def binding_type_errors(source, bindings: Bindings, plan: AuditPlan, skip: set[i
     return errors
 
 
-def _undecodable_topics(source, schemas: dict) -> dict[str, str]:
+def _undecodable_topics(source, schemas: Mapping[str, TopicSchema | None]) -> dict[str, str]:
     """Topic -> why its messages cannot be decoded, for the topics that name a message type
     whose definition the log does not carry or that cannot be parsed (a custom type of a
     bag that stores no definitions: the reason names ``--msg-path``)."""
@@ -133,12 +142,12 @@ def variable_uses(r: RequirementPlan) -> dict[str, set]:
         if n is None:
             continue
         if n.op in ("ap", "var"):
-            out.setdefault(n.name, set()).add(n.op)
+            out.setdefault(ir.name_of(n), set()).add(n.op)
         stack.extend(n.args)
     return out
 
 
-def check_nominal_rate(la, bindings: Bindings | None) -> None:
+def check_nominal_rate(la: LogAudit, bindings: Bindings | None) -> None:
     """Warn when one tick per message of a topic whose nominal rate converts the durations
     runs at a measured rate (messages over the log's span) more than
     :data:`RATE_TOLERANCE` away from it: ``within 1 second`` then means a different time."""
@@ -158,7 +167,7 @@ def check_nominal_rate(la, bindings: Bindings | None) -> None:
 
 
 
-def rate_hint(source, topic: str, counts: dict[str, int]) -> str:
+def rate_hint(source: LogSource, topic: str, counts: dict[str, int]) -> str:
     """The ``nominal_rate`` to write for ``topic``, measured on this log (messages over
     the log's span; ``counts``: messages per topic already read, else the topic is counted
     now): ``'; /scan runs at 50 Hz in this log: nominal_rate = "50 Hz"'``, or "" when the

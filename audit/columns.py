@@ -10,6 +10,10 @@ about 80 bytes a tick for the Safe-ROS set, 3 MB for an hour at 10 Hz (kept in c
 from __future__ import annotations
 
 import numpy as np
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fretc.signals.blocks import TickBlock
 
 __all__ = ["CHUNK", "TickColumns", "column_array"]
 
@@ -30,7 +34,7 @@ class TickColumns:
         self._lchunks: list[list[np.ndarray]] = [[] for _ in topics]
         self._tchunks: list[np.ndarray] = []
 
-    def append_block(self, block) -> None:
+    def append_block(self, block: TickBlock) -> None:
         """Add a block of ticks (:class:`fretc.signals.TickBlock`); a variable absent
         from it (its evaluation failed: its requirements are errors) reads False."""
         k = len(block.times)

@@ -17,16 +17,22 @@ object (:func:`fleet_coverage`; docs/reference/audit-json.md).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from fretc.compiler.coverage import obligations
 from fretc.monitors.coverage import exercised
 
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit, Verdict
+    from fretc.audit.passes import ClockPass
+    from fretc.audit.model import AuditPlan, RequirementPlan
+
 __all__ = ["record_coverage", "fleet_coverage", "coverage_text"]
 
 
-def record_coverage(r, res, v, unknown: np.ndarray) -> None:
+def record_coverage(r: RequirementPlan, res: ClockPass, v: Verdict, unknown: np.ndarray) -> None:
     """Set ``v.coverage`` (:class:`fretc.audit.verdict.Verdict`) of requirement plan ``r``
     from its judged clock pass ``res`` (``res.columns``: FRET variable -> column, ``res.times``
     tick times in ns); ``unknown``: bool per tick, True where a value is unknown."""
@@ -41,11 +47,12 @@ def record_coverage(r, res, v, unknown: np.ndarray) -> None:
         v.coverage = {"unknown": f"{k} of its ticks are unknown (a gap of the log or a "
                                  "comparison with NaN): no obligation is counted on this log"}
         return
+    assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     obs = obligations(r.id, r.requirement, r.formalization.ticks)
     got = exercised(obs, r.requirement, res.columns, n, r.formalization.ticks)
     out = []
     for ob, e in zip(obs, got):
-        item = {"obligation": ob.id, "status": e.status, "tick": e.tick,
+        item: dict[str, Any] = {"obligation": ob.id, "status": e.status, "tick": e.tick,
                 "time_ns": int(res.times[e.tick]) if e.tick is not None else None}
         if e.margin is not None:
             item["margin"] = e.margin
@@ -55,7 +62,7 @@ def record_coverage(r, res, v, unknown: np.ndarray) -> None:
     v.coverage = out
 
 
-def fleet_coverage(plan, logs: Sequence) -> dict:
+def fleet_coverage(plan: AuditPlan, logs: Sequence[LogAudit]) -> dict:
     """The top-level ``coverage`` object of the audit JSON: per requirement of ``plan``
     (formalized ones) its obligations with their description, status over the fleet
     (``covered``, ``unknown``, ``uncovered``), the runs covering each (``runs``: log, tick,
@@ -65,8 +72,9 @@ def fleet_coverage(plan, logs: Sequence) -> dict:
     for r in plan.requirements:
         if r.formalization is None:
             continue
+        assert r.requirement is not None  # (formalized: parsed)
         obs = obligations(r.id, r.requirement, r.formalization.ticks)
-        rows = {ob.id: {"obligation": ob.id, "kind": ob.kind, "description": ob.description,
+        rows: dict[str, dict[str, Any]] = {ob.id: {"obligation": ob.id, "kind": ob.kind, "description": ob.description,
                         "runs": [], "unknown_runs": []} for ob in obs}
         for la in logs:
             for v in la.verdicts:
@@ -82,9 +90,10 @@ def fleet_coverage(plan, logs: Sequence) -> dict:
                         row["unknown_runs"].append(la.log)
                     continue
                 for c in v.coverage:
-                    row = rows.get(c["obligation"])
-                    if row is None:
+                    got = rows.get(c["obligation"])
+                    if got is None:
                         continue
+                    row = got
                     if c["status"] == "met":
                         run = {"log": la.log, "tick": c["tick"]}
                         if "margin" in c:

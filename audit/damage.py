@@ -29,8 +29,8 @@ at the cut comes out violated although the run went on. Which verdict a requirem
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -94,6 +94,7 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
     R, C, S = trace_signals(req, columns, n, intervals)
     k = 0
     if timing in A.DURATION_TIMINGS:
+        assert req.timing.duration is not None  # (a duration timing has it)
         k = int(duration_ticks) if duration_ticks is not None else int(
             req.timing.duration.amount)
     chk = ObligationChecker(timing, negate, R, S, k)
@@ -170,6 +171,7 @@ def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int,
         return f"R at t+k+1={t + k + 1}, past the damage"
     if kind in ("until", "before"):
         nS = chk.nS
+        assert nS is not None  # (until and before have a stop condition)
         if (kind == "until") == want:
             if nS[t] > e and nUnwant[t] > e:
                 return f"{rname} held from t={t} but the stop condition has not come yet"

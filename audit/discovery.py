@@ -54,8 +54,7 @@ def find_logs(paths: Sequence[str]) -> list[str]:
         if not found:
             raise AuditInputError(f"{p}: no logs (*.mcap, *.bag, *.csv, rosbag2 folders)")
         out.extend(found)
-    seen = set()
-    return [x for x in out if not (x in seen or seen.add(x))]
+    return list(dict.fromkeys(out))  # each once, in order
 
 
 def _walk_logs(folder: Path) -> list[str]:

@@ -98,7 +98,7 @@ def find_entities(path: str, bindings: Any, name: str) -> tuple[list, dict, bool
         raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
                            "field path of one topic, e.g. \"/tracks.tracks[:].id\"")
     topic = next(iter(b.topics))
-    st, seen, cut = EvalState(), {}, False
+    st, seen, cut = EvalState(), dict[Any, Any](), False
     src = open_log(path)
     for m in Streams([b]).messages(src.messages({base_topic(topic)}), {topic}):
         st.msgs[topic], st.times[topic], st.now = m.data, m.log_time, m.log_time
@@ -192,7 +192,7 @@ def _instances(plan: Any, r: Any, names: list[str], path: str, run: Any) -> list
         return alone("vacuous", notes=[f"no entity {name} ({key}) appeared in the log: the "
                                        "requirement holds of none"])
     out: list[Verdict] = []
-    for i, value in enumerate(values):
+    for _i, value in enumerate(values):
         sub = dataclasses.replace(plan, bindings=plan.bindings.for_entity({name: value}),
                                   requirements=[dataclasses.replace(
                                       r, id=f"{r.id}[{name}={value}]", index=0)])
@@ -225,7 +225,7 @@ def _summary(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
     v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
     bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]
     if verdict == "violated" and bad:
-        first = min(bad, key=lambda x: x.first_violation.at.time_ns)
+        first = min(bad, key=lambda x: x.first_violation.at.time_ns)  # type: ignore[union-attr]  # (bad: with one)
         v.first_violation = first.first_violation
         v.notes.append(f"first violated by {first.requirement}")
     margins = [x.robustness for x in out if x.robustness is not None]

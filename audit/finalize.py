@@ -12,7 +12,9 @@ the one the intact span decides (:mod:`fretc.audit.damage`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,10 +34,14 @@ from fretc.common.problems import NAN
 from fretc.compiler.ir import walk
 from fretc.monitors.vectorized import supports
 
+if TYPE_CHECKING:
+    from fretc.signals.clock import Sampling
+    from fretc.audit.verdict import LogAudit, Verdict
+
 __all__ = ["finalize", "between_ticks", "prepare", "unknown_of"]
 
 
-def between_ticks(v, s, r: RequirementPlan, bindings: Bindings | None) -> None:
+def between_ticks(v: Verdict, s: Sampling, r: RequirementPlan, bindings: Bindings | None) -> None:
     """Set ``v.unsampled_messages`` and ``v.missed_changes`` from requirement ``r``'s clock
     ``s`` (:class:`fretc.signals.clock.Sampling`), with a note per variable that could miss events
     between ticks (never silently)."""
@@ -51,7 +57,7 @@ def between_ticks(v, s, r: RequirementPlan, bindings: Bindings | None) -> None:
 
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
-             v, la) -> None:
+             v: Verdict, la: LogAudit) -> None:
     """Set the verdict ``v`` (:class:`fretc.audit.verdict.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it. Ticks
@@ -103,6 +109,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     """The verdict of :func:`finalize` over the prepared pass ``res`` (at least one tick)."""
     n = len(res.times)
     f = r.formalization
+    assert r.requirement is not None and f is not None  # (judged: formalized)
     online = not r.offline
     try:
         j = judge(r.requirement, f, res.columns, n,
@@ -114,6 +121,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     v.engine = j.engine
     if j.note is not None:
         v.notes.append(j.note)
+    holds: bool | None
     ev, holds, status, st_tick = j.evidence, j.holds, j.ltl3, j.ltl3_tick
     if ev is not None:
         v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
@@ -127,6 +135,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
             return
         v.notes.append(f"robustness unavailable: {v.unknown_ticks} of its ticks are unknown")
     else:
+        assert holds is not None  # (the two-valued judge decides)
         if res.intact_end is not None:
             holds = _judge_at_damage(r, res, v, holds, ev, status, st_tick, n)
             if holds is None:
@@ -134,7 +143,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
         _robustness(r, res, bindings, v, j.robustness, holds)
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
-        if v.verdict == "vacuous":
+        if v.verdict == "vacuous" and ev is not None:
             v.notes.append("vacuous: " + ("the scope was never entered" if ev.intervals == 0
                                           else "the trigger never fired"))
         return
@@ -146,7 +155,7 @@ def _nan_unknown(bindings) -> bool:
     return bindings is None or bindings.tick.nan != "false"
 
 
-def unknown_of(r, res: ClockPass, nan_unknown: bool) -> np.ndarray:
+def unknown_of(r: RequirementPlan, res: ClockPass, nan_unknown: bool) -> np.ndarray:
     """The ticks of ``res`` at which ``r`` reads something unknown: a gap leaves one of its
     variables unknown, or (``nan_unknown``) one of its comparisons reads NaN."""
     n = len(res.times)
@@ -155,7 +164,7 @@ def unknown_of(r, res: ClockPass, nan_unknown: bool) -> np.ndarray:
         m = res.unknown.get(name)
         if m is not None:
             out |= m[:n]
-    if nan_unknown and n:
+    if nan_unknown and n and r.requirement is not None:  # (judged: parsed)
         try:
             out |= nan_ticks(r.requirement, res.columns, n)
         except (EvidenceUnsupported, KeyError, ValueError):
@@ -175,7 +184,8 @@ def _three_valued_takes(r, res: ClockPass) -> str | None:
     return None
 
 
-def prepare(r, res: ClockPass, bindings, v, la) -> tuple[ClockPass, bool]:
+def prepare(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v: Verdict,
+            la: LogAudit) -> tuple[ClockPass, bool]:
     """Before judging ``r``: its NaN ticks reported as a ``nan`` data problem of ``la`` (or
     the binding file's IEEE 754 policy noted); a requirement the three-valued judge cannot
     take is cut at its first unknown tick (judged as on a cut log, a note says why).
@@ -250,6 +260,7 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
     False for the usual satisfied-or-vacuous / violated paths of :func:`finalize`, None
     when the verdict (``unknown``) is set here."""
     opened = []
+    assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     try:
         opened = open_obligations(r.requirement, res.columns, n, r.formalization.ticks)
     except (EvidenceUnsupported, KeyError) as exc:
@@ -321,6 +332,7 @@ def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v
     # the message that decided the tick: the newest held among the clock's topics
     v.robustness_at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
     m, times = rob.margin, res.times
+    ticks: Sequence[int]
     if len(m) <= MARGIN_POINTS:
         ticks = range(len(m))
     else:  # the least value of each run of consecutive ticks
@@ -335,6 +347,7 @@ def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
     """The first violation of a violated requirement, and the values and message log times
     ``plan.config.window`` ticks around its trigger and violation."""
     n = len(res.times)
+    assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     scope_kind = r.requirement.scope.kind
     timing = r.requirement.timing.kind
     obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]

@@ -54,7 +54,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 from fretc.audit import AuditInputError, AuditPlan, audit_log
 from fretc.audit.plan import MODULE_PREFIX, load_module
@@ -62,6 +62,9 @@ from fretc.signals.bindings import Bindings, compile_expression
 from fretc.common.problems import BindingError
 from fretc.common.textsafe import visible
 from fretc.audit.verdict import LogAudit, Verdict
+
+if TYPE_CHECKING:
+    from fretc.audit.workers import LogProgress
 
 __all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
            "audit_logs_ray", "error_audit", "RAY_HINT"]
@@ -134,7 +137,7 @@ class ShippedPlan:
     bindings: list[tuple] | None
     key: str
     #: binding files that select their logs: (selector, file, ShippedPlan of that file)
-    variants: list[tuple[Any, str, "ShippedPlan"]] = field(default_factory=list)
+    variants: list[tuple[Any, str, ShippedPlan]] = field(default_factory=list)
 
     def rebuild(self) -> AuditPlan:
         """The runnable plan: monitor modules ``exec``'d, binding expressions compiled."""
@@ -148,7 +151,7 @@ class ShippedPlan:
             reqs.append(r)
         b = self.plan.bindings
         if b is not None:
-            variables = {}
+            variables: dict[str, Any] = {}
             todo = list(self.bindings or [])
             for _round in range(len(todo) + 1):  # references compile after their targets
                 left = []
@@ -269,7 +272,7 @@ def _audit_task(shipped: ShippedPlan, path: str, kill: tuple[str, str] | None = 
     return audit_log(plan, path, progress)
 
 
-def error_audit(plan: AuditPlan, path: str, reason: str):
+def error_audit(plan: AuditPlan, path: str, reason: str) -> LogAudit:
     """A :class:`~fretc.audit.verdict.LogAudit` of a log that could not be audited: the
     log's ``error`` is ``reason`` and every requirement's verdict is ``error`` with it (so the
     exit code is 2 and nothing reads as satisfied)."""
@@ -284,7 +287,8 @@ def error_audit(plan: AuditPlan, path: str, reason: str):
 
 
 def audit_logs_ray(plan: AuditPlan, paths: Sequence[str], address: str | None = None,
-                   retries: int = 0, progress=None, num_cpus: int | None = None,
+                   retries: int = 0, progress: LogProgress | None = None,
+                   num_cpus: int | None = None,
                    _kill: tuple[str, str] | None = None) -> list[Any]:
     """Audit ``paths`` on Ray, one task per log; results in the order of ``paths``.
 
@@ -352,6 +356,7 @@ def _run_driver(job: dict, said, results: dict, progress) -> int:
     unavailable = None
     try:
         with os.fdopen(read_fd, "rb") as frames:
+            assert child.stdin is not None  # (stdin=PIPE)
             child.stdin.write(pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL))
             child.stdin.close()
             while True:

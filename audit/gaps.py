@@ -24,6 +24,7 @@ instead: those are listed as bridged and leave no tick unknown.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,13 +33,17 @@ from fretc.logs.base import Gap
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import stateful_topics
 
+if TYPE_CHECKING:
+    from fretc.audit.passes import ClockPass
+    from fretc.logs.base import LogSource
+
 __all__ = ["split_bridged", "inner_gaps", "unknown_masks", "gap_json", "gaps_of_clock",
            "insert_gap_ticks", "merged_gaps"]
 
 _NEG, _POS = -(2**63), 2**63 - 1
 
 
-def inner_gaps(source) -> list[Gap]:
+def inner_gaps(source: LogSource) -> list[Gap]:
     """The gaps of ``source``'s latest pass that the log was read on after (every gap with
     an end, and its messages present but not decoded, one gap each:
     :meth:`fretc.logs.base.LogSource.lost_gaps`), in log-time order. A gap without an end is
@@ -54,7 +59,8 @@ def split_bridged(gaps: Iterable[Gap], bridge_ns: int | None) -> tuple[list[Gap]
     """``(kept, bridged)``: the gaps shorter than ``bridge_ns`` (``--bridge-gaps``; known
     start and end, ``end - start < bridge_ns``) are bridged (values held over them, as
     sample-and-hold holds a value between messages); None bridges none."""
-    kept, bridged = [], []
+    kept: list[Gap] = []
+    bridged: list[Gap] = []
     for g in gaps:
         short = (bridge_ns is not None and g.start is not None and g.end is not None
                  and g.end - g.start < bridge_ns)
@@ -138,7 +144,7 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
     return out
 
 
-def insert_gap_ticks(res, gaps: list[Gap], tick_topic: str) -> list[int]:
+def insert_gap_ticks(res: ClockPass, gaps: list[Gap], tick_topic: str) -> list[int]:
     """On a clock that ticks on each message of ``tick_topic``, the ticks a gap of that topic
     lost are not known (not even how many): one tick is put in their place, at the gap's
     start, unknown for every variable (:func:`fretc.audit.passes.mark_gaps` marks it), so

@@ -31,6 +31,7 @@ form for triggers clustered in runs, and the widening over trials of unknown out
 from __future__ import annotations
 
 import math
+from typing import Any
 from dataclasses import dataclass
 
 __all__ = ["clopper_pearson", "effective_clopper_pearson", "Counts", "cluster_interval",
@@ -40,7 +41,7 @@ __all__ = ["clopper_pearson", "effective_clopper_pearson", "Counts", "cluster_in
 MAX_MORE_RUNS = 10**9
 
 
-def check_confidence(confidence) -> float:
+def check_confidence(confidence: Any) -> float:
     """``confidence`` as a float in (0, 1); ``ValueError`` for anything else (NaN, inf, a
     string, 0, 1)."""
     try:
@@ -174,7 +175,7 @@ def more_runs(op: str, p: float, c: Counts, confidence: float) -> int | None:
         grown = Counts(successes=c.successes + round(rate * j * mean), trials=c.trials + round(
             j * mean), unknown=c.unknown, runs=c.runs + j)
         grown.size = grown.trials + grown.unknown
-        grown.size2 = c.size2 + j * mean * mean
+        grown.size2 = c.size2 + j * mean * mean  # type: ignore[assignment]  # (a projection: a float)
         return decide(op, p, *cluster_interval(grown, confidence)) != "undecided"
 
     hi_j = 1

@@ -15,7 +15,8 @@ before its first cut or gap are judged. Problems of every pass are kept.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING
 
 from fretc.signals.bindings import Bindings
 from fretc.signals.clock import missing_topics
@@ -35,6 +36,9 @@ from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.operands import operand_values
 from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
 from fretc.audit.plan import select_variant
+
+if TYPE_CHECKING:
+    from fretc.logs.base import LogSource
 
 __all__ = ["audit_log", "summarize_clocks", "log_engine"]
 
@@ -56,7 +60,7 @@ def audit_log(plan: AuditPlan, path: str,
     if plan.variants:
         sub, err = select_variant(plan, str(path))
         if sub is None:
-            return _not_selected(plan, str(path), err)
+            return _not_selected(plan, str(path), err or "")
         return audit_log(sub, path, progress)
     if plan.bindings is not None and plan.bindings.per_entity:
         from fretc.audit.entities import audit_entities
@@ -97,7 +101,7 @@ class _LogRun:
                                              source=r.source, notes=list(r.notes))
             if r.error is not None:
                 self.verdicts[r.index].error = r.error
-        self.source = None
+        self.source: LogSource | None = None  # (opened by the first pass)
         self.bindings: Bindings | None = None
         self.skip: set = set()  # requirements already decided (unknown) before the pass
         self.problems: dict[tuple, DataProblem] = {}
@@ -173,6 +177,7 @@ class _LogRun:
     def _check_inputs(self) -> bool:
         """A binding for every variable, every bound topic in the log, binding types."""
         source, bindings = self.source, self.bindings
+        assert source is not None  # (open)
         active = [r for r in self.plan.requirements if r.error is None]
         self._check_bound(active)
         try:
@@ -191,12 +196,14 @@ class _LogRun:
     def _check_bound(self, active: list[RequirementPlan]) -> None:
         """Variables without a binding (or CSV column) make their requirements errors."""
         bindings, source = self.bindings, self.source
-        available = set(bindings.variables) if bindings is not None else set(source.columns)
+        assert source is not None  # (open)
+        # without bindings: a CSV trace (its columns)
+        available = set(bindings.variables) if bindings is not None else set(source.columns)  # type: ignore[attr-defined]
         for r in active:
             missing = [v for v in r.variables if v not in available]
             if missing:
                 where = (f"bindings ({bindings.source or '--bind'})" if bindings is not None
-                         else f"the CSV columns ({', '.join(source.columns)})")
+                         else f"the CSV columns ({', '.join(source.columns)})")  # type: ignore[attr-defined]
                 hints = [(m, closest(m, sorted(available))) for m in missing if "(" not in m]
                 hint = "; ".join([f"did you mean {h!r} for {m!r}?" for m, h in hints if h]
                                  + [call_hint(m) for m in missing if "(" in m])
@@ -208,6 +215,7 @@ class _LogRun:
         """Topics absent from the log: the tick topic ends the audit, a bound topic makes its
         requirements errors (``unknown`` when the damage may have taken it)."""
         bindings, source, verdicts, path = self.bindings, self.source, self.verdicts, self.path
+        assert bindings is not None and source is not None  # (checked with bindings only)
         if bindings.tick.topic is not None and bindings.tick.topic not in log_topics:
             msg = (f"{path}: the tick topic {bindings.tick.topic} is not in the log (it has "
                    f"{', '.join(log_topics) or 'no topics'})")
@@ -230,7 +238,7 @@ class _LogRun:
                                if t in log_topics_of(bindings.variables[v].topics))
                      for t in absent}
             has = (f"a CSV trace has one topic, /csv, with the columns "
-                   f"{', '.join(source.columns)}" if source.kind == "csv"
+                   f"{', '.join(source.columns)}" if source.kind == "csv"  # type: ignore[attr-defined]
                    else f"it has {', '.join(log_topics) or 'no topics'}")
             msg = ("; ".join(f"topic {t} (bound to {', '.join(users[t])}) is not in the log"
                              for t in absent) + f" ({has})")
@@ -246,6 +254,7 @@ class _LogRun:
         """Read the log for the requirements still active; a signal that fails makes its
         requirements errors and the log is read again for the others."""
         plan, source, verdicts = self.plan, self.source, self.verdicts
+        assert source is not None  # (open)
         result, b, active = None, None, []
         while True:
             active = [r for r in plan.requirements if verdicts[r.index].error is None
@@ -275,6 +284,7 @@ class _LogRun:
     def _record_source(self) -> None:
         """The log's damage, message counts, problems and span, from its source."""
         la, source = self.la, self.source
+        assert source is not None  # (open)
         la.partial = bool(source.partial) or la.partial
         if source.partial or la.damage_time_ns is None:
             la.damage_time_ns = source.damage_time
@@ -288,8 +298,10 @@ class _LogRun:
         la.end_time_ns = source.end_time
         check_nominal_rate(la, self.bindings)
         for r in self.plan.requirements:  # the measured rate in the nominal_rate hint
-            if r.rate_topic is not None and self.verdicts[r.index].error == r.error:
-                self.verdicts[r.index].error += rate_hint(source, r.rate_topic, la.messages)
+            v = self.verdicts[r.index]
+            # (rate_topic is set with the error)
+            if r.rate_topic is not None and v.error is not None and v.error == r.error:
+                v.error += rate_hint(source, r.rate_topic, la.messages)
 
     def _judge(self, result: LogPasses, active: list[RequirementPlan],
                b: Bindings | None) -> None:
@@ -376,14 +388,14 @@ class _LogRun:
         return None
 
 
-def log_engine(verdicts) -> str | None:
+def log_engine(verdicts: Iterable[Verdict]) -> str | None:
     """The log's ``engine`` figure: what decided its verdicts (:class:`~fretc.monitors.judge.
     Judgement`'s ``engine``), ``"mixed"`` when several did, None when none was decided."""
     engines = sorted({v.engine for v in verdicts if v.engine is not None})
     return engines[0] if len(engines) == 1 else ("mixed" if engines else None)
 
 
-def summarize_clocks(la, verdicts: list) -> None:
+def summarize_clocks(la: LogAudit, verdicts: list) -> None:
     """The log's figures from its requirements' clocks (each verdict has its own): the most
     ticks evaluated and warm-up ticks, the earliest first tick, every topic waited for, and
     after damage the end of the judged span. ``verdicts``: those without an error."""

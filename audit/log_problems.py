@@ -4,9 +4,16 @@ chunk: :func:`damage_before_topics`), and why a silent topic gave nothing."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import Any, TYPE_CHECKING
+
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem, FretcInputError
 from fretc.logs import open_log
+
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit
+    from fretc.logs.base import LogSource
 
 __all__ = ["DAMAGE_KINDS", "problem_json", "collect_problems", "silent_reasons", "damage_of",
            "damage_before_topics"]
@@ -23,7 +30,7 @@ def problem_json(p: DataProblem) -> dict:
             "end_time_ns": p.end_time, "detail": p.detail}
 
 
-def collect_problems(source, sampling, problems: dict[tuple, DataProblem],
+def collect_problems(source: LogSource, sampling: Any, problems: dict[tuple, DataProblem],
                      counts: dict[str, int]) -> None:
     """Add the problems of one pass (the source's and the clock's) to ``problems`` (kept
     once each) and ``counts`` ("kind topic" -> number, including those beyond the cap)."""
@@ -42,7 +49,8 @@ def collect_problems(source, sampling, problems: dict[tuple, DataProblem],
             counts[k] = max(counts.get(k, 0), n)
 
 
-def silent_reasons(silent, problems, lost=None) -> dict[str, str]:
+def silent_reasons(silent: Iterable[str], problems: Iterable[DataProblem],
+                   lost: dict | None = None) -> dict[str, str]:
     """Topic -> why it gave no message: messages present but not decoded (how many, and
     why: a schema or encoding that cannot be read, payloads that do not deserialize), or
     none in the log. ``lost``: the source's :attr:`fretc.logs.LogSource.lost`."""
@@ -64,7 +72,7 @@ def silent_reasons(silent, problems, lost=None) -> dict[str, str]:
     return out
 
 
-def damage_of(path: str, la) -> str | None:
+def damage_of(path: str, la: LogAudit) -> str | None:
     """Open ``path`` and read its topics; when that meets damage, mark ``la`` partial and
     return the reason (:func:`damage_before_topics`), else None (also when it cannot be
     opened at all: that is an input error, not damage)."""
@@ -76,7 +84,7 @@ def damage_of(path: str, la) -> str | None:
     return damage_before_topics(source, la)
 
 
-def damage_before_topics(source, la) -> str | None:
+def damage_before_topics(source: LogSource, la: LogAudit) -> str | None:
     """When finding the log's topics met damage (a log cut inside its only chunk, say): mark
     ``la`` partial with the problems, and return the reason in words (else None).
     The reason for the damage is kept even when nothing readable is left."""

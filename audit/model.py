@@ -6,12 +6,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 from fretc.compiler.codegen import monitor_source
 
 from fretc.signals.bindings import Bindings
 from fretc.audit.config import AuditConfig
+
+if TYPE_CHECKING:
+    from fretc.compiler.codegen import MonitorSource
+    from fretc.fretish.ast import Requirement
+    from fretc.compiler.semantics import Formalization
 
 __all__ = ["RequirementPlan", "AuditPlan"]
 
@@ -54,17 +59,17 @@ class RequirementPlan:
     _msource: Any = None
 
     @property
-    def formalization(self):
+    def formalization(self) -> Formalization | None:
         """The :class:`fretc.compiler.semantics.Formalization`, or None."""
         return self.compiled.formalization if self.compiled is not None else None
 
     @property
-    def requirement(self):
+    def requirement(self) -> Requirement | None:
         """The parsed requirement (:class:`fretc.fretish.ast.Requirement`), or None."""
         return self.compiled.requirement if self.compiled is not None else None
 
     @property
-    def monitor_source(self):
+    def monitor_source(self) -> MonitorSource:
         """codegen's :class:`~fretc.compiler.codegen.MonitorSource` (the LTL3 automata tables the
         judge runs, :mod:`fretc.monitors.judge`), built on first use and kept."""
         if self._msource is None:
@@ -126,7 +131,7 @@ class AuditPlan:
     #: remarks on the inputs (bound variables no requirement uses)
     warnings: list[str] = field(default_factory=list)
     #: binding files with ``[logs]``: (selector, file, the plan for the logs it selects)
-    variants: list[tuple[Any, str, "AuditPlan"]] = field(default_factory=list)
+    variants: list[tuple[Any, str, AuditPlan]] = field(default_factory=list)
     #: items of ReqIF / Doorstop sources without FRETish text (RequirementEntry): listed as
     #: not formalized, never audited
     not_formalized: list = field(default_factory=list)
@@ -151,7 +156,7 @@ class AuditPlan:
     def bindings_json(self) -> dict | None:
         """The bindings as the audit JSON gives them (per log with ``[logs]``)."""
         if self.variants:
-            variables = {}
+            variables: dict[str, Any] = {}
             for _sel, _f, sub in self.variants:
                 for name, v in (sub.bindings_json() or {}).get("variables", {}).items():
                     variables.setdefault(name, v)
@@ -163,7 +168,7 @@ class AuditPlan:
         b = self.bindings
         if b is None:
             return None
-        tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns is not None
+        tick: dict[str, Any] = ({"period_ns": b.tick.period_ns} if b.tick.period_ns is not None
                 else {"topic": b.tick.topic})
         if b.tick.nan != "unread":  # a binding file's own NaN policy ([tick] nan)
             tick["nan"] = b.tick.nan

@@ -3,6 +3,8 @@ comparisons its bindings are made of, read in a second pass over the log."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from fretc.signals.bindings import Bindings, operand_signals
 from fretc.monitors.stepwise import to_python
 from fretc.common.problems import LogError, SignalError
@@ -11,11 +13,18 @@ from fretc.logs import open_log
 from fretc.audit.model import AuditPlan
 from fretc.audit.passes import ClockKey, clock_key
 
+if TYPE_CHECKING:
+    from fretc.audit.model import RequirementPlan
+    from fretc.audit.passes import ClockPass
+    from fretc.audit.verdict import Verdict
+    from fretc.logs.base import LogSource
+
 __all__ = ["operand_values"]
 
 
-def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdicts,
-                   passes, first=None) -> None:
+def operand_values(path: str, plan: AuditPlan, bindings: Bindings,
+                   active: list[RequirementPlan], verdicts: dict[int, Verdict],
+                   passes: dict[int, ClockPass], first: LogSource | None = None) -> None:
     """Evidence of violations: the numbers behind their boolean variables (the operands of
     the comparisons a binding is made of, :func:`fretc.signals.bindings.operand_signals`) at the
     ticks whose values are shown. A second streaming pass over the log, only when something
@@ -67,6 +76,7 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings, active, verdi
             if verdicts[r_index] is v:
                 times = res.times
         vals = got.get((key, aux_name), {})
+        assert times is not None  # (v is the verdict of one of the passes)
         rows = [(t, int(times[t]), vals[t]) for t in ticks if t in vals]
         if rows:
             v.values[label] = rows

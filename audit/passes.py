@@ -12,9 +12,9 @@ change them; requirements whose variables are the same share one sampled stream
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +27,9 @@ from fretc.logs import CSV_TOPIC
 from fretc.audit.columns import TickColumns
 from fretc.audit.gaps import gaps_of_clock, inner_gaps, insert_gap_ticks, split_bridged, unknown_masks
 from fretc.audit.model import AuditPlan, RequirementPlan
+
+if TYPE_CHECKING:
+    from fretc.logs.base import LogSource
 
 __all__ = ["ClockPass", "ClockKey", "LogPasses", "run_passes", "cut_at_damage", "mark_gaps",
            "clock_key", "restrict", "expected_ticks", "lost_in_words", "MAX_TICKS"]
@@ -78,7 +81,7 @@ def restrict(b: Bindings, names: list[str]) -> Bindings:
                     b.header_lag_ns, b.source)
 
 
-def expected_ticks(source, bindings: Bindings | None) -> int | None:
+def expected_ticks(source: LogSource, bindings: Bindings | None) -> int | None:
     """Ticks the log should give: a CSV trace's rows, or its span over a fixed tick period
     (None when unknown: a topic tick, no span)."""
     if source.kind == "csv":
@@ -125,7 +128,7 @@ class _Clock:
 
 
 def _progress(source, expected: int | None, progress: Callable[[float], None]
-              ) -> Callable[[Any], None]:
+              ) -> Callable[[int, int], None]:
     """Report the fraction of the log read at tick time ``time`` (ns): by log time over the log's span, or
     by ticks over the ticks expected."""
     start_t, end_t = source.start_time, source.end_time
@@ -140,7 +143,7 @@ def _progress(source, expected: int | None, progress: Callable[[float], None]
     return report
 
 
-def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
+def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
                active: list[RequirementPlan],
                progress: Callable[[float], None] | None) -> LogPasses:
     """Read the log once: sample every clock of ``active``, keep the columns, then cut each
@@ -155,6 +158,8 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
     for r in active:
         groups.setdefault(clock_key(r, bindings), []).append(r)
     clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
+    stream: Iterator[tuple[Any, Any]]  # (clock key, TickBlock)
+    sampling: Any  # a GroupSampling, or the Sampling of a CSV trace
     if bindings is not None:
         sampling = sample_blocks(source, bindings,
                                  {key: (c.names, key.topics) for key, c in clocks.items()})
@@ -190,7 +195,7 @@ def run_passes(plan: AuditPlan, source, bindings: Bindings | None,
     return LogPasses(sampling, passes, failed, errors, gaps, bridged)
 
 
-def cut_at_damage(res: ClockPass, source, bindings: Bindings | None,
+def cut_at_damage(res: ClockPass, source: LogSource, bindings: Bindings | None,
                   topics: frozenset = frozenset()) -> None:
     """Keep only the ticks before the cut at the end of the log (../shared/DESIGN.md "Damage
     is a gap"): those strictly before :attr:`fretc.logs.LogSource.cut_start`, the start of
@@ -283,7 +288,7 @@ def _insert_first(res: ClockPass, at: int) -> None:
     res.tick_gaps = [0] + [i + 1 for i in res.tick_gaps]
 
 
-def lost_in_words(source, topics) -> str:
+def lost_in_words(source: LogSource, topics: Iterable[str]) -> str:
     """The messages of ``topics`` present but not decoded in the source's latest pass
     (:attr:`fretc.logs.LogSource.lost`), one clause per (kind, topic, channel), earliest first:
     how many, the channel, the first and last log time (ns) and why."""

@@ -13,9 +13,8 @@ Binding files that select their logs (``[logs]``) give one plan per file
 
 from __future__ import annotations
 
-import re
-
 import dataclasses
+import re
 import types
 from fractions import Fraction
 from pathlib import Path
@@ -123,6 +122,7 @@ def _build_plan(config: AuditConfig) -> AuditPlan:
     if config.tick_period is not None:
         for c, rp in zip(compiled, plans):
             if c.error is not None and rp.error is None:
+                assert period is not None  # (the --tick-period's)
                 rp.error = (f"{c.error} (the tick period {format_period(period)} comes from "
                             "--tick-period)")
     ok = [c for c, rp in zip(compiled, plans) if rp.error is None]
@@ -184,6 +184,7 @@ def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bin
     topic's nominal rate), or time units on a topic tick of undeclared rate, set
     ``rp.error``."""
     if config.tick_period is not None:
+        assert period is not None  # (the --tick-period's)
         if e.tick_period is not None and e.tick_period != period:
             rp.notes.append(f"durations converted with --tick-period "
                             f"{format_period(period)} instead of the declared "
@@ -193,7 +194,8 @@ def _with_tick_period(rp: RequirementPlan, e, config: AuditConfig, bindings: Bin
         return dataclasses.replace(e, tick_period=period)
     if e.tick_period is not None and period is not None and e.tick_period != period:
         rp.error = (f"{e.source}:{e.line}: {e.id} declares a tick period of "
-                    f"{format_period(e.tick_period)} but the bindings ({bindings.source}) "
+                    f"{format_period(e.tick_period)} but the bindings "
+                    f"({bindings.source if bindings is not None else None}) "
                     f"tick every {format_period(period)}: durations would convert with the "
                     "wrong period; make them equal (or pass --tick-period to override "
                     "both for this run)")
@@ -256,7 +258,7 @@ def _attach(rp: RequirementPlan, c, classes: dict[tuple[str, str], type],
         rp.error = "free-form"  # dropped by load_plan: not audited, not an error
     elif key in classes:
         rp.monitor_cls = classes[key]
-        names = list(rp.monitor_cls.VARIABLES)
+        names = list(rp.monitor_cls.VARIABLES)  # type: ignore[attr-defined]  # a generated monitor class
         rp.variables = names + [v for v in c.formalization.variables if v not in names]
         rp.notes.extend(c.formalization.warnings)
     elif not c.formalization.pt_causal:
@@ -311,14 +313,15 @@ def _plan_per_log(config: AuditConfig) -> AuditPlan | None:
         sub = load_plan(dataclasses.replace(config, bindings=tuple([str(f)] + plain),
                                             select_logs=False))
         variants.append((b.logs, str(f), sub))
-    anywhere = {n for _s, _f, sub in variants for n in sub.bindings.variables}
+    # (each variant has the bindings of its selecting file)
+    anywhere = {n for _s, _f, sub in variants if sub.bindings for n in sub.bindings.variables}
     union: dict[tuple[str, str], RequirementPlan] = {}
     for _s, _f, sub in variants:
         keep = []
         for r in sub.requirements:
             names = r.variables or (list(r.formalization.variables)
                                     if r.formalization is not None else [])
-            missing = [v for v in names if v not in sub.bindings.variables]
+            missing = [v for v in names if sub.bindings and v not in sub.bindings.variables]
             if missing and all(v in anywhere for v in missing):
                 continue  # bound by another selecting file: for its logs, not these
             keep.append(r)

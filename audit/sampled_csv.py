@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fretc.logs import open_log
 from fretc.logs.csv_source import SAMPLED_MARK
@@ -30,6 +31,9 @@ from fretc.signals import sample
 
 from fretc.audit.model import AuditPlan
 from fretc.audit.passes import restrict
+
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit
 
 __all__ = ["clock_notes", "csv_name", "sampled_variables", "write_sampled_csv"]
 
@@ -71,6 +75,7 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     names = sampled_variables(plan)
     if not names:
         raise ValueError("the requirements' variables have no bindings: nothing to sample")
+    assert plan.bindings is not None  # (names are bound)
     bindings = restrict(plan.bindings, names)
     source = open_log(log_path, msg_path=plan.config.msg_path)
     first = last = None
@@ -89,7 +94,7 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     return count, first, last
 
 
-def clock_notes(log_audit, ticks: int, first: int | None, last: int | None) -> list[str]:
+def clock_notes(log_audit: LogAudit, ticks: int, first: int | None, last: int | None) -> list[str]:
     """The requirements of ``log_audit`` (:class:`fretc.audit.verdict.LogAudit` of the same
     log) whose own clock is not the file's (another first or last tick, or another number
     of ticks): one sentence each."""

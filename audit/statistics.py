@@ -35,10 +35,14 @@ draws from one distribution of operating conditions (docs/guide/statistics.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 from fretc.audit.intervals import (MAX_MORE_RUNS, Counts, check_confidence, clopper_pearson,
                                    cluster_interval, decide, more_runs)
+
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["RequirementStatistics", "fleet_statistics", "plan_statistics", "clopper_pearson",
            "decide", "more_runs", "judge_counts", "statistical_exit", "UNKNOWN_POLICIES",
@@ -138,6 +142,7 @@ def judge_counts(st: RequirementStatistics, op: str | None, p: float | None) -> 
     if op is None:
         return
     st.bound = {"op": op, "p": p}
+    assert p is not None  # (an operator comes with its bound)
     st.verdict = decide(op, p, *st.interval)
     if st.blocked is not None:
         st.verdict, st.why = "undecided", st.blocked
@@ -260,7 +265,7 @@ def _count_triggers(st: RequirementStatistics, verdicts: list, policy: str) -> N
                       "them out with --unknown-runs exclude")
 
 
-def plan_statistics(plan, logs: list, confidence: float = 0.95, unknown: str = "worst-case",
+def plan_statistics(plan: AuditPlan, logs: list[LogAudit], confidence: float = 0.95, unknown: str = "worst-case",
                     trial: str = "trigger") -> list[RequirementStatistics] | None:
     """The fleet statistics of an audit plan's requirements
     (:class:`fretc.audit.model.AuditPlan`) over ``logs``, or None when the audit is of one

@@ -24,6 +24,8 @@ satisfied or violated; the others are counted apart, never as trials of either o
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from fretc.fretish import ast as A
@@ -32,6 +34,9 @@ from fretc.monitors.judge3 import Unknowns, possible_trigger
 from fretc.monitors.obligations import ObligationChecker
 
 from fretc.audit.damage import open_reason
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["Trials", "trigger_trials", "trigger_outcomes", "TIMED_WINDOWS"]
 
@@ -62,7 +67,7 @@ class Trials:
                 "unknown": self.unknown, "hidden": self.hidden}
 
 
-def trigger_trials(req: A.Requirement, columns, n: int, duration_ticks: int | None,
+def trigger_trials(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int, duration_ticks: int | None,
                    unknowns: Unknowns | None = None, damaged: bool = False) -> Trials:
     """The :class:`Trials` of ``req`` on a trace of ``n`` ticks (>= 1; module docstring):
     the outcomes of :func:`trigger_outcomes` counted; arguments and errors as there."""
@@ -72,8 +77,9 @@ def trigger_trials(req: A.Requirement, columns, n: int, duration_ticks: int | No
     return out
 
 
-def trigger_outcomes(req: A.Requirement, columns, n: int, duration_ticks: int | None,
-                     unknowns: Unknowns | None = None, damaged: bool = False):
+def trigger_outcomes(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+                     duration_ticks: int | None, unknowns: Unknowns | None = None,
+                     damaged: bool = False) -> Iterator[tuple[int, str]]:
     """Each trigger of ``req`` on a trace of ``n`` ticks (>= 1) with its outcome, in tick
     order: ``(t, kind)``, ``kind`` one of ``satisfied``, ``violated``, ``cut``, ``unknown``
     (module docstring).

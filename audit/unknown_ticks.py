@@ -21,6 +21,7 @@ the end").
 from __future__ import annotations
 
 import numpy as np
+from typing import TYPE_CHECKING
 
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.audit.passes import ClockPass
@@ -29,10 +30,17 @@ from fretc.monitors.judge3 import Unknowns, definite_evidence, possible_trigger
 from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
 from fretc.monitors.vectorized import VectorizeError
 
+if TYPE_CHECKING:
+    from fretc.monitors.interval import Evidence
+    from fretc.monitors.judge import Judgement
+    from fretc.audit.verdict import Verdict
+    from fretc.audit.model import RequirementPlan
+
 __all__ = ["judge_three"]
 
 
-def judge_three(r, res: ClockPass, v, j, nan_unknown: bool, unknown: np.ndarray):
+def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, nan_unknown: bool,
+                unknown: np.ndarray) -> tuple[bool | None, Evidence | None, str, int | None]:
     """The verdict of ``r`` over ``res`` with unknown ticks ``unknown`` (bool array over its
     ticks: :func:`fretc.audit.finalize.unknown_of`; module docstring), from the judge's
     result ``j`` over the ticks as sampled (its interval evidence).
@@ -42,6 +50,7 @@ def judge_three(r, res: ClockPass, v, j, nan_unknown: bool, unknown: np.ndarray)
         False (violated; ``evidence`` has only definite failed triggers), or None when the
         verdict (``unknown``) was set here; the three-valued LTL3 verdict and its tick.
     """
+    assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     n = len(res.times)
     ev3 = ThreeValued(res.columns, res.unknown, n, nan_unknown)
     lo, hi = ev3.pair(r.formalization.pt)

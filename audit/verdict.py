@@ -393,7 +393,7 @@ EXIT_CODES = (
 )
 
 
-def incomplete(la: "LogAudit") -> bool:
+def incomplete(la: LogAudit) -> bool:
     """The log was not audited completely: partial (damaged, cut short), data problems
     found while reading it, or a verdict that is neither satisfied, vacuous, violated nor
     error (e.g. ``unknown`` at damage)."""

@@ -8,7 +8,7 @@ import multiprocessing as mp
 import queue as queue_mod
 from collections.abc import Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from typing import Any
+from typing import Any, Protocol
 
 from fretc.audit.verdict import LogAudit
 from fretc.audit.config import AuditConfig
@@ -42,8 +42,22 @@ def _worker_audit(index: int, path: str):
     return index, audit_log(plan, path, cb)
 
 
-def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=None
-               ) -> list[LogAudit]:
+class LogProgress(Protocol):
+    """What the audit of several logs tells as it goes (:class:`fretc.reports.terminal.
+    AuditProgress` shows it): log ``index`` (of ``path``) started, the fraction of it read,
+    its audit done."""
+
+    def start(self, index: int, path: str) -> None:
+        """Log ``index`` (``path``) is being read."""
+
+    def update(self, index: int, fraction: float) -> None:
+        """``fraction`` (0 to 1) of log ``index`` read."""
+
+    def done(self, index: int, la: LogAudit) -> None:
+        """Log ``index`` audited: ``la``."""
+
+def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1,
+               progress: LogProgress | None = None) -> list[LogAudit]:
     """Audit ``paths`` (from :func:`find_logs`), ``jobs`` at a time in worker processes.
 
     Args:
@@ -66,7 +80,7 @@ def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=No
     try:
         ctx = mp.get_context("fork")
     except ValueError:  # pragma: no cover - platforms without fork
-        ctx = mp.get_context()
+        ctx = mp.get_context()  # type: ignore[assignment]  # (a context all the same)
     q = ctx.Queue() if progress is not None else None
     _WORKER["plan"] = plan  # inherited by forked workers
     with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
@@ -87,7 +101,8 @@ def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1, progress=No
                         break
                     except Exception:
                         break
-                    progress.update(i, frac)
+                    if progress is not None:  # (q is made with it)
+                        progress.update(i, frac)
             for fut in done:
                 i, la = fut.result()
                 results[i] = la

@@ -130,7 +130,7 @@ def plain_iteration(path: Path) -> tuple[float, int]:
     n = 0
     stores = {}
     with open(path, "rb") as f:
-        for schema, channel, message in make_reader(f).iter_messages(log_time_order=True):
+        for schema, _channel, message in make_reader(f).iter_messages(log_time_order=True):
             st = stores.get(schema.id)
             if st is None:
                 st = get_typestore(Stores.EMPTY)

@@ -148,8 +148,7 @@ def _env(root: Path, cache: str) -> dict:
 def run_child(cmd, env, cwd):
     """(CPU seconds, peak RSS MB, stdout) of one child run to completion."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    proc = subprocess.run(cmd, env=env, cwd=cwd, stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE)
+    proc = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode not in (0, 1):
         raise SystemExit(f"{' '.join(map(str, cmd))} exited {proc.returncode}:\n"

@@ -128,7 +128,8 @@ def main() -> None:
     print(f"\n{'command (start-up included)':40s} {'wall s':>8s}")
     for name, extra in (("fretc audit -j 2", ["-j", "2"]), ("fretc audit --ray", ["--ray"])):
         target = workdir / f"fleet_{name.split()[-1].strip('-')}.json"
-        w, _c, proc = measure(lambda: subprocess.run(base + extra + ["--json", str(target)],
+        # measure calls the lambda at once: extra and target are this iteration's
+        w, _c, proc = measure(lambda: subprocess.run(base + extra + ["--json", str(target)],  # noqa: B023
                                                      capture_output=True, text=True))
         if proc.returncode not in (0, 1):
             print(proc.stderr[-2000:])

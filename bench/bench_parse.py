@@ -109,7 +109,7 @@ def best_times(runs: dict, texts: list, rounds: int) -> dict:
     """name -> sum over 100-sentence chunks of the best CPU time of each chunk."""
     chunks = [texts[i:i + 100] for i in range(0, len(texts), 100)]
     best = {name: [float("inf")] * len(chunks) for name in runs}
-    for name, run in runs.items():       # warm-up: tables loaded, words known
+    for run in runs.values():       # warm-up: tables loaded, words known
         for t in texts:
             run(t)
     for _ in range(rounds):

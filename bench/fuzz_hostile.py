@@ -60,7 +60,6 @@ import argparse
 import asyncio
 import io
 import json
-import os
 import random
 import resource
 import struct
@@ -152,7 +151,7 @@ def forge_index(rng: random.Random, data: bytes) -> bytes:
                 struct.pack_into("<Q", d, k, rng.choice(big))
         if opcode == 0x0F and rng.random() < 0.5:  # DataEnd: data CRC "not computed"
             struct.pack_into("<I", d, pos + 9, 0)
-    for pos, opcode, length in list(_records(d, start, len(d) - 37)):
+    for pos, opcode, _length in list(_records(d, start, len(d) - 37)):
         if opcode != 0x08 or rng.random() < 0.4:
             continue
         field = rng.randrange(5)

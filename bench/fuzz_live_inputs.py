@@ -65,7 +65,7 @@ def _script(rng: random.Random):
         for step in steps:
             if step in ("good", "bad_value", "old_times"):
                 x = -1.0 if step == "bad_value" else 1.0
-                for i in range(5):
+                for _i in range(5):
                     lt = t - 10_000 * MS if step == "old_times" else t
                     await ws.send(message_data(sid, lt, f64(x)))
                     t += 50 * MS
@@ -88,7 +88,7 @@ def _script(rng: random.Random):
                 await ws.send(advertise([(cid, "/a")]))
                 try:
                     sid = await subscription(ws, cid, timeout=3)
-                except (asyncio.TimeoutError, ConnectionError):
+                except (TimeoutError, ConnectionError):
                     return
         await asyncio.sleep(0.2)
         if facts["closed"]:

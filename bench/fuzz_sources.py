@@ -206,7 +206,7 @@ def run_explain(rng: random.Random, tmp: Path) -> list[str]:
 
     n = rng.choice([0, 1, 3, 40, 41, 1000, 10**6])
     timing = rng.choice([f"within {n} ticks", f"for {n} ticks", f"after {n} ticks",
-                         "immediately", "eventually", "always", f"until q"])
+                         "immediately", "eventually", "always", "until q"])
     cond = rng.choice(["", "upon p ", "whenever p "])
     fret = tmp / "e.fret"
     rid = rng.choice(["R1", "r1", "R-1.a", "R_1"])

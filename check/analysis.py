@@ -41,6 +41,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any, TYPE_CHECKING
 
 from fretc.compiler import ir
 from fretc.check.budget import Budget
@@ -50,6 +51,10 @@ from fretc.check.findings import ids as _ids
 from fretc.check.findings import subsets_text
 from fretc.check.items import CheckItem, atom_variables, make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
+
+if TYPE_CHECKING:
+    from fretc.check.witness import Judge
+    from fretc.compiler.build import Compiled
 
 __all__ = ["CheckItem", "CheckResult", "Finding", "Checker", "check_requirements",
            "atom_variables", "make_item", "ENGINES", "SPOT_MAX_BOUND"]
@@ -117,13 +122,13 @@ def _tri(ans) -> object:
 
 
 # --------------------------------------------------------------------------- entry point
-def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
+def check_requirements(compiled: Sequence[Compiled], *, budget: Budget | None = None,
                        mus_budget: int = MUS_BUDGET, redundancy: bool = True,
                        vacuity: bool = True, witness_dir: str | None = None,
                        inputs: Sequence[str] | None = None,
                        outputs: Sequence[str] | None = None,
                        worker: SpotWorker | None = None,
-                       witness_judge=None, engine: str = "auto",
+                       witness_judge: Judge | None = None, engine: str = "auto",
                        deadline: float | None = None) -> CheckResult:
     """Check compiled requirements (:class:`fretc.compiler.build.Compiled`, in file order).
 
@@ -162,7 +167,7 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
         else:
             items.append(make_item(len(items), c))
     own = worker is None
-    if own:
+    if worker is None:
         worker = SpotWorker(budget, deadline=deadline)
     try:
         checker = Checker(items, worker, mus_budget, engine=engine)
@@ -173,6 +178,7 @@ def check_requirements(compiled: Sequence, *, budget: Budget | None = None,
                                                        outputs or [])
         if witness_dir is not None:
             from fretc.check.witness import write_witnesses  # lazy: numpy, if asked
+            assert witness_judge is not None  # (refused above)
             write_witnesses(checker, result, witness_dir, witness_judge)
         _figures(checker, worker, result)
     finally:
@@ -208,7 +214,7 @@ def _figures(checker: Checker, worker: SpotWorker, result: CheckResult) -> None:
 
 
 def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool) -> None:
-    status = {x.index: {"id": x.id, "source": x.compiled.entry.source,
+    status: dict[int, dict[str, Any]] = {x.index: {"id": x.id, "source": x.compiled.entry.source,
                         "line": x.compiled.entry.line, "text": x.compiled.text,
                         "component": None, "satisfiable": None, "non_vacuous": None,
                         "redundant": None, "findings": []} for x in ck.items}
@@ -315,7 +321,7 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
                 f"non-vacuity of {x.id} ({x.location}) unknown: " + WHY_UNKNOWN))
             continue
         found = ck.minimal_subsets(
-            comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])),
+            comp, [x], lambda s, x=x: _neg(ck.sat([y.phi for y in s] + [x.trigger])),  # type: ignore[misc]  # (x=x: this x)
             known_bad=True)
         names = [_ids(s) for s in found.subsets]
         if names and names[0] == [x.id]:

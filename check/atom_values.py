@@ -34,11 +34,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from fractions import Fraction
+from typing import Any
 
 from fretc.check.numeric_abstraction import simple_comparison
 from fretc.compiler import ir
 from fretc.compiler.evaluate import INTERPRETED_FUNCTIONS, ft_at, series
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 from fretc.compiler.printers import to_smv
 
 __all__ = ["free_atoms", "concrete_rows", "RLIMIT"]
@@ -96,12 +97,12 @@ class _Terms:
         module docstring's list."""
         z3 = self.z3
         if n.op == "var":
-            return self.var(n.name)
+            return self.var(name_of(n))
         if n.op == "fn" and n.name not in INTERPRETED_FUNCTIONS:
             return self.var(to_smv(n))
         if n.op == "num":
             try:
-                return _real(z3, Fraction(n.name))
+                return _real(z3, Fraction(name_of(n)))
             except (ValueError, ZeroDivisionError):
                 return None
         if n.op == "pre":  # FRET's preReal(init, x): init at the first tick, else x before
@@ -133,7 +134,7 @@ class _Terms:
         if a is None or b is None:
             return None
         return {"=": a == b, "!=": a != b, "<": a < b, "<=": a <= b, ">": a > b,
-                ">=": a >= b}[n.name]
+                ">=": a >= b}[name_of(n)]
 
 
 def _real(z3, q: Fraction):
@@ -189,13 +190,13 @@ def concrete_rows(rows: list[dict], letters: list[dict], atoms: dict[str, Node]
     if not atoms:
         return rows
     import z3
-    cache: dict[tuple, dict | None] = {}
+    cache: dict[tuple[Any, ...], dict | None] = {}
     stateful = any(ir.has_op(a, ("pre",)) for a in atoms.values())
     names = sorted(atoms)
     out: list[dict] = []
     for row, letter in zip(rows, letters):
         prev = out[-1] if out else None
-        key = tuple((k, letter.get(k)) for k in names)
+        key: tuple[Any, ...] = tuple((k, letter.get(k)) for k in names)
         if stateful:
             key += (tuple(sorted(prev.items())) if prev else None,)
         if key not in cache:

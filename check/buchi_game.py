@@ -277,8 +277,8 @@ def solve_buchi_game(pts: Sequence[Node], liveness: Sequence[Node], inputs: Sequ
             out["inputs"], out["run"] = None, []
             if lasso is not None:
                 out["inputs"] = tuple([letter for letter, _c in part] for part in lasso)
-                out["run"] = _play(game, *([c for _l, c in part] for part in lasso),
-                                   2 * _longest_bound([*pts, *liveness]) + 4)
+                prefix, cycle = ([c for _l, c in part] for part in lasso)
+                out["run"] = _play(game, prefix, cycle, 2 * _longest_bound([*pts, *liveness]) + 4)
         return out
     finally:
         game.automata, game.acc, game._step = [], [], None

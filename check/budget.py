@@ -30,6 +30,7 @@ that 20 requirements with bounds near 10^6 ticks stay under 1 GB (docs/guide/che
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = ["Budget", "BudgetSpent", "RunStopped", "Meter", "DEFAULT_WORK", "DEFAULT_MEMORY",
            "MIN_MEMORY", "MUS_BUDGET", "UNKNOWN", "STEP_KNEE", "DEFAULT_QUERY_CPU", "step_cost",
@@ -106,7 +107,7 @@ class Budget:
             raise ValueError(f"the memory budget must be at least {MIN_MEMORY} BDD nodes, "
                              f"not {self.memory}")
 
-    def share(self, fraction: float) -> "Budget":
+    def share(self, fraction: float) -> Budget:
         """This budget with ``fraction`` of its work (at least 1 unit), the same memory and
         CPU limit."""
         return Budget(max(1, int(self.work * fraction)), self.memory, self.cpu)
@@ -149,7 +150,7 @@ class Meter:
         #: steps through (set by the engine, :meth:`relation`)
         self.base = 0
 
-    def relation(self, b, *bdds) -> None:
+    def relation(self, b: Any, *bdds: Any) -> None:  # the buddy module, its BDDs
         """Set :attr:`base` to the cost of a step through ``bdds`` (the relation each
         iteration reads: :func:`step_cost` of its nodes); raises :class:`BudgetSpent` when
         one step is past what is left of the budget (the step is not taken: one BDD
@@ -167,7 +168,7 @@ class Meter:
         if self.spent > self.limit:
             raise BudgetSpent(self.budget.work_spent())
 
-    def nodes(self, b, *bdds) -> None:
+    def nodes(self, b: Any, *bdds: Any) -> None:
         """Pay one iteration: the BDD nodes of ``bdds`` (``b``: the buddy module) and
         :attr:`base`."""
         self.charge(self.base + sum(b.bdd_nodecount(x) for x in bdds))

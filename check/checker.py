@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
@@ -62,7 +63,7 @@ class Checker:
         allf += [x.phi_ft for x in self.items] + [x.trigger_ft for x in self.items
                                                   if x.trigger_ft]
         self.numeric = NumericAbstraction.of(allf)
-        self._cache: dict[str, object] = {}
+        self._cache: dict[tuple, Any] = {}
         #: formula -> ("safe" | "goal", pt formula, requirement index), on infinite runs /
         #: finite traces (:mod:`fretc.check.monitor_sat`)
         self.monitored = monitored_forms(self.items)
@@ -180,7 +181,8 @@ class Checker:
                 why = (f"{self.spent} queries on these requirements spent their whole work "
                        "budget, so this one was not tried (a larger --budget tries it)")
                 fresh = ("spent", tuple(query)) not in self._cache
-                got = self._cached(("spent", tuple(query)), lambda: self.worker.refuse(why))
+                # _cached calls the lambda at once (never later): why is this iteration's
+                got = self._cached(("spent", tuple(query)), lambda: self.worker.refuse(why))  # noqa: B023
                 self.not_tried += fresh
                 break
             fresh = (engine, tuple(query)) not in self._seen
@@ -257,7 +259,7 @@ class Checker:
     # ---------------------------------------------------------------- subsets
     def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],
                         bad: Callable[[list[CheckItem]], object],
-                        known_bad: bool = False) -> "Subsets":
+                        known_bad: bool = False) -> Subsets:
         """Minimal subsets S of ``pool`` (each containing ``must``) with ``bad(S)`` True,
         smallest first; ``bad`` must be monotone (a superset of a bad set is bad).
 

@@ -37,10 +37,15 @@ from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
 from itertools import product
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from fretc.compiler import ir
+
+if TYPE_CHECKING:
+    from fretc.check.budget import Budget
+    from fretc.compiler.build import Compiled
 
 __all__ = ["Distinction", "distinguish", "MAX_LETTERS", "MAX_STATES", "DEFAULT_MAX_TICKS"]
 
@@ -109,9 +114,9 @@ def _domains(formulas) -> dict[str, list]:
     for f in formulas:
         for n in ir.walk(f):
             if n.op == "ap":
-                kinds.setdefault(n.name, "bool")
+                kinds.setdefault(ir.name_of(n), "bool")
             elif n.op == "var":
-                kinds[n.name] = "num"
+                kinds[ir.name_of(n)] = "num"
             elif n.op == "cmp":
                 sc = simple_comparison(n)
                 if sc is not None:
@@ -211,7 +216,7 @@ def _verdict_words(ca, cb, trace: list[dict]) -> tuple[str, str] | None:
     return out[0], out[1]
 
 
-def _replay(classes, trace: list[dict]) -> tuple[bool, bool]:
+def _replay(classes, trace: list[dict]) -> tuple[bool | None, bool | None]:
     """The two monitors' verdicts at the end of ``trace``."""
     out = []
     for cls in classes:
@@ -227,8 +232,9 @@ def _columns(trace: list[dict], names) -> dict[str, list]:
     return {v: [row[v] for row in trace] for v in names}
 
 
-def distinguish(ca, cb, *, max_ticks: int = DEFAULT_MAX_TICKS, max_states: int = MAX_STATES,
-                budget=None, fork: bool = True) -> Distinction:
+def distinguish(ca: Compiled, cb: Compiled, *, max_ticks: int = DEFAULT_MAX_TICKS,
+                max_states: int = MAX_STATES, budget: Budget | None = None,
+                fork: bool = True) -> Distinction:
     """Compare the compiled requirements ``ca`` and ``cb`` (:class:`fretc.compiler.build.Compiled`,
     both formalized, different ids): module docstring. ``budget``: the solver queries' work
     budget (:class:`fretc.check.budget.Budget`; default the defaults); ``fork``: run Spot in
@@ -242,15 +248,17 @@ def distinguish(ca, cb, *, max_ticks: int = DEFAULT_MAX_TICKS, max_states: int =
             raise ValueError(f"{c.id} has no formalization: {c.error or 'free-form'}")
     if ca.id == cb.id:
         raise ValueError("the two requirements must have different ids")
-    fa, fb = ca.formalization.ft, cb.formalization.ft
+    form_a, form_b = ca.formalization, cb.formalization
+    assert form_a is not None and form_b is not None  # (refused above)
+    fa, fb = form_a.ft, form_b.ft
     out = Distinction(None)
-    read = [fa, fb] + [f for f in (ca.formalization.pt, cb.formalization.pt) if f is not None]
+    read = [fa, fb] + [f for f in (form_a.pt, form_b.pt) if f is not None]
     blocked = _atoms_ok(read)
     classes = _monitor_classes(ca, cb)
     domains = _domains(read) if blocked is None else {}
     # the trace's variables: the formulas' (ft, and pt, which may read one ft does not)
-    names = list(dict.fromkeys(list(ca.formalization.variables)
-                               + list(cb.formalization.variables) + list(_kinds(read))))
+    names = list(dict.fromkeys(list(form_a.variables)
+                               + list(form_b.variables) + list(_kinds(read))))
     count = int(np.prod([len(v) for v in domains.values()], dtype=float)) if domains else 1
     exhausted = False
     if blocked is None and count <= MAX_LETTERS:
@@ -295,13 +303,13 @@ def _kinds(formulas) -> dict[str, str]:
     for f in formulas:
         for n in ir.walk(f):
             if n.op == "ap":
-                out.setdefault(n.name, "bool")
+                out.setdefault(ir.name_of(n), "bool")
             elif n.op == "var":
-                out[n.name] = "float"
+                out[ir.name_of(n)] = "float"
     return out
 
 
-def _symbolic(ck, fa, fb, kinds) -> tuple[object, bool]:
+def _symbolic(ck, fa, fb, kinds) -> tuple[Any, bool]:  # (rows, None or UNKNOWN; exact)
     """The pt monitors' fixed points (:mod:`fretc.check.monitor_sat`, BuDDy), in both
     directions (``ft_A & !ft_B``, ``!ft_A & ft_B``): (rows of the shorter distinguishing
     trace, None when neither direction has one, or UNKNOWN; whether the monitors answered

@@ -4,7 +4,12 @@ trace that shows it."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fretc.check.items import CheckItem
 
 __all__ = ["Finding", "ids", "subsets_text"]
 
@@ -40,7 +45,7 @@ class Finding:
                 "expected": self.expected, "details": self.details}
 
 
-def ids(items) -> list[str]:
+def ids(items: Iterable[CheckItem]) -> list[str]:
     """The requirement ids of check items, in order."""
     return [x.id for x in items]
 

@@ -25,9 +25,13 @@ report says the environment *may* have to react, never that it must.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, TYPE_CHECKING
 
 from fretc.check.budget import BudgetSpent, Meter
+
+if TYPE_CHECKING:
+    from fretc.check.safety_game import Game
 
 __all__ = ["recurrence", "keep_forever", "defeats", "post", "input_lasso", "prefix_search",
            "MAX_LASSO", "SEARCH_SETS"]
@@ -38,7 +42,9 @@ MAX_LASSO = 4
 SEARCH_SETS = 4000
 
 
-def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
+def recurrence(b: Any, z: Any, accs: Sequence, prepare: Callable[[Any, Any], Any],
+               step: Callable[[Any, Any], Any], tick: Callable[[Any], Any],
+               lost: Callable[[Any], Any] | None = None) -> Any:  # b: buddy; BDDs
     """The states of ``z`` (a BDD of states) from which each acceptance set of ``accs``
     can be met infinitely often: ``nu Z. AND_j mu Y. Z & step(prepare(acc_j, Z), Y)``
     (Emerson & Lei, LICS 1986; ``z`` itself when ``accs`` is empty). ``prepare(acc, Z)``:
@@ -68,7 +74,7 @@ def recurrence(b, z, accs: Sequence, prepare, step, tick, lost=None):
     return z
 
 
-def defeats(game, cubes: list, start: int, meter: Meter) -> bool:
+def defeats(game: Game, cubes: list, start: int, meter: Meter) -> bool:
     """Does the input lasso ``cubes[:start]`` then ``cubes[start:]`` forever (BDD cubes of
     the input atoms) defeat every controller of ``game`` (a :class:`fretc.check.safety_game.
     Game` or :class:`fretc.check.buchi_game._BuchiGame`): is there no output sequence along it
@@ -77,7 +83,7 @@ def defeats(game, cubes: list, start: int, meter: Meter) -> bool:
     return game.b.bdd_and(game.init, _keep(game, cubes, start, meter)[0]) == game.b.bddfalse
 
 
-def keep_forever(game, cube, meter: Meter):
+def keep_forever(game: Game, cube: Any, meter: Meter) -> Any:  # BDDs
     """The states from which, with the inputs ``cube`` at every tick, some output sequence
     keeps every requirement of ``game`` (and meets each acceptance set infinitely often)."""
     return _keep(game, [cube], 0, meter)[0]
@@ -110,7 +116,7 @@ def _keep(game, cubes: list, start: int, meter: Meter) -> list:
         z = new
 
 
-def post(game, states, cube):
+def post(game: Game, states: Any, cube: Any) -> Any:  # BDDs
     """The states ``game``'s monitors can be in one tick after ``states`` with the inputs
     ``cube``, over every output that keeps every requirement."""
     b = game.b
@@ -119,7 +125,7 @@ def post(game, states, cube):
                                       every))
 
 
-def input_lasso(game, letters: list, meter: Meter) -> tuple[tuple | None, str]:
+def input_lasso(game: Game, letters: list, meter: Meter) -> tuple[tuple | None, str]:
     """The shortest input lasso that defeats every controller (module docstring), as
     ``(prefix, cycle)`` of indices into ``letters`` (``(values, cube)`` pairs, the input
     letters the environment may set), up to :data:`MAX_LASSO` ticks, then longer prefixes
@@ -151,19 +157,19 @@ def input_lasso(game, letters: list, meter: Meter) -> tuple[tuple | None, str]:
                   "react to the outputs")
 
 
-def prefix_search(game, letters: list, keeps: list, meter: Meter) -> tuple | None:
+def prefix_search(game: Game, letters: list, keeps: list, meter: Meter) -> tuple | None:
     """Breadth first over input prefixes: the first prefix after which every state the
     monitors can be in (:func:`post`) is outside ``keeps[c]`` (:func:`keep_forever` of
     letter ``c``) for some ``c``, as ``(prefix indices, [c])``; None when every set of
     states was visited. Raises :class:`fretc.check.budget.BudgetSpent` past the meter's budget
     or past :data:`SEARCH_SETS` sets."""
     b = game.b
-    frontier = [(game.init, ())]
+    frontier: list[tuple[Any, tuple[int, ...]]] = [(game.init, ())]  # (states BDD, letters)
     seen = {game.init.id()}
     while frontier:
         if len(seen) > SEARCH_SETS:
             raise BudgetSpent(f"{SEARCH_SETS} sets of states searched")
-        nxt_frontier = []
+        nxt_frontier: list[tuple[Any, tuple[int, ...]]] = []
         for states, seq in frontier:
             for c, keep in enumerate(keeps):
                 if b.bdd_and(states, keep) == b.bddfalse:

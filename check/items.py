@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from fretc.fretish import ast as A
 
@@ -16,6 +17,9 @@ from fretc.compiler.ir import Node
 from fretc.compiler.semantics import SemanticsError, formalize
 
 from fretc.check.safety_game import pt_monitors_ft_inf
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 __all__ = ["CheckItem", "make_item", "atom_variables", "monitored_forms"]
 
@@ -37,7 +41,7 @@ class CheckItem:
     """
 
     index: int
-    compiled: object
+    compiled: Compiled
     phi: Node
     phi_ft: Node
     trigger: Node | None
@@ -62,10 +66,11 @@ def _with_response(req: A.Requirement, value: bool) -> A.Requirement:
     return dataclasses.replace(req, response=A.BoolLit(value))
 
 
-def make_item(index: int, compiled) -> CheckItem:
+def make_item(index: int, compiled: Compiled) -> CheckItem:
     """A :class:`CheckItem` of a formalized :class:`fretc.compiler.build.Compiled`."""
     f = compiled.formalization
     req = compiled.requirement
+    assert f is not None and req is not None  # (a formalized requirement)
     period = compiled.entry.tick_period
     trig = trig_ft = trig_pt = last = None
     pt = f.pt if pt_monitors_ft_inf(f) else None
@@ -102,7 +107,9 @@ def monitored_forms(items: Sequence[CheckItem]) -> dict[bool, dict[Node, tuple]]
         last = out[True]
         if x.trigger_ft is not None and x.trigger_pt_last is not None:
             last.setdefault(x.trigger_ft, ("last", x.trigger_pt_last, x.index))
-        full = x.compiled.formalization.pt
+        f = x.compiled.formalization
+        assert f is not None  # (an item is made of a formalized requirement)
+        full = f.pt
         if x.pt is None and full is not None:
             last[x.phi_ft] = ("last", full, x.index)
             last[ir.not_(x.phi_ft)] = ("last", ir.not_(full), x.index)

@@ -34,6 +34,7 @@ sets. The BDDs are BuDDy's, shipped with Spot.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
@@ -49,7 +50,7 @@ __all__ = ["decide"]
 
 def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
            finite: bool, length: int | None = None, budget: Budget | None = None,
-           liveness: Sequence[Node] = (), last: Sequence[Node] = ()):
+           liveness: Sequence[Node] = (), last: Sequence[Node] = ()) -> tuple[Any, Any]:
     """Is there a run on which every pt formula of ``safe`` holds at every tick and every
     pt formula of ``goals`` holds at some tick (module docstring)?
 
@@ -71,6 +72,7 @@ def decide(safe: Sequence[Node], goals: Sequence[Node], invariant: Node,
         raise ValueError("last-tick formulas are read on finite traces only")
     # the first layer of the search: the goals have held, the last-tick formulas hold
     marks = [ir.O(g) for g in goals] + list(last)
+    game: Game
     if liveness:
         if finite:
             raise ValueError("liveness formulas are read on infinite runs only")

@@ -26,7 +26,7 @@ from collections.abc import Iterable
 from fractions import Fraction
 
 from fretc.compiler import ir
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 from fretc.compiler.printers import to_smv
 
 __all__ = ["NumericAbstraction", "simple_comparison"]
@@ -39,7 +39,7 @@ _TEST = {"<": lambda v, c: v < c, "<=": lambda v, c: v <= c, ">": lambda v, c: v
 def _constant(n: Node) -> Fraction | None:
     if n.op == "num":
         try:
-            return Fraction(n.name)
+            return Fraction(name_of(n))
         except (ValueError, ZeroDivisionError):
             return None
     if n.op == "neg":
@@ -54,11 +54,18 @@ def simple_comparison(node: Node) -> tuple[str, str, Fraction] | None:
     if node.op != "cmp":
         return None
     a, b = node.args
-    if a.op == "var" and _constant(b) is not None:
-        return a.name, node.name, _constant(b)
-    if b.op == "var" and _constant(a) is not None:
-        return b.name, _FLIP[node.name], _constant(a)
+    if a.op == "var" and (c := _constant(b)) is not None:
+        return name_of(a), name_of(node), c
+    if b.op == "var" and (c := _constant(a)) is not None:
+        return name_of(b), _FLIP[name_of(node)], c
     return None
+
+
+def _simple(node: Node) -> tuple[str, str, Fraction]:
+    """:func:`simple_comparison` of an atom of the abstraction (one by construction)."""
+    got = simple_comparison(node)
+    assert got is not None
+    return got
 
 
 class NumericAbstraction:
@@ -73,7 +80,7 @@ class NumericAbstraction:
         self._uninterpreted: dict[str, str] = {}
 
     @classmethod
-    def of(cls, formulas: Iterable[Node]) -> "NumericAbstraction":
+    def of(cls, formulas: Iterable[Node]) -> NumericAbstraction:
         """Collect the atoms of ``formulas`` (IR nodes)."""
         self = cls()
         seen = set()
@@ -108,14 +115,14 @@ class NumericAbstraction:
     def _regions(self, name: str) -> list[tuple[Fraction, tuple[bool, ...]]]:
         """``(representative value, truth of each atom)`` per region, distinct truths only."""
         atoms = self.atoms[name]
-        consts = sorted({simple_comparison(a)[2] for a in atoms})
+        consts = sorted({_simple(a)[2] for a in atoms})
         points: list[Fraction] = [consts[0] - 1]
         for i, c in enumerate(consts):
             points.append(c)
             points.append((c + consts[i + 1]) / 2 if i + 1 < len(consts) else c + 1)
         out, seen = [], set()
         for v in points:
-            truth = tuple(_TEST[simple_comparison(a)[1]](v, simple_comparison(a)[2])
+            truth = tuple(_TEST[_simple(a)[1]](v, _simple(a)[2])
                           for a in atoms)
             if truth not in seen:
                 seen.add(truth)

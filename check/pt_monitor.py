@@ -33,6 +33,8 @@ the other way round (measured: twice the nodes per tick with the counters after 
 
 from __future__ import annotations
 
+from typing import Any
+
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
 
@@ -56,7 +58,7 @@ def state_bits(n: Node, seen: set, counted: frozenset = frozenset()) -> tuple[in
         return (0, 0)
     seen.add(n)
     if n in counted:
-        a, b, N = _deadline_parts(n)
+        a, b, N = _deadline_of(n)
         d1, o1 = state_bits(a, seen, counted)
         d2, o2 = state_bits(b, seen, counted)
         # the deadline's counter, and room for the counters of its O[0,N-1] in the block
@@ -96,8 +98,9 @@ def deadline_uses(formulas: list[Node]) -> dict[Node, list[Node]]:
                 starts.append(next((x for x in right.args if x != phi), right)
                               if right.op == "&" and phi in right.args else right)
                 continue
+            # (a conjunction at a formula's root has no parents: not fine)
             if parent.op == "&" and phi in parent.args and all(
-                    p.op == "S" and j == 1 and p.args[0] == phi
+                    p is not None and p.op == "S" and j == 1 and p.args[0] == phi
                     for p, j in parents.get(parent, [(None, -1)])):
                 continue
             fine = False
@@ -155,7 +158,7 @@ class Monitor:
         for f in formulas:
             for n in ir.walk(f):
                 if n in self.deadlines:
-                    widths.setdefault(n, (_deadline_parts(n)[2] + 1).bit_length())
+                    widths.setdefault(n, (_deadline_of(n)[2] + 1).bit_length())
                 elif n.op in ("O", "H") and n.hi is not None and n.hi > (n.lo or 0):
                     widths.setdefault(n, (n.hi - (n.lo or 0) + 1).bit_length())
         nodes = list(widths)
@@ -222,7 +225,7 @@ class Monitor:
         self.out_vars.append(var)
         return var
 
-    def value(self, n: Node):
+    def value(self, n: Node) -> Any:  # a BDD
         """Truth of ``n`` at the current tick (a BDD)."""
         got = self.memo.get(n)
         if got is None:
@@ -280,6 +283,7 @@ class Monitor:
             v, bit = self._bit(False, delay=True)
             bit[3] = x
             x = v
+        assert n.hi is not None  # (bounded)
         w = n.hi - (n.lo or 0)
         if w > 0:
             x = self._since_counter(x, w, n)
@@ -294,7 +298,7 @@ class Monitor:
         age reaches ``N`` without ``b``. Each tick: ``b`` leaves pending only this tick's
         ``a``; otherwise the oldest stays and ages, or this tick's ``a`` becomes it."""
         b = self.b
-        a_node, b_node, N = _deadline_parts(n)
+        a_node, b_node, N = _deadline_of(n)
         resp = self.value(b_node)
         for start in self.deadlines[n]:
             if b.bdd_imp(self.value(start), resp) != b.bddtrue:
@@ -349,6 +353,13 @@ def _deadline_parts(n: Node) -> tuple[Node, Node, int] | None:
     return left.args[0], right.args[0], left.lo
 
 
+def _deadline_of(n: Node) -> tuple[Node, Node, int]:
+    """:func:`_deadline_parts` of a node known to be a deadline."""
+    got = _deadline_parts(n)
+    assert got is not None
+    return got
+
+
 def _equals(b, bits: list, k: int):
     """BDD of ``value(bits) == k`` (``bits`` least significant first)."""
     out = b.bddtrue
@@ -357,7 +368,7 @@ def _equals(b, bits: list, k: int):
     return out
 
 
-def less_than(b, bits: list, k: int):
+def less_than(b: Any, bits: list, k: int) -> Any:  # b: the buddy module; a BDD
     """BDD of ``value(bits) < k`` (``bits`` least significant first)."""
     out = b.bddfalse
     for i, v in enumerate(bits):  # from the least significant bit up

@@ -29,6 +29,7 @@ environment has to react to the outputs and the report says so.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING
 
 from fretc.common.errors import CheckError
 
@@ -44,6 +45,10 @@ from fretc.check.numeric_abstraction import NumericAbstraction, simple_compariso
 from fretc.check.safety_game import Outside, game_atoms, letter_name
 from fretc.compiler.printers import mangle, to_smv, to_spot
 
+if TYPE_CHECKING:
+    from fretc.check.analysis import CheckResult
+    from fretc.check.checker import Checker
+
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
 
 #: who moves first in the game: at each tick the environment sets the inputs, then the
@@ -58,10 +63,10 @@ class RealizabilityError(CheckError, ValueError):
 
 
 def _atom_vars(atom) -> list[str]:
-    return [n.name for n in ir.walk(atom) if n.op in ("ap", "var")]
+    return [ir.name_of(n) for n in ir.walk(atom) if n.op in ("ap", "var")]
 
 
-def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequence[str]
+def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[str], outputs: Sequence[str]
                         ) -> dict:
     """Decide realizability per component; append ``unrealizable`` / ``unknown`` findings
     to ``result`` and return the JSON-able summary (module docstring).
@@ -77,7 +82,7 @@ def check_realizability(checker, result, inputs: Sequence[str], outputs: Sequenc
         for v in x.variables:
             if v not in used:
                 used.append(v)
-    summary = {"machine": MACHINE, "inputs": inputs, "outputs": outputs,
+    summary: dict[str, Any] = {"machine": MACHINE, "inputs": inputs, "outputs": outputs,
                "assumed_outputs": [v for v in used if v not in inputs and v not in outputs],
                "unused": [v for v in inputs + outputs if v not in used],
                "components": []}
@@ -116,10 +121,10 @@ class _Decider:
 
     def __init__(self, checker, inputs: list[str]):
         self.checker, self.inputs = checker, inputs
-        self.cache: dict[tuple, object] = {}
+        self.cache: dict[tuple, Any] = {}
         self.notes: list[str] = []
 
-    def __call__(self, items) -> object:
+    def __call__(self, items) -> Any:  # UNKNOWN or a dict
         key = tuple(x.index for x in items)
         if key not in self.cache:
             ans = None
@@ -128,7 +133,7 @@ class _Decider:
             self.cache[key] = ans if ans is not None else self._spot(items)
         return self.cache[key]
 
-    def _game(self, items) -> object:
+    def _game(self, items) -> Any:  # UNKNOWN or a dict
         """The symbolic games' answer, or None when Spot has to decide (module docstring):
         the safety game of the safety requirements; when it is won and other requirements
         remain, the Büchi game of the whole set (:mod:`fretc.check.buchi_game`)."""
@@ -140,7 +145,7 @@ class _Decider:
                 return ans
         return self._buchi(safe, rest)
 
-    def _safety(self, safe, items) -> object:
+    def _safety(self, safe, items) -> Any:  # UNKNOWN or a dict
         """The safety game of ``safe`` (the safety requirements of ``items``)."""
         checker = self.checker
         pts = [x.pt for x in safe]
@@ -182,7 +187,7 @@ class _Decider:
         failures = self.checker.worker.failures
         return failures[-1] if failures else "no reason given"
 
-    def _buchi(self, safe, rest, search: bool = False) -> object:
+    def _buchi(self, safe, rest, search: bool = False) -> Any:  # UNKNOWN or a dict
         """The Büchi game of ``safe`` (pt monitors) and ``rest`` (Spot's deterministic
         automata of their ft_inf), or None (Spot's game decides). With ``search``, a lost
         game comes with an input lasso that defeats every controller when one is found."""
@@ -220,22 +225,22 @@ class _Decider:
         if text not in self.notes:
             self.notes.append(text)
 
-    def _spot(self, items) -> object:
+    def _spot(self, items) -> Any:  # UNKNOWN or a dict
         """Spot's synthesis game on the ft_inf formulas (as before the safety game)."""
         checker, inputs = self.checker, self.inputs
         phis = [x.phi for x in items]
         atoms = _atoms(phis)
         outs = sorted({letter_name(a) for a in atoms
                        if not all(v in inputs for v in _atom_vars(a))})
-        in_vars = sorted({simple_comparison(a)[0] for a in atoms if a.op == "cmp"
-                          and simple_comparison(a) and simple_comparison(a)[0] in inputs})
-        out_vars = sorted({simple_comparison(a)[0] for a in atoms if a.op == "cmp"
-                           and simple_comparison(a) and simple_comparison(a)[0] not in inputs})
+        in_vars = sorted({c[0] for a in atoms if a.op == "cmp"
+                          and (c := simple_comparison(a)) and c[0] in inputs})
+        out_vars = sorted({c[0] for a in atoms if a.op == "cmp"
+                           and (c := simple_comparison(a)) and c[0] not in inputs})
         inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars))
         inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars))
         if inv_in.op == "true":  # a conjunction: one automaton per conjunct
             parts = [p for p in phis + [inv_out] if p.op != "true"] or [ir.TRUE]
-            spec_text = tuple(to_spot(p) for p in parts)
+            spec_text: str | tuple[str, ...] = tuple(to_spot(p) for p in parts)
         else:
             spec_text = to_spot(ir.implies(inv_in, ir.and_(ir.and_all(*phis), inv_out)))
         checker.queries += 1

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING
 
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
@@ -53,6 +54,9 @@ from fretc.check.budget import Budget, BudgetSpent, Meter
 from fretc.check.fixed_inputs import keep_forever, post, prefix_search
 from fretc.check.numeric_abstraction import simple_comparison
 from fretc.check.pt_monitor import Monitor, NoRoom, Outside, deadline_uses, state_bits
+
+if TYPE_CHECKING:
+    from fretc.compiler.semantics import Formalization
 
 __all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms", "letter_name",
            "Game", "Witness", "bdd_dict"]
@@ -75,8 +79,8 @@ def is_safety(n: Node, positive: bool = True) -> bool:
         return True
     if op == "!":
         return is_safety(n.args[0], not positive)
-    if op == "|" and positive and _weak_until(n) is not None:
-        p, q = _weak_until(n)
+    if op == "|" and positive and (weak := _weak_until(n)) is not None:
+        p, q = weak
         return is_safety(p, positive) and is_safety(q, positive)
     if op in ("&", "|"):
         return all(is_safety(a, positive) for a in n.args)
@@ -104,7 +108,7 @@ def _weak_until(n: Node) -> tuple[Node, Node] | None:
     return None
 
 
-def pt_monitors_ft_inf(formalization) -> bool:
+def pt_monitors_ft_inf(formalization: Formalization) -> bool:
     """Does FRET's pt formula of ``formalization`` (a :class:`fretc.compiler.semantics.
     Formalization`) monitor its ft_inf formula: ft_inf holds on an infinite run iff pt holds
     at every tick? True when ft_inf is syntactically safe (:func:`is_safety`), except for the
@@ -149,7 +153,7 @@ def _buddy():
 _DICT: list = []
 
 
-def bdd_dict():
+def bdd_dict() -> Any:  # a spot.bdd_dict
     """The one Spot BDD dictionary of the games and the automata they read (so their BDD
     variables live in one BuDDy space)."""
     import spot  # lazy: Spot (and its BuDDy) in the query worker process only
@@ -201,7 +205,7 @@ class Game:
                 self.extra = [m.value(f) for f in extra]  # encoded with their state bits
                 break
             except NoRoom:
-                self.m = self.ok = None
+                self.m = self.ok = None  # type: ignore[assignment]  # planned again below
                 _DICT[0].unregister_all_my_variables(self.owner)
         self.in_set = _varset(b, m.in_vars)
         self.out_set = _varset(b, m.out_vars)
@@ -228,12 +232,12 @@ class Game:
     def close(self) -> None:
         """Drop the BDDs and give their variables back to Spot's allocator."""
         self.layers = []
-        self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None
+        self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None  # type: ignore[assignment]  # closed
         self.extra, self.same, self._step = [], None, None
         _DICT[0].unregister_all_my_variables(self.owner)
 
     @property
-    def trans(self):
+    def trans(self) -> Any:  # a BDD
         """The transition relation, ``next <-> next-value`` for every state bit, built
         when first asked (:mod:`fretc.check.monitor_sat` steps through it in parts instead)."""
         if self._trans is None:
@@ -243,7 +247,7 @@ class Game:
         return self._trans
 
     @property
-    def step(self):
+    def step(self) -> Any:  # a BDD
         """The moves that keep every requirement: ``ok & ctl_ok & trans`` over (state,
         letter, next state), built when first asked (the satisfiability fixed points of
         :mod:`fretc.check.monitor_sat` step through the relation in parts instead)."""
@@ -262,7 +266,7 @@ class Game:
         """``f`` over the state bits' current variables (:meth:`_primed` the other way)."""
         return self.b.bdd_appex(self.same, f, self.b.bddop_and, self.nxt_set)
 
-    def successors_in(self, target):
+    def successors_in(self, target: Any) -> Any:  # BDDs
         """BDD over (state, inputs, outputs): the next state is in ``target``
         (``target`` with each state bit replaced by its next-value function: renamed to
         its next variable first, so the substitution is simultaneous)."""
@@ -276,7 +280,7 @@ class Game:
             f = b.bdd_compose(f, fn, nxt)
         return f
 
-    def pre(self, lose):
+    def pre(self, lose: Any) -> Any:  # BDDs
         """States from which the environment forces a loss now or a move into ``lose``."""
         b = self.b
         bad = b.bdd_or(b.bdd_not(self.ok), self.successors_in(lose))
@@ -300,7 +304,7 @@ class Game:
             if b.bdd_and(self.init, lose) != b.bddfalse:
                 return False
 
-    def next_state(self, here):
+    def next_state(self, here: Any) -> Any:  # BDDs
         """The state after ``here`` (a cube of every state bit and atom), as a cube of the
         state bits."""
         b, out = self.b, self.b.bddtrue
@@ -349,7 +353,7 @@ class Witness:
         self.all_set = game.b.bdd_and(game.b.bdd_and(game.cur_set, game.in_set),
                                       game.out_set)
 
-    def _cubes(self, atoms: list[Node], allowed, limit: int) -> list[tuple]:
+    def _cubes(self, atoms: list[Node], allowed, limit: int) -> list[tuple] | None:
         """Assignments of ``atoms`` allowed by ``allowed`` (a BDD over them), as
         ``(values, cube)``, at most ``limit`` (None when there are more)."""
         b, var = self.b, self.g.m.atom_var
@@ -364,7 +368,7 @@ class Witness:
                 out.append((values, cube))
         return out
 
-    def rank(self, states) -> int:
+    def rank(self, states: Any) -> int:  # a BDD
         """Fewest ticks in which the environment forces a loss from every state of
         ``states`` (``len(layers)`` when some state is not known to lose)."""
         b, layers = self.b, self.g.layers
@@ -377,7 +381,7 @@ class Witness:
                 lo = mid + 1
         return lo
 
-    def post(self, states, cube):
+    def post(self, states: Any, cube: Any) -> Any:  # BDDs
         """The states the monitors can be in after one tick with inputs ``cube``, over
         every output that keeps every requirement."""
         b, g = self.b, self.g
@@ -399,7 +403,8 @@ class Witness:
         meter = Meter(budget, 0.25)
         meter.relation(self.b, self.g.trans)
         start = self.g.init
-        heap = [(self.rank(start), 0, 0, start, ())]
+        # (rank, length, count, states BDD, letters)
+        heap: list[tuple[Any, int, int, Any, tuple[int, ...]]] = [(self.rank(start), 0, 0, start, ())]
         seen = {start.id()}
         count = 0
         try:

@@ -36,6 +36,7 @@ function, a past-time function, ``LAST``) is an independent proposition per posi
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
 
@@ -185,7 +186,7 @@ class _Lasso:
         self.z3, self.K, self.l = z3, K, loop
         self.atoms = _Atoms(z3, "@")
         self.memo: dict[Node, list] = {}
-        self.counts: dict[Node, list] = {}
+        self.counts: dict[Any, list] = {}  # a node, or (a node, a width)
         self.constraints: list = []
         self.fresh = 0
 
@@ -282,6 +283,7 @@ class _Lasso:
         """``F[lo,hi] p`` at ``i``: from ``lo`` steps after ``i``, the next ``p`` is at most
         ``hi - lo`` ticks away; ``G[lo,hi] p`` = ``!F[lo,hi] !p``."""
         z3 = self.z3
+        assert n.hi is not None  # (bounded)
         lo, width = n.lo or 0, n.hi - (n.lo or 0)
         p = n.args[0] if n.op == "F" else ir.not_(n.args[0])
         d = self._distance(p, width)
@@ -319,7 +321,7 @@ class SmtSolver:
         #: a query of this solver ran past z3's memory cap (z3's state is unusable after)
         self.out_of_memory = False
 
-    def sat(self, formulas: Sequence[Node]):
+    def sat(self, formulas: Sequence[Node]) -> Any:  # True, False or UNKNOWN
         """Is the conjunction of ``formulas`` satisfiable on infinite words?"""
         if self.worker is not None and self.worker.fork:
             status, value = self.worker.call(("smt", list(formulas)))
@@ -347,7 +349,7 @@ class SmtSolver:
             # largest bound, a longer proof, the other lassos, and the proof again; each
             # attempt a share of the resource count left (``cap``: at most that share of
             # the whole budget)
-            plan = ([("lasso", (x, 1.0)) for x in shapes] + [("proof", (0.15, True, 0.1))]
+            plan: list[tuple[str, Any]] = ([("lasso", (x, 1.0)) for x in shapes] + [("proof", (0.15, True, 0.1))]
                     + [("proof", (0.1, False, 0.1))] + [("lasso", (big[0], 0.5))]
                     + [("proof", (0.4, True, None))]
                     + [("lasso", (x, 0.5)) for x in big[1:]] + [("proof", (1.0, True, None))])

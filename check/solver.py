@@ -175,6 +175,7 @@ def run_query(query: tuple, budget: Budget | None = None) -> Any:
             if len(_PRODUCTS) > 64:
                 _PRODUCTS.clear()
             _PRODUCTS[key] = aut
+        assert aut is not None  # (a query has a formula)
         if aut.is_empty():
             return (False, None)
         for t in extra:
@@ -190,7 +191,7 @@ def run_query(query: tuple, budget: Budget | None = None) -> Any:
     if kind == "safety_game":
         from fretc.check.safety_game import solve_game  # lazy: BuDDy games only when asked
 
-        return solve_game(*query[1:], budget=budget)
+        return solve_game(*query[1:], budget=budget)  # type: ignore[misc]  # the query's fields come before budget
     if kind == "buchi_game":
         from fretc.check.buchi_game import solve_buchi_game  # lazy: BuDDy games only when asked
 
@@ -300,8 +301,8 @@ class SpotWorker:
         self.budget = budget or Budget()
         self.fork = fork
         self.deadline = deadline
-        self._proc = None
-        self._conn = None
+        self._proc: Any = None  # the worker's multiprocessing Process, once started
+        self._conn: Any = None  # and our end of its Pipe
         self.spent = 0
         self.failures: list[str] = []
         self.deaths = 0  # worker deaths in a row not caused by its limits
@@ -310,7 +311,8 @@ class SpotWorker:
         methods = multiprocessing.get_all_start_methods()
         ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
         parent, child = ctx.Pipe()
-        self._proc = ctx.Process(target=_serve, args=(child, self.budget.memory),
+        # (every start method's context has Process)
+        self._proc = ctx.Process(target=_serve, args=(child, self.budget.memory),  # type: ignore[attr-defined]
                                  daemon=True)
         self._proc.start()
         child.close()
@@ -403,7 +405,7 @@ class SpotWorker:
             self._proc.join(timeout=1)
         self._kill()
 
-    def __enter__(self) -> "SpotWorker":
+    def __enter__(self) -> SpotWorker:
         return self
 
     def __exit__(self, *exc) -> None:

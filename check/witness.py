@@ -34,8 +34,9 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
@@ -44,8 +45,14 @@ from fretc.check.solver import UNKNOWN
 from fretc.common.textsafe import csv_line
 from fretc.compiler import ir
 from fretc.compiler.evaluate import INTERPRETED_FUNCTIONS, ft_at
-from fretc.compiler.ir import LAST, Node
+from fretc.compiler.ir import LAST, Node, name_of
 from fretc.compiler.printers import mangle, to_smv
+
+if TYPE_CHECKING:
+    from fretc.fretish.ast import Requirement
+    from fretc.check.items import CheckItem
+    from fretc.check.analysis import CheckResult
+    from fretc.check.checker import Checker
 
 __all__ = ["trace_columns", "Judge", "finite_trace", "write_witnesses", "expected_verdicts",
            "read_expected"]
@@ -54,7 +61,7 @@ __all__ = ["trace_columns", "Judge", "finite_trace", "write_witnesses", "expecte
 #: duration_ticks)`` -> ``"satisfied"``, ``"vacuous"``, ``"violated"`` or ``"unknown"``
 #: (``columns``: FRET variable -> numpy array of ``n`` values; ``duration_ticks`` as
 #: ``Formalization.ticks``). The audit's is :func:`fretc.monitors.interval.verdict_of`.
-Judge = Callable[[object, Mapping[str, np.ndarray], int, "int | None"], str]
+Judge = Callable[["Requirement", Mapping[str, np.ndarray], int, "int | None"], str]
 
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
 
@@ -71,7 +78,7 @@ def _atoms(nodes: Sequence[Node]) -> list[Node]:
 
 def _absorbing_value(atom: Node) -> bool:
     if atom.op == "cmp":
-        names = {n.name for n in ir.walk(atom) if n.op == "var"}
+        names = {name_of(n) for n in ir.walk(atom) if n.op == "var"}
         try:
             return bool(ft_at(atom, [{n: 0.0 for n in names}], 0))
         except Exception:
@@ -85,8 +92,8 @@ def _finite_model(nodes: Sequence[Node]) -> Node:
     return ir.U(ir.not_(LAST), ir.and_(LAST, ir.X(ir.G(ir.and_(ir.not_(LAST), absorbing)))))
 
 
-def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
-                 length: int | None = None) -> object:
+def finite_trace(checker: Checker, formulas: Sequence[Node], columns: dict[str, str],
+                 length: int | None = None) -> Any:  # rows, None or UNKNOWN
     """A finite trace meeting the ft ``formulas`` (list of rows ``{variable: value}`` over
     ``columns``, name -> ``"bool"``/``"float"``), None when there is none, or UNKNOWN.
     ``length``: exactly that many ticks. Comparisons of one variable with constants get
@@ -98,6 +105,7 @@ def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
         ok, word = got
         if ok is not True:
             return ok if ok == UNKNOWN else None
+        assert word is not None  # (the monitors found a word)
         letters = word[0]
     else:
         letters = _spot_trace(checker, formulas, length)
@@ -109,7 +117,7 @@ def finite_trace(checker, formulas: Sequence[Node], columns: dict[str, str],
     for letter in letters:
         truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
         numbers = checker.numeric.values(truth)
-        row = {}
+        row: dict[str, bool | float] = {}
         for name, kind in columns.items():
             if kind == "bool":  # a variable by FRET's name; a call by its text
                 row[name] = bool(letter.get(mangle(name), letter.get(name, False)))
@@ -158,9 +166,9 @@ def trace_columns(formulas: Sequence[Node], cols: dict[str, str] | None = None
     for f in formulas:
         for n in ir.walk(f):
             if n.op == "var" or (n.op == "fn" and n.name not in INTERPRETED_FUNCTIONS):
-                cols[n.name if n.op == "var" else to_smv(n)] = "float"
+                cols[name_of(n) if n.op == "var" else to_smv(n)] = "float"
             elif n.op == "ap" and n.name not in cols:
-                cols[n.name] = "bool"
+                cols[name_of(n)] = "bool"
             elif n.op == "call":
                 cols.setdefault(to_smv(n), "bool")
     return cols
@@ -170,16 +178,17 @@ def _columns(items) -> dict[str, str]:
     return trace_columns([f for x in items for f in (x.phi_ft, x.phi)])
 
 
-def expected_verdicts(items, rows: list[dict], judge: Judge) -> dict[str, str]:
+def expected_verdicts(items: Iterable[CheckItem], rows: list[dict], judge: Judge) -> dict[str, str]:
     """FRET's verdict of each item on ``rows`` (``satisfied``/``vacuous``/``violated``, or
     ``unknown`` where ``judge`` cannot decide), by ``judge`` (:data:`Judge`)."""
     n = len(rows)
     cols = {name: np.array([r[name] for r in rows]) for name in (rows[0] if rows else {})}
     out = {}
     for x in items:
-        f = x.compiled.formalization
+        f, req = x.compiled.formalization, x.compiled.requirement
+        assert f is not None and req is not None  # (an item is of a formalized requirement)
         try:
-            out[x.id] = judge(x.compiled.requirement, cols, n, f.ticks)
+            out[x.id] = judge(req, cols, n, f.ticks)
         except (KeyError, ValueError):
             out[x.id] = "unknown"
     return out
@@ -219,7 +228,8 @@ def _safe(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text)[:60]
 
 
-def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
+def write_witnesses(checker: Checker, result: CheckResult, witness_dir: str,
+                    judge: Judge) -> None:
     """Write one witness CSV per finding (conflict, vacuity, unsatisfiable) and one for a
     consistent set, into ``witness_dir``; set ``Finding.witness``/``expected`` and
     ``result.witnesses``. ``judge`` gives the expected verdicts written in each file
@@ -273,7 +283,7 @@ def write_witnesses(checker, result, witness_dir: str, judge: Judge) -> None:
                                      "expected": f.expected})
 
 
-def _controller_run(w: "_Witnesses", finding, path: Path) -> None:
+def _controller_run(w: _Witnesses, finding, path: Path) -> None:
     """The witness of an unrealizable set: the defeating inputs with a controller's best
     effort (:mod:`fretc.check.safety_game`); some requirement of the set is violated whatever
     the controller does, so on this run too."""

@@ -15,6 +15,10 @@ Location: ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pathlib is imported lazily (start-up time)
+    from pathlib import Path
 
 __all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "remove", "entry_path",
            "read_file", "write_file", "lark_cache_file"]
@@ -34,7 +38,7 @@ def _root() -> str | None:
     return os.path.join(home, ".cache", "fretc")
 
 
-def cache_dir():
+def cache_dir() -> Path | None:
     """The cache folder (a :class:`pathlib.Path`, not created here), or None when the disk
     cache is off."""
     root = _root()
@@ -75,7 +79,7 @@ def _entry(kind: str, name: str) -> str | None:
     return None if root is None else os.path.join(root, kind, name)
 
 
-def entry_path(kind: str, name: str):
+def entry_path(kind: str, name: str) -> Path | None:
     """Where entry ``name`` of sub-folder ``kind`` lives (a :class:`pathlib.Path`; None:
     cache off)."""
     path = _entry(kind, name)

@@ -25,8 +25,14 @@ seconds.
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
 
-__all__ = ["NS_PER_S", "TIME_UNITS", "parse_seconds", "parse_duration", "format_ns",
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
+
+# TIME_UNITS is made on first use by the module's __getattr__ (PEP 562)
+__all__ = ["NS_PER_S", "TIME_UNITS",  # noqa: F822
+           "parse_seconds", "parse_duration", "format_ns",
            "format_period", "format_period_ms", "format_offset", "format_seconds"]
 
 #: Nanoseconds per second (MCAP log times and ROS times are integer nanoseconds).

@@ -26,19 +26,30 @@ from __future__ import annotations
 
 import re
 import tomllib
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from fretc.common.errors import FretishError
 from fretc.common.textsafe import one_line
 
 from fretc.compiler.codegen import file_stems
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 from fretc.compiler.printers import mangle, to_smv
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 _TERM = re.compile(r"[a-z][A-Za-z0-9_]*")  # fullmatch: "$" would take a final newline
 
 
 class AjpfError(FretishError):
     """A requirement or mapping AJPF cannot take; the message says why and what to do."""
+
+    # set on a requirement's error (its position in the file)
+    source: str
+    line: int
+    column: int
+    message: str
 
 
 def load_mapping(path: str | None) -> dict:
@@ -129,7 +140,7 @@ def to_ajpf(node: Node, agent: str, mapping: dict) -> str:
     def go(n: Node) -> str:
         op = n.op
         if op == "ap":
-            return atom_for_var(n.name)
+            return atom_for_var(name_of(n))
         if op == "cmp":
             text = to_smv(n)
             if text not in comparisons:
@@ -183,7 +194,7 @@ def to_ajpf(node: Node, agent: str, mapping: dict) -> str:
     return go(node)
 
 
-def emit_psl(compiled, mapping_path: str | None = None) -> dict[str, str]:
+def emit_psl(compiled: Sequence[Compiled], mapping_path: str | None = None) -> dict[str, str]:
     """One ``.psl`` text per requirement file: ``{file stem: text}``. Requirements AJPF
     cannot take appear as comment lines with the reason (and so do failed ones). A comment
     line starts with ``#`` in column 0: AJPF's property-file reader skips exactly those and
@@ -218,7 +229,7 @@ def emit_psl(compiled, mapping_path: str | None = None) -> dict[str, str]:
     return out
 
 
-def refuse_probability(compiled) -> None:
+def refuse_probability(compiled: Compiled) -> None:
     """Raise :class:`AjpfError` positioned at the ``with probability`` phrase of a
     probability requirement (``file:line:col: error: ...``): AJPF checks that *every*
     execution of the agent satisfies a property and has no probability operator, so a .psl
@@ -229,7 +240,9 @@ def refuse_probability(compiled) -> None:
         return
     from fretc.common.errors import render_diagnostic
 
-    e, span = compiled.entry, compiled.requirement.probability.span
+    req = compiled.requirement
+    assert req is not None and req.probability is not None  # (b is its bound)
+    e, span = compiled.entry, req.probability.span
     line = span.line if span.line else e.line
     column = span.column if span.line else e.column
     msg = (f"requirement {one_line(compiled.id)} has 'with probability {b.op} {b.text}': "
@@ -243,7 +256,8 @@ def refuse_probability(compiled) -> None:
     raise err
 
 
-def psl_label_and_formula(compiled, mapping: dict | None = None):
+def psl_label_and_formula(compiled: Compiled, mapping: dict | None = None
+                          ) -> tuple[str | None, str]:
     """``(label, formula)`` of one compiled requirement, or ``(None, reason)``."""
     if compiled.formalization is None:
         return None, "not formalized"
@@ -252,6 +266,7 @@ def psl_label_and_formula(compiled, mapping: dict | None = None):
                       "chance and is judged over triggers, not by a .psl property")
     mapping = mapping or {}
     try:
+        assert compiled.requirement is not None  # (it formalized)
         agent = mapping.get("agent") or compiled.requirement.component
         return _label(compiled.id, set()), to_ajpf(compiled.formalization.ft_inf, agent,
                                                     mapping)

@@ -4,14 +4,21 @@ failure never stops the others."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from fretc.common.errors import FretishError, render_diagnostic
+from fretc.fretish.ast import Requirement
+from fretc.fretish.entry import RequirementEntry
 
 from fretc.compiler.instantiate import formula_text, instantiate
 from fretc.compiler.printers import mangle
 from fretc.compiler.semantics import Formalization, SemanticsError
+
+if TYPE_CHECKING:
+    from fretc.compiler.pctl import Pctl
+    from fretc.compiler.ir import ProbabilityBound
 
 PT_FTP = "(Z FALSE)"
 
@@ -30,7 +37,7 @@ class Compiled:
     have neither.
     """
 
-    entry: object
+    entry: RequirementEntry
     formalization: Formalization | None = None
     error: FretishError | None = None
     _cache: dict = field(default_factory=dict, repr=False)
@@ -48,7 +55,7 @@ class Compiled:
         return self.entry.text
 
     @property
-    def requirement(self):
+    def requirement(self) -> Requirement | None:
         """The parsed requirement (:class:`fretc.fretish.ast.Requirement`), or None if it did not parse."""
         return self.entry.requirement
 
@@ -72,7 +79,9 @@ class Compiled:
         FTP printed ``(Z FALSE)``, as FRET does), printed once (from the template key's
         printed form where it applies, :func:`fretc.compiler.instantiate.formula_text`)."""
         if "smv" not in self._cache:
-            self._cache["smv"] = {w: formula_text(self.formalization, w)
+            f = self.formalization
+            assert f is not None  # (the printed forms are asked of a formalized requirement)
+            self._cache["smv"] = {w: formula_text(f, w)
                                   for w in ("ft", "ft_inf", "pt")}
         return self._cache["smv"]
 
@@ -80,17 +89,19 @@ class Compiled:
         """Spot text of ``ft`` or ``ft_inf``."""
         key = ("spot", which)
         if key not in self._cache:
-            self._cache[key] = formula_text(self.formalization, which + "_spot")
+            f = self.formalization
+            assert f is not None  # (the printed forms are asked of a formalized requirement)
+            self._cache[key] = formula_text(f, which + "_spot")
         return self._cache[key]
 
     @property
-    def probability(self):
+    def probability(self) -> ProbabilityBound | None:
         """The requirement's probability bound (:class:`fretc.compiler.ir.ProbabilityBound`), or
         None: a requirement without ``with probability``, or one that did not formalize."""
         f = self.formalization
         return None if f is None else getattr(f, "probability", None)
 
-    def pctl_form(self):
+    def pctl_form(self) -> Pctl | None:
         """The requirement's probabilistic form (:class:`fretc.compiler.pctl.Pctl`: FRET's
         five-part key, the bounds where FRET 3.1 puts them, per trigger, around ft_inf),
         computed once; None for a requirement that did not formalize or is free-form."""
@@ -106,9 +117,8 @@ class Compiled:
         puts them (per trigger, :mod:`fretc.compiler.pctl`), e.g. ``P>=1 [ ((G (((!
         too_close) & (X too_close)) => (X P>=0.9 [ (F<=1 stopped) ]))) & (too_close =>
         P>=0.9 [ (F<=1 stopped) ])) ]``; None without a bound."""
-        if self.probability is None:
-            return None
-        return self.pctl_form().text
+        form = self.pctl_form() if self.probability is not None else None
+        return None if form is None else form.text
 
     @property
     def key_pctl(self) -> str | None:
@@ -137,7 +147,7 @@ class Compiled:
         return (self.smv_text["ft"], self.smv_text["ft_inf"], self.smv_text["pt"], self.spot("ft"),
                 self.spot("ft_inf"))
 
-    def json_forms(self, enc, seps: tuple) -> str | None:
+    def json_forms(self, enc: Callable[[str], str], seps: tuple) -> str | None:
         """The five printed forms as JSON strings escaped by ``enc`` and separated by
         ``seps``, in one piece, where the formalization gives them so
         (:meth:`fretc.compiler.instantiate.InstantiatedFormalization.json_forms`); else None."""
@@ -186,6 +196,7 @@ class Compiled:
             b = self.probability
             if b is not None:  # FRET's keys: key (five-part), key_ltl (four-part)
                 form = self.pctl_form()
+                assert form is not None  # (it formalized)
                 out["key"], out["key_ltl"] = form.key, f.key
                 out["probability"] = dict(b.to_json(), text=b.text)
                 out["pctl"] = form.text
@@ -201,7 +212,7 @@ class Compiled:
         return out
 
 
-def compile_entry(entry) -> Compiled:
+def compile_entry(entry: RequirementEntry) -> Compiled:
     """Formalize one :class:`fretc.fretish.files.RequirementEntry` (never raises for bad input)."""
     if entry.error is not None:
         return Compiled(entry, error=entry.error)
@@ -220,7 +231,7 @@ def compile_entries(entries: Iterable) -> list[Compiled]:
     return [compile_entry(e) for e in entries]
 
 
-def _locate(exc: SemanticsError, entry) -> FretishError:
+def _locate(exc: SemanticsError, entry: RequirementEntry) -> FretishError:
     """Give a semantics error the file position of the span it names."""
     span = exc.span
     line = span.line if span is not None and span.line else entry.line

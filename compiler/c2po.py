@@ -28,12 +28,17 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 from fretc.compiler import ir
 from fretc.compiler.codegen import file_stems
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 from fretc.compiler.pt_step import CodegenError, check_monitorable
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 __all__ = ["C2PO_KEYWORDS", "emit_c2po", "mltl"]
 
@@ -88,9 +93,9 @@ def _text(n: Node, a: list[str], names: dict[str, str]) -> str:
     if op in ("true", "false"):
         return op
     if op in ("ap", "var"):
-        return names[n.name]
+        return names[name_of(n)]
     if op == "num":
-        return _number(n.name)
+        return _number(name_of(n))
     if op == "FTP":
         return "(H[1,1] false)"
     if op == "past":
@@ -100,9 +105,9 @@ def _text(n: Node, a: list[str], names: dict[str, str]) -> str:
     if op in _BIN:
         return f"({a[0]} {_BIN[op]} {a[1]})"
     if op == "cmp":
-        return f"({a[0]} {_CMP[n.name]} {a[1]})"
+        return f"({a[0]} {_CMP[name_of(n)]} {a[1]})"
     if op == "arith":
-        return f"({a[0]} {_ARITH[n.name]} {a[1]})"
+        return f"({a[0]} {_ARITH[name_of(n)]} {a[1]})"
     if op == "neg":
         return f"(- {a[0]})"
     if op == "fn" and n.name in ("absReal", "absInt"):
@@ -119,7 +124,7 @@ def _text(n: Node, a: list[str], names: dict[str, str]) -> str:
     raise CodegenError(f"C2PO cannot express {what.get(op, repr(op))}")
 
 
-def emit_c2po(compiled) -> tuple[dict[str, str], list[tuple[str, str, str]]]:
+def emit_c2po(compiled: Sequence[Compiled]) -> tuple[dict[str, str], list[tuple[str, str, str]]]:
     """Per requirement file (``compiler.build.Compiled`` list, in input order) its C2PO
     text: ``({file stem: text}, [(stem, requirement id, why it is left out)])``."""
     groups: dict[str, list] = {}

@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from fretc.compiler import ir
 from fretc.compiler.automata import LTL3Automata, ltl3_automata
@@ -33,6 +35,9 @@ from fretc.compiler.codegen import _env, file_stems
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.compiler.pt_step import CodegenError, check_monitorable
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 __all__ = ["CMonitor", "CUnit", "CodegenError", "c_monitor", "c_units", "emit_c", "trigger_pt"]
 
@@ -96,7 +101,7 @@ class CMonitor:
         return self.prefix.upper()
 
 
-def trigger_pt(compiled) -> Node | None:
+def trigger_pt(compiled: Compiled) -> Node | None:
     """The pt formula that is true at the last tick of a trace iff no trigger of the
     requirement has occurred in any scope interval (the audit's *vacuous*: FRET's
     finite-trace verdict of the same scope and condition with the timing ``immediately``
@@ -130,12 +135,13 @@ def _identifier(text: str) -> str:
     return safe or "r"
 
 
-def c_monitor(compiled, prefix: str, automata: LTL3Automata | None = None) -> CMonitor:
+def c_monitor(compiled: Compiled, prefix: str, automata: LTL3Automata | None = None) -> CMonitor:
     """The :class:`CMonitor` of one compiled requirement (``compiler.build.Compiled``,
     formalized) with C identifier ``prefix``. ``automata``: its LTL3 automata when already
     built (the Python monitor's). Raises :class:`CodegenError` when it has no online
     monitor (pt needs the future) or an LTL3 automaton is given as condition chains."""
     f = compiled.formalization
+    assert f is not None  # (a formalized requirement)
     check_monitorable(f.pt)
     if automata is None:
         automata = LTL3Automata(*ltl3_automata(f.ft_inf))
@@ -220,7 +226,7 @@ def _automata(automata: LTL3Automata, atom_nodes, atom_exprs, prefix: str):
             continue
         live = not aut.complete and not aut.empty and aut.table is not None
         name, letter = None, "0u"
-        if live:
+        if live and aut.table is not None:  # (live: it has a table)
             bits = [atom_exprs[atom_nodes.index(a)] for a in aut.atoms]
             letter = " | ".join(f"({b} ? {1 << j}u : 0u)" for j, b in enumerate(bits)) or "0u"
             name = f"{prefix}_{which}"
@@ -309,7 +315,7 @@ class CUnit:
         return any(m.numeric for m in self.monitors)
 
 
-def c_units(compiled, split: bool = False, automata: dict | None = None) -> list[CUnit]:
+def c_units(compiled: Sequence[Compiled], split: bool = False, automata: dict | None = None) -> list[CUnit]:
     """The header/source pairs of ``compiled`` (:func:`emit_c`'s, before rendering): per
     requirement file one :class:`CUnit` (``split``: one per requirement)."""
     groups: dict[str, list] = {}
@@ -335,7 +341,7 @@ def c_units(compiled, split: bool = False, automata: dict | None = None) -> list
 
 def _unit(file_stem: str, source: str, stem: str, items, automata,
           own_prefix: bool = False) -> CUnit:
-    monitors, skipped, used = [], [], set()
+    monitors, skipped, used = [], [], set[str]()
     for c in items:
         if c.formalization is None:
             reason = "free-form" if c.freeform else getattr(c.error, "message", str(c.error))
@@ -369,7 +375,7 @@ def _names(prefix: str) -> set[str]:
             | {f"{prefix.upper()}_{x}" for x in _MACROS})
 
 
-def emit_c(compiled, split: bool = False, automata: dict | None = None
+def emit_c(compiled: Sequence[Compiled], split: bool = False, automata: dict | None = None
            ) -> tuple[dict[str, str], list[tuple[str, str, str]]]:
     """The C files of ``compiled`` (``compiler.build.Compiled`` list): ``({file name: text},
     [(file stem, requirement id, why it has no monitor)])``, in input order: per

@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of, window
 from fretc.compiler.printers import to_smv
 from fretc.compiler.pt_step import CodegenError, _future_error
 
@@ -185,9 +185,9 @@ def _emit(n: Node, code: CStep) -> str:
         code.uses_first = True
         return "first"
     if op in ("ap", "var"):
-        return _read(n.name, code, numeric=op == "var")
+        return _read(name_of(n), code, numeric=op == "var")
     if op == "num":
-        return c_number(n.name)
+        return c_number(name_of(n))
     if (op == "fn" and n.name not in _C_FN) or op == "call":
         return _read(to_smv(n), code, numeric=op == "fn")
     if op == "past":
@@ -208,18 +208,18 @@ def _expression(n: Node, a: list[str], code: CStep) -> str | None:
         for x, arg in zip(a, n.args):
             if code.types[arg] == "double" and arg.op != "num":
                 code.nan_checks.append(f"isnan({x})")
-        return f"{a[0]} {_C_CMP[n.name]} {a[1]}"
+        return f"{a[0]} {_C_CMP[name_of(n)]} {a[1]}"
     if op == "arith":
         if n.name in ("+", "-", "*"):
             return f"{a[0]} {n.name} {a[1]}"
-        code.helpers.add(_C_ARITH_FN[n.name])
-        return f"{_C_ARITH_FN[n.name]}({a[0]}, {a[1]})"
+        code.helpers.add(_C_ARITH_FN[name_of(n)])
+        return f"{_C_ARITH_FN[name_of(n)]}({a[0]}, {a[1]})"
     if op == "neg":
         return f"-{a[0]}"
     if op == "fn":
-        if _C_FN[n.name].startswith("fretc_"):
-            code.helpers.add(_C_FN[n.name])
-        return f"{_C_FN[n.name]}({', '.join(a)})"
+        if _C_FN[name_of(n)].startswith("fretc_"):
+            code.helpers.add(_C_FN[name_of(n)])
+        return f"{_C_FN[name_of(n)]}({', '.join(a)})"
     if op == "ite":
         return f"{a[0]} ? {a[1]} : {a[2]}"
     if op == "pre":
@@ -256,7 +256,7 @@ def _temporal(n: Node, a: list[str], code: CStep) -> str:
 
 def _bounded(n: Node, arg: str, code: CStep) -> str:
     """``O[lo,hi]`` / ``H[lo,hi]`` (module docstring): the local of its value."""
-    lo, hi, what = n.lo, n.hi, _text(n)
+    (lo, hi), what = window(n), _text(n)
     bit = arg if n.op == "O" else f"!{arg}"
     if lo > 0:
         pos_t = uint_type(lo)

@@ -40,12 +40,15 @@ import opcode
 import re
 import sys
 import types
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from fretc.common import cache as fretc_cache
 
 from fretc.compiler import code_cache
-from fretc.compiler.automata import LTL3Automata, ltl3_automata
+from fretc.compiler.automata import Automaton, LTL3Automata, ltl3_automata
+from fretc.compiler.build import Compiled
 from fretc.compiler.ir import Node
 from fretc.compiler.pt_step import CodegenError, StepCode, check_monitorable, compile_nodes
 
@@ -101,12 +104,12 @@ class MonitorSource:
 
     # read-only delegations, same shape as compiler.build.Compiled's (kept: one property per field)
     @property
-    def bad(self):
+    def bad(self) -> Automaton | None:
         """The automaton whose rejection means *violated* (or None)."""
         return self.automata.bad
 
     @property
-    def good(self):
+    def good(self) -> Automaton | None:
         """The automaton whose rejection means *satisfied* (or None)."""
         return self.automata.good
 
@@ -146,11 +149,12 @@ def _class_name(rid: str, index: int) -> str:
     return f"Monitor_{safe}_{index}"
 
 
-def monitor_source(compiled, index: int) -> MonitorSource:
+def monitor_source(compiled: Compiled, index: int) -> MonitorSource:
     """Generate the code pieces of one compiled requirement (``compiler.build.Compiled``,
     formalized), the ``index``-th of its module. Raises :class:`CodegenError` when no
     monitor can be built (pt needs the future)."""
     f = compiled.formalization
+    assert f is not None  # (a formalized requirement)
     check_monitorable(f.pt)  # before any expensive work
     code = StepCode()
     bad, good, note = ltl3_automata(f.ft_inf)
@@ -168,8 +172,8 @@ def monitor_source(compiled, index: int) -> MonitorSource:
         text=compiled.text, key=f.key, ft=compiled.smv_text["ft"], ft_inf=compiled.smv_text["ft_inf"],
         pt=compiled.smv_text["pt"], source_hash=compiled.source_hash,
         pctl=compiled.pctl() if getattr(compiled, "probability", None) is not None else None,
-        probability=((compiled.probability.op, compiled.probability.p)
-                     if getattr(compiled, "probability", None) is not None else None),
+        probability=((b.op, b.p)
+                     if (b := getattr(compiled, "probability", None)) is not None else None),
         variables=[v[0] for v in var_locals], var_locals=var_locals,
         slots_init=slots_init,
         slots_unpack="".join(f"s{i}, " for i in range(len(code.slots))) + "tick, _",
@@ -209,8 +213,7 @@ class MonitorInfo:
         class_name: the name of its class in the module (``MONITORS[id]`` is that class).
         source: what the template was fed for it.
         automata: its LTL3 automata (``bad`` / ``good`` may be None, ``note`` says why), the
-            same objects the module's tables were written from.
-    """
+            same objects the module's tables were written from."""
 
     class_name: str
     source: MonitorSource
@@ -225,8 +228,7 @@ class MonitorModule:
         name: the module name (``r1_monitors``; :func:`file_stems`).
         text: the module's Python source, as ``fretc --emit monitor`` writes it.
         monitors: requirement id -> its monitor, in the order of ``MONITORS``.
-        skipped: requirement id -> why it has no monitor, as the module's ``SKIPPED``.
-    """
+        skipped: requirement id -> why it has no monitor, as the module's ``SKIPPED``."""
 
     name: str
     text: str
@@ -319,7 +321,7 @@ def _check_module(text: str, module_name: str, cache: bool) -> None:
     unknown = sorted(reads - defined - _ALLOWED_BUILTINS)
     if unknown:
         fail(f"reads undefined names {', '.join(unknown)}")
-    ns = {"__name__": module_name}
+    ns: dict[str, Any] = {"__name__": module_name}
     compiled_shapes = []
     try:
         exec(code, ns)  # only the standard library and literals made by repr
@@ -333,10 +335,10 @@ def _check_module(text: str, module_name: str, cache: bool) -> None:
             unknown = sorted(shape_reads - shape_defined - defined - _ALLOWED_BUILTINS)
             if unknown:
                 fail(f"reads undefined names {', '.join(unknown)} in shape {i}")
-            shape_ns = {}
+            shape_ns: dict[str, Any] = {}
             exec(shape_code, ns, shape_ns)  # what the module's _bind does, compiled once
             ns["_MAKE"][i] = shape_ns["make"]
-        for rid, cls in ns["MONITORS"].items():
+        for _rid, cls in ns["MONITORS"].items():
             m = cls()
             for value in (0, 1):
                 m.step({v: value for v in cls.VARIABLES})
@@ -402,7 +404,7 @@ _WANTED = (_LOAD_GLOBAL, _LOAD_NAME)
 _WANTED_TOP = _WANTED + tuple(sorted(_STORES))
 
 
-def build_monitor_module(compiled_list, module_name: str,
+def build_monitor_module(compiled_list: Sequence[Compiled], module_name: str,
                          errors: list | None = None) -> MonitorModule:
     """One generated monitor module for a list of compiled requirements
     (``compiler.build.Compiled``, in the module's order); requirements that failed or have
@@ -457,7 +459,7 @@ def _invalid_monitors(monitors: list[MonitorSource], module_name: str,
     return bad
 
 
-def render_module(compiled_list, module_name: str, errors: list | None = None) -> str:
+def render_module(compiled_list: Sequence[Compiled], module_name: str, errors: list | None = None) -> str:
     """The text of :func:`build_monitor_module` (same arguments and errors)."""
     return build_monitor_module(compiled_list, module_name, errors).text
 
@@ -517,7 +519,7 @@ def encode_table(table: list[list[int]]) -> str:
     return ";".join(",".join(map(str, row)) for row in table)
 
 
-def file_stems(sources, suffix: str = "") -> dict[str, str]:
+def file_stems(sources: Iterable[str], suffix: str = "") -> dict[str, str]:
     """A distinct Python-identifier stem per requirement file, in order: the file name's
     stem (``requirements/r1.fret`` -> ``r1`` + ``suffix``), with ``_2``, ``_3`` ... added when
     two files of different folders share a name (so no output overwrites another)."""
@@ -536,7 +538,7 @@ def file_stems(sources, suffix: str = "") -> dict[str, str]:
     return out
 
 
-def build_monitor_modules(compiled, errors: list | None = None) -> dict[str, MonitorModule]:
+def build_monitor_modules(compiled: Sequence[Compiled], errors: list | None = None) -> dict[str, MonitorModule]:
     """One :class:`MonitorModule` per requirement file, keyed by the file
     (``RequirementEntry.source``), in input order; requirements keep their order within a
     file. Module names come from :func:`file_stems` (``r1.fret`` -> ``r1_monitors``).
@@ -552,7 +554,7 @@ def build_monitor_modules(compiled, errors: list | None = None) -> dict[str, Mon
             for source, items in groups.items()}
 
 
-def emit_monitors(compiled, errors: list | None = None) -> dict[str, str]:
+def emit_monitors(compiled: Sequence[Compiled], errors: list | None = None) -> dict[str, str]:
     """The texts of :func:`build_monitor_modules`: ``{module name: source text}`` in input
     order (``r1.fret`` -> ``r1_monitors``); ``errors`` as there."""
     return {m.name: m.text for m in build_monitor_modules(compiled, errors).values()}

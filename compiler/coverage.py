@@ -138,6 +138,11 @@ def atoms_of(e: A.Expr | None) -> list[A.Expr]:
     return out
 
 
+def _replace_in(e: A.Expr | None, key: str, by: A.Expr) -> A.Expr | None:
+    """:func:`_replace` in a field, which a requirement may not have (None stays None)."""
+    return None if e is None else _replace(e, key, by)
+
+
 def _replace(e: A.Expr, key: str, by: A.Expr) -> A.Expr:
     """``e`` with every boolean-position occurrence of the atom whose text is ``key``
     replaced by ``by``."""
@@ -165,16 +170,16 @@ def replace_atom(req: A.Requirement, field: str, atom: A.Expr, by: A.Expr) -> A.
     key = expr_text(atom)
     if field == "scope":
         return dataclasses.replace(req, scope=dataclasses.replace(
-            req.scope, mode=_replace(req.scope.mode, key, by)))
+            req.scope, mode=_replace_in(req.scope.mode, key, by)))
     if field == "condition":
         c = req.condition
         parts = tuple(dataclasses.replace(p, expr=_replace(p.expr, key, by)) for p in c.parts)
         return dataclasses.replace(req, condition=dataclasses.replace(
-            c, expr=_replace(c.expr, key, by), parts=parts))
+            c, expr=_replace_in(c.expr, key, by), parts=parts))
     if field == "stop":
         return dataclasses.replace(req, timing=dataclasses.replace(
-            req.timing, stop=_replace(req.timing.stop, key, by)))
-    return dataclasses.replace(req, response=_replace(req.response, key, by))
+            req.timing, stop=_replace_in(req.timing.stop, key, by)))
+    return dataclasses.replace(req, response=_replace_in(req.response, key, by))
 
 
 def with_ticks(req: A.Requirement, ticks: int) -> A.Requirement:

@@ -89,15 +89,15 @@ def simulation_dominated(succ: list[list[int]]) -> list[int]:
         for s in range(n):
             cur = new = simby[s]
             for a, d in out[s]:
-                m = can[a].get(d)
-                if m is None:
-                    m, x, pa = 0, simby[d], pred[a]
+                sim = can[a].get(d)
+                if sim is None:
+                    sim, x, pa = 0, simby[d], pred[a]
                     while x:
                         low = x & -x
-                        m |= pa[low.bit_length() - 1]
+                        sim |= pa[low.bit_length() - 1]
                         x ^= low
-                    can[a][d] = m
-                new &= m
+                    can[a][d] = sim
+                new &= sim
                 if not new:
                     break
             if new != cur:
@@ -159,6 +159,7 @@ def _subsets(succ: list[list[int]], init: int, width: int, limit: int,
         return got
 
     dominated: dict[tuple[int, int], int] = {}  # (chunk, bits) -> states they dominate
+    doms = dom if dom is not None else []  # (dominated_by is called only with dom)
 
     def dominated_by(p: int, bits: int) -> int:
         got = dominated.get((p, bits))
@@ -166,7 +167,7 @@ def _subsets(succ: list[list[int]], init: int, width: int, limit: int,
             low = bits & -bits
             s = p * _CHUNK + low.bit_length() - 1
             rest = bits ^ low
-            got = dominated_by(p, rest) | dom[s] if rest else dom[s]
+            got = dominated_by(p, rest) | doms[s] if rest else doms[s]
             dominated[p, bits] = got
         return got
 
@@ -195,6 +196,7 @@ def _subsets(succ: list[list[int]], init: int, width: int, limit: int,
                 masks = got if masks is None else list(map(or_, masks, got))
             sub >>= _CHUNK
             p += 1
+        assert masks is not None  # (a subset has a state)
         row = []
         for r in masks:
             if not r:
@@ -274,7 +276,7 @@ def _minimize_small(rows: list[list[int]]) -> tuple[int, list[list[int]]]:
         count = len(signatures)
     sink_class = cls[n]
     number: dict[int, int] = {}
-    reps = []
+    reps: list[int] = []
     for s in range(n):
         c = cls[s]
         if c != sink_class and c not in number:
@@ -371,6 +373,7 @@ def guarantee_bad_prefixes(succ: list[list[int]], init: int, width: int, target:
             s = low.bit_length() - 1
             x ^= low
             masks = list(map(or_, masks, succ[s]))
+        assert masks is not None  # (a subset has a state)
         row = []
         for r in masks:
             if r & target:

@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of, window
 from fretc.compiler.printers import to_smv
 
 Trace = Sequence[Mapping[str, Any]]
@@ -53,7 +53,7 @@ def _arith(op: str, a: float, b: float) -> float:
     raise ValueError(f"unknown arithmetic operator {op}")
 
 
-_FUNCS = {
+_FUNCS: dict[str, Callable[..., Any]] = {
     "absReal": abs, "absInt": abs, "minReal": min, "minInt": min, "maxReal": max,
     "maxInt": max,
 }
@@ -111,11 +111,11 @@ class _Evaluator:
         if op == "FTP":
             return [i == 0 for i in rng]
         if op == "ap":
-            return [self.value(n.name, i, False) for i in rng]
+            return [self.value(name_of(n), i, False) for i in rng]
         if op == "var":
-            return [self.value(n.name, i, True) for i in rng]
+            return [self.value(name_of(n), i, True) for i in rng]
         if op == "num":
-            v = float(n.name) if any(c in n.name for c in ".eE") else int(n.name)
+            v = float(name_of(n)) if any(c in name_of(n) for c in ".eE") else int(name_of(n))
             return [v] * (L + 1)
         if op == "call":
             key = to_smv(n)
@@ -128,20 +128,20 @@ class _Evaluator:
         L, op, a = self.L, n.op, n.args
         rng = range(L + 1)
         if op == "cmp":
-            x, y, f = self.series(a[0]), self.series(a[1]), _CMP[n.name]
+            x, y, f = self.series(a[0]), self.series(a[1]), _CMP[name_of(n)]
             return [bool(f(x[i], y[i])) for i in rng]
         if op == "arith":
             x, y = self.series(a[0]), self.series(a[1])
-            return [_arith(n.name, x[i], y[i]) for i in rng]
+            return [_arith(name_of(n), x[i], y[i]) for i in rng]
         if op == "neg":
             return [-v for v in self.series(a[0])]
         if op == "fn":
             args = [self.series(x) for x in a]
-            f = _FUNCS.get(n.name)
-            if f is None:  # uninterpreted: read the trace under its printed name
+            fn = _FUNCS.get(name_of(n))
+            if fn is None:  # uninterpreted: read the trace under its printed name
                 key = to_smv(n)
                 return [self.value(key, i, True) for i in rng]
-            return [f(*(s[i] for s in args)) for i in rng]
+            return [fn(*(s[i] for s in args)) for i in rng]
         if op == "ite":
             c, x, y = (self.series(s) for s in a)
             return [x[i] if c[i] else y[i] for i in rng]
@@ -175,7 +175,8 @@ class _Evaluator:
                 for i in range(L - 1, -1, -1):
                     out[i] = (x[i] or out[i + 1]) if op == "F" else (x[i] and out[i + 1])
                 return out
-            return [agg(x[min(j, L)] for j in range(i + n.lo, i + n.hi + 1)) for i in rng]
+            lo, hi = window(n)
+            return [agg(x[min(j, L)] for j in range(i + lo, i + hi + 1)) for i in rng]
         x, y = self.series(a[0]), self.series(a[1])
         out = [False] * (L + 1)
         out[L] = y[L]
@@ -204,7 +205,8 @@ class _Evaluator:
                     out.append(acc)
                 return out + [False]
             agg = any if op == "O" else all
-            return [agg(x[j] for j in range(max(0, i - n.hi), i - n.lo + 1))
+            lo, hi = window(n)
+            return [agg(x[j] for j in range(max(0, i - hi), i - lo + 1))
                     for i in range(L)] + [False]
         x, y = self.series(a[0]), self.series(a[1])
         out = []

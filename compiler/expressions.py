@@ -14,7 +14,7 @@ from fretc.common.errors import FretishError
 from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long
 
 from fretc.compiler import ir
-from fretc.compiler.ir import FALSE, FTP, TRUE, F, G, H, Node, O, S, U, X, Y, and_, implies, not_, or_
+from fretc.compiler.ir import FALSE, FTP, TRUE, F, G, H, Node, O, S, U, X, Y, and_, implies, name_of, not_, or_
 from fretc.compiler.printers import expr_text
 
 __all__ = ["Expander", "SemanticsError", "mentions_time"]
@@ -23,6 +23,11 @@ __all__ = ["Expander", "SemanticsError", "mentions_time"]
 class SemanticsError(FretishError):
     """A requirement that parses but cannot be formalized (bad duration, bad function
     argument). ``span`` points at the offending part of the sentence."""
+
+    # the position in the file, set by fretc.compiler.build when the requirement's is known
+    source: str
+    line: int
+    column: int
 
     def __init__(self, message: str, span: A.Span | None = None):
         super().__init__(message)
@@ -135,7 +140,7 @@ class Expander:
         raise SemanticsError(f"{e.name}: the bound must be a non-negative integer literal",
                              getattr(a, "span", e.span))
 
-    def _bounds(self, e: A.Call, x: "Expander"):
+    def _bounds(self, e: A.Call, x: Expander):
         """(m, n, p) of ``f(n, p)`` (m = 0) or ``f(m, n, p)``."""
         args = e.args
         if len(args) == 2:
@@ -231,8 +236,8 @@ class Expander:
             return ir.num(e.text)
         if isinstance(e, A.Unary) and e.op == "-":
             inner = self.term(e.operand)
-            if inner.op == "num" and not inner.name.startswith("-"):
-                return ir.num("-" + inner.name)
+            if inner.op == "num" and not name_of(inner).startswith("-"):
+                return ir.num("-" + name_of(inner))
             return Node("neg", (inner,))
         if isinstance(e, A.Binary) and e.op in A.ARITH_OPS:
             return ir.arith(e.op, self.term(e.left), self.term(e.right))

@@ -17,6 +17,8 @@ to the full build (:func:`fretc.compiler.semantics.formalize`) when
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from fretc.compiler.ir import Node
 from fretc.compiler.template_table import ATOMS as _ATOMS
 from fretc.compiler.template_table import Template
@@ -57,7 +59,7 @@ def _bound(b, n):
     return b
 
 
-def opaque_safe(tmpl: Template, atoms, n: int | None) -> bool:
+def opaque_safe(tmpl: Template, atoms: Sequence[Node | None], n: int | None) -> bool:
     """Rules 1 and 2 of the module docstring: no atom is inspected by a constructor
     (:func:`inspected`), and every pair of formulas the template's construction compared
     and found different is still different with the requirement's atoms (``atoms``: the
@@ -110,7 +112,8 @@ def _plain_conditions(tmpl: Template) -> tuple:
     return conds
 
 
-def plain_compared_safe(tmpl: Template, one, atoms, n: int | None) -> bool:
+def plain_compared_safe(tmpl: Template, one: Sequence[Node | None],
+                        atoms: Sequence[Node | None], n: int | None) -> bool:
     """:func:`_compared_safe` for plain atoms: ``one`` the four atoms (mode, condition,
     stop, response), ``atoms`` them three times (ft, ft_inf, pt)."""
     for conj in _plain_conditions(tmpl):

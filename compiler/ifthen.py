@@ -91,7 +91,7 @@ def same_meaning(a: Node, b: Node, exhaustive_atoms: int = 14) -> tuple[bool, ..
     _atoms(b, atoms)
     keys = list(atoms)
     if len(keys) <= exhaustive_atoms:
-        rows = itertools.product((False, True), repeat=len(keys))
+        rows: Iterable[tuple[bool, ...]] = itertools.product((False, True), repeat=len(keys))
     else:
         import random  # lazy: only for many atoms (start-up time of fretc FILE)
         rnd = random.Random(0)

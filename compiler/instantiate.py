@@ -47,6 +47,12 @@ random sentences over the whole grammar, FRET's vectors and the case-study corpu
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
+
 from fretc.fretish import ast as A
 
 from fretc.compiler.expressions import Expander, SemanticsError, mentions_time
@@ -76,6 +82,7 @@ def _bound_texts(n: int | None) -> list:
         if len(_BOUND_TEXTS) > 4096:
             _BOUND_TEXTS.clear()
             _BOUND_TEXTS[None] = [None] * (MAX_OFFSET - MIN_OFFSET + 1)
+        assert n is not None  # (None's texts are there from the start)
         texts = _BOUND_TEXTS[n] = [str(n + k) for k in range(MIN_OFFSET, MAX_OFFSET + 1)]
     return texts
 
@@ -92,7 +99,8 @@ class InstantiatedFormalization(Formalization):
     def __init__(self, req: A.Requirement, tick_period: Fraction | None, tmpl: Template,
                  atoms: tuple, texts: list, variables: list, warnings: list,
                  ticks: int | None, pt_causal: bool, plain: bool = False):
-        self.key = req.key
+        assert req.key is not None  # (a free-form requirement is never instantiated)
+        self.key: str = req.key
         self.variables = variables
         self.warnings = warnings
         self.ticks = ticks
@@ -100,10 +108,10 @@ class InstantiatedFormalization(Formalization):
         self.probability = probability_bound(req.probability)
         self._req, self._period, self._tmpl = req, tick_period, tmpl
         self._atoms, self._texts = atoms, texts
-        self._full = None
-        self._smv_values = None
+        self._full: Formalization | None = None
+        self._smv_values: list | None = None
         self._plain = plain  # the same four atoms in ft, ft_inf and pt
-        self._spot_values = None
+        self._spot_values: list | None = None
 
     def _build(self) -> Formalization:
         f = self._full
@@ -151,7 +159,7 @@ class InstantiatedFormalization(Formalization):
         fmt, pick = t.pt
         return ft, ft_inf, fmt % pick(values), self.spot("ft"), self.spot("ft_inf")
 
-    def json_forms(self, enc, seps: tuple) -> str | None:
+    def json_forms(self, enc: Callable[[str], str], seps: tuple) -> str | None:
         """The five printed forms (as :meth:`printed`) as JSON strings escaped by ``enc``
         (``json``'s ``encode_basestring_ascii``), separated by ``seps`` (the four texts
         between them): one ``%`` formatting of the template's escaped forms
@@ -202,7 +210,7 @@ class InstantiatedFormalization(Formalization):
                 values = self._spot_values = self._values(one * 3)
             return fmt % pick(values)
         lo = 0 if which == "ft" else _ATOMS  # only that formula's atoms: pt's have past
-        texts = [None] * (3 * _ATOMS)
+        texts: list[str | None] = [None] * (3 * _ATOMS)
         for i in range(lo, lo + _ATOMS):
             a = self._atoms[i]
             if a is not None:
@@ -328,7 +336,7 @@ def _timed(req, tick_period, shape: tuple, exprs: tuple, one: list,
         return formalize(req, tick_period)
     # variables in sentence order: mode, condition, stop, response (of ft); Left and
     # Right are made of the mode's names, which come first: not walked
-    variables = {}
+    variables: dict[str, None] = {}
     done = {id(left), id(right), id(right_inf)}
     for a, d in zip(atoms[:_ATOMS], names):
         if d is None:

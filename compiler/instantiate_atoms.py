@@ -45,7 +45,8 @@ class PlainExpander(Expander):
         self.names: dict = {}
 
     # The common shapes (names, comparisons, and/or/implies/xor/iff, negation, literals,
-    # arithmetic) are dispatched on the AST node's exact type and build the nodes
+    # arithmetic) are dispatched on the AST node's exact type (saved as t: mypy does not
+    # narrow e through t, hence the type: ignore comments) and build the nodes
     # Expander builds for them, in the same order (children left to right); any other
     # shape, or an error, is Expander's own code.
     def bool(self, e: A.Expr) -> Node:
@@ -53,15 +54,15 @@ class PlainExpander(Expander):
         for an expression without temporal functions."""
         t = type(e)
         if t is _Var:
-            return self._name(e.name, "ap")
+            return self._name(e.name, "ap")  # type: ignore[union-attr]  # e's type is t
         if t is _Binary:
-            op = e.op
+            op = e.op  # type: ignore[union-attr]  # e's type is t
             if op in _COMPARISON_OPS:  # Expander: ir.cmp, no derived atom (no preReal here)
-                return Node("cmp", (self.term(e.left), self.term(e.right)), name=op)
+                return Node("cmp", (self.term(e.left), self.term(e.right)), name=op)  # type: ignore[union-attr]  # e's type is t
             if op in _BOOL_OPS:  # Expander: Node(op) for & | ->, ir.xor, ir.iff
-                return Node(op, (self.bool(e.left), self.bool(e.right)))
-        elif t is _Unary and e.op == "!":
-            return ir.not_(self.bool(e.operand))
+                return Node(op, (self.bool(e.left), self.bool(e.right)))  # type: ignore[union-attr]  # e's type is t
+        elif t is _Unary and e.op == "!":  # type: ignore[union-attr]  # e's type is t
+            return ir.not_(self.bool(e.operand))  # type: ignore[union-attr]  # e's type is t
         return Expander.bool(self, e)
 
     def _name(self, name: str, op: str) -> Node:
@@ -84,11 +85,11 @@ class PlainExpander(Expander):
         """``e`` as a numeric IR term, as :meth:`fretc.compiler.expressions.Expander.term` builds it."""
         t = type(e)
         if t is _Var:
-            return self._name(e.name, "var")
+            return self._name(e.name, "var")  # type: ignore[union-attr]  # e's type is t
         if t is _NumLit:
-            return name_node("num", e.text)  # ir.num
-        if t is _Binary and e.op in _ARITH_OPS:  # ir.arith
-            return Node("arith", (self.term(e.left), self.term(e.right)), name=e.op)
+            return name_node("num", e.text)  # type: ignore[union-attr]  # ir.num
+        if t is _Binary and e.op in _ARITH_OPS:  # type: ignore[union-attr]  # ir.arith
+            return Node("arith", (self.term(e.left), self.term(e.right)), name=e.op)  # type: ignore[union-attr]  # e's type is t
         if isinstance(e, A.Call) and e.name in _TIME_NAMES:
             raise Timed  # preInt, preReal
         return Expander.term(self, e)
@@ -164,28 +165,28 @@ class SharingExpander(Expander):
         requirement (:meth:`fretc.compiler.expressions.Expander.bool`'s result otherwise)."""
         t = type(e)
         if t is _Var:
-            name = e.name
+            name = e.name  # type: ignore[union-attr]  # e's type is t
             return FTP if name == "FTP" else name_node("ap", name)
         if t is _Binary:
-            op = e.op
+            op = e.op  # type: ignore[union-attr]  # e's type is t
             if op in _COMPARISON_OPS:
-                return self._atom(Node("cmp", (self.term(e.left), self.term(e.right)),
+                return self._atom(Node("cmp", (self.term(e.left), self.term(e.right)),  # type: ignore[union-attr]  # e's type is t
                                        name=op))
             if op in _BOOL_OPS:
-                return Node(op, (self.bool(e.left), self.bool(e.right)))
-        elif t is _Unary and e.op == "!":
-            return ir.not_(self.bool(e.operand))
+                return Node(op, (self.bool(e.left), self.bool(e.right)))  # type: ignore[union-attr]  # e's type is t
+        elif t is _Unary and e.op == "!":  # type: ignore[union-attr]  # e's type is t
+            return ir.not_(self.bool(e.operand))  # type: ignore[union-attr]  # e's type is t
         return Expander.bool(self, e)
 
     def term(self, e: A.Expr) -> Node:
         """``e`` as a numeric IR term with shared name nodes (see :meth:`bool`)."""
         t = type(e)
         if t is _Var:
-            return name_node("var", e.name)  # ir.var
+            return name_node("var", e.name)  # type: ignore[union-attr]  # ir.var
         if t is _NumLit:
-            return name_node("num", e.text)  # ir.num
-        if t is _Binary and e.op in _ARITH_OPS:  # ir.arith
-            return Node("arith", (self.term(e.left), self.term(e.right)), name=e.op)
+            return name_node("num", e.text)  # type: ignore[union-attr]  # ir.num
+        if t is _Binary and e.op in _ARITH_OPS:  # type: ignore[union-attr]  # ir.arith
+            return Node("arith", (self.term(e.left), self.term(e.right)), name=e.op)  # type: ignore[union-attr]  # e's type is t
         return Expander.term(self, e)
 
     def _past_function(self, e: A.Call) -> Node:

@@ -34,7 +34,11 @@ negation, and the identities FRET's own optimizer uses, e.g. ``p S (p & FTP) = H
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Container, Iterator
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fretc.fretish.ast import Probability
 
 
 class Node:
@@ -43,7 +47,7 @@ class Node:
 
     __slots__ = ("op", "args", "name", "lo", "hi", "_hash", "text", "ztext", "stext")
 
-    def __init__(self, op: str, args: tuple["Node", ...] = (), name: str | None = None,
+    def __init__(self, op: str, args: tuple[Node, ...] = (), name: str | None = None,
                  lo: int | None = None, hi: int | None = None):
         # plain attribute stores, same shape as common.errors' __init__s (kept: a __slots__
         # class's fields)
@@ -52,13 +56,13 @@ class Node:
         self.name = name
         self.lo = lo
         self.hi = hi
-        self._hash = None  # computed on first use (most nodes are never hashed)
+        self._hash: int | None = None  # computed on first use (most nodes are never hashed)
         # memo slots of compiler.printers (the FRET/SMV text with FTP printed as FTP, and as
         # (Z FALSE); the Spot text): a node's text is built once per node, however often a
         # formula shares it
-        self.text = None
-        self.ztext = None
-        self.stext = None  # and the Spot text (compiler.printers.to_spot)
+        self.text: str | None = None
+        self.ztext: str | None = None
+        self.stext: str | None = None  # and the Spot text (compiler.printers.to_spot)
 
     def __hash__(self) -> int:
         h = self._hash
@@ -87,6 +91,24 @@ class Node:
         """True for ``F G O H`` with a ``[lo, hi]`` window."""
         return self.hi is not None
 
+
+
+def name_of(n: Node) -> str:
+    """``n.name`` of a node whose op names something (``ap``, ``var``, ``num``, ``cmp``,
+    ``arith``, ``fn``, ``call``, ``P``). Raises ``ValueError`` for a node without a name."""
+    name = n.name
+    if name is None:
+        raise ValueError(f"IR node {n.op!r} has no name")
+    return name
+
+
+def window(n: Node) -> tuple[int, int]:
+    """``(lo, hi)`` of a bounded ``F G O H`` node (:attr:`Node.bounded`). Raises
+    ``ValueError`` for an unbounded one."""
+    lo, hi = n.lo, n.hi
+    if lo is None or hi is None:
+        raise ValueError(f"IR node {n.op!r} has no [lo, hi] window")
+    return lo, hi
 
 #: while not None, the list :func:`and_`, :func:`or_` and :func:`S` append each pair of
 #: formulas they compared and found different (``a & a = a``, ``a | a = a``, FRET's since
@@ -370,14 +392,14 @@ def walk(node: Node) -> Iterator[Node]:
 
 def variables(node: Node) -> list:
     """Names of boolean and numeric variables, in order of first appearance."""
-    seen = {}
+    seen: dict[str | None, None] = {}
     for n in walk(node):
         if n.op in ("ap", "var") and n.name not in seen:
             seen[n.name] = None
     return list(seen)
 
 
-def has_op(node: Node, ops) -> bool:
+def has_op(node: Node, ops: Container[str]) -> bool:
     """Does any sub-node of ``node`` have an ``op`` in ``ops``?"""
     return any(n.op in ops for n in walk(node))
 
@@ -419,6 +441,9 @@ class ProbabilityBound:
     """
 
     __slots__ = ("op", "p", "text")
+    op: str
+    p: float
+    text: str
 
     def __init__(self, op: str, text: str):
         if op not in BOUND_OPS:
@@ -465,7 +490,7 @@ class ProbabilityBound:
                 "<": rate < self.p, "=": rate == self.p, "!=": rate != self.p}[self.op]
 
 
-def probability_bound(prob) -> ProbabilityBound | None:
+def probability_bound(prob: Probability | None) -> ProbabilityBound | None:
     """The :class:`ProbabilityBound` of a parsed ``fretish.ast.Probability`` (None for
     None)."""
     return None if prob is None else ProbabilityBound(prob.op, prob.value)

@@ -22,7 +22,7 @@ import re
 from collections.abc import Sequence
 
 from fretc.compiler import ir
-from fretc.compiler.ir import FALSE, TRUE, Node
+from fretc.compiler.ir import FALSE, TRUE, Node, window
 from fretc.compiler.printers import to_smv
 
 #: Give up beyond this many residual states (the module then has no LTL3 automaton).
@@ -106,13 +106,14 @@ def _relation(x: Node, y: Node) -> int | None:
         return _combine([None if r is None else -r, _relation(x.args[1], y.args[1])])
     if op in ("&", "|", "U", "V", "X") or (op in ("F", "G") and x.hi is None):
         return _combine(_relation(a, b) for a, b in zip(x.args, y.args))
-    if op in ("F", "G") and x.lo == 0:
-        if x.hi == y.hi:
+    if op in ("F", "G") and x.lo == 0:  # (x.lo == y.lo: both bounded)
+        (_, xhi), (_, yhi) = window(x), window(y)
+        if xhi == yhi:
             bound = 0
         elif op == "F":
-            bound = -1 if x.hi < y.hi else 1
+            bound = -1 if xhi < yhi else 1
         else:
-            bound = 1 if x.hi < y.hi else -1
+            bound = 1 if xhi < yhi else -1
         return _combine([_relation(x.args[0], y.args[0]), bound])
     return None
 
@@ -182,10 +183,11 @@ def progress(n: Node, letter: dict[Node, bool], memo: dict[Node, Node]) -> Node:
         now = progress(a[0], letter, memo)
         out = _disj([now, n]) if op == "F" else _conj([now, n])
     elif op in ("F", "G"):
-        if n.lo > 0:
-            out = Node(op, a, lo=n.lo - 1, hi=n.hi - 1)
+        lo, hi = window(n)
+        if lo > 0:
+            out = Node(op, a, lo=lo - 1, hi=hi - 1)
         else:
-            rest = (ir.F if op == "F" else ir.G)(a[0], 0, n.hi - 1)
+            rest = (ir.F if op == "F" else ir.G)(a[0], 0, hi - 1)
             now = progress(a[0], letter, memo)
             out = _disj([now, rest]) if op == "F" else _conj([now, rest])
     elif op == "U":

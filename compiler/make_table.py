@@ -42,7 +42,9 @@ class SymbolicBound(int):
     offset) for the constructors' comparisons, printed as the format field of its offset.
     ``AssertionError`` for an offset outside ``MIN_OFFSET .. MAX_OFFSET``."""
 
-    def __new__(cls, offset: int):
+    offset: int
+
+    def __new__(cls, offset: int) -> SymbolicBound:
         if not MIN_OFFSET <= offset <= MAX_OFFSET:
             raise AssertionError(f"template bound n{offset:+d} out of range")
         self = super().__new__(cls, _SENTINEL + offset)
@@ -161,12 +163,12 @@ def unify(x: Node, y: Node, out: list) -> bool:
     for bx, by in ((x.lo, y.lo), (x.hi, y.hi)):
         sx, sy = type(bx) is SymbolicBound, type(by) is SymbolicBound
         if sx and sy:
-            if bx.offset != by.offset:
+            if bx.offset != by.offset:  # type: ignore[union-attr]  # sx and sy
                 return False
         elif sx or sy:
             if (bx if sx else by) is None or (by if sx else bx) is None:
                 return False
-            out.append([2, bx.offset, by] if sx else [2, by.offset, bx])
+            out.append([2, bx.offset, by] if sx else [2, by.offset, bx])  # type: ignore[union-attr]
         elif bx != by:
             return False
     return all(unify(a, b, out) for a, b in zip(x.args, y.args))
@@ -201,7 +203,7 @@ def write_table(folder: str) -> int:
     return len(ALL_KEYS)
 
 
-def main(argv=None) -> None:
+def main(argv: list[str] | None = None) -> None:
     """``python -m fretc.compiler.make_table [--out DIR]``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=TABLE_DIR, help="folder (default: %(default)s)")

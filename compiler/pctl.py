@@ -30,11 +30,16 @@ conjunction or disjunction of two bounds.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from fretc.compiler import ir
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 from fretc.compiler.printers import mangle, to_smv
 from fretc.compiler.semantics import marked_ft_inf
+
+if TYPE_CHECKING:
+    from fretc.fretish import ast as A
+    from fractions import Fraction
 
 __all__ = ["Pctl", "pctl_of", "pctl_key", "prism_text", "strip_bounds", "bound_structure",
            "prism_property", "ALMOST_SURE", "PROBABILITY_KEYS"]
@@ -86,7 +91,7 @@ class Pctl:
         return bound_structure(self.tree)
 
 
-def pctl_of(req, tick_period=None) -> Pctl:
+def pctl_of(req: A.Requirement, tick_period: Fraction | None = None) -> Pctl:
     """The :class:`Pctl` of a parsed requirement (not free-form) with the tick period
     ``tick_period`` (seconds, or None as :func:`fretc.compiler.semantics.formalize`).
     Raises :class:`fretc.compiler.expressions.SemanticsError` as ``formalize`` does."""
@@ -95,6 +100,7 @@ def pctl_of(req, tick_period=None) -> Pctl:
     tree = marked_ft_inf(req, tick_period, lambda t: Node("P", (t,), name=name))
     if (req.scope.kind, req.condition.kind) != ("null", "null"):
         tree = Node("P", (tree,), name=ALMOST_SURE)
+    assert req.key is not None  # (formalize refused a free-form requirement)
     return Pctl(pctl_key(req.key, b is not None), tree, b)
 
 
@@ -191,7 +197,7 @@ def _prism(x: Node, go) -> str:
     if op in ("ap", "var"):
         return mangle(x.name)
     if op == "num":
-        return x.name
+        return name_of(x)
     if op == "P":  # parenthesized inside a formula, as FRET does (prism_text: not at the top)
         return f"(P{x.name} [ {go(a[0])} ])"
     if op == "!":
@@ -225,10 +231,10 @@ def prism_property(pctl: Pctl, name: str) -> str:
 def _prism_bounds(n: Node) -> Node:
     """``n`` with ``=``/``!=`` bounds written as PRISM's (:func:`prism_property`)."""
     args = tuple(_prism_bounds(a) for a in n.args)
-    if n.op != "P" or not n.name.startswith(("=", "!=")):
+    if n.op != "P" or not name_of(n).startswith(("=", "!=")):
         return n if args == n.args else Node(n.op, args, n.name, n.lo, n.hi)
-    eq = n.name.startswith("=")
-    text = n.name[1:] if eq else n.name[2:]
+    eq = name_of(n).startswith("=")
+    text = name_of(n)[1:] if eq else name_of(n)[2:]
     p = float(text)
 
     def b(op: str) -> Node:

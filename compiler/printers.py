@@ -19,7 +19,7 @@ import re
 from fretc.fretish import ast as A
 from fretc.fretish.words import FRET_RESERVED, RESERVED_LETTERS, RESERVED_WORDS
 
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 
 #: FRET's names for the special characters of identifiers (../shared/fretish/README.md section
 #: 6b, "Names"); each prints as ``_XXX_``.
@@ -106,7 +106,7 @@ def _smv_text(n: Node, ftp: str, memo: str) -> str:
     if op in ("ap", "var"):
         return mangle(n.name)
     if op == "num":
-        return n.name
+        return name_of(n)
     if op == "!":
         return f"(! {sub(0)})"
     if op in ("cmp", "arith"):

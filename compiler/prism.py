@@ -13,16 +13,21 @@ not formalize, and free-form ones, are comment lines with the reason.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from fretc.common.textsafe import one_line
 
 from fretc.compiler.codegen import file_stems
 from fretc.compiler.pctl import prism_property
 
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
+
 __all__ = ["emit_prism"]
 
 
-def emit_prism(compiled) -> dict[str, str]:
+def emit_prism(compiled: Sequence[Compiled]) -> dict[str, str]:
     """One properties text per requirement file: ``{file stem: text}`` in input order
     (:func:`fretc.compiler.codegen.file_stems`; written as ``STEM.props``)."""
     groups: dict[str, list] = {}

@@ -19,8 +19,7 @@ from dataclasses import dataclass, field
 
 from fretc.common.errors import FretishError
 
-from fretc.compiler import ir
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of, window
 from fretc.compiler.printers import to_smv
 
 #: An expression read once is inlined into the expression that reads it up to this nesting
@@ -172,9 +171,9 @@ def _direct(n: Node, a: list[str], code: StepCode) -> str | None:
         code.uses_first = True
         return "first"
     if op in ("ap", "var"):
-        return _read(n.name, code, numeric=op == "var")
+        return _read(name_of(n), code, numeric=op == "var")
     if op == "num":
-        return _number(n.name)
+        return _number(name_of(n))
     if (op == "fn" and n.name not in _PY_FN) or op == "call":
         return _opaque(n, code, numeric=op == "fn")
     if op == "past":
@@ -189,13 +188,13 @@ def _expression(n: Node, a: list[str], code: StepCode,
     """A pure expression of this tick (inlined where it is read once), or None."""
     op = n.op
     if op == "cmp":
-        return f"{a[0]} {_PY_CMP[n.name]} {a[1]}"
+        return f"{a[0]} {_PY_CMP[name_of(n)]} {a[1]}"
     if op == "arith":
         if n.name in ("+", "-", "*"):
             return f"{a[0]} {n.name} {a[1]}"
-        return f"{_PY_ARITH_FN[n.name]}({a[0]}, {a[1]})"
+        return f"{_PY_ARITH_FN[name_of(n)]}({a[0]}, {a[1]})"
     if op == "fn":
-        return f"{_PY_FN[n.name]}({', '.join(a)})"
+        return f"{_PY_FN[name_of(n)]}({', '.join(a)})"
     if op == "pre":
         prev, idx = code.slot("0")
         code.uses_first = True
@@ -242,7 +241,7 @@ def _bounded(n: Node, arg: str, out: str, code: StepCode) -> str:
     ``[start, end]`` pairs (the module's ``_once_within``: amortized O(1) per tick, memory at
     most the runs within the last ``hi + 1`` ticks); ticks before the first count as not
     holding, so ``O`` is false and ``H`` true there (FRET's past-time semantics)."""
-    op, lo, hi = n.op, n.lo, n.hi
+    op, (lo, hi) = n.op, window(n)
     bit = arg if op == "O" else f"not {arg}"
     if lo == 0:
         # ticks since the argument last held, capped at hi + 1

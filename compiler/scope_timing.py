@@ -30,9 +30,11 @@ def ft_timing(kind: str, negate: bool, R: Node, right: Node, n: int | None,
         return or_(G(r, 0, k), V(right, r))
 
     def until(r: Node) -> Node:
+        assert stop is not None  # until and before have a stop condition
         return or_(V(stop, or_(r, stop)), V(right, r))
 
     def before(r: Node) -> Node:
+        assert stop is not None
         return V(or_(r, right), not_(stop))
 
     def eventually(r: Node) -> Node:
@@ -52,11 +54,11 @@ def ft_timing(kind: str, negate: bool, R: Node, right: Node, n: int | None,
         return eventually(nR) if negate else V(right, R)
     if kind == "never":
         return eventually(R) if negate else V(right, nR)
-    if kind == "within":
-        return for_(nR, n) if negate else within(R, n)
-    if kind == "for":
-        return within(nR, n) if negate else for_(R, n)
-    if kind == "after":
+    if kind in ("within", "for", "after") and n is not None:  # (they have a duration)
+        if kind == "within":
+            return for_(nR, n) if negate else within(R, n)
+        if kind == "for":
+            return within(nR, n) if negate else for_(R, n)
         if negate:
             return or_(within(R, n), for_(nR, n + 1))
         return and_(for_(nR, n), within(R, n + 1))
@@ -86,7 +88,10 @@ class _PastTiming:
         return not_(S(not_(r), and_(not_(r), start)))
 
     def vac(self, f: Node) -> Node:  # no trigger yet in this interval, or f
-        return f if self.trig is None else or_(self.no_cond, f)
+        if self.trig is None:
+            return f
+        assert self.no_cond is not None  # a trigger comes with its no-condition formula
+        return or_(self.no_cond, f)
 
     def immediately(self, r: Node) -> Node:
         return self.since_left(implies(self.focus, r))
@@ -116,6 +121,7 @@ class _PastTiming:
 
     def until(self, r: Node) -> Node:
         stop = self.stop
+        assert stop is not None  # until and before have a stop condition
         not_stopped = S(not_(stop), and_(not_(stop), self.focus))
         return self.since_left(self.vac(implies(not_stopped, r)))
 
@@ -124,8 +130,10 @@ class _PastTiming:
         if trig is None:
             enforce = and_(not_(left), Y(self.occurs_by(r, left)))
         else:
+            assert self.no_cond is not None  # a trigger comes with its no-condition formula
             enforce = or_(self.no_cond, and_(and_(not_(left), not_(trig)),
                                              Y(self.occurs_by(r, trig))))
+        assert self.stop is not None  # until and before have a stop condition
         return self.since_left(implies(self.stop, enforce))
 
     def not_after(self, r: Node, k: int) -> Node:
@@ -160,11 +168,11 @@ def pt_timing(kind: str, negate: bool, R: Node, left: Node, trig: Node | None,
         return t.eventually(nR) if negate else t.always(R)
     if kind == "never":
         return t.eventually(R) if negate else t.always(nR)
-    if kind == "within":
-        return t.for_(nR, n) if negate else t.within(R, n)
-    if kind == "for":
-        return t.within(nR, n) if negate else t.for_(R, n)
-    if kind == "after":
+    if kind in ("within", "for", "after") and n is not None:  # (they have a duration)
+        if kind == "within":
+            return t.for_(nR, n) if negate else t.within(R, n)
+        if kind == "for":
+            return t.within(nR, n) if negate else t.for_(R, n)
         if negate:
             return t.not_after(R, n)
         return and_(t.for_(nR, n), t.within(R, n + 1))
@@ -176,14 +184,14 @@ def pt_timing(kind: str, negate: bool, R: Node, left: Node, trig: Node | None,
 
 
 # --------------------------------------------------------------------------- scopes
-def ft_markers(m: Node, last: Node = LAST):
+def ft_markers(m: Node, last: Node = LAST) -> tuple[Node, Node]:
     """ft: the point just before M starts (FiM) and M's last point before it stops (LiM).
     ``last`` is ``LAST`` (finite traces) or FALSE (infinite traces, ft_inf)."""
     nl = not_(last)
     return (and_all(not_(m), nl, X(m)), and_all(m, nl, X(not_(m))))
 
 
-def pt_markers(m: Node):
+def pt_markers(m: Node) -> tuple[Node, Node]:
     """pt: first point of an M interval (FiM), first point after it (LiM)."""
     start = and_(m, or_(FTP, Y(not_(m))))
     end = and_(not_(m), Y(m))
@@ -195,6 +203,7 @@ def ft_right(kind: str, m: Node | None, last: Node) -> Node:
     ft_inf)."""
     if kind in ("null", "after", "onlyBefore"):
         return last
+    assert m is not None  # the scopes with a mode
     if kind in ("notin", "onlyIn"):
         m = not_(m)
     fim, lim = ft_markers(m, last)
@@ -208,17 +217,19 @@ def fn_right(kind: str, m: Node | None, last: Node) -> Node:
     LAST disjunct), else LAST. ``last`` is ``LAST``, or FALSE for ft_inf."""
     if kind in ("null", "after", "onlyBefore"):
         return last
+    assert m is not None  # the scopes with a mode
     if kind in ("in", "onlyAfter"):
         return and_(m, or_(last, X(not_(m))))
     return and_all(not_(m), not_(last), X(m))
 
 
-def pt_endpoints(kind: str, m: Node | None):
+def pt_endpoints(kind: str, m: Node | None) -> tuple[Node, Node]:
     """pt: (left, right) with ``left`` true at an interval's first point and ``right`` at
     the first point after it (``LAST`` when intervals run to the end of the trace); FRET's
     past-time endpoint rules (FiM, LiM, FNiM, LNiM, FFiM, FLiM)."""
     if kind == "null":
         return FTP, LAST
+    assert m is not None  # the scopes with a mode
     if kind in ("in", "notin", "onlyIn"):
         return pt_markers(m if kind == "in" else not_(m))
     if kind in ("before", "onlyBefore"):
@@ -234,6 +245,7 @@ def ft_scope(kind: str, body: Node, m: Node | None, last: Node = LAST) -> Node:
     """Wrap the interval formula ``body`` (true at an interval's first point) by the scope."""
     if kind == "null":
         return body
+    assert m is not None  # the scopes with a mode
     fim, lim = ft_markers(m, last)
     if kind == "in":
         return and_(V(last, implies(fim, X(body))), implies(m, body))

@@ -25,7 +25,12 @@ rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
 
 from fretc.fretish import ast as A
 from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long
@@ -122,7 +127,8 @@ def formalize(req: A.Requirement, tick_period: Fraction | None = None) -> Formal
     return _formalize(req, tick_period)
 
 
-def marked_ft_inf(req: A.Requirement, tick_period: Fraction | None, mark) -> Node:
+def marked_ft_inf(req: A.Requirement, tick_period: Fraction | None,
+                  mark: Callable[[Node], Node]) -> Node:
     """The ft_inf formula of ``req`` (as :func:`formalize` builds it) with each occurrence of
     the timing's obligation wrapped by ``mark(T) -> Node`` (:func:`construct`): where FRET's
     probabilistic templates put a trigger's bound (:mod:`fretc.compiler.pctl`). Raises as
@@ -154,6 +160,7 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None, mark=None):
         # Scope conditions: temporal functions take FRET's endpoint-free forms.
         if scope == "null":
             return None
+        assert req.scope.mode is not None  # (a scope other than null has its mode)
         return Expander(kind, FTP, last, free=True).bool(req.scope.mode)
 
     ft, ft_inf, pt, used, px = construct(scope, cond, timing, n, mode, fields, mark)
@@ -163,12 +170,14 @@ def _formalize(req: A.Requirement, tick_period: Fraction | None, mark=None):
     variables = ir.variables(Node("vars", tuple(x for x in used if x is not None)))
     # pt_causal from the pt tree itself: the scope mode is expanded by its own Expander,
     # whose future-time functions px does not see
+    assert req.key is not None  # (template_parts refused a free-form requirement)
     return Formalization(req.key, ft, ft_inf, pt, variables, warnings, n,
                          pt_causal=not ir.has_op(pt, ("future",)),
                          probability=ir.probability_bound(req.probability))
 
 
-def template_parts(req: A.Requirement, tick_period: Fraction | None):
+def template_parts(req: A.Requirement, tick_period: Fraction | None
+                   ) -> tuple[str, str, str, int | None, list[str]]:
     """(scope, condition kind, timing, ticks or None, warnings) of a requirement; raises
     :class:`SemanticsError` for a free-form requirement or a bad duration."""
     if req.freeform:
@@ -185,7 +194,10 @@ def template_parts(req: A.Requirement, tick_period: Fraction | None):
     return scope, cond, timing, n, warnings
 
 
-def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields, mark=None):
+def construct(scope: str, cond: str, timing: str, n: int | None,
+              mode: Callable[[str, Node], Node | None],
+              fields: Callable[[Expander], tuple[Node, Node | None, Node | None]],
+              mark: Callable[[Node], Node] | None = None) -> tuple:
     """The three formulas of one template key, from its atoms.
 
     ``mode(kind, last)`` gives the scope condition (None for the null scope) for formula
@@ -212,11 +224,13 @@ def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields, m
             T = mark(T)
         if cond == "null":
             body = T
-        elif cond == "holding":
-            body = V(right, implies(c, T))
         else:
-            rise = and_all(not_(c), not_(right), X(c))
-            body = and_(V(right, implies(rise, X(T))), implies(c, T))
+            assert c is not None  # (a condition other than null has its expression)
+            if cond == "holding":
+                body = V(right, implies(c, T))
+            else:
+                rise = and_all(not_(c), not_(right), X(c))
+                body = and_(V(right, implies(rise, X(T))), implies(c, T))
         return ft_scope(scope, body, m, last), (m, c, s, R)
 
     ft, used = future(LAST)
@@ -228,6 +242,7 @@ def construct(scope: str, cond: str, timing: str, n: int | None, mode, fields, m
     if cond == "null":
         trig = no_cond = None
     else:
+        assert c is not None  # (a condition other than null has its expression)
         trig = c if cond == "holding" else and_(c, or_(Y(not_(c)), left))
         no_cond = S(not_(c), and_(not_(c), left))
     base = pt_timing(timing, negate, R, left, trig, no_cond, n, s)

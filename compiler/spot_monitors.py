@@ -14,6 +14,8 @@ fresh BDD dictionary whose variables are registered in atom order.
 
 from __future__ import annotations
 
+from typing import Any
+
 from fretc.compiler import dfa
 from fretc.compiler.pt_step import CodegenError
 
@@ -27,7 +29,7 @@ POWERSET_MAX = 10000#: Options of Spot's ``low`` translation (Spot's ``-x`` opti
 #: states by default, 0.33 s and 90 states).
 LOW_XARGS = "branch-post=0,exprop=0"
 
-def bdd_code(f, aps: list[str]) -> str:
+def bdd_code(f: Any, aps: list[str]) -> str:  # f: a spot.formula (Spot has no types)
     """Python code of a Spot Boolean formula ``f`` over the letter ``sub`` (atom ``aps[i]``
     is bit ``i``). Raises :class:`~fretc.compiler.pt_step.CodegenError` for an operator that is not
     Boolean."""
@@ -87,7 +89,7 @@ def spot_automata(text: str, n_atoms: int, max_states: int, table_max_aps: int) 
     if first is None:
         first, terminal = _safety_side(spot.tl_simplifier(
             spot.tl_simplifier_options(True, False, False)).simplify(f)), False
-    got = {"bad": None, "good": None}
+    got: dict[str, dict | None] = {"bad": None, "good": None}
     if first is not None:
         if terminal and n_atoms <= table_max_aps:
             # the guarantee side: the negation of the safety one
@@ -242,7 +244,7 @@ def _spot_monitor(text: str, negate: bool, n_atoms: int, max_states: int,
             "complete": False, "states": len(chains)}
 
 
-def letter_rows(aut, n_atoms: int) -> list[list[int]]:
+def letter_rows(aut: Any, n_atoms: int) -> list[list[int]]:  # aut: a spot.twa_graph
     """The transition table of a deterministic Spot automaton over the atoms ``a0`` ..
     ``a{n_atoms-1}``: ``rows[state][letter]`` is the successor state (-1: no edge), a letter
     being the bit vector of the atoms' values (bit i = ``a{i}``), ``2**n_atoms`` per row.

@@ -31,6 +31,8 @@ import json
 import operator
 import os
 import re
+from collections.abc import Callable, Sequence
+from typing import Any
 
 from fretc.fretish import ast as A
 
@@ -65,10 +67,13 @@ def file_name(key: tuple) -> str:
     return f"{scope}-{cond}-{timing}{suffix}.json"
 
 
+#: a printed form of a template: ``(format, getter)``, ``format % getter(values)`` its text
+Form = tuple[str, Callable[[Sequence[Any]], tuple[Any, ...]]]
+
 _FIELD = re.compile(r"\{(\d+)\}")
 
 
-def compile_text(text: str | None):
+def compile_text(text: str | None) -> tuple[str, tuple[int, ...]] | None:
     """``(format, order)`` of a template text whose fields are ``{i}``: ``format %
     tuple(values[i] for i in order)`` fills them in (None stays None)."""
     if text is None:
@@ -105,13 +110,22 @@ class Template:
 
     __slots__ = ("forms", "compared", "json", "plain_compared", "ft", "ft_inf", "pt",
                  "ft_spot", "ft_inf_spot")
+    forms: tuple[tuple[str, tuple[int, ...]] | None, ...]
+    compared: tuple[Any, ...]
+    json: tuple[Any, tuple[str, ...], Any] | None  # (enc, seps, json_format's result)
+    plain_compared: tuple[Any, ...] | None
+    ft: Form  # the FRET/SMV forms are always there,
+    ft_inf: Form
+    pt: Form
+    ft_spot: Form | None  # a Spot form may not be
+    ft_inf_spot: Form | None
 
     def __init__(self, data: dict):
         self.forms = tuple(compile_text(data[name]) for name in FORM_NAMES)
         self.compared = _tuples(data["fallback"])
         self.json = None
         self.plain_compared = None
-        (self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot) = (
+        (self.ft, self.ft_inf, self.pt, self.ft_spot, self.ft_inf_spot) = (  # type: ignore[assignment]  # FRET's forms are never None
             None if f is None else (f[0], _picker(f[1])) for f in self.forms)
 
 
@@ -151,7 +165,7 @@ _JSON_PLAIN_SPOT = bytes(ATOMS + 6 + f % ATOMS if f < BOUND0 else ATOMS + f - BO
 _JSON_SPOT_OF = bytes(_JSON_SPOT + f for f in range(BOUND0 + 6)).ljust(256, b"\xff")
 
 
-def json_format(forms: tuple, enc, seps: tuple):
+def json_format(forms: tuple, enc: Callable[[str], str], seps: tuple) -> tuple | None:
     """``(format, getter, plain getter)`` of the five printed forms ``forms`` (a
     :class:`Template`'s, ``(format, order)`` each, None where Spot has none) as
     JSON strings (``json``'s escaper ``enc``), ft, ft_inf, pt, ft_spot, ft_inf_spot,

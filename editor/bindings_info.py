@@ -21,8 +21,12 @@ A file that does not parse gives its variables' places by a scan of its ``[varia
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
 from dataclasses import dataclass, field
 from pathlib import Path
+
+if TYPE_CHECKING:
+    from fretc.signals.bindings.expression import Expr
 
 __all__ = ["VariableInfo", "BindingsFile", "bindings_beside", "read_bindings", "FIELD_UNITS"]
 
@@ -231,7 +235,7 @@ def _static(node) -> str:
     return "unknown"
 
 
-def unit_of(node, schemas: dict) -> str | None:
+def unit_of(node: Expr, schemas: dict) -> str | None:
     """The unit of a numeric expression (module docstring), or None."""
     from fretc.signals.bindings.expression import BinOp, Const, Field, FuncCall, UnaryOp
 
@@ -249,7 +253,7 @@ def unit_of(node, schemas: dict) -> str | None:
             return "Hz"
         if f == "tf":
             comp = node.args[-1].value if isinstance(node.args[-1], Const) else None
-            return {"x": "m", "y": "m", "z": "m", "yaw": "rad", "age": "s"}.get(comp)
+            return {"x": "m", "y": "m", "z": "m", "yaw": "rad", "age": "s"}.get(str(comp))
         if f in _SAME_UNIT or f == "delta":
             args = node.args[:1] if type(node.args[-1]).__name__ == "Span" else node.args
             units = {unit_of(a, schemas) for a in args}

@@ -18,6 +18,7 @@ diagram only for a requirement whose diagram is at most :data:`MAX_DIAGRAM_TICKS
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,6 +28,10 @@ from fretc.fretish.words import RESERVED_WORDS
 
 from fretc.editor.bindings_info import VariableInfo, bindings_beside
 from fretc.editor.sentences import CompileCache, SentenceCache
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
+    from fretc.check.solver import SpotWorker
 
 __all__ = ["Problem", "Analysis", "Memory", "analyse", "check_problems", "KEYWORDS",
            "SAVE_WORK", "MAX_DOCUMENT", "MAX_PROBLEMS", "MAX_HOVER", "MAX_DIAGRAM_TICKS"]
@@ -88,7 +93,7 @@ class Analysis:
     lines: list[str] = field(default_factory=list)
     memory: Memory | None = None
 
-    def requirement_at(self, line: int):
+    def requirement_at(self, line: int) -> Compiled | None:
         """The compiled requirement whose text spans 0-based ``line``, or None."""
         best = None
         for c, start in zip(self.compiled, self.starts):
@@ -337,7 +342,8 @@ def _width(lines: list[str], ln: int) -> int:
     return len(lines[ln]) if ln < len(lines) else 0
 
 
-def check_problems(a: Analysis, work: int = SAVE_WORK, worker=None) -> list[Problem]:
+def check_problems(a: Analysis, work: int = SAVE_WORK, worker: SpotWorker | None = None
+                   ) -> list[Problem]:
     """``fretc check``'s conflicts, unsatisfiable and vacuous requirements of the analysed
     document, under a work budget of ``work`` units a query (answers past it say nothing
     here): one diagnostic per requirement involved, at its first line (error for a

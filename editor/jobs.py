@@ -54,14 +54,14 @@ async def run_job(request: dict, timeout: float) -> dict:
     try:
         out, _err = await asyncio.wait_for(proc.communicate(json.dumps(request).encode()),
                                            timeout)
-    except asyncio.TimeoutError:
+    except TimeoutError:
         raise JobFailed(f"not finished within {timeout:g} s") from None
     finally:
         if proc.returncode is None:
             _kill(proc.pid)
             try:
                 await asyncio.wait_for(proc.wait(), 5)
-            except (asyncio.TimeoutError, ProcessLookupError):
+            except (TimeoutError, ProcessLookupError):
                 pass
     try:
         return json.loads(out.decode("utf-8"))

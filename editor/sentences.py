@@ -17,18 +17,24 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+from typing import TYPE_CHECKING
 from collections import OrderedDict
 
 from fretc.common.errors import FretishSyntaxError
 from fretc.fretish import ast as A
 from fretc.fretish.parser import parse
 
+if TYPE_CHECKING:
+    from fretc.fretish.entry import RequirementEntry
+    from fretc.compiler.semantics import Formalization
+    from fretc.compiler.build import Compiled
+
 __all__ = ["SentenceCache", "CompileCache", "variable_spans", "variable_uses", "Span"]
 
 Span = tuple[str, int, int, int]  # (variable, relative 1-based line, 0-based col, end col)
 
 
-def variable_spans(node) -> list[Span]:
+def variable_spans(node: A.Requirement) -> list[Span]:
     """Every variable written in the requirement ``node`` (:class:`fretc.fretish.ast.Requirement`),
     in text order: (name, 1-based line, 0-based column, 0-based end column) of its text, the
     line as parsed (relative for this module's sentences). A name written across lines
@@ -50,7 +56,7 @@ def variable_spans(node) -> list[Span]:
     return sorted(out, key=lambda s: (s[1], s[2]))
 
 
-def variable_uses(formalization) -> dict[str, str]:
+def variable_uses(formalization: Formalization) -> dict[str, str]:
     """Variable -> ``"boolean"`` or ``"number"``: how the requirement's formulas read it
     (``"both"`` when they do both, which the compiler never makes)."""
     from fretc.compiler import ir
@@ -62,7 +68,8 @@ def variable_uses(formalization) -> dict[str, str]:
         for n in ir.walk(f):
             kind = "boolean" if n.op == "ap" else "number" if n.op == "var" else None
             if kind is not None:
-                out[n.name] = kind if out.get(n.name, kind) == kind else "both"
+                name = ir.name_of(n)
+                out[name] = kind if out.get(name, kind) == kind else "both"
     return out
 
 
@@ -98,6 +105,7 @@ class SentenceCache:
             self._items.move_to_end(key)
         if got[1] is not None:
             raise copy.copy(got[1])
+        assert got[0] is not None  # (parsed, or the error raised above)
         return got[0]
 
     def spans(self, requirement: A.Requirement) -> list[Span]:
@@ -121,14 +129,15 @@ class CompileCache:
         self.limit = limit
         self._items: OrderedDict = OrderedDict()
 
-    def compile(self, entry):
+    def compile(self, entry: RequirementEntry) -> tuple[Compiled, dict[str, str]]:
         """The :class:`fretc.compiler.build.Compiled` of ``entry`` (whose positions are relative);
         its :func:`variable_uses` as ``compiled.uses`` is kept beside it: (compiled, uses)."""
         from fretc.compiler.build import compile_entry
 
         err = entry.error
         key = (entry.id, entry.source, entry.text, entry.column, entry.tick_period,
-               id(entry.requirement), err and (err.message, err.line, err.column),
+               id(entry.requirement),
+               err and (err.message, err.line, err.column),  # type: ignore[attr-defined]  # (a positioned FretishError)
                entry.inputs, entry.outputs, entry.rationale, entry.parent)
         got = self._items.get(key)
         if got is None or got[2] is not entry.requirement:

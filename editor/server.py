@@ -113,13 +113,13 @@ class _State:
         self.jobs: dict[str, asyncio.Task] = {}
         self.analyses = 0
         self._tidied = 0
-        self._tidy_handle = None
+        self._tidy_handle: asyncio.TimerHandle | None = None
         self._workspace: Workspace | None = None
 
     def workspace(self) -> Workspace:
         if self._workspace is None:
             ws = self.server.workspace
-            roots = [to_fs_path(f.uri) for f in ws.folders.values()] if ws.folders else []
+            roots = [p for f in (ws.folders or {}).values() if (p := to_fs_path(f.uri))]
             if not roots and ws.root_path:
                 roots = [ws.root_path]
             self._workspace = Workspace(roots, self.memory, self.open_text)
@@ -278,7 +278,7 @@ def make_server() -> LanguageServer:
 
     server = LanguageServer("fretc", version("fretc"))
     st = _State(server)
-    server.fretc_state = st  # (the tests and main() reach the jobs through it)
+    server.fretc_state = st  # type: ignore[attr-defined]  # (the tests and main() reach the jobs through it)
 
     @server.feature(T.TEXT_DOCUMENT_DID_OPEN)
     @_guarded(None)
@@ -452,5 +452,5 @@ def main() -> None:
     try:
         serve_stdio(server)
     finally:
-        for task in list(server.fretc_state.jobs.values()):
+        for task in list(server.fretc_state.jobs.values()):  # type: ignore[attr-defined]  # (set above)
             task.cancel()

@@ -24,6 +24,11 @@ import logging
 import re
 import sys
 import threading
+from typing import BinaryIO, TYPE_CHECKING
+from collections.abc import AsyncIterator, Callable
+
+if TYPE_CHECKING:
+    from pygls.lsp.server import LanguageServer
 
 __all__ = ["serve_stdio", "MAX_HEADER", "MAX_MESSAGE", "read_messages"]
 
@@ -52,7 +57,9 @@ class _Reader:
         return await loop.run_in_executor(self.executor, self.stream.read, n)
 
 
-async def read_messages(reader, problem=lambda text: None):
+async def read_messages(reader: asyncio.StreamReader,
+                        problem: Callable[[str], None] = lambda text: None
+                        ) -> AsyncIterator[bytes]:
     """Yield the bodies (bytes) of the well-formed messages read by ``reader`` (``readline``
     of at most :data:`MAX_HEADER` bytes, ``read(n)``), until the end of the input;
     ``problem(text)`` is told of each malformed one (module docstring)."""
@@ -134,7 +141,8 @@ def _refuse(protocol, body: bytes, exc: Exception) -> None:
         pass
 
 
-def serve_stdio(server, stdin=None, stdout=None) -> None:
+def serve_stdio(server: LanguageServer, stdin: BinaryIO | None = None,
+                stdout: BinaryIO | None = None) -> None:
     """Serve ``server`` (a pygls ``LanguageServer``) over standard input and output until the
     client exits or the input ends (pygls's ``start_io`` with this module's reader)."""
     from pygls.io_ import StdoutWriter

@@ -93,7 +93,8 @@ class Workspace:
     def _walk(self, suffix: str) -> list[str]:
         """The walk of :meth:`files`: at most :data:`MAX_FOLDERS` folders are looked into,
         and the files found add up to at most :data:`MAX_WORKSPACE_BYTES`."""
-        out, folders, size = [], 0, 0
+        out: list[str] = []
+        folders, size = 0, 0
         for root in self.roots:
             for folder, dirs, names in os.walk(root):
                 dirs[:] = sorted(d for d in dirs if not d.startswith(".")
@@ -190,7 +191,7 @@ class Workspace:
 
     def ids(self) -> set[str]:
         """The requirement ids of the workspace's requirement files."""
-        out = set()
+        out: set[str] = set()
         for p in self.files(".fret"):
             a = self.analysis(p)
             if a is not None:

@@ -15,7 +15,11 @@ spans.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
 
 SCOPE_KINDS = ("null", "in", "notin", "onlyIn", "after", "before", "onlyAfter", "onlyBefore")
 CONDITION_KINDS = ("null", "regular", "holding")
@@ -107,7 +111,7 @@ class Unary:
     """``op`` is ``"!"`` (logical not; FRETish ``!`` and ``~``) or ``"-"`` (arithmetic)."""
 
     op: str
-    operand: "Expr"
+    operand: Expr
     span: Span = _span()
 
 
@@ -124,8 +128,8 @@ class Binary:
     :data:`ARITH_OPS`."""
 
     op: str
-    left: "Expr"
-    right: "Expr"
+    left: Expr
+    right: Expr
     span: Span = _span()
 
 
@@ -137,7 +141,7 @@ class Call:
     is ``prevOcc(P, Q)``, ``at the next occurrence of P, Q`` is ``nextOcc(P, Q)``)."""
 
     name: str
-    args: tuple["Expr", ...]
+    args: tuple[Expr, ...]
     span: Span = _span()
 
 
@@ -255,7 +259,7 @@ class Requirement:
         return f"{self.scope.kind},{self.condition.kind},{self.timing.kind},satisfaction"
 
 
-def walk(expr: Expr):
+def walk(expr: Expr) -> Iterator[Expr]:
     """Yield ``expr`` and all its sub-expressions, pre-order."""
     stack = [expr]
     while stack:

@@ -74,7 +74,9 @@ def resolve(req: A.Requirement, constants: dict[str, tuple[str, str]]) -> A.Requ
     if name is None or name not in constants:
         return req
     amount, unit = constants[name]
-    d = dataclasses.replace(req.timing.duration, amount=amount, unit=unit)
+    duration = req.timing.duration
+    assert duration is not None  # unresolved() named it
+    d = dataclasses.replace(duration, amount=amount, unit=unit)
     return dataclasses.replace(req, timing=dataclasses.replace(req.timing, duration=d))
 
 

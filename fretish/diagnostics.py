@@ -12,8 +12,10 @@ set at that point (Lark's interactive parser).
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from lark import Lark
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from fretc.common.errors import FretishSyntaxError
@@ -46,7 +48,7 @@ _HINT_SHALL = ("a requirement needs 'shall' next to its component: "
                "'[the] component shall ...' or '... shall [the] component ...'")
 
 
-def expected_names(exp) -> list[str]:
+def expected_names(exp: Iterable[str]) -> list[str]:
     """The terminals ``exp`` (Lark terminal names of ``grammar.lark``) as what a writer of
     FRETish would call them ("a scope", "an expression", "'shall'"), each once, in the
     order of a sentence."""
@@ -110,7 +112,7 @@ def _position(text: str, pos: int) -> tuple[int, int]:
 
 
 def make_error(text: str, source: str, line0: int, col0: int, pos: int, message: str,
-               expected, hint: str | None) -> FretishSyntaxError:
+               expected: Sequence[str], hint: str | None) -> FretishSyntaxError:
     """The error at offset ``pos`` of ``text``, which starts at line ``line0``, column
     ``col0`` (1-based) of ``source``: the position in file coordinates, the offending line
     of the text, the ``expected`` names and the ``hint``."""
@@ -143,7 +145,7 @@ def _previous_word(text: str, pos: int) -> str:
     return word[m.start():].lower() if m else ""
 
 
-def accepted_before(parser, text: str, start: str, pos: int) -> set | None:
+def accepted_before(parser: Lark, text: str, start: str, pos: int) -> set[str] | None:
     """Terminals ``parser`` accepts just before offset ``pos``, found by replaying the
     parse up to there. (An LALR parser may perform reductions before it notices a bad
     token; the set it reports is then that of a later state, e.g. only "end of sentence"
@@ -152,7 +154,7 @@ def accepted_before(parser, text: str, start: str, pos: int) -> set | None:
         ip = parser.parse_interactive(text, start=start)
         try:
             for tok in ip.iter_parse():
-                if tok.start_pos >= pos:
+                if tok.start_pos >= pos:  # type: ignore[operator]  # lexer tokens have it
                     break
         except UnexpectedInput:
             pass          # the lexer stopped at pos: the parser state is the one before it
@@ -161,7 +163,7 @@ def accepted_before(parser, text: str, start: str, pos: int) -> set | None:
         return None
 
 
-def translate(e: Exception, parser, text: str, source: str, line: int, column: int,
+def translate(e: Exception, parser: Lark, text: str, source: str, line: int, column: int,
               start: str = "start") -> FretishSyntaxError:
     """Turn a Lark exception raised by ``parser`` (start symbol ``start``) on ``text``
     into a :class:`FretishSyntaxError` with a hint. Never raises; a Lark failure that is
@@ -198,6 +200,7 @@ def _locate(e: Exception, text: str) -> tuple[int, str | None, str, set] | None:
         return tok.start_pos, tok.value, tok.type, set(e.expected or ())
     if isinstance(e, UnexpectedCharacters):
         pos = e.pos_in_stream
+        assert pos is not None  # UnexpectedCharacters is made with its position
         m = _WORD.match(text, pos)
         return pos, m.group(0) if m else text[pos], "CHAR", set(e.allowed or ())
     if isinstance(e, UnexpectedEOF):
@@ -280,6 +283,6 @@ def _explain(f: _Failure) -> tuple[int, str, list[str], str | None]:
         return pos, message, names, _HINT_UNITS
     if ttype == "CHAR" and value and value[0] == '"':
         return pos, "unterminated quoted name", names, 'close the quote: "name"'
-    if ttype == "CHAR":
+    if ttype == "CHAR" and value is not None:  # a CHAR failure has its character
         return pos, f"unexpected character '{value[0]}'{where}", names, None
     return pos, message, names, None

@@ -49,11 +49,12 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from typing import NoReturn
 
 from fretc.common.errors import FretishError, FretishFileError, FretishSyntaxError
 from fretc.fretish.parser import parse
-from fretc.fretish.entry import RequirementEntry
+from fretc.fretish.entry import Fraction, Requirement, RequirementEntry  # entry's imports
 from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
 from fretc.common.units import parse_seconds
 
@@ -156,7 +157,7 @@ class _FretReader:
         self.constants: dict[str, tuple[str, str]] = {}
         self.constant_line: dict[str, int] = {}
 
-    def fail(self, msg: str, ln: int, col: int = 1, hint: str | None = None):
+    def fail(self, msg: str, ln: int, col: int = 1, hint: str | None = None) -> NoReturn:
         raise FretishFileError(msg, source=self.source, line=ln, column=col,
                                text_line=self.lines[ln - 1].rstrip("\r"), hint=hint)
 
@@ -323,15 +324,15 @@ _FULLTEXT = r'"fulltext"\s*:\s*"'  # compiled on first use (re's cache), as _ATT
 _KNOWN = ("reqid", "parent_reqid", "rationale", "fulltext")
 
 
-def load_fret_text(text: str, source: str, parse_sentence=None) -> list[RequirementEntry]:
+def load_fret_text(text: str, source: str, parse_sentence: Callable[..., Requirement] | None = None
+                   ) -> list[RequirementEntry]:
     """The requirements of a ``.fret`` document given as text (an editor's buffer), as
     :func:`load_requirements` reads a ``.fret`` file named ``source``. ``parse_sentence``:
     called instead of :func:`fretc.fretish.parser.parse` with the same arguments (the
     language server's cache of parsed sentences, :mod:`fretc.editor.document`).
 
     Raises:
-        FretishFileError: the file structure is wrong (positioned, as for a file).
-    """
+        FretishFileError: the file structure is wrong (positioned, as for a file)."""
     return _FretReader(source, text, parse_sentence).read()
 
 
@@ -496,8 +497,7 @@ def _files_of(paths, skipped: list[str] | None = None) -> list[str]:
         elif os.path.isfile(path):
             out.append(path)
         else:
-            raise FretishFileError("no such file or folder", source=path, line=1,
-                                   column=1)
+            raise FretishFileError("no such file or folder", source=path, line=1, column=1)
     return out
 
 

@@ -22,6 +22,10 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # fractions is imported lazily (start-up time)
+    from fractions import Fraction
 
 from fretc.fretish import ast as A
 from fretc.common.errors import FretishError
@@ -149,7 +153,7 @@ _DURATION_HINT = ("use a coarser tick period or a shorter duration; monitors kee
                   "bit per tick of a bounded duration")
 
 
-def duration_too_long(ticks) -> str:
+def duration_too_long(ticks: Fraction | float) -> str:
     """The message for a duration of ``ticks`` ticks above :data:`MAX_DURATION_TICKS`."""
     shown = f"{int(ticks):,}" if ticks == int(ticks) else f"{float(ticks):,.1f}"
     return (f"a duration of {shown} ticks is beyond the limit of {MAX_DURATION_TICKS:,} "

@@ -47,8 +47,8 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
-import sys
 import threading
+from typing import Any, cast
 
 import lark
 from lark.exceptions import LarkError, UnexpectedInput
@@ -147,9 +147,11 @@ class _Builder:
         if not isinstance(x, lark.Token):
             return x.span
         dl, dc = self.dl, self.dc
-        return A.Span(x.line + dl, x.column + dc if x.line == 1 else x.column,
-                      x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,
-                      x.start_pos, x.end_pos)
+        # Lark types a Token's position optional (a token made by hand has none); the
+        # lexer's tokens, the only ones here, always have theirs
+        return A.Span(x.line + dl, x.column + dc if x.line == 1 else x.column,  # type: ignore[operator, arg-type]
+                      x.end_line + dl, x.end_column + dc if x.end_line == 1 else x.end_column,  # type: ignore[operator, arg-type]
+                      x.start_pos, x.end_pos)  # type: ignore[arg-type]
 
     def join(self, a, b) -> A.Span:
         """The span from the start of ``a`` to the end of ``b`` (tokens or nodes)."""
@@ -397,7 +399,7 @@ def _read_grammar() -> str:
         return f.read()
 
 
-def build_lark(**options) -> lark.Lark:
+def build_lark(**options: Any) -> lark.Lark:
     """A new Lark parser for ``grammar.lark`` (start symbols ``start`` and ``expr``), LALR
     with the contextual lexer and a new :class:`_Builder` applied while parsing. ``options``
     go to :class:`lark.Lark` (the tests pass ``debug=True`` to see conflicts, :func:`cached_lark`
@@ -432,10 +434,11 @@ def _run(start: str, text: str, source: str, line: int, column: int):
     with _lock:
         if _parser is None:
             _parser = cached_lark()
-        builder = _parser.options.transformer
+        builder = cast(_Builder, _parser.options.transformer)
         builder.begin(text, line, column)
         try:
-            result = _parser.parse(text, start=start)
+            # the transformer (_Builder) makes the tree the AST: a Requirement or an Expr
+            result = cast(Any, _parser.parse(text, start=start))
             if start == "start":
                 check_requirement(result)
             else:

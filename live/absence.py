@@ -11,6 +11,13 @@ requirements that do not read the topic are not affected.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fretc.logs.base import Gap
+    from fretc.live.source import WatchSource
+
 __all__ = ["Absences", "NO_TIME", "run_gaps"]
 
 #: The start of a span opened before any message was used: below every log time.
@@ -57,7 +64,7 @@ class Absences:
                 f"evaluated (unknown) for the requirements that read {topic}, never held "
                 "over; the monitors keep their state")
 
-    def at(self, topics, t: int) -> bool:
+    def at(self, topics: Iterable[str], t: int) -> bool:
         """Whether some topic of ``topics`` had no publisher at log time ``t`` (ns)."""
         for topic in topics:
             for start, end, *_rest in self.spans.get(topic, ()):
@@ -65,7 +72,7 @@ class Absences:
                     return True
         return False
 
-    def left_for_good(self, topics, used: int) -> int | None:
+    def left_for_good(self, topics: Iterable[str], used: int) -> int | None:
         """The earliest start of a span of ``topics`` still open at the run's end while the
         run went on without it (``used``: messages used in all); None when there is none (a
         topic that left with every other, at the run's end, is the run's end)."""
@@ -81,7 +88,7 @@ class Absences:
         return min(starts) if starts else None
 
 
-def run_gaps(src) -> list:
+def run_gaps(src: WatchSource) -> list[Gap]:
     """The gaps of a watched run (``src``: its :class:`fretc.live.source.WatchSource`) as
     the audit's (:class:`fretc.logs.base.Gap`): a lost connection (every topic, between the
     last message before it and the first after it) and a publisher that left and came back

@@ -46,8 +46,9 @@ import json
 import struct
 import threading
 import time
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 from fretc.live.events import EventQueue
 
@@ -83,7 +84,7 @@ def require_websockets() -> None:
         raise MissingDependency(f"fretc watch needs the websockets package: {WATCH_HINT}")
 
 
-def closed_in_order(ws) -> bool:
+def closed_in_order(ws: Any) -> bool:  # a websockets connection, new or legacy
     """The server sent a close frame (RFC 6455 section 5.5.1) before the connection ended:
     an orderly close, not a network fault. Works with websockets' new (``protocol``) and
     legacy (``close_rcvd``) connection objects."""
@@ -116,7 +117,7 @@ class Advertised:
     unreadable: str = ""
 
     @staticmethod
-    def from_json(ch: dict) -> "Advertised":
+    def from_json(ch: dict) -> Advertised:
         """An advertisement of the Foxglove protocol's ``advertise`` message.
 
         Raises:
@@ -133,14 +134,14 @@ class Advertised:
                           str(ch.get("schemaEncoding", "") or ""))
 
 
-def frame_shape(value) -> str:
+def frame_shape(value: object) -> str:
     """The JSON kind of a decoded frame or field (``array``, ``number``, ``string``, ...),
     for protocol problems."""
     return {dict: "object", list: "array", str: "string", int: "number", float: "number",
             bool: "boolean", type(None): "null"}.get(type(value), type(value).__name__)
 
 
-def json_object(frame) -> tuple[dict | None, str | None]:
+def json_object(frame: str | bytes) -> tuple[dict | None, str | None]:
     """A text frame of a JSON protocol (Foxglove WebSocket, rosbridge v2: every text frame
     is one JSON object) decoded: ``(object, None)``, or ``(None, problem)`` with the
     sentence of the protocol problem when it is not JSON text or not an object."""
@@ -185,13 +186,13 @@ class WebSocketClient:
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stop: asyncio.Event | None = None
-        self._ws = None
+        self._ws: Any = None  # the open websockets connection
         self._started = threading.Event()
         self._session_messages = 0  # messages put in the current session
         self._session_problems = 0  # protocol problems in the current session
 
     # -- thread control --------------------------------------------------------------------
-    def start(self) -> "WebSocketClient":
+    def start(self) -> WebSocketClient:
         """Connect in a background thread (returns at once). Raises
         :class:`MissingDependency` without ``websockets``."""
         require_websockets()
@@ -245,7 +246,7 @@ class WebSocketClient:
             self._session_messages = self._session_problems = 0
             try:
                 async with websockets.connect(
-                        self.url, subprotocols=list(self.subprotocols or ()) or None,
+                        self.url, subprotocols=list(self.subprotocols or ()) or None,  # type: ignore[arg-type]  # (Subprotocol is a str)
                         max_size=MAX_FRAME_BYTES, open_timeout=5, ping_interval=5, ping_timeout=10,
                         compression=None) as ws:
                     self._check(ws)
@@ -284,7 +285,7 @@ class WebSocketClient:
                 return
             try:
                 await asyncio.wait_for(self._stop.wait(), delay)
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 pass
             delay = min(self.max_backoff, delay * 2)
 
@@ -339,7 +340,7 @@ class FoxgloveClient(WebSocketClient):
         except ConnectionClosed:
             return
 
-    async def _frame(self, ws, frame, st: "_FoxgloveState", now: int) -> None:
+    async def _frame(self, ws, frame, st: _FoxgloveState, now: int) -> None:
         """Handle one frame: a binary ``messageData`` (other binary opcodes, such as time and
         service responses, are not read) or a JSON text frame."""
         from websockets.exceptions import ConnectionClosed
@@ -362,6 +363,7 @@ class FoxgloveClient(WebSocketClient):
         if problem is not None:
             self._protocol(problem)
             return
+        assert msg is not None  # (no problem: an object)
         try:
             await self._text(ws, msg, st, now)
         except ConnectionClosed:
@@ -370,7 +372,7 @@ class FoxgloveClient(WebSocketClient):
             self._protocol(f"a {str(msg.get('op'))[:40]!r} frame of the wrong shape "
                            f"({type(exc).__name__}: {str(exc)[:200]}); ignored")
 
-    async def _text(self, ws, msg: dict, st: "_FoxgloveState", now: int) -> None:
+    async def _text(self, ws, msg: dict, st: _FoxgloveState, now: int) -> None:
         """Handle one JSON object frame (module docstring); raises on a field of the wrong
         shape (the caller reports it)."""
         op = msg.get("op")
@@ -393,9 +395,9 @@ class FoxgloveClient(WebSocketClient):
             if any(type(cid) is not int for cid in ids):
                 raise ValueError("channelIds holds other values than integers")
             for cid in ids:
-                sid = st.by_channel.pop(cid, None)
-                if sid is not None:
-                    topics.append(st.subs.pop(sid))
+                gone = st.by_channel.pop(cid, -1)  # (subscription ids are >= 0)
+                if gone >= 0:
+                    topics.append(st.subs.pop(gone))
             if topics:
                 self._put("unadvertise", now, topics)
         elif op == "serverInfo":

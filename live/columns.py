@@ -8,11 +8,15 @@ what the watch hands its judge (:class:`WatchPasses`) and the live table's pendi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from fretc.audit.columns import column_array
+
+if TYPE_CHECKING:
+    from fretc.signals.clock import Tick
+    from fretc.monitors.interval import Evidence
 
 __all__ = ["LiveColumns", "WatchPasses", "split_pending"]
 
@@ -29,7 +33,7 @@ class LiveColumns:
         self.lts: dict[str, list] = {t: [] for t in topics}
         self.times: list = []
 
-    def append(self, tick) -> None:
+    def append(self, tick: Tick) -> None:
         """Keep one :class:`~fretc.signals.clock.Tick`: its values, held log times and time."""
         v = tick.values
         for name in self.names:
@@ -40,7 +44,8 @@ class LiveColumns:
         self.times.append(tick.time)
         self.n += 1
 
-    def arrays(self, n: int | None = None):
+    def arrays(self, n: int | None = None
+               ) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
         """(times, variable -> values, topic -> held log times) of the first ``n`` ticks
         (all by default; a snapshot of ``n`` taken first is safe while another thread
         appends)."""
@@ -51,7 +56,7 @@ class LiveColumns:
         return times, cols, lts
 
 
-def split_pending(ev, n: int) -> tuple[int, int]:
+def split_pending(ev: Evidence, n: int) -> tuple[int, int]:
     """(violated, pending) of the failed obligations of ``ev`` (an
     :class:`~fretc.monitors.interval.Evidence` over the first ``n`` ticks of a run): pending
     when its window reaches the last tick and it failed only there (FRET's finite-trace

@@ -30,6 +30,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from typing import Any
 
 from fretc.live.client import WATCH_HINT, MissingDependency
 from fretc.live.events import EventQueue
@@ -105,7 +106,7 @@ class DdsClient:
         self._heard: set[str] = set()
         self._silent_reported: set[str] = set()
 
-    def start(self) -> "DdsClient":
+    def start(self) -> DdsClient:
         """Join the domain and start reading in a background thread (returns at once)."""
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
@@ -126,7 +127,7 @@ class DdsClient:
             self._thread.join(5)
         self._merge.stop()
         self._readers.clear()
-        self._builtin = self._dp = None
+        self._builtin = self._dp = None  # type: ignore[assignment]  # (closed)
 
     def _run(self) -> None:
         while not self._stop.is_set():
@@ -214,7 +215,7 @@ class DdsClient:
         if cls is None:
             self._readers[topic] = (None, ros)
             return
-        tp = Topic(self._dp, dds_topic(topic), cls)
+        tp: Topic[Any] = Topic(self._dp, dds_topic(topic), cls)
         self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
 
     def _read(self) -> bool:

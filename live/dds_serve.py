@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable
+from typing import Any
 
 from fretc.logs.decoding import build_typestore
 
@@ -41,11 +42,11 @@ class DdsServer:
         self.url = url
         self.domain = parse_url(url).domain
         self.participant = open_participant(self.domain, config_file)
-        self.channels: dict[str, object] = {}
+        self.channels: dict[str, Any] = {}  # topic -> the library's channel or writer
         self.skipped: dict[str, str] = {}
 
     def channel(self, topic: str, message_encoding: str, schema_name: str,
-                schema_encoding: str, schema_data: bytes):
+                schema_encoding: str, schema_data: bytes) -> Any:  # the writer, or None
         """Create the writer of ``topic`` (once); None for a channel that cannot be
         published (not CDR, or a schema rosbags cannot read)."""
         from cyclonedds.pub import DataWriter
@@ -65,7 +66,7 @@ class DdsServer:
         except Exception as exc:  # a schema rosbags cannot read
             self.skipped[topic] = f"schema {schema_name!r} cannot be read ({exc})"
             return None
-        tp = Topic(self.participant, dds_topic(topic), cls)
+        tp: Topic[Any] = Topic(self.participant, dds_topic(topic), cls)
         w = DataWriter(self.participant, tp, qos=writer_qos(topic))
         self.channels[topic] = w
         return w

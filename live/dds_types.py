@@ -20,6 +20,10 @@ programs) is read too, since DDS would otherwise refuse the match without a word
 from __future__ import annotations
 
 import threading
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["idl_struct", "open_participant", "take_raw", "write_raw", "reader_qos",
            "writer_qos", "LOOPBACK_XML"]
@@ -49,7 +53,7 @@ def _member_type(store, node):
     if kind == 1:  # BASE: (name, string bound)
         name, bound = args
         if name in ("string", "wstring"):
-            return T.bounded_str[bound] if bound else str
+            return T.bounded_str[bound] if bound else str  # type: ignore[misc]  # (subscripted at run time)
         t = _BASE[name]
         return bool if t == "bool" else getattr(T, t)
     if kind == 2:  # NAME: a nested message
@@ -57,11 +61,11 @@ def _member_type(store, node):
     inner, n = args
     sub = _member_type(store, inner)
     if kind == 3:  # ARRAY
-        return T.array[sub, n]
-    return T.sequence[sub, n] if n else T.sequence[sub]
+        return T.array[sub, n]  # type: ignore[misc]  # (cyclonedds' types are subscripted at run time)
+    return T.sequence[sub, n] if n else T.sequence[sub]  # type: ignore[misc]
 
 
-def idl_struct(store, typename: str) -> type:
+def idl_struct(store: Typestore, typename: str) -> type:
     """The ``cyclonedds.idl.IdlStruct`` of ROS type ``typename`` (``pkg/msg/Type``) named
     ``pkg::msg::dds_::Type_``, built from ``store``'s definition (module docstring); one
     class per store and type.
@@ -88,7 +92,7 @@ def idl_struct(store, typename: str) -> type:
         return _structs.setdefault(key, cls)
 
 
-def open_participant(domain: int, config_file: str | None = None):
+def open_participant(domain: int, config_file: str | None = None) -> Any:  # a DomainParticipant
     """A ``DomainParticipant`` on ``domain``: with ``config_file`` (Cyclone DDS XML, e.g.
     interfaces, peers, DDS Security / SROS2 settings) the domain is configured from it, else
     from ``CYCLONEDDS_URI`` or Cyclone DDS's defaults. One configuration per domain and
@@ -115,7 +119,7 @@ def open_participant(domain: int, config_file: str | None = None):
 READER_DEPTH = 20_000
 
 
-def reader_qos(offered=None, topic: str = ""):
+def reader_qos(offered: Any = None, topic: str = "") -> Any:  # cyclonedds Qos
     """The QoS a ROS 2 subscription to a publisher offering ``offered`` (a
     ``cyclonedds.qos.Qos``, or None) would use so as to match it: reliable when offered
     reliable, else best effort; transient-local when offered (and always for ``/tf_static``,
@@ -135,7 +139,7 @@ def reader_qos(offered=None, topic: str = ""):
                Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True))
 
 
-def writer_qos(topic: str = ""):
+def writer_qos(topic: str = "") -> Any:  # a cyclonedds Qos
     """The replay's writer QoS: reliable, keep all (a slow reader slows the replay down
     rather than losing messages), transient-local for ``/tf_static``."""
     from cyclonedds.qos import Policy, Qos
@@ -146,7 +150,7 @@ def writer_qos(topic: str = ""):
                else Policy.Durability.Volatile)
 
 
-def take_raw(reader, n: int = 256) -> list[tuple[bytes, object]]:
+def take_raw(reader: Any, n: int = 256) -> list[tuple[bytes, Any]]:  # a DataReader
     """Up to ``n`` samples of ``reader`` as (CDR bytes with header, SampleInfo); samples
     without data (an instance disposed, its writers gone) are skipped."""
     from cyclonedds._clayer import ddspy_take
@@ -158,7 +162,7 @@ def take_raw(reader, n: int = 256) -> list[tuple[bytes, object]]:
     return [(bytes(d), info) for d, info in got if info.valid_data]
 
 
-def write_raw(writer, data: bytes, source_ns: int) -> None:
+def write_raw(writer: Any, data: bytes, source_ns: int) -> None:  # a DataWriter
     """Write the CDR bytes ``data`` (with header) with ``source_ns`` as the sample's source
     timestamp. Raises RuntimeError when Cyclone DDS refuses it."""
     from cyclonedds._clayer import ddspy_write_ts

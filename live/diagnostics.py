@@ -22,8 +22,14 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from typing import Any, TYPE_CHECKING
 
 from fretc.live.ros2_names import standard_store
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
+    from fretc.audit.verdict import LogAudit
+    from fretc.live.watch import Watch
 
 __all__ = ["DIAGNOSTICS_TOPIC", "DIAGNOSTIC_ARRAY", "Status", "live_statuses",
            "final_statuses", "diagnostic_array", "DiagnosticsPublisher", "LEVELS"]
@@ -37,11 +43,11 @@ LEVELS = {"satisfied": 0, "vacuous": 0, "pending": 0, "violated": 2, "error": 2,
 Status = tuple[str, str, float | None, float | None, str]
 
 
-def live_statuses(watch) -> list[Status]:
+def live_statuses(watch: Watch) -> list[Status]:
     """The statuses of a running :class:`~fretc.live.watch.Watch` from its live state: violated
     once an obligation failed or the LTL3 verdict is violated; satisfied when the LTL3
     verdict is; unknown before any tick; pending otherwise."""
-    out = []
+    out: list[Status] = []
     for r in watch.plan.requirements:
         st = watch.live[r.index]
         first = None
@@ -63,7 +69,7 @@ def live_statuses(watch) -> list[Status]:
     return out
 
 
-def final_statuses(la, start_ns: int | None) -> list[Status]:
+def final_statuses(la: LogAudit, start_ns: int | None) -> list[Status]:
     """The statuses of the final verdicts of a watch's :class:`~fretc.audit.verdict.LogAudit`."""
     out = []
     for v in la.verdicts:
@@ -73,7 +79,8 @@ def final_statuses(la, start_ns: int | None) -> list[Status]:
     return out
 
 
-def diagnostic_array(statuses: list[Status], stamp_ns: int, store=None) -> bytes:
+def diagnostic_array(statuses: list[Status], stamp_ns: int, store: Typestore | None = None
+                     ) -> bytes:
     """The CDR bytes (with header) of a ``diagnostic_msgs/msg/DiagnosticArray`` of
     ``statuses`` (module docstring), stamped ``stamp_ns``."""
     store = store if store is not None else standard_store()
@@ -113,14 +120,14 @@ class DiagnosticsPublisher:
         self.open_server = open_server
         self.period = period
         self.sent = 0
-        self._server = None
+        self._server: Any = None  # the server the statuses are published on
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._last: list[Status] | None = None
         self._thread = threading.Thread(target=self._run, daemon=True,
                                         name="fretc-diagnostics")
 
-    def start(self) -> "DiagnosticsPublisher":
+    def start(self) -> DiagnosticsPublisher:
         """Start the publishing thread."""
         self._thread.start()
         return self
@@ -153,7 +160,7 @@ class DiagnosticsPublisher:
             except Exception:  # diagnostics never stop the watch; the next tick retries
                 continue
 
-    def finish(self, la) -> None:
+    def finish(self, la: LogAudit) -> None:
         """Publish the final verdicts of ``la`` and close the server."""
         self._stop.set()
         self._wake.set()

@@ -126,13 +126,15 @@ class EntityRecording:
         bad = {r.index: "; ".join(self.unreadable[t] for t in sorted(self.reads[r.index])
                                   if t in self.unreadable) for r in reqs}
         judged = [r for r in reqs if not bad[r.index]]
+        path = self.path
+        assert path is not None  # (the recording's, made with the recorder)
         try:
             self._recorder.close()
             got = audit_log(dataclasses.replace(self.plan, requirements=judged),
-                            self.path) if judged else LogAudit(log=la.log)
+                            path) if judged else LogAudit(log=la.log)
         finally:
             self._recorder = None
-            os.unlink(self.path)
+            os.unlink(path)
         out: list[Verdict] = []
         for r in reqs:  # the plan's order, as the audit's
             out += ([error(r, bad[r.index])] if bad[r.index] else
@@ -140,9 +142,9 @@ class EntityRecording:
                      if v.requirement == r.id or v.requirement.startswith(r.id + "[")])
         for v in out:
             v.log = la.log
-            v.error = v.error and v.error.replace(self.path, la.log)
-            v.unknown_reason = v.unknown_reason and v.unknown_reason.replace(self.path, la.log)
-            v.notes = [n.replace(self.path, la.log) for n in v.notes]
+            v.error = v.error and v.error.replace(path, la.log)
+            v.unknown_reason = v.unknown_reason and v.unknown_reason.replace(path, la.log)
+            v.notes = [n.replace(path, la.log) for n in v.notes]
             if la.damage_time_ns is not None:
                 _damaged(v, la.damage_time_ns)
             v.partial = la.partial and v.error is None

@@ -17,9 +17,10 @@ without a generated monitor (``offline``).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from fnmatch import fnmatchcase
 from types import SimpleNamespace
-from typing import Any, Callable
+from typing import Any
 
 from fretc.audit.entities import MAX_ENTITIES, entity_of_requirements
 from fretc.audit.passes import clock_key
@@ -64,8 +65,9 @@ class _Kind:
 
     def values(self, data: Any, log_time: int) -> list:
         """The key's values on one message of its topic (as fretc.audit.entities reads them)."""
-        st = EvalState()
-        st.msgs[self.key_topic], st.times[self.key_topic], st.now = data, log_time, log_time
+        st, topic = EvalState(), self.key_topic
+        assert topic is not None  # (values of a key of one topic)
+        st.msgs[topic], st.times[topic], st.now = data, log_time, log_time
         try:
             v = self.key._scalar(st)  # type: ignore[misc]
         except Exception:  # noqa: BLE001 - the audit at the end names the error

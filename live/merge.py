@@ -42,7 +42,7 @@ class MergeBuffer:
         self._stopped = False
         self._thread: threading.Thread | None = None
 
-    def start(self) -> "MergeBuffer":
+    def start(self) -> MergeBuffer:
         """Start the releasing thread."""
         self._thread = threading.Thread(target=self._run, daemon=True, name="fretc-merge")
         self._thread.start()

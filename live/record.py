@@ -6,10 +6,13 @@ recording gives the watch's verdicts."""
 from __future__ import annotations
 
 import json
-
+from typing import TYPE_CHECKING
 from mcap.writer import CompressionType, Writer
 
 from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit
 
 __all__ = ["Recorder"]
 
@@ -41,7 +44,7 @@ class Recorder:
                                 sequence=self.seq[topic])
         self.seq[topic] += 1
 
-    def finish(self, la) -> int:
+    def finish(self, la: LogAudit) -> int:
         """Write the verdict events of ``la`` and close the file; the number of events."""
         events = verdict_events(la.to_json())
         sid = self.writer.register_schema("foxglove.Log", "jsonschema",

@@ -29,11 +29,15 @@ from __future__ import annotations
 import functools
 import struct
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 from urllib.parse import parse_qs, urlsplit
 
 from rosbags.typesys.msg import normalize_msgtype
 
 from fretc.live.client import Advertised
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["Ros2Url", "parse_url", "dds_topic", "ros_topic_of_dds", "dds_type", "ros_type",
            "zenoh_key", "zenoh_topic_key", "parse_zenoh_key", "LivelinessToken",
@@ -233,7 +237,7 @@ def attachment_time(data: bytes | None) -> int | None:
 
 
 @functools.lru_cache(maxsize=8)
-def standard_store(msg_path: tuple[str, ...] = ()):
+def standard_store(msg_path: tuple[str, ...] = ()) -> Typestore:
     """rosbags' type store of ROS 2 Humble's standard types, with the ``.msg``/``.idl``
     types of ``msg_path`` (``--msg-path``, :mod:`fretc.logs.msg_path`) when given."""
     if msg_path:
@@ -245,7 +249,7 @@ def standard_store(msg_path: tuple[str, ...] = ()):
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
-def advertisement(cid: int, topic: str, ros: str, store, expected: str | None = None
+def advertisement(cid: int, topic: str, ros: str, store: Typestore, expected: str | None = None
                   ) -> Advertised:
     """The :class:`~fretc.live.client.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
     with the ``ros2msg`` definition ``store`` gives; an unreadable one (the watch then makes

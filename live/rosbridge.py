@@ -32,11 +32,14 @@ import base64
 import json
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from fretc.live.client import MAX_OTHER_CHANNELS, Advertised, WebSocketClient, frame_shape, json_object
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["RosbridgeClient", "json_to_cdr", "ros_url", "CLOCK_TOPIC"]
 
@@ -99,7 +102,7 @@ def _value(store, node, value):
     return [_value(store, inner, x) for x in items]
 
 
-def build_message(store, typename: str, doc: dict[str, Any]):
+def build_message(store: Typestore, typename: str, doc: dict[str, Any]) -> Any:  # its message
     """The rosbags message of ``typename`` from rosbridge's JSON ``doc`` (missing fields
     zero; ROS 1 ``secs``/``nsecs`` accepted for ROS 2 times).
 
@@ -115,14 +118,15 @@ def build_message(store, typename: str, doc: dict[str, Any]):
     return store.types[typename](**kwargs)
 
 
-def json_to_cdr(typename: str, doc: dict[str, Any], store=None) -> bytes:
+def json_to_cdr(typename: str, doc: dict[str, Any], store: Typestore | None = None) -> bytes:
     """rosbridge's JSON message -> CDR bytes of ``typename`` (a ROS 2 ``pkg/msg/Type``), with
     the types of ``store`` (default: ROS 2 Humble's standard types)."""
     store = store if store is not None else _store()
     return bytes(store.serialize_cdr(build_message(store, typename, doc), typename))
 
 
-def advertisement(cid: int, topic: str, type_name: str, store=None) -> Advertised:
+def advertisement(cid: int, topic: str, type_name: str, store: Typestore | None = None
+                  ) -> Advertised:
     """The :class:`~fretc.live.client.Advertised` of a rosbridge topic: CDR with the
     type's ``ros2msg`` definition, or no schema when the type store (``store``, default ROS
     2 Humble's standard types) does not know it."""
@@ -172,7 +176,7 @@ class RosbridgeClient(WebSocketClient):
                                   "id": cid}))
         try:
             msg = await asyncio.wait_for(fut, timeout)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             return None
         finally:
             replies.pop(cid, None)
@@ -183,7 +187,7 @@ class RosbridgeClient(WebSocketClient):
         from websockets.exceptions import ConnectionClosed  # (as websockets in _main)
 
         replies: dict[str, asyncio.Future] = {}
-        state = {"clock": None, "types": {}}
+        state: dict[str, Any] = {"clock": None, "types": {}}
         reader = asyncio.ensure_future(self._read(ws, replies, state))
         try:
             await self._subscribe_loop(ws, replies, state, reader)
@@ -264,6 +268,7 @@ class RosbridgeClient(WebSocketClient):
             if problem is not None:
                 self._protocol(problem)
                 continue
+            assert msg is not None  # (no problem: an object)
             try:
                 self._frame(msg, replies, state, now)
             except Exception as exc:  # a field of the wrong shape

@@ -15,6 +15,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Iterable
+from typing import Any
 
 from mcap.reader import make_reader
 
@@ -101,7 +102,7 @@ class FoxgloveServer:
         self.name = name
         self.context = fg.Context()
         self.listener = _Listener()
-        self.channels: dict[str, object] = {}
+        self.channels: dict[str, Any] = {}  # topic -> the library's channel or writer
         self._server = self._start(port)
         self.port = self._server.port
 
@@ -116,7 +117,7 @@ class FoxgloveServer:
         return f"ws://{self.host}:{self.port}"
 
     def channel(self, topic: str, message_encoding: str, schema_name: str,
-                schema_encoding: str, schema_data: bytes):
+                schema_encoding: str, schema_data: bytes) -> Any:  # a foxglove Channel
         """The channel of ``topic`` (created on first use with this schema)."""
         ch = self.channels.get(topic)
         if ch is None:
@@ -204,7 +205,7 @@ def advertise_mcap(path: str, server: FoxgloveServer,
         if summary is not None:
             pairs = [(ch, summary.schemas.get(ch.schema_id)) for ch in summary.channels.values()]
         else:
-            seen = {}
+            seen: dict[int, tuple[Any, Any]] = {}  # channel id -> (channel, schema)
             for schema, channel, _m in reader.iter_messages():
                 seen.setdefault(channel.id, (channel, schema))
             pairs = list(seen.values())

@@ -50,7 +50,7 @@ import queue
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from rosbags.typesys.msg import normalize_msgtype
@@ -149,7 +149,7 @@ class WatchSource(LogSource):
         self.ever_connected = False
         self.first_connect_wall: float | None = None
         self.last_reason = ""
-        self.gaps: list[tuple[int, int]] = []  # (last log time before, first after)
+        self.gaps: list[tuple[int, int]] = []  # type: ignore[assignment]  # (last log time before, first after): a connection's, not a log's Gap records
         #: the run ended inside an undecodable gap: the last log time used before it
         self.lost_after: int | None = None
         self.undecodable_end: int | None = None
@@ -298,7 +298,7 @@ class WatchSource(LogSource):
         if span is not None:
             span.append(ch.id)  # advertised again: the channel it came back on
 
-    def left_for_good(self, topics) -> int | None:
+    def left_for_good(self, topics: Iterable[str]) -> int | None:
         """:meth:`fretc.live.absence.Absences.left_for_good` of this run."""
         return self.absent.left_for_good(topics, self._delivered)
 
@@ -366,7 +366,7 @@ class WatchSource(LogSource):
                 self._build(ch)
 
     # -- the stream ------------------------------------------------------------------------
-    def messages(self, topics=None) -> Iterator[Message]:
+    def messages(self, topics: Iterable[str] | None = None) -> Iterator[Message]:
         """The watched messages of ``topics`` (all wanted by default) as they arrive,
         until stopped."""
         self.counts = {}

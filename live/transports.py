@@ -9,13 +9,24 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fretc.live.client import WebSocketClient
+    from fretc.live.dds_client import DdsClient
+    from fretc.live.zenoh_client import ZenohClient
+    from fretc.live.watch import WatchOptions
+
 __all__ = ["make_client", "URL_SCHEMES"]
 
 #: The URL schemes ``fretc watch`` speaks.
 URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", "zenoh://")
 
 
-def make_client(options, wanted, types: dict[str, str] | None = None, topics=()):
+def make_client(options: WatchOptions, wanted: Callable[[str], bool],
+                types: dict[str, str] | None = None, topics: Iterable[str] = ()
+                ) -> WebSocketClient | DdsClient | ZenohClient:
     """The client for ``options.url`` (a :class:`~fretc.live.watch.WatchOptions`): ``wanted``
     topic -> bool; ``types`` the bindings' ``[types]`` (overridden by ``options.types``);
     ``topics`` the bound topics (the DDS and Zenoh clients subscribe to exactly these).
@@ -24,7 +35,7 @@ def make_client(options, wanted, types: dict[str, str] | None = None, topics=())
         MissingDependency: the transport's package is not installed (the message names the
             install hint); ValueError: a DDS or Zenoh URL of the wrong form.
     """
-    kw = {"backoff": options.backoff, "max_backoff": options.max_backoff}
+    kw: dict[str, Any] = {"backoff": options.backoff, "max_backoff": options.max_backoff}
     given = dict(types or {})
     given.update(options.types or {})
     url = options.url

@@ -186,7 +186,7 @@ class Watch:
         self.recorder: Recorder | None = None
         self._lock = threading.Lock()
         self._evidence_at = 0.0
-        self._cols, self._group, self._unknown = {}, {}, {}
+        self._cols, self._group, self._unknown = {}, {}, {}  # type: dict[ClockKey, LiveColumns], dict[int, ClockKey], dict[ClockKey, int]
         self.entity_events = EntityEvents(plan, self.source, self._step, _Live)
         #: called after every evaluated tick's monitors stepped, with (tick index, tick
         #: time, log time of the newest message its values use, log time of the message
@@ -349,7 +349,7 @@ class Watch:
             if src.ever_connected:
                 if self.needed <= set(src.advertised):
                     break
-                if time.monotonic() - src.first_connect_wall >= opt.wait:
+                if time.monotonic() - (src.first_connect_wall or 0.0) >= opt.wait:  # (set: connected)
                     break
             elif opt.connect_timeout is not None and time.monotonic() - t0 >= opt.connect_timeout:
                 break
@@ -453,7 +453,7 @@ class Watch:
                 self._event(WatchEvent("ltl3", t, time.time_ns(), r.id, i, mon.status,
                                        depends_on=dep, extra={"status_tick": mon.status_tick}))
 
-    def tick_times(self, index: int):
+    def tick_times(self, index: int) -> list[int]:
         """Tick times seen so far on the clock of the requirement at ``index``."""
         cols = (getattr(self, "_cols", None) or {}).get(getattr(self, "_group", {}).get(index))
         return cols.times if cols is not None else []

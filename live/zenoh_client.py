@@ -31,6 +31,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from typing import Any
 
 from fretc.live.client import WATCH_HINT, MissingDependency
 from fretc.live.events import EventQueue
@@ -44,7 +45,7 @@ __all__ = ["ZenohClient", "zenoh_config", "require_zenoh", "CLOCK_TOPIC"]
 CLOCK_TOPIC = "/clock"
 
 
-def require_zenoh():
+def require_zenoh() -> Any:  # the zenoh module
     """The ``zenoh`` module; raises :class:`~fretc.live.client.MissingDependency` naming the
     install hint when ``eclipse-zenoh`` is not installed."""
     try:
@@ -56,7 +57,7 @@ def require_zenoh():
 
 
 def zenoh_config(*, listen: str | None = None, connect: str | None = None,
-                 config_file: str | None = None, mode: str = "peer"):
+                 config_file: str | None = None, mode: str = "peer") -> Any:  # a zenoh.Config
     """A Zenoh session's configuration (``mode`` ``peer`` or ``router``): multicast scouting
     off, listening on and/or connecting to the given ``tcp/host:port`` endpoints
     (``config_file``: a Zenoh JSON5 configuration read first, e.g. TLS or access control)."""
@@ -108,14 +109,14 @@ class ZenohClient:
         self._advertised: dict[str, str] = {}  # topic -> ROS type
         self._seen: set[str] = set()  # topics advertised once (a second time: a restart)
         self._clock: int | None = None
-        self._session = None
+        self._session: Any = None  # the open zenoh Session
         self._decls: list = []
         self._stop = threading.Event()
         self._watcher: threading.Thread | None = None
         self._merge = MergeBuffer(self.events)
 
     # -- thread control ----------------------------------------------------------------------
-    def start(self) -> "ZenohClient":
+    def start(self) -> ZenohClient:
         """Open the session and declare the subscribers (returns at once)."""
         zenoh = require_zenoh()
         self._merge.start()
@@ -243,7 +244,7 @@ class ZenohClient:
                                  "not read"))
                 return
         else:
-            ros = self._key_type(str(sample.key_expr), topic)
+            ros = self._key_type(str(sample.key_expr), topic)  # type: ignore[assignment]  # (None: returned below)
             if ros is None:
                 self.events.put(("protocol", now, f"a message of {topic} on the key "
                                  f"expression {str(sample.key_expr)[:200]} names no type "

@@ -25,6 +25,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Iterable
+from typing import Any
 
 from fretc.logs.decoding import build_typestore
 
@@ -59,14 +60,14 @@ class ZenohServer:
         self._own = session is None
         self.session = session if session is not None else __import__("zenoh").open(
             zenoh_config(listen=self.address.endpoint, config_file=config_file, mode="router"))
-        self.channels: dict[str, object] = {}
+        self.channels: dict[str, Any] = {}  # topic -> the library's channel or writer
         self.skipped: dict[str, str] = {}
-        self._tokens: dict[str, object] = {}  # topic -> its liveliness token
+        self._tokens: dict[str, Any] = {}  # topic -> its liveliness token
         self._seq = 0
         self._gid = os.urandom(16)
 
     def channel(self, topic: str, message_encoding: str, schema_name: str,
-                schema_encoding: str, schema_data: bytes):
+                schema_encoding: str, schema_data: bytes) -> Any:  # the writer, or None
         """Declare the publisher and liveliness token of ``topic`` (once); None for a
         channel that cannot be published (not CDR, or a schema rosbags cannot read)."""
         if topic in self.channels or topic in self.skipped:

@@ -13,7 +13,7 @@ rosbag ``timestamp``).
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import Any, NamedTuple
 
 from fretc.common.units import NS_PER_S
@@ -203,7 +203,7 @@ class LogSource:
         """The messages present but not decoded (:attr:`lost`) as gaps of their own topic:
         one point gap per message (its log time), or past :data:`LOST_TIMES_CAP` of them
         one gap to the last; cause the problem kind (``undecodable``, ...)."""
-        out = []
+        out: list[Gap] = []
         for key, (_first, last, count, _why) in sorted(self.lost.items(),
                                                        key=lambda kv: (kv[1][0], kv[0][0],
                                                                        kv[0][1])):
@@ -215,13 +215,13 @@ class LogSource:
                 out.append(Gap(times[-1], last, topics, kind))
         return out
 
-    def lost_from(self, topics) -> int | None:
+    def lost_from(self, topics: Iterable[str]) -> int | None:
         """The earliest log time (ns) of a message of ``topics`` lost in the latest pass
         (:attr:`lost`), or None."""
         firsts = [v[0] for (_k, t, _c), v in self.lost.items() if t in topics]
         return min(firsts) if firsts else None
 
-    def intact_end_of(self, topics) -> int | None:
+    def intact_end_of(self, topics: Iterable[str]) -> int | None:
         """Exclusive log-time bound (ns) of the span of ``topics`` read completely in the
         latest pass: :attr:`intact_end`, or earlier when a message of one of ``topics`` was
         present but not decoded (its log time); None when nothing was lost."""
@@ -279,7 +279,7 @@ class LogSource:
             return None
         if any(s is None for s in starts):
             return -(2**63)
-        return min(starts)
+        return min(s for s in starts if s is not None)
 
     @property
     def intact_end(self) -> int | None:
@@ -315,7 +315,7 @@ class LogSource:
         """
         raise NotImplementedError
 
-    def reopen(self) -> "LogSource | None":
+    def reopen(self) -> LogSource | None:
         """A new source of this file for another pass (its own counts, problems and times)
         without reading the file again, or None: open it again (the default; a reader that
         streams keeps nothing to reopen from)."""

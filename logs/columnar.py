@@ -33,11 +33,14 @@ bound but not gathered (text, arrays, nested messages) are read from the message
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from fretc.logs.selective import HEADER_STAMP, Path, _NotCovered, _tree
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["ColumnarDecoder", "columnar_decoder", "Segment", "RANGES"]
 
@@ -77,7 +80,7 @@ class ColumnarDecoder:
     def _walk(self, store, typename: str, tree: dict | None, prefix: Path) -> None:
         for name, desc in store.get_msgdef(typename).fields:
             want = tree is not None and name in tree
-            sub = tree.get(name) if want else None
+            sub = tree.get(name) if tree is not None and want else None
             path = prefix + (name,)
             kind = desc[0]
             if kind == 1 and desc[1][0] == "string":
@@ -240,7 +243,7 @@ def _rows(buf: np.ndarray, starts: np.ndarray, width: int) -> np.ndarray:
     return np.stack([buf[a:a + width] for a in starts.tolist()])
 
 
-def columnar_decoder(store, typename: str, message_encoding: str, paths: Iterable[Path] | None
+def columnar_decoder(store: Typestore, typename: str, message_encoding: str, paths: Iterable[Path] | None
                      ) -> ColumnarDecoder | None:
     """A :class:`ColumnarDecoder` of ``typename`` for ``paths``, or None when the walk does not
     cover it (then the messages are decoded one by one). ``message_encoding`` must be
@@ -285,7 +288,7 @@ class Segment:
             d = self._decoded[k] = self._message(k + self._skip)
         return d
 
-    def dropped(self, k: int) -> "Segment":
+    def dropped(self, k: int) -> Segment:
         """This segment without its first ``k`` messages."""
         cols = None if self.columns is None else {p: c[k:] for p, c in self.columns.items()}
         seg = Segment(cols, self.n - k, self._message, self.typename, self._skip + k)

@@ -44,7 +44,7 @@ class CsvRow(NamedTuple):
         values: column name → bool (boolean column) or float (numeric column).
     """
 
-    index: int
+    index: int  # type: ignore[assignment]  # the field shadows tuple.index, as documented
     line: int
     time: int | None
     values: dict[str, bool | float]

@@ -27,6 +27,7 @@ import io
 import os
 from collections.abc import Iterator
 from types import SimpleNamespace
+from typing import Any
 
 from fretc.common import problems as P
 from fretc.common.problems import LogError
@@ -45,7 +46,7 @@ _TYPES = {"b": "int8", "B": "uint8", "h": "int16", "H": "uint16", "i": "int32",
 _META = ("FMT", "FMTU", "MULT", "UNIT")
 
 
-def dataflash_definition(fmt) -> str:
+def dataflash_definition(fmt: Any) -> str:  # fmt: pymavlink's DFFormat (untyped)
     """The ROS 2 message definition of one DataFlash format (pymavlink ``DFFormat``): one
     field per column, typed by its format character. Raises KeyError for an unknown
     character."""

@@ -69,6 +69,7 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
         raise EncodingError(f"schema encoding {schema_encoding!r} does not go with message "
                             f"encoding {message_encoding!r}")
     typ = type_name(schema_name) if schema_name else None
+    loads: Callable[[bytes], Any]
     if message_encoding == "json":
         loads = json.loads
     elif message_encoding == "cbor":
@@ -261,7 +262,7 @@ def _pb_lies(msg) -> None:
     from google.protobuf.unknown_fields import UnknownFieldSet
 
     declared = msg.DESCRIPTOR.fields_by_number
-    for f in UnknownFieldSet(msg):
+    for f in UnknownFieldSet(msg):  # type: ignore[attr-defined]  # a sequence (len, [i])
         if f.field_number in declared:
             field = declared[f.field_number]
             raise ValueError(f"field {field.name} (number {f.field_number}) is declared "
@@ -352,7 +353,8 @@ def _pb_definition(name: str, fds: bytes) -> tuple[str, str] | None:
     seen: set[str] = {top.full_name}
 
     def fields(desc) -> str:
-        lines, consts = [], {}
+        lines: list[str] = []
+        consts: dict[str, str] = {}
         for f in desc.fields:
             repeated = _repeated(f)
             if f.type == _MESSAGE:
@@ -401,7 +403,8 @@ def _json_definition(name: str, doc: dict) -> tuple[str, str]:
         return t
 
     def fields(spec: dict, prefix: str) -> str:
-        lines, consts = [], {}
+        lines: list[str] = []
+        consts: dict[str, str] = {}
         for field, sub in (spec.get("properties") or {}).items():
             if not isinstance(sub, dict) or not field.isidentifier():
                 continue
@@ -424,11 +427,12 @@ def _json_definition(name: str, doc: dict) -> tuple[str, str]:
             parts.append((typ, fields(sub, nested)))
             return typ
         if t == "array":
-            item = sub.get("items") if isinstance(sub.get("items"), dict) else {}
+            items = sub.get("items")
+            item = items if isinstance(items, dict) else {}
             inner = field_type(item, nested)
             return None if inner is None or inner.endswith("[]") else inner + "[]"
         if t is None and sub.get("oneOf"):
             return "int64"
-        return _JSON_ROS.get(t)
+        return None if t is None else _JSON_ROS.get(t)
 
     return root, _sections(fields(doc, root.split("/")[-1]), parts)

@@ -20,8 +20,11 @@ project's own message) is not checked.
 
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Any
+from functools import lru_cache, cache
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["layout_mismatch", "layout"]
 
@@ -30,7 +33,7 @@ _ROS2 = ("ros2_humble", "ros2_jazzy", "ros2_iron", "ros2_kilted", "ros2_lyrical"
 _MAX_DEPTH = 32
 
 
-@lru_cache(maxsize=None)
+@cache
 def _store(name: str):
     from rosbags.typesys import Stores, get_typestore
 
@@ -43,7 +46,7 @@ def _ref_layout(store_name: str, typename: str) -> tuple | None:
     return layout(ref, typename) if typename in ref.fielddefs else None
 
 
-def layout(store, typename: str, depth: int = 0) -> tuple:
+def layout(store: Typestore, typename: str, depth: int = 0) -> tuple:
     """The layout of ``typename`` in the rosbags Typestore ``store`` (module docstring): a
     tuple of ``(field name, kind)``, kind ``("base", type)``, ``("msg", layout)``,
     ``("array", kind, length)`` or ``("seq", kind)``.

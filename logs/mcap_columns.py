@@ -251,7 +251,11 @@ def _gathered(groups: list[_Group], members: list[int], which: np.ndarray, idx: 
         cols = groups[members[0]].columns
         assert cols is not None
         return {p: c[idx] for p, c in cols.items()}
-    colsets = [groups[m].columns for m in members]
+    colsets = []
+    for m in members:
+        cols = groups[m].columns
+        assert cols is not None  # (as above)
+        colsets.append(cols)
     keys = set(colsets[0])
     if any(set(c) != keys for c in colsets) or any(
             c[p].shape[1:] != colsets[0][p].shape[1:] for c in colsets for p in keys):

@@ -60,7 +60,7 @@ class SummaryRead(NamedTuple):
     the index unusable (None when the summary is intact or absent)."""
 
     profile: str
-    index: McapIndex | None
+    index: McapIndex | None  # type: ignore[assignment]  # the field shadows tuple.index
     problem: DataProblem | None
 
 

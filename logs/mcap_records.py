@@ -46,7 +46,7 @@ _OP_MESSAGE = int(Opcode.MESSAGE)
 RECORD_ERRORS = (McapError, struct.error, UnicodeDecodeError, ValueError, EOFError, MemoryError,
                  OverflowError)
 
-_RECORD_CLASSES = {Opcode.CHUNK: Chunk, Opcode.SCHEMA: Schema, Opcode.CHANNEL: Channel,
+_RECORD_CLASSES: dict[int, Any] = {Opcode.CHUNK: Chunk, Opcode.SCHEMA: Schema, Opcode.CHANNEL: Channel,
                    Opcode.HEADER: Header, Opcode.DATA_END: DataEnd, Opcode.FOOTER: Footer,
                    Opcode.CHUNK_INDEX: ChunkIndex, Opcode.STATISTICS: Statistics}
 

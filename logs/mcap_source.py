@@ -178,9 +178,10 @@ class McapSource(LogSource):
                     and (channel.schema_id == 0 or schema is None)):
                 raise UnsupportedSchema(f"channel {channel.id} has no schema (schema id "
                                         f"{channel.schema_id})")
-            dec = schema_decoder(channel.message_encoding, schema and schema.encoding,
-                                 schema and schema.name,
-                                 schema and bytes(schema.data),
+            dec = schema_decoder(channel.message_encoding,
+                                 None if schema is None else schema.encoding,
+                                 None if schema is None else schema.name,
+                                 None if schema is None else bytes(schema.data),
                                  self._fields_for(channel.topic))
         except UnsupportedSchema as exc:
             kind = (P.UNKNOWN_SCHEMA if channel.message_encoding in SCHEMA_FOR_ENCODING
@@ -242,8 +243,9 @@ class McapSource(LogSource):
         wanted = {cid for cid, ch in index.channels.items() if topics is None or ch.topic in topics}
         # every chunk is read whole: the channels a ChunkIndex lists (its MessageIndex
         # offsets) are a hint a forged summary can falsify, never a reason to skip a chunk
-        heap = [(ci.message_start_time, ci.chunk_start_offset, -1, ci)
-                for ci in index.chunk_indexes]
+        # (log time, chunk offset, -1 and a ChunkIndex, or n and (channel id, message))
+        heap: list[tuple[int, int, int, Any]] = [
+            (ci.message_start_time, ci.chunk_start_offset, -1, ci) for ci in index.chunk_indexes]
         heapq.heapify(heap)
         with open(self.path, "rb") as f:
             while heap:

@@ -22,13 +22,16 @@ import difflib
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 from fretc.common.errors import InputError
 
 from fretc.logs.csv_source import CSV_TOPIC
 from fretc.logs.decoding import UnsupportedSchema, build_typestore
 from fretc.logs.encodings import SELF_DESCRIBING, definition
+
+if TYPE_CHECKING:
+    from fretc.logs.base import LogSource
 
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "LogSchemas", "log_schemas",
            "field_paths", "closest"]
@@ -51,7 +54,7 @@ class FieldType:
 
     def text(self) -> str:
         """The type as bindings and ``fretc inspect`` print it (``float64``, ``float32[360]``)."""
-        if self.kind == "array":
+        if self.kind == "array" and self.item is not None:  # (an array has its item type)
             return f"{self.item.text()}[{'' if self.length is None else self.length}]"
         return self.name
 
@@ -121,8 +124,8 @@ class TopicSchema:
         for p in path:
             kind = type(p).__name__
             if kind in ("Slice", "Filter"):
-                if cur.kind == "array":  # its items (a filter right after a slice: the same)
-                    cur, many = cur.item, True
+                if cur.kind == "array" and cur.item is not None:  # its items (a filter right
+                    cur, many = cur.item, True  # after a slice: the same); an array has them
                 elif kind == "Slice" or not many:
                     how = "sliced" if kind == "Slice" else "filtered"
                     raise FieldPathError(f"{walked} is a {cur.text()}, not an array: it "
@@ -146,6 +149,7 @@ class TopicSchema:
         if cur.length is not None and not -cur.length <= p < cur.length:
             raise FieldPathError(f"{walked}[{p}]: index out of range (the array has "
                                  f"{cur.length} items)", [], None)
+        assert cur.item is not None  # (an array has its item type)
         return cur.item
 
     def _member(self, cur: FieldType, p: str, walked: str) -> FieldType:
@@ -266,7 +270,7 @@ class LogSchemas(Mapping):
         return len(self._builders)
 
 
-def log_schemas(source) -> Mapping[str, TopicSchema | None]:
+def log_schemas(source: LogSource) -> Mapping[str, TopicSchema | None]:
     """Topic -> :class:`TopicSchema` of an open log (:func:`fretc.logs.open_log`), built on first
     access (:class:`LogSchemas`); None for a topic whose schema is missing or cannot be
     parsed (the reader reports it as ``unknown_schema``). Reads only the schema and channel
@@ -275,7 +279,7 @@ def log_schemas(source) -> Mapping[str, TopicSchema | None]:
     kind = source.kind
     if kind == "csv":
         return {CSV_TOPIC: CsvSchema(CSV_TOPIC, dict(getattr(source, "types", {}) or
-                                                     {c: "float" for c in source.columns}))}
+                                                     {c: "float" for c in source.columns}))}  # type: ignore[attr-defined]  # a CsvSource
     if kind == "mcap":
         return _mcap_schemas(source)
     if kind in ("ulog", "dataflash"):

@@ -40,11 +40,15 @@ from __future__ import annotations
 import struct
 import sys
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from fretc.common.streams import base_topic
+
+if TYPE_CHECKING:
+    from fretc.logs.base import LogSource
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["selective_decoder", "wanted_fields", "install", "stats", "HEADER_STAMP"]
 
@@ -71,7 +75,7 @@ class _NotCovered(Exception):
     """The fast path does not cover this (type, fields): use the full decoder."""
 
 
-def wanted_fields(bindings) -> dict[str, frozenset[Path]]:
+def wanted_fields(bindings: Any) -> dict[str, frozenset[Path]]:  # a signals Bindings
     """Topic -> field paths the variables of ``bindings`` read (``/scan.ranges`` gives
     ``("ranges",)``); the tick topic and topics read only by ``age()`` get an empty set;
     with the header time base every topic also gets :data:`HEADER_STAMP`."""
@@ -89,7 +93,7 @@ def wanted_fields(bindings) -> dict[str, frozenset[Path]]:
     return {t: frozenset(p) for t, p in out.items()}
 
 
-def install(source, bindings) -> None:
+def install(source: LogSource, bindings: Any) -> None:  # a signals Bindings or None
     """Make ``source`` decode only the fields ``bindings`` read (None: everything). Its
     cached decoders are dropped when the wanted fields change."""
     fields = wanted_fields(bindings) if bindings is not None else None
@@ -250,7 +254,7 @@ class _Gen:
                 continue
             want = tree is not None and fname in tree
             target = f"{obj}.{fname}" if want else None
-            sub = tree.get(fname) if want else None
+            sub = tree.get(fname) if tree is not None and want else None
             self.field(desc, target, sub, ind)
 
     def field(self, desc, target: str | None, sub: dict | None, ind: int) -> None:
@@ -376,7 +380,7 @@ class _Gen:
         return key
 
 
-_CLASSES: dict[tuple[str, tuple[str, ...]], type] = {}
+_CLASSES: dict[tuple[str, tuple[str, ...], str], type] = {}
 
 
 def _message_class(typename: str, names: tuple[str, ...], clsname: str) -> type:
@@ -423,7 +427,7 @@ def _generate(store, typename: str, paths: Iterable[Path], cdr: bool) -> Callabl
     return fn
 
 
-def selective_decoder(store, typename: str, message_encoding: str,
+def selective_decoder(store: Typestore, typename: str, message_encoding: str,
                       paths: Iterable[Path] | None, full: Callable[[bytes], Any]
                       ) -> Callable[[bytes], Any] | None:
     """A decoder of ``typename`` messages reading only ``paths`` (see the module docstring),
@@ -453,5 +457,5 @@ def selective_decoder(store, typename: str, message_encoding: str,
             stats["fallback_messages"] += 1
             return full(raw)
 
-    decode.fast = fast
+    decode.fast = fast  # type: ignore[attr-defined]  # the fast path, for the tests
     return decode

@@ -183,7 +183,7 @@ class UlogSource(LogSource):
         return [self._read(None, io.BytesIO(segment_bytes(data, framing, k)))
                 for k in range(len(framing.runs))], framing
 
-    def reopen(self) -> "UlogSource":
+    def reopen(self) -> UlogSource:
         """A new source of this file from the rows read when it was opened (the operands
         pass of a violated requirement reads them again without a second pyulog read)."""
         new = copy.copy(self)
@@ -245,7 +245,7 @@ class UlogSource(LogSource):
                           f"the logger dropped messages for {ms} ms (ULog dropout record) "
                           "after this log time: only the span before it is judged",
                           end_time=end)
-        streams = []
+        streams: list[tuple[str, Any, Any]] = []  # (topic, log times, rows)
         for k, ulog in enumerate(self._ulogs):
             for d in ulog.data_list:
                 topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
@@ -324,7 +324,7 @@ class _Rows:
 def _plan(formats: dict, name: str, prefix: str) -> list[tuple[str, str, Any]]:
     """How to build a message of uORB type ``name`` from pyulog's flattened column names
     under ``prefix``: (field, how, columns or sub-plans)."""
-    plan = []
+    plan: list[tuple[str, str, Any]] = []
     for typ, size, field in formats[name].fields:
         if field.startswith("_padding"):
             continue

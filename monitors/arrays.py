@@ -8,6 +8,10 @@ for single Python values.)"""
 from __future__ import annotations
 
 import numpy as np
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from numpy.typing import DTypeLike
 
 __all__ = ["COMPARISONS", "CONNECTIVES", "arith", "connective", "py_min", "py_max",
            "shifted"]
@@ -76,7 +80,7 @@ def py_max(args: list[np.ndarray]) -> np.ndarray:
     return out
 
 
-def shifted(x: np.ndarray, first, dtype) -> np.ndarray:
+def shifted(x: np.ndarray, first: Any, dtype: DTypeLike) -> np.ndarray:
     """``x`` one tick later: ``first`` at tick 0, ``x[i-1]`` at tick ``i``."""
     n = len(x)
     out = np.empty(n, dtype)

@@ -72,6 +72,7 @@ def _difference_tick(a: Evidence, b: Evidence) -> int | None:
 
 def _threshold(ob: Obligation, columns: Mapping[str, np.ndarray], n: int) -> Exercise:
     atom = ob.atom
+    assert isinstance(atom, A.Binary)  # (a threshold obligation is a comparison)
     var, num = (atom.left, atom.right) if isinstance(atom.left, A.Var) else (atom.right,
                                                                                atom.left)
     if not isinstance(var, A.Var) or not isinstance(num, A.NumLit):
@@ -82,7 +83,7 @@ def _threshold(ob: Obligation, columns: Mapping[str, np.ndarray], n: int) -> Exe
     c = float(num.value)
     left, right = (x, c) if var is atom.left else (c, x)
     with np.errstate(invalid="ignore"):
-        truth = np.asarray(_CMP[atom.op](left, right), dtype=bool) & ~np.isnan(x)
+        truth = np.asarray(_CMP[atom.op](left, right), dtype=np.bool_) & ~np.isnan(x)
     on_side = truth if ob.side else (~truth & ~np.isnan(x))
     if not on_side.any():
         return Exercise("unmet")
@@ -109,6 +110,7 @@ def exercised(obligations: Sequence[Obligation], req: A.Requirement,
         if base is None:
             out.append(Exercise("unknown", why=why))
             continue
+        assert ob.variant is not None  # (an obligation other than a threshold has it)
         try:
             other = evaluate_requirement(ob.variant, columns, n, ob.variant_ticks)
         except EvidenceUnsupported as exc:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +25,9 @@ from fretc.compiler.printers import expr_text
 
 from fretc.monitors.interval import scope_intervals, trigger_points
 from fretc.monitors.obligations import OBLIGATIONS, ObligationChecker
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 __all__ = ["Diagram", "Explanation", "explain", "diagram", "shortest_traces", "MAX_SEARCH"]
 
@@ -149,9 +153,9 @@ def diagram(req: A.Requirement, k: int | None) -> Diagram:
             continue
         window, _tick, _why = bad
         if value is False:
-            d.required = tuple(window)  # R never holds: where it was required
+            d.required = (window[0], window[1])  # R never holds: where it was required
         else:
-            d.forbidden = tuple(window)  # R always holds: where it was forbidden
+            d.forbidden = (window[0], window[1])  # R always holds: where it was forbidden
     if timing == "after" and not d.negated and d.required is not None:
         # "after k": R must not hold on [t, t+k] and must hold at t+k+1 (the checker
         # reports the whole [t, t+k+1] either way)
@@ -242,7 +246,7 @@ def reading(req: A.Requirement, k: int | None, period: Fraction | None) -> str:
             f"met must be {bound}; one run does not decide it.")
 
 
-def explain(compiled) -> Explanation:
+def explain(compiled: Compiled) -> Explanation:
     """The :class:`Explanation` of a compiled requirement (formalized, not free-form).
 
     Raises:
@@ -252,8 +256,10 @@ def explain(compiled) -> Explanation:
     if f is None:
         raise ValueError(f"{compiled.id} has no formalization: {compiled.error}")
     req = compiled.requirement
+    assert req is not None  # (it formalized)
     period = getattr(compiled.entry, "tick_period", None)
-    key = compiled.key_pctl if req.probability is not None else f.key  # FRET's five parts
+    # FRET's five parts with a probability
+    key = (compiled.key_pctl if req.probability is not None else None) or f.key
     x = Explanation(compiled.id, compiled.text, key, reading(req, f.ticks, period),
                     f.ticks, period, diagram(req, f.ticks))
     if req.probability is not None:
@@ -262,7 +268,10 @@ def explain(compiled) -> Explanation:
     return x
 
 
-def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MAX_SEARCH[1]):
+def shortest_traces(compiled: Compiled, max_ticks: int = MAX_SEARCH[0],
+                    max_vars: int = MAX_SEARCH[1]
+                    ) -> tuple[dict[str, list[bool]] | None, dict[str, list[bool]] | None,
+                               str | None]:
     """(shortest trace that satisfies, shortest that violates, note) of a compiled
     requirement: a breadth-first search over the states of its generated runtime monitor
     (the pt formula's state machine, :mod:`fretc.compiler.codegen`), one letter per valuation of
@@ -277,6 +286,7 @@ def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MA
     from fretc.compiler.codegen import build_monitor_modules
 
     f = compiled.formalization
+    assert f is not None  # (explain() refused a requirement that did not formalize)
     if any(n.op in ("cmp", "num", "call", "pre") for n in ir.walk(f.ft)):
         return None, None, "a variable is a number: no trace searched (use fretc check's witnesses)"
     names = list(f.variables)
@@ -292,7 +302,7 @@ def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MA
         return None, None, "no runtime monitor: no trace searched"
     letters = [dict(zip(names, bits)) for bits in product((False, True), repeat=len(names))]
     found: dict[bool, list] = {}
-    frontier = [(None, [])]
+    frontier: list[tuple[Any, list[dict[str, bool]]]] = [(None, [])]
     seen = set()
     for _depth in range(max_ticks):
         nxt = []
@@ -313,7 +323,7 @@ def shortest_traces(compiled, max_ticks: int = MAX_SEARCH[0], max_vars: int = MA
             break
         frontier = nxt
 
-    def columns(run):
+    def columns(run: list[dict[str, bool]] | None) -> dict[str, list[bool]] | None:
         return None if run is None else {v: [row[v] for row in run] for v in names}
     note = None if len(found) == 2 else (f"no {'satisfying' if True not in found else 'violating'} "
                                          f"trace of at most {max_ticks} ticks")

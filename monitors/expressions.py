@@ -11,6 +11,7 @@ conditions; index ``n`` is FRET's absorbing state after the trace (section 6's t
 
 from __future__ import annotations
 
+import builtins
 from collections.abc import Mapping
 
 import numpy as np
@@ -144,7 +145,7 @@ class ColumnExpressions:
             return self.uninterpreted(e, numeric=True)
         raise EvidenceUnsupported(f"cannot evaluate {type(e).__name__} as a number")
 
-    def uninterpreted(self, e: A.Call, numeric: bool) -> np.ndarray:
+    def uninterpreted(self, e: A.Call, numeric: builtins.bool) -> np.ndarray:
         """A function FRET does not define (``sqrt(weight)``, ``det_3x3(...)``), read as the
         generated monitors read it: the trace's column named by the printed call
         (:func:`fretc.compiler.printers.to_smv` of its IR, e.g. ``sqrt(weight)``),

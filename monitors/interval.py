@@ -50,9 +50,10 @@ of the requirement's own variables for this (1 byte per tick for a boolean, 8 fo
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -60,6 +61,9 @@ from fretc.fretish import ast as A
 
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 from fretc.monitors.obligations import OBLIGATIONS, Interval, ObligationChecker
+
+if TYPE_CHECKING:
+    from fretc.monitors.judge3 import Unknowns
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
            "endpoints", "scope_mode",
@@ -232,6 +236,7 @@ def scope_mode(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
     section 6b); None for the ``null`` scope."""
     if req.scope.kind == "null":
         return None
+    assert req.scope.mode is not None  # (a scope other than null has its mode)
     return ColumnExpressions(columns, n, free=True).bool(req.scope.mode)[:n]
 
 
@@ -257,9 +262,12 @@ def _signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
     """:func:`trace_signals` given the scope mode's truth at each tick."""
     left, right = endpoints(req.scope.kind, mode, n)
     ex = ColumnExpressions(columns, n, left, right)
+    # (a formalizable requirement has a response, a condition's expression unless null, and
+    # a stop condition with until and before)
+    assert req.response is not None
     R = ex.bool(req.response)[:n]
-    C = ex.bool(req.condition.expr)[:n] if req.condition.kind != "null" else None
-    S = ex.bool(req.timing.stop)[:n] if req.timing.kind in A.STOP_TIMINGS else None
+    C = ex.bool(req.condition.expr)[:n] if req.condition.kind != "null" else None  # type: ignore[arg-type]
+    S = ex.bool(req.timing.stop)[:n] if req.timing.kind in A.STOP_TIMINGS else None  # type: ignore[arg-type]
     return R, C, S
 
 
@@ -267,6 +275,7 @@ def trigger_points(cond: str, C: np.ndarray | None, s: int, e: int) -> list[int]
     """The trigger points of the scope interval ``[s, e]`` (module docstring, point 2)."""
     if cond == "null":
         return [s]
+    assert C is not None  # (a condition other than null has its truth)
     if cond == "holding":
         return (np.flatnonzero(C[s:e + 1]) + s).tolist()
     seg = C[s:e + 1]
@@ -277,7 +286,8 @@ def trigger_points(cond: str, C: np.ndarray | None, s: int, e: int) -> list[int]
 
 # --------------------------------------------------------------------------- entry point
 def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                         duration_ticks: int | None = None, favour=None) -> Evidence:
+                         duration_ticks: int | None = None, favour: Unknowns | None = None
+                         ) -> Evidence:
     """Decide ``req`` on a trace of ``n`` ticks by FRET's interval semantics.
 
     Args:
@@ -318,6 +328,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
         if duration_ticks is not None:
             k = int(duration_ticks)
         else:
+            assert req.timing.duration is not None  # (a duration timing has it)
             amount = Fraction(req.timing.duration.amount)
             if amount.denominator != 1:
                 raise EvidenceUnsupported("a fractional duration without a tick period")

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,6 +37,11 @@ from fretc.monitors.interval import Evidence, EvidenceUnsupported, evaluate_requ
 from fretc.monitors.robustness import Robustness, robustness
 from fretc.monitors.vectorized import VectorizeError, atom_letters, pt_series, supports
 from fretc.monitors.nan import nan_ticks_of
+
+if TYPE_CHECKING:
+    from fretc.fretish import ast as A
+    from fretc.compiler.semantics import Formalization
+    from fretc.compiler.codegen import MonitorSource
 
 __all__ = ["Judgement", "judge", "ltl3_verdict", "nan_ticks"]
 
@@ -69,8 +75,9 @@ class Judgement:
     robustness: Robustness | None = None
 
 
-def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int, *,
-          monitor_source=None,
+def judge(requirement: A.Requirement, formalization: Formalization,
+          columns: Mapping[str, np.ndarray], n: int, *,
+          monitor_source: MonitorSource | None = None,
           monitor_cls: type | None = None) -> Judgement:
     """Decide one requirement over the first ``n`` ticks of ``columns``.
 
@@ -101,6 +108,7 @@ def judge(requirement, formalization, columns: Mapping[str, np.ndarray], n: int,
     elif _pt_evaluable(formalization):
         holds, engine = bool(pt_series(formalization.pt, columns, n)[-1]), "vectorized"
     else:
+        assert monitor_cls is not None  # (else the interval evidence's error was raised)
         replayed = stepwise.replay(monitor_cls, columns, n)
         holds, engine = bool(replayed.finish()), "stepwise"
     ltl3, tick = _ltl3(monitor_source, monitor_cls, columns, n, replayed)
@@ -127,7 +135,7 @@ def _ltl3(monitor_source, monitor_cls, columns, n: int, replayed) -> tuple[str, 
     return mon.status, mon.status_tick
 
 
-def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
+def ltl3_verdict(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray], n: int
                  ) -> tuple[str, int | None]:
     """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
     deterministic Spot monitors embedded by :func:`fretc.compiler.codegen.monitor_source`
@@ -159,11 +167,12 @@ def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
                                  "tabulate): use the step-wise monitor")
     runs = []
     for aut, outcome in live:
+        assert aut.table is not None  # (checked above)
         letters = atom_letters(aut.atoms, columns, n).tolist()
         runs.append((aut.table, aut.initial, letters, outcome))
     # first rejection of each automaton
     firsts = []
-    for table, state, letters, outcome in runs:
+    for table, state, letters, _outcome in runs:
         hit = None
         for i, letter in enumerate(letters):
             state = table[state][letter]
@@ -172,13 +181,13 @@ def ltl3_verdict(monitor_source, columns: Mapping[str, np.ndarray], n: int
                 break
         firsts.append(hit)
     best: tuple[str, int | None] = ("unknown", None)
-    for (table, _s, _l, outcome), hit in zip(runs, firsts):
+    for (_t, _s, _l, outcome), hit in zip(runs, firsts):
         if hit is not None and (best[1] is None or hit < best[1]):
             best = (outcome, hit)
     return best
 
 
-def nan_ticks(requirement, columns: Mapping[str, np.ndarray], n: int) -> np.ndarray:
+def nan_ticks(requirement: A.Requirement, columns: Mapping[str, np.ndarray], n: int) -> np.ndarray:
     """The ticks (bool array of ``n``) at which a comparison of ``requirement`` (scope mode,
     condition, stop condition, response) reads NaN: unread ticks (:mod:`fretc.monitors.nan`).
     A free-form requirement has none."""

@@ -88,11 +88,11 @@ class Unknowns:
     C: np.ndarray
     R: np.ndarray
     S: np.ndarray
-    ticks: np.ndarray = field(default=None)  # any part unknown
+    ticks: np.ndarray = field(default=None)  # type: ignore[arg-type]  # any part unknown; set by of()
 
     @classmethod
     def of(cls, req: A.Requirement, unknown: Mapping[str, np.ndarray],
-           columns: Mapping[str, np.ndarray], n: int, nan_unknown: bool) -> "Unknowns":
+           columns: Mapping[str, np.ndarray], n: int, nan_unknown: bool) -> Unknowns:
         """The unknown ticks of ``req``'s parts (:func:`expression_unknown`)."""
         def part(e):
             return expression_unknown(e, unknown, columns, n, nan_unknown)

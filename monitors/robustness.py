@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 
 from fretc.monitors.vectorized import VectorizeError, node_series
 
@@ -170,7 +170,7 @@ class _Rho:
         truth = node_series(node, self.columns, self.n)
         with np.errstate(invalid="ignore", over="ignore"):
             d = {"<": y - x, "<=": y - x, ">": x - y, ">=": x - y,
-                 "=": -np.abs(x - y), "!=": np.abs(x - y)}[node.name]
+                 "=": -np.abs(x - y), "!=": np.abs(x - y)}[name_of(node)]
         return _fix_sign(d, truth)
 
     def _connective(self, op: str, p: Node, q: Node) -> np.ndarray:

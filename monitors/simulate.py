@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from fretc.common.errors import InputError, Where
 from fretc.compiler.evaluate import ft_at, pt_at, series
 
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 __all__ = ["MAX_SIMULATED_TICKS", "Simulation", "parse_timeline", "read_trace", "simulate"]
 
@@ -194,7 +197,7 @@ def read_trace(path: str) -> dict[str, list[Any]]:
     return trace
 
 
-def simulate(compiled, trace: dict[str, list[Any]]) -> Simulation:
+def simulate(compiled: Compiled, trace: dict[str, list[Any]]) -> Simulation:
     """The simulation (module docstring) of one compiled requirement
     (:class:`fretc.compiler.build.Compiled` with a formalization) over ``trace`` (variable ->
     values, one per tick, all of one length).
@@ -204,6 +207,7 @@ def simulate(compiled, trace: dict[str, list[Any]]) -> Simulation:
             requirement and the variables the trace has).
     """
     f = compiled.formalization
+    assert f is not None  # (a compiled requirement with a formalization, as documented)
     missing = [v for v in f.variables if v not in trace]
     if missing:
         raise InputError(f"{compiled.id}: the trace has no {', '.join(map(repr, missing))} "
@@ -252,7 +256,7 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
             raise VectorizeError("a future-time function inside the pt formula")
         lo, hi = ThreeValued(cols, {}, n).pair(f.pt)
         pt = [three(a, b) for a, b in zip(lo.tolist(), hi.tolist())]
-        ft = []
+        ft: list[bool | None] = []
         for i in range(n):
             if i > last_nan:  # no NaN in the trace from i: exact
                 ft.append(bool(ft_at(f.ft, rows[i:])))

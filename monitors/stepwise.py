@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["replay", "verdict", "to_python"]
 
 
-def to_python(x):
+def to_python(x: Any) -> bool | float:
     """A column item as the generated monitors read it: ``bool`` or ``float``."""
     if isinstance(x, (np.bool_, bool)):
         return bool(x)
@@ -33,7 +33,7 @@ def replay(monitor_cls: type, columns: Mapping[str, np.ndarray], n: int) -> Any:
     return mon
 
 
-def verdict(mon) -> tuple[bool, str, int | None]:
+def verdict(mon: Any) -> tuple[bool, str, int | None]:  # mon: a generated monitor
     """(FRET's finite-trace verdict ``finish()``, the LTL3 ``status`` and the tick it became
     definite) of a monitor after its last step."""
     return bool(mon.finish()), mon.status, mon.status_tick

@@ -21,13 +21,17 @@ LTL3 verdict runs the monitor automata over every letter an unknown tick may be
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fretc.compiler.ir import Node
+from fretc.compiler.ir import Node, name_of
 from fretc.compiler.printers import to_smv
 from fretc.monitors.arrays import COMPARISONS, arith, py_max, py_min, shifted
 from fretc.monitors.vectorized import VectorizeError
+
+if TYPE_CHECKING:
+    from fretc.compiler.codegen import MonitorSource
 
 __all__ = ["Pair", "ThreeValued", "pt_verdict", "ltl3_verdict"]
 
@@ -130,7 +134,7 @@ class ThreeValued:
             first = self.idx == 0
             return first, first
         if op == "ap":
-            return self._bool_leaf(node.name)
+            return self._bool_leaf(name_of(node))
         if op == "call":  # an uninterpreted predicate: unknown where anything is
             col = np.asarray(self._column_of_call(node), np.bool_)
             return col & ~self.any_unknown, col | self.any_unknown
@@ -142,7 +146,7 @@ class ThreeValued:
         if op == "cmp":
             (x, ux), (y, uy) = self.number(a[0]), self.number(a[1])
             with np.errstate(invalid="ignore"):
-                val = COMPARISONS[node.name](x, y)
+                val = COMPARISONS[name_of(node)](x, y)
             unk = ux | uy
             if self.nan_unknown:
                 unk = unk | np.isnan(x) | np.isnan(y)
@@ -208,9 +212,9 @@ class ThreeValued:
     def _number(self, node: Node) -> tuple[np.ndarray, np.ndarray]:
         op, a, n = node.op, node.args, self.n
         if op == "num":
-            return np.full(n, float(node.name), np.float64), self.none
+            return np.full(n, float(name_of(node)), np.float64), self.none
         if op == "var" or op == "ap":
-            col, unk = self._column(node.name)
+            col, unk = self._column(name_of(node))
             return col.astype(np.float64), unk
         if op == "fn" and node.name not in _FUNCS:  # an uninterpreted function
             col = self._column_of_call(node).astype(np.float64)
@@ -220,10 +224,10 @@ class ThreeValued:
             unk = self.none
             for _v, u in args:
                 unk = unk | u
-            return _FUNCS[node.name]([v for v, _u in args]), unk
+            return _FUNCS[name_of(node)]([v for v, _u in args]), unk
         if op == "arith":
             (x, ux), (y, uy) = self.number(a[0]), self.number(a[1])
-            return arith(node.name, x, y), ux | uy
+            return arith(name_of(node), x, y), ux | uy
         if op == "neg":
             x, ux = self.number(a[0])
             return -x, ux
@@ -259,7 +263,7 @@ def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str
     return None, (lo, hi)
 
 
-def ltl3_verdict(monitor_source, ev: ThreeValued) -> tuple[str, int | None]:
+def ltl3_verdict(monitor_source: MonitorSource, ev: ThreeValued) -> tuple[str, int | None]:
     """The earliest definite LTL3 verdict of the monitor automata of
     :func:`fretc.compiler.codegen.monitor_source` over ``ev``'s ticks, an unknown atom
     standing for both of its values (the set of states every letter an unknown tick may be

@@ -29,11 +29,12 @@ monitors that codegen embeds (same tables, same atoms) over the same columns.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import builtins
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from fretc.compiler.ir import Node, walk
+from fretc.compiler.ir import Node, name_of, walk
 from fretc.compiler.printers import to_smv
 
 from fretc.monitors.arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
@@ -87,7 +88,7 @@ class _Series:
     def num(self, node: Node) -> np.ndarray:
         return self.get(node, True)
 
-    def get(self, node: Node, numeric: bool) -> np.ndarray:
+    def get(self, node: Node, numeric: builtins.bool) -> np.ndarray:
         key = (node, numeric)
         got = self.memo.get(key)
         if got is None:
@@ -95,7 +96,7 @@ class _Series:
             self.memo[key] = got
         return got
 
-    def _compute(self, node: Node, numeric: bool) -> np.ndarray:
+    def _compute(self, node: Node, numeric: builtins.bool) -> np.ndarray:
         op = node.op
         if op in _FUTURE:
             raise VectorizeError(f"future-time operator {op!r} (or function "
@@ -109,7 +110,7 @@ class _Series:
             return self._term(node, numeric)
         return self._leaf(node, numeric)
 
-    def _leaf(self, node: Node, numeric: bool) -> np.ndarray:
+    def _leaf(self, node: Node, numeric: builtins.bool) -> np.ndarray:
         """Constants, variables, FTP, and uninterpreted calls (read as columns named by
         their text)."""
         op, n = node.op, self.n
@@ -123,26 +124,26 @@ class _Series:
                 out[0] = True
             return out
         if op in ("ap", "var"):
-            return self.read(node.name, numeric=(op == "var"))
+            return self.read(name_of(node), numeric=(op == "var"))
         if op in ("call", "fn"):
             return self.read(to_smv(node), numeric=(op == "fn"))
         if op == "num":
-            return np.full(n, float(node.name), np.float64)
+            return np.full(n, float(name_of(node)), np.float64)
         raise VectorizeError(f"cannot evaluate IR node {op!r}")
 
-    def _term(self, node: Node, numeric: bool) -> np.ndarray:
+    def _term(self, node: Node, numeric: builtins.bool) -> np.ndarray:
         """Comparisons, arithmetic, the numeric functions, ``ite``, ``pre``."""
         op, a = node.op, node.args
         if op == "cmp":
             x, y = self.num(a[0]), self.num(a[1])
-            return COMPARISONS[node.name](x, y)
+            return COMPARISONS[name_of(node)](x, y)
         if op == "arith":
-            return arith(node.name, self.num(a[0]), self.num(a[1]))
+            return arith(name_of(node), self.num(a[0]), self.num(a[1]))
         if op == "neg":
             return -self.num(a[0])
         if op == "fn":
             args = [self.num(x) for x in a]
-            return _FUNCS[node.name](args)
+            return _FUNCS[name_of(node)](args)
         if op == "ite":
             c = self.bool(a[0])
             if numeric:
@@ -185,6 +186,7 @@ class _Series:
         op, n = node.op, self.n
         x = self.bool(node.args[0])
         lo, hi = node.lo or 0, node.hi
+        assert hi is not None  # (bounded)
         hits = x if op == "O" else ~x
         cs = np.zeros(n + 1, np.int64)
         np.cumsum(hits, out=cs[1:])
@@ -229,7 +231,7 @@ def pt_series(node: Node, columns: Columns, n: int) -> np.ndarray:
     return _Series(columns, n).bool(node)
 
 
-def atom_letters(atoms: list[Node], columns: Columns, n: int) -> np.ndarray:
+def atom_letters(atoms: Sequence[Node], columns: Columns, n: int) -> np.ndarray:
     """The automaton letter at each tick: bit ``j`` is the truth of ``atoms[j]`` (int64
     array). Same bit order as the generated ``sub`` expressions."""
     ev = _Series(columns, n)

@@ -15,9 +15,10 @@ import hashlib
 import os
 import re
 from importlib.metadata import PackageNotFoundError, version
+from collections.abc import Sequence
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Sequence
+from typing import Any
 
 from fretc.common.units import format_seconds
 
@@ -87,10 +88,10 @@ def _generated_line(when: _dt.datetime | None = None) -> str:
     if when is None:
         epoch = os.environ.get("SOURCE_DATE_EPOCH")
         if epoch and epoch.strip().isdigit():
-            when = _dt.datetime.fromtimestamp(int(epoch), tz=_dt.timezone.utc)
+            when = _dt.datetime.fromtimestamp(int(epoch), tz=_dt.UTC)
         else:
-            when = _dt.datetime.now(tz=_dt.timezone.utc)
-    return GENERATED_PREFIX + when.astimezone(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+            when = _dt.datetime.now(tz=_dt.UTC)
+    return GENERATED_PREFIX + when.astimezone(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
 def _version() -> str:
@@ -108,7 +109,7 @@ def _damage_text(la: dict) -> str:
     ns = SimpleNamespace(problems=la.get("problems") or [],
                          problem_counts=la.get("problem_counts") or {},
                          gaps=la.get("gaps") or [], **{k: la.get(k) for k in fields})
-    return damage_summary(ns)
+    return damage_summary(ns)  # type: ignore[arg-type]  # (the fields it reads, from the JSON)
 
 
 class _Inputs:
@@ -238,7 +239,7 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
         run = runs[j]
         row_anchor = f"{rc['anchor']}-{run['anchor']}"
         word, _, at = label.partition(" @ ")
-        cell = {"run": j, "verdict": cls, "label": label, "word": word,
+        cell: dict[str, Any] = {"run": j, "verdict": cls, "label": label, "word": word,
                 "at": ("@ " + at) if at else "",
                 "partial": bool(v and v.get("partial")), "row_anchor": row_anchor,
                 "href": "#" + row_anchor, "witness": witness(v) if v else [],
@@ -267,7 +268,7 @@ def _requirement_rows(reqs: list[dict], logs: list[dict], runs: list[dict],
     id_anchor: dict[str, str] = {}
     for i, r in enumerate(reqs):
         a = anchors.make("req", r.get("id", f"r{i}"))
-        id_anchor.setdefault(r.get("id"), a)
+        id_anchor.setdefault(str(r.get("id")), a)
         req_ctx.append({"index": i, "anchor": a})
     violations: list[dict] = []
     for i, r in enumerate(reqs):
@@ -413,7 +414,7 @@ def report_context(doc: dict, traces: dict[int, RequirementTrace],
                                             anchors)
     coverage = _coverage(req_ctx, reqs, logs, runs, bindings.get("variables") or {})
     parents = _parents(doc, req_ctx)
-    req_files = []
+    req_files: list[dict[str, Any]] = []
     for rc in req_ctx:
         if rc["file"] and rc["file"] not in [f["path"] for f in req_files]:
             req_files.append(inputs.file_info(rc["file"]))
@@ -424,7 +425,7 @@ def report_context(doc: dict, traces: dict[int, RequirementTrace],
         "generated": generated or _generated_line(),
         "version": _version(), "schema": doc.get("schema"),
         "summary": summary,
-        "exit_meaning": _EXIT_MEANING.get(summary.get("exit_code"), ""),
+        "exit_meaning": _EXIT_MEANING.get(summary.get("exit_code", -1), ""),
         "requirement_files": req_files, "binding_files": bind_files,
         "tick": _tick_text(bindings.get("tick")), "time_base": bindings.get("time_base") or "-",
         "runs": runs, "requirements": req_ctx, "violations": violations, "parents": parents,

@@ -7,8 +7,12 @@ found or proved. Same input, same text."""
 from __future__ import annotations
 
 import html
+from typing import TYPE_CHECKING
 
 from fretc.common.textsafe import xml_text
+
+if TYPE_CHECKING:
+    from fretc.check.distinguish import Distinction
 
 __all__ = ["distinction_text", "distinction_svg"]
 
@@ -43,11 +47,12 @@ def _rows(trace: dict[str, list]) -> list[str]:
     return [f"    {'tick':<{w}}  {head}"] + body
 
 
-def distinction_text(d, label_a: str, text_a: str, label_b: str, text_b: str) -> str:
+def distinction_text(d: Distinction, label_a: str, text_a: str, label_b: str, text_b: str) -> str:
     """The answer ``d`` (:class:`fretc.check.distinguish.Distinction`) for the terminal;
     ``label_*`` name the two wordings (an id, or ``A``/``B``), ``text_*`` are their texts."""
     wa = max(len(label_a), len(label_b))
     if d.equivalent is False:
+        assert d.trace is not None and d.verdicts is not None  # (not equivalent: shown)
         n = len(next(iter(d.trace.values())))
         out = [f"not equivalent: {label_a} and {label_b} disagree on "
                + ("this shortest trace" if d.shortest else "this trace")
@@ -68,12 +73,12 @@ def distinction_text(d, label_a: str, text_a: str, label_b: str, text_b: str) ->
     return "\n".join(out) + "\n"
 
 
-def distinction_svg(d, label_a: str, text_a: str, label_b: str, text_b: str) -> str:
+def distinction_svg(d: Distinction, label_a: str, text_a: str, label_b: str, text_b: str) -> str:
     """The distinguishing trace of ``d`` as an SVG, drawn as ``fretc explain`` draws its
     diagrams (a row per variable: a filled cell where a boolean holds, the value where it is
     a number), under the two wordings and their verdicts; raises ``ValueError`` when ``d``
     has no trace (equivalent or unknown)."""
-    if d.trace is None:
+    if d.trace is None or d.verdicts is None:
         raise ValueError("no distinguishing trace to draw")
     n = len(next(iter(d.trace.values())))
     numeric = any(not isinstance(v, bool) for vals in d.trace.values() for v in vals)

@@ -19,9 +19,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fretc.common.textsafe import file_stems
 from fretc.reports.statistics import COLUMNS, statistics_rows, summary_line
+
+if TYPE_CHECKING:
+    from fretc.sim.rare import RareResult
+    from fretc.sim.estimate import Estimate
 
 __all__ = ["write_estimate", "exit_code_of"]
 
@@ -157,7 +162,8 @@ def _svg_names(doc: dict) -> dict[str, str]:
     return {rid: stem + ".svg" for rid, stem in stems.items()}
 
 
-def write_estimate(out: str | Path, result=None, rare=None) -> dict:
+def write_estimate(out: str | Path, result: Estimate | None = None,
+                   rare: RareResult | None = None) -> dict:
     """Write ``estimate.json``, ``estimate.md`` and the SVGs (module docstring) for a
     campaign ``result`` (:class:`fretc.sim.estimate.Estimate`) or a ``rare`` result
     (:class:`fretc.sim.rare.RareResult`); returns the JSON document with ``summary_lines`` (the
@@ -168,6 +174,7 @@ def write_estimate(out: str | Path, result=None, rare=None) -> dict:
     if result is not None:
         doc = result.to_json()
     else:
+        assert rare is not None  # (one of the two is given)
         doc = {"schema": "fretc-estimate/1", "space": rare.space.path, "seed": rare.seed,
                "budget": None, "rare": rare.to_json()}
     doc["exit_code"] = exit_code_of(doc)

@@ -5,8 +5,12 @@ and as SVG (``-o DIR``). Same input, same bytes."""
 from __future__ import annotations
 
 import html
+from typing import TYPE_CHECKING
 
 from fretc.common.textsafe import xml_text
+
+if TYPE_CHECKING:
+    from fretc.monitors.explain import Explanation
 
 def _x(text) -> str:
     """Text for SVG/XHTML: control and bidi characters made visible, then XML-escaped (a
@@ -37,7 +41,7 @@ def _rows(d) -> list[tuple[str, str, list[int]]]:
     return rows
 
 
-def text(x) -> str:
+def text(x: Explanation) -> str:
     """The explanation ``x`` (:class:`fretc.monitors.explain.Explanation`) for the terminal."""
     d = x.diagram
     mark = {"signal": "T", "scope": "=", "trigger": "^", "window": "#", "forbidden": "x"}
@@ -68,7 +72,7 @@ def text(x) -> str:
     return "\n".join(out) + "\n"
 
 
-def svg(x) -> str:
+def svg(x: Explanation) -> str:
     """The diagram of ``x`` as an SVG: a row per signal, the scope intervals shaded, the
     triggers as arrows, the required window green and the forbidden one red."""
     d = x.diagram

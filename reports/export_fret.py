@@ -32,6 +32,7 @@ def _indent(text: str) -> int | None:
     if len(lines) < 2:
         return None
     m = re.match(r" *", lines[1])
+    assert m is not None  # (" *" matches any text)
     return len(m.group(0)) or 2
 
 
@@ -56,7 +57,7 @@ def export_fret(src: str, results: dict[str, RequirementResult]) -> tuple[bytes,
     for obj in reqs:
         if not isinstance(obj, dict):
             continue
-        result = results.get(obj.get("reqid"))
+        result = results.get(obj.get("reqid", ""))
         if result is None:
             continue
         obj[FRETC_MEMBER] = {"verdict": result.verdict, "evidence": result.evidence,

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
 from fretc.reports.export_results import RequirementResult
 from fretc.reports.rollup import parents_of
@@ -63,7 +64,7 @@ def _runs(doc: dict) -> dict[str, str]:
 
 def _need(item: dict, result: RequirementResult, parents: tuple[str, ...], known: set[str],
           runs: str) -> dict:
-    origin = item.get("origin") if isinstance(item.get("origin"), dict) else {}
+    origin: dict[str, Any] = item["origin"] if isinstance(item.get("origin"), dict) else {}
     fields = {"fretc_verdict": result.verdict, "fretc_verdicts": runs,
               "fretc_evidence": result.evidence, "fretc_rollup": result.rollup,
               "fretc_rollup_path": result.rollup_path, "fretc_tool": origin.get("format"),

@@ -26,6 +26,7 @@ import hashlib
 import os
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from fretc.reports.rollup import rollups
@@ -62,14 +63,14 @@ def audit_identity(path: str, raw: bytes, date: str | None = None) -> tuple[str,
     digest = "sha256:" + hashlib.sha256(raw).hexdigest()[:16]
     if date:
         return digest, date
-    stamp = _dt.datetime.fromtimestamp(int(os.stat(path).st_mtime), _dt.timezone.utc)
+    stamp = _dt.datetime.fromtimestamp(int(os.stat(path).st_mtime), _dt.UTC)
     return digest, stamp.strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 def _evidence(rows: list[tuple[str, dict]]) -> str:
     """The evidence line of one requirement: counts per verdict, then the first violation
     of each violating run."""
-    counts = {}
+    counts: dict[str | None, int] = {}
     for _log, v in rows:
         counts[v.get("verdict")] = counts.get(v.get("verdict"), 0) + 1
     parts = [f"{k} on {counts[k]} of {len(rows)} runs" for k in VERDICT_ORDER if k in counts]
@@ -138,7 +139,7 @@ def write_atomic(path: str, data: bytes) -> None:
         raise
 
 
-def replace_tree(build, out: str) -> None:
+def replace_tree(build: Callable[[str], object], out: str) -> None:
     """Build a folder with ``build(tmp_folder)`` beside ``out`` and rename it to ``out``
     (which must not exist, or be an empty folder); on any error the temporary folder is
     removed and ``out`` is untouched. Raises :class:`FileExistsError` for a non-empty

@@ -18,10 +18,14 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fretc.reports.terminal import robustness_text
 
 from fretc.sim.falsify import Search
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["write_search", "search_json", "SCHEMA"]
 
@@ -121,7 +125,7 @@ def _svg(doc: dict) -> str:
     return buf.getvalue()
 
 
-def write_search(search: Search, out: str | Path, plan) -> dict:
+def write_search(search: Search, out: str | Path, plan: AuditPlan) -> dict:
     """Write the report files (module docstring) to ``out``; returns the JSON document.
 
     Raises:

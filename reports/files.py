@@ -19,6 +19,7 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fretc.audit.annotate import AnnotateResult, annotate_mcap
 from fretc.reports.context import report_context
@@ -26,6 +27,9 @@ from fretc.audit.verdict import SCHEMA
 from fretc.reports.render import render_html, render_markdown
 from fretc.reports.matrix import matrix_csv, matrix_html, matrix_rows
 from fretc.reports.trace import ReportError, resolve_input, split_source, trace_requirements
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["load_audit_json", "schema_problem", "ReportFiles", "write_report"]
 
@@ -163,7 +167,8 @@ def _current_entries(doc: dict, base: Path | None, json_dir: Path | None) -> dic
     return {e.id: e for e in entries + unformalized}
 
 
-def write_report(doc: dict, out_dir: str, *, plan=None, base: str | None = None,
+def write_report(doc: dict, out_dir: str, *, plan: AuditPlan | None = None,
+                 base: str | None = None,
                  json_dir: str | None = None, psl_map: str | None = None,
                  annotate_dir: str | None = None, title: str | None = None,
                  generated: str | None = None) -> ReportFiles:

@@ -103,7 +103,7 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None,
             suite.set(k, str(n))
             tot[k] += n
         suite.set("time", "0")
-    if bounded:
+    if bounded and statistics is not None:  # (bounded: some statistics have a bound)
         _statistics_suite(root, [s for s in statistics if s.bound is not None], tot)
     for k, n in tot.items():
         root.set(k, str(n))

@@ -80,14 +80,15 @@ def margin_svg(series: list[tuple[str, list]], title: str) -> str:
     out.append(f'<text x="{_X1}" y="{_H - 8}" text-anchor="end">{tmax:.1f} s</text>')
     for k, (name, rows) in enumerate(pts):
         color = _COLORS[k % len(_COLORS)]
-        lines, cur = [], []
-        for t, v in rows:
-            if v is None:
+        lines: list[list[str]] = []
+        cur: list[str] = []
+        for t, value in rows:
+            if value is None:
                 if cur:
                     lines.append(cur)
                 cur = []
             else:
-                cur.append(f"{_f(x(t))},{_f(y(v))}")
+                cur.append(f"{_f(x(t))},{_f(y(value))}")
         if cur:
             lines.append(cur)
         for ln in lines:

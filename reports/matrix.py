@@ -120,11 +120,11 @@ def matrix_rows(doc: dict, current: dict | None = None,
         runs = per.get(req["id"]) or [("", {"verdict": "not judged"})]
         for log, v in runs:
             rob = (v.get("robustness") or {}).get("value")
-            rows.append(MatrixRow(*head, log, v.get("verdict") or "",
+            rows.append(MatrixRow(*head, log, v.get("verdict") or "",  # type: ignore[call-arg]  # (head: the first cells)
                                   "" if rob is None else str(rob), *tree(req["id"]), stale))
     for item in doc.get("not_formalized") or []:
         origin = item.get("origin") or {}
-        rows.append(MatrixRow(item["id"], origin.get("format") or "", origin.get("tool_id")
+        rows.append(MatrixRow(item["id"], origin.get("format") or "", origin.get("tool_id")  # type: ignore[call-arg]  # (tree: the last cells)
                               or item["id"], origin.get("version") or "", "",
                               "not formalized (no FRETish text)", "not checked", "", "",
                               "not formalized", "", *tree(item["id"]), ""))
@@ -162,7 +162,7 @@ _SORTS = (("by-requirement", "requirement", lambda r: ()),
           ("by-verdict", "verdict", lambda r: (_VERDICT_RANK.get(r.verdict, 9),)),
           ("by-robustness", "robustness", lambda r: (_number(r.robustness),)),
           ("by-stale", "stale", lambda r: (r.stale != STALE, r.stale)))
-_VERDICT_RANK = {"error": 0, "violated": 1, "unknown": 2, "not formalized": 3,
+_VERDICT_RANK: dict[str, int] = {"error": 0, "violated": 1, "unknown": 2, "not formalized": 3,
                  "not judged": 4, NOT_IN_AUDIT: 4, "vacuous": 5, "satisfied": 6}
 
 
@@ -190,7 +190,7 @@ def matrix_html(rows: list[MatrixRow], title: str = "Traceability matrix") -> st
              "</style></head><body>", f"<h1>{e(title)}</h1>",
              f"<p>{len(rows)} rows; sort by a linked column header.</p>"]
     orders = list(_SORTS[1:]) + [_SORTS[0]]  # the default order last (CSS above)
-    for anchor, col, key in orders:
+    for anchor, _col, key in orders:
         ordered = sorted(enumerate(rows), key=lambda ir: (key(ir[1]), ir[0]))
         parts.append(f'<section class="order" id="{anchor}"><table><tr>')
         for c in COLUMNS:

@@ -7,7 +7,6 @@ Markdown document.
 from __future__ import annotations
 
 import re
-
 from typing import Any
 
 import jinja2

@@ -10,7 +10,10 @@ import html
 from fretc.common.textsafe import file_stems, xml_text
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from fretc.monitors.simulate import Simulation
 
 def _x(text) -> str:
     """Text for SVG/XHTML: control and bidi characters made visible, then XML-escaped (a
@@ -50,7 +53,7 @@ def text_table(sims: list, n: int) -> str:
     return "\n".join(lines + [""] + verdicts)
 
 
-def svg(sim, n: int) -> str:
+def svg(sim: Simulation, n: int) -> str:
     """One requirement's timelines (ft, pt, then its parts) as an SVG: a filled cell where
     the value is true, an empty one where false, a hatched one where unread."""
     rows = [("ft", sim.ft), ("pt", sim.pt)] + list(sim.parts.items())

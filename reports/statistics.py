@@ -5,8 +5,12 @@ and its statistical verdict (:mod:`fretc.audit.statistics`)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from rich.table import Table
 from rich.markup import escape
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 __all__ = ["print_statistics", "statistics_rows", "summary_line", "COLUMNS", "per_run"]
 
@@ -29,7 +33,7 @@ def per_run(st: dict) -> str:
 def statistics_rows(stats: list) -> list[tuple[str, ...]]:
     """The table's rows as plain text, one per statistics object (the audit JSON's, or
     :class:`fretc.audit.statistics.RequirementStatistics`), in :data:`COLUMNS`' order."""
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for st in stats:
         s = st if isinstance(st, dict) else st.to_json()
         lo, hi = s["interval"]
@@ -64,7 +68,7 @@ def summary_line(s: dict) -> str:
     return text
 
 
-def print_statistics(console, stats: list) -> None:
+def print_statistics(console: Console, stats: list) -> None:
     """Print the table of ``stats`` to the rich ``console``, then a line per undecided
     requirement saying why, and the unknown-outcome policy and confidence used."""
     if not stats:

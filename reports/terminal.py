@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-
+from typing import Any, TYPE_CHECKING, cast
 from rich.markup import escape as _markup_escape
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
@@ -23,13 +23,18 @@ from fretc.common.units import format_offset
 from fretc.audit.verdict import LogAudit, Verdict, exit_code, incomplete
 from fretc.reports.verdicts import format_value
 
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan
+    from rich.console import Console
+    from rich.progress import TaskID
+
 __all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
 
 _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
           "unknown": "yellow", "error": "magenta"}
 
 
-def escape(text) -> str:
+def escape(text: object) -> str:
     """Text from the inputs for rich markup: newlines, control and bidi characters shown
     escaped (:func:`fretc.common.textsafe.terminal_text`: a newline in a topic, a frame id or a
     joint name cannot start a line of its own), then markup escaped."""
@@ -77,8 +82,8 @@ def robustness_text(value: float | str | None, none: str = "") -> str:
 
 
 def _cell(v: Verdict, st: int | None) -> str:
-    rob = v.robustness
-    rob = f"\n({robustness_text(rob)})" if rob is not None and math.isfinite(rob) else ""
+    r = v.robustness
+    rob = f"\n({robustness_text(r)})" if r is not None and math.isfinite(r) else ""
     if v.verdict == "violated":
         fv = v.first_violation
         at = f" {format_offset(fv.at.time_ns, st)}" if fv is not None else ""
@@ -86,7 +91,8 @@ def _cell(v: Verdict, st: int | None) -> str:
     return v.verdict + (" *" if v.partial else "") + rob
 
 
-def print_summary(console, logs: list[LogAudit], plan=None, details: bool = True,
+def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None = None,
+                  details: bool = True,
                   verbose: bool = False, allow_partial: bool = False,
                   input_errors: bool = False, statistics: list | None = None,
                   command: str = "fretc audit") -> None:
@@ -143,7 +149,7 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
 
-def _print_plan(console, plan, n_logs: int, command: str = "fretc audit") -> None:
+def _print_plan(console, plan, n_logs: int | None, command: str = "fretc audit") -> None:
     """The header: the command, requirements, logs (``n_logs`` None: a watch, one run) and
     the clock of the bindings."""
     b = plan.bindings
@@ -169,9 +175,9 @@ def _print_plan(console, plan, n_logs: int, command: str = "fretc audit") -> Non
         console.print(line, markup=False, highlight=False)
 
 
-def tool_ids(plan) -> dict[str, str]:
+def tool_ids(plan: AuditPlan | None) -> dict[str, str]:
     """Requirement id -> the identifier of the tool it was read from (ReqIF SPEC-OBJECT,
-    Doorstop UID, FRET reqid), for the requirements that have one."""
+    Doorstop UID, FRET reqid), for the requirements that have one (none without a plan)."""
     out = {}
     for r in getattr(plan, "requirements", None) or []:
         origin = getattr(getattr(r.compiled, "entry", None), "origin", None)
@@ -180,7 +186,7 @@ def tool_ids(plan) -> dict[str, str]:
     return out
 
 
-def tool_lines(plan) -> list[str]:
+def tool_lines(plan: AuditPlan | None) -> list[str]:
     """The header lines of requirements read from tools: each id with its tool id (one line
     per source file), then the items listed as not formalized (no FRETish text)."""
     by_file: dict[str, list[str]] = {}
@@ -207,7 +213,8 @@ def _print_matrix(console, logs: list[LogAudit], reqs: list[str]) -> None:
     cells: dict[tuple, Verdict] = {(la.log, v.requirement): v for la in logs for v in la.verdicts}
     starts = {la.log: la.start_time_ns for la in logs}
     by_log = len(reqs) <= len(logs) or len(logs) > MATRIX_MAX
-    rows, cols = (logs, reqs) if by_log else (reqs, logs)
+    # logs (LogAudit) and requirement ids (str), or the other way round
+    rows, cols = cast("tuple[list[Any], list[Any]]", (logs, reqs) if by_log else (reqs, logs))
     table = Table(show_lines=False, header_style="bold")
     table.add_column("log" if by_log else "req", no_wrap=True)
     for c in cols:
@@ -357,7 +364,7 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
                   f"{escape(short_log_name(la.log))}: {escape(v.text)}", highlight=False)
     if fv is None:
         return
-    if fv.trigger is not None:
+    if fv.trigger is not None and fv.scope is not None:  # (a trigger is in its scope interval)
         sc = fv.scope
         console.print(f"  trigger at tick {fv.trigger.tick} "
                       f"({format_offset(fv.trigger.time_ns, st)}) in the "
@@ -368,7 +375,7 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
     elif fv.obligation:
         console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
                       highlight=False)
-    if v.robustness_at is not None and math.isfinite(v.robustness):
+    if v.robustness_at is not None and v.robustness is not None and math.isfinite(v.robustness):
         console.print(f"  robustness {robustness_text(v.robustness)} at tick "
                       f"{v.robustness_at.tick} ({format_offset(v.robustness_at.time_ns, st)})",
                       markup=False, highlight=False)
@@ -405,8 +412,8 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
         prev = tick
         cells = [str(tick), format_offset(ns, st)] + [_value(c[2]) for c in row]
         for tp in topics:
-            lt = v.sources[tp][k][2]
-            cells.append(format_offset(lt, st))
+            held = v.sources[tp][k][2]
+            cells.append(format_offset(held, st))
         cells.append(marks.get(tick, ""))
         t.add_row(*cells)
     console.print(t)
@@ -483,7 +490,7 @@ class AuditProgress:
                                  TaskProgressColumn(), TimeElapsedColumn(), console=console,
                                  transient=True)
         self.total = self.progress.add_task("logs", total=total)
-        self.tasks: dict[int, int] = {}
+        self.tasks: dict[int, TaskID] = {}
 
     def __enter__(self):
         self.progress.start()
@@ -502,7 +509,7 @@ class AuditProgress:
         if task is not None:
             self.progress.update(task, completed=fraction)
 
-    def done(self, index: int, la) -> None:
+    def done(self, index: int, la: LogAudit) -> None:
         """Log ``index`` audited: its bar removed, the overall bar advanced."""
         task = self.tasks.pop(index, None)
         if task is not None:

@@ -27,11 +27,10 @@ and tools can check the picture against the JSON.
 
 from __future__ import annotations
 
-import textwrap
-
 import math
+import textwrap
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 from xml.sax.saxutils import escape as _xml_escape, quoteattr as _xml_quoteattr
 
 from fretc.common.textsafe import xml_text
@@ -331,7 +330,7 @@ def _draw_markers(svg: _Svg, lay: Timeline, det: _Detail) -> None:
     """Vertical markers over the lanes (the violation drawn last: on top when they meet),
     and the violated tick's cell under them."""
     draw_order = {"ltl3": 0, "trigger": 1, "violation": 2}
-    for kind, ns, label in sorted(lay.marks, key=lambda m: draw_order[m[0]]):
+    for kind, ns, _label in sorted(lay.marks, key=lambda m: draw_order[m[0]]):
         x, where = lay.axis.x(ns)
         dash = ' stroke-dasharray="5 3"' if kind == "ltl3" else ""
         svg.line(x, det.lab_y0 + 2, x, det.lanes_y1 + 2, COLORS[kind],

@@ -7,8 +7,9 @@ and the broken time axis that maps log time (ns) to pixels. No drawing here.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Iterator, Sequence
+from typing import Any
 
 from fretc.common.units import format_offset
 

@@ -11,6 +11,7 @@ import hashlib
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, TYPE_CHECKING
 
 from fretc.compiler.ajpf import AjpfError, load_mapping, psl_label_and_formula
 from fretc.compiler.codegen import file_stems
@@ -19,6 +20,9 @@ from fretc.common.errors import FretcError
 
 from fretc.audit import AuditConfig, AuditInputError, load_plan
 from fretc.reports.timeline import Threshold
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["ReportError", "FIELD_NAMES", "ModuleInfo", "RequirementTrace", "marked_fields",
            "thresholds", "trace_requirements", "resolve_input", "split_source"]
@@ -86,7 +90,7 @@ def _class_source(module_text: str, class_name: str) -> str:
     return "\n".join(out)
 
 
-def marked_fields(text: str, requirement) -> list[tuple[str, str | None]]:
+def marked_fields(text: str, requirement: A.Requirement) -> list[tuple[str, str | None]]:
     """The FRETish text cut into ``(piece, field)`` pieces in order, ``field`` one of
     :data:`FIELD_NAMES` or None for the words between fields ("shall", ...), from the
     :class:`fretc.fretish.ast.Requirement` spans (0-based character offsets into ``text``).
@@ -130,7 +134,7 @@ def _const(e) -> float | None:
     return None
 
 
-def thresholds(requirement) -> list[Threshold]:
+def thresholds(requirement: A.Requirement) -> list[Threshold]:
     """``var OP constant`` comparisons of the condition and response of a
     :class:`fretc.fretish.ast.Requirement` (the timeline's dashed lines), in tree order without
     repeats; ``constant OP var`` is turned round. None or free-form: none."""
@@ -142,10 +146,10 @@ def thresholds(requirement) -> list[Threshold]:
             continue
         for n in A.walk(root):
             if isinstance(n, A.Binary) and n.op in A.COMPARISON_OPS:
-                if isinstance(n.left, A.Var) and _const(n.right) is not None:
-                    t = Threshold(n.left.name, n.op, _const(n.right))
-                elif isinstance(n.right, A.Var) and _const(n.left) is not None:
-                    t = Threshold(n.right.name, _FLIP[n.op], _const(n.left))
+                if isinstance(n.left, A.Var) and (c := _const(n.right)) is not None:
+                    t = Threshold(n.left.name, n.op, c)
+                elif isinstance(n.right, A.Var) and (c := _const(n.left)) is not None:
+                    t = Threshold(n.right.name, _FLIP[n.op], c)
                 else:
                     continue
                 if t not in out:
@@ -276,7 +280,7 @@ def _modules_of(plan) -> dict[str, ModuleInfo]:
     return out
 
 
-def trace_requirements(doc: dict, *, plan=None, base: Path | None = None,
+def trace_requirements(doc: dict, *, plan: AuditPlan | None = None, base: Path | None = None,
                        json_dir: Path | None = None, psl_map: str | None = None
                        ) -> tuple[dict[int, RequirementTrace], dict[str, ModuleInfo], list[str]]:
     """Compile the requirements an audit document names, for what the JSON does not carry.
@@ -341,7 +345,8 @@ def _rebuild_plan(doc: dict, base: Path | None, json_dir: Path | None, notes: li
         f, _ = split_source(r.get("source", ""))
         if f and f not in files:
             files.append(f)
-    found, missing = [], []
+    found: list[Any] = []
+    missing: list[Any] = []
     for f in files:
         p = resolve_input(f, base, json_dir)
         (found if p is not None else missing).append(str(p) if p is not None else f)

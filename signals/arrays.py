@@ -27,6 +27,10 @@ class SampledArrays(tuple):
             fit columns: ragged arrays, text).
     """
 
+    warmup_ticks: int
+    log_times: dict[str, np.ndarray]
+    vectorized: bool
+
     def __new__(cls, times: np.ndarray, columns: dict[str, np.ndarray], warmup_ticks: int,
                 log_times: dict[str, np.ndarray], vectorized: bool) -> SampledArrays:
         self = super().__new__(cls, (times, columns))
@@ -58,7 +62,7 @@ def sample_arrays(source: LogSource, bindings: Bindings | None = None) -> Sample
     """
     if source.kind == "csv" and (bindings is None or not bindings.variables):
         s = sample(source, bindings)
-        names = list(source.columns)
+        names = list(source.columns)  # type: ignore[attr-defined]  # a CsvSource
         blocks = list(blocks_of_ticks(iter(s), names, [CSV_TOPIC]))
         return _joined(blocks, names, 0, True)
     if bindings is None:

@@ -103,10 +103,10 @@ class _Stream:
         b = self.buffers[topic]
         if not isinstance(b.data, SegmentList):
             assert not b.data
-            b.data = SegmentList()
+            b.data = SegmentList()  # type: ignore[assignment]  # indexed as a list is
         b.times.extend(log_times)
         b.log_times.extend(log_times)
-        b.data.add(segment)
+        b.data.add(segment)  # type: ignore[attr-defined]  # (a SegmentList, above)
 
     def arrays(self, topic: str) -> tuple[np.ndarray, np.ndarray]:
         """int64 (times, log times) of the buffered messages of ``topic``."""
@@ -168,6 +168,7 @@ class _Group:
         """Time of its next tick not yet evaluated (inf: none is known yet)."""
         if self.period is not None:
             return self.next_grid if self.next_grid is not None else float("inf")
+        assert self.tick_topic is not None  # (no period: per-topic ticks)
         b = self.stream.buffers[self.tick_topic]
         p = self.next_seq - b.base
         return b.times[p] if p < len(b.times) else float("inf")
@@ -189,9 +190,9 @@ def sample_blocks(source: LogSource, bindings: Bindings,
     if source.kind == "csv":
         assert isinstance(source, CsvSource)
         whole = csv_clock(g, source, bindings, groups)
-        names = list(whole.bindings.variables) if whole.bindings is not None else []
-        topics = sorted({t for _n, ts in groups.values() for t in ts})
-        g._iter = ((key, blk) for blk in blocks_of_ticks(iter(whole), names, topics)
+        variables = list(whole.bindings.variables) if whole.bindings is not None else []
+        csv_topics = sorted({t for _n, ts in groups.values() for t in ts})
+        g._iter = ((key, blk) for blk in blocks_of_ticks(iter(whole), variables, csv_topics)
                    for key in groups)
         return g
     tick = bindings.tick
@@ -342,6 +343,7 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
             own = None
             c.next_grid += n * c.period
         else:
+            assert c.tick_topic is not None  # (no period: per-topic ticks)
             tb = c.stream.buffers[c.tick_topic]
             p = c.next_seq - tb.base
             q = len(tb.times) if final else bisect_left(tb.times, last, lo=p)
@@ -364,6 +366,7 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     stream, s = c.stream, c.sampling
     idx = {t: np.searchsorted(stream.arrays(t)[0], times, side="right") - 1 for t in c.own}
     if own is not None:
+        assert c.tick_topic is not None  # (own: per-topic ticks)
         idx[c.tick_topic] = own
     if s.start_time is None:
         s.start_time = int(times[0])
@@ -371,7 +374,7 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
     s.end_time = int(times[-1])
     warm = max((int(np.count_nonzero(idx[t] < _first_held(c, t))) for t in c.required),
                default=0)
-    wwarm, wvals = 0, {}
+    wwarm, wvals = 0, dict[str, Any]()
     if c.sliding:
         held_abs = {w.spec.topic: idx[w.spec.topic] + stream.buffers[w.spec.topic].base
                     for w in c.sliding.values()}
@@ -521,7 +524,7 @@ def _add_transforms(tf: tuple[TfBuffer, dict[str, int]], stream: _Stream, upto: 
     """Add to ``tf``'s buffer the messages of /tf and /tf_static with time <= ``upto`` not
     added yet, in time order (as the streaming clock adds them)."""
     buf, added = tf
-    pending = []
+    pending: list[Any] = []
     for topic in TF_TOPICS:
         b = stream.buffers.get(topic)
         if b is None:

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import heapq
 from collections import deque
+from collections.abc import Iterable, Iterator
 from types import SimpleNamespace
-from collections.abc import Iterator
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -117,7 +117,7 @@ class Sampling:
         return one_clock(it, self)  # count_ticks(...) bindings counted
 
 
-def missing_topics(need, available) -> list[str]:
+def missing_topics(need: Iterable[str], available: Iterable[str]) -> list[str]:
     """The topics of ``need`` the log does not have (sorted). ``tf()`` reads /tf and
     /tf_static together: a transform tree on either alone is complete (ROS 1 tf, and bags
     from before tf2, have no /tf_static; a static tree may have no /tf), so the pair is missing
@@ -125,7 +125,7 @@ def missing_topics(need, available) -> list[str]:
     return sorted(present_tf(need, available) - set(available))
 
 
-def present_tf(topics, available) -> set[str]:
+def present_tf(topics: Iterable[str], available: Iterable[str]) -> set[str]:
     """``topics`` less the one of /tf and /tf_static the log does not have when it has the
     other (:func:`missing_topics`): the clock then waits for and reads the one there is."""
     out = set(topics)
@@ -240,12 +240,12 @@ def feed(source: LogSource, bindings: Bindings, topics: set[str], problems: Prob
     yield from buf.drain()
 
 
-def s_first(s: "Sampling") -> bool:
+def s_first(s: Sampling) -> bool:
     """Whether ``s`` has evaluated a tick (skipped messages count from then on)."""
     return s.first_time is not None
 
 
-def unsampled_of(s: "Sampling", names: list[str], bindings: Bindings | None) -> dict[str, int]:
+def unsampled_of(s: Sampling, names: list[str], bindings: Bindings | None) -> dict[str, int]:
     """The unsampled messages of clock ``s`` that count for variables ``names`` (one
     requirement's): those of topics its non-aggregated bindings read, sorted by topic."""
     own = [bindings.variables[n] for n in names
@@ -309,7 +309,7 @@ class Clock:
         """``b`` at the tick: the held message's value, or its aggregation over the
         messages since the previous tick (:func:`fretc.signals.bindings.binding.fold`)."""
         if b.name in self.sliding:
-            return self.sliding[b.name].value(self.state.now)  # type: ignore[arg-type]
+            return self.sliding[b.name].value(self.state.now)
         if b.aggregate is None:
             return b.evaluate(self.state)
         vals = window.get(b.name) or []
@@ -364,7 +364,7 @@ class Clock:
                   prev_t: int | None = None) -> Tick | None:
         """A per-topic tick, evaluated with its own message of the tick topic (and the one
         before it, for @delta and the like)."""
-        st, lt, tt = self.state, self.log_times, self.tick_topic
+        st, lt, tt = self.state, self.log_times, cast(str, self.tick_topic)  # per-topic: set
         held = (st.msgs[tt], st.times[tt], lt[tt], st.prev_msgs.get(tt), st.prev_times.get(tt))
         st.msgs[tt], st.times[tt], lt[tt] = data, t, log_time
         if prev is not None:

@@ -68,7 +68,7 @@ class MessageColumns:
         self._reduced: dict[tuple[str, str], Any] = {}
         #: (topic, field text) -> (the values read from each message, why they are no column):
         #: read once, for every binding and the message-by-message fallback
-        self._irregular: dict[tuple[str, tuple], tuple[list, str]] = {}
+        self._irregular: dict[tuple[str, Any], tuple[list, str]] = {}
 
     def field(self, topic: str, path: tuple, node: Field) -> Any:
         """Field ``path`` of every message of ``topic`` (:func:`regular_column`).

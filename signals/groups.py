@@ -5,7 +5,7 @@ variables (normally one requirement's), each on the clock of its own topics
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 from fretc.common.streams import log_topics
@@ -38,7 +38,11 @@ class GroupSampling:
         self.groups: dict[Any, Sampling] = {}
         self.failed: dict[Any, dict[str, SignalError]] = {}
         self.errors: dict[Any, SignalError] = {}
-        self._iter: Iterator[tuple[Any, Tick]] | None = None
+        # (key, Tick); signals.blocks' sample_blocks: (key, TickBlock)
+        self._iter: Iterator[tuple[Any, Any]] | None = None
+
+    #: key -> the variables evaluated tick by tick (set by signals.blocks' sample_blocks)
+    per_tick: dict[Any, set[str]]
 
     @property
     def signal_problems(self) -> list[DataProblem]:
@@ -58,7 +62,7 @@ class GroupSampling:
         """The source's problems followed by every clock's (once each)."""
         return list(self.source.problems) + self.signal_problems
 
-    def __iter__(self) -> Iterator[tuple[Any, Tick]]:
+    def __iter__(self) -> Iterator[tuple[Any, Any]]:  # Tick, or signals.blocks' TickBlock
         if self._iter is None:
             raise RuntimeError("GroupSampling is iterated once")
         it, self._iter = self._iter, None
@@ -158,6 +162,7 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, Clock],
             if key in g.errors:
                 continue
             c = clocks[key]
+            items: Iterable[tuple[str, int, int, Any]]  # (topic, time, log time, data)
             if key in buffers:
                 try:
                     items = buffers[key].push(m)

@@ -190,7 +190,8 @@ class PendingCalls:
 
     def __init__(self, spec: WindowSpec) -> None:
         self.spec = spec
-        self.open: dict[tuple, int] = {}  # key -> time of its first request, oldest first
+        # key (a tuple; a goal's id bytes for actions) -> time of its first request, oldest first
+        self.open: dict[tuple | bytes, int] = {}
         self.error: Exception | None = None
 
     def push(self, t: int, v: Any) -> None:

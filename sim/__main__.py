@@ -14,12 +14,12 @@ from fretc.sim.serve import serve as do_serve
 
 
 @click.group()
-def main():
+def main() -> None:
     """Simulated Safe-ROS robot: record Scout Mini inspection runs as MCAP."""
 
 
 @main.command("list")
-def list_scenarios():
+def list_scenarios() -> None:
     """List the scenarios."""
     for name, sc in SCENARIOS.items():
         click.echo(f"{name:20s} {sc.description}")
@@ -43,7 +43,8 @@ def list_scenarios():
 @click.option("--safety", default="sif", show_default=True, metavar="sif|shield:DIR",
               help="The Safety System: the hand-written SIF and cmd_vel_interceptor, or the "
               "shield fretc shield --emit python -b BINDINGS wrote into DIR.")
-def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression, safety):
+def record(scenario: str, seed: int, output: str, ros1: bool, png: str | None, threshold: float,
+           stop_delay: float | None, compression: str, safety: str) -> None:
     """Record one scenario to an MCAP file."""
     t0 = time.perf_counter()
     try:
@@ -82,7 +83,8 @@ def record(scenario, seed, output, ros1, png, threshold, stop_delay, compression
 @click.option("--ros1", is_flag=True, help="ROS 1 messages instead of ROS 2 (cdr).")
 @click.option("--wait/--no-wait", default=True, show_default=True,
               help="Start the run once a client subscribed.")
-def serve(scenario, seed, rate, host, port, ros1, wait):
+def serve(scenario: str, seed: int, rate: float, host: str, port: int, ros1: bool, wait: bool
+         ) -> None:
     """Run one scenario live over the Foxglove WebSocket protocol (foxglove-sdk)."""
     def ready(server):
         click.echo(f"serving {scenario} on {server.url} at {rate:g}x"
@@ -103,7 +105,7 @@ def serve(scenario, seed, rate, host, port, ros1, wait):
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
 @click.option("--threshold", type=float, default=0.9, show_default=True)
 @click.option("--markdown", is_flag=True, help="Print Markdown tables.")
-def verdicts(files, threshold, markdown):
+def verdicts(files: tuple[str, ...], threshold: float, markdown: bool) -> None:
     """Evaluate R1-R6 on recorded runs with the reference evaluator (sim.logs)."""
     rows = []
     for f in files:
@@ -124,7 +126,7 @@ def verdicts(files, threshold, markdown):
             click.echo(f"| {name} | {prof} | {dur:.2f} | {size} | "
                        + " | ".join(str(cnt.get(t, 0)) for t in topics) + " |")
     else:
-        for name, prof, dur, size, cnt, v in rows:
+        for name, prof, dur, size, _cnt, v in rows:
             click.echo(f"{name} ({prof}, {dur:.2f} s, {size} bytes)")
             for r in REQUIREMENTS:
                 click.echo(f"  {r}: {v[r].text()}  [{v[r].triggers} triggering ticks]")
@@ -145,7 +147,8 @@ def verdicts(files, threshold, markdown):
 @click.option("--lead-out", type=float, default=None,
               help="Seconds simulated after the trace's last tick, its inputs held "
                    "(default 2.0).")
-def drive(trace, log, bindings_file, scenario, seed, lead_in, lead_out):
+def drive(trace: str, log: str, bindings_file: str, scenario: str, seed: int,
+          lead_in: float | None, lead_out: float | None) -> None:
     """Drive the robot with TRACE's input variables (a fretc testgen CSV) and record the run to
     LOG (MCAP). The robot's SIF, interceptor and navigation produce the outputs."""
     import sys

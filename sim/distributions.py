@@ -24,8 +24,12 @@ space in which :mod:`fretc.sim.splitting` moves its particles.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["Distribution", "parse_distribution", "DistributionError", "DISTRIBUTIONS"]
 
@@ -67,7 +71,7 @@ class Distribution:
         hi = self.high if math.isfinite(self.high) else self.mean + 4 * self.sd
         return lo, hi
 
-    def value(self, z: list[float] | tuple[float, ...]) -> float | None:
+    def value(self, z: Sequence[float] | np.ndarray) -> float | None:
         """The parameter's value at the latent coordinates ``z`` (``latent_dims`` of them,
         standard normal): None when a fault does not happen; else the value rounded to
         1e-6 (1 us, 1 um)."""
@@ -104,7 +108,7 @@ def _num(spec: dict, key: str, fail: Callable[[str], None], default=None) -> flo
     return float(v)
 
 
-def parse_distribution(name: str, spec, nonnegative: bool,
+def parse_distribution(name: str, spec: Any, nonnegative: bool,
                        fail: Callable[[str], None]) -> Distribution:
     """The :class:`Distribution` of one ``[parameters]`` entry (a ``[low, high]`` list or
     a table, module docstring). ``nonnegative``: the parameter cannot be below 0 (a normal

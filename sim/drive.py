@@ -75,7 +75,8 @@ class TraceDrivenSimulation(Simulation):
         self.end = last + out_ms // SCAN_MS
         self.lead_ms = lead_ms
         self.first = min(plan) if plan else 0
-        self.lidar = _TraceLidar(self.lidar)
+        self.trace_lidar = _TraceLidar(self.lidar)
+        self.lidar = self.trace_lidar  # type: ignore[assignment]  # (a Lidar's interface)
 
     def _scan_10hz(self, rec, st, t_ms, t, s) -> None:
         k = (t_ms - self.lead_ms) // SCAN_MS
@@ -89,7 +90,7 @@ class TraceDrivenSimulation(Simulation):
             value = self.plan.get(k)
         if value is None:
             return  # silent: no scan, the SIF hears nothing
-        self.lidar.value = value
+        self.trace_lidar.value = value
         super()._scan_10hz(rec, st, t_ms, t, s)
 
 

@@ -29,15 +29,20 @@ deleted.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, TYPE_CHECKING
 
 from fretc.audit.statistics import RequirementStatistics, fleet_statistics, unknown_policy
 
 from fretc.sim.run import record_scenario
 from fretc.sim.sequential import make_test
 from fretc.sim.space import Space, apply
+
+if TYPE_CHECKING:
+    from fretc.audit.verdict import LogAudit
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["EstimateRun", "Estimate", "estimate", "sample_point", "Runner", "simulate_run",
            "observation"]
@@ -180,7 +185,7 @@ def _finite(v):
     return v
 
 
-def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 1000,
+def estimate(plan: AuditPlan, space: Space, seed: int, out: str | Path, *, budget: int = 1000,
              test: str = "sprt", delta: float = 0.05, alpha: float = 0.05,
              beta: float = 0.05, confidence: float = 0.95, unknown: str = "worst-case",
              trial: str = "trigger", ray_address: str | None = None, batch: int = 8,
@@ -244,7 +249,7 @@ def estimate(plan, space: Space, seed: int, out: str | Path, *, budget: int = 10
     return result
 
 
-def observation(la, rid: str, trial: str, unknown: str) -> tuple[int, int, int] | None:
+def observation(la: LogAudit, rid: str, trial: str, unknown: str) -> tuple[int, int, int] | None:
     """What one run (:class:`fretc.audit.verdict.LogAudit`) gives requirement ``rid``'s
     test: ``(k, n, u)``, ``k`` satisfied of ``n`` trials of known outcome and ``u`` of
     unknown outcome (0 under ``exclude``); None when the run could not be judged per trigger

@@ -25,12 +25,16 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, TYPE_CHECKING
 
 from fretc.sim.run import record_scenario, shield_of
 from fretc.sim.space import Space, apply
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["Run", "Search", "falsify", "CLIP"]
 
@@ -88,7 +92,7 @@ class Search:
         for r in self.runs:
             for t in self.targets:
                 v = r.robustness.get(t)
-                if v is not None and (out[t] is None or v < out[t][0]):
+                if v is not None and ((cur := out[t]) is None or v < cur[0]):
                     at = _verdict(r.audit, t).robustness_at
                     out[t] = (v, r.index, at.tick if at is not None else None)
         return out
@@ -180,7 +184,7 @@ class _Evaluator:
             ray.shutdown()
 
 
-def falsify(plan, space: Space, budget: int, seed: int, out: str | Path, *,
+def falsify(plan: AuditPlan, space: Space, budget: int, seed: int, out: str | Path, *,
             targets: list[str] | None = None, first: bool = False,
             ray_address: str | None = None,
             progress: Callable[[Run], None] | None = None) -> Search:

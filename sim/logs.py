@@ -30,6 +30,7 @@ Bindings: ``too_close`` = min valid ``/scan`` range < 0.9 (valid: finite and wit
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -94,6 +95,7 @@ def read_log(path: str | Path) -> RecordedLog:
         encodings: dict[str, tuple[str, str]] = {}
         order = []
         for schema, channel, message in reader.iter_messages(log_time_order=False):
+            assert schema is not None  # (the simulator's channels have their schemas)
             if schema.id not in registered:
                 if schema.encoding not in ("ros1msg", "ros2msg"):
                     raise ValueError(f"unsupported schema encoding {schema.encoding!r}")
@@ -116,7 +118,7 @@ def read_log(path: str | Path) -> RecordedLog:
     return RecordedLog(profile, messages, schemas, encodings, order)
 
 
-def min_valid(ranges, range_min: float, range_max: float) -> float:
+def min_valid(ranges: Sequence[float] | np.ndarray, range_min: float, range_max: float) -> float:
     """Minimum valid LaserScan range (m) under REP 117 (see module docstring); ``inf`` if
     none is valid."""
     r = np.asarray(ranges, dtype=np.float64)
@@ -234,5 +236,6 @@ def counts(path: str | Path) -> dict[str, int]:
     """Messages per topic from the MCAP summary (statistics record)."""
     with open(path, "rb") as fh:
         summ = make_reader(fh).get_summary()
+    assert summ is not None and summ.statistics is not None  # (the simulator writes them)
     by_id = {cid: ch.topic for cid, ch in summ.channels.items()}
     return {by_id[cid]: n for cid, n in summ.statistics.channel_message_counts.items()}

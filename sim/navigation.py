@@ -18,8 +18,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 from scipy import ndimage
@@ -48,7 +48,7 @@ class NavigationFunction:
     ``dist`` (float, one per traversable cell) and ``pred`` (next cell towards the goal, -1 at
     the goal or where unreachable)."""
 
-    def __init__(self, planner: "GlobalPlanner", goal: tuple[float, float],
+    def __init__(self, planner: GlobalPlanner, goal: tuple[float, float],
                  dist: np.ndarray, pred: np.ndarray):
         self.planner = planner
         self.goal = goal
@@ -106,7 +106,9 @@ class GlobalPlanner:
         ids[rows, cols] = np.arange(rows.size)
         self.ids = ids
         self.rows, self.cols = rows, cols
-        src, dst, wts = [], [], []
+        src_parts: list[np.ndarray] = []
+        dst_parts: list[np.ndarray] = []
+        wts_parts: list[np.ndarray] = []
         res = omap.resolution
         for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
             r2, c2 = rows + dr, cols + dc
@@ -116,12 +118,12 @@ class GlobalPlanner:
             b = ids[r2[ok], c2[ok]]
             step = res * math.hypot(dr, dc)
             w = step * (1.0 + 0.5 * (cost[rows[ok], cols[ok]] + cost[r2[ok], c2[ok]]))
-            src.append(a)
-            dst.append(b)
-            wts.append(w)
-        src = np.concatenate(src)
-        dst = np.concatenate(dst)
-        wts = np.concatenate(wts)
+            src_parts.append(a)
+            dst_parts.append(b)
+            wts_parts.append(w)
+        src = np.concatenate(src_parts)
+        dst = np.concatenate(dst_parts)
+        wts = np.concatenate(wts_parts)
         n = rows.size
         self.graph = csr_matrix((np.concatenate([wts, wts]),
                                  (np.concatenate([src, dst]), np.concatenate([dst, src]))),
@@ -211,6 +213,7 @@ class LocalController:
 
     def goal_reached(self, x: float, y: float) -> bool:
         """Whether ``(x, y)`` (estimated, ``map``) is within ``goal_tolerance`` of the goal."""
+        assert self.nav is not None  # (set_goal came first)
         g = self.nav.goal
         return math.hypot(g[0] - x, g[1] - y) <= self.p.goal_tolerance
 
@@ -225,6 +228,7 @@ class LocalController:
         Returns ``(0, 0)`` if there is no path."""
         p = self.p
         nav = self.nav
+        assert nav is not None  # (set_goal came first)
         c2g = nav.cost_to_go(x, y)
         if c2g < self.best_cost - p.progress:
             self.best_cost = c2g
@@ -286,7 +290,7 @@ class Mission:
     @property
     def goals(self) -> list[tuple[float, float]]:
         """All goals in order, home last."""
-        return list(self.points) + [tuple(self.home)]
+        return list(self.points) + [(self.home[0], self.home[1])]
 
     @property
     def current(self) -> tuple[float, float]:

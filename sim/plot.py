@@ -79,7 +79,7 @@ def _draw_zoom(ax, res: RunResult, img, stop_idx, release_idx):
         axins.plot(xs[i], ys[i], "x", color="red", ms=6, mew=1.8, zorder=9)
     for i in release_idx:
         axins.plot(xs[i], ys[i], "o", color="tab:green", ms=3.5, mec="k", mew=0.4, zorder=8)
-    for i, (gx, gy) in enumerate(res.goals[:-1]):
+    for gx, gy in res.goals[:-1]:
         axins.plot(gx, gy, marker="*", ms=13, color="gold", mec="k", zorder=6)
     axins.set_xlim(cx - half_w, cx + half_w)
     axins.set_ylim(cy - half_h, cy + half_h)
@@ -187,7 +187,7 @@ def _draw_trajectory(fig, ax, res: RunResult) -> None:
                    label=f"no /scan ({sc_.dropout_duration:g} s)")
     sc = ax.scatter(xs, ys, c=t, cmap="viridis", s=3, zorder=5)
     cax = ax.inset_axes([0.05, 0.29, 0.3, 0.02])
-    cb = fig.colorbar(sc, cax=cax, orientation="horizontal")
+    fig.colorbar(sc, cax=cax, orientation="horizontal")
     cax.tick_params(labelsize=7)
     cax.set_title("sim time [s]", fontsize=7, pad=2)
     if sc_.stop_delay > 0:
@@ -221,7 +221,7 @@ def _draw_sif(ax, res: RunResult, img) -> None:
     for (tc, stop) in tr.control:
         if not stop:
             continue
-        i = min(np.searchsorted(t, tc), len(t) - 1)
+        i = min(int(np.searchsorted(t, tc)), len(t) - 1)
         ax.add_patch(Polygon(_footprint(tr.x[i], tr.y[i], tr.yaw[i], hl, hw), closed=True,
                              fc="none", ec="red", lw=1.0, zorder=7))
         ax.plot(tr.x[i], tr.y[i], "x", color="red", ms=8, mew=2.2, zorder=9,
@@ -231,7 +231,7 @@ def _draw_sif(ax, res: RunResult, img) -> None:
     for (tc, stop) in tr.control[1:]:
         if stop:
             continue
-        i = min(np.searchsorted(t, tc), len(t) - 1)
+        i = min(int(np.searchsorted(t, tc)), len(t) - 1)
         ax.plot(tr.x[i], tr.y[i], "o", color="tab:green", ms=4, mec="k", mew=0.4, zorder=8,
                 label="stop released (false)" if first else None)
         first = False

@@ -12,13 +12,17 @@ run finishes first). Violating runs met on the way are kept as in :mod:`fretc.si
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, TYPE_CHECKING
 
 from fretc.sim.estimate import Runner, _finite
 from fretc.sim.space import Space
 from fretc.sim.splitting import SplittingError, SplittingResult, adaptive_multilevel_splitting
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["RareResult", "rare_estimate"]
 
@@ -43,7 +47,7 @@ class RareResult:
                 "errors": self.errors}
 
 
-def rare_estimate(plan, space: Space, seed: int, out: str | Path, targets: list[str], *,
+def rare_estimate(plan: AuditPlan, space: Space, seed: int, out: str | Path, targets: list[str], *,
                   particles: int = 100, kill: int = 10, moves: int = 5,
                   confidence: float = 0.95, budget: int | None = None,
                   ray_address: str | None = None, keep: int = 10,

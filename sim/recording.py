@@ -25,11 +25,15 @@ byte-identical files.
 from __future__ import annotations
 
 import math
-from typing import BinaryIO, Iterable, Sequence
+from collections.abc import Iterable, Sequence
+from typing import Any, BinaryIO, Protocol, TYPE_CHECKING
 
 import numpy as np
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 #: Topics recorded, with their message types (ROS 2 names), in channel order.
 TOPICS: tuple[tuple[str, str], ...] = (
@@ -57,7 +61,7 @@ CALLERS = {
 _TF_MSG = "geometry_msgs/TransformStamped[] transforms"
 
 
-def make_typestore(ros1: bool):
+def make_typestore(ros1: bool) -> Typestore:
     """The rosbags typestore for ROS 1 Noetic (``ros1=True``) or ROS 2 Humble, with
     ``tf2_msgs/msg/TFMessage`` registered where the store lacks it (Noetic)."""
     ts = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
@@ -84,12 +88,12 @@ class MessageFactory:
         self._seq: dict[str, int] = {}
 
     # ---------------------------------------------------------------- primitives
-    def time(self, stamp_ns: int):
+    def time(self, stamp_ns: int) -> Any:
         """``builtin_interfaces/Time`` (ROS 1 ``time``) for ``stamp_ns``."""
         return self.T["builtin_interfaces/msg/Time"](sec=int(stamp_ns // 1_000_000_000),
                                                       nanosec=int(stamp_ns % 1_000_000_000))
 
-    def header(self, stamp_ns: int, frame_id: str, seq_key: str = ""):
+    def header(self, stamp_ns: int, frame_id: str, seq_key: str = "") -> Any:
         """``std_msgs/Header``; in ROS 1 ``seq`` counts up per ``seq_key`` (per publisher)."""
         H = self.T["std_msgs/msg/Header"]
         if self.ros1:
@@ -98,11 +102,11 @@ class MessageFactory:
             return H(seq=seq, stamp=self.time(stamp_ns), frame_id=frame_id)
         return H(stamp=self.time(stamp_ns), frame_id=frame_id)
 
-    def vector3(self, x=0.0, y=0.0, z=0.0):
+    def vector3(self, x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Any:
         """``geometry_msgs/Vector3``."""
         return self.T["geometry_msgs/msg/Vector3"](x=float(x), y=float(y), z=float(z))
 
-    def pose(self, x: float, y: float, yaw: float):
+    def pose(self, x: float, y: float, yaw: float) -> Any:
         """``geometry_msgs/Pose`` in the plane."""
         qx, qy, qz, qw = yaw_to_quaternion(yaw)
         return self.T["geometry_msgs/msg/Pose"](
@@ -110,26 +114,26 @@ class MessageFactory:
             orientation=self.T["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw))
 
     # ---------------------------------------------------------------- messages
-    def twist(self, v: float, w: float):
+    def twist(self, v: float, w: float) -> Any:
         """``geometry_msgs/Twist`` with ``linear.x = v`` m/s and ``angular.z = w`` rad/s."""
         return self.T["geometry_msgs/msg/Twist"](linear=self.vector3(v),
                                                   angular=self.vector3(0, 0, w))
 
-    def bool(self, value: bool):
+    def bool(self, value: bool) -> Any:
         """``std_msgs/Bool``."""
         return self.T["std_msgs/msg/Bool"](data=bool(value))
 
-    def float64(self, value: float):
+    def float64(self, value: float) -> Any:
         """``std_msgs/Float64``."""
         return self.T["std_msgs/msg/Float64"](data=float(value))
 
     def pose_stamped(self, stamp_ns: int, frame_id: str, x: float, y: float, yaw: float,
-                     seq_key: str):
+                     seq_key: str) -> Any:
         """``geometry_msgs/PoseStamped``."""
         return self.T["geometry_msgs/msg/PoseStamped"](
             header=self.header(stamp_ns, frame_id, seq_key), pose=self.pose(x, y, yaw))
 
-    def transform(self, stamp_ns: int, parent: str, child: str, x: float, y: float, yaw: float):
+    def transform(self, stamp_ns: int, parent: str, child: str, x: float, y: float, yaw: float) -> Any:
         """``geometry_msgs/TransformStamped`` of ``child`` in ``parent``."""
         qx, qy, qz, qw = yaw_to_quaternion(yaw)
         return self.T["geometry_msgs/msg/TransformStamped"](
@@ -139,12 +143,13 @@ class MessageFactory:
                 translation=self.vector3(x, y, 0.0),
                 rotation=self.T["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw)))
 
-    def tf(self, transforms: Sequence):
+    def tf(self, transforms: Sequence) -> Any:
         """``tf2_msgs/TFMessage``."""
         return self.T["tf2_msgs/msg/TFMessage"](transforms=list(transforms))
 
     def odometry(self, stamp_ns: int, x: float, y: float, yaw: float, v: float, w: float,
-                 pose_cov: Sequence[float], twist_cov: Sequence[float]):
+                 pose_cov: Sequence[float] | np.ndarray, twist_cov: Sequence[float] | np.ndarray
+                 ) -> Any:
         """``nav_msgs/Odometry`` (``odom`` -> ``base_link``; twist in ``base_link``);
         covariances are 36-element row-major 6x6 matrices (x, y, z, roll, pitch, yaw)."""
         T = self.T
@@ -157,7 +162,7 @@ class MessageFactory:
 
     def laser_scan(self, stamp_ns: int, frame_id: str, angle_min: float, angle_max: float,
                    angle_increment: float, scan_time: float, range_min: float,
-                   range_max: float, ranges: np.ndarray):
+                   range_max: float, ranges: np.ndarray) -> Any:
         """``sensor_msgs/LaserScan`` with float32 ``ranges`` and no intensities."""
         return self.T["sensor_msgs/msg/LaserScan"](
             header=self.header(stamp_ns, frame_id, "/scan"),
@@ -168,7 +173,7 @@ class MessageFactory:
             intensities=np.zeros(0, dtype=np.float32))
 
     def occupancy_grid(self, stamp_ns: int, resolution: float, width: int, height: int,
-                       origin_x: float, origin_y: float, data: np.ndarray):
+                       origin_x: float, origin_y: float, data: np.ndarray) -> Any:
         """``nav_msgs/OccupancyGrid`` in ``map`` (``data``: int8, row-major, row 0 at
         ``origin_y``)."""
         T = self.T
@@ -179,7 +184,7 @@ class MessageFactory:
             header=self.header(stamp_ns, "map", "/map"), info=info,
             data=np.ascontiguousarray(data, dtype=np.int8).ravel())
 
-    def serialize(self, msg, typename: str) -> bytes:
+    def serialize(self, msg: Any, typename: str) -> bytes:  # a rosbags message
         """Wire bytes of ``msg`` (CDR for ROS 2, ROS 1 serialization for ROS 1)."""
         if self.ros1:
             return bytes(self.ts.serialize_ros1(msg, typename))
@@ -189,6 +194,17 @@ class MessageFactory:
 def schema_name(typename: str, ros1: bool) -> str:
     """MCAP schema name: ``pkg/msg/Type`` (ROS 2) or ``pkg/Type`` (ROS 1)."""
     return typename.replace("/msg/", "/") if ros1 else typename
+
+
+class Recorder(Protocol):
+    """What a simulation writes its messages to (:class:`McapRecorder`, or
+    :class:`fretc.sim.serve.ServeRecorder` live): its ``factory`` and :meth:`write`."""
+
+    factory: MessageFactory
+    counts: dict[str, int]  # messages per topic
+
+    def write(self, topic: str, log_time_ns: int, msg: Any) -> None:
+        """Add the message ``msg`` on ``topic`` at ``log_time_ns``."""
 
 
 class McapRecorder:
@@ -234,7 +250,7 @@ class McapRecorder:
             self.channels[topic] = (cid, typename)
             self.counts[topic] = 0
 
-    def write(self, topic: str, log_time_ns: int, msg) -> None:
+    def write(self, topic: str, log_time_ns: int, msg: Any) -> None:
         """Serialize ``msg`` and add it on ``topic`` at ``log_time_ns`` (= publish time)."""
         # same checks as sim.serve.ServeRecorder.write (kept: two small recorders, a file and a
         # live server)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO, cast
 
 from fretc.sim.recording import McapRecorder
 from fretc.sim.scenarios import Scenario, get_scenario
@@ -60,13 +60,14 @@ def record_scenario(sc: Scenario, seed: int = 1,
     Raises ``ValueError`` for bad parameters and ``OSError`` if the output cannot be
     written."""
     sim = Simulation(sc, seed=seed, threshold=threshold, shield=shield)
+    stream: BinaryIO
     if output is None:
         stream, close = io.BytesIO(), True
     elif isinstance(output, (str, Path)):
         Path(output).parent.mkdir(parents=True, exist_ok=True)
         stream, close = open(output, "wb"), True
     else:
-        stream, close = output, False
+        stream, close = cast(BinaryIO, output), False
     try:
         rec = McapRecorder(stream, ros1=ros1, compression=compression)
         result = sim.run(rec)

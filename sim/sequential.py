@@ -222,7 +222,8 @@ class SequentialCP(_Test):
                 "path": [list(x) for x in self.path]}
 
 
-def make_test(kind: str, op: str, p: float, delta: float, alpha: float, beta: float):
+def make_test(kind: str, op: str, p: float, delta: float, alpha: float, beta: float
+              ) -> SPRT | SequentialCP:
     """An :class:`SPRT` (``kind="sprt"``) or :class:`SequentialCP` (``"cp"``) of the bound;
     ``ValueError`` for another kind or parameters out of range."""
     if kind == "sprt":

@@ -13,13 +13,17 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Iterable
+from collections.abc import Callable, Iterable
+from typing import Any, TYPE_CHECKING
 
 from fretc.live.serve import FoxgloveServer, Pacer
 
 from fretc.sim.recording import TOPICS, MessageFactory, schema_name
 from fretc.sim.scenarios import get_scenario
 from fretc.sim.simulation import Simulation
+
+if TYPE_CHECKING:
+    from fretc.sim.simulation import RunResult
 
 __all__ = ["ServeRecorder", "serve"]
 
@@ -52,7 +56,7 @@ class ServeRecorder:
             self.types[topic] = typename
             self.counts[topic] = 0
 
-    def write(self, topic: str, log_time_ns: int, msg) -> None:
+    def write(self, topic: str, log_time_ns: int, msg: Any) -> None:
         """Serialize ``msg`` and publish it on ``topic`` when its log time is due."""
         # same checks as sim.recording.McapRecorder.write (kept: two small recorders, a live server
         # and a file)
@@ -74,8 +78,9 @@ class ServeRecorder:
 
 def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0.0.1",
           port: int = 8765, ros1: bool = False, threshold: float = 0.9,
-          stop_delay: float | None = None, wait: bool = True, server=None,
-          on_ready=None):
+          stop_delay: float | None = None, wait: bool = True,
+          server: FoxgloveServer | None = None,
+          on_ready: Callable[[FoxgloveServer], None] | None = None) -> RunResult:
     """Simulate ``scenario`` live on a foxglove-sdk server (a new one on ``host:port``
     unless ``server`` is given); with ``wait``, start once a client subscribed. Returns the
     :class:`~fretc.sim.simulation.RunResult`.
@@ -83,7 +88,7 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
     Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
     """
     own = server is None
-    if own:
+    if server is None:
         server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}")
     try:
         rec = ServeRecorder(server, rate=rate, ros1=ros1)

@@ -35,7 +35,7 @@ import numpy as np
 
 from fretc.sim.navigation import (INSPECTION_POINTS, ControllerParams, GlobalPlanner, LocalController,
                          Mission, PlannerParams)
-from fretc.sim.recording import McapRecorder
+from fretc.sim.recording import Recorder
 from fretc.sim.robot import (Lidar, LidarParams, OdometryNoise, ScoutMini, ScoutMiniParams,
                     WheelOdometry, min_valid_range, wrap_angle)
 from fretc.sim.safety import CmdVelInterceptor, SafetyAgent, SafetyParams
@@ -143,9 +143,11 @@ class Simulation:
 
     def __init__(self, scenario: Scenario, seed: int = 1, threshold: float = 0.9,
                  omap: OccupancyMap | None = None, sim: SimParams = SimParams(),
-                 robot: ScoutMiniParams = ScoutMiniParams(), lidar: LidarParams = LidarParams(),
-                 odom_noise: OdometryNoise = OdometryNoise(),
-                 planner: PlannerParams = PlannerParams(),
+                 # frozen dataclasses: one shared default instance is safe
+                 robot: ScoutMiniParams = ScoutMiniParams(),  # noqa: B008
+                 lidar: LidarParams = LidarParams(),  # noqa: B008
+                 odom_noise: OdometryNoise = OdometryNoise(),  # noqa: B008
+                 planner: PlannerParams = PlannerParams(),  # noqa: B008
                  controller: ControllerParams | None = None,
                  safety: SafetyParams | None = None, shield: Any = None):
         if not threshold > 0:
@@ -198,7 +200,7 @@ class Simulation:
         return tx + c * o.x - sn * o.y, ty + sn * o.x + c * o.y, wrap_angle(tyaw + o.yaw)
 
     # ------------------------------------------------------------------ run
-    def run(self, rec: McapRecorder) -> RunResult:
+    def run(self, rec: Recorder) -> RunResult:
         """Simulate until the run ends, writing every message to ``rec`` (not finished here)."""
         sim = self.sim
         st = _RunState(trace=Trace(), delay_ms=int(round(self.safety.p.delay * 1000)),
@@ -251,7 +253,7 @@ class Simulation:
             overrides=list(self.shield.overrides) if self.shield is not None else [],
             shield_ticks=self.shield.ticks if self.shield is not None else 0)
 
-    def _publish_control(self, rec: McapRecorder, st: _RunState, t_ms: int, stop) -> None:
+    def _publish_control(self, rec: Recorder, st: _RunState, t_ms: int, stop) -> None:
         rec.write("/gwendolen_control", _ns(t_ms), rec.factory.bool(stop))
         st.trace.control.append((t_ms / 1000.0, bool(stop)))
         delay_ms = int(round(self.scenario.interceptor_delay * 1000))
@@ -260,12 +262,12 @@ class Simulation:
         else:
             self._intercept_control(rec, st, t_ms, stop)
 
-    def _intercept_control(self, rec: McapRecorder, st: _RunState, t_ms: int, stop) -> None:
+    def _intercept_control(self, rec: Recorder, st: _RunState, t_ms: int, stop) -> None:
         out = self.interceptor.on_control(stop)
         if out is not None:
             self._publish_filtered(rec, st, t_ms, *out)
 
-    def _publish_filtered(self, rec: McapRecorder, st: _RunState, t_ms: int, v: float,
+    def _publish_filtered(self, rec: Recorder, st: _RunState, t_ms: int, v: float,
                           w: float) -> None:
         self.cmd_filtered = (v, w)
         rec.write("/cmd_vel_filtered", _ns(t_ms), rec.factory.twist(v, w))
@@ -273,7 +275,7 @@ class Simulation:
         st.trace.cmd_v.append(v)
         st.trace.cmd_w.append(w)
 
-    def _publish_cmd(self, rec: McapRecorder, st: _RunState, t_ms: int, v: float,
+    def _publish_cmd(self, rec: Recorder, st: _RunState, t_ms: int, v: float,
                      w: float) -> None:
         msg = rec.factory.twist(v, w)
         rec.write("/cmd_vel", _ns(t_ms), msg)
@@ -282,7 +284,7 @@ class Simulation:
             return
         self._publish_filtered(rec, st, t_ms, *self.interceptor.on_cmd_vel(v, w))
 
-    def _shield_tick(self, rec: McapRecorder, st: _RunState, t_ms: int) -> None:
+    def _shield_tick(self, rec: Recorder, st: _RunState, t_ms: int) -> None:
         """The generated shield's tick (:mod:`fretc.sim.shielded`), at the scan's log time."""
         for topic, msg in self.shield.tick(t_ms / 1000.0, _ns(t_ms)):
             if topic == "/cmd_vel_filtered":
@@ -314,7 +316,7 @@ class Simulation:
                     st.end_ms = t_ms + int(round(self.sim.contact_linger * 1000))
                     st.end_ms += (100 - st.end_ms % 100) % 100
 
-    def _sample_20hz(self, rec: McapRecorder, st: _RunState, t_ms: int, t: float, s) -> None:
+    def _sample_20hz(self, rec: Recorder, st: _RunState, t_ms: int, t: float, s) -> None:
         """3. Every 50 ms (and at a contact): odometry, tf, ground truth."""
         f, o, trace = rec.factory, self.odom, st.trace
         if t_ms % 50 == 0:
@@ -335,7 +337,7 @@ class Simulation:
         trace.v.append(s.v)
         trace.clearance.append(clr)
 
-    def _scan_10hz(self, rec: McapRecorder, st: _RunState, t_ms: int, t: float, s) -> None:
+    def _scan_10hz(self, rec: Recorder, st: _RunState, t_ms: int, t: float, s) -> None:
         """4. Every 100 ms: ``/scan``, ``/tf`` map -> odom; the SIF reads the scan and may
         decide (published now, or ``stop_delay`` later)."""
         f, lid = rec.factory, self.lidar.p
@@ -363,7 +365,7 @@ class Simulation:
         ex, ey, eyaw = self._pose_estimate()
         return self.controller.compute(ex, ey, eyaw, self.odom.v, self.odom.w, st.last_min, t)
 
-    def _sras(self, rec: McapRecorder, st: _RunState, t_ms: int, t: float,
+    def _sras(self, rec: Recorder, st: _RunState, t_ms: int, t: float,
               s) -> tuple[float, float]:
         """5. Every 100 ms, 50 ms after the scan: the SRAS's mission step; returns the
         ``/cmd_vel`` (v, w) to publish."""
@@ -403,7 +405,7 @@ class Simulation:
             v, w = self._command(st, t)
         return v, w
 
-    def _send_goal(self, rec: McapRecorder, t_ms: int) -> bool:
+    def _send_goal(self, rec: Recorder, t_ms: int) -> bool:
         gx, gy = self.mission.current
         ns = _ns(t_ms)
         rec.write("/goal", ns, rec.factory.pose_stamped(ns, "map", gx, gy, 0.0, "/goal"))

@@ -29,8 +29,10 @@ from __future__ import annotations
 import math
 import re
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import NoReturn, TYPE_CHECKING
 
 from fretc.common.errors import FretcError, Where
 
@@ -38,6 +40,9 @@ from fretc.sim.distributions import Distribution, DistributionError, parse_distr
 from fretc.sim.scenarios import DRUM_RADIUS, SCENARIOS, Scenario
 from fretc.sim.simulation import STEP_MS
 from fretc.sim.world import Barrel
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["PARAMETERS", "Space", "SpaceError", "load_space", "apply"]
 
@@ -90,7 +95,7 @@ class Space:
         (:mod:`fretc.sim.distributions`)."""
         return sum(d.latent_dims for d in self.distributions)
 
-    def at_latent(self, z) -> dict[str, float]:
+    def at_latent(self, z: Sequence[float] | np.ndarray) -> dict[str, float]:
         """The parameter values at latent coordinates ``z`` (``latent_dims`` floats); a
         fault that does not happen is left out (the scenario's own value)."""
         out, i = {}, 0
@@ -163,9 +168,9 @@ def load_space(path: str | Path) -> Space:
         m = re.search(r"line (\d+), column (\d+)", str(exc))
         where = f"{p}:{m.group(1)}:{m.group(2)}" if m else p
         raise SpaceError(f"{where}: not a TOML file: {exc}",
-                         where=Where(p, *(int(g) for g in m.groups())) if m else None) from None
+                         where=Where(p, int(m.group(1)), int(m.group(2))) if m else None) from None
 
-    def fail(key: str, msg: str):
+    def fail(key: str, msg: str) -> NoReturn:
         line = _line_of(text, key)
         raise SpaceError(f"{p}:{line}: {msg}" if line else f"{p}: {msg}",
                          where=Where(p, line))

@@ -34,8 +34,8 @@ as satisfied.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
 
 __all__ = ["SplittingResult", "SplittingError", "adaptive_multilevel_splitting"]
 
@@ -137,7 +137,7 @@ def adaptive_multilevel_splitting(
         raise SplittingError("the robustness of this requirement is boolean (+-inf on every "
                              "run): splitting has no levels; estimate it by crude Monte Carlo "
                              "(fretc estimate without --rare)")
-    log_p, var, levels = 0.0, 0.0, []
+    log_p, var, levels = 0.0, 0.0, list[float]()
     accepted = proposed = 0
     reached, why = True, None
     while True:

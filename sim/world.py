@@ -16,14 +16,18 @@ Two views of the same room exist on purpose:
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import yaml
 from PIL import Image
 from scipy import ndimage
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 #: Folder holding the shipped copy of the Safe-ROS map (BSD-3-Clause, see ``data/NOTICE``).
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -75,7 +79,7 @@ class OccupancyMap:
         self.grid = grid
 
     @classmethod
-    def load(cls, yaml_path: str | Path = REACTOR_ROOM_YAML) -> "OccupancyMap":
+    def load(cls, yaml_path: str | Path = REACTOR_ROOM_YAML) -> OccupancyMap:
         """Read a map_server YAML and the image it names (PGM, via Pillow).
 
         Raises ``FileNotFoundError`` if either file is missing and ``KeyError`` if the YAML
@@ -88,18 +92,18 @@ class OccupancyMap:
                    float(meta.get("occupied_thresh", 0.65)), float(meta.get("free_thresh", 0.196)))
 
     # ------------------------------------------------------------------ coordinates
-    def cell_of(self, x, y):
+    def cell_of(self, x: ArrayLike, y: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Cell indices ``(row, col)`` (int arrays, same shape as ``x``/``y``) containing the
         points ``(x, y)`` in m; indices may fall outside the grid (check :meth:`inside`)."""
         col = np.floor((np.asarray(x) - self.origin_x) / self.resolution).astype(np.int64)
         row = np.floor((np.asarray(y) - self.origin_y) / self.resolution).astype(np.int64)
         return row, col
 
-    def inside(self, row, col):
+    def inside(self, row: np.ndarray, col: np.ndarray) -> np.ndarray:
         """Boolean mask: which ``(row, col)`` lie inside the grid."""
         return (row >= 0) & (row < self.height) & (col >= 0) & (col < self.width)
 
-    def cell_centers(self, row, col):
+    def cell_centers(self, row: ArrayLike, col: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Centres ``(x, y)`` in m of cells ``(row, col)``."""
         return (self.origin_x + (np.asarray(col) + 0.5) * self.resolution,
                 self.origin_y + (np.asarray(row) + 0.5) * self.resolution)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from fretc.signals.bindings.spec import Bindings, make_bindings
 from fretc.testing.mcap_log import EPOCH_NS, plan_messages, write_mcap
@@ -61,7 +62,7 @@ def classify(names: list[str], bindings: Bindings) -> Classified:
     return out
 
 
-def scan_plan(rows: list[dict], bindings: Bindings, driven: list[str]
+def scan_plan(rows: list[dict[str, Any]], bindings: Bindings, driven: list[str]
               ) -> dict[int, float]:
     """Trace tick (< 0: before the trace) -> the range every beam of that tick's scan reads;
     ticks absent have no scan. Ticks before the first planned one are not in the map.

@@ -31,23 +31,23 @@ chosen by z3 (:mod:`fretc.check.atom_values`), and the judge still confirms the 
 from __future__ import annotations
 
 import dataclasses
-from fractions import Fraction
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
 
 import numpy as np
 
 from fretc.check.budget import Budget
 from fretc.common.textsafe import csv_line
 from fretc.check.checker import Checker
-from fretc.check.items import make_item
+from fretc.check.items import CheckItem, make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
 from fretc.check.witness import finite_trace, trace_columns
 from fretc.compiler import ir
 from fretc.compiler.build import Compiled
 from fretc.compiler.coverage import Obligation, obligations
-from fretc.compiler.printers import to_smv
-from fretc.compiler.semantics import SemanticsError, formalize
+from fretc.compiler.semantics import Formalization, SemanticsError, formalize
 from fretc.fretish import ast as A
 from fretc.logs.csv_source import SAMPLED_MARK
 from fretc.monitors.coverage import exercised
@@ -72,7 +72,7 @@ class TestCase:
     None), ``log_why`` (why none) and ``adjusted`` (variables the bindings gave other
     values)."""
 
-    rows: list[dict]
+    rows: list[dict[str, Any]]
     covers: list[tuple[str, str, int | None]] = field(default_factory=list)
     expected: dict[str, str] = field(default_factory=dict)
     origin: tuple[str, str] = ("", "")
@@ -93,39 +93,55 @@ class Generated:
     obligations: dict[str, list[Obligation]]
 
 
+def _formal(c: Compiled) -> tuple[A.Requirement, Formalization]:
+    """``c``'s parsed requirement and formalization (a test is generated of formalized
+    requirements only: ``ValueError`` for another)."""
+    if c.requirement is None or c.formalization is None:
+        raise ValueError(f"{c.id} has no formalization")
+    return c.requirement, c.formalization
+
+
+#: rows that accept(rows) confirms a trace meets what was asked
+Accept = Callable[[list[dict[str, Any]]], bool]
+
+
 def column_kinds(compiled: Sequence[Compiled]) -> dict[str, str]:
     """FRET variable -> ``"bool"`` or ``"float"`` over the ft formulas of ``compiled``, in
     order of first use (:func:`fretc.check.witness.trace_columns`: a variable used as a
     number anywhere is ``float``; an uninterpreted function is its own column)."""
-    return trace_columns([c.formalization.ft for c in compiled])
+    return trace_columns([_formal(c)[1].ft for c in compiled])
 
 
-def _columns(rows: list[dict], kinds: dict[str, str]) -> dict[str, np.ndarray]:
+def _columns(rows: list[dict[str, Any]], kinds: dict[str, str]) -> dict[str, np.ndarray]:
     return {k: np.array([r[k] for r in rows], dtype=bool if t == "bool" else float)
             for k, t in kinds.items()}
 
 
-def expected_of(compiled: Sequence[Compiled], rows: list[dict], kinds: dict[str, str]
+def expected_of(compiled: Sequence[Compiled], rows: list[dict[str, Any]], kinds: dict[str, str]
                 ) -> dict[str, str]:
     """The audit's verdict of every requirement of ``compiled`` on ``rows``
     (:func:`fretc.monitors.interval.verdict_of`)."""
     cols = _columns(rows, kinds)
-    return {c.id: verdict_of(c.requirement, cols, len(rows), c.formalization.ticks)
-            for c in compiled}
+    out = {}
+    for c in compiled:
+        req, f = _formal(c)
+        out[c.id] = verdict_of(req, cols, len(rows), f.ticks)
+    return out
 
 
 def covered_by(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
-               rows: list[dict], kinds: dict[str, str],
+               rows: list[dict[str, Any]], kinds: dict[str, str],
                only: set[tuple[str, str]] | None = None) -> list[tuple[str, str, int | None]]:
     """``(requirement id, obligation id, tick)`` of every obligation ``rows`` exercises
     (``only``: of these ``(requirement id, obligation id)`` alone)."""
     cols = _columns(rows, kinds)
-    out = []
+    out: list[tuple[str, str, int | None]] = []
     for c in compiled:
         mine = [o for o in obs[c.id] if only is None or (c.id, o.id) in only]
         if not mine:
             continue
-        got = exercised(mine, c.requirement, cols, len(rows), c.formalization.ticks)
+        req, f = _formal(c)
+        got = exercised(mine, req, cols, len(rows), f.ticks)
         out.extend((c.id, o.id, e.tick) for o, e in zip(mine, got) if e.met)
     return out
 
@@ -135,7 +151,7 @@ def _variant(c: Compiled, req: A.Requirement, suffix: str) -> Compiled:
     return Compiled(entry, formalize(req, c.entry.tick_period))
 
 
-def _classes(item, verdict: str) -> list:
+def _classes(item: CheckItem, verdict: str) -> list[ir.Node]:
     phi, trig = item.phi_ft, item.trigger_ft
     if verdict == "violated":
         return [ir.not_(phi)]
@@ -152,7 +168,8 @@ class Finder:
         self.worker = worker
         self.kinds = kinds
 
-    def _rows(self, items, queries, accept) -> tuple[object, str]:
+    def _rows(self, items: list[CheckItem], queries: list[list[ir.Node]], accept: Accept
+              ) -> tuple[Any, str]:  # (rows, None, UNKNOWN or SPURIOUS; the engine)
         ck = Checker(items, self.worker)
         engine = "z3 or the pt monitors" if ck.uses_smt(queries[0]) else "Spot"
         unknown = spurious = False
@@ -171,12 +188,13 @@ class Finder:
             return SPURIOUS, engine
         return (UNKNOWN if unknown else None), (engine + (f": {why}" if why else ""))
 
-    def find(self, c: Compiled, ob: Obligation, accept) -> tuple[object, str]:
+    def find(self, c: Compiled, ob: Obligation, accept: Accept) -> tuple[Any, str]:
         """Rows meeting ``ob`` (every variable of :attr:`kinds`) that ``accept(rows)``
         confirms, None (no finite trace), UNKNOWN or SPURIOUS (traces found, none
         confirmed); and the engine's words."""
         base = make_item(0, c)
         if ob.kind == "threshold":
+            assert ob.atom is not None  # (a threshold obligation has its comparison)
             atom = ob.atom if ob.side else A.Unary("!", ob.atom)
             aux_req = A.Requirement(text="", component="c", timing=A.Timing("eventually"),
                                     response=atom)
@@ -185,37 +203,43 @@ class Finder:
             queries = [[base.phi_ft] + trig + [aux.phi_ft], [base.phi_ft, aux.phi_ft],
                        [aux.phi_ft]]
             return self._rows([base, aux], queries, accept)
+        assert ob.variant is not None  # (an obligation other than a threshold has it)
         other = make_item(1, _variant(c, ob.variant, "variant"))
         queries = [_classes(base, v1) + _classes(other, v2) for v1, v2 in _PAIRS]
         return self._rows([base, other], queries, accept)
 
 
-def separating_trace(finder: "Finder", c: Compiled, other: A.Requirement
-                     ) -> tuple[object, str]:
+def separating_trace(finder: Finder, c: Compiled, other: A.Requirement
+                     ) -> tuple[Any, str]:
     """A trace on which ``c`` and the requirement ``other`` (same tick period) get different
     verdicts from the audit's judge: rows, None (no finite trace separates their verdict
     classes: equivalent as far as those classes go), UNKNOWN or SPURIOUS; and the engine."""
     v = _variant(c, other, "other")
     kinds = finder.kinds
+    (req, f), (_, fv) = _formal(c), _formal(v)
 
-    def accept(rows):
+    def accept(rows: list[dict[str, Any]]) -> bool:
         cols = _columns(rows, kinds)
-        return (verdict_of(c.requirement, cols, len(rows), c.formalization.ticks)
-                != verdict_of(other, cols, len(rows), v.formalization.ticks))
+        return (verdict_of(req, cols, len(rows), f.ticks)
+                != verdict_of(other, cols, len(rows), fv.ticks))
 
-    ob = Obligation(c.id, "other", "other", "", other, v.formalization.ticks)
+    ob = Obligation(c.id, "other", "other", "", other, fv.ticks)
     return finder.find(c, ob, accept)
 
 
-def _complete(rows: list[dict], kinds: dict[str, str]) -> list[dict]:
+def _complete(rows: list[dict[str, Any]], kinds: dict[str, str]) -> list[dict[str, Any]]:
     return [{k: r.get(k, False if t == "bool" else 0.0) for k, t in kinds.items()}
             for r in rows]
 
 
-def _candidates(compiled, obs, kinds, budget, fork):
+def _candidates(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
+                kinds: dict[str, str], budget: Budget | None, fork: bool
+                ) -> tuple[list[TestCase], list[tuple[Obligation, str]],
+                           list[tuple[Obligation, str]]]:
     """One checked trace per meetable obligation; the unmeetable and unknown ones."""
     found: list[TestCase] = []
-    unmeetable, unknown = [], []
+    unmeetable: list[tuple[Obligation, str]] = []
+    unknown: list[tuple[Obligation, str]] = []
     left = {(c.id, o.id) for c in compiled for o in obs[c.id]}
     with SpotWorker(budget or Budget(), fork=fork) as worker:
         finder = Finder(worker, kinds)
@@ -224,9 +248,11 @@ def _candidates(compiled, obs, kinds, budget, fork):
                 if (c.id, ob.id) not in left:
                     continue  # an earlier trace meets it already
 
-                def accept(rows, c=c, ob=ob):
-                    return exercised([ob], c.requirement, _columns(rows, kinds), len(rows),
-                                     c.formalization.ticks)[0].met
+                def accept(rows: list[dict[str, Any]], c: Compiled = c,
+                           ob: Obligation = ob) -> bool:
+                    req, f = _formal(c)
+                    return exercised([ob], req, _columns(rows, kinds), len(rows),
+                                     f.ticks)[0].met
 
                 try:
                     rows, engine = finder.find(c, ob, accept)
@@ -281,8 +307,11 @@ def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
     ``kinds``: only the obligations of these kinds (:class:`Obligation`'s ``kind``; None:
     all), e.g. ``{"atom"}`` for FLIP's one obligation per atom and value."""
     compiled = [c for c in compiled if c.formalization is not None]
-    obs = {c.id: [o for o in obligations(c.id, c.requirement, c.formalization.ticks)
-                  if kinds is None or o.kind in kinds] for c in compiled}
+    obs = {}
+    for c in compiled:
+        req, f = _formal(c)
+        obs[c.id] = [o for o in obligations(c.id, req, f.ticks)
+                     if kinds is None or o.kind in kinds]
     cols = column_kinds(compiled)
     found, unmeetable, unknown = _candidates(compiled, obs, cols, budget, fork)
     tests = _cover(found)
@@ -294,13 +323,13 @@ def generate(compiled: Sequence[Compiled], *, budget: Budget | None = None,
     return Generated(tests, unmeetable, unknown, obs)
 
 
-def _cell(v) -> str:
+def _cell(v: Any) -> str:
     if isinstance(v, (bool, np.bool_)):
         return "true" if v else "false"
     return repr(float(v))
 
 
-def _obligation_json(ob: Obligation, reason: str | None = None) -> dict:
+def _obligation_json(ob: Obligation, reason: str | None = None) -> dict[str, Any]:
     out = {"requirement": ob.requirement, "obligation": ob.id, "kind": ob.kind,
            "description": ob.description}
     if reason is not None:
@@ -309,7 +338,7 @@ def _obligation_json(ob: Obligation, reason: str | None = None) -> dict:
 
 
 def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
-                period: Fraction | None = None, bindings: str | None = None) -> dict:
+                period: Fraction | None = None, bindings: str | None = None) -> dict[str, Any]:
     """Write ``DIR/T01.csv``... (one per test: comment lines, the first one
     :data:`fretc.logs.csv_source.SAMPLED_MARK` so that an audit with binding files reads the
     columns as the FRET variables they are; then a header row, ``time`` (tick ``k`` at ``k *

@@ -57,6 +57,9 @@ class NotWritable(Exception):
     naming the part of the expression."""
 
 
+#: an assignment of message fields: ``(topic, field path) -> value``
+Assignment = dict[tuple[Any, ...], Any]
+
 def margin(c: float) -> float:
     """The margin of a value written on one side of the threshold ``c``:
     ``max(REL_MARGIN * |c|, MIN_MARGIN)`` (same unit as ``c``)."""
@@ -102,7 +105,7 @@ class Range:
         return ((self.lo < x or (self.lo_in and x == self.lo))
                 and (x < self.hi or (self.hi_in and x == self.hi)))
 
-    def meet(self, other: "Range") -> "Range | None":
+    def meet(self, other: Range) -> Range | None:
         """The numbers in both ranges (None when none), preferring this one's ``pref``,
         then the other's, then a point inside by :func:`margin`."""
         lo, lo_in = max((self.lo, self.lo_in), (other.lo, other.lo_in),
@@ -118,12 +121,12 @@ class Range:
                 return Range(lo, hi, lo_in, hi_in, float(x))
         return None
 
-    def neg(self) -> "Range":
+    def neg(self) -> Range:
         """The range of ``-x``."""
         return Range(-self.hi, -self.lo, self.hi_in, self.lo_in, -self.pref)
 
 
-def _range(op: str, c: float, pref: float) -> "Range | float":
+def _range(op: str, c: float, pref: float) -> Range | float:
     """The numbers ``x`` with ``x op c`` as a :class:`Range` (``=``/``!=``: the point)."""
     inf = math.inf
     return {"<": Range(-inf, c, False, False, pref), "<=": Range(-inf, c, False, True, pref),
@@ -158,7 +161,7 @@ def _resolved(v: Any) -> Any:
     return v
 
 
-def _merge(a: dict, b: dict) -> dict | None:
+def _merge(a: Assignment, b: Assignment) -> Assignment | None:
     """The union of two assignments, None when they set one key to values no one value
     satisfies."""
     out = dict(a)
@@ -171,23 +174,23 @@ def _merge(a: dict, b: dict) -> dict | None:
     return out
 
 
-def _product(lists: list[list[dict]]) -> list[dict]:
+def _product(lists: list[list[Assignment]]) -> list[Assignment]:
     """Every consistent union of one assignment from each list (at most MAX_ALTERNATIVES)."""
-    acc: list[dict] = [{}]
+    acc: list[Assignment] = [{}]
     for alts in lists:
         acc = [m for a in acc for b in alts if (m := _merge(a, b)) is not None]
         acc = acc[:MAX_ALTERNATIVES]
     return acc
 
 
-def _field_key(f: Field) -> tuple:
+def _field_key(f: Field) -> tuple[Any, ...]:
     if not f.path or not all(isinstance(p, str) for p in f.path):
         raise NotWritable(f"{f.text()}: only a field with a path of attribute names is "
                           "written (no index, slice, filter or whole message)")
     return (f.topic, tuple(f.path))
 
 
-def _logical(e: BinOp, target: Any) -> list[dict]:
+def _logical(e: BinOp, target: Any) -> list[Assignment]:
     if not isinstance(target, bool):
         raise NotWritable(f"{unparse(e)}: a boolean expression given a number")
     a, b = e.left, e.right
@@ -204,7 +207,7 @@ def _logical(e: BinOp, target: Any) -> list[dict]:
     return (alternatives(a, target) + alternatives(b, target))[:MAX_ALTERNATIVES]
 
 
-def _age(f: Expr, op: str, c: float, target: bool) -> list[dict]:
+def _age(f: Expr, op: str, c: float, target: bool) -> list[Assignment]:
     if not isinstance(f, Field):
         raise NotWritable(f"age({unparse(f)}): only age of a topic is written")
     if not target:
@@ -217,7 +220,7 @@ def _age(f: Expr, op: str, c: float, target: bool) -> list[dict]:
     return [{(f.topic, AGE): (silent, int(round(c * 1e9)), strict)}]
 
 
-def _comparison(e: BinOp, target: Any) -> list[dict]:
+def _comparison(e: BinOp, target: Any) -> list[Assignment]:
     if not isinstance(target, bool):
         raise NotWritable(f"{unparse(e)}: a comparison given a number")
     term, const, op = _folded(e.left), _folded(e.right), e.op
@@ -253,7 +256,7 @@ def _folded(e: Expr) -> Expr:
     return e
 
 
-def _function(e: FuncCall, target: Any) -> list[dict]:
+def _function(e: FuncCall, target: Any) -> list[Assignment]:
     if isinstance(target, bool):
         raise NotWritable(f"{unparse(e)}: a number given a boolean")
     if e.func == "abs" and len(e.args) == 1:
@@ -267,7 +270,7 @@ def _function(e: FuncCall, target: Any) -> list[dict]:
     raise NotWritable(f"{unparse(e)}: {e.func}() is not inverted")
 
 
-def alternatives(e: Expr, target: Any) -> list[dict]:
+def alternatives(e: Expr, target: Any) -> list[Assignment]:
     """The assignments (module docstring) that make ``e`` evaluate to ``target`` (a bool, a
     float or a string), at most :data:`MAX_ALTERNATIVES`, the simplest first; an empty list
     when none does (``abs(x) = -1``).
@@ -300,7 +303,7 @@ def alternatives(e: Expr, target: Any) -> list[dict]:
                       "not written)")
 
 
-def solve(wanted: list[tuple[str, Expr, Any]]) -> tuple[dict | None, str, str]:
+def solve(wanted: list[tuple[str, Expr, Any]]) -> tuple[Assignment | None, str, str]:
     """One assignment making every ``(variable, expression, value)`` of ``wanted`` give its
     value together (backtracking over each one's :func:`alternatives`), ``""`` and ``""``;
     or None, the variable that cannot be given its value with those before it, and the
@@ -311,7 +314,7 @@ def solve(wanted: list[tuple[str, Expr, Any]]) -> tuple[dict | None, str, str]:
     options = [(name, alternatives(expr, value), value) for name, expr, value in wanted]
     options.sort(key=lambda o: len(o[1]))
 
-    def search(i: int, acc: dict, depth: list[int]) -> dict | None:
+    def search(i: int, acc: Assignment, depth: list[int]) -> Assignment | None:
         depth[0] = max(depth[0], i)
         if i == len(options):
             return acc
@@ -341,7 +344,7 @@ def _show(v: Any) -> str:
     return repr(v)
 
 
-def field_defaults(e: Expr, ctx: str = "bool") -> dict[tuple, Any]:
+def field_defaults(e: Expr, ctx: str = "bool") -> dict[tuple[Any, ...], Any]:
     """Every field of ``e`` that :func:`alternatives` may set, with the value a message holds
     when no variable sets it: ``[0.0]`` under ``min``/``max``, ``""`` when compared with a
     string, ``false`` where a boolean is read, else 0.0. ``ctx``: what ``e`` itself gives

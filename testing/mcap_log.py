@@ -40,19 +40,23 @@ cannot be given together even with variables left to the messages.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Set as AbstractSet
 from pathlib import Path
-from typing import Any
-
-from collections.abc import Callable, Iterable
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 from mcap.writer import CompressionType, Writer
 
-from fretc.testing.invert import AGE, NotWritable, field_defaults, margin, solve
+from fretc.testing.invert import AGE, Assignment, NotWritable, field_defaults, margin, solve
 from fretc.signals.bindings.spec import Bindings
 
+if TYPE_CHECKING:
+    from fretc.testing.generate import Generated
+    from fretc.compiler.build import Compiled
+
 #: other values to try for a numeric variable: (variable, trace value) -> values
-Candidates = Callable[[str, float], list]
+Candidates = Callable[[str, float], list[Any]]
 
 __all__ = ["EPOCH_NS", "Candidates", "plan_messages", "write_mcap", "read_back", "bind_tests",
            "thresholds", "same_side"]
@@ -71,8 +75,8 @@ def _check_clock(bindings: Bindings) -> int:
     return bindings.tick.period_ns
 
 
-def _assignments(rows: list[dict], bindings: Bindings, candidates: Candidates | None
-                 ) -> tuple[list[dict], list[str]]:
+def _assignments(rows: list[dict[str, Any]], bindings: Bindings, candidates: Candidates | None
+                 ) -> tuple[list[Assignment], list[str]]:
     """One assignment per tick (:func:`fretc.testing.invert.solve`), and the
     variables given other values at some tick (module docstring, "adjusted")."""
     names = list(rows[0]) if rows else []
@@ -84,7 +88,8 @@ def _assignments(rows: list[dict], bindings: Bindings, candidates: Candidates | 
         if b.aggregate or b.window or b.uses_tf:
             raise NotWritable(f"{n} = {b.expr!r}: windows, aggregations over messages and "
                               "tf() are not inverted")
-    out, relaxed = [], set()
+    out: list[Assignment] = []
+    relaxed: set[str] = set()
     for k, row in enumerate(rows):
         wanted = [(n, bindings.variables[n].ast, _value(row[n])) for n in names]
         try:
@@ -111,7 +116,7 @@ def _value(v: Any) -> bool | float:
     return bool(v) if isinstance(v, (bool, np.bool_)) else float(v)
 
 
-def _substitute(wanted: list, candidates: Candidates | None) -> list:
+def _substitute(wanted: list[Any], candidates: Candidates | None) -> list[Any]:
     """``wanted`` with each number no message can give (``abs(x)`` = -0.5) replaced by the
     first of its ``candidates(name, value)`` one can; then, if the values still conflict,
     with the first one number replaced by a candidate that makes them agree (in order)."""
@@ -137,7 +142,7 @@ def _substitute(wanted: list, candidates: Candidates | None) -> list:
     return out
 
 
-def _relax(wanted: list) -> tuple[dict | None, list]:
+def _relax(wanted: list[Any]) -> tuple[Assignment | None, list[Any]]:
     """An assignment for as many of ``wanted`` as a greedy pass keeps (numbers dropped
     first, in order, until the rest is solvable; then each dropped one put back when it
     fits), and the ones kept."""
@@ -156,18 +161,19 @@ def _relax(wanted: list) -> tuple[dict | None, list]:
     return solve(kept)[0], kept
 
 
-def _held_fields(ticks: list[dict], defaults: dict[tuple, Any]) -> dict[str, list[dict]]:
+def _held_fields(ticks: list[Assignment], defaults: Assignment
+                 ) -> dict[str, list[dict[Any, Any]]]:
     """Topic -> one ``{path: value}`` per tick, every field the trace sets or the bindings
     read (``defaults``: :func:`fretc.testing.invert.field_defaults`) on the topic at
     every tick (held from the tick before; module docstring)."""
-    keys: dict[tuple, Any] = {}
+    keys: dict[tuple[Any, ...], Any] = {}
     for a in ticks:
         for k, v in a.items():
             if k[1] != AGE:
                 keys.setdefault(k, v)
     for k, v in defaults.items():
         keys.setdefault(k, v)
-    topics: dict[str, list[dict]] = {t: [{} for _ in ticks] for t in
+    topics: dict[str, list[dict[Any, Any]]] = {t: [{} for _ in ticks] for t in
                                      sorted({k[0] for k in keys})}
     for key, first in sorted(keys.items(), key=lambda kv: (kv[0][0], kv[0][1])):
         held = first
@@ -177,9 +183,9 @@ def _held_fields(ticks: list[dict], defaults: dict[tuple, Any]) -> dict[str, lis
     return topics
 
 
-def plan_messages(rows: list[dict], bindings: Bindings,
+def plan_messages(rows: list[dict[str, Any]], bindings: Bindings,
                   candidates: Candidates | None = None
-                  ) -> tuple[list[tuple[int, str, dict]], list[str]]:
+                  ) -> tuple[list[tuple[int, str, dict[str, Any]]], list[str]]:
     """The messages of a trace: ``(log time ns, topic, JSON object)`` in log-time order
     (topics by name within a tick), and the numeric variables left to the messages
     (module docstring, "adjusted"). ``candidates(variable, value)``: other values of a
@@ -192,7 +198,7 @@ def plan_messages(rows: list[dict], bindings: Bindings,
     if not rows:
         raise NotWritable("the trace has no ticks")
     ticks, relaxed = _assignments(rows, bindings, candidates)
-    defaults: dict[tuple, Any] = {}
+    defaults: dict[tuple[Any, ...], Any] = {}
     for n in rows[0]:
         defaults.update(field_defaults(bindings.variables[n].ast))
     fields = _held_fields(ticks, defaults)
@@ -200,7 +206,7 @@ def plan_messages(rows: list[dict], bindings: Bindings,
     for t in age_topics:
         fields.setdefault(t, [{} for _ in ticks])
     plan = _age_plan(ticks, age_topics, period)
-    out: list[tuple[int, str, dict]] = []
+    out: list[tuple[int, str, dict[str, Any]]] = []
     for topic, at in sorted(plan.items()):
         if at and at[0] < 0:
             out.append((EPOCH_NS + at[0] * period, topic, _nested(fields[topic][0])))
@@ -214,7 +220,7 @@ def plan_messages(rows: list[dict], bindings: Bindings,
     return out, relaxed
 
 
-def _age_plan(ticks: list[dict], topics: list[str], period: int) -> dict[str, list[int]]:
+def _age_plan(ticks: list[Assignment], topics: list[str], period: int) -> dict[str, list[int]]:
     """Topic with an ``age()`` constraint -> the tick indexes it has a message at (one
     index < 0 first when a message is needed before tick 0)."""
     plan = {}
@@ -245,8 +251,8 @@ def _age_plan(ticks: list[dict], topics: list[str], period: int) -> dict[str, li
     return plan
 
 
-def _nested(flat: dict[tuple, Any]) -> dict:
-    out: dict = {}
+def _nested(flat: dict[tuple[Any, ...], Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
     for path, v in sorted(flat.items()):
         d = out
         for p in path[:-1]:
@@ -255,7 +261,7 @@ def _nested(flat: dict[tuple, Any]) -> dict:
     return out
 
 
-def _schema(obj: Any) -> dict:
+def _schema(obj: Any) -> dict[str, Any]:
     if isinstance(obj, dict):
         return {"type": "object", "properties": {k: _schema(v) for k, v in obj.items()}}
     if isinstance(obj, bool):
@@ -265,9 +271,9 @@ def _schema(obj: Any) -> dict:
     return {"type": "string"} if isinstance(obj, str) else {"type": "number"}
 
 
-def write_mcap(rows: list[dict], bindings: Bindings, path: str | Path,
+def write_mcap(rows: list[dict[str, Any]], bindings: Bindings, path: str | Path,
                candidates: Candidates | None = None
-               ) -> tuple[list[dict] | None, list[str], str | None]:
+               ) -> tuple[list[dict[str, Any]] | None, list[str], str | None]:
     """Write the MCAP log of ``rows`` (one mapping FRET variable -> value per tick) under
     ``bindings`` to ``path`` and check it by reading it back (module docstring). Returns the
     rows the audit reads from it (equal to ``rows`` but for the adjusted variables), the
@@ -280,7 +286,7 @@ def write_mcap(rows: list[dict], bindings: Bindings, path: str | Path,
         msgs, relaxed = plan_messages(rows, bindings, candidates)
     except NotWritable as exc:
         return None, [], str(exc)
-    schemas: dict[str, dict] = {}
+    schemas: dict[str, dict[str, Any]] = {}
     for _, topic, obj in msgs:
         schemas.setdefault(topic, _schema(obj))
     with open(path, "wb") as f:
@@ -298,7 +304,7 @@ def write_mcap(rows: list[dict], bindings: Bindings, path: str | Path,
             seq[topic] = seq.get(topic, -1) + 1
             w.add_message(channel_id=channels[topic], log_time=t, publish_time=t,
                           data=json.dumps(obj, sort_keys=True).encode(), sequence=seq[topic])
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]  # (mcap's Writer.finish has no annotations)
     got, why = read_back(rows, bindings, path, set(relaxed))
     if why is not None:
         path.unlink()
@@ -306,8 +312,8 @@ def write_mcap(rows: list[dict], bindings: Bindings, path: str | Path,
     return got, relaxed, None
 
 
-def read_back(rows: list[dict], bindings: Bindings, path: str | Path,
-              free: set[str] = frozenset()) -> tuple[list[dict] | None, str | None]:
+def read_back(rows: list[dict[str, Any]], bindings: Bindings, path: str | Path,
+              free: AbstractSet[str] = frozenset()) -> tuple[list[dict[str, Any]] | None, str | None]:
     """The rows the audit's sampler reads from ``path`` under ``bindings`` and None when
     they are ``rows`` (same ticks, every variable but those of ``free`` equal); else None
     and the first difference."""
@@ -339,7 +345,7 @@ def read_back(rows: list[dict], bindings: Bindings, path: str | Path,
     return out, None
 
 
-def thresholds(compiled) -> dict[str, list[float]]:
+def thresholds(compiled: Sequence[Compiled]) -> dict[str, list[float]]:
     """FRET variable -> the constants it is compared with in the ft formulas of ``compiled``
     (sorted, without repeats)."""
     from fretc.compiler import ir
@@ -354,7 +360,7 @@ def thresholds(compiled) -> dict[str, list[float]]:
             a, b = n.args
             for var, k in ((a, b), (b, a)):
                 if var.op == "var" and k.op == "num":
-                    out.setdefault(var.name, set()).add(float(k.name))
+                    out.setdefault(ir.name_of(var), set()).add(float(ir.name_of(k)))
     return {v: sorted(cs) for v, cs in out.items()}
 
 
@@ -372,7 +378,8 @@ def same_side(value: float, limits: Iterable[float]) -> list[float]:
     return sorted(dict.fromkeys(ok), key=lambda p: (p < 0, ok.index(p)))
 
 
-def bind_tests(gen, compiled, bindings: Bindings, out_dir: str | Path) -> None:
+def bind_tests(gen: Generated, compiled: Sequence[Compiled], bindings: Bindings,
+               out_dir: str | Path) -> None:
     """Write ``DIR/T01.mcap``... for the tests of ``gen`` (a
     :class:`fretc.testing.generate.Generated` of ``compiled``) under ``bindings``, setting each
     test's ``log`` (the file name) or ``log_why`` (why none was written) and ``adjusted``.

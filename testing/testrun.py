@@ -33,6 +33,7 @@ import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 __all__ = ["OUTCOMES", "Outcome", "judge", "run_test", "audit_log"]
 
@@ -80,7 +81,7 @@ class Outcome:
                "obligations exercised)"
 
 
-def judge(test: dict, doc: dict, require: str = "target") -> Outcome:
+def judge(test: dict[str, Any], doc: dict[str, Any], require: str = "target") -> Outcome:
     """The outcome (module docstring) of ``test`` (an entry of ``tests.json``) on the
     system's log audited as ``doc`` (``fretc audit --coverage --json``'s document);
     ``require``: ``"target"`` (the obligation it was generated for must be exercised) or
@@ -117,7 +118,7 @@ def judge(test: dict, doc: dict, require: str = "target") -> Outcome:
     return out
 
 
-def audit_log(requirements: list[str], bindings: str | None, log: Path, out: Path) -> dict:
+def audit_log(requirements: list[str], bindings: str | None, log: Path, out: Path) -> dict[str, Any]:
     """``fretc audit -r REQ... [--bindings B] LOG --coverage --json OUT`` in a fresh process;
     its JSON document.
 
@@ -131,10 +132,11 @@ def audit_log(requirements: list[str], bindings: str | None, log: Path, out: Pat
     if not out.exists():
         last = (res.stderr.strip().splitlines() or ["no output"])[-1]
         raise RuntimeError(f"fretc audit exited {res.returncode}: {last}")
-    return json.loads(out.read_text(encoding="utf-8"))
+    doc: dict[str, Any] = json.loads(out.read_text(encoding="utf-8"))
+    return doc
 
 
-def run_test(test: dict, doc: dict, folder: Path, command: str, work: Path,
+def run_test(test: dict[str, Any], doc: dict[str, Any], folder: Path, command: str, work: Path,
              bindings: str | None = None, require: str = "target",
              log_name: str | None = None) -> Outcome:
     """Run ``command`` (split as a shell would, then ``TRACE LOG`` appended) on ``test``'s

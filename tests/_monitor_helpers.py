@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import random
 import types
-from typing import Dict, List
 
 import numpy as np
 
@@ -80,7 +79,7 @@ def load_module(compiled_list, name: str = "test_monitors") -> types.ModuleType:
 
 
 def random_trace(rnd: random.Random, length: int, variables=("m", "c", "r", "s"),
-                 numeric=("x",)) -> Dict[str, np.ndarray]:
+                 numeric=("x",)) -> dict[str, np.ndarray]:
     cols = {v: np.array([rnd.random() < 0.5 for _ in range(length)], dtype=np.bool_)
             for v in variables}
     for v in numeric:
@@ -88,7 +87,7 @@ def random_trace(rnd: random.Random, length: int, variables=("m", "c", "r", "s")
     return cols
 
 
-def samples(cols: Dict[str, np.ndarray], length: int) -> List[dict]:
+def samples(cols: dict[str, np.ndarray], length: int) -> list[dict]:
     return [{k: (bool(v[i]) if v.dtype == np.bool_ else float(v[i])) for k, v in cols.items()}
             for i in range(length)]
 

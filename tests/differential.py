@@ -28,7 +28,7 @@ every variable is false and every number 0. Two FRET facts the oracle models exp
 from __future__ import annotations
 
 import random
-from typing import Dict, List, Optional, Sequence, Tuple
+from collections.abc import Sequence
 
 INF = 10 ** 9
 
@@ -56,7 +56,7 @@ class _Gen:
         m = r.randint(0, n)
         return (m, n)
 
-    def expr(self, depth: int, allow_future=True, allow_past=True) -> Tuple[tuple, str]:
+    def expr(self, depth: int, allow_future=True, allow_past=True) -> tuple[tuple, str]:
         """(meaning, text). Text is parenthesized except for nested if-then as the last
         operand, which the grammar groups to the right."""
         r = self.rnd
@@ -130,7 +130,7 @@ TIMING_KIND = {"": "null", "immediately": "immediately", "at the next timepoint"
                "after {n} ticks": "after", "until {s}": "until", "before {s}": "before"}
 
 
-def random_requirement(rnd: random.Random, depth: int = 2) -> Tuple[str, dict]:
+def random_requirement(rnd: random.Random, depth: int = 2) -> tuple[str, dict]:
     """A random sentence and its meaning ``{scope, mode, cond_kind, cond, timing, n, stop,
     response}`` (expressions as meaning tuples)."""
     g = _Gen(rnd)
@@ -178,7 +178,7 @@ def random_requirement(rnd: random.Random, depth: int = 2) -> Tuple[str, dict]:
 class _World:
     """A trace with its scope's interval starts and ends (for the functions)."""
 
-    def __init__(self, trace: Sequence[dict], scope: str, mode_series: Optional[list],
+    def __init__(self, trace: Sequence[dict], scope: str, mode_series: list | None,
                  infinite: bool):
         self.trace = trace
         self.L = len(trace)
@@ -191,7 +191,7 @@ class _World:
         # onlyIn and before FRET's Right has no LAST, so an interval reaching the end of
         # a finite trace has no Right
         ends = set()
-        for s, e in self.intervals:
+        for _s, e in self.intervals:
             if e < L - 1 or (e == L - 1 and not infinite and (
                     scope in ("null", "in", "after", "onlyBefore")
                     or (scope == "onlyAfter" and mode_series[-1]))):
@@ -225,7 +225,7 @@ class _World:
         return self.trace[t].get(name, 0 if numeric else False)
 
 
-def _runs(series: List[bool]) -> List[Tuple[int, int]]:
+def _runs(series: list[bool]) -> list[tuple[int, int]]:
     out = []
     i = 0
     L = len(series)
@@ -241,7 +241,7 @@ def _runs(series: List[bool]) -> List[Tuple[int, int]]:
     return out
 
 
-def _intervals(scope: str, m: Optional[list], L: int, infinite: bool):
+def _intervals(scope: str, m: list | None, L: int, infinite: bool):
     """Scope intervals [s, e] (../shared/fretish/README.md section 2); ``only*`` scopes give the complement
     intervals on which the negated obligation applies."""
     if scope == "null":
@@ -433,7 +433,7 @@ def _obligation(tk, negate, n, t, e, R, S, L) -> bool:
 
 
 # --------------------------------------------------------------------------- checking
-def random_trace(rnd: random.Random, length: int) -> List[dict]:
+def random_trace(rnd: random.Random, length: int) -> list[dict]:
     return [{**{v: rnd.random() < 0.5 for v in BOOL_VARS + MODE_VARS},
              **{v: rnd.randint(-1, 3) for v in NUM_VARS}} for _ in range(length)]
 

@@ -182,3 +182,49 @@ def test_public_functions_and_classes_have_docstrings(tmp_path):
     bare = tmp_path / "bare.py"
     bare.write_text("def f():\n    pass\n\n\nclass C:\n    def g(self):\n        pass\n")
     assert undocumented([bare], tmp_path) == ["bare.py:1 f", "bare.py:5 C", "bare.py:6 C.g"]
+
+
+def unannotated(files: list[Path], root: Path = REPO) -> list[str]:
+    """``path:line name: what`` for every public function and method (the functions and
+    methods :func:`undocumented` checks, in modules whose name does not start with ``_`` but
+    ``__init__`` and ``__main__``) whose parameters (``self`` and ``cls`` aside) or return type
+    are not annotated; ``what`` lists the bare parameters, then ``return``."""
+    out = []
+    for p in files:
+        if p.name.startswith("_") and p.stem not in ("__init__", "__main__"):
+            continue
+        tree = ast.parse(p.read_text(encoding="utf-8"))
+        defs = (ast.FunctionDef, ast.AsyncFunctionDef)
+        nodes = [(n, n.name, False) for n in tree.body if isinstance(n, defs)]
+        nodes += [(s, f"{n.name}.{s.name}", True) for n in tree.body
+                  if isinstance(n, ast.ClassDef) and not n.name.startswith("_")
+                  for s in n.body if isinstance(s, defs)]
+        for node, name, method in nodes:
+            if node.name.startswith("_"):
+                continue
+            a = node.args
+            params = [*a.posonlyargs, *a.args, *a.kwonlyargs, *filter(None, (a.vararg, a.kwarg))]
+            static = any(isinstance(d, ast.Name) and d.id == "staticmethod"
+                         for d in node.decorator_list)
+            if method and not static and params and params[0] in (a.posonlyargs + a.args)[:1]:
+                params = params[1:]  # self, cls
+            bare = [x.arg for x in params if x.annotation is None]
+            bare += ["return"] if node.returns is None else []
+            if bare:
+                out.append(f"{p.relative_to(root)}:{node.lineno} {name}: {', '.join(bare)}")
+    return out
+
+
+def test_public_functions_are_annotated(tmp_path):
+    # mypy checks the bodies of annotated functions only, and readers of the package rely on
+    # its public signatures: every public parameter and return type is annotated
+    files = [p for p in _python_files()
+             if any(p.relative_to(REPO).as_posix().startswith(f + "/") for f in LIBRARY)]
+    assert unannotated(files) == []
+    bare = tmp_path / "bare.py"
+    bare.write_text("def f(a, b: int, *c):\n    pass\n\n\ndef _g(x):\n    pass\n\n\n"
+                    "class C:\n    def m(self, y: int):\n        pass\n\n"
+                    "    @staticmethod\n    def s(z) -> None:\n        pass\n")
+    (tmp_path / "_private.py").write_text("def f(x):\n    pass\n")
+    assert unannotated([bare, tmp_path / "_private.py"], tmp_path) == [
+        "bare.py:1 f: a, c, return", "bare.py:10 C.m: return", "bare.py:14 C.s: z"]

@@ -18,11 +18,28 @@ def _modules() -> dict[str, Path]:
     return {installed_name(p): p for pkg in PACKAGES for p in source_files(REPO / pkg)}
 
 
-def _imports(name: str, path: Path, known) -> set[str]:
-    """Modules of ``known`` that ``name`` imports anywhere (inside functions too)."""
+def _type_only(tree: ast.Module) -> set[int]:
+    """``id``s of the import statements under ``if TYPE_CHECKING:`` (for the type checker
+    alone: they never run)."""
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and ast.unparse(node.test) in ("TYPE_CHECKING",
+                                                                    "typing.TYPE_CHECKING"):
+            out.update(id(n) for s in node.body for n in ast.walk(s)
+                       if isinstance(n, (ast.Import, ast.ImportFrom)))
+    return out
+
+
+def _imports(name: str, path: Path, known, type_only: bool = True) -> set[str]:
+    """Modules of ``known`` that ``name`` imports anywhere (inside functions too; with
+    ``type_only``, under ``if TYPE_CHECKING:`` too)."""
     pkg = name if path.stem == "__init__" else name.rsplit(".", 1)[0]
     out = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = set() if type_only else _type_only(tree)
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.ImportFrom):
             base = node.module or ""
             if node.level:  # relative: level 1 is this package, 2 its parent ...
@@ -36,14 +53,17 @@ def _imports(name: str, path: Path, known) -> set[str]:
     return {m for m in out if m in known and m != name}
 
 
-def import_graph() -> dict[str, set[str]]:
-    """Module -> the project modules it imports (anywhere in it), for every source module."""
+def import_graph(type_only: bool = True) -> dict[str, set[str]]:
+    """Module -> the project modules it imports (anywhere in it; with ``type_only``, for the
+    type checker alone too), for every source module."""
     mods = _modules()
-    return {m: _imports(m, p, mods) for m, p in mods.items()}
+    return {m: _imports(m, p, mods, type_only) for m, p in mods.items()}
 
 
 def test_no_import_cycles():
-    graph = import_graph()
+    # the imports that run: those for the type checker alone (if TYPE_CHECKING:) never do,
+    # and annotations naming each other's classes are no cycle (the layering counts them)
+    graph = import_graph(type_only=False)
     cycles = []
     for start in graph:  # a cycle through start: a path back to it
         stack, seen = [(start, [start])], set()
@@ -56,6 +76,15 @@ def test_no_import_cycles():
                     seen.add(nxt)
                     stack.append((nxt, path + [nxt]))
     assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles)
+
+
+def test_type_checking_imports_count_for_layers_not_cycles(tmp_path):
+    p = tmp_path / "a.py"
+    p.write_text("from typing import TYPE_CHECKING\n\nimport fretc.x\n\n"
+                 "if TYPE_CHECKING:\n    from fretc.y import Y\n")
+    known = {"fretc.x", "fretc.y"}
+    assert _imports("fretc.a", p, known) == {"fretc.x", "fretc.y"}
+    assert _imports("fretc.a", p, known, type_only=False) == {"fretc.x"}
 
 
 def test_emit_ltl_starts_without_heavy_libraries(tmp_path):

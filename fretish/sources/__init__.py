@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 
-from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin
+from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
 
 __all__ = ["Origin", "tool_source_kind", "load_tool_source", "fret_origin",
            "DEFAULT_TEXT_ATTRIBUTE", "REQIF_SUFFIXES"]
@@ -36,7 +36,7 @@ def tool_source_kind(path: str) -> str | None:
         return "reqif" if path.lower().endswith(REQIF_SUFFIXES) else None
     if not os.path.isdir(path):
         return None
-    for depth, (folder, dirs, files) in enumerate(_walk(path)):
+    for depth, (_folder, _dirs, files) in enumerate(_walk(path)):
         if ".doorstop.yml" in files:
             return "doorstop"
         if depth > 200:  # a very wide tree is not worth searching for one
@@ -54,7 +54,8 @@ def _walk(path: str):
         yield folder, dirs, files
 
 
-def load_tool_source(path: str, kind: str, text_attribute: str | None = None):
+def load_tool_source(path: str, kind: str, text_attribute: str | None = None
+                     ) -> tuple[list[RequirementEntry], list[RequirementEntry]]:
     """(entries, not formalized) of the ReqIF file or Doorstop tree at ``path`` (``kind`` from
     :func:`tool_source_kind`): two lists of :class:`fretc.fretish.files.RequirementEntry`, the
     second of the items without FRETish text (their ``text`` empty, ``requirement`` and

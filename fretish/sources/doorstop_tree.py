@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import os
 import stat
+from typing import Any  # doorstop's objects: the library has no types
 
 from fretc.common.errors import FretishFileError, FretishSyntaxError
 
@@ -30,7 +31,7 @@ __all__ = ["load_doorstop", "build_tree", "custom_attributes", "check_tree_files
            "MAX_YAML_BYTES", "MAX_YAML_NODES"]
 
 
-def build_tree(path: str):
+def build_tree(path: str) -> Any:
     """The ``doorstop`` tree of the documents under ``path``. Raises
     :class:`FretishFileError` naming ``path`` when Doorstop cannot build it (a document whose
     parent document is missing, two roots, a bad ``.doorstop.yml`` or item file)."""
@@ -123,7 +124,7 @@ def _expanded_nodes(root) -> int:
     return sizes[id(root)]
 
 
-def custom_attributes(item) -> dict[str, object]:
+def custom_attributes(item: Any) -> dict[str, object]:
     """The item's attributes outside Doorstop's own (its custom attributes), by name."""
     data = getattr(item, "_data", {}) or {}
     own = {"active", "derived", "header", "level", "links", "normative", "ref", "references",
@@ -245,7 +246,8 @@ def _check_links(items: list, all_uids: set[str]) -> None:
                 path.append(nxt)
 
 
-def load_doorstop(path: str, text_attribute: str | None = None):
+def load_doorstop(path: str, text_attribute: str | None = None
+                  ) -> tuple[list[RequirementEntry], list[RequirementEntry]]:
     """(entries, not formalized) of the Doorstop tree under ``path`` (module docstring; both
     lists of :class:`fretc.fretish.files.RequirementEntry`, ``source`` the tree ``path``, the item
     file in ``origin.file``; ``line`` the line of the text attribute in it). Raises

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import re
+from typing import Any  # the reqif library's objects: it has no types
 
 from fretc.common.errors import FretishFileError, FretishSyntaxError
 
@@ -33,7 +34,7 @@ ID_ATTRIBUTES = ("reqif.foreignid", "uid", "id")
 REQIF_TEXT = "ReqIF.Text"
 
 
-def parse_reqif_bundles(path: str) -> list[tuple[str, object]]:
+def parse_reqif_bundles(path: str) -> list[tuple[str, Any]]:
     """``[(source, ReqIFBundle)]`` of the file at ``path``: one for a ``.reqif``, one per
     ``.reqif`` member of a ``.reqifz`` (source ``archive!member``). Raises
     :class:`FretishFileError` for unreadable, hostile (:func:`.safe_xml.checked_text`) or
@@ -72,7 +73,7 @@ def _line(node) -> int:
     return getattr(node, "sourceline", None) or 1
 
 
-def attribute_names(content, source: str) -> dict[str, tuple[str, object]]:
+def attribute_names(content: Any, source: str) -> dict[str, tuple[str, object]]:
     """Attribute definition IDENTIFIER -> (its name, its datatype) over every SPEC-OBJECT-TYPE
     of ``content``. Raises :class:`FretishFileError` at a definition whose datatype is not
     among the DATATYPES (ReqIF 1.2 section 10.8.4: a definition's TYPE references one)."""
@@ -94,9 +95,9 @@ def _value_text(attr, datatype) -> str:
     of their values joined by ", "."""
     value = attr.value
     if isinstance(value, list):  # enumeration: ENUM-VALUE refs
-        names = {v.identifier: (v.long_name or v.key or v.identifier)
+        names: dict[str, str] = {v.identifier: (v.long_name or v.key or v.identifier)
                  for v in getattr(datatype, "values", None) or []}
-        return ", ".join(names.get(v, v) for v in value)
+        return ", ".join(str(names.get(v, v)) for v in value)
     if attr.attribute_type.name == "XHTML":
         raw = attr.value_stripped_xhtml if attr.value_stripped_xhtml is not None else value
         return visible_text(raw or "")
@@ -154,12 +155,14 @@ def visible_text(markup: str) -> str:
     return " ".join("".join(parts).split())
 
 
-def load_reqif(path: str, text_attribute: str | None = None):
+def load_reqif(path: str, text_attribute: str | None = None
+               ) -> tuple[list[RequirementEntry], list[RequirementEntry]]:
     """(entries, not formalized) of the ReqIF file at ``path`` (module docstring; both lists of
     :class:`fretc.fretish.files.RequirementEntry`). Raises :class:`FretishFileError` (file, line of
     the element): hostile or malformed XML, a SPEC-OBJECT whose type or attribute definition
     is missing, a missing datatype, two SPEC-OBJECTs with one id or one IDENTIFIER."""
-    entries, unformalized = [], []
+    entries: list[RequirementEntry] = []
+    unformalized: list[RequirementEntry] = []
     for source, bundle in parse_reqif_bundles(path):
         got, skipped = _read_bundle(source, bundle.core_content.req_if_content,
                                     text_attribute)
@@ -188,7 +191,8 @@ def _read_bundle(source: str, content, text_attribute: str | None):
     names = attribute_names(content, source)
     wanted = _text_attribute(names, text_attribute)
     objects = content.spec_objects or []
-    ids, first = {}, {}
+    ids: dict[str, tuple[str, dict[str, str], Any]] = {}  # IDENTIFIER -> (id, values, node)
+    first: dict[str, tuple[str, int]] = {}  # id -> (IDENTIFIER, line)
     for so in objects:
         if so.identifier in ids:  # IDENTIFIERs are unique in a ReqIF document (ReqIF 1.2)
             raise FretishFileError(

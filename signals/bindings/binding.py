@@ -196,7 +196,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     aggregate = check_aggregate(node, where)
     body = node.args[0] if aggregate is not None else node  # type: ignore[attr-defined]
     windowed = check_window(node, where)
-    window, parts, tick_window = None, (), None
+    window, tick_window = None, None
+    parts: tuple[Binding, ...] = ()
     if windowed is not None and windowed[0].func == "count_ticks":
         (tick_window, body), windowed = windowed, None
     if windowed is not None:

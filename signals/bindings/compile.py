@@ -44,7 +44,7 @@ class EvalState:
         self.times: dict[str, int] = {}
         self.now = 0
         #: (topic, field path) → (message data, extracted value): extraction memo.
-        self.values: dict[tuple[str, tuple], tuple[Any, Any]] = {}
+        self.values: dict[tuple[str, Any], tuple[Any, Any]] = {}
         #: every transform of /tf and /tf_static so far, when a binding reads ``tf()``
         #: (the clock adds each message: :meth:`TfBuffer.add`); None otherwise.
         self.tf: TfBuffer | None = None
@@ -362,9 +362,9 @@ def _several(node: FuncCall, args: list[Evaluator]) -> Evaluator:
         acc = vals[0]
         for v in vals[1:]:
             if type(acc) in PY_TYPES and type(v) in PY_TYPES:
-                acc = pair(acc, v)
+                acc = pair(acc, v)  # type: ignore[misc]  # set for min and max (norm returned)
             else:
-                acc = npfn(num(acc), num(v))
+                acc = npfn(num(acc), num(v))  # type: ignore[misc]  # as pair
         return acc
     return several
 

@@ -389,11 +389,11 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         topics.update(TF_TOPICS)
         return
     if node.func in STATEFUL:
-        arg = node.args[0]
-        fields = {n.topic for n in walk(arg) if isinstance(n, Field)}
-        other = [n for n in walk(arg) if isinstance(n, FuncCall)
+        stateful_arg = node.args[0]
+        fields = {n.topic for n in walk(stateful_arg) if isinstance(n, Field)}
+        other = [n for n in walk(stateful_arg) if isinstance(n, FuncCall)
                  and n.func in ("age", "tf") + STATEFUL + tuple(AGGREGATES)]
-        if (isinstance(arg, Field) and not arg.path) or len(fields) != 1 or other:
+        if (isinstance(stateful_arg, Field) and not stateful_arg.path) or len(fields) != 1 or other:
             raise where.error(f"{node.func}() (the @{node.func} modifier) takes a field of a "
                               "message, or an expression of the fields of one topic, e.g. "
                               f"/odom.twist.twist.linear.x@{node.func} or "
@@ -403,10 +403,10 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         topics.add(node.args[0].topic)  # type: ignore[attr-defined]
         return
     if node.func == "age":
-        arg = node.args[0]
-        if not isinstance(arg, Field) or arg.path:
-            raise where.error("age() takes a topic name, e.g. age(/scan)", arg.col)
-        topics.add(arg.topic)
+        age_arg = node.args[0]
+        if not isinstance(age_arg, Field) or age_arg.path:
+            raise where.error("age() takes a topic name, e.g. age(/scan)", age_arg.col)
+        topics.add(age_arg.topic)
         return
     for a in node.args:
         check(a, where, topics)

@@ -176,9 +176,9 @@ def undeclared_inf(v: Any, path: tuple) -> Any:
     return v
 
 
-def _or_unknown(got: np.ndarray, unknown: np.ndarray | None, ax: int | None, when: bool
+def _or_unknown(got: Any, unknown: np.ndarray | None, ax: int | None, when: bool
                 ) -> Any:
-    """``got`` (bool per tick), NaN where it equals ``when`` and an item was unknown
+    """``got`` (bool per tick, an array or a numpy bool), NaN where it equals ``when`` and an item was unknown
     (``any``: no item true but one unknown; ``all``: no item false but one unknown)."""
     if unknown is None:
         return got
@@ -209,7 +209,7 @@ def _div(a: Any, b: Any) -> Any:
 
 
 #: Binary operator -> (numpy function, whether its operands are numbers).
-NP_BINARY = {
+NP_BINARY: dict[str, tuple[Callable[[Any, Any], Any], bool]] = {
     "+": (np.add, True), "-": (np.subtract, True), "*": (np.multiply, True),
     "/": (np.divide, True),
     "<": (np.less, False), "<=": (np.less_equal, False), ">": (np.greater, False),

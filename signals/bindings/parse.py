@@ -310,7 +310,7 @@ def _joint_args(args: tuple, where: ExprLocation, col: int) -> tuple:
 def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> BindingError:
     col = getattr(exc, "column", None)
     if isinstance(exc, UnexpectedCharacters):
-        msg = f"unexpected character {expr[exc.pos_in_stream]!r}"
+        msg = f"unexpected character {expr[exc.pos_in_stream]!r}"  # type: ignore[index]  # set by UnexpectedCharacters
     elif isinstance(exc, UnexpectedEOF) or (isinstance(exc, UnexpectedToken)
                                             and exc.token.type == "$END"):
         msg = "expression ends too early"

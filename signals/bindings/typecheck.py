@@ -9,6 +9,9 @@ topic's schema is unknown (then nothing is checked).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 from fretc.common.streams import base_topic
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
@@ -26,7 +29,7 @@ _WORDS = {"bool": "a boolean", "number": "a number", "array_bool": "an array of 
           "array_string": "an array of strings", "array_other": "an array of messages"}
 
 
-def check_types(binding: Binding, schemas: dict) -> str:
+def check_types(binding: Binding, schemas: Mapping[str, Any]) -> str:
     """Check ``binding`` against the message types of a log (:func:`fretc.logs.schema.log_schemas`)
     before it is evaluated: every field path must resolve through fields the
     schema declares (never Python attributes), strings cannot enter arithmetic or
@@ -86,7 +89,7 @@ def _describe(node: Expr, t: str) -> str:
 class _TypeChecker:
     """The type of each node, bottom up; raises at the first node that does not fit."""
 
-    def __init__(self, where: ExprLocation, schemas: dict, constants: dict) -> None:
+    def __init__(self, where: ExprLocation, schemas: Mapping[str, Any], constants: dict) -> None:
         self.where = where
         self.schemas = schemas
         self.constants = constants

@@ -236,7 +236,7 @@ def alone_files(fret: str) -> list[tuple[str, str]]:
     starts = [i for i, x in enumerate(rows) if x.strip() and not x[0].isspace()
               and not x.lstrip().startswith(("#", "@"))]
     out = []
-    for k, i in enumerate(starts):
+    for _k, i in enumerate(starts):
         end = next((j for j in range(i + 1, len(rows)) if rows[j].strip() and
                     not rows[j][0].isspace()), len(rows))
         keep = set(range(i, end)) | {j for j, x in enumerate(rows) if x.lstrip().startswith("@")}

@@ -58,7 +58,7 @@ def test_main_job_on_the_shipped_traces(tmp_path):
     assert case.find("failure") is not None
     assert "8.800 s" in case.find("failure").get("message")
     # deterministic: the same audit gives the same JSON
-    res2 = run("--requirements", ROOT / "requirements", TRACES, "--json", tmp_path / "b.json")
+    run("--requirements", ROOT / "requirements", TRACES, "--json", tmp_path / "b.json")
     assert (tmp_path / "b.json").read_text() == out_json.read_text()
 
 
@@ -131,7 +131,6 @@ def test_violations_are_listed_and_annotated(tmp_path):
     from fretc.monitors.interval import MAX_LISTED
 
     root = Path(__file__).resolve().parents[2]
-    out = tmp_path / "audit.json"
     res = CliRunner().invoke(fretc_main, [
         "report", "-r", str(root / "requirements"), str(root / "traces" / "interceptor_fault.mcap"),
         "-o", str(tmp_path / "report"), "--annotate", str(tmp_path / "annotated")])

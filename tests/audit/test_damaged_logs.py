@@ -20,7 +20,6 @@ the full sweep is ``pytest -m slow tests/audit/test_damaged_logs.py``.
 from __future__ import annotations
 
 import random
-import shutil
 import struct
 import zlib
 from pathlib import Path

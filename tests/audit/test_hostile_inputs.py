@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import re
-import struct
 import xml.etree.ElementTree as ET
 from pathlib import Path
 

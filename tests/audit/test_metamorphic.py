@@ -269,4 +269,4 @@ def test_a_generated_set_is_the_same_for_the_same_seed():
     assert one == two and M.generated_set(doc, 8) != one
     fret, bindings = one
     assert len(M.lines(fret)) == 4 and bindings.startswith("[tick]\n")
-    assert all(itertools.chain((f"v{i} =" in bindings for i in range(8))))
+    assert all(itertools.chain(f"v{i} =" in bindings for i in range(8)))

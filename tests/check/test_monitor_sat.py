@@ -303,3 +303,18 @@ def test_eventually_beside_250_tick_deadlines(tmp_path, text, kinds):
         assert promised and audit_verdicts(req, Path(w["path"]), tmp_path) == promised
     if kinds:
         assert r.findings[0].details["witness_shows_finding"] is True
+
+
+def test_a_deadline_under_a_root_conjunction_is_not_counted():
+    # a deadline O[N,N] a -> O[0,N-1] b that is a conjunct of a formula's root conjunction
+    # (no parent above it) is kept as its delay line, not one counter; it raised
+    # AttributeError (the root's missing parent read as None.op) before
+    from fretc.check.pt_monitor import deadline_uses
+
+    a, b, x = (ir.Node("ap", name=v) for v in "abx")
+    phi = ir.implies(ir.O(a, 2, 2), ir.O(b, 0, 1))
+    assert deadline_uses([ir.and_(phi, x)]) == {}
+    # under a since formula's left, as the counter wants it, it is counted
+    assert deadline_uses([ir.S(ir.and_(phi, x), x)]) == {}
+    since = ir.S(phi, ir.and_(x, phi))
+    assert deadline_uses([since]) == {phi: [x]}

@@ -160,7 +160,7 @@ def _check(compiled, traces_per, rnd, make_trace):
     labels = [c for c in compiled if c.id not in {s[1] for s in skipped}]
     assert len(labels) == len(specs)
     checked = 0
-    for c, (label, f) in zip(labels, specs.items()):
+    for c, (_label, f) in zip(labels, specs.items()):
         for _ in range(traces_per):
             trace = make_trace(rnd)
             sig = [{s: state[renamed.get(s, s)] for s in _signals(f)} for state in trace]

@@ -41,7 +41,7 @@ def test_module_is_byte_identical_cold_warm_and_without_cache(tmp_path, monkeypa
     assert len(files) == len(SENTENCES) - 1
     mod = load(outputs[0])
     assert mod.MONITORS["R0"]._BAD is None  # tables decoded lazily
-    m0, m1 = mod.MONITORS["R0"](), mod.MONITORS["R1"]()
+    _m0, _m1 = mod.MONITORS["R0"](), mod.MONITORS["R1"]()
     assert mod.MONITORS["R0"]._BAD is mod.MONITORS["R1"]._BAD  # and shared
 
 

@@ -453,7 +453,7 @@ def test_shared_leaves_and_endpoints_are_bounded(monkeypatch):
     assert a._atoms[1] is b._atoms[1]  # the leaf of p, shared
     texts = ["in m upon p%d the sw shall always satisfy persisted(2, q%d) & x%d > %d"
              % (i, i, i, i) for i in range(12)]
-    for i, t in enumerate(texts):
+    for _i, t in enumerate(texts):
         assert same(t)
         assert len(IA._LEAVES) <= 3
     # the named-mode endpoints were emptied with the leaves (one mode name, m)

@@ -54,7 +54,7 @@ def test_modules_pair_requirements_with_classes_and_automata(monkeypatch):
     assert [m.name for m in modules.values()] == ["r_monitors", "r_2_monitors", "c_monitors"]
     assert len(calls) == 5  # once per monitored requirement, never for the skipped one
     assert {m.name: m.text for m in modules.values()} == codegen.emit_monitors(compiled)
-    for src, mm in modules.items():
+    for _src, mm in modules.items():
         mod = load(mm)
         assert list(mm.monitors) == list(mod.MONITORS)
         assert mm.skipped == mod.SKIPPED
@@ -160,7 +160,7 @@ def test_requirements_of_one_shape_share_code_but_not_state():
     # the six S* and D* requirements share one shape (and its tables), O1 has its own
     assert len(together._SHAPES) == 2
     assert len({c._SHAPE for c in classes[:-1]}) == 1
-    monitors = [c() for c in classes]
+    _monitors = [c() for c in classes]
     assert classes[0]._BAD is classes[1]._BAD is not None  # read-only, shared
     assert classes[0].step is not classes[1].step  # each class reads its own variables
     assert [c.VARIABLES for c in classes[:2]] == [["m0", "p0", "q0"], ["m1", "p1", "q1"]]

@@ -134,8 +134,8 @@ def _check_function_vector(vec, n):
     for _ in range(n):
         u = [state() for _ in range(rnd.randint(0, 5))]
         v = [state() for _ in range(rnd.randint(1, 4))]
-        for st in u + v:
-            st.update({name: rnd.random() < 0.5 for name in derived})
+        for s in u + v:
+            s.update({name: rnd.random() < 0.5 for name in derived})
         assert lasso_at(f.ft_inf, u, v) == lasso_at(fret_inf, u, v), (u, v)
 
 

@@ -49,7 +49,7 @@ def test_mutated_sentences_never_crash(rnd):
     exec(compile(module, "m", "exec"), ns)
     for cls in ns["MONITORS"].values():
         m = cls()
-        for t in range(5):
+        for _t in range(5):
             v = m.step({name: rng.choice((True, False, 0, 2.5)) for name in cls.VARIABLES})
             assert type(v) is bool and m.status in ("satisfied", "violated", "unknown")
     assert time.process_time() - t0 < 5 * 3  # generous: the fuzz script's bound is 5 s

@@ -92,3 +92,19 @@ def test_plain_numbers_keep_the_digits_that_tell_them_apart():
     from fretc.cli.inspect import plain
     assert plain(1.000158) == "1.000158" and plain(1432240000.25) == "1432240000.25"
     assert plain(1.5e-7) == "0.00000015" and plain(-2.0) == "-2"
+
+
+def test_a_missing_array_field_counts_as_empty():
+    # a message without a field its schema declares (getattr's None) is an empty array for
+    # the field's statistics: arrays of messages and of bools raised TypeError before
+    from types import SimpleNamespace
+
+    from fretc.cli.inspect import _Stat, _visit
+
+    msgs, flags = _Stat("Item[]"), _Stat("bool[]")
+    plan = [("items", "array", "message", msgs, []), ("flags", "array", "bool", flags, None)]
+    _visit(plan, SimpleNamespace())
+    assert msgs.lengths == {0} and flags.lengths == {0}
+    assert flags.true == flags.false == 0
+    _visit(plan, SimpleNamespace(items=[SimpleNamespace()], flags=[True, False, True]))
+    assert msgs.lengths == {0, 1} and (flags.true, flags.false) == (2, 1)

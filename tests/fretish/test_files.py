@@ -277,7 +277,7 @@ def test_fret_positions_property(tmp_path_factory, reqs):
     p = d / "r.fret"
     p.write_text("\n".join(lines) + "\n")
     entries = load_requirements(p)
-    for k, ((rid, resp, pad), e) in enumerate(zip(reqs, entries)):
+    for k, ((rid, resp, _pad), e) in enumerate(zip(reqs, entries)):
         assert e.id == rid and e.line == 2 * k + 1
         if e.requirement is not None:
             s = e.requirement.response_span

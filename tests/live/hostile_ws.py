@@ -124,5 +124,5 @@ class ScriptServer:
             self._ready.set()
             try:
                 await asyncio.wait_for(self._stop.wait(), self.lifetime)
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 pass

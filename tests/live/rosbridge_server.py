@@ -120,7 +120,7 @@ class RosbridgeTestServer:
             self._ready.set()
             try:
                 await asyncio.wait_for(self._stop.wait(), 120)  # bounded in time
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 pass
 
     def _service(self, msg: dict) -> dict:
@@ -158,7 +158,7 @@ class RosbridgeTestServer:
     async def _publish(self, ws) -> None:
         await asyncio.sleep(0.1)
         t0, w0 = None, time.perf_counter()
-        for topic, log_time, text in self.messages:
+        for _topic, log_time, text in self.messages:
             if t0 is None:
                 t0 = log_time
             due = w0 + (log_time - t0) / 1e9 / self.rate

@@ -105,7 +105,7 @@ def _audit(tmp_path) -> dict[str, str]:
 
 def _check(last: list[tuple[str, int, dict]], audit: dict[str, str]) -> None:
     assert [name for name, _l, _v in last] == [f"fretc: {r}" for r in audit]
-    for (name, level, values), (rid, verdict) in zip(last, audit.items()):
+    for (name, level, values), (_rid, verdict) in zip(last, audit.items()):
         assert values["verdict"] == verdict, name
         assert level == LEVEL[verdict], name
         assert values["text"]

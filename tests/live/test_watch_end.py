@@ -21,7 +21,6 @@ pytest.importorskip("websockets")
 from click.testing import CliRunner  # noqa: E402
 
 from fretc.cli import main  # noqa: E402
-from fretc.live.serve import FoxgloveServer  # noqa: E402
 from rosbridge_server import RosbridgeTestServer  # noqa: E402
 
 pytestmark = pytest.mark.watch

@@ -65,7 +65,7 @@ def _restart(value_after: float, hold: float = 0.0):
         await ws.send(advertise([(2, "/a")]))
         try:
             sid2 = await subscription(ws, 2, timeout=3)
-        except (asyncio.TimeoutError, ConnectionError):
+        except (TimeoutError, ConnectionError):
             return  # the watch ended at the unadvertisement (grace 0)
         for i in range(10):
             await ws.send(message_data(sid2, T0 + 1000 * MS + i * 50 * MS, f64(value_after)))

@@ -47,7 +47,7 @@ def _raw(path: Path):
 
     st, lg = [], []
     with open(path, "rb") as f:
-        for _s, ch, m in make_reader(f).iter_messages(topics=["/state"]):
+        for _s, _ch, m in make_reader(f).iter_messages(topics=["/state"]):
             d = json.loads(m.data)
             st.append((m.log_time, d["speed"], d["mode"]))
     with open(path, "rb") as f:

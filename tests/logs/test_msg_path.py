@@ -77,7 +77,8 @@ def test_a_custom_type_audits_with_msg_path_and_names_it_without(tmp_path, stora
 
 
 def test_a_bad_definition_in_msg_path_is_an_input_error_naming_the_file(tmp_path):
-    bag, reqs = _bag(tmp_path, "sqlite3"), _reqs(tmp_path)
+    bag = _bag(tmp_path, "sqlite3")
+    _reqs(tmp_path)
     d = tmp_path / "bad" / "my_robot_msgs" / "msg"
     d.mkdir(parents=True)
     (d / "Status.msg").write_text("float64 = broken\n")

@@ -81,7 +81,7 @@ def check_sentences(rnd: random.Random, sentences: int, traces: int,
     if monitors:
         classes = load_module(comps, "evidence_functions").MONITORS
     pairs = with_monitor = 0
-    for i, ((text, meaning), comp) in enumerate(zip(drawn, comps)):
+    for _i, ((text, meaning), comp) in enumerate(zip(drawn, comps)):
         req, f = comp.requirement, comp.formalization
         cls = classes.get(comp.id)
         for _ in range(traces):

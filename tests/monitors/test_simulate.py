@@ -33,7 +33,7 @@ def _compiled(tmp_path: Path, text: str):
 @pytest.mark.parametrize("seed", range(6))
 def test_every_tick_against_the_oracle_of_the_meaning(tmp_path, seed):
     rnd = random.Random(seed)
-    for k in range(8):
+    for _k in range(8):
         text, meaning = random_requirement(rnd)
         (c,) = _compiled(tmp_path, f"R: {text}\n")
         for _ in range(4):

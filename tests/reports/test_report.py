@@ -24,9 +24,6 @@ from mcap.writer import CompressionType
 from fretc.cli import main
 from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
 from fretc.reports.context import GENERATED_PREFIX
-from fretc.reports.trace import marked_fields
-from fretc.reports.timeline import timeline_svg
-from fretc.reports.timeline_layout import Threshold
 
 from _logs import MS, boolean, float64, scan, twist, write_mcap
 

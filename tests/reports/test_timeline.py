@@ -17,7 +17,6 @@ from _logs import MS
 SVG = "{http://www.w3.org/2000/svg}"
 
 def test_marked_fields_join_back_to_the_text():
-    from fretc.fretish.parser import parse
 
     for text in ["in docking mode, upon p & q the sw shall within 3 ticks satisfy r",
                  "the sw shall always satisfy x > 0", "when p the sw shall satisfy q",

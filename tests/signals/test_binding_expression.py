@@ -3,7 +3,6 @@ Transformer and the printer agree, and walking the tree follows the text."""
 
 from __future__ import annotations
 
-import pytest
 
 from fretc.signals.bindings import EvalState
 from hypothesis import given, settings
@@ -13,7 +12,6 @@ from fretc.signals.bindings.binding import compile_expression
 from fretc.signals.bindings.expression import (BinOp, Const, ExprLocation, Field, FuncCall, Ref,
                                           UnaryOp, refs, unparse, walk)
 from fretc.signals.bindings.parse import parse_expression
-from fretc.common.problems import BindingError
 
 FIELDS = ["/scan.ranges", "/odom.pose.x", "/odom.v[2]", "/a.b[-1]", "/scan.ranges[1:3]",
           "/imu.q[:2]"]

@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 from fretc.common.units import parse_duration
 from fretc.signals.bindings.binding import compile_expression, parse_inline
 from fretc.signals.bindings.compile import EvalState
-from fretc.signals.bindings.extract import Valid, make_extractor
 from fretc.signals.bindings.files import load_bindings, parse_bindings
 from fretc.signals.bindings.spec import Bindings, TickSpec, make_bindings
 from fretc.common.problems import BindingError, SignalError

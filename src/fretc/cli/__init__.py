@@ -113,7 +113,7 @@ def _names_a_file(arg: str) -> bool:
 
 @click.group(cls=_DefaultGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="fretc")
-def main():
+def main() -> None:
     """fretc: FRETish requirements to FRET's LTL, runtime monitors and AJPF properties, and
     audits of recorded robot runs against them."""
 

@@ -58,9 +58,12 @@ __all__ = ["audit_cmd"]
                    "differs from the file's.")
 @ray_options
 @click.pass_context
-def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              jobs, json_path, junit_path, no_progress, window, allow_partial,
-              confidence, trial, unknown_runs, verbose, coverage, csv_dir=None, msg_path=()):
+def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str, ...],
+              bindings: tuple[str, ...], inline: tuple[str, ...], tick_period: str | None,
+              tick_topic: str | None, time_base: str | None, jobs: int, json_path: str | None,
+              junit_path: str | None, no_progress: bool, window: int, allow_partial: bool,
+              confidence: float, trial: str, unknown_runs: str, verbose: bool, coverage: bool,
+              csv_dir: str | None = None, msg_path: tuple[str, ...] = ()) -> None:
     """Audit recorded runs (LOGS: .mcap, .bag, rosbag2 folders, .csv, or folders of them)
     against FRETish requirements.
 
@@ -128,16 +131,21 @@ def audit_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic
     doc = audit_json(results, reqs, plan.bindings_json(), input_errors, allow_partial,
                      {**plan.sources_json(), **_coverage(plan, results, out, coverage)}, stats)
     if json_path:
-        if to_stdout_json:
-            click.echo(doc, nl=False)
-        else:
-            Path(json_path).write_text(doc, encoding="utf-8")
+        _write_json(doc, json_path)
     if junit_path:
         Path(junit_path).write_text(junit_xml(results, stats, reqs), encoding="utf-8")
     code = exit_code(results, input_errors, allow_partial, stats)
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
         code = 2
     ctx.exit(code)
+
+
+def _write_json(doc: str, json_path: str) -> None:
+    """``--json PATH``: the audit document to PATH, or to standard output for ``-``."""
+    if json_path == "-":
+        click.echo(doc, nl=False)
+    else:
+        Path(json_path).write_text(doc, encoding="utf-8")
 
 
 def _mark_coverage(plan, coverage: bool) -> None:

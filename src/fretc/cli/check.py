@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
@@ -28,6 +29,9 @@ from fretc.check.budget import (DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK,
                                  MUS_BUDGET)
 
 from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, FiniteRange, shown, text_attribute
+
+if TYPE_CHECKING:
+    from fretc.check.analysis import CheckResult
 
 __all__ = ["check_cmd", "render_text"]
 
@@ -38,7 +42,7 @@ def _names(text):
     return [n for n in text.replace(",", " ").split() if n]
 
 
-def render_text(result) -> str:
+def render_text(result: CheckResult) -> str:
     """The terminal report of a :class:`fretc.check.analysis.CheckResult`."""
     lines = []
     mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN"}
@@ -170,8 +174,10 @@ def _lasso(prefix, cycle) -> str:
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
 @TEXT_ATTRIBUTE_OPTION
-def check_cmd(files, inputs, outputs, as_json, witness_dir, budget, memory_budget, mus_budget,
-              query_cpu, timeout, engine, no_redundancy, output):
+def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, as_json: bool,
+              witness_dir: str | None, budget: int, memory_budget: int, mus_budget: int,
+              query_cpu: float, timeout: float | None, engine: str, no_redundancy: bool,
+              output: str | None) -> None:
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs

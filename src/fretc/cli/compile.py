@@ -15,11 +15,16 @@ from __future__ import annotations
 import sys
 
 import click
+from collections.abc import Callable, Sequence
+from typing import Any, TYPE_CHECKING
 
 from fretc.common.textsafe import visible
 
 from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, text_attribute
 from fretc.cli.options import shown as _shown
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
 
 __all__ = ["compile_cmd"]
 
@@ -60,7 +65,8 @@ def _load(paths) -> list:
 @click.option("--split", is_flag=True,
               help="c: one header and source per requirement instead of one per file.")
 @TEXT_ATTRIBUTE_OPTION
-def compile_cmd(files, emit, as_json, output, psl_map, split):
+def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | None,
+                psl_map: str | None, split: bool) -> None:
     """Compile requirement FILES (.fret, FRET JSON exports, .reqif/.reqifz, Doorstop
     trees)."""
     if emit == "ltl":
@@ -268,7 +274,7 @@ def _layout(enc, keys: tuple, pad: str) -> tuple:
     return heads, inner, pad + "}"
 
 
-def json_indent2(obj) -> str:
+def json_indent2(obj: Any) -> str:
     """``json.dumps(obj, indent=2)``, the same text, for dicts with string keys, lists,
     strings, ints, booleans and None (anything else: ``json.dumps`` itself). The standard
     library's C encoder only serves ``indent=None``; its Python one is a tenth of the time
@@ -289,7 +295,7 @@ def json_indent2(obj) -> str:
     return "".join(parts)
 
 
-def ltl_json(compiled) -> str:
+def ltl_json(compiled: Sequence[Compiled]) -> str:
     """``json_indent2([c.to_json() for c in compiled])``, the same text, written in one pass:
     each requirement's text is :func:`ltl_json_item`'s, the list around them as
     ``json.dumps(..., indent=2)`` writes it."""
@@ -298,7 +304,7 @@ def ltl_json(compiled) -> str:
     return "[\n  " + ",\n  ".join(map(ltl_json_item(), compiled)) + "\n]"
 
 
-def ltl_json_item():
+def ltl_json_item() -> Callable[[Compiled], str]:
     """``item(compiled) -> str``: the text of ``compiled.to_json()`` as an item of
     :func:`ltl_json`'s list (``json.dumps(..., indent=2)``'s text nested one level: every
     line after the first indented by two more spaces), for one

@@ -58,7 +58,8 @@ def _entry(arg: str, which: str, files: tuple[str, ...], period, by_id: dict):
 @click.option("--svg", "svg_path", type=click.Path(dir_okay=False), default=None,
               help="Also draw the distinguishing trace as an SVG in FILE (when there is one).")
 @TEXT_ATTRIBUTE_OPTION
-def distinguish_cmd(a, b, files, tick_period, max_ticks, svg_path):
+def distinguish_cmd(a: str, b: str, files: tuple[str, ...], tick_period: str | None,
+                    max_ticks: int, svg_path: str | None) -> None:
     """Compare two wordings A and B (texts, or ids of -r FILE): "not equivalent" and the
     shortest trace on which their verdicts differ (exit 1), "equivalent" and the proof
     (exit 0), or "unknown" and why (exit 3)."""

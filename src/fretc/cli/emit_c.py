@@ -5,16 +5,21 @@ written by ``fretc compile`` (:mod:`fretc.cli.compile`)."""
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from fretc.cli.options import shown
 
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
+
 __all__ = ["write_c", "write_c2po"]
 
 
-def write_c(compiled, output: str | None, split: bool) -> None:
+def write_c(compiled: Sequence[Compiled], output: str | None, split: bool) -> None:
     """Write the C files of ``compiled`` into the folder ``output`` (required: several
     files) and report the requirements without a monitor on stderr; exit 2 without
     ``-o``."""
@@ -37,7 +42,9 @@ def write_c(compiled, output: str | None, split: bool) -> None:
             click.echo(shown(f"skipped {rid} ({stem}): {why}".replace("\n", " ")), err=True)
 
 
-def write_c2po(compiled, output: str | None, check_output, write_outputs) -> None:
+def write_c2po(compiled: Sequence[Compiled], output: str | None,
+               check_output: Callable[[dict, str | None, str], None],
+               write_outputs: Callable[[dict, str | None, str], None]) -> None:
     """Write one C2PO specification per requirement file (``-o`` a file for one, a
     folder for several; stdout without ``-o``: ``fretc compile``'s ``check_output`` and
     ``write_outputs``) and report on stderr what could not be expressed."""

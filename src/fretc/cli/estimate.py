@@ -76,9 +76,11 @@ __all__ = ["estimate_cmd"]
               help="Simulate and audit the runs in parallel on Ray (a local Ray, or ADDRESS "
                    "of a cluster); the same answer as without.")
 @click.pass_context
-def estimate_cmd(ctx, requirements, bindings, space_path, seed, budget, output, test, delta,
-                 alpha, beta, confidence, trial, unknown_runs, rare, targets, particles, kill,
-                 moves, ray):
+def estimate_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tuple[str, ...],
+                 space_path: str, seed: int, budget: int, output: str, test: str, delta: float,
+                 alpha: float, beta: float, confidence: float, trial: str, unknown_runs: str,
+                 rare: bool, targets: tuple[str, ...], particles: int, kill: int, moves: int,
+                 ray: str | None) -> None:
     """Judge requirements 'with probability OP p' over the simulator's scenario space:
     sample its distributions with SEED, simulate and audit each run, and stop when every
     probability requirement is decided by the sequential test or the budget ends. A
@@ -168,8 +170,8 @@ def _campaign(plan, space, seed, budget, output, test, delta, alpha, beta, confi
         params = ", ".join(f"{k}={v:g}" for k, v in run.parameters.items())
         click.echo(shown(f"run {run.index}: {params}{viol}"), err=True)
 
-    result = estimate(plan, space, seed, output, budget=budget, test=test, delta=delta,
-                      alpha=alpha, beta=beta, confidence=confidence, unknown=unknown_runs,
-                      trial=trial, ray_address=ray, audit_json=one_log_json,
-                      progress=progress)
-    return write_estimate(output, result, None)
+    found = estimate(plan, space, seed, output, budget=budget, test=test, delta=delta,
+                     alpha=alpha, beta=beta, confidence=confidence, unknown=unknown_runs,
+                     trial=trial, ray_address=ray, audit_json=one_log_json,
+                     progress=progress)
+    return write_estimate(output, found, None)

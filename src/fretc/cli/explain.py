@@ -25,7 +25,7 @@ __all__ = ["explain_cmd"]
 @click.option("-o", "--output", type=click.Path(file_okay=False), default=None,
               help="Write one SVG diagram per requirement into this folder.")
 @TEXT_ATTRIBUTE_OPTION
-def explain_cmd(file, ids, output):
+def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
     """Explain the requirements of FILE (or only IDS): plain English, template key and a
     diagram of the scope, the triggers and the response windows."""
     from fretc.compiler.build import compile_entries

@@ -51,8 +51,8 @@ def _audit_date(value: str | None) -> str | None:
         raise click.BadParameter(f"{value!r} is not an ISO 8601 date or date-time",
                                  param_hint="--audit-date") from None
     if when.tzinfo is None:
-        when = when.replace(tzinfo=_dt.timezone.utc)
-    return when.astimezone(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        when = when.replace(tzinfo=_dt.UTC)
+    return when.astimezone(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 @click.command("export")
@@ -83,8 +83,9 @@ def _audit_date(value: str | None) -> str | None:
               default=None, help="fretc check -o FILE: its results in the matrix.")
 @TEXT_ATTRIBUTE_OPTION
 @click.pass_context
-def export_cmd(ctx, src, from_json, output, needs_path, sdoc_path, audit_date, matrix_csv,
-               matrix_html, check_json):
+def export_cmd(ctx: click.Context, src: str | None, from_json: str, output: str | None,
+               needs_path: str | None, sdoc_path: str | None, audit_date: str | None,
+               matrix_csv: str | None, matrix_html: str | None, check_json: str | None) -> None:
     """Write an audit's verdicts back into the requirements' format (ReqIF attributes,
     Doorstop custom attributes, a member of each FRET requirement), keeping everything that
     was there; as a sphinx-needs needs.json (--needs) and a StrictDoc document (--sdoc); and
@@ -101,7 +102,7 @@ def export_cmd(ctx, src, from_json, output, needs_path, sdoc_path, audit_date, m
     if not any((output, needs_path, sdoc_path, matrix_csv, matrix_html)):
         raise click.UsageError("nothing to write: give -o (with -r), --needs, --sdoc, "
                                "--matrix or --matrix-html")
-    kind = _kind(src) if output is not None else None
+    kind = _kind(src) if output is not None and src is not None else None  # (src: refused above)
     try:
         doc = load_audit_json(from_json)
     except ReportError as exc:
@@ -126,7 +127,8 @@ def export_cmd(ctx, src, from_json, output, needs_path, sdoc_path, audit_date, m
             return
     outputs = _matrix_outputs(doc, current, check_json, matrix_csv, matrix_html)
     outputs += _tool_outputs(doc, results, needs_path, sdoc_path)
-    written = _write_export(kind, src, output, results, current) if kind else None
+    written = (_write_export(kind, src, output, results, current)
+               if kind and src is not None and output is not None else None)  # (kind: both)
     for path, data in outputs:
         write_atomic(path, data)
     _report(doc, current, written, output, [p for p, _d in outputs])

@@ -54,8 +54,9 @@ __all__ = ["falsify_cmd"]
               help="Every run with the shield fretc shield --emit python -b BINDINGS wrote into "
                    "DIR in place of the hand-written SIF and interceptor.")
 @click.pass_context
-def falsify_cmd(ctx, requirements, bindings, space_path, budget, seed, output, only, first,
-                ray, safety):
+def falsify_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tuple[str, ...],
+                space_path: str, budget: int, seed: int, output: str, only: tuple[str, ...],
+                first: bool, ray: str | None, safety: str | None) -> None:
     """Search the simulator's scenario parameters for runs that violate a requirement:
     CMA-ES minimizes the least robustness (the margin behind each verdict, as fretc audit
     gives it) over the target requirements, one simulator run per evaluation.

@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from typing import Any, Dict, List
+from typing import Any
 
 import click
 
@@ -95,7 +95,7 @@ class _Stat:
 
     def to_json(self) -> dict:
         self.flush()
-        out: Dict[str, Any] = {"type": self.type}
+        out: dict[str, Any] = {"type": self.type}
         if self.texts:
             out["values"] = sorted(self.texts)[:MAX_VALUES]
             if len(self.texts) > MAX_VALUES:
@@ -139,7 +139,7 @@ def _constants(schema, typename: str) -> dict:
     return {c[0]: (c[1], c[2]) for c in consts}
 
 
-def _plan(schema, typename: str, prefix: str, stats: Dict[str, _Stat], plans: dict) -> list:
+def _plan(schema, typename: str, prefix: str, stats: dict[str, _Stat], plans: dict) -> list:
     """The fields of ``typename`` as visited under path ``prefix``: ``(attribute, kind,
     item kind, stat, sub-plan)`` per field, made once per (type, path) and kept in ``plans``
     (the schema's field list is not walked again for every message)."""
@@ -171,7 +171,8 @@ def _visit(plan: list, obj) -> None:
         if kind == "message":
             _visit(sub, v)
         elif kind == "array":
-            n = len(v) if v is not None else 0
+            v = v if v is not None else ()  # a field the message lacks: empty
+            n = len(v)
             st.lengths.add(n)
             if item == "message":
                 for x in v:
@@ -211,10 +212,10 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
     source = open_log(path, msg_path=msg_path)
     types = source.topics()
     schemas = log_schemas(source)
-    stats: Dict[str, Dict[str, _Stat]] = {t: {} for t in types}
-    first: Dict[str, int] = {}
-    last: Dict[str, int] = {}
-    counts: Dict[str, int] = {}
+    stats: dict[str, dict[str, _Stat]] = {t: {} for t in types}
+    first: dict[str, int] = {}
+    last: dict[str, int] = {}
+    counts: dict[str, int] = {}
     plans: dict = {}
     # a topic whose schema is missing or not parsed is listed without fields ("schema
     # unknown"), its messages counted
@@ -229,9 +230,9 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
         if plan is not None:
             _visit(plan, m.data)
         elif source.kind == "csv":
-            for c in source.columns:
+            for c in source.columns:  # type: ignore[attr-defined]  # a CsvSource
                 st = stats[m.topic].setdefault(f"{m.topic}.{c}",
-                                               _Stat(source.types.get(c, "")))
+                                               _Stat(source.types.get(c, "")))  # type: ignore[attr-defined]
                 v = getattr(m.data, c)
                 if isinstance(v, bool):
                     st.true += v
@@ -252,9 +253,9 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
                        "rate_hz": (n - 1) / span if span else None,
                        "schema": schemas.get(t) is not None,
                        "fields": {p: s.to_json() for p, s in stats[t].items()}})
-    st, en = source.start_time, source.end_time
-    return {"log": str(path), "kind": source.kind, "start_time_ns": st, "end_time_ns": en,
-            "duration_s": (en - st) / 1e9 if st is not None and en is not None else None,
+    t0, t1 = source.start_time, source.end_time
+    return {"log": str(path), "kind": source.kind, "start_time_ns": t0, "end_time_ns": t1,
+            "duration_s": (t1 - t0) / 1e9 if t0 is not None and t1 is not None else None,
             "partial": bool(source.partial),
             "problems": [str(p) for p in source.problems], "topics": topics}
 
@@ -303,7 +304,7 @@ def _print(doc: dict) -> None:
 @click.argument("logs", nargs=-1, required=True)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list, one object per log.")
 @MSG_PATH_OPTION
-def inspect_cmd(logs, as_json, msg_path):
+def inspect_cmd(logs: tuple[str, ...], as_json: bool, msg_path: tuple[str, ...]) -> None:
     """List what LOGS (.mcap, .bag, rosbag2 folders, .csv) hold: topics, message types,
     counts, rates, time span, and every field path in binding syntax, as it binds when pasted
     (quoted topics, [:] for items), with its type, array lengths, numeric min/max, the values
@@ -311,7 +312,7 @@ def inspect_cmd(logs, as_json, msg_path):
     (docs/bindings.md)."""
     from fretc.common.problems import FretcInputError  # lazy: as the readers
 
-    docs: List[dict] = []
+    docs: list[dict] = []
     failed = False
     for p in logs:
         try:

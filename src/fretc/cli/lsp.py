@@ -14,7 +14,7 @@ __all__ = ["lsp_cmd"]
 @click.command("lsp")
 @click.option("--stdio", is_flag=True, help="Serve over stdin/stdout (the default; "
               "accepted because editors pass it).")
-def lsp_cmd(stdio):
+def lsp_cmd(stdio: bool) -> None:
     """Serve the FRETish language server over stdio: diagnostics, hover (with a variable's
     type and unit), completion, go to definition, find references, rename, a code action
     comparing a requirement with its saved wording, document symbols for .fret files."""

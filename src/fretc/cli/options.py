@@ -12,11 +12,17 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any, Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, TYPE_CHECKING, TypeVar
 
 import click
 
 from fretc.common.textsafe import visible
+
+if TYPE_CHECKING:
+    from fretc.audit import AuditConfig
+    from fretc.audit.workers import LogProgress
+    from fretc.audit.model import AuditPlan
 
 __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps",
            "audit_input_options", "live_input_options", "audit_config", "ray_options",
@@ -27,7 +33,8 @@ class FiniteRange(click.FloatRange):
     """click's ``FloatRange`` that also refuses NaN and the infinities, which click's range
     lets through (every comparison with NaN is false): a usage error, exit 2."""
 
-    def convert(self, value, param, ctx):
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None
+                ) -> Any:
         """The float of ``value`` in the range; fails (usage error) otherwise."""
         rv = super().convert(value, param, ctx)
         if not math.isfinite(rv):
@@ -35,7 +42,7 @@ class FiniteRange(click.FloatRange):
         return rv
 
 
-def statistics_options(f):
+def statistics_options(f: F) -> F:
     """``--confidence``, ``--trial`` and ``--unknown-runs`` of the statistics of probability
     requirements (``fretc audit``, ``fretc estimate``; :mod:`fretc.audit.statistics`)."""
     for opt in reversed((
@@ -60,6 +67,9 @@ def statistics_options(f):
     return f
 
 
+#: a command function (the option decorators return it with their options added)
+F = TypeVar("F", bound=Callable[..., Any])
+
 #: Key of the Ray options in the click context's ``meta``.
 META = "fretc.fleet"
 
@@ -70,12 +80,12 @@ def shown(text: str) -> str:
     return visible(text, keep="\n")
 
 
-def live_input_options(f):
+def live_input_options(f: F) -> F:
     """:func:`audit_input_options` without ``-j/--jobs`` (``fretc watch`` audits one run)."""
     return audit_input_options(f, jobs=False)
 
 
-def audit_input_options(f, jobs: bool = True):
+def audit_input_options(f: F, jobs: bool = True) -> F:
     """The options that say what to audit and how (shared by ``fretc audit`` and
     ``fretc report``): requirements, bindings, tick, time base, jobs (unless ``jobs`` is
     False), window."""
@@ -180,8 +190,10 @@ def text_attribute() -> str | None:
     return ctx.meta.get(TEXT_META) if ctx is not None else None
 
 
-def audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base, window,
-                 msg_path=()):
+def audit_config(requirements: tuple[str, ...], bindings: tuple[str, ...],
+                 inline: tuple[str, ...], tick_period: str | None, tick_topic: str | None,
+                 time_base: str | None, window: int, msg_path: tuple[str, ...] = ()
+                 ) -> AuditConfig:
     """The :class:`fretc.audit.AuditConfig` of :func:`audit_input_options`' values
     (requirements default to ./requirements; raises ``click.UsageError`` without one)."""
     from fretc.audit import AuditConfig  # lazy: numpy and the engine only when run
@@ -209,7 +221,7 @@ def _store(ctx, param, value):
     return value
 
 
-def ray_options(f):
+def ray_options(f: F) -> F:
     """``--ray [ADDRESS]`` and ``--retries N`` (values kept in the click context; read by
     :func:`run_audits`), for ``fretc audit``, ``fretc report`` and ``fretc watch``."""
     f = click.option("--retries", type=click.IntRange(min=0), default=None,
@@ -242,7 +254,8 @@ def _check_address(ctx, param, value):
     return _store(ctx, param, value)
 
 
-def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
+def run_audits(plan: AuditPlan, paths: Sequence[str], jobs: int = 1,
+               progress: LogProgress | None = None,
                ctx: click.Context | None = None) -> list[Any]:
     """The commands' audit of ``paths``: on Ray when ``--ray`` was given
     (:func:`ray_options`), else :func:`fretc.audit.audit_logs` with ``jobs`` processes.
@@ -264,5 +277,5 @@ def run_audits(plan, paths: Sequence[str], jobs: int = 1, progress=None,
     except KeyboardInterrupt:
         err = FleetError("interrupted: the running Ray tasks were cancelled; no result was "
                          "written")
-        err.exit_code = 130
+        err.exit_code = 130  # type: ignore[misc]  # (this error's own exit code)
         raise err from None

@@ -43,9 +43,12 @@ __all__ = ["report_cmd"]
                                  "requirements.")
 @ray_options
 @click.pass_context
-def report_cmd(ctx, logs, requirements, bindings, inline, tick_period, tick_topic, time_base,
-               jobs, window, from_json, base, output, annotate_dir, psl_map, title,
-               check_json=None, msg_path=()):
+def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str, ...],
+               bindings: tuple[str, ...], inline: tuple[str, ...], tick_period: str | None,
+               tick_topic: str | None, time_base: str | None, jobs: int, window: int,
+               from_json: str | None, base: str | None, output: str, annotate_dir: str | None,
+               psl_map: str | None, title: str | None, check_json: str | None = None,
+               msg_path: tuple[str, ...] = ()) -> None:
     """Write the traceability report (HTML + Markdown) of an audit: requirements x runs,
     formulas, monitors, AJPF properties, verdicts, witnesses and violation timelines.
 

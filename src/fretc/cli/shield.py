@@ -68,8 +68,8 @@ def _names(text: str | None) -> list[str] | None:
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                bindings_file: str | None, prefer: str | None, forms: tuple[str, ...],
-               out_dir: str | None, prove: bool, explain: bool, name: str | None,
-               budget: int, memory_budget: int) -> None:
+               out_dir: str | None, prove: bool, explain: bool, name: str | None, budget: int,
+               memory_budget: int) -> None:
     """Synthesize the shield of requirement FILES: each tick it passes the controller's
     proposed outputs unchanged when they keep every requirement winnable, and otherwise
     changes the fewest outputs needed (the Safety System of Safe-ROS, generated)."""

@@ -31,7 +31,8 @@ __all__ = ["simulate_cmd"]
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help='Write {"ticks", "requirements": [{"id", "ft", "pt", "parts"}]} here.')
 @TEXT_ATTRIBUTE_OPTION
-def simulate_cmd(file, trace, ids, output, json_path):
+def simulate_cmd(file: str, trace: str, ids: tuple[str, ...], output: str | None,
+                 json_path: str | None) -> None:
     """Simulate the requirements of FILE on TRACE (a .csv as the audit's, or a timeline
     text: one line per variable, 'p: 0-3, 7' for the ticks a boolean holds, 'speed: 0.0 0.2
     0.6' for one value per tick, '@ticks N' for the length)."""

@@ -60,7 +60,8 @@ __all__ = ["testgen_cmd"]
                    "test's messages on the bound topics, read back by fretc audit with the "
                    "same file.")
 @TEXT_ATTRIBUTE_OPTION
-def testgen_cmd(files, out_dir, with_pytest, bindings_file):
+def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, bindings_file: str | None
+               ) -> None:
     """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
     tests.json (what each covers, the expected verdict of every requirement)."""
     from fretc.testing.generate import generate, write_tests

@@ -47,7 +47,8 @@ __all__ = ["testrun_cmd"]
                    "trace covers (default: the one it was generated for).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the outcomes as JSON here.")
-def testrun_cmd(folder, command, bindings, logs_dir, only, all_obligations, json_path):
+def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir: str | None,
+                only: tuple[str, ...], all_obligations: bool, json_path: str | None) -> None:
     """Run the generated tests in FOLDER against the system CMD makes logs of."""
     from fretc.testing.testrun import OUTCOMES, run_test
 

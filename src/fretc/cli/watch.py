@@ -33,15 +33,22 @@ import threading
 import time
 
 import click
+from typing import TYPE_CHECKING
 
 from fretc.common.units import format_offset
 
 from fretc.cli.options import FiniteRange, audit_config, live_input_options
 
+if TYPE_CHECKING:
+    from rich.console import Group
+
+    from fretc.live.watch import Watch
+    from fretc.live.diagnostics import DiagnosticsPublisher
+
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
 
 
-def live_table(w):
+def live_table(w: Watch) -> Group:
     """The live table of a :class:`fretc.live.watch.Watch`: per requirement its own
     clock's ticks and the time of the last one, the pt verdict now, the LTL3 status and when
     it became definite, obligations violated and pending so far
@@ -180,10 +187,14 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
               help="dds://, zenoh://: publish the verdicts as a diagnostic_msgs/DiagnosticArray "
                    "on /diagnostics over the watched transport, at 1 Hz and on every change.")
 @click.pass_context
-def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic, time_base,
-              window, duration, until_idle, restart_grace, allow_partial, topic_types, record,
-              jsonl, json_path, wait, connect_timeout, no_live, dds_config, zenoh_config,
-              publish_diagnostics, msg_path=()):
+def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
+              bindings: tuple[str, ...], inline: tuple[str, ...], tick_period: str | None,
+              tick_topic: str | None, time_base: str | None, window: int, duration: float | None,
+              until_idle: float | None, restart_grace: float, allow_partial: bool,
+              topic_types: dict[str, str], record: str | None, jsonl: bool, json_path: str | None,
+              wait: float, connect_timeout: float | None, no_live: bool, dds_config: str | None,
+              zenoh_config: str | None, publish_diagnostics: bool, msg_path: tuple[str, ...] = ()
+             ) -> None:
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
     rosbridge://host:9090: rosbridge v2; dds://DOMAIN: the robot's DDS (Cyclone DDS);
     zenoh://host:7447: rmw_zenoh; zenoh://host:7447?layout=bridge: zenoh-bridge-ros2dds)
@@ -210,7 +221,7 @@ def watch_cmd(ctx, url, requirements, bindings, inline, tick_period, tick_topic,
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window, msg_path)
     lock = threading.Lock()
-    diagnostics = []
+    diagnostics: list[DiagnosticsPublisher] = []
 
     def on_event(e):
         if diagnostics and e.kind in ("pt", "ltl3", "problem", "gap"):
@@ -333,7 +344,8 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
               help="dds://: a Cyclone DDS XML configuration instead of the loopback one.")
 @click.option("--zenoh-config", type=click.Path(exists=True, dir_okay=False), default=None,
               help="zenoh://: a Zenoh JSON5 session configuration read first.")
-def replay_cmd(log, serve, rate, host, port, wait, loop, dds_config, zenoh_config):
+def replay_cmd(log: str, serve: str | None, rate: float, host: str, port: int, wait: bool,
+               loop: bool, dds_config: str | None, zenoh_config: str | None) -> None:
     """Publish a recorded MCAP LOG (--serve: over the Foxglove WebSocket protocol; --serve
     dds://DOMAIN or zenoh://HOST:PORT: on the robot's middleware, with ROS 2's names and
     types and each message's log time as its source timestamp), paced at RATE times real
@@ -398,7 +410,7 @@ class MissingExtra(click.ClickException):
     exit_code = 2
 
 
-def register(main) -> None:
+def register(main: click.Group) -> None:
     """Add ``watch`` and ``replay`` to the ``fretc`` group."""
     main.add_command(watch_cmd, "watch")
     main.add_command(replay_cmd, "replay")
