@@ -18,7 +18,6 @@ corrects), and a shield for every FRET case-study set that ``fretc check`` decid
 from __future__ import annotations
 
 import argparse
-import json
 import random
 import resource
 import subprocess

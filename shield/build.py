@@ -23,7 +23,7 @@ from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.shield.machine import Atom, Machine
-from fretc.shield.plan import Component, Plan, ShieldError, plan
+from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
 from fretc.shield.synthesis import synthesize
 from fretc.signals.bindings.spec import Bindings
 
@@ -117,9 +117,9 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     with SpotWorker(budget, fork=fork) as worker:
         for comp in p.components:
             machines.append(_machine(worker, comp, p))
-    reqs = tuple(Requirement(x.id, x.compiled.entry.text, x.location,
-                             to_smv(x.pt), k)
-                 for k, comp in enumerate(p.components) for x in comp.items)
+    reqs = tuple(Requirement(x.id, x.compiled.entry.text, x.location, to_smv(pt), k)
+                 for k, comp in enumerate(p.components)
+                 for x, pt in zip(comp.items, enforced_pts(comp.items)))
     texts = {a.text for m in machines for a in m.outputs}
     unknown = [t for t, _v in prefer if t not in texts]
     if unknown:
@@ -146,13 +146,13 @@ def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
     for c in compiled:
         for n in ir.walk(c.formalization.ft_inf):
             if n.op in ("cmp", "arith"):
-                out.update(x.name for x in ir.walk(n) if x.op == "var")
+                out.update(ir.name_of(x) for x in ir.walk(n) if x.op == "var")
     return frozenset(out)
 
 
 def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     """The machine of one component (module docstring)."""
-    pts = [x.pt for x in comp.items]
+    pts = enforced_pts(comp.items)
     ans = worker.ask(("call", synthesize, (pts, p.inputs, comp.env_inv, comp.ctl_inv)))
     if ans == UNKNOWN:
         why = worker.failures[-1] if worker.failures else "no reason given"
@@ -170,7 +170,7 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
 def _atom(node: Node) -> Atom:
     """An IR atom (a boolean variable or a comparison with a constant) as an :class:`Atom`."""
     if node.op == "ap":
-        return Atom(to_smv(node), node.name, name=letter_name(node))
+        return Atom(to_smv(node), ir.name_of(node), name=letter_name(node))
     sc = simple_comparison(node)
     assert sc is not None  # the game takes no other atom
     var, op, c = sc
@@ -185,7 +185,7 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
             f"{', '.join(p.inputs)} do)")
     if not ans.get("inputs"):
         return head + "; " + (ans.get("note") or "the environment must react to the outputs")
-    numeric = NumericAbstraction.of([x.pt for x in comp.items])
+    numeric = NumericAbstraction.of(enforced_pts(comp.items))
     atoms = {to_smv(a): a for name in numeric.atoms for a in numeric.atoms[name]}
     rows = []
     for letter in ans["inputs"]:

@@ -66,9 +66,9 @@ def node_source(pkg: str, module: str, bindings_name: str, types: dict[str, str]
     """The node's Python source (module docstring; ``templates/shield_node.py.j2``)."""
     from fretc.compiler.codegen import _env  # lazy: Jinja2 only when the form is written
 
-    return _env().get_template("shield_node.py.j2").render(
+    return str(_env().get_template("shield_node.py.j2").render(
         pkg=pkg, module=module, bindings_name=bindings_name, types=types, inputs=inputs,
-        proposals=proposals, outputs=outputs, period_ns=period_ns, tick=tick)
+        proposals=proposals, outputs=outputs, period_ns=period_ns, tick=tick))
 
 
 def render_ros2(shield: Shield, base: str, bindings: Bindings | None,

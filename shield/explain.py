@@ -99,7 +99,7 @@ def _wait(graph: Graph, m: Machine, c: Node, r: Node) -> int | None:
         return best
 
     starts = {tuple(int(b) for b in m.init)}
-    for s, edges in graph.items():
+    for edges in graph.values():
         for nxt, letters in edges.items():
             if any(not _value(c, dict(zip(names, map(bool, x)))) for x in letters):
                 starts.add(nxt)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from collections.abc import Sequence
 from typing import Any
 
 __all__ = ["Atom", "Machine", "evaluate"]
@@ -64,7 +65,8 @@ class Atom:
         v = float(x)
         if math.isnan(v):
             raise ValueError(f"{self.variable} is NaN: {self.text} has no truth value")
-        return _TESTS[self.op](v, self.constant)
+        assert self.constant is not None  # a comparison has its constant
+        return bool(_TESTS[self.op](v, self.constant))
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,7 @@ class Machine:
     keep: tuple[int, ...]
     env_ok: int
     messages: tuple[Any, ...] = ()
-    stats: dict = field(default_factory=dict, compare=False)
+    stats: dict[str, Any] = field(default_factory=dict, compare=False)
 
     @property
     def output_variables(self) -> list[str]:
@@ -99,8 +101,8 @@ class Machine:
         return list(dict.fromkeys(a.variable for a in self.inputs))
 
 
-def evaluate(nodes: tuple[tuple[int, int, int], ...], root: int, values: list[bool]) -> bool:
-    """The BDD ``root`` of ``nodes`` at the variable values ``values`` (one bool per
+def evaluate(nodes: Sequence[tuple[int, int, int]], root: int, values: Sequence[int]) -> bool:
+    """The BDD ``root`` of ``nodes`` at the variable values ``values`` (one bool or 0/1 per
     variable of the node table)."""
     n = root
     while n > 1:

@@ -37,7 +37,8 @@ from fretc.signals.bindings.expression import BinOp, Const, Expr, Field, FuncCal
 from fretc.signals.bindings.spec import Bindings
 from fretc.testing.invert import AGE, NotWritable, solve
 
-__all__ = ["ShieldError", "MessageGroup", "Component", "Plan", "plan", "MAX_GROUP_ATOMS"]
+__all__ = ["ShieldError", "MessageGroup", "Component", "Plan", "plan", "MAX_GROUP_ATOMS",
+           "enforced_pts"]
 
 #: the most output atoms of one message whose valuations are enumerated (2^12 inversions)
 MAX_GROUP_ATOMS = 12
@@ -213,7 +214,7 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
 def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
                bindings: Bindings | None, notes: list[str]) -> Component:
     """A :class:`Component` with its invariants (module docstring)."""
-    pts = [x.pt for x in items]
+    pts = enforced_pts(items)
     numeric = NumericAbstraction.of(pts)
     env_inv = numeric.regions([v for v in numeric.atoms if v in inputs])
     ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs])
@@ -230,9 +231,18 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     return Component(items, env_inv, ctl_inv, messages)
 
 
+def enforced_pts(items: list[CheckItem]) -> list[Node]:
+    """The pt formulas of enforced requirements (each has one: :func:`plan` checked)."""
+    out = []
+    for x in items:
+        assert x.pt is not None
+        out.append(x.pt)
+    return out
+
+
 def _variable(atom: Node) -> str:
     if atom.op == "ap":
-        return atom.name
+        return ir.name_of(atom)
     sc = simple_comparison(atom)
     assert sc is not None  # game_atoms took it
     return sc[0]
@@ -283,7 +293,7 @@ def _number(e: Expr, fields: dict[tuple[str, tuple[str, ...]], Any]) -> float | 
     if isinstance(e, Const) and isinstance(e.value, float) and not isinstance(e.value, bool):
         return e.value
     if isinstance(e, Field) and e.path and all(isinstance(x, str) for x in e.path):
-        v = fields.get((e.topic, tuple(e.path)), 0.0)
+        v = fields.get((e.topic, tuple(str(x) for x in e.path)), 0.0)
         return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
     if isinstance(e, UnaryOp) and e.op == "-":
         x = _number(e.arg, fields)
@@ -297,7 +307,8 @@ def _number(e: Expr, fields: dict[tuple[str, tuple[str, ...]], Any]) -> float | 
 def _wanted(atom: Node, bindings: Bindings) -> tuple[str, Expr]:
     """``(variable, expression)`` whose truth is the atom's, over the bound message."""
     if atom.op == "ap":
-        return atom.name, bindings.variables[atom.name].ast
+        name = ir.name_of(atom)
+        return name, bindings.variables[name].ast
     sc = simple_comparison(atom)
     assert sc is not None
     var, op, c = sc

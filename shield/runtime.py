@@ -21,6 +21,7 @@ override changed takes them (:mod:`fretc.shield.messages` publishes the fields).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 __all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest"]
@@ -30,8 +31,9 @@ __all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest"]
 #: is cleared (the answers never depend on it)
 CACHE_LIMIT = 1 << 16
 
-_OPS = {"<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
-        ">=": lambda x, c: x >= c, "=": lambda x, c: x == c, "!=": lambda x, c: x != c}
+_OPS: dict[str, Callable[[float, float], bool]] = {
+    "<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
+    ">=": lambda x, c: x >= c, "=": lambda x, c: x == c, "!=": lambda x, c: x != c}
 _NOT = {"<": ">=", "<=": ">", ">": "<=", ">=": "<", "=": "!=", "!=": "="}
 
 
@@ -55,13 +57,14 @@ def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
     var, op, c = spec
     if op is None:
         if value is True or value is False:
-            return value
+            return bool(value)
         if not isinstance(value, int):
             raise TypeError(f"{var} must be a boolean, not {value!r}")
         return bool(value)
     x = float(value)
     if x != x:
         raise ValueError(f"{var} is NaN: its comparisons have no truth value")
+    assert c is not None  # a comparison has its constant
     return _OPS[op](x, c)
 
 
@@ -75,12 +78,14 @@ def _tester(spec: tuple[str, str | None, float | None]) -> Any:
             return truth(spec, value)
         return boolean
     test = _OPS[op]
+    assert c is not None  # a comparison has its constant
+    const = c
 
     def compare(value: Any) -> bool:
         x = float(value)
         if x != x:
             raise ValueError(f"{var} is NaN: its comparisons have no truth value")
-        return test(x, c)
+        return test(x, const)
     return compare
 
 
@@ -100,9 +105,10 @@ def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int]
     if not math.isnan(x) and all(truth(s, x) == bool(t) for s, t in zip(specs, truths)):
         return x
     lo, hi = -math.inf, math.inf
-    points = []
-    for (_v, op, c), t in zip(specs, truths):
-        op = op if t else _NOT[op]
+    points: list[float] = []
+    for (_v, spec_op, c), t in zip(specs, truths):
+        assert spec_op is not None and c is not None  # numbers: comparisons only
+        op = spec_op if t else _NOT[spec_op]
         if op in ("<", "<="):
             hi = min(hi, c)
         elif op in (">", ">="):

@@ -129,6 +129,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     if forms:
         from fretc.shield.emit import write_forms
 
+        assert out_dir is not None  # refused above without -o
         try:
             written = write_forms(shield, forms, Path(out_dir), bindings=bindings,
                                   bindings_file=bindings_file, compiled=compiled)
