@@ -121,9 +121,14 @@ def ros_topic_of_dds(name: str) -> str | None:
 
 
 def dds_type(ros: str) -> str:
-    """``pkg/msg/Type`` (or ``pkg/Type``) -> ``pkg::msg::dds_::Type_``."""
-    pkg, _msg, name = normalize_msgtype(ros).split("/")
-    return f"{pkg}::msg::dds_::{name}_"
+    """``pkg/msg/Type`` (or ``pkg/Type``) -> ``pkg::msg::dds_::Type_``; a service's types
+    (``pkg/srv/Name_Event``, filed by rosbags as ``pkg/srv/msg/Name_Event``) ->
+    ``pkg::srv::dds_::Name_Event_``, as rosidl names them on DDS."""
+    parts = normalize_msgtype(ros).split("/")
+    if len(parts) == 4 and parts[2] == "msg":  # pkg/srv/msg/Name, pkg/action/msg/Name
+        return f"{parts[0]}::{parts[1]}::dds_::{parts[3]}_"
+    pkg, kind, name = parts
+    return f"{pkg}::{kind}::dds_::{name}_"
 
 
 def ros_type(dds: str) -> str:
@@ -238,15 +243,20 @@ def attachment_time(data: bytes | None) -> int | None:
 
 @functools.lru_cache(maxsize=8)
 def standard_store(msg_path: tuple[str, ...] = ()) -> Typestore:
-    """rosbags' type store of ROS 2 Humble's standard types, with the ``.msg``/``.idl``
-    types of ``msg_path`` (``--msg-path``, :mod:`fretc.logs.msg_path`) when given."""
+    """rosbags' type store of ROS 2 Humble's standard types and the events of the standard
+    services (:mod:`fretc.logs.standard_services`), or the ``.msg``/``.idl`` types of
+    ``msg_path`` (``--msg-path``, :mod:`fretc.logs.msg_path`) when given."""
     if msg_path:
         from fretc.logs.msg_path import msg_path_typestore
 
         return msg_path_typestore(tuple(msg_path))
     from rosbags.typesys import Stores, get_typestore
 
-    return get_typestore(Stores.ROS2_HUMBLE)
+    from fretc.logs.standard_services import register_service_events
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    register_service_events(store)  # the events of std_srvs' services (introspection)
+    return store
 
 
 def advertisement(cid: int, topic: str, ros: str, store: Typestore, expected: str | None = None

@@ -127,10 +127,13 @@ def service_event_text(name: str, text: str) -> str:
         body) else len(lines)
     pkg, svc = parts[0], parts[2][:-len("_Event")]
     request, response = "\n".join(lines[:cut]), "\n".join(lines[cut + 1:])
-    out = (f"service_msgs/ServiceEventInfo info\n{svc}_Request[<=1] request\n"
-           f"{svc}_Response[<=1] response\n" + _IDL_SEP + _EVENT_INFO + _IDL_SEP
-           + f"MSG: {pkg}/{svc}_Request\n{request}\n" + _IDL_SEP
-           + f"MSG: {pkg}/{svc}_Response\n{response}\n")
+    # the request and response named in full (pkg/srv/Name_Request): rosbags resolves a
+    # relative name against the event's own package path, which differs between a type
+    # store (pkg/srv/msg/...) and a log's schema read under pkg/msg/ (_service_type)
+    out = (f"service_msgs/ServiceEventInfo info\n{pkg}/srv/{svc}_Request[<=1] request\n"
+           f"{pkg}/srv/{svc}_Response[<=1] response\n" + _IDL_SEP + _EVENT_INFO + _IDL_SEP
+           + f"MSG: {pkg}/srv/{svc}_Request\n{request}\n" + _IDL_SEP
+           + f"MSG: {pkg}/srv/{svc}_Response\n{response}\n")
     kept = [sec for sec in rest if sec.strip()]
     return out + "".join(_IDL_SEP + sec for sec in kept)
 

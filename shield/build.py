@@ -27,7 +27,8 @@ from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
 from fretc.shield.synthesis import synthesize
 from fretc.signals.bindings.spec import Bindings
 
-__all__ = ["Requirement", "Shield", "ShieldUnknown", "build_shield", "parse_preferences"]
+__all__ = ["Requirement", "Shield", "ShieldUnknown", "build_shield", "parse_preferences",
+           "with_margin"]
 
 
 class ShieldUnknown(Exception):
@@ -95,6 +96,41 @@ def parse_preferences(text: str | None) -> list[tuple[str, bool]]:
         if part:
             neg = part.startswith("!")
             out.append((part[1:].strip() if neg else part, not neg))
+    return out
+
+
+def with_margin(compiled: Sequence[Any], margin: int) -> list[Any]:
+    """``compiled`` with every ``within N`` deadline shortened by ``margin`` ticks (each
+    recompiled from its entry; the text says so): a shield that meets a deadline ``margin``
+    ticks early still meets it in the view of a sampler whose ticks lag its own (a recorder
+    on the same bus, the audit's grid at another phase), the shield's answers being at most
+    that late there.
+
+    Raises:
+        ShieldError: a deadline shorter than the margin."""
+    from dataclasses import replace
+
+    from fretc.compiler.build import compile_entry
+    from fretc.compiler.coverage import with_ticks
+    from fretc.compiler.semantics import duration_ticks
+
+    if margin <= 0:
+        return list(compiled)
+    out = []
+    for c in compiled:
+        req = c.entry.requirement
+        if c.formalization is None or req is None or req.timing.kind != "within":
+            out.append(c)
+            continue
+        assert req.timing.duration is not None  # a within timing has its duration
+        ticks = duration_ticks(req.timing.duration, c.entry.tick_period, [])
+        if ticks - margin < 0:
+            raise ShieldError(f"{c.entry.source}:{c.entry.line}: {c.id}: its deadline of "
+                              f"{ticks} ticks is shorter than the margin of {margin}")
+        entry = replace(c.entry, requirement=with_ticks(req, ticks - margin),
+                        text=f"{c.entry.text} [a deadline {margin} tick(s) early: "
+                             f"{ticks - margin} ticks]")
+        out.append(compile_entry(entry))
     return out
 
 

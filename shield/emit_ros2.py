@@ -16,7 +16,9 @@ The node (:func:`node_source`):
 * ticks on each message of the ``[shield] tick`` topic (Safe-ROS: ``/scan``, the LiDAR's
   100 ms: the answer follows the scan at once), and on its timer at the requirements' period
   when that topic falls silent for more than a period and a half (so a stale input is still
-  judged); without a tick topic, on the timer alone; at most one tick per half period;
+  judged); without a tick topic, on the timer alone; at most one tick per half period, and
+  the ticks a late timer missed are stepped at their own times first (the shield counts its
+  deadlines in ticks: one tick per period of time keeps them deadlines in time);
 * each tick publishes the corrected outputs (:class:`fretc.shield.messages.MessageShield`:
   the proposal unchanged, or the fields the bindings' inversion gives the corrected values)
   and ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``: level OK, WARN with the reasons

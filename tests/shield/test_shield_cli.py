@@ -179,3 +179,14 @@ def test_explain_says_what_r2_permits_and_what_r7_takes_away(tmp_path):
     assert got.exit_code == 0, got.output
     assert "R2: stopped must hold at once after too_close becomes true" in got.output
     assert "R2: stopped may stop holding" not in got.output
+
+
+def test_a_margin_meets_each_deadline_early_and_is_refused_past_one(tmp_path):
+    got = shield_cli(*SAFE_ROS, "--margin", "1", "--explain", "--prove")
+    assert got.exit_code == 0, got.output
+    assert "R2: stopped may wait up to 9 ticks (0.9 s)" in got.output
+    assert "  R2: holds" in got.output  # the original deadline, proved
+    f = tmp_path / "r.fret"
+    f.write_text("R1: upon a sw shall within 2 ticks satisfy x\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x", "--margin", "3")
+    assert got.exit_code == 2 and "shorter than the margin of 3" in got.output, got.output

@@ -60,6 +60,10 @@ def _names(text: str | None) -> list[str] | None:
               "controller may still do under the shield.")
 @click.option("--name", default=None, help="The shield's name (default: the first file's "
               "stem).")
+@click.option("--margin", type=click.IntRange(min=0), default=0, show_default=True,
+              metavar="TICKS", help="Meet every 'within' deadline TICKS ticks early: on a "
+              "bus, a recorder or monitor ticking at another phase sees the shield's answers "
+              "up to a tick late (the ROS 2 node: --margin 1).")
 @click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_WORK, show_default=True,
               metavar="UNITS", help="Work units per game (as fretc check's).")
 @click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY), default=DEFAULT_MEMORY,
@@ -68,8 +72,8 @@ def _names(text: str | None) -> list[str] | None:
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                bindings_file: str | None, prefer: str | None, forms: tuple[str, ...],
-               out_dir: str | None, prove: bool, explain: bool, name: str | None, budget: int,
-               memory_budget: int) -> None:
+               out_dir: str | None, prove: bool, explain: bool, name: str | None,
+               margin: int, budget: int, memory_budget: int) -> None:
     """Synthesize the shield of requirement FILES: each tick it passes the controller's
     proposed outputs unchanged when they keep every requirement winnable, and otherwise
     changes the fewest outputs needed (the Safety System of Safe-ROS, generated)."""
@@ -77,7 +81,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.common.errors import FretcError
     from fretc.compiler.build import compile_entries
     from fretc.fretish.files import load_requirements
-    from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences
+    from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
@@ -107,7 +111,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
 
         bindings = load_bindings(bindings_file)
     try:
-        shield = build_shield(compiled, ins, outs, bindings=bindings,
+        shield = build_shield(with_margin(compiled, margin), ins, outs, bindings=bindings,
                               prefer=parse_preferences(prefer),
                               budget=Budget(work=budget, memory=memory_budget),
                               name=name or Path(files[0]).stem)
