@@ -34,7 +34,7 @@ from typing import Any
 
 from fretc.live.client import WATCH_HINT, MissingDependency
 from fretc.live.events import EventQueue
-from fretc.live.merge import MergeBuffer
+from fretc.live.merge import HOLD_SECONDS, MergeBuffer
 from fretc.live.ros2_names import advertisement, dds_topic, parse_url, ros_topic_of_dds, ros_type, \
     standard_store
 from fretc.live.zenoh_client import CLOCK_TOPIC, _clock_ns, _norm
@@ -84,7 +84,7 @@ class DdsClient:
     def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
                  types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),
                  config_file: str | None = None, events: EventQueue | None = None,
-                 **_ignored) -> None:
+                 merge_hold: float = HOLD_SECONDS, **_ignored) -> None:
         require_cyclonedds()
         self.url = parse_url(url)
         self.wanted = wanted
@@ -93,7 +93,7 @@ class DdsClient:
         self.store = standard_store(tuple(msg_path))
         self.config_file = config_file
         self.events: EventQueue = events if events is not None else EventQueue()
-        self._merge = MergeBuffer(self.events)
+        self._merge = MergeBuffer(self.events, merge_hold)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._pubs: dict[str, set] = {}  # topic -> publication keys alive

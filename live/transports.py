@@ -43,12 +43,13 @@ def make_client(options: WatchOptions, wanted: Callable[[str], bool],
         from fretc.live.zenoh_client import ZenohClient
 
         return ZenohClient(url, wanted, topics=topics, types=given,
-                           msg_path=options.msg_path, config_file=options.config)
+                           msg_path=options.msg_path, config_file=options.config,
+                           merge_hold=options.merge_hold)
     if url.startswith("dds://"):
         from fretc.live.dds_client import DdsClient
 
         return DdsClient(url, wanted, topics=topics, types=given, msg_path=options.msg_path,
-                         config_file=options.config)
+                         config_file=options.config, merge_hold=options.merge_hold)
     from fretc.live.client import FoxgloveClient, require_websockets
 
     require_websockets()

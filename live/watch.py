@@ -47,6 +47,7 @@ from fretc.audit.log import log_engine, summarize_clocks
 from fretc.audit.log_problems import collect_problems, problem_json
 from fretc.audit.operands import operand_values
 from fretc.audit.gaps import merged_gaps, split_bridged
+from fretc.live.merge import HOLD_SECONDS
 from fretc.audit.passes import ClockKey, ClockPass, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, run_gaps
@@ -89,6 +90,9 @@ class WatchOptions:
             (``--msg-path``); Foxglove WebSocket servers send their schemas.
         config: DDS: a Cyclone DDS XML configuration (``--dds-config``); Zenoh: a JSON5
             session configuration (``--zenoh-config``).
+        merge_hold: DDS, Zenoh: seconds each message is held to be merged into log-time
+            order with the other topics' (:mod:`fretc.live.merge`; ``--merge-hold``): the
+            latency a verdict gains, against out-of-order arrivals reported.
         restart_grace: seconds a bound topic's publisher has, once every bound topic was
             unadvertised, to advertise it again and continue the same run (a node restart);
             0 ends the run at once (``--restart-grace``).
@@ -106,6 +110,7 @@ class WatchOptions:
     restart_grace: float = RESTART_GRACE
     msg_path: tuple[str, ...] = ()
     config: str | None = None
+    merge_hold: float = HOLD_SECONDS
 
 
 # --------------------------------------------------------------------------- the engine

@@ -35,7 +35,7 @@ from typing import Any
 
 from fretc.live.client import WATCH_HINT, MissingDependency
 from fretc.live.events import EventQueue
-from fretc.live.merge import MergeBuffer
+from fretc.live.merge import HOLD_SECONDS, MergeBuffer
 from fretc.live.ros2_names import (LIVELINESS_PREFIX, advertisement, attachment_time, bridge_key,
                          parse_bridge_liveliness, parse_liveliness, parse_url, parse_zenoh_key,
                          standard_store, zenoh_topic_key)
@@ -95,7 +95,7 @@ class ZenohClient:
     def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
                  types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),
                  events: EventQueue | None = None, config_file: str | None = None,
-                 **_ignored) -> None:
+                 merge_hold: float = HOLD_SECONDS, **_ignored) -> None:
         require_zenoh()
         self.url = parse_url(url)
         self.wanted = wanted
@@ -113,7 +113,7 @@ class ZenohClient:
         self._decls: list = []
         self._stop = threading.Event()
         self._watcher: threading.Thread | None = None
-        self._merge = MergeBuffer(self.events)
+        self._merge = MergeBuffer(self.events, merge_hold)
 
     # -- thread control ----------------------------------------------------------------------
     def start(self) -> ZenohClient:

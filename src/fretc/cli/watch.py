@@ -180,6 +180,10 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
 @click.option("--dds-config", type=click.Path(exists=True, dir_okay=False), default=None,
               help="dds://: a Cyclone DDS XML configuration (network interfaces, peers, DDS "
                    "Security / SROS2) used instead of the default loopback-free one.")
+@click.option("--merge-hold", type=FiniteRange(0, 10), default=0.1, show_default=True,
+              metavar="SECONDS", help="dds://, zenoh://: hold each message this long to merge "
+              "the topics into log-time order (the latency a verdict gains; a message "
+              "overtaken by more is reported, clock_backwards).")
 @click.option("--zenoh-config", type=click.Path(exists=True, dir_okay=False), default=None,
               help="zenoh://: a Zenoh JSON5 session configuration (TLS, access control) read "
                    "before fretc sets peer mode and the endpoint.")
@@ -193,8 +197,8 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
               until_idle: float | None, restart_grace: float, allow_partial: bool,
               topic_types: dict[str, str], record: str | None, jsonl: bool, json_path: str | None,
               wait: float, connect_timeout: float | None, no_live: bool, dds_config: str | None,
-              zenoh_config: str | None, publish_diagnostics: bool, msg_path: tuple[str, ...] = ()
-             ) -> None:
+              zenoh_config: str | None, publish_diagnostics: bool, msg_path: tuple[str, ...] = (),
+              merge_hold: float = 0.1) -> None:
     """Watch a robot live (URL ws://host:8765: Foxglove WebSocket, e.g. foxglove_bridge;
     rosbridge://host:9090: rosbridge v2; dds://DOMAIN: the robot's DDS (Cyclone DDS);
     zenoh://host:7447: rmw_zenoh; zenoh://host:7447?layout=bridge: zenoh-bridge-ros2dds)
@@ -237,7 +241,8 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
                                      connect_timeout=connect_timeout, record=record,
                                      until_idle=until_idle, types=topic_types or None,
                                      restart_grace=restart_grace, msg_path=tuple(msg_path),
-                                     config=dds_config or zenoh_config),
+                                     config=dds_config or zenoh_config,
+                                     merge_hold=merge_hold),
                   on_event=on_event)
     except (AuditInputError, MissingDependency) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")

@@ -1,0 +1,188 @@
+"""fretc on a real ROS 2 graph (ROS 2 Jazzy's rclpy from PyPI, Fast DDS with its default
+transports), measured in one run.
+
+    python bench/bench_ros2.py [--events 1000] [--rates 100 1000 2000 5000] [--seconds 10]
+
+1. **The shield node's reaction.** The generated ROS 2 node of the Safe-ROS shield with R7
+   (``requirements/shield/stay_stopped.fret``: while too close, a stop at once) between a rclpy
+   driver and itself: the driver publishes ``/scan`` at 20 Hz, far and too close in turn, and
+   ``/cmd_vel`` at 0.4 m/s; for each scan that makes ``too_close`` true, the time from its
+   publication to the arrival of the first zero ``/cmd_vel_filtered`` after it (both clocks
+   the driver's: the node's processing and DDS both ways). p50/p99 over ``--events`` events.
+2. **fretc watch keeping up.** A rclpy publisher (its own process) sends
+   ``/gwendolen_control`` and ``/cmd_vel_filtered`` at each rate; ``fretc watch dds://D`` with
+   R3 and R4 (100 ms ticks) records what it reads; per rate: messages sent and read (none
+   dropped by fretc), and the latency from the message that closed a tick (its DDS source
+   time, the publisher's wall clock) to that tick's verdicts, p50/p99, with the default merge
+   hold (0.1 s, the latency the log-time ordering adds) and with ``--merge-hold 0.01``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+REQS = ROOT / "requirements"
+
+_PUBLISHER = r"""
+import sys, time, rclpy
+from std_msgs.msg import Bool
+from geometry_msgs.msg import Twist
+rate, seconds = float(sys.argv[1]), float(sys.argv[2])
+rclpy.init()
+n = rclpy.create_node("bench_talker")
+c = n.create_publisher(Bool, "/gwendolen_control", 100)
+f = n.create_publisher(Twist, "/cmd_vel_filtered", 100)
+time.sleep(2.0)
+sent, t0 = 0, time.monotonic()
+period = 1.0 / rate
+nxt = t0
+while time.monotonic() - t0 < seconds:
+    nxt += period
+    k = sent // 2
+    stop = (k // int(rate)) % 2 == 1
+    c.publish(Bool(data=stop))
+    tw = Twist(); tw.linear.x = 0.0 if stop else 0.3
+    f.publish(tw)
+    sent += 2
+    delay = nxt - time.monotonic()
+    if delay > 0:
+        time.sleep(delay)
+time.sleep(1.0)
+print(sent)
+"""
+
+
+def _pct(xs) -> str:
+    a = np.asarray(xs, dtype=float)
+    if not len(a):
+        return "no samples"
+    return f"p50 {np.percentile(a, 50):.2f} ms, p99 {np.percentile(a, 99):.2f} ms (n={len(a)})"
+
+
+def shield_reaction(events: int) -> None:
+    """Part 1."""
+    import rclpy
+    from geometry_msgs.msg import Twist
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import LaserScan
+
+    domain = random.randint(1, 99)
+    os.environ["ROS_DOMAIN_ID"] = str(domain)
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, "-m", "fretc", "shield", str(REQS / "safe_ros.fret"),
+                        str(REQS / "shield" / "stay_stopped.fret"), "-b",
+                        str(REQS / "safe_ros.bindings.toml"), "--inputs",
+                        "too_close,scan_stale,clearance", "--outputs",
+                        "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed",
+                        "--emit", "ros2", "-o", tmp], check=True, capture_output=True)
+        pkg = Path(tmp) / "safe_ros_shield_ros2"
+        node = subprocess.Popen([sys.executable, "-m", "safe_ros_shield_ros2"],
+                                env={**os.environ, "PYTHONPATH": str(pkg)},
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        rclpy.init()
+        n = rclpy.create_node("bench_driver")
+        be = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+        scan_pub = n.create_publisher(LaserScan, "/scan", be)
+        cmd_pub = n.create_publisher(Twist, "/cmd_vel", 10)
+        pending: list[int] = []
+        lat: list[float] = []
+
+        def heard(msg) -> None:
+            if msg.linear.x == 0.0 and pending:
+                lat.append((time.perf_counter_ns() - pending.pop()) / 1e6)
+                pending.clear()
+
+        n.create_subscription(Twist, "/cmd_vel_filtered", heard, 10)
+        time.sleep(3.0)
+        k, t0 = 0, time.monotonic()
+        nxt = t0
+        while len(lat) < events and time.monotonic() - t0 < events * 0.2 + 30:
+            if time.monotonic() >= nxt:
+                close = k % 2 == 1
+                tw = Twist()
+                tw.linear.x = 0.4
+                cmd_pub.publish(tw)
+                s = LaserScan(range_min=0.1, range_max=10.0, ranges=[0.5 if close else 3.0] * 8)
+                if close:
+                    pending[:] = [time.perf_counter_ns()]
+                scan_pub.publish(s)
+                k += 1
+                nxt += 0.05
+            rclpy.spin_once(n, timeout_sec=0.001)
+        node.terminate()
+        node.wait(10)
+        n.destroy_node()
+        rclpy.shutdown()
+    print(f"1. shield node reaction (/scan too close -> zero /cmd_vel_filtered, Fast DDS both "
+          f"ways): {_pct(lat)}")
+
+
+def watch_rate(rate: float, seconds: float, hold: float) -> tuple[int, int, list[float]]:
+    """Part 2 at one rate: (sent, read, closing message -> verdict latencies in ms)."""
+    from fretc.audit import AuditConfig, load_plan
+    from fretc.live.watch import Watch, WatchOptions
+
+    domain = random.randint(1, 99)
+    with tempfile.TemporaryDirectory() as tmp:
+        req = Path(tmp) / "r.fret"
+        req.write_text("@tick_period 100 ms\n"
+                       "R3: whenever stop_requested cmd_vel_interceptor shall immediately "
+                       "satisfy forwarded_zero\n"
+                       "R4: the scout_mini shall always satisfy linear_speed <= 0.5 & "
+                       "angular_speed <= 0.5\n")
+        plan = load_plan(AuditConfig(requirements=[str(req)],
+                                     bindings=[str(REQS / "safe_ros.bindings.toml")]))
+        pub = subprocess.Popen([sys.executable, "-c", _PUBLISHER, str(rate), str(seconds)],
+                               env={**os.environ, "ROS_DOMAIN_ID": str(domain)},
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        rec = str(Path(tmp) / "rec.mcap")
+        w = Watch(plan, WatchOptions(url=f"dds://{domain}", duration=seconds + 5, wait=10,
+                                     record=rec, merge_hold=hold))
+        ticks: list[float] = []
+        w.on_tick = lambda i, t, dep, closing: ticks.append((time.time_ns() - closing) / 1e6)
+        th = threading.Thread(target=w.run, daemon=True)
+        th.start()
+        out, _ = pub.communicate(timeout=seconds + 60)
+        th.join(seconds + 60)
+        from mcap.reader import make_reader
+
+        with open(rec, "rb") as fh:
+            read = sum(1 for _s, ch, _m in make_reader(fh).iter_messages()
+                       if ch.topic in ("/gwendolen_control", "/cmd_vel_filtered"))
+        return int(out.strip().splitlines()[-1]), read, ticks
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--events", type=int, default=1000)
+    ap.add_argument("--rates", type=float, nargs="+", default=[100, 1000, 2000, 5000])
+    ap.add_argument("--seconds", type=float, default=10)
+    args = ap.parse_args()
+    try:
+        import rclpy  # noqa: F401
+    except ImportError:
+        print("ROS 2 Jazzy's rclpy is not installed: pip install -e '.[test]'")
+        return 2
+    shield_reaction(args.events)
+    for hold in (0.1, 0.01):
+        for rate in args.rates:
+            sent, read, lat = watch_rate(rate, args.seconds, hold)
+            print(f"2. fretc watch dds:// at {rate:g} Hz (2 topics, merge hold {hold:g} s): "
+                  f"{sent} sent, {read} read ({sent - read} not read); closing message -> "
+                  f"verdict {_pct(lat)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
