@@ -202,3 +202,51 @@ def test_the_shield_node_in_a_real_graph_keeps_r2_and_r3(tmp_path, shielded):
         assert got["R6"][0] == "satisfied", got
     else:
         assert got["R2"][0] == "violated" and got["R3"][0] == "violated", got
+
+
+@pytest.fixture()
+def two_hosts():
+    """Two network namespaces joined by a veth pair (10.77.x.1 and .2, multicast on): two
+    hosts of one network, for what crosses it; skipped where they cannot be made."""
+    import shutil
+
+    if shutil.which("ip") is None or os.geteuid() != 0:
+        pytest.skip("two network namespaces need root and iproute2's ip")
+    tag = f"{os.getpid() % 10000}"
+    a, b, sub = f"fretc_a{tag}", f"fretc_b{tag}", 10 + os.getpid() % 200
+    cmds = [["ip", "netns", "add", a], ["ip", "netns", "add", b],
+            ["ip", "link", "add", f"va{tag}", "type", "veth", "peer", "name", f"vb{tag}"],
+            ["ip", "link", "set", f"va{tag}", "netns", a],
+            ["ip", "link", "set", f"vb{tag}", "netns", b],
+            ["ip", "-n", a, "addr", "add", f"10.77.{sub}.1/24", "dev", f"va{tag}"],
+            ["ip", "-n", b, "addr", "add", f"10.77.{sub}.2/24", "dev", f"vb{tag}"]]
+    for ns, dev in ((a, f"va{tag}"), (b, f"vb{tag}")):
+        cmds += [["ip", "-n", ns, "link", "set", "lo", "up"],
+                 ["ip", "-n", ns, "link", "set", dev, "up", "multicast", "on"],
+                 ["ip", "-n", ns, "route", "add", "224.0.0.0/4", "dev", dev]]
+    try:
+        for c in cmds:
+            got = subprocess.run(c, capture_output=True, text=True)
+            if got.returncode != 0:
+                pytest.skip(f"network namespaces cannot be made here: {got.stderr.strip()}")
+        yield a, b
+    finally:
+        for ns in (a, b):
+            subprocess.run(["ip", "netns", "del", ns], capture_output=True)
+
+
+def test_a_default_rclpy_talker_on_another_host_is_watched(tmp_path, two_hosts):
+    a, b = two_hosts
+    d = _domain()
+    req, bnd = _files(tmp_path, REQ34)
+    talker = subprocess.Popen(["ip", "netns", "exec", a, sys.executable, PEERS, "talker", "7"],
+                              env={**os.environ, "ROS_DOMAIN_ID": str(d)},
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    out = tmp_path / "watch.json"
+    watch = subprocess.run(["ip", "netns", "exec", b, sys.executable, "-m", "fretc", "watch",
+                            f"dds://{d}", "-r", req, "-b", bnd, "--duration", "8", "--json",
+                            str(out)], capture_output=True, text=True, timeout=90, cwd=ROOT)
+    talker.wait(30)
+    assert out.exists(), watch.stderr[-2000:]
+    got = _verdicts(json.loads(out.read_text()))
+    assert got["R3"][0] == "violated" and got["R4"][0] == "satisfied", (got, watch.stdout)
