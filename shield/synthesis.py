@@ -76,6 +76,7 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         # safe first: its nodes are the table's first (the correction's shortest path reads
         # only them, :mod:`fretc.shield.runtime`)
         roots = [table.add(f) for f in [safe, *nexts, *keeps, game.env_ok]]
+        _self_check(b, varmap, table, [safe, *nexts, *keeps, game.env_ok], roots)
         return {"realizable": True,
                 "atoms": [(a, True) for a in ins] + [(a, False) for a in outs],
                 "init": [bool(bit[2]) for bit in m.bits], "nodes": table.nodes,
@@ -88,6 +89,34 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
                           "table_nodes": len(table.nodes)}}
     finally:
         game.close()
+
+
+#: random full assignments at which every exported root is compared with BuDDy's BDD
+SELF_CHECKS = 256
+
+
+def _self_check(b: Any, varmap: dict[int, int], table: _Table, bdds: list[Any],
+                roots: list[int]) -> None:
+    """Compare each exported root with its BuDDy BDD at :data:`SELF_CHECKS` random full
+    assignments (a fixed seed): the table every form runs is the BDD the game computed, or
+    RuntimeError (a defect of fretc, never a shield that differs silently)."""
+    import random
+
+    from fretc.shield.machine import evaluate
+
+    rnd = random.Random(0)
+    order = sorted(varmap)
+    for _ in range(SELF_CHECKS):
+        bits = {v: rnd.random() < 0.5 for v in order}
+        cube = b.bddtrue
+        values = [0] * len(order)
+        for v, on in bits.items():
+            cube = b.bdd_and(cube, b.bdd_ithvar(v) if on else b.bdd_nithvar(v))
+            values[varmap[v]] = int(on)
+        for f, root in zip(bdds, roots):
+            want = b.bdd_restrict(f, cube) == b.bddtrue
+            if evaluate(table.nodes, root, values) != want:
+                raise RuntimeError("the exported node table differs from the game's BDD")
 
 
 def _attractor(game: Game, ok: Any, meter: Meter) -> Any:

@@ -81,3 +81,27 @@ def test_the_closed_loop_of_every_shield_is_proved(text):
     assert not proof.blocking
     assert all(v in ("holds", "unknown") for v in proof.results.values()), proof.text()
     assert set(proof.results) == {r.id for r in shield.requirements}
+
+
+def test_a_table_that_differs_from_the_games_bdd_is_never_exported(monkeypatch, tmp_path):
+    # the synthesis compares every exported root with BuDDy's BDD: a corrupted copy (one
+    # node's branches swapped) is an internal error, not a shield
+    from fretc.shield import synthesis
+
+    real_add = synthesis._Table.add
+    done = []
+
+    def corrupt(self, f):
+        got = real_add(self, f)
+        if len(self.nodes) > 2 and not done:
+            done.append(1)
+            var, lo, hi = self.nodes[2]
+            self.nodes[2] = (var, hi, lo)
+        return got
+
+    monkeypatch.setattr(synthesis._Table, "add", corrupt)
+    compiled = compile_text("R1: whenever a sw shall immediately satisfy x\n", tmp_path)
+    import pytest
+
+    with pytest.raises(RuntimeError, match="differs from the game's BDD"):
+        build(compiled)
