@@ -192,6 +192,8 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     ans = worker.ask(("call", synthesize, (pts, p.inputs, comp.env_inv, comp.ctl_inv)))
     if ans == UNKNOWN:
         why = worker.failures[-1] if worker.failures else "no reason given"
+        if why.startswith("RuntimeError:"):  # a defect of the synthesis, not a budget
+            raise RuntimeError(why[len("RuntimeError:"):].strip())
         raise ShieldUnknown(f"the shield of {', '.join(comp.ids)} could not be synthesized: "
                             f"{why} (raise --budget or --memory-budget)")
     if not ans["realizable"]:
