@@ -119,6 +119,18 @@ def open_participant(domain: int, config_file: str | None = None) -> Any:  # a D
 READER_DEPTH = 20_000
 
 
+def _policy(qos: Any, policy: Any) -> str | None:
+    """The text of ``qos``'s ``policy`` (``"Policy.Reliability.BestEffort"``), None when the
+    QoS (a ``cyclonedds.qos.Qos`` read from a publication) does not give it. Qos objects are
+    indexed by policy type; they have no attribute per policy."""
+    if qos is None:
+        return None
+    try:
+        return str(qos[policy])
+    except (KeyError, TypeError, IndexError):
+        return None
+
+
 def reader_qos(offered: Any = None, topic: str = "") -> Any:  # cyclonedds Qos
     """The QoS a ROS 2 subscription to a publisher offering ``offered`` (a
     ``cyclonedds.qos.Qos``, or None) would use so as to match it: reliable when offered
@@ -127,11 +139,10 @@ def reader_qos(offered: Any = None, topic: str = "") -> Any:  # cyclonedds Qos
     samples; member names ignored in matching types (module docstring)."""
     from cyclonedds.qos import Policy, Qos
 
-    rel = getattr(offered, "reliability", None) if offered is not None else None
-    dur = getattr(offered, "durability", None) if offered is not None else None
-    reliable = rel is None or "Reliable" in type(rel).__name__
-    transient = topic == "/tf_static" or (dur is not None and "Volatile" not in
-                                          type(dur).__name__)
+    rel = _policy(offered, Policy.Reliability)
+    dur = _policy(offered, Policy.Durability)
+    reliable = rel is None or "BestEffort" not in rel
+    transient = topic == "/tf_static" or (dur is not None and "Volatile" not in dur)
     return Qos(Policy.Reliability.Reliable(max_blocking_time=100_000_000) if reliable
                else Policy.Reliability.BestEffort,
                Policy.Durability.TransientLocal if transient else Policy.Durability.Volatile,

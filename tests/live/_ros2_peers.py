@@ -6,8 +6,8 @@ on its default middleware (Fast DDS, default transports); nothing here imports f
 Roles:
 
 * ``talker``: ``/gwendolen_control`` (std_msgs/Bool) and ``/cmd_vel_filtered``
-  (geometry_msgs/Twist) at 10 Hz, reliable; a stop requested from 2 s to 4 s, during which
-  one command (at 3 s) is not zero; ``/scan`` (sensor_msgs/LaserScan, best effort, header
+  (geometry_msgs/Twist) at 10 Hz, reliable; a stop requested from 4 s to 6 s, during which
+  one command (at 5 s) is not zero; ``/scan`` (sensor_msgs/LaserScan, best effort, header
   stamps) and a latched ``/map`` (nav_msgs/OccupancyGrid, transient local) once.
 * ``listen``: subscribes ``/scan``, ``/cmd_vel_filtered``, ``/gwendolen_control``,
   ``/diagnostics`` and writes each message received as a JSON line to OUT (topic, receipt
@@ -72,10 +72,10 @@ def talker(seconds: float, _out: str) -> None:
     time.sleep(1.0)  # discovery
 
     def step(k: int) -> None:
-        stop = 20 <= k < 40
+        stop = 40 <= k < 60
         c.publish(Bool(data=stop))
         tw = Twist()
-        tw.linear.x = 0.3 if (not stop or k == 30) else 0.0
+        tw.linear.x = 0.3 if (not stop or k == 50) else 0.0
         f.publish(tw)
         scan = LaserScan(range_min=0.1, range_max=10.0, ranges=[2.0] * 8)
         scan.header.stamp = n.get_clock().now().to_msg()

@@ -83,3 +83,20 @@ def test_a_publisher_naming_members_without_the_underscore_is_read(tmp_path, dds
     assert log["messages"] == {"/a": 15}, res.output
     assert log["verdicts"][0]["verdict"] == "violated"
     assert res.exit_code == 1, res.output
+
+
+def test_the_reader_takes_the_offered_reliability_and_durability():
+    # a publication's QoS read from DCPSPublication is a cyclonedds Qos indexed by policy
+    # (it has no attribute per policy): best effort and transient local as offered
+    from cyclonedds.qos import Policy, Qos
+
+    from fretc.live.dds_types import reader_qos
+
+    offered = Qos(Policy.Reliability.BestEffort, Policy.Durability.TransientLocal)
+    got = [str(p) for p in reader_qos(offered, "/map")]
+    assert "Policy.Reliability.BestEffort" in got and "Policy.Durability.TransientLocal" in got
+    got = [str(p) for p in reader_qos(Qos(Policy.Durability.Volatile), "/scan")]
+    assert any(p.startswith("Policy.Reliability.Reliable") for p in got)
+    assert "Policy.Durability.Volatile" in got
+    got = [str(p) for p in reader_qos(None, "/tf_static")]
+    assert "Policy.Durability.TransientLocal" in got

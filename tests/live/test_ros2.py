@@ -89,17 +89,25 @@ def _watch_and_audit(tmp_path: Path, req: str, b: str, domain: int, seconds: flo
 
 
 def test_a_default_rclpy_talker_is_watched_with_the_audits_verdicts(tmp_path):
+    # R3 and R4 over reliable topics; M1 over the latched /map (transient local: published
+    # before the watch joins) and S1 over the best-effort /scan, stamped
     d = _domain()
-    req, b = _files(tmp_path, REQ34)
-    talker = _peer("talker", 7, d)
+    bindings = (ROOT / "requirements" / "safe_ros.bindings.toml").read_text().replace(
+        "[variables]\n", '[variables]\nmap_ok = "/map.info.width = 2"\n'
+        'scan_ok = "min(/scan.ranges) > 1.5"\n', 1)
+    req, b = _files(tmp_path, REQ34 + "M1: the mapper shall always satisfy map_ok\n"
+                    "S1: the lidar shall always satisfy scan_ok\n", bindings)
+    talker = _peer("talker", 9, d)
+    time.sleep(3)  # the map is out before the watch joins
     try:
-        live, audit, watch = _watch_and_audit(tmp_path, req, b, d, 8)
+        live, audit, watch = _watch_and_audit(tmp_path, req, b, d, 6)
     finally:
         talker.wait(30)
     assert "never published" not in watch.stdout, watch.stdout
     got, want = _verdicts(live), _verdicts(audit)
     assert got == want, (got, want)
     assert got["R3"][0] == "violated" and got["R4"][0] == "satisfied", got
+    assert got["M1"][0] == "satisfied" and got["S1"][0] == "satisfied", got
 
 
 def test_replay_serve_is_read_by_rclpy_with_its_types_and_stamps(tmp_path):
