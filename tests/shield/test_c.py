@@ -112,3 +112,18 @@ def test_preferences_break_ties_alike_in_c_and_python(tmp_path, prefer):
         assert d.outputs["y"] and not d.outputs["x"]
     if needs_cc():
         _same(shield, rows, run_c(shield, rows, tmp_path / "c"))
+
+
+def test_a_shield_that_enforces_nothing_still_builds_and_runs(tmp_path):
+    # every requirement over inputs only: no machine, no output field; the C form builds
+    # with the strict flags and passes every tick
+    needs_cc()
+    shield = build_shield(compile_text("R1: the sw shall always satisfy a\n", tmp_path))
+    assert not shield.machines and list(shield.monitored) == ["R1"]
+    write(render_c(shield, "e"), tmp_path / "c")
+    exe = build(tmp_path / "c", ["e_shield.c", "e_shield_run.c"], "run")
+    got = subprocess.run([str(exe)], input=",".join(INPUTS + OUTPUTS) + "\n"
+                         "true,false,false,false,false,0.0\n", capture_output=True, text=True,
+                         timeout=60)
+    assert got.returncode == 0 and got.stdout.splitlines() == ["tick,overridden,reasons",
+                                                               "0,0,"], got
