@@ -1,7 +1,7 @@
 """Messages between ticks, for the block sampler (:mod:`fretc.signals.blocks`): the windows of
 messages each tick of a clock folds for its aggregated bindings (``any_of_messages`` ...,
-docs/bindings.md "Events between ticks"), their folded values, and the closing tick that
-folds the messages after the last grid tick. The tick-by-tick clock
+docs/bindings.md "Events between ticks"), their folded values, and the changes of plain
+boolean bindings on messages no tick held. The tick-by-tick clock
 (:class:`fretc.signals.clock.Clock`) folds the same windows message by message (tested equal).
 
 ``c`` below is a block clock (``signals.blocks._Group``): ``window_start`` (topic -> number
@@ -81,25 +81,8 @@ def missed_changes(variables: list[Binding], stream: Any, topic: str, starts: np
         if n:
             out[b.name] = out.get(b.name, 0) + n
 
-__all__ = ["folded_topics", "closing_end", "windows_of", "folded", "is_boolean", "single_topic",
+__all__ = ["folded_topics", "windows_of", "folded", "is_boolean", "single_topic",
            "missed_changes"]
-
-
-def closing_end(c: Any, last: int) -> int:
-    """Where the grid of a clock with aggregated bindings ends at the end of the log: one
-    tick past the last message when a folded topic has messages after the last grid tick at
-    or before ``last`` (their fold is that closing tick's value, as
-    :meth:`fretc.signals.clock.Clock.finish`); else ``last + 1``."""
-    assert c.next_grid is not None and c.period is not None
-    if c.next_grid <= last:
-        grid = c.next_grid + ((last - c.next_grid) // c.period) * c.period
-    else:
-        grid = c.next_grid - c.period
-    tails = [c.stream.buffers[t].times[-1] for t in c.window_start
-             if c.stream.buffers[t].times]
-    if tails and max(tails) > grid:
-        return grid + c.period + 1
-    return last + 1
 
 
 def windows_of(c: Any, times: np.ndarray, warm: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:

@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from fretc.signals.bindings.binding import Binding
-from fretc.signals.between_ticks import closing_end, folded, missed_changes, windows_of
+from fretc.signals.between_ticks import folded, missed_changes, windows_of
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
@@ -30,7 +30,7 @@ from fretc.common.streams import log_topics
 from fretc.signals.streams import Streams
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
-from fretc.signals.bindings.spec import grid_start
+from fretc.signals.bindings.spec import grid_end, grid_start
 from fretc.signals.windows import message_value, sliding_windows, window_block
 from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
@@ -317,8 +317,9 @@ def _evaluate_all(g: GroupSampling, clocks: dict[Any, _Group], final: bool
 
 
 def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
-    """The blocks of ``c``'s ticks before the newest message of its own topics (all of them
-    when ``final``)."""
+    """The blocks of ``c``'s ticks before the newest message of its own topics (when
+    ``final``, all of them: to the first grid tick at or after the last message,
+    :func:`~fretc.signals.bindings.spec.grid_end`)."""
     bufs = [c.stream.buffers[t] for t in c.own]
     lasts = [b.times[-1] for b in bufs if b.times]
     if not lasts:
@@ -328,9 +329,7 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
         if c.period is not None:
             if c.next_grid is None:
                 c.next_grid = grid_start(min(b.times[0] for b in bufs if b.times), c.period)
-            end = last + 1 if final else last
-            if final and c.window_start:
-                end = max(end, closing_end(c, last))
+            end = grid_end(last, c.period) + 1 if final else last
             due = 0 if c.next_grid >= end else -(-(end - c.next_grid) // c.period)
             if c.index + c.sampling.warmup_ticks + due > MAX_TICKS:
                 raise SignalError(

@@ -20,7 +20,7 @@ from fretc.signals.between_ticks import folded_topics, single_topic
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
-from fretc.signals.bindings.spec import Bindings, TickSpec, grid_start
+from fretc.signals.bindings.spec import Bindings, TickSpec, grid_end, grid_start
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import one_clock
 from fretc.signals.windows import push_message, sliding_windows, windows_complete
@@ -258,7 +258,7 @@ class Clock:
     """The ticks of one group of variables on the clock of its own topics (module docstring):
     the grid (:func:`grid_start`) starts at or after the first message of ``topics`` (or
     the tick topic's messages), the warm-up waits for every one of ``required``, and the
-    grid ends at their last message.
+    grid ends at or after their last message (:func:`grid_end`).
 
     Messages are pushed in non-decreasing time (:meth:`push`); ticks come back as lists.
     With ``keep_going``, a variable whose evaluation fails is dropped (its error kept in
@@ -452,14 +452,8 @@ class Clock:
         if self.last is not None:
             if self.period is not None:
                 assert self.next_grid is not None
-                while self.next_grid <= self.last:
-                    tick = self._emit(self.next_grid)
-                    self.next_grid += self.period
-                    if tick is not None:
-                        out.append(tick)
-                if any(self.window.values()):
-                    # messages folded by an aggregation after the last tick: one closing tick
-                    # on the grid, so an event in the last period is never lost
+                end = grid_end(self.last, self.period)  # every message is held by a tick
+                while self.next_grid <= end:
                     tick = self._emit(self.next_grid)
                     self.next_grid += self.period
                     if tick is not None:

@@ -260,13 +260,13 @@ def held(log: RobotLog, topic: str, t: int) -> Any:
 def ticks(log: RobotLog, topics: list[str], period: int = 100 * MS) -> list[int]:
     """The evaluated ticks of a requirement reading ``topics`` on a fixed period (the tick
     rules of docs/guide/ticks.md, restated): the multiples of ``period`` from the first at or
-    after the first message of those topics up to their last message, skipping the ticks
-    before each topic has one."""
+    after the first message of those topics to the first at or after their last message,
+    skipping the ticks before each topic has one."""
     first = min(log.data[t][0][0] for t in topics)
     last = max(log.data[t][-1][0] for t in topics)
     ready = max(log.data[t][0][0] for t in topics)
     out, t = [], -(-first // period) * period
-    while t <= last:
+    while t < last + period:
         if t >= ready:
             out.append(t)
         t += period

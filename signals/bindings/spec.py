@@ -13,7 +13,7 @@ from fretc.common.units import NS_PER_S
 from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
-           "Bindings", "make_bindings", "grid_start"]
+           "Bindings", "make_bindings", "grid_start", "grid_end"]
 
 #: The time bases of ``[tick] time``: ``log`` (the log's own time of each message),
 #: ``header`` (every bound message's ``header.stamp``; a message without one is an error),
@@ -225,3 +225,12 @@ def grid_start(first: int, period: int) -> int:
     message read happens to lie: a lost first message (a gap) cannot shift the grid, and
     clocks of one period share it (docs/guide/ticks.md, "The tick grid")."""
     return -(-first // period) * period
+
+
+def grid_end(last: int, period: int) -> int:
+    """The last tick of a fixed-period clock whose last message is at ``last`` (ns): the
+    first multiple of ``period`` at or after it, as :func:`grid_start` is for the first
+    message. Every message of the clock's topics is then held by a tick or counted as
+    unsampled: the last message of a run is judged (docs/guide/ticks.md, "The tick
+    grid")."""
+    return -(-last // period) * period

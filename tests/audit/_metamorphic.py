@@ -311,3 +311,29 @@ __all__ = ["Case", "shipped_cases", "real_cases", "foreign_logs", "conformance_l
            "generated_set", "generated_case", "write", "audit", "verdicts", "lines",
            "alone_files",
            "header", "reversed_bindings", "corrupt_chunk", "rechunked", "flip"]
+
+
+# --------------------------------------------------------------------------- the watch's clock
+def tick_by_tick(source, bindings, groups):
+    """:func:`fretc.signals.sample_blocks`'s result computed by the tick-by-tick clock of
+    ``fretc watch`` (:func:`fretc.signals.sample_groups`), one tick a block: patched into
+    the audit's passes, it audits a log on the watch's sampling."""
+    import numpy as np
+
+    from fretc.signals import sample_groups
+    from fretc.signals.blocks import TickBlock
+
+    g = sample_groups(source, bindings, groups)
+    g.per_tick = {key: set() for key in groups}
+    ticks, count = g._iter, {}
+
+    def blocks():
+        for key, tick in ticks:
+            i = count[key] = count.get(key, -1) + 1
+            values = {n: np.array([v], dtype=np.bool_ if type(v) is bool else np.float64)
+                      for n, v in tick.values.items()}
+            log_times = {t: np.array([lt], dtype=np.int64) for t, lt in tick.log_times.items()}
+            yield key, TickBlock(i, np.array([tick.time], dtype=np.int64), values, log_times)
+
+    g._iter = blocks()
+    return g

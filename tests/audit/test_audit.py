@@ -325,9 +325,11 @@ def test_synthetic_log_baseline(tmp_path):
     assert [v[r].verdict for r in ("A1", "A2", "A3")] == ["satisfied"] * 3
     assert not la.partial and not la.problems
     # A1 (/scan, /cmd): /cmd starts 10 ms late, the grid (multiples of 100 ms) at 0: one
-    # warm-up tick; A2 (/cmd alone) starts at the first multiple after its first message
-    assert (v["A1"].ticks_evaluated, v["A1"].warmup_ticks) == (199, 1)
-    assert (v["A2"].ticks_evaluated, v["A2"].warmup_ticks) == (199, 0)
+    # warm-up tick; A2 (/cmd alone) starts at the first multiple after its first message;
+    # both end at the first multiple at or after the last /cmd (19.91 s): 20 s
+    assert (v["A1"].ticks_evaluated, v["A1"].warmup_ticks) == (200, 1)
+    assert (v["A2"].ticks_evaluated, v["A2"].warmup_ticks) == (200, 0)
+    assert v["A1"].last_tick_ns == v["A2"].last_tick_ns == 20_000 * MS
     assert v["A2"].first_tick_ns == v["A1"].first_tick_ns
     assert la.messages == {"/cmd": 200, "/flag": 200, "/scan": 200}
 
@@ -388,7 +390,7 @@ def test_unknown_schema_is_an_error_for_that_topic_only(tmp_path):
     assert v["A3"].verdict == "error" and "/flag" in v["A3"].error
     assert v["A1"].verdict == "satisfied" and v["A2"].verdict == "satisfied"
     assert any(p["kind"] == "unknown_schema" and p["topic"] == "/flag" for p in la.problems)
-    assert v["A1"].ticks_evaluated == 199 and v["A2"].ticks_evaluated == 199
+    assert v["A1"].ticks_evaluated == 200 and v["A2"].ticks_evaluated == 200  # to 20 s
 
 
 def test_missing_topic_and_binding_are_errors_of_the_requirement(tmp_path):
@@ -428,10 +430,10 @@ def test_warm_up_ticks_are_not_evaluated_and_reported(tmp_path):
     la = audit_log(_plan(tmp_path / "syn.fret"), str(tmp_path / "late.mcap"))
     v = _by_req(la)
     assert v["A1"].warmup_ticks == 11 and v["A1"].waiting_for == ["/cmd"]
-    assert v["A1"].ticks_evaluated == 39
+    assert v["A1"].ticks_evaluated == 40  # 1.1 s to 5 s, the first multiple after 4.901 s
     assert (v["A1"].first_tick_ns - la.start_time_ns) == 1100 * MS
     # /cmd's own clock: from the first multiple of 100 ms after its first message (1.001 s)
-    assert v["A2"].warmup_ticks == 0 and v["A2"].ticks_evaluated == 39
+    assert v["A2"].warmup_ticks == 0 and v["A2"].ticks_evaluated == 40
     assert la.warmup_ticks == 11 and la.waiting_for == ["/cmd"]
 
 

@@ -20,7 +20,12 @@ each comparing the whole per-requirement JSON (``log`` and ``source`` aside):
    the whole decides before the gap;
 6. a corrupted chunk elsewhere never turns a violation into anything else;
 7. ``fretc watch`` over a replay = ``fretc audit`` (tests/live/test_watch.py, on the shipped
-   runs).
+   runs);
+8. the audit on the tick-by-tick clock of ``fretc watch`` (:func:`fretc.signals.sample_groups`)
+   = the audit on its block sampler: the same ticks, the last one included (the first grid
+   tick at or after the last message, docs/guide/ticks.md), and the same verdicts;
+9. the audit of the CSV that ``--write-csv`` writes of a log gives each requirement whose
+   clock is the file's the log's verdict, ticks and LTL3 verdict.
 
 The default run takes a bounded sample (a shipped run, a real log, a flight log, a foreign
 bag; a few hypothesis examples); ``-m slow`` sweeps every log.
@@ -241,6 +246,48 @@ def test_a_violation_after_a_corrupted_chunk_is_violated(tmp_path):
         whole["RV"]["first_violation"]["tick_time_ns"] == S + 240 * S // 10
     assert got["RW"]["verdict"] == "unknown" and "chunk" in got["RW"]["unknown_reason"]
     assert got["RW"]["unknown_ticks"] > 0
+
+
+# --------------------------------------------------------------------------- 8, 9
+def check_watch_clock_and_csv(case: M.Case, tmp: Path, monkeypatch) -> None:
+    """Relations 8 and 9 on one case."""
+    import fretc.audit.passes as passes
+    from fretc.audit import AuditConfig, audit_log, load_plan
+    from fretc.audit.sampled_csv import clock_notes, write_sampled_csv
+
+    fret = M.write(tmp / "r", case)
+    plan = load_plan(AuditConfig(requirements=(str(fret),)))
+    la = audit_log(plan, str(case.log))
+    whole = M.verdicts(la.to_json())
+    with monkeypatch.context() as m:
+        m.setattr(passes, "sample_blocks", M.tick_by_tick)
+        _same(M.verdicts(M.audit(fret, case.log)), whole, f"{case.id}: the watch's clock")
+    try:
+        got = write_sampled_csv(plan, str(case.log), tmp / "s.csv")
+    except ValueError:
+        return  # no bound variable to write
+    other = {n.split(":", 1)[0] for n in clock_notes(la, *got)}
+    csv = M.verdicts(M.audit(fret, tmp / "s.csv"))
+    def seen(v: dict) -> dict:  # time_s counts from the log's start, not the file's
+        ltl3 = {k: x for k, x in (v["ltl3"] or {}).items() if k != "time_s"}
+        return {"ltl3": ltl3, **{k: v[k] for k in ("verdict", "ticks_evaluated",
+                                                   "first_tick_ns", "last_tick_ns")}}
+
+    for rid, v in whole.items():
+        if rid not in other and v["verdict"] != "error":
+            assert seen(csv[rid]) == seen(v), f"{case.id}: {rid} on its sampled CSV"
+
+
+@pytest.mark.parametrize("case", SAMPLE)
+def test_the_watch_clock_and_the_sampled_csv_give_the_audit(case, tmp_path, monkeypatch):
+    check_watch_clock_and_csv(_case(case), tmp_path, monkeypatch)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ALL)
+def test_the_watch_clock_and_the_sampled_csv_give_the_audit_on_every_log(case, tmp_path,
+                                                                         monkeypatch):
+    check_watch_clock_and_csv(_case(case), tmp_path, monkeypatch)
 
 
 # --------------------------------------------------------------------------- generation

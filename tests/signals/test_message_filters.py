@@ -73,12 +73,13 @@ def test_a_filter_after_the_topic_holds_the_newest_passing_message(tmp_path_fact
         assert ticks == []  # before any passing message the bindings wait (warm-up)
         return
     # messages that fail the filters are as if not published: the grid runs from the first
-    # passing message to the last; warm-up until every stream has passed one and the window
-    # lies after the first
+    # passing message to the last (the first multiples at or after them); warm-up until
+    # every stream has passed one and the window lies after the first
     first, last = min(px[0][0], py[0][0]), max(px[-1][0], py[-1][0])
     ready = max(px[0][0], py[0][0], px[0][0] + span)
     start = -(-first // period) * period  # the first multiple of the period from the first
-    grid = [start + i * period for i in range((last - start) // period + 1)]
+    end = -(-last // period) * period  # and from the last
+    grid = list(range(start, end + 1, period))
     assert [t.time / MS for t in ticks] == [g for g in grid if g >= ready]
     for tk in ticks:
         now = tk.time / MS

@@ -213,7 +213,8 @@ def test_real_mcap_bindings_against_numpy():
             per[ch.topic][2].append(d.twist.angular.z)
     t0 = min(v[0][0] for v in per.values())
     t1 = max(v[0][-1] for v in per.values())
-    t0 = -(-t0 // (50 * MS)) * (50 * MS)  # the grid: multiples of the period
+    t0 = -(-t0 // (50 * MS)) * (50 * MS)  # the grid: multiples of the period, from the
+    t1 = -(-t1 // (50 * MS)) * (50 * MS)  # first at or after the first message to the last
     grid = np.arange(t0, t1 + 1, 50 * MS, dtype=np.int64)
     idx = {k: np.searchsorted(np.array(v[0]), grid, side="right") - 1 for k, v in per.items()}
     ok = (idx["/vehicle/cmd_vel"] >= 0) & (idx["/scaled/cmd_vel"] >= 0)

@@ -69,12 +69,12 @@ def test_count_ticks_equals_pandas_rolling_over_the_ticks(tmp_path_factory, a, b
     bindings = make_bindings({"n": f"count_ticks(/a.data > 0 & /b.data > 0, {span} ms)"},
                              TickSpec(period_ns=period * MS))
     ticks, s = _both_clocks(path, bindings)
-    # the clock by hand: the grid from the first message to the last, evaluated once both
-    # topics have a message
+    # the clock by hand: the grid from the first multiple at or after the first message to
+    # the first at or after the last, evaluated once both topics have a message
     a_s, b_s = sorted(a, key=lambda m: m[0]), sorted(b, key=lambda m: m[0])
     first, last = min(a_s[0][0], b_s[0][0]), max(a_s[-1][0], b_s[-1][0])
-    start = -(-first // period) * period
-    grid = [t for t in range(start, last + 1, period)
+    start, end = -(-first // period) * period, -(-last // period) * period
+    grid = [t for t in range(start, end + 1, period)
             if _held(a_s, t) is not None and _held(b_s, t) is not None]
     if not grid:
         assert ticks == []
@@ -92,7 +92,7 @@ def test_count_ticks_equals_pandas_rolling_over_the_ticks(tmp_path_factory, a, b
     assert [t.time / MS for t in ticks] == [grid[i] for i in kept]
     got = np.array([t.values["n"] for t in ticks])
     assert np.array_equal(got, want[kept], equal_nan=True), (got, want[kept])
-    assert s.warmup_ticks == len(range(start, last + 1, period)) - len(kept)
+    assert s.warmup_ticks == len(range(start, end + 1, period)) - len(kept)
     assert s.ticks == len(kept)
     if kept:
         assert s.first_time == grid[kept[0]] * MS
