@@ -106,7 +106,8 @@ class CsvSource(LogSource):
             except csv.Error as exc:
                 raise CsvError(self.path, reader.line_num, f"malformed CSV: {exc}") from None
             except UnicodeDecodeError as exc:
-                raise CsvError(self.path, reader.line_num + 1, f"not UTF-8 text: {exc}") from None
+                line, what = _bad_utf8(self.path, exc)
+                raise CsvError(self.path, line, f"not UTF-8 text: {what}") from None
 
     def _first_line(self) -> str:
         with open(self.path, encoding="utf-8", errors="replace") as f:
@@ -215,3 +216,16 @@ def _csv_time(path: str, line: int, cell: str) -> int:
         return int((value * NS_PER_S).to_integral_value())
     except (InvalidOperation, ValueError):
         raise CsvError(path, line, f"time {cell!r} is not a number of seconds", column="time") from None
+
+
+def _bad_utf8(path: str, exc: UnicodeDecodeError) -> tuple[int, str]:
+    """The 1-based line of the first byte of ``path`` that is not UTF-8, and the error in
+    words naming the byte's column there (the text decoder reads ahead of the CSV reader,
+    so the reader's line number is not the byte's)."""
+    with open(path, "rb") as f:
+        for n, raw in enumerate(f, 1):
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError as e:
+                return n, f"byte 0x{raw[e.start]:02x} at column {e.start + 1}: {e.reason}"
+    return 1, str(exc)

@@ -189,3 +189,19 @@ def test_runner_input_errors(runner, tmp_path):
     (tmp_path / "missing.csv").write_text("too_close\ntrue\n")
     code, rows = _run(runner, tmp_path / "missing.csv")
     assert code == 2 and rows[0][:3] == ["R1", "error", "no column stopped"]
+
+
+@pytest.mark.parametrize("byte", [b"\x00", b"\x00\x00\x00", b"\xff\x00"])
+def test_runner_refuses_a_nul_byte_and_never_stops_at_it(random_runner, tmp_path, byte):
+    """A NUL byte in a trace is an error naming its line, exit 2, as fretc audit refuses the
+    file: the runner used to read it as the end of the file and judge the rows before it
+    (``satisfied``, exit 0, on rows that violate after it)."""
+    _folder, plan, exe = random_runner
+    path = tmp_path / "nul.csv"
+    path.write_bytes(b"m,p,q,x,y\nfalse,false,false,2,true\nfalse,false,false,2,true" + byte
+                     + b"\ntrue,false,false,2,false\ntrue,false,false,2,false\n")
+    la = audit_log(plan, str(path))
+    assert la.error is not None and re.match(rf"{re.escape(str(path))}:3\D", la.error), la.error
+    got = subprocess.run([str(exe), str(path)], capture_output=True, text=True)
+    assert got.returncode == 2 and f"{path}:3:" in got.stderr and "NUL" in got.stderr, got
+    assert got.stdout == ""
