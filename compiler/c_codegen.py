@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -317,40 +317,55 @@ class CUnit:
 
 def c_units(compiled: Sequence[Compiled], split: bool = False, automata: dict | None = None) -> list[CUnit]:
     """The header/source pairs of ``compiled`` (:func:`emit_c`'s, before rendering): per
-    requirement file one :class:`CUnit` (``split``: one per requirement)."""
+    requirement file one :class:`CUnit` (``split``: one per requirement).
+
+    Names are unique across the whole emission, made so deterministically (``_2``, ``_3``
+    ... in input order): file names whatever their case (``one/Safe.fret`` and
+    ``two/safe.fret``; a case-insensitive file system, and the include guards in upper
+    case), and every C identifier of every monitor (``a.fret``'s ``b_c`` and ``a_b.fret``'s
+    ``c`` would both be ``a_b_c``)."""
     groups: dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
     stems = file_stems(groups)
+    files: set[str] = {"runner"}  # file stems taken, case-folded (runner.c is the runner's)
+    idents: set[str] = set()  # identifiers taken by the monitors so far
     units: list[CUnit] = []
     for source, items in groups.items():
         stem = stems[source]
         if not split:
-            units.append(_unit(f"{stem}_monitors", source, stem, items, automata))
+            name = _free(f"{stem}_monitors", lambda n: n.casefold() not in files)
+            files.add(name.casefold())
+            units.append(_unit(name, source, stem, items, automata, idents))
             continue
-        used: set[str] = set()
         for c in items:
-            rid = _identifier(c.id)
-            name, k = f"{stem}_{rid}", 2
-            while name in used:
-                name, k = f"{stem}_{rid}_{k}", k + 1
-            used.add(name)
-            units.append(_unit(name, source, name, [c], automata, own_prefix=True))
+            name = _free(f"{stem}_{_identifier(c.id)}",
+                         lambda n: n.casefold() not in files and not _names(n) & idents)
+            files.add(name.casefold())
+            units.append(_unit(name, source, name, [c], automata, idents, own_prefix=True))
     return units
 
 
-def _unit(file_stem: str, source: str, stem: str, items, automata,
+def _free(base: str, free: Callable[[str], bool]) -> str:
+    """``base``, else ``base_2``, ``base_3`` ...: the first name ``free`` accepts."""
+    name, k = base, 2
+    while not free(name):
+        name, k = f"{base}_{k}", k + 1
+    return name
+
+
+def _unit(file_stem: str, source: str, stem: str, items, automata, used: set[str],
           own_prefix: bool = False) -> CUnit:
-    monitors, skipped, used = [], [], set[str]()
+    """One :class:`CUnit`; ``used``: the identifiers of the emission so far (added to)."""
+    monitors: list[CMonitor] = []
+    skipped: list[tuple[str, str]] = []
     for c in items:
         if c.formalization is None:
             reason = "free-form" if c.freeform else getattr(c.error, "message", str(c.error))
             skipped.append((c.id, reason))
             continue
-        prefix = stem if own_prefix else f"{stem}_{_identifier(c.id)}"
-        base, k = prefix, 2
-        while _names(prefix) & used:
-            prefix, k = f"{base}_{k}", k + 1
+        base = stem if own_prefix else f"{stem}_{_identifier(c.id)}"
+        prefix = _free(base, lambda n: not _names(n) & used)
         used |= _names(prefix)
         try:
             got = (automata or {}).get((source, c.id))

@@ -305,12 +305,24 @@ def c_number(text: str) -> str:
     return out if value >= 0 else f"({out})"
 
 
+#: C99 (5.2.4.1) promises string literals of this many bytes, after concatenation
+C_STRING_MAX = 4095
+
+
 def c_string(text: str) -> str:
-    """A C string literal of ``text`` (UTF-8): printable ASCII as is but ``\\``, ``"`` and
-    ``?`` (trigraphs) escaped, every other byte in octal; split into adjacent literals of
-    at most 200 bytes."""
+    """A C string expression of ``text`` (UTF-8): a string literal, printable ASCII as is
+    but ``\\``, ``"`` and ``?`` (trigraphs) escaped, every other byte in octal, split into
+    adjacent literals of at most 200 bytes; past :data:`C_STRING_MAX` bytes (more than C99
+    promises a literal, ``-pedantic`` refuses it) a compound literal of character
+    constants, ``((const char[]){'a', ..., 0})``, of the same bytes."""
+    data = text.encode("utf-8")
+    if len(data) > C_STRING_MAX:
+        chars = [f"'{chr(b)}'" if 32 <= b < 127 and chr(b) not in "\\'?" else f"'\\{b:03o}'"
+                 for b in data] + ["0"]
+        rows = [", ".join(chars[i:i + 16]) for i in range(0, len(chars), 16)]
+        return "((const char[]){" + ", \\\n    ".join(rows) + "})"
     parts, cur = [], []
-    for b in text.encode("utf-8"):
+    for b in data:
         c = chr(b)
         if c in '\\"?':
             cur.append("\\" + c)

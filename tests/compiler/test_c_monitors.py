@@ -314,3 +314,68 @@ def test_command_needs_a_folder_and_reports_skipped(tmp_path):
     assert res.exit_code == 0
     assert "skipped B (f_monitors): the pt formula needs the future-time function" in res.output
     assert " *   B: the pt formula needs" in (tmp_path / "c" / "f_monitors.h").read_text()
+
+
+def _emit_files(tmp_path, files: dict[str, str], *args):
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    paths = []
+    for name, text in files.items():
+        p = tmp_path / "in" / name
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(text)
+        paths.append(str(p))
+    out = tmp_path / "c"
+    res = CliRunner().invoke(main, paths + ["--emit", "c", "-o", str(out), *args])
+    assert res.exit_code == 0, res.output
+    return out
+
+
+@pytest.mark.parametrize("split", [False, True])
+@pytest.mark.parametrize("files", [
+    {"a.fret": "b_c: the sw shall always satisfy p\n",
+     "a_b.fret": "c: the sw shall always satisfy q\n"},
+    {"one/Safe.fret": "R: the sw shall always satisfy p\n",
+     "two/safe.fret": "r: the sw shall always satisfy q\n"},
+    {"x.fret": "A: the sw shall always satisfy p\nB: the sw shall always satisfy q\n",
+     "x_A.fret": "h: the sw shall always satisfy q\n"},
+], ids=["a_b_c", "case", "x_A_h"])
+def test_names_are_unique_across_the_files_of_one_emission(tmp_path, files, split):
+    """Two requirements never share a file name (whatever the case) or an identifier, in
+    one emission of several files with or without ``--split``: ``a.fret``'s ``b_c`` and
+    ``a_b.fret``'s ``c`` both became ``a_b_c.h`` (the second overwrote the first and the
+    runner fed b_c's column to c's monitor), ``one/Safe.fret`` and ``two/safe.fret`` did not
+    compile. Each requirement's monitor reads its own column: the runner's verdicts are
+    each requirement's own."""
+    import subprocess
+
+    out = _emit_files(tmp_path, files, *(["--split"] if split else []))
+    names = sorted(p.name for p in out.iterdir())
+    assert len({n.lower() for n in names}) == len(names), names
+    runner_c = (out / "runner.c").read_text()
+    includes = re.findall(r'#include "([^"]+)"', runner_c)
+    assert len(includes) == len(set(includes)) and all((out / i).exists() for i in includes)
+    ids = [line.split(":")[0] for text in files.values() for line in text.splitlines()]
+    exe = build(out, sorted(p.name for p in out.glob("*.c")), "runner")
+    (tmp_path / "t.csv").write_text("p,q\ntrue,false\n")
+    got = subprocess.run([str(exe), str(tmp_path / "t.csv")], capture_output=True, text=True)
+    words = [line.split("\t")[:2] for line in got.stdout.splitlines()]
+    want = [[rid, "satisfied" if "satisfy p" in line else "violated"]
+            for text in files.values() for line in text.splitlines() for rid in [line.split(":")[0]]]
+    assert sorted(words) == sorted(want) and len(words) == len(ids), got
+
+
+def test_an_id_over_c99s_string_limit_builds_pedantic(tmp_path):
+    """C99 promises string literals of 4,095 bytes (after concatenation); an id (or text)
+    longer than that was one literal and broke ``-pedantic``. It builds, and the runner
+    prints the id in full."""
+    import subprocess
+
+    rid = "R" + "-x." * 1700
+    out = _emit_files(tmp_path, {"a.fret": f"{rid}: the sw shall always satisfy p\n"})
+    exe = build(out, sorted(p.name for p in out.glob("*.c")), "runner")
+    (tmp_path / "t.csv").write_text("p\ntrue\n")
+    got = subprocess.run([str(exe), str(tmp_path / "t.csv")], capture_output=True)
+    assert got.returncode == 0 and got.stdout.decode() == f"{rid}\tsatisfied\tltl3=unknown\tticks=1\n"
