@@ -9,7 +9,8 @@ with ``$track`` = 7; a summary over the entities is added to each instance's not
 The entities are found by one read of the key's topic (every message, the key path's values,
 those matching the ``matching`` glob); each entity is then audited in a read of its own (the
 log is read once per entity: :data:`MAX_ENTITIES` bounds them; past it, the requirement has
-one more verdict, an error saying how many entities were left unjudged). The audit of each
+one more verdict, ``R[track=...]``, an error saying that entities were left unjudged; the
+requirement's own verdict is then an error too, unless a judged entity violates it). The audit of each
 instance is the plain audit (:func:`fretc.audit.log.audit_log`): warm-up, gaps and damage
 per instance, as per requirement.
 """
@@ -207,20 +208,24 @@ def _instances(plan: Any, r: Any, names: list[str], path: str, run: Any) -> list
                + ", ".join(f"{n} {k}" for k, n in sorted(counts.items())))
     for v in out:
         v.notes.append(summary)
-    if cut:
-        out += alone("error", error=f"more than {MAX_ENTITIES:,} entities {name} ({key}) in the "
-                     f"log: only the first {MAX_ENTITIES:,} are judged")
+    if cut:  # the entities left unjudged: a verdict of their own, never named r.id
+        rest = alone("error", error=f"more than {MAX_ENTITIES:,} entities {name} ({key}) in "
+                     f"the log: only the first {MAX_ENTITIES:,} are judged")
+        rest[0].requirement = f"{r.id}[{name}=...]"
+        out += rest
     return [_summary(r, path, out, summary)] + out
 
 
-#: The verdict over all entities: the first of these that some entity has (an error or an
-#: unjudged entity leaves the whole undecided, a violation decides it).
-_PRECEDENCE = ("error", "violated", "unknown", "satisfied", "vacuous")
+#: The verdict over all entities: the first of these that some entity has. A violated
+#: entity decides it (the universal quantifier is false whatever the others are); else an
+#: error or an unjudged entity (past :data:`MAX_ENTITIES`) leaves the whole undecided.
+_PRECEDENCE = ("violated", "error", "unknown", "satisfied", "vacuous")
 
 
 def _summary(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
     """The requirement's verdict over its entities (every entity satisfies it: satisfied;
-    one violates it: violated, with the earliest violation's evidence), named ``r.id``."""
+    one violates it: violated, with the earliest violation's evidence, whatever is left
+    unjudged, which its notes name), named ``r.id``."""
     verdict = next(k for k in _PRECEDENCE if any(v.verdict == k for v in out))
     v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
     bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]
@@ -230,8 +235,11 @@ def _summary(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
         v.notes.append(f"first violated by {first.requirement}")
     margins = [x.robustness for x in out if x.robustness is not None]
     v.robustness = min(margins) if margins else None
+    errors = "; ".join(f"{x.requirement}: {x.error}" for x in out if x.error)
     if verdict == "error":
-        v.error = "; ".join(f"{x.requirement}: {x.error}" for x in out if x.error)
+        v.error = errors
+    elif errors:  # violated all the same: what was not judged is said
+        v.notes.append(f"not judged: {errors}")
     if verdict == "unknown":
         v.unknown_reason = "; ".join(f"{x.requirement}: {x.unknown_reason}" for x in out
                                      if x.verdict == "unknown")

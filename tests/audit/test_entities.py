@@ -149,3 +149,31 @@ def test_a_key_topic_absent_from_the_log_is_an_error_not_vacuous(tmp_path):
     assert got["M"].verdict == "error"
     assert got["M"].error.startswith("topic /diagnostics (the key /diagnostics.status[:].name "
                                      "of entity motor) is not in the log (it has /speed)")
+
+
+def test_past_the_entity_bound_a_violated_entity_violates_the_requirement(tmp_path, monkeypatch):
+    """More entities than the bound (here 5 for 6 tracks; 1,000 for 1,001 in the issue),
+    track 2 violated: the requirement is violated (a violated instance decides it, whatever
+    is left unjudged), the unjudged entities named in its notes and in their own error
+    verdict; with no violation it stays an error."""
+    import fretc.audit.entities as E
+
+    monkeypatch.setattr(E, "MAX_ENTITIES", 5)
+    Track, TrackArray = _track_types()
+    (tmp_path / "t.fret").write_text("@tick_period 100 ms\n"
+                                     "T: in present mode the robot shall always satisfy dist > 0.5\n")
+    (tmp_path / "t.bindings.toml").write_text(TRACK_BINDINGS)
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+    for bad, want in ((2, "violated"), (None, "error")):
+        msgs = [("/tracks", "tracking_msgs/msg/TrackArray", S + k * S // 10,
+                 TrackArray(tracks=[Track(id=i, distance=0.2 if i == bad and k == 3 else 2.0)
+                                    for i in range(1, 7)])) for k in range(6)]
+        got = {v.requirement: v for v in audit_log(plan, str(write_mcap(
+            tmp_path / f"t{bad}.mcap", msgs))).verdicts}
+        assert got["T"].verdict == want, got["T"]
+        assert [v.verdict for k, v in got.items() if k.startswith("T[")] == [
+            "violated" if i == bad else "satisfied" for i in range(1, 6)] + ["error"]
+        assert "more than 5 entities track" in got["T[track=...]"].error
+        if want == "violated":
+            assert got["T"].first_violation.at.time_ns == S + 3 * S // 10
+            assert any("more than 5 entities track" in n for n in got["T"].notes)
