@@ -66,9 +66,28 @@ def schema_problem(doc: dict) -> str | None:
                     key=lambda e: [str(p) for p in e.absolute_path])
     if not errors:
         return None
-    first = errors[0]
+    first = _deepest(errors[0])
     more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-    return f"{first.json_path}: {first.message[:200]}{more}"
+    return f"{first.json_path}: {_message(first)}{more}"
+
+
+def _deepest(error):
+    """The error that names the failing value: for a member valid under none of the
+    alternatives of an ``anyOf``/``oneOf`` (an object, or null), the deepest of the errors
+    of its alternatives (``jsonschema``'s ``context``), not the whole instance."""
+    while error.context:
+        error = max(error.context, key=lambda e: (len(e.absolute_path), -len(e.message)))
+    return error
+
+
+def _message(error) -> str:
+    """The error in words, the failing value shortened (never the whole document)."""
+    value = repr(error.instance)
+    if len(value) > 80:
+        value = value[:77] + "..."
+    words = {"enum": f"is not one of {error.validator_value!r}",
+             "type": f"is not of type {error.validator_value!r}"}.get(error.validator)
+    return f"{value} {words}" if words else error.message[:200]
 
 
 @dataclass
