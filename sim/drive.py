@@ -31,13 +31,15 @@ file's tick must be the LiDAR's 100 ms period.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from fretc.signals.bindings.spec import Bindings
-from fretc.testing.drive_plan import SCAN_MS, Classified, DriveError, classify, scan_plan
+from fretc.testing.drive_plan import (DRIVEN_TOPICS, SCAN_MS, Classified, DriveError, classify,
+                                      scan_plan)
 from fretc.sim.recording import McapRecorder
 from fretc.sim.scenarios import Scenario, get_scenario
 from fretc.sim.simulation import RunResult, SimParams, Simulation
@@ -77,12 +79,15 @@ class TraceDrivenSimulation(Simulation):
         self.first = min(plan) if plan else 0
         self.trace_lidar = _TraceLidar(self.lidar)
         self.lidar = self.trace_lidar  # type: ignore[assignment]  # (a Lidar's interface)
+        #: the last trace tick whose scan time the run reached (-1: none)
+        self.reached = -1
 
     def _scan_10hz(self, rec, st, t_ms, t, s) -> None:
         k = (t_ms - self.lead_ms) // SCAN_MS
         if k >= self.end:
             st.end_ms = t_ms
         k = min(k, self.last)  # the lead-out: the last tick's inputs held
+        self.reached = max(self.reached, k)
         if k < 0:  # the lead-in: as the first planned scan (silent after one before 0)
             p = self.first
             value = self.plan.get(p) if p >= 0 or k <= p else None
@@ -101,11 +106,22 @@ def drive(rows: list[dict], bindings: Bindings, output: str | Path, *,
     tick) under ``bindings`` and record the run to ``output`` (MCAP, ROS 2).
 
     Raises:
-        DriveError: the trace cannot drive the simulator (module docstring).
+        DriveError: the trace cannot drive the simulator (module docstring): no tick, no
+            variable the driver drives, ``lead_in``/``lead_out`` not finite or negative; or
+            the run ended (the mission over) before the trace's last tick was applied (the
+            log is written, but it is not the trace's run).
         KeyError: an unknown scenario. OSError: ``output`` cannot be written."""
+    for name, value in (("lead-in", lead_in), ("lead-out", lead_out)):
+        if not math.isfinite(value) or value < 0:
+            raise DriveError(f"--{name} {value!r}: seconds, finite and not negative")
     if not rows:
         raise DriveError("the trace has no ticks")
     roles = classify(list(rows[0]), bindings)
+    if not roles.driven:
+        raise DriveError("no variable of the trace is one the driver drives (the topics "
+                         f"{', '.join(DRIVEN_TOPICS)}: in {bindings.source}, "
+                         f"{', '.join(_drivable(bindings)) or 'none'}): the run would be the "
+                         "robot alone, not the trace's")
     plan = scan_plan(rows, bindings, roles.driven)
     lead_ms = max(int(round(lead_in * 1000)), -min(plan) * SCAN_MS if plan else 0)
     lead_ms -= lead_ms % SCAN_MS
@@ -117,4 +133,16 @@ def drive(rows: list[dict], bindings: Bindings, output: str | Path, *,
         rec = McapRecorder(f)
         result = sim.run(rec)
         rec.finish()
+    if sim.reached < len(rows) - 1:
+        Path(output).unlink(missing_ok=True)  # not the trace's run: never audited as one
+        nxt = sim.reached + 1
+        raise DriveError(f"the run ended at {result.duration:.1f} s of simulated time "
+                         f"({result.outcome or 'its end'}) before the trace's tick {nxt} of "
+                         f"{len(rows)} (due at {(lead_ms + nxt * SCAN_MS) / 1000:.1f} s): the "
+                         "trace was not applied whole (a shorter --lead-in?)")
     return roles, result
+
+
+def _drivable(bindings: Bindings) -> list[str]:
+    """The variables of ``bindings`` the driver can drive (:func:`classify`'s ``driven``)."""
+    return classify(list(bindings.variables), bindings).driven

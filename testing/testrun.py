@@ -17,7 +17,9 @@ oracle; instead a test
   meant to take it, so the test shows nothing about that obligation (a test generated to
   show a violation, ``deadline-missed``, is never exercised on a correct system);
 * **passes** when no requirement is violated, every verdict is decided, and the obligation
-  it was generated for (``require="all"``: every one it covers) is exercised on the log.
+  it was generated for (``require="all"``: every one it covers) is exercised on the log. A
+  test that names no obligation (no ``generated_for``, ``covers`` empty) is never a pass: it
+  is "not exercised".
 
 Only ``pass`` is a pass. The other obligations a test's trace covers are reported (how many
 the system's log exercises, and which not) without deciding the outcome by default: a test
@@ -34,6 +36,8 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from fretc.testing.tests_json import file_name
 
 __all__ = ["OUTCOMES", "Outcome", "judge", "run_test", "audit_log"]
 
@@ -96,25 +100,27 @@ def judge(test: dict[str, Any], doc: dict[str, Any], require: str = "target") ->
     covered = {(r["requirement"], o["obligation"])
                for r in (doc.get("coverage") or {}).get("requirements", [])
                for o in r["obligations"] if o["status"] == "covered"}
-    wanted = list(dict.fromkeys((c["requirement"], c["obligation"]) for c in test["covers"]))
+    g = test.get("generated_for") or {}
+    target = (g.get("requirement"), g.get("obligation"))
+    wanted = list(dict.fromkeys([(c["requirement"], c["obligation"]) for c in test["covers"]]
+                                + ([target] if g else [])))
     out = Outcome(test["id"], "pass", verdicts,
                   violated=[r for r, v in verdicts.items() if v == "violated"],
                   undecided=[r for r, v in verdicts.items() if v not in _DECIDED],
                   not_exercised=[w for w in wanted if w not in covered],
                   exercised=sum(w in covered for w in wanted),
                   log=logs[0]["log"] if logs else "",
-                  target=" ".join(str(x) for x in (test.get("generated_for") or {}).values()))
+                  target=" ".join(str(x) for x in g.values()) or "no obligation")
     if logs and logs[0].get("error"):
         out.undecided = out.undecided or ["(log)"]
         out.error = f"the audit could not read the log: {logs[0]['error']}"
-    g = test.get("generated_for") or {}
-    target = (g.get("requirement"), g.get("obligation"))
     if out.violated:
         out.outcome = "fail"
     elif out.undecided or not verdicts:
         out.outcome = "unknown"
-    elif (out.not_exercised if require == "all" or not g else target in out.not_exercised):
-        out.outcome = "not exercised"
+    elif not wanted or (out.not_exercised if require == "all" or not g
+                        else target in out.not_exercised):
+        out.outcome = "not exercised"  # a test without an obligation shows nothing
     return out
 
 
@@ -145,9 +151,15 @@ def run_test(test: dict[str, Any], doc: dict[str, Any], folder: Path, command: s
     (default: ``doc``'s ``"bindings"``, else the audit's own search beside the
     requirements); ``require``: as :func:`judge`'s; ``log_name``: the log's file name in
     ``work`` (default ``<test id>.mcap``; its suffix tells the audit the format). A command
-    that fails or writes no log gives ``unknown`` with its error."""
+    that fails or writes no log gives ``unknown`` with its error. Files are named by
+    :func:`fretc.testing.tests_json.file_name` only (``test['id']`` as read by
+    :func:`fretc.testing.tests_json.load_tests`).
+
+    Raises:
+        ValueError: a test id or ``log_name`` that is not a file name."""
+    log = work / file_name(log_name or test["id"], "" if log_name else ".mcap")
+    report = work / file_name(test["id"], ".audit.json")
     work.mkdir(parents=True, exist_ok=True)
-    log = work / (log_name or f"{test['id']}.mcap")
     trace = folder / test["trace"]
     log.unlink(missing_ok=True)  # an earlier run's log is never judged as this run's
     res = subprocess.run(shlex.split(command) + [str(trace), str(log)], capture_output=True,
@@ -159,8 +171,7 @@ def run_test(test: dict[str, Any], doc: dict[str, Any], folder: Path, command: s
             error = f"the command exited {res.returncode} without a log: {last}"
         return Outcome(test["id"], "unknown", error=error, log=str(log))
     try:
-        audited = audit_log(doc["requirements"], bindings or doc.get("bindings"), log,
-                            work / f"{test['id']}.audit.json")
+        audited = audit_log(doc["requirements"], bindings or doc.get("bindings"), log, report)
     except RuntimeError as exc:
         return Outcome(test["id"], "unknown", error=str(exc), log=str(log))
     return judge(test, audited, require)

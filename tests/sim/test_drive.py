@@ -173,3 +173,117 @@ def test_command_without_log_is_unknown(generated, tmp_path):
                                     "--logs", str(tmp_path)])
     assert res.exit_code == 3, res.output
     assert f"{first}: unknown: the command exited 0 without a log" in res.output
+
+
+# --------------------------------------------------------------------------- hostile round 7
+def _sim_drive(tmp_path, *extra, trace=None):
+    from fretc.sim.__main__ import main as sim_main
+
+    if trace is None:
+        trace = tmp_path / "t.csv"
+        trace.write_text("time,too_close\n" + "".join(f"{k / 10},{'true' if 3 <= k < 6 else 'false'}\n"
+                                                      for k in range(12)))
+    return CliRunner().invoke(sim_main, ["drive", str(trace), str(tmp_path / "x.mcap"),
+                                         "-b", str(BINDINGS), *extra])
+
+
+@pytest.mark.parametrize("option,value", [("--lead-in", "nan"), ("--lead-in", "inf"),
+                                          ("--lead-in", "-1"), ("--lead-out", "-100"),
+                                          ("--lead-out", "nan"), ("--lead-out", "-inf")])
+def test_drive_options_must_be_finite_and_not_negative(tmp_path, option, value):
+    """``--lead-in nan|inf`` was a traceback, ``--lead-out -100`` a run that ended before the
+    trace did, exit 0: each is an input error naming the option, exit 2."""
+    res = _sim_drive(tmp_path, option, value)
+    assert res.exit_code == 2 and option in res.output, res.output
+    assert res.exception is None or isinstance(res.exception, SystemExit)
+    assert not (tmp_path / "x.mcap").exists()
+
+
+def test_a_drive_that_does_not_apply_the_whole_trace_fails(tmp_path):
+    """``--lead-in 1e9``: the mission ends long before the trace's first tick; the run used to
+    be recorded, exit 0, and testrun turned failing tests into "not exercised"."""
+    res = _sim_drive(tmp_path, "--lead-in", "1e9")
+    assert res.exit_code == 2 and "trace" in res.output and "tick" in res.output, res.output
+
+
+def test_a_trace_with_no_drivable_column_is_refused(tmp_path):
+    """A trace without too_close or scan_stale drove the robot with no input at all, exit 0."""
+    trace = tmp_path / "s.csv"
+    trace.write_text("time,stopped\n0.0,true\n0.1,true\n")
+    res = _sim_drive(tmp_path, trace=trace)
+    assert res.exit_code == 2 and "drive" in res.output, res.output
+    with pytest.raises(DriveError, match="drive"):
+        drive([{"stopped": True}], load_bindings(BINDINGS), tmp_path / "y.mcap")
+
+
+def test_a_test_without_an_obligation_is_not_a_pass():
+    """``"covers": []`` and no ``generated_for``: nothing the test was meant to show, so it
+    does not pass; a target its covers do not list is still required."""
+    ok = _doc({"R2": "satisfied"}, [])
+    bare = {"id": "T", "generated_for": None, "covers": []}
+    assert judge(bare, ok).outcome == "not exercised"
+    assert judge(bare, ok, "all").outcome == "not exercised"
+    aside = _test(("R2", "deadline-missed"), [])
+    assert judge(aside, ok).outcome == "not exercised"
+    assert judge(_test(("R2", "trigger"), []), _doc({"R2": "satisfied"}, [("R2", "trigger")])
+                 ).outcome == "pass"
+
+
+def _tests_json(folder: Path, doc) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "tests.json").write_text(doc if isinstance(doc, str) else json.dumps(doc))
+    (folder / "T01.csv").write_text("too_close\nfalse\n")
+
+
+def _one(**test):
+    t = {"id": "T01", "trace": "T01.csv", "generated_for": {"requirement": "R2",
+                                                            "obligation": "trigger"},
+         "covers": [{"requirement": "R2", "obligation": "trigger", "tick": 0}],
+         "expected": {"R2": "satisfied"}}
+    t.update(test)
+    return {"requirements": [str(REQS / "safe_ros.fret")], "tests": [t]}
+
+
+@pytest.mark.parametrize("test_id", ["../../x/victim", "/tmp/fretc-victim", "a/b", "..",
+                                     "a\\b", "x\x00y", "x" * 300, "", "."])
+def test_a_test_id_never_names_a_file_outside_the_folder(tmp_path, test_id):
+    """A test id becomes a file name only through one check (separators, ``..``, absolute
+    paths, NUL, over-long names refused): ``../../../x/victim`` made testrun unlink and
+    replace ``victim.mcap`` and ``victim.audit.json`` outside its folder."""
+    victim = tmp_path / "x"
+    victim.mkdir()
+    (victim / "victim.mcap").write_text("precious")
+    folder = tmp_path / "a" / "b"
+    _tests_json(folder, _one(id=test_id))
+    cmd = f"{sys.executable} -c \"import sys; open(sys.argv[2], 'w').write('log')\""
+    res = CliRunner().invoke(main, ["testrun", str(folder), "--command", cmd])
+    assert res.exit_code == 2 and "$.tests[0].id" in res.output, res.output
+    assert (victim / "victim.mcap").read_text() == "precious"
+    assert not (victim / "victim.audit.json").exists()
+    assert not (folder / "runs").exists() or not any((folder / "runs").iterdir())
+
+
+@pytest.mark.parametrize("doc,where", [
+    ({"tests": []}, "$.requirements"),
+    ({"requirements": [], "tests": []}, "$.requirements"),
+    ({"requirements": "safe_ros.fret", "tests": []}, "$.requirements"),
+    (dict(_one(), bindings=7), "$.bindings"),
+    (_one(covers=None), "$.tests[0].covers"),
+    (_one(covers=[{"requirement": "R2"}]), "$.tests[0].covers[0]"),
+    (_one(covers=[{"requirement": 2, "obligation": "x"}]), "$.tests[0].covers[0].requirement"),
+    (_one(generated_for="R2"), "$.tests[0].generated_for"),
+    (_one(id=7), "$.tests[0].id"),
+    (_one(trace="../T01.csv"), "$.tests[0].trace"),
+    (_one(trace="/etc/passwd"), "$.tests[0].trace"),
+    ({"requirements": ["r.fret"], "tests": [[[[]]]]}, "$.tests[0]"),
+    ("[" * 100_000 + "]" * 100_000, "nested"),
+    ("{\"requirements\": [\"r.fret\"], \"tests\": ", "not JSON"),
+    ("[]", "$"),
+])
+def test_tests_json_is_checked_against_its_schema(tmp_path, doc, where):
+    """Every refusal names the JSON path (or why it is not JSON), exit 2, no traceback."""
+    _tests_json(tmp_path, doc)
+    res = CliRunner().invoke(main, ["testrun", str(tmp_path), "--command", "true"])
+    assert res.exit_code == 2, res.output
+    assert where in res.output and "tests.json" in res.output, res.output
+    assert "Traceback" not in res.output and isinstance(res.exception, SystemExit)

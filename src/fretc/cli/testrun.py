@@ -50,20 +50,17 @@ __all__ = ["testrun_cmd"]
 def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir: str | None,
                 only: tuple[str, ...], all_obligations: bool, json_path: str | None) -> None:
     """Run the generated tests in FOLDER against the system CMD makes logs of."""
+    from fretc.testing.tests_json import TestsJsonError, load_tests
     from fretc.testing.testrun import OUTCOMES, run_test
 
     folder = Path(folder)
     try:
-        doc = json.loads((folder / "tests.json").read_text(encoding="utf-8"))
-        tests, _ = doc["tests"], doc["requirements"]
-        ids = {t["id"] for t in tests}
-    except KeyError as exc:
-        click.echo(shown(f"error: {folder / 'tests.json'}: no {exc} (not a tests.json of "
-                         "fretc testgen)"), err=True)
+        doc = load_tests(folder)  # its schema, ids as file names, traces inside the folder
+    except TestsJsonError as exc:
+        click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
-    except (OSError, ValueError, TypeError) as exc:
-        click.echo(shown(f"error: {folder / 'tests.json'}: {exc}"), err=True)
-        sys.exit(2)
+    tests = doc["tests"]
+    ids = {t["id"] for t in tests}
     missing = [i for i in only if i not in ids]
     if missing:
         click.echo(shown(f"error: {folder / 'tests.json'}: no test {', '.join(missing)}"),
