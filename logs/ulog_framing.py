@@ -11,8 +11,9 @@ checked. The rules here:
 
 * **cut**: the last message runs past the end of the file (its size says so): the log is
   damaged from the last log time read before that message to its end;
-* **damaged span**: a message header of no known type (zeroed bytes, garbage) is where the
-  damage starts; reading resumes after the next *sync* message (``S``, whose payload is the
+* **damaged span**: a message header of no known type (zeroed bytes, garbage), or a data
+  message (``D``) whose size is not its format's (a size field bit-flipped: the message
+  would swallow the messages after it, pyulog skips it quietly), is where the damage starts; reading resumes after the next *sync* message (``S``, whose payload is the
   8 sync bytes; PX4 writes one every so often): the messages between are lost and the log is
   damaged from the last log time before the damage to the first one after it. With no sync
   message after the damage, the rest of the log is lost (a cut).
@@ -79,6 +80,69 @@ def _time_of(data: bytes, pos: int, size: int, typ: int) -> int | None:
     return _U64.unpack_from(data, start + offset)[0]
 
 
+#: bytes of ULog's basic types (the "ULog File Format" documentation)
+_BASIC = {"int8_t": 1, "uint8_t": 1, "bool": 1, "char": 1, "int16_t": 2, "uint16_t": 2,
+          "int32_t": 4, "uint32_t": 4, "float": 4, "int64_t": 8, "uint64_t": 8, "double": 8}
+
+
+class _Formats:
+    """The formats (``F``) and subscriptions (``A``) read so far, for the size a data
+    message of a subscription must have."""
+
+    def __init__(self) -> None:
+        self.fields: dict[str, list[tuple[str, int, str]]] = {}
+        self.topic: dict[int, str] = {}
+        self._sizes: dict[str, tuple[int, int] | None] = {}
+
+    def add(self, typ: int, payload: bytes) -> None:
+        """Record an ``F`` or ``A`` message's payload."""
+        text = payload.decode("latin-1")
+        if typ == ord("F") and ":" in text:
+            name, _, body = text.partition(":")
+            fields = []
+            for f in body.split(";"):
+                if not f.strip():
+                    continue
+                kind, _, field = f.strip().rpartition(" ")
+                base, _, count = kind.partition("[")
+                fields.append((base, int(count.rstrip("]")) if count.rstrip("]").isdigit()
+                               else 0, field))
+            self.fields[name] = fields
+        elif typ == ord("A") and len(payload) >= 3:
+            self.topic[int.from_bytes(payload[1:3], "little")] = text[3:].rstrip("\x00")
+
+    def sizes(self, name: str, depth: int = 0) -> tuple[int, int] | None:
+        """(bytes without the trailing ``_padding`` fields, all bytes) of format ``name``,
+        or None when it is not known (an unknown or recursive type)."""
+        if name in self._sizes:
+            return self._sizes[name]
+        if depth > 32 or name not in self.fields:
+            return None
+        total, least = 0, 0
+        for base, count, field in self.fields[name]:
+            one = _BASIC.get(base)
+            if one is None:
+                inner = self.sizes(base, depth + 1)
+                if inner is None:
+                    return None
+                one = inner[1]
+            total += one * max(count, 1)
+            if not field.startswith("_padding"):
+                least = total
+        self._sizes[name] = (least, total)
+        return self._sizes[name]
+
+    def problem(self, payload_size: int, msg_id: int) -> str | None:
+        """Why a data message of ``payload_size`` bytes with ``msg_id`` cannot be one of
+        its subscription (its format's size, trailing padding optional, plus the id)."""
+        name = self.topic.get(msg_id)
+        got = self.sizes(name) if name is not None else None
+        if got is None or got[0] + 2 <= payload_size <= got[1] + 2:
+            return None
+        return (f"a data message of {name} of {payload_size} bytes (its format has "
+                f"{got[1] + 2})")
+
+
 def ulog_framing(data: bytes) -> UlogFraming:
     """Walk the messages of a ULog file (``data``: the whole file) and return its
     :class:`UlogFraming` (module docstring). A file that does not start with the ULog magic
@@ -90,6 +154,7 @@ def ulog_framing(data: bytes) -> UlogFraming:
         return out
     pos, start, last, seen_a = 16, None, None, False
     after_damage: UlogDamage | None = None
+    formats = _Formats()
     n = len(data)
     while True:
         if pos + 3 > n:
@@ -100,9 +165,12 @@ def ulog_framing(data: bytes) -> UlogFraming:
                 out.runs.append((start, pos))
             break
         size, typ = _HEADER.unpack_from(data, pos)
-        if typ not in _TYPES or (size == 0 and typ != ord("S")):
-            reason = (f"a message of unknown type {typ} (size {size}) at byte {pos}: the "
-                      "bytes from there are not ULog messages")
+        wrong = (formats.problem(size, int.from_bytes(data[pos + 3:pos + 5], "little"))
+                 if typ == ord("D") and pos + 5 <= n else None)
+        if typ not in _TYPES or (size == 0 and typ != ord("S")) or wrong:
+            reason = (f"{wrong} at byte {pos}" if wrong else
+                      f"a message of unknown type {typ} (size {size}) at byte {pos}")
+            reason += ": the bytes from there are not ULog messages"
             if start is not None:
                 out.runs.append((start, pos))
             # damage in the definitions, or in a file with data appended: nothing after it
@@ -121,6 +189,8 @@ def ulog_framing(data: bytes) -> UlogFraming:
             _cut(out, start, pos, last, f"the last message (type {chr(typ)}, {size} bytes "
                                         f"at byte {pos}) runs past the end of the file")
             break
+        if typ in (ord("F"), ord("A")):
+            formats.add(typ, data[pos + 3:pos + 3 + size])
         if typ == ord("B") and size >= 9 and data[pos + 3 + 8] & 1:
             out.appended = True
         if typ == ord("A") and not seen_a:

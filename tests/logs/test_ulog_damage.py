@@ -99,3 +99,45 @@ def test_zeroed_bytes_in_the_middle_are_a_gap_and_the_flight_after_it_is_judged(
 def test_framing_of_bytes_that_are_no_ulog_is_empty():
     assert ulog_framing(b"not a ulog at all").runs == []
     assert ulog_framing(b"").damages == []
+
+
+def _data_messages(data: bytes, topic: str) -> list[tuple[int, int]]:
+    """(offset, payload size) of every data message of ``topic`` (walking the framing)."""
+    import struct
+
+    pos, subs, out = 16, {}, []
+    while pos + 3 <= len(data):
+        size, typ = struct.unpack_from("<HB", data, pos)
+        if typ == ord("A"):
+            subs[struct.unpack_from("<H", data, pos + 4)[0]] = data[pos + 6:pos + 3 + size]
+        elif typ == ord("D") and subs.get(struct.unpack_from("<H", data, pos + 3)[0]) == \
+                topic.encode():
+            out.append((pos, size))
+        pos += 3 + size
+    return out
+
+
+@needs_shared
+@pytest.mark.parametrize("big", [13459, 1722])
+def test_a_data_message_whose_size_field_is_wrong_is_damage(tmp_path, big):
+    """A ``battery_status`` message whose size field says more bytes than its format has
+    swallows the messages after it, and where the size lands on a message boundary the
+    framing went on: 7 of 157 messages lost, no problem, not partial. A data message whose
+    size is not its format's is damage (resynchronised at the next sync message)."""
+    import struct
+
+    from fretc.logs import open_log
+
+    data = bytearray((PX4 / "sample_px4_events.ulg").read_bytes())
+    msgs = _data_messages(bytes(data), "battery_status")
+    assert len(msgs) == 157
+    at = msgs[0][0] if big == 13459 else msgs[10][0]
+    struct.pack_into("<H", data, at, big)
+    framing = ulog_framing(bytes(data))
+    assert [d.kind for d in framing.damages] == ["corrupt_record"], framing.damages
+    assert f"byte {at}" in framing.damages[0].detail
+    path = tmp_path / "big.ulg"
+    path.write_bytes(bytes(data))
+    src = open_log(str(path))
+    got = sum(1 for _ in src.messages({"battery_status"}))
+    assert got < 157 and src.partial and any(p.kind == "corrupt_record" for p in src.problems)
