@@ -245,6 +245,9 @@ class ZenohClient:
                 return
         else:
             ros = self._key_type(str(sample.key_expr), topic)  # type: ignore[assignment]  # (None: returned below)
+            if ros is None and topic == CLOCK_TOPIC and not self.wanted(topic):
+                return  # a put on a wildcard (``**``) that reached the time source's
+                # subscriber too: not a clock message, and the topics it is for read it
             if ros is None:
                 self.events.put(("protocol", now, f"a message of {topic} on the key "
                                  f"expression {str(sample.key_expr)[:200]} names no type "

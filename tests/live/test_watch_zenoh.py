@@ -139,9 +139,14 @@ def test_samples_on_wildcard_keys_are_messages_of_the_topic_they_reach(tmp_path,
                                     "--json", str(out), "--duration", "30",
                                     "--restart-grace", "0.5"])
     t.join(10)
-    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
+    log = json.loads(out.read_text())["logs"][0]
+    (v,) = log["verdicts"]
     assert v["verdict"] == "violated", (v, res.output)
     assert res.exit_code == 1, res.output
+    # they reach the subscriber of /clock too (the watch's time source): not clock messages,
+    # and not untyped messages of /clock either (they are /a's)
+    assert not [p for p in log["problems"] if "/clock" in json.dumps(p)], log["problems"]
+    assert log["messages"].get("/a") == 20, log["messages"]
 
 
 def test_zenoh_bridge_ros2dds_layout(tmp_path):
