@@ -65,41 +65,87 @@ MAX_YAML_NODES = 100_000
 def check_tree_files(path: str) -> None:
     """Refuse, before doorstop reads anything, the YAML files of the tree under ``path``
     that are not regular files (a FIFO would block the read), lead outside the tree
-    (a symbolic link), are larger than :data:`MAX_YAML_BYTES` or expand to more than
-    :data:`MAX_YAML_NODES` nodes with their aliases resolved (counted on PyYAML's node
-    graph, which shares an alias's node and constructs no object: linear in the file).
-    Raises :class:`FretishFileError` naming the file."""
-    import yaml
-
+    (a symbolic link), are larger than :data:`MAX_YAML_BYTES`, nest too deeply for a YAML
+    reader, or expand to more than :data:`MAX_YAML_NODES` nodes with their aliases resolved
+    (counted on PyYAML's node graph, which shares an alias's node and constructs no
+    object: linear in the file); and the files they ``!include`` (doorstop reads the tag in
+    a document's ``.doorstop.yml``, relative to it) by the same rules, so an include stays
+    inside the tree and reads regular files only. Raises :class:`FretishFileError` naming
+    the file."""
     top = os.path.realpath(path)
     for folder, dirs, files in os.walk(path):
         dirs[:] = [d for d in dirs if not d.startswith(".")]
         for name in files:
-            if not name.endswith((".yml", ".yaml")):
-                continue
-            f = os.path.join(folder, name)
-            real = os.path.realpath(f)
-            if os.path.commonpath([top, real]) != top:
-                raise FretishFileError(f"{f} is a link to {real}, outside the tree {path}: "
-                                       "not read", source=f, line=1)
-            st = os.stat(real)
-            if not stat.S_ISREG(st.st_mode):
-                raise FretishFileError(f"{f} is not a regular file: not read", source=f,
-                                       line=1)
-            if st.st_size > MAX_YAML_BYTES:
-                raise FretishFileError(f"{f} is {st.st_size} bytes, more than the "
-                                       f"{MAX_YAML_BYTES} an item file may be", source=f,
-                                       line=1)
-            with open(real, "rb") as fh:
-                data = fh.read()
-            try:
-                nodes = _expanded_nodes(yaml.compose(data, Loader=yaml.SafeLoader))
-            except (yaml.YAMLError, RecursionError):
-                continue  # doorstop reports the invalid YAML, naming the file
-            if nodes > MAX_YAML_NODES:
-                raise FretishFileError(f"{f} expands to {nodes} YAML nodes with its aliases "
-                                       f"resolved, more than {MAX_YAML_NODES} (a YAML bomb?): "
-                                       "not read", source=f, line=1)
+            if name.endswith((".yml", ".yaml")):
+                _check_yaml_file(os.path.join(folder, name), top, path, set())
+
+
+def _check_yaml_file(f: str, top: str, tree: str, seen: set[str],
+                     included_by: str | None = None, chain: tuple[str, ...] = ()) -> None:
+    """One YAML file of the tree (:func:`check_tree_files`), then the files it includes
+    (``chain``: the real paths of the files including it, a cycle among which is refused:
+    doorstop would include them forever)."""
+    import yaml
+
+    real = os.path.realpath(f)
+    by = f" (included by {included_by})" if included_by else ""
+    where = included_by or f
+    if os.path.commonpath([top, real]) != top:
+        raise FretishFileError(f"{f}{by} leads to {real}, outside the tree {tree}: not read",
+                               source=where, line=1)
+    if real in chain:
+        raise FretishFileError(f"{f}{by} includes itself (an !include cycle): not read",
+                               source=where, line=1)
+    if real in seen:  # included twice: checked once
+        return
+    seen.add(real)
+    try:
+        st = os.stat(real)
+    except OSError as e:
+        raise FretishFileError(f"{f}{by} cannot be read: {e.strerror or e}", source=where,
+                               line=1) from None
+    if not stat.S_ISREG(st.st_mode):
+        raise FretishFileError(f"{f}{by} is not a regular file: not read", source=where, line=1)
+    if st.st_size > MAX_YAML_BYTES:
+        raise FretishFileError(f"{f}{by} is {st.st_size} bytes, more than the "
+                               f"{MAX_YAML_BYTES} an item file may be", source=where, line=1)
+    with open(real, "rb") as fh:
+        data = fh.read()
+    try:
+        root = yaml.compose(data, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return  # doorstop reports the invalid YAML, naming the file
+    except RecursionError:
+        raise FretishFileError(f"{f}{by} nests its YAML too deeply to be read", source=where,
+                               line=1) from None
+    nodes = _expanded_nodes(root)
+    if nodes > MAX_YAML_NODES:
+        raise FretishFileError(f"{f}{by} expands to {nodes} YAML nodes with its aliases "
+                               f"resolved, more than {MAX_YAML_NODES} (a YAML bomb?): "
+                               "not read", source=where, line=1)
+    for target in _includes(root):
+        _check_yaml_file(os.path.join(os.path.dirname(f), target), top, tree, seen, f,
+                         chain + (real,))
+
+
+def _includes(root) -> list[str]:
+    """The values of the ``!include`` scalars of a composed YAML document."""
+    import yaml
+
+    out, stack, seen = [], [root] if root is not None else [], set()
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        if isinstance(node, yaml.ScalarNode):
+            if node.tag == "!include":
+                out.append(str(node.value))
+        elif isinstance(node, yaml.SequenceNode):
+            stack.extend(node.value)
+        elif isinstance(node, yaml.MappingNode):
+            stack.extend(c for pair in node.value for c in pair)
+    return out
 
 
 def _expanded_nodes(root) -> int:

@@ -316,12 +316,35 @@ def _hostile_item(tree: Path, how: str) -> str:
         outside.write_text("active: true\nlevel: 9\nnormative: true\ntext: outside\n")
         os.symlink(outside, tree / "r" / "R9.yml")
         return str(tree / "r" / "R9.yml")
+    elif how.startswith("include_"):  # doorstop reads !include in a document's config
+        doc = tree / "r" / ".doorstop.yml"
+        target = {"include_passwd": "/etc/passwd",
+                  "include_outside": "../../outside.yml",
+                  "include_fifo": "pipe.txt",
+                  "include_nested": "inner.yml", "include_cycle": "loop.yml"}[how]
+        (tree.parent / "outside.yml").write_text("prefix: X\n")
+        if how == "include_fifo":
+            os.mkfifo(tree / "r" / "pipe.txt")
+        if how == "include_cycle":  # two files that include each other
+            (tree / "r" / "loop.yml").write_text("a: !include loop2.yml\n")
+            (tree / "r" / "loop2.yml").write_text("b: !include loop.yml\n")
+        if how == "include_nested":  # an included file inside the tree that includes out
+            (tree / "r" / "inner.yml").write_text("a: !include ../../outside.yml\n")
+        doc.write_text(doc.read_text() + f"\nextra: !include {target}\n")
+        return {"include_nested": str(tree / "r" / "inner.yml"),
+                "include_cycle": "includes itself"}.get(how, str(doc))
+    elif how == "deep_doc_yaml":
+        doc = tree / "r" / ".doorstop.yml"
+        doc.write_text(doc.read_text() + "\ndeep: " + "[" * 5000 + "]" * 5000 + "\n")
+        return str(doc)
     return str(r1)
 
 
 @pytest.mark.parametrize("how", ["invalid_yaml", "python_tag", "non_utf8", "level_mapping",
                                  "links_number", "fretish_mapping", "yaml_bomb", "fifo",
-                                 "link_outside"])
+                                 "link_outside", "include_passwd", "include_outside",
+                                 "include_fifo", "include_nested", "include_cycle",
+                                 "deep_doc_yaml"])
 def test_a_hostile_doorstop_item_is_an_input_error_naming_its_file(tmp_path, how):
     """Each was an internal error (exit 4), a hang (a FIFO, a YAML bomb under ``reviewed``)
     or a file read from outside the tree; the entry point must answer within seconds."""
