@@ -50,7 +50,7 @@ class RawClient:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "fretc", "lsp"], stdin=subprocess.PIPE,
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=str(cwd),
-            env={**os.environ, "PYTHONPATH": str(ROOT), **(env or {})})
+            env={**os.environ, "PYTHONPATH": str(ROOT / "src"), **(env or {})})
         self.messages: queue.Queue = queue.Queue()
         self.stderr: list[bytes] = []
         self.next_id = 0

@@ -28,7 +28,7 @@ def test_where_defaults_and_keywords():
 
 def _fretc(args, cache_dir) -> subprocess.CompletedProcess:
     """``fretc ARGS`` in a fresh process with fretc's cache folder at ``cache_dir``."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT), FRETC_CACHE_DIR=str(cache_dir))
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"), FRETC_CACHE_DIR=str(cache_dir))
     return subprocess.run([sys.executable, "-c", "import sys; from fretc.cli import main; "
                            "sys.exit(main())", *map(str, args)], capture_output=True,
                           text=True, env=env, timeout=300)

@@ -26,7 +26,7 @@ BAD = GOOD + "R3: upon too_close the robot shall always satisfy stopped &\n"
 
 @pytest_lsp.fixture(config=ClientServerConfig(
     server_command=[sys.executable, "-m", "fretc", "lsp"],
-    server_env={**os.environ, "PYTHONPATH": str(ROOT)}))
+    server_env={**os.environ, "PYTHONPATH": str(ROOT / "src")}))
 async def client(lsp_client: LanguageClient):
     await lsp_client.initialize_session(T.InitializeParams(
         capabilities=T.ClientCapabilities(), root_uri=(ROOT / "requirements").as_uri()))

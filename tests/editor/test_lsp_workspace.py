@@ -54,7 +54,7 @@ WS: dict = {}
 
 @pytest_lsp.fixture(config=ClientServerConfig(
     server_command=[sys.executable, "-m", "fretc", "lsp"],
-    server_env={**os.environ, "PYTHONPATH": str(ROOT)}))
+    server_env={**os.environ, "PYTHONPATH": str(ROOT / "src")}))
 async def client(lsp_client: LanguageClient, workspace):
     WS["root"] = workspace
     await lsp_client.initialize_session(T.InitializeParams(

@@ -69,7 +69,7 @@ def _replay(trace: Path, url: str, dds_xml: str, rate: str = RATE) -> "subproces
     return subprocess.Popen(_fretc("replay", str(trace), "--serve", url, "--rate", rate,
                                    *_config(url, dds_xml)),
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            env={**os.environ, "PYTHONPATH": str(ROOT)})
+                            env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
 
 
 def _verdicts(doc: dict) -> list[tuple]:
@@ -94,7 +94,7 @@ def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str, *extra:
                                     "--wait", "10", "--duration", "120",
                                     *_config(url, dds_xml), *extra),
                              cwd=ROOT, capture_output=True, text=True, timeout=150,
-                             env={**os.environ, "PYTHONPATH": str(ROOT)})
+                             env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
         _o, err = rep.communicate(timeout=30)
     finally:
         rep.kill()
