@@ -29,6 +29,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import gc
+import os
 import logging
 import re
 
@@ -114,16 +115,30 @@ class _State:
         self.analyses = 0
         self._tidied = 0
         self._tidy_handle: asyncio.TimerHandle | None = None
-        self._workspace: Workspace | None = None
+        self._roots: list[str] | None = None
+        self._workspaces: dict[tuple[str, ...], Workspace] = {}
 
-    def workspace(self) -> Workspace:
-        if self._workspace is None:
+    def workspace(self, uri: str | None = None) -> Workspace:
+        """The files the client's folders hold (``workspaceFolders``, else ``rootUri``),
+        each folder once (:func:`_distinct`); a client that gave neither: the folder of
+        ``uri``'s document."""
+        if self._roots is None:
             ws = self.server.workspace
             roots = [p for f in (ws.folders or {}).values() if (p := to_fs_path(f.uri))]
-            if not roots and ws.root_path:
-                roots = [ws.root_path]
-            self._workspace = Workspace(roots, self.memory, self.open_text)
-        return self._workspace
+            if ws.root_path:
+                roots.append(ws.root_path)
+            self._roots = _distinct([r for r in roots if r])
+        key = tuple(self._roots)
+        if not key and uri:
+            key = (os.path.dirname(to_fs_path(uri) or ""),)
+        if key not in self._workspaces:
+            self._workspaces[key] = Workspace(list(key), self.memory, self.open_text)
+        return self._workspaces[key]
+
+    def forget(self) -> None:
+        """List the workspaces' files again at the next request."""
+        for w in self._workspaces.values():
+            w.forget()
 
     def document(self, uri: str):
         """The open document ``uri`` (pygls's), or None when the client has not opened it."""
@@ -142,7 +157,7 @@ class _State:
             return Analysis()
         path = to_fs_path(uri) or uri
         try:
-            elsewhere = self.workspace().uses_elsewhere(path)
+            elsewhere = self.workspace(uri).uses_elsewhere(path)
             a = analyse(doc.source, path, self.memory, elsewhere)
         except Exception as exc:  # noqa: BLE001 - never exit on a document: say so
             self.log(f"fretc could not analyse {uri}: {exc!r}", T.MessageType.Error)
@@ -217,7 +232,19 @@ class _State:
 
 def _locations(places: list[Place]) -> list[T.Location]:
     return [T.Location(uri=from_fs_path(p.path), range=_range(p.line, p.col, p.end_col))
-            for p in places]
+            for p in dict.fromkeys(places)]
+
+
+def _distinct(roots: list[str]) -> list[str]:
+    """The folders of ``roots`` each once (by real path), none inside another kept one: a
+    client that names one folder as ``rootUri`` and in ``workspaceFolders`` (or a folder
+    and a sub-folder) would have each file listed twice."""
+    real = sorted({os.path.realpath(r) for r in roots}, key=len)
+    out: list[str] = []
+    for r in real:
+        if not any(os.path.commonpath([r, k]) == k for k in out):
+            out.append(r)
+    return out
 
 
 def _name_at(st: _State, uri: str, pos: T.Position) -> tuple[str, str] | None:
@@ -236,12 +263,16 @@ def _rename(st: _State, uri: str, pos: T.Position, new: str) -> T.WorkspaceEdit:
     if found is None:
         raise JsonRpcInvalidParams("no variable or requirement id here to rename")
     kind, old = found
-    ws = st.workspace()
+    ws = st.workspace(uri)
     shown = new if len(new) <= 80 else new[:80] + "..."
     if kind == "variable":
         if not valid_variable_name(new):
             raise JsonRpcInvalidParams(f"{shown!r} is not a FRETish variable name (a letter, "
                                        "then letters, digits and '_'; not a reserved word)")
+        if new != old and ws.variable_places(new):
+            raise JsonRpcInvalidParams(f"the variable {new!r} exists already: the rename would "
+                                       "make two variables one (and a bindings file's key "
+                                       "twice)")
         places = ws.variable_places(old)
     else:
         if not valid_id(new):
@@ -251,7 +282,7 @@ def _rename(st: _State, uri: str, pos: T.Position, new: str) -> T.WorkspaceEdit:
             raise JsonRpcInvalidParams(f"the requirement id {new!r} exists already")
         places = ws.id_places(old)
     changes: dict[str, list[T.TextEdit]] = {}
-    for p in places:
+    for p in dict.fromkeys(places):  # each place once: LSP forbids overlapping edits
         changes.setdefault(from_fs_path(p.path), []).append(
             T.TextEdit(range=_range(p.line, p.col, p.end_col), new_text=new))
     return T.WorkspaceEdit(changes=changes)
@@ -283,7 +314,7 @@ def make_server() -> LanguageServer:
     @server.feature(T.TEXT_DOCUMENT_DID_OPEN)
     @_guarded(None)
     def did_open(ls, params: T.DidOpenTextDocumentParams):
-        st.workspace().forget()
+        st.forget()
         st.saved[params.text_document.uri] = params.text_document.text
         st.cache.pop(params.text_document.uri, None)
         st.analyse(params.text_document.uri)
@@ -302,7 +333,7 @@ def make_server() -> LanguageServer:
         doc = st.document(uri)
         if doc is None:  # a save of a document the client has not opened
             return
-        st.workspace().forget()
+        st.forget()
         a = st.analyse(uri)
         st.saved[uri] = doc.source
         st.jobs[uri] = asyncio.ensure_future(st.check_on_save(uri, doc.version, doc.source, a))
@@ -355,7 +386,8 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
             return None
         kind, name = found
         if kind == "id":
-            places = [p for p in st.workspace().id_places(name) if p.col == 0]
+            places = [p for p in st.workspace(params.text_document.uri).id_places(name)
+                      if p.col == 0]
             return _locations(places)[0] if places else None
         where = st.analysis(params.text_document.uri).definition(name)
         if where is None:
@@ -369,7 +401,7 @@ def _reading_features(server: LanguageServer, st: _State) -> None:
         if found is None:
             return []
         kind, name = found
-        ws = st.workspace()
+        ws = st.workspace(params.text_document.uri)
         return _locations(ws.variable_places(name) if kind == "variable"
                           else ws.id_places(name))
 
@@ -395,8 +427,9 @@ def _editing_features(server: LanguageServer, st: _State) -> None:
         if found is None:
             return None
         kind, name = found
-        places = [p for p in (st.workspace().variable_places(name) if kind == "variable"
-                              else st.workspace().id_places(name))
+        ws = st.workspace(params.text_document.uri)
+        places = [p for p in (ws.variable_places(name) if kind == "variable"
+                              else ws.id_places(name))
                   if from_fs_path(p.path) == params.text_document.uri
                   and p.line == params.position.line
                   and p.col <= params.position.character <= p.end_col]
@@ -443,14 +476,15 @@ def _editing_features(server: LanguageServer, st: _State) -> None:
         return text
 
 
-def main() -> None:
-    """Serve over stdio until the client exits; the jobs still running end with it."""
+def main() -> int:
+    """Serve over stdio until the client exits; the jobs still running end with it. The
+    exit code (:func:`fretc.editor.transport.serve_stdio`'s)."""
     from fretc.editor.transport import serve_stdio
 
     gc.set_threshold(700, 10, 1 << 30)  # full collections: _State._tidy's, at pauses
     server = make_server()
     try:
-        serve_stdio(server)
+        return serve_stdio(server)
     finally:
         for task in list(server.fretc_state.jobs.values()):  # type: ignore[attr-defined]  # (set above)
             task.cancel()

@@ -128,7 +128,7 @@ def _refuse(protocol, body: bytes, exc: Exception) -> None:
 
     try:
         data = json.loads(body)
-    except ValueError:
+    except (ValueError, RecursionError):  # not JSON, or nested too deeply to read
         return
     if not isinstance(data, dict) or "method" not in data or \
             not isinstance(data.get("id"), (int, str)) or isinstance(data.get("id"), bool):
@@ -142,19 +142,25 @@ def _refuse(protocol, body: bytes, exc: Exception) -> None:
 
 
 def serve_stdio(server: LanguageServer, stdin: BinaryIO | None = None,
-                stdout: BinaryIO | None = None) -> None:
+                stdout: BinaryIO | None = None) -> int:
     """Serve ``server`` (a pygls ``LanguageServer``) over standard input and output until the
-    client exits or the input ends (pygls's ``start_io`` with this module's reader)."""
+    client exits or the input ends (pygls's ``start_io`` with this module's reader); the
+    process's exit code: LSP's (``exit``: 0 after ``shutdown``, else 1), 0 at the end of the
+    input."""
     from pygls.io_ import StdoutWriter
 
     server._stop_event = stop = threading.Event()
     reader = _Reader(stdin or sys.stdin.buffer, server.thread_pool)
     server.protocol.set_writer(StdoutWriter(stdout or sys.stdout.buffer))
+    code = 0
     try:
         asyncio.run(_serve(stop, reader, server.protocol))
     except BrokenPipeError:
         log.error("fretc lsp: the connection to the client is lost")
-    except (KeyboardInterrupt, SystemExit):
+    except KeyboardInterrupt:
         pass
+    except SystemExit as exc:  # pygls's exit handler: the code LSP gives it
+        code = exc.code if isinstance(exc.code, int) else 0
     finally:
         server.shutdown()
+    return code

@@ -168,3 +168,77 @@ def test_a_hover_on_a_million_tick_requirement_is_bounded():
     a = analyse("R1: upon p the sw shall within 1000000 ticks satisfy q\n", "/nonexistent/x.fret")
     text = a.hover(0, 1)
     assert len(text) <= MAX_HOVER and "F[0,1000000]" in text and "no diagram" in text
+
+
+# --------------------------------------------------------------------------- round 7
+def test_a_message_of_deeply_nested_arrays_is_skipped_and_the_server_lives(session):
+    """A 2 KB JSON-RPC message of 1,000 nested arrays ended the server (RecursionError)."""
+    client, tmp = session
+    body = b'{"jsonrpc": "2.0", "id": 99, "method": "textDocument/hover", "params": ' + \
+        b"[" * 1000 + b"]" * 1000 + b"}"
+    client.raw(b"Content-Length: %d\r\n\r\n" % len(body) + body)
+    got = client.request("textDocument/documentSymbol",
+                         {"textDocument": {"uri": (tmp / "none.fret").as_uri()}})
+    assert got is not None and got.get("result") == []
+    assert client.proc.poll() is None and client.close() == 0
+
+
+def test_exit_without_shutdown_exits_1(session):
+    """LSP: the server exits with 1 on ``exit`` without ``shutdown`` before it (was 0)."""
+    client, _tmp = session
+    client.notify("exit", None)
+    assert client.proc.wait(timeout=20) == 1
+
+
+REF = ("R1: the robot shall always satisfy speed < 1\n"
+       "R2: upon speed > 2 the robot shall immediately satisfy slow\n")
+
+
+def _places(got) -> list:
+    return sorted((r["uri"].rsplit("/", 1)[-1], r["range"]["start"]["line"],
+                   r["range"]["start"]["character"]) for r in got["result"])
+
+
+@pytest.mark.parametrize("init", ["root_and_folders", "no_root"])
+def test_references_and_rename_list_each_place_once_with_or_without_a_root(tmp_path, init):
+    """A client that gives ``rootUri`` and the same folder in ``workspaceFolders`` got each
+    place twice (and every rename edit twice: overlapping edits, forbidden by LSP); one
+    that gives neither got nothing: the open document's folder is the workspace then."""
+    (tmp_path / "a.fret").write_text(REF)
+    client = RawClient(tmp_path)
+    try:
+        params = {"processId": None, "capabilities": {}}
+        if init == "root_and_folders":
+            params.update(rootUri=tmp_path.as_uri(), workspaceFolders=[
+                {"uri": tmp_path.as_uri(), "name": "ws"},
+                {"uri": (tmp_path / ".").as_uri() + "/", "name": "again"}])
+        else:
+            params.update(rootUri=None)
+        assert "result" in client.request("initialize", params)
+        client.notify("initialized", {})
+        uri = _open(client, tmp_path / "a.fret", REF)
+        at = {"textDocument": {"uri": uri}, "position": {"line": 0, "character": 36}}
+        got = client.request("textDocument/references",
+                             {**at, "context": {"includeDeclaration": True}})
+        want = [(i, line.index("speed")) for i, line in enumerate(REF.splitlines())]
+        assert _places(got) == [("a.fret", i, c) for i, c in want], got
+        got = client.request("textDocument/rename", {**at, "newName": "velocity"})
+        edits = got["result"]["changes"][uri]
+        assert sorted((e["range"]["start"]["line"], e["range"]["start"]["character"])
+                      for e in edits) == want, got
+    finally:
+        client.close()
+
+
+def test_rename_to_an_existing_variable_is_refused(session):
+    """Renaming ``speed`` to ``slow`` merged two variables and gave the bindings file a
+    duplicate key (a TOML it cannot read): refused, naming the variable."""
+    client, tmp = session
+    (tmp / "a.fret").write_text(REF)
+    (tmp / "a.bindings.toml").write_text('[variables]\nspeed = "/v.data"\nslow = "/s.data"\n')
+    uri = _open(client, tmp / "a.fret", REF)
+    got = client.request("textDocument/rename", {"textDocument": {"uri": uri}, "position": {
+        "line": 0, "character": 36}, "newName": "slow"})
+    assert "error" in got and "slow" in got["error"]["message"] and \
+        "exists" in got["error"]["message"], got
+    assert (tmp / "a.bindings.toml").read_text().count("slow") == 1

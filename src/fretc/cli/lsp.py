@@ -24,4 +24,4 @@ def lsp_cmd(stdio: bool) -> None:
         click.echo(f"error: fretc lsp needs pygls ({exc.name} is missing): "
                    "pip install 'fretc[editor]'", err=True)
         sys.exit(2)
-    main()
+    sys.exit(main())
