@@ -29,6 +29,7 @@ from bisect import bisect_left, insort
 from collections import deque
 from typing import Any
 
+from fretc.common.problems import SignalError
 from fretc.signals.bindings.windowing import WindowSpec
 
 __all__ = ["SlidingWindow", "PendingCalls", "OpenGoals", "message_value", "sliding_windows",
@@ -205,7 +206,7 @@ class PendingCalls:
         if etype <= 1:
             if key not in self.open:
                 if len(self.open) >= MAX_PENDING_CALLS:
-                    self.error = RuntimeError(
+                    self.error = SignalError(
                         f"{self.spec.topic}: more than {MAX_PENDING_CALLS:,} calls wait for "
                         "their response (the limit of waiting())")
                     return
@@ -262,8 +263,9 @@ class OpenGoals(PendingCalls):
                 continue
             if 1 <= s <= 3:
                 if key not in self.open and len(self.open) >= MAX_PENDING_CALLS:
-                    self.error = RuntimeError(f"{self.spec.topic}: more than "
-                                              f"{MAX_PENDING_CALLS:,} goals are open")
+                    self.error = SignalError(f"{self.spec.topic}: more than "
+                                             f"{MAX_PENDING_CALLS:,} goals are open (the "
+                                             "limit of goal_waiting())")
                     return
                 self.open.setdefault(key, t)
             elif s >= 4:

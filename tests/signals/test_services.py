@@ -193,3 +193,34 @@ def test_every_accepted_goal_ends_with_a_result_within_its_bound(tmp_path):
     assert v.verdict == "violated", v.error
     assert v.first_violation.at.time_ns == S + 800 * MS  # goal 2 has waited 0.6 s
     assert v.robustness == pytest.approx(0.5 - 0.7)  # 0.7 s at 1.9 s, its last open tick
+
+
+@pytest.mark.parametrize("func", ["waiting", "goal_waiting"])
+def test_past_the_bound_of_open_calls_the_requirement_is_an_error_naming_it(tmp_path, monkeypatch,
+                                                                            func):
+    """Past the bound of open calls (100,000; here 3) the bound's error object was used as a
+    number (TypeError, an internal error) in the audit and in the watch's clock: it is the
+    requirement's error, naming the topic and the bound."""
+    from _services import write_action_bag
+
+    import fretc.signals.windows as W
+
+    monkeypatch.setattr(W, "MAX_PENDING_CALLS", 3)
+    if func == "waiting":
+        log = write_service_bag(tmp_path, [(S + k * 10 * MS, 0, 1, k + 1, True) for k in range(6)])
+        expr, topic = "waiting(/arm)", "/arm"
+    else:
+        status = [(S + k * 10 * MS, [(g, 1) for g in range(1, k + 2)]) for k in range(6)]
+        log = write_action_bag(tmp_path, [], status)
+        expr, topic = "goal_waiting(/fib)", "/fib"
+    (tmp_path / "w.fret").write_text("@tick_period 10 ms\nW: the s shall always satisfy w <= 9\n")
+    (tmp_path / "w.bindings.toml").write_text(
+        f'[tick]\nperiod = "10 ms"\n[variables]\nw = "{expr}"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),))), str(log))
+    v = la.verdicts[0]
+    assert v.verdict == "error" and "more than 3" in v.error and topic in v.error, v.error
+    b = make_bindings({"w": expr}, TickSpec(period_ns=10 * MS))
+    from fretc.common.problems import SignalError
+
+    with pytest.raises(SignalError, match="more than 3"):
+        list(sample(open_log(log), b))
