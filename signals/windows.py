@@ -8,8 +8,9 @@ duration; pandas' ``rolling("2s")`` on the message series, closed on the right),
 last ``count`` messages at or before ``t``. Cost per message: constant (amortized) for
 ``sum``, ``count``, ``mean``, ``rate`` (a running compensated sum), ``min`` and ``max``
 (monotone deques, Lemire's streaming minimum/maximum), ``variance`` (Welford's update with
-removal); ``median`` and ``percentile`` keep the window's values sorted (insertion and
-removal by bisection: linear in the window's size, a memory move). Memory: every window
+removal); ``median`` and ``percentile`` keep the window's values in an order-statistics structure
+(``sortedcontainers.SortedList``: insertion, removal and the k-th value in logarithmic
+time). Memory: every window
 holds at most the messages of one span (or ``count`` of them), never more.
 
 The rules a value follows: a NaN (unread) value in the window makes it NaN (three-valued:
@@ -25,9 +26,10 @@ before are the clock's warm-up (per requirement, :mod:`fretc.signals.clock`).
 from __future__ import annotations
 
 import math
-from bisect import bisect_left, insort
 from collections import deque
 from typing import Any
+
+from sortedcontainers import SortedList
 
 from fretc.common.problems import SignalError
 from fretc.signals.bindings.windowing import WindowSpec
@@ -61,7 +63,7 @@ class SlidingWindow:
         self.m2 = 0.0
         self.lo: deque[tuple[int, float]] = deque()  # (sequence, value), values increasing
         self.hi: deque[tuple[int, float]] = deque()  # (sequence, value), values decreasing
-        self.ordered: list[float] = []
+        self.ordered = SortedList() if spec.func in ("median", "percentile") else None
 
     def push(self, t: int, v: Any) -> None:
         """Add the value ``v`` (bool, float; NaN unread; an exception: the message failed to
@@ -96,7 +98,7 @@ class SlidingWindow:
                 self.hi.pop()
             self.hi.append((seq, x))
         elif kind in ("median", "percentile"):
-            insort(self.ordered, x)
+            self.ordered.add(x)  # type: ignore[union-attr]
 
     def _add_sum(self, x: float) -> None:
         s = self.total + x
@@ -131,7 +133,7 @@ class SlidingWindow:
             elif kind == "max" and self.hi and self.hi[0][0] == oldest:
                 self.hi.popleft()
             elif kind in ("median", "percentile"):
-                del self.ordered[bisect_left(self.ordered, x)]
+                self.ordered.remove(x)  # type: ignore[union-attr]
         if len(items) == self.nans:  # empty of numbers: restart the sums exactly
             self.total = self.comp = self.mean = self.m2 = 0.0
 
@@ -173,7 +175,7 @@ class SlidingWindow:
         pos = q * (n - 1)
         i = int(math.floor(pos))
         j = min(i + 1, n - 1)
-        a, b = self.ordered[i], self.ordered[j]
+        a, b = self.ordered[i], self.ordered[j]  # type: ignore[index]
         return a + (b - a) * (pos - i)
 
 
