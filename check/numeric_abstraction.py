@@ -23,6 +23,7 @@ them (the midpoint of the region).
 from __future__ import annotations
 
 from collections.abc import Iterable
+import math
 from fractions import Fraction
 
 from fretc.compiler import ir
@@ -36,11 +37,16 @@ _TEST = {"<": lambda v, c: v < c, "<=": lambda v, c: v <= c, ">": lambda v, c: v
          ">=": lambda v, c: v >= c, "=": lambda v, c: v == c, "!=": lambda v, c: v != c}
 
 
-def _constant(n: Node) -> Fraction | None:
+def _constant(n: Node) -> Fraction | float | None:
+    """The value of a constant: exact (a Fraction), or +-inf for a literal past the largest
+    float (``1e999`` is inf, as the judge and the monitors read it); None for another node."""
     if n.op == "num":
         try:
-            return Fraction(name_of(n))
-        except (ValueError, ZeroDivisionError):
+            name = name_of(n)
+            if math.isinf(float(name)):
+                return float(name)
+            return Fraction(name)
+        except (ValueError, ZeroDivisionError, OverflowError):
             return None
     if n.op == "neg":
         c = _constant(n.args[0])
@@ -48,7 +54,7 @@ def _constant(n: Node) -> Fraction | None:
     return None
 
 
-def simple_comparison(node: Node) -> tuple[str, str, Fraction] | None:
+def simple_comparison(node: Node) -> tuple[str, str, Fraction | float] | None:
     """``(variable, op, constant)`` of a comparison of one variable with a constant, with the
     variable on the left (``3 < x`` gives ``("x", ">", 3)``); None for any other node."""
     if node.op != "cmp":
@@ -61,11 +67,26 @@ def simple_comparison(node: Node) -> tuple[str, str, Fraction] | None:
     return None
 
 
-def _simple(node: Node) -> tuple[str, str, Fraction]:
+def _simple(node: Node) -> tuple[str, str, Fraction | float]:
     """:func:`simple_comparison` of an atom of the abstraction (one by construction)."""
     got = simple_comparison(node)
     assert got is not None
     return got
+
+
+def _between(a: Fraction | float, b: Fraction | float) -> Fraction | float:
+    """A value strictly between the constants ``a < b`` when there is one (either may be
+    infinite: ``-inf`` and ``inf`` stand for "no constant below" and "none above"); ``a``
+    when ``a == b`` (an infinite constant with nothing beyond it)."""
+    if a == b:
+        return a
+    if math.isinf(a) and math.isinf(b):
+        return Fraction(0)
+    if math.isinf(b):
+        return a + 1
+    if math.isinf(a):
+        return b - 1
+    return (a + b) / 2
 
 
 class NumericAbstraction:
@@ -112,14 +133,14 @@ class NumericAbstraction:
         """``(atom text, why)`` of every atom left uninterpreted, sorted by text."""
         return sorted(self._uninterpreted.items())
 
-    def _regions(self, name: str) -> list[tuple[Fraction, tuple[bool, ...]]]:
+    def _regions(self, name: str) -> list[tuple[Fraction | float, tuple[bool, ...]]]:
         """``(representative value, truth of each atom)`` per region, distinct truths only."""
         atoms = self.atoms[name]
         consts = sorted({_simple(a)[2] for a in atoms})
-        points: list[Fraction] = [consts[0] - 1]
+        points: list[Fraction | float] = [_between(-math.inf, consts[0])]
         for i, c in enumerate(consts):
             points.append(c)
-            points.append((c + consts[i + 1]) / 2 if i + 1 < len(consts) else c + 1)
+            points.append(_between(c, consts[i + 1] if i + 1 < len(consts) else math.inf))
         out, seen = [], set()
         for v in points:
             truth = tuple(_TEST[_simple(a)[1]](v, _simple(a)[2])

@@ -203,3 +203,14 @@ def test_too_many_letters_for_the_search_go_to_the_fixed_points():
     d = _check_against_spot(a, b)                 # 2^9 letters a tick: past the search
     assert d.equivalent is False and d.shortest and "BuDDy" in d.proof
     assert len(d.trace["a"]) == 4 and "512 letters" in d.notes[0]
+
+
+@pytest.mark.parametrize("c", ["1e999", "-1e999", "1e309"])
+def test_a_literal_past_the_largest_float_is_infinity(c):
+    """``1e999`` is inf (as the judge reads it): the region values of a comparison with it
+    used to overflow into an internal error (OverflowError, exit 4)."""
+    code, out = _run("distinguish", f"the sw shall always satisfy x < {c}",
+                     "the sw shall always satisfy x < 5")
+    assert code == 1 and out.startswith("not equivalent: "), out  # x < -inf never holds,
+    # x < inf holds where x < 5 does not
+    assert ("A  violated " if c.startswith("-") else "A  satisfied ") in out, out

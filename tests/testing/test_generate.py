@@ -202,3 +202,14 @@ def test_arithmetic_and_uninterpreted_functions_replay(tmp_path):
     assert '"det_3x3(a,b,c)"' in (out / doc["tests"][0]["trace"]).read_text()
     for t in doc["tests"]:
         assert audit_verdicts(p, out / t["trace"], tmp_path) == t["expected"], t["id"]
+
+
+def test_a_literal_past_the_largest_float_is_no_internal_error(tmp_path):
+    """``1e999`` (inf) in a requirement: testgen used to stop with an OverflowError."""
+    f = tmp_path / "a.fret"
+    f.write_text("A: the sw shall always satisfy x < 1e999\n"
+                 "B: upon x > -1e999 the sw shall immediately satisfy y\n")
+    res = CliRunner().invoke(main, ["testgen", str(f), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0 and "internal error" not in res.output, res.output
+    doc = json.loads((tmp_path / "out" / "tests.json").read_text())
+    assert doc["tests"]
