@@ -61,15 +61,18 @@ def too_many_ticks(source: LogSource, bindings: Bindings | None, path: str) -> s
             f"{MAX_TICKS:,}; choose a longer period")
 
 
-def binding_type_errors(source: LogSource, bindings: Bindings, plan: AuditPlan, skip: set[int]
+def binding_type_errors(source: LogSource, bindings: Bindings, plan: AuditPlan, skip: set[int],
+                        schemas: Mapping[str, TopicSchema | None] | None = None
                         ) -> dict[int, str]:
     """The bindings the requirements use checked against the log's message types
     (:func:`fretc.signals.bindings.check_types`): requirement index -> why it is an ``error``
     (a binding that names a field the schema does not declare, mixes strings, booleans and
     numbers, or is used as the other kind), before anything is evaluated. Requirements whose
-    index is in ``skip`` (already in error) are not checked."""
+    index is in ``skip`` (already in error) are not checked. ``schemas``: topic ->
+    :class:`fretc.logs.schema.TopicSchema` when not the log's own (a watch's advertised
+    ones, :func:`fretc.logs.schema.record_schemas`)."""
     try:
-        schemas = log_schemas(source)
+        schemas = log_schemas(source) if schemas is None else schemas
     except Exception:  # unreadable schemas: the reader reports the damage itself
         return {}
     errors: dict[int, str] = {}

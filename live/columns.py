@@ -34,10 +34,12 @@ class LiveColumns:
         self.times: list = []
 
     def append(self, tick: Tick) -> None:
-        """Keep one :class:`~fretc.signals.clock.Tick`: its values, held log times and time."""
+        """Keep one :class:`~fretc.signals.clock.Tick`: its values, held log times and time.
+        A variable absent from it (its evaluation failed: its requirements are errors) reads
+        False, as in the audit's columns."""
         v = tick.values
         for name in self.names:
-            self.vals[name].append(v[name])
+            self.vals[name].append(v.get(name, False))
         lt = tick.log_times
         for t in self.topics:
             self.lts[t].append(lt.get(t, -1))

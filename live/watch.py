@@ -51,6 +51,7 @@ from fretc.live.merge import HOLD_SECONDS
 from fretc.audit.passes import ClockKey, ClockPass, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, run_gaps
+from fretc.live.checks import watchable
 from fretc.live.columns import LiveColumns, WatchPasses as _WatchPasses, split_pending
 from fretc.live.entities import EntityRecording
 from fretc.live.entity_events import EntityEvents
@@ -273,45 +274,18 @@ class Watch:
         self.entity_events.message(topic, log_time, payload)
 
     def _watchable(self, la: LogAudit, verdicts: dict[int, Verdict]) -> list:
-        """The requirements that can be watched: every variable bound, every topic they read
-        advertised with a schema that decodes, and the tick topic advertised; the others'
-        verdicts get the error."""
-        plan, src, url, b = self.plan, self.source, self.options.url, self.plan.bindings
-        active = []
-        for r in plan.requirements:
-            v = verdicts[r.index]
-            if v.error is not None or r.index in self.entities.indexes:
-                continue
-            missing = [n for n in r.variables if n not in b.variables]
-            if missing:
-                v.error = f"no binding for {', '.join(map(repr, missing))} in bindings " \
-                          f"({b.source})"
-                continue
-            topics = sorted({t for n in r.variables for t in log_topics(b.variables[n].topics)})
-            bad = []
-            for t in topics:
-                if t not in src.advertised:
-                    bad.append(f"topic {t} is not advertised by {url} (it advertises "
-                               f"{_listing(src.advertised)})")
-                elif src.decoders.get(t) is None:
-                    bad.append(f"topic {t} cannot be read "
-                               f"({src.schema_errors.get(t, 'no decoder')})")
-            if bad:
-                v.error = "; ".join(bad)
-                continue
-            active.append(r)
+        """The requirements that can be watched (:func:`fretc.live.checks.watchable`); the
+        bound topics not advertised are reported."""
+        src = self.source
+        active = watchable(self.plan, src, self.options.url, la, verdicts,
+                           set(self.entities.indexes))
         for t in sorted(self.needed - set(src.advertised)):
             src._problem(NOT_ADVERTISED, t, None,
-                         f"not advertised by {url} within {self.options.wait:g} s of "
-                         "connecting")
-        for r in plan.requirements:
+                         f"not advertised by {self.options.url} within "
+                         f"{self.options.wait:g} s of connecting")
+        for r in self.plan.requirements:
             if verdicts[r.index].error is not None:
                 self.live[r.index].error = verdicts[r.index].error
-        if b.tick.topic is not None and b.tick.topic not in src.advertised:
-            la.error = f"the tick topic {b.tick.topic} is not advertised by {url}"
-            for r in active:
-                verdicts[r.index].error = la.error
-            active = []
         return active
 
     def _record_problems(self, la: LogAudit, result) -> None:
@@ -554,12 +528,3 @@ class Watch:
                            extra={"ltl3": v.ltl3.status, "violations": v.violations})
             self._event(e)
         return la
-
-
-def _listing(topics, most: int = 20) -> str:
-    """``topics`` for an error: sorted, at most ``most`` named, the rest counted."""
-    names = sorted(topics)
-    if not names:
-        return "no topics"
-    more = f" and {len(names) - most} more" if len(names) > most else ""
-    return ", ".join(names[:most]) + more

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from fretc.logs.base import LogSource
 
 __all__ = ["FieldType", "TopicSchema", "FieldPathError", "LogSchemas", "log_schemas",
-           "field_paths", "closest"]
+           "record_schemas", "field_paths", "closest"]
 
 _NUMBER = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
            "float32", "float64", "byte", "char", "octet"}
@@ -334,6 +334,25 @@ def _mcap_schemas(source) -> LogSchemas:
             return None
         return build
     return LogSchemas({t: builder(t, chans) for t, chans in by_topic.items()})
+
+
+def record_schemas(records: Mapping[str, tuple[str, str, str, bytes]]) -> LogSchemas:
+    """Topic -> :class:`TopicSchema` (or None) built from topic -> (message encoding, schema
+    encoding, schema name, schema data), as an MCAP channel and its schema record give them
+    (a live source's advertisements: the watch checks the bindings' types with them)."""
+    def builder(topic: str, rec: tuple[str, str, str, bytes]
+                ) -> Callable[[], TopicSchema | None]:
+        def build() -> TopicSchema | None:
+            encoding, schema_encoding, name, data = rec
+            if encoding in SELF_DESCRIBING:
+                found = definition(encoding, schema_encoding, name, data or None)
+                built = _build("ros2msg", *found) if found else None
+            else:
+                built = (_build(schema_encoding, name, data.decode("utf-8", errors="replace"))
+                         if name else None)
+            return TopicSchema(topic, built[1], built[0]) if built else None
+        return build
+    return LogSchemas({t: builder(t, rec) for t, rec in records.items()})
 
 
 def _bag_schemas(source) -> dict[str, TopicSchema | None]:

@@ -397,3 +397,68 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
     assert abs(v["first_tick_ns"] - 100 * 10**9) <= 10**8
     assert res.exit_code == 1, res.output
 
+
+
+STRING_BINDINGS = {
+    "as_variable": ("auto = '/mode.data'", "a variable must be a boolean or a number"),
+    "as_number": ("auto = '/mode.data > 3'", "compares numbers"),
+    "len_of_string": ("auto = 'len(/mode.data) > 3'", "len() takes an array"),
+    "string_with_number": ("auto = '/mode.data == 3'", "compares a string with"),
+    "compared": ("auto = '/mode.data == \"auto\"'", None),
+}
+
+
+@pytest.mark.parametrize("transport,case", [
+    pytest.param(t, c, marks=[pytest.mark.slow] if t != "ws" and c != "as_variable" else [])
+    for t in ("ws", "dds", "zenoh") for c in sorted(STRING_BINDINGS)])
+def test_a_string_typed_bound_topic_is_watched_as_it_is_audited(transport, case, tmp_path,
+                                                                  dds_xml):
+    """A std_msgs/String topic read by a binding that types it wrong: the watch stopped
+    with an internal error (KeyError) or judged what the audit refuses; it is the same
+    type error as the audit's, and a binding that compares the string is judged as there."""
+    import sys as _sys
+
+    _sys.path.insert(0, str(ROOT / "tests"))
+    from _logs import MS, ROS2, T, float64, write_mcap
+
+    t0 = 1_700_000_000 * 10**9
+    msgs = []
+    for k in range(30):
+        msgs.append(("/mode", "std_msgs/msg/String", t0 + k * 100 * MS,
+                     T(ROS2, "std_msgs/msg/String")(data="auto" if k < 25 else "manual")))
+        msgs.append(("/v", "std_msgs/msg/Float64", t0 + k * 100 * MS + MS,
+                     float64(9.0 if k == 12 else 1.0)))
+    log = write_mcap(tmp_path / "s.mcap", msgs)
+    bind, why = STRING_BINDINGS[case]
+    (tmp_path / "s.fret").write_text("@tick_period 100 ms\n"
+                                     "M: in auto mode the robot shall always satisfy v < 5\n")
+    (tmp_path / "s.bindings.toml").write_text(
+        f'[tick]\nperiod = "100 ms"\n[variables]\n{bind}\nv = "/v.data"\n')
+    reqs = ["-r", str(tmp_path / "s.fret")]
+    out = tmp_path / "a.json"
+    CliRunner().invoke(main, ["audit", *reqs, str(log), "--json", str(out)])
+    audit = json.loads(out.read_text())
+    url = {"ws": f"ws://127.0.0.1:{_port()}"}.get(transport) or _url(transport)
+    serve = (["--serve", "--port", url.rsplit(":", 1)[1]] if transport == "ws"
+             else ["--serve", url, *_config(url, dds_xml)])
+    rep = subprocess.Popen(_fretc("replay", str(log), *serve, "--rate", "10"), cwd=ROOT,
+                           stderr=subprocess.PIPE, env={**os.environ,
+                                                        "PYTHONPATH": str(ROOT / "src")})
+    wout = tmp_path / "w.json"
+    try:
+        res = subprocess.run(_fretc("watch", url, *reqs, "--json", str(wout), "--no-live",
+                                    "--wait", "10", "--duration", "60",
+                                    *_config(url, dds_xml)),
+                             cwd=ROOT, capture_output=True, text=True, timeout=120,
+                             env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
+        rep.communicate(timeout=30)
+    finally:
+        rep.kill()
+    assert "internal error" not in res.stderr + res.stdout, res.stderr
+    (v,) = json.loads(wout.read_text())["logs"][0]["verdicts"]
+    (a,) = audit["logs"][0]["verdicts"]
+    assert (v["verdict"], v["error"]) == (a["verdict"], a["error"]), (v, a)
+    if why is None:
+        assert v["verdict"] == "violated"
+    else:
+        assert v["verdict"] == "error" and why in v["error"], v["error"]

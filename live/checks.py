@@ -1,0 +1,77 @@
+"""What a watch checks before it steps a requirement (the audit's own checks, on what the
+server advertised instead of a log's records): every variable bound, every topic it reads
+advertised with a schema that decodes, the tick topic advertised, and the bindings' types
+against the advertised schemas (:func:`fretc.audit.checks.binding_type_errors`: a binding
+that reads a string as a number, or a variable that is not a boolean or a number, is the
+requirement's ``error`` in the watch as in the audit)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fretc.audit.checks import binding_type_errors
+from fretc.audit.verdict import LogAudit, Verdict
+from fretc.common.streams import log_topics
+from fretc.logs.schema import record_schemas
+
+__all__ = ["watchable", "listing"]
+
+
+def listing(topics, most: int = 20) -> str:
+    """``topics`` for an error: sorted, at most ``most`` named, the rest counted."""
+    names = sorted(topics)
+    if not names:
+        return "no topics"
+    more = f" and {len(names) - most} more" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
+def watchable(plan: Any, src: Any, url: str, la: LogAudit, verdicts: dict[int, Verdict],
+              skip: set[int]) -> list:
+    """The requirements of ``plan`` that can be watched on ``src`` (a
+    :class:`fretc.live.source.WatchSource` after its advertisements); the others' verdicts
+    get the error (module docstring). ``skip``: indexes judged elsewhere (per entity)."""
+    b = plan.bindings
+    active = []
+    for r in plan.requirements:
+        v = verdicts[r.index]
+        if v.error is not None or r.index in skip:
+            continue
+        missing = [n for n in r.variables if n not in b.variables]
+        if missing:
+            v.error = f"no binding for {', '.join(map(repr, missing))} in bindings " \
+                      f"({b.source})"
+            continue
+        topics = sorted({t for n in r.variables for t in log_topics(b.variables[n].topics)})
+        bad = []
+        for t in topics:
+            if t not in src.advertised:
+                bad.append(f"topic {t} is not advertised by {url} (it advertises "
+                           f"{listing(src.advertised)})")
+            elif src.decoders.get(t) is None:
+                bad.append(f"topic {t} cannot be read "
+                           f"({src.schema_errors.get(t, 'no decoder')})")
+        if bad:
+            v.error = "; ".join(bad)
+            continue
+        active.append(r)
+    typed = binding_type_errors(src, b, plan, {i for i, v in verdicts.items()
+                                               if v.error is not None} | skip,
+                                schemas=record_schemas(_records(src)))
+    for i, why in typed.items():
+        verdicts[i].error = why
+    active = [r for r in active if r.index not in typed]
+    if b.tick.topic is not None and b.tick.topic not in src.advertised:
+        la.error = f"the tick topic {b.tick.topic} is not advertised by {url}"
+        for r in active:
+            verdicts[r.index].error = la.error
+        active = []
+    return active
+
+
+def _records(src: Any) -> dict[str, tuple[str, str, str, bytes]]:
+    """Topic -> (message encoding, schema encoding, schema name, schema bytes) of the
+    readable advertised channels of ``src``."""
+    return {t: (ch.encoding, ch.schema_encoding, ch.schema_name,
+                ch.schema.encode("utf-8", "surrogatepass"))
+            for t, ch in sorted(src.advertised.items()) if src.decoders.get(t) is not None}
