@@ -28,7 +28,7 @@ import re
 from typing import Any
 
 __all__ = ["csv_line", "visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe",
-           "file_stems"]
+           "file_stems", "no_surrogates"]
 
 _UNSAFE_CATEGORIES = frozenset({"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"})
 
@@ -70,6 +70,28 @@ def visible(text: Any, keep: str = "") -> str:
     if s.isascii() and s.isprintable():
         return s
     return "".join(_escape(ch) if _unsafe(ch, keep) else ch for ch in s)
+
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def no_surrogates(value: Any) -> Any:
+    """``value`` (JSON data: dicts, lists, strings, numbers) with every lone surrogate of
+    its strings and keys written as a visible escape: ``\\xfe`` for the byte a file name
+    that is not UTF-8 had (Python's ``surrogateescape``, PEP 383: U+DC80-U+DCFF), else
+    ``\\udXXX``. Such text cannot be encoded as UTF-8, so every output written from it
+    (JSON, CSV, HTML, needs.json, .sdoc) would fail; other characters are left as they are."""
+    if isinstance(value, str):
+        if not _SURROGATE.search(value):
+            return value
+        return _SURROGATE.sub(lambda m: (f"\\x{ord(m.group()) - 0xDC00:02x}"
+                                         if 0xDC80 <= ord(m.group()) <= 0xDCFF
+                                         else f"\\u{ord(m.group()):04x}"), value)
+    if isinstance(value, dict):
+        return {no_surrogates(k): no_surrogates(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [no_surrogates(v) for v in value]
+    return value
 
 
 def terminal_text(text: Any, keep: str = "") -> str:

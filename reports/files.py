@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from fretc.audit.annotate import AnnotateResult, annotate_mcap
+from fretc.common.textsafe import no_surrogates
 from fretc.reports.context import report_context
 from fretc.audit.verdict import SCHEMA
 from fretc.reports.render import render_html, render_markdown
@@ -221,6 +222,7 @@ def write_report(doc: dict, out_dir: str, *, plan: AuditPlan | None = None,
     results: list[AnnotateResult] = []
     if annotate_dir:
         annotated, results = _annotate_all(doc, Path(annotate_dir), basep, jd, out, notes)
+    doc = no_surrogates(doc)  # a log name that is not UTF-8: written escaped, never an error
     ctx = report_context(doc, traces, modules, notes=notes, annotated=annotated, title=title,
                          base=basep, json_dir=jd, generated=generated)
     ctx["matrix_rows"] = matrix_rows(doc, _current_entries(doc, basep, jd))

@@ -353,3 +353,35 @@ def test_fret_export_of_hostile_json(audits, tmp_path, case):
     else:
         assert code == 2 and not out.exists(), text
         assert case == "deep" or "1e999" in text
+
+
+def test_a_log_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_path):
+    """A log named with a byte that is not UTF-8 (``run\\xff.mcap``, and one that cannot be
+    read, ``bad\\xfe.mcap``): its name reaches the audit JSON as a lone surrogate, and every
+    export but ReqIF (needs.json, .sdoc, the matrix CSV and HTML) and the report stopped on
+    it (UnicodeEncodeError, an internal error); each writes it as a visible escape."""
+    import os
+    import shutil
+
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    try:
+        shutil.copy(ROOT / "traces" / "stop_delay.mcap",
+                    os.fsdecode(bytes(logs) + b"/run\xff.mcap"))
+        (logs / os.fsdecode(b"bad\xfe.mcap")).write_bytes(b"junk")
+    except (OSError, UnicodeError):
+        pytest.skip("the file system does not take names that are not UTF-8")
+    doc = tmp_path / "a.json"
+    code, _ = _run("audit", "-r", REQIF, "-b", BINDINGS, logs, "--json", doc, "--no-progress")
+    assert code == 2
+    outs = {"--needs": "n.json", "--sdoc": "r.sdoc", "--matrix": "m.csv",
+            "--matrix-html": "m.html", "-o": "out.reqif"}
+    for flag, name in outs.items():
+        code, text = _run("export", "-r", REQIF, "--from-json", doc, flag, tmp_path / name)
+        assert code == 0 and "internal error" not in text, (flag, text)
+        data = (tmp_path / name).read_bytes().decode("utf-8")  # valid UTF-8
+        if flag.startswith("--matrix"):  # the matrix names every log
+            assert "bad\\xfe.mcap" in data, flag
+    code, text = _run("report", "-r", REQIF, "--from-json", doc, "-o", tmp_path / "rep")
+    assert "internal error" not in text and (tmp_path / "rep" / "report.html").exists(), text
+    assert "bad\\xfe.mcap" in (tmp_path / "rep" / "matrix.csv").read_text(encoding="utf-8")

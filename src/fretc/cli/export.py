@@ -95,6 +95,7 @@ def export_cmd(ctx: click.Context, src: str | None, from_json: str, output: str 
     # lazy: the readers and writers only when the command runs
     from fretc.reports.export_results import audit_identity, requirement_results, write_atomic
     from fretc.reports.write import ReportError, load_audit_json
+    from fretc.common.textsafe import no_surrogates
 
     if output is not None and src is None:
         raise click.UsageError("-o writes the results into the requirements' file: give it "
@@ -104,7 +105,7 @@ def export_cmd(ctx: click.Context, src: str | None, from_json: str, output: str 
                                "--matrix or --matrix-html")
     kind = _kind(src) if output is not None and src is not None else None  # (src: refused above)
     try:
-        doc = load_audit_json(from_json)
+        doc = no_surrogates(load_audit_json(from_json))  # a log name that is not UTF-8
     except ReportError as exc:
         click.echo(shown(f"error: {exc}"), err=True)
         ctx.exit(2)
