@@ -30,7 +30,7 @@ from fretc.common.streams import log_topics
 from fretc.signals.streams import Streams
 from fretc.logs.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
-from fretc.signals.bindings.spec import grid_end, grid_start
+from fretc.signals.bindings.spec import MAX_TICKS, grid_end, grid_start, tick_bound_error
 from fretc.signals.windows import message_value, sliding_windows, window_block
 from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
@@ -42,10 +42,6 @@ __all__ = ["BLOCK", "MAX_TICKS", "TickBlock", "sample_blocks", "blocks_of_ticks"
 BLOCK = 4096
 #: At most this many ticks in one block (a long gap at a short period gives many ticks).
 MAX_BLOCK_TICKS = 1 << 16
-#: At most this many ticks per clock: a tick period that would give more (``tick period =
-#: "1 ns"`` on an 88 s log: 8.8e10; a header.stamp that jumps by centuries) is an input error
-#: that says how many, raised before any of them is made.
-MAX_TICKS = 10**8
 
 
 class TickBlock(NamedTuple):
@@ -142,6 +138,10 @@ class _Group:
         self.sampling = sampling
         self.stream = stream
         self.next_grid: int | None = None
+        #: bytes of columns a tick of this clock takes (time, values, held log times), and
+        #: the bytes made so far by every clock of the read (one list, shared)
+        self.bytes_per_tick = 8 * (1 + len(self.variables) + len(self.required))
+        self.committed = [0]
         self.next_seq = 0
         self.index = 0
         self.last_held: dict[str, int] = {}  # topic -> number of the message held last
@@ -198,6 +198,7 @@ def sample_blocks(source: LogSource, bindings: Bindings,
     tick = bindings.tick
     shared = _Stream() if bindings.time_base == "log" else None
     clocks: dict[Any, _Group] = {}
+    committed = [0]  # the column bytes of every clock (MAX_COLUMN_BYTES)
     buffers: dict[Any, HeaderBuffer] = {}
     fed: dict[str, list[Any]] = {}
     available = source.topics()
@@ -207,6 +208,7 @@ def sample_blocks(source: LogSource, bindings: Bindings,
         g.groups[key] = s
         stream = shared if shared is not None else _Stream()
         clocks[key] = c = _Group(sub, present_tf(topics, available), tick, s, stream)
+        c.committed = committed
         g.failed[key] = c.failed
         g.per_tick[key] = c.per_tick
         if shared is None:
@@ -331,13 +333,13 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
                 c.next_grid = grid_start(min(b.times[0] for b in bufs if b.times), c.period)
             end = grid_end(last, c.period) + 1 if final else last
             due = 0 if c.next_grid >= end else -(-(end - c.next_grid) // c.period)
-            if c.index + c.sampling.warmup_ticks + due > MAX_TICKS:
-                raise SignalError(
-                    f"{c.sampling.source.path}: more than {MAX_TICKS:,} ticks (the limit): "
-                    f"the tick period {c.period} ns from {c.next_grid} ns to the newest "
-                    f"message at {last} ns (time base: a header.stamp jump?); choose a longer "
-                    "tick period")
+            made = c.index + c.sampling.warmup_ticks
+            why = tick_bound_error(c.sampling.source.path, c.period, c.next_grid, last,
+                                   made + due, c.committed[0] + due * c.bytes_per_tick)
+            if why is not None:
+                raise SignalError(why)
             n = min(due, MAX_BLOCK_TICKS)
+            c.committed[0] += n * c.bytes_per_tick
             times = c.next_grid + c.period * np.arange(n, dtype=np.int64)
             own = None
             c.next_grid += n * c.period

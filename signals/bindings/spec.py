@@ -13,7 +13,8 @@ from fretc.common.units import NS_PER_S
 from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
-           "Bindings", "make_bindings", "grid_start", "grid_end"]
+           "Bindings", "make_bindings", "grid_start", "grid_end", "MAX_TICKS",
+           "MAX_COLUMN_BYTES", "tick_bound_error"]
 
 #: The time bases of ``[tick] time``: ``log`` (the log's own time of each message),
 #: ``header`` (every bound message's ``header.stamp``; a message without one is an error),
@@ -234,3 +235,30 @@ def grid_end(last: int, period: int) -> int:
     unsampled: the last message of a run is judged (docs/guide/ticks.md, "The tick
     grid")."""
     return -(-last // period) * period
+
+
+#: At most this many ticks per clock: a tick period that would give more (``tick period =
+#: "1 ns"`` on an 88 s log: 8.8e10; a header.stamp that jumps by centuries) is an input error
+#: that says how many, raised before any of them is made.
+MAX_TICKS = 10**8
+#: At most this many bytes of columns over the clocks of one read (8 bytes a tick for its
+#: time, and per variable and per held topic): counted before the ticks are made, so a log
+#: whose first message is far from its last (a 200-byte DataFlash log, a time stamp
+#: bit-flipped) is refused before it takes gigabytes.
+MAX_COLUMN_BYTES = 1 << 30
+
+
+def tick_bound_error(path: str, period: int, first: int, last: int, ticks: int,
+                     need: int) -> str | None:
+    """Why a clock of ``period`` (ns) that would have ``ticks`` ticks in all, from ``first``
+    to ``last`` (ns), cannot be sampled: more than :data:`MAX_TICKS`, or the columns of
+    every clock of the read with them (``need`` bytes) more than :data:`MAX_COLUMN_BYTES`;
+    None when it can (docs/guide/ticks.md, "A bound on ticks")."""
+    if ticks <= MAX_TICKS and need <= MAX_COLUMN_BYTES:
+        return None
+    what = (f"more than {MAX_TICKS:,} ticks (the limit)" if ticks > MAX_TICKS else
+            f"{ticks:,} ticks whose columns would take {need / 2**30:.2f} GiB, more than the "
+            f"{MAX_COLUMN_BYTES / 2**30:g} GiB an audit keeps")
+    return (f"{path}: {what}: the tick period {period} ns from {first} ns to the newest "
+            f"message at {last} ns (time base: a header.stamp jump? a time stamp far from "
+            "the others?); choose a longer tick period")

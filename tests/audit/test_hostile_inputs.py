@@ -304,3 +304,28 @@ def test_a_newline_in_log_text_cannot_forge_a_terminal_line(tmp_path):
     assert res.exit_code in (2, 3), res.output
     assert "arm\\x0aFORGED" in res.output, res.output
     assert not any(line.startswith("FORGED") for line in res.output.splitlines())
+
+
+def test_a_tiny_log_whose_messages_are_hours_apart_is_refused_before_its_columns(tmp_path):
+    """A 200-byte DataFlash log with two BAT records 50,000 s apart at a 1 ms tick: 5e7
+    ticks, under the tick limit, took 5.25 GB; the columns are counted before they are made
+    (1 GiB over the clocks of a log) and the requirement is an error saying how many, with
+    the process's memory still small."""
+    import resource
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests" / "logs"))
+    from _dataflash import write_dataflash
+
+    log = write_dataflash(tmp_path / "x.bin", [("BAT", [1_000_000, 0, 12.0, 1.0, 90]),
+                                               ("BAT", [50_000_000_000, 0, 12.0, 1.0, 80])])
+    assert log.stat().st_size < 1000
+    (tmp_path / "r.fret").write_text("R: the drone shall always satisfy volt > 10\n")
+    (tmp_path / "r.bindings.toml").write_text('[tick]\nperiod = "1 ms"\n[variables]\n'
+                                              'volt = "BAT.Volt"\n')
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    la = audit_log(load_plan(AuditConfig((str(tmp_path / "r.fret"),))), str(log))
+    (v,) = la.verdicts
+    assert v.verdict == "error" and "49,999,001 ticks" in v.error and "GiB" in v.error, v.error
+    # (not a measure of time: the peak the read reached, under a tenth of the columns)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 100 * 1024
