@@ -17,7 +17,8 @@ not topics. Messages are delivered in log-time order with the reordering window 
 unindexed readers (:mod:`fretc.logs.reorder`); a message later than the window is an
 ``out_of_order`` problem. Bytes between records that are no record (pymavlink skips them)
 are a ``corrupt_record`` gap; a file whose end is no whole record (a crashed recording) is
-read up to there: a ``truncated`` gap.
+read up to there: a ``truncated`` gap. A record dated far after the records on both sides
+of it (a bit flipped in its ``TimeUS``) is a ``corrupt_record`` problem naming it, skipped.
 """
 
 from __future__ import annotations
@@ -67,7 +68,7 @@ class DataflashSource(LogSource):
         super().__init__(path)
         self._formats: dict[str, object] = {}
         self._topics: dict[str, str] = {}
-        for topic, fmt, _lt, _m in self._records(None):
+        for topic, fmt, _lt, _m, _at in self._records(None):
             if topic not in self._topics:
                 self._topics[topic] = f"ardupilot/msg/{fmt.name}"
                 self._formats[topic] = fmt
@@ -89,7 +90,7 @@ class DataflashSource(LogSource):
                                       f"({type(exc).__name__}: {exc})") from None
 
     def _records(self, want: set[str] | None):
-        """(topic, format, log time ns, message) in file order. Bytes pymavlink skips
+        """(topic, format, log time ns, message, offset) in file order. Bytes pymavlink skips
         between two records are a gap (``corrupt_record``) between their log times; bytes
         left at the end that do not make a record, or a parse failure, end the read with a
         ``truncated`` gap. pymavlink's own prints of skipped bytes are kept off the
@@ -130,7 +131,7 @@ class DataflashSource(LogSource):
                     topic = f"{fmt.name}/{k}"
             if want is not None and topic not in want:
                 continue
-            yield topic, fmt, int(m.TimeUS) * 1000, m
+            yield topic, fmt, int(m.TimeUS) * 1000, m, start
 
     def _truncated(self, at: int | None, why: str) -> None:
         """The read ends after the message read last (log time ``at``, ns)."""
@@ -147,13 +148,46 @@ class DataflashSource(LogSource):
         return {t: (typ, dataflash_definition(self._formats[t]))
                 for t, typ in self._topics.items()}
 
+    def _dated(self, want: set[str] | None):
+        """:meth:`_records` with the records whose TimeUS cannot be right left out: one
+        dated more than :data:`REORDER_WINDOW_NS` after the record before it and followed by
+        one more than that before it (a bit flipped in its time stamp: a log's time runs on)
+        is a ``corrupt_record`` problem naming its type, offset and TimeUS, and a gap where
+        it was. Every record is looked at, whatever ``want`` keeps (the problems of a log
+        never depend on the topics read)."""
+        pending, prev = None, None
+        for rec in self._records(None):
+            lt = rec[2]
+            if pending is not None:
+                p, pending = pending, None
+                if lt < p[2] - REORDER_WINDOW_NS:
+                    self._gap(prev, lt, cause=P.CORRUPT_RECORD)
+                    self._problem(P.CORRUPT_RECORD, p[0], prev,
+                                  f"the {p[1].name} record at offset {p[4]} has TimeUS "
+                                  f"{p[2] // 1000} us, {(p[2] - prev) / 1e9:.6g} s after the "
+                                  f"record before it and {(p[2] - lt) / 1e9:.6g} s after the "
+                                  "one that follows it: its time stamp is damaged (a bit "
+                                  "flipped?); skipped", end_time=lt)
+                else:
+                    prev = p[2]
+                    if want is None or p[0] in want:
+                        yield p[:4]
+            if prev is not None and lt > prev + REORDER_WINDOW_NS:
+                pending = rec  # dated far after the record before it: judged by the next
+                continue
+            prev = lt if prev is None else max(prev, lt)
+            if want is None or rec[0] in want:
+                yield rec[:4]
+        if pending is not None and (want is None or pending[0] in want):
+            yield pending[:4]
+
     def messages(self, topics: set[str] | frozenset[str] | None = None) -> Iterator[Message]:
         """The messages of ``topics`` (all when None) in non-decreasing log time."""
         self._begin_pass()
         want = None if topics is None else set(topics)
         queue = ReorderQueue()
         position = 0
-        for topic, fmt, lt, m in self._records(want):
+        for topic, fmt, lt, m in self._dated(want):
             late = queue.late_by(lt)
             if late > 0:
                 self._problem(P.OUT_OF_ORDER, topic, lt,

@@ -273,3 +273,31 @@ def test_dataflash_cut_at_any_byte_inside_its_last_record_is_partial(tmp_path, c
     zeroed.write_bytes(data[:last] + bytes(4000) + data[last:])
     audit_log(plan, str(zeroed))
     assert "bad header" not in "".join(capfd.readouterr())
+
+
+@pytest.mark.parametrize("bit", [0x40, 0x01, 0x80])
+def test_dataflash_a_bit_flipped_in_timeus_names_the_record(tmp_path, bit):
+    """A bit flipped in one record's TimeUS dates it centuries (or minutes) after the records
+    around it: the audit stopped on "more than 100,000,000 ticks" naming no record. The
+    record is a ``corrupt_record`` problem naming its type, offset and TimeUS, skipped, and
+    the log is judged around it (a gap where it was)."""
+    rows = [("BAT", [1_000_000 + k * 100_000, 0, 12.0 if k != 30 else 9.0, 1.0, 90])
+            for k in range(50)]
+    log = write_dataflash(tmp_path / "x.bin", rows)
+    data = bytearray(log.read_bytes())
+    bat = [i for i in range(len(data) - 2) if data[i:i + 3] == bytes([0xA3, 0x95, 130])]
+    at = bat[20]
+    data[at + 3 + (7 if bit != 0x01 else 4)] ^= bit  # a high byte of the uint64 TimeUS
+    flipped = tmp_path / "flip.bin"
+    flipped.write_bytes(bytes(data))
+    (tmp_path / "r.fret").write_text("R: the drone shall always satisfy volt > 10\n")
+    (tmp_path / "r.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
+                                              'volt = "BAT.Volt"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "r.fret"),))),
+                   str(flipped))
+    (v,) = la.verdicts
+    named = [p for p in la.problems if p["kind"] == "corrupt_record"]
+    assert named and f"offset {at}" in named[0]["detail"] and "BAT" in named[0]["detail"], \
+        la.problems
+    assert v.verdict == "violated", v.error  # the record at 4.0 s read, the flipped one not
+    assert v.first_violation.at.time_ns == 4_000_000_000 and la.partial
