@@ -86,7 +86,7 @@ def robustness(pt: Node, columns: Columns, n: int) -> Robustness:
     """
     if n < 1:
         raise ValueError("robustness needs at least one tick")
-    ev = _Rho(columns, n)
+    ev = _Rho(columns, n, pt)
     if pt.op == "H" and pt.hi is None:
         margin = ev.rho(pt.args[0])
         value = float(margin.min())
@@ -103,7 +103,7 @@ def robustness_series(node: Node, columns: Columns, n: int) -> np.ndarray:
     Raises:
         VectorizeError: as :func:`robustness`.
     """
-    return _Rho(columns, n).rho(node)
+    return _Rho(columns, n, node).rho(node)
 
 
 def _neg(x: np.ndarray) -> np.ndarray:
@@ -120,19 +120,38 @@ def _fix_sign(rho: np.ndarray, truth: np.ndarray) -> np.ndarray:
         return np.where(~truth & ~(rho < 0), -TINY, rho)
 
 
-class _Rho:
-    """Memoized per-node robustness arrays over ``n`` ticks."""
+#: ticks of a since (``S``, ``T``) recurrence run at a time (:meth:`_Rho._since`)
+SINCE_CHUNK = 1 << 14
 
-    def __init__(self, columns: Columns, n: int):
+
+class _Rho:
+    """Per-node robustness arrays over ``n`` ticks of the formula ``root``; a node read by
+    several parents is kept until its last parent read it, any other array only while it
+    is used (the memory is a few arrays of ``n`` floats, not one per node)."""
+
+    def __init__(self, columns: Columns, n: int, root: Node):
         self.columns = columns
         self.n = n
         self.memo: dict[Node, np.ndarray] = {}
+        self.uses: dict[Node, int] = {}  # node -> reads by its parents still to come
+        seen, stack = {root}, [root]
+        while stack:
+            for child in stack.pop().args:
+                self.uses[child] = self.uses.get(child, 0) + 1
+                if child not in seen:
+                    seen.add(child)
+                    stack.append(child)
 
     def rho(self, node: Node) -> np.ndarray:
         got = self.memo.get(node)
         if got is None:
             got = self._compute(node)
-            self.memo[node] = got
+            if self.uses.get(node, 0) > 1:
+                self.memo[node] = got
+        left = self.uses.get(node, 0) - 1
+        self.uses[node] = left
+        if left <= 0:
+            self.memo.pop(node, None)
         return got
 
     def _compute(self, node: Node) -> np.ndarray:
@@ -198,17 +217,21 @@ class _Rho:
 
     def _since(self, op: str, p: Node, q: Node) -> np.ndarray:
         """``a S b``: ``s[i] = max(b[i], min(a[i], s[i-1]))`` from ``s[-1] = -inf``; its dual
-        ``a T b``: ``s[i] = min(b[i], max(a[i], s[i-1]))`` from ``+inf``."""
-        a, b = self.rho(p).tolist(), self.rho(q).tolist()
-        out = []
-        if op == "S":
-            s = -_INF
-            for ai, bi in zip(a, b):
-                s = max(bi, min(ai, s))
-                out.append(s)
-        else:
-            s = _INF
-            for ai, bi in zip(a, b):
-                s = min(bi, max(ai, s))
-                out.append(s)
-        return np.array(out, dtype=np.float64)
+        ``a T b``: ``s[i] = min(b[i], max(a[i], s[i-1]))`` from ``+inf``. The recurrence
+        runs over :data:`SINCE_CHUNK` ticks at a time as Python floats, so its memory is the
+        output array and one chunk, not Python objects for every tick."""
+        a, b = self.rho(p), self.rho(q)
+        out = np.empty(self.n, dtype=np.float64)
+        s = -_INF if op == "S" else _INF
+        for k in range(0, self.n, SINCE_CHUNK):
+            chunk = []
+            if op == "S":
+                for ai, bi in zip(a[k:k + SINCE_CHUNK].tolist(), b[k:k + SINCE_CHUNK].tolist()):
+                    s = max(bi, min(ai, s))
+                    chunk.append(s)
+            else:
+                for ai, bi in zip(a[k:k + SINCE_CHUNK].tolist(), b[k:k + SINCE_CHUNK].tolist()):
+                    s = min(bi, max(ai, s))
+                    chunk.append(s)
+            out[k:k + len(chunk)] = chunk
+        return out
