@@ -16,7 +16,7 @@ from fretc.common.units import NS_PER_S
 from fretc.common.problems import CsvError, LogError
 from fretc.logs.base import LogSource, Message
 
-__all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK"]
+__all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "column_name_problem"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
 CSV_TOPIC = "/csv"
@@ -32,6 +32,17 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 #: as the monitors read it (FRET's ``det_3x3(a,b,c)`` in the case studies)
 _CALL = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\(.*\)\Z")
 _BOOL_WORDS = {"true": True, "false": False, "1": True, "0": False}
+
+
+def column_name_problem(name: str) -> str | None:
+    """Why a CSV trace cannot carry the FRET variable ``name`` as a column of its own (a
+    header cell reads as a name only when it is an identifier or a function call's printed
+    text, and ``time`` is the rows' time), or None when it can."""
+    if name == "time":
+        return "'time' is the column of the rows' time in a CSV trace"
+    if not (_IDENT.match(name) or _CALL.match(name)):
+        return "a CSV trace's column names are identifiers or a function call's printed text"
+    return None
 
 
 class CsvRow(NamedTuple):

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from fretc.check.budget import Budget
-from fretc.common.textsafe import csv_line
+from fretc.common.textsafe import csv_line, visible
 from fretc.check.checker import Checker
 from fretc.check.items import CheckItem, make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
@@ -49,7 +49,7 @@ from fretc.compiler.build import Compiled
 from fretc.compiler.coverage import Obligation, obligations
 from fretc.compiler.semantics import Formalization, SemanticsError, formalize
 from fretc.fretish import ast as A
-from fretc.logs.csv_source import SAMPLED_MARK
+from fretc.logs.csv_source import SAMPLED_MARK, column_name_problem
 from fretc.monitors.coverage import exercised
 from fretc.monitors.interval import verdict_of
 
@@ -346,22 +346,34 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
     ``DIR/tests.json``; return the JSON document written (format in the module docstring of
     :mod:`fretc.cli.testgen`). ``sources``: the requirement files, for the replay line;
     ``bindings``: the binding file the tests' MCAP logs were written with
-    (:func:`fretc.testing.mcap_log.bind_tests`), or None."""
+    (:func:`fretc.testing.mcap_log.bind_tests`), or None. Ids and paths in the comment lines
+    are written visible (:func:`fretc.common.textsafe.visible`: a line break in an id
+    cannot end its line).
+
+    Raises:
+        ValueError: a variable a CSV trace cannot carry as a column
+            (:func:`fretc.logs.csv_source.column_name_problem`); nothing is written."""
     from pathlib import Path
     import json
 
     out = Path(out_dir)
+    for t in gen.tests:  # every variable a column the audit reads back as that variable
+        for n in t.rows[0] if t.rows else ():
+            why = column_name_problem(n)
+            if why is not None:
+                raise ValueError(f"the variable {visible(n)!r} cannot be a column of a test's "
+                                 f"CSV trace: {why}; rename it")
     out.mkdir(parents=True, exist_ok=True)
-    replay = "fretc audit " + " ".join(f"-r {s}" for s in sources)
+    replay = "fretc audit " + " ".join(f"-r {visible(s)}" for s in sources)
     tests = []
     for k, t in enumerate(gen.tests, 1):
         name = f"T{k:02d}"
         names = list(t.rows[0])
-        lines = [f"{SAMPLED_MARK}: fretc testgen test {name}, generated for {t.origin[0]} "
-                 f"{t.origin[1]}; FRET variables, one row per tick",
-                 f"# replay: {replay} {out / (name + '.csv')}",
+        lines = [f"{SAMPLED_MARK}: fretc testgen test {name}, generated for "
+                 f"{visible(t.origin[0])} {visible(t.origin[1])}; FRET variables, one row per "
+                 "tick", f"# replay: {replay} {visible(out / (name + '.csv'))}",
                  "# one row per tick; expected verdicts (FRET finite-trace semantics):",
-                 "# expected: " + ", ".join(f"{r}={v}" for r, v in t.expected.items()),
+                 "# expected: " + ", ".join(f"{visible(r)}={v}" for r, v in t.expected.items()),
                  csv_line((["time"] if period else []) + names)]
         lines += [",".join(([f"{float(i * period):.9f}"] if period else [])
                            + [_cell(r[n]) for n in names]) for i, r in enumerate(t.rows)]

@@ -213,3 +213,40 @@ def test_a_literal_past_the_largest_float_is_no_internal_error(tmp_path):
     assert res.exit_code == 0 and "internal error" not in res.output, res.output
     doc = json.loads((tmp_path / "out" / "tests.json").read_text())
     assert doc["tests"]
+
+
+@pytest.mark.parametrize("text,name", [
+    ("A: the sw shall always satisfy time > 1\n", "time"),
+    ('A: the sw shall always satisfy "#x" > 1\n', "#x"),
+    ('A: upon p the sw shall immediately satisfy "a,b"\n', "a,b"),
+])
+def test_a_variable_no_csv_trace_can_carry_is_refused(tmp_path, text, name):
+    """testgen wrote traces its own audit cannot read (a header whose first cell ``#x``
+    reads as a comment, a variable ``time`` read as the rows' time), exit 0: refused, naming
+    the variable, nothing written."""
+    f = tmp_path / "a.fret"
+    f.write_text(text)
+    res = CliRunner().invoke(main, ["testgen", str(f), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and repr(name) in res.output, res.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_id_with_a_line_break_stays_in_its_comment_line(tmp_path):
+    """A requirement id with a line break (a FRET export's ``reqid``) ended the
+    ``# expected:`` comment, the rest a row the audit could not read."""
+    f = tmp_path / "r.json"
+    f.write_text(json.dumps([{"reqid": "R1\nx,y", "fulltext": "the sw shall always satisfy p"},
+                             {"reqid": "R2", "fulltext": "upon q the sw shall immediately "
+                                                         "satisfy p"}]))
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["testgen", str(f), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((out / "tests.json").read_text())
+    for t in doc["tests"]:
+        text = (out / t["trace"]).read_text()
+        assert "# expected: R1\\x0ax,y=" in text
+        a = CliRunner().invoke(main, ["audit", "-r", str(f), str(out / t["trace"]), "--json",
+                                      str(tmp_path / "a.json"), "--no-progress"])
+        assert a.exit_code in (0, 1), a.output
+        got = json.loads((tmp_path / "a.json").read_text())["logs"][0]["verdicts"]
+        assert {v["requirement"]: v["verdict"] for v in got} == t["expected"]

@@ -91,7 +91,11 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
         bind_tests(gen, compiled, bindings, out_dir)
     sources = list(dict.fromkeys(c.entry.source for c in compiled))
     period = next((e.tick_period for e in entries if e.tick_period is not None), None)
-    doc = write_tests(gen, out_dir, sources, period, bindings_file)
+    try:
+        doc = write_tests(gen, out_dir, sources, period, bindings_file)
+    except ValueError as exc:  # a variable no CSV trace can carry: named
+        click.echo(shown(f"error: {exc}"), err=True)
+        sys.exit(2)
     if with_pytest:
         from fretc.testing.pytest_file import PYTEST_FILE, pytest_file
 
