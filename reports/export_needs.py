@@ -21,6 +21,12 @@ document's order, of type :data:`NEED_TYPE` (sphinx-needs' default requirement t
   ``fretc_tool_id``, ``fretc_ft``, ``fretc_pt``, ``fretc_parents``, ``fretc_audit_id``,
   ``fretc_audit_date``.
 
+Ids are written as JUnit's ``verifies`` writes them (:func:`fretc.common.textsafe.visible`:
+a control character, U+202E or U+2028 in an id as a visible escape), so the test cases link
+to their needs whatever the id holds; ``[[`` in any other value is written ``[ [``
+(sphinx-needs reads ``[[...]]`` in a need's fields and content as a dynamic function call
+and runs it).
+
 Deterministic: ``created`` is the audit's date (``--audit-date``, else the audit document's
 modification time), never the time of the export; keys sorted.
 """
@@ -31,6 +37,7 @@ import json
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
+from fretc.common.textsafe import xml_text
 from fretc.reports.export_results import RequirementResult
 from fretc.reports.rollup import parents_of
 
@@ -71,12 +78,26 @@ def _need(item: dict, result: RequirementResult, parents: tuple[str, ...], known
               "fretc_tool_id": origin.get("tool_id"), "fretc_ft": result.ft,
               "fretc_pt": result.pt, "fretc_parents": ", ".join(parents),
               "fretc_audit_id": result.audit_id, "fretc_audit_date": result.audit_date}
-    return {"id": item["id"], "type": NEED_TYPE,
+    need = {"id": _id(item["id"]), "type": NEED_TYPE,
             "title": origin.get("long_name") or item["id"],
             "content": item.get("text") or (origin.get("text") or ""),
             "status": result.verdict, "tags": ["fretc", result.verdict.replace(" ", "_")],
-            "links": [p for p in parents if p in known],
+            "links": [_id(p) for p in parents if p in known],
             **{k: "" if v is None else str(v) for k, v in fields.items()}}
+    return {k: v if k in ("id", "links") else _inert(v) for k, v in need.items()}
+
+
+def _id(rid: str) -> str:
+    """A requirement id as the need's id: as JUnit's ``verifies`` property has it (an XML
+    attribute: :func:`fretc.common.textsafe.xml_text` with nothing kept)."""
+    return xml_text(rid, keep="")
+
+
+def _inert(value):
+    """A need's value with ``[[`` written ``[ [`` (no sphinx-needs dynamic function)."""
+    if isinstance(value, list):
+        return [_inert(v) for v in value]
+    return value.replace("[[", "[ [") if isinstance(value, str) else value
 
 
 def needs_json(doc: dict, results: dict[str, RequirementResult],
@@ -90,9 +111,9 @@ def needs_json(doc: dict, results: dict[str, RequirementResult],
     runs = _runs(doc)
     needs = {}
     for item in items:
-        if item["id"] in needs:
+        if _id(item["id"]) in needs:
             continue
-        needs[item["id"]] = _need(item, results[item["id"]], parents.get(item["id"], ()),
+        needs[_id(item["id"])] = _need(item, results[item["id"]], parents.get(item["id"], ()),
                                   known, runs.get(item["id"], ""))
     date = next(iter(results.values())).audit_date if results else ""
     envelope = {"created": date, "current_version": NEEDS_VERSION, "project": project,

@@ -11,7 +11,7 @@ node to what it refines or verifies):
   ``FRETC-<id>``: its result over the runs (``VERDICT``, ``STATUS``), the evidence
   (``STATEMENT``), the formulas (``FT``, ``PT``), for a parent the roll-up (``ROLLUP``,
   ``ROLLUP_PATH``, :mod:`fretc.reports.rollup`), ``AUDIT_ID``, ``AUDIT_DATE``;
-* ``TEST_RESULT``, one per requirement and run, UID ``FRETC-<id>-<n>`` (``n`` the run's
+* ``TEST_RESULT``, one per requirement and run, UID ``FRETC-<id>/run-<n>`` (``n`` the run's
   1-based place in the audit): ``STATUS`` (``PASSED`` satisfied or vacuous, ``FAILED``
   violated, ``ERROR`` otherwise: StrictDoc's JUnit test-report words), ``VERDICT``,
   ``VACUOUS``, ``LOG``, ``FIRST_VIOLATION_LOG_TIME_NS``, ``FIRST_VIOLATION``,
@@ -19,8 +19,11 @@ node to what it refines or verifies):
 
 StrictDoc's own rules for the text (its grammar, ``strictdoc/backend/sdoc/grammar``): a
 single-line value starts with a non-space character and holds no line break; a field with
-no value is left out; a UID matches ``[\\w]+[\\w()\\-/.: ]*``: a requirement whose id does not
-gets no Parent relation (the result names it in ``TITLE``). Deterministic.
+no value is left out; a UID matches ``[\\w]+[\\w()\\-/.: ]*``: characters it does not take
+are written ``_``, and UIDs that come out equal (``R#2`` and ``R$2``) are made unique with
+``-(2)``, ``-(3)``... in document order; a requirement whose id is no UID gets no Parent relation
+(the result names it in ``TITLE``, and :func:`sdoc_text` says so in ``notes``).
+Deterministic.
 """
 
 from __future__ import annotations
@@ -81,13 +84,20 @@ def _node(tag: str, values: dict, parent: str | None) -> list[str]:
     return out + [""]
 
 
-def _uid(text: str) -> str:
-    """``text`` as a UID: characters StrictDoc's UID does not take replaced by ``_``."""
+def _uid(text: str, used: set[str]) -> str:
+    """``text`` as a UID (characters StrictDoc's UID does not take replaced by ``_``), made
+    unique among ``used`` (``-(2)``, ``-(3)``, ...; StrictDoc compares UIDs as written) and
+    added to it."""
     s = re.sub(r"[^\w()\-/.: ]", "_", text)
-    return s if UID_PATTERN.match(s) else "X" + s
+    s = s if UID_PATTERN.match(s) else "X" + s
+    out, k = s, 2
+    while out in used:
+        out, k = f"{s}-({k})", k + 1
+    used.add(out)
+    return out
 
 
-def _run_node(rid: str, n: int, log: str, v: dict) -> list[str]:
+def _run_node(rid: str, n: int, log: str, v: dict, used: set[str]) -> list[str]:
     fv = v.get("first_violation") or {}
     at = fv.get("log_time_ns")
     where = None
@@ -99,7 +109,7 @@ def _run_node(rid: str, n: int, log: str, v: dict) -> list[str]:
     rob = (v.get("robustness") or {}).get("value")
     verdict = v.get("verdict") or "error"
     return _node("TEST_RESULT", {
-        "UID": _uid(f"FRETC-{rid}-{n}"), "TITLE": f"{rid} on {log}",
+        "UID": _uid(f"FRETC-{rid}/run-{n}", used), "TITLE": f"{rid} on {log}",
         "STATUS": _STATUS.get(verdict, "ERROR"), "VERDICT": verdict,
         "VACUOUS": str(verdict == "vacuous").lower(), "LOG": log,
         "FIRST_VIOLATION_LOG_TIME_NS": at, "FIRST_VIOLATION": where,
@@ -107,21 +117,27 @@ def _run_node(rid: str, n: int, log: str, v: dict) -> list[str]:
 
 
 def sdoc_text(doc: dict, results: dict[str, RequirementResult],
-              title: str = "fretc audit results") -> str:
+              title: str = "fretc audit results", notes: list[str] | None = None) -> str:
     """The ``.sdoc`` text (module docstring) of the audit document ``doc`` and its results
-    (:func:`fretc.reports.export_results.requirement_results`)."""
+    (:func:`fretc.reports.export_results.requirement_results`); ``notes`` (when given) gets
+    a sentence per requirement whose id is no StrictDoc UID (its results have no Parent
+    relation)."""
     out = ["[DOCUMENT]", f"TITLE: {_value(title) or 'fretc audit results'}", "",
            _GRAMMAR.format(verification=_fields(_VERIFICATION), test=_fields(_TEST))]
     runs: dict[str, list[tuple[int, str, dict]]] = {}
     for n, la in enumerate(doc.get("logs") or [], start=1):
         for v in la.get("verdicts") or []:
             runs.setdefault(v.get("requirement"), []).append((n, la.get("log") or "", v))
+    used: set[str] = set()
     for rid, r in results.items():
+        if notes is not None and not UID_PATTERN.match(rid):
+            notes.append(f"{rid!r} is no StrictDoc UID: its results in the .sdoc have no "
+                         "Parent relation (their TITLE names it)")
         out += _node("VERIFICATION", {
-            "UID": _uid(f"FRETC-{rid}"), "TITLE": f"{rid}: result over {r.runs} runs",
+            "UID": _uid(f"FRETC-{rid}", used), "TITLE": f"{rid}: result over {r.runs} runs",
             "STATUS": _STATUS.get(r.verdict, "ERROR"), "VERDICT": r.verdict,
             "STATEMENT": r.evidence, "ROLLUP": r.rollup, "ROLLUP_PATH": r.rollup_path,
             "FT": r.ft, "PT": r.pt, "AUDIT_ID": r.audit_id, "AUDIT_DATE": r.audit_date}, rid)
         for n, log, v in runs.get(rid, []):
-            out += _run_node(rid, n, log, v)
+            out += _run_node(rid, n, log, v, used)
     return "\n".join(out).rstrip("\n") + "\n"

@@ -385,3 +385,40 @@ def test_a_log_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_path
     code, text = _run("report", "-r", REQIF, "--from-json", doc, "-o", tmp_path / "rep")
     assert "internal error" not in text and (tmp_path / "rep" / "report.html").exists(), text
     assert "bad\\xfe.mcap" in (tmp_path / "rep" / "matrix.csv").read_text(encoding="utf-8")
+
+
+HOSTILE_IDS = ["R1", "R1-1", "R#2", "R$2", "A\u202eB", "L\u2028M", "C\x07D", "[[copy('id')]]"]
+
+
+def test_hostile_ids_keep_their_links_in_junit_needs_and_sdoc(tmp_path):
+    """StrictDoc: ``R1``'s first run and ``R1-1``'s verification got one UID, ``R#2`` and
+    ``R$2`` collided, an id outside StrictDoc's UID pattern lost its Parent silently;
+    needs.json kept raw the ids JUnit's ``verifies`` escapes (the link broke), and ``[[``
+    went unescaped into sphinx-needs (a dynamic function call)."""
+    import re
+    import xml.etree.ElementTree as ET
+
+    reqs = tmp_path / "r.json"
+    reqs.write_text(json.dumps([{"reqid": i, "fulltext": f"the sw shall always satisfy p{k}"}
+                                for k, i in enumerate(HOSTILE_IDS)]))
+    trace = tmp_path / "t.csv"
+    trace.write_text(",".join(f"p{k}" for k in range(len(HOSTILE_IDS))) + "\n"
+                     + ",".join("true" for _ in HOSTILE_IDS) + "\n")
+    doc, junit = tmp_path / "a.json", tmp_path / "j.xml"
+    code, out = _run("audit", "-r", reqs, trace, "--json", doc, "--junit", junit,
+                     "--no-progress")
+    assert code == 0, out
+    code, out = _run("export", "--from-json", doc, "--needs", tmp_path / "n.json", "--sdoc",
+                     tmp_path / "r.sdoc")
+    assert code == 0, out
+    for rid in ("A\u202eB", "L\u2028M", "C\x07D", "[[copy('id')]]"):
+        assert f"note: {tmp_path / 'r.sdoc'}: {rid!r}".encode("unicode_escape").decode() \
+            in out.encode("unicode_escape").decode(), out
+    verifies = {p.get("value") for p in ET.parse(junit).iter("property")
+                if p.get("name") == "verifies"}
+    needs = json.loads((tmp_path / "n.json").read_text())["versions"]["1.0"]["needs"]
+    assert set(needs) == verifies and len(verifies) == len(HOSTILE_IDS)
+    text = (tmp_path / "n.json").read_text()
+    assert all("[[" not in str(v) for n in needs.values() for k, v in n.items() if k != "id")
+    uids = re.findall(r"^UID: (.*)$", (tmp_path / "r.sdoc").read_text(), re.M)
+    assert len(uids) == len(set(uids)) == 2 * len(HOSTILE_IDS)  # a verification, a run

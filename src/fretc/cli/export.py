@@ -145,7 +145,10 @@ def _tool_outputs(doc, results, needs_path, sdoc_path) -> list[tuple[str, bytes]
     if sdoc_path:
         from fretc.reports.export_sdoc import sdoc_text
 
-        out.append((sdoc_path, sdoc_text(doc, results).encode("utf-8")))
+        notes: list[str] = []
+        out.append((sdoc_path, sdoc_text(doc, results, notes=notes).encode("utf-8")))
+        for note in notes:
+            click.echo(shown(f"note: {sdoc_path}: {note}"), err=True)
     return out
 
 
