@@ -20,12 +20,10 @@ verdict, robustness, stale), and the header links show one of them (CSS ``:targe
 
 from __future__ import annotations
 
-import csv
 import html
-import io
 from dataclasses import astuple, dataclass, fields
 
-from fretc.common.textsafe import one_line
+from fretc.common.textsafe import csv_line, one_line
 
 from fretc.reports.export_results import requirement_results
 from fretc.reports.rollup import NOT_IN_AUDIT, parents_of, rollups
@@ -147,13 +145,13 @@ def _csv_cell(text: str) -> str:
 
 
 def matrix_csv(rows: list[MatrixRow]) -> str:
-    """The rows as CSV (RFC 4180, ``\\n`` line ends), with a header of :data:`COLUMNS`."""
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(COLUMNS)
-    for r in rows:
-        w.writerow([_csv_cell(c) for c in astuple(r)])
-    return buf.getvalue()
+    """The rows as CSV (RFC 4180, ``\\n`` line ends), with a header of :data:`COLUMNS`; a
+    cell with a comma, a quote, a line feed or a carriage return quoted
+    (:func:`fretc.common.textsafe.csv_line`: Python's ``csv`` writer leaves a lone carriage
+    return unquoted, and a reader ends the row there)."""
+    lines = [csv_line(list(COLUMNS))]
+    lines += [csv_line([_csv_cell(c) for c in astuple(r)]) for r in rows]
+    return "\n".join(lines) + "\n"
 
 
 #: Sort orders of the HTML page: (anchor, column, key of a row)

@@ -422,3 +422,17 @@ def test_hostile_ids_keep_their_links_in_junit_needs_and_sdoc(tmp_path):
     assert all("[[" not in str(v) for n in needs.values() for k, v in n.items() if k != "id")
     uids = re.findall(r"^UID: (.*)$", (tmp_path / "r.sdoc").read_text(), re.M)
     assert len(uids) == len(set(uids)) == 2 * len(HOSTILE_IDS)  # a verification, a run
+
+
+def test_a_carriage_return_in_an_id_stays_in_its_matrix_row(tmp_path):
+    """A CR in a requirement id (a FRET export's reqid) split its row of the matrix CSV."""
+    reqs = tmp_path / "r.json"
+    reqs.write_text(json.dumps([{"reqid": "A\rB", "fulltext": "the sw shall always satisfy p"},
+                                {"reqid": "C", "fulltext": "the sw shall always satisfy p"}]))
+    (tmp_path / "t.csv").write_text("p\ntrue\n")
+    doc = tmp_path / "a.json"
+    assert _run("audit", "-r", reqs, tmp_path / "t.csv", "--json", doc, "--no-progress")[0] == 0
+    assert _run("export", "--from-json", doc, "--matrix", tmp_path / "m.csv")[0] == 0
+    with open(tmp_path / "m.csv", newline="", encoding="utf-8") as f:
+        rows = list(csv.reader(f))
+    assert [r[0] for r in rows[1:]] == ["A\rB", "C"], rows
