@@ -68,7 +68,7 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     res, nan_unknown = prepare(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
-        _no_tick(res, v, la)
+        _no_tick(res, v, la, _windows_of(r, bindings))
         return
     _verdict(plan, r, res, bindings, v, nan_unknown)
     if plan.coverage:
@@ -238,9 +238,18 @@ def _nan_problem(r, res: ClockPass, la) -> None:
 
 
 
-def _no_tick(res: ClockPass, v, la) -> None:
+def _windows_of(r: RequirementPlan, bindings: Bindings | None) -> list[str]:
+    """The window bindings (``mean(x, 2s)`` ...) among ``r``'s variables, as ``name =
+    expression``."""
+    if bindings is None:
+        return []
+    return [f"{n} = {b.expr}" for n in r.variables
+            if (b := bindings.variables.get(n)) is not None and b.window is not None]
+
+
+def _no_tick(res: ClockPass, v, la, windows: list[str] = ()) -> None:
     """No tick evaluated: unknown when the damage came first, else an error saying what the
-    clock waited for."""
+    clock waited for (its topics, or windows that never filled: ``windows``)."""
     if res.intact_end is not None:
         v.verdict = "unknown"
         v.unknown_reason = ("the log is damaged before its first evaluated tick: nothing was "
@@ -250,6 +259,12 @@ def _no_tick(res: ClockPass, v, la) -> None:
                                 f"evaluated tick ({res.lost}): nothing was read to judge")
         return
     waiting = la.missing_topics or la.waiting_for
+    if not waiting and windows and v.warmup_ticks:
+        v.error = (f"no tick evaluated: the window of {'; '.join(windows)} is never complete "
+                   f"in the {v.warmup_ticks} ticks of the log (a window is complete once it "
+                   "starts at or after its topic's first message, or holds its count of "
+                   "messages): a shorter window, or a longer log")
+        return
     v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
                                       else ": the log has no message on the bound topics"))
 

@@ -123,3 +123,19 @@ def test_a_window_meeting_a_gap_is_unknown_for_its_span(tmp_path):
     want = int(np.count_nonzero((ticks >= g["start_ns"]) & (ticks - 2 * S < g["end_ns"])))
     assert v["W"].verdict == "unknown" and v["W"].unknown_ticks == want
     assert v["H"].unknown_ticks < want  # sample and hold is known from the next message
+
+
+def test_a_window_that_never_fills_is_named(tmp_path):
+    """``mean(x, 1e9 s)`` on a 10 s log: every tick is warm-up; the error said "the log has
+    no message on the bound topics" (it has 100): it names the window, its span and how much
+    of it the log gives."""
+    log = write_mcap(tmp_path / "w.mcap", [("/battery", "std_msgs/msg/Float64", S + k * 100 * MS,
+                                            float64(1.0)) for k in range(100)])
+    (tmp_path / "w.fret").write_text("@tick_period 100 ms\n"
+                                     "MEAN: the robot shall always satisfy mean_current < 10\n")
+    (tmp_path / "w.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
+                                              'mean_current = "mean(/battery.data, 1e9 s)"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),))), str(log))
+    (v,) = la.verdicts
+    assert v.verdict == "error" and "no message on the bound topics" not in v.error, v.error
+    assert "mean_current" in v.error and "never complete" in v.error, v.error
