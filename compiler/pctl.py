@@ -41,7 +41,8 @@ if TYPE_CHECKING:
     from fretc.fretish import ast as A
     from fractions import Fraction
 
-__all__ = ["Pctl", "pctl_of", "pctl_key", "prism_text", "strip_bounds", "bound_structure",
+__all__ = ["Pctl", "pctl_of", "pctl_key", "prism_text", "PrismUnsupported", "strip_bounds",
+           "bound_structure",
            "prism_property", "ALMOST_SURE", "PROBABILITY_KEYS"]
 
 #: the probability field of FRET's five-part keys
@@ -168,10 +169,15 @@ def prism_text(n: Node) -> str:
     prints them: ``! & | => <=>``, ``X F G U R``,
     bounded ``F<=k`` (``F[l,h]`` for a lower bound above 0), ``true``/``false``, names
     mangled as FRET does, ``P>=0.9 [ ... ]``. ``xor`` is written with ``&``, ``|`` and
-    ``!``; ``mod`` and ``^`` as PRISM's ``mod(a, b)`` and ``pow(a, b)``. Past-time
-    operators and FRETish functions PRISM has not (``absReal``, ``persisted`` left
-    uninterpreted...) print in FRET's syntax (:func:`fretc.compiler.printers.to_smv`):
-    the model must define them."""
+    ``!``; ``mod`` and ``^`` as PRISM's ``mod(a, b)`` and ``pow(a, b)``; FRETish's
+    ``absReal``/``absInt`` as ``max(x, -x)``, ``minReal``/``minInt`` and ``maxReal``/
+    ``maxInt`` as PRISM's ``min`` and ``max`` (PRISM manual, "Expressions": its built-in
+    functions).
+
+    Raises:
+        PrismUnsupported: something PRISM's properties cannot say: a past-time operator or
+            function (``persisted``, ``occurred``, ``preBool``...: PCTL has no past), or a
+            function PRISM has not (an uninterpreted one, ``det_3x3(a,b,c)``)."""
     memo: dict = {}
 
     def go(x: Node) -> str:
@@ -217,7 +223,26 @@ def _prism(x: Node, go) -> str:
         return f"({go(a[0])} {x.name} {go(a[1])})"
     if op == "neg":
         return f"(- {go(a[0])})"
-    return to_smv(x)
+    fn = _PRISM_FN.get(x.name or "") if op == "fn" else None
+    if fn is not None and len(a) == fn[1]:
+        return fn[0].format(*(go(y) for y in a))
+    what = (f"the past-time function {to_smv(x)}" if op == "past" else
+            f"the function {x.name}()" if op == "fn" else f"the past-time operator {op}"
+            if op in _PAST else f"{to_smv(x)}")
+    raise PrismUnsupported(f"{what} has no form in PRISM's properties (PCTL has no past, "
+                           "and PRISM no functions but its built-in ones)")
+
+
+#: FRETish functions PRISM's built-in functions give: name -> (PRISM text of the arguments'
+#: texts, number of arguments)
+_PRISM_FN = {"absReal": ("max({0}, (- {0}))", 1), "absInt": ("max({0}, (- {0}))", 1),
+             "minReal": ("min({0}, {1})", 2), "minInt": ("min({0}, {1})", 2),
+             "maxReal": ("max({0}, {1})", 2), "maxInt": ("max({0}, {1})", 2)}
+_PAST = ("Y", "Z", "H", "O", "S", "T", "FTP", "past")
+
+
+class PrismUnsupported(ValueError):
+    """A formula PRISM's property syntax cannot express (:func:`prism_text`)."""
 
 
 def prism_property(pctl: Pctl, name: str) -> str:

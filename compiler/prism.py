@@ -7,7 +7,9 @@ Files"), its formula the PCTL of :mod:`fretc.compiler.pctl`: FRET's placement of
 probability) around fretc's ft_inf. Lines before it, ``//`` comments, give its id, file,
 line and text. The FRET variables are the model's variables or formulas of the same
 (mangled) names: a model checked against the file must declare them. Requirements that did
-not formalize, and free-form ones, are comment lines with the reason.
+not formalize, free-form ones, and those PRISM's properties cannot say (a past-time function
+such as ``persisted``, a function PRISM has not: :class:`fretc.compiler.pctl.PrismUnsupported`)
+are comment lines with the reason.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import TYPE_CHECKING
 from fretc.common.textsafe import one_line
 
 from fretc.compiler.codegen import file_stems
-from fretc.compiler.pctl import prism_property
+from fretc.compiler.pctl import PrismUnsupported, prism_property
 
 if TYPE_CHECKING:
     from fretc.compiler.build import Compiled
@@ -27,9 +29,12 @@ if TYPE_CHECKING:
 __all__ = ["emit_prism"]
 
 
-def emit_prism(compiled: Sequence[Compiled]) -> dict[str, str]:
+def emit_prism(compiled: Sequence[Compiled],
+               skipped: list[tuple[str, str, str]] | None = None) -> dict[str, str]:
     """One properties text per requirement file: ``{file stem: text}`` in input order
-    (:func:`fretc.compiler.codegen.file_stems`; written as ``STEM.props``)."""
+    (:func:`fretc.compiler.codegen.file_stems`; written as ``STEM.props``). ``skipped``
+    (when given) gets ``(file stem, requirement id, why)`` of each formalized requirement
+    PRISM's properties cannot say."""
     groups: dict[str, list] = {}
     for c in compiled:
         groups.setdefault(c.entry.source, []).append(c)
@@ -46,7 +51,12 @@ def emit_prism(compiled: Sequence[Compiled]) -> dict[str, str]:
                 why = getattr(c.error, "message", None) or "free-form requirement"
                 lines.append("//   not formalized: " + one_line(why))
                 continue
-            lines.append(prism_property(form, _name(c.id, used)))
+            try:
+                lines.append(prism_property(form, _name(c.id, used)))
+            except PrismUnsupported as exc:  # refused, never a file PRISM cannot parse
+                lines.append("//   not in PRISM: " + one_line(str(exc)))
+                if skipped is not None:
+                    skipped.append((stems[source], c.id, str(exc)))
         out[stems[source]] = "\n".join(lines) + "\n"
     return out
 

@@ -335,10 +335,14 @@ class _Builder:
         from fractions import Fraction
 
         v = Fraction(value)
+        rounded = 0 < v < 1 and Fraction(float(v)) in (0, 1)  # '< 1e-400': 0 as a double,
+        if rounded:  # what the monitors, the statistics and PRISM compute with
+            v = Fraction(float(v))
         if not 0 <= v <= 1 or (op.type == "GT" and v == 1) or (op.type == "LT" and v == 0):
             what = (f"probability {value} is outside [0, 1]" if not 0 <= v <= 1 else
-                    f"'{op.value} {value}' is no probability bound: a probability is never "
-                    + ("above 1" if v == 1 else "below 0"))
+                    f"'{op.value} {value}' is no probability bound: "
+                    + (f"{value} is {int(v)} as a double, and " if rounded else "")
+                    + "a probability is never " + ("above 1" if v == 1 else "below 0"))
             raise _Fail(self.span(c[-1] if not value.startswith("-") else c[-2]), what,
                         "a probability bound is a number in [0, 1], e.g. "
                         "'with probability >= 0.99'")

@@ -192,3 +192,40 @@ def test_emit_prism_writes_a_properties_file(tmp_path):
     assert '"E": ((P>=0.5 [ (F ok) ]) & (P<=0.5 [ (F ok) ]));' in text  # PRISM has no '='
     assert '"N": P<1 [ (F ok) ];' in text
     assert "// P2 (" in text and "with probability >= 0.9" in text
+
+
+def test_emit_prism_expands_fret_functions_or_refuses_them(tmp_path):
+    """FRET's functions were written as FRET prints them (``persisted(3,a)``,
+    ``preBool(FALSE,a)``, ``absReal(x)``): PRISM cannot parse them. abs/min/max are PRISM's
+    built-in ``max``/``min``; past-time functions and functions PRISM has not are refused,
+    the requirement named on stderr and in a comment, never written as a property."""
+    f = tmp_path / "p.fret"
+    f.write_text("C: the sw shall with probability > 0.5 always satisfy minReal(x, y) > 1 & "
+                 "maxInt(x, y) < 3 & absReal(x) < 4 & absInt(y) > 0\n"
+                 "B: the sw shall with probability >= 0.9 always satisfy persisted(3, a)\n"
+                 "D: the sw shall with probability >= 0.9 always satisfy preBool(false, a)\n"
+                 "U: the sw shall with probability >= 0.9 always satisfy det(x, y) > 0\n")
+    res = CliRunner().invoke(main, [str(f), "--emit", "prism", "-o", str(tmp_path / "p.props")])
+    assert res.exit_code == 0, res.output
+    text = (tmp_path / "p.props").read_text()
+    assert ('"C": P>0.5 [ (G ((((min(x, y) > 1) & (max(x, y) < 3)) & (max(x, (- x)) < 4)) & '
+            '(max(y, (- y)) > 0))) ];') in text, text
+    props = [line for line in text.splitlines() if not line.startswith("//")]
+    assert len(props) == 1 and not any(w in text.split("//")[0] for w in ("Real(", "Int("))
+    for rid in ("B", "D", "U"):
+        assert f"skipped {rid} (p.props): " in res.output, res.output
+    assert text.count("//   not in PRISM: ") == 3
+
+
+@pytest.mark.parametrize("bound,ok", [("< 0", False), ("< 1e-400", False), ("<= 1e-400", True),
+                                      ("> 1", False), ("> 0.99999999999999999999", False),
+                                      ("< 1e-300", True)])
+def test_a_probability_that_is_0_or_1_as_a_double_is_judged_as_it(tmp_path, bound, ok):
+    """``< 0`` was refused while ``< 1e-400`` (0 as a double: what the monitors, the
+    statistics and PRISM read) was accepted and written ``P<1e-400``."""
+    f = tmp_path / "p.fret"
+    f.write_text(f"A: the sw shall with probability {bound} always satisfy p\n")
+    res = CliRunner().invoke(main, [str(f), "--emit", "prism"])
+    assert (res.exit_code == 0) == ok, res.output
+    if not ok:
+        assert "is no probability bound" in res.output

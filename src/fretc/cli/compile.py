@@ -109,9 +109,12 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
         write_c2po(compiled, output, _check_output, _write_outputs)
     elif emit == "prism":
         from fretc.compiler.prism import emit_prism  # lazy: only for prism
-        outputs = emit_prism(compiled)
+        refused: list = []
+        outputs = emit_prism(compiled, refused)
         _check_output(outputs, output, ".props")
         _write_outputs(outputs, output, ".props")
+        for stem, rid, why in refused:
+            click.echo(_shown(f"skipped {rid} ({stem}.props): {why}"), err=True)
     elif emit == "psl":
         from fretc.compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler
