@@ -189,6 +189,7 @@ def _read_bundle(source: str, content, text_attribute: str | None):
     from fretc.fretish.parser import parse
 
     names = attribute_names(content, source)
+    types = {t.identifier for t in content.spec_types or []}
     wanted = _text_attribute(names, text_attribute)
     objects = content.spec_objects or []
     ids: dict[str, tuple[str, dict[str, str], Any]] = {}  # IDENTIFIER -> (id, values, node)
@@ -199,7 +200,7 @@ def _read_bundle(source: str, content, text_attribute: str | None):
                 f"two SPEC-OBJECTs have the IDENTIFIER {so.identifier!r} (lines "
                 f"{_line(ids[so.identifier][2])} and {_line(so.xml_node)}); a ReqIF "
                 "IDENTIFIER must be unique", source=source, line=_line(so.xml_node))
-        values = _values(so, names, source)
+        values = _values(so, names, source, types)
         rid = next((values[k] for k in ID_ATTRIBUTES if values.get(k)), so.identifier)
         if rid in first:
             raise FretishFileError(
@@ -248,16 +249,59 @@ def _text_attribute(names: dict, asked: str | None) -> str:
     return DEFAULT_TEXT_ATTRIBUTE if DEFAULT_TEXT_ATTRIBUTE.lower() in known else REQIF_TEXT
 
 
-def _values(so, names: dict, source: str) -> dict[str, str]:
+def _values(so, names: dict, source: str, types: set[str]) -> dict[str, str]:
     """A SPEC-OBJECT's attribute values by lower-case attribute name. Raises
-    :class:`FretishFileError` at a value whose definition is not defined."""
+    :class:`FretishFileError` at a SPEC-OBJECT whose type ``types`` (the SPEC-OBJECT-TYPE
+    identifiers) does not hold, and at a value whose definition is not defined or that its
+    datatype does not take (:func:`_value_problem`)."""
+    if so.spec_object_type not in types:
+        raise FretishFileError(
+            f"SPEC-OBJECT {so.identifier!r} is of SPEC-OBJECT-TYPE {so.spec_object_type!r}, "
+            "which SPEC-TYPES does not define", source=source, line=_line(so.xml_node))
     out = {}
     for attr in so.attributes:
         got = names.get(attr.definition_ref)
+        line = _line(attr.xml_node if attr.xml_node is not None else so.xml_node)
         if got is None:
             raise FretishFileError(
                 f"SPEC-OBJECT {so.identifier!r}: its value refers to attribute definition "
                 f"{attr.definition_ref!r}, which no SPEC-OBJECT-TYPE defines", source=source,
-                line=_line(attr.xml_node if attr.xml_node is not None else so.xml_node))
+                line=line)
+        why = _value_problem(attr, got[1])
+        if why is not None:
+            raise FretishFileError(f"SPEC-OBJECT {so.identifier!r}: its value of {got[0]!r} "
+                                   f"{why}", source=source, line=line)
         out[got[0].lower()] = _value_text(attr, got[1])
     return out
+
+
+def _value_problem(attr, datatype) -> str | None:
+    """Why ``attr``'s value is not one of its datatype (ReqIF 1.2 section 10.8: an INTEGER
+    value a whole number within the datatype's MIN and MAX, a REAL a number, a BOOLEAN
+    ``true``/``false``, an enumeration's values among the datatype's ENUM-VALUEs), or None."""
+    kind, value = attr.attribute_type.name, attr.value
+    if kind == "ENUMERATION":
+        known = {v.identifier for v in getattr(datatype, "values", None) or []}
+        bad = [v for v in value or [] if v not in known]
+        return (f"is ENUM-VALUE {bad[0]!r}, which its datatype "
+                f"{datatype.identifier!r} does not define") if bad else None
+    if kind == "INTEGER":
+        try:
+            n = int(str(value).strip())
+        except ValueError:
+            return f"{value!r} is not an integer"
+        lo, hi = (getattr(datatype, "min_value", None), getattr(datatype, "max_value", None))
+        try:
+            lo, hi = int(lo) if lo is not None else None, int(hi) if hi is not None else None
+        except ValueError:
+            return None
+        if (lo is not None and n < lo) or (hi is not None and n > hi):
+            return f"{n} is outside [{lo}, {hi}], its datatype's MIN and MAX"
+    if kind == "REAL":
+        try:
+            float(str(value).strip())
+        except ValueError:
+            return f"{value!r} is not a number"
+    if kind == "BOOLEAN" and str(value).strip().lower() not in ("true", "false", "1", "0"):
+        return f"{value!r} is not true or false"
+    return None

@@ -355,3 +355,77 @@ def test_a_hostile_doorstop_item_is_an_input_error_naming_its_file(tmp_path, how
         load_requirements(tree)
     assert time.monotonic() - t0 < 20
     assert err.value.source == named or named in err.value.message, (how, str(err.value))
+
+
+_TYPED_REQIF = """<?xml version="1.0" encoding="UTF-8"?>
+<REQ-IF xmlns="http://www.omg.org/spec/ReqIF/20110401/reqif.xsd" xmlns:xhtml="http://www.w3.org/1999/xhtml">
+  <THE-HEADER><REQ-IF-HEADER IDENTIFIER="h"><TITLE>t</TITLE></REQ-IF-HEADER></THE-HEADER>
+  <CORE-CONTENT><REQ-IF-CONTENT>
+    <DATATYPES>
+      <DATATYPE-DEFINITION-STRING IDENTIFIER="DT-S" LAST-CHANGE="2026-01-01T00:00:00Z" MAX-LENGTH="100"/>
+      <DATATYPE-DEFINITION-INTEGER IDENTIFIER="DT-I" LAST-CHANGE="2026-01-01T00:00:00Z" MAX="100" MIN="0"/>
+      <DATATYPE-DEFINITION-ENUMERATION IDENTIFIER="DT-E" LAST-CHANGE="2026-01-01T00:00:00Z">
+        <SPECIFIED-VALUES>
+          <ENUM-VALUE IDENTIFIER="E-HIGH" LONG-NAME="high" LAST-CHANGE="2026-01-01T00:00:00Z"><PROPERTIES><EMBEDDED-VALUE KEY="1" OTHER-CONTENT=""/></PROPERTIES></ENUM-VALUE>
+        </SPECIFIED-VALUES>
+      </DATATYPE-DEFINITION-ENUMERATION>
+    </DATATYPES>
+    <SPEC-TYPES>
+      <SPEC-OBJECT-TYPE IDENTIFIER="T" LAST-CHANGE="2026-01-01T00:00:00Z">
+        <SPEC-ATTRIBUTES>
+          <ATTRIBUTE-DEFINITION-STRING IDENTIFIER="A-ID" LONG-NAME="ReqIF.ForeignID" LAST-CHANGE="2026-01-01T00:00:00Z">
+            <TYPE><DATATYPE-DEFINITION-STRING-REF>DT-S</DATATYPE-DEFINITION-STRING-REF></TYPE>
+          </ATTRIBUTE-DEFINITION-STRING>
+          <ATTRIBUTE-DEFINITION-STRING IDENTIFIER="A-F" LONG-NAME="FRETish" LAST-CHANGE="2026-01-01T00:00:00Z">
+            <TYPE><DATATYPE-DEFINITION-STRING-REF>DT-S</DATATYPE-DEFINITION-STRING-REF></TYPE>
+          </ATTRIBUTE-DEFINITION-STRING>
+          <ATTRIBUTE-DEFINITION-INTEGER IDENTIFIER="A-P" LONG-NAME="Priority" LAST-CHANGE="2026-01-01T00:00:00Z">
+            <TYPE><DATATYPE-DEFINITION-INTEGER-REF>DT-I</DATATYPE-DEFINITION-INTEGER-REF></TYPE>
+          </ATTRIBUTE-DEFINITION-INTEGER>
+          <ATTRIBUTE-DEFINITION-ENUMERATION IDENTIFIER="A-E" LONG-NAME="Level" LAST-CHANGE="2026-01-01T00:00:00Z" MULTI-VALUED="false">
+            <TYPE><DATATYPE-DEFINITION-ENUMERATION-REF>DT-E</DATATYPE-DEFINITION-ENUMERATION-REF></TYPE>
+          </ATTRIBUTE-DEFINITION-ENUMERATION>
+        </SPEC-ATTRIBUTES>
+      </SPEC-OBJECT-TYPE>
+    </SPEC-TYPES>
+    <SPEC-OBJECTS>
+      <SPEC-OBJECT IDENTIFIER="O1" LAST-CHANGE="2026-01-01T00:00:00Z">
+        <TYPE><SPEC-OBJECT-TYPE-REF>TYPEREF</SPEC-OBJECT-TYPE-REF></TYPE>
+        <VALUES>
+          <ATTRIBUTE-VALUE-STRING THE-VALUE="X1"><DEFINITION><ATTRIBUTE-DEFINITION-STRING-REF>A-ID</ATTRIBUTE-DEFINITION-STRING-REF></DEFINITION></ATTRIBUTE-VALUE-STRING>
+          <ATTRIBUTE-VALUE-STRING THE-VALUE="the robot shall always satisfy ok"><DEFINITION><ATTRIBUTE-DEFINITION-STRING-REF>A-F</ATTRIBUTE-DEFINITION-STRING-REF></DEFINITION></ATTRIBUTE-VALUE-STRING>
+          <ATTRIBUTE-VALUE-INTEGER THE-VALUE="INTVAL"><DEFINITION><ATTRIBUTE-DEFINITION-INTEGER-REF>A-P</ATTRIBUTE-DEFINITION-INTEGER-REF></DEFINITION></ATTRIBUTE-VALUE-INTEGER>
+          <ATTRIBUTE-VALUE-ENUMERATION><DEFINITION><ATTRIBUTE-DEFINITION-ENUMERATION-REF>A-E</ATTRIBUTE-DEFINITION-ENUMERATION-REF></DEFINITION><VALUES><ENUM-VALUE-REF>ENUMREF</ENUM-VALUE-REF></VALUES></ATTRIBUTE-VALUE-ENUMERATION>
+        </VALUES>
+      </SPEC-OBJECT>
+    </SPEC-OBJECTS>
+  </REQ-IF-CONTENT></CORE-CONTENT>
+</REQ-IF>
+"""
+
+
+@pytest.mark.parametrize("case,swap,what", [
+    ("type", ("TYPEREF", "NOPE"), "SPEC-OBJECT-TYPE 'NOPE'"),
+    ("integer", ("INTVAL", "abc"), "'abc' is not an integer"),
+    ("range", ("INTVAL", "500"), "outside [0, 100]"),
+    ("enum", ("ENUMREF", "E-NOPE"), "ENUM-VALUE 'E-NOPE'"),
+])
+def test_a_reqif_value_its_datatype_refuses_is_an_error_naming_it(tmp_path, case, swap, what):
+    """A SPEC-OBJECT of an undefined type, an INTEGER ``abc`` (or outside its datatype's
+    MIN/MAX) and an enumeration value its datatype does not define were accepted as text
+    (ReqIF 1.2, sections 10.8.x: a value is of its definition's datatype)."""
+    good = {"TYPEREF": "T", "INTVAL": "5", "ENUMREF": "E-HIGH"}
+    text = _TYPED_REQIF
+    for k, v in good.items():
+        text = text.replace(k, swap[1] if k == swap[0] else v)
+    p = tmp_path / "t.reqif"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(FretishFileError) as err:
+        load_requirements(p)
+    assert what in str(err.value) and err.value.line > 1, str(err.value)
+    ok = _TYPED_REQIF
+    for k, v in good.items():
+        ok = ok.replace(k, v)
+    p.write_text(ok, encoding="utf-8")
+    (e,) = load_requirements(p)
+    assert e.id == "X1" and e.error is None
