@@ -1,11 +1,9 @@
-"""Fuzz fretc with hostile inputs other than requirement text: forged MCAP indexes,
-decompression bombs, cut and bit-flipped logs, schemas that lie, hostile binding files and
-hostile live frames (Foxglove and rosbridge).
+"""Fuzz fretc with hostile inputs other than requirement text (logs, bindings, live frames,
+sources, outputs, test runs):
 
     python bench/fuzz_hostile.py --count 2000 [--seed N] [--classes index,bomb,...] [--shard K/N]
 
-Each run takes a fresh seed unless ``--seed`` is given; the seed is printed first, and the
-same seed gives the same inputs. Per class:
+A fresh seed unless ``--seed`` is given (printed first; same seed, same inputs). Per class:
 
 * ``index``: a small MCAP with its ChunkIndex records (times, offsets, lengths, channel
   lists), MessageIndex records and summary CRC forged at random; audited;
@@ -32,19 +30,18 @@ same seed gives the same inputs. Per class:
   old and huge log times, cut payloads) watched by ``fretc watch --duration 3``;
 * ``bus``: hostile DDS or Zenoh publishers (random payloads, one publisher leaving while the
   others go on, a publisher leaving and coming back, floods) watched for 4 s;
-* ``typed``: a command fed a wrongly typed value in a FRET JSON export, a binding file, a
-  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has these three);
-* ``lsp``: a hostile session of ``fretc lsp`` (framing, documents, requests at random
-  places; ``bench/fuzz_lsp.py``): no traceback, every request answered within 15 s, under
-  1 GB, a clean exit.
-* ``flight``: damaged PX4 ULogs and ArduPilot DataFlash logs (cut, zeroed spans, garbage
-  after the formats; ``bench/fuzz_flight.py``), audited against the intact log's verdicts;
+* ``typed``: a wrongly typed value in a FRET export, a binding file, a ``--psl-map`` file or
+  a falsify space (``bench/fuzz_live_inputs.py``: these three); ``lsp``: a hostile session
+  of ``fretc lsp`` (``bench/fuzz_lsp.py``); ``flight``: damaged PX4 ULogs and DataFlash logs
+  audited against the intact log's verdicts (``bench/fuzz_flight.py``);
 * ``reqif``, ``doorstop``, ``exports``, ``explain``: hostile ReqIF files and XHTML values,
   Doorstop trees, exported results read back by each format's library, and ``fretc
   explain``/``simulate`` of random requirements and traces (``bench/fuzz_sources.py``);
 * ``statistics``: hostile fleets, campaigns and option values against the statistics of
-  probability requirements (``bench/fuzz_statistics.py``: its oracle, never a bound decided
-  that the trials do not support).
+  probability requirements (``bench/fuzz_statistics.py``: never a bound the trials do not
+  support); ``crunner``, ``split``, ``prism``, ``entities``, ``windows`` (the C runner's
+  input and names, PRISM, the entity bound, windows at 10^6 messages:
+  ``bench/fuzz_emit.py``), ``testsjson``, ``drive``, ``lspnest`` (``bench/fuzz_runs.py``).
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
@@ -79,12 +76,15 @@ from fuzz_lsp import run_lsp  # noqa: E402  (lsp)
 from fuzz_statistics import run_statistics  # noqa: E402  (the statistics class)
 from fuzz_flight import run_flight  # noqa: E402  (the flight class)
 from fuzz_sources import run_doorstop, run_explain, run_exports, run_reqif  # noqa: E402
+from fuzz_emit import EMIT_CLASSES  # noqa: E402  (crunner, split, prism, entities, windows)
+from fuzz_runs import RUN_CLASSES  # noqa: E402  (testsjson, drive, lspnest)
 
 #: the share of ``cut`` inputs taken from the shipped traces (the rest: the small MCAP)
 TRACE_SHARE = 0.3
+MORE = {**EMIT_CLASSES, **RUN_CLASSES}  # name -> (runner(rng, tmp), weight)
 CLASSES = ("index", "bomb", "cut", "schema", "lost", "nan", "bindings", "frames", "ws",
            "bus", "typed", "lsp", "statistics", "flight", "reqif", "doorstop", "exports",
-           "explain")
+           "explain", *MORE)
 FRET = ("@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
         "RV: the robot shall always satisfy v_ok\n"
         "RE: the robot shall eventually satisfy !a_ok\n")
@@ -479,7 +479,7 @@ SOURCE_CLASSES = {"reqif": run_reqif, "doorstop": run_doorstop, "exports": run_e
 WEIGHTS = {"index": 2, "bomb": 1, "cut": 3, "schema": 2, "lost": 2, "nan": 2,
            "bindings": 40, "frames": 40, "ws": 0.2, "bus": 0.1, "typed": 8, "lsp": 0.2,
            "statistics": 20, "flight": 1, "reqif": 2, "doorstop": 1, "exports": 1,
-           "explain": 2}
+           "explain": 2, **{k: w for k, (_run, w) in MORE.items()}}
 
 
 def plan_inputs(classes: str, count: int) -> list[str]:
@@ -534,8 +534,8 @@ def main(argv=None) -> int:
                 bad = run_statistics(rng, tmp)
             elif kind == "flight":
                 bad = run_flight(rng, tmp, flight_cache)
-            elif kind in SOURCE_CLASSES:
-                bad = SOURCE_CLASSES[kind](rng, tmp)
+            elif kind in SOURCE_CLASSES or kind in MORE:
+                bad = (SOURCE_CLASSES.get(kind) or MORE[kind][0])(rng, tmp)
             else:
                 audits = audits or Audits(tmp)
                 bad = run_log_class(kind, rng, audits)
