@@ -20,7 +20,8 @@ from fretc.signals.between_ticks import folded_topics, single_topic
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
 from fretc.signals.bindings.frames import TfBuffer
-from fretc.signals.bindings.spec import Bindings, TickSpec, grid_end, grid_start
+from fretc.signals.bindings.spec import (Bindings, TickSpec, grid_end, grid_start,
+                                         tick_bound_error)
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import one_clock
 from fretc.signals.windows import push_message, sliding_windows, windows_complete
@@ -260,7 +261,8 @@ class Clock:
     the tick topic's messages), the warm-up waits for every one of ``required``, and the
     grid ends at or after their last message (:func:`grid_end`).
 
-    Messages are pushed in non-decreasing time (:meth:`push`); ticks come back as lists.
+    Messages are pushed in non-decreasing time (:meth:`push`); ticks come back one at a
+    time (generators: iterate each to its end).
     With ``keep_going``, a variable whose evaluation fails is dropped (its error kept in
     ``failed``) and the others go on; otherwise the SignalError propagates.
     """
@@ -376,22 +378,35 @@ class Clock:
             if held[3] is not None:
                 st.prev_msgs[tt], st.prev_times[tt] = held[3], held[4]  # type: ignore[assignment]
 
-    def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
-        """Hold message ``data`` of ``topic`` at time ``t``; the ticks due before it."""
-        out: list[Tick] = []
+    def _grid_ticks(self, end: int) -> Iterator[Tick]:
+        """The grid ticks before ``end`` (ns), counted against the tick bound before any is
+        made (:func:`~fretc.signals.bindings.spec.tick_bound_error`) and handed on one at
+        a time."""
+        assert self.next_grid is not None and self.period is not None
+        due = max(0, -(-(end - self.next_grid) // self.period))
+        why = tick_bound_error(str(getattr(self.s.source, "path", "")), self.period,
+                               self.next_grid, end, self.s.ticks + self.s.warmup_ticks + due,
+                               0) if due else None
+        if why is not None:
+            raise SignalError(why)
+        while self.next_grid < end:
+            tick = self._emit(self.next_grid)
+            self.next_grid += self.period
+            if tick is not None:
+                yield tick
+
+    def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
+        """Hold message ``data`` of ``topic`` at time ``t`` after yielding the ticks due
+        before it (iterate to the end: the message is held then)."""
         if self.period is not None:
             if self.next_grid is None:
                 self.next_grid = grid_start(t, self.period)
-            while self.next_grid < t:
-                tick = self._emit(self.next_grid)
-                self.next_grid += self.period
-                if tick is not None:
-                    out.append(tick)
+            yield from self._grid_ticks(t)
         else:
             while self.pending and self.pending[0][0] < t:
                 tick = self._emit_own(*self.pending.popleft())
                 if tick is not None:
-                    out.append(tick)
+                    yield tick
         st = self.state
         if self.since.get(topic) and topic in self.watched and s_first(self.s):
             self._missed(topic)  # the held message is superseded before a tick sampled it
@@ -416,7 +431,6 @@ class Clock:
         if topic == self.tick_topic:
             self.pending.append((t, data, log_time, prev, st.prev_times.get(topic)))
         self.last = t
-        return out
 
     def _missed(self, topic: str) -> None:
         """Count a change of a watched binding on the held message of ``topic``, which no
@@ -446,25 +460,17 @@ class Clock:
                 except SignalError as exc:
                     self.window[b.name].append(exc)
 
-    def finish(self) -> list[Tick]:
-        """The ticks left at the end of the log."""
-        out: list[Tick] = []
+    def finish(self) -> Iterator[Tick]:
+        """The ticks left at the end of the log (iterate to the end)."""
         if self.last is not None:
-            if self.period is not None:
-                assert self.next_grid is not None
-                end = grid_end(self.last, self.period)  # every message is held by a tick
-                while self.next_grid <= end:
-                    tick = self._emit(self.next_grid)
-                    self.next_grid += self.period
-                    if tick is not None:
-                        out.append(tick)
+            if self.period is not None:  # to the grid tick at or after the last message
+                yield from self._grid_ticks(grid_end(self.last, self.period) + 1)
             else:
                 while self.pending:
                     tick = self._emit_own(*self.pending.popleft())
                     if tick is not None:
-                        out.append(tick)
+                        yield tick
         self.s.missing_topics = sorted(self.missing)
-        return out
 
 
 def _context(state: EvalState, log_times: dict[str, int]) -> str:

@@ -329,3 +329,33 @@ def test_a_tiny_log_whose_messages_are_hours_apart_is_refused_before_its_columns
     assert v.verdict == "error" and "49,999,001 ticks" in v.error and "GiB" in v.error, v.error
     # (not a measure of time: the peak the read reached, under a tenth of the columns)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 100 * 1024
+
+
+def test_the_tick_by_tick_clock_counts_its_ticks_before_it_makes_them(tmp_path):
+    """The clock of the watch and of ``--write-csv`` made every tick due before a message
+    into one list: two DataFlash records 10^6 s apart at 1 ms (10^9 ticks) took gigabytes
+    before any bound; the 10^8-tick bound is counted before the ticks are made, and ticks
+    are handed on one at a time."""
+    import sys
+    import tracemalloc
+
+    from fretc.audit.sampled_csv import write_sampled_csv
+    from fretc.common.problems import SignalError
+
+    sys.path.insert(0, str(ROOT / "tests" / "logs"))
+    from _dataflash import write_dataflash
+
+    log = write_dataflash(tmp_path / "x.bin", [("BAT", [1_000_000, 0, 12.0, 1.0, 90]),
+                                               ("BAT", [10**12, 0, 12.0, 1.0, 80])])
+    (tmp_path / "r.fret").write_text("R: the drone shall always satisfy volt > 10\n")
+    (tmp_path / "r.bindings.toml").write_text('[tick]\nperiod = "1 ms"\n[variables]\n'
+                                              'volt = "BAT.Volt"\n')
+    plan = load_plan(AuditConfig((str(tmp_path / "r.fret"),)))
+    tracemalloc.start()
+    try:
+        with pytest.raises(SignalError, match="more than 100,000,000 ticks"):
+            write_sampled_csv(plan, str(log), tmp_path / "x.csv")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 50 * 2**20, peak
