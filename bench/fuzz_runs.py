@@ -237,9 +237,13 @@ def run_lspnest(rng: random.Random, tmp: Path) -> list[str]:
             bad.append(f"references {spots}")
         bad += _rename_step(client, rng, folder, uri, at)
     finally:
-        if shutdown:
-            client.request("shutdown", None)
-        client.notify("exit", None)
+        try:
+            if shutdown:
+                client.request("shutdown", None)
+            client.notify("exit", None)
+        except OSError:  # the server is gone: said below with its exit code
+            bad.append("the server ended before shutdown: "
+                       + b"".join(client.stderr).decode("utf-8", "replace")[-600:])
         try:
             code = client.proc.wait(timeout=20)
         except subprocess.TimeoutExpired:

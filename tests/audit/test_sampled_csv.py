@@ -205,3 +205,20 @@ def test_runner_refuses_a_nul_byte_and_never_stops_at_it(random_runner, tmp_path
     got = subprocess.run([str(exe), str(path)], capture_output=True, text=True)
     assert got.returncode == 2 and f"{path}:3:" in got.stderr and "NUL" in got.stderr, got
     assert got.stdout == ""
+
+
+def test_runner_reads_a_lone_carriage_return_as_the_audit_does(random_runner, tmp_path):
+    """A lone CR ends a line for the audit (Python's csv: ``m\\r,p,...`` is a header ``m``
+    and a row of five cells, refused); the runner read it as a space in the cell and judged
+    the trace (found by bench/fuzz_hostile.py --classes crunner)."""
+    _folder, plan, exe = random_runner
+    path = tmp_path / "cr.csv"
+    path.write_bytes(b"m\r,p,q,x,y\nfalse,false,false,2,true\n")
+    la = audit_log(plan, str(path))
+    assert la.error is not None and re.match(rf"{re.escape(str(path))}:2\D", la.error)
+    got = subprocess.run([str(exe), str(path)], capture_output=True, text=True)
+    assert got.returncode == 2 and f"{path}:2:" in got.stderr and got.stdout == "", got
+    path.write_bytes(b"m,p,q,x,y\rfalse,false,false,2,true\r")  # old Mac line ends: read
+    code, rows = _run(exe, path)
+    assert [r[:2] for r in rows] == [[v.requirement, v.verdict]
+                                     for v in audit_log(plan, str(path)).verdicts]
