@@ -247,7 +247,7 @@ def _windows_of(r: RequirementPlan, bindings: Bindings | None) -> list[str]:
             if (b := bindings.variables.get(n)) is not None and b.window is not None]
 
 
-def _no_tick(res: ClockPass, v, la, windows: list[str] = ()) -> None:
+def _no_tick(res: ClockPass, v, la, windows: Sequence[str] = ()) -> None:
     """No tick evaluated: unknown when the damage came first, else an error saying what the
     clock waited for (its topics, or windows that never filled: ``windows``)."""
     if res.intact_end is not None:

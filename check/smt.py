@@ -97,6 +97,10 @@ class _Atoms:
         if sc is None:
             return self._fn("b:" + letter_name(atom), z3.BoolSort())(t)
         name, op, c = sc
+        if isinstance(c, float):  # +-inf (1e999): a real is below inf, above -inf
+            below = c > 0
+            return z3.BoolVal({"<": below, "<=": below, ">": not below, ">=": not below,
+                               "=": False, "!=": True}[op])
         v = self._fn("r:" + name, z3.RealSort())(t)
         k = z3.RealVal(f"{c.numerator}/{c.denominator}")
         return {"<": v < k, "<=": v <= k, ">": v > k, ">=": v >= k, "=": v == k,

@@ -366,7 +366,7 @@ def _unit(file_stem: str, source: str, stem: str, items, automata, used: set[str
             continue
         base = stem if own_prefix else f"{stem}_{_identifier(c.id)}"
         prefix = _free(base, lambda n: not _names(n) & used)
-        used |= _names(prefix)
+        used.update(_names(prefix))
         try:
             got = (automata or {}).get((source, c.id))
             monitors.append(c_monitor(c, prefix, got))

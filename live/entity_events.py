@@ -17,7 +17,7 @@ without a generated monitor (``offline``).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from fnmatch import fnmatchcase
 from types import SimpleNamespace
 from typing import Any
@@ -30,7 +30,7 @@ from fretc.signals.bindings.binding import compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.extract import Valid
 from fretc.audit.passes import restrict as restrict_bindings
-from fretc.signals.clock import Clock, Sampling, present_tf
+from fretc.signals.clock import Clock, Sampling, Tick, present_tf
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import TickWindows
 
@@ -163,7 +163,7 @@ class EntityEvents:
             self._push(inst, topic, log_time, data)
 
     def _push(self, inst: _Instance, topic: str, log_time: int, data: Any) -> None:
-        ticks = []
+        ticks: list[Tick] = []
         try:
             if topic in inst.topics:
                 ticks += inst.clock.push(topic, log_time, log_time, data)
@@ -174,7 +174,7 @@ class EntityEvents:
             return
         self._ticks(inst, ticks)
 
-    def _ticks(self, inst: _Instance, ticks: list) -> None:
+    def _ticks(self, inst: _Instance, ticks: Iterable[Tick]) -> None:
         src = self.source
         for tick in ticks:
             tick = inst.windows.apply(None, tick)

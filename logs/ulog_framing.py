@@ -103,10 +103,10 @@ class _Formats:
             for f in body.split(";"):
                 if not f.strip():
                     continue
-                kind, _, field = f.strip().rpartition(" ")
+                kind, _, fname = f.strip().rpartition(" ")
                 base, _, count = kind.partition("[")
                 fields.append((base, int(count.rstrip("]")) if count.rstrip("]").isdigit()
-                               else 0, field))
+                               else 0, fname))
             self.fields[name] = fields
         elif typ == ord("A") and len(payload) >= 3:
             self.topic[int.from_bytes(payload[1:3], "little")] = text[3:].rstrip("\x00")
@@ -119,7 +119,7 @@ class _Formats:
         if depth > 32 or name not in self.fields:
             return None
         total, least = 0, 0
-        for base, count, field in self.fields[name]:
+        for base, count, fname in self.fields[name]:
             one = _BASIC.get(base)
             if one is None:
                 inner = self.sizes(base, depth + 1)
@@ -127,7 +127,7 @@ class _Formats:
                     return None
                 one = inner[1]
             total += one * max(count, 1)
-            if not field.startswith("_padding"):
+            if not fname.startswith("_padding"):
                 least = total
         self._sizes[name] = (least, total)
         return self._sizes[name]

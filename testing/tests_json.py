@@ -108,7 +108,7 @@ def _where(error: Any) -> str:
     return f"{error.json_path}: {value} {rule}"
 
 
-def load_tests(folder: str | Path) -> dict:
+def load_tests(folder: str | Path) -> dict[str, Any]:
     """``folder/tests.json`` read and checked (module docstring).
 
     Raises:
@@ -150,4 +150,4 @@ def load_tests(folder: str | Path) -> dict:
         why = _trace_problem(t["trace"])
         if why is not None:
             raise TestsJsonError(f"{path}: $.tests[{i}].trace: {t['trace']!r:.80} {why}")
-    return doc
+    return dict(doc)  # an object: the schema says so

@@ -273,3 +273,23 @@ def test_a_vacuity_finding_keeps_its_forcing_set_when_subset_checks_are_unknown(
         if result.unknown_queries:
             assert "some subset checks were unknown" in vac.message \
                 or vac.standing == ["smallest"]
+
+
+@pytest.mark.parametrize("c,op,want", [("1e999", "<", True), ("1e999", ">=", False),
+                                       ("-1e999", ">", True), ("1e999", "=", False)])
+def test_a_comparison_with_an_infinite_literal_is_its_truth_over_the_reals(c, op, want):
+    """``x < 1e999`` (inf) in a z3 query: its constant has no numerator (an AttributeError
+    found by mypy once the abstraction read 1e999 as inf); over the reals it is true."""
+    import z3
+
+    from fretc.check.smt import _Atoms
+    from fretc.compiler import ir
+
+    neg = c.startswith("-")
+    k = ir.Node("num", (), name=c.lstrip("-"))
+    atom = ir.Node("cmp", (ir.Node("var", (), name="x"), ir.Node("neg", (k,)) if neg else k),
+                   name=op)
+    got = _Atoms(z3, "p").at(atom, z3.IntVal(0))
+    s = z3.Solver()
+    s.add(got if want else z3.Not(got))
+    assert s.check() == z3.sat and z3.is_true(z3.simplify(got)) == want

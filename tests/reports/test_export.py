@@ -418,7 +418,6 @@ def test_hostile_ids_keep_their_links_in_junit_needs_and_sdoc(tmp_path):
                 if p.get("name") == "verifies"}
     needs = json.loads((tmp_path / "n.json").read_text())["versions"]["1.0"]["needs"]
     assert set(needs) == verifies and len(verifies) == len(HOSTILE_IDS)
-    text = (tmp_path / "n.json").read_text()
     assert all("[[" not in str(v) for n in needs.values() for k, v in n.items() if k != "id")
     uids = re.findall(r"^UID: (.*)$", (tmp_path / "r.sdoc").read_text(), re.M)
     assert len(uids) == len(set(uids)) == 2 * len(HOSTILE_IDS)  # a verification, a run
