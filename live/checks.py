@@ -7,6 +7,7 @@ requirement's ``error`` in the watch as in the audit)."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
 from fretc.audit.checks import binding_type_errors
@@ -17,7 +18,7 @@ from fretc.logs.schema import record_schemas
 __all__ = ["watchable", "listing"]
 
 
-def listing(topics, most: int = 20) -> str:
+def listing(topics: Iterable[str], most: int = 20) -> str:
     """``topics`` for an error: sorted, at most ``most`` named, the rest counted."""
     names = sorted(topics)
     if not names:

@@ -435,3 +435,29 @@ def test_a_carriage_return_in_an_id_stays_in_its_matrix_row(tmp_path):
     with open(tmp_path / "m.csv", newline="", encoding="utf-8") as f:
         rows = list(csv.reader(f))
     assert [r[0] for r in rows[1:]] == ["A\rB", "C"], rows
+
+
+def test_the_audit_json_of_a_csv_without_bindings_reads_back(tmp_path):
+    """fretc's own audit JSON of a CSV trace judged without bindings (``tick_time_base``
+    ``"csv"``) with a violation: ``report`` and ``export --from-json`` read it; a document
+    that does break the schema is refused naming the failing member and value, not the
+    whole instance around it."""
+    (tmp_path / "r.fret").write_text("@tick_period 1 s\nA2: in m the sw shall always satisfy y\n")
+    (tmp_path / "t.csv").write_text("m,y\ntrue,true\ntrue,false\n")
+    out = tmp_path / "a.json"
+    res = CliRunner().invoke(main, ["audit", "-r", str(tmp_path / "r.fret"), str(tmp_path / "t.csv"),
+                                    "--json", str(out), "--no-progress"])
+    assert res.exit_code == 1, res.output
+    doc = json.loads(out.read_text())
+    assert doc["logs"][0]["verdicts"][0]["first_violation"]["tick_time_base"] == "csv"
+    res = CliRunner().invoke(main, ["report", "-r", str(tmp_path / "r.fret"), "--from-json",
+                                    str(out), "-o", str(tmp_path / "rep")])
+    assert res.exit_code == 1 and (tmp_path / "rep" / "report.html").exists(), res.output
+    doc["logs"][0]["verdicts"][0]["first_violation"]["tick_time_base"] = "sideways"
+    out.write_text(json.dumps(doc))
+    res = CliRunner().invoke(main, ["report", "-r", str(tmp_path / "r.fret"), "--from-json",
+                                    str(out), "-o", str(tmp_path / "rep2")])
+    assert res.exit_code == 2
+    assert "$.logs[0].verdicts[0].first_violation.tick_time_base: 'sideways' is not one of" \
+        in res.output, res.output
+    assert "scope_interval" not in res.output  # the instance around it is not dumped
