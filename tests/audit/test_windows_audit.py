@@ -77,8 +77,10 @@ def test_window_verdicts_equal_a_pandas_recomputation(tmp_path_factory, seed):
                          lambda a, b: a <= b),
              "P95": (lt, lx, 10 * S, lambda r: r.quantile(0.95), 12, lambda a, b: a < b)}
     for req, (mt, mx, span, how, bound, op) in cases.items():
-        ticks = np.arange((mt[0] + 100 * MS - 1) // (100 * MS) * (100 * MS), mt[-1] + 1,
-                          100 * MS)
+        # the grid: the first multiple at or after the first message to the first at or
+        # after the last (docs/guide/ticks.md)
+        ticks = np.arange((mt[0] + 100 * MS - 1) // (100 * MS) * (100 * MS),
+                          -(-mt[-1] // (100 * MS)) * (100 * MS) + 1, 100 * MS)
         want = _first_violation(ticks, _rolling(mt, mx, ticks, span, how), span, bound, op,
                                 int(mt[0]))
         v = got[req]

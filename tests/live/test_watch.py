@@ -260,7 +260,8 @@ def test_bad_payload_clock_backwards_and_unadvertise_are_data_problems(tmp_path)
     assert by["RB"].verdict == "unknown"
     assert "publisher of /b left" in by["RB"].unknown_reason
     assert la.partial
-    assert la.ticks_evaluated == 15  # 0 .. 1.45 s: the watch went on to the last message
+    assert la.ticks_evaluated == 16  # 0 .. 1.5 s: the watch went on to the first tick at or
+    # after the last message (1.45 s)
 
 
 def test_cli_watch_jsonl_and_exit_code(tmp_path):

@@ -127,7 +127,8 @@ def test_until_idle_ends_a_clean_run_with_exit_0(reqs, tmp_path):
     ends = [json.loads(x) for x in res.output.splitlines() if x.startswith('{"')]
     ends = [e for e in ends if e["event"] == "end"]
     assert [e["detail"] for e in ends] == ["no message for 0.5 s"]
-    assert [v["ticks_evaluated"] for v in doc["logs"][0]["verdicts"]] == [10, 10]
+    # 0 .. 1 s: to the first tick at or after the last message (950 ms)
+    assert [v["ticks_evaluated"] for v in doc["logs"][0]["verdicts"]] == [11, 11]
 
 
 def test_data_problems_exit_3_and_0_with_allow_partial(reqs, tmp_path):
@@ -170,7 +171,7 @@ def test_live_table_shows_each_clock_and_pending_apart(reqs):
     assert re.search(r"violated .* pending", text)
     for v in la.verdicts:
         row = next(x for x in text.splitlines() if f" {v.requirement} " in x)
-        assert f"{v.ticks_evaluated} (0.9 s)" in row  # its own clock: 10 ticks, 0 .. 0.9 s
+        assert f"{v.ticks_evaluated} (1.0 s)" in row  # its own clock: 11 ticks, 0 .. 1 s
 
 
 def test_pending_obligations_are_not_counted_as_violations():
