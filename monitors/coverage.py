@@ -87,8 +87,10 @@ def _threshold(ob: Obligation, columns: Mapping[str, np.ndarray], n: int) -> Exe
     on_side = truth if ob.side else (~truth & ~np.isnan(x))
     if not on_side.any():
         return Exercise("unmet")
-    return Exercise("met", tick=int(np.argmax(on_side)),
-                    margin=float(np.min(np.abs(x[on_side] - c))))
+    with np.errstate(invalid="ignore"):  # inf - inf (a value at an infinite threshold):
+        # NaN, no margin to state
+        margin = float(np.min(np.abs(x[on_side] - c)))
+    return Exercise("met", tick=int(np.argmax(on_side)), margin=margin)
 
 
 def exercised(obligations: Sequence[Obligation], req: A.Requirement,
