@@ -438,7 +438,8 @@ def test_a_string_typed_bound_topic_is_watched_as_it_is_audited(transport, case,
     out = tmp_path / "a.json"
     CliRunner().invoke(main, ["audit", *reqs, str(log), "--json", str(out)])
     audit = json.loads(out.read_text())
-    url = {"ws": f"ws://127.0.0.1:{_port()}"}.get(transport) or _url(transport)
+    url = {"ws": f"ws://127.0.0.1:{_port()}",  # a DDS domain of this worker's own
+           "dds": f"dds://{201 + os.getpid() % 30}"}.get(transport) or _url(transport)
     serve = (["--serve", "--port", url.rsplit(":", 1)[1]] if transport == "ws"
              else ["--serve", url, *_config(url, dds_xml)])
     rep = subprocess.Popen(_fretc("replay", str(log), *serve, "--rate", "10"), cwd=ROOT,
