@@ -25,7 +25,8 @@ The node (:func:`node_source`):
   and the changed outputs on an override, ERROR when an input cannot be read, then nothing
   else is published that tick).
 
-Message types come from the binding file's ``[types]`` table (topic -> ``pkg/msg/Type``).
+Message types come from the binding file's ``[shield] types`` (or ``[types]``) table (topic ->
+``pkg/msg/Type``).
 """
 
 from __future__ import annotations
@@ -49,6 +50,21 @@ def _shield_table(bindings_file: str) -> dict[str, Any]:
     doc = tomllib.loads(Path(bindings_file).read_text(encoding="utf-8"))
     table = doc.get("shield", {})
     return table if isinstance(table, dict) else {}
+
+
+def _types(table: dict[str, Any], bindings_file: str) -> dict[str, str]:
+    """``[shield] types``: topic -> ``pkg/msg/Type`` (the ROS 2 types the node reads and
+    writes; a binding file's ``[types]`` counts too).
+
+    Raises:
+        ShieldError: not a table of topic names and type names."""
+    types = table.get("types", {})
+    if not isinstance(types, dict) or not all(
+            isinstance(k, str) and isinstance(v, str) and k.startswith("/") and v.count("/") == 2
+            for k, v in types.items()):
+        raise ShieldError(f"{bindings_file}: [shield] types must map topics to ROS 2 types, "
+                          "e.g. { \"/scan\" = \"sensor_msgs/msg/LaserScan\" }")
+    return dict(types)
 
 
 def _topics(shield: Shield, bindings: Bindings, proposals: dict[str, str]
@@ -86,20 +102,23 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
     proposals = proposals_of(bindings_file)
     inputs, outputs = _topics(shield, bindings, proposals)
     needed = sorted(set(inputs) | set(outputs) | set(proposals.values()))
-    missing = [t for t in needed if t not in bindings.types]
-    if missing:
-        raise ShieldError(f"{bindings_file}: [types] gives no ROS 2 type for "
-                          f"{', '.join(missing)} (e.g. \"{missing[0]}\" = \"pkg/msg/Type\")")
     table = _shield_table(bindings_file)
+    known = {**bindings.types, **_types(table, bindings_file)}
+    missing = [t for t in needed if t not in known]
+    if missing:
+        raise ShieldError(f"{bindings_file}: [shield] types (or [types]) gives no ROS 2 type "
+                          f"for {', '.join(missing)} (e.g. \"{missing[0]}\" = "
+                          "\"pkg/msg/Type\")")
     tick = table.get("tick")
-    if tick is not None and (not isinstance(tick, str) or tick not in bindings.types):
-        raise ShieldError(f"{bindings_file}: [shield] tick must name a topic of [types]")
+    if tick is not None and (not isinstance(tick, str) or tick not in known):
+        raise ShieldError(f"{bindings_file}: [shield] tick must name a topic whose type is "
+                          "given")
     if shield.period is None:
         raise ShieldError("the requirements declare no tick period (@tick_period): the node "
                           "needs one")
     pkg = f"{base}_shield_ros2"
     module = f"{base}_shield"
-    types = {t: bindings.types[t] for t in needed}
+    types = {t: known[t] for t in needed}
     period_ns = int(shield.period * 10**9)
     deps = sorted({t.split("/")[0] for t in types.values()} | {"diagnostic_msgs", "rclpy"})
     node = node_source(pkg, module, f"{base}.bindings.toml", types, inputs, proposals,

@@ -53,10 +53,10 @@ def test_the_package_holds_the_node_the_shield_and_the_bindings(tmp_path):
 def test_without_types_the_form_is_refused(tmp_path):
     b = tmp_path / "b.bindings.toml"
     text = (REPO / "requirements" / "safe_ros.bindings.toml").read_text()
-    b.write_text(text.split("[types]")[0], encoding="utf-8")
+    b.write_text(text.split("types = {")[0], encoding="utf-8")
     got = CliRunner().invoke(main, ["shield", *ARGS, "-b", str(b), "--emit", "ros2", "-o",
                                     str(tmp_path / "out")])
-    assert got.exit_code == 2 and "[types] gives no ROS 2 type for" in got.output, got.output
+    assert got.exit_code == 2 and "gives no ROS 2 type for" in got.output, got.output
     got = CliRunner().invoke(main, ["shield", *ARGS, "--emit", "ros2", "-o",
                                     str(tmp_path / "out2")])
     assert got.exit_code == 2 and "needs the binding file" in got.output, got.output
