@@ -109,9 +109,11 @@ def test_unmeetable_obligation_has_its_reason(tmp_path):
     assert "trigger" in met and "condition:p+" in met
 
 
+@pytest.mark.slow
 def test_long_deadline_boundaries(tmp_path):
     """A 300-tick deadline (past Spot's 16): its boundary tests through check's other
-    engines, each confirmed by the judge."""
+    engines, each confirmed by the judge. Slow: about 3 minutes of CPU (its queries spend
+    their budgets), most of the default suite's time on one worker."""
     p = tmp_path / "long.fret"
     p.write_text("L: upon p the sw shall within 300 ticks satisfy q\n")
     c = compile_entries(load_requirements([p]))
