@@ -24,9 +24,13 @@ binding checks and ``fretc inspect``.
 
 Log time is the message's ``timestamp`` field (microseconds of the flight controller's
 clock, usually since boot) in ns; messages are delivered in non-decreasing log time over all
-topics. A message whose timestamp is before the start the ULog header gives (0: never set;
-a timestamp kept since boot while the message was logged again and again) is skipped as an
-:data:`EARLY_TIMESTAMP` problem: its time says nothing of when it was logged. A ULog
+topics. PX4's logger writes, when it subscribes to a topic, the topic's last sample, stamped
+when it was published (before the ULog header's start: ``vehicle_status`` 220 ms before it in
+a SITL flight): that first row of each topic is data, at its own time, as uORB held it. A
+timestamp of 0 (never set) and any later row stamped before the header's start (a
+timestamp kept since boot while the message was logged again and again: ``commander_state``
+678 times at 2.07 s in a flight logged from 112.5 s) are skipped as an
+:data:`EARLY_TIMESTAMP` problem: their time says nothing of when they were logged. A ULog
 **dropout** (the logger lost messages for a number of milliseconds) is damage: a
 :data:`DROPOUT` problem and a gap of the log from the last timestamp before it (only the span
 before it is judged; nothing is held over it). A file cut short (its last message runs past
@@ -64,8 +68,8 @@ LOG_TOPIC = "Log"
 PARAMETER_TOPIC = "Parameter"
 #: A ULog dropout: the logger lost messages for ``end - start``.
 DROPOUT = "dropout"
-#: A message whose ``timestamp`` is before the log's start (0: never set; a value kept from
-#: boot): it says nothing of when it was logged, so it is skipped.
+#: A message whose ``timestamp`` says nothing of when it was logged (0: never set; a row
+#: after a topic's first stamped before the log's start: a value kept from boot), skipped.
 EARLY_TIMESTAMP = "early_timestamp"
 
 _ROS_TYPES = {"int8_t": "int8", "uint8_t": "uint8", "int16_t": "int16", "uint16_t": "uint16",
@@ -152,7 +156,7 @@ class UlogSource(LogSource):
             self.dropouts += [(max(int(d.timestamp) * 1000, floor), int(d.duration))
                               for d in u.dropouts]
         times = [int(t) * 1000 for u in self._ulogs for d in u.data_list
-                 for t in d.data["timestamp"][:1] if int(t) * 1000 >= self.log_start]
+                 for t in d.data["timestamp"][:1] if t != 0]
         self._start_time = min(times) if times else None
         self._end_time = None
         self._opened = (self._start_time, self._open_problems)
@@ -262,19 +266,24 @@ class UlogSource(LogSource):
     def _merged(self, streams) -> Iterator[Message]:
         if not streams:
             return
+        keeps = []
         for topic, t, _r in streams:
-            early = t < self.log_start
-            if early.any():
-                self._problem(EARLY_TIMESTAMP, topic, int(t[early][0]),
-                              f"{int(early.sum())} message(s) with a timestamp before the log's "
-                              f"start ({self.log_start // 1000} us; 0 is a timestamp never set) "
-                              "skipped: their time says nothing of when they were logged")
+            keep = _stamped(t, self.log_start, topic not in (LOG_TOPIC, PARAMETER_TOPIC))
+            keeps.append(keep)
+            if not keep.all():
+                skipped = t[~keep]
+                self._problem(EARLY_TIMESTAMP, topic, int(skipped[0]),
+                              f"{len(skipped)} message(s) with a timestamp that says nothing "
+                              f"of when they were logged skipped (0: never set; or stamped "
+                              f"before the log's start, {self.log_start // 1000} us, after the "
+                              "topic's first sample: a timestamp kept while the message was "
+                              "logged again and again)")
         times = np.concatenate([t for _n, t, _r in streams])
         which = np.concatenate([np.full(len(t), k, dtype=np.int32)
                                 for k, (_n, t, _r) in enumerate(streams)])
         rows = np.concatenate([np.arange(len(t)) for _n, t, _r in streams])
         order = np.argsort(times, kind="stable")
-        order = order[times[order] >= self.log_start]
+        order = order[np.concatenate(keeps)[order]]
         for i in order:
             topic, t, rows_of = streams[which[i]]
             lt = int(times[i])
@@ -284,6 +293,17 @@ class UlogSource(LogSource):
                 self._start_time = lt
             self._end_time = lt
             yield Message(topic, lt, lt, None, data)
+
+
+def _stamped(t: np.ndarray, log_start: int, sampled: bool) -> np.ndarray:
+    """The rows of one topic whose timestamp ``t`` (ns, in file order) is a log time (module
+    docstring): not 0, and at or after ``log_start`` (the ULog header's start) unless it is
+    the first row of a uORB topic (``sampled``: the last sample PX4's logger writes when it
+    subscribes; text messages and parameter changes have no such row)."""
+    keep = (t >= log_start) & (t != 0)
+    if sampled and len(t) and t[0] != 0:
+        keep[0] = True
+    return keep
 
 
 class _Rows:

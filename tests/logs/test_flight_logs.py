@@ -64,8 +64,10 @@ def _ulog(name: str, topics: list[str]):
     u = ULog(str(PX4 / name), message_name_filter_list=topics)
     start = u.start_timestamp
     out = {}
-    for d in u.data_list:
-        keep = d.data["timestamp"] >= start
+    for d in u.data_list:  # a topic's first row (stamped at its publication) is data
+        t = d.data["timestamp"]
+        keep = (t >= start) & (t != 0)
+        keep[0] = t[0] != 0
         out[(d.name, d.multi_id)] = {k: v[keep] for k, v in d.data.items()}
     return u, out
 
@@ -100,8 +102,33 @@ def test_px4_requirements_on_a_sitl_flight_match_an_independent_recomputation(tm
     trig = v["PR5"].first_violation.trigger.time_ns
     assert trig == _first_tick_at_or_after(v["PR5"].first_tick_ns, rtl)
     assert v["PR5"].first_violation.at.time_ns == trig + 50 * TICK
-    # the one vehicle_status message stamped before the log's start is skipped, and said
-    assert any(p["kind"] == EARLY_TIMESTAMP for p in la.problems)
+    # the vehicle_status sample stamped before the log's start is data, not skipped
+    assert not any(p["kind"] == EARLY_TIMESTAMP for p in la.problems)
+
+
+@needs_shared
+def test_px4_first_samples_stamped_before_the_header_are_data(tmp_path):
+    """PX4's logger writes each topic's last sample when it subscribes, stamped when it was
+    published: vehicle_status 220 ms before the ULog header's start in this SITL flight.
+    A requirement reading it starts at its first sample (the first tick at or after it),
+    not at the header's start; a timestamp of 0 (rtl_time_estimate, never set) is skipped
+    and reported."""
+    from pyulog import ULog
+
+    u = ULog(str(PX4 / "sample_px4_events.ulg"), message_name_filter_list=["vehicle_status"])
+    first = int(u.data_list[0].data["timestamp"][0]) * 1000
+    start = int(u.start_timestamp) * 1000
+    assert start - first == 220_000_000
+    fret = "@tick_period 100 ms\nS: the drone shall always satisfy nav_state < 100\n"
+    binds = '[tick]\nperiod = "100 ms"\n[variables]\nnav_state = \'"vehicle_status".nav_state\'\n'
+    (s,) = audit_log(_plan(tmp_path, fret, binds), str(PX4 / "sample_px4_events.ulg")).verdicts
+    assert s.verdict == "satisfied"
+    assert first <= s.first_tick_ns < first + TICK and s.first_tick_ns < start
+    src = open_log(PX4 / "sample_px4_events.ulg")
+    rtl = list(src.messages({"rtl_time_estimate"}))
+    zeros = [p for p in src.problems if p.kind == EARLY_TIMESTAMP]
+    assert len(zeros) == 1 and zeros[0].topic == "rtl_time_estimate"
+    assert all(m.log_time != 0 for m in rtl)
 
 
 @needs_shared
