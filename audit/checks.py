@@ -68,9 +68,12 @@ def binding_type_errors(source: LogSource, bindings: Bindings, plan: AuditPlan, 
     (:func:`fretc.signals.bindings.check_types`): requirement index -> why it is an ``error``
     (a binding that names a field the schema does not declare, mixes strings, booleans and
     numbers, or is used as the other kind), before anything is evaluated. Requirements whose
-    index is in ``skip`` (already in error) are not checked. ``schemas``: topic ->
-    :class:`fretc.logs.schema.TopicSchema` when not the log's own (a watch's advertised
-    ones, :func:`fretc.logs.schema.record_schemas`)."""
+    index is in ``skip`` (already in error) are not checked, nor a sampled trace
+    (:mod:`fretc.audit.sampled_csv`: its columns are variables checked on their log).
+    ``schemas``: topic -> :class:`fretc.logs.schema.TopicSchema` when not the log's own (a
+    watch's advertised ones, :func:`fretc.logs.schema.record_schemas`)."""
+    if getattr(source, "sampled", False):  # the variables' types were checked on their log
+        return {}
     try:
         schemas = log_schemas(source) if schemas is None else schemas
     except Exception:  # unreadable schemas: the reader reports the damage itself

@@ -16,6 +16,7 @@ before its first cut or gap are judged. Problems of every pass are kept.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from fretc.signals.bindings import Bindings
@@ -26,6 +27,7 @@ from fretc.common.streams import log_topics as log_topics_of
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
+from fretc.logs.csv_source import CsvSource, clock_lines
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
 from fretc.audit.finalize import between_ticks, finalize
@@ -40,7 +42,8 @@ from fretc.audit.plan import select_variant
 if TYPE_CHECKING:
     from fretc.logs.base import LogSource
 
-__all__ = ["audit_log", "summarize_clocks", "log_engine"]
+__all__ = ["audit_log", "audit_keeping_passes", "KeptPasses", "summarize_clocks",
+           "log_engine"]
 
 
 def audit_log(plan: AuditPlan, path: str,
@@ -57,6 +60,13 @@ def audit_log(plan: AuditPlan, path: str,
         problems of this log (unreadable file, missing topic or binding) are reported in it
         (``error`` / ``error`` verdicts), never raised.
     """
+    clocks = clock_lines(path) if str(path).lower().endswith(".csv") else {}
+    if clocks:  # a trace --write-csv wrote: each requirement on its own clock's rows
+        from fretc.audit.sampled_audit import audit_clocks
+
+        return audit_clocks(plan, str(path), clocks, lambda p, c: _LogRun(
+            p, path, lambda: CsvSource(path, period_ns=plan.csv_period_ns, clock=c)
+        ).run(progress))
     if plan.variants:
         sub, err = select_variant(plan, str(path))
         if sub is None:
@@ -68,6 +78,46 @@ def audit_log(plan: AuditPlan, path: str,
         return audit_entities(plan, str(path), progress,
                               lambda p, f, pr: _LogRun(p, f).run(pr))
     return _LogRun(plan, path).run(progress)
+
+
+@dataclass
+class KeptPasses:
+    """A log's audit with the passes it judged (:func:`audit_keeping_passes`).
+
+    Attributes:
+        plan: the plan audited (a binding file's ``[logs]`` variant when one selects the log).
+        audit: the :class:`~fretc.audit.verdict.LogAudit`.
+        passes: the read of the log (:class:`~fretc.audit.passes.LogPasses`), or None when
+            nothing was read.
+        bindings: the bindings it was read with (None: a CSV trace's columns).
+        unjudged: indexes of the requirements decided ``unknown`` before their ticks were
+            judged (a topic the damage may have taken).
+    """
+
+    plan: AuditPlan
+    audit: LogAudit
+    passes: LogPasses | None
+    bindings: Bindings | None
+    unjudged: set[int]
+
+
+def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
+    """:func:`audit_log` of ``path``, keeping what each requirement was judged on (the
+    sampled trace of ``--write-csv``, :mod:`fretc.audit.sampled_csv`).
+
+    Raises:
+        ValueError: per-entity requirements (each entity is audited on a read of its own)."""
+    if plan.variants:
+        sub, err = select_variant(plan, str(path))
+        if sub is None:
+            return KeptPasses(plan, _not_selected(plan, str(path), err or ""), None, None,
+                              set())
+        return audit_keeping_passes(sub, path)
+    if plan.bindings is not None and plan.bindings.per_entity:
+        raise ValueError("per-entity requirements cannot be written as a sampled trace")
+    run = _LogRun(plan, path)
+    la = run.run(None)
+    return KeptPasses(plan, la, run.result, run.read_bindings, set(run.skip))
 
 
 def _not_selected(plan: AuditPlan, path: str, err: str) -> LogAudit:
@@ -91,9 +141,13 @@ def _not_selected(plan: AuditPlan, path: str, err: str) -> LogAudit:
 class _LogRun:
     """The audit of one log in steps; each returns False when the log's audit ends there."""
 
-    def __init__(self, plan: AuditPlan, path: str) -> None:
+    def __init__(self, plan: AuditPlan, path: str,
+                 opener: Callable[[], LogSource] | None = None) -> None:
         self.plan = plan
         self.path = path
+        self.opener = opener  # opens the log (None: open_log)
+        self.result: LogPasses | None = None  # the passes, once read
+        self.read_bindings: Bindings | None = None  # the bindings they were read with
         self.la = LogAudit(log=str(path))
         self.verdicts: dict[int, Verdict] = {}
         for r in plan.requirements:
@@ -110,6 +164,7 @@ class _LogRun:
     def run(self, progress: Callable[[float], None] | None) -> LogAudit:
         if self._open() and self._check_inputs():
             result, active, b = self._read(progress)
+            self.result, self.read_bindings = result, b
             self._record_source()
             if result is not None:
                 self._judge(result, active, b)
@@ -139,8 +194,8 @@ class _LogRun:
         """Open the log and choose its bindings (a CSV trace's columns, else the plan's)."""
         plan, path, la = self.plan, self.path, self.la
         try:
-            source = self.source = open_log(path, csv_period_ns=plan.csv_period_ns,
-                                            msg_path=plan.config.msg_path)
+            source = self.source = (self.opener() if self.opener is not None else open_log(
+                path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path))
         except FretcInputError as exc:
             return self._fail_log(str(exc), "log not audited: ")
         except OSError as exc:

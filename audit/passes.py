@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from fretc.logs.base import LogSource
 
 __all__ = ["ClockPass", "ClockKey", "LogPasses", "run_passes", "cut_at_damage", "mark_gaps",
-           "clock_key", "restrict", "expected_ticks", "lost_in_words", "MAX_TICKS"]
+           "clock_key", "restrict", "expected_ticks", "lost_in_words", "csv_marks", "MAX_TICKS"]
 
 
 
@@ -192,7 +192,35 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
         mark_gaps(res, clock.names, bindings, gaps, key.topics,
                   lost_in_words(source, log_topics(key.topics) if bindings is not None
                                 else [CSV_TOPIC]))
+        if source.kind == "csv":
+            csv_marks(res, source, clock.names, bindings)
     return LogPasses(sampling, passes, failed, errors, gaps, bridged)
+
+
+def csv_marks(res: ClockPass, source: LogSource, names: list[str],
+              bindings: Bindings | None) -> None:
+    """What a CSV trace marks unknown (:class:`fretc.logs.csv_source.CsvSource`: ``unknown``
+    cells, ``gap`` rows), as a gap of a log leaves it (:func:`mark_gaps`): ``res.unknown``
+    per variable (a variable bound over ``/csv`` columns is unknown where a column it reads
+    is) and ``res.tick_gaps`` the ``gap`` rows, unknown for every variable."""
+    rows: dict[str, list[int]] = getattr(source, "unknown_rows", {})
+    gap_rows: list[int] = getattr(source, "gap_rows", [])
+    n = len(res.times)
+    if not (rows or gap_rows) or not n:
+        return
+    for name in names:
+        if bindings is None or name not in bindings.variables:
+            cols = [name]
+        else:
+            fields = bindings.variables[name].fields
+            cols = ([f.path[0] for f in fields if f.path and isinstance(f.path[0], str)]
+                    if all(f.path and isinstance(f.path[0], str) for f in fields)
+                    else list(rows))
+        idx = [i for c in cols for i in rows.get(c, ()) if i < n] + [i for i in gap_rows if i < n]
+        if idx:
+            mask = res.unknown.setdefault(name, np.zeros(n, np.bool_))
+            mask[idx] = True
+    res.tick_gaps = sorted(set(res.tick_gaps) | {i for i in gap_rows if i < n})
 
 
 def cut_at_damage(res: ClockPass, source: LogSource, bindings: Bindings | None,
@@ -206,8 +234,8 @@ def cut_at_damage(res: ClockPass, source: LogSource, bindings: Bindings | None,
     end = getattr(source, "cut_start", None)
     if end is None:
         return
-    if bindings is not None and bindings.time_base != "log":
-        end -= bindings.header_lag_ns
+    if bindings is not None and bindings.time_base != "log" and source.kind != "csv":
+        end -= bindings.header_lag_ns  # (a CSV trace's cut is at its own tick times)
     keep = int(np.searchsorted(res.times, end, side="left"))
     n = len(res.times)
     res.intact_end = end

@@ -44,13 +44,17 @@ R2U2_PUBLISHED = "0.27-0.80 µs/step (C, 3-8 node formulas; R2U2 v3.0, CAV 2023)
 
 
 def read_trace(path: Path) -> list[dict]:
+    """The ticks of a CSV trace as dicts of every variable: the rows of a sampled trace's
+    clocks (column ``tick``) joined by time, those that give every variable kept."""
     with path.open(newline="") as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
-    out = []
+    at: dict[str, dict] = {}
     for r in rows:
-        out.append({k: (v == "true") if v in ("true", "false") else float(v)
-                    for k, v in r.items() if k != "time"})
-    return out
+        cells = at.setdefault(r.get("time") or str(len(at)), {})
+        cells.update({k: v for k, v in r.items() if k not in ("time", "tick") and v})
+    names = {k for r in rows for k in r if k not in ("time", "tick")}
+    return [{k: (v == "true") if v in ("true", "false") else float(v) for k, v in c.items()}
+            for c in at.values() if set(c) == names]
 
 
 def c_literal(x, ctype: str) -> str:

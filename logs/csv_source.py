@@ -16,7 +16,9 @@ from fretc.common.units import NS_PER_S
 from fretc.common.problems import CsvError, LogError
 from fretc.logs.base import LogSource, Message
 
-__all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "column_name_problem"]
+__all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
+           "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "escape_id",
+           "unescape_id", "column_name_problem"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
 CSV_TOPIC = "/csv"
@@ -26,12 +28,70 @@ CSV_TYPE = "fretc/msg/CsvRow"
 #: The first line of a CSV trace written by ``fretc audit --write-csv``: its columns are FRET
 #: variables already sampled through the binding files (:mod:`fretc.audit.sampled_csv`).
 SAMPLED_MARK = "# fretc sampled trace"
+#: A comment line of a sampled trace naming one clock and the requirements sampled on it:
+#: ``# fretc clock 2: R5 R6`` (ids written by :func:`escape_id`, separated by spaces).
+CLOCK_LINE = "# fretc clock "
+#: The column of a sampled trace of several clocks giving the clock of each row (``tick`` is
+#: a FRETish reserved word, so never a FRET variable's column).
+CLOCK_COLUMN = "tick"
+#: A cell whose value is not known at its tick (a gap of the log left the variable unknown).
+UNKNOWN_CELL = "unknown"
+#: Every cell of a row that stands for the ticks a gap lost (how many is not known): unknown.
+GAP_CELL = "gap"
+#: Every cell of a clock's last row: the log was cut at its time (nothing after it was read).
+CUT_CELL = "cut"
+_MARKS = (UNKNOWN_CELL, GAP_CELL, CUT_CELL)
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 #: a column of an uninterpreted function's values, named by its printed call (``sqrt(w)``),
 #: as the monitors read it (FRET's ``det_3x3(a,b,c)`` in the case studies)
 _CALL = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\(.*\)\Z")
 _BOOL_WORDS = {"true": True, "false": False, "1": True, "0": False}
+_PLAIN = frozenset(range(0x21, 0x7F)) - {ord("\\"), ord(","), ord('"')}
+
+
+def escape_id(rid: str) -> str:
+    """A requirement id as a word of a :data:`CLOCK_LINE`: its UTF-8 bytes, each outside
+    printable ASCII, a backslash, a comma or a double quote as ``\\xNN`` (the C monitors'
+    runner compares its ids escaped the same way)."""
+    return "".join(chr(b) if b in _PLAIN else f"\\x{b:02x}" for b in rid.encode("utf-8"))
+
+
+def unescape_id(word: str) -> str:
+    """The requirement id :func:`escape_id` wrote as ``word``."""
+    out = bytearray()
+    i = 0
+    while i < len(word):
+        if word.startswith("\\x", i) and len(word) >= i + 4:
+            try:
+                out.append(int(word[i + 2:i + 4], 16))
+                i += 4
+                continue
+            except ValueError:
+                pass
+        out += word[i].encode("utf-8")
+        i += 1
+    return out.decode("utf-8", errors="replace")
+
+
+def clock_lines(path: str | os.PathLike) -> dict[str, list[str]]:
+    """The clocks of a sampled trace (:data:`SAMPLED_MARK` on its first line): clock label ->
+    the ids of the requirements sampled on it, from its :data:`CLOCK_LINE` comments before
+    the header; ``{}`` for any other CSV trace, or a file that cannot be read as text."""
+    out: dict[str, list[str]] = {}
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            if not f.readline().startswith(SAMPLED_MARK):
+                return {}
+            for line in f:
+                if not line.startswith("#"):
+                    break
+                if line.startswith(CLOCK_LINE) and ":" in line:
+                    label, _, ids = line[len(CLOCK_LINE):].partition(":")
+                    out[label.strip()] = [unescape_id(w) for w in ids.split()]
+    except OSError:
+        return {}
+    return out
 
 
 def column_name_problem(name: str) -> str | None:
@@ -52,13 +112,18 @@ class CsvRow(NamedTuple):
         index: 0-based row number among data rows (the tick index).
         line: 1-based line number in the file.
         time: ns from the ``time`` column (seconds, decimal), or None without one.
-        values: column name → bool (boolean column) or float (numeric column).
+        values: column name → bool (boolean column) or float (numeric column); a value not
+            known (``unknown``, ``gap``) holds a placeholder (false, 0.0).
+        unknown: the columns whose value is not known at this tick.
+        gap: the row stands for the ticks a gap lost (every column unknown).
     """
 
     index: int  # type: ignore[assignment]  # the field shadows tuple.index, as documented
     line: int
     time: int | None
     values: dict[str, bool | float]
+    unknown: frozenset[str] = frozenset()
+    gap: bool = False
 
 
 class CsvSource(LogSource):
@@ -72,6 +137,18 @@ class CsvSource(LogSource):
     time in seconds (decimal, non-decreasing); without it row *k* is at ``k * period_ns``
     (default 1 s: one tick is one time unit).
 
+    What a log's damage left unknown (docs/guide/ticks.md "CSV traces"): a cell ``unknown``
+    is a value not known at its tick (judged three-valued, as a gap of a log); a row whose
+    cells are all ``gap`` stands for the ticks a gap of a tick topic lost (unknown, how many
+    not known); a last row whose cells are all ``cut`` ends the trace where the log was cut
+    (a gap to its end: only the ticks before it are judged, ``partial``).
+
+    A sampled trace (:data:`SAMPLED_MARK`) names its clocks in :data:`CLOCK_LINE` comments;
+    with several, its :data:`CLOCK_COLUMN` gives each row's clock and a row's cells of the
+    columns of other clocks are empty. ``clock`` selects one clock: the source is then its
+    rows and columns alone (the audit reads such a trace clock by clock,
+    :mod:`fretc.audit.sampled_audit`); a trace of several clocks read whole has no rows.
+
     The file is checked completely when opened (two streaming passes: types, then rows).
 
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
@@ -80,13 +157,15 @@ class CsvSource(LogSource):
 
     Raises:
         CsvError: bad header (empty, duplicate or non-identifier name), a row with the wrong
-            number of cells, an unreadable cell, or time going backwards; the message names
+            number of cells, an unreadable cell, time going backwards, or marks out of place
+            (``cut`` not last, ``gap`` beside values, a row of no clock); the message names
             ``file:line`` and the column.
     """
 
     kind = "csv"
 
-    def __init__(self, path: str | os.PathLike, *, period_ns: int = NS_PER_S) -> None:
+    def __init__(self, path: str | os.PathLike, *, period_ns: int = NS_PER_S,
+                 clock: str | None = None) -> None:
         super().__init__(path)
         if period_ns <= 0:
             raise ValueError("period_ns must be positive")
@@ -97,6 +176,19 @@ class CsvSource(LogSource):
         self.row_count = 0
         #: the file starts with :data:`SAMPLED_MARK`: its columns are sampled FRET variables
         self.sampled = False
+        #: a sampled trace's clocks: label -> requirement ids (:func:`clock_lines`)
+        self.clocks: dict[str, list[str]] = {}
+        #: the clock read (None: every row of a trace of one clock)
+        self.clock = clock
+        #: column -> the data rows (indexes) where its value is ``unknown``
+        self.unknown_rows: dict[str, list[int]] = {}
+        #: the data rows (indexes) that are ``gap`` rows
+        self.gap_rows: list[int] = []
+        #: the time (ns) of the ``cut`` row, or None
+        self.cut_time: int | None = None
+        self._grouped = False  # several clocks: a CLOCK_COLUMN gives each row's
+        self._gap_set: frozenset[int] = frozenset()
+        self._header: list[str] = []
         self._check()
 
     def _lines(self) -> Iterator[tuple[int, list[str]]]:
@@ -144,65 +236,69 @@ class CsvSource(LogSource):
             seen.add(name)
         self._header = header
         self.sampled = self._first_line().startswith(SAMPLED_MARK)
+        self.clocks = clock_lines(self.path) if self.sampled else {}
+        self._grouped = bool(self.clocks) and CLOCK_COLUMN in header
+        if len(self.clocks) > 1 and not self._grouped:
+            raise CsvError(self.path, line, f"{len(self.clocks)} clocks but no column "
+                           f"{CLOCK_COLUMN!r} giving each row's clock")
+        if self.clock is None and len(self.clocks) == 1:
+            self.clock = next(iter(self.clocks))
+        if self.clock is not None and self.clock not in self.clocks:
+            raise CsvError(self.path, line, f"no clock {self.clock!r} in this trace")
         self.has_time = "time" in header
-        self.columns = [c for c in header if c != "time"]
-        numeric_at: dict[str, int] = {}  # first line with a non-boolean cell
-        word_at: dict[str, int] = {}  # first line with true/false
-        count = 0
-        last_time: int | None = None
-        for line, cells in lines:
-            if len(cells) != len(header):
-                raise CsvError(self.path, line,
-                               f"expected {len(header)} cells ({', '.join(header)}), got {len(cells)}")
-            for name, cell in zip(header, cells):
-                if name == "time":
-                    t = _csv_time(self.path, line, cell)
-                    if last_time is not None and t < last_time:
-                        raise CsvError(self.path, line, f"time {cell} s goes backwards "
-                                       f"(previous row at {last_time / NS_PER_S} s)", column="time")
-                    last_time = t
-                    continue
-                if not cell:
-                    raise CsvError(self.path, line, "empty cell", column=name)
-                low = cell.lower()
-                if low in ("true", "false"):
-                    word_at.setdefault(name, line)
-                elif low not in _BOOL_WORDS:
-                    try:
-                        float(cell)
-                    except ValueError:
-                        raise CsvError(self.path, line, f"cannot read {cell!r} as true/false or a "
-                                       "number", column=name) from None
-                    numeric_at.setdefault(name, line)
-                if name in word_at and name in numeric_at:
-                    raise CsvError(self.path, max(word_at[name], numeric_at[name]),
-                                   f"column mixes true/false (line {word_at[name]}) with numbers "
-                                   f"(line {numeric_at[name]})", column=name)
-            count += 1
-        self.row_count = count
-        self.types = {c: ("float" if c in numeric_at else "bool") for c in self.columns}
+        self.columns = [c for c in header
+                        if c != "time" and not (self._grouped and c == CLOCK_COLUMN)]
+        _Checker(self, header).run(lines)
+
+    def _own(self, cells: list[str], line: int) -> bool:
+        """Whether a data row belongs to the clock read (its :data:`CLOCK_COLUMN` cell)."""
+        if not self._grouped:
+            return True
+        label = cells[self._header.index(CLOCK_COLUMN)]
+        if label not in self.clocks:
+            raise CsvError(self.path, line, f"clock {label!r} is not named by a "
+                           f"{CLOCK_LINE.strip()!r} line", column=CLOCK_COLUMN)
+        return label == self.clock
 
     def topics(self) -> dict[str, str]:
         """``{CSV_TOPIC: CSV_TYPE}``."""
         return {CSV_TOPIC: CSV_TYPE}
 
     def rows(self) -> Iterator[CsvRow]:
-        """The data rows, typed (see the class docstring), in file order."""
+        """The data rows of the clock read, typed (see the class docstring), in file order.
+        A ``cut`` row ends them: the pass records a gap from its time to the end of the log
+        (:attr:`fretc.logs.LogSource.cut_start`); marks make the pass ``partial``."""
         lines = self._lines()
         next(lines)  # header, checked in __init__
         header = self._header
         types = self.types
-        for index, (line, cells) in enumerate(lines):
-            time = None
+        if self.unknown_rows or self.gap_rows:
+            self.partial = True
+        index = 0
+        at = header.index("time") if self.has_time else None
+        for line, cells in lines:
+            if not self._own(cells, line):
+                continue
+            time = _csv_time(self.path, line, cells[at]) if at is not None else None
             values: dict[str, bool | float] = {}
+            unknown = []
             for name, cell in zip(header, cells):
-                if name == "time":
-                    time = _csv_time(self.path, line, cell)
+                if name not in types:
+                    continue
+                elif cell in _MARKS:
+                    if cell == CUT_CELL:
+                        t = time if time is not None else index * self.period_ns
+                        self._gap(t, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
+                        return
+                    unknown.append(name)
+                    values[name] = False if types[name] == "bool" else 0.0
                 elif types[name] == "bool":
                     values[name] = _BOOL_WORDS[cell.lower()]
                 else:
                     values[name] = float(cell)
-            yield CsvRow(index, line, time, values)
+            yield CsvRow(index, line, time, values, frozenset(unknown),
+                         index in self._gap_set)
+            index += 1
 
     def messages(self, topics: set[str] | frozenset[str] | None = None) -> Iterator[Message]:
         """One Message per row on :data:`CSV_TOPIC`; log time = ``time`` column or index × period."""
@@ -217,6 +313,101 @@ class CsvSource(LogSource):
             self.counts[CSV_TOPIC] = self.counts.get(CSV_TOPIC, 0) + 1
             yield Message(CSV_TOPIC, t, t, None, SimpleNamespace(**row.values))
         self._start_time, self._end_time = first, last
+
+
+class _Checker:
+    """The checking pass of :meth:`CsvSource._check` over the data rows: cells, marks, the
+    columns of the clock read, and the types; sets the source's figures."""
+
+    def __init__(self, src: CsvSource, header: list[str]) -> None:
+        self.src = src
+        self.header = header
+        self.numeric_at: dict[str, int] = {}  # first line with a non-boolean cell
+        self.word_at: dict[str, int] = {}  # first line with true/false
+        self.own: list[str] | None = None  # the columns of the clock read (grouped traces)
+        self.cut_line: int | None = None
+
+    def run(self, lines: Iterator[tuple[int, list[str]]]) -> None:
+        src, header = self.src, self.header
+        count = 0
+        last_time: int | None = None
+        for line, cells in lines:
+            if len(cells) != len(header):
+                raise CsvError(src.path, line,
+                               f"expected {len(header)} cells ({', '.join(header)}), got {len(cells)}")
+            time = None
+            if src.has_time:
+                cell = cells[header.index("time")]
+                time = _csv_time(src.path, line, cell)
+                if last_time is not None and time < last_time:
+                    raise CsvError(src.path, line, f"time {cell} s goes backwards "
+                                   f"(previous row at {last_time / NS_PER_S} s)", column="time")
+                last_time = time
+            if not src._own(cells, line):
+                continue
+            if self.cut_line is not None:
+                raise CsvError(src.path, line, f"a row after the cut (line {self.cut_line}): "
+                               "nothing was read after it")
+            if self._row(line, cells, count):
+                src.cut_time = time if time is not None else count * src.period_ns
+                continue
+            count += 1
+        if self.own is not None:
+            src.columns = [c for c in src.columns if c in self.own]
+        elif src._grouped:
+            src.columns = []
+        src.row_count = count
+        src.types = {c: ("float" if c in self.numeric_at else "bool") for c in src.columns}
+        src._gap_set = frozenset(src.gap_rows)
+
+    def _row(self, line: int, cells: list[str], index: int) -> bool:
+        """Check one data row of the clock read; True when it is the ``cut`` row."""
+        src = self.src
+        named = {n: c for n, c in zip(self.header, cells) if n in src.columns}
+        if src._grouped:  # the clock's columns: the cells its first row fills
+            filled = [n for n, c in named.items() if c]
+            if self.own is None:
+                self.own = filled
+            elif filled != self.own:
+                raise CsvError(src.path, line, f"the cells of clock {src.clock} fill "
+                               f"{', '.join(filled) or 'no column'}, its first row "
+                               f"{', '.join(self.own) or 'no column'}")
+            named = {n: named[n] for n in self.own}
+        marks = {c for c in named.values() if c in (GAP_CELL, CUT_CELL)}
+        if marks and (len(marks) > 1 or any(c not in marks for c in named.values())):
+            raise CsvError(src.path, line, f"a {'/'.join(sorted(marks))} row has every cell "
+                           f"{' or '.join(sorted(marks))}")
+        if CUT_CELL in marks:
+            self.cut_line = line
+            return True
+        if GAP_CELL in marks:
+            src.gap_rows.append(index)
+            return False
+        for name, cell in named.items():
+            self._cell(line, name, cell, index)
+        return False
+
+    def _cell(self, line: int, name: str, cell: str, index: int) -> None:
+        src = self.src
+        if not cell:
+            raise CsvError(src.path, line, "empty cell", column=name)
+        if cell == UNKNOWN_CELL:
+            src.unknown_rows.setdefault(name, []).append(index)
+            return
+        low = cell.lower()
+        if low in ("true", "false"):
+            self.word_at.setdefault(name, line)
+        elif low not in _BOOL_WORDS:
+            try:
+                float(cell)
+            except ValueError:
+                raise CsvError(src.path, line, f"cannot read {cell!r} as true/false or a "
+                               "number", column=name) from None
+            self.numeric_at.setdefault(name, line)
+        if name in self.word_at and name in self.numeric_at:
+            raise CsvError(src.path, line,
+                           f"column mixes true/false (line {self.word_at[name]}) with numbers "
+                           f"(line {self.numeric_at[name]})", column=name)
 
 
 def _csv_time(path: str, line: int, cell: str) -> int:

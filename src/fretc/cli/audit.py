@@ -52,10 +52,11 @@ __all__ = ["audit_cmd"]
 @click.option("-v", "--verbose", is_flag=True,
               help="Full evidence: every value row around each violation and every note.")
 @click.option("--write-csv", "csv_dir", type=click.Path(file_okay=False), default=None,
-              help="Also write each log's FRET variables as the audit samples them, one "
-                   "CSV trace per log in DIR (LOG-STEM.csv; the input of fretc audit and "
-                   "of the C monitors' runner), and name the requirements whose own clock "
-                   "differs from the file's.")
+              help="Also write what the audit of each log judged, one CSV trace per log "
+                   "in DIR (LOG-STEM.csv): each requirement's own clock (its ticks, the "
+                   "values of its variables, what the log's damage left unknown); the "
+                   "input of fretc audit and of the C monitors' runner, which give the "
+                   "log's verdicts on it.")
 @ray_options
 @click.pass_context
 def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str, ...],
@@ -170,25 +171,25 @@ def _coverage(plan, results, out, coverage: bool) -> dict:
 
 
 def _write_csvs(plan, paths, results, folder: str, err) -> bool:
-    """``--write-csv``: the sampled variables of each log (:mod:`fretc.audit.sampled_csv`);
-    False when one could not be written (reported on ``err``)."""
-    from fretc.audit.sampled_csv import clock_notes, csv_name, write_sampled_csv
+    """``--write-csv``: what the audit of each log judged, each requirement on its own
+    clock (:mod:`fretc.audit.sampled_csv`); False when one could not be written (reported
+    on ``err``)."""
+    from fretc.audit.sampled_csv import csv_name, write_sampled_csv
     from fretc.common.errors import FretcError
     from fretc.reports.terminal import escape
 
     used: set[str] = set()
     ok = True
-    audits = {la.log: la for la in results}
     for path in paths:
         out = Path(folder) / csv_name(str(path), used)
         try:
-            ticks, first, last = write_sampled_csv(plan, str(path), out)
+            _la, clocks = write_sampled_csv(plan, str(path), out)
         except (FretcError, ValueError, OSError) as exc:
             err.print(f"[red]error:[/red] {escape(f'{path}: cannot write {out}: {exc}')}")
             ok = False
             continue
-        err.print(escape(f"wrote {out} ({ticks} ticks)"))
-        la = audits.get(str(path))
-        for note in clock_notes(la, ticks, first, last) if la is not None else ():
-            err.print(escape(f"  note: {note}"))
+        ticks = sum(len(c.times) for c in clocks)
+        err.print(escape(f"wrote {out} ({len(clocks)} clock{'s' if len(clocks) != 1 else ''}, "
+                         f"{ticks} ticks: " + "; ".join(
+                             ", ".join(c.ids) + f" {len(c.times)}" for c in clocks) + ")"))
     return ok

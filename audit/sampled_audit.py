@@ -1,0 +1,98 @@
+"""The audit of a sampled trace of several clocks (:func:`audit_clocks`): the CSV that
+``fretc audit --write-csv`` writes (:mod:`fretc.audit.sampled_csv`) names, in its
+``# fretc clock N: ...`` lines, the requirements judged on each clock of the log; each
+requirement is audited on its own clock's rows alone, as it was on the log
+(../shared/DESIGN.md, "Each verdict stands alone"), and a requirement no clock names is an
+error (the trace does not carry its ticks).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+from fretc.audit.model import AuditPlan
+from fretc.audit.verdict import LogAudit, Verdict
+
+__all__ = ["audit_clocks"]
+
+
+def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
+                 run: Callable[[AuditPlan, str], LogAudit]) -> LogAudit:
+    """Audit the sampled trace ``path`` whose clocks are ``clocks`` (label -> requirement
+    ids, :func:`fretc.logs.csv_source.clock_lines`).
+
+    Args:
+        plan: the audit plan (requirements matched to clocks by id).
+        run: audits a plan on one clock's rows (``run(sub_plan, label)``).
+
+    Returns:
+        One :class:`~fretc.audit.verdict.LogAudit`: the verdicts in the plan's order, each
+        from its clock's audit; the log's figures merged over the clocks.
+    """
+    owner = {rid: label for label, ids in clocks.items() for rid in ids}
+    parts: list[LogAudit] = []
+    verdicts: dict[int, Verdict] = {}
+    for label in clocks:
+        rs = [r for r in plan.requirements if owner.get(r.id) == label]
+        if not rs:
+            continue
+        # (binding files selecting logs by name: the trace's columns are the variables)
+        sub = replace(plan, requirements=rs, variants=[],
+                      bindings=None if plan.variants else plan.bindings)
+        la = run(sub, label)
+        parts.append(la)
+        for r, v in zip(rs, la.verdicts):
+            verdicts[r.index] = v
+    merged = _merge(path, parts)
+    named = ", ".join(sorted(owner)) or "none"
+    for r in plan.requirements:
+        if r.index not in verdicts:
+            why = r.error or (f"{path} is a sampled trace (fretc audit --write-csv) that "
+                              f"carries no clock of {r.id}: it holds the clocks of {named} "
+                              "(a requirement the audit of the log could not judge has none)")
+            verdicts[r.index] = Verdict(log=path, requirement=r.id, text=r.text,
+                                        source=r.source, notes=list(r.notes),
+                                        verdict="error", error=why)
+    merged.verdicts = [verdicts[r.index] for r in plan.requirements]
+    return merged
+
+
+def _merge(path: str, parts: list[LogAudit]) -> LogAudit:
+    """The log's figures over the audits of its clocks."""
+    la = LogAudit(log=path, kind="csv")
+    if not parts:
+        return la
+    first = parts[0]
+    la.tick, la.time_base = first.tick, first.time_base
+    la.partial = any(p.partial for p in parts)
+    la.damage_cut = any(p.damage_cut for p in parts)
+    la.damage_time_ns = _least(p.damage_time_ns for p in parts)
+    la.cut_time_ns = _least(p.cut_time_ns for p in parts)
+    la.start_time_ns = _least(p.start_time_ns for p in parts)
+    la.first_time_ns = _least(p.first_time_ns for p in parts)
+    ends = [p.end_time_ns for p in parts if p.end_time_ns is not None]
+    la.end_time_ns = max(ends) if ends else None
+    la.ticks_evaluated = max(p.ticks_evaluated for p in parts)
+    la.warmup_ticks = max(p.warmup_ticks for p in parts)
+    la.ticks_after_damage = max(p.ticks_after_damage for p in parts)
+    la.waiting_for = sorted({t for p in parts for t in p.waiting_for})
+    la.missing_topics = sorted({t for p in parts for t in p.missing_topics})
+    for p in parts:
+        for topic, n in p.messages.items():
+            la.messages[topic] = la.messages.get(topic, 0) + n
+        for k, n in p.problem_counts.items():
+            la.problem_counts[k] = la.problem_counts.get(k, 0) + n
+        la.problems += p.problems
+        la.gaps += [g for g in p.gaps if g not in la.gaps]
+        la.warnings += [w for w in p.warnings if w not in la.warnings]
+    errors = [p.error for p in parts if p.error]
+    la.error = errors[0] if len(errors) == len(parts) else None
+    engines = sorted({p.engine for p in parts if p.engine is not None})
+    la.engine = engines[0] if len(engines) == 1 else ("mixed" if engines else None)
+    return la
+
+
+def _least(values) -> int | None:
+    got = [x for x in values if x is not None]
+    return min(got) if got else None
