@@ -181,7 +181,7 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     names = [n for n in _order(kept.plan) if any(n in c.columns for c in clocks)]
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="", encoding="utf-8") as f:
-        f.write(f"{SAMPLED_MARK} of {Path(log_path).name}: the FRET variables as fretc "
+        f.write(f"{SAMPLED_MARK} of {escape_id(Path(log_path).name)}: the FRET variables as fretc "
                 "audit judged them (bindings applied), each requirement on its own clock; "
                 "time in seconds\n")
         for k, c in enumerate(clocks, 1):

@@ -193,6 +193,20 @@ def test_clocks_marks_and_their_errors(tmp_path):
             why, str(e.value))
 
 
+def test_a_log_name_with_quotes_and_commas_is_written_visibly(tmp_path):
+    """The log's name in the first line is escaped as ids are: no comma or quote reaches the
+    CSV readers (a quote at a cell's start would open a quoted cell over the lines after)."""
+    log = tmp_path / 'a,"b.csv'
+    log.write_text("time,p\n0,true\n1,false\n")
+    fret = tmp_path / "r.fret"
+    fret.write_text("A: the sw shall always satisfy p\n")
+    plan = load_plan(AuditConfig(requirements=(str(fret),)))
+    write_sampled_csv(plan, str(log), tmp_path / "s.csv")
+    first = (tmp_path / "s.csv").read_text().splitlines()[0]
+    assert '"' not in first and "a\\x2c\\x22b.csv" in first
+    assert [v.verdict for v in audit_log(plan, str(tmp_path / "s.csv")).verdicts] == ["violated"]
+
+
 @pytest.mark.parametrize("rid", ["R1", "a b", "x,y", 'q"', "é\\", "\t"])
 def test_ids_escape_and_come_back(rid):
     word = escape_id(rid)
