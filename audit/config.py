@@ -34,6 +34,9 @@ class AuditConfig:
         bridge_gaps_ns: ``--bridge-gaps``: gaps of a log shorter than this (ns) are bridged
             (the value before held over them, each listed) instead of leaving their ticks
             unknown (:mod:`fretc.audit.gaps`); None bridges none (the default).
+        max_entities: ``--max-entities``: entities of one per-entity requirement judged per
+            log (None: :data:`fretc.audit.entities.DEFAULT_MAX_ENTITIES`); past it, an error
+            verdict says how to raise it.
     """
 
     requirements: tuple[str, ...]
@@ -47,4 +50,5 @@ class AuditConfig:
     msg_path: tuple[str, ...] = ()
     text_attribute: str | None = None
     bridge_gaps_ns: int | None = None
+    max_entities: int | None = None
 

@@ -3,40 +3,51 @@ variables read an entity of the binding file's ``[entities]`` table (``$track`` 
 ``{id==$track}``) is judged once for every value of the entity's key that appears in the log
 (first-order monitoring's universal quantifier over the trace's objects, as DejaVu and
 MonPoly have it; FRET's parameterised requirements over N identical components). Each
-instance is an ordinary verdict named ``R[track=7]`` with its evidence, its variables bound
-with ``$track`` = 7; a summary over the entities is added to each instance's notes.
+instance is an ordinary verdict named ``R[track=7]`` with its evidence, judged on the
+entity's life (:mod:`fretc.audit.entity_read`: every entity of every per-entity requirement
+in one read of the log); a summary over the entities is added to each instance's notes.
 
-The entities are found by one read of the key's topic (every message, the key path's values,
-those matching the ``matching`` glob); each entity is then audited in a read of its own (the
-log is read once per entity: :data:`MAX_ENTITIES` bounds them; past it, the requirement has
-one more verdict, ``R[track=...]``, an error saying that entities were left unjudged; the
-requirement's own verdict is then an error too, unless a judged entity violates it). The audit of each
-instance is the plain audit (:func:`fretc.audit.log.audit_log`): warm-up, gaps and damage
-per instance, as per requirement.
+At most ``--max-entities`` entities of one requirement are judged per log
+(:data:`DEFAULT_MAX_ENTITIES` unless the option says otherwise; a bound on memory, not a
+limit of the method): past it, the requirement has one more verdict, ``R[track=...]``, an
+error saying how to raise it; the requirement's own verdict is then an error too, unless a
+judged entity violates it. Each instance has the plain audit's damage rules (the log's cut
+and gaps on its own ticks).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import re
-from fnmatch import fnmatchcase
 from typing import Any
 
 import numpy as np
 
-from fretc.audit.verdict import LogAudit, Verdict
-from fretc.common.problems import BindingError, FretcInputError, SignalError
-from fretc.common.streams import base_topic, log_topics
+from fretc.audit.entity_batch import batch_verdicts, batchable, nan_traces
+from fretc.audit.entity_read import ENTITIES, EntityClock, read_entities
+from fretc.audit.finalize import finalize
+from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
+from fretc.audit.log_problems import collect_problems, problem_json
+from fretc.audit.passes import ClockPass, cut_at_damage, lost_in_words, mark_gaps
+from fretc.audit.verdict import LogAudit, Ltl3, Verdict
+from fretc.common.problems import FretcInputError
+from fretc.common.streams import log_topics
 from fretc.logs import open_log
-from fretc.signals.bindings.binding import compile_expression
-from fretc.signals.bindings.compile import EvalState
-from fretc.signals.bindings.extract import Valid
-from fretc.signals.streams import Streams
+from fretc.signals.bindings import Bindings
+from fretc.signals.bindings.expression import EntityParam
 
-__all__ = ["MAX_ENTITIES", "entity_of_requirements", "find_entities", "audit_entities"]
+__all__ = ["MAX_ENTITIES", "DEFAULT_MAX_ENTITIES", "entity_of_requirements", "audit_entities"]
 
-#: Entities of one key judged in one log (each costs one read of the log).
+#: Entities of one key that ``fretc watch`` steps live (their messages replayed into a
+#: monitor of their own while watching); its final verdicts are the audit's, unbounded.
 MAX_ENTITIES = 1000
+#: Entities of one per-entity requirement judged in one log unless ``--max-entities`` says
+#: otherwise (each costs a few hundred bytes while the log is read).
+DEFAULT_MAX_ENTITIES = 1_000_000
+
+#: The note of an entity judged with the others (:mod:`fretc.audit.entity_batch`).
+BATCH_NOTE = ("judged with the requirement's other entities at once (its pt formula over "
+              "their ticks): robustness and interval counts are given for violated entities")
 
 _DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
@@ -72,79 +83,6 @@ def entity_of_requirements(plan: Any) -> dict[int, list[str]]:
     return out
 
 
-def _items(v: Any) -> list:
-    """The values a key path read from one message (an array, or one value)."""
-    if isinstance(v, Valid):
-        data = v.data if v.mask is None else v.data[v.mask]
-        return np.asarray(data).tolist()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, (list, tuple)):
-        return list(v)
-    return [v]
-
-
-def find_entities(path: str, bindings: Any, name: str) -> tuple[list, dict, bool]:
-    """The entities of ``name`` in the log at ``path``: (values in order of first
-    appearance, value -> (first, last) log time ns of a message carrying it, whether
-    :data:`MAX_ENTITIES` cut the list).
-
-    Raises:
-        BindingError: the key is not a field path of one topic.
-        SignalError: the key cannot be read from a message (named with its log time).
-    """
-    key, matching = bindings.entities[name]
-    b = compile_expression(f"entity_{name}", key, source=f"{bindings.source} [entities]")
-    if len(b.topics) != 1 or not b.fields:
-        raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
-                           "field path of one topic, e.g. \"/tracks.tracks[:].id\"")
-    topic = next(iter(b.topics))
-    st, seen, cut = EvalState(), dict[Any, Any](), False
-    src = open_log(path)
-    for m in Streams([b]).messages(src.messages({base_topic(topic)}), {topic}):
-        st.msgs[topic], st.times[topic], st.now = m.data, m.log_time, m.log_time
-        try:
-            values = _items(b._scalar(st))  # type: ignore[misc]
-        except Exception as exc:  # noqa: BLE001 - an extractor's error: named with the message
-            raise SignalError(f"[entities] {name}: {key} cannot be read from the message of "
-                              f"{topic} at log time {m.log_time}: {exc}") from None
-        for x in values:
-            if isinstance(x, float) and x.is_integer():
-                x = int(x)
-            if matching is not None and not fnmatchcase(str(x), matching):
-                continue
-            if x not in seen:
-                if len(seen) >= MAX_ENTITIES:
-                    cut = True
-                    continue
-                seen[x] = [m.log_time, m.log_time]
-            seen[x][1] = m.log_time
-    return list(seen), {k: tuple(v) for k, v in seen.items()}, cut
-
-
-def _key_topic_absent(path: str, bindings: Any, name: str) -> tuple[str, str] | None:
-    """When the topic of entity ``name``'s key is not in the log at ``path``: the verdict of
-    its requirement, as a plain requirement's whose bound topic is absent (``error``, or
-    ``unknown`` when the damage found reading the log's topics may have taken it), with the
-    reason. None when the topic is there (no entity in its messages is then ``vacuous``)
-    or the key does not compile (:func:`find_entities` says why)."""
-    key = bindings.entities[name][0]
-    try:
-        topics = compile_expression(f"entity_{name}", key, source=str(bindings.source)).topics
-        src = open_log(path)
-        available = src.topics()
-    except (BindingError, OSError, FretcInputError):
-        return None
-    absent = sorted(t for t in log_topics(topics) if t not in available)
-    if not absent:
-        return None
-    why = (f"topic {', '.join(absent)} (the key {key} of entity {name}) is not in the log "
-           f"(it has {', '.join(available) or 'no topics'}): no entity was looked for")
-    if src.partial:
-        return "unknown", f"{why}; the log is damaged: the damage may have taken it"
-    return "error", why
-
-
 def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
     """Audit ``plan`` on the log at ``path`` with its per-entity requirements instantiated per
     entity (module docstring); ``run(plan, path, progress)`` audits a plan (the plain audit).
@@ -153,72 +91,355 @@ def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
         the log's audit: the other requirements' verdicts, then per requirement its verdict
         over all entities (named as the requirement: violated when one entity violates it,
         satisfied when all satisfy it) and one verdict per entity in order of first
-        appearance (none appeared: one ``vacuous`` verdict saying so; an error reading the
-        key: one ``error`` verdict naming it).
+        appearance (none appeared: one ``vacuous`` verdict saying so; an error: one ``error``
+        verdict naming it).
     """
     groups = entity_of_requirements(plan)
     plain = [r for r in plan.requirements if r.index not in groups]
     la = run(dataclasses.replace(plan, requirements=plain), path, progress) if plain else None
-    extra: list[Verdict] = []
-    for r in [r for r in plan.requirements if r.index in groups]:
-        extra += _instances(plan, r, groups[r.index], path, run)
     if la is None:
         la = LogAudit(log=path)
-        la.verdicts = []
+    extra = _Entities(plan, path, la).judge([r for r in plan.requirements
+                                             if r.index in groups], groups)
     la.verdicts = la.verdicts + extra
     return la
 
 
-def _instances(plan: Any, r: Any, names: list[str], path: str, run: Any) -> list[Verdict]:
-    """The verdicts of requirement ``r`` on its entities ``names`` (one entity only)."""
-    def alone(verdict: str, **kw: Any) -> list[Verdict]:
-        return [Verdict(log=path, requirement=r.id, text=r.text, source=r.source,
+class _Entities:
+    """The per-entity requirements of one log: checked, read once, judged."""
+
+    def __init__(self, plan: Any, path: str, la: LogAudit) -> None:
+        self.plan, self.path, self.la = plan, path, la
+        self.bound = getattr(plan.config, "max_entities", None) or DEFAULT_MAX_ENTITIES
+
+    def alone(self, r: Any, verdict: str, **kw: Any) -> list[Verdict]:
+        return [Verdict(log=self.path, requirement=r.id, text=r.text, source=r.source,
                         verdict=verdict, **kw)]
 
-    if len(names) != 1:
-        return alone("error", error=f"{r.id} reads the entities {', '.join(names)}: a "
-                     "requirement is judged per entity of one key")
-    name = names[0]
-    absent = _key_topic_absent(path, plan.bindings, name)
-    if absent is not None:
-        verdict, why = absent
-        return alone(verdict, **({"unknown_reason": why} if verdict == "unknown" else
-                                 {"error": why}))
-    try:
-        values, span, cut = find_entities(path, plan.bindings, name)
-    except (BindingError, SignalError, OSError) as exc:
-        return alone("error", error=str(exc))
-    key = plan.bindings.entities[name][0]
-    if not values:
-        return alone("vacuous", notes=[f"no entity {name} ({key}) appeared in the log: the "
-                                       "requirement holds of none"])
-    out: list[Verdict] = []
-    for _i, value in enumerate(values):
-        sub = dataclasses.replace(plan, bindings=plan.bindings.for_entity({name: value}),
-                                  requirements=[dataclasses.replace(
-                                      r, id=f"{r.id}[{name}={value}]", index=0)])
-        v = run(sub, path, None).verdicts[0]
-        v.notes = list(v.notes) + [f"entity {name} = {value!r} ({key}): first seen at log time "
-                                   f"{span[value][0]}, last at {span[value][1]}"]
-        out.append(v)
-    counts: dict[str, int] = {}
-    for v in out:
-        counts[v.verdict] = counts.get(v.verdict, 0) + 1
-    summary = (f"{r.id} over {len(out)} entities {name}: "
-               + ", ".join(f"{n} {k}" for k, n in sorted(counts.items())))
-    for v in out:
-        v.notes.append(summary)
-    if cut:  # the entities left unjudged: a verdict of their own, never named r.id
-        rest = alone("error", error=f"more than {MAX_ENTITIES:,} entities {name} ({key}) in "
-                     f"the log: only the first {MAX_ENTITIES:,} are judged")
-        rest[0].requirement = f"{r.id}[{name}=...]"
-        out += rest
-    return [_summary(r, path, out, summary)] + out
+    def judge(self, rs: list, groups: dict[int, list[str]]) -> list[Verdict]:
+        """Every per-entity requirement's verdicts, in ``rs`` order."""
+        out: dict[int, list[Verdict]] = {}
+        try:
+            source = open_log(self.path, msg_path=self.plan.config.msg_path)
+            available = source.topics()
+        except (FretcInputError, OSError) as exc:
+            return [v for r in rs for v in self.alone(r, "error", error=f"log not audited: {exc}")]
+        clocks: dict[int, tuple[str, list[str]]] = {}
+        for r in rs:
+            why = self._cannot(r, groups[r.index], available, source)
+            if why is not None:
+                out[r.index] = why
+            else:
+                clocks[r.index] = (groups[r.index][0], list(r.variables))
+        if clocks:
+            self._read(source, rs, clocks, out)
+        return [v for r in rs for v in out[r.index]]
+
+    def _cannot(self, r: Any, names: list[str], available: Any, source: Any
+                ) -> list[Verdict] | None:
+        """The verdicts of a requirement that cannot be read (else None): an error before
+        the log (its own), two kinds of entity, a topic not in the log (``unknown`` when
+        the damage may have taken it)."""
+        if r.error is not None:
+            return self.alone(r, "error", error=r.error)
+        if len(names) != 1:
+            return self.alone(r, "error", error=f"{r.id} reads the entities {', '.join(names)}"
+                              ": a requirement is judged per entity of one key")
+        b = self.plan.bindings
+        missing = [v for v in r.variables if v not in b.variables and v not in b.per_entity]
+        if missing:
+            return self.alone(r, "error", error=f"no binding for {', '.join(map(repr, missing))}"
+                              f" in bindings ({b.source})")
+        try:
+            key_topics = _key_topics(b, names[0])
+            own = b.for_entity({names[0]: EntityParam(names[0])}).variables
+        except Exception as exc:  # noqa: BLE001 - a binding that does not compile: its error
+            return self.alone(r, "error", error=str(exc))
+        has = f"(it has {', '.join(available) or 'no topics'})"
+        absent = sorted(t for t in log_topics(key_topics) if t not in available)
+        if absent:
+            why = (f"topic {', '.join(absent)} (the key {b.entities[names[0]][0]} of entity "
+                   f"{names[0]}) is not in the log {has}: no entity was looked for")
+        else:
+            absent = sorted(t for v in r.variables for t in log_topics(own[v].topics)
+                            if t not in available)
+            if not absent:
+                return None
+            why = f"topic {', '.join(absent)} (bound to {r.id}'s variables) is not in the log {has}"
+        if source.partial:
+            return self.alone(r, "unknown", unknown_reason=f"{why}; the log is damaged: "
+                              "the damage may have taken it", partial=True)
+        return self.alone(r, "error", error=why)
+
+    def _read(self, source: Any, rs: list, clocks: dict[int, tuple[str, list[str]]],
+              out: dict[int, list[Verdict]]) -> None:
+        """One read for the requirements of ``clocks``, then each judged into ``out``."""
+        try:
+            made, ticks, errors = read_entities(source, self.plan.bindings, clocks, self.bound)
+        except Exception as exc:  # noqa: BLE001 - a binding or signal error: every one's error
+            for r in rs:
+                out.setdefault(r.index, self.alone(r, "error", error=str(exc)))
+            return
+        self._record(source, made)
+        gaps, _bridged = split_bridged(inner_gaps(source), self.plan.config.bridge_gaps_ns)
+        for r in rs:
+            if r.index not in clocks:
+                continue
+            c = made[r.index]
+            err = errors.get(r.index) or next(iter(c.failed.values()), None)
+            if err is not None:
+                out[r.index] = self.alone(r, "error", error=str(err))
+                continue
+            out[r.index] = _Judge(self, r, clocks[r.index][0], c, ticks[r.index], source,
+                                  gaps).verdicts()
+
+    def _record(self, source: Any, made: dict[int, EntityClock]) -> None:
+        """The log's figures from the read (when no plain requirement read it already)."""
+        la = self.la
+        la.kind = la.kind or source.kind
+        la.partial = la.partial or bool(source.partial)
+        if la.damage_time_ns is None:
+            la.damage_time_ns = source.damage_time
+        la.damage_cut = la.damage_cut or bool(source.damage_cut)
+        la.cut_time_ns = la.cut_time_ns if la.cut_time_ns is not None else source.cut_start
+        for t, n in source.counts.items():
+            la.messages[t] = max(la.messages.get(t, 0), n)
+        problems: dict = {}
+        counts: dict[str, int] = {}
+        for c in made.values():
+            collect_problems(source, c.s, problems, counts)
+        seen = {(p["kind"], p["topic"], p["log_time_ns"], p["detail"]) for p in la.problems}
+        la.problems += [problem_json(p) for k, p in problems.items() if k not in seen]
+        for k, n in counts.items():
+            la.problem_counts[k] = max(la.problem_counts.get(k, 0), n)
+        if not la.gaps:
+            kept, bridged = split_bridged(inner_gaps(source),
+                                          self.plan.config.bridge_gaps_ns)
+            la.gaps = merged_gaps(kept, bridged)
+        starts = [t for t in (la.start_time_ns, source.start_time) if t is not None]
+        la.start_time_ns = min(starts) if starts else None
+        la.end_time_ns = la.end_time_ns if la.end_time_ns is not None else source.end_time
+        if not la.tick and self.plan.bindings is not None:
+            b = self.plan.bindings
+            la.tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns
+                       else {"topic": b.tick.topic})
+            la.time_base = b.time_base
+
+
+def _key_topics(bindings: Bindings, name: str) -> frozenset[str]:
+    from fretc.audit.entity_read import entity_kind
+
+    return entity_kind(bindings, name).binding.topics
+
+
+class _Judge:
+    """One per-entity requirement's verdicts from its clock's read: each entity's trace
+    (its life, :mod:`fretc.audit.entity_read`) judged as a plain requirement's clock."""
+
+    def __init__(self, ents: _Entities, r: Any, name: str, c: EntityClock, ticks: list,
+                 source: Any, gaps: list) -> None:
+        self.ents, self.r, self.name, self.c, self.source, self.gaps = (
+            ents, r, name, c, source, gaps)
+        self.times = np.array([t.time for t in ticks], dtype=np.int64)
+        self.plain = {b.name: _column([t.values.get(b.name) for t in ticks])
+                      for b in c.variables}
+        topics = sorted({tp for t in ticks for tp in t.log_times})
+        self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks], np.int64)
+                          for tp in topics}
+        own = [b.name for b in c.own]
+        self.absent = ({n: _column([t.values[ENTITIES][0][j] for t in ticks])
+                        for j, n in enumerate(own)} if not c.kind.stream else {})
+        self.present: dict[int, list[tuple[int, tuple]]] = {}
+        for k, t in enumerate(ticks):
+            for i, vals in t.values[ENTITIES][1]:
+                self.present.setdefault(i, []).append((k, vals))
+        self.records: dict[int, list[tuple[int, tuple]]] = {}
+        for i, tm, vals in c.table.rows:
+            self.records.setdefault(i, []).append((tm, vals))
+        self.bindings = Bindings({**{b.name: b for b in c.variables},
+                                  **{b.name: b for b in c.own}},
+                                 ents.plan.bindings.tick, ents.plan.bindings.time_base,
+                                 ents.plan.bindings.header_lag_ns, ents.plan.bindings.source)
+
+    def verdicts(self) -> list[Verdict]:
+        ents, r, c = self.ents, self.r, self.c
+        table = c.table
+        key = c.kind.key
+        if not table.keys:
+            return ents.alone(r, "vacuous", notes=[f"no entity {self.name} ({key}) appeared in "
+                                                   "the log: the requirement holds of none"])
+        fast = self._batch()
+        out = [fast.get(i) or self._one(i) for i in range(len(table.keys))]
+        counts: dict[str, int] = {}
+        for v in out:
+            counts[v.verdict] = counts.get(v.verdict, 0) + 1
+        summary = (f"{r.id} over {len(out)} entities {self.name}: "
+                   + ", ".join(f"{n} {k}" for k, n in sorted(counts.items())))
+        for v in out:
+            v.notes.append(summary)
+        if table.cut:  # the entities left unjudged: a verdict of their own, never named r.id
+            rest = ents.alone(r, "error", error=(
+                f"more than {ents.bound:,} entities {self.name} ({key}) in the log: only the "
+                f"first {ents.bound:,} are judged (raise the bound with --max-entities)"))
+            rest[0].requirement = f"{r.id}[{self.name}=...]"
+            out += rest
+        return [_summary(r, ents.path, out, summary)] + out
+
+    def _new(self, i: int) -> Verdict:
+        """Entity ``i``'s verdict, not yet judged."""
+        r, c = self.r, self.c
+        value = c.table.keys[i]
+        v = Verdict(log=self.ents.path, requirement=f"{r.id}[{self.name}={value}]",
+                    text=r.text, source=r.source, notes=list(r.notes))
+        v.notes.append(f"entity {self.name} = {value!r} ({c.kind.key}): first seen at log "
+                       f"time {c.table.first[i]}, last at {c.table.last[i]}")
+        return v
+
+    def _range(self, i: int) -> tuple[int, int]:
+        """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
+        n = len(self.times)
+        i0 = int(np.searchsorted(self.times, self.c.table.first[i], side="left"))
+        i1 = min(int(np.searchsorted(self.times, self.c.table.last[i], side="left")), n - 1)
+        return i0, i1
+
+    def _batch(self) -> dict[int, Verdict]:
+        """The entities judged at once (:mod:`fretc.audit.entity_batch`): satisfied or
+        vacuous ones on a log without damage; the others are judged one at a time."""
+        src, c = self.source, self.c
+        trig = batchable(self.ents.plan, self.r)
+        if trig is None or src.partial or src.lost or inner_gaps(src):
+            return {}
+        judged = [i for i in range(len(c.table.keys))
+                  if i not in c.table.errors or c.kind.stream]
+        ranges = [self._range(i) for i in judged]
+        keep = [k for k, (i0, _i1) in enumerate(ranges) if i0 < len(self.times)]
+        judged = [judged[k] for k in keep]
+        if not judged:
+            return {}
+        i0s = np.array([ranges[k][0] for k in keep], np.int64)
+        lengths = np.array([ranges[k][1] for k in keep], np.int64) - i0s + 1
+        firsts = np.concatenate(([0], np.cumsum(lengths)[:-1])).astype(np.int64)
+        idx = np.arange(int(lengths.sum()), dtype=np.int64) - np.repeat(firsts - i0s, lengths)
+        columns = {k: col[idx] for k, col in self.plain.items()}
+        columns.update(self._own_columns(judged, i0s, firsts, lengths, idx))
+        got = batch_verdicts(self.r, trig, columns, firsts, lengths)
+        if got is None:
+            return {}
+        holds, vacuous, ltl3 = got
+        slow = nan_traces(columns, firsts, lengths)
+        out: dict[int, Verdict] = {}
+        for e, i in enumerate(judged):
+            if not holds[e] or e in slow:
+                continue
+            v = out[i] = self._new(i)
+            a, m = int(i0s[e]), int(lengths[e])
+            v.verdict = "vacuous" if vacuous[e] else "satisfied"
+            v.engine = "vectorized"
+            v.ticks_evaluated = m
+            v.first_tick_ns, v.last_tick_ns = int(self.times[a]), int(self.times[a + m - 1])
+            status, tick = ltl3[e]
+            v.ltl3 = Ltl3(status, tick, int(self.times[a + tick]) if tick is not None else None)
+            v.notes.append(BATCH_NOTE)
+        return out
+
+    def _own_columns(self, judged: list[int], i0s: np.ndarray, firsts: np.ndarray,
+                     lengths: np.ndarray, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """The per-entity variables of the entities ``judged`` laid end to end."""
+        c = self.c
+        own = [b.name for b in c.own]
+        if c.kind.stream:
+            vals: list[list] = [[] for _ in own]
+            for e, i in enumerate(judged):
+                rec = self.records[i]
+                rt = np.array([t for t, _v in rec], dtype=np.int64)
+                a, m = int(i0s[e]), int(lengths[e])
+                at = np.maximum(np.searchsorted(rt, self.times[a:a + m], side="right") - 1, 0)
+                for j in range(len(own)):
+                    vals[j] += [rec[k][1][j] for k in at.tolist()]
+            return {name: _column(vals[j]) for j, name in enumerate(own)}
+        out = {}
+        for j, name in enumerate(own):
+            col = self.absent[name][idx].tolist()
+            for e, i in enumerate(judged):
+                a, m, f = int(i0s[e]), int(lengths[e]), int(firsts[e])
+                for k, got in self.present.get(i, ()):
+                    if a <= k < a + m:
+                        col[f + k - a] = got[j]
+            out[name] = _column(col)
+        return out
+
+    def _one(self, i: int) -> Verdict:
+        """Entity ``i``'s verdict."""
+        r, c, ents = self.r, self.c, self.ents
+        v = self._new(i)
+        first = c.table.first[i]
+        if i in c.table.errors and not c.kind.stream:
+            v.verdict, v.error = "error", str(c.table.errors[i])
+            return v
+        n = len(self.times)
+        i0, i1 = self._range(i)
+        if i0 >= n:
+            v.verdict = "error"
+            v.error = (f"no tick evaluated at or after its first message (log time {first})"
+                       + (f": waiting for {', '.join(c.s.missing_topics)}"
+                          if c.s.missing_topics else ""))
+            return v
+        res = self._pass(i, i0, i1)
+        v.ticks_evaluated = len(res.times)
+        v.first_tick_ns, v.last_tick_ns = int(self.times[i0]), int(self.times[i1])
+        if res.cut:
+            v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
+        ri = dataclasses.replace(r, id=v.requirement)
+        finalize(ents.plan, ri, res, self.bindings, v, ents.la)
+        if v.error is not None:
+            v.verdict = "error"
+        v.partial = ents.la.partial and v.error is None
+        return v
+
+    def _pass(self, i: int, i0: int, i1: int) -> ClockPass:
+        """Entity ``i``'s clock pass over ticks ``i0..i1`` (the damage's cut and gaps)."""
+        c, sl = self.c, slice(i0, i1 + 1)
+        times = self.times[sl]
+        columns = {k: col[sl] for k, col in self.plain.items()}
+        own = [b.name for b in c.own]
+        if c.kind.stream:
+            rec = self.records[i]
+            rt = np.array([t for t, _v in rec], dtype=np.int64)
+            at = np.maximum(np.searchsorted(rt, times, side="right") - 1, 0)
+            for j, name in enumerate(own):
+                columns[name] = _column([rec[k][1][j] for k in at.tolist()])
+        else:
+            rows = [(k - i0, vals) for k, vals in self.present.get(i, ()) if i0 <= k <= i1]
+            for j, name in enumerate(own):
+                vals = [x for x in self.absent[name][sl].tolist()]
+                for k, got in rows:
+                    vals[k] = got[j]
+                columns[name] = _column(vals)
+        log_times = {k: lt[sl] for k, lt in self.log_times.items()}
+        res = ClockPass(c.s, times, columns, log_times)
+        topics = frozenset(t for b in self.bindings.variables.values() for t in b.topics)
+        cut_at_damage(res, self.source, self.bindings, topics)
+        mark_gaps(res, list(columns), self.bindings, self.gaps, topics,
+                  lost_in_words(self.source, log_topics(topics)))
+        return res
+
+
+def _column(values: list) -> np.ndarray:
+    """Values of one variable as a column: booleans as bool, else float (NaN unknown)."""
+    if values and all(type(x) in (bool, np.bool_) for x in values):
+        return np.array(values, dtype=np.bool_)
+    out = np.empty(len(values), np.float64)
+    for k, x in enumerate(values):
+        try:
+            out[k] = float(x) if x is not None else np.nan
+        except (TypeError, ValueError):
+            out[k] = np.nan
+    return out
 
 
 #: The verdict over all entities: the first of these that some entity has. A violated
 #: entity decides it (the universal quantifier is false whatever the others are); else an
-#: error or an unjudged entity (past :data:`MAX_ENTITIES`) leaves the whole undecided.
+#: error or an unjudged entity (past the bound) leaves the whole undecided.
 _PRECEDENCE = ("violated", "error", "unknown", "satisfied", "vacuous")
 
 
@@ -235,15 +456,27 @@ def _summary(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
         v.notes.append(f"first violated by {first.requirement}")
     margins = [x.robustness for x in out if x.robustness is not None]
     v.robustness = min(margins) if margins else None
-    errors = "; ".join(f"{x.requirement}: {x.error}" for x in out if x.error)
+    errors = _listed([f"{x.requirement}: {x.error}" for x in out if x.error])
     if verdict == "error":
         v.error = errors
     elif errors:  # violated all the same: what was not judged is said
         v.notes.append(f"not judged: {errors}")
     if verdict == "unknown":
-        v.unknown_reason = "; ".join(f"{x.requirement}: {x.unknown_reason}" for x in out
-                                     if x.verdict == "unknown")
+        v.unknown_reason = _listed([f"{x.requirement}: {x.unknown_reason}" for x in out
+                                    if x.verdict == "unknown"])
+    v.partial = any(x.partial for x in out)
     v.notes.append(summary)
-    v.notes.append("violated by: " + (", ".join(x.requirement for x in out
-                                                if x.verdict == "violated") or "none"))
+    v.notes.append("violated by: " + (_listed([x.requirement for x in out
+                                               if x.verdict == "violated"], ", ") or "none"))
     return v
+
+
+#: Entities named in the requirement's own error, reason and notes (the rest counted).
+LISTED = 20
+
+
+def _listed(items: list[str], sep: str = "; ") -> str:
+    """``items`` joined, the first :data:`LISTED` of them and how many more."""
+    more = len(items) - LISTED
+    return sep.join(items[:LISTED]) + (f"{sep}and {more} more" if more > 0 else "")
+

@@ -36,6 +36,7 @@ from fretc.common.problems import BindingError
 from fretc.common.streams import log_topics
 from fretc.live.record import Recorder
 from fretc.signals.bindings.binding import compile_expression
+from fretc.signals.bindings.expression import EntityParam
 
 __all__ = ["EntityRecording", "entity_topics"]
 
@@ -54,7 +55,7 @@ def entity_topics(plan: Any, indexes: set[int]) -> set[str]:
         except BindingError:
             pass
     try:
-        bound = b.for_entity({name: 0 for name in b.entities}).variables
+        bound = b.for_entity({name: EntityParam(name) for name in b.entities}).variables
     except BindingError:
         bound = b.variables
     for r in plan.requirements:

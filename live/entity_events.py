@@ -7,8 +7,9 @@ end (:mod:`fretc.live.entities`); the live events follow the same rules, so an e
 
 An entity found on a message of the key's topic gets its clock from the start of the run:
 the messages the watch used on the topics its requirement reads are kept in memory (at most
-:data:`MAX_LIVE_MESSAGES`) and replayed into the new clock, so its ticks are those the audit
-of the run gives it. Past the bound, entities found later have no live events (their final
+:data:`MAX_LIVE_MESSAGES`) and replayed into the new clock, and its monitor is stepped from
+the first tick at or after that message (the entity's life, :mod:`fretc.audit.entity_read`),
+so its ticks are those the audit of the run gives it. Past the bound, entities found later have no live events (their final
 verdict is unchanged); so do entities under the header time base (the audit orders by
 header stamps: a later message may come before a tick already stepped), and requirements
 without a generated monitor (``offline``).
@@ -49,6 +50,7 @@ class _Instance:
     monitor: Any
     state: Any
     topics: set
+    first: int = 0  # the log time of the entity's first message: its first tick at or after
     n: int = 0  # ticks stepped
 
 
@@ -132,7 +134,7 @@ class EntityEvents:
                 for value in kind.values(data, log_time):
                     if value not in kind.seen and len(kind.seen) < MAX_ENTITIES:
                         kind.seen.add(value)
-                        self._start(kind, value)
+                        self._start(kind, value, log_time)
 
     def finish(self) -> None:
         """The run ended: the ticks left on every instance's clock."""
@@ -140,7 +142,7 @@ class EntityEvents:
             for inst in kind.instances:
                 self._ticks(inst, inst.clock.finish())
 
-    def _start(self, kind: _Kind, value: Any) -> None:
+    def _start(self, kind: _Kind, value: Any, first: int) -> None:
         b, r = self.plan.bindings, kind.r
         try:
             sub = b.for_entity({kind.name: value})
@@ -157,7 +159,7 @@ class EntityEvents:
         req = SimpleNamespace(id=f"{r.id}[{kind.name}={value}]", variables=r.variables)
         inst = _Instance(req, clock, Streams(variables), windows, r.monitor_cls(),
                          self.new_state(), topics | ({own.tick.topic} if own.tick.topic
-                                                     else set()))
+                                                     else set()), first)
         kind.instances.append(inst)
         for topic, log_time, data in self.history:
             self._push(inst, topic, log_time, data)
@@ -178,7 +180,7 @@ class EntityEvents:
         src = self.source
         for tick in ticks:
             tick = inst.windows.apply(None, tick)
-            if tick is None:
+            if tick is None or tick.time < inst.first:  # before the entity's life
                 continue
             t, i = tick.time, inst.n
             inst.n += 1

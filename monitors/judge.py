@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from fretc.compiler.semantics import Formalization
     from fretc.compiler.codegen import MonitorSource
 
-__all__ = ["Judgement", "judge", "ltl3_verdict", "nan_ticks"]
+__all__ = ["Judgement", "judge", "ltl3_verdict", "ltl3_verdicts", "nan_ticks"]
 
 
 @dataclass
@@ -184,6 +184,44 @@ def ltl3_verdict(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray
     for (_t, _s, _l, outcome), hit in zip(runs, firsts):
         if hit is not None and (best[1] is None or hit < best[1]):
             best = (outcome, hit)
+    return best
+
+
+def ltl3_verdicts(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray], n: int,
+                  starts: np.ndarray, firsts: np.ndarray, lengths: np.ndarray
+                  ) -> list[tuple[str, int | None]]:
+    """:func:`ltl3_verdict` of each of several traces laid end to end in ``columns`` (trace
+    ``e`` at ``firsts[e]``, ``lengths[e]`` ticks; ``starts`` each tick's trace's first
+    index, as :func:`fretc.monitors.vectorized.pt_series` takes it): the automata restart
+    at each trace. Ticks are 0-based in each trace.
+
+    Raises:
+        VectorizeError: as :func:`ltl3_verdict`."""
+    ms = monitor_source
+    bad, good = ms.bad, ms.good
+    count = len(firsts)
+    if bad is not None and bad.empty:
+        return [("violated", None)] * count
+    if good is not None and good.empty:
+        return [("satisfied", None)] * count
+    live = [(aut, outcome) for aut, outcome in ((bad, "violated"), (good, "satisfied"))
+            if aut is not None and not aut.complete]
+    best: list[tuple[str, int | None]] = [("unknown", None)] * count
+    for aut, outcome in live:
+        if aut.table is None:
+            raise VectorizeError("automaton with condition chains (too many atoms to "
+                                 "tabulate): use the step-wise monitor")
+        letters = atom_letters(aut.atoms, columns, n, starts).tolist()
+        table, init = aut.table, aut.initial
+        for e, (a, m) in enumerate(zip(firsts.tolist(), lengths.tolist())):
+            state = init
+            for i in range(a, a + m):
+                state = table[state][letters[i]]
+                if state < 0:
+                    hit = i - a
+                    if best[e][1] is None or hit < best[e][1]:  # type: ignore[operator]
+                        best[e] = (outcome, hit)
+                    break
     return best
 
 

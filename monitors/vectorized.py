@@ -17,6 +17,11 @@ does that, operator by operator, with exactly the semantics of the generated ``s
 ``preReal(i, x)``       ``x`` shifted one tick, ``i`` at tick 0
 =====================  ==========================================================
 
+Several traces at once (``starts``: each tick's trace starts at that index, as the traces of
+the entities of a per-entity requirement laid end to end): every operator restarts at a
+trace's first tick (``Y`` false, ``Z`` true, ``O``/``H``/``S`` over that trace's ticks only),
+so each trace's values are those it has alone.
+
 Arithmetic follows the generated module's helpers: ``/`` by zero, ``mod`` by zero and
 overflowing ``^`` give NaN; ``min``/``max`` keep Python's ``min(a, b)`` / ``max(a, b)``
 choice when NaN is involved; a boolean variable read as a number is 0/1 and a number read
@@ -61,11 +66,14 @@ def supports(node: Node) -> bool:
 class _Series:
     """Memoized per-node arrays over ``n`` ticks."""
 
-    def __init__(self, columns: Columns, n: int):
+    def __init__(self, columns: Columns, n: int, starts: np.ndarray | None = None):
         self.columns = columns
         self.n = n
         self.memo: dict[tuple[Node, bool], np.ndarray] = {}
         self.idx = np.arange(n, dtype=np.int64)
+        #: the first tick of each tick's trace (all 0: one trace)
+        self.seg = starts if starts is not None else np.zeros(n, np.int64)
+        self.first = self.idx == self.seg  # a trace's first tick
 
     # ------------------------------------------------------------------ reading variables
     def read(self, name: str, numeric: bool) -> np.ndarray:
@@ -119,10 +127,7 @@ class _Series:
         if op == "false":
             return np.zeros(n, np.bool_)
         if op == "FTP":
-            out = np.zeros(n, np.bool_)
-            if n:
-                out[0] = True
-            return out
+            return self.first.copy()
         if op in ("ap", "var"):
             return self.read(name_of(node), numeric=(op == "var"))
         if op in ("call", "fn"):
@@ -151,7 +156,9 @@ class _Series:
             return np.where(c, self.bool(a[1]), self.bool(a[2]))
         if op == "pre":
             init, x = self.num(a[0]), self.num(a[1])
-            return shifted(x, init[0] if self.n else None, np.float64)
+            out = shifted(x, init[0] if self.n else None, np.float64)
+            out[self.first] = init[self.first]
+            return out
         return self.get(a[0], numeric)  # "past"
 
     def _connective(self, node: Node) -> np.ndarray:
@@ -164,12 +171,16 @@ class _Series:
         """The past-time operators (module docstring's table)."""
         op, a, n = node.op, node.args, self.n
         if op in ("Y", "Z"):
-            return shifted(self.bool(a[0]), op == "Z", np.bool_)
+            out = shifted(self.bool(a[0]), op == "Z", np.bool_)
+            out[self.first] = op == "Z"
+            return out
         if op in ("O", "H") and node.hi is None:
             x = self.bool(a[0])
-            if op == "O":
-                return np.logical_or.accumulate(x) if n else x
-            return np.logical_and.accumulate(x) if n else x
+            if not n:
+                return x
+            if op == "O":  # the last tick holding x, in this trace
+                return np.maximum.accumulate(np.where(x, self.idx, -1)) >= self.seg
+            return np.maximum.accumulate(np.where(x, -1, self.idx)) < self.seg
         if op in ("O", "H"):
             return self._bounded_once(node)
         x, y = self.bool(a[0]), self.bool(a[1])
@@ -177,7 +188,7 @@ class _Series:
             x, y = ~x, ~y
         last_y = np.maximum.accumulate(np.where(y, self.idx, -1)) if n else self.idx
         last_not_x = np.maximum.accumulate(np.where(x, -1, self.idx)) if n else self.idx
-        s = (last_y >= 0) & (last_not_x <= last_y)
+        s = (last_y >= self.seg) & (last_not_x <= last_y)
         return ~s if op == "T" else s
 
     def _bounded_once(self, node: Node) -> np.ndarray:
@@ -191,8 +202,8 @@ class _Series:
         cs = np.zeros(n + 1, np.int64)
         np.cumsum(hits, out=cs[1:])
         upper = self.idx - lo  # inclusive
-        lower = np.maximum(self.idx - hi, 0)
-        nonempty = upper >= 0
+        lower = np.maximum(self.idx - hi, self.seg)
+        nonempty = upper >= self.seg
         count = np.where(nonempty, cs[np.clip(upper + 1, 0, n)] - cs[np.minimum(lower, n)], 0)
         if op == "O":
             return nonempty & (count > 0)
@@ -220,21 +231,26 @@ def node_series(node: Node, columns: Columns, n: int, numeric: bool = False) -> 
     return _Series(columns, n).get(node, numeric)
 
 
-def pt_series(node: Node, columns: Columns, n: int) -> np.ndarray:
+def pt_series(node: Node, columns: Columns, n: int, starts: np.ndarray | None = None
+              ) -> np.ndarray:
     """The pt verdict at every tick: ``out[i]`` equals the value the generated monitor's
     ``step()`` returns at tick ``i`` (bool array of shape ``(n,)``); ``out[-1]`` is the
-    FRET finite-trace verdict of the whole run.
+    FRET finite-trace verdict of the whole run. ``starts``: several traces laid end to end
+    (int64 array: the index of each tick's trace's first tick; module docstring), each
+    trace's verdict at its last tick.
 
     Raises:
         VectorizeError: as :func:`node_series`.
     """
-    return _Series(columns, n).bool(node)
+    return _Series(columns, n, starts).bool(node)
 
 
-def atom_letters(atoms: Sequence[Node], columns: Columns, n: int) -> np.ndarray:
+def atom_letters(atoms: Sequence[Node], columns: Columns, n: int,
+                 starts: np.ndarray | None = None) -> np.ndarray:
     """The automaton letter at each tick: bit ``j`` is the truth of ``atoms[j]`` (int64
-    array). Same bit order as the generated ``sub`` expressions."""
-    ev = _Series(columns, n)
+    array). Same bit order as the generated ``sub`` expressions. ``starts`` as
+    :func:`pt_series`."""
+    ev = _Series(columns, n, starts)
     out = np.zeros(n, np.int64)
     for j, a in enumerate(atoms):
         out |= ev.bool(a).astype(np.int64) << j

@@ -17,7 +17,7 @@ import numpy as np
 
 from fretc.common.units import NS_PER_S
 
-from fretc.signals.bindings.expression import BinOp, Const, Expr, Field, FuncCall, Named, UnaryOp, walk
+from fretc.signals.bindings.expression import BinOp, Const, EntityParam, Expr, const_value, Field, FuncCall, Named, UnaryOp, walk
 from fretc.signals.bindings.extract import FieldAccessError, Valid, make_extractor
 from fretc.signals.bindings.frames import LookupFailed, TfBuffer, pick_joint
 from fretc.signals.bindings.operations import (COMPARISONS, LOGICAL, NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2,
@@ -77,6 +77,8 @@ def compile_node(node: Expr, ops: Ops, extractors: dict[Field, Evaluator],
     consts = constants if constants is not None else {}
     if isinstance(node, Const):
         v = node.value
+        if isinstance(v, EntityParam):  # an entity's key, set before each evaluation
+            return lambda st: v.value
         return lambda st: v
     if isinstance(node, Named):
         return _named(node, consts)
@@ -326,7 +328,7 @@ def _joint(node: FuncCall, args: list[Evaluator]) -> Evaluator:
 
     def joint(st: Any) -> Any:
         try:
-            return pick_joint(values_of(st), names_of(st), joint_name, text)
+            return pick_joint(values_of(st), names_of(st), const_value(joint_name), text)
         except LookupFailed as exc:
             raise EvalError(node, str(exc)) from None
     return joint

@@ -21,7 +21,7 @@ from fretc.fretish.limits import MAX_EXPR_DEPTH, MAX_EXPR_NODES
 from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
 
-__all__ = ["Expr", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
+__all__ = ["Expr", "EntityParam", "const_value", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
            "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
@@ -42,11 +42,33 @@ class Expr:
     col: int
 
 
+class EntityParam:
+    """The value of an entity's variable (``$track``, docs/bindings.md "One verdict per
+    entity") read when a binding is evaluated rather than when it is compiled: one compiled
+    binding serves every entity of a log, the audit setting :attr:`value` to each entity's
+    key before evaluating it (:mod:`fretc.audit.entity_read`). Written ``$name``."""
+
+    __slots__ = ("name", "value")
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.value: object = None
+
+    def __repr__(self) -> str:
+        return f"${self.name}"
+
+
+def const_value(v: object) -> object:
+    """A constant's value as read now (an :class:`EntityParam`'s current value)."""
+    return v.value if isinstance(v, EntityParam) else v
+
+
 @dataclass(frozen=True)
 class Const(Expr):
-    """``1.5``, ``2e-3``, ``true``, ``false``, ``"charging"``: a float, a bool or a string."""
+    """``1.5``, ``2e-3``, ``true``, ``false``, ``"charging"``: a float, a bool or a string;
+    or an :class:`EntityParam` (an entity's key, set at evaluation)."""
 
-    value: bool | float | str
+    value: bool | float | str | EntityParam
 
 
 @dataclass(frozen=True)
@@ -219,6 +241,8 @@ def unparse(node: Expr) -> str:
     """
     if isinstance(node, Const):
         v = node.value
+        if isinstance(v, EntityParam):
+            return repr(v)
         if isinstance(v, str):
             return quote(v)
         return ("true" if v else "false") if isinstance(v, bool) else repr(float(v))

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from fretc.signals.bindings.expression import Const, Field, Filter, Slice
+from fretc.signals.bindings.expression import Const, Field, Filter, Slice, const_value
 
 __all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "message_filter",
            "normalize_scalar"]
@@ -159,7 +159,7 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
 
     def keep(item: Any) -> bool:
         if isinstance(value_node, Const):
-            want = value_node.value
+            want = const_value(value_node.value)
         else:  # a Named constant, resolved against the log's schemas
             if value_node.name not in constants:  # type: ignore[attr-defined]
                 raise FieldAccessError(f"{text}: {value_node.name} is not a constant of the "  # type: ignore[attr-defined]

@@ -24,7 +24,7 @@ from fretc.common.libraries import check_lark
 from fretc.common.problems import BindingError
 from fretc.common.units import parse_duration
 from fretc.fretish.limits import MAX_EXPR_DEPTH
-from fretc.signals.bindings.expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, Expr,
+from fretc.signals.bindings.expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, EntityParam, Expr,
                          ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice, Span,
                          TF_COMPONENTS, UnaryOp, check, check_size)
 from fretc.signals.bindings.paths import unquote
@@ -81,6 +81,8 @@ class _ToExpr(Transformer):
 
     def path_variable(self, meta, kids):
         v = self._variable(kids[0])
+        if isinstance(v, EntityParam):  # an entity's key, read at evaluation
+            return Const(kids[0].column, v)
         return Const(kids[0].column, v if isinstance(v, (bool, str)) else float(v))
 
     def number(self, meta, kids):
@@ -300,7 +302,7 @@ def _joint_args(args: tuple, where: ExprLocation, col: int) -> tuple:
     beside the values field)."""
     if (len(args) != 2 or not isinstance(args[0], Field) or not args[0].path
             or not isinstance(args[0].path[-1], str) or not isinstance(args[1], Const)
-            or not isinstance(args[1].value, str)):
+            or not isinstance(args[1].value, (str, EntityParam))):
         raise where.error('joint() takes an array field and a joint name in quotes: '
                           'joint(/joint_states.position, "wheel_left_joint")', col)
     f = args[0]

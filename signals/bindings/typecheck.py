@@ -16,7 +16,7 @@ from fretc.common.streams import base_topic
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
 from fretc.logs.encodings import constant_name
-from fretc.signals.bindings.expression import (BinOp, Const, Expr, ExprLocation, Field, Filter, FuncCall, Named, Span,
+from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Expr, ExprLocation, Field, Filter, FuncCall, Named, Span,
                          UnaryOp, unparse)
 
 __all__ = ["check_types"]
@@ -107,6 +107,8 @@ class _TypeChecker:
     def type(self, node: Expr) -> str:
         if isinstance(node, Const):
             v = node.value
+            if isinstance(v, EntityParam):  # an entity's key: any value of its field
+                return "any"
             return "bool" if isinstance(v, bool) else "string" if isinstance(v, str) else "number"
         if isinstance(node, Named):
             if node.name in self.constants:

@@ -112,9 +112,10 @@ def test_watch_gives_one_verdict_per_track_equal_to_the_audit(tmp_path):
     for i, bad in want.items():
         v = got[f"T[track={i}]"]
         assert v.verdict == ("violated" if bad else "satisfied"), (i, v.error, v.notes)
-        if bad:
+        if bad:  # ticks counted from the entity's first message (its life)
+            seen = S + next(k for k, r in enumerate(ROWS) if i in r) * S // 10
             assert v.first_violation.at.time_ns == bad
-            assert v.first_violation.at.tick == (bad - S) // (S // 10)
+            assert v.first_violation.at.tick == (bad - seen) // (S // 10)
     assert got["T"].verdict == "violated"
     first = min(t for t in want.values() if t is not None)
     assert got["T"].first_violation.at.time_ns == first
@@ -153,19 +154,21 @@ def test_watch_with_no_entity_is_vacuous(tmp_path):
     assert [(v.requirement, v.verdict) for v in la.verdicts] == [("T", "vacuous")]
 
 
-def test_watch_judges_at_most_max_entities(tmp_path, monkeypatch):
-    """The audit's bound holds in the watch: past it, an error verdict counts the rest."""
-    import fretc.audit.entities as E
+def test_watch_judges_at_most_max_entities(tmp_path):
+    """The audit's bound (--max-entities) holds in the watch: past it, an error verdict
+    says how to raise it."""
+    import dataclasses
 
-    monkeypatch.setattr(E, "MAX_ENTITIES", 3)
     plan = _plan(tmp_path, FRET_T)
+    plan = dataclasses.replace(plan, config=dataclasses.replace(plan.config, max_entities=3))
     log = _log(tmp_path, ROWS)
     _w, la, _done = _watch(plan, log)
     ref = audit_log(plan, str(log))
     assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
     assert [v.requirement for v in la.verdicts] == ["T", "T[track=1]", "T[track=2]",
                                                     "T[track=3]", "T[track=...]"]
-    assert "only the first 3 are judged" in la.verdicts[-1].error
+    assert "only the first 3 are judged (raise the bound with --max-entities)" in (
+        la.verdicts[-1].error)
 
 
 def test_a_gap_is_never_a_pass_for_an_entity(tmp_path):

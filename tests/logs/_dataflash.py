@@ -15,6 +15,7 @@ FORMATS = [
     (131, "MODE", "QMBB", "TimeUS,Mode,ModeNum,Rsn"),
     (132, "MSG", "QZ", "TimeUS,Message"),
     (133, "ERR", "QBB", "TimeUS,Subsys,ECode"),
+    (134, "PARM", "QNf", "TimeUS,Name,Value"),
 ]
 
 

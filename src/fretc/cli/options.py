@@ -118,9 +118,10 @@ def audit_input_options(f: F, jobs: bool = True) -> F:
         MSG_PATH_OPTION,
         TEXT_ATTRIBUTE_OPTION,
         BRIDGE_GAPS_OPTION,
+        MAX_ENTITIES_OPTION,
     ]
     if not jobs:
-        del options[-5]
+        del options[-6]
     for option in reversed(options):
         f = option(f)
     return f
@@ -178,6 +179,19 @@ BRIDGE_GAPS_OPTION = click.option(
          "listed. Default: none (a gap's ticks are unknown).")
 
 
+#: Key of ``--max-entities``' value in the click context's ``meta``.
+MAX_ENTITIES_META = "fretc.max_entities"
+
+#: ``--max-entities N``: entities of one per-entity requirement judged per log
+MAX_ENTITIES_OPTION = click.option(
+    "--max-entities", type=click.IntRange(min=1), default=None, metavar="N",
+    expose_value=False,
+    callback=lambda ctx, _p, v: ctx.meta.__setitem__(MAX_ENTITIES_META, v) if v else None,
+    help="Judge at most N entities of one per-entity requirement per log (docs/bindings.md, "
+         "\"One verdict per entity\"); past it, an error verdict names the rest. Default: "
+         "1,000,000.")
+
+
 def bridge_gaps() -> int | None:
     """The running command's ``--bridge-gaps`` in ns (None: not given)."""
     ctx = click.get_current_context(silent=True)
@@ -206,7 +220,14 @@ def audit_config(requirements: tuple[str, ...], bindings: tuple[str, ...],
                        bindings=tuple(bindings) if bindings else None, inline=tuple(inline),
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
                        window=window, msg_path=tuple(msg_path),
-                       text_attribute=text_attribute(), bridge_gaps_ns=bridge_gaps())
+                       text_attribute=text_attribute(), bridge_gaps_ns=bridge_gaps(),
+                       max_entities=_max_entities())
+
+
+def _max_entities() -> int | None:
+    """The running command's ``--max-entities`` (None: not given)."""
+    ctx = click.get_current_context(silent=True)
+    return ctx.meta.get(MAX_ENTITIES_META) if ctx is not None else None
 
 
 class FleetError(click.ClickException):

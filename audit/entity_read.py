@@ -1,0 +1,373 @@
+"""One read of a log for every per-entity requirement and every entity
+(docs/bindings.md, "One verdict per entity"): :func:`read_entities`.
+
+Each per-entity requirement is sampled on its own clock (its own variables' topics and the
+bindings' tick: :class:`fretc.signals.clock.Clock`, the tick-by-tick clock of ``fretc
+watch``, with all its rules), its plain variables once per tick; its per-entity variables
+are compiled once with the entity's key as a value set at evaluation
+(:class:`fretc.signals.bindings.expression.EntityParam`) and evaluated at each tick for each
+entity the held messages carry. An entity's trace is its life:
+
+* its first tick is the first tick at or after its first message (a message of the key's
+  topic that carries its key), its last the first tick at or after its last message (the
+  rule of a clock's last tick, docs/guide/ticks.md): an entity seen in one message has at
+  least one tick, at or after it;
+* an array key (``/tracks.tracks[:].id``: a message lists the entities present) reads the
+  entity in the held message: a tick whose held message does not carry it reads it absent
+  (a filter keeps no item; a function that needs the item, ``joint()``, is NaN: unknown);
+* a key of one value per message (``"PARM".Name``) makes each entity a stream of its own
+  messages (its variables read it through a filter right after the topic,
+  ``"PARM"{Name==$param}.Value``): a tick reads the entity's newest message, as a stream.
+
+Memory: per clock, its plain columns (one value per tick) and the absent value of each
+per-entity variable at each tick, plus one entry per (entity, tick it is present at) (array
+keys) or per message of the entity (one-value keys); nothing grows with entities times the
+log's length. Per-entity variables are functions of the held messages: windows and
+aggregations over messages (``mean(x, 2s)``, ``any_of_messages``) of an entity are refused.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from fnmatch import fnmatchcase
+from typing import Any
+
+import numpy as np
+
+from fretc.common.problems import BindingError, SignalError
+from fretc.common.streams import base_topic, is_stream, log_topics
+from fretc.logs.selective import install as install_selective
+from fretc.signals.bindings import Bindings
+from fretc.signals.bindings.binding import Binding, compile_expression
+from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.expression import EntityParam
+from fretc.signals.bindings.extract import Valid
+from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
+from fretc.signals.streams import Streams
+from fretc.signals.tick_windows import with_tick_windows
+
+__all__ = ["EntityKind", "EntityClock", "entity_kind", "read_entities"]
+
+#: the key of a tick's values holding its per-entity values (never a FRET variable's name)
+ENTITIES = "\x00entities"
+_ABSENT = object()  # the key of no entity: a filter on it keeps nothing
+
+
+@dataclass
+class EntityKind:
+    """One ``[entities]`` name: ``key`` its key path, compiled (``binding``) and read from
+    ``topic`` (a topic, or a stream); ``stream``: one key per message (each entity a stream
+    of its own messages), else an array of keys per message (the entities present)."""
+
+    name: str
+    key: str
+    matching: str | None
+    binding: Binding
+    topic: str
+    stream: bool
+
+
+def entity_kind(bindings: Bindings, name: str) -> EntityKind:
+    """The :class:`EntityKind` of ``[entities]`` name ``name``.
+
+    Raises:
+        BindingError: the key is not a field path of one topic."""
+    key, matching = bindings.entities[name]
+    b = compile_expression(f"entity_{name}", key, source=f"{bindings.source} [entities]")
+    if len(b.topics) != 1 or not b.fields:
+        raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
+                           "field path of one topic, e.g. \"/tracks.tracks[:].id\"")
+    topic = next(iter(b.topics))
+    return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields))
+
+
+def _items(v: Any) -> list:
+    """The values a key path read from one message (an array, or one value)."""
+    if isinstance(v, Valid):
+        data = v.data if v.mask is None else v.data[v.mask]
+        return np.asarray(data).tolist()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, (list, tuple)):
+        return list(v)
+    return [v]
+
+
+@dataclass
+class EntityTable:
+    """The entities of one clock as the read meets them: key -> index (first appearance
+    order), their first and last message times (ns, the clock's time base), the first error
+    evaluating one, and the present values (array keys: per tick) or the messages' values
+    (one-value keys: per message)."""
+
+    index: dict[Any, int] = field(default_factory=dict)
+    keys: list[Any] = field(default_factory=list)
+    first: list[int] = field(default_factory=list)
+    last: list[int] = field(default_factory=list)
+    errors: dict[int, SignalError] = field(default_factory=dict)
+    #: (entity, tick number or message time, values) in the order met
+    rows: list[tuple[int, int, tuple]] = field(default_factory=list)
+    cut: bool = False  # more entities than the bound met
+
+    def see(self, key: Any, t: int, bound: int) -> int | None:
+        """Entity ``key`` carried by a message at ``t``: its index (None past ``bound``)."""
+        i = self.index.get(key)
+        if i is None:
+            if len(self.keys) >= bound:
+                self.cut = True
+                return None
+            i = self.index[key] = len(self.keys)
+            self.keys.append(key)
+            self.first.append(t)
+            self.last.append(t)
+        else:
+            self.last[i] = t
+        return i
+
+
+class EntityClock(Clock):
+    """A per-entity requirement's clock (module docstring): the :class:`Clock` of its plain
+    variables, the entities of ``kind`` met in its key's messages, and at each evaluated
+    tick, under :data:`ENTITIES` in the tick's values, the per-entity values
+    ``(absent values, [(entity, values)])``."""
+
+    def __init__(self, s: Sampling, plain: list[Binding], required: set[str], tick: Any,
+                 kind: EntityKind, own: list[Binding], param: EntityParam, bound: int) -> None:
+        super().__init__(s, plain, required, tick, keep_going=True)
+        self.kind, self.own, self.param, self.bound = kind, own, param, bound
+        self.table = EntityTable()
+        self.key_state = EvalState()
+        self.present: dict[int, list[int]] = {}  # id(held key message) -> its entities
+        self.stream_state = EvalState()
+
+    def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
+        out = super().push(topic, t, log_time, data) if topic in self.fed else []
+        if topic == base_topic(self.kind.topic) or topic == self.kind.topic:
+            self._key_message(topic, t, data)
+        return out
+
+    fed: frozenset[str] = frozenset()  # (set by read_entities: the topics the clock holds)
+
+    def _key_message(self, topic: str, t: int, data: Any) -> None:
+        """Record the entities a message of the key's topic carries."""
+        kind, st = self.kind, self.key_state
+        st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
+        st.values.clear()
+        try:
+            values = _items(kind.binding._scalar(st))  # type: ignore[misc]
+        except Exception as exc:  # noqa: BLE001 - an extractor's error, named with the message
+            raise SignalError(f"[entities] {kind.name}: {kind.key} cannot be read from the "
+                              f"message of {kind.topic} at log time {t}: {exc}") from None
+        got = []
+        for x in values:
+            if isinstance(x, float) and x.is_integer():
+                x = int(x)
+            if kind.matching is not None and not fnmatchcase(str(x), kind.matching):
+                continue
+            i = self.table.see(x, t, self.bound)
+            if i is not None:
+                got.append(i)
+                if kind.stream:
+                    self._stream_values(i, x, t, data)
+        if not kind.stream:  # (only the messages held or waiting for their tick are kept)
+            keep = {id(self.state.msgs.get(kind.topic))} | {id(p[1]) for p in self.pending}
+            self.present = {k: v for k, v in self.present.items() if k in keep}
+            self.present[id(data)] = got
+
+    def _stream_values(self, i: int, key: Any, t: int, data: Any) -> None:
+        """One-value keys: entity ``i``'s variables on its message ``data`` at ``t``."""
+        st = self.stream_state
+        for b in self.own:
+            for f in b.fields:
+                st.msgs[f.topic], st.times[f.topic] = data, t
+        st.now = t
+        self.table.rows.append((i, t, self._values(st, key, i)))
+
+    def _values(self, st: EvalState, key: Any, i: int | None) -> tuple:
+        """The per-entity variables with the entity's key ``key`` (NaN where one fails; the
+        first failure of entity ``i`` kept)."""
+        self.param.value = key
+        out = []
+        for b in self.own:
+            st.values.clear()  # (the extraction memo does not know the key)
+            try:
+                with np.errstate(all="ignore"):
+                    out.append(b.evaluate(st))
+            except SignalError as exc:
+                if i is not None and i not in self.table.errors:
+                    self.table.errors[i] = exc
+                out.append(float("nan"))
+        st.values.clear()
+        return tuple(out)
+
+    def _emit(self, t: int) -> Tick | None:
+        tick = super()._emit(t)
+        if tick is None:
+            return None
+        st = self.state
+        absent = self._absent(st) if not self.kind.stream else ()
+        rows = []
+        if not self.kind.stream:
+            held = st.msgs.get(self.kind.topic)
+            for i in self.present.get(id(held), ()) if held is not None else ():
+                rows.append((i, self._values(st, self.table.keys[i], i)))
+        tick.values[ENTITIES] = (absent, rows)  # type: ignore[assignment]
+        return tick
+
+    def finish(self) -> list[Tick]:
+        """The ticks left at the end; on a period, up to the first tick at or after the last
+        message (docs/guide/ticks.md), so that an entity met in the last period has one."""
+        out = super().finish()
+        if self.period is not None and self.next_grid is not None and self.last is not None \
+                and self.next_grid - self.period < self.last:
+            tick = self._emit(self.next_grid)
+            self.next_grid += self.period
+            if tick is not None:
+                out.append(tick)
+        return out
+
+    def _absent(self, st: EvalState) -> tuple:
+        """The per-entity variables of an entity the held messages do not carry."""
+        self.param.value = _ABSENT
+        out = []
+        for b in self.own:
+            st.values.clear()
+            try:
+                with np.errstate(all="ignore"):
+                    out.append(b.evaluate(st))
+            except (SignalError, TypeError):
+                out.append(float("nan"))
+        st.values.clear()
+        return tuple(out)
+
+
+def _own_bindings(bindings: Bindings, name: str, names: list[str]
+                  ) -> tuple[list[Binding], list[Binding], EntityParam]:
+    """The plain and the per-entity variables of ``names`` (the latter compiled once, the
+    entity's key an :class:`EntityParam`).
+
+    Raises:
+        BindingError: a per-entity variable that aggregates messages or reads a window."""
+    param = EntityParam(name)
+    every = bindings.for_entity({name: param}).variables
+    plain = [bindings.variables[n] for n in names if n in bindings.variables]
+    own = [every[n] for n in names if n in bindings.per_entity]
+    for b in own:
+        if b.aggregate is not None or b.window is not None or b.tick_window is not None:
+            raise BindingError(str(bindings.source), f"{b.name}: a per-entity variable reads "
+                               f"the held messages (its entity ${name}), not an aggregation "
+                               f"or a window over messages ({b.expr})")
+    return plain, own, param
+
+
+def _check_stream(kind: EntityKind, own: list[Binding], source: str) -> None:
+    """A key of one value per message: the per-entity variables read the entity's own
+    messages only (its stream, ``"PARM"{Name==$param}.Value``).
+
+    Raises:
+        BindingError: one reads another topic."""
+    for b in own:
+        if log_topics(b.topics) != {base_topic(kind.topic)}:
+            raise BindingError(source, f"{b.name}: the entities {kind.name} are the messages "
+                               f"of {base_topic(kind.topic)} ({kind.key}: one per message); a "
+                               f"per-entity variable reads that topic only ({b.expr})")
+
+
+def _topics_of(kind: EntityKind, plain: list[Binding], own: list[Binding]) -> set[str]:
+    """The topics (and streams) the clock holds: its plain variables' and the per-entity
+    variables' (an entity's stream stands for its topic), and the key's."""
+    out = {t for b in plain for t in b.topics}
+    for b in own:
+        out |= {base_topic(t) if is_stream(t) else t for t in b.topics}
+    return out | {kind.topic if not is_stream(kind.topic) else base_topic(kind.topic)}
+
+
+def read_entities(source: Any, bindings: Bindings,
+                  clocks: dict[Any, tuple[str, list[str]]], bound: int
+                  ) -> tuple[dict[Any, EntityClock], dict[Any, list[Tick]], dict[Any, Any]]:
+    """Sample the per-entity requirements ``clocks`` (key -> (entity name, variable
+    names)) in one read of ``source``.
+
+    Returns:
+        ``(clocks, ticks, errors)``: key -> its :class:`EntityClock` (entities met, their
+        rows; its ``s`` the clock's :class:`~fretc.signals.clock.Sampling`), key -> its
+        evaluated ticks (count_ticks warm-up applied), key -> the error that stopped it.
+
+    Raises:
+        BindingError: a per-entity variable the read cannot take (:func:`_own_bindings`),
+            or a bad key.
+        SignalError: a topic missing from the log.
+    """
+    made: dict[Any, EntityClock] = {}
+    fed: dict[str, list[Any]] = {}
+    available = source.topics()
+    buffers: dict[Any, HeaderBuffer] = {}
+    every: list[Binding] = []
+    for key, (name, names) in clocks.items():
+        kind = entity_kind(bindings, name)
+        plain, own, param = _own_bindings(bindings, name, names)
+        if kind.stream:
+            _check_stream(kind, own, str(bindings.source))
+        topics = _topics_of(kind, plain, own)
+        sub = Bindings({b.name: b for b in plain}, bindings.tick, bindings.time_base,
+                       bindings.header_lag_ns, bindings.source)
+        s = Sampling(source, sub)
+        c = made[key] = EntityClock(s, plain, present_tf(topics, available), bindings.tick,
+                                    kind, own, param, bound)
+        c.fed = frozenset(topics | ({bindings.tick.topic} if bindings.tick.topic else set()))
+        if bindings.time_base != "log":
+            buffers[key] = HeaderBuffer(source, sub, s._problems)
+        for t in c.fed:
+            fed.setdefault(t, []).append(key)
+        every += plain + own + [kind.binding]
+    check_topics(source, Bindings({}, bindings.tick, bindings.time_base,
+                                  bindings.header_lag_ns, bindings.source),
+                 extra=set(fed), users=bindings)
+    install_selective(source, Bindings({b.name + str(i): b for i, b in enumerate(every)},
+                                       bindings.tick, bindings.time_base,
+                                       bindings.header_lag_ns, bindings.source))
+    errors: dict[Any, Any] = {}
+    pairs = with_tick_windows(_run(source, made, buffers, fed, errors),
+                              {k: c.s for k, c in made.items()},
+                              {k: c.variables for k, c in made.items()})
+    ticks: dict[Any, list[Tick]] = {k: [] for k in made}
+    for key, tick in pairs:
+        ticks[key].append(tick)
+    return made, ticks, errors
+
+
+def _run(source: Any, clocks: dict[Any, EntityClock], buffers: dict[Any, HeaderBuffer],
+         fed: dict[str, list[Any]], errors: dict[Any, Any]) -> Iterator[tuple[Any, Tick]]:
+    """One read feeding every clock (as :func:`fretc.signals.groups.sample_groups`)."""
+    streams = Streams([b for c in clocks.values() for b in c.variables])
+
+    def stream_failed(stream: str, exc: SignalError) -> None:
+        for key in fed.get(stream, ()):
+            errors.setdefault(key, exc)
+
+    for m in streams.messages(source.messages(log_topics(fed)), fed, stream_failed):
+        for key in fed.get(m.topic, ()):
+            if key in errors:
+                continue
+            c = clocks[key]
+            try:
+                items = (buffers[key].push(m) if key in buffers
+                         else ((m.topic, m.log_time, m.log_time, m.data),))
+                for item in items:
+                    for t in c.push(*item):
+                        yield key, t
+            except SignalError as exc:
+                errors[key] = exc
+    for key, c in clocks.items():
+        if key in errors:
+            continue
+        try:
+            if key in buffers:
+                for item in buffers[key].drain():
+                    for t in c.push(*item):
+                        yield key, t
+            for t in c.finish():
+                yield key, t
+        except SignalError as exc:
+            errors[key] = exc
