@@ -41,8 +41,8 @@ from fretc.logs.selective import install as install_selective
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_expression
 from fretc.signals.bindings.compile import EvalState
-from fretc.signals.bindings.expression import EntityParam
-from fretc.signals.bindings.extract import Valid
+from fretc.signals.bindings.expression import EntityParam, Filter
+from fretc.signals.bindings.extract import Valid, by_entity
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import with_tick_windows
@@ -140,6 +140,12 @@ class EntityClock(Clock):
         self.key_state = EvalState()
         self.present: dict[int, list[int]] = {}  # id(held key message) -> its entities
         self.stream_state = EvalState()
+        #: the absent values once computed, when they cannot depend on the message (every
+        #: field read through a filter on the entity's key: nothing is left of it)
+        self.absent_once: tuple | None = None
+        self.static_absent = all(
+            f.topic == kind.topic and any(isinstance(p, Filter) and by_entity(p) for p in f.path)
+            for b in own for f in b.fields) and not any(b.uses_tf for b in own)
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
         out = super().push(topic, t, log_time, data) if topic in self.fed else []
@@ -206,7 +212,11 @@ class EntityClock(Clock):
         if tick is None:
             return None
         st = self.state
-        absent = self._absent(st) if not self.kind.stream else ()
+        absent = self.absent_once
+        if absent is None:
+            absent = self._absent(st) if not self.kind.stream else ()
+            if self.static_absent:
+                self.absent_once = absent
         rows = []
         if not self.kind.stream:
             held = st.msgs.get(self.kind.topic)

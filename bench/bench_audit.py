@@ -20,10 +20,13 @@
    and a 95th percentile audited on the same log, CPU time against the plain read, and their
    verdicts and first violations checked equal to a pandas recomputation (rolling windows at
    the tick grid over an independent read: mcap + rosbags).
-4. One verdict per entity (``--entities``): a per-entity requirement over the obstacles of
-   a one-hour ``/tracks`` recording (``bench/tracks_run.py``), CPU time against the plain
-   read of that log, and the per-obstacle verdicts checked equal to a recomputation from
-   the generated values. Each entity costs one read of the log.
+4. One verdict per entity (``--entities [N]``): a per-entity requirement over N tracked
+   obstacles (default 100,000: ``bench/tracks_run.py``'s ``write_many_tracks``, five
+   tracked at a time, each for five messages at 10 Hz), its CPU time against the same
+   requirement without entities (its variables over every track of the message) and the
+   plain read of that log, in one run; the per-obstacle verdicts checked equal to a
+   recomputation from the generated values (exits 1 on a difference). Every entity of the
+   requirement is judged in one read of the log.
 5. Peak memory (max RSS of a fresh process auditing the log) for two log lengths
    (``--memory A B`` minutes): memory must stay flat in the log's length.
 """
@@ -275,36 +278,49 @@ present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
 """
 
 
-def bench_entities(workdir: Path, minutes: float, repeat: int) -> None:
-    """Time the per-entity audit of :data:`ENTITY_REQUIREMENTS` on a ``minutes`` tracks log
-    (best of ``repeat``), print its ratio to the plain read of that log and check each
-    obstacle's verdict against :func:`tracks_run.tracks_reference` (exits 1 on a
-    difference)."""
-    from tracks_run import tracks_reference, write_tracks
+PLAIN_BINDINGS = """[tick]
+period = "100 ms"
+[variables]
+dist = 'min(/tracks.tracks[:].distance)'
+present = 'count(/tracks.tracks[:].distance >= 0) >= 1'
+"""
+
+
+def bench_entities(workdir: Path, entities: int, repeat: int) -> None:
+    """Time the per-entity audit of :data:`ENTITY_REQUIREMENTS` on a log of ``entities``
+    obstacles (best of ``repeat``) against the same requirement without entities
+    (:data:`PLAIN_BINDINGS`) and the plain read, print the ratios, and check each obstacle's
+    verdict against :func:`tracks_run.many_reference` (exits 1 on a difference)."""
+    from tracks_run import many_reference, write_many_tracks
 
     edir = workdir / "entities"
-    edir.mkdir(exist_ok=True)
-    log = edir / f"tracks_{minutes:g}min.mcap"
+    (edir / "plain").mkdir(parents=True, exist_ok=True)
+    log = edir / f"many_tracks_{entities}.mcap"
     if not log.exists():
-        write_tracks(log, minutes)
+        write_many_tracks(log, entities)
     fret = edir / "tracks.fret"
     fret.write_text(ENTITY_REQUIREMENTS)
     (edir / "tracks.bindings.toml").write_text(ENTITY_BINDINGS)
-    plains, runs = [], []
+    plain_fret = edir / "plain" / "tracks.fret"
+    plain_fret.write_text(ENTITY_REQUIREMENTS)
+    (edir / "plain" / "tracks.bindings.toml").write_text(PLAIN_BINDINGS)
+    reads, plains, runs = [], [], []
     for _ in range(repeat):
-        plains.append(plain_iteration(log)[0])
+        reads.append(plain_iteration(log)[0])
+        plains.append(audit_once(log, plain_fret)[1])
         _t_plan, t_audit, la = audit_once(log, fret)
         runs.append(t_audit)
-    want = tracks_reference(minutes, 1.0)
+    want = many_reference(entities, bound=1.0)
     got = {int(v.requirement.split("=")[1][:-1]): v for v in la.verdicts if "[" in v.requirement}
     same = sorted(got) == sorted(want) and all(
         (got[i].verdict == ("violated" if want[i] is not None else "satisfied"))
         and (want[i] is None or got[i].first_violation.at.time_ns == want[i]) for i in want)
-    print(f"per-entity requirement over {len(got)} tracked obstacles ({log.name}): "
-          f"{min(runs):.2f} s CPU against {min(plains):.2f} s for the plain read "
-          f"(ratio {min(runs) / min(plains):.2f} x; {min(runs) / max(1, len(got)):.2f} s per "
-          f"entity); verdicts {'equal' if same else 'DIFFER from'} the recomputation "
-          f"({sum(w is not None for w in want.values())} obstacles violated)")
+    best, plain, read = min(runs), min(plains), min(reads)
+    print(f"per-entity requirement over {len(got):,} tracked obstacles ({log.name}, one read): "
+          f"{best:.2f} s CPU; without entities {plain:.2f} s (ratio {best / plain:.2f} x); "
+          f"the plain read {read:.2f} s (ratio {best / read:.2f} x); verdicts "
+          f"{'equal' if same else 'DIFFER from'} the recomputation "
+          f"({sum(w is not None for w in want.values()):,} obstacles violated)")
     if not same:
         sys.exit(1)
 
@@ -319,7 +335,8 @@ def _arguments() -> argparse.Namespace:
     ap.add_argument("--repeat", type=int, default=3, help="alternated runs of each (best kept)")
     ap.add_argument("--windows", action="store_true",
                     help="only the window requirements: time and pandas check")
-    ap.add_argument("--entities", action="store_true",
+    ap.add_argument("--entities", type=int, nargs="?", const=100_000, default=None,
+                    metavar="N",
                     help="only the per-entity requirement: time and recomputation check")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--child-plain", help=argparse.SUPPRESS)
@@ -352,7 +369,7 @@ def main() -> None:
     workdir.mkdir(parents=True, exist_ok=True)
     fret = ensure_requirements(workdir)
     if args.entities:
-        bench_entities(workdir, args.minutes, args.repeat)
+        bench_entities(workdir, args.entities, args.repeat)
         return
     log = ensure_log(workdir, args.minutes)
     if args.windows:

@@ -84,3 +84,48 @@ def tracks_reference(minutes: float, bound: float) -> dict[int, int | None]:
             if d <= bound and out[i] is None:
                 out[i] = EPOCH_NS + k * PERIOD_NS
     return out
+
+
+def many_tracks(entities: int, alive: int = 5) -> list[dict[int, float]]:
+    """Per message, id -> distance (m): ``entities`` obstacles, each tracked for ``alive``
+    messages, a new one every message (so ``alive`` at a time); one in 100 comes within
+    0.5 m once (its 3rd message), the others stay beyond 1.5 m. Deterministic."""
+    rows: list[dict[int, float]] = [{} for _ in range(entities + alive - 1)]
+    for i in range(entities):
+        for age in range(alive):
+            close = i % 100 == 7 and age == 2
+            rows[i + age][i + 1] = 0.4 if close else 1.5 + ((i * 7 + age * 3) % 40) / 10
+    return rows
+
+
+def write_many_tracks(path: str | Path, entities: int, alive: int = 5) -> int:
+    """Write :func:`many_tracks` as ``/tracks`` at 10 Hz to ``path`` (ROS 2 MCAP); returns
+    the number of messages. Raises ``OSError`` if the file cannot be written."""
+    store = _store()
+    Track, Arr = store.types["tracking_msgs/msg/Track"], store.types["tracking_msgs/msg/TrackArray"]
+    rows = many_tracks(entities, alive)
+    with open(path, "wb") as f:
+        w = Writer(f, chunk_size=1 << 20, compression=CompressionType.ZSTD)
+        w.start(profile="ros2", library="fretc-bench")
+        text = store.generate_msgdef("tracking_msgs/msg/TrackArray", ros_version=2)[0]
+        sid = w.register_schema("tracking_msgs/msg/TrackArray", "ros2msg", text.encode())
+        ch = w.register_channel("/tracks", "cdr", sid)
+        for k, r in enumerate(rows):
+            t = EPOCH_NS + k * PERIOD_NS
+            msg = Arr(tracks=[Track(id=i, distance=d) for i, d in sorted(r.items())])
+            w.add_message(ch, log_time=t, publish_time=t, data=bytes(
+                store.serialize_cdr(msg, "tracking_msgs/msg/TrackArray")), sequence=k)
+        w.finish()
+    return len(rows)
+
+
+def many_reference(entities: int, alive: int = 5, bound: float = 1.0) -> dict[int, int | None]:
+    """Id -> log time (ns) of the first message where that obstacle of :func:`many_tracks`
+    is at most ``bound`` metres away, None if never."""
+    out: dict[int, int | None] = {}
+    for k, r in enumerate(many_tracks(entities, alive)):
+        for i, d in r.items():
+            out.setdefault(i, None)
+            if d <= bound and out[i] is None:
+                out[i] = EPOCH_NS + k * PERIOD_NS
+    return out

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from fretc.signals.bindings.expression import Const, Field, Filter, Slice, const_value
+from fretc.signals.bindings.expression import Const, EntityParam, Field, Filter, Slice, const_value
 
-__all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "message_filter",
+__all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "message_filter", "by_entity",
            "normalize_scalar"]
 
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
@@ -208,6 +208,38 @@ def _select(items: list, many: bool, kind: str, fn: Any, text: str) -> tuple[lis
     return [x for x in items if fn(x)], True
 
 
+def by_entity(flt: Filter) -> bool:
+    """``{id==$track}``: a filter on an entity's key (its items grouped by the key field
+    once per message, :func:`_grouper`)."""
+    return (flt.op == "=" and isinstance(flt.value, Const)
+            and isinstance(flt.value.value, EntityParam))
+
+
+def _grouper(flt: Filter, text: str) -> Callable[[Any, int, list, bool], list]:
+    """The step of a filter on an entity's key (``{id==$track}``, FoxQL's filter semantics:
+    a string matches only a string): the items of the message's arrays grouped by their
+    key field once per message (the last message's groups kept), the entity's items
+    looked up; as :func:`_filter_test` keeps them, in their order."""
+    get = operator.attrgetter(".".join(flt.path))
+    param = flt.value.value  # type: ignore[attr-defined]
+    memo: list[Any] = [None, -1, None]  # message, step, groups
+
+    def step(data: Any, k: int, items: list, many: bool) -> list:
+        if memo[0] is not data or memo[1] != k:
+            flat, _m = _select(items, many, "filter", lambda x: True, text)
+            groups: dict[tuple[bool, Any], list] = {}
+            for x in flat:
+                v = normalize_scalar(get(x))
+                groups.setdefault((isinstance(v, str), v), []).append(x)
+            memo[0], memo[1], memo[2] = data, k, groups
+        want = param.value
+        try:
+            return list(memo[2].get((isinstance(want, str), want), ()))
+        except TypeError:  # a key that cannot be looked up (unhashable): none matches
+            return []
+    return step
+
+
 def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
     """Extractor of a path with a slice or a filter before its end (Foxglove's message path
     semantics): from the first of them on, each step applies to every item, a slice or a
@@ -215,7 +247,9 @@ def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
     text = f.text()
     steps: list[tuple[str, Any]] = []
     for p in f.path:
-        if isinstance(p, Filter):
+        if isinstance(p, Filter) and by_entity(p):
+            steps.append(("group", _grouper(p, text)))
+        elif isinstance(p, Filter):
             steps.append(("filter", _filter_test(p, constants, text)))
         elif isinstance(p, Slice):
             steps.append(("slice", slice(p.lo, p.hi)))
@@ -226,9 +260,12 @@ def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
     def extract(data: Any) -> Any:
         items, many = [data], False
         try:
-            for kind, fn in steps:
+            for k, (kind, fn) in enumerate(steps):
                 if kind == "step":
                     items = [fn(x) for x in items]
+                    continue
+                if kind == "group":
+                    items, many = fn(data, k, items, many), True
                     continue
                 items, many = _select(items, many, kind, fn, text)
         except AttributeError as exc:
