@@ -9,11 +9,14 @@ from __future__ import annotations
 import os
 import struct
 import zlib
-from collections.abc import Callable, Iterator
+import shutil
+import weakref
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 from rosbags.interfaces import MessageDefinitionFormat
+from rosbags.typesys.msg import normalize_msgtype
 from rosbags.rosbag1 import Reader as Ros1Reader, ReaderError as Ros1ReaderError
 from rosbags.rosbag2 import Reader as Ros2Reader, ReaderError as Ros2ReaderError
 from rosbags.typesys.store import Typestore
@@ -21,10 +24,12 @@ from rosbags.typesys.store import Typestore
 from fretc.common import problems as P
 from fretc.common.problems import LogError
 from fretc.logs.base import LogSource, Message, header_stamp
-from fretc.logs.decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, build_typestore
+from fretc.logs.decoding import (DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema,
+                                 build_typestore, service_event_text)
 from fretc.logs.decoding import decoder_for
 from fretc.logs.msg_path import MSG_PATH_HINT
 from fretc.logs.ros1_linear import Ros1Linear, is_ros1_bag
+from fretc.logs.rosbag2_storage import lone_storage, storage_folder, stored_definitions
 
 __all__ = ["BagSource", "connection_typestore"]
 
@@ -33,7 +38,8 @@ _BAG_ERRORS = (Ros1ReaderError, Ros2ReaderError, OSError, struct.error, EOFError
                KeyError, IndexError, zlib.error, AssertionError)  # rosbags asserts on some corrupt bags
 
 
-def connection_typestore(kind: str, conn: Any, fallback: Typestore | None
+def connection_typestore(kind: str, conn: Any, fallback: Typestore | None,
+                         stored: Mapping[str, tuple[str, str]] | None = None
                          ) -> tuple[Typestore, str]:
     """The typestore and type name of one bag connection, built from the definition the bag
     stores (ROS 1 connection header ``message_definition``: ``ros1msg``; rosbag2
@@ -43,17 +49,29 @@ def connection_typestore(kind: str, conn: Any, fallback: Typestore | None
         kind: ``"bag"`` (ROS 1) or ``"rosbag2"``.
         conn: a rosbags ``Connection``.
         fallback: types for connections that carry no definition, or None.
+        stored: the definitions the bag's storage keeps by type name
+            (:func:`fretc.logs.rosbag2_storage.stored_definitions`): a service event topic
+            (``pkg/srv/Name_Event``) whose own definition is not stored is built from the
+            service's (``pkg/srv/Name``, as rosbag2 stores it).
 
     Raises:
         UnsupportedSchema: no definition and no fallback type, or a definition rosbags cannot
             parse.
     """
     fmt, text = conn.msgdef.format, conn.msgdef.data
+    service = conn.msgtype[:-len("_Event")] if conn.msgtype.endswith("_Event") else None
+    if (fmt == MessageDefinitionFormat.NONE or not text.strip()) and stored and service \
+            and "/srv/" in conn.msgtype and stored.get(service, ("", ""))[0] == "ros2msg":
+        return build_typestore("ros2msg", conn.msgtype,
+                               service_event_text(conn.msgtype, stored[service][1]))
     if fmt == MessageDefinitionFormat.NONE or not text.strip():
-        if fallback is None or conn.msgtype not in fallback.fielddefs:
+        name = conn.msgtype
+        if fallback is not None and name not in fallback.fielddefs:
+            name = normalize_msgtype(name)  # pkg/srv/T as rosbags stores it: pkg/srv/msg/T
+        if fallback is None or name not in fallback.fielddefs:
             raise UnsupportedSchema(f"the bag stores no definition of {conn.msgtype!r} and no "
                                     f"folder given defines it: give its .msg with {MSG_PATH_HINT}")
-        return fallback, conn.msgtype
+        return fallback, name
     schema_encoding = ("ros1msg" if kind == "bag" else
                        "ros2idl" if fmt == MessageDefinitionFormat.IDL else "ros2msg")
     return build_typestore(schema_encoding, conn.msgtype, text)
@@ -70,7 +88,9 @@ class BagSource(LogSource):
 
     A ROS 1 bag whose index is damaged or missing (a crashed recording) is read record by
     record from the start (:class:`~fretc.logs.ros1_linear.Ros1Linear`), as far as
-    it goes; the log is then ``partial``.
+    it goes; the log is then ``partial``. A rosbag2 sqlite3 storage file given alone (a
+    ``.db3``, or a folder holding one without ``metadata.yaml``) is read as rosbag2 opens it
+    (:mod:`fretc.logs.rosbag2_storage`).
 
     Raises:
         LogError: the bag cannot be opened (a rosbag2 folder rosbags cannot read, a ``.bag``
@@ -80,7 +100,13 @@ class BagSource(LogSource):
     def __init__(self, path: str | os.PathLike, *, fallback_typestore: Typestore | None = None) -> None:
         super().__init__(path)
         p = Path(path)
-        self.kind = "rosbag2" if p.is_dir() else "bag"
+        self.kind = "rosbag2" if p.is_dir() or p.suffix.lower() == ".db3" else "bag"
+        self._read_path = p
+        alone = lone_storage(p) if self.kind == "rosbag2" else None
+        if alone is not None:  # the folder made for it goes with the source
+            self._read_path = storage_folder(alone)
+            weakref.finalize(self, shutil.rmtree, self._read_path, True)
+        self._stored = stored_definitions(self._read_path) if self.kind == "rosbag2" else {}
         self._fallback = fallback_typestore
         self._topics: dict[str, str] = {}
         self._linear_bag: Ros1Linear | None = None
@@ -104,7 +130,7 @@ class BagSource(LogSource):
             self._topics = self._linear_bag.scan()
 
     def _reader(self) -> Any:
-        return (Ros1Reader if self.kind == "bag" else Ros2Reader)(Path(self.path))
+        return (Ros1Reader if self.kind == "bag" else Ros2Reader)(self._read_path)
 
     def topics(self) -> dict[str, str]:
         """Topic → type name (normalized ``pkg/msg/Type``)."""
@@ -116,7 +142,7 @@ class BagSource(LogSource):
         dec = None
         encoding = "ros1" if self.kind == "bag" else getattr(conn.ext, "serialization_format", "cdr")
         try:
-            store, typename = connection_typestore(self.kind, conn, self._fallback)
+            store, typename = connection_typestore(self.kind, conn, self._fallback, self._stored)
             dec = decoder_for(store, typename, encoding, self._fields_for(conn.topic))
         except UnsupportedSchema as exc:
             kind = P.UNKNOWN_ENCODING if encoding not in SCHEMA_FOR_ENCODING else P.UNKNOWN_SCHEMA

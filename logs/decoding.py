@@ -27,7 +27,7 @@ from fretc.logs.selective import selective_decoder
 
 __all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
            "schema_columnar",
-           "DECODE_ERRORS", "SCHEMA_FOR_ENCODING"]
+           "DECODE_ERRORS", "SCHEMA_FOR_ENCODING", "event_encoding"]
 
 _IDL_SEP = "=" * 80 + "\n"
 
@@ -205,6 +205,18 @@ def decoder_for(store: Typestore, typename: str, message_encoding: str,
 SCHEMA_FOR_ENCODING = {"cdr": ("ros2msg", "ros2idl"), "ros1": ("ros1msg",)}
 
 
+def event_encoding(message_encoding: str, schema_encoding: str | None,
+                   schema_name: str | None) -> str | None:
+    """``ros2msg`` for a service event channel whose schema encoding rosbag2 wrote as
+    ``unknown`` (Jazzy, a service of primitive fields only: the schema is the ``.srv``
+    text, :func:`service_event_text`); ``schema_encoding`` unchanged for any other."""
+    parts = (schema_name or "").split("/")
+    if (schema_encoding == "unknown" and message_encoding == "cdr" and len(parts) == 3
+            and parts[1] == "srv" and parts[2].endswith("_Event")):
+        return "ros2msg"
+    return schema_encoding
+
+
 def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
                    schema_text: str | bytes | None, fields: Any = None) -> Callable[[bytes], Any]:
     """A function ``bytes -> rosbags message`` for one channel, with its types built from the
@@ -240,6 +252,7 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
                                 + " (read: cdr, ros1, " + ", ".join(SELF_DESCRIBING) + ")")
     if isinstance(schema_text, bytes):
         schema_text = schema_text.decode("utf-8", errors="replace")
+    schema_encoding = event_encoding(message_encoding, schema_encoding, schema_name)
     if not schema_encoding or not schema_name or schema_text is None:
         raise UnsupportedSchema("the channel has no schema")
     if schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]:
@@ -266,6 +279,7 @@ def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_n
     raises; the arguments are :func:`schema_decoder`'s."""
     if message_encoding != "cdr" or fields is None:
         return None
+    schema_encoding = event_encoding(message_encoding, schema_encoding, schema_name)
     try:
         if (not schema_name or schema_text is None
                 or schema_encoding not in SCHEMA_FOR_ENCODING[message_encoding]):

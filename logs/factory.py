@@ -29,6 +29,7 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
 
     Args:
         path: ``*.mcap`` file, ROS 1 ``*.bag`` file, rosbag2 folder (with ``metadata.yaml``),
+            a rosbag2 sqlite3 storage file alone (``*.db3``, or a folder holding one),
             ``*.csv`` trace, PX4 ULog ``*.ulg`` or ArduPilot DataFlash ``*.bin`` flight log.
         fallback_typestore: types for rosbag connections that carry no definition (e.g. old
             rosbag2 sqlite3 bags): a rosbags Typestore or a ``rosbags.typesys.Stores`` member.
@@ -53,17 +54,19 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
     if not p.exists():
         raise LogError(path, "no such file or folder")
     suffix = p.suffix.lower()
-    if p.is_dir() or suffix == ".bag":
+    if p.is_dir() or suffix in (".bag", ".db3"):
         from rosbags.typesys import Stores, get_typestore
         from fretc.logs.bag_source import BagSource
         from fretc.logs.msg_path import fallback_for
+        from fretc.logs.rosbag2_storage import lone_storage
 
         if isinstance(fallback_typestore, Stores):
             fallback_typestore = get_typestore(fallback_typestore)
         if fallback_typestore is None:
             fallback_typestore = fallback_for(msg_path)
-        if p.is_dir() and not (p / "metadata.yaml").exists():
-            raise LogError(path, "a folder but not a rosbag2 bag (no metadata.yaml)")
+        if p.is_dir() and not (p / "metadata.yaml").exists() and lone_storage(p) is None:
+            raise LogError(path, "a folder but not a rosbag2 bag (no metadata.yaml, nor one "
+                                 "sqlite3 storage file .db3)")
         return BagSource(p, fallback_typestore=fallback_typestore)
     if suffix == ".mcap":
         from fretc.logs.mcap_source import McapSource
@@ -79,5 +82,5 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         from fretc.logs.dataflash_source import DataflashSource
 
         return DataflashSource(p)
-    raise LogError(path, "unknown log kind (expected .mcap, .bag, .csv, .ulg, .bin or a "
-                         "rosbag2 folder)")
+    raise LogError(path, "unknown log kind (expected .mcap, .bag, .db3, .csv, .ulg, .bin or "
+                         "a rosbag2 folder)")

@@ -369,12 +369,13 @@ def _bag_schemas(source) -> dict[str, TopicSchema | None]:
                 out[topic] = TopicSchema(topic, built[1], built[0]) if built else None
         return dict(sorted(out.items()))
     reader_class = Ros1Reader if source.kind == "bag" else Ros2Reader
-    with reader_class(Path(source.path)) as reader:
+    with reader_class(getattr(source, "_read_path", Path(source.path))) as reader:
         for c in reader.connections:
             if out.get(c.topic) is not None:
                 continue
             try:
-                built = connection_typestore(source.kind, c, getattr(source, "_fallback", None))
+                built = connection_typestore(source.kind, c, getattr(source, "_fallback", None),
+                                             getattr(source, "_stored", None))
             except UnsupportedSchema:
                 built = None
             out[c.topic] = TopicSchema(c.topic, built[1], built[0]) if built else None

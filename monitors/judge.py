@@ -219,7 +219,8 @@ def ltl3_verdicts(monitor_source: MonitorSource, columns: Mapping[str, np.ndarra
                 state = table[state][letters[i]]
                 if state < 0:
                     hit = i - a
-                    if best[e][1] is None or hit < best[e][1]:  # type: ignore[operator]
+                    seen = best[e][1]
+                    if seen is None or hit < seen:
                         best[e] = (outcome, hit)
                     break
     return best

@@ -32,7 +32,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from fretc.signals.bindings.expression import (BinOp, Const, Expr, Field, FuncCall, UnaryOp,
+from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Expr, Field,
+                                               FuncCall, UnaryOp,
                                                unparse)
 
 __all__ = ["NotWritable", "Range", "AGE", "MIN_MARGIN", "REL_MARGIN", "MAX_ALTERNATIVES", "margin",
@@ -230,6 +231,8 @@ def _comparison(e: BinOp, target: Any) -> list[Assignment]:
         raise NotWritable(f"{unparse(e)}: only a comparison of one term with a constant "
                           "is written")
     c = const.value
+    if isinstance(c, EntityParam):
+        raise NotWritable(f"{unparse(e)}: a comparison with an entity's key")
     if isinstance(c, str) or isinstance(c, bool):
         if op not in ("=", "!="):
             raise NotWritable(f"{unparse(e)}: an order comparison with {c!r}")

@@ -328,7 +328,7 @@ def _joint(node: FuncCall, args: list[Evaluator]) -> Evaluator:
 
     def joint(st: Any) -> Any:
         try:
-            return pick_joint(values_of(st), names_of(st), const_value(joint_name), text)
+            return pick_joint(values_of(st), names_of(st), str(const_value(joint_name)), text)
         except LookupFailed as exc:
             raise EvalError(node, str(exc)) from None
     return joint

@@ -158,6 +158,7 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
     value_node = flt.value
 
     def keep(item: Any) -> bool:
+        want: Any
         if isinstance(value_node, Const):
             want = const_value(value_node.value)
         else:  # a Named constant, resolved against the log's schemas

@@ -100,11 +100,11 @@ def check_window(node: Expr, where: ExprLocation) -> tuple[WindowSpec, Expr] | N
     q = None
     if node.func == "percentile":
         qa = node.args[1]
-        if not (isinstance(qa, Const) and not isinstance(qa.value, (bool, str))
-                and 0 <= float(qa.value) <= 100):
+        if not (isinstance(qa, Const) and isinstance(qa.value, float)
+                and 0 <= qa.value <= 100):
             raise where.error("percentile()'s second argument is a number from 0 to 100",
                               qa.col)
-        q = float(qa.value)
+        q = qa.value
     if node.func == "rate" and span.ns is None:
         raise where.error("rate() is messages per second over a duration (rate(/scan, 1s)), "
                           "not over a count of messages", span.col)

@@ -115,3 +115,65 @@ def test_a_rosbridge_watch_reads_the_robots_own_types_with_msg_path(tmp_path):
                        "battery_voltage": 23.5, "state": 2, "faults": ["overheat"]}, store)
     msg = schema_decoder(adv.encoding, adv.schema_encoding, adv.schema_name, adv.schema)(raw)
     assert (msg.state, msg.battery_voltage, list(msg.faults)) == (2, 23.5, ["overheat"])
+
+
+ARM_SRV = "float64 angle\n---\nbool success\nstring message\n"
+DOCK_ACTION = "float64 x\n---\nbool docked\n---\nfloat64 distance\n"
+
+
+def test_services_and_actions_from_srv_and_action_files(tmp_path):
+    """A Humble-era bag that stores no definitions, with a team's own service's
+    introspection events (``my_robot_msgs/srv/Arm_Event``) and action feedback
+    (``my_robot_msgs/action/Dock_FeedbackMessage``): --msg-path reads ``srv/Arm.srv`` and
+    ``action/Dock.action`` as rosidl generates their types; called()/answered() and the
+    feedback's fields audit; without them the error names --msg-path."""
+    from fretc.logs.msg_path import msg_path_typestore
+
+    ws = tmp_path / "ws" / "my_robot_msgs"
+    (ws / "srv").mkdir(parents=True)
+    (ws / "action").mkdir()
+    (ws / "srv" / "Arm.srv").write_text(ARM_SRV)
+    (ws / "action" / "Dock.action").write_text(DOCK_ACTION)
+    st = msg_path_typestore((str(tmp_path / "ws"),))
+    ev, fb = "my_robot_msgs/srv/msg/Arm_Event", "my_robot_msgs/action/Dock_FeedbackMessage"
+    assert {ev, fb, "my_robot_msgs/srv/msg/Arm_Request",
+            "my_robot_msgs/action/Dock_SendGoal_Request"} <= set(st.fielddefs)
+    Ev, Info, Req, Res = (st.types[ev], st.types["service_msgs/msg/ServiceEventInfo"],
+                          st.types["my_robot_msgs/srv/msg/Arm_Request"],
+                          st.types["my_robot_msgs/srv/msg/Arm_Response"])
+    Fb, Feedback, UUID = (st.types[fb], st.types["my_robot_msgs/action/Dock_Feedback"],
+                          st.types["unique_identifier_msgs/msg/UUID"])
+    Time = st.types["builtin_interfaces/msg/Time"]
+    import numpy as np
+
+    path = tmp_path / "bag"
+    with Writer(path, version=8, storage_plugin=StoragePlugin.SQLITE3) as w:
+        ce = w.add_connection("/arm/_service_event", "my_robot_msgs/srv/Arm_Event", msgdef="",
+                              rihs01="RIHS01_" + "0" * 64)
+        cf = w.add_connection("/dock/_action/feedback",
+                              "my_robot_msgs/action/Dock_FeedbackMessage", msgdef="",
+                              rihs01="RIHS01_" + "0" * 64)
+        for k in range(5):
+            t = T0 + k * 1_000_000_000
+            gid = np.arange(16, dtype=np.uint8)
+            for kind, dt in ((1, 0), (2, 50_000_000 if k != 3 else 700_000_000)):
+                e = Ev(info=Info(event_type=kind, stamp=Time(sec=0, nanosec=0), client_gid=gid,
+                                 sequence_number=k),
+                       request=[Req(angle=0.1 * k)] if kind == 1 else [],
+                       response=[Res(success=True, message="")] if kind == 2 else [])
+                w.write(ce, t + dt, st.serialize_cdr(e, ev))
+            f = Fb(goal_id=UUID(uuid=gid), feedback=Feedback(distance=5.0 - k))
+            w.write(cf, t + 10, st.serialize_cdr(f, fb))
+    reqs = tmp_path / "req"
+    reqs.mkdir()
+    (reqs / "a.fret").write_text("@tick_period 100 ms\nA: the arm shall always satisfy "
+                                 "wait <= 0.5\nD: the dock shall always satisfy dist > 0.5\n")
+    (reqs / "a.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\nwait = "waiting(/arm)"\n'
+        'dist = "/dock/_action/feedback.feedback.distance"\n')
+    plan = load_plan(AuditConfig(requirements=(str(reqs),), msg_path=(str(tmp_path / "ws"),)))
+    v = {x.requirement: x for x in audit_log(plan, str(path)).verdicts}
+    assert v["A"].verdict == "violated", v["A"].error  # call 3 waits 0.7 s
+    assert v["D"].verdict == "satisfied", v["D"].error
+    res = CliRunner().invoke(main, ["audit", "-r", str(reqs), str(path), "--no-progress"])
+    assert res.exit_code == 2 and "--msg-path" in res.output and ".srv" in res.output
