@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from fretc.audit.passes import ClockPass
     from fretc.audit.model import AuditPlan, RequirementPlan
 
-__all__ = ["record_coverage", "fleet_coverage", "coverage_text"]
+__all__ = ["record_coverage", "fleet_coverage", "coverage_text", "margin_json", "margin_value"]
 
 
 def record_coverage(r: RequirementPlan, res: ClockPass, v: Verdict, unknown: np.ndarray) -> None:
@@ -54,12 +54,25 @@ def record_coverage(r: RequirementPlan, res: ClockPass, v: Verdict, unknown: np.
     for ob, e in zip(obs, got):
         item: dict[str, Any] = {"obligation": ob.id, "status": e.status, "tick": e.tick,
                 "time_ns": int(res.times[e.tick]) if e.tick is not None else None}
-        if e.margin is not None:
-            item["margin"] = e.margin
+        if e.margin is not None and e.margin == e.margin:  # (NaN: no margin)
+            item["margin"] = margin_json(e.margin)
         if e.why:
             item["why"] = e.why
         out.append(item)
     v.coverage = out
+
+
+def margin_json(x: float) -> float | str:
+    """A margin as the audit JSON writes it: a number, or the strings ``inf`` / ``-inf``
+    (JSON has no infinity: ``max`` over a filter that keeps nothing is -inf)."""
+    if x in (float("inf"), float("-inf")):
+        return "inf" if x > 0 else "-inf"
+    return float(x)
+
+
+def margin_value(x: float | str) -> float:
+    """The number :func:`margin_json` wrote."""
+    return float(x)
 
 
 def fleet_coverage(plan: AuditPlan, logs: Sequence[LogAudit]) -> dict:
@@ -104,9 +117,9 @@ def fleet_coverage(plan: AuditPlan, logs: Sequence[LogAudit]) -> dict:
         for row in rows.values():
             row["status"] = ("covered" if row["runs"] else
                              "unknown" if row["unknown_runs"] else "uncovered")
-            sides = [x["margin"] for x in row["runs"] if "margin" in x]
+            sides = [margin_value(x["margin"]) for x in row["runs"] if "margin" in x]
             if sides:
-                row["closest_margin"] = min(sides)
+                row["closest_margin"] = margin_json(min(sides))
         items = list(rows.values())
         reqs.append({"requirement": r.id, "obligations": items,
                      "covered": sum(x["status"] == "covered" for x in items),

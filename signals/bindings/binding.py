@@ -200,6 +200,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     parts: tuple[Binding, ...] = ()
     if windowed is not None and windowed[0].func == "count_ticks":
         (tick_window, body), windowed = windowed, None
+        if aggregate is not None:  # count_ticks(called(/arm), 1min): the fold's argument
+            body = body.args[0]  # type: ignore[attr-defined]
     if windowed is not None:
         window, body = windowed
         parts = tuple(compile_expression(f"{name}__part{i}", unparse(p), source=source,

@@ -22,7 +22,7 @@ from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
 
 __all__ = ["Expr", "EntityParam", "const_value", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "written", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -453,6 +453,11 @@ def check_aggregate(node: Expr, where: ExprLocation) -> str | None:
             column.
     """
     agg = None
+    if (isinstance(node, FuncCall) and node.func == "count_ticks" and node.args
+            and isinstance(node.args[0], FuncCall) and node.args[0].func in AGGREGATES):
+        # count_ticks(called(/arm), 1min): the ticks whose messages since the previous tick
+        # the aggregation folds true (signals/tick_windows.py counts them)
+        return check_aggregate(node.args[0], where)
     if isinstance(node, FuncCall) and node.func in AGGREGATES:
         agg = AGGREGATES[node.func]
         inner = node.args[0]
@@ -474,11 +479,24 @@ def check_aggregate(node: Expr, where: ExprLocation) -> str | None:
         return agg
     for n in walk(node):
         if isinstance(n, FuncCall) and n.func in AGGREGATES:
-            raise where.error(f"{n.func}() is the whole binding (e.g. error_logged = "
-                              f"\"{n.func}(/log.level >= 8)\"), not a part of one: bind it "
-                              "to its own variable and combine the variables in the "
-                              "requirement", n.col)
+            said = written(n)
+            raise where.error(f"{said} is the whole binding (e.g. error_logged = "
+                              f"\"{n.func}(/log.level >= 8)\", busy = \"count_ticks({said}, "
+                              "1min)\"), not a part of one: bind it to its own variable and "
+                              "combine the variables in the requirement", n.col)
     return None
+
+
+def written(n: FuncCall) -> str:
+    """How the user wrote an aggregation: ``called(/arm)`` / ``answered(/arm)`` for the
+    service events' folds that parse.py makes of them, else ``any_of_messages()`` ..."""
+    arg = n.args[0] if n.args else None
+    if (n.func == "any_of_messages" and isinstance(arg, BinOp) and isinstance(arg.left, Field)
+            and arg.left.path == ("info", "event_type")
+            and arg.left.topic.endswith("/_service_event")):
+        service = arg.left.topic[:-len("/_service_event")]
+        return f"{'called' if arg.op == '<=' else 'answered'}({service})"
+    return f"{n.func}()"
 
 
 #: A name that may be a constant of a message definition (ROS writes them in capitals).

@@ -126,3 +126,34 @@ def test_coverage_json_follows_the_schema(tmp_path):
     schema = json.loads((ROOT / "docs" / "reference" / "audit.schema.json").read_text())
     jsonschema.validate(doc, schema)
     assert doc["coverage"]["total"] == sum(r["total"] for r in doc["coverage"]["requirements"])
+
+
+def test_coverage_of_a_variable_at_minus_infinity_is_written(tmp_path):
+    """``max`` over a filter that keeps nothing is -inf (docs/bindings.md): the obligation
+    it meets has the margin -inf, written as the string "-inf" (the audit JSON has no
+    infinity; the audit used to stop with "inf is not JSON compliant")."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from _logs import ROS2, S, T, write_mcap
+
+    St, Arr = T(ROS2, "diagnostic_msgs/msg/DiagnosticStatus"), T(ROS2, "diagnostic_msgs/msg/DiagnosticArray")
+    hdr = T(ROS2, "std_msgs/msg/Header")(stamp=T(ROS2, "builtin_interfaces/msg/Time")(
+        sec=0, nanosec=0), frame_id="")
+    log = write_mcap(tmp_path / "d.mcap", [
+        ("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", S + k * S // 10,
+         Arr(header=hdr, status=[St(level=0, name="lidar", message="", hardware_id="",
+                                    values=[])])) for k in range(5)])
+    (tmp_path / "m.fret").write_text("@tick_period 100 ms\n"
+                                     "M: the robot shall always satisfy motor_level < 2\n")
+    (tmp_path / "m.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\n'
+        "motor_level = 'max(/diagnostics.status[:]{name==\"motor\"}.level)'\n")
+    out = tmp_path / "audit.json"
+    res = CliRunner().invoke(main, ["audit", "--coverage", "-r", str(tmp_path / "m.fret"),
+                                    str(log), "--json", str(out), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(out.read_text())
+    margins = [c["margin"] for v in doc["logs"][0]["verdicts"] for c in v["coverage"]
+               if "margin" in c]
+    assert "-inf" in margins or "inf" in margins, margins

@@ -124,3 +124,42 @@ def test_a_storage_file_alone_reads_as_its_folder_with_metadata(tmp_path):
     sums = [m.data.response[0].sum for m in alone.messages({"/add_two_ints/_service_event"})
             if len(m.data.response)]
     assert sums and all(isinstance(s, int) for s in sums)
+
+
+@needs_shared
+@pytest.mark.parametrize("inline", [False, True])
+def test_count_ticks_of_called(tmp_path, inline):
+    """``count_ticks(called(/svc), 1 s)``, bound to a variable of its own or written inline:
+    the ticks in the last second at which a request came (the server is called every 0.5 s:
+    two), equal to a count from the independent decode."""
+    (tmp_path / "c.fret").write_text("@tick_period 100 ms\nN1: the server shall always "
+                                     "satisfy n <= 1\nN2: the server shall always satisfy "
+                                     "n <= 2\n")
+    inner = "called(/add_two_ints)" if inline else "c"
+    (tmp_path / "c.bindings.toml").write_text(
+        f'[tick]\nperiod = "100 ms"\n[variables]\nc = "called(/add_two_ints)"\n'
+        f'n = "count_ticks({inner}, 1 s)"\n')
+    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "c.fret"),))),
+                   str(BAGS / "only_services.mcap"))
+    got = {v.requirement: v for v in la.verdicts}
+    req = [t for t, k, _g, _s in _independent_events() if k <= 1]
+    tick = 100_000_000
+    first = got["N2"].first_tick_ns  # the first tick whose window is full (1 s in)
+    ticks = [-(-t // tick) * tick for t in req]  # the tick that folds each request
+    counts = {t: sum(1 for x in ticks if t - 1_000_000_000 < x <= t)
+              for t in range(first, ticks[-1] + tick, tick)}
+    assert got["N2"].verdict == ("satisfied" if max(counts.values()) <= 2 else "violated")
+    bad = min(t for t, c in counts.items() if c > 1)
+    assert got["N1"].verdict == "violated" and got["N1"].first_violation.at.time_ns == bad
+
+
+def test_a_fold_inside_an_expression_is_named_as_written(tmp_path):
+    """``called(/arm) & ok``: the error names called(/arm), not the any_of_messages() it
+    stands for."""
+    from fretc.common.problems import BindingError
+    from fretc.signals.bindings.binding import compile_expression
+
+    with pytest.raises(BindingError) as e:
+        compile_expression("x", "called(/arm) & /ok.data", source="b.toml")
+    assert "called(/arm) is the whole binding" in str(e.value)
+    assert "any_of_messages" not in str(e.value).split("(e.g.")[0]
