@@ -66,6 +66,9 @@ class DataflashSource(LogSource):
 
     def __init__(self, path: str | os.PathLike) -> None:
         super().__init__(path)
+        #: the earliest TimeUS (ns) of a record the latest pass read, of any topic: the log's
+        #: start whichever topics a pass delivers (the origin of an audit's times)
+        self._first_any: int | None = None
         self._formats: dict[str, object] = {}
         self._topics: dict[str, str] = {}
         for topic, fmt, _lt, _m, _at in self._records(None):
@@ -129,6 +132,8 @@ class DataflashSource(LogSource):
                 k = getattr(m, inst, 0)
                 if isinstance(k, int) and k > 0:
                     topic = f"{fmt.name}/{k}"
+            if self._first_any is None or prev_time < self._first_any:
+                self._first_any = prev_time  # (every record's: the log's start)
             if want is not None and topic not in want:
                 continue
             yield topic, fmt, int(m.TimeUS) * 1000, m, start
@@ -200,6 +205,9 @@ class DataflashSource(LogSource):
             position += 1
             yield from self._release(queue, lt)
         yield from self._release(queue, None)
+        if self._first_any is not None and (self._start_time is None
+                                            or self._first_any < self._start_time):
+            self._start_time = self._first_any
 
     def _release(self, queue: ReorderQueue, watermark: int | None) -> Iterator[Message]:
         for lt, (topic, data) in queue.due(watermark):

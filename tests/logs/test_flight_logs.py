@@ -328,3 +328,22 @@ def test_dataflash_a_bit_flipped_in_timeus_names_the_record(tmp_path, bit):
         la.problems
     assert v.verdict == "violated", v.error  # the record at 4.0 s read, the flipped one not
     assert v.first_violation.at.time_ns == 4_000_000_000 and la.partial
+
+
+def test_dataflash_times_count_from_the_logs_start_whatever_is_audited(tmp_path):
+    """The ``*_s`` times of a verdict count from the log's first record of any type, so a
+    requirement audited alone prints the seconds it prints in its set (they counted from
+    the first message of the topics the audit read: 0.5 s apart here)."""
+    rows = [("MSG", [500_000, "boot"])] + [
+        ("BAT", [1_000_000 + i * 100_000, 0, 12.0 - i * 0.1, 5.0, 90.0]) for i in range(30)]
+    log = write_dataflash(tmp_path / "f.bin", rows)
+    fret = "@tick_period 100 ms\nB: the copter shall always satisfy volt_ok\n"
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    alone = audit_log(_plan(tmp_path / "a", fret, DF_BINDINGS), str(log)).to_json()
+    both = audit_log(_plan(tmp_path / "b", fret + "E: the copter shall never satisfy "
+                           "radio_failsafe\n", DF_BINDINGS), str(log)).to_json()
+    assert alone["start_time_ns"] == both["start_time_ns"] == 500_000_000
+    va, vb = alone["verdicts"][0], both["verdicts"][0]
+    assert va["first_violation"]["tick_time_s"] == vb["first_violation"]["tick_time_s"]
+    assert va["first_violation"]["tick_time_s"] == pytest.approx(2.5)
