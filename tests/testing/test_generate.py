@@ -252,3 +252,26 @@ def test_an_id_with_a_line_break_stays_in_its_comment_line(tmp_path):
         assert a.exit_code in (0, 1), a.output
         got = json.loads((tmp_path / "a.json").read_text())["logs"][0]["verdicts"]
         assert {v["requirement"]: v["verdict"] for v in got} == t["expected"]
+
+
+def test_generated_pytest_file_runs_inside_a_project_with_its_own_pytest_options(tmp_path):
+    """Generated into a project whose pytest options ask for a plugin the environment lacks
+    (``addopts = -n auto``: pytest-xdist), the file runs with pytest's defaults (its folder's
+    pytest.ini): the project's options used to make every run an error."""
+    import subprocess
+    import sys
+
+    (tmp_path / "pyproject.toml").write_text('[tool.pytest.ini_options]\naddopts = "-n auto '
+                                             '--dist loadgroup"\n')
+    p = tmp_path / "one.fret"
+    p.write_text("A: upon p the sw shall within 2 ticks satisfy q\n")
+    res = CliRunner().invoke(main, ["testgen", str(p), "-o", str(tmp_path / "gen"), "--pytest"])
+    assert res.exit_code == 0, res.output
+    cmd = [sys.executable, "-m", "pytest", "-p", "no:xdist", "-p", "no:cacheprovider"]
+    ran = subprocess.run(cmd + ["gen/test_fretc_generated.py"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    assert ran.returncode == 0 and " passed" in ran.stdout, ran.stdout + ran.stderr
+    (tmp_path / "gen" / "pytest.ini").unlink()  # the project's options: the error it was
+    ran = subprocess.run(cmd + ["gen/test_fretc_generated.py"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    assert ran.returncode != 0

@@ -97,9 +97,11 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
         click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
     if with_pytest:
-        from fretc.testing.pytest_file import PYTEST_FILE, pytest_file
+        from fretc.testing.pytest_file import (PYTEST_FILE, PYTEST_INI, PYTEST_INI_TEXT,
+                                               pytest_file)
 
         (Path(out_dir) / PYTEST_FILE).write_text(pytest_file(), encoding="utf-8")
+        (Path(out_dir) / PYTEST_INI).write_text(PYTEST_INI_TEXT, encoding="utf-8")
     total = len(doc["obligations"])
     met = len({(c["requirement"], c["obligation"]) for t in doc["tests"] for c in t["covers"]})
     click.echo(shown(f"{len(doc['tests'])} tests in {out_dir}: {met} of {total} obligations "
