@@ -27,7 +27,7 @@ from fretc.common.streams import log_topics as log_topics_of
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
-from fretc.logs.csv_source import CsvSource, clock_lines
+from fretc.logs.csv_source import CsvSource, clock_lines, sampled_trace
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
 from fretc.audit.finalize import between_ticks, finalize
@@ -72,7 +72,9 @@ def audit_log(plan: AuditPlan, path: str,
         if sub is None:
             return _not_selected(plan, str(path), err or "")
         return audit_log(sub, path, progress)
-    if plan.bindings is not None and plan.bindings.per_entity:
+    if plan.bindings is not None and plan.bindings.per_entity and not sampled_trace(path):
+        # (a sampled trace's columns are the variables: per-entity ones too, as testgen
+        # writes them)
         from fretc.audit.entities import audit_entities
 
         return audit_entities(plan, str(path), progress,

@@ -17,8 +17,8 @@ from fretc.common.problems import CsvError, LogError
 from fretc.logs.base import LogSource, Message
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
-           "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "escape_id",
-           "unescape_id", "column_name_problem"]
+           "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "sampled_trace",
+           "escape_id", "unescape_id", "column_name_problem"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
 CSV_TOPIC = "/csv"
@@ -72,6 +72,18 @@ def unescape_id(word: str) -> str:
         out += word[i].encode("utf-8")
         i += 1
     return out.decode("utf-8", errors="replace")
+
+
+def sampled_trace(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a CSV trace whose first line is :data:`SAMPLED_MARK` (its columns
+    the FRET variables, bindings applied: ``--write-csv``, ``fretc testgen``)."""
+    if not str(path).lower().endswith(".csv"):
+        return False
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return f.readline().startswith(SAMPLED_MARK)
+    except OSError:
+        return False
 
 
 def clock_lines(path: str | os.PathLike) -> dict[str, list[str]]:

@@ -275,3 +275,31 @@ def test_generated_pytest_file_runs_inside_a_project_with_its_own_pytest_options
     ran = subprocess.run(cmd + ["gen/test_fretc_generated.py"], cwd=tmp_path,
                          capture_output=True, text=True)
     assert ran.returncode != 0
+
+
+def test_the_replay_line_of_a_per_entity_requirement_gives_its_expected_verdicts(tmp_path):
+    """Bindings with [entities] beside the requirements: each test's ``# replay:`` command
+    audits the trace's columns as the variables (the per-entity ones too) and gives the
+    expected verdicts (the entities' key was looked for in the CSV: an error)."""
+    import json
+    import shlex
+
+    (tmp_path / "e.fret").write_text("@tick_period 100 ms\nM: in present mode the robot "
+                                     "shall always satisfy motor_level < 2\n")
+    (tmp_path / "e.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[entities]\nmotor = { key = "/diagnostics.status[:].name",'
+        ' matching = "motor*" }\n[variables]\n'
+        "motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'\n"
+        "present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'\n")
+    out = tmp_path / "gen"
+    res = CliRunner().invoke(main, ["testgen", str(tmp_path / "e.fret"), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((out / "tests.json").read_text())
+    assert doc["tests"]
+    for t in doc["tests"]:
+        line = next(x for x in (out / t["trace"]).read_text().splitlines()
+                    if x.startswith("# replay: "))
+        args = shlex.split(line[len("# replay: fretc "):])
+        got = CliRunner().invoke(main, args + ["--json", "-", "--no-progress"])
+        verdicts = json.loads(got.output[got.output.index("{"):])["logs"][0]["verdicts"]
+        assert {v["requirement"]: v["verdict"] for v in verdicts} == t["expected"], t["id"]
