@@ -113,30 +113,92 @@ def json_type_check(schema_data: bytes | str) -> Callable[[Any], Any] | None:
     if not isinstance(doc, dict):
         return None
 
-    def check(value: Any, spec: Any, where: str, depth: int = 0) -> None:
-        if not isinstance(spec, dict) or depth > 64:
-            return
-        t = spec.get("type")
-        allowed = [t] if isinstance(t, str) else [x for x in t if isinstance(x, str)] \
-            if isinstance(t, list) else []
-        tests = [_JSON_TYPES[x] for x in allowed if x in _JSON_TYPES]
-        if tests and not any(f(value) for f in tests):
-            shown = json.dumps(value)[:40] if not isinstance(value, (dict, list)) else \
-                type(value).__name__
-            raise ValueError(f"{where or 'the message'} is {shown}, but the schema says "
-                             f"{' or '.join(allowed)}")
-        if isinstance(value, dict):
-            for name, sub in (spec.get("properties") or {}).items():
-                if name in value:
-                    check(value[name], sub, f"{where}.{name}" if where else name, depth + 1)
-        elif isinstance(value, list) and isinstance(spec.get("items"), dict):
-            for i, item in enumerate(value):
-                check(item, spec["items"], f"{where}[{i}]", depth + 1)
+    check = _compile_check(doc, "", 0)
+    if check is None:
+        return None
 
     def checked(value: Any) -> Any:
-        check(value, doc, "")
+        check(value)
         return value
     return checked
+
+
+#: Python types of the JSON values of each JSON Schema ``type`` (bool is no number).
+_JSON_PY: dict[str, tuple[type, ...]] = {
+    "number": (int, float), "boolean": (bool,), "string": (str,), "object": (dict,),
+    "array": (list,), "null": (type(None),), "integer": (int, float)}
+
+
+def _compile_check(spec: Any, where: str, depth: int) -> Callable[[Any], None] | None:
+    """The check of one schema node, made once (None: nothing to check there): its own
+    ``type``, its declared properties' checks, and its items' (an array of scalars in one
+    pass over the list)."""
+    if not isinstance(spec, dict) or depth > 64:
+        return None
+    t = spec.get("type")
+    allowed = [t] if isinstance(t, str) else [x for x in t if isinstance(x, str)] \
+        if isinstance(t, list) else []
+    tests = [_JSON_TYPES[x] for x in allowed if x in _JSON_TYPES]
+    kinds = frozenset(k for x in allowed if x in _JSON_PY for k in _JSON_PY[x])
+    exact = "integer" not in allowed  # (an integer: a float only when whole)
+    props = [(name, c) for name, sub in (spec.get("properties") or {}).items()
+             if (c := _compile_check(sub, f"{where}.{name}" if where else name,
+                                     depth + 1)) is not None]
+    items = spec.get("items")
+    item = _compile_check(items, f"{where}[]", depth + 1) if isinstance(items, dict) else None
+    scalar_items = (isinstance(items, dict) and not items.get("properties")
+                    and not isinstance(items.get("items"), dict))
+    it = items.get("type") if isinstance(items, dict) else None
+    item_allowed = [it] if isinstance(it, str) else [x for x in it if isinstance(x, str)] \
+        if isinstance(it, list) else []
+    # an array of scalars of exact types: checked by the set of its items' types (map(type)
+    # runs in C), the item named only when one is wrong
+    fast = (scalar_items and item_allowed and "integer" not in item_allowed
+            and all(x in _JSON_PY for x in item_allowed))
+    item_kinds = frozenset(k for x in item_allowed if x in _JSON_PY for k in _JSON_PY[x])
+    if not tests and not props and item is None:
+        return None
+
+    def wrong(value: Any, at: str) -> None:
+        shown = json.dumps(value)[:40] if not isinstance(value, (dict, list)) else \
+            type(value).__name__
+        raise ValueError(f"{at or 'the message'} is {shown}, but the schema says "
+                         f"{' or '.join(allowed)}")
+
+    def check(value: Any) -> None:
+        if tests and not (type(value) in kinds if exact else any(f(value) for f in tests)):
+            wrong(value, where)
+        if props and type(value) is dict:
+            for name, c in props:
+                if name in value:
+                    c(value[name])
+        elif item is not None and type(value) is list:
+            if fast and set(map(type, value)) <= item_kinds:
+                return
+            if scalar_items:  # the first item of another type is named
+                for i, x in enumerate(value):
+                    try:
+                        item(x)
+                    except ValueError:
+                        raise ValueError(str(_item_error(item, x, f"{where}[{i}]"))) from None
+            else:
+                for i, x in enumerate(value):
+                    try:
+                        item(x)
+                    except ValueError as exc:
+                        raise ValueError(str(exc).replace(f"{where}[]", f"{where}[{i}]", 1)) \
+                            from None
+    return check
+
+
+def _item_error(item: Callable[[Any], None], x: Any, at: str) -> str:
+    """The error of ``item`` on ``x``, named at ``at``."""
+    try:
+        item(x)
+    except ValueError as exc:
+        text = str(exc)
+        return at + text[text.index(" is "):] if " is " in text else text
+    return at
 
 
 def _checked(decode: Callable[[bytes], Any], encoding: str) -> Callable[[bytes], Any]:

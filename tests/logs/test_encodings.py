@@ -11,6 +11,8 @@ import json
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 pytest.importorskip("mcap_protobuf")
 pytest.importorskip("cbor2")
@@ -231,3 +233,72 @@ def test_a_schema_from_any_writer_keeps_its_fields_and_named_constants(tmp_path)
     err = {v.requirement: v for v in la.verdicts}["R1"].error
     assert "exposre" in err and "/v" in err and "sequenceNumber" in err, err
     assert "SimpleNamespace" not in err
+
+
+def _reference_check(value, spec, where="", depth=0):
+    """The JSON Schema type check, node by node and item by item (the rule the decoder's
+    compiled check keeps): raises ValueError naming the first field of another type."""
+    import json as _json
+
+    from fretc.logs.encodings import _JSON_TYPES
+
+    if not isinstance(spec, dict) or depth > 64:
+        return
+    t = spec.get("type")
+    allowed = [t] if isinstance(t, str) else [x for x in t if isinstance(x, str)] \
+        if isinstance(t, list) else []
+    tests = [_JSON_TYPES[x] for x in allowed if x in _JSON_TYPES]
+    if tests and not any(f(value) for f in tests):
+        shown = _json.dumps(value)[:40] if not isinstance(value, (dict, list)) else \
+            type(value).__name__
+        raise ValueError(f"{where or 'the message'} is {shown}, but the schema says "
+                         f"{' or '.join(allowed)}")
+    if isinstance(value, dict):
+        for name, sub in (spec.get("properties") or {}).items():
+            if name in value:
+                _reference_check(value[name], sub, f"{where}.{name}" if where else name,
+                                 depth + 1)
+    elif isinstance(value, list) and isinstance(spec.get("items"), dict):
+        for i, item in enumerate(value):
+            _reference_check(item, spec["items"], f"{where}[{i}]", depth + 1)
+
+
+_TYPES = ["number", "integer", "boolean", "string", "object", "array", "null"]
+_scalars = st.one_of(st.integers(-5, 5), st.floats(allow_nan=False, width=32), st.booleans(),
+                     st.text(max_size=3), st.none(), st.sampled_from([1.0, 2.5]))
+_values = st.recursive(_scalars, lambda c: st.one_of(
+    st.lists(c, max_size=4), st.dictionaries(st.sampled_from(["a", "b", "c"]), c, max_size=3)),
+    max_leaves=12)
+_schemas = st.recursive(
+    st.fixed_dictionaries({}, optional={"type": st.one_of(st.sampled_from(_TYPES), st.lists(
+        st.sampled_from(_TYPES), max_size=2))}),
+    lambda c: st.one_of(
+        st.fixed_dictionaries({"type": st.just("array"), "items": c}),
+        st.fixed_dictionaries({"type": st.just("object"), "properties": st.dictionaries(
+            st.sampled_from(["a", "b", "c"]), c, max_size=3)})), max_leaves=8)
+
+
+@settings(max_examples=300, deadline=None)
+@given(schema=_schemas, value=_values)
+def test_the_json_type_check_compiled_once_is_the_rule(schema, value):
+    """The check made once from the schema (arrays of scalars checked by the set of their
+    items' types) accepts what the rule accepts and names the same field when it refuses."""
+    import json as _json
+
+    from fretc.logs.encodings import json_type_check
+
+    check = json_type_check(_json.dumps(schema))
+    try:
+        _reference_check(value, schema)
+        want = None
+    except ValueError as exc:
+        want = str(exc)
+    if check is None:
+        assert want is None
+        return
+    try:
+        check(value)
+        got = None
+    except ValueError as exc:
+        got = str(exc)
+    assert got == want
