@@ -148,6 +148,8 @@ class EntityClock(Clock):
             for b in own for f in b.fields) and not any(b.uses_tf for b in own)
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
+        """Hold message ``data`` of ``topic`` at ``t`` (the clock's ticks due before it) and
+        record the entities it carries when it is the key's."""
         out = super().push(topic, t, log_time, data) if topic in self.fed else []
         if topic == base_topic(self.kind.topic) or topic == self.kind.topic:
             self._key_message(topic, t, data)
