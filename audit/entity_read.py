@@ -147,13 +147,14 @@ class EntityClock(Clock):
             f.topic == kind.topic and any(isinstance(p, Filter) and by_entity(p) for p in f.path)
             for b in own for f in b.fields) and not any(b.uses_tf for b in own)
 
-    def push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
-        """Hold message ``data`` of ``topic`` at ``t`` (the clock's ticks due before it) and
-        record the entities it carries when it is the key's."""
-        out = super().push(topic, t, log_time, data) if topic in self.fed else []
+    def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
+        """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
+        before it, and record the entities it carries when it is the key's (iterate to the
+        end)."""
+        if topic in self.fed:
+            yield from super().push(topic, t, log_time, data)
         if topic == base_topic(self.kind.topic) or topic == self.kind.topic:
             self._key_message(topic, t, data)
-        return out
 
     fed: frozenset[str] = frozenset()  # (set by read_entities: the topics the clock holds)
 
@@ -226,18 +227,6 @@ class EntityClock(Clock):
                 rows.append((i, self._values(st, self.table.keys[i], i)))
         tick.values[ENTITIES] = (absent, rows)  # type: ignore[assignment]
         return tick
-
-    def finish(self) -> list[Tick]:
-        """The ticks left at the end; on a period, up to the first tick at or after the last
-        message (docs/guide/ticks.md), so that an entity met in the last period has one."""
-        out = super().finish()
-        if self.period is not None and self.next_grid is not None and self.last is not None \
-                and self.next_grid - self.period < self.last:
-            tick = self._emit(self.next_grid)
-            self.next_grid += self.period
-            if tick is not None:
-                out.append(tick)
-        return out
 
     def _absent(self, st: EvalState) -> tuple:
         """The per-entity variables of an entity the held messages do not carry."""

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from fretc.common.problems import SignalError
 from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, GAP_CELL, SAMPLED_MARK,
                                    UNKNOWN_CELL, escape_id)
 
@@ -173,10 +174,13 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     Raises:
         ValueError: the plan binds no variable of its requirements (nothing to write), or
             per-entity requirements.
+        SignalError: the log could not be read (the audit's error).
         OSError: ``out`` cannot be written."""
     if not sampled_variables(plan) and plan.bindings is not None:
         raise ValueError("the requirements' variables have no bindings: nothing to sample")
     kept = audit_keeping_passes(plan, log_path)
+    if kept.audit.error is not None and kept.passes is None:  # nothing read: nothing to write
+        raise SignalError(kept.audit.error)
     clocks = sampled_clocks(kept)
     names = [n for n in _order(kept.plan) if any(n in c.columns for c in clocks)]
     Path(out).parent.mkdir(parents=True, exist_ok=True)

@@ -156,14 +156,14 @@ def test_past_the_entity_bound_a_violated_entity_violates_the_requirement(tmp_pa
     track 2 violated: the requirement is violated (a violated instance decides it, whatever
     is left unjudged), the unjudged entities named in its notes and in their own error
     verdict; with no violation it stays an error."""
-    import fretc.audit.entities as E
+    import dataclasses
 
-    monkeypatch.setattr(E, "MAX_ENTITIES", 5)
     Track, TrackArray = _track_types()
     (tmp_path / "t.fret").write_text("@tick_period 100 ms\n"
                                      "T: in present mode the robot shall always satisfy dist > 0.5\n")
     (tmp_path / "t.bindings.toml").write_text(TRACK_BINDINGS)
-    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),), max_entities=5))
+    assert dataclasses.replace(plan.config).max_entities == 5
     for bad, want in ((2, "violated"), (None, "error")):
         msgs = [("/tracks", "tracking_msgs/msg/TrackArray", S + k * S // 10,
                  TrackArray(tracks=[Track(id=i, distance=0.2 if i == bad and k == 3 else 2.0)
