@@ -179,8 +179,10 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     if not sampled_variables(plan) and plan.bindings is not None:
         raise ValueError("the requirements' variables have no bindings: nothing to sample")
     kept = audit_keeping_passes(plan, log_path)
-    if kept.audit.error is not None and kept.passes is None:  # nothing read: nothing to write
-        raise SignalError(kept.audit.error)
+    errors = [e for e in [kept.audit.error] + [v.error for v in kept.audit.verdicts] if e]
+    if kept.passes is None and errors and all(v.verdict == "error"
+                                              for v in kept.audit.verdicts):
+        raise SignalError(errors[0])  # nothing read: nothing to write
     clocks = sampled_clocks(kept)
     names = [n for n in _order(kept.plan) if any(n in c.columns for c in clocks)]
     Path(out).parent.mkdir(parents=True, exist_ok=True)
