@@ -126,7 +126,7 @@ def test_csv_export_and_c_runner_judge_the_last_message(tmp_path):
                                     "--write-csv", str(tmp_path / "csv"), "--no-progress"])
     assert res.exit_code == 1, res.output
     rows = (tmp_path / "csv" / "x.csv").read_text().splitlines()
-    assert rows[-1] == "9,10.0" and len(rows) == 2 + 90
+    assert rows[-1] == "9,10.0" and len(rows) == 3 + 90  # the mark, its clock, the header
     needs_cc()
     res = CliRunner().invoke(main, [str(tmp_path / "u.fret"), "--emit", "c", "-o",
                                     str(tmp_path / "c")])
