@@ -16,15 +16,15 @@ Roles:
   client calling it every 200 ms, both with service introspection (contents) on.
 * ``actions``: a test_msgs/Fibonacci action server ``/fib`` (each goal takes about 0.8 s) and a
   client sending a goal every second.
-* ``controller``: the shield graph's controller and world: ``/cmd_vel`` at 0.4 m/s every
-  100 ms (always proposing to drive on) and ``/scan`` every 100 ms whose ranges read 0.5 m from
+* ``controller``: the shield graph's controller and world, once the Safety System and the
+  recorder subscribe to both its topics: ``/cmd_vel`` at 0.4 m/s every 100 ms (always proposing to drive on) and ``/scan`` every 100 ms whose ranges read 0.5 m from
   2 s to 4 s (an obstacle within 0.9 m) and 3 m otherwise, with no scan from 5 s to 6 s.
 * ``passthrough``: the unshielded graph's Safety System: forwards each ``/cmd_vel`` to
   ``/cmd_vel_filtered`` unchanged and publishes ``/gwendolen_control`` true while a scan reads
-  under 0.9 m (a stop requested that nothing enforces).
+  under 0.9 m (a stop requested that nothing enforces), until the controller has gone.
 * ``record``: an independent recorder: ``/scan``, ``/cmd_vel``, ``/cmd_vel_filtered``,
   ``/gwendolen_control`` as CDR into the MCAP file OUT (mcap's writer, the schemas of ROS 2
-  Jazzy's definitions from rosbags), log time = receipt time.
+  Jazzy's definitions from rosbags), log time = receipt time, until the controller has gone.
 """
 
 from __future__ import annotations
@@ -52,6 +52,32 @@ def spin_for(node, seconds: float, step=None, period: float = 0.1) -> None:
             k += 1
             nxt += period
         rclpy.spin_once(node, timeout_sec=max(0.0, min(0.01, nxt - time.monotonic())))
+
+
+def wait_for_subscribers(node, publishers, count: int, limit: float = 60.0) -> None:
+    """Spin ``node`` until each of ``publishers`` has ``count`` subscriptions matched (the
+    graph's other peers discovered: a start that does not depend on how long they take to
+    come up), at most ``limit`` s."""
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < limit:
+        if all(p.get_subscription_count() >= count for p in publishers):
+            return
+        rclpy.spin_once(node, timeout_sec=0.05)
+    raise SystemExit(f"the graph's peers were not discovered within {limit} s")
+
+
+def spin_until_gone(node, topic: str, limit: float = 90.0) -> None:
+    """Spin ``node`` until ``topic`` has had a publisher and has none left (the controller
+    ended), then 0.5 s more for the last messages; at most ``limit`` s."""
+    t0 = time.monotonic()
+    seen = False
+    while time.monotonic() - t0 < limit:
+        n = node.count_publishers(topic)
+        seen = seen or n > 0
+        if seen and n == 0:
+            break
+        rclpy.spin_once(node, timeout_sec=0.05)
+    spin_for(node, 0.5)
 
 
 def talker(seconds: float, _out: str) -> None:
@@ -190,7 +216,9 @@ def controller(seconds: float, _out: str) -> None:
     n = rclpy.create_node("controller")
     cmd = n.create_publisher(Twist, "/cmd_vel", RELIABLE)
     scan = n.create_publisher(LaserScan, "/scan", BEST_EFFORT)
-    time.sleep(1.5)
+    # the Safety System (shield or passthrough) and the recorder read both topics
+    wait_for_subscribers(n, [cmd, scan], 2)
+    spin_for(n, 0.5)
     t0 = time.monotonic()
 
     def step(k: int) -> None:
@@ -218,7 +246,7 @@ def passthrough(seconds: float, _out: str) -> None:
     n.create_subscription(Twist, "/cmd_vel", out.publish, RELIABLE)
     n.create_subscription(LaserScan, "/scan", lambda s: ctl.publish(
         Bool(data=min(s.ranges) < 0.9)), BEST_EFFORT)
-    spin_for(n, seconds)
+    spin_until_gone(n, "/cmd_vel")
 
 
 def record(seconds: float, out: str) -> None:
@@ -251,7 +279,7 @@ def record(seconds: float, out: str) -> None:
                 w.add_message(channels[topic], log_time=t, publish_time=t, data=raw)
 
             n.create_subscription(cls, topic, cb, qos, raw=True)
-        spin_for(n, seconds)
+        spin_until_gone(n, "/cmd_vel")
         w.finish()
 
 
