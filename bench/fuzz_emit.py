@@ -134,6 +134,9 @@ def run_crunner(rng: random.Random, tmp: Path) -> list[str]:
         return []
     bad = [f"{rid}: runner {w}, audit {audit.get(rid)}" for rid, w in words.items()
            if w != "unread" and w != audit.get(rid)]
+    if code == 2 and "quoted cells are not read by this runner" in err and \
+            re.search(rf"{re.escape(str(trace))}:\d+", err) and not words:
+        return []  # a documented refusal with its line (docs/guide/robot-monitors.md)
     if code == 2 and "error:" in err and not words:
         return [f"the runner refuses what the audit reads: {err[-300:]!r}"]
     return bad

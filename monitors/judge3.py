@@ -13,7 +13,8 @@ read (../shared/DESIGN.md, "Damage is a gap: never evidence, never the end").
   and the response (and stop condition) from the trigger to the tick the obligation was
   missed are all known. Where none is, the evidence is the tick from which the pt formula is
   false in every completion.
-* **Triggers** counted are the definite ones; a requirement that holds in every completion
+* **Triggers** counted are the definite ones (the trigger and the part of its scope
+  interval up to it known: the interval's end does not make a trigger); a requirement that holds in every completion
   with no definite trigger is vacuous (a note says when a trigger may have fired in unknown
   ticks).
 
@@ -38,6 +39,8 @@ __all__ = ["Unknowns", "expression_unknown", "definite_evidence", "possible_trig
 
 _PAST = ("persisted", "occurred", "prevOcc", "preBool", "preInt", "preReal")
 _FUTURE = ("persists", "occurs", "nextOcc")
+#: scopes whose interval the mode's first occurrence places (monitors/interval.py, point 1)
+_FIRST_OCCURRENCE = ("before", "after", "onlyBefore", "onlyAfter")
 
 
 def _names(e: A.Expr, out: set[str], calls: set[str]) -> None:
@@ -106,11 +109,32 @@ class Unknowns:
 
     def scope_known(self, s: int, e: int, scope: str) -> bool:
         """The scope interval ``[s, e]``'s bounds are known: the mode is known from the tick
-        before it to the tick after it (any interval of the ``null`` scope is)."""
+        before it to the tick after it, and from the first tick for the scopes that the
+        mode's first occurrence places (``before``, ``after``, ``onlyBefore``,
+        ``onlyAfter``: an unknown tick earlier could be that occurrence); any interval of
+        the ``null`` scope is."""
         if scope == "null":
             return True
-        lo, hi = max(s - 1, 0), min(e + 1, self.n - 1)
-        return not self.M[lo:hi + 1].any()
+        lo = 0 if scope in _FIRST_OCCURRENCE else max(s - 1, 0)
+        return not self.M[lo:min(e + 1, self.n - 1) + 1].any()
+
+    def in_scope_known(self, t: int, s: int, scope: str) -> bool:
+        """Tick ``t`` lies in a scope interval starting at ``s`` in every completion, whatever
+        the interval's end (the trigger points of an interval need its start and the ticks
+        up to ``t``, not its end): the mode known on ``[s - 1, t]`` (``in``, ``notin``,
+        ``onlyIn``: ``t`` in the run that starts at ``s``), on ``[0, s]`` (``after``,
+        ``onlyBefore``: the interval runs to the end of the trace from the tick the mode's
+        first occurrence places) or on ``[0, t]`` (``before``, ``onlyAfter``: the interval
+        starts at the first tick and ``t`` precedes its end)."""
+        if scope == "null":
+            return True
+        if scope in ("after", "onlyBefore"):
+            lo, hi = 0, s
+        elif scope in ("before", "onlyAfter"):
+            lo, hi = 0, t
+        else:
+            lo, hi = max(s - 1, 0), t
+        return not self.M[lo:min(hi, self.n - 1) + 1].any()
 
     def trigger_known(self, t: int, s: int, cond: str) -> bool:
         """The trigger point ``t`` of the interval starting at ``s`` is one in every
@@ -156,10 +180,8 @@ def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,
     intervals = scope_of(req, columns, u.n)
     C = _condition(req, columns, u.n)
     for s, e in intervals:
-        if not u.scope_known(s, e, scope):
-            continue
         for t in trigger_points(cond, C, s, e):
-            if u.trigger_known(t, s, cond):
+            if u.in_scope_known(t, s, scope) and u.trigger_known(t, s, cond):
                 triggers += 1
                 first_trigger = t if first_trigger is None else first_trigger
     return Evidence(holds=ev.holds, vacuous=ev.vacuous, intervals=ev.intervals,

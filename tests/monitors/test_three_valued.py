@@ -105,3 +105,60 @@ def test_a_gap_leaves_unknown_the_ticks_a_lost_message_could_hold(kept, lost, ti
                                                           for t in lost])
     want = np.array([any(h <= m <= t for m in lost) for t, h in zip(ticks, held)], np.bool_)
     assert np.array_equal(got.get("a", np.zeros(len(ticks), np.bool_)), want)
+
+
+SCOPED = [
+    "only after m the sw shall never satisfy p",
+    "only before m the sw shall always satisfy p",
+    "only in m mode the sw shall always satisfy p",
+    "before m the sw shall always satisfy p",
+    "after m the sw shall always satisfy p",
+    "in m mode upon p the sw shall within 1 ticks satisfy q",
+    "when not in m mode whenever p the sw shall immediately satisfy q",
+    "after m upon p the sw shall eventually satisfy q",
+]
+
+
+def _definite_triggers(text, cols, unknown, n):
+    from fretc.monitors.interval import evaluate_requirement
+    from fretc.monitors.judge3 import Unknowns, definite_evidence
+
+    c, _ms = _compiled_of(text)
+    req, ticks = c.entry.requirement, c.formalization.ticks
+    u = Unknowns.of(req, unknown, cols, n, True)
+    ev = evaluate_requirement(req, cols, n, ticks, favour=u)
+    return definite_evidence(req, ev, u, cols).triggers, req, ticks
+
+
+@settings(max_examples=200, deadline=None)
+@given(text=st.sampled_from(SCOPED), rows=st.lists(_row, min_size=1, max_size=6),
+       holes=st.lists(st.tuples(st.integers(0, 5), st.sampled_from("pqm")), max_size=2))
+def test_the_triggers_counted_are_in_every_completion(text, rows, holes):
+    """A trigger counted with unknown ticks (the one that makes a requirement satisfied
+    rather than vacuous) fires in every way of filling them: at least as many triggers in
+    each completion; with the ticks before it known and only the scope's end unknown it is
+    counted (an ``only after`` whose mode is unknown at the last tick has its trigger at
+    the first tick: fuzz_hostile crunner seed 67 input 1040)."""
+    from fretc.monitors.interval import evaluate_requirement
+
+    c, _ms = _compiled_of(text)
+    n = len(rows)
+    cols = _columns(rows, set(c.formalization.variables))
+    cells = sorted({(i, v) for i, v in holes if i < n and v in cols})
+    unknown: dict = {}
+    for i, v in cells:
+        unknown.setdefault(v, np.zeros(n, np.bool_))[i] = True
+    counted, req, ticks = _definite_triggers(text, cols, unknown, n)
+    for combo in itertools.product((False, True), repeat=len(cells)):
+        filled = {k: a.copy() for k, a in cols.items()}
+        for (i, v), val in zip(cells, combo):
+            filled[v][i] = val
+        assert evaluate_requirement(req, filled, n, ticks).triggers >= counted, \
+            (text, rows, cells, combo, counted)
+
+
+def test_a_trigger_before_an_unknown_scope_end_is_counted():
+    text = "only after m the sw shall never satisfy p"
+    cols = {"m": np.array([True, True, True]), "p": np.array([False, False, False])}
+    unknown = {"m": np.array([False, False, True])}
+    assert _definite_triggers(text, cols, unknown, 3)[0] == 1
