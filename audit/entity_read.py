@@ -38,12 +38,14 @@ import numpy as np
 from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.logs.selective import install as install_selective
+from fretc.audit.entity_rows import row_fields, row_values
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
 from fretc.signals.bindings.extract import Valid, by_entity
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
+from fretc.signals.columns import Irregular
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import with_tick_windows
 
@@ -52,6 +54,11 @@ __all__ = ["EntityKind", "EntityClock", "entity_kind", "read_entities"]
 #: the key of a tick's values holding its per-entity values (never a FRET variable's name)
 ENTITIES = "\x00entities"
 _ABSENT = object()  # the key of no entity: a filter on it keeps nothing
+#: Held key messages whose rows are evaluated at once (vectorized path)
+BATCH = 4096
+#: Whether the per-entity variables that can be are evaluated over rows by numpy
+#: (:mod:`fretc.audit.entity_rows`); False: each at each tick (the reference, for tests)
+VECTORIZED = True
 
 
 @dataclass
@@ -133,7 +140,8 @@ class EntityClock(Clock):
     ``(absent values, [(entity, values)])``."""
 
     def __init__(self, s: Sampling, plain: list[Binding], required: set[str], tick: Any,
-                 kind: EntityKind, own: list[Binding], param: EntityParam, bound: int) -> None:
+                 kind: EntityKind, own: list[Binding], param: EntityParam, bound: int,
+                 vectorized: bool = True) -> None:
         super().__init__(s, plain, required, tick, keep_going=True)
         self.kind, self.own, self.param, self.bound = kind, own, param, bound
         self.table = EntityTable()
@@ -146,6 +154,16 @@ class EntityClock(Clock):
         self.static_absent = all(
             f.topic == kind.topic and any(isinstance(p, Filter) and by_entity(p) for p in f.path)
             for b in own for f in b.fields) and not any(b.uses_tf for b in own)
+        #: the vectorized path (:mod:`fretc.audit.entity_rows`): the item fields of the
+        #: per-entity variables when they are functions of the key's message and the
+        #: entity alone (None: each evaluated at each tick, the reference)
+        self.rows_of = (row_fields(own, kind.topic)
+                        if self.static_absent and not kind.stream and vectorized else None)
+        #: vectorized: held key message number -> its rows (filled by batches), and the
+        #: held messages waiting for their batch ``(message, entities, rows)``
+        self.msg_rows: dict[int, list] = {}
+        self.batch: list[tuple[Any, list[int], list]] = []
+        self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
@@ -183,6 +201,7 @@ class EntityClock(Clock):
             keep = {id(self.state.msgs.get(kind.topic))} | {id(p[1]) for p in self.pending}
             self.present = {k: v for k, v in self.present.items() if k in keep}
             self.present[id(data)] = got
+            self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
 
     def _stream_values(self, i: int, key: Any, t: int, data: Any) -> None:
         """One-value keys: entity ``i``'s variables on its message ``data`` at ``t``."""
@@ -220,13 +239,53 @@ class EntityClock(Clock):
             absent = self._absent(st) if not self.kind.stream else ()
             if self.static_absent:
                 self.absent_once = absent
-        rows = []
+        rows: list = []
         if not self.kind.stream:
             held = st.msgs.get(self.kind.topic)
-            for i in self.present.get(id(held), ()) if held is not None else ():
-                rows.append((i, self._values(st, self.table.keys[i], i)))
+            got = self.present.get(id(held), ()) if held is not None else ()
+            if self.rows_of is not None:
+                if got:  # the held message's rows, shared by the ticks that hold it
+                    rows = self.msg_rows.get(id(held))  # type: ignore[assignment]
+                    if rows is None:
+                        rows = self.msg_rows[id(held)] = []
+                        self.batch.append((held, list(got), rows))
+                        if len(self.batch) >= BATCH:
+                            self.flush()
+            else:
+                for i in got:
+                    rows.append((i, self._values(st, self.table.keys[i], i)))
         tick.values[ENTITIES] = (absent, rows)  # type: ignore[assignment]
         return tick
+
+    def flush(self) -> None:
+        """Evaluate the rows of the held messages waiting for it (vectorized: one batch;
+        what the rows cannot take, message by message with the reference evaluator, which
+        records the entities' first errors in tick order)."""
+        batch, self.batch = self.batch, []
+        if not batch:
+            return
+        keys = self.table.keys
+        try:
+            got = row_values(self.own, self.rows_of,  # type: ignore[arg-type]
+                             [(m, [keys[i] for i in ents]) for m, ents, _r in batch])
+        except (Irregular, SignalError):
+            got = None
+        if got is not None:
+            for (_m, ents, rows), vals in zip(batch, got):
+                rows.extend(zip(ents, vals))
+            self.evaluated[0] += sum(len(e) for _m, e, _r in batch)
+            return
+        st, topic = EvalState(), self.kind.topic
+        for m, ents, rows in batch:
+            st.msgs[topic] = m
+            rows.extend((i, self._values(st, keys[i], i)) for i in ents)
+            self.evaluated[1] += len(ents)
+
+    def finish(self) -> Iterator[Tick]:
+        """The ticks left at the end of the log, the last rows evaluated (iterate to the
+        end)."""
+        yield from super().finish()
+        self.flush()
 
     def _absent(self, st: EvalState) -> tuple:
         """The per-entity variables of an entity the held messages do not carry."""
@@ -315,7 +374,7 @@ def read_entities(source: Any, bindings: Bindings,
                        bindings.header_lag_ns, bindings.source)
         s = Sampling(source, sub)
         c = made[key] = EntityClock(s, plain, present_tf(topics, available), bindings.tick,
-                                    kind, own, param, bound)
+                                    kind, own, param, bound, VECTORIZED)
         c.fed = frozenset(topics | ({bindings.tick.topic} if bindings.tick.topic else set()))
         if bindings.time_base != "log":
             buffers[key] = HeaderBuffer(source, sub, s._problems)

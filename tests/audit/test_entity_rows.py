@@ -1,0 +1,134 @@
+"""The per-entity variables evaluated over rows by numpy (audit/entity_rows.py) against the
+reference, each variable evaluated at each tick for each entity (``entity_read.VECTORIZED``
+off): on random small per-entity logs (numeric and text keys, keys repeated in a message,
+NaN and infinite values, booleans), the values of every tick of every entity, the entities'
+errors and the audit's verdicts are the same."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import fretc.audit.entity_read as R
+from _logs import ROS2, S, write_mcap
+from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.audit.entity_rows import row_fields
+from fretc.logs import open_log
+
+OBJ, ARR = "entity_rows_msgs/msg/Obj", "entity_rows_msgs/msg/ObjArray"
+
+VARIABLES = """dist = 'min(/objs.objs[:]{%(k)s==$obj}.distance)'
+far = 'max(/objs.objs{%(k)s==$obj}.distance) - 1 >= 0.5'
+ok = 'all(/objs.objs[:]{%(k)s==$obj}.ok)'
+n = 'count(/objs.objs[:]{%(k)s==$obj}.ok) + len(/objs.objs[:]{%(k)s==$obj}.distance)'
+m = 'abs(mean(/objs.objs[:]{%(k)s==$obj}.distance) * -2)'
+any_ok = 'any(/objs.objs[:]{%(k)s==$obj}.ok) | dist < 0.5'
+"""
+FRET = ("@tick_period 100 ms\n"
+        "R: the robot shall always satisfy (dist > 0.5 | !ok) & (n < 5 | far) & m > -1\n"
+        "Q: upon any_ok the robot shall within 2 ticks satisfy !far\n")
+
+
+def _types():
+    from rosbags.typesys import get_types_from_msg
+
+    if ARR not in ROS2.types:
+        ROS2.register(get_types_from_msg("uint32 id\nstring label\nfloat64 distance\nbool ok",
+                                         OBJ))
+        ROS2.register(get_types_from_msg("entity_rows_msgs/Obj[] objs", ARR))
+    return ROS2.types[OBJ], ROS2.types[ARR]
+
+
+def _setup(tmp: Path, rows: list, key: str) -> tuple:
+    Obj, Arr = _types()
+    log = write_mcap(tmp / "o.mcap", [
+        ("/objs", ARR, S + k * S // 10 + (k % 3) * S // 30,
+         Arr(objs=[Obj(id=i, label=f"o{i}", distance=d, ok=ok) for i, d, ok in r]))
+        for k, r in enumerate(rows)])
+    (tmp / "o.fret").write_text(FRET)
+    (tmp / "o.bindings.toml").write_text(
+        f'[tick]\nperiod = "100 ms"\n[entities]\nobj = "/objs.objs[:].{key}"\n'
+        "[variables]\n" + VARIABLES % {"k": key})
+    return log, load_plan(AuditConfig(requirements=(str(tmp / "o.fret"),)))
+
+
+def _read(log: Path, plan, vectorized: bool, monkeypatch) -> tuple:
+    """Every tick's values (per-entity ones included) and the entities' errors."""
+    names = ["dist", "far", "ok", "n", "m", "any_ok"]
+    with monkeypatch.context() as mp:
+        mp.setattr(R, "VECTORIZED", vectorized)
+        made, ticks, errors = R.read_entities(open_log(str(log)), plan.bindings,
+                                              {0: ("obj", names)}, 10**6)
+    c = made[0]
+    seen = [(t.time, repr(t.values[R.ENTITIES][0]), repr(t.values[R.ENTITIES][1]))
+            for t in ticks[0]]
+    return seen, c.table.keys, {i: str(e) for i, e in c.table.errors.items()}, \
+        {k: str(e) for k, e in errors.items()}, c.evaluated
+
+
+def _verdicts(la) -> list:
+    return [dataclasses.replace(v, notes=[]).__dict__.__repr__() for v in la.verdicts]
+
+
+ITEM = st.tuples(st.integers(1, 5),
+                 st.sampled_from([0.2, 0.8, 1.7, 2.0, float("inf"), float("nan")]),
+                 st.booleans())
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.lists(ITEM, max_size=4), min_size=1, max_size=15),
+       key=st.sampled_from(["id", "label"]))
+def test_rows_equal_the_reference(tmp_path_factory, monkeypatch, rows, key):
+    """Vectorized rows == the tick-by-tick reference (values, errors, verdicts); a log
+    whose messages never repeat a key is evaluated by the rows alone."""
+    tmp = tmp_path_factory.mktemp("rows")
+    log, plan = _setup(tmp, rows, key)
+    fast = _read(log, plan, True, monkeypatch)
+    slow = _read(log, plan, False, monkeypatch)
+    assert fast[:4] == slow[:4], rows
+    assert slow[4] == [0, 0]  # (the reference evaluates at each tick, not by rows)
+    if all(len({i for i, _d, _o in r}) == len(r) for r in rows) and fast[1]:
+        assert fast[4][1] == 0 and fast[4][0] > 0  # no repeated key: all by rows
+    with monkeypatch.context() as mp:
+        mp.setattr(R, "VECTORIZED", False)
+        reference = audit_log(plan, str(log))
+    assert _verdicts(audit_log(plan, str(log))) == _verdicts(reference)
+
+
+def test_repeated_keys_fall_back_to_the_reference(tmp_path, monkeypatch):
+    """Key 1 twice in a message: its rows have two items where the others have one; the
+    batch is evaluated by the reference (min over both items: 0.2)."""
+    log, plan = _setup(tmp_path, [[(1, 0.2, True), (1, 2.0, True), (2, 2.0, False)],
+                                  [(2, 0.8, True)]], "id")
+    seen, keys, errs, _e, evaluated = _read(log, plan, True, monkeypatch)
+    assert evaluated[0] == 0 and evaluated[1] > 0
+    assert keys == [1, 2] and not errs
+    assert "(0, (0.2," in seen[0][2]
+
+
+@pytest.mark.parametrize("expr, rows", [
+    ("min(/objs.objs[:]{id==$obj}.distance)", True),
+    ("min(/objs.objs[1:]{id==$obj}.distance)", False),  # a slice that is not every item
+    ("min(/objs.objs[:]{id==2}.distance)", False),  # not the entity's filter
+    ("age(/objs) + min(/objs.objs[:]{id==$obj}.distance)", False),
+    ("min(/objs.objs[:]{id==$obj}.distance) + $obj", False),  # the key read as a value
+])
+def test_which_variables_the_rows_take(tmp_path, expr, rows):
+    _types()
+    log = write_mcap(tmp_path / "o.mcap", [("/objs", ARR, S, ROS2.types[ARR](objs=[]))])
+    (tmp_path / "o.fret").write_text("@tick_period 100 ms\nR: the robot shall always satisfy "
+                                     "v > 1\n")
+    (tmp_path / "o.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[entities]\nobj = "/objs.objs[:].id"\n'
+        f"[variables]\nv = '{expr}'\n")
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "o.fret"),)))
+    from fretc.signals.bindings.expression import EntityParam
+
+    own = plan.bindings.for_entity({"obj": EntityParam("obj")}).variables["v"]
+    assert (row_fields([own], "/objs") is not None) == rows
+    assert audit_log(plan, str(log)).verdicts  # audited either way
