@@ -38,7 +38,7 @@ import numpy as np
 from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.logs.selective import install as install_selective
-from fretc.audit.entity_rows import row_fields, row_values
+from fretc.audit.entity_rows import key_reader, row_fields, row_values
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_expression
 from fretc.signals.bindings.compile import EvalState
@@ -164,6 +164,7 @@ class EntityClock(Clock):
         self.msg_rows: dict[int, list] = {}
         self.batch: list[tuple[Any, list[int], list]] = []
         self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
+        self.read_keys = key_reader(kind.binding) if vectorized else None
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
@@ -178,14 +179,10 @@ class EntityClock(Clock):
 
     def _key_message(self, topic: str, t: int, data: Any) -> None:
         """Record the entities a message of the key's topic carries."""
-        kind, st = self.kind, self.key_state
-        st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
-        st.values.clear()
-        try:
-            values = _items(kind.binding._scalar(st))  # type: ignore[misc]
-        except Exception as exc:  # noqa: BLE001 - an extractor's error, named with the message
-            raise SignalError(f"[entities] {kind.name}: {kind.key} cannot be read from the "
-                              f"message of {kind.topic} at log time {t}: {exc}") from None
+        kind = self.kind
+        values = self.read_keys(data) if self.read_keys is not None else None
+        if values is None:
+            values = self._keys(topic, t, data)
         got = []
         for x in values:
             if isinstance(x, float) and x.is_integer():
@@ -202,6 +199,21 @@ class EntityClock(Clock):
             self.present = {k: v for k, v in self.present.items() if k in keep}
             self.present[id(data)] = got
             self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
+
+    def _keys(self, topic: str, t: int, data: Any) -> list:
+        """The keys a message of the key's topic carries, by the key's binding.
+
+        Raises:
+            SignalError: they cannot be read (named with the message's log time)."""
+        kind, st = self.kind, self.key_state
+        st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
+        st.values.clear()
+        try:
+            values = _items(kind.binding._scalar(st))  # type: ignore[misc]
+        except Exception as exc:  # noqa: BLE001 - an extractor's error, named with the message
+            raise SignalError(f"[entities] {kind.name}: {kind.key} cannot be read from the "
+                              f"message of {kind.topic} at log time {t}: {exc}") from None
+        return values
 
     def _stream_values(self, i: int, key: Any, t: int, data: Any) -> None:
         """One-value keys: entity ``i``'s variables on its message ``data`` at ``t``."""

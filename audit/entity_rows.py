@@ -1,27 +1,29 @@
 """The per-entity variables of many (message, entity) rows at once, by numpy
 (:func:`row_values`): the vectorized path of :mod:`fretc.audit.entity_read`.
 
-A per-entity variable whose fields all read the items of one array of the key's message
+A per-entity variable whose fields all read the items of an array of the key's message
 through a filter on the entity's key (``min(/tracks.tracks[:]{id==$track}.distance)``) is a
 function of that message and the entity alone. For a batch of such messages, each message's
-items are grouped by their key field (as :func:`fretc.signals.bindings.extract._grouper`
-groups them: FoxQL's filter semantics, a string matches only a string), each (message,
-entity present in it) is one row, each field's values over a row's items one row of a
-:class:`~fretc.signals.bindings.extract.Valid` array, and each binding is evaluated once over
-all rows (:meth:`fretc.signals.bindings.Binding.evaluate_columns`, the operations of the
-tick-by-tick evaluator over ticks x items).
+items are looked up by their key field (a string equals only a string: FoxQL's filter
+semantics, as :func:`fretc.signals.bindings.extract._grouper` groups them), each (message,
+entity present in it) is one row, each field's value on the row's item one row of a
+:class:`~fretc.signals.bindings.extract.Valid` array (rows x 1 item), and each binding is
+evaluated once over all rows (:meth:`fretc.signals.bindings.Binding.evaluate_columns`, the
+operations of the tick-by-tick evaluator over ticks x items).
 
 What this path does not take raises :class:`~fretc.signals.columns.Irregular` and the caller
-evaluates those rows message by message with :meth:`~fretc.signals.bindings.Binding.evaluate`
-(the reference, which gives the values and the errors): a row whose items differ in number
-from the others' (a key repeated in some message), values that are not all numbers or all
-booleans, a field missing from an item, a message without the array. :func:`row_fields`
-says which variables the path can take at all (else the caller always uses the reference).
+evaluates that batch message by message with :meth:`~fretc.signals.bindings.Binding.evaluate`
+(the reference, which gives the values and the errors): a key repeated in a message (a row
+of several items), an entity with no item in a filtered array, values that are not all
+numbers or all booleans, a field missing from an item, a message without the array.
+:func:`row_fields` says which variables the path can take at all (else the caller always
+uses the reference).
 """
 
 from __future__ import annotations
 
 import operator
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,7 +36,7 @@ from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Field,
 from fretc.signals.bindings.extract import Valid, by_entity, normalize_scalar
 from fretc.signals.columns import Irregular
 
-__all__ = ["ItemField", "row_fields", "row_values", "RowColumns"]
+__all__ = ["ItemField", "row_fields", "row_values", "RowColumns", "key_reader"]
 
 #: The functions a row-wise variable may call (reductions and arithmetic over the items).
 _FUNCS = frozenset({"abs", "min", "max", "mean", "norm", "any", "all", "count", "len", "sqrt"})
@@ -101,6 +103,42 @@ def row_fields(own: list[Binding], topic: str) -> dict[Field, ItemField] | None:
     return out
 
 
+def key_reader(b: Binding) -> Callable[[Any], list | None] | None:
+    """For an entity key ``/topic.array[:].field`` (names only around one full slice), a
+    reader of a message's keys that gives what the key's binding gives
+    (``entity_read._items`` of its value) when the keys are all strings or all finite
+    numbers, and None otherwise (the caller then evaluates the binding: bools, infinities,
+    NaN, missing fields and their errors are its). None when the key has another form."""
+    ast = b.ast
+    if not isinstance(ast, Field) or ast.filters:
+        return None
+    at = [k for k, p in enumerate(ast.path) if isinstance(p, Slice)]
+    if len(at) != 1:
+        return None
+    cut = ast.path[at[0]]
+    before, after = ast.path[:at[0]], ast.path[at[0] + 1:]
+    if (cut.lo is not None or cut.hi is not None or not before or not after  # type: ignore[union-attr]
+            or not all(type(p) is str for p in before + after)):
+        return None
+    array = operator.attrgetter(".".join(before))  # type: ignore[arg-type]
+    key = operator.attrgetter(".".join(after))  # type: ignore[arg-type]
+
+    def read(data: Any) -> list | None:
+        try:
+            items = array(data)
+            if not isinstance(items, (list, tuple)):
+                return None
+            vals = [normalize_scalar(key(x)) for x in items]
+        except Exception:  # noqa: BLE001 - the binding reads it again and names the error
+            return None
+        if all(type(v) is str for v in vals):
+            return vals
+        if all(type(v) is float and v - v == 0.0 for v in vals):  # (finite)
+            return vals
+        return None
+    return read
+
+
 class RowColumns:
     """What :meth:`~fretc.signals.bindings.Binding.evaluate_columns` reads over ``n`` rows:
     each item field's values (a :class:`Valid` of rows x items)."""
@@ -165,7 +203,6 @@ def row_values(own: list[Binding], specs: dict[Field, ItemField],
     by_text = {f.text(): s for f, s in specs.items()}
     arrays = {s.array for s in by_text.values()}
     flats: dict[str, list] = {t: [] for t in by_text}
-    widths: dict[str, int | None] = dict.fromkeys(by_text)
     getters = {a: operator.attrgetter(a) for a in arrays}
     keyget = {s.key: operator.attrgetter(s.key) for s in by_text.values()}
     restget = {t: operator.attrgetter(s.rest) for t, s in by_text.items()}
@@ -179,24 +216,19 @@ def row_values(own: list[Binding], specs: dict[Field, ItemField],
                     items = getters[s.array](data)
                     if not isinstance(items, (list, tuple, np.ndarray)):
                         raise Irregular(f"{s.array}: not an array")
-                    g = groups[(s.array, s.key)] = {}
                     get = keyget[s.key]
-                    for x in items:
-                        v = normalize_scalar(get(x))
-                        g.setdefault((isinstance(v, str), v), []).append(x)
-                rest, flat = restget[t], flats[t]
-                for want in keys:
-                    kept = g.get((isinstance(want, str), want), ())
-                    w = widths[t]
-                    if w is None:
-                        w = widths[t] = len(kept)
-                    elif len(kept) != w:
-                        raise Irregular("rows of different numbers of items")
-                    flat.extend(normalize_scalar(rest(x)) for x in kept)
+                    # (a string equals only a string: FoxQL's filter semantics as it is)
+                    g = groups[(s.array, s.key)] = {normalize_scalar(get(x)): x for x in items}
+                    if len(g) != len(items):
+                        raise Irregular("a key repeated in a message: rows of several items")
+                rest = restget[t]
+                flats[t].extend([normalize_scalar(rest(g[want])) for want in keys])
             n += len(keys)
+    except KeyError:
+        raise Irregular("an entity without an item in an array: a row of no item") from None
     except (AttributeError, TypeError, IndexError) as exc:
         raise Irregular(f"an item the rows cannot read: {exc}") from None
-    cols = RowColumns(n, {t: _column(flats[t], n, widths[t] or 0, t) for t in by_text})
+    cols = RowColumns(n, {t: _column(flats[t], n, 1, t) for t in by_text})
     with np.errstate(all="ignore"):
         values = [_python(b, b.evaluate_columns(cols)) for b in own]
     rows = list(zip(*values)) if values else [() for _ in range(n)]
