@@ -108,11 +108,7 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
     count)."""
     if plan is not None:
         _print_plan(console, plan, len(logs) if command == "fretc audit" else None, command)
-    reqs: list[str] = []
-    for la in logs:
-        for v in la.verdicts:
-            if v.requirement not in reqs:
-                reqs.append(v.requirement)
+    reqs = list(dict.fromkeys(v.requirement for la in logs for v in la.verdicts))
     if min(len(logs), len(reqs)) <= MATRIX_MAX and logs:
         _print_matrix(console, logs, reqs)
     else:
