@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from fretc.audit.entity_batch import batch_verdicts, batchable, nan_traces
+from fretc.audit.entity_columns import EntityColumns, column as _column
 from fretc.audit.entity_read import ENTITIES, EntityClock, read_entities
 from fretc.audit.finalize import finalize
 from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
@@ -276,13 +277,9 @@ class _Judge:
         topics = sorted({tp for t in ticks for tp in t.log_times})
         self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks], np.int64)
                           for tp in topics}
-        own = [b.name for b in c.own]
-        self.absent = ({n: _column([t.values[ENTITIES][0][j] for t in ticks])
-                        for j, n in enumerate(own)} if not c.kind.stream else {})
-        self.present: dict[int, list[tuple[int, tuple]]] = {}
-        for k, t in enumerate(ticks):
-            for i, vals in t.values[ENTITIES][1]:
-                self.present.setdefault(i, []).append((k, vals))
+        self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
+        self.rows = (EntityColumns(ticks, [b.name for b in c.own], ENTITIES, len(c.table.keys))
+                    if not c.kind.stream else None)
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))
@@ -327,10 +324,19 @@ class _Judge:
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
+        i0, i1 = self._ranges([i])
+        return int(i0[0]), int(i1[0])
+
+    def _ranges(self, which: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """The ticks ``i0..i1`` of the entities ``which`` (:meth:`_range`), as arrays."""
         n = len(self.times)
-        i0 = int(np.searchsorted(self.times, self.c.table.first[i], side="left"))
-        i1 = min(int(np.searchsorted(self.times, self.c.table.last[i], side="left")), n - 1)
-        return i0, i1
+        at = np.asarray(which, np.int64)
+        if self.lives is None:
+            self.lives = (np.asarray(self.c.table.first, np.int64),
+                          np.asarray(self.c.table.last, np.int64))
+        first, last = self.lives[0][at], self.lives[1][at]
+        return (np.searchsorted(self.times, first, side="left").astype(np.int64),
+                np.minimum(np.searchsorted(self.times, last, side="left"), n - 1).astype(np.int64))
 
     def _batch(self) -> dict[int, Verdict]:
         """The entities judged at once (:mod:`fretc.audit.entity_batch`): satisfied or
@@ -341,13 +347,14 @@ class _Judge:
             return {}
         judged = [i for i in range(len(c.table.keys))
                   if i not in c.table.errors or c.kind.stream]
-        ranges = [self._range(i) for i in judged]
-        keep = [k for k, (i0, _i1) in enumerate(ranges) if i0 < len(self.times)]
-        judged = [judged[k] for k in keep]
+        n = len(self.times)
+        i0s, i1s = self._ranges(judged)
+        keep = i0s < n
+        judged = np.asarray(judged, np.int64)[keep].tolist()
         if not judged:
             return {}
-        i0s = np.array([ranges[k][0] for k in keep], np.int64)
-        lengths = np.array([ranges[k][1] for k in keep], np.int64) - i0s + 1
+        i0s = i0s[keep]
+        lengths = i1s[keep] - i0s + 1
         firsts = np.concatenate(([0], np.cumsum(lengths)[:-1])).astype(np.int64)
         idx = np.arange(int(lengths.sum()), dtype=np.int64) - np.repeat(firsts - i0s, lengths)
         columns = {k: col[idx] for k, col in self.plain.items()}
@@ -387,16 +394,8 @@ class _Judge:
                 for j in range(len(own)):
                     vals[j] += [rec[k][1][j] for k in at.tolist()]
             return {name: _column(vals[j]) for j, name in enumerate(own)}
-        out = {}
-        for j, name in enumerate(own):
-            col = self.absent[name][idx].tolist()
-            for e, i in enumerate(judged):
-                a, m, f = int(i0s[e]), int(lengths[e]), int(firsts[e])
-                for k, got in self.present.get(i, ()):
-                    if a <= k < a + m:
-                        col[f + k - a] = got[j]
-            out[name] = _column(col)
-        return out
+        assert self.rows is not None  # (an array key)
+        return self.rows.end_to_end(judged, i0s, firsts, lengths, idx)
 
     def _one(self, i: int) -> Verdict:
         """Entity ``i``'s verdict."""
@@ -439,12 +438,8 @@ class _Judge:
             for j, name in enumerate(own):
                 columns[name] = _column([rec[k][1][j] for k in at.tolist()])
         else:
-            rows = [(k - i0, vals) for k, vals in self.present.get(i, ()) if i0 <= k <= i1]
-            for j, name in enumerate(own):
-                vals = [x for x in self.absent[name][sl].tolist()]
-                for k, got in rows:
-                    vals[k] = got[j]
-                columns[name] = _column(vals)
+            assert self.rows is not None  # (an array key)
+            columns.update(self.rows.trace(i, i0, i1))
         log_times = {k: lt[sl] for k, lt in self.log_times.items()}
         res = ClockPass(c.s, times, columns, log_times)
         topics = frozenset(t for b in self.bindings.variables.values() for t in b.topics)
@@ -452,19 +447,6 @@ class _Judge:
         mark_gaps(res, list(columns), self.bindings, self.gaps, topics,
                   lost_in_words(self.source, log_topics(topics)))
         return res
-
-
-def _column(values: list) -> np.ndarray:
-    """Values of one variable as a column: booleans as bool, else float (NaN unknown)."""
-    if values and all(type(x) in (bool, np.bool_) for x in values):
-        return np.array(values, dtype=np.bool_)
-    out = np.empty(len(values), np.float64)
-    for k, x in enumerate(values):
-        try:
-            out[k] = float(x) if x is not None else np.nan
-        except (TypeError, ValueError):
-            out[k] = np.nan
-    return out
 
 
 #: The verdict over all entities: the first of these that some entity has. A violated

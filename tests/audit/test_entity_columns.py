@@ -1,0 +1,60 @@
+"""The per-entity columns gathered by numpy (audit/entity_columns.py) against the loop they
+replace: the absent value at each tick (typed over all ticks), the entity's row where it is
+present, the column bool exactly when every value in it is a bool."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fretc.audit.entity_columns import EntityColumns, column
+
+E = "\x00entities"
+VALUE = st.sampled_from([True, False, 0.5, 2.0, math.nan, math.inf])
+
+
+class _Tick:
+    def __init__(self, absent, rows):
+        self.values = {E: (absent, rows)}
+
+
+def _naive(ticks, j, i, i0, i1):
+    vals = column([t.values[E][0][j] for t in ticks])[i0:i1 + 1].tolist()
+    for k in range(i0, i1 + 1):
+        for e, got in ticks[k].values[E][1]:
+            if e == i:
+                vals[k - i0] = got[j]
+    return column(vals)
+
+
+def _same(a, b):
+    return a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
+
+
+@settings(max_examples=200, deadline=None)
+@given(data=st.lists(st.tuples(st.tuples(VALUE, VALUE),
+                               st.dictionaries(st.integers(0, 3), st.tuples(VALUE, VALUE),
+                                               max_size=4)), min_size=1, max_size=12),
+       span=st.tuples(st.integers(0, 11), st.integers(0, 11)))
+def test_columns_equal_the_loop(data, span):
+    ticks = [_Tick(a, sorted(rows.items())) for a, rows in data]
+    cols = EntityColumns(ticks, ["x", "y"], E, 4)
+    i0, i1 = sorted(min(s, len(ticks) - 1) for s in span)
+    for i in range(4):
+        got = cols.trace(i, i0, i1)
+        for j, n in enumerate(["x", "y"]):
+            assert _same(got[n], _naive(ticks, j, i, i0, i1)), (i, n)
+    # every entity end to end (entity 3 first, entity 1 left out)
+    judged = [3, 0, 2]
+    i0s = np.array([i0, 0, i1], np.int64)
+    lengths = np.array([i1 - i0 + 1, i1 + 1, 1], np.int64)
+    firsts = np.concatenate(([0], np.cumsum(lengths)[:-1])).astype(np.int64)
+    idx = np.arange(int(lengths.sum())) - np.repeat(firsts - i0s, lengths)
+    got = cols.end_to_end(judged, i0s, firsts, lengths, idx)
+    for j, n in enumerate(["x", "y"]):
+        want = column(sum((_naive(ticks, j, i, int(a), int(a + m - 1)).tolist()
+                           for i, a, m in zip(judged, i0s, lengths)), []))
+        assert _same(got[n], want)
