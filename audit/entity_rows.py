@@ -148,20 +148,28 @@ class RowColumns:
         self.fields = fields
 
     def field(self, topic: str, path: tuple, node: Field) -> Any:
+        """The item field ``node``'s values over the rows.
+
+        Raises:
+            Irregular: not an item field of the rows."""
         try:
             return self.fields[node.text()]
         except KeyError:
             raise Irregular(f"{node.text()}: not an item field") from None
 
     def age(self, topic: str) -> np.ndarray:
+        """Raises :class:`Irregular`: a row has no tick time (such variables are refused)."""
         raise Irregular("age() over rows")
 
     @property
     def tf(self) -> Any:
+        """Raises :class:`Irregular`: tf() reads every transform, not a row."""
         raise Irregular("tf() over rows")
 
     def per_message(self, node: Any, topic: str, vector: Any, scalar: Any) -> np.ndarray:
-        return vector(self)  # (a row is one message and one entity)
+        """A reduction of one topic's fields: by ``vector`` over the rows (a row is one
+        message and one entity)."""
+        return vector(self)
 
 
 def _column(flat: list, n: int, width: int, what: str) -> Valid:
