@@ -30,7 +30,7 @@ def floats(values: list) -> tuple[np.ndarray, np.ndarray]:
     """``values`` as float64 (bools 1.0 and 0.0; None and what is no number NaN) and whether
     each is a bool."""
     n = len(values)
-    isbool = np.fromiter((type(x) in (bool, np.bool_) for x in values), np.bool_, n)
+    isbool = np.array([type(x) is bool or type(x) is np.bool_ for x in values], np.bool_)
     try:
         return np.array(values, dtype=np.float64).reshape(n), isbool
     except (TypeError, ValueError):
@@ -64,18 +64,17 @@ class EntityColumns:
         for j, n in enumerate(names):
             f, b = floats([t.values[entities][0][j] for t in ticks])
             self.absent[n] = (f, b if b.all() else np.zeros(len(b), np.bool_))
-        ents: list[int] = []
-        ks: list[int] = []
-        vals: list[tuple] = []
+        flat: list[tuple] = []
+        counts = np.empty(len(ticks), np.int64)
         for k, t in enumerate(ticks):
-            for i, v in t.values[entities][1]:
-                ents.append(i)
-                ks.append(k)
-                vals.append(v)
-        entity = np.array(ents, np.int64)
+            rows = t.values[entities][1]
+            counts[k] = len(rows)
+            flat.extend(rows)
+        entity = np.array([r[0] for r in flat], np.int64)
+        vals = [r[1] for r in flat]
         self.order = np.argsort(entity, kind="stable")
         self.entity = entity[self.order]
-        self.tick = np.array(ks, np.int64)[self.order]
+        self.tick = np.repeat(np.arange(len(ticks), dtype=np.int64), counts)[self.order]
         self.starts = np.searchsorted(self.entity, np.arange(n_entities + 1))
         self.rows: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for j, n in enumerate(names):

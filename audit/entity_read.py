@@ -184,17 +184,28 @@ class EntityClock(Clock):
         if values is None:
             values = self._keys(topic, t, data)
         got = []
+        table, matching = self.table, kind.matching
+        index, last = table.index, table.last
         for x in values:
             if isinstance(x, float) and x.is_integer():
                 x = int(x)
-            if kind.matching is not None and not fnmatchcase(str(x), kind.matching):
+            if matching is not None and not fnmatchcase(str(x), matching):
                 continue
-            i = self.table.see(x, t, self.bound)
-            if i is not None:
-                got.append(i)
-                if kind.stream:
-                    self._stream_values(i, x, t, data)
+            i = index.get(x)
+            if i is not None:  # (an entity met before: its last message, as see() has it)
+                last[i] = t
+            else:
+                i = table.see(x, t, self.bound)
+                if i is None:
+                    continue
+            got.append(i)
+            if kind.stream:
+                self._stream_values(i, x, t, data)
         if not kind.stream:  # (only the messages held or waiting for their tick are kept)
+            if not self.pending and self.state.msgs.get(kind.topic) is data:  # (the rows
+                # of no other message are needed)
+                self.present, self.msg_rows = {id(data): got}, {}
+                return
             keep = {id(self.state.msgs.get(kind.topic))} | {id(p[1]) for p in self.pending}
             self.present = {k: v for k, v in self.present.items() if k in keep}
             self.present[id(data)] = got
