@@ -103,12 +103,24 @@ class KeptPasses:
     unjudged: set[int]
 
 
+def per_entity_refusal(bindings: Bindings) -> str:
+    """Why ``--write-csv`` does not write the per-entity variables of ``bindings``, and what
+    to do instead."""
+    return ("per-entity requirements cannot be written as a sampled trace: their variables "
+            f"({', '.join(sorted(bindings.per_entity))}) have a value per entity at each "
+            "tick, where a column has one, and the audit of the CSV would not judge them per "
+            "entity as the audit of the log does; audit the log itself, or write the CSV of "
+            "the other requirements with bindings that have no [entities] nor per-entity "
+            "variables")
+
+
 def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
     """:func:`audit_log` of ``path``, keeping what each requirement was judged on (the
     sampled trace of ``--write-csv``, :mod:`fretc.audit.sampled_csv`).
 
     Raises:
-        ValueError: per-entity requirements (each entity is audited on a read of its own)."""
+        ValueError: per-entity requirements (a sampled trace has one value of a variable per
+            tick, not one per entity; the message says what to do)."""
     if plan.variants:
         sub, err = select_variant(plan, str(path))
         if sub is None:
@@ -116,7 +128,7 @@ def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
                               set())
         return audit_keeping_passes(sub, path)
     if plan.bindings is not None and plan.bindings.per_entity:
-        raise ValueError("per-entity requirements cannot be written as a sampled trace")
+        raise ValueError(per_entity_refusal(plan.bindings))
     run = _LogRun(plan, path)
     la = run.run(None)
     return KeptPasses(plan, la, run.result, run.read_bindings, set(run.skip))

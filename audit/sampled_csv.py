@@ -45,7 +45,7 @@ from fretc.common.problems import SignalError
 from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, GAP_CELL, SAMPLED_MARK,
                                    UNKNOWN_CELL, escape_id)
 
-from fretc.audit.log import KeptPasses, audit_keeping_passes
+from fretc.audit.log import KeptPasses, audit_keeping_passes, per_entity_refusal
 from fretc.audit.model import AuditPlan
 from fretc.audit.passes import ClockPass, clock_key
 
@@ -176,6 +176,8 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
             per-entity requirements.
         SignalError: the log could not be read (the audit's error).
         OSError: ``out`` cannot be written."""
+    if plan.bindings is not None and plan.bindings.per_entity:
+        raise ValueError(per_entity_refusal(plan.bindings))
     if not sampled_variables(plan) and plan.bindings is not None:
         raise ValueError("the requirements' variables have no bindings: nothing to sample")
     kept = audit_keeping_passes(plan, log_path)

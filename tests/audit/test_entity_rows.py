@@ -132,3 +132,20 @@ def test_which_variables_the_rows_take(tmp_path, expr, rows):
     own = plan.bindings.for_entity({"obj": EntityParam("obj")}).variables["v"]
     assert (row_fields([own], "/objs") is not None) == rows
     assert audit_log(plan, str(log)).verdicts  # audited either way
+
+
+def test_write_csv_refuses_per_entity_requirements_and_says_why(tmp_path):
+    """--write-csv of a per-entity requirement: not written (a column has one value per
+    tick, not one per entity), the message names the variables and what to do; exit 2."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    log, _plan = _setup(tmp_path, [[(1, 0.8, True)], [(1, 2.0, True)]], "id")
+    res = CliRunner().invoke(main, ["audit", "-r", str(tmp_path / "o.fret"), str(log),
+                                    "--write-csv", str(tmp_path / "csv")])
+    assert res.exit_code == 2, res.output
+    said = " ".join(res.output.split())
+    assert "per-entity requirements cannot be written as a sampled trace" in said
+    assert "(any_ok, dist, far, m, n, ok)" in said and "audit the log itself" in said
+    assert not (tmp_path / "csv" / "o.csv").exists()
