@@ -6,7 +6,13 @@ bindings' tick: :class:`fretc.signals.clock.Clock`, the tick-by-tick clock of ``
 watch``, with all its rules), its plain variables once per tick; its per-entity variables
 are compiled once with the entity's key as a value set at evaluation
 (:class:`fretc.signals.bindings.expression.EntityParam`) and evaluated at each tick for each
-entity the held messages carry. An entity's trace is its life:
+entity the held messages carry. Where they are functions of the key's message and the
+entity alone (fields of the key's array read through ``{key==$entity}``), each held key
+message's rows (one per entity it carries) are evaluated by numpy, a batch of
+:data:`BATCH` held messages at once, shared by the ticks that hold the message
+(:mod:`fretc.audit.entity_rows`); the tick-by-tick evaluation stays the reference (tests
+compare them, :data:`VECTORIZED`) and the fallback for a batch the rows cannot take. An
+entity's trace is its life:
 
 * its first tick is the first tick at or after its first message (a message of the key's
   topic that carries its key), its last the first tick at or after its last message (the
