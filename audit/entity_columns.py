@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["column", "floats", "EntityColumns"]
+__all__ = ["column", "floats", "EntityColumns", "RowBlock", "HeldRows"]
 
 
 def column(values: list) -> np.ndarray:
@@ -53,10 +53,34 @@ def _merged(absent: tuple[np.ndarray, np.ndarray], slots: np.ndarray,
     return f.astype(np.bool_) if len(f) and b.all() else f
 
 
+class RowBlock:
+    """The rows of a batch of held key messages (:mod:`fretc.audit.entity_read`, vectorized):
+    ``entity`` the entity of each row, message ``q``'s rows ``offsets[q]..offsets[q+1]``,
+    ``values`` variable -> (float64 values, whether each is a bool) over the rows."""
+
+    __slots__ = ("entity", "offsets", "values")
+
+    def __init__(self, entity: np.ndarray, offsets: np.ndarray,
+                 values: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
+        self.entity, self.offsets, self.values = entity, offsets, values
+
+
+class HeldRows:
+    """The rows of one held key message, shared by the ticks that hold it: message ``at``
+    of ``block``, set when its batch is evaluated."""
+
+    __slots__ = ("block", "at")
+
+    def __init__(self) -> None:
+        self.block: RowBlock | None = None
+        self.at = 0
+
+
 class EntityColumns:
     """The per-entity variables ``names`` of an array key's clock: per variable the absent
     value at each tick and the rows ``(entity, tick, value)`` of the ticks ``ticks``
-    (each tick's ``values[entities]`` is ``(absent values, [(entity, values)])``)."""
+    (each tick's ``values[entities]`` is ``(absent values, rows)``, the rows a list of
+    ``(entity, values)`` or a :class:`HeldRows`)."""
 
     def __init__(self, ticks: list, names: list[str], entities: str, n_entities: int) -> None:
         self.names = names
@@ -65,21 +89,41 @@ class EntityColumns:
             f, b = floats([t.values[entities][0][j] for t in ticks])
             self.absent[n] = (f, b if b.all() else np.zeros(len(b), np.bool_))
         flat: list[tuple] = []
-        counts = np.empty(len(ticks), np.int64)
+        counts = np.zeros(len(ticks), np.int64)
+        held: dict[int, tuple[RowBlock, list[int], list[int]]] = {}
         for k, t in enumerate(ticks):
             rows = t.values[entities][1]
-            counts[k] = len(rows)
-            flat.extend(rows)
-        entity = np.array([r[0] for r in flat], np.int64)
+            if type(rows) is list:
+                counts[k] = len(rows)
+                flat.extend(rows)
+                continue
+            blk = rows.block
+            assert blk is not None  # (every batch is evaluated by the end of the read)
+            got = held.get(id(blk))
+            if got is None:
+                got = held[id(blk)] = (blk, [], [])
+            got[1].append(k)
+            got[2].append(rows.at)
         vals = [r[1] for r in flat]
+        parts = [(np.array([r[0] for r in flat], np.int64),
+                  np.repeat(np.arange(len(ticks), dtype=np.int64), counts),
+                  {n: floats([v[j] for v in vals]) for j, n in enumerate(names)})]
+        for blk, ks, ats in held.values():
+            at = np.array(ats, np.int64)
+            starts = blk.offsets[at]
+            lengths = blk.offsets[at + 1] - starts
+            pos = (np.repeat(starts - (np.cumsum(lengths) - lengths), lengths)
+                   + np.arange(int(lengths.sum()), dtype=np.int64))
+            parts.append((blk.entity[pos], np.repeat(np.array(ks, np.int64), lengths),
+                          {n: (blk.values[n][0][pos], blk.values[n][1][pos]) for n in names}))
+        entity = np.concatenate([p[0] for p in parts])
         self.order = np.argsort(entity, kind="stable")
         self.entity = entity[self.order]
-        self.tick = np.repeat(np.arange(len(ticks), dtype=np.int64), counts)[self.order]
+        self.tick = np.concatenate([p[1] for p in parts])[self.order]
         self.starts = np.searchsorted(self.entity, np.arange(n_entities + 1))
-        self.rows: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        for j, n in enumerate(names):
-            f, b = floats([v[j] for v in vals])
-            self.rows[n] = (f[self.order], b[self.order])
+        self.rows: dict[str, tuple[np.ndarray, np.ndarray]] = {
+            n: (np.concatenate([p[2][n][0] for p in parts])[self.order],
+                np.concatenate([p[2][n][1] for p in parts])[self.order]) for n in names}
 
     def trace(self, i: int, i0: int, i1: int) -> dict[str, np.ndarray]:
         """Entity ``i``'s columns over ticks ``i0..i1``."""

@@ -44,6 +44,7 @@ import numpy as np
 from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.logs.selective import install as install_selective
+from fretc.audit.entity_columns import HeldRows, RowBlock, floats
 from fretc.audit.entity_rows import key_reader, row_fields, row_values
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_expression
@@ -165,10 +166,10 @@ class EntityClock(Clock):
         #: entity alone (None: each evaluated at each tick, the reference)
         self.rows_of = (row_fields(own, kind.topic)
                         if self.static_absent and not kind.stream and vectorized else None)
-        #: vectorized: held key message number -> its rows (filled by batches), and the
+        #: vectorized: id of a held key message -> its rows (set by its batch), and the
         #: held messages waiting for their batch ``(message, entities, rows)``
-        self.msg_rows: dict[int, list] = {}
-        self.batch: list[tuple[Any, list[int], list]] = []
+        self.msg_rows: dict[int, HeldRows] = {}
+        self.batch: list[tuple[Any, list[int], HeldRows]] = []
         self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
         self.read_keys = key_reader(kind.binding) if vectorized else None
 
@@ -276,7 +277,7 @@ class EntityClock(Clock):
                 if got:  # the held message's rows, shared by the ticks that hold it
                     rows = self.msg_rows.get(id(held))  # type: ignore[assignment]
                     if rows is None:
-                        rows = self.msg_rows[id(held)] = []
+                        rows = self.msg_rows[id(held)] = HeldRows()
                         self.batch.append((held, list(got), rows))
                         if len(self.batch) >= BATCH:
                             self.flush()
@@ -294,21 +295,23 @@ class EntityClock(Clock):
         if not batch:
             return
         keys = self.table.keys
+        ents = [i for _m, e, _r in batch for i in e]
         try:
-            got = row_values(self.own, self.rows_of,  # type: ignore[arg-type]
-                             [(m, [keys[i] for i in ents]) for m, ents, _r in batch])
+            vals = row_values(self.own, self.rows_of,  # type: ignore[arg-type]
+                              [(m, [keys[i] for i in e]) for m, e, _r in batch])
+            self.evaluated[0] += len(ents)
         except (Irregular, SignalError):
-            got = None
-        if got is not None:
-            for (_m, ents, rows), vals in zip(batch, got):
-                rows.extend(zip(ents, vals))
-            self.evaluated[0] += sum(len(e) for _m, e, _r in batch)
-            return
-        st, topic = EvalState(), self.kind.topic
-        for m, ents, rows in batch:
-            st.msgs[topic] = m
-            rows.extend((i, self._values(st, keys[i], i)) for i in ents)
+            st, topic, got = EvalState(), self.kind.topic, []
+            for m, e, _r in batch:
+                st.msgs[topic] = m
+                got += [self._values(st, keys[i], i) for i in e]
+            vals = [floats([v[j] for v in got]) for j in range(len(self.own))]
             self.evaluated[1] += len(ents)
+        block = RowBlock(np.array(ents, np.int64),
+                         np.cumsum([0] + [len(e) for _m, e, _r in batch], dtype=np.int64),
+                         {b.name: v for b, v in zip(self.own, vals)})
+        for q, (_m, _e, held) in enumerate(batch):
+            held.block, held.at = block, q
 
     def finish(self) -> Iterator[Tick]:
         """The ticks left at the end of the log, the last rows evaluated (iterate to the

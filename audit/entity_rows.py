@@ -188,21 +188,24 @@ def _column(flat: list, n: int, width: int, what: str) -> Valid:
     raise Irregular(f"{what}: values that are not all numbers or all booleans")
 
 
-def _python(b: Binding, v: np.ndarray) -> list:
-    """The values of ``b`` over the rows as the tick-by-tick evaluator gives them: a
-    boolean by its form (a comparison, a logical operator) a Python bool, or NaN when
+def _typed(b: Binding, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The values of ``b`` over the rows as float64 and whether each is a bool, as the
+    tick-by-tick evaluator gives them (:func:`fretc.audit.entity_columns.floats` of its
+    values): a boolean by its form (a comparison, a logical operator) is a bool, or NaN when
     unknown (numpy holds such a column as float)."""
-    out = v.tolist()
-    if v.dtype.kind == "f" and is_boolean(b.ast):
-        return [x == 1.0 if x == x else x for x in out]
-    return out
+    if v.dtype == np.bool_:
+        return v.astype(np.float64), np.ones(len(v), np.bool_)
+    if is_boolean(b.ast):
+        return v, ~np.isnan(v)
+    return v, np.zeros(len(v), np.bool_)
 
 
 def row_values(own: list[Binding], specs: dict[Field, ItemField],
-               batch: list[tuple[Any, list[Any]]]) -> list[list[tuple]]:
+               batch: list[tuple[Any, list[Any]]]) -> list[tuple[np.ndarray, np.ndarray]]:
     """The per-entity variables ``own`` (:func:`row_fields` gave ``specs``) over ``batch``:
-    (message data, the keys of the entities present in it) -> per message, per entity in
-    that order, the tuple of the variables' values (Python bool or float).
+    (message data, the keys of the entities present in it) -> per variable, its values
+    over the rows (each message's entities in that order, message after message) as
+    float64 and whether each is a bool (:func:`_typed`).
 
     Raises:
         Irregular: rows the path does not take (module docstring).
@@ -238,10 +241,4 @@ def row_values(own: list[Binding], specs: dict[Field, ItemField],
         raise Irregular(f"an item the rows cannot read: {exc}") from None
     cols = RowColumns(n, {t: _column(flats[t], n, 1, t) for t in by_text})
     with np.errstate(all="ignore"):
-        values = [_python(b, b.evaluate_columns(cols)) for b in own]
-    rows = list(zip(*values)) if values else [() for _ in range(n)]
-    out, at = [], 0
-    for _data, keys in batch:
-        out.append(rows[at:at + len(keys)])
-        at += len(keys)
-    return out
+        return [_typed(b, b.evaluate_columns(cols)) for b in own]

@@ -10,7 +10,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.audit.entity_columns import EntityColumns, column
+from fretc.audit.entity_columns import EntityColumns, HeldRows, RowBlock, column, floats
 
 E = "\x00entities"
 VALUE = st.sampled_from([True, False, 0.5, 2.0, math.nan, math.inf])
@@ -30,6 +30,24 @@ def _naive(ticks, j, i, i0, i1):
     return column(vals)
 
 
+def _as_blocks(ticks, split):
+    """The same ticks with their rows in two :class:`RowBlock` s (messages before ``split``
+    in the first), each tick's rows a :class:`HeldRows`; a tick without rows keeps []."""
+    out, blocks = [], []
+    for part in (ticks[:split], ticks[split:]):
+        rows = [t.values[E][1] for t in part]
+        flat = [r for rs in rows for r in rs]
+        blk = RowBlock(np.array([r[0] for r in flat], np.int64),
+                       np.cumsum([0] + [len(rs) for rs in rows], dtype=np.int64),
+                       {n: floats([r[1][j] for r in flat]) for j, n in enumerate(["x", "y"])})
+        blocks.append(blk)
+        for q, t in enumerate(part):
+            h = HeldRows()
+            h.block, h.at = blk, q
+            out.append(_Tick(t.values[E][0], h if t.values[E][1] else []))
+    return out
+
+
 def _same(a, b):
     return a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
 
@@ -42,11 +60,14 @@ def _same(a, b):
 def test_columns_equal_the_loop(data, span):
     ticks = [_Tick(a, sorted(rows.items())) for a, rows in data]
     cols = EntityColumns(ticks, ["x", "y"], E, 4)
+    blocks = EntityColumns(_as_blocks(ticks, span[0] % (len(ticks) + 1)), ["x", "y"], E, 4)
     i0, i1 = sorted(min(s, len(ticks) - 1) for s in span)
     for i in range(4):
         got = cols.trace(i, i0, i1)
+        also = blocks.trace(i, i0, i1)
         for j, n in enumerate(["x", "y"]):
             assert _same(got[n], _naive(ticks, j, i, i0, i1)), (i, n)
+            assert _same(also[n], got[n]), (i, n)
     # every entity end to end (entity 3 first, entity 1 left out)
     judged = [3, 0, 2]
     i0s = np.array([i0, 0, i1], np.int64)
@@ -54,7 +75,9 @@ def test_columns_equal_the_loop(data, span):
     firsts = np.concatenate(([0], np.cumsum(lengths)[:-1])).astype(np.int64)
     idx = np.arange(int(lengths.sum())) - np.repeat(firsts - i0s, lengths)
     got = cols.end_to_end(judged, i0s, firsts, lengths, idx)
+    also = blocks.end_to_end(judged, i0s, firsts, lengths, idx)
     for j, n in enumerate(["x", "y"]):
+        assert _same(also[n], got[n])
         want = column(sum((_naive(ticks, j, i, int(a), int(a + m - 1)).tolist()
                            for i, a, m in zip(judged, i0s, lengths)), []))
         assert _same(got[n], want)

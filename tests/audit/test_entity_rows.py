@@ -64,10 +64,21 @@ def _read(log: Path, plan, vectorized: bool, monkeypatch) -> tuple:
         made, ticks, errors = R.read_entities(open_log(str(log)), plan.bindings,
                                               {0: ("obj", names)}, 10**6)
     c = made[0]
-    seen = [(t.time, repr(t.values[R.ENTITIES][0]), repr(t.values[R.ENTITIES][1]))
+    seen = [(t.time, repr(t.values[R.ENTITIES][0]), repr(_rows(t.values[R.ENTITIES][1], names)))
             for t in ticks[0]]
     return seen, c.table.keys, {i: str(e) for i, e in c.table.errors.items()}, \
         {k: str(e) for k, e in errors.items()}, c.evaluated
+
+
+def _rows(rows, names: list[str]) -> list:
+    """A tick's rows as (entity, ((value as float, whether a bool), ...)): the reference's
+    list of (entity, values) or the vectorized path's rows of a batch."""
+    if isinstance(rows, list):
+        return [(i, tuple((float(v), type(v) is bool) for v in vals)) for i, vals in rows]
+    blk = rows.block
+    a, z = int(blk.offsets[rows.at]), int(blk.offsets[rows.at + 1])
+    return [(int(blk.entity[k]), tuple((float(blk.values[n][0][k]), bool(blk.values[n][1][k]))
+                                       for n in names)) for k in range(a, z)]
 
 
 def _verdicts(la) -> list:
@@ -108,7 +119,7 @@ def test_repeated_keys_fall_back_to_the_reference(tmp_path, monkeypatch):
     seen, keys, errs, _e, evaluated = _read(log, plan, True, monkeypatch)
     assert evaluated[0] == 0 and evaluated[1] > 0
     assert keys == [1, 2] and not errs
-    assert "(0, (0.2," in seen[0][2]
+    assert "(0, ((0.2, False)," in seen[0][2]
 
 
 @pytest.mark.parametrize("expr, rows", [
