@@ -103,6 +103,10 @@ def row_fields(own: list[Binding], topic: str) -> dict[Field, ItemField] | None:
     return out
 
 
+#: Integers a float64 holds exactly (keys read as numbers are integers again after it)
+_EXACT = 2 ** 53
+
+
 def key_reader(b: Binding) -> Callable[[Any], list | None] | None:
     """For an entity key ``/topic.array[:].field`` (names only around one full slice), a
     reader of a message's keys that gives what the key's binding gives
@@ -128,9 +132,12 @@ def key_reader(b: Binding) -> Callable[[Any], list | None] | None:
             items = array(data)
             if not isinstance(items, (list, tuple)):
                 return None
-            vals = [normalize_scalar(key(x)) for x in items]
+            vals = [key(x) for x in items]
         except Exception:  # noqa: BLE001 - the binding reads it again and names the error
             return None
+        if all(type(v) is int and -_EXACT < v < _EXACT for v in vals):
+            return vals  # (the binding's floats, each an integer: the same keys)
+        vals = [normalize_scalar(v) for v in vals]
         if all(type(v) is str for v in vals):
             return vals
         if all(type(v) is float and v - v == 0.0 for v in vals):  # (finite)
@@ -181,6 +188,9 @@ def _column(flat: list, n: int, width: int, what: str) -> Valid:
     if not flat:
         return Valid(np.empty((n, 0), np.float64), None)
     kinds = {type(v) for v in flat}
+    if kinds - {bool, float}:  # (ints and numpy numbers as the extractor reads them)
+        flat = [normalize_scalar(v) for v in flat]
+        kinds = {type(v) for v in flat}
     if kinds == {bool}:
         return Valid(np.array(flat, dtype=np.bool_).reshape(n, width), None)
     if kinds == {float}:
@@ -229,11 +239,12 @@ def row_values(own: list[Binding], specs: dict[Field, ItemField],
                         raise Irregular(f"{s.array}: not an array")
                     get = keyget[s.key]
                     # (a string equals only a string: FoxQL's filter semantics as it is)
-                    g = groups[(s.array, s.key)] = {normalize_scalar(get(x)): x for x in items}
+                    # (a key as read equals and hashes as normalize_scalar's: no call each)
+                    g = groups[(s.array, s.key)] = {get(x): x for x in items}
                     if len(g) != len(items):
                         raise Irregular("a key repeated in a message: rows of several items")
                 rest = restget[t]
-                flats[t].extend([normalize_scalar(rest(g[want])) for want in keys])
+                flats[t].extend([rest(g[want]) for want in keys])
             n += len(keys)
     except KeyError:
         raise Irregular("an entity without an item in an array: a row of no item") from None
