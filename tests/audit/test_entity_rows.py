@@ -160,3 +160,50 @@ def test_write_csv_refuses_per_entity_requirements_and_says_why(tmp_path):
     assert "per-entity requirements cannot be written as a sampled trace" in said
     assert "(any_ok, dist, far, m, n, ok)" in said and "audit the log itself" in said
     assert not (tmp_path / "csv" / "o.csv").exists()
+
+
+DIAG_STATUS = st.dictionaries(st.sampled_from(["motor_l", "motor_r", "battery", "motor_3"]),
+                              st.integers(0, 3), max_size=4)
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.tuples(DIAG_STATUS, st.integers(-40, 40)),
+                     min_size=1, max_size=15),
+       time=st.sampled_from(["log", "header"]))
+def test_rows_equal_the_reference_on_diagnostics(tmp_path_factory, monkeypatch, rows, time):
+    """Text keys with a ``matching`` glob, byte levels, the header time base (stamps off by
+    up to 40 ms, some out of order): the rows' values and verdicts equal the reference's,
+    every row evaluated by numpy."""
+    from _logs import T, header
+
+    tmp = tmp_path_factory.mktemp("diag")
+    St, Arr = T(ROS2, "diagnostic_msgs/msg/DiagnosticStatus"), T(ROS2, "diagnostic_msgs/msg/DiagnosticArray")
+    log = write_mcap(tmp / "d.mcap", [
+        ("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", S + k * S // 10,
+         Arr(header=header(S + k * S // 10 + jitter * S // 1000),
+             status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
+                     for n, lvl in sorted(statuses.items())]))
+        for k, (statuses, jitter) in enumerate(rows)])
+    (tmp / "d.fret").write_text("@tick_period 100 ms\n"
+                                "M: in present mode the robot shall always satisfy lvl < 2\n")
+    (tmp / "d.bindings.toml").write_text(
+        f'[tick]\nperiod = "100 ms"\ntime = "{time}"\n[entities]\n'
+        'motor = { key = "/diagnostics.status[:].name", matching = "motor*" }\n[variables]\n'
+        "lvl = 'max(/diagnostics.status[:]{name==$motor}.level)'\n"
+        "present = 'count(/diagnostics.status{name==$motor}.level >= 0) >= 1'\n")
+    plan = load_plan(AuditConfig(requirements=(str(tmp / "d.fret"),)))
+    got = []
+    for vectorized in (True, False):
+        with monkeypatch.context() as mp:
+            mp.setattr(R, "VECTORIZED", vectorized)
+            made, ticks, errors = R.read_entities(open_log(str(log)), plan.bindings,
+                                                  {0: ("motor", ["lvl", "present"])}, 10**6)
+            used = made[0].evaluated
+            got.append(([(t.time, repr(t.values[R.ENTITIES][0]),
+                          repr(_rows(t.values[R.ENTITIES][1], ["lvl", "present"])))
+                         for t in ticks[0]], made[0].table.keys, sorted(errors),
+                        _verdicts(audit_log(plan, str(log)))))
+        if vectorized and got[0][1]:
+            assert used[0] > 0 and used[1] == 0  # (no name twice in a message: all by rows)
+    assert got[0] == got[1], rows
