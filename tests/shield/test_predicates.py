@@ -213,29 +213,44 @@ def _case_study(shared: Path, group: str):
     return compiled, sorted({v for c in compiled for v in c.formalization.variables})
 
 
+def _drive(shield, names: list[str], ticks: int) -> int:
+    """Random proposals (numbers 0 .. 3 and the case studies' constants) through the shield:
+    the corrected numbers give safe truth values, a safe proposal is kept. Returns the
+    number of overrides."""
+    rt = ShieldRuntime(tables(shield))
+    rnd = random.Random(1)
+    overridden = 0
+    for _ in range(ticks):
+        prop = {v: (rnd.choice([0.0, 1.0, 2.0, 3.0, 20.0, 35.0, 95.0, 120.0])
+                    if v in shield.numbers else rnd.random() < 0.5) for v in names}
+        before = [m.state for m in rt.machines]
+        d = rt.step({}, prop)
+        overridden += d.overridden
+        for k, m in enumerate(shield.machines):
+            assert safe(m, before[k], {}, atoms_of(m, d.outputs)), (prop, d)
+        if not d.overridden:
+            assert d.outputs == prop
+    return overridden
+
+
 def test_the_fsm_case_study_gives_a_shield(shared):
     """Every variable the controller's (as the case-study bench declares them): its
     ``state = ap_standby_state`` comparisons are predicates; overrides give numbers that
-    realize the corrected truths."""
+    realize safe truth values."""
     compiled, names = _case_study(shared, "FiniteStateMachine/fsm_reqts_and_vars.json")
     shield = build_shield(compiled, [], names, fork=False, name="fsm")
-    preds = [a for m in shield.machines for a in m.outputs if a.op == "pred"]
-    assert len(preds) >= 12
-    rt = ShieldRuntime(tables(shield))
-    rnd = random.Random(1)
-    numeric = sorted(shield.numbers)
-    overridden = 0
-    for _ in range(300):
-        prop = {v: (float(rnd.randint(0, 3)) if v in numeric else rnd.random() < 0.5)
-                for v in names}
-        d = rt.step({}, prop)
-        overridden += d.overridden
-        for m in shield.machines:  # the corrected numbers give consistent truths
-            for c in rt.machines[shield.machines.index(m)].clusters:
-                assert all(v in d.outputs for v in c["variables"])
-        if not d.overridden:
-            assert d.outputs == prop
-    assert overridden > 0
+    assert sum(a.op == "pred" for m in shield.machines for a in m.outputs) >= 12
+    assert _drive(shield, names, 300) > 0
+
+
+def test_lift_plus_cruise_without_its_past_number_gives_a_shield(shared):
+    """The LPC mini set without LPC_KIAS_DERIVATIVE (its ``preReal``): ``kias = kgs`` and
+    the ``lift_mode = thrust_borne`` enumerations are predicates."""
+    compiled, names = _case_study(shared, "LiftPlusCruise/LPC_mini_reqts_and_vars.json")
+    compiled = [c for c in compiled if c.id != "LPC_KIAS_DERIVATIVE"]
+    shield = build_shield(compiled, [], names, fork=False, name="lpc")
+    assert any(a.text == "(kias = kgs)" for m in shield.machines for a in m.outputs)
+    assert _drive(shield, names, 200) > 0
 
 
 @pytest.mark.parametrize("group", ["LiftPlusCruise/LPC_mini_reqts_and_vars.json",
@@ -253,3 +268,23 @@ def test_the_ros2_form_refuses_comparisons_of_several_outputs_with_why(tmp_path)
     shield = build_shield(compiled, [], ["p", "q"], fork=False)
     with pytest.raises(ShieldError, match=r"cannot publish the outputs of \(p < q\)"):
         render_ros2(shield, "t", None, None)
+
+
+def test_the_command_proves_a_shield_over_comparisons_of_two_variables(tmp_path):
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    path = tmp_path / "two.fret"
+    path.write_text("@inputs go\n@outputs x, y, lmode, cruise, hover\n"
+                    "P1: the ctl shall always satisfy x < y\n"
+                    "P2: upon go the ctl shall within 2 ticks satisfy x + y > 10 & x <= 4\n"
+                    "P3: the ctl shall always satisfy lmode = cruise | lmode = hover\n"
+                    "P4: upon go the ctl shall at the next timepoint satisfy lmode = hover & "
+                    "!(lmode = cruise)\n")
+    got = CliRunner().invoke(main, ["shield", str(path), "--prove", "--emit", "python",
+                                    "--emit", "c", "-o", str(tmp_path / "out")])
+    assert got.exit_code == 0, got.output
+    for rid in ("P1", "P2", "P3", "P4"):
+        assert f"{rid}: holds" in got.output
+    assert "the shield satisfies every enforced requirement" in got.output
