@@ -12,7 +12,9 @@ corrects), and a shield for every FRET case-study set that ``fretc check`` decid
    the C monitors' steps (``cc -O2``, arrays in memory, ``clock_gettime``). Ratios in one run.
 3. The case studies: per FRET project of the corpus, outputs = the variables its responses
    read, inputs = the rest; ``fretc check``'s realizability per component with its default
-   budgets; for each realizable set, the shield within the same budgets (synthesized or not).
+   budgets; for each realizable set, the shield within the same budgets (synthesized or not),
+   with the CPU of each (in process; the shield's games in ``check``'s worker process, whose
+   CPU counts as the children's).
 """
 
 from __future__ import annotations
@@ -229,20 +231,28 @@ def case_studies(corpus: Path) -> None:
             continue
         outs = sorted(_response_vars(compiled))
         ins = sorted({v for c in compiled for v in c.formalization.variables} - set(outs))
+        t1 = cpu()
         res = check_requirements(compiled, inputs=ins, outputs=outs, redundancy=False,
                                  vacuity=False)
+        t_check = cpu() - t1
         rz = res.realizability or {"components": []}
         if not rz["components"] or not all(c["realizable"] is True for c in rz["components"]):
             continue
         decided += 1
+        t1 = cpu()
         try:
-            build_shield(compiled, ins, outs, name=group.replace("/", "_"))
+            shield = build_shield(compiled, ins, outs, name=group.replace("/", "_"))
             made += 1
-        except ShieldUnknown:
+            preds = sum(a.op == "pred" for m in shield.machines for a in m.outputs)
+            print(f"   {group}: shield in {cpu() - t1:.2f} s CPU (check {t_check:.2f} s); "
+                  f"{len(shield.machines)} machines, {preds} comparisons of several variables")
+        except ShieldUnknown as exc:
             unknown += 1
+            print(f"   {group}: unknown: {str(exc).splitlines()[0][:160]}")
         except ShieldError as exc:
             refused += 1
-            print(f"   {group}: refused: {str(exc).splitlines()[0][:160]}")
+            print(f"   {group}: refused after {cpu() - t1:.2f} s CPU (check {t_check:.2f} s): "
+                  f"{str(exc).splitlines()[0][:200]}")
     print(f"3. case studies: {decided} sets decided realizable by fretc check; shields "
           f"synthesized for {made}, refused {refused} (not enforceable: see above), unknown "
           f"{unknown}; {cpu() - t0:.1f} s CPU in all")

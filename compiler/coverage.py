@@ -22,6 +22,10 @@ deadlines. The obligations:
   Mavridou, Pressburger, NFM 2025).
 * ``trigger``: the condition made false throughout would make the verdict vacuous, so a
   trigger fired in scope and its obligation was judged.
+* ``trigger-persists`` (a condition): the condition read as the other of FRET's condition
+  kinds (``upon``/``when``/``if``, a trigger at each rising edge, against ``whenever``, a
+  trigger at every tick the condition holds) would change the verdict: the condition stays
+  true (or comes back) after its first edge and the response is judged again, or not.
 * ``scope-entered``: the scope's mode set so that no scope interval exists would change the
   verdict; ``scope-left``: the scope widened past the mode's end (``in M`` to ``after M``,
   ``before M`` and ``not in M`` to globally) would change it, so the trace left the scope
@@ -56,6 +60,9 @@ _EMPTY_SCOPE = {"in": False, "notin": True, "after": False, "before": True,
                 "onlyIn": True, "onlyAfter": True, "onlyBefore": False}
 #: the scope that extends each kind past the end of its mode (``scope-left``)
 _WIDER_SCOPE = {"in": "after", "before": "null", "notin": "null"}
+
+#: each condition kind's other kind and a qualifier that writes it (``trigger-persists``)
+_OTHER_CONDITION = {"regular": ("holding", "whenever"), "holding": ("regular", "upon")}
 
 _DEADLINE_WORDS = {
     "within": ("a response comes at the last tick the deadline allows",
@@ -252,6 +259,15 @@ def _structural(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligat
             "obligation is judged (with the condition false throughout it would be vacuous)",
             dataclasses.replace(req, condition=dataclasses.replace(
                 req.condition, expr=A.BoolLit(False), parts=())), ticks))
+    if req.condition.kind in _OTHER_CONDITION:
+        other, word = _OTHER_CONDITION[req.condition.kind]
+        parts = tuple(dataclasses.replace(p, qualifier=word) for p in req.condition.parts)
+        out.append(Obligation(
+            rid, "trigger-persists", "trigger",
+            "the trigger persists: the condition holds past its first tick (or comes back) "
+            f"and that decides the verdict (read as '{word}' the verdict would differ)",
+            dataclasses.replace(req, condition=dataclasses.replace(
+                req.condition, kind=other, parts=parts)), ticks))
     if req.timing.kind in _DEADLINE_WORDS and ticks is not None:
         reached, missed = _DEADLINE_WORDS[req.timing.kind]
         if ticks >= 1:

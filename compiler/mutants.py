@@ -9,7 +9,9 @@ mutation score of ``bench/bench_mutation.py``): the classic specification mutati
 * ``A -> B``: an atom replaced by another atom of the same requirement;
 * ``& -> |`` / ``| -> &``: one conjunction or disjunction swapped (each occurrence);
 * ``scope K``: the scope's kind changed to another kind over the same mode;
-* ``timing K``: the timing changed to another kind (durations keep their ``n``, or 1 tick).
+* ``timing K``: the timing changed to another kind (durations keep their ``n``, or 1 tick);
+* ``condition whenever`` / ``condition upon``: the condition's kind changed (``upon``/``when``/
+  ``if``, a trigger at each rising edge, against ``whenever``, at every tick it holds).
 
 A mutant that is the requirement itself (the same fields) is not produced; equivalent ones
 (other fields, same verdict on every trace) are for the caller to remove.
@@ -92,6 +94,12 @@ def _structure_mutants(req: A.Requirement, ticks: int | None
             if kind != req.scope.kind:
                 yield f"scope {kind}", dataclasses.replace(
                     req, scope=dataclasses.replace(req.scope, kind=kind))
+    if req.condition.kind in ("regular", "holding"):
+        kind, word = (("holding", "whenever") if req.condition.kind == "regular"
+                      else ("regular", "upon"))
+        parts = tuple(dataclasses.replace(p, qualifier=word) for p in req.condition.parts)
+        yield f"condition {word}", dataclasses.replace(req, condition=dataclasses.replace(
+            req.condition, kind=kind, parts=parts))
     if req.timing.kind not in A.STOP_TIMINGS:
         for kind in _TIMINGS:
             if kind == req.timing.kind:

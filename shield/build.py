@@ -24,6 +24,7 @@ from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.shield.machine import Atom, Machine
 from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
+from fretc.shield.predicates import PredicateBudget, term
 from fretc.shield.synthesis import synthesize
 from fretc.signals.bindings.spec import Bindings
 
@@ -147,8 +148,13 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     Raises:
         ShieldError: a requirement that cannot be enforced, an unrealizable component (with
             the inputs that defeat every controller), an unknown preference.
-        ShieldUnknown: a component's game past its budget."""
-    p = plan(compiled, inputs, outputs, bindings)
+        ShieldUnknown: a component's game past its budget, or comparisons of several
+            variables with too many valuations to decide
+            (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
+    try:
+        p = plan(compiled, inputs, outputs, bindings)
+    except PredicateBudget as exc:
+        raise ShieldUnknown(f"no shield: {exc}") from None
     machines = []
     with SpotWorker(budget, fork=fork) as worker:
         for comp in p.components:
@@ -166,7 +172,8 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
                                               f"out:{','.join(p.outputs)}",
                                               f"prefer:{list(prefer)}"]
-        + [str(m.nodes) for m in machines]).encode()).hexdigest()
+        + [str(m.nodes) for m in machines]
+        + [str(m.clusters) for m in machines if m.clusters]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
                   dict(p.monitored), tuple(prefer), min(periods) if periods else None,
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
@@ -188,8 +195,8 @@ def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
 
 def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     """The machine of one component (module docstring)."""
-    pts = enforced_pts(comp.items)
-    ans = worker.ask(("call", synthesize, (pts, p.inputs, comp.env_inv, comp.ctl_inv)))
+    ans = worker.ask(("call", synthesize, (comp.game_pts, comp.game_inputs, comp.env_inv,
+                                           comp.ctl_inv)))
     if ans == UNKNOWN:
         why = worker.failures[-1] if worker.failures else "no reason given"
         if why.startswith("RuntimeError:"):  # a defect of the synthesis, not a budget
@@ -198,15 +205,29 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
                             f"{why} (raise --budget or --memory-budget)")
     if not ans["realizable"]:
         raise ShieldError(_unrealizable(comp, p, ans))
-    atoms = [(_atom(a), is_in) for a, is_in in ans["atoms"]]
-    return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i),
-                   tuple(a for a, i in atoms if not i), tuple(ans["init"]),
-                   tuple(tuple(n) for n in ans["nodes"]), ans["safe"], tuple(ans["next"]),
-                   tuple(ans["keep"]), ans["env_ok"], tuple(comp.messages), ans["stats"])
+    back = {ap: pred for pred, ap in comp.names.items()}
+    atoms = [(_atom(back.get(a, a)), is_in) for a, is_in in ans["atoms"]]
+    outs = [a for a, i in atoms if not i]
+    clusters = []
+    for cl in comp.clusters:
+        if cl.is_input:
+            continue
+        index = [next(j for j, a in enumerate(outs) if a.text == to_smv(x)) for x in cl.atoms]
+        clusters.append({"atoms": index, "variables": list(cl.variables),
+                         "numbers": {sum(int(b) << k for k, b in enumerate(key)): nums
+                                     for key, nums in sorted(cl.witnesses.items())}})
+    return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i), tuple(outs),
+                   tuple(ans["init"]), tuple(tuple(n) for n in ans["nodes"]), ans["safe"],
+                   tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"],
+                   tuple(comp.messages), tuple(clusters), ans["stats"])
 
 
 def _atom(node: Node) -> Atom:
-    """An IR atom (a boolean variable or a comparison with a constant) as an :class:`Atom`."""
+    """An IR atom (a boolean variable, a comparison with a constant, a comparison of
+    several variables) as an :class:`Atom`."""
+    if node.op == "cmp" and simple_comparison(node) is None:
+        first = next(ir.name_of(x) for x in ir.walk(node) if x.op == "var")
+        return Atom(to_smv(node), first, "pred", None, letter_name(node), term(node))
     if node.op == "ap":
         return Atom(to_smv(node), ir.name_of(node), name=letter_name(node))
     sc = simple_comparison(node)

@@ -13,6 +13,11 @@ Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
   random runs in the tests); returns 1 when the proposal was changed (``s->reasons``: bit
   ``r`` set when ``P_SHIELD_REQUIREMENT_IDS[r]`` forced it), 0 when not, -1 when an input or
   a proposed number is NaN (no decision: ``corrected`` and the state untouched).
+
+A comparison of several variables (:mod:`fretc.shield.predicates`) is computed in doubles
+as the Python runtime computes it (:func:`c_term`); when an override changes an atom of an
+output cluster, the cluster's variables take the numbers recorded for the new valuation (a
+table searched linearly: constant time and memory).
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from fretc.compiler.c_step import c_string
 from fretc.shield.build import Shield
 from fretc.shield.emit_python import tables
 
-__all__ = ["render_c", "c_name"]
+__all__ = ["render_c", "c_name", "c_term"]
 
 _C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto "
@@ -47,6 +52,30 @@ def _double(x: float) -> str:
     return text if any(ch in text for ch in ".en") else text + ".0"
 
 
+def c_term(t: tuple[Any, ...], struct: str) -> str:
+    """A comparison of several variables or one of its terms
+    (:func:`fretc.shield.runtime.term_value`) as a C expression over the fields of
+    ``struct`` (a pointer), with the runtime's double arithmetic (``min``/``max`` as
+    Python's, IEEE division)."""
+    op = t[0]
+    if op == "cmp":
+        return f"({c_term(t[2], struct)} {_C_OPS[t[1]]} {c_term(t[3], struct)})"
+    if op == "var":
+        return f"{struct}->{c_name(t[1])}"
+    if op == "num":
+        return _double(t[1])
+    if op == "neg":
+        return f"(-{c_term(t[1], struct)})"
+    if op == "fn":
+        a = c_term(t[2], struct)
+        if t[1].startswith("abs"):
+            return f"fabs({a})"
+        b = c_term(t[3], struct)
+        rel = "<" if t[1].startswith("min") else ">"
+        return f"(({b}) {rel} ({a}) ? ({b}) : ({a}))"
+    return f"({c_term(t[1], struct)} {op} {c_term(t[2], struct)})"
+
+
 def _comment(text: str) -> str:
     t = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
     t = t.replace("*/", "* /").replace("/*", "/ *")
@@ -64,6 +93,8 @@ class _CMachine:
     first_req: int
     numeric_outputs: list[tuple[str, list[tuple[str, str]], list[int]]]
     groups: list[dict[str, Any]]
+    #: output clusters (:mod:`fretc.shield.predicates`): atoms, variables, rows (key, values)
+    clusters: list[dict[str, Any]]
 
     @property
     def n_in(self) -> int:
@@ -90,7 +121,10 @@ def _machines(shield: Shield) -> list[_CMachine]:
     out, first = [], 0
     for k, t in enumerate(tables(shield)["machines"]):
         numeric = []
+        clustered = {v for c in t["clusters"] for v in c["variables"]}
         for v in dict.fromkeys(s[0] for s in t["outputs"]):
+            if v in clustered:
+                continue
             idx = [j for j, s in enumerate(t["outputs"]) if s[0] == v]
             if t["outputs"][idx[0]][1] is not None:
                 numeric.append((v, [(_C_OPS[t["outputs"][j][1]], _double(t["outputs"][j][2]))
@@ -102,7 +136,11 @@ def _machines(shield: Shield) -> list[_CMachine]:
             for key, nums in g["numbers"].items():
                 rows.append((key, [_double(nums[v]) if v in nums else "NAN" for v in names]))
             groups.append({"atoms": g["atoms"], "rows": rows})
-        out.append(_CMachine(k, t, first, numeric, groups))
+        clusters = [{"atoms": c["atoms"], "variables": c["variables"],
+                     "rows": [(key, [_double(nums[v]) for v in c["variables"]])
+                              for key, nums in c["numbers"].items()]}
+                    for c in t["clusters"]]
+        out.append(_CMachine(k, t, first, numeric, groups, clusters))
         first += len(t["requirements"])
     return out
 
@@ -116,6 +154,7 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
     env.filters["ccom"] = _comment
     env.filters["cname"] = c_name
     env.filters["double"] = _double
+    env.filters["cterm"] = c_term
     t = tables(shield)
     machines = _machines(shield)
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,

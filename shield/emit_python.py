@@ -39,14 +39,17 @@ def tables(shield: Shield) -> dict[str, Any]:
                            "fields": dict(sorted(fields.items()))})
         machines.append({
             "requirements": list(m.requirements),
-            "inputs": [(a.variable, a.op, a.constant) for a in m.inputs],
-            "outputs": [(a.variable, a.op, a.constant) for a in m.outputs],
+            "inputs": [a.spec for a in m.inputs],
+            "outputs": [a.spec for a in m.outputs],
             "texts": texts,
             "init": [int(b) for b in m.init],
             "nodes": [tuple(n) for n in m.nodes],
             "safe": m.safe, "next": list(m.next), "keep": list(m.keep),
             "weights": {j: (int(w), x) for j, (w, x) in sorted(shield.weights(k).items())},
-            "groups": groups})
+            "groups": groups,
+            "clusters": [{"atoms": list(c["atoms"]), "variables": list(c["variables"]),
+                          "numbers": dict(sorted(c["numbers"].items()))}
+                         for c in m.clusters]})
     return {"name": shield.name, "digest": shield.digest, "inputs": list(shield.inputs),
             "outputs": list(shield.outputs),
             "preferences": [(t, int(v)) for t, v in shield.preferences],

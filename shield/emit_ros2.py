@@ -94,8 +94,16 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
     """``{relative path: text}`` of the package (module docstring).
 
     Raises:
-        ShieldError: no binding file, a topic without a type in its ``[types]``, or no
-            proposal topic for an output topic."""
+        ShieldError: no binding file, a topic without a type in its ``[types]``, no
+            proposal topic for an output topic, or comparisons of several output variables
+            (their corrected numbers have no message the bindings' inversion writes)."""
+    preds = [a.text for m in shield.machines for a in m.outputs if a.op == "pred"]
+    if preds:
+        raise ShieldError("--emit ros2 cannot publish the outputs of " + ", ".join(preds)
+                          + ": a comparison of several output variables is corrected by "
+                          "setting their numbers together, which the bindings' inversion "
+                          "(one message per valuation of one variable's atoms) does not "
+                          "write; use --emit python or c")
     if bindings is None or bindings_file is None:
         raise ShieldError("--emit ros2 needs the binding file (-b): the node reads and writes "
                           "the bound topics")

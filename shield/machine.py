@@ -44,9 +44,11 @@ _TESTS = {"<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: 
 
 @dataclass(frozen=True)
 class Atom:
-    """An atom of the game: the boolean FRET variable ``variable`` (``op`` None) or the
+    """An atom of the game: the boolean FRET variable ``variable`` (``op`` None), the
     comparison ``variable op constant`` (``op`` in ``< <= > >= = !=``, the variable on the
-    left, the constant as a float of FRET's text). ``text``: its FRET/SMV text (the name
+    left, the constant as a float of FRET's text), or a comparison of several variables
+    (``op`` ``"pred"``, ``term`` its :func:`fretc.shield.predicates.term`, ``variable`` the
+    first it reads; :mod:`fretc.shield.predicates`). ``text``: its FRET/SMV text (the name
     ``fretc check`` gives it)."""
 
     text: str
@@ -56,10 +58,23 @@ class Atom:
     #: the atom's name in Spot's formulas (``fretc check``'s letters): the mangled variable,
     #: or the comparison's FRET/SMV text
     name: str = ""
+    #: a comparison of several variables: its term (``op`` ``"pred"``)
+    term: tuple[Any, ...] | None = None
 
-    def value(self, x: bool | float) -> bool:
+    @property
+    def spec(self) -> tuple[str, str | None, Any]:
+        """The atom as the runtimes' tables give it (:mod:`fretc.shield.runtime`)."""
+        return (self.variable, self.op, self.term if self.op == "pred" else self.constant)
+
+    def value(self, x: Any) -> bool:
         """The atom's truth for the variable's value ``x`` (a bool for a boolean variable,
-        a float for a numeric one). Raises ValueError for a NaN (no truth value)."""
+        a float for a numeric one, a dict of every variable's value for a comparison of
+        several). Raises ValueError for a NaN (no truth value)."""
+        if self.op == "pred":
+            from fretc.shield.runtime import term_value
+
+            assert self.term is not None  # a predicate has its term
+            return bool(term_value(self.term, x))
         if self.op is None:
             return bool(x)
         v = float(x)
@@ -75,7 +90,8 @@ class Machine:
     ``inputs``/``outputs`` the atoms, ``init`` the state bits' initial values, ``nodes`` the
     node table, ``safe``/``next``/``keep``/``env_ok`` its roots (``keep`` one per
     requirement), ``messages`` its outputs corrected together
-    (:class:`fretc.shield.plan.MessageGroup`), ``stats`` sizes (state bits, BDD nodes of the
+    (:class:`fretc.shield.plan.MessageGroup`), ``clusters`` the numbers of its comparisons
+    of several variables, ``stats`` sizes (state bits, BDD nodes of the
     winning region, iterations)."""
 
     requirements: tuple[str, ...]
@@ -88,6 +104,10 @@ class Machine:
     keep: tuple[int, ...]
     env_ok: int
     messages: tuple[Any, ...] = ()
+    #: output clusters of comparisons of several variables (:mod:`fretc.shield.predicates`):
+    #: ``{"atoms": [output atom indices], "variables": [...], "numbers": {valuation bits:
+    #: {variable: value}}}`` (:mod:`fretc.shield.runtime`)
+    clusters: tuple[dict[str, Any], ...] = ()
     stats: dict[str, Any] = field(default_factory=dict, compare=False)
 
     @property

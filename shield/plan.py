@@ -3,7 +3,9 @@ the enforced ones into components, and the consistency of the outputs' atoms.
 
 * **Enforced**: a requirement reading an output whose ft_inf is a safety property monitored
   by its FRET pt formula (:func:`fretc.check.safety_game.pt_monitors_ft_inf`) and whose atoms
-  the game takes (boolean variables, comparisons of one variable with a constant).
+  the game takes (boolean variables, comparisons of one variable with a constant, and
+  comparisons of several variables as predicates kept consistent by z3,
+  :mod:`fretc.shield.predicates`).
 * **Monitored only**: a requirement over inputs only: no output can keep it (Safe-ROS's R5,
   ``clearance > 0``, is the environment's); listed, not enforced.
 * **Refused** (input errors, exit 2, :class:`ShieldError`): not a safety property (an
@@ -31,6 +33,7 @@ from fretc.check.pt_monitor import Outside
 from fretc.check.safety_game import game_atoms
 from fretc.common.errors import FretcError
 from fretc.compiler import ir
+from fretc.shield import predicates as preds
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.signals.bindings.expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
@@ -67,14 +70,22 @@ class MessageGroup:
 @dataclass
 class Component:
     """Enforced requirements sharing variables or messages: ``items`` (check's view of each),
-    ``env_inv``/``ctl_inv`` the consistency of the input / output atoms (propositional IR:
-    numeric regions, and for outputs the message constraints), ``messages`` the groups of
-    output variables bound to one topic (the shield corrects each group together)."""
+    ``env_inv``/``ctl_inv`` the consistency of the input / output atoms (propositional IR
+    over the game's atoms: numeric regions, the clusters' invariants, and for outputs the
+    message constraints), ``messages`` the groups of output variables bound to one topic
+    (the shield corrects each group together), ``clusters`` the comparisons of several
+    variables (:mod:`fretc.shield.predicates`), ``names`` each such comparison -> its game
+    atom (a boolean ``ap``), ``game_pts`` the pt formulas with them substituted,
+    ``game_inputs`` the inputs and the game atoms of input clusters."""
 
     items: list[CheckItem]
     env_inv: Node = ir.TRUE
     ctl_inv: Node = ir.TRUE
     messages: list[MessageGroup] = field(default_factory=list)
+    clusters: list[preds.Cluster] = field(default_factory=list)
+    names: dict[Node, Node] = field(default_factory=dict)
+    game_pts: list[Node] = field(default_factory=list)
+    game_inputs: list[str] = field(default_factory=list)
 
     @property
     def ids(self) -> list[str]:
@@ -126,8 +137,12 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         if item.pt is None:
             raise ShieldError(f"{_where(c)}: {c.id} is not a safety property: "
                               + _not_safety(c.formalization.key))
+        for n in ir.walk(item.pt):
+            if preds.is_predicate(n) and (why := preds.refusal(n, inputs)) is not None:
+                raise ShieldError(f"{_where(c)}: {c.id}: {why}")
         try:
-            game_atoms([item.pt])
+            game_atoms([preds.substitute(item.pt, {n: ir.ap(preds.PREFIX) for n in
+                                                   ir.walk(item.pt) if preds.is_predicate(n)})])
         except Outside as exc:
             raise ShieldError(f"{_where(c)}: {c.id}: {exc}") from None
         enforced.append(item)
@@ -213,12 +228,30 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
 
 def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
                bindings: Bindings | None, notes: list[str]) -> Component:
-    """A :class:`Component` with its invariants (module docstring)."""
+    """A :class:`Component` with its invariants (module docstring).
+
+    Raises :class:`fretc.shield.predicates.PredicateBudget` (a cluster too large)."""
     pts = enforced_pts(items)
     numeric = NumericAbstraction.of(pts)
     env_inv = numeric.regions([v for v in numeric.atoms if v in inputs])
     ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs])
-    atoms = game_atoms(pts)
+    clusters = preds.clusters(pts, inputs)
+    names: dict[Node, Node] = {}
+    game_inputs = list(inputs)
+    for cl in clusters:
+        for a in cl.atoms:
+            if preds.is_predicate(a) and a not in names:
+                names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
+                if cl.is_input:
+                    game_inputs.append(ir.name_of(names[a]))
+    for cl in clusters:
+        inv = preds.substitute(cl.invariant, names)
+        if cl.is_input:
+            env_inv = ir.and_(env_inv, inv)
+        else:
+            ctl_inv = ir.and_(ctl_inv, inv)
+    game_pts = [preds.substitute(f, names) for f in pts]
+    atoms = game_atoms(game_pts)
     used = {v for x in items for v in x.variables}
     messages = []
     for g in groups:
@@ -228,7 +261,8 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
             ctl_inv = ir.and_(ctl_inv, _message_constraint(
                 [a for a in atoms if _variable(a) in g], bindings, notes, group))
             messages.append(group)
-    return Component(items, env_inv, ctl_inv, messages)
+    return Component(items, env_inv, ctl_inv, messages, clusters, names, game_pts,
+                     game_inputs)
 
 
 def enforced_pts(items: list[CheckItem]) -> list[Node]:

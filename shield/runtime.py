@@ -10,12 +10,17 @@ Tables: ``{"name", "digest", "inputs", "outputs", "machines": [...]}``; a machin
 ``{"requirements": [ids], "inputs": [(variable, op, constant)], "outputs": [...], "texts":
 [output atom texts], "init": [0/1], "nodes": [(var, low, high)], "safe": int, "next":
 [int], "keep": [int], "weights": {output atom: (wanted 0/1, weight)}, "groups": [...]}``
-(``op`` None for a boolean variable). A group is the output atoms of one message:
+(``op`` None for a boolean variable; ``"pred"`` for a comparison of several variables, whose
+third element is then its term, :func:`term_value`: ``(variable, "pred", term)`` with
+``variable`` the first it reads). A group is the output atoms of one message:
 ``{"atoms": [indices], "topics": [...], "numbers": {valuation: {variable: value}}, "fields":
 {valuation: [(topic, path, value)]}}``, a valuation being the atoms' values as bits (first
 atom least significant): the message fields the bindings give it by and that message's
 numbers (:mod:`fretc.shield.plan`); a numeric output of a group whose boolean atoms an
-override changed takes them (:mod:`fretc.shield.messages` publishes the fields).
+override changed takes them (:mod:`fretc.shield.messages` publishes the fields). A machine's
+``"clusters"`` (:mod:`fretc.shield.predicates`) are ``{"atoms": [output atom indices],
+"variables": [...], "numbers": {valuation: {variable: value}}}``: when an override changes
+one of a cluster's atoms, its variables take the numbers recorded for the new valuation.
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ import math
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest"]
+__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest", "term_value"]
 
 #: moves (and corrections) remembered per machine, keyed by (state, input atoms, output
 #: atoms): the BDD walks of a tick are done once per distinct key; past the limit the memory
@@ -68,11 +73,52 @@ def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
     return _OPS[op](x, c)
 
 
-def _tester(spec: tuple[str, str | None, float | None]) -> Any:
-    """A function: the variable's value -> the atom's truth (as :func:`truth`)."""
+def term_value(t: tuple[Any, ...], values: dict[str, Any]) -> Any:
+    """A comparison of several variables, or one of its terms, at the variables' ``values``
+    in double arithmetic (IEEE division, as C computes it): ``("cmp", op, a, b)`` gives a
+    bool; ``("var", name)``, ``("num", x)``, ``("neg", a)``, ``(op, a, b)`` for ``+ - * /``,
+    ``("fn", absReal|absInt|minReal|minInt|maxReal|maxInt, a[, b])`` a float.
+
+    Raises ValueError: a variable's value is NaN."""
+    op = t[0]
+    if op == "cmp":
+        return _OPS[t[1]](term_value(t[2], values), term_value(t[3], values))
+    if op == "var":
+        x = float(values[t[1]])
+        if x != x:
+            raise ValueError(f"{t[1]} is NaN: its comparisons have no truth value")
+        return x
+    if op == "num":
+        return t[1]
+    if op == "neg":
+        return -term_value(t[1], values)
+    if op == "fn":
+        xs = [term_value(a, values) for a in t[2:]]
+        f = t[1][:3]
+        return abs(xs[0]) if f == "abs" else min(xs) if f == "min" else max(xs)
+    a, b = term_value(t[1], values), term_value(t[2], values)
+    if op == "+":
+        return a + b
+    if op == "-":
+        return a - b
+    if op == "*":
+        return a * b
+    if b == 0:
+        return math.nan if a == 0 or a != a else math.copysign(math.inf, a) * math.copysign(1.0, b)
+    return a / b
+
+
+def _tester(spec: tuple[str, str | None, Any]) -> Any:
+    """A function: the variables' values (a dict) -> the atom's truth (as :func:`truth`,
+    :func:`term_value` for a comparison of several variables)."""
     var, op, c = spec
+    if op == "pred":
+        def predicate(values: dict[str, Any]) -> bool:
+            return bool(term_value(c, values))
+        return predicate
     if op is None:
-        def boolean(value: Any) -> bool:
+        def boolean(values: dict[str, Any]) -> bool:
+            value = values[var]
             if value is True or value is False:
                 return value
             return truth(spec, value)
@@ -81,8 +127,8 @@ def _tester(spec: tuple[str, str | None, float | None]) -> Any:
     assert c is not None  # a comparison has its constant
     const = c
 
-    def compare(value: Any) -> bool:
-        x = float(value)
+    def compare(values: dict[str, Any]) -> bool:
+        x = float(values[var])
         if x != x:
             raise ValueError(f"{var} is NaN: its comparisons have no truth value")
         return test(x, const)
@@ -143,10 +189,12 @@ class _Machine:
         self.corrections: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
                                tuple[tuple[int, ...], tuple[str, ...]]] = {}
         self.variables = list(dict.fromkeys(s[0] for s in self.outs))
-        self.in_tests = [(s[0], _tester(s)) for s in self.ins]
-        self.out_tests = [(s[0], _tester(s)) for s in self.outs]
+        self.in_tests = [_tester(s) for s in self.ins]
+        self.out_tests = [_tester(s) for s in self.outs]
+        self.clusters = t.get("clusters", [])
+        clustered = {v for c in self.clusters for v in c["variables"]}
         self.atoms_of = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
-                         for v in self.variables}
+                         for v in self.variables if v not in clustered}
 
     def move(self, ins: tuple[int, ...], outs: tuple[int, ...]) -> tuple[bool, tuple[int, ...]]:
         """Whether ``outs`` is safe from the current state with ``ins``, and the next
@@ -205,8 +253,8 @@ class _Machine:
              ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...]]:
         """This machine's corrected outputs (empty when the proposal is kept), reasons and
         changed atoms for one tick; advances."""
-        ins = tuple([f(inputs[v]) for v, f in self.in_tests])
-        prop = tuple([f(proposed[v]) for v, f in self.out_tests])
+        ins = tuple([f(inputs) for f in self.in_tests])
+        prop = tuple([f(proposed) for f in self.out_tests])
         safe, nxt = self.move(ins, prop)
         if safe:
             self.state = nxt
@@ -231,8 +279,16 @@ class _Machine:
         """The output variables' values: a boolean its atom's; a number the proposal's when
         its comparisons keep their truth, else the nearest number giving them. A number of
         a message group (module docstring) whose boolean atoms an override changed takes
-        the number of the message the bindings give for the group's new valuation."""
+        the number of the message the bindings give for the group's new valuation. The
+        variables of a cluster (module docstring) keep the proposal's numbers unless an
+        atom of the cluster changed; then they all take the cluster's recorded numbers."""
         result: dict[str, Any] = {}
+        for c in self.clusters:
+            if any(self.texts[j] in changed for j in c["atoms"]):
+                key = sum(int(outs[j]) << k for k, j in enumerate(c["atoms"]))
+                result.update(c["numbers"][key])
+            else:
+                result.update({v: proposed[v] for v in c["variables"]})
         fixed: dict[str, float] = {}
         for g in self.groups:
             if any(self.texts[j] in changed and self.outs[j][1] is None for j in g["atoms"]):

@@ -108,3 +108,54 @@ def test_a_missing_array_field_counts_as_empty():
     assert flags.true == flags.false == 0
     _visit(plan, SimpleNamespace(items=[SimpleNamespace()], flags=[True, False, True]))
     assert msgs.lengths == {0, 1} and (flags.true, flags.false) == (2, 1)
+
+
+def _json_log(path: Path, schema: dict | None, messages: list[dict]) -> None:
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        sid = (w.register_schema("Thing", "jsonschema", json.dumps(schema).encode())
+               if schema is not None else 0)
+        cid = w.register_channel("/thing", "json", sid)
+        for i, m in enumerate(messages):
+            w.add_message(cid, log_time=i * 100_000_000, publish_time=i * 100_000_000,
+                          data=json.dumps(m).encode())
+        w.finish()
+
+
+def test_json_topics_without_a_field_list_get_their_fields_from_the_messages(tmp_path):
+    msgs = [{"x": i, "ok": i % 2 == 0, "mode": "auto" if i < 3 else "manual",
+             "nested": {"y": 2.5 * i}, "arr": [i, -i], "tracks": [{"d": 1.0 + i}],
+             "maybe": [] if i == 0 else [1.5]} for i in range(5)]
+    for schema in (None, {"type": "object"}):
+        log = tmp_path / f"j{schema is not None}.mcap"
+        _json_log(log, schema, msgs)
+        res = CliRunner().invoke(main, ["inspect", str(log), "--json"])
+        assert res.exit_code == 0, res.output
+        (topic,) = json.loads(res.output)[0]["topics"]
+        assert topic["fields_from_messages"] is True
+        f = topic["fields"]
+        assert {p: s["type"] for p, s in f.items()} == {
+            "/thing.x": "number", "/thing.ok": "boolean", "/thing.mode": "string",
+            "/thing.nested.y": "number", "/thing.arr": "number[]",
+            "/thing.tracks": "object[]", "/thing.tracks[:].d": "number",
+            "/thing.maybe": "number[]"}
+        assert (f["/thing.x"]["min"], f["/thing.x"]["max"]) == (0, 4)
+        assert (f["/thing.arr"]["min"], f["/thing.arr"]["max"]) == (-4, 4)
+        assert (f["/thing.ok"]["true"], f["/thing.ok"]["false"]) == (3, 2)
+        assert f["/thing.mode"]["values"] == ["auto", "manual"]
+        assert f["/thing.maybe"]["lengths"] == [0, 1]
+        # the paths listed bind: the audit reads the maxima inspect printed
+        for path, hi in (("/thing.nested.y", 10.0), ("/thing.x", 4)):
+            (tmp_path / "r.fret").write_text(f"R: the thing shall always satisfy v < {hi}\n")
+            (tmp_path / "r.bindings.toml").write_text(
+                f'[tick]\nperiod = "100 ms"\n[variables]\nv = "{path}"\n')
+            got = CliRunner().invoke(main, ["audit", "-r", str(tmp_path / "r.fret"), "-b",
+                                            str(tmp_path / "r.bindings.toml"), str(log),
+                                            "--no-progress", "--json", "-"])
+            (v,) = json.loads(got.stdout)["logs"][0]["verdicts"]
+            assert v["verdict"] == "violated" and v["first_violation"]["tick"] == 4, v
+        text = CliRunner().invoke(main, ["inspect", str(log)])
+        assert "fields from the messages" in text.output

@@ -72,12 +72,14 @@ def runs(draw, length: int = 40) -> list[tuple[dict, dict]]:
 
 def atoms_of(machine, values: dict) -> list[int]:
     """The output atoms' values (0/1) of one tick's outputs."""
-    return [int(a.value(values[a.variable])) for a in machine.outputs]
+    return [int(a.value(values if a.op == "pred" else values[a.variable]))
+            for a in machine.outputs]
 
 
 def safe(machine, state, ins: dict, outs: list[int]) -> bool:
     """The node table's ``safe`` for the input values ``ins`` and output atoms ``outs``."""
-    values = [int(a.value(ins[a.variable])) for a in machine.inputs] + list(outs) + list(state)
+    values = ([int(a.value(ins if a.op == "pred" else ins[a.variable])) for a in machine.inputs]
+              + list(outs) + list(state))
     return evaluate(machine.nodes, machine.safe, values)
 
 

@@ -303,3 +303,43 @@ def test_the_replay_line_of_a_per_entity_requirement_gives_its_expected_verdicts
         got = CliRunner().invoke(main, args + ["--json", "-", "--no-progress"])
         verdicts = json.loads(got.output[got.output.index("{"):])["logs"][0]["verdicts"]
         assert {v["requirement"]: v["verdict"] for v in verdicts} == t["expected"], t["id"]
+
+
+def test_the_generated_tests_kill_every_condition_kind_and_reviewer_mutant_of_safe_ros():
+    """A reviewer's mutants of the Safe-ROS set (upon/whenever swapped, a bound +-1, the
+    response negated, always/eventually) are each killed by some generated test, unless
+    check's engines show the mutant equivalent: ``upon too_close`` read as ``whenever``
+    is told apart only by a test whose condition stays true past its response."""
+    from fretc.compiler.mutants import mutants
+    from fretc.monitors.interval import verdict_of
+    from fretc.testing.generate import Finder, column_kinds, separating_trace
+    from fretc.check.budget import Budget
+    from fretc.check.solver import SpotWorker
+
+    c = compile_entries(load_requirements([REQS / "safe_ros.fret"]))
+    gen = generate(c, fork=False)
+    kinds = column_kinds(c)
+    reviewer = ("condition ", "timing n-1", "timing n+1", "response: negate",
+                "timing always", "timing eventually")
+    survivors, checked = [], 0
+    with SpotWorker(Budget(), fork=False) as worker:
+        finder = Finder(worker, kinds)
+        for comp in c:
+            if comp.formalization is None:
+                continue
+            ticks = comp.formalization.ticks
+            for op, m in mutants(comp.requirement, ticks):
+                if not op.startswith(reviewer):
+                    continue
+                mf = formalize(m, comp.entry.tick_period)
+                killed = any(verdict_of(m, {k: np.array([r[k] for r in t.rows],
+                                                        dtype=bool if kinds[k] == "bool"
+                                                        else float) for k in kinds},
+                                        len(t.rows), mf.ticks) != t.expected[comp.id]
+                             for t in gen.tests)
+                checked += 1
+                if not killed and separating_trace(finder, comp, m)[0] is not None:
+                    survivors.append((comp.id, op))
+    assert checked >= 20 and not survivors, survivors
+    persists = {cid for t in gen.tests for cid, o, _ in t.covers if o == "trigger-persists"}
+    assert {"R2", "R3", "R6"} <= persists, persists

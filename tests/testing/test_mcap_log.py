@@ -178,7 +178,9 @@ def test_safe_ros_logs_give_the_expected_verdicts(safe_ros, tmp_path):
     assert res.exit_code == 0, res.output
     assert doc["bindings"] == str(BINDINGS)
     written = [t for t in doc["tests"] if t["log"]]
-    assert len(written) == len(doc["tests"]), res.output
+    # a trace the bindings cannot give stays a CSV test, saying why (R6's trigger-persists
+    # trace has /scan stale again one tick after a message: age(/scan) cannot rise so fast)
+    assert len(written) >= len(doc["tests"]) - 1, res.output
     for t in doc["tests"]:
         if not t["log"]:
             assert t["log_not_written"], t

@@ -10,7 +10,11 @@ notation), for booleans how often each value occurs, for text fields their disti
 (up to :data:`MAX_VALUES`) and for fields with named constants in their message definition
 (``power_supply_status``: ``POWER_SUPPLY_STATUS_CHARGING = 1``, DiagnosticStatus ``level``:
 ``OK`` .. ``STALE``) those constants. Field types come from the schemas embedded in the log
-(:mod:`fretc.logs.schema`); values from one read of every message.
+(:mod:`fretc.logs.schema`); values from one read of every message. A topic whose messages
+decode without a schema that lists their fields (a JSON channel with no schema, or a
+JSON Schema without ``properties``) gets its fields from the messages themselves, typed by
+their JSON values (``number``, ``boolean``, ``string``, ``number[]``, ``object[]``): the
+paths the audit binds on it; such a topic is marked "fields from the messages".
 """
 
 from __future__ import annotations
@@ -197,6 +201,71 @@ def _visit(plan: list, obj) -> None:
                 st.false += 1
 
 
+def _visit_untyped(prefix: str, obj: Any, stats: dict[str, _Stat]) -> None:
+    """Add the values of a message decoded without a field list (a ``SimpleNamespace``
+    tree, as the JSON reader gives: :mod:`fretc.logs.encodings`) to ``stats``, each field
+    typed by its JSON value; a field whose values change type is ``mixed``."""
+    import numpy as np  # lazy: as in _Stat
+
+    for name, v in vars(obj).items():
+        if name.startswith("__"):  # the reader's own marks (the type's name), not fields
+            continue
+        path = f"{prefix}.{name}"
+        if hasattr(v, "__dict__") and not isinstance(v, np.ndarray):
+            _visit_untyped(path, v, stats)
+            continue
+        if isinstance(v, np.ndarray) or isinstance(v, (list, tuple)):
+            items = list(v)
+            if items and all(hasattr(x, "__dict__") for x in items):
+                kind = "object[]"
+            elif all(isinstance(x, bool | np.bool_) for x in items):
+                kind = "boolean[]" if items else "array"
+            elif all(isinstance(x, int | float | np.number) and not isinstance(x, bool)
+                     for x in items):
+                kind = "number[]"
+            elif all(isinstance(x, str) for x in items):
+                kind = "string[]"
+            else:
+                kind = "array"
+        elif isinstance(v, bool):
+            kind = "boolean"
+        elif isinstance(v, int | float):
+            kind = "number"
+        elif isinstance(v, str):
+            kind = "string"
+        else:
+            kind = "null" if v is None else type(v).__name__
+        st = stats.get(path)
+        if st is None:
+            st = stats[path] = _Stat(kind)
+        elif st.type != kind:
+            if st.type == "array" and kind.endswith("[]"):
+                st.type = kind  # an empty array first: its items' type when one comes
+            elif not (kind == "array" and st.type.endswith("[]")):
+                st.type = "mixed"
+        if kind == "object[]":
+            st.lengths.add(len(items))
+            for x in items:
+                _visit_untyped(f"{path}[:]", x, stats)
+        elif kind.endswith("[]") or kind == "array":
+            st.lengths.add(len(items))
+            if kind == "number[]":
+                st.array(np.asarray(items, dtype=float))
+            elif kind == "boolean[]":
+                k = sum(1 for x in items if x)
+                st.true += k
+                st.false += len(items) - k
+            elif kind == "string[]":
+                st.text(items)
+        elif kind == "number" and st.type == "number":
+            st.scalar(v)
+        elif kind == "boolean" and st.type == "boolean":
+            st.true += v
+            st.false += not v
+        elif kind == "string" and st.type == "string" and len(st.texts) <= MAX_VALUES:
+            st.text([v])
+
+
 def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
     """The inventory of one log (module docstring) as a JSON-ready dict; ``msg_path``:
     folders of the types the log does not carry (``--msg-path``).
@@ -217,6 +286,7 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
     last: dict[str, int] = {}
     counts: dict[str, int] = {}
     plans: dict = {}
+    untyped: set[str] = set()
     # a topic whose schema is missing or not parsed is listed without fields ("schema
     # unknown"), its messages counted
     visit = {t: _plan(s, s.typename, topic_text(t), stats[t], plans)
@@ -229,6 +299,9 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
         plan = visit.get(m.topic)
         if plan is not None:
             _visit(plan, m.data)
+        elif source.kind != "csv" and hasattr(m.data, "__dict__"):  # decoded, no field list
+            _visit_untyped(topic_text(m.topic), m.data, stats[m.topic])
+            untyped.add(m.topic)
         elif source.kind == "csv":
             for c in source.columns:  # type: ignore[attr-defined]  # a CsvSource
                 st = stats[m.topic].setdefault(f"{m.topic}.{c}",
@@ -252,6 +325,7 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
                        "not_decoded_why": lost[0][3] if lost else None,
                        "rate_hz": (n - 1) / span if span else None,
                        "schema": schemas.get(t) is not None,
+                       "fields_from_messages": t in untyped,
                        "fields": {p: s.to_json() for p, s in stats[t].items()}})
     t0, t1 = source.start_time, source.end_time
     return {"log": str(path), "kind": source.kind, "start_time_ns": t0, "end_time_ns": t1,
@@ -277,7 +351,9 @@ def _print(doc: dict) -> None:
         lost = (f"  ({t['not_decoded']} not decoded: {t['not_decoded_why']})"
                 if t.get("not_decoded") else "")
         click.echo(f"  {t['topic']}  {t['type'] or '?'}  {t['messages']} {plural}  {rate}"
-                   + ("" if t["schema"] else "  (schema unknown)") + lost)
+                   + ("  (no field list in the schema: fields from the messages)"
+                      if t.get("fields_from_messages")
+                      else "" if t["schema"] else "  (schema unknown)") + lost)
         for p, f in t["fields"].items():
             extra = []
             if "lengths" in f:
