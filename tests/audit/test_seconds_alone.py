@@ -2,7 +2,7 @@
 requirements read (audit-json reference: "seconds since the log's start"): a requirement
 audited alone prints the seconds it prints in a set, on an indexed MCAP (its statistics
 give the start) and on one without summary or index (the start found by the pass), where
-an unbound topic publishes 10 s before the bound ones (issue 64, "Other defects")."""
+an unbound topic publishes 10 s before the bound ones."""
 
 from __future__ import annotations
 
