@@ -67,6 +67,10 @@ def _value(v) -> str:
 #: The matrix (logs x requirements) is used while its smaller side has at most this many
 #: entries; beyond, a list of the verdicts that are not plain passes.
 MATRIX_MAX = 10
+#: ... and its larger side at most this many (a per-entity requirement over 100,000 entities
+#: would print a row per instance: the list of the verdicts that are not plain passes instead;
+#: the JSON, JUnit and report keep every verdict).
+MATRIX_ROWS_MAX = 1000
 
 
 def robustness_text(value: float | str | None, none: str = "") -> str:
@@ -109,7 +113,8 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
     if plan is not None:
         _print_plan(console, plan, len(logs) if command == "fretc audit" else None, command)
     reqs = list(dict.fromkeys(v.requirement for la in logs for v in la.verdicts))
-    if min(len(logs), len(reqs)) <= MATRIX_MAX and logs:
+    if min(len(logs), len(reqs)) <= MATRIX_MAX and max(len(logs), len(reqs)) <= \
+            MATRIX_ROWS_MAX and logs:
         _print_matrix(console, logs, reqs)
     else:
         _print_incomplete(console, logs)
@@ -244,8 +249,9 @@ def _print_incomplete(console, logs: list[LogAudit]) -> None:
                           Text(_cell(v, la.start_time_ns), style=_STYLE.get(v.verdict, "")))
     if shown:
         console.print(table)
-    console.print("(only verdicts that are not complete passes are listed)",
-                  highlight=False)
+    total = sum(len(la.verdicts) for la in logs)
+    console.print(f"(only verdicts that are not complete passes are listed: {shown} of "
+                  f"{total})", highlight=False)
 
 
 def _print_errors(console, logs: list[LogAudit]) -> None:

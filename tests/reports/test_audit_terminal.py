@@ -82,3 +82,26 @@ def test_a_value_beside_its_threshold_shows_which_side_it_is_on(tmp_path):
     for x in (1.000158, 0.1 + 0.2, 1e-9, 123456789.125, 2.0, -0.5):
         assert float(format_value(x)) == x
     assert format_value(2.0) == "2" and format_value(True) == "T"
+
+
+def test_a_table_of_many_instances_lists_only_what_did_not_pass():
+    """1,001 verdicts on one log (a per-entity requirement's instances): no matrix row per
+    instance, but every verdict that is not a plain pass, and the count of all."""
+    from rich.console import Console
+
+    from fretc.audit.verdict import LogAudit, Verdict
+    from fretc.reports.terminal import MATRIX_ROWS_MAX, print_summary
+
+    def log(n: int) -> LogAudit:
+        vs = [Verdict(log="run.mcap", requirement=f"T[track={k}]",
+                      verdict="unknown" if k == 7 else "satisfied") for k in range(n)]
+        return LogAudit(log="run.mcap", kind="mcap", verdicts=vs)
+
+    for n, matrix in ((MATRIX_ROWS_MAX, True), (MATRIX_ROWS_MAX + 1, False)):
+        console = Console(record=True, width=120)
+        print_summary(console, [log(n)], details=False)
+        text = console.export_text()
+        assert ("T[track=999]" in text) is matrix, n
+        assert "T[track=7]" in text and "unknown" in text
+        assert ("only verdicts that are not complete passes are listed: 1 of "
+                f"{n}" in text) is not matrix
