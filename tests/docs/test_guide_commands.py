@@ -104,22 +104,20 @@ def _workspace(folder: Path) -> dict:
 
 
 # pages whose commands take tens of seconds to minutes of CPU (falsify searches, statistical
-# runs, generated test suites run): in the slow part of the suite
+# runs, generated test suites run): in the slow part of the suite, as one test (a
+# parametrized slow test keeps a sample of its cases in the default run)
 SLOW_PAGES = ("falsify.md", "statistics.md", "testing.md")
 
 
-@pytest.mark.parametrize("page", [pytest.param(p, marks=pytest.mark.slow)
-                                  if p.name in SLOW_PAGES else p for p in PAGES],
-                         ids=lambda p: p.name)
-def test_every_command_of_the_page_runs_as_written(page, tmp_path):
+def _run_page(page: Path, folder: Path) -> None:
     blocks = command_blocks(page.read_text(encoding="utf-8"))
-    env = _workspace(tmp_path)
+    env = _workspace(folder)
     ran = 0
     for block in blocks:
         if block.not_run is not None:
             continue
         for command, code in block.commands:
-            got = subprocess.run(["bash", "-c", command], cwd=tmp_path, env=env,
+            got = subprocess.run(["bash", "-c", command], cwd=folder, env=env,
                                  capture_output=True, text=True, timeout=300)
             where = f"{page.relative_to(ROOT)}:{block.line}: {command}"
             assert "Traceback (most recent call last)" not in got.stderr, \
@@ -132,6 +130,20 @@ def test_every_command_of_the_page_runs_as_written(page, tmp_path):
         reasons = sorted({b.not_run for b in blocks if b.not_run})
         pytest.skip("no command of the page is run as written"
                     + (f": {'; '.join(reasons)}" if reasons else ""))
+
+
+@pytest.mark.parametrize("page", [p for p in PAGES if p.name not in SLOW_PAGES],
+                         ids=lambda p: p.name)
+def test_every_command_of_the_page_runs_as_written(page, tmp_path):
+    _run_page(page, tmp_path)
+
+
+@pytest.mark.slow
+def test_every_command_of_the_long_pages_runs_as_written(tmp_path):
+    for name in SLOW_PAGES:
+        folder = tmp_path / name
+        folder.mkdir()
+        _run_page(ROOT / "docs" / "guide" / name, folder)
 
 
 def test_the_parser_finds_blocks_in_lists_prompts_continuations_and_markers():
