@@ -17,7 +17,10 @@ What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types: :mod:`f
   the watch's restart grace);
 * the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
   (the writer's clock), or the last ``/clock`` received when a ``/clock`` publication exists
-  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`);
+  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`), released
+  at the watermark: after each poll the merge learns which writers each reader is matched
+  with (:meth:`~fretc.live.merge.MergeBuffer.sync`), each sample naming its writer (its
+  publication handle);
 * faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
   ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
   type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
@@ -160,6 +163,7 @@ class DdsClient:
                 for t in list(self._readers):
                     self._take(t, until_empty=True)
                 for t in gone:
+                    self._merge.forget(t)  # its writers' last messages are put
                     self._merge.put_event(("unadvertise", time.time_ns(), [t]))
                 gone.clear()
 
@@ -219,10 +223,17 @@ class DdsClient:
         self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
 
     def _read(self) -> bool:
-        """Take every reader's samples; True when some came."""
+        """Take every reader's samples, then set the merge's watermark from the writers each
+        reader is matched with now (read after the takes: a writer matched later has
+        written nothing taken yet); True when some came."""
         got = False
         for topic in list(self._readers):
             got |= self._take(topic)
+        matched = {}
+        for topic, (reader, _ros) in list(self._readers.items()):
+            if reader is not None and self.wanted(topic):
+                matched[topic] = set(reader.get_matched_publications())
+        self._merge.sync(matched)
         return got
 
     def _take(self, topic: str, until_empty: bool = False) -> bool:
@@ -247,7 +258,7 @@ class DdsClient:
                         continue
                 stamp = info.source_timestamp
                 log_time = self._clock if self._clock else (stamp if stamp > 0 else now)
-                self._merge.put(topic, log_time, data, now)
+                self._merge.put(topic, log_time, data, now, info.publication_handle)
             if not (until_empty and batch):
                 return got
 
