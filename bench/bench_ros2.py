@@ -2,6 +2,7 @@
 transports), measured in one run.
 
     python bench/bench_ros2.py [--events 1000] [--rates 100 1000 2000 5000] [--seconds 10]
+                               [--parts 1 2]
 
 1. **The shield node's reaction.** The generated ROS 2 node of the Safe-ROS shield with R7
    (``requirements/shield/stay_stopped.fret``: while too close, a stop at once) between a rclpy
@@ -14,7 +15,11 @@ transports), measured in one run.
    R3 and R4 (100 ms ticks) records what it reads; per rate: messages sent and read (none
    dropped by fretc), and the latency from the message that closed a tick (its DDS source
    time, the publisher's wall clock) to that tick's verdicts, p50/p99, with the default merge
-   hold (0.1 s, the latency the log-time ordering adds) and with ``--merge-hold 0.01``.
+   hold (0.1 s, the latency the log-time ordering adds) and with ``--merge-hold 0.01``; each
+   both with the merge's watermark (fretc's, :mod:`fretc.live.merge`) and with the hold alone
+   (the watermark switched off in this script only), one after the other at each rate, so
+   both see the same machine load; and the messages fretc skipped as out of order
+   (``clock_backwards``).
 """
 
 from __future__ import annotations
@@ -128,9 +133,14 @@ def shield_reaction(events: int) -> None:
           f"ways): {_pct(lat)}")
 
 
-def watch_rate(rate: float, seconds: float, hold: float) -> tuple[int, int, list[float]]:
-    """Part 2 at one rate: (sent, read, closing message -> verdict latencies in ms)."""
+def watch_rate(rate: float, seconds: float, hold: float, watermark: bool = True
+               ) -> tuple[int, int, int, list[float]]:
+    """Part 2 at one rate: (sent, read, skipped as out of order, closing message -> verdict
+    latencies in ms); ``watermark`` False: the merge releases by its hold alone."""
+    from unittest import mock
+
     from fretc.audit import AuditConfig, load_plan
+    from fretc.live.merge import MergeBuffer
     from fretc.live.watch import Watch, WatchOptions
 
     domain = random.randint(1, 99)
@@ -151,16 +161,21 @@ def watch_rate(rate: float, seconds: float, hold: float) -> tuple[int, int, list
                                      record=rec, merge_hold=hold))
         ticks: list[float] = []
         w.on_tick = lambda i, t, dep, closing: ticks.append((time.time_ns() - closing) / 1e6)
-        th = threading.Thread(target=w.run, daemon=True)
-        th.start()
-        out, _ = pub.communicate(timeout=seconds + 60)
-        th.join(seconds + 60)
+        result = []
+        sync = MergeBuffer.sync if watermark else (lambda self, matched: None)
+        with mock.patch.object(MergeBuffer, "sync", sync):
+            th = threading.Thread(target=lambda: result.append(w.run()), daemon=True)
+            th.start()
+            out, _ = pub.communicate(timeout=seconds + 60)
+            th.join(seconds + 60)
+        skipped = sum(n for k, n in result[0].problem_counts.items()  # "kind topic": n
+                      if k.split()[0] == "clock_backwards") if result else -1
         from mcap.reader import make_reader
 
         with open(rec, "rb") as fh:
             read = sum(1 for _s, ch, _m in make_reader(fh).iter_messages()
                        if ch.topic in ("/gwendolen_control", "/cmd_vel_filtered"))
-        return int(out.strip().splitlines()[-1]), read, ticks
+        return int(out.strip().splitlines()[-1]), read, skipped, ticks
 
 
 def main() -> int:
@@ -168,19 +183,24 @@ def main() -> int:
     ap.add_argument("--events", type=int, default=1000)
     ap.add_argument("--rates", type=float, nargs="+", default=[100, 1000, 2000, 5000])
     ap.add_argument("--seconds", type=float, default=10)
+    ap.add_argument("--parts", type=int, nargs="+", default=[1, 2], choices=[1, 2])
     args = ap.parse_args()
     try:
         import rclpy  # noqa: F401
     except ImportError:
         print("ROS 2 Jazzy's rclpy is not installed: pip install -e '.[test]'")
         return 2
-    shield_reaction(args.events)
-    for hold in (0.1, 0.01):
+    if 1 in args.parts:
+        shield_reaction(args.events)
+    for hold in (0.1, 0.01) if 2 in args.parts else ():
         for rate in args.rates:
-            sent, read, lat = watch_rate(rate, args.seconds, hold)
-            print(f"2. fretc watch dds:// at {rate:g} Hz (2 topics, merge hold {hold:g} s): "
-                  f"{sent} sent, {read} read ({sent - read} not read); closing message -> "
-                  f"verdict {_pct(lat)}")
+            for watermark in (False, True):
+                sent, read, skipped, lat = watch_rate(rate, args.seconds, hold, watermark)
+                how = "watermark" if watermark else "hold alone"
+                print(f"2. fretc watch dds:// at {rate:g} Hz (2 topics, merge hold {hold:g} s, "
+                      f"{how}): {sent} sent, {read} read ({sent - read} not read, {skipped} "
+                      f"skipped as out of order); closing message -> verdict {_pct(lat)}",
+                      flush=True)
     return 0
 
 

@@ -46,6 +46,9 @@ __all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
 
 #: Seconds between two polls of the readers.
 POLL_SECONDS = 0.005
+#: an instance handle as one unsigned 64-bit number (Cyclone DDS's Python binding gives a
+#: reader's matched publications signed and a sample's publication handle unsigned)
+_HANDLE = 2**64 - 1
 #: a publisher known this long (s) whose topic has sent nothing is reported once
 #: (:meth:`DdsClient._check_silent`)
 SILENT_SECONDS = 3.0
@@ -232,7 +235,7 @@ class DdsClient:
         matched = {}
         for topic, (reader, _ros) in list(self._readers.items()):
             if reader is not None and self.wanted(topic):
-                matched[topic] = set(reader.get_matched_publications())
+                matched[topic] = {h & _HANDLE for h in reader.get_matched_publications()}
         self._merge.sync(matched)
         return got
 
@@ -258,7 +261,7 @@ class DdsClient:
                         continue
                 stamp = info.source_timestamp
                 log_time = self._clock if self._clock else (stamp if stamp > 0 else now)
-                self._merge.put(topic, log_time, data, now, info.publication_handle)
+                self._merge.put(topic, log_time, data, now, info.publication_handle & _HANDLE)
             if not (until_empty and batch):
                 return got
 

@@ -173,3 +173,55 @@ def test_threads_putting_in_any_interleaving_reach_the_queue_in_log_time_order()
     m.stop()
     got = _times(_released(q))
     assert got == sorted(t for r in plan.values() for t in r)
+
+
+def test_the_dds_client_releases_at_the_watermark(tmp_path):
+    """Two Cyclone DDS writers (fretc's replay server, in this process) of two topics, read by
+    the DDS client with a hold of an hour: the messages reach the queue in log-time order by
+    the watermark alone (each sample's publication handle names one of the readers' matched
+    writers); once one topic's publisher left, the other's last message goes too."""
+    import os
+    import queue
+    import struct
+
+    import pytest
+
+    pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
+                        "pip install 'fretc[watch]'")
+    from fretc.live.dds_client import DdsClient
+    from fretc.live.dds_serve import DdsServer
+    from fretc.live.dds_types import LOOPBACK_XML
+
+    xml = tmp_path / "loopback.xml"
+    xml.write_text(LOOPBACK_XML, encoding="utf-8")
+    url = f"dds://{171 + os.getpid() % 28}"
+    server = DdsServer(url, str(xml))
+    for t in ("/a", "/b"):
+        server.channel(t, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    q = EventQueue()
+    client = DdsClient(url, lambda t: t in ("/a", "/b"), topics=("/a", "/b"),
+                       config_file=str(xml), events=q, merge_hold=HOUR).start()
+    try:
+        assert server.wait_subscribed(["/a", "/b"], timeout=30)
+        payload = bytes([0, 1, 0, 0]) + struct.pack("<d", 1.0)  # CDR little endian
+        t0 = 1_700_000_000 * 10**9
+        for k in range(20):  # /b written before /a at each step, /a's time the earlier
+            server.log("/b", payload, t0 + 10 * k + 5)
+            server.log("/a", payload, t0 + 10 * k)
+        got: list[int] = []
+        while len(got) < 39:  # every message but /b's last: /a may still send before it
+            ev = q.get(timeout=30)
+            if ev[0] == "message":
+                got.append(ev[2] - t0)
+        server.unpublish("/a")  # /a's publisher left: /b's last message goes
+        while len(got) < 40:
+            ev = q.get(timeout=30)
+            if ev[0] == "message":
+                got.append(ev[2] - t0)
+        assert got == sorted(10 * k + d for k in range(20) for d in (0, 5))
+        with pytest.raises(queue.Empty):
+            while True:
+                assert q.get_nowait()[0] != "message"
+    finally:
+        client.stop()
+        server.stop()
