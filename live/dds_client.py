@@ -20,7 +20,8 @@ What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types: :mod:`f
   (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`), released
   at the watermark: after each poll the merge learns which writers each reader is matched
   with (:meth:`~fretc.live.merge.MergeBuffer.sync`), each sample naming its writer (its
-  publication handle);
+  publication handle); while a latched (transient-local) topic is read, the hold alone
+  releases (a publisher of it that appears sends its stored samples, of any age);
 * faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
   ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
   type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
@@ -107,6 +108,8 @@ class DdsClient:
         self._advertised: set[str] = set()
         self._clock: int | None = None
         self._qos_reported: set[str] = set()
+        #: topics read transient-local (latched): no watermark while one is read
+        self._latched: set[str] = set()
         #: topic -> wall time (ns) its first publisher was discovered; topics heard from
         self._known_since: dict[str, int] = {}
         self._heard: set[str] = set()
@@ -197,7 +200,7 @@ class DdsClient:
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
-        from fretc.live.dds_types import idl_struct, reader_qos
+        from fretc.live.dds_types import idl_struct, reader_qos, transient_local
 
         if topic == CLOCK_TOPIC and self._clock is None:
             self._clock = 0
@@ -224,6 +227,8 @@ class DdsClient:
             return
         tp: Topic[Any] = Topic(self._dp, dds_topic(topic), cls)
         self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
+        if transient_local(qos, topic):
+            self._latched.add(topic)
 
     def _read(self) -> bool:
         """Take every reader's samples, then set the merge's watermark from the writers each
@@ -232,10 +237,12 @@ class DdsClient:
         got = False
         for topic in list(self._readers):
             got |= self._take(topic)
-        matched = {}
+        matched: dict[str, set[int]] | None = {}
         for topic, (reader, _ros) in list(self._readers.items()):
-            if reader is not None and self.wanted(topic):
+            if reader is not None and self.wanted(topic) and matched is not None:
                 matched[topic] = {h & _HANDLE for h in reader.get_matched_publications()}
+                if topic in self._latched:  # a writer matched later sends stored samples
+                    matched = None  # of any age: the hold alone
         self._merge.sync(matched)
         return got
 

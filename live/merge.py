@@ -18,7 +18,15 @@ to come from them is older than the oldest of their latest ones, the *watermark*
 messages at or before it are released at once (:meth:`MergeBuffer.sync`). A matched writer
 that has delivered nothing yet (a publisher that appeared, or one that is silent since the
 watch started) leaves the watermark undefined, and a writer that stopped sending holds it
-back: then the hold alone releases, as without a watermark. Writers stay counted until the
+back: then the hold alone releases, as without a watermark. What the watermark cannot know
+is a writer the transport was not yet matched with at the last :meth:`sync`: its first
+messages are ordered if no newer one was released before them; on one host a writer's
+first message is written after the match, so it is newer than what was released, but the
+stored samples a latched (transient-local) writer sends on matching can be of any age
+(the DDS client syncs with ``matched`` None while it reads a latched topic) and a writer
+on a host whose clock is behind the watch's by more than a poll can have its first
+messages skipped (``clock_backwards``) where the hold would have ordered those overtaken by
+less than the hold. Writers stay counted until the
 transport says their topic's publishers are all gone (:meth:`MergeBuffer.forget`), after
 their last messages were put. Source of the rule: the low watermark of stream processing
 (Akidau et al., "The Dataflow Model", VLDB 2015), per writer as DDS orders samples per writer
@@ -88,15 +96,17 @@ class MergeBuffer:
         if spill is not None:
             self.events.put(spill)
 
-    def sync(self, matched: Mapping[str, Set[Hashable]]) -> None:
+    def sync(self, matched: Mapping[str, Set[Hashable]] | None) -> None:
         """Set the watermark from the messages put so far: ``matched`` is topic -> the ids of
         the writers the transport's subscription of it is matched with *now*, read after
         those messages were put (a writer matched later writes after this call). The
         watermark is the oldest latest log time over every writer that delivered (none
         forgotten), defined only when each writer in ``matched`` has delivered and no
-        message came without a writer id; else the hold alone releases."""
+        message came without a writer id; else (and for ``matched`` None: the transport
+        cannot tell) the hold alone releases."""
         with self._cond:
-            ok = all((t, w) in self._latest for t, ws in matched.items() for w in ws) \
+            ok = matched is not None \
+                and all((t, w) in self._latest for t, ws in matched.items() for w in ws) \
                 and all(w is not None for _, w in self._latest)
             self._watermark = min(self._latest.values()) if ok and self._latest else None
             self._cond.notify()

@@ -225,3 +225,60 @@ def test_the_dds_client_releases_at_the_watermark(tmp_path):
     finally:
         client.stop()
         server.stop()
+
+
+def test_a_transport_that_cannot_tell_its_writers_leaves_the_hold_alone():
+    q = EventQueue()
+    m = MergeBuffer(q, hold=HOUR)
+    m.put("/a", 10, b"", 0, "a1")
+    m.put("/a", 20, b"", 0, "a1")
+    m.sync({"/a": {"a1"}})
+    m._release()
+    assert _times(_released(q)) == [10, 20]
+    m.put("/a", 30, b"", 0, "a1")
+    m.sync(None)  # e.g. a latched topic read: a writer matched later sends old samples
+    m._release()
+    assert _released(q) == []
+
+
+def test_the_dds_client_reading_a_latched_topic_has_no_watermark(tmp_path):
+    """/tf_static is read transient-local (a writer that appears sends its stored samples, of
+    any age): while it is read, the hold alone releases, even with every writer heard."""
+    import os
+    import struct
+    import time
+
+    import pytest
+
+    pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
+                        "pip install 'fretc[watch]'")
+    from fretc.live.dds_client import DdsClient
+    from fretc.live.dds_serve import DdsServer
+    from fretc.live.dds_types import LOOPBACK_XML
+
+    xml = tmp_path / "loopback.xml"
+    xml.write_text(LOOPBACK_XML, encoding="utf-8")
+    url = f"dds://{141 + os.getpid() % 28}"
+    server = DdsServer(url, str(xml))
+    topics = ("/a", "/tf_static")
+    for t in topics:
+        server.channel(t, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    q = EventQueue()
+    client = DdsClient(url, lambda t: t in topics, topics=topics, config_file=str(xml),
+                       events=q, merge_hold=HOUR).start()
+    try:
+        assert server.wait_subscribed(list(topics), timeout=30)
+        payload = bytes([0, 1, 0, 0]) + struct.pack("<d", 1.0)
+        for k in range(5):
+            for t in topics:
+                server.log(t, payload, 1_700_000_000 * 10**9 + k)
+        deadline = time.monotonic() + 30
+        while len(client._merge._latest) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.2)  # a few polls (each syncs)
+        assert client._latched == {"/tf_static"}
+        assert len(client._merge._latest) == 2 and client._merge._watermark is None
+        assert all(ev[0] != "message" for ev in _released(q))
+    finally:
+        client.stop()
+        server.stop()
