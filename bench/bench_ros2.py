@@ -2,6 +2,7 @@
 transports), measured in one run.
 
     python bench/bench_ros2.py [--events 1000] [--rates 100 1000 2000 5000] [--seconds 10]
+                               [--parts 1 2]
 
 1. **The shield node's reaction.** The generated ROS 2 node of the Safe-ROS shield with R7
    (``requirements/shield/stay_stopped.fret``: while too close, a stop at once) between a rclpy
@@ -14,7 +15,12 @@ transports), measured in one run.
    R3 and R4 (100 ms ticks) records what it reads; per rate: messages sent and read (none
    dropped by fretc), and the latency from the message that closed a tick (its DDS source
    time, the publisher's wall clock) to that tick's verdicts, p50/p99, with the default merge
-   hold (0.1 s, the latency the log-time ordering adds) and with ``--merge-hold 0.01``.
+   hold (0.1 s, the latency the log-time ordering adds) and with ``--merge-hold 0.01``; each
+   both with the merge's watermark (fretc's, :mod:`fretc.live.merge`) and with the hold alone
+   (the watermark switched off in this script only), one after the other at each rate, so
+   both see the same machine load; and the messages that reached the merge older than one it
+   had released (skipped as ``clock_backwards``), by what released that one: the watermark
+   (never, if it is safe) or the hold (one too short for the load).
 """
 
 from __future__ import annotations
@@ -128,9 +134,50 @@ def shield_reaction(events: int) -> None:
           f"ways): {_pct(lat)}")
 
 
-def watch_rate(rate: float, seconds: float, hold: float) -> tuple[int, int, list[float]]:
-    """Part 2 at one rate: (sent, read, closing message -> verdict latencies in ms)."""
+class _Overtaken:
+    """Counts messages put into the merge older than one it already released, by what
+    released that one: the watermark (an unsafe watermark) or the hold (a hold too short)."""
+
+    def __init__(self) -> None:
+        self.newest: int | None = None
+        self.by = ""
+        self.counts = {"watermark": 0, "hold": 0}
+
+    def patches(self):
+        from unittest import mock
+
+        from fretc.live.merge import MergeBuffer
+
+        due, put, me = MergeBuffer._due, MergeBuffer.put, self
+
+        def _due(buf):
+            mark = buf._watermark
+            out = due(buf)
+            times = [e[2] for e in out if e[0] == "message"]
+            if times and (me.newest is None or max(times) > me.newest):
+                me.newest = max(times)
+                me.by = "watermark" if mark is not None and me.newest <= mark else "hold"
+            return out
+
+        def _put(buf, topic, log_time, *rest):
+            if me.newest is not None and log_time < me.newest:
+                me.counts[me.by] += 1
+            return put(buf, topic, log_time, *rest)
+
+        return (mock.patch.object(MergeBuffer, "_due", _due),
+                mock.patch.object(MergeBuffer, "put", _put))
+
+
+def watch_rate(rate: float, seconds: float, hold: float, watermark: bool = True
+               ) -> tuple[int, int, dict[str, int], list[float]]:
+    """Part 2 at one rate: (sent, read, messages overtaken by one the merge released, by
+    the watermark and by the hold, closing message -> verdict latencies in ms);
+    ``watermark`` False: the merge releases by its hold alone."""
+    from contextlib import ExitStack
+    from unittest import mock
+
     from fretc.audit import AuditConfig, load_plan
+    from fretc.live.merge import MergeBuffer
     from fretc.live.watch import Watch, WatchOptions
 
     domain = random.randint(1, 99)
@@ -151,16 +198,21 @@ def watch_rate(rate: float, seconds: float, hold: float) -> tuple[int, int, list
                                      record=rec, merge_hold=hold))
         ticks: list[float] = []
         w.on_tick = lambda i, t, dep, closing: ticks.append((time.time_ns() - closing) / 1e6)
-        th = threading.Thread(target=w.run, daemon=True)
-        th.start()
-        out, _ = pub.communicate(timeout=seconds + 60)
-        th.join(seconds + 60)
+        sync = MergeBuffer.sync if watermark else (lambda self, matched: None)
+        overtaken = _Overtaken()
+        with ExitStack() as stack:
+            for p in (mock.patch.object(MergeBuffer, "sync", sync), *overtaken.patches()):
+                stack.enter_context(p)
+            th = threading.Thread(target=w.run, daemon=True)
+            th.start()
+            out, _ = pub.communicate(timeout=seconds + 60)
+            th.join(seconds + 60)
         from mcap.reader import make_reader
 
         with open(rec, "rb") as fh:
             read = sum(1 for _s, ch, _m in make_reader(fh).iter_messages()
                        if ch.topic in ("/gwendolen_control", "/cmd_vel_filtered"))
-        return int(out.strip().splitlines()[-1]), read, ticks
+        return int(out.strip().splitlines()[-1]), read, overtaken.counts, ticks
 
 
 def main() -> int:
@@ -168,19 +220,25 @@ def main() -> int:
     ap.add_argument("--events", type=int, default=1000)
     ap.add_argument("--rates", type=float, nargs="+", default=[100, 1000, 2000, 5000])
     ap.add_argument("--seconds", type=float, default=10)
+    ap.add_argument("--parts", type=int, nargs="+", default=[1, 2], choices=[1, 2])
     args = ap.parse_args()
     try:
         import rclpy  # noqa: F401
     except ImportError:
         print("ROS 2 Jazzy's rclpy is not installed: pip install -e '.[test]'")
         return 2
-    shield_reaction(args.events)
-    for hold in (0.1, 0.01):
+    if 1 in args.parts:
+        shield_reaction(args.events)
+    for hold in (0.1, 0.01) if 2 in args.parts else ():
         for rate in args.rates:
-            sent, read, lat = watch_rate(rate, args.seconds, hold)
-            print(f"2. fretc watch dds:// at {rate:g} Hz (2 topics, merge hold {hold:g} s): "
-                  f"{sent} sent, {read} read ({sent - read} not read); closing message -> "
-                  f"verdict {_pct(lat)}")
+            for watermark in (False, True):
+                sent, read, late, lat = watch_rate(rate, args.seconds, hold, watermark)
+                how = "watermark" if watermark else "hold alone"
+                print(f"2. fretc watch dds:// at {rate:g} Hz (2 topics, merge hold {hold:g} s, "
+                      f"{how}): {sent} sent, {read} read ({sent - read} not read; overtaken "
+                      f"by a message released by the watermark {late['watermark']}, by the "
+                      f"hold {late['hold']}); closing message -> verdict {_pct(lat)}",
+                      flush=True)
     return 0
 
 

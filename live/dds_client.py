@@ -17,7 +17,11 @@ What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types: :mod:`f
   the watch's restart grace);
 * the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
   (the writer's clock), or the last ``/clock`` received when a ``/clock`` publication exists
-  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`);
+  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`), released
+  at the watermark: after each poll the merge learns which writers each reader is matched
+  with (:meth:`~fretc.live.merge.MergeBuffer.sync`), each sample naming its writer (its
+  publication handle); while a latched (transient-local) topic is read, the hold alone
+  releases (a publisher of it that appears sends its stored samples, of any age);
 * faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
   ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
   type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
@@ -43,6 +47,9 @@ __all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
 
 #: Seconds between two polls of the readers.
 POLL_SECONDS = 0.005
+#: an instance handle as one unsigned 64-bit number (Cyclone DDS's Python binding gives a
+#: reader's matched publications signed and a sample's publication handle unsigned)
+_HANDLE = 2**64 - 1
 #: a publisher known this long (s) whose topic has sent nothing is reported once
 #: (:meth:`DdsClient._check_silent`)
 SILENT_SECONDS = 3.0
@@ -101,6 +108,8 @@ class DdsClient:
         self._advertised: set[str] = set()
         self._clock: int | None = None
         self._qos_reported: set[str] = set()
+        #: topics read transient-local (latched): no watermark while one is read
+        self._latched: set[str] = set()
         #: topic -> wall time (ns) its first publisher was discovered; topics heard from
         self._known_since: dict[str, int] = {}
         self._heard: set[str] = set()
@@ -160,6 +169,7 @@ class DdsClient:
                 for t in list(self._readers):
                     self._take(t, until_empty=True)
                 for t in gone:
+                    self._merge.forget(t)  # its writers' last messages are put
                     self._merge.put_event(("unadvertise", time.time_ns(), [t]))
                 gone.clear()
 
@@ -190,7 +200,7 @@ class DdsClient:
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
-        from fretc.live.dds_types import idl_struct, reader_qos
+        from fretc.live.dds_types import idl_struct, reader_qos, transient_local
 
         if topic == CLOCK_TOPIC and self._clock is None:
             self._clock = 0
@@ -217,12 +227,23 @@ class DdsClient:
             return
         tp: Topic[Any] = Topic(self._dp, dds_topic(topic), cls)
         self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
+        if transient_local(qos, topic):
+            self._latched.add(topic)
 
     def _read(self) -> bool:
-        """Take every reader's samples; True when some came."""
+        """Take every reader's samples, then set the merge's watermark from the writers each
+        reader is matched with now (read after the takes: a writer matched later has
+        written nothing taken yet); True when some came."""
         got = False
         for topic in list(self._readers):
             got |= self._take(topic)
+        matched: dict[str, set[int]] | None = {}
+        for topic, (reader, _ros) in list(self._readers.items()):
+            if reader is not None and self.wanted(topic) and matched is not None:
+                matched[topic] = {h & _HANDLE for h in reader.get_matched_publications()}
+                if topic in self._latched:  # a writer matched later sends stored samples
+                    matched = None  # of any age: the hold alone
+        self._merge.sync(matched)
         return got
 
     def _take(self, topic: str, until_empty: bool = False) -> bool:
@@ -247,7 +268,7 @@ class DdsClient:
                         continue
                 stamp = info.source_timestamp
                 log_time = self._clock if self._clock else (stamp if stamp > 0 else now)
-                self._merge.put(topic, log_time, data, now)
+                self._merge.put(topic, log_time, data, now, info.publication_handle & _HANDLE)
             if not (until_empty and batch):
                 return got
 

@@ -131,6 +131,15 @@ def _policy(qos: Any, policy: Any) -> str | None:
         return None
 
 
+def transient_local(offered: Any = None, topic: str = "") -> bool:
+    """Whether :func:`reader_qos` asks ``topic``'s publisher offering ``offered`` for its
+    stored samples (transient-local durability: latched topics, ``/tf_static``)."""
+    from cyclonedds.qos import Policy
+
+    dur = _policy(offered, Policy.Durability)
+    return topic == "/tf_static" or (dur is not None and "Volatile" not in dur)
+
+
 def reader_qos(offered: Any = None, topic: str = "") -> Any:  # cyclonedds Qos
     """The QoS a ROS 2 subscription to a publisher offering ``offered`` (a
     ``cyclonedds.qos.Qos``, or None) would use so as to match it: reliable when offered
@@ -140,9 +149,8 @@ def reader_qos(offered: Any = None, topic: str = "") -> Any:  # cyclonedds Qos
     from cyclonedds.qos import Policy, Qos
 
     rel = _policy(offered, Policy.Reliability)
-    dur = _policy(offered, Policy.Durability)
     reliable = rel is None or "BestEffort" not in rel
-    transient = topic == "/tf_static" or (dur is not None and "Volatile" not in dur)
+    transient = transient_local(offered, topic)
     return Qos(Policy.Reliability.Reliable(max_blocking_time=100_000_000) if reliable
                else Policy.Reliability.BestEffort,
                Policy.Durability.TransientLocal if transient else Policy.Durability.Volatile,

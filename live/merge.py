@@ -8,6 +8,29 @@ message for :data:`HOLD_SECONDS` of wall time after it arrived and releases the 
 log-time order (equal times in arrival order): a message overtaken by less than the hold
 reaches the watch in order; one later than that is still skipped and reported. The hold is
 the latency a verdict gains on these transports.
+
+**The watermark.** A transport that knows, for each topic, which writers its subscription
+is matched with, and which writer sent each message (DDS: the reader's matched publications
+and each sample's publication handle, :mod:`fretc.live.dds_client`), releases earlier: each
+writer's messages come in log-time order (its source timestamps, in the order it wrote
+them), so once every matched writer of every topic has delivered a message, no message still
+to come from them is older than the oldest of their latest ones, the *watermark*; the held
+messages at or before it are released at once (:meth:`MergeBuffer.sync`). A matched writer
+that has delivered nothing yet (a publisher that appeared, or one that is silent since the
+watch started) leaves the watermark undefined, and a writer that stopped sending holds it
+back: then the hold alone releases, as without a watermark. What the watermark cannot know
+is a writer the transport was not yet matched with at the last :meth:`sync`: its first
+messages are ordered if no newer one was released before them; on one host a writer's
+first message is written after the match, so it is newer than what was released, but the
+stored samples a latched (transient-local) writer sends on matching can be of any age
+(the DDS client syncs with ``matched`` None while it reads a latched topic) and a writer
+on a host whose clock is behind the watch's by more than a poll can have its first
+messages skipped (``clock_backwards``) where the hold would have ordered those overtaken by
+less than the hold. Writers stay counted until the
+transport says their topic's publishers are all gone (:meth:`MergeBuffer.forget`), after
+their last messages were put. Source of the rule: the low watermark of stream processing
+(Akidau et al., "The Dataflow Model", VLDB 2015), per writer as DDS orders samples per writer
+(DDS 1.4 §2.2.2.5.1.9, ``BY_SOURCE_TIMESTAMP``).
 """
 
 from __future__ import annotations
@@ -15,6 +38,7 @@ from __future__ import annotations
 import heapq
 import threading
 import time
+from collections.abc import Hashable, Mapping, Set
 
 __all__ = ["MergeBuffer", "HOLD_SECONDS", "MAX_HELD"]
 
@@ -28,9 +52,11 @@ MAX_HELD = 10_000
 class MergeBuffer:
     """Hold ``("message", topic, log_time_ns, payload, wall_ns)`` events and put them on
     ``events`` (an :class:`~fretc.live.events.EventQueue`) in log-time order, :data:`HOLD_SECONDS`
-    (``hold``) after each arrived. Thread-safe: any number of producer threads.
+    (``hold``) after each arrived, or earlier at the watermark (module docstring) when the
+    transport calls :meth:`sync`. Thread-safe: any number of producer threads.
 
-    Call :meth:`start`, :meth:`put` messages, :meth:`stop` (releases what is held).
+    Call :meth:`start`, :meth:`put` messages (and :meth:`sync`), :meth:`stop` (releases what
+    is held).
     """
 
     def __init__(self, events, hold: float = HOLD_SECONDS) -> None:
@@ -41,6 +67,10 @@ class MergeBuffer:
         self._cond = threading.Condition()
         self._stopped = False
         self._thread: threading.Thread | None = None
+        #: (topic, writer) -> the latest log time (ns) it delivered
+        self._latest: dict[tuple[str, Hashable], int] = {}
+        #: log time (ns) at or before which held messages may go now; None: hold only
+        self._watermark: int | None = None
 
     def start(self) -> MergeBuffer:
         """Start the releasing thread."""
@@ -48,18 +78,45 @@ class MergeBuffer:
         self._thread.start()
         return self
 
-    def put(self, topic: str, log_time: int, payload: bytes, wall_ns: int) -> None:
-        """Hold one message (past :data:`MAX_HELD` held, the oldest goes on at once)."""
+    def put(self, topic: str, log_time: int, payload: bytes, wall_ns: int,
+            writer: Hashable = None) -> None:
+        """Hold one message (past :data:`MAX_HELD` held, the oldest goes on at once).
+        ``writer``: the id of the writer that sent it, as :meth:`sync`'s ``matched`` names it
+        (None: unknown; a topic with such messages never has a watermark)."""
         spill = None
         with self._cond:
             self._seq += 1
             heapq.heappush(self._heap, (log_time, self._seq, time.monotonic(),
                                         ("message", topic, log_time, payload, wall_ns)))
+            key = (topic, writer)
+            self._latest[key] = max(log_time, self._latest.get(key, log_time))
             if len(self._heap) > MAX_HELD:
                 spill = heapq.heappop(self._heap)[3]
             self._cond.notify()
         if spill is not None:
             self.events.put(spill)
+
+    def sync(self, matched: Mapping[str, Set[Hashable]] | None) -> None:
+        """Set the watermark from the messages put so far: ``matched`` is topic -> the ids of
+        the writers the transport's subscription of it is matched with *now*, read after
+        those messages were put (a writer matched later writes after this call). The
+        watermark is the oldest latest log time over every writer that delivered (none
+        forgotten), defined only when each writer in ``matched`` has delivered and no
+        message came without a writer id; else (and for ``matched`` None: the transport
+        cannot tell) the hold alone releases."""
+        with self._cond:
+            ok = matched is not None \
+                and all((t, w) in self._latest for t, ws in matched.items() for w in ws) \
+                and all(w is not None for _, w in self._latest)
+            self._watermark = min(self._latest.values()) if ok and self._latest else None
+            self._cond.notify()
+
+    def forget(self, topic: str) -> None:
+        """``topic``'s writers are all gone and their messages put: they no longer hold the
+        watermark back (from the next :meth:`sync`)."""
+        with self._cond:
+            for key in [k for k in self._latest if k[0] == topic]:
+                del self._latest[key]
 
     def put_event(self, event: tuple) -> None:
         """Hold another event (an ``unadvertise``: a publisher left) behind every message
@@ -72,28 +129,37 @@ class MergeBuffer:
             self._cond.notify()
 
     def _due(self) -> list[tuple]:
-        """The messages to release now (lock held): every message at or before the log time of
-        the newest one whose hold passed, in log-time order."""
-        now = time.monotonic()
-        ripe = [e for e in self._heap if now - e[2] >= self.hold]
-        if not ripe and not self._stopped:
-            return []
-        upto = max(e[0] for e in ripe) if ripe and not self._stopped else None
+        """The events to release now (lock held): every one at or before the watermark or
+        the log time of the newest message whose hold passed, in log-time order."""
+        if self._stopped:
+            upto = None
+        else:
+            now = time.monotonic()
+            ripe = [e[0] for e in self._heap if now - e[2] >= self.hold]
+            marks = ripe + ([self._watermark] if self._watermark is not None else [])
+            if not marks:
+                return []
+            upto = max(marks)
         out = []
         while self._heap and (upto is None or self._heap[0][0] <= upto):
             out.append(heapq.heappop(self._heap)[3])
         return out
 
+    def _release(self, wait: float = 0.0) -> bool:
+        """Wait up to ``wait`` seconds for a put, a sync or the stop, then put the due events
+        on the queue (by one thread: the releasing one); True when stopped and empty."""
+        with self._cond:
+            if wait > 0:
+                self._cond.wait(wait)
+            out = self._due()
+            done = self._stopped and not self._heap
+        for ev in out:
+            self.events.put(ev)
+        return done
+
     def _run(self) -> None:
-        while True:
-            with self._cond:
-                self._cond.wait(self.hold / 10)  # released within a tenth of the hold
-                out = self._due()
-                done = self._stopped and not self._heap
-            for ev in out:
-                self.events.put(ev)
-            if done:
-                return
+        while not self._release(self.hold / 10):  # released within a tenth of the hold
+            pass
 
     def stop(self) -> None:
         """Release everything held and end the thread."""

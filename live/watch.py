@@ -93,7 +93,8 @@ class WatchOptions:
             session configuration (``--zenoh-config``).
         merge_hold: DDS, Zenoh: seconds each message is held to be merged into log-time
             order with the other topics' (:mod:`fretc.live.merge`; ``--merge-hold``): the
-            latency a verdict gains, against out-of-order arrivals reported.
+            latency a verdict gains, against out-of-order arrivals reported; DDS releases
+            earlier at the watermark (every matched writer past the message).
         restart_grace: seconds a bound topic's publisher has, once every bound topic was
             unadvertised, to advertise it again and continue the same run (a node restart);
             0 ends the run at once (``--restart-grace``).

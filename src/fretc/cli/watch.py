@@ -183,7 +183,8 @@ URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", 
 @click.option("--merge-hold", type=FiniteRange(0, 10), default=0.1, show_default=True,
               metavar="SECONDS", help="dds://, zenoh://: hold each message this long to merge "
               "the topics into log-time order (the latency a verdict gains; a message "
-              "overtaken by more is reported, clock_backwards).")
+              "overtaken by more is reported, clock_backwards); dds:// releases earlier, "
+              "once every matched writer has sent a later message (the watermark).")
 @click.option("--zenoh-config", type=click.Path(exists=True, dir_okay=False), default=None,
               help="zenoh://: a Zenoh JSON5 session configuration (TLS, access control) read "
                    "before fretc sets peer mode and the endpoint.")
