@@ -50,14 +50,11 @@ def _tracks(minutes: float, seed: int = 11) -> list[dict[int, float]]:
     return rows
 
 
-def write_tracks(path: str | Path, minutes: float) -> int:
-    """Write ``minutes`` of ``/tracks`` to ``path``; returns the number of messages.
-
-    Raises ``OSError`` if the file cannot be written.
-    """
+def _write_rows(path: str | Path, rows: list[dict[int, float]]) -> int:
+    """Write ``rows`` (per message, id -> distance in m) as ``/tracks`` at 10 Hz to ``path``
+    (ROS 2 MCAP); returns the number of messages. Raises ``OSError``."""
     store = _store()
     Track, Arr = store.types["tracking_msgs/msg/Track"], store.types["tracking_msgs/msg/TrackArray"]
-    rows = _tracks(minutes)
     with open(path, "wb") as f:
         w = Writer(f, chunk_size=1 << 20, compression=CompressionType.ZSTD)
         w.start(profile="ros2", library="fretc-bench")
@@ -73,17 +70,31 @@ def write_tracks(path: str | Path, minutes: float) -> int:
     return len(rows)
 
 
-def tracks_reference(minutes: float, bound: float) -> dict[int, int | None]:
-    """Id -> log time (ns) of the first message where that obstacle is tracked at most
-    ``bound`` metres away, None if never: the first violation of ``in present mode ...
-    always satisfy dist > bound`` per entity."""
+def write_tracks(path: str | Path, minutes: float) -> int:
+    """Write ``minutes`` of ``/tracks`` to ``path``; returns the number of messages.
+
+    Raises ``OSError`` if the file cannot be written.
+    """
+    return _write_rows(path, _tracks(minutes))
+
+
+def _first_close(rows: list[dict[int, float]], bound: float) -> dict[int, int | None]:
+    """Id -> log time (ns) of the first of ``rows`` (messages at 10 Hz) where it is at most
+    ``bound`` metres away, None if never."""
     out: dict[int, int | None] = {}
-    for k, r in enumerate(_tracks(minutes)):
+    for k, r in enumerate(rows):
         for i, d in r.items():
             out.setdefault(i, None)
             if d <= bound and out[i] is None:
                 out[i] = EPOCH_NS + k * PERIOD_NS
     return out
+
+
+def tracks_reference(minutes: float, bound: float) -> dict[int, int | None]:
+    """Id -> log time (ns) of the first message where that obstacle is tracked at most
+    ``bound`` metres away, None if never: the first violation of ``in present mode ...
+    always satisfy dist > bound`` per entity."""
+    return _first_close(_tracks(minutes), bound)
 
 
 def many_tracks(entities: int, alive: int = 5) -> list[dict[int, float]]:
@@ -101,31 +112,10 @@ def many_tracks(entities: int, alive: int = 5) -> list[dict[int, float]]:
 def write_many_tracks(path: str | Path, entities: int, alive: int = 5) -> int:
     """Write :func:`many_tracks` as ``/tracks`` at 10 Hz to ``path`` (ROS 2 MCAP); returns
     the number of messages. Raises ``OSError`` if the file cannot be written."""
-    store = _store()
-    Track, Arr = store.types["tracking_msgs/msg/Track"], store.types["tracking_msgs/msg/TrackArray"]
-    rows = many_tracks(entities, alive)
-    with open(path, "wb") as f:
-        w = Writer(f, chunk_size=1 << 20, compression=CompressionType.ZSTD)
-        w.start(profile="ros2", library="fretc-bench")
-        text = store.generate_msgdef("tracking_msgs/msg/TrackArray", ros_version=2)[0]
-        sid = w.register_schema("tracking_msgs/msg/TrackArray", "ros2msg", text.encode())
-        ch = w.register_channel("/tracks", "cdr", sid)
-        for k, r in enumerate(rows):
-            t = EPOCH_NS + k * PERIOD_NS
-            msg = Arr(tracks=[Track(id=i, distance=d) for i, d in sorted(r.items())])
-            w.add_message(ch, log_time=t, publish_time=t, data=bytes(
-                store.serialize_cdr(msg, "tracking_msgs/msg/TrackArray")), sequence=k)
-        w.finish()
-    return len(rows)
+    return _write_rows(path, many_tracks(entities, alive))
 
 
 def many_reference(entities: int, alive: int = 5, bound: float = 1.0) -> dict[int, int | None]:
     """Id -> log time (ns) of the first message where that obstacle of :func:`many_tracks`
     is at most ``bound`` metres away, None if never."""
-    out: dict[int, int | None] = {}
-    for k, r in enumerate(many_tracks(entities, alive)):
-        for i, d in r.items():
-            out.setdefault(i, None)
-            if d <= bound and out[i] is None:
-                out[i] = EPOCH_NS + k * PERIOD_NS
-    return out
+    return _first_close(many_tracks(entities, alive), bound)

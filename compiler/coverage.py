@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 from fretc.fretish import ast as A
 
-__all__ = ["Obligation", "obligations", "atoms_of", "expr_text", "replace_atom",
+__all__ = ["Obligation", "obligations", "other_condition_kind", "atoms_of", "expr_text", "replace_atom",
            "with_ticks", "FIELDS", "TIMINGS"]
 
 #: the fields whose atoms get obligations, in sentence order
@@ -233,6 +233,18 @@ def _threshold(rid: str, field: str, atom: A.Expr) -> list[Obligation]:
             for side in (True, False)]
 
 
+def other_condition_kind(req: A.Requirement) -> tuple[str, A.Requirement] | None:
+    """``req`` with its condition read as the other of FRET's condition kinds (``regular``:
+    ``upon``/``when``/``if``, a trigger at each rising edge; ``holding``: ``whenever``, at every
+    tick the condition holds), with the qualifier that writes it; None without a condition."""
+    if req.condition.kind not in _OTHER_CONDITION:
+        return None
+    other, word = _OTHER_CONDITION[req.condition.kind]
+    parts = tuple(dataclasses.replace(p, qualifier=word) for p in req.condition.parts)
+    return word, dataclasses.replace(req, condition=dataclasses.replace(
+        req.condition, kind=other, parts=parts))
+
+
 def _structural(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligation]:
     out = []
     kind = req.scope.kind
@@ -259,15 +271,14 @@ def _structural(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligat
             "obligation is judged (with the condition false throughout it would be vacuous)",
             dataclasses.replace(req, condition=dataclasses.replace(
                 req.condition, expr=A.BoolLit(False), parts=())), ticks))
-    if req.condition.kind in _OTHER_CONDITION:
-        other, word = _OTHER_CONDITION[req.condition.kind]
-        parts = tuple(dataclasses.replace(p, qualifier=word) for p in req.condition.parts)
+    swapped = other_condition_kind(req)
+    if swapped is not None:
+        word, variant = swapped
         out.append(Obligation(
             rid, "trigger-persists", "trigger",
             "the trigger persists: the condition holds past its first tick (or comes back) "
             f"and that decides the verdict (read as '{word}' the verdict would differ)",
-            dataclasses.replace(req, condition=dataclasses.replace(
-                req.condition, kind=other, parts=parts)), ticks))
+            variant, ticks))
     if req.timing.kind in _DEADLINE_WORDS and ticks is not None:
         reached, missed = _DEADLINE_WORDS[req.timing.kind]
         if ticks >= 1:

@@ -22,7 +22,8 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator
 
-from fretc.compiler.coverage import FIELDS, atoms_of, expr_text, replace_atom, with_ticks
+from fretc.compiler.coverage import (FIELDS, atoms_of, expr_text, other_condition_kind,
+                                     replace_atom, with_ticks)
 from fretc.fretish import ast as A
 
 __all__ = ["mutants"]
@@ -94,12 +95,9 @@ def _structure_mutants(req: A.Requirement, ticks: int | None
             if kind != req.scope.kind:
                 yield f"scope {kind}", dataclasses.replace(
                     req, scope=dataclasses.replace(req.scope, kind=kind))
-    if req.condition.kind in ("regular", "holding"):
-        kind, word = (("holding", "whenever") if req.condition.kind == "regular"
-                      else ("regular", "upon"))
-        parts = tuple(dataclasses.replace(p, qualifier=word) for p in req.condition.parts)
-        yield f"condition {word}", dataclasses.replace(req, condition=dataclasses.replace(
-            req.condition, kind=kind, parts=parts))
+    swapped = other_condition_kind(req)
+    if swapped is not None:
+        yield f"condition {swapped[0]}", swapped[1]
     if req.timing.kind not in A.STOP_TIMINGS:
         for kind in _TIMINGS:
             if kind == req.timing.kind:
