@@ -128,7 +128,8 @@ def _json_log(path: Path, schema: dict | None, messages: list[dict]) -> None:
 def test_json_topics_without_a_field_list_get_their_fields_from_the_messages(tmp_path):
     msgs = [{"x": i, "ok": i % 2 == 0, "mode": "auto" if i < 3 else "manual",
              "nested": {"y": 2.5 * i}, "arr": [i, -i], "tracks": [{"d": 1.0 + i}],
-             "maybe": [] if i == 0 else [1.5]} for i in range(5)]
+             "maybe": [] if i == 0 else [1.5], "bag": [1, "a"] if i == 4 else [1, 2]}
+            for i in range(5)]
     for schema in (None, {"type": "object"}):
         log = tmp_path / f"j{schema is not None}.mcap"
         _json_log(log, schema, msgs)
@@ -141,7 +142,7 @@ def test_json_topics_without_a_field_list_get_their_fields_from_the_messages(tmp
             "/thing.x": "number", "/thing.ok": "boolean", "/thing.mode": "string",
             "/thing.nested.y": "number", "/thing.arr": "number[]",
             "/thing.tracks": "object[]", "/thing.tracks[:].d": "number",
-            "/thing.maybe": "number[]"}
+            "/thing.maybe": "number[]", "/thing.bag": "mixed[]"}
         assert (f["/thing.x"]["min"], f["/thing.x"]["max"]) == (0, 4)
         assert (f["/thing.arr"]["min"], f["/thing.arr"]["max"]) == (-4, 4)
         assert (f["/thing.ok"]["true"], f["/thing.ok"]["false"]) == (3, 2)

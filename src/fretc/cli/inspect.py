@@ -204,7 +204,8 @@ def _visit(plan: list, obj) -> None:
 def _visit_untyped(prefix: str, obj: Any, stats: dict[str, _Stat]) -> None:
     """Add the values of a message decoded without a field list (a ``SimpleNamespace``
     tree, as the JSON reader gives: :mod:`fretc.logs.encodings`) to ``stats``, each field
-    typed by its JSON value; a field whose values change type is ``mixed``."""
+    typed by its JSON value; a field whose values change type is ``mixed``, an array whose
+    items do ``mixed[]``."""
     import numpy as np  # lazy: as in _Stat
 
     for name, v in vars(obj).items():
@@ -216,17 +217,19 @@ def _visit_untyped(prefix: str, obj: Any, stats: dict[str, _Stat]) -> None:
             continue
         if isinstance(v, np.ndarray) or isinstance(v, (list, tuple)):
             items = list(v)
-            if items and all(hasattr(x, "__dict__") for x in items):
+            if not items:
+                kind = "array"  # no item: the items' type comes with a later message
+            elif all(hasattr(x, "__dict__") for x in items):
                 kind = "object[]"
             elif all(isinstance(x, bool | np.bool_) for x in items):
-                kind = "boolean[]" if items else "array"
+                kind = "boolean[]"
             elif all(isinstance(x, int | float | np.number) and not isinstance(x, bool)
                      for x in items):
                 kind = "number[]"
             elif all(isinstance(x, str) for x in items):
                 kind = "string[]"
             else:
-                kind = "array"
+                kind = "mixed[]"  # items of several JSON types
         elif isinstance(v, bool):
             kind = "boolean"
         elif isinstance(v, int | float):
@@ -242,7 +245,8 @@ def _visit_untyped(prefix: str, obj: Any, stats: dict[str, _Stat]) -> None:
             if st.type == "array" and kind.endswith("[]"):
                 st.type = kind  # an empty array first: its items' type when one comes
             elif not (kind == "array" and st.type.endswith("[]")):
-                st.type = "mixed"
+                st.type = "mixed[]" if kind.endswith("[]") and st.type.endswith("[]") \
+                    else "mixed"
         if kind == "object[]":
             st.lengths.add(len(items))
             for x in items:
