@@ -42,6 +42,7 @@ from fretc.check.smt import max_bound
 from fretc.check.solver import UNKNOWN
 from fretc.check.witness import _atoms
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
+from fretc.check.predicates import PredicateBudget, clusters
 from fretc.check.safety_game import Outside, game_atoms, letter_name
 from fretc.compiler.printers import mangle, to_smv, to_spot
 
@@ -92,11 +93,14 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
         ans = decide(comp)
         if ans == UNKNOWN:
             entry["realizable"] = "unknown"
+            why = decide.inexact.get(tuple(x.index for x in comp))
+            if why:
+                entry["why"] = why
             result.findings.append(Finding(
                 "unknown", "unknown", _ids(comp),
-                "realizability of " + ", ".join(_ids(comp)) + " unknown: the game ran past "
-                "its work or memory budget (--budget, --memory-budget) or Spot could not take "
-                "it (see the notes)"))
+                "realizability of " + ", ".join(_ids(comp)) + " unknown: " + (
+                    why or "the game ran past its work or memory budget (--budget, "
+                    "--memory-budget) or Spot could not take it (see the notes)")))
         elif ans["realizable"]:
             entry["realizable"] = True
             entry["method"] = ans["method"]
@@ -123,6 +127,8 @@ class _Decider:
         self.checker, self.inputs = checker, inputs
         self.cache: dict[tuple, Any] = {}
         self.notes: list[str] = []
+        #: items' indexes -> why Spot's answer for them was not exact (they are UNKNOWN)
+        self.inexact: dict[tuple, str] = {}
 
     def __call__(self, items) -> Any:  # UNKNOWN or a dict
         key = tuple(x.index for x in items)
@@ -236,8 +242,11 @@ class _Decider:
                           and (c := simple_comparison(a)) and c[0] in inputs})
         out_vars = sorted({c[0] for a in atoms if a.op == "cmp"
                            and (c := simple_comparison(a)) and c[0] not in inputs})
-        inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars))
-        inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars))
+        env_clusters, ctl_clusters, ctl_why, env_why = _predicate_invariants(phis, inputs)
+        inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars),
+                            env_clusters)
+        inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars),
+                             ctl_clusters)
         if inv_in.op == "true":  # a conjunction: one automaton per conjunct
             parts = [p for p in phis + [inv_out] if p.op != "true"] or [ir.TRUE]
             spec_text: str | tuple[str, ...] = tuple(to_spot(p) for p in parts)
@@ -254,11 +263,58 @@ class _Decider:
         if ans == UNKNOWN:
             checker.unknown += 1
             return UNKNOWN
+        if ans[0] and ctl_why or not ans[0] and env_why:
+            checker.unknown += 1
+            self.inexact[tuple(x.index for x in items)] = (
+                ("realizable" if ans[0] else "unrealizable")
+                + " over the propositional abstraction only, whose "
+                + ("controller" if ans[0] else "environment")
+                + " may give comparisons truth values no numbers give: "
+                + "; ".join(ctl_why if ans[0] else env_why))
+            return UNKNOWN
         if ans[0]:
             return {"realizable": True, "method": "Spot's synthesis game",
                     "mealy_states": ans[1]}
         return {"realizable": False, "method": "Spot's synthesis game", "counter": ans[1],
                 "note": "", "run": []}
+
+
+def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
+                          ) -> tuple[ir.Node, ir.Node, list[str], list[str]]:
+    """The comparisons of several variables in ``phis`` made exact for Spot's game
+    (:mod:`fretc.check.predicates`): ``(environment's invariant, controller's invariant, why
+    a realizable answer is not exact, why an unrealizable one is not)``, the invariants ``G``
+    of the clusters' valuations that numbers realize. A cluster z3 cannot decide tick by tick
+    (a previous value, ``preReal``; past its budget) leaves its player free to choose truth
+    values no numbers give: a win of that player proves nothing. A cluster of inputs and
+    outputs is not exact for either: which truth values the controller can give depends on
+    the numbers the environment chose."""
+    undecided: list = []
+    try:
+        found = clusters(phis, inputs, undecided=undecided)
+    except PredicateBudget as exc:
+        return ir.TRUE, ir.TRUE, [str(exc)], [str(exc)]
+    env_inv: list[ir.Node] = []
+    ctl_inv: list[ir.Node] = []
+    ctl_why: list[str] = []
+    env_why: list[str] = []
+    for c, why in [(c, None) for c in found] + undecided:
+        ins = [v for v in c.variables if v in inputs]
+        if ins and len(ins) < len(c.variables):
+            text = (why + "; " if why else "") + (
+                f"{', '.join(to_smv(a) for a in c.atoms)} compare the input(s) "
+                f"{', '.join(ins)} with the output(s) "
+                f"{', '.join(v for v in c.variables if v not in inputs)}, whose truth values "
+                "the controller can give depend on the inputs' numbers")
+            ctl_why.append(text)
+            env_why.append(text)
+        elif why is not None:
+            (env_why if c.is_input else ctl_why).append(why)
+        else:
+            (env_inv if c.is_input else ctl_inv).append(c.invariant)
+    env, ctl = ir.and_all(*env_inv), ir.and_all(*ctl_inv)
+    return (ir.TRUE if env.op == "true" else ir.G(env),
+            ir.TRUE if ctl.op == "true" else ir.G(ctl), ctl_why, env_why)
 
 
 def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],

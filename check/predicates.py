@@ -1,0 +1,213 @@
+"""Comparisons of several variables (``x < y``, ``a + b > c``, ``state = ap_standby_state``)
+decided by z3: which truth values of linked comparisons real numbers realize.
+
+The numeric abstraction (:mod:`fretc.check.numeric_abstraction`) ties together the
+comparisons of *one* variable with constants; a comparison of several variables is an
+independent proposition there, which a game's player may set to truth values no numbers give
+(``x < y`` and ``y < x`` together). Per **cluster** (the comparisons linked by the numeric
+variables they share, comparisons of one variable with a constant included), z3 decides which
+valuations of the cluster's atoms real numbers realize (the variables read as reals), by lazy
+enumeration with unsat cores (the lemmas of DPLL(T), Nieuwenhuis, Oliveras, Tinelli, JACM 53,
+2006): a propositional search proposes a valuation, z3 decides it; a realizable one is kept
+(its model handed to the caller), an unrealizable one is excluded with its unsat core. The
+invariant (the conjunction of the cores' negations) is exact: every valuation it allows was
+found realizable, every one it excludes has no numbers.
+
+Used by ``fretc check``'s realizability (:mod:`fretc.check.realizability`: the invariants
+join the environment's assumptions and the controller's obligations) and by the shield
+(:mod:`fretc.shield.predicates`: its overrides take the models' numbers).
+
+Only comparisons whose truth at a tick depends on that tick's numbers can be decided so;
+:func:`undecidable` says why one cannot (a previous value, ``preReal``; a function z3 is not
+given).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+from fretc.check.numeric_abstraction import simple_comparison
+from fretc.compiler import ir
+from fretc.compiler.ir import Node
+from fretc.compiler.printers import to_smv
+
+__all__ = ["Cluster", "PredicateBudget", "MAX_VALUATIONS", "FUNCTIONS", "is_predicate",
+           "undecidable", "comparisons", "clusters"]
+
+#: the most valuations (realizable plus excluded by a core) z3 is asked about per cluster
+MAX_VALUATIONS = 4096
+#: the functions a comparison may apply, with their arity (FRET's names)
+FUNCTIONS = {"absReal": 1, "absInt": 1, "minReal": 2, "minInt": 2, "maxReal": 2, "maxInt": 2}
+_ARITH = ("+", "-", "*", "/")
+
+#: called with (cluster, z3 model, z3 reals by variable, the valuation) for each realizable
+#: valuation found; returns what :attr:`Cluster.witnesses` keeps for it
+Witness = Callable[["Cluster", Any, dict[str, Any], tuple[bool, ...]], Any]
+
+
+class PredicateBudget(Exception):
+    """A cluster with more valuations than :data:`MAX_VALUATIONS` to decide."""
+
+
+def is_predicate(node: Node) -> bool:
+    """Is ``node`` a comparison the numeric abstraction leaves free (not a boolean variable,
+    not one variable against a constant)?"""
+    return node.op == "cmp" and simple_comparison(node) is None
+
+
+def undecidable(node: Node) -> str | None:
+    """Why the truth values of the comparison ``node`` cannot be decided tick by tick from
+    that tick's numbers, or None when they can."""
+    for n in ir.walk(node):
+        if n.op == "pre":
+            return (f"{to_smv(node)} reads the previous value of a number ({to_smv(n)}): "
+                    "which truth values it can take depends on the tick before")
+        if n.op == "fn" and FUNCTIONS.get(ir.name_of(n)) != len(n.args):
+            return f"{to_smv(node)} applies {to_smv(n)}, a function z3 is not given"
+        if n.op not in ("cmp", "var", "num", "neg", "arith", "fn"):
+            return f"{to_smv(node)} has {to_smv(n)}, a term z3 is not given"
+        if n.op == "arith" and ir.name_of(n) not in _ARITH:
+            return f"{to_smv(node)} has the operator {ir.name_of(n)}, which z3 is not given"
+    return None
+
+
+@dataclass
+class Cluster:
+    """Numeric atoms linked by their variables, at least one a predicate: ``atoms`` (IR
+    comparisons, first-seen order), ``variables`` the FRET variables they read, ``is_input``
+    the environment's (every variable an input), ``invariant`` the valuations real numbers
+    realize (propositional IR over ``atoms``), ``witnesses`` realizable valuation (a bool
+    per atom) -> what the caller's :data:`Witness` made of z3's model (None without one)."""
+
+    atoms: list[Node]
+    variables: list[str]
+    is_input: bool
+    invariant: Node = ir.TRUE
+    witnesses: dict[tuple[bool, ...], Any] = field(default_factory=dict)
+
+
+def comparisons(formulas: Sequence[Node]) -> list[Node]:
+    """Every comparison node of ``formulas``, first-seen order, without repeats."""
+    out: list[Node] = []
+    seen: set[Node] = set()
+    for f in formulas:
+        for n in ir.walk(f):
+            if n.op == "cmp" and n not in seen:
+                seen.add(n)
+                out.append(n)
+    return out
+
+
+def clusters(formulas: Sequence[Node], inputs: Sequence[str],
+             witness: Witness | None = None,
+             undecided: list[tuple[Cluster, str]] | None = None) -> list[Cluster]:
+    """The clusters of the comparisons of ``formulas`` (module docstring), each decided by
+    z3; ``witness`` turns the model of each realizable valuation into what the cluster keeps.
+    With ``undecided`` (a list), a cluster holding a predicate :func:`undecidable` refuses is
+    appended to it with the reason, undecided (its invariant TRUE), instead of raising.
+
+    Raises:
+        PredicateBudget: a cluster past :data:`MAX_VALUATIONS`.
+        ValueError: without ``undecided``, a predicate :func:`undecidable` refuses (its
+            message)."""
+    numeric = comparisons(formulas)
+    if undecided is None:
+        for n in numeric:
+            if is_predicate(n) and (why := undecidable(n)) is not None:
+                raise ValueError(why)
+    parent: dict[str, str] = {}
+
+    def find(v: str) -> str:
+        while parent.setdefault(v, v) != v:
+            v = parent[v]
+        return v
+
+    for n in numeric:
+        names = [ir.name_of(x) for x in ir.walk(n) if x.op == "var"]
+        for v in names[1:]:
+            a, b = find(names[0]), find(v)
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+    groups: dict[str, list[Node]] = {}
+    for n in numeric:
+        first = next((ir.name_of(x) for x in ir.walk(n) if x.op == "var"), None)
+        if first is not None:
+            groups.setdefault(find(first), []).append(n)
+    out = []
+    for atoms in groups.values():
+        if not any(is_predicate(a) for a in atoms):
+            continue
+        names = list(dict.fromkeys(ir.name_of(x) for a in atoms for x in ir.walk(a)
+                                   if x.op == "var"))
+        c = Cluster(atoms, names, all(v in inputs for v in names))
+        why = next((w for a in atoms if is_predicate(a) and (w := undecidable(a))), None)
+        if why is not None and undecided is not None:
+            undecided.append((c, why))
+            continue
+        _decide(c, witness)
+        out.append(c)
+    return out
+
+
+def _z3(n: Node, reals: dict[str, Any]) -> Any:
+    import z3
+
+    if n.op == "cmp":
+        a, b = _z3(n.args[0], reals), _z3(n.args[1], reals)
+        op = ir.name_of(n)
+        return {"<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b, "=": a == b,
+                "!=": a != b}[op]
+    if n.op == "var":
+        return reals[ir.name_of(n)]
+    if n.op == "num":
+        return z3.RealVal(str(Fraction(ir.name_of(n))))
+    if n.op == "neg":
+        return -_z3(n.args[0], reals)
+    if n.op == "fn":
+        xs = [_z3(a, reals) for a in n.args]
+        name = ir.name_of(n)
+        if name.startswith("abs"):
+            return z3.If(xs[0] >= 0, xs[0], -xs[0])
+        if name.startswith("min"):
+            return z3.If(xs[0] <= xs[1], xs[0], xs[1])
+        return z3.If(xs[0] >= xs[1], xs[0], xs[1])
+    a, b = _z3(n.args[0], reals), _z3(n.args[1], reals)
+    op = ir.name_of(n)
+    return a + b if op == "+" else a - b if op == "-" else a * b if op == "*" else a / b
+
+
+def _decide(c: Cluster, witness: Witness | None) -> None:
+    """Fill ``c.invariant`` and ``c.witnesses`` (module docstring)."""
+    import z3
+
+    reals = {v: z3.Real(v) for v in c.variables}
+    bs = [z3.Bool(f"p{k}") for k in range(len(c.atoms))]
+    theory = z3.Solver()
+    for b, a in zip(bs, c.atoms):
+        theory.add(b == _z3(a, reals))
+    search = z3.Solver()
+    lemmas: list[Node] = []
+    asked = 0
+    while search.check() == z3.sat:
+        asked += 1
+        if asked > MAX_VALUATIONS:
+            raise PredicateBudget(
+                f"the comparisons {', '.join(to_smv(a) for a in c.atoms)} have more than "
+                f"{MAX_VALUATIONS} valuations to decide")
+        model = search.model()
+        values = tuple(z3.is_true(model.eval(b, model_completion=True)) for b in bs)
+        lits = [b if v else z3.Not(b) for b, v in zip(bs, values)]
+        if theory.check(*lits) == z3.sat:
+            c.witnesses[values] = (witness(c, theory.model(), reals, values)
+                                   if witness is not None else None)
+            search.add(z3.Not(z3.And(*lits)))
+            continue
+        core = {str(x) for x in theory.unsat_core()}
+        picked = [(k, v) for k, (lit, v) in enumerate(zip(lits, values)) if str(lit) in core]
+        search.add(z3.Not(z3.And(*(lits[k] for k, _v in picked))))
+        lemmas.append(ir.not_(ir.and_all(*(c.atoms[k] if v else ir.not_(c.atoms[k])
+                                             for k, v in picked))))
+    c.invariant = ir.and_all(*lemmas)

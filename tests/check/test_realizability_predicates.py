@@ -1,0 +1,105 @@
+"""Realizability with comparisons of several variables (:mod:`fretc.check.predicates`):
+Spot's game takes each such comparison as a proposition, so a player could give ``x < y``
+and ``y < x`` both true. The clusters' invariants make the per-tick ones exact; a
+comparison z3 cannot decide tick by tick (``preReal``) or one of inputs and outputs makes
+the win of the player it favours ``unknown``, never ``realizable``/``unrealizable``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from fretc.compiler.build import compile_entries
+from fretc.fretish.files import load_requirements
+from fretc.shield.build import build_shield
+from fretc.shield.plan import ShieldError
+from tests.check.test_safety_game import realizability_of
+
+
+def test_a_controller_cannot_make_x_below_y_and_y_below_x(tmp_path: Path) -> None:
+    """Before the invariants, Spot's controller set both atoms true: realizable."""
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x < y\n"
+                                     "B: the sw shall always satisfy y < x\n", [])
+    assert got["realizable"] is False
+
+
+def test_per_tick_comparisons_of_outputs_stay_decided(tmp_path: Path) -> None:
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x < y\n"
+                                     "B: whenever i the sw shall immediately satisfy y < 3 & x > 1\n",
+                           ["i"])
+    assert got["realizable"] is True
+
+
+def test_an_environment_cannot_make_a_below_b_and_b_below_a(tmp_path: Path) -> None:
+    """The environment's spurious win: both atoms true forces o and !o."""
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy (a < b & b < a) -> o\n"
+                                     "B: the sw shall always satisfy (a < b & b < a) -> !o\n",
+                           ["a", "b"])
+    assert got["realizable"] is True
+
+
+def test_a_previous_value_of_an_output_makes_realizable_unknown(tmp_path: Path) -> None:
+    """x starts at 10 and moves by at most 1 a tick: it cannot be at most 0 within 3 ticks.
+    The abstraction's controller sets the rate atom true while x jumps: it said realizable."""
+    got = realizability_of(tmp_path, (
+        "A: the sw shall immediately satisfy x = 10.0\n"
+        "B: the sw shall always satisfy FTP | absReal(preReal(0.0, x) - x) <= 1.0\n"
+        "C: the sw shall within 3 ticks satisfy x <= 0.0\n"), [])
+    assert got["realizable"] == "unknown"
+    assert "previous value" in got["why"] and "preReal" in got["why"]
+
+
+def test_a_comparison_of_an_input_and_an_output_makes_realizable_unknown(tmp_path: Path) -> None:
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x > a\n", ["a"])
+    assert got["realizable"] == "unknown"
+    assert "input(s) a with the output(s) x" in got["why"]
+
+
+def test_an_unrealizable_answer_stands_against_a_freer_controller(tmp_path: Path) -> None:
+    """A preReal atom the controller sets freely cannot make it lose: unrealizable stands."""
+    got = realizability_of(tmp_path, (
+        "A: the sw shall always satisfy o\n"
+        "B: whenever i the sw shall immediately satisfy !o\n"
+        "C: the sw shall always satisfy FTP | absReal(preReal(0.0, x) - x) <= 1.0\n"), ["i"])
+    assert got["realizable"] is False
+
+
+_ATOMS = ["x < y", "y < x", "x + y > 3.0", "x > 2.0", "i", "o"]
+_FORMS = ["the sw shall always satisfy {a} -> {b}",
+          "whenever {a} the sw shall immediately satisfy {b}",
+          "upon {a} the sw shall at the next timepoint satisfy {b}",
+          "the sw shall always satisfy {a} | {b}",
+          "the sw shall always satisfy {a} & {b}"]
+
+
+@pytest.mark.slow
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                   HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(st.sampled_from(_FORMS), st.sampled_from(_ATOMS),
+                          st.sampled_from(_ATOMS + ["!o"])),
+                min_size=1, max_size=3))
+def test_check_agrees_with_the_shield_on_comparisons_of_outputs(tmp_path: Path, parts) -> None:
+    """Differential: ``fretc check`` (Spot's game with the clusters' invariants) and the
+    shield (the safety game with the same clusters, :mod:`fretc.shield.plan`) decide
+    realizability of the same safety sets alike."""
+    text = "".join(f"R{k}: " + form.format(a=a, b=b) + "\n"
+                   for k, (form, a, b) in enumerate(parts))
+    got = realizability_of(tmp_path, text, ["i"])
+    if got["realizable"] == "unknown":
+        pytest.skip("the game ran past its budget")
+    p = tmp_path / "r.fret"
+    compiled = compile_entries(load_requirements([p]))
+    if any(set(c.formalization.variables) <= {"i"} for c in compiled):
+        return  # over inputs only: the shield monitors it, check finds it unrealizable
+    variables = sorted({v for c in compiled for v in c.formalization.variables})
+    try:
+        build_shield(compiled, ["i"], [v for v in variables if v != "i"], fork=False)
+        shield = True
+    except ShieldError as exc:
+        if "not a safety" in str(exc) or "over inputs only" in str(exc):
+            return
+        shield = False
+    assert got["realizable"] is shield, text
