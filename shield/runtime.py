@@ -266,29 +266,40 @@ class _Machine:
             values = list(ins + prop + self.state)
             reasons = tuple(r for r, k in zip(self.reqs, self.keep)
                             if _walk(self.nodes, k, values) != 1) or self.reqs
+            changed = tuple(t for t, p, o in zip(self.texts, prop, outs) if p != o)
             if len(self.corrections) >= CACHE_LIMIT:
                 self.corrections.clear()
-            got = self.corrections[key] = (outs, reasons)
-        outs, reasons = got
+            got = self.corrections[key] = (outs, (reasons if changed else ()), changed,
+                                           self._plan(outs, changed))
+        outs, reasons, changed, (fixed, kept, near) = got
         self.state = self.move(ins, outs)[1]
-        changed = tuple(t for t, p, o in zip(self.texts, prop, outs) if p != o)
-        return self._values(outs, proposed, changed), (reasons if changed else ()), changed
+        result = dict(fixed)
+        for v in kept:
+            result[v] = proposed[v]
+        for v, specs, truths in near:
+            result[v] = nearest(specs, truths, float(proposed[v]))
+        return result, reasons, changed
 
-    def _values(self, outs: tuple[int, ...], proposed: dict[str, Any],
-                changed: tuple[str, ...]) -> dict[str, Any]:
-        """The output variables' values: a boolean its atom's; a number the proposal's when
-        its comparisons keep their truth, else the nearest number giving them. A number of
-        a message group (module docstring) whose boolean atoms an override changed takes
-        the number of the message the bindings give for the group's new valuation. The
+    def _plan(self, outs: tuple[int, ...], changed: tuple[str, ...]
+              ) -> tuple[dict[str, Any], list[str], list[tuple[Any, ...]]]:
+        """How the output variables' values follow from the corrected atoms ``outs``
+        (computed once per correction): ``(values fixed by the atoms, variables keeping
+        the proposal's value, (variable, comparisons, truths) taking the number nearest the
+        proposal's)``. A boolean takes its atom's value; a number the proposal's when its
+        comparisons keep their truth, else the nearest number giving them. A number of a
+        message group (module docstring) whose boolean atoms an override changed takes the
+        number of the message the bindings give for the group's new valuation. The
         variables of a cluster (module docstring) keep the proposal's numbers unless an
         atom of the cluster changed; then they all take the cluster's recorded numbers."""
         result: dict[str, Any] = {}
+        kept: list[str] = []
+        near: list[tuple[Any, ...]] = []
         for c in self.clusters:
             if any(self.texts[j] in changed for j in c["atoms"]):
                 key = sum(int(outs[j]) << k for k, j in enumerate(c["atoms"]))
                 result.update(c["numbers"][key])
             else:
-                result.update({v: proposed[v] for v in c["variables"]})
+                kept += c["variables"]
         fixed: dict[str, float] = {}
         for g in self.groups:
             if any(self.texts[j] in changed and self.outs[j][1] is None for j in g["atoms"]):
@@ -301,9 +312,8 @@ class _Machine:
                                     for j in idx):
                 result[v] = fixed[v]
             else:
-                result[v] = nearest([self.outs[j] for j in idx], [outs[j] for j in idx],
-                                    float(proposed[v]))
-        return result
+                near.append((v, [self.outs[j] for j in idx], [outs[j] for j in idx]))
+        return result, kept, near
 
 
 class ShieldRuntime:
