@@ -185,9 +185,10 @@ class _Machine:
         self.groups = t["groups"]
         self.cache: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
                          tuple[bool, tuple[int, ...]]] = {}
-        #: the corrections made, by the same key (state, input atoms, proposed atoms)
+        #: the corrections made, by the same key (state, input atoms, proposed atoms):
+        #: (corrected atoms, reasons, changed atoms' texts, :meth:`_plan`)
         self.corrections: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
-                               tuple[tuple[int, ...], tuple[str, ...]]] = {}
+                               tuple[Any, ...]] = {}
         self.variables = list(dict.fromkeys(s[0] for s in self.outs))
         self.in_tests = [_tester(s) for s in self.ins]
         self.out_tests = [_tester(s) for s in self.outs]
