@@ -35,7 +35,7 @@ from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 
 __all__ = ["Cluster", "PredicateBudget", "MAX_VALUATIONS", "FUNCTIONS", "is_predicate",
-           "undecidable", "comparisons", "clusters"]
+           "undecidable", "comparisons", "clusters", "mixed_invariants"]
 
 #: the most valuations (realizable plus excluded by a core) z3 is asked about per cluster
 MAX_VALUATIONS = 4096
@@ -211,3 +211,55 @@ def _decide(c: Cluster, witness: Witness | None) -> None:
         lemmas.append(ir.not_(ir.and_all(*(c.atoms[k] if v else ir.not_(c.atoms[k])
                                              for k, v in picked))))
     c.invariant = ir.and_all(*lemmas)
+
+
+def mixed_invariants(c: Cluster, inputs: Sequence[str]) -> tuple[Node, Node]:
+    """A cluster of inputs and outputs (``x > a``, ``a`` an input) for a game whose
+    controller sees only the truth values of the comparisons: ``(environment's invariant,
+    controller's invariant)``, propositional over ``c.atoms``.
+
+    The environment gives its comparisons (those reading inputs only) the valuations input
+    numbers realize. Given those truth values, the controller may give its comparisons (the
+    others) a valuation only when *every* input numbers with those truth values leave output
+    numbers that realize it (z3: ``forall inputs. in-valuation -> exists outputs.
+    valuation``; an answer z3 does not give counts as no). A controller winning with that
+    invariant has numbers for its choices whatever the inputs' numbers: its realizable
+    answer is sound; an unrealizable one is not (the real controller sees the numbers).
+
+    Raises:
+        PredicateBudget: more than :data:`MAX_VALUATIONS` valuations to ask about."""
+    import itertools
+
+    import z3
+
+    ins = [a for a in c.atoms if all(ir.name_of(x) in inputs for x in ir.walk(a)
+                                     if x.op == "var")]
+    outs = [a for a in c.atoms if a not in ins]
+    if 2 ** (len(ins) + len(outs)) > MAX_VALUATIONS:
+        raise PredicateBudget(
+            f"the comparisons {', '.join(to_smv(a) for a in c.atoms)} have more than "
+            f"{MAX_VALUATIONS} valuations to decide")
+    out_vars = [v for v in c.variables if v not in inputs]
+    reals = {v: z3.Real(v) for v in c.variables}
+    in_z3 = [_z3(a, reals) for a in ins]
+    out_z3 = [_z3(a, reals) for a in outs]
+    env: list[Node] = []
+    ctl: list[Node] = []
+    for iv in itertools.product((False, True), repeat=len(ins)):
+        given = z3.And(*[x if v else z3.Not(x) for x, v in zip(in_z3, iv)], z3.BoolVal(True))
+        iota = ir.and_all(*(a if v else ir.not_(a) for a, v in zip(ins, iv)))
+        s = z3.Solver()
+        s.add(given)
+        if s.check() != z3.sat:  # (no input numbers give it: the environment's lemma)
+            env.append(ir.not_(iota))
+            continue
+        allowed = []
+        for ov in itertools.product((False, True), repeat=len(outs)):
+            want = z3.And(*[x if v else z3.Not(x) for x, v in zip(out_z3, ov)], z3.BoolVal(True))
+            bad = z3.Solver()
+            body = z3.Exists([reals[v] for v in out_vars], want) if out_vars else want
+            bad.add(given, z3.Not(body))
+            if bad.check() == z3.unsat:
+                allowed.append(ir.and_all(*(a if v else ir.not_(a) for a, v in zip(outs, ov))))
+        ctl.append(ir.implies(iota, ir.or_all(*allowed) if allowed else ir.FALSE))
+    return ir.and_all(*env), ir.and_all(*ctl)

@@ -42,7 +42,7 @@ from fretc.check.smt import max_bound
 from fretc.check.solver import UNKNOWN
 from fretc.check.witness import _atoms
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
-from fretc.check.predicates import PredicateBudget, clusters
+from fretc.check.predicates import PredicateBudget, clusters, mixed_invariants
 from fretc.check.safety_game import Outside, game_atoms, letter_name
 from fretc.compiler.printers import mangle, to_smv, to_spot
 
@@ -287,8 +287,9 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
     of the clusters' valuations that numbers realize. A cluster z3 cannot decide tick by tick
     (a previous value, ``preReal``; past its budget) leaves its player free to choose truth
     values no numbers give: a win of that player proves nothing. A cluster of inputs and
-    outputs is not exact for either: which truth values the controller can give depends on
-    the numbers the environment chose."""
+    outputs gives the controller only the choices numbers realize whatever the inputs'
+    numbers (:func:`fretc.check.predicates.mixed_invariants`): its wins are sound, its losses
+    are not."""
     undecided: list = []
     try:
         found = clusters(phis, inputs, undecided=undecided)
@@ -300,12 +301,24 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
     env_why: list[str] = []
     for c, why in [(c, None) for c in found] + undecided:
         ins = [v for v in c.variables if v in inputs]
-        if ins and len(ins) < len(c.variables):
-            text = (why + "; " if why else "") + (
-                f"{', '.join(to_smv(a) for a in c.atoms)} compare the input(s) "
+        text = (f"{', '.join(to_smv(a) for a in c.atoms)} compare the input(s) "
                 f"{', '.join(ins)} with the output(s) "
-                f"{', '.join(v for v in c.variables if v not in inputs)}, whose truth values "
-                "the controller can give depend on the inputs' numbers")
+                f"{', '.join(v for v in c.variables if v not in inputs)}")
+        if ins and len(ins) < len(c.variables) and why is None:
+            try:
+                env, ctl = mixed_invariants(c, inputs)
+            except PredicateBudget as exc:
+                ctl_why.append(str(exc))
+                env_why.append(str(exc))
+                continue
+            env_inv.append(env)
+            ctl_inv.append(ctl)
+            env_why.append(text + ": the game's controller, which sees their truth values "
+                           "and not the numbers, is given only the choices numbers realize "
+                           "whatever the inputs' numbers, and a controller that reads the "
+                           "numbers may do better")
+        elif ins and len(ins) < len(c.variables):
+            text = f"{why}; {text}, whose truth values the controller can give depend on the inputs' numbers"
             ctl_why.append(text)
             env_why.append(text)
         elif why is not None:

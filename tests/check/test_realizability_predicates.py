@@ -52,10 +52,30 @@ def test_a_previous_value_of_an_output_makes_realizable_unknown(tmp_path: Path) 
     assert "previous value" in got["why"] and "preReal" in got["why"]
 
 
-def test_a_comparison_of_an_input_and_an_output_makes_realizable_unknown(tmp_path: Path) -> None:
-    got = realizability_of(tmp_path, "A: the sw shall always satisfy x > a\n", ["a"])
+def test_an_output_above_an_input_is_realizable(tmp_path: Path) -> None:
+    """For every input number a there is an x above it and below a + 1: realizable (the
+    controller's choices hold whatever the input's number)."""
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x > a\n"
+                                     "B: the sw shall always satisfy x < a + 1.0\n", ["a"])
+    assert got["realizable"] is True
+
+
+def test_a_choice_that_depends_on_the_inputs_number_makes_realizable_unknown_never_false(
+        tmp_path: Path) -> None:
+    """x above a and below 3 fails for a >= 3 (truly unrealizable), but the game's
+    controller sees truth values, not numbers: its loss is unknown, with why."""
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x > a\n"
+                                     "B: the sw shall always satisfy x < 3.0\n", ["a"])
     assert got["realizable"] == "unknown"
-    assert "input(s) a with the output(s) x" in got["why"]
+    assert "compare the input(s) a with the output(s) x" in got["why"]
+
+
+def test_a_visible_input_comparison_lets_the_controller_choose(tmp_path: Path) -> None:
+    """Below 3 the controller keeps x above a and below 3; at or above 3 it may leave x
+    anywhere: it sees the truth of a < 3 and chooses accordingly."""
+    got = realizability_of(tmp_path, "A: whenever a < 3.0 the sw shall immediately satisfy "
+                                     "x > a & x < 3.0\n", ["a"])
+    assert got["realizable"] is True
 
 
 def test_an_unrealizable_answer_stands_against_a_freer_controller(tmp_path: Path) -> None:
@@ -103,3 +123,41 @@ def test_check_agrees_with_the_shield_on_comparisons_of_outputs(tmp_path: Path, 
             return
         shield = False
     assert got["realizable"] is shield, text
+
+
+_MIXED = ["x > a", "x < a + 1.0", "x < 3.0", "a < 2.0", "x > 1.0", "a > x + 2.0", "a >= 5.0"]
+
+
+def _truth(parts: list[tuple[str, str, str]]) -> bool:
+    """Ground truth for invariants of one tick: realizable iff for every a some x meets
+    them all (z3, quantified linear real arithmetic)."""
+    import z3
+
+    a, x = z3.Reals("a x")
+    env = {"a": a, "x": x}
+
+    def atom(text: str):
+        return eval(text.replace("&", " and "), {}, env)  # noqa: S307 - the fixed atoms above
+
+    def form(op: str, p: str, q: str):
+        return {"&": z3.And, "|": z3.Or, "->": z3.Implies}[op](atom(p), atom(q))
+
+    s = z3.Solver()
+    s.add(z3.Not(z3.ForAll([a], z3.Exists([x], z3.And(*[form(o, p, q) for o, p, q in parts])))))
+    return s.check() == z3.unsat
+
+
+@pytest.mark.slow
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                   HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(st.sampled_from(["&", "|", "->"]), st.sampled_from(_MIXED),
+                          st.sampled_from(_MIXED)), min_size=1, max_size=3))
+def test_realizability_of_an_input_and_an_output_never_contradicts_the_numbers(
+        tmp_path: Path, parts) -> None:
+    """Invariants of one tick over an input a and an output x are realizable exactly when
+    every a has an x: ``fretc check`` answers that, or unknown - never the other."""
+    text = "".join(f"R{k}: the sw shall always satisfy ({p}) {op} ({q})\n"
+                   for k, (op, p, q) in enumerate(parts))
+    got = realizability_of(tmp_path, text, ["a"])
+    if got["realizable"] != "unknown":
+        assert got["realizable"] is _truth(parts), text
