@@ -267,9 +267,7 @@ class _Decider:
             checker.unknown += 1
             self.inexact[tuple(x.index for x in items)] = (
                 ("realizable" if ans[0] else "unrealizable")
-                + " over the propositional abstraction only, whose "
-                + ("controller" if ans[0] else "environment")
-                + " may give comparisons truth values no numbers give: "
+                + " over the propositional abstraction only: "
                 + "; ".join(ctl_why if ans[0] else env_why))
             return UNKNOWN
         if ans[0]:
@@ -318,11 +316,14 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
                            "whatever the inputs' numbers, and a controller that reads the "
                            "numbers may do better")
         elif ins and len(ins) < len(c.variables):
-            text = f"{why}; {text}, whose truth values the controller can give depend on the inputs' numbers"
+            text = (f"{why}; {text}, and the game may give them truth values no numbers "
+                    "give")
             ctl_why.append(text)
             env_why.append(text)
         elif why is not None:
-            (env_why if c.is_input else ctl_why).append(why)
+            side = "environment" if c.is_input else "controller"
+            (env_why if c.is_input else ctl_why).append(
+                f"{why}, and the game's {side} may give it truth values no numbers give")
         else:
             (env_inv if c.is_input else ctl_inv).append(c.invariant)
     env, ctl = ir.and_all(*env_inv), ir.and_all(*ctl_inv)
