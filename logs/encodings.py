@@ -30,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from fretc.logs.field_select import field_tree, json_picker, protobuf_picker, pruned_schema
+
 __all__ = ["SELF_DESCRIBING", "UNSUPPORTED_ENCODINGS", "other_decoder", "definition",
            "type_name"]
 
@@ -57,8 +59,12 @@ def _as_bytes(data: bytes | str) -> bytes:
 
 
 def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
-                  schema_data: bytes | str | None) -> Callable[[bytes], Any]:
+                  schema_data: bytes | str | None, fields: Any = None
+                  ) -> Callable[[bytes], Any]:
     """A function ``bytes -> message object`` for a channel of a self-describing encoding.
+    With ``fields`` (the field paths the bindings read, :mod:`fretc.logs.selective`), a
+    ``json`` or ``protobuf`` message object holds only those fields, and only their types
+    are checked (:mod:`fretc.logs.field_select`); None: every field.
 
     Raises:
         EncodingError: a protobuf channel whose schema is missing, is no FileDescriptorSet
@@ -69,6 +75,7 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
         raise EncodingError(f"schema encoding {schema_encoding!r} does not go with message "
                             f"encoding {message_encoding!r}")
     typ = type_name(schema_name) if schema_name else None
+    tree = field_tree(fields) if message_encoding != "cbor" else None
     loads: Callable[[bytes], Any]
     if message_encoding == "json":
         loads = json.loads
@@ -77,10 +84,15 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
 
         loads = cbor2.loads
     else:
-        pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""))
+        pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""), tree)
         return _checked(lambda raw: _typed(pb(raw), typ), message_encoding)
-    check = (json_type_check(schema_data) if message_encoding == "json"
+    check = (json_type_check(schema_data, tree) if message_encoding == "json"
              and schema_encoding == "jsonschema" and schema_data else None)
+    if tree is not None:
+        pick = json_picker(tree, as_message)
+        if check is not None:
+            return _checked(lambda raw: _typed(pick(check(loads(raw))), typ), message_encoding)
+        return _checked(lambda raw: _typed(pick(loads(raw)), typ), message_encoding)
     if check is not None:
         return _checked(lambda raw: _typed(as_message(check(loads(raw))), typ),
                         message_encoding)
@@ -98,13 +110,15 @@ _JSON_TYPES: dict[str, Callable[[Any], bool]] = {
 }
 
 
-def json_type_check(schema_data: bytes | str) -> Callable[[Any], Any] | None:
+def json_type_check(schema_data: bytes | str, tree: dict | None = None
+                    ) -> Callable[[Any], Any] | None:
     """A function that returns a decoded JSON message unchanged when the scalar values of
     the properties its JSON Schema declares have the declared ``type`` (JSON Schema
     draft 2020-12, "type": a JSON ``true`` is no number, a number no boolean), and raises
     ``ValueError`` naming the first field that does not (an undecodable message: the schema
     does not describe it). Properties the schema does not declare, and schemas that cannot
-    be read, are not checked (None)."""
+    be read, are not checked (None). With ``tree`` (:func:`fretc.logs.field_select.field_tree`)
+    only the properties it reads are checked."""
     try:
         doc = json.loads(schema_data if isinstance(schema_data, str) else
                          _as_bytes(schema_data))
@@ -113,7 +127,7 @@ def json_type_check(schema_data: bytes | str) -> Callable[[Any], Any] | None:
     if not isinstance(doc, dict):
         return None
 
-    check = _compile_check(doc, "", 0)
+    check = _compile_check(pruned_schema(doc, tree), "", 0)
     if check is None:
         return None
 
@@ -235,8 +249,11 @@ def as_message(value: Any) -> Any:
             except OverflowError:
                 return np.array([_big(x) for x in value], dtype=np.float64)
         if kinds and kinds <= {int, float}:
-            return np.array([_big(x) if type(x) is int else x for x in value],
-                            dtype=np.float64)
+            try:  # (numpy converts each int as float() does)
+                return np.array(value, dtype=np.float64)
+            except OverflowError:
+                return np.array([_big(x) if type(x) is int else x for x in value],
+                                dtype=np.float64)
         return [as_message(x) for x in value]
     if isinstance(value, (bytes, bytearray)):
         return np.frombuffer(bytes(value), dtype=np.uint8)
@@ -267,7 +284,8 @@ _PB_ROS = {1: "float64", 2: "float32", 3: "int64", 4: "uint64", 5: "int32", 6: "
 _MESSAGE, _ENUM, _BYTES = 11, 14, 12
 
 
-def _protobuf_decoder(name: str, fds: bytes) -> Callable[[bytes], Any]:
+def _protobuf_decoder(name: str, fds: bytes, tree: dict | None = None
+                      ) -> Callable[[bytes], Any]:
     from mcap.records import Schema
     from mcap_protobuf.decoder import DecoderFactory
 
@@ -281,7 +299,18 @@ def _protobuf_decoder(name: str, fds: bytes) -> Callable[[bytes], Any]:
                             f"({type(exc).__name__}: {exc})") from None
     if make is None:
         raise EncodingError(f"the protobuf schema does not define {name!r}")
-    return lambda raw: _pb_message(make(raw))
+    if tree is None:
+        return lambda raw: _pb_message(make(raw))
+    picks: dict[Any, Callable[[Any], SimpleNamespace]] = {}
+
+    def selected(raw: bytes) -> SimpleNamespace:
+        msg = make(raw)
+        pick = picks.get(msg.DESCRIPTOR)
+        if pick is None:
+            pick = picks[msg.DESCRIPTOR] = protobuf_picker(msg.DESCRIPTOR, tree, _pb_message,
+                                                           _pb_plan, _pb_lies)
+        return pick(msg)
+    return selected
 
 
 def _repeated(field) -> bool:
@@ -315,17 +344,17 @@ def _pb_plan(descriptor) -> list[tuple[str, int, Any]]:
 _PB_PLANS: dict[Any, list[tuple[str, int, Any]]] = {}
 
 
-def _pb_lies(msg) -> None:
+def _pb_lies(msg, numbers: frozenset[int] | None = None) -> None:
     """Raise ``ValueError`` when the payload holds a field the schema declares with another
     wire type (a float field over varint bytes, say): protobuf keeps such a field as an
     unknown field and leaves the declared one at its default, 0, which would be read as a
     value (protobuf encoding, "Message Structure": wire types). Unknown field numbers are
-    newer fields, not lies."""
+    newer fields, not lies. ``numbers``: only those fields are checked (None: all)."""
     from google.protobuf.unknown_fields import UnknownFieldSet
 
     declared = msg.DESCRIPTOR.fields_by_number
     for f in UnknownFieldSet(msg):  # type: ignore[attr-defined]  # a sequence (len, [i])
-        if f.field_number in declared:
+        if f.field_number in declared and (numbers is None or f.field_number in numbers):
             field = declared[f.field_number]
             raise ValueError(f"field {field.name} (number {f.field_number}) is declared "
                              f"{_PB_ROS.get(field.type, 'of another type')} but the payload "
@@ -341,23 +370,26 @@ def _pb_message(msg) -> SimpleNamespace:
     out = SimpleNamespace()
     d = out.__dict__
     for name, how, dtype in _pb_plan(msg.DESCRIPTOR):
-        value = getattr(msg, name)
-        if how == 0:
-            pass
-        elif how == 5:
-            value = np.array(value, dtype=dtype)
-        elif how == 1:
-            value = _pb_message(value)
-        elif how == 2:
-            value = [_pb_message(x) for x in value]
-        elif how == 3:
-            value = np.frombuffer(value, dtype=np.uint8)
-        elif how == 4:
-            value = [np.frombuffer(x, dtype=np.uint8) for x in value]
-        else:
-            value = list(value)
-        d[name] = value
+        d[name] = pb_value(getattr(msg, name), how, dtype)
     return out
+
+
+def pb_value(value: Any, how: int, dtype: Any) -> Any:
+    """One field's value of a parsed protobuf message converted by its plan (:func:`_pb_plan`:
+    ``how``, numpy ``dtype``)."""
+    if how == 0:
+        return value
+    if how == 5:
+        return np.array(value, dtype=dtype)
+    if how == 1:
+        return _pb_message(value)
+    if how == 2:
+        return [_pb_message(x) for x in value]
+    if how == 3:
+        return np.frombuffer(value, dtype=np.uint8)
+    if how == 4:
+        return [np.frombuffer(x, dtype=np.uint8) for x in value]
+    return list(value)
 
 
 def type_name(name: str) -> str:
