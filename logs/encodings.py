@@ -307,7 +307,7 @@ def _protobuf_decoder(name: str, fds: bytes, tree: dict | None = None
         msg = make(raw)
         pick = picks.get(msg.DESCRIPTOR)
         if pick is None:
-            pick = picks[msg.DESCRIPTOR] = protobuf_picker(msg.DESCRIPTOR, tree, _pb_message,
+            pick = picks[msg.DESCRIPTOR] = protobuf_picker(msg.DESCRIPTOR, tree, pb_value,
                                                            _pb_plan, _pb_lies)
         return pick(msg)
     return selected

@@ -99,18 +99,16 @@ def json_picker(tree: Tree, convert: Callable[[Any], Any]) -> Callable[[Any], An
 
 
 def protobuf_picker(descriptor: Any, tree: Tree,
-                    convert: Callable[[Any], SimpleNamespace],
+                    convert: Callable[[Any, int, Any], Any],
                     plan: Callable[[Any], list[tuple[str, int, Any]]],
                     lies: Callable[[Any, frozenset[int] | None], None]
                     ) -> Callable[[Any], SimpleNamespace]:
     """A function ``parsed protobuf message -> message object`` holding the fields of
     ``tree`` (those the message type declares; a field it lacks is left out, as the full
-    conversion has no such attribute). ``convert`` is the full conversion of a message
-    (:func:`fretc.logs.encodings._pb_message`), ``plan`` its per-type plan, ``lies`` the
-    wire-type check restricted to the given field numbers. Raises ``ValueError`` where
+    conversion has no such attribute). ``convert`` converts one field's value whole by its
+    plan (:func:`fretc.logs.encodings.pb_value`), ``plan`` gives a type's plan, ``lies`` is
+    the wire-type check restricted to the given field numbers. Raises ``ValueError`` where
     ``lies`` does."""
-    from fretc.logs.encodings import pb_value
-
     by_name = {name: (how, dtype) for name, how, dtype in plan(descriptor)}
     numbers = frozenset(f.number for f in descriptor.fields if f.name in tree)
     steps: list[tuple[str, int, Any, Any]] = []
@@ -131,6 +129,6 @@ def protobuf_picker(descriptor: Any, tree: Tree,
         d = out.__dict__
         for name, how, dtype, sub in steps:
             value = getattr(msg, name)
-            d[name] = sub(value) if sub is not None else pb_value(value, how, dtype)
+            d[name] = sub(value) if sub is not None else convert(value, how, dtype)
         return out
     return pick
