@@ -36,20 +36,30 @@ from fretc.logs.ulog_framing import UlogFraming, _Formats
 __all__ = ["read_sound"]
 
 _MAGIC = b"ULog\x01\x12\x35"
-_KNOWN = np.zeros(256, dtype=bool)
-_KNOWN[list(b"BFIMPQARDLCSO")] = True
-#: message types of the data section read here (others: the reference read)
-_DATA_TYPES = frozenset(b"IMPQADLCSO")
+
+
+def _table(types: bytes) -> np.ndarray:
+    """A lookup table: True at the message types ``types`` (indexed by a type byte)."""
+    table = np.zeros(256, dtype=bool)
+    table[list(types)] = True
+    return table
+
+
+_KNOWN = _table(b"BFIMPQARDLCSO")
+#: message types of the data section read here (others: the reference read), of the
+#: definitions, where pyulog's data section starts, and the messages built one by one
+_DATA, _DEFS, _SECTION, _OTHERS = (_table(b"IMPQADLCSO"), _table(b"BFIMPQ"), _table(b"ALC"),
+                                   _table(b"IMPQLCO"))
 
 
 def _walk(data: bytes) -> np.ndarray:
     """The offsets of the message headers from byte 16 while a whole header fits."""
-    pos, n = 16, len(data)
+    pos, last = 16, len(data) - 3
     out: list[int] = []
     append = out.append
-    while pos + 3 <= n:
+    while pos <= last:
         append(pos)
-        pos += 3 + (data[pos] | (data[pos + 1] << 8))
+        pos += 3 + data[pos] + (data[pos + 1] << 8)
     return np.array(out, dtype=np.int64)
 
 
@@ -70,13 +80,12 @@ def read_sound(data: bytes) -> tuple[Any, UlogFraming] | None:
         return None
     if ((sizes == 0) & (types != ord("S"))).any():
         return None
-    first = np.flatnonzero(np.isin(types, np.frombuffer(b"ALC", dtype=np.uint8)))
+    first = np.flatnonzero(_SECTION[types])
     first_a = np.flatnonzero(types == ord("A"))
     if not len(first_a):
         return None
     start = int(first[0])  # pyulog's data section (the framing's starts at the first A)
-    if not (np.isin(types[start:], np.frombuffer(bytes(_DATA_TYPES), dtype=np.uint8)).all()
-            and np.isin(types[:start], np.frombuffer(b"BFIMPQ", dtype=np.uint8)).all()):
+    if not (_DATA[types[start:]].all() and _DEFS[types[:start]].all()):
         return None
     ulog = _header(data)
     if ulog is None or ulog.has_data_appended or ulog._file_corrupt:
@@ -107,8 +116,8 @@ def _data_section(ulog: Any, data: bytes, buf: np.ndarray, at: np.ndarray, sizes
         formats.add(ord("F"), data[p + 3:p + 3 + int(sizes[k])])
     is_d = types == ord("D")
     d_idx = np.flatnonzero(is_d)
-    ids = (buf[at[d_idx] + 3].astype(np.int64) | (buf[at[d_idx] + 4].astype(np.int64) << 8))
-    order = np.argsort(ids, kind="stable")  # each id's data messages, in file order
+    ids = buf[at[d_idx] + 3].astype(np.uint16) | (buf[at[d_idx] + 4].astype(np.uint16) << 8)
+    order = np.argsort(ids, kind="stable")  # each id's data messages, in file order (radix)
     uniq, lo, count = np.unique(ids[order], return_index=True, return_counts=True)
     group = {int(i): order[a:a + c] for i, a, c in zip(uniq, lo, count)}
     subs: dict[int, Any] = {}
@@ -164,7 +173,7 @@ def _others(ulog: Any, data: bytes, at: np.ndarray, sizes: np.ndarray, types: np
     from pyulog import ULog
 
     header = ULog._MessageHeader()
-    rest = np.flatnonzero(~np.isin(types[start:], np.frombuffer(b"ADS", dtype=np.uint8)))
+    rest = np.flatnonzero(_OTHERS[types[start:]])
     rest += start
     before = np.searchsorted(d_idx, rest)  # data messages before each
     try:
