@@ -152,7 +152,7 @@ def _data_section(ulog: Any, data: bytes, buf: np.ndarray, at: np.ndarray, sizes
                 bounds is not None and ((got < bounds[0]) | (got > bounds[1])).any()):
             return None
         rows = np.lib.stride_tricks.sliding_window_view(buf, item)[at[d_idx[mine]] + 5]
-        sub.buffer = rows.tobytes()
+        sub.buffer = rows  # (pyulog's Data reads its buffer with np.frombuffer: no copy)
         t = rows[:, sub.timestamp_offset:sub.timestamp_offset + 8].copy().view("<u8")[:, 0]
         times[mine] = t
     # pyulog's running timestamp: the largest data timestamp so far, from the header's
@@ -160,7 +160,7 @@ def _data_section(ulog: Any, data: bytes, buf: np.ndarray, at: np.ndarray, sizes
         [np.array([ulog.start_timestamp], dtype=np.uint64), times]))
     if not _others(ulog, data, at, sizes, types, start, d_idx, last):
         return None
-    ulog._data_list = sorted((ULog.Data(s) for s in subs.values() if s.buffer),
+    ulog._data_list = sorted((ULog.Data(s) for s in subs.values() if len(s.buffer)),
                              key=lambda ds: (ds.name, ds.multi_id))
     ulog._last_timestamp = int(last[-1])
     return ulog, framing
