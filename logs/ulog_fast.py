@@ -8,7 +8,9 @@ where each message starts (nothing else per message); numpy then checks the fram
 of them at once (the rules of :func:`~fretc.logs.ulog_framing.ulog_framing`: known types, no
 empty message but a sync, data messages of their format's size, the last message ending at
 the end of the file) and gathers each subscription's rows (the bytes of its data messages
-up to its format's size, as pyulog keeps them) into pyulog's own ``Data`` objects. The
+up to its format's size, as pyulog keeps them) into pyulog's own ``Data`` objects, a
+topic's when its rows are first read (each row's timestamp is gathered at once: pyulog dates
+logged text, parameter changes and dropouts by the data read before them). The
 definitions are pyulog's (``parse_header_only``); the few other messages of the data
 section (logged text, parameter changes, dropouts, information) are built by pyulog's own
 classes, with the timestamp pyulog gives them (the largest data timestamp read before them).
@@ -25,6 +27,7 @@ every ULog the tests have, and on damaged copies of them.
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import struct
 from typing import Any
@@ -151,19 +154,47 @@ def _data_section(ulog: Any, data: bytes, buf: np.ndarray, at: np.ndarray, sizes
         if (got < item).any() or (got > sub.max_data_size).any() or (
                 bounds is not None and ((got < bounds[0]) | (got > bounds[1])).any()):
             return None
-        rows = np.lib.stride_tricks.sliding_window_view(buf, item)[at[d_idx[mine]] + 5]
-        sub.buffer = rows  # (pyulog's Data reads its buffer with np.frombuffer: no copy)
-        t = rows[:, sub.timestamp_offset:sub.timestamp_offset + 8].copy().view("<u8")[:, 0]
-        times[mine] = t
+        sub.starts = at[d_idx[mine]] + 5  # the rows, gathered when read (_lazy_data)
+        sub.times = np.lib.stride_tricks.sliding_window_view(buf, 8)[
+            sub.starts + sub.timestamp_offset].copy().view("<u8")[:, 0]
+        times[mine] = sub.times
     # pyulog's running timestamp: the largest data timestamp so far, from the header's
     last = np.maximum.accumulate(np.concatenate(
         [np.array([ulog.start_timestamp], dtype=np.uint64), times]))
     if not _others(ulog, data, at, sizes, types, start, d_idx, last):
         return None
-    ulog._data_list = sorted((ULog.Data(s) for s in subs.values() if len(s.buffer)),
+    lazy = _lazy_data()
+    ulog._data_list = sorted((lazy(s, buf) for s in subs.values() if hasattr(s, "starts")),
                              key=lambda ds: (ds.name, ds.multi_id))
     ulog._last_timestamp = int(last[-1])
     return ulog, framing
+
+
+@functools.cache
+def _lazy_data() -> type:
+    """pyulog's ``Data`` of one subscription whose rows are gathered from the file's bytes
+    when its ``data`` is first read (an audit reads the topics its bindings name);
+    ``timestamps`` (each row's, µs) are known without them."""
+    from pyulog import ULog
+
+    class LazyData(ULog.Data):
+        def __init__(self, sub: Any, buf: np.ndarray) -> None:  # noqa: D107 - pyulog's fields
+            self.multi_id, self.msg_id = sub.multi_id, sub.msg_id
+            self.name, self.field_data = sub.message_name, sub.field_data
+            self.timestamp_idx, self.timestamps = sub.timestamp_idx, sub.times
+            self._dtype, self._buf, self._starts = sub.dtype, buf, sub.starts
+            self._data: dict[str, np.ndarray] | None = None
+
+        @property
+        def data(self) -> dict[str, np.ndarray]:
+            if self._data is None:  # as pyulog's Data: one view per field of the rows
+                rows = np.lib.stride_tricks.sliding_window_view(
+                    self._buf, self._dtype.itemsize)[self._starts]
+                table = np.frombuffer(rows, dtype=self._dtype)
+                self._data = {name: table[name] for name in table.dtype.names}
+            return self._data
+
+    return LazyData
 
 
 def _others(ulog: Any, data: bytes, at: np.ndarray, sizes: np.ndarray, types: np.ndarray,

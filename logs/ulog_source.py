@@ -160,7 +160,7 @@ class UlogSource(LogSource):
             self.dropouts += [(max(int(d.timestamp) * 1000, floor), int(d.duration))
                               for d in u.dropouts]
         times = [int(t) * 1000 for u in self._ulogs for d in u.data_list
-                 for t in d.data["timestamp"][:1] if t != 0]
+                 for t in _timestamps(d)[:1] if t != 0]
         self._start_time = min(times) if times else None
         self._end_time = None
         self._opened = (self._start_time, self._open_problems)
@@ -301,6 +301,13 @@ class UlogSource(LogSource):
                 self._start_time = lt
             self._end_time = lt
             yield Message(topic, lt, lt, None, data)
+
+
+def _timestamps(data: Any) -> np.ndarray:
+    """The ``timestamp`` column of a pyulog data set (µs), without gathering its other
+    columns when :mod:`fretc.logs.ulog_fast` read it."""
+    times = getattr(data, "timestamps", None)
+    return times if times is not None else data.data["timestamp"]
 
 
 def _stamped(t: np.ndarray, log_start: int, sampled: bool) -> np.ndarray:
