@@ -18,9 +18,9 @@ Two sizes of each input:
 
 The baselines read what the audit needs at least: pyulog the three bound uORB topics
 (``message_name_filter_list``); the MCAP read decodes every message. fretc's ULog reader
-reads every topic once (pyulog dates a dropout by the last timestamp it parsed, so only a
-read of every topic dates it the same whatever the bindings), so pyulog's read of every topic
-is printed too.
+walks every message of every topic once and dates dropouts as pyulog's read of every topic
+does (by the last timestamp read before them, whatever the bindings), so pyulog's read of
+every topic is printed too.
 
 The long logs are also measured in one process (the audit after its imports and a warm-up
 audit of the short log, against the plain read in the same process): the ratio of the
