@@ -23,14 +23,14 @@ import re
 
 import base64
 import json
-import math
 from collections.abc import Callable
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from fretc.logs.field_select import field_tree, json_picker, protobuf_picker, pruned_schema
+from fretc.logs.field_select import field_tree, json_picker, protobuf_picker
+from fretc.logs.json_values import as_message, checked_picker, type_check
 
 __all__ = ["SELF_DESCRIBING", "UNSUPPORTED_ENCODINGS", "other_decoder", "definition",
            "type_name"]
@@ -86,133 +86,33 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
     else:
         pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""), tree)
         return _checked(lambda raw: _typed(pb(raw), typ), message_encoding)
-    check = (json_type_check(schema_data, tree) if message_encoding == "json"
-             and schema_encoding == "jsonschema" and schema_data else None)
-    if tree is not None:
-        pick = json_picker(tree, as_message)
-        if check is not None:
-            return _checked(lambda raw: _typed(pick(check(loads(raw))), typ), message_encoding)
+    doc = (_json_schema(schema_data) if message_encoding == "json"
+           and schema_encoding == "jsonschema" and schema_data else None)
+    if tree is not None:  # the fields read, checked and converted in one walk
+        pick = checked_picker(doc, tree) if doc is not None else json_picker(tree, as_message)
         return _checked(lambda raw: _typed(pick(loads(raw)), typ), message_encoding)
+    check = type_check(doc) if doc is not None else None
     if check is not None:
         return _checked(lambda raw: _typed(as_message(check(loads(raw))), typ),
                         message_encoding)
     return _checked(lambda raw: _typed(as_message(loads(raw)), typ), message_encoding)
 
 
-_JSON_TYPES: dict[str, Callable[[Any], bool]] = {
-    "number": lambda v: type(v) in (int, float),
-    "integer": lambda v: type(v) is int or (type(v) is float and v.is_integer()),
-    "boolean": lambda v: type(v) is bool,
-    "string": lambda v: type(v) is str,
-    "object": lambda v: type(v) is dict,
-    "array": lambda v: type(v) is list,
-    "null": lambda v: v is None,
-}
+def json_type_check(schema_data: bytes | str) -> Callable[[Any], Any] | None:
+    """:func:`fretc.logs.json_values.type_check` of a channel's JSON Schema (bytes or text);
+    None when the schema cannot be read or declares nothing to check."""
+    doc = _json_schema(schema_data)
+    return None if doc is None else type_check(doc)
 
 
-def json_type_check(schema_data: bytes | str, tree: dict | None = None
-                    ) -> Callable[[Any], Any] | None:
-    """A function that returns a decoded JSON message unchanged when the scalar values of
-    the properties its JSON Schema declares have the declared ``type`` (JSON Schema
-    draft 2020-12, "type": a JSON ``true`` is no number, a number no boolean), and raises
-    ``ValueError`` naming the first field that does not (an undecodable message: the schema
-    does not describe it). Properties the schema does not declare, and schemas that cannot
-    be read, are not checked (None). With ``tree`` (:func:`fretc.logs.field_select.field_tree`)
-    only the properties it reads are checked."""
+def _json_schema(schema_data: bytes | str) -> dict | None:
+    """A channel's JSON Schema document, or None when it is no JSON object."""
     try:
         doc = json.loads(schema_data if isinstance(schema_data, str) else
                          _as_bytes(schema_data))
     except (ValueError, RecursionError):
         return None
-    if not isinstance(doc, dict):
-        return None
-
-    check = _compile_check(pruned_schema(doc, tree), "", 0)
-    if check is None:
-        return None
-
-    def checked(value: Any) -> Any:
-        check(value)
-        return value
-    return checked
-
-
-#: Python types of the JSON values of each JSON Schema ``type`` (bool is no number).
-_JSON_PY: dict[str, tuple[type, ...]] = {
-    "number": (int, float), "boolean": (bool,), "string": (str,), "object": (dict,),
-    "array": (list,), "null": (type(None),), "integer": (int, float)}
-
-
-def _compile_check(spec: Any, where: str, depth: int) -> Callable[[Any], None] | None:
-    """The check of one schema node, made once (None: nothing to check there): its own
-    ``type``, its declared properties' checks, and its items' (an array of scalars in one
-    pass over the list)."""
-    if not isinstance(spec, dict) or depth > 64:
-        return None
-    t = spec.get("type")
-    allowed = [t] if isinstance(t, str) else [x for x in t if isinstance(x, str)] \
-        if isinstance(t, list) else []
-    tests = [_JSON_TYPES[x] for x in allowed if x in _JSON_TYPES]
-    kinds = frozenset(k for x in allowed if x in _JSON_PY for k in _JSON_PY[x])
-    exact = "integer" not in allowed  # (an integer: a float only when whole)
-    props = [(name, c) for name, sub in (spec.get("properties") or {}).items()
-             if (c := _compile_check(sub, f"{where}.{name}" if where else name,
-                                     depth + 1)) is not None]
-    items = spec.get("items")
-    item = _compile_check(items, f"{where}[]", depth + 1) if isinstance(items, dict) else None
-    scalar_items = (isinstance(items, dict) and not items.get("properties")
-                    and not isinstance(items.get("items"), dict))
-    it = items.get("type") if isinstance(items, dict) else None
-    item_allowed = [it] if isinstance(it, str) else [x for x in it if isinstance(x, str)] \
-        if isinstance(it, list) else []
-    # an array of scalars of exact types: checked by the set of its items' types (map(type)
-    # runs in C), the item named only when one is wrong
-    fast = (scalar_items and item_allowed and "integer" not in item_allowed
-            and all(x in _JSON_PY for x in item_allowed))
-    item_kinds = frozenset(k for x in item_allowed if x in _JSON_PY for k in _JSON_PY[x])
-    if not tests and not props and item is None:
-        return None
-
-    def wrong(value: Any, at: str) -> None:
-        shown = json.dumps(value)[:40] if not isinstance(value, (dict, list)) else \
-            type(value).__name__
-        raise ValueError(f"{at or 'the message'} is {shown}, but the schema says "
-                         f"{' or '.join(allowed)}")
-
-    def check(value: Any) -> None:
-        if tests and not (type(value) in kinds if exact else any(f(value) for f in tests)):
-            wrong(value, where)
-        if props and type(value) is dict:
-            for name, c in props:
-                if name in value:
-                    c(value[name])
-        elif item is not None and type(value) is list:
-            if fast and set(map(type, value)) <= item_kinds:
-                return
-            if scalar_items:  # the first item of another type is named
-                for i, x in enumerate(value):
-                    try:
-                        item(x)
-                    except ValueError:
-                        raise ValueError(str(_item_error(item, x, f"{where}[{i}]"))) from None
-            else:
-                for i, x in enumerate(value):
-                    try:
-                        item(x)
-                    except ValueError as exc:
-                        raise ValueError(str(exc).replace(f"{where}[]", f"{where}[{i}]", 1)) \
-                            from None
-    return check
-
-
-def _item_error(item: Callable[[Any], None], x: Any, at: str) -> str:
-    """The error of ``item`` on ``x``, named at ``at``."""
-    try:
-        item(x)
-    except ValueError as exc:
-        text = str(exc)
-        return at + text[text.index(" is "):] if " is " in text else text
-    return at
+    return doc if isinstance(doc, dict) else None
 
 
 def _checked(decode: Callable[[bytes], Any], encoding: str) -> Callable[[bytes], Any]:
@@ -233,45 +133,6 @@ def _typed(msg: Any, typ: str | None) -> Any:
     if typ is not None and isinstance(msg, SimpleNamespace):
         msg.__msgtype__ = typ
     return msg
-
-
-def as_message(value: Any) -> Any:
-    """A decoded JSON/CBOR value as a message object (module docstring)."""
-    if isinstance(value, dict):
-        return SimpleNamespace(**{str(k): as_message(v) for k, v in value.items()})
-    if isinstance(value, list):
-        kinds = set(map(type, value))  # the decoders give exact built-in types
-        if kinds == {bool}:
-            return np.array(value, dtype=bool)
-        if kinds == {int}:
-            try:
-                return np.array(value, dtype=np.int64)
-            except OverflowError:
-                return np.array([_big(x) for x in value], dtype=np.float64)
-        if kinds and kinds <= {int, float}:
-            try:  # (numpy converts each int as float() does)
-                return np.array(value, dtype=np.float64)
-            except OverflowError:
-                return np.array([_big(x) if type(x) is int else x for x in value],
-                                dtype=np.float64)
-        return [as_message(x) for x in value]
-    if isinstance(value, (bytes, bytearray)):
-        return np.frombuffer(bytes(value), dtype=np.uint8)
-    if type(value) is int and not _INT64[0] <= value <= _INT64[1]:
-        return _big(value)
-    return value
-
-
-_INT64 = (-(2**63), 2**63 - 1)
-
-
-def _big(value: int) -> float:
-    """An integer past int64 as the nearest float64; past the largest float, +-inf (as
-    IEEE 754 rounds an overflow; a JSON ``1e999`` is read as inf too)."""
-    try:
-        return float(value)
-    except OverflowError:
-        return math.inf if value > 0 else -math.inf
 
 
 # --------------------------------------------------------------------------- protobuf

@@ -72,9 +72,9 @@ def pruned_schema(spec: Any, tree: Tree | None) -> Any:
         return spec
     props = spec.get("properties")
     out = dict(spec)
-    if isinstance(props, dict):
-        out["properties"] = {name: pruned_schema(props[name], sub)
-                             for name, sub in tree.items() if name in props}
+    if isinstance(props, dict):  # (in the schema's order: the check's order of errors)
+        out["properties"] = {name: pruned_schema(sub_spec, tree[name])
+                             for name, sub_spec in props.items() if name in tree}
     return out
 
 
