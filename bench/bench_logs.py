@@ -18,9 +18,13 @@ Two sizes of each input:
 
 The baselines read what the audit needs at least: pyulog the three bound uORB topics
 (``message_name_filter_list``); the MCAP read decodes every message. fretc's ULog reader
-reads every topic once (pyulog dates a dropout by the last timestamp it parsed, so only a
-read of every topic dates it the same whatever the bindings), so pyulog's read of every topic
-is printed too.
+walks every message of every topic once and dates dropouts as pyulog's read of every topic
+does (by the last timestamp read before them, whatever the bindings), so pyulog's read of
+every topic is printed too.
+
+The long logs are also measured in one process (the audit after its imports and a warm-up
+audit of the short log, against the plain read in the same process): the ratio of the
+reading alone, start-up left out.
 
     python bench/bench_logs.py            # needs ../shared (the PX4 logs)
 """
@@ -80,6 +84,52 @@ with open(sys.argv[1], "rb") as f:
             n += 1
 print(n)
 """
+
+#: the audit and the plain read in one process, CPU of each after the imports and a warm-up
+#: audit of a short log of the same kind (argv: kind, log, requirements, short log)
+IN_PROCESS = """
+import json, sys, time
+from fretc.audit import AuditConfig, audit_log, load_plan
+kind, log, fret, short = sys.argv[1:5]
+plan = load_plan(AuditConfig(requirements=(fret,)))
+audit_log(plan, short)
+t = time.process_time()
+audit_log(plan, log)
+ours = time.process_time() - t
+if kind == "ulog":
+    from pyulog import ULog
+    t = time.process_time()
+    u = ULog(log, message_name_filter_list=sys.argv[5].split(","))
+    plain = [time.process_time() - t]
+    t = time.process_time()
+    u = ULog(log)
+    plain.append(time.process_time() - t)
+else:
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory
+    t = time.process_time()
+    with open(log, "rb") as f:
+        if kind == "json":
+            for _s, _c, m in make_reader(f).iter_messages():
+                json.loads(m.data)
+        else:
+            for _d in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+                pass
+    plain = [time.process_time() - t]
+print(json.dumps([ours] + plain))
+"""
+
+
+def _in_process(kind: str, log: Path, fret: Path, short: Path, cwd: Path) -> list[float]:
+    """[fretc's audit, the plain read(s)] CPU seconds in one process (:data:`IN_PROCESS`)."""
+    import json
+
+    out = subprocess.run([sys.executable, "-c", IN_PROCESS, kind, str(log), str(fret),
+                          str(short), ",".join(TOPICS)], cwd=cwd, capture_output=True,
+                         text=True)
+    if out.returncode != 0:
+        raise SystemExit(f"in-process run failed: {out.stderr[-500:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def _cpu(cmd: list[str], cwd: Path) -> float:
@@ -186,6 +236,10 @@ def main() -> int:
             print(f"ULog {label}, {log.stat().st_size / 1e6:.1f} MB:")
             _line("3 requirements", ours, f"pyulog's read of the {len(TOPICS)} topics", plain)
             _line("3 requirements", ours, "pyulog's read of every topic", every)
+        ours, plain, every = _in_process("ulog", long, tmp / "px4.fret", PX4, ROOT)
+        print(f"ULog long, in one process: audit {ours:.2f} s CPU, pyulog 3 topics "
+              f"{plain:.2f} s / every topic {every:.2f} s: ratio {ours / plain:.2f} / "
+              f"{ours / every:.2f}")
 
         syn = tmp / "syn.mcap"
         bench_read.write_log(syn, args.minutes, "zstd")
@@ -205,6 +259,9 @@ def main() -> int:
             plain = _cpu([sys.executable, "-c", PLAIN_MCAP, str(longer), enc], ROOT)
             _line(f"long ({args.minutes:g} min, {longer.stat().st_size / 1e6:.0f} MB)", ours,
                   "plain read + decode of every message", plain)
+            ours, plain = _in_process(enc, longer, tmp / "syn.fret", short, ROOT)
+            print(f"  long, in one process: audit {ours:.2f} s CPU, plain read + decode "
+                  f"{plain:.2f} s CPU: ratio {ours / plain:.2f}")
         ours = _cpu(_fretc() + ["audit", "-r", str(tmp / "syn.fret"), str(syn),
                                 "--no-progress"], ROOT)
         print("cdr MCAP (the same long log, for comparison):")

@@ -242,7 +242,7 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
     if message_encoding in SELF_DESCRIBING:
         try:
             return other_decoder(message_encoding, schema_encoding or "", schema_name or "",
-                                 schema_text)
+                                 schema_text, fields)
         except EncodingError as exc:
             raise UnsupportedSchema(str(exc)) from None
     if message_encoding not in SCHEMA_FOR_ENCODING:

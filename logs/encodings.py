@@ -23,12 +23,14 @@ import re
 
 import base64
 import json
-import math
 from collections.abc import Callable
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
+
+from fretc.logs.field_select import field_tree, json_picker, protobuf_picker
+from fretc.logs.json_values import as_message, checked_picker, type_check
 
 __all__ = ["SELF_DESCRIBING", "UNSUPPORTED_ENCODINGS", "other_decoder", "definition",
            "type_name"]
@@ -57,8 +59,12 @@ def _as_bytes(data: bytes | str) -> bytes:
 
 
 def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
-                  schema_data: bytes | str | None) -> Callable[[bytes], Any]:
+                  schema_data: bytes | str | None, fields: Any = None
+                  ) -> Callable[[bytes], Any]:
     """A function ``bytes -> message object`` for a channel of a self-describing encoding.
+    With ``fields`` (the field paths the bindings read, :mod:`fretc.logs.selective`), a
+    ``json`` or ``protobuf`` message object holds only those fields, and only their types
+    are checked (:mod:`fretc.logs.field_select`); None: every field.
 
     Raises:
         EncodingError: a protobuf channel whose schema is missing, is no FileDescriptorSet
@@ -69,6 +75,7 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
         raise EncodingError(f"schema encoding {schema_encoding!r} does not go with message "
                             f"encoding {message_encoding!r}")
     typ = type_name(schema_name) if schema_name else None
+    tree = field_tree(fields) if message_encoding != "cbor" else None
     loads: Callable[[bytes], Any]
     if message_encoding == "json":
         loads = json.loads
@@ -77,128 +84,35 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
 
         loads = cbor2.loads
     else:
-        pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""))
+        pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""), tree)
         return _checked(lambda raw: _typed(pb(raw), typ), message_encoding)
-    check = (json_type_check(schema_data) if message_encoding == "json"
-             and schema_encoding == "jsonschema" and schema_data else None)
+    doc = (_json_schema(schema_data) if message_encoding == "json"
+           and schema_encoding == "jsonschema" and schema_data else None)
+    if tree is not None:  # the fields read, checked and converted in one walk
+        pick = checked_picker(doc, tree) if doc is not None else json_picker(tree, as_message)
+        return _checked(lambda raw: _typed(pick(loads(raw)), typ), message_encoding)
+    check = type_check(doc) if doc is not None else None
     if check is not None:
         return _checked(lambda raw: _typed(as_message(check(loads(raw))), typ),
                         message_encoding)
     return _checked(lambda raw: _typed(as_message(loads(raw)), typ), message_encoding)
 
 
-_JSON_TYPES: dict[str, Callable[[Any], bool]] = {
-    "number": lambda v: type(v) in (int, float),
-    "integer": lambda v: type(v) is int or (type(v) is float and v.is_integer()),
-    "boolean": lambda v: type(v) is bool,
-    "string": lambda v: type(v) is str,
-    "object": lambda v: type(v) is dict,
-    "array": lambda v: type(v) is list,
-    "null": lambda v: v is None,
-}
-
-
 def json_type_check(schema_data: bytes | str) -> Callable[[Any], Any] | None:
-    """A function that returns a decoded JSON message unchanged when the scalar values of
-    the properties its JSON Schema declares have the declared ``type`` (JSON Schema
-    draft 2020-12, "type": a JSON ``true`` is no number, a number no boolean), and raises
-    ``ValueError`` naming the first field that does not (an undecodable message: the schema
-    does not describe it). Properties the schema does not declare, and schemas that cannot
-    be read, are not checked (None)."""
+    """:func:`fretc.logs.json_values.type_check` of a channel's JSON Schema (bytes or text);
+    None when the schema cannot be read or declares nothing to check."""
+    doc = _json_schema(schema_data)
+    return None if doc is None else type_check(doc)
+
+
+def _json_schema(schema_data: bytes | str) -> dict | None:
+    """A channel's JSON Schema document, or None when it is no JSON object."""
     try:
         doc = json.loads(schema_data if isinstance(schema_data, str) else
                          _as_bytes(schema_data))
     except (ValueError, RecursionError):
         return None
-    if not isinstance(doc, dict):
-        return None
-
-    check = _compile_check(doc, "", 0)
-    if check is None:
-        return None
-
-    def checked(value: Any) -> Any:
-        check(value)
-        return value
-    return checked
-
-
-#: Python types of the JSON values of each JSON Schema ``type`` (bool is no number).
-_JSON_PY: dict[str, tuple[type, ...]] = {
-    "number": (int, float), "boolean": (bool,), "string": (str,), "object": (dict,),
-    "array": (list,), "null": (type(None),), "integer": (int, float)}
-
-
-def _compile_check(spec: Any, where: str, depth: int) -> Callable[[Any], None] | None:
-    """The check of one schema node, made once (None: nothing to check there): its own
-    ``type``, its declared properties' checks, and its items' (an array of scalars in one
-    pass over the list)."""
-    if not isinstance(spec, dict) or depth > 64:
-        return None
-    t = spec.get("type")
-    allowed = [t] if isinstance(t, str) else [x for x in t if isinstance(x, str)] \
-        if isinstance(t, list) else []
-    tests = [_JSON_TYPES[x] for x in allowed if x in _JSON_TYPES]
-    kinds = frozenset(k for x in allowed if x in _JSON_PY for k in _JSON_PY[x])
-    exact = "integer" not in allowed  # (an integer: a float only when whole)
-    props = [(name, c) for name, sub in (spec.get("properties") or {}).items()
-             if (c := _compile_check(sub, f"{where}.{name}" if where else name,
-                                     depth + 1)) is not None]
-    items = spec.get("items")
-    item = _compile_check(items, f"{where}[]", depth + 1) if isinstance(items, dict) else None
-    scalar_items = (isinstance(items, dict) and not items.get("properties")
-                    and not isinstance(items.get("items"), dict))
-    it = items.get("type") if isinstance(items, dict) else None
-    item_allowed = [it] if isinstance(it, str) else [x for x in it if isinstance(x, str)] \
-        if isinstance(it, list) else []
-    # an array of scalars of exact types: checked by the set of its items' types (map(type)
-    # runs in C), the item named only when one is wrong
-    fast = (scalar_items and item_allowed and "integer" not in item_allowed
-            and all(x in _JSON_PY for x in item_allowed))
-    item_kinds = frozenset(k for x in item_allowed if x in _JSON_PY for k in _JSON_PY[x])
-    if not tests and not props and item is None:
-        return None
-
-    def wrong(value: Any, at: str) -> None:
-        shown = json.dumps(value)[:40] if not isinstance(value, (dict, list)) else \
-            type(value).__name__
-        raise ValueError(f"{at or 'the message'} is {shown}, but the schema says "
-                         f"{' or '.join(allowed)}")
-
-    def check(value: Any) -> None:
-        if tests and not (type(value) in kinds if exact else any(f(value) for f in tests)):
-            wrong(value, where)
-        if props and type(value) is dict:
-            for name, c in props:
-                if name in value:
-                    c(value[name])
-        elif item is not None and type(value) is list:
-            if fast and set(map(type, value)) <= item_kinds:
-                return
-            if scalar_items:  # the first item of another type is named
-                for i, x in enumerate(value):
-                    try:
-                        item(x)
-                    except ValueError:
-                        raise ValueError(str(_item_error(item, x, f"{where}[{i}]"))) from None
-            else:
-                for i, x in enumerate(value):
-                    try:
-                        item(x)
-                    except ValueError as exc:
-                        raise ValueError(str(exc).replace(f"{where}[]", f"{where}[{i}]", 1)) \
-                            from None
-    return check
-
-
-def _item_error(item: Callable[[Any], None], x: Any, at: str) -> str:
-    """The error of ``item`` on ``x``, named at ``at``."""
-    try:
-        item(x)
-    except ValueError as exc:
-        text = str(exc)
-        return at + text[text.index(" is "):] if " is " in text else text
-    return at
+    return doc if isinstance(doc, dict) else None
 
 
 def _checked(decode: Callable[[bytes], Any], encoding: str) -> Callable[[bytes], Any]:
@@ -221,42 +135,6 @@ def _typed(msg: Any, typ: str | None) -> Any:
     return msg
 
 
-def as_message(value: Any) -> Any:
-    """A decoded JSON/CBOR value as a message object (module docstring)."""
-    if isinstance(value, dict):
-        return SimpleNamespace(**{str(k): as_message(v) for k, v in value.items()})
-    if isinstance(value, list):
-        kinds = set(map(type, value))  # the decoders give exact built-in types
-        if kinds == {bool}:
-            return np.array(value, dtype=bool)
-        if kinds == {int}:
-            try:
-                return np.array(value, dtype=np.int64)
-            except OverflowError:
-                return np.array([_big(x) for x in value], dtype=np.float64)
-        if kinds and kinds <= {int, float}:
-            return np.array([_big(x) if type(x) is int else x for x in value],
-                            dtype=np.float64)
-        return [as_message(x) for x in value]
-    if isinstance(value, (bytes, bytearray)):
-        return np.frombuffer(bytes(value), dtype=np.uint8)
-    if type(value) is int and not _INT64[0] <= value <= _INT64[1]:
-        return _big(value)
-    return value
-
-
-_INT64 = (-(2**63), 2**63 - 1)
-
-
-def _big(value: int) -> float:
-    """An integer past int64 as the nearest float64; past the largest float, +-inf (as
-    IEEE 754 rounds an overflow; a JSON ``1e999`` is read as inf too)."""
-    try:
-        return float(value)
-    except OverflowError:
-        return math.inf if value > 0 else -math.inf
-
-
 # --------------------------------------------------------------------------- protobuf
 _PB_DTYPES = {1: np.float64, 2: np.float32, 3: np.int64, 4: np.uint64, 5: np.int32,
               6: np.uint64, 7: np.uint32, 8: bool, 13: np.uint32, 14: np.int32,
@@ -267,7 +145,8 @@ _PB_ROS = {1: "float64", 2: "float32", 3: "int64", 4: "uint64", 5: "int32", 6: "
 _MESSAGE, _ENUM, _BYTES = 11, 14, 12
 
 
-def _protobuf_decoder(name: str, fds: bytes) -> Callable[[bytes], Any]:
+def _protobuf_decoder(name: str, fds: bytes, tree: dict | None = None
+                      ) -> Callable[[bytes], Any]:
     from mcap.records import Schema
     from mcap_protobuf.decoder import DecoderFactory
 
@@ -281,7 +160,18 @@ def _protobuf_decoder(name: str, fds: bytes) -> Callable[[bytes], Any]:
                             f"({type(exc).__name__}: {exc})") from None
     if make is None:
         raise EncodingError(f"the protobuf schema does not define {name!r}")
-    return lambda raw: _pb_message(make(raw))
+    if tree is None:
+        return lambda raw: _pb_message(make(raw))
+    picks: dict[Any, Callable[[Any], SimpleNamespace]] = {}
+
+    def selected(raw: bytes) -> SimpleNamespace:
+        msg = make(raw)
+        pick = picks.get(msg.DESCRIPTOR)
+        if pick is None:
+            pick = picks[msg.DESCRIPTOR] = protobuf_picker(msg.DESCRIPTOR, tree, pb_value,
+                                                           _pb_plan, _pb_lies)
+        return pick(msg)
+    return selected
 
 
 def _repeated(field) -> bool:
@@ -315,17 +205,17 @@ def _pb_plan(descriptor) -> list[tuple[str, int, Any]]:
 _PB_PLANS: dict[Any, list[tuple[str, int, Any]]] = {}
 
 
-def _pb_lies(msg) -> None:
+def _pb_lies(msg, numbers: frozenset[int] | None = None) -> None:
     """Raise ``ValueError`` when the payload holds a field the schema declares with another
     wire type (a float field over varint bytes, say): protobuf keeps such a field as an
     unknown field and leaves the declared one at its default, 0, which would be read as a
     value (protobuf encoding, "Message Structure": wire types). Unknown field numbers are
-    newer fields, not lies."""
+    newer fields, not lies. ``numbers``: only those fields are checked (None: all)."""
     from google.protobuf.unknown_fields import UnknownFieldSet
 
     declared = msg.DESCRIPTOR.fields_by_number
     for f in UnknownFieldSet(msg):  # type: ignore[attr-defined]  # a sequence (len, [i])
-        if f.field_number in declared:
+        if f.field_number in declared and (numbers is None or f.field_number in numbers):
             field = declared[f.field_number]
             raise ValueError(f"field {field.name} (number {f.field_number}) is declared "
                              f"{_PB_ROS.get(field.type, 'of another type')} but the payload "
@@ -341,23 +231,26 @@ def _pb_message(msg) -> SimpleNamespace:
     out = SimpleNamespace()
     d = out.__dict__
     for name, how, dtype in _pb_plan(msg.DESCRIPTOR):
-        value = getattr(msg, name)
-        if how == 0:
-            pass
-        elif how == 5:
-            value = np.array(value, dtype=dtype)
-        elif how == 1:
-            value = _pb_message(value)
-        elif how == 2:
-            value = [_pb_message(x) for x in value]
-        elif how == 3:
-            value = np.frombuffer(value, dtype=np.uint8)
-        elif how == 4:
-            value = [np.frombuffer(x, dtype=np.uint8) for x in value]
-        else:
-            value = list(value)
-        d[name] = value
+        d[name] = pb_value(getattr(msg, name), how, dtype)
     return out
+
+
+def pb_value(value: Any, how: int, dtype: Any) -> Any:
+    """One field's value of a parsed protobuf message converted by its plan (:func:`_pb_plan`:
+    ``how``, numpy ``dtype``)."""
+    if how == 0:
+        return value
+    if how == 5:
+        return np.array(value, dtype=dtype)
+    if how == 1:
+        return _pb_message(value)
+    if how == 2:
+        return [_pb_message(x) for x in value]
+    if how == 3:
+        return np.frombuffer(value, dtype=np.uint8)
+    if how == 4:
+        return [np.frombuffer(x, dtype=np.uint8) for x in value]
+    return list(value)
 
 
 def type_name(name: str) -> str:

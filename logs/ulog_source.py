@@ -39,9 +39,11 @@ pyulog reads quietly as a shorter flight: the framing is checked first
 (:mod:`fretc.logs.ulog_framing`), a cut is a gap to the end of the log, and a damaged span a
 gap to the first message after the next sync message (each intact run read on its own).
 
-Opening a ULog reads it whole with pyulog, once (every topic's rows as numpy arrays, kept
-for the passes of the audit: dropouts are dated only by a read of every topic, so that read
-is needed anyway); :meth:`UlogSource.messages` then builds one message object per row.
+Opening a ULog reads it whole, once (every topic's rows as numpy arrays, kept for the passes
+of the audit: dropouts are dated only by a read of every topic, so that read is needed
+anyway): a sound file by one walk over its messages and numpy gathers
+(:mod:`fretc.logs.ulog_fast`, the same rows as pyulog's), any other with the framing walk
+and pyulog; :meth:`UlogSource.messages` then builds one message object per row.
 """
 
 from __future__ import annotations
@@ -57,6 +59,8 @@ import numpy as np
 
 from fretc.common.problems import LogError
 from fretc.logs.base import LogSource, Message
+from fretc.logs.field_select import field_tree
+from fretc.logs.ulog_fast import read_sound
 from fretc.logs.ulog_framing import segment_bytes, ulog_framing
 
 __all__ = ["UlogSource", "LOG_TOPIC", "PARAMETER_TOPIC", "DROPOUT", "EARLY_TIMESTAMP",
@@ -156,7 +160,7 @@ class UlogSource(LogSource):
             self.dropouts += [(max(int(d.timestamp) * 1000, floor), int(d.duration))
                               for d in u.dropouts]
         times = [int(t) * 1000 for u in self._ulogs for d in u.data_list
-                 for t in d.data["timestamp"][:1] if t != 0]
+                 for t in _timestamps(d)[:1] if t != 0]
         self._start_time = min(times) if times else None
         self._end_time = None
         self._opened = (self._start_time, self._open_problems)
@@ -178,6 +182,9 @@ class UlogSource(LogSource):
                 data = f.read()
         except OSError as exc:
             raise LogError(self.path, f"cannot read: {exc.strerror or exc}") from None
+        sound = read_sound(data)  # one walk and numpy gathers: a sound file's read
+        if sound is not None:
+            return [sound[0]], sound[1]
         framing = ulog_framing(data)
         if not framing.damages:
             return [self._read(None)], framing
@@ -255,7 +262,8 @@ class UlogSource(LogSource):
                 topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
                 if topic in want:
                     streams.append((topic, d.data["timestamp"].astype(np.int64) * 1000,
-                                    _Rows(d.data, ulog.message_formats, d.name)))
+                                    _Rows(d.data, ulog.message_formats, d.name,
+                                          field_tree(self._fields_for(topic)))))
             if LOG_TOPIC in want:
                 streams.append(_log_stream(ulog))
             if PARAMETER_TOPIC in want:  # a change before the run's first data: at its floor
@@ -295,6 +303,13 @@ class UlogSource(LogSource):
             yield Message(topic, lt, lt, None, data)
 
 
+def _timestamps(data: Any) -> np.ndarray:
+    """The ``timestamp`` column of a pyulog data set (µs), without gathering its other
+    columns when :mod:`fretc.logs.ulog_fast` read it."""
+    times = getattr(data, "timestamps", None)
+    return times if times is not None else data.data["timestamp"]
+
+
 def _stamped(t: np.ndarray, log_start: int, sampled: bool) -> np.ndarray:
     """The rows of one topic whose timestamp ``t`` (ns, in file order) is a log time (module
     docstring): not 0, and at or after ``log_start`` (the ULog header's start) unless it is
@@ -309,12 +324,15 @@ def _stamped(t: np.ndarray, log_start: int, sampled: bool) -> np.ndarray:
 class _Rows:
     """Row ``i`` of a pyulog data set as a message object: one attribute per field, arrays
     as numpy arrays (``output[0]``, ``output[1]``, ... joined), nested uORB messages as
-    objects, ``char[N]`` as a string."""
+    objects, ``char[N]`` as a string; with ``tree`` (:func:`fretc.logs.field_select.field_tree`
+    of the fields the bindings read) only those fields."""
 
-    def __init__(self, data: dict[str, np.ndarray], formats: dict, name: str) -> None:
+    def __init__(self, data: dict[str, np.ndarray], formats: dict, name: str,
+                 tree: dict | None = None) -> None:
         self.data = data
-        self.plan = _plan(formats, name, "")
+        self.plan = _plan(formats, name, "", tree)
         self.stacked: dict[str, np.ndarray] = {}
+        self.lists: dict[str, list] = {}  # a scalar column as Python values (``.item()``)
 
     def row(self, i: int) -> Any:
         return self._build(self.plan, i)
@@ -323,7 +341,10 @@ class _Rows:
         out = SimpleNamespace()
         for field, how, arg in plan:
             if how == "scalar":
-                value = self.data[arg][i].item()
+                column = self.lists.get(arg)
+                if column is None:
+                    column = self.lists[arg] = self.data[arg].tolist()
+                value = column[i]
             elif how == "array":
                 arr = self.stacked.get(field + arg[0])
                 if arr is None:
@@ -341,13 +362,16 @@ class _Rows:
         return out
 
 
-def _plan(formats: dict, name: str, prefix: str) -> list[tuple[str, str, Any]]:
+def _plan(formats: dict, name: str, prefix: str, tree: dict | None = None
+          ) -> list[tuple[str, str, Any]]:
     """How to build a message of uORB type ``name`` from pyulog's flattened column names
-    under ``prefix``: (field, how, columns or sub-plans)."""
+    under ``prefix``: (field, how, columns or sub-plans); only the fields of ``tree`` when
+    given (None: every field)."""
     plan: list[tuple[str, str, Any]] = []
     for typ, size, field in formats[name].fields:
-        if field.startswith("_padding"):
+        if field.startswith("_padding") or (tree is not None and field not in tree):
             continue
+        sub = None if tree is None else tree[field]
         base = prefix + field
         if typ in _ROS_TYPES:
             if typ == "char" and size:
@@ -360,7 +384,7 @@ def _plan(formats: dict, name: str, prefix: str) -> list[tuple[str, str, Any]]:
             plan.append((field, "nested_array",
                          [_plan(formats, typ, f"{base}[{k}].") for k in range(size)]))
         else:
-            plan.append((field, "nested", _plan(formats, typ, base + ".")))
+            plan.append((field, "nested", _plan(formats, typ, base + ".", sub)))
     return plan
 
 

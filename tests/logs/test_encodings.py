@@ -240,7 +240,7 @@ def _reference_check(value, spec, where="", depth=0):
     compiled check keeps): raises ValueError naming the first field of another type."""
     import json as _json
 
-    from fretc.logs.encodings import _JSON_TYPES
+    from fretc.logs.json_values import _JSON_TYPES
 
     if not isinstance(spec, dict) or depth > 64:
         return

@@ -1,0 +1,134 @@
+"""The fields the signal bindings read, picked from a decoded self-describing message
+(``json``, ``protobuf``: :mod:`fretc.logs.encodings`) instead of converting all of it.
+
+The audit reads a few fields of a few topics (``min(/scan.ranges)``,
+``/odom.twist.twist.linear.x``). The libraries decode the whole payload (``json.loads``,
+protobuf's parser) as the plain read does; what costs beside them is turning every field
+into a message object and checking every field's type. With the bindings' field paths
+(:func:`fretc.logs.selective.wanted_fields`) the decoders here build the object of only the
+fields read, and check the types of only those: a JSON value against its schema's ``type``
+(arrays of scalars in one pass), a protobuf field against its declared wire type. A field
+nobody reads is neither converted nor checked, as :mod:`fretc.logs.selective` skips it in
+CDR. The values of the fields read are those of the full conversion
+(``tests/logs/test_field_select.py`` compares both, on the test logs and on generated
+messages).
+
+A path is kept up to its first index or slice (``/scan.ranges[0]`` reads ``ranges``
+whole); :data:`~fretc.logs.selective.HEADER_STAMP` reads ``header.stamp``; beside a
+``ranges`` field, ``range_min`` and ``range_max`` are kept (REP 117 filtering of LaserScan).
+A path that names no field (the whole message) gives the full conversion.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from types import SimpleNamespace
+from typing import Any
+
+__all__ = ["field_tree", "json_picker", "pruned_schema", "protobuf_picker"]
+
+#: field name -> sub-tree (the fields read of a nested message) or None (the value whole)
+Tree = dict[str, Any]
+
+
+def field_tree(paths: Iterable[tuple[Any, ...]] | None) -> Tree | None:
+    """The tree of the fields read along ``paths`` (module docstring); None when the whole
+    message is wanted (``paths`` None, or a path naming no field)."""
+    from fretc.logs.selective import HEADER_STAMP
+
+    if paths is None:
+        return None
+    tree: Tree = {}
+    for path in paths:
+        if path == HEADER_STAMP:
+            path = ("header", "stamp")
+        names: list[str] = []
+        for part in path:
+            if not isinstance(part, str):
+                break
+            names.append(part)
+        if not names:
+            return None
+        node: Tree | None = tree
+        for k, name in enumerate(names):
+            assert node is not None
+            if k == len(names) - 1:
+                node[name] = None
+            elif name in node and node[name] is None:
+                break  # the value is read whole already
+            else:
+                node = node.setdefault(name, {})
+    if "ranges" in tree:
+        tree.setdefault("range_min", None)
+        tree.setdefault("range_max", None)
+    return tree
+
+
+def pruned_schema(spec: Any, tree: Tree | None) -> Any:
+    """A JSON Schema node with only the ``properties`` ``tree`` reads (recursively); its own
+    ``type`` and ``items`` kept (a value of another shape than the tree expects is checked
+    as the full schema checks it)."""
+    if tree is None or not isinstance(spec, dict):
+        return spec
+    props = spec.get("properties")
+    out = dict(spec)
+    if isinstance(props, dict):  # (in the schema's order: the check's order of errors)
+        out["properties"] = {name: pruned_schema(sub_spec, tree[name])
+                             for name, sub_spec in props.items() if name in tree}
+    return out
+
+
+def json_picker(tree: Tree, convert: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    """A function ``decoded JSON value -> message object`` holding the fields of ``tree``
+    (each read value converted whole by ``convert``, :func:`fretc.logs.encodings.as_message`);
+    a value that is no JSON object is converted whole (the extractor reports it as the full
+    conversion would make it report)."""
+    subs = [(name, None if sub is None else json_picker(sub, convert))
+            for name, sub in tree.items()]
+
+    def pick(value: Any) -> Any:
+        if type(value) is not dict:
+            return convert(value)
+        out = SimpleNamespace()
+        d = out.__dict__
+        for name, sub in subs:
+            if name in value:
+                d[name] = convert(value[name]) if sub is None else sub(value[name])
+        return out
+    return pick
+
+
+def protobuf_picker(descriptor: Any, tree: Tree,
+                    convert: Callable[[Any, int, Any], Any],
+                    plan: Callable[[Any], list[tuple[str, int, Any]]],
+                    lies: Callable[[Any, frozenset[int] | None], None]
+                    ) -> Callable[[Any], SimpleNamespace]:
+    """A function ``parsed protobuf message -> message object`` holding the fields of
+    ``tree`` (those the message type declares; a field it lacks is left out, as the full
+    conversion has no such attribute). ``convert`` converts one field's value whole by its
+    plan (:func:`fretc.logs.encodings.pb_value`), ``plan`` gives a type's plan, ``lies`` is
+    the wire-type check restricted to the given field numbers. Raises ``ValueError`` where
+    ``lies`` does."""
+    by_name = {name: (how, dtype) for name, how, dtype in plan(descriptor)}
+    numbers = frozenset(f.number for f in descriptor.fields if f.name in tree)
+    steps: list[tuple[str, int, Any, Any]] = []
+    for name, sub in tree.items():
+        if name not in by_name:
+            continue
+        how, dtype = by_name[name]
+        field = descriptor.fields_by_name[name]
+        if sub is not None and how == 1:  # a nested message: its fields read
+            steps.append((name, -1, None, protobuf_picker(field.message_type, sub, convert,
+                                                          plan, lies)))
+        else:
+            steps.append((name, how, dtype, None))
+
+    def pick(msg: Any) -> SimpleNamespace:
+        lies(msg, numbers)
+        out = SimpleNamespace()
+        d = out.__dict__
+        for name, how, dtype, sub in steps:
+            value = getattr(msg, name)
+            d[name] = sub(value) if sub is not None else convert(value, how, dtype)
+        return out
+    return pick
