@@ -39,6 +39,9 @@ __all__ = ["Cluster", "PredicateBudget", "MAX_VALUATIONS", "FUNCTIONS", "is_pred
 
 #: the most valuations (realizable plus excluded by a core) z3 is asked about per cluster
 MAX_VALUATIONS = 4096
+#: z3's deterministic resource limit per query (never seconds: same input, same answer); a
+#: query past it makes the cluster undecided (:class:`PredicateBudget`)
+RLIMIT = 5_000_000
 #: the functions a comparison may apply, with their arity (FRET's names)
 FUNCTIONS = {"absReal": 1, "absInt": 1, "minReal": 2, "minInt": 2, "maxReal": 2, "maxInt": 2}
 _ARITH = ("+", "-", "*", "/")
@@ -49,7 +52,22 @@ Witness = Callable[["Cluster", Any, dict[str, Any], tuple[bool, ...]], Any]
 
 
 class PredicateBudget(Exception):
-    """A cluster with more valuations than :data:`MAX_VALUATIONS` to decide."""
+    """A cluster with more valuations than :data:`MAX_VALUATIONS` to decide, or a query z3
+    did not answer within :data:`RLIMIT`."""
+
+
+def _solver() -> Any:
+    import z3
+
+    s = z3.Solver()
+    s.set("rlimit", RLIMIT)
+    return s
+
+
+def _undecided(c: Cluster, solver: Any) -> PredicateBudget:
+    return PredicateBudget(f"z3 did not decide the comparisons "
+                           f"{', '.join(to_smv(a) for a in c.atoms)} "
+                           f"({solver.reason_unknown()})")
 
 
 def is_predicate(node: Node) -> bool:
@@ -185,10 +203,10 @@ def _decide(c: Cluster, witness: Witness | None) -> None:
 
     reals = {v: z3.Real(v) for v in c.variables}
     bs = [z3.Bool(f"p{k}") for k in range(len(c.atoms))]
-    theory = z3.Solver()
+    theory = _solver()
     for b, a in zip(bs, c.atoms):
         theory.add(b == _z3(a, reals))
-    search = z3.Solver()
+    search = z3.Solver()  # (propositional: no limit needed)
     lemmas: list[Node] = []
     asked = 0
     while search.check() == z3.sat:
@@ -200,7 +218,10 @@ def _decide(c: Cluster, witness: Witness | None) -> None:
         model = search.model()
         values = tuple(z3.is_true(model.eval(b, model_completion=True)) for b in bs)
         lits = [b if v else z3.Not(b) for b, v in zip(bs, values)]
-        if theory.check(*lits) == z3.sat:
+        answer = theory.check(*lits)
+        if answer == z3.unknown:
+            raise _undecided(c, theory)
+        if answer == z3.sat:
             c.witnesses[values] = (witness(c, theory.model(), reals, values)
                                    if witness is not None else None)
             search.add(z3.Not(z3.And(*lits)))
@@ -248,15 +269,18 @@ def mixed_invariants(c: Cluster, inputs: Sequence[str]) -> tuple[Node, Node]:
     for iv in itertools.product((False, True), repeat=len(ins)):
         given = z3.And(*[x if v else z3.Not(x) for x, v in zip(in_z3, iv)], z3.BoolVal(True))
         iota = ir.and_all(*(a if v else ir.not_(a) for a, v in zip(ins, iv)))
-        s = z3.Solver()
+        s = _solver()
         s.add(given)
-        if s.check() != z3.sat:  # (no input numbers give it: the environment's lemma)
+        answer = s.check()
+        if answer == z3.unknown:
+            raise _undecided(c, s)
+        if answer == z3.unsat:  # (no input numbers give it: the environment's lemma)
             env.append(ir.not_(iota))
             continue
         allowed = []
         for ov in itertools.product((False, True), repeat=len(outs)):
             want = z3.And(*[x if v else z3.Not(x) for x, v in zip(out_z3, ov)], z3.BoolVal(True))
-            bad = z3.Solver()
+            bad = _solver()
             body = z3.Exists([reals[v] for v in out_vars], want) if out_vars else want
             bad.add(given, z3.Not(body))
             if bad.check() == z3.unsat:

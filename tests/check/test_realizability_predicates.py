@@ -161,3 +161,16 @@ def test_realizability_of_an_input_and_an_output_never_contradicts_the_numbers(
     got = realizability_of(tmp_path, text, ["a"])
     if got["realizable"] != "unknown":
         assert got["realizable"] is _truth(parts), text
+
+
+def test_a_comparison_z3_does_not_decide_in_its_limit_is_unknown(tmp_path: Path,
+                                                                 monkeypatch) -> None:
+    """A query past z3's resource limit leaves the cluster undecided: the realizability is
+    unknown and says so (before the limit, an unknown answer raised from z3's unsat core)."""
+    from fretc.check import predicates
+
+    monkeypatch.setattr(predicates, "RLIMIT", 1)
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x * y > 2.0\n"
+                                     "B: the sw shall always satisfy x * x < y - 3.0\n", [])
+    assert got["realizable"] == "unknown"
+    assert "z3 did not decide" in got["why"]
