@@ -83,10 +83,9 @@ class Robustness:
 ROBUSTNESS_CHUNK = 1 << 16
 
 
-def robustness(pt: Node, columns: Columns, n: int, chunk: int = ROBUSTNESS_CHUNK
-               ) -> Robustness:
+def robustness(pt: Node, columns: Columns, n: int, chunk: int | None = None) -> Robustness:
     """The robustness of the pt formula ``pt`` over ticks ``0..n-1`` (``n >= 1``), evaluated
-    ``chunk`` ticks at a time when ``n`` is longer (the same values: each temporal
+    ``chunk`` ticks (default :data:`ROBUSTNESS_CHUNK`) at a time when ``n`` is longer (the same values: each temporal
     operator's state carried from chunk to chunk) unless a comparison's operands hold a
     past-time operator or ``pre`` (then over the whole trace at once).
 
@@ -96,6 +95,7 @@ def robustness(pt: Node, columns: Columns, n: int, chunk: int = ROBUSTNESS_CHUNK
     """
     if n < 1:
         raise ValueError("robustness needs at least one tick")
+    chunk = ROBUSTNESS_CHUNK if chunk is None else chunk
     top = pt.op == "H" and pt.hi is None  # the margin is that of the body of a top H
     body = pt.args[0] if top else pt
     if n > chunk and _chunkable(body, chunk):
