@@ -4,7 +4,8 @@ Memory: messages are streamed (:mod:`fretc.logs`), never kept. What grows with t
 length of the log is only these columns: per evaluated tick, 8 bytes of time, 8 bytes per
 bound topic (log time of the held message), 1 byte per boolean and 8 per numeric variable -
 about 80 bytes a tick for the Safe-ROS set, 3 MB for an hour at 10 Hz (kept in chunks of
-:data:`CHUNK` ticks).
+:data:`CHUNK` ticks). A topic whose held log time is the tick's time at every tick (a CSV
+trace's rows) keeps no column of its own: its column is the times' array.
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ class TickColumns:
         self._vchunks: list[list[np.ndarray]] = [[] for _ in names]
         self._lchunks: list[list[np.ndarray]] = [[] for _ in topics]
         self._tchunks: list[np.ndarray] = []
+        #: per topic: its held log times equal the ticks' times so far (no chunk kept)
+        self._same = [True for _ in topics]
 
     def append_block(self, block: TickBlock) -> None:
         """Add a block of ticks (:class:`fretc.signals.TickBlock`); a variable absent
@@ -41,9 +44,15 @@ class TickColumns:
         for name, chunks in zip(self.names, self._vchunks):
             v = block.values.get(name)
             chunks.append(v if v is not None else np.zeros(k, dtype=np.bool_))
-        for topic, chunks in zip(self.topics, self._lchunks):
+        for i, (topic, chunks) in enumerate(zip(self.topics, self._lchunks)):
             lt = block.log_times.get(topic)
-            chunks.append(lt if lt is not None else np.full(k, -1, dtype=np.int64))
+            lt = lt if lt is not None else np.full(k, -1, dtype=np.int64)
+            if self._same[i]:
+                if lt.dtype == block.times.dtype and np.array_equal(lt, block.times):
+                    continue
+                self._same[i] = False  # the chunks so far were the times'
+                chunks.extend(c.copy() for c in self._tchunks)
+            chunks.append(lt)
         self._tchunks.append(block.times)
         self.n += k
 
@@ -64,7 +73,8 @@ class TickColumns:
 
         times = cat(self._tchunks, np.int64)
         cols = {n: cat(c, np.bool_) for n, c in zip(self.names, self._vchunks)}
-        lts = {t: cat(c, np.int64) for t, c in zip(self.topics, self._lchunks)}
+        lts = {t: times if same else cat(c, np.int64)
+               for t, c, same in zip(self.topics, self._lchunks, self._same)}
         return times, cols, lts
 
 

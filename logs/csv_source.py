@@ -288,23 +288,25 @@ class CsvSource(LogSource):
             self.partial = True
         index = 0
         at = header.index("time") if self.has_time else None
+        # (the typed columns in the header's order: position, name, boolean)
+        typed = [(i, name, types[name] == "bool") for i, name in enumerate(header)
+                 if name in types]
         for line, cells in lines:
             if not self._own(cells, line):
                 continue
             time = _csv_time(self.path, line, cells[at]) if at is not None else None
             values: dict[str, bool | float] = {}
             unknown = []
-            for name, cell in zip(header, cells):
-                if name not in types:
-                    continue
-                elif cell in _MARKS:
+            for i, name, boolean in typed:
+                cell = cells[i]
+                if cell in _MARKS:
                     if cell == CUT_CELL:
                         t = time if time is not None else index * self.period_ns
                         self._gap(t, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
                         return
                     unknown.append(name)
-                    values[name] = False if types[name] == "bool" else 0.0
-                elif types[name] == "bool":
+                    values[name] = False if boolean else 0.0
+                elif boolean:
                     values[name] = _BOOL_WORDS[cell.lower()]
                 else:
                     values[name] = float(cell)
@@ -338,9 +340,13 @@ class _Checker:
         self.word_at: dict[str, int] = {}  # first line with true/false
         self.own: list[str] | None = None  # the columns of the clock read (grouped traces)
         self.cut_line: int | None = None
+        #: cell text -> its kind ("word" true/false, "bit" 1/0, "num" another number), for
+        #: the first :data:`_KINDS_KEPT` distinct cells (a trace repeats its cells)
+        self.kinds: dict[str, str] = {}
 
     def run(self, lines: Iterator[tuple[int, list[str]]]) -> None:
         src, header = self.src, self.header
+        self.variables = frozenset(src.columns)
         count = 0
         last_time: int | None = None
         for line, cells in lines:
@@ -375,7 +381,7 @@ class _Checker:
     def _row(self, line: int, cells: list[str], index: int) -> bool:
         """Check one data row of the clock read; True when it is the ``cut`` row."""
         src = self.src
-        named = {n: c for n, c in zip(self.header, cells) if n in src.columns}
+        named = {n: c for n, c in zip(self.header, cells) if n in self.variables}
         if src._grouped:  # the clock's columns: the cells its first row fills
             filled = [n for n, c in named.items() if c]
             if self.own is None:
@@ -400,29 +406,52 @@ class _Checker:
         return False
 
     def _cell(self, line: int, name: str, cell: str, index: int) -> None:
-        src = self.src
-        if not cell:
-            raise CsvError(src.path, line, "empty cell", column=name)
-        if cell == UNKNOWN_CELL:
-            src.unknown_rows.setdefault(name, []).append(index)
-            return
-        low = cell.lower()
-        if low in ("true", "false"):
+        kind = self.kinds.get(cell)
+        if kind is None:
+            src = self.src
+            if not cell:
+                raise CsvError(src.path, line, "empty cell", column=name)
+            if cell == UNKNOWN_CELL:
+                src.unknown_rows.setdefault(name, []).append(index)
+                return
+            low = cell.lower()
+            if low in ("true", "false"):
+                kind = "word"
+            elif low in _BOOL_WORDS:
+                kind = "bit"
+            else:
+                try:
+                    float(cell)
+                except ValueError:
+                    raise CsvError(src.path, line, f"cannot read {cell!r} as true/false or "
+                                   "a number", column=name) from None
+                kind = "num"
+            if len(self.kinds) < _KINDS_KEPT:
+                self.kinds[cell] = kind
+        if kind == "word":
             self.word_at.setdefault(name, line)
-        elif low not in _BOOL_WORDS:
-            try:
-                float(cell)
-            except ValueError:
-                raise CsvError(src.path, line, f"cannot read {cell!r} as true/false or a "
-                               "number", column=name) from None
+        elif kind == "num":
             self.numeric_at.setdefault(name, line)
+        else:  # 1/0: either type (a column of mixed types was refused at its second)
+            return
         if name in self.word_at and name in self.numeric_at:
             raise CsvError(src.path, line,
                            f"column mixes true/false (line {self.word_at[name]}) with numbers "
                            f"(line {self.numeric_at[name]})", column=name)
 
 
+#: distinct cells whose kind :class:`_Checker` keeps
+_KINDS_KEPT = 1 << 16
+#: a time in seconds of at most 9 decimals, read exactly without :class:`Decimal`
+_PLAIN_TIME = re.compile(r"(-?)([0-9]+)(?:\.([0-9]{1,9}))?\Z")
+
+
 def _csv_time(path: str, line: int, cell: str) -> int:
+    plain = _PLAIN_TIME.match(cell)
+    if plain is not None:  # (the same ns as Decimal's, exactly)
+        sign, whole, frac = plain.groups()
+        ns = int(whole) * NS_PER_S + (int(frac.ljust(9, "0")) if frac else 0)
+        return -ns if sign else ns
     try:
         value = Decimal(cell)
         if not value.is_finite():

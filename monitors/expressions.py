@@ -122,10 +122,10 @@ class ColumnExpressions:
         """Numeric expression ``e`` at every tick and the absorbing state (``n + 1`` float64;
         ``/`` by zero NaN, as the generated monitors)."""
         N = self.N
-        if isinstance(e, A.Var):
-            return self.column(e.name).astype(np.float64)
-        if isinstance(e, A.NumLit):
-            return np.full(N, float(e.value))
+        if isinstance(e, A.Var):  # (read only: every caller makes a new array of it)
+            return self.column(e.name).astype(np.float64, copy=False)
+        if isinstance(e, A.NumLit):  # one number read at every tick (a read-only view)
+            return np.broadcast_to(np.float64(float(e.value)), (N,))
         if isinstance(e, A.Unary) and e.op == "-":
             return -self.num(e.operand)
         if isinstance(e, A.Binary) and e.op in A.ARITH_OPS:

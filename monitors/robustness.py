@@ -36,12 +36,12 @@ away (``+inf`` when they are boolean).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from fretc.compiler.ir import Node, name_of
+from fretc.compiler.ir import Node, name_of, walk
 
 from fretc.monitors.vectorized import VectorizeError, node_series
 
@@ -77,8 +77,17 @@ class Robustness:
     margin: np.ndarray
 
 
-def robustness(pt: Node, columns: Columns, n: int) -> Robustness:
-    """The robustness of the pt formula ``pt`` over ticks ``0..n-1`` (``n >= 1``).
+#: ticks evaluated at a time by :func:`robustness` (a long trace's formula is evaluated a
+#: chunk at a time, carrying each temporal operator's state: the memory is the margin and a
+#: few arrays of a chunk, not a few arrays of the whole trace)
+ROBUSTNESS_CHUNK = 1 << 16
+
+
+def robustness(pt: Node, columns: Columns, n: int, chunk: int | None = None) -> Robustness:
+    """The robustness of the pt formula ``pt`` over ticks ``0..n-1`` (``n >= 1``), evaluated
+    ``chunk`` ticks (default :data:`ROBUSTNESS_CHUNK`) at a time when ``n`` is longer (the same values: each temporal
+    operator's state carried from chunk to chunk) unless a comparison's operands hold a
+    past-time operator or ``pre`` (then over the whole trace at once).
 
     Raises:
         VectorizeError: a future-time operator or function in ``pt``, or a missing or
@@ -86,15 +95,56 @@ def robustness(pt: Node, columns: Columns, n: int) -> Robustness:
     """
     if n < 1:
         raise ValueError("robustness needs at least one tick")
-    ev = _Rho(columns, n, pt)
-    if pt.op == "H" and pt.hi is None:
-        margin = ev.rho(pt.args[0])
-        value = float(margin.min())
+    chunk = ROBUSTNESS_CHUNK if chunk is None else chunk
+    top = pt.op == "H" and pt.hi is None  # the margin is that of the body of a top H
+    body = pt.args[0] if top else pt
+    if n > chunk and _chunkable(body, chunk):
+        margin = np.empty(n, dtype=np.float64)
+        carry: dict[Node, object] = {}
+        for a in range(0, n, chunk):
+            b = min(n, a + chunk)
+            margin[a:b] = _Rho(_Window(columns, a, b), b - a, body, a, carry).rho(body)
     else:
-        margin = ev.rho(pt)
-        value = float(margin[-1])
-    tick = int(np.flatnonzero(margin == value)[0])
+        margin = _Rho(columns, n, body).rho(body)
+    value = float(margin.min()) if top else float(margin[-1])
+    tick = int(np.argmax(margin == value))  # the first tick at the value
     return Robustness(value, tick, margin)
+
+
+#: operators :class:`_Rho` evaluates itself (carrying their state from chunk to chunk);
+#: any other node is evaluated by :func:`fretc.monitors.vectorized.node_series`
+_OWN = frozenset(("!", "&", "|", "->", "<->", "xor", "Y", "Z", "O", "H", "S", "T", "ite",
+                  "past", "FTP"))
+#: operators whose value at a tick depends on earlier ticks
+_STATEFUL = frozenset(("Y", "Z", "O", "H", "S", "T", "FTP", "pre"))
+
+
+def _chunkable(body: Node, chunk: int) -> bool:
+    """Whether ``body`` can be evaluated a chunk at a time: every node
+    :func:`~fretc.monitors.vectorized.node_series` evaluates (comparisons, atoms) depends on
+    its own tick only, and no bounded window reaches back further than a chunk."""
+    for node in walk(body):
+        if node.op in ("O", "H") and node.hi is not None and node.hi > chunk:
+            return False
+        if node.op not in _OWN and any(x.op in _STATEFUL for x in walk(node)):
+            return False
+    return True
+
+
+class _Window(Mapping):
+    """The ticks ``a..b-1`` of every column (views)."""
+
+    def __init__(self, columns: Columns, a: int, b: int) -> None:
+        self.columns, self.a, self.b = columns, a, b
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return np.asarray(self.columns[name])[self.a:self.b]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.columns)
+
+    def __len__(self) -> int:
+        return len(self.columns)
 
 
 def robustness_series(node: Node, columns: Columns, n: int) -> np.ndarray:
@@ -129,9 +179,14 @@ class _Rho:
     several parents is kept until its last parent read it, any other array only while it
     is used (the memory is a few arrays of ``n`` floats, not one per node)."""
 
-    def __init__(self, columns: Columns, n: int, root: Node):
+    def __init__(self, columns: Columns, n: int, root: Node, start: int = 0,
+                 carry: dict | None = None):
         self.columns = columns
         self.n = n
+        #: the trace's tick of index 0 here, and the temporal operators' state at the end of
+        #: the ticks before it (node -> value), when the trace is evaluated in chunks
+        self.start = start
+        self.carry = carry
         self.memo: dict[Node, np.ndarray] = {}
         self.uses: dict[Node, int] = {}  # node -> reads by its parents still to come
         seen, stack = {root}, [root]
@@ -165,14 +220,21 @@ class _Rho:
         if op in ("&", "|", "->", "<->", "xor"):
             return self._connective(op, a[0], a[1])
         if op in ("Y", "Z"):
+            x = self.rho(a[0])
             out = np.empty(n)
-            out[0] = -_INF if op == "Y" else _INF
-            out[1:] = self.rho(a[0])[:-1]
+            out[0] = self._carried(node, -_INF if op == "Y" else _INF)
+            out[1:] = x[:-1]
+            self._keep(node, float(x[-1]))
+            return out
+        if op == "FTP":
+            out = np.full(n, -_INF)
+            if self.start == 0:
+                out[0] = _INF
             return out
         if op in ("O", "H"):
             return self._once(node)
         if op in ("S", "T"):
-            return self._since(op, a[0], a[1])
+            return self._since(node)
         if op == "ite":  # a boolean if-then-else: (c & t) | (!c & e)
             c = self.rho(a[0])
             return np.maximum(np.minimum(c, self.rho(a[1])),
@@ -182,6 +244,16 @@ class _Rho:
         # constants, FTP, boolean variables and calls: +-inf by their truth
         truth = node_series(node, self.columns, n)
         return np.where(truth, _INF, -_INF)
+
+    def _carried(self, node: Node, initial):
+        """The state ``node`` carried from the chunk before (``initial`` at the start)."""
+        if self.carry is None or node not in self.carry:
+            return initial
+        return self.carry[node]
+
+    def _keep(self, node: Node, state) -> None:
+        if self.carry is not None:
+            self.carry[node] = state
 
     def _comparison(self, node: Node) -> np.ndarray:
         x = node_series(node.args[0], self.columns, self.n, numeric=True)
@@ -205,24 +277,35 @@ class _Rho:
 
     def _once(self, node: Node) -> np.ndarray:
         """``O`` / ``H``: running max / min, or over the window ``[i-hi, i-lo]``."""
-        x, n, is_once = self.rho(node.args[0]), self.n, node.op == "O"
-        if node.hi is None:
-            return (np.maximum if is_once else np.minimum).accumulate(x)
-        lo, hi = node.lo or 0, node.hi
+        x, is_once = self.rho(node.args[0]), node.op == "O"
         pick = np.maximum if is_once else np.minimum
-        out = np.full(n, -_INF if is_once else _INF)
-        for d in range(lo, min(hi, n - 1) + 1):  # the value d ticks back, where it exists
-            out[d:] = pick(out[d:], x[:n - d])
-        return out
+        if node.hi is None:
+            out = pick.accumulate(x)
+            before = self._carried(node, None)
+            if before is not None:
+                out = pick(out, before)
+            self._keep(node, float(out[-1]))
+            return out
+        lo, hi = node.lo or 0, node.hi
+        tail = self._carried(node, x[:0])  # the last ``hi`` ticks before, where they exist
+        if len(tail):
+            x = np.concatenate((tail, x))
+        m = len(x)
+        out = np.full(m, -_INF if is_once else _INF)
+        for d in range(lo, min(hi, m - 1) + 1):  # the value d ticks back, where it exists
+            out[d:] = pick(out[d:], x[:m - d])
+        self._keep(node, x[max(0, m - hi):].copy() if hi else x[:0])
+        return out[len(tail):]
 
-    def _since(self, op: str, p: Node, q: Node) -> np.ndarray:
+    def _since(self, node: Node) -> np.ndarray:
         """``a S b``: ``s[i] = max(b[i], min(a[i], s[i-1]))`` from ``s[-1] = -inf``; its dual
         ``a T b``: ``s[i] = min(b[i], max(a[i], s[i-1]))`` from ``+inf``. The recurrence
         runs over :data:`SINCE_CHUNK` ticks at a time as Python floats, so its memory is the
         output array and one chunk, not Python objects for every tick."""
-        a, b = self.rho(p), self.rho(q)
+        op = node.op
+        a, b = self.rho(node.args[0]), self.rho(node.args[1])
         out = np.empty(self.n, dtype=np.float64)
-        s = -_INF if op == "S" else _INF
+        s = self._carried(node, -_INF if op == "S" else _INF)
         for k in range(0, self.n, SINCE_CHUNK):
             chunk = []
             if op == "S":
@@ -234,4 +317,5 @@ class _Rho:
                     s = min(bi, max(ai, s))
                     chunk.append(s)
             out[k:k + len(chunk)] = chunk
+        self._keep(node, s)
         return out

@@ -166,6 +166,21 @@ def test_random_keys_and_traces_against_brute_force(all_keys, index, n, rnd):
     _check(all_keys[index], _trace(rnd, n), n)
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, len(KEYS) - 1), st.integers(2, 30), st.integers(1, 7),
+       st.randoms(use_true_random=False))
+def test_chunks_give_the_margin_of_the_whole_trace(all_keys, index, n, chunk, rnd):
+    """Evaluated ``chunk`` ticks at a time (every temporal operator's state carried over,
+    bounded windows their last ticks), the margin, value and tick are the whole trace's,
+    bit for bit, wherever the chunks' edges fall."""
+    pt = all_keys[index].formalization.pt
+    cols = _trace(rnd, n)
+    whole = robustness(pt, cols, n, chunk=n)
+    parts = robustness(pt, cols, n, chunk=chunk)
+    assert (parts.value, parts.tick) == (whole.value, whole.tick), all_keys[index].text
+    assert parts.margin.tobytes() == whole.margin.tobytes(), all_keys[index].text
+
+
 def test_numeric_margin_is_the_distance_to_the_threshold():
     """``always x <= 0.5``: the least margin, where it first occurs; a strict comparison at
     its threshold is violated at distance 0 (-TINY), a non-strict one satisfied (0.0)."""
