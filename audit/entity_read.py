@@ -37,7 +37,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -51,6 +51,7 @@ from fretc.signals.bindings.binding import Binding, compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
 from fretc.signals.bindings.extract import Valid, by_entity
+from fretc.signals.bindings.spec import grid_start
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
 from fretc.signals.columns import Irregular
 from fretc.signals.streams import Streams
@@ -172,15 +173,40 @@ class EntityClock(Clock):
         self.batch: list[tuple[Any, list[int], HeldRows]] = []
         self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
         self.read_keys = key_reader(kind.binding) if vectorized else None
+        self.key_topics = frozenset({base_topic(kind.topic), kind.topic})
+        #: a tick period and nothing evaluated per tick but the rows of the held key
+        #: message: :meth:`push` makes its ticks without a generator per message
+        self.lean = (self.period is not None and not self.variables and not self.window
+                     and not self.sliding and not self.stateful and self.state.tf is None
+                     and self.rows_of is not None)
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
         before it, and record the entities it carries when it is the key's (iterate to the
         end)."""
+        if self.lean:
+            return iter(self._lean_push(topic, t, log_time, data))
+        return self._push(topic, t, log_time, data)
+
+    def _push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         if topic in self.fed:
             yield from super().push(topic, t, log_time, data)
-        if topic == base_topic(self.kind.topic) or topic == self.kind.topic:
+        if topic in self.key_topics:
             self._key_message(topic, t, data)
+
+    def _lean_push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
+        """:meth:`push` of a clock of a tick period without plain variables: the same
+        ticks, made at once (no generator per message; :attr:`lean`)."""
+        ticks: list[Tick] = []
+        if topic in self.fed:
+            if self.next_grid is None:
+                self.next_grid = grid_start(t, self.period)  # type: ignore[arg-type]
+            if self.next_grid < t:
+                ticks = list(self._grid_ticks(t))
+            self._hold(topic, t, log_time, data)
+        if topic in self.key_topics:
+            self._key_message(topic, t, data)
+        return ticks
 
     fed: frozenset[str] = frozenset()  # (set by read_entities: the topics the clock holds)
 
@@ -190,9 +216,20 @@ class EntityClock(Clock):
         values = self.read_keys(data) if self.read_keys is not None else None
         if values is None:
             values = self._keys(topic, t, data)
-        got = []
         table, matching = self.table, kind.matching
         index, last = table.index, table.last
+        got: list[int]
+        if matching is None and not kind.stream:  # (a float key equal to an int finds it)
+            found = list(map(index.get, values))
+            if None in found:
+                got = self._new_keys(values, found, t)
+            else:
+                got = cast("list[int]", found)
+                for k in got:
+                    last[k] = t
+            self._held_entities(data, got)
+            return
+        got = []
         for x in values:
             if isinstance(x, float) and x.is_integer():
                 x = int(x)
@@ -208,15 +245,37 @@ class EntityClock(Clock):
             got.append(i)
             if kind.stream:
                 self._stream_values(i, x, t, data)
-        if not kind.stream:  # (only the messages held or waiting for their tick are kept)
-            if not self.pending and self.state.msgs.get(kind.topic) is data:  # (the rows
-                # of no other message are needed)
-                self.present, self.msg_rows = {id(data): got}, {}
-                return
-            keep = {id(self.state.msgs.get(kind.topic))} | {id(p[1]) for p in self.pending}
-            self.present = {k: v for k, v in self.present.items() if k in keep}
-            self.present[id(data)] = got
-            self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
+        if not kind.stream:
+            self._held_entities(data, got)
+
+    def _new_keys(self, values: list, found: list, t: int) -> list[int]:
+        """The entities of keys ``values`` of a message at ``t`` (``found``: their index
+        or None, looked up before), the new ones added to the table in order."""
+        table, last = self.table, self.table.last
+        got: list[int] = []
+        for x, i in zip(values, found):
+            if i is not None:
+                last[i] = t
+            else:
+                if isinstance(x, float) and x.is_integer():
+                    x = int(x)
+                i = table.see(x, t, self.bound)
+                if i is None:
+                    continue
+            got.append(i)
+        return got
+
+    def _held_entities(self, data: Any, got: list[int]) -> None:
+        """Array keys: key message ``data`` carries the entities ``got`` (only the
+        messages held or waiting for their tick are kept)."""
+        if not self.pending and self.state.msgs.get(self.kind.topic) is data:  # (the rows
+            # of no other message are needed)
+            self.present, self.msg_rows = {id(data): got}, {}
+            return
+        keep = {id(self.state.msgs.get(self.kind.topic))} | {id(p[1]) for p in self.pending}
+        self.present = {k: v for k, v in self.present.items() if k in keep}
+        self.present[id(data)] = got
+        self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
 
     def _keys(self, topic: str, t: int, data: Any) -> list:
         """The keys a message of the key's topic carries, by the key's binding.
