@@ -314,13 +314,12 @@ class _Judge:
 
     def _new(self, i: int) -> Verdict:
         """Entity ``i``'s verdict, not yet judged."""
-        r, c = self.r, self.c
-        value = c.table.keys[i]
-        v = Verdict(log=self.ents.path, requirement=f"{r.id}[{self.name}={value}]",
-                    text=r.text, source=r.source, notes=list(r.notes))
-        v.notes.append(f"entity {self.name} = {value!r} ({c.kind.key}): first seen at log "
-                       f"time {c.table.first[i]}, last at {c.table.last[i]}")
-        return v
+        r, table = self.r, self.c.table
+        value = table.keys[i]
+        return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
+                       notes=[*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): "
+                              f"first seen at log time {table.first[i]}, last at "
+                              f"{table.last[i]}"])
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
@@ -365,17 +364,20 @@ class _Judge:
         holds, vacuous, ltl3 = got
         slow = nan_traces(columns, firsts, lengths)
         out: dict[int, Verdict] = {}
+        times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
+        holds_, vacuous_ = np.asarray(holds).tolist(), np.asarray(vacuous).tolist()
+        starts, counts = i0s.tolist(), lengths.tolist()
         for e, i in enumerate(judged):
-            if not holds[e] or e in slow:
+            if not holds_[e] or e in slow:
                 continue
             v = out[i] = self._new(i)
-            a, m = int(i0s[e]), int(lengths[e])
-            v.verdict = "vacuous" if vacuous[e] else "satisfied"
+            a, m = starts[e], counts[e]
+            v.verdict = "vacuous" if vacuous_[e] else "satisfied"
             v.engine = "vectorized"
             v.ticks_evaluated = m
-            v.first_tick_ns, v.last_tick_ns = int(self.times[a]), int(self.times[a + m - 1])
+            v.first_tick_ns, v.last_tick_ns = times[a], times[a + m - 1]
             status, tick = ltl3[e]
-            v.ltl3 = Ltl3(status, tick, int(self.times[a + tick]) if tick is not None else None)
+            v.ltl3 = Ltl3(status, tick, times[a + tick] if tick is not None else None)
             v.notes.append(BATCH_NOTE)
         return out
 
