@@ -271,15 +271,25 @@ class _Judge:
                  source: Any, gaps: list) -> None:
         self.ents, self.r, self.name, self.c, self.source, self.gaps = (
             ents, r, name, c, source, gaps)
-        self.times = np.array([t.time for t in ticks], dtype=np.int64)
-        self.plain = {b.name: _column([t.values.get(b.name) for t in ticks])
-                      for b in c.variables}
-        topics = sorted({tp for t in ticks for tp in t.log_times})
-        self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks], np.int64)
-                          for tp in topics}
+        own = [b.name for b in c.own]
+        self.rows: EntityColumns | None = None
+        if c.lean:  # (its ticks are runs: no plain variable, an array key)
+            self.times = c.runs.times()
+            self.plain: dict[str, np.ndarray] = {}
+            self.log_times = c.runs.log_time_columns()
+            self.rows = (c.runs.columns(own, c.absent_once, len(c.table.keys))
+                         if c.absent_once is not None else
+                         EntityColumns([], own, ENTITIES, len(c.table.keys)))
+        else:
+            self.times = np.array([t.time for t in ticks], dtype=np.int64)
+            self.plain = {b.name: _column([t.values.get(b.name) for t in ticks])
+                          for b in c.variables}
+            topics = sorted({tp for t in ticks for tp in t.log_times})
+            self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks],
+                                           np.int64) for tp in topics}
+            if not c.kind.stream:
+                self.rows = EntityColumns(ticks, own, ENTITIES, len(c.table.keys))
         self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
-        self.rows = (EntityColumns(ticks, [b.name for b in c.own], ENTITIES, len(c.table.keys))
-                    if not c.kind.stream else None)
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))

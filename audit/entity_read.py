@@ -46,12 +46,13 @@ from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.logs.selective import install as install_selective
 from fretc.audit.entity_columns import HeldRows, RowBlock, floats
 from fretc.audit.entity_rows import key_reader, row_fields, row_values
+from fretc.audit.entity_runs import TickRuns, grid_run
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
 from fretc.signals.bindings.extract import Valid, by_entity
-from fretc.signals.bindings.spec import grid_start
+from fretc.signals.bindings.spec import grid_end, grid_start
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
 from fretc.signals.columns import Irregular
 from fretc.signals.streams import Streams
@@ -67,6 +68,9 @@ BATCH = 4096
 #: Whether the per-entity variables that can be are evaluated over rows by numpy
 #: (:mod:`fretc.audit.entity_rows`); False: each at each tick (the reference, for tests)
 VECTORIZED = True
+#: Whether a clock of a tick period without plain variables records its ticks as runs
+#: (:mod:`fretc.audit.entity_runs`); False: tick by tick (the reference, for tests)
+LEAN = True
 
 
 @dataclass
@@ -175,17 +179,20 @@ class EntityClock(Clock):
         self.read_keys = key_reader(kind.binding) if vectorized else None
         self.key_topics = frozenset({base_topic(kind.topic), kind.topic})
         #: a tick period and nothing evaluated per tick but the rows of the held key
-        #: message: :meth:`push` makes its ticks without a generator per message
-        self.lean = (self.period is not None and not self.variables and not self.window
+        #: message: the ticks are recorded as runs in :attr:`runs`, none yielded
+        #: (:mod:`fretc.audit.entity_runs`)
+        self.lean = (LEAN and self.period is not None and not self.variables and not self.window
                      and not self.sliding and not self.stateful and self.state.tf is None
                      and self.rows_of is not None)
+        self.runs = TickRuns(self.period or 0)
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
         before it, and record the entities it carries when it is the key's (iterate to the
         end)."""
         if self.lean:
-            return iter(self._lean_push(topic, t, log_time, data))
+            self._lean_push(topic, t, log_time, data)
+            return iter(())
         return self._push(topic, t, log_time, data)
 
     def _push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
@@ -194,19 +201,19 @@ class EntityClock(Clock):
         if topic in self.key_topics:
             self._key_message(topic, t, data)
 
-    def _lean_push(self, topic: str, t: int, log_time: int, data: Any) -> list[Tick]:
-        """:meth:`push` of a clock of a tick period without plain variables: the same
-        ticks, made at once (no generator per message; :attr:`lean`)."""
-        ticks: list[Tick] = []
+    def _lean_push(self, topic: str, t: int, log_time: int, data: Any) -> None:
+        """:meth:`push` of a clock of a tick period without plain variables
+        (:attr:`lean`): the ticks due before the message recorded as one run in
+        :attr:`runs` (:func:`fretc.audit.entity_runs.grid_run`), none yielded."""
         if topic in self.fed:
             if self.next_grid is None:
                 self.next_grid = grid_start(t, self.period)  # type: ignore[arg-type]
             if self.next_grid < t:
-                ticks = list(self._grid_ticks(t))
-            self._hold(topic, t, log_time, data)
+                grid_run(self, t)
+            for _tick in Clock.push(self, topic, t, log_time, data):  # (holds it: no tick
+                raise AssertionError("a tick made after the run")  # is due before t now)
         if topic in self.key_topics:
             self._key_message(topic, t, data)
-        return ticks
 
     fed: frozenset[str] = frozenset()  # (set by read_entities: the topics the clock holds)
 
@@ -322,6 +329,11 @@ class EntityClock(Clock):
         tick = super()._emit(t)
         if tick is None:
             return None
+        tick.values[ENTITIES] = self._entity_values()  # type: ignore[assignment]
+        return tick
+
+    def _entity_values(self) -> tuple[tuple, Any]:
+        """The per-entity values at the tick being made: ``(absent values, rows)``."""
         st = self.state
         absent = self.absent_once
         if absent is None:
@@ -343,8 +355,7 @@ class EntityClock(Clock):
             else:
                 for i in got:
                     rows.append((i, self._values(st, self.table.keys[i], i)))
-        tick.values[ENTITIES] = (absent, rows)  # type: ignore[assignment]
-        return tick
+        return absent, rows
 
     def flush(self) -> None:
         """Evaluate the rows of the held messages waiting for it (vectorized: one batch;
@@ -375,8 +386,18 @@ class EntityClock(Clock):
     def finish(self) -> Iterator[Tick]:
         """The ticks left at the end of the log, the last rows evaluated (iterate to the
         end)."""
-        yield from super().finish()
+        if self.lean:
+            if self.last is not None:
+                grid_run(self, grid_end(self.last, self.period) + 1)  # type: ignore[arg-type]
+            self.s.missing_topics = sorted(self.missing)
+        else:
+            yield from super().finish()
         self.flush()
+
+    def lean_ticks(self) -> list[Tick]:
+        """A lean clock's ticks (:attr:`runs`) as :class:`Tick` objects, as the
+        tick-by-tick clock makes them (for tests)."""
+        return self.runs.ticks(ENTITIES, self.absent_once or ())
 
     def _absent(self, st: EvalState) -> tuple:
         """The per-entity variables of an entity the held messages do not carry."""
@@ -443,7 +464,8 @@ def read_entities(source: Any, bindings: Bindings,
     Returns:
         ``(clocks, ticks, errors)``: key -> its :class:`EntityClock` (entities met, their
         rows; its ``s`` the clock's :class:`~fretc.signals.clock.Sampling`), key -> its
-        evaluated ticks (count_ticks warm-up applied), key -> the error that stopped it.
+        evaluated ticks (count_ticks warm-up applied; a lean clock's: none, its ticks are
+        its ``runs``), key -> the error that stopped it.
 
     Raises:
         BindingError: a per-entity variable the read cannot take (:func:`_own_bindings`),

@@ -345,19 +345,6 @@ class Clock:
         state = self.state
         state.now = t
         values: dict[str, bool | float] = {}
-        if self.variables:
-            self._values_into(values, window)
-        tick = Tick(self.index, t, values, dict(self.log_times))
-        self.last_values = values
-        self.index += 1
-        s.ticks += 1
-        return tick
-
-    def _values_into(self, values: dict[str, bool | float], window: dict[str, list[Any]]
-                     ) -> None:
-        """The variables' values at the tick into ``values`` (a failing one dropped with
-        ``keep_going``, else its SignalError raised)."""
-        state = self.state
         with np.errstate(all="ignore"):
             for b in list(self.variables):
                 try:
@@ -369,6 +356,11 @@ class Clock:
                         raise err from None
                     self.failed[b.name] = err
                     self.variables.remove(b)
+        tick = Tick(self.index, t, values, dict(self.log_times))
+        self.last_values = values
+        self.index += 1
+        s.ticks += 1
+        return tick
 
     def _emit_own(self, t: int, data: Any, log_time: int, prev: Any = None,
                   prev_t: int | None = None) -> Tick | None:
@@ -415,10 +407,6 @@ class Clock:
                 tick = self._emit_own(*self.pending.popleft())
                 if tick is not None:
                     yield tick
-        self._hold(topic, t, log_time, data)
-
-    def _hold(self, topic: str, t: int, log_time: int, data: Any) -> None:
-        """Hold message ``data`` of ``topic`` at ``t`` (the ticks due before it made)."""
         st = self.state
         if self.since.get(topic) and topic in self.watched and s_first(self.s):
             self._missed(topic)  # the held message is superseded before a tick sampled it
