@@ -271,15 +271,25 @@ class _Judge:
                  source: Any, gaps: list) -> None:
         self.ents, self.r, self.name, self.c, self.source, self.gaps = (
             ents, r, name, c, source, gaps)
-        self.times = np.array([t.time for t in ticks], dtype=np.int64)
-        self.plain = {b.name: _column([t.values.get(b.name) for t in ticks])
-                      for b in c.variables}
-        topics = sorted({tp for t in ticks for tp in t.log_times})
-        self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks], np.int64)
-                          for tp in topics}
+        own = [b.name for b in c.own]
+        self.rows: EntityColumns | None = None
+        if c.lean:  # (its ticks are runs: no plain variable, an array key)
+            self.times = c.runs.times()
+            self.plain: dict[str, np.ndarray] = {}
+            self.log_times = c.runs.log_time_columns()
+            self.rows = (c.runs.columns(own, c.absent_once, len(c.table.keys))
+                         if c.absent_once is not None else
+                         EntityColumns([], own, ENTITIES, len(c.table.keys)))
+        else:
+            self.times = np.array([t.time for t in ticks], dtype=np.int64)
+            self.plain = {b.name: _column([t.values.get(b.name) for t in ticks])
+                          for b in c.variables}
+            topics = sorted({tp for t in ticks for tp in t.log_times})
+            self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks],
+                                           np.int64) for tp in topics}
+            if not c.kind.stream:
+                self.rows = EntityColumns(ticks, own, ENTITIES, len(c.table.keys))
         self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
-        self.rows = (EntityColumns(ticks, [b.name for b in c.own], ENTITIES, len(c.table.keys))
-                    if not c.kind.stream else None)
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))
@@ -314,13 +324,12 @@ class _Judge:
 
     def _new(self, i: int) -> Verdict:
         """Entity ``i``'s verdict, not yet judged."""
-        r, c = self.r, self.c
-        value = c.table.keys[i]
-        v = Verdict(log=self.ents.path, requirement=f"{r.id}[{self.name}={value}]",
-                    text=r.text, source=r.source, notes=list(r.notes))
-        v.notes.append(f"entity {self.name} = {value!r} ({c.kind.key}): first seen at log "
-                       f"time {c.table.first[i]}, last at {c.table.last[i]}")
-        return v
+        r, table = self.r, self.c.table
+        value = table.keys[i]
+        return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
+                       notes=[*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): "
+                              f"first seen at log time {table.first[i]}, last at "
+                              f"{table.last[i]}"])
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
@@ -365,17 +374,20 @@ class _Judge:
         holds, vacuous, ltl3 = got
         slow = nan_traces(columns, firsts, lengths)
         out: dict[int, Verdict] = {}
+        times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
+        holds_, vacuous_ = np.asarray(holds).tolist(), np.asarray(vacuous).tolist()
+        starts, counts = i0s.tolist(), lengths.tolist()
         for e, i in enumerate(judged):
-            if not holds[e] or e in slow:
+            if not holds_[e] or e in slow:
                 continue
             v = out[i] = self._new(i)
-            a, m = int(i0s[e]), int(lengths[e])
-            v.verdict = "vacuous" if vacuous[e] else "satisfied"
+            a, m = starts[e], counts[e]
+            v.verdict = "vacuous" if vacuous_[e] else "satisfied"
             v.engine = "vectorized"
             v.ticks_evaluated = m
-            v.first_tick_ns, v.last_tick_ns = int(self.times[a]), int(self.times[a + m - 1])
+            v.first_tick_ns, v.last_tick_ns = times[a], times[a + m - 1]
             status, tick = ltl3[e]
-            v.ltl3 = Ltl3(status, tick, int(self.times[a + tick]) if tick is not None else None)
+            v.ltl3 = Ltl3(status, tick, times[a + tick] if tick is not None else None)
             v.notes.append(BATCH_NOTE)
         return out
 

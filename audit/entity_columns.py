@@ -83,30 +83,55 @@ class EntityColumns:
     ``(entity, values)`` or a :class:`HeldRows`)."""
 
     def __init__(self, ticks: list, names: list[str], entities: str, n_entities: int) -> None:
-        self.names = names
-        self.absent = {}
+        absent = {}
         for j, n in enumerate(names):
-            f, b = floats([t.values[entities][0][j] for t in ticks])
-            self.absent[n] = (f, b if b.all() else np.zeros(len(b), np.bool_))
+            absent[n] = floats([t.values[entities][0][j] for t in ticks])
+        self._build(names, absent, [(k, 1, t.values[entities][1]) for k, t in enumerate(ticks)],
+                    len(ticks), n_entities)
+
+    @classmethod
+    def of_runs(cls, names: list[str], absent: tuple, runs: list[tuple[int, int, Any]],
+                n_ticks: int, n_entities: int) -> EntityColumns:
+        """The columns of ``n_ticks`` ticks given as runs ``(first tick, ticks, rows)`` of
+        ticks holding the same rows (:mod:`fretc.audit.entity_runs`), ``absent`` the
+        variables' absent values at every tick."""
+        out = cls.__new__(cls)
+        cols = {}
+        for j, n in enumerate(names):
+            f, b = floats([absent[j]])
+            cols[n] = (np.repeat(f, n_ticks), np.repeat(b, n_ticks))
+        out._build(names, cols, runs, n_ticks, n_entities)
+        return out
+
+    def _build(self, names: list[str], absent: dict[str, tuple[np.ndarray, np.ndarray]],
+               runs: list[tuple[int, int, Any]], n_ticks: int, n_entities: int) -> None:
+        """The columns from the absent values (per variable, at each tick) and the rows of
+        runs ``(first tick, ticks, rows)`` of ticks holding the same rows."""
+        self.names = names
+        self.absent = {n: (f, b if b.all() else np.zeros(len(b), np.bool_))
+                       for n, (f, b) in absent.items()}
         flat: list[tuple] = []
-        counts = np.zeros(len(ticks), np.int64)
+        counts = np.zeros(n_ticks, np.int64)
         held: dict[int, tuple[RowBlock, list[int], list[int]]] = {}
-        for k, t in enumerate(ticks):
-            rows = t.values[entities][1]
+        for k, m, rows in runs:
             if type(rows) is list:
-                counts[k] = len(rows)
-                flat.extend(rows)
+                counts[k:k + m] = len(rows)
+                flat.extend(rows * m)
                 continue
             blk = rows.block
             assert blk is not None  # (every batch is evaluated by the end of the read)
             got = held.get(id(blk))
             if got is None:
                 got = held[id(blk)] = (blk, [], [])
-            got[1].append(k)
-            got[2].append(rows.at)
+            if m == 1:
+                got[1].append(k)
+                got[2].append(rows.at)
+            else:
+                got[1].extend(range(k, k + m))
+                got[2].extend([rows.at] * m)
         vals = [r[1] for r in flat]
         parts = [(np.array([r[0] for r in flat], np.int64),
-                  np.repeat(np.arange(len(ticks), dtype=np.int64), counts),
+                  np.repeat(np.arange(n_ticks, dtype=np.int64), counts),
                   {n: floats([v[j] for v in vals]) for j, n in enumerate(names)})]
         for blk, ks, ats in held.values():
             at = np.array(ats, np.int64)

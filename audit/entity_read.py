@@ -37,7 +37,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -46,11 +46,13 @@ from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.logs.selective import install as install_selective
 from fretc.audit.entity_columns import HeldRows, RowBlock, floats
 from fretc.audit.entity_rows import key_reader, row_fields, row_values
+from fretc.audit.entity_runs import TickRuns, grid_run
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
 from fretc.signals.bindings.extract import Valid, by_entity
+from fretc.signals.bindings.spec import grid_end, grid_start
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
 from fretc.signals.columns import Irregular
 from fretc.signals.streams import Streams
@@ -61,11 +63,17 @@ __all__ = ["EntityKind", "EntityClock", "entity_kind", "read_entities"]
 #: the key of a tick's values holding its per-entity values (never a FRET variable's name)
 ENTITIES = "\x00entities"
 _ABSENT = object()  # the key of no entity: a filter on it keeps nothing
-#: Held key messages whose rows are evaluated at once (vectorized path)
-BATCH = 4096
+#: Held key messages whose rows are evaluated at once (vectorized path): few, so that the
+#: decoded messages waiting for their batch are few (4,096: 3.3 s against 2.9 s for 100,000
+#: entities, ``bench/bench_audit.py --entities``; 3.0 s against 2.7 s with the garbage
+#: collector off: the collections that walk them and the memory they hold)
+BATCH = 256
 #: Whether the per-entity variables that can be are evaluated over rows by numpy
 #: (:mod:`fretc.audit.entity_rows`); False: each at each tick (the reference, for tests)
 VECTORIZED = True
+#: Whether a clock of a tick period without plain variables records its ticks as runs
+#: (:mod:`fretc.audit.entity_runs`); False: tick by tick (the reference, for tests)
+LEAN = True
 
 
 @dataclass
@@ -172,14 +180,47 @@ class EntityClock(Clock):
         self.batch: list[tuple[Any, list[int], HeldRows]] = []
         self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
         self.read_keys = key_reader(kind.binding) if vectorized else None
+        self.key_topics = frozenset({base_topic(kind.topic), kind.topic})
+        #: a tick period and nothing evaluated per tick but the rows of the held key
+        #: message: the ticks are recorded as runs in :attr:`runs`, none yielded
+        #: (:mod:`fretc.audit.entity_runs`)
+        self.lean = (LEAN and self.period is not None and self.tick_topic is None
+                     and not self.variables and not self.window
+                     and not self.sliding and not self.stateful and self.state.tf is None
+                     and self.rows_of is not None)
+        self.runs = TickRuns(self.period or 0)
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
         before it, and record the entities it carries when it is the key's (iterate to the
         end)."""
+        if self.lean:
+            self._lean_push(topic, t, log_time, data)
+            return iter(())
+        return self._push(topic, t, log_time, data)
+
+    def _push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         if topic in self.fed:
             yield from super().push(topic, t, log_time, data)
-        if topic == base_topic(self.kind.topic) or topic == self.kind.topic:
+        if topic in self.key_topics:
+            self._key_message(topic, t, data)
+
+    def _lean_push(self, topic: str, t: int, log_time: int, data: Any) -> None:
+        """:meth:`push` of a clock of a tick period without plain variables
+        (:attr:`lean`): the ticks due before the message recorded as one run in
+        :attr:`runs` (:func:`fretc.audit.entity_runs.grid_run`), none yielded."""
+        if topic in self.fed:
+            if self.next_grid is None:
+                self.next_grid = grid_start(t, self.period)  # type: ignore[arg-type]
+            if self.next_grid < t:
+                grid_run(self, t)
+            st = self.state  # (held as Clock.push holds it: nothing of a variable to keep)
+            st.msgs[topic], st.times[topic], self.log_times[topic] = data, t, log_time
+            self.missing.discard(topic)
+            if topic in self.counted:
+                self.since[topic] = self.since.get(topic, 0) + 1
+            self.last = t
+        if topic in self.key_topics:
             self._key_message(topic, t, data)
 
     fed: frozenset[str] = frozenset()  # (set by read_entities: the topics the clock holds)
@@ -190,9 +231,20 @@ class EntityClock(Clock):
         values = self.read_keys(data) if self.read_keys is not None else None
         if values is None:
             values = self._keys(topic, t, data)
-        got = []
         table, matching = self.table, kind.matching
         index, last = table.index, table.last
+        got: list[int]
+        if matching is None and not kind.stream:  # (a float key equal to an int finds it)
+            found = list(map(index.get, values))
+            if None in found:
+                got = self._new_keys(values, found, t)
+            else:
+                got = cast("list[int]", found)
+                for k in got:
+                    last[k] = t
+            self._held_entities(data, got)
+            return
+        got = []
         for x in values:
             if isinstance(x, float) and x.is_integer():
                 x = int(x)
@@ -208,15 +260,37 @@ class EntityClock(Clock):
             got.append(i)
             if kind.stream:
                 self._stream_values(i, x, t, data)
-        if not kind.stream:  # (only the messages held or waiting for their tick are kept)
-            if not self.pending and self.state.msgs.get(kind.topic) is data:  # (the rows
-                # of no other message are needed)
-                self.present, self.msg_rows = {id(data): got}, {}
-                return
-            keep = {id(self.state.msgs.get(kind.topic))} | {id(p[1]) for p in self.pending}
-            self.present = {k: v for k, v in self.present.items() if k in keep}
-            self.present[id(data)] = got
-            self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
+        if not kind.stream:
+            self._held_entities(data, got)
+
+    def _new_keys(self, values: list, found: list, t: int) -> list[int]:
+        """The entities of keys ``values`` of a message at ``t`` (``found``: their index
+        or None, looked up before), the new ones added to the table in order."""
+        table, last = self.table, self.table.last
+        got: list[int] = []
+        for x, i in zip(values, found):
+            if i is not None:
+                last[i] = t
+            else:
+                if isinstance(x, float) and x.is_integer():
+                    x = int(x)
+                i = table.see(x, t, self.bound)
+                if i is None:
+                    continue
+            got.append(i)
+        return got
+
+    def _held_entities(self, data: Any, got: list[int]) -> None:
+        """Array keys: key message ``data`` carries the entities ``got`` (only the
+        messages held or waiting for their tick are kept)."""
+        if not self.pending and self.state.msgs.get(self.kind.topic) is data:  # (the rows
+            # of no other message are needed)
+            self.present, self.msg_rows = {id(data): got}, {}
+            return
+        keep = {id(self.state.msgs.get(self.kind.topic))} | {id(p[1]) for p in self.pending}
+        self.present = {k: v for k, v in self.present.items() if k in keep}
+        self.present[id(data)] = got
+        self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
 
     def _keys(self, topic: str, t: int, data: Any) -> list:
         """The keys a message of the key's topic carries, by the key's binding.
@@ -263,6 +337,11 @@ class EntityClock(Clock):
         tick = super()._emit(t)
         if tick is None:
             return None
+        tick.values[ENTITIES] = self._entity_values()  # type: ignore[assignment]
+        return tick
+
+    def _entity_values(self) -> tuple[tuple, Any]:
+        """The per-entity values at the tick being made: ``(absent values, rows)``."""
         st = self.state
         absent = self.absent_once
         if absent is None:
@@ -284,8 +363,7 @@ class EntityClock(Clock):
             else:
                 for i in got:
                     rows.append((i, self._values(st, self.table.keys[i], i)))
-        tick.values[ENTITIES] = (absent, rows)  # type: ignore[assignment]
-        return tick
+        return absent, rows
 
     def flush(self) -> None:
         """Evaluate the rows of the held messages waiting for it (vectorized: one batch;
@@ -316,8 +394,18 @@ class EntityClock(Clock):
     def finish(self) -> Iterator[Tick]:
         """The ticks left at the end of the log, the last rows evaluated (iterate to the
         end)."""
-        yield from super().finish()
+        if self.lean:
+            if self.last is not None:
+                grid_run(self, grid_end(self.last, self.period) + 1)  # type: ignore[arg-type]
+            self.s.missing_topics = sorted(self.missing)
+        else:
+            yield from super().finish()
         self.flush()
+
+    def lean_ticks(self) -> list[Tick]:
+        """A lean clock's ticks (:attr:`runs`) as :class:`Tick` objects, as the
+        tick-by-tick clock makes them (for tests)."""
+        return self.runs.ticks(ENTITIES, self.absent_once or ())
 
     def _absent(self, st: EvalState) -> tuple:
         """The per-entity variables of an entity the held messages do not carry."""
@@ -384,7 +472,8 @@ def read_entities(source: Any, bindings: Bindings,
     Returns:
         ``(clocks, ticks, errors)``: key -> its :class:`EntityClock` (entities met, their
         rows; its ``s`` the clock's :class:`~fretc.signals.clock.Sampling`), key -> its
-        evaluated ticks (count_ticks warm-up applied), key -> the error that stopped it.
+        evaluated ticks (count_ticks warm-up applied; a lean clock's: none, its ticks are
+        its ``runs``), key -> the error that stopped it.
 
     Raises:
         BindingError: a per-entity variable the read cannot take (:func:`_own_bindings`),

@@ -332,7 +332,7 @@ class Clock:
             s.start_time = t
             s.waiting_for = sorted(self.missing)
         s.end_time = t
-        if self.missing or not windows_complete(self.sliding, t):
+        if self.missing or (self.sliding and not windows_complete(self.sliding, t)):
             s.warmup_ticks += 1
             return None
         if s.first_time is None:

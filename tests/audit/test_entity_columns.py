@@ -81,3 +81,31 @@ def test_columns_equal_the_loop(data, span):
         want = column(sum((_naive(ticks, j, i, int(a), int(a + m - 1)).tolist()
                            for i, a, m in zip(judged, i0s, lengths)), []))
         assert _same(got[n], want)
+
+
+@settings(max_examples=100, deadline=None)
+@given(absent=st.tuples(VALUE, VALUE),
+       runs=st.lists(st.tuples(st.integers(1, 4),
+                               st.dictionaries(st.integers(0, 3), st.tuples(VALUE, VALUE),
+                                               max_size=4)), min_size=1, max_size=6),
+       span=st.tuples(st.integers(0, 23), st.integers(0, 23)))
+def test_columns_of_runs_equal_those_of_their_ticks(absent, runs, span):
+    """Runs of ticks holding the same rows (audit/entity_runs.py), the rows as lists or as
+    :class:`HeldRows` of a block, give the columns of their ticks one by one."""
+    ticks = [_Tick(absent, sorted(rows.items())) for m, rows in runs for _ in range(m)]
+    blocks = _as_blocks([_Tick(absent, sorted(rows.items())) for _m, rows in runs], 0)
+    spans, k = [], 0
+    for (m, _r), t in zip(runs, blocks):
+        spans.append((k, m, t.values[E][1]))
+        k += m
+    cols = EntityColumns(ticks, ["x", "y"], E, 4)
+    lists = EntityColumns.of_runs(["x", "y"], absent,
+                                  [(k, m, sorted(r.items())) for (k, m, _h), (_m, r)
+                                   in zip(spans, runs)], len(ticks), 4)
+    held = EntityColumns.of_runs(["x", "y"], absent, spans, len(ticks), 4)
+    i0, i1 = sorted(min(s, len(ticks) - 1) for s in span)
+    for i in range(4):
+        want = cols.trace(i, i0, i1)
+        for got in (lists.trace(i, i0, i1), held.trace(i, i0, i1)):
+            for n in ["x", "y"]:
+                assert _same(got[n], want[n]), (i, n)
