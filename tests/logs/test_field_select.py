@@ -60,6 +60,10 @@ def _leaf_paths(msg, prefix=()):
     return out
 
 
+#: messages of each topic compared (the first ones: every field set decodes each)
+MESSAGES_PER_TOPIC = 150
+
+
 @pytest.mark.parametrize("encoding", ["json", "protobuf"])
 @pytest.mark.parametrize("log", ["stop_delay.mcap", "dynamic_obstacle.mcap"])
 def test_the_fields_read_have_the_values_of_the_full_decode(tmp_path, encoding, log):
@@ -68,9 +72,13 @@ def test_the_fields_read_have_the_values_of_the_full_decode(tmp_path, encoding, 
     path = copy_as(ROOT / "traces" / log, tmp_path / f"{encoding}.mcap", encoding)
     decoders: dict = {}
     seen = 0
+    per_topic: dict[str, int] = {}
     with open(path, "rb") as f:
         for schema, channel, message in make_reader(f).iter_messages():
             key = channel.topic
+            per_topic[key] = per_topic.get(key, 0) + 1
+            if per_topic[key] > MESSAGES_PER_TOPIC:
+                continue
             if key not in decoders:
                 args = (channel.message_encoding, schema.encoding, schema.name, schema.data)
                 full = schema_decoder(*args)
