@@ -95,7 +95,9 @@ def talker(seconds: float, _out: str) -> None:
     grid.info.width, grid.info.height, grid.info.resolution = 2, 2, 0.5
     grid.data = [0, 100, 0, 0]
     m.publish(grid)
-    time.sleep(1.0)  # discovery
+    # the steps start when the watch's subscriptions are matched (the one non-zero command
+    # during a stop, k = 50, then falls inside the watch whatever the start-up took)
+    wait_for_subscribers(n, [c, f], 1)
 
     def step(k: int) -> None:
         stop = 40 <= k < 60

@@ -97,10 +97,11 @@ def test_a_default_rclpy_talker_is_watched_with_the_audits_verdicts(tmp_path):
         'scan_ok = "min(/scan.ranges) > 1.5"\n', 1)
     req, b = _files(tmp_path, REQ34 + "M1: the mapper shall always satisfy map_ok\n"
                     "S1: the lidar shall always satisfy scan_ok\n", bindings)
-    talker = _peer("talker", 9, d)
+    # the talker steps from when the watch is matched (k = 50 at 5 s) and outlives the watch
+    talker = _peer("talker", 12, d)
     time.sleep(3)  # the map is out before the watch joins
     try:
-        live, audit, watch = _watch_and_audit(tmp_path, req, b, d, 6)
+        live, audit, watch = _watch_and_audit(tmp_path, req, b, d, 9)
     finally:
         talker.wait(30)
     assert "never published" not in watch.stdout, watch.stdout
