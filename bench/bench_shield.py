@@ -141,17 +141,25 @@ static const double ang_[N] = {ANG};
 static const unsigned char stopped_[N] = {STOPPED};
 int main(void) {
     b_shield_state s; b_shield_inputs in = {0}; b_shield_outputs p = {0}, c;
-    struct timespec a, b; long k, steps = STEPS, sum = 0;
-    b_shield_init(&s);
-    clock_gettime(CLOCK_MONOTONIC, &a);
-    for (k = 0; k < steps; k++) {
-        int i = (int)(k % NTICKS);
-        in.too_close = close_[i]; in.scan_stale = stale_[i];
-        p.stopped = stopped_[i]; p.linear_speed = lin_[i]; p.angular_speed = ang_[i];
-        sum += b_shield_step(&s, &in, &p, &c);
+    struct timespec a, b; long k, steps = STEPS, sum = 0, first = 0; int r;
+    double best = 1e30, ns;
+    for (r = 0; r < 5; r++) { /* the best of 5 runs of the same steps from the initial state */
+        b_shield_init(&s);
+        sum = 0;
+        clock_gettime(CLOCK_MONOTONIC, &a);
+        for (k = 0; k < steps; k++) {
+            int i = (int)(k % NTICKS);
+            in.too_close = close_[i]; in.scan_stale = stale_[i];
+            p.stopped = stopped_[i]; p.linear_speed = lin_[i]; p.angular_speed = ang_[i];
+            sum += b_shield_step(&s, &in, &p, &c);
+        }
+        clock_gettime(CLOCK_MONOTONIC, &b);
+        ns = ((b.tv_sec - a.tv_sec) * 1e9 + (b.tv_nsec - a.tv_nsec)) / steps;
+        best = ns < best ? ns : best;
+        if (r == 0) first = sum;
+        if (sum != first) return 1;
     }
-    clock_gettime(CLOCK_MONOTONIC, &b);
-    printf("%.2f %ld\\n", ((b.tv_sec - a.tv_sec) * 1e9 + (b.tv_nsec - a.tv_nsec)) / steps, sum);
+    printf("%.2f %ld\\n", best, sum);
     return 0;
 }
 """

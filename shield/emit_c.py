@@ -17,7 +17,10 @@ Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
 A comparison of several variables (:mod:`fretc.shield.predicates`) is computed in doubles
 as the Python runtime computes it (:func:`c_term`); when an override changes an atom of an
 output cluster, the cluster's variables take the numbers recorded for the new valuation (a
-table searched linearly: constant time and memory).
+table searched linearly: constant time and memory). Each machine whose variables fit in 64
+bits keeps a memo of its decisions in the state (:data:`MEMO_SLOTS` direct-mapped slots:
+correction, reasons, next state), as the Python form caches its corrections: a tick met
+before costs a lookup, a miss what the step costs without it.
 """
 
 from __future__ import annotations
@@ -116,6 +119,12 @@ class _CMachine:
         """Variables of the node table."""
         return self.n_in + self.n_out + len(self.t["init"])
 
+    @property
+    def memo(self) -> bool:
+        """Whether the machine keeps a memo of its corrections (:data:`MEMO_SLOTS` slots,
+        keyed by the node table's variables packed in 64 bits: only when they fit)."""
+        return 0 < self.n_vars <= 64
+
 
 def _machines(shield: Shield) -> list[_CMachine]:
     out, first = [], 0
@@ -145,6 +154,12 @@ def _machines(shield: Shield) -> list[_CMachine]:
     return out
 
 
+#: slots of a machine's correction memo (direct-mapped; a power of two): an override whose
+#: inputs, proposal and state were met before copies the correction found then (the same
+#: answer as computing it again: the correction is a function of these alone)
+MEMO_SLOTS = 256
+
+
 def render_c(shield: Shield, base: str) -> dict[str, str]:
     """``{file name: text}`` of the C form (module docstring); ``base`` the C prefix."""
     from fretc.compiler.codegen import _env  # lazy: Jinja2 only when C is written
@@ -162,7 +177,7 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
            "outputs": [(v, v in shield.numbers) for v in shield.outputs
                        if v in shield.read],
            "requirements": [r for m in t["machines"] for r in m["requirements"]],
-           "op_map": _C_OPS,
+           "op_map": _C_OPS, "memo_slots": MEMO_SLOTS,
            "numeric": any(m.numeric_outputs for m in machines),
            "max_atoms": max([1] + [len(i) for m in machines for _v, _s, i in m.numeric_outputs])}
     return {f"{base}_shield.h": env.get_template("shield.h.j2").render(**ctx),
