@@ -96,14 +96,16 @@ def talker(seconds: float, _out: str) -> None:
     grid.data = [0, 100, 0, 0]
     m.publish(grid)
     # the steps start when the watch's subscriptions are matched (the one non-zero command
-    # during a stop, k = 50, then falls inside the watch whatever the start-up took)
+    # during a stop, k = 30..32, then falls inside the watch whatever the start-up took)
     wait_for_subscribers(n, [c, f], 1)
 
     def step(k: int) -> None:
-        stop = 40 <= k < 60
+        stop = 20 <= k < 40
         c.publish(Bool(data=stop))
         tw = Twist()
-        tw.linear.x = 0.3 if (not stop or k == 50) else 0.0
+        # three steps, not one: a 100 ms pulse between two 100 ms ticks can fall between
+        # them when the messages jitter (neither the watch nor the audit would sample it)
+        tw.linear.x = 0.3 if (not stop or 30 <= k <= 32) else 0.0
         f.publish(tw)
         scan = LaserScan(range_min=0.1, range_max=10.0, ranges=[2.0] * 8)
         scan.header.stamp = n.get_clock().now().to_msg()

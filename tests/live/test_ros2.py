@@ -4,8 +4,8 @@ DDS with its default transports, shared memory and UDP), each peer in a process 
 
 * a rclpy talker (reliable and best-effort topics, a latched ``/map``, header stamps) is
   watched by ``fretc watch dds://D``: the watch's verdicts equal ``fretc audit``'s of the same
-  messages recorded by the watch (``--record``), and R3 is violated at the one non-zero
-  command sent during a stop;
+  messages recorded by the watch (``--record``), and R3 is violated at the non-zero
+  commands sent during a stop;
 * the reverse: ``fretc replay --serve dds://D`` is read by a rclpy subscriber with the log's
   types and header stamps; ``--publish-diagnostics`` by a rclpy subscriber as
   ``diagnostic_msgs/DiagnosticArray``;
@@ -97,7 +97,7 @@ def test_a_default_rclpy_talker_is_watched_with_the_audits_verdicts(tmp_path):
         'scan_ok = "min(/scan.ranges) > 1.5"\n', 1)
     req, b = _files(tmp_path, REQ34 + "M1: the mapper shall always satisfy map_ok\n"
                     "S1: the lidar shall always satisfy scan_ok\n", bindings)
-    # the talker steps from when the watch is matched (k = 50 at 5 s) and outlives the watch
+    # the talker steps from when the watch is matched (k = 30 at 3 s) and outlives the watch
     talker = _peer("talker", 12, d)
     time.sleep(3)  # the map is out before the watch joins
     try:
