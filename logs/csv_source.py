@@ -435,7 +435,7 @@ class _Checker:
         else:  # 1/0: either type (a column of mixed types was refused at its second)
             return
         if name in self.word_at and name in self.numeric_at:
-            raise CsvError(src.path, line,
+            raise CsvError(self.src.path, line,
                            f"column mixes true/false (line {self.word_at[name]}) with numbers "
                            f"(line {self.numeric_at[name]})", column=name)
 

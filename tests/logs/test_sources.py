@@ -509,6 +509,8 @@ def test_csv_without_time_column_uses_period(tmp_path):
     ("a,b\n1,0\n1,x\n", ":3 (column 'b')", "cannot read 'x'"),
     ("a,b\n1,0\n1,\n", ":3 (column 'b')", "empty cell"),
     ("a,b\ntrue,0\n0.5,0\n", ":3 (column 'a')", "mixes true/false"),
+    # the mixing cell's kind already known from another column (it was an internal error)
+    ("a,b\n0.5,true\ntrue,0.5\n", ":3 (column 'a')", "mixes true/false"),
     ("time,a\n0.0,1\n0.2,1\n0.1,0\n", ":4 (column 'time')", "goes backwards"),
     ("time,a\n0.0,1\nsoon,1\n", ":3 (column 'time')", "not a number of seconds"),
     ("a,a\n1,1\n", ":1 (column 'a')", "appears twice"),
