@@ -1,14 +1,17 @@
 """Helpers of the C monitor tests and benchmarks: the system C compiler (or a skip with the
-reason), the generated files built with the issue's flags, and a driver program that steps
+reason), the generated files built with the strict flags of ``--emit c``, and a driver program that steps
 any monitor of a generated unit over traces given on its standard input and prints, per
 tick, the pt verdict, the LTL3 verdict and its tick, then FRET's finite-trace verdict and
 the audit's word (the C twin of replaying a Python monitor)."""
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import os
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -46,12 +49,36 @@ def write(files: dict[str, str], folder: Path) -> None:
 def build(folder: Path, sources: list[str], out: str, flags=(), sanitize: bool = True) -> Path:
     """Compile ``sources`` (file names in ``folder``) into ``folder/out`` with
     :data:`STRICT` (+ :data:`SANITIZE`); AssertionError with the compiler's output on any
-    diagnostic."""
+    diagnostic.
+
+    A build is kept in the suite's cache folder (``FRETC_CACHE_DIR``/cc, tests/conftest.py)
+    under a key of the command, the compiler's version and the bytes of every source and
+    header of ``folder``: the same generated files are compiled once, then copied (only a
+    build without any diagnostic is kept, so the check that they compile warning-free holds
+    for each distinct source)."""
     cc = needs_cc()
     cmd = [cc, *STRICT, *(SANITIZE if sanitize else []), *flags, "-o", out, *sources, "-lm"]
+    key = hashlib.sha256("\0".join([*cmd, _cc_version(cc)]).encode())
+    for name in sorted({*sources, *(p.name for p in folder.glob("*.h"))}):
+        key.update(name.encode() + b"\0" + (folder / name).read_bytes() + b"\0")
+    kept = Path(os.environ.get("FRETC_CACHE_DIR") or tempfile.gettempdir()) / "cc" / \
+        key.hexdigest()[:32]
+    if kept.is_file():
+        shutil.copy2(kept, folder / out)
+        return folder / out
     got = subprocess.run(cmd, cwd=folder, capture_output=True, text=True)
     assert got.returncode == 0 and not got.stderr.strip(), got.stderr[-4000:]
+    kept.parent.mkdir(parents=True, exist_ok=True)
+    part = kept.with_name(f"{kept.name}.{os.getpid()}.part")
+    shutil.copy2(folder / out, part)
+    os.replace(part, kept)  # whole or absent, whatever runs beside it
     return folder / out
+
+
+@functools.lru_cache(maxsize=None)
+def _cc_version(cc: str) -> str:
+    got = subprocess.run([cc, "--version"], capture_output=True, text=True)
+    return cc + got.stdout
 
 
 def driver_source(units) -> str:
