@@ -75,7 +75,7 @@ def build(folder: Path, sources: list[str], out: str, flags=(), sanitize: bool =
     return folder / out
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _cc_version(cc: str) -> str:
     got = subprocess.run([cc, "--version"], capture_output=True, text=True)
     return cc + got.stdout
