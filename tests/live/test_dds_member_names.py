@@ -4,7 +4,6 @@ tests/live/test_watch_middleware.py), and a watch's readers ignore member names 
 so a publisher whose types name members otherwise is read too."""
 
 import json
-import random
 import time
 from dataclasses import dataclass
 
@@ -19,6 +18,8 @@ from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
 from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
+
+from _dds import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -52,7 +53,7 @@ def test_a_publisher_naming_members_without_the_underscore_is_read(tmp_path, dds
     (tmp_path / "w.bindings.toml").write_text(
         '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
         encoding="utf-8")
-    url = f"dds://{random.randint(100, 200)}"
+    url = f"dds://{fresh_domain()}"
     dp = open_participant(int(url[len("dds://"):]), dds_xml)  # the watch's domain config
     writer = [DataWriter(dp, Topic(dp, "rt/a", Float64_), qos=Qos(
         Policy.Reliability.Reliable(max_blocking_time=10**9), Policy.History.KeepAll))]

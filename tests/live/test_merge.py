@@ -11,6 +11,8 @@ from hypothesis import strategies as st
 from fretc.live.events import EventQueue
 from fretc.live.merge import MergeBuffer
 
+from _dds import fresh_domain
+
 HOUR = 3600.0
 
 
@@ -180,7 +182,6 @@ def test_the_dds_client_releases_at_the_watermark(tmp_path):
     the DDS client with a hold of an hour: the messages reach the queue in log-time order by
     the watermark alone (each sample's publication handle names one of the readers' matched
     writers); once one topic's publisher left, the other's last message goes too."""
-    import os
     import queue
     import struct
 
@@ -194,7 +195,7 @@ def test_the_dds_client_releases_at_the_watermark(tmp_path):
 
     xml = tmp_path / "loopback.xml"
     xml.write_text(LOOPBACK_XML, encoding="utf-8")
-    url = f"dds://{171 + os.getpid() % 28}"
+    url = f"dds://{fresh_domain()}"
     server = DdsServer(url, str(xml))
     for t in ("/a", "/b"):
         server.channel(t, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
@@ -244,7 +245,6 @@ def test_a_transport_that_cannot_tell_its_writers_leaves_the_hold_alone():
 def test_the_dds_client_reading_a_latched_topic_has_no_watermark(tmp_path):
     """/tf_static is read transient-local (a writer that appears sends its stored samples, of
     any age): while it is read, the hold alone releases, even with every writer heard."""
-    import os
     import struct
     import time
 
@@ -258,7 +258,7 @@ def test_the_dds_client_reading_a_latched_topic_has_no_watermark(tmp_path):
 
     xml = tmp_path / "loopback.xml"
     xml.write_text(LOOPBACK_XML, encoding="utf-8")
-    url = f"dds://{141 + os.getpid() % 28}"
+    url = f"dds://{fresh_domain()}"
     server = DdsServer(url, str(xml))
     topics = ("/a", "/tf_static")
     for t in topics:

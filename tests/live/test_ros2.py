@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import json
 import os
-import random
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
+
+from _dds import fresh_domain
 
 pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
                     "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
@@ -47,7 +48,7 @@ R4: the scout_mini shall always satisfy linear_speed <= 0.5 & angular_speed <= 0
 
 
 def _domain() -> int:
-    return random.randint(1, 99)
+    return fresh_domain(1, 99)
 
 
 def _peer(role: str, seconds: float, domain: int, out: str = "",

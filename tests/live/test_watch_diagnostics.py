@@ -6,7 +6,6 @@ the last array names each requirement `fretc: <id>` with the level and verdict o
 
 import json
 import os
-import random
 import subprocess
 import sys
 import time
@@ -24,7 +23,9 @@ from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import byte, int32, sequence, uint32  # noqa: E402
 
 from fretc.cli import main  # noqa: E402
-from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
+from fretc.live.dds_types import LOOPBACK_XML, open_participant  # noqa: E402
+
+from _dds import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -113,16 +114,14 @@ def _check(last: list[tuple[str, int, dict]], audit: dict[str, str]) -> None:
 
 
 def test_diagnostics_over_dds_read_back_with_own_idl_types(tmp_path):
-    from cyclonedds.domain import Domain, DomainParticipant
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
     xml = tmp_path / "lo.xml"
     xml.write_text(LOOPBACK_XML, encoding="utf-8")
-    domain = random.randint(100, 200)
-    keep = Domain(domain, LOOPBACK_XML)  # noqa: F841 - configures the domain
-    dp = DomainParticipant(domain)
+    domain = fresh_domain()
+    dp = open_participant(domain, str(xml))  # configures the domain as the watch's own
     reader = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray_),
                         qos=Qos(Policy.Reliability.Reliable(max_blocking_time=10**8),
                                 Policy.History.KeepAll))

@@ -8,7 +8,6 @@ tests/live/test_watch_zenoh.py). Everything on 127.0.0.1, multicast off."""
 
 import json
 import os
-import random
 import socket
 import struct
 import subprocess
@@ -28,7 +27,9 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
+from fretc.live.dds_types import LOOPBACK_XML, open_participant  # noqa: E402
+
+from _dds import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -53,7 +54,7 @@ def dds_xml(tmp_path):
 
 def _url(transport: str) -> str:
     if transport == "dds":
-        return f"dds://{random.randint(100, 200)}"
+        return f"dds://{fresh_domain()}"
     return f"zenoh://127.0.0.1:{_port()}"
 
 
@@ -166,14 +167,12 @@ class Bool_(IdlStruct, typename="std_msgs::msg::dds_::Bool_"):
 
 
 def test_an_independent_dds_subscriber_reads_ros2_wire_names(tmp_path, dds_xml):
-    from cyclonedds.domain import Domain, DomainParticipant
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
-    domain = random.randint(100, 200)
-    keep = Domain(domain, LOOPBACK_XML)  # noqa: F841 - configures the domain
-    dp = DomainParticipant(domain)
+    domain = fresh_domain()
+    dp = open_participant(domain, dds_xml)  # configures the domain as the replay's own
     qos = Qos(Policy.Reliability.Reliable(max_blocking_time=10**8), Policy.History.KeepAll)
     tw = DataReader(dp, Topic(dp, "rt/cmd_vel_filtered", Twist_), qos=qos)
     bo = DataReader(dp, Topic(dp, "rt/gwendolen_control", Bool_), qos=qos)
@@ -439,7 +438,7 @@ def test_a_string_typed_bound_topic_is_watched_as_it_is_audited(transport, case,
     CliRunner().invoke(main, ["audit", *reqs, str(log), "--json", str(out)])
     audit = json.loads(out.read_text())
     url = {"ws": f"ws://127.0.0.1:{_port()}",  # a DDS domain of this worker's own
-           "dds": f"dds://{201 + os.getpid() % 30}"}.get(transport) or _url(transport)
+           "dds": f"dds://{fresh_domain()}"}.get(transport) or _url(transport)
     serve = (["--serve", "--port", url.rsplit(":", 1)[1]] if transport == "ws"
              else ["--serve", url, *_config(url, dds_xml)])
     rep = subprocess.Popen(_fretc("replay", str(log), *serve, "--rate", "10"), cwd=ROOT,
