@@ -59,7 +59,7 @@ if TYPE_CHECKING:
     from fretc.compiler.semantics import Formalization
 
 __all__ = ["is_safety", "pt_monitors_ft_inf", "Outside", "solve_game", "game_atoms", "letter_name",
-           "Game", "Witness", "bdd_dict"]
+           "Game", "Witness", "bdd_dict", "new_bdd_dict"]
 
 #: fixed-input-sequence search: sets of states visited before giving up
 SEARCH_BUDGET = 4000
@@ -154,13 +154,21 @@ _DICT: list = []
 
 
 def bdd_dict() -> Any:  # a spot.bdd_dict
-    """The one Spot BDD dictionary of the games and the automata they read (so their BDD
-    variables live in one BuDDy space)."""
+    """The Spot BDD dictionary of the games and the automata they read (so their BDD
+    variables live in one BuDDy space), the same until :func:`new_bdd_dict`."""
     import spot  # lazy: Spot (and its BuDDy) in the query worker process only
 
     if not _DICT:
         _DICT.append(spot.make_bdd_dict())
     return _DICT[0]
+
+
+def new_bdd_dict() -> None:
+    """Make the games from here on in a new BDD dictionary (:func:`bdd_dict`), numbered from
+    nothing: :mod:`fretc.check.solver` calls it before each game query, so no variable an
+    earlier query or other work of the process left registered changes the numbering (the
+    answer). A game made before keeps its own."""
+    _DICT.clear()
 
 
 class Game:
@@ -192,8 +200,9 @@ class Game:
             delay = sum(d for d, _o in counts)
             nvars = len(self.atoms) + 2 * (other + delay) + 2
             self.meter.variables(nvars, "the monitors' state, atoms and delay lines")
-            self.owner = spot.make_twa_graph(bdd_dict())
-            first = _DICT[0].register_anonymous_variables(nvars, self.owner)
+            self.dict = bdd_dict()
+            self.owner = spot.make_twa_graph(self.dict)
+            first = self.dict.register_anonymous_variables(nvars, self.owner)
             m = self.m = Monitor(b, first, self.atoms, set(inputs), other,
                                  delay if counted else None)
             try:
@@ -206,7 +215,7 @@ class Game:
                 break
             except NoRoom:
                 self.m = self.ok = None  # type: ignore[assignment]  # planned again below
-                _DICT[0].unregister_all_my_variables(self.owner)
+                self.dict.unregister_all_my_variables(self.owner)
         self.in_set = _varset(b, m.in_vars)
         self.out_set = _varset(b, m.out_vars)
         self.layers: list = []
@@ -234,7 +243,7 @@ class Game:
         self.layers = []
         self.m = self.ok = self.env_ok = self.ctl_ok = self._trans = self.init = None  # type: ignore[assignment]  # closed
         self.extra, self.same, self._step = [], None, None
-        _DICT[0].unregister_all_my_variables(self.owner)
+        self.dict.unregister_all_my_variables(self.owner)
 
     @property
     def trans(self) -> Any:  # a BDD

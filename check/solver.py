@@ -40,6 +40,13 @@ Queries (all on infinite words, Spot's LTL semantics):
   starts a new one.
 
 The worker adds the query's :class:`fretc.check.budget.Budget` to the BDD queries.
+
+Same query, same answer: a worker's automata are made in a BDD dictionary of its own (Spot
+numbers an atom's BDD variable when it is first registered in a dictionary, and the word
+Spot finds depends on that numbering), and each game query in a new one
+(:func:`fretc.check.safety_game.new_bdd_dict`), never in Spot's process-wide default
+dictionary, which keeps what earlier work of the process (or of the parent a worker was
+forked from) registered.
 """
 
 from __future__ import annotations
@@ -101,37 +108,108 @@ def _word(aut) -> tuple[list, list] | None:
     return _letters(aut, w.prefix), _letters(aut, w.cycle)
 
 
-_PRODUCTS: dict = {}
-_AUTOMATA: dict = {}
+class _Session:
+    """The Spot state of one job (a query worker's life, an in-process :class:`SpotWorker`'s):
+    a BDD dictionary of its own, so the variables of the atoms are numbered by this job's
+    queries alone (Spot's process-wide default dictionary keeps the numbering of whatever
+    the process, or the parent a worker was forked from, registered before, and the words
+    Spot finds depend on it), and the automata built in it: one per conjunct of a ``sat``
+    query (``automata``) and the products of the bases (``products``), shared by the
+    queries of one component."""
+
+    def __init__(self) -> None:
+        import spot  # lazy: Spot loads in the query worker process only
+
+        self.dict = spot.make_bdd_dict()
+        self.automata: dict[str, Any] = {}
+        self.products: dict[tuple[str, ...], Any] = {}
+
+    def translate(self, text: str):
+        """Spot's small automaton of ``text`` in this session's dictionary (kept)."""
+        import spot  # lazy: Spot loads in the query worker process only
+
+        a = self.automata.get(text)
+        if a is None:
+            if len(self.automata) > 1024:
+                self.automata.clear()
+            a = self.automata[text] = spot.translate(spot.formula(text), "high", "small",
+                                                     dict=self.dict)
+        return a
+
+    def sat(self, base: list[str], extra: list[str]) -> tuple[bool, Any]:
+        """The ``sat`` query of the conjuncts ``base`` and ``extra``."""
+        import spot  # lazy: Spot loads in the query worker process only
+
+        # one automaton per conjunct (deterministic when Spot finds a small one), then
+        # their product, smallest first: far smaller than translating the conjunction when
+        # the conjuncts are many. The product of the base is kept: the queries of one
+        # component share it (non-vacuity adds one trigger to the same base).
+        key = tuple(sorted(base))
+        aut = self.products.get(key)
+        if aut is None:
+            for a in sorted((self.translate(t) for t in base), key=lambda a: a.num_states()):
+                aut = a if aut is None else _bounded(spot.product(aut, a), "product")
+                if aut.is_empty():
+                    break
+            if len(self.products) > 64:
+                self.products.clear()
+            self.products[key] = aut
+        assert aut is not None  # (a query has a formula)
+        if aut.is_empty():
+            return (False, None)
+        for t in extra:
+            aut = _bounded(spot.product(aut, self.translate(t)), "product")
+            if aut.is_empty():
+                return (False, None)
+        return (True, _word(aut))
+
+    def realizable(self, texts: list[str], outputs: list[str]) -> tuple[bool, Any]:
+        """The ``realizable`` query of the conjunction of ``texts``, ``outputs`` the
+        controller's atoms."""
+        import spot  # lazy: Spot loads in the query worker process only
+
+        si = spot.synthesis_info()
+        si.dict = self.dict
+        game = _product_game(texts, outputs, self.dict) if len(texts) > 1 else None
+        if game is None:
+            game = spot.ltl_to_game(spot.formula(_conj(texts)), outputs, si)
+        if spot.solve_game(game):
+            mealy = spot.solved_game_to_mealy(game, si)
+            return (True, mealy.num_states())
+        # a fixed input sequence that defeats every controller: an input word along which
+        # no output sequence satisfies f (outputs quantified away, then complemented)
+        aut = spot.translate(spot.formula(_conj(texts)), dict=self.dict)
+        if aut.num_states() > SPOT_MAX_COMPLEMENT:
+            return (False, None)
+        strip = spot.remove_ap()
+        for o in outputs:
+            strip.add_ap(o)
+        counter = spot.complement(strip.strip(aut))
+        return (False, _word(counter))
 
 
-def _translate(text: str):
-    import spot  # lazy: Spot loads in the query worker process only
-
-    a = _AUTOMATA.get(text)
-    if a is None:
-        if len(_AUTOMATA) > 1024:
-            _AUTOMATA.clear()
-        a = _AUTOMATA[text] = spot.translate(spot.formula(text), "high", "small")
-    return a
+#: the session of this query worker process (:func:`_serve` starts it)
+_WORKER_SESSION: list[_Session] = []
 
 
 def _conj(texts) -> str:
     return " & ".join(f"({t})" for t in texts)
 
 
-def _product_game(texts, outputs):
+def _product_game(texts, outputs, bdd_dict=None):
     """The synthesis game of a conjunction built from one deterministic automaton per
     conjunct (their product, made parity, split into environment and controller moves), or
     None when some conjunct has no small deterministic automaton (then the caller uses
     ``spot.ltl_to_game`` on the whole formula). Same game as ``ltl_to_game`` up to the
-    automaton construction; equal answers checked in tests/compiler/test_check.py."""
+    automaton construction; equal answers checked in tests/check/test_check.py. Its
+    automata are made in ``bdd_dict`` (a Spot BDD dictionary; None: a new one)."""
     import buddy  # lazy: with Spot, in the query worker process only
     import spot  # lazy: Spot loads in the query worker process only
 
+    d = spot.make_bdd_dict() if bdd_dict is None else bdd_dict
     auts = []
     for t in texts:
-        a = spot.translate(spot.formula(t), "high", "det")
+        a = spot.translate(spot.formula(t), "high", "det", dict=d)
         if not a.prop_universal().is_true():
             return None
         auts.append(a)
@@ -151,40 +229,29 @@ def _product_game(texts, outputs):
     return game
 
 
-def run_query(query: tuple, budget: Budget | None = None) -> Any:
+def run_query(query: tuple, budget: Budget | None = None,
+              session: _Session | None = None) -> Any:
     """Answer one query in this process (see the module docstring for the shapes) within
-    ``budget`` (default: the defaults); raises :class:`fretc.check.budget.BudgetSpent` past it."""
-    import spot  # lazy: Spot loads in the query worker process only
-
+    ``budget`` (default: the defaults); raises :class:`fretc.check.budget.BudgetSpent` past it.
+    ``session``: the job's Spot state for the ``sat`` and ``realizable`` queries (a
+    ``_Session``: its BDD dictionary and automata; default: the query worker's, else a new
+    one for this query alone), so the answer depends on the query and the job's earlier
+    queries only, never on other Spot work of the process."""
     budget = budget or Budget()
     kind = query[0]
-    if kind == "sat":
-        base = [query[1]] if isinstance(query[1], str) else list(query[1])
-        extra = list(query[2]) if len(query) > 2 else []
-        # one automaton per conjunct (deterministic when Spot finds a small one), then
-        # their product, smallest first: far smaller than translating the conjunction when
-        # the conjuncts are many. The product of the base is kept: the queries of one
-        # component share it (non-vacuity adds one trigger to the same base).
-        key = tuple(sorted(base))
-        aut = _PRODUCTS.get(key)
-        if aut is None:
-            for a in sorted((_translate(t) for t in base), key=lambda a: a.num_states()):
-                aut = a if aut is None else _bounded(spot.product(aut, a), "product")
-                if aut.is_empty():
-                    break
-            if len(_PRODUCTS) > 64:
-                _PRODUCTS.clear()
-            _PRODUCTS[key] = aut
-        assert aut is not None  # (a query has a formula)
-        if aut.is_empty():
-            return (False, None)
-        for t in extra:
-            aut = _bounded(spot.product(aut, _translate(t)), "product")
-            if aut.is_empty():
-                return (False, None)
-        if aut.is_empty():
-            return (False, None)
-        return (True, _word(aut))
+    if kind in ("sat", "realizable"):
+        if session is None:
+            session = _WORKER_SESSION[0] if _WORKER_SESSION else _Session()
+        texts = [query[1]] if isinstance(query[1], str) else list(query[1])
+        if kind == "sat":
+            return session.sat(texts, list(query[2]) if len(query) > 2 else [])
+        return session.realizable(texts, list(query[2]))
+    if kind in ("call", "safety_game", "buchi_game", "monitor_sat"):
+        # the games' BDD dictionary (check.safety_game) new for each query: its numbering
+        # is the query's alone
+        from fretc.check.safety_game import new_bdd_dict  # lazy: BuDDy games only when asked
+
+        new_bdd_dict()
     if kind == "call":  # a later layer's function run here (the caller passes it in)
         fn, args = query[1], query[2]
         return fn(*args, budget=budget)
@@ -206,26 +273,6 @@ def run_query(query: tuple, budget: Budget | None = None) -> Any:
         from fretc.check.smt import solve_capped  # lazy: z3 only when a query needs it
 
         return solve_capped(query[1], budget)
-    if kind == "realizable":
-        texts = [query[1]] if isinstance(query[1], str) else list(query[1])
-        outputs = list(query[2])
-        si = spot.synthesis_info()
-        game = _product_game(texts, outputs) if len(texts) > 1 else None
-        if game is None:
-            game = spot.ltl_to_game(spot.formula(_conj(texts)), outputs, si)
-        if spot.solve_game(game):
-            mealy = spot.solved_game_to_mealy(game, si)
-            return (True, mealy.num_states())
-        # a fixed input sequence that defeats every controller: an input word along which
-        # no output sequence satisfies f (outputs quantified away, then complemented)
-        aut = spot.translate(spot.formula(_conj(texts)))
-        if aut.num_states() > SPOT_MAX_COMPLEMENT:
-            return (False, None)
-        strip = spot.remove_ap()
-        for o in outputs:
-            strip.add_ap(o)
-        counter = spot.complement(strip.strip(aut))
-        return (False, _word(counter))
     raise ValueError(f"unknown query {kind!r}")
 
 
@@ -242,6 +289,9 @@ def _serve(conn, memory: int) -> None:  # pragma: no cover - runs in the worker 
     faulthandler.disable()
     os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
     buddy.bdd_setmaxnodenum(memory)
+    # the worker's own Spot state: nothing the parent registered in Spot's default BDD
+    # dictionary before the fork numbers this job's atoms
+    _WORKER_SESSION[:] = [_Session()]
     while True:
         try:
             query, budget = conn.recv()
@@ -287,7 +337,9 @@ class SpotWorker:
     :class:`fretc.check.budget.Budget`; default the defaults).
 
     ``fork``: run the queries in a worker process (False: in this process, with no cap on
-    BuDDy's node table; for tests). ``deadline``: the run's wall-clock limit
+    BuDDy's node table; for tests). Either way the queries' automata are made in a BDD
+    dictionary of the worker's own, so its answers do not depend on other Spot work of the
+    process (see ``_Session``). ``deadline``: the run's wall-clock limit
     (``time.monotonic()`` value, None for none): past it :meth:`ask` kills the worker and
     raises :class:`fretc.check.budget.RunStopped`. Use as a context manager, or call
     :meth:`close`. :meth:`ask` returns the answer, or :data:`UNKNOWN` when the query ran past
@@ -303,6 +355,7 @@ class SpotWorker:
         self.deadline = deadline
         self._proc: Any = None  # the worker's multiprocessing Process, once started
         self._conn: Any = None  # and our end of its Pipe
+        self._session: _Session | None = None  # the Spot state of the queries run here
         self.spent = 0
         self.failures: list[str] = []
         self.deaths = 0  # worker deaths in a row not caused by its limits
@@ -332,7 +385,9 @@ class SpotWorker:
         :class:`fretc.check.budget.RunStopped` past the run's deadline."""
         if not self.fork:
             try:
-                return run_query(query, self.budget)
+                if self._session is None:
+                    self._session = _Session()
+                return run_query(query, self.budget, self._session)
             except BudgetSpent as exc:
                 return self.refuse(str(exc))
             except Exception as exc:  # a Spot error is an unknown answer, not a crash

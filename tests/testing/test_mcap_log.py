@@ -179,10 +179,10 @@ def test_safe_ros_logs_give_the_expected_verdicts(safe_ros, tmp_path):
     assert doc["bindings"] == str(BINDINGS)
     written = [t for t in doc["tests"] if t["log"]]
     # a trace the bindings cannot give stays a CSV test, saying why (R6's trigger-persists
-    # trace has /scan stale again one tick after a message: age(/scan) cannot rise so fast;
-    # in one run of the suite, in a worker process that had run other tests, testgen chose
-    # another trace for R6's trigger that has the same limit)
-    assert len(written) >= len(doc["tests"]) - 2, res.output
+    # trace has /scan stale again one tick after a message: age(/scan) cannot rise so fast).
+    # The traces do not depend on what the process ran before (tests/check/
+    # test_deterministic_witnesses.py), so a worker that ran other tests gets the same one
+    assert len(written) >= len(doc["tests"]) - 1, res.output
     assert all(t["log"] or "age(/scan)" in t["log_not_written"] for t in doc["tests"]), \
         res.output
     for t in doc["tests"]:
