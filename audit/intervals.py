@@ -3,7 +3,10 @@
 form for triggers clustered in runs, and the widening over trials of unknown outcome.
 
 * :func:`clopper_pearson`: the exact two-sided interval of a binomial proportion (Clopper &
-  Pearson 1934) by scipy, ``binomtest(k, n).proportion_ci(method="exact")``.
+  Pearson 1934): its ends are beta quantiles (the binomial tail is a regularized incomplete
+  beta function), by scipy's ``beta.ppf`` / ``beta.isf``; the interval scipy's
+  ``binomtest(k, n).proportion_ci(method="exact")`` finds by root search (to 2e-12), in
+  about a hundredth of its time (tests compare the two).
 * :class:`Counts` and :func:`cluster_interval`: trials grouped in runs (the triggers of one
   run are not independent). Run ``i`` contributes ``k_i`` successes of ``n_i`` trials and
   ``u_i`` trials of unknown outcome; the estimate is the pooled share ``K / N``. The
@@ -55,36 +58,35 @@ def check_confidence(confidence: Any) -> float:
 
 def clopper_pearson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
     """The exact two-sided interval ``(lo, hi)`` of a binomial proportion with ``k``
-    successes in ``n`` trials at ``confidence`` (in (0, 1)), by scipy (Clopper & Pearson
-    1934). ``n == 0``: ``(0.0, 1.0)``. Raises ``ValueError`` for ``k`` outside [0, n] or
+    successes in ``n`` trials at ``confidence`` (in (0, 1)) (Clopper & Pearson 1934; module
+    docstring). ``n == 0``: ``(0.0, 1.0)``. Raises ``ValueError`` for ``k`` outside [0, n] or
     a confidence outside (0, 1)."""
     check_confidence(confidence)
     if n == 0:
         return 0.0, 1.0
     if not 0 <= k <= n:
         raise ValueError(f"{k} successes in {n} trials")
-    from scipy.stats import binomtest  # lazy: scipy only when statistics are asked
-
-    ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=confidence, method="exact")
-    return float(ci.low), float(ci.high)
+    return _beta_interval(float(k), float(n), confidence)
 
 
 def effective_clopper_pearson(k: float, n: float, confidence: float) -> tuple[float, float]:
     """Clopper-Pearson's interval at a non-integer count: ``k`` successes of ``n`` trials
-    (``0 <= k <= n``, ``n > 0``), its ends the beta quantiles scipy's exact interval takes
-    (``beta.ppf(a/2, k, n - k + 1)``, ``beta.ppf(1 - a/2, k + 1, n - k)``; 0 at ``k = 0``,
-    1 at ``k = n``). Integer counts: :func:`clopper_pearson`."""
+    (``0 <= k <= n``, ``n > 0``), its ends the same beta quantiles as at integer counts
+    (``beta.ppf(a/2, k, n - k + 1)``, ``beta.isf(a/2, k + 1, n - k)``; 0 at ``k = 0``,
+    1 at ``k = n``), so integer counts give :func:`clopper_pearson`'s interval."""
     check_confidence(confidence)
     if n <= 0:
         return 0.0, 1.0
-    if float(k).is_integer() and float(n).is_integer():
-        return clopper_pearson(int(k), int(n), confidence)
+    return _beta_interval(min(max(float(k), 0.0), float(n)), float(n), confidence)
+
+
+def _beta_interval(k: float, n: float, confidence: float) -> tuple[float, float]:
+    """The Clopper-Pearson ends of ``0 <= k <= n`` successes of ``n > 0`` trials."""
     from scipy.stats import beta  # lazy: scipy only when statistics are asked
 
-    a = 1 - confidence
-    k = min(max(k, 0.0), n)
-    lo = 0.0 if k <= 0 else float(beta.ppf(a / 2, k, n - k + 1))
-    hi = 1.0 if k >= n else float(beta.ppf(1 - a / 2, k + 1, n - k))
+    a = (1 - confidence) / 2
+    lo = 0.0 if k <= 0 else float(beta.ppf(a, k, n - k + 1))
+    hi = 1.0 if k >= n else float(beta.isf(a, k + 1, n - k))
     return lo, hi
 
 

@@ -12,9 +12,11 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given, settings, strategies as st
 from scipy.stats import beta, binomtest
 
-from fretc.audit.intervals import Counts, cluster_interval, effective_clopper_pearson
+from fretc.audit.intervals import (Counts, clopper_pearson, cluster_interval,
+                                   effective_clopper_pearson)
 from fretc.audit.statistics import fleet_statistics
 from fretc.audit.trials import Trials
 from fretc.audit.verdict import LogAudit, Verdict, exit_code
@@ -124,6 +126,21 @@ def test_effective_clopper_pearson_is_scipys_at_integer_counts():
         ci = binomtest(k, n).proportion_ci(confidence_level=0.9, method="exact")
         assert effective_clopper_pearson(float(k), float(n), 0.9) == pytest.approx(
             (ci.low, ci.high))
+
+
+@settings(max_examples=300, deadline=None)
+@given(n=st.integers(1, 50_000), share=st.floats(0, 1),
+       confidence=st.sampled_from([0.5, 0.8, 0.9, 0.95, 0.99, 0.999, 0.999999]))
+def test_the_beta_quantile_interval_is_scipys_root_searched_one(n, share, confidence):
+    """clopper_pearson's beta quantiles against scipy's exact interval by root search
+    (binomtest; its tolerance 2e-12), on counts up to 50,000 trials and tail confidences;
+    effective_clopper_pearson at integer counts is clopper_pearson's interval."""
+    k = round(share * n)
+    ci = binomtest(k, n).proportion_ci(confidence_level=confidence, method="exact")
+    lo, hi = clopper_pearson(k, n, confidence)
+    assert abs(lo - ci.low) <= 1e-9 and abs(hi - ci.high) <= 1e-9, (k, n, confidence)
+    assert (k == 0) == (lo == 0.0) and (k == n) == (hi == 1.0)
+    assert effective_clopper_pearson(float(k), float(n), confidence) == (lo, hi)
 
 
 # ------------------------------------------------------------------ never support a bound
