@@ -104,14 +104,12 @@ class KeptPasses:
 
 
 def per_entity_refusal(bindings: Bindings) -> str:
-    """Why ``--write-csv`` does not write the per-entity variables of ``bindings``, and what
-    to do instead."""
+    """Why ``--write-csv`` does not write the per-entity requirements of ``bindings``'
+    variables, and what to do instead (one line)."""
     return ("per-entity requirements cannot be written as a sampled trace: their variables "
             f"({', '.join(sorted(bindings.per_entity))}) have a value per entity at each "
             "tick, where a column has one, and the audit of the CSV would not judge them per "
-            "entity as the audit of the log does; audit the log itself, or write the CSV of "
-            "the other requirements with bindings that have no [entities] nor per-entity "
-            "variables")
+            "entity as the audit of the log does; audit the log itself for them")
 
 
 def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
@@ -120,14 +118,17 @@ def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
 
     Raises:
         ValueError: per-entity requirements (a sampled trace has one value of a variable per
-            tick, not one per entity; the message says what to do)."""
+            tick, not one per entity; the message says what to do): the caller leaves them
+            out (:func:`fretc.audit.sampled_csv.write_sampled_csv`)."""
     if plan.variants:
         sub, err = select_variant(plan, str(path))
         if sub is None:
             return KeptPasses(plan, _not_selected(plan, str(path), err or ""), None, None,
                               set())
         return audit_keeping_passes(sub, path)
-    if plan.bindings is not None and plan.bindings.per_entity:
+    from fretc.audit.entities import entity_of_requirements
+
+    if plan.bindings is not None and entity_of_requirements(plan):
         raise ValueError(per_entity_refusal(plan.bindings))
     run = _LogRun(plan, path)
     la = run.run(None)

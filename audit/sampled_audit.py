@@ -3,7 +3,7 @@
 ``# fretc clock N: ...`` lines, the requirements judged on each clock of the log; each
 requirement is audited on its own clock's rows alone, as it was on the log
 (../shared/DESIGN.md, "Each verdict stands alone"), and a requirement no clock names is an
-error (the trace does not carry its ticks).
+error (the trace does not carry its ticks; a ``# fretc not sampled`` line says why).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from dataclasses import replace
 
 from fretc.audit.model import AuditPlan
 from fretc.audit.verdict import LogAudit, Verdict
+from fretc.logs.csv_source import not_sampled_lines
 
 __all__ = ["audit_clocks"]
 
@@ -46,11 +47,14 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
             verdicts[r.index] = v
     merged = _merge(path, parts)
     named = ", ".join(sorted(owner)) or "none"
+    left_out = not_sampled_lines(path)
     for r in plan.requirements:
         if r.index not in verdicts:
             why = r.error or (f"{path} is a sampled trace (fretc audit --write-csv) that "
-                              f"carries no clock of {r.id}: it holds the clocks of {named} "
-                              "(a requirement the audit of the log could not judge has none)")
+                              f"carries no clock of {r.id}: " + (
+                                  f"not sampled: {left_out[r.id]}" if r.id in left_out else
+                                  f"it holds the clocks of {named} (a requirement the audit "
+                                  "of the log could not judge has none)"))
             verdicts[r.index] = Verdict(log=path, requirement=r.id, text=r.text,
                                         source=r.source, notes=list(r.notes),
                                         verdict="error", error=why)

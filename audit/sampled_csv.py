@@ -16,7 +16,8 @@ Format (:class:`fretc.logs.csv_source.CsvSource`):
   audit with binding files reads the columns as the variables they are,
   :func:`fretc.audit.checks.csv_bindings`), then one line
   ``# fretc clock N: R1 R2`` per clock naming the requirements judged on it
-  (:func:`~fretc.logs.csv_source.escape_id`);
+  (:func:`~fretc.logs.csv_source.escape_id`), and one line ``# fretc not sampled: T: why``
+  per requirement left out (a per-entity requirement: a value per entity at each tick);
 * a header: ``time`` (the tick's time in seconds, exact), with several clocks ``tick`` (the
   row's clock N), then one column per variable in the requirements' order; one row per tick
   of each clock, in time order; a row's cells of the variables of other clocks are empty;
@@ -27,26 +28,28 @@ Format (:class:`fretc.logs.csv_source.CsvSource`):
   were judged).
 
 A requirement judged without ticks (``unknown`` because the damage may have taken its
-topic) has a clock of one ``cut`` row; one whose audit is an error has no clock (an error
-on the file too).
+topic) has a clock of one ``cut`` row; one whose audit is an error, and a per-entity one,
+have no clock (an error on the file too, saying why).
 """
 
 from __future__ import annotations
 
 import csv
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fretc.common.problems import SignalError
-from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, GAP_CELL, SAMPLED_MARK,
-                                   UNKNOWN_CELL, escape_id)
+from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, GAP_CELL,
+                                   NOT_SAMPLED_LINE, SAMPLED_MARK, UNKNOWN_CELL, escape_id)
 
+from fretc.audit.entities import entity_of_requirements
 from fretc.audit.log import KeptPasses, audit_keeping_passes, per_entity_refusal
 from fretc.audit.model import AuditPlan
+from fretc.audit.plan import select_variant
 from fretc.audit.passes import ClockPass, clock_key
 
 if TYPE_CHECKING:
@@ -171,13 +174,16 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     """Write what the audit of ``log_path`` judged to the CSV file ``out`` (module
     docstring). Returns the log's audit and the clocks written.
 
+    Per-entity requirements (a value of a variable per entity at each tick, where a column
+    has one) are left out, each named on a :data:`~fretc.logs.csv_source.NOT_SAMPLED_LINE`
+    with why, so the audit of the file gives them an error that says so.
+
     Raises:
         ValueError: the plan binds no variable of its requirements (nothing to write), or
-            per-entity requirements.
+            all of its requirements are per-entity.
         SignalError: the log could not be read (the audit's error).
         OSError: ``out`` cannot be written."""
-    if plan.bindings is not None and plan.bindings.per_entity:
-        raise ValueError(per_entity_refusal(plan.bindings))
+    plan, left_out = _without_per_entity(plan, log_path)
     if not sampled_variables(plan) and plan.bindings is not None:
         raise ValueError("the requirements' variables have no bindings: nothing to sample")
     kept = audit_keeping_passes(plan, log_path)
@@ -194,10 +200,34 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
                 "time in seconds\n")
         for k, c in enumerate(clocks, 1):
             f.write(f"{CLOCK_LINE}{k}: {' '.join(escape_id(i) for i in c.ids)}\n")
+        for rid, why in left_out.items():
+            f.write(f"{NOT_SAMPLED_LINE}{escape_id(rid)}: {why}\n")
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["time"] + ([CLOCK_COLUMN] if len(clocks) > 1 else []) + names)
         w.writerows(_rows(clocks, names))
     return kept.audit, clocks
+
+
+def _without_per_entity(plan: AuditPlan, log_path: str) -> tuple[AuditPlan, dict[str, str]]:
+    """``plan`` (its binding file's variant for ``log_path``, when one selects it) without
+    its per-entity requirements, and their ids -> why they are left out.
+
+    Raises:
+        ValueError: every requirement is per-entity (nothing to write)."""
+    if plan.variants:
+        sub, _err = select_variant(plan, log_path)
+        if sub is None:  # (the audit says why: every verdict an error)
+            return plan, {}
+        plan = sub
+    groups = entity_of_requirements(plan)
+    if not groups or plan.bindings is None:
+        return plan, {}
+    why = per_entity_refusal(plan.bindings)
+    rest = [r for r in plan.requirements if r.index not in groups]
+    if not rest:
+        raise ValueError(why)
+    return (replace(plan, requirements=rest),
+            {r.id: why for r in plan.requirements if r.index in groups})
 
 
 def _order(plan: AuditPlan) -> list[str]:

@@ -18,6 +18,7 @@ from fretc.logs.base import LogSource, Message
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
            "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "sampled_trace",
+           "NOT_SAMPLED_LINE", "not_sampled_lines",
            "escape_id", "unescape_id", "column_name_problem"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
@@ -31,6 +32,10 @@ SAMPLED_MARK = "# fretc sampled trace"
 #: A comment line of a sampled trace naming one clock and the requirements sampled on it:
 #: ``# fretc clock 2: R5 R6`` (ids written by :func:`escape_id`, separated by spaces).
 CLOCK_LINE = "# fretc clock "
+#: A comment line of a sampled trace naming a requirement it does not carry and why:
+#: ``# fretc not sampled: T: <why>`` (a per-entity requirement; the id written by
+#: :func:`escape_id`).
+NOT_SAMPLED_LINE = "# fretc not sampled: "
 #: The column of a sampled trace of several clocks giving the clock of each row (``tick`` is
 #: a FRETish reserved word, so never a FRET variable's column).
 CLOCK_COLUMN = "tick"
@@ -91,18 +96,38 @@ def clock_lines(path: str | os.PathLike) -> dict[str, list[str]]:
     the ids of the requirements sampled on it, from its :data:`CLOCK_LINE` comments before
     the header; ``{}`` for any other CSV trace, or a file that cannot be read as text."""
     out: dict[str, list[str]] = {}
+    for line in _sampled_comments(path):
+        if line.startswith(CLOCK_LINE) and ":" in line:
+            label, _, ids = line[len(CLOCK_LINE):].partition(":")
+            out[label.strip()] = [unescape_id(w) for w in ids.split()]
+    return out
+
+
+def not_sampled_lines(path: str | os.PathLike) -> dict[str, str]:
+    """The requirements a sampled trace says it does not carry: id -> why, from its
+    :data:`NOT_SAMPLED_LINE` comments before the header; ``{}`` for any other CSV trace."""
+    out: dict[str, str] = {}
+    for line in _sampled_comments(path):
+        if line.startswith(NOT_SAMPLED_LINE):
+            word, _, why = line[len(NOT_SAMPLED_LINE):].partition(": ")
+            out[unescape_id(word.strip())] = why.strip()
+    return out
+
+
+def _sampled_comments(path: str | os.PathLike) -> list[str]:
+    """The comment lines after a sampled trace's first line, before its header (none for
+    any other file, or one that cannot be read as text)."""
+    out: list[str] = []
     try:
         with open(path, encoding="utf-8", errors="replace") as f:
             if not f.readline().startswith(SAMPLED_MARK):
-                return {}
+                return []
             for line in f:
                 if not line.startswith("#"):
                     break
-                if line.startswith(CLOCK_LINE) and ":" in line:
-                    label, _, ids = line[len(CLOCK_LINE):].partition(":")
-                    out[label.strip()] = [unescape_id(w) for w in ids.split()]
+                out.append(line)
     except OSError:
-        return {}
+        return []
     return out
 
 

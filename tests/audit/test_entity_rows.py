@@ -162,6 +162,50 @@ def test_write_csv_refuses_per_entity_requirements_and_says_why(tmp_path):
     assert not (tmp_path / "csv" / "o.csv").exists()
 
 
+
+def test_write_csv_leaves_out_only_the_per_entity_requirements(tmp_path):
+    """--write-csv of a set mixing a per-entity requirement with plain ones: the plain ones
+    are written and the audit of the CSV gives their verdicts as the audit of the log does;
+    the per-entity one is named as not sampled (in the file and on the terminal) and the
+    audit of the CSV makes it an error that says why, never a verdict."""
+    import json
+
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+    from fretc.logs.csv_source import not_sampled_lines
+
+    log, _plan = _setup(tmp_path, [[(1, 0.8, True), (2, 0.3, True)], [(1, 2.0, True)],
+                                   [(2, 0.2, False)], [(1, 0.9, True)]], "id")
+    (tmp_path / "o.fret").write_text(
+        "@tick_period 100 ms\n"
+        "E: the robot shall always satisfy dist > 0.5\n"
+        "P: the robot shall always satisfy seen < 2\n"
+        "Q: the robot shall always satisfy seen >= 1\n")
+    (tmp_path / "o.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[entities]\nobj = "/objs.objs[:].id"\n[variables]\n'
+        "dist = 'min(/objs.objs[:]{id==$obj}.distance)'\nseen = 'len(/objs.objs[:].id)'\n")
+    reqs = ["-r", str(tmp_path / "o.fret")]
+    res = CliRunner().invoke(main, ["audit", *reqs, str(log), "--write-csv",
+                                    str(tmp_path / "csv"), "--json", str(tmp_path / "a.json")])
+    assert res.exit_code == 1, res.output  # E and P are violated on the log
+    said = " ".join(res.output.split())
+    assert "not sampled: E (per-entity" in said, said
+    csv = tmp_path / "csv" / "o.csv"
+    assert list(not_sampled_lines(csv)) == ["E"]
+    res = CliRunner().invoke(main, ["audit", *reqs, str(csv), "--json", str(tmp_path / "c.json")])
+    log_v = {v["requirement"]: v for v in json.loads((tmp_path / "a.json").read_text())
+             ["logs"][0]["verdicts"]}
+    csv_v = {v["requirement"]: v for v in json.loads((tmp_path / "c.json").read_text())
+             ["logs"][0]["verdicts"]}
+    assert log_v["E"]["verdict"] == "violated" and log_v["P"]["verdict"] == "violated"
+    for rid in ("P", "Q"):
+        assert (csv_v[rid]["verdict"], csv_v[rid]["ticks_evaluated"]) == \
+            (log_v[rid]["verdict"], log_v[rid]["ticks_evaluated"]), rid
+    assert csv_v["E"]["verdict"] == "error"
+    assert "not sampled" in csv_v["E"]["error"] and "per-entity" in csv_v["E"]["error"]
+    assert not any(rid.startswith("E[") for rid in csv_v)
+
 DIAG_STATUS = st.dictionaries(st.sampled_from(["motor_l", "motor_r", "battery", "motor_3"]),
                               st.integers(0, 3), max_size=4)
 

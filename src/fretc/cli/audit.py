@@ -176,6 +176,7 @@ def _write_csvs(plan, paths, results, folder: str, err) -> bool:
     on ``err``)."""
     from fretc.audit.sampled_csv import csv_name, write_sampled_csv
     from fretc.common.errors import FretcError
+    from fretc.logs.csv_source import not_sampled_lines
     from fretc.reports.terminal import escape
 
     used: set[str] = set()
@@ -189,7 +190,10 @@ def _write_csvs(plan, paths, results, folder: str, err) -> bool:
             ok = False
             continue
         ticks = sum(len(c.times) for c in clocks)
+        left_out = not_sampled_lines(out)
         err.print(escape(f"wrote {out} ({len(clocks)} clock{'s' if len(clocks) != 1 else ''}, "
                          f"{ticks} ticks: " + "; ".join(
-                             ", ".join(c.ids) + f" {len(c.times)}" for c in clocks) + ")"))
+                             ", ".join(c.ids) + f" {len(c.times)}" for c in clocks) + ")"
+                         + (f"; not sampled: {', '.join(left_out)} (per-entity: audit the "
+                            "log itself for them)" if left_out else "")))
     return ok
