@@ -23,7 +23,8 @@ from fretc.signals.bindings import Bindings
 from fretc.common.problems import SignalError
 from fretc.signals import blocks_of_ticks, sample, sample_blocks
 from fretc.signals.blocks import MAX_TICKS
-from fretc.logs import CSV_TOPIC
+from fretc.signals.csv_columns import csv_columns
+from fretc.logs import CSV_TOPIC, CsvSource
 from fretc.audit.columns import TickColumns
 from fretc.audit.gaps import gaps_of_clock, inner_gaps, insert_gap_ticks, split_bridged, unknown_masks
 from fretc.audit.model import AuditPlan, RequirementPlan
@@ -159,6 +160,8 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
         groups.setdefault(clock_key(r, bindings), []).append(r)
     clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
     stream: Iterator[tuple[Any, Any]]  # (clock key, TickBlock)
+    #: clock key -> (times, columns, log times) read whole, not block by block
+    finished: dict[ClockKey, tuple[np.ndarray, dict, dict]] = {}
     sampling: Any  # a GroupSampling, or the Sampling of a CSV trace
     if bindings is not None:
         sampling = sample_blocks(source, bindings,
@@ -166,12 +169,22 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
         stream = iter(sampling)
         failed, errors = sampling.failed, sampling.errors
     else:
-        sampling = sample(source, None)
         key0 = next(iter(groups))
         c0 = clocks[key0]
-        stream = ((key0, b) for b in blocks_of_ticks(iter(sampling), c0.names,
-                                                     c0.columns.topics))
         failed, errors = {key0: {}}, {}
+        if isinstance(source, CsvSource):  # the columns the source kept: no row objects
+            sampling, times, cols = csv_columns(source, c0.names)
+            if len(times) > MAX_TICKS:
+                raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the "
+                                  "limit); choose a longer tick period")
+            if progress is not None and len(times):
+                _progress(source, expected, progress)(int(times[-1]), len(times))
+            finished[key0] = (times, cols, {t: times for t in c0.columns.topics})
+            stream = iter(())
+        else:
+            sampling = sample(source, None)
+            stream = ((key0, b) for b in blocks_of_ticks(iter(sampling), c0.names,
+                                                         c0.columns.topics))
     report = _progress(source, expected, progress) if progress is not None else None
     count = 0
     for key, block in stream:
@@ -185,7 +198,8 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
     passes: dict[ClockKey, ClockPass] = {}
     gaps, bridged = split_bridged(inner_gaps(source), plan.config.bridge_gaps_ns)
     for key, clock in clocks.items():
-        times, columns, log_times = clock.columns.finish()
+        times, columns, log_times = (finished[key] if key in finished
+                                     else clock.columns.finish())
         s = sampling.groups[key] if bindings is not None else sampling
         passes[key] = res = ClockPass(s, times, columns, log_times)
         cut_at_damage(res, source, bindings, key.topics)

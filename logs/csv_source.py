@@ -6,15 +6,20 @@ from __future__ import annotations
 import csv
 import os
 import re
+from array import array
+from bisect import bisect_right
 from collections.abc import Iterator
-from decimal import Decimal, InvalidOperation
 from types import SimpleNamespace
 from typing import NamedTuple
+
+import numpy as np
 
 from fretc.common.units import NS_PER_S
 
 from fretc.common.problems import CsvError, LogError
 from fretc.logs.base import LogSource, Message
+# (the cells' words: UNKNOWN_CELL, GAP_CELL, CUT_CELL, are defined with their reader)
+from fretc.logs.csv_read import CUT_CELL, GAP_CELL, UNKNOWN_CELL, RowReader, clean_cells
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
            "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "sampled_trace",
@@ -39,19 +44,11 @@ NOT_SAMPLED_LINE = "# fretc not sampled: "
 #: The column of a sampled trace of several clocks giving the clock of each row (``tick`` is
 #: a FRETish reserved word, so never a FRET variable's column).
 CLOCK_COLUMN = "tick"
-#: A cell whose value is not known at its tick (a gap of the log left the variable unknown).
-UNKNOWN_CELL = "unknown"
-#: Every cell of a row that stands for the ticks a gap lost (how many is not known): unknown.
-GAP_CELL = "gap"
-#: Every cell of a clock's last row: the log was cut at its time (nothing after it was read).
-CUT_CELL = "cut"
-_MARKS = (UNKNOWN_CELL, GAP_CELL, CUT_CELL)
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 #: a column of an uninterpreted function's values, named by its printed call (``sqrt(w)``),
 #: as the monitors read it (FRET's ``det_3x3(a,b,c)`` in the case studies)
 _CALL = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\(.*\)\Z")
-_BOOL_WORDS = {"true": True, "false": False, "1": True, "0": False}
 _PLAIN = frozenset(range(0x21, 0x7F)) - {ord("\\"), ord(","), ord('"')}
 
 
@@ -186,7 +183,10 @@ class CsvSource(LogSource):
     rows and columns alone (the audit reads such a trace clock by clock,
     :mod:`fretc.audit.sampled_audit`); a trace of several clocks read whole has no rows.
 
-    The file is checked completely when opened (two streaming passes: types, then rows).
+    The file is read once, when opened (:mod:`fretc.logs.csv_read`): checked completely, its
+    values kept as compact columns (a byte a row for a boolean column, eight for a numeric
+    one or the time); :meth:`rows`, :meth:`messages`, :meth:`column_values` and
+    :meth:`column_pass` read those, not the file.
 
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
     ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`fretc.signals`)
@@ -226,9 +226,19 @@ class CsvSource(LogSource):
         self._grouped = False  # several clocks: a CLOCK_COLUMN gives each row's
         self._gap_set: frozenset[int] = frozenset()
         self._header: list[str] = []
+        #: column -> its values at the rows of the clock read (:meth:`column_values`)
+        self._values: dict[str, array] = {}
+        self._times: array | None = None  # the ``time`` column's ns, kept with it
+        #: (row index, its line): the rows from it to the next are on consecutive lines
+        self._line_runs: list[tuple[int, int]] = []
         self._check()
 
-    def _lines(self) -> Iterator[tuple[int, list[str]]]:
+    def _raw(self) -> Iterator[tuple[int, list[str] | CsvError]]:
+        """The file's rows as the :mod:`csv` module reads them: ``(line, cells)``, then
+        ``(line, CsvError)`` where it stops being UTF-8 CSV.
+
+        Raises:
+            LogError: the file cannot be opened."""
         try:
             f = open(self.path, newline="", encoding="utf-8")
         except OSError as exc:
@@ -237,28 +247,29 @@ class CsvSource(LogSource):
             reader = csv.reader(f)
             try:
                 for cells in reader:
-                    line = reader.line_num
-                    if not cells or all(not c.strip() for c in cells):
-                        continue
-                    if cells[0].lstrip().startswith("#"):
-                        continue
-                    yield line, [c.strip() for c in cells]
+                    yield reader.line_num, cells
             except csv.Error as exc:
-                raise CsvError(self.path, reader.line_num, f"malformed CSV: {exc}") from None
+                yield reader.line_num, CsvError(self.path, reader.line_num,
+                                                f"malformed CSV: {exc}")
             except UnicodeDecodeError as exc:
                 line, what = _bad_utf8(self.path, exc)
-                raise CsvError(self.path, line, f"not UTF-8 text: {what}") from None
+                yield line, CsvError(self.path, line, f"not UTF-8 text: {what}")
 
     def _first_line(self) -> str:
         with open(self.path, encoding="utf-8", errors="replace") as f:
             return f.readline()
 
     def _check(self) -> None:
-        lines = self._lines()
-        try:
-            line, header = next(lines)
-        except StopIteration:
-            raise CsvError(self.path, 1, "empty file: expected a header row of variable names") from None
+        raw = self._raw()
+        for at, cells in raw:
+            if isinstance(cells, CsvError):
+                raise cells
+            got = clean_cells(cells)
+            if got is not None:
+                line, header = at, got
+                break
+        else:
+            raise CsvError(self.path, 1, "empty file: expected a header row of variable names")
         self._header_line = line
         seen: set[str] = set()
         for name in header:
@@ -285,7 +296,7 @@ class CsvSource(LogSource):
         self.has_time = "time" in header
         self.columns = [c for c in header
                         if c != "time" and not (self._grouped and c == CLOCK_COLUMN)]
-        _Checker(self, header).run(lines)
+        RowReader(self, header).run(raw)
 
     def _own(self, cells: list[str], line: int) -> bool:
         """Whether a data row belongs to the clock read (its :data:`CLOCK_COLUMN` cell)."""
@@ -301,43 +312,91 @@ class CsvSource(LogSource):
         """``{CSV_TOPIC: CSV_TYPE}``."""
         return {CSV_TOPIC: CSV_TYPE}
 
+    def column_values(self, name: str) -> np.ndarray:
+        """The values of column ``name`` at the :attr:`row_count` rows of the clock read, as
+        kept when the file was read (no copy; read-only): ``bool`` for a boolean column,
+        ``float64`` for a numeric one; a value not known (``unknown``, a ``gap`` row) holds
+        the placeholder (false, 0.0).
+
+        Raises:
+            KeyError: ``name`` is not a column of the clock read."""
+        col = self._values[name]
+        out = np.frombuffer(col, np.float64 if col.typecode == "d" else np.uint8)
+        if col.typecode != "d":
+            out = out.view(np.bool_)
+        out.flags.writeable = False
+        return out
+
+    def row_times(self, period_ns: int | None = None) -> np.ndarray:
+        """The time of each row of the clock read, ns (``int64``): its ``time`` cell, or
+        without a ``time`` column the row's index × ``period_ns`` (default
+        :attr:`period_ns`)."""
+        if self._times is not None:
+            out = np.frombuffer(self._times, np.int64)
+            out.flags.writeable = False
+            return out
+        return np.arange(self.row_count, dtype=np.int64) * (period_ns or self.period_ns)
+
+    def row_line(self, index: int) -> int:
+        """The 1-based line of the file where the data row ``index`` (0-based, of the clock
+        read) ends.
+
+        Raises:
+            IndexError: no such row."""
+        if not 0 <= index < self.row_count:
+            raise IndexError(f"row {index} of {self.row_count}")
+        at = bisect_right(self._line_runs, (index, 1 << 62)) - 1
+        first, line = self._line_runs[at]
+        return line + index - first
+
+    def column_pass(self, names: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """One pass over the rows of the clock read as columns, what :meth:`rows` gives as
+        arrays: (:meth:`row_times`, ``names`` -> :meth:`column_values`; a name that is no
+        column reads false; every column ``bool`` when there is no row). As :meth:`rows`,
+        marks make the pass ``partial`` and a ``cut`` row is recorded as a gap to the end
+        (start the pass with ``_begin_pass``)."""
+        if self.unknown_rows or self.gap_rows:
+            self.partial = True
+        n = self.row_count
+        times = self.row_times()
+        cols = {name: (self.column_values(name) if n and name in self._values
+                       else np.zeros(n, np.bool_)) for name in names}
+        if self.cut_time is not None:
+            self._gap(self.cut_time, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
+        return times, cols
+
     def rows(self) -> Iterator[CsvRow]:
         """The data rows of the clock read, typed (see the class docstring), in file order.
         A ``cut`` row ends them: the pass records a gap from its time to the end of the log
         (:attr:`fretc.logs.LogSource.cut_start`); marks make the pass ``partial``."""
-        lines = self._lines()
-        next(lines)  # header, checked in __init__
-        header = self._header
-        types = self.types
         if self.unknown_rows or self.gap_rows:
             self.partial = True
-        index = 0
-        at = header.index("time") if self.has_time else None
-        # (the typed columns in the header's order: position, name, boolean)
-        typed = [(i, name, types[name] == "bool") for i, name in enumerate(header)
-                 if name in types]
-        for line, cells in lines:
-            if not self._own(cells, line):
-                continue
-            time = _csv_time(self.path, line, cells[at]) if at is not None else None
-            values: dict[str, bool | float] = {}
-            unknown = []
-            for i, name, boolean in typed:
-                cell = cells[i]
-                if cell in _MARKS:
-                    if cell == CUT_CELL:
-                        t = time if time is not None else index * self.period_ns
-                        self._gap(t, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
-                        return
-                    unknown.append(name)
-                    values[name] = False if boolean else 0.0
-                elif boolean:
-                    values[name] = _BOOL_WORDS[cell.lower()]
-                else:
-                    values[name] = float(cell)
-            yield CsvRow(index, line, time, values, frozenset(unknown),
-                         index in self._gap_set)
-            index += 1
+        names = self.columns
+        every = frozenset(names)
+        unknown_at: dict[int, list[str]] = {}
+        for name in names:
+            for i in self.unknown_rows.get(name, ()):
+                unknown_at.setdefault(i, []).append(name)
+        cols = [(name, self.column_values(name)) for name in names]
+        times = self.row_times() if self.has_time else None
+        runs = self._line_runs
+        run = 0
+        step = 4096
+        for lo in range(0, self.row_count, step):
+            hi = min(self.row_count, lo + step)
+            chunk = [(name, col[lo:hi].tolist()) for name, col in cols]
+            ts = times[lo:hi].tolist() if times is not None else None
+            for k in range(hi - lo):
+                i = lo + k
+                while run + 1 < len(runs) and runs[run + 1][0] <= i:
+                    run += 1
+                gap = i in self._gap_set
+                unknown = every if gap else frozenset(unknown_at.get(i, ()))
+                yield CsvRow(i, runs[run][1] + i - runs[run][0],
+                             ts[k] if ts is not None else None,
+                             {name: vals[k] for name, vals in chunk}, unknown, gap)
+        if self.cut_time is not None:
+            self._gap(self.cut_time, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
 
     def messages(self, topics: set[str] | frozenset[str] | None = None) -> Iterator[Message]:
         """One Message per row on :data:`CSV_TOPIC`; log time = ``time`` column or index × period."""
@@ -352,138 +411,6 @@ class CsvSource(LogSource):
             self.counts[CSV_TOPIC] = self.counts.get(CSV_TOPIC, 0) + 1
             yield Message(CSV_TOPIC, t, t, None, SimpleNamespace(**row.values))
         self._start_time, self._end_time = first, last
-
-
-class _Checker:
-    """The checking pass of :meth:`CsvSource._check` over the data rows: cells, marks, the
-    columns of the clock read, and the types; sets the source's figures."""
-
-    def __init__(self, src: CsvSource, header: list[str]) -> None:
-        self.src = src
-        self.header = header
-        self.numeric_at: dict[str, int] = {}  # first line with a non-boolean cell
-        self.word_at: dict[str, int] = {}  # first line with true/false
-        self.own: list[str] | None = None  # the columns of the clock read (grouped traces)
-        self.cut_line: int | None = None
-        #: cell text -> its kind ("word" true/false, "bit" 1/0, "num" another number), for
-        #: the first :data:`_KINDS_KEPT` distinct cells (a trace repeats its cells)
-        self.kinds: dict[str, str] = {}
-
-    def run(self, lines: Iterator[tuple[int, list[str]]]) -> None:
-        src, header = self.src, self.header
-        self.variables = frozenset(src.columns)
-        count = 0
-        last_time: int | None = None
-        for line, cells in lines:
-            if len(cells) != len(header):
-                raise CsvError(src.path, line,
-                               f"expected {len(header)} cells ({', '.join(header)}), got {len(cells)}")
-            time = None
-            if src.has_time:
-                cell = cells[header.index("time")]
-                time = _csv_time(src.path, line, cell)
-                if last_time is not None and time < last_time:
-                    raise CsvError(src.path, line, f"time {cell} s goes backwards "
-                                   f"(previous row at {last_time / NS_PER_S} s)", column="time")
-                last_time = time
-            if not src._own(cells, line):
-                continue
-            if self.cut_line is not None:
-                raise CsvError(src.path, line, f"a row after the cut (line {self.cut_line}): "
-                               "nothing was read after it")
-            if self._row(line, cells, count):
-                src.cut_time = time if time is not None else count * src.period_ns
-                continue
-            count += 1
-        if self.own is not None:
-            src.columns = [c for c in src.columns if c in self.own]
-        elif src._grouped:
-            src.columns = []
-        src.row_count = count
-        src.types = {c: ("float" if c in self.numeric_at else "bool") for c in src.columns}
-        src._gap_set = frozenset(src.gap_rows)
-
-    def _row(self, line: int, cells: list[str], index: int) -> bool:
-        """Check one data row of the clock read; True when it is the ``cut`` row."""
-        src = self.src
-        named = {n: c for n, c in zip(self.header, cells) if n in self.variables}
-        if src._grouped:  # the clock's columns: the cells its first row fills
-            filled = [n for n, c in named.items() if c]
-            if self.own is None:
-                self.own = filled
-            elif filled != self.own:
-                raise CsvError(src.path, line, f"the cells of clock {src.clock} fill "
-                               f"{', '.join(filled) or 'no column'}, its first row "
-                               f"{', '.join(self.own) or 'no column'}")
-            named = {n: named[n] for n in self.own}
-        marks = {c for c in named.values() if c in (GAP_CELL, CUT_CELL)}
-        if marks and (len(marks) > 1 or any(c not in marks for c in named.values())):
-            raise CsvError(src.path, line, f"a {'/'.join(sorted(marks))} row has every cell "
-                           f"{' or '.join(sorted(marks))}")
-        if CUT_CELL in marks:
-            self.cut_line = line
-            return True
-        if GAP_CELL in marks:
-            src.gap_rows.append(index)
-            return False
-        for name, cell in named.items():
-            self._cell(line, name, cell, index)
-        return False
-
-    def _cell(self, line: int, name: str, cell: str, index: int) -> None:
-        kind = self.kinds.get(cell)
-        if kind is None:
-            src = self.src
-            if not cell:
-                raise CsvError(src.path, line, "empty cell", column=name)
-            if cell == UNKNOWN_CELL:
-                src.unknown_rows.setdefault(name, []).append(index)
-                return
-            low = cell.lower()
-            if low in ("true", "false"):
-                kind = "word"
-            elif low in _BOOL_WORDS:
-                kind = "bit"
-            else:
-                try:
-                    float(cell)
-                except ValueError:
-                    raise CsvError(src.path, line, f"cannot read {cell!r} as true/false or "
-                                   "a number", column=name) from None
-                kind = "num"
-            if len(self.kinds) < _KINDS_KEPT:
-                self.kinds[cell] = kind
-        if kind == "word":
-            self.word_at.setdefault(name, line)
-        elif kind == "num":
-            self.numeric_at.setdefault(name, line)
-        else:  # 1/0: either type (a column of mixed types was refused at its second)
-            return
-        if name in self.word_at and name in self.numeric_at:
-            raise CsvError(self.src.path, line,
-                           f"column mixes true/false (line {self.word_at[name]}) with numbers "
-                           f"(line {self.numeric_at[name]})", column=name)
-
-
-#: distinct cells whose kind :class:`_Checker` keeps
-_KINDS_KEPT = 1 << 16
-#: a time in seconds of at most 9 decimals, read exactly without :class:`Decimal`
-_PLAIN_TIME = re.compile(r"(-?)([0-9]+)(?:\.([0-9]{1,9}))?\Z")
-
-
-def _csv_time(path: str, line: int, cell: str) -> int:
-    plain = _PLAIN_TIME.match(cell)
-    if plain is not None:  # (the same ns as Decimal's, exactly)
-        sign, whole, frac = plain.groups()
-        ns = int(whole) * NS_PER_S + (int(frac.ljust(9, "0")) if frac else 0)
-        return -ns if sign else ns
-    try:
-        value = Decimal(cell)
-        if not value.is_finite():
-            raise InvalidOperation
-        return int((value * NS_PER_S).to_integral_value())
-    except (InvalidOperation, ValueError):
-        raise CsvError(path, line, f"time {cell!r} is not a number of seconds", column="time") from None
 
 
 def _bad_utf8(path: str, exc: UnicodeDecodeError) -> tuple[int, str]:

@@ -1,0 +1,38 @@
+"""A CSV trace without bindings as the columns of its one clock, straight from what its
+source kept when it read the file (:meth:`fretc.logs.CsvSource.column_pass`): the ticks,
+values and figures :func:`fretc.signals.sample` then :func:`fretc.signals.blocks_of_ticks`
+give it (tested), without a Python object per row."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fretc.logs import CSV_TOPIC, CsvSource
+from fretc.signals.clock import Sampling
+
+__all__ = ["csv_columns"]
+
+
+def csv_columns(source: CsvSource, names: list[str]
+                ) -> tuple[Sampling, np.ndarray, dict[str, np.ndarray]]:
+    """One pass over the rows of ``source`` as the columns of the variables ``names`` (the
+    columns of the same names: the variables of a CSV trace without bindings).
+
+    Returns:
+        ``(sampling, times, columns)``: the pass's :class:`~fretc.signals.Sampling`, its
+        figures final (ticks, start, first and end time; the source's message count and
+        damage as :func:`~fretc.signals.sample` leaves them); the rows' times (ns,
+        ``int64``: the ``time`` column or index × the source's period); variable -> values
+        (``bool`` or ``float64``, read-only views of the source's columns, one item per
+        row; a variable that is no column reads false).
+    """
+    s = Sampling(source, None)
+    source._begin_pass()
+    times, columns = source.column_pass(names)
+    n = len(times)
+    if n:
+        source.counts[CSV_TOPIC] = source.counts.get(CSV_TOPIC, 0) + n
+        s.ticks = n
+        s.start_time = s.first_time = int(times[0])
+        s.end_time = int(times[-1])
+    return s, times, columns
