@@ -34,14 +34,17 @@ def csv_bindings(plan: AuditPlan, bindings: Bindings, source: LogSource) -> Bind
     requirements that names a column reads it (``/csv.<column>``). A sampled trace (its
     first line :data:`fretc.logs.csv_source.SAMPLED_MARK`, as ``fretc audit --write-csv``
     writes it) holds the variables with the bindings already applied: a variable that
-    names one of its columns reads it, whatever the binding files bind it to."""
+    names one of its columns reads it, whatever the binding files bind it to, and its
+    ±inf are the variable's values (``max`` over a filter that keeps nothing is -inf), not
+    a field's undeclared ones (docs/bindings.md, "NaN, ±inf")."""
     variables = dict(bindings.variables)
     sampled = getattr(source, "sampled", False)
     for r in plan.requirements:
         for v in r.variables:
             if (v not in variables or sampled) and v in source.columns:  # type: ignore[attr-defined]  # a CsvSource
                 variables[v] = compile_expression(v, f"{CSV_TOPIC}.{v}",
-                                                  source=f"<CSV column {v}>")
+                                                  source=f"<CSV column {v}>",
+                                                  inf="value" if sampled else "unread")
     return Bindings(variables, bindings.tick, bindings.time_base, bindings.header_lag_ns,
                     bindings.source)
 

@@ -40,7 +40,8 @@ from fretc.logs import open_log
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import EntityParam
 
-__all__ = ["MAX_ENTITIES", "DEFAULT_MAX_ENTITIES", "entity_of_requirements", "audit_entities"]
+__all__ = ["MAX_ENTITIES", "DEFAULT_MAX_ENTITIES", "entity_of_requirements", "audit_entities",
+           "entity_passes", "summary_verdict", "summary_note"]
 
 #: Entities of one key that ``fretc watch`` steps live (their messages replayed into a
 #: monitor of their own while watching); its final verdicts are the audit's, unbounded.
@@ -48,6 +49,9 @@ MAX_ENTITIES = 1000
 #: Entities of one per-entity requirement judged in one log unless ``--max-entities`` says
 #: otherwise (each costs a few hundred bytes while the log is read).
 DEFAULT_MAX_ENTITIES = 1_000_000
+
+#: The start of the error of every per-entity requirement when the log cannot be opened.
+NOT_AUDITED = "log not audited: "
 
 #: The note of an entity judged with the others (:mod:`fretc.audit.entity_batch`).
 BATCH_NOTE = ("judged with the requirement's other entities at once (its pt formula over "
@@ -109,12 +113,33 @@ def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
     return la
 
 
-class _Entities:
-    """The per-entity requirements of one log: checked, read once, judged."""
+def entity_passes(plan: Any, path: str, keep: Any) -> tuple[LogAudit, dict[str, Any]]:
+    """The audit of the per-entity requirements of ``plan`` on the log at ``path`` and what
+    each entity was judged on: ``keep(r, pass)`` of its :class:`~fretc.audit.passes.ClockPass`
+    by the entity's verdict's name (``R[track=7]``; none for an entity with no tick). For
+    ``--write-csv`` (:mod:`fretc.audit.sampled_entities`).
 
-    def __init__(self, plan: Any, path: str, la: LogAudit) -> None:
+    Returns:
+        (the log's audit of the per-entity requirements alone, what ``keep`` returned); the
+        audit's verdicts are :func:`audit_entities`' (per requirement its summary, then its
+        entities).
+    """
+    groups = entity_of_requirements(plan)
+    la = LogAudit(log=path)
+    ents = _Entities(plan, path, la, keep=keep)
+    la.verdicts = ents.judge([r for r in plan.requirements if r.index in groups], groups)
+    return la, ents.kept
+
+
+class _Entities:
+    """The per-entity requirements of one log: checked, read once, judged (``keep``: what
+    :func:`entity_passes` keeps of each entity's pass, in :attr:`kept`)."""
+
+    def __init__(self, plan: Any, path: str, la: LogAudit, keep: Any = None) -> None:
         self.plan, self.path, self.la = plan, path, la
         self.bound = getattr(plan.config, "max_entities", None) or DEFAULT_MAX_ENTITIES
+        self.keep = keep
+        self.kept: dict[str, Any] = {}
 
     def alone(self, r: Any, verdict: str, **kw: Any) -> list[Verdict]:
         return [Verdict(log=self.path, requirement=r.id, text=r.text, source=r.source,
@@ -127,7 +152,7 @@ class _Entities:
             source = open_log(self.path, msg_path=self.plan.config.msg_path)
             available = source.topics()
         except (FretcInputError, OSError) as exc:
-            return [v for r in rs for v in self.alone(r, "error", error=f"log not audited: {exc}")]
+            return [v for r in rs for v in self.alone(r, "error", error=f"{NOT_AUDITED}{exc}")]
         clocks: dict[int, tuple[str, list[str]]] = {}
         for r in rs:
             why = self._cannot(r, groups[r.index], available, source)
@@ -307,11 +332,11 @@ class _Judge:
                                                    "the log: the requirement holds of none"])
         fast = self._batch()
         out = [fast.get(i) or self._one(i) for i in range(len(table.keys))]
-        counts: dict[str, int] = {}
-        for v in out:
-            counts[v.verdict] = counts.get(v.verdict, 0) + 1
-        summary = (f"{r.id} over {len(out)} entities {self.name}: "
-                   + ", ".join(f"{n} {k}" for k, n in sorted(counts.items())))
+        if ents.keep is not None:  # (what the entities judged at once were judged on)
+            for i, v in fast.items():
+                i0, i1 = self._range(i)
+                ents.kept[v.requirement] = ents.keep(r, self._pass(i, i0, i1))
+        summary = summary_note(r.id, self.name, out)
         for v in out:
             v.notes.append(summary)
         if table.cut:  # the entities left unjudged: a verdict of their own, never named r.id
@@ -320,7 +345,7 @@ class _Judge:
                 f"first {ents.bound:,} are judged (raise the bound with --max-entities)"))
             rest[0].requirement = f"{r.id}[{self.name}=...]"
             out += rest
-        return [_summary(r, ents.path, out, summary)] + out
+        return [summary_verdict(r, ents.path, out, summary)] + out
 
     def _new(self, i: int) -> Verdict:
         """Entity ``i``'s verdict, not yet judged."""
@@ -426,6 +451,8 @@ class _Judge:
                           if c.s.missing_topics else ""))
             return v
         res = self._pass(i, i0, i1)
+        if ents.keep is not None:
+            ents.kept[v.requirement] = ents.keep(r, res)
         v.ticks_evaluated = len(res.times)
         v.first_tick_ns, v.last_tick_ns = int(self.times[i0]), int(self.times[i1])
         if res.cut:
@@ -467,10 +494,21 @@ class _Judge:
 _PRECEDENCE = ("violated", "error", "unknown", "satisfied", "vacuous")
 
 
-def _summary(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
-    """The requirement's verdict over its entities (every entity satisfies it: satisfied;
-    one violates it: violated, with the earliest violation's evidence, whatever is left
-    unjudged, which its notes name), named ``r.id``."""
+def summary_note(rid: str, name: str, out: list[Verdict]) -> str:
+    """The note giving how many of requirement ``rid``'s entities ``name`` have each verdict
+    (``R over 3 entities track: 1 violated, 2 satisfied``)."""
+    counts: dict[str, int] = {}
+    for v in out:
+        counts[v.verdict] = counts.get(v.verdict, 0) + 1
+    return (f"{rid} over {len(out)} entities {name}: "
+            + ", ".join(f"{n} {k}" for k, n in sorted(counts.items())))
+
+
+def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
+    """The requirement's verdict over its entities' verdicts ``out`` (every entity satisfies
+    it: satisfied; one violates it: violated, with the earliest violation's evidence,
+    whatever is left unjudged, which its notes name), named ``r.id``; ``summary`` is
+    :func:`summary_note`'s."""
     verdict = next(k for k in _PRECEDENCE if any(v.verdict == k for v in out))
     v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
     bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]

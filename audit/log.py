@@ -27,7 +27,8 @@ from fretc.common.streams import log_topics as log_topics_of
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
-from fretc.logs.csv_source import CsvSource, clock_lines, sampled_trace
+from fretc.logs.csv_source import (CsvSource, clock_lines, not_sampled_lines,
+                                   per_entity_lines, sampled_trace)
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
 from fretc.audit.finalize import between_ticks, finalize
@@ -60,8 +61,10 @@ def audit_log(plan: AuditPlan, path: str,
         problems of this log (unreadable file, missing topic or binding) are reported in it
         (``error`` / ``error`` verdicts), never raised.
     """
-    clocks = clock_lines(path) if str(path).lower().endswith(".csv") else {}
-    if clocks:  # a trace --write-csv wrote: each requirement on its own clock's rows
+    csv = str(path).lower().endswith(".csv")
+    clocks = clock_lines(path) if csv else {}
+    if clocks or (csv and (per_entity_lines(path) or not_sampled_lines(path))):
+        # (a trace --write-csv wrote: each requirement on its own clock's rows)
         from fretc.audit.sampled_audit import audit_clocks
 
         return audit_clocks(plan, str(path), clocks, lambda p, c: _LogRun(
@@ -103,23 +106,13 @@ class KeptPasses:
     unjudged: set[int]
 
 
-def per_entity_refusal(bindings: Bindings) -> str:
-    """Why ``--write-csv`` does not write the per-entity requirements of ``bindings``'
-    variables, and what to do instead (one line)."""
-    return ("per-entity requirements cannot be written as a sampled trace: their variables "
-            f"({', '.join(sorted(bindings.per_entity))}) have a value per entity at each "
-            "tick, where a column has one, and the audit of the CSV would not judge them per "
-            "entity as the audit of the log does; audit the log itself for them")
-
-
 def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
     """:func:`audit_log` of ``path``, keeping what each requirement was judged on (the
     sampled trace of ``--write-csv``, :mod:`fretc.audit.sampled_csv`).
 
     Raises:
-        ValueError: per-entity requirements (a sampled trace has one value of a variable per
-            tick, not one per entity; the message says what to do): the caller leaves them
-            out (:func:`fretc.audit.sampled_csv.write_sampled_csv`)."""
+        ValueError: per-entity requirements: their entities' passes are kept by
+            :func:`fretc.audit.entities.entity_passes` (:mod:`fretc.audit.sampled_entities`)."""
     if plan.variants:
         sub, err = select_variant(plan, str(path))
         if sub is None:
@@ -129,7 +122,8 @@ def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
     from fretc.audit.entities import entity_of_requirements
 
     if plan.bindings is not None and entity_of_requirements(plan):
-        raise ValueError(per_entity_refusal(plan.bindings))
+        raise ValueError("audit_keeping_passes keeps the passes of plain requirements; "
+                         "per-entity ones: fretc.audit.entities.entity_passes")
     run = _LogRun(plan, path)
     la = run.run(None)
     return KeptPasses(plan, la, run.result, run.read_bindings, set(run.skip))

@@ -11,9 +11,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
+from fretc.audit.entities import entity_of_requirements
 from fretc.audit.model import AuditPlan
 from fretc.audit.verdict import LogAudit, Verdict
-from fretc.logs.csv_source import not_sampled_lines
+from fretc.logs.csv_source import not_sampled_lines, per_entity_lines
 
 __all__ = ["audit_clocks"]
 
@@ -29,13 +30,20 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
 
     Returns:
         One :class:`~fretc.audit.verdict.LogAudit`: the verdicts in the plan's order, each
-        from its clock's audit; the log's figures merged over the clocks.
+        from its clock's audit, the per-entity requirements' after the others as the audit
+        of the log gives them (each its verdict over its entities, then one per entity,
+        :mod:`fretc.audit.sampled_entities`); the log's figures merged over the clocks.
     """
+    entities = {rid: ent for rid, ent in per_entity_lines(path).items()
+                if any(r.id == rid for r in plan.requirements)}
     owner = {rid: label for label, ids in clocks.items() for rid in ids}
+    instance_of = {i: rid for rid, (_n, ids) in entities.items() for i in ids}
     parts: list[LogAudit] = []
-    verdicts: dict[int, Verdict] = {}
-    for label in clocks:
-        rs = [r for r in plan.requirements if owner.get(r.id) == label]
+    verdicts: dict[str, Verdict] = {}
+    for label, ids in clocks.items():
+        rs = [r for r in plan.requirements if owner.get(r.id) == label and r.id not in entities]
+        rs += [replace(r, id=i) for i in ids if i in instance_of
+               for r in plan.requirements if r.id == instance_of[i]]
         if not rs:
             continue
         # (binding files selecting logs by name: the trace's columns are the variables)
@@ -44,22 +52,58 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
         la = run(sub, label)
         parts.append(la)
         for r, v in zip(rs, la.verdicts):
-            verdicts[r.index] = v
+            verdicts[r.id] = v
     merged = _merge(path, parts)
-    named = ", ".join(sorted(owner)) or "none"
+    named = ", ".join(sorted(i for i in owner if i not in instance_of)) or "none"
     left_out = not_sampled_lines(path)
-    for r in plan.requirements:
-        if r.index not in verdicts:
+    # (the log's audit gives the per-entity requirements after the others, those it judged
+    # as a whole too: an error, or unknown before any tick)
+    groups = entity_of_requirements(plan) if plan.bindings is not None else {}
+    later = set(entities) | {r.id for r in plan.requirements if r.index in groups}
+    out: list[Verdict] = []
+    for r in [r for r in plan.requirements if r.id not in later] + [
+            r for r in plan.requirements if r.id in later]:
+        if r.id in entities:
+            out += _per_entity(r, path, entities[r.id], verdicts, left_out)
+            continue
+        got = verdicts.get(r.id)
+        if got is None:
             why = r.error or (f"{path} is a sampled trace (fretc audit --write-csv) that "
                               f"carries no clock of {r.id}: " + (
                                   f"not sampled: {left_out[r.id]}" if r.id in left_out else
                                   f"it holds the clocks of {named} (a requirement the audit "
                                   "of the log could not judge has none)"))
-            verdicts[r.index] = Verdict(log=path, requirement=r.id, text=r.text,
-                                        source=r.source, notes=list(r.notes),
-                                        verdict="error", error=why)
-    merged.verdicts = [verdicts[r.index] for r in plan.requirements]
+            got = _error(r, path, why)
+        out.append(got)
+    merged.verdicts = out
     return merged
+
+
+def _error(r, path: str, why: str, rid: str | None = None) -> Verdict:
+    return Verdict(log=path, requirement=rid or r.id, text=r.text, source=r.source,
+                   notes=list(r.notes), verdict="error", error=why)
+
+
+def _per_entity(r, path: str, entity: tuple[str, list[str]], verdicts: dict[str, Verdict],
+                left_out: dict[str, str]) -> list[Verdict]:
+    """A per-entity requirement's verdicts from its entities' clocks: its verdict over them
+    (:func:`fretc.audit.entities.summary_verdict`), then theirs in the file's order."""
+    from fretc.audit.entities import summary_note, summary_verdict
+
+    name, ids = entity
+    if r.error:
+        return [_error(r, path, r.error)]
+    if not ids:
+        return [Verdict(log=path, requirement=r.id, text=r.text, source=r.source,
+                        notes=[*r.notes, f"no entity {name} appeared in the log: the "
+                               "requirement holds of none"], verdict="vacuous")]
+    out = [verdicts.get(i) or _error(r, path, left_out.get(i) or f"no clock of {i} in "
+                                     f"{path}", rid=i) for i in ids]
+    # (the entities past --max-entities, ``R[track=...]``, are not counted among them)
+    summary = summary_note(r.id, name, [v for v in out if not v.requirement.endswith("=...]")])
+    for v in out:
+        v.notes.append(summary)
+    return [summary_verdict(r, path, out, summary)] + out
 
 
 def _merge(path: str, parts: list[LogAudit]) -> LogAudit:

@@ -16,8 +16,11 @@ Format (:class:`fretc.logs.csv_source.CsvSource`):
   audit with binding files reads the columns as the variables they are,
   :func:`fretc.audit.checks.csv_bindings`), then one line
   ``# fretc clock N: R1 R2`` per clock naming the requirements judged on it
-  (:func:`~fretc.logs.csv_source.escape_id`), and one line ``# fretc not sampled: T: why``
-  per requirement left out (a per-entity requirement: a value per entity at each tick);
+  (:func:`~fretc.logs.csv_source.escape_id`), one line ``# fretc not sampled: T: why`` per
+  requirement the audit of the log could not judge, and for each per-entity requirement a
+  line ``# fretc per entity: T: track`` followed by its entities, each a clock of its own
+  named by the entity's verdict (``# fretc clock 9: T[track=7]``) or a not-sampled line
+  (:mod:`fretc.audit.sampled_entities`);
 * a header: ``time`` (the tick's time in seconds, exact), with several clocks ``tick`` (the
   row's clock N), then one column per variable in the requirements' order; one row per tick
   of each clock, in time order; a row's cells of the variables of other clocks are empty;
@@ -28,8 +31,8 @@ Format (:class:`fretc.logs.csv_source.CsvSource`):
   were judged).
 
 A requirement judged without ticks (``unknown`` because the damage may have taken its
-topic) has a clock of one ``cut`` row; one whose audit is an error, and a per-entity one,
-have no clock (an error on the file too, saying why).
+topic) has a clock of one ``cut`` row; one whose audit is an error has no clock (an error on
+the file too, saying why).
 """
 
 from __future__ import annotations
@@ -38,16 +41,18 @@ import csv
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fretc.common.problems import SignalError
 from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, GAP_CELL,
-                                   NOT_SAMPLED_LINE, SAMPLED_MARK, UNKNOWN_CELL, escape_id)
+                                   NOT_SAMPLED_LINE, PER_ENTITY_LINE, SAMPLED_MARK,
+                                   UNKNOWN_CELL, escape_id)
 
 from fretc.audit.entities import entity_of_requirements
-from fretc.audit.log import KeptPasses, audit_keeping_passes, per_entity_refusal
+from fretc.audit.log import KeptPasses, audit_keeping_passes
 from fretc.audit.model import AuditPlan
 from fretc.audit.plan import select_variant
 from fretc.audit.passes import ClockPass, clock_key
@@ -57,14 +62,15 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import LogAudit
 
 __all__ = ["SampledClock", "sampled_clocks", "csv_name", "sampled_variables",
-           "write_sampled_csv"]
+           "write_sampled_csv", "pass_cells"]
 
 
 def sampled_variables(plan: AuditPlan) -> list[str]:
-    """The FRET variables of the plan's requirements that its bindings bind, in order of
-    first use."""
+    """The FRET variables of the plan's requirements that its bindings bind (per entity or
+    not), in order of first use."""
     names: list[str] = []
-    bound = plan.bindings.variables if plan.bindings is not None else {}
+    bound = ({**plan.bindings.variables, **plan.bindings.per_entity}
+             if plan.bindings is not None else {})
     for r in plan.requirements:
         for v in r.variables:
             if v in bound and v not in names:
@@ -88,12 +94,15 @@ class SampledClock:
         times: its tick times (ns).
         columns: variable -> its cells, one per tick (text, marks included).
         cut: the time (ns) where the damage ends the span read, or None.
+        entity_of: the per-entity requirement whose entity it is (``ids`` is that
+            entity's verdict's name), or None.
     """
 
     ids: list[str]
     times: np.ndarray
     columns: dict[str, list[str]] = field(default_factory=dict)
     cut: int | None = None
+    entity_of: str | None = None
 
     def agrees(self, other: SampledClock) -> bool:
         """The same ticks and cut, and the same cells of the variables both have."""
@@ -102,7 +111,7 @@ class SampledClock:
                         for n in self.columns.keys() & other.columns.keys()))
 
 
-def _cells(res: ClockPass, name: str) -> list[str]:
+def pass_cells(res: ClockPass, name: str) -> list[str]:
     """The cells of variable ``name`` over the ticks of ``res``: values, ``unknown`` where a
     gap leaves it unknown, ``gap`` at the ticks standing for a gap's lost ticks."""
     col = res.columns[name]
@@ -131,7 +140,7 @@ def _own_clock(kept: KeptPasses, r: RequirementPlan) -> SampledClock | None:
     if r.index in kept.unjudged or res is None:  # unknown before its ticks were judged
         at = kept.audit.start_time_ns if kept.audit.start_time_ns is not None else 0
         return SampledClock([r.id], np.zeros(0, np.int64), {n: [] for n in names}, at)
-    return SampledClock([r.id], res.times, {n: _cells(res, n) for n in names if n in
+    return SampledClock([r.id], res.times, {n: pass_cells(res, n) for n in names if n in
                                             res.columns}, res.intact_end)
 
 
@@ -154,80 +163,129 @@ def sampled_clocks(kept: KeptPasses) -> list[SampledClock]:
     return out
 
 
-def _rows(clocks: list[SampledClock], names: list[str]) -> list[list[str]]:
-    """Every clock's rows (time, [clock,] cells) in time order, then clock order."""
-    keyed = []
-    for k, c in enumerate(clocks, 1):
-        lead = [str(k)] if len(clocks) > 1 else []
-        for i, t in enumerate(c.times.tolist()):
-            cells = [c.columns[n][i] if n in c.columns else "" for n in names]
-            keyed.append((int(t), k, i, [seconds(t)] + lead + cells))
-        if c.cut is not None:
-            cells = [CUT_CELL if n in c.columns else "" for n in names]
-            keyed.append((c.cut, k, len(c.times), [seconds(c.cut)] + lead + cells))
-    keyed.sort(key=lambda x: x[:3])
-    return [row for *_k, row in keyed]
+def _rows(clocks: list[SampledClock], names: list[str]) -> Iterator[list[str]]:
+    """Every clock's rows (time, [clock,] cells) in time order, then clock order, made one
+    at a time (the order sorted once over the ticks' keys, not over rows held)."""
+    n = [len(c.times) + (c.cut is not None) for c in clocks]
+    if not sum(n):
+        return
+    times = np.concatenate([np.append(c.times, c.cut).astype(np.int64) if c.cut is not None
+                            else c.times.astype(np.int64) for c in clocks])
+    which = np.repeat(np.arange(len(clocks), dtype=np.int64), n)
+    starts = np.concatenate(([0], np.cumsum(n)[:-1])).astype(np.int64)
+    index = np.arange(len(times), dtype=np.int64) - np.repeat(starts, n)
+    several = len(clocks) > 1
+    for at in np.lexsort((index, which, times)).tolist():
+        t, k, i = int(times[at]), int(which[at]), int(index[at])
+        c = clocks[k]
+        lead = [str(k + 1)] if several else []
+        if i < len(c.times):
+            yield [seconds(t)] + lead + [c.columns[m][i] if m in c.columns else ""
+                                         for m in names]
+        else:
+            yield [seconds(t)] + lead + [CUT_CELL if m in c.columns else "" for m in names]
 
 
 def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
                       ) -> tuple[LogAudit, list[SampledClock]]:
     """Write what the audit of ``log_path`` judged to the CSV file ``out`` (module
-    docstring). Returns the log's audit and the clocks written.
-
-    Per-entity requirements (a value of a variable per entity at each tick, where a column
-    has one) are left out, each named on a :data:`~fretc.logs.csv_source.NOT_SAMPLED_LINE`
-    with why, so the audit of the file gives them an error that says so.
+    docstring). Returns the log's audit and the clocks written (the per-entity
+    requirements' entities' clocks after the others, :attr:`SampledClock.entity_of` set).
 
     Raises:
-        ValueError: the plan binds no variable of its requirements (nothing to write), or
-            all of its requirements are per-entity.
+        ValueError: the plan binds no variable of its requirements (nothing to write).
         SignalError: the log could not be read (the audit's error).
         OSError: ``out`` cannot be written."""
-    plan, left_out = _without_per_entity(plan, log_path)
-    if not sampled_variables(plan) and plan.bindings is not None:
+    from fretc.audit.entities import NOT_AUDITED
+    from fretc.audit.sampled_entities import entity_blocks
+
+    plan, ent_plan = _split_per_entity(plan, log_path)
+    if not sampled_variables(plan) and not sampled_variables(ent_plan) \
+            and plan.bindings is not None:
         raise ValueError("the requirements' variables have no bindings: nothing to sample")
-    kept = audit_keeping_passes(plan, log_path)
-    errors = [e for e in [kept.audit.error] + [v.error for v in kept.audit.verdicts] if e]
-    if kept.passes is None and errors and all(v.verdict == "error"
-                                              for v in kept.audit.verdicts):
-        raise SignalError(errors[0])  # nothing read: nothing to write
-    clocks = sampled_clocks(kept)
-    names = [n for n in _order(kept.plan) if any(n in c.columns for c in clocks)]
+    audits: list[LogAudit] = []
+    clocks: list[SampledClock] = []
+    if plan.requirements or not ent_plan.requirements:
+        kept = audit_keeping_passes(plan, log_path)
+        plan = kept.plan
+        audits.append(kept.audit)
+        clocks = sampled_clocks(kept)
+        if kept.passes is None and _all_errors(kept.audit) and not ent_plan.requirements:
+            raise SignalError(_all_errors(kept.audit)[0])  # nothing read: nothing to write
+    blocks: list = []
+    if ent_plan.requirements:
+        la, blocks = entity_blocks(ent_plan, log_path)
+        audits.append(la)
+        errors = _all_errors(la)
+        if not plan.requirements and errors and all(e.startswith(NOT_AUDITED)
+                                                    for e in errors):
+            raise SignalError(errors[0][len(NOT_AUDITED):])  # nothing read
+    lines = [f"{CLOCK_LINE}{k}: {' '.join(escape_id(i) for i in c.ids)}"
+             for k, c in enumerate(clocks, 1)]
+    left_out: list[tuple[str, str]] = []
+    for b in blocks:
+        if b.clock is not None:
+            clocks.append(b.clock)
+            lines.append(f"{CLOCK_LINE}{len(clocks)}: {escape_id(b.rid)}")
+        elif b.entity is None:
+            left_out.append((b.rid, b.why or "not judged"))
+            continue
+        else:
+            lines.append(f"{PER_ENTITY_LINE}{escape_id(b.rid)}: {b.entity}")
+        for iid, c, why in b.items:
+            if c is None:
+                lines.append(f"{NOT_SAMPLED_LINE}{escape_id(iid)}: {_one_line(why)}")
+            else:
+                c.entity_of = b.rid
+                clocks.append(c)
+                lines.append(f"{CLOCK_LINE}{len(clocks)}: {escape_id(iid)}")
+    lines += [f"{NOT_SAMPLED_LINE}{escape_id(rid)}: {_one_line(why)}" for rid, why in left_out]
+    names = [n for n in _order(plan) + _order(ent_plan) if any(n in c.columns for c in clocks)]
+    names = list(dict.fromkeys(names))
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="", encoding="utf-8") as f:
         f.write(f"{SAMPLED_MARK} of {escape_id(Path(log_path).name)}: the FRET variables as fretc "
                 "audit judged them (bindings applied), each requirement on its own clock; "
                 "time in seconds\n")
-        for k, c in enumerate(clocks, 1):
-            f.write(f"{CLOCK_LINE}{k}: {' '.join(escape_id(i) for i in c.ids)}\n")
-        for rid, why in left_out.items():
-            f.write(f"{NOT_SAMPLED_LINE}{escape_id(rid)}: {why}\n")
+        f.writelines(line + "\n" for line in lines)
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["time"] + ([CLOCK_COLUMN] if len(clocks) > 1 else []) + names)
         w.writerows(_rows(clocks, names))
-    return kept.audit, clocks
+    return _joined(log_path, audits), clocks
 
 
-def _without_per_entity(plan: AuditPlan, log_path: str) -> tuple[AuditPlan, dict[str, str]]:
-    """``plan`` (its binding file's variant for ``log_path``, when one selects it) without
-    its per-entity requirements, and their ids -> why they are left out.
+def _all_errors(la: LogAudit) -> list[str]:
+    """The errors of an audit whose verdicts are all errors (else none)."""
+    if not all(v.verdict == "error" for v in la.verdicts):
+        return []
+    return [e for e in [la.error] + [v.error for v in la.verdicts] if e]
 
-    Raises:
-        ValueError: every requirement is per-entity (nothing to write)."""
+
+def _one_line(why: str) -> str:
+    """``why`` on one line (a comment line of the file)."""
+    return " ".join(why.split())
+
+
+def _joined(path: str, audits: list[LogAudit]) -> LogAudit:
+    """One audit of the plain and the per-entity requirements (the log's figures of the
+    first)."""
+    la = audits[0]
+    for other in audits[1:]:
+        la.verdicts = la.verdicts + other.verdicts
+    return la
+
+
+def _split_per_entity(plan: AuditPlan, log_path: str) -> tuple[AuditPlan, AuditPlan]:
+    """``plan`` (its binding file's variant for ``log_path``, when one selects it) as its
+    plain requirements and its per-entity ones (two plans)."""
     if plan.variants:
         sub, _err = select_variant(plan, log_path)
         if sub is None:  # (the audit says why: every verdict an error)
-            return plan, {}
+            return plan, replace(plan, requirements=[])
         plan = sub
-    groups = entity_of_requirements(plan)
-    if not groups or plan.bindings is None:
-        return plan, {}
-    why = per_entity_refusal(plan.bindings)
-    rest = [r for r in plan.requirements if r.index not in groups]
-    if not rest:
-        raise ValueError(why)
-    return (replace(plan, requirements=rest),
-            {r.id: why for r in plan.requirements if r.index in groups})
+    groups = entity_of_requirements(plan) if plan.bindings is not None else {}
+    return (replace(plan, requirements=[r for r in plan.requirements if r.index not in groups]),
+            replace(plan, requirements=[r for r in plan.requirements if r.index in groups]))
 
 
 def _order(plan: AuditPlan) -> list[str]:

@@ -127,10 +127,6 @@ def trigger_pt(compiled: Compiled) -> Node | None:
     return got.pt
 
 
-#: Clocks of one sampled trace the runner reads (``# fretc clock N:`` lines,
-#: :mod:`fretc.audit.sampled_csv`: at most one per requirement).
-MAX_CLOCKS = 4096
-
 _KNOWN_FN = ("absReal", "absInt", "minReal", "minInt", "maxReal", "maxInt")
 
 
@@ -414,6 +410,6 @@ def emit_c(compiled: Sequence[Compiled], split: bool = False, automata: dict | N
     monitors = [m for u in units for m in u.monitors]
     files["runner.c"] = env.get_template("c_runner.c.j2").render(
         units=units, monitors=monitors,
-        max_inputs=max([1] + [len(m.inputs) for m in monitors]), max_clocks=MAX_CLOCKS)
+        max_inputs=max([1] + [len(m.inputs) for m in monitors]))
     return files, skipped
 

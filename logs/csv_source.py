@@ -23,7 +23,7 @@ from fretc.logs.csv_read import CUT_CELL, GAP_CELL, UNKNOWN_CELL, RowReader, cle
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
            "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "sampled_trace",
-           "NOT_SAMPLED_LINE", "not_sampled_lines",
+           "NOT_SAMPLED_LINE", "not_sampled_lines", "PER_ENTITY_LINE", "per_entity_lines",
            "escape_id", "unescape_id", "column_name_problem"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
@@ -41,6 +41,10 @@ CLOCK_LINE = "# fretc clock "
 #: ``# fretc not sampled: T: <why>`` (a per-entity requirement; the id written by
 #: :func:`escape_id`).
 NOT_SAMPLED_LINE = "# fretc not sampled: "
+#: A comment line of a sampled trace saying a requirement is judged per entity:
+#: ``# fretc per entity: T: track``; the clock and not-sampled lines after it naming
+#: ``T[track=...]`` are its entities, in order (:mod:`fretc.audit.sampled_entities`).
+PER_ENTITY_LINE = "# fretc per entity: "
 #: The column of a sampled trace of several clocks giving the clock of each row (``tick`` is
 #: a FRETish reserved word, so never a FRET variable's column).
 CLOCK_COLUMN = "tick"
@@ -108,6 +112,29 @@ def not_sampled_lines(path: str | os.PathLike) -> dict[str, str]:
         if line.startswith(NOT_SAMPLED_LINE):
             word, _, why = line[len(NOT_SAMPLED_LINE):].partition(": ")
             out[unescape_id(word.strip())] = why.strip()
+    return out
+
+
+def per_entity_lines(path: str | os.PathLike) -> dict[str, tuple[str, list[str]]]:
+    """The per-entity requirements of a sampled trace: id -> (the entity's name, the ids of
+    its entities' verdicts ``T[track=7]`` in the order the clock and not-sampled lines after
+    its :data:`PER_ENTITY_LINE` name them); ``{}`` for any other CSV trace."""
+    out: dict[str, tuple[str, list[str]]] = {}
+    for line in _sampled_comments(path):
+        if line.startswith(PER_ENTITY_LINE):
+            word, _, name = line[len(PER_ENTITY_LINE):].partition(": ")
+            out[unescape_id(word.strip())] = (name.strip(), [])
+            continue
+        if line.startswith(CLOCK_LINE) and ":" in line:
+            ids = [unescape_id(w) for w in line[len(CLOCK_LINE):].partition(":")[2].split()]
+        elif line.startswith(NOT_SAMPLED_LINE):
+            ids = [unescape_id(line[len(NOT_SAMPLED_LINE):].partition(": ")[0].strip())]
+        else:
+            continue
+        for i in ids:
+            owner, bracket, _rest = i.partition("[")
+            if bracket and owner in out and i.endswith("]"):
+                out[owner][1].append(i)
     return out
 
 

@@ -145,35 +145,17 @@ def test_which_variables_the_rows_take(tmp_path, expr, rows):
     assert audit_log(plan, str(log)).verdicts  # audited either way
 
 
-def test_write_csv_refuses_per_entity_requirements_and_says_why(tmp_path):
-    """--write-csv of a per-entity requirement: not written (a column has one value per
-    tick, not one per entity), the message names the variables and what to do; exit 2."""
-    from click.testing import CliRunner
-
-    from fretc.cli import main
-
-    log, _plan = _setup(tmp_path, [[(1, 0.8, True)], [(1, 2.0, True)]], "id")
-    res = CliRunner().invoke(main, ["audit", "-r", str(tmp_path / "o.fret"), str(log),
-                                    "--write-csv", str(tmp_path / "csv")])
-    assert res.exit_code == 2, res.output
-    said = " ".join(res.output.split())
-    assert "per-entity requirements cannot be written as a sampled trace" in said
-    assert "(any_ok, dist, far, m, n, ok)" in said and "audit the log itself" in said
-    assert not (tmp_path / "csv" / "o.csv").exists()
-
-
-
-def test_write_csv_leaves_out_only_the_per_entity_requirements(tmp_path):
-    """--write-csv of a set mixing a per-entity requirement with plain ones: the plain ones
-    are written and the audit of the CSV gives their verdicts as the audit of the log does;
-    the per-entity one is named as not sampled (in the file and on the terminal) and the
-    audit of the CSV makes it an error that says why, never a verdict."""
+def test_write_csv_writes_the_per_entity_requirements_beside_the_plain_ones(tmp_path):
+    """--write-csv of a set mixing a per-entity requirement with plain ones (the per-entity
+    one was left out before, ``# fretc not sampled``): every requirement is written, each
+    entity on a clock of its own, and the audit of the CSV gives every verdict of the log's,
+    the entities' included."""
     import json
 
     from click.testing import CliRunner
 
     from fretc.cli import main
-    from fretc.logs.csv_source import not_sampled_lines
+    from fretc.logs.csv_source import not_sampled_lines, per_entity_lines
 
     log, _plan = _setup(tmp_path, [[(1, 0.8, True), (2, 0.3, True)], [(1, 2.0, True)],
                                    [(2, 0.2, False)], [(1, 0.9, True)]], "id")
@@ -190,21 +172,20 @@ def test_write_csv_leaves_out_only_the_per_entity_requirements(tmp_path):
                                     str(tmp_path / "csv"), "--json", str(tmp_path / "a.json")])
     assert res.exit_code == 1, res.output  # E and P are violated on the log
     said = " ".join(res.output.split())
-    assert "not sampled: E (per-entity" in said, said
+    assert "E 2 entities" in said and "not sampled" not in said, said
     csv = tmp_path / "csv" / "o.csv"
-    assert list(not_sampled_lines(csv)) == ["E"]
+    assert not not_sampled_lines(csv)
+    assert per_entity_lines(csv) == {"E": ("obj", ["E[obj=1]", "E[obj=2]"])}
     res = CliRunner().invoke(main, ["audit", *reqs, str(csv), "--json", str(tmp_path / "c.json")])
-    log_v = {v["requirement"]: v for v in json.loads((tmp_path / "a.json").read_text())
-             ["logs"][0]["verdicts"]}
-    csv_v = {v["requirement"]: v for v in json.loads((tmp_path / "c.json").read_text())
-             ["logs"][0]["verdicts"]}
-    assert log_v["E"]["verdict"] == "violated" and log_v["P"]["verdict"] == "violated"
-    for rid in ("P", "Q"):
-        assert (csv_v[rid]["verdict"], csv_v[rid]["ticks_evaluated"]) == \
-            (log_v[rid]["verdict"], log_v[rid]["ticks_evaluated"]), rid
-    assert csv_v["E"]["verdict"] == "error"
-    assert "not sampled" in csv_v["E"]["error"] and "per-entity" in csv_v["E"]["error"]
-    assert not any(rid.startswith("E[") for rid in csv_v)
+    assert res.exit_code == 1, res.output
+
+    def seen(path):
+        return [(v["requirement"], v["verdict"], v["ticks_evaluated"])
+                for v in json.loads(path.read_text())["logs"][0]["verdicts"]]
+
+    assert seen(tmp_path / "c.json") == seen(tmp_path / "a.json")
+    assert ("E[obj=2]", "violated") in [x[:2] for x in seen(tmp_path / "c.json")]
+
 
 DIAG_STATUS = st.dictionaries(st.sampled_from(["motor_l", "motor_r", "battery", "motor_3"]),
                               st.integers(0, 3), max_size=4)

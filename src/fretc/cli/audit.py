@@ -189,11 +189,25 @@ def _write_csvs(plan, paths, results, folder: str, err) -> bool:
             err.print(f"[red]error:[/red] {escape(f'{path}: cannot write {out}: {exc}')}")
             ok = False
             continue
-        ticks = sum(len(c.times) for c in clocks)
-        left_out = not_sampled_lines(out)
-        err.print(escape(f"wrote {out} ({len(clocks)} clock{'s' if len(clocks) != 1 else ''}, "
-                         f"{ticks} ticks: " + "; ".join(
-                             ", ".join(c.ids) + f" {len(c.times)}" for c in clocks) + ")"
-                         + (f"; not sampled: {', '.join(left_out)} (per-entity: audit the "
-                            "log itself for them)" if left_out else "")))
+        err.print(escape(_written(out, clocks, not_sampled_lines(out))))
     return ok
+
+
+def _written(out: Path, clocks: list, left_out: dict[str, str]) -> str:
+    """What ``--write-csv`` wrote, in one line: per clock its requirements and ticks (a
+    per-entity requirement's entities counted together), what it left out and why."""
+    parts: list[str] = []
+    entities: dict[str, list[int]] = {}
+    for c in clocks:
+        if c.entity_of is None:
+            parts.append(", ".join(c.ids) + f" {len(c.times)}")
+        else:
+            entities.setdefault(c.entity_of, []).append(len(c.times))
+    parts += [f"{rid} {len(n)} entit{'ies' if len(n) != 1 else 'y'} {sum(n)}"
+              for rid, n in entities.items()]
+    ticks = sum(len(c.times) for c in clocks)
+    plain = [i for i in left_out if "[" not in i]
+    return (f"wrote {out} ({len(clocks)} clock{'s' if len(clocks) != 1 else ''}, {ticks} ticks: "
+            + "; ".join(parts) + ")"
+            + (f"; not sampled: {', '.join(f'{i} ({left_out[i]})' for i in plain)}"
+               if plain else ""))
