@@ -27,6 +27,7 @@ from fretc.common.streams import log_topics as log_topics_of
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
+from fretc.logs.csv_clocks import split_clocks
 from fretc.logs.csv_source import (CsvSource, clock_lines, not_sampled_lines,
                                    per_entity_lines, sampled_trace)
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
@@ -45,6 +46,12 @@ if TYPE_CHECKING:
 
 __all__ = ["audit_log", "audit_keeping_passes", "KeptPasses", "summarize_clocks",
            "log_engine"]
+
+
+#: A sampled trace of more clocks than this (a per-entity requirement has one per entity) is
+#: read once and split by clock (:func:`fretc.logs.csv_clocks.split_clocks`: its rows held
+#: at once); one of fewer is read once per clock (its columns alone held at a time).
+SPLIT_CLOCKS = 8
 
 
 def audit_log(plan: AuditPlan, path: str,
@@ -67,8 +74,11 @@ def audit_log(plan: AuditPlan, path: str,
         # (a trace --write-csv wrote: each requirement on its own clock's rows)
         from fretc.audit.sampled_audit import audit_clocks
 
+        split = (split_clocks(path, plan.csv_period_ns) if len(clocks) > SPLIT_CLOCKS
+                 else None)
         return audit_clocks(plan, str(path), clocks, lambda p, c: _LogRun(
-            p, path, lambda: CsvSource(path, period_ns=plan.csv_period_ns, clock=c)
+            p, path, split[c] if split is not None else
+            lambda: CsvSource(path, period_ns=plan.csv_period_ns, clock=c)
         ).run(progress))
     if plan.variants:
         sub, err = select_variant(plan, str(path))

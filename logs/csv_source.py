@@ -282,6 +282,10 @@ class CsvSource(LogSource):
                 line, what = _bad_utf8(self.path, exc)
                 yield line, CsvError(self.path, line, f"not UTF-8 text: {what}")
 
+    def _clock_lines(self) -> dict[str, list[str]]:
+        """The trace's clocks (:func:`clock_lines`)."""
+        return clock_lines(self.path)
+
     def _first_line(self) -> str:
         with open(self.path, encoding="utf-8", errors="replace") as f:
             return f.readline()
@@ -311,7 +315,7 @@ class CsvSource(LogSource):
             seen.add(name)
         self._header = header
         self.sampled = self._first_line().startswith(SAMPLED_MARK)
-        self.clocks = clock_lines(self.path) if self.sampled else {}
+        self.clocks = self._clock_lines() if self.sampled else {}
         self._grouped = bool(self.clocks) and CLOCK_COLUMN in header
         if len(self.clocks) > 1 and not self._grouped:
             raise CsvError(self.path, line, f"{len(self.clocks)} clocks but no column "

@@ -270,3 +270,51 @@ def test_write_csv_of_per_entity_requirements_only(tmp_path):
 
     assert words(a.output) == words(b.output)
     assert ("T[track=2]", "violated") in words(b.output)
+
+
+def test_a_trace_of_many_clocks_read_once_gives_what_each_clock_read_apart_gives(
+        tmp_path, monkeypatch):
+    """The audit of a trace of more than SPLIT_CLOCKS clocks reads it once and splits its
+    rows by clock (logs/csv_clocks.py): the same verdicts, JSON for JSON, as each clock read
+    from the file; a file whose rows are not a trace of several clocks (a time going
+    backwards, a clock no line names) is read clock by clock, whose errors name the line."""
+    import json
+
+    import fretc.audit.log as L
+
+    (tmp_path / "t.fret").write_text(TRACK_FRET)
+    (tmp_path / "t.bindings.toml").write_text(TRACKS)
+    rows = [{i: (0.2 if (i, k) == (3, 7) else 0.8 if i == 5 else 2.0) for i in range(1 + k % 4,
+                                                                          6 + k % 3)}
+            for k in range(40)]
+    log = _tracks_log(tmp_path / "t.mcap", rows)
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+    csv = tmp_path / "s.csv"
+    write_sampled_csv(plan, str(log), csv)
+    from fretc.logs.csv_source import clock_lines
+
+    assert len(clock_lines(csv)) > L.SPLIT_CLOCKS
+
+    def dump(path):
+        return json.dumps(audit_log(plan, str(path)).to_json(), sort_keys=True)
+
+    once = dump(csv)
+    monkeypatch.setattr(L, "SPLIT_CLOCKS", 10**9)
+    assert dump(csv) == once
+    text = csv.read_text().splitlines()
+    at = next(i for i, x in enumerate(text) if x.startswith("time,"))
+    bad = tmp_path / "bad.csv"
+    for damage in ("backwards", "label"):
+        lines = list(text)
+        cells = lines[at + 5].split(",")
+        if damage == "backwards":
+            cells[0] = "0.5"
+        else:
+            cells[1] = "99999"
+        lines[at + 5] = ",".join(cells)
+        bad.write_text("\n".join(lines) + "\n")
+        monkeypatch.setattr(L, "SPLIT_CLOCKS", 10**9)
+        apart = dump(bad)
+        monkeypatch.setattr(L, "SPLIT_CLOCKS", 8)
+        assert dump(bad) == apart
+        assert f"bad.csv:{at + 6}" in apart, apart[:2000]
