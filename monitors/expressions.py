@@ -12,6 +12,7 @@ conditions; index ``n`` is FRET's absorbing state after the trace (section 6's t
 from __future__ import annotations
 
 import builtins
+import functools
 from collections.abc import Mapping
 
 import numpy as np
@@ -55,16 +56,37 @@ class ColumnExpressions:
         self.n = n
         self.N = n + 1
         self.free = free or left is None
-        self.idx = np.arange(self.N, dtype=np.int64)
         self._cols: dict[str, np.ndarray] = {}
         if not self.free:
-            lft = np.concatenate((np.asarray(left, np.bool_), [False]))
-            rgt = np.concatenate((np.asarray(right, np.bool_), [False]))
-            self.left = lft
-            self.right = rgt
-            # the last Left at or before t, the first Right at or after t
-            self.s_last = np.maximum.accumulate(np.where(lft, self.idx, -_FAR))
-            self.e_next = np.minimum.accumulate(np.where(rgt, self.idx, _FAR)[::-1])[::-1]
+            self.left = np.concatenate((np.asarray(left, np.bool_), [False]))
+            self.right = np.concatenate((np.asarray(right, np.bool_), [False]))
+
+    # (the index arrays, 8 bytes a tick each, are made when a temporal function reads them)
+    @functools.cached_property
+    def idx(self) -> np.ndarray:
+        """Each position's index, ``0..n`` (``int64``)."""
+        return np.arange(self.N, dtype=np.int64)
+
+    @functools.cached_property
+    def s_last(self) -> np.ndarray:
+        """The last ``Left`` at or before each position (``-_FAR`` where none)."""
+        return np.maximum.accumulate(np.where(self.left, self.idx, -_FAR))
+
+    @functools.cached_property
+    def e_next(self) -> np.ndarray:
+        """The first ``Right`` at or after each position (``_FAR`` where none)."""
+        return np.minimum.accumulate(np.where(self.right, self.idx, _FAR)[::-1])[::-1]
+
+    def ticks(self, name: str) -> np.ndarray:
+        """The column of FRET variable ``name`` at the ``n`` ticks, without the absorbing
+        state (a view, no copy). Raises as :meth:`column`."""
+        col = self.columns.get(name)
+        if col is None:
+            raise KeyError(name)
+        col = np.asarray(col)
+        if len(col) < self.n:
+            raise ValueError(f"column {name!r} has {len(col)} values for {self.n} ticks")
+        return col[:self.n]
 
     def column(self, name: str) -> np.ndarray:
         """The column of FRET variable ``name`` with the absorbing state appended (``n + 1``
@@ -73,17 +95,28 @@ class ColumnExpressions:
         got = self._cols.get(name)
         if got is not None:
             return got
-        col = self.columns.get(name)
-        if col is None:
-            raise KeyError(name)
-        col = np.asarray(col)
-        if len(col) < self.n:
-            raise ValueError(f"column {name!r} has {len(col)} values for {self.n} ticks")
-        col = col[:self.n]
+        col = self.ticks(name)
         absorbing = np.zeros(1, dtype=col.dtype if col.dtype != object else np.float64)
         got = np.concatenate((col, absorbing))
         self._cols[name] = got
         return got
+
+    def _compare_leaves(self, op: str, a: A.Expr, b: A.Expr) -> np.ndarray:
+        """``a op b`` for a variable or number on each side, as :meth:`bool` computes it
+        but without copying a column to append the absorbing state (a number there is 0)."""
+        def ticks(e: A.Expr):
+            if isinstance(e, A.Var):
+                return self.ticks(e.name).astype(np.float64, copy=False), np.float64(0.0)
+            assert isinstance(e, A.NumLit)
+            value = np.float64(float(e.value))
+            return value, value
+
+        (x, x_end), (y, y_end) = ticks(a), ticks(b)
+        out = np.empty(self.N, np.bool_)
+        with np.errstate(invalid="ignore"):
+            COMPARISONS[op](x, y, out=out[:self.n])
+            out[self.n] = COMPARISONS[op](x_end, y_end)
+        return out
 
     def bool(self, e: A.Expr) -> np.ndarray:
         """Boolean expression ``e`` at every tick and the absorbing state (``n + 1`` bools).
@@ -103,6 +136,8 @@ class ColumnExpressions:
         if isinstance(e, A.Binary):
             op = e.op
             if op in A.COMPARISON_OPS:
+                if all(_leaf(x) for x in (e.left, e.right)):
+                    return self._compare_leaves(op, e.left, e.right)
                 x, y = self.num(e.left), self.num(e.right)
                 with np.errstate(invalid="ignore"):
                     out = COMPARISONS[op](x, y)
@@ -268,6 +303,11 @@ class ColumnExpressions:
             return found & q_at_j
         reached = found & (self.e_next[u] >= j)        # no Right in [t+1, j)
         return self.right | ~reached | q_at_j
+
+
+def _leaf(e: A.Expr) -> bool:
+    """A variable with a column (not ``FTP``) or a number."""
+    return (isinstance(e, A.Var) and e.name != "FTP") or isinstance(e, A.NumLit)
 
 
 def _has_pre(e: A.Expr) -> bool:

@@ -165,26 +165,29 @@ def ltl3_verdict(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray
         if aut.table is None:
             raise VectorizeError("automaton with condition chains (too many atoms to "
                                  "tabulate): use the step-wise monitor")
-    runs = []
-    for aut, outcome in live:
-        assert aut.table is not None  # (checked above)
-        letters = atom_letters(aut.atoms, columns, n).tolist()
-        runs.append((aut.table, aut.initial, letters, outcome))
-    # first rejection of each automaton
-    firsts = []
-    for table, state, letters, _outcome in runs:
-        hit = None
-        for i, letter in enumerate(letters):
-            state = table[state][letter]
-            if state < 0:
-                hit = i
-                break
-        firsts.append(hit)
     best: tuple[str, int | None] = ("unknown", None)
-    for (_t, _s, _l, outcome), hit in zip(runs, firsts):
+    for aut, outcome in live:  # the first rejection of each automaton
+        assert aut.table is not None  # (checked above)
+        hit = _first_rejection(aut.table, aut.initial,
+                               atom_letters(aut.atoms, columns, n))
         if hit is not None and (best[1] is None or hit < best[1]):
             best = (outcome, hit)
     return best
+
+
+#: letters read into Python at a time by :func:`_first_rejection`
+_LETTERS_CHUNK = 1 << 16
+
+
+def _first_rejection(table, state: int, letters: np.ndarray) -> int | None:
+    """The first tick at which the automaton ``table`` from ``state`` rejects over
+    ``letters``, or None (read a chunk at a time: no list of every letter)."""
+    for lo in range(0, len(letters), _LETTERS_CHUNK):
+        for i, letter in enumerate(letters[lo:lo + _LETTERS_CHUNK].tolist(), lo):
+            state = table[state][letter]
+            if state < 0:
+                return i
+    return None
 
 
 def ltl3_verdicts(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray], n: int,

@@ -12,6 +12,7 @@ here: the bindings drop their NaN before any comparison (:mod:`fretc.signals.bin
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -48,18 +49,34 @@ def nan_ticks_of(exprs: list[A.Expr], columns: Mapping[str, np.ndarray], n: int
     return out
 
 
+def _nan(e: A.Expr, ev: ColumnExpressions, n: int) -> np.ndarray | None:
+    """Where the numeric expression ``e`` is NaN at the ``n`` ticks (None: nowhere); a
+    variable's column read in place (no copy with the absorbing state)."""
+    if isinstance(e, A.NumLit):
+        return np.ones(n, np.bool_) if math.isnan(float(e.value)) else None
+    if isinstance(e, A.Var) and e.name != "FTP":
+        col = ev.ticks(e.name)
+        if col.dtype.kind in "biu":
+            return None
+        if col.dtype.kind == "f":
+            return np.isnan(col)
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        return np.isnan(ev.num(e)[:n])
+
+
 def _walk(e: A.Expr, ev: ColumnExpressions, out: np.ndarray, as_condition: bool) -> None:
     """OR into ``out`` the NaN ticks of the comparisons inside ``e``."""
     n = len(out)
     try:
         if isinstance(e, A.Binary) and e.op in A.COMPARISON_OPS:
-            with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-                x, y = ev.num(e.left), ev.num(e.right)
-            out |= np.isnan(x[:n]) | np.isnan(y[:n])
+            x, y = _nan(e.left, ev, n), _nan(e.right, ev, n)
+            for nan in (x, y):
+                if nan is not None:
+                    out |= nan
         elif isinstance(e, A.Var) and as_condition and e.name in ev.columns:
-            col = ev.column(e.name)
+            col = ev.ticks(e.name)
             if col.dtype.kind == "f":
-                out |= np.isnan(col[:n])
+                out |= np.isnan(col)
     except (EvidenceUnsupported, KeyError, ValueError, TypeError):
         pass
     if isinstance(e, A.Binary):

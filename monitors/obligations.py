@@ -7,6 +7,8 @@ in O(1) per trigger from next-true indexes over the trace."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["OBLIGATIONS", "ObligationChecker", "Interval"]
@@ -78,9 +80,23 @@ class ObligationChecker:
         # numpy arrays (not lists): a few bytes a tick, for long logs
         self.R = _Bools(R)
         self.k = k or 0
-        self.nR = _Ints(_next_true(R))
-        self.nNR = _Ints(_next_true(~R))
-        self.nS = _Ints(_next_true(S)) if S is not None else None
+        self._S = S
+
+    # (each next-true index, 4 bytes a tick, is made when a timing first reads it)
+    @functools.cached_property
+    def nR(self) -> _Ints:
+        """The first tick at or after each where R holds (n where none)."""
+        return _Ints(_next_true(self.R.a))
+
+    @functools.cached_property
+    def nNR(self) -> _Ints:
+        """The first tick at or after each where R does not hold (n where none)."""
+        return _Ints(_next_true(~self.R.a))
+
+    @functools.cached_property
+    def nS(self) -> _Ints | None:
+        """The first tick at or after each where S holds (n where none); None without S."""
+        return _Ints(_next_true(self._S)) if self._S is not None else None
 
     def check(self, t: int, e: int) -> tuple[Interval, int, str] | None:
         """None if the obligation of trigger ``t`` (interval end ``e``) holds, else (window,

@@ -35,6 +35,7 @@ monitors that codegen embeds (same tables, same atoms) over the same columns.
 from __future__ import annotations
 
 import builtins
+import functools
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -70,10 +71,23 @@ class _Series:
         self.columns = columns
         self.n = n
         self.memo: dict[tuple[Node, bool], np.ndarray] = {}
-        self.idx = np.arange(n, dtype=np.int64)
-        #: the first tick of each tick's trace (all 0: one trace)
-        self.seg = starts if starts is not None else np.zeros(n, np.int64)
-        self.first = self.idx == self.seg  # a trace's first tick
+        #: the first tick of each tick's trace (0 for every tick of one trace)
+        self.seg: np.ndarray | np.int64 = starts if starts is not None else np.int64(0)
+
+    # (the index arrays are made when an operator reads them, and then kept)
+    @functools.cached_property
+    def idx(self) -> np.ndarray:
+        """Each tick's index (``int64``)."""
+        return np.arange(self.n, dtype=np.int64)
+
+    @functools.cached_property
+    def first(self) -> np.ndarray:
+        """Whether each tick is its trace's first (bool)."""
+        if isinstance(self.seg, np.ndarray):
+            return self.idx == self.seg
+        out = np.zeros(self.n, np.bool_)
+        out[:1] = True
+        return out
 
     # ------------------------------------------------------------------ reading variables
     def read(self, name: str, numeric: bool) -> np.ndarray:
@@ -247,11 +261,12 @@ def pt_series(node: Node, columns: Columns, n: int, starts: np.ndarray | None = 
 
 def atom_letters(atoms: Sequence[Node], columns: Columns, n: int,
                  starts: np.ndarray | None = None) -> np.ndarray:
-    """The automaton letter at each tick: bit ``j`` is the truth of ``atoms[j]`` (int64
-    array). Same bit order as the generated ``sub`` expressions. ``starts`` as
-    :func:`pt_series`."""
+    """The automaton letter at each tick: bit ``j`` is the truth of ``atoms[j]`` (a
+    ``uint16`` array for at most 16 atoms, else ``int64``). Same bit order as the generated
+    ``sub`` expressions. ``starts`` as :func:`pt_series`."""
     ev = _Series(columns, n, starts)
-    out = np.zeros(n, np.int64)
+    dtype = np.dtype(np.uint16 if len(atoms) <= 16 else np.int64)
+    out = np.zeros(n, dtype)
     for j, a in enumerate(atoms):
-        out |= ev.bool(a).astype(np.int64) << j
+        np.bitwise_or(out, np.left_shift(ev.bool(a).astype(dtype), j, dtype=dtype), out=out)
     return out
