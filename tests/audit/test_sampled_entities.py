@@ -318,3 +318,56 @@ def test_a_trace_of_many_clocks_read_once_gives_what_each_clock_read_apart_gives
         monkeypatch.setattr(L, "SPLIT_CLOCKS", 8)
         assert dump(bad) == apart
         assert f"bad.csv:{at + 6}" in apart, apart[:2000]
+
+
+def _joint_case(log: Path) -> tuple[str, str]:
+    """A per-joint set over the positions of ``log``'s /joint_states, with thresholds inside
+    the range its inspection gives, and a plain requirement beside."""
+    from fretc.cli.inspect import inspect_log
+
+    doc = inspect_log(str(log))
+    pos = next(t for t in doc["topics"] if t["topic"] == "/joint_states")["fields"][
+        "/joint_states.position"]
+    lo, hi = pos["min"], pos["max"]
+    a, b = lo + (hi - lo) * 0.3, lo + (hi - lo) * 0.7
+    return ("@tick_period 100 ms\n"
+            "E0: the sys shall always satisfy above\n"
+            "E1: upon below the sys shall within 3 ticks satisfy above\n"
+            "E2: whenever below the sys shall immediately satisfy !above\n"
+            "P0: the sys shall always satisfy spread\n",
+            '[tick]\nperiod = "100 ms"\n[entities]\njoint = "/joint_states.name[:]"\n'
+            f"[variables]\nabove = 'joint(/joint_states.position, $joint) > {a!r}'\n"
+            f"below = 'joint(/joint_states.position, $joint) < {b!r}'\n"
+            f"spread = 'max(/joint_states.position) - min(/joint_states.position) < {hi - lo!r}'\n")
+
+
+ENTITY_LOGS = {
+    "fuse_tb3/turtlebot3.bag": _joint_case,
+    "husky_ekf/gps_data.bag": _joint_case,
+    "kuka_lwr/test.bag": _joint_case,
+    "husky_ekf/gps_data.bag#diagnostics": lambda log: (
+        "@tick_period 100 ms\nD0: the sys shall always satisfy calm\n"
+        "D1: upon alarm the sys shall within 5 ticks satisfy calm\n",
+        '[tick]\nperiod = "100 ms"\n[entities]\nst = "/diagnostics.status[:].name"\n'
+        "[variables]\ncalm = 'max(/diagnostics.status[:]{name==$st}.level) < 1'\n"
+        "alarm = 'max(/diagnostics.status[:]{name==$st}.level) >= 2'\n"),
+    "rosbag2_services/topics_and_services.mcap": lambda log: (
+        "@tick_period 100 ms\nQ0: the sys shall always satisfy small\n",
+        '[tick]\nperiod = "100 ms"\n[entities]\n'
+        'par = "/parameter_events.new_parameters[:].name"\n[variables]\n'
+        "small = 'max(/parameter_events.new_parameters[:]{name==$par}.value.type) < 3'\n"),
+}
+
+
+@pytest.mark.skipif(not SHARED.exists(), reason="needs ../shared/data/foreign_logs")
+@pytest.mark.parametrize("name", sorted(ENTITY_LOGS))
+def test_every_real_log_with_entities(name, tmp_path):
+    """Every log of ../shared with entities (the joints of JointState, the statuses of a
+    DiagnosticArray, the parameters of /parameter_events): per-entity sets written as a CSV
+    give the log's verdicts, in Python and in the runner."""
+    log = SHARED / name.split("#")[0]
+    fret, bindings = ENTITY_LOGS[name](log)
+    (tmp_path / "e.fret").write_text(fret)
+    (tmp_path / "e.bindings.toml").write_text(bindings)
+    verdicts = check(tmp_path / "e.fret", log, tmp_path)
+    assert any("[" in v.requirement for v in verdicts), [v.requirement for v in verdicts]
