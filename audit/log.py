@@ -212,9 +212,14 @@ class _LogRun:
     def _open(self) -> bool:
         """Open the log and choose its bindings (a CSV trace's columns, else the plan's)."""
         plan, path, la = self.plan, self.path, self.la
+        # a CSV trace read without bindings keeps only the columns of the requirements'
+        # variables (those with bindings read every column as /csv fields)
+        keep = ({v for r in plan.requirements for v in r.variables}
+                if plan.bindings is None or not plan.bindings.variables else None)
         try:
             source = self.source = (self.opener() if self.opener is not None else open_log(
-                path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path))
+                path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path,
+                csv_keep=keep))
         except FretcInputError as exc:
             return self._fail_log(str(exc), "log not audited: ")
         except OSError as exc:

@@ -174,6 +174,7 @@ class RowReader:
         #: (row index, its line): the rows from it to the next run's are on consecutive lines
         self.runs: list[tuple[int, int]] = []
         self.next_line = -1
+        self.kept = src.keep  # the columns whose values are kept (None: all)
 
     def run(self, raw: Iterator[tuple[int, list[str] | CsvError]]) -> None:
         """Read the rows after the header: ``(line, cells)`` as the :mod:`csv` module reads
@@ -227,6 +228,8 @@ class RowReader:
                                "(a tick time is at most 2^63 - 1 ns)", column="time")
             self.times.append(time)
         for name, value in values.items():
+            if self.kept is not None and name not in self.kept:
+                continue
             col = self.values.get(name)
             if col is None:
                 col = self.values[name] = array("B")
@@ -322,6 +325,8 @@ class RowReader:
                 self.numeric_at[name] = lines[first_num]
             if unknown:
                 self.src.unknown_rows.setdefault(name, []).extend(base + k for k in unknown)
+            if self.kept is not None and name not in self.kept:
+                continue
             col = self.values.get(name)
             if col is None:
                 col = self.values[name] = array("B")
@@ -399,6 +404,7 @@ class RowReader:
         src.row_count = self.count
         src.types = {c: ("float" if c in self.numeric_at else "bool") for c in src.columns}
         src._gap_set = frozenset(src.gap_rows)
-        src._values = {c: self.values.get(c, array("B")) for c in src.columns}
+        src._values = {c: self.values.get(c, array("B")) for c in src.columns
+                       if self.kept is None or c in self.kept}
         src._times = self.times if src.has_time else None
         src._line_runs = self.runs

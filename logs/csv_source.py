@@ -8,7 +8,7 @@ import os
 import re
 from array import array
 from bisect import bisect_right
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from types import SimpleNamespace
 from typing import NamedTuple
 
@@ -213,7 +213,10 @@ class CsvSource(LogSource):
     The file is read once, when opened (:mod:`fretc.logs.csv_read`): checked completely, its
     values kept as compact columns (a byte a row for a boolean column, eight for a numeric
     one or the time); :meth:`rows`, :meth:`messages`, :meth:`column_values` and
-    :meth:`column_pass` read those, not the file.
+    :meth:`column_pass` read those, not the file. ``keep`` names the columns whose values are
+    kept (None: all): the others are checked and typed but not kept, and :meth:`rows` and
+    :meth:`messages`, which give every column, then raise RuntimeError (an audit without
+    bindings keeps its requirements' variables alone).
 
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
     ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`fretc.signals`)
@@ -229,7 +232,7 @@ class CsvSource(LogSource):
     kind = "csv"
 
     def __init__(self, path: str | os.PathLike, *, period_ns: int = NS_PER_S,
-                 clock: str | None = None) -> None:
+                 clock: str | None = None, keep: Iterable[str] | None = None) -> None:
         super().__init__(path)
         if period_ns <= 0:
             raise ValueError("period_ns must be positive")
@@ -258,6 +261,8 @@ class CsvSource(LogSource):
         self._times: array | None = None  # the ``time`` column's ns, kept with it
         #: (row index, its line): the rows from it to the next are on consecutive lines
         self._line_runs: list[tuple[int, int]] = []
+        #: the columns whose values are kept (None: every one)
+        self.keep: frozenset[str] | None = frozenset(keep) if keep is not None else None
         self._check()
 
     def _raw(self) -> Iterator[tuple[int, list[str] | CsvError]]:
@@ -350,7 +355,7 @@ class CsvSource(LogSource):
         the placeholder (false, 0.0).
 
         Raises:
-            KeyError: ``name`` is not a column of the clock read."""
+            KeyError: ``name`` is not a column of the clock read, or one not kept."""
         col = self._values[name]
         out = np.frombuffer(col, np.float64 if col.typecode == "d" else np.uint8)
         if col.typecode != "d":
@@ -385,13 +390,22 @@ class CsvSource(LogSource):
         arrays: (:meth:`row_times`, ``names`` -> :meth:`column_values`; a name that is no
         column reads false; every column ``bool`` when there is no row). As :meth:`rows`,
         marks make the pass ``partial`` and a ``cut`` row is recorded as a gap to the end
-        (start the pass with ``_begin_pass``)."""
+        (start the pass with ``_begin_pass``).
+
+        Raises:
+            KeyError: a name of a column not kept (``keep``)."""
         if self.unknown_rows or self.gap_rows:
             self.partial = True
         n = self.row_count
         times = self.row_times()
-        cols = {name: (self.column_values(name) if n and name in self._values
-                       else np.zeros(n, np.bool_)) for name in names}
+
+        def column(name: str) -> np.ndarray:
+            if name not in self.types:
+                return np.zeros(n, np.bool_)
+            values = self.column_values(name)  # (KeyError: not kept)
+            return values if n else np.zeros(0, np.bool_)
+
+        cols = {name: column(name) for name in names}
         if self.cut_time is not None:
             self._gap(self.cut_time, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
         return times, cols
@@ -399,7 +413,13 @@ class CsvSource(LogSource):
     def rows(self) -> Iterator[CsvRow]:
         """The data rows of the clock read, typed (see the class docstring), in file order.
         A ``cut`` row ends them: the pass records a gap from its time to the end of the log
-        (:attr:`fretc.logs.LogSource.cut_start`); marks make the pass ``partial``."""
+        (:attr:`fretc.logs.LogSource.cut_start`); marks make the pass ``partial``.
+
+        Raises:
+            RuntimeError: some column's values were not kept (``keep``)."""
+        if self._values.keys() != set(self.columns):
+            raise RuntimeError(f"{self.path}: rows() gives every column; kept only "
+                               f"{', '.join(sorted(self._values)) or 'none'}")
         if self.unknown_rows or self.gap_rows:
             self.partial = True
         names = self.columns

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from typing import TYPE_CHECKING
@@ -24,7 +24,8 @@ __all__ = ["open_log"]
 
 def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores | None = None,
              check_data_crc: bool = True, csv_period_ns: int = NS_PER_S,
-             msg_path: Sequence[str] = ()) -> LogSource:
+             msg_path: Sequence[str] = (), csv_keep: Iterable[str] | None = None
+             ) -> LogSource:
     """Open a recorded run for reading.
 
     Args:
@@ -39,6 +40,8 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         check_data_crc: MCAP only: check the DataEnd data-section CRC (one extra read of the
             data section after a full indexed pass).
         csv_period_ns: CSV only: time step between rows when there is no ``time`` column.
+        csv_keep: CSV only: the columns whose values are kept (None: every one; the
+            others are checked but not kept, :class:`~fretc.logs.csv_source.CsvSource`).
 
     Returns:
         A :class:`LogSource` (McapSource, BagSource, CsvSource, UlogSource or
@@ -73,7 +76,7 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
 
         return McapSource(p, check_data_crc=check_data_crc)
     if suffix == ".csv":
-        return CsvSource(p, period_ns=csv_period_ns)
+        return CsvSource(p, period_ns=csv_period_ns, keep=csv_keep)
     if suffix == ".ulg":
         from fretc.logs.ulog_source import UlogSource
 

@@ -201,8 +201,8 @@ def _read(path: str):
 
 
 @settings(max_examples=400, deadline=None)
-@given(traces(), st.integers(1, 6))
-def test_the_one_read_equals_a_plain_reading(tmp_path_factory, text, chunk):
+@given(traces(), st.integers(1, 6), st.sets(st.sampled_from(["v0", "v1", "v2", "x"])))
+def test_the_one_read_equals_a_plain_reading(tmp_path_factory, text, chunk, keep):
     path = str(tmp_path_factory.mktemp("r") / "t.csv")
     with open(path, "w", encoding="utf-8", newline="") as f:
         f.write(text)
@@ -239,6 +239,28 @@ def test_the_one_read_equals_a_plain_reading(tmp_path_factory, text, chunk):
         assert all(_same(v, w[3][n]) for v, w in zip(col.tolist(), want_rows))
         assert not col.flags.writeable
     assert [src.row_line(i) for i in range(src.row_count)] == [r[1] for r in want_rows]
+    # keeping some columns: the same checks and figures, the kept columns alone
+    mp = pytest.MonkeyPatch()
+    try:
+        mp.setattr(csv_read, "CHUNK_ROWS", chunk)
+        part = CsvSource(path, period_ns=PERIOD, keep=keep)
+    finally:
+        mp.undo()
+    assert (part.columns, part.types, part.row_count, part.unknown_rows, part.gap_rows,
+            part.cut_time) == tuple(want_figures)
+    for n in src.columns:
+        if n in keep:
+            assert np.array_equal(part.column_values(n), src.column_values(n), equal_nan=True)
+        else:
+            with pytest.raises(KeyError):
+                part.column_values(n)
+            with pytest.raises(KeyError):
+                part.column_pass([n])
+    if set(src.columns) <= keep:
+        assert len(list(part.rows())) == src.row_count
+    else:
+        with pytest.raises(RuntimeError, match="rows.. gives every column"):
+            list(part.rows())
 
 
 def test_the_plain_chunks_are_read_column_by_column(tmp_path, monkeypatch):
