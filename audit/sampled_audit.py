@@ -14,7 +14,8 @@ from dataclasses import replace
 from fretc.audit.entities import entity_of_requirements
 from fretc.audit.model import AuditPlan
 from fretc.audit.verdict import LogAudit, Verdict
-from fretc.logs.csv_source import not_sampled_lines, per_entity_lines
+from fretc.common.problems import CsvError, LogError
+from fretc.logs.csv_source import CsvSource, not_sampled_lines, per_entity_lines
 
 __all__ = ["audit_clocks"]
 
@@ -54,6 +55,12 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
         for r, v in zip(rs, la.verdicts):
             verdicts[r.id] = v
     merged = _merge(path, parts)
+    if not parts:  # no clock judged: the file is still read, and refused if it is bad
+        try:
+            CsvSource(path)
+        except (CsvError, LogError) as exc:
+            merged.error = str(exc)
+            return _all_error(plan, path, merged, f"log not audited: {exc}")
     named = ", ".join(sorted(i for i in owner if i not in instance_of)) or "none"
     left_out = not_sampled_lines(path)
     # (the log's audit gives the per-entity requirements after the others, those it judged
@@ -77,6 +84,12 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
         out.append(got)
     merged.verdicts = out
     return merged
+
+
+def _all_error(plan: AuditPlan, path: str, la: LogAudit, why: str) -> LogAudit:
+    """``la`` with every requirement of ``plan`` an error saying ``why``."""
+    la.verdicts = [_error(r, path, r.error or why) for r in plan.requirements]
+    return la
 
 
 def _error(r, path: str, why: str, rid: str | None = None) -> Verdict:

@@ -3,7 +3,8 @@
 properties, the per-entity bound, and windows over 10^6 messages.
 
 * ``crunner``: a CSV trace of random rows for the C runner of five requirements (built once
-  per process with ``-std=c99 -pedantic -Werror`` and the sanitizers), with hostile bytes at
+  per process with ``-std=c99 -pedantic -Werror`` and the sanitizers), half of them sampled
+  traces of plain and per-entity clocks as ``--write-csv`` writes them, with hostile bytes at
   random places: NUL, bytes that are not UTF-8, CR, quotes, tabs, empty lines, comment
   lines, long cells, numbers that overflow. Oracle: the runner never stops at a byte and
   reports the rows before it: where ``fretc audit`` refuses the file the runner exits 2
@@ -82,20 +83,34 @@ def _audit_words(fret: Path, trace: Path) -> tuple[dict | None, str | None]:
     from fretc.audit import AuditConfig, audit_log, load_plan
 
     la = audit_log(load_plan(AuditConfig(requirements=(str(fret),))), str(trace))
+    _AUDIT_ERRORS[:] = [v.error for v in la.verdicts if v.error]
     if la.error is not None:
         return None, la.error
     return {v.requirement: v.verdict for v in la.verdicts}, None
 
 
+#: the error verdicts of the last :func:`_audit_words` (a sampled trace's clocks are read
+#: apart: one clock's bad row is its requirements' error, the others judged)
+_AUDIT_ERRORS: list[str] = []
+
+
 def _runner_words(exe: Path, trace: Path) -> tuple[int, dict, str]:
+    """(exit status, {id: word}, stderr) of the runner on ``trace``: ids as the audit gives
+    them (the runner prints a backslash or a control byte as ``\\xNN``); a word ``unknown``
+    at an unread tick is ``unread``, and so is a per-entity requirement's ``unknown`` when
+    one of its entities is unread (the runner stops where the audit judges on)."""
+    from fretc.logs.csv_source import unescape_id
+
     got = subprocess.run([str(exe), str(trace)], capture_output=True, timeout=60)
     words, unread = {}, set()
     for line in got.stdout.decode("utf-8", "replace").splitlines():
         cells = line.split("\t")
         if len(cells) >= 2:
-            words[cells[0]] = cells[1]
+            rid = unescape_id(cells[0])
+            words[rid] = cells[1]
             if any(c.startswith("unread=") for c in cells):
-                unread.add(cells[0])
+                unread.add(rid)
+                unread.add(rid.split("[", 1)[0])
     return got.returncode, {k: ("unread" if k in unread and v == "unknown" else v)
                             for k, v in words.items()}, got.stderr.decode("utf-8", "replace")
 
@@ -115,8 +130,11 @@ def run_crunner(rng: random.Random, tmp: Path) -> list[str]:
         _CACHE["crunner"] = (d / "r.fret", exe)
     fret, exe = _CACHE["crunner"]
     cell = lambda: rng.choice(["true", "false", "0", "1", "2", "-1", "0.5", "nan", "inf"])  # noqa: E731
-    rows = [",".join(cell() for _ in range(5)).encode() for _ in range(rng.randrange(0, 15))]
-    data = bytearray(b"m,p,q,x,y\n" + b"\n".join(rows) + b"\n")
+    if rng.random() < 0.5:
+        data = _sampled_trace(rng, cell)
+    else:
+        rows = [",".join(cell() for _ in range(5)).encode() for _ in range(rng.randrange(0, 15))]
+        data = bytearray(b"m,p,q,x,y\n" + b"\n".join(rows) + b"\n")
     for _ in range(rng.randrange(0, 3)):
         at = rng.randrange(len(data) + 1)
         data[at:at] = rng.choice(HOSTILE_BYTES)
@@ -134,12 +152,42 @@ def run_crunner(rng: random.Random, tmp: Path) -> list[str]:
         return []
     bad = [f"{rid}: runner {w}, audit {audit.get(rid)}" for rid, w in words.items()
            if w != "unread" and w != audit.get(rid)]
+    if code == 2 and "a NUL byte: not a text trace" in err and \
+            re.search(rf"{re.escape(str(trace))}:\d+", err) and not words:
+        return []  # a NUL anywhere, a comment line's too: the documented refusal, its line
     if code == 2 and "quoted cells are not read by this runner" in err and \
             re.search(rf"{re.escape(str(trace))}:\d+", err) and not words:
         return []  # a documented refusal with its line (docs/guide/robot-monitors.md)
+    named = re.search(rf"{re.escape(str(trace))}:\d+(?!\d)", err)
+    if code == 2 and named and not words and any(
+            re.search(rf"{re.escape(named.group(0))}(?!\d)", e) for e in _AUDIT_ERRORS):
+        return []  # a clock's row the audit refuses too: the runner refuses the whole file
     if code == 2 and "error:" in err and not words:
         return [f"the runner refuses what the audit reads: {err[-300:]!r}"]
     return bad
+
+
+def _sampled_trace(rng: random.Random, cell) -> bytearray:
+    """A trace as ``--write-csv`` writes it, of plain and per-entity clocks: A1 and A4 on
+    one clock, A2 and A5 per entity ``e`` (names with a space, a comma, a backslash, bytes
+    over 127, escaped as the writer escapes them; some entities on a not-sampled line), A3 on
+    no clock; each row of a random clock, time rising."""
+    from fretc.logs.csv_source import escape_id
+
+    lines = ["# fretc sampled trace of fuzz.mcap: the FRET variables", "# fretc clock 1: A1 A4"]
+    k = 1
+    for rid in ("A2", "A5"):
+        lines.append(f"# fretc per entity: {rid}: e")
+        for name in rng.sample(["a", "b c", "d,e", "f\\g", "h\u00e9", "7"], rng.randrange(0, 5)):
+            if rng.random() < 0.2:
+                lines.append(f"# fretc not sampled: {escape_id(f'{rid}[e={name}]')}: no tick")
+            else:
+                k += 1
+                lines.append(f"# fretc clock {k}: {escape_id(f'{rid}[e={name}]')}")
+    lines.append("time,tick,m,p,q,x,y")
+    for i in range(rng.randrange(0, 25)):
+        lines.append(f"{i / 10},{rng.randrange(1, k + 1)}," + ",".join(cell() for _ in range(5)))
+    return bytearray(("\n".join(lines) + "\n").encode())
 
 
 def _split_files(rng: random.Random) -> dict[str, list[str]]:

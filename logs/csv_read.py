@@ -123,6 +123,14 @@ def _chunk_times(cells: list[str]) -> np.ndarray | None:
         return None
 
 
+def _stripped(cells: tuple[str, ...]) -> list[str]:
+    """A column's cells stripped of white space (copied as they are when none has any)."""
+    text = "".join(cells)
+    if text and text.split() == [text]:
+        return list(cells)
+    return list(map(str.strip, cells))
+
+
 def _kind(cell: str) -> tuple[int, float] | None:
     """(kind, value) of a variable's cell (value 1/0 for true/false and 1/0, 0 for
     ``unknown``), or None when it is empty or unreadable (a ``gap``/``cut`` mark too)."""
@@ -184,8 +192,9 @@ class RowReader:
             CsvError: as :class:`~fretc.logs.csv_source.CsvSource`, the first in file order.
         """
         fast = not self.src._grouped
+        take = getattr(raw, "chunk", None)  # (a file's rows: a chunk without a frame a row)
         while True:
-            chunk = list(islice(raw, CHUNK_ROWS))
+            chunk = take(CHUNK_ROWS) if take is not None else list(islice(raw, CHUNK_ROWS))
             if not chunk:
                 break
             if fast and self._chunk(chunk):
@@ -210,7 +219,7 @@ class RowReader:
             time = csv_time(src.path, line, cell)
             if self.last_time is not None and time < self.last_time:
                 raise CsvError(src.path, line, f"time {cell} s goes backwards "
-                               f"(previous row at {self.last_time / NS_PER_S} s)", column="time")
+                               f"(previous row at {Decimal(self.last_time) / NS_PER_S} s)", column="time")
             self.last_time = time
         if not src._own(cells, line):
             return
@@ -301,7 +310,7 @@ class RowReader:
         rows: list[list[str]] = [cells for _line, cells in chunk]  # type: ignore[misc]
         if set(map(len, rows)) != {len(self.header)}:
             return False
-        cols = [list(map(str.strip, c)) for c in zip(*rows)]
+        cols = [_stripped(c) for c in zip(*rows)]
         if min(cols[0]) < "$":  # a blank or comment line, or an odd first cell
             return False
         times = None

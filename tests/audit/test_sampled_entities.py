@@ -371,3 +371,41 @@ def test_every_real_log_with_entities(name, tmp_path):
     (tmp_path / "e.bindings.toml").write_text(bindings)
     verdicts = check(tmp_path / "e.fret", log, tmp_path)
     assert any("[" in v.requirement for v in verdicts), [v.requirement for v in verdicts]
+
+
+def test_the_runner_reads_a_sampled_trace_as_the_audit_does(tmp_path):
+    """Where the runner and the audit could part: a byte that is not UTF-8 in a comment
+    line (both refuse the file, naming the line), a row of a clock no line names (both
+    refuse), a bad cell in a row of a clock nothing is judged on (neither reads it: both
+    judge the others), a column holding true/false in one clock and numbers in another
+    (each clock read apart: both judge)."""
+    fret = tmp_path / "t.fret"
+    fret.write_text("@tick_period 100 ms\nA: the sw shall always satisfy y\n"
+                    "E: the sw shall always satisfy x > 0\n")
+    exe = _runner(fret, tmp_path)
+    if exe is None:
+        pytest.skip("no C compiler")
+    head = ("# fretc sampled trace of t.mcap\n# fretc clock 1: A\n# fretc per entity: E: k\n"
+            "# fretc clock 2: E[k=1]\n# fretc clock 3: Z\n")
+    plan = load_plan(AuditConfig(requirements=(str(fret),)))
+    cases = {
+        "utf8": (head.replace("Z", "Z\xe9").encode("latin-1")
+                 + b"time,tick,x,y\n0,1,,true\n0,2,1,\n", 5),
+        "label": ((head + "time,tick,x,y\n0,1,,true\n0,7,1,\n").encode(), 8),
+        "unused": ((head + "time,tick,x,y\n0,1,,true\n0,2,1,\n0.1,3,oops,oops\n").encode(),
+                   None),
+        "types": ((head + "time,tick,x,y\n0,1,true,true\n0,2,1,2\n").encode(), None),
+    }
+    for name, (data, line) in cases.items():
+        csv = tmp_path / f"{name}.csv"
+        csv.write_bytes(data)
+        la = audit_log(plan, str(csv))
+        run = subprocess.run([str(exe), str(csv)], capture_output=True, text=True)
+        if line is not None:
+            assert all(v.verdict == "error" for v in la.verdicts), name
+            assert run.returncode == 2 and f"{csv}:{line}" in run.stderr, (name, run.stderr)
+            assert any(f"{csv}:{line}" in (v.error or "") for v in la.verdicts), name
+        else:
+            words = {v.requirement: v.verdict for v in la.verdicts}
+            said = dict(row.split("\t")[:2] for row in run.stdout.splitlines())
+            assert not run.stderr and said == words, (name, run.stderr, said, words)

@@ -529,3 +529,16 @@ def test_csv_nan_and_inf_cells(tmp_path):
     src = open_log(_csv(tmp_path, "x\nnan\ninf\n-inf\n1\n"))
     vals = [r.values["x"] for r in src.rows()]
     assert np.isnan(vals[0]) and vals[1:] == [np.inf, -np.inf, 1.0]
+
+
+def test_a_time_past_a_float_in_a_row_of_another_clock_is_an_error_not_a_crash(tmp_path):
+    """A sampled trace's row of another clock at 1e400 s, then one going back: the read of
+    clock 1 says where time goes backwards (the previous row's time was printed as a float:
+    an internal OverflowError)."""
+    from fretc.common.problems import CsvError
+
+    p = _csv(tmp_path, "# fretc sampled trace of x\n# fretc clock 1: A\n# fretc clock 2: B\n"
+             "time,tick,a,b\n0,1,1,\n1e400,2,,1\n0.1,1,0,\n", "s.csv")
+    with pytest.raises(CsvError) as err:
+        open_log(str(p))  # (a trace of several clocks read whole)
+    assert str(err.value).startswith(f"{p}:7 (column 'time'): ") and "goes backwards" in str(err.value)
