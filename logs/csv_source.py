@@ -9,8 +9,9 @@ import re
 from array import array
 from bisect import bisect_right
 from collections.abc import Iterable, Iterator
+from itertools import islice
 from types import SimpleNamespace
-from typing import NamedTuple
+from typing import NamedTuple, TextIO
 
 import numpy as np
 
@@ -267,7 +268,8 @@ class CsvSource(LogSource):
 
     def _raw(self) -> Iterator[tuple[int, list[str] | CsvError]]:
         """The file's rows as the :mod:`csv` module reads them: ``(line, cells)``, then
-        ``(line, CsvError)`` where it stops being UTF-8 CSV.
+        ``(line, CsvError)`` where it stops being UTF-8 CSV (:class:`_FileRows`, which
+        also gives them a chunk at a time).
 
         Raises:
             LogError: the file cannot be opened."""
@@ -275,17 +277,7 @@ class CsvSource(LogSource):
             f = open(self.path, newline="", encoding="utf-8")
         except OSError as exc:
             raise LogError(self.path, f"cannot read: {exc.strerror or exc}") from None
-        with f:
-            reader = csv.reader(f)
-            try:
-                for cells in reader:
-                    yield reader.line_num, cells
-            except csv.Error as exc:
-                yield reader.line_num, CsvError(self.path, reader.line_num,
-                                                f"malformed CSV: {exc}")
-            except UnicodeDecodeError as exc:
-                line, what = _bad_utf8(self.path, exc)
-                yield line, CsvError(self.path, line, f"not UTF-8 text: {what}")
+        return _FileRows(self.path, f)
 
     def _clock_lines(self) -> dict[str, list[str]]:
         """The trace's clocks (:func:`clock_lines`)."""
@@ -462,6 +454,45 @@ class CsvSource(LogSource):
             self.counts[CSV_TOPIC] = self.counts.get(CSV_TOPIC, 0) + 1
             yield Message(CSV_TOPIC, t, t, None, SimpleNamespace(**row.values))
         self._start_time, self._end_time = first, last
+
+
+class _FileRows:
+    """The rows of an open CSV file as the :mod:`csv` module reads them, ``(line, cells)``,
+    then ``(line, CsvError)`` where it stops being UTF-8 CSV; closed at its end. Iterate
+    it, or take rows :meth:`chunk` at a time (no Python frame per row)."""
+
+    def __init__(self, path: str, f: TextIO) -> None:
+        self.path, self.f = path, f
+        self.reader = csv.reader(f)
+
+    def __iter__(self) -> _FileRows:
+        return self
+
+    def __next__(self) -> tuple[int, list[str] | CsvError]:
+        got = self.chunk(1)
+        if not got:
+            raise StopIteration
+        return got[0]
+
+    def chunk(self, n: int) -> list[tuple[int, list[str] | CsvError]]:
+        """The next ``n`` rows (fewer at the end, the error last where there is one)."""
+        out: list[tuple[int, list[str] | CsvError]] = []
+        if self.f.closed:
+            return out
+        reader, append = self.reader, out.append
+        try:
+            for cells in islice(reader, n):
+                append((reader.line_num, cells))
+            if len(out) == n:
+                return out
+        except csv.Error as exc:
+            append((reader.line_num, CsvError(self.path, reader.line_num,
+                                              f"malformed CSV: {exc}")))
+        except UnicodeDecodeError as exc:
+            line, what = _bad_utf8(self.path, exc)
+            append((line, CsvError(self.path, line, f"not UTF-8 text: {what}")))
+        self.f.close()
+        return out
 
 
 def _bad_utf8(path: str, exc: UnicodeDecodeError) -> tuple[int, str]:
