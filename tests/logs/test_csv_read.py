@@ -70,7 +70,7 @@ def _reference(path: str):
             time = _time(path, line, row["time"])
             if last is not None and time < last:
                 raise CsvError(path, line, f"time {row['time']} s goes backwards (previous "
-                               f"row at {last / 1e9} s)", column="time")
+                               f"row at {Decimal(last) / 10**9} s)", column="time")
             last = time
         if cut_line is not None:
             raise CsvError(path, line, f"a row after the cut (line {cut_line}): nothing was "
