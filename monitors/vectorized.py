@@ -146,8 +146,8 @@ class _Series:
             return self.read(name_of(node), numeric=(op == "var"))
         if op in ("call", "fn"):
             return self.read(to_smv(node), numeric=(op == "fn"))
-        if op == "num":
-            return np.full(n, float(name_of(node)), np.float64)
+        if op == "num":  # one number read at every tick (a read-only view, no array)
+            return np.broadcast_to(np.float64(float(name_of(node))), (n,))
         raise VectorizeError(f"cannot evaluate IR node {op!r}")
 
     def _term(self, node: Node, numeric: builtins.bool) -> np.ndarray:
