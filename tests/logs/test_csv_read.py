@@ -36,9 +36,9 @@ def _time(path, line, cell):
     return int((value * 1_000_000_000).to_integral_value())
 
 
-def _reference(path: str):
-    """The format read row by row (a trace of one clock): (columns, types, row count,
-    unknown rows, gap rows, cut time, rows as (index, line, time, values, unknown, gap))."""
+def _lines(path: str) -> list:
+    """The file's rows the format reads, ``(line, stripped cells)``, then
+    ``(line, CsvError)`` where it stops being CSV."""
     with open(path, newline="", encoding="utf-8") as f:
         reader = csv.reader(f)
         lines = []
@@ -52,6 +52,13 @@ def _reference(path: str):
         except csv.Error as exc:
             lines.append((reader.line_num, CsvError(path, reader.line_num,
                                                     f"malformed CSV: {exc}")))
+    return lines
+
+
+def _reference(path: str):
+    """The format read row by row (a trace of one clock): (columns, types, row count,
+    unknown rows, gap rows, cut time, rows as (index, line, time, values, unknown, gap))."""
+    lines = _lines(path)
     if not lines:
         raise CsvError(path, 1, "empty file: expected a header row of variable names")
     (_line, header), data = lines[0], lines[1:]
