@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import csv
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
@@ -47,22 +47,22 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fretc.common.problems import SignalError
-from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, GAP_CELL,
-                                   NOT_SAMPLED_LINE, PER_ENTITY_LINE, SAMPLED_MARK,
-                                   UNKNOWN_CELL, escape_id)
+from fretc.logs.csv_source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, NOT_SAMPLED_LINE,
+                                   PER_ENTITY_LINE, SAMPLED_MARK, escape_id)
 
 from fretc.audit.entities import entity_of_requirements
+from fretc.audit.sampled_clock import SampledClock, pass_cells, seconds
 from fretc.audit.log import KeptPasses, audit_keeping_passes
 from fretc.audit.model import AuditPlan
 from fretc.audit.plan import select_variant
-from fretc.audit.passes import ClockPass, clock_key
+from fretc.audit.passes import clock_key
 
 if TYPE_CHECKING:
     from fretc.audit.model import RequirementPlan
     from fretc.audit.verdict import LogAudit
 
 __all__ = ["SampledClock", "sampled_clocks", "csv_name", "sampled_variables",
-           "write_sampled_csv", "pass_cells"]
+           "write_sampled_csv", "pass_cells", "seconds"]
 
 
 def sampled_variables(plan: AuditPlan) -> list[str]:
@@ -76,57 +76,6 @@ def sampled_variables(plan: AuditPlan) -> list[str]:
             if v in bound and v not in names:
                 names.append(v)
     return names
-
-
-def seconds(ns: int) -> str:
-    """Integer nanoseconds as exact decimal seconds (``1700000000.1``)."""
-    sign = "-" if ns < 0 else ""
-    whole, frac = divmod(abs(int(ns)), 1_000_000_000)
-    return f"{sign}{whole}" + (f".{frac:09d}".rstrip("0") if frac else "")
-
-
-@dataclass
-class SampledClock:
-    """One clock of a sampled trace.
-
-    Attributes:
-        ids: the requirements judged on it.
-        times: its tick times (ns).
-        columns: variable -> its cells, one per tick (text, marks included).
-        cut: the time (ns) where the damage ends the span read, or None.
-        entity_of: the per-entity requirement whose entity it is (``ids`` is that
-            entity's verdict's name), or None.
-    """
-
-    ids: list[str]
-    times: np.ndarray
-    columns: dict[str, list[str]] = field(default_factory=dict)
-    cut: int | None = None
-    entity_of: str | None = None
-
-    def agrees(self, other: SampledClock) -> bool:
-        """The same ticks and cut, and the same cells of the variables both have."""
-        return (self.cut == other.cut and np.array_equal(self.times, other.times)
-                and all(self.columns[n] == other.columns[n]
-                        for n in self.columns.keys() & other.columns.keys()))
-
-
-def pass_cells(res: ClockPass, name: str) -> list[str]:
-    """The cells of variable ``name`` over the ticks of ``res``: values, ``unknown`` where a
-    gap leaves it unknown, ``gap`` at the ticks standing for a gap's lost ticks."""
-    col = res.columns[name]
-    if col.dtype == np.bool_:
-        out = ["true" if x else "false" for x in col.tolist()]
-    else:
-        out = [repr(float(x)) for x in col.tolist()]
-    mask = res.unknown.get(name)
-    if mask is not None:
-        for i in np.flatnonzero(mask[:len(out)]).tolist():
-            out[i] = UNKNOWN_CELL
-    for i in res.tick_gaps:
-        if i < len(out):
-            out[i] = GAP_CELL
-    return out
 
 
 def _own_clock(kept: KeptPasses, r: RequirementPlan) -> SampledClock | None:

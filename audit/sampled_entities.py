@@ -24,11 +24,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fretc.audit.entities import entity_of_requirements, entity_passes
+from fretc.audit.sampled_clock import SampledClock, pass_cells
 from fretc.audit.verdict import LogAudit
 
 if TYPE_CHECKING:
     from fretc.audit.model import AuditPlan
-    from fretc.audit.sampled_csv import SampledClock
 
 __all__ = ["EntityBlock", "entity_blocks"]
 
@@ -58,8 +58,6 @@ def entity_blocks(plan: AuditPlan, path: str) -> tuple[LogAudit, list[EntityBloc
     """The per-entity requirements of ``plan`` (all of its requirements must be) on the
     log at ``path``: the log's audit of them and one :class:`EntityBlock` each, in the
     plan's order; every entity judged alone (:func:`fretc.audit.entities.entity_passes`)."""
-    from fretc.audit.sampled_csv import SampledClock, pass_cells
-
     groups = entity_of_requirements(plan)
 
     def keep(r, res) -> SampledClock:  # (each entity's pass dropped once its cells are)
