@@ -64,18 +64,20 @@ def escape_id(rid: str) -> str:
     return "".join(chr(b) if b in _PLAIN else f"\\x{b:02x}" for b in rid.encode("utf-8"))
 
 
+_HEX2 = re.compile(r"[0-9a-f]{2}")
+
+
 def unescape_id(word: str) -> str:
-    """The requirement id :func:`escape_id` wrote as ``word``."""
+    """The requirement id :func:`escape_id` wrote as ``word``: each ``\\xNN`` of two
+    lowercase hex digits is the byte NN (as the C monitors' runner reads it); anything else
+    stands for itself."""
     out = bytearray()
     i = 0
     while i < len(word):
-        if word.startswith("\\x", i) and len(word) >= i + 4:
-            try:
-                out.append(int(word[i + 2:i + 4], 16))
-                i += 4
-                continue
-            except ValueError:
-                pass
+        if word.startswith("\\x", i) and _HEX2.fullmatch(word, i + 2, i + 4):
+            out.append(int(word[i + 2:i + 4], 16))
+            i += 4
+            continue
         out += word[i].encode("utf-8")
         i += 1
     return out.decode("utf-8", errors="replace")
@@ -101,7 +103,7 @@ def clock_lines(path: str | os.PathLike) -> dict[str, list[str]]:
     for line in _sampled_comments(path):
         if line.startswith(CLOCK_LINE) and ":" in line:
             label, _, ids = line[len(CLOCK_LINE):].partition(":")
-            out[label.strip()] = [unescape_id(w) for w in ids.split()]
+            out[label.strip()] = [unescape_id(w) for w in _words(ids)]
     return out
 
 
@@ -112,7 +114,7 @@ def not_sampled_lines(path: str | os.PathLike) -> dict[str, str]:
     for line in _sampled_comments(path):
         if line.startswith(NOT_SAMPLED_LINE):
             word, _, why = line[len(NOT_SAMPLED_LINE):].partition(": ")
-            out[unescape_id(word.strip())] = why.strip()
+            out[unescape_id(word)] = why.strip()
     return out
 
 
@@ -124,12 +126,12 @@ def per_entity_lines(path: str | os.PathLike) -> dict[str, tuple[str, list[str]]
     for line in _sampled_comments(path):
         if line.startswith(PER_ENTITY_LINE):
             word, _, name = line[len(PER_ENTITY_LINE):].partition(": ")
-            out[unescape_id(word.strip())] = (name.strip(), [])
+            out[unescape_id(word)] = (name.strip(), [])
             continue
         if line.startswith(CLOCK_LINE) and ":" in line:
-            ids = [unescape_id(w) for w in line[len(CLOCK_LINE):].partition(":")[2].split()]
+            ids = [unescape_id(w) for w in _words(line[len(CLOCK_LINE):].partition(":")[2])]
         elif line.startswith(NOT_SAMPLED_LINE):
-            ids = [unescape_id(line[len(NOT_SAMPLED_LINE):].partition(": ")[0].strip())]
+            ids = [unescape_id(line[len(NOT_SAMPLED_LINE):].partition(": ")[0])]
         else:
             continue
         for i in ids:
@@ -137,6 +139,13 @@ def per_entity_lines(path: str | os.PathLike) -> dict[str, tuple[str, list[str]]
             if bracket and owner in out and i.endswith("]"):
                 out[owner][1].append(i)
     return out
+
+
+def _words(ids: str) -> list[str]:
+    """The ids of a comment line's list, as :func:`escape_id` writes them: separated by
+    spaces (an id holds none; a tab or another byte is part of the word, as the C runner
+    reads it)."""
+    return [w for w in ids.rstrip("\r\n").split(" ") if w]
 
 
 def _sampled_comments(path: str | os.PathLike) -> list[str]:

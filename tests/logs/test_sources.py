@@ -8,6 +8,8 @@ import numpy as np
 import struct
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from mcap.reader import make_reader
 from mcap.writer import CompressionType
 from rosbags.highlevel import AnyReader
@@ -542,3 +544,15 @@ def test_a_time_past_a_float_in_a_row_of_another_clock_is_an_error_not_a_crash(t
     with pytest.raises(CsvError) as err:
         open_log(str(p))  # (a trace of several clocks read whole)
     assert str(err.value).startswith(f"{p}:7 (column 'time'): ") and "goes backwards" in str(err.value)
+
+
+@given(st.text(max_size=20))
+def test_an_escaped_id_reads_back_and_a_malformed_escape_stands_for_itself(rid):
+    """escape_id/unescape_id round trip; ``\\x`` followed by anything but two lowercase
+    hex digits (a tab, a sign, upper case: Python's int() took ``\\x\\t5`` for byte 5) is
+    text, as the C monitors' runner reads it."""
+    from fretc.logs.csv_source import escape_id, unescape_id
+
+    assert unescape_id(escape_id(rid)) == rid.encode("utf-8", "replace").decode("utf-8", "replace")
+    for bad in ("\\x\t5", "\\x+5", "\\x5", "\\xAB", "\\x 5"):
+        assert unescape_id(f"a{bad}z") == f"a{bad}z"
