@@ -73,7 +73,7 @@ def entity_blocks(plan: AuditPlan, path: str) -> tuple[LogAudit, list[EntityBloc
     for r in plan.requirements:
         vs = [v for v in by_id.get(r.id, []) if v.requirement == r.id
               or v.requirement.startswith(f"{r.id}[")]
-        names = [n for n in r.variables]
+        names = list(r.variables)
         if len(vs) == 1 and vs[0].requirement == r.id and not (
                 vs[0].verdict == "vacuous" and vs[0].notes
                 and vs[0].notes[0].startswith(f"no entity {groups[r.index][0]} ")):

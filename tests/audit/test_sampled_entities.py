@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 from _c_monitors import build, c_compiler
 from _logs import ROS2, S, T, write_mcap
+from test_entities import _track_types
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.audit.sampled_csv import write_sampled_csv
 from fretc.cli import main
@@ -42,16 +43,6 @@ TRACK_FRET = ("@tick_period 100 ms\n"
               "T: in present mode the robot shall always satisfy dist > 0.5\n"
               "U: upon present the robot shall within 3 ticks satisfy dist > 1.5\n"
               "N: the robot shall always satisfy !near\n")
-
-
-def _track_types():
-    from rosbags.typesys import get_types_from_msg
-
-    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
-        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
-        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
-                                         "tracking_msgs/msg/TrackArray"))
-    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
 
 
 def _tracks_log(path: Path, rows: list[dict[int, float]], **kw) -> Path:
