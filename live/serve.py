@@ -86,8 +86,12 @@ class FoxgloveServer:
     Args:
         host: interface to bind (loopback by default: nothing leaves the machine unless
             asked).
-        port: TCP port; 0 picks a free one (see :attr:`port`).
+        port: TCP port; 0 picks a free one (see :attr:`port`, known once started).
         name: the server name clients see.
+        start: listen at once; False: :meth:`start` later, after the channels are created,
+            so that a client connecting at once is advertised every channel in its first
+            ``advertise`` (else it may subscribe, and a server waiting for a subscription
+            may start sending, before the last channels are advertised).
 
     Channels are created with :meth:`channel` and messages sent with :meth:`log`.
     :meth:`restart` stops the server and starts a new one on the same port with the same
@@ -95,7 +99,7 @@ class FoxgloveServer:
     """
 
     def __init__(self, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
-                 name: str = "fretc") -> None:
+                 name: str = "fretc", start: bool = True) -> None:
         fg = _foxglove()
         self._fg = fg
         self.host = host
@@ -103,8 +107,16 @@ class FoxgloveServer:
         self.context = fg.Context()
         self.listener = _Listener()
         self.channels: dict[str, Any] = {}  # topic -> the library's channel or writer
-        self._server = self._start(port)
-        self.port = self._server.port
+        self._server: Any = None
+        self.port = port
+        if start:
+            self.start()
+
+    def start(self) -> None:
+        """Listen on :attr:`port` (nothing when listening already)."""
+        if self._server is None:
+            self._server = self._start(self.port)
+            self.port = self._server.port
 
     def _start(self, port: int):
         return self._fg.start_server(name=self.name, host=self.host, port=port,
@@ -167,8 +179,9 @@ class FoxgloveServer:
         self._server = self._start(self.port)
 
     def stop(self) -> None:
-        """Stop the server."""
-        self._server.stop()
+        """Stop the server (nothing when it never started)."""
+        if self._server is not None:
+            self._server.stop()
 
 
 class Pacer:

@@ -88,10 +88,13 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
     Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
     """
     own = server is None
-    if server is None:
-        server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}")
+    if server is None:  # started once every channel exists: a client sees them all at once
+        server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}",
+                                start=False)
     try:
         rec = ServeRecorder(server, rate=rate, ros1=ros1)
+        if own:
+            server.start()
         if on_ready is not None:
             on_ready(server)
         if wait:

@@ -5,6 +5,7 @@ going backwards, a payload that does not decode) are data problems, never crashe
 
 from __future__ import annotations
 
+import socket
 import struct
 import threading
 import time
@@ -396,3 +397,90 @@ def test_a_topic_advertised_with_another_type_than_the_bindings_declare_is_not_r
         server.stop()
     (ra,) = la.verdicts
     assert ra.verdict == "error" and "advertised as std_msgs/msg/Float64" in ra.error
+
+
+def _first_advertise(url: str) -> set[str]:
+    """The topics of the first ``advertise`` frame a Foxglove WebSocket client connecting to
+    ``url`` receives (retrying the connection for up to 60 s); it then subscribes to the
+    first of them (a server waiting for a subscription goes on)."""
+    import json
+
+    from websockets.sync.client import connect
+
+    from fretc.live.client import SUBPROTOCOLS
+
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            ws = connect(url, subprotocols=SUBPROTOCOLS, open_timeout=10)
+            break
+        except OSError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.01)
+    with ws:
+        while True:
+            frame = ws.recv(timeout=30)
+            msg = json.loads(frame) if isinstance(frame, str) else {}
+            if msg.get("op") == "advertise":
+                first = msg["channels"][0]["id"]
+                ws.send(json.dumps({"op": "subscribe",
+                                    "subscriptions": [{"id": 0, "channelId": first}]}))
+                time.sleep(0.3)  # (the server sees the subscription before the close)
+                return {ch["topic"] for ch in msg["channels"]}
+
+
+def _slow_channels(monkeypatch) -> None:
+    """Each channel of a FoxgloveServer takes 0.1 s more to create (a loaded machine): a
+    client connecting meanwhile would see only the first ones."""
+    make = FoxgloveServer.channel
+
+    def slow(self, *args, **kwargs):
+        time.sleep(0.1)
+        return make(self, *args, **kwargs)
+
+    monkeypatch.setattr(FoxgloveServer, "channel", slow)
+
+
+def test_the_simulator_server_advertises_every_topic_in_its_first_frame(monkeypatch):
+    """``python -m fretc.sim serve`` starts a run once a client subscribed: a client
+    connecting at once must be advertised every topic in one frame, else it subscribes to
+    the first ones, the run starts and the others are missed (seen under load: requirements
+    in error, "topic /ground_truth/clearance is not advertised")."""
+    from fretc.sim.recording import TOPICS
+    from fretc.sim.serve import serve
+
+    _slow_channels(monkeypatch)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    t = threading.Thread(target=serve, args=("nominal",), daemon=True,
+                         kwargs={"rate": 1000.0, "port": port})
+    t.start()
+    topics = _first_advertise(f"ws://127.0.0.1:{port}")
+    t.join(60)
+    assert topics == {topic for topic, _type in TOPICS}
+
+
+def test_the_replay_server_advertises_every_topic_of_the_log_in_its_first_frame(monkeypatch):
+    """``fretc replay LOG --serve`` listens once the log's channels exist (same reason as
+    above): the first client is advertised them all in one frame."""
+    from click.testing import CliRunner
+    from mcap.reader import make_reader
+
+    from fretc.cli import main
+
+    _slow_channels(monkeypatch)
+    trace = ROOT / "traces" / "sif_disabled.mcap"
+    with open(trace, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    t = threading.Thread(target=CliRunner().invoke, daemon=True, args=(main, [
+        "replay", str(trace), "--serve", "--port", str(port), "--rate", "1000"]))
+    t.start()
+    topics = _first_advertise(f"ws://127.0.0.1:{port}")
+    t.join(60)
+    assert topics == {ch.topic for ch in summary.channels.values()}

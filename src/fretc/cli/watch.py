@@ -364,6 +364,8 @@ def replay_cmd(log: str, serve: str | None, rate: float, host: str, port: int, w
 
     server = _replay_server(log, serve, host, port, dds_config or zenoh_config)
     advertise_mcap(log, server)
+    if hasattr(server, "start"):  # the Foxglove WebSocket server listens from here
+        server.start()
     for topic, why in sorted(getattr(server, "skipped", {}).items()):
         click.echo(f"not published: {topic}: {why}", err=True)
     click.echo(f"serving {log} on {server.url} at {rate:g}x", err=True)
@@ -404,7 +406,9 @@ def _replay_server(log: str, serve: str, host: str, port: int, config: str | Non
                                      "(or --serve alone)", param_hint="--serve")
         from fretc.live.serve import FoxgloveServer
 
-        return FoxgloveServer(host=host, port=port, name=f"fretc replay {log}")
+        # started once the log's channels are created (advertise_mcap): a client
+        # connecting at once is advertised them all in one message
+        return FoxgloveServer(host=host, port=port, name=f"fretc replay {log}", start=False)
     except (RuntimeError, MissingDependency) as exc:
         raise MissingExtra(str(exc)) from None
 
