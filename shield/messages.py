@@ -17,12 +17,20 @@ requirements. Each tick:
   with the fields the bindings' inversion gives the corrected atoms
   (:mod:`fretc.shield.plan`, as ``fretc testgen --bindings`` writes tests); every message is
   read back through the bindings before it is published, and one that would not give the
-  decided values is an internal error, never sent.
+  decided values is an internal error, never sent;
+* the messages are given in an order in which a reader sampling between two of them (a
+  recorder's receipt times, the audit's ticks at another phase) sees, at every point, a
+  valuation the shield accepts from the tick's state (:meth:`ShieldRuntime.accepts`: the
+  held messages of the last tick with the new ones published so far): a stop's zero
+  velocity before the stop request is raised, the request lowered before the velocity
+  rises again (Safe-ROS's R3). The first such order of the output topics' order is taken
+  (up to :data:`ORDER_TOPICS` topics); when none exists, that order itself.
 """
 
 from __future__ import annotations
 
 import copy
+import itertools
 import tomllib
 from collections.abc import Callable
 from pathlib import Path
@@ -35,6 +43,9 @@ from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.spec import Bindings
 
 __all__ = ["MessageShield", "ShieldInputError", "proposals_of", "default_message"]
+
+#: the most output topics whose publication orders are searched (their permutations)
+ORDER_TOPICS = 4
 
 
 class ShieldInputError(Exception):
@@ -81,6 +92,8 @@ class MessageShield:
             raise ShieldError("no binding for " + ", ".join(missing) + f" in {bindings.source}")
         self.groups = [(m, g) for m in runtime.machines for g in m.groups]
         self.output_topics = list(dict.fromkeys(t for _m, g in self.groups for t in g["topics"]))
+        #: the messages of the last tick published (topic -> message)
+        self.published: dict[str, Any] = {}
 
     def _read(self, v: str) -> bool:
         return any(s[0] == v for m in self.runtime.machines for s in (*m.ins, *m.outs))
@@ -122,8 +135,39 @@ class MessageShield:
         proposal = self._values(props, now_ns)
         for v in self.runtime.outputs:
             proposal.setdefault(v, False)
+        before = self.runtime.state
         d = self.runtime.step(inputs, proposal)
-        return d, self._messages(d, props, now_ns)
+        msgs = self._order(self._messages(d, props, now_ns), before, inputs, now_ns)
+        self.published.update(msgs)
+        return d, msgs
+
+    def _order(self, msgs: list[tuple[str, Any]], before: tuple[tuple[int, ...], ...],
+               inputs: dict[str, Any], now_ns: int) -> list[tuple[str, Any]]:
+        """``msgs`` in the first order (of their permutations) every proper prefix of which,
+        published over the last tick's messages, gives outputs the shield accepts from
+        ``before`` (module docstring); ``msgs`` as given when none does or there is no last
+        tick."""
+        if len(msgs) < 2 or len(msgs) > ORDER_TOPICS or \
+                not all(t in self.published for t, _m in msgs):
+            return msgs
+        accepted: dict[frozenset[str], bool] = {}  # published topics -> accepted
+
+        def ok(prefix: tuple[tuple[str, Any], ...]) -> bool:
+            key = frozenset(t for t, _m in prefix)
+            if key not in accepted:
+                values = self._values({**self.published, **dict(prefix)}, now_ns)
+                for v in self.runtime.outputs:
+                    values.setdefault(v, False)
+                try:
+                    accepted[key] = self.runtime.accepts(before, inputs, values)
+                except (KeyError, ValueError, TypeError):  # (a value the tests cannot read)
+                    accepted[key] = False
+            return accepted[key]
+
+        for order in itertools.permutations(msgs):
+            if all(ok(order[:i]) for i in range(1, len(order))):
+                return list(order)
+        return msgs
 
     def _values(self, msgs: dict[str, Any], now_ns: int) -> dict[str, Any]:
         """The output variables' values on the messages ``msgs`` (topic -> message)."""

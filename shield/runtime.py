@@ -339,6 +339,21 @@ class ShieldRuntime:
         """Each machine's state bits."""
         return tuple(m.state for m in self.machines)
 
+    def accepts(self, state: tuple[tuple[int, ...], ...], inputs: dict[str, Any],
+                outputs: dict[str, Any]) -> bool:
+        """Whether ``outputs`` (every output variable's value) keep every requirement
+        winnable from ``state`` (as :attr:`state` gave it) with ``inputs``; nothing
+        advances. A host publishing a tick's outputs as several messages uses it to order
+        them so that a sampler between two of them sees an accepted valuation.
+
+        Raises:
+            KeyError, ValueError, TypeError: as :meth:`step`."""
+        for m, bits in zip(self.machines, state):
+            values = [f(inputs) for f in m.in_tests] + [f(outputs) for f in m.out_tests]
+            if _walk(m.nodes, m.safe, values + list(bits)) != 1:
+                return False
+        return True
+
     def step(self, inputs: dict[str, Any], proposed: dict[str, Any]) -> Decision:
         """One tick: ``inputs`` maps every input variable to its value (bool, or a number
         for a numeric one), ``proposed`` every output variable to the controller's value.

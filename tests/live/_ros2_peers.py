@@ -24,7 +24,9 @@ Roles:
   under 0.9 m (a stop requested that nothing enforces), until the controller has gone.
 * ``record``: an independent recorder: ``/scan``, ``/cmd_vel``, ``/cmd_vel_filtered``,
   ``/gwendolen_control`` as CDR into the MCAP file OUT (mcap's writer, the schemas of ROS 2
-  Jazzy's definitions from rosbags), log time = receipt time, until the controller has gone.
+  Jazzy's definitions from rosbags), log time = the publisher's source timestamp (the order
+  in which the node published: on a loaded machine two topics' messages can be received in
+  the other order), until the controller has gone.
 """
 
 from __future__ import annotations
@@ -275,11 +277,12 @@ def record(seconds: float, out: str) -> None:
                                                  schema_id=sid)
             pkg, _m, name = typ.split("/")
             cls = getattr(importlib.import_module(pkg + ".msg"), name)
-            qos = BEST_EFFORT if topic == "/scan" else QoSProfile(
-                depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+            # the publishers' reliability (as rosbag2 adapts its QoS): a loaded machine
+            # drops no message a reliable publisher sent
+            qos = BEST_EFFORT if topic == "/scan" else RELIABLE
 
-            def cb(raw, topic=topic):
-                t = time.time_ns()
+            def cb(raw, info, topic=topic):
+                t = info["source_timestamp"]
                 w.add_message(channels[topic], log_time=t, publish_time=t, data=raw)
 
             n.create_subscription(cls, topic, cb, qos, raw=True)
