@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.audit.passes import ClockPass
+from fretc.monitors.completions import TooManyStates, completed_verdict
 from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement
 from fretc.monitors.judge3 import Unknowns, definite_evidence, possible_trigger
 from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
@@ -55,6 +56,13 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     ev3 = ThreeValued(res.columns, res.unknown, n, nan_unknown)
     lo, hi = ev3.pair(r.formalization.pt)
     holds = True if lo[-1] else (False if not hi[-1] else None)
+    completed, outgrew = False, ""
+    if holds is None:  # Kleene's reading is not complete: every completion decides
+        try:
+            holds = completed_verdict(r.formalization.pt, ev3)
+        except TooManyStates as exc:
+            outgrew = f" (not every way of filling them was followed: {exc})"
+        completed = holds is not None
     status, st_tick = "unknown", None
     if not r.offline and r.monitor_source is not None:
         try:
@@ -75,7 +83,7 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
         holds = _at_cut(r, res, v, holds, ev, status, st_tick, n)
     elif holds is None:
         v.verdict = "unknown"
-        v.unknown_reason = _why(res, unknown, n)
+        v.unknown_reason = _why(res, unknown, n, outgrew)
     if holds is True and ev is not None and ev.triggers == 0:
         ev.vacuous = True
         if parts is not None and possible_trigger(parts):
@@ -84,8 +92,13 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     elif ev is not None:
         ev.vacuous = False
     if holds is False and ev is not None and ev.violation is None:
-        v.notes.append(_pt_decides(hi))
+        v.notes.append(_COMPLETED if completed else _pt_decides(hi))
     return holds, ev, status, st_tick
+
+
+_COMPLETED = ("violated whatever the unknown ticks held: its pt formula is false at the last "
+              "tick in every way of filling them (each followed through the formula's "
+              "states; no single failed trigger lies wholly in ticks read)")
 
 
 def _pt_decides(hi: np.ndarray) -> str:
@@ -97,17 +110,19 @@ def _pt_decides(hi: np.ndarray) -> str:
             "ticks read)")
 
 
-def _why(res: ClockPass, unknown: np.ndarray, n: int) -> str:
-    """The unknown verdict's reason: its unknown ticks and the gaps behind them."""
+def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "") -> str:
+    """The unknown verdict's reason: its unknown ticks and the gaps behind them (and
+    ``outgrew``: why the ways of filling them were not all followed)."""
     k = int(unknown.sum())
     first = int(np.argmax(unknown)) if k else 0
     causes = sorted({g.cause or "gap" for g in res.gaps})
     what = ", ".join(causes) if causes else "comparisons with NaN"
     if res.lost_words:
         what += f": {res.lost_words}"
+    depends = "may depend" if outgrew else "depends"
     return (f"{k} of its {n} ticks are unknown ({what}; the first at tick {first}, "
-            f"{int(res.times[first])} ns), and the verdict depends on them: no violation "
-            "in the ticks read, but one could lie in the ticks not read")
+            f"{int(res.times[first])} ns), and the verdict {depends} on them{outgrew}: no "
+            "violation in the ticks read, but one could lie in the ticks not read")
 
 
 def _at_cut(r, res: ClockPass, v, holds, ev, status, st_tick, n: int) -> bool | None:

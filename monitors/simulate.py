@@ -236,10 +236,12 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
     """``(ft, pt)`` of a trace with NaN values: True or False where every value the NaN
     could stand for gives it, None (unknown) where it depends on them, as the audit judges
     a NaN (docs/guide/ticks.md, "NaN"; :mod:`fretc.monitors.three_valued`, Kleene's
-    three-valued logic). ``pt`` at tick i is the pt formula's pair at i; ``ft`` at i is the
+    three-valued logic, and :mod:`fretc.monitors.completions` where it leaves a verdict
+    open). ``pt`` at tick i is the pt formula's pair at i; ``ft`` at i is the
     pt formula's at the last tick of the trace from i (FRET's ft verdict of a trace is its pt
     formula at the last tick: tests/semantics); both exact where no NaN is read. A pt formula
     with a future-time function inside is unknown wherever a NaN is in the trace."""
+    from fretc.monitors.completions import TooManyStates, completed_verdict
     from fretc.monitors.three_valued import ThreeValued
     from fretc.monitors.vectorized import VectorizeError
 
@@ -247,22 +249,28 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
     cols = {v: np.asarray(trace[v], dtype=np.bool_ if all(type(x) is bool for x in trace[v])
                           else np.float64) for v in f.variables}
 
-    def three(lo, hi):
-        return True if lo else (False if not hi else None)
+    def three(lo, hi, a: int = 0, b: int = n):  # Kleene's reading, else every completion's
+        if lo or not hi:
+            return bool(lo)
+        try:
+            return completed_verdict(f.pt, ThreeValued({v: c[a:b] for v, c in cols.items()},
+                                                       {}, b - a))
+        except TooManyStates:
+            return None
 
     last_nan = int(np.flatnonzero(nan)[-1])
     try:
         if not f.pt_causal:
             raise VectorizeError("a future-time function inside the pt formula")
         lo, hi = ThreeValued(cols, {}, n).pair(f.pt)
-        pt = [three(a, b) for a, b in zip(lo.tolist(), hi.tolist())]
+        pt = [three(a, b, 0, i + 1) for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist()))]
         ft: list[bool | None] = []
         for i in range(n):
             if i > last_nan:  # no NaN in the trace from i: exact
                 ft.append(bool(ft_at(f.ft, rows[i:])))
                 continue
             sl, sh = ThreeValued({v: c[i:] for v, c in cols.items()}, {}, n - i).pair(f.pt)
-            ft.append(three(bool(sl[-1]), bool(sh[-1])))
+            ft.append(three(bool(sl[-1]), bool(sh[-1]), i, n))
     except VectorizeError:
         first_nan = int(np.flatnonzero(nan)[0])
         pt = [bool(pt_at(f.pt, rows[:i + 1])) if i < first_nan else None for i in range(n)]

@@ -249,18 +249,26 @@ class ThreeValued:
 def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
                n: int, nan_unknown: bool = True) -> tuple[bool | None, Pair]:
     """FRET's finite-trace verdict over ``n`` ticks with unknown ticks: True (every way of
-    filling them satisfies), False (every one violates) or None (it depends on them); and
-    the pt formula's ``(lo, hi)`` at every tick.
+    filling them satisfies), False (every one violates) or None (it depends on them, or
+    the search of :func:`fretc.monitors.completions.completed_verdict`, which decides where
+    Kleene's reading leaves it open, outgrew its bound); and the pt formula's Kleene
+    ``(lo, hi)`` at every tick.
 
     Raises:
         VectorizeError: the pt formula cannot be evaluated over columns.
     """
-    lo, hi = ThreeValued(columns, unknown, n, nan_unknown).pair(pt)
+    from fretc.monitors.completions import TooManyStates, completed_verdict  # (imports this)
+
+    ev = ThreeValued(columns, unknown, n, nan_unknown)
+    lo, hi = ev.pair(pt)
     if lo[-1]:
         return True, (lo, hi)
     if not hi[-1]:
         return False, (lo, hi)
-    return None, (lo, hi)
+    try:
+        return completed_verdict(pt, ev), (lo, hi)
+    except TooManyStates:
+        return None, (lo, hi)
 
 
 def ltl3_verdict(monitor_source: MonitorSource, ev: ThreeValued) -> tuple[str, int | None]:

@@ -192,3 +192,34 @@ def test_range_inf_keeps_its_rep117_meaning(tmp_path):
     la = audit_log(load_plan(AuditConfig((str(tmp_path / "r.fret"),),
                                          (str(tmp_path / "b.toml"),))), str(log))
     assert la.verdicts[0].verdict == "satisfied" and not la.problem_counts
+
+
+def test_a_violation_every_completion_shows_is_not_hidden_by_an_unknown_mode(tmp_path):
+    """``in m`` reads ``m`` at the mode's entry and at its exit: Kleene's reading takes the
+    NaN at tick 2 for two independent unknowns and called the verdict unknown, yet ``m``
+    holds and ``y`` fails at tick 0, so every way of filling the NaN violates the
+    requirement there (bench/fuzz_hostile.py --classes crunner:300 --seed 78, input 31; the
+    C runner said violated at 0)."""
+    (tmp_path / "t.csv").write_text("time,m,y\n0,2,0\n0.1,2,1\n0.2,nan,0.5\n0.3,0,2\n")
+    (tmp_path / "r.fret").write_text("A2: in m the sw shall always satisfy y\n"
+                                     "A3: in m the sw shall always satisfy y > -1\n")
+    plan = load_plan(AuditConfig((str(tmp_path / "r.fret"),)))
+    got = {v.requirement: v for v in audit_log(plan, str(tmp_path / "t.csv")).verdicts}
+    assert got["A2"].verdict == "violated", got["A2"].unknown_reason
+    assert got["A2"].ltl3.status == "violated" and got["A2"].ltl3.tick == 0
+    # and one that every completion satisfies (y > -1 throughout) is satisfied
+    assert got["A3"].verdict == "satisfied", got["A3"].unknown_reason
+
+
+def test_past_the_search_bound_the_verdict_stays_unknown_and_says_why(tmp_path, monkeypatch):
+    """Where the ways of filling the unknown ticks are too many to follow, the verdict is
+    Kleene's unknown, and the reason says the search stopped (never a guess)."""
+    import fretc.monitors.completions as completions
+
+    monkeypatch.setattr(completions, "MAX_STATES", 1)
+    (tmp_path / "t.csv").write_text("time,m,y\n0,2,0\n0.1,2,1\n0.2,nan,0.5\n0.3,0,2\n")
+    (tmp_path / "r.fret").write_text("A2: in m the sw shall always satisfy y\n")
+    plan = load_plan(AuditConfig((str(tmp_path / "r.fret"),)))
+    (v,) = audit_log(plan, str(tmp_path / "t.csv")).verdicts
+    assert v.verdict == "unknown"
+    assert "may depend on them (not every way of filling them was followed" in v.unknown_reason

@@ -58,7 +58,7 @@ def _columns(rows, names):
 _row = st.tuples(st.booleans(), st.booleans(), st.booleans(), st.sampled_from([0.0, 1.0, 2.0]))
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(text=st.sampled_from(SENTENCES), rows=st.lists(_row, min_size=1, max_size=7),
        holes=st.lists(st.tuples(st.integers(0, 6), st.sampled_from("pqmx")), max_size=3))
 def test_a_verdict_is_what_every_completion_gives(text, rows, holes):
@@ -84,6 +84,9 @@ def test_a_verdict_is_what_every_completion_gives(text, rows, holes):
         ltl3s.append(ltl3_two(ms, filled, n))
     if got is not None:
         assert outcomes == {got}, (text, rows, cells)
+    if len(outcomes) == 1 and all(v != "x" for _i, v in cells):
+        # complete on boolean unknowns: the atoms are the variables, every letter a completion
+        assert got == next(iter(outcomes)), (text, rows, cells, outcomes)
     if not cells:
         assert got is not None and (status, tick) == ltl3s[0]
     if status != "unknown":
@@ -162,3 +165,27 @@ def test_a_trigger_before_an_unknown_scope_end_is_counted():
     cols = {"m": np.array([True, True, True]), "p": np.array([False, False, False])}
     unknown = {"m": np.array([False, False, True])}
     assert _definite_triggers(text, cols, unknown, 3)[0] == 1
+
+
+@settings(max_examples=200, deadline=None)
+@given(text=st.sampled_from(SENTENCES + SCOPED), rows=st.lists(_row, min_size=1, max_size=12),
+       start=st.integers(0, 11))
+def test_the_stepped_pt_program_equals_the_vectorized_pt(text, rows, start):
+    """The pt formula stepped tick by tick over its state (:mod:`fretc.monitors.completions`,
+    the exact search's step), from the state read at any tick, gives the vectorized
+    evaluator's value at every tick after it."""
+    from fretc.monitors.completions import _Program
+
+    c, _ms = _compiled_of(text)
+    f = c.formalization
+    n = len(rows)
+    start = min(start, n - 1)
+    cols = _columns(rows, set(f.variables))
+    ev = ThreeValued(cols, {}, n)
+    want = ev.pair(f.pt)[0]
+    prog = _Program(f.pt)
+    state = prog.state_at(ev, start)
+    for i in range(start, n):
+        leaves = {k: bool(ev.pair(prog.nodes[k])[0][i]) for k in prog.leaves}
+        got, state = prog.step(state, leaves, i)
+        assert got == bool(want[i]), (text, rows, start, i)
