@@ -239,16 +239,21 @@ class RowReader:
         for name, value in values.items():
             if self.kept is not None and name not in self.kept:
                 continue
-            col = self.values.get(name)
-            if col is None:
-                col = self.values[name] = array("B")
-            if col.typecode == "B" and name in self.numeric_at:
-                col = self.values[name] = _widened(col)
-            col.append(value)  # type: ignore[arg-type]  # (0/1 in a column of bytes)
+            self._column_of(name).append(value)  # (0/1 in a column of bytes)
         if line != self.next_line:
             self.runs.append((index, line))
         self.next_line = line + 1
         self.count = index + 1
+
+    def _column_of(self, name: str) -> array:
+        """The kept column of ``name`` (new: bytes), widened to ``float64`` once a number
+        was read in it."""
+        col = self.values.get(name)
+        if col is None:
+            col = self.values[name] = array("B")
+        if col.typecode == "B" and name in self.numeric_at:
+            col = self.values[name] = _widened(col)
+        return col
 
     def _cells(self, line: int, cells: list[str], index: int) -> dict[str, float] | None:
         """Check one data row of the clock read: its variables' values (0 where not known),
@@ -336,11 +341,7 @@ class RowReader:
                 self.src.unknown_rows.setdefault(name, []).extend(base + k for k in unknown)
             if self.kept is not None and name not in self.kept:
                 continue
-            col = self.values.get(name)
-            if col is None:
-                col = self.values[name] = array("B")
-            if col.typecode == "B" and name in self.numeric_at:
-                col = self.values[name] = _widened(col)
+            col = self._column_of(name)
             want = np.float64 if col.typecode == "d" else np.uint8
             col.frombytes(vals.astype(want, copy=False).tobytes())
         if times is not None:
