@@ -27,14 +27,15 @@ finite-trace semantics.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from fretc.compiler.ir import Node
-from fretc.monitors.three_valued import ThreeValued
+from fretc.monitors.three_valued import Pair, ThreeValued
 
-__all__ = ["completed_verdict", "TooManyStates", "MAX_STATES", "MAX_STEPS"]
+__all__ = ["pt_verdict", "completed_verdict", "TooManyStates", "MAX_STATES", "MAX_STEPS"]
 
 #: the most states (times the letters of one tick) the run keeps
 MAX_STATES = 4096
@@ -216,3 +217,25 @@ def _evaluate_completion(pt: Node, ev: ThreeValued, prog: _Program, chain: Any) 
     for k, arr in filled.items():
         done._memo[(prog.nodes[k], False)] = (arr, arr)
     return bool(done.pair(pt)[0][-1])
+
+
+def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
+               n: int, nan_unknown: bool = True) -> tuple[bool | None, Pair]:
+    """FRET's finite-trace verdict over ``n`` ticks with unknown ticks: True (every way of
+    filling them satisfies), False (every one violates) or None (it depends on them, or
+    the search of :func:`completed_verdict`, which decides where Kleene's reading leaves it
+    open, outgrew its bound); and the pt formula's Kleene ``(lo, hi)`` at every tick.
+
+    Raises:
+        VectorizeError: the pt formula cannot be evaluated over columns.
+    """
+    ev = ThreeValued(columns, unknown, n, nan_unknown)
+    lo, hi = ev.pair(pt)
+    if lo[-1]:
+        return True, (lo, hi)
+    if not hi[-1]:
+        return False, (lo, hi)
+    try:
+        return completed_verdict(pt, ev), (lo, hi)
+    except TooManyStates:
+        return None, (lo, hi)

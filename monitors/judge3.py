@@ -3,7 +3,7 @@ NaN): the verdict every way of filling them agrees on, and evidence that lies in
 read (../shared/DESIGN.md, "Damage is a gap: never evidence, never the end").
 
 * **The verdict** is FRET's finite-trace verdict three-valued (:func:`fretc.monitors.
-  three_valued.pt_verdict`): violated when every completion of the unknown ticks violates
+  completions.pt_verdict`): violated when every completion of the unknown ticks violates
   the requirement, satisfied when every one satisfies it, unknown otherwise. An invariant
   broken at a tick read is violated, whatever a gap elsewhere held; one that held on every
   tick read but has unknown ticks is unknown.

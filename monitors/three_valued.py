@@ -13,7 +13,8 @@ Schallhart, TOSEM 2011). Numbers carry an unknown mask through arithmetic; a com
 unknown where an operand is, and, under fretc's NaN rule (docs/guide/ticks.md, "NaN"), where
 an operand is NaN.
 
-FRET's finite-trace verdict is the pt formula at the last tick (:func:`pt_verdict`); the
+FRET's finite-trace verdict is the pt formula at the last tick
+(:func:`fretc.monitors.completions.pt_verdict`); the
 LTL3 verdict runs the monitor automata over every letter an unknown tick may be
 (:func:`ltl3_verdict`): definite once every run is decided.
 """
@@ -33,7 +34,7 @@ from fretc.monitors.vectorized import VectorizeError
 if TYPE_CHECKING:
     from fretc.compiler.codegen import MonitorSource
 
-__all__ = ["Pair", "ThreeValued", "pt_verdict", "ltl3_verdict"]
+__all__ = ["Pair", "ThreeValued", "ltl3_verdict"]
 
 Pair = tuple[np.ndarray, np.ndarray]
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
@@ -244,31 +245,6 @@ class ThreeValued:
             return self.number(a[0])
         lo, hi = self.pair(node)  # a condition read as a number: 0/1
         return lo.astype(np.float64), lo != hi
-
-
-def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
-               n: int, nan_unknown: bool = True) -> tuple[bool | None, Pair]:
-    """FRET's finite-trace verdict over ``n`` ticks with unknown ticks: True (every way of
-    filling them satisfies), False (every one violates) or None (it depends on them, or
-    the search of :func:`fretc.monitors.completions.completed_verdict`, which decides where
-    Kleene's reading leaves it open, outgrew its bound); and the pt formula's Kleene
-    ``(lo, hi)`` at every tick.
-
-    Raises:
-        VectorizeError: the pt formula cannot be evaluated over columns.
-    """
-    from fretc.monitors.completions import TooManyStates, completed_verdict  # (imports this)
-
-    ev = ThreeValued(columns, unknown, n, nan_unknown)
-    lo, hi = ev.pair(pt)
-    if lo[-1]:
-        return True, (lo, hi)
-    if not hi[-1]:
-        return False, (lo, hi)
-    try:
-        return completed_verdict(pt, ev), (lo, hi)
-    except TooManyStates:
-        return None, (lo, hi)
 
 
 def ltl3_verdict(monitor_source: MonitorSource, ev: ThreeValued) -> tuple[str, int | None]:

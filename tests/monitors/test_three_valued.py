@@ -18,7 +18,8 @@ from fretc.compiler.codegen import monitor_source
 from fretc.fretish import load_requirements
 from fretc.logs.base import Gap
 from fretc.monitors.judge import ltl3_verdict as ltl3_two
-from fretc.monitors.three_valued import ThreeValued, ltl3_verdict, pt_verdict
+from fretc.monitors.completions import pt_verdict
+from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
 from fretc.monitors.vectorized import pt_series
 
 SENTENCES = [
