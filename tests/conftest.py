@@ -7,8 +7,11 @@
   runs, so a second run is warm as a user's would be; the tests of cold runs, damaged
   entries and read-only folders set ``FRETC_CACHE_DIR`` to their own ``tmp_path``. Set before
   any test runs, so the fretc subprocesses the tests start inherit it.
-* The default run (``-m 'not slow and not ray'``, pyproject.toml) also takes a fixed sample of
-  the cases of each parametrized ``slow`` test (:data:`SLOW_SAMPLE` of them, chosen by a hash
+* ``long``: the tests of 5 s or more listed in ``long_tests.txt``, left out of the default
+  run (which must stay under 10 minutes on a 2-core machine) and run by CI in a step of
+  their own (``-m long``).
+* The default run (``-m 'not slow and not ray and not long'``, pyproject.toml) also takes a
+  fixed sample of the cases of each parametrized ``slow`` test (:data:`SLOW_SAMPLE` of them, chosen by a hash
   of their names: the same in every run and xdist worker); ``-m slow`` runs them all.
 * ``shared``: the project's shared data (``../shared``), or a skip with one reason when it is
   absent (``tests/_shared.py``; a user's clone has none).
@@ -52,9 +55,19 @@ os.environ.setdefault("FRETC_CACHE_DIR", TEST_CACHE_DIR)
 SLOW_SAMPLE = 2
 
 
-@pytest.hookimpl(tryfirst=True)  # before ``-m`` deselects the slow tests
+#: the tests marked ``long`` (tests/long_tests.txt: node ids, a case or every case)
+LONG = frozenset(line.strip() for line in
+                 (Path(__file__).parent / "long_tests.txt").read_text(encoding="utf-8").splitlines()
+                 if line.strip() and not line.startswith("#"))
+
+
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` deselects the slow and long tests
 def pytest_collection_modifyitems(config, items):
-    """When ``-m`` leaves the slow tests out, keep a fixed sample of each parametrized one."""
+    """Mark the tests of :data:`LONG` ``long``; when ``-m`` leaves the slow tests out, keep a
+    fixed sample of each parametrized one."""
+    for item in items:
+        if item.nodeid in LONG or item.nodeid.partition("[")[0] in LONG:
+            item.add_marker(pytest.mark.long)
     if "not slow" not in (config.option.markexpr or ""):
         return
     cases: dict = {}
