@@ -39,8 +39,9 @@ __all__ = ["pt_verdict", "completed_verdict", "TooManyStates", "MAX_STATES", "MA
 
 #: the most states (times the letters of one tick) the run keeps
 MAX_STATES = 4096
-#: the most state steps (states times letters, summed over the ticks run): about a second
-MAX_STEPS = 200_000
+#: the most state steps (states times letters, summed over the ticks from the first unknown
+#: tick to the last): about 25 us each, so at most about a second and a half a requirement
+MAX_STEPS = 50_000
 
 
 class TooManyStates(Exception):
