@@ -18,7 +18,8 @@ on, each state's future is fixed, and one completion leading to it is evaluated 
 rest of the trace with the vectorized evaluator. Reading the atoms as independent admits
 more completions than the trace's variables can give (``x > 1`` and ``x > 2`` both free),
 so a verdict is what every completion gives, never a guess: True or False only when all of
-them agree, None when they differ; past a bound on the states, :class:`TooManyStates`. This is the
+them agree, None when they differ; past a bound on the states or the work,
+:class:`TooManyStates`. This is the
 subset construction (Rabin and Scott 1959) over the past-time formula's own state, the
 exact three-valued reading of LTL3 (Bauer, Leucker, Schallhart, TOSEM 2011) for FRET's
 finite-trace semantics.
@@ -39,13 +40,14 @@ __all__ = ["pt_verdict", "completed_verdict", "TooManyStates", "MAX_STATES", "MA
 
 #: the most states (times the letters of one tick) the run keeps
 MAX_STATES = 4096
-#: the most state steps (states times letters, summed over the ticks from the first unknown
-#: tick to the last): about 25 us each, so at most about a second and a half a requirement
-MAX_STEPS = 50_000
+#: the most work of the run, in node evaluations: each step of a state costs the formula's
+#: nodes and the values its bounded operators keep (about 1 us each, so about a second a
+#: requirement at most; ``in m ... always satisfy y``, 21 nodes: about 57,000 ticks)
+MAX_STEPS = 1_200_000
 
 
 class TooManyStates(Exception):
-    """The completions were not all followed: the states of one tick or the steps of the
+    """The completions were not all followed: the states of one tick or the work of the
     run passed :data:`MAX_STATES` or :data:`MAX_STEPS` (the message says which, and at which
     tick)."""
 
@@ -85,6 +87,9 @@ class _Program:
         self.temporal = [k for k, node in enumerate(self.nodes) if node.op in _TEMPORAL]
         self.args = [[self.index[a] for a in node.args] if node.op in _SKELETON else []
                      for node in self.nodes]
+        #: the work of one step: the nodes, and the values the bounded operators keep
+        self.cost = len(self.nodes) + sum(self.nodes[k].hi or 0 for k in self.temporal
+                                          if self.nodes[k].op in ("O", "H"))
 
     def state_at(self, ev: ThreeValued, i: int) -> tuple[Any, ...]:
         """The state before tick ``i`` read from ``ev``'s (definite) values at ticks < i."""
@@ -181,12 +186,12 @@ def completed_verdict(pt: Node, ev: ThreeValued) -> bool | None:
         known = {k: bool(lo[k][i]) for k in prog.leaves}
         free = [k for k in prog.leaves if lo[k][i] != hi[k][i]]
         letters = 1 << len(free)
-        steps += len(states) * letters
+        steps += len(states) * letters * prog.cost
         if len(states) * letters > MAX_STATES:
             raise TooManyStates(f"{len(states)} states times {letters} letters at tick {i} "
                                 f"(bound {MAX_STATES})")
         if steps > MAX_STEPS:
-            raise TooManyStates(f"more than {MAX_STEPS} steps by tick {i}")
+            raise TooManyStates(f"more than {MAX_STEPS} node evaluations by tick {i}")
         nxt: dict[tuple[Any, ...], Any] = {}
         for state, chain in states.items():
             for bits in itertools.product((False, True), repeat=len(free)):
