@@ -7,7 +7,7 @@
   runs, so a second run is warm as a user's would be; the tests of cold runs, damaged
   entries and read-only folders set ``FRETC_CACHE_DIR`` to their own ``tmp_path``. Set before
   any test runs, so the fretc subprocesses the tests start inherit it.
-* ``long``: the tests of 5 s or more listed in ``long_tests.txt``, left out of the default
+* ``long``: the tests of 3 s or more listed in ``long_tests.txt``, left out of the default
   run (which must stay under 10 minutes on a 2-core machine) and run by CI in a step of
   their own (``-m long``).
 * The default run (``-m 'not slow and not ray and not long'``, pyproject.toml) also takes a
