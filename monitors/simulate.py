@@ -241,7 +241,7 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
     pt formula's at the last tick of the trace from i (FRET's ft verdict of a trace is its pt
     formula at the last tick: tests/semantics); both exact where no NaN is read. A pt formula
     with a future-time function inside is unknown wherever a NaN is in the trace."""
-    from fretc.monitors.completions import TooManyStates, completed_verdict
+    from fretc.monitors.completions import pt_verdict
     from fretc.monitors.three_valued import ThreeValued
     from fretc.monitors.vectorized import VectorizeError
 
@@ -249,28 +249,22 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
     cols = {v: np.asarray(trace[v], dtype=np.bool_ if all(type(x) is bool for x in trace[v])
                           else np.float64) for v in f.variables}
 
-    def three(lo, hi, a: int = 0, b: int = n):  # Kleene's reading, else every completion's
-        if lo or not hi:
-            return bool(lo)
-        try:
-            return completed_verdict(f.pt, ThreeValued({v: c[a:b] for v, c in cols.items()},
-                                                       {}, b - a))
-        except TooManyStates:
-            return None
+    def at_last(a: int, b: int) -> bool | None:  # the verdict over ticks a..b-1
+        return pt_verdict(f.pt, {v: c[a:b] for v, c in cols.items()}, {}, b - a)[0]
 
     last_nan = int(np.flatnonzero(nan)[-1])
     try:
         if not f.pt_causal:
             raise VectorizeError("a future-time function inside the pt formula")
         lo, hi = ThreeValued(cols, {}, n).pair(f.pt)
-        pt = [three(a, b, 0, i + 1) for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist()))]
+        pt = [bool(a) if a or not b else at_last(0, i + 1)
+              for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist()))]
         ft: list[bool | None] = []
         for i in range(n):
             if i > last_nan:  # no NaN in the trace from i: exact
                 ft.append(bool(ft_at(f.ft, rows[i:])))
                 continue
-            sl, sh = ThreeValued({v: c[i:] for v, c in cols.items()}, {}, n - i).pair(f.pt)
-            ft.append(three(bool(sl[-1]), bool(sh[-1]), i, n))
+            ft.append(at_last(i, n))
     except VectorizeError:
         first_nan = int(np.flatnonzero(nan)[0])
         pt = [bool(pt_at(f.pt, rows[:i + 1])) if i < first_nan else None for i in range(n)]
