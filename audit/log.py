@@ -28,8 +28,7 @@ from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
 from fretc.logs.csv_clocks import split_clocks
-from fretc.logs.csv_source import (CsvSource, clock_lines, not_sampled_lines,
-                                   per_entity_lines, sampled_trace)
+from fretc.logs.csv_source import CsvSource, sampled_header, sampled_trace
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
 from fretc.audit.finalize import between_ticks, finalize
@@ -69,14 +68,16 @@ def audit_log(plan: AuditPlan, path: str,
         (``error`` / ``error`` verdicts), never raised.
     """
     csv = str(path).lower().endswith(".csv")
-    clocks = clock_lines(path) if csv else {}
-    if clocks or (csv and (per_entity_lines(path) or not_sampled_lines(path))):
+    head = sampled_header(path) if csv else None
+    if head is not None and (head.clocks or head.per_entity or head.not_sampled):
         # (a trace --write-csv wrote: each requirement on its own clock's rows)
         from fretc.audit.sampled_audit import audit_clocks
 
-        split = (split_clocks(path, plan.csv_period_ns) if len(clocks) > SPLIT_CLOCKS
+        clocks = head.clocks
+
+        split = (split_clocks(path, plan.csv_period_ns, clocks) if len(clocks) > SPLIT_CLOCKS
                  else None)
-        return audit_clocks(plan, str(path), clocks, lambda p, c: _LogRun(
+        return audit_clocks(plan, str(path), head, lambda p, c: _LogRun(
             p, path, split[c] if split is not None else
             lambda: CsvSource(path, period_ns=plan.csv_period_ns, clock=c)
         ).run(progress))

@@ -15,15 +15,16 @@ from fretc.audit.entities import entity_of_requirements
 from fretc.audit.model import AuditPlan
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.common.problems import CsvError, LogError
-from fretc.logs.csv_source import CsvSource, not_sampled_lines, per_entity_lines
+from fretc.logs.csv_source import CsvSource, SampledHeader
 
 __all__ = ["audit_clocks"]
 
 
-def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
+def audit_clocks(plan: AuditPlan, path: str, head: SampledHeader,
                  run: Callable[[AuditPlan, str], LogAudit]) -> LogAudit:
-    """Audit the sampled trace ``path`` whose clocks are ``clocks`` (label -> requirement
-    ids, :func:`fretc.logs.csv_source.clock_lines`).
+    """Audit the sampled trace ``path`` whose comment lines say ``head`` (its clocks,
+    label -> requirement ids; the requirements it does not carry; its per-entity ones:
+    :func:`fretc.logs.csv_source.sampled_header`).
 
     Args:
         plan: the audit plan (requirements matched to clocks by id).
@@ -35,7 +36,8 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
         of the log gives them (each its verdict over its entities, then one per entity,
         :mod:`fretc.audit.sampled_entities`); the log's figures merged over the clocks.
     """
-    entities = {rid: ent for rid, ent in per_entity_lines(path).items()
+    clocks = head.clocks
+    entities = {rid: ent for rid, ent in head.per_entity.items()
                 if any(r.id == rid for r in plan.requirements)}
     owner = {rid: label for label, ids in clocks.items() for rid in ids}
     instance_of = {i: rid for rid, (_n, ids) in entities.items() for i in ids}
@@ -62,7 +64,7 @@ def audit_clocks(plan: AuditPlan, path: str, clocks: dict[str, list[str]],
             merged.error = str(exc)
             return _all_error(plan, path, merged, f"log not audited: {exc}")
     named = ", ".join(sorted(i for i in owner if i not in instance_of)) or "none"
-    left_out = not_sampled_lines(path)
+    left_out = head.not_sampled
     # (the log's audit gives the per-entity requirements after the others, those it judged
     # as a whole too: an error, or unknown before any tick)
     groups = entity_of_requirements(plan) if plan.bindings is not None else {}

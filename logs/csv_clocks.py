@@ -45,15 +45,19 @@ class ClockRows(CsvSource):
         return self._given_first
 
 
-def split_clocks(path: str | os.PathLike, period_ns: int = NS_PER_S
+def split_clocks(path: str | os.PathLike, period_ns: int = NS_PER_S,
+                 clocks: dict[str, list[str]] | None = None
                  ) -> dict[str, Callable[[], CsvSource]] | None:
     """The clocks of the sampled trace ``path`` (label -> a function making its source),
     from one read of the file: its rows split by their :data:`CLOCK_COLUMN` cell.
+    ``clocks``: the trace's clock lines when the caller read them
+    (:func:`fretc.logs.csv_source.clock_lines`; None: read here).
 
     Returns None when the file's rows are not those of a trace of several clocks (a row of
     another length, a time not read or going backwards, a clock no line names, not UTF-8
     CSV): the caller reads each clock from the file, which says what is wrong where."""
-    clocks = clock_lines(path)
+    if clocks is None:
+        clocks = clock_lines(path)
     try:
         with open(path, newline="", encoding="utf-8") as f:
             first = f.readline()

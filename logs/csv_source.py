@@ -25,6 +25,7 @@ from fretc.logs.csv_read import CUT_CELL, GAP_CELL, UNKNOWN_CELL, RowReader, cle
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
            "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "sampled_trace",
            "NOT_SAMPLED_LINE", "not_sampled_lines", "PER_ENTITY_LINE", "per_entity_lines",
+           "SampledHeader", "sampled_header",
            "escape_id", "unescape_id", "column_name_problem"]
 
 #: Pseudo-topic of a CSV trace: one message per row; ``data`` has one attribute per column.
@@ -95,50 +96,69 @@ def sampled_trace(path: str | os.PathLike) -> bool:
         return False
 
 
-def clock_lines(path: str | os.PathLike) -> dict[str, list[str]]:
-    """The clocks of a sampled trace (:data:`SAMPLED_MARK` on its first line): clock label ->
-    the ids of the requirements sampled on it, from its :data:`CLOCK_LINE` comments before
-    the header; ``{}`` for any other CSV trace, or a file that cannot be read as text."""
-    out: dict[str, list[str]] = {}
-    for line in _sampled_comments(path):
-        if line.startswith(CLOCK_LINE) and ":" in line:
-            label, _, ids = line[len(CLOCK_LINE):].partition(":")
-            out[label.strip()] = [unescape_id(w) for w in _words(ids)]
-    return out
+class SampledHeader(NamedTuple):
+    """What a sampled trace (:data:`SAMPLED_MARK` on its first line) says before its header
+    (:func:`sampled_header`).
+
+    Attributes:
+        clocks: clock label -> the ids of the requirements sampled on it (its
+            :data:`CLOCK_LINE` comment).
+        not_sampled: requirement id -> why the trace does not carry it (its
+            :data:`NOT_SAMPLED_LINE` comment).
+        per_entity: requirement id -> (the entity's name, the ids of its entities' verdicts
+            ``T[track=7]`` in the order the clock and not-sampled lines after its
+            :data:`PER_ENTITY_LINE` name them).
+    """
+
+    clocks: dict[str, list[str]]
+    not_sampled: dict[str, str]
+    per_entity: dict[str, tuple[str, list[str]]]
 
 
-def not_sampled_lines(path: str | os.PathLike) -> dict[str, str]:
-    """The requirements a sampled trace says it does not carry: id -> why, from its
-    :data:`NOT_SAMPLED_LINE` comments before the header; ``{}`` for any other CSV trace."""
-    out: dict[str, str] = {}
-    for line in _sampled_comments(path):
-        if line.startswith(NOT_SAMPLED_LINE):
-            word, _, why = line[len(NOT_SAMPLED_LINE):].partition(": ")
-            out[unescape_id(word)] = why.strip()
-    return out
-
-
-def per_entity_lines(path: str | os.PathLike) -> dict[str, tuple[str, list[str]]]:
-    """The per-entity requirements of a sampled trace: id -> (the entity's name, the ids of
-    its entities' verdicts ``T[track=7]`` in the order the clock and not-sampled lines after
-    its :data:`PER_ENTITY_LINE` name them); ``{}`` for any other CSV trace."""
-    out: dict[str, tuple[str, list[str]]] = {}
+def sampled_header(path: str | os.PathLike) -> SampledHeader:
+    """The comment lines of the sampled trace ``path`` before its header, read once and
+    parsed (:class:`SampledHeader`); every part empty for any other CSV trace, or a file that
+    cannot be read as text."""
+    clocks: dict[str, list[str]] = {}
+    not_sampled: dict[str, str] = {}
+    per_entity: dict[str, tuple[str, list[str]]] = {}
     for line in _sampled_comments(path):
         if line.startswith(PER_ENTITY_LINE):
             word, _, name = line[len(PER_ENTITY_LINE):].partition(": ")
-            out[unescape_id(word)] = (name.strip(), [])
+            per_entity[unescape_id(word)] = (name.strip(), [])
             continue
         if line.startswith(CLOCK_LINE) and ":" in line:
-            ids = [unescape_id(w) for w in _words(line[len(CLOCK_LINE):].partition(":")[2])]
+            label, _, words = line[len(CLOCK_LINE):].partition(":")
+            ids = clocks[label.strip()] = [unescape_id(w) for w in _words(words)]
         elif line.startswith(NOT_SAMPLED_LINE):
-            ids = [unescape_id(line[len(NOT_SAMPLED_LINE):].partition(": ")[0])]
+            word, _, why = line[len(NOT_SAMPLED_LINE):].partition(": ")
+            ids = [unescape_id(word)]
+            not_sampled[ids[0]] = why.strip()
         else:
             continue
         for i in ids:
             owner, bracket, _rest = i.partition("[")
-            if bracket and owner in out and i.endswith("]"):
-                out[owner][1].append(i)
-    return out
+            if bracket and owner in per_entity and i.endswith("]"):
+                per_entity[owner][1].append(i)
+    return SampledHeader(clocks, not_sampled, per_entity)
+
+
+def clock_lines(path: str | os.PathLike) -> dict[str, list[str]]:
+    """The clocks of a sampled trace: :attr:`SampledHeader.clocks` of
+    :func:`sampled_header`."""
+    return sampled_header(path).clocks
+
+
+def not_sampled_lines(path: str | os.PathLike) -> dict[str, str]:
+    """The requirements a sampled trace does not carry: :attr:`SampledHeader.not_sampled`
+    of :func:`sampled_header`."""
+    return sampled_header(path).not_sampled
+
+
+def per_entity_lines(path: str | os.PathLike) -> dict[str, tuple[str, list[str]]]:
+    """The per-entity requirements of a sampled trace: :attr:`SampledHeader.per_entity` of
+    :func:`sampled_header`."""
+    return sampled_header(path).per_entity
 
 
 def _words(ids: str) -> list[str]:
