@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.audit.passes import ClockPass
-from fretc.monitors.completions import TooManyStates, completed_verdict
+from fretc.monitors.completions import decide
 from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement
 from fretc.monitors.judge3 import Unknowns, definite_evidence, possible_trigger
 from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
@@ -54,15 +54,10 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     n = len(res.times)
     ev3 = ThreeValued(res.columns, res.unknown, n, nan_unknown)
-    lo, hi = ev3.pair(r.formalization.pt)
-    holds = True if lo[-1] else (False if not hi[-1] else None)
-    completed, outgrew = False, ""
-    if holds is None:  # Kleene's reading is not complete: every completion decides
-        try:
-            holds = completed_verdict(r.formalization.pt, ev3)
-        except TooManyStates as exc:
-            outgrew = f" (not every way of filling them was followed: {exc})"
-        completed = holds is not None
+    # Kleene's reading, and where it is open every completion's
+    holds, (lo, hi), why = decide(r.formalization.pt, ev3)
+    completed = holds is not None and not lo[-1] and bool(hi[-1])
+    outgrew = f" (not every way of filling them was followed: {why})" if why else ""
     status, st_tick = "unknown", None
     if not r.offline and r.monitor_source is not None:
         try:

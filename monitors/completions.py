@@ -36,7 +36,8 @@ import numpy as np
 from fretc.compiler.ir import Node
 from fretc.monitors.three_valued import Pair, ThreeValued
 
-__all__ = ["pt_verdict", "completed_verdict", "TooManyStates", "MAX_STATES", "MAX_STEPS"]
+__all__ = ["decide", "pt_verdict", "completed_verdict", "TooManyStates", "MAX_STATES",
+           "MAX_STEPS"]
 
 #: the most states (times the letters of one tick) the run keeps
 MAX_STATES = 4096
@@ -221,7 +222,7 @@ def _evaluate_completion(pt: Node, ev: ThreeValued, prog: _Program, chain: Any) 
             filled[k][i] = v
     done = ThreeValued(ev.columns, {}, ev.n, ev.nan_unknown)
     for k, arr in filled.items():
-        done._memo[(prog.nodes[k], False)] = (arr, arr)
+        done.fix(prog.nodes[k], arr)
     return bool(done.pair(pt)[0][-1])
 
 
@@ -230,18 +231,34 @@ def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str
     """FRET's finite-trace verdict over ``n`` ticks with unknown ticks: True (every way of
     filling them satisfies), False (every one violates) or None (it depends on them, or
     the search of :func:`completed_verdict`, which decides where Kleene's reading leaves it
-    open, outgrew its bound); and the pt formula's Kleene ``(lo, hi)`` at every tick.
+    open, outgrew its bound); and the pt formula's Kleene ``(lo, hi)`` at every tick
+    (:func:`decide` over the columns).
 
     Raises:
         VectorizeError: the pt formula cannot be evaluated over columns.
     """
-    ev = ThreeValued(columns, unknown, n, nan_unknown)
+    holds, pair, _why = decide(pt, ThreeValued(columns, unknown, n, nan_unknown))
+    return holds, pair
+
+
+def decide(pt: Node, ev: ThreeValued) -> tuple[bool | None, Pair, str]:
+    """The verdict of :func:`pt_verdict` over the ticks of ``ev``: Kleene's reading of the pt
+    formula at the last tick, then, where it is open, the exact search over completions.
+
+    Returns:
+        ``(holds, (lo, hi), why)``: ``holds`` True, False or None; the pt formula's Kleene
+        pair at every tick; ``why`` empty, or why the search stopped before it decided
+        (:class:`TooManyStates`' message; ``holds`` is then None).
+
+    Raises:
+        VectorizeError: the pt formula cannot be evaluated over the columns of ``ev``.
+    """
     lo, hi = ev.pair(pt)
     if lo[-1]:
-        return True, (lo, hi)
+        return True, (lo, hi), ""
     if not hi[-1]:
-        return False, (lo, hi)
+        return False, (lo, hi), ""
     try:
-        return completed_verdict(pt, ev), (lo, hi)
-    except TooManyStates:
-        return None, (lo, hi)
+        return completed_verdict(pt, ev), (lo, hi), ""
+    except TooManyStates as exc:
+        return None, (lo, hi), str(exc)

@@ -114,6 +114,13 @@ class ThreeValued:
             got = self._memo[key] = self._pair(node)
         return got  # type: ignore[return-value]
 
+    def fix(self, node: Node, values: np.ndarray) -> None:
+        """Read the boolean ``node`` as known, ``values`` (bool array over the ticks) at
+        every tick, from here on: a completion of its unknown ticks
+        (:func:`fretc.monitors.completions.completed_verdict`). Nodes above it evaluated
+        before keep their pairs: fix the leaves first."""
+        self._memo[(node, False)] = (values, values)
+
     def number(self, node: Node) -> tuple[np.ndarray, np.ndarray]:
         """``(values, unknown)`` of a numeric node: float values (those of the columns as
         read) and where they are unknown."""
