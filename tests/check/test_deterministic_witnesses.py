@@ -87,3 +87,76 @@ def test_testgen_traces_do_not_depend_on_earlier_spot_work(tmp_path):
     assert res.returncode == 0, res.stdout + res.stderr
     command = _files(out)
     assert not _differing(first, command), _differing(first, command)
+
+
+def _formulas_of_queries_shuffled(seed: int) -> list:
+    """Spot formulas of every sub-formula of the Safe-ROS requirements' ft formulas and their
+    negations, made in a shuffled order (Spot numbers a formula when it is first made and
+    orders the operands of ``&`` and ``|`` by that number)."""
+    import random
+
+    import spot
+
+    from fretc.compiler.build import compile_entries
+    from fretc.compiler.printers import to_spot
+    from fretc.fretish.files import load_requirements
+
+    subs: set[str] = set()
+
+    def walk(f) -> None:
+        subs.add(str(f))
+        for g in f:
+            walk(g)
+
+    for c in compile_entries(load_requirements([REQS / "safe_ros.fret"])):
+        if c.formalization is not None:
+            walk(spot.formula(f"!({to_spot(c.formalization.ft)})"))
+    order = sorted(subs)
+    random.Random(seed).shuffle(order)
+    return [spot.formula(s) for s in order]
+
+
+def _bdd_nodes_alive(seed: int, count: int) -> list:
+    """``count`` BDDs over 60 atoms of an automaton in a dictionary of its own (the
+    automaton last in the list, so the BDDs are freed before it), kept alive: the BuDDy node
+    table the query worker inherits is fuller, and its nodes numbered otherwise."""
+    import random
+
+    import spot
+    import buddy  # (importable once Spot is)
+
+    rnd = random.Random(seed)
+    owner = spot.make_twa_graph(spot.make_bdd_dict())
+    var = [owner.register_ap(f"held{k}") for k in range(60)]
+    kept: list = []
+    for _ in range(count):
+        b = buddy.bddtrue
+        for _k in range(rnd.randint(2, 8)):
+            v = buddy.bdd_ithvar(var[rnd.randrange(60)])
+            b = (b & v) if rnd.random() < 0.5 else (b | buddy.bdd_not(v))
+        kept.append(b)
+    return [owner] + kept  # (a list frees its items from the last)
+
+
+def test_testgen_traces_do_not_depend_on_what_the_parent_holds(tmp_path):
+    """What a CI test worker may hold when testgen's query worker forks from it: the same
+    requirements' formulas made in other orders, a fuller BuDDy node table, an in-process
+    testgen of a subset (Spot, BuDDy and z3 used in this process, ``fork=False``). Each
+    time the files testgen writes are byte-identical to a first run. (A CI worker once got
+    other Safe-ROS tests than the command gives; none of these reproduced it.)"""
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.testing.generate import generate
+
+    out = tmp_path / "tests"
+    first = _testgen_in_process(out)
+    held: list = []
+    for seed in (1, 2):
+        held.append(_formulas_of_queries_shuffled(seed))
+        assert not _differing(first, _testgen_in_process(out)), ("formulas", seed)
+    held.append(_bdd_nodes_alive(3, 100_000))
+    assert not _differing(first, _testgen_in_process(out)), "BuDDy nodes"
+    compiled = compile_entries(load_requirements([REQS / "safe_ros.fret"]))
+    generate([c for c in compiled if c.id in ("R6", "R3")], fork=False)
+    assert not _differing(first, _testgen_in_process(out)), "in-process testgen"
+    del held
