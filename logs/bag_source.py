@@ -124,7 +124,9 @@ class BagSource(LogSource):
                 raise LogError(path, _bag_open_error(p, self.kind, exc)) from None
             # a ROS 1 bag whose index (at its end) is damaged or missing, as a crashed
             # recording leaves it: read its records from the start, as far as they go
-            self._linear_bag = Ros1Linear(self, f"{type(exc).__name__}: {exc}".rstrip(": "))
+            why = f"{type(exc).__name__}: {exc}" if str(exc) else \
+                f"{type(exc).__name__}, without a message"
+            self._linear_bag = Ros1Linear(self, f"rosbags' reader: {why}")
             self._open_damage = True
             self.partial = True
             self._topics = self._linear_bag.scan()

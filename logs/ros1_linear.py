@@ -138,6 +138,7 @@ class _Ros1Pass:
         self.decode = decode
         self.queue = ReorderQueue()
         self.last_good: int | None = None
+        self.first_time: int | None = None  # the least log time of a message read
         self.decoders: dict[int, Callable[[bytes], Any] | None] = {}
         self.why: dict[int, str] = {}  # connection -> why it has no decoder
 
@@ -192,7 +193,7 @@ class _Ros1Pass:
                          f"the bag index is damaged or missing ({self.bag.why}); every record "
                          "was read without it")
         if not self.decode and self.last_good is not None:
-            src._end_time = self.last_good
+            src._start_time, src._end_time = self.first_time, self.last_good
 
     def _take(self, header: dict[bytes, bytes], body: bytes) -> None:
         """Note a Connection record, or queue a Message data record."""
@@ -211,6 +212,7 @@ class _Ros1Pass:
             if self.src._open_gaps:
                 self.src._close_gaps(t)
             self.last_good = t if self.last_good is None else max(self.last_good, t)
+            self.first_time = t if self.first_time is None else min(self.first_time, t)
             if self.decode:
                 self.queue.push(t, 0, (conn, body))
 

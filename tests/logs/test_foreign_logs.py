@@ -41,12 +41,18 @@ def test_inspect_reads_every_foreign_log(log):
 
 @pytest.mark.parametrize("log", params(lambda: [FOREIGN / "ccny_lsm_crash" / "demo.bag"]))
 def test_an_old_bag_with_a_non_standard_index_is_read_record_by_record(log):
+    """Its span is that of the messages read without the index (it was unknown), and the
+    problem names the reader's error even when the error has no message of its own."""
     src = open_log(log)
+    assert (src.start_time, src.end_time) == (1282836371069930698, 1282836398700597077)
     scans = [m for m in src.messages({"/scan"})]
     assert len(scans) == 278 and len(scans[0].data.ranges) > 100
+    assert (scans[0].log_time, scans[-1].log_time) == (src.start_time, src.end_time)
     assert scans[0].data.header.frame_id  # the 2010 roslib/Header, read as std_msgs/Header
     kinds = {p.kind for p in src.problems}
     assert "truncated" in kinds and src.partial
+    (cut,) = [p for p in src.problems if p.kind == "truncated"]
+    assert cut.detail.endswith("(rosbags' reader: AssertionError, without a message)")
 
 
 def test_a_bag_of_format_1_2_is_refused_by_its_format(tmp_path):
