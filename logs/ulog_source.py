@@ -254,7 +254,8 @@ class UlogSource(LogSource):
             self._gap(start, end, cause=DROPOUT)
             self._problem(DROPOUT, None, start,
                           f"the logger dropped messages for {ms} ms (ULog dropout record) "
-                          "after this log time: only the span before it is judged",
+                          "after this log time: a gap (its ticks are unknown), the log is "
+                          "read on after it",
                           end_time=end)
         streams: list[tuple[str, Any, Any]] = []  # (topic, log times, rows)
         for k, ulog in enumerate(self._ulogs):

@@ -157,6 +157,9 @@ def test_px4_dropouts_are_damage_never_held_over(tmp_path):
     la = audit_log(_plan(tmp_path, PX4_FRET, PX4_BINDINGS), str(PX4 / "sample.ulg"))
     assert la.partial
     assert any(p["kind"] == DROPOUT for p in la.problems)
+    # each dropout is said to be what it is: a gap, the log read on after it
+    assert all(p["detail"].endswith("a gap (its ticks are unknown), the log is read on after "
+                                    "it") for p in la.problems if p["kind"] == DROPOUT)
     v = _by_id(la)
     # the logger's ERROR message at 45.6 s is read after the dropouts: violated there
     assert v["PL"].verdict == "violated"
