@@ -226,7 +226,9 @@ def _prism(x: Node, go) -> str:
     fn = _PRISM_FN.get(x.name or "") if op == "fn" else None
     if fn is not None and len(a) == fn[1]:
         return fn[0].format(*(go(y) for y in a))
-    what = (f"the past-time function {to_smv(x)}" if op == "past" else
+    what = (f"the past-time function {x.name}" if op == "past" and x.name else
+            f"the comparison {to_smv(a[0])}, which reads a previous tick's value,"
+            if op == "past" else
             f"the function {x.name}()" if op == "fn" else f"the past-time operator {op}"
             if op in _PAST else f"{to_smv(x)}")
     raise PrismUnsupported(f"{what} has no form in PRISM's properties (PCTL has no past, "

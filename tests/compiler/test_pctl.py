@@ -204,7 +204,8 @@ def test_emit_prism_expands_fret_functions_or_refuses_them(tmp_path):
                  "maxInt(x, y) < 3 & absReal(x) < 4 & absInt(y) > 0\n"
                  "B: the sw shall with probability >= 0.9 always satisfy persisted(3, a)\n"
                  "D: the sw shall with probability >= 0.9 always satisfy preBool(false, a)\n"
-                 "U: the sw shall with probability >= 0.9 always satisfy det(x, y) > 0\n")
+                 "U: the sw shall with probability >= 0.9 always satisfy det(x, y) > 0\n"
+                 "P: the sw shall with probability >= 0.9 always satisfy preInt(0, x) <= y\n")
     res = CliRunner().invoke(main, [str(f), "--emit", "prism", "-o", str(tmp_path / "p.props")])
     assert res.exit_code == 0, res.output
     text = (tmp_path / "p.props").read_text()
@@ -212,9 +213,14 @@ def test_emit_prism_expands_fret_functions_or_refuses_them(tmp_path):
             '(max(y, (- y)) > 0))) ];') in text, text
     props = [line for line in text.splitlines() if not line.startswith("//")]
     assert len(props) == 1 and not any(w in text.split("//")[0] for w in ("Real(", "Int("))
-    for rid in ("B", "D", "U"):
+    for rid in ("B", "D", "U", "P"):
         assert f"skipped {rid} (p.props): " in res.output, res.output
-    assert text.count("//   not in PRISM: ") == 3
+    assert text.count("//   not in PRISM: ") == 4
+    # each named as what it is: a past-time function by its call, a comparison reading a
+    # previous value as a comparison (it was called a function)
+    assert "the past-time function preBool(FALSE,a) has no form" in res.output, res.output
+    assert ("the comparison (preInt(0,x) <= y), which reads a previous tick's value, has no "
+            "form") in res.output, res.output
 
 
 @pytest.mark.parametrize("bound,ok", [("< 0", False), ("< 1e-400", False), ("<= 1e-400", True),
