@@ -286,3 +286,64 @@ def test_spot_errors_are_unknown_answers_not_crashes(tmp_path):
     res = CliRunner().invoke(main, ["check", str(ab), "--inputs", "p", "--outputs", "s"])
     assert res.exit_code == 1 and "UNREALIZABLE (safety game)" in res.output, res.output
     assert "inputs that defeat every controller: {p=true}" in res.output
+
+
+def test_progress_names_each_stage_and_query_in_order(tmp_path):
+    """``progress`` is called before every query of each stage, component by component:
+    each requirement alone, the set, non-vacuity and redundancy, counting 1..n; a component
+    whose requirements conflict stops after the set (no vacuity, no redundancy)."""
+    p = _write(tmp_path, "ok.fret",
+               "C1: upon p the sw shall within 3 ticks satisfy q\n"
+               "C2: whenever q the sw shall immediately satisfy r\n"
+               "C3: whenever q the sw shall immediately satisfy r\n"
+               "K1: the sw shall always satisfy k\n"
+               "K2: the sw shall always satisfy !k\n")
+    calls: list[tuple] = []
+    r = _check(p, progress=lambda *a: calls.append(a))
+    assert r.components == [["C1", "C2", "C3"], ["K1", "K2"]]
+    want = ([("alone", i, 3, 1, 2) for i in (1, 2, 3)] + [("set", 1, 1, 1, 2)]
+            + [("vacuity", i, 3, 1, 2) for i in (1, 2, 3)]
+            + [("redundancy", i, 3, 1, 2) for i in (1, 2, 3)]
+            + [("alone", i, 2, 2, 2) for i in (1, 2)] + [("set", 1, 1, 2, 2)])
+    assert calls == want
+    # the same answers with and without it
+    assert _kinds(r) == _kinds(_check(p)) and r.requirements == _check(p).requirements
+
+
+def test_fretc_check_shows_its_progress_on_a_terminal_only(tmp_path):
+    """On a terminal the standard error shows the stage being checked (rich's transient
+    bar); ``--no-progress``, or a standard error that is not a terminal, shows none."""
+    import os
+    import pty
+    import subprocess
+    import sys
+
+    p = _write(tmp_path, "ok.fret", "C1: upon p the sw shall within 3 ticks satisfy q\n"
+                                    "C2: whenever q the sw shall immediately satisfy r\n")
+
+    def stderr_on_a_terminal(*extra: str) -> str:
+        main_fd, other_fd = pty.openpty()
+        proc = subprocess.Popen([sys.executable, "-m", "fretc", "check", str(p), *extra],
+                                stdout=subprocess.DEVNULL, stderr=other_fd)
+        os.close(other_fd)
+        got = b""
+        while True:
+            try:
+                chunk = os.read(main_fd, 4096)
+            except OSError:  # the terminal's other end closed
+                break
+            if not chunk:
+                break
+            got += chunk
+        assert proc.wait(timeout=120) == 0
+        os.close(main_fd)
+        return got.decode("utf-8", "replace")
+
+    # (the bar is drawn when it starts and then 10 times a second: which stage it shows
+    # depends on the machine's speed)
+    words = ("checking", "each requirement alone", "the set", "non-vacuity", "redundancy")
+    assert any(w in stderr_on_a_terminal() for w in words)
+    assert not any(w in stderr_on_a_terminal("--no-progress") for w in words)
+    res = subprocess.run([sys.executable, "-m", "fretc", "check", str(p)], capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 0 and res.stderr == ""

@@ -18,6 +18,7 @@ stopped by ``--timeout``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -171,13 +172,16 @@ def _lasso(prefix, cycle) -> str:
               "or the Büchi game with an eventually (auto, smt, bdd), or Spot's game only "
               "(spot).")
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
+@click.option("--no-progress", is_flag=True,
+              help="No progress display (shown on a terminal: stage and query of each "
+              "component).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
 @TEXT_ATTRIBUTE_OPTION
 def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, as_json: bool,
               witness_dir: str | None, budget: int, memory_budget: int, mus_budget: int,
               query_cpu: float, timeout: float | None, engine: str, no_redundancy: bool,
-              output: str | None) -> None:
+              no_progress: bool, output: str | None) -> None:
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
@@ -208,11 +212,14 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
         from fretc.monitors.interval import verdict_of
         judge = verdict_of
     deadline = None if timeout is None else time.monotonic() + timeout
+    shown_progress = _CheckProgress() if not no_progress and sys.stderr.isatty() else None
     try:
-        result = check_requirements(compiled, budget=Budget(budget, memory_budget, query_cpu),
-                                    mus_budget=mus_budget, redundancy=not no_redundancy,
-                                    witness_dir=witness_dir, inputs=ins, outputs=outs,
-                                    witness_judge=judge, engine=engine, deadline=deadline)
+        with shown_progress or contextlib.nullcontext():
+            result = check_requirements(
+                compiled, budget=Budget(budget, memory_budget, query_cpu),
+                mus_budget=mus_budget, redundancy=not no_redundancy, witness_dir=witness_dir,
+                inputs=ins, outputs=outs, witness_judge=judge, engine=engine,
+                deadline=deadline, progress=shown_progress)
     except RealizabilityError as exc:
         click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
@@ -231,3 +238,34 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
     else:
         click.echo(shown(render_text(result)))
     sys.exit(result.exit_code)
+
+
+class _CheckProgress:
+    """The check's progress on the standard error (a terminal): a transient bar of the
+    current stage of the current component (:data:`fretc.check.analysis.STAGES`), with the
+    time elapsed. Called as :data:`fretc.check.analysis.Progress`."""
+
+    _WORDS = {"alone": "each requirement alone", "set": "the set",
+              "vacuity": "non-vacuity", "redundancy": "redundancy"}
+
+    def __init__(self) -> None:
+        from rich.console import Console  # lazy: only on a terminal
+        from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn,
+                                   TimeElapsedColumn)
+
+        self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                            TimeElapsedColumn(), console=Console(stderr=True), transient=True)
+        self.task = self.bar.add_task("checking", total=None)
+
+    def __enter__(self) -> _CheckProgress:
+        self.bar.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.bar.stop()
+
+    def __call__(self, stage: str, at: int, total: int, component: int,
+                 components: int) -> None:
+        where = f"component {component} of {components}: " if components > 1 else ""
+        self.bar.update(self.task, description=where + self._WORDS.get(stage, stage),
+                        completed=at - 1, total=total)
