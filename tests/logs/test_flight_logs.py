@@ -132,6 +132,34 @@ def test_px4_first_samples_stamped_before_the_header_are_data(tmp_path):
 
 
 @needs_shared
+def test_px4_inspect_gives_the_span_from_the_first_sample_and_the_headers_start():
+    """inspect's span starts at the first sample (stamped before the ULog header's start,
+    data as the audit reads it) and says where the header starts the recording, by pyulog's
+    header; a log without such a header says nothing of it (an MCAP here)."""
+    import json
+
+    from click.testing import CliRunner
+    from pyulog import ULog
+
+    from fretc.cli import main
+
+    path = PX4 / "sample_px4_events.ulg"
+    res = CliRunner().invoke(main, ["inspect", "--json", str(path)])
+    assert res.exit_code == 0, res.output
+    (doc,) = json.loads(res.output)
+    header = int(ULog(str(path), message_name_filter_list=[]).start_timestamp) * 1000
+    assert doc["header_start_ns"] == header > doc["start_time_ns"]
+    res = CliRunner().invoke(main, ["inspect", str(path)])
+    first = res.output.splitlines()[0]
+    assert f"{doc['duration_s']:.3f} s (from the first sample; the ULog header starts the " \
+           f"recording {(header - doc['start_time_ns']) / 1e9:.3f} s after it)" in first
+    mcap = Path(__file__).resolve().parents[2] / "traces" / "stop_delay.mcap"
+    res = CliRunner().invoke(main, ["inspect", "--json", str(mcap)])
+    assert json.loads(res.output)[0]["header_start_ns"] is None
+    assert "first sample" not in CliRunner().invoke(main, ["inspect", str(mcap)]).output
+
+
+@needs_shared
 def test_px4_instances_are_topics_of_their_own_with_every_field():
     src = open_log(PX4 / "sample_log_small.ulg")
     topics = src.topics()

@@ -332,8 +332,12 @@ def inspect_log(path: str, msg_path: tuple[str, ...] = ()) -> dict:
                        "fields_from_messages": t in untyped,
                        "fields": {p: s.to_json() for p, s in stats[t].items()}})
     t0, t1 = source.start_time, source.end_time
+    # a ULog's header start (PX4's logger stamps each topic's last sample before it, kept
+    # as data: the span starts at the first sample, the recording at the header)
+    header = getattr(source, "log_start", None)
     return {"log": str(path), "kind": source.kind, "start_time_ns": t0, "end_time_ns": t1,
             "duration_s": (t1 - t0) / 1e9 if t0 is not None and t1 is not None else None,
+            "header_start_ns": header,
             "partial": bool(source.partial),
             "problems": [str(p) for p in source.problems], "topics": topics}
 
@@ -347,6 +351,10 @@ def plain(x: float) -> str:
 
 def _print(doc: dict) -> None:
     dur = f"{doc['duration_s']:.3f} s" if doc["duration_s"] is not None else "unknown span"
+    t0, header = doc["start_time_ns"], doc.get("header_start_ns")
+    if header is not None and t0 is not None and header > t0:
+        dur += (f" (from the first sample; the ULog header starts the recording "
+                f"{(header - t0) / 1e9:.3f} s after it)")
     click.echo(f"{doc['log']} ({doc['kind']}): {dur}, {len(doc['topics'])} topics"
                + (" [partial: damaged]" if doc["partial"] else ""))
     for t in doc["topics"]:
