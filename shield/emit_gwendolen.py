@@ -9,15 +9,16 @@ Files (``N`` the shield's name, ``A`` the agent):
   [timing] satisfy R", C a conjunction of boolean literals (or none) and R a conjunction of
   literals of boolean outputs, becomes plans ``+c: {guards} <- set_r, +r;``: on the belief
   (a percept, or a belief the agent added itself) that completes C, act to make each literal
-  of R true (the action ``set_r``/``clear_r``) and believe it. A requirement without a
-  condition is an initial goal. What has another shape (a number compared, a disjunction,
+  of R true (the action ``set_r``/``clear_r``) and believe it. ``never`` R makes R's
+  negation hold instead (R one literal; the negation of a conjunction is a disjunction, not
+  in the agent). A requirement without a condition is an initial goal. What has another shape (a number compared, a disjunction,
   a mode scope) is not in the agent: listed in its header, enforced by the other forms.
 * ``N_env.java``: the verification environment (a ``VerificationofAutonomousSystemsEnvironment``
   as the paper's): at each perception every input variable is perceived or not by AJPF's
   boolean choice, so the model checker explores every input sequence.
 * ``N.ail``: the AIL configuration (the agent, its builder, the environment).
 * ``N.psl``: one property per requirement in the agent, ``[] (C -> <> R)`` over the agent's
-  beliefs.
+  beliefs (``[] (C -> <> ~R)`` for ``never`` R).
 
 **The untimed reading.** A Gwendolen agent has no clock and acts some reasoning cycles after
 it perceives, so a deadline ("within 1 second", a counter in the shield's state) and even
@@ -86,8 +87,12 @@ def agent_rules(shield: Shield, compiled: Sequence[Any]) -> list[Rule]:
             out.append(Rule(r.id, why="its response reads an input"))
         elif not all(_TERM.match(v) for v in names):
             out.append(Rule(r.id, why="a variable that is not a Gwendolen term"))
-        elif req.timing.kind in ("never", "always") and cond:
-            out.append(Rule(r.id, cond, resp, req.timing.kind))
+        elif req.timing.kind == "never" and len(resp) != 1:
+            out.append(Rule(r.id, why="'never' of a conjunction forbids a disjunction, and the "
+                                      "agent's plans make literals true"))
+        elif req.timing.kind == "never":  # never R: the agent makes R's negation hold
+            (v, val), = resp
+            out.append(Rule(r.id, cond, [(v, not val)], "never"))
         else:
             out.append(Rule(r.id, cond, resp, req.timing.kind or "null"))
     return out
@@ -134,8 +139,9 @@ def render_gwendolen(shield: Shield, compiled: Sequence[Any], base: str) -> dict
             head.append(f"// {rule.rid}: not in the agent ({rule.why}); enforced by the other "
                         "forms")
         else:
-            head.append(f"// {rule.rid}: untimed reading of '{rule.timing}': the response "
-                        "eventually follows the condition")
+            head.append(f"// {rule.rid}: untimed reading of '{rule.timing}': the response"
+                        + ("'s negation" if rule.timing == "never" else "")
+                        + " eventually follows the condition")
     gwen = "\n".join(head + ["GWENDOLEN", f":name: {agent}", "", ":Initial Beliefs:", "",
                              ":Initial Goals:", *goals, "", ":Plans:", *plans]) + "\n"
     return {f"{base}.gwen": gwen,
@@ -158,7 +164,8 @@ def _psl(rules: list[Rule], agent: str) -> str:
         cond = ir.and_all(*(ir.ap(v) if b else ir.not_(ir.ap(v)) for v, b in rule.condition))
         resp = ir.and_all(*(ir.ap(v) if b else ir.not_(ir.ap(v)) for v, b in rule.response))
         phi = ir.G(ir.implies(cond, ir.F(resp))) if rule.condition else ir.F(resp)
-        lines.append(f"# {rule.rid}: untimed reading of its '{rule.timing}' timing")
+        lines.append(f"# {rule.rid}: untimed reading of its '{rule.timing}' timing"
+                     + (" (the response's negation)" if rule.timing == "never" else ""))
         lines.append(f"{re.sub(r'[^A-Za-z0-9_]', '_', rule.rid)}: {to_ajpf(phi, agent, {})}")
     return "\n".join(lines) + "\n"
 

@@ -53,6 +53,43 @@ def test_the_agent_acts_on_each_condition_and_says_what_it_leaves_out(files):
     assert "clearance" not in files["safe_ros_env.java"].split("public class")[1]
 
 
+def _never_files(tmp_path: Path, text: str) -> dict:
+    """The Gwendolen form of a shield of one requirement ``text`` (input i1, output o1)."""
+    src = tmp_path / "never.fret"
+    src.write_text(f"A: {text}\n", encoding="utf-8")
+    compiled = compile_entries(load_requirements([src]))
+    shield = build_shield(compiled, ["i1"], ["o1"], fork=False, name="safe_ros")
+    return render_gwendolen(shield, compiled, "safe_ros")
+
+
+@pytest.mark.parametrize("text, plan, prop", [
+    ("upon i1 c shall never satisfy o1", "+i1: {B o1} <- clear_o1, -o1;",
+     "A: [] (B(c,i1) -> <> ~B(c,o1))"),
+    ("upon i1 c shall never satisfy !o1", "+i1: {~B o1} <- set_o1, +o1;",
+     "A: [] (B(c,i1) -> <> B(c,o1))"),
+    ("c shall never satisfy o1", "<- clear_o1, -o1;", "A: <> ~B(c,o1)"),
+])
+def test_never_makes_the_responses_negation_hold(tmp_path, text, plan, prop):
+    """``never`` R forbids R: the agent's plan makes R's negation hold, and the property is
+    that negation (the agent set the forbidden output and AJPF verified it, the property
+    inverted too)."""
+    got = _never_files(tmp_path, text)
+    assert plan in got["safe_ros.gwen"]
+    assert prop in got["safe_ros.psl"].splitlines()
+    assert "untimed reading of 'never': the response's negation" in got["safe_ros.gwen"]
+
+
+def test_never_of_a_conjunction_is_not_in_the_agent(tmp_path):
+    src = tmp_path / "never.fret"
+    src.write_text("A: upon i1 c shall never satisfy o1 & o2\n", encoding="utf-8")
+    compiled = compile_entries(load_requirements([src]))
+    shield = build_shield(compiled, ["i1"], ["o1", "o2"], fork=False, name="safe_ros")
+    got = render_gwendolen(shield, compiled, "safe_ros")
+    assert "// A: not in the agent ('never' of a conjunction" in got["safe_ros.gwen"]
+    assert "o1" not in got["safe_ros.gwen"].split(":Plans:")[1]
+    assert "# A: not in the agent" in got["safe_ros.psl"]
+
+
 @pytest.fixture(scope="session")
 def ajpf(tmp_path_factory):
     """AJPF built from ../shared/tools/ajpf (its ``ajpf-check.sh`` and MCAPL), or a skip.
@@ -129,3 +166,16 @@ def test_a_mutated_agent_violates_the_property(ajpf, files, tmp_path):
         "+too_close: {~B stopped} <- set_stopped, +stopped;", "+too_close: {True} <- print(\"x\");")
     assert mutated["safe_ros.gwen"] != files["safe_ros.gwen"]
     assert "RESULT: VIOLATED" in _check(ajpf, tmp_path, mutated, "R2")
+
+
+@pytest.mark.xdist_group("ajpf")
+def test_ajpf_verifies_a_never_agent_never_sets_the_forbidden_output(ajpf, tmp_path):
+    """The agent of ``upon i1 c shall never satisfy o1``: its property holds, and so does
+    the requirement's own reading, ``o1`` never believed once ``i1`` was (the agent sets
+    it nowhere); the property inverted (``<> B(c,o1)``, as it was generated) is violated."""
+    files = _never_files(tmp_path, "upon i1 c shall never satisfy o1")
+    files["safe_ros.psl"] += ("N: [] (B(c,i1) -> [] ~B(c,o1))\n"
+                              "W: [] (B(c,i1) -> <> B(c,o1))\n")
+    assert "RESULT: HOLDS" in _check(ajpf, tmp_path / "A", files, "A")
+    assert "RESULT: HOLDS" in _check(ajpf, tmp_path / "N", files, "N")
+    assert "RESULT: VIOLATED" in _check(ajpf, tmp_path / "W", files, "W")
