@@ -16,6 +16,13 @@
    auto``), and the command a user runs (``fretc check FILE --inputs p,m --outputs
    q,r,speed``, start-up and every check included).
 
+8. With ``--redundancy [GROUP]`` (only this): the command ``fretc check FILE --json`` on one
+   project of the corpus (default FRET's Lift+Cruise set, 57 requirements in one component),
+   redundancy included, beside the same command with the ``satisfiable`` query's probe off
+   (``SPOT_PROBE_STATES = 0``: each redundancy query builds the product of the others
+   first, as before the probe): CPU of each (the process and its Spot worker), their ratio,
+   and whether the two JSON reports are the same.
+
 7. With ``--large`` (only this): the 20-requirement set with deadlines near 10^6 ticks
    (``@inputs r0, r1, r2``, ``@outputs a0..a3``): the command ``fretc check FILE --json``
    twice, its CPU (the process and its worker), peak memory and answers, and whether the two
@@ -237,6 +244,43 @@ def realizability_sweep(budget: float) -> None:
             print(f"  {n:>5} {name:<13} {ts:8.2f} {tg:8.2f} {tc:8.2f}  {a} | {b}", flush=True)
 
 
+#: ``fretc check`` with the ``satisfiable`` query's probe off (part 8's baseline); the
+#: query worker is forked from this process, so it keeps the setting
+NO_PROBE = ("import sys; import fretc.check.solver as s; s.SPOT_PROBE_STATES = 0; "
+            "from fretc.cli import main; sys.argv[0] = 'fretc'; main()")
+
+
+def redundancy(corpus: Path, group: str) -> None:
+    """Part 8 (module docstring)."""
+    import tempfile
+
+    rows = [json.loads(line) for line in corpus.read_text(encoding="utf-8").splitlines()]
+    reqs = [{"reqid": d["id"].partition("#")[2], "fulltext": d["text"]} for d in rows
+            if d["id"].partition("#")[0] == group]
+    if not reqs:
+        raise SystemExit(f"no project {group!r} in {corpus}")
+    print(f"8. redundancy of {group} ({len(reqs)} requirements): fretc check FILE --json")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "requirements.json"
+        path.write_text(json.dumps(reqs, indent=1), encoding="utf-8")
+        reports, times = [], []
+        for cmd in ([sys.executable, "-m", "fretc"], [sys.executable, "-c", NO_PROBE]):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            proc = subprocess.run([*cmd, "check", str(path), "--json", "--no-progress"],
+                                  cwd=ROOT, capture_output=True, text=True)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            if proc.returncode not in (0, 1):
+                raise SystemExit(f"fretc check failed ({proc.returncode}): {proc.stderr[-500:]}")
+            times.append((after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime))
+            reports.append(json.loads(proc.stdout))
+    redundant = sum(r.get("redundant") is True for r in reports[0].get("requirements", []))
+    print(f"  probe {times[0]:.1f} s CPU, without it {times[1]:.1f} s CPU: ratio "
+          f"{times[0] / times[1]:.2f}; reports {'equal' if reports[0] == reports[1] else 'DIFFER'}"
+          f" ({redundant} redundant)")
+    if reports[0] != reports[1]:
+        sys.exit(1)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default=str(ROOT / ".." / "shared" / "corpora" /
@@ -251,8 +295,13 @@ def main() -> int:
                     help="Only part 7: the 20-requirement set near 10^6 ticks.")
     ap.add_argument("--against", metavar="DIR",
                     help="Only part 6: the command here beside the checkout at DIR.")
+    ap.add_argument("--redundancy", metavar="GROUP", nargs="?",
+                    const="LiftPlusCruise/LPC_full_reqts_and_vars.json",
+                    help="Only part 8: redundancy of one corpus project, probe on and off.")
     args = ap.parse_args()
-    if args.large:
+    if args.redundancy:
+        redundancy(Path(args.corpus), args.redundancy)
+    elif args.large:
         large_set()
     elif args.against:
         against(Path(args.against).resolve())

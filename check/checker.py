@@ -84,11 +84,14 @@ class Checker:
         self.unknown = 0
 
     # ---------------------------------------------------------------- queries
-    def sat(self, formulas: Sequence[Node], extra: Sequence[Node] = ()) -> object:
+    def sat(self, formulas: Sequence[Node], extra: Sequence[Node] = (), *,
+            word: bool = True) -> object:
         """True / False / UNKNOWN: is the conjunction of ``formulas`` and ``extra`` (with the
         numeric invariants of their comparisons) satisfiable on infinite words? (``extra``
-        apart so the worker can reuse the product of ``formulas``.)"""
-        return self.sat_word(formulas, extra)[0]
+        apart so the worker can reuse the product of ``formulas``.) ``word=False``: no
+        word is wanted, and Spot's product starts from ``extra`` (the worker's
+        ``satisfiable`` query: far sooner when ``extra`` is a negated requirement)."""
+        return self.sat_word(formulas, extra, word=word)[0]
 
     def uses_smt(self, formulas: Sequence[Node]) -> bool:
         """Does a query on ``formulas`` go to z3 (:mod:`fretc.check.smt`) rather than Spot? With
@@ -97,9 +100,10 @@ class Checker:
             return self.engine in ("smt", "bdd")
         return max_bound(formulas) > SPOT_MAX_BOUND
 
-    def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = ()
-                 ) -> tuple[object, tuple | None]:
-        """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable."""
+    def sat_word(self, formulas: Sequence[Node], extra: Sequence[Node] = (), *,
+                 word: bool = True) -> tuple[object, tuple | None]:
+        """:meth:`sat` and an accepting lasso ``(prefix, cycle)`` when satisfiable (None
+        with ``word=False`` when Spot answered)."""
         if self.uses_smt(list(formulas) + list(extra)):
             return self._large_word(list(formulas) + list(extra))
 
@@ -121,7 +125,7 @@ class Checker:
             base = [ir.TRUE]
         return self._ask_sat((tuple(to_spot(f) for f in base),
                               tuple(to_spot(f) for f in more if f not in base)),
-                             max_bound(base + more))
+                             max_bound(base + more), word)
 
     def monitor_word(self, formulas: Sequence[Node], finite: bool,
                      length: int | None = None) -> tuple[object, tuple | None] | None:
@@ -210,10 +214,16 @@ class Checker:
         self.smt_queries += ("smt", tuple(formulas)) not in self._cache
         return self._cached(("smt", tuple(formulas)), lambda: self.smt.sat(formulas))
 
-    def _ask_sat(self, text, bound: int):
+    def _ask_sat(self, text, bound: int, word: bool = True):
         if bound > SPOT_MAX_BOUND:  # a translation past it may not end: refused up front
             return self._cached(text, lambda: self.worker.refuse(
                 f"Spot is given tick bounds up to {SPOT_MAX_BOUND}, this query has {bound}"))
+        if not word and text not in self._cache:  # (a sat answer of it has its word too)
+            def ask():
+                ans = self.worker.ask(("satisfiable", text[0], text[1]))
+                return ans if ans == UNKNOWN else (ans, None)
+
+            return self._cached(("satisfiable", *text), ask)
         return self._cached(text, lambda: self.worker.ask(("sat", text[0], text[1])))
 
     def _cached(self, key, ask):

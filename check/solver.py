@@ -17,6 +17,9 @@ Queries (all on infinite words, Spot's LTL semantics):
 * ``("sat", base, extra)`` (``base`` one formula or a list of conjuncts, ``extra`` more
   conjuncts) -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
   ``{ap: bool}`` letters (atoms a letter leaves free are absent), or ``(False, None)``.
+* ``("satisfiable", base, extra)`` -> True or False: the ``sat`` query's answer without its
+  word (:meth:`_Session.satisfiable`: a product started from ``extra``, which ends far
+  sooner when the conjunction is empty; the redundancy of a requirement asks it).
 * ``("realizable", f, outputs)`` (``f`` one formula or a list of conjuncts) -> ``(True, mealy_states)`` or ``(False, counter)`` where
   ``counter`` is an input lasso ``(prefix, cycle)`` that defeats every controller (no output
   sequence satisfies ``f`` along it), or None when the environment must react to the
@@ -65,6 +68,11 @@ __all__ = ["UNKNOWN", "SpotWorker", "run_query", "SPOT_MAX_STATES"]
 #: refused (the query answers unknown), so the next product and the emptiness check stay
 #: bounded (the benchmark's products at 16 ticks have at most a few thousand states)
 SPOT_MAX_STATES = 200_000
+
+#: the most states of the product a ``satisfiable`` query builds from its ``extra`` conjuncts
+#: before it tests a word of it on the other conjuncts and, when that does not decide, asks
+#: ``sat`` (:meth:`_Session.satisfiable`); 0: ask ``sat`` at once
+SPOT_PROBE_STATES = 16_000
 
 #: the most states of the automaton Spot's synthesis complements to find a defeating input
 #: lasso (complementation is exponential in it): past it no lasso is searched
@@ -163,6 +171,60 @@ class _Session:
                 return (False, None)
         return (True, _word(aut))
 
+    def satisfiable(self, base: list[str], extra: list[str],
+                    probe: int | None = None) -> bool:
+        """The answer of the ``sat`` query of ``base`` and ``extra`` without its word.
+
+        The product of :meth:`sat` starts from the base, smallest automaton first; when the
+        extra conjunct is a negated requirement (is it implied by the others?), the product
+        of the base is as large as that of the whole set, and emptiness shows only at the
+        end. Here the product starts from ``extra`` and takes the base smallest first while
+        it has at most ``probe`` states (default :data:`SPOT_PROBE_STATES`): an empty
+        product is the answer False; a product of every conjunct that is not empty, True;
+        else an accepting word of the product so far, each letter a value of every atom, is
+        tested on each conjunct left (the product of the word's automaton with it): in all,
+        True. Otherwise
+        :meth:`sat` decides. Each answer is an exact emptiness check, so it is the one
+        :meth:`sat` gives, sooner (FRET's Lift+Cruise set: 57 redundancy queries of 76
+        conjuncts, ``bench/bench_check.py --redundancy``)."""
+        import spot  # lazy: Spot loads in the query worker process only
+
+        probe = SPOT_PROBE_STATES if probe is None else probe
+        base_auts = sorted((self.translate(t) for t in base), key=lambda a: a.num_states())
+        auts = [self.translate(t) for t in extra] + base_auts
+        aut, used = None, 0
+        for a in auts:
+            nxt = a if aut is None else spot.product(aut, a)
+            if nxt.num_states() > probe:
+                break
+            aut, used = nxt, used + 1
+            if aut.is_empty():
+                return False
+        else:
+            return aut is not None and not aut.is_empty()
+        if aut is not None:
+            lasso = self._one_word(aut, auts).as_automaton()
+            if all(not spot.product(lasso, a).is_empty() for a in auts[used:]):
+                return True
+        return self.sat(base, extra)[0]
+
+    def _one_word(self, aut, auts: list):
+        """An accepting word of ``aut`` whose every letter gives each atom of ``auts`` a
+        value (Spot's letters leave atoms free: a lasso of them stands for many words, and
+        each conjunct could accept another one of them)."""
+        import spot  # lazy: Spot loads in the query worker process only (before buddy)
+        import buddy  # lazy: Spot's BDD library, with Spot in the query worker process
+
+        atoms = buddy.bddtrue
+        for a in auts:
+            atoms = atoms & a.ap_vars()
+        found = aut.accepting_word()
+        word = spot.twa_word(self.dict)
+        for letters, out in ((found.prefix, word.prefix), (found.cycle, word.cycle)):
+            for b in letters:
+                out.append(buddy.bdd_satoneset(b, atoms, buddy.bddfalse))
+        return word
+
     def realizable(self, texts: list[str], outputs: list[str]) -> tuple[bool, Any]:
         """The ``realizable`` query of the conjunction of ``texts``, ``outputs`` the
         controller's atoms."""
@@ -239,12 +301,14 @@ def run_query(query: tuple, budget: Budget | None = None,
     queries only, never on other Spot work of the process."""
     budget = budget or Budget()
     kind = query[0]
-    if kind in ("sat", "realizable"):
+    if kind in ("sat", "satisfiable", "realizable"):
         if session is None:
             session = _WORKER_SESSION[0] if _WORKER_SESSION else _Session()
         texts = [query[1]] if isinstance(query[1], str) else list(query[1])
         if kind == "sat":
             return session.sat(texts, list(query[2]) if len(query) > 2 else [])
+        if kind == "satisfiable":
+            return session.satisfiable(texts, list(query[2]))
         return session.realizable(texts, list(query[2]))
     if kind in ("call", "safety_game", "buchi_game", "monitor_sat"):
         # the games' BDD dictionary (check.safety_game) new for each query: its numbering
