@@ -14,7 +14,9 @@ requirements. Each tick:
   ``/gwendolen_control``) is proposed as its default message (every field 0 or false);
 * the shield decides (:class:`fretc.shield.runtime.ShieldRuntime`), and each output topic
   gets a message: the proposal itself when none of its atoms changed, else the proposal
-  with the fields the bindings' inversion gives the corrected atoms
+  with each numeric output set to its decided value through its binding (a field, ``-x``,
+  ``abs(x)`` with the proposal's sign) when that gives the decided atoms, else with the
+  fields the bindings' inversion gives the corrected atoms
   (:mod:`fretc.shield.plan`, as ``fretc testgen --bindings`` writes tests); every message is
   read back through the bindings before it is published, and one that would not give the
   decided values is an internal error, never sent;
@@ -41,6 +43,7 @@ from fretc.common.problems import SignalError
 from fretc.shield.plan import ShieldError
 from fretc.shield.runtime import Decision, ShieldRuntime, truth
 from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.expression import Field, FuncCall, UnaryOp
 from fretc.signals.bindings.spec import Bindings
 
 __all__ = ["MessageShield", "ShieldInputError", "proposals_of", "default_message"]
@@ -196,6 +199,11 @@ class MessageShield:
                 if not changed and topic in self.proposed:
                     out[topic] = base
                     continue
+                msg = self._decided(base, topic, d, m, g)
+                if msg is not None and self._gives(m, g, {**props, topic: msg}, truths,
+                                                   now_ns):
+                    out[topic] = msg
+                    continue
                 if fields is None:
                     raise RuntimeError(f"no message of {topic} gives the decided values")
                 msg = _overlay(base, topic, fields)
@@ -207,10 +215,69 @@ class MessageShield:
                 out[topic] = msg
         return [(t, out[t]) for t in self.output_topics]
 
+    def _decided(self, base: Any, topic: str, d: Decision, m: Any, g: dict[str, Any]
+                 ) -> Any | None:
+        """The proposal ``base`` of ``topic`` with each numeric output of the group set to
+        its decided value, through its binding (a field ``x``, ``-x`` or ``abs(x)``, whose
+        sign the proposal keeps): the message that changes what the decision changed and
+        nothing else; None when a decided number has another binding."""
+        msg = copy.deepcopy(base)
+        for v in dict.fromkeys(m.outs[j][0] for j in g["atoms"]):
+            value = d.outputs.get(v)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                continue
+            if not _write_number(msg, topic, self.bindings.variables[v].ast, float(value)):
+                return None
+        return msg
+
     def _gives(self, m: Any, g: dict[str, Any], msgs: dict[str, Any], truths: list[bool],
                now_ns: int) -> bool:
         values = self._values(msgs, now_ns)
         return [truth(m.outs[j], values[m.outs[j][0]]) for j in g["atoms"]] == truths
+
+
+def _write_number(msg: Any, topic: str, e: Any, value: float) -> bool:
+    """Set the field of ``msg`` (a message of ``topic``) that the numeric binding ``e``
+    reads so that ``e`` gives ``value``: ``e`` a field of ``topic`` (an int field only with
+    an integral value), ``-x`` or ``abs(x)`` (``x``'s sign kept, + when it is 0); False
+    for any other binding."""
+    if isinstance(e, UnaryOp) and e.op == "-":
+        return _write_number(msg, topic, e.arg, -value)
+    if isinstance(e, FuncCall) and e.func == "abs" and len(e.args) == 1:
+        now = _read_number(msg, topic, e.args[0])
+        if now is None or value < 0:
+            return False
+        return _write_number(msg, topic, e.args[0], -value if now < 0 else value)
+    if not (isinstance(e, Field) and e.topic == topic and e.path
+            and all(isinstance(x, str) for x in e.path)):
+        return False
+    path = [str(x) for x in e.path]
+    owner = msg
+    for name in path[:-1]:
+        owner = getattr(owner, name, None)
+    old = getattr(owner, path[-1], None)
+    if isinstance(old, bool) or not isinstance(old, (int, float)):
+        return False
+    if isinstance(old, int) and not value.is_integer():
+        return False
+    setattr(owner, path[-1], type(old)(value))
+    return True
+
+
+def _read_number(msg: Any, topic: str, e: Any) -> float | None:
+    """The value of the binding ``e`` (a field of ``topic``, or ``-x``) on ``msg``; None
+    for another binding."""
+    if isinstance(e, UnaryOp) and e.op == "-":
+        x = _read_number(msg, topic, e.arg)
+        return None if x is None else -x
+    if not (isinstance(e, Field) and e.topic == topic and e.path
+            and all(isinstance(x, str) for x in e.path)):
+        return None
+    owner = msg
+    for name in e.path:
+        owner = getattr(owner, str(name), None)
+    return float(owner) if isinstance(owner, (int, float)) and not isinstance(owner, bool) \
+        else None
 
 
 def _overlay(message: Any, topic: str, fields: list[tuple[str, list[str], Any]]) -> Any:

@@ -126,3 +126,45 @@ def test_a_shield_generated_without_accepts_keeps_the_topics_order(tables):
     steps = [("far", 0.4)] * 3 + [("none", 0.4)] * 8 + [("far", 0.4)] * 10  # (R6: a stop)
     with pytest.raises(AssertionError):  # the fixed order shows R3 broken as the stop falls
         _run(tables, steps, Older)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["far", "close", "none"]),
+                          st.floats(-1.2, 1.2, allow_subnormal=False),
+                          st.floats(-1.2, 1.2, allow_subnormal=False)),
+                min_size=1, max_size=30))
+def test_a_corrected_velocity_has_the_decided_speeds_and_the_proposals_direction(tables, steps):
+    """The corrected ``/cmd_vel_filtered`` is the proposal with the decided speeds written
+    through their bindings (``abs(linear.x)``, ``abs(angular.z)``): the decided values, in
+    the proposal's direction. (It was a fixed witness of the corrected atoms' truths: a
+    proposal of 0.754 m/s backwards, straight, limited to 0.5, went out as 0.001 m/s forwards
+    turning at 0.45 rad/s.)"""
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    shield = MessageShield(ShieldRuntime(tables), load_bindings(BINDINGS),
+                           {"/cmd_vel_filtered": "/cmd_vel"},
+                           lambda topic: default_message(store, TYPES[topic]))
+    for k, (scan, lx, az) in enumerate(steps):
+        t = (k + 1) * PERIOD
+        if scan != "none":
+            msg = default_message(store, TYPES["/scan"])
+            msg.range_min, msg.range_max = 0.1, 10.0
+            msg.ranges = __import__("numpy").full(8, 0.5 if scan == "close" else 3.0,
+                                                  dtype="float32")
+            shield.hear("/scan", msg, t)
+        clear = default_message(store, TYPES["/ground_truth/clearance"])
+        clear.data = 1.0
+        shield.hear("/ground_truth/clearance", clear, t)
+        cmd = default_message(store, TYPES["/cmd_vel"])
+        cmd.linear.x, cmd.angular.z = lx, az
+        shield.hear("/cmd_vel", cmd, t)
+        try:
+            d, msgs = shield.tick(t)
+        except Exception as exc:  # no scan yet: nothing published
+            assert "no message" in str(exc), exc
+            continue
+        pub = dict(msgs)["/cmd_vel_filtered"]
+        assert abs(pub.linear.x) == d.outputs["linear_speed"], (k, lx, az, d, pub)
+        assert abs(pub.angular.z) == d.outputs["angular_speed"], (k, lx, az, d, pub)
+        assert pub.linear.x * lx >= 0 and pub.angular.z * az >= 0, (k, lx, az, d, pub)
