@@ -19,6 +19,7 @@ from fretc.check.budget import Budget
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
 from fretc.check.safety_game import letter_name
 from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.common.units import format_period_ms
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
@@ -147,10 +148,22 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
 
     Raises:
         ShieldError: a requirement that cannot be enforced, an unrealizable component (with
-            the inputs that defeat every controller), an unknown preference.
+            the inputs that defeat every controller), an unknown preference, requirements
+            of different tick periods (the shield steps on one tick: a duration of the other
+            period would count ticks of the wrong length).
         ShieldUnknown: a component's game past its budget, or comparisons of several
             variables with too many valuations to decide
             (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
+    periods: dict[Any, list[str]] = {}
+    for c in compiled:
+        if c.entry.tick_period is not None:
+            periods.setdefault(c.entry.tick_period, []).append(
+                f"{c.id} ({c.entry.source}:{c.entry.line})")
+    if len(periods) > 1:
+        raise ShieldError("requirements of different tick periods: " + "; ".join(
+            f"{format_period_ms(t)}: {', '.join(ids)}" for t, ids in sorted(periods.items()))
+            + ". The shield steps on one tick, and each duration counts ticks of its own "
+            "file's period; give the files one @tick_period")
     try:
         p = plan(compiled, inputs, outputs, bindings)
     except PredicateBudget as exc:
@@ -167,7 +180,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     if unknown:
         raise ShieldError("--prefer names " + ", ".join(unknown) + ", not an output atom of "
                           "an enforced requirement (" + ", ".join(sorted(texts)) + ")")
-    periods = {c.entry.tick_period for c in compiled if c.entry.tick_period is not None}
+    assert len(periods) <= 1  # (mixed periods were refused above)
     digest = hashlib.sha256("\n".join(
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
                                               f"out:{','.join(p.outputs)}",
@@ -175,7 +188,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         + [str(m.nodes) for m in machines]
         + [str(m.clusters) for m in machines if m.clusters]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
-                  dict(p.monitored), tuple(prefer), min(periods) if periods else None,
+                  dict(p.monitored), tuple(prefer), next(iter(periods), None),
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
                         if len(g.variables) > 1),
                   _numbers(compiled),

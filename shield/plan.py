@@ -120,10 +120,14 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         raise ShieldError("declared both input and output: " + ", ".join(both))
     enforced: list[CheckItem] = []
     monitored: dict[str, str] = {}
+    notes: list[str] = []
     for k, c in enumerate(compiled):
         if c.formalization is None:
             raise ShieldError(f"{_where(c)}: {c.id} has no formalization"
                               + (f" ({c.error})" if c.error else " (free-form text)"))
+        bound = _probability_bound(c)
+        if bound is not None:
+            notes.append(bound)
         item = make_item(k, c)
         undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
         if undeclared:
@@ -146,11 +150,35 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         except Outside as exc:
             raise ShieldError(f"{_where(c)}: {c.id}: {exc}") from None
         enforced.append(item)
-    notes: list[str] = []
     groups = _message_groups(outputs, bindings)
     components = [_component(items, inputs, groups, bindings, notes)
                   for items in _components(enforced, groups)]
     return Plan(inputs, outputs, components, monitored, notes)
+
+
+def _probability_bound(c: Any) -> str | None:
+    """None for a requirement without ``with probability OP p`` (FRET 3.1); for one with it,
+    the note that the shield enforces its property on every run, so with probability 1,
+    which meets ``OP p``.
+
+    Raises:
+        ShieldError: probability 1 does not meet the bound (``<= 0.001``: a shield that
+            enforces the property makes the requirement fail)."""
+    req = c.entry.requirement
+    prob = getattr(req, "probability", None)
+    if prob is None:
+        return None
+    p = float(prob.value)
+    holds = {"<": 1 < p, "<=": 1 <= p, ">": 1 > p, ">=": 1 >= p, "=": p == 1,
+             "!=": p != 1}[prob.op]
+    if not holds:
+        raise ShieldError(f"{_where(c)}: {c.id} bounds the probability of its property by "
+                          f"{prob.op} {prob.value}: a shield enforces the property on every "
+                          "run (probability 1), which breaks that bound; leave it out of the "
+                          "shield and judge it with fretc audit or fretc estimate")
+    return (f"{c.id}: 'with probability {prob.op} {prob.value}' is enforced on every run "
+            "(probability 1, which meets the bound): the shield may correct more than the "
+            "requirement asks")
 
 
 def _not_safety(key: str) -> str:

@@ -146,6 +146,47 @@ def test_refusals_are_input_errors_that_say_why(tmp_path, text, args, words):
     assert words in got.output
 
 
+@pytest.mark.parametrize("op, value, enforced", [
+    ("<=", "0.001", False), ("<", "1", False), ("=", "0.5", False), ("!=", "1", False),
+    (">=", "0.9", True), (">", "0.5", True), ("=", "1", True), ("<=", "1", True),
+])
+def test_a_probability_bound_is_enforced_only_where_probability_1_meets_it(tmp_path, op,
+                                                                          value, enforced):
+    """The shield enforces a requirement's property on every run, so with probability 1:
+    a bound that 1 breaks (``<= 0.001``) is refused, the audit of the shielded runs would
+    find it failed; one that 1 meets is enforced, with a note."""
+    f = tmp_path / "r.fret"
+    f.write_text(f"R: if armed the drone shall with probability {op} {value} never satisfy "
+                 "motor_fault\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "armed", "--outputs", "motor_fault",
+                     "-o", str(tmp_path / "out"))
+    if enforced:
+        assert got.exit_code == 0, got.output
+        assert f"'with probability {op} {value}' is enforced on every run" in got.output
+    else:
+        assert got.exit_code == 2, got.output
+        assert f"bounds the probability of its property by {op} {value}" in got.output
+
+
+def test_files_of_different_tick_periods_are_refused(tmp_path):
+    """Each duration counts ticks of its own file's period and the shield steps on one
+    tick: B's 'within 2 seconds' at 1 s a tick was enforced as 2 ticks of 100 ms."""
+    (tmp_path / "fast.fret").write_text("@tick_period 100 ms\nA: upon i c shall within 1 "
+                                        "second satisfy o\n", encoding="utf-8")
+    (tmp_path / "slow.fret").write_text("@tick_period 1 s\nB: upon j c shall within 2 "
+                                        "seconds satisfy p\n", encoding="utf-8")
+    got = shield_cli(str(tmp_path / "fast.fret"), str(tmp_path / "slow.fret"), "--inputs",
+                     "i,j", "--outputs", "o,p", "-o", str(tmp_path / "out"))
+    assert got.exit_code == 2, got.output
+    assert "requirements of different tick periods: 100 ms: A (" in got.output
+    assert "1 s: B (" in got.output
+    (tmp_path / "slow.fret").write_text("@tick_period 100 ms\nB: upon j c shall within 2 "
+                                        "seconds satisfy p\n", encoding="utf-8")
+    got = shield_cli(str(tmp_path / "fast.fret"), str(tmp_path / "slow.fret"), "--inputs",
+                     "i,j", "--outputs", "o,p", "-o", str(tmp_path / "out"))
+    assert got.exit_code == 0, got.output
+
+
 def test_over_inputs_only_is_monitored_not_enforced(tmp_path):
     compiled = compile_text("R1: sw shall always satisfy a\nR2: whenever a sw shall "
                             "immediately satisfy x\n", tmp_path)
