@@ -26,6 +26,8 @@ before costs a lookup, a miss what the step costs without it.
 from __future__ import annotations
 
 import keyword
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,7 +35,7 @@ from fretc.compiler.c_step import c_string
 from fretc.shield.build import Shield
 from fretc.shield.emit_python import tables
 
-__all__ = ["render_c", "c_name", "c_term"]
+__all__ = ["render_c", "c_name", "c_names", "c_term"]
 
 _C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto "
@@ -44,9 +46,32 @@ _C_OPS = {"<": "<", "<=": "<=", ">": ">", ">=": ">=", "=": "==", "!=": "!="}
 
 
 def c_name(variable: str) -> str:
-    """A FRET variable as a C field name: itself, or with ``_`` after it when it is a C
-    keyword (FRET names are identifiers)."""
+    """A FRET variable as a C identifier: itself, with ``_`` after it when it is a C (or
+    Python) keyword; a name that is no identifier (FRET's dotted ``ROS.ok``, a quoted
+    ``"load%"``) with ``_`` for each other character (``v_`` before a digit). Two names
+    may give one: :func:`c_names` makes them unique."""
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", variable):
+        variable = re.sub(r"[^A-Za-z0-9_]", "_", variable)
+        if not variable or variable[0].isdigit():
+            variable = "v_" + variable
     return variable + "_" if variable in _C_KEYWORDS or keyword.iskeyword(variable) else variable
+
+
+def c_names(variables: Sequence[str]) -> dict[str, str]:
+    """Each of ``variables`` (distinct FRET names) -> its C field name, unique among them:
+    :func:`c_name`, with ``_2``, ``_3``, ... after a name another variable already has
+    (the names that are C identifiers as they are keep them; the others are taken in the
+    order given)."""
+    out: dict[str, str] = {}
+    used: set[str] = set()
+    for v in sorted(variables, key=lambda v: c_name(v) != v):  # (stable: given order)
+        name, k = c_name(v), 1
+        while name in used:
+            k += 1
+            name = f"{c_name(v)}_{k}"
+        out[v] = name
+        used.add(name)
+    return {v: out[v] for v in variables}
 
 
 def _double(x: float) -> str:
@@ -55,28 +80,29 @@ def _double(x: float) -> str:
     return text if any(ch in text for ch in ".en") else text + ".0"
 
 
-def c_term(t: tuple[Any, ...], struct: str) -> str:
+def c_term(t: tuple[Any, ...], struct: str, names: dict[str, str] | None = None) -> str:
     """A comparison of several variables or one of its terms
     (:func:`fretc.shield.runtime.term_value`) as a C expression over the fields of
     ``struct`` (a pointer), with the runtime's double arithmetic (``min``/``max`` as
-    Python's, IEEE division)."""
+    Python's, IEEE division); ``names`` the fields' names (:func:`c_names`; default
+    :func:`c_name`)."""
     op = t[0]
-    if op == "cmp":
-        return f"({c_term(t[2], struct)} {_C_OPS[t[1]]} {c_term(t[3], struct)})"
     if op == "var":
-        return f"{struct}->{c_name(t[1])}"
+        return f"{struct}->{names[t[1]] if names is not None else c_name(t[1])}"
     if op == "num":
         return _double(t[1])
+    if op == "cmp":
+        return f"({c_term(t[2], struct, names)} {_C_OPS[t[1]]} {c_term(t[3], struct, names)})"
     if op == "neg":
-        return f"(-{c_term(t[1], struct)})"
+        return f"(-{c_term(t[1], struct, names)})"
     if op == "fn":
-        a = c_term(t[2], struct)
+        a = c_term(t[2], struct, names)
         if t[1].startswith("abs"):
             return f"fabs({a})"
-        b = c_term(t[3], struct)
+        b = c_term(t[3], struct, names)
         rel = "<" if t[1].startswith("min") else ">"
         return f"(({b}) {rel} ({a}) ? ({b}) : ({a}))"
-    return f"({c_term(t[1], struct)} {op} {c_term(t[2], struct)})"
+    return f"({c_term(t[1], struct, names)} {op} {c_term(t[2], struct, names)})"
 
 
 def _comment(text: str) -> str:
@@ -167,9 +193,11 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
     env = _env()
     env.filters["cstr"] = c_string
     env.filters["ccom"] = _comment
-    env.filters["cname"] = c_name
+    names = c_names(list(dict.fromkeys([*shield.inputs, *shield.outputs])))
+    env.filters["cname"] = names.__getitem__
     env.filters["double"] = _double
-    env.filters["cterm"] = c_term
+    env.filters["prepend_comma"] = lambda v: "," + v
+    env.filters["cterm"] = lambda t, struct: c_term(t, struct, names)
     t = tables(shield)
     machines = _machines(shield)
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,

@@ -127,3 +127,39 @@ def test_a_shield_that_enforces_nothing_still_builds_and_runs(tmp_path):
                          timeout=60)
     assert got.returncode == 0 and got.stdout.splitlines() == ["tick,overridden,reasons",
                                                                "0,0,"], got
+
+
+def test_names_that_are_no_c_identifiers_build_and_decide_alike(tmp_path):
+    """FRET's dotted names, quoted ones with ``*/``, ``%`` or a backslash, and two names that
+    sanitize alike (``arm.stop``, ``arm_stop``): the C form builds with the strict flags
+    (they were pasted in as fields and into the runner's printf), names each field after
+    its FRET name, and decides as the Python form; the Python form imports (a backslash in
+    its docstring was a SyntaxError)."""
+    from fretc.shield.build import build_shield as build_one
+    from fretc.shield.emit_python import load_shield, render_python
+
+    needs_cc()
+    compiled = compile_text('R1: whenever ROS.ok sw shall immediately satisfy arm.stop\n'
+                            'R2: whenever "x*/y" sw shall immediately satisfy "load%"\n'
+                            'R3: whenever "p\\N" sw shall immediately satisfy arm_stop\n',
+                            tmp_path)
+    ins, outs = ["ROS.ok", "x*/y", "p\\N"], ["arm.stop", "load%", "arm_stop"]
+    shield = build_one(compiled, ins, outs, fork=False)
+    files = render_c(shield, "n")
+    assert "bool arm_stop;" in files["n_shield.h"]
+    assert "bool arm_stop_2; /* FRET's arm.stop */" in files["n_shield.h"]
+    write(files, tmp_path / "c")
+    exe = build(tmp_path / "c", ["n_shield.c", "n_shield_run.c"], "run")
+    py = load_shield(render_python(shield))()
+    rows = [({v: bool(k >> i & 1) for i, v in enumerate(ins)},
+             {v: bool(k >> (i + 3) & 1) for i, v in enumerate(outs)}) for k in range(64)]
+    text = ",".join(ins + outs) + "\n" + "".join(
+        ",".join(_cell(x) for x in [*a.values(), *p.values()]) + "\n" for a, p in rows)
+    got = subprocess.run([str(exe)], input=text, capture_output=True, text=True, timeout=60)
+    assert got.returncode == 0 and not got.stderr, got.stderr
+    c_rows = list(csv.DictReader(io.StringIO(got.stdout)))
+    assert list(c_rows[0])[1:4] == outs
+    for (a, p), c in zip(rows, c_rows, strict=True):
+        d = py.step(a, p)
+        assert {v: c[v] for v in outs} == {v: str(int(d.outputs[v])) for v in outs}, (a, p, c)
+        assert c["overridden"] == str(int(d.overridden))
