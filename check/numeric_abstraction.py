@@ -133,17 +133,34 @@ class NumericAbstraction:
         """``(atom text, why)`` of every atom left uninterpreted, sorted by text."""
         return sorted(self._uninterpreted.items())
 
-    def _regions(self, name: str) -> list[tuple[Fraction | float, tuple[bool, ...]]]:
-        """``(representative value, truth of each atom)`` per region, distinct truths only."""
+    def _regions(self, name: str, doubles: bool = False
+                 ) -> list[tuple[Fraction | float, tuple[bool, ...]]]:
+        """``(representative value, truth of each atom)`` per region, distinct truths only.
+        ``doubles``: the values are IEEE doubles and each constant the double nearest it, as
+        the monitors and the shield compute (``y > 0.1 & y < 0.10000000000000001`` has a
+        real between its constants, no double: the two literals are one double); a region
+        is kept when a double lies in it (each constant, the double just above it when it
+        is below the next constant, the double just below the first)."""
         atoms = self.atoms[name]
-        consts = sorted({_simple(a)[2] for a in atoms})
-        points: list[Fraction | float] = [_between(-math.inf, consts[0])]
-        for i, c in enumerate(consts):
-            points.append(c)
-            points.append(_between(c, consts[i + 1] if i + 1 < len(consts) else math.inf))
+        points: list[Fraction | float]
+        if doubles:
+            fc = sorted({float(_simple(a)[2]) for a in atoms})
+            points = [math.nextafter(fc[0], -math.inf)] if fc[0] > -math.inf else []
+            for i, d in enumerate(fc):
+                points.append(d)
+                up = math.nextafter(d, math.inf)
+                if d < math.inf and (i + 1 == len(fc) or up < fc[i + 1]):
+                    points.append(up)
+        else:
+            consts = sorted({_simple(a)[2] for a in atoms})
+            points = [_between(-math.inf, consts[0])]
+            for i, c in enumerate(consts):
+                points.append(c)
+                points.append(_between(c, consts[i + 1] if i + 1 < len(consts) else math.inf))
         out, seen = [], set()
         for v in points:
-            truth = tuple(_TEST[_simple(a)[1]](v, _simple(a)[2])
+            truth = tuple(_TEST[_simple(a)[1]](v, float(_simple(a)[2]) if doubles
+                                               else _simple(a)[2])
                           for a in atoms)
             if truth not in seen:
                 seen.add(truth)
@@ -171,13 +188,14 @@ class NumericAbstraction:
         disj = self.region(name)
         return disj if disj.op == "true" else ir.G(disj)
 
-    def region(self, name: str) -> Node:
-        """The truth values of one variable's comparisons that one real value gives, as a
-        propositional disjunction over them (TRUE when every combination is possible)."""
+    def region(self, name: str, doubles: bool = False) -> Node:
+        """The truth values of one variable's comparisons that one real value (``doubles``:
+        one double, :meth:`_regions`) gives, as a propositional disjunction over them (TRUE
+        when every combination is possible)."""
         atoms = self.atoms.get(name, [])
-        if len(atoms) < 2:
+        if not atoms or (len(atoms) < 2 and not doubles):
             return ir.TRUE
-        regions = self._regions(name)
+        regions = self._regions(name, doubles)
         if len(regions) == 2 ** len(atoms):
             return ir.TRUE
         disj = ir.FALSE
@@ -186,10 +204,10 @@ class NumericAbstraction:
                                              for a, t in zip(atoms, truth))))
         return disj
 
-    def regions(self, names: Iterable[str]) -> Node:
+    def regions(self, names: Iterable[str], doubles: bool = False) -> Node:
         """The conjunction of :meth:`region` over ``names`` (a propositional formula that
         holds at every tick: the game's and the monitors' consistency of numbers)."""
-        return ir.and_all(*(self.region(v) for v in names))
+        return ir.and_all(*(self.region(v, doubles) for v in names))
 
     def values(self, truth: dict[Node, bool]) -> dict[str, float]:
         """A value per compared variable giving the comparisons the truth values ``truth``

@@ -255,9 +255,15 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
     head = (f"no shield exists for {', '.join(comp.ids)} ({', '.join(x.location for x in comp.items)}): "
             "the requirements are unrealizable (no controller meets them whatever the inputs "
             f"{', '.join(p.inputs)} do)")
+    numeric = NumericAbstraction.of(enforced_pts(comp.items))
+    gaps = [v for v in sorted(numeric.atoms) if numeric.region(v) != numeric.region(v, True)]
+    if gaps:  # (check decides over the reals, the shield in doubles)
+        head += (f", in doubles as the shield decides: the comparisons of {', '.join(gaps)} "
+                 "have values between their constants that no double takes (two literals "
+                 "that are one double, or no double between them), which fretc check, over "
+                 "the reals, counts")
     if not ans.get("inputs"):
         return head + "; " + (ans.get("note") or "the environment must react to the outputs")
-    numeric = NumericAbstraction.of(enforced_pts(comp.items))
     atoms = {to_smv(a): a for name in numeric.atoms for a in numeric.atoms[name]}
     rows = []
     for letter in ans["inputs"]:
@@ -272,4 +278,4 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
         rows.append("{" + ", ".join(f"{k}={str(x).lower() if isinstance(x, bool) else x}"
                                     for k, x in row.items()) + "}")
     return (head + "; these inputs, tick by tick, defeat every controller: "
-            + " ".join(rows) + " (fretc check gives the same finding)")
+            + " ".join(rows) + ("" if gaps else " (fretc check gives the same finding)"))

@@ -261,8 +261,10 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     Raises :class:`fretc.shield.predicates.PredicateBudget` (a cluster too large)."""
     pts = enforced_pts(items)
     numeric = NumericAbstraction.of(pts)
-    env_inv = numeric.regions([v for v in numeric.atoms if v in inputs])
-    ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs])
+    # (in doubles, as the shield's forms compute: a region with reals and no double in it
+    # is no move of either player)
+    env_inv = numeric.regions([v for v in numeric.atoms if v in inputs], doubles=True)
+    ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True)
     clusters = preds.clusters(pts, inputs)
     names: dict[Node, Node] = {}
     game_inputs = list(inputs)

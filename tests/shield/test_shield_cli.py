@@ -231,3 +231,24 @@ def test_a_margin_meets_each_deadline_early_and_is_refused_past_one(tmp_path):
     f.write_text("R1: upon a sw shall within 2 ticks satisfy x\n", encoding="utf-8")
     got = shield_cli(str(f), "--inputs", "a", "--outputs", "x", "--margin", "3")
     assert got.exit_code == 2 and "shorter than the margin of 3" in got.output, got.output
+
+
+@pytest.mark.parametrize("text, args", [
+    ("A: the c shall always satisfy y > 1 & y < 1.0000000000000002\n", ["--outputs", "y"]),
+    ("A: whenever i1 c shall immediately satisfy y > 0.1 & y < 0.10000000000000001\n",
+     ["--inputs", "i1", "--outputs", "y"]),
+])
+def test_a_region_with_reals_and_no_double_is_no_move(tmp_path, text, args):
+    """The shield decides in doubles: a response whose values lie between two constants
+    with no double between them (two literals that are one double) cannot be met; it was
+    synthesized over the reals, and then the Python form raised and the C form gave NaN
+    as the correction. Refused, saying why ``fretc check`` (over the reals) differs."""
+    f = tmp_path / "r.fret"
+    f.write_text(text, encoding="utf-8")
+    got = shield_cli(str(f), *args, "-o", str(tmp_path / "out"))
+    assert got.exit_code == 2, got.output
+    assert "in doubles as the shield decides: the comparisons of y have values" in got.output
+    assert "fretc check gives the same finding" not in got.output
+    f.write_text(text.replace("1.0000000000000002", "1.5").replace("0.10000000000000001",
+                                                                   "0.3"), encoding="utf-8")
+    assert shield_cli(str(f), *args, "-o", str(tmp_path / "out")).exit_code == 0
