@@ -34,7 +34,7 @@ from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 
-__all__ = ["Cluster", "PredicateBudget", "MAX_VALUATIONS", "FUNCTIONS", "is_predicate",
+__all__ = ["Cluster", "PredicateBudget", "NoWitness", "MAX_VALUATIONS", "FUNCTIONS", "is_predicate",
            "undecidable", "comparisons", "clusters", "mixed_invariants"]
 
 #: the most valuations (realizable plus excluded by a core) z3 is asked about per cluster
@@ -49,6 +49,13 @@ _ARITH = ("+", "-", "*", "/")
 #: called with (cluster, z3 model, z3 reals by variable, the valuation) for each realizable
 #: valuation found; returns what :attr:`Cluster.witnesses` keeps for it
 Witness = Callable[["Cluster", Any, dict[str, Any], tuple[bool, ...]], Any]
+
+
+class NoWitness(Exception):
+    """Raised by a :data:`Witness` whose caller cannot use z3's model of a realizable
+    valuation (the shield: its numbers do not give the valuation in double arithmetic):
+    the valuation is left out of the invariant as if no numbers realized it, and listed in
+    :attr:`Cluster.unwitnessed` with the message."""
 
 
 class PredicateBudget(Exception):
@@ -105,6 +112,8 @@ class Cluster:
     is_input: bool
     invariant: Node = ir.TRUE
     witnesses: dict[tuple[bool, ...], Any] = field(default_factory=dict)
+    #: realizable valuations the witness could not use (:class:`NoWitness`) -> why
+    unwitnessed: dict[tuple[bool, ...], str] = field(default_factory=dict)
 
 
 def comparisons(formulas: Sequence[Node]) -> list[Node]:
@@ -222,9 +231,14 @@ def _decide(c: Cluster, witness: Witness | None) -> None:
         if answer == z3.unknown:
             raise _undecided(c, theory)
         if answer == z3.sat:
-            c.witnesses[values] = (witness(c, theory.model(), reals, values)
-                                   if witness is not None else None)
             search.add(z3.Not(z3.And(*lits)))
+            try:
+                c.witnesses[values] = (witness(c, theory.model(), reals, values)
+                                       if witness is not None else None)
+            except NoWitness as exc:
+                c.unwitnessed[values] = str(exc)
+                lemmas.append(ir.not_(ir.and_all(*(a if v else ir.not_(a)
+                                                   for a, v in zip(c.atoms, values)))))
             continue
         core = {str(x) for x in theory.unsat_core()}
         picked = [(k, v) for k, (lit, v) in enumerate(zip(lits, values)) if str(lit) in core]

@@ -262,6 +262,12 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
                  "have values between their constants that no double takes (two literals "
                  "that are one double, or no double between them), which fretc check, over "
                  "the reals, counts")
+    unused = [(cl, v) for cl in comp.clusters for v in cl.unwitnessed]
+    if unused:
+        head += (", in doubles as the shield decides: " + "; ".join(
+            " & ".join(to_smv(a) if t else f"!{to_smv(a)}" for a, t in zip(cl.atoms, v))
+            + f" ({cl.unwitnessed[v]})" for cl, v in unused)
+            + ": never chosen, where fretc check, over the reals, counts it")
     if not ans.get("inputs"):
         return head + "; " + (ans.get("note") or "the environment must react to the outputs")
     atoms = {to_smv(a): a for name in numeric.atoms for a in numeric.atoms[name]}
@@ -278,4 +284,4 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
         rows.append("{" + ", ".join(f"{k}={str(x).lower() if isinstance(x, bool) else x}"
                                     for k, x in row.items()) + "}")
     return (head + "; these inputs, tick by tick, defeat every controller: "
-            + " ".join(rows) + ("" if gaps else " (fretc check gives the same finding)"))
+            + " ".join(rows) + ("" if gaps or unused else " (fretc check gives the same finding)"))

@@ -266,6 +266,11 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     env_inv = numeric.regions([v for v in numeric.atoms if v in inputs], doubles=True)
     ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True)
     clusters = preds.clusters(pts, inputs)
+    for cl in clusters:
+        for values, why in cl.unwitnessed.items():
+            cube = " & ".join(to_smv(a) if v else f"!{to_smv(a)}"
+                              for a, v in zip(cl.atoms, values))
+            notes.append(f"never chosen: {cube} ({why})")
     names: dict[Node, Node] = {}
     game_inputs = list(inputs)
     for cl in clusters:

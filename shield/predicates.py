@@ -23,8 +23,8 @@ from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
-from fretc.check.predicates import (MAX_VALUATIONS, Cluster, PredicateBudget, is_predicate,
-                                    undecidable)
+from fretc.check.predicates import (MAX_VALUATIONS, Cluster, NoWitness, PredicateBudget,
+                                    is_predicate, undecidable)
 from fretc.check import predicates as _check
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
@@ -90,9 +90,13 @@ def clusters(pts: Sequence[Node], inputs: Sequence[str]) -> list[Cluster]:
 
 def _numbers(c: Cluster, model: Any, reals: dict[str, Any],
              values: tuple[bool, ...]) -> dict[str, float]:
-    """z3's numbers as doubles, checked to give the atoms ``values`` in double arithmetic.
+    """z3's numbers as doubles, checked to give the atoms ``values`` in double arithmetic
+    (an output cluster's: the shield writes them; an input cluster's numbers are never
+    written, and the environment may give the valuation whatever they are).
 
-    Raises RuntimeError when rounding to doubles changes a truth value (never silently)."""
+    Raises:
+        NoWitness: rounding to doubles changes a truth value of an output cluster: the
+            shield never chooses the valuation (never silently: the plan notes it)."""
     import z3
 
     out = {}
@@ -100,10 +104,12 @@ def _numbers(c: Cluster, model: Any, reals: dict[str, Any],
         x = model.eval(reals[v], model_completion=True)
         out[v] = float(Fraction(x.as_fraction())) if z3.is_rational_value(x) else float(
             x.approx(20).as_fraction())
+    if c.is_input:
+        return out
     for a, want in zip(c.atoms, values):
         if term_value(term(a), out) != want:
-            raise RuntimeError(f"z3's numbers {out} for {to_smv(a)} = {want} do not hold "
-                               "in doubles")
+            raise NoWitness(f"z3's numbers {out} give {to_smv(a)} = {want} over the reals, "
+                            "not in doubles")
     return out
 
 

@@ -252,3 +252,16 @@ def test_a_region_with_reals_and_no_double_is_no_move(tmp_path, text, args):
     f.write_text(text.replace("1.0000000000000002", "1.5").replace("0.10000000000000001",
                                                                    "0.3"), encoding="utf-8")
     assert shield_cli(str(f), *args, "-o", str(tmp_path / "out")).exit_code == 0
+
+
+def test_a_cluster_valuation_whose_numbers_fail_in_doubles_is_never_chosen(tmp_path):
+    """z3's numbers for ``y + z = 0.3 & y = 0.1`` are 0.1 and 0.2, whose double sum is not
+    0.3: an internal error (exit 4) before. The valuation is never chosen, and the set,
+    realizable over the reals, is refused as the shield decides (in doubles), saying so."""
+    f = tmp_path / "r.fret"
+    f.write_text("A: the c shall always satisfy y + z = 0.3\n"
+                 "B: whenever i1 c shall immediately satisfy y = 0.1\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "i1", "--outputs", "y,z", "-o", str(tmp_path / "a"))
+    assert got.exit_code == 2, got.output
+    assert "((y + z) = 0.3) & (y = 0.1) (z3's numbers" in got.output
+    assert "never chosen, where fretc check, over the reals, counts it" in got.output
