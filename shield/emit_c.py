@@ -183,6 +183,13 @@ def _machines(shield: Shield) -> list[_CMachine]:
 #: slots of a machine's correction memo (direct-mapped; a power of two): an override whose
 #: inputs, proposal and state were met before copies the correction found then (the same
 #: answer as computing it again: the correction is a function of these alone)
+def _term_variables(t: tuple[Any, ...]) -> set[str]:
+    """The variables a comparison of several variables reads (:func:`c_term`'s shape)."""
+    if t[0] == "var":
+        return {t[1]}
+    return set().union(*(_term_variables(x) for x in t[1:] if isinstance(x, tuple)))
+
+
 MEMO_SLOTS = 256
 
 
@@ -200,7 +207,17 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
     env.filters["cterm"] = lambda t, struct: c_term(t, struct, names)
     t = tables(shield)
     machines = _machines(shield)
+    # (the numbers the machines compare: a NaN there has no truth value, the runtime's
+    # ValueError; a NaN elsewhere, a monitored requirement's, passes as in Python)
+    compared: set[str] = set()
+    for m in t["machines"]:
+        for var, op, c in (*m["inputs"], *m["outputs"]):
+            if op == "pred":
+                compared |= _term_variables(c)
+            elif op is not None:
+                compared.add(var)
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,
+           "compared": compared,
            "inputs": [(v, v in shield.numbers) for v in shield.inputs if v in shield.read],
            "outputs": [(v, v in shield.numbers) for v in shield.outputs
                        if v in shield.read],

@@ -163,3 +163,31 @@ def test_names_that_are_no_c_identifiers_build_and_decide_alike(tmp_path):
         d = py.step(a, p)
         assert {v: c[v] for v in outs} == {v: str(int(d.outputs[v])) for v in outs}, (a, p, c)
         assert c["overridden"] == str(int(d.overridden))
+
+
+def test_a_nan_no_enforced_requirement_compares_passes_in_c_as_in_python(tmp_path):
+    """``d`` is read only by R2, over inputs only (monitored): a NaN there is decided on, in
+    the Python form and now in C (it returned -1, no decision); a NaN in ``v``, which R1
+    compares, is no decision in both (C: -1, the runner exits 3; Python: ValueError)."""
+    from fretc.shield.build import build_shield as build_one
+    from fretc.shield.emit_python import load_shield, render_python
+
+    needs_cc()
+    compiled = compile_text("R1: whenever a sw shall immediately satisfy v <= 0.5\n"
+                            "R2: the sw shall always satisfy d > 0\n", tmp_path)
+    shield = build_one(compiled, ["a", "d"], ["v"], fork=False)
+    assert list(shield.monitored) == ["R2"]
+    write(render_c(shield, "n"), tmp_path / "c")
+    exe = build(tmp_path / "c", ["n_shield.c", "n_shield_run.c"], "run")
+    py = load_shield(render_python(shield))()
+    d = py.step({"a": True, "d": math.nan}, {"v": 0.9})
+    got = subprocess.run([str(exe)], input="a,d,v\ntrue,nan,0.9\n", capture_output=True,
+                         text=True, timeout=60)
+    assert got.returncode == 0, got.stderr
+    row = list(csv.DictReader(io.StringIO(got.stdout)))[0]
+    assert float(row["v"]) == d.outputs["v"] == 0.5 and row["overridden"] == "1"
+    with pytest.raises(ValueError):
+        load_shield(render_python(shield))().step({"a": True, "d": 1.0}, {"v": math.nan})
+    got = subprocess.run([str(exe)], input="a,d,v\ntrue,1.0,nan\n", capture_output=True,
+                         text=True, timeout=60)
+    assert got.returncode == 3 and "a NaN: no decision" in got.stderr
