@@ -22,7 +22,7 @@ from fretc.check.solver import UNKNOWN, SpotWorker
 from fretc.common.units import format_period_ms
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
-from fretc.compiler.printers import to_smv
+from fretc.compiler.printers import mangle, to_smv
 from fretc.shield.machine import Atom, Machine
 from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
 from fretc.shield.predicates import PredicateBudget, term
@@ -279,8 +279,8 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
         for v in p.inputs:
             if v in numeric.atoms:
                 row[v] = numbers[v]
-            elif any(k == v or k.strip('"') == v for k in letter):
-                row[v] = next(val for k, val in letter.items() if k == v or k.strip('"') == v)
+            elif mangle(v) in letter:  # (a letter names a variable as Spot's words do)
+                row[v] = letter[mangle(v)]
         rows.append("{" + ", ".join(f"{k}={str(x).lower() if isinstance(x, bool) else x}"
                                     for k, x in row.items()) + "}")
     return (head + "; these inputs, tick by tick, defeat every controller: "

@@ -316,3 +316,27 @@ def test_entry_fields_in_the_order_the_reader_passes_them():
     assert tuple(f.name for f in dataclasses.fields(files.RequirementEntry)) == (
         "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
         "requirement", "error", "extra", "inputs", "outputs", "origin")
+
+
+def test_inputs_and_outputs_name_quoted_variables_as_the_requirements_write_them(tmp_path):
+    """``@inputs``/``@outputs`` and ``--inputs``/``--outputs`` take a name that is no
+    identifier in double quotes (``"wheel speed"``, ``"it's safe"``, ``"path #3"``), as
+    FRETish writes it: such a requirement could be given to no shield, and an unclosed
+    quote is refused with its column."""
+    from fretc.fretish.files import load_requirements, split_names
+
+    assert split_names('"wheel speed", ok ROS.ok,"it\'s safe" "path #3"') == [
+        "wheel speed", "ok", "ROS.ok", "it's safe", "path #3"]
+    for bad in ('"abc', '""', 'a"b'):
+        with pytest.raises(ValueError):
+            split_names(bad)
+    f = tmp_path / "q.fret"
+    f.write_text('@inputs "wheel speed", "path #3" # a comment\n@outputs o\n'
+                 'R1: whenever "wheel speed" > 2 & "path #3" c shall immediately satisfy o\n',
+                 encoding="utf-8")
+    (e,) = load_requirements([f])
+    assert e.inputs == ("wheel speed", "path #3") and e.outputs == ("o",)
+    f.write_text('@inputs ok, "wheel speed\nR1: whenever ok c shall immediately satisfy o\n',
+                 encoding="utf-8")
+    with pytest.raises(FretishError, match=r"q.fret:1:13: .*bad variable name '\"wheel' in @inputs \(its double quote is not closed"):
+        load_requirements([f])

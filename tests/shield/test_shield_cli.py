@@ -265,3 +265,19 @@ def test_a_cluster_valuation_whose_numbers_fail_in_doubles_is_never_chosen(tmp_p
     assert got.exit_code == 2, got.output
     assert "((y + z) = 0.3) & (y = 0.1) (z3's numbers" in got.output
     assert "never chosen, where fretc check, over the reals, counts it" in got.output
+
+
+def test_unrealizable_inputs_name_dotted_and_quoted_variables(tmp_path):
+    """The inputs that defeat every controller are read from Spot's letters, which name a
+    variable as FRET mangles it (``a.b`` is ``a_DOT_b``): a dotted input was left out
+    (``{a_b=true}``: with ``a.b`` false the controller wins). A quoted name with a space is
+    declared with its quotes (it could not be)."""
+    f = tmp_path / "r.fret"
+    f.write_text("R1: whenever a.b c shall immediately satisfy o\n"
+                 "R2: whenever a_b c shall immediately satisfy !o\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "a.b,a_b", "--outputs", "o")
+    assert got.exit_code == 2 and "defeat every controller: {a.b=true, a_b=true}" in got.output
+    f.write_text('R1: whenever "weird var" c shall immediately satisfy o\n'
+                 'R2: whenever "weird var" c shall immediately satisfy !o\n', encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", '"weird var"', "--outputs", "o")
+    assert got.exit_code == 2 and "defeat every controller: {weird var=true}" in got.output

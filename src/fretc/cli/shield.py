@@ -30,9 +30,16 @@ FORMS = ("python", "c", "ros2", "gwendolen")
 
 
 def _names(text: str | None) -> list[str] | None:
+    """The names of ``--inputs``/``--outputs`` (commas or blanks between them, a name that
+    is no identifier in double quotes, as FRETish writes it)."""
+    from fretc.fretish.files import split_names
+
     if text is None:
         return None
-    return [n for n in text.replace(",", " ").split() if n]
+    try:
+        return split_names(text)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from None
 
 
 @click.command("shield")
