@@ -11,6 +11,11 @@ For a requirement with condition ``C`` (none: every tick) and response ``R``:
 * **release**: whether ``R`` may stop holding again while ``C`` still holds (one response per
   trigger: R2 lets the robot move on while the obstacle is still too close).
 
+They are read for requirements without a scope whose timing asks one response after the
+condition (``immediately``, ``within``; ``always`` without a condition); any other is said to
+be enforced as it reads (a scope's mode, ``for``, ``next``, ``until``, ``never`` ... are not
+this one response, and "may never come" outside a scope is no liberty).
+
 These are facts of the closed loop, so they hold for the Python, C and ROS 2 forms alike.
 """
 
@@ -37,15 +42,19 @@ Graph = dict[tuple[int, ...], dict[tuple[int, ...], list[tuple[int, ...]]]]
 class Permission:
     """What requirement ``rid`` leaves the controller: ``wait`` ticks (None: unbounded,
     -1: the closed loop was too large to read), ``release``, and its ``condition`` and
-    ``response`` as FRET/SMV text."""
+    ``response`` as FRET/SMV text; ``unread``: why they are not read for it (its scope or
+    timing is not the one response after its condition that they describe)."""
 
     def __init__(self, rid: str, condition: str, response: str, wait: int | None,
-                 release: bool):
+                 release: bool, unread: str | None = None):
         self.rid, self.condition, self.response = rid, condition, response
-        self.wait, self.release = wait, release
+        self.wait, self.release, self.unread = wait, release, unread
 
     def text(self, period: Fraction | None) -> str:
         """One sentence per liberty."""
+        if self.unread is not None:
+            return (f"{self.rid}: enforced as it reads ({self.unread}); its liberties are "
+                    "not read here (fretc explain gives its meaning)")
         if self.wait == -1:
             return f"{self.rid}: the closed loop is too large to read its permissions"
         when = (f"after {self.condition} becomes true" if self.condition != "TRUE"
@@ -137,8 +146,10 @@ def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
             req = by_id[rid].entry.requirement
             c = ir.TRUE if req.condition.expr is None else ex.bool(req.condition.expr)
             r = ex.bool(req.response)
-            if req.timing.kind == "never":
-                r = ir.not_(r)
+            unread = _unread(req)
+            if unread is not None:
+                out.append(Permission(rid, to_smv(c), to_smv(r), 0, False, unread))
+                continue
             if loop is None:
                 out.append(Permission(rid, to_smv(c), to_smv(r), -1, False))
                 continue
@@ -146,6 +157,21 @@ def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
             out.append(Permission(rid, to_smv(c), to_smv(r), _wait(graph, m, c, r),
                                   _release(graph, m, c, r)))
     return out
+
+
+def _unread(req: Any) -> str | None:
+    """Why the wait and the release (module docstring) do not describe ``req``, or None:
+    they are read for the one response the requirement asks after its condition (no scope;
+    ``immediately`` or ``within``, or ``always`` without a condition). A scope bounds where
+    the response is asked (outside it, "may never come" is no liberty the scope grants),
+    and ``for``, ``next``, ``until``, ``never``, ``always`` after a condition and the rest
+    ask for more than one response, or at one tick only."""
+    kind = req.timing.kind or "null"
+    if req.scope.kind != "null":
+        return f"the '{req.scope.kind}' scope"
+    if kind in ("immediately", "within") or (kind == "always" and req.condition.expr is None):
+        return None
+    return f"the '{kind}' timing"
 
 
 def explain_text(shield: Shield, compiled: Sequence[Any] = ()) -> str:

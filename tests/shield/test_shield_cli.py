@@ -222,6 +222,26 @@ def test_explain_says_what_r2_permits_and_what_r7_takes_away(tmp_path):
     assert "R2: stopped may stop holding" not in got.output
 
 
+@pytest.mark.parametrize("text, why", [
+    ("A: upon i1 c shall for 3 ticks satisfy o1\n", "the 'for' timing"),
+    ("A: in i2 mode c shall always satisfy o1\n", "the 'in' scope"),
+    ("A: upon i1 c shall until i2 satisfy o1\n", "the 'until' timing"),
+    ("A: upon i1 c shall at the next timepoint satisfy o1\n", "the 'next' timing"),
+    ("A: upon i1 c shall always satisfy o1\n", "the 'always' timing"),
+])
+def test_explain_reads_no_liberty_off_a_scope_or_a_timing_of_more_than_one_response(
+        tmp_path, text, why):
+    """--explain's wait and release describe one response after the condition: for a
+    scope or another timing they said what the shield does not allow (``for 3 ticks``:
+    "may stop holding again"; a mode: "may never come")."""
+    f = tmp_path / "r.fret"
+    f.write_text(text, encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "i1,i2", "--outputs", "o1", "--explain")
+    assert got.exit_code == 0, got.output
+    assert f"A: enforced as it reads ({why}); its liberties are not read here" in got.output
+    assert "may stop holding" not in got.output and "may never come" not in got.output
+
+
 def test_a_margin_meets_each_deadline_early_and_is_refused_past_one(tmp_path):
     got = shield_cli(*SAFE_ROS, "--margin", "1", "--explain", "--prove")
     assert got.exit_code == 0, got.output
