@@ -301,3 +301,10 @@ def test_unrealizable_inputs_name_dotted_and_quoted_variables(tmp_path):
                  'R2: whenever "weird var" c shall immediately satisfy !o\n', encoding="utf-8")
     got = shield_cli(str(f), "--inputs", '"weird var"', "--outputs", "o")
     assert got.exit_code == 2 and "defeat every controller: {weird var=true}" in got.output
+
+
+def test_an_output_folder_that_cannot_be_made_is_a_usage_error(tmp_path):
+    """``-o /dev/null`` (an existing file that is no folder) was an internal error (exit 4)."""
+    got = shield_cli(*SAFE_ROS, "--emit", "python", "-o", "/dev/null")
+    assert got.exit_code == 2, got.output
+    assert "cannot write the forms into -o /dev/null" in got.output

@@ -146,6 +146,9 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                                   bindings_file=bindings_file, compiled=compiled)
         except FretcError:
             raise
+        except OSError as exc:  # (-o names a file, or a folder that cannot be written)
+            raise click.UsageError(f"cannot write the forms into -o {out_dir}: "
+                                   f"{exc.strerror or exc}") from None
         for path in written:
             click.echo(shown(f"wrote {path}"))
     sys.exit(code)
