@@ -56,46 +56,12 @@ from fretc.common.errors import FretishError, FretishFileError, FretishSyntaxErr
 from fretc.fretish.parser import parse
 from fretc.fretish.entry import Fraction, Requirement, RequirementEntry  # entry's imports
 from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
-from fretc.common.units import parse_seconds
+from fretc.fretish.directives import name_tokens, parse_tick_period, split_names
 
 __all__ = ["RequirementEntry", "load_requirements", "load_fret_text", "parse_tick_period",
            "is_fret_export", "split_names"]
 
 PathLike = str | os.PathLike
-
-
-# --------------------------------------------------------------------------- durations
-#: one name of a list of FRET variables (``@inputs``, ``--inputs``): a double-quoted name
-#: (any text but a quote, as FRETish writes it: ``"wheel speed"``) or a bare one (a lone
-#: ``"`` is a bare token of its own, refused), separated by commas or blanks
-_NAME_TOKEN = re.compile(r'"([^"]*)"|("?[^\s,"]+|")')
-
-
-def split_names(text: str) -> list[str]:
-    """The FRET variables of a list (``--inputs A,B``; ``"wheel speed", ok``): commas or
-    blanks between names, a name that is no identifier in double quotes (the quotes are
-    not part of it, as FRETish's quoted names).
-
-    Raises:
-        ValueError: a quote that is not closed, or an empty quoted name."""
-    out = []
-    for tok in _NAME_TOKEN.finditer(text):
-        bare = tok.group(2)
-        if bare is not None and bare.startswith('"') or tok.group(1) == "":
-            raise ValueError(f"a name is not closed by its double quote, or empty, at "
-                             f"{tok.group(0)!r} in {text!r}")
-        out.append(bare if bare is not None else tok.group(1))
-    return out
-
-
-def parse_tick_period(text: str) -> Fraction:
-    """``"<number> <unit>"`` (e.g. ``"100 ms"``, ``"0.05 seconds"``, ``"10 Hz"``) -> seconds,
-    exactly: the duration grammar of :mod:`fretc.common.units` (the same as the bindings').
-
-    Raises :class:`ValueError` (with a readable message) for anything else, for ``ticks`` (a
-    tick period must be a time) and for a period that is not positive.
-    """
-    return parse_seconds(text)
 
 
 # --------------------------------------------------------------------------- .fret files
@@ -250,19 +216,12 @@ class _FretReader:
         kind = m.group(1)
         if kind in self.io_line:
             self.fail(f"second @{kind} (the first is on line {self.io_line[kind]})", ln)
-        text = m.group(2) or ""
-        names = []
-        for tok in _NAME_TOKEN.finditer(text):
-            bare = tok.group(2)
-            if (bare is not None and (bare.startswith('"')
-                                      or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", bare))
-                    or tok.group(1) == ""):
-                why = ("its double quote is not closed" if tok.group(0).startswith('"') else
-                       "a name that is no identifier goes in double quotes, as the "
-                       "requirements write it")
-                self.fail(f"bad variable name '{tok.group(0)}' in @{kind} ({why})",
-                          ln, m.start(2) + tok.start() + 1)
-            names.append(bare if bare is not None else tok.group(1))
+        try:
+            names = [n for n, _at in name_tokens(m.group(2) or "", identifiers=True)]
+        except ValueError as exc:
+            why, token, at = exc.args
+            self.fail(f"bad variable name '{token}' in @{kind} ({why})", ln,
+                      m.start(2) + at + 1)
         self.io[kind] = tuple(names)
         self.io_line[kind] = ln
         clash = sorted(set(self.io.get("inputs", ())) & set(self.io.get("outputs", ())))
