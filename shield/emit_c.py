@@ -203,7 +203,6 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
     names = c_names(list(dict.fromkeys([*shield.inputs, *shield.outputs])))
     env.filters["cname"] = names.__getitem__
     env.filters["double"] = _double
-    env.filters["prepend_comma"] = lambda v: "," + v
     env.filters["cterm"] = lambda t, struct: c_term(t, struct, names)
     t = tables(shield)
     machines = _machines(shield)
@@ -216,11 +215,14 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
                 compared |= _term_variables(c)
             elif op is not None:
                 compared.add(var)
+    outputs = [(v, v in shield.numbers) for v in shield.outputs if v in shield.read]
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,
            "compared": compared,
            "inputs": [(v, v in shield.numbers) for v in shield.inputs if v in shield.read],
-           "outputs": [(v, v in shield.numbers) for v in shield.outputs
-                       if v in shield.read],
+           "outputs": outputs,
+           # the runner's CSV header (FRET names: any text, never a printf format)
+           "header": "".join(["tick", *(f",{v}" for v, _n in outputs),
+                              ",overridden,reasons\n"]),
            "requirements": [r for m in t["machines"] for r in m["requirements"]],
            "op_map": _C_OPS, "memo_slots": MEMO_SLOTS,
            "numeric": any(m.numeric_outputs for m in machines),

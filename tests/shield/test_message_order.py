@@ -50,6 +50,23 @@ def _r3(bindings, msgs: dict, t: int) -> bool:
     return not v["stop_requested"].evaluate(s) or bool(v["forwarded_zero"].evaluate(s))
 
 
+def _hear(shield, store, t: int, scan: str, lx: float, az: float) -> None:
+    """One tick's messages heard at ``t``: a scan ("far": 3 m, "close": 0.5 m, "none": no
+    scan), the ground truth's clearance, the controller's velocity ``lx``, ``az``."""
+    if scan != "none":
+        msg = default_message(store, TYPES["/scan"])
+        msg.range_min, msg.range_max = 0.1, 10.0  # (REP 117: a range outside is no reading)
+        msg.ranges = __import__("numpy").full(8, 0.5 if scan == "close" else 3.0,
+                                              dtype="float32")
+        shield.hear("/scan", msg, t)
+    clear = default_message(store, TYPES["/ground_truth/clearance"])
+    clear.data = 1.0
+    shield.hear("/ground_truth/clearance", clear, t)
+    cmd = default_message(store, TYPES["/cmd_vel"])
+    cmd.linear.x, cmd.angular.z = lx, az
+    shield.hear("/cmd_vel", cmd, t)
+
+
 def _run(tables, steps: list[tuple[str, float]], runtime_cls=ShieldRuntime) -> tuple[int, int]:
     """Drive a MessageShield through ``steps`` (scan: "far", "close" or "none"; the
     controller's proposed speed) at the tick period; check R3 between every two messages of
@@ -65,18 +82,7 @@ def _run(tables, steps: list[tuple[str, float]], runtime_cls=ShieldRuntime) -> t
     fixed_broken = ticks = 0
     for k, (scan, speed) in enumerate(steps):
         t = (k + 1) * PERIOD
-        if scan != "none":
-            msg = default_message(store, TYPES["/scan"])
-            msg.range_min, msg.range_max = 0.1, 10.0  # (REP 117: a range outside is no reading)
-            msg.ranges = __import__("numpy").full(8, 0.5 if scan == "close" else 3.0,
-                                                  dtype="float32")
-            shield.hear("/scan", msg, t)
-        clear = default_message(store, TYPES["/ground_truth/clearance"])
-        clear.data = 1.0
-        shield.hear("/ground_truth/clearance", clear, t)
-        cmd = default_message(store, TYPES["/cmd_vel"])
-        cmd.linear.x = speed
-        shield.hear("/cmd_vel", cmd, t)
+        _hear(shield, store, t, scan, speed, 0.0)
         try:
             _d, msgs = shield.tick(t)
         except Exception as exc:  # no scan yet: nothing published
@@ -147,18 +153,7 @@ def test_a_corrected_velocity_has_the_decided_speeds_and_the_proposals_direction
                            lambda topic: default_message(store, TYPES[topic]))
     for k, (scan, lx, az) in enumerate(steps):
         t = (k + 1) * PERIOD
-        if scan != "none":
-            msg = default_message(store, TYPES["/scan"])
-            msg.range_min, msg.range_max = 0.1, 10.0
-            msg.ranges = __import__("numpy").full(8, 0.5 if scan == "close" else 3.0,
-                                                  dtype="float32")
-            shield.hear("/scan", msg, t)
-        clear = default_message(store, TYPES["/ground_truth/clearance"])
-        clear.data = 1.0
-        shield.hear("/ground_truth/clearance", clear, t)
-        cmd = default_message(store, TYPES["/cmd_vel"])
-        cmd.linear.x, cmd.angular.z = lx, az
-        shield.hear("/cmd_vel", cmd, t)
+        _hear(shield, store, t, scan, lx, az)
         try:
             d, msgs = shield.tick(t)
         except Exception as exc:  # no scan yet: nothing published
