@@ -18,10 +18,7 @@ and gaps on its own ticks).
 from __future__ import annotations
 
 import dataclasses
-import gc
 import re
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -161,8 +158,7 @@ class _Entities:
             else:
                 clocks[r.index] = (groups[r.index][0], list(r.variables))
         if clocks:
-            with _fewer_full_collections():
-                self._read(source, rs, clocks, out)
+            self._read(source, rs, clocks, out)
         return [v for r in rs for v in out[r.index]]
 
     def _cannot(self, r: Any, names: list[str], available: Any, source: Any
@@ -254,32 +250,6 @@ class _Entities:
             la.tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns
                        else {"topic": b.tick.topic})
             la.time_base = b.time_base
-
-
-#: Collections of the young generations between two full collections while the entities are
-#: read and judged (Python's default is 10)
-FULL_EVERY = 1000
-
-
-@contextmanager
-def _fewer_full_collections() -> Iterator[None]:
-    """Python's full (generation 2) garbage collections made rarer while the entities are
-    read and judged: the ticks and rows kept until the judgement are millions of objects,
-    each full collection walks them all, and CPython runs one each time the objects that
-    survive grow by a quarter (a third of the CPU of 100,000 entities,
-    ``bench/bench_audit.py --entities``). The young generations are collected as usual
-    (cycles among new objects freed); the thresholds are restored after, unless changed
-    meanwhile."""
-    t0, t1, t2 = gc.get_threshold()
-    if t2 >= FULL_EVERY:
-        yield
-        return
-    gc.set_threshold(t0, t1, FULL_EVERY)
-    try:
-        yield
-    finally:
-        if gc.get_threshold() == (t0, t1, FULL_EVERY):
-            gc.set_threshold(t0, t1, t2)
 
 
 def _key_topics(bindings: Bindings, name: str) -> frozenset[str]:

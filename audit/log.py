@@ -24,6 +24,7 @@ from fretc.signals.clock import missing_topics
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem, FretcInputError, SignalError
 from fretc.common.streams import log_topics as log_topics_of
+from fretc.common.collections_gc import fewer_full_collections
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
@@ -67,6 +68,12 @@ def audit_log(plan: AuditPlan, path: str,
         problems of this log (unreadable file, missing topic or binding) are reported in it
         (``error`` / ``error`` verdicts), never raised.
     """
+    with fewer_full_collections():
+        return _audit_log(plan, path, progress)
+
+
+def _audit_log(plan: AuditPlan, path: str, progress: Callable[[float], None] | None
+               ) -> LogAudit:
     csv = str(path).lower().endswith(".csv")
     head = sampled_header(path) if csv else None
     if head is not None and (head.clocks or head.per_entity or head.not_sampled):
@@ -85,7 +92,7 @@ def audit_log(plan: AuditPlan, path: str,
         sub, err = select_variant(plan, str(path))
         if sub is None:
             return _not_selected(plan, str(path), err or "")
-        return audit_log(sub, path, progress)
+        return _audit_log(sub, path, progress)
     if plan.bindings is not None and plan.bindings.per_entity and not sampled_trace(path):
         # (a sampled trace's columns are the variables: per-entity ones too, as testgen
         # writes them)
