@@ -97,6 +97,33 @@ def test_the_c_runner_refuses_a_nul_byte_and_names_the_line(tmp_path):
     assert got.returncode == 3 and b"NaN" in got.stderr
 
 
+def test_the_c_runner_reads_true_and_false_in_any_case_as_the_audit_does(tmp_path):
+    """``TRUE``/``False`` are booleans in a CSV trace fretc audit reads; the shield's runner
+    refused them ("not a boolean"). The same rows in any case give the same corrections;
+    a word that is neither is still refused, with its line."""
+    needs_cc()
+    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy x\n",
+                                       tmp_path))
+    write(render_c(shield, "t"), tmp_path / "c")
+    exe = build(tmp_path / "c", ["t_shield.c", "t_shield_run.c"], "run")
+    head = ",".join(INPUTS + OUTPUTS) + "\n"
+    rows = ["true,false,false,false,false,0\n", "false,true,true,true,false,1\n",
+            "true,true,false,false,true,0.5\n"]
+
+    def run(text: str) -> subprocess.CompletedProcess:
+        return subprocess.run([str(exe)], input=(head + text).encode(), capture_output=True,
+                              timeout=60)
+
+    lower = run("".join(rows))
+    assert lower.returncode == 0 and b",1," in lower.stdout  # (the first row is corrected)
+    for spell in (str.upper, str.title, lambda r: r.replace("true", "tRuE")):
+        got = run("".join(spell(r) for r in rows))
+        assert got.returncode == 0 and got.stdout == lower.stdout, got.stderr
+    for word in ("tru", "truex", "yes", "TRUE1"):
+        got = run(rows[0] + word + rows[1][len("false"):])
+        assert got.returncode == 2 and b"line 3: a: not a boolean" in got.stderr, got.stderr
+
+
 @pytest.mark.parametrize("prefer", [(), (("x", True),), (("x", False), ("y", True))])
 def test_preferences_break_ties_alike_in_c_and_python(tmp_path, prefer):
     # x | y must hold: an unsafe proposal (both false) has two corrections of one change;
