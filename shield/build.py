@@ -91,13 +91,20 @@ class Shield:
 def parse_preferences(text: str | None) -> list[tuple[str, bool]]:
     """``"stopped, !moving"`` -> ``[("stopped", True), ("moving", False)]``: output atoms
     (a boolean variable or a comparison's FRET text) and the value to prefer among equally
-    few changes."""
-    out = []
+    few changes.
+
+    Raises:
+        ShieldError: an atom named twice (``o,!o``: the first would hide the second)."""
+    out: list[tuple[str, bool]] = []
     for part in (text or "").split(","):
         part = part.strip()
         if part:
             neg = part.startswith("!")
-            out.append((part[1:].strip() if neg else part, not neg))
+            atom = part[1:].strip() if neg else part
+            if any(a == atom for a, _v in out):
+                raise ShieldError(f"--prefer names {atom} twice: an atom has one preferred "
+                                  "value, and the first would hide the second")
+            out.append((atom, not neg))
     return out
 
 
@@ -180,6 +187,11 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     if unknown:
         raise ShieldError("--prefer names " + ", ".join(unknown) + ", not an output atom of "
                           "an enforced requirement (" + ", ".join(sorted(texts)) + ")")
+    read = frozenset(v for c in compiled for v in c.formalization.variables)
+    unread = [f"{v}: declared an input, read by no requirement (not used)" for v in p.inputs
+              if v not in read]
+    unread += [f"{v}: declared an output, read by no requirement (passed through unchanged)"
+               for v in p.outputs if v not in read]
     assert len(periods) <= 1  # (mixed periods were refused above)
     digest = hashlib.sha256("\n".join(
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
@@ -192,8 +204,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
                         if len(g.variables) > 1),
                   _numbers(compiled),
-                  frozenset(v for c in compiled for v in c.formalization.variables),
-                  tuple(p.notes), digest)
+                  read, tuple(p.notes) + tuple(unread), digest)
 
 
 def _numbers(compiled: Sequence[Any]) -> frozenset[str]:

@@ -208,6 +208,55 @@ def test_an_unknown_preference_is_refused(tmp_path):
     assert got.exit_code == 0, got.output
 
 
+@pytest.mark.parametrize("prefer", ["x,!x", "!y, x, y", "x,x"])
+def test_an_atom_preferred_twice_is_refused(tmp_path, prefer):
+    """``--prefer 'x,!x'`` was accepted, the second silently dead (the first wins)."""
+    f = tmp_path / "r.fret"
+    f.write_text("R1: whenever a sw shall immediately satisfy x | y\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x,y", "--prefer", prefer)
+    assert got.exit_code == 2 and "twice" in got.output, got.output
+
+
+def test_declared_variables_no_requirement_reads_are_named_in_the_notes(tmp_path):
+    """An input or output read by no requirement (a typo beside the right name, a variable
+    left over) was accepted without a word."""
+    f = tmp_path / "r.fret"
+    f.write_text("R1: whenever a sw shall immediately satisfy x\n", encoding="utf-8")
+    got = shield_cli(str(f), "--inputs", "a,zz", "--outputs", "x,yy")
+    assert got.exit_code == 0, got.output
+    assert "note: zz: declared an input, read by no requirement (not used)" in got.output
+    assert ("note: yy: declared an output, read by no requirement (passed through "
+            "unchanged)") in got.output
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x")
+    assert got.exit_code == 0 and "read by no requirement" not in got.output
+
+
+def test_the_query_cpu_the_budget_message_names_is_an_option_of_shield(tmp_path,
+                                                                     monkeypatch):
+    """A game past its CPU limit said "(--query-cpu)", an option only fretc check had."""
+    import inspect
+
+    from fretc.check.solver import SpotWorker  # (the message's source)
+    from fretc.shield import build
+
+    assert "(--query-cpu)" in inspect.getsource(SpotWorker)
+    f = tmp_path / "r.fret"
+    f.write_text("R1: whenever a sw shall immediately satisfy x\n", encoding="utf-8")
+    budgets = []
+    real = build.build_shield
+
+    def spy(*args, **kw):
+        budgets.append(kw["budget"])
+        return real(*args, **kw)
+
+    monkeypatch.setattr(build, "build_shield", spy)
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x", "--query-cpu", "30")
+    assert got.exit_code == 0, got.output
+    assert [b.cpu for b in budgets] == [30]
+    got = shield_cli(str(f), "--inputs", "a", "--outputs", "x", "--query-cpu", "0")
+    assert got.exit_code == 2 and "--query-cpu" in got.output
+
+
 def test_explain_says_what_r2_permits_and_what_r7_takes_away(tmp_path):
     got = shield_cli(*SAFE_ROS, "--explain")
     assert got.exit_code == 0, got.output

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import click
 
-from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_WORK, MIN_MEMORY
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK, MIN_MEMORY
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, FiniteRange, shown, text_attribute
 
 __all__ = ["shield_cmd", "FORMS"]
 
@@ -76,11 +76,15 @@ def _names(text: str | None) -> list[str] | None:
 @click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY), default=DEFAULT_MEMORY,
               show_default=True, metavar="NODES", help="BDD nodes per game (as fretc "
               "check's).")
+@click.option("--query-cpu", type=FiniteRange(0, 1e7, min_open=True),
+              default=DEFAULT_QUERY_CPU, show_default=True, metavar="SECONDS",
+              help="CPU seconds a game may take (as fretc check's): past it the answer is "
+              "unknown and says so.")
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                bindings_file: str | None, prefer: str | None, forms: tuple[str, ...],
                out_dir: str | None, prove: bool, explain: bool, name: str | None,
-               margin: int, budget: int, memory_budget: int) -> None:
+               margin: int, budget: int, memory_budget: int, query_cpu: float) -> None:
     """Synthesize the shield of requirement FILES: each tick it passes the controller's
     proposed outputs unchanged when they keep every requirement winnable, and otherwise
     changes the fewest outputs needed (the Safety System of Safe-ROS, generated)."""
@@ -120,7 +124,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     try:
         shield = build_shield(with_margin(compiled, margin), ins, outs, bindings=bindings,
                               prefer=parse_preferences(prefer),
-                              budget=Budget(work=budget, memory=memory_budget),
+                              budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
                               name=name or Path(files[0]).stem)
     except ShieldUnknown as exc:
         click.echo(shown(f"unknown: {exc}"), err=True)
