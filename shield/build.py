@@ -242,7 +242,7 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
                                      for key, nums in sorted(cl.witnesses.items())}})
     return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i), tuple(outs),
                    tuple(ans["init"]), tuple(tuple(n) for n in ans["nodes"]), ans["safe"],
-                   tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"],
+                   tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"], ans["ctl_ok"],
                    tuple(comp.messages), tuple(clusters), ans["stats"])
 
 

@@ -13,8 +13,11 @@ into one node table (:mod:`fretc.shield.synthesis`):
   state inside the safety game's winning region (:mod:`fretc.check.safety_game`), with the
   outputs' numeric and message consistency (``ctl_ok``);
 * ``next[k]``: the next value of state bit ``k``;
-* ``keep[j]``: the same as ``safe`` for requirement ``j`` alone (its own winning region):
-  a proposal that fails it is *a reason* for an override;
+* ``keep[j]``: requirement ``j`` alone kept now and its own winning region kept, the
+  outputs' consistency left out: a proposal that fails it is *a reason* for an override;
+* ``ctl_ok``: the output atoms' consistency (a valuation numbers can take, and a message
+  the bindings can give): a proposal that fails only it is overridden with no requirement
+  as its reason;
 * ``env_ok``: the input atoms take the truth values of real numbers (the proof's
   environment, :mod:`fretc.shield.prove`).
 
@@ -88,7 +91,7 @@ class Atom:
 class Machine:
     """One component's shield (module docstring): ``requirements`` the enforced ids,
     ``inputs``/``outputs`` the atoms, ``init`` the state bits' initial values, ``nodes`` the
-    node table, ``safe``/``next``/``keep``/``env_ok`` its roots (``keep`` one per
+    node table, ``safe``/``next``/``keep``/``env_ok``/``ctl_ok`` its roots (``keep`` one per
     requirement), ``messages`` its outputs corrected together
     (:class:`fretc.shield.plan.MessageGroup`), ``clusters`` the numbers of its comparisons
     of several variables, ``stats`` sizes (state bits, BDD nodes of the
@@ -103,6 +106,8 @@ class Machine:
     next: tuple[int, ...]
     keep: tuple[int, ...]
     env_ok: int
+    #: the root of the output atoms' consistency (1: true, no constraint)
+    ctl_ok: int = 1
     messages: tuple[Any, ...] = ()
     #: output clusters of comparisons of several variables (:mod:`fretc.shield.predicates`):
     #: ``{"atoms": [output atom indices], "variables": [...], "numbers": {valuation bits:

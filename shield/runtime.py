@@ -44,8 +44,12 @@ _NOT = {"<": ">=", "<=": ">", ">": "<=", ">=": "<", "=": "!=", "!=": "="}
 
 class Decision(NamedTuple):
     """One tick's answer: ``outputs`` FRET variable -> value to use; ``overridden`` whether
-    the proposal was changed; ``reasons`` the requirement ids that forced the change (empty
-    when not overridden); ``changed`` the output atoms changed (FRET/SMV text)."""
+    the proposal was changed; ``reasons`` the requirement ids that forced the change: those
+    the proposal breaks alone, else (the requirements of a component forcing it only
+    together) all of the component's; empty when not overridden, or when the proposal
+    breaks none and is overridden only for being no valuation the outputs can take (no
+    message the bindings give: ``forwarded_zero`` without ``stopped``); ``changed`` the
+    output atoms changed (FRET/SMV text)."""
 
     outputs: dict[str, Any]
     overridden: bool
@@ -177,7 +181,7 @@ class _Machine:
         self.reqs = tuple(t["requirements"])
         self.ins, self.outs, self.texts = t["inputs"], t["outputs"], t["texts"]
         self.nodes, self.safe = t["nodes"], t["safe"]
-        self.next, self.keep = t["next"], t["keep"]
+        self.next, self.keep, self.ctl_ok = t["next"], t["keep"], t["ctl_ok"]
         self.init = tuple(t["init"])
         self.state = self.init
         self.weights = t["weights"]
@@ -266,7 +270,9 @@ class _Machine:
             outs = self.correct(ins, prop)
             values = list(ins + prop + self.state)
             reasons = tuple(r for r, k in zip(self.reqs, self.keep)
-                            if _walk(self.nodes, k, values) != 1) or self.reqs
+                            if _walk(self.nodes, k, values) != 1)
+            if not reasons and _walk(self.nodes, self.ctl_ok, values) == 1:
+                reasons = self.reqs  # (no requirement alone: the machine's together)
             changed = tuple(t for t, p, o in zip(self.texts, prop, outs) if p != o)
             if len(self.corrections) >= CACHE_LIMIT:
                 self.corrections.clear()

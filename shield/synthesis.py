@@ -11,8 +11,10 @@ The shield's functions (:mod:`fretc.shield.machine`) are exported as one node ta
 * ``safe(s, i, o) = ok(s, i, o) & ctl_ok(o) & next(s, i, o) not in Lose``: every move the
   shield lets through. From a state outside ``Lose`` every input letter allowed by
   ``env_ok`` has a safe output (the fixed point), so the shield never blocks;
-* ``keep_j``: the same with requirement ``j``'s pt formula alone and its own attractor
-  (the reasons of an override);
+* ``keep_j``: requirement ``j``'s pt formula alone kept now and the next state out of its
+  own attractor, whatever ``ctl_ok`` says (the reasons of an override: a proposal no
+  message gives breaks no requirement by that alone);
+* ``ctl_ok``: the output atoms' consistency (numbers, messages);
 * the next-value function of every state bit, and ``env_ok``.
 
 Könighofer et al., "Shield synthesis", FMSD 51 (2017), section 4: a safety shield is the
@@ -40,7 +42,7 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
 
     Returns ``{"realizable": True, "atoms": [(IR atom, is input)], "init": [bool],
     "nodes": [(var, lo, hi)], "safe": int, "next": [int], "keep": [int], "env_ok": int,
-    "stats": {...}}`` (variables numbered as :mod:`fretc.shield.machine` says) or
+    "ctl_ok": int, "stats": {...}}`` (variables numbered as :mod:`fretc.shield.machine` says) or
     ``{"realizable": False, "inputs": [letters] | None, "run": [rows], "note": str}``
     (letters and rows: ``{atom name: bool}``, as :func:`fretc.check.safety_game.solve_game`).
 
@@ -65,7 +67,7 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         keeps = []
         for f in pts:
             ok_j = m.value(f)
-            keeps.append(_keep(game, ok_j, _attractor(game, ok_j, meter)))
+            keeps.append(_stay(game, ok_j, _attractor(game, ok_j, meter)))
         nexts = [bit[3] for bit in m.bits]
         ins = [a for a in game.atoms if m.atom_var[a] in m.in_vars]
         outs = [a for a in game.atoms if m.atom_var[a] in m.out_vars]
@@ -75,14 +77,14 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         table = _Table(b, varmap)
         # safe first: its nodes are the table's first (the correction's shortest path reads
         # only them, :mod:`fretc.shield.runtime`)
-        roots = [table.add(f) for f in [safe, *nexts, *keeps, game.env_ok]]
-        _self_check(b, varmap, table, [safe, *nexts, *keeps, game.env_ok], roots)
+        roots = [table.add(f) for f in [safe, *nexts, *keeps, game.env_ok, game.ctl_ok]]
+        _self_check(b, varmap, table, [safe, *nexts, *keeps, game.env_ok, game.ctl_ok], roots)
         return {"realizable": True,
                 "atoms": [(a, True) for a in ins] + [(a, False) for a in outs],
                 "init": [bool(bit[2]) for bit in m.bits], "nodes": table.nodes,
                 "safe": roots[0], "next": roots[1:1 + len(nexts)],
                 "keep": roots[1 + len(nexts):1 + len(nexts) + len(keeps)],
-                "env_ok": roots[-1],
+                "env_ok": roots[-2], "ctl_ok": roots[-1],
                 "stats": {"state_bits": len(m.bits),
                           "winning_region_bdd_nodes": b.bdd_nodecount(b.bdd_not(lose)),
                           "iterations": len(game.layers),
@@ -137,9 +139,15 @@ def _attractor(game: Game, ok: Any, meter: Meter) -> Any:
 def _keep(game: Game, ok: Any, lose: Any) -> Any:
     """The moves that keep ``ok`` now and the next state out of ``lose``, with consistent
     outputs."""
+    return game.b.bdd_and(_stay(game, ok, lose), game.ctl_ok)
+
+
+def _stay(game: Game, ok: Any, lose: Any) -> Any:
+    """The moves that keep ``ok`` now and the next state out of ``lose``, whatever the
+    outputs' consistency (``keep_j``: a requirement is a reason of an override only when
+    the proposal breaks it, not when the proposal is no valuation the outputs can take)."""
     b = game.b
-    stay = b.bdd_not(game.successors_in(lose))
-    return b.bdd_and(b.bdd_and(ok, game.ctl_ok), stay)
+    return b.bdd_and(ok, b.bdd_not(game.successors_in(lose)))
 
 
 class _Table:

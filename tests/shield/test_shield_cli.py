@@ -111,6 +111,44 @@ def test_outputs_of_one_message_never_take_values_no_message_gives(safe_ros):
     assert (13, ("R2",)) in seen and (25, ("R6",)) in seen
 
 
+def test_an_override_only_the_bindings_force_blames_no_requirement(safe_ros, tmp_path):
+    """``forwarded_zero`` proposed without ``stopped`` is no message of /cmd_vel_filtered:
+    the shield overrides it, and no requirement is broken by it. The reasons named every
+    requirement (R2, R3, R4, R6), which the ROS 2 node's /diagnostics showed as the cause.
+    The same tick in C gives the same reasons; a proposal that breaks R4 still names R4."""
+    from _c_monitors import build as build_c, needs_cc, write
+    from fretc.shield.emit_c import render_c
+
+    _compiled, shield = safe_ros
+    ins = {"too_close": False, "scan_stale": False, "clearance": 1.0}
+    incoherent = {"stopped": False, "stop_requested": False, "forwarded_zero": True,
+                  "linear_speed": 0.0, "angular_speed": 0.0}
+    fast = {"stopped": False, "stop_requested": False, "forwarded_zero": False,
+            "linear_speed": 0.9, "angular_speed": 0.0}
+    (m,) = shield.machines
+    texts = [a.text for a in m.outputs]
+    assert not evaluate(m.nodes, m.ctl_ok, [0] * len(m.inputs)
+                        + [int(t == "forwarded_zero") for t in texts] + list(map(int, m.init)))
+    d = ShieldRuntime(tables(shield)).step(ins, incoherent)
+    assert d.overridden and d.changed and d.reasons == ()
+    d = ShieldRuntime(tables(shield)).step(ins, fast)
+    assert d.overridden and d.reasons == ("R4",)
+    needs_cc()
+    write(render_c(shield, "t"), tmp_path)
+    exe = build_c(tmp_path, ["t_shield.c", "t_shield_run.c"], "run")
+    names = list(ins) + list(incoherent)
+
+    def row(values: dict) -> str:
+        return ",".join(str(v).lower() for v in values.values())
+
+    got = subprocess.run([str(exe)], input=",".join(names) + "\n" + row({**ins, **incoherent})
+                         + "\n" + row({**ins, **fast}) + "\n", capture_output=True,
+                         text=True, timeout=60)
+    assert got.returncode == 0, got.stderr
+    rows = [line.split(",") for line in got.stdout.splitlines()[1:]]
+    assert [(r[-2], r[-1]) for r in rows] == [("1", ""), ("1", "R4")]
+
+
 def test_a_mutated_shield_fails_its_proof(safe_ros):
     # the proof is not vacuous: a shield letting every move through violates R2
     from dataclasses import replace
