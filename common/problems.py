@@ -27,6 +27,8 @@ CHUNK_CORRUPT = "chunk_corrupt"  # chunk cannot be decompressed or parsed; chunk
 DATA_CRC = "data_crc"  # MCAP DataEnd data_section_crc mismatch
 SUMMARY_CORRUPT = "summary_corrupt"  # footer/summary unreadable or its CRC is wrong; index ignored
 INDEX_MISMATCH = "index_mismatch"  # the summary's index disagrees with the data; read linearly
+# a watch's recording whose record of the run's gaps cannot be read (fretc.logs.recorded_gaps)
+RECORDED_GAPS = "recorded_gaps_unreadable"
 UNKNOWN_SCHEMA = "unknown_schema"  # schema missing, of an unsupported encoding, or unparsable
 UNKNOWN_ENCODING = "unknown_encoding"  # message encoding other than cdr / ros1
 UNKNOWN_CHANNEL = "unknown_channel"  # message refers to a channel never defined (lost chunk)

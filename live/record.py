@@ -1,7 +1,8 @@
 """The recording of a watch (``fretc watch --record``): an MCAP of the watched messages, with
 their schemas and encodings as advertised, plus the ``/fretc/verdicts`` ``foxglove.Log``
-channel of verdict events (:mod:`fretc.audit.annotate`), written at the end. ``fretc audit`` of the
-recording gives the watch's verdicts."""
+channel of verdict events (:mod:`fretc.audit.annotate`) and the run's gaps (a lost connection,
+a publisher that left: :mod:`fretc.logs.recorded_gaps`), written at the end. ``fretc audit`` of
+the recording gives the watch's verdicts."""
 
 from __future__ import annotations
 
@@ -10,9 +11,13 @@ from typing import TYPE_CHECKING
 from mcap.writer import CompressionType, Writer
 
 from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
+from fretc.logs.recorded_gaps import GAPS_METADATA, gaps_json
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from fretc.audit.verdict import LogAudit
+    from fretc.logs.base import Gap
 
 __all__ = ["Recorder"]
 
@@ -44,8 +49,11 @@ class Recorder:
                                 sequence=self.seq[topic])
         self.seq[topic] += 1
 
-    def finish(self, la: LogAudit) -> int:
-        """Write the verdict events of ``la`` and close the file; the number of events."""
+    def finish(self, la: LogAudit, gaps: Sequence[Gap] = ()) -> int:
+        """Write the verdict events of ``la`` and the run's ``gaps``
+        (:func:`fretc.live.absence.recorded_gaps`: the metadata :data:`GAPS_METADATA`, which
+        :class:`fretc.logs.McapSource` reads back as gaps of the log) and close the file;
+        the number of events."""
         events = verdict_events(la.to_json())
         sid = self.writer.register_schema("foxglove.Log", "jsonschema",
                                           json.dumps(FOXGLOVE_LOG_SCHEMA).encode("utf-8"))
@@ -55,6 +63,8 @@ class Recorder:
                                     data=json.dumps(e.to_json()).encode("utf-8"), sequence=i)
         self.writer.add_metadata("fretc.verdicts",
                                  {v.requirement: v.verdict for v in la.verdicts})
+        if gaps:
+            self.writer.add_metadata(GAPS_METADATA, {"gaps": gaps_json(gaps)})
         self.close()
         return len(events)
 

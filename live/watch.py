@@ -50,7 +50,7 @@ from fretc.audit.gaps import merged_gaps, split_bridged
 from fretc.live.merge import HOLD_SECONDS
 from fretc.audit.passes import ClockKey, ClockPass, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
-from fretc.live.absence import NO_TIME, run_gaps
+from fretc.live.absence import NO_TIME, recorded_gaps, run_gaps
 from fretc.live.checks import watchable
 from fretc.live.columns import LiveColumns, WatchPasses as _WatchPasses, split_pending
 from fretc.live.entities import EntityRecording
@@ -516,7 +516,7 @@ class Watch:
             v.partial = la.partial
         la.verdicts += self.entities.verdicts(la)  # the audit's, over the messages used
         if self.recorder is not None:
-            self.recorder.finish(la)
+            self.recorder.finish(la, recorded_gaps(self.source))
             if result is not None and not self.source.gaps:
                 # the numbers behind violated boolean variables: the audit's second pass,
                 # over the recording

@@ -56,12 +56,14 @@ class McapIndex(NamedTuple):
 
 class SummaryRead(NamedTuple):
     """What :func:`read_summary` found: the Header ``profile`` (``""`` when unreadable), the
-    ``index`` (None: read the file linearly) and the ``summary_corrupt`` ``problem`` that made
-    the index unusable (None when the summary is intact or absent)."""
+    ``index`` (None: read the file linearly), the ``summary_corrupt`` ``problem`` that made
+    the index unusable (None when the summary is intact or absent) and the Header
+    ``library`` (``""`` when unreadable)."""
 
     profile: str
     index: McapIndex | None  # type: ignore[assignment]  # the field shadows tuple.index
     problem: DataProblem | None
+    library: str = ""
 
 
 class _Unusable(Exception):
@@ -76,25 +78,28 @@ def read_summary(path: str, size: int) -> SummaryRead:
     Footer or summary (then ``problem`` says what).
     """
     with open(path, "rb") as f:
-        profile = _read_profile(f, size)
+        profile, library = _read_header(f, size)
         try:
             index = _read_index(f, size)
         except _Unusable as exc:
-            return SummaryRead(profile, None, DataProblem(P.SUMMARY_CORRUPT, None, None, str(exc)))
-    return SummaryRead(profile, index, None)
+            return SummaryRead(profile, None, DataProblem(P.SUMMARY_CORRUPT, None, None, str(exc)),
+                               library)
+    return SummaryRead(profile, index, None, library)
 
 
-def _read_profile(f: BinaryIO, size: int) -> str:
-    """The Header record's profile (MCAP spec, "Header"), ``""`` when unreadable."""
+def _read_header(f: BinaryIO, size: int) -> tuple[str, str]:
+    """The Header record's profile and library (MCAP spec, "Header"), ``""`` when
+    unreadable."""
     head = f.read(len(MCAP_MAGIC) + 9)
     if len(head) == len(MCAP_MAGIC) + 9 and head[8] == Opcode.HEADER:
         length = RECORD_HEAD.unpack_from(head, 8)[1]
         if length < size:
             try:
-                return parse_record(Opcode.HEADER, f.read(length)).profile
+                header = parse_record(Opcode.HEADER, f.read(length))
+                return header.profile, header.library
             except RECORD_ERRORS:
                 pass
-    return ""
+    return "", ""
 
 
 def _read_index(f: BinaryIO, size: int) -> McapIndex | None:

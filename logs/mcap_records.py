@@ -28,7 +28,7 @@ from mcap.stream_reader import CRCValidationError
 
 __all__ = ["MCAP_MAGIC", "RECORD_HEAD", "FOOTER_LEN", "DATA_END_LEN", "RECORD_ERRORS",
            "parse_record", "chunk_records", "chunk_messages", "chunk_message_table", "crc_skip",
-           "decompress", "max_chunk_bytes"]
+           "decompress", "max_chunk_bytes", "data_follows"]
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"  # MCAP spec, "Magic"
 RECORD_HEAD = struct.Struct("<BQ")  # opcode, record length (MCAP spec, "Records")
@@ -261,3 +261,22 @@ def crc_skip(f: BinaryIO, length: int, crc: int) -> int:
         crc = zlib.crc32(block, crc)
         length -= len(block)
     return crc
+
+
+def data_follows(f: BinaryIO, at: int, size: int) -> bool:
+    """Whether a Chunk or Message record starts at or after byte ``at`` (record headers
+    walked to the end of the file, bodies skipped); the file position is restored."""
+    back = f.tell()
+    try:
+        while at + 9 <= size:
+            f.seek(at)
+            head = f.read(9)
+            if len(head) < 9:
+                return False
+            opcode, length = RECORD_HEAD.unpack(head)
+            if opcode in (Opcode.CHUNK, Opcode.MESSAGE) and at + 9 + length <= size:
+                return True
+            at += 9 + length
+        return False
+    finally:
+        f.seek(back)

@@ -31,14 +31,15 @@ from rosbags.typesys.msg import normalize_msgtype
 
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem, LogError
-from fretc.logs.base import LogSource, Message, header_stamp
+from fretc.logs.base import Gap, LogSource, Message, header_stamp
 from fretc.logs.decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
 from fretc.logs.encodings import SELF_DESCRIBING, type_name
 from fretc.logs.mcap_integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
 from fretc.logs.mcap_integrity import index_disagreement, missing_records, read_summary
 from fretc.logs.mcap_columns import TopicBlock, column_pass
 from fretc.logs.mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
-from fretc.logs.mcap_records import crc_skip, parse_record
+from fretc.logs.mcap_records import crc_skip, data_follows, parse_record
+from fretc.logs.recorded_gaps import WATCH_LIBRARY, read_recorded_gaps
 from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 __all__ = ["McapSource"]
@@ -107,6 +108,10 @@ class McapSource(LogSource):
                     P.INDEX_MISMATCH, None, None,
                     f"the summary's index disagrees with the data section ({why}); the "
                     "file is read record by record"))
+        #: the gaps of a watched run its recording carries (:mod:`fretc.logs.recorded_gaps`)
+        self.recorded_gaps: list[Gap] = []
+        if found.library == WATCH_LIBRARY and self._index is not None:
+            self._read_recorded_gaps()
         self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
@@ -120,6 +125,19 @@ class McapSource(LogSource):
                 self._start_time = min(c.message_start_time for c in self._index.chunk_indexes)
                 self._end_time = max(c.message_end_time for c in self._index.chunk_indexes)
 
+
+    def _read_recorded_gaps(self) -> None:
+        """:attr:`recorded_gaps` (:func:`read_recorded_gaps`); a record that cannot be read
+        is a :data:`fretc.common.problems.RECORDED_GAPS` problem, and the log is partial."""
+        try:
+            self.recorded_gaps = read_recorded_gaps(self.path)
+        except ValueError as exc:
+            self._open_damage = True
+            self._open_problems.add(DataProblem(P.RECORDED_GAPS, None, None, str(exc)))
+
+    def _begin_pass(self) -> None:
+        super()._begin_pass()
+        self.gaps.extend(self.recorded_gaps)
 
     def _complete_index(self) -> None:
         """Add to the index the Schema and Channel records the summary does not repeat
@@ -337,25 +355,6 @@ class McapSource(LogSource):
                   open_end=True, cause=P.CHUNK_CORRUPT)
 
 
-def _data_follows(f: BinaryIO, at: int, size: int) -> bool:
-    """Whether a Chunk or Message record starts at or after byte ``at`` (record headers
-    walked to the end of the file, bodies skipped); the file position is restored."""
-    back = f.tell()
-    try:
-        while at + 9 <= size:
-            f.seek(at)
-            head = f.read(9)
-            if len(head) < 9:
-                return False
-            opcode, length = RECORD_HEAD.unpack(head)
-            if opcode in (Opcode.CHUNK, Opcode.MESSAGE) and at + 9 + length <= size:
-                return True
-            at += 9 + length
-        return False
-    finally:
-        f.seek(back)
-
-
 class _LinearPass:
     """One record-by-record pass over an MCAP file from byte 0, for a file without a usable
     index (framing: 1-byte opcode, 8-byte length; MCAP spec, "Records").
@@ -391,7 +390,7 @@ class _LinearPass:
                     break
                 opcode, length = RECORD_HEAD.unpack(head)
                 if opcode in (Opcode.DATA_END, Opcode.FOOTER) and \
-                        _data_follows(f, pos + 9 + length, src._size):
+                        data_follows(f, pos + 9 + length, src._size):
                     self._false_end(opcode, pos)  # a flipped opcode, not the end
                     self.crc = crc_skip(f, length, zlib.crc32(head, self.crc))
                     continue

@@ -1,0 +1,95 @@
+"""The gaps of a watched run, carried by its recording (``fretc watch --record``).
+
+A watch knows what its recording cannot show: the connection was lost for a while, a
+publisher left (its topic unadvertised) and came back, or left for good while the run went
+on. The watch judges the ticks inside such a gap unknown and cuts the requirements that read
+a topic gone for good at its last message (:mod:`fretc.live.absence`). The recording writes
+them in an MCAP Metadata record (MCAP spec, "Metadata": a name and a map of strings) named
+:data:`GAPS_METADATA`, whose ``gaps`` entry is a JSON list of ``{"start", "end", "topics",
+"cause"}`` (log times in ns, ``start`` null from the start of the run; ``topics`` null for
+every topic), and :class:`fretc.logs.McapSource` reads them back as gaps of the log, so that
+``fretc audit`` of the recording gives the watch's verdicts (../shared/DESIGN.md, "Damage is
+a gap"). A recording whose record cannot be read is a data problem of the log, never a
+crash, and its gaps are not used.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+
+from fretc.logs.base import Gap
+
+__all__ = ["GAPS_METADATA", "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps"]
+
+#: The name of the Metadata record of a recording's gaps
+GAPS_METADATA = "fretc.watch_gaps"
+#: The Header library of a watch's recording (only such files carry the record)
+WATCH_LIBRARY = "fretc watch"
+#: Gaps read from one record at most (a watch keeps fewer problems than this)
+MAX_GAPS = 100_000
+_INT64 = (-(2**63), 2**63 - 1)
+
+
+def gaps_json(gaps: Sequence[Gap]) -> str:
+    """The JSON text of ``gaps`` (in order), as :func:`parse_gaps` reads it."""
+    return json.dumps([{"start": g.start, "end": g.end,
+                        "topics": None if g.topics is None else sorted(g.topics),
+                        "cause": g.cause} for g in gaps], separators=(",", ":"))
+
+
+def parse_gaps(text: str) -> list[Gap]:
+    """The gaps of :func:`gaps_json`'s ``text``.
+
+    Raises:
+        ValueError: not that shape (not JSON, a member missing or of another type, a log
+            time outside int64 or an end before its start, more than :data:`MAX_GAPS`),
+            naming the entry."""
+    try:
+        doc = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise ValueError(f"not JSON ({exc})") from None
+    if not isinstance(doc, list) or len(doc) > MAX_GAPS:
+        raise ValueError(f"not a list of at most {MAX_GAPS:,} gaps")
+    out = []
+    for k, g in enumerate(doc):
+        if not isinstance(g, dict) or set(g) != {"start", "end", "topics", "cause"}:
+            raise ValueError(f"gap {k}: not an object of start, end, topics and cause")
+        start, end, topics, cause = g["start"], g["end"], g["topics"], g["cause"]
+        for name, x in (("start", start), ("end", end)):
+            if x is not None and (type(x) is not int or not _INT64[0] <= x <= _INT64[1]):
+                raise ValueError(f"gap {k}: {name} is not a log time in ns: {x!r}")
+        if end is None or (start is not None and end < start):
+            raise ValueError(f"gap {k}: its end {end!r} is not a log time at or after its "
+                             f"start {start!r}")
+        if topics is not None and (not isinstance(topics, list) or not all(
+                isinstance(t, str) for t in topics)):
+            raise ValueError(f"gap {k}: topics is not a list of topic names")
+        if not isinstance(cause, str):
+            raise ValueError(f"gap {k}: cause is not a string")
+        out.append(Gap(start, end, None if topics is None else frozenset(topics), cause))
+    return out
+
+
+def read_recorded_gaps(path: str) -> list[Gap]:
+    """The gaps of the MCAP file ``path``'s :data:`GAPS_METADATA` record, read through its
+    summary's MetadataIndex by the ``mcap`` library; none when it has no such record.
+
+    Raises:
+        ValueError: the record cannot be read (more than one, other entries, or
+            :func:`parse_gaps`'s refusals), in words naming it."""
+    from mcap.reader import make_reader
+
+    try:
+        with open(path, "rb") as f:
+            found = [m.metadata for m in make_reader(f).iter_metadata()
+                     if m.name == GAPS_METADATA]
+        if not found:
+            return []
+        if len(found) > 1 or set(found[0]) != {"gaps"}:
+            raise ValueError(f"{len(found)} records, or entries other than 'gaps'")
+        return parse_gaps(found[0]["gaps"])
+    except Exception as exc:  # noqa: BLE001 - the library's own errors, and ours
+        raise ValueError(f"the record of the watched run's gaps ({GAPS_METADATA}) cannot be "
+                         f"read ({type(exc).__name__}: {str(exc)[:200]}): where the watch "
+                         "lost messages is not known") from None
