@@ -4,10 +4,7 @@ once per worker); results come back in input order."""
 
 from __future__ import annotations
 
-import multiprocessing as mp
-import queue as queue_mod
 from collections.abc import Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Protocol
 
 from fretc.audit.verdict import LogAudit
@@ -77,6 +74,11 @@ def audit_logs(plan: AuditPlan, paths: Sequence[str], jobs: int = 1,
             if progress is not None:
                 progress.done(i, results[i])
         return [results[i] for i in range(len(paths))]
+    # lazy: only for -j N (start-up time of the others)
+    import multiprocessing as mp
+    import queue as queue_mod
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
     try:
         ctx = mp.get_context("fork")
     except ValueError:  # pragma: no cover - platforms without fork

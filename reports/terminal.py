@@ -13,7 +13,6 @@ import math
 import os
 from typing import Any, TYPE_CHECKING, cast
 from rich.markup import escape as _markup_escape
-from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 from rich.text import Text
 
@@ -488,6 +487,10 @@ class AuditProgress:
     of its log time). Used as the ``progress`` object of :func:`fretc.audit.audit_logs`."""
 
     def __init__(self, console, total: int):
+        # lazy: only on a terminal (start-up time of the other runs)
+        from rich.progress import (BarColumn, Progress, TaskProgressColumn, TextColumn,
+                                   TimeElapsedColumn)
+
         self.progress = Progress(TextColumn("{task.description}"), BarColumn(),
                                  TaskProgressColumn(), TimeElapsedColumn(), console=console,
                                  transient=True)

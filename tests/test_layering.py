@@ -5,6 +5,7 @@ generation, checking and the audit need."""
 from __future__ import annotations
 
 import ast
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -101,6 +102,25 @@ def test_emit_ltl_starts_without_heavy_libraries(tmp_path):
                          text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert "HEAVY []" in out.stdout, out.stdout
+
+
+def test_an_audit_with_its_automata_cached_loads_no_spot_junit_or_process_pool(tmp_path):
+    """``fretc audit`` of one log reads its LTL3 automata from the cache: Spot is not loaded
+    for its version (the cache key), nor the JUnit writer without ``--junit``, the progress
+    bar off a terminal, or the process pool without ``-j`` (start-up of every audit)."""
+    code = ("import sys\n"
+            "sys.argv = ['fretc', 'audit', '-r', 'requirements', 'traces/stop_delay.mcap',\n"
+            "            '--no-progress']\n"
+            "from fretc.cli import main\n"
+            "try:\n    main()\nexcept SystemExit:\n    pass\n"
+            "loaded = sorted(m for m in sys.modules if m in ('spot', 'fretc.reports.junit', "
+            "'rich.progress', 'multiprocessing', 'concurrent.futures'))\n"
+            "print('LOADED', loaded)\n")
+    env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))
+    for _ in range(2):  # the first run fills the cache
+        out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
+                             text=True, timeout=300, env=env)
+    assert "LOADED []" in out.stdout, (out.stdout, out.stderr[-2000:])
 
 
 def test_every_package_is_installed():

@@ -95,7 +95,6 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     from rich.console import Console
 
     from fretc.audit import AuditInputError, find_logs, load_plan
-    from fretc.reports.junit import junit_xml
     from fretc.reports.terminal import AuditProgress, escape, print_summary
     from fretc.audit.fleet import expand_log_args
     from fretc.audit.statistics import plan_statistics
@@ -134,6 +133,8 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
         _write_json(audit_json(results, reqs, plan.bindings_json(), input_errors,
                                allow_partial, extra, stats), json_path)
     if junit_path:
+        from fretc.reports.junit import junit_xml  # lazy: only with --junit (start-up time)
+
         Path(junit_path).write_text(junit_xml(results, stats, reqs), encoding="utf-8")
     code = exit_code(results, input_errors, allow_partial, stats)
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
