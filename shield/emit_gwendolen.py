@@ -11,7 +11,9 @@ Files (``N`` the shield's name, ``A`` the agent):
   (a percept, or a belief the agent added itself) that completes C, act to make each literal
   of R true (the action ``set_r``/``clear_r``) and believe it. ``never`` R makes R's
   negation hold instead (R one literal; the negation of a conjunction is a disjunction, not
-  in the agent). A requirement without a condition is an initial goal. What has another shape (a number compared, a disjunction,
+  in the agent). A requirement without a condition is an initial goal; one whose condition
+  is negated literals only (``whenever !i1``) holds from the start, so it gets an initial
+  goal beside its plans. What has another shape (a number compared, a disjunction,
   a mode scope) is not in the agent: listed in its header, enforced by the other forms.
 * ``N_env.java``: the verification environment (a ``VerificationofAutonomousSystemsEnvironment``
   as the paper's): at each perception every input variable is perceived or not by AJPF's
@@ -101,7 +103,10 @@ def agent_rules(shield: Shield, compiled: Sequence[Any]) -> list[Rule]:
 def _plans(rules: list[Rule]) -> tuple[list[str], list[str]]:
     """The agent's plans and initial goals: per literal of the response, a plan that acts only
     while the literal does not hold yet (so each plan fires once per need, and the agent's
-    pending intentions stay bounded for the model checker)."""
+    pending intentions stay bounded for the model checker). A condition of negated
+    literals only holds from the start, before any belief changes (the agent believes
+    nothing yet): its plans fire on a belief's removal, which never comes when the input
+    was never perceived, so an initial goal acts on it too."""
     plans, goals = [], []
     for rule in rules:
         if rule.why:
@@ -118,6 +123,11 @@ def _plans(rules: list[Rule]) -> tuple[list[str], list[str]]:
                 others = [(w, b) for j, (w, b) in enumerate(rule.condition) if j != k]
                 guard = ", ".join([("B " if b else "~B ") + w for w, b in others] + [need])
                 plans.append(f"{'+' if cval else '-'}{c}: {{{guard}}} <- {act};")
+            if not any(cval for _c, cval in rule.condition):  # (holds at the start)
+                goal = f"start_{rule.rid.lower()}_{v} [perform]"
+                goals.append(goal)
+                guard = ", ".join([f"~B {c}" for c, _b in rule.condition] + [need])
+                plans.append(f"+!{goal} : {{{guard}}} <- {act};")
     return plans, goals
 
 

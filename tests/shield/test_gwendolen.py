@@ -79,6 +79,32 @@ def test_never_makes_the_responses_negation_hold(tmp_path, text, plan, prop):
     assert "untimed reading of 'never': the response's negation" in got["safe_ros.gwen"]
 
 
+@pytest.mark.parametrize("text, start", [
+    ("whenever !i1 c shall immediately satisfy o1",
+     "+!start_a_o1 [perform] : {~B i1, ~B o1} <- set_o1, +o1;"),
+    ("upon !i1 & !i2 c shall within 3 ticks satisfy !o1",
+     "+!start_a_o1 [perform] : {~B i1, ~B i2, B o1} <- clear_o1, -o1;"),
+    ("whenever !i1 & i2 c shall immediately satisfy o1", None),
+    ("whenever i1 c shall immediately satisfy o1", None),
+])
+def test_a_condition_of_negations_is_acted_on_from_the_start(tmp_path, text, start):
+    """``whenever !i1``: its plan fires on ``-i1``, a belief's removal, which never comes
+    when ``i1`` was never perceived; the condition holds from the start, so an initial goal
+    acts on it (AJPF reported the agent VIOLATED). A condition with a positive literal
+    cannot hold before a percept, and gets none."""
+    src = tmp_path / "n.fret"
+    src.write_text(f"A: {text}\n", encoding="utf-8")
+    compiled = compile_entries(load_requirements([src]))
+    ins = ["i1", "i2"] if "i2" in text else ["i1"]
+    shield = build_shield(compiled, ins, ["o1"], fork=False, name="safe_ros")
+    gwen = render_gwendolen(shield, compiled, "safe_ros")["safe_ros.gwen"]
+    goals = gwen.split(":Initial Goals:")[1].split(":Plans:")[0].split()
+    if start is None:
+        assert "start_" not in gwen
+    else:
+        assert start in gwen.splitlines() and "start_a_o1" in goals
+
+
 def test_never_of_a_conjunction_is_not_in_the_agent(tmp_path):
     src = tmp_path / "never.fret"
     src.write_text("A: upon i1 c shall never satisfy o1 & o2\n", encoding="utf-8")
@@ -166,6 +192,20 @@ def test_a_mutated_agent_violates_the_property(ajpf, files, tmp_path):
         "+too_close: {~B stopped} <- set_stopped, +stopped;", "+too_close: {True} <- print(\"x\");")
     assert mutated["safe_ros.gwen"] != files["safe_ros.gwen"]
     assert "RESULT: VIOLATED" in _check(ajpf, tmp_path, mutated, "R2")
+
+
+@pytest.mark.xdist_group("ajpf")
+def test_ajpf_verifies_an_agent_whose_condition_holds_from_the_start(ajpf, tmp_path):
+    """``whenever !i1 c shall immediately satisfy o1``: the property ``[] (~B(c,i1) -> <>
+    B(c,o1))`` holds for the generated agent; without its initial goal (the agent as it was
+    generated) it is violated on the run where ``i1`` is never perceived."""
+    files = _never_files(tmp_path, "whenever !i1 c shall immediately satisfy o1")
+    assert "RESULT: HOLDS" in _check(ajpf, tmp_path / "A", files, "A")
+    old = dict(files)
+    old["safe_ros.gwen"] = "\n".join(line for line in files["safe_ros.gwen"].splitlines()
+                                     if "start_a_o1" not in line) + "\n"
+    assert old["safe_ros.gwen"] != files["safe_ros.gwen"]
+    assert "RESULT: VIOLATED" in _check(ajpf, tmp_path / "old", old, "A")
 
 
 @pytest.mark.xdist_group("ajpf")
