@@ -63,12 +63,21 @@ class PredicateBudget(Exception):
     did not answer within :data:`RLIMIT`."""
 
 
-def _solver() -> Any:
+def _solver(ctx: Any) -> Any:
     import z3
 
-    s = z3.Solver()
+    s = z3.Solver(ctx=ctx)
     s.set("rlimit", RLIMIT)
     return s
+
+
+def _context() -> Any:
+    """A new z3 context for one cluster's queries: its models and unsat cores (the numbers
+    the shield writes, the lemmas of the invariant) depend on the cluster alone, not on what
+    the process asked z3 before (z3's terms and caches live in their context)."""
+    import z3
+
+    return z3.Context()
 
 
 def _undecided(c: Cluster, solver: Any) -> PredicateBudget:
@@ -190,7 +199,8 @@ def _z3(n: Node, reals: dict[str, Any]) -> Any:
     if n.op == "var":
         return reals[ir.name_of(n)]
     if n.op == "num":
-        return z3.RealVal(str(Fraction(ir.name_of(n))))
+        ctx = next(iter(reals.values())).ctx  # (a cluster reads at least one variable)
+        return z3.RealVal(str(Fraction(ir.name_of(n))), ctx)
     if n.op == "neg":
         return -_z3(n.args[0], reals)
     if n.op == "fn":
@@ -210,12 +220,13 @@ def _decide(c: Cluster, witness: Witness | None) -> None:
     """Fill ``c.invariant`` and ``c.witnesses`` (module docstring)."""
     import z3
 
-    reals = {v: z3.Real(v) for v in c.variables}
-    bs = [z3.Bool(f"p{k}") for k in range(len(c.atoms))]
-    theory = _solver()
+    ctx = _context()
+    reals = {v: z3.Real(v, ctx) for v in c.variables}
+    bs = [z3.Bool(f"p{k}", ctx) for k in range(len(c.atoms))]
+    theory = _solver(ctx)
     for b, a in zip(bs, c.atoms):
         theory.add(b == _z3(a, reals))
-    search = z3.Solver()  # (propositional: no limit needed)
+    search = z3.Solver(ctx=ctx)  # (propositional: no limit needed)
     lemmas: list[Node] = []
     asked = 0
     while search.check() == z3.sat:
@@ -275,15 +286,17 @@ def mixed_invariants(c: Cluster, inputs: Sequence[str]) -> tuple[Node, Node]:
             f"the comparisons {', '.join(to_smv(a) for a in c.atoms)} have more than "
             f"{MAX_VALUATIONS} valuations to decide")
     out_vars = [v for v in c.variables if v not in inputs]
-    reals = {v: z3.Real(v) for v in c.variables}
+    ctx = _context()
+    reals = {v: z3.Real(v, ctx) for v in c.variables}
     in_z3 = [_z3(a, reals) for a in ins]
     out_z3 = [_z3(a, reals) for a in outs]
     env: list[Node] = []
     ctl: list[Node] = []
     for iv in itertools.product((False, True), repeat=len(ins)):
-        given = z3.And(*[x if v else z3.Not(x) for x, v in zip(in_z3, iv)], z3.BoolVal(True))
+        given = z3.And(*[x if v else z3.Not(x) for x, v in zip(in_z3, iv)],
+                       z3.BoolVal(True, ctx))
         iota = ir.and_all(*(a if v else ir.not_(a) for a, v in zip(ins, iv)))
-        s = _solver()
+        s = _solver(ctx)
         s.add(given)
         answer = s.check()
         if answer == z3.unknown:
@@ -293,8 +306,9 @@ def mixed_invariants(c: Cluster, inputs: Sequence[str]) -> tuple[Node, Node]:
             continue
         allowed = []
         for ov in itertools.product((False, True), repeat=len(outs)):
-            want = z3.And(*[x if v else z3.Not(x) for x, v in zip(out_z3, ov)], z3.BoolVal(True))
-            bad = _solver()
+            want = z3.And(*[x if v else z3.Not(x) for x, v in zip(out_z3, ov)],
+                          z3.BoolVal(True, ctx))
+            bad = _solver(ctx)
             body = z3.Exists([reals[v] for v in out_vars], want) if out_vars else want
             bad.add(given, z3.Not(body))
             if bad.check() == z3.unsat:

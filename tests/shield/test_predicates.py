@@ -288,3 +288,30 @@ def test_the_command_proves_a_shield_over_comparisons_of_two_variables(tmp_path)
     for rid in ("P1", "P2", "P3", "P4"):
         assert f"{rid}: holds" in got.output
     assert "the shield satisfies every enforced requirement" in got.output
+
+
+def test_a_clusters_numbers_do_not_depend_on_what_z3_was_asked_before(tmp_path):
+    """The numbers z3 gives a cluster (written by the shield) and the valuations whose
+    numbers hold in doubles (the others are never chosen) came out of z3's one global
+    context: after other z3 work in the same process, the same requirements gave other
+    numbers and another set of valuations. Each cluster has a context of its own."""
+    import z3
+
+    text = ("A: whenever i1 c shall immediately satisfy y / z > 2\n"
+            "B: whenever i2 c shall immediately satisfy z = 0\n"
+            "C: whenever i1 c shall immediately satisfy y + z > 0.3 & y - z < 4\n")
+
+    def decided():
+        shield = build_shield(compile_text(text, tmp_path), ["i1", "i2"], ["y", "z"],
+                              fork=False)
+        return ([c["numbers"] for m in shield.machines for c in m.clusters],
+                [m.nodes for m in shield.machines], shield.notes)
+
+    first = decided()
+    for k in range(50):  # other work in z3's main context
+        a, b, c = z3.Reals(f"a{k} b{k} c{k}")
+        s = z3.Solver()
+        s.add(a / b > 2, b > 0.001 * k, c == a + b, a < 100 + k)
+        assert s.check() == z3.sat
+        s.model()
+    assert decided() == first
