@@ -74,7 +74,8 @@ class RequirementEntry:
     of ``requirement`` (the parsed AST) and ``error`` (why it does not parse) is set.
     ``extra`` holds the other members of a FRET JSON object. ``inputs``/``outputs`` are
     the file's ``@inputs``/``@outputs`` variable names (for ``fretc check``'s
-    realizability), the same for every requirement of the file. ``origin`` says where
+    realizability), the same for every requirement of the file (of a FRET export: the Input and Output
+    variables FRET declares for the requirement's component, ``variables``). ``origin`` says where
     a requirement kept in a tool came from (:class:`fretc.fretish.sources.Origin`: ReqIF, Doorstop,
     FRET export; None for ``.fret`` files).
     """
@@ -93,3 +94,7 @@ class RequirementEntry:
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
     origin: Origin | None = None
+    #: a FRET export's variables of the requirement's component
+    #: (:class:`fretc.fretish.fret_variables.FretVariable`; ``inputs``/``outputs`` are its
+    #: Input and Output ones); empty for other files
+    variables: tuple = ()

@@ -57,6 +57,7 @@ from fretc.fretish.parser import parse
 from fretc.fretish.entry import Fraction, Requirement, RequirementEntry  # entry's imports
 from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
 from fretc.fretish.directives import name_tokens, parse_tick_period, split_names
+from fretc.fretish.fret_variables import declare, fret_variables
 
 __all__ = ["RequirementEntry", "load_requirements", "load_fret_text", "parse_tick_period",
            "is_fret_export", "split_names"]
@@ -352,6 +353,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
     else:
         raise FretishFileError("expected a list of FRET requirements or an object with a "
                                "\"requirements\" list", source=source)
+    declared = fret_variables(data, source)
     starts = [m.end() for m in re.finditer(_FULLTEXT, raw)]
     exact_positions = len(starts) == len(reqs)
     entries = []
@@ -395,6 +397,8 @@ def _load_json(path: str) -> list[RequirementEntry]:
             entry.requirement = parse(text, source=source, line=line, column=col)
         except FretishSyntaxError as e:
             entry.error = e
+        if declared and entry.requirement is not None:
+            declare(entry, declared)
         entries.append(entry)
     return entries
 

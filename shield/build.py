@@ -25,6 +25,7 @@ from fretc.compiler.ir import Node
 from fretc.compiler.printers import mangle, to_smv
 from fretc.shield.machine import Atom, Machine
 from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
+from fretc.fretish.fret_variables import INTEGER_TYPES, FretVariable, unused
 from fretc.shield.predicates import PredicateBudget, term
 from fretc.shield.synthesis import synthesize
 from fretc.signals.bindings.spec import Bindings
@@ -157,7 +158,8 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         ShieldError: a requirement that cannot be enforced, an unrealizable component (with
             the inputs that defeat every controller), an unknown preference, requirements
             of different tick periods (the shield steps on one tick: a duration of the other
-            period would count ticks of the wrong length).
+            period would count ticks of the wrong length), outputs a FRET export declares
+            whole numbers that a requirement compares (:func:`_integer_outputs`).
         ShieldUnknown: a component's game past its budget, or comparisons of several
             variables with too many valuations to decide
             (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
@@ -171,6 +173,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
             f"{format_period_ms(t)}: {', '.join(ids)}" for t, ids in sorted(periods.items()))
             + ". The shield steps on one tick, and each duration counts ticks of its own "
             "file's period; give the files one @tick_period")
+    _integer_outputs(compiled, outputs)
     try:
         p = plan(compiled, inputs, outputs, bindings)
     except PredicateBudget as exc:
@@ -192,6 +195,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
               if v not in read]
     unread += [f"{v}: declared an output, read by no requirement (passed through unchanged)"
                for v in p.outputs if v not in read]
+    unread += unused(_declared(compiled), set(read))
     assert len(periods) <= 1  # (mixed periods were refused above)
     digest = hashlib.sha256("\n".join(
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
@@ -205,6 +209,29 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
                         if len(g.variables) > 1),
                   _numbers(compiled),
                   read, tuple(p.notes) + tuple(unread), digest)
+
+
+def _declared(compiled: Sequence[Any]) -> list[FretVariable]:
+    """The FRET variables a FRET export declares for the requirements' components."""
+    return list({(v.component, v.name): v for c in compiled
+                 for v in getattr(c.entry, "variables", ())}.values())
+
+
+def _integer_outputs(compiled: Sequence[Any], outputs: Sequence[str]) -> None:
+    """Refuse outputs a FRET export declares whole numbers that a requirement compares: the
+    shield corrects numbers as reals (``gear > 2`` from a proposal of 1 gives
+    2.0000000000000004, which an integer actuator takes as 2, violating it).
+
+    Raises:
+        ShieldError: naming them and their declared type."""
+    numbers = _numbers(compiled)
+    ints = sorted({f"{v.name} ({v.data_type})" for v in _declared(compiled)
+                   if v.data_type in INTEGER_TYPES and v.name in outputs and v.name in numbers})
+    if ints:
+        raise ShieldError("outputs declared whole numbers in the FRET export and compared "
+                          f"with numbers: {', '.join(ints)}. The shield corrects numbers as "
+                          "reals and could give one that is no whole number (gear > 2 from "
+                          "1 gives 2.0000000000000004); not supported")
 
 
 def _numbers(compiled: Sequence[Any]) -> frozenset[str]:

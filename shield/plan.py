@@ -131,9 +131,14 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         item = make_item(k, c)
         undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
         if undeclared:
+            fret = {v.name: v for v in getattr(c.entry, "variables", ())}
+            kinds = [f"{v} is {'an' if fret[v].kind[0] in 'IO' else 'a'} {fret[v].kind} "
+                     "variable in FRET's export" for v in undeclared
+                     if v in fret and fret[v].kind]
             raise ShieldError(f"{_where(c)}: {c.id} reads {', '.join(undeclared)}, declared "
                               "neither input nor output (--inputs/--outputs, or @inputs/"
-                              "@outputs in the file): the shield must know who sets each")
+                              "@outputs in the file): the shield must know who sets each"
+                              + (f" ({'; '.join(kinds)})" if kinds else ""))
         if all(v in inputs for v in item.variables):
             monitored[c.id] = ("over inputs only (" + ", ".join(item.variables) + "): the "
                                "environment's, no output can keep it; monitored, not enforced")

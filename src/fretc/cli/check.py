@@ -237,6 +237,13 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
         sys.exit(3)
     for e in result.input_errors:
         click.echo(shown(str(e)), err=True)
+    fret_vars = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
+    if fret_vars:  # (a FRET export's declarations fretc does not use: said, not dropped)
+        from fretc.fretish.fret_variables import unused
+
+        read = {v for c in compiled if c.formalization is not None
+                for v in c.formalization.variables}
+        result.notes += unused(fret_vars, read)
     doc = result.to_json()
     if output:
         Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
