@@ -39,7 +39,7 @@ from fretc.logs.mcap_integrity import index_disagreement, missing_records, read_
 from fretc.logs.mcap_columns import TopicBlock, column_pass
 from fretc.logs.mcap_records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
 from fretc.logs.mcap_records import crc_skip, data_follows, parse_record
-from fretc.logs.recorded_gaps import WATCH_LIBRARY, read_recorded_gaps
+from fretc.logs.recorded_gaps import WATCH_LIBRARY, first_start, gap_problems, read_recorded_gaps
 from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 __all__ = ["McapSource"]
@@ -111,7 +111,11 @@ class McapSource(LogSource):
         #: the gaps of a watched run its recording carries (:mod:`fretc.logs.recorded_gaps`)
         self.recorded_gaps: list[Gap] = []
         if found.library == WATCH_LIBRARY and self._index is not None:
-            self._read_recorded_gaps()
+            try:
+                self.recorded_gaps = read_recorded_gaps(self.path)
+            except ValueError as exc:  # (where the watch lost messages is not known)
+                self._open_damage = True
+                self._open_problems.add(DataProblem(P.RECORDED_GAPS, None, None, str(exc)))
         self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
@@ -126,18 +130,13 @@ class McapSource(LogSource):
                 self._end_time = max(c.message_end_time for c in self._index.chunk_indexes)
 
 
-    def _read_recorded_gaps(self) -> None:
-        """:attr:`recorded_gaps` (:func:`read_recorded_gaps`); a record that cannot be read
-        is a :data:`fretc.common.problems.RECORDED_GAPS` problem, and the log is partial."""
-        try:
-            self.recorded_gaps = read_recorded_gaps(self.path)
-        except ValueError as exc:
-            self._open_damage = True
-            self._open_problems.add(DataProblem(P.RECORDED_GAPS, None, None, str(exc)))
-
     def _begin_pass(self) -> None:
         super()._begin_pass()
-        self.gaps.extend(self.recorded_gaps)
+        if self.recorded_gaps:  # (a watched run with a gap is partial, as the watch said)
+            self.gaps.extend(self.recorded_gaps)
+            self.partial, self.damage_time = True, first_start(self.recorded_gaps)
+            for p in gap_problems(self.recorded_gaps):
+                self._pass_problems.add(p)
 
     def _complete_index(self) -> None:
         """Add to the index the Schema and Channel records the summary does not repeat

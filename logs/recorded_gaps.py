@@ -18,9 +18,11 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
+from fretc.common.problems import DataProblem
 from fretc.logs.base import Gap
 
-__all__ = ["GAPS_METADATA", "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps"]
+__all__ = ["GAPS_METADATA", "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps",
+           "first_start", "gap_problems"]
 
 #: The name of the Metadata record of a recording's gaps
 GAPS_METADATA = "fretc.watch_gaps"
@@ -93,3 +95,17 @@ def read_recorded_gaps(path: str) -> list[Gap]:
         raise ValueError(f"the record of the watched run's gaps ({GAPS_METADATA}) cannot be "
                          f"read ({type(exc).__name__}: {str(exc)[:200]}): where the watch "
                          "lost messages is not known") from None
+
+
+def first_start(gaps: Sequence[Gap]) -> int | None:
+    """The earliest known start (ns) of ``gaps``, None when none has one."""
+    starts = [g.start for g in gaps if g.start is not None]
+    return min(starts) if starts else None
+
+
+def gap_problems(gaps: Sequence[Gap]) -> list[DataProblem]:
+    """One data problem per recorded gap (its cause as the kind, its topics, start and end),
+    as the watch reported them."""
+    return [DataProblem(g.cause, ", ".join(sorted(g.topics)) if g.topics else None, g.start,
+                        "the watch that recorded this log lost messages here (its gaps are "
+                        "recorded in the log)", g.end) for g in gaps]

@@ -15,6 +15,7 @@ pytest.importorskip("websockets")
 
 from hostile_ws import T0, ScriptServer, advertise, f64, message_data, subscription  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from fretc.audit.verdict import exit_code  # noqa: E402
 from fretc.common import problems as P  # noqa: E402
 from fretc.live.watch import Watch, WatchOptions  # noqa: E402
 from fretc.logs import McapSource  # noqa: E402
@@ -95,6 +96,8 @@ def test_the_audit_of_the_recording_equals_the_watch_when_a_publisher_leaves(
         live = w.run()
     offline = audit_log(plan, str(rec))
     assert _verdicts(offline) == _verdicts(live), (live.problems, offline.problems)
+    assert offline.partial and live.partial and exit_code([offline]) == exit_code([live])
+    assert {p["kind"] for p in offline.problems} >= {g.cause for g in McapSource(rec).recorded_gaps}
     got = _verdicts(live)
     assert got["RA"] == ("violated", T0 + 1500 * MS)  # /a is not affected
     if b_until == 0:  # /b never had a message: its requirements cannot be judged
