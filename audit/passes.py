@@ -25,6 +25,7 @@ from fretc.signals import blocks_of_ticks, sample, sample_blocks
 from fretc.signals.blocks import MAX_TICKS
 from fretc.signals.csv_columns import csv_columns
 from fretc.logs import CSV_TOPIC, CsvSource
+from fretc.logs.recorded_gaps import LEFT_FOR_GOOD
 from fretc.audit.columns import TickColumns
 from fretc.audit.gaps import gaps_of_clock, inner_gaps, insert_gap_ticks, split_bridged, unknown_masks
 from fretc.audit.model import AuditPlan, RequirementPlan
@@ -299,17 +300,12 @@ def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
             mask[i] = True
 
 
-#: The cause of a recorded gap of a topic whose publisher left a watched run for good while
-#: the run went on (:mod:`fretc.logs.recorded_gaps`): its variables are unknown to the end, the
-#: other topics were read, so it is no cut (the watch judges the same way)
-LEFT_FOR_GOOD = "publisher_left_for_good"
-
-
 def _cut_at_trailing_gap(res: ClockPass, own: list) -> None:
     """A gap that ends at or after the clock's last tick: nothing after its start was read
     for this clock, as after a cut; the ticks from its start on are dropped. A topic whose
-    publisher left a watched run for good (:data:`LEFT_FOR_GOOD`) is no cut: the run went on
-    and was read, and the topic's variables are unknown from its start (the watch's rule)."""
+    publisher left a watched run for good (:data:`fretc.logs.recorded_gaps.LEFT_FOR_GOOD`) is
+    no cut: the run went on and was read, and the topic's variables are unknown from its
+    start (the watch's rule)."""
     last = int(res.times[-1])
     own = [g for g in own if g.cause != LEFT_FOR_GOOD]
     starts = [g.start for g in own if g.end is None or g.end >= last]

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from fretc.logs.base import Gap
     from fretc.live.source import WatchSource
 
-__all__ = ["Absences", "NO_TIME", "RUN_END", "recorded_gaps", "run_gaps"]
+__all__ = ["Absences", "NO_TIME", "recorded_gaps", "run_gaps"]
 
 #: The start of a span opened before any message was used: below every log time.
 NO_TIME = -(2**63)
@@ -88,19 +88,16 @@ class Absences:
         return min(starts) if starts else None
 
 
-#: The end of a gap that lasts to the end of the run (a publisher that left for good), as a
-#: recording of the run carries it: past every tick of the run.
-RUN_END = 2**63 - 1
-
-
 def recorded_gaps(src: WatchSource) -> list[Gap]:
     """The gaps a recording of the watched run carries (``fretc watch --record``), so that
     the audit of the recording judges what the watch judged: :func:`run_gaps`, and per
     topic whose publisher left for good while the run went on, a gap of that topic from the
-    last message used before it left (exclusive; from the start when none was) to
-    :data:`RUN_END`: the audit cuts the clocks reading it there
-    (:func:`fretc.audit.passes.mark_gaps`), as the watch does (``left_for_good``)."""
+    last message used before it left (exclusive; from the start when none was) to the end
+    of the run (:data:`fretc.logs.recorded_gaps.RUN_END`): the audit leaves the variables
+    reading it unknown from there (:func:`fretc.audit.passes.mark_gaps`), as the watch
+    does."""
     from fretc.logs.base import Gap
+    from fretc.logs.recorded_gaps import LEFT_FOR_GOOD, RUN_END
 
     out = run_gaps(src)
     absent = src.absent
@@ -109,7 +106,7 @@ def recorded_gaps(src: WatchSource) -> list[Gap]:
             start = src.left_for_good((topic,))
             if start is not None:
                 out.append(Gap(None if start == NO_TIME else start + 1, RUN_END,
-                               frozenset((topic,)), "publisher_left_for_good"))
+                               frozenset((topic,)), LEFT_FOR_GOOD))
     return out
 
 

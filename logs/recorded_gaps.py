@@ -2,8 +2,8 @@
 
 A watch knows what its recording cannot show: the connection was lost for a while, a
 publisher left (its topic unadvertised) and came back, or left for good while the run went
-on. The watch judges the ticks inside such a gap unknown and cuts the requirements that read
-a topic gone for good at its last message (:mod:`fretc.live.absence`). The recording writes
+on. The watch judges the variables of the topics such a gap may have held unknown inside it
+(to the end of the run for a topic gone for good: :mod:`fretc.live.absence`). The recording writes
 them in an MCAP Metadata record (MCAP spec, "Metadata": a name and a map of strings) named
 :data:`GAPS_METADATA`, whose ``gaps`` entry is a JSON list of ``{"start", "end", "topics",
 "cause"}`` (log times in ns, ``start`` null from the start of the run; ``topics`` null for
@@ -21,9 +21,15 @@ from collections.abc import Sequence
 from fretc.common.problems import DataProblem
 from fretc.logs.base import Gap
 
-__all__ = ["GAPS_METADATA", "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps",
+__all__ = ["GAPS_METADATA", "LEFT_FOR_GOOD", "RUN_END", "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps",
            "first_start", "gap_problems"]
 
+#: The cause of the gap of a topic whose publisher left the run for good while the run went
+#: on: to the end of the run (:data:`RUN_END`), and no cut of the log (the other topics were
+#: read: :func:`fretc.audit.passes.mark_gaps`)
+LEFT_FOR_GOOD = "publisher_left_for_good"
+#: The end of a gap that lasts to the end of the run: past every tick of the run
+RUN_END = 2**63 - 1
 #: The name of the Metadata record of a recording's gaps
 GAPS_METADATA = "fretc.watch_gaps"
 #: The Header library of a watch's recording (only such files carry the record)

@@ -17,7 +17,9 @@ from rich.table import Table
 from rich.text import Text
 
 from fretc.common.textsafe import terminal_text
+from fretc.common.problems import RECORDED_GAPS
 from fretc.common.units import format_offset
+from fretc.logs.recorded_gaps import LEFT_FOR_GOOD, RUN_END
 
 from fretc.audit.verdict import LogAudit, Verdict, exit_code, incomplete
 from fretc.reports.verdicts import format_value
@@ -423,13 +425,7 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
 def gap_text(g: dict, st: int | None) -> str:
     """One gap of the audit JSON (:func:`fretc.audit.gaps.gap_json`) in words: its cause,
     log-time span (s from ``st``), the messages it counts and the topics it may hold."""
-    lo, hi = g.get("start_ns"), g.get("end_ns")
-    if lo is None:
-        span = " from the start"
-    elif hi is None or hi == lo:
-        span = f" at {format_offset(lo, st)}"
-    else:
-        span = f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
+    span = _span(g.get("start_ns"), g.get("end_ns"), st)
     n = g.get("messages")
     count = f"{n} message{'s' if n != 1 else ''} " if n else ""
     topics = g.get("topics")
@@ -438,22 +434,34 @@ def gap_text(g: dict, st: int | None) -> str:
     return f"{count}{g.get('cause') or 'gap'}{span}{on}"
 
 
+def _span(lo: int | None, hi: int | None, st: int | None) -> str:
+    """A log-time span (ns) in words, seconds from ``st``; an end at
+    :data:`fretc.logs.recorded_gaps.RUN_END` (a publisher gone for good) is the end of the
+    run."""
+    end = "the end of the run" if hi is not None and hi >= RUN_END else None
+    if lo is None:
+        return " from the start" + (f" to {end}" if end else "")
+    if end:
+        return f" from {format_offset(lo, st)} to {end}"
+    if hi is None or hi == lo:
+        return f" at {format_offset(lo, st)}"
+    return f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
+
+
 def damage_summary(la: LogAudit) -> str:
     """What damaged a partial log and how it was judged, in one sentence: the damage
     problems (kind and log-time span, seconds from the first tick), the gaps judged as
     unknown ticks or bridged, and where a cut ends what was read."""
     st = la.start_time_ns
     kinds = ("truncated", "chunk_crc", "chunk_corrupt", "corrupt_record", "summary_corrupt",
-             "data_crc", "unknown_channel", "out_of_order", "dropout")
+             "data_crc", "unknown_channel", "out_of_order", "dropout", "connection_gap",
+             "publisher_left", LEFT_FOR_GOOD, RECORDED_GAPS)
     parts = []
     for p in la.problems:
         if p.get("kind") not in kinds:
             continue
         lo, hi = p.get("log_time_ns"), p.get("end_time_ns")
-        span = ""
-        if lo is not None:
-            span = f" at {format_offset(lo, st)}" if hi is None or hi == lo else \
-                f" over {format_offset(lo, st)} .. {format_offset(hi, st)}"
+        span = _span(lo, hi, st) if lo is not None else ""
         parts.append(f"{p['kind']}{span}")
         if len(parts) >= 3:
             break
