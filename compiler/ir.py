@@ -371,8 +371,47 @@ def num(text: str) -> Node:
 
 
 def cmp(op: str, a: Node, b: Node) -> Node:
-    """A comparison ``a op b`` of two terms (``op`` in ``= != < <= > >=``)."""
+    """A comparison ``a op b`` of two terms (``op`` in ``= != < <= > >=``); of two constant
+    terms (numbers, ``-`` and ``+ - * /`` of numbers) folded to its truth value when exact
+    arithmetic and double arithmetic (the monitors') agree on it (``3.0 >= 0`` is TRUE;
+    ``0.1 + 0.2 = 0.3``, true over the reals and false in doubles, is kept)."""
+    x, y = _constant(a), _constant(b)
+    if x is not None and y is not None:
+        exact, double = _CMP[op](x[0], y[0]), _CMP[op](x[1], y[1])
+        if exact == double:
+            return TRUE if exact else FALSE
     return Node("cmp", (a, b), name=op)
+
+
+_CMP = {"=": lambda x, y: x == y, "!=": lambda x, y: x != y, "<": lambda x, y: x < y,
+        "<=": lambda x, y: x <= y, ">": lambda x, y: x > y, ">=": lambda x, y: x >= y}
+
+
+def _constant(n: Node) -> tuple | None:
+    """``(exact Fraction, double)`` of a constant term, None for another (a variable, a
+    function, ``mod``/``^``, a division by 0, a literal that is no finite number)."""
+    import math
+    from fractions import Fraction
+
+    if n.op == "num":
+        try:
+            q = Fraction(n.name)  # type: ignore[arg-type]
+        except (ValueError, ZeroDivisionError, OverflowError):
+            return None
+        d = float(n.name)  # type: ignore[arg-type]
+        return (q, d) if math.isfinite(d) else None
+    if n.op == "neg":
+        x = _constant(n.args[0])
+        return None if x is None else (-x[0], -x[1])
+    if n.op == "arith" and n.name in ("+", "-", "*", "/"):
+        x, y = _constant(n.args[0]), _constant(n.args[1])
+        if x is None or y is None or (n.name == "/" and y[0] == 0):
+            return None
+        ops = {"+": lambda p, q: p + q, "-": lambda p, q: p - q, "*": lambda p, q: p * q,
+               "/": lambda p, q: p / q}[n.name]
+        d = ops(x[1], y[1]) if not (n.name == "/" and y[1] == 0) else math.nan
+        return (ops(x[0], y[0]), d) if math.isfinite(d) else None
+    return None
 
 
 def arith(op: str, a: Node, b: Node) -> Node:

@@ -291,7 +291,15 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
         else:
             ctl_inv = ir.and_(ctl_inv, inv)
     game_pts = [preds.substitute(f, names) for f in pts]
-    atoms = game_atoms(game_pts)
+    try:
+        atoms = game_atoms(game_pts)
+    except Outside as exc:
+        consts = [n for f in game_pts for n in ir.walk(f) if n.op == "cmp"
+                  and not ir.variables(n)]  # (not folded: reals and doubles disagree)
+        why = (f"the comparison of constants {to_smv(consts[0])} is true over the reals "
+               "(FRET's) and false in doubles (a controller's), or the other way round; "
+               "write it without them" if consts else str(exc))
+        raise ShieldError(f"{', '.join(x.compiled.id for x in items)}: {why}") from None
     used = {v for x in items for v in x.variables}
     messages = []
     for g in groups:
