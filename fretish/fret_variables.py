@@ -14,17 +14,27 @@ fretc takes a component's Input and Output variables as the ``@inputs``/``@outpu
 requirements (``fretc check``'s realizability, ``fretc shield``). What it does not take
 (an Internal variable's assignment: fretc reads the variable as a free one; a Mode's
 requirement; an integer type, the numbers being reals) is named by :func:`unused`, never
-silently dropped.
+silently dropped. An Internal variable whose assignment is a literal (FRET's case studies:
+``ap_standby_state`` is ``3.0``) is that constant for the analyses that FRET makes with the
+assignments (realizability: ``fretc check``, ``fretc shield``; :func:`with_fret_constants`);
+the formulas fretc emits keep the variable's name, as FRET's ft and pt do.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from dataclasses import dataclass
 from typing import Any
 
 from fretc.common.errors import FretishFileError
+from fretc.fretish import ast as A
 
-__all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES"]
+__all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES",
+           "with_fret_constants", "constant_of", "names_read"]
+
+#: A Lustre literal (Lustre's ``INT``/``REAL`` constants, ``true``/``false``)
+_LITERAL = re.compile(r"[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?\Z")
 
 #: FRET's ``dataType`` values of whole numbers
 INTEGER_TYPES = frozenset({"integer", "unsigned integer"})
@@ -94,13 +104,77 @@ def declare(entry: Any, declared: list[FretVariable]) -> None:
     entry.outputs = tuple(dict.fromkeys(v.name for v in own if v.kind == "Output"))
 
 
+def constant_of(v: FretVariable) -> A.Expr | None:
+    """The literal an Internal variable's assignment is (a number or ``true``/``false`` as
+    Lustre writes them), else None."""
+    text = v.assignment.strip()
+    if v.kind != "Internal" or not text:
+        return None
+    if text in ("true", "false"):
+        return A.BoolLit(text == "true")
+    if _LITERAL.match(text):
+        return A.NumLit(text.lstrip("+"))
+    return None
+
+
+def with_fret_constants(entry: Any) -> Any:
+    """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
+    of its FRET export whose assignment is a literal replaced by that literal in its
+    requirement's expressions (conditions, response, stop condition, a scope's condition;
+    not a scope's mode name); the entry itself when there is none."""
+    values = {v.name: c for v in entry.variables if (c := constant_of(v)) is not None}
+    req = entry.requirement
+    if not values or req is None or req.freeform:
+        return entry
+
+    def sub(e: Any) -> Any:
+        if e is None:
+            return None
+        if isinstance(e, A.Var):
+            return values.get(e.name, e)
+        if isinstance(e, A.Unary):
+            return dataclasses.replace(e, operand=sub(e.operand))
+        if isinstance(e, A.Binary):
+            return dataclasses.replace(e, left=sub(e.left), right=sub(e.right))
+        if isinstance(e, A.Call):
+            return dataclasses.replace(e, args=tuple(sub(a) for a in e.args))
+        return e
+
+    scope = req.scope
+    if scope.mode is not None and not isinstance(scope.mode, A.Var):
+        scope = dataclasses.replace(scope, mode=sub(scope.mode))
+    cond = dataclasses.replace(req.condition, expr=sub(req.condition.expr), parts=tuple(
+        dataclasses.replace(p, expr=sub(p.expr)) for p in req.condition.parts))
+    new = dataclasses.replace(req, scope=scope, condition=cond, response=sub(req.response),
+                              timing=dataclasses.replace(req.timing, stop=sub(req.timing.stop)))
+    return dataclasses.replace(entry, requirement=new)
+
+
+def names_read(entries: Any) -> set[str]:
+    """The FRET variables the requirements of ``entries`` read as written (before
+    :func:`with_fret_constants`)."""
+    out: set[str] = set()
+    for e in entries:
+        req = e.requirement
+        if req is None or req.freeform:
+            continue
+        for x in (req.scope.mode, req.condition.expr, req.response, req.timing.stop):
+            if x is not None:
+                out.update(n.name for n in A.walk(x) if isinstance(n, A.Var))
+    return out
+
+
 def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str]
            ) -> list[str]:
-    """What the FRET declarations of the variables in ``read`` say that fretc does not use,
-    one sentence per variable (sorted by name)."""
+    """What the FRET declarations of the variables in ``read`` say that fretc does not use
+    (a literal Internal assignment is used: :func:`with_fret_constants`), one sentence per
+    variable (sorted by name)."""
     out = []
     for v in sorted((v for v in variables if v.name in read), key=lambda v: v.name):
-        if v.kind == "Internal" and v.assignment.strip():
+        if constant_of(v) is not None:
+            out.append(f"{v.name}: FRET defines it (Internal) as {v.assignment.strip()}; "
+                       "that constant in the analysis (the emitted formulas keep its name)")
+        elif v.kind == "Internal" and v.assignment.strip():
             out.append(f"{v.name}: FRET defines it (Internal) as {v.assignment.strip()}; "
                        "fretc reads it as a free variable")
         elif v.kind in ("Mode", "Function"):

@@ -25,7 +25,7 @@ from fretc.compiler.ir import Node
 from fretc.compiler.printers import mangle, to_smv
 from fretc.shield.machine import Atom, Machine
 from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
-from fretc.fretish.fret_variables import INTEGER_TYPES, FretVariable, unused
+from fretc.fretish.fret_variables import INTEGER_TYPES, FretVariable
 from fretc.shield.predicates import PredicateBudget, term
 from fretc.shield.synthesis import synthesize
 from fretc.signals.bindings.spec import Bindings
@@ -195,7 +195,6 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
               if v not in read]
     unread += [f"{v}: declared an output, read by no requirement (passed through unchanged)"
                for v in p.outputs if v not in read]
-    unread += unused(_declared(compiled), set(read))
     assert len(periods) <= 1  # (mixed periods were refused above)
     digest = hashlib.sha256("\n".join(
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",

@@ -74,9 +74,14 @@ def test_declarations_of_another_shape_are_refused_naming_the_entry(tmp_path, ba
 def test_check_takes_the_declarations_and_says_what_it_does_not_use(tmp_path):
     got = CliRunner().invoke(main, ["check", _write(tmp_path, EXPORT), "--no-progress"])
     assert got.exit_code == 0, got.output
-    assert "inputs standby, state; outputs STATE, ok;" in got.output, got.output
-    assert "note: ap_standby_state: FRET defines it (Internal) as 3.0; fretc reads it as a " \
-           "free variable" in got.output
+    assert "inputs standby, state; outputs STATE, ok\n" in got.output, got.output
+    # FRET's realizability reads an Internal variable's assignment: a literal is that
+    # constant, so STATE = ap_standby_state is STATE = 3.0 (a comparison with a constant,
+    # the safety game's), not a free proposition
+    assert "note: ap_standby_state: FRET defines it (Internal) as 3.0; that constant in the " \
+           "analysis (the emitted formulas keep its name)" in got.output
+    assert "FSM-002: realizable by a controller over 1 state bit (safety game" in got.output
+    assert "abstraction: (STATE = ap_standby_state)" not in got.output
     assert "note: state: declared integer in FRET; fretc's numbers are reals" in got.output
 
 
@@ -99,3 +104,30 @@ def test_the_shield_takes_the_outputs_and_refuses_whole_numbers_it_would_correct
     doc["variables"][1]["idType"] = "Internal"
     got = CliRunner().invoke(main, ["shield", _write(tmp_path, doc)])
     assert got.exit_code == 2 and "gear is an Internal variable in FRET's export" in got.output
+
+
+def test_a_literal_internal_assignment_is_that_constant_elsewhere_a_free_variable(tmp_path):
+    from fretc.fretish.fret_variables import FretVariable, constant_of, with_fret_constants
+
+    def internal(a: str) -> FretVariable:
+        return FretVariable("c", "k", "Internal", "double", a)
+
+    assert [constant_of(internal(a)) is not None for a in
+            ("3.0", "-2", "+1e3", ".5", "true", "false", "x + 1", "pre(k)", "")] == [
+        True, True, True, True, True, True, False, False, False]
+    doc = {"requirements": [{"reqid": "A", "fulltext":
+                             "in m mode c shall always satisfy (k > x) & (flag | !on)"}],
+           "variables": [{"variable_name": "k", "component_name": "c", "idType": "Internal",
+                          "assignment": "2.5"},
+                         {"variable_name": "flag", "component_name": "c",
+                          "idType": "Internal", "assignment": "false"},
+                         {"variable_name": "m", "component_name": "c", "idType": "Mode",
+                          "modeRequirement": "on"}]}
+    (entry,) = load_requirements([_write(tmp_path, doc)])
+    from fretc.compiler.build import compile_entries
+
+    (before,) = compile_entries([entry])
+    (after,) = compile_entries([with_fret_constants(entry)])
+    assert set(before.formalization.variables) == {"m", "k", "x", "flag", "on"}
+    assert set(after.formalization.variables) == {"m", "x", "on"}  # (a mode is no constant)
+    assert with_fret_constants(entry).text == entry.text

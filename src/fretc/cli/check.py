@@ -213,6 +213,12 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
     if outs is None:
         declared = [n for e in entries for n in e.outputs]
         outs = list(dict.fromkeys(declared)) if declared else None
+    fret_vars = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
+    if fret_vars:  # (FRET's literal Internal assignments are constants for its analyses)
+        from fretc.fretish.fret_variables import names_read, unused, with_fret_constants
+
+        fret_notes = unused(fret_vars, names_read(entries))
+        entries = [with_fret_constants(e) for e in entries]
     compiled = compile_entries(entries)
     judge = None
     if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
@@ -237,13 +243,8 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
         sys.exit(3)
     for e in result.input_errors:
         click.echo(shown(str(e)), err=True)
-    fret_vars = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if fret_vars:  # (a FRET export's declarations fretc does not use: said, not dropped)
-        from fretc.fretish.fret_variables import unused
-
-        read = {v for c in compiled if c.formalization is not None
-                for v in c.formalization.variables}
-        result.notes += unused(fret_vars, read)
+        result.notes += fret_notes
     doc = result.to_json()
     if output:
         Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")

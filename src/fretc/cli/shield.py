@@ -97,6 +97,14 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
     entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
+    fret_notes: list[str] = []
+    if any(e.variables for e in entries):  # (FRET's literal Internal assignments: constants)
+        from fretc.fretish.fret_variables import names_read, unused, with_fret_constants
+
+        fret_vars = list({(v.component, v.name): v for e in entries
+                          for v in e.variables}.values())
+        fret_notes = unused(fret_vars, names_read(entries))
+        entries = [with_fret_constants(e) for e in entries]
     compiled = compile_entries(entries)
     bad = [c for c in compiled if c.error is not None]
     for c in bad:
@@ -130,6 +138,8 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
     click.echo(shown(_summary(shield)))
+    for n in fret_notes:
+        click.echo(shown(f"  note: {n}"))
     code = 0
     if explain:
         from fretc.shield.explain import explain_text
