@@ -31,7 +31,7 @@ from fretc.common.errors import FretishFileError
 from fretc.fretish import ast as A
 
 __all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES",
-           "with_fret_constants", "constant_of", "names_read"]
+           "with_fret_constants", "constant_of", "names_read", "fret_declarations"]
 
 #: A Lustre literal (Lustre's ``INT``/``REAL`` constants, ``true``/``false``)
 _LITERAL = re.compile(r"[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?\Z")
@@ -184,3 +184,15 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
             out.append(f"{v.name}: declared {v.data_type} in FRET; fretc's numbers are "
                        "reals")
     return out
+
+
+def fret_declarations(entries: list) -> tuple[list, list[str]]:
+    """``entries`` with their FRET export's literal Internal assignments as constants
+    (:func:`with_fret_constants`), and the notes of :func:`unused` over the variables they
+    read as written (``fretc check``'s and ``fretc shield``'s); ``entries`` and no note when
+    none comes from an export that declares variables."""
+    declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
+    if not declared:
+        return entries, []
+    notes = unused(declared, names_read(entries))
+    return [with_fret_constants(e) for e in entries], notes

@@ -134,7 +134,6 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
                                allow_partial, extra, stats), json_path)
     if junit_path:
         from fretc.reports.junit import junit_xml  # lazy: only with --junit (start-up time)
-
         Path(junit_path).write_text(junit_xml(results, stats, reqs), encoding="utf-8")
     code = exit_code(results, input_errors, allow_partial, stats)
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):

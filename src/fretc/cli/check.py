@@ -213,12 +213,9 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
     if outs is None:
         declared = [n for e in entries for n in e.outputs]
         outs = list(dict.fromkeys(declared)) if declared else None
-    fret_vars = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
-    if fret_vars:  # (FRET's literal Internal assignments are constants for its analyses)
-        from fretc.fretish.fret_variables import names_read, unused, with_fret_constants
+    from fretc.fretish.fret_variables import fret_declarations
 
-        fret_notes = unused(fret_vars, names_read(entries))
-        entries = [with_fret_constants(e) for e in entries]
+    entries, fret_notes = fret_declarations(entries)  # (a FRET export's literal constants)
     compiled = compile_entries(entries)
     judge = None
     if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
@@ -243,8 +240,7 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
         sys.exit(3)
     for e in result.input_errors:
         click.echo(shown(str(e)), err=True)
-    if fret_vars:  # (a FRET export's declarations fretc does not use: said, not dropped)
-        result.notes += fret_notes
+    result.notes += fret_notes  # (a FRET export's declarations: what is not used is said)
     doc = result.to_json()
     if output:
         Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")

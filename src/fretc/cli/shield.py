@@ -92,19 +92,13 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.common.errors import FretcError
     from fretc.compiler.build import compile_entries
     from fretc.fretish.files import load_requirements
+    from fretc.fretish.fret_variables import fret_declarations
     from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
     entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
-    fret_notes: list[str] = []
-    if any(e.variables for e in entries):  # (FRET's literal Internal assignments: constants)
-        from fretc.fretish.fret_variables import names_read, unused, with_fret_constants
-
-        fret_vars = list({(v.component, v.name): v for e in entries
-                          for v in e.variables}.values())
-        fret_notes = unused(fret_vars, names_read(entries))
-        entries = [with_fret_constants(e) for e in entries]
+    entries, fret_notes = fret_declarations(entries)  # (a FRET export's literal constants)
     compiled = compile_entries(entries)
     bad = [c for c in compiled if c.error is not None]
     for c in bad:
