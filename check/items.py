@@ -85,8 +85,12 @@ def make_item(index: int, compiled: Compiled) -> CheckItem:
                 trig_pt = last
     except SemanticsError:  # pragma: no cover - the requirement itself formalized
         pass
-    return CheckItem(index, compiled, f.ft_inf, f.ft, trig, trig_ft, list(f.variables),
-                     pt, trig_pt, last)
+    def fold(x: Node | None) -> Node | None:  # (a comparison of constants: its truth value)
+        return None if x is None else ir.fold_constants(x)
+
+    return CheckItem(index, compiled, ir.fold_constants(f.ft_inf), ir.fold_constants(f.ft),
+                     fold(trig), fold(trig_ft), list(f.variables), fold(pt), fold(trig_pt),
+                     fold(last))
 
 
 def atom_variables(node: Node) -> set[str]:

@@ -371,16 +371,39 @@ def num(text: str) -> Node:
 
 
 def cmp(op: str, a: Node, b: Node) -> Node:
-    """A comparison ``a op b`` of two terms (``op`` in ``= != < <= > >=``); of two constant
-    terms (numbers, ``-`` and ``+ - * /`` of numbers) folded to its truth value when exact
-    arithmetic and double arithmetic (the monitors') agree on it (``3.0 >= 0`` is TRUE;
-    ``0.1 + 0.2 = 0.3``, true over the reals and false in doubles, is kept)."""
-    x, y = _constant(a), _constant(b)
-    if x is not None and y is not None:
-        exact, double = _CMP[op](x[0], y[0]), _CMP[op](x[1], y[1])
-        if exact == double:
-            return TRUE if exact else FALSE
+    """A comparison ``a op b`` of two terms (``op`` in ``= != < <= > >=``), kept as written
+    (FRET prints ``(3 < 3)``; :func:`fold_constants` folds it for the analyses)."""
     return Node("cmp", (a, b), name=op)
+
+
+def fold_constants(node: Node) -> Node:
+    """``node`` with each comparison of two constant terms (numbers, ``-`` and ``+ - * /``
+    of numbers) replaced by its truth value when exact arithmetic and double arithmetic
+    (the monitors') agree on it, and the formula simplified by the constructors: ``3.0 >=
+    0`` is TRUE; ``0.1 + 0.2 = 0.3``, true over the reals and false in doubles, is kept.
+    For ``fretc check`` and ``fretc shield``, which would read such a comparison as a free
+    proposition; the emitted formulas keep it as FRET prints it."""
+    memo: dict[int, Node] = {}
+
+    def go(n: Node) -> Node:
+        got = memo.get(id(n))
+        if got is not None:
+            return got
+        if n.op == "cmp":
+            x, y = _constant(n.args[0]), _constant(n.args[1])
+            out = n
+            if x is not None and y is not None:
+                exact = _CMP[n.name](x[0], y[0])  # type: ignore[index]
+                if exact == _CMP[n.name](x[1], y[1]):  # type: ignore[index]
+                    out = TRUE if exact else FALSE
+        elif n.args and n.op not in ("arith", "neg", "fn", "ite"):
+            args = tuple(go(a) for a in n.args)
+            out = n if all(a is b for a, b in zip(args, n.args)) else rebuild(n, args)
+        else:
+            out = n
+        memo[id(n)] = out
+        return out
+    return go(node)
 
 
 _CMP = {"=": lambda x, y: x == y, "!=": lambda x, y: x != y, "<": lambda x, y: x < y,

@@ -25,6 +25,7 @@ from typing import Any
 
 from fretc.check.checker import SPOT_MAX_BOUND
 from fretc.check.smt import max_bound
+from fretc.compiler import ir
 from fretc.compiler.printers import to_spot
 from fretc.shield.build import Shield
 from fretc.shield.machine import Machine, evaluate
@@ -159,7 +160,7 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
         aut = _automaton(m, graph)
         proof.sizes.append((ids, aut.num_states(), aut.num_edges(), len(m.nodes)))
         for rid in m.requirements:
-            phi = by_id[rid].formalization.ft_inf
+            phi = ir.fold_constants(by_id[rid].formalization.ft_inf)  # (as the game read it)
             if max_bound([phi]) > SPOT_MAX_BOUND:
                 proof.results[rid] = "unknown"
                 proof.why[rid] = (f"a bound of {max_bound([phi])} ticks; Spot is given up "

@@ -1,5 +1,6 @@
 """A comparison of constants (``3.0 >= 0``, as a FRET export's Internal constants make of
-``level >= 0``) is its truth value in the IR when exact and double arithmetic agree on it:
+``level >= 0``) is its truth value for check and shield (:func:`fretc.compiler.ir.fold_constants`)
+when exact and double arithmetic agree on it:
 ``fretc check`` abstracted it as a free proposition (``ctrl shall always satisfy 3.0 >= 0 &
 ok`` was unrealizable, exit 1) and ``fretc shield`` ended with an internal error. One
 they disagree on (``0.1 + 0.2 = 0.3``) is kept as written, so that the monitors, which
@@ -41,12 +42,15 @@ def test_folded_exactly_when_reals_and_doubles_agree(data):
     op = data.draw(st.sampled_from(OPS))
     cmp = {"=": lambda p, q: p == q, "!=": lambda p, q: p != q, "<": lambda p, q: p < q,
            "<=": lambda p, q: p <= q, ">": lambda p, q: p > q, ">=": lambda p, q: p >= q}[op]
-    got = ir.cmp(op, x, y)
+    kept = ir.cmp(op, x, y)
+    assert kept.op == "cmp"  # (the emitted formulas print it as FRET does)
+    got = ir.fold_constants(ir.and_(ir.ap("p"), kept))
     if cmp(qx, qy) == cmp(dx, dy):
-        assert got == (ir.TRUE if cmp(qx, qy) else ir.FALSE)
+        assert got == (ir.ap("p") if cmp(qx, qy) else ir.FALSE)
     else:
-        assert got.op == "cmp"
-    assert ir.cmp(op, ir.var("v"), y).op == "cmp"  # (a variable: never folded)
+        assert got == ir.and_(ir.ap("p"), kept)
+    free = ir.cmp(op, ir.var("v"), y)  # (a variable: never folded)
+    assert ir.fold_constants(free) is free
 
 
 def test_check_and_shield_read_a_comparison_of_constants_as_its_truth(tmp_path):
