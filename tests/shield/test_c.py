@@ -74,12 +74,18 @@ def test_c_and_python_shields_decide_alike(text, rows):
         _same(shield, rows, run_c(shield, rows, Path(tmp) / "c"))
 
 
+def _runner(tmp_path: Path, response: str, name: str) -> Path:
+    """The C runner (sanitizers on) of the shield of ``whenever a sw shall immediately
+    satisfy RESPONSE``, built in ``tmp_path / name`` with the prefix ``name``."""
+    shield = build_shield(compile_text(f"R1: whenever a sw shall immediately satisfy "
+                                       f"{response}\n", tmp_path))
+    write(render_c(shield, name), tmp_path / name)
+    return build(tmp_path / name, [f"{name}_shield.c", f"{name}_shield_run.c"], "run")
+
+
 def test_the_c_runner_refuses_a_nul_byte_and_names_the_line(tmp_path):
     needs_cc()
-    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy x\n",
-                                       tmp_path))
-    write(render_c(shield, "t"), tmp_path / "c")
-    exe = build(tmp_path / "c", ["t_shield.c", "t_shield_run.c"], "run")
+    exe = _runner(tmp_path, "x", "t")
     head = ",".join(INPUTS + OUTPUTS) + "\n"
     good = "true,false,false,false,false,0.0\n"
     got = subprocess.run([str(exe)], input=(head + good + "tr\0ue,false,false,false,false,0\n"
@@ -88,10 +94,7 @@ def test_the_c_runner_refuses_a_nul_byte_and_names_the_line(tmp_path):
     got = subprocess.run([str(exe)], input=(head + "true,false,false,maybe,false,0\n").encode(),
                          capture_output=True, timeout=60)
     assert got.returncode == 2 and b"line 2: x: not a boolean" in got.stderr
-    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy v < 1\n",
-                                       tmp_path))
-    write(render_c(shield, "u"), tmp_path / "d")
-    exe = build(tmp_path / "d", ["u_shield.c", "u_shield_run.c"], "run")
+    exe = _runner(tmp_path, "v < 1", "u")
     got = subprocess.run([str(exe)], input=(head + "true,false,false,false,false,nan\n").encode(),
                          capture_output=True, timeout=60)
     assert got.returncode == 3 and b"NaN" in got.stderr
@@ -102,10 +105,7 @@ def test_the_c_runner_reads_true_and_false_in_any_case_as_the_audit_does(tmp_pat
     refused them ("not a boolean"). The same rows in any case give the same corrections;
     a word that is neither is still refused, with its line."""
     needs_cc()
-    shield = build_shield(compile_text("R1: whenever a sw shall immediately satisfy x\n",
-                                       tmp_path))
-    write(render_c(shield, "t"), tmp_path / "c")
-    exe = build(tmp_path / "c", ["t_shield.c", "t_shield_run.c"], "run")
+    exe = _runner(tmp_path, "x", "t")
     head = ",".join(INPUTS + OUTPUTS) + "\n"
     rows = ["true,false,false,false,false,0\n", "false,true,true,true,false,1\n",
             "true,true,false,false,true,0.5\n"]
