@@ -8,7 +8,9 @@ constants ``c1 < ... < ck`` cut the real line into the regions ``(-inf, c1)``, `
 ``(c1, c2)``, ... ``(ck, +inf)``, and ``G (region_1 | ... | region_2k+1)`` where each region
 fixes the truth of every comparison of ``x``. This is exact for real-valued variables (it
 gives ``x > 5 -> x > 3``, ``!(x < 2 & x > 3)``, and ``x = 2 -> x <= 2``); integer variables
-are read as reals (``x > 1 & x < 2`` stays satisfiable).
+are read as reals (``x > 1 & x < 2`` stays satisfiable), except where a caller names them
+(``integers``: the shield's outputs FRET declares whole numbers, whose regions are those an
+integer lies in).
 
 Anything else (comparisons of two variables, arithmetic, numeric functions, boolean
 functions, past-time functions inside future formulas) stays an independent proposition and
@@ -133,17 +135,28 @@ class NumericAbstraction:
         """``(atom text, why)`` of every atom left uninterpreted, sorted by text."""
         return sorted(self._uninterpreted.items())
 
-    def _regions(self, name: str, doubles: bool = False
+    def _regions(self, name: str, doubles: bool = False, integer: bool = False
                  ) -> list[tuple[Fraction | float, tuple[bool, ...]]]:
         """``(representative value, truth of each atom)`` per region, distinct truths only.
         ``doubles``: the values are IEEE doubles and each constant the double nearest it, as
         the monitors and the shield compute (``y > 0.1 & y < 0.10000000000000001`` has a
         real between its constants, no double: the two literals are one double); a region
         is kept when a double lies in it (each constant, the double just above it when it
-        is below the next constant, the double just below the first)."""
+        is below the next constant, the double just below the first). ``integer``: the
+        variable takes whole numbers only, and a region is kept when one lies in it
+        (``x > 1 & x < 2`` has none): the truths of the comparisons change only at the
+        constants, so ``ceil(c) - 1``, ``floor(c)`` and ``floor(c) + 1`` of each constant
+        ``c`` (the whole numbers just below it, at or below it, just above it) meet every
+        region a whole number can be in."""
         atoms = self.atoms[name]
         points: list[Fraction | float]
-        if doubles:
+        if integer:
+            ends = sorted({float(_simple(a)[2]) if doubles else _simple(a)[2] for a in atoms})
+            whole = sorted({w for c in ends if not math.isinf(c)
+                            for w in (math.ceil(c) - 1, math.floor(c), math.floor(c) + 1)
+                            }) or [0]
+            points = [float(w) if doubles else Fraction(w) for w in whole]
+        elif doubles:
             fc = sorted({float(_simple(a)[2]) for a in atoms})
             points = [math.nextafter(fc[0], -math.inf)] if fc[0] > -math.inf else []
             for i, d in enumerate(fc):
@@ -188,14 +201,14 @@ class NumericAbstraction:
         disj = self.region(name)
         return disj if disj.op == "true" else ir.G(disj)
 
-    def region(self, name: str, doubles: bool = False) -> Node:
+    def region(self, name: str, doubles: bool = False, integer: bool = False) -> Node:
         """The truth values of one variable's comparisons that one real value (``doubles``:
-        one double, :meth:`_regions`) gives, as a propositional disjunction over them (TRUE
-        when every combination is possible)."""
+        one double; ``integer``: one whole number; :meth:`_regions`) gives, as a
+        propositional disjunction over them (TRUE when every combination is possible)."""
         atoms = self.atoms.get(name, [])
-        if not atoms or (len(atoms) < 2 and not doubles):
+        if not atoms or (len(atoms) < 2 and not doubles and not integer):
             return ir.TRUE
-        regions = self._regions(name, doubles)
+        regions = self._regions(name, doubles, integer)
         if len(regions) == 2 ** len(atoms):
             return ir.TRUE
         disj = ir.FALSE
@@ -204,10 +217,13 @@ class NumericAbstraction:
                                              for a, t in zip(atoms, truth))))
         return disj
 
-    def regions(self, names: Iterable[str], doubles: bool = False) -> Node:
+    def regions(self, names: Iterable[str], doubles: bool = False,
+                integers: Iterable[str] = ()) -> Node:
         """The conjunction of :meth:`region` over ``names`` (a propositional formula that
-        holds at every tick: the game's and the monitors' consistency of numbers)."""
-        return ir.and_all(*(self.region(v, doubles) for v in names))
+        holds at every tick: the game's and the monitors' consistency of numbers), those in
+        ``integers`` taking whole numbers only."""
+        whole = frozenset(integers)
+        return ir.and_all(*(self.region(v, doubles, v in whole) for v in names))
 
     def values(self, truth: dict[Node, bool]) -> dict[str, float]:
         """A value per compared variable giving the comparisons the truth values ``truth``

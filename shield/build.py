@@ -60,7 +60,9 @@ class Shield:
     text, wanted value)`` in the user's order; ``period`` the requirements' tick (seconds,
     None when they declare none); ``messages`` the output variables corrected together (bound
     to one topic); ``numbers`` the variables that are numbers (compared in a formula; the
-    others are booleans); ``read`` the variables some requirement reads; ``digest`` a hash of the requirements and choices (traceability)."""
+    others are booleans); ``read`` the variables some requirement reads; ``digest`` a hash
+    of the requirements and choices (traceability); ``integers`` the outputs of whole
+    numbers."""
 
     name: str
     machines: tuple[Machine, ...]
@@ -75,6 +77,9 @@ class Shield:
     read: frozenset[str] = frozenset()
     notes: tuple[str, ...] = ()
     digest: str = ""
+    #: the outputs that take whole numbers only (FRET's export declares them integers):
+    #: corrected to the whole number nearest the proposal (:func:`fretc.shield.runtime.nearest`)
+    integers: tuple[str, ...] = ()
     stats: dict[str, Any] = field(default_factory=dict, compare=False)
 
     def weights(self, k: int) -> dict[int, tuple[bool, int]]:
@@ -173,9 +178,9 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
             f"{format_period_ms(t)}: {', '.join(ids)}" for t, ids in sorted(periods.items()))
             + ". The shield steps on one tick, and each duration counts ticks of its own "
             "file's period; give the files one @tick_period")
-    _integer_outputs(compiled, outputs)
+    integers = _integer_outputs(compiled, outputs)
     try:
-        p = plan(compiled, inputs, outputs, bindings)
+        p = plan(compiled, inputs, outputs, bindings, integers)
     except PredicateBudget as exc:
         raise ShieldUnknown(f"no shield: {exc}") from None
     machines = []
@@ -200,6 +205,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
                                               f"out:{','.join(p.outputs)}",
                                               f"prefer:{list(prefer)}"]
+        + ([f"integers:{','.join(p.integers)}"] if p.integers else [])
         + [str(m.nodes) for m in machines]
         + [str(m.clusters) for m in machines if m.clusters]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
@@ -207,7 +213,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
                         if len(g.variables) > 1),
                   _numbers(compiled),
-                  read, tuple(p.notes) + tuple(unread), digest)
+                  read, tuple(p.notes) + tuple(unread), digest, integers=tuple(p.integers))
 
 
 def _declared(compiled: Sequence[Any]) -> list[FretVariable]:
@@ -216,21 +222,32 @@ def _declared(compiled: Sequence[Any]) -> list[FretVariable]:
                  for v in getattr(c.entry, "variables", ())}.values())
 
 
-def _integer_outputs(compiled: Sequence[Any], outputs: Sequence[str]) -> None:
-    """Refuse outputs a FRET export declares whole numbers that a requirement compares: the
-    shield corrects numbers as reals (``gear > 2`` from a proposal of 1 gives
-    2.0000000000000004, which an integer actuator takes as 2, violating it).
+def _integer_outputs(compiled: Sequence[Any], outputs: Sequence[str]) -> list[str]:
+    """The outputs a FRET export declares whole numbers that a requirement compares with
+    constants (sorted): the shield corrects them to whole numbers (``gear > 2`` from a
+    proposal of 1 gives 3, not the real 2.0000000000000004, which an integer actuator takes
+    as 2).
 
     Raises:
-        ShieldError: naming them and their declared type."""
+        ShieldError: such an output read otherwise (compared with another variable, in
+            arithmetic or a function): the shield's numbers for those are reals
+            (:mod:`fretc.shield.predicates`), named with their declared type."""
     numbers = _numbers(compiled)
-    ints = sorted({f"{v.name} ({v.data_type})" for v in _declared(compiled)
-                   if v.data_type in INTEGER_TYPES and v.name in outputs and v.name in numbers})
-    if ints:
+    ints = {v.name: v.data_type for v in _declared(compiled)
+            if v.data_type in INTEGER_TYPES and v.name in outputs and v.name in numbers}
+    other: set[str] = set()
+    for c in compiled:
+        for n in ir.walk(c.formalization.ft_inf):
+            if n.op in ("cmp", "arith") and simple_comparison(n) is None:
+                other.update(ir.name_of(x) for x in ir.walk(n) if x.op == "var")
+    bad = sorted(f"{v} ({t})" for v, t in ints.items() if v in other)
+    if bad:
         raise ShieldError("outputs declared whole numbers in the FRET export and compared "
-                          f"with numbers: {', '.join(ints)}. The shield corrects numbers as "
-                          "reals and could give one that is no whole number (gear > 2 from "
-                          "1 gives 2.0000000000000004); not supported")
+                          f"with other variables or in arithmetic: {', '.join(bad)}. The "
+                          "shield gives such comparisons real numbers and could give one "
+                          "that is no whole number; not supported (compare them with "
+                          "constants only)")
+    return sorted(ints)
 
 
 def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
@@ -293,12 +310,19 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
             "the requirements are unrealizable (no controller meets them whatever the inputs "
             f"{', '.join(p.inputs)} do)")
     numeric = NumericAbstraction.of(enforced_pts(comp.items))
-    gaps = [v for v in sorted(numeric.atoms) if numeric.region(v) != numeric.region(v, True)]
+    whole = [v for v in sorted(numeric.atoms) if v in p.integers
+             and numeric.region(v) != numeric.region(v, True, True)]
+    gaps = [v for v in sorted(numeric.atoms) if v not in whole
+            and numeric.region(v) != numeric.region(v, True)]
     if gaps:  # (check decides over the reals, the shield in doubles)
         head += (f", in doubles as the shield decides: the comparisons of {', '.join(gaps)} "
                  "have values between their constants that no double takes (two literals "
                  "that are one double, or no double between them), which fretc check, over "
                  "the reals, counts")
+    if whole:
+        head += (f", in whole numbers as FRET's export declares {', '.join(whole)}: their "
+                 "comparisons have values between their constants that no whole number "
+                 "takes, which fretc check, over the reals, counts")
     unused = [(cl, v) for cl in comp.clusters for v in cl.unwitnessed]
     if unused:
         head += (", in doubles as the shield decides: " + "; ".join(
@@ -321,4 +345,5 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
         rows.append("{" + ", ".join(f"{k}={str(x).lower() if isinstance(x, bool) else x}"
                                     for k, x in row.items()) + "}")
     return (head + "; these inputs, tick by tick, defeat every controller: "
-            + " ".join(rows) + ("" if gaps or unused else " (fretc check gives the same finding)"))
+            + " ".join(rows) + ("" if gaps or whole or unused
+                                else " (fretc check gives the same finding)"))

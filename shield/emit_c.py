@@ -226,6 +226,7 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
            "requirements": [r for m in t["machines"] for r in m["requirements"]],
            "op_map": _C_OPS, "memo_slots": MEMO_SLOTS,
            "numeric": any(m.numeric_outputs for m in machines),
+           "whole": any(v in m.t["integers"] for m in machines for v, _s, _i in m.numeric_outputs),
            "max_atoms": max([1] + [len(i) for m in machines for _v, _s, i in m.numeric_outputs])}
     return {f"{base}_shield.h": env.get_template("shield.h.j2").render(**ctx),
             f"{base}_shield.c": env.get_template("shield.c.j2").render(**ctx),

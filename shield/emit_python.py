@@ -41,6 +41,7 @@ def tables(shield: Shield) -> dict[str, Any]:
             "requirements": list(m.requirements),
             "inputs": [a.spec for a in m.inputs],
             "outputs": [a.spec for a in m.outputs],
+            "integers": [v for v in m.output_variables if v in shield.integers],
             "texts": texts,
             "init": [int(b) for b in m.init],
             "nodes": [tuple(n) for n in m.nodes],

@@ -104,12 +104,16 @@ class Plan:
     components: list[Component]
     monitored: dict[str, str]
     notes: list[str]
+    #: the outputs that take whole numbers only (FRET's export declares them so)
+    integers: list[str] = field(default_factory=list)
 
 
 def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
-         bindings: Bindings | None = None) -> Plan:
+         bindings: Bindings | None = None, integers: Sequence[str] = ()) -> Plan:
     """Sort ``compiled`` (:class:`fretc.compiler.build.Compiled`) into the plan of the module
-    docstring, ``inputs``/``outputs`` the FRET variables of the environment / controller.
+    docstring, ``inputs``/``outputs`` the FRET variables of the environment / controller,
+    ``integers`` the outputs that take whole numbers only (their comparisons' regions those
+    a whole number lies in, :meth:`fretc.check.numeric_abstraction.NumericAbstraction.region`).
 
     Raises:
         ShieldError: a requirement that cannot be enforced, a variable both input and
@@ -156,9 +160,10 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
             raise ShieldError(f"{_where(c)}: {c.id}: {exc}") from None
         enforced.append(item)
     groups = _message_groups(outputs, bindings)
-    components = [_component(items, inputs, groups, bindings, notes)
+    whole = sorted(set(integers) & set(outputs))
+    components = [_component(items, inputs, groups, bindings, notes, whole)
                   for items in _components(enforced, groups)]
-    return Plan(inputs, outputs, components, monitored, notes)
+    return Plan(inputs, outputs, components, monitored, notes, whole)
 
 
 def _probability_bound(c: Any) -> str | None:
@@ -260,7 +265,8 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
 
 
 def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
-               bindings: Bindings | None, notes: list[str]) -> Component:
+               bindings: Bindings | None, notes: list[str], integers: Sequence[str] = ()
+               ) -> Component:
     """A :class:`Component` with its invariants (module docstring).
 
     Raises :class:`fretc.shield.predicates.PredicateBudget` (a cluster too large)."""
@@ -269,7 +275,8 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     # (in doubles, as the shield's forms compute: a region with reals and no double in it
     # is no move of either player)
     env_inv = numeric.regions([v for v in numeric.atoms if v in inputs], doubles=True)
-    ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True)
+    ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True,
+                              integers=integers)
     clusters = preds.clusters(pts, inputs)
     for cl in clusters:
         for values, why in cl.unwitnessed.items():

@@ -148,12 +148,19 @@ def _walk(nodes: list[tuple[int, int, int]], root: int, values: list[int]) -> in
 
 
 def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int],
-            x: float) -> float:
+            x: float, integer: bool = False) -> float:
     """The number nearest ``x`` giving the comparisons ``specs`` (of one variable) the
     values ``truths``: ``x`` when it does, else the nearest end of their region (an open end
-    one float inside). Raises ValueError when no number gives them."""
-    if not math.isnan(x) and all(truth(s, x) == bool(t) for s, t in zip(specs, truths)):
+    one float inside). ``integer`` (a variable of whole numbers): ``x`` when it gives them
+    and is whole or infinite, else the whole number nearest ``x`` that gives them (the
+    smaller of two as near; for a NaN or infinite ``x``, nearest the region's end as above),
+    so that a proposal of 4.4 under ``gear != 4`` is not left for an integer actuator to
+    round to 4. Raises ValueError when no number gives them."""
+    if not math.isnan(x) and all(truth(s, x) == bool(t) for s, t in zip(specs, truths)) \
+            and (not integer or math.isinf(x) or x == math.floor(x)):
         return x
+    if integer:
+        return _nearest_whole(specs, truths, x)
     lo, hi = -math.inf, math.inf
     points: list[float] = []
     for (_v, spec_op, c), t in zip(specs, truths):
@@ -172,6 +179,33 @@ def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int]
             if all(truth(s, w) == bool(t) for s, t in zip(specs, truths)):
                 return w
     raise ValueError("no number gives the comparisons of " + specs[0][0] + " those values")
+
+
+def _nearest_whole(specs: list[tuple[str, str | None, float | None]], truths: list[int],
+                   x: float) -> float:
+    """:func:`nearest` for a variable of whole numbers: the truths change only at the
+    constants, so the nearest whole number giving them is ``floor(x)``, ``ceil(x)``, or
+    ``ceil(c) - 1``, ``floor(c)`` or ``floor(c) + 1`` of a constant ``c``
+    (:meth:`fretc.check.numeric_abstraction.NumericAbstraction.region` keeps the same
+    points); the candidates are compared in doubles, as the C shield does."""
+    near = x
+    if not math.isfinite(x):  # (NaN or infinite: the region's end, as for reals)
+        near = nearest(specs, truths, x)
+    cands = [math.floor(near), math.ceil(near)] if math.isfinite(near) else []
+    for _v, _op, c in specs:
+        assert c is not None  # numbers: comparisons only
+        if math.isfinite(c):
+            cands += [math.ceil(c) - 1, math.floor(c), math.floor(c) + 1]
+    best = None
+    for w in map(float, cands):
+        if all(truth(s, w) == bool(t) for s, t in zip(specs, truths)) and (
+                best is None or abs(w - near) < abs(best - near)
+                or (abs(w - near) == abs(best - near) and w < best)):
+            best = w
+    if best is None:
+        raise ValueError("no whole number gives the comparisons of " + specs[0][0]
+                         + " those values")
+    return best
 
 
 class _Machine:
@@ -194,6 +228,7 @@ class _Machine:
         self.corrections: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
                                tuple[Any, ...]] = {}
         self.variables = list(dict.fromkeys(s[0] for s in self.outs))
+        self.integers = frozenset(t["integers"])
         self.in_tests = [_tester(s) for s in self.ins]
         self.out_tests = [_tester(s) for s in self.outs]
         self.clusters = t.get("clusters", [])
@@ -263,7 +298,7 @@ class _Machine:
         safe, nxt = self.move(ins, prop)
         if safe:
             self.state = nxt
-            return {}, (), ()
+            return (self._whole(proposed, prop) if self.integers else {}), (), ()
         key = (self.state, ins, prop)
         got = self.corrections.get(key)
         if got is None:
@@ -284,8 +319,21 @@ class _Machine:
         for v in kept:
             result[v] = proposed[v]
         for v, specs, truths in near:
-            result[v] = nearest(specs, truths, float(proposed[v]))
+            result[v] = nearest(specs, truths, float(proposed[v]), v in self.integers)
         return result, reasons, changed
+
+    def _whole(self, proposed: dict[str, Any], prop: tuple[int, ...]) -> dict[str, float]:
+        """The whole-number outputs of a proposal kept whole: one that is no whole number
+        becomes the whole number nearest it with the same truths (:func:`nearest`; one
+        exists: the proposal kept ``ctl_ok``, whose regions of such a variable are those a
+        whole number lies in). No comparison changes: not an override."""
+        out: dict[str, float] = {}
+        for v in self.integers:
+            x = float(proposed[v])
+            if math.isfinite(x) and x != math.floor(x):
+                idx = self.atoms_of[v]
+                out[v] = nearest([self.outs[j] for j in idx], [prop[j] for j in idx], x, True)
+        return out
 
     def _plan(self, outs: tuple[int, ...], changed: tuple[str, ...]
               ) -> tuple[dict[str, Any], list[str], list[tuple[Any, ...]]]:

@@ -85,3 +85,31 @@ def test_two_literals_of_one_double_leave_no_value_between():
     numeric = NumericAbstraction.of([ir.G(ir.and_(*atoms))])
     assert (True, True) in _truths(numeric.region("y"), atoms)  # a real between them
     assert (True, True) not in _truths(numeric.region("y", doubles=True), atoms)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(OPS), st.one_of(
+    st.integers(-6, 6).map(str), st.sampled_from(["0.5", "-1.5", "2.25", "1e999", "-1e999",
+                                                  "3.0000000000000001"]))),
+    min_size=1, max_size=4, unique=True))
+def test_integer_regions_are_the_truths_whole_numbers_give(comparisons):
+    """``integer``: the regions are exactly the truths of the whole numbers (as doubles, as
+    the shield computes); ``y > 1 & y < 2`` has none."""
+    atoms = [_atom(op, c) for op, c in comparisons]
+    if len(set(atoms)) < len(atoms):
+        return
+    numeric = NumericAbstraction.of([ir.and_all(*(ir.G(a) for a in atoms))])
+    allowed = _truths(numeric.region("y", doubles=True, integer=True), atoms)
+    consts = [float(c) for _op, c in comparisons]
+    # every region of whole numbers is met between -10 and 10 (the constants are within 7)
+    given_by_integers = {tuple(TEST[op](float(v), c) for (op, _t), c in zip(comparisons, consts))
+                         for v in range(-10, 11)}
+    assert allowed == given_by_integers, (comparisons, allowed ^ given_by_integers)
+
+
+def test_no_whole_number_lies_strictly_between_1_and_2():
+    atoms = [_atom(">", "1"), _atom("<", "2")]
+    numeric = NumericAbstraction.of([ir.G(ir.and_all(*atoms))])
+    assert (True, True) in _truths(numeric.region("y", doubles=True), atoms)
+    assert (True, True) not in _truths(numeric.region("y", doubles=True, integer=True), atoms)
+    assert (True, True) not in _truths(numeric.regions(["y"], True, integers=["y"]), atoms)

@@ -132,6 +132,10 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
     click.echo(shown(_summary(shield)))
+    reals = tuple(f"{v}: declared " for v in shield.integers)  # (those it gives whole)
+    fret_notes = [n.replace("fretc's numbers are reals", "the shield gives it whole numbers")
+                  if n.startswith(reals) and n.endswith("fretc's numbers are reals") else n
+                  for n in fret_notes]
     for n in fret_notes:
         click.echo(shown(f"  note: {n}"))
     code = 0
