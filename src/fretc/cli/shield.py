@@ -132,11 +132,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
     click.echo(shown(_summary(shield)))
-    reals = tuple(f"{v}: declared " for v in shield.integers)  # (those it gives whole)
-    fret_notes = [n.replace("fretc's numbers are reals", "the shield gives it whole numbers")
-                  if n.startswith(reals) and n.endswith("fretc's numbers are reals") else n
-                  for n in fret_notes]
-    for n in fret_notes:
+    for n in _whole_notes(fret_notes, shield.integers):
         click.echo(shown(f"  note: {n}"))
     code = 0
     if explain:
@@ -183,3 +179,11 @@ def _summary(shield) -> str:
     for n in shield.notes:
         lines.append(f"  note: {n}")
     return "\n".join(lines)
+
+
+def _whole_notes(notes: list[str], integers: tuple[str, ...]) -> list[str]:
+    """The notes of a FRET export's declarations, those of the outputs the shield gives
+    whole numbers (``integers``) saying so rather than "fretc's numbers are reals"."""
+    reals, whole = "fretc's numbers are reals", tuple(f"{v}: declared " for v in integers)
+    return [n.replace(reals, "the shield gives it whole numbers")
+            if n.startswith(whole) and n.endswith(reals) else n for n in notes]
