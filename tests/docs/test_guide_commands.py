@@ -107,6 +107,9 @@ def _workspace(folder: Path) -> dict:
 # runs, generated test suites run): in the slow part of the suite, as one test (a
 # parametrized slow test keeps a sample of its cases in the default run)
 SLOW_PAGES = ("falsify.md", "statistics.md", "testing.md")
+#: seconds a command of a slow page may take (the falsify page's search of 200 simulator
+#: runs takes 300 to 400 s of CPU on the 2-core CI machine), of another page
+SLOW_TIMEOUT, TIMEOUT = 900, 300
 
 
 def _run_page(page: Path, folder: Path) -> None:
@@ -118,7 +121,8 @@ def _run_page(page: Path, folder: Path) -> None:
             continue
         for command, code in block.commands:
             got = subprocess.run(["bash", "-c", command], cwd=folder, env=env,
-                                 capture_output=True, text=True, timeout=300)
+                                 capture_output=True, text=True,
+                                 timeout=SLOW_TIMEOUT if page.name in SLOW_PAGES else TIMEOUT)
             where = f"{page.relative_to(ROOT)}:{block.line}: {command}"
             assert "Traceback (most recent call last)" not in got.stderr, \
                 (where, got.stderr[-2000:])
