@@ -231,10 +231,17 @@ def _integer_outputs(compiled: Sequence[Any], outputs: Sequence[str]) -> list[st
     Raises:
         ShieldError: such an output read otherwise (compared with another variable, in
             arithmetic or a function): the shield's numbers for those are reals
-            (:mod:`fretc.shield.predicates`), named with their declared type."""
+            (:mod:`fretc.shield.predicates`); or declared ``unsigned integer`` (its sign is
+            not kept); named with their declared type."""
     numbers = _numbers(compiled)
     ints = {v.name: v.data_type for v in _declared(compiled)
             if v.data_type in INTEGER_TYPES and v.name in outputs and v.name in numbers}
+    unsigned = sorted(f"{v} ({t})" for v, t in ints.items() if t != "integer")
+    if unsigned:
+        raise ShieldError("outputs declared unsigned whole numbers in the FRET export and "
+                          f"compared with numbers: {', '.join(unsigned)}. The shield keeps "
+                          "whole numbers but not their sign (it could correct one to -1); "
+                          "not supported (declare them integer and require >= 0)")
     other: set[str] = set()
     for c in compiled:
         for n in ir.walk(c.formalization.ft_inf):

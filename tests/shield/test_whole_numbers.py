@@ -126,6 +126,12 @@ def test_a_whole_number_output_compared_with_another_variable_is_refused(tmp_pat
     got = CliRunner().invoke(main, ["shield", str(_export(tmp_path, GEAR))])
     assert got.exit_code == 0, got.output
     assert "gear: declared integer in FRET; the shield gives it whole numbers" in got.output
+    unsigned = [dict(v, dataType="unsigned integer") if v["variable_name"] == "gear" else v
+                for v in VARIABLES]
+    got = CliRunner().invoke(main, ["shield", str(_export(tmp_path, GEAR, unsigned))])
+    assert got.exit_code == 2, got.output
+    assert "unsigned whole numbers in the FRET export and compared with numbers: gear " \
+           "(unsigned integer)" in got.output
 
 
 @settings(max_examples=4, deadline=None)
