@@ -13,8 +13,8 @@ What is inverted (anything else raises :class:`NotWritable`, nothing is guessed)
   value, tried in turn (an operand's fields must not be set to two values);
 * a comparison of an invertible numeric term with a constant (either side): any value on
   the wanted side of the constant (a :class:`Range`), written as :func:`point` unless
-  another variable gives the field a value on that side; ``=``/``!=`` with a string constant (true
-  only for ``!=``: another string);
+  another variable gives the field a value on that side (``!=``: either side, above first);
+  ``=``/``!=`` with a string constant (true only for ``!=``: another string);
 * ``age(/topic) OP c``: whether the topic is silent (no message for more than / at least
   ``c`` seconds) or fresh at the tick; :mod:`fretc.testing.mcap_log` schedules the
   topic's messages from it.
@@ -245,6 +245,14 @@ def _comparison(e: BinOp, target: Any) -> list[Assignment]:
     if isinstance(term, FuncCall) and term.func == "age":
         return _age(term.args[0], op, float(c), target)
     nonneg = isinstance(term, FuncCall) and term.func == "abs"
+    if (op if target else _NEGATE[op]) == "!=":  # either side of c (one point, c + margin,
+        # missed x != 4 & x < 3.5: the shield took such outputs for no message's)
+        out: list[Assignment] = []
+        for side in (">", "<"):
+            x = point(side, float(c), True, nonneg)
+            if x is not None:
+                out += alternatives(term, _range(side, float(c), x))
+        return out[:MAX_ALTERNATIVES]
     x = point(op, float(c), target, nonneg)
     if x is None:
         return []

@@ -86,13 +86,14 @@ _CANDS = lambda c1, c2: [c1, c2, c1 + margin(c1), c1 - margin(c1), c2 + margin(c
                          c2 - margin(c2), (c1 + c2) / 2, 0.0, 1e9, -1e9]
 
 
-@given(st.sampled_from(OPS[:4]), st.sampled_from([0.0, 0.9, -2.5, 1e-3, 42.0]), st.booleans(),
-       st.sampled_from(OPS[:4]), st.sampled_from([0.0, 0.9, -2.5, 1e-3, 42.0]), st.booleans(),
+@given(st.sampled_from(OPS), st.sampled_from([0.0, 0.9, -2.5, 1e-3, 42.0]), st.booleans(),
+       st.sampled_from(OPS), st.sampled_from([0.0, 0.9, -2.5, 1e-3, 42.0]), st.booleans(),
        st.booleans())
 def test_two_comparisons_of_one_field(op1, c1, t1, op2, c2, t2, absolute):
     """Two variables comparing one field with constants: solve finds a value exactly when
     some value satisfies both (brute force over the thresholds, their margins and their
-    midpoint), and the value it writes does."""
+    midpoint), and the value it writes does. (``x != 4`` true was the one point 4.4, so
+    ``x != 4 & x < 3.5`` had no value: the shield took such outputs for no message's.)"""
     term = "abs(/a.x)" if absolute else "/a.x"
     b = _bindings({"p": f"{term} {op1} {c1!r}", "q": f"{term} {op2} {c2!r}"})
     got, _, _ = solve([("p", b.variables["p"].ast, t1), ("q", b.variables["q"].ast, t2)])
