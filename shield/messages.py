@@ -141,7 +141,8 @@ class MessageShield:
             proposal.setdefault(v, False)
         before = self.runtime.state
         d = self.runtime.step(inputs, proposal)
-        msgs = self._order(self._messages(d, props, now_ns), before, inputs, now_ns)
+        msgs = self._order(self._messages(d, props, now_ns, proposal), before, inputs,
+                           now_ns)
         self.published.update(msgs)
         return d, msgs
 
@@ -185,14 +186,17 @@ class MessageShield:
                 out[v] = self.bindings.variables[v].evaluate(st)
         return out
 
-    def _messages(self, d: Decision, props: dict[str, Any], now_ns: int
-                  ) -> list[tuple[str, Any]]:
+    def _messages(self, d: Decision, props: dict[str, Any], now_ns: int,
+                  proposal: dict[str, Any]) -> list[tuple[str, Any]]:
         out: dict[str, Any] = {}
         for m, g in self.groups:
             atoms = [m.outs[j] for j in g["atoms"]]
             truths = [truth(s, d.outputs[s[0]]) for s in atoms]
             key = sum(int(t) << i for i, t in enumerate(truths))
-            changed = any(m.texts[j] in d.changed for j in g["atoms"])
+            # (a value the shield changed without an atom: a whole-number output's proposal
+            # that was no whole number, runtime._Machine._whole)
+            changed = any(m.texts[j] in d.changed for j in g["atoms"]) or any(
+                d.outputs.get(s[0]) != proposal.get(s[0]) for s in atoms if s[1] is not None)
             fields = g["fields"].get(key)
             for topic in g["topics"]:
                 base = props[topic]
@@ -206,9 +210,9 @@ class MessageShield:
                     continue
                 if fields is None:
                     raise RuntimeError(f"no message of {topic} gives the decided values")
-                msg = _overlay(base, topic, fields)
+                msg = self._overlaid(base, topic, fields, d, m, g)
                 if not self._gives(m, g, {**props, topic: msg}, truths, now_ns):
-                    msg = _overlay(self.make(topic), topic, fields)
+                    msg = self._overlaid(self.make(topic), topic, fields, d, m, g)
                     if not self._gives(m, g, {**props, topic: msg}, truths, now_ns):
                         raise RuntimeError(f"the message made for {topic} does not give the "
                                            "decided values")
@@ -229,6 +233,16 @@ class MessageShield:
             if not _write_number(msg, topic, self.bindings.variables[v].ast, float(value)):
                 return None
         return msg
+
+    def _overlaid(self, base: Any, topic: str, fields: Any, d: Decision, m: Any,
+                  g: dict[str, Any]) -> Any:
+        """``base`` with the fields of the message the bindings give for the group's
+        valuation, then the decided numbers written over them where their bindings take
+        them (:meth:`_decided`): the witness's numbers are the decision's only when the
+        runtime took them (a whole-number output takes a whole number instead)."""
+        msg = _overlay(base, topic, fields)
+        decided = self._decided(msg, topic, d, m, g)
+        return msg if decided is None else decided
 
     def _gives(self, m: Any, g: dict[str, Any], msgs: dict[str, Any], truths: list[bool],
                now_ns: int) -> bool:

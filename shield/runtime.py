@@ -364,7 +364,8 @@ class _Machine:
             if self.outs[idx[0]][1] is None:
                 result[v] = bool(outs[idx[0]])
             elif v in fixed and all(truth(self.outs[j], fixed[v]) == bool(outs[j])
-                                    for j in idx):
+                                    for j in idx) and (v not in self.integers
+                                                       or fixed[v] == math.floor(fixed[v])):
                 result[v] = fixed[v]
             else:
                 near.append((v, [self.outs[j] for j in idx], [outs[j] for j in idx]))

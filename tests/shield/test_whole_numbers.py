@@ -169,3 +169,82 @@ def test_the_shield_refuses_no_whole_number_output_it_cannot_take(tmp_path):
         build_shield(compile_entries(load_requirements([_export(tmp_path, [
             ("R1", "ctrl shall always satisfy absInt(gear) > 2 & ready")])])),
             ["go", "slow"], ["gear", "ready"], fork=False)
+
+
+def test_the_ros_2_node_publishes_the_whole_number_of_a_kept_proposal(tmp_path):
+    """The node forwarded a proposal whose atoms the shield kept as it came: the whole
+    number the shield made of 4.4 never reached the topic."""
+    from types import SimpleNamespace
+
+    from fretc.shield.messages import MessageShield
+    from fretc.signals.bindings.files import load_bindings
+
+    b = tmp_path / "gear.bindings.toml"
+    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\ngo = "/go.data"\n'
+                 'slow = "/slow.data"\ngear = "/gear_cmd.data"\nready = "/ready_cmd.data"\n',
+                 encoding="utf-8")
+    bindings = load_bindings(b)
+    compiled = compile_entries(load_requirements([_export(tmp_path, GEAR)]))
+    shield = build_shield(compiled, ["go", "slow"], ["gear", "ready"], bindings=bindings,
+                          fork=False)
+    node = MessageShield(ShieldRuntime(tables(shield)), bindings,
+                         {"/gear_cmd": "/gear_prop", "/ready_cmd": "/ready_prop"},
+                         lambda topic: SimpleNamespace(data=0))
+    for k, (gear, want) in enumerate([(3.0, 3.0), (4.4, 5.0), (1.0, 3.0), (2.5, 3.0)]):
+        t = (k + 1) * 100_000_000
+        node.hear("/go.data".split(".")[0], SimpleNamespace(data=k == 2), t)
+        node.hear("/slow", SimpleNamespace(data=False), t)
+        node.hear("/gear_prop", SimpleNamespace(data=gear), t)
+        node.hear("/ready_prop", SimpleNamespace(data=True), t)
+        d, msgs = node.tick(t)
+        assert d.outputs["gear"] == want and dict(msgs)["/gear_cmd"].data == want, (gear, d)
+
+
+def test_a_whole_number_output_beside_a_corrected_boolean_of_its_message_stays_whole(tmp_path):
+    """``gear`` and ``ready`` in one message: an override of ``ready`` takes the group's
+    message numbers (a real witness such as 3.15); a whole-number output takes them only
+    when whole, else the nearest whole number (Python and C alike)."""
+    from types import SimpleNamespace
+
+    from fretc.shield.messages import MessageShield
+    from fretc.signals.bindings.files import load_bindings
+
+    b = tmp_path / "gear.bindings.toml"
+    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\ngo = "/go.data"\n'
+                 'slow = "/slow.data"\ngear = "/cmd.gear"\nready = "/cmd.ready"\n',
+                 encoding="utf-8")
+    bindings = load_bindings(b)
+    compiled = compile_entries(load_requirements([_export(tmp_path, GEAR)]))
+    shield = build_shield(compiled, ["go", "slow"], ["gear", "ready"], bindings=bindings,
+                          fork=False)
+    node = MessageShield(ShieldRuntime(tables(shield)), bindings, {"/cmd": "/prop"},
+                         lambda topic: SimpleNamespace(gear=0.0, ready=False))
+    rows = [(True, True, 1.0, False), (False, True, 3.3, False), (False, False, 4.0, False),
+            (True, False, 2.5, True), (False, True, 9.0, False)]
+    got = []
+    for k, (go, slow, gear, ready) in enumerate(rows):
+        t = (k + 1) * 100_000_000
+        node.hear("/go", SimpleNamespace(data=go), t)
+        node.hear("/slow", SimpleNamespace(data=slow), t)
+        node.hear("/prop", SimpleNamespace(gear=gear, ready=ready), t)
+        d, msgs = node.tick(t)
+        out = dict(msgs)["/cmd"]
+        assert out.gear == d.outputs["gear"] == int(out.gear) and out.ready, (k, d, out)
+        got.append(d.outputs["gear"])
+    if not _has_cc():
+        return
+    write(render_c(shield, "g"), tmp_path / "c")
+    exe = build(tmp_path / "c", ["g_shield.c", "g_shield_run.c"], "run")
+    text = "go,slow,gear,ready\n" + "".join(f"{str(g).lower()},{str(s).lower()},{x!r},"
+                                             f"{str(r).lower()}\n" for g, s, x, r in rows)
+    run = subprocess.run([str(exe)], input=text, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert [float(c["gear"]) for c in csv.DictReader(io.StringIO(run.stdout))] == got
+
+
+def _has_cc() -> bool:
+    try:
+        needs_cc()
+    except pytest.skip.Exception:
+        return False
+    return True
