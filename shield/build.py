@@ -336,6 +336,13 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
             " & ".join(to_smv(a) if t else f"!{to_smv(a)}" for a, t in zip(cl.atoms, v))
             + f" ({cl.unwitnessed[v]})" for cl, v in unused)
             + ": never chosen, where fretc check, over the reals, counts it")
+    restricted = [g for g in comp.messages if g.valuations
+                  and len(g.valuations) < 2 ** len(g.valuations[0][0])]
+    if restricted:  # (check reads no bindings)
+        head += (", with the outputs as messages give them: valuations of " + "; ".join(
+            f"{', '.join(g.variables)} that no message of {', '.join(g.topics)} gives"
+            for g in restricted) + " are never chosen (the bindings), which fretc check "
+            "does not read")
     if not ans.get("inputs"):
         return head + "; " + (ans.get("note") or "the environment must react to the outputs")
     atoms = {to_smv(a): a for name in numeric.atoms for a in numeric.atoms[name]}
@@ -352,5 +359,5 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
         rows.append("{" + ", ".join(f"{k}={str(x).lower() if isinstance(x, bool) else x}"
                                     for k, x in row.items()) + "}")
     return (head + "; these inputs, tick by tick, defeat every controller: "
-            + " ".join(rows) + ("" if gaps or whole or unused
+            + " ".join(rows) + ("" if gaps or whole or unused or restricted
                                 else " (fretc check gives the same finding)"))

@@ -395,3 +395,21 @@ def test_an_output_folder_that_cannot_be_made_is_a_usage_error(tmp_path):
     got = shield_cli(*SAFE_ROS, "--emit", "python", "-o", "/dev/null")
     assert got.exit_code == 2, got.output
     assert "cannot write the forms into -o /dev/null" in got.output
+
+
+def test_unrealizable_only_as_messages_says_so_and_not_that_check_agrees(tmp_path):
+    """``a = /cmd.x > 0`` and ``b = /cmd.x < 0``: no message gives ``a & b``, so the shield
+    with the bindings has no controller where ``fretc check`` (no bindings) finds one; the
+    refusal said "fretc check gives the same finding"."""
+    (tmp_path / "m.fret").write_text(
+        "@inputs go\n@outputs a, b\nR1: whenever go ctrl shall immediately satisfy a & b\n")
+    (tmp_path / "m.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\ngo = "/go.data"\na = "/cmd.x > 0"\n'
+        'b = "/cmd.x < 0"\n')
+    got = CliRunner().invoke(main, ["shield", str(tmp_path / "m.fret"), "-b",
+                                    str(tmp_path / "m.bindings.toml")])
+    assert got.exit_code == 2, got.output
+    assert "valuations of a, b that no message of /cmd gives are never chosen" in got.output
+    assert "fretc check gives the same finding" not in got.output
+    got = CliRunner().invoke(main, ["shield", str(tmp_path / "m.fret")])
+    assert got.exit_code == 0, got.output
