@@ -413,8 +413,10 @@ class ShieldRuntime:
         """One tick: ``inputs`` maps every input variable to its value (bool, or a number
         for a numeric one), ``proposed`` every output variable to the controller's value.
         Returns the :class:`Decision`: the proposal unchanged when it keeps every
-        requirement winnable, else the nearest safe outputs and the requirements that forced
-        them. Output variables no enforced requirement reads are passed through.
+        requirement winnable (but for a whole-number output's proposal that is no whole
+        number: the nearest whole number with its truths, not an override), else the nearest
+        safe outputs and the requirements that forced them. Output variables no enforced
+        requirement reads are passed through.
 
         Raises:
             KeyError: a variable is missing. ValueError: a numeric value is NaN.
