@@ -36,14 +36,16 @@ def binding_files(config: AuditConfig) -> list[tuple[Path, Bindings]]:
     return parts
 
 
-def load_audit_bindings(config: AuditConfig) -> tuple[Bindings | None, list[str]]:
+def load_audit_bindings(config: AuditConfig, files: list[tuple[Path, Bindings]] | None = None
+                        ) -> tuple[Bindings | None, list[str]]:
     """(the merged bindings with the command line's overrides, or None when there are none;
-    the binding files read).
+    the binding files read: ``files``, :func:`binding_files`' read of them, else read here).
 
     Raises:
         AuditInputError: unreadable or conflicting binding files, bad tick options.
     """
-    files = binding_files(config)
+    if files is None:
+        files = binding_files(config)
     parts = [b for _f, b in files]
     b = merge_bindings(parts) if parts else None
     if config.tick_period is not None and config.tick_topic is not None:

@@ -57,25 +57,26 @@ def load_plan(config: AuditConfig) -> AuditPlan:
             this: it becomes that requirement's ``error``), bad or conflicting bindings, bad
             options.
     """
+    files = binding_files(config)  # (read once: each read parses every expression)
     if config.select_logs:
-        split = _plan_per_log(config)
+        split = _plan_per_log(config, files)
         if split is not None:
             return split
-    return _build_plan(config)
+    return _build_plan(config, files)
 
 
-def _with_msg_path(config: AuditConfig) -> AuditConfig:
-    """``config`` with the ``[types] msg_path`` folders of its binding files after the
-    ``--msg-path`` ones."""
-    extra = tuple(p for _f, b in binding_files(config) for p in b.msg_path)
+def _with_msg_path(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> AuditConfig:
+    """``config`` with the ``[types] msg_path`` folders of its binding files ``files``
+    after the ``--msg-path`` ones."""
+    extra = tuple(p for _f, b in files for p in b.msg_path)
     if not extra:
         return config
     return dataclasses.replace(config, msg_path=tuple(config.msg_path) + extra)
 
 
-def _with_constants(entries: list, config: AuditConfig) -> list:
+def _with_constants(entries: list, files: list[tuple[Path, Bindings]]) -> list:
     """``entries`` whose named durations not declared in their own file take the value of
-    the binding files' ``[constants]`` (:mod:`fretc.fretish.constants`).
+    the binding files' ``[constants]`` (``files``; :mod:`fretc.fretish.constants`).
 
     Raises:
         AuditInputError: one constant given two values by two binding files.
@@ -90,7 +91,7 @@ def _with_constants(entries: list, config: AuditConfig) -> list:
 
     constants: dict = {}
     where: dict = {}
-    for f, b in binding_files(config):
+    for f, b in files:
         for name, value in b.constants.items():
             if name in constants and constants[name] != value:
                 raise AuditInputError(f"[constants] {name} is {' '.join(constants[name])} in "
@@ -102,13 +103,14 @@ def _with_constants(entries: list, config: AuditConfig) -> list:
     return entries
 
 
-def _build_plan(config: AuditConfig) -> AuditPlan:
-    """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection)."""
-    config = _with_msg_path(config)
-    bindings, binding_files = load_audit_bindings(config)
+def _build_plan(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> AuditPlan:
+    """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection;
+    ``files``: its binding files, read)."""
+    config = _with_msg_path(config, files)
+    bindings, binding_files = load_audit_bindings(config, files)
     notes: list[str] = []
     unformalized: list = []
-    entries = _with_constants(_read_requirements(config, notes, unformalized), config)
+    entries = _with_constants(_read_requirements(config, notes, unformalized), files)
     period, nominal = _bindings_periods(bindings)
     plans: list[RequirementPlan] = []
     to_compile = []
@@ -297,13 +299,13 @@ def _unused_bindings(bindings: Bindings | None, plans: list[RequirementPlan]) ->
     return warnings
 
 
-def _plan_per_log(config: AuditConfig) -> AuditPlan | None:
+def _plan_per_log(config: AuditConfig, parts: list[tuple[Path, Bindings]]
+                  ) -> AuditPlan | None:
     """Binding files that select their logs (``[logs]``, :class:`fretc.signals.bindings.LogSelector`):
     one plan per selecting file (merged with the files that select nothing, which apply to
     every log), each compiled with its own tick. A requirement whose variables are bound
     only by another selecting file is not applicable to that file's logs (it is left out of
     their verdicts); one bound nowhere stays an error. None when no file selects logs."""
-    parts = binding_files(config)
     selecting = [(f, b) for f, b in parts if b.logs is not None]
     if not selecting:
         return None
