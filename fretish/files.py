@@ -55,6 +55,7 @@ from typing import NoReturn
 from fretc.common.errors import FretishError, FretishFileError, FretishSyntaxError
 from fretc.fretish.parser import parse
 from fretc.fretish.entry import Fraction, Requirement, RequirementEntry  # entry's imports
+from fretc.fretish.entry_cache import cached_entries
 from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
 from fretc.fretish.directives import name_tokens, parse_tick_period, split_names
 from fretc.fretish.fret_variables import declare, fret_variables
@@ -125,7 +126,8 @@ def _read_text(path: str) -> str:
 
 
 def _load_fret(path: str) -> list[RequirementEntry]:
-    return _FretReader(path).read()
+    text = _read_text(path)
+    return cached_entries(str(path), text, lambda: _FretReader(path, text).read())
 
 
 class _FretReader:

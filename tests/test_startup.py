@@ -1,5 +1,5 @@
-"""Start-up of ``fretc`` as a user sees it: the first run stores the parser's tables in
-fretc's cache folder and later runs read them, with the same output (a damaged entry or
+"""Start-up of ``fretc`` as a user sees it: the first run stores the parser's tables and the
+file's parsed entries in fretc's cache folder and later runs read them, with the same output (a damaged entry or
 no cache included); :class:`fretc.common.errors.Where`'s defaults, ``repr`` and ``str``.
 (That ``fretc FILE --emit ltl`` loads no Spot, numpy, Jinja2 or MCAP code is checked by
 ``tests/test_layering.py``.)"""
@@ -45,9 +45,12 @@ def test_first_run_writes_the_parser_cache_and_later_runs_read_it(tmp_path):
     first = _fretc([fret, "--emit", "ltl", "--json"], cache_dir)
     assert first.returncode == 0, first.stderr
     (entry,) = (cache_dir / "lark").iterdir()
-    stamp = entry.stat().st_mtime_ns
+    (kept,) = (cache_dir / "fret-entries").iterdir()  # the file's entries, parsed
+    stamps = entry.stat().st_mtime_ns, kept.stat().st_mtime_ns
     again = _fretc([fret, "--emit", "ltl", "--json"], cache_dir)
-    assert again.stdout == first.stdout and entry.stat().st_mtime_ns == stamp
+    assert again.stdout == first.stdout
+    assert (entry.stat().st_mtime_ns, kept.stat().st_mtime_ns) == stamps
+    kept.unlink()  # (the file parsed again, so that the parser's tables are read)
     entry.write_bytes(entry.read_bytes()[:200])   # damaged: rebuilt, written again
     damaged = _fretc([fret, "--emit", "ltl", "--json"], cache_dir)
     assert damaged.stdout == first.stdout and damaged.stderr == ""

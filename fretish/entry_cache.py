@@ -1,0 +1,106 @@
+"""The requirement entries of a ``.fret`` file kept on disk between runs, as Python keeps a
+module's bytecode in ``__pycache__``.
+
+Every command reads its requirement files first; parsing them (Lark's LALR tables loaded,
+the contextual lexer's scanners compiled, each sentence parsed and checked) costs about
+0.15 s of CPU at each start of ``fretc audit`` on three requirements, most of it the same
+work each time. An unchanged file read by unchanged code gives the same entries, so
+:func:`cached_entries` keeps them: one entry a file name (``<cache>/fret-entries/<key>``,
+replaced by the next read of that name, so the cache does not grow with each edit), holding
+the SHA-256 of what the entries were made from (the file's text and name, the text of every
+module that reads or parses it, Lark's and Python's versions) and of its payload (the
+entries, pickled). An entry for another text or other code, damaged, or of another layout
+is a miss: the file is parsed again (:mod:`fretc.common.cache`: the cache changes speed,
+never output). A file with a sentence that does not parse is never kept (its errors are
+made again, with their carets, at each read). ``FRETC_CACHE_DIR=""`` turns it off.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+import sys
+from collections.abc import Callable
+
+import lark
+
+from fretc.common import cache
+from fretc.fretish.entry import RequirementEntry
+
+__all__ = ["cached_entries", "code_key"]
+
+KIND = "fret-entries"
+_MAGIC = b"fretc fret-entries 1\n"
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_COMMON = os.path.join(os.path.dirname(_HERE), "common")
+#: what else a .fret file's entries depend on (units of durations, the error classes)
+_OTHER = ("units.py", "errors.py")
+_CODE_KEY: str | None = None
+
+
+def code_key() -> str:
+    """A key of the code that makes a ``.fret`` file's entries: the text of every module of
+    :mod:`fretc.fretish` and its grammar, of :mod:`fretc.common.units` and
+    :mod:`fretc.common.errors`, and Lark's and Python's versions (computed once a process)."""
+    global _CODE_KEY
+    if _CODE_KEY is None:
+        names = sorted(n for n in os.listdir(_HERE) if n.endswith((".py", ".lark")))
+        texts = []
+        for path in [os.path.join(_HERE, n) for n in names] + [
+                os.path.join(_COMMON, n) for n in _OTHER]:
+            with open(path, encoding="utf-8") as f:
+                texts.append(f"{os.path.basename(path)}\n{f.read()}")
+        _CODE_KEY = cache.key_of(KIND, lark.__version__, sys.version, *texts)
+    return _CODE_KEY
+
+
+def _name(source: str) -> str:
+    return cache.key_of(KIND, source)
+
+
+def _made_from(source: str, text: str) -> bytes:
+    return hashlib.sha256("\x00".join((code_key(), source, text)).encode(
+        "utf-8", "surrogatepass")).digest()
+
+
+def _load(source: str, text: str) -> list[RequirementEntry] | None:
+    data = cache.read_bytes(KIND, _name(source))
+    if data is None or not data.startswith(_MAGIC):
+        return None
+    head = len(_MAGIC)
+    made_from, digest = data[head:head + 32], data[head + 32:head + 64]
+    payload = data[head + 64:]
+    if made_from != _made_from(source, text) or hashlib.sha256(payload).digest() != digest:
+        return None
+    try:
+        got = pickle.loads(payload)
+    except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
+        return None
+    if not (isinstance(got, list) and all(isinstance(e, RequirementEntry) for e in got)):
+        return None
+    return got
+
+
+def _store(source: str, text: str, entries: list[RequirementEntry]) -> bool:
+    try:
+        payload = pickle.dumps(entries, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # noqa: BLE001 - an entry that does not pickle is not kept
+        return False
+    data = b"".join((_MAGIC, _made_from(source, text), hashlib.sha256(payload).digest(),
+                     payload))
+    return cache.write_bytes(KIND, _name(source), data)
+
+
+def cached_entries(source: str, text: str, read: Callable[[], list[RequirementEntry]]
+                   ) -> list[RequirementEntry]:
+    """The entries of the ``.fret`` file named ``source`` whose text is ``text``: those kept
+    from an earlier ``read()`` of the same name, text and code, else ``read()``'s (kept when
+    every sentence parsed). Raises what ``read`` raises."""
+    got = _load(source, text)
+    if got is not None:
+        return got
+    entries = read()
+    if all(e.error is None for e in entries):
+        _store(source, text, entries)
+    return entries
