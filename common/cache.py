@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # pathlib is imported lazily (start-up time)
     from pathlib import Path
 
 __all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "remove", "entry_path",
-           "read_file", "write_file", "lark_cache_file"]
+           "read_file", "write_file", "lark_cache_file", "read_sealed", "write_sealed", "digest"]
 
 
 def _root() -> str | None:
@@ -100,6 +100,37 @@ def write_bytes(kind: str, name: str, data: bytes) -> bool:
     when the cache folder cannot be created or written."""
     path = _entry(kind, name)
     return path is not None and write_file(path, data)
+
+
+def read_sealed(kind: str, name: str, magic: bytes, made_from: bytes) -> bytes | None:
+    """The payload of an entry written by :func:`write_sealed` with the same ``magic`` (the
+    layout's first line) and ``made_from`` (a 32-byte SHA-256 of what the payload was made
+    from), or None: no entry, another layout, made from something else, or a payload whose
+    own SHA-256 does not match (damaged on disk)."""
+    data = read_bytes(kind, name)
+    if data is None or not data.startswith(magic):
+        return None
+    head = len(magic)
+    payload = data[head + 64:]
+    if data[head:head + 32] != made_from or data[head + 32:head + 64] != digest(payload):
+        return None
+    return payload
+
+
+def write_sealed(kind: str, name: str, magic: bytes, made_from: bytes, payload: bytes) -> bool:
+    """Store ``payload`` as entry ``name`` of ``kind``: ``magic``, ``made_from`` (32 bytes),
+    the payload's SHA-256, the payload (read back by :func:`read_sealed`). An entry per
+    name, replaced by the next write: the folder does not grow with each edit of what it was
+    made from. False when the cache is off or not writable (never raises for that)."""
+    return write_bytes(kind, name, b"".join((magic, made_from, digest(payload), payload)))
+
+
+def digest(data: bytes) -> bytes:
+    """The SHA-256 of ``data`` (32 bytes; FIPS 180-4), without loading OpenSSL
+    (:func:`_sha256`)."""
+    h = _sha256()
+    h.update(data)
+    return h.digest()
 
 
 def remove(kind: str, name: str) -> bool:

@@ -20,7 +20,6 @@ again (:mod:`fretc.common.cache`: the cache changes speed, never output).
 
 from __future__ import annotations
 
-import hashlib
 import importlib.util
 import marshal
 import types
@@ -38,20 +37,15 @@ def _name(module_name: str) -> str:
 
 
 def _text_digest(text: str) -> bytes:
-    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).digest()
+    return cache.digest(text.encode("utf-8", "surrogatepass"))
 
 
 def load(module_name: str, text: str
          ) -> tuple[types.CodeType, tuple[types.CodeType, ...]] | None:
     """The code objects :func:`store` kept for ``text`` (the module's, then one per shape
     in ``_SHAPES`` order), or None: no entry, an entry for another text, or damaged."""
-    data = cache.read_bytes(KIND, _name(module_name))
-    if data is None or not data.startswith(_MAGIC):
-        return None
-    head = len(_MAGIC)
-    text_digest, payload_digest = data[head:head + 32], data[head + 32:head + 64]
-    payload = data[head + 64:]
-    if text_digest != _text_digest(text) or hashlib.sha256(payload).digest() != payload_digest:
+    payload = cache.read_sealed(KIND, _name(module_name), _MAGIC, _text_digest(text))
+    if payload is None:
         return None
     try:
         module_code, shapes = marshal.loads(payload)
@@ -68,6 +62,5 @@ def store(module_name: str, text: str, module_code: types.CodeType,
     """Keep the code objects compiled from ``text`` (the module's, then its shapes' in
     ``_SHAPES`` order) for the next :func:`load`; False when the cache is off or not
     writable (never raises for that)."""
-    payload = marshal.dumps((module_code, tuple(shapes)))
-    data = b"".join((_MAGIC, _text_digest(text), hashlib.sha256(payload).digest(), payload))
-    return cache.write_bytes(KIND, _name(module_name), data)
+    return cache.write_sealed(KIND, _name(module_name), _MAGIC, _text_digest(text),
+                              marshal.dumps((module_code, tuple(shapes))))

@@ -17,7 +17,6 @@ made again, with their carets, at each read). ``FRETC_CACHE_DIR=""`` turns it of
 
 from __future__ import annotations
 
-import hashlib
 import os
 import pickle
 import sys
@@ -60,18 +59,13 @@ def _name(source: str) -> str:
 
 
 def _made_from(source: str, text: str) -> bytes:
-    return hashlib.sha256("\x00".join((code_key(), source, text)).encode(
-        "utf-8", "surrogatepass")).digest()
+    return cache.digest("\x00".join((code_key(), source, text)).encode(
+        "utf-8", "surrogatepass"))
 
 
 def _load(source: str, text: str) -> list[RequirementEntry] | None:
-    data = cache.read_bytes(KIND, _name(source))
-    if data is None or not data.startswith(_MAGIC):
-        return None
-    head = len(_MAGIC)
-    made_from, digest = data[head:head + 32], data[head + 32:head + 64]
-    payload = data[head + 64:]
-    if made_from != _made_from(source, text) or hashlib.sha256(payload).digest() != digest:
+    payload = cache.read_sealed(KIND, _name(source), _MAGIC, _made_from(source, text))
+    if payload is None:
         return None
     try:
         got = pickle.loads(payload)
@@ -87,9 +81,7 @@ def _store(source: str, text: str, entries: list[RequirementEntry]) -> bool:
         payload = pickle.dumps(entries, protocol=pickle.HIGHEST_PROTOCOL)
     except Exception:  # noqa: BLE001 - an entry that does not pickle is not kept
         return False
-    data = b"".join((_MAGIC, _made_from(source, text), hashlib.sha256(payload).digest(),
-                     payload))
-    return cache.write_bytes(KIND, _name(source), data)
+    return cache.write_sealed(KIND, _name(source), _MAGIC, _made_from(source, text), payload)
 
 
 def cached_entries(source: str, text: str, read: Callable[[], list[RequirementEntry]]
