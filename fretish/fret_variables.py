@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import re
 from dataclasses import dataclass
+from collections.abc import Collection
 from typing import Any
 
 from fretc.common.errors import FretishFileError
@@ -164,11 +165,12 @@ def names_read(entries: Any) -> set[str]:
     return out
 
 
-def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str]
-           ) -> list[str]:
+def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str],
+           whole: Collection[str] = ()) -> list[str]:
     """What the FRET declarations of the variables in ``read`` say that fretc does not use
     (a literal Internal assignment is used: :func:`with_fret_constants`), one sentence per
-    variable (sorted by name)."""
+    variable (sorted by name); ``whole``: the variables the shield gives whole numbers (its
+    outputs declared ``integer``), whose type is used."""
     out = []
     for v in sorted((v for v in variables if v.name in read), key=lambda v: v.name):
         if constant_of(v) is not None:
@@ -181,18 +183,20 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
             out.append(f"{v.name}: declared a {v.kind} in FRET; fretc reads it as a free "
                        "variable")
         if v.data_type in INTEGER_TYPES:
-            out.append(f"{v.name}: declared {v.data_type} in FRET; fretc's numbers are "
-                       "reals")
+            out.append(f"{v.name}: declared {v.data_type} in FRET; "
+                       + ("the shield gives it whole numbers" if v.name in whole
+                          else "fretc's numbers are reals"))
     return out
 
 
-def fret_declarations(entries: list) -> tuple[list, list[str]]:
+def fret_declarations(entries: list, whole: Collection[str] = ()
+                      ) -> tuple[list, list[str]]:
     """``entries`` with their FRET export's literal Internal assignments as constants
-    (:func:`with_fret_constants`), and the notes of :func:`unused` over the variables they
-    read as written (``fretc check``'s and ``fretc shield``'s); ``entries`` and no note when
-    none comes from an export that declares variables."""
+    (:func:`with_fret_constants`), and the notes of :func:`unused` (``whole`` as there) over
+    the variables they read as written (``fretc check``'s and ``fretc shield``'s);
+    ``entries`` and no note when none comes from an export that declares variables."""
     declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if not declared:
         return entries, []
-    notes = unused(declared, names_read(entries))
+    notes = unused(declared, names_read(entries), whole)
     return [with_fret_constants(e) for e in entries], notes

@@ -97,8 +97,8 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
-    entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
-    entries, fret_notes = fret_declarations(entries)  # (a FRET export's literal constants)
+    as_written = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
+    entries, _notes = fret_declarations(as_written)  # (a FRET export's literal constants)
     compiled = compile_entries(entries)
     bad = [c for c in compiled if c.error is not None]
     for c in bad:
@@ -132,7 +132,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
     click.echo(shown(_summary(shield)))
-    for n in _whole_notes(fret_notes, shield.integers):
+    for n in fret_declarations(as_written, shield.integers)[1]:  # (the notes of the integers)
         click.echo(shown(f"  note: {n}"))
     code = 0
     if explain:
@@ -180,10 +180,3 @@ def _summary(shield) -> str:
         lines.append(f"  note: {n}")
     return "\n".join(lines)
 
-
-def _whole_notes(notes: list[str], integers: tuple[str, ...]) -> list[str]:
-    """The notes of a FRET export's declarations, those of the outputs the shield gives
-    whole numbers (``integers``) saying so rather than "fretc's numbers are reals"."""
-    reals, whole = "fretc's numbers are reals", tuple(f"{v}: declared " for v in integers)
-    return [n.replace(reals, "the shield gives it whole numbers")
-            if n.startswith(whole) and n.endswith(reals) else n for n in notes]
