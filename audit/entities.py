@@ -25,6 +25,7 @@ import numpy as np
 
 from fretc.audit.entity_batch import batch_verdicts, batchable, nan_traces
 from fretc.audit.entity_columns import EntityColumns, column as _column
+from fretc.audit.entity_kinds import entity_kind
 from fretc.audit.entity_read import ENTITIES, EntityClock, read_entities
 from fretc.audit.finalize import finalize
 from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
@@ -253,8 +254,6 @@ class _Entities:
 
 
 def _key_topics(bindings: Bindings, name: str) -> frozenset[str]:
-    from fretc.audit.entity_read import entity_kind
-
     return entity_kind(bindings, name).binding.topics
 
 
@@ -317,14 +316,14 @@ class _Judge:
             out += rest
         return [summary_verdict(r, ents.path, out, summary)] + out
 
-    def _new(self, i: int) -> Verdict:
-        """Entity ``i``'s verdict, not yet judged."""
+    def _new(self, i: int, **judged: Any) -> Verdict:
+        """Entity ``i``'s verdict, with the fields ``judged`` (none: not yet judged)."""
         r, table = self.r, self.c.table
         value = table.keys[i]
         return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
                        notes=[*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): "
                               f"first seen at log time {table.first[i]}, last at "
-                              f"{table.last[i]}"])
+                              f"{table.last[i]}", *judged.pop("notes", ())], **judged)
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
@@ -375,15 +374,13 @@ class _Judge:
         for e, i in enumerate(judged):
             if not holds_[e] or e in slow:
                 continue
-            v = out[i] = self._new(i)
             a, m = starts[e], counts[e]
-            v.verdict = "vacuous" if vacuous_[e] else "satisfied"
-            v.engine = "vectorized"
-            v.ticks_evaluated = m
-            v.first_tick_ns, v.last_tick_ns = times[a], times[a + m - 1]
             status, tick = ltl3[e]
-            v.ltl3 = Ltl3(status, tick, times[a + tick] if tick is not None else None)
-            v.notes.append(BATCH_NOTE)
+            out[i] = self._new(i, verdict="vacuous" if vacuous_[e] else "satisfied",
+                               engine="vectorized", ticks_evaluated=m, first_tick_ns=times[a],
+                               last_tick_ns=times[a + m - 1], notes=(BATCH_NOTE,),
+                               ltl3=Ltl3(status, tick,
+                                         times[a + tick] if tick is not None else None))
         return out
 
     def _own_columns(self, judged: list[int], i0s: np.ndarray, firsts: np.ndarray,
@@ -479,7 +476,8 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     it: satisfied; one violates it: violated, with the earliest violation's evidence,
     whatever is left unjudged, which its notes name), named ``r.id``; ``summary`` is
     :func:`summary_note`'s."""
-    verdict = next(k for k in _PRECEDENCE if any(v.verdict == k for v in out))
+    kinds = {x.verdict for x in out}
+    verdict = next(k for k in _PRECEDENCE if k in kinds)
     v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
     bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]
     if verdict == "violated" and bad:

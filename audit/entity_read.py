@@ -35,23 +35,26 @@ aggregations over messages (``mean(x, 2s)``, ``any_of_messages``) of an entity a
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
 from typing import Any, cast
 
 import numpy as np
 
-from fretc.common.problems import BindingError, SignalError
-from fretc.common.streams import base_topic, is_stream, log_topics
-from fretc.logs.selective import install as install_selective
+from fretc.audit import entity_runs
 from fretc.audit.entity_columns import HeldRows, RowBlock, floats
-from fretc.audit.entity_rows import key_reader, row_fields, row_values
-from fretc.audit.entity_runs import TickRuns, grid_run
+from fretc.audit.entity_kinds import (EntityKind, EntityTable, check_stream, clock_topics,
+                                      entity_kind, key_items, own_bindings)
+from fretc.audit.entity_rows import (item_values, key_reader, reads_items_of, row_fields,
+                                     row_values)
+from fretc.audit.entity_runs import TickRuns, grid_run, lean_messages
+from fretc.common.problems import SignalError
+from fretc.common.streams import base_topic, log_topics
+from fretc.logs.selective import install as install_selective
 from fretc.signals.bindings import Bindings
-from fretc.signals.bindings.binding import Binding, compile_expression
+from fretc.signals.bindings.binding import Binding
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
-from fretc.signals.bindings.extract import Valid, by_entity
+from fretc.signals.bindings.extract import by_entity
 from fretc.signals.bindings.spec import grid_end, grid_start
 from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
 from fretc.signals.columns import Irregular
@@ -74,78 +77,6 @@ VECTORIZED = True
 #: Whether a clock of a tick period without plain variables records its ticks as runs
 #: (:mod:`fretc.audit.entity_runs`); False: tick by tick (the reference, for tests)
 LEAN = True
-
-
-@dataclass
-class EntityKind:
-    """One ``[entities]`` name: ``key`` its key path, compiled (``binding``) and read from
-    ``topic`` (a topic, or a stream); ``stream``: one key per message (each entity a stream
-    of its own messages), else an array of keys per message (the entities present)."""
-
-    name: str
-    key: str
-    matching: str | None
-    binding: Binding
-    topic: str
-    stream: bool
-
-
-def entity_kind(bindings: Bindings, name: str) -> EntityKind:
-    """The :class:`EntityKind` of ``[entities]`` name ``name``.
-
-    Raises:
-        BindingError: the key is not a field path of one topic."""
-    key, matching = bindings.entities[name]
-    b = compile_expression(f"entity_{name}", key, source=f"{bindings.source} [entities]")
-    if len(b.topics) != 1 or not b.fields:
-        raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
-                           "field path of one topic, e.g. \"/tracks.tracks[:].id\"")
-    topic = next(iter(b.topics))
-    return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields))
-
-
-def _items(v: Any) -> list:
-    """The values a key path read from one message (an array, or one value)."""
-    if isinstance(v, Valid):
-        data = v.data if v.mask is None else v.data[v.mask]
-        return np.asarray(data).tolist()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, (list, tuple)):
-        return list(v)
-    return [v]
-
-
-@dataclass
-class EntityTable:
-    """The entities of one clock as the read meets them: key -> index (first appearance
-    order), their first and last message times (ns, the clock's time base), the first error
-    evaluating one, and the present values (array keys: per tick) or the messages' values
-    (one-value keys: per message)."""
-
-    index: dict[Any, int] = field(default_factory=dict)
-    keys: list[Any] = field(default_factory=list)
-    first: list[int] = field(default_factory=list)
-    last: list[int] = field(default_factory=list)
-    errors: dict[int, SignalError] = field(default_factory=dict)
-    #: (entity, tick number or message time, values) in the order met
-    rows: list[tuple[int, int, tuple]] = field(default_factory=list)
-    cut: bool = False  # more entities than the bound met
-
-    def see(self, key: Any, t: int, bound: int) -> int | None:
-        """Entity ``key`` carried by a message at ``t``: its index (None past ``bound``)."""
-        i = self.index.get(key)
-        if i is None:
-            if len(self.keys) >= bound:
-                self.cut = True
-                return None
-            i = self.index[key] = len(self.keys)
-            self.keys.append(key)
-            self.first.append(t)
-            self.last.append(t)
-        else:
-            self.last[i] = t
-        return i
 
 
 class EntityClock(Clock):
@@ -177,9 +108,15 @@ class EntityClock(Clock):
         #: vectorized: id of a held key message -> its rows (set by its batch), and the
         #: held messages waiting for their batch ``(message, entities, rows)``
         self.msg_rows: dict[int, HeldRows] = {}
-        self.batch: list[tuple[Any, list[int], HeldRows]] = []
+        self.batch: list[tuple[Any, list[int], HeldRows, list | None]] = []
         self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
         self.read_keys = key_reader(kind.binding) if vectorized else None
+        #: the rows of a held message are its items (:func:`~fretc.audit.entity_rows.
+        #: reads_items_of`), and the items of the held message when its entities were
+        #: read from them in order (:func:`fretc.audit.entity_runs.lean_messages`)
+        self.items_rows = self.rows_of is not None and reads_items_of(self.rows_of,
+                                                                       self.read_keys)
+        self.held_items: list | None = None
         self.key_topics = frozenset({base_topic(kind.topic), kind.topic})
         #: a tick period and nothing evaluated per tick but the rows of the held key
         #: message: the ticks are recorded as runs in :attr:`runs`, none yielded
@@ -189,6 +126,8 @@ class EntityClock(Clock):
                      and not self.sliding and not self.stateful and self.state.tf is None
                      and self.rows_of is not None)
         self.runs = TickRuns(self.period or 0)
+        #: lean: the key's messages not yet recorded ``(t, log time, data)``
+        self.waiting: list[tuple[int, int, Any]] = []
 
     def push(self, topic: str, t: int, log_time: int, data: Any) -> Iterator[Tick]:
         """Hold message ``data`` of ``topic`` at ``t`` after yielding the clock's ticks due
@@ -207,8 +146,21 @@ class EntityClock(Clock):
 
     def _lean_push(self, topic: str, t: int, log_time: int, data: Any) -> None:
         """:meth:`push` of a clock of a tick period without plain variables
-        (:attr:`lean`): the ticks due before the message recorded as one run in
-        :attr:`runs` (:func:`fretc.audit.entity_runs.grid_run`), none yielded."""
+        (:attr:`lean`): the key's messages wait to be recorded by batch
+        (:func:`fretc.audit.entity_runs.lean_messages`: the ticks between them as runs in
+        :attr:`runs`, none yielded)."""
+        if topic == self.kind.topic and topic in self.fed and entity_runs.LEAN_BATCH:
+            self.waiting.append((t, log_time, data))
+            if len(self.waiting) >= entity_runs.LEAN_BATCH:
+                lean_messages(self)
+            return
+        if self.waiting:
+            lean_messages(self)
+        self._lean_one(topic, t, log_time, data)
+
+    def _lean_one(self, topic: str, t: int, log_time: int, data: Any) -> None:
+        """One message of :meth:`_lean_push`: the ticks due before it as one run
+        (:func:`fretc.audit.entity_runs.grid_run`), then held."""
         if topic in self.fed:
             if self.next_grid is None:
                 self.next_grid = grid_start(t, self.period)  # type: ignore[arg-type]
@@ -216,6 +168,7 @@ class EntityClock(Clock):
                 grid_run(self, t)
             st = self.state  # (held as Clock.push holds it: nothing of a variable to keep)
             st.msgs[topic], st.times[topic], self.log_times[topic] = data, t, log_time
+            self.held_items = None
             self.missing.discard(topic)
             if topic in self.counted:
                 self.since[topic] = self.since.get(topic, 0) + 1
@@ -227,6 +180,16 @@ class EntityClock(Clock):
 
     def _key_message(self, topic: str, t: int, data: Any) -> None:
         """Record the entities a message of the key's topic carries."""
+        got = self._key_entities(topic, t, data)
+        if not self.kind.stream:
+            self._held_entities(data, got)
+
+    def _key_entities(self, topic: str, t: int, data: Any) -> list[int]:
+        """The entities (indexes) a message of the key's topic at ``t`` carries, recorded
+        in the table (one-value keys: with the entity's values).
+
+        Raises:
+            SignalError: its keys cannot be read."""
         kind = self.kind
         values = self.read_keys(data) if self.read_keys is not None else None
         if values is None:
@@ -237,13 +200,11 @@ class EntityClock(Clock):
         if matching is None and not kind.stream:  # (a float key equal to an int finds it)
             found = list(map(index.get, values))
             if None in found:
-                got = self._new_keys(values, found, t)
-            else:
-                got = cast("list[int]", found)
-                for k in got:
-                    last[k] = t
-            self._held_entities(data, got)
-            return
+                return self._new_keys(values, found, t)
+            got = cast("list[int]", found)
+            for k in got:
+                last[k] = t
+            return got
         got = []
         for x in values:
             if isinstance(x, float) and x.is_integer():
@@ -260,8 +221,7 @@ class EntityClock(Clock):
             got.append(i)
             if kind.stream:
                 self._stream_values(i, x, t, data)
-        if not kind.stream:
-            self._held_entities(data, got)
+        return got
 
     def _new_keys(self, values: list, found: list, t: int) -> list[int]:
         """The entities of keys ``values`` of a message at ``t`` (``found``: their index
@@ -301,7 +261,7 @@ class EntityClock(Clock):
         st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
         st.values.clear()
         try:
-            values = _items(kind.binding._scalar(st))  # type: ignore[misc]
+            values = key_items(kind.binding._scalar(st))  # type: ignore[misc]
         except Exception as exc:  # noqa: BLE001 - an extractor's error, named with the message
             raise SignalError(f"[entities] {kind.name}: {kind.key} cannot be read from the "
                               f"message of {kind.topic} at log time {t}: {exc}") from None
@@ -356,14 +316,22 @@ class EntityClock(Clock):
                 if got:  # the held message's rows, shared by the ticks that hold it
                     rows = self.msg_rows.get(id(held))  # type: ignore[assignment]
                     if rows is None:
-                        rows = self.msg_rows[id(held)] = HeldRows()
-                        self.batch.append((held, list(got), rows))
-                        if len(self.batch) >= BATCH:
-                            self.flush()
+                        rows = self.msg_rows[id(held)] = self.held_rows(held, got,
+                                                                        self.held_items)
             else:
                 for i in got:
                     rows.append((i, self._values(st, self.table.keys[i], i)))
         return absent, rows
+
+    def held_rows(self, held: Any, got: list[int], items: list | None = None) -> HeldRows:
+        """The rows of held key message ``held`` (carrying the entities ``got``, read in
+        order from its ``items`` when given), to be evaluated with its batch (:meth:`flush`
+        at :data:`BATCH` messages)."""
+        rows = HeldRows()
+        self.batch.append((held, list(got), rows, items))
+        if len(self.batch) >= BATCH:
+            self.flush()
+        return rows
 
     def flush(self) -> None:
         """Evaluate the rows of the held messages waiting for it (vectorized: one batch;
@@ -373,28 +341,45 @@ class EntityClock(Clock):
         if not batch:
             return
         keys = self.table.keys
-        ents = [i for _m, e, _r in batch for i in e]
+        ents = [i for b in batch for i in b[1]]
+        offsets = np.cumsum([0] + [len(b[1]) for b in batch], dtype=np.int64)
         try:
-            vals = row_values(self.own, self.rows_of,  # type: ignore[arg-type]
-                              [(m, [keys[i] for i in e]) for m, e, _r in batch])
+            items = self._items_in_order(batch, ents, offsets)
+            vals = (item_values(self.own, self.rows_of, items)  # type: ignore[arg-type]
+                    if items is not None else
+                    row_values(self.own, self.rows_of,  # type: ignore[arg-type]
+                               [(b[0], [keys[i] for i in b[1]]) for b in batch]))
             self.evaluated[0] += len(ents)
         except (Irregular, SignalError):
             st, topic, got = EvalState(), self.kind.topic, []
-            for m, e, _r in batch:
+            for m, e, *_r in batch:
                 st.msgs[topic] = m
                 got += [self._values(st, keys[i], i) for i in e]
             vals = [floats([v[j] for v in got]) for j in range(len(self.own))]
             self.evaluated[1] += len(ents)
-        block = RowBlock(np.array(ents, np.int64),
-                         np.cumsum([0] + [len(e) for _m, e, _r in batch], dtype=np.int64),
+        block = RowBlock(np.array(ents, np.int64), offsets,
                          {b.name: v for b, v in zip(self.own, vals)})
-        for q, (_m, _e, held) in enumerate(batch):
-            held.block, held.at = block, q
+        for q, b in enumerate(batch):
+            b[2].block, b[2].at = block, q
+
+    def _items_in_order(self, batch: list, ents: list[int], offsets: np.ndarray
+                        ) -> list | None:
+        """The items the rows of ``batch`` read, laid end to end, when each message's
+        entities were read in order from its items (:func:`fretc.audit.entity_runs.
+        lean_messages`) and none repeats in it; else None."""
+        if not self.items_rows or any(b[3] is None for b in batch):
+            return None
+        e = np.array(ents, np.int64)
+        q = np.repeat(np.arange(len(batch), dtype=np.int64), np.diff(offsets))
+        if len(np.unique(q * (len(self.table.keys) + 1) + e)) != len(e):
+            return None  # (a key repeated in a message: rows of several items)
+        return [x for b in batch for x in b[3]]
 
     def finish(self) -> Iterator[Tick]:
         """The ticks left at the end of the log, the last rows evaluated (iterate to the
         end)."""
         if self.lean:
+            lean_messages(self)
             if self.last is not None:
                 grid_run(self, grid_end(self.last, self.period) + 1)  # type: ignore[arg-type]
             self.s.missing_topics = sorted(self.missing)
@@ -422,47 +407,6 @@ class EntityClock(Clock):
         return tuple(out)
 
 
-def _own_bindings(bindings: Bindings, name: str, names: list[str]
-                  ) -> tuple[list[Binding], list[Binding], EntityParam]:
-    """The plain and the per-entity variables of ``names`` (the latter compiled once, the
-    entity's key an :class:`EntityParam`).
-
-    Raises:
-        BindingError: a per-entity variable that aggregates messages or reads a window."""
-    param = EntityParam(name)
-    every = bindings.for_entity({name: param}).variables
-    plain = [bindings.variables[n] for n in names if n in bindings.variables]
-    own = [every[n] for n in names if n in bindings.per_entity]
-    for b in own:
-        if b.aggregate is not None or b.window is not None or b.tick_window is not None:
-            raise BindingError(str(bindings.source), f"{b.name}: a per-entity variable reads "
-                               f"the held messages (its entity ${name}), not an aggregation "
-                               f"or a window over messages ({b.expr})")
-    return plain, own, param
-
-
-def _check_stream(kind: EntityKind, own: list[Binding], source: str) -> None:
-    """A key of one value per message: the per-entity variables read the entity's own
-    messages only (its stream, ``"PARM"{Name==$param}.Value``).
-
-    Raises:
-        BindingError: one reads another topic."""
-    for b in own:
-        if log_topics(b.topics) != {base_topic(kind.topic)}:
-            raise BindingError(source, f"{b.name}: the entities {kind.name} are the messages "
-                               f"of {base_topic(kind.topic)} ({kind.key}: one per message); a "
-                               f"per-entity variable reads that topic only ({b.expr})")
-
-
-def _topics_of(kind: EntityKind, plain: list[Binding], own: list[Binding]) -> set[str]:
-    """The topics (and streams) the clock holds: its plain variables' and the per-entity
-    variables' (an entity's stream stands for its topic), and the key's."""
-    out = {t for b in plain for t in b.topics}
-    for b in own:
-        out |= {base_topic(t) if is_stream(t) else t for t in b.topics}
-    return out | {kind.topic if not is_stream(kind.topic) else base_topic(kind.topic)}
-
-
 def read_entities(source: Any, bindings: Bindings,
                   clocks: dict[Any, tuple[str, list[str]]], bound: int
                   ) -> tuple[dict[Any, EntityClock], dict[Any, list[Tick]], dict[Any, Any]]:
@@ -476,7 +420,7 @@ def read_entities(source: Any, bindings: Bindings,
         its ``runs``), key -> the error that stopped it.
 
     Raises:
-        BindingError: a per-entity variable the read cannot take (:func:`_own_bindings`),
+        BindingError: a per-entity variable the read cannot take (:func:`~fretc.audit.entity_kinds.own_bindings`),
             or a bad key.
         SignalError: a topic missing from the log.
     """
@@ -487,10 +431,10 @@ def read_entities(source: Any, bindings: Bindings,
     every: list[Binding] = []
     for key, (name, names) in clocks.items():
         kind = entity_kind(bindings, name)
-        plain, own, param = _own_bindings(bindings, name, names)
+        plain, own, param = own_bindings(bindings, name, names)
         if kind.stream:
-            _check_stream(kind, own, str(bindings.source))
-        topics = _topics_of(kind, plain, own)
+            check_stream(kind, own, str(bindings.source))
+        topics = clock_topics(kind, plain, own)
         sub = Bindings({b.name: b for b in plain}, bindings.tick, bindings.time_base,
                        bindings.header_lag_ns, bindings.source)
         s = Sampling(source, sub)

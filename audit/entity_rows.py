@@ -23,7 +23,7 @@ uses the reference).
 from __future__ import annotations
 
 import operator
-from collections.abc import Callable
+from itertools import chain
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,7 +36,8 @@ from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Field,
 from fretc.signals.bindings.extract import Valid, by_entity, normalize_scalar
 from fretc.signals.columns import Irregular
 
-__all__ = ["ItemField", "row_fields", "row_values", "RowColumns", "key_reader"]
+__all__ = ["ItemField", "row_fields", "row_values", "item_values", "reads_items_of", "RowColumns",
+           "key_reader", "KeyReader"]
 
 #: The functions a row-wise variable may call (reductions and arithmetic over the items).
 _FUNCS = frozenset({"abs", "min", "max", "mean", "norm", "any", "all", "count", "len", "sqrt"})
@@ -107,12 +108,9 @@ def row_fields(own: list[Binding], topic: str) -> dict[Field, ItemField] | None:
 _EXACT = 2 ** 53
 
 
-def key_reader(b: Binding) -> Callable[[Any], list | None] | None:
-    """For an entity key ``/topic.array[:].field`` (names only around one full slice), a
-    reader of a message's keys that gives what the key's binding gives
-    (``entity_read._items`` of its value) when the keys are all strings or all finite
-    numbers, and None otherwise (the caller then evaluates the binding: bools, infinities,
-    NaN, missing fields and their errors are its). None when the key has another form."""
+def key_reader(b: Binding) -> KeyReader | None:
+    """For an entity key ``/topic.array[:].field`` (names only around one full slice), its
+    :class:`KeyReader`; None when the key has another form."""
     ast = b.ast
     if not isinstance(ast, Field) or ast.filters:
         return None
@@ -124,15 +122,28 @@ def key_reader(b: Binding) -> Callable[[Any], list | None] | None:
     if (cut.lo is not None or cut.hi is not None or not before or not after  # type: ignore[union-attr]
             or not all(type(p) is str for p in before + after)):
         return None
-    array = operator.attrgetter(".".join(before))  # type: ignore[arg-type]
-    key = operator.attrgetter(".".join(after))  # type: ignore[arg-type]
+    return KeyReader(".".join(before), ".".join(after))  # type: ignore[arg-type]
 
-    def read(data: Any) -> list | None:
+
+class KeyReader:
+    """A reader of the keys of an entity key ``/topic.array[:].field`` that gives what the
+    key's binding gives (``entity_read._items`` of its value) when the keys are all strings
+    or all finite numbers: one message's (call), or a batch's when they are all integers
+    (:meth:`batch`); None otherwise (the caller then evaluates the binding: bools,
+    infinities, NaN, missing fields and their errors are its)."""
+
+    def __init__(self, array: str, key: str) -> None:
+        self.path = (array, key)  # (the dotted paths: an ItemField's array and key)
+        self.array = operator.attrgetter(array)
+        self.key = operator.attrgetter(key)
+
+    def __call__(self, data: Any) -> list | None:
+        """The keys of one message, or None (class docstring)."""
         try:
-            items = array(data)
+            items = self.array(data)
             if not isinstance(items, (list, tuple)):
                 return None
-            vals = [key(x) for x in items]
+            vals = [self.key(x) for x in items]
         except Exception:  # noqa: BLE001 - the binding reads it again and names the error
             return None
         if all(type(v) is int and -_EXACT < v < _EXACT for v in vals):
@@ -143,7 +154,23 @@ def key_reader(b: Binding) -> Callable[[Any], list | None] | None:
         if all(type(v) is float and v - v == 0.0 for v in vals):  # (finite)
             return vals
         return None
-    return read
+
+    def batch(self, datas: list) -> tuple[list[int], list[list]] | None:
+        """The keys of the messages ``datas`` laid end to end and each message's items
+        (the array's elements, a list each), when each message's keys are what a call gives
+        and all are integers (the common case, read without a Python loop per key); None
+        otherwise (read them one message at a time)."""
+        try:
+            arrays = list(map(self.array, datas))
+            if any(type(a) is not list for a in arrays):
+                return None
+            keys = list(map(self.key, chain.from_iterable(arrays)))
+        except Exception:  # noqa: BLE001 - one at a time: the binding names the error
+            return None
+        if keys and (set(map(type, keys)) != {int} or min(keys) <= -_EXACT
+                     or max(keys) >= _EXACT):
+            return None
+        return keys, arrays
 
 
 class RowColumns:
@@ -210,6 +237,53 @@ def _typed(b: Binding, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return v, np.zeros(len(v), np.bool_)
 
 
+def reads_items_of(specs: dict[Field, ItemField], reader: KeyReader | None) -> bool:
+    """Whether every item field of ``specs`` reads the items of the entity key's array
+    through its key field (a held message's rows are then its items, in order, when no key
+    repeats in it)."""
+    return reader is not None and all((s.array, s.key) == reader.path for s in specs.values())
+
+
+def item_values(own: list[Binding], specs: dict[Field, ItemField], items: list
+                ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`row_values` of rows that are ``items`` (the item each row reads, laid end to
+    end; the caller knows each row's item: :func:`reads_items_of`).
+
+    Raises:
+        Irregular, SignalError: as :func:`row_values`."""
+    n = len(items)
+    try:
+        cols = RowColumns(n, {f.text(): _column(list(map(operator.attrgetter(s.rest), items)),
+                                                n, 1, f.text()) for f, s in specs.items()})
+    except (AttributeError, TypeError, IndexError) as exc:
+        raise Irregular(f"an item the rows cannot read: {exc}") from None
+    with np.errstate(all="ignore"):
+        return [_typed(b, b.evaluate_columns(cols)) for b in own]
+
+
+def _in_order(by_text: dict[str, ItemField], batch: list[tuple[Any, list[Any]]]
+              ) -> list | None:
+    """The items of the rows of ``batch`` laid end to end when every field reads one array
+    by one key field and each message's keys are its items' keys, in order and each once
+    (the rows are then its items: :func:`row_values` without a lookup per row); else
+    None."""
+    if len({(s.array, s.key) for s in by_text.values()}) != 1:
+        return None
+    spec = next(iter(by_text.values()))
+    array, key = operator.attrgetter(spec.array), operator.attrgetter(spec.key)
+    out: list = []
+    try:
+        for data, keys in batch:
+            items = array(data)
+            if type(items) is not list or list(map(key, items)) != keys \
+                    or len(set(keys)) != len(keys):
+                return None
+            out += items
+    except Exception:  # noqa: BLE001 - row_values reads them again and says why
+        return None
+    return out
+
+
 def row_values(own: list[Binding], specs: dict[Field, ItemField],
                batch: list[tuple[Any, list[Any]]]) -> list[tuple[np.ndarray, np.ndarray]]:
     """The per-entity variables ``own`` (:func:`row_fields` gave ``specs``) over ``batch``:
@@ -222,6 +296,9 @@ def row_values(own: list[Binding], specs: dict[Field, ItemField],
         SignalError: a binding's evaluation error (the caller evaluates one at a time).
     """
     by_text = {f.text(): s for f, s in specs.items()}
+    items = _in_order(by_text, batch)
+    if items is not None:  # (each row an item of its message, in order)
+        return item_values(own, specs, items)
     arrays = {s.array for s in by_text.values()}
     flats: dict[str, list] = {t: [] for t in by_text}
     getters = {a: operator.attrgetter(a) for a in arrays}

@@ -11,13 +11,14 @@ ticks as objects (for tests: the tick-by-tick clock's ticks, equal by test).
 
 from __future__ import annotations
 
+from itertools import chain, repeat
 from typing import Any
 
 import numpy as np
 
 from fretc.audit.entity_columns import EntityColumns
 from fretc.common.problems import SignalError
-from fretc.signals.bindings.spec import tick_bound_error
+from fretc.signals.bindings.spec import MAX_TICKS, tick_bound_error
 from fretc.signals.clock import Tick
 
 __all__ = ["TickRuns", "grid_run"]
@@ -125,3 +126,164 @@ def grid_run(c: Any, end: int) -> None:
     c.runs.add(start, n, rows, dict(c.log_times))
     c.index += n
     s.ticks += n
+
+
+#: Messages of a lean clock's key topic recorded at once by :func:`lean_messages` (tests
+#: patch it small, so that batches end anywhere; 0: one at a time by :func:`grid_run`, the
+#: tick-by-tick bookkeeping the batches are tested against)
+LEAN_BATCH = 256
+
+
+def lean_messages(c: Any) -> None:
+    """Record the key messages waiting in lean clock ``c`` (``c.waiting``: ``(t, log time,
+    data)`` in push order) as :meth:`EntityClock._lean_push
+    <fretc.audit.entity_read.EntityClock._lean_push>` does one at a time: each message's
+    entities into the table, then the runs of ticks between the messages with numpy (the
+    run before a message holds the one before it: ticks ``G, G + period, ...`` before its
+    time, ``G`` the first multiple of the period at or after every earlier message), the
+    sampling's figures (:func:`grid_run`'s), the held messages' rows evaluated by batch;
+    the last message is held. A clock still waiting for another topic records them one at
+    a time (``c._lean_one``).
+
+    Raises:
+        SignalError: a key that cannot be read (after the ticks before its message are
+            recorded), or more ticks than the tick bound."""
+    msgs, c.waiting = c.waiting, []
+    topic = c.kind.topic
+    if not msgs:
+        return
+    if c.missing - {topic}:
+        for m in msgs:
+            c._lean_one(topic, *m)
+        return
+    err = None
+    fast = _batch_entities(c, msgs)
+    gots, arrays = fast if fast is not None else ([], None)
+    if fast is None:
+        for t, _lt, data in msgs:
+            try:
+                gots.append(c._key_entities(topic, t, data))
+            except SignalError as exc:
+                err = exc
+                break
+        msgs = msgs[:len(gots)]
+    if msgs:
+        _runs(c, msgs, gots, arrays)
+    if err is not None:
+        raise err
+
+
+def _batch_entities(c: Any, msgs: list[tuple[int, int, Any]]
+                    ) -> tuple[list[list[int]], list[list]] | None:
+    """The entities each of ``msgs`` carries and its items, recorded in the table as
+    :meth:`EntityClock._key_entities <fretc.audit.entity_read.EntityClock._key_entities>`
+    records them one message at a time, when the keys are integers read by the clock's
+    :class:`~fretc.audit.entity_rows.KeyReader` (:meth:`~fretc.audit.entity_rows.KeyReader.batch`),
+    no key pattern selects them, and the table's bound is not met in the batch; else None
+    (and nothing recorded)."""
+    kind, table, reader = c.kind, c.table, c.read_keys
+    if reader is None or kind.matching is not None or kind.stream:
+        return None
+    got = reader.batch([m[2] for m in msgs])
+    if got is None:
+        return None
+    keys, arrays = got
+    lens = list(map(len, arrays))
+    index = table.index
+    found = list(map(index.get, keys))
+    times = list(chain.from_iterable(repeat(m[0], n) for m, n in zip(msgs, lens)))
+    if None in found:
+        new = [p for p, i in enumerate(found) if i is None]
+        if len(table.keys) + len({keys[p] for p in new}) > c.bound:
+            return None  # (the bound is met: one message at a time, as the table cuts)
+        for p in new:
+            i = index.get(keys[p])
+            found[p] = i if i is not None else table.see(keys[p], times[p], c.bound)
+    last = table.last
+    for i, t in zip(found, times):
+        last[i] = t
+    out, a = [], 0
+    for n in lens:
+        out.append(found[a:a + n])
+        a += n
+    return out, arrays
+
+
+def _runs(c: Any, msgs: list[tuple[int, int, Any]], gots: list[list[int]],
+          arrays: list[list] | None) -> None:
+    """:func:`lean_messages`' runs and holds of ``msgs`` (their entities ``gots``, their
+    items ``arrays`` when the entities were read from them in order, else None)."""
+    topic, s, period, st = c.kind.topic, c.s, c.period, c.state
+    times = np.fromiter((m[0] for m in msgs), np.int64, len(msgs))
+    held = st.msgs.get(topic)
+    if c.next_grid is None:
+        c.next_grid = -(-int(times[0]) // period) * period
+    # the grid's next tick before each message's push, and the ticks due before it
+    after = np.maximum(np.maximum.accumulate(-(-times // period) * period), c.next_grid)
+    before = np.concatenate(([c.next_grid], after[:-1]))
+    counts = np.maximum(-(-(times - before) // period), 0)
+    if held is None:
+        counts[0] = 0
+    at = np.flatnonzero(counts).tolist()
+    if at:
+        total = s.ticks + s.warmup_ticks + np.cumsum(counts[at])
+        over = np.flatnonzero(total > MAX_TICKS)
+        if len(over):
+            j = at[int(over[0])]
+            raise SignalError(tick_bound_error(str(getattr(s.source, "path", "")), period,
+                                               int(before[j]), int(times[j]), int(total[over[0]]),
+                                               0) or "")
+        _record(c, msgs, gots, arrays, at, before[at].tolist(), counts[at].tolist())
+    t, lt, data = msgs[-1]
+    st.msgs[topic], st.times[topic], c.log_times[topic] = data, t, lt
+    c.missing.discard(topic)
+    if topic in c.counted:
+        c.since[topic] = c.since.get(topic, 0) + len(msgs) - (at[-1] if at else 0)
+    c.last = t
+    c.next_grid = int(after[-1])
+    c.present, c.msg_rows = {id(data): gots[-1]}, {}
+    c.held_items = arrays[-1] if arrays is not None else None
+
+
+def _record(c: Any, msgs: list, gots: list[list[int]], arrays: list[list] | None,
+            at: list[int], starts: list[int], counts: list[int]) -> None:
+    """The runs before the messages ``at`` (``starts``, ``counts``), each holding the
+    message before it (the held one before ``msgs[0]``), into ``c.runs``."""
+    topic, s, period, st = c.kind.topic, c.s, c.period, c.state
+    counted = topic in c.counted
+    base = dict(c.log_times)
+    h = st.msgs.get(topic)  # (the message held before msgs[0])
+    prev_got = c.present.get(id(h), ())
+    prev_lt = c.log_times.get(topic)
+    since = c.since.get(topic, 0)
+    last_at = 0
+    runs = c.runs
+    for j, start, n in zip(at, starts, counts):
+        if j:
+            data, got, lt = msgs[j - 1][2], gots[j - 1], msgs[j - 1][1]
+            items = arrays[j - 1] if arrays is not None else None
+        else:
+            data, got, lt, items = h, prev_got, prev_lt, c.held_items
+        if c.absent_once is None:  # (as the clock's first tick evaluates it)
+            st.msgs[topic], st.now = data, start
+            c.absent_once = c._absent(st)
+            st.msgs[topic] = h
+        if s.start_time is None:
+            s.start_time = start
+            s.waiting_for = []
+        if s.first_time is None:
+            s.first_time = start
+        elif counted:
+            k = since + j - last_at
+            if k > 1:
+                s.unsampled[topic] = s.unsampled.get(topic, 0) + k - 1
+        since, last_at = 0, j
+        base[topic] = lt
+        runs.add(start, n, c.held_rows(data, got, items) if got else [], dict(base))
+        c.index += n
+        s.ticks += n
+    c.since = {}
+    last = starts[-1] + (counts[-1] - 1) * period
+    s.end_time = last
+    st.now = last
+    c.last_values = {}

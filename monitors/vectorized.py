@@ -59,8 +59,10 @@ class VectorizeError(ValueError):
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
 
+@functools.lru_cache(maxsize=1024)
 def supports(node: Node) -> bool:
-    """True when :func:`pt_series` can evaluate ``node`` (no future-time operator)."""
+    """True when :func:`pt_series` can evaluate ``node`` (no future-time operator); kept
+    per formula (asked again for each trace a requirement judges)."""
     return not any(n.op in _FUTURE for n in walk(node))
 
 

@@ -1,7 +1,8 @@
 """A lean per-entity clock's ticks recorded as runs (audit/entity_runs.py) against the
 tick-by-tick clock (``entity_read.LEAN`` off): on random logs whose messages are several
 ticks apart or within one tick, the ticks (times, log times, per-entity values), the
-sampling's figures and the audit's JSON are the same."""
+sampling's figures and the audit's JSON are the same, whether the messages are recorded
+one at a time (``entity_runs.LEAN_BATCH`` 0) or by batches that end anywhere."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import fretc.audit.entity_read as R
+import fretc.audit.entity_runs as RU
 from _logs import S, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.logs import open_log
@@ -36,11 +38,12 @@ def _setup(tmp, rows):
     return log, load_plan(AuditConfig(requirements=(str(tmp / "o.fret"),)))
 
 
-def _read(log, plan, lean, monkeypatch):
+def _read(log, plan, lean, monkeypatch, batch=RU.LEAN_BATCH, bound=10**6):
     with monkeypatch.context() as mp:
         mp.setattr(R, "LEAN", lean)
+        mp.setattr(RU, "LEAN_BATCH", batch)
         made, ticks, errors = R.read_entities(open_log(str(log)), plan.bindings,
-                                              {0: ("obj", NAMES)}, 10**6)
+                                              {0: ("obj", NAMES)}, bound)
         la = audit_log(plan, str(log))
     c = made[0]
     assert c.lean == lean and (not lean or not ticks[0])
@@ -50,15 +53,17 @@ def _read(log, plan, lean, monkeypatch):
             for t in (c.lean_ticks() if lean else ticks[0])]
     figures = (s.ticks, s.warmup_ticks, s.start_time, s.end_time, s.first_time,
                dict(s.unsampled), s.missing_topics, c.index, c.next_grid)
-    return seen, figures, c.table.keys, sorted(errors), json.dumps(la.to_json(), sort_keys=True)
+    return (seen, figures, c.table.keys, c.table.first, c.table.last, c.table.cut, sorted(errors),
+            json.dumps(la.to_json(), sort_keys=True))
 
 
 @settings(max_examples=40, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(rows=st.lists(st.tuples(st.integers(0, 45), st.lists(ITEM, max_size=3)),
-                     min_size=1, max_size=12))
-def test_runs_equal_the_ticks(tmp_path_factory, monkeypatch, rows):
+                     min_size=1, max_size=12),
+       batch=st.sampled_from([0, 1, 3, RU.LEAN_BATCH]), bound=st.sampled_from([2, 4, 10**6]))
+def test_runs_equal_the_ticks(tmp_path_factory, monkeypatch, rows, batch, bound):
     log, plan = _setup(tmp_path_factory.mktemp("runs"), rows)
-    lean = _read(log, plan, True, monkeypatch)
-    ticks = _read(log, plan, False, monkeypatch)
+    lean = _read(log, plan, True, monkeypatch, batch, bound)
+    ticks = _read(log, plan, False, monkeypatch, batch, bound)
     assert lean == ticks, rows
