@@ -203,6 +203,7 @@ def _pb_plan(descriptor) -> list[tuple[str, int, Any]]:
 
 
 _PB_PLANS: dict[Any, list[tuple[str, int, Any]]] = {}
+_UNKNOWN: Any = None  # protobuf's UnknownFieldSet, once a protobuf message is checked
 
 
 def _pb_lies(msg, numbers: frozenset[int] | None = None) -> None:
@@ -211,10 +212,14 @@ def _pb_lies(msg, numbers: frozenset[int] | None = None) -> None:
     unknown field and leaves the declared one at its default, 0, which would be read as a
     value (protobuf encoding, "Message Structure": wire types). Unknown field numbers are
     newer fields, not lies. ``numbers``: only those fields are checked (None: all)."""
-    from google.protobuf.unknown_fields import UnknownFieldSet
-
+    global _UNKNOWN
+    if _UNKNOWN is None:  # (imported once: this runs for every message and nested message)
+        from google.protobuf.unknown_fields import UnknownFieldSet as _UNKNOWN
+    unknown = _UNKNOWN(msg)
+    if not len(unknown):
+        return
     declared = msg.DESCRIPTOR.fields_by_number
-    for f in UnknownFieldSet(msg):  # type: ignore[attr-defined]  # a sequence (len, [i])
+    for f in unknown:  # (a sequence: len, [i])
         if f.field_number in declared and (numbers is None or f.field_number in numbers):
             field = declared[f.field_number]
             raise ValueError(f"field {field.name} (number {f.field_number}) is declared "
