@@ -367,29 +367,27 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
                   f"{escape(short_log_name(la.log))}: {escape(v.text)}", highlight=False)
     if fv is None:
         return
+    lines = []  # (printed at once: a call of rich's print costs about a millisecond)
     if fv.trigger is not None and fv.scope is not None:  # (a trigger is in its scope interval)
         sc = fv.scope
-        console.print(f"  trigger at tick {fv.trigger.tick} "
-                      f"({format_offset(fv.trigger.time_ns, st)}) in the "
-                      f"scope interval [{sc[0].tick}, {sc[1].tick}] "
-                      f"({format_offset(sc[0].time_ns, st)} .. {format_offset(sc[1].time_ns, st)})"
-                      + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""),
-                      markup=False, highlight=False)
+        lines.append(f"  trigger at tick {fv.trigger.tick} "
+                     f"({format_offset(fv.trigger.time_ns, st)}) in the "
+                     f"scope interval [{sc[0].tick}, {sc[1].tick}] "
+                     f"({format_offset(sc[0].time_ns, st)} .. "
+                     f"{format_offset(sc[1].time_ns, st)})"
+                     + (f"; obligation: {terminal_text(fv.obligation)}" if fv.obligation else ""))
     elif fv.obligation:
-        console.print(f"  obligation: {terminal_text(fv.obligation)}", markup=False,
-                      highlight=False)
+        lines.append(f"  obligation: {terminal_text(fv.obligation)}")
     if v.robustness_at is not None and v.robustness is not None and math.isfinite(v.robustness):
-        console.print(f"  robustness {robustness_text(v.robustness)} at tick "
-                      f"{v.robustness_at.tick} ({format_offset(v.robustness_at.time_ns, st)})",
-                      markup=False, highlight=False)
+        lines.append(f"  robustness {robustness_text(v.robustness)} at tick "
+                     f"{v.robustness_at.tick} ({format_offset(v.robustness_at.time_ns, st)})")
     lt = (f"; deciding message log time {fv.at.log_time_ns} ns"
           if fv.at.log_time_ns is not None else "")
-    console.print(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "
-                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})", markup=False,
-                  highlight=False)
+    lines.append(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "
+                 f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})")
     if v.triggers is not None and v.violations:
-        console.print(f"  {v.violations} of {v.triggers} triggers failed", markup=False,
-                      highlight=False)
+        lines.append(f"  {v.violations} of {v.triggers} triggers failed")
+    console.print("\n".join(lines), markup=False, highlight=False)
     if not v.values or not verbose:
         return
     t = Table(show_header=True, header_style="bold", box=None, pad_edge=False)
