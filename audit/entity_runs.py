@@ -21,7 +21,7 @@ from fretc.common.problems import SignalError
 from fretc.signals.bindings.spec import MAX_TICKS, tick_bound_error
 from fretc.signals.clock import Tick
 
-__all__ = ["TickRuns", "grid_run"]
+__all__ = ["TickRuns", "grid_run", "LEAN_BATCH", "lean_messages"]
 
 
 class TickRuns:
@@ -146,8 +146,8 @@ def lean_messages(c: Any) -> None:
     a time (``c._lean_one``).
 
     Raises:
-        SignalError: a key that cannot be read (after the ticks before its message are
-            recorded), or more ticks than the tick bound."""
+        SignalError: a key that cannot be read (the messages before it recorded), or more
+            ticks than the tick bound (none of the batch recorded): the clock stops there."""
     msgs, c.waiting = c.waiting, []
     topic = c.kind.topic
     if not msgs:
