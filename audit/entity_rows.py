@@ -127,7 +127,7 @@ def key_reader(b: Binding) -> KeyReader | None:
 
 class KeyReader:
     """A reader of the keys of an entity key ``/topic.array[:].field`` that gives what the
-    key's binding gives (``entity_read._items`` of its value) when the keys are all strings
+    key's binding gives (``entity_kinds.key_items`` of its value) when the keys are all strings
     or all finite numbers: one message's (call), or a batch's when they are all integers
     (:meth:`batch`); None otherwise (the caller then evaluates the binding: bools,
     infinities, NaN, missing fields and their errors are its)."""
