@@ -420,8 +420,8 @@ def read_entities(source: Any, bindings: Bindings,
         its ``runs``), key -> the error that stopped it.
 
     Raises:
-        BindingError: a per-entity variable the read cannot take (:func:`~fretc.audit.entity_kinds.own_bindings`),
-            or a bad key.
+        BindingError: a per-entity variable the read cannot take
+            (:func:`~fretc.audit.entity_kinds.own_bindings`), or a bad key.
         SignalError: a topic missing from the log.
     """
     made: dict[Any, EntityClock] = {}
