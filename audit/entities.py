@@ -35,6 +35,8 @@ from fretc.audit.verdict import LogAudit, Ltl3, Verdict
 from fretc.common.problems import FretcInputError
 from fretc.common.streams import log_topics
 from fretc.logs import open_log
+from fretc.monitors.robustness import robustness_of_traces
+from fretc.monitors.vectorized import VectorizeError
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import EntityParam
 
@@ -50,6 +52,10 @@ DEFAULT_MAX_ENTITIES = 1_000_000
 
 #: The start of the error of every per-entity requirement when the log cannot be opened.
 NOT_AUDITED = "log not audited: "
+
+#: Whether the robustness of the entities the batch finds violated is computed at once
+#: (False: one entity at a time, the reference the tests compare it with)
+BATCH_ROBUSTNESS = True
 
 #: The note of an entity judged with the others (:mod:`fretc.audit.entity_batch`).
 BATCH_NOTE = ("judged with the requirement's other entities at once (its pt formula over "
@@ -284,6 +290,8 @@ class _Judge:
             if not c.kind.stream:
                 self.rows = EntityColumns(ticks, own, ENTITIES, len(c.table.keys))
         self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
+        #: entity -> the robustness of its trace computed with the others' (the batch)
+        self.robs: dict[int, Any] = {}
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))
@@ -367,6 +375,7 @@ class _Judge:
             return {}
         holds, vacuous, ltl3 = got
         slow = nan_traces(columns, firsts, lengths)
+        self._violated_robustness(judged, holds, slow, columns, firsts, lengths)
         out: dict[int, Verdict] = {}
         times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
         holds_, vacuous_ = np.asarray(holds).tolist(), np.asarray(vacuous).tolist()
@@ -382,6 +391,29 @@ class _Judge:
                                ltl3=Ltl3(status, tick,
                                          times[a + tick] if tick is not None else None))
         return out
+
+    def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],
+                             columns: dict[str, np.ndarray], firsts: np.ndarray,
+                             lengths: np.ndarray) -> None:
+        """The robustness of the entities of ``judged`` the batch found violated, at once
+        (:func:`fretc.monitors.robustness.robustness_of_traces`), into :attr:`robs` for
+        their evidence one at a time (:meth:`_one`); none when it cannot be computed so."""
+        bad = [e for e, h in enumerate(np.asarray(holds).tolist())
+               if not h and e not in slow]
+        if not BATCH_ROBUSTNESS or not bad:
+            return
+        at = np.asarray(bad, np.int64)
+        counts = lengths[at]
+        starts = np.cumsum(counts) - counts
+        idx = np.repeat(firsts[at] - starts, counts) + np.arange(int(counts.sum()),
+                                                                dtype=np.int64)
+        try:
+            got = robustness_of_traces(self.r.formalization.pt,
+                                       {k: c[idx] for k, c in columns.items()}, starts, counts)
+        except (VectorizeError, KeyError):
+            return
+        for e, rob in zip(bad, got or ()):
+            self.robs[judged[e]] = rob
 
     def _own_columns(self, judged: list[int], i0s: np.ndarray, firsts: np.ndarray,
                      lengths: np.ndarray, idx: np.ndarray) -> dict[str, np.ndarray]:
@@ -425,7 +457,7 @@ class _Judge:
         if res.cut:
             v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
         ri = dataclasses.replace(r, id=v.requirement)
-        finalize(ents.plan, ri, res, self.bindings, v, ents.la)
+        finalize(ents.plan, ri, res, self.bindings, v, ents.la, rob=self.robs.get(i))
         if v.error is not None:
             v.verdict = "error"
         v.partial = ents.la.partial and v.error is None

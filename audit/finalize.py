@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -57,20 +57,23 @@ def between_ticks(v: Verdict, s: Sampling, r: RequirementPlan, bindings: Binding
 
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
-             v: Verdict, la: LogAudit) -> None:
+             v: Verdict, la: LogAudit, rob: Any = None) -> None:
     """Set the verdict ``v`` (:class:`fretc.audit.verdict.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it. Ticks
     a gap or a NaN leaves unknown are judged in three-valued semantics
     (:mod:`fretc.audit.unknown_ticks`). ``la`` is the log's
     :class:`fretc.audit.verdict.LogAudit`. A requirement with a probability bound also gets
-    its triggers as trials (:mod:`fretc.audit.trials`)."""
+    its triggers as trials (:mod:`fretc.audit.trials`). ``rob``: the pt formula's robustness
+    over the pass's ticks when computed already (:func:`fretc.monitors.judge.judge`)."""
     res, nan_unknown = prepare(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
         _no_tick(res, v, la, _windows_of(r, bindings))
         return
-    _verdict(plan, r, res, bindings, v, nan_unknown)
+    if rob is not None and len(rob.margin) != n:  # (computed over other ticks: not these)
+        rob = None
+    _verdict(plan, r, res, bindings, v, nan_unknown, rob)
     if plan.coverage:
         from fretc.audit.coverage import record_coverage  # lazy: only with --coverage
 
@@ -105,7 +108,7 @@ def _trials(r, res: ClockPass, v, nan_unknown: bool) -> None:
 
 
 def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
-             v, nan_unknown: bool) -> None:
+             v, nan_unknown: bool, rob: Any = None) -> None:
     """The verdict of :func:`finalize` over the prepared pass ``res`` (at least one tick)."""
     n = len(res.times)
     f = r.formalization
@@ -114,7 +117,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     try:
         j = judge(r.requirement, f, res.columns, n,
                   monitor_source=r.monitor_source if online else None,
-                  monitor_cls=r.monitor_cls if online else None)
+                  monitor_cls=r.monitor_cls if online else None, rob=rob)
     except EvidenceUnsupported as exc:
         v.error = f"no online monitor and no interval semantics for it: {exc}"
         return

@@ -78,7 +78,7 @@ class Judgement:
 def judge(requirement: A.Requirement, formalization: Formalization,
           columns: Mapping[str, np.ndarray], n: int, *,
           monitor_source: MonitorSource | None = None,
-          monitor_cls: type | None = None) -> Judgement:
+          monitor_cls: type | None = None, rob: Robustness | None = None) -> Judgement:
     """Decide one requirement over the first ``n`` ticks of ``columns``.
 
     Args:
@@ -89,6 +89,8 @@ def judge(requirement: A.Requirement, formalization: Formalization,
         monitor_source: the requirement's :class:`fretc.compiler.codegen.MonitorSource` (its LTL3
             automata tables), or None for a requirement without an online monitor.
         monitor_cls: its generated monitor class, for the replay fallbacks, or None.
+        rob: the pt formula's robustness over these ticks when computed already (with other
+            traces: :func:`fretc.monitors.robustness.robustness_of_traces`), else None.
 
     Raises:
         EvidenceUnsupported: neither the interval semantics, nor the pt formula over the
@@ -112,7 +114,8 @@ def judge(requirement: A.Requirement, formalization: Formalization,
         replayed = stepwise.replay(monitor_cls, columns, n)
         holds, engine = bool(replayed.finish()), "stepwise"
     ltl3, tick = _ltl3(monitor_source, monitor_cls, columns, n, replayed)
-    rob = robustness(formalization.pt, columns, n) if _pt_evaluable(formalization) else None
+    if rob is None and _pt_evaluable(formalization):
+        rob = robustness(formalization.pt, columns, n)
     return Judgement(holds, ev, ltl3, tick, engine, note, rob)
 
 

@@ -47,7 +47,7 @@ from fretc.monitors.vectorized import VectorizeError, node_series
 
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
-__all__ = ["Robustness", "TINY", "robustness", "robustness_series"]
+__all__ = ["Robustness", "TINY", "robustness", "robustness_of_traces", "robustness_series"]
 
 #: The smallest positive double: ``-TINY`` is the robustness of a comparison false at
 #: distance 0 (the module docstring's sign convention).
@@ -145,6 +145,32 @@ class _Window(Mapping):
 
     def __len__(self) -> int:
         return len(self.columns)
+
+
+def robustness_of_traces(pt: Node, columns: Columns, firsts: np.ndarray,
+                         lengths: np.ndarray) -> list[Robustness] | None:
+    """The robustness (:func:`robustness`) of each of ``len(firsts)`` traces laid end to end
+    in ``columns`` (trace ``e`` its ``lengths[e] >= 1`` ticks from ``firsts[e]``), in one
+    evaluation of the formula that restarts every temporal operator at each trace's first
+    tick: the values :func:`robustness` gives each trace alone (equal by test). None when
+    that evaluation cannot restart (a comparison's operand holds a past-time operator or
+    ``pre``) or the traces hold more than :data:`ROBUSTNESS_CHUNK` ticks in all: judge them
+    one at a time.
+
+    Raises:
+        VectorizeError: as :func:`robustness`."""
+    n = int(lengths.sum())
+    top = pt.op == "H" and pt.hi is None
+    body = pt.args[0] if top else pt
+    if n > ROBUSTNESS_CHUNK or not _chunkable(body, 1 << 62):  # (any window: no chunks)
+        return None
+    margin = _Traces(columns, n, body, np.repeat(firsts, lengths)).rho(body)
+    values = (np.minimum.reduceat(margin, firsts) if top else margin[firsts + lengths - 1])
+    out = []
+    for a, m, value in zip(firsts.tolist(), lengths.tolist(), values.tolist()):
+        own = margin[a:a + m].copy()
+        out.append(Robustness(value, int(np.argmax(own == value)), own))
+    return out
 
 
 def robustness_series(node: Node, columns: Columns, n: int) -> np.ndarray:
@@ -319,3 +345,53 @@ class _Rho:
             out[k:k + len(chunk)] = chunk
         self._keep(node, s)
         return out
+
+
+class _Traces(_Rho):
+    """:class:`_Rho` over traces laid end to end: ``seg[i]`` the first tick of tick ``i``'s
+    trace; the temporal operators start again at each trace's first tick (no carry)."""
+
+    def __init__(self, columns: Columns, n: int, root: Node, seg: np.ndarray) -> None:
+        super().__init__(columns, n, root)
+        self.seg = seg
+        self.first = np.arange(n, dtype=np.int64) == seg
+
+    def _compute(self, node: Node) -> np.ndarray:
+        op = node.op
+        if op in ("Y", "Z"):
+            out = np.empty(self.n)
+            out[1:] = self.rho(node.args[0])[:-1]
+            out[self.first] = -_INF if op == "Y" else _INF
+            return out
+        if op == "FTP":
+            return np.where(self.first, _INF, -_INF)
+        return super()._compute(node)
+
+    def _once(self, node: Node) -> np.ndarray:
+        x, is_once = self.rho(node.args[0]), node.op == "O"
+        pick = np.maximum if is_once else np.minimum
+        if node.hi is None:
+            out = np.empty(self.n)
+            edges = np.flatnonzero(self.first).tolist() + [self.n]
+            for a, b in zip(edges, edges[1:]):
+                out[a:b] = pick.accumulate(x[a:b])
+            return out
+        lo, hi, m = node.lo or 0, node.hi, self.n
+        out = np.full(m, -_INF if is_once else _INF)
+        idx = np.arange(m, dtype=np.int64)
+        for d in range(lo, min(hi, m - 1) + 1):  # the value d ticks back, in the same trace
+            inside = idx[d:] - d >= self.seg[d:]
+            out[d:] = np.where(inside, pick(out[d:], x[:m - d]), out[d:])
+        return out
+
+    def _since(self, node: Node) -> np.ndarray:
+        op = node.op
+        a, b = self.rho(node.args[0]).tolist(), self.rho(node.args[1]).tolist()
+        start = -_INF if op == "S" else _INF
+        out, s = [], start
+        for ai, bi, first in zip(a, b, self.first.tolist()):
+            if first:
+                s = start
+            s = max(bi, min(ai, s)) if op == "S" else min(bi, max(ai, s))
+            out.append(s)
+        return np.array(out, dtype=np.float64)

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import json
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+import fretc.audit.entities as E
 import fretc.audit.entity_read as R
 import fretc.audit.entity_runs as RU
 from _logs import S, write_mcap
@@ -67,3 +68,20 @@ def test_runs_equal_the_ticks(tmp_path_factory, monkeypatch, rows, batch, bound)
     lean = _read(log, plan, True, monkeypatch, batch, bound)
     ticks = _read(log, plan, False, monkeypatch, batch, bound)
     assert lean == ticks, rows
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.tuples(st.integers(0, 45), st.lists(ITEM, max_size=3)),
+                     min_size=1, max_size=12))
+@example(rows=[(10, [(1, 0.2, True), (2, 0.3, True), (3, 0.4, True)])] * 3)  # (alike lives)
+def test_violated_entities_robustness_at_once_equals_one_at_a_time(tmp_path_factory,
+                                                                   monkeypatch, rows):
+    """The robustness of the entities the batch finds violated, computed at once over their
+    traces end to end (``entities.BATCH_ROBUSTNESS``), gives the audit JSON of each computed
+    over its own trace: values, ticks, margins and evidence."""
+    log, plan = _setup(tmp_path_factory.mktemp("rob"), rows)
+    with monkeypatch.context() as mp:
+        mp.setattr(E, "BATCH_ROBUSTNESS", False)
+        one = json.dumps(audit_log(plan, str(log)).to_json(), sort_keys=True)
+    assert json.dumps(audit_log(plan, str(log)).to_json(), sort_keys=True) == one, rows

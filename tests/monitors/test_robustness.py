@@ -15,10 +15,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.compiler import evaluate
+from fretc.compiler import evaluate, ir
 from fretc.fretish import ast as A
 from fretc.monitors.judge import judge
-from fretc.monitors.robustness import TINY, robustness, robustness_series
+from fretc.monitors.robustness import (TINY, robustness, robustness_of_traces,
+                                       robustness_series)
 from fretc.monitors.vectorized import pt_series
 
 from _monitor_helpers import KEYS, compiled, samples
@@ -179,6 +180,56 @@ def test_chunks_give_the_margin_of_the_whole_trace(all_keys, index, n, chunk, rn
     parts = robustness(pt, cols, n, chunk=chunk)
     assert (parts.value, parts.tick) == (whole.value, whole.tick), all_keys[index].text
     assert parts.margin.tobytes() == whole.margin.tobytes(), all_keys[index].text
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, len(KEYS) - 1), st.lists(st.integers(1, 9), min_size=1, max_size=6),
+       st.randoms(use_true_random=False))
+def test_traces_end_to_end_give_each_traces_own_robustness(all_keys, index, lengths, rnd):
+    """Traces laid end to end and evaluated at once (every temporal operator restarting at
+    each trace's first tick: the per-entity audit's violated entities) give each trace the
+    value, tick and margin of :func:`robustness` over that trace alone, bit for bit."""
+    pt = all_keys[index].formalization.pt
+    traces = [_trace(rnd, m) for m in lengths]
+    cols = {k: np.concatenate([t[k] for t in traces]) for k in traces[0]}
+    counts = np.array(lengths, dtype=np.int64)
+    firsts = np.cumsum(counts) - counts
+    got = robustness_of_traces(pt, cols, firsts, counts)
+    assert got is not None, all_keys[index].text  # (no template compares a past-time operand)
+    for t, m, r in zip(traces, lengths, got):
+        alone = robustness(pt, t, m)
+        assert (r.value, r.tick) == (alone.value, alone.tick) or (
+            math.isnan(r.value) and math.isnan(alone.value)), all_keys[index].text
+        assert r.margin.tobytes() == alone.margin.tobytes(), all_keys[index].text
+
+
+_ATOMS = st.sampled_from(["m", "c", "r", "s"]).map(ir.ap)
+_PAST = st.recursive(_ATOMS, lambda sub: st.one_of(
+    sub.map(ir.Y), sub.map(ir.Z), sub.map(ir.not_),
+    st.tuples(sub, st.integers(0, 2), st.integers(0, 3)).map(
+        lambda a: ir.O(a[0], a[1], a[1] + a[2])),
+    st.tuples(sub, st.integers(0, 2), st.integers(0, 3)).map(
+        lambda a: ir.H(a[0], a[1], a[1] + a[2])),
+    sub.map(ir.O), sub.map(ir.H),
+    st.tuples(sub, sub).map(lambda a: ir.S(*a)), st.tuples(sub, sub).map(lambda a: ir.T(*a)),
+    st.tuples(sub, sub).map(lambda a: ir.and_(*a))), max_leaves=6)
+
+
+@settings(max_examples=60, deadline=None)
+@given(_PAST, st.lists(st.integers(1, 7), min_size=1, max_size=5),
+       st.randoms(use_true_random=False))
+def test_any_past_formula_end_to_end_gives_each_traces_own_robustness(pt, lengths, rnd):
+    """As above for any past-time formula of boolean atoms (bounded windows that reach back
+    before a trace's first tick, since and trigger restarting at each trace)."""
+    traces = [_trace(rnd, m) for m in lengths]
+    cols = {k: np.concatenate([t[k] for t in traces]) for k in traces[0]}
+    counts = np.array(lengths, dtype=np.int64)
+    got = robustness_of_traces(pt, cols, np.cumsum(counts) - counts, counts)
+    assert got is not None
+    for t, m, r in zip(traces, lengths, got):
+        alone = robustness(pt, t, m)
+        assert (r.value, r.tick) == (alone.value, alone.tick), pt
+        assert r.margin.tobytes() == alone.margin.tobytes(), pt
 
 
 def test_numeric_margin_is_the_distance_to_the_threshold():
