@@ -8,10 +8,11 @@ FRET's finite-trace verdict of a trace is its pt formula at its last tick; it is
 when the trigger formula (:func:`fretc.compiler.c_codegen.trigger_pt`: no trigger in any
 scope interval) holds there too; the LTL3 verdict is the first rejection of the automata.
 These are the verdicts the judge gives one trace at a time (the tests compare them on
-random traces). What this pass does not compute (the interval evidence of a violation, the
-robustness) is computed for the entities it finds violated, one at a time, by the plain
-judge; so are traces it cannot take: a value NaN (unknown ticks), and every trace of a log
-with damage (a cut or gaps).
+random traces). The entities it finds violated get their robustness over their traces at
+once too (:func:`fretc.monitors.robustness.robustness_of_traces`, in
+:mod:`fretc.audit.entities`) and the rest of their evidence (the interval semantics' first
+violation and counts) one at a time from the plain judge; so do the traces this pass cannot
+take: a value NaN (unknown ticks), and every trace of a log with damage (a cut or gaps).
 """
 
 from __future__ import annotations
