@@ -261,29 +261,6 @@ def item_values(own: list[Binding], specs: dict[Field, ItemField], items: list
         return [_typed(b, b.evaluate_columns(cols)) for b in own]
 
 
-def _in_order(by_text: dict[str, ItemField], batch: list[tuple[Any, list[Any]]]
-              ) -> list | None:
-    """The items of the rows of ``batch`` laid end to end when every field reads one array
-    by one key field and each message's keys are its items' keys, in order and each once
-    (the rows are then its items: :func:`row_values` without a lookup per row); else
-    None."""
-    if len({(s.array, s.key) for s in by_text.values()}) != 1:
-        return None
-    spec = next(iter(by_text.values()))
-    array, key = operator.attrgetter(spec.array), operator.attrgetter(spec.key)
-    out: list = []
-    try:
-        for data, keys in batch:
-            items = array(data)
-            if type(items) is not list or list(map(key, items)) != keys \
-                    or len(set(keys)) != len(keys):
-                return None
-            out += items
-    except Exception:  # noqa: BLE001 - row_values reads them again and says why
-        return None
-    return out
-
-
 def row_values(own: list[Binding], specs: dict[Field, ItemField],
                batch: list[tuple[Any, list[Any]]]) -> list[tuple[np.ndarray, np.ndarray]]:
     """The per-entity variables ``own`` (:func:`row_fields` gave ``specs``) over ``batch``:
@@ -296,9 +273,6 @@ def row_values(own: list[Binding], specs: dict[Field, ItemField],
         SignalError: a binding's evaluation error (the caller evaluates one at a time).
     """
     by_text = {f.text(): s for f, s in specs.items()}
-    items = _in_order(by_text, batch)
-    if items is not None:  # (each row an item of its message, in order)
-        return item_values(own, specs, items)
     arrays = {s.array for s in by_text.values()}
     flats: dict[str, list] = {t: [] for t in by_text}
     getters = {a: operator.attrgetter(a) for a in arrays}
