@@ -135,7 +135,7 @@ class FirstViolation:
         return out
 
 
-@dataclass
+@dataclass(slots=True)
 class Ltl3:
     """The earliest definitive verdict of the infinite-trace formula (LTL3: ``satisfied``,
     ``violated`` or ``unknown``) and the tick at which it was reached (None: unknown, or
@@ -152,7 +152,7 @@ class Ltl3:
                 "time_s": _t(self.time_ns, start)["s"]}
 
 
-@dataclass
+@dataclass(slots=True)
 class Verdict:
     """One requirement on one log.
 

@@ -82,7 +82,7 @@ def _rows(rows, names: list[str]) -> list:
 
 
 def _verdicts(la) -> list:
-    return [dataclasses.replace(v, notes=[]).__dict__.__repr__() for v in la.verdicts]
+    return [repr(dataclasses.replace(v, notes=[])) for v in la.verdicts]
 
 
 ITEM = st.tuples(st.integers(1, 5),
