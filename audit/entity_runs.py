@@ -28,21 +28,33 @@ class TickRuns:
     """Runs of evaluated ticks ``period`` ns apart: run ``r`` is ``counts[r]`` ticks from
     ``starts[r]`` (ns), each holding the rows ``rows[r]`` (a
     :class:`~fretc.audit.entity_columns.HeldRows`, or ``[]``: no entity held) and the log
-    times ``log_times[r]`` (topic -> ns)."""
+    times ``log_times[topic][r]`` (ns; -1: no message of the topic held yet), one list a
+    topic rather than a dict a run (a lean clock makes a run a key message)."""
 
     def __init__(self, period: int) -> None:
         self.period = period
         self.starts: list[int] = []
         self.counts: list[int] = []
         self.rows: list[Any] = []
-        self.log_times: list[dict[str, int]] = []
+        self.log_times: dict[str, list[int]] = {}
 
     def add(self, start: int, n: int, rows: Any, log_times: dict[str, int]) -> None:
-        """One more run (its ticks after those recorded)."""
+        """One more run (its ticks after those recorded), holding the log times
+        ``log_times`` (topic -> ns; copied: the caller may change it after)."""
+        k = len(self.starts)
         self.starts.append(start)
         self.counts.append(n)
         self.rows.append(rows)
-        self.log_times.append(log_times)
+        cols = self.log_times
+        for tp, lt in log_times.items():
+            col = cols.get(tp)
+            if col is None:
+                col = cols[tp] = [-1] * k
+            col.append(lt)
+        if len(cols) > len(log_times):  # (a topic held before and not in this run's)
+            for col in cols.values():
+                if len(col) == k:
+                    col.append(-1)
 
     def _run_of(self) -> np.ndarray:
         """The run of each tick (int64, one per tick)."""
@@ -60,9 +72,8 @@ class TickRuns:
     def log_time_columns(self) -> dict[str, np.ndarray]:
         """Topic -> the log time held at each tick (-1: none yet), int64, topics sorted."""
         run = self._run_of()
-        topics = sorted({tp for lt in self.log_times for tp in lt})
-        return {tp: np.array([lt.get(tp, -1) for lt in self.log_times], np.int64)[run]
-                for tp in topics}
+        return {tp: np.array(self.log_times[tp], np.int64)[run]
+                for tp in sorted(self.log_times)}
 
     def columns(self, names: list[str], absent: tuple, n_entities: int) -> EntityColumns:
         """The per-entity variables ``names`` as columns (``absent``: their values for an
@@ -77,7 +88,9 @@ class TickRuns:
         """The runs' ticks as :class:`~fretc.signals.clock.Tick` objects (numbered from 0,
         ``values[entities]`` = ``(absent, rows)``), as the tick-by-tick clock makes them."""
         out: list[Tick] = []
-        for start, n, rows, lt in zip(self.starts, self.counts, self.rows, self.log_times):
+        cols = self.log_times
+        for r, (start, n, rows) in enumerate(zip(self.starts, self.counts, self.rows)):
+            lt = {tp: col[r] for tp, col in cols.items() if col[r] != -1}
             for j in range(n):
                 out.append(Tick(len(out), start + j * self.period,
                                 {entities: (absent, rows)},  # type: ignore[dict-item]
@@ -123,7 +136,7 @@ def grid_run(c: Any, end: int) -> None:
     _absent, rows = c._entity_values()
     c.state.now = last
     c.last_values = {}
-    c.runs.add(start, n, rows, dict(c.log_times))
+    c.runs.add(start, n, rows, c.log_times)
     c.index += n
     s.ticks += n
 
@@ -279,7 +292,7 @@ def _record(c: Any, msgs: list, gots: list[list[int]], arrays: list[list] | None
                 s.unsampled[topic] = s.unsampled.get(topic, 0) + k - 1
         since, last_at = 0, j
         base[topic] = lt
-        runs.add(start, n, c.held_rows(data, got, items) if got else [], dict(base))
+        runs.add(start, n, c.held_rows(data, got, items) if got else [], base)
         c.index += n
         s.ticks += n
     c.since = {}
