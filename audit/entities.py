@@ -507,29 +507,46 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     """The requirement's verdict over its entities' verdicts ``out`` (every entity satisfies
     it: satisfied; one violates it: violated, with the earliest violation's evidence,
     whatever is left unjudged, which its notes name), named ``r.id``; ``summary`` is
-    :func:`summary_note`'s."""
-    kinds = {x.verdict for x in out}
+    :func:`summary_note`'s. One pass over ``out`` (100,000 entities: a pass each costs)."""
+    kinds: set[str] = set()
+    first: Verdict | None = None  # (the earliest violation, the first in order among equals)
+    margin: float | None = None
+    errors: list[str] = []
+    unknown: list[str] = []
+    violated: list[str] = []
+    partial = False
+    for x in out:
+        kind = x.verdict
+        kinds.add(kind)
+        if kind == "violated":
+            violated.append(x.requirement)
+            fv = x.first_violation
+            if fv is not None and (first is None or fv.at.time_ns
+                                   < first.first_violation.at.time_ns):  # type: ignore[union-attr]  # (first: with one)
+                first = x
+        elif kind == "unknown":
+            unknown.append(f"{x.requirement}: {x.unknown_reason}")
+        if x.robustness is not None and (margin is None or x.robustness < margin):
+            margin = x.robustness
+        if x.error:
+            errors.append(f"{x.requirement}: {x.error}")
+        partial = partial or x.partial
     verdict = next(k for k in _PRECEDENCE if k in kinds)
     v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
-    bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]
-    if verdict == "violated" and bad:
-        first = min(bad, key=lambda x: x.first_violation.at.time_ns)  # type: ignore[union-attr]  # (bad: with one)
+    if verdict == "violated" and first is not None:
         v.first_violation = first.first_violation
         v.notes.append(f"first violated by {first.requirement}")
-    margins = [x.robustness for x in out if x.robustness is not None]
-    v.robustness = min(margins) if margins else None
-    errors = _listed([f"{x.requirement}: {x.error}" for x in out if x.error])
+    v.robustness = margin
+    listed = _listed(errors)
     if verdict == "error":
-        v.error = errors
-    elif errors:  # violated all the same: what was not judged is said
-        v.notes.append(f"not judged: {errors}")
+        v.error = listed
+    elif listed:  # violated all the same: what was not judged is said
+        v.notes.append(f"not judged: {listed}")
     if verdict == "unknown":
-        v.unknown_reason = _listed([f"{x.requirement}: {x.unknown_reason}" for x in out
-                                    if x.verdict == "unknown"])
-    v.partial = any(x.partial for x in out)
+        v.unknown_reason = _listed(unknown)
+    v.partial = partial
     v.notes.append(summary)
-    v.notes.append("violated by: " + (_listed([x.requirement for x in out
-                                               if x.verdict == "violated"], ", ") or "none"))
+    v.notes.append("violated by: " + (_listed(violated, ", ") or "none"))
     return v
 
 

@@ -177,3 +177,58 @@ def test_past_the_entity_bound_a_violated_entity_violates_the_requirement(tmp_pa
         if want == "violated":
             assert got["T"].first_violation.at.time_ns == S + 3 * S // 10
             assert any("more than 5 entities track" in n for n in got["T"].notes)
+
+
+_ENTITY = st.builds(
+    dict, verdict=st.sampled_from(["satisfied", "vacuous", "violated", "unknown", "error"]),
+    at=st.none() | st.integers(0, 3), rob=st.none() | st.sampled_from(
+        [-1.0, 0.0, 0.5, float("nan"), float("-inf")]),
+    error=st.none() | st.just("no tick"), partial=st.booleans())
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(_ENTITY, min_size=1, max_size=8))
+def test_the_requirement_verdict_over_its_entities_is_their_definition(entities):
+    """summary_verdict (one pass over the entities) equals its definition read field by
+    field: the first verdict of the precedence some entity has, the earliest violation (the
+    first in order among equals), the least margin (as ``min`` takes NaN), every error
+    listed, the unknown reasons, partial when one is."""
+    from fretc.audit.entities import _PRECEDENCE, _listed, summary_verdict
+    from fretc.audit.verdict import FirstViolation, TimePoint, Verdict
+
+    class R:
+        id, text, source = "R", "the robot shall always satisfy x", "r.fret:1"
+
+    out = []
+    for k, e in enumerate(entities):
+        v = Verdict("log", f"R[e={k}]", verdict=e["verdict"], robustness=e["rob"],
+                    error=e["error"], partial=e["partial"],
+                    unknown_reason="gap" if e["verdict"] == "unknown" else None)
+        if e["verdict"] == "violated" and e["at"] is not None:
+            v.first_violation = FirstViolation(at=TimePoint(e["at"], e["at"] * 10))
+        out.append(v)
+    got = summary_verdict(R, "log", out, "R over n entities e")
+    kinds = {x.verdict for x in out}
+    verdict = next(k for k in _PRECEDENCE if k in kinds)
+    assert got.verdict == verdict and got.requirement == "R"
+    bad = [x for x in out if x.verdict == "violated" and x.first_violation is not None]
+    if verdict == "violated" and bad:
+        first = min(bad, key=lambda x: x.first_violation.at.time_ns)
+        assert got.first_violation is first.first_violation
+        assert f"first violated by {first.requirement}" in got.notes
+    else:
+        assert got.first_violation is None
+    margins = [x.robustness for x in out if x.robustness is not None]
+    want = min(margins) if margins else None
+    assert (got.robustness is None) == (want is None)
+    if want is not None:
+        assert repr(got.robustness) == repr(want)
+    errors = _listed([f"{x.requirement}: {x.error}" for x in out if x.error])
+    assert got.error == (errors if verdict == "error" else None)
+    assert (f"not judged: {errors}" in got.notes) == (verdict != "error" and bool(errors))
+    reasons = _listed([f"{x.requirement}: {x.unknown_reason}" for x in out
+                       if x.verdict == "unknown"])
+    assert got.unknown_reason == (reasons if verdict == "unknown" else None)
+    assert got.partial == any(x.partial for x in out)
+    assert got.notes[-2:] == ["R over n entities e", "violated by: " + (
+        _listed([x.requirement for x in out if x.verdict == "violated"], ", ") or "none")]
