@@ -514,7 +514,6 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     errors: list[str] = []
     unknown: list[str] = []
     violated: list[str] = []
-    partial = False
     for x in out:
         kind = x.verdict
         kinds.add(kind)
@@ -530,7 +529,6 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
             margin = x.robustness
         if x.error:
             errors.append(f"{x.requirement}: {x.error}")
-        partial = partial or x.partial
     verdict = next(k for k in _PRECEDENCE if k in kinds)
     v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
     if verdict == "violated" and first is not None:
@@ -544,7 +542,7 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
         v.notes.append(f"not judged: {listed}")
     if verdict == "unknown":
         v.unknown_reason = _listed(unknown)
-    v.partial = partial
+    v.partial = any(x.partial for x in out)
     v.notes.append(summary)
     v.notes.append("violated by: " + (_listed(violated, ", ") or "none"))
     return v
