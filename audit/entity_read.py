@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from fnmatch import fnmatchcase
+from itertools import chain
 from typing import Any, cast
 
 import numpy as np
@@ -341,7 +342,7 @@ class EntityClock(Clock):
         if not batch:
             return
         keys = self.table.keys
-        ents = [i for b in batch for i in b[1]]
+        ents = list(chain.from_iterable(b[1] for b in batch))
         offsets = np.cumsum([0] + [len(b[1]) for b in batch], dtype=np.int64)
         try:
             items = self._items_in_order(batch, ents, offsets)
@@ -373,7 +374,7 @@ class EntityClock(Clock):
         q = np.repeat(np.arange(len(batch), dtype=np.int64), np.diff(offsets))
         if len(np.unique(q * (len(self.table.keys) + 1) + e)) != len(e):
             return None  # (a key repeated in a message: rows of several items)
-        return [x for b in batch for x in b[3]]
+        return list(chain.from_iterable(b[3] for b in batch))
 
     def finish(self) -> Iterator[Tick]:
         """The ticks left at the end of the log, the last rows evaluated (iterate to the

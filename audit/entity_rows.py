@@ -214,10 +214,10 @@ def _column(flat: list, n: int, width: int, what: str) -> Valid:
         Irregular: other values, or booleans mixed with numbers (one row might differ)."""
     if not flat:
         return Valid(np.empty((n, 0), np.float64), None)
-    kinds = {type(v) for v in flat}
+    kinds = set(map(type, flat))
     if kinds - {bool, float}:  # (ints and numpy numbers as the extractor reads them)
         flat = [normalize_scalar(v) for v in flat]
-        kinds = {type(v) for v in flat}
+        kinds = set(map(type, flat))
     if kinds == {bool}:
         return Valid(np.array(flat, dtype=np.bool_).reshape(n, width), None)
     if kinds == {float}:

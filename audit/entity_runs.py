@@ -41,20 +41,28 @@ class TickRuns:
     def add(self, start: int, n: int, rows: Any, log_times: dict[str, int]) -> None:
         """One more run (its ticks after those recorded), holding the log times
         ``log_times`` (topic -> ns; copied: the caller may change it after)."""
-        k = len(self.starts)
-        self.starts.append(start)
-        self.counts.append(n)
-        self.rows.append(rows)
+        self.extend([start], [n], [rows], log_times)
+
+    def extend(self, starts: list[int], counts: list[int], rows: list[Any],
+               log_times: dict[str, int], topic: str | None = None,
+               topic_log_times: list[int] | None = None) -> None:
+        """Runs ``starts``, ``counts``, ``rows`` after those recorded, each holding the log
+        times ``log_times`` (topic -> ns) but for ``topic``, whose log time at each run is
+        ``topic_log_times`` (as long as ``starts``)."""
+        k, m = len(self.starts), len(starts)
+        self.starts += starts
+        self.counts += counts
+        self.rows += rows
         cols = self.log_times
-        for tp, lt in log_times.items():
+        also = () if topic is None else (topic,)
+        for tp in dict.fromkeys([*log_times, *also, *cols]):
             col = cols.get(tp)
             if col is None:
                 col = cols[tp] = [-1] * k
-            col.append(lt)
-        if len(cols) > len(log_times):  # (a topic held before and not in this run's)
-            for col in cols.values():
-                if len(col) == k:
-                    col.append(-1)
+            if tp == topic:
+                col += topic_log_times  # type: ignore[arg-type]  # (given with topic)
+            else:
+                col += [log_times.get(tp, -1)] * m
 
     def _run_of(self) -> np.ndarray:
         """The run of each tick (int64, one per tick)."""
@@ -264,14 +272,13 @@ def _record(c: Any, msgs: list, gots: list[list[int]], arrays: list[list] | None
     message before it (the held one before ``msgs[0]``), into ``c.runs``."""
     topic, s, period, st = c.kind.topic, c.s, c.period, c.state
     counted = topic in c.counted
-    base = dict(c.log_times)
     h = st.msgs.get(topic)  # (the message held before msgs[0])
     prev_got = c.present.get(id(h), ())
     prev_lt = c.log_times.get(topic)
     since = c.since.get(topic, 0)
     last_at = 0
-    runs = c.runs
-    for j, start, n in zip(at, starts, counts):
+    rows, lts = [], []
+    for j, start in zip(at, starts):
         if j:
             data, got, lt = msgs[j - 1][2], gots[j - 1], msgs[j - 1][1]
             items = arrays[j - 1] if arrays is not None else None
@@ -291,10 +298,12 @@ def _record(c: Any, msgs: list, gots: list[list[int]], arrays: list[list] | None
             if k > 1:
                 s.unsampled[topic] = s.unsampled.get(topic, 0) + k - 1
         since, last_at = 0, j
-        base[topic] = lt
-        runs.add(start, n, c.held_rows(data, got, items) if got else [], base)
-        c.index += n
-        s.ticks += n
+        lts.append(lt)
+        rows.append(c.held_rows(data, got, items) if got else [])
+    c.runs.extend(starts, counts, rows, c.log_times, topic, lts)
+    n = sum(counts)
+    c.index += n
+    s.ticks += n
     c.since = {}
     last = starts[-1] + (counts[-1] - 1) * period
     s.end_time = last
