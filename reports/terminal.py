@@ -363,11 +363,12 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
     clock = "header-stamp clock" if la.time_base == "header" else "log clock"
     named = v.requirement if tool_id in (None, v.requirement) else \
         f"{v.requirement} ({tool_id})"
-    console.print(f"\n[bold red]{escape(named)} violated[/bold red] on "
-                  f"{escape(short_log_name(la.log))}: {escape(v.text)}", highlight=False)
+    head = Text.from_markup(f"\n[bold red]{escape(named)} violated[/bold red] on "
+                            f"{escape(short_log_name(la.log))}: {escape(v.text)}")
     if fv is None:
+        console.print(head, highlight=False)
         return
-    lines = []  # (printed at once: a call of rich's print costs about a millisecond)
+    lines = [""]  # (printed with the head at once: a call of rich's print costs about 1 ms)
     if fv.trigger is not None and fv.scope is not None:  # (a trigger is in its scope interval)
         sc = fv.scope
         lines.append(f"  trigger at tick {fv.trigger.tick} "
@@ -387,7 +388,7 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})")
     if v.triggers is not None and v.violations:
         lines.append(f"  {v.violations} of {v.triggers} triggers failed")
-    console.print("\n".join(lines), markup=False, highlight=False)
+    console.print(head + Text("\n".join(lines)), highlight=False)
     if not v.values or not verbose:
         return
     t = Table(show_header=True, header_style="bold", box=None, pad_edge=False)
