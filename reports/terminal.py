@@ -317,6 +317,8 @@ def _log_notes(la: LogAudit, verbose: bool = False) -> list[str]:
     for w in la.warnings:
         out.append(f"[yellow]warning[/yellow]: {escape(w)}")
     for v in la.verdicts:  # events a plain binding could not see (docs/bindings.md)
+        if not v.missed_changes:  # (no note of one: 100,000 entities' notes unread)
+            continue
         for n in v.notes:
             if any(n.startswith(f"{var}: ") for var in v.missed_changes):
                 out.append(f"[yellow]between ticks[/yellow] {escape(v.requirement)}: "

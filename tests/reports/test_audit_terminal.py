@@ -105,3 +105,22 @@ def test_a_table_of_many_instances_lists_only_what_did_not_pass():
         assert "T[track=7]" in text and "unknown" in text
         assert ("only verdicts that are not complete passes are listed: 1 of "
                 f"{n}" in text) is not matrix
+
+
+def test_a_note_of_changes_between_ticks_is_printed_only_for_a_verdict_that_has_them():
+    """The log's notes name a variable's changes no tick sampled (its verdict's
+    ``missed_changes``), and only those: a note that merely starts like one is not."""
+    import io
+
+    from rich.console import Console
+
+    from fretc.audit.verdict import LogAudit, Verdict
+    from fretc.reports.terminal import print_summary
+
+    note = "stop: 2 messages of /stop that no tick sampled would have changed its value"
+    seen = Verdict("l.mcap", "A", verdict="satisfied", notes=[note], missed_changes={"stop": 2})
+    other = Verdict("l.mcap", "B", verdict="satisfied", notes=[note])
+    out = io.StringIO()
+    print_summary(Console(file=out, width=200), [LogAudit(log="l.mcap", verdicts=[seen, other])])
+    lines = [line for line in out.getvalue().splitlines() if "between ticks" in line]
+    assert len(lines) == 1 and "A: stop: 2 messages" in lines[0], lines
