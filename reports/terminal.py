@@ -134,10 +134,13 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
     _print_errors(console, logs)
     if details:
         ids = tool_ids(plan)
-        for la in logs:
-            for v in la.verdicts:
-                if v.verdict == "violated":
-                    _print_violation(console, la, v, verbose, ids.get(v.requirement))
+        bad = [(la, v) for la in logs for v in la.verdicts if v.verdict == "violated"]
+        if verbose:
+            for la, v in bad:
+                _print_violation(console, la, v, verbose, ids.get(v.requirement))
+        elif bad:  # (in one call: a call of rich's print costs about a millisecond)
+            console.print(Text("\n").join(_violation_text(la, v, ids.get(v.requirement))
+                                          for la, v in bad), highlight=False)
     if statistics is not None and (verbose or any(st.bound is not None for st in statistics)):
         # (plain requirements' fleet statistics: in the JSON, and here with --verbose)
         from fretc.reports.statistics import print_statistics
@@ -358,8 +361,9 @@ def _headers(names: list[str]) -> list[str]:
     return out
 
 
-def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
-                     tool_id: str | None = None) -> None:
+def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None) -> Text:
+    """Violation ``v``'s heading and evidence lines (trigger, obligation, robustness, the
+    missed tick with the log time of the message that decided it), as printed."""
     st = la.start_time_ns
     fv = v.first_violation
     clock = "header-stamp clock" if la.time_base == "header" else "log clock"
@@ -368,9 +372,8 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
     head = Text.from_markup(f"\n[bold red]{escape(named)} violated[/bold red] on "
                             f"{escape(short_log_name(la.log))}: {escape(v.text)}")
     if fv is None:
-        console.print(head, highlight=False)
-        return
-    lines = [""]  # (printed with the head at once: a call of rich's print costs about 1 ms)
+        return head
+    lines = [""]
     if fv.trigger is not None and fv.scope is not None:  # (a trigger is in its scope interval)
         sc = fv.scope
         lines.append(f"  trigger at tick {fv.trigger.tick} "
@@ -390,8 +393,16 @@ def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})")
     if v.triggers is not None and v.violations:
         lines.append(f"  {v.violations} of {v.triggers} triggers failed")
-    console.print(head + Text("\n".join(lines)), highlight=False)
-    if not v.values or not verbose:
+    return head + Text("\n".join(lines))
+
+
+def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
+                     tool_id: str | None = None) -> None:
+    """Violation ``v``'s :func:`_violation_text`, and with ``verbose`` the values around it."""
+    console.print(_violation_text(la, v, tool_id), highlight=False)
+    st = la.start_time_ns
+    fv = v.first_violation
+    if fv is None or not v.values or not verbose:
         return
     t = Table(show_header=True, header_style="bold", box=None, pad_edge=False)
     t.add_column("tick", justify="right")
