@@ -137,7 +137,7 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
         bad = [(la, v) for la in logs for v in la.verdicts if v.verdict == "violated"]
         if verbose:
             for la, v in bad:
-                _print_violation(console, la, v, verbose, ids.get(v.requirement))
+                _print_violation_verbose(console, la, v, ids.get(v.requirement))
         elif bad:  # (in one call: a call of rich's print costs about a millisecond)
             console.print(Text("\n").join(_violation_text(la, v, ids.get(v.requirement))
                                           for la, v in bad), highlight=False)
@@ -396,13 +396,13 @@ def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None) -> Tex
     return head + Text("\n".join(lines))
 
 
-def _print_violation(console, la: LogAudit, v: Verdict, verbose: bool = False,
-                     tool_id: str | None = None) -> None:
-    """Violation ``v``'s :func:`_violation_text`, and with ``verbose`` the values around it."""
+def _print_violation_verbose(console, la: LogAudit, v: Verdict,
+                             tool_id: str | None = None) -> None:
+    """Violation ``v``'s :func:`_violation_text`, then the values around it (``--verbose``)."""
     console.print(_violation_text(la, v, tool_id), highlight=False)
     st = la.start_time_ns
     fv = v.first_violation
-    if fv is None or not v.values or not verbose:
+    if fv is None or not v.values:
         return
     t = Table(show_header=True, header_style="bold", box=None, pad_edge=False)
     t.add_column("tick", justify="right")
