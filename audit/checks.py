@@ -126,11 +126,11 @@ def _undecodable_topics(source, schemas: Mapping[str, TopicSchema | None]) -> di
     """Topic -> why its messages cannot be decoded, for the topics that name a message type
     whose definition the log does not carry or that cannot be parsed (a custom type of a
     bag that stores no definitions: the reason names ``--msg-path``)."""
-    from fretc.logs.msg_path import MSG_PATH_HINT
-
     out: dict[str, str] = {}
     if source.kind not in ("bag", "rosbag2"):  # logs that carry their schemas report them
         return out
+    from fretc.logs.msg_path import MSG_PATH_HINT  # lazy: bags only (start-up)
+
     for topic, typ in source.topics().items():
         if typ and topic in schemas and schemas[topic] is None:
             out[topic] = (f"topic {topic}: its messages cannot be decoded: the log carries no "

@@ -1,14 +1,17 @@
-"""Finding the inputs on disk: the logs named by paths (:func:`find_logs`) and the binding
-files next to requirement files (:func:`discover_bindings`)."""
+"""Finding the inputs on disk: the logs named by paths (:func:`find_logs`) and by the LOGS
+arguments' lists and globs (:func:`expand_log_args`), and the binding files next to
+requirement files (:func:`discover_bindings`)."""
 
 from __future__ import annotations
 
+import glob
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
 from fretc.audit.config import AuditInputError
 
-__all__ = ["LOG_SUFFIXES", "discover_bindings", "find_logs"]
+__all__ = ["LOG_SUFFIXES", "discover_bindings", "expand_log_args", "find_logs"]
 
 #: File kinds audited when a folder is given.
 LOG_SUFFIXES = (".mcap", ".bag", ".csv", ".ulg", ".bin")
@@ -73,3 +76,43 @@ def _walk_logs(folder: Path) -> list[str]:
     return [x for x in out if not (Path(x).suffix.lower() == ".csv" and Path(x).stem in logs
                                    and Path(x).parent == folder)]
 
+
+def expand_log_args(args: Sequence[str]) -> list[str]:
+    """Expand ``@FILE`` lists and globs in the LOGS arguments, in order.
+
+    ``@FILE``: one path or glob per line; blank lines and ``#`` comments skipped; a relative
+    path starts at FILE's folder. A glob (``*``, ``?``, ``[``) that is not an existing path
+    is expanded with ``**`` recursion, sorted. Other arguments are kept as given (folders are
+    searched later by :func:`fretc.audit.find_logs`).
+
+    Raises:
+        AuditInputError: an unreadable list file, or a glob that matches nothing (naming
+            the file and line for a list entry).
+    """
+    out: list[str] = []
+    for a in args:
+        if a.startswith("@") and len(a) > 1:
+            lst = Path(a[1:])
+            try:
+                lines = lst.read_text(encoding="utf-8").splitlines()
+            except OSError as exc:
+                raise AuditInputError(f"{a}: cannot read the log list: {exc}") from None
+            for n, line in enumerate(lines, 1):
+                entry = line.split("#", 1)[0].strip() if line.lstrip().startswith("#") \
+                    else line.strip()
+                if not entry:
+                    continue
+                p = entry if os.path.isabs(entry) else str(lst.parent / entry)
+                out.extend(_glob_one(p, f"{lst}:{n}"))
+            continue
+        out.extend(_glob_one(a, None))
+    return out
+
+
+def _glob_one(p: str, where: str | None) -> list[str]:
+    if os.path.exists(p) or not any(c in p for c in "*?["):
+        return [p]
+    found = sorted(glob.glob(p, recursive=True))
+    if not found:
+        raise AuditInputError(f"{where + ': ' if where else ''}{p}: no file matches")
+    return found

@@ -33,14 +33,13 @@ resolves 127.0.0.1 to it) and stops it at the end; ``"auto"``,
 ``"ray://host:10001"`` or ``host:port`` connect to an existing cluster, whose workers must
 have fretc installed (``pip install 'fretc[ray]'``) and see the log paths (shared storage).
 
-Log lists (:func:`expand_log_args`, also for local runs): paths, folders, globs (``**``
+Log lists (:func:`fretc.audit.discovery.expand_log_args`, also for local runs): paths, folders, globs (``**``
 allowed) and ``@FILE`` (one path or glob per line, ``#`` comments; relative paths start at
 FILE's folder), so a cluster job can be started from an index of a fleet's recordings.
 """
 
 from __future__ import annotations
 
-import glob
 import hashlib
 import logging
 import os
@@ -66,7 +65,7 @@ from fretc.audit.verdict import LogAudit, Verdict
 if TYPE_CHECKING:
     from fretc.audit.workers import LogProgress
 
-__all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "expand_log_args", "connect",
+__all__ = ["RayUnavailable", "ShippedPlan", "ship_plan", "connect",
            "audit_logs_ray", "error_audit", "RAY_HINT"]
 
 #: How to get Ray (printed when ``--ray`` is used without it).
@@ -78,47 +77,6 @@ class RayUnavailable(AuditInputError):
 
 
 # --------------------------------------------------------------------------- log lists
-def expand_log_args(args: Sequence[str]) -> list[str]:
-    """Expand ``@FILE`` lists and globs in the LOGS arguments, in order.
-
-    ``@FILE``: one path or glob per line; blank lines and ``#`` comments skipped; a relative
-    path starts at FILE's folder. A glob (``*``, ``?``, ``[``) that is not an existing path
-    is expanded with ``**`` recursion, sorted. Other arguments are kept as given (folders are
-    searched later by :func:`fretc.audit.find_logs`).
-
-    Raises:
-        AuditInputError: an unreadable list file, or a glob that matches nothing (naming
-            the file and line for a list entry).
-    """
-    out: list[str] = []
-    for a in args:
-        if a.startswith("@") and len(a) > 1:
-            lst = Path(a[1:])
-            try:
-                lines = lst.read_text(encoding="utf-8").splitlines()
-            except OSError as exc:
-                raise AuditInputError(f"{a}: cannot read the log list: {exc}") from None
-            for n, line in enumerate(lines, 1):
-                entry = line.split("#", 1)[0].strip() if line.lstrip().startswith("#") \
-                    else line.strip()
-                if not entry:
-                    continue
-                p = entry if os.path.isabs(entry) else str(lst.parent / entry)
-                out.extend(_glob_one(p, f"{lst}:{n}"))
-            continue
-        out.extend(_glob_one(a, None))
-    return out
-
-
-def _glob_one(p: str, where: str | None) -> list[str]:
-    if os.path.exists(p) or not any(c in p for c in "*?["):
-        return [p]
-    found = sorted(glob.glob(p, recursive=True))
-    if not found:
-        raise AuditInputError(f"{where + ': ' if where else ''}{p}: no file matches")
-    return found
-
-
 # --------------------------------------------------------------------------- shipping a plan
 @dataclass
 class ShippedPlan:

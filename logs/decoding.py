@@ -13,17 +13,18 @@ from __future__ import annotations
 import functools
 import struct
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rosbags.serde import SerdeError
-from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
-from rosbags.typesys.msg import normalize_msgtype
-from rosbags.typesys.store import Typestore
 
 from fretc.logs.columnar import ColumnarDecoder, columnar_decoder
 from fretc.logs.encodings import SELF_DESCRIBING, UNSUPPORTED_ENCODINGS, EncodingError, other_decoder
 from fretc.logs.known_types import layout_mismatch
 from fretc.logs.selective import selective_decoder
+
+if TYPE_CHECKING:  # rosbags' type system is imported when a schema is built (start-up of
+    # the logs that need none: json, protobuf, cbor, ULog, CSV)
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["UnsupportedSchema", "build_typestore", "decoder_for", "schema_decoder",
            "schema_columnar",
@@ -144,6 +145,9 @@ def _has_separator(text: str) -> bool:
 
 @functools.lru_cache(maxsize=_STORES_KEPT)
 def _build_typestore(schema_encoding: str, name: str, text: str) -> tuple[Typestore, str]:
+    from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
+    from rosbags.typesys.msg import normalize_msgtype
+
     typename = normalize_msgtype(_service_type(name) if schema_encoding == "ros2msg" else name)
     if schema_encoding in ("ros2msg", "unknown"):
         text = service_event_text(name, text)

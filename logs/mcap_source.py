@@ -27,7 +27,6 @@ from typing import Any, BinaryIO
 from mcap.opcode import Opcode
 from mcap.records import Channel, Chunk, ChunkIndex, Message as McapMessage, Schema
 from mcap.stream_reader import CRCValidationError
-from rosbags.typesys.msg import normalize_msgtype
 
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem, LogError
@@ -554,4 +553,6 @@ def _type_name(message_encoding: str, schema: Schema | None) -> str:
         return ""
     if message_encoding in SELF_DESCRIBING:
         return type_name(schema.name)
+    from rosbags.typesys.msg import normalize_msgtype  # lazy: ROS logs only (start-up)
+
     return normalize_msgtype(schema.name)

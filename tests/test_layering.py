@@ -114,13 +114,30 @@ def test_an_audit_with_its_automata_cached_loads_no_spot_junit_or_process_pool(t
             "from fretc.cli import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
             "loaded = sorted(m for m in sys.modules if m in ('spot', 'fretc.reports.junit', "
-            "'rich.progress', 'multiprocessing', 'concurrent.futures'))\n"
+            "'rich.progress', 'multiprocessing', 'concurrent.futures', 'fretc.audit.fleet'))\n"
             "print('LOADED', loaded)\n")
     env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))
     for _ in range(2):  # the first run fills the cache
         out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
                              text=True, timeout=300, env=env)
     assert "LOADED []" in out.stdout, (out.stdout, out.stderr[-2000:])
+
+
+def test_the_command_starts_numpy_without_blas_threads():
+    """fretc makes no BLAS call: the command keeps OpenBLAS to one thread (its threads' start
+    is CPU of every command), unless the user set ``OPENBLAS_NUM_THREADS``."""
+    if not os.path.isdir("/proc/self/task"):
+        import pytest
+        pytest.skip("no /proc/self/task to count the threads (not Linux)")
+    code = "import os, fretc.cli, numpy; print(len(os.listdir('/proc/self/task')))"
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, env=env, check=True)
+    assert out.stdout.strip() == "1", out.stdout
+    if (os.cpu_count() or 1) > 1:  # the user's own choice is kept
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             timeout=120, env=dict(env, OPENBLAS_NUM_THREADS="2"), check=True)
+        assert out.stdout.strip() == "2", out.stdout
 
 
 def test_every_package_is_installed():

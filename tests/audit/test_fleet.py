@@ -16,6 +16,7 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 from fretc.audit import fleet
+from fretc.audit import discovery
 from fretc.audit import AuditConfig, AuditInputError, audit_log, audit_logs, load_plan
 from fretc.audit.verdict import audit_json, exit_code
 
@@ -208,15 +209,15 @@ def test_log_lists_and_globs(tmp_path):
         (tmp_path / n).write_bytes(b"")
     lst = tmp_path / "logs.txt"
     lst.write_text("# fleet index\n\na/*.mcap\n  b.mcap  \n" + str(tmp_path / "a/1.mcap") + "\n")
-    got = fleet.expand_log_args([f"@{lst}", str(tmp_path / "**" / "2.mcap")])
+    got = discovery.expand_log_args([f"@{lst}", str(tmp_path / "**" / "2.mcap")])
     assert got == [str(tmp_path / "a/1.mcap"), str(tmp_path / "a/2.mcap"),
                    str(tmp_path / "b.mcap"), str(tmp_path / "a/1.mcap"),
                    str(tmp_path / "a/2.mcap")]
     with pytest.raises(AuditInputError, match=r"logs.txt:1: .*nope\*: no file matches"):
         lst.write_text("nope*\n")
-        fleet.expand_log_args([f"@{lst}"])
+        discovery.expand_log_args([f"@{lst}"])
     with pytest.raises(AuditInputError, match="cannot read the log list"):
-        fleet.expand_log_args([f"@{tmp_path / 'missing.txt'}"])
+        discovery.expand_log_args([f"@{tmp_path / 'missing.txt'}"])
 
 
 def test_cli_reads_a_log_list(tmp_path):

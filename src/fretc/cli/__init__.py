@@ -18,6 +18,12 @@ from __future__ import annotations
 import os
 import sys
 
+# numpy's OpenBLAS starts a thread per core when numpy is imported; fretc makes no BLAS call
+# (no matrix product, no linalg), and those threads' start cost a command 0.1 s to 0.2 s of
+# CPU on a 2-core machine. One thread unless the user chose otherwise (OpenBLAS's own
+# variable; set before anything imports numpy).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import click
 
 from fretc.common.errors import FretcError, error_text

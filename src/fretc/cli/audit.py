@@ -96,7 +96,7 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
 
     from fretc.audit import AuditInputError, find_logs, load_plan
     from fretc.reports.terminal import AuditProgress, escape, print_summary
-    from fretc.audit.fleet import expand_log_args
+    from fretc.audit.discovery import expand_log_args
     from fretc.audit.statistics import plan_statistics
     from fretc.audit.verdict import audit_json, exit_code
 

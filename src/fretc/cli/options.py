@@ -285,11 +285,11 @@ def run_audits(plan: AuditPlan, paths: Sequence[str], jobs: int = 1,
     started or reached."""
     # lazy: the audit engine (numpy, mcap, rosbags) is loaded only when a command runs
     from fretc.audit import audit_logs
-    from fretc.audit.fleet import RayUnavailable, audit_logs_ray
 
     opts = (ctx.meta.get(META) if ctx is not None else None) or {}
     if "ray" not in opts:
         return audit_logs(plan, paths, jobs=jobs, progress=progress)
+    from fretc.audit.fleet import RayUnavailable, audit_logs_ray  # lazy: --ray only
     try:
         return audit_logs_ray(plan, paths, address=opts["ray"],
                               retries=opts.get("retries") or 0, progress=progress)
