@@ -2,8 +2,9 @@
 against pyulog's own read, and a json / protobuf MCAP audit against a plain read and decode
 of every message (the ``mcap`` reader with Python's ``json``, or with mcap-protobuf-support's
 decoder). Each figure is the CPU time (user + system) of a command run as a user runs it,
-start-up included; the ratio is ours over the baseline. Bytecode caches are written first
-(one untimed run of each command), as an installed fretc has them.
+start-up included, the least of ``--repeat`` runs (default 3) alternated with its
+baseline's; the ratio is ours over the baseline. Bytecode caches are written first (one
+untimed run of each command), as an installed fretc has them.
 
 Two sizes of each input:
 
@@ -133,16 +134,28 @@ def _in_process(kind: str, log: Path, fret: Path, short: Path, cwd: Path) -> lis
 
 
 def _cpu(cmd: list[str], cwd: Path) -> float:
-    """CPU seconds (user + system) of ``cmd`` run to its end (after one untimed run that
-    writes the bytecode caches)."""
+    """CPU seconds (user + system) of ``cmd`` run to its end."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    subprocess.run(cmd, cwd=cwd, capture_output=True, env=env)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, env=env)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if out.returncode not in (0, 1, 3):
         raise SystemExit(f"{' '.join(cmd)} failed ({out.returncode}): {out.stderr[-500:]}")
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+#: runs of each command (``--repeat``): alternated, the best of each kept
+REPEAT = [3]
+
+
+def _best(*cmds: list[str], cwd: Path = ROOT) -> list[float]:
+    """The least CPU seconds of each command over :data:`REPEAT` rounds, the commands
+    alternated within a round (a machine whose speed drifts slows both alike), after one
+    untimed run of each that writes the bytecode caches, as an installed fretc has them."""
+    for cmd in cmds:
+        _cpu(cmd, cwd)
+    runs = [[_cpu(cmd, cwd) for cmd in cmds] for _ in range(REPEAT[0])]
+    return [min(r[i] for r in runs) for i in range(len(cmds))]
 
 
 def _fretc() -> list[str]:
@@ -211,7 +224,10 @@ def main() -> int:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--copies", type=int, default=20, help="copies of the flight (long ULog)")
     ap.add_argument("--minutes", type=float, default=20.0, help="length of the long MCAP")
+    ap.add_argument("--repeat", type=int, default=3,
+                    help="alternated runs of each command (best kept)")
     args = ap.parse_args()
+    REPEAT[0] = max(1, args.repeat)
     if not PX4.exists():
         print(f"{PX4} is absent (../shared)")
         return 2
@@ -222,17 +238,17 @@ def main() -> int:
 
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
-        start = _cpu(_fretc() + ["--version"], ROOT)
+        start, = _best(_fretc() + ["--version"])
         print(f"start-up: fretc --version {start:.2f} s CPU")
         (tmp / "px4.fret").write_text(PX4_FRET)
         (tmp / "px4.bindings.toml").write_text(PX4_BINDINGS)
         long = tmp / "long.ulg"
         long_ulog(PX4, long, args.copies)
         for label, log in (("short", PX4), (f"long ({args.copies} copies)", long)):
-            ours = _cpu(_fretc() + ["audit", "-r", str(tmp / "px4.fret"), str(log),
-                                    "--no-progress"], ROOT)
-            plain = _cpu([sys.executable, "-c", PLAIN_ULOG, str(log), ",".join(TOPICS)], ROOT)
-            every = _cpu([sys.executable, "-c", PLAIN_ULOG, str(log), ""], ROOT)
+            ours, plain, every = _best(
+                _fretc() + ["audit", "-r", str(tmp / "px4.fret"), str(log), "--no-progress"],
+                [sys.executable, "-c", PLAIN_ULOG, str(log), ",".join(TOPICS)],
+                [sys.executable, "-c", PLAIN_ULOG, str(log), ""])
             print(f"ULog {label}, {log.stat().st_size / 1e6:.1f} MB:")
             _line("3 requirements", ours, f"pyulog's read of the {len(TOPICS)} topics", plain)
             _line("3 requirements", ours, "pyulog's read of every topic", every)
@@ -249,21 +265,21 @@ def main() -> int:
             short = copy_as(ROOT / "traces" / "stop_delay.mcap", tmp / f"stop_{enc}.mcap", enc)
             longer = copy_as(syn, tmp / f"syn_{enc}.mcap", enc)
             print(f"{enc} MCAP:")
-            ours = _cpu(_fretc() + ["audit", "-r", "requirements", str(short),
-                                    "--no-progress"], ROOT)
-            plain = _cpu([sys.executable, "-c", PLAIN_MCAP, str(short), enc], ROOT)
+            ours, plain = _best(
+                _fretc() + ["audit", "-r", "requirements", str(short), "--no-progress"],
+                [sys.executable, "-c", PLAIN_MCAP, str(short), enc])
             _line("short (stop_delay, 10 topics, every requirement)", ours,
                   "plain read + decode of every message", plain)
-            ours = _cpu(_fretc() + ["audit", "-r", str(tmp / "syn.fret"), str(longer),
-                                    "--no-progress"], ROOT)
-            plain = _cpu([sys.executable, "-c", PLAIN_MCAP, str(longer), enc], ROOT)
+            ours, plain = _best(
+                _fretc() + ["audit", "-r", str(tmp / "syn.fret"), str(longer), "--no-progress"],
+                [sys.executable, "-c", PLAIN_MCAP, str(longer), enc])
             _line(f"long ({args.minutes:g} min, {longer.stat().st_size / 1e6:.0f} MB)", ours,
                   "plain read + decode of every message", plain)
             ours, plain = _in_process(enc, longer, tmp / "syn.fret", short, ROOT)
             print(f"  long, in one process: audit {ours:.2f} s CPU, plain read + decode "
                   f"{plain:.2f} s CPU: ratio {ours / plain:.2f}")
-        ours = _cpu(_fretc() + ["audit", "-r", str(tmp / "syn.fret"), str(syn),
-                                "--no-progress"], ROOT)
+        ours, = _best(_fretc() + ["audit", "-r", str(tmp / "syn.fret"), str(syn),
+                                 "--no-progress"])
         print("cdr MCAP (the same long log, for comparison):")
         print(f"  fretc audit {ours:.2f} s CPU")
     return 0
