@@ -156,7 +156,8 @@ class Binding:
 def compile_expression(name: str, expr: str, *, source: str = "<expression>",
                        line: int | None = None, col: int | None = None, exact: bool = True,
                        refs: dict[str, Binding] | None = None, nan: str = "unread",
-                       inf: str = "unread", path_vars: dict | None = None) -> Binding:
+                       inf: str = "unread", path_vars: dict | None = None,
+                       parsed: tuple[Expr, frozenset[str]] | None = None) -> Binding:
     """Parse, check and compile one binding expression.
 
     Args:
@@ -172,6 +173,9 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
             NaN, but for REP 117 fields) or ``"value"``.
         path_vars: the binding file's ``[path_variables]`` (FoxQL's ``$name`` in filters and
             slices): name -> bool, int, float or string.
+        parsed: what :func:`fretc.signals.bindings.parse.parse_expression` returned for
+            ``expr`` and ``path_vars``, when the caller has it (a binding file parses each
+            expression once, to order the variables by their references).
 
     Raises:
         BindingError: bad name, syntax error, unknown function, wrong arity, a bare topic
@@ -181,7 +185,7 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     if not VARNAME.match(name):
         raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
                           "quoted FRETish variable")
-    node, topics = parse_expression(expr, where, path_vars)
+    node, topics = parsed if parsed is not None else parse_expression(expr, where, path_vars)
     if any(isinstance(n, Ref) for n in walk(node)):
         trees = {n: b.ast for n, b in (refs or {}).items()}
         node = substitute(node, trees, where, name)

@@ -210,10 +210,11 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
                       path_vars: dict | None = None) -> dict[str, Binding]:
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
     deps: dict[str, list[str]] = {}
+    parsed: dict[str, tuple] = {}
     for name, (expr, line, col, exact) in pending.items():
-        node, _t = parse_expression(expr, ExprLocation(source, name, line, col, exact),
-                                    path_vars)
-        deps[name] = [r for r in refs(node) if r in pending]
+        parsed[name] = parse_expression(expr, ExprLocation(source, name, line, col, exact),
+                                        path_vars)
+        deps[name] = [r for r in refs(parsed[name][0]) if r in pending]
     state: dict[str, int] = {}
     compiled: dict[str, Binding] = {}
 
@@ -235,7 +236,7 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
         expr, line, col, exact = pending[name]
         compiled[name] = compile_expression(name, expr, source=source, line=line, col=col,
                                             exact=exact, refs=compiled, nan=nan, inf=inf,
-                                            path_vars=path_vars)
+                                            path_vars=path_vars, parsed=parsed[name])
         state[name] = 2
 
     for name in pending:

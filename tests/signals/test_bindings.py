@@ -393,3 +393,27 @@ def test_a_tick_topic_is_named_as_inspect_lists_it():
         assert b.tick.topic == name
     for bad in ("", " ", "a\x00b", '"unbalanced', '""'):
         assert topic_name(bad) is None, bad
+
+
+def test_a_binding_file_parses_each_expression_once(monkeypatch):
+    """Each variable's text is parsed once, references included (the parse that orders the
+    variables is the one compiled), and the compiled bindings are those of a parse each."""
+    from fretc.signals.bindings import binding, files, parse
+
+    calls: list[str] = []
+    real = parse.parse_expression
+
+    def counted(expr, where, path_vars=None):
+        calls.append(expr)
+        return real(expr, where, path_vars)
+
+    text = ('[tick]\nperiod = "100 ms"\n[variables]\nnear = "min(/scan.ranges) < 0.9"\n'
+            'fast = "abs(/cmd_vel.linear.x) > 0.4"\nboth = "near & fast"\n')
+    once = parse_bindings(text, "b.toml")
+    monkeypatch.setattr(files, "parse_expression", counted)
+    monkeypatch.setattr(binding, "parse_expression", counted)
+    again = parse_bindings(text, "b.toml")
+    assert sorted(calls) == sorted(["min(/scan.ranges) < 0.9", "abs(/cmd_vel.linear.x) > 0.4",
+                                    "near & fast"])
+    assert {n: (repr(b.ast), b.topics) for n, b in again.variables.items()} == \
+        {n: (repr(b.ast), b.topics) for n, b in once.variables.items()}
