@@ -45,8 +45,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fretc.common import cache as fretc_cache
-
-from fretc.compiler import code_cache
+from fretc.compiler import code_cache, text_cache
 from fretc.compiler.automata import Automaton, LTL3Automata, ltl3_automata
 from fretc.compiler.build import Compiled
 from fretc.compiler.ir import Node
@@ -477,19 +476,20 @@ def _render(monitors: list[MonitorSource], skipped, module_name: str) -> str:
                 if text is None:
                     text = encoded[id(aut.table)] = encode_table(aut.table)
                 setattr(m, f"{which}_table", tables.setdefault(text, len(tables)))
-    env = _env()
-    shape_template = env.get_template("monitor_shape.py.j2")
-    # one shape per distinct (step code, KEY, STATUS_NOTE, tables): the code is rendered
-    # without the variable names, so equal text means equal behaviour
-    shapes: dict[tuple, int] = {}
-    for m in monitors:
-        ident = (shape_template.render(m=m), m.key, m.status_note, m.bad_table, m.good_table)
-        m.shape = shapes.setdefault(ident, len(shapes))
-    return env.get_template("monitor_module.py.j2").render(
-        module_name=module_name, monitors=monitors, skipped=skipped, digest=digest,
-        tables=list(tables),
-        shapes=[_Shape(key, note, bad, good, _code_literal(code))
-                for code, key, note, bad, good in shapes])
+    def render() -> str:  # Jinja, when the text is not in the cache (text_cache)
+        env = _env()
+        shape_template = env.get_template("monitor_shape.py.j2")
+        # one shape per distinct (step code, KEY, STATUS_NOTE, tables): the code is rendered
+        # without the variable names, so equal text means equal behaviour
+        shapes: dict[tuple, int] = {}
+        for m in monitors:
+            ident = (shape_template.render(m=m), m.key, m.status_note, m.bad_table, m.good_table)
+            m.shape = shapes.setdefault(ident, len(shapes))
+        return env.get_template("monitor_module.py.j2").render(
+            module_name=module_name, monitors=monitors, skipped=skipped, digest=digest,
+            tables=list(tables), shapes=[_Shape(key, note, bad, good, _code_literal(code))
+                                         for code, key, note, bad, good in shapes])
+    return text_cache.rendered(module_name, repr((monitors, skipped, module_name)), monitors, render)
 
 
 @dataclass(frozen=True)

@@ -105,16 +105,18 @@ def test_emit_ltl_starts_without_heavy_libraries(tmp_path):
 
 
 def test_an_audit_with_its_automata_cached_loads_no_spot_junit_or_process_pool(tmp_path):
-    """``fretc audit`` of one log reads its LTL3 automata from the cache: Spot is not loaded
-    for its version (the cache key), nor the JUnit writer without ``--junit``, the progress
-    bar off a terminal, or the process pool without ``-j`` (start-up of every audit)."""
+    """``fretc audit`` of one log reads its LTL3 automata and its monitor module's text from
+    the cache: neither Spot (for its version, the cache key) nor Jinja is loaded, nor the
+    JUnit writer without ``--junit``, the progress bar off a terminal, the process pool
+    without ``-j`` or the Ray fleet without ``--ray`` (start-up of every audit)."""
     code = ("import sys\n"
             "sys.argv = ['fretc', 'audit', '-r', 'requirements', 'traces/stop_delay.mcap',\n"
             "            '--no-progress']\n"
             "from fretc.cli import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
             "loaded = sorted(m for m in sys.modules if m in ('spot', 'fretc.reports.junit', "
-            "'rich.progress', 'multiprocessing', 'concurrent.futures', 'fretc.audit.fleet'))\n"
+            "'rich.progress', 'multiprocessing', 'concurrent.futures', 'fretc.audit.fleet', "
+            "'jinja2'))\n"
             "print('LOADED', loaded)\n")
     env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))
     for _ in range(2):  # the first run fills the cache

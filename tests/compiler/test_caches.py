@@ -4,6 +4,8 @@ automaton construction."""
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
 
 import pytest
 
@@ -11,6 +13,8 @@ from fretc.compiler import automata, codegen, ltl3, spot_monitors
 from fretc.compiler.build import compile_entry
 from fretc.compiler.codegen import render_module
 from fretc.fretish import parser as P
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 # same helpers as entry/load in tests/compiler/test_monitors_codegen.py (kept: each test file
@@ -286,13 +290,94 @@ def test_templates_compiled_once_and_reloaded_from_disk(tmp_path, monkeypatch):
 
     monkeypatch.setattr(jinja2.Environment, "compile", counting)
     codegen._env.cache_clear()
+    shutil.rmtree(tmp_path / "monitor-text")  # rendered again, not read (text_cache)
     assert render_module(compiled, "m") == first and compiles == []
     for damage in (lambda b: b[:40], lambda b: b[:-10] + bytes(10), lambda b: b[:60]):
         entries[0].write_bytes(damage(entries[0].read_bytes()))
         codegen._env.cache_clear()
         compiles.clear()
+        shutil.rmtree(tmp_path / "monitor-text")
         assert render_module(compiled, "m") == first and len(compiles) == 1
     codegen._env.cache_clear()
+
+
+def _no_jinja(monkeypatch) -> list:
+    """Count the renders that reach Jinja (``codegen._env``)."""
+    calls: list = []
+    real = codegen._env
+
+    def counted():
+        calls.append(1)
+        return real()
+
+    monkeypatch.setattr(codegen, "_env", counted)
+    return calls
+
+
+def _shapes(module) -> dict:
+    return {i: m.source.shape for i, m in module.monitors.items()}
+
+
+@pytest.mark.parametrize("fret", sorted(p.name for p in
+                                        (REPO / "requirements").glob("*.fret")) + ["sentences"])
+def test_module_text_from_the_cache_is_the_rendered_text(fret, tmp_path, monkeypatch):
+    """Cold, warm (read from disk, Jinja not called) and cache off give the same module text
+    and the same shape of every monitor, for every requirement file of the repository."""
+    from fretc.compiler.codegen import build_monitor_module
+    from fretc.fretish.files import load_requirements
+
+    entries = ([entry(f"R{i}", t) for i, t in enumerate(SENTENCES)] if fret == "sentences"
+               else load_requirements(str(REPO / "requirements" / fret)))
+    compiled = [compile_entry(e) for e in entries]
+    renders = _no_jinja(monkeypatch)
+    got = []
+    for cache_dir in (tmp_path / "c", tmp_path / "c", ""):  # cold, warm, off
+        monkeypatch.setenv("FRETC_CACHE_DIR", str(cache_dir))
+        renders.clear()
+        module = build_monitor_module([compile_entry(e) for e in entries] if got else compiled,
+                                      "m")
+        got.append((module.text, _shapes(module), len(renders)))
+    assert got[0][:2] == got[1][:2] == got[2][:2]
+    assert [n for _t, _s, n in got] == [1, 0, 1]
+
+
+def test_module_text_entry_of_other_inputs_code_or_damaged_is_rendered(tmp_path, monkeypatch):
+    """One entry per module name: another requirement under the same name replaces it; an
+    entry made from other inputs or other code, or damaged, is a miss (rendered again, the
+    same text), never another module's text."""
+    from fretc.compiler import text_cache
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    one = [compile_entry(entry("R", SENTENCES[0]))]
+    two = [compile_entry(entry("R", SENTENCES[3]))]
+    renders = _no_jinja(monkeypatch)
+    text_one, text_two = render_module(one, "m"), render_module(two, "m")
+    assert text_one != text_two and len(renders) == 2
+    assert len(list((tmp_path / "monitor-text").iterdir())) == 1
+    assert render_module(one, "m") == text_one and len(renders) == 3  # replaced: a miss
+    assert render_module(one, "m") == text_one and len(renders) == 3  # now a hit
+    monkeypatch.setattr(text_cache, "_CODE_KEY", "other code")
+    assert render_module(one, "m") == text_one and len(renders) == 4
+    (f,) = (tmp_path / "monitor-text").iterdir()
+    for damage in (lambda b: b[:len(b) // 2], lambda b: b[:-10] + bytes(10),
+                   lambda b: b"x" + b[1:]):
+        f.write_bytes(damage(f.read_bytes()))
+        renders.clear()
+        assert render_module(one, "m") == text_one and len(renders) == 1
+
+
+def test_module_text_code_key_follows_the_templates(tmp_path, monkeypatch):
+    from fretc.compiler import text_cache
+
+    monkeypatch.setattr(text_cache, "_CODE_KEY", None)
+    key = text_cache._code_key()
+    copy = tmp_path / "templates"
+    shutil.copytree(text_cache._TEMPLATES, copy)
+    shape = copy / "monitor_shape.py.j2"
+    shape.write_text(shape.read_text() + "\n")
+    monkeypatch.setattr(text_cache, "_TEMPLATES", str(copy))
+    monkeypatch.setattr(text_cache, "_CODE_KEY", None)
+    assert text_cache._code_key() != key
 
 
 def test_binding_grammar_tables_cached_and_same_parse(tmp_path, monkeypatch):

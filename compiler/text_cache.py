@@ -1,0 +1,93 @@
+"""The rendered text of a monitor module kept on disk between runs, as
+:mod:`fretc.compiler.code_cache` keeps its bytecode.
+
+Every ``fretc audit`` renders its requirements' monitor module with Jinja before it checks and
+loads it; loading Jinja and rendering cost about 40 ms of CPU at each start, the same work
+each time for unchanged requirements. The text is a function of what the templates are fed
+and of the code that feeds and renders them, so :func:`rendered` keys an entry by all of it:
+
+* the monitors' and skipped requirements' ``repr`` and the module name (the template's whole
+  input: :class:`fretc.compiler.codegen.MonitorSource` is a dataclass whose fields, automata
+  and IR atoms included, all appear in its ``repr``);
+* the text of every Jinja template of :mod:`fretc.templates`, of
+  :mod:`fretc.compiler.codegen` (the environment, filters and the shape literal code) and of
+  this module;
+* Jinja's and Python's versions (the text of Jinja's ``__init__.py``, which names its
+  version, read without importing Jinja).
+
+One entry per module name (``<cache>/monitor-text/<key>``), replaced by the next render of a
+module of that name, holding the SHA-256 of that key and of its payload (the text and each
+monitor's shape index, as JSON). An entry made from anything else, or damaged, is a miss: the
+module is rendered again (:mod:`fretc.common.cache`: the cache changes speed, never output).
+The text read from the cache is checked and loaded as a rendered one is
+(:func:`fretc.compiler.codegen.check_module`). ``FRETC_CACHE_DIR=""`` turns it off.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from fretc.common import cache
+
+__all__ = ["rendered"]
+
+KIND = "monitor-text"
+_MAGIC = b"fretc monitor-text 1\n"
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_TEMPLATES = os.path.join(os.path.dirname(_HERE), "templates")
+_CODE_KEY: str | None = None
+
+
+def _code_key() -> str:
+    """A key of the code that renders a module (computed once a process): the templates,
+    ``codegen.py``, this module, Jinja's ``__init__.py`` and Python's version."""
+    global _CODE_KEY
+    if _CODE_KEY is None:
+        import importlib.util
+
+        spec = importlib.util.find_spec("jinja2")  # finds, does not import
+        paths = [os.path.join(_TEMPLATES, n) for n in sorted(os.listdir(_TEMPLATES))
+                 if n.endswith(".j2")]
+        paths += [os.path.join(_HERE, "codegen.py"), os.path.abspath(__file__),
+                  str(spec.origin if spec is not None else "")]
+        texts = [sys.version]
+        for path in paths:
+            try:
+                with open(path, encoding="utf-8") as f:
+                    texts.append(f"{path}\n{f.read()}")
+            except OSError:
+                texts.append(f"{path}\nunreadable")
+        _CODE_KEY = cache.key_of(KIND, *texts)
+    return _CODE_KEY
+
+
+def rendered(module_name: str, inputs: str, monitors: Sequence[Any],
+             render: Callable[[], str]) -> str:
+    """The module text ``render()`` gives for ``inputs`` (the ``repr`` of all the template's
+    input), from the cache when a previous render of ``module_name`` had the same inputs and
+    code; each monitor's ``shape`` (its index in the module's ``_SHAPES``) is set as
+    ``render`` sets it. Otherwise ``render()`` is called and its text kept. Raises what
+    ``render`` raises."""
+    name = cache.key_of(KIND, module_name)
+    made_from = cache.digest("\x00".join((_code_key(), module_name, inputs)).encode(
+        "utf-8", "surrogatepass"))
+    payload = cache.read_sealed(KIND, name, _MAGIC, made_from)
+    if payload is not None:
+        try:
+            got = json.loads(payload)
+            text, shapes = got["text"], got["shapes"]
+        except (ValueError, KeyError, TypeError):
+            got = None
+        if (got is not None and isinstance(text, str) and isinstance(shapes, list)
+                and len(shapes) == len(monitors)):
+            for m, shape in zip(monitors, shapes):
+                m.shape = shape
+            return text
+    text = render()
+    cache.write_sealed(KIND, name, _MAGIC, made_from, json.dumps(
+        {"text": text, "shapes": [m.shape for m in monitors]}).encode("utf-8", "surrogatepass"))
+    return text
