@@ -335,10 +335,11 @@ def bench_entities(workdir: Path, entities: int, repeat: int) -> None:
         sys.exit(1)
     fretc = Path(sys.executable).with_name("fretc")
     cmd = ([str(fretc)] if fretc.exists() else [sys.executable, "-m", "fretc"])
-    one = [_child_cpu(cmd + ["audit", "-r", str(fret), str(log), "--no-progress"])
-           for _ in range(repeat)]
-    without = [_child_cpu(cmd + ["audit", "-r", str(plain_fret), str(log), "--no-progress"])
-               for _ in range(repeat)]
+    one, without = [], []
+    for _ in range(repeat):  # alternated: a machine whose speed drifts slows both alike
+        one.append(_child_cpu(cmd + ["audit", "-r", str(fret), str(log), "--no-progress"]))
+        without.append(_child_cpu(cmd + ["audit", "-r", str(plain_fret), str(log),
+                                         "--no-progress"]))
     print(f"the commands (fretc audit, a fresh process each, start-up included, best of "
           f"{repeat}): {min(one):.2f} s CPU with entities, {min(without):.2f} s without "
           f"(ratio {min(one) / min(without):.2f} x)")
