@@ -23,7 +23,6 @@ from fretc.compiler.build import compile_entries
 from fretc.compiler.codegen import MonitorModule, MonitorSource, build_monitor_modules
 from fretc.common.errors import FretishError
 from fretc.fretish.files import load_requirements
-from fretc.fretish.parser import parse
 from fretc.common.units import NS_PER_S, format_period
 
 from fretc.signals.bindings import Bindings
@@ -41,10 +40,14 @@ MODULE_PREFIX = "fretc_audit_"
 
 def _has_time_units(entry) -> bool:
     """The requirement's text has a duration in time units (not ``ticks``)."""
-    try:
-        req = parse(entry.text)
-    except Exception:  # reported when compiled
-        return False
+    req = entry.requirement  # as the requirement file's reader parsed it
+    if req is None:
+        from fretc.fretish.parser import parse  # lazy: Lark (start-up)
+
+        try:
+            req = parse(entry.text)
+        except Exception:  # reported when compiled
+            return False
     d = getattr(req.timing, "duration", None)
     return d is not None and d.unit != "ticks"
 

@@ -22,9 +22,8 @@ import pickle
 import sys
 from collections.abc import Callable
 
-import lark
-
 from fretc.common import cache
+from fretc.common.libraries import lark_init_text
 from fretc.fretish.entry import RequirementEntry
 
 __all__ = ["cached_entries", "code_key"]
@@ -41,7 +40,8 @@ _CODE_KEY: str | None = None
 def code_key() -> str:
     """A key of the code that makes a ``.fret`` file's entries: the text of every module of
     :mod:`fretc.fretish` and its grammar, of :mod:`fretc.common.units` and
-    :mod:`fretc.common.errors`, and Lark's and Python's versions (computed once a process)."""
+    :mod:`fretc.common.errors`, and Lark's (:func:`fretc.common.libraries.lark_init_text`) and Python's versions
+    (computed once a process)."""
     global _CODE_KEY
     if _CODE_KEY is None:
         names = sorted(n for n in os.listdir(_HERE) if n.endswith((".py", ".lark")))
@@ -50,8 +50,9 @@ def code_key() -> str:
                 os.path.join(_COMMON, n) for n in _OTHER]:
             with open(path, encoding="utf-8") as f:
                 texts.append(f"{os.path.basename(path)}\n{f.read()}")
-        _CODE_KEY = cache.key_of(KIND, lark.__version__, sys.version, *texts)
+        _CODE_KEY = cache.key_of(KIND, lark_init_text(), sys.version, *texts)
     return _CODE_KEY
+
 
 
 def _name(source: str) -> str:

@@ -53,7 +53,6 @@ from collections.abc import Callable, Iterable
 from typing import NoReturn
 
 from fretc.common.errors import FretishError, FretishFileError, FretishSyntaxError
-from fretc.fretish.parser import parse
 from fretc.fretish.entry import Fraction, Requirement, RequirementEntry  # entry's imports
 from fretc.fretish.entry_cache import cached_entries
 from fretc.fretish.sources import fret_origin, load_tool_source, tool_source_kind
@@ -136,7 +135,9 @@ class _FretReader:
 
     def __init__(self, path: str, text: str | None = None, parse_sentence=None):
         self.source = str(path)
-        self.parse = parse_sentence or parse
+        if parse_sentence is None:  # lazy: Lark only when a file is parsed (start-up time)
+            from fretc.fretish.parser import parse as parse_sentence
+        self.parse = parse_sentence
         self.lines = (_read_text(path) if text is None else text).split("\n")
         self.pending: list[_Pending] = []
         self.seen: dict[str, int] = {}
@@ -396,6 +397,7 @@ def _load_json(path: str) -> list[RequirementEntry]:
             extra={k2: v for k2, v in obj.items() if k2 not in _KNOWN},
             origin=fret_origin(source, obj))
         try:
+            from fretc.fretish.parser import parse  # lazy: as _FretReader
             entry.requirement = parse(text, source=source, line=line, column=col)
         except FretishSyntaxError as e:
             entry.error = e

@@ -105,10 +105,11 @@ def test_emit_ltl_starts_without_heavy_libraries(tmp_path):
 
 
 def test_an_audit_with_its_automata_cached_loads_no_spot_junit_or_process_pool(tmp_path):
-    """``fretc audit`` of one log reads its LTL3 automata and its monitor module's text from
-    the cache: neither Spot (for its version, the cache key) nor Jinja is loaded, nor the
-    JUnit writer without ``--junit``, the progress bar off a terminal, the process pool
-    without ``-j`` or the Ray fleet without ``--ray`` (start-up of every audit)."""
+    """``fretc audit`` of one log reads its LTL3 automata, its monitor module's text and its
+    parsed requirements and binding expressions from the cache: neither Spot (for its
+    version, the cache key), Jinja nor Lark is loaded, nor the JUnit writer without
+    ``--junit``, the progress bar off a terminal, the process pool without ``-j`` or the Ray
+    fleet without ``--ray`` (start-up of every audit)."""
     code = ("import sys\n"
             "sys.argv = ['fretc', 'audit', '-r', 'requirements', 'traces/stop_delay.mcap',\n"
             "            '--no-progress']\n"
@@ -116,7 +117,7 @@ def test_an_audit_with_its_automata_cached_loads_no_spot_junit_or_process_pool(t
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
             "loaded = sorted(m for m in sys.modules if m in ('spot', 'fretc.reports.junit', "
             "'rich.progress', 'multiprocessing', 'concurrent.futures', 'fretc.audit.fleet', "
-            "'jinja2'))\n"
+            "'jinja2', 'lark'))\n"
             "print('LOADED', loaded)\n")
     env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))
     for _ in range(2):  # the first run fills the cache

@@ -15,8 +15,8 @@ from fretc.common.problems import BindingError, SignalError
 from fretc.signals.bindings.compile import EvalError, EvalState, compile_node
 from fretc.signals.bindings.expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
                          UnaryOp, check, check_aggregate, check_size, substitute, unparse, walk)
-from fretc.signals.bindings.parse import parse_expression
 from fretc.signals.bindings.extract import Valid, normalize_scalar
+from fretc.signals.bindings.parse_cache import cached_parses
 from fretc.signals.bindings.operations import Ops
 from fretc.signals.bindings.windowing import WindowSpec, check_window
 
@@ -185,7 +185,11 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
     if not VARNAME.match(name):
         raise where.error(f"variable name {name!r} is not an identifier nor the text of a "
                           "quoted FRETish variable")
-    node, topics = parsed if parsed is not None else parse_expression(expr, where, path_vars)
+    if parsed is None:
+        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
+
+        parsed = parse_expression(expr, where, path_vars)
+    node, topics = parsed
     if any(isinstance(n, Ref) for n in walk(node)):
         trees = {n: b.ast for n, b in (refs or {}).items()}
         node = substitute(node, trees, where, name)
@@ -260,19 +264,26 @@ def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding
     ``limit`` of them; evidence shows them next to the boolean."""
     found: list[Expr] = []
     _operands(binding.ast, found)
-    out: list[tuple[str, Binding]] = []
-    seen: set[str] = set()
+    texts: dict[str, str] = {}  # operand's variable -> its text
     for i, side in enumerate(found):
         text = unparse(side)
         if text.startswith("(") and text.endswith(")"):
             text = text[1:-1]
-        if text in seen or len(out) >= limit:
+        if text in texts.values() or len(texts) >= limit:
             continue
-        seen.add(text)
-        aux = compile_expression(f"{binding.name}__operand{i}", text, source=binding.source,
-                                 line=binding.line, col=binding.col, exact=False)
-        out.append((f"{binding.name}: {text}", aux))
-    return out
+        texts[f"{binding.name}__operand{i}"] = text
+
+    def parse(name: str) -> tuple[Expr, frozenset[str]]:
+        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
+
+        where = ExprLocation(binding.source, name, binding.line, binding.col, False)
+        return parse_expression(texts[name], where, None)
+
+    parsed = cached_parses(f"{binding.source}#{binding.name}", texts, None, parse)
+    return [(f"{binding.name}: {text}",
+             compile_expression(name, text, source=binding.source, line=binding.line,
+                                col=binding.col, exact=False, parsed=parsed[name]))
+            for name, text in texts.items()]
 
 
 #: The value of an aggregation over no message since the previous tick (None: the held

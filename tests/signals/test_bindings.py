@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -395,10 +396,9 @@ def test_a_tick_topic_is_named_as_inspect_lists_it():
         assert topic_name(bad) is None, bad
 
 
-def test_a_binding_file_parses_each_expression_once(monkeypatch):
-    """Each variable's text is parsed once, references included (the parse that orders the
-    variables is the one compiled), and the compiled bindings are those of a parse each."""
-    from fretc.signals.bindings import binding, files, parse
+def _count_parses(monkeypatch) -> list[str]:
+    """Count the expressions parsed (``parse_expression``, imported where it is called)."""
+    from fretc.signals.bindings import parse
 
     calls: list[str] = []
     real = parse.parse_expression
@@ -407,13 +407,99 @@ def test_a_binding_file_parses_each_expression_once(monkeypatch):
         calls.append(expr)
         return real(expr, where, path_vars)
 
-    text = ('[tick]\nperiod = "100 ms"\n[variables]\nnear = "min(/scan.ranges) < 0.9"\n'
-            'fast = "abs(/cmd_vel.linear.x) > 0.4"\nboth = "near & fast"\n')
-    once = parse_bindings(text, "b.toml")
-    monkeypatch.setattr(files, "parse_expression", counted)
-    monkeypatch.setattr(binding, "parse_expression", counted)
-    again = parse_bindings(text, "b.toml")
+    monkeypatch.setattr(parse, "parse_expression", counted)
+    return calls
+
+
+_THREE = ('[tick]\nperiod = "100 ms"\n[variables]\nnear = "min(/scan.ranges) < 0.9"\n'
+          'fast = "abs(/cmd_vel.linear.x) > 0.4"\nboth = "near & fast"\n')
+
+
+def _trees(b) -> dict:
+    return {n: (repr(v.ast), v.topics) for n, v in b.variables.items()}
+
+
+def test_a_binding_file_parses_each_expression_once(monkeypatch):
+    """Each variable's text is parsed once, references included (the parse that orders the
+    variables is the one compiled), and the compiled bindings are those of a parse each."""
+    monkeypatch.setenv("FRETC_CACHE_DIR", "")
+    once = parse_bindings(_THREE, "b.toml")
+    calls = _count_parses(monkeypatch)
+    again = parse_bindings(_THREE, "b.toml")
     assert sorted(calls) == sorted(["min(/scan.ranges) < 0.9", "abs(/cmd_vel.linear.x) > 0.4",
                                     "near & fast"])
-    assert {n: (repr(b.ast), b.topics) for n, b in again.variables.items()} == \
-        {n: (repr(b.ast), b.topics) for n, b in once.variables.items()}
+    assert _trees(again) == _trees(once)
+
+
+def _binding_files() -> list:
+    root = Path(__file__).resolve().parents[2]
+    return sorted(p for d in ("requirements", "examples", "traces") if (root / d).is_dir()
+                  for p in (root / d).rglob("*.bindings.toml"))
+
+
+@pytest.mark.parametrize("path", _binding_files(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_parsed_expressions_from_the_cache_are_the_parsed_ones(path, tmp_path, monkeypatch):
+    """Cold, warm (read from disk: nothing parsed) and cache off give the same trees and
+    topics for every binding file of the repository."""
+    calls = _count_parses(monkeypatch)
+    got = []
+    for cache_dir in (tmp_path / "c", tmp_path / "c", ""):
+        monkeypatch.setenv("FRETC_CACHE_DIR", str(cache_dir))
+        calls.clear()
+        got.append((_trees(load_bindings(path)), len(calls)))
+    assert got[0][0] == got[1][0] == got[2][0]
+    n = got[0][1]
+    assert [c for _t, c in got] == [n, 0, n] and n >= 1
+
+
+def test_binding_parse_cache_misses_on_other_text_code_damage_and_keeps_no_error(
+        tmp_path, monkeypatch):
+    from fretc.signals.bindings import parse_cache
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    calls = _count_parses(monkeypatch)
+    first = _trees(parse_bindings(_THREE, "b.toml"))
+    other = _THREE.replace("0.9", "0.8")
+    assert _trees(parse_bindings(other, "b.toml")) != first  # same file, other text
+    calls.clear()
+    assert _trees(parse_bindings(_THREE, "b.toml")) == first and len(calls) == 3
+    calls.clear()
+    assert _trees(parse_bindings(_THREE, "b.toml")) == first and not calls  # a hit
+    monkeypatch.setattr(parse_cache, "_CODE_KEY", "other code")
+    assert _trees(parse_bindings(_THREE, "b.toml")) == first and len(calls) == 3
+    (f,) = (tmp_path / "binding-parses").iterdir()
+    for damage in (lambda b: b[:len(b) // 2], lambda b: b[:-10] + bytes(10),
+                   lambda b: b"x" + b[1:]):
+        f.write_bytes(damage(f.read_bytes()))
+        calls.clear()
+        assert _trees(parse_bindings(_THREE, "b.toml")) == first and len(calls) == 3
+    bad = _THREE.replace('"near & fast"', '"near & (fast"')
+    for _ in range(2):  # an expression that does not parse: never kept, its error each time
+        with pytest.raises(BindingError, match="syntax error"):
+            parse_bindings(bad, "bad.toml")
+
+
+def test_entity_keys_are_never_read_back_from_the_cache(tmp_path, monkeypatch):
+    """A tree over an entity's key holds the very object the audit sets each entity's value
+    on: such a file is parsed at each load, never read back as a copy."""
+    import dataclasses
+
+    from fretc.signals.bindings.expression import EntityParam
+    from fretc.signals.bindings.files import _compile_in_order
+
+    def holds(obj, target) -> bool:
+        if obj is target:
+            return True
+        if dataclasses.is_dataclass(obj):
+            return any(holds(getattr(obj, f.name), target) for f in dataclasses.fields(obj))
+        return isinstance(obj, (tuple, list)) and any(holds(x, target) for x in obj)
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    calls = _count_parses(monkeypatch)
+    for _ in range(2):
+        key = EntityParam("track")
+        pending = {"near": ('max(/tracks.tracks[:]{id == $track}.x) < 2', None, None, True)}
+        compiled = _compile_in_order(pending, "e.toml", path_vars={"track": key})
+        assert holds(compiled["near"].ast, key)
+    assert len(calls) == 2
+    assert not (tmp_path / "binding-parses").exists()

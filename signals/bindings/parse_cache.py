@@ -1,0 +1,97 @@
+"""The parsed expressions of a binding file kept on disk between runs, as
+:mod:`fretc.fretish.entry_cache` keeps a ``.fret`` file's parsed requirements.
+
+Every audit parses its binding files' expressions (Lark imported, its contextual lexer's
+scanners compiled, each expression parsed and checked): about 50 ms of CPU at each start,
+the same work each time for an unchanged file. An expression's tree is a function of its text,
+the ``[path_variables]`` values and the code that parses and checks it, so
+:func:`cached_parses` keys an entry by all of it: the text of every module of
+:mod:`fretc.signals.bindings` and its grammar, of the modules they take limits, units and
+errors from, Lark's ``__init__.py`` (its version, read without importing Lark) and Python's
+version. One entry per binding file (``<cache>/binding-parses/<key>``), replaced by the next
+parse of that file, holding the SHA-256 of what it was made from and of its payload (the trees,
+pickled). An entry made from anything else, or damaged, is a miss: the expressions are parsed
+again (:mod:`fretc.common.cache`: the cache changes speed, never output).
+
+Not kept: a file with an expression that does not parse (its error is made again, with its
+place, at each read), and a file whose ``[path_variables]`` hold an entity's key
+(:class:`fretc.signals.bindings.expression.EntityParam`): its trees share that object with
+the audit, which sets each entity's value on it, so a tree read back would hold a copy.
+``FRETC_CACHE_DIR=""`` turns it off.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import sys
+from collections.abc import Callable, Mapping
+
+from fretc.common import cache
+from fretc.common.libraries import lark_init_text
+from fretc.signals.bindings.expression import Expr
+
+__all__ = ["cached_parses"]
+
+KIND = "binding-parses"
+_MAGIC = b"fretc binding-parses 1\n"
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_SRC = os.path.dirname(os.path.dirname(_HERE))
+#: what else an expression's tree depends on (limits, units, the error classes)
+_OTHER = (("fretish", "limits.py"), ("common", "units.py"), ("common", "problems.py"),
+          ("common", "errors.py"))
+_CODE_KEY: str | None = None
+
+Parsed = tuple[Expr, frozenset[str]]
+
+
+def _code_key() -> str:
+    """A key of the code that parses an expression (computed once a process)."""
+    global _CODE_KEY
+    if _CODE_KEY is None:
+        paths = [os.path.join(_HERE, n) for n in sorted(os.listdir(_HERE))
+                 if n.endswith((".py", ".lark"))]
+        paths += [os.path.join(_SRC, *p) for p in _OTHER]
+        texts = []
+        for path in paths:
+            with open(path, encoding="utf-8") as f:
+                texts.append(f"{os.path.relpath(path, _SRC)}\n{f.read()}")
+        _CODE_KEY = cache.key_of(KIND, lark_init_text(), sys.version, *texts)
+    return _CODE_KEY
+
+
+def _plain(path_vars: Mapping | None) -> bool:
+    return all(type(v) in (bool, int, float, str) for v in (path_vars or {}).values())
+
+
+def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mapping | None,
+                  parse: Callable[[str], Parsed]) -> dict[str, Parsed]:
+    """``{variable: parse(variable)}`` for the binding file ``source`` whose variables'
+    expressions are ``expressions`` (variable -> text, in the file's order): those kept from
+    an earlier parse of the same file, texts, path variables and code, else ``parse``'s
+    (kept when every expression parsed, as :func:`fretc.signals.bindings.parse.parse_expression`
+    returns them). Raises what ``parse`` raises, for the first variable that fails."""
+    keep = _plain(path_vars)
+    name = cache.key_of(KIND, source)
+    made_from = cache.digest("\x00".join(
+        (_code_key(), source, repr(list(expressions.items())),
+         repr(sorted((path_vars or {}).items())))).encode("utf-8", "surrogatepass"))
+    if keep:
+        payload = cache.read_sealed(KIND, name, _MAGIC, made_from)
+        if payload is not None:
+            try:
+                got = pickle.loads(payload)
+            except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
+                got = None
+            if (isinstance(got, dict) and list(got) == list(expressions)
+                    and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], Expr)
+                            and isinstance(v[1], frozenset) for v in got.values())):
+                return got
+    out = {variable: parse(variable) for variable in expressions}
+    if keep:
+        try:
+            payload = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception:  # noqa: BLE001 - a tree that does not pickle is not kept
+            return out
+        cache.write_sealed(KIND, name, _MAGIC, made_from, payload)
+    return out
