@@ -370,7 +370,7 @@ def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None) -> Tex
     named = v.requirement if tool_id in (None, v.requirement) else \
         f"{v.requirement} ({tool_id})"
     head = Text.from_markup(f"\n[bold red]{escape(named)} violated[/bold red] on "
-                            f"{escape(short_log_name(la.log))}: {escape(v.text)}")
+                            f"{escape(short_log_name(la.log))}: {escape(v.text)}", emoji=False)
     if fv is None:
         return head
     lines = [""]
@@ -511,7 +511,7 @@ class AuditProgress:
         from rich.progress import (BarColumn, Progress, TaskProgressColumn, TextColumn,
                                    TimeElapsedColumn)
 
-        self.progress = Progress(TextColumn("{task.description}"), BarColumn(),
+        self.progress = Progress(TextColumn("{task.description}", markup=False), BarColumn(),
                                  TaskProgressColumn(), TimeElapsedColumn(), console=console,
                                  transient=True)
         self.total = self.progress.add_task("logs", total=total)

@@ -5,6 +5,7 @@ their caret intact."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from click.testing import CliRunner
@@ -124,3 +125,28 @@ def test_a_note_of_changes_between_ticks_is_printed_only_for_a_verdict_that_has_
     print_summary(Console(file=out, width=200), [LogAudit(log="l.mcap", verdicts=[seen, other])])
     lines = [line for line in out.getvalue().splitlines() if "between ticks" in line]
     assert len(lines) == 1 and "A: stop: 2 messages" in lines[0], lines
+
+
+def test_names_are_printed_as_given_never_as_emoji(tmp_path):
+    """A log named ``:fire:.mcap`` is printed by that name: rich's emoji codes are not
+    applied to what the audit prints (it would name a log that does not exist)."""
+    import shutil
+
+    log = tmp_path / ":fire:.mcap"
+    shutil.copy(TRACES / "stop_delay.mcap", log)
+    res = _run("--requirements", ROOT / "requirements", log, "--no-progress")
+    assert res.exit_code == 1, res.output
+    assert f"{tmp_path}/:fire:.mcap" in res.output.replace("\n", "")
+    assert "\N{FIRE}" not in res.output
+
+
+def test_the_progress_bar_shows_log_names_as_given():
+    """The progress bar's label of a log is its name, not rich markup or emoji codes."""
+    from rich.console import Console
+
+    from fretc.reports.terminal import AuditProgress
+
+    prog = AuditProgress(Console(file=open(os.devnull, "w"), emoji=False), 1)
+    prog.start(0, "/runs/[bold]:fire:.mcap")
+    (task,) = [t for t in prog.progress.tasks if t.id == prog.tasks[0]]
+    assert prog.progress.columns[0].render(task).plain == "/runs/[bold]:fire:.mcap"

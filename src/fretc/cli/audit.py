@@ -102,8 +102,8 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
-                  highlight=False)
-    err = Console(stderr=True, highlight=False, soft_wrap=True)
+                  highlight=False, emoji=False)
+    err = Console(stderr=True, highlight=False, soft_wrap=True, emoji=False)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window, msg_path)
     try:

@@ -265,7 +265,8 @@ class _CheckProgress:
                                    TimeElapsedColumn)
 
         self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                            TimeElapsedColumn(), console=Console(stderr=True), transient=True)
+                            TimeElapsedColumn(), console=Console(stderr=True, emoji=False),
+                            transient=True)
         self.task = self.bar.add_task("checking", total=None)
 
     def __enter__(self) -> _CheckProgress:

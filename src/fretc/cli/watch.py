@@ -222,7 +222,7 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
     if publish_diagnostics and not url.startswith(("dds://", "zenoh://")):
         raise click.BadParameter("--publish-diagnostics needs a dds:// or zenoh:// URL",
                                  param_hint="--publish-diagnostics")
-    err = Console(stderr=True, highlight=False, soft_wrap=True)
+    err = Console(stderr=True, highlight=False, soft_wrap=True, emoji=False)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window, msg_path)
     lock = threading.Lock()
@@ -316,7 +316,8 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
     from fretc.audit.verdict import audit_json, exit_code
     from fretc.reports.terminal import print_summary
 
-    out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160)
+    out = Console(stderr=jsonl, highlight=False, width=None if sys.stdout.isatty() else 160,
+                  emoji=False)
     print_summary(out, [la], plan, allow_partial=allow_partial, input_errors=input_errors,
                   command="fretc watch")
     if la.partial:
