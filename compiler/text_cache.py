@@ -9,9 +9,9 @@ and of the code that feeds and renders them, so :func:`rendered` keys an entry b
 * the monitors' and skipped requirements' ``repr`` and the module name (the template's whole
   input: :class:`fretc.compiler.codegen.MonitorSource` is a dataclass whose fields, automata
   and IR atoms included, all appear in its ``repr``);
-* the text of every Jinja template of :mod:`fretc.templates`, of
-  :mod:`fretc.compiler.codegen` (the environment, filters and the shape literal code) and of
-  this module;
+* the text of every Jinja template of :mod:`fretc.templates` and of every module of
+  :mod:`fretc.compiler` (:mod:`~fretc.compiler.codegen`'s environment, filters, properties
+  and shape literals, and the code of the objects the templates read);
 * Jinja's and Python's versions (the text of Jinja's ``__init__.py``, which names its
   version, read without importing Jinja).
 
@@ -44,7 +44,7 @@ _CODE_KEY: str | None = None
 
 def _code_key() -> str:
     """A key of the code that renders a module (computed once a process): the templates,
-    ``codegen.py``, this module, Jinja's ``__init__.py`` and Python's version."""
+    the modules of :mod:`fretc.compiler`, Jinja's ``__init__.py`` and Python's version."""
     global _CODE_KEY
     if _CODE_KEY is None:
         import importlib.util
@@ -52,8 +52,8 @@ def _code_key() -> str:
         spec = importlib.util.find_spec("jinja2")  # finds, does not import
         paths = [os.path.join(_TEMPLATES, n) for n in sorted(os.listdir(_TEMPLATES))
                  if n.endswith(".j2")]
-        paths += [os.path.join(_HERE, "codegen.py"), os.path.abspath(__file__),
-                  str(spec.origin if spec is not None else "")]
+        paths += [os.path.join(_HERE, n) for n in sorted(os.listdir(_HERE)) if n.endswith(".py")]
+        paths.append(str(spec.origin if spec is not None else ""))
         texts = [sys.version]
         for path in paths:
             try:
