@@ -33,9 +33,10 @@ resolves 127.0.0.1 to it) and stops it at the end; ``"auto"``,
 ``"ray://host:10001"`` or ``host:port`` connect to an existing cluster, whose workers must
 have fretc installed (``pip install 'fretc[ray]'``) and see the log paths (shared storage).
 
-Log lists (:func:`fretc.audit.discovery.expand_log_args`, also for local runs): paths, folders, globs (``**``
-allowed) and ``@FILE`` (one path or glob per line, ``#`` comments; relative paths start at
-FILE's folder), so a cluster job can be started from an index of a fleet's recordings.
+Log lists (:func:`fretc.audit.discovery.expand_log_args`, also for local runs): paths,
+folders, globs (``**`` allowed) and ``@FILE`` (one path or glob per line, ``#`` comments;
+relative paths start at FILE's folder), so a cluster job can be started from an index of a
+fleet's recordings.
 """
 
 from __future__ import annotations

@@ -15,12 +15,13 @@ Location: ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pathlib is imported lazily (start-up time)
     from pathlib import Path
 
-__all__ = ["cache_dir", "key_of", "read_bytes", "write_bytes", "remove", "entry_path",
+__all__ = ["cache_dir", "key_of", "files_key", "read_bytes", "write_bytes", "remove", "entry_path",
            "read_file", "write_file", "lark_cache_file", "read_sealed", "write_sealed", "digest"]
 
 
@@ -59,6 +60,21 @@ def key_of(*parts: str) -> str:
         h.update(len(b).to_bytes(8, "little"))
         h.update(b)
     return h.hexdigest()
+
+
+def files_key(kind: str, paths: Iterable[str], *parts: str) -> str:
+    """A cache key (:func:`key_of`) of ``kind``, ``parts`` and the text of each file of
+    ``paths`` (named by its path; a file that cannot be read by its path alone): the key of
+    the code a cached value is made by, which changes when any of those files does. Raises
+    nothing."""
+    texts = []
+    for path in paths:
+        try:
+            with open(path, encoding="utf-8") as f:
+                texts.append(f"{path}\n{f.read()}")
+        except (OSError, ValueError):
+            texts.append(f"{path}\nunreadable")
+    return key_of(kind, *parts, *texts)
 
 
 def _sha256():

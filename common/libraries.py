@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from fretc.common.errors import FretcError
 
-__all__ = ["LibraryError", "check_lark", "lark_init_text", "LARK_REPAIR"]
+__all__ = ["LibraryError", "check_lark", "package_init", "LARK_REPAIR"]
 
 #: the command that puts Lark 1.x back over lark-parser 0.12's files
 LARK_REPAIR = "pip install --force-reinstall --no-deps 'lark>=1.1.9'"
@@ -33,18 +33,13 @@ def check_lark(version: str) -> None:
             f"has replaced Lark's files; repair it with: {LARK_REPAIR}")
 
 
-def lark_init_text() -> str:
-    """The text of Lark's ``__init__.py``, which names its version (``__version__``): a key
-    part of fretc's caches of parsed text that follows Lark's version without importing Lark
-    (about 30 ms of a start whose parses all come from the cache). Raises nothing: a Lark
-    that cannot be found or read gives a key of its own (the parse then fails as it
-    would)."""
+def package_init(name: str) -> str:
+    """The path of the installed package ``name``'s ``__init__.py``, found without importing
+    it ("" when it is not installed). Its text names the package's version (``__version__``):
+    fretc's caches of parsed and rendered text key on it (:func:`fretc.common.cache.files_key`)
+    and so do not import Lark or Jinja for their versions (about 30 ms each at a start whose
+    work all comes from the cache)."""
     import importlib.util
 
-    spec = importlib.util.find_spec("lark")
-    origin = spec.origin if spec is not None else None
-    try:
-        with open(str(origin), encoding="utf-8") as f:
-            return f"{origin}\n{f.read()}"
-    except OSError:
-        return f"{origin}\nunreadable"
+    spec = importlib.util.find_spec(name)
+    return str(spec.origin) if spec is not None and spec.origin else ""

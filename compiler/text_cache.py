@@ -32,6 +32,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from fretc.common import cache
+from fretc.common.libraries import package_init
 
 __all__ = ["rendered"]
 
@@ -47,21 +48,10 @@ def _code_key() -> str:
     the modules of :mod:`fretc.compiler`, Jinja's ``__init__.py`` and Python's version."""
     global _CODE_KEY
     if _CODE_KEY is None:
-        import importlib.util
-
-        spec = importlib.util.find_spec("jinja2")  # finds, does not import
         paths = [os.path.join(_TEMPLATES, n) for n in sorted(os.listdir(_TEMPLATES))
                  if n.endswith(".j2")]
         paths += [os.path.join(_HERE, n) for n in sorted(os.listdir(_HERE)) if n.endswith(".py")]
-        paths.append(str(spec.origin if spec is not None else ""))
-        texts = [sys.version]
-        for path in paths:
-            try:
-                with open(path, encoding="utf-8") as f:
-                    texts.append(f"{path}\n{f.read()}")
-            except OSError:
-                texts.append(f"{path}\nunreadable")
-        _CODE_KEY = cache.key_of(KIND, *texts)
+        _CODE_KEY = cache.files_key(KIND, paths + [package_init("jinja2")], sys.version)
     return _CODE_KEY
 
 

@@ -23,7 +23,7 @@ import sys
 from collections.abc import Callable
 
 from fretc.common import cache
-from fretc.common.libraries import lark_init_text
+from fretc.common.libraries import package_init
 from fretc.fretish.entry import RequirementEntry
 
 __all__ = ["cached_entries", "code_key"]
@@ -40,19 +40,16 @@ _CODE_KEY: str | None = None
 def code_key() -> str:
     """A key of the code that makes a ``.fret`` file's entries: the text of every module of
     :mod:`fretc.fretish` and its grammar, of :mod:`fretc.common.units` and
-    :mod:`fretc.common.errors`, and Lark's (:func:`fretc.common.libraries.lark_init_text`) and Python's versions
-    (computed once a process)."""
+    :mod:`fretc.common.errors`, and Lark's (its ``__init__.py``,
+    :func:`fretc.common.libraries.package_init`) and Python's versions (computed once a
+    process)."""
     global _CODE_KEY
     if _CODE_KEY is None:
         names = sorted(n for n in os.listdir(_HERE) if n.endswith((".py", ".lark")))
-        texts = []
-        for path in [os.path.join(_HERE, n) for n in names] + [
-                os.path.join(_COMMON, n) for n in _OTHER]:
-            with open(path, encoding="utf-8") as f:
-                texts.append(f"{os.path.basename(path)}\n{f.read()}")
-        _CODE_KEY = cache.key_of(KIND, lark_init_text(), sys.version, *texts)
+        paths = ([os.path.join(_HERE, n) for n in names]
+                 + [os.path.join(_COMMON, n) for n in _OTHER] + [package_init("lark")])
+        _CODE_KEY = cache.files_key(KIND, paths, sys.version)
     return _CODE_KEY
-
 
 
 def _name(source: str) -> str:

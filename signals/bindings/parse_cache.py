@@ -28,7 +28,7 @@ import sys
 from collections.abc import Callable, Mapping
 
 from fretc.common import cache
-from fretc.common.libraries import lark_init_text
+from fretc.common.libraries import package_init
 from fretc.signals.bindings.expression import Expr
 
 __all__ = ["cached_parses"]
@@ -51,12 +51,8 @@ def _code_key() -> str:
     if _CODE_KEY is None:
         paths = [os.path.join(_HERE, n) for n in sorted(os.listdir(_HERE))
                  if n.endswith((".py", ".lark"))]
-        paths += [os.path.join(_SRC, *p) for p in _OTHER]
-        texts = []
-        for path in paths:
-            with open(path, encoding="utf-8") as f:
-                texts.append(f"{os.path.relpath(path, _SRC)}\n{f.read()}")
-        _CODE_KEY = cache.key_of(KIND, lark_init_text(), sys.version, *texts)
+        paths += [os.path.join(_SRC, *p) for p in _OTHER] + [package_init("lark")]
+        _CODE_KEY = cache.files_key(KIND, paths, sys.version)
     return _CODE_KEY
 
 

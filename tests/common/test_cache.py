@@ -8,6 +8,7 @@ import hashlib
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fretc.common import cache
 from fretc.common.cache import key_of
 
 
@@ -29,3 +30,18 @@ def test_framing_separates_parts():
     assert key_of("ab", "c") != key_of("a", "bc")
     assert key_of("") != key_of()
     assert len(key_of("abc")) == 64 and int(key_of("abc"), 16) >= 0
+
+
+def test_files_key_follows_each_file_and_part(tmp_path):
+    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    a.write_text("x = 1\n")
+    b.write_text("y = 2\n")
+    key = cache.files_key("k", [str(a), str(b)], "3.11")
+    assert cache.files_key("k", [str(a), str(b)], "3.11") == key
+    assert cache.files_key("k", [str(a), str(b)], "3.12") != key
+    assert cache.files_key("other", [str(a), str(b)], "3.11") != key
+    b.write_text("y = 3\n")
+    changed = cache.files_key("k", [str(a), str(b)], "3.11")
+    assert changed != key
+    b.unlink()  # a file that cannot be read gives a key of its own, no error
+    assert cache.files_key("k", [str(a), str(b)], "3.11") not in (key, changed)

@@ -15,6 +15,8 @@ from fretc.compiler.codegen import render_module
 from fretc.fretish import parser as P
 
 REPO = Path(__file__).resolve().parents[2]
+#: damage done to a cache entry: cut, zeroed tail, altered magic
+DAMAGES = (lambda b: b[:len(b) // 2], lambda b: b[:-10] + bytes(10), lambda b: b"x" + b[1:])
 
 
 # same helpers as entry/load in tests/compiler/test_monitors_codegen.py (kept: each test file
@@ -253,8 +255,7 @@ def test_module_code_entry_of_another_text_or_damaged_is_recompiled(tmp_path, mo
     calls.clear()
     assert render_module(one, "m") == text_one and len(calls) == 2  # a miss: compiled
     (f,) = (tmp_path / "monitor-code").iterdir()
-    for damage in (lambda b: b[:len(b) // 2], lambda b: b[:-10] + bytes(10),
-                   lambda b: b"x" + b[1:]):
+    for damage in DAMAGES:
         f.write_bytes(damage(f.read_bytes()))
         calls.clear()
         assert render_module(one, "m") == text_one and len(calls) == 2
@@ -359,8 +360,7 @@ def test_module_text_entry_of_other_inputs_code_or_damaged_is_rendered(tmp_path,
     monkeypatch.setattr(text_cache, "_CODE_KEY", "other code")
     assert render_module(one, "m") == text_one and len(renders) == 4
     (f,) = (tmp_path / "monitor-text").iterdir()
-    for damage in (lambda b: b[:len(b) // 2], lambda b: b[:-10] + bytes(10),
-                   lambda b: b"x" + b[1:]):
+    for damage in DAMAGES:
         f.write_bytes(damage(f.read_bytes()))
         renders.clear()
         assert render_module(one, "m") == text_one and len(renders) == 1
