@@ -108,6 +108,50 @@ def test_a_table_of_many_instances_lists_only_what_did_not_pass():
                 f"{n}" in text) is not matrix
 
 
+def test_the_list_of_many_instances_keeps_every_name_whole_and_aligned():
+    """The list printed instead of the matrix: one line per verdict that is not a plain
+    pass, columns aligned by display width (a wide character counts two), a name longer
+    than the console never cut, and each log named as the working directory sees it."""
+    from rich.console import Console
+
+    from fretc.audit.verdict import LogAudit, Verdict
+    from fretc.reports.terminal import MATRIX_ROWS_MAX, print_summary
+
+    long_key = "k" * 150
+    names = ["T[track=\u969c]", f"T[track={long_key}]"]
+    vs = [Verdict(log="run.mcap", requirement=f"T[track={k}]", verdict="satisfied")
+          for k in range(MATRIX_ROWS_MAX)]
+    vs += [Verdict(log="run.mcap", requirement=n, verdict="unknown") for n in names]
+    console = Console(record=True, width=80)
+    print_summary(console, [LogAudit(log=os.path.abspath("run.mcap"), kind="mcap",
+                                     verdicts=vs)], details=False)
+    lines = console.export_text().splitlines()
+    head = next(k for k, line in enumerate(lines) if line.startswith("log "))
+    rows = lines[head + 1:head + 3]
+    assert [r.split()[:2] for r in rows] == [["run.mcap", n] for n in names]
+    from rich.cells import cell_len
+    # the verdict column starts at the same display column on every line
+    starts = [cell_len(line[:line.index(word)]) for line, word in
+              zip(lines[head:head + 3], ("verdict", "unknown", "unknown"))]
+    assert len(set(starts)) == 1, lines[head:head + 3]
+    assert "only verdicts that are not complete passes are listed: 2 of 1002" in "\n".join(lines)
+
+
+def test_a_log_is_named_from_the_working_directory_of_the_moment(tmp_path, monkeypatch):
+    """:func:`short_log_name` is kept per path, but follows a change of directory."""
+    from fretc.reports.terminal import short_log_name
+
+    log = tmp_path / "a" / "run.mcap"
+    log.parent.mkdir()
+    monkeypatch.chdir(tmp_path)
+    assert short_log_name(str(log)) == os.path.join("a", "run.mcap")
+    monkeypatch.chdir(log.parent)
+    assert short_log_name(str(log)) == "run.mcap"
+    monkeypatch.chdir(tmp_path.parent)
+    assert short_log_name(str(log)) == os.path.join(tmp_path.name, "a", "run.mcap")
+    assert short_log_name("ws://host:8765") == "ws://host:8765"
+
+
 def test_a_note_of_changes_between_ticks_is_printed_only_for_a_verdict_that_has_them():
     """The log's notes name a variable's changes no tick sampled (its verdict's
     ``missed_changes``), and only those: a note that merely starts like one is not."""
