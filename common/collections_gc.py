@@ -1,4 +1,5 @@
-"""Python's full garbage collections made rarer while one log is audited.
+"""Python's full garbage collections made rarer while one log is audited (and, in
+``fretc audit``, while its verdicts are printed and written).
 
 An audit keeps what it has read until it judges it (ticks, held messages, the rows of
 entities, the verdicts of every entity): on a log of messages carrying arrays of structures
@@ -6,7 +7,9 @@ entities, the verdicts of every entity): on a log of messages carrying arrays of
 full (generation 2) collection, which walks every one of them, each time the objects that
 survived the young generations grow by a quarter (CPython's ``gc`` module, "threshold2";
 the young generations are untouched). On ``bench/bench_audit.py``'s 100,000-obstacle log the
-full collections were a fifth of the command's CPU without entities and a third with them.
+full collections were a fifth of the command's CPU without entities and a third with them;
+after the audit, printing the 1,001 violations among its 100,001 verdicts ran one more, a
+third of a second.
 """
 
 from __future__ import annotations

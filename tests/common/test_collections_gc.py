@@ -55,3 +55,27 @@ def test_a_failed_audit_gives_the_thresholds_back(thresholds):
         with fewer_full_collections():
             raise RuntimeError("boom")
     assert gc.get_threshold() == (700, 10, 10)
+
+
+def test_the_audit_command_prints_its_verdicts_with_rare_full_collections(
+        thresholds, monkeypatch):
+    """``fretc audit`` keeps the full collections rare while it prints the verdicts too (a
+    full collection walks every verdict kept for the report), and gives them back after."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+    from fretc.reports import terminal
+
+    seen = []
+    real = terminal.print_summary
+
+    def print_summary(*args, **kwargs):
+        seen.append(gc.get_threshold())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(terminal, "print_summary", print_summary)
+    res = CliRunner().invoke(main, ["audit", "-r", str(ROOT / "requirements"),
+                                    str(ROOT / "traces" / "stop_delay.mcap"), "--no-progress"])
+    assert res.exit_code in (0, 1, 3), res.output
+    assert seen == [(700, 10, FULL_EVERY)]
+    assert gc.get_threshold() == (700, 10, 10)

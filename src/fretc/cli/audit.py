@@ -99,7 +99,11 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     from fretc.audit.discovery import expand_log_args
     from fretc.audit.statistics import plan_statistics
     from fretc.audit.verdict import audit_json, exit_code
+    from fretc.common.collections_gc import fewer_full_collections
 
+    # the audits and the reports of their verdicts alike (a full collection walks every
+    # verdict: a third of a second on 100,000 entities' verdicts)
+    ctx.with_resource(fewer_full_collections())
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
                   highlight=False, emoji=False)
