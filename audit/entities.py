@@ -324,14 +324,22 @@ class _Judge:
             out += rest
         return [summary_verdict(r, ents.path, out, summary)] + out
 
-    def _new(self, i: int, **judged: Any) -> Verdict:
-        """Entity ``i``'s verdict, with the fields ``judged`` (none: not yet judged)."""
+    def _new(self, i: int, batch: Ltl3 | None = None, vacuous: bool = False,
+             ticks: tuple[int, int, int] = (0, 0, 0)) -> Verdict:
+        """Entity ``i``'s verdict: not yet judged, or with ``batch`` (its LTL3 verdict) one
+        judged at once, satisfied (``vacuous``: vacuous) over ``ticks`` (count, first and
+        last tick time, ns)."""
         r, table = self.r, self.c.table
         value = table.keys[i]
+        seen = (f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at log "
+                f"time {table.first[i]}, last at {table.last[i]}")
+        if batch is None:
+            return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
+                           notes=[*r.notes, seen])
         return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
-                       notes=[*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): "
-                              f"first seen at log time {table.first[i]}, last at "
-                              f"{table.last[i]}", *judged.pop("notes", ())], **judged)
+                       verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
+                       ticks_evaluated=ticks[0], first_tick_ns=ticks[1],
+                       last_tick_ns=ticks[2], notes=[*r.notes, seen, BATCH_NOTE], ltl3=batch)
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
@@ -385,11 +393,9 @@ class _Judge:
                 continue
             a, m = starts[e], counts[e]
             status, tick = ltl3[e]
-            out[i] = self._new(i, verdict="vacuous" if vacuous_[e] else "satisfied",
-                               engine="vectorized", ticks_evaluated=m, first_tick_ns=times[a],
-                               last_tick_ns=times[a + m - 1], notes=(BATCH_NOTE,),
-                               ltl3=Ltl3(status, tick,
-                                         times[a + tick] if tick is not None else None))
+            out[i] = self._new(i, Ltl3(status, tick,
+                                       times[a + tick] if tick is not None else None),
+                               vacuous_[e], (m, times[a], times[a + m - 1]))
         return out
 
     def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],
