@@ -146,8 +146,12 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
             for la, v in bad:
                 _print_violation_verbose(console, la, v, ids.get(v.requirement))
         elif bad:  # (in one call: a call of rich's print costs about a millisecond)
-            console.print(Text("\n").join(_violation_text(la, v, ids.get(v.requirement))
-                                          for la, v in bad), highlight=False)
+            text = Text("\n").join(_violation_text(la, v, ids.get(v.requirement))
+                                   for la, v in bad)
+            # lines that all fit are printed as they are: rich's word wrap would leave them
+            # so, at 0.1 ms a line (0.3 s for 1,001 violations)
+            fits = all(cell_len(line) <= console.width for line in text.plain.split("\n"))
+            console.print(text, highlight=False, soft_wrap=fits)
     if statistics is not None and (verbose or any(st.bound is not None for st in statistics)):
         # (plain requirements' fleet statistics: in the JSON, and here with --verbose)
         from fretc.reports.statistics import print_statistics

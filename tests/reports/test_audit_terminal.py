@@ -137,6 +137,30 @@ def test_the_list_of_many_instances_keeps_every_name_whole_and_aligned():
     assert "only verdicts that are not complete passes are listed: 2 of 1002" in "\n".join(lines)
 
 
+def test_violations_are_printed_as_rich_wraps_them_whether_their_lines_fit_or_not():
+    """The violations' evidence printed without rich's word wrap when every line fits is the
+    text rich's wrap gives; a line too long for the console is still wrapped by rich."""
+    from rich.console import Console
+    from rich.text import Text
+
+    from fretc.audit.verdict import FirstViolation, LogAudit, TimePoint, Verdict
+    from fretc.reports.terminal import _violation_text, print_summary
+
+    for words in (3, 40):  # (a short requirement text, and one wider than the console)
+        v = Verdict(log="run.mcap", requirement="R1", verdict="violated",
+                    text=" ".join(["the robot shall always satisfy speed <= 1"] * words),
+                    first_violation=FirstViolation(at=TimePoint(3, 300, 299), obligation="q",
+                                                   reason="q is false at tick 3"))
+        la = LogAudit(log="run.mcap", kind="mcap", verdicts=[v], start_time_ns=0)
+        ours, rich_wrapped = Console(record=True, width=100), Console(record=True, width=100)
+        print_summary(ours, [la])
+        text = ours.export_text()
+        rich_wrapped.print(_violation_text(la, v), highlight=False)
+        want = rich_wrapped.export_text()
+        assert want.strip() and want in text, (words, text)
+        assert max(map(len, text.splitlines())) <= 100
+
+
 def test_a_log_is_named_from_the_working_directory_of_the_moment(tmp_path, monkeypatch):
     """:func:`short_log_name` is kept per path, but follows a change of directory."""
     from fretc.reports.terminal import short_log_name
