@@ -302,8 +302,7 @@ class _Judge:
 
     def verdicts(self) -> list[Verdict]:
         ents, r, c = self.ents, self.r, self.c
-        table = c.table
-        key = c.kind.key
+        table, key = c.table, c.kind.key
         if not table.keys:
             return ents.alone(r, "vacuous", notes=[f"no entity {self.name} ({key}) appeared in "
                                                    "the log: the requirement holds of none"])
@@ -325,21 +324,19 @@ class _Judge:
         return [summary_verdict(r, ents.path, out, summary)] + out
 
     def _new(self, i: int, batch: Ltl3 | None = None, vacuous: bool = False,
-             ticks: tuple[int, int, int] = (0, 0, 0)) -> Verdict:
-        """Entity ``i``'s verdict: not yet judged, or with ``batch`` (its LTL3 verdict) one
-        judged at once, satisfied (``vacuous``: vacuous) over ``ticks`` (count, first and
-        last tick time, ns)."""
-        r, table = self.r, self.c.table
-        value = table.keys[i]
-        seen = (f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at log "
-                f"time {table.first[i]}, last at {table.last[i]}")
-        if batch is None:
-            return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
-                           notes=[*r.notes, seen])
+             ticks: tuple[int, int | None, int | None] = (0, None, None)) -> Verdict:
+        """Entity ``i``'s verdict: not yet judged, or (``batch``: its LTL3 verdict) judged at
+        once, satisfied or ``vacuous``, over ``ticks`` (count, first and last tick time, ns)."""
+        r, table, value = self.r, self.c.table, self.c.table.keys[i]
+        notes = [*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
+                 f"log time {table.first[i]}, last at {table.last[i]}"]
+        if batch is not None:
+            notes.append(BATCH_NOTE)
         return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
-                       verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
-                       ticks_evaluated=ticks[0], first_tick_ns=ticks[1],
-                       last_tick_ns=ticks[2], notes=[*r.notes, seen, BATCH_NOTE], ltl3=batch)
+                       verdict="error" if batch is None else "vacuous" if vacuous else "satisfied",
+                       engine=None if batch is None else "vectorized", ticks_evaluated=ticks[0],
+                       first_tick_ns=ticks[1], last_tick_ns=ticks[2], notes=notes,
+                       ltl3=batch or Ltl3())
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
@@ -391,11 +388,9 @@ class _Judge:
         for e, i in enumerate(judged):
             if not holds_[e] or e in slow:
                 continue
-            a, m = starts[e], counts[e]
-            status, tick = ltl3[e]
-            out[i] = self._new(i, Ltl3(status, tick,
-                                       times[a + tick] if tick is not None else None),
-                               vacuous_[e], (m, times[a], times[a + m - 1]))
+            (a, m), (status, tick) = (starts[e], counts[e]), ltl3[e]
+            at = times[a + tick] if tick is not None else None
+            out[i] = self._new(i, Ltl3(status, tick, at), vacuous_[e], (m, times[a], times[a + m - 1]))
         return out
 
     def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],

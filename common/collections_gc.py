@@ -14,11 +14,15 @@ third of a second.
 
 from __future__ import annotations
 
+import functools
 import gc
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any, TypeVar, cast
 
-__all__ = ["FULL_EVERY", "fewer_full_collections"]
+__all__ = ["FULL_EVERY", "fewer_full_collections", "with_fewer_full_collections"]
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 #: Collections of the middle generation between two full collections while a log is audited
 #: (Python's default is 10)
@@ -41,3 +45,14 @@ def fewer_full_collections() -> Iterator[None]:
     finally:
         if gc.get_threshold() == (t0, t1, FULL_EVERY):
             gc.set_threshold(t0, t1, t2)
+
+
+def with_fewer_full_collections(func: F) -> F:
+    """``func`` run within :func:`fewer_full_collections` (a command that audits logs and
+    then prints and writes their verdicts: a full collection would walk every verdict)."""
+    @functools.wraps(func)
+    def wrapped(*args: Any, **kwargs: Any) -> Any:
+        with fewer_full_collections():
+            return func(*args, **kwargs)
+
+    return cast(F, wrapped)

@@ -52,15 +52,13 @@ def _T(text, keep: str = "") -> Text:
 
 def short_log_name(path: str) -> str:
     """The path relative to the working directory when it lies below it (a URL as is)."""
-    return _short_log_name(path, os.getcwd())
+    return path if "://" in path else _short_log_name(path, os.getcwd())
 
 
 @lru_cache(maxsize=4096)
 def _short_log_name(path: str, cwd: str) -> str:
     """:func:`short_log_name` of ``path`` from ``cwd`` (kept: a summary names a log once per
     verdict, and ``os.path.relpath`` costs about 10 µs)."""
-    if "://" in path:
-        return path
     try:
         rel = os.path.relpath(path, cwd)
     except ValueError:  # pragma: no cover - other drive on Windows

@@ -141,7 +141,6 @@ def test_violations_are_printed_as_rich_wraps_them_whether_their_lines_fit_or_no
     """The violations' evidence printed without rich's word wrap when every line fits is the
     text rich's wrap gives; a line too long for the console is still wrapped by rich."""
     from rich.console import Console
-    from rich.text import Text
 
     from fretc.audit.verdict import FirstViolation, LogAudit, TimePoint, Verdict
     from fretc.reports.terminal import _violation_text, print_summary

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import click
 
+from fretc.common.collections_gc import with_fewer_full_collections
 from fretc.cli.options import (audit_config, audit_input_options, ray_options, run_audits,
                                statistics_options)
 
@@ -59,6 +60,7 @@ __all__ = ["audit_cmd"]
                    "log's verdicts on it.")
 @ray_options
 @click.pass_context
+@with_fewer_full_collections
 def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str, ...],
               bindings: tuple[str, ...], inline: tuple[str, ...], tick_period: str | None,
               tick_topic: str | None, time_base: str | None, jobs: int, json_path: str | None,
@@ -99,11 +101,7 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     from fretc.audit.discovery import expand_log_args
     from fretc.audit.statistics import plan_statistics
     from fretc.audit.verdict import audit_json, exit_code
-    from fretc.common.collections_gc import fewer_full_collections
 
-    # the audits and the reports of their verdicts alike (a full collection walks every
-    # verdict: a third of a second on 100,000 entities' verdicts)
-    ctx.with_resource(fewer_full_collections())
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
                   highlight=False, emoji=False)
