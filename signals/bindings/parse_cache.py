@@ -67,27 +67,26 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
     an earlier parse of the same file, texts, path variables and code, else ``parse``'s
     (kept when every expression parsed, as :func:`fretc.signals.bindings.parse.parse_expression`
     returns them). Raises what ``parse`` raises, for the first variable that fails."""
-    keep = _plain(path_vars)
+    if not _plain(path_vars):  # (an entity's key: never kept, module docstring)
+        return {variable: parse(variable) for variable in expressions}
     name = cache.key_of(KIND, source)
     made_from = cache.digest("\x00".join(
         (_code_key(), source, repr(list(expressions.items())),
          repr(sorted((path_vars or {}).items())))).encode("utf-8", "surrogatepass"))
-    if keep:
-        payload = cache.read_sealed(KIND, name, _MAGIC, made_from)
-        if payload is not None:
-            try:
-                got = pickle.loads(payload)
-            except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
-                got = None
-            if (isinstance(got, dict) and list(got) == list(expressions)
-                    and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], Expr)
-                            and isinstance(v[1], frozenset) for v in got.values())):
-                return got
-    out = {variable: parse(variable) for variable in expressions}
-    if keep:
+    payload = cache.read_sealed(KIND, name, _MAGIC, made_from)
+    if payload is not None:
         try:
-            payload = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
-        except Exception:  # noqa: BLE001 - a tree that does not pickle is not kept
-            return out
-        cache.write_sealed(KIND, name, _MAGIC, made_from, payload)
+            got = pickle.loads(payload)
+        except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
+            got = None
+        if (isinstance(got, dict) and list(got) == list(expressions)
+                and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], Expr)
+                        and isinstance(v[1], frozenset) for v in got.values())):
+            return got
+    out = {variable: parse(variable) for variable in expressions}
+    try:
+        payload = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # noqa: BLE001 - a tree that does not pickle is not kept
+        return out
+    cache.write_sealed(KIND, name, _MAGIC, made_from, payload)
     return out
