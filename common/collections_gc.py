@@ -49,7 +49,9 @@ def fewer_full_collections() -> Iterator[None]:
 
 def with_fewer_full_collections(func: F) -> F:
     """``func`` run within :func:`fewer_full_collections` (a command that audits logs and
-    then prints and writes their verdicts: a full collection would walk every verdict)."""
+    then prints and writes their verdicts: a full collection would walk every verdict).
+    Returns what ``func`` returns and raises what it raises; Python's thresholds
+    (``gc.set_threshold``) are given back either way."""
     @functools.wraps(func)
     def wrapped(*args: Any, **kwargs: Any) -> Any:
         with fewer_full_collections():
