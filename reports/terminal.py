@@ -1,6 +1,6 @@
-"""How ``fretc audit`` shows its verdicts: the terminal summary (rich), the progress bar,
-and the damage of a partial log in one sentence (the JUnit XML file:
-:mod:`fretc.reports.junit`).
+"""How ``fretc audit`` shows its verdicts: the terminal summary (rich) and the damage of a
+partial log in one sentence (the progress bar: :mod:`fretc.reports.progress`; the JUnit XML
+file: :mod:`fretc.reports.junit`).
 
 All output is deterministic: same logs and requirements, same text (no wall-clock times).
 Times are printed as seconds since the log's first tick (``12.300 s``) next to the tick
@@ -29,9 +29,8 @@ from fretc.reports.verdicts import format_value
 if TYPE_CHECKING:
     from fretc.audit.model import AuditPlan
     from rich.console import Console
-    from rich.progress import TaskID
 
-__all__ = ["print_summary", "AuditProgress", "short_log_name", "damage_summary", "escape"]
+__all__ = ["print_summary", "short_log_name", "damage_summary", "escape"]
 
 _STYLE = {"satisfied": "green", "vacuous": "yellow", "violated": "bold red",
           "unknown": "yellow", "error": "magenta"}
@@ -144,11 +143,15 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
             for la, v in bad:
                 _print_violation_verbose(console, la, v, ids.get(v.requirement))
         elif bad:  # (in one call: a call of rich's print costs about a millisecond)
-            text = Text("\n").join(_violation_text(la, v, ids.get(v.requirement))
-                                   for la, v in bad)
+            text = Text()
+            for k, (la, v) in enumerate(bad):
+                if k:
+                    text.append("\n")
+                _violation_text(la, v, ids.get(v.requirement), into=text)
             # lines that all fit are printed as they are: rich's word wrap would leave them
             # so, at 0.1 ms a line (0.3 s for 1,001 violations)
-            fits = all(cell_len(line) <= console.width for line in text.plain.split("\n"))
+            width = console.width
+            fits = all(cell_len(line) <= width for line in text.plain.split("\n"))
             console.print(text, highlight=False, soft_wrap=fits)
     if statistics is not None and (verbose or any(st.bound is not None for st in statistics)):
         # (plain requirements' fleet statistics: in the JSON, and here with --verbose)
@@ -378,16 +381,20 @@ def _headers(names: list[str]) -> list[str]:
     return out
 
 
-def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None) -> Text:
+def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None,
+                    into: Text | None = None) -> Text:
     """Violation ``v``'s heading and evidence lines (trigger, obligation, robustness, the
-    missed tick with the log time of the message that decided it), as printed."""
+    missed tick with the log time of the message that decided it), as printed: appended to
+    ``into`` when given (one text for many violations), else a new text; returns it."""
     st = la.start_time_ns
     fv = v.first_violation
     clock = "header-stamp clock" if la.time_base == "header" else "log clock"
     named = v.requirement if tool_id in (None, v.requirement) else \
         f"{v.requirement} ({tool_id})"
-    head = Text.from_markup(f"\n[bold red]{escape(named)} violated[/bold red] on "
-                            f"{escape(short_log_name(la.log))}: {escape(v.text)}", emoji=False)
+    head = Text() if into is None else into
+    head.append("\n")
+    head.append(terminal_text(f"{named} violated", keep=""), style="bold red")
+    head.append(terminal_text(f" on {short_log_name(la.log)}: {v.text}", keep=""))
     if fv is None:
         return head
     lines = [""]
@@ -410,7 +417,8 @@ def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None) -> Tex
                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})")
     if v.triggers is not None and v.violations:
         lines.append(f"  {v.violations} of {v.triggers} triggers failed")
-    return head + Text("\n".join(lines))
+    head.append("\n".join(lines))
+    return head
 
 
 def _print_violation_verbose(console, la: LogAudit, v: Verdict,
@@ -517,43 +525,3 @@ def damage_summary(la: LogAudit) -> str:
     if not said:
         said.append("no message lost" if not la.damage_cut else "judged on after it")
     return f"the log is damaged ({what}); " + "; ".join(said)
-
-
-class AuditProgress:
-    """A rich progress display: one bar for the logs done, one per log being read (fraction
-    of its log time). Used as the ``progress`` object of :func:`fretc.audit.audit_logs`."""
-
-    def __init__(self, console, total: int):
-        # lazy: only on a terminal (start-up time of the other runs)
-        from rich.progress import (BarColumn, Progress, TaskProgressColumn, TextColumn,
-                                   TimeElapsedColumn)
-
-        self.progress = Progress(TextColumn("{task.description}", markup=False), BarColumn(),
-                                 TaskProgressColumn(), TimeElapsedColumn(), console=console,
-                                 transient=True)
-        self.total = self.progress.add_task("logs", total=total)
-        self.tasks: dict[int, TaskID] = {}
-
-    def __enter__(self):
-        self.progress.start()
-        return self
-
-    def __exit__(self, *exc):
-        self.progress.stop()
-
-    def start(self, index: int, path: str) -> None:
-        """A progress bar for log ``index`` (its file name shown)."""
-        self.tasks[index] = self.progress.add_task(short_log_name(path), total=1.0)
-
-    def update(self, index: int, fraction: float) -> None:
-        """Log ``index`` read to ``fraction`` (0 to 1)."""
-        task = self.tasks.get(index)
-        if task is not None:
-            self.progress.update(task, completed=fraction)
-
-    def done(self, index: int, la: LogAudit) -> None:
-        """Log ``index`` audited: its bar removed, the overall bar advanced."""
-        task = self.tasks.pop(index, None)
-        if task is not None:
-            self.progress.remove_task(task)
-        self.progress.advance(self.total)

@@ -160,6 +160,40 @@ def test_violations_are_printed_as_rich_wraps_them_whether_their_lines_fit_or_no
         assert max(map(len, text.splitlines())) <= 100
 
 
+def test_violation_headings_give_names_and_texts_as_written_in_one_text():
+    """Each violation's heading names the requirement, log and text as written (rich markup
+    and emoji codes in them are not applied), the name and "violated" in bold red; printed
+    together, the violations are each one's own text, a blank line between them."""
+    from rich.console import Console
+
+    from fretc.audit.verdict import FirstViolation, LogAudit, TimePoint, Verdict
+    from fretc.common.textsafe import terminal_text
+    from fretc.reports.terminal import _violation_text, print_summary
+
+    def violated(name, text):
+        return Verdict(log="[red]r:fire:.mcap", requirement=name, verdict="violated", text=text,
+                       first_violation=FirstViolation(at=TimePoint(3, 300, 299), obligation="q",
+                                                      reason="q is false at tick 3"))
+
+    vs = [violated("R[x=1]", "shall [bold]always[/bold] :fire: hold"),
+          violated("S\nT", "b\n\u202eevil")]
+    la = LogAudit(log="[red]r:fire:.mcap", kind="mcap", verdicts=vs, start_time_ns=0)
+    heading = _violation_text(la, vs[0])
+    assert heading.plain.startswith(
+        "\nR[x=1] violated on [red]r:fire:.mcap: shall [bold]always[/bold] :fire: hold\n")
+    assert [heading.plain[s.start:s.end] for s in heading.spans
+            if str(s.style) == "bold red"] == ["R[x=1] violated"]
+    name, text = (terminal_text(x, keep="") for x in ("S\nT", "b\n\u202eevil"))
+    assert "\n" not in name + text and "\u202e" not in text
+    assert _violation_text(la, vs[1]).plain.startswith(
+        f"\n{name} violated on [red]r:fire:.mcap: {text}\n")
+    ours, alone = Console(record=True, width=200), Console(record=True, width=200)
+    print_summary(ours, [la])
+    for v in vs:
+        alone.print(_violation_text(la, v), highlight=False)
+    assert alone.export_text(styles=True) in ours.export_text(styles=True)
+
+
 def test_a_log_is_named_from_the_working_directory_of_the_moment(tmp_path, monkeypatch):
     """:func:`short_log_name` is kept per path, but follows a change of directory."""
     from fretc.reports.terminal import short_log_name
@@ -211,7 +245,7 @@ def test_the_progress_bar_shows_log_names_as_given():
     """The progress bar's label of a log is its name, not rich markup or emoji codes."""
     from rich.console import Console
 
-    from fretc.reports.terminal import AuditProgress
+    from fretc.reports.progress import AuditProgress
 
     prog = AuditProgress(Console(file=open(os.devnull, "w"), emoji=False), 1)
     prog.start(0, "/runs/[bold]:fire:.mcap")

@@ -95,9 +95,9 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     examples): docs/bindings.md."""
     # lazy: the audit engine (numpy, mcap, rosbags, rich) only when the command runs
     from rich.console import Console
-
     from fretc.audit import AuditInputError, find_logs, load_plan
-    from fretc.reports.terminal import AuditProgress, escape, print_summary
+    from fretc.reports.progress import AuditProgress
+    from fretc.reports.terminal import escape, print_summary
     from fretc.audit.discovery import expand_log_args
     from fretc.audit.statistics import plan_statistics
     from fretc.audit.verdict import audit_json, exit_code
