@@ -217,19 +217,47 @@ def ltl3_verdicts(monitor_source: MonitorSource, columns: Mapping[str, np.ndarra
         if aut.table is None:
             raise VectorizeError("automaton with condition chains (too many atoms to "
                                  "tabulate): use the step-wise monitor")
-        letters = atom_letters(aut.atoms, columns, n, starts).tolist()
-        table, init = aut.table, aut.initial
-        for e, (a, m) in enumerate(zip(firsts.tolist(), lengths.tolist())):
-            state = init
-            for i in range(a, a + m):
-                state = table[state][letters[i]]
-                if state < 0:
-                    hit = i - a
-                    seen = best[e][1]
-                    if seen is None or hit < seen:
-                        best[e] = (outcome, hit)
-                    break
+        letters = atom_letters(aut.atoms, columns, n, starts)
+        hits = first_rejections(aut.table, aut.initial, letters, firsts, lengths)
+        for e in np.flatnonzero(hits >= 0).tolist():
+            hit, seen = int(hits[e]), best[e][1]
+            if seen is None or hit < seen:  # (the earlier automaton's on a tie)
+                best[e] = (outcome, hit)
     return best
+
+
+#: Traces stepped together by :func:`first_rejections` while at least this many are still
+#: running (one numpy step for all of them); the rest are stepped one tick at a time
+STEP_TOGETHER = 32
+
+
+def first_rejections(table: list[list[int]], initial: int, letters: np.ndarray,
+                     firsts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The first tick (0-based in its trace) at which the automaton ``table`` (``table[state]
+    [letter]``, negative: rejected) from ``initial`` rejects each trace (``letters``, trace
+    ``e`` at ``firsts[e]``, ``lengths[e]`` ticks), -1 where it never does: tick ``k`` of
+    every trace still running in one numpy step while :data:`STEP_TOGETHER` or more run
+    (the short traces of many entities), the rest as :func:`_first_rejection` steps them."""
+    hits = np.full(len(firsts), -1, np.int64)
+    firsts = np.asarray(firsts, np.int64)
+    lengths = np.asarray(lengths, np.int64)
+    active = np.flatnonzero(lengths > 0)
+    state = np.full(len(active), initial, np.int64)
+    steps = np.asarray(table, np.int64)
+    k = 0
+    while len(active) and len(active) >= STEP_TOGETHER:
+        state = steps[state, letters[firsts[active] + k]]
+        out = state < 0
+        hits[active[out]] = k
+        keep = ~out & (lengths[active] > k + 1)
+        active, state = active[keep], state[keep]
+        k += 1
+    for e, st in zip(active.tolist(), state.tolist()):
+        a = int(firsts[e])
+        hit = _first_rejection(table, st, letters[a + k:a + int(lengths[e])])
+        if hit is not None:
+            hits[e] = hit + k
+    return hits
 
 
 def nan_ticks(requirement: A.Requirement, columns: Mapping[str, np.ndarray], n: int) -> np.ndarray:

@@ -12,7 +12,8 @@ import pytest
 
 from fretc.compiler import ir
 from fretc.compiler.codegen import monitor_source
-from fretc.monitors.judge import ltl3_verdict
+from fretc.monitors import judge
+from fretc.monitors.judge import ltl3_verdict, ltl3_verdicts
 from fretc.monitors.vectorized import (VectorizeError, node_series, pt_series,
                                         supports)
 from fretc.fretish import parse
@@ -60,6 +61,24 @@ def test_long_random_traces_agree(all_keys):
         steps, st = step_all(cls(), cols, n)
         assert pt_series(comp.formalization.pt, cols, n).tolist() == steps
         assert ltl3_verdict(ms, cols, n) == st
+
+
+@pytest.mark.parametrize("together", [1, 32])
+def test_the_verdicts_of_many_traces_at_once_are_each_ones_own(all_keys, together,
+                                                               monkeypatch):
+    """:func:`ltl3_verdicts` of many traces laid end to end (the per-entity batch) gives
+    each trace the verdict and tick :func:`ltl3_verdict` gives it alone, the traces stepped
+    by numpy together (``together``: while that many run) or one at a time."""
+    monkeypatch.setattr(judge, "STEP_TOGETHER", together)
+    rnd = random.Random(together)
+    for comp, _cls, ms in all_keys[::4]:
+        traces = [random_trace(rnd, rnd.randint(1, 12)) for _ in range(40)]
+        lengths = np.array([len(next(iter(t.values()))) for t in traces], np.int64)
+        firsts = (np.cumsum(lengths) - lengths).astype(np.int64)
+        cols = {k: np.concatenate([t[k] for t in traces]) for k in traces[0]}
+        got = ltl3_verdicts(ms, cols, int(lengths.sum()), np.repeat(firsts, lengths), firsts,
+                            lengths)
+        assert got == [ltl3_verdict(ms, t, int(m)) for t, m in zip(traces, lengths)], comp.text
 
 
 @pytest.mark.parametrize("sentence", [

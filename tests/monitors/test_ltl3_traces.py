@@ -1,0 +1,46 @@
+"""The first rejection of many traces at once (:func:`fretc.monitors.judge.first_rejections`,
+the per-entity batch's LTL3 verdicts) equals each trace's own, whether the traces are stepped
+together by numpy or one tick at a time (the monitors of every template key:
+tests/monitors/test_vectorized.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fretc.monitors import judge as J
+
+
+@st.composite
+def automata_and_traces(draw):
+    """A random complete table over ``2**atoms`` letters (-1: rejected) and traces of
+    letters laid end to end."""
+    atoms = draw(st.integers(0, 2))
+    states = draw(st.integers(1, 4))
+    table = [[draw(st.integers(-1, states - 1)) for _ in range(2 ** atoms)]
+             for _ in range(states)]
+    lengths = draw(st.lists(st.integers(0, 9), min_size=0, max_size=40))
+    letters = draw(st.lists(st.integers(0, 2 ** atoms - 1), min_size=sum(lengths),
+                            max_size=sum(lengths)))
+    return table, draw(st.integers(0, states - 1)), lengths, letters
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=automata_and_traces(), together=st.sampled_from([0, 1, 3, 32]))
+def test_the_first_rejection_of_each_trace_is_its_own(case, together, monkeypatch_session):
+    table, initial, lengths, letters = case
+    monkeypatch_session.setattr(J, "STEP_TOGETHER", together)
+    lens = np.asarray(lengths, np.int64)
+    firsts = (np.cumsum(lens) - lens).astype(np.int64)
+    arr = np.asarray(letters, np.uint16)
+    got = J.first_rejections(table, initial, arr, firsts, lens).tolist()
+    want = [J._first_rejection(table, initial, arr[a:a + m]) for a, m in zip(firsts, lengths)]
+    assert got == [-1 if w is None else w for w in want]
+
+
+@pytest.fixture(scope="module")
+def monkeypatch_session():
+    with pytest.MonkeyPatch.context() as m:
+        yield m
