@@ -5,7 +5,7 @@ all of them in one pass that restarts at each trace's first tick
 over each (:func:`fretc.monitors.judge.ltl3_verdicts`).
 
 FRET's finite-trace verdict of a trace is its pt formula at its last tick; it is vacuous
-when the trigger formula (:func:`fretc.compiler.c_codegen.trigger_pt`: no trigger in any
+when the trigger formula (:func:`fretc.compiler.trigger.trigger_pt`: no trigger in any
 scope interval) holds there too; the LTL3 verdict is the first rejection of the automata.
 These are the verdicts the judge gives one trace at a time (the tests compare them on
 random traces). The entities it finds violated get their robustness over their traces at
@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from fretc.compiler.c_codegen import trigger_pt
+from fretc.compiler.trigger import trigger_pt
 from fretc.monitors.judge import ltl3_verdicts
 from fretc.monitors.vectorized import VectorizeError, pt_series, supports
 

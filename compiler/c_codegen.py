@@ -9,7 +9,8 @@ Each requirement's monitor is generated from the formula IR the Python monitors 
 (:mod:`fretc.compiler.codegen`): the pt formula's tick code (:mod:`fretc.compiler.c_step`, the
 C twin of :mod:`fretc.compiler.pt_step`), the same LTL3 automata of ft_inf
 (:func:`fretc.compiler.automata.ltl3_automata`) as constant tables, and the requirement's
-trigger formula for the audit's *vacuous* verdict (:func:`trigger_pt`). Its state is one
+trigger formula for the audit's *vacuous* verdict
+(:func:`fretc.compiler.trigger.trigger_pt`). Its state is one
 struct of a size known here (``<P>_STATE_BYTES``, checked by the C compiler); ``step`` runs
 in constant time with no allocation, no recursion and no loop.
 
@@ -22,7 +23,6 @@ tick).
 
 from __future__ import annotations
 
-import dataclasses
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -35,11 +35,12 @@ from fretc.compiler.codegen import _env, file_stems
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.compiler.pt_step import CodegenError, check_monitorable
+from fretc.compiler.trigger import trigger_pt
 
 if TYPE_CHECKING:
     from fretc.compiler.build import Compiled
 
-__all__ = ["CMonitor", "CUnit", "CodegenError", "c_monitor", "c_units", "emit_c", "trigger_pt"]
+__all__ = ["CMonitor", "CUnit", "CodegenError", "c_monitor", "c_units", "emit_c"]
 
 
 @dataclass
@@ -99,35 +100,6 @@ class CMonitor:
     def upper(self) -> str:
         """The prefix in upper case, for the macros."""
         return self.prefix.upper()
-
-
-def trigger_pt(compiled: Compiled) -> Node | None:
-    """The pt formula that is true at the last tick of a trace iff no trigger of the
-    requirement has occurred in any scope interval (the audit's *vacuous*: FRET's
-    finite-trace verdict of the same scope and condition with the timing ``immediately``
-    and the response ``false``, ``true`` for the ``only`` scopes whose obligation is
-    negated: every trigger then fails at once). None when the audit's interval semantics
-    cannot say vacuous either (an uninterpreted function, a free-form requirement)."""
-    from fretc.compiler.semantics import SemanticsError, formalize
-    from fretc.fretish import ast as A
-
-    req = compiled.requirement
-    f = compiled.formalization
-    if req is None or req.freeform or f is None or ir.has_op(f.pt, ("call",)) or any(
-            n.op == "fn" and n.name not in _KNOWN_FN for n in ir.walk(f.pt)):
-        return None
-    only = req.scope.kind.startswith("only")
-    probe = dataclasses.replace(req, timing=A.Timing("immediately"),
-                                response=A.BoolLit(only), probability=None)
-    try:
-        got = formalize(probe, compiled.entry.tick_period)
-        check_monitorable(got.pt)
-    except (SemanticsError, CodegenError):
-        return None
-    return got.pt
-
-
-_KNOWN_FN = ("absReal", "absInt", "minReal", "minInt", "maxReal", "maxInt")
 
 
 def _identifier(text: str) -> str:
