@@ -15,7 +15,7 @@ import numpy as np
 from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.signals.bindings import Bindings
-from fretc.signals.bindings.binding import Binding, compile_expression
+from fretc.signals.bindings.binding import Binding, compile_kept
 from fretc.signals.bindings.expression import EntityParam
 from fretc.signals.bindings.extract import Valid
 
@@ -43,7 +43,7 @@ def entity_kind(bindings: Bindings, name: str) -> EntityKind:
     Raises:
         BindingError: the key is not a field path of one topic."""
     key, matching = bindings.entities[name]
-    b = compile_expression(f"entity_{name}", key, source=f"{bindings.source} [entities]")
+    b = compile_kept(f"entity_{name}", key, f"{bindings.source} [entities]")
     if len(b.topics) != 1 or not b.fields:
         raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
                            "field path of one topic, e.g. \"/tracks.tracks[:].id\"")

@@ -20,8 +20,8 @@ from fretc.signals.bindings.parse_cache import cached_parses
 from fretc.signals.bindings.operations import Ops
 from fretc.signals.bindings.windowing import WindowSpec, check_window
 
-__all__ = ["VARNAME", "Binding", "compile_expression", "parse_inline", "operand_signals",
-           "fold", "EMPTY_FOLD"]
+__all__ = ["VARNAME", "Binding", "compile_expression", "compile_kept", "parse_inline",
+           "operand_signals", "fold", "EMPTY_FOLD"]
 
 #: A FRET variable name as a binding key: an identifier, or the text of a quoted FRETish
 #: variable (``"wind speed"``: a TOML quoted key ``"wind speed" = "..."``, or
@@ -243,6 +243,19 @@ def parse_inline(spec: str, refs: dict[str, Binding] | None = None) -> Binding:
 
 
 _COMPARISONS = ("<", "<=", ">", ">=", "=", "!=")
+
+
+def compile_kept(name: str, expr: str, source: str) -> Binding:
+    """:func:`compile_expression` of ``expr`` (no path variables), its parse kept between
+    runs as a binding file's are (:mod:`fretc.signals.bindings.parse_cache`: Lark is not
+    loaded for an unchanged expression). Raises what :func:`compile_expression` raises."""
+    def parse(_name: str) -> tuple[Expr, frozenset[str]]:
+        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
+
+        return parse_expression(expr, ExprLocation(source, name, None, None, True), None)
+
+    parsed = cached_parses(f"{source}#{name}", {name: expr}, None, parse)
+    return compile_expression(name, expr, source=source, parsed=parsed[name])
 
 
 def _operands(node: Expr, found: list[Expr]) -> None:

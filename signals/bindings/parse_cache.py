@@ -14,14 +14,16 @@ pickled). An entry made from anything else, or damaged, is a miss: the expressio
 again (:mod:`fretc.common.cache`: the cache changes speed, never output).
 
 Not kept: a file with an expression that does not parse (its error is made again, with its
-place, at each read), and a file whose ``[path_variables]`` hold an entity's key
-(:class:`fretc.signals.bindings.expression.EntityParam`): its trees share that object with
-the audit, which sets each entity's value on it, so a tree read back would hold a copy.
-``FRETC_CACHE_DIR=""`` turns it off.
+place, at each read). A file whose ``[path_variables]`` hold an entity's key
+(:class:`fretc.signals.bindings.expression.EntityParam`) is kept with each key written by
+its name (pickle's ``persistent_id``): its trees must share that object with the audit,
+which sets each entity's value on it, so a tree read back holds the key object of the
+``path_variables`` it is read for, never a copy. ``FRETC_CACHE_DIR=""`` turns it off.
 """
 
 from __future__ import annotations
 
+import io
 import os
 import pickle
 import sys
@@ -29,7 +31,7 @@ from collections.abc import Callable, Mapping
 
 from fretc.common import cache
 from fretc.common.libraries import package_init
-from fretc.signals.bindings.expression import Expr
+from fretc.signals.bindings.expression import EntityParam, Expr
 
 __all__ = ["cached_parses"]
 
@@ -56,8 +58,45 @@ def _code_key() -> str:
     return _CODE_KEY
 
 
-def _plain(path_vars: Mapping | None) -> bool:
-    return all(type(v) in (bool, int, float, str) for v in (path_vars or {}).values())
+def _keys(path_vars: Mapping | None) -> dict[str, EntityParam] | None:
+    """The entity keys among ``path_vars`` by path variable, or None when a value is
+    neither a key nor a plain value (such a file is not kept)."""
+    keys = {}
+    for name, v in (path_vars or {}).items():
+        if type(v) is EntityParam:
+            keys[name] = v
+        elif type(v) not in (bool, int, float, str):
+            return None
+    return keys
+
+
+class _Pickler(pickle.Pickler):
+    """Pickles each entity key of ``keys`` as its path variable's name (a key that is not
+    among them: :class:`pickle.PicklingError`, the file is not kept)."""
+
+    def __init__(self, file: io.BytesIO, keys: dict[str, EntityParam]) -> None:
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self.names = {id(v): k for k, v in keys.items()}
+
+    def persistent_id(self, obj: object) -> str | None:
+        if type(obj) is not EntityParam:
+            return None
+        if id(obj) not in self.names:
+            raise pickle.PicklingError(f"an entity key not among the path variables: {obj!r}")
+        return self.names[id(obj)]
+
+
+class _Unpickler(pickle.Unpickler):
+    """Reads a key written by :class:`_Pickler` as the key object of that path variable."""
+
+    def __init__(self, payload: bytes, keys: dict[str, EntityParam]) -> None:
+        super().__init__(io.BytesIO(payload))
+        self.keys = keys
+
+    def persistent_load(self, pid: object) -> EntityParam:
+        if not isinstance(pid, str) or pid not in self.keys:
+            raise pickle.UnpicklingError(f"no entity key {pid!r}")
+        return self.keys[pid]
 
 
 def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mapping | None,
@@ -67,7 +106,8 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
     an earlier parse of the same file, texts, path variables and code, else ``parse``'s
     (kept when every expression parsed, as :func:`fretc.signals.bindings.parse.parse_expression`
     returns them). Raises what ``parse`` raises, for the first variable that fails."""
-    if not _plain(path_vars):  # (an entity's key: never kept, module docstring)
+    keys = _keys(path_vars)
+    if keys is None:  # (a value that is neither plain nor a key: never kept)
         return {variable: parse(variable) for variable in expressions}
     name = cache.key_of(KIND, source)
     made_from = cache.digest("\x00".join(
@@ -76,7 +116,7 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
     payload = cache.read_sealed(KIND, name, _MAGIC, made_from)
     if payload is not None:
         try:
-            got = pickle.loads(payload)
+            got = _Unpickler(payload, keys).load()
         except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
             got = None
         if (isinstance(got, dict) and list(got) == list(expressions)
@@ -85,7 +125,9 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
             return got
     out = {variable: parse(variable) for variable in expressions}
     try:
-        payload = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+        buf = io.BytesIO()
+        _Pickler(buf, keys).dump(out)
+        payload = buf.getvalue()
     except Exception:  # noqa: BLE001 - a tree that does not pickle is not kept
         return out
     cache.write_sealed(KIND, name, _MAGIC, made_from, payload)

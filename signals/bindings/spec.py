@@ -10,7 +10,10 @@ from pathlib import PurePath
 
 from fretc.common.units import NS_PER_S
 
+from fretc.common.problems import BindingError
 from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
+from fretc.signals.bindings.expression import ExprLocation
+from fretc.signals.bindings.parse_cache import cached_parses
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
            "Bindings", "make_bindings", "grid_start", "grid_end", "MAX_TICKS",
@@ -171,21 +174,17 @@ class Bindings:
         variables = dict(self.variables)
         pending = dict(self.per_entity)
         pvars = {**self.path_vars, **values}
+        parsed = _per_entity_parses(str(self.source), pending, pvars)
         while pending:
-            for name, (expr, line, col, exact, nan, inf) in list(pending.items()):
-                if any(other in expr for other in pending if other != name):
-                    continue  # refers to another pending one: after it
-                variables[name] = compile_expression(
-                    name, expr, source=str(self.source), line=line, col=col, exact=exact,
-                    refs=variables, nan=nan, inf=inf, path_vars=pvars)
-                del pending[name]
-                break
-            else:  # only mutual references left: compile in order (an error names them)
-                name, (expr, line, col, exact, nan, inf) = next(iter(pending.items()))
-                variables[name] = compile_expression(
-                    name, expr, source=str(self.source), line=line, col=col, exact=exact,
-                    refs=variables, nan=nan, inf=inf, path_vars=pvars)
-                del pending[name]
+            # the first that refers to no other pending one; only mutual references left:
+            # the first (its error names them)
+            name = next((n for n, p in pending.items()
+                         if not any(other in p[0] for other in pending if other != n)),
+                        next(iter(pending)))
+            expr, line, col, exact, nan, inf = pending.pop(name)
+            variables[name] = compile_expression(
+                name, expr, source=str(self.source), line=line, col=col, exact=exact,
+                refs=variables, nan=nan, inf=inf, path_vars=pvars, parsed=parsed.get(name))
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
                         types=dict(self.types), msg_path=self.msg_path,
                         constants=self.constants)
@@ -262,3 +261,21 @@ def tick_bound_error(path: str, period: int, first: int, last: int, ticks: int,
     return (f"{path}: {what}: the tick period {period} ns from {first} ns to the newest "
             f"message at {last} ns (time base: a header.stamp jump? a time stamp far from "
             "the others?); choose a longer tick period")
+
+
+def _per_entity_parses(source: str, pending: dict[str, tuple], path_vars: dict) -> dict:
+    """The per-entity expressions ``pending`` (name -> (text, line, col, exact, ...)) parsed
+    with ``path_vars`` (the entities' keys among them), kept between runs
+    (:mod:`fretc.signals.bindings.parse_cache`); none when one does not parse (each is then
+    parsed as it is compiled, whose error comes in the order of compiling)."""
+    def parse(name: str) -> tuple:
+        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
+
+        expr, line, col, exact = pending[name][:4]
+        return parse_expression(expr, ExprLocation(source, name, line, col, exact), path_vars)
+
+    try:
+        return cached_parses(f"{source}#per-entity", {n: p[0] for n, p in pending.items()},
+                             path_vars, parse)
+    except BindingError:
+        return {}

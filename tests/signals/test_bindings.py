@@ -479,27 +479,69 @@ def test_binding_parse_cache_misses_on_other_text_code_damage_and_keeps_no_error
             parse_bindings(bad, "bad.toml")
 
 
-def test_entity_keys_are_never_read_back_from_the_cache(tmp_path, monkeypatch):
-    """A tree over an entity's key holds the very object the audit sets each entity's value
-    on: such a file is parsed at each load, never read back as a copy."""
+def _holds(obj, target) -> bool:
+    """Whether the tree ``obj`` holds the very object ``target`` (an entity key)."""
     import dataclasses
 
     from fretc.signals.bindings.expression import EntityParam
+
+    if obj is target:
+        return True
+    if isinstance(obj, EntityParam):
+        return False
+    if dataclasses.is_dataclass(obj):
+        return any(_holds(getattr(obj, f.name), target) for f in dataclasses.fields(obj))
+    return isinstance(obj, (tuple, list)) and any(_holds(x, target) for x in obj)
+
+
+def test_entity_keys_are_read_back_from_the_cache_as_the_live_key(tmp_path, monkeypatch):
+    """A tree over an entity's key holds the very object the audit sets each entity's value
+    on: read back from the cache, it holds the key object of the load it is read for (never
+    a copy, nor an earlier load's key)."""
+    from fretc.signals.bindings.expression import EntityParam
     from fretc.signals.bindings.files import _compile_in_order
 
-    def holds(obj, target) -> bool:
-        if obj is target:
-            return True
-        if dataclasses.is_dataclass(obj):
-            return any(holds(getattr(obj, f.name), target) for f in dataclasses.fields(obj))
-        return isinstance(obj, (tuple, list)) and any(holds(x, target) for x in obj)
-
+    holds = _holds
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
     calls = _count_parses(monkeypatch)
-    for _ in range(2):
+    keys = []
+    for _ in range(3):
         key = EntityParam("track")
+        keys.append(key)
         pending = {"near": ('max(/tracks.tracks[:]{id == $track}.x) < 2', None, None, True)}
         compiled = _compile_in_order(pending, "e.toml", path_vars={"track": key})
         assert holds(compiled["near"].ast, key)
-    assert len(calls) == 2
-    assert not (tmp_path / "binding-parses").exists()
+        assert not any(holds(compiled["near"].ast, k) for k in keys[:-1])
+    assert len(calls) == 1  # (the first load parsed; the others read the cache)
+    assert list((tmp_path / "binding-parses").iterdir())
+    other = {"near": ('max(/tracks.tracks[:]{id == $ship}.x) < 2', None, None, True)}
+    ship = EntityParam("ship")
+    assert holds(_compile_in_order(other, "e.toml", path_vars={"ship": ship})["near"].ast, ship)
+
+
+def test_per_entity_variables_and_keys_are_parsed_once_across_loads(tmp_path, monkeypatch):
+    """A per-entity binding file: its per-entity variables (compiled per entity key object,
+    :meth:`Bindings.for_entity`) and its ``[entities]`` key are parsed once; later loads
+    read the cache and their trees hold that load's own key object. An expression that
+    does not parse still gives its error, with its place."""
+    from fretc.audit.entity_kinds import entity_kind
+    from fretc.common.problems import BindingError
+    from fretc.signals.bindings.expression import EntityParam
+
+    monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
+    calls = _count_parses(monkeypatch)
+    text = ('[tick]\nperiod = "100 ms"\n[entities]\ntrack = "/tracks.tracks[:].id"\n'
+            '[variables]\ndist = "min(/tracks.tracks[:]{id==$track}.distance)"\n'
+            'near = "dist < 1"\n')
+    for k in range(3):
+        b = parse_bindings(text, "e.toml")
+        key = EntityParam("track")
+        own = b.for_entity({"track": key}).variables
+        assert _holds(own["dist"].ast, key) and _holds(own["near"].ast, key)
+        assert entity_kind(b, "track").topic == "/tracks"
+        if k == 0:
+            first = len(calls)
+    assert first >= 3 and len(calls) == first
+    bad = text.replace("{id==$track}.distance)", "{id==$track}.distance")
+    with pytest.raises(BindingError, match=r"e\.toml:\d+:\d+"):
+        parse_bindings(bad, "e.toml").for_entity({"track": EntityParam("track")})
