@@ -86,61 +86,40 @@ class EntityColumns:
         absent = {}
         for j, n in enumerate(names):
             absent[n] = floats([t.values[entities][0][j] for t in ticks])
-        self._build(names, absent, [(k, 1, t.values[entities][1]) for k, t in enumerate(ticks)],
-                    len(ticks), n_entities)
+        n_ticks = len(ticks)
+        self._build(names, absent, list(range(n_ticks)), [1] * n_ticks,
+                    [t.values[entities][1] for t in ticks], n_ticks, n_entities)
 
     @classmethod
-    def of_runs(cls, names: list[str], absent: tuple, runs: list[tuple[int, int, Any]],
-                n_ticks: int, n_entities: int) -> EntityColumns:
-        """The columns of ``n_ticks`` ticks given as runs ``(first tick, ticks, rows)`` of
-        ticks holding the same rows (:mod:`fretc.audit.entity_runs`), ``absent`` the
-        variables' absent values at every tick."""
+    def of_runs(cls, names: list[str], absent: tuple, firsts: list[int], counts: list[int],
+                rows: list, n_ticks: int, n_entities: int) -> EntityColumns:
+        """The columns of ``n_ticks`` ticks given as runs (run ``r``: ``counts[r]`` ticks from
+        tick ``firsts[r]``, each holding the rows ``rows[r]``; :mod:`fretc.audit.entity_runs`),
+        ``absent`` the variables' absent values at every tick."""
         out = cls.__new__(cls)
         cols = {}
         for j, n in enumerate(names):
             f, b = floats([absent[j]])
             cols[n] = (np.repeat(f, n_ticks), np.repeat(b, n_ticks))
-        out._build(names, cols, runs, n_ticks, n_entities)
+        out._build(names, cols, firsts, counts, rows, n_ticks, n_entities)
         return out
 
     def _build(self, names: list[str], absent: dict[str, tuple[np.ndarray, np.ndarray]],
-               runs: list[tuple[int, int, Any]], n_ticks: int, n_entities: int) -> None:
+               firsts: list[int], counts: list[int], rows: list, n_ticks: int,
+               n_entities: int) -> None:
         """The columns from the absent values (per variable, at each tick) and the rows of
-        runs ``(first tick, ticks, rows)`` of ticks holding the same rows."""
+        runs (:meth:`of_runs`): rows given as a list of ``(entity, values)``, or as a
+        :class:`HeldRows` (gathered from their blocks by numpy, run by run)."""
         self.names = names
         self.absent = {n: (f, b if b.all() else np.zeros(len(b), np.bool_))
                        for n, (f, b) in absent.items()}
-        flat: list[tuple] = []
-        counts = np.zeros(n_ticks, np.int64)
-        held: dict[int, tuple[RowBlock, list[int], list[int]]] = {}
-        for k, m, rows in runs:
-            if type(rows) is list:
-                counts[k:k + m] = len(rows)
-                flat.extend(rows * m)
-                continue
-            blk = rows.block
-            assert blk is not None  # (every batch is evaluated by the end of the read)
-            got = held.get(id(blk))
-            if got is None:
-                got = held[id(blk)] = (blk, [], [])
-            if m == 1:
-                got[1].append(k)
-                got[2].append(rows.at)
-            else:
-                got[1].extend(range(k, k + m))
-                got[2].extend([rows.at] * m)
-        vals = [r[1] for r in flat]
-        parts = [(np.array([r[0] for r in flat], np.int64),
-                  np.repeat(np.arange(n_ticks, dtype=np.int64), counts),
-                  {n: floats([v[j] for v in vals]) for j, n in enumerate(names)})]
-        for blk, ks, ats in held.values():
-            at = np.array(ats, np.int64)
-            starts = blk.offsets[at]
-            lengths = blk.offsets[at + 1] - starts
-            pos = (np.repeat(starts - (np.cumsum(lengths) - lengths), lengths)
-                   + np.arange(int(lengths.sum()), dtype=np.int64))
-            parts.append((blk.entity[pos], np.repeat(np.array(ks, np.int64), lengths),
-                          {n: (blk.values[n][0][pos], blk.values[n][1][pos]) for n in names}))
+        is_list = np.fromiter(map(_is_list, rows), np.bool_, len(rows))
+        parts = [self._listed(names, firsts, counts, rows, n_ticks, bool(is_list.any()))]
+        if not is_list.all():
+            at = np.flatnonzero(~is_list)
+            parts.append(_held_rows(names, [rows[j] for j in at.tolist()],
+                                    np.asarray(firsts, np.int64)[at],
+                                    np.asarray(counts, np.int64)[at]))
         entity = np.concatenate([p[0] for p in parts])
         self.order = np.argsort(entity, kind="stable")
         self.entity = entity[self.order]
@@ -149,6 +128,22 @@ class EntityColumns:
         self.rows: dict[str, tuple[np.ndarray, np.ndarray]] = {
             n: (np.concatenate([p[2][n][0] for p in parts])[self.order],
                 np.concatenate([p[2][n][1] for p in parts])[self.order]) for n in names}
+
+    @staticmethod
+    def _listed(names: list[str], firsts: list[int], counts: list[int], rows: list,
+                n_ticks: int, any_list: bool) -> tuple:
+        """The rows given as lists, as (entity, tick, variable -> (values, bools))."""
+        flat: list[tuple] = []
+        per_tick = np.zeros(n_ticks, np.int64)
+        if any_list:
+            for k, m, got in zip(firsts, counts, rows):
+                if got and type(got) is list:
+                    per_tick[k:k + m] = len(got)
+                    flat.extend(got * m)
+        vals = [r[1] for r in flat]
+        return (np.array([r[0] for r in flat], np.int64),
+                np.repeat(np.arange(n_ticks, dtype=np.int64), per_tick),
+                {n: floats([v[j] for v in vals]) for j, n in enumerate(names)})
 
     def trace(self, i: int, i0: int, i1: int) -> dict[str, np.ndarray]:
         """Entity ``i``'s columns over ticks ``i0..i1``."""
@@ -176,3 +171,42 @@ class EntityColumns:
         return {n: _merged((self.absent[n][0][idx], self.absent[n][1][idx]), slots,
                            (self.rows[n][0][ok][inside], self.rows[n][1][ok][inside]))
                 for n in self.names}
+
+
+def _is_list(rows: Any) -> bool:
+    return type(rows) is list
+
+
+def _held_rows(names: list[str], held: list[HeldRows], firsts: np.ndarray,
+               counts: np.ndarray) -> tuple:
+    """The rows of runs holding :class:`HeldRows` (run ``r``: ``counts[r]`` ticks from
+    ``firsts[r]``, each the rows of message ``held[r].at`` of ``held[r].block``), as
+    (entity, tick, variable -> (values, bools)): the blocks laid end to end, each tick's
+    rows gathered by numpy."""
+    blocks = list(dict.fromkeys(map(_block_of, held)))
+    number = {id(b): q for q, b in enumerate(blocks)}
+    sizes = np.array([len(b.offsets) - 1 for b in blocks], np.int64)
+    rows_in = np.array([int(b.offsets[-1]) for b in blocks], np.int64)
+    row_base = np.cumsum(rows_in) - rows_in
+    # every message of every block: where its rows start and end in the blocks end to end
+    starts = np.concatenate([b.offsets[:-1] + r for b, r in zip(blocks, row_base.tolist())])
+    ends = np.concatenate([b.offsets[1:] + r for b, r in zip(blocks, row_base.tolist())])
+    message = ((np.cumsum(sizes) - sizes)[np.fromiter((number[id(h.block)] for h in held),
+                                                      np.int64, len(held))]
+               + np.fromiter((h.at for h in held), np.int64, len(held)))
+    total = int(counts.sum())
+    tick = np.repeat(firsts, counts) + (np.arange(total, dtype=np.int64)
+                                        - np.repeat(np.cumsum(counts) - counts, counts))
+    message = np.repeat(message, counts)
+    first, lengths = starts[message], ends[message] - starts[message]
+    pos = (np.repeat(first - (np.cumsum(lengths) - lengths), lengths)
+           + np.arange(int(lengths.sum()), dtype=np.int64))
+    entity = np.concatenate([b.entity for b in blocks])[pos]
+    return (entity, np.repeat(tick, lengths),
+            {n: (np.concatenate([b.values[n][0] for b in blocks])[pos],
+                 np.concatenate([b.values[n][1] for b in blocks])[pos]) for n in names})
+
+
+def _block_of(h: HeldRows) -> RowBlock:
+    assert h.block is not None  # (every batch is evaluated by the end of the read)
+    return h.block

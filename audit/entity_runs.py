@@ -86,11 +86,10 @@ class TickRuns:
     def columns(self, names: list[str], absent: tuple, n_entities: int) -> EntityColumns:
         """The per-entity variables ``names`` as columns (``absent``: their values for an
         entity not held, the same at every tick)."""
-        spans, k = [], 0
-        for n, rows in zip(self.counts, self.rows):
-            spans.append((k, n, rows))
-            k += n
-        return EntityColumns.of_runs(names, absent, spans, k, n_entities)
+        counts = np.asarray(self.counts, np.int64)
+        firsts = (np.cumsum(counts) - counts).tolist()
+        return EntityColumns.of_runs(names, absent, firsts, self.counts, self.rows,
+                                     int(counts.sum()), n_entities)
 
     def ticks(self, entities: str, absent: tuple) -> list[Tick]:
         """The runs' ticks as :class:`~fretc.signals.clock.Tick` objects (numbered from 0,

@@ -93,16 +93,17 @@ def test_columns_of_runs_equal_those_of_their_ticks(absent, runs, span):
     """Runs of ticks holding the same rows (audit/entity_runs.py), the rows as lists or as
     :class:`HeldRows` of a block, give the columns of their ticks one by one."""
     ticks = [_Tick(absent, sorted(rows.items())) for m, rows in runs for _ in range(m)]
-    blocks = _as_blocks([_Tick(absent, sorted(rows.items())) for _m, rows in runs], 0)
+    blocks = _as_blocks([_Tick(absent, sorted(rows.items())) for _m, rows in runs],
+                        span[1] % (len(runs) + 1))  # (the runs' rows in one or two blocks)
     spans, k = [], 0
     for (m, _r), t in zip(runs, blocks):
         spans.append((k, m, t.values[E][1]))
         k += m
     cols = EntityColumns(ticks, ["x", "y"], E, 4)
-    lists = EntityColumns.of_runs(["x", "y"], absent,
-                                  [(k, m, sorted(r.items())) for (k, m, _h), (_m, r)
-                                   in zip(spans, runs)], len(ticks), 4)
-    held = EntityColumns.of_runs(["x", "y"], absent, spans, len(ticks), 4)
+    firsts, counts, rows = (list(x) for x in zip(*spans))
+    lists = EntityColumns.of_runs(["x", "y"], absent, firsts, counts,
+                                  [sorted(r.items()) for _m, r in runs], len(ticks), 4)
+    held = EntityColumns.of_runs(["x", "y"], absent, firsts, counts, rows, len(ticks), 4)
     i0, i1 = sorted(min(s, len(ticks) - 1) for s in span)
     for i in range(4):
         want = cols.trace(i, i0, i1)
