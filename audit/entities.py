@@ -27,6 +27,7 @@ from fretc.audit.entity_batch import batch_verdicts, batchable, nan_traces
 from fretc.audit.entity_columns import EntityColumns, column as _column
 from fretc.audit.entity_kinds import entity_kind
 from fretc.audit.entity_read import ENTITIES, EntityClock, read_entities
+from fretc.audit.entity_summary import summary_note, summary_verdict
 from fretc.audit.finalize import finalize
 from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
 from fretc.audit.log_problems import collect_problems, problem_json
@@ -290,8 +291,10 @@ class _Judge:
             if not c.kind.stream:
                 self.rows = EntityColumns(ticks, own, ENTITIES, len(c.table.keys))
         self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
-        #: entity -> the robustness of its trace computed with the others' (the batch)
+        #: entity -> the robustness of its trace computed with the others' (the batch), and
+        #: its LTL3 verdict, tick and ticks
         self.robs: dict[int, Any] = {}
+        self.ltl3s: dict[int, tuple[str, int | None, int]] = {}
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))
@@ -386,7 +389,10 @@ class _Judge:
         holds_, vacuous_ = np.asarray(holds).tolist(), np.asarray(vacuous).tolist()
         starts, counts = i0s.tolist(), lengths.tolist()
         for e, i in enumerate(judged):
-            if not holds_[e] or e in slow:
+            if e in slow:
+                continue
+            if not holds_[e]:  # (violated: judged alone, its LTL3 verdict known)
+                self.ltl3s[i] = (*ltl3[e], counts[e])
                 continue
             (a, m), (status, tick) = (starts[e], counts[e]), ltl3[e]
             at = times[a + tick] if tick is not None else None
@@ -458,7 +464,8 @@ class _Judge:
         if res.cut:
             v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
         ri = dataclasses.replace(r, id=v.requirement)
-        finalize(ents.plan, ri, res, self.bindings, v, ents.la, rob=self.robs.get(i))
+        finalize(ents.plan, ri, res, self.bindings, v, ents.la, rob=self.robs.get(i),
+                 ltl3=self.ltl3s.get(i))
         if v.error is not None:
             v.verdict = "error"
         v.partial = ents.la.partial and v.error is None
@@ -486,75 +493,3 @@ class _Judge:
         mark_gaps(res, list(columns), self.bindings, self.gaps, topics,
                   lost_in_words(self.source, log_topics(topics)))
         return res
-
-
-#: The verdict over all entities: the first of these that some entity has. A violated
-#: entity decides it (the universal quantifier is false whatever the others are); else an
-#: error or an unjudged entity (past the bound) leaves the whole undecided.
-_PRECEDENCE = ("violated", "error", "unknown", "satisfied", "vacuous")
-
-
-def summary_note(rid: str, name: str, out: list[Verdict]) -> str:
-    """The note giving how many of requirement ``rid``'s entities ``name`` have each verdict
-    (``R over 3 entities track: 1 violated, 2 satisfied``)."""
-    counts: dict[str, int] = {}
-    for v in out:
-        counts[v.verdict] = counts.get(v.verdict, 0) + 1
-    return (f"{rid} over {len(out)} entities {name}: "
-            + ", ".join(f"{n} {k}" for k, n in sorted(counts.items())))
-
-
-def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verdict:
-    """The requirement's verdict over its entities' verdicts ``out`` (every entity satisfies
-    it: satisfied; one violates it: violated, with the earliest violation's evidence,
-    whatever is left unjudged, which its notes name), named ``r.id``; ``summary`` is
-    :func:`summary_note`'s. One pass over ``out`` (100,000 entities: a pass each costs)."""
-    kinds: set[str] = set()
-    first: Verdict | None = None  # (the earliest violation, the first in order among equals)
-    margin: float | None = None
-    errors: list[str] = []
-    unknown: list[str] = []
-    violated: list[str] = []
-    for x in out:
-        kind = x.verdict
-        kinds.add(kind)
-        if kind == "violated":
-            violated.append(x.requirement)
-            fv = x.first_violation
-            if fv is not None and (first is None or fv.at.time_ns
-                                   < first.first_violation.at.time_ns):  # type: ignore[union-attr]  # (first: with one)
-                first = x
-        elif kind == "unknown":
-            unknown.append(f"{x.requirement}: {x.unknown_reason}")
-        if x.robustness is not None and (margin is None or x.robustness < margin):
-            margin = x.robustness
-        if x.error:
-            errors.append(f"{x.requirement}: {x.error}")
-    verdict = next(k for k in _PRECEDENCE if k in kinds)
-    v = Verdict(log=path, requirement=r.id, text=r.text, source=r.source, verdict=verdict)
-    if verdict == "violated" and first is not None:
-        v.first_violation = first.first_violation
-        v.notes.append(f"first violated by {first.requirement}")
-    v.robustness = margin
-    listed = _listed(errors)
-    if verdict == "error":
-        v.error = listed
-    elif listed:  # violated all the same: what was not judged is said
-        v.notes.append(f"not judged: {listed}")
-    if verdict == "unknown":
-        v.unknown_reason = _listed(unknown)
-    v.partial = any(x.partial for x in out)
-    v.notes.append(summary)
-    v.notes.append("violated by: " + (_listed(violated, ", ") or "none"))
-    return v
-
-
-#: Entities named in the requirement's own error, reason and notes (the rest counted).
-LISTED = 20
-
-
-def _listed(items: list[str], sep: str = "; ") -> str:
-    """``items`` joined, the first :data:`LISTED` of them and how many more."""
-    more = len(items) - LISTED
-    return sep.join(items[:LISTED]) + (f"{sep}and {more} more" if more > 0 else "")
-

@@ -57,7 +57,8 @@ def between_ticks(v: Verdict, s: Sampling, r: RequirementPlan, bindings: Binding
 
 
 def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
-             v: Verdict, la: LogAudit, rob: Any = None) -> None:
+             v: Verdict, la: LogAudit, rob: Any = None,
+             ltl3: tuple[str, int | None, int] | None = None) -> None:
     """Set the verdict ``v`` (:class:`fretc.audit.verdict.Verdict`) of requirement ``r``
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it. Ticks
@@ -65,7 +66,9 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     (:mod:`fretc.audit.unknown_ticks`). ``la`` is the log's
     :class:`fretc.audit.verdict.LogAudit`. A requirement with a probability bound also gets
     its triggers as trials (:mod:`fretc.audit.trials`). ``rob``: the pt formula's robustness
-    over the pass's ticks when computed already (:func:`fretc.monitors.judge.judge`)."""
+    over the pass's ticks when computed already (:func:`fretc.monitors.judge.judge`);
+    ``ltl3``: its LTL3 verdict and tick over the pass's ticks, and how many ticks that was,
+    when computed already (:func:`fretc.monitors.judge.ltl3_verdicts`)."""
     res, nan_unknown = prepare(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
@@ -73,7 +76,8 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
         return
     if rob is not None and len(rob.margin) != n:  # (computed over other ticks: not these)
         rob = None
-    _verdict(plan, r, res, bindings, v, nan_unknown, rob)
+    known = ltl3[:2] if ltl3 is not None and ltl3[2] == n else None
+    _verdict(plan, r, res, bindings, v, nan_unknown, rob, known)
     if plan.coverage:
         from fretc.audit.coverage import record_coverage  # lazy: only with --coverage
 
@@ -108,7 +112,8 @@ def _trials(r, res: ClockPass, v, nan_unknown: bool) -> None:
 
 
 def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
-             v, nan_unknown: bool, rob: Any = None) -> None:
+             v, nan_unknown: bool, rob: Any = None,
+             ltl3: tuple[str, int | None] | None = None) -> None:
     """The verdict of :func:`finalize` over the prepared pass ``res`` (at least one tick)."""
     n = len(res.times)
     f = r.formalization
@@ -117,7 +122,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     try:
         j = judge(r.requirement, f, res.columns, n,
                   monitor_source=r.monitor_source if online else None,
-                  monitor_cls=r.monitor_cls if online else None, rob=rob)
+                  monitor_cls=r.monitor_cls if online else None, rob=rob, ltl3=ltl3)
     except EvidenceUnsupported as exc:
         v.error = f"no online monitor and no interval semantics for it: {exc}"
         return

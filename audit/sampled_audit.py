@@ -102,8 +102,8 @@ def _error(r, path: str, why: str, rid: str | None = None) -> Verdict:
 def _per_entity(r, path: str, entity: tuple[str, list[str]], verdicts: dict[str, Verdict],
                 left_out: dict[str, str]) -> list[Verdict]:
     """A per-entity requirement's verdicts from its entities' clocks: its verdict over them
-    (:func:`fretc.audit.entities.summary_verdict`), then theirs in the file's order."""
-    from fretc.audit.entities import summary_note, summary_verdict
+    (:func:`fretc.audit.entity_summary.summary_verdict`), then theirs in the file's order."""
+    from fretc.audit.entity_summary import summary_note, summary_verdict
 
     name, ids = entity
     if r.error:

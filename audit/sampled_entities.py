@@ -3,7 +3,7 @@
 (docs/bindings.md, "One verdict per entity": its life's ticks), so each entity is a clock of
 the file named by the entity's verdict (``# fretc clock 9: R[track=7]``), and the audit of
 the file and the C runner judge each entity on its clock's rows, then the requirement over
-its entities as the audit of the log does (:func:`fretc.audit.entities.summary_verdict`).
+its entities as the audit of the log does (:func:`fretc.audit.entity_summary.summary_verdict`).
 
 A :data:`~fretc.logs.csv_source.PER_ENTITY_LINE` (``# fretc per entity: R: track``) before
 a requirement's entities says the requirement is judged per entity ``track``; its entities

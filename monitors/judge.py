@@ -78,7 +78,8 @@ class Judgement:
 def judge(requirement: A.Requirement, formalization: Formalization,
           columns: Mapping[str, np.ndarray], n: int, *,
           monitor_source: MonitorSource | None = None,
-          monitor_cls: type | None = None, rob: Robustness | None = None) -> Judgement:
+          monitor_cls: type | None = None, rob: Robustness | None = None,
+          ltl3: tuple[str, int | None] | None = None) -> Judgement:
     """Decide one requirement over the first ``n`` ticks of ``columns``.
 
     Args:
@@ -91,6 +92,8 @@ def judge(requirement: A.Requirement, formalization: Formalization,
         monitor_cls: its generated monitor class, for the replay fallbacks, or None.
         rob: the pt formula's robustness over these ticks when computed already (with other
             traces: :func:`fretc.monitors.robustness.robustness_of_traces`), else None.
+        ltl3: the LTL3 verdict and tick of ``monitor_source``'s automata over these ticks
+            when computed already (with other traces: :func:`ltl3_verdicts`), else None.
 
     Raises:
         EvidenceUnsupported: neither the interval semantics, nor the pt formula over the
@@ -113,10 +116,11 @@ def judge(requirement: A.Requirement, formalization: Formalization,
         assert monitor_cls is not None  # (else the interval evidence's error was raised)
         replayed = stepwise.replay(monitor_cls, columns, n)
         holds, engine = bool(replayed.finish()), "stepwise"
-    ltl3, tick = _ltl3(monitor_source, monitor_cls, columns, n, replayed)
+    status, tick = (ltl3 if ltl3 is not None and monitor_source is not None else
+                    _ltl3(monitor_source, monitor_cls, columns, n, replayed))
     if rob is None and _pt_evaluable(formalization):
         rob = robustness(formalization.pt, columns, n)
-    return Judgement(holds, ev, ltl3, tick, engine, note, rob)
+    return Judgement(holds, ev, status, tick, engine, note, rob)
 
 
 def _pt_evaluable(formalization) -> bool:

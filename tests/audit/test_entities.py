@@ -193,7 +193,7 @@ def test_the_requirement_verdict_over_its_entities_is_their_definition(entities)
     field: the first verdict of the precedence some entity has, the earliest violation (the
     first in order among equals), the least margin (as ``min`` takes NaN), every error
     listed, the unknown reasons, partial when one is."""
-    from fretc.audit.entities import _PRECEDENCE, _listed, summary_verdict
+    from fretc.audit.entity_summary import _PRECEDENCE, _listed, summary_verdict
     from fretc.audit.verdict import FirstViolation, TimePoint, Verdict
 
     class R:
