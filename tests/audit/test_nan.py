@@ -223,3 +223,38 @@ def test_past_the_search_bound_the_verdict_stays_unknown_and_says_why(tmp_path, 
     (v,) = audit_log(plan, str(tmp_path / "t.csv")).verdicts
     assert v.verdict == "unknown"
     assert "may depend on them (not every way of filling them was followed" in v.unknown_reason
+
+
+def test_a_requirements_nan_ticks_are_found_once_per_pass_and_follow_its_columns(
+        tmp_path, monkeypatch):
+    """finalize finds a requirement's NaN ticks once per clock pass (its NaN problem, its
+    unknown ticks and its verdict read them), each requirement its own; a pass whose
+    columns were replaced, or a copy of it, never reads what another set of columns gave."""
+    import dataclasses
+
+    from fretc.audit import finalize as F
+    from fretc.audit.passes import ClockPass
+
+    calls: list[int] = []
+    real = F.nan_ticks
+
+    def counted(req, columns, n):
+        calls.append(n)
+        return real(req, columns, n)
+
+    monkeypatch.setattr(F, "nan_ticks", counted)
+    la = audit_log(_plan(tmp_path), str(_log(tmp_path / "m.mcap", [1.0, 1.0, math.nan, 1.0])))
+    assert _got(la)["R1"].verdict == "unknown"
+    assert len(calls) == 4  # (R1 to R4: one each)
+
+    plan = _plan(tmp_path)
+    r1, r4 = (next(r for r in plan.requirements if r.id == i) for i in ("R1", "R4"))
+    res = ClockPass(None, np.arange(3), {"v": np.array([1.0, math.nan, 1.0]),
+                                         "w": np.array([math.nan, 1.0, 1.0])}, {})
+    assert F._nan_ticks(r1, res).tolist() == [False, True, False]
+    assert F._nan_ticks(r4, res).tolist() == [True, False, False]
+    res.columns = {"v": np.array([math.nan, 1.0, 1.0]), "w": res.columns["w"]}
+    assert F._nan_ticks(r1, res).tolist() == [True, False, False]
+    copy = dataclasses.replace(res, columns={"v": np.ones(3), "w": np.ones(3)})
+    assert copy.nan_ticks == {} and not F._nan_ticks(r1, copy).any()
+    assert F._nan_ticks(r1, res).tolist() == [True, False, False]
