@@ -295,6 +295,7 @@ class _Judge:
         #: its LTL3 verdict, tick and ticks
         self.robs: dict[int, Any] = {}
         self.ltl3s: dict[int, tuple[str, int | None, int]] = {}
+        self.spans: dict[int, tuple[int, int]] = {}  # entity -> its ticks i0..i1 (the batch's)
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))
@@ -384,19 +385,22 @@ class _Judge:
         holds, vacuous, ltl3 = got
         slow = nan_traces(columns, firsts, lengths)
         self._violated_robustness(judged, holds, slow, columns, firsts, lengths)
+        holds = np.asarray(holds, np.bool_)
+        fast = np.ones(len(judged), np.bool_)
+        fast[list(slow)] = False
+        counts = lengths.tolist()
+        starts, vacuous_ = i0s.tolist(), np.asarray(vacuous).tolist()
+        for e in np.flatnonzero(fast & ~holds).tolist():  # (violated: judged alone, with
+            self.ltl3s[judged[e]] = (*ltl3[e], counts[e])  # the LTL3 verdict and ticks known)
+            self.spans[judged[e]] = (starts[e], starts[e] + counts[e] - 1)
         out: dict[int, Verdict] = {}
         times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
-        holds_, vacuous_ = np.asarray(holds).tolist(), np.asarray(vacuous).tolist()
-        starts, counts = i0s.tolist(), lengths.tolist()
-        for e, i in enumerate(judged):
-            if e in slow:
-                continue
-            if not holds_[e]:  # (violated: judged alone, its LTL3 verdict known)
-                self.ltl3s[i] = (*ltl3[e], counts[e])
-                continue
-            (a, m), (status, tick) = (starts[e], counts[e]), ltl3[e]
-            at = times[a + tick] if tick is not None else None
-            out[i] = self._new(i, Ltl3(status, tick, at), vacuous_[e], (m, times[a], times[a + m - 1]))
+        lasts = self.times[i0s + lengths - 1].tolist()
+        for e in np.flatnonzero(fast & holds).tolist():
+            i, (status, tick) = judged[e], ltl3[e]
+            at = times[starts[e] + tick] if tick is not None else None
+            out[i] = self._new(i, Ltl3(status, tick, at), vacuous_[e],
+                               (counts[e], times[starts[e]], lasts[e]))
         return out
 
     def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],
@@ -449,7 +453,7 @@ class _Judge:
             v.verdict, v.error = "error", str(c.table.errors[i])
             return v
         n = len(self.times)
-        i0, i1 = self._range(i)
+        i0, i1 = self.spans.get(i) or self._range(i)
         if i0 >= n:
             v.verdict = "error"
             v.error = (f"no tick evaluated at or after its first message (log time {first})"
