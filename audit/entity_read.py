@@ -479,6 +479,9 @@ def _run(source: Any, clocks: dict[Any, EntityClock], buffers: dict[Any, HeaderB
                 continue
             c = clocks[key]
             try:
+                if c.lean and key not in buffers:  # (no tick yielded: c.push without the
+                    c._lean_push(m.topic, m.log_time, m.log_time, m.data)  # generator)
+                    continue
                 items = (buffers[key].push(m) if key in buffers
                          else ((m.topic, m.log_time, m.log_time, m.data),))
                 for item in items:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import Counter
 from functools import lru_cache
 from typing import Any, TYPE_CHECKING, cast
 from rich.cells import cell_len
@@ -117,9 +118,9 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
     count)."""
     if plan is not None:
         _print_plan(console, plan, len(logs) if command == "fretc audit" else None, command)
-    reqs = list(dict.fromkeys(v.requirement for la in logs for v in la.verdicts))
-    if min(len(logs), len(reqs)) <= MATRIX_MAX and max(len(logs), len(reqs)) <= \
-            MATRIX_ROWS_MAX and logs:
+    reqs = _requirement_names(logs, MATRIX_ROWS_MAX)
+    if reqs is not None and min(len(logs), len(reqs)) <= MATRIX_MAX and \
+            len(logs) <= MATRIX_ROWS_MAX and logs:
         _print_matrix(console, logs, reqs)
     else:
         _print_incomplete(console, logs)
@@ -159,6 +160,19 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
 
         print_statistics(console, statistics)
     _print_counts(console, logs, input_errors, allow_partial, statistics)
+
+
+def _requirement_names(logs: list[LogAudit], most: int) -> list[str] | None:
+    """The verdicts' requirement names in order of first appearance; None as soon as there
+    are more than ``most`` (100,000 entities: the matrix is not printed, nor are they all
+    gathered)."""
+    names: dict[str, None] = {}
+    for la in logs:
+        for v in la.verdicts:
+            names[v.requirement] = None
+            if len(names) > most:
+                return None
+    return list(names)
 
 
 def _plural(n: int, word: str) -> str:
@@ -257,9 +271,8 @@ def _print_incomplete(console, logs: list[LogAudit]) -> None:
     rows: list[tuple[str, str, str, str]] = []
     for la in logs:
         name = terminal_text(short_log_name(la.log), keep="")
-        for v in la.verdicts:
-            if v.verdict in ("satisfied", "vacuous") and not v.partial:
-                continue
+        for v in [v for v in la.verdicts
+                  if v.partial or v.verdict not in ("satisfied", "vacuous")]:
             rows.append((name, terminal_text(v.requirement, keep=""),
                          _cell(v, la.start_time_ns).replace("\n", " "),
                          _STYLE.get(v.verdict, "")))
@@ -300,10 +313,7 @@ def _print_errors(console, logs: list[LogAudit]) -> None:
 def _print_counts(console, logs: list[LogAudit], input_errors: bool,
                   allow_partial: bool, statistics: list | None = None) -> None:
     """The last line: the count of each verdict and the exit code with its meaning."""
-    counts: dict[str, int] = {}
-    for la in logs:
-        for v in la.verdicts:
-            counts[v.verdict] = counts.get(v.verdict, 0) + 1
+    counts = Counter(v.verdict for la in logs for v in la.verdicts)
     parts = [f"{counts.get(k, 0)} {k}" for k in ("satisfied", "vacuous", "violated", "unknown",
                                                  "error")]
     parts += [f"{n} {k}" for k, n in sorted(counts.items())
