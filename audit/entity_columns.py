@@ -13,6 +13,7 @@ rather than a loop over its ticks.
 
 from __future__ import annotations
 
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
@@ -113,7 +114,7 @@ class EntityColumns:
         self.names = names
         self.absent = {n: (f, b if b.all() else np.zeros(len(b), np.bool_))
                        for n, (f, b) in absent.items()}
-        is_list = np.fromiter(map(_is_list, rows), np.bool_, len(rows))
+        is_list = np.array([type(r) is list for r in rows], np.bool_)
         parts = [self._listed(names, firsts, counts, rows, n_ticks, bool(is_list.any()))]
         if not is_list.all():
             at = np.flatnonzero(~is_list)
@@ -173,27 +174,25 @@ class EntityColumns:
                 for n in self.names}
 
 
-def _is_list(rows: Any) -> bool:
-    return type(rows) is list
-
-
 def _held_rows(names: list[str], held: list[HeldRows], firsts: np.ndarray,
                counts: np.ndarray) -> tuple:
     """The rows of runs holding :class:`HeldRows` (run ``r``: ``counts[r]`` ticks from
     ``firsts[r]``, each the rows of message ``held[r].at`` of ``held[r].block``), as
     (entity, tick, variable -> (values, bools)): the blocks laid end to end, each tick's
     rows gathered by numpy."""
-    blocks = list(dict.fromkeys(map(_block_of, held)))
-    number = {id(b): q for q, b in enumerate(blocks)}
+    of = list(map(attrgetter("block"), held))
+    blocks: list[RowBlock] = list(dict.fromkeys(of))
+    assert None not in blocks  # (every batch is evaluated by the end of the read)
+    number = {b: q for q, b in enumerate(blocks)}
     sizes = np.array([len(b.offsets) - 1 for b in blocks], np.int64)
     rows_in = np.array([int(b.offsets[-1]) for b in blocks], np.int64)
     row_base = np.cumsum(rows_in) - rows_in
     # every message of every block: where its rows start and end in the blocks end to end
     starts = np.concatenate([b.offsets[:-1] + r for b, r in zip(blocks, row_base.tolist())])
     ends = np.concatenate([b.offsets[1:] + r for b, r in zip(blocks, row_base.tolist())])
-    message = ((np.cumsum(sizes) - sizes)[np.fromiter((number[id(h.block)] for h in held),
-                                                      np.int64, len(held))]
-               + np.fromiter((h.at for h in held), np.int64, len(held)))
+    message = ((np.cumsum(sizes) - sizes)[np.fromiter(map(number.__getitem__, of), np.int64,
+                                                      len(held))]
+               + np.fromiter(map(attrgetter("at"), held), np.int64, len(held)))
     total = int(counts.sum())
     tick = np.repeat(firsts, counts) + (np.arange(total, dtype=np.int64)
                                         - np.repeat(np.cumsum(counts) - counts, counts))
@@ -205,8 +204,3 @@ def _held_rows(names: list[str], held: list[HeldRows], firsts: np.ndarray,
     return (entity, np.repeat(tick, lengths),
             {n: (np.concatenate([b.values[n][0] for b in blocks])[pos],
                  np.concatenate([b.values[n][1] for b in blocks])[pos]) for n in names})
-
-
-def _block_of(h: HeldRows) -> RowBlock:
-    assert h.block is not None  # (every batch is evaluated by the end of the read)
-    return h.block
