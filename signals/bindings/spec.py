@@ -12,7 +12,7 @@ from fretc.common.units import NS_PER_S
 
 from fretc.common.problems import BindingError
 from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
-from fretc.signals.bindings.expression import ExprLocation
+from fretc.signals.bindings.expression import EntityParam, ExprLocation
 from fretc.signals.bindings.parse_cache import cached_parses
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
@@ -174,7 +174,10 @@ class Bindings:
         variables = dict(self.variables)
         pending = dict(self.per_entity)
         pvars = {**self.path_vars, **values}
-        parsed = _per_entity_parses(str(self.source), pending, pvars)
+        # (keys read at evaluation, as the audit compiles them once, are kept between runs;
+        # the trees of one entity's value, as ``fretc watch`` makes them, are not)
+        keys = all(type(v) is EntityParam for v in values.values())
+        parsed = _per_entity_parses(str(self.source), pending, pvars) if keys else {}
         while pending:
             # the first that refers to no other pending one; only mutual references left:
             # the first (its error names them)

@@ -522,8 +522,9 @@ def test_entity_keys_are_read_back_from_the_cache_as_the_live_key(tmp_path, monk
 def test_per_entity_variables_and_keys_are_parsed_once_across_loads(tmp_path, monkeypatch):
     """A per-entity binding file: its per-entity variables (compiled per entity key object,
     :meth:`Bindings.for_entity`) and its ``[entities]`` key are parsed once; later loads
-    read the cache and their trees hold that load's own key object. An expression that
-    does not parse still gives its error, with its place."""
+    read the cache and their trees hold that load's own key object. Compiled for an
+    entity's own value they are parsed each time and never written to the cache. An
+    expression that does not parse still gives its error, with its place."""
     from fretc.audit.entity_kinds import entity_kind
     from fretc.common.problems import BindingError
     from fretc.signals.bindings.expression import EntityParam
@@ -542,6 +543,12 @@ def test_per_entity_variables_and_keys_are_parsed_once_across_loads(tmp_path, mo
         if k == 0:
             first = len(calls)
     assert first >= 3 and len(calls) == first
+    entries = sorted((f.name, f.stat().st_mtime_ns) for f in (tmp_path / "binding-parses").iterdir())
+    for value in (7, 8):  # (an entity's own value, as fretc watch compiles one: not kept)
+        assert b.for_entity({"track": value}).variables["dist"].topics == {"/tracks"}
+    assert len(calls) == first + 4
+    assert sorted((f.name, f.stat().st_mtime_ns)
+                  for f in (tmp_path / "binding-parses").iterdir()) == entries
     bad = text.replace("{id==$track}.distance)", "{id==$track}.distance")
     with pytest.raises(BindingError, match=r"e\.toml:\d+:\d+"):
         parse_bindings(bad, "e.toml").for_entity({"track": EntityParam("track")})
