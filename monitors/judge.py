@@ -247,9 +247,13 @@ def first_rejections(table: list[list[int]], initial: int, letters: np.ndarray,
     lengths = np.asarray(lengths, np.int64)
     active = np.flatnonzero(lengths > 0)
     state = np.full(len(active), initial, np.int64)
-    steps = np.asarray(table, np.int64)
+    try:
+        steps = np.asarray(table, np.int64)
+    except ValueError:  # (rows of unequal length: every trace stepped one tick at a time)
+        steps = np.zeros((0, 0), np.int64)
+    together = STEP_TOGETHER if steps.ndim == 2 and steps.size else len(firsts) + 1
     k = 0
-    while len(active) and len(active) >= STEP_TOGETHER:
+    while len(active) and len(active) >= together:
         state = steps[state, letters[firsts[active] + k]]
         out = state < 0
         hits[active[out]] = k

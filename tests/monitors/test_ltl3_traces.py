@@ -44,3 +44,13 @@ def test_the_first_rejection_of_each_trace_is_its_own(case, together, monkeypatc
 def monkeypatch_session():
     with pytest.MonkeyPatch.context() as m:
         yield m
+
+
+def test_a_table_of_unequal_rows_is_stepped_one_tick_at_a_time(monkeypatch_session):
+    """A table numpy cannot take as an array (rows of unequal length) gives each trace's own
+    first rejection all the same."""
+    monkeypatch_session.setattr(J, "STEP_TOGETHER", 1)
+    table = [[0, -1], [1]]
+    letters = np.array([0, 1, 0, 0, 1, 0], np.uint16)
+    got = J.first_rejections(table, 0, letters, np.array([0, 2, 5]), np.array([2, 3, 1]))
+    assert got.tolist() == [1, 2, -1]
