@@ -295,7 +295,6 @@ class _Judge:
         #: its LTL3 verdict, tick and ticks
         self.robs: dict[int, Any] = {}
         self.ltl3s: dict[int, tuple[str, int | None, int]] = {}
-        self.spans: dict[int, tuple[int, int]] = {}  # entity -> its ticks i0..i1 (the batch's)
         self.records: dict[int, list[tuple[int, tuple]]] = {}
         for i, tm, vals in c.table.rows:
             self.records.setdefault(i, []).append((tm, vals))
@@ -392,7 +391,6 @@ class _Judge:
         starts, vacuous_ = i0s.tolist(), np.asarray(vacuous).tolist()
         for e in np.flatnonzero(fast & ~holds).tolist():  # (violated: judged alone, with
             self.ltl3s[judged[e]] = (*ltl3[e], counts[e])  # the LTL3 verdict and ticks known)
-            self.spans[judged[e]] = (starts[e], starts[e] + counts[e] - 1)
         out: dict[int, Verdict] = {}
         times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
         lasts = self.times[i0s + lengths - 1].tolist()
@@ -453,7 +451,7 @@ class _Judge:
             v.verdict, v.error = "error", str(c.table.errors[i])
             return v
         n = len(self.times)
-        i0, i1 = self.spans.get(i) or self._range(i)
+        i0, i1 = self._range(i)
         if i0 >= n:
             v.verdict = "error"
             v.error = (f"no tick evaluated at or after its first message (log time {first})"

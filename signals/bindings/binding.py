@@ -16,7 +16,7 @@ from fretc.signals.bindings.compile import EvalError, EvalState, compile_node
 from fretc.signals.bindings.expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
                          UnaryOp, check, check_aggregate, check_size, substitute, unparse, walk)
 from fretc.signals.bindings.extract import Valid, normalize_scalar
-from fretc.signals.bindings.parse_cache import cached_parses
+from fretc.signals.bindings.parse_cache import kept_parses
 from fretc.signals.bindings.operations import Ops
 from fretc.signals.bindings.windowing import WindowSpec, check_window
 
@@ -249,12 +249,7 @@ def compile_kept(name: str, expr: str, source: str) -> Binding:
     """:func:`compile_expression` of ``expr`` (no path variables), its parse kept between
     runs as a binding file's are (:mod:`fretc.signals.bindings.parse_cache`: Lark is not
     loaded for an unchanged expression). Raises what :func:`compile_expression` raises."""
-    def parse(_name: str) -> tuple[Expr, frozenset[str]]:
-        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
-
-        return parse_expression(expr, ExprLocation(source, name, None, None, True), None)
-
-    parsed = cached_parses(f"{source}#{name}", {name: expr}, None, parse)
+    parsed = kept_parses(f"{source}#{name}", {name: (expr, None, None, True)}, None)
     return compile_expression(name, expr, source=source, parsed=parsed[name])
 
 
@@ -286,13 +281,9 @@ def operand_signals(binding: Binding, limit: int = 4) -> list[tuple[str, Binding
             continue
         texts[f"{binding.name}__operand{i}"] = text
 
-    def parse(name: str) -> tuple[Expr, frozenset[str]]:
-        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
-
-        where = ExprLocation(binding.source, name, binding.line, binding.col, False)
-        return parse_expression(texts[name], where, None)
-
-    parsed = cached_parses(f"{binding.source}#{binding.name}", texts, None, parse)
+    parsed = kept_parses(f"{binding.source}#{binding.name}",
+                         {n: (t, binding.line, binding.col, False) for n, t in texts.items()},
+                         None)
     return [(f"{binding.name}: {text}",
              compile_expression(name, text, source=binding.source, line=binding.line,
                                 col=binding.col, exact=False, parsed=parsed[name]))

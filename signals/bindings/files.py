@@ -19,8 +19,8 @@ from fretc.common.units import parse_duration
 
 from fretc.common.problems import BindingError
 from fretc.signals.bindings.binding import VARNAME, Binding, compile_expression
-from fretc.signals.bindings.expression import ExprLocation, refs
-from fretc.signals.bindings.parse_cache import cached_parses
+from fretc.signals.bindings.expression import refs
+from fretc.signals.bindings.parse_cache import kept_parses
 from fretc.signals.bindings.paths import topic_name
 from fretc.signals.bindings.spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
                    TickSpec)
@@ -209,13 +209,7 @@ def _compile_in_order(pending: dict[str, tuple[str, int | None, int | None, bool
                       source: str, nan: str = "unread", inf: str = "unread",
                       path_vars: dict | None = None) -> dict[str, Binding]:
     """Compile the variables, each after the ones it refers to; a cycle is an error."""
-    def parse(name: str):
-        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
-
-        expr, line, col, exact = pending[name]
-        return parse_expression(expr, ExprLocation(source, name, line, col, exact), path_vars)
-
-    parsed = cached_parses(source, {n: p[0] for n, p in pending.items()}, path_vars, parse)
+    parsed = kept_parses(source, pending, path_vars)
     deps = {name: [r for r in refs(parsed[name][0]) if r in pending] for name in pending}
     state: dict[str, int] = {}
     compiled: dict[str, Binding] = {}

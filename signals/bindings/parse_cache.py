@@ -31,9 +31,9 @@ from collections.abc import Callable, Mapping
 
 from fretc.common import cache
 from fretc.common.libraries import package_init
-from fretc.signals.bindings.expression import EntityParam, Expr
+from fretc.signals.bindings.expression import EntityParam, Expr, ExprLocation
 
-__all__ = ["cached_parses"]
+__all__ = ["cached_parses", "kept_parses"]
 
 KIND = "binding-parses"
 _MAGIC = b"fretc binding-parses 1\n"
@@ -132,3 +132,20 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
         return out
     cache.write_sealed(KIND, name, _MAGIC, made_from, payload)
     return out
+
+
+def kept_parses(source: str, pending: Mapping[str, tuple], path_vars: dict | None
+                ) -> dict[str, Parsed]:
+    """:func:`cached_parses` of the expressions ``pending`` (variable -> ``(text, line, col,
+    exact, ...)``: where the text starts in ``source``, 1-based or None) parsed by
+    :func:`fretc.signals.bindings.parse.parse_expression` with ``path_vars``.
+
+    Raises:
+        BindingError: the first expression that does not parse, at its file:line:col."""
+    def parse(name: str) -> Parsed:
+        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
+
+        expr, line, col, exact = pending[name][:4]
+        return parse_expression(expr, ExprLocation(source, name, line, col, exact), path_vars)
+
+    return cached_parses(source, {n: p[0] for n, p in pending.items()}, path_vars, parse)

@@ -12,8 +12,8 @@ from fretc.common.units import NS_PER_S
 
 from fretc.common.problems import BindingError
 from fretc.signals.bindings.binding import Binding, compile_expression, parse_inline
-from fretc.signals.bindings.expression import EntityParam, ExprLocation
-from fretc.signals.bindings.parse_cache import cached_parses
+from fretc.signals.bindings.expression import EntityParam
+from fretc.signals.bindings.parse_cache import kept_parses
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
            "Bindings", "make_bindings", "grid_start", "grid_end", "MAX_TICKS",
@@ -267,18 +267,11 @@ def tick_bound_error(path: str, period: int, first: int, last: int, ticks: int,
 
 
 def _per_entity_parses(source: str, pending: dict[str, tuple], path_vars: dict) -> dict:
-    """The per-entity expressions ``pending`` (name -> (text, line, col, exact, ...)) parsed
-    with ``path_vars`` (the entities' keys among them), kept between runs
-    (:mod:`fretc.signals.bindings.parse_cache`); none when one does not parse (each is then
-    parsed as it is compiled, whose error comes in the order of compiling)."""
-    def parse(name: str) -> tuple:
-        from fretc.signals.bindings.parse import parse_expression  # lazy: Lark (start-up)
-
-        expr, line, col, exact = pending[name][:4]
-        return parse_expression(expr, ExprLocation(source, name, line, col, exact), path_vars)
-
+    """The per-entity expressions ``pending`` parsed with ``path_vars`` (the entities' keys
+    among them), kept between runs (:func:`fretc.signals.bindings.parse_cache.kept_parses`);
+    none when one does not parse (each is then parsed as it is compiled, whose error comes
+    in the order of compiling)."""
     try:
-        return cached_parses(f"{source}#per-entity", {n: p[0] for n, p in pending.items()},
-                             path_vars, parse)
+        return kept_parses(f"{source}#per-entity", pending, path_vars)
     except BindingError:
         return {}
