@@ -266,6 +266,22 @@ def cut_at_damage(res: ClockPass, source: LogSource, bindings: Bindings | None,
     res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
 
 
+def _left_after_last_tick(res: ClockPass, gone: list) -> None:
+    """``gone``: gaps of topics whose publisher left the watched run for good after the
+    clock's last tick (:data:`fretc.logs.recorded_gaps.LEFT_FOR_GOOD`, ``start`` past it):
+    the clock's judged span ends at the earliest start (``res.intact_end``), no tick
+    dropped; an obligation open there is ``unknown`` (:func:`fretc.audit.finalize`'s rule
+    for a cut)."""
+    if not gone:
+        return
+    end = min(g.start for g in gone)
+    res.intact_end = end if res.intact_end is None else min(end, res.intact_end)
+    topics = sorted({t for g in gone for t in (g.topics or ())})
+    res.lost = "; ".join(x for x in (res.lost, (
+        f"the publisher of {', '.join(topics)} left (unadvertised) and did not come back "
+        "before the run ended")) if x)
+
+
 def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
               gaps: list, topics: frozenset, lost: str = "") -> None:
     """Set ``res.unknown`` (variable -> ticks it is unknown at) and ``res.gaps`` (the gaps
@@ -308,9 +324,14 @@ def _cut_at_trailing_gap(res: ClockPass, own: list) -> None:
     """A gap that ends at or after the clock's last tick: nothing after its start was read
     for this clock, as after a cut; the ticks from its start on are dropped. A topic whose
     publisher left a watched run for good (:data:`fretc.logs.recorded_gaps.LEFT_FOR_GOOD`) is
-    no cut: the run went on and was read, and the topic's variables are unknown from its
-    start (the watch's rule)."""
+    no cut where the clock ticks past its start: the run went on and was read, and the
+    topic's variables are unknown there, so a violation the other topics show is kept. Past
+    the clock's last tick it is the end of what this clock read while the run went on: a
+    cut after its last tick (:func:`_left_after_last_tick`), as the same requirement watched
+    alone is cut when its only publisher leaves (``publishers_left``)."""
     last = int(res.times[-1])
+    _left_after_last_tick(res, [g for g in own if g.cause == LEFT_FOR_GOOD
+                                and g.start is not None and g.start > last])
     own = [g for g in own if g.cause != LEFT_FOR_GOOD]
     starts = [g.start for g in own if g.end is None or g.end >= last]
     if not starts:

@@ -5,7 +5,9 @@ participant's lease expired, a Zenoh liveliness token gone) while the run goes o
 others: from the last message used before it left until the topic's own next message, its
 value is unknown, never held over (../shared/DESIGN.md, "Damage is never evidence"). Ticks of
 the requirements that read it inside the span are not evaluated; a span still open when the
-run ends cuts those requirements there (an obligation open at the cut is ``unknown``); the
+run ends is a gap of the topic to the end of the run (:func:`recorded_gaps`), judged as the
+audit of the recording judges it (:func:`fretc.audit.passes.mark_gaps`: the topic's variables
+unknown at the ticks inside it; a clock with no tick inside it is cut at its start); the
 requirements that do not read the topic are not affected.
 """
 

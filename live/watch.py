@@ -389,7 +389,11 @@ class Watch:
                 self.start_time = (src.start_time if src.start_time is not None
                                    else sampling.groups[key].start_time)
         passes = {}
-        live_gaps = split_bridged(run_gaps(self.source), self.plan.config.bridge_gaps_ns)[0]
+        # the gaps the recording carries, judged by the audit's rule (a publisher gone for
+        # good: its topic's variables unknown from there, no cut), so that the audit of the
+        # recording gives these verdicts
+        live_gaps = split_bridged(recorded_gaps(self.source),
+                                  self.plan.config.bridge_gaps_ns)[0]
         for key in groups:
             times, columns, log_times = self._cols[key].arrays()
             passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
@@ -398,13 +402,6 @@ class Watch:
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
                 passes[key].intact_end = cut + 1
-            left = src.left_for_good(log_topics(key.topics))
-            if left is not None:  # a publisher it reads left and the run went on without it
-                end, res = left + 1 if left != NO_TIME else NO_TIME, passes[key]
-                res.intact_end = min(end, end if res.intact_end is None else res.intact_end)
-                gone = sorted(t for t in log_topics(key.topics) if src.left_for_good((t,)) is not None)
-                res.lost = (f"the publisher of {', '.join(gone)} left (unadvertised) and did "
-                            "not come back before the run ended")
         self._live_evidence()
         return _WatchPasses(sampling, {r.index: passes[self._group[r.index]] for r in active},
                             sampling.failed, self._group)

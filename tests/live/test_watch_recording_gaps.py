@@ -26,7 +26,8 @@ MS = 1_000_000
 FRET = ("@tick_period 100 ms\n"
         "RA: the robot shall always satisfy a_ok\n"
         "RB: the robot shall always satisfy a_ok & b_ok\n"
-        "RC: upon !a_ok the robot shall within 300 milliseconds satisfy b_ok\n")
+        "RC: upon !a_ok the robot shall within 300 milliseconds satisfy b_ok\n"
+        "RD: the robot shall always satisfy b_ok\n")
 BINDINGS = ('[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
             'b_ok = "/b.data > 0"\n')
 
@@ -38,9 +39,12 @@ def plan(tmp_path):
     return load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),)))
 
 
-def _run(b_until: int, b_back: int | None, restart: bool):
+def _run(b_until: int, b_back: int | None, restart: bool, b_leave: int | None = None):
     """/a every 50 ms for 2 s, false from 1.5 s on; /b true every 50 ms until ``b_until``
-    ms, then unadvertised; advertised again (``restart``) from ``b_back`` ms on."""
+    ms, then silent, unadvertised at ``b_leave`` ms (default ``b_until``); advertised again
+    (``restart``) from ``b_back`` ms on."""
+    leave = b_until if b_leave is None else b_leave
+
     async def script(ws, k):
         await ws.send(advertise([(1, "/a"), (2, "/b")]))
         sa, sb = await _subscriptions(ws, (1, 2))
@@ -49,7 +53,7 @@ def _run(b_until: int, b_back: int | None, restart: bool):
             await ws.send(message_data(sa, T0 + t * MS, f64(1.0 if t < 1500 else -1.0)))
             if t < b_until:
                 await ws.send(message_data(sb, T0 + t * MS, f64(1.0)))
-            elif t == b_until:
+            elif t == leave:
                 await ws.send(json.dumps({"op": "unadvertise", "channelIds": [2]}))
                 if restart:
                     await ws.send(advertise([(3, "/b")]))
@@ -82,15 +86,17 @@ def _verdicts(la) -> dict:
                             else None) for v in la.verdicts}
 
 
-@pytest.mark.parametrize("b_until, b_back, restart", [
-    (500, None, False),   # /b's publisher leaves for good at 0.5 s, the run goes on
-    (0, None, False),     # ... before its first message was used
-    (500, 1200, True),    # /b restarts: no message of it from 0.5 s to 1.2 s
+@pytest.mark.parametrize("b_until, b_back, restart, b_leave", [
+    (500, None, False, None),   # /b's publisher leaves for good at 0.5 s, the run goes on
+    (0, None, False, None),     # ... before its first message was used
+    (500, 1200, True, None),    # /b restarts: no message of it from 0.5 s to 1.2 s
+    # /b silent from 0.5 s, its publisher gone for good at 1 s: past RD's last tick
+    (500, None, False, 1000),
 ])
 def test_the_audit_of_the_recording_equals_the_watch_when_a_publisher_leaves(
-        plan, tmp_path, b_until, b_back, restart):
+        plan, tmp_path, b_until, b_back, restart, b_leave):
     rec = tmp_path / "run.mcap"
-    with ScriptServer(_run(b_until, b_back, restart)) as srv:
+    with ScriptServer(_run(b_until, b_back, restart, b_leave)) as srv:
         w = Watch(plan, WatchOptions(url=srv.url, wait=3.0, duration=20, record=str(rec),
                                      restart_grace=3.0 if restart else 0.3))
         live = w.run()
@@ -101,10 +107,13 @@ def test_the_audit_of_the_recording_equals_the_watch_when_a_publisher_leaves(
     got = _verdicts(live)
     assert got["RA"] == ("violated", T0 + 1500 * MS)  # /a is not affected
     if b_until == 0:  # /b never had a message: its requirements cannot be judged
-        assert got["RB"][0] == got["RC"][0] == "error", got
+        assert got["RB"][0] == got["RC"][0] == got["RD"][0] == "error", got
     else:  # a false decides RB without /b; RC needs /b, unknown once it left for good
         assert got["RB"] == ("violated", T0 + 1500 * MS), got
         assert got["RC"][0] == ("satisfied" if restart else "unknown"), got
+        # RD reads /b alone: gone for good, its clock is cut where the publisher left (past
+        # its last tick when /b fell silent first); restarted, the hole's ticks are unknown
+        assert got["RD"][0] == "unknown", got
     src = McapSource(rec)
     assert src.recorded_gaps and all(g.topics == frozenset({"/b"}) for g in src.recorded_gaps)
     assert {g.cause for g in src.recorded_gaps} == {
