@@ -51,11 +51,28 @@ def _domain() -> int:
     return fresh_domain(1, 99)
 
 
+_started: list[subprocess.Popen] = []
+
+
+@pytest.fixture(autouse=True)
+def _no_peer_left_behind():
+    """A peer still running when its test ends (the test failed or timed out waiting for
+    it) is killed: left behind, it would load the machine for the tests after it."""
+    yield
+    while _started:
+        p = _started.pop()
+        if p.poll() is None:
+            p.kill()
+            p.wait(30)
+
+
 def _peer(role: str, seconds: float, domain: int, out: str = "",
           extra_env: dict | None = None) -> subprocess.Popen:
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), **(extra_env or {})}
-    return subprocess.Popen([sys.executable, PEERS, role, str(seconds), out], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p = subprocess.Popen([sys.executable, PEERS, role, str(seconds), out], env=env,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    _started.append(p)
+    return p
 
 
 def _fretc(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
@@ -193,6 +210,7 @@ def test_the_shield_node_in_a_real_graph_keeps_r2_and_r3(tmp_path, shielded):
                                  env={**os.environ, "ROS_DOMAIN_ID": str(d),
                                       "PYTHONPATH": str(pkg)},
                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        _started.append(guard)
     else:
         guard = _peer("passthrough", 11, d)
     recorder = _peer("record", 10, d, str(rec))
@@ -253,6 +271,7 @@ def test_a_default_rclpy_talker_on_another_host_is_watched(tmp_path, two_hosts):
     talker = subprocess.Popen(["ip", "netns", "exec", a, sys.executable, PEERS, "talker", "7"],
                               env={**os.environ, "ROS_DOMAIN_ID": str(d)},
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    _started.append(talker)
     out = tmp_path / "watch.json"
     watch = subprocess.run(["ip", "netns", "exec", b, sys.executable, "-m", "fretc", "watch",
                             f"dds://{d}", "-r", req, "-b", bnd, "--duration", "8", "--json",
