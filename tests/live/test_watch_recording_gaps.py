@@ -39,18 +39,23 @@ def plan(tmp_path):
     return load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),)))
 
 
-def _run(b_until: int, b_back: int | None, restart: bool, b_leave: int | None = None):
+def _run(b_until: int, b_back: int | None, restart: bool, b_leave: int | None = None,
+         b_only: bool = False):
     """/a every 50 ms for 2 s, false from 1.5 s on; /b true every 50 ms until ``b_until``
     ms, then silent, unadvertised at ``b_leave`` ms (default ``b_until``); advertised again
-    (``restart``) from ``b_back`` ms on."""
+    (``restart``) from ``b_back`` ms on. ``b_only``: a watch that subscribes to /b alone
+    (then the run goes on for 0.6 s of wall time after /b left for good, past the grace a
+    publisher has to come back in, as the run goes on with /a in the set)."""
     leave = b_until if b_leave is None else b_leave
 
     async def script(ws, k):
         await ws.send(advertise([(1, "/a"), (2, "/b")]))
-        sa, sb = await _subscriptions(ws, (1, 2))
+        sa, sb = (None, *await _subscriptions(ws, (2,))) if b_only else \
+            await _subscriptions(ws, (1, 2))
         for i in range(40):
             t = i * 50
-            await ws.send(message_data(sa, T0 + t * MS, f64(1.0 if t < 1500 else -1.0)))
+            if sa is not None:
+                await ws.send(message_data(sa, T0 + t * MS, f64(1.0 if t < 1500 else -1.0)))
             if t < b_until:
                 await ws.send(message_data(sb, T0 + t * MS, f64(1.0)))
             elif t == leave:
@@ -58,6 +63,8 @@ def _run(b_until: int, b_back: int | None, restart: bool, b_leave: int | None = 
                 if restart:
                     await ws.send(advertise([(3, "/b")]))
                     sb = await subscription(ws, 3)
+                elif b_only:  # the run goes on past the grace without its one topic
+                    await asyncio.sleep(0.6)
             elif b_back is not None and t >= b_back:
                 await ws.send(message_data(sb, T0 + t * MS, f64(1.0)))
             await asyncio.sleep(0.003)
@@ -114,6 +121,15 @@ def test_the_audit_of_the_recording_equals_the_watch_when_a_publisher_leaves(
         # RD reads /b alone: gone for good, its clock is cut where the publisher left (past
         # its last tick when /b fell silent first); restarted, the hole's ticks are unknown
         assert got["RD"][0] == "unknown", got
+    if b_until:  # RD watched alone (/b its only topic) is judged as in the set
+        (tmp_path / "rd.fret").write_text("@tick_period 100 ms\nRD: the robot shall always "
+                                          "satisfy b_ok\n", encoding="utf-8")
+        (tmp_path / "rd.bindings.toml").write_text(BINDINGS, encoding="utf-8")
+        alone = load_plan(AuditConfig(requirements=(str(tmp_path / "rd.fret"),)))
+        with ScriptServer(_run(b_until, b_back, restart, b_leave, b_only=True)) as srv:
+            w = Watch(alone, WatchOptions(url=srv.url, wait=3.0, duration=20,
+                                          restart_grace=3.0 if restart else 0.3))
+            assert _verdicts(w.run())["RD"] == got["RD"]
     src = McapSource(rec)
     assert src.recorded_gaps and all(g.topics == frozenset({"/b"}) for g in src.recorded_gaps)
     assert {g.cause for g in src.recorded_gaps} == {
