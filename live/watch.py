@@ -390,8 +390,8 @@ class Watch:
                                    else sampling.groups[key].start_time)
         passes = {}
         # the gaps the recording carries, judged by the audit's rule (a publisher gone for
-        # good: its topic's variables unknown from there, no cut), so that the audit of the
-        # recording gives these verdicts
+        # good: its variables unknown from there; a clock with no tick past it cut there),
+        # so that the audit of the recording gives these verdicts
         live_gaps = split_bridged(recorded_gaps(self.source),
                                   self.plan.config.bridge_gaps_ns)[0]
         for key in groups:
