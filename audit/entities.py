@@ -32,7 +32,7 @@ from fretc.audit.finalize import finalize
 from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
 from fretc.audit.log_problems import collect_problems, problem_json
 from fretc.audit.passes import ClockPass, cut_at_damage, lost_in_words, mark_gaps
-from fretc.audit.verdict import LogAudit, Ltl3, Verdict
+from fretc.audit.verdict import NO_EVIDENCE, LogAudit, Ltl3, Verdict
 from fretc.common.problems import FretcInputError
 from fretc.common.streams import log_topics
 from fretc.logs import open_log
@@ -329,17 +329,19 @@ class _Judge:
     def _new(self, i: int, batch: Ltl3 | None = None, vacuous: bool = False,
              ticks: tuple[int, int | None, int | None] = (0, None, None)) -> Verdict:
         """Entity ``i``'s verdict: not yet judged, or (``batch``: its LTL3 verdict) judged at
-        once, satisfied or ``vacuous``, over ``ticks`` (count, first and last tick time, ns)."""
+        once, satisfied or ``vacuous``, over ``ticks`` (count, first and last tick time, ns),
+        with no evidence (its evidence fields the shared empty ones, :data:`NO_EVIDENCE`)."""
         r, table, value = self.r, self.c.table, self.c.table.keys[i]
         notes = [*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
                  f"log time {table.first[i]}, last at {table.last[i]}"]
-        if batch is not None:
-            notes.append(BATCH_NOTE)
+        if batch is None:
+            return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
+                           notes=notes)
+        notes.append(BATCH_NOTE)
         return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
-                       verdict="error" if batch is None else "vacuous" if vacuous else "satisfied",
-                       engine=None if batch is None else "vectorized", ticks_evaluated=ticks[0],
-                       first_tick_ns=ticks[1], last_tick_ns=ticks[2], notes=notes,
-                       ltl3=batch or Ltl3())
+                       verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
+                       ticks_evaluated=ticks[0], first_tick_ns=ticks[1], last_tick_ns=ticks[2],
+                       notes=notes, ltl3=batch, **NO_EVIDENCE)
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""

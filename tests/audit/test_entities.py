@@ -232,3 +232,46 @@ def test_the_requirement_verdict_over_its_entities_is_their_definition(entities)
     assert got.partial == any(x.partial for x in out)
     assert got.notes[-2:] == ["R over n entities e", "violated by: " + (
         _listed([x.requirement for x in out if x.verdict == "violated"], ", ") or "none")]
+
+
+def test_the_entities_judged_at_once_share_evidence_that_cannot_change(tmp_path, monkeypatch):
+    """The satisfied entities (judged at once) share their empty evidence containers
+    (``NO_EVIDENCE``): the audit's JSON and a pickle (as a fleet worker sends it) are those of
+    verdicts with containers of their own, and a change to a shared one raises instead of
+    changing every entity's verdict; a violated entity (judged alone) has its own."""
+    import json
+    import pickle
+
+    import pytest
+
+    import fretc.audit.entities as entities
+
+    Track, TrackArray = _track_types()
+    rows = [{1: 2.0, 2: 2.0}, {1: 2.0, 2: 0.2, 3: 2.0}, {3: 2.0, 4: 2.0}, {4: 2.0}]
+    log = write_mcap(tmp_path / "t.mcap", [
+        ("/tracks", "tracking_msgs/msg/TrackArray", S + k * S // 10,
+         TrackArray(tracks=[Track(id=i, distance=d) for i, d in sorted(r.items())]))
+        for k, r in enumerate(rows)])
+    (tmp_path / "t.fret").write_text("@tick_period 100 ms\n"
+                                     "T: in present mode the robot shall always satisfy dist > 0.5\n")
+    (tmp_path / "t.bindings.toml").write_text(TRACK_BINDINGS)
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
+    shared = audit_log(plan, str(log))
+    monkeypatch.setattr(entities, "NO_EVIDENCE", {})
+    own = audit_log(plan, str(log))
+    assert json.dumps(shared.to_json(), sort_keys=True) == json.dumps(own.to_json(), sort_keys=True)
+    assert pickle.loads(pickle.dumps(shared)).to_json() == own.to_json()
+    got = {v.requirement: v for v in shared.verdicts}
+    at_once = [got[f"T[track={i}]"] for i in (1, 3, 4)]
+    assert all(v.verdict == "satisfied" and v.engine == "vectorized" for v in at_once)
+    assert at_once[0].values is at_once[1].values and at_once[0].margin is at_once[2].margin
+    alone = got["T[track=2]"]
+    assert alone.verdict == "violated" and alone.values and alone.values is not at_once[0].values
+    with pytest.raises(TypeError, match="assign the verdict a container of its own"):
+        at_once[0].values["dist"] = []
+    with pytest.raises(TypeError):
+        at_once[0].margin.append((0, 0, 1.0))
+    assert at_once[1].values == {} and at_once[1].margin == []
+    copied = pickle.loads(pickle.dumps(at_once[0]))
+    copied.values["dist"] = []  # (a copy is the verdict's own)
+    assert at_once[1].values == {}
