@@ -54,8 +54,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 __all__ = ["TimePoint", "FirstViolation", "Ltl3", "Verdict", "LogAudit", "audit_json",
-           "NO_EVIDENCE", "summary", "exit_code", "incomplete", "SCHEMA", "VERDICTS", "EXIT_CODES", "EXIT_OK",
-           "EXIT_VIOLATED", "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE", "EXIT_UNDECIDED"]
+           "NO_EVIDENCE", "SharedEmptyDict", "SharedEmptyList", "summary", "exit_code",
+           "incomplete", "SCHEMA", "VERDICTS", "EXIT_CODES", "EXIT_OK", "EXIT_VIOLATED",
+           "EXIT_INPUT_ERROR", "EXIT_INCOMPLETE", "EXIT_UNDECIDED"]
 
 SCHEMA = "fretc-audit/1"
 #: At most this many points of a verdict's margin over time (:attr:`Verdict.margin`).
