@@ -305,9 +305,11 @@ class Verdict:
             "ticks_evaluated": self.ticks_evaluated, "warmup_ticks": self.warmup_ticks,
             "first_tick_ns": self.first_tick_ns, "first_tick_s": _t(self.first_tick_ns, start)["s"],
             "last_tick_ns": self.last_tick_ns, "last_tick_s": _t(self.last_tick_ns, start)["s"],
-            "waiting_for": self.waiting_for,
-            "unsampled_messages": self.unsampled_messages,
-            "missed_changes": self.missed_changes,
+            # (plain copies: never the shared empty containers of NO_EVIDENCE, which a
+            # serializer of exact types such as PyYAML's safe dumper refuses)
+            "waiting_for": list(self.waiting_for),
+            "unsampled_messages": dict(self.unsampled_messages),
+            "missed_changes": dict(self.missed_changes),
             "intervals": self.intervals, "triggers": self.triggers,
             "violations": self.violations,
             "violation_list": [{"trigger": t.to_json(start), "violation": w.to_json(start)}

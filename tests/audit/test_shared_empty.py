@@ -59,3 +59,27 @@ def test_a_verdict_without_evidence_reads_writes_and_copies_as_one_with_its_own(
     assert shared.values == {} and shared.margin == [] and (shared.margin + [1]) == [1]
     assert set(NO_EVIDENCE) == {f.name for f in dataclasses.fields(Verdict)
                                 if f.default_factory in (dict, list) and f.name != "notes"}
+
+
+def _types(x):
+    """Every container type in a JSON-like document."""
+    if isinstance(x, dict):
+        yield type(x)
+        for v in x.values():
+            yield from _types(v)
+    elif isinstance(x, (list, tuple)):
+        yield type(x)
+        for v in x:
+            yield from _types(v)
+
+
+def test_a_verdicts_json_holds_plain_containers_only():
+    """The document of a verdict without evidence is plain data: PyYAML's safe dumper (which
+    refuses a subclass of dict or list) writes it as it writes the same verdict's with
+    containers of its own."""
+    import yaml
+
+    shared = Verdict("l.mcap", "R[e=1]", verdict="satisfied", **NO_EVIDENCE).to_json(0)
+    own = Verdict("l.mcap", "R[e=1]", verdict="satisfied").to_json(0)
+    assert set(_types(shared)) <= {dict, list}
+    assert yaml.safe_dump(shared) == yaml.safe_dump(own)
