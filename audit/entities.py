@@ -334,11 +334,11 @@ class _Judge:
         r, table, value = self.r, self.c.table, self.c.table.keys[i]
         notes = [*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
                  f"log time {table.first[i]}, last at {table.last[i]}"]
+        rid = f"{r.id}[{self.name}={value}]"
         if batch is None:
-            return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
-                           notes=notes)
+            return Verdict(self.ents.path, rid, r.text, r.source, notes=notes)
         notes.append(BATCH_NOTE)
-        return Verdict(self.ents.path, f"{r.id}[{self.name}={value}]", r.text, r.source,
+        return Verdict(self.ents.path, rid, r.text, r.source,
                        verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
                        ticks_evaluated=ticks[0], first_tick_ns=ticks[1], last_tick_ns=ticks[2],
                        notes=notes, ltl3=batch, **NO_EVIDENCE)

@@ -286,7 +286,7 @@ def test_one_publisher_leaving_while_the_run_goes_on_is_unknown_not_held(transpo
     assert log["messages"] == {"/a": 30, "/b": 10}
     assert by["RA"]["verdict"] == "satisfied"
     assert by["RB"]["verdict"] == "unknown", by["RB"]
-    assert left_for_good(by["RB"]["unknown_reason"]), by["RB"]
+    assert left_for_good(by["RB"]["unknown_reason"], "/b"), by["RB"]
     assert log["partial"] and "unadvertised" in {p["kind"] for p in log["problems"]}
     assert res.exit_code == 3, res.output
 
