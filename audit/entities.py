@@ -332,16 +332,15 @@ class _Judge:
         once, satisfied or ``vacuous``, over ``ticks`` (count, first and last tick time, ns),
         with no evidence (its evidence fields the shared empty ones, :data:`NO_EVIDENCE`)."""
         r, table, value = self.r, self.c.table, self.c.table.keys[i]
-        notes = [*r.notes, f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
-                 f"log time {table.first[i]}, last at {table.last[i]}"]
+        seen = (f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
+                f"log time {table.first[i]}, last at {table.last[i]}")
         rid = f"{r.id}[{self.name}={value}]"
         if batch is None:
-            return Verdict(self.ents.path, rid, r.text, r.source, notes=notes)
-        notes.append(BATCH_NOTE)
+            return Verdict(self.ents.path, rid, r.text, r.source, notes=[*r.notes, seen])
         return Verdict(self.ents.path, rid, r.text, r.source,
                        verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
                        ticks_evaluated=ticks[0], first_tick_ns=ticks[1], last_tick_ns=ticks[2],
-                       notes=notes, ltl3=batch, **NO_EVIDENCE)
+                       notes=[*r.notes, seen, BATCH_NOTE], ltl3=batch, **NO_EVIDENCE)
 
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
@@ -396,11 +395,14 @@ class _Judge:
         out: dict[int, Verdict] = {}
         times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
         lasts = self.times[i0s + lengths - 1].tolist()
+        shared: dict[tuple, Ltl3] = {}  # (equal LTL3 verdicts as one object: immutable)
         for e in np.flatnonzero(fast & holds).tolist():
             i, (status, tick) = judged[e], ltl3[e]
-            at = times[starts[e] + tick] if tick is not None else None
-            out[i] = self._new(i, Ltl3(status, tick, at), vacuous_[e],
-                               (counts[e], times[starts[e]], lasts[e]))
+            key = (status, tick, times[starts[e] + tick] if tick is not None else None)
+            same = shared.get(key)
+            if same is None:
+                same = shared[key] = Ltl3(*key)
+            out[i] = self._new(i, same, vacuous_[e], (counts[e], times[starts[e]], lasts[e]))
         return out
 
     def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],

@@ -136,11 +136,12 @@ class FirstViolation:
         return out
 
 
-@dataclass(slots=True)
+@dataclass(frozen=True, slots=True)
 class Ltl3:
     """The earliest definitive verdict of the infinite-trace formula (LTL3: ``satisfied``,
     ``violated`` or ``unknown``) and the tick at which it was reached (None: unknown, or
-    definitive before the first tick)."""
+    definitive before the first tick). Immutable: verdicts share equal ones (the entities
+    judged at once, :mod:`fretc.audit.entities`)."""
 
     status: str = "unknown"
     tick: int | None = None
@@ -255,7 +256,7 @@ class Verdict:
     verdict: str = "error"
     partial: bool = False
     first_violation: FirstViolation | None = None
-    ltl3: Ltl3 = field(default_factory=Ltl3)
+    ltl3: Ltl3 = Ltl3()
     values: dict[str, list[tuple[int, int, Any]]] = field(default_factory=dict)
     sources: dict[str, list[tuple[int, int, int | None]]] = field(default_factory=dict)
     ticks_evaluated: int = 0

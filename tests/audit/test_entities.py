@@ -6,6 +6,7 @@ over; no entity at all is vacuous."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
@@ -13,6 +14,7 @@ from hypothesis import strategies as st
 
 from _logs import ROS2, S, T, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
+from fretc.audit.verdict import Ltl3
 
 BINDINGS = '''[tick]
 period = "100 ms"
@@ -275,3 +277,7 @@ def test_the_entities_judged_at_once_share_evidence_that_cannot_change(tmp_path,
     copied = pickle.loads(pickle.dumps(at_once[0]))
     copied.values["dist"] = []  # (a copy is the verdict's own)
     assert at_once[1].values == {}
+    # equal LTL3 verdicts are one object, which cannot change
+    assert at_once[0].ltl3 == Ltl3("unknown", None, None) and at_once[0].ltl3 is at_once[2].ltl3
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        at_once[0].ltl3.status = "violated"  # type: ignore[misc]
