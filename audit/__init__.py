@@ -15,9 +15,14 @@ One module per step:
    evidence, the monitor automata for the LTL3 verdict), the verdict at the damage
    (:mod:`.damage`), the values around the first violation and the numbers behind its boolean
    variables (:mod:`.operands`); the problems of every pass (:mod:`.log_problems`).
-4. **Many logs** (:mod:`.workers`): :func:`audit_logs` with ``jobs > 1`` audits logs in worker
-   processes; results come back in input order; :mod:`.fleet` runs one Ray task per log,
-   the same :func:`audit_log`.
+4. **Many logs** (:mod:`.fleet`): :func:`audit_logs` with ``jobs > 1`` audits logs in worker
+   processes (:mod:`.fleet.workers`); results come back in input order; :mod:`.fleet.ray`
+   runs one Ray task per log, the same :func:`audit_log`; :mod:`.fleet.statistics` counts
+   the runs.
+
+Beside the steps, in subpackages: **per-entity** requirements (:mod:`.entities`: one
+verdict per entity of the log) and the **sampled trace** (:mod:`.sampled`: what an audit
+judged, written as a CSV trace with ``--write-csv`` and audited back).
 
 This package re-exports the public names of those modules.
 """
@@ -31,7 +36,7 @@ from fretc.audit.log import audit_log
 from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.passes import MAX_TICKS
 from fretc.audit.plan import load_plan
-from fretc.audit.workers import audit_logs
+from fretc.audit.fleet.workers import audit_logs
 
 __all__ = ["AuditConfig", "AuditPlan", "RequirementPlan", "AuditInputError", "load_plan",
            "discover_bindings", "find_logs", "audit_log", "audit_logs", "CHUNK",

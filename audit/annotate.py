@@ -39,7 +39,7 @@ from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
 from fretc.common.units import format_offset
-from fretc.logs.mcap_records import chunk_records
+from fretc.logs.mcap.records import chunk_records
 
 __all__ = ["VERDICT_TOPIC", "FOXGLOVE_LOG_SCHEMA", "VerdictEvent", "AnnotateResult",
            "verdict_events", "annotate_mcap", "LEVELS"]

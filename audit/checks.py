@@ -32,7 +32,7 @@ RATE_TOLERANCE = 0.10
 def csv_bindings(plan: AuditPlan, bindings: Bindings, source: LogSource) -> Bindings:
     """CSV with bindings: the bound variables as bound; every other variable of the
     requirements that names a column reads it (``/csv.<column>``). A sampled trace (its
-    first line :data:`fretc.logs.csv_source.SAMPLED_MARK`, as ``fretc audit --write-csv``
+    first line :data:`fretc.logs.csv.source.SAMPLED_MARK`, as ``fretc audit --write-csv``
     writes it) holds the variables with the bindings already applied: a variable that
     names one of its columns reads it, whatever the binding files bind it to, and its
     ±inf are the variable's values (``max`` over a filter that keeps nothing is -inf), not
@@ -72,7 +72,7 @@ def binding_type_errors(source: LogSource, bindings: Bindings, plan: AuditPlan, 
     (a binding that names a field the schema does not declare, mixes strings, booleans and
     numbers, or is used as the other kind), before anything is evaluated. Requirements whose
     index is in ``skip`` (already in error) are not checked, nor a sampled trace
-    (:mod:`fretc.audit.sampled_csv`: its columns are variables checked on their log).
+    (:mod:`fretc.audit.sampled.csv`: its columns are variables checked on their log).
     ``schemas``: topic -> :class:`fretc.logs.schema.TopicSchema` when not the log's own (a
     watch's advertised ones, :func:`fretc.logs.schema.record_schemas`)."""
     if getattr(source, "sampled", False):  # the variables' types were checked on their log
@@ -129,7 +129,7 @@ def _undecodable_topics(source, schemas: Mapping[str, TopicSchema | None]) -> di
     out: dict[str, str] = {}
     if source.kind not in ("bag", "rosbag2"):  # logs that carry their schemas report them
         return out
-    from fretc.logs.msg_path import MSG_PATH_HINT  # lazy: bags only (start-up)
+    from fretc.logs.ros.msg_path import MSG_PATH_HINT  # lazy: bags only (start-up)
 
     for topic, typ in source.topics().items():
         if typ and topic in schemas and schemas[topic] is None:

@@ -28,14 +28,14 @@ class AuditConfig:
             per message of this topic; ``time_base``: ``"log"`` or ``"header"``.
         window: ticks of values shown on each side of the trigger and the violation.
         msg_path: folders of ``.msg``/``.idl`` files for types a log does not carry
-            (``--msg-path``, :mod:`fretc.logs.msg_path`).
+            (``--msg-path``, :mod:`fretc.logs.ros.msg_path`).
         text_attribute: the attribute of ReqIF / Doorstop requirements holding the FRETish
             text (``--text-attribute``; None: :mod:`fretc.fretish.sources`' default).
         bridge_gaps_ns: ``--bridge-gaps``: gaps of a log shorter than this (ns) are bridged
             (the value before held over them, each listed) instead of leaving their ticks
             unknown (:mod:`fretc.audit.gaps`); None bridges none (the default).
         max_entities: ``--max-entities``: entities of one per-entity requirement judged per
-            log (None: :data:`fretc.audit.entities.DEFAULT_MAX_ENTITIES`); past it, an error
+            log (None: :data:`fretc.audit.entities.log.DEFAULT_MAX_ENTITIES`); past it, an error
             verdict says how to raise it.
     """
 

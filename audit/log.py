@@ -28,8 +28,8 @@ from fretc.common.collections_gc import fewer_full_collections
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
-from fretc.logs.csv_clocks import split_clocks
-from fretc.logs.csv_source import CsvSource, sampled_header, sampled_trace
+from fretc.logs.csv.clocks import split_clocks
+from fretc.logs.csv.source import CsvSource, sampled_header, sampled_trace
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
                      rate_hint, too_many_ticks)
 from fretc.audit.finalize import between_ticks, finalize
@@ -49,7 +49,7 @@ __all__ = ["audit_log", "audit_keeping_passes", "KeptPasses", "summarize_clocks"
 
 
 #: A sampled trace of more clocks than this (a per-entity requirement has one per entity) is
-#: read once and split by clock (:func:`fretc.logs.csv_clocks.split_clocks`: its rows held
+#: read once and split by clock (:func:`fretc.logs.csv.clocks.split_clocks`: its rows held
 #: at once); one of fewer is read once per clock (its columns alone held at a time).
 SPLIT_CLOCKS = 8
 
@@ -78,7 +78,7 @@ def _audit_log(plan: AuditPlan, path: str, progress: Callable[[float], None] | N
     head = sampled_header(path) if csv else None
     if head is not None and (head.clocks or head.per_entity or head.not_sampled):
         # (a trace --write-csv wrote: each requirement on its own clock's rows)
-        from fretc.audit.sampled_audit import audit_clocks
+        from fretc.audit.sampled.audit import audit_clocks
 
         clocks = head.clocks
 
@@ -96,7 +96,7 @@ def _audit_log(plan: AuditPlan, path: str, progress: Callable[[float], None] | N
     if plan.bindings is not None and plan.bindings.per_entity and not sampled_trace(path):
         # (a sampled trace's columns are the variables: per-entity ones too, as testgen
         # writes them)
-        from fretc.audit.entities import audit_entities
+        from fretc.audit.entities.log import audit_entities
 
         return audit_entities(plan, str(path), progress,
                               lambda p, f, pr: _LogRun(p, f).run(pr))
@@ -126,22 +126,22 @@ class KeptPasses:
 
 def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
     """:func:`audit_log` of ``path``, keeping what each requirement was judged on (the
-    sampled trace of ``--write-csv``, :mod:`fretc.audit.sampled_csv`).
+    sampled trace of ``--write-csv``, :mod:`fretc.audit.sampled.csv`).
 
     Raises:
         ValueError: per-entity requirements: their entities' passes are kept by
-            :func:`fretc.audit.entities.entity_passes` (:mod:`fretc.audit.sampled_entities`)."""
+            :func:`fretc.audit.entities.log.entity_passes` (:mod:`fretc.audit.sampled.entities`)."""
     if plan.variants:
         sub, err = select_variant(plan, str(path))
         if sub is None:
             return KeptPasses(plan, _not_selected(plan, str(path), err or ""), None, None,
                               set())
         return audit_keeping_passes(sub, path)
-    from fretc.audit.entities import entity_of_requirements
+    from fretc.audit.entities.log import entity_of_requirements
 
     if plan.bindings is not None and entity_of_requirements(plan):
         raise ValueError("audit_keeping_passes keeps the passes of plain requirements; "
-                         "per-entity ones: fretc.audit.entities.entity_passes")
+                         "per-entity ones: fretc.audit.entities.log.entity_passes")
     run = _LogRun(plan, path)
     la = run.run(None)
     return KeptPasses(plan, la, run.result, run.read_bindings, set(run.skip))

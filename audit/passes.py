@@ -218,7 +218,7 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
 
 def csv_marks(res: ClockPass, source: LogSource, names: list[str],
               bindings: Bindings | None) -> None:
-    """What a CSV trace marks unknown (:class:`fretc.logs.csv_source.CsvSource`: ``unknown``
+    """What a CSV trace marks unknown (:class:`fretc.logs.csv.source.CsvSource`: ``unknown``
     cells, ``gap`` rows), as a gap of a log leaves it (:func:`mark_gaps`): ``res.unknown``
     per variable (a variable bound over ``/csv`` columns is unknown where a column it reads
     is) and ``res.tick_gaps`` the ``gap`` rows, unknown for every variable."""

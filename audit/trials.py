@@ -17,7 +17,7 @@ satisfied or violated; the others are counted apart, never as trials of either o
   (a gap of the log, a comparison with NaN), or whose obligation is still open where a
   damaged log stops being read (the run went on: :func:`fretc.audit.damage.open_reason`).
   What they count for is the fleet statistics' unknown policy
-  (:mod:`fretc.audit.statistics`): never a success.
+  (:mod:`fretc.audit.fleet.statistics`): never a success.
 * **hidden**: a trigger may have fired in unknown ticks (the scope mode or the condition is
   unknown somewhere): such triggers are not seen, so not counted; a note says so.
 """

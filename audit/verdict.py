@@ -16,7 +16,7 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
       "statistics": [ RequirementStatistics.to_json() ... ]  # only with several logs or a
     }                                                         # probability requirement
 
-``statistics`` (:mod:`fretc.audit.statistics`): per requirement the runs of each verdict, the
+``statistics`` (:mod:`fretc.audit.fleet.statistics`): per requirement the runs of each verdict, the
 estimate of P(satisfied), its Clopper-Pearson ``interval`` at ``confidence``, and for a
 requirement ``with probability OP p`` its ``bound`` and statistical ``verdict`` (holds /
 fails / undecided). A probability requirement's exit code follows that verdict, never its
@@ -141,7 +141,7 @@ class Ltl3:
     """The earliest definitive verdict of the infinite-trace formula (LTL3: ``satisfied``,
     ``violated`` or ``unknown``) and the tick at which it was reached (None: unknown, or
     definitive before the first tick). Immutable: verdicts share equal ones (the entities
-    judged at once, :mod:`fretc.audit.entities`)."""
+    judged at once, :mod:`fretc.audit.entities.log`)."""
 
     status: str = "unknown"
     tick: int | None = None
@@ -186,7 +186,7 @@ class SharedEmptyList(list):
 _NO_DICT, _NO_LIST = SharedEmptyDict(), SharedEmptyList()
 #: The evidence fields of a :class:`Verdict` that has none, as keyword arguments, their
 #: empty containers shared: the verdicts of the entities judged at once
-#: (:mod:`fretc.audit.entities`), 100,000 of them on a large log, each otherwise carrying
+#: (:mod:`fretc.audit.entities.log`), 100,000 of them on a large log, each otherwise carrying
 #: seven empty containers of its own (half its memory, and the collector's work)
 NO_EVIDENCE: dict[str, Any] = {
     "values": _NO_DICT, "sources": _NO_DICT, "waiting_for": _NO_LIST,
@@ -471,11 +471,11 @@ def exit_code(logs: list[LogAudit], input_errors: bool = False,
     partial, data problems, unknown verdicts - a CI gate must not pass a recording that lost
     its last minutes); else 0.
 
-    ``statistics`` (:class:`fretc.audit.statistics.RequirementStatistics` list): a requirement
+    ``statistics`` (:class:`fretc.audit.fleet.statistics.RequirementStatistics` list): a requirement
     with a probability bound is judged by its statistical verdict, not by its runs: 1 when
     it ``fails``, 5 (:data:`EXIT_UNDECIDED`, after 1 and before 3) when ``undecided``; its
     violated runs alone do not give 1."""
-    from fretc.audit.statistics import statistical_exit
+    from fretc.audit.fleet.statistics import statistical_exit
 
     bounded = {s.id for s in statistics or () if s.bound is not None}
     failed, undecided = statistical_exit(statistics)

@@ -12,7 +12,7 @@
    floor for anything that reads the messages) and the audit of the file against 10
    requirements (``audit.audit_log``: read, sample every 100 ms, monitor, evidence),
    and prints both CPU times and their ratio (aim: <= 0.5x; the audit decodes only the
-   fields its bindings read, a chunk's messages at once, :mod:`fretc.logs.columnar`);
+   fields its bindings read, a chunk's messages at once, :mod:`fretc.logs.ros.columnar`);
    then the same two as commands in fresh processes (start-up included; bytecode cached as
    in an installed fretc, after one untimed run of each). Compiling the requirements (Spot) is timed
    apart: it does not depend on the log.

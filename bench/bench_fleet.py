@@ -76,7 +76,7 @@ def main() -> None:
     args = ap.parse_args()
 
     from bench_audit import ensure_requirements, plain_iteration
-    from fretc.audit import fleet
+    from fretc.audit.fleet import ray as fleet
     from fretc.audit import AuditConfig, audit_logs, load_plan
     from fretc.audit.verdict import audit_json
 

@@ -48,21 +48,21 @@ sys.path.insert(0, str(ROOT))
 def _server(url: str, config: str | None):
     """The replay server of ``url`` (``ws``: a foxglove-sdk server on a free port)."""
     if url.startswith("dds://"):
-        from fretc.live.dds_serve import DdsServer
+        from fretc.live.dds.serve import DdsServer
 
         return DdsServer(url, config_file=config)
     if url.startswith("zenoh://"):
-        from fretc.live.zenoh_serve import ZenohServer
+        from fretc.live.zenoh.serve import ZenohServer
 
         return ZenohServer(url)
-    from fretc.live.serve import FoxgloveServer
+    from fretc.live.websocket.serve import FoxgloveServer
 
     return FoxgloveServer(port=0)
 
 
 def _serve(trace: str, rate: float, topics, conn, url: str = "ws",
            config: str | None = None) -> None:
-    from fretc.live.serve import advertise_mcap, replay_mcap
+    from fretc.live.websocket.serve import advertise_mcap, replay_mcap
 
     server = _server(url, config)
     advertise_mcap(trace, server, topics=set(topics))
@@ -159,7 +159,7 @@ def main() -> None:
     import tempfile
 
     from fretc.audit import AuditConfig, audit_log, load_plan
-    from fretc.live.dds_types import LOOPBACK_XML
+    from fretc.live.dds.idl_types import LOOPBACK_XML
 
     plan = load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
     c0 = _cpu()

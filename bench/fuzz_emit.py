@@ -99,7 +99,7 @@ def _runner_words(exe: Path, trace: Path) -> tuple[int, dict, str]:
     them (the runner prints a backslash or a control byte as ``\\xNN``); a word ``unknown``
     at an unread tick is ``unread``, and so is a per-entity requirement's ``unknown`` when
     one of its entities is unread (the runner stops where the audit judges on)."""
-    from fretc.logs.csv_source import unescape_id
+    from fretc.logs.csv.source import unescape_id
 
     got = subprocess.run([str(exe), str(trace)], capture_output=True, timeout=60)
     words, unread = {}, set()
@@ -172,7 +172,7 @@ def _sampled_trace(rng: random.Random, cell) -> bytearray:
     one clock, A2 and A5 per entity ``e`` (names with a space, a comma, a backslash, bytes
     over 127, escaped as the writer escapes them; some entities on a not-sampled line), A3 on
     no clock; each row of a random clock, time rising."""
-    from fretc.logs.csv_source import escape_id
+    from fretc.logs.csv.source import escape_id
 
     lines = ["# fretc sampled trace of fuzz.mcap: the FRET variables", "# fretc clock 1: A1 A4"]
     k = 1

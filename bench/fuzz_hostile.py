@@ -430,8 +430,8 @@ def hostile_frames(rng: random.Random, foxglove: bool) -> list:
 def run_frames(rng: random.Random) -> list[str]:
     """Hand hostile frames to a client's session and its events to a watch source (an
     exception propagates)."""
-    from fretc.live.client import FoxgloveClient
-    from fretc.live.rosbridge import RosbridgeClient
+    from fretc.live.websocket.foxglove import FoxgloveClient
+    from fretc.live.websocket.rosbridge import RosbridgeClient
     from fretc.live.source import WatchSource
 
     foxglove = rng.random() < 0.6
@@ -442,7 +442,7 @@ def run_frames(rng: random.Random) -> list[str]:
     else:
         client = RosbridgeClient("rosbridge://127.0.0.1:1", lambda t: t == "/a")
         state = {"clock": 0, "types": {"/a": "std_msgs/msg/Float64"}}
-        client._put("advertise", 0, [__import__("fretc.live.rosbridge", fromlist=["x"])
+        client._put("advertise", 0, [__import__("fretc.live.websocket.rosbridge", fromlist=["x"])
                                      .advertisement(1, "/a", "std_msgs/msg/Float64")])
         asyncio.run(client._read(FakeSocket(frames), {}, state))
     src = WatchSource("ws://fuzz", client)

@@ -145,11 +145,11 @@ def _bus_server(transport: str, rng: random.Random, dds_xml: Path):
     import socket
 
     if transport == "dds":
-        from fretc.live.dds_serve import DdsServer
+        from fretc.live.dds.serve import DdsServer
 
         url = f"dds://{rng.randrange(100, 230)}"
         return url, DdsServer(url, str(dds_xml))
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
@@ -227,7 +227,7 @@ def run_bus(rng: random.Random, tmp: Path) -> list[str]:
 
     from fretc.audit import AuditConfig, load_plan
     from fretc.audit.verdict import exit_code
-    from fretc.live.dds_types import LOOPBACK_XML
+    from fretc.live.dds.idl_types import LOOPBACK_XML
     from fretc.live.watch import Watch, WatchOptions
 
     d = tmp / "bus"

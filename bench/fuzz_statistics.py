@@ -1,6 +1,6 @@
 """The ``statistics`` class of ``bench/fuzz_hostile.py`` (its docstring): hostile fleets,
 campaigns and option values against the statistics of probability requirements
-(``audit/statistics.py``, ``audit/intervals.py``, ``sim/sequential.py``, the ``--confidence``,
+(``audit/fleet/statistics.py``, ``audit/fleet/intervals.py``, ``sim/sequential.py``, the ``--confidence``,
 ``--trial``, ``--unknown-runs``, ``--delta``, ``--alpha`` and ``--beta`` options).
 
 Each input is one of:
@@ -29,7 +29,7 @@ import math
 import random
 from pathlib import Path
 
-from fretc.audit.statistics import fleet_statistics
+from fretc.audit.fleet.statistics import fleet_statistics
 from fretc.audit.trials import Trials
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.compiler.ir import BOUND_OPS, ProbabilityBound

@@ -19,7 +19,7 @@ each stage has its own subclass (the model: Lark's one exception tree)::
     │   ├── BindingError                a signal binding
     │   ├── SignalError                 a binding that cannot be evaluated on a log
     │   ├── FieldPathError              a field path the schema lacks (logs/schema.py)
-    │   └── AuditInputError ── RayUnavailable   (audit/config.py, audit/fleet.py)
+    │   └── AuditInputError ── RayUnavailable   (audit/config.py, audit/fleet/ray.py)
     └── ReportError                     fretc report's inputs and output (reports/write.py)
 
 Internal errors are not input errors and stay outside the tree (a generated monitor that is

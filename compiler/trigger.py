@@ -1,7 +1,7 @@
 """The trigger formula of a requirement (:func:`trigger_pt`): the pt formula true at the last
 tick of a trace iff no trigger of the requirement occurred in any scope interval. The audit
 reads it for its *vacuous* verdict of the entities judged at once
-(:mod:`fretc.audit.entity_batch`), the C monitors for theirs (:mod:`fretc.compiler.c_codegen`).
+(:mod:`fretc.audit.entities.batch`), the C monitors for theirs (:mod:`fretc.compiler.c_codegen`).
 """
 
 from __future__ import annotations

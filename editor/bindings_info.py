@@ -184,7 +184,7 @@ def _schemas(types: dict[str, str]) -> dict:
     definitions); a type rosbags does not know is left out."""
     if not types:
         return {}
-    from fretc.logs.known_types import _store
+    from fretc.logs.ros.known_types import _store
     from fretc.logs.schema import TopicSchema
 
     store = _store("ros2_humble")

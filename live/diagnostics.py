@@ -107,7 +107,7 @@ class DiagnosticsPublisher:
     Args:
         watch: the :class:`~fretc.live.watch.Watch`.
         open_server: () -> a server with ``channel``/``log``/``stop`` (a
-            :class:`~fretc.live.dds_serve.DdsServer` or :class:`~fretc.live.zenoh_serve.ZenohServer`
+            :class:`~fretc.live.dds.serve.DdsServer` or :class:`~fretc.live.zenoh.serve.ZenohServer`
             on the watched transport), called once the watch is connected.
         period: seconds between two arrays when nothing changes (1 Hz).
 

@@ -1,6 +1,6 @@
 """Per-entity requirements in ``fretc watch`` (docs/bindings.md, "One verdict per entity"):
 a requirement whose variables read an entity of ``[entities]`` (``$track``) is judged at the
-end of the run by the audit's own code (:func:`fretc.audit.entities.audit_entities`, through
+end of the run by the audit's own code (:func:`fretc.audit.entities.log.audit_entities`, through
 :func:`fretc.audit.log.audit_log`) over the messages the watch used on the topics those
 requirements read, kept in a temporary MCAP while watching (their bytes, schemas and log
 times as received: what ``--record`` writes). So its verdicts (one per entity seen, in order
@@ -9,7 +9,7 @@ messages by construction. No live ``pt``/``ltl3`` events are made for them (thei
 are not stepped while watching); their ``final`` events are.
 
 Memory stays bounded: the messages are on disk, not in memory (as many bytes as those topics
-carried in the run), and at most :data:`fretc.audit.entities.MAX_ENTITIES` entities of a key
+carried in the run), and at most :data:`fretc.audit.entities.log.MAX_ENTITIES` entities of a key
 are judged (past it, the audit's error verdict says how many were left unjudged). The file is
 deleted once judged.
 
@@ -29,7 +29,7 @@ import os
 import tempfile
 from typing import Any
 
-from fretc.audit.entities import entity_of_requirements
+from fretc.audit.entities.log import entity_of_requirements
 from fretc.audit.log import audit_log
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.common.problems import BindingError

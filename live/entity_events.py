@@ -8,7 +8,7 @@ end (:mod:`fretc.live.entities`); the live events follow the same rules, so an e
 An entity found on a message of the key's topic gets its clock from the start of the run:
 the messages the watch used on the topics its requirement reads are kept in memory (at most
 :data:`MAX_LIVE_MESSAGES`) and replayed into the new clock, and its monitor is stepped from
-the first tick at or after that message (the entity's life, :mod:`fretc.audit.entity_read`),
+the first tick at or after that message (the entity's life, :mod:`fretc.audit.entities.read`),
 so its ticks are those the audit of the run gives it. Past the bound, entities found later have no live events (their final
 verdict is unchanged); so do entities under the header time base (the audit orders by
 header stamps: a later message may come before a tick already stepped), and requirements
@@ -23,7 +23,7 @@ from fnmatch import fnmatchcase
 from types import SimpleNamespace
 from typing import Any
 
-from fretc.audit.entities import MAX_ENTITIES, entity_of_requirements
+from fretc.audit.entities.log import MAX_ENTITIES, entity_of_requirements
 from fretc.audit.passes import clock_key
 from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import log_topics
@@ -66,7 +66,7 @@ class _Kind:
         self.instances: list[_Instance] = []
 
     def values(self, data: Any, log_time: int) -> list:
-        """The key's values on one message of its topic (as fretc.audit.entities reads them)."""
+        """The key's values on one message of its topic (as fretc.audit.entities.log reads them)."""
         st, topic = EvalState(), self.key_topic
         assert topic is not None  # (values of a key of one topic)
         st.msgs[topic], st.times[topic], st.now = data, log_time, log_time

@@ -1,5 +1,5 @@
 """The bounded queue between a live transport's thread and the watch: the transport puts
-events (the tuples of :mod:`fretc.live.client`'s docstring), the watch takes them in order.
+events (the tuples of :mod:`fretc.live.protocol`), the watch takes them in order.
 
 A server can send faster than the monitors step (a flood, or a backlog after a stall). The
 queue holds at most :data:`MAX_QUEUED_MESSAGES` messages and :data:`MAX_QUEUED_BYTES` bytes of

@@ -11,7 +11,7 @@ the latency a verdict gains on these transports.
 
 **The watermark.** A transport that knows, for each topic, which writers its subscription
 is matched with, and which writer sent each message (DDS: the reader's matched publications
-and each sample's publication handle, :mod:`fretc.live.dds_client`), releases earlier: each
+and each sample's publication handle, :mod:`fretc.live.dds.client`), releases earlier: each
 writer's messages come in log-time order (its source timestamps, in the order it wrote
 them), so once every matched writer of every topic has delivered a message, no message still
 to come from them is older than the oldest of their latest ones, the *watermark*; the held

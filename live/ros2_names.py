@@ -34,7 +34,7 @@ from urllib.parse import parse_qs, urlsplit
 
 from rosbags.typesys.msg import normalize_msgtype
 
-from fretc.live.client import Advertised
+from fretc.live.protocol import Advertised
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -43,7 +43,13 @@ __all__ = ["Ros2Url", "parse_url", "dds_topic", "ros_topic_of_dds", "dds_type", 
            "zenoh_key", "zenoh_topic_key", "parse_zenoh_key", "LivelinessToken",
            "liveliness_token", "parse_liveliness", "attachment", "attachment_time",
            "standard_store", "advertisement", "DEFAULT_ZENOH_PORT", "LIVELINESS_PREFIX",
-           "bridge_key", "bridge_liveliness", "parse_bridge_liveliness"]
+           "bridge_key", "bridge_liveliness", "parse_bridge_liveliness", "CLOCK_TOPIC",
+           "normal_type", "cdr_clock_ns"]
+
+#: The topic of the ROS clock (simulated time, ``use_sim_time``): the DDS and Zenoh watches read
+#: it whether or not a requirement does; once it is published, messages take its time as their
+#: log time.
+CLOCK_TOPIC = "/clock"
 
 #: rmw_zenoh's router and peers listen on TCP port 7447 by default.
 DEFAULT_ZENOH_PORT = 7447
@@ -244,15 +250,15 @@ def attachment_time(data: bytes | None) -> int | None:
 @functools.lru_cache(maxsize=8)
 def standard_store(msg_path: tuple[str, ...] = ()) -> Typestore:
     """rosbags' type store of ROS 2 Humble's standard types and the events of the standard
-    services (:mod:`fretc.logs.standard_services`), or the ``.msg``/``.idl`` types of
-    ``msg_path`` (``--msg-path``, :mod:`fretc.logs.msg_path`) when given."""
+    services (:mod:`fretc.logs.ros.standard_services`), or the ``.msg``/``.idl`` types of
+    ``msg_path`` (``--msg-path``, :mod:`fretc.logs.ros.msg_path`) when given."""
     if msg_path:
-        from fretc.logs.msg_path import msg_path_typestore
+        from fretc.logs.ros.msg_path import msg_path_typestore
 
         return msg_path_typestore(tuple(msg_path))
     from rosbags.typesys import Stores, get_typestore
 
-    from fretc.logs.standard_services import register_service_events
+    from fretc.logs.ros.standard_services import register_service_events
 
     store = get_typestore(Stores.ROS2_HUMBLE)
     register_service_events(store)  # the events of std_srvs' services (introspection)
@@ -261,11 +267,11 @@ def standard_store(msg_path: tuple[str, ...] = ()) -> Typestore:
 
 def advertisement(cid: int, topic: str, ros: str, store: Typestore, expected: str | None = None
                   ) -> Advertised:
-    """The :class:`~fretc.live.client.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
+    """The :class:`~fretc.live.protocol.Advertised` of ``topic`` carrying CDR of ROS type ``ros``
     with the ``ros2msg`` definition ``store`` gives; an unreadable one (the watch then makes
     the topic's requirements ``error`` saying why) when ``store`` does not know the type or
     it is not ``expected`` (the bindings' ``[types]``)."""
-    if expected and _norm(expected) != _norm(ros):
+    if expected and normal_type(expected) != normal_type(ros):
         return Advertised(cid, topic, "cdr", ros, "", "", unreadable=(
             f"{topic} carries {ros}, the bindings expect {expected}"))
     try:
@@ -277,8 +283,22 @@ def advertisement(cid: int, topic: str, ros: str, store: Typestore, expected: st
     return Advertised(cid, topic, "cdr", name, text, "ros2msg")
 
 
-def _norm(name: str) -> str:
+def normal_type(name: str) -> str:
+    """A ROS type name in its normal form (``std_msgs/Bool`` -> ``std_msgs/msg/Bool``,
+    rosbags' ``normalize_msgtype``); a name that is no ROS type name as it is."""
     try:
         return normalize_msgtype(name)
     except Exception:  # not a ROS type name
         return name
+
+
+def cdr_clock_ns(payload: bytes) -> int | None:
+    """The time of a CDR ``rosgraph_msgs/msg/Clock`` on ``/clock`` (:data:`CLOCK_TOPIC`):
+    int32 sec and uint32 nanosec after the 4-byte encapsulation header, in ns since the
+    epoch; None when the payload is too short."""
+    if len(payload) < 12:
+        return None
+    little = payload[1] & 1
+    sec = int.from_bytes(payload[4:8], "little" if little else "big", signed=True)
+    nsec = int.from_bytes(payload[8:12], "little" if little else "big")
+    return sec * 1_000_000_000 + nsec

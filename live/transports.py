@@ -1,10 +1,10 @@
 """The client of a watch's URL (one per transport, all feeding the same
 :class:`~fretc.live.source.WatchSource` through an :class:`~fretc.live.events.EventQueue`):
 
-* ``ws://``, ``wss://``: the Foxglove WebSocket protocol (:class:`~fretc.live.client.FoxgloveClient`);
-* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2 (:class:`~fretc.live.rosbridge.RosbridgeClient`);
-* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS (:class:`~fretc.live.dds_client.DdsClient`);
-* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions (:class:`~fretc.live.zenoh_client.ZenohClient`).
+* ``ws://``, ``wss://``: the Foxglove WebSocket protocol (:class:`~fretc.live.websocket.foxglove.FoxgloveClient`);
+* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2 (:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`);
+* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS (:class:`~fretc.live.dds.client.DdsClient`);
+* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions (:class:`~fretc.live.zenoh.client.ZenohClient`).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from collections.abc import Callable, Iterable
 from typing import Any, TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from fretc.live.client import WebSocketClient
-    from fretc.live.dds_client import DdsClient
-    from fretc.live.zenoh_client import ZenohClient
+    from fretc.live.websocket.session import WebSocketClient
+    from fretc.live.dds.client import DdsClient
+    from fretc.live.zenoh.client import ZenohClient
     from fretc.live.watch import WatchOptions
 
 __all__ = ["make_client", "URL_SCHEMES"]
@@ -40,21 +40,22 @@ def make_client(options: WatchOptions, wanted: Callable[[str], bool],
     given.update(options.types or {})
     url = options.url
     if url.startswith("zenoh://"):
-        from fretc.live.zenoh_client import ZenohClient
+        from fretc.live.zenoh.client import ZenohClient
 
         return ZenohClient(url, wanted, topics=topics, types=given,
                            msg_path=options.msg_path, config_file=options.config,
                            merge_hold=options.merge_hold)
     if url.startswith("dds://"):
-        from fretc.live.dds_client import DdsClient
+        from fretc.live.dds.client import DdsClient
 
         return DdsClient(url, wanted, topics=topics, types=given, msg_path=options.msg_path,
                          config_file=options.config, merge_hold=options.merge_hold)
-    from fretc.live.client import FoxgloveClient, require_websockets
+    from fretc.live.websocket.foxglove import FoxgloveClient
+    from fretc.live.websocket.session import require_websockets
 
     require_websockets()
     if url.startswith(("rosbridge://", "rosbridge+wss://")):
-        from fretc.live.rosbridge import RosbridgeClient  # lazy: numpy's message building
+        from fretc.live.websocket.rosbridge import RosbridgeClient  # lazy: numpy's message building
 
         return RosbridgeClient(url, wanted, types=given, msg_path=options.msg_path, **kw)
     return FoxgloveClient(url, wanted, **kw)

@@ -1,6 +1,6 @@
 """``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
-protocol (:class:`~fretc.live.client.FoxgloveClient`), rosbridge
-(:class:`~fretc.live.rosbridge.RosbridgeClient`), DDS or Zenoh (:mod:`fretc.live.transports`).
+protocol (:class:`~fretc.live.websocket.foxglove.FoxgloveClient`), rosbridge
+(:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`), DDS or Zenoh (:mod:`fretc.live.transports`).
 
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:

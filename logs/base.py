@@ -144,7 +144,7 @@ class LogSource:
         #: the log times of the messages counted in :attr:`lost` (the first
         #: :data:`LOST_TIMES_CAP` of each key)
         self.lost_times: dict[tuple[str, str, int | None], list[int]] = {}
-        #: topic -> field paths to decode (:func:`fretc.logs.selective.install`); None: all
+        #: topic -> field paths to decode (:func:`fretc.logs.ros.selective.install`); None: all
         self._wanted_fields: dict[str, frozenset[tuple]] | None = None
 
     # -- problems -------------------------------------------------------------------------------

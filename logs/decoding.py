@@ -3,8 +3,8 @@
 
 Schema encodings ``ros2msg``, ``ros2idl`` and ``ros1msg``, message encodings ``cdr`` (ROS 2)
 and ``ros1`` (MCAP spec, "Well-known encodings"). Decoders read every field, or only the
-fields the signal bindings read (:mod:`fretc.logs.selective`). The self-describing encodings
-(``json``, ``protobuf``, ``cbor``) are :mod:`fretc.logs.encodings`'; :func:`schema_decoder` serves
+fields the signal bindings read (:mod:`fretc.logs.ros.selective`). The self-describing encodings
+(``json``, ``protobuf``, ``cbor``) are :mod:`fretc.logs.mcap.encodings`'; :func:`schema_decoder` serves
 both.
 """
 
@@ -17,10 +17,10 @@ from typing import TYPE_CHECKING, Any
 
 from rosbags.serde import SerdeError
 
-from fretc.logs.columnar import ColumnarDecoder, columnar_decoder
-from fretc.logs.encodings import SELF_DESCRIBING, UNSUPPORTED_ENCODINGS, EncodingError, other_decoder
-from fretc.logs.known_types import layout_mismatch
-from fretc.logs.selective import selective_decoder
+from fretc.logs.ros.columnar import ColumnarDecoder, columnar_decoder
+from fretc.logs.mcap.encodings import SELF_DESCRIBING, UNSUPPORTED_ENCODINGS, EncodingError, other_decoder
+from fretc.logs.ros.known_types import layout_mismatch
+from fretc.logs.ros.selective import selective_decoder
 
 if TYPE_CHECKING:  # rosbags' type system is imported when a schema is built (start-up of
     # the logs that need none: json, protobuf, cbor, ULog, CSV)
@@ -186,7 +186,7 @@ def decoder_for(store: Typestore, typename: str, message_encoding: str,
         store: a rosbags Typestore holding ``typename``.
         typename: the normalized type name (``pkg/msg/Type``).
         message_encoding: ``"cdr"`` or ``"ros1"``.
-        fields: field paths to decode (:mod:`fretc.logs.selective`); None: every field.
+        fields: field paths to decode (:mod:`fretc.logs.ros.selective`); None: every field.
 
     Raises:
         UnsupportedSchema: another message encoding.
@@ -229,19 +229,19 @@ def schema_decoder(message_encoding: str, schema_encoding: str | None, schema_na
 
     Args:
         message_encoding: ``"cdr"`` (ROS 2), ``"ros1"``, or a self-describing encoding of
-            :data:`fretc.logs.encodings.SELF_DESCRIBING` (MCAP well-known message encodings).
+            :data:`fretc.logs.mcap.encodings.SELF_DESCRIBING` (MCAP well-known message encodings).
         schema_encoding: ``"ros2msg"``, ``"ros2idl"`` or ``"ros1msg"`` (well-known schema
             encodings), matching the message encoding; None or ``""`` when the channel has none.
         schema_name: the message type (``pkg/msg/Type`` or ``pkg/Type``).
         schema_text: the definition text (see :func:`build_typestore`), or the schema's bytes
             (MCAP Schema ``data``; binary for ``protobuf``).
-        fields: field paths to decode (:mod:`fretc.logs.selective`); None: every field.
+        fields: field paths to decode (:mod:`fretc.logs.ros.selective`); None: every field.
 
     Raises:
         UnsupportedSchema: an unsupported message encoding, a channel without schema, a schema
             encoding that does not go with the message encoding, a schema rosbags cannot
             parse, or a definition of a standard ROS type whose layout is not ROS's
-            (:func:`fretc.logs.known_types.layout_mismatch`; the message says which).
+            (:func:`fretc.logs.ros.known_types.layout_mismatch`; the message says which).
     """
     if message_encoding in SELF_DESCRIBING:
         try:
@@ -277,7 +277,7 @@ DECODE_ERRORS = (SerdeError, struct.error, IndexError, ValueError, AssertionErro
 
 def schema_columnar(message_encoding: str, schema_encoding: str | None, schema_name: str | None,
                     schema_text: str | bytes | None, fields: Any) -> ColumnarDecoder | None:
-    """A :class:`~fretc.logs.columnar.ColumnarDecoder` of one channel's ``fields``, or
+    """A :class:`~fretc.logs.ros.columnar.ColumnarDecoder` of one channel's ``fields``, or
     None wherever :func:`schema_decoder` would raise or the columnar walk does not cover the
     type (the channel is then decoded message by message, which reports the problem). Never
     raises; the arguments are :func:`schema_decoder`'s."""

@@ -13,7 +13,7 @@ from fretc.common.units import NS_PER_S
 
 from fretc.common.problems import LogError
 from fretc.logs.base import LogSource
-from fretc.logs.csv_source import CsvSource
+from fretc.logs.csv.source import CsvSource
 
 if TYPE_CHECKING:
     from rosbags.typesys import Stores
@@ -35,13 +35,13 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         fallback_typestore: types for rosbag connections that carry no definition (e.g. old
             rosbag2 sqlite3 bags): a rosbags Typestore or a ``rosbags.typesys.Stores`` member.
             Never used when the log embeds its definitions. Default: ROS 2 Humble's standard
-            types plus the types defined under ``msg_path`` (:mod:`fretc.logs.msg_path`).
+            types plus the types defined under ``msg_path`` (:mod:`fretc.logs.ros.msg_path`).
         msg_path: folders of ``.msg``/``.idl`` files (``--msg-path``).
         check_data_crc: MCAP only: check the DataEnd data-section CRC (one extra read of the
             data section after a full indexed pass).
         csv_period_ns: CSV only: time step between rows when there is no ``time`` column.
         csv_keep: CSV only: the columns whose values are kept (None: every one; the
-            others are checked but not kept, :class:`~fretc.logs.csv_source.CsvSource`).
+            others are checked but not kept, :class:`~fretc.logs.csv.source.CsvSource`).
 
     Returns:
         A :class:`LogSource` (McapSource, BagSource, CsvSource, UlogSource or
@@ -59,9 +59,9 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
     suffix = p.suffix.lower()
     if p.is_dir() or suffix in (".bag", ".db3"):
         from rosbags.typesys import Stores, get_typestore
-        from fretc.logs.bag_source import BagSource
-        from fretc.logs.msg_path import fallback_for
-        from fretc.logs.rosbag2_storage import lone_storage
+        from fretc.logs.ros.bags import BagSource
+        from fretc.logs.ros.msg_path import fallback_for
+        from fretc.logs.ros.rosbag2_storage import lone_storage
 
         if isinstance(fallback_typestore, Stores):
             fallback_typestore = get_typestore(fallback_typestore)
@@ -72,17 +72,17 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
                                  "sqlite3 storage file .db3)")
         return BagSource(p, fallback_typestore=fallback_typestore)
     if suffix == ".mcap":
-        from fretc.logs.mcap_source import McapSource
+        from fretc.logs.mcap.source import McapSource
 
         return McapSource(p, check_data_crc=check_data_crc)
     if suffix == ".csv":
         return CsvSource(p, period_ns=csv_period_ns, keep=csv_keep)
     if suffix == ".ulg":
-        from fretc.logs.ulog_source import UlogSource
+        from fretc.logs.flight.ulog import UlogSource
 
         return UlogSource(p)
     if suffix == ".bin":
-        from fretc.logs.dataflash_source import DataflashSource
+        from fretc.logs.flight.dataflash import DataflashSource
 
         return DataflashSource(p)
     raise LogError(path, "unknown log kind (expected .mcap, .bag, .db3, .csv, .ulg, .bin or "

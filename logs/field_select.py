@@ -1,20 +1,20 @@
 """The fields the signal bindings read, picked from a decoded self-describing message
-(``json``, ``protobuf``: :mod:`fretc.logs.encodings`) instead of converting all of it.
+(``json``, ``protobuf``: :mod:`fretc.logs.mcap.encodings`) instead of converting all of it.
 
 The audit reads a few fields of a few topics (``min(/scan.ranges)``,
 ``/odom.twist.twist.linear.x``). The libraries decode the whole payload (``json.loads``,
 protobuf's parser) as the plain read does; what costs beside them is turning every field
 into a message object and checking every field's type. With the bindings' field paths
-(:func:`fretc.logs.selective.wanted_fields`) the decoders here build the object of only the
+(:func:`fretc.logs.ros.selective.wanted_fields`) the decoders here build the object of only the
 fields read, and check the types of only those: a JSON value against its schema's ``type``
 (arrays of scalars in one pass), a protobuf field against its declared wire type. A field
-nobody reads is neither converted nor checked, as :mod:`fretc.logs.selective` skips it in
+nobody reads is neither converted nor checked, as :mod:`fretc.logs.ros.selective` skips it in
 CDR. The values of the fields read are those of the full conversion
 (``tests/logs/test_field_select.py`` compares both, on the test logs and on generated
 messages).
 
 A path is kept up to its first index or slice (``/scan.ranges[0]`` reads ``ranges``
-whole); :data:`~fretc.logs.selective.HEADER_STAMP` reads ``header.stamp``; beside a
+whole); :data:`~fretc.logs.ros.selective.HEADER_STAMP` reads ``header.stamp``; beside a
 ``ranges`` field, ``range_min`` and ``range_max`` are kept (REP 117 filtering of LaserScan).
 A path that names no field (the whole message) gives the full conversion.
 """
@@ -34,7 +34,7 @@ Tree = dict[str, Any]
 def field_tree(paths: Iterable[tuple[Any, ...]] | None) -> Tree | None:
     """The tree of the fields read along ``paths`` (module docstring); None when the whole
     message is wanted (``paths`` None, or a path naming no field)."""
-    from fretc.logs.selective import HEADER_STAMP
+    from fretc.logs.ros.selective import HEADER_STAMP
 
     if paths is None:
         return None
@@ -80,7 +80,7 @@ def pruned_schema(spec: Any, tree: Tree | None) -> Any:
 
 def json_picker(tree: Tree, convert: Callable[[Any], Any]) -> Callable[[Any], Any]:
     """A function ``decoded JSON value -> message object`` holding the fields of ``tree``
-    (each read value converted whole by ``convert``, :func:`fretc.logs.encodings.as_message`);
+    (each read value converted whole by ``convert``, :func:`fretc.logs.mcap.encodings.as_message`);
     a value that is no JSON object is converted whole (the extractor reports it as the full
     conversion would make it report)."""
     subs = [(name, None if sub is None else json_picker(sub, convert))
@@ -106,7 +106,7 @@ def protobuf_picker(descriptor: Any, tree: Tree,
     """A function ``parsed protobuf message -> message object`` holding the fields of
     ``tree`` (those the message type declares; a field it lacks is left out, as the full
     conversion has no such attribute). ``convert`` converts one field's value whole by its
-    plan (:func:`fretc.logs.encodings.pb_value`), ``plan`` gives a type's plan, ``lies`` is
+    plan (:func:`fretc.logs.mcap.encodings.pb_value`), ``plan`` gives a type's plan, ``lies`` is
     the wire-type check restricted to the given field numbers. Raises ``ValueError`` where
     ``lies`` does."""
     by_name = {name: (how, dtype) for name, how, dtype in plan(descriptor)}

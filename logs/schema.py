@@ -26,9 +26,9 @@ from typing import Any, TYPE_CHECKING
 
 from fretc.common.errors import InputError
 
-from fretc.logs.csv_source import CSV_TOPIC
+from fretc.logs.csv.source import CSV_TOPIC
 from fretc.logs.decoding import UnsupportedSchema, build_typestore
-from fretc.logs.encodings import SELF_DESCRIBING, definition
+from fretc.logs.mcap.encodings import SELF_DESCRIBING, definition
 
 if TYPE_CHECKING:
     from fretc.logs.base import LogSource
@@ -358,7 +358,7 @@ def record_schemas(records: Mapping[str, tuple[str, str, str, bytes]]) -> LogSch
 def _bag_schemas(source) -> dict[str, TopicSchema | None]:
     from rosbags.rosbag1 import Reader as Ros1Reader  # lazy: bags only (start-up)
     from rosbags.rosbag2 import Reader as Ros2Reader
-    from fretc.logs.bag_source import connection_typestore
+    from fretc.logs.ros.bags import connection_typestore
 
     out: dict[str, TopicSchema | None] = {}
     linear = getattr(source, "_linear_bag", None)

@@ -47,7 +47,7 @@ def junit_xml(logs: list[LogAudit], statistics: list | None = None,
     ``requirements`` list, whose ``origin`` gives the ``tool`` and ``tool_id`` properties
     (None: no tool properties).
 
-    With ``statistics`` (:class:`fretc.audit.statistics.RequirementStatistics` list) a requirement
+    With ``statistics`` (:class:`fretc.audit.fleet.statistics.RequirementStatistics` list) a requirement
     with a probability bound follows its statistical verdict: its per-log cases pass
     (a violated run says so in ``system-out``: one run does not decide a probability), and a
     ``statistics`` suite has one case per such requirement: a ``failure`` when it fails, an
@@ -162,7 +162,7 @@ def _statistics_suite(root, stats: list, tot: dict) -> None:
     counts = {"tests": 0, "failures": 0, "errors": 0}
     for st in stats:
         counts["tests"] += 1
-        case = ET.SubElement(suite, "testcase", classname="fretc.audit.statistics",
+        case = ET.SubElement(suite, "testcase", classname="fretc.audit.fleet.statistics",
                              name=st.id, time="0")
         b = st.bound
         lo, hi = st.interval

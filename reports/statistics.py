@@ -1,7 +1,7 @@
 """The fleet statistics in the terminal (``fretc audit`` of several logs, ``fretc estimate``):
 one row per requirement: runs of each verdict, what one trial is (a trigger or a run), the
 triggers per run, the estimate, its interval and, for a probability requirement, the bound
-and its statistical verdict (:mod:`fretc.audit.statistics`)."""
+and its statistical verdict (:mod:`fretc.audit.fleet.statistics`)."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ def per_run(st: dict) -> str:
 
 def statistics_rows(stats: list) -> list[tuple[str, ...]]:
     """The table's rows as plain text, one per statistics object (the audit JSON's, or
-    :class:`fretc.audit.statistics.RequirementStatistics`), in :data:`COLUMNS`' order."""
+    :class:`fretc.audit.fleet.statistics.RequirementStatistics`), in :data:`COLUMNS`' order."""
     rows: list[tuple[str, ...]] = []
     for st in stats:
         s = st if isinstance(st, dict) else st.to_json()

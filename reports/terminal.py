@@ -112,7 +112,7 @@ def print_summary(console: Console, logs: list[LogAudit], plan: AuditPlan | None
     ``details`` one evidence block per violation (trigger, obligation, the missed tick with
     its tick time and the log time of the message that decided it) and, with ``verbose``,
     the values around each violation; last the counts and the exit code (with
-    ``statistics``, :mod:`fretc.audit.statistics`: the fleet table first when a requirement has
+    ``statistics``, :mod:`fretc.audit.fleet.statistics`: the fleet table first when a requirement has
     a probability bound or with ``verbose``, and probability requirements judged by their
     statistical verdict). ``command`` heads the output (``fretc watch``: one run, no log
     count)."""

@@ -28,7 +28,7 @@ from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import SignalError
 from fretc.common.streams import log_topics
 from fretc.signals.streams import Streams
-from fretc.logs.selective import install as install_selective
+from fretc.logs.ros.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.bindings.spec import MAX_TICKS, grid_end, grid_start, tick_bound_error
 from fretc.signals.windows import message_value, sliding_windows, window_block

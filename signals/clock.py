@@ -26,7 +26,7 @@ from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import one_clock
 from fretc.signals.windows import push_message, sliding_windows, windows_complete
 from fretc.common.problems import DataProblem, ProblemLog, SignalError
-from fretc.logs.selective import install as install_selective
+from fretc.logs.ros.selective import install as install_selective
 from fretc.logs import CSV_TOPIC, CsvSource, LogSource
 
 __all__ = ["Tick", "Sampling", "sample", "folded_topics", "unsampled_of"]

@@ -248,8 +248,8 @@ class HeldColumns:
 
 class SegmentList:
     """The messages of one topic as a list (indexing decodes a message on demand), held as
-    :class:`~fretc.logs.columnar.Segment` s whose columns :meth:`column` joins: what the
-    columnar MCAP pass (:mod:`fretc.logs.mcap_columns`) gives the block sampler."""
+    :class:`~fretc.logs.ros.columnar.Segment` s whose columns :meth:`column` joins: what the
+    columnar MCAP pass (:mod:`fretc.logs.mcap.columns`) gives the block sampler."""
 
     def __init__(self) -> None:
         self.segments: list[Any] = []

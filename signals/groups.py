@@ -11,7 +11,7 @@ from typing import Any
 from fretc.common.streams import log_topics
 from fretc.signals.bindings.spec import Bindings, TickSpec
 from fretc.common.problems import DataProblem, SignalError
-from fretc.logs.selective import install as install_selective
+from fretc.logs.ros.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import with_tick_windows

@@ -12,7 +12,7 @@ on Ray (``ray_address``) in batches whose results are taken in index order, and 
 after the one where the last test decided are dropped, so both give the same runs, the
 same decisions and byte-identical JSON.
 
-Counting (:mod:`fretc.audit.statistics`): a probability requirement's trials are its
+Counting (:mod:`fretc.audit.fleet.statistics`): a probability requirement's trials are its
 triggers (``trial="trigger"``, the default: FRET's bound is per trigger; each run gives its
 triggers' outcomes, :mod:`fretc.audit.trials`) or its runs (``trial="run"``: one trial a
 run, satisfied or vacuous a success). Unknown outcomes (unknown runs or triggers) count
@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
-from fretc.audit.statistics import RequirementStatistics, fleet_statistics, unknown_policy
+from fretc.audit.fleet.statistics import RequirementStatistics, fleet_statistics, unknown_policy
 
 from fretc.sim.run import record_scenario
 from fretc.sim.sequential import make_test
@@ -96,7 +96,7 @@ class Runner:
         self.started = False
         (out / "runs").mkdir(parents=True, exist_ok=True)
         if ray_address is not None:
-            from fretc.audit.fleet import connect  # lazy: Ray only with --ray
+            from fretc.audit.fleet.ray import connect  # lazy: Ray only with --ray
             self.started = connect(ray_address)
 
     def path(self, index: int) -> str:
@@ -108,7 +108,7 @@ class Runner:
         if self.ray_address is not None:
             import ray  # lazy: Ray only with --ray
 
-            from fretc.audit.fleet import audit_logs_ray
+            from fretc.audit.fleet.ray import audit_logs_ray
             task = ray.remote(simulate_run).options(num_cpus=1)
             paths = ray.get([task.remote(self.space, p, s, self.path(i))
                              for i, _z, p, s in points])
@@ -141,7 +141,7 @@ class Runner:
 @dataclass
 class Estimate:
     """A campaign's result: its inputs, the runs used (in order), per requirement its
-    :class:`~fretc.audit.statistics.RequirementStatistics` and sequential test (None for a
+    :class:`~fretc.audit.fleet.statistics.RequirementStatistics` and sequential test (None for a
     requirement without a probability bound), and why it stopped."""
 
     space: Space
@@ -200,7 +200,7 @@ def estimate(plan: AuditPlan, space: Space, seed: int, out: str | Path, *, budge
         space: from :func:`fretc.sim.space.load_space` (checked for degenerate distributions).
         seed: the campaign's seed; ``budget``: the most runs (>= 1).
         confidence, unknown, trial: of the tests and the reported intervals
-            (:func:`fretc.audit.statistics.fleet_statistics`).
+            (:func:`fretc.audit.fleet.statistics.fleet_statistics`).
         ray_address: simulate and audit on Ray, ``batch`` runs at a time (same answer).
         audit_json: a kept run's audit JSON text from its LogAudit (the caller's writer).
         progress: called with each run taken, in order.

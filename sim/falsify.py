@@ -145,7 +145,7 @@ class _Evaluator:
         self.ray_address = ray_address
         self.started = False
         if ray_address is not None:
-            from fretc.audit.fleet import connect  # lazy: Ray only with --ray
+            from fretc.audit.fleet.ray import connect  # lazy: Ray only with --ray
             self.started = connect(ray_address)
 
     def path(self, index: int) -> str:
@@ -170,7 +170,7 @@ class _Evaluator:
     def _batch_ray(self, start: int, points: list[dict], targets: list[str]) -> list[Run]:
         import ray  # lazy: Ray only with --ray
 
-        from fretc.audit.fleet import audit_logs_ray
+        from fretc.audit.fleet.ray import audit_logs_ray
         task = ray.remote(simulate).options(num_cpus=1)
         paths = ray.get([task.remote(self.space, p, self.path(start + k))
                          for k, p in enumerate(points)])

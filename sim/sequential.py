@@ -4,7 +4,7 @@
 A run gives the test its trials (:meth:`SPRT.observe`): ``k`` satisfied of ``n`` of known
 outcome and ``u`` of unknown outcome; per trigger (the default unit, FRET's per-trigger
 bound) a run's triggers, per run one trial. As the fleet statistics do
-(:mod:`fretc.audit.intervals`), the trials are counted with runs as clusters, at the
+(:mod:`fretc.audit.fleet.intervals`), the trials are counted with runs as clusters, at the
 effective sample size ``n* = M^2 / sum(m_i^2)`` of the runs so far (``m_i`` a run's trials,
 ``M`` their sum; one trial a run: ``n*`` is the number of runs), and every decision counts
 the unknown outcomes against it: ``holds`` is decided with them all going against the
@@ -29,7 +29,7 @@ swap the two rates; ``=`` and ``!=`` bounds are two-sided: the SPRT decides neit
 :class:`SequentialCP` is a repeated Clopper-Pearson test: at looks after 10, 15, 23, ...
 runs (x1.5 each) it computes the clustered, widened interval with error ``alpha / 2^(j+1)``
 at look ``j`` (so the errors of all looks add up to at most ``alpha``, a union bound) and
-decides as :func:`fretc.audit.intervals.decide` does (``!=`` included). Slower to decide
+decides as :func:`fretc.audit.fleet.intervals.decide` does (``!=`` included). Slower to decide
 than the SPRT, but with no indifference region. No finite sample confirms an ``=`` bound.
 """
 
@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 
-from fretc.audit.intervals import Counts, cluster_interval, decide
+from fretc.audit.fleet.intervals import Counts, cluster_interval, decide
 
 __all__ = ["SPRT", "SequentialCP", "effective_delta", "make_test", "TESTS", "check_parameters"]
 

@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any, TYPE_CHECKING
 
-from fretc.live.serve import FoxgloveServer, Pacer
+from fretc.live.websocket.serve import FoxgloveServer, Pacer
 
 from fretc.sim.recording import TOPICS, MessageFactory, schema_name
 from fretc.sim.scenarios import get_scenario
@@ -31,7 +31,7 @@ __all__ = ["ServeRecorder", "serve"]
 class ServeRecorder:
     """The recorder interface of :class:`fretc.sim.recording.McapRecorder` (``factory``,
     ``counts``, ``write``, ``finish``), publishing on a
-    :class:`fretc.live.serve.FoxgloveServer` instead of writing a file.
+    :class:`fretc.live.websocket.serve.FoxgloveServer` instead of writing a file.
 
     Raises ValueError for an unknown topic or a log time going backwards (as the MCAP
     recorder).

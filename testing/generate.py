@@ -49,7 +49,7 @@ from fretc.compiler.build import Compiled
 from fretc.compiler.coverage import Obligation, obligations
 from fretc.compiler.semantics import Formalization, SemanticsError, formalize
 from fretc.fretish import ast as A
-from fretc.logs.csv_source import SAMPLED_MARK, column_name_problem
+from fretc.logs.csv.source import SAMPLED_MARK, column_name_problem
 from fretc.monitors.coverage import exercised
 from fretc.monitors.interval import verdict_of
 
@@ -340,7 +340,7 @@ def _obligation_json(ob: Obligation, reason: str | None = None) -> dict[str, Any
 def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
                 period: Fraction | None = None, bindings: str | None = None) -> dict[str, Any]:
     """Write ``DIR/T01.csv``... (one per test: comment lines, the first one
-    :data:`fretc.logs.csv_source.SAMPLED_MARK` so that an audit with binding files reads the
+    :data:`fretc.logs.csv.source.SAMPLED_MARK` so that an audit with binding files reads the
     columns as the FRET variables they are; then a header row, ``time`` (tick ``k`` at ``k *
     period`` seconds, when ``period`` is given) and the FRET variables, one row per tick) and
     ``DIR/tests.json``; return the JSON document written (format in the module docstring of
@@ -352,7 +352,7 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
 
     Raises:
         ValueError: a variable a CSV trace cannot carry as a column
-            (:func:`fretc.logs.csv_source.column_name_problem`); nothing is written."""
+            (:func:`fretc.logs.csv.source.column_name_problem`); nothing is written."""
     from pathlib import Path
     import json
 

@@ -116,7 +116,7 @@ def test_an_audit_with_its_automata_cached_loads_no_spot_junit_or_process_pool(t
             "from fretc.cli import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
             "loaded = sorted(m for m in sys.modules if m in ('spot', 'fretc.reports.junit', "
-            "'rich.progress', 'multiprocessing', 'concurrent.futures', 'fretc.audit.fleet', "
+            "'rich.progress', 'multiprocessing', 'concurrent.futures', 'fretc.audit.fleet.ray', "
             "'jinja2', 'lark'))\n"
             "print('LOADED', loaded)\n")
     env = dict(os.environ, FRETC_CACHE_DIR=str(tmp_path / "cache"))

@@ -46,7 +46,7 @@ class EntityParam:
     """The value of an entity's variable (``$track``, docs/bindings.md "One verdict per
     entity") read when a binding is evaluated rather than when it is compiled: one compiled
     binding serves every entity of a log, the audit setting :attr:`value` to each entity's
-    key before evaluating it (:mod:`fretc.audit.entity_read`). Written ``$name``."""
+    key before evaluating it (:mod:`fretc.audit.entities.read`). Written ``$name``."""
 
     __slots__ = ("name", "value")
 

@@ -122,7 +122,7 @@ class Bindings:
         types: ``[types]``: topic -> ROS message type, for live servers that do not say
             (rosbridge without rosapi); logs carry their own schemas.
         msg_path: ``[types] msg_path``: folders of the ``.msg``/``.idl`` files of types a
-            log does not carry (as ``--msg-path``; :mod:`fretc.logs.msg_path`).
+            log does not carry (as ``--msg-path``; :mod:`fretc.logs.ros.msg_path`).
         constants: ``[constants]``: named durations of the requirements (name -> (amount,
             unit), :mod:`fretc.fretish.constants`), read by the audit before it compiles.
         entities: ``[entities]``: entity name -> (key path, ``matching`` glob or None): the

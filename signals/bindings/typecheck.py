@@ -15,7 +15,7 @@ from typing import Any
 from fretc.common.streams import base_topic
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
-from fretc.logs.encodings import constant_name
+from fretc.logs.mcap.encodings import constant_name
 from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Expr, ExprLocation, Field, Filter, FuncCall, Named, Span,
                          UnaryOp, unparse)
 

@@ -1,6 +1,6 @@
 """The audit of a CSV trace read and judged in small chunks equals the audit of the same
 trace read and judged whole (differential, on random traces): the file read 1 to 5 rows at a
-time (:data:`fretc.logs.csv_read.CHUNK_ROWS`), rows as blocks of 1 to 5 ticks where blocks
+time (:data:`fretc.logs.csv.read.CHUNK_ROWS`), rows as blocks of 1 to 5 ticks where blocks
 are used (the columns kept a block at a time, a topic's log times shared with the ticks'
 times while they are equal) and the robustness a chunk of 1 to 5 ticks at a time, so that the
 chunks' edges fall everywhere, inside runs of ``unknown`` cells and ``gap`` rows and just
@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fretc.audit.passes as passes
-import fretc.logs.csv_read as csv_read
+import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
 import fretc.signals.blocks as blocks
 from fretc.audit import AuditConfig, audit_log, load_plan

@@ -29,7 +29,7 @@ from _c_monitors import build, c_compiler
 from test_metamorphic import ALL, SAMPLE, _case
 
 from fretc.audit import AuditConfig, audit_log, load_plan
-from fretc.audit.sampled_csv import write_sampled_csv
+from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -195,7 +195,7 @@ def test_the_requirement_verdict_over_its_entities_is_their_definition(entities)
     field: the first verdict of the precedence some entity has, the earliest violation (the
     first in order among equals), the least margin (as ``min`` takes NaN), every error
     listed, the unknown reasons, partial when one is."""
-    from fretc.audit.entity_summary import _PRECEDENCE, _listed, summary_verdict
+    from fretc.audit.entities.summary import _PRECEDENCE, _listed, summary_verdict
     from fretc.audit.verdict import FirstViolation, TimePoint, Verdict
 
     class R:
@@ -246,7 +246,7 @@ def test_the_entities_judged_at_once_share_evidence_that_cannot_change(tmp_path,
 
     import pytest
 
-    import fretc.audit.entities as entities
+    import fretc.audit.entities.log as entities
 
     Track, TrackArray = _track_types()
     rows = [{1: 2.0, 2: 2.0}, {1: 2.0, 2: 0.2, 3: 2.0}, {3: 2.0, 4: 2.0}, {4: 2.0}]

@@ -1,9 +1,9 @@
-"""Per-entity requirements in one read of the log (audit/entity_read.py): every entity of
+"""Per-entity requirements in one read of the log (audit/entities/read.py): every entity of
 every per-entity requirement sampled in one pass, each judged on its life (from the first
 tick at or after its first message to the first tick at or after its last); an entity seen
 in one message judged (ArduPilot's parameters, each logged once); no fixed bound on the
 entities (``--max-entities``); entities over the parallel arrays of a message (JointState's
-joints by name); the entities judged at once (audit/entity_batch.py) give the verdicts of
+joints by name); the entities judged at once (audit/entities/batch.py) give the verdicts of
 the judge one at a time."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import fretc.audit.entities as E
+import fretc.audit.entities.log as E
 from _logs import ROS2, S, T, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.cli import main
@@ -77,7 +77,7 @@ def test_parameters_logged_once_are_each_judged_on_a_period_clock(tmp_path):
 def test_one_read_for_every_entity_and_requirement(tmp_path, monkeypatch):
     """Two per-entity requirements over 60 tracked obstacles: the log's messages are read
     once (one pass of its reader), not once per entity."""
-    from fretc.logs.mcap_source import McapSource
+    from fretc.logs.mcap.source import McapSource
 
     Track, TrackArray = _track_types()
     rows = [{i: 2.0 + (k % 7) * 0.1 for i in range(k // 5, k // 5 + 4)} for k in range(250)]

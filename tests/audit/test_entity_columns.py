@@ -1,4 +1,4 @@
-"""The per-entity columns gathered by numpy (audit/entity_columns.py) against the loop they
+"""The per-entity columns gathered by numpy (audit/entities/columns.py) against the loop they
 replace: the absent value at each tick (typed over all ticks), the entity's row where it is
 present, the column bool exactly when every value in it is a bool."""
 
@@ -10,7 +10,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.audit.entity_columns import EntityColumns, HeldRows, RowBlock, column, floats
+from fretc.audit.entities.columns import EntityColumns, HeldRows, RowBlock, column, floats
 
 E = "\x00entities"
 VALUE = st.sampled_from([True, False, 0.5, 2.0, math.nan, math.inf])
@@ -90,7 +90,7 @@ def test_columns_equal_the_loop(data, span):
                                                max_size=4)), min_size=1, max_size=6),
        span=st.tuples(st.integers(0, 23), st.integers(0, 23)))
 def test_columns_of_runs_equal_those_of_their_ticks(absent, runs, span):
-    """Runs of ticks holding the same rows (audit/entity_runs.py), the rows as lists or as
+    """Runs of ticks holding the same rows (audit/entities/runs.py), the rows as lists or as
     :class:`HeldRows` of a block, give the columns of their ticks one by one."""
     ticks = [_Tick(absent, sorted(rows.items())) for m, rows in runs for _ in range(m)]
     blocks = _as_blocks([_Tick(absent, sorted(rows.items())) for _m, rows in runs],

@@ -1,4 +1,4 @@
-"""The per-entity variables evaluated over rows by numpy (audit/entity_rows.py) against the
+"""The per-entity variables evaluated over rows by numpy (audit/entities/rows.py) against the
 reference, each variable evaluated at each tick for each entity (``entity_read.VECTORIZED``
 off): on random small per-entity logs (numeric and text keys, keys repeated in a message,
 NaN and infinite values, booleans), the values of every tick of every entity, the entities'
@@ -13,10 +13,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import fretc.audit.entity_read as R
+import fretc.audit.entities.read as R
 from _logs import ROS2, S, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
-from fretc.audit.entity_rows import row_fields
+from fretc.audit.entities.rows import row_fields
 from fretc.logs import open_log
 
 OBJ, ARR = "entity_rows_msgs/msg/Obj", "entity_rows_msgs/msg/ObjArray"
@@ -155,7 +155,7 @@ def test_write_csv_writes_the_per_entity_requirements_beside_the_plain_ones(tmp_
     from click.testing import CliRunner
 
     from fretc.cli import main
-    from fretc.logs.csv_source import not_sampled_lines, per_entity_lines
+    from fretc.logs.csv.source import not_sampled_lines, per_entity_lines
 
     log, _plan = _setup(tmp_path, [[(1, 0.8, True), (2, 0.3, True)], [(1, 2.0, True)],
                                    [(2, 0.2, False)], [(1, 0.9, True)]], "id")

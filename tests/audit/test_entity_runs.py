@@ -1,4 +1,4 @@
-"""A lean per-entity clock's ticks recorded as runs (audit/entity_runs.py) against the
+"""A lean per-entity clock's ticks recorded as runs (audit/entities/runs.py) against the
 tick-by-tick clock (``entity_read.LEAN`` off): on random logs whose messages are several
 ticks apart or within one tick, the ticks (times, log times, per-entity values), the
 sampling's figures and the audit's JSON are the same, whether the messages are recorded
@@ -11,9 +11,9 @@ import json
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-import fretc.audit.entities as E
-import fretc.audit.entity_read as R
-import fretc.audit.entity_runs as RU
+import fretc.audit.entities.log as E
+import fretc.audit.entities.read as R
+import fretc.audit.entities.runs as RU
 from _logs import S, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.logs import open_log

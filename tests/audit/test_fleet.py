@@ -1,4 +1,4 @@
-"""Fleet audits (audit/fleet.py): ``--ray`` gives the ``-j 1`` JSON; faults give error
+"""Fleet audits (audit/fleet/ray.py): ``--ray`` gives the ``-j 1`` JSON; faults give error
 entries, never verdicts; ``--retries`` recovers a lost worker; log lists.
 
 The tests marked ``ray`` share one local Ray (2 CPUs) for the module (Ray starts slowly);
@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
-from fretc.audit import fleet
+from fretc.audit.fleet import ray as fleet
 from fretc.audit import discovery
 from fretc.audit import AuditConfig, AuditInputError, audit_log, audit_logs, load_plan
 from fretc.audit.verdict import audit_json, exit_code
@@ -116,7 +116,7 @@ def test_cli_writes_the_json_when_the_raylet_is_killed(tmp_path):
     marker = tmp_path / "kill-raylet-once"
     marker.write_text("")
     script = (
-        "import sys; from fretc.audit import fleet; real = fleet.audit_logs_ray\n"
+        "import sys; from fretc.audit.fleet import ray as fleet; real = fleet.audit_logs_ray\n"
         "def hooked(*a, **k):\n"
         f"    k['_kill'] = ('nominal.mcap', ':raylet:{marker}'); k['num_cpus'] = 1\n"
         "    return real(*a, **k)\n"

@@ -339,7 +339,7 @@ def test_the_tick_by_tick_clock_counts_its_ticks_before_it_makes_them(tmp_path):
     import sys
     import tracemalloc
 
-    from fretc.audit.sampled_csv import write_sampled_csv
+    from fretc.audit.sampled.csv import write_sampled_csv
     from fretc.common.problems import SignalError
 
     sys.path.insert(0, str(ROOT / "tests" / "logs"))

@@ -254,7 +254,7 @@ def check_watch_clock_and_csv(case: M.Case, tmp: Path, monkeypatch) -> None:
     """Relations 8 and 9 on one case."""
     import fretc.audit.passes as passes
     from fretc.audit import AuditConfig, audit_log, load_plan
-    from fretc.audit.sampled_csv import write_sampled_csv
+    from fretc.audit.sampled.csv import write_sampled_csv
 
     fret = M.write(tmp / "r", case)
     plan = load_plan(AuditConfig(requirements=(str(fret),)))

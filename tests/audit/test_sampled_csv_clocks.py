@@ -14,10 +14,10 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.audit import AuditConfig, audit_log, load_plan
-from fretc.audit.sampled_csv import write_sampled_csv
+from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.cli import main
 from fretc.common.problems import CsvError
-from fretc.logs.csv_source import CsvSource, clock_lines, escape_id, unescape_id
+from fretc.logs.csv.source import CsvSource, clock_lines, escape_id, unescape_id
 
 from _c_monitors import build, needs_cc
 from _logs import float64, write_mcap

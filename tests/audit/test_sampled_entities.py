@@ -1,4 +1,4 @@
-"""``fretc audit --write-csv`` of per-entity requirements (audit/sampled_entities.py): every
+"""``fretc audit --write-csv`` of per-entity requirements (audit/sampled/entities.py): every
 entity is a clock of the file, so the audit of the CSV gives the log's verdicts, verdict for
 verdict (the requirement's over its entities and each entity's: verdict, LTL3 verdict and
 tick, ticks evaluated, unknown ticks, in the log's order), and the C monitors' runner on it
@@ -22,9 +22,9 @@ from _c_monitors import build, c_compiler
 from _logs import ROS2, S, T, write_mcap
 from test_entities import _track_types
 from fretc.audit import AuditConfig, audit_log, load_plan
-from fretc.audit.sampled_csv import write_sampled_csv
+from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.cli import main
-from fretc.logs.csv_source import per_entity_lines, unescape_id
+from fretc.logs.csv.source import per_entity_lines, unescape_id
 
 ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "foreign_logs"
@@ -266,7 +266,7 @@ def test_write_csv_of_per_entity_requirements_only(tmp_path):
 def test_a_trace_of_many_clocks_read_once_gives_what_each_clock_read_apart_gives(
         tmp_path, monkeypatch):
     """The audit of a trace of more than SPLIT_CLOCKS clocks reads it once and splits its
-    rows by clock (logs/csv_clocks.py): the same verdicts, JSON for JSON, as each clock read
+    rows by clock (logs/csv/clocks.py): the same verdicts, JSON for JSON, as each clock read
     from the file; a file whose rows are not a trace of several clocks (a time going
     backwards, a clock no line names) is read clock by clock, whose errors name the line."""
     import json
@@ -282,7 +282,7 @@ def test_a_trace_of_many_clocks_read_once_gives_what_each_clock_read_apart_gives
     plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
     csv = tmp_path / "s.csv"
     write_sampled_csv(plan, str(log), csv)
-    from fretc.logs.csv_source import clock_lines
+    from fretc.logs.csv.source import clock_lines
 
     assert len(clock_lines(csv)) > L.SPLIT_CLOCKS
 

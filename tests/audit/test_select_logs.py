@@ -83,7 +83,7 @@ def test_a_plan_with_selecting_binding_files_ships_to_workers():
     import pickle
 
     from fretc.audit import AuditConfig, audit_log, load_plan
-    from fretc.audit.fleet import ship_plan
+    from fretc.audit.fleet.ray import ship_plan
 
     plan = load_plan(AuditConfig(requirements=(str(REAL),)))
     again = pickle.loads(pickle.dumps(ship_plan(plan))).rebuild()

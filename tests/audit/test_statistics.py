@@ -1,4 +1,4 @@
-"""Fleet statistics (audit/statistics.py): counts, scipy's Clopper-Pearson interval, the
+"""Fleet statistics (audit/fleet/statistics.py): counts, scipy's Clopper-Pearson interval, the
 statistical verdict of 'with probability' requirements, their exit code and JUnit cases,
 locally and on Ray (the same JSON)."""
 
@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 from scipy.stats import binomtest
 
-from fretc.audit.statistics import (RequirementStatistics, clopper_pearson, decide, fleet_statistics,
+from fretc.audit.fleet.statistics import (RequirementStatistics, clopper_pearson, decide, fleet_statistics,
                               more_runs)
 from fretc.audit.verdict import EXIT_UNDECIDED, LogAudit, Verdict, exit_code
 from fretc.compiler.ir import ProbabilityBound
@@ -80,7 +80,7 @@ def test_confidence_option_changes_the_interval(fleet):
 @pytest.mark.ray
 @pytest.mark.xdist_group("ray")
 def test_ray_gives_the_same_statistics(fleet):
-    from fretc.audit import fleet as fl
+    from fretc.audit.fleet import ray as fl
     started = fl.connect(num_cpus=2)
     try:
         a, da, _ = _audit(fleet, "0.7")
@@ -125,8 +125,8 @@ def test_decide(op, p, lo, hi, want):
 
 def test_undecided_says_how_many_more_runs():
     st = RequirementStatistics("P", successes=19, trials=20)
-    from fretc.audit.intervals import Counts
-    from fretc.audit.statistics import judge_counts
+    from fretc.audit.fleet.intervals import Counts
+    from fretc.audit.fleet.statistics import judge_counts
     judge_counts(st, ">=", 0.9)
     assert st.verdict == "undecided" and st.more_runs is not None and "more runs" in st.why
     m = st.more_runs

@@ -1,4 +1,4 @@
-"""Probability requirements judged per trigger (FRET's reading, audit/statistics.py): a fleet
+"""Probability requirements judged per trigger (FRET's reading, audit/fleet/statistics.py): a fleet
 of runs with several triggers each gives the per-trigger estimate and its interval (runs as
 clusters), where the per-run reading decides otherwise; the interval's effective sample size
 against an independent computation; a fleet whose triggers are perfectly correlated within
@@ -15,9 +15,9 @@ from click.testing import CliRunner
 from hypothesis import given, settings, strategies as st
 from scipy.stats import beta, binomtest
 
-from fretc.audit.intervals import (Counts, clopper_pearson, cluster_interval,
+from fretc.audit.fleet.intervals import (Counts, clopper_pearson, cluster_interval,
                                    effective_clopper_pearson)
-from fretc.audit.statistics import fleet_statistics
+from fretc.audit.fleet.statistics import fleet_statistics
 from fretc.audit.trials import Trials
 from fretc.audit.verdict import LogAudit, Verdict, exit_code
 from fretc.cli import main

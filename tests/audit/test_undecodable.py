@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcap.writer import CompressionType, Writer
 
 from fretc.audit import AuditConfig, audit_log, load_plan
-from fretc.logs.mcap_source import McapSource
+from fretc.logs.mcap.source import McapSource
 
 from _logs import ROS2, S
 

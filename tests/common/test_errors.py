@@ -16,7 +16,7 @@ from fretc.common.errors import (CheckError, FretcError, FretishError, FretishFi
 from fretc.fretish.files import load_requirements
 from fretc.fretish.limits import LimitError
 from fretc.audit import AuditInputError
-from fretc.audit.fleet import RayUnavailable
+from fretc.audit.fleet.ray import RayUnavailable
 from fretc.common.problems import BindingError, CsvError, FretcInputError, LogError, SignalError
 from fretc.reports.write import ReportError
 from fretc.logs.schema import FieldPathError

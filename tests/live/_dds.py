@@ -2,7 +2,7 @@
 publications (the loopback configuration finds peers on 127.0.0.1), and Cyclone DDS refuses
 a second configuration of a domain a process already holds (DDS_RETCODE_PRECONDITION_NOT_MET).
 So each pytest-xdist worker draws from ids of its own, in turn, and a test that configures a
-domain in its own process does it through ``fretc.live.dds_types.open_participant``, which
+domain in its own process does it through ``fretc.live.dds.idl_types.open_participant``, which
 keeps one configuration per domain and process."""
 
 import itertools

@@ -17,7 +17,7 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from fretc.live.dds_types import LOOPBACK_XML  # noqa: E402
+from fretc.live.dds.idl_types import LOOPBACK_XML  # noqa: E402
 
 from _dds import fresh_domain  # noqa: E402
 
@@ -42,7 +42,7 @@ def test_a_publisher_naming_members_without_the_underscore_is_read(tmp_path, dds
     from cyclonedds.pub import DataWriter
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.topic import Topic
-    from fretc.live.dds_types import open_participant
+    from fretc.live.dds.idl_types import open_participant
 
     @dataclass
     class Float64_(IdlStruct, typename="std_msgs::msg::dds_::Float64_"):
@@ -91,7 +91,7 @@ def test_the_reader_takes_the_offered_reliability_and_durability():
     # (it has no attribute per policy): best effort and transient local as offered
     from cyclonedds.qos import Policy, Qos
 
-    from fretc.live.dds_types import reader_qos
+    from fretc.live.dds.idl_types import reader_qos
 
     offered = Qos(Policy.Reliability.BestEffort, Policy.Durability.TransientLocal)
     got = [str(p) for p in reader_qos(offered, "/map")]

@@ -189,9 +189,9 @@ def test_the_dds_client_releases_at_the_watermark(tmp_path):
 
     pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
                         "pip install 'fretc[watch]'")
-    from fretc.live.dds_client import DdsClient
-    from fretc.live.dds_serve import DdsServer
-    from fretc.live.dds_types import LOOPBACK_XML
+    from fretc.live.dds.client import DdsClient
+    from fretc.live.dds.serve import DdsServer
+    from fretc.live.dds.idl_types import LOOPBACK_XML
 
     xml = tmp_path / "loopback.xml"
     xml.write_text(LOOPBACK_XML, encoding="utf-8")
@@ -252,9 +252,9 @@ def test_the_dds_client_reading_a_latched_topic_has_no_watermark(tmp_path):
 
     pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
                         "pip install 'fretc[watch]'")
-    from fretc.live.dds_client import DdsClient
-    from fretc.live.dds_serve import DdsServer
-    from fretc.live.dds_types import LOOPBACK_XML
+    from fretc.live.dds.client import DdsClient
+    from fretc.live.dds.serve import DdsServer
+    from fretc.live.dds.idl_types import LOOPBACK_XML
 
     xml = tmp_path / "loopback.xml"
     xml.write_text(LOOPBACK_XML, encoding="utf-8")

@@ -20,7 +20,7 @@ pytest.importorskip("websockets")
 
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.live.watch import CLOCK_BACKWARDS, CONNECTION_GAP, UNADVERTISED, Watch, WatchOptions
-from fretc.live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
+from fretc.live.websocket.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -409,7 +409,7 @@ def _first_advertise(url: str) -> set[str]:
 
     from websockets.sync.client import connect
 
-    from fretc.live.client import SUBPROTOCOLS
+    from fretc.live.websocket.foxglove import SUBPROTOCOLS
 
     deadline = time.monotonic() + 60
     while True:

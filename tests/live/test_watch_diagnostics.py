@@ -23,7 +23,7 @@ from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import byte, int32, sequence, uint32  # noqa: E402
 
 from fretc.cli import main  # noqa: E402
-from fretc.live.dds_types import LOOPBACK_XML, open_participant  # noqa: E402
+from fretc.live.dds.idl_types import LOOPBACK_XML, open_participant  # noqa: E402
 
 from _dds import fresh_domain  # noqa: E402
 

@@ -17,7 +17,7 @@ pytest.importorskip("websockets")
 
 from _logs import ROS2, S, float64, write_mcap  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
-from fretc.live.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
+from fretc.live.websocket.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
 from test_watch import _watch_trace  # noqa: E402
 
 pytestmark = pytest.mark.watch

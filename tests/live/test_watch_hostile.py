@@ -18,7 +18,8 @@ pytest.importorskip("websockets")
 from hostile_ws import (BINDINGS, FRET, S, T0, ScriptServer, advertise, f64,  # noqa: E402
                         message_data, publish_a, subscription)
 from fretc.audit import AuditConfig, load_plan  # noqa: E402
-from fretc.live.client import MAX_HOSTILE_SESSIONS, MAX_OTHER_CHANNELS  # noqa: E402
+from fretc.live.protocol import MAX_OTHER_CHANNELS  # noqa: E402
+from fretc.live.websocket.session import MAX_HOSTILE_SESSIONS  # noqa: E402
 from fretc.live.source import PROTOCOL, TIME_RANGE  # noqa: E402
 from fretc.live.watch import Watch, WatchOptions  # noqa: E402
 from fretc.audit.verdict import exit_code  # noqa: E402
@@ -96,8 +97,8 @@ def test_a_server_repeating_a_bad_frame_and_dropping_is_given_up_on(plan):
 
 
 def test_a_frame_over_the_size_limit_closes_the_connection_with_the_reason(plan, monkeypatch):
-    from fretc.live import client
-    monkeypatch.setattr(client, "MAX_FRAME_BYTES", 4096)
+    from fretc.live.websocket import session
+    monkeypatch.setattr(session, "MAX_FRAME_BYTES", 4096)
 
     async def script(ws, k):
         await ws.send(advertise([(1, "/a")]) if k else "x" * 10_000)

@@ -29,7 +29,7 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from fretc.live.dds_types import LOOPBACK_XML, open_participant  # noqa: E402
+from fretc.live.dds.idl_types import LOOPBACK_XML, open_participant  # noqa: E402
 
 from _dds import fresh_domain  # noqa: E402
 
@@ -246,8 +246,8 @@ def test_one_publisher_leaving_while_the_run_goes_on_is_unknown_not_held(transpo
     ``satisfied`` (not affected), the run is partial and the exit code 3."""
     import threading
 
-    from fretc.live.dds_serve import DdsServer
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.dds.serve import DdsServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     (tmp_path / "w.fret").write_text(
         "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
@@ -301,8 +301,8 @@ def test_a_qos_that_cannot_match_is_reported_and_its_requirement_is_not_judged(t
     import threading
 
     from cyclonedds.qos import Policy, Qos
-    from fretc.live import dds_types
-    from fretc.live.dds_serve import DdsServer
+    from fretc.live.dds import idl_types as dds_types
+    from fretc.live.dds.serve import DdsServer
 
     monkeypatch.setattr(dds_types, "writer_qos", lambda topic="": Qos(
         Policy.Reliability.Reliable(max_blocking_time=10**9), Policy.History.KeepAll,
@@ -353,8 +353,8 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
     wall clock 1.7e9 s away): the violation at simulated second 100.5 is reported there."""
     import threading
 
-    from fretc.live.dds_serve import DdsServer
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.dds.serve import DdsServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")

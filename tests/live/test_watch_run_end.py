@@ -25,7 +25,7 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from fretc.audit import AuditConfig, load_plan  # noqa: E402
 from fretc.monitors.interval import Evidence, Violation  # noqa: E402
-from fretc.live.serve import FoxgloveServer  # noqa: E402
+from fretc.live.websocket.serve import FoxgloveServer  # noqa: E402
 from fretc.live.watch import UNADVERTISED, Watch, WatchOptions, split_pending  # noqa: E402
 from fretc.audit.verdict import exit_code  # noqa: E402
 

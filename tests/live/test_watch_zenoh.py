@@ -30,7 +30,7 @@ def _port() -> int:
 def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
     """A message that does not decode opens a gap: the run is partial (exit 3), never a
     clean pass; the watch ends by itself when the publisher leaves."""
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")
@@ -71,7 +71,7 @@ def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
     requirement is error (exit 2), never judged from a misread value."""
     import threading
 
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")
@@ -112,7 +112,7 @@ def test_samples_on_wildcard_keys_are_messages_of_the_topic_they_reach(tmp_path,
     import threading
 
     from fretc.live.ros2_names import attachment
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
                                      "satisfy a_ok\n", encoding="utf-8")
@@ -160,7 +160,7 @@ def test_zenoh_bridge_ros2dds_layout(tmp_path):
     import threading
 
     from fretc.live.ros2_names import bridge_liveliness
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     assert bridge_liveliness("z1", "ns/a", "std_msgs/msg/Float64") == \
         "@ros2_lv/z1/MP/ns§a/std_msgs§msg§Float64/:::"

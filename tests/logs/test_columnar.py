@@ -1,4 +1,4 @@
-"""The columnar CDR decoder (logs/columnar.py) against the per-message selective
+"""The columnar CDR decoder (logs/ros/columnar.py) against the per-message selective
 decoder, its reference: the same values wherever it reads a group, and no group read that the
 selective fast path would not read.
 
@@ -9,7 +9,7 @@ selective fast path would not read.
 * the same groups with bytes flipped or cut: where the columnar decoder still reads a group,
   every message of it is read by the selective fast path with the same values;
 * big-endian CDR, non-ASCII strings, LaserScans of different lengths: not read (None);
-* the columnar MCAP pass (logs/mcap_columns.py) against the per-message pass, on
+* the columnar MCAP pass (logs/mcap/columns.py) against the per-message pass, on
   every shipped trace, bit-flipped copies and a log with big-endian, malformed and odd-length
   scans: the same messages per topic in the same order, the same columns as the sampler
   builds from the messages, the same damage, problems and counts.
@@ -30,8 +30,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from fretc.signals.bindings.extract import Valid
 from fretc.signals.columns import SegmentList, _plain_column
 from fretc.logs import open_log
-from fretc.logs.columnar import RANGES, columnar_decoder
-from fretc.logs.selective import selective_decoder
+from fretc.logs.ros.columnar import RANGES, columnar_decoder
+from fretc.logs.ros.selective import selective_decoder
 
 STRESS = """
 string label

@@ -1,4 +1,4 @@
-"""The one read of a CSV trace (:mod:`fretc.logs.csv_read`: plain chunks column by column,
+"""The one read of a CSV trace (:mod:`fretc.logs.csv.read`: plain chunks column by column,
 the others row by row) against a plain reading of the format with the :mod:`csv` module, one
 row at a time (:func:`_reference`): on random small traces with ``unknown``/``gap``/``cut``
 marks, blank and comment lines, empty, unreadable and mixed cells, odd times and rows of the
@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import fretc.logs.csv_read as csv_read
+import fretc.logs.csv.read as csv_read
 from fretc.common.problems import CsvError
 from fretc.logs import CsvSource
 

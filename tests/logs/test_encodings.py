@@ -173,7 +173,7 @@ def _same(a, b) -> bool:
 
 def test_json_values_become_the_arrays_and_objects_of_the_rule():
     from hypothesis import given, settings, strategies as st
-    from fretc.logs.encodings import as_message
+    from fretc.logs.mcap.encodings import as_message
 
     scalars = st.one_of(st.booleans(), st.integers(min_value=-2**70, max_value=2**70), st.integers(min_value=10**300, max_value=10**400),
                         st.floats(allow_nan=True), st.text(max_size=3), st.none())
@@ -240,7 +240,7 @@ def _reference_check(value, spec, where="", depth=0):
     compiled check keeps): raises ValueError naming the first field of another type."""
     import json as _json
 
-    from fretc.logs.json_values import _JSON_TYPES
+    from fretc.logs.mcap.json_values import _JSON_TYPES
 
     if not isinstance(spec, dict) or depth > 64:
         return
@@ -285,7 +285,7 @@ def test_the_json_type_check_compiled_once_is_the_rule(schema, value):
     items' types) accepts what the rule accepts and names the same field when it refuses."""
     import json as _json
 
-    from fretc.logs.encodings import json_type_check
+    from fretc.logs.mcap.encodings import json_type_check
 
     check = json_type_check(_json.dumps(schema))
     try:

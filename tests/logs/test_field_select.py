@@ -19,7 +19,7 @@ from mcap.reader import make_reader
 from _encode import copy_as
 from fretc.logs.decoding import schema_decoder
 from fretc.logs.field_select import field_tree
-from fretc.logs.selective import HEADER_STAMP
+from fretc.logs.ros.selective import HEADER_STAMP
 
 ROOT = Path(__file__).resolve().parents[2]
 _MISSING = object()

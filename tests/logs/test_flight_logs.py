@@ -19,7 +19,7 @@ from _shared import SHARED, needs_shared  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.logs import open_log  # noqa: E402
 from fretc.logs.schema import log_schemas  # noqa: E402
-from fretc.logs.ulog_source import DROPOUT, EARLY_TIMESTAMP  # noqa: E402
+from fretc.logs.flight.ulog import DROPOUT, EARLY_TIMESTAMP  # noqa: E402
 from fretc.audit.verdict import exit_code  # noqa: E402
 
 PX4 = SHARED / "data" / "foreign_logs" / "px4"

@@ -14,7 +14,7 @@ import zstandard
 from mcap.writer import CompressionType, Writer
 
 from fretc.logs import open_log
-from fretc.logs.mcap_records import RECORD_HEAD, decompress
+from fretc.logs.mcap.records import RECORD_HEAD, decompress
 
 _MB = 2**20
 

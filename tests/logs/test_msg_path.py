@@ -102,9 +102,9 @@ def test_msg_path_in_the_bindings_file(tmp_path):
 def test_a_rosbridge_watch_reads_the_robots_own_types_with_msg_path(tmp_path):
     # rosbridge sends JSON and names the type; fretc builds CDR from the type's definition,
     # found in the --msg-path folders beside ROS 2's standard types
-    from fretc.live.rosbridge import advertisement, json_to_cdr
+    from fretc.live.websocket.rosbridge import advertisement, json_to_cdr
     from fretc.logs import schema_decoder
-    from fretc.logs.msg_path import msg_path_typestore
+    from fretc.logs.ros.msg_path import msg_path_typestore
 
     store = msg_path_typestore((str(_msgs(tmp_path)),))
     assert advertisement(1, "/status", "my_robot_msgs/msg/Status").encoding == "json"  # unknown
@@ -127,7 +127,7 @@ def test_services_and_actions_from_srv_and_action_files(tmp_path):
     (``my_robot_msgs/action/Dock_FeedbackMessage``): --msg-path reads ``srv/Arm.srv`` and
     ``action/Dock.action`` as rosidl generates their types; called()/answered() and the
     feedback's fields audit; without them the error names --msg-path."""
-    from fretc.logs.msg_path import msg_path_typestore
+    from fretc.logs.ros.msg_path import msg_path_typestore
 
     ws = tmp_path / "ws" / "my_robot_msgs"
     (ws / "srv").mkdir(parents=True)

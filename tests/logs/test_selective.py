@@ -1,4 +1,4 @@
-"""Selective decoding (logs/selective.py) against rosbags' full decode: identical values.
+"""Selective decoding (logs/ros/selective.py) against rosbags' full decode: identical values.
 
 * every field (outside arrays of messages) of every message of every shipped trace and both
   real logs, decoded selectively, equals the full decode;
@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from fretc.logs import selective
+from fretc.logs.ros import selective
 from fretc.audit import AuditConfig, load_plan
 from fretc.common.problems import SignalError
 from fretc.signals import sample

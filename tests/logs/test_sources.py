@@ -551,7 +551,7 @@ def test_an_escaped_id_reads_back_and_a_malformed_escape_stands_for_itself(rid):
     """escape_id/unescape_id round trip; ``\\x`` followed by anything but two lowercase
     hex digits (a tab, a sign, upper case: Python's int() took ``\\x\\t5`` for byte 5) is
     text, as the C monitors' runner reads it."""
-    from fretc.logs.csv_source import escape_id, unescape_id
+    from fretc.logs.csv.source import escape_id, unescape_id
 
     assert unescape_id(escape_id(rid)) == rid.encode("utf-8", "replace").decode("utf-8", "replace")
     for bad in ("\\x\t5", "\\x+5", "\\x5", "\\xAB", "\\x 5"):

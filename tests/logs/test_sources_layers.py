@@ -16,10 +16,10 @@ from mcap.writer import CompressionType
 from rosbags.interfaces import MessageDefinition, MessageDefinitionFormat
 
 from fretc.common import problems as P
-from fretc.logs.bag_source import connection_typestore
+from fretc.logs.ros.bags import connection_typestore
 from fretc.logs.decoding import UnsupportedSchema
-from fretc.logs.mcap_integrity import check_data_section, cut_record, read_summary
-from fretc.logs.mcap_records import RECORD_HEAD, chunk_messages, parse_record
+from fretc.logs.mcap.integrity import check_data_section, cut_record, read_summary
+from fretc.logs.mcap.records import RECORD_HEAD, chunk_messages, parse_record
 from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 from _logs import ROS2, S, twist, write_mcap

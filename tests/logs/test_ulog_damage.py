@@ -1,7 +1,7 @@
 """Damaged PX4 ULogs (the three real logs of ``../shared/data/foreign_logs/px4/``): cut in the
 middle of a message at 10 % and 50 %, the tail zeroed, 64 KB zeroed in the middle. pyulog
 reads each quietly as a shorter or thinner clean flight; fretc checks the framing
-(:mod:`fretc.logs.ulog_framing`): each is partial with a ``truncated`` or ``corrupt_record``
+(:mod:`fretc.logs.flight.ulog_framing`): each is partial with a ``truncated`` or ``corrupt_record``
 problem, and no verdict contradicts the intact log's (a verdict satisfied on the damaged copy
 is satisfied on the intact log, a violated one violated there); a requirement the intact log
 satisfies is never satisfied on a cut copy (what was cut was not checked)."""
@@ -14,7 +14,7 @@ pytest.importorskip("pyulog")
 
 from _shared import SHARED, needs_shared  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
-from fretc.logs.ulog_framing import SYNC_BYTES, ulog_framing  # noqa: E402
+from fretc.logs.flight.ulog_framing import SYNC_BYTES, ulog_framing  # noqa: E402
 
 PX4 = SHARED / "data" / "foreign_logs" / "px4"
 NAMES = ["sample.ulg", "sample_log_small.ulg", "sample_px4_events.ulg"]

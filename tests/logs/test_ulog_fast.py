@@ -1,5 +1,5 @@
-"""The read of a sound ULog by one walk and numpy gathers (:mod:`fretc.logs.ulog_fast`)
-against the reference read (the framing walk of :mod:`fretc.logs.ulog_framing` and pyulog's
+"""The read of a sound ULog by one walk and numpy gathers (:mod:`fretc.logs.flight.ulog_fast`)
+against the reference read (the framing walk of :mod:`fretc.logs.flight.ulog_framing` and pyulog's
 read of every topic): on the real logs of ``../shared``, on a long log of copied flights and
 on damaged copies (bytes changed, cut, zeroed, inserted), the fast read either gives what
 the reference gives (every topic's rows, logged text, parameter changes, dropouts, the
@@ -19,8 +19,8 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 pytest.importorskip("pyulog")
 
 from _shared import SHARED, needs_shared  # noqa: E402
-from fretc.logs.ulog_fast import read_sound  # noqa: E402
-from fretc.logs.ulog_framing import ulog_framing  # noqa: E402
+from fretc.logs.flight.ulog_fast import read_sound  # noqa: E402
+from fretc.logs.flight.ulog_framing import ulog_framing  # noqa: E402
 
 PX4 = SHARED / "data" / "foreign_logs" / "px4"
 NAMES = ["sample.ulg", "sample_log_small.ulg", "sample_px4_events.ulg"]

@@ -525,7 +525,7 @@ def test_per_entity_variables_and_keys_are_parsed_once_across_loads(tmp_path, mo
     read the cache and their trees hold that load's own key object. Compiled for an
     entity's own value they are parsed each time and never written to the cache. An
     expression that does not parse still gives its error, with its place."""
-    from fretc.audit.entity_kinds import entity_kind
+    from fretc.audit.entities.kinds import entity_kind
     from fretc.common.problems import BindingError
     from fretc.signals.bindings.expression import EntityParam
 

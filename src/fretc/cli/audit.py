@@ -11,7 +11,7 @@ LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosba
 ``*.bindings.toml`` beside the requirement files or folders. Exit status
 (:data:`fretc.audit.verdict.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
 complete logs, 1 a requirement is violated (a probability requirement: fails over the
-logs, :mod:`fretc.audit.statistics`), 2 usage or input errors (including a
+logs, :mod:`fretc.audit.fleet.statistics`), 2 usage or input errors (including a
 requirement that could not be audited on some log), 3 no violation but a log is partial or
 had data problems (``--allow-partial``: 0), 5 a probability requirement is undecided.
 
@@ -99,7 +99,7 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     from fretc.reports.progress import AuditProgress
     from fretc.reports.terminal import escape, print_summary
     from fretc.audit.discovery import expand_log_args
-    from fretc.audit.statistics import plan_statistics
+    from fretc.audit.fleet.statistics import plan_statistics
     from fretc.audit.verdict import audit_json, exit_code
 
     to_stdout_json = json_path == "-"
@@ -174,11 +174,11 @@ def _coverage(plan, results, out, coverage: bool) -> dict:
 
 def _write_csvs(plan, paths, results, folder: str, err) -> bool:
     """``--write-csv``: what the audit of each log judged, each requirement on its own
-    clock (:mod:`fretc.audit.sampled_csv`); False when one could not be written (reported
+    clock (:mod:`fretc.audit.sampled.csv`); False when one could not be written (reported
     on ``err``)."""
-    from fretc.audit.sampled_csv import csv_name, write_sampled_csv
+    from fretc.audit.sampled.csv import csv_name, write_sampled_csv
     from fretc.common.errors import FretcError
-    from fretc.logs.csv_source import not_sampled_lines
+    from fretc.logs.csv.source import not_sampled_lines
     from fretc.reports.terminal import escape
 
     used: set[str] = set()

@@ -101,7 +101,7 @@ def estimate_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tu
       130  interrupted (Ctrl-C); the runs so far are reported"""
     # lazy: the simulator, the audit engine, scipy only when the command runs
     from fretc.audit import AuditInputError, load_plan
-    from fretc.audit.fleet import RayUnavailable
+    from fretc.audit.fleet.ray import RayUnavailable
     from fretc.sim.space import load_space
 
     if os.path.isdir(output) and os.listdir(output):

@@ -73,7 +73,7 @@ def falsify_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tup
       130  interrupted (Ctrl-C) without a violating run; the runs so far are written"""
     # lazy: the simulator, the audit engine and cma only when the command runs
     from fretc.audit import AuditConfig, AuditInputError, load_plan
-    from fretc.audit.fleet import RayUnavailable
+    from fretc.audit.fleet.ray import RayUnavailable
     from fretc.sim.falsify import falsify
     from fretc.reports.falsify import write_search
     from fretc.sim.space import load_space

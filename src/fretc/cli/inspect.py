@@ -203,7 +203,7 @@ def _visit(plan: list, obj) -> None:
 
 def _visit_untyped(prefix: str, obj: Any, stats: dict[str, _Stat]) -> None:
     """Add the values of a message decoded without a field list (a ``SimpleNamespace``
-    tree, as the JSON reader gives: :mod:`fretc.logs.encodings`) to ``stats``, each field
+    tree, as the JSON reader gives: :mod:`fretc.logs.mcap.encodings`) to ``stats``, each field
     typed by its JSON value; a field whose values change type is ``mixed``, an array whose
     items do ``mixed[]``."""
     import numpy as np  # lazy: as in _Stat

@@ -3,7 +3,7 @@
 ``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
 ``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
 :func:`audit_config` turns their values into a :class:`fretc.audit.AuditConfig` and
-:func:`run_audits` runs the audit locally or on Ray (:mod:`fretc.audit.fleet`) as the options
+:func:`run_audits` runs the audit locally or on Ray (:mod:`fretc.audit.fleet.ray`) as the options
 say. Only click is imported at module level, so the command starts fast; the engine loads
 on first use.
 """
@@ -21,7 +21,7 @@ from fretc.common.textsafe import visible
 
 if TYPE_CHECKING:
     from fretc.audit import AuditConfig
-    from fretc.audit.workers import LogProgress
+    from fretc.audit.fleet.workers import LogProgress
     from fretc.audit.model import AuditPlan
 
 __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps",
@@ -44,7 +44,7 @@ class FiniteRange(click.FloatRange):
 
 def statistics_options(f: F) -> F:
     """``--confidence``, ``--trial`` and ``--unknown-runs`` of the statistics of probability
-    requirements (``fretc audit``, ``fretc estimate``; :mod:`fretc.audit.statistics`)."""
+    requirements (``fretc audit``, ``fretc estimate``; :mod:`fretc.audit.fleet.statistics`)."""
     for opt in reversed((
         click.option("--confidence", type=FiniteRange(0.5, 1, max_open=True), default=0.95,
                      show_default=True,
@@ -263,7 +263,7 @@ def _check_address(ctx, param, value):
     import importlib.util  # lazy: only for --ray (start-up time)
 
     if importlib.util.find_spec("ray") is None:
-        from fretc.audit.fleet import RAY_HINT  # lazy: the audit engine is not loaded for --help
+        from fretc.audit.fleet.ray import RAY_HINT  # lazy: the audit engine is not loaded for --help
 
         raise click.UsageError(RAY_HINT, ctx=ctx)
     ok = (value in ("local", "auto") or value.startswith("ray://")
@@ -289,7 +289,7 @@ def run_audits(plan: AuditPlan, paths: Sequence[str], jobs: int = 1,
     opts = (ctx.meta.get(META) if ctx is not None else None) or {}
     if "ray" not in opts:
         return audit_logs(plan, paths, jobs=jobs, progress=progress)
-    from fretc.audit.fleet import RayUnavailable, audit_logs_ray  # lazy: --ray only
+    from fretc.audit.fleet.ray import RayUnavailable, audit_logs_ray  # lazy: --ray only
     try:
         return audit_logs_ray(plan, paths, address=opts["ray"],
                               retries=opts.get("retries") or 0, progress=progress)

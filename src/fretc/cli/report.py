@@ -72,7 +72,7 @@ def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[st
         # lazy: the audit engine only when the logs are audited here
         from fretc.audit import AuditInputError, find_logs, load_plan
         from fretc.audit.discovery import expand_log_args
-        from fretc.audit.statistics import plan_statistics
+        from fretc.audit.fleet.statistics import plan_statistics
         from fretc.audit.verdict import audit_json
 
         json_dir = None

@@ -212,7 +212,7 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
     from rich.markup import escape
 
     from fretc.audit import AuditInputError, load_plan
-    from fretc.live.client import MissingDependency
+    from fretc.live.protocol import MissingDependency
     from fretc.live.watch import Watch, WatchOptions
 
     if not url.startswith(URL_SCHEMES):
@@ -279,10 +279,10 @@ def _diagnostics(w, url: str, dds_config: str | None):
     from fretc.live.diagnostics import DiagnosticsPublisher
 
     if url.startswith("dds://"):
-        from fretc.live.dds_serve import DdsServer
+        from fretc.live.dds.serve import DdsServer
 
         return DiagnosticsPublisher(w, lambda: DdsServer(url, config_file=dds_config))
-    from fretc.live.zenoh_serve import ZenohServer
+    from fretc.live.zenoh.serve import ZenohServer
 
     w.client.keep_session = True  # the final verdicts go out after the watch stopped reading
     return DiagnosticsPublisher(w, lambda: ZenohServer(url, name="fretc_watch",
@@ -361,7 +361,7 @@ def replay_cmd(log: str, serve: str | None, rate: float, host: str, port: int, w
         raise click.UsageError("--serve is required (alone for the Foxglove WebSocket, or "
                                "--serve dds://DOMAIN, --serve zenoh://HOST:PORT)")
     # lazy: foxglove-sdk, Cyclone DDS, Zenoh only when the command runs
-    from fretc.live.serve import advertise_mcap, replay_mcap
+    from fretc.live.websocket.serve import advertise_mcap, replay_mcap
 
     server = _replay_server(log, serve, host, port, dds_config or zenoh_config)
     advertise_mcap(log, server)
@@ -389,23 +389,23 @@ def replay_cmd(log: str, serve: str | None, rate: float, host: str, port: int, w
 
 def _replay_server(log: str, serve: str, host: str, port: int, config: str | None):
     """The server of ``--serve`` (``ws``: the Foxglove WebSocket server on host:port)."""
-    from fretc.live.client import MissingDependency
+    from fretc.live.protocol import MissingDependency
 
     if serve != "ws":
         _check_ros2_url(serve, "--serve")
     try:
         if serve.startswith("dds://"):
-            from fretc.live.dds_serve import DdsServer
+            from fretc.live.dds.serve import DdsServer
 
             return DdsServer(serve, config_file=config)
         if serve.startswith("zenoh://"):
-            from fretc.live.zenoh_serve import ZenohServer
+            from fretc.live.zenoh.serve import ZenohServer
 
             return ZenohServer(serve, name=f"fretc_replay_{log}", config_file=config)
         if serve != "ws":
             raise click.BadParameter(f"{serve!r}: expected dds://DOMAIN or zenoh://HOST:PORT "
                                      "(or --serve alone)", param_hint="--serve")
-        from fretc.live.serve import FoxgloveServer
+        from fretc.live.websocket.serve import FoxgloveServer
 
         # started once the log's channels are created (advertise_mcap): a client
         # connecting at once is advertised them all in one message

@@ -1,0 +1,501 @@
+"""One verdict per entity (docs/bindings.md, "One verdict per entity"): a requirement whose
+variables read an entity of the binding file's ``[entities]`` table (``$track`` in a filter,
+``{id==$track}``) is judged once for every value of the entity's key that appears in the log
+(first-order monitoring's universal quantifier over the trace's objects, as DejaVu and
+MonPoly have it; FRET's parameterised requirements over N identical components). Each
+instance is an ordinary verdict named ``R[track=7]`` with its evidence, judged on the
+entity's life (:mod:`fretc.audit.entities.read`: every entity of every per-entity requirement
+in one read of the log); a summary over the entities is added to each instance's notes.
+
+At most ``--max-entities`` entities of one requirement are judged per log
+(:data:`DEFAULT_MAX_ENTITIES` unless the option says otherwise; a bound on memory, not a
+limit of the method): past it, the requirement has one more verdict, ``R[track=...]``, an
+error saying how to raise it; the requirement's own verdict is then an error too, unless a
+judged entity violates it. Each instance has the plain audit's damage rules (the log's cut
+and gaps on its own ticks).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from typing import Any
+
+import numpy as np
+
+from fretc.audit.entities.batch import batch_verdicts, batchable, nan_traces
+from fretc.audit.entities.columns import EntityColumns, column as _column
+from fretc.audit.entities.kinds import entity_kind
+from fretc.audit.entities.read import ENTITIES, EntityClock, read_entities
+from fretc.audit.entities.summary import summary_note, summary_verdict
+from fretc.audit.finalize import finalize
+from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
+from fretc.audit.log_problems import collect_problems, problem_json
+from fretc.audit.passes import ClockPass, cut_at_damage, lost_in_words, mark_gaps
+from fretc.audit.verdict import NO_EVIDENCE, LogAudit, Ltl3, Verdict
+from fretc.common.problems import FretcInputError
+from fretc.common.streams import log_topics
+from fretc.logs import open_log
+from fretc.monitors.robustness import robustness_of_traces
+from fretc.monitors.vectorized import VectorizeError
+from fretc.signals.bindings import Bindings
+from fretc.signals.bindings.expression import EntityParam
+
+__all__ = ["MAX_ENTITIES", "DEFAULT_MAX_ENTITIES", "entity_of_requirements", "audit_entities",
+           "entity_passes", "summary_verdict", "summary_note"]
+
+#: Entities of one key that ``fretc watch`` steps live (their messages replayed into a
+#: monitor of their own while watching); its final verdicts are the audit's, unbounded.
+MAX_ENTITIES = 1000
+#: Entities of one per-entity requirement judged in one log unless ``--max-entities`` says
+#: otherwise (each costs a few hundred bytes while the log is read).
+DEFAULT_MAX_ENTITIES = 1_000_000
+
+#: The start of the error of every per-entity requirement when the log cannot be opened.
+NOT_AUDITED = "log not audited: "
+
+#: Whether the robustness of the entities the batch finds violated is computed at once
+#: (False: one entity at a time, the reference the tests compare it with)
+BATCH_ROBUSTNESS = True
+
+#: The note of an entity judged with the others (:mod:`fretc.audit.entities.batch`).
+BATCH_NOTE = ("judged with the requirement's other entities at once (its pt formula over "
+              "their ticks): robustness and interval counts are given for violated entities")
+
+_DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
+
+
+def _entities_read(bindings: Any, name: str, seen: set[str]) -> set[str]:
+    """The entities a per-entity variable reads, directly (``$track``) or through the
+    per-entity variables it refers to."""
+    if name in seen:
+        return set()
+    seen.add(name)
+    expr = bindings.per_entity[name][0]
+    out = set(_DOLLAR.findall(expr)) & set(bindings.entities)
+    for other in bindings.per_entity:
+        if other != name and re.search(rf"(?<![\w/.$]){re.escape(other)}(?!\w)", expr):
+            out |= _entities_read(bindings, other, seen)
+    return out
+
+
+def entity_of_requirements(plan: Any) -> dict[int, list[str]]:
+    """Requirement index -> the entities its variables read (sorted), for the requirements
+    of ``plan`` that read one."""
+    b = plan.bindings
+    if b is None or not b.per_entity:
+        return {}
+    out = {}
+    for r in plan.requirements:
+        names: set[str] = set()
+        for v in r.variables:
+            if v in b.per_entity:
+                names |= _entities_read(b, v, set())
+        if names:
+            out[r.index] = sorted(names)
+    return out
+
+
+def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
+    """Audit ``plan`` on the log at ``path`` with its per-entity requirements instantiated per
+    entity (module docstring); ``run(plan, path, progress)`` audits a plan (the plain audit).
+
+    Returns:
+        the log's audit: the other requirements' verdicts, then per requirement its verdict
+        over all entities (named as the requirement: violated when one entity violates it,
+        satisfied when all satisfy it) and one verdict per entity in order of first
+        appearance (none appeared: one ``vacuous`` verdict saying so; an error: one ``error``
+        verdict naming it).
+    """
+    groups = entity_of_requirements(plan)
+    plain = [r for r in plan.requirements if r.index not in groups]
+    la = run(dataclasses.replace(plan, requirements=plain), path, progress) if plain else None
+    if la is None:
+        la = LogAudit(log=path)
+    extra = _Entities(plan, path, la).judge([r for r in plan.requirements
+                                             if r.index in groups], groups)
+    la.verdicts = la.verdicts + extra
+    return la
+
+
+def entity_passes(plan: Any, path: str, keep: Any) -> tuple[LogAudit, dict[str, Any]]:
+    """The audit of the per-entity requirements of ``plan`` on the log at ``path`` and what
+    each entity was judged on: ``keep(r, pass)`` of its :class:`~fretc.audit.passes.ClockPass`
+    by the entity's verdict's name (``R[track=7]``; none for an entity with no tick). For
+    ``--write-csv`` (:mod:`fretc.audit.sampled.entities`).
+
+    Returns:
+        (the log's audit of the per-entity requirements alone, what ``keep`` returned); the
+        audit's verdicts are :func:`audit_entities`' (per requirement its summary, then its
+        entities).
+    """
+    groups = entity_of_requirements(plan)
+    la = LogAudit(log=path)
+    ents = _Entities(plan, path, la, keep=keep)
+    la.verdicts = ents.judge([r for r in plan.requirements if r.index in groups], groups)
+    return la, ents.kept
+
+
+class _Entities:
+    """The per-entity requirements of one log: checked, read once, judged (``keep``: what
+    :func:`entity_passes` keeps of each entity's pass, in :attr:`kept`)."""
+
+    def __init__(self, plan: Any, path: str, la: LogAudit, keep: Any = None) -> None:
+        self.plan, self.path, self.la = plan, path, la
+        self.bound = getattr(plan.config, "max_entities", None) or DEFAULT_MAX_ENTITIES
+        self.keep = keep
+        self.kept: dict[str, Any] = {}
+
+    def alone(self, r: Any, verdict: str, **kw: Any) -> list[Verdict]:
+        return [Verdict(log=self.path, requirement=r.id, text=r.text, source=r.source,
+                        verdict=verdict, **kw)]
+
+    def judge(self, rs: list, groups: dict[int, list[str]]) -> list[Verdict]:
+        """Every per-entity requirement's verdicts, in ``rs`` order."""
+        out: dict[int, list[Verdict]] = {}
+        try:
+            source = open_log(self.path, msg_path=self.plan.config.msg_path)
+            available = source.topics()
+        except (FretcInputError, OSError) as exc:
+            return [v for r in rs for v in self.alone(r, "error", error=f"{NOT_AUDITED}{exc}")]
+        clocks: dict[int, tuple[str, list[str]]] = {}
+        for r in rs:
+            why = self._cannot(r, groups[r.index], available, source)
+            if why is not None:
+                out[r.index] = why
+            else:
+                clocks[r.index] = (groups[r.index][0], list(r.variables))
+        if clocks:
+            self._read(source, rs, clocks, out)
+        return [v for r in rs for v in out[r.index]]
+
+    def _cannot(self, r: Any, names: list[str], available: Any, source: Any
+                ) -> list[Verdict] | None:
+        """The verdicts of a requirement that cannot be read (else None): an error before
+        the log (its own), two kinds of entity, a topic not in the log (``unknown`` when
+        the damage may have taken it)."""
+        if r.error is not None:
+            return self.alone(r, "error", error=r.error)
+        if len(names) != 1:
+            return self.alone(r, "error", error=f"{r.id} reads the entities {', '.join(names)}"
+                              ": a requirement is judged per entity of one key")
+        b = self.plan.bindings
+        missing = [v for v in r.variables if v not in b.variables and v not in b.per_entity]
+        if missing:
+            return self.alone(r, "error", error=f"no binding for {', '.join(map(repr, missing))}"
+                              f" in bindings ({b.source})")
+        try:
+            key_topics = _key_topics(b, names[0])
+            own = b.for_entity({names[0]: EntityParam(names[0])}).variables
+        except Exception as exc:  # noqa: BLE001 - a binding that does not compile: its error
+            return self.alone(r, "error", error=str(exc))
+        has = f"(it has {', '.join(available) or 'no topics'})"
+        absent = sorted(t for t in log_topics(key_topics) if t not in available)
+        if absent:
+            why = (f"topic {', '.join(absent)} (the key {b.entities[names[0]][0]} of entity "
+                   f"{names[0]}) is not in the log {has}: no entity was looked for")
+        else:
+            absent = sorted(t for v in r.variables for t in log_topics(own[v].topics)
+                            if t not in available)
+            if not absent:
+                return None
+            why = f"topic {', '.join(absent)} (bound to {r.id}'s variables) is not in the log {has}"
+        if source.partial:
+            return self.alone(r, "unknown", unknown_reason=f"{why}; the log is damaged: "
+                              "the damage may have taken it", partial=True)
+        return self.alone(r, "error", error=why)
+
+    def _read(self, source: Any, rs: list, clocks: dict[int, tuple[str, list[str]]],
+              out: dict[int, list[Verdict]]) -> None:
+        """One read for the requirements of ``clocks``, then each judged into ``out``."""
+        try:
+            made, ticks, errors = read_entities(source, self.plan.bindings, clocks, self.bound)
+        except Exception as exc:  # noqa: BLE001 - a binding or signal error: every one's error
+            for r in rs:
+                out.setdefault(r.index, self.alone(r, "error", error=str(exc)))
+            return
+        self._record(source, made)
+        gaps, _bridged = split_bridged(inner_gaps(source), self.plan.config.bridge_gaps_ns)
+        for r in rs:
+            if r.index not in clocks:
+                continue
+            c = made[r.index]
+            err = errors.get(r.index) or next(iter(c.failed.values()), None)
+            if err is not None:
+                out[r.index] = self.alone(r, "error", error=str(err))
+                continue
+            out[r.index] = _Judge(self, r, clocks[r.index][0], c, ticks[r.index], source,
+                                  gaps).verdicts()
+
+    def _record(self, source: Any, made: dict[int, EntityClock]) -> None:
+        """The log's figures from the read (when no plain requirement read it already)."""
+        la = self.la
+        la.kind = la.kind or source.kind
+        la.partial = la.partial or bool(source.partial)
+        if la.damage_time_ns is None:
+            la.damage_time_ns = source.damage_time
+        la.damage_cut = la.damage_cut or bool(source.damage_cut)
+        la.cut_time_ns = la.cut_time_ns if la.cut_time_ns is not None else source.cut_start
+        for t, n in source.counts.items():
+            la.messages[t] = max(la.messages.get(t, 0), n)
+        problems: dict = {}
+        counts: dict[str, int] = {}
+        for c in made.values():
+            collect_problems(source, c.s, problems, counts)
+        seen = {(p["kind"], p["topic"], p["log_time_ns"], p["detail"]) for p in la.problems}
+        la.problems += [problem_json(p) for k, p in problems.items() if k not in seen]
+        for k, n in counts.items():
+            la.problem_counts[k] = max(la.problem_counts.get(k, 0), n)
+        if not la.gaps:
+            kept, bridged = split_bridged(inner_gaps(source),
+                                          self.plan.config.bridge_gaps_ns)
+            la.gaps = merged_gaps(kept, bridged)
+        starts = [t for t in (la.start_time_ns, source.start_time) if t is not None]
+        la.start_time_ns = min(starts) if starts else None
+        la.end_time_ns = la.end_time_ns if la.end_time_ns is not None else source.end_time
+        if not la.tick and self.plan.bindings is not None:
+            b = self.plan.bindings
+            la.tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns
+                       else {"topic": b.tick.topic})
+            la.time_base = b.time_base
+
+
+def _key_topics(bindings: Bindings, name: str) -> frozenset[str]:
+    return entity_kind(bindings, name).binding.topics
+
+
+class _Judge:
+    """One per-entity requirement's verdicts from its clock's read: each entity's trace
+    (its life, :mod:`fretc.audit.entities.read`) judged as a plain requirement's clock."""
+
+    def __init__(self, ents: _Entities, r: Any, name: str, c: EntityClock, ticks: list,
+                 source: Any, gaps: list) -> None:
+        self.ents, self.r, self.name, self.c, self.source, self.gaps = (
+            ents, r, name, c, source, gaps)
+        own = [b.name for b in c.own]
+        self.rows: EntityColumns | None = None
+        if c.lean:  # (its ticks are runs: no plain variable, an array key)
+            self.times = c.runs.times()
+            self.plain: dict[str, np.ndarray] = {}
+            self.log_times = c.runs.log_time_columns()
+            self.rows = (c.runs.columns(own, c.absent_once, len(c.table.keys))
+                         if c.absent_once is not None else
+                         EntityColumns([], own, ENTITIES, len(c.table.keys)))
+        else:
+            self.times = np.array([t.time for t in ticks], dtype=np.int64)
+            self.plain = {b.name: _column([t.values.get(b.name) for t in ticks])
+                          for b in c.variables}
+            topics = sorted({tp for t in ticks for tp in t.log_times})
+            self.log_times = {tp: np.array([t.log_times.get(tp, -1) for t in ticks],
+                                           np.int64) for tp in topics}
+            if not c.kind.stream:
+                self.rows = EntityColumns(ticks, own, ENTITIES, len(c.table.keys))
+        self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
+        #: entity -> the robustness of its trace computed with the others' (the batch), and
+        #: its LTL3 verdict, tick and ticks
+        self.robs: dict[int, Any] = {}
+        self.ltl3s: dict[int, tuple[str, int | None, int]] = {}
+        self.records: dict[int, list[tuple[int, tuple]]] = {}
+        for i, tm, vals in c.table.rows:
+            self.records.setdefault(i, []).append((tm, vals))
+        self.bindings = Bindings({**{b.name: b for b in c.variables},
+                                  **{b.name: b for b in c.own}},
+                                 ents.plan.bindings.tick, ents.plan.bindings.time_base,
+                                 ents.plan.bindings.header_lag_ns, ents.plan.bindings.source)
+
+    def verdicts(self) -> list[Verdict]:
+        ents, r, c = self.ents, self.r, self.c
+        table, key = c.table, c.kind.key
+        if not table.keys:
+            return ents.alone(r, "vacuous", notes=[f"no entity {self.name} ({key}) appeared in "
+                                                   "the log: the requirement holds of none"])
+        fast = self._batch()
+        out = [fast.get(i) or self._one(i) for i in range(len(table.keys))]
+        if ents.keep is not None:  # (what the entities judged at once were judged on)
+            for i, v in fast.items():
+                i0, i1 = self._range(i)
+                ents.kept[v.requirement] = ents.keep(r, self._pass(i, i0, i1))
+        summary = summary_note(r.id, self.name, out)
+        for v in out:
+            v.notes.append(summary)
+        if table.cut:  # the entities left unjudged: a verdict of their own, never named r.id
+            rest = ents.alone(r, "error", error=(
+                f"more than {ents.bound:,} entities {self.name} ({key}) in the log: only the "
+                f"first {ents.bound:,} are judged (raise the bound with --max-entities)"))
+            rest[0].requirement = f"{r.id}[{self.name}=...]"
+            out += rest
+        return [summary_verdict(r, ents.path, out, summary)] + out
+
+    def _new(self, i: int, batch: Ltl3 | None = None, vacuous: bool = False,
+             ticks: tuple[int, int | None, int | None] = (0, None, None)) -> Verdict:
+        """Entity ``i``'s verdict: not yet judged, or (``batch``: its LTL3 verdict) judged at
+        once, satisfied or ``vacuous``, over ``ticks`` (count, first and last tick time, ns),
+        with no evidence (its evidence fields the shared empty ones, :data:`NO_EVIDENCE`)."""
+        r, table, value = self.r, self.c.table, self.c.table.keys[i]
+        seen = (f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
+                f"log time {table.first[i]}, last at {table.last[i]}")
+        rid = f"{r.id}[{self.name}={value}]"
+        if batch is None:
+            return Verdict(self.ents.path, rid, r.text, r.source, notes=[*r.notes, seen])
+        return Verdict(self.ents.path, rid, r.text, r.source,
+                       verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
+                       ticks_evaluated=ticks[0], first_tick_ns=ticks[1], last_tick_ns=ticks[2],
+                       notes=[*r.notes, seen, BATCH_NOTE], ltl3=batch, **NO_EVIDENCE)
+
+    def _range(self, i: int) -> tuple[int, int]:
+        """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
+        i0, i1 = self._ranges([i])
+        return int(i0[0]), int(i1[0])
+
+    def _ranges(self, which: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """The ticks ``i0..i1`` of the entities ``which`` (:meth:`_range`), as arrays."""
+        n = len(self.times)
+        at = np.asarray(which, np.int64)
+        if self.lives is None:
+            self.lives = (np.asarray(self.c.table.first, np.int64),
+                          np.asarray(self.c.table.last, np.int64))
+        first, last = self.lives[0][at], self.lives[1][at]
+        return (np.searchsorted(self.times, first, side="left").astype(np.int64),
+                np.minimum(np.searchsorted(self.times, last, side="left"), n - 1).astype(np.int64))
+
+    def _batch(self) -> dict[int, Verdict]:
+        """The entities judged at once (:mod:`fretc.audit.entities.batch`): satisfied or
+        vacuous ones on a log without damage; the others are judged one at a time."""
+        src, c = self.source, self.c
+        trig = batchable(self.ents.plan, self.r)
+        if trig is None or src.partial or src.lost or inner_gaps(src):
+            return {}
+        judged = [i for i in range(len(c.table.keys))
+                  if i not in c.table.errors or c.kind.stream]
+        n = len(self.times)
+        i0s, i1s = self._ranges(judged)
+        keep = i0s < n
+        judged = np.asarray(judged, np.int64)[keep].tolist()
+        if not judged:
+            return {}
+        i0s = i0s[keep]
+        lengths = i1s[keep] - i0s + 1
+        firsts = np.concatenate(([0], np.cumsum(lengths)[:-1])).astype(np.int64)
+        idx = np.arange(int(lengths.sum()), dtype=np.int64) - np.repeat(firsts - i0s, lengths)
+        columns = {k: col[idx] for k, col in self.plain.items()}
+        columns.update(self._own_columns(judged, i0s, firsts, lengths, idx))
+        got = batch_verdicts(self.r, trig, columns, firsts, lengths)
+        if got is None:
+            return {}
+        holds, vacuous, ltl3 = got
+        slow = nan_traces(columns, firsts, lengths)
+        self._violated_robustness(judged, holds, slow, columns, firsts, lengths)
+        holds = np.asarray(holds, np.bool_)
+        fast = np.ones(len(judged), np.bool_)
+        fast[list(slow)] = False
+        counts = lengths.tolist()
+        starts, vacuous_ = i0s.tolist(), np.asarray(vacuous).tolist()
+        for e in np.flatnonzero(fast & ~holds).tolist():  # (violated: judged alone, with
+            self.ltl3s[judged[e]] = (*ltl3[e], counts[e])  # the LTL3 verdict and ticks known)
+        out: dict[int, Verdict] = {}
+        times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
+        lasts = self.times[i0s + lengths - 1].tolist()
+        shared: dict[tuple, Ltl3] = {}  # (equal LTL3 verdicts as one object: immutable)
+        for e in np.flatnonzero(fast & holds).tolist():
+            i, (status, tick) = judged[e], ltl3[e]
+            key = (status, tick, times[starts[e] + tick] if tick is not None else None)
+            same = shared.get(key)
+            if same is None:
+                same = shared[key] = Ltl3(*key)
+            out[i] = self._new(i, same, vacuous_[e], (counts[e], times[starts[e]], lasts[e]))
+        return out
+
+    def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],
+                             columns: dict[str, np.ndarray], firsts: np.ndarray,
+                             lengths: np.ndarray) -> None:
+        """The robustness of the entities of ``judged`` the batch found violated, at once
+        (:func:`fretc.monitors.robustness.robustness_of_traces`), into :attr:`robs` for
+        their evidence one at a time (:meth:`_one`); none when it cannot be computed so."""
+        bad = [e for e, h in enumerate(np.asarray(holds).tolist())
+               if not h and e not in slow]
+        if not BATCH_ROBUSTNESS or not bad:
+            return
+        at = np.asarray(bad, np.int64)
+        counts = lengths[at]
+        starts = np.cumsum(counts) - counts
+        idx = np.repeat(firsts[at] - starts, counts) + np.arange(int(counts.sum()),
+                                                                dtype=np.int64)
+        try:
+            got = robustness_of_traces(self.r.formalization.pt,
+                                       {k: c[idx] for k, c in columns.items()}, starts, counts)
+        except (VectorizeError, KeyError):
+            return
+        for e, rob in zip(bad, got or ()):
+            self.robs[judged[e]] = rob
+
+    def _own_columns(self, judged: list[int], i0s: np.ndarray, firsts: np.ndarray,
+                     lengths: np.ndarray, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """The per-entity variables of the entities ``judged`` laid end to end."""
+        c = self.c
+        own = [b.name for b in c.own]
+        if c.kind.stream:
+            vals: list[list] = [[] for _ in own]
+            for e, i in enumerate(judged):
+                rec = self.records[i]
+                rt = np.array([t for t, _v in rec], dtype=np.int64)
+                a, m = int(i0s[e]), int(lengths[e])
+                at = np.maximum(np.searchsorted(rt, self.times[a:a + m], side="right") - 1, 0)
+                for j in range(len(own)):
+                    vals[j] += [rec[k][1][j] for k in at.tolist()]
+            return {name: _column(vals[j]) for j, name in enumerate(own)}
+        assert self.rows is not None  # (an array key)
+        return self.rows.end_to_end(judged, i0s, firsts, lengths, idx)
+
+    def _one(self, i: int) -> Verdict:
+        """Entity ``i``'s verdict."""
+        r, c, ents = self.r, self.c, self.ents
+        v = self._new(i)
+        first = c.table.first[i]
+        if i in c.table.errors and not c.kind.stream:
+            v.verdict, v.error = "error", str(c.table.errors[i])
+            return v
+        n = len(self.times)
+        i0, i1 = self._range(i)
+        if i0 >= n:
+            v.verdict = "error"
+            v.error = (f"no tick evaluated at or after its first message (log time {first})"
+                       + (f": waiting for {', '.join(c.s.missing_topics)}"
+                          if c.s.missing_topics else ""))
+            return v
+        res = self._pass(i, i0, i1)
+        if ents.keep is not None:
+            ents.kept[v.requirement] = ents.keep(r, res)
+        v.ticks_evaluated = len(res.times)
+        v.first_tick_ns, v.last_tick_ns = int(self.times[i0]), int(self.times[i1])
+        if res.cut:
+            v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
+        ri = dataclasses.replace(r, id=v.requirement)
+        finalize(ents.plan, ri, res, self.bindings, v, ents.la, rob=self.robs.get(i),
+                 ltl3=self.ltl3s.get(i))
+        if v.error is not None:
+            v.verdict = "error"
+        v.partial = ents.la.partial and v.error is None
+        return v
+
+    def _pass(self, i: int, i0: int, i1: int) -> ClockPass:
+        """Entity ``i``'s clock pass over ticks ``i0..i1`` (the damage's cut and gaps)."""
+        c, sl = self.c, slice(i0, i1 + 1)
+        times = self.times[sl]
+        columns = {k: col[sl] for k, col in self.plain.items()}
+        own = [b.name for b in c.own]
+        if c.kind.stream:
+            rec = self.records[i]
+            rt = np.array([t for t, _v in rec], dtype=np.int64)
+            at = np.maximum(np.searchsorted(rt, times, side="right") - 1, 0)
+            for j, name in enumerate(own):
+                columns[name] = _column([rec[k][1][j] for k in at.tolist()])
+        else:
+            assert self.rows is not None  # (an array key)
+            columns.update(self.rows.trace(i, i0, i1))
+        log_times = {k: lt[sl] for k, lt in self.log_times.items()}
+        res = ClockPass(c.s, times, columns, log_times)
+        topics = frozenset(t for b in self.bindings.variables.values() for t in b.topics)
+        cut_at_damage(res, self.source, self.bindings, topics)
+        mark_gaps(res, list(columns), self.bindings, self.gaps, topics,
+                  lost_in_words(self.source, log_topics(topics)))
+        return res

@@ -1,0 +1,298 @@
+"""``fretc watch dds://DOMAIN``: a Cyclone DDS participant that reads the bound ROS 2 topics
+of the robot's DDS domain and hands them to the watch engine as the Foxglove client does
+(:mod:`fretc.live.protocol`'s events on an :class:`~fretc.live.events.EventQueue`).
+
+What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types: :mod:`fretc.live.dds.idl_types`):
+
+* the graph: DDS's built-in publication topic (``DCPSPublication``, what ``ros2 topic list
+  -t`` reads). A publication of ``rt/<topic>`` for a bound topic advertises the topic with the
+  ROS type of its DDS type name (``ros2msg`` definition from rosbags' type store and the
+  ``--msg-path`` folders) and creates a reader of that type with the QoS a ROS 2
+  subscription would use to match the offered one (:func:`~fretc.live.dds.idl_types.reader_qos`).
+  When the last publication of a bound topic is gone (its writer deleted, or its
+  participant's lease expired: DDS liveliness) the topic is unadvertised (behind the
+  messages already merged: :meth:`~fretc.live.merge.MergeBuffer.put_event`; its value is then not
+  held, :class:`~fretc.live.source.WatchSource`); every bound topic's
+  publishers gone is the end of the robot's run (:attr:`DdsClient.leaving_ends_run`, after
+  the watch's restart grace);
+* the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
+  (the writer's clock), or the last ``/clock`` received when a ``/clock`` publication exists
+  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`), released
+  at the watermark: after each poll the merge learns which writers each reader is matched
+  with (:meth:`~fretc.live.merge.MergeBuffer.sync`), each sample naming its writer (its
+  publication handle); while a latched (transient-local) topic is read, the hold alone
+  releases (a publisher of it that appears sends its stored samples, of any age);
+* faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
+  ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
+  type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
+
+Needs ``cyclonedds`` (the ``watch`` extra).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from fretc.live.protocol import WATCH_HINT, MissingDependency
+from fretc.live.events import EventQueue
+from fretc.live.merge import HOLD_SECONDS, MergeBuffer
+from fretc.live.ros2_names import CLOCK_TOPIC, advertisement, cdr_clock_ns, dds_topic, normal_type, \
+    parse_url, ros_topic_of_dds, ros_type, standard_store
+
+__all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
+
+#: Seconds between two polls of the readers.
+POLL_SECONDS = 0.005
+#: an instance handle as one unsigned 64-bit number (Cyclone DDS's Python binding gives a
+#: reader's matched publications signed and a sample's publication handle unsigned)
+_HANDLE = 2**64 - 1
+#: a publisher known this long (s) whose topic has sent nothing is reported once
+#: (:meth:`DdsClient._check_silent`)
+SILENT_SECONDS = 3.0
+#: what to do when a discovered publisher's messages never arrive (Fast DDS may send to a
+#: reader on the same host over shared memory only, a transport Cyclone DDS cannot read)
+SILENT_HINT = ("if it is publishing, its middleware may be sending over a transport fretc "
+               "cannot read (Fast DDS's shared memory, to a reader on the same host): on the "
+               "robot, start the node with FASTDDS_BUILTIN_TRANSPORTS=UDPv4, or watch from "
+               "another host (docs/guide/watch.md, 'ROS 2 on its defaults')")
+
+
+def require_cyclonedds() -> None:
+    """Raise :class:`~fretc.live.protocol.MissingDependency` naming the install hint when the
+    ``cyclonedds`` package is not installed."""
+    try:
+        import cyclonedds.domain  # noqa: F401
+    except ImportError:
+        raise MissingDependency(f"the DDS transport needs cyclonedds: {WATCH_HINT}") from None
+
+
+class DdsClient:
+    """Watch ROS 2 topics on a DDS domain (module docstring).
+
+    Args:
+        url: ``dds://DOMAIN``.
+        wanted: topic -> bool (the bound topics).
+        topics: the bound topics (readers are created for these only).
+        types: topic -> expected ROS type (the bindings' ``[types]``, ``--topic-type``).
+        msg_path: folders of the robot's own ``.msg``/``.idl`` files.
+        config_file: a Cyclone DDS XML configuration (``--dds-config``).
+        events: the queue (a new bounded :class:`~fretc.live.events.EventQueue` by default).
+
+    Raises:
+        ValueError: a URL of the wrong form; MissingDependency: no cyclonedds.
+    """
+
+    leaving_ends_run = True
+
+    def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
+                 types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),
+                 config_file: str | None = None, events: EventQueue | None = None,
+                 merge_hold: float = HOLD_SECONDS, **_ignored) -> None:
+        require_cyclonedds()
+        self.url = parse_url(url)
+        self.wanted = wanted
+        self.topics = set(topics)
+        self.types = dict(types or {})
+        self.store = standard_store(tuple(msg_path))
+        self.config_file = config_file
+        self.events: EventQueue = events if events is not None else EventQueue()
+        self._merge = MergeBuffer(self.events, merge_hold)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._pubs: dict[str, set] = {}  # topic -> publication keys alive
+        self._readers: dict[str, tuple] = {}  # topic -> (reader, ROS type)
+        self._advertised: set[str] = set()
+        self._clock: int | None = None
+        self._qos_reported: set[str] = set()
+        #: topics read transient-local (latched): no watermark while one is read
+        self._latched: set[str] = set()
+        #: topic -> wall time (ns) its first publisher was discovered; topics heard from
+        self._known_since: dict[str, int] = {}
+        self._heard: set[str] = set()
+        self._silent_reported: set[str] = set()
+
+    def start(self) -> DdsClient:
+        """Join the domain and start reading in a background thread (returns at once)."""
+        from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
+
+        from fretc.live.dds.idl_types import open_participant
+
+        self._dp = open_participant(self.url.domain, self.config_file)
+        self._builtin = BuiltinDataReader(self._dp, BuiltinTopicDcpsPublication)
+        self._merge.start()
+        self.events.put(("connected", time.time_ns(), "dds", f"domain {self.url.domain}"))
+        self._thread = threading.Thread(target=self._run, daemon=True, name="fretc-dds")
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop reading and leave the domain (idempotent)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(5)
+        self._merge.stop()
+        self._readers.clear()
+        self._builtin = self._dp = None  # type: ignore[assignment]  # (closed)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._discover()
+                busy = self._read()
+                self._check_silent(time.time_ns())
+            except Exception as exc:  # one bad sample or entity costs that poll only
+                self.events.put(("protocol", time.time_ns(),
+                                 f"DDS: {type(exc).__name__}: {str(exc)[:200]}"))
+                busy = False
+            if not busy:
+                self._stop.wait(POLL_SECONDS)
+
+    def _discover(self) -> None:
+        """Read the built-in publications: new ones of bound topics (and ``/clock``)
+        advertise and get a reader; gone ones unadvertise their topic when it was the last."""
+        from cyclonedds.core import InstanceState
+
+        def alive_of(p) -> bool:
+            info = getattr(p, "sample_info", None)
+            return info is None or info.instance_state == InstanceState.Alive
+
+        gone: list[str] = []
+
+        def flush() -> None:
+            # what any writer sent before these left is still in the readers: taken first,
+            # so each unadvertisement comes after it (and after the others' data of then)
+            if gone:
+                for t in list(self._readers):
+                    self._take(t, until_empty=True)
+                for t in gone:
+                    self._merge.forget(t)  # its writers' last messages are put
+                    self._merge.put_event(("unadvertise", time.time_ns(), [t]))
+                gone.clear()
+
+        # publications gone before new ones in one batch: a writer replaced by another
+        # (a node restart) is seen as its topic leaving and coming back, never as nothing
+        for p in sorted(self._builtin.take(64), key=alive_of):
+            topic = ros_topic_of_dds(getattr(p, "topic_name", "") or "")
+            alive = alive_of(p)
+            key, now = p.key, time.time_ns()
+            if alive:
+                flush()
+                if topic is None or not (self.wanted(topic) or topic == CLOCK_TOPIC):
+                    continue
+                self._pubs.setdefault(topic, set()).add(key)
+                self._known_since.setdefault(topic, now)
+                self._add(topic, ros_type(p.type_name), p.qos, now)
+                continue
+            for t, keys in self._pubs.items():
+                if key in keys:
+                    keys.discard(key)
+                    if not keys and t in self._advertised:
+                        self._advertised.discard(t)
+                        gone.append(t)
+        flush()
+
+    def _add(self, topic: str, ros: str, qos, now: int) -> None:
+        """Advertise ``topic`` and create its reader (once)."""
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+
+        from fretc.live.dds.idl_types import idl_struct, reader_qos, transient_local
+
+        if topic == CLOCK_TOPIC and self._clock is None:
+            self._clock = 0
+        if topic in self._readers:
+            if self.wanted(topic) and topic not in self._advertised:
+                self._advertised.add(topic)  # a publisher came back (a restart): behind
+                # its unadvertisement, which waits with the messages merged
+                self._merge.put_event(("advertise", now, [advertisement(
+                    0, topic, ros, self.store, self.types.get(topic))]))
+            return
+        adv = advertisement(len(self._readers) + 1, topic, ros, self.store,
+                            self.types.get(topic))
+        if adv.unreadable:
+            self.events.put(("protocol", now, f"{adv.unreadable}: the topic is not read"))
+        if self.wanted(topic):
+            self._advertised.add(topic)
+            self.events.put(("advertise", now, [adv]))
+        try:
+            cls = None if adv.unreadable else idl_struct(self.store, normal_type(ros))
+        except Exception:  # a definition Cyclone DDS's IDL cannot take
+            cls = None
+        if cls is None:
+            self._readers[topic] = (None, ros)
+            return
+        tp: Topic[Any] = Topic(self._dp, dds_topic(topic), cls)
+        self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
+        if transient_local(qos, topic):
+            self._latched.add(topic)
+
+    def _read(self) -> bool:
+        """Take every reader's samples, then set the merge's watermark from the writers each
+        reader is matched with now (read after the takes: a writer matched later has
+        written nothing taken yet); True when some came."""
+        got = False
+        for topic in list(self._readers):
+            got |= self._take(topic)
+        matched: dict[str, set[int]] | None = {}
+        for topic, (reader, _ros) in list(self._readers.items()):
+            if reader is not None and self.wanted(topic) and matched is not None:
+                matched[topic] = {h & _HANDLE for h in reader.get_matched_publications()}
+                if topic in self._latched:  # a writer matched later sends stored samples
+                    matched = None  # of any age: the hold alone
+        self._merge.sync(matched)
+        return got
+
+    def _take(self, topic: str, until_empty: bool = False) -> bool:
+        """Take ``topic``'s samples into the merge (one batch, or every sample the reader
+        holds when ``until_empty``); True when some came."""
+        from fretc.live.dds.idl_types import take_raw
+
+        reader = self._readers[topic][0]
+        if reader is None:
+            return False
+        self._check_qos(topic, reader)
+        got = False
+        while True:
+            batch = take_raw(reader)
+            for data, info in batch:
+                got = True
+                self._heard.add(topic)
+                now = time.time_ns()
+                if topic == CLOCK_TOPIC:
+                    self._clock = cdr_clock_ns(data)
+                    if not self.wanted(topic):
+                        continue
+                stamp = info.source_timestamp
+                log_time = self._clock if self._clock else (stamp if stamp > 0 else now)
+                self._merge.put(topic, log_time, data, now, info.publication_handle & _HANDLE)
+            if not (until_empty and batch):
+                return got
+
+    def _check_silent(self, now: int) -> None:
+        """A ``protocol`` event (once per topic) for a bound topic whose publisher has been
+        known for :data:`SILENT_SECONDS` with no message of it read: never a silent "never
+        published" while the topic may be publishing."""
+        for topic, since in self._known_since.items():
+            if (topic in self._heard or topic in self._silent_reported
+                    or not self._pubs.get(topic) or not self.wanted(topic)
+                    or now - since < SILENT_SECONDS * 1e9):
+                continue
+            self._silent_reported.add(topic)
+            self.events.put(("protocol", now, f"{topic}: a publisher is known since "
+                             f"{(now - since) / 1e9:.0f} s but no message of it has arrived; "
+                             + SILENT_HINT))
+
+    def _check_qos(self, topic: str, reader) -> None:
+        """A reader whose QoS cannot match a publisher's is a ``protocol`` event (once)."""
+        if topic in self._qos_reported:
+            return
+        status = reader.get_requested_incompatible_qos_status()
+        if getattr(status, "total_count", 0):
+            self._qos_reported.add(topic)
+            self.events.put(("protocol", time.time_ns(), f"{topic}: a publisher's QoS is "
+                             "incompatible with the subscription's (policy id "
+                             f"{getattr(status, 'last_policy_id', '?')}); its messages are not "
+                             "received"))

@@ -1,0 +1,420 @@
+"""The one read of a CSV trace's data rows (:class:`fretc.logs.csv.source.CsvSource`): each
+row checked (cells, marks, the columns of the clock read, the types) and its values kept as
+compact columns, in one streaming pass over the file.
+
+Columns are :class:`array.array`: a column of true/false/1/0 cells one byte a row (0 or 1),
+a numeric column eight (``float64``, widened when its first number comes), the ``time``
+column eight (ns, ``int64``); a value not known (``unknown``, a ``gap`` row) holds 0.
+
+Rows are read :data:`CHUNK_ROWS` at a time. A chunk of plain rows (every row the header's
+number of cells, no blank or comment line, no ``gap``/``cut`` mark, no empty or unreadable
+cell, no column mixing true/false with numbers, times read and non-decreasing; a trace of
+one clock) is checked and converted column by column; any other chunk is read row by row by
+the rules of :class:`~fretc.logs.csv.source.CsvSource`, which raise its first error in file
+order. Both keep the same columns and figures (tested against a plain reading with the
+:mod:`csv` module).
+"""
+
+from __future__ import annotations
+
+import re
+from array import array
+from collections.abc import Iterator
+from decimal import Decimal, InvalidOperation
+from itertools import islice
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fretc.common.problems import CsvError
+from fretc.common.units import NS_PER_S
+
+if TYPE_CHECKING:
+    from fretc.logs.csv.source import CsvSource
+
+__all__ = ["RowReader", "CHUNK_ROWS", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clean_cells",
+           "csv_time"]
+
+#: A cell whose value is not known at its tick (a gap of the log left the variable unknown).
+UNKNOWN_CELL = "unknown"
+#: Every cell of a row that stands for the ticks a gap lost (how many is not known): unknown.
+GAP_CELL = "gap"
+#: Every cell of a clock's last row: the log was cut at its time (nothing after it was read).
+CUT_CELL = "cut"
+#: the cells of a boolean's two values (any case for true/false)
+_BOOL_WORDS = {"true": 1, "false": 0, "1": 1, "0": 0}
+
+#: data rows read, checked and converted at once by :class:`RowReader`
+CHUNK_ROWS = 4096
+#: distinct cells whose kind :class:`RowReader` keeps (a trace repeats its cells)
+_KINDS_KEPT = 1 << 16
+#: a time in seconds of at most 9 decimals, read exactly without :class:`Decimal`
+_PLAIN_TIME = re.compile(r"(-?)([0-9]+)(?:\.([0-9]{1,9}))?\Z")
+#: the times a tick time (ns, ``int64``) can hold
+_NS_MIN, _NS_MAX = -(1 << 63), (1 << 63) - 1
+# a cell's kind: true/false, 1/0 (either type), another number, ``unknown``
+_WORD, _BIT, _NUM, _UNKNOWN = range(4)
+
+
+def clean_cells(cells: list[str]) -> list[str] | None:
+    """A row's cells stripped of white space, or None for a row the format ignores (blank,
+    or a comment: its first cell starts with ``#``)."""
+    if not cells or all(not c.strip() for c in cells):
+        return None
+    if cells[0].lstrip().startswith("#"):
+        return None
+    return [c.strip() for c in cells]
+
+
+def _time_ns(cell: str) -> int | None:
+    """A ``time`` cell (seconds, decimal) in ns, rounded half to even past 9 decimals; None
+    when it is not a finite number."""
+    whole, dot, frac = cell.partition(".")
+    if (whole.isascii() and whole.isdigit()
+            and (not dot or (frac.isascii() and frac.isdigit() and len(frac) <= 9))):
+        return int(whole) * NS_PER_S + (int(frac.ljust(9, "0")) if dot else 0)
+    plain = _PLAIN_TIME.match(cell)
+    if plain is not None:  # (the same ns as Decimal's, exactly)
+        sign, whole, frac = plain.groups()
+        ns = int(whole) * NS_PER_S + (int(frac.ljust(9, "0")) if frac else 0)
+        return -ns if sign else ns
+    try:
+        value = Decimal(cell)
+        if not value.is_finite():
+            return None
+        return int((value * NS_PER_S).to_integral_value())
+    except (InvalidOperation, ValueError):
+        return None
+
+
+def csv_time(path: str, line: int, cell: str) -> int:
+    """The ``time`` cell at ``path:line`` in ns.
+
+    Raises:
+        CsvError: not a finite number of seconds."""
+    ns = _time_ns(cell)
+    if ns is None:
+        raise CsvError(path, line, f"time {cell!r} is not a number of seconds", column="time")
+    return ns
+
+
+def _chunk_times(cells: list[str]) -> np.ndarray | None:
+    """The ``time`` cells of a chunk in ns (``int64``), or None when one is not a number
+    or does not fit. Cells of at most 10 characters of digits and dots under 10^6 s are
+    read as floats: float64 keeps ``s * 1e9`` within 0.2 ns of its integer there, so
+    rounding gives it exactly."""
+    try:
+        text = "".join(cells).encode("ascii")
+    except UnicodeEncodeError:
+        text = b"-"
+    if not text.translate(None, b"0123456789.") and max(map(len, cells)) <= 10:
+        try:
+            f = np.frombuffer(array("d", map(float, cells)), np.float64)
+        except ValueError:
+            return None
+        if f.max() < 1e6:
+            return np.rint(f * 1e9).astype(np.int64)
+    ns = list(map(_time_ns, cells))
+    if None in ns:
+        return None
+    try:
+        return np.array(ns, dtype=np.int64)
+    except OverflowError:
+        return None
+
+
+def _stripped(cells: tuple[str, ...]) -> list[str]:
+    """A column's cells stripped of white space (copied as they are when none has any)."""
+    text = "".join(cells)
+    if text and text.split() == [text]:
+        return list(cells)
+    return list(map(str.strip, cells))
+
+
+def _kind(cell: str) -> tuple[int, float] | None:
+    """(kind, value) of a variable's cell (value 1/0 for true/false and 1/0, 0 for
+    ``unknown``), or None when it is empty or unreadable (a ``gap``/``cut`` mark too)."""
+    if not cell:
+        return None
+    if cell == UNKNOWN_CELL:
+        return _UNKNOWN, 0
+    low = cell.lower()
+    if low in ("true", "false"):
+        return _WORD, _BOOL_WORDS[low]
+    if low in _BOOL_WORDS:
+        return _BIT, _BOOL_WORDS[low]
+    try:
+        return _NUM, float(cell)
+    except ValueError:
+        return None
+
+
+def _widened(col: array) -> array:
+    """A column of 0/1 bytes as ``float64`` values."""
+    out = array("d")
+    if len(col):
+        out.frombytes(np.frombuffer(col, np.uint8).astype(np.float64).tobytes())
+    return out
+
+
+class RowReader:
+    """The one pass of :meth:`CsvSource._check <fretc.logs.csv.source.CsvSource>` over the
+    data rows (module docstring): checks, the columns of the clock read, the types; sets the
+    source's figures and columns (:meth:`run`)."""
+
+    def __init__(self, src: CsvSource, header: list[str]) -> None:
+        self.src = src
+        self.header = header
+        self.time_at = header.index("time") if src.has_time else None
+        self.variables = frozenset(src.columns)
+        #: (position, name) of the variables' columns in the header
+        self.var_at = [(i, n) for i, n in enumerate(header) if n in self.variables]
+        self.numeric_at: dict[str, int] = {}  # first line with a non-boolean cell
+        self.word_at: dict[str, int] = {}  # first line with true/false
+        self.own: list[str] | None = None  # the columns of the clock read (grouped traces)
+        self.cut_line: int | None = None
+        #: cell text -> (kind, value), for the first :data:`_KINDS_KEPT` distinct cells
+        self.kinds: dict[str, tuple[int, float]] = {}
+        self.count = 0
+        self.last_time: int | None = None
+        self.values: dict[str, array] = {}
+        self.times = array("q")
+        #: (row index, its line): the rows from it to the next run's are on consecutive lines
+        self.runs: list[tuple[int, int]] = []
+        self.next_line = -1
+        self.kept = src.keep  # the columns whose values are kept (None: all)
+
+    def run(self, raw: Iterator[tuple[int, list[str] | CsvError]]) -> None:
+        """Read the rows after the header: ``(line, cells)`` as the :mod:`csv` module reads
+        them, or ``(line, CsvError)`` where the file stops being CSV (raised in its turn).
+
+        Raises:
+            CsvError: as :class:`~fretc.logs.csv.source.CsvSource`, the first in file order.
+        """
+        fast = not self.src._grouped
+        take = getattr(raw, "chunk", None)  # (a file's rows: a chunk without a frame a row)
+        while True:
+            chunk = take(CHUNK_ROWS) if take is not None else list(islice(raw, CHUNK_ROWS))
+            if not chunk:
+                break
+            if fast and self._chunk(chunk):
+                continue
+            for line, cells in chunk:
+                if isinstance(cells, CsvError):
+                    raise cells
+                kept = clean_cells(cells)
+                if kept is not None:
+                    self._row(line, kept)
+        self._finish()
+
+    # ------------------------------------------------------------------ row by row
+    def _row(self, line: int, cells: list[str]) -> None:
+        src, header = self.src, self.header
+        if len(cells) != len(header):
+            raise CsvError(src.path, line,
+                           f"expected {len(header)} cells ({', '.join(header)}), got {len(cells)}")
+        time, cell = None, ""
+        if self.time_at is not None:
+            cell = cells[self.time_at]
+            time = csv_time(src.path, line, cell)
+            if self.last_time is not None and time < self.last_time:
+                raise CsvError(src.path, line, f"time {cell} s goes backwards "
+                               f"(previous row at {Decimal(self.last_time) / NS_PER_S} s)", column="time")
+            self.last_time = time
+        if not src._own(cells, line):
+            return
+        if self.cut_line is not None:
+            raise CsvError(src.path, line, f"a row after the cut (line {self.cut_line}): "
+                           "nothing was read after it")
+        index = self.count
+        values = self._cells(line, cells, index)
+        if values is None:  # the cut row
+            src.cut_time = time if time is not None else index * src.period_ns
+            return
+        if time is not None:
+            if not _NS_MIN <= time <= _NS_MAX:
+                raise CsvError(src.path, line, f"time {cell} s is out of range "
+                               "(a tick time is at most 2^63 - 1 ns)", column="time")
+            self.times.append(time)
+        for name, value in values.items():
+            if self.kept is not None and name not in self.kept:
+                continue
+            self._column_of(name).append(value)  # (0/1 in a column of bytes)
+        if line != self.next_line:
+            self.runs.append((index, line))
+        self.next_line = line + 1
+        self.count = index + 1
+
+    def _column_of(self, name: str) -> array:
+        """The kept column of ``name`` (new: bytes), widened to ``float64`` once a number
+        was read in it."""
+        col = self.values.get(name)
+        if col is None:
+            col = self.values[name] = array("B")
+        if col.typecode == "B" and name in self.numeric_at:
+            col = self.values[name] = _widened(col)
+        return col
+
+    def _cells(self, line: int, cells: list[str], index: int) -> dict[str, float] | None:
+        """Check one data row of the clock read: its variables' values (0 where not known),
+        or None for the ``cut`` row."""
+        src = self.src
+        named = {n: c for n, c in zip(self.header, cells) if n in self.variables}
+        if src._grouped:  # the clock's columns: the cells its first row fills
+            filled = [n for n, c in named.items() if c]
+            if self.own is None:
+                self.own = filled
+            elif filled != self.own:
+                raise CsvError(src.path, line, f"the cells of clock {src.clock} fill "
+                               f"{', '.join(filled) or 'no column'}, its first row "
+                               f"{', '.join(self.own) or 'no column'}")
+            named = {n: named[n] for n in self.own}
+        marks = {c for c in named.values() if c in (GAP_CELL, CUT_CELL)}
+        if marks and (len(marks) > 1 or any(c not in marks for c in named.values())):
+            raise CsvError(src.path, line, f"a {'/'.join(sorted(marks))} row has every cell "
+                           f"{' or '.join(sorted(marks))}")
+        if CUT_CELL in marks:
+            self.cut_line = line
+            return None
+        if GAP_CELL in marks:
+            src.gap_rows.append(index)
+            return dict.fromkeys(named, 0)
+        return {name: self._cell(line, name, cell, index) for name, cell in named.items()}
+
+    def _cell(self, line: int, name: str, cell: str, index: int) -> float:
+        got = self.kinds.get(cell)
+        if got is None:
+            got = _kind(cell)
+            if got is None:
+                raise CsvError(self.src.path, line, "empty cell" if not cell else
+                               f"cannot read {cell!r} as true/false or a number", column=name)
+            if len(self.kinds) < _KINDS_KEPT:
+                self.kinds[cell] = got
+        kind, value = got
+        if kind == _BIT:  # either type (a column of mixed types was refused at its second)
+            return value
+        if kind == _UNKNOWN:
+            self.src.unknown_rows.setdefault(name, []).append(index)
+            return 0
+        if kind == _WORD:
+            self.word_at.setdefault(name, line)
+        else:
+            self.numeric_at.setdefault(name, line)
+        if name in self.word_at and name in self.numeric_at:
+            raise CsvError(self.src.path, line,
+                           f"column mixes true/false (line {self.word_at[name]}) with numbers "
+                           f"(line {self.numeric_at[name]})", column=name)
+        return value
+
+    # ------------------------------------------------------------------ a chunk at once
+    def _chunk(self, chunk: list[tuple[int, list[str] | CsvError]]) -> bool:
+        """Check and keep a chunk of plain rows column by column (module docstring); False,
+        with nothing kept, when it is not plain."""
+        if self.cut_line is not None or isinstance(chunk[-1][1], CsvError):
+            return False
+        rows: list[list[str]] = [cells for _line, cells in chunk]  # type: ignore[misc]
+        if set(map(len, rows)) != {len(self.header)}:
+            return False
+        cols = [_stripped(c) for c in zip(*rows)]
+        if min(cols[0]) < "$":  # a blank or comment line, or an odd first cell
+            return False
+        times = None
+        if self.time_at is not None:
+            times = _chunk_times(cols[self.time_at])
+            if times is None or (self.last_time is not None and times[0] < self.last_time) \
+                    or bool((times[1:] < times[:-1]).any()):
+                return False
+        got = []
+        for i, name in self.var_at:
+            c = self._column(name, cols[i])
+            if c is None:
+                return False
+            got.append((name, c))
+        lines = [line for line, _cells in chunk]
+        base = self.count
+        for name, (vals, unknown, first_word, first_num) in got:
+            if first_word is not None:
+                self.word_at[name] = lines[first_word]
+            if first_num is not None:
+                self.numeric_at[name] = lines[first_num]
+            if unknown:
+                self.src.unknown_rows.setdefault(name, []).extend(base + k for k in unknown)
+            if self.kept is not None and name not in self.kept:
+                continue
+            col = self._column_of(name)
+            want = np.float64 if col.typecode == "d" else np.uint8
+            col.frombytes(vals.astype(want, copy=False).tobytes())
+        if times is not None:
+            self.times.frombytes(times.tobytes())
+            self.last_time = int(times[-1])
+        if lines[0] != self.next_line:
+            self.runs.append((base, lines[0]))
+        if lines[-1] - lines[0] != len(lines) - 1:  # (rows over several lines: quoted cells)
+            self.runs.extend((base + k, lines[k]) for k in range(1, len(lines))
+                             if lines[k] != lines[k - 1] + 1)
+        self.next_line = lines[-1] + 1
+        self.count = base + len(lines)
+        return True
+
+    def _column(self, name: str, cells: list[str]
+                ) -> tuple[np.ndarray, list[int], int | None, int | None] | None:
+        """A variable's cells in a chunk: (values, as ``float64`` when a number is among
+        them, else 0/1 ``uint8``; the positions of ``unknown`` cells; the position of the
+        first true/false and of the first number where the column has none yet), or None
+        when a cell is empty, unreadable or a mark of a row, or the column would mix
+        true/false with numbers."""
+        n = len(cells)
+        distinct = set(cells)
+        if len(distinct) * 4 > n and name not in self.word_at:  # many values: each a number?
+            try:
+                vals = np.frombuffer(array("d", map(float, cells)), np.float64)
+            except ValueError:
+                vals = None
+            if vals is not None:
+                numeric = cells.count("0") + cells.count("1") < n
+                first_num = None
+                if numeric and name not in self.numeric_at:
+                    first_num = next(k for k, c in enumerate(cells) if c != "0" and c != "1")
+                return (vals if numeric else vals.astype(np.uint8)), [], None, first_num
+        table: dict[str, tuple[int, float]] = {}
+        kinds = self.kinds
+        for cell in distinct:
+            got = kinds.get(cell)
+            if got is None:
+                got = _kind(cell)
+                if got is None:
+                    return None
+                if len(kinds) < _KINDS_KEPT:
+                    kinds[cell] = got
+            table[cell] = got
+        seen = {k for k, _v in table.values()}
+        word, numeric = _WORD in seen, _NUM in seen
+        if (word or name in self.word_at) and (numeric or name in self.numeric_at):
+            return None
+        value = {c: v for c, (_k, v) in table.items()}
+        if numeric:
+            vals = np.frombuffer(array("d", map(value.__getitem__, cells)), np.float64)
+        else:
+            vals = np.frombuffer(bytes(map(value.__getitem__, cells)), np.uint8)  # type: ignore[arg-type]  # (0/1)
+        unknown = ([k for k, c in enumerate(cells) if c == UNKNOWN_CELL]
+                   if _UNKNOWN in seen else [])
+        first_word = first_num = None
+        if word and name not in self.word_at:
+            first_word = next(k for k, c in enumerate(cells) if table[c][0] == _WORD)
+        if numeric and name not in self.numeric_at:
+            first_num = next(k for k, c in enumerate(cells) if table[c][0] == _NUM)
+        return vals, unknown, first_word, first_num
+
+    def _finish(self) -> None:
+        src = self.src
+        if self.own is not None:
+            src.columns = [c for c in src.columns if c in self.own]
+        elif src._grouped:
+            src.columns = []
+        src.row_count = self.count
+        src.types = {c: ("float" if c in self.numeric_at else "bool") for c in src.columns}
+        src._gap_set = frozenset(src.gap_rows)
+        src._values = {c: self.values.get(c, array("B")) for c in src.columns
+                       if self.kept is None or c in self.kept}
+        src._times = self.times if src.has_time else None
+        src._line_runs = self.runs
