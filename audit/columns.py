@@ -1,4 +1,5 @@
-"""The per-tick columns an audit keeps for the evidence and the vectorized engine.
+"""The per-tick columns an audit keeps for the evidence and the vectorized engine, and one
+clock's pass over a log that holds them (:class:`ClockPass`).
 
 Memory: messages are streamed (:mod:`fretc.logs`), never kept. What grows with the
 length of the log is only these columns: per evaluated tick, 8 bytes of time, 8 bytes per
@@ -10,13 +11,15 @@ trace's rows) keeps no column of its own: its column is the times' array.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from fretc.signals.blocks import TickBlock
 
-__all__ = ["CHUNK", "TickColumns", "column_array"]
+__all__ = ["CHUNK", "TickColumns", "column_array", "ClockPass"]
 
 #: Ticks per column chunk.
 CHUNK = 4096
@@ -83,3 +86,33 @@ def column_array(values: list) -> np.ndarray:
     if all(type(x) is bool for x in values):
         return np.array(values, dtype=np.bool_)
     return np.array(values, dtype=np.float64)
+
+
+@dataclass
+class ClockPass:
+    """The ticks of one clock: its sampling (:class:`fretc.signals.Sampling`), tick
+    times (ns) and the columns (variable -> values, topic -> held log times)."""
+
+    sampling: Any
+    times: np.ndarray
+    columns: dict[str, np.ndarray]
+    log_times: dict[str, np.ndarray]
+    cut: int = 0  # ticks dropped after the damage (:func:`fretc.audit.passes.cut_at_damage`)
+    intact_end: int | None = None  # exclusive bound of the judged ticks' times (a cut)
+    #: when the judged span ends where something could not be read - messages of the
+    #: clock's topics present but not decoded (topic, count, channel, first and last log
+    #: time), or a comparison with NaN (audit.finalize) - that, in words
+    lost: str | None = None
+    #: variable -> bool array over the ticks: where a gap leaves it unknown (only variables
+    #: with an unknown tick; :func:`mark_gaps`)
+    unknown: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the log's gaps that may hold messages of this clock's topics (:class:`fretc.logs.Gap`)
+    gaps: list = field(default_factory=list)
+    #: ticks inserted for gaps of a tick topic (indexes), unknown for every variable
+    tick_gaps: list[int] = field(default_factory=list)
+    #: the messages of its topics present but not decoded, in words (for reasons)
+    lost_words: str = ""
+    #: id of a requirement's AST -> (that AST, the columns, its NaN ticks over them), as
+    #: :mod:`fretc.audit.finalize` computed them (never copied by ``dataclasses.replace``)
+    nan_ticks: dict[int, tuple[Any, dict, np.ndarray]] = field(
+        default_factory=dict, init=False, repr=False, compare=False)

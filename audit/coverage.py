@@ -26,7 +26,7 @@ from fretc.monitors.coverage import exercised
 
 if TYPE_CHECKING:
     from fretc.audit.verdict import LogAudit, Verdict
-    from fretc.audit.passes import ClockPass
+    from fretc.audit.columns import ClockPass
     from fretc.audit.model import AuditPlan, RequirementPlan
 
 __all__ = ["record_coverage", "fleet_coverage", "coverage_text", "margin_json", "margin_value"]

@@ -23,11 +23,12 @@ from fretc.signals.clock import unsampled_of
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.monitors.interval import OBLIGATIONS, EvidenceUnsupported
 from fretc.monitors.judge import judge, nan_ticks
-from fretc.monitors.judge3 import Unknowns
+from fretc.monitors.unknowns import Unknowns
 from fretc.monitors.stepwise import to_python
 from fretc.audit.verdict import MARGIN_POINTS, FirstViolation, Ltl3, TimePoint
 from fretc.audit.model import AuditPlan, RequirementPlan
-from fretc.audit.passes import ClockPass, clock_key
+from fretc.audit.columns import ClockPass
+from fretc.audit.passes import clock_key
 from fretc.audit.trials import trigger_trials
 from fretc.audit.unknown_ticks import judge_three
 from fretc.common.problems import NAN

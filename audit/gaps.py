@@ -34,7 +34,7 @@ from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import stateful_topics
 
 if TYPE_CHECKING:
-    from fretc.audit.passes import ClockPass
+    from fretc.audit.columns import ClockPass
     from fretc.logs.base import LogSource
 
 __all__ = ["split_bridged", "inner_gaps", "unknown_masks", "gap_json", "gaps_of_clock",
@@ -149,7 +149,7 @@ def insert_gap_ticks(res: ClockPass, gaps: list[Gap], tick_topic: str) -> list[i
     lost are not known (not even how many): one tick is put in their place, at the gap's
     start, unknown for every variable (:func:`fretc.audit.passes.mark_gaps` marks it), so
     that nothing joins the ticks on both sides of the gap. Only gaps between two ticks of the
-    clock get one. ``res`` (a :class:`fretc.audit.passes.ClockPass`) is changed in place:
+    clock get one. ``res`` (a :class:`fretc.audit.columns.ClockPass`) is changed in place:
     its times, columns and held log times (the tick before's values, which no verdict reads).
 
     Returns:

@@ -15,7 +15,7 @@ from fretc.audit.passes import ClockKey, clock_key
 
 if TYPE_CHECKING:
     from fretc.audit.model import RequirementPlan
-    from fretc.audit.passes import ClockPass
+    from fretc.audit.columns import ClockPass
     from fretc.audit.verdict import Verdict
     from fretc.logs.base import LogSource
 
@@ -33,7 +33,7 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings,
 
     Args:
         active: the requirements judged; ``verdicts``: requirement index -> Verdict;
-            ``passes``: requirement index -> its :class:`fretc.audit.passes.ClockPass`;
+            ``passes``: requirement index -> its :class:`fretc.audit.columns.ClockPass`;
             ``first``: the first pass's source (its ``reopen()`` spares a second read of a
             flight log), or None.
     """

@@ -26,7 +26,7 @@ from fretc.signals.blocks import MAX_TICKS
 from fretc.signals.csv_columns import csv_columns
 from fretc.logs import CSV_TOPIC, CsvSource
 from fretc.logs.recorded_gaps import LEFT_FOR_GOOD
-from fretc.audit.columns import TickColumns
+from fretc.audit.columns import ClockPass, TickColumns
 from fretc.audit.gaps import gaps_of_clock, inner_gaps, insert_gap_ticks, split_bridged, unknown_masks
 from fretc.audit.model import AuditPlan, RequirementPlan
 
@@ -36,36 +36,6 @@ if TYPE_CHECKING:
 __all__ = ["ClockPass", "ClockKey", "LogPasses", "run_passes", "cut_at_damage", "mark_gaps",
            "clock_key", "restrict", "expected_ticks", "lost_in_words", "csv_marks", "MAX_TICKS"]
 
-
-
-@dataclass
-class ClockPass:
-    """The ticks of one clock: its sampling (:class:`fretc.signals.Sampling`), tick
-    times (ns) and the columns (variable -> values, topic -> held log times)."""
-
-    sampling: Any
-    times: np.ndarray
-    columns: dict[str, np.ndarray]
-    log_times: dict[str, np.ndarray]
-    cut: int = 0  # ticks dropped after the damage (cut_at_damage)
-    intact_end: int | None = None  # exclusive bound of the judged ticks' times (a cut)
-    #: when the judged span ends where something could not be read - messages of the
-    #: clock's topics present but not decoded (topic, count, channel, first and last log
-    #: time), or a comparison with NaN (audit.finalize) - that, in words
-    lost: str | None = None
-    #: variable -> bool array over the ticks: where a gap leaves it unknown (only variables
-    #: with an unknown tick; :func:`mark_gaps`)
-    unknown: dict[str, np.ndarray] = field(default_factory=dict)
-    #: the log's gaps that may hold messages of this clock's topics (:class:`fretc.logs.Gap`)
-    gaps: list = field(default_factory=list)
-    #: ticks inserted for gaps of a tick topic (indexes), unknown for every variable
-    tick_gaps: list[int] = field(default_factory=list)
-    #: the messages of its topics present but not decoded, in words (for reasons)
-    lost_words: str = ""
-    #: id of a requirement's AST -> (that AST, the columns, its NaN ticks over them), as
-    #: :mod:`fretc.audit.finalize` computed them (never copied by ``dataclasses.replace``)
-    nan_ticks: dict[int, tuple[Any, dict, np.ndarray]] = field(
-        default_factory=dict, init=False, repr=False, compare=False)
 
 
 @dataclass

@@ -6,7 +6,7 @@ satisfied or violated; the others are counted apart, never as trials of either o
 * **satisfied** / **violated**: the obligation from the trigger (:mod:`fretc.monitors.
   obligations`) is met / missed on the ticks read, whatever the unknown ticks held (the
   scope interval's bounds and the trigger are known, and so are the response and stop
-  condition on the ticks that decide it: :class:`fretc.monitors.judge3.Unknowns`).
+  condition on the ticks that decide it: :class:`fretc.monitors.unknowns.Unknowns`).
 * **cut**: the log ends (a complete log: the run ended there) inside the trigger's timing
   window, which reaches past its last tick, before the ticks read decide the obligation:
   ``within``, ``for``, ``after`` and ``next`` near the end. FRET's finite-trace semantics
@@ -29,8 +29,8 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from fretc.fretish import ast as A
-from fretc.monitors.interval import Violation, scope_of, trace_signals, trigger_points
-from fretc.monitors.judge3 import Unknowns, possible_trigger
+from fretc.monitors.interval import scope_of, trace_signals, trigger_points
+from fretc.monitors.unknowns import Unknowns, possible_trigger
 from fretc.monitors.obligations import ObligationChecker
 
 from fretc.audit.damage import open_reason
@@ -123,9 +123,8 @@ def _outcome(timing: str, negate: bool, t: int, interval: tuple[int, int], k: in
             return "cut"
     bad = chk.check(t, e)
     if bad is not None:
-        window, vt, reason = bad
-        if u is None or u.missed_known(Violation(t, interval, window, vt, reason), timing,
-                                       negate):
+        window, vt, _reason = bad
+        if u is None or u.missed_known(t, window[0], vt, timing, negate):
             return "violated"
         return "unknown"
     return "satisfied" if _met_known(timing, negate, t, e, k, chk, u) else "unknown"

@@ -24,10 +24,11 @@ import numpy as np
 from typing import TYPE_CHECKING
 
 from fretc.audit.damage import open_obligations, verdict_at_damage
-from fretc.audit.passes import ClockPass
+from fretc.audit.columns import ClockPass
 from fretc.monitors.completions import decide
 from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement
-from fretc.monitors.judge3 import Unknowns, definite_evidence, possible_trigger
+from fretc.monitors.judge3 import definite_evidence
+from fretc.monitors.unknowns import Unknowns, possible_trigger
 from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
 from fretc.monitors.vectorized import VectorizeError
 

@@ -475,10 +475,9 @@ def exit_code(logs: list[LogAudit], input_errors: bool = False,
     with a probability bound is judged by its statistical verdict, not by its runs: 1 when
     it ``fails``, 5 (:data:`EXIT_UNDECIDED`, after 1 and before 3) when ``undecided``; its
     violated runs alone do not give 1."""
-    from fretc.audit.fleet.statistics import statistical_exit
-
     bounded = {s.id for s in statistics or () if s.bound is not None}
-    failed, undecided = statistical_exit(statistics)
+    failed = any(s.verdict == "fails" for s in statistics or ())
+    undecided = any(s.verdict == "undecided" for s in statistics or ())
     if input_errors or any(la.error for la in logs) or any(
             v.verdict == "error" for la in logs for v in la.verdicts):
         return EXIT_INPUT_ERROR

@@ -1,7 +1,7 @@
-"""The ``statistics`` class of ``bench/fuzz_hostile.py`` (its docstring): hostile fleets,
-campaigns and option values against the statistics of probability requirements
-(``audit/fleet/statistics.py``, ``audit/fleet/intervals.py``, ``sim/sequential.py``, the ``--confidence``,
-``--trial``, ``--unknown-runs``, ``--delta``, ``--alpha`` and ``--beta`` options).
+"""The ``statistics`` class of ``bench/fuzz_hostile.py`` (its docstring): hostile fleets, campaigns
+and option values against the statistics of probability requirements (``audit/fleet/statistics.py``,
+``audit/fleet/intervals.py``, ``sim/sequential.py``, the ``--confidence``, ``--trial``,
+``--unknown-runs``, ``--delta``, ``--alpha`` and ``--beta`` options).
 
 Each input is one of:
 

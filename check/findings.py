@@ -1,6 +1,6 @@
-"""A finding of ``fretc check`` (:mod:`fretc.check.analysis`, :mod:`fretc.check.realizability`,
-:mod:`fretc.check.witness`): what was found, about which requirements, and the witness
-trace that shows it."""
+"""What ``fretc check`` finds (:mod:`fretc.check.analysis`, :mod:`fretc.check.realizability`,
+:mod:`fretc.check.witness`): each finding (what was found, about which requirements, and
+the witness trace that shows it) and the whole result of a run (:class:`CheckResult`)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from fretc.check.items import CheckItem
 
-__all__ = ["Finding", "ids", "subsets_text"]
+__all__ = ["Finding", "CheckResult", "ids", "subsets_text"]
 
 
 @dataclass
@@ -61,3 +61,51 @@ def subsets_text(names: list[list[str]], standing: list[str], noun: str) -> str:
         else:
             out.append(f"{st} {noun} {text}")
     return "; ".join(out)
+
+
+@dataclass
+class CheckResult:
+    """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
+    requirement (``satisfiable``, ``non_vacuous``, ``redundant``: true / false / "unknown"
+    / None when not checked); ``components`` the ids per component; ``abstractions`` the
+    uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered,
+    ``monitor_queries`` those the pt monitors' fixed points answered
+    (:mod:`fretc.check.smt`), ``unknown_queries`` those past their budget or refused."""
+
+    requirements: list[dict] = field(default_factory=list)
+    components: list[list[str]] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    abstractions: list[dict] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    realizability: dict | None = None
+    witnesses: list[dict] = field(default_factory=list)
+    input_errors: list[str] = field(default_factory=list)
+    queries: int = 0
+    unknown_queries: int = 0
+    smt_queries: int = 0
+    monitor_queries: int = 0
+
+    @property
+    def exit_code(self) -> int:
+        """0 no finding, 1 a conflict / vacuity / unrealizability (or an unknown answer:
+        nothing is called fine that was not checked), 2 input errors."""
+        if self.input_errors:
+            return 2
+        if any(f.severity in ("error", "unknown") for f in self.findings):
+            return 1
+        return 0
+
+    def to_json(self) -> dict:
+        """The document of ``fretc check --json`` / ``-o``: tool, semantics, exit code, one status
+        per requirement, components, findings, abstractions, notes, realizability,
+        witnesses, input errors and the query counts."""
+        return {"tool": "fretc check", "semantics": "ft_inf (infinite traces); witnesses "
+                "on finite traces (ft)", "exit_code": self.exit_code,
+                "requirements": self.requirements, "components": self.components,
+                "findings": [f.to_json() for f in self.findings],
+                "abstractions": self.abstractions, "realizability": self.realizability,
+                "witnesses": self.witnesses,
+                "notes": self.notes, "input_errors": self.input_errors,
+                "queries": self.queries, "smt_queries": self.smt_queries,
+                "monitor_queries": self.monitor_queries,
+                "unknown_queries": self.unknown_queries}

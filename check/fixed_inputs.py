@@ -26,15 +26,36 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from typing import Any, TYPE_CHECKING
+from typing import Any, Protocol
 
 from fretc.check.budget import BudgetSpent, Meter
 
-if TYPE_CHECKING:
-    from fretc.check.safety_game import Game
-
 __all__ = ["recurrence", "keep_forever", "defeats", "post", "input_lasso", "prefix_search",
            "MAX_LASSO", "SEARCH_SETS"]
+
+class Game(Protocol):
+    """What the searches read of a game (:class:`fretc.check.safety_game.Game`, or
+    :class:`fretc.check.buchi_game._BuchiGame` with its acceptance sets): BuDDy ``b``, the
+    BDDs of the initial states ``init`` and the transition relation ``step`` (over the
+    current state, the inputs, the outputs and the next state), the variable sets of the
+    current state, inputs, outputs and of a tick's letter, the acceptance sets ``acc``
+    (empty for a safety game), and the renamings between next and current state bits."""
+
+    b: Any
+    init: Any
+    cur_set: Any
+    in_set: Any
+    out_set: Any
+    letter_vars: Any
+    acc: list
+
+    @property
+    def step(self) -> Any: ...
+
+    def _primed(self, bdd: Any) -> Any: ...
+
+    def _unprimed(self, bdd: Any) -> Any: ...
+
 
 #: the longest input lasso (prefix and cycle, in ticks) enumerated
 MAX_LASSO = 4

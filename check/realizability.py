@@ -40,14 +40,14 @@ from fretc.check.findings import subsets_text
 from fretc.check.checker import SPOT_MAX_BOUND
 from fretc.check.smt import max_bound
 from fretc.check.solver import UNKNOWN
-from fretc.check.witness import _atoms
+from fretc.check.witness import formula_atoms
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
 from fretc.check.predicates import PredicateBudget, clusters, mixed_invariants
 from fretc.check.safety_game import Outside, game_atoms, letter_name
 from fretc.compiler.printers import mangle, to_smv, to_spot
 
 if TYPE_CHECKING:
-    from fretc.check.analysis import CheckResult
+    from fretc.check.findings import CheckResult
     from fretc.check.checker import Checker
 
 __all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
@@ -235,7 +235,7 @@ class _Decider:
         """Spot's synthesis game on the ft_inf formulas (as before the safety game)."""
         checker, inputs = self.checker, self.inputs
         phis = [x.phi for x in items]
-        atoms = _atoms(phis)
+        atoms = formula_atoms(phis)
         outs = sorted({letter_name(a) for a in atoms
                        if not all(v in inputs for v in _atom_vars(a))})
         in_vars = sorted({c[0] for a in atoms if a.op == "cmp"

@@ -51,7 +51,7 @@ from fretc.compiler.printers import mangle, to_smv
 if TYPE_CHECKING:
     from fretc.fretish.ast import Requirement
     from fretc.check.items import CheckItem
-    from fretc.check.analysis import CheckResult
+    from fretc.check.findings import CheckResult
     from fretc.check.checker import Checker
 
 __all__ = ["trace_columns", "Judge", "finite_trace", "write_witnesses", "expected_verdicts",
@@ -66,7 +66,10 @@ Judge = Callable[["Requirement", Mapping[str, np.ndarray], int, "int | None"], s
 _EXPECTED = re.compile(r"#\s*expected:\s*(.*)")
 
 
-def _atoms(nodes: Sequence[Node]) -> list[Node]:
+def formula_atoms(nodes: Sequence[Node]) -> list[Node]:
+    """The atoms of the formulas ``nodes`` (propositions, comparisons, calls and FRET's
+    temporal functions: what a witness trace gives a value), each once, in the order of a
+    walk of the formulas."""
     out, seen = [], set()
     for f in nodes:
         for n in ir.walk(f):
@@ -88,7 +91,7 @@ def _absorbing_value(atom: Node) -> bool:
 
 def _finite_model(nodes: Sequence[Node]) -> Node:
     absorbing = ir.and_all(*(a if _absorbing_value(a) else ir.not_(a)
-                             for a in _atoms(nodes)))
+                             for a in formula_atoms(nodes)))
     return ir.U(ir.not_(LAST), ir.and_(LAST, ir.X(ir.G(ir.and_(ir.not_(LAST), absorbing)))))
 
 

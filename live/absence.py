@@ -14,13 +14,12 @@ requirements that do not read the topic are not affected.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from fretc.logs.base import Gap
-    from fretc.live.source import WatchSource
 
-__all__ = ["Absences", "NO_TIME", "recorded_gaps", "run_gaps"]
+__all__ = ["Absences", "NO_TIME", "WatchedRun", "recorded_gaps", "run_gaps"]
 
 #: The start of a span opened before any message was used: below every log time.
 NO_TIME = -(2**63)
@@ -90,7 +89,21 @@ class Absences:
         return min(starts) if starts else None
 
 
-def recorded_gaps(src: WatchSource) -> list[Gap]:
+class WatchedRun(Protocol):
+    """What the gaps of a watched run are read from (:class:`fretc.live.source.WatchSource`):
+    its lost connections (``gaps``: pairs of the log times around each, ns), its topics'
+    spans without a publisher (``absent``) and, per topic, where its publisher left for good
+    (``left_for_good``)."""
+
+    gaps: list[tuple[int, int]]
+
+    @property
+    def absent(self) -> Absences | None: ...
+
+    def left_for_good(self, topics: Iterable[str]) -> int | None: ...
+
+
+def recorded_gaps(src: WatchedRun) -> list[Gap]:
     """The gaps a recording of the watched run carries (``fretc watch --record``), so that
     the audit of the recording judges what the watch judged: :func:`run_gaps`, and per
     topic whose publisher left for good while the run went on, a gap of that topic from the
@@ -112,7 +125,7 @@ def recorded_gaps(src: WatchSource) -> list[Gap]:
     return out
 
 
-def run_gaps(src: WatchSource) -> list[Gap]:
+def run_gaps(src: WatchedRun) -> list[Gap]:
     """The gaps of a watched run (``src``: its :class:`fretc.live.source.WatchSource`) as
     the audit's (:class:`fretc.logs.base.Gap`): a lost connection (every topic, between the
     last message before it and the first after it) and a publisher that left and came back

@@ -73,7 +73,7 @@ def split_pending(ev: Evidence, n: int) -> tuple[int, int]:
 
 @dataclass
 class WatchPasses:
-    """The watch's ticks, one :class:`fretc.audit.passes.ClockPass` per requirement's
+    """The watch's ticks, one :class:`fretc.audit.columns.ClockPass` per requirement's
     clock."""
 
     sampling: Any

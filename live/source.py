@@ -16,8 +16,10 @@ Faults, each a data problem of the run, never a crash:
   value is **not held**: from the last message used before it until the topic's next
   message, ticks of the requirements that read it are not evaluated (unknown; the span is
   a :data:`PUBLISHER_RESTART` problem when the topic comes back); when it never comes back
-  before the run ends, its variables are unknown from there on, and a clock with no tick
-  past it is cut there; the others are not affected (:mod:`fretc.live.absence`);
+  before the run ends, its variables are unknown from there to the end of the run at the
+  ticks of the clocks that read it, and a clock with no tick past it is cut there (an
+  obligation open at the cut is ``unknown``); the others are not affected
+  (:mod:`fretc.live.absence`);
 
 The end of the watched run, never a data problem: the server's orderly close (a WebSocket
 close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
@@ -149,7 +151,8 @@ class WatchSource(LogSource):
         self.ever_connected = False
         self.first_connect_wall: float | None = None
         self.last_reason = ""
-        self.gaps: list[tuple[int, int]] = []  # type: ignore[assignment]  # (last log time before, first after): a connection's, not a log's Gap records
+        # (last log time before, first after): a connection's gaps, not a log's Gap records
+        self.gaps: list[tuple[int, int]] = []  # type: ignore[assignment]  # (the pairs above)
         #: the run ended inside an undecodable gap: the last log time used before it
         self.lost_after: int | None = None
         self.undecodable_end: int | None = None

@@ -1,35 +1,61 @@
 """The client of a watch's URL (one per transport, all feeding the same
 :class:`~fretc.live.source.WatchSource` through an :class:`~fretc.live.events.EventQueue`):
 
-* ``ws://``, ``wss://``: the Foxglove WebSocket protocol (:class:`~fretc.live.websocket.foxglove.FoxgloveClient`);
-* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2 (:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`);
-* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS (:class:`~fretc.live.dds.client.DdsClient`);
-* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions (:class:`~fretc.live.zenoh.client.ZenohClient`).
+* ``ws://``, ``wss://``: the Foxglove WebSocket protocol
+  (:class:`~fretc.live.websocket.foxglove.FoxgloveClient`);
+* ``rosbridge://``, ``rosbridge+wss://``: rosbridge v2
+  (:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`);
+* ``dds://DOMAIN``: ROS 2's DDS mapping over Cyclone DDS
+  (:class:`~fretc.live.dds.client.DdsClient`);
+* ``zenoh://HOST:PORT``: rmw_zenoh's key expressions
+  (:class:`~fretc.live.zenoh.client.ZenohClient`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import Any, TYPE_CHECKING
+from typing import Any, Protocol, TYPE_CHECKING
 
 if TYPE_CHECKING:
     from fretc.live.websocket.session import WebSocketClient
     from fretc.live.dds.client import DdsClient
     from fretc.live.zenoh.client import ZenohClient
-    from fretc.live.watch import WatchOptions
 
-__all__ = ["make_client", "URL_SCHEMES"]
+__all__ = ["make_client", "URL_SCHEMES", "ClientOptions"]
 
 #: The URL schemes ``fretc watch`` speaks.
 URL_SCHEMES = ("ws://", "wss://", "rosbridge://", "rosbridge+wss://", "dds://", "zenoh://")
 
 
-def make_client(options: WatchOptions, wanted: Callable[[str], bool],
+class ClientOptions(Protocol):
+    """What a client is made from: the fields of :class:`fretc.live.watch.WatchOptions` that
+    name them (the URL, the reconnection delays in seconds, the topic types given on the
+    command line, the ``--msg-path`` folders, the middleware's configuration file and the
+    merge hold in seconds)."""
+
+    @property
+    def url(self) -> str: ...
+    @property
+    def backoff(self) -> float: ...
+    @property
+    def max_backoff(self) -> float: ...
+    @property
+    def types(self) -> dict[str, str] | None: ...
+    @property
+    def msg_path(self) -> tuple[str, ...]: ...
+    @property
+    def config(self) -> str | None: ...
+    @property
+    def merge_hold(self) -> float: ...
+
+
+def make_client(options: ClientOptions, wanted: Callable[[str], bool],
                 types: dict[str, str] | None = None, topics: Iterable[str] = ()
                 ) -> WebSocketClient | DdsClient | ZenohClient:
-    """The client for ``options.url`` (a :class:`~fretc.live.watch.WatchOptions`): ``wanted``
-    topic -> bool; ``types`` the bindings' ``[types]`` (overridden by ``options.types``);
-    ``topics`` the bound topics (the DDS and Zenoh clients subscribe to exactly these).
+    """The client for ``options.url`` (a :class:`~fretc.live.watch.WatchOptions`:
+    :class:`ClientOptions`): ``wanted`` topic -> bool; ``types`` the bindings' ``[types]``
+    (overridden by ``options.types``); ``topics`` the bound topics (the DDS and Zenoh clients
+    subscribe to exactly these).
 
     Raises:
         MissingDependency: the transport's package is not installed (the message names the

@@ -1,33 +1,40 @@
-"""``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket
-protocol (:class:`~fretc.live.websocket.foxglove.FoxgloveClient`), rosbridge
-(:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`), DDS or Zenoh (:mod:`fretc.live.transports`).
+"""``fretc watch``: the audit's monitors on a running robot, over the Foxglove WebSocket protocol
+(:class:`~fretc.live.websocket.foxglove.FoxgloveClient`), rosbridge
+(:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`), DDS or Zenoh
+(:mod:`fretc.live.transports`).
 
 One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
 of a recorded log, only fed live:
 
-* :class:`~fretc.live.source.WatchSource` is a :class:`fretc.logs.LogSource` whose messages come from a
-  client; each channel is decoded from the schema the server advertised (as in an MCAP);
+* :class:`~fretc.live.source.WatchSource` is a :class:`fretc.logs.LogSource` whose messages
+  come from a client instead of a file; each channel is decoded from the schema text the
+  server advertised (:func:`fretc.logs.schema_decoder`, shared with the MCAP reader: rosbags
+  for ROS messages);
 * the ticks come from :func:`fretc.signals.sample` with the same bindings (tick, time
   base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
 * every tick steps the generated monitors the audit loads (:func:`fretc.audit.load_plan`)
   for the live verdicts and events;
 * at the end the verdicts and evidence are made by the audit's own code
   (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching;
-* per-entity requirements (``$track``) get their verdicts at the end, from the audit's own code
-  over the messages kept for them (:mod:`fretc.live.entities`; live events: :mod:`fretc.live.entity_events`).
+* per-entity requirements (``$track``) get their verdicts at the end, from the audit's own code over
+  the messages kept for them (:mod:`fretc.live.entities`; live events:
+  :mod:`fretc.live.entity_events`).
 
 The run ends with the server's orderly close, every bound topic unadvertised, the
 duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
 the final verdicts are FRET's finite-trace verdicts at the last tick, as the audit's at the
 end of a log. So the same messages give the same verdicts as ``fretc audit`` (tested: each
 shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
-server, watched to the end, equal its audit; so does a ``--record``\\ ed watch).
+server, watched to the end, equal its audit; a ``--record``\\ ed watch audited offline
+equals the watch).
 
 The faults of a live run are data problems (:mod:`fretc.live.source`).
+
 Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
 verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
 end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them;
-``--record`` writes them to the ``/fretc/verdicts`` channel of the recording (foxglove.Log).
+``--record`` writes them to the ``/fretc/verdicts`` channel of the recording (foxglove.Log,
+like ``fretc report --annotate``) beside every message the watch used.
 """
 
 from __future__ import annotations
@@ -48,7 +55,8 @@ from fretc.audit.log_problems import collect_problems, problem_json
 from fretc.audit.operands import operand_values
 from fretc.audit.gaps import merged_gaps, split_bridged
 from fretc.live.merge import HOLD_SECONDS
-from fretc.audit.passes import ClockKey, ClockPass, clock_key, mark_gaps, restrict
+from fretc.audit.columns import ClockPass
+from fretc.audit.passes import ClockKey, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, recorded_gaps, run_gaps
 from fretc.live.checks import watchable
@@ -146,9 +154,10 @@ class Watch:
         options: :class:`WatchOptions`.
         on_event: called with every :class:`WatchEvent` (``--jsonl``, the live table).
 
-    :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration,
-    idle, :meth:`stop`), then returns the :class:`~fretc.audit.verdict.LogAudit` of the run (``log`` = the URL, ``kind``
-    ``"watch"``): final verdicts and evidence exactly as an audit of the same messages.
+    :meth:`run` blocks until the run ends (module docstring: close, unadvertised, duration, idle,
+    :meth:`stop`), then returns the :class:`~fretc.audit.verdict.LogAudit` of the run (``log`` = the
+    URL, ``kind`` ``"watch"``): final verdicts and evidence exactly as an audit of the same
+    messages.
     """
 
     #: Seconds between two recomputations of "violations so far" / "last trigger".
@@ -268,7 +277,8 @@ class Watch:
         return self._finish(la, verdicts, result, active if result is not None else [])
 
     def _used(self, topic: str, log_time: int, payload: bytes) -> None:
-        """A message the watch used: recorded, kept and stepped for per-entity requirements."""
+        """A message the watch used: recorded (``--record``), kept and stepped for the
+        per-entity requirements."""
         if self.recorder is not None:
             self.recorder.message(topic, log_time, payload)
         self.entities.message(topic, log_time, payload)
@@ -398,7 +408,8 @@ class Watch:
             times, columns, log_times = self._cols[key].arrays()
             passes[key] = ClockPass(sampling.groups[key], times, columns, log_times)
             mark_gaps(passes[key], spec[key][0], bindings, live_gaps, key.topics)
-            # cut short, or lost at the end (undecodable): a log cut after the last message
+            # cut short, or messages lost at the end (undecodable): judged as a log cut after
+            # the last message used (fretc.audit.damage)
             cut = src._last_time if src.publishers_left else src.lost_after
             if cut is not None:
                 passes[key].intact_end = cut + 1

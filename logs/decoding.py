@@ -2,10 +2,9 @@
 ``bytes -> message`` function per channel.
 
 Schema encodings ``ros2msg``, ``ros2idl`` and ``ros1msg``, message encodings ``cdr`` (ROS 2)
-and ``ros1`` (MCAP spec, "Well-known encodings"). Decoders read every field, or only the
-fields the signal bindings read (:mod:`fretc.logs.ros.selective`). The self-describing encodings
-(``json``, ``protobuf``, ``cbor``) are :mod:`fretc.logs.mcap.encodings`'; :func:`schema_decoder` serves
-both.
+and ``ros1`` (MCAP spec, "Well-known encodings"). Decoders read every field, or only the fields the
+signal bindings read (:mod:`fretc.logs.ros.selective`). The self-describing encodings (``json``,
+``protobuf``, ``cbor``) are :mod:`fretc.logs.mcap.encodings`'; :func:`schema_decoder` serves both.
 """
 
 from __future__ import annotations
@@ -18,7 +17,8 @@ from typing import TYPE_CHECKING, Any
 from rosbags.serde import SerdeError
 
 from fretc.logs.ros.columnar import ColumnarDecoder, columnar_decoder
-from fretc.logs.mcap.encodings import SELF_DESCRIBING, UNSUPPORTED_ENCODINGS, EncodingError, other_decoder
+from fretc.logs.mcap.encodings import (SELF_DESCRIBING, UNSUPPORTED_ENCODINGS, EncodingError,
+                                       other_decoder)
 from fretc.logs.ros.known_types import layout_mismatch
 from fretc.logs.ros.selective import selective_decoder
 

@@ -63,7 +63,7 @@ from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 from fretc.monitors.obligations import OBLIGATIONS, Interval, ObligationChecker
 
 if TYPE_CHECKING:
-    from fretc.monitors.judge3 import Unknowns
+    from fretc.monitors.unknowns import Unknowns
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
            "endpoints", "scope_mode",
@@ -298,7 +298,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
             converted by the compiler (``Formalization.ticks``); None reads the duration's
             amount as ticks.
         favour: where the condition, response and stop condition are unknown (an object
-            with bool arrays ``C``, ``R``, ``S``: :class:`fretc.monitors.judge3.Unknowns`):
+            with bool arrays ``C``, ``R``, ``S``: :class:`fretc.monitors.unknowns.Unknowns`):
             there they take the value that meets the obligation (no trigger, the response
             the timing wants, the stop condition that ends it), so the failures left are
             those the known ticks make; None: the columns as they are.

@@ -31,7 +31,8 @@ from fretc.audit.entities.summary import summary_note, summary_verdict
 from fretc.audit.finalize import finalize
 from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
 from fretc.audit.log_problems import collect_problems, problem_json
-from fretc.audit.passes import ClockPass, cut_at_damage, lost_in_words, mark_gaps
+from fretc.audit.columns import ClockPass
+from fretc.audit.passes import cut_at_damage, lost_in_words, mark_gaps
 from fretc.audit.verdict import NO_EVIDENCE, LogAudit, Ltl3, Verdict
 from fretc.common.problems import FretcInputError
 from fretc.common.streams import log_topics
@@ -120,7 +121,7 @@ def audit_entities(plan: Any, path: str, progress: Any, run: Any) -> LogAudit:
 
 def entity_passes(plan: Any, path: str, keep: Any) -> tuple[LogAudit, dict[str, Any]]:
     """The audit of the per-entity requirements of ``plan`` on the log at ``path`` and what
-    each entity was judged on: ``keep(r, pass)`` of its :class:`~fretc.audit.passes.ClockPass`
+    each entity was judged on: ``keep(r, pass)`` of its :class:`~fretc.audit.columns.ClockPass`
     by the entity's verdict's name (``R[track=7]``; none for an entity with no tick). For
     ``--write-csv`` (:mod:`fretc.audit.sampled.entities`).
 

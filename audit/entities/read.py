@@ -44,9 +44,9 @@ import numpy as np
 from fretc.audit.entities import runs as entity_runs
 from fretc.audit.entities.columns import HeldRows, RowBlock, floats
 from fretc.audit.entities.kinds import (EntityKind, EntityTable, check_stream, clock_topics,
-                                      entity_kind, key_items, own_bindings)
+                                        entity_kind, key_items, own_bindings)
 from fretc.audit.entities.rows import (item_values, key_reader, reads_items_of, row_fields,
-                                     row_values)
+                                       row_values)
 from fretc.audit.entities.runs import TickRuns, grid_run, lean_messages
 from fretc.common.problems import SignalError
 from fretc.common.streams import base_topic, log_topics

@@ -196,11 +196,11 @@ def lean_messages(c: Any) -> None:
 def _batch_entities(c: Any, msgs: list[tuple[int, int, Any]]
                     ) -> tuple[list[list[int]], list[list]] | None:
     """The entities each of ``msgs`` carries and its items, recorded in the table as
-    :meth:`EntityClock._key_entities <fretc.audit.entities.read.EntityClock._key_entities>`
-    records them one message at a time, when the keys are integers read by the clock's
-    :class:`~fretc.audit.entities.rows.KeyReader` (:meth:`~fretc.audit.entities.rows.KeyReader.batch`),
-    no key pattern selects them, and the table's bound is not met in the batch; else None
-    (and nothing recorded)."""
+    :meth:`EntityClock._key_entities <fretc.audit.entities.read.EntityClock._key_entities>` records
+    them one message at a time, when the keys are integers read by the clock's
+    :class:`~fretc.audit.entities.rows.KeyReader`
+    (:meth:`~fretc.audit.entities.rows.KeyReader.batch`), no key pattern selects them, and the
+    table's bound is not met in the batch; else None (and nothing recorded)."""
     kind, table, reader = c.kind, c.table, c.read_keys
     if reader is None or kind.matching is not None or kind.stream:
         return None

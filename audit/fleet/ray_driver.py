@@ -28,7 +28,7 @@ import sys
 from typing import Any, BinaryIO
 
 from fretc.audit.fleet.ray import (RayUnavailable, _audit_task, _first_line, _import_ray, connect,
-                    error_audit)
+                                   error_audit)
 
 __all__ = ["drive", "main"]
 

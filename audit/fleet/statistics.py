@@ -38,14 +38,14 @@ from dataclasses import dataclass
 from typing import Any, TYPE_CHECKING
 
 from fretc.audit.fleet.intervals import (MAX_MORE_RUNS, Counts, check_confidence, clopper_pearson,
-                                   cluster_interval, decide, more_runs)
+                                         cluster_interval, decide, more_runs)
 
 if TYPE_CHECKING:
     from fretc.audit.verdict import LogAudit
     from fretc.audit.model import AuditPlan
 
 __all__ = ["RequirementStatistics", "fleet_statistics", "plan_statistics", "clopper_pearson",
-           "decide", "more_runs", "judge_counts", "statistical_exit", "UNKNOWN_POLICIES",
+           "decide", "more_runs", "judge_counts", "UNKNOWN_POLICIES",
            "STAT_VERDICTS", "TRIAL_UNITS", "MAX_MORE_RUNS", "unknown_policy"]
 
 UNKNOWN_POLICIES = ("worst-case", "exclude")
@@ -275,11 +275,3 @@ def plan_statistics(plan: AuditPlan, logs: list[LogAudit], confidence: float = 0
     if len(logs) <= 1 and not any(bounds.values()):
         return None
     return fleet_statistics(logs, bounds, confidence, unknown, trial)
-
-
-def statistical_exit(stats: list[RequirementStatistics] | None) -> tuple[bool, bool]:
-    """``(failed, undecided)``: a probability requirement's statistical verdict is
-    ``fails``, or ``undecided`` (for :func:`fretc.audit.verdict.exit_code`)."""
-    stats = stats or []
-    return (any(s.verdict == "fails" for s in stats),
-            any(s.verdict == "undecided" for s in stats))

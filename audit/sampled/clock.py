@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fretc.audit.passes import ClockPass
+from fretc.audit.columns import ClockPass
 from fretc.logs.csv.source import GAP_CELL, UNKNOWN_CELL
 
 __all__ = ["SampledClock", "pass_cells", "seconds"]

@@ -14,6 +14,10 @@ is *not formalized*: it is returned in the second list, never an error for the f
 Modules: :mod:`.safe_xml` (the byte checks before any XML parser sees a file: no DTD, no
 entity, size and zip caps), :mod:`.reqif_file` (ReqIF via the ``reqif`` library),
 :mod:`.doorstop_tree` (Doorstop via the ``doorstop`` library).
+
+May import: ``fretc.common`` and the FRETish layer's entries and parser
+(:mod:`fretc.fretish.entry`, :mod:`fretc.fretish.parser`); :mod:`fretc.fretish.files` calls
+it, never the other way.
 """
 
 from __future__ import annotations

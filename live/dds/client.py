@@ -2,7 +2,8 @@
 of the robot's DDS domain and hands them to the watch engine as the Foxglove client does
 (:mod:`fretc.live.protocol`'s events on an :class:`~fretc.live.events.EventQueue`).
 
-What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types: :mod:`fretc.live.dds.idl_types`):
+What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types:
+:mod:`fretc.live.dds.idl_types`):
 
 * the graph: DDS's built-in publication topic (``DCPSPublication``, what ``ros2 topic list
   -t`` reads). A publication of ``rt/<topic>`` for a bound topic advertises the topic with the
@@ -39,8 +40,9 @@ from typing import Any
 from fretc.live.protocol import WATCH_HINT, MissingDependency
 from fretc.live.events import EventQueue
 from fretc.live.merge import HOLD_SECONDS, MergeBuffer
-from fretc.live.ros2_names import CLOCK_TOPIC, advertisement, cdr_clock_ns, dds_topic, normal_type, \
-    parse_url, ros_topic_of_dds, ros_type, standard_store
+from fretc.live.ros2_names import (CLOCK_TOPIC, advertisement, cdr_clock_ns, dds_topic,
+                                   normal_type, parse_url, ros_topic_of_dds, ros_type,
+                                   standard_store)
 
 __all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
 

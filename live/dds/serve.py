@@ -1,13 +1,14 @@
-"""``fretc replay LOG --serve dds://DOMAIN``: a recorded log's messages published on a DDS
-domain (Cyclone DDS) as a ROS 2 node would publish them: topic ``rt/<name>``, type
-``pkg::msg::dds_::Type_`` (:mod:`fretc.live.ros2_names`, :mod:`fretc.live.dds.idl_types`), each message's
-CDR bytes as recorded, its log time as the sample's source timestamp. Writers are reliable,
-keep-all (transient-local for ``/tf_static``). At the end the writers are deleted (their
-publications disposed: a watch sees the publishers leave). Channels of other encodings are
-not published (:attr:`DdsServer.skipped`).
+"""``fretc replay LOG --serve dds://DOMAIN``: a recorded log's messages published on a DDS domain
+(Cyclone DDS) as a ROS 2 node would publish them: topic ``rt/<name>``, type
+``pkg::msg::dds_::Type_`` (:mod:`fretc.live.ros2_names`, :mod:`fretc.live.dds.idl_types`), each
+message's CDR bytes as recorded, its log time as the sample's source timestamp. Writers are
+reliable, keep-all (transient-local for ``/tf_static``). At the end the writers are deleted (their
+publications disposed: a watch sees the publishers leave). Channels of other encodings are not
+published (:attr:`DdsServer.skipped`).
 
 The object has the interface of :class:`fretc.live.websocket.serve.FoxgloveServer` that
-:func:`fretc.live.websocket.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``, ``stop``).
+:func:`fretc.live.websocket.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``,
+``stop``).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""``fretc watch zenoh://HOST:PORT``: a Zenoh session (a peer of the robot's rmw_zenoh
-router or sessions) that hands the bound topics' messages to the watch engine as the
-Foxglove client does (:mod:`fretc.live.protocol`'s events on an :class:`~fretc.live.events.EventQueue`).
+"""``fretc watch zenoh://HOST:PORT``: a Zenoh session (a peer of the robot's rmw_zenoh router or
+sessions) that hands the bound topics' messages to the watch engine as the Foxglove client does
+(:mod:`fretc.live.protocol`'s events on an :class:`~fretc.live.events.EventQueue`).
 
 What it reads (naming rules and sources: :mod:`fretc.live.ros2_names`):
 
@@ -37,9 +37,9 @@ from fretc.live.protocol import WATCH_HINT, MissingDependency
 from fretc.live.events import EventQueue
 from fretc.live.merge import HOLD_SECONDS, MergeBuffer
 from fretc.live.ros2_names import (CLOCK_TOPIC, LIVELINESS_PREFIX, advertisement, attachment_time,
-                                   bridge_key, cdr_clock_ns, normal_type,
-                                   parse_bridge_liveliness, parse_liveliness, parse_url,
-                                   parse_zenoh_key, standard_store, zenoh_topic_key)
+                                   bridge_key, cdr_clock_ns, normal_type, parse_bridge_liveliness,
+                                   parse_liveliness, parse_url, parse_zenoh_key, standard_store,
+                                   zenoh_topic_key)
 
 __all__ = ["ZenohClient", "zenoh_config", "require_zenoh"]
 

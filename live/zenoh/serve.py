@@ -12,12 +12,12 @@ messages go out as zenoh-bridge-ros2dds routes a DDS robot's: on the topic's key
 (``cmd_vel``), with a bridge liveliness token and no attachment (so no source timestamp: a
 watch dates them when they arrive).
 
-The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as
-the robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes
-between them (a watch's ``--publish-diagnostics`` reaches the others). The object has the
-interface of :class:`fretc.live.websocket.serve.FoxgloveServer` that :func:`fretc.live.websocket.serve.replay_mcap` drives
-(``channel``, ``log``, ``wait_subscribed``, ``stop``), and ``unpublish`` (one publisher
-leaves, the others go on).
+The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as the
+robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes between
+them (a watch's ``--publish-diagnostics`` reaches the others). The object has the interface of
+:class:`fretc.live.websocket.serve.FoxgloveServer` that
+:func:`fretc.live.websocket.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``,
+``stop``), and ``unpublish`` (one publisher leaves, the others go on).
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ from typing import Any
 
 from fretc.logs.decoding import build_typestore
 
-from fretc.live.ros2_names import (attachment, bridge_key, bridge_liveliness, liveliness_token, parse_url,
-                         zenoh_key)
+from fretc.live.ros2_names import (attachment, bridge_key, bridge_liveliness, liveliness_token,
+                                   parse_url, zenoh_key)
 from fretc.live.zenoh.client import require_zenoh, zenoh_config
 
 __all__ = ["ZenohServer"]

@@ -19,18 +19,14 @@ from __future__ import annotations
 
 import re
 from array import array
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from decimal import Decimal, InvalidOperation
 from itertools import islice
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fretc.common.problems import CsvError
 from fretc.common.units import NS_PER_S
-
-if TYPE_CHECKING:
-    from fretc.logs.csv.source import CsvSource
 
 __all__ = ["RowReader", "CHUNK_ROWS", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clean_cells",
            "csv_time"]
@@ -159,14 +155,41 @@ def _widened(col: array) -> array:
 
 class RowReader:
     """The one pass of :meth:`CsvSource._check <fretc.logs.csv.source.CsvSource>` over the
-    data rows (module docstring): checks, the columns of the clock read, the types; sets the
-    source's figures and columns (:meth:`run`)."""
+    data rows (module docstring): checks, the columns of the clock read, the types; after
+    :meth:`run`, what it read is in its fields (the source takes them).
 
-    def __init__(self, src: CsvSource, header: list[str]) -> None:
-        self.src = src
+    Args:
+        path: the file (for errors). header: its header row's names. columns: the variables'
+            columns (the header without ``time`` and the clock column).
+        has_time: the header has a ``time`` column. keep: the columns whose values are kept
+            (None: all). grouped: the rows of several clocks, each row's clock in its clock
+            column; ``own(cells, line)`` tells whether a row is of the clock read (``clock``,
+            its label); ``period_ns``: the tick period, the time of a row without ``time``.
+
+    Fields after :meth:`run`: ``columns`` (of the clock read), ``types`` (column -> ``bool``
+    or ``float``), ``count`` (rows of the clock read), ``kept_values`` (column -> its values,
+    :class:`array.array`), ``kept_times`` (the ``time`` column, ns; None without one), ``runs``
+    ((row index, line) where rows stop being on consecutive lines), ``gap_rows`` (the
+    indexes of ``gap`` rows), ``unknown_rows`` (column -> indexes of its ``unknown`` cells)
+    and ``cut_time`` (the time of the ``cut`` row, ns; None without one).
+    """
+
+    def __init__(self, path: str, header: list[str], columns: list[str], *, has_time: bool,
+                 keep: frozenset[str] | None, grouped: bool,
+                 own: Callable[[list[str], int], bool], clock: str | None,
+                 period_ns: int) -> None:
+        self.path, self.has_time, self.grouped, self.own_row = path, has_time, grouped, own
+        self.clock, self.period_ns = clock, period_ns
+        self.columns = list(columns)
+        self.types: dict[str, str] = {}
+        self.gap_rows: list[int] = []
+        self.unknown_rows: dict[str, list[int]] = {}
+        self.cut_time: int | None = None
+        self.kept_times: array | None = None
+        self.kept_values: dict[str, array] = {}
         self.header = header
-        self.time_at = header.index("time") if src.has_time else None
-        self.variables = frozenset(src.columns)
+        self.time_at = header.index("time") if has_time else None
+        self.variables = frozenset(columns)
         #: (position, name) of the variables' columns in the header
         self.var_at = [(i, n) for i, n in enumerate(header) if n in self.variables]
         self.numeric_at: dict[str, int] = {}  # first line with a non-boolean cell
@@ -182,7 +205,7 @@ class RowReader:
         #: (row index, its line): the rows from it to the next run's are on consecutive lines
         self.runs: list[tuple[int, int]] = []
         self.next_line = -1
-        self.kept = src.keep  # the columns whose values are kept (None: all)
+        self.kept = keep  # the columns whose values are kept (None: all)
 
     def run(self, raw: Iterator[tuple[int, list[str] | CsvError]]) -> None:
         """Read the rows after the header: ``(line, cells)`` as the :mod:`csv` module reads
@@ -191,7 +214,7 @@ class RowReader:
         Raises:
             CsvError: as :class:`~fretc.logs.csv.source.CsvSource`, the first in file order.
         """
-        fast = not self.src._grouped
+        fast = not self.grouped
         take = getattr(raw, "chunk", None)  # (a file's rows: a chunk without a frame a row)
         while True:
             chunk = take(CHUNK_ROWS) if take is not None else list(islice(raw, CHUNK_ROWS))
@@ -209,31 +232,31 @@ class RowReader:
 
     # ------------------------------------------------------------------ row by row
     def _row(self, line: int, cells: list[str]) -> None:
-        src, header = self.src, self.header
+        path, header = self.path, self.header
         if len(cells) != len(header):
-            raise CsvError(src.path, line,
+            raise CsvError(path, line,
                            f"expected {len(header)} cells ({', '.join(header)}), got {len(cells)}")
         time, cell = None, ""
         if self.time_at is not None:
             cell = cells[self.time_at]
-            time = csv_time(src.path, line, cell)
+            time = csv_time(path, line, cell)
             if self.last_time is not None and time < self.last_time:
-                raise CsvError(src.path, line, f"time {cell} s goes backwards "
+                raise CsvError(path, line, f"time {cell} s goes backwards "
                                f"(previous row at {Decimal(self.last_time) / NS_PER_S} s)", column="time")
             self.last_time = time
-        if not src._own(cells, line):
+        if not self.own_row(cells, line):
             return
         if self.cut_line is not None:
-            raise CsvError(src.path, line, f"a row after the cut (line {self.cut_line}): "
+            raise CsvError(path, line, f"a row after the cut (line {self.cut_line}): "
                            "nothing was read after it")
         index = self.count
         values = self._cells(line, cells, index)
         if values is None:  # the cut row
-            src.cut_time = time if time is not None else index * src.period_ns
+            self.cut_time = time if time is not None else index * self.period_ns
             return
         if time is not None:
             if not _NS_MIN <= time <= _NS_MAX:
-                raise CsvError(src.path, line, f"time {cell} s is out of range "
+                raise CsvError(path, line, f"time {cell} s is out of range "
                                "(a tick time is at most 2^63 - 1 ns)", column="time")
             self.times.append(time)
         for name, value in values.items():
@@ -258,26 +281,26 @@ class RowReader:
     def _cells(self, line: int, cells: list[str], index: int) -> dict[str, float] | None:
         """Check one data row of the clock read: its variables' values (0 where not known),
         or None for the ``cut`` row."""
-        src = self.src
+        path = self.path
         named = {n: c for n, c in zip(self.header, cells) if n in self.variables}
-        if src._grouped:  # the clock's columns: the cells its first row fills
+        if self.grouped:  # the clock's columns: the cells its first row fills
             filled = [n for n, c in named.items() if c]
             if self.own is None:
                 self.own = filled
             elif filled != self.own:
-                raise CsvError(src.path, line, f"the cells of clock {src.clock} fill "
+                raise CsvError(path, line, f"the cells of clock {self.clock} fill "
                                f"{', '.join(filled) or 'no column'}, its first row "
                                f"{', '.join(self.own) or 'no column'}")
             named = {n: named[n] for n in self.own}
         marks = {c for c in named.values() if c in (GAP_CELL, CUT_CELL)}
         if marks and (len(marks) > 1 or any(c not in marks for c in named.values())):
-            raise CsvError(src.path, line, f"a {'/'.join(sorted(marks))} row has every cell "
+            raise CsvError(path, line, f"a {'/'.join(sorted(marks))} row has every cell "
                            f"{' or '.join(sorted(marks))}")
         if CUT_CELL in marks:
             self.cut_line = line
             return None
         if GAP_CELL in marks:
-            src.gap_rows.append(index)
+            self.gap_rows.append(index)
             return dict.fromkeys(named, 0)
         return {name: self._cell(line, name, cell, index) for name, cell in named.items()}
 
@@ -286,7 +309,7 @@ class RowReader:
         if got is None:
             got = _kind(cell)
             if got is None:
-                raise CsvError(self.src.path, line, "empty cell" if not cell else
+                raise CsvError(self.path, line, "empty cell" if not cell else
                                f"cannot read {cell!r} as true/false or a number", column=name)
             if len(self.kinds) < _KINDS_KEPT:
                 self.kinds[cell] = got
@@ -294,14 +317,14 @@ class RowReader:
         if kind == _BIT:  # either type (a column of mixed types was refused at its second)
             return value
         if kind == _UNKNOWN:
-            self.src.unknown_rows.setdefault(name, []).append(index)
+            self.unknown_rows.setdefault(name, []).append(index)
             return 0
         if kind == _WORD:
             self.word_at.setdefault(name, line)
         else:
             self.numeric_at.setdefault(name, line)
         if name in self.word_at and name in self.numeric_at:
-            raise CsvError(self.src.path, line,
+            raise CsvError(self.path, line,
                            f"column mixes true/false (line {self.word_at[name]}) with numbers "
                            f"(line {self.numeric_at[name]})", column=name)
         return value
@@ -338,7 +361,7 @@ class RowReader:
             if first_num is not None:
                 self.numeric_at[name] = lines[first_num]
             if unknown:
-                self.src.unknown_rows.setdefault(name, []).extend(base + k for k in unknown)
+                self.unknown_rows.setdefault(name, []).extend(base + k for k in unknown)
             if self.kept is not None and name not in self.kept:
                 continue
             col = self._column_of(name)
@@ -406,15 +429,11 @@ class RowReader:
         return vals, unknown, first_word, first_num
 
     def _finish(self) -> None:
-        src = self.src
         if self.own is not None:
-            src.columns = [c for c in src.columns if c in self.own]
-        elif src._grouped:
-            src.columns = []
-        src.row_count = self.count
-        src.types = {c: ("float" if c in self.numeric_at else "bool") for c in src.columns}
-        src._gap_set = frozenset(src.gap_rows)
-        src._values = {c: self.values.get(c, array("B")) for c in src.columns
-                       if self.kept is None or c in self.kept}
-        src._times = self.times if src.has_time else None
-        src._line_runs = self.runs
+            self.columns = [c for c in self.columns if c in self.own]
+        elif self.grouped:
+            self.columns = []
+        self.types = {c: ("float" if c in self.numeric_at else "bool") for c in self.columns}
+        self.kept_values = {c: self.values.get(c, array("B")) for c in self.columns
+                            if self.kept is None or c in self.kept}
+        self.kept_times = self.times if self.has_time else None

@@ -353,7 +353,15 @@ class CsvSource(LogSource):
         self.has_time = "time" in header
         self.columns = [c for c in header
                         if c != "time" and not (self._grouped and c == CLOCK_COLUMN)]
-        RowReader(self, header).run(raw)
+        reader = RowReader(self.path, header, self.columns, has_time=self.has_time,
+                           keep=self.keep, grouped=self._grouped, own=self._own,
+                           clock=self.clock, period_ns=self.period_ns)
+        reader.run(raw)
+        self.columns, self.types, self.row_count = reader.columns, reader.types, reader.count
+        self.gap_rows, self.unknown_rows = reader.gap_rows, reader.unknown_rows
+        self.cut_time, self._gap_set = reader.cut_time, frozenset(reader.gap_rows)
+        self._values, self._times = reader.kept_values, reader.kept_times
+        self._line_runs = reader.runs
 
     def _own(self, cells: list[str], line: int) -> bool:
         """Whether a data row belongs to the clock read (its :data:`CLOCK_COLUMN` cell)."""

@@ -24,8 +24,8 @@ from mcap.records import Channel, ChunkIndex, Message as McapMessage, Schema, St
 
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem
-from fretc.logs.mcap.records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD,
-                           crc_skip, decompress, parse_record)
+from fretc.logs.mcap.records import (DATA_END_LEN, FOOTER_LEN, MCAP_MAGIC, RECORD_ERRORS,
+                                     RECORD_HEAD, crc_skip, decompress, parse_record)
 
 __all__ = ["McapIndex", "SummaryRead", "read_summary", "check_data_section", "cut_record",
            "ends_with_footer", "GAP_NOTE"]

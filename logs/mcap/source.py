@@ -31,12 +31,15 @@ from mcap.stream_reader import CRCValidationError
 from fretc.common import problems as P
 from fretc.common.problems import DataProblem, LogError
 from fretc.logs.base import Gap, LogSource, Message, header_stamp
-from fretc.logs.decoding import DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema, schema_decoder
+from fretc.logs.decoding import (DECODE_ERRORS, SCHEMA_FOR_ENCODING, UnsupportedSchema,
+                                 schema_decoder)
 from fretc.logs.mcap.encodings import SELF_DESCRIBING, type_name
-from fretc.logs.mcap.integrity import GAP_NOTE, McapIndex, check_data_section, cut_record, ends_with_footer
+from fretc.logs.mcap.integrity import (GAP_NOTE, McapIndex, check_data_section, cut_record,
+                                       ends_with_footer)
 from fretc.logs.mcap.integrity import index_disagreement, missing_records, read_summary
 from fretc.logs.mcap.columns import TopicBlock, column_pass
-from fretc.logs.mcap.records import MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages, chunk_records
+from fretc.logs.mcap.records import (MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages,
+                                     chunk_records)
 from fretc.logs.mcap.records import crc_skip, data_follows, parse_record
 from fretc.logs.recorded_gaps import WATCH_LIBRARY, first_start, gap_problems, read_recorded_gaps
 from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue

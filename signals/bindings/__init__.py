@@ -76,6 +76,10 @@ The modules, in the order they build on each other:
 * :mod:`~fretc.signals.bindings.typecheck`: a binding against a log's message types;
 * :mod:`~fretc.signals.bindings.spec`: :class:`Bindings`, :class:`TickSpec`, :class:`LogSelector`;
 * :mod:`~fretc.signals.bindings.files`: binding files (TOML).
+
+May import: ``fretc.common``, ``fretc.fretish`` and ``fretc.logs`` (the schemas of a log's
+types, the names of its encodings' constants) for the type checks; it sits below the rest
+of ``fretc.signals`` (the sampling), which uses it.
 """
 
 from __future__ import annotations

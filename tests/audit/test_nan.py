@@ -233,7 +233,7 @@ def test_a_requirements_nan_ticks_are_found_once_per_pass_and_follow_its_columns
     import dataclasses
 
     from fretc.audit import finalize as F
-    from fretc.audit.passes import ClockPass
+    from fretc.audit.columns import ClockPass
 
     calls: list[int] = []
     real = F.nan_ticks

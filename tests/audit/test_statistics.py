@@ -12,8 +12,8 @@ import pytest
 from click.testing import CliRunner
 from scipy.stats import binomtest
 
-from fretc.audit.fleet.statistics import (RequirementStatistics, clopper_pearson, decide, fleet_statistics,
-                              more_runs)
+from fretc.audit.fleet.statistics import (RequirementStatistics, clopper_pearson, decide,
+                                          fleet_statistics, more_runs)
 from fretc.audit.verdict import EXIT_UNDECIDED, LogAudit, Verdict, exit_code
 from fretc.compiler.ir import ProbabilityBound
 from fretc.cli import main

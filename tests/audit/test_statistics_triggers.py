@@ -16,7 +16,7 @@ from hypothesis import given, settings, strategies as st
 from scipy.stats import beta, binomtest
 
 from fretc.audit.fleet.intervals import (Counts, clopper_pearson, cluster_interval,
-                                   effective_clopper_pearson)
+                                         effective_clopper_pearson)
 from fretc.audit.fleet.statistics import fleet_statistics
 from fretc.audit.trials import Trials
 from fretc.audit.verdict import LogAudit, Verdict, exit_code

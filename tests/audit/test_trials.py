@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from fretc.audit.trials import TIMED_WINDOWS, trigger_outcomes, trigger_trials
 from fretc.fretish.parser import parse
 from fretc.monitors.interval import evaluate_requirement
-from fretc.monitors.judge3 import Unknowns
+from fretc.monitors.unknowns import Unknowns
 
 SCOPES = ["", "in mode m ", "unless in mode m ", "only in mode m ", "after m ", "before m ",
           "only after m ", "only before m "]

@@ -8,8 +8,8 @@ import pytest
 from fretc.live.events import EventQueue
 from fretc.live.merge import MAX_HELD, MergeBuffer
 from fretc.live.ros2_names import (attachment, attachment_time, dds_topic, dds_type,
-                             liveliness_token, parse_liveliness, parse_url, parse_zenoh_key,
-                             ros_topic_of_dds, ros_type, zenoh_key)
+                                   liveliness_token, parse_liveliness, parse_url, parse_zenoh_key,
+                                   ros_topic_of_dds, ros_type, zenoh_key)
 
 
 def test_urls():

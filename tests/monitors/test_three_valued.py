@@ -125,7 +125,8 @@ SCOPED = [
 
 def _definite_triggers(text, cols, unknown, n):
     from fretc.monitors.interval import evaluate_requirement
-    from fretc.monitors.judge3 import Unknowns, definite_evidence
+    from fretc.monitors.judge3 import definite_evidence
+    from fretc.monitors.unknowns import Unknowns
 
     c, _ms = _compiled_of(text)
     req, ticks = c.entry.requirement, c.formalization.ticks

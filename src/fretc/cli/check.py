@@ -32,7 +32,7 @@ from fretc.check.budget import (DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK,
 from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, FiniteRange, shown, text_attribute
 
 if TYPE_CHECKING:
-    from fretc.check.analysis import CheckResult
+    from fretc.check.findings import CheckResult
 
 __all__ = ["check_cmd", "render_text"]
 

@@ -263,7 +263,8 @@ def _check_address(ctx, param, value):
     import importlib.util  # lazy: only for --ray (start-up time)
 
     if importlib.util.find_spec("ray") is None:
-        from fretc.audit.fleet.ray import RAY_HINT  # lazy: the audit engine is not loaded for --help
+        # lazy: the audit engine is not loaded for --help
+        from fretc.audit.fleet.ray import RAY_HINT
 
         raise click.UsageError(RAY_HINT, ctx=ctx)
     ok = (value in ("local", "auto") or value.startswith("ray://")
