@@ -1,9 +1,12 @@
-"""Fuzz fretc with hostile inputs other than requirement text (logs, bindings, live frames,
-sources, outputs, test runs):
+"""Fuzz fretc with hostile inputs other than requirement text: forged MCAP indexes,
+decompression bombs, cut and bit-flipped logs, schemas that lie, hostile binding files,
+hostile live frames (Foxglove and rosbridge) and buses (DDS, Zenoh), and hostile requirement
+sources, outputs and test runs:
 
     python bench/fuzz_hostile.py --count 2000 [--seed N] [--classes index,bomb,...] [--shard K/N]
 
-A fresh seed unless ``--seed`` is given (printed first; same seed, same inputs). Per class:
+Each run takes a fresh seed unless ``--seed`` is given; the seed is printed first, and the
+same seed gives the same inputs. Per class:
 
 * ``index``: a small MCAP with its ChunkIndex records (times, offsets, lengths, channel
   lists), MessageIndex records and summary CRC forged at random; audited;
@@ -30,18 +33,22 @@ A fresh seed unless ``--seed`` is given (printed first; same seed, same inputs).
   old and huge log times, cut payloads) watched by ``fretc watch --duration 3``;
 * ``bus``: hostile DDS or Zenoh publishers (random payloads, one publisher leaving while the
   others go on, a publisher leaving and coming back, floods) watched for 4 s;
-* ``typed``: a wrongly typed value in a FRET export, a binding file, a ``--psl-map`` file or
-  a falsify space (``bench/fuzz_live_inputs.py``: these three); ``lsp``: a hostile session
-  of ``fretc lsp`` (``bench/fuzz_lsp.py``); ``flight``: damaged PX4 ULogs and DataFlash logs
-  audited against the intact log's verdicts (``bench/fuzz_flight.py``);
+* ``typed``: a command fed a wrongly typed value in a FRET JSON export, a binding file, a
+  ``--psl-map`` file or a falsify space (``bench/fuzz_live_inputs.py`` has these three);
+* ``lsp``: a hostile session of ``fretc lsp`` (framing, documents, requests at random
+  places; ``bench/fuzz_lsp.py``): no traceback, every request answered within 15 s, under
+  1 GB, a clean exit;
+* ``flight``: damaged PX4 ULogs and ArduPilot DataFlash logs (cut, zeroed spans, garbage
+  after the formats; ``bench/fuzz_flight.py``), audited against the intact log's verdicts;
 * ``reqif``, ``doorstop``, ``exports``, ``explain``: hostile ReqIF files and XHTML values,
   Doorstop trees, exported results read back by each format's library, and ``fretc
   explain``/``simulate`` of random requirements and traces (``bench/fuzz_sources.py``);
 * ``statistics``: hostile fleets, campaigns and option values against the statistics of
-  probability requirements (``bench/fuzz_statistics.py``: never a bound the trials do not
-  support); ``crunner``, ``split``, ``prism``, ``entities``, ``windows`` (the C runner's
-  input and names, PRISM, the entity bound, windows at 10^6 messages:
-  ``bench/fuzz_emit.py``), ``testsjson``, ``drive``, ``lspnest`` (``bench/fuzz_runs.py``).
+  probability requirements (``bench/fuzz_statistics.py``: its oracle, never a bound decided
+  that the trials do not support);
+* ``crunner``, ``split``, ``prism``, ``entities``, ``windows`` (the C runner's input and
+  names, PRISM, the entity bound, windows at 10^6 messages: ``bench/fuzz_emit.py``),
+  ``testsjson``, ``drive``, ``lspnest`` (``bench/fuzz_runs.py``).
 
 A failure is a traceback (any exception but an input error), or for an audited log a verdict
 the damaged log does not support (:func:`unsupported`: the rule of
