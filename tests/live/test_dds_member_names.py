@@ -17,18 +17,9 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from fretc.live.dds.idl_types import LOOPBACK_XML  # noqa: E402
-
 from _dds import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.watch
-
-
-@pytest.fixture()
-def dds_xml(tmp_path):
-    path = tmp_path / "loopback.xml"
-    path.write_text(LOOPBACK_XML, encoding="utf-8")
-    return str(path)
 
 
 def test_a_publisher_naming_members_without_the_underscore_is_read(tmp_path, dds_xml):

@@ -5,12 +5,8 @@ the last array names each requirement `fretc: <id>` with the level and verdict o
 `fretc audit` of the same log. Everything on 127.0.0.1, multicast off."""
 
 import json
-import os
-import subprocess
-import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import pytest
 
@@ -18,19 +14,15 @@ pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not instal
                     "pip install 'fretc[watch]'")
 pytest.importorskip("zenoh", reason="eclipse-zenoh is not installed: pip install 'fretc[watch]'")
 
-from click.testing import CliRunner  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import byte, int32, sequence, uint32  # noqa: E402
 
-from fretc.cli import main  # noqa: E402
-from fretc.live.dds.idl_types import LOOPBACK_XML, open_participant  # noqa: E402
+from fretc.live.dds.idl_types import open_participant  # noqa: E402
 
-from _dds import fresh_domain  # noqa: E402
+from _bus import REQS, ROOT, audit_json, bus_url, replay, watch_process  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
-ROOT = Path(__file__).resolve().parents[2]
-REQS = str(ROOT / "requirements")
 TRACE = ROOT / "traces" / "stop_delay.mcap"
 LEVEL = {"satisfied": 0, "vacuous": 0, "violated": 2, "error": 2, "unknown": 3}
 
@@ -68,28 +60,13 @@ class DiagnosticArray_(IdlStruct, typename="diagnostic_msgs::msg::dds_::Diagnost
     status_: sequence[DiagnosticStatus_]
 
 
-def _port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _run(url: str, extra: list[str], tmp_path) -> tuple[int, dict]:
+def _run(url: str, dds_xml: str, tmp_path) -> tuple[int, dict]:
     """Replay the trace on ``url`` and watch it with --publish-diagnostics, each in its own
     process; (watch exit code, watch JSON)."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    fretc = [sys.executable, "-m", "fretc"]
-    rep = subprocess.Popen([*fretc, "replay", str(TRACE), "--serve", url, "--rate", "30",
-                            *extra], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL)
+    rep = replay(TRACE, url, dds_xml, quiet=True)
     out = tmp_path / "w.json"
     try:
-        res = subprocess.run([*fretc, "watch", url, "-r", REQS, "--no-live", "--json",
-                              str(out), "--wait", "10", "--duration", "120",
-                              "--publish-diagnostics", *extra],
-                             cwd=ROOT, env=env, capture_output=True, text=True, timeout=150)
+        res = watch_process(url, ["-r", REQS], out, dds_xml, "--publish-diagnostics")
         rep.wait(30)
     finally:
         rep.kill()
@@ -98,9 +75,7 @@ def _run(url: str, extra: list[str], tmp_path) -> tuple[int, dict]:
 
 
 def _audit(tmp_path) -> dict[str, str]:
-    out = tmp_path / "a.json"
-    CliRunner().invoke(main, ["audit", "-r", REQS, str(TRACE), "--json", str(out)])
-    doc = json.loads(out.read_text())
+    _code, doc = audit_json(TRACE, tmp_path / "a.json")
     return {v["requirement"]: v["verdict"] for log in doc["logs"] for v in log["verdicts"]}
 
 
@@ -113,19 +88,17 @@ def _check(last: list[tuple[str, int, dict]], audit: dict[str, str]) -> None:
         assert (values["first_violation_s"] != "") == (verdict == "violated")
 
 
-def test_diagnostics_over_dds_read_back_with_own_idl_types(tmp_path):
+def test_diagnostics_over_dds_read_back_with_own_idl_types(tmp_path, dds_xml):
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
-    xml = tmp_path / "lo.xml"
-    xml.write_text(LOOPBACK_XML, encoding="utf-8")
-    domain = fresh_domain()
-    dp = open_participant(domain, str(xml))  # configures the domain as the watch's own
+    url = bus_url("dds")
+    dp = open_participant(int(url[len("dds://"):]), dds_xml)  # configured as the watch's own
     reader = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray_),
                         qos=Qos(Policy.Reliability.Reliable(max_blocking_time=10**8),
                                 Policy.History.KeepAll))
-    code, _doc = _run(f"dds://{domain}", ["--dds-config", str(xml)], tmp_path)
+    code, _doc = _run(url, dds_xml, tmp_path)
     time.sleep(0.5)
     arrays = [a for a in reader.take(10_000) if a.sample_info.valid_data]
     assert len(arrays) >= 2  # while watching, and the final verdicts
@@ -139,14 +112,14 @@ def test_diagnostics_over_zenoh_read_back_by_key_expression(tmp_path):
     import zenoh
     from rosbags.typesys import Stores, get_typestore
 
-    port = _port()
+    url = bus_url("zenoh")
+    port = int(url.rsplit(":", 1)[1])
     got: list[tuple[str, bytes]] = []
     cfg = zenoh.Config()
     cfg.insert_json5("mode", '"peer"')
     cfg.insert_json5("scouting/multicast/enabled", "false")
     cfg.insert_json5("connect/endpoints", f'["tcp/127.0.0.1:{port}"]')
     store = get_typestore(Stores.ROS2_HUMBLE)
-    url = f"zenoh://127.0.0.1:{port}"
     holder = {}
 
     def listen():  # the replay's router is up once it listens; retry until connected
@@ -161,7 +134,7 @@ def test_diagnostics_over_zenoh_read_back_by_key_expression(tmp_path):
     t = threading.Timer(1.0, listen)
     t.start()
     try:
-        code, _doc = _run(url, [], tmp_path)
+        code, _doc = _run(url, "", tmp_path)
     finally:
         t.join()
         time.sleep(0.3)

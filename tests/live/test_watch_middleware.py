@@ -7,11 +7,7 @@ receive the replay's messages under ROS 2's wire names (more Zenoh cases:
 tests/live/test_watch_zenoh.py). Everything on 127.0.0.1, multicast off."""
 
 import json
-import os
-import socket
 import struct
-import subprocess
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,75 +25,26 @@ from click.testing import CliRunner  # noqa: E402
 from fretc.cli import main  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.idl.types import float64  # noqa: E402
-from fretc.live.dds.idl_types import LOOPBACK_XML, open_participant  # noqa: E402
+from fretc.live.dds.idl_types import open_participant  # noqa: E402
 
+from _bus import (FLOAT64, REQS, ROOT, T0, audit_json, bus_server, bus_url,  # noqa: E402
+                  float64_cdr, free_port, replay, verdicts, watch_process, watch_while,
+                  write_watch_files)
 from _dds import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
-ROOT = Path(__file__).resolve().parents[2]
 TRACES = sorted((ROOT / "traces").glob("*.mcap"))
-REQS = str(ROOT / "requirements")
-RATE = "30"
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture()
-def dds_xml(tmp_path):
-    path = tmp_path / "loopback.xml"
-    path.write_text(LOOPBACK_XML, encoding="utf-8")
-    return str(path)
-
-
-def _url(transport: str) -> str:
-    if transport == "dds":
-        return f"dds://{fresh_domain()}"
-    return f"zenoh://127.0.0.1:{_port()}"
-
-
-def _config(url: str, dds_xml: str) -> list[str]:
-    return ["--dds-config", dds_xml] if url.startswith("dds://") else []
-
-
-def _fretc(*args: str) -> list[str]:
-    return [sys.executable, "-m", "fretc", *args]
-
-
-def _replay(trace: Path, url: str, dds_xml: str, rate: str = RATE) -> "subprocess.Popen":
-    return subprocess.Popen(_fretc("replay", str(trace), "--serve", url, "--rate", rate,
-                                   *_config(url, dds_xml)),
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
-
-
-def _verdicts(doc: dict) -> list[tuple]:
-    return [(v["requirement"], v["verdict"], v.get("first_violation"), v.get("robustness"))
-            for log in doc["logs"] for v in log["verdicts"]]
-
-
-def _audit(trace: Path, tmp_path) -> tuple[int, dict]:
-    out = tmp_path / "audit.json"
-    res = CliRunner().invoke(main, ["audit", "-r", REQS, str(trace), "--json", str(out)])
-    return res.exit_code, json.loads(out.read_text())
 
 
 def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str, *extra: str):
     """Replay ``trace`` over ``transport`` in one process, watch it in another until it ends
     by itself; (exit code, watch JSON, replay's stderr)."""
-    url = _url(transport)
+    url = bus_url(transport)
     out = tmp_path / f"watch-{transport}.json"
-    rep = _replay(trace, url, dds_xml)
+    rep = replay(trace, url, dds_xml)
     try:
-        res = subprocess.run(_fretc("watch", url, "-r", REQS, "--json", str(out), "--no-live",
-                                    "--wait", "10", "--duration", "120",
-                                    *_config(url, dds_xml), *extra),
-                             cwd=ROOT, capture_output=True, text=True, timeout=150,
-                             env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
+        res = watch_process(url, ["-r", REQS], out, dds_xml, *extra)
         _o, err = rep.communicate(timeout=30)
     finally:
         rep.kill()
@@ -106,10 +53,10 @@ def _watch_replayed(trace: Path, transport: str, tmp_path, dds_xml: str, *extra:
 
 
 def _assert_same(trace, transport, tmp_path, dds_xml, *extra):
-    code, audit = _audit(trace, tmp_path)
+    code, audit = audit_json(trace, tmp_path / "audit.json")
     wcode, watch, err = _watch_replayed(trace, transport, tmp_path, dds_xml, *extra)
     assert "sent" in err
-    assert _verdicts(watch) == _verdicts(audit)
+    assert verdicts(watch) == verdicts(audit)
     assert watch["logs"][0].get("problems", []) == []
     assert wcode == code
     return audit
@@ -121,8 +68,8 @@ def test_replayed_trace_watched_to_its_end_equals_the_audit(transport, tmp_path,
     rec = tmp_path / "rec.mcap"
     audit = _assert_same(ROOT / "traces" / "stop_delay.mcap", transport, tmp_path, dds_xml,
                          "--record", str(rec))
-    code, recorded = _audit(rec, tmp_path)
-    assert _verdicts(recorded) == _verdicts(audit)
+    code, recorded = audit_json(rec, tmp_path / "audit.json")
+    assert verdicts(recorded) == verdicts(audit)
 
 
 @pytest.mark.slow
@@ -179,7 +126,7 @@ def test_an_independent_dds_subscriber_reads_ros2_wire_names(tmp_path, dds_xml):
     tw = DataReader(dp, Topic(dp, "rt/cmd_vel_filtered", Twist_), qos=qos)
     bo = DataReader(dp, Topic(dp, "rt/gwendolen_control", Bool_), qos=qos)
     trace = ROOT / "traces" / "stop_delay.mcap"
-    rep = _replay(trace, f"dds://{domain}", dds_xml, rate="60")
+    rep = replay(trace, f"dds://{domain}", dds_xml, rate="60")
     twists, bools = [], []
     deadline = time.monotonic() + 40
     while rep.poll() is None and time.monotonic() < deadline:
@@ -203,9 +150,9 @@ def test_an_independent_dds_subscriber_reads_ros2_wire_names(tmp_path, dds_xml):
 def test_an_independent_zenoh_subscriber_reads_rmw_zenoh_key_expressions(tmp_path, dds_xml):
     import zenoh
 
-    port = _port()
+    port = free_port()
     trace = ROOT / "traces" / "stop_delay.mcap"
-    rep = _replay(trace, f"zenoh://127.0.0.1:{port}?domain=3", dds_xml, rate="60")
+    rep = replay(trace, f"zenoh://127.0.0.1:{port}?domain=3", dds_xml, rate="60")
     cfg = zenoh.Config()
     cfg.insert_json5("mode", '"peer"')
     cfg.insert_json5("scouting/multicast/enabled", "false")
@@ -244,44 +191,26 @@ def test_one_publisher_leaving_while_the_run_goes_on_is_unknown_not_held(transpo
     reading /b is ``unknown`` (its "always" obligation is open where /b's publisher left;
     its last value is never held over the rest of the run), the one reading only /a is
     ``satisfied`` (not affected), the run is partial and the exit code 3."""
-    import threading
-
-    from fretc.live.dds.serve import DdsServer
-    from fretc.live.zenoh.serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text(
-        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
-        "RB: the robot shall always satisfy b_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
-        'b_ok = "/b.data > 0"\n', encoding="utf-8")
-    url = _url(transport)
-    server = (DdsServer(url, dds_xml) if transport == "dds" else ZenohServer(url))
-    for topic in ("/a", "/b"):
-        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-    one = b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
+    fret = write_watch_files(tmp_path, "RA: the robot shall always satisfy a_ok\n"
+                             "RB: the robot shall always satisfy b_ok\n",
+                             'a_ok = "/a.data > 0"\nb_ok = "/b.data > 0"\n')
+    url = bus_url(transport)
+    server = bus_server(url, dds_xml, ("/a", "/b"))
+    one = float64_cdr(1.0)
 
     def publish():
         server.wait_subscribed(["/a", "/b"], timeout=30)
-        t0 = 1_700_000_000 * 10**9
         for k in range(30):
-            server.log("/a", one, t0 + k * 100_000_000)
+            server.log("/a", one, T0 + k * 100_000_000)
             if k < 10:
-                server.log("/b", one, t0 + k * 100_000_000 + 1)
+                server.log("/b", one, T0 + k * 100_000_000 + 1)
             if k == 10:
                 server.unpublish("/b")
             time.sleep(0.05)
         time.sleep(0.3)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    args = ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live", "--json", str(out),
-            "--duration", "30", "--wait", "10", "--restart-grace", "1"]
-    res = CliRunner().invoke(main, args + _config(url, dds_xml))
-    t.join(20)
-    log = json.loads(out.read_text())["logs"][0]
+    res, log = watch_while(publish, url, fret, dds_xml)
     by = {v["requirement"]: v for v in log["verdicts"]}
     assert log["messages"] == {"/a": 30, "/b": 10}
     assert by["RA"]["verdict"] == "satisfied"
@@ -298,46 +227,30 @@ def test_a_qos_that_cannot_match_is_reported_and_its_requirement_is_not_judged(t
     watch's reader asks for transient-local) cannot match: a ``protocol`` problem naming
     the topic and the incompatible QoS; the requirement reading it is ``error`` (no
     message), the one reading ``/a`` is judged as usual."""
-    import threading
-
     from cyclonedds.qos import Policy, Qos
     from fretc.live.dds import idl_types as dds_types
-    from fretc.live.dds.serve import DdsServer
 
     monkeypatch.setattr(dds_types, "writer_qos", lambda topic="": Qos(
         Policy.Reliability.Reliable(max_blocking_time=10**9), Policy.History.KeepAll,
         Policy.Durability.Volatile))
-    (tmp_path / "w.fret").write_text(
-        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
-        "RT: the robot shall always satisfy t_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
-        't_ok = "/tf_static.data > 0"\n', encoding="utf-8")
-    url = _url("dds")
-    server = DdsServer(url, dds_xml)
-    for topic in ("/a", "/tf_static"):
-        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-    one = b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
+    fret = write_watch_files(tmp_path, "RA: the robot shall always satisfy a_ok\n"
+                             "RT: the robot shall always satisfy t_ok\n",
+                             'a_ok = "/a.data > 0"\nt_ok = "/tf_static.data > 0"\n')
+    url = bus_url("dds")
+    server = bus_server(url, dds_xml, ("/a", "/tf_static"))
+    one = float64_cdr(1.0)
 
     def publish():
         server.wait_subscribed(["/a"], timeout=30)
         time.sleep(0.5)
-        t0 = 1_700_000_000 * 10**9
         for k in range(20):
-            server.log("/a", one, t0 + k * 100_000_000)
-            server.log("/tf_static", one, t0 + k * 100_000_000 + 1)
+            server.log("/a", one, T0 + k * 100_000_000)
+            server.log("/tf_static", one, T0 + k * 100_000_000 + 1)
             time.sleep(0.02)
         time.sleep(0.3)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "30", "--wait", "10",
-                                    "--restart-grace", "1", *_config(url, dds_xml)])
-    t.join(20)
-    log = json.loads(out.read_text())["logs"][0]
+    res, log = watch_while(publish, url, fret, dds_xml)
     by = {v["requirement"]: v for v in log["verdicts"]}
     assert by["RA"]["verdict"] == "satisfied"
     assert by["RT"]["verdict"] == "error" and "/tf_static" in by["RT"]["error"]
@@ -351,23 +264,15 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
     """A robot on simulated time publishes ``/clock`` (rosgraph_msgs/Clock): the watch's
     log times are the last ``/clock`` received, not the samples' source timestamps (here a
     wall clock 1.7e9 s away): the violation at simulated second 100.5 is reported there."""
-    import threading
-
-    from fretc.live.dds.serve import DdsServer
-    from fretc.live.zenoh.serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
-        encoding="utf-8")
-    url = _url(transport)
-    server = DdsServer(url, dds_xml) if transport == "dds" else ZenohServer(url)
+    fret = write_watch_files(tmp_path, "RA: the robot shall always satisfy a_ok\n",
+                             'a_ok = "/a.data > 0"\n')
+    url = bus_url(transport)
+    server = bus_server(url, dds_xml)
     server.channel("/clock", "cdr", "rosgraph_msgs/msg/Clock", "ros2msg",
                    b"builtin_interfaces/Time clock\n" + b"=" * 80
                    + b"\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
     assert "/clock" not in server.skipped
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    server.channel("/a", *FLOAT64)
     wall = 1_700_000_000 * 10**9
 
     def publish():
@@ -377,20 +282,12 @@ def test_on_simulated_time_log_times_come_from_clock(transport, tmp_path, dds_xm
             sec, ns = divmod(100 * 10**9 + k * 100_000_000, 10**9)
             server.log("/clock", b"\x00\x01\x00\x00" + struct.pack("<iI", sec, ns), wall)
             time.sleep(0.03)  # the clock first, then the message it dates
-            server.log("/a", b"\x00\x01\x00\x00" + struct.pack("<d", -1.0 if k >= 5 else 1.0),
-                       wall + k)
+            server.log("/a", float64_cdr(-1.0 if k >= 5 else 1.0), wall + k)
             time.sleep(0.03)
         time.sleep(0.3)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "30", "--wait", "10",
-                                    "--restart-grace", "1", *_config(url, dds_xml)])
-    t.join(20)
-    log = json.loads(out.read_text())["logs"][0]
+    res, log = watch_while(publish, url, fret, dds_xml)
     (v,) = log["verdicts"]
     assert v["verdict"] == "violated", v
     # on /clock's time (a message may, under load, overtake the /clock before it: one tick)
@@ -439,20 +336,11 @@ def test_a_string_typed_bound_topic_is_watched_as_it_is_audited(transport, case,
     out = tmp_path / "a.json"
     CliRunner().invoke(main, ["audit", *reqs, str(log), "--json", str(out)])
     audit = json.loads(out.read_text())
-    url = {"ws": f"ws://127.0.0.1:{_port()}",  # a DDS domain of this worker's own
-           "dds": f"dds://{fresh_domain()}"}.get(transport) or _url(transport)
-    serve = (["--serve", "--port", url.rsplit(":", 1)[1]] if transport == "ws"
-             else ["--serve", url, *_config(url, dds_xml)])
-    rep = subprocess.Popen(_fretc("replay", str(log), *serve, "--rate", "10"), cwd=ROOT,
-                           stderr=subprocess.PIPE, env={**os.environ,
-                                                        "PYTHONPATH": str(ROOT / "src")})
+    url = bus_url(transport)
+    rep = replay(log, url, dds_xml, "10")
     wout = tmp_path / "w.json"
     try:
-        res = subprocess.run(_fretc("watch", url, *reqs, "--json", str(wout), "--no-live",
-                                    "--wait", "10", "--duration", "60",
-                                    *_config(url, dds_xml)),
-                             cwd=ROOT, capture_output=True, text=True, timeout=120,
-                             env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
+        res = watch_process(url, reqs, wout, dds_xml, duration="60", timeout=120)
     finally:  # (the watch has ended: the replay is done, or, when the watch refused the
         rep.kill()  # bindings before it subscribed, waits for a subscriber in vain)
     assert "internal error" not in res.stderr + res.stdout, res.stderr

@@ -3,9 +3,6 @@ has that): payloads that do not decode, a topic of another type than the binding
 samples on wildcard key expressions, and zenoh-bridge-ros2dds's layout. Each test runs its
 own Zenoh peer on 127.0.0.1 with a server written here; everything in one process."""
 
-import json
-import socket
-import struct
 import time
 
 import pytest
@@ -14,54 +11,32 @@ from _gaps import left_for_good  # noqa: E402
 
 pytest.importorskip("zenoh", reason="eclipse-zenoh is not installed: pip install 'fretc[watch]'")
 
-from click.testing import CliRunner  # noqa: E402
-
-from fretc.cli import main  # noqa: E402
+from _bus import T0, bus_server, bus_url, float64_cdr, watch_while, write_watch_files  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+#: one requirement over /a's std_msgs/Float64
+RA = ("RA: the robot shall always satisfy a_ok\n", 'a_ok = "/a.data > 0"\n')
 
 
 def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
     """A message that does not decode opens a gap: the run is partial (exit 3), never a
     clean pass; the watch ends by itself when the publisher leaves."""
-    from fretc.live.zenoh.serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
-        encoding="utf-8")
-    port = _port()
-    url = f"zenoh://127.0.0.1:{port}"
-    server = ZenohServer(url)
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-    import threading
+    fret = write_watch_files(tmp_path, *RA)
+    url = bus_url("zenoh")
+    server = bus_server(url, "", ("/a",))
 
     def publish():
         server.wait_subscribed(timeout=30)
-        t0 = 1_700_000_000 * 10**9
         for k in range(30):
-            data = b"\x00\x01" if k == 15 else b"\x00\x01\x00\x00" + struct.pack("<d", 1.0)
-            server.log("/a", data, t0 + k * 50_000_000)
+            data = b"\x00\x01" if k == 15 else float64_cdr(1.0)
+            server.log("/a", data, T0 + k * 50_000_000)
             time.sleep(0.005)
         time.sleep(0.5)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "60",
-                                    "--restart-grace", "0.5"])
-    t.join(10)
-    doc = json.loads(out.read_text())
-    kinds = {p["kind"] for p in doc["logs"][0]["problems"]}
+    res, log = watch_while(publish, url, fret, duration=60, wait=None, grace=0.5, join=10)
+    kinds = {p["kind"] for p in log["problems"]}
     assert "undecodable" in kinds, res.output
     assert res.exit_code == 3, res.output
 
@@ -69,35 +44,19 @@ def test_a_truncated_zenoh_payload_is_undecodable_not_held_over(tmp_path):
 def test_a_topic_of_another_type_than_the_bindings_expect_is_not_read(tmp_path):
     """/a is bound as std_msgs/Bool ([types]) but carries Float64: reported, its
     requirement is error (exit 2), never judged from a misread value."""
-    import threading
-
-    from fretc.live.zenoh.serve import ZenohServer
-
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
-        '[types]\n"/a" = "std_msgs/msg/Bool"\n', encoding="utf-8")
-    url = f"zenoh://127.0.0.1:{_port()}"
-    server = ZenohServer(url)
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    fret = write_watch_files(tmp_path, *RA, '[types]\n"/a" = "std_msgs/msg/Bool"\n')
+    url = bus_url("zenoh")
+    server = bus_server(url, "", ("/a",))
 
     def publish():
         server.wait_subscribed(timeout=30)
         for k in range(10):
-            server.log("/a", b"\x00\x01\x00\x00" + struct.pack("<d", 1.0),
-                       1_700_000_000 * 10**9 + k * 50_000_000)
+            server.log("/a", float64_cdr(1.0), T0 + k * 50_000_000)
         time.sleep(0.3)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "20", "--wait", "5",
-                                    "--restart-grace", "0.5"])
-    t.join(10)
-    (v,) = json.loads(out.read_text())["logs"][0]["verdicts"]
+    res, log = watch_while(publish, url, fret, duration=20, wait=5, grace=0.5, join=10)
+    (v,) = log["verdicts"]
     assert v["verdict"] == "error"
     assert "std_msgs/msg/Bool" in v["error"] and "/a" in v["error"], v["error"]
     assert res.exit_code == 2, res.output
@@ -109,39 +68,25 @@ def test_samples_on_wildcard_keys_are_messages_of_the_topic_they_reach(tmp_path,
     (its key expression intersects theirs): those are messages of /a, typed by /a's
     liveliness token, and the violating value among them is found (was: ignored, satisfied,
     exit 0)."""
-    import threading
+    import json
 
     from fretc.live.ros2_names import attachment
-    from fretc.live.zenoh.serve import ZenohServer
 
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\nRA: the robot shall always "
-                                     "satisfy a_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n',
-        encoding="utf-8")
-    url = f"zenoh://127.0.0.1:{_port()}"
-    server = ZenohServer(url)
-    server.channel("/a", "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
+    fret = write_watch_files(tmp_path, *RA)
+    url = bus_url("zenoh")
+    server = bus_server(url, "", ("/a",))
 
     def publish():
         server.wait_subscribed(timeout=30)
-        t0 = 1_700_000_000 * 10**9
         for k in range(20):  # rmw_zenoh's attachment gives each its log time, 50 ms apart
             value = -1.0 if 8 <= k < 12 else 1.0  # 200 ms: over a tick
-            server.session.put(wildcard, b"\x00\x01\x00\x00" + struct.pack("<d", value),
-                               attachment=attachment(k + 1, t0 + k * 50_000_000, bytes(16)))
+            server.session.put(wildcard, float64_cdr(value),
+                               attachment=attachment(k + 1, T0 + k * 50_000_000, bytes(16)))
             time.sleep(0.005)
         time.sleep(0.5)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "30",
-                                    "--restart-grace", "0.5"])
-    t.join(10)
-    log = json.loads(out.read_text())["logs"][0]
+    res, log = watch_while(publish, url, fret, wait=None, grace=0.5, join=10)
     (v,) = log["verdicts"]
     assert v["verdict"] == "violated", (v, res.output)
     assert res.exit_code == 1, res.output
@@ -157,26 +102,16 @@ def test_zenoh_bridge_ros2dds_layout(tmp_path):
     std_msgs§msg§Float64/:::``); the type comes from the token, the log time is the arrival
     (the bridge forwards no source timestamp); a violating value is seen, and ``/b``'s
     publisher leaving while ``/a`` goes on makes the requirement reading it unknown."""
-    import threading
-
     from fretc.live.ros2_names import bridge_liveliness
-    from fretc.live.zenoh.serve import ZenohServer
 
     assert bridge_liveliness("z1", "ns/a", "std_msgs/msg/Float64") == \
         "@ros2_lv/z1/MP/ns§a/std_msgs§msg§Float64/:::"
-    (tmp_path / "w.fret").write_text(
-        "@tick_period 100 ms\nRA: the robot shall always satisfy a_ok\n"
-        "RB: the robot shall always satisfy b_ok\n", encoding="utf-8")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\na_ok = "/a.data > 0"\n'
-        'b_ok = "/b.data > 0"\n', encoding="utf-8")
-    url = f"zenoh://127.0.0.1:{_port()}?layout=bridge"
-    server = ZenohServer(url)
-    for topic in ("/a", "/b"):
-        server.channel(topic, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
-
-    def f64(x: float) -> bytes:
-        return b"\x00\x01\x00\x00" + struct.pack("<d", x)
+    fret = write_watch_files(tmp_path, "RA: the robot shall always satisfy a_ok\n"
+                             "RB: the robot shall always satisfy b_ok\n",
+                             'a_ok = "/a.data > 0"\nb_ok = "/b.data > 0"\n')
+    url = bus_url("zenoh") + "?layout=bridge"
+    server = bus_server(url, "", ("/a", "/b"))
+    f64 = float64_cdr
 
     def publish():
         server.wait_subscribed(["/a", "/b"], timeout=30)
@@ -191,14 +126,7 @@ def test_zenoh_bridge_ros2dds_layout(tmp_path):
         time.sleep(0.3)
         server.stop()
 
-    t = threading.Thread(target=publish, daemon=True)
-    t.start()
-    out = tmp_path / "w.json"
-    res = CliRunner().invoke(main, ["watch", url, "-r", str(tmp_path / "w.fret"), "--no-live",
-                                    "--json", str(out), "--duration", "30", "--wait", "10",
-                                    "--restart-grace", "1"])
-    t.join(20)
-    log = json.loads(out.read_text())["logs"][0]
+    res, log = watch_while(publish, url, fret)
     by = {v["requirement"]: v for v in log["verdicts"]}
     assert log["messages"] == {"/a": 30, "/b": 10}
     assert by["RA"]["verdict"] == "violated"
