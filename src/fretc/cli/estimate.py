@@ -25,21 +25,17 @@ import os
 
 import click
 
-from fretc.cli.options import FiniteRange, FleetError, audit_config, shown, statistics_options
+from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SIMULATOR_RAY_OPTION,
+                               SPACE_OPTION, FiniteRange, FleetError, audit_config, shown,
+                               statistics_options)
 
 __all__ = ["estimate_cmd"]
 
 
 @click.command("estimate")
-@click.option("-r", "--requirements", "requirements", multiple=True, type=click.Path(exists=True),
-              help="Requirement file or folder; repeatable. Default: ./requirements.")
-@click.option("-b", "--bindings", "bindings", multiple=True, type=click.Path(exists=True),
-              help="Signal binding file (TOML); repeatable. Default: *.bindings.toml beside "
-                   "the requirements.")
-@click.option("--space", "space_path", required=True,
-              type=click.Path(exists=True, dir_okay=False),
-              help="The scenario space (TOML) with a distribution per parameter "
-                   "(sim/spaces/*.toml; a [low, high] range is uniform).")
+@REQUIREMENTS_OPTION
+@BINDINGS_OPTION
+@SPACE_OPTION
 @click.option("--seed", type=click.IntRange(min=0, max=2**32 - 1), default=1, show_default=True,
               help="The campaign's seed: the same seed gives the same runs and answer, "
                    "locally and on Ray.")
@@ -71,10 +67,7 @@ __all__ = ["estimate_cmd"]
               help="--rare: particles replaced per level (fewer: more levels, less error).")
 @click.option("--moves", type=click.IntRange(min=1), default=5, show_default=True,
               help="--rare: Markov chain steps per replaced particle.")
-@click.option("--ray", "ray", is_flag=False, flag_value="local", default=None,
-              metavar="[ADDRESS]",
-              help="Simulate and audit the runs in parallel on Ray (a local Ray, or ADDRESS "
-                   "of a cluster); the same answer as without.")
+@SIMULATOR_RAY_OPTION
 @click.pass_context
 def estimate_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tuple[str, ...],
                  space_path: str, seed: int, budget: int, output: str, test: str, delta: float,

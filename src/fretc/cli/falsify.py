@@ -18,21 +18,16 @@ import os
 
 import click
 
-from fretc.cli.options import FleetError, shown
+from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SAFETY_OPTION,
+                               SIMULATOR_RAY_OPTION, SPACE_OPTION, FleetError, shown)
 
 __all__ = ["falsify_cmd"]
 
 
 @click.command("falsify")
-@click.option("-r", "--requirements", "requirements", multiple=True, type=click.Path(exists=True),
-              help="Requirement file or folder; repeatable. Default: ./requirements.")
-@click.option("-b", "--bindings", "bindings", multiple=True, type=click.Path(exists=True),
-              help="Signal binding file (TOML); repeatable. Default: *.bindings.toml beside "
-                   "the requirements.")
-@click.option("--space", "space_path", required=True,
-              type=click.Path(exists=True, dir_okay=False),
-              help="The parameter space (TOML): base scenario, simulator seed, a [low, high] "
-                   "range per parameter (sim/spaces/*.toml).")
+@REQUIREMENTS_OPTION
+@BINDINGS_OPTION
+@SPACE_OPTION
 @click.option("--budget", type=click.IntRange(min=1), default=50, show_default=True,
               help="Simulator runs at most.")
 @click.option("--seed", type=click.IntRange(min=0, max=2**32 - 1), default=1, show_default=True,
@@ -46,13 +41,8 @@ __all__ = ["falsify_cmd"]
 @click.option("--first", is_flag=True,
               help="Stop at the first falsifying run (default: spend the budget, or stop "
                    "once every target is violated).")
-@click.option("--ray", "ray", is_flag=False, flag_value="local", default=None,
-              metavar="[ADDRESS]",
-              help="Simulate and audit each population's runs in parallel on Ray: a local "
-                   "Ray for the run, or ADDRESS of a cluster. Needs pip install 'fretc[ray]'.")
-@click.option("--safety", default=None, metavar="shield:DIR",
-              help="Every run with the shield fretc shield --emit python -b BINDINGS wrote into "
-                   "DIR in place of the hand-written SIF and interceptor.")
+@SIMULATOR_RAY_OPTION
+@SAFETY_OPTION
 @click.pass_context
 def falsify_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tuple[str, ...],
                 space_path: str, budget: int, seed: int, output: str, only: tuple[str, ...],

@@ -85,20 +85,42 @@ def live_input_options(f: F) -> F:
     return audit_input_options(f, jobs=False)
 
 
+#: ``-r/--requirements FILE`` (repeatable): the requirements of an audit, and of the
+#: simulator's campaigns (``fretc falsify``, ``fretc estimate``) that audit their runs
+REQUIREMENTS_OPTION = click.option(
+    "-r", "--requirements", "requirements", multiple=True, type=click.Path(exists=True),
+    help="Requirement file (.fret, FRET JSON export, .reqif/.reqifz) or folder (of them, or "
+         "a Doorstop tree); repeatable. Default: ./requirements.")
+#: ``-b/--bindings FILE`` (repeatable): the signal bindings of those audits
+BINDINGS_OPTION = click.option(
+    "-b", "--bindings", "bindings", multiple=True, type=click.Path(exists=True),
+    help="Signal binding file (TOML); repeatable. Default: *.bindings.toml beside the "
+         "requirements.")
+#: ``--space FILE``: the scenario space the simulator's campaigns sample or search
+SPACE_OPTION = click.option(
+    "--space", "space_path", required=True, type=click.Path(exists=True, dir_okay=False),
+    help="The scenario space (TOML, sim/spaces/*.toml): the base scenario, the simulator's "
+         "seed and each parameter's [low, high] range (uniform) or distribution (estimate "
+         "samples it, falsify searches its range).")
+#: ``--safety shield:DIR``: the simulator's runs with a generated shield (fretc.sim.shielded)
+SAFETY_OPTION = click.option(
+    "--safety", default=None, metavar="shield:DIR",
+    help="Every run with the shield fretc shield --emit python -b BINDINGS wrote into DIR in "
+         "place of the hand-written SIF and interceptor.")
+#: ``--ray [ADDRESS]`` of the simulator's campaigns: the runs simulated and audited on Ray
+SIMULATOR_RAY_OPTION = click.option(
+    "--ray", "ray", is_flag=False, flag_value="local", default=None, metavar="[ADDRESS]",
+    help="Simulate and audit the runs in parallel on Ray: a local Ray for the run, or "
+         "ADDRESS of a cluster; the same answer as without. Needs pip install 'fretc[ray]'.")
+
+
 def audit_input_options(f: F, jobs: bool = True) -> F:
     """The options that say what to audit and how (shared by ``fretc audit`` and
     ``fretc report``): requirements, bindings, tick, time base, jobs (unless ``jobs`` is
     False), window."""
     options = [
-        click.option("-r", "--requirements", "requirements", multiple=True,
-                     type=click.Path(exists=True),
-                     help="Requirement file (.fret, FRET JSON export, .reqif/.reqifz) or "
-                          "folder (of them, or a Doorstop tree); repeatable. "
-                          "Default: ./requirements."),
-        click.option("-b", "--bindings", "bindings", multiple=True,
-                     type=click.Path(exists=True),
-                     help="Signal binding file (TOML); repeatable. Default: *.bindings.toml "
-                          "beside the requirements."),
+        REQUIREMENTS_OPTION,
+        BINDINGS_OPTION,
         click.option("--bind", "inline", multiple=True, metavar="NAME=EXPR",
                      help="Bind a FRET variable inline, e.g. "
                           "--bind 'too_close=min(/scan.ranges) < 0.9'."),
