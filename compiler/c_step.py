@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 from fretc.compiler.ir import Node, name_of, window
 from fretc.compiler.printers import to_smv
-from fretc.compiler.pt_step import CodegenError, _future_error
+from fretc.compiler.pt_step import CodegenError, _future_error, post_order
 
 __all__ = ["CField", "CStep", "HELPERS", "c_number", "c_string", "compile_c_nodes",
            "uint_type"]
@@ -140,28 +140,9 @@ def compile_c_nodes(roots: list[Node], code: CStep) -> list[str]:
     """Emit the C code of ``roots`` (common sub-formulas shared) into ``code``; returns the
     C expressions (locals or literals) of their values. Raises :class:`CodegenError` for a
     future-time operator or function (:func:`fretc.compiler.pt_step.check_monitorable`)."""
-    for n in _post_order(roots, code):
+    for n in post_order(roots, code.locals):
         code.locals[n] = _emit(n, code)
     return [code.locals[r] for r in roots]
-
-
-def _post_order(roots: list[Node], code: CStep) -> list[Node]:
-    post: list[Node] = []
-    seen: set[Node] = set()
-    for r in roots:
-        stack = [(r, False)]
-        while stack:
-            node, done = stack.pop()
-            if node in seen or node in code.locals:
-                continue
-            if done:
-                seen.add(node)
-                post.append(node)
-                continue
-            stack.append((node, True))
-            for a in reversed(node.args):
-                stack.append((a, False))
-    return post
 
 
 def _ctype(n: Node, code: CStep) -> str:

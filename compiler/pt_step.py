@@ -15,6 +15,7 @@ requirement: a variable's FRET name reaches the module only as a string literal
 from __future__ import annotations
 
 import math
+from collections.abc import Container
 from dataclasses import dataclass, field
 
 from fretc.common.errors import FretishError
@@ -106,7 +107,7 @@ def compile_nodes(roots: list[Node], code: StepCode) -> list[str]:
     """Emit code for ``roots`` (sharing common sub-formulas) into ``code``; returns the
     Python expressions (locals or literals) of their values. Raises :class:`CodegenError`
     for a future-time operator or function."""
-    post = _post_order(roots, code)
+    post = post_order(roots, code.locals)
     # how many times each node's value is read: single-use pure expressions are inlined
     for n in post:
         for a in n.args:
@@ -121,15 +122,17 @@ def compile_nodes(roots: list[Node], code: StepCode) -> list[str]:
     return [code.locals[r] for r in roots]
 
 
-def _post_order(roots: list[Node], code: StepCode) -> list[Node]:
-    """The nodes under ``roots`` not compiled yet, each once, children first."""
+def post_order(roots: list[Node], compiled: Container[Node]) -> list[Node]:
+    """The nodes under ``roots`` not in ``compiled`` (the nodes a step code has a local of
+    already), each once, children first: the order their code is emitted in (Python here,
+    C in :mod:`fretc.compiler.c_step`)."""
     post: list[Node] = []
     seen: set[Node] = set()
     for r in roots:
         stack = [(r, False)]
         while stack:
             node, done = stack.pop()
-            if node in seen or node in code.locals:
+            if node in seen or node in compiled:
                 continue
             if done:
                 seen.add(node)
