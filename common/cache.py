@@ -1,4 +1,5 @@
-"""fretc's on-disk cache of derived data (the Lark parser tables, LTL3 automata).
+"""fretc's on-disk cache of derived data (parser tables, parsed files, LTL3 automata, the
+text and bytecode of checked monitor modules).
 
 Everything cached here is a pure function of its key, and every key names all the inputs
 of the computation (e.g. the grammar text and Lark's version; a formula's shape and Spot's
@@ -8,45 +9,186 @@ atomic on POSIX and Windows), so a reader sees a whole entry or none. A cache th
 be read or written (read-only home, full disk, ``FRETC_CACHE_DIR=""``) is skipped
 silently: the caller computes the value again, so the cache changes speed, never output.
 
-Location: ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
-``$XDG_CACHE_HOME/fretc``, else ``~/.cache/fretc``.
+The cache is not trusted blindly: some entries are code (the ``marshal`` data of compiled
+monitor modules and Jinja templates, module text that is executed), and others decide
+output (a requirement's parsed AST). So:
+
+* **Location.** ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
+  ``$XDG_CACHE_HOME/fretc``, else ``~/.cache/fretc``. A relative ``XDG_CACHE_HOME`` is
+  ignored (the XDG Base Directory Specification 0.8: "If an implementation encounters a
+  relative path in any of these variables it should consider the path invalid and ignore
+  it"); so is a relative ``FRETC_CACHE_DIR``, with a warning: a relative folder would be
+  whatever the current folder holds, e.g. a checked-out repository's.
+* **A private folder.** Folders are created with mode 0700 whatever the umask (the missing
+  parents too, as the XDG specification asks). A cache folder is used only when it, and
+  each folder above it, is owned by the user running fretc (or by root, above it) and not
+  writable by group or others (a folder above it may be, with the sticky bit, as ``/tmp``):
+  what OpenSSH's ``StrictModes`` asks of ``~/.ssh``. Otherwise the cache is skipped with
+  one warning on the standard error (never a failure).
+* **Sealed entries.** Every entry carries an HMAC-SHA256 (RFC 2104) of its kind, name and
+  bytes under a secret key of 32 random bytes that fretc keeps in the folder
+  (``seal-key``, mode 0600, refused unless a private regular file of the user's); an entry
+  whose seal does not verify (planted, altered, copied from another cache) is a miss, never
+  decoded. Data entries are JSON or ``marshal`` data of plain values (no pickle): decoding
+  them runs no code.
+* **Bounded reads.** An entry is read only when it is a regular file (opened without
+  following a symbolic link, non-blocking, checked with ``fstat`` after the open: a FIFO or a
+  link to ``/dev/zero`` is a miss) owned by the user and at most :data:`MAX_ENTRY_BYTES`.
 """
 
 from __future__ import annotations
 
 import os
+import stat
+import sys
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pathlib is imported lazily (start-up time)
     from pathlib import Path
 
-__all__ = ["cache_dir", "key_of", "files_key", "read_bytes", "write_bytes", "remove", "entry_path",
-           "read_file", "write_file", "lark_cache_file", "read_sealed", "write_sealed", "digest"]
+__all__ = ["cache_dir", "key_of", "files_key", "read_sealed", "write_sealed", "remove",
+           "digest", "hmac_sha256", "MAX_ENTRY_BYTES", "KEY_FILE"]
+
+#: the largest entry read or written (bytes); a larger file in the folder is a miss
+MAX_ENTRY_BYTES = 64 * 1024 * 1024
+#: the name of the seal key's file in the cache folder
+KEY_FILE = "seal-key"
+_KEY_BYTES = 32
+#: root -> the folder to use (the same string), or "" when refused (checked once a process)
+_CHECKED: dict[str, str] = {}
+#: root -> its seal key, or b"" when there is none that can be used
+_KEYS: dict[str, bytes] = {}
+_WARNED: set[str] = set()
+
+
+def _euid() -> int | None:
+    """The effective user id, or None where there is none (Windows: no mode checks)."""
+    getter = getattr(os, "geteuid", None)
+    return None if getter is None else getter()
+
+
+def _warn(message: str) -> None:
+    """Write ``fretc: warning: MESSAGE`` to the standard error once a process."""
+    if message in _WARNED:
+        return
+    _WARNED.add(message)
+    try:
+        sys.stderr.write(f"fretc: warning: {message}\n")
+    except (OSError, ValueError):  # a closed standard error: nothing to tell
+        pass
 
 
 def _root() -> str | None:
-    """:func:`cache_dir` as a string (no pathlib: this runs at every start-up)."""
+    """The cache folder's path as configured (not checked, not created), or None when the
+    disk cache is off. No pathlib: this runs at every start-up."""
     env = os.environ.get("FRETC_CACHE_DIR")
     if env is not None:
-        return env if env.strip() else None
+        if not env.strip():
+            return None
+        if os.path.isabs(env):
+            return env
+        _warn(f"FRETC_CACHE_DIR={env!r} is not an absolute path: ignored "
+              "(the default cache folder is used)")
     xdg = os.environ.get("XDG_CACHE_HOME")
-    if xdg:
+    if xdg and os.path.isabs(xdg):  # XDG Base Directory Specification: relative is invalid
         return os.path.join(xdg, "fretc")
     home = os.path.expanduser("~")
-    if home.startswith("~"):  # no home directory
+    if not os.path.isabs(home):  # no home directory ("~" left as it is)
         return None
     return os.path.join(home, ".cache", "fretc")
 
 
 def cache_dir() -> Path | None:
-    """The cache folder (a :class:`pathlib.Path`, not created here), or None when the disk
-    cache is off."""
+    """The cache folder as configured (a :class:`pathlib.Path`, neither checked nor created
+    here), or None when the disk cache is off."""
     root = _root()
     if root is None:
         return None
     from pathlib import Path
     return Path(root)
+
+
+def _unsafe(st: os.stat_result, euid: int, own_only: bool) -> str | None:
+    """Why a folder with status ``st`` cannot hold the cache (None: it can). ``own_only``:
+    the cache folder itself (owned by the user, writable by no one else); otherwise a folder
+    above it (owned by the user or root; writable by others only with the sticky bit)."""
+    if not stat.S_ISDIR(st.st_mode):
+        return "is not a folder"
+    if st.st_uid != euid and (own_only or st.st_uid != 0):
+        return f"is owned by another user (uid {st.st_uid})"
+    if st.st_mode & 0o022 and (own_only or not st.st_mode & stat.S_ISVTX):
+        return f"is writable by others (mode {stat.S_IMODE(st.st_mode):04o})"
+    return None
+
+
+def _problem(root: str) -> str | None:
+    """Why the existing folder ``root`` cannot hold the cache, or None. Raises OSError when
+    it cannot be examined."""
+    euid = _euid()
+    if euid is None:
+        return None
+    real = os.path.realpath(root)
+    why = _unsafe(os.stat(real), euid, True)
+    if why is not None:
+        return f"the cache folder {root} {why}"
+    # the folders above it as named (where a link to it would be replaced) and as resolved
+    for start in {os.path.dirname(os.path.abspath(root)), os.path.dirname(real)}:
+        parent = start
+        while True:
+            why = _unsafe(os.stat(parent), euid, False)
+            if why is not None:
+                return f"the folder {parent} above the cache folder {root} {why}"
+            up = os.path.dirname(parent)
+            if up == parent:
+                break
+            parent = up
+    return None
+
+
+def _make_private(folder: str) -> None:
+    """Create ``folder`` and its missing parents with mode 0700 (whatever the umask; the XDG
+    specification's mode for a folder it creates). Raises OSError."""
+    missing = []
+    while not os.path.isdir(folder):
+        missing.append(folder)
+        up = os.path.dirname(folder)
+        if up == folder:
+            break
+        folder = up
+    for path in reversed(missing):
+        try:
+            os.mkdir(path, 0o700)
+        except FileExistsError:
+            continue  # made by another process meanwhile (checked below as any folder)
+        os.chmod(path, 0o700)
+
+
+def _usable(create: bool) -> str | None:
+    """The cache folder when it can be used (checked once a process: see the module's
+    docstring), creating it when ``create``; else None (one warning when it is refused)."""
+    root = _root()
+    if root is None:
+        return None
+    got = _CHECKED.get(root)
+    if got is not None:
+        return got or None
+    try:
+        if not os.path.lexists(root):
+            if not create:
+                return None  # (not remembered: a later write creates it)
+            _make_private(root)
+        why = _problem(root)
+    except OSError:
+        _CHECKED[root] = ""
+        return None
+    if why is not None:
+        _warn(f"{why}: the cache is not used (it must be private to you, as ~/.ssh: "
+              f"chmod 700 it, or set FRETC_CACHE_DIR to another folder)")
+        _CHECKED[root] = ""
+        return None
+    _CHECKED[root] = root
+    return root
 
 
 def key_of(*parts: str) -> str:
@@ -90,57 +232,6 @@ def _sha256():
     return sha256()
 
 
-def _entry(kind: str, name: str) -> str | None:
-    root = _root()
-    return None if root is None else os.path.join(root, kind, name)
-
-
-def entry_path(kind: str, name: str) -> Path | None:
-    """Where entry ``name`` of sub-folder ``kind`` lives (a :class:`pathlib.Path`; None:
-    cache off)."""
-    path = _entry(kind, name)
-    if path is None:
-        return None
-    from pathlib import Path
-    return Path(path)
-
-
-def read_bytes(kind: str, name: str) -> bytes | None:
-    """The entry's bytes, or None when missing or unreadable."""
-    path = _entry(kind, name)
-    return None if path is None else read_file(path)
-
-
-def write_bytes(kind: str, name: str, data: bytes) -> bool:
-    """Store an entry atomically (temporary file + rename). Returns False, without raising,
-    when the cache folder cannot be created or written."""
-    path = _entry(kind, name)
-    return path is not None and write_file(path, data)
-
-
-def read_sealed(kind: str, name: str, magic: bytes, made_from: bytes) -> bytes | None:
-    """The payload of an entry written by :func:`write_sealed` with the same ``magic`` (the
-    layout's first line) and ``made_from`` (a 32-byte SHA-256 of what the payload was made
-    from), or None: no entry, another layout, made from something else, or a payload whose
-    own SHA-256 does not match (damaged on disk)."""
-    data = read_bytes(kind, name)
-    if data is None or not data.startswith(magic):
-        return None
-    head = len(magic)
-    payload = data[head + 64:]
-    if data[head:head + 32] != made_from or data[head + 32:head + 64] != digest(payload):
-        return None
-    return payload
-
-
-def write_sealed(kind: str, name: str, magic: bytes, made_from: bytes, payload: bytes) -> bool:
-    """Store ``payload`` as entry ``name`` of ``kind``: ``magic``, ``made_from`` (32 bytes),
-    the payload's SHA-256, the payload (read back by :func:`read_sealed`). An entry per
-    name, replaced by the next write: the folder does not grow with each edit of what it was
-    made from. False when the cache is off or not writable (never raises for that)."""
-    return write_bytes(kind, name, b"".join((magic, made_from, digest(payload), payload)))
-
-
 def digest(data: bytes) -> bytes:
     """The SHA-256 of ``data`` (32 bytes; FIPS 180-4), without loading OpenSSL
     (:func:`_sha256`)."""
@@ -149,44 +240,68 @@ def digest(data: bytes) -> bytes:
     return h.digest()
 
 
-def remove(kind: str, name: str) -> bool:
-    """Delete an entry (one found damaged, so the next run computes and writes it again).
-    Returns False, without raising, when there is none or it cannot be removed."""
-    path = _entry(kind, name)
-    if path is None:
-        return False
-    try:
-        os.unlink(path)
-        return True
-    except OSError:
-        return False
+def hmac_sha256(key: bytes, *parts: bytes | memoryview) -> bytes:
+    """HMAC-SHA256 (RFC 2104, FIPS 198-1) of the concatenation of ``parts`` under ``key``
+    (32 bytes), with :func:`_sha256` (``hmac`` imports ``hashlib``, which loads OpenSSL at
+    every start-up). Raises ValueError for a key longer than SHA-256's 64-byte block."""
+    if len(key) > 64:
+        raise ValueError("an HMAC key of at most 64 bytes")
+    block = key.ljust(64, b"\x00")
+    inner = _sha256()
+    inner.update(bytes(b ^ 0x36 for b in block))
+    for p in parts:
+        inner.update(p)
+    outer = _sha256()
+    outer.update(bytes(b ^ 0x5C for b in block))
+    outer.update(inner.digest())
+    return outer.digest()
 
 
-def read_file(path: str) -> bytes | None:
-    """The bytes of the cache file ``path`` (any folder), or None when missing or
-    unreadable."""
+def _read_regular(path: str, limit: int) -> bytes | None:
+    """The bytes of ``path`` when it is a regular file of the user's of at most ``limit``
+    bytes, opened without following a symbolic link and without blocking (a FIFO), checked
+    with ``fstat`` after the open; else None. Raises nothing."""
+    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0) \
+        | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
     try:
-        with open(path, "rb") as f:
-            return f.read()
+        fd = os.open(path, flags)
+    except (OSError, ValueError):
+        return None
+    try:
+        st = os.fstat(fd)
+        euid = _euid()
+        if (not stat.S_ISREG(st.st_mode) or st.st_size > limit
+                or (euid is not None and st.st_uid != euid)):
+            return None
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, min(limit + 1 - size, 1 << 20))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+            if size > limit:  # grew since the fstat
+                return None
+        return b"".join(chunks)
     except OSError:
         return None
+    finally:
+        os.close(fd)
 
 
-def write_file(path: str, data: bytes) -> bool:
-    """Write the cache file ``path`` (any folder, created if missing) atomically: a
-    temporary file in the same folder renamed into place. Returns False, without raising,
-    when that fails (a read-only folder, a full disk)."""
+def _write_atomic(folder: str, name: str, data: bytes) -> bool:
+    """Write ``folder/name`` (``folder`` made 0700 if missing) atomically: a temporary file
+    (``mkstemp``: created exclusively, mode 0600) renamed over it, which replaces a symbolic
+    link there rather than writing through it. False, without raising, when that fails."""
     tmp = None
     try:
-        folder = os.path.dirname(path)
-        os.makedirs(folder, exist_ok=True)
+        _make_private(folder)
         import tempfile  # lazy: a run that only reads the cache does not need it
 
-        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp",
-                                   dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
-        os.replace(tmp, path)
+        os.replace(tmp, os.path.join(folder, name))
         return True
     except OSError:
         if tmp is not None:
@@ -197,22 +312,137 @@ def write_file(path: str, data: bytes) -> bool:
         return False
 
 
-def lark_cache_file(name: str, grammar: str, lark_version: str, options: dict) -> str | None:
-    """Where Lark keeps the tables of one grammar (Lark's ``cache=PATH`` option): the file
-    ``lark/NAME-KEY.lark`` of the cache folder, KEY a hash of the grammar text, the Lark
-    and Python versions and the parser ``options`` (Lark also stores a hash of them in the
-    file and rebuilds when it does not match). Editing the grammar, upgrading Lark or Python
-    gives a new file, never a stale one. None when the cache is off or its folder cannot be
-    created (then Lark builds the tables in memory: the same parser, slower to start)."""
-    import sys
+def _seal_key(root: str, create: bool) -> bytes | None:
+    """The seal key of the cache folder ``root`` (made when missing and ``create``), or
+    None: none, or one that is not a private regular file of 32 bytes (one warning)."""
+    got = _KEYS.get(root)
+    if got:
+        return got
+    path = os.path.join(root, KEY_FILE)
+    key = _read_regular(path, _KEY_BYTES)
+    if key is None and create and not os.path.lexists(path):
+        key = _make_key(root, path)
+    if key is not None and len(key) == _KEY_BYTES and _private(path):
+        _KEYS[root] = key
+        return key
+    if key is not None or os.path.lexists(path):
+        _warn(f"the cache's seal key {path} is not a private regular file of "
+              f"{_KEY_BYTES} bytes: the cache is not used (remove the file: fretc makes "
+              "another)")
+        _CHECKED[root] = ""
+    return None
 
-    key = key_of(f"{name}-grammar", grammar, lark_version, "%d.%d" % sys.version_info[:2],
-                 repr(sorted(options.items())))
-    path = _entry("lark", f"{name}-{key[:40]}.lark")
-    if path is None:
-        return None
+
+def _private(path: str) -> bool:
+    """Whether ``path`` is readable and writable by its owner alone (mode 0600 or less)."""
     try:
-        os.makedirs(os.path.dirname(path), exist_ok=True)
+        return _euid() is None or not os.lstat(path).st_mode & 0o077
+    except OSError:
+        return False
+
+
+def _make_key(root: str, path: str) -> bytes | None:
+    """A new seal key written to ``path``: 32 bytes of ``os.urandom`` in a temporary file
+    (mode 0600) linked to its name (``link`` never replaces: when another process made one
+    first, that one is read). None when the folder cannot be written."""
+    import tempfile
+
+    key = os.urandom(_KEY_BYTES)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".seal-key.", suffix=".tmp", dir=root)
     except OSError:
         return None
-    return path
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(key)
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            return _read_regular(path, _KEY_BYTES)
+        return key
+    except OSError:
+        return None
+    finally:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+
+
+def _check_name(kind: str, name: str) -> None:
+    """Raise ValueError unless ``kind`` and ``name`` are plain file names (no separator, not
+    ``.``/``..``, not the seal key): an entry lives in ``<cache>/<kind>/<name>``."""
+    for part in (kind, name):
+        if (not part or part in (".", "..") or "/" in part or "\\" in part or "\x00" in part
+                or part == KEY_FILE):
+            raise ValueError(f"not a cache entry name: {part!r}")
+
+
+def _seal(key: bytes, kind: str, name: str, head: bytes, payload: bytes | memoryview) -> bytes:
+    """The seal of an entry: HMAC-SHA256 of ``kind/name``, a NUL, its magic and made-from
+    digest (``head``) and its payload."""
+    return hmac_sha256(key, f"{kind}/{name}".encode("utf-8", "surrogatepass"), b"\x00", head,
+                       payload)
+
+
+def read_sealed(kind: str, name: str, magic: bytes, made_from: bytes) -> bytes | None:
+    """The payload of entry ``name`` of sub-folder ``kind`` written by :func:`write_sealed`
+    with the same ``magic`` (the layout's first line) and ``made_from`` (a 32-byte SHA-256
+    of what the payload was made from), or None: cache off or refused, no entry, not a
+    regular file of the user's or over :data:`MAX_ENTRY_BYTES`, another layout, made from
+    something else, or a seal (HMAC-SHA256 under the cache's key) that does not verify
+    (altered, planted, or written under another key). Raises ValueError for a ``kind`` or
+    ``name`` that is not a plain file name."""
+    _check_name(kind, name)
+    root = _usable(create=False)
+    if root is None:
+        return None
+    key = _seal_key(root, create=False)
+    if key is None:
+        return None
+    data = _read_regular(os.path.join(root, kind, name), MAX_ENTRY_BYTES)
+    head = len(magic)
+    if data is None or not data.startswith(magic) or data[head:head + 32] != made_from:
+        return None
+    if data[head + 32:head + 64] != _seal(key, kind, name, data[:head + 32],
+                                          memoryview(data)[head + 64:]):
+        return None
+    return data[head + 64:]
+
+
+def write_sealed(kind: str, name: str, magic: bytes, made_from: bytes, payload: bytes) -> bool:
+    """Store ``payload`` as entry ``name`` of ``kind``: ``magic``, ``made_from`` (32 bytes),
+    the seal (HMAC-SHA256 of the kind, name and the rest under the cache's key), the payload
+    (read back by :func:`read_sealed`). An entry per name, replaced by the next write: the
+    folder does not grow with each edit of what it was made from. False when the cache is
+    off, refused or not writable, or the entry would be over :data:`MAX_ENTRY_BYTES` (never
+    raises for that). Raises ValueError for a ``kind`` or ``name`` that is not a plain file
+    name."""
+    _check_name(kind, name)
+    if len(made_from) != 32:
+        raise ValueError("made_from is a 32-byte digest")
+    if len(magic) + 64 + len(payload) > MAX_ENTRY_BYTES:
+        return False
+    root = _usable(create=True)
+    if root is None:
+        return False
+    key = _seal_key(root, create=True)
+    if key is None:
+        return False
+    sealed = b"".join((magic, made_from, _seal(key, kind, name, magic + made_from, payload),
+                       payload))
+    return _write_atomic(os.path.join(root, kind), name, sealed)
+
+
+def remove(kind: str, name: str) -> bool:
+    """Delete an entry (one found damaged, so the next run computes and writes it again).
+    Returns False, without raising, when there is none or it cannot be removed."""
+    _check_name(kind, name)
+    root = _usable(create=False)
+    if root is None:
+        return False
+    try:
+        os.unlink(os.path.join(root, kind, name))
+        return True
+    except OSError:
+        return False

@@ -15,7 +15,6 @@ symbolic) beyond.
 from __future__ import annotations
 
 import json
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -213,6 +212,7 @@ def _automaton(data: dict | None, atoms: list[Node]) -> Automaton | None:
 ATOM_OPS = ("ap", "cmp", "call", "past", "future", "FTP", "LAST")
 
 _SHAPE_MEMO: dict[str, dict] = {}
+_LTL3_MAGIC = b"fretc ltl3 2 json\n"
 _SOURCE_KEY: str | None = None
 
 
@@ -269,14 +269,15 @@ def shape_automata(kind: str, shape: Node, n_atoms: int, max_states: int,
     got = _SHAPE_MEMO.get(key)
     if got is not None:
         return got
-    name = f"{key[:40]}.json"
-    raw = cache.read_bytes("ltl3", name)
-    # an entry is a CRC-32 line (8 hex digits) then the JSON: a table altered on disk but
-    # still valid JSON would give a monitor a wrong LTL3 status, so it is rebuilt instead
-    if raw is not None and raw[8:9] == b"\n" and raw[:8] == b"%08x" % zlib.crc32(raw[9:]):
+    name, made_from = f"{key[:40]}.json", cache.digest(key.encode("ascii"))
+    # a sealed entry (fretc.common.cache: its HMAC under the cache's key): a table altered
+    # or planted on disk, still valid JSON, would give a monitor a wrong LTL3 status, so it
+    # is a miss and rebuilt instead
+    raw = cache.read_sealed("ltl3", name, _LTL3_MAGIC, made_from)
+    if raw is not None:
         try:
-            got = json.loads(raw[9:])
-            if got.get("shape") != text:  # a hash collision or a foreign file
+            got = json.loads(raw)
+            if not isinstance(got, dict) or got.get("shape") != text:  # a foreign entry
                 got = None
         except ValueError:
             got = None
@@ -286,8 +287,8 @@ def shape_automata(kind: str, shape: Node, n_atoms: int, max_states: int,
         else:
             got = _progression_data(shape, n_atoms)
         got["shape"] = text
-        body = json.dumps(got, separators=(",", ":")).encode()
-        cache.write_bytes("ltl3", name, b"%08x\n" % zlib.crc32(body) + body)
+        cache.write_sealed("ltl3", name, _LTL3_MAGIC, made_from,
+                           json.dumps(got, separators=(",", ":")).encode())
     _SHAPE_MEMO[key] = got
     return got
 

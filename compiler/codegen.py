@@ -235,30 +235,34 @@ class MonitorModule:
     skipped: dict[str, str]
 
 
+_JINJA_MAGIC = b"fretc jinja 2\n"
+
+
 @functools.lru_cache(maxsize=1)
 def _env():
     import jinja2  # lazy: start-up of the commands that render nothing (--emit ltl)
 
     class BytecodeCache(jinja2.BytecodeCache):
-        """Jinja's compiled templates in fretc's disk cache (:mod:`fretc.common.cache`: skipped
-        when off or not writable). Jinja checks an entry's header (its bytecode format,
-        Python's version) and the template source's checksum; the SHA-256 of the entry
-        written before it makes a damaged entry a miss too (compiled again), never a
-        template that renders other text."""
+        """Jinja's compiled templates (``marshal`` code) in fretc's disk cache
+        (:mod:`fretc.common.cache`: skipped when off, refused or not writable), as sealed
+        entries: one altered, damaged or planted is a miss (compiled again), never code that
+        runs. Jinja also checks an entry's header (its bytecode format, Python's version) and
+        the template source's checksum."""
 
         def load_bytecode(self, bucket):
-            data = fretc_cache.read_bytes("jinja", bucket.key)
-            if data is None or hashlib.sha256(data[32:]).digest() != data[:32]:
+            data = fretc_cache.read_sealed("jinja", bucket.key, _JINJA_MAGIC,
+                                           fretc_cache.digest(bucket.key.encode()))
+            if data is None:
                 return
             try:
-                bucket.bytecode_from_string(data[32:])
+                bucket.bytecode_from_string(data)
             except Exception:  # noqa: BLE001 - an entry Jinja cannot read is a miss
                 bucket.reset()
 
         def dump_bytecode(self, bucket):
-            payload = bucket.bytecode_to_string()
-            fretc_cache.write_bytes("jinja", bucket.key,
-                                    hashlib.sha256(payload).digest() + payload)
+            fretc_cache.write_sealed("jinja", bucket.key, _JINJA_MAGIC,
+                                     fretc_cache.digest(bucket.key.encode()),
+                                     bucket.bytecode_to_string())
 
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("fretc.templates", ""),

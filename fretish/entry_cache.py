@@ -8,28 +8,31 @@ work each time. An unchanged file read by unchanged code gives the same entries,
 :func:`cached_entries` keeps them: one entry a file name (``<cache>/fret-entries/<key>``,
 replaced by the next read of that name, so the cache does not grow with each edit), holding
 the SHA-256 of what the entries were made from (the file's text and name, the text of every
-module that reads or parses it, Lark's and Python's versions) and of its payload (the
-entries, pickled). An entry for another text or other code, damaged, or of another layout
-is a miss: the file is parsed again (:mod:`fretc.common.cache`: the cache changes speed,
-never output). A file with a sentence that does not parse is never kept (its errors are
+module that reads or parses it, Lark's and Python's versions), its seal and its payload (the
+entries as JSON, :mod:`fretc.common.cache_json`: reading it makes only the classes of
+:mod:`fretc.fretish.ast` and :mod:`fretc.fretish.entry`, runs no code). An entry for another
+text or other code, damaged, planted or of another layout is a miss: the file is parsed
+again (:mod:`fretc.common.cache`: the cache changes speed, never output). A file with a sentence that does not parse is never kept (its errors are
 made again, with their carets, at each read). ``FRETC_CACHE_DIR=""`` turns it off.
 """
 
 from __future__ import annotations
 
 import os
-import pickle
 import sys
 from collections.abc import Callable
 
-from fretc.common import cache
+from fretc.common import cache, cache_json
 from fretc.common.libraries import package_init
+from fretc.fretish import ast, entry
 from fretc.fretish.entry import RequirementEntry
 
 __all__ = ["cached_entries", "code_key"]
 
 KIND = "fret-entries"
-_MAGIC = b"fretc fret-entries 1\n"
+_MAGIC = b"fretc fret-entries 2 json\n"
+#: the classes an entry may hold
+_CLASSES = cache_json.classes_of(ast, entry)
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _COMMON = os.path.join(os.path.dirname(_HERE), "common")
 #: what else a .fret file's entries depend on (units of durations, the error classes)
@@ -66,8 +69,8 @@ def _load(source: str, text: str) -> list[RequirementEntry] | None:
     if payload is None:
         return None
     try:
-        got = pickle.loads(payload)
-    except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
+        got = cache_json.loads(payload, _CLASSES)
+    except ValueError:  # not this layout: a miss (the seal makes it unlikely)
         return None
     if not (isinstance(got, list) and all(isinstance(e, RequirementEntry) for e in got)):
         return None
@@ -76,9 +79,9 @@ def _load(source: str, text: str) -> list[RequirementEntry] | None:
 
 def _store(source: str, text: str, entries: list[RequirementEntry]) -> bool:
     try:
-        payload = pickle.dumps(entries, protocol=pickle.HIGHEST_PROTOCOL)
-    except Exception:  # noqa: BLE001 - an entry that does not pickle is not kept
-        return False
+        payload = cache_json.dumps(entries, _CLASSES)
+    except (TypeError, ValueError, RecursionError):  # no JSON form (an error, a class not
+        return False                                 # listed, too deep): not kept
     return cache.write_sealed(KIND, _name(source), _MAGIC, _made_from(source, text), payload)
 
 

@@ -14,12 +14,13 @@ import math
 import os
 import re
 from functools import lru_cache
+from typing import cast
 
 from lark import Lark, Transformer, __version__ as lark_version, v_args
 from lark.exceptions import (UnexpectedCharacters, UnexpectedEOF, UnexpectedInput,
                              UnexpectedToken, VisitError)
 
-from fretc.common import cache
+from fretc.common import lark_tables
 from fretc.common.libraries import check_lark
 from fretc.common.problems import BindingError
 from fretc.common.units import parse_duration
@@ -44,12 +45,13 @@ _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", propagate_positions=True
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
     """The Lark parser of ``grammar.lark``, its tables kept in fretc's cache folder
-    (:func:`fretc.common.cache.lark_cache_file`; built in memory when the cache is off)."""
+    (:func:`fretc.common.lark_tables.cached_parser`: a sealed entry of plain data, never
+    unpickled; built in memory when the cache is off)."""
     check_lark(lark_version)
     with open(os.path.join(os.path.dirname(__file__), "grammar.lark"), encoding="utf-8") as f:
         grammar = f.read()
-    path = cache.lark_cache_file("bindings", grammar, lark_version, _LARK_OPTIONS)
-    return Lark(grammar, **_LARK_OPTIONS, **({} if path is None else {"cache": path}))
+    return cast(Lark, lark_tables.cached_parser(
+        "bindings", grammar, _LARK_OPTIONS, {}, lambda: Lark(grammar, **_LARK_OPTIONS)))
 
 
 def _col(meta: object) -> int:

@@ -9,34 +9,37 @@ the ``[path_variables]`` values and the code that parses and checks it, so
 :mod:`fretc.signals.bindings` and its grammar, of the modules they take limits, units and
 errors from, Lark's ``__init__.py`` (its version, read without importing Lark) and Python's
 version. One entry per binding file (``<cache>/binding-parses/<key>``), replaced by the next
-parse of that file, holding the SHA-256 of what it was made from and of its payload (the trees,
-pickled). An entry made from anything else, or damaged, is a miss: the expressions are parsed
-again (:mod:`fretc.common.cache`: the cache changes speed, never output).
+parse of that file, holding the SHA-256 of what it was made from, its seal and its payload
+(the trees as JSON, :mod:`fretc.common.cache_json`: reading it makes only the classes of
+:mod:`fretc.signals.bindings.expression`, runs no code). An entry made from anything else,
+damaged or planted, is a miss: the expressions are parsed again (:mod:`fretc.common.cache`:
+the cache changes speed, never output).
 
 Not kept: a file with an expression that does not parse (its error is made again, with its
 place, at each read). A file whose ``[path_variables]`` hold an entity's key
 (:class:`fretc.signals.bindings.expression.EntityParam`) is kept with each key written by
-its name (pickle's ``persistent_id``): its trees must share that object with the audit,
+its name (``{"p": name}``): its trees must share that object with the audit,
 which sets each entity's value on it, so a tree read back holds the key object of the
 ``path_variables`` it is read for, never a copy. ``FRETC_CACHE_DIR=""`` turns it off.
 """
 
 from __future__ import annotations
 
-import io
 import os
-import pickle
 import sys
 from collections.abc import Callable, Mapping
 
-from fretc.common import cache
+from fretc.common import cache, cache_json
 from fretc.common.libraries import package_init
+from fretc.signals.bindings import expression
 from fretc.signals.bindings.expression import EntityParam, Expr, ExprLocation
 
 __all__ = ["cached_parses", "kept_parses"]
 
 KIND = "binding-parses"
-_MAGIC = b"fretc binding-parses 1\n"
+_MAGIC = b"fretc binding-parses 2 json\n"
+#: the classes an entry may hold
+_CLASSES = cache_json.classes_of(expression)
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _SRC = os.path.dirname(os.path.dirname(_HERE))
 #: what else an expression's tree depends on (limits, units, the error classes)
@@ -70,33 +73,19 @@ def _keys(path_vars: Mapping | None) -> dict[str, EntityParam] | None:
     return keys
 
 
-class _Pickler(pickle.Pickler):
-    """Pickles each entity key of ``keys`` as its path variable's name (a key that is not
-    among them: :class:`pickle.PicklingError`, the file is not kept)."""
+def _key_name(keys: dict[str, EntityParam]) -> Callable[[object], str | None]:
+    """The name of an entity key among ``keys`` (written ``{"p": name}``), None for other
+    values; an entity key that is not among them raises TypeError (the file is not kept)."""
+    names = {id(v): k for k, v in keys.items()}
 
-    def __init__(self, file: io.BytesIO, keys: dict[str, EntityParam]) -> None:
-        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
-        self.names = {id(v): k for k, v in keys.items()}
-
-    def persistent_id(self, obj: object) -> str | None:
+    def name_of(obj: object) -> str | None:
         if type(obj) is not EntityParam:
             return None
-        if id(obj) not in self.names:
-            raise pickle.PicklingError(f"an entity key not among the path variables: {obj!r}")
-        return self.names[id(obj)]
+        if id(obj) not in names:
+            raise TypeError(f"an entity key not among the path variables: {obj!r}")
+        return names[id(obj)]
 
-
-class _Unpickler(pickle.Unpickler):
-    """Reads a key written by :class:`_Pickler` as the key object of that path variable."""
-
-    def __init__(self, payload: bytes, keys: dict[str, EntityParam]) -> None:
-        super().__init__(io.BytesIO(payload))
-        self.keys = keys
-
-    def persistent_load(self, pid: object) -> EntityParam:
-        if not isinstance(pid, str) or pid not in self.keys:
-            raise pickle.UnpicklingError(f"no entity key {pid!r}")
-        return self.keys[pid]
+    return name_of
 
 
 def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mapping | None,
@@ -116,8 +105,8 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
     payload = cache.read_sealed(KIND, name, _MAGIC, made_from)
     if payload is not None:
         try:
-            got = _Unpickler(payload, keys).load()
-        except Exception:  # noqa: BLE001 - any damage is a miss (the digest makes it unlikely)
+            got = cache_json.loads(payload, _CLASSES, keys.__getitem__)
+        except ValueError:  # not this layout: a miss (the seal makes it unlikely)
             got = None
         if (isinstance(got, dict) and list(got) == list(expressions)
                 and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], Expr)
@@ -125,10 +114,8 @@ def cached_parses(source: str, expressions: Mapping[str, str], path_vars: Mappin
             return got
     out = {variable: parse(variable) for variable in expressions}
     try:
-        buf = io.BytesIO()
-        _Pickler(buf, keys).dump(out)
-        payload = buf.getvalue()
-    except Exception:  # noqa: BLE001 - a tree that does not pickle is not kept
+        payload = cache_json.dumps(out, _CLASSES, _key_name(keys))
+    except (TypeError, ValueError, RecursionError):  # no JSON form: not kept
         return out
     cache.write_sealed(KIND, name, _MAGIC, made_from, payload)
     return out

@@ -128,7 +128,7 @@ def test_damaged_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
 
 def test_altered_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
     """An entry whose table was altered on disk but is still valid JSON with the right
-    shape (a flipped transition) fails its CRC-32 and is recomputed, never used."""
+    shape (a flipped transition) fails its seal and is recomputed, never used."""
     import json
 
     monkeypatch.setenv("FRETC_CACHE_DIR", str(tmp_path))
@@ -137,10 +137,11 @@ def test_altered_ltl3_entry_is_recomputed(tmp_path, monkeypatch):
     good = render_module(compiled, "m")
     (f,) = (tmp_path / "ltl3").glob("*.json")
     raw = f.read_bytes()
-    data = json.loads(raw[9:])
+    head = len(automata._LTL3_MAGIC) + 64  # magic, made-from digest, seal
+    data = json.loads(raw[head:])
     table = data["bad"]["table"]
     table[0] = [(x + 1) % len(table) for x in table[0]]  # redirect the initial state
-    f.write_bytes(raw[:9] + json.dumps(data, separators=(",", ":")).encode())
+    f.write_bytes(raw[:head] + json.dumps(data, separators=(",", ":")).encode())
     monkeypatch.setattr(automata, "_SHAPE_MEMO", {})
     assert render_module(compiled, "m") == good
     assert f.read_bytes() == raw  # rewritten as computed
@@ -203,7 +204,8 @@ def test_lark_cache_key_follows_the_grammar(tmp_path, monkeypatch):
 def test_cache_off(value, tmp_path, monkeypatch):
     from fretc.common import cache
     monkeypatch.setenv("FRETC_CACHE_DIR", value)
-    assert cache.cache_dir() is None and not cache.write_bytes("x", "y", b"z")
+    assert cache.cache_dir() is None
+    assert not cache.write_sealed("x", "y", b"m\n", bytes(32), b"z")
     assert _parsed(P.cached_lark()) == _reference()
 
 
