@@ -81,6 +81,10 @@ class Shield:
     #: corrected to the whole number nearest the proposal (:func:`fretc.shield.runtime.nearest`)
     integers: tuple[str, ...] = ()
     stats: dict[str, Any] = field(default_factory=dict, compare=False)
+    #: the outputs of a tick whose inputs cannot be read, as the runtimes' tables hold
+    #: them (:func:`fretc.shield.fallback.fallback_of`); None when no outputs are safe
+    #: from every state whatever the inputs
+    fallback: dict[str, Any] | None = None
 
     def weights(self, k: int) -> dict[int, tuple[bool, int]]:
         """Machine ``k``'s preferences as :func:`fretc.shield.machine.correct` takes them:
@@ -152,12 +156,13 @@ def with_margin(compiled: Sequence[Any], margin: int) -> list[Any]:
 def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str], *,
                  bindings: Bindings | None = None, prefer: Sequence[tuple[str, bool]] = (),
                  budget: Budget | None = None, name: str = "shield",
-                 fork: bool = True) -> Shield:
+                 fork: bool = True, fallback: dict[str, Any] | None = None) -> Shield:
     """Synthesize the shield of ``compiled`` (:class:`fretc.compiler.build.Compiled`) for the
     FRET variables ``inputs`` (the environment's) and ``outputs`` (the controller's), with
     ``bindings`` relating outputs of one message, ``prefer`` the tie-breaking preferences,
     ``budget`` each game's (``fretc check``'s defaults), ``fork`` the games in a worker
-    process (False: in this one, for tests).
+    process (False: in this one, for tests), ``fallback`` the declared outputs of a tick
+    whose inputs cannot be read (:mod:`fretc.shield.fallback`; None: the shield's own).
 
     Raises:
         ShieldError: a requirement that cannot be enforced, an unrealizable component (with
@@ -201,19 +206,25 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     unread += [f"{v}: declared an output, read by no requirement (passed through unchanged)"
                for v in p.outputs if v not in read]
     assert len(periods) <= 1  # (mixed periods were refused above)
+    from fretc.shield.fallback import fallback_of
+
+    fb, fb_notes = fallback_of(machines, fallback, p.outputs, _numbers(compiled), p.integers,
+                               prefer)
     digest = hashlib.sha256("\n".join(
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
                                               f"out:{','.join(p.outputs)}",
                                               f"prefer:{list(prefer)}"]
         + ([f"integers:{','.join(p.integers)}"] if p.integers else [])
         + [str(m.nodes) for m in machines]
-        + [str(m.clusters) for m in machines if m.clusters]).encode()).hexdigest()
+        + [str(m.clusters) for m in machines if m.clusters]
+        + [f"fallback:{fb}"]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
                   dict(p.monitored), tuple(prefer), next(iter(periods), None),
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
                         if len(g.variables) > 1),
                   _numbers(compiled),
-                  read, tuple(p.notes) + tuple(unread), digest, integers=tuple(p.integers))
+                  read, tuple(p.notes) + tuple(unread) + tuple(fb_notes), digest,
+                  integers=tuple(p.integers), fallback=fb)
 
 
 def _declared(compiled: Sequence[Any]) -> list[FretVariable]:
@@ -293,7 +304,7 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i), tuple(outs),
                    tuple(ans["init"]), tuple(tuple(n) for n in ans["nodes"]), ans["safe"],
                    tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"], ans["ctl_ok"],
-                   tuple(comp.messages), tuple(clusters), ans["stats"])
+                   tuple(comp.messages), tuple(clusters), ans["stats"], ans["robust"])
 
 
 def _atom(node: Node) -> Atom:

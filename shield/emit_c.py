@@ -124,6 +124,8 @@ class _CMachine:
     groups: list[dict[str, Any]]
     #: output clusters (:mod:`fretc.shield.predicates`): atoms, variables, rows (key, values)
     clusters: list[dict[str, Any]]
+    #: per output atom, the indices (in the outputs struct's order) of the variables it reads
+    atom_vars: list[list[int]]
 
     @property
     def n_in(self) -> int:
@@ -154,6 +156,7 @@ class _CMachine:
 
 def _machines(shield: Shield) -> list[_CMachine]:
     out, first = [], 0
+    fields = [v for v in shield.outputs if v in shield.read]  # (the outputs struct's)
     for k, t in enumerate(tables(shield)["machines"]):
         numeric = []
         clustered = {v for c in t["clusters"] for v in c["variables"]}
@@ -175,7 +178,10 @@ def _machines(shield: Shield) -> list[_CMachine]:
                      "rows": [(key, [_double(nums[v]) for v in c["variables"]])
                               for key, nums in c["numbers"].items()]}
                     for c in t["clusters"]]
-        out.append(_CMachine(k, t, first, numeric, groups, clusters))
+        atom_vars = [sorted(fields.index(x) for x in (_term_variables(c) if op == "pred"
+                                                      else {var}) if x in fields)
+                     for var, op, c in t["outputs"]]
+        out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars))
         first += len(t["requirements"])
     return out
 
@@ -222,7 +228,7 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
            "outputs": outputs,
            # the runner's CSV header (FRET names: any text, never a printf format)
            "header": "".join(["tick", *(f",{v}" for v, _n in outputs),
-                              ",overridden,reasons\n"]),
+                              ",overridden,reasons,fault\n"]),
            "requirements": [r for m in t["machines"] for r in m["requirements"]],
            "op_map": _C_OPS, "memo_slots": MEMO_SLOTS,
            "numeric": any(m.numeric_outputs for m in machines),

@@ -8,6 +8,7 @@ reasons, changed)``. The same shield gives the same bytes (no time, no path, no 
 
 from __future__ import annotations
 
+import ast
 import inspect
 from typing import Any
 
@@ -54,7 +55,7 @@ def tables(shield: Shield) -> dict[str, Any]:
     return {"name": shield.name, "digest": shield.digest, "inputs": list(shield.inputs),
             "outputs": list(shield.outputs),
             "preferences": [(t, int(v)) for t, v in shield.preferences],
-            "machines": machines}
+            "machines": machines, "fallback": shield.fallback}
 
 
 def _runtime_body() -> str:
@@ -63,7 +64,13 @@ def _runtime_body() -> str:
     doc = runtime.__doc__ or ""
     start = src.index('"""' + doc[:40])
     src = src[start + len(doc) + 6:].lstrip("\n")
-    lines = [ln for ln in src.splitlines() if not ln.startswith("__all__")]
+    lines = src.splitlines()
+    for node in ast.parse(src).body:  # (the __all__ statement, over all its lines)
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__"
+                                                for t in node.targets):
+            assert node.end_lineno is not None
+            del lines[node.lineno - 1:node.end_lineno]
+            break
     return "\n".join(lines).rstrip() + "\n"
 
 

@@ -19,7 +19,9 @@ into one node table (:mod:`fretc.shield.synthesis`):
   the bindings can give): a proposal that fails only it is overridden with no requirement
   as its reason;
 * ``env_ok``: the input atoms take the truth values of real numbers (the proof's
-  environment, :mod:`fretc.shield.prove`).
+  environment, :mod:`fretc.shield.prove`);
+* ``robust``: the output valuations ``safe`` from every state of the winning region with
+  every input ``env_ok`` allows (the fallback's, :func:`fretc.shield.build.fallback_of`).
 
 The rule every form implements (:class:`fretc.shield.runtime.ShieldRuntime`, the one Python
 implementation, written into ``--emit python``'s module; the C form; the tests compare them
@@ -114,6 +116,9 @@ class Machine:
     #: {variable: value}}}`` (:mod:`fretc.shield.runtime`)
     clusters: tuple[dict[str, Any], ...] = ()
     stats: dict[str, Any] = field(default_factory=dict, compare=False)
+    #: the root of the output valuations safe from every winning state whatever the inputs
+    #: (0: none; the fallback's, :func:`fretc.shield.build.fallback_of`)
+    robust: int = 0
 
     @property
     def output_variables(self) -> list[str]:

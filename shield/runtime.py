@@ -21,15 +21,36 @@ override changed takes them (:mod:`fretc.shield.messages` publishes the fields).
 ``"clusters"`` (:mod:`fretc.shield.predicates`) are ``{"atoms": [output atom indices],
 "variables": [...], "numbers": {valuation: {variable: value}}}``: when an override changes
 one of a cluster's atoms, its variables take the numbers recorded for the new valuation.
+The tables' ``"fallback"`` (None when there is none) is ``{"outputs": {variable: value},
+"atoms": [[0/1 per output atom] per machine]}``: outputs that keep every requirement
+winnable from every state of the winning region whatever the inputs
+(:func:`fretc.shield.build.fallback_of`).
+
+**A step is all or nothing.** Every value a machine reads is checked before any machine
+moves (:func:`read_value`): a missing variable, a value of the wrong type (a boolean is
+``True``/``False`` or the integer 0 or 1; a number an ``int`` or ``float``, never a bool
+or a string), a NaN, an integer no double holds (``10**400``) and, for a proposal, an
+infinite number (no actuator takes one) cannot be read. Then:
+
+* an **input** that cannot be read leaves every machine's state as it was and the step
+  returns the fallback's outputs (none when the shield has no fallback), with
+  ``Decision.fault`` saying which input and why (an infinite input is read: REP 117's
+  ``+inf`` is "no return", which a comparison reads);
+* a **proposed output** that cannot be read is replaced, never passed on: by the
+  fallback's value of that variable, then decided as any proposal (the state moves);
+  without a fallback its atoms are left to the correction (any value of theirs costs
+  nothing). ``Decision.fault`` says which and why; ``overridden`` is true.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest", "term_value"]
+__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest", "term_value",
+           "Unreadable", "read_value"]
 
 #: moves (and corrections) remembered per machine, keyed by (state, input atoms, output
 #: atoms): the BDD walks of a tick are done once per distinct key; past the limit the memory
@@ -55,6 +76,10 @@ class Decision(NamedTuple):
     overridden: bool
     reasons: tuple[str, ...]
     changed: tuple[str, ...]
+    #: "" for a decision on readable values; else why not (module docstring): "input x:
+    #: ..." (``outputs`` the fallback's, the state unchanged), "proposal y: ..." (the
+    #: proposal replaced)
+    fault: str = ""
 
 
 def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
@@ -75,6 +100,47 @@ def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
         raise ValueError(f"{var} is NaN: its comparisons have no truth value")
     assert c is not None  # a comparison has its constant
     return _OPS[op](x, c)
+
+
+class Unreadable(ValueError):
+    """A value the shield cannot read (module docstring); the message says which and why."""
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def read_value(var: str, kind: str, values: dict[str, Any], proposal: bool = False) -> Any:
+    """``values[var]`` checked for a variable read as ``kind`` (``"b"`` a boolean, ``"n"``
+    a number; module docstring): a bool, or a float.
+
+    Raises:
+        Unreadable: missing, of the wrong type, NaN, too large for a double, or (a
+            ``proposal``) infinite."""
+    if var not in values:
+        raise Unreadable(f"{var} is missing")
+    value = values[var]
+    if kind == "b":
+        if value is True or value is False:
+            return value
+        if type(value).__name__ == "bool_":  # (numpy's, from a message's array)
+            return bool(value)
+        if isinstance(value, numbers.Integral) and value in (0, 1):
+            return bool(value)
+        raise Unreadable(f"{var} must be a boolean, not {_shown(value)}")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or type(value).__name__ == "bool_":
+        raise Unreadable(f"{var} must be a number, not {_shown(value)}")
+    try:
+        x = float(value)
+    except (OverflowError, ValueError, TypeError):
+        raise Unreadable(f"{var} is {_shown(value)}, which no double holds") from None
+    if x != x:
+        raise Unreadable(f"{var} is NaN")
+    if proposal and math.isinf(x):
+        raise Unreadable(f"{var} is {x}: no actuator takes an infinite value")
+    return x
 
 
 def term_value(t: tuple[Any, ...], values: dict[str, Any]) -> Any:
@@ -110,6 +176,26 @@ def term_value(t: tuple[Any, ...], values: dict[str, Any]) -> Any:
     if b == 0:
         return math.nan if a == 0 or a != a else math.copysign(math.inf, a) * math.copysign(1.0, b)
     return a / b
+
+
+def term_variables(t: tuple[Any, ...]) -> set[str]:
+    """The variables a comparison of several variables reads (:func:`term_value`'s shape)."""
+    if t[0] == "var":
+        return {t[1]}
+    return set().union(*(term_variables(x) for x in t[1:] if isinstance(x, tuple)))
+
+
+def kinds(specs: list[tuple[str, str | None, Any]]) -> dict[str, str]:
+    """Each variable the atoms ``specs`` read -> ``"b"`` (a boolean) or ``"n"`` (a
+    number), in first-seen order."""
+    out: dict[str, str] = {}
+    for var, op, c in specs:
+        if op == "pred":
+            for v in sorted(term_variables(c)):
+                out.setdefault(v, "n")
+        else:
+            out.setdefault(var, "b" if op is None else "n")
+    return out
 
 
 def _tester(spec: tuple[str, str | None, Any]) -> Any:
@@ -235,6 +321,11 @@ class _Machine:
         clustered = {v for c in self.clusters for v in c["variables"]}
         self.atoms_of = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
                          for v in self.variables if v not in clustered}
+        self.in_kinds, self.out_kinds = kinds(self.ins), kinds(self.outs)
+        #: the output atoms that read each output variable
+        self.reading = {v: [j for j, s in enumerate(self.outs)
+                            if (v in term_variables(s[2]) if s[1] == "pred" else s[0] == v)]
+                        for v in self.out_kinds}
 
     def move(self, ins: tuple[int, ...], outs: tuple[int, ...]) -> tuple[bool, tuple[int, ...]]:
         """Whether ``outs`` is safe from the current state with ``ins``, and the next
@@ -250,18 +341,20 @@ class _Machine:
             got = self.cache[key] = (safe, nxt)
         return got
 
-    def correct(self, ins: tuple[int, ...], prop: tuple[int, ...]) -> tuple[int, ...]:
+    def correct(self, ins: tuple[int, ...], prop: tuple[int, ...],
+                unknown: frozenset[int] = frozenset()) -> tuple[int, ...]:
         """The safe output atoms nearest ``prop``: the fewest changes, then the preferences
         in order (a shortest path through the ``safe`` BDD; untested atoms keep their
-        proposed values; equal costs take the low branch)."""
+        proposed values; equal costs take the low branch). The atoms ``unknown`` (a
+        proposal that could not be read) cost nothing either way but their preferences."""
         n_in, n_out = len(ins), len(prop)
         values = list(ins + prop + self.state)
         costs: list[float] = [math.inf, 0.0]
         for var, lo, hi in self.nodes[2:self.safe + 1]:  # safe's nodes come first
             j = var - n_in
             if 0 <= j < n_out:
-                costs.append(min(costs[lo] + self._cost(j, 0, prop),
-                                 costs[hi] + self._cost(j, 1, prop)))
+                costs.append(min(costs[lo] + self._cost(j, 0, prop, unknown),
+                                 costs[hi] + self._cost(j, 1, prop, unknown)))
             else:
                 costs.append(costs[hi] if values[var] else costs[lo])
         if costs[self.safe] == math.inf:
@@ -272,33 +365,43 @@ class _Machine:
             var, lo, hi = self.nodes[n]
             j = var - n_in
             if 0 <= j < n_out:
-                low = costs[lo] + self._cost(j, 0, prop) <= costs[hi] + self._cost(j, 1, prop)
+                low = (costs[lo] + self._cost(j, 0, prop, unknown)
+                       <= costs[hi] + self._cost(j, 1, prop, unknown))
                 out[j] = 0 if low else 1
                 n = lo if low else hi
             else:
                 n = hi if values[var] else lo
         return tuple(out)
 
-    def _cost(self, j: int, v: int, prop: tuple[int, ...]) -> int:
+    def _cost(self, j: int, v: int, prop: tuple[int, ...],
+              unknown: frozenset[int] = frozenset()) -> int:
+        w = self.weights.get(j)
+        if j in unknown:
+            return w[1] if w is not None and v != w[0] else 0
         p = prop[j]
         if v == p:
             return 0
         c = self.big
-        w = self.weights.get(j)
         if w is not None:
             c += (w[1] if v != w[0] else 0) - (w[1] if p != w[0] else 0)
         return c
 
-    def step(self, inputs: dict[str, Any], proposed: dict[str, Any]
-             ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...]]:
-        """This machine's corrected outputs (empty when the proposal is kept), reasons and
-        changed atoms for one tick; advances."""
+    def decide(self, inputs: dict[str, Any], proposed: dict[str, Any],
+               unknown: frozenset[str] = frozenset()
+               ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...]]:
+        """This machine's decision for one tick, nothing moved: the corrected outputs
+        (empty when the proposal is kept), reasons, changed atoms and the next state.
+        ``inputs`` and ``proposed`` hold checked values (:func:`read_value`) of every
+        variable the machine reads but the output variables ``unknown`` (proposals that
+        could not be read: their atoms are left to the correction and always changed)."""
         ins = tuple([f(inputs) for f in self.in_tests])
+        unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
+        if unk:
+            return self._unknown(ins, proposed, unk)
         prop = tuple([f(proposed) for f in self.out_tests])
         safe, nxt = self.move(ins, prop)
         if safe:
-            self.state = nxt
-            return (self._whole(proposed, prop) if self.integers else {}), (), ()
+            return (self._whole(proposed, prop) if self.integers else {}), (), (), nxt
         key = (self.state, ins, prop)
         got = self.corrections.get(key)
         if got is None:
@@ -313,14 +416,35 @@ class _Machine:
                 self.corrections.clear()
             got = self.corrections[key] = (outs, (reasons if changed else ()), changed,
                                            self._plan(outs, changed))
-        outs, reasons, changed, (fixed, kept, near) = got
-        self.state = self.move(ins, outs)[1]
+        outs, reasons, changed, plan = got
+        return self._values(plan, proposed), reasons, changed, self.move(ins, outs)[1]
+
+    def _unknown(self, ins: tuple[int, ...], proposed: dict[str, Any], unk: frozenset[int]
+                 ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...]]:
+        """:meth:`decide` when the output atoms ``unk`` read a proposal that could not be
+        read: the safe outputs nearest the rest of the proposal, every atom of ``unk``
+        counted changed (its variable's value is never the proposal's); no reason (the
+        fault is the proposal's)."""
+        prop = tuple([0 if j in unk else f(proposed) for j, f in enumerate(self.out_tests)])
+        outs = self.correct(ins, prop, unk)
+        changed = tuple(t for j, (t, p, o) in enumerate(zip(self.texts, prop, outs))
+                        if p != o or j in unk)
+        plan = self._plan(outs, changed)
+        return self._values(plan, proposed), (), changed, self.move(ins, outs)[1]
+
+    def _values(self, plan: tuple[dict[str, Any], list[str], list[tuple[Any, ...]]],
+                proposed: dict[str, Any]) -> dict[str, Any]:
+        """The output values of a correction's :meth:`_plan` for the proposal ``proposed``
+        (a variable missing there, a proposal that could not be read, takes the number
+        nearest NaN: its region's end)."""
+        fixed, kept, near = plan
         result = dict(fixed)
         for v in kept:
             result[v] = proposed[v]
         for v, specs, truths in near:
-            result[v] = nearest(specs, truths, float(proposed[v]), v in self.integers)
-        return result, reasons, changed
+            result[v] = nearest(specs, truths, float(proposed.get(v, math.nan)),
+                                v in self.integers)
+        return result
 
     def _whole(self, proposed: dict[str, Any], prop: tuple[int, ...]) -> dict[str, float]:
         """The whole-number outputs of a proposal kept whole: one that is no whole number
@@ -383,6 +507,15 @@ class ShieldRuntime:
         self.outputs = tuple(tables["outputs"])
         prefs = len(tables.get("preferences", ()))
         self.machines = [_Machine(t, prefs) for t in tables["machines"]]
+        #: the fallback (module docstring), None when the shield has none
+        self.fallback: dict[str, Any] | None = tables.get("fallback")
+        self.input_kinds: dict[str, str] = {}
+        self.output_kinds: dict[str, str] = {}
+        for m in self.machines:
+            for v, k in m.in_kinds.items():
+                self.input_kinds.setdefault(v, k)
+            for v, k in m.out_kinds.items():
+                self.output_kinds.setdefault(v, k)
 
     def reset(self) -> None:
         """Back to the initial state (before the first tick)."""
@@ -394,6 +527,12 @@ class ShieldRuntime:
         """Each machine's state bits."""
         return tuple(m.state for m in self.machines)
 
+    def restore(self, state: tuple[tuple[int, ...], ...]) -> None:
+        """Put back a :attr:`state` read before a step (a host whose tick failed after
+        the step, before it published: the tick is then not taken)."""
+        for m, bits in zip(self.machines, state, strict=True):
+            m.state = tuple(bits)
+
     def accepts(self, state: tuple[tuple[int, ...], ...], inputs: dict[str, Any],
                 outputs: dict[str, Any]) -> bool:
         """Whether ``outputs`` (every output variable's value) keep every requirement
@@ -402,9 +541,11 @@ class ShieldRuntime:
         them so that a sampler between two of them sees an accepted valuation.
 
         Raises:
-            KeyError, ValueError, TypeError: as :meth:`step`."""
+            Unreadable (a ValueError): a value the step could not read."""
+        ins = {v: read_value(v, k, inputs) for v, k in self.input_kinds.items()}
+        outs = {v: read_value(v, k, outputs, True) for v, k in self.output_kinds.items()}
         for m, bits in zip(self.machines, state):
-            values = [f(inputs) for f in m.in_tests] + [f(outputs) for f in m.out_tests]
+            values = [f(ins) for f in m.in_tests] + [f(outs) for f in m.out_tests]
             if _walk(m.nodes, m.safe, values + list(bits)) != 1:
                 return False
         return True
@@ -416,17 +557,70 @@ class ShieldRuntime:
         requirement winnable (but for a whole-number output's proposal that is no whole
         number: the nearest whole number with its truths, not an override), else the nearest
         safe outputs and the requirements that forced them. Output variables no enforced
-        requirement reads are passed through.
-
-        Raises:
-            KeyError: a variable is missing. ValueError: a numeric value is NaN.
-            TypeError: a boolean variable given a non-boolean."""
-        outputs = {v: proposed[v] for v in self.outputs}
+        requirement reads are passed through. All or nothing (module docstring): a value
+        that cannot be read never raises; an input leaves the state as it was and gives the
+        fallback (``Decision.fault`` says why), a proposal is replaced."""
+        try:
+            ins = {v: read_value(v, k, inputs) for v, k in self.input_kinds.items()}
+        except Unreadable as exc:
+            return self.fault(f"input {exc}", proposed)
+        props: dict[str, Any] = {}
+        unknown: set[str] = set()
+        faults: list[str] = []
+        replaced: list[str] = []
+        fallback = self.fallback["outputs"] if self.fallback is not None else {}
+        for v, k in self.output_kinds.items():
+            try:
+                props[v] = read_value(v, k, proposed, True)
+            except Unreadable as exc:
+                faults.append(f"proposal {exc}")
+                replaced.append(v)
+                if v in fallback:
+                    props[v] = fallback[v]
+                else:
+                    unknown.add(v)
+        frozen = frozenset(unknown)
+        # every machine decides before any moves: a step is all or nothing
+        moves = [m.decide(ins, props, frozen) for m in self.machines]
+        outputs = {v: proposed[v] for v in self.outputs
+                   if v not in self.output_kinds and v in proposed}
+        outputs.update(props)
         reasons: list[str] = []
         changed: list[str] = []
-        for m in self.machines:
-            values, why, what = m.step(inputs, proposed)
+        for m, (values, why, what, nxt) in zip(self.machines, moves):
+            m.state = nxt
             outputs.update(values)
             reasons += why
             changed += what
-        return Decision(outputs, bool(changed), tuple(reasons), tuple(changed))
+            # (a replaced proposal's atoms are changed, whatever their new truth)
+            changed += [m.texts[j] for v in replaced for j in m.reading.get(v, ())
+                        if m.texts[j] not in what]
+        return Decision({v: outputs[v] for v in self.outputs if v in outputs},
+                        bool(changed) or bool(faults), tuple(reasons), tuple(changed),
+                        "; ".join(faults))
+
+    def fault(self, why: str, proposed: dict[str, Any]) -> Decision:
+        """The decision of a tick whose inputs cannot be read (module docstring; ``why``
+        says which and why, e.g. a host's binding that could not be evaluated): the
+        fallback's outputs (none without a fallback), every machine's state as it was;
+        ``changed`` the output atoms whose fallback truth is not the proposal's (or whose
+        proposal cannot be read either)."""
+        if self.fallback is None:
+            return Decision({}, True, (), (), why + "; no fallback: no outputs")
+        outputs = {v: proposed[v] for v in self.outputs
+                   if v not in self.output_kinds and v in proposed}
+        outputs.update(self.fallback["outputs"])
+        checked: dict[str, Any] = {}
+        for v, k in self.output_kinds.items():
+            try:
+                checked[v] = read_value(v, k, proposed, True)
+            except Unreadable:
+                pass
+        changed: list[str] = []
+        for m, bits in zip(self.machines, self.fallback["atoms"]):
+            for j, (spec, f, t) in enumerate(zip(m.outs, m.out_tests, m.texts)):
+                need = term_variables(spec[2]) if spec[1] == "pred" else {spec[0]}
+                if not need <= checked.keys() or int(f(checked)) != bits[j]:
+                    changed.append(t)
+        return Decision({v: outputs[v] for v in self.outputs if v in outputs}, True, (),
+                        tuple(changed), why)

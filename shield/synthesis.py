@@ -15,7 +15,10 @@ The shield's functions (:mod:`fretc.shield.machine`) are exported as one node ta
   own attractor, whatever ``ctl_ok`` says (the reasons of an override: a proposal no
   message gives breaks no requirement by that alone);
 * ``ctl_ok``: the output atoms' consistency (numbers, messages);
-* the next-value function of every state bit, and ``env_ok``.
+* the next-value function of every state bit, and ``env_ok``;
+* ``robust``: the output valuations ``safe`` from every state outside ``Lose`` with every
+  input letter ``env_ok`` allows (over the output atoms only): the fallback of a tick whose
+  inputs cannot be read is one of them (:func:`fretc.shield.build.fallback_of`).
 
 Könighofer et al., "Shield synthesis", FMSD 51 (2017), section 4: a safety shield is the
 winning region of the safety game, and a minimally interfering one changes a proposal only
@@ -42,7 +45,7 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
 
     Returns ``{"realizable": True, "atoms": [(IR atom, is input)], "init": [bool],
     "nodes": [(var, lo, hi)], "safe": int, "next": [int], "keep": [int], "env_ok": int,
-    "ctl_ok": int, "stats": {...}}`` (variables numbered as :mod:`fretc.shield.machine` says) or
+    "ctl_ok": int, "robust": int, "stats": {...}}`` (variables numbered as :mod:`fretc.shield.machine` says) or
     ``{"realizable": False, "inputs": [letters] | None, "run": [rows], "note": str}``
     (letters and rows: ``{atom name: bool}``, as :func:`fretc.check.safety_game.solve_game`).
 
@@ -77,14 +80,19 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         table = _Table(b, varmap)
         # safe first: its nodes are the table's first (the correction's shortest path reads
         # only them, :mod:`fretc.shield.runtime`)
-        roots = [table.add(f) for f in [safe, *nexts, *keeps, game.env_ok, game.ctl_ok]]
-        _self_check(b, varmap, table, [safe, *nexts, *keeps, game.env_ok, game.ctl_ok], roots)
+        # the fallback's outputs: safe from every state of the winning region whatever
+        # the (consistent) inputs (the outputs of a tick whose inputs cannot be read)
+        robust = b.bdd_forall(b.bdd_imp(b.bdd_and(b.bdd_not(lose), game.env_ok), safe),
+                              b.bdd_and(game.cur_set, game.in_set))
+        bdds = [safe, *nexts, *keeps, game.env_ok, game.ctl_ok, robust]
+        roots = [table.add(f) for f in bdds]
+        _self_check(b, varmap, table, bdds, roots)
         return {"realizable": True,
                 "atoms": [(a, True) for a in ins] + [(a, False) for a in outs],
                 "init": [bool(bit[2]) for bit in m.bits], "nodes": table.nodes,
                 "safe": roots[0], "next": roots[1:1 + len(nexts)],
                 "keep": roots[1 + len(nexts):1 + len(nexts) + len(keeps)],
-                "env_ok": roots[-2], "ctl_ok": roots[-1],
+                "env_ok": roots[-3], "ctl_ok": roots[-2], "robust": roots[-1],
                 "stats": {"state_bits": len(m.bits),
                           "winning_region_bdd_nodes": b.bdd_nodecount(b.bdd_not(lose)),
                           "iterations": len(game.layers),

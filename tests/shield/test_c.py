@@ -97,7 +97,9 @@ def test_the_c_runner_refuses_a_nul_byte_and_names_the_line(tmp_path):
     exe = _runner(tmp_path, "v < 1", "u")
     got = subprocess.run([str(exe)], input=(head + "true,false,false,false,false,nan\n").encode(),
                          capture_output=True, timeout=60)
-    assert got.returncode == 3 and b"NaN" in got.stderr
+    # (a proposed NaN is replaced, never passed on: the row says so)
+    row = list(csv.DictReader(io.StringIO(got.stdout.decode())))[0]
+    assert got.returncode == 0 and row["fault"] == "proposal" and float(row["v"]) < 1, row
 
 
 def test_the_c_runner_reads_true_and_false_in_any_case_as_the_audit_does(tmp_path):
@@ -152,8 +154,8 @@ def test_a_shield_that_enforces_nothing_still_builds_and_runs(tmp_path):
     got = subprocess.run([str(exe)], input=",".join(INPUTS + OUTPUTS) + "\n"
                          "true,false,false,false,false,0.0\n", capture_output=True, text=True,
                          timeout=60)
-    assert got.returncode == 0 and got.stdout.splitlines() == ["tick,overridden,reasons",
-                                                               "0,0,"], got
+    assert got.returncode == 0 and got.stdout.splitlines() == [
+        "tick,overridden,reasons,fault", "0,0,,"], got
 
 
 def test_names_that_are_no_c_identifiers_build_and_decide_alike(tmp_path):
@@ -195,7 +197,8 @@ def test_names_that_are_no_c_identifiers_build_and_decide_alike(tmp_path):
 def test_a_nan_no_enforced_requirement_compares_passes_in_c_as_in_python(tmp_path):
     """``d`` is read only by R2, over inputs only (monitored): a NaN there is decided on, in
     the Python form and now in C (it returned -1, no decision); a NaN in ``v``, which R1
-    compares, is no decision in both (C: -1, the runner exits 3; Python: ValueError)."""
+    compares, is a proposal the shield cannot read: replaced in both (by the fallback's
+    value, v = 0, which R1 keeps), never passed on, never an exception (issue 84, V1)."""
     from fretc.shield.build import build_shield as build_one
     from fretc.shield.emit_python import load_shield, render_python
 
@@ -213,8 +216,9 @@ def test_a_nan_no_enforced_requirement_compares_passes_in_c_as_in_python(tmp_pat
     assert got.returncode == 0, got.stderr
     row = list(csv.DictReader(io.StringIO(got.stdout)))[0]
     assert float(row["v"]) == d.outputs["v"] == 0.5 and row["overridden"] == "1"
-    with pytest.raises(ValueError):
-        load_shield(render_python(shield))().step({"a": True, "d": 1.0}, {"v": math.nan})
+    d = load_shield(render_python(shield))().step({"a": True, "d": 1.0}, {"v": math.nan})
+    assert d.overridden and d.fault == "proposal v is NaN" and d.outputs == {"v": 0.0}, d
     got = subprocess.run([str(exe)], input="a,d,v\ntrue,1.0,nan\n", capture_output=True,
                          text=True, timeout=60)
-    assert got.returncode == 3 and "a NaN: no decision" in got.stderr
+    row = list(csv.DictReader(io.StringIO(got.stdout)))[0]
+    assert got.returncode == 0 and row["fault"] == "proposal" and float(row["v"]) == 0.0, row

@@ -3,7 +3,8 @@
 ::
 
     fretc shield FILE... [--inputs A,B] [--outputs C,D] [-b BINDINGS] [--prefer LITERALS]
-                 [--emit python|c|ros2|gwendolen]... [-o DIR] [--prove] [--explain]
+                 [--fallback OUTPUTS] [--emit python|c|ros2|gwendolen]... [-o DIR] [--prove]
+                 [--explain]
                  [--budget UNITS] [--memory-budget NODES]
 
 Inputs and outputs default to the files' ``@inputs``/``@outputs`` (as ``fretc check``). Exit
@@ -56,6 +57,11 @@ def _names(text: str | None) -> list[str] | None:
 @click.option("--prefer", default=None, metavar="LITERALS",
               help="Among corrections changing equally few output atoms, prefer these "
               "values, first first: e.g. 'stopped,!stop_requested'.")
+@click.option("--fallback", default=None, metavar="OUTPUTS",
+              help="The outputs of a tick whose inputs cannot be read (a NaN, a missing "
+              "value), which must keep every requirement from every state whatever the "
+              "inputs: e.g. 'stopped,!moving,speed=0'; default: [shield] fallback of -b, "
+              "else the shield's own.")
 @click.option("--emit", "forms", multiple=True, type=click.Choice(FORMS),
               help="Write the shield in this form into DIR (repeatable).")
 @click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False), default=None,
@@ -82,7 +88,8 @@ def _names(text: str | None) -> list[str] | None:
               "unknown and says so.")
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
-               bindings_file: str | None, prefer: str | None, forms: tuple[str, ...],
+               bindings_file: str | None, prefer: str | None, fallback: str | None,
+               forms: tuple[str, ...],
                out_dir: str | None, prove: bool, explain: bool, name: str | None,
                margin: int, budget: int, memory_budget: int, query_cpu: float) -> None:
     """Synthesize the shield of requirement FILES: each tick it passes the controller's
@@ -94,6 +101,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.fretish.files import load_requirements
     from fretc.fretish.fret_variables import fret_declarations
     from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
+    from fretc.shield.fallback import declared_fallback, parse_fallback
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
@@ -123,11 +131,14 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         from fretc.signals.bindings.files import load_bindings
 
         bindings = load_bindings(bindings_file)
+    declared = parse_fallback(fallback)
+    if declared is None:
+        declared = declared_fallback(bindings_file)
     try:
         shield = build_shield(with_margin(compiled, margin), ins, outs, bindings=bindings,
                               prefer=parse_preferences(prefer),
                               budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
-                              name=name or Path(files[0]).stem)
+                              name=name or Path(files[0]).stem, fallback=declared)
     except ShieldUnknown as exc:
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
@@ -176,6 +187,10 @@ def _summary(shield) -> str:
         lines.append(f"  corrected together (one message): {', '.join(g)}")
     for rid, why in shield.monitored.items():
         lines.append(f"  monitored only: {rid}: {why}")
+    if shield.fallback is not None and shield.fallback["outputs"]:
+        lines.append("  fallback (a tick whose inputs cannot be read): " + ", ".join(
+            (v if x else f"!{v}") if isinstance(x, bool) else f"{v}={x:g}"
+            for v, x in shield.fallback["outputs"].items()))
     for n in shield.notes:
         lines.append(f"  note: {n}")
     return "\n".join(lines)
