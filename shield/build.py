@@ -165,7 +165,8 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     whose inputs cannot be read (:mod:`fretc.shield.fallback`; None: the shield's own).
 
     Raises:
-        ShieldError: a requirement that cannot be enforced, an unrealizable component (with
+        ShieldError: a free-form requirement (no formula), a requirement that cannot be
+            enforced, an unrealizable component (with
             the inputs that defeat every controller), an unknown preference, requirements
             of different tick periods (the shield steps on one tick: a duration of the other
             period would count ticks of the wrong length), outputs a FRET export declares
@@ -173,6 +174,12 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         ShieldUnknown: a component's game past its budget, or comparisons of several
             variables with too many valuations to decide
             (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
+    for c in compiled:  # (before anything reads their formulas)
+        if c.formalization is None:
+            where = f"{c.entry.source}:{c.entry.line}: {c.id}"
+            raise ShieldError(f"{where} has no formula ({c.error})" if c.error is not None
+                              else f"{where} is free-form text: it has no formula a shield "
+                              "could enforce or monitor; leave it out of the shield's files")
     periods: dict[Any, list[str]] = {}
     for c in compiled:
         if c.entry.tick_period is not None:

@@ -15,7 +15,7 @@ from typing import Any
 from fretc.shield.build import Shield
 from fretc.shield.plan import ShieldError
 
-__all__ = ["identifier", "write_forms"]
+__all__ = ["identifier", "render_forms", "write_forms"]
 
 
 def identifier(name: str) -> str:
@@ -25,50 +25,60 @@ def identifier(name: str) -> str:
     return "_" + out if out[0].isdigit() else out
 
 
-def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
-                bindings: Any = None, bindings_file: str | None = None,
-                compiled: Sequence[Any] = ()) -> list[Path]:
-    """Write each form of ``forms`` into ``out_dir`` (made when missing); the paths written,
-    in order.
+def render_forms(shield: Shield, forms: Sequence[str], *, bindings: Any = None,
+                 bindings_file: str | None = None, compiled: Sequence[Any] = ()
+                 ) -> dict[str, str | bytes]:
+    """Every file of each form of ``forms``: relative path -> text (or bytes, the binding
+    file copied), in order; nothing is written.
 
     Raises:
-        ShieldError: a form that needs what was not given (the ros2 form: bindings)."""
-    out_dir.mkdir(parents=True, exist_ok=True)
+        ShieldError: a form that needs what was not given (the ros2 form: bindings and
+            the types of its topics) or an unknown form."""
     base = identifier(shield.name)
-    written: list[Path] = []
+    files: dict[str, str | bytes] = {}
     for form in dict.fromkeys(forms):
         if form == "python":
             from fretc.shield.emit_python import render_python
 
-            path = out_dir / f"{base}_shield.py"
-            path.write_text(render_python(shield), encoding="utf-8")
-            written.append(path)
+            files[f"{base}_shield.py"] = render_python(shield)
             if bindings_file is not None:  # what a host reads the messages with
-                copy = out_dir / f"{base}.bindings.toml"
-                copy.write_bytes(Path(bindings_file).read_bytes())
-                written.append(copy)
+                files[f"{base}.bindings.toml"] = Path(bindings_file).read_bytes()
         elif form == "c":
             from fretc.shield.emit_c import render_c
 
-            for fname, text in render_c(shield, base).items():
-                path = out_dir / fname
-                path.write_text(text, encoding="utf-8")
-                written.append(path)
+            files.update(render_c(shield, base))
         elif form == "ros2":
             from fretc.shield.emit_ros2 import render_ros2
 
-            for fname, text in render_ros2(shield, base, bindings, bindings_file).items():
-                path = out_dir / fname
-                path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(text, encoding="utf-8")
-                written.append(path)
+            files.update(render_ros2(shield, base, bindings, bindings_file))
         elif form == "gwendolen":
             from fretc.shield.emit_gwendolen import render_gwendolen
 
-            for fname, text in render_gwendolen(shield, compiled, base).items():
-                path = out_dir / fname
-                path.write_text(text, encoding="utf-8")
-                written.append(path)
+            files.update(render_gwendolen(shield, compiled, base))
         else:
             raise ShieldError(f"unknown form {form!r}")
+    return files
+
+
+def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
+                bindings: Any = None, bindings_file: str | None = None,
+                compiled: Sequence[Any] = ()) -> list[Path]:
+    """Write each form of ``forms`` into ``out_dir`` (made when missing); the paths written,
+    in order. Every form is made before any file is written: a form refused leaves the
+    folder as it was (no partial output).
+
+    Raises:
+        ShieldError: as :func:`render_forms`."""
+    files = render_forms(shield, forms, bindings=bindings, bindings_file=bindings_file,
+                         compiled=compiled)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    for fname, content in files.items():
+        path = out_dir / fname
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(content, bytes):
+            path.write_bytes(content)
+        else:
+            path.write_text(content, encoding="utf-8")
+        written.append(path)
     return written

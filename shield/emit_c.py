@@ -26,6 +26,7 @@ before costs a lookup, a miss what the step costs without it.
 from __future__ import annotations
 
 import keyword
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -42,19 +43,40 @@ _C_KEYWORDS = frozenset(
     "if inline int long register restrict return short signed sizeof static struct switch "
     "typedef union unsigned void volatile while _Bool _Complex _Imaginary bool true false "
     "NULL".split())
+#: object-like macros a field of the same name would expand: those of the headers the C form
+#: includes (C99's <math.h>, <stdio.h>, <stdlib.h>, <string.h>, <stdint.h>, <stdbool.h>,
+#: <stddef.h>, and <errno.h>, which they may include) and the generated files' own
+_C_MACROS = frozenset(
+    "NAN INFINITY HUGE_VAL HUGE_VALF HUGE_VALL FP_NAN FP_INFINITE FP_ZERO FP_SUBNORMAL "
+    "FP_NORMAL FP_ILOGB0 FP_ILOGBNAN FP_FAST_FMA FP_FAST_FMAF FP_FAST_FMAL MATH_ERRNO "
+    "MATH_ERREXCEPT math_errhandling EOF BUFSIZ FILENAME_MAX FOPEN_MAX L_tmpnam TMP_MAX "
+    "SEEK_SET SEEK_CUR SEEK_END stdin stdout stderr EXIT_SUCCESS EXIT_FAILURE RAND_MAX "
+    "MB_CUR_MAX errno EDOM ERANGE EILSEQ SIZE_MAX PTRDIFF_MIN PTRDIFF_MAX SIG_ATOMIC_MIN "
+    "SIG_ATOMIC_MAX WCHAR_MIN WCHAR_MAX WINT_MIN WINT_MAX INTMAX_MIN INTMAX_MAX UINTMAX_MAX "
+    "INTPTR_MIN INTPTR_MAX UINTPTR_MAX __bool_true_false_are_defined "
+    "INF_COST MAX_ATOMS LINE_MAX_BYTES MAX_COLUMNS".split())
+#: macro families: <stdint.h>'s limits (INT8_MIN ... UINT_FAST64_MAX), the generated
+#: files' per-machine and per-shield ones (M0_NIN, SAFE_ROS_SHIELD_...), and the names C
+#: reserves (``_`` then a capital, or ``__``)
+_C_RESERVED = re.compile(r"U?INT(_LEAST|_FAST)?\d+_(MIN|MAX)|U?INT\d+_C|INTMAX_C|UINTMAX_C"
+                         r"|M\d+_[A-Z_]+|[A-Z0-9_]*_SHIELD_[A-Z_]+|FRETC_SHIELD_\w*|_[A-Z_]\w*")
 _C_OPS = {"<": "<", "<=": "<=", ">": ">", ">=": ">=", "=": "==", "!=": "!="}
 
 
 def c_name(variable: str) -> str:
     """A FRET variable as a C identifier: itself, with ``_`` after it when it is a C (or
-    Python) keyword; a name that is no identifier (FRET's dotted ``ROS.ok``, a quoted
+    Python) keyword, a macro of the headers the C form includes or of its own files
+    (``NAN``, ``errno``, ``EOF``, ``MAX_ATOMS``: a field of that name would be expanded) or a
+    name C reserves; a name that is no identifier (FRET's dotted ``ROS.ok``, a quoted
     ``"load%"``) with ``_`` for each other character (``v_`` before a digit). Two names
     may give one: :func:`c_names` makes them unique."""
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", variable):
         variable = re.sub(r"[^A-Za-z0-9_]", "_", variable)
         if not variable or variable[0].isdigit():
             variable = "v_" + variable
-    return variable + "_" if variable in _C_KEYWORDS or keyword.iskeyword(variable) else variable
+    reserved = (variable in _C_KEYWORDS or variable in _C_MACROS or keyword.iskeyword(variable)
+                or _C_RESERVED.fullmatch(variable) is not None)
+    return variable + "_" if reserved else variable
 
 
 def c_names(variables: Sequence[str]) -> dict[str, str]:
@@ -75,8 +97,15 @@ def c_names(variables: Sequence[str]) -> dict[str, str]:
 
 
 def _double(x: float) -> str:
-    """A finite double as a C literal that reads back to the same value."""
-    text = repr(float(x))
+    """A double as a C expression of the same value: a literal that reads back to it, or
+    ``<math.h>``'s ``INFINITY``, ``(-INFINITY)``, ``NAN`` (a constant such as ``1e309`` is
+    infinite in doubles; ``repr`` writes no C for it)."""
+    x = float(x)
+    if math.isnan(x):
+        return "NAN"
+    if math.isinf(x):
+        return "INFINITY" if x > 0 else "(-INFINITY)"
+    text = repr(x)
     return text if any(ch in text for ch in ".en") else text + ".0"
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import inspect
+import math
 from typing import Any
 
 from fretc.shield import runtime
@@ -75,8 +76,15 @@ def _runtime_body() -> str:
 
 
 def _literal(value: Any, indent: int = 0) -> str:
-    """``value`` as Python source, one machine table entry per line, deterministic."""
+    """``value`` as Python source, one machine table entry per line, deterministic; a
+    float no literal writes (a constant such as ``1e309``, infinite in doubles) as
+    ``float('inf')``, ``float('-inf')`` or ``float('nan')``."""
     pad = " " * indent
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"float({str(value)!r})"
+    if isinstance(value, tuple):
+        inner = ", ".join(_literal(v, indent) for v in value)
+        return f"({inner},)" if len(value) == 1 else f"({inner})"
     if isinstance(value, dict):
         if not value:
             return "{}"
@@ -85,6 +93,8 @@ def _literal(value: Any, indent: int = 0) -> str:
     if isinstance(value, list) and value and isinstance(value[0], (dict, tuple)):
         items = [f"{pad}    {_literal(v, indent + 4)}," for v in value]
         return "[\n" + "\n".join(items) + f"\n{pad}]"
+    if isinstance(value, list):
+        return "[" + ", ".join(_literal(v, indent) for v in value) + "]"
     return repr(value)
 
 

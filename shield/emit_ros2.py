@@ -67,6 +67,29 @@ def _types(table: dict[str, Any], bindings_file: str) -> dict[str, str]:
     return dict(types)
 
 
+def _check_types(types: dict[str, str], bindings: Bindings, bindings_file: str) -> None:
+    """Every type of ``types`` (topic -> ``pkg/msg/Type``) is one the node can decode and
+    make: ROS 2 Jazzy's standard types (rosbags), or those of the binding file's ``[types]
+    msg_path`` folders, as the node's type store holds them.
+
+    Raises:
+        ShieldError: a type it does not hold, named with its topic."""
+    if bindings.msg_path:
+        from fretc.logs.ros.msg_path import msg_path_typestore
+
+        store = msg_path_typestore(bindings.msg_path)
+    else:
+        from rosbags.typesys import Stores, get_typestore
+
+        store = get_typestore(Stores.ROS2_JAZZY)
+    unknown = [f"{t} ({name})" for t, name in types.items() if name not in store.types]
+    if unknown:
+        raise ShieldError(f"{bindings_file}: no ROS 2 message type of that name for "
+                          + ", ".join(unknown) + ": the node can decode and make only ROS 2 "
+                          "Jazzy's standard types and those of [types] msg_path (give the "
+                          "folder of its .msg file there)")
+
+
 def _topics(shield: Shield, bindings: Bindings, proposals: dict[str, str]
             ) -> tuple[list[str], list[str]]:
     """(topics the inputs read, topics the outputs are published on)."""
@@ -94,8 +117,9 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
     """``{relative path: text}`` of the package (module docstring).
 
     Raises:
-        ShieldError: no binding file, a topic without a type in its ``[types]``, no
-            proposal topic for an output topic, or comparisons of several output variables
+        ShieldError: no binding file, a topic without a type in its ``[types]`` or with a
+            type that does not exist (:func:`_check_types`), no proposal topic for an
+            output topic, or comparisons of several output variables
             (their corrected numbers have no message the bindings' inversion writes)."""
     preds = [a.text for m in shield.machines for a in m.outputs if a.op == "pred"]
     if preds:
@@ -127,6 +151,7 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
     pkg = f"{base}_shield_ros2"
     module = f"{base}_shield"
     types = {t: known[t] for t in needed}
+    _check_types(types, bindings, bindings_file)
     period_ns = int(shield.period * 10**9)
     deps = sorted({t.split("/")[0] for t in types.values()} | {"diagnostic_msgs", "rclpy"})
     node = node_source(pkg, module, f"{base}.bindings.toml", types, inputs, proposals,

@@ -7,7 +7,9 @@ For a requirement with condition ``C`` (none: every tick) and response ``R``:
 * **wait**: the most consecutive ticks at which ``C`` holds and ``R`` does not, starting where
   ``C`` becomes true (or at the first tick): how late the shield lets the response come
   (``upon too_close ... within 1 second``: 10 ticks); unbounded when some run keeps ``C``
-  without ``R`` for ever;
+  without ``R`` for ever. A ``whenever`` condition asks the response at every tick ``C``
+  holds, so its wait is said from each such tick (``whenever C ... immediately R``: ``R``
+  must hold at every tick at which ``C`` holds), not once after ``C`` becomes true;
 * **release**: whether ``R`` may stop holding again while ``C`` still holds (one response per
   trigger: R2 lets the robot move on while the obstacle is still too close).
 
@@ -46,9 +48,12 @@ class Permission:
     timing is not the one response after its condition that they describe)."""
 
     def __init__(self, rid: str, condition: str, response: str, wait: int | None,
-                 release: bool, unread: str | None = None):
+                 release: bool, unread: str | None = None, holding: bool = False):
         self.rid, self.condition, self.response = rid, condition, response
         self.wait, self.release, self.unread = wait, release, unread
+        #: a ``whenever`` condition (FRET's *holding* kind): the response is asked at every
+        #: tick the condition holds, not once after it becomes true
+        self.holding = holding
 
     def text(self, period: Fraction | None) -> str:
         """One sentence per liberty."""
@@ -59,8 +64,12 @@ class Permission:
             return f"{self.rid}: the closed loop is too large to read its permissions"
         when = (f"after {self.condition} becomes true" if self.condition != "TRUE"
                 else "at any tick")
+        if self.holding and self.condition != "TRUE":
+            when = f"after each tick at which {self.condition} holds"
         if self.wait is None:
             head = f"{self.response} may never come while {self.condition} holds"
+        elif self.wait == 0 and self.holding and self.condition != "TRUE":
+            head = f"{self.response} must hold at every tick at which {self.condition} holds"
         elif self.wait == 0:
             head = f"{self.response} must hold at once {when}"
         else:
@@ -155,7 +164,8 @@ def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
                 continue
             graph = loop[0]
             out.append(Permission(rid, to_smv(c), to_smv(r), _wait(graph, m, c, r),
-                                  _release(graph, m, c, r)))
+                                  _release(graph, m, c, r),
+                                  holding=req.condition.kind == "holding"))
     return out
 
 
