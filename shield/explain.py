@@ -74,7 +74,8 @@ class Permission:
             head = f"{self.response} must hold at once {when}"
         else:
             secs = f" ({float(self.wait * period):g} s)" if period else ""
-            head = f"{self.response} may wait up to {self.wait} ticks{secs} {when}"
+            ticks = "1 tick" if self.wait == 1 else f"{self.wait} ticks"
+            head = f"{self.response} may wait up to {ticks}{secs} {when}"
         tail = (f"; once it holds, {self.response} may stop holding again while "
                 f"{self.condition} still holds" if self.release else "")
         return f"{self.rid}: {head}{tail}"

@@ -3,7 +3,7 @@ any robot runs (the analyses are in :mod:`fretc.check.analysis`).
 
 ::
 
-    fretc check FILE... [--inputs a,b] [--outputs c,d] [--json] [--witness-dir DIR]
+    fretc check FILE... [--inputs a,b] [--outputs c,d] [-b BINDINGS] [--json] [--witness-dir DIR]
                 [--budget UNITS] [--memory-budget NODES] [--mus-budget CHECKS]
                 [--timeout SECONDS] [--engine auto|spot|smt|bdd] [--no-redundancy]
 
@@ -21,33 +21,19 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
 
-from fretc.check.budget import (DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK, MIN_MEMORY,
-                                 MUS_BUDGET)
+from fretc.check.budget import MUS_BUDGET
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, FiniteRange, shown, text_attribute
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, FiniteRange, budget_options, io_options,
+                               names_of, requirement_set, set_bindings_option, shown)
 
 if TYPE_CHECKING:
     from fretc.check.findings import CheckResult
 
 __all__ = ["check_cmd", "render_text"]
-
-
-def _names(text: str | None) -> list[str] | None:
-    """The names of ``--inputs``/``--outputs`` (commas or blanks between them, a name that
-    is no identifier in double quotes, as FRETish writes it)."""
-    from fretc.fretish.files import split_names
-
-    if text is None:
-        return None
-    try:
-        return split_names(text)
-    except ValueError as exc:
-        raise click.BadParameter(str(exc)) from None
 
 
 def render_text(result: CheckResult) -> str:
@@ -144,30 +130,16 @@ def _lasso(prefix, cycle) -> str:
 
 @click.command("check")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--inputs", default=None, metavar="A,B",
-              help="Environment variables (realizability); default: @inputs of the files.")
-@click.option("--outputs", default=None, metavar="C,D",
-              help="Component variables (realizability); default: @outputs of the files.")
+@io_options("Environment variables (realizability); default: @inputs of the files.",
+            "Component variables (realizability); default: @outputs of the files.")
+@set_bindings_option("A binding file; fretc check reads its tick period only.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--witness-dir", type=click.Path(file_okay=False), default=None,
               help="Write a witness CSV per finding (replay with fretc audit).")
-@click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_WORK,
-              show_default=True, metavar="UNITS", help="Work units per query: one unit is "
-              "one BDD node of a set a fixed point computes, or 10 of z3's resource count "
-              "(rlimit); past it the answer is unknown. Counted, not timed: the same answers "
-              "on any machine.")
-@click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY), default=DEFAULT_MEMORY,
-              show_default=True, metavar="NODES", help="BDD nodes per query (BuDDy's node "
-              "table, about 20 bytes a node; a BDD variable counts as 32, a term of z3's "
-              "lasso encoding as 8); past it the answer is unknown.")
+@budget_options("query")
 @click.option("--mus-budget", type=click.IntRange(min=0), default=MUS_BUDGET,
               show_default=True, metavar="CHECKS",
               help="Subset checks per enumeration of minimal subsets.")
-@click.option("--query-cpu", type=FiniteRange(0, 1e7, min_open=True),
-              default=DEFAULT_QUERY_CPU, show_default=True, metavar="SECONDS",
-              help="CPU seconds a query may take: a safety net for the one step of a fixed "
-              "point that the work budget does not foresee (a BDD operation cannot be "
-              "metered); past it the answer is unknown and says so.")
 @click.option("--timeout", type=FiniteRange(0, 1e7, min_open=True), default=None,
               metavar="SECONDS", help="Wall-clock limit of the whole run: past it the run "
               "stops with no report (exit 3); it never changes an answer.")
@@ -185,10 +157,10 @@ def _lasso(prefix, cycle) -> str:
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
 @TEXT_ATTRIBUTE_OPTION
-def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, as_json: bool,
-              witness_dir: str | None, budget: int, memory_budget: int, mus_budget: int,
-              query_cpu: float, timeout: float | None, engine: str, no_redundancy: bool,
-              no_progress: bool, output: str | None) -> None:
+def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
+              bindings_file: str | None, as_json: bool, witness_dir: str | None, budget: int,
+              memory_budget: int, query_cpu: float, mus_budget: int, timeout: float | None,
+              engine: str, no_redundancy: bool, no_progress: bool, output: str | None) -> None:
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
     realizability."""
     # lazy: the compiler (Lark tables, Spot) only when the command runs
@@ -198,25 +170,13 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
     from fretc.check.analysis import check_requirements
     from fretc.check.budget import Budget, RunStopped
     from fretc.check.realizability import RealizabilityError
-    from fretc.common.errors import FretishError
-    from fretc.fretish.files import load_requirements
 
-    try:
-        entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
-    except (FretishError, OSError) as exc:
-        click.echo(shown(str(exc)), err=True)
-        sys.exit(2)
-    ins, outs = _names(inputs), _names(outputs)
-    if ins is None:
-        declared = [n for e in entries for n in e.inputs]
-        ins = list(dict.fromkeys(declared)) if declared else None
-    if outs is None:
-        declared = [n for e in entries for n in e.outputs]
-        outs = list(dict.fromkeys(declared)) if declared else None
-    from fretc.fretish.fret_variables import fret_declarations
-
-    entries, fret_notes = fret_declarations(entries)  # (a FRET export's literal constants)
-    compiled = compile_entries(entries)
+    rs = requirement_set(files, bindings_file)
+    ins, outs = names_of(inputs), names_of(outputs)
+    ins = rs.inputs if ins is None else ins
+    outs = rs.outputs if outs is None else outs
+    fret_notes = rs.notes
+    compiled = compile_entries(rs.entries)
     judge = None
     if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
         from fretc.monitors.interval import verdict_of
@@ -243,7 +203,9 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None, a
     result.notes += fret_notes  # (a FRET export's declarations: what is not used is said)
     doc = result.to_json()
     if output:
-        Path(output).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        from fretc.common.outputs import write_file
+
+        write_file(output, json.dumps(doc, indent=2) + "\n")
     if as_json:
         click.echo(json.dumps(doc, indent=2))
     else:

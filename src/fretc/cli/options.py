@@ -2,6 +2,9 @@
 
 ``audit_input_options`` (what to audit and how) and ``ray_options`` (``--ray [ADDRESS]``,
 ``--retries N``) decorate ``fretc audit``, ``fretc report`` and ``fretc watch``;
+``io_options``, ``set_bindings_option``, ``budget_options`` and :func:`requirement_set`
+(the files read, each requirement's tick period) are those of ``fretc check``, ``fretc
+shield`` and ``fretc testgen``;
 :func:`audit_config` turns their values into a :class:`fretc.audit.AuditConfig` and
 :func:`run_audits` runs the audit locally or on Ray (:mod:`fretc.audit.fleet.ray`) as the options
 say. Only click is imported at module level, so the command starts fast; the engine loads
@@ -26,7 +29,9 @@ if TYPE_CHECKING:
 
 __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bridge_gaps",
            "audit_input_options", "live_input_options", "audit_config", "ray_options",
-           "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options"]
+           "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options",
+           "names_of", "io_options", "set_bindings_option", "budget_options", "RequirementSet",
+           "requirement_set"]
 
 
 class FiniteRange(click.FloatRange):
@@ -323,3 +328,157 @@ def run_audits(plan: AuditPlan, paths: Sequence[str], jobs: int = 1,
                          "written")
         err.exit_code = 130  # type: ignore[misc]  # (this error's own exit code)
         raise err from None
+
+
+# ------------------------------------------------------------------ requirement sets
+# The options and the reading shared by the commands that take requirement files and ask
+# about the set as written (fretc check, fretc shield, fretc testgen): defined once here.
+
+
+def names_of(text: str | None) -> list[str] | None:
+    """The names of ``--inputs``/``--outputs`` (commas or blanks between them, a name that
+    is no identifier in double quotes, as FRETish writes it); None for no option.
+
+    Raises:
+        click.BadParameter: a name that does not read (unclosed quotes)."""
+    from fretc.fretish.files import split_names
+
+    if text is None:
+        return None
+    try:
+        return split_names(text)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from None
+
+
+def io_options(inputs_help: str, outputs_help: str) -> Callable[[F], F]:
+    """``--inputs A,B`` and ``--outputs C,D`` (read with :func:`names_of`), their help
+    saying what the command does with them."""
+    def decorate(f: F) -> F:
+        f = click.option("--outputs", default=None, metavar="C,D", help=outputs_help)(f)
+        return click.option("--inputs", default=None, metavar="A,B", help=inputs_help)(f)
+    return decorate
+
+
+def set_bindings_option(help_text: str) -> Callable[[F], F]:
+    """``-b/--bindings FILE`` (one binding file) of a requirement set: what the command
+    does with it (``help_text``), and the tick period its durations convert with where the
+    files declare none (:func:`requirement_set`)."""
+    return click.option(
+        "-b", "--bindings", "bindings_file", type=click.Path(exists=True, dir_okay=False),
+        default=None, metavar="FILE",
+        help=help_text + " Its [tick] period (or tick topic's nominal_rate) is the "
+             "requirements' where they declare no @tick_period; default: a binding file "
+             "beside them, as fretc audit finds it.")
+
+
+def budget_options(per: str) -> Callable[[F], F]:
+    """``--budget``, ``--memory-budget`` and ``--query-cpu`` of ``fretc check``'s engines
+    (:mod:`fretc.check.budget`), ``per`` what one budget covers (``"query"``, ``"game"``)."""
+    from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK, MIN_MEMORY
+
+    options = [
+        click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_WORK,
+                     show_default=True, metavar="UNITS",
+                     help=f"Work units per {per}: one unit is one BDD node of a set a fixed "
+                          "point computes, or 10 of z3's resource count (rlimit); past it the "
+                          "answer is unknown. Counted, not timed: the same answers on any "
+                          "machine."),
+        click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY),
+                     default=DEFAULT_MEMORY, show_default=True, metavar="NODES",
+                     help=f"BDD nodes per {per} (BuDDy's node table, about 20 bytes a node; "
+                          "a BDD variable counts as 32, a term of z3's lasso encoding as 8); "
+                          "past it the answer is unknown."),
+        click.option("--query-cpu", type=FiniteRange(0, 1e7, min_open=True),
+                     default=DEFAULT_QUERY_CPU, show_default=True, metavar="SECONDS",
+                     help=f"CPU seconds a {per} may take: a safety net for the one step of a "
+                          "fixed point that the work budget does not foresee (a BDD "
+                          "operation cannot be metered); past it the answer is unknown and "
+                          "says so."),
+    ]
+
+    def decorate(f: F) -> F:
+        for opt in reversed(options):
+            f = opt(f)
+        return f
+    return decorate
+
+
+class RequirementSet:
+    """Requirement files as ``fretc check``, ``fretc shield`` and ``fretc testgen`` read them
+    (:func:`requirement_set`): ``as_written`` the entries as read, ``entries`` with a FRET
+    export's literal constants and each one's tick period, ``notes`` what a FRET export
+    declares and no requirement uses, ``bindings`` the ``-b`` file read (None without),
+    ``inputs``/``outputs`` the files' ``@inputs``/``@outputs`` (None when they declare
+    none)."""
+
+    def __init__(self, as_written: list[Any], entries: list[Any], notes: list[str],
+                 bindings: Any):
+        self.as_written, self.entries, self.notes = as_written, entries, notes
+        self.bindings = bindings
+        ins = [n for e in entries for n in e.inputs]
+        outs = [n for e in entries for n in e.outputs]
+        self.inputs = list(dict.fromkeys(ins)) if ins else None
+        self.outputs = list(dict.fromkeys(outs)) if outs else None
+
+
+def requirement_set(files: Sequence[str], bindings_file: str | None) -> RequirementSet:
+    """Read requirement ``files`` (any format :func:`fretc.fretish.files.load_requirements`
+    reads) with the ``-b`` binding file: each requirement's tick period is its file's
+    ``@tick_period``, else the bindings' (``-b``, else the binding files beside the
+    requirements, :func:`fretc.audit.discovery.discover_bindings`, read only when a
+    requirement needs a period), never a duration in time units read as ticks
+    (:mod:`fretc.signals.bindings.periods`).
+
+    Raises:
+        FretcError: a file or binding file that cannot be read, or no period known for a
+            duration in time units (exit 2 through the command group)."""
+    from pathlib import Path
+
+    from fretc.common.errors import InputError
+    from fretc.fretish.files import load_requirements
+    from fretc.fretish.fret_variables import fret_declarations
+    from fretc.signals.bindings.periods import time_unit_duration, with_periods
+
+    try:
+        as_written = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
+    except OSError as exc:
+        raise InputError(f"cannot read the requirements: {exc}") from None
+    entries, notes = fret_declarations(as_written)  # (a FRET export's literal constants)
+    bindings, found = None, ""
+    if bindings_file is not None:
+        from fretc.signals.bindings.files import load_bindings
+
+        bindings, found = load_bindings(bindings_file), "-b"
+    elif any(e.tick_period is None and time_unit_duration(e) for e in entries):
+        bindings, found = _beside(files)
+    entries = with_periods(entries, bindings, found)
+    if bindings_file is None:
+        bindings = None  # (found beside: its period only)
+    return RequirementSet(as_written, entries, notes, bindings)
+
+
+def _beside(files: Sequence[str]) -> tuple[Any, str]:
+    """The binding file beside the requirement ``files`` whose period they take (module
+    docstring of :mod:`fretc.signals.bindings.periods`), and how it was found; ``(None,
+    "")`` when there is none.
+
+    Raises:
+        InputError: binding files beside them that give different periods."""
+    from fretc.audit.discovery import discover_bindings
+    from fretc.common.errors import InputError
+    from fretc.common.units import format_period
+    from fretc.signals.bindings.files import load_bindings
+    from fretc.signals.bindings.periods import bindings_period
+
+    found = [(p, load_bindings(p)) for p in discover_bindings(list(files))]
+    periods = {p: t for p, b in found if (t := bindings_period(b)) is not None}
+    with_period = [(p, b) for p, b in found if p in periods]
+    if len(set(periods.values())) > 1:
+        raise InputError("the binding files beside the requirements tick at different "
+                         "periods (" + ", ".join(f"{p}: {format_period(t)}"
+                                                 for p, t in periods.items())
+                         + "): give the one to use with -b")
+    if with_period:
+        return with_period[0][1], f"beside the requirements: {with_period[0][0]}"
+    return (found[0][1], f"beside the requirements: {found[0][0]}") if found else (None, "")

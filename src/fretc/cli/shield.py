@@ -21,8 +21,8 @@ from pathlib import Path
 
 import click
 
-from fretc.check.budget import DEFAULT_MEMORY, DEFAULT_QUERY_CPU, DEFAULT_WORK, MIN_MEMORY
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, FiniteRange, shown, text_attribute
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, budget_options, io_options, names_of,
+                               requirement_set, set_bindings_option, shown)
 
 __all__ = ["shield_cmd", "FORMS"]
 
@@ -30,30 +30,14 @@ __all__ = ["shield_cmd", "FORMS"]
 FORMS = ("python", "c", "ros2", "gwendolen")
 
 
-def _names(text: str | None) -> list[str] | None:
-    """The names of ``--inputs``/``--outputs`` (commas or blanks between them, a name that
-    is no identifier in double quotes, as FRETish writes it)."""
-    from fretc.fretish.files import split_names
-
-    if text is None:
-        return None
-    try:
-        return split_names(text)
-    except ValueError as exc:
-        raise click.BadParameter(str(exc)) from None
-
-
 @click.command("shield")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--inputs", default=None, metavar="A,B",
-              help="The environment's variables; default: @inputs of the files.")
-@click.option("--outputs", default=None, metavar="C,D",
-              help="The controller's variables, which the shield corrects; default: "
-              "@outputs of the files.")
-@click.option("-b", "--bindings", "bindings_file", type=click.Path(exists=True, dir_okay=False),
-              default=None, help="A binding file: outputs bound to one topic are corrected "
-              "together, never to values no single message gives; the ros2 form reads and "
-              "writes the bound topics.")
+@io_options("The environment's variables; default: @inputs of the files.",
+            "The controller's variables, which the shield corrects; default: @outputs of "
+            "the files.")
+@set_bindings_option("A binding file: outputs bound to one topic are corrected together, "
+                     "never to values no single message gives; the ros2 form reads and "
+                     "writes the bound topics.")
 @click.option("--prefer", default=None, metavar="LITERALS",
               help="Among corrections changing equally few output atoms, prefer these "
               "values, first first: e.g. 'stopped,!stop_requested'.")
@@ -77,15 +61,7 @@ def _names(text: str | None) -> list[str] | None:
               metavar="TICKS", help="Meet every 'within' deadline TICKS ticks early: on a "
               "bus, a recorder or monitor ticking at another phase sees the shield's answers "
               "up to a tick late (the ROS 2 node: --margin 1).")
-@click.option("--budget", type=click.IntRange(min=1), default=DEFAULT_WORK, show_default=True,
-              metavar="UNITS", help="Work units per game (as fretc check's).")
-@click.option("--memory-budget", type=click.IntRange(min=MIN_MEMORY), default=DEFAULT_MEMORY,
-              show_default=True, metavar="NODES", help="BDD nodes per game (as fretc "
-              "check's).")
-@click.option("--query-cpu", type=FiniteRange(0, 1e7, min_open=True),
-              default=DEFAULT_QUERY_CPU, show_default=True, metavar="SECONDS",
-              help="CPU seconds a game may take (as fretc check's): past it the answer is "
-              "unknown and says so.")
+@budget_options("game")
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                bindings_file: str | None, prefer: str | None, fallback: str | None,
@@ -98,15 +74,14 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.check.budget import Budget
     from fretc.common.errors import FretcError
     from fretc.compiler.build import compile_entries
-    from fretc.fretish.files import load_requirements
     from fretc.fretish.fret_variables import fret_declarations
     from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
     from fretc.shield.fallback import declared_fallback, parse_fallback
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
-    as_written = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
-    entries, _notes = fret_declarations(as_written)  # (a FRET export's literal constants)
+    rs = requirement_set(files, bindings_file)
+    as_written, entries = rs.as_written, rs.entries
     compiled = compile_entries(entries)
     bad = [c for c in compiled if c.error is not None]
     for c in bad:
@@ -116,21 +91,17 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     if not compiled:
         click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
         sys.exit(2)
-    ins = _names(inputs)
-    outs = _names(outputs)
+    ins = names_of(inputs)
+    outs = names_of(outputs)
     if ins is None:
-        ins = list(dict.fromkeys(n for e in entries for n in e.inputs))
+        ins = rs.inputs or []
     if outs is None:
-        outs = list(dict.fromkeys(n for e in entries for n in e.outputs))
+        outs = rs.outputs or []
     if not outs:
         click.echo(shown("error: no outputs: give --outputs or @outputs in the files (the "
                          "variables the shield corrects)"), err=True)
         sys.exit(2)
-    bindings = None
-    if bindings_file:
-        from fretc.signals.bindings.files import load_bindings
-
-        bindings = load_bindings(bindings_file)
+    bindings = rs.bindings
     declared = parse_fallback(fallback)
     if declared is None:
         declared = declared_fallback(bindings_file)

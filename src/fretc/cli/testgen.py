@@ -39,7 +39,7 @@ from pathlib import Path
 
 import click
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, shown, text_attribute
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, requirement_set, set_bindings_option, shown
 
 __all__ = ["testgen_cmd"]
 
@@ -54,26 +54,19 @@ __all__ = ["testgen_cmd"]
                    "test's trace against its expected verdicts, or, with FRETC_RUN_TRACE set, "
                    "the log that command makes of it ('COMMAND TRACE.csv LOG') by the pass "
                    "rule of fretc testrun.")
-@click.option("-b", "--bindings", "bindings_file", type=click.Path(exists=True, dir_okay=False),
-              metavar="FILE",
-              help="A binding file (*.bindings.toml): also write DIR/T01.mcap... , each "
-                   "test's messages on the bound topics, read back by fretc audit with the "
-                   "same file.")
+@set_bindings_option("A binding file (*.bindings.toml): also write DIR/T01.mcap... , each "
+                     "test's messages on the bound topics, read back by fretc audit with the "
+                     "same file.")
 @TEXT_ATTRIBUTE_OPTION
 def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, bindings_file: str | None
                ) -> None:
     """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
     tests.json (what each covers, the expected verdict of every requirement)."""
     from fretc.testing.generate import generate, write_tests
-    from fretc.common.errors import FretishError
     from fretc.compiler.build import compile_entries
-    from fretc.fretish.files import load_requirements
 
-    try:
-        entries = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
-    except (FretishError, OSError) as exc:
-        click.echo(shown(str(exc)), err=True)
-        sys.exit(2)
+    rs = requirement_set(files, bindings_file)
+    entries = rs.entries
     compiled = compile_entries(entries)
     bad = [c for c in compiled if c.error is not None]
     for c in bad:
@@ -83,7 +76,7 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
     if not compiled:
         click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
         sys.exit(2)
-    bindings = _load_bindings(bindings_file) if bindings_file else None
+    bindings = rs.bindings
     gen = generate(compiled)
     if bindings is not None:
         from fretc.testing.mcap_log import bind_tests
@@ -100,8 +93,10 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
         from fretc.testing.pytest_file import (PYTEST_FILE, PYTEST_INI, PYTEST_INI_TEXT,
                                                pytest_file)
 
-        (Path(out_dir) / PYTEST_FILE).write_text(pytest_file(), encoding="utf-8")
-        (Path(out_dir) / PYTEST_INI).write_text(PYTEST_INI_TEXT, encoding="utf-8")
+        from fretc.common.outputs import write_file
+
+        write_file(Path(out_dir) / PYTEST_FILE, pytest_file())
+        write_file(Path(out_dir) / PYTEST_INI, PYTEST_INI_TEXT)
     total = len(doc["obligations"])
     met = len({(c["requirement"], c["obligation"]) for t in doc["tests"] for c in t["covers"]})
     click.echo(shown(f"{len(doc['tests'])} tests in {out_dir}: {met} of {total} obligations "
@@ -125,14 +120,3 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
             sys.exit(1)
     sys.exit(3 if doc["unknown"] else 0)
 
-
-def _load_bindings(path: str):
-    """The binding file ``path``, or exit 2 naming the error."""
-    from fretc.common.problems import BindingError
-    from fretc.signals.bindings.files import load_bindings
-
-    try:
-        return load_bindings(path)
-    except (BindingError, OSError) as exc:
-        click.echo(shown(str(exc)), err=True)
-        sys.exit(2)
