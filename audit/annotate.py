@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import functools
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +37,7 @@ from mcap.records import (Attachment, Channel, Chunk, DataEnd, Header, Message, 
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
+from fretc.common.outputs import open_output, output_folder
 from fretc.common.units import format_offset
 from fretc.logs.mcap.records import chunk_records
 
@@ -327,13 +327,12 @@ def annotate_mcap(source: str, output: str, log: dict, *, library: str = "fretc 
     events = verdict_events(log)
     res = AnnotateResult(source=source, output=output,
                          compression=comp if comp is not None else "unchunked")
-    Path(output).parent.mkdir(parents=True, exist_ok=True)
-    tmp = f"{output}.part"
-    with open(source, "rb") as fin, open(tmp, "wb") as fout:
+    output_folder(Path(output).parent)
+    # a temporary file renamed over the output (never written through a link planted there)
+    with open(source, "rb") as fin, open_output(output, "wb") as fout:
         copy = _Copy(fout, events, res, comp, chunk_size, library)
         copy.copy(StreamReader(fin, emit_chunks=True, validate_crcs=True))
         copy.finish(log)
-    os.replace(tmp, output)
     extra = 1 if copy.verdict_channel is not None else 0
     res.channels = len(copy.channels) + extra
     res.schemas = len(copy.schemas) + extra

@@ -9,6 +9,8 @@ import html
 import json
 from pathlib import Path
 
+from fretc.common.outputs import write_file
+
 __all__ = ["load_check", "findings_rows", "add_to_report"]
 
 
@@ -52,8 +54,7 @@ def add_to_report(markdown_path: str, html_path: str, doc: dict) -> None:
         md.append(f"| {r['id']} | {r['source']} | {r['satisfiable']} | {r['non_vacuous']} | "
                   f"{r['redundant']} | {cell} |")
     p = Path(markdown_path)
-    p.write_text(p.read_text(encoding="utf-8").rstrip("\n") + "\n" + "\n".join(md) + "\n",
-                 encoding="utf-8")
+    write_file(p, p.read_text(encoding="utf-8").rstrip("\n") + "\n" + "\n".join(md) + "\n")
     e = html.escape
     body = ['<section id="check-findings"><h2>Check findings (fretc check)</h2><table>',
             "<tr><th>requirement</th><th>source</th><th>satisfiable</th><th>non-vacuous</th>"
@@ -69,4 +70,4 @@ def add_to_report(markdown_path: str, html_path: str, doc: dict) -> None:
     block = "\n".join(body)
     text = text.replace("</body>", block + "\n</body>", 1) if "</body>" in text \
         else text + block
-    h.write_text(text, encoding="utf-8")
+    write_file(h, text)

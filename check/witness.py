@@ -42,6 +42,7 @@ import numpy as np
 
 from fretc.check.atom_values import concrete_rows, free_atoms
 from fretc.check.solver import UNKNOWN
+from fretc.common.outputs import output_folder, write_file
 from fretc.common.textsafe import csv_line
 from fretc.compiler import ir
 from fretc.compiler.evaluate import INTERPRETED_FUNCTIONS, ft_at
@@ -224,7 +225,7 @@ def _write(path: Path, title: str, sources: list[str], rows: list[dict],
              csv_line(names)]
     for r in rows:
         lines.append(",".join(_cell(r[n]) for n in names))
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_file(path, "\n".join(lines) + "\n")  # (never through a link planted there)
 
 
 def _safe(text: str) -> str:
@@ -237,8 +238,7 @@ def write_witnesses(checker: Checker, result: CheckResult, witness_dir: str,
     consistent set, into ``witness_dir``; set ``Finding.witness``/``expected`` and
     ``result.witnesses``. ``judge`` gives the expected verdicts written in each file
     (:data:`Judge`)."""
-    out = Path(witness_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = Path(output_folder(witness_dir))
     if not checker.items:
         return
     w = _Witnesses(checker, judge)

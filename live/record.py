@@ -10,6 +10,7 @@ import json
 from typing import TYPE_CHECKING
 from mcap.writer import CompressionType, Writer
 
+from fretc.common.outputs import create_output
 from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
 from fretc.logs.recorded_gaps import GAPS_METADATA, gaps_json
 
@@ -29,7 +30,7 @@ class Recorder:
     def __init__(self, path: str, source) -> None:
         self.path = path
         self.source = source
-        self._f = open(path, "wb")
+        self._f = create_output(path)  # (a link planted at path is replaced, not followed)
         self.writer = Writer(self._f, compression=CompressionType.ZSTD)
         self.writer.start(profile="", library="fretc watch")
         self.channels: dict[str, int] = {}

@@ -21,6 +21,7 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from fretc.common.outputs import output_folder, write_file
 from fretc.common.textsafe import file_stems
 from fretc.reports.statistics import COLUMNS, statistics_rows, summary_line
 
@@ -169,8 +170,7 @@ def write_estimate(out: str | Path, result: Estimate | None = None,
     (:class:`fretc.sim.rare.RareResult`); returns the JSON document with ``summary_lines`` (the
     command's output) added after writing. Raises ``OSError`` when ``out`` is not
     writable."""
-    outp = Path(out)
-    outp.mkdir(parents=True, exist_ok=True)
+    outp = Path(output_folder(out))
     if result is not None:
         doc = result.to_json()
     else:
@@ -178,11 +178,11 @@ def write_estimate(out: str | Path, result: Estimate | None = None,
         doc = {"schema": "fretc-estimate/1", "space": rare.space.path, "seed": rare.seed,
                "budget": None, "rare": rare.to_json()}
     doc["exit_code"] = exit_code_of(doc)
-    (outp / "estimate.json").write_text(
-        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", "utf-8")
+    write_file(outp / "estimate.json",
+               json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n")
     for s in doc.get("statistics", []):
         if s.get("sequential"):
-            (outp / _svg_names(doc)[s["id"]]).write_text(_svg(s), "utf-8")
+            write_file(outp / _svg_names(doc)[s["id"]], _svg(s))
     md, summary = _markdown(doc)
-    (outp / "estimate.md").write_text(md, "utf-8")
+    write_file(outp / "estimate.md", md)
     return dict(doc, summary_lines=summary)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import os
 import shutil
 
+from fretc.common.outputs import write_file
 from fretc.reports.export_results import RequirementResult, replace_tree
 
 __all__ = ["export_doorstop", "item_block", "MARKER", "KEYS"]
@@ -142,8 +143,7 @@ def export_doorstop(src: str, out: str, results: dict[str, RequirementResult],
             path = os.path.join(tmp, rel)
             with open(path, "rb") as f:
                 raw = f.read()
-            with open(path, "wb") as f:
-                f.write(_with_block(raw, result))
+            write_file(path, _with_block(raw, result))  # (replaces the copy, never a link)
 
     replace_tree(build, out)
     return len(targets)

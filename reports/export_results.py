@@ -29,6 +29,7 @@ import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from fretc.common.outputs import write_file
 from fretc.reports.rollup import rollups
 
 __all__ = ["RequirementResult", "requirement_results", "audit_identity", "write_atomic",
@@ -125,18 +126,10 @@ def _umask() -> int:
 
 def write_atomic(path: str, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder renamed over
-    it: a reader (or a failure half-way) never sees a part of the file."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".fretc-export-")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(tmp, 0o666 & ~_umask())  # as open() would make it (mkstemp makes 0600)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    it (:func:`fretc.common.outputs.write_file`): a reader (or a failure half-way) never sees
+    a part of the file, and a link at ``path`` is replaced, never written through. Raises
+    :class:`fretc.common.outputs.OutputError` (an OSError) when it cannot be written."""
+    write_file(path, data)
 
 
 def replace_tree(build: Callable[[str], object], out: str) -> None:

@@ -20,6 +20,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from fretc.common.outputs import write_file
 from fretc.reports.terminal import robustness_text
 
 from fretc.sim.falsify import Search
@@ -138,9 +139,9 @@ def write_search(search: Search, out: str | Path, plan: AuditPlan) -> dict:
     for r in search.runs:
         if r.mcap:
             text = audit_json([r.audit], plan.requirements_json(), plan.bindings_json())
-            (outp / (r.mcap[:-len(".mcap")] + ".audit.json")).write_text(text, "utf-8")
-    (outp / "falsify.json").write_text(
-        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", "utf-8")
-    (outp / "falsify.md").write_text(_markdown(doc), "utf-8")
-    (outp / "falsify.svg").write_text(_svg(doc), "utf-8")
+            write_file(outp / (r.mcap[:-len(".mcap")] + ".audit.json"), text)
+    write_file(outp / "falsify.json",
+               json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n")
+    write_file(outp / "falsify.md", _markdown(doc))
+    write_file(outp / "falsify.svg", _svg(doc))
     return doc

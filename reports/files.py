@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from fretc.audit.annotate import AnnotateResult, annotate_mcap
+from fretc.common.outputs import output_folder, sub_folder, write_file
 from fretc.common.textsafe import no_surrogates
 from fretc.reports.context import report_context
 from fretc.audit.verdict import SCHEMA
@@ -150,18 +151,17 @@ def _write_files(out: Path, files: ReportFiles, ctx: dict, html: str, md: str,
         old.unlink()
     for v in ctx["violations"]:
         p = out / v["svg_file"]
-        p.write_text(v["svg"], encoding="utf-8")
+        write_file(p, v["svg"])
         files.timelines.append(p)
-    files.html.write_text(html, encoding="utf-8")
-    files.markdown.write_text(md, encoding="utf-8")
-    files.audit_json.write_text(json.dumps(doc, indent=2, sort_keys=True) + "\n",
-                                encoding="utf-8")
-    (out / "matrix.html").write_text(matrix_html(ctx["matrix_rows"]), encoding="utf-8")
-    (out / "matrix.csv").write_text(matrix_csv(ctx["matrix_rows"]), encoding="utf-8")
+    write_file(files.html, html)
+    write_file(files.markdown, md)
+    write_file(files.audit_json, json.dumps(doc, indent=2, sort_keys=True) + "\n")
+    write_file(out / "matrix.html", matrix_html(ctx["matrix_rows"]))
+    write_file(out / "matrix.csv", matrix_csv(ctx["matrix_rows"]))
     if isinstance(doc.get("coverage"), dict):
         from fretc.reports.coverage import coverage_html  # lazy: only with coverage
 
-        (out / "coverage.html").write_text(coverage_html(doc), encoding="utf-8")
+        write_file(out / "coverage.html", coverage_html(doc))
 
 
 def _current_entries(doc: dict, base: Path | None, json_dir: Path | None) -> dict | None:
@@ -212,8 +212,7 @@ def write_report(doc: dict, out_dir: str, *, plan: AuditPlan | None = None,
     basep = Path(base) if base else None
     jd = Path(json_dir) if json_dir else None
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "timelines").mkdir(exist_ok=True)
+        sub_folder(output_folder(out), "timelines")  # (a link planted there: refused)
     except OSError as exc:
         raise ReportError(f"{out_dir}: cannot create: {exc}") from None
     traces, modules, notes = trace_requirements(doc, plan=plan, base=basep, json_dir=jd,

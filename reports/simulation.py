@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import html
 
+from fretc.common.outputs import output_folder, write_file
 from fretc.common.textsafe import file_stems, xml_text
 import json
 from pathlib import Path
@@ -88,14 +89,13 @@ def write_outputs(sims: list, n: int, out_dir: str | None, json_path: str | None
     (``json_path``); the paths written."""
     written = []
     if out_dir is not None:
-        d = Path(out_dir)
-        d.mkdir(parents=True, exist_ok=True)
+        d = Path(output_folder(out_dir))
         parts = []
         stems = file_stems([s.id for s in sims])
         for s in sims:
             name = stems[s.id] + ".svg"
             text = svg(s, n)
-            (d / name).write_text(text, encoding="utf-8")
+            write_file(d / name, text)
             written.append(str(d / name))
             parts.append(f"<section><h2>{_x(s.id)}</h2>"
                          f"<p>{_x(s.text)}</p>{text}</section>")
@@ -103,10 +103,9 @@ def write_outputs(sims: list, n: int, out_dir: str | None, json_path: str | None
                 "</title></head><body><h1>fretc simulate</h1><p>Filled: true; empty: false; "
                 "grey: unknown (a NaN read). ft at a tick: on the trace from that tick; pt: on the "
                 "trace up to it.</p>" + "".join(parts) + "</body></html>\n")
-        (d / "simulation.html").write_text(page, encoding="utf-8")
+        write_file(d / "simulation.html", page)
         written.append(str(d / "simulation.html"))
     if json_path is not None:
-        Path(json_path).write_text(json.dumps(json_document(sims, n), indent=1) + "\n",
-                                   encoding="utf-8")
+        write_file(json_path, json.dumps(json_document(sims, n), indent=1) + "\n")
         written.append(json_path)
     return written

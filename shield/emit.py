@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from fretc.common.outputs import output_folder, write_under
 from fretc.shield.build import Shield
 from fretc.shield.plan import ShieldError
 
@@ -71,14 +72,8 @@ def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
         ShieldError: as :func:`render_forms`."""
     files = render_forms(shield, forms, bindings=bindings, bindings_file=bindings_file,
                          compiled=compiled)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    output_folder(out_dir)
     written: list[Path] = []
-    for fname, content in files.items():
-        path = out_dir / fname
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if isinstance(content, bytes):
-            path.write_bytes(content)
-        else:
-            path.write_text(content, encoding="utf-8")
-        written.append(path)
+    for fname, content in files.items():  # (never through a link planted in out_dir)
+        written.append(Path(write_under(out_dir, fname, content)))
     return written

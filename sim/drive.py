@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fretc.common.outputs import open_output, output_folder
 from fretc.signals.bindings.spec import Bindings
 from fretc.testing.drive_plan import (DRIVEN_TOPICS, SCAN_MS, Classified, DriveError, classify,
                                       scan_plan)
@@ -128,8 +129,8 @@ def drive(rows: list[dict], bindings: Bindings, output: str | Path, *,
     sc = replace(get_scenario(scenario), max_time=None)
     sim = TraceDrivenSimulation(sc, plan, len(rows) - 1, lead_ms, seed,
                                 int(round(lead_out * 1000)))
-    Path(output).parent.mkdir(parents=True, exist_ok=True)
-    with open(output, "wb") as f:
+    output_folder(Path(output).parent)
+    with open_output(output, "wb") as f:  # (never through a link planted there)
         rec = McapRecorder(f)
         result = sim.run(rec)
         rec.finish()

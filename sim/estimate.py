@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
+from fretc.common.outputs import output_folder, sub_folder, write_file
 from fretc.audit.fleet.statistics import RequirementStatistics, fleet_statistics, unknown_policy
 
 from fretc.sim.run import record_scenario
@@ -94,7 +95,7 @@ class Runner:
     def __init__(self, plan, space: Space, out: Path, ray_address: str | None = None):
         self.plan, self.space, self.out, self.ray_address = plan, space, out, ray_address
         self.started = False
-        (out / "runs").mkdir(parents=True, exist_ok=True)
+        sub_folder(output_folder(out), "runs")  # (a link planted as runs/: refused)
         if ray_address is not None:
             from fretc.audit.fleet.ray import connect  # lazy: Ray only with --ray
             self.started = connect(ray_address)
@@ -126,7 +127,7 @@ class Runner:
         MCAP of any other run."""
         mcap = Path(self.path(run.index))
         if run.violated():
-            mcap.with_suffix(".audit.json").write_text(audit_json(run.audit), encoding="utf-8")
+            write_file(mcap.with_suffix(".audit.json"), audit_json(run.audit))
             run.mcap = str(mcap.relative_to(self.out))
         elif mcap.exists():
             os.remove(mcap)

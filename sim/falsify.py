@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
+from fretc.common.outputs import output_folder, sub_folder
 from fretc.sim.run import record_scenario, shield_of
 from fretc.sim.space import Space, apply
 
@@ -215,7 +216,7 @@ def falsify(plan: AuditPlan, space: Space, budget: int, seed: int, out: str | Pa
     targets = list(targets) if targets else ids
     search = Search(space, budget, seed, targets)
     outp = Path(out)
-    (outp / "runs").mkdir(parents=True, exist_ok=True)
+    sub_folder(output_folder(outp), "runs")  # (a link planted as runs/: refused)
     ev = _Evaluator(plan, space, outp, ray_address)
     violated_before: set[str] = set()
     try:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
+from fretc.common.outputs import write_file
 from fretc.sim.estimate import Runner, _finite
 from fretc.sim.space import Space
 from fretc.sim.splitting import SplittingError, SplittingResult, adaptive_multilevel_splitting
@@ -81,8 +82,7 @@ def rare_estimate(plan: AuditPlan, space: Space, seed: int, out: str | Path, tar
                 for run in runs:
                     path = Path(runner.path(run.index))
                     if run.verdicts.get(rid) == "violated" and len(kept) < keep:
-                        path.with_suffix(".audit.json").write_text(audit_json(run.audit),
-                                                                   encoding="utf-8")
+                        write_file(path.with_suffix(".audit.json"), audit_json(run.audit))
                         kept.append({"mcap": str(path.relative_to(outp)),
                                      "parameters": run.parameters,
                                      "robustness": _finite(run.robustness.get(rid))})

@@ -6,6 +6,7 @@ import io
 from pathlib import Path
 from typing import Any, BinaryIO, cast
 
+from fretc.common.outputs import create_output, output_folder
 from fretc.sim.recording import McapRecorder
 from fretc.sim.scenarios import Scenario, get_scenario
 from fretc.sim.simulation import RunResult, Simulation
@@ -64,8 +65,8 @@ def record_scenario(sc: Scenario, seed: int = 1,
     if output is None:
         stream, close = io.BytesIO(), True
     elif isinstance(output, (str, Path)):
-        Path(output).parent.mkdir(parents=True, exist_ok=True)
-        stream, close = open(output, "wb"), True
+        output_folder(Path(output).parent)
+        stream, close = create_output(output), True  # (a link planted there: replaced)
     else:
         stream, close = cast(BinaryIO, output), False
     try:

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from fretc.check.budget import Budget
+from fretc.common.outputs import output_folder, write_file
 from fretc.common.textsafe import csv_line, visible
 from fretc.check.checker import Checker
 from fretc.check.items import CheckItem, make_item
@@ -363,7 +364,7 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
             if why is not None:
                 raise ValueError(f"the variable {visible(n)!r} cannot be a column of a test's "
                                  f"CSV trace: {why}; rename it")
-    out.mkdir(parents=True, exist_ok=True)
+    output_folder(out)
     replay = "fretc audit " + " ".join(f"-r {visible(s)}" for s in sources)
     tests = []
     for k, t in enumerate(gen.tests, 1):
@@ -377,7 +378,7 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
                  csv_line((["time"] if period else []) + names)]
         lines += [",".join(([f"{float(i * period):.9f}"] if period else [])
                            + [_cell(r[n]) for n in names]) for i, r in enumerate(t.rows)]
-        (out / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        write_file(out / f"{name}.csv", "\n".join(lines) + "\n")  # (never through a link)
         tests.append({"id": name, "trace": f"{name}.csv", "ticks": len(t.rows),
                       "generated_for": {"requirement": t.origin[0], "obligation": t.origin[1]},
                       "covers": [{"requirement": r, "obligation": o, "tick": tick}
@@ -392,5 +393,5 @@ def write_tests(gen: Generated, out_dir: str, sources: Sequence[str],
                            for o in obs],
            "unmeetable": [_obligation_json(o, why) for o, why in gen.unmeetable],
            "unknown": [_obligation_json(o, why) for o, why in gen.unknown]}
-    (out / "tests.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    write_file(out / "tests.json", json.dumps(doc, indent=2) + "\n")
     return doc

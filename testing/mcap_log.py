@@ -48,6 +48,7 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 from mcap.writer import CompressionType, Writer
 
+from fretc.common.outputs import open_output, output_folder
 from fretc.testing.invert import AGE, Assignment, NotWritable, field_defaults, margin, solve
 from fretc.signals.bindings.spec import Bindings
 
@@ -289,7 +290,7 @@ def write_mcap(rows: list[dict[str, Any]], bindings: Bindings, path: str | Path,
     schemas: dict[str, dict[str, Any]] = {}
     for _, topic, obj in msgs:
         schemas.setdefault(topic, _schema(obj))
-    with open(path, "wb") as f:
+    with open_output(path, "wb") as f:  # (never through a link planted there)
         w = Writer(f, compression=CompressionType.ZSTD)
         w.start(profile="", library="fretc-testgen")
         channels = {}
@@ -390,8 +391,7 @@ def bind_tests(gen: Generated, compiled: Sequence[Compiled], bindings: Bindings,
     exercises every obligation it covered (else no log, and the reason)."""
     from fretc.testing.generate import column_kinds, covered_by, expected_of
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = Path(output_folder(out_dir))
     kinds = column_kinds([c for c in compiled if c.formalization is not None])
     limits = thresholds(compiled)
     for k, t in enumerate(gen.tests, 1):

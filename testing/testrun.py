@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fretc.common.outputs import output_folder
 from fretc.testing.tests_json import file_name
 
 __all__ = ["OUTCOMES", "Outcome", "judge", "run_test", "audit_log"]
@@ -159,7 +160,7 @@ def run_test(test: dict[str, Any], doc: dict[str, Any], folder: Path, command: s
         ValueError: a test id or ``log_name`` that is not a file name."""
     log = work / file_name(log_name or test["id"], "" if log_name else ".mcap")
     report = work / file_name(test["id"], ".audit.json")
-    work.mkdir(parents=True, exist_ok=True)
+    output_folder(work)  # (the caller's folder: fretc testrun checks its default runs/)
     trace = folder / test["trace"]
     log.unlink(missing_ok=True)  # an earlier run's log is never judged as this run's
     res = subprocess.run(shlex.split(command) + [str(trace), str(log)], capture_output=True,

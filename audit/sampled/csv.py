@@ -46,6 +46,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from fretc.common.outputs import open_output, output_folder
 from fretc.common.problems import SignalError
 from fretc.logs.csv.source import (CLOCK_COLUMN, CLOCK_LINE, CUT_CELL, NOT_SAMPLED_LINE,
                                    PER_ENTITY_LINE, SAMPLED_MARK, escape_id)
@@ -191,8 +192,8 @@ def write_sampled_csv(plan: AuditPlan, log_path: str, out: str | os.PathLike
     lines += [f"{NOT_SAMPLED_LINE}{escape_id(rid)}: {_one_line(why)}" for rid, why in left_out]
     names = [n for n in _order(plan) + _order(ent_plan) if any(n in c.columns for c in clocks)]
     names = list(dict.fromkeys(names))
-    Path(out).parent.mkdir(parents=True, exist_ok=True)
-    with open(out, "w", newline="", encoding="utf-8") as f:
+    output_folder(Path(out).parent)
+    with open_output(out, "w", newline="") as f:  # (never through a link planted there)
         f.write(f"{SAMPLED_MARK} of {escape_id(Path(log_path).name)}: the FRET variables as fretc "
                 "audit judged them (bindings applied), each requirement on its own clock; "
                 "time in seconds\n")

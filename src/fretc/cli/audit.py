@@ -135,8 +135,10 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
         _write_json(audit_json(results, reqs, plan.bindings_json(), input_errors,
                                allow_partial, extra, stats), json_path)
     if junit_path:
+        from fretc.common.outputs import write_file
         from fretc.reports.junit import junit_xml  # lazy: only with --junit (start-up time)
-        Path(junit_path).write_text(junit_xml(results, stats, reqs), encoding="utf-8")
+
+        write_file(junit_path, junit_xml(results, stats, reqs))
     code = exit_code(results, input_errors, allow_partial, stats)
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
         code = 2
@@ -148,7 +150,9 @@ def _write_json(doc: str, json_path: str) -> None:
     if json_path == "-":
         click.echo(doc, nl=False)
     else:
-        Path(json_path).write_text(doc, encoding="utf-8")
+        from fretc.common.outputs import write_file
+
+        write_file(json_path, doc)
 
 
 def _mark_coverage(plan, coverage: bool) -> None:

@@ -437,15 +437,17 @@ def _write_outputs(outputs: dict, output: str | None, suffix: str) -> None:
             click.echo(text, nl=False)
         return
     from pathlib import Path  # lazy: --emit ltl does not need it (start-up time)
+
+    from fretc.common.outputs import output_folder, write_file
     out = Path(output)
     if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
         # one module: -o is the file
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(next(iter(outputs.values())), encoding="utf-8")
+        output_folder(out.parent)
+        write_file(out, next(iter(outputs.values())))
         click.echo(f"wrote {out}", err=True)
         return
-    out.mkdir(parents=True, exist_ok=True)
+    output_folder(out)
     for stem, text in outputs.items():
         path = out / f"{stem}{suffix}"
-        path.write_text(text, encoding="utf-8")
+        write_file(path, text)
         click.echo(f"wrote {path}", err=True)

@@ -93,10 +93,9 @@ def distinguish_cmd(a: str, b: str, files: tuple[str, ...], tick_period: str | N
     d = distinguish(ca, cb, max_ticks=max_ticks)
     click.echo(_shown(distinction_text(d, la, ta, lb, tb)), nl=False)
     if svg_path is not None and d.trace is not None:
-        from pathlib import Path
-
+        from fretc.common.outputs import write_file
         from fretc.reports.distinction import distinction_svg
 
-        Path(svg_path).write_text(distinction_svg(d, la, ta, lb, tb), encoding="utf-8")
+        write_file(svg_path, distinction_svg(d, la, ta, lb, tb))
         click.echo(_shown(f"wrote {svg_path}"), err=True)
     sys.exit(0 if d.equivalent else 1 if d.equivalent is False else 3)

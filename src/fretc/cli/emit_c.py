@@ -29,12 +29,13 @@ def write_c(compiled: Sequence[Compiled], output: str | None, split: bool) -> No
         sys.exit(2)
     from fretc.compiler.c_codegen import emit_c  # lazy: Jinja2 and Spot
 
+    from fretc.common.outputs import output_folder, write_file
+
     files, skipped = emit_c(compiled, split=split)
-    folder = Path(output)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = Path(output_folder(output))
     for name, text in files.items():
         path = folder / name
-        path.write_text(text, encoding="utf-8")
+        write_file(path, text)
         click.echo(f"wrote {path}", err=True)
     reported = {c.id for c in compiled if c.error is not None}
     for stem, rid, why in skipped:

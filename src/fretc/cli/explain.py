@@ -46,7 +46,9 @@ def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
     code = 0
     stems = file_stems(known)
     if output is not None:
-        Path(output).mkdir(parents=True, exist_ok=True)
+        from fretc.common.outputs import output_folder, write_file
+
+        output_folder(output)
     for c in compiled:
         if ids and c.id not in ids:
             continue
@@ -59,6 +61,6 @@ def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
         click.echo(_shown(text(x)))
         if output is not None:
             path = Path(output) / f"{stems[c.id]}.svg"
-            path.write_text(svg(x), encoding="utf-8")
+            write_file(path, svg(x))
             click.echo(_shown(f"wrote {path}"), err=True)
     sys.exit(code)

@@ -134,11 +134,12 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         try:
             written = write_forms(shield, forms, Path(out_dir), bindings=bindings,
                                   bindings_file=bindings_file, compiled=compiled)
-        except FretcError:
-            raise
-        except OSError as exc:  # (-o names a file, or a folder that cannot be written)
+        except OSError as exc:  # (-o names a file, a folder that cannot be written, a link
+            # where a folder goes: fretc.common.outputs.OutputError)
             raise click.UsageError(f"cannot write the forms into -o {out_dir}: "
                                    f"{exc.strerror or exc}") from None
+        except FretcError:
+            raise
         for path in written:
             click.echo(shown(f"wrote {path}"))
     sys.exit(code)

@@ -66,7 +66,10 @@ def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir
         click.echo(shown(f"error: {folder / 'tests.json'}: no test {', '.join(missing)}"),
                    err=True)
         sys.exit(2)
-    work = Path(logs_dir) if logs_dir else folder / "runs"
+    from fretc.common.outputs import sub_folder
+
+    # the default runs/ is a folder of fretc's own: a link planted there is refused (exit 2)
+    work = Path(logs_dir) if logs_dir else Path(sub_folder(folder, "runs"))
     outcomes = []
     for t in tests:
         if only and t["id"] not in only:
@@ -79,9 +82,10 @@ def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir
     click.echo(shown(f"{len(outcomes)} tests: " + ", ".join(f"{v} {k}" for k, v in
                                                             summary.items())))
     if json_path:
-        Path(json_path).write_text(json.dumps({"tests": [_json(o) for o in outcomes],
-                                               "summary": summary}, indent=2) + "\n",
-                                   encoding="utf-8")
+        from fretc.common.outputs import write_file
+
+        write_file(json_path, json.dumps({"tests": [_json(o) for o in outcomes],
+                                          "summary": summary}, indent=2) + "\n")
     sys.exit(1 if summary["fail"] else 3 if summary["unknown"] or summary["not exercised"]
              else 0)
 

@@ -328,8 +328,9 @@ def _report(w, la, plan, input_errors, allow_partial, jsonl, record, json_path) 
     if json_path:
         doc = audit_json([la], plan.requirements_json(), plan.bindings_json(), input_errors,
                          allow_partial, plan.sources_json())
-        with open(json_path, "w", encoding="utf-8") as f:
-            f.write(doc)
+        from fretc.common.outputs import write_file
+
+        write_file(json_path, doc)
     return exit_code([la], input_errors, allow_partial)
 
 

@@ -1,0 +1,194 @@
+"""Writing fretc's output files without ever writing through a link planted where they go.
+
+Every command that writes files (``--emit ... -o``, ``testgen -o``, ``testrun``, ``shield
+-o``, ``audit --json/--junit/--write-csv``, ``report -o``, ``check --witness-dir``, ...)
+writes them with these functions. An output folder is often shared or prepared by someone
+else (a CI workspace, ``/tmp``, a checked-out repository), and a symbolic link planted there
+under the name of an output (``D/T01.csv -> ~/.bashrc``) must not make fretc overwrite the
+file it points to; nor may a hard link to another file.
+
+* :func:`write_file` and :func:`open_output` write a temporary file beside the output,
+  created exclusively (``O_CREAT | O_EXCL | O_NOFOLLOW``, mode 0666 less the umask, as
+  ``open()`` would make the output), then rename it over the output's name (``rename(2)``
+  replaces the directory entry, a link included: it never writes through it). A reader sees
+  the old file or the whole new one; a failure leaves the old one and no temporary file.
+* :func:`create_output` is for files written as they go (a recording): whatever is at the
+  name (a file, a link) is removed, and the file is created exclusively without following a
+  link (``O_EXCL | O_NOFOLLOW``, POSIX ``open()``: "If O_CREAT and O_EXCL are set, open()
+  shall fail if the file exists ... If the path names a symbolic link, open() shall fail").
+* :func:`output_folder` makes the folder the user named (following it when it is a link:
+  the user's choice); :func:`sub_folder` a folder fretc names inside it (``runs/``,
+  ``timelines/``), refused when a link or a file stands there; :func:`write_under` a file
+  at a path fretc names inside it (a ROS 2 package's files), its folders as
+  :func:`sub_folder` makes them.
+
+Errors are :class:`OutputError` (a :class:`fretc.common.errors.FretcError`, so the command
+exits 2 naming the path, and an :class:`OSError`, so callers that catch those go on doing so).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from typing import IO, Any, BinaryIO, cast
+
+from fretc.common.errors import FretcError
+
+__all__ = ["OutputError", "write_file", "open_output", "create_output", "write_under",
+           "output_folder", "sub_folder"]
+
+_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+_EXCL = os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW | getattr(os, "O_CLOEXEC", 0) \
+    | getattr(os, "O_BINARY", 0)
+
+
+class OutputError(FretcError, OSError):
+    """An output fretc cannot write where it was asked to; the message names the path and
+    why (a folder in its place, a link where fretc makes a folder, no permission, a full
+    disk)."""
+
+
+def _fail(path: str | os.PathLike, exc: OSError, what: str = "cannot write") -> OutputError:
+    reason = exc.strerror or type(exc).__name__
+    return OutputError(f"{what} {os.fspath(path)}: {reason}")
+
+
+def _temporary(path: str) -> tuple[int, str]:
+    """A new file beside ``path`` (``.NAME.XXXXXXXX.tmp``) created exclusively, never through a
+    link; its descriptor and name. Raises OSError."""
+    folder, name = os.path.split(path)
+    for _ in range(100):
+        tmp = os.path.join(folder, f".{name[:200]}.{os.urandom(6).hex()}.tmp")
+        try:
+            return os.open(tmp, _EXCL, 0o666), tmp
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free temporary name beside {path}")
+
+
+@contextlib.contextmanager
+def open_output(path: str | os.PathLike, mode: str = "w", *, encoding: str | None = "utf-8",
+                newline: str | None = None) -> Iterator[Any]:
+    """A file object to write the output ``path`` through (``mode`` ``"w"`` or ``"wb"``;
+    ``encoding`` and ``newline`` as :func:`open`'s, for text): a temporary file beside it,
+    renamed over ``path`` when the ``with`` block ends without an exception, removed when it
+    raises (``path`` is then left as it was). The folder must exist.
+
+    Raises:
+        OutputError: the temporary file cannot be made or written, or renamed over ``path``
+            (a folder there, no permission).
+        ValueError: a ``mode`` other than ``"w"`` and ``"wb"``."""
+    if mode not in ("w", "wb"):
+        raise ValueError(f"open_output writes a whole file (mode 'w' or 'wb'), not {mode!r}")
+    target = os.fspath(path)
+    try:
+        fd, tmp = _temporary(target)
+    except OSError as exc:
+        raise _fail(target, exc) from None
+    try:
+        if mode == "wb":
+            f: IO[Any] = os.fdopen(fd, "wb")
+        else:
+            f = os.fdopen(fd, "w", encoding=encoding, newline=newline)
+        with f:
+            yield f
+        os.replace(tmp, target)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        if (isinstance(exc, OSError) and not isinstance(exc, OutputError)
+                and exc.filename in (None, tmp, target)):  # (not another file the block read)
+            raise _fail(target, exc) from None
+        raise
+
+
+def write_file(path: str | os.PathLike, data: str | bytes, *, encoding: str = "utf-8",
+               newline: str | None = None) -> None:
+    """Write ``data`` (text in ``encoding``, or bytes) as the output file ``path``, whole or
+    not at all, never through a link at ``path`` (:func:`open_output`). The folder must
+    exist.
+
+    Raises:
+        OutputError: it cannot be written (the message names ``path``)."""
+    if isinstance(data, bytes):
+        with open_output(path, "wb") as f:
+            f.write(data)
+    else:
+        with open_output(path, "w", encoding=encoding, newline=newline) as f:
+            f.write(data)
+
+
+def create_output(path: str | os.PathLike) -> BinaryIO:
+    """A new binary file at ``path`` for an output written as it goes (a recording, read
+    while it grows): what stands at ``path`` (an older output, a link) is removed, then the
+    file is created exclusively without following a link; another file made there meanwhile
+    is an error, never overwritten. The caller closes it.
+
+    Raises:
+        OutputError: a folder at ``path``, or the file cannot be made."""
+    target = os.fspath(path)
+    try:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(target)  # a link is removed itself, never what it points to
+        return cast(BinaryIO, os.fdopen(os.open(target, _EXCL, 0o666), "wb"))
+    except OSError as exc:
+        raise _fail(target, exc) from None
+
+
+def write_under(folder: str | os.PathLike, relative: str, data: str | bytes) -> str:
+    """Write ``data`` as the output file ``folder/relative``, ``relative`` a ``/``-separated
+    path of names fretc chose (a ROS 2 package's ``pkg/launch/pkg.launch.py``): each folder
+    on the way made as :func:`sub_folder` makes one (a link or a file there refused), the
+    file written by :func:`write_file`. ``folder`` must exist. Returns the file's path.
+
+    Raises:
+        OutputError: a link or a file where a folder goes, or the file cannot be written.
+        ValueError: ``relative`` is empty, absolute or holds ``.``, ``..`` or an empty
+            name."""
+    parts = relative.split("/")
+    if not relative or any(p in ("", ".", "..") for p in parts):
+        raise ValueError(f"not a relative path of plain names: {relative!r}")
+    here = os.fspath(folder)
+    for name in parts[:-1]:
+        here = sub_folder(here, name)
+    target = os.path.join(here, parts[-1])
+    write_file(target, data)
+    return target
+
+
+def output_folder(path: str | os.PathLike) -> str:
+    """The output folder the user named, made (with its parents) when missing; a link to a
+    folder is followed (the user named it). Returns ``path`` as a string.
+
+    Raises:
+        OutputError: a file stands there, or the folder cannot be made."""
+    target = os.fspath(path)
+    try:
+        os.makedirs(target, exist_ok=True)
+    except OSError as exc:
+        raise _fail(target, exc, "cannot make the output folder") from None
+    return target
+
+
+def sub_folder(parent: str | os.PathLike, name: str) -> str:
+    """The folder ``name`` inside the output folder ``parent`` (which must exist), made when
+    missing: a folder fretc names itself, so a link or a file standing there (planted in the
+    output folder) is refused, never followed. Returns its path as a string.
+
+    Raises:
+        OutputError: a link or a file at ``parent/name``, or the folder cannot be made."""
+    target = os.path.join(os.fspath(parent), name)
+    try:
+        os.mkdir(target)
+        return target
+    except FileExistsError:
+        pass
+    except OSError as exc:
+        raise _fail(target, exc, "cannot make the folder") from None
+    if os.path.islink(target) or not os.path.isdir(target):
+        what = "a symbolic link" if os.path.islink(target) else "not a folder"
+        raise OutputError(f"{target} is {what}: fretc writes its files into a folder of its "
+                          "own there, never through a link (remove it, or choose another "
+                          "output folder)")
+    return target
