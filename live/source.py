@@ -306,10 +306,13 @@ class WatchSource(LogSource):
         return self.absent.left_for_good(topics, self._delivered)
 
     def _report(self, kind: str, topic: str | None, log_time: int | None,
-                detail: str) -> None:
+                detail: str, record: bool = True) -> None:
         """A data problem and its ``problem`` event (events capped per kind at
-        :data:`fretc.common.problems.MAX_PROBLEMS_PER_KIND`, as the problems kept; all counted)."""
-        self._problem(kind, topic, log_time, detail)
+        :data:`fretc.common.problems.MAX_PROBLEMS_PER_KIND`, as the problems kept; all counted).
+        ``record`` False: the event alone (the problem is counted elsewhere, as a message
+        lost: :meth:`_skipped`)."""
+        if record:
+            self._problem(kind, topic, log_time, detail)
         n = self._reported.get(kind, 0)
         if n < P.MAX_PROBLEMS_PER_KIND:
             self._reported[kind] = n + 1
@@ -444,8 +447,10 @@ class WatchSource(LogSource):
         as an offline log's message out of order): the ticks its value would have held at
         are unknown, never a pass over it. One whose time cannot be placed (``at`` None)
         opens a gap from the last message used to the next one, as a message not
-        decoded."""
-        self._report(kind, topic, at, f"{why}; its value is not held over it")
+        decoded. Either is one ``kind`` problem per message (a message lost is counted as
+        one, :attr:`fretc.logs.LogSource.problem_counts`, never again as reported)."""
+        self._report(kind, topic, at, f"{why}; its value is not held over it",
+                     record=at is None)
         if at is not None:
             self._lose(kind, topic, None, at, why)
         elif self._gap_open is None:
