@@ -116,9 +116,31 @@ class Compiled:
         """The PCTL of a probability requirement in PRISM's syntax, its bounds where FRET
         puts them (per trigger, :mod:`fretc.compiler.pctl`), e.g. ``P>=1 [ ((G (((!
         too_close) & (X too_close)) => (X P>=0.9 [ (F<=1 stopped) ]))) & (too_close =>
-        P>=0.9 [ (F<=1 stopped) ])) ]``; None without a bound."""
-        form = self.pctl_form() if self.probability is not None else None
-        return None if form is None else form.text
+        P>=0.9 [ (F<=1 stopped) ])) ]``; None without a bound, or when PRISM's properties
+        cannot say it (:meth:`pctl_unsupported` says why)."""
+        return self._pctl_text()[0]
+
+    def pctl_unsupported(self) -> str | None:
+        """Why a probability requirement has no PCTL form (:meth:`pctl` None): its path
+        formula holds what PRISM's properties cannot say (a past-time operator or function,
+        a function PRISM does not have: :class:`fretc.compiler.pctl.PrismUnsupported`'s
+        message); None when it has one, or has no bound."""
+        return self._pctl_text()[1]
+
+    def _pctl_text(self) -> tuple[str | None, str | None]:
+        """``(pctl, why none)``, computed once."""
+        if "pctl_text" not in self._cache:
+            form = self.pctl_form() if self.probability is not None else None
+            got: tuple[str | None, str | None] = (None, None)
+            if form is not None:
+                from fretc.compiler.pctl import PrismUnsupported
+
+                try:
+                    got = (form.text, None)
+                except PrismUnsupported as exc:
+                    got = (None, str(exc))
+            self._cache["pctl_text"] = got
+        return self._cache["pctl_text"]
 
     @property
     def key_pctl(self) -> str | None:
@@ -175,7 +197,8 @@ class Compiled:
         FRET's formulas print them: ``"weird var"`` -> ``_DQT_weird_SPC_var_DQT_``),
         ``warnings``, for a probability requirement FRET's five-part ``key`` with the four-part
         one as ``key_ltl``, ``probability`` (``{"op", "p", "text"}``), ``pctl``
-        (:meth:`pctl`) and ``pctl_bounds`` (where its bounds sit,
+        (:meth:`pctl`; null where PRISM cannot say it, with ``pctl_unsupported`` the reason)
+        and ``pctl_bounds`` (where its bounds sit,
         :func:`fretc.compiler.pctl.bound_structure`), and ``error`` (``message``, ``line``, ``column``) when it failed. A formalized
         requirement's keys are :data:`FORMALIZED_KEYS`, its values :meth:`json_values`."""
         values = self.json_values()
@@ -199,7 +222,9 @@ class Compiled:
                 assert form is not None  # (it formalized)
                 out["key"], out["key_ltl"] = form.key, f.key
                 out["probability"] = dict(b.to_json(), text=b.text)
-                out["pctl"] = form.text
+                out["pctl"] = self.pctl()  # None, and why, where PRISM cannot say it
+                if out["pctl"] is None:
+                    out["pctl_unsupported"] = self.pctl_unsupported()
                 out["pctl_bounds"] = form.bounds
         elif self.freeform:
             out.update({"key": None, "freeform": True})

@@ -404,7 +404,9 @@ def _emit_ltl(compiled) -> None:
             click.echo(f"  pt      {c.smv_text['pt']}")
             if b is not None:
                 # FRET's PCTL: the bound at each trigger; ft/ft_inf/pt judge one run
-                click.echo(f"  pctl    {c.pctl()}")
+                pctl = c.pctl()
+                click.echo(f"  pctl    {pctl}" if pctl is not None
+                           else _shown(f"  pctl    none: {c.pctl_unsupported()}"))
                 click.echo(f"  note    probability {b.op} {b.text} applies to each trigger: "
                            "one log gives its triggers' outcomes; fleets and 'fretc "
                            "estimate' judge the bound over triggers (docs/guide/"
