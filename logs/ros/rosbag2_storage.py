@@ -20,6 +20,7 @@ import os
 import shutil
 import sqlite3
 import tempfile
+from contextlib import closing
 from pathlib import Path
 
 from fretc.common.problems import LogError
@@ -28,7 +29,13 @@ __all__ = ["stored_definitions", "storage_folder", "lone_storage"]
 
 
 def _connect(path: Path) -> sqlite3.Connection:
-    return sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+    """A connection to the storage file ``path`` that writes nothing: read-only and
+    immutable (SQLite's URI parameters ``mode=ro&immutable=1``, sqlite.org/uri.html: no
+    lock, no ``-shm``/``-wal`` file beside a WAL-mode database, so the evidence folder is
+    left as it was and a bag on read-only media opens). A recorded bag is read, never one
+    being written. The path percent-encoded as a ``file:`` URI (``?`` and ``#`` in a
+    name). The caller closes it."""
+    return sqlite3.connect(Path(path).resolve().as_uri() + "?mode=ro&immutable=1", uri=True)
 
 
 def stored_definitions(folder: Path) -> dict[str, tuple[str, str]]:
@@ -37,7 +44,7 @@ def stored_definitions(folder: Path) -> dict[str, tuple[str, str]]:
     out: dict[str, tuple[str, str]] = {}
     for db in sorted(folder.glob("*.db3")):
         try:
-            with _connect(db) as c:
+            with closing(_connect(db)) as c:
                 rows = c.execute("SELECT topic_type, encoding, encoded_message_definition "
                                  "FROM message_definitions ORDER BY id").fetchall()
         except sqlite3.Error:
@@ -65,7 +72,7 @@ def _metadata(db: Path, name: str) -> str:
     Raises:
         LogError: the file is not a rosbag2 sqlite3 storage file."""
     try:
-        with _connect(db) as c:
+        with closing(_connect(db)) as c:
             topics = c.execute("SELECT id, name, type, serialization_format, "
                                "offered_qos_profiles FROM topics ORDER BY id").fetchall()
             counts = dict(c.execute("SELECT topic_id, count(*) FROM messages "
