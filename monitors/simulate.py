@@ -176,7 +176,13 @@ def read_trace(path: str) -> dict[str, list[Any]]:
     from fretc.logs import CsvSource
 
     if path.lower().endswith(".csv"):
-        src = CsvSource(path)  # CsvError (an input error) names file:line and column
+        # CsvError (an input error) names file:line and column; a file past the bound is
+        # read only a chunk of rows past it, never whole
+        src = CsvSource(path, max_rows=MAX_SIMULATED_TICKS)
+        if src.over_max_rows:
+            raise InputError(f"{path}: more than {MAX_SIMULATED_TICKS} ticks; a simulation "
+                             f"has at most {MAX_SIMULATED_TICKS} (audit a longer trace with "
+                             "fretc audit)")
         rows = list(src.rows())
         names = [n for n in src.types if n != "time"]
         trace = {n: [r.values[n] for r in rows] for n in names}

@@ -166,6 +166,9 @@ class RowReader:
             column; ``own(cells, line)`` tells whether a row is of the clock read (``clock``,
             its label); ``period_ns``: the tick period, the time of a row without ``time``.
 
+    ``max_rows``: stop after the chunk (:data:`CHUNK_ROWS` rows) where the rows of the clock
+    read pass it, ``over`` then True (the rows after it neither read nor checked).
+
     Fields after :meth:`run`: ``columns`` (of the clock read), ``types`` (column -> ``bool``
     or ``float``), ``count`` (rows of the clock read), ``kept_values`` (column -> its values,
     :class:`array.array`), ``kept_times`` (the ``time`` column, ns; None without one), ``runs``
@@ -177,8 +180,10 @@ class RowReader:
     def __init__(self, path: str, header: list[str], columns: list[str], *, has_time: bool,
                  keep: frozenset[str] | None, grouped: bool,
                  own: Callable[[list[str], int], bool], clock: str | None,
-                 period_ns: int) -> None:
+                 period_ns: int, max_rows: int | None = None) -> None:
         self.path, self.has_time, self.grouped, self.own_row = path, has_time, grouped, own
+        #: stop once more rows than this were read (None: read them all); ``over`` says so
+        self.max_rows, self.over = max_rows, False
         self.clock, self.period_ns = clock, period_ns
         self.columns = list(columns)
         self.types: dict[str, str] = {}
@@ -220,14 +225,16 @@ class RowReader:
             chunk = take(CHUNK_ROWS) if take is not None else list(islice(raw, CHUNK_ROWS))
             if not chunk:
                 break
-            if fast and self._chunk(chunk):
-                continue
-            for line, cells in chunk:
-                if isinstance(cells, CsvError):
-                    raise cells
-                kept = clean_cells(cells)
-                if kept is not None:
-                    self._row(line, kept)
+            if not (fast and self._chunk(chunk)):
+                for line, cells in chunk:
+                    if isinstance(cells, CsvError):
+                        raise cells
+                    kept = clean_cells(cells)
+                    if kept is not None:
+                        self._row(line, kept)
+            if self.max_rows is not None and self.count > self.max_rows:
+                self.over = True  # (the rest of the file is not read)
+                break
         self._finish()
 
     # ------------------------------------------------------------------ row by row

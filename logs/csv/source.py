@@ -246,7 +246,9 @@ class CsvSource(LogSource):
     :meth:`column_pass` read those, not the file. ``keep`` names the columns whose values are
     kept (None: all): the others are checked and typed but not kept, and :meth:`rows` and
     :meth:`messages`, which give every column, then raise RuntimeError (an audit without
-    bindings keeps its requirements' variables alone).
+    bindings keeps its requirements' variables alone). ``max_rows``: a reader with a bound
+    of its own (``fretc simulate``'s 2,000 ticks) stops reading the file a chunk of rows past
+    it (:attr:`over_max_rows`), in bounded memory.
 
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
     ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`fretc.signals`)
@@ -262,7 +264,8 @@ class CsvSource(LogSource):
     kind = "csv"
 
     def __init__(self, path: str | os.PathLike, *, period_ns: int = NS_PER_S,
-                 clock: str | None = None, keep: Iterable[str] | None = None) -> None:
+                 clock: str | None = None, keep: Iterable[str] | None = None,
+                 max_rows: int | None = None) -> None:
         super().__init__(path)
         if period_ns <= 0:
             raise ValueError("period_ns must be positive")
@@ -293,6 +296,10 @@ class CsvSource(LogSource):
         self._line_runs: list[tuple[int, int]] = []
         #: the columns whose values are kept (None: every one)
         self.keep: frozenset[str] | None = frozenset(keep) if keep is not None else None
+        #: ``max_rows`` given and passed: the file was read only up to a chunk past it
+        #: (:attr:`row_count` rows, more than ``max_rows``), the rest neither read nor checked
+        self.over_max_rows = False
+        self._max_rows = max_rows
         self._check()
 
     def _raw(self) -> Iterator[tuple[int, list[str] | CsvError]]:
@@ -355,8 +362,10 @@ class CsvSource(LogSource):
                         if c != "time" and not (self._grouped and c == CLOCK_COLUMN)]
         reader = RowReader(self.path, header, self.columns, has_time=self.has_time,
                            keep=self.keep, grouped=self._grouped, own=self._own,
-                           clock=self.clock, period_ns=self.period_ns)
+                           clock=self.clock, period_ns=self.period_ns,
+                           max_rows=self._max_rows)
         reader.run(raw)
+        self.over_max_rows = reader.over
         self.columns, self.types, self.row_count = reader.columns, reader.types, reader.count
         self.gap_rows, self.unknown_rows = reader.gap_rows, reader.unknown_rows
         self.cut_time, self._gap_set = reader.cut_time, frozenset(reader.gap_rows)

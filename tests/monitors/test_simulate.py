@@ -229,3 +229,26 @@ def test_ids_that_map_to_one_file_name_keep_their_own_svgs(tmp_path):
     assert len(svgs) == 3
     titles = sorted(p.read_text().split("<title>")[1].split(":")[0] for p in svgs)
     assert titles == ["A_B", "a/b", "a_b"]
+
+
+def test_a_long_csv_is_refused_after_its_first_rows(tmp_path):
+    """A CSV of 10^6 rows was read whole (644 MB) before the 2,000-tick refusal: it is
+    refused once its rows pass 2,000 (exit 2, naming the file), in a process whose peak
+    stays near its start-up's (the rows past the bound are never read)."""
+    import subprocess
+
+    (tmp_path / "r.fret").write_text("S1: the robot shall never satisfy speed >= 5\n")
+    with open(tmp_path / "t.csv", "w") as f:
+        f.write("time,speed\n")
+        f.writelines(f"{i / 10:.1f},{i % 7}\n" for i in range(1_000_000))
+    code = ("import resource, sys\nfrom click.testing import CliRunner\nfrom fretc.cli import main\n"
+            f"res = CliRunner().invoke(main, ['simulate', {str(tmp_path / 'r.fret')!r}, "
+            f"{str(tmp_path / 't.csv')!r}])\n"
+            "print(res.exit_code, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+            "print(res.output)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=600).stdout
+    code_and_peak, message = out.split("\n", 1)
+    exit_code, peak_kb = map(int, code_and_peak.split())
+    assert exit_code == 2 and "t.csv" in message and "more than 2000 ticks" in message, out
+    assert peak_kb < 250_000, peak_kb  # (the whole file read: 700,000 KB)
