@@ -14,6 +14,12 @@ tick whose span since the previous tick meets a gap; a window over a duration
 a count of messages from the gap on (how many messages the gap held is not known). A
 variable is unknown where any topic it reads is.
 
+A *silence* (:data:`fretc.logs.recorded_gaps.SILENT_CAUSES`: a topic's publisher away, so
+nothing of it was sent) is read the same way for the topic's values, which are never held
+over it; but a variable that reads the topic only through ``age(/topic)`` is known in it:
+the time since its last message grows, as in a log in which the topic falls silent, so a
+staleness requirement is judged (a LiDAR that dies).
+
 Under the header time base, tick times are header stamps: a gap counts from ``header_lag_ns``
 before its start (a lost message's stamp may precede its log time by that much).
 
@@ -30,8 +36,9 @@ import numpy as np
 
 from fretc.common.streams import base_topic, log_topics
 from fretc.logs.base import Gap
+from fretc.logs.recorded_gaps import SILENT_CAUSES
 from fretc.signals.bindings import Bindings
-from fretc.signals.bindings.expression import stateful_topics
+from fretc.signals.bindings.expression import age_only_topics, stateful_topics
 
 if TYPE_CHECKING:
     from fretc.audit.columns import ClockPass
@@ -122,16 +129,19 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
         b = bindings.variables.get(name) if bindings is not None else None
         topics = sorted(b.topics) if b is not None else sorted(log_times)
         stateful = stateful_topics(b.ast) if b is not None else set()
+        aged = age_only_topics(b.ast) if b is not None else set()
         folded = b is not None and b.aggregate is not None
         w = b.window if b is not None else None
         span = None if w is None else (w.span_ns or 0)
         mask = np.zeros(len(times), np.bool_)
         for t in topics:
-            own = [g for g in gaps if g.affects(base_topic(t))]  # a stream: its topic's
+            # a stream: its topic's gaps; a silence leaves what age() reads known
+            own = [g for g in gaps if g.affects(base_topic(t))
+                   and not (t in aged and g.cause in SILENT_CAUSES)]
             held = log_times.get(t)
             if not own or held is None:
                 continue
-            key = (t, t in stateful, folded, span)
+            key = (t, t in stateful, folded, span, t in aged)
             if key not in masks:
                 masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded, span)
             mask |= masks[key]

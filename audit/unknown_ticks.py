@@ -20,9 +20,11 @@ the end").
 
 from __future__ import annotations
 
-import numpy as np
 from typing import TYPE_CHECKING
 
+import numpy as np
+
+from fretc.logs.recorded_gaps import SILENT_CAUSES
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.audit.columns import ClockPass
 from fretc.monitors.completions import decide
@@ -106,12 +108,20 @@ def _pt_decides(hi: np.ndarray) -> str:
             "ticks read)")
 
 
+def _cause(g) -> str:
+    """A gap's cause in the reason of an unknown verdict: a silence (a publisher away,
+    :data:`fretc.logs.recorded_gaps.SILENT_CAUSES`) says whose publisher left."""
+    if g.cause in SILENT_CAUSES and g.topics:
+        return f"the publisher of {', '.join(sorted(g.topics))} left ({g.cause})"
+    return g.cause or "gap"
+
+
 def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "") -> str:
     """The unknown verdict's reason: its unknown ticks and the gaps behind them (and
     ``outgrew``: why the ways of filling them were not all followed)."""
     k = int(unknown.sum())
     first = int(np.argmax(unknown)) if k else 0
-    causes = sorted({g.cause or "gap" for g in res.gaps})
+    causes = sorted({_cause(g) for g in res.gaps})
     what = ", ".join(causes) if causes else "comparisons with NaN"
     if res.lost_words:
         what += f": {res.lost_words}"

@@ -3,12 +3,19 @@
 A topic's publisher leaves (foxglove_bridge's unadvertisement, a DDS writer deleted or its
 participant's lease expired, a Zenoh liveliness token gone) while the run goes on with the
 others: from the last message used before it left until the topic's own next message, its
-value is unknown, never held over (../shared/DESIGN.md, "Damage is never evidence"). Ticks of
-the requirements that read it inside the span are not evaluated; a span still open when the
-run ends is a gap of the topic to the end of the run (:func:`recorded_gaps`), judged as the
-audit of the recording judges it (:func:`fretc.audit.passes.mark_gaps`: the topic's variables
-unknown at the ticks inside it; a clock with no tick inside it is cut at its start); the
-requirements that do not read the topic are not affected.
+values are unknown, never held over (../shared/DESIGN.md, "Damage is never evidence"), and
+a requirement that reads them is not stepped inside the span. But with no publisher nothing
+was sent: the span is a *silence*, not a loss, and the time since the topic's last message
+is known (``age(/topic)`` grows, a staleness requirement is judged: a LiDAR that dies). A
+span still open when the run ends (the publisher left for good) is a silence on every
+transport; one that closed (the publisher came back: a restart) is a silence where the
+client hears a new publisher from its first message (DDS, Zenoh:
+:data:`fretc.logs.recorded_gaps.PUBLISHER_ABSENT`), and a gap that may have lost messages
+where it subscribes again after the new advertisement (the Foxglove WebSocket protocol,
+rosbridge: ``publisher_left``). The spans are the run's gaps (:func:`run_gaps`,
+:func:`recorded_gaps`), judged as the audit of the recording judges them
+(:func:`fretc.audit.passes.mark_gaps`); only a loss makes the run partial. The requirements
+that do not read the topic are not affected.
 """
 
 from __future__ import annotations
@@ -49,9 +56,11 @@ class Absences:
         spans = self.spans.get(topic)
         return spans[-1] if spans and spans[-1][1] is None else None
 
-    def back(self, topic: str, log_time: int) -> tuple[int | None, str] | None:
+    def back(self, topic: str, log_time: int, silent: bool = False
+             ) -> tuple[int | None, str] | None:
         """A message of ``topic`` at ``log_time`` (ns) closes its open span: (its start,
-        None when before any message; the problem's text), or None when none was open."""
+        None when before any message; the event's text, which says whether the span was a
+        silence, ``silent``, or may have lost messages), or None when none was open."""
         span = self.open_span(topic)
         if span is None:
             return None
@@ -59,11 +68,14 @@ class Absences:
         how = (f"advertised again as channel {span[3]}" if len(span) > 3
                else "its messages came again")
         since = "the start of the run" if start == NO_TIME else f"log time {start}"
+        what = ("it had no publisher, so nothing was sent: the time since its last message "
+                "is known, its values are not" if silent else
+                "messages its new publisher sent before the watch subscribed again may be lost")
         return (None if start == NO_TIME else start,
                 f"the publisher of {topic} restarted (unadvertised, then {how}): no message "
-                f"of {topic} from {since} to log time {log_time}: ticks inside are not "
-                f"evaluated (unknown) for the requirements that read {topic}, never held "
-                "over; the monitors keep their state")
+                f"of {topic} from {since} to log time {log_time} ({what}): ticks inside are "
+                f"not evaluated (unknown) for the requirements that read its values, never "
+                "held over; the monitors keep their state")
 
     def at(self, topics: Iterable[str], t: int) -> bool:
         """Whether some topic of ``topics`` had no publisher at log time ``t`` (ns)."""
@@ -81,24 +93,31 @@ class Absences:
                   if s is not None and used > s[2]]
         return min(starts) if starts else None
 
-    def lost_start(self, used: int) -> int | None:
-        """The earliest start of a span that cost the run data (closed, or open while the
-        run went on), or None."""
-        starts = [s[0] for spans in self.spans.values() for s in spans
-                  if s[1] is not None or used > s[2]]
+    def lost_start(self, hears_new_publishers: bool) -> int | None:
+        """The earliest start of a span that may have cost the run messages, or None: a
+        closed span (a restart) where the client subscribes again only after the new
+        advertisement (``hears_new_publishers`` False); a span open at the end (left for
+        good) and every span on a client that hears a new publisher at once are silences."""
+        if hears_new_publishers:
+            return None
+        starts = [s[0] for spans in self.spans.values() for s in spans if s[1] is not None]
         return min(starts) if starts else None
 
 
 class WatchedRun(Protocol):
     """What the gaps of a watched run are read from (:class:`fretc.live.source.WatchSource`):
     its lost connections (``gaps``: pairs of the log times around each, ns), its topics'
-    spans without a publisher (``absent``) and, per topic, where its publisher left for good
-    (``left_for_good``)."""
+    spans without a publisher (``absent``), whether its client hears a new publisher from its
+    first message (``hears_new_publishers``) and, per topic, where its publisher left for
+    good (``left_for_good``)."""
 
     gaps: list[tuple[int, int]]
 
     @property
     def absent(self) -> Absences | None: ...
+
+    @property
+    def hears_new_publishers(self) -> bool: ...
 
     def left_for_good(self, topics: Iterable[str]) -> int | None: ...
 
@@ -129,17 +148,21 @@ def run_gaps(src: WatchedRun) -> list[Gap]:
     """The gaps of a watched run (``src``: its :class:`fretc.live.source.WatchSource`) as
     the audit's (:class:`fretc.logs.base.Gap`): a lost connection (every topic, between the
     last message before it and the first after it) and a publisher that left and came back
-    (its topic, until its next message); the messages lost lie strictly inside. Messages
+    (its topic, until its next message: a silence where the client hears a new publisher
+    at once, module docstring); the messages lost lie strictly inside. Messages
     received but not used at a known log time (a clock reset) are point gaps of their topic
     (:meth:`fretc.logs.base.LogSource.lost_gaps`)."""
     from fretc.logs.base import Gap
 
+    from fretc.logs.recorded_gaps import PUBLISHER_ABSENT
+
+    cause = PUBLISHER_ABSENT if src.hears_new_publishers else "publisher_left"
     out = [Gap(a + 1, e - 1, None, "connection_gap") for a, e in src.gaps if e - a > 1]
     for topic, spans in (src.absent.spans if src.absent else {}).items():
         for start, end, *_rest in spans:
             if end is not None:
                 out.append(Gap(None if start == NO_TIME else start + 1, end - 1,
-                               frozenset((topic,)), "publisher_left"))
+                               frozenset((topic,)), cause))
     lost = getattr(src, "lost_gaps", None)  # messages received but not used, at their times
     if lost is not None:
         out += lost()

@@ -1,9 +1,12 @@
 """What a watch checks before it steps a requirement (the audit's own checks, on what the
-server advertised instead of a log's records): every variable bound, every topic it reads
-advertised with a schema that decodes, the tick topic advertised, and the bindings' types
-against the advertised schemas (:func:`fretc.audit.checks.binding_type_errors`: a binding
-that reads a string as a number, or a variable that is not a boolean or a number, is the
-requirement's ``error`` in the watch as in the audit)."""
+server advertised instead of a log's records): every variable bound, every advertised topic
+it reads with a schema that decodes, and the bindings' types against the advertised schemas
+(:func:`fretc.audit.checks.binding_type_errors`: a binding that reads a string as a number,
+or a variable that is not a boolean or a number, is the requirement's ``error`` in the watch
+as in the audit). A topic not advertised yet (a node that starts after the watch, in any
+order) is no error: the requirement waits for its first message as a clock waits for a
+log's, and its types are checked when it is advertised (:func:`late_type_errors`); one
+never advertised in the whole run is its requirement's error at the end."""
 
 from __future__ import annotations
 
@@ -11,11 +14,11 @@ from collections.abc import Iterable
 from typing import Any
 
 from fretc.audit.checks import binding_type_errors
-from fretc.audit.verdict import LogAudit, Verdict
+from fretc.audit.verdict import Verdict
 from fretc.common.streams import log_topics
 from fretc.logs.schema import record_schemas
 
-__all__ = ["watchable", "listing"]
+__all__ = ["watchable", "listing", "late_type_errors"]
 
 
 def listing(topics: Iterable[str], most: int = 20) -> str:
@@ -27,11 +30,11 @@ def listing(topics: Iterable[str], most: int = 20) -> str:
     return ", ".join(names[:most]) + more
 
 
-def watchable(plan: Any, src: Any, url: str, la: LogAudit, verdicts: dict[int, Verdict],
-              skip: set[int]) -> list:
+def watchable(plan: Any, src: Any, verdicts: dict[int, Verdict], skip: set[int]) -> list:
     """The requirements of ``plan`` that can be watched on ``src`` (a
-    :class:`fretc.live.source.WatchSource` after its advertisements); the others' verdicts
-    get the error (module docstring). ``skip``: indexes judged elsewhere (per entity)."""
+    :class:`fretc.live.source.WatchSource` after its advertisements so far); the others'
+    verdicts get the error (module docstring). ``skip``: indexes judged elsewhere (per
+    entity)."""
     b = plan.bindings
     active = []
     for r in plan.requirements:
@@ -45,11 +48,8 @@ def watchable(plan: Any, src: Any, url: str, la: LogAudit, verdicts: dict[int, V
             continue
         topics = sorted({t for n in r.variables for t in log_topics(b.variables[n].topics)})
         bad = []
-        for t in topics:
-            if t not in src.advertised:
-                bad.append(f"topic {t} is not advertised by {url} (it advertises "
-                           f"{listing(src.advertised)})")
-            elif src.decoders.get(t) is None:
+        for t in topics:  # (one not advertised yet is waited for: module docstring)
+            if t in src.advertised and src.decoders.get(t) is None:
                 bad.append(f"topic {t} cannot be read "
                            f"({src.schema_errors.get(t, 'no decoder')})")
         if bad:
@@ -61,13 +61,29 @@ def watchable(plan: Any, src: Any, url: str, la: LogAudit, verdicts: dict[int, V
                                 schemas=record_schemas(_records(src)))
     for i, why in typed.items():
         verdicts[i].error = why
-    active = [r for r in active if r.index not in typed]
-    if b.tick.topic is not None and b.tick.topic not in src.advertised:
-        la.error = f"the tick topic {b.tick.topic} is not advertised by {url}"
-        for r in active:
-            verdicts[r.index].error = la.error
-        active = []
-    return active
+    return [r for r in active if r.index not in typed]
+
+
+def late_type_errors(plan: Any, src: Any, topic: str, active: Iterable[Any],
+                     verdicts: dict[int, Verdict]) -> dict[int, str]:
+    """The requirements of ``active`` that read ``topic``, advertised after the watch began,
+    checked as :func:`watchable` checks them (a schema that cannot be read, the bindings'
+    types): requirement index -> why it is an ``error``; their verdicts get it."""
+    b = plan.bindings
+    readers = {r.index for r in active if verdicts[r.index].error is None and any(
+        topic in log_topics(b.variables[n].topics) for n in r.variables if n in b.variables)}
+    if not readers:
+        return {}
+    out: dict[int, str] = {}
+    if src.decoders.get(topic) is None:
+        why = f"topic {topic} cannot be read ({src.schema_errors.get(topic, 'no decoder')})"
+        out = dict.fromkeys(readers, why)
+    else:
+        skip = {r.index for r in plan.requirements} - readers
+        out = binding_type_errors(src, b, plan, skip, schemas=record_schemas(_records(src)))
+    for i, why in out.items():
+        verdicts[i].error = why
+    return out
 
 
 def _records(src: Any) -> dict[str, tuple[str, str, str, bytes]]:

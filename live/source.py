@@ -12,14 +12,17 @@ Faults, each a data problem of the run, never a crash:
   nothing after it before the watch ends is the end of the watched run
   (:data:`CONNECTION_CLOSED`, reported, not a gap);
 * a bound topic the server stops advertising while the run goes on (its publisher left: a
-  node restarted or died, a DDS writer or Zenoh token gone): :data:`UNADVERTISED`, and its
-  value is **not held**: from the last message used before it until the topic's next
-  message, ticks of the requirements that read it are not evaluated (unknown; the span is
-  a :data:`PUBLISHER_RESTART` problem when the topic comes back); when it never comes back
-  before the run ends, its variables are unknown from there to the end of the run at the
-  ticks of the clocks that read it, and a clock with no tick past it is cut there (an
-  obligation open at the cut is ``unknown``); the others are not affected
-  (:mod:`fretc.live.absence`);
+  node restarted or died, a DDS writer or Zenoh token gone): a ``publisher`` event, and its
+  values are **not held**: from the last message used before it until the topic's next
+  message, ticks of the requirements that read its values are not evaluated (unknown);
+  when it never comes back before the run ends, its values are unknown from there to the
+  end of the run at the ticks of the clocks that read it, and a clock with no tick past it
+  is cut there (an obligation open at the cut is ``unknown``); the others are not affected
+  (:mod:`fretc.live.absence`). With no publisher nothing was sent: the span is a silence,
+  no data problem, and what ``age(/topic)`` reads is known in it (a staleness requirement
+  is judged); only a restart over a client that subscribes again after the new
+  advertisement (the Foxglove WebSocket protocol, rosbridge) may have lost messages: a
+  :data:`PUBLISHER_RESTART` problem;
 
 The end of the watched run, never a data problem: the server's orderly close (a WebSocket
 close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
@@ -84,8 +87,9 @@ NOT_ADVERTISED = "not_advertised"
 PROTOCOL = "protocol"
 #: A message's log time is outside the range the watch can tick on; skipped.
 TIME_RANGE = "time_range"
-#: A bound topic was unadvertised and advertised again (its publisher restarted): the
-#: messages between were not received.
+#: A bound topic was unadvertised and advertised again (its publisher restarted) over a
+#: client that subscribes again after the new advertisement: messages the new publisher
+#: sent before that may not have been received.
 PUBLISHER_RESTART = "publisher_restart"
 #: Every publisher of the bound topics left (unadvertised) and none came back within the
 #: grace period, before the watch's end: the run was cut short.
@@ -137,7 +141,7 @@ class WatchSource(LogSource):
         self.end_reason: str | None = None
         self._ended = False
         self._server_ended = False  # the server ended the run (close, all unadvertised)
-        self._last_wall: float | None = None  # monotonic time of the last message (or connect)
+        self._last_wall: float | None = None  # monotonic time of the last message used (--until-idle counts from the first)
         self._pending_unadvertised: list[tuple[str, int | None]] = []
         self.on_event = on_event or (lambda e: None)
         self.on_message = on_message
@@ -168,6 +172,10 @@ class WatchSource(LogSource):
         self._reported: dict[str, int] = {}  # problem events sent per kind (capped)
         #: the bound topics' spans without a publisher (:mod:`fretc.live.absence`)
         self.absent = Absences()
+        #: bound topics not advertised yet that the run waits for (the watch sets them)
+        self.awaited: set[str] = set()
+        #: called with each topic advertised for the first time (the watch's late checks)
+        self.on_advertised: Callable[[str], None] | None = None
         self._delivered = 0
 
     def stop(self) -> None:
@@ -217,8 +225,10 @@ class WatchSource(LogSource):
             self.end_reason = reason
 
     def topics(self) -> dict[str, str]:
-        """Advertised topic -> its message type (ROS name)."""
-        out = {}
+        """Advertised topic -> its message type (ROS name); a bound topic the watch still
+        awaits (:attr:`awaited`: not advertised yet, any start order) is there with no type,
+        as a topic of a log whose first message is still to come."""
+        out = dict.fromkeys(self.awaited, "")
         for t, ch in self.advertised.items():
             try:
                 out[t] = normalize_msgtype(ch.schema_name) if ch.schema_name else ""
@@ -243,11 +253,14 @@ class WatchSource(LogSource):
             self._early.append(ev)
         elif kind == "advertise":
             for ch in ev[2]:
+                first = ch.topic not in self.advertised
                 self.advertised[ch.topic] = ch
                 if ch.topic in self.unadvertised:
                     self.unadvertised.discard(ch.topic)
                     self._readvertised(ch)
                 self._build(ch)
+                if first and self.on_advertised is not None:
+                    self.on_advertised(ch.topic)
         elif kind == "unadvertise":
             for t in ev[2]:
                 self.unadvertised.add(t)
@@ -276,8 +289,6 @@ class WatchSource(LogSource):
             self.connected = self.ever_connected = True
             if self.first_connect_wall is None:
                 self.first_connect_wall = time.monotonic()
-            if self._last_wall is None:
-                self._last_wall = time.monotonic()
             self.on_event(WatchEvent("connected", self._last_time, ev[1],
                                      detail=f"subprotocol {ev[2]}"))
         elif kind == "disconnected":
@@ -304,6 +315,13 @@ class WatchSource(LogSource):
     def left_for_good(self, topics: Iterable[str]) -> int | None:
         """:meth:`fretc.live.absence.Absences.left_for_good` of this run."""
         return self.absent.left_for_good(topics, self._delivered)
+
+    @property
+    def hears_new_publishers(self) -> bool:
+        """Whether the client reads a topic's new publisher from its first message (DDS,
+        Zenoh: the span without a publisher is a silence), or subscribes again after its
+        advertisement (WebSocket: a restart may lose messages; :mod:`fretc.live.absence`)."""
+        return bool(getattr(self.client, "hears_new_publishers", False))
 
     def _report(self, kind: str, topic: str | None, log_time: int | None,
                 detail: str, record: bool = True) -> None:
@@ -484,16 +502,16 @@ class WatchSource(LogSource):
                               QUEUE_OVERFLOW)
 
     def _flush_unadvertised(self) -> None:
-        """The run went on after topics were unadvertised: each is an :data:`UNADVERTISED`
-        problem."""
+        """The run went on after topics were unadvertised: each is a ``publisher`` event
+        (:data:`UNADVERTISED`), no data problem: with no publisher nothing was sent."""
         for t, at in self._pending_unadvertised:
-            held = ("its value is not held: ticks after it are not evaluated for the "
-                    "requirements that read it until its next message"
+            held = ("its values are not held: ticks after it are not evaluated for the "
+                    "requirements that read them until its next message; the time since its "
+                    "last message (age) is known"
                     if self._wanted is None or t in self._wanted else "no requirement reads it")
-            self._problem(UNADVERTISED, t, at, "the server stopped advertising this topic (its "
-                          f"publisher left); {held}")
-            self.on_event(WatchEvent("problem", at, time.time_ns(),
-                                     detail=f"{UNADVERTISED}: {t}"))
+            self.on_event(WatchEvent("publisher", at, time.time_ns(),
+                                     detail=f"{UNADVERTISED}: {t}: the server stopped "
+                                     f"advertising it (its publisher left); {held}"))
         self._pending_unadvertised.clear()
 
     def _time_problem(self, topic: str, log_time: int) -> str | None:
@@ -552,10 +570,12 @@ class WatchSource(LogSource):
                 self.on_event(WatchEvent("gap", before, time.time_ns(), detail=detail,
                                          extra={"end_time_ns": log_time,
                                                 "length_s": (log_time - before) / 1e9}))
-        back = self.absent.back(topic, log_time)
+        back = self.absent.back(topic, log_time, self.hears_new_publishers)
         if back is not None:  # its publisher had left: the span without it is reported
-            self._problem(PUBLISHER_RESTART, topic, back[0], back[1], end_time=log_time)
-            self.on_event(WatchEvent("gap", back[0], time.time_ns(), detail=back[1],
+            if not self.hears_new_publishers:  # (a silence loses nothing: no data problem)
+                self._problem(PUBLISHER_RESTART, topic, back[0], back[1], end_time=log_time)
+            self.on_event(WatchEvent("gap" if not self.hears_new_publishers else "publisher",
+                                     back[0], time.time_ns(), detail=back[1],
                                      extra={"end_time_ns": log_time}))
         self._last_time = log_time
         self._delivered += 1

@@ -47,6 +47,7 @@ from dataclasses import dataclass
 from fretc.common.problems import DataProblem
 from fretc.common.streams import log_topics
 from fretc.signals import sample_groups
+from fretc.signals.bindings.expression import age_only_topics
 from fretc.monitors.interval import evaluate_requirement
 from fretc.audit import AuditInputError
 from fretc.audit.finalize import between_ticks, finalize
@@ -59,7 +60,7 @@ from fretc.audit.columns import ClockPass
 from fretc.audit.passes import ClockKey, clock_key, mark_gaps, restrict
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.live.absence import NO_TIME, recorded_gaps, run_gaps
-from fretc.live.checks import watchable
+from fretc.live.checks import late_type_errors, listing, watchable
 from fretc.live.columns import LiveColumns, WatchPasses as _WatchPasses, split_pending
 from fretc.live.entities import EntityRecording
 from fretc.live.entity_events import EntityEvents
@@ -121,6 +122,21 @@ class WatchOptions:
     msg_path: tuple[str, ...] = ()
     config: str | None = None
     merge_hold: float = HOLD_SECONDS
+
+
+def _value_topics(r, bindings, silent: bool) -> set[str]:
+    """The topics whose values requirement ``r``'s variables read: those a span without a
+    publisher leaves unknown. Over a client that hears a new publisher at once (``silent``:
+    :mod:`fretc.live.absence`), a topic read only through ``age()`` is known in such a span;
+    over one that may lose a restarted publisher's first messages, every topic it reads."""
+    out: set[str] = set()
+    for v in r.variables:
+        b = bindings.variables.get(v)
+        if b is None:
+            continue
+        aged = age_only_topics(b.ast) if silent else set()
+        out |= {t for t in log_topics(b.topics) if t not in aged}
+    return out
 
 
 # --------------------------------------------------------------------------- the engine
@@ -254,8 +270,7 @@ class Watch:
                 for v in verdicts.values():
                     v.error = v.error or f"not watched: {la.error}"
                 return self._finish(la, verdicts, None)
-            active = self._watchable(la, verdicts)
-            self.entities.check(src, url)
+            active = self._watchable(verdicts)
             result = None
             if active:
                 names = sorted({v for r in active for v in r.variables})
@@ -270,6 +285,7 @@ class Watch:
                     pass
         finally:
             self.client.stop()
+        self.entities.check(src, url)  # (at the end: a topic may be advertised late)
         self.entity_events.finish()
         self._event(WatchEvent("end", src._last_time, time.time_ns(),
                                detail=src.end_reason or "stopped"))
@@ -284,24 +300,60 @@ class Watch:
         self.entities.message(topic, log_time, payload)
         self.entity_events.message(topic, log_time, payload)
 
-    def _watchable(self, la: LogAudit, verdicts: dict[int, Verdict]) -> list:
+    def _watchable(self, verdicts: dict[int, Verdict]) -> list:
         """The requirements that can be watched (:func:`fretc.live.checks.watchable`); the
-        bound topics not advertised are reported."""
+        bound topics not advertised yet are awaited (any start order: they join the run
+        when they come, and their types are checked then, :meth:`_advertised`), and said."""
         src = self.source
-        active = watchable(self.plan, src, self.options.url, la, verdicts,
-                           set(self.entities.indexes))
-        for t in sorted(self.needed - set(src.advertised)):
-            src._problem(NOT_ADVERTISED, t, None,
-                         f"not advertised by {self.options.url} within "
-                         f"{self.options.wait:g} s of connecting")
+        active = watchable(self.plan, src, verdicts, set(self.entities.indexes))
+        self._verdicts, self._awaiting = verdicts, set(self.needed) - set(src.advertised)
+        src.awaited = set(self._awaiting)
+        if self._awaiting:
+            why = (f"not advertised by {self.options.url} within {self.options.wait:g} s of "
+                   f"connecting: {', '.join(sorted(self._awaiting))}; the requirements that "
+                   "read them wait for them (a node that starts later joins the run)")
+            self.status_line = f"waiting for {', '.join(sorted(self._awaiting))}"
+            self._event(WatchEvent("waiting", src._last_time, time.time_ns(), detail=why))
+        src.on_advertised = self._advertised
         for r in self.plan.requirements:
             if verdicts[r.index].error is not None:
                 self.live[r.index].error = verdicts[r.index].error
         return active
 
+    def _advertised(self, topic: str) -> None:
+        """A bound topic advertised after the watch began (its node started later): the
+        requirements that read it are checked now (:func:`fretc.live.checks.late_type_errors`),
+        and those it fails are not stepped (``error`` at the end)."""
+        if topic not in self._awaiting:
+            return
+        self._awaiting.discard(topic)
+        self.source.awaited.discard(topic)
+        bad = late_type_errors(self.plan, self.source, topic, getattr(self, "_active", ()),
+                               self._verdicts)
+        for i, why in bad.items():
+            self.live[i].error = why
+        self._event(WatchEvent("advertised", self.source._last_time, time.time_ns(),
+                               detail=f"{topic} advertised; the requirements that read it "
+                               "join the run" + (f" ({len(bad)} of them cannot be read)"
+                                                 if bad else "")))
+        if not self._awaiting:
+            self.status_line = f"watching {self.options.url}"
+
+    def _never(self, topic: str) -> str:
+        """Why a bound topic gave no message in the run: never advertised (no publisher
+        appeared), or advertised and silent."""
+        src = self.source
+        if topic in src.advertised:
+            return f"topic {topic} was advertised but no message of it arrived in the run"
+        return (f"topic {topic} was not advertised by {self.options.url} during the run (it "
+                f"advertised {listing(src.advertised)})")
+
     def _record_problems(self, la: LogAudit, result) -> None:
         """The run's message counts and problems; a run with a gap is partial."""
         src = self.source
+        for t in sorted(self.needed - set(src.advertised)):  # (no publisher in the whole run)
+            src._problem(NOT_ADVERTISED, t, None,
+                         f"not advertised by {self.options.url} during the run")
         problems: dict[tuple, DataProblem] = {}
         counts: dict[str, int] = {}
         collect_problems(src, result.sampling if result is not None else None, problems,
@@ -317,8 +369,8 @@ class Watch:
         if src.lost:  # messages received but not used at their log times (a clock reset)
             la.partial, first = True, min(v[0] for v in src.lost.values())
             la.damage_time_ns = min(x for x in (first, la.damage_time_ns) if x is not None)
-        lost = src.absent.lost_start(src._delivered)
-        if lost is not None:  # a bound topic's publisher left while the run went on
+        lost = src.absent.lost_start(src.hears_new_publishers)
+        if lost is not None:  # a publisher's restart may have lost messages (WebSocket)
             la.partial = True
             first = lost + 1 if lost != NO_TIME else (src.start_time or 0)
             la.damage_time_ns = min(x for x in (first, la.damage_time_ns) if x is not None)
@@ -373,6 +425,7 @@ class Watch:
                 self._group[r.index] = key
         self._active = active
         self._unknown = {key: 0 for key in groups}
+        blind = {r.index: _value_topics(r, bindings, src.hears_new_publishers) for r in active}
         sampling = sample_groups(src, bindings, spec)
         gaps = src.gaps
         self.status_line = f"watching {self.options.url}"
@@ -382,12 +435,19 @@ class Watch:
             cols = self._cols[key]
             i = cols.n
             dep = max(tick.log_times.values()) if tick.log_times else None
-            if (gaps and any(a < t < e for a, e in gaps[-4:])) or (
-                    src.absent and src.absent.at(log_topics(key.topics), t)):
+            if gaps and any(a < t < e for a, e in gaps[-4:]):
                 # inside a gap: kept (the judge reads it as unknown), the monitors not
                 # stepped over it
                 self._unknown[key] += 1
                 self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
+            elif src.absent and src.absent.at(log_topics(key.topics), t):
+                # a topic without a publisher: the requirements that read its values are
+                # not stepped (unknown), those that read only its age are
+                rows = [row for row in order[key] if not src.absent.at(blind[row[0].index], t)]
+                if len(rows) < len(order[key]):
+                    self._unknown[key] += 1
+                    self.unknown_ticks = max(self.unknown_ticks, self._unknown[key])
+                self._step(rows, vals, t, i, dep)
             else:
                 self._step(order[key], vals, t, i, dep)
             cols.append(tick)
@@ -423,7 +483,8 @@ class Watch:
         reads NaN (unread, :mod:`fretc.monitors.nan`) unless ``[tick] nan = "false"``."""
         unread = self.plan.bindings is None or self.plan.bindings.tick.nan != "false"
         for r, mon, st in rows:
-            if mon is None or st.nan_at is not None or any(v not in vals for v in r.variables):
+            if (mon is None or st.nan_at is not None or st.error is not None
+                    or any(v not in vals for v in r.variables)):
                 continue
             if unread and any(vals[v] != vals[v] for v in r.variables):
                 st.nan_at = i
@@ -507,9 +568,10 @@ class Watch:
                 if bad:
                     v.error = str(result.failed[self._group[r.index]][bad[0]])
                     continue
+                if v.error is not None:  # (a topic advertised late that cannot be read)
+                    continue
                 if g.missing_topics:
-                    v.error = "; ".join(f"topic {t} has no message in the run"
-                                        for t in g.missing_topics)
+                    v.error = "; ".join(self._never(t) for t in g.missing_topics)
                     continue
                 finalize(self.plan, r, res, self.plan.bindings, v, la)
                 ok.append(r)

@@ -21,13 +21,25 @@ from collections.abc import Sequence
 from fretc.common.problems import DataProblem
 from fretc.logs.base import Gap
 
-__all__ = ["GAPS_METADATA", "LEFT_FOR_GOOD", "RUN_END", "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps",
-           "first_start", "gap_problems"]
+__all__ = ["GAPS_METADATA", "LEFT_FOR_GOOD", "PUBLISHER_ABSENT", "SILENT_CAUSES", "RUN_END",
+           "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps", "first_start",
+           "gap_problems", "losses"]
 
 #: The cause of the gap of a topic whose publisher left the run for good while the run went
 #: on: to the end of the run (:data:`RUN_END`), and no cut of the log (the other topics were
 #: read: :func:`fretc.audit.passes.mark_gaps`)
 LEFT_FOR_GOOD = "publisher_left_for_good"
+#: The cause of a topic's span without a publisher that came back, over a transport whose
+#: subscription stays while the publisher is away (DDS, Zenoh: the reader is matched with
+#: the new writer as soon as it appears): nothing was sent in it and nothing was lost
+PUBLISHER_ABSENT = "publisher_absent"
+#: The causes of a silence, not a loss: spans in which a topic had no publisher, so no
+#: message of it was sent. The values it last sent are unknown in them (never held over: a
+#: requirement over them is not judged on stale values), but the time since its last
+#: message is known (``age(/topic)`` reads only that: a staleness requirement is judged),
+#: and the log is not damaged by them: what the watch received is whole
+#: (:func:`fretc.audit.gaps.unknown_masks`)
+SILENT_CAUSES = frozenset({LEFT_FOR_GOOD, PUBLISHER_ABSENT})
 #: The end of a gap that lasts to the end of the run: past every tick of the run
 RUN_END = 2**63 - 1
 #: The name of the Metadata record of a recording's gaps
@@ -103,6 +115,12 @@ def read_recorded_gaps(path: str) -> list[Gap]:
                          "lost messages is not known") from None
 
 
+def losses(gaps: Sequence[Gap]) -> list[Gap]:
+    """The gaps of ``gaps`` in which messages may have been lost: all but the silences
+    (:data:`SILENT_CAUSES`); only these make a log partial and are its data problems."""
+    return [g for g in gaps if g.cause not in SILENT_CAUSES]
+
+
 def first_start(gaps: Sequence[Gap]) -> int | None:
     """The earliest known start (ns) of ``gaps``, None when none has one."""
     starts = [g.start for g in gaps if g.start is not None]
@@ -110,8 +128,9 @@ def first_start(gaps: Sequence[Gap]) -> int | None:
 
 
 def gap_problems(gaps: Sequence[Gap]) -> list[DataProblem]:
-    """One data problem per recorded gap (its cause as the kind, its topics, start and end),
-    as the watch reported them."""
+    """One data problem per recorded gap in which messages were lost (:func:`losses`: its
+    cause as the kind, its topics, start and end), as the watch reported them; a silence
+    (a publisher away) is no data problem."""
     return [DataProblem(g.cause, ", ".join(sorted(g.topics)) if g.topics else None, g.start,
                         "the watch that recorded this log lost messages here (its gaps are "
-                        "recorded in the log)", g.end) for g in gaps]
+                        "recorded in the log)", g.end) for g in losses(gaps)]

@@ -88,6 +88,10 @@ class DdsClient:
     """
 
     leaving_ends_run = True
+    #: the reader stays while a topic's publishers are away and reads a new publisher from
+    #: its first message: a span without a publisher is a silence, nothing lost in it
+    #: (:data:`fretc.logs.recorded_gaps.PUBLISHER_ABSENT`)
+    hears_new_publishers = True
 
     def __init__(self, url: str, wanted: Callable[[str], bool], *, topics=(),
                  types: dict[str, str] | None = None, msg_path: tuple[str, ...] = (),

@@ -89,6 +89,10 @@ class ZenohClient:
     #: every publisher of the bound topics leaving is the end of the run (no close frame on
     #: this transport)
     leaving_ends_run = True
+    #: the reader stays while a topic's publishers are away and reads a new publisher from
+    #: its first message: a span without a publisher is a silence, nothing lost in it
+    #: (:data:`fretc.logs.recorded_gaps.PUBLISHER_ABSENT`)
+    hears_new_publishers = True
     #: :meth:`stop` leaves the session open (closed by :meth:`close`)
     keep_session = False
 

@@ -41,7 +41,8 @@ from fretc.logs.mcap.columns import TopicBlock, column_pass
 from fretc.logs.mcap.records import (MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages,
                                      chunk_records)
 from fretc.logs.mcap.records import crc_skip, data_follows, parse_record
-from fretc.logs.recorded_gaps import WATCH_LIBRARY, first_start, gap_problems, read_recorded_gaps
+from fretc.logs.recorded_gaps import (WATCH_LIBRARY, first_start, gap_problems, losses,
+                                      read_recorded_gaps)
 from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
 __all__ = ["McapSource"]
@@ -134,9 +135,11 @@ class McapSource(LogSource):
 
     def _begin_pass(self) -> None:
         super()._begin_pass()
-        if self.recorded_gaps:  # (a watched run with a gap is partial, as the watch said)
+        if self.recorded_gaps:
             self.gaps.extend(self.recorded_gaps)
-            self.partial, self.damage_time = True, first_start(self.recorded_gaps)
+            lost = losses(self.recorded_gaps)  # (a silence, a publisher away, loses nothing)
+            if lost:  # a watched run with a gap is partial, as the watch said
+                self.partial, self.damage_time = True, first_start(lost)
             for p in gap_problems(self.recorded_gaps):
                 self._pass_problems.add(p)
 

@@ -22,7 +22,7 @@ from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
 
 __all__ = ["Expr", "EntityParam", "const_value", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "AGGREGATES", "check_aggregate", "written", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "age_only_topics", "AGGREGATES", "check_aggregate", "written", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -434,6 +434,32 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         return
     for a in node.args:
         check(a, where, topics)
+
+
+def age_only_topics(node: Expr) -> set[str]:
+    """The topics ``node`` reads only through ``age(/topic)``: the time since their last
+    message, never a value of one. Where such a topic had no publisher (nothing was sent),
+    what the expression reads of it is known, unlike what a lost message held
+    (:data:`fretc.logs.recorded_gaps.SILENT_CAUSES`)."""
+    aged: set[str] = set()
+    read: set[str] = set()
+
+    def visit(n: Expr, in_age: bool) -> None:
+        if isinstance(n, Field):
+            (aged if in_age else read).add(n.topic)
+        elif isinstance(n, UnaryOp):
+            visit(n.arg, in_age)
+        elif isinstance(n, BinOp):
+            visit(n.left, in_age)
+            visit(n.right, in_age)
+        elif isinstance(n, FuncCall):
+            if n.func == "tf":  # the transforms' values, whatever its arguments say
+                read.update(TF_TOPICS)
+            for a in n.args:
+                visit(a, in_age or n.func == "age")
+
+    visit(node, False)
+    return aged - read
 
 
 def stateful_topics(node: Expr) -> set[str]:

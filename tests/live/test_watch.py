@@ -217,7 +217,7 @@ def test_unknown_topic_and_undecodable_schema_are_errors_for_their_requirements_
     finally:
         server.stop()
     by = {v.requirement: v for v in la.verdicts}
-    assert by["RG"].verdict == "error" and "/ghost is not advertised" in by["RG"].error
+    assert by["RG"].verdict == "error" and "/ghost was not advertised" in by["RG"].error
     assert by["RB"].verdict == "error" and "/b cannot be read" in by["RB"].error
     assert "unknown_schema" in by["RB"].error
     # RA does not depend on the others being broken
@@ -227,7 +227,8 @@ def test_unknown_topic_and_undecodable_schema_are_errors_for_their_requirements_
     assert {"unknown_schema", "not_advertised"} <= kinds
 
 
-def test_bad_payload_clock_backwards_and_unadvertise_are_data_problems(tmp_path):
+def test_bad_payload_and_clock_backwards_are_data_problems_a_publisher_leaving_is_not(
+        tmp_path):
     plan = _write_reqs(tmp_path, FRET.replace("RG:", "# RG:"), BINDINGS)
     server = FoxgloveServer(port=0)
     try:
@@ -254,15 +255,19 @@ def test_bad_payload_clock_backwards_and_unadvertise_are_data_problems(tmp_path)
     finally:
         server.stop()
     kinds = {p["kind"] for p in la.problems}
-    assert {"undecodable", CLOCK_BACKWARDS, UNADVERTISED} <= kinds
+    assert {"undecodable", CLOCK_BACKWARDS} <= kinds
+    # /b's publisher left at k = 20 and the run went on with /a: with no publisher nothing
+    # was sent, so its leaving is a "publisher" event, no data problem
+    assert UNADVERTISED not in kinds
+    assert any(e.kind == "publisher" and UNADVERTISED in (e.detail or "") and "/b" in e.detail
+               for e in w.events), [(e.kind, e.detail) for e in w.events]
     by = {v.requirement: v for v in la.verdicts}
-    # /b's publisher left at k = 20 and the run went on with /a: RB ("always") has an
-    # obligation open there, so it is unknown, never judged on a held value; RA, which
-    # does not read /b, is not affected
+    # RB ("always") has an obligation open where /b's publisher left, so it is unknown,
+    # never judged on a held value; RA, which does not read /b, is not affected
     assert by["RA"].verdict == "satisfied"
     assert by["RB"].verdict == "unknown"
     assert left_for_good(by["RB"].unknown_reason, "/b"), by["RB"].unknown_reason
-    assert la.partial
+    assert la.partial  # (the message not decoded and the one skipped: a loss)
     assert la.ticks_evaluated == 16  # 0 .. 1.5 s: the watch went on to the first tick at or
     # after the last message (1.45 s)
 
