@@ -40,7 +40,7 @@ from typing import Any
 from fretc.common.outputs import output_folder
 from fretc.testing.tests_json import file_name
 
-__all__ = ["OUTCOMES", "Outcome", "judge", "run_test", "audit_log"]
+__all__ = ["OUTCOMES", "Outcome", "judge", "run_test", "audit_log", "missing_traces"]
 
 #: the outcomes of a test against a system, worst first
 OUTCOMES = ("fail", "unknown", "not exercised", "pass")
@@ -143,6 +143,21 @@ def audit_log(requirements: list[str], bindings: str | None, log: Path, out: Pat
     return doc
 
 
+def missing_traces(tests: list[dict[str, Any]], folder: Path) -> list[str]:
+    """``FOLDER/TRACE: why`` for each test of ``tests`` (``tests.json``'s, as
+    :func:`fretc.testing.tests_json.load_tests` read them) whose trace is not a file in the
+    test folder ``folder``: no such file, or a folder there. A test without its trace cannot
+    be run (its command would be given a path to nothing and might still write a log)."""
+    out = []
+    for t in tests:
+        trace = folder / t["trace"]
+        if not trace.is_file():
+            why = "a folder, not a trace file" if trace.is_dir() else "no such file"
+            out.append(f"{trace}: {why} (test {t['id']}'s trace, named in "
+                       f"{folder / 'tests.json'})")
+    return out
+
+
 def run_test(test: dict[str, Any], doc: dict[str, Any], folder: Path, command: str, work: Path,
              bindings: str | None = None, require: str = "target",
              log_name: str | None = None) -> Outcome:
@@ -157,7 +172,11 @@ def run_test(test: dict[str, Any], doc: dict[str, Any], folder: Path, command: s
     :func:`fretc.testing.tests_json.load_tests`).
 
     Raises:
-        ValueError: a test id or ``log_name`` that is not a file name."""
+        ValueError: a test id or ``log_name`` that is not a file name, or a trace that is
+            not a file in ``folder`` (:func:`missing_traces`): never run without it."""
+    missing = missing_traces([test], folder)
+    if missing:
+        raise ValueError(missing[0])
     log = work / file_name(log_name or test["id"], "" if log_name else ".mcap")
     report = work / file_name(test["id"], ".audit.json")
     output_folder(work)  # (the caller's folder: fretc testrun checks its default runs/)

@@ -51,7 +51,7 @@ def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir
                 only: tuple[str, ...], all_obligations: bool, json_path: str | None) -> None:
     """Run the generated tests in FOLDER against the system CMD makes logs of."""
     from fretc.testing.tests_json import TestsJsonError, load_tests
-    from fretc.testing.testrun import OUTCOMES, run_test
+    from fretc.testing.testrun import OUTCOMES, missing_traces, run_test
 
     folder = Path(folder)
     try:
@@ -65,6 +65,11 @@ def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir
     if missing:
         click.echo(shown(f"error: {folder / 'tests.json'}: no test {', '.join(missing)}"),
                    err=True)
+        sys.exit(2)
+    absent = missing_traces([t for t in tests if not only or t["id"] in only], folder)
+    for why in absent:  # (before any test runs: none is run without its trace)
+        click.echo(shown(f"error: {why}"), err=True)
+    if absent:
         sys.exit(2)
     from fretc.common.outputs import sub_folder
 
