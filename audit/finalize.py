@@ -259,12 +259,13 @@ def _nan_problem(r, res: ClockPass, la) -> None:
 
 
 def _windows_of(r: RequirementPlan, bindings: Bindings | None) -> list[str]:
-    """The window bindings (``mean(x, 2s)`` ...) among ``r``'s variables, as ``name =
-    expression``."""
+    """The window bindings among ``r``'s variables, over messages (``mean(x, 2s)`` ...) or
+    over the requirement's ticks (``count_ticks(c, 1min)``), as ``name = expression``."""
     if bindings is None:
         return []
     return [f"{n} = {b.expr}" for n in r.variables
-            if (b := bindings.variables.get(n)) is not None and b.window is not None]
+            if (b := bindings.variables.get(n)) is not None
+            and (b.window is not None or b.tick_window is not None)]
 
 
 def _no_tick(res: ClockPass, v, la, windows: Sequence[str] = ()) -> None:
@@ -283,7 +284,8 @@ def _no_tick(res: ClockPass, v, la, windows: Sequence[str] = ()) -> None:
         v.error = (f"no tick evaluated: the window of {'; '.join(windows)} is never complete "
                    f"in the {v.warmup_ticks} ticks of the log (a window is complete once it "
                    "starts at or after its topic's first message, or holds its count of "
-                   "messages): a shorter window, or a longer log")
+                   "messages; a count_ticks window once it starts at or after the "
+                   "requirement's first tick): a shorter window, or a longer log")
         return
     v.error = ("no tick evaluated" + (f": waiting for {', '.join(waiting)}" if waiting
                                       else ": the log has no message on the bound topics"))
