@@ -155,6 +155,9 @@ class WatchSource(LogSource):
         self.ever_connected = False
         self.first_connect_wall: float | None = None
         self.last_reason = ""
+        #: connection attempts that failed before the first connection (an ``unreachable``
+        #: event each: no server, or not yet)
+        self.failed_connects = 0
         # (last log time before, first after): a connection's gaps, not a log's Gap records
         self.gaps: list[tuple[int, int]] = []  # type: ignore[assignment]  # (the pairs above)
         #: the run ended inside an undecodable gap: the last log time used before it
@@ -299,6 +302,11 @@ class WatchSource(LogSource):
                     self._gap_open = (time.monotonic(), ev[2], CONNECTION_GAP)
                 self.on_event(WatchEvent("disconnected", self._last_time, ev[1],
                                          detail=ev[2]))
+            elif not self.ever_connected:  # no server (yet): said at once, then counted
+                self.failed_connects += 1
+                self.on_event(WatchEvent("unreachable", None, ev[1],
+                                         detail=f"cannot connect to {self.path}: {ev[2]}",
+                                         extra={"attempts": self.failed_connects}))
 
     def _readvertised(self, ch) -> None:
         """A topic advertised again after it was unadvertised (its publisher restarted, as

@@ -234,6 +234,9 @@ class Watch:
             self.events.append(e)
         if e.kind == "connected":
             self.status_line = f"connected to {self.options.url} ({e.detail})"
+        elif e.kind == "unreachable":
+            self.status_line = (f"{e.detail}; retrying (attempt {e.extra.get('attempts')}; "
+                                "Ctrl-C stops)")
         elif e.kind == "disconnected":
             self.status_line = f"disconnected: {e.detail}; retrying"
         elif e.kind == "end":

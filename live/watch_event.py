@@ -16,7 +16,12 @@ class WatchEvent:
     Attributes:
         kind: ``pt`` | ``ltl3`` | ``problem`` | ``gap`` | ``final`` | ``connected`` |
             ``disconnected`` | ``closed`` (the server's orderly close) | ``end`` (the
-            watched run ended; ``detail``: why).
+            watched run ended; ``detail``: why) | ``unreachable`` (a connection attempt
+            failed before the first connection: ``detail`` the URL and the reason,
+            ``attempts`` how many so far) | ``waiting`` (bound topics not advertised within
+            ``--wait``: the run goes on and waits for them) | ``advertised`` (one of them
+            came) | ``publisher`` (a bound topic's publisher left, or came back: a silence,
+            no data problem).
         time_ns: on the run's clock (log time or header stamp), when known.
         wall_ns: wall clock (``time.time_ns()``) when the event was produced.
         requirement: the requirement id (verdict events).

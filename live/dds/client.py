@@ -279,17 +279,32 @@ class DdsClient:
 
     def _check_silent(self, now: int) -> None:
         """A ``protocol`` event (once per topic) for a bound topic whose publisher has been
-        known for :data:`SILENT_SECONDS` with no message of it read: never a silent "never
-        published" while the topic may be publishing."""
+        known for :data:`SILENT_SECONDS`, whose messages are known to have been sent (DDS
+        tells the reader it lost samples: ``SampleLostStatus``) and none of which arrived:
+        the transport hint (:data:`SILENT_HINT`). A publisher that is only silent (a node
+        that starts publishing later) gets no hint: its topic waits, and a topic that gave
+        no message in the whole run is its requirements' error at the end."""
         for topic, since in self._known_since.items():
             if (topic in self._heard or topic in self._silent_reported
                     or not self._pubs.get(topic) or not self.wanted(topic)
-                    or now - since < SILENT_SECONDS * 1e9):
+                    or now - since < SILENT_SECONDS * 1e9 or not self._lost(topic)):
                 continue
             self._silent_reported.add(topic)
             self.events.put(("protocol", now, f"{topic}: a publisher is known since "
-                             f"{(now - since) / 1e9:.0f} s but no message of it has arrived; "
+                             f"{(now - since) / 1e9:.0f} s and DDS reports "
+                             f"{self._lost(topic)} of its samples lost, none arrived; "
                              + SILENT_HINT))
+
+    def _lost(self, topic: str) -> int:
+        """Samples of ``topic`` its reader knows were sent but did not get (DDS's
+        ``SampleLostStatus``); 0 without a reader."""
+        reader = self._readers.get(topic, (None, ""))[0]
+        if reader is None:
+            return 0
+        try:
+            return int(getattr(reader.get_sample_lost_status(), "total_count", 0) or 0)
+        except Exception:  # noqa: BLE001 - a status the binding cannot read: nothing known
+            return 0
 
     def _check_qos(self, topic: str, reader) -> None:
         """A reader whose QoS cannot match a publisher's is a ``protocol`` event (once)."""

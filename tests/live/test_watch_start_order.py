@@ -62,3 +62,31 @@ def test_nodes_that_start_after_the_watch_join_the_run(transport, tmp_path, dds_
     assert res.exit_code == 2, res.output  # (RG could not be judged)
     assert took < 30, took  # ended by --until-idle, not by the duration
     assert log["messages"]["/a"] == 40 and log["messages"]["/b"] == 30
+
+
+def test_a_publisher_silent_until_its_first_message_gets_no_transport_hint(tmp_path, dds_xml):
+    """/a's writer is discovered at once but sends its first message 4 s later (a node that
+    starts up slowly), past the 3 s after which the DDS client looks for silent publishers:
+    nothing points to a transport (nothing was sent, so nothing was lost), and /a is
+    judged."""
+    from fretc.live.dds.client import SILENT_SECONDS
+
+    fret = write_watch_files(tmp_path, "RA: the robot shall always satisfy a_ok\n",
+                             'a_ok = "/a.data > 0"\n')
+    url = bus_url("dds")
+    server = bus_server(url, dds_xml, ("/a",))
+
+    def publish():
+        server.wait_subscribed(["/a"], timeout=30)
+        time.sleep(SILENT_SECONDS + 1.0)
+        for k in range(20):
+            server.log("/a", float64_cdr(1.0), T0 + k * 100_000_000)
+            time.sleep(0.02)
+        time.sleep(0.3)
+        server.stop()
+
+    res, log = watch_while(publish, url, fret, dds_xml)
+    (v,) = log["verdicts"]
+    assert v["verdict"] == "satisfied", v
+    assert not [p for p in log.get("problems", []) if "FASTDDS" in p.get("detail", "")]
+    assert res.exit_code == 0, res.output

@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from fretc.live.watch import Watch
     from fretc.live.diagnostics import DiagnosticsPublisher
 
-__all__ = ["watch_cmd", "replay_cmd", "live_table", "register"]
+__all__ = ["watch_cmd", "replay_cmd", "live_table", "register", "connection_line"]
 
 
 def live_table(w: Watch) -> Group:
@@ -231,6 +231,9 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
     def on_event(e):
         if diagnostics and e.kind in ("pt", "ltl3", "problem", "gap"):
             diagnostics[0].changed()
+        said = connection_line(e, connect_timeout)
+        if said is not None:
+            err.print(said, markup=False)
         if jsonl:
             with lock:
                 sys.stdout.write(json.dumps(e.to_json(), sort_keys=True) + "\n")
@@ -261,6 +264,21 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
         diagnostics[0].finish(la)
         getattr(w.client, "close", lambda: None)()
     ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
+
+
+def connection_line(e, connect_timeout: float | None) -> str | None:
+    """What the watch says on the terminal about its connection, as ``ros2 topic echo`` and
+    Foxglove's client do: at once when the first attempt fails (the URL and the reason),
+    then after 2, 4, 8, ... failed attempts (a count, never silence), and once connected
+    after failures; None for other events."""
+    n = e.extra.get("attempts", 0) if e.kind == "unreachable" else 0
+    if n == 1:
+        give_up = (f"gives up after {connect_timeout:g} s" if connect_timeout is not None
+                   else "--connect-timeout S gives up")
+        return f"fretc watch: {e.detail}; retrying until it answers (Ctrl-C stops; {give_up})"
+    if n > 1 and n & (n - 1) == 0:
+        return f"fretc watch: still no connection after {n} attempts ({e.detail})"
+    return None
 
 
 def _check_ros2_url(url: str, hint: str) -> None:
