@@ -227,8 +227,25 @@ def _culprit(doc, root: str) -> str | None:
     return None
 
 
+def _one_per_folder(tree) -> set[int]:
+    """The ids of the documents of ``tree`` to read: one per real folder. A document whose
+    folder is also reached through a symbolic link inside the tree (``tree/r_link -> r``)
+    is one document, read once, by its own path (the link's when every path to it is one)."""
+    def linked(doc) -> bool:
+        return os.path.realpath(doc.path) != os.path.abspath(doc.path)
+
+    chosen: dict[str, Any] = {}
+    for doc in tree:
+        real = os.path.realpath(doc.path)
+        other = chosen.get(real)
+        if other is None or (linked(other) and not linked(doc)):
+            chosen[real] = doc
+    return {id(doc) for doc in chosen.values()}
+
+
 def _items(tree, root: str) -> list:
-    """Active, normative items: documents in tree order, items by level. Raises
+    """Active, normative items: documents in tree order (each folder once:
+    :func:`_one_per_folder`), items by level. Raises
     :class:`FretishFileError` naming the item file for one doorstop cannot read (invalid
     YAML, a YAML tag such as ``!!python/object`` or ``!include``, not UTF-8, an attribute of
     the wrong type) and for an item file that is a link to outside the tree (``root``)."""
@@ -236,7 +253,10 @@ def _items(tree, root: str) -> list:
 
     top = os.path.realpath(root)
     out = []
+    kept = _one_per_folder(tree)
     for doc in tree:
+        if id(doc) not in kept:  # (a document reached again through a link to its folder)
+            continue
         try:
             listed = list(doc.items)
         except (DoorstopError, *_ITEM_ERRORS) as e:
