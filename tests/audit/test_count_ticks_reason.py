@@ -1,7 +1,7 @@
 """``count_ticks(COND, 1e9 s)`` on a 10 s log: its window over the requirement's own ticks is
 never complete, so no tick is evaluated; the error said "the log has no message on the bound
 topics" (the log has 100 of them). It names the window, as a window over messages is named
-(``tests/audit/test_windows_audit.py``), issue 84's leftover."""
+(``tests/audit/test_windows_audit.py``)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Where fretc's cache lives and which folders it accepts (issue 84, S2): folders created
+"""Where fretc's cache lives and which folders it accepts: folders created
 0700 whatever the umask; a folder owned by another user, or writable by others (itself, or
 a folder above it without the sticky bit), skipped with one warning, never a failure; a
 relative ``XDG_CACHE_HOME`` ignored (XDG Base Directory Specification); an HMAC seal under

@@ -1,4 +1,4 @@
-"""fretc's disk cache against a hostile user of the cache folder (issue 84: S1/V2, H2/I3):
+"""fretc's disk cache against a hostile user of the cache folder:
 a planted entry of any kind (a pickle, ``marshal`` code, module text, Lark's table file,
 Jinja's compiled template) runs no code and changes no output; a crafted requirement entry
 with its checksum recomputed does not turn a violation into ``satisfied``; a FIFO, a link to

@@ -1,4 +1,4 @@
-"""Output writers never write through a link planted in their output folder (issue 84, S3):
+"""Output writers never write through a link planted in their output folder:
 :mod:`fretc.common.outputs` itself, then each command that writes files, run with a link
 ``D/NAME -> victim`` planted under every name it writes (a folder it makes, ``runs/`` or
 ``timelines/``, planted as a link to a victim folder): the victims are unchanged, each file

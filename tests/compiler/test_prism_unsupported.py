@@ -1,6 +1,6 @@
 """A requirement ``with probability`` whose path formula PRISM's properties cannot say (a
 past-time function, an uninterpreted function) has no PCTL form, with the reason in its own
-entry, and nothing else fails (issue 84: ``--emit ltl --json`` was an internal error, exit 4,
+entry, and nothing else fails (``--emit ltl --json`` was an internal error, exit 4,
 for the whole file, and so were ``--emit monitor`` and ``fretc audit``).
 
 The oracle is independent of the PRISM printer: PCTL has no past and PRISM's properties no

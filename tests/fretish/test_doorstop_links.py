@@ -1,6 +1,6 @@
 """A Doorstop document reached twice, through a symbolic link to its folder inside the tree
 (``tree/r_link -> r``), is one document: its items are listed once, with their own item
-files, not twice (issue 84, a leftover of round 7)."""
+files, not twice."""
 
 from __future__ import annotations
 

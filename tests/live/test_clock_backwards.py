@@ -1,5 +1,5 @@
 """A live message whose log time goes back before one already used is one ``clock_backwards``
-data problem, counted once (issue 84, D7: it was counted twice, once as the problem reported
+data problem, counted once (it was counted twice, once as the problem reported
 and once as the message lost that makes its gap), and its gap is still made."""
 
 from __future__ import annotations

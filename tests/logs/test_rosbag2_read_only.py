@@ -1,7 +1,7 @@
 """A rosbag2 sqlite3 bag is read as evidence: opened read-only and immutable, so auditing it
 writes nothing beside the ``.db3`` (a bag in SQLite's WAL journal mode, as rosbag2's
 ``resilient`` preset writes it, got ``-shm`` and ``-wal`` files beside it), and a bag on
-read-only media audits with the verdicts of a writable copy (issue 84). SQLite's URI
+read-only media audits with the verdicts of a writable copy. SQLite's URI
 parameters: ``mode=ro``, and ``immutable=1`` ("the database file cannot be changed ... no
 locking and no change detection", sqlite.org/uri.html)."""
 

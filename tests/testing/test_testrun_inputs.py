@@ -1,6 +1,6 @@
-"""``fretc testrun`` of a test folder whose tests.json names a trace that is not there
-(issue 84, a leftover of round 7): an input error naming the file (exit 2), before any test
-runs, never a test run and judged on a log its command made without its trace."""
+"""``fretc testrun`` of a test folder whose tests.json names a trace that is not there: an
+input error naming the file (exit 2), before any test runs, never a test run and judged on a
+log its command made without its trace."""
 
 from __future__ import annotations
 
