@@ -20,13 +20,15 @@ that has delivered nothing yet (a publisher that appeared, or one that is silent
 watch started) leaves the watermark undefined, and a writer that stopped sending holds it
 back: then the hold alone releases, as without a watermark. What the watermark cannot know
 is a writer the transport was not yet matched with at the last :meth:`sync`: its first
-messages are ordered if no newer one was released before them; on one host a writer's
-first message is written after the match, so it is newer than what was released, but the
-stored samples a latched (transient-local) writer sends on matching can be of any age
-(the DDS client syncs with ``matched`` None while it reads a latched topic) and a writer
-on a host whose clock is behind the watch's by more than a poll can have its first
-messages skipped (``clock_backwards``) where the hold would have ordered those overtaken by
-less than the hold. Writers stay counted until the
+messages can be older than what was released. A writer already writing when it is
+discovered (a node that started while the watch runs) is matched with the reader a little
+after its publication is known, and its first samples come once it is; the stored samples a
+latched (transient-local) writer sends on matching can be of any age. So the DDS client
+syncs with ``matched`` None (the hold alone) while it reads a latched topic or while a
+publication it discovered is not matched yet; a writer on a host whose clock is behind the
+watch's by more than a poll can still have its first messages skipped
+(``clock_backwards``) where the hold would have ordered those overtaken by less than the
+hold. Writers stay counted until the
 transport says their topic's publishers are all gone (:meth:`MergeBuffer.forget`), after
 their last messages were put. Source of the rule: the low watermark of stream processing
 (Akidau et al., "The Dataflow Model", VLDB 2015), per writer as DDS orders samples per writer

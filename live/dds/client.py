@@ -242,14 +242,28 @@ class DdsClient:
         got = False
         for topic in list(self._readers):
             got |= self._take(topic)
-        matched: dict[str, set[int]] | None = {}
-        for topic, (reader, _ros) in list(self._readers.items()):
-            if reader is not None and self.wanted(topic) and matched is not None:
-                matched[topic] = {h & _HANDLE for h in reader.get_matched_publications()}
-                if topic in self._latched:  # a writer matched later sends stored samples
-                    matched = None  # of any age: the hold alone
-        self._merge.sync(matched)
+        self._merge.sync(self._matched())
         return got
+
+    def _matched(self) -> dict[str, set[int]] | None:
+        """Topic -> the writers each bound topic's reader is matched with now, for the
+        merge's watermark; None (the hold alone) while a topic is read latched (a writer
+        matched later sends stored samples of any age) or while a publication discovered
+        is not matched yet: DDS matches a discovered writer with the reader a little later,
+        and a writer already writing (a node that started while the watch runs) can have
+        its first samples delivered once matched, older than what a watermark over the
+        other writers alone would have released (the ``clock_backwards`` of a plain rclpy
+        node, tests/live/test_dds_watermark.py)."""
+        matched: dict[str, set[int]] = {}
+        for topic, (reader, _ros) in list(self._readers.items()):
+            if reader is None or not self.wanted(topic):
+                continue
+            if topic in self._latched:
+                return None
+            matched[topic] = {h & _HANDLE for h in reader.get_matched_publications()}
+            if len(matched[topic]) < len(self._pubs.get(topic, ())):
+                return None
+        return matched
 
     def _take(self, topic: str, until_empty: bool = False) -> bool:
         """Take ``topic``'s samples into the merge (one batch, or every sample the reader
