@@ -26,7 +26,14 @@ Roles:
   ``/gwendolen_control`` as CDR into the MCAP file OUT (mcap's writer, the schemas of ROS 2
   Jazzy's definitions from rosbags), log time = the publisher's source timestamp (the order
   in which the node published: on a loaded machine two topics' messages can be received in
-  the other order), until the controller has gone.
+  the other order), until the controller has gone (``record_control``: until the
+  ``control`` node has gone).
+* ``lidar``: once three subscriptions match (the watch, the recorder, ``control``),
+  ``/scan`` (best effort, header stamps) every 100 ms for SECONDS, then the node exits: a
+  LiDAR that dies while the rest of the graph runs on.
+* ``control``: ``/gwendolen_control`` (reliable) every 100 ms for SECONDS; with OUT
+  ``stop``, the stop request raised once no scan came for 0.2 s after one did (a Safety
+  System that keeps R6), else never.
 """
 
 from __future__ import annotations
@@ -255,7 +262,7 @@ def passthrough(seconds: float, _out: str) -> None:
     spin_until_gone(n, "/cmd_vel")
 
 
-def record(seconds: float, out: str) -> None:
+def record(seconds: float, out: str, until: str = "/cmd_vel") -> None:
     from mcap.writer import Writer
     from rosbags.typesys import Stores, get_typestore
 
@@ -286,12 +293,52 @@ def record(seconds: float, out: str) -> None:
                 w.add_message(channels[topic], log_time=t, publish_time=t, data=raw)
 
             n.create_subscription(cls, topic, cb, qos, raw=True)
-        spin_until_gone(n, "/cmd_vel")
+        spin_until_gone(n, until)
         w.finish()
 
 
+def record_control(seconds: float, out: str) -> None:
+    record(seconds, out, until="/gwendolen_control")
+
+
+def lidar(seconds: float, _out: str) -> None:
+    from sensor_msgs.msg import LaserScan
+
+    n = rclpy.create_node("lidar")
+    scan = n.create_publisher(LaserScan, "/scan", BEST_EFFORT)
+    # its readers (the watch, the recorder, the control node) matched first: all of its
+    # scans are theirs, whatever their start-up took
+    wait_for_subscribers(n, [scan], 3)
+
+    def step(k: int) -> None:
+        s = LaserScan(range_min=0.1, range_max=10.0, ranges=[3.0] * 8)
+        s.header.stamp = n.get_clock().now().to_msg()
+        scan.publish(s)
+
+    spin_for(n, seconds, step)
+    n.destroy_node()  # the publisher leaves with the node
+
+
+def control(seconds: float, out: str) -> None:
+    from sensor_msgs.msg import LaserScan
+    from std_msgs.msg import Bool
+
+    n = rclpy.create_node("control")
+    ctl = n.create_publisher(Bool, "/gwendolen_control", RELIABLE)
+    last = [None]
+    n.create_subscription(LaserScan, "/scan", lambda s: last.__setitem__(0, time.monotonic()),
+                          BEST_EFFORT)
+
+    def step(k: int) -> None:
+        stale = last[0] is not None and time.monotonic() - last[0] > 0.2
+        ctl.publish(Bool(data=out == "stop" and stale))
+
+    spin_for(n, seconds, step)
+
+
 ROLES = {"talker": talker, "listen": listen, "services": services, "actions": actions,
-         "controller": controller, "passthrough": passthrough, "record": record}
+         "controller": controller, "passthrough": passthrough, "record": record,
+         "record_control": record_control, "lidar": lidar, "control": control}
 
 
 if __name__ == "__main__":
