@@ -166,7 +166,19 @@ class MessageShield:
                 restore(before)
             raise
         self.published.update(msgs)
-        return d, msgs
+        return self._as_published(d, msgs, now_ns), msgs
+
+    def _as_published(self, d: Decision, msgs: list[tuple[str, Any]], now_ns: int
+                      ) -> Decision:
+        """``d`` with each numeric output the messages carry read back from them: where two
+        outputs read one field, the number one of them gives is not the decided one (the
+        atoms are: :meth:`_gives`)."""
+        read = self._values({**self.published, **dict(msgs)}, now_ns)
+        numbers = {v: x for v, x in read.items() if v in d.outputs
+                   and isinstance(x, (int, float)) and not isinstance(x, bool)
+                   and isinstance(d.outputs[v], (int, float))
+                   and not isinstance(d.outputs[v], bool) and x != d.outputs[v]}
+        return d._replace(outputs={**d.outputs, **numbers}) if numbers else d
 
     def fallback_messages(self, now_ns: int) -> list[tuple[str, Any]]:
         """The messages of the shield's fallback (:meth:`ShieldRuntime.fault`; each made
@@ -269,30 +281,57 @@ class MessageShield:
                 if not changed and topic in self.proposed:
                     out[topic] = base
                     continue
-                msg = self._decided(base, topic, d, m, g)
-                if msg is not None and self._gives(m, g, {**props, topic: msg}, truths,
-                                                   now_ns):
-                    out[topic] = msg
-                    continue
-                if fields is None:
+                msg = None
+                for order in self._orders(m, g, d):
+                    got = self._decided(base, topic, d, m, g, order)
+                    if got is not None and self._gives(m, g, {**props, topic: got}, truths,
+                                                       now_ns):
+                        msg = got
+                        break
+                if msg is None and fields is None:
                     raise RuntimeError(f"no message of {topic} gives the decided values")
-                msg = self._overlaid(base, topic, fields, d, m, g)
-                if not self._gives(m, g, {**props, topic: msg}, truths, now_ns):
-                    msg = self._overlaid(self.make(topic), topic, fields, d, m, g)
-                    if not self._gives(m, g, {**props, topic: msg}, truths, now_ns):
-                        raise RuntimeError(f"the message made for {topic} does not give the "
-                                           "decided values")
+                for start in ((base, self.make(topic)) if msg is None else ()):
+                    # (last, the message the bindings give for the valuation as it is: its
+                    # fields give the decided atoms, its numbers are not the decided ones)
+                    for order in [*self._orders(m, g, d), ()]:
+                        got = self._overlaid(start, topic, fields, d, m, g, order)
+                        if self._gives(m, g, {**props, topic: got}, truths, now_ns):
+                            msg = got
+                            break
+                    if msg is not None:
+                        break
+                if msg is None:
+                    raise RuntimeError(f"the message made for {topic} does not give the "
+                                       "decided values")
                 out[topic] = msg
         return [(t, out[t]) for t in self.output_topics]
 
-    def _decided(self, base: Any, topic: str, d: Decision, m: Any, g: dict[str, Any]
-                 ) -> Any | None:
+    def _orders(self, m: Any, g: dict[str, Any], d: Decision) -> list[tuple[str, ...]]:
+        """The orders in which the group's numeric outputs are written into a message
+        (:meth:`_decided`): the outputs whose atoms the decision changed last, so that where
+        two outputs read one field (``linear_speed = abs(linear.x)`` and ``linear_velocity
+        = linear.x``) the corrected one decides it; then the other orders (at most
+        :data:`ORDER_TOPICS`! of them). The message must give the decided atoms
+        (:meth:`_gives`), whichever order writes it."""
+        numeric = [v for v in dict.fromkeys(m.outs[j][0] for j in g["atoms"])
+                   if isinstance(d.outputs.get(v), (int, float))
+                   and not isinstance(d.outputs.get(v), bool)]
+        moved = {m.outs[j][0] for j in g["atoms"] if m.texts[j] in d.changed}
+        first = tuple(sorted(numeric, key=lambda v: v in moved))
+        if len(numeric) > ORDER_TOPICS:
+            return [first]
+        return [first] + [o for o in itertools.permutations(numeric) if o != first]
+
+    def _decided(self, base: Any, topic: str, d: Decision, m: Any, g: dict[str, Any],
+                 order: tuple[str, ...] | None = None) -> Any | None:
         """The proposal ``base`` of ``topic`` with each numeric output of the group set to
         its decided value, through its binding (a field ``x``, ``-x`` or ``abs(x)``, whose
-        sign the proposal keeps): the message that changes what the decision changed and
-        nothing else; None when a decided number has another binding."""
+        sign the proposal keeps), in ``order`` (default: the group's): the message that
+        changes what the decision changed and nothing else; None when a decided number has
+        another binding."""
         msg = copy.deepcopy(base)
-        for v in dict.fromkeys(m.outs[j][0] for j in g["atoms"]):
+        names = order if order is not None else dict.fromkeys(m.outs[j][0] for j in g["atoms"])
+        for v in names:
             value = d.outputs.get(v)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 continue
@@ -301,13 +340,13 @@ class MessageShield:
         return msg
 
     def _overlaid(self, base: Any, topic: str, fields: Any, d: Decision, m: Any,
-                  g: dict[str, Any]) -> Any:
+                  g: dict[str, Any], order: tuple[str, ...] | None = None) -> Any:
         """``base`` with the fields of the message the bindings give for the group's
         valuation, then the decided numbers written over them where their bindings take
         them (:meth:`_decided`): the witness's numbers are the decision's only when the
         runtime took them (a whole-number output takes a whole number instead)."""
         msg = _overlay(base, topic, fields)
-        decided = self._decided(msg, topic, d, m, g)
+        decided = self._decided(msg, topic, d, m, g, order)
         return msg if decided is None else decided
 
     def _gives(self, m: Any, g: dict[str, Any], msgs: dict[str, Any], truths: list[bool],

@@ -37,7 +37,7 @@ from typing import Any, TYPE_CHECKING
 from fretc.common.outputs import output_folder, sub_folder, write_file
 from fretc.audit.fleet.statistics import RequirementStatistics, fleet_statistics, unknown_policy
 
-from fretc.sim.run import record_scenario
+from fretc.sim.run import record_scenario, shield_of
 from fretc.sim.sequential import make_test
 from fretc.sim.space import Space, apply
 
@@ -61,9 +61,11 @@ def sample_point(space: Space, seed: int, index: int) -> tuple[list[float], dict
 
 
 def simulate_run(space: Space, parameters: dict, sim_seed: int, path: str) -> str:
-    """Simulate the space's scenario with ``parameters`` and simulator seed ``sim_seed``;
-    write the MCAP to ``path`` and return it."""
-    record_scenario(apply(space.scenario, parameters), sim_seed, path)
+    """Simulate the space's scenario with ``parameters`` and simulator seed ``sim_seed``,
+    with the space's Safety System (its ``safety``: a generated shield, else the
+    hand-written SIF); write the MCAP to ``path`` and return it."""
+    record_scenario(apply(space.scenario, parameters), sim_seed, path,
+                    shield=shield_of(space.safety))
     return path
 
 

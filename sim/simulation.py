@@ -339,7 +339,8 @@ class Simulation:
 
     def _scan_10hz(self, rec: Recorder, st: _RunState, t_ms: int, t: float, s) -> None:
         """4. Every 100 ms: ``/scan``, ``/tf`` map -> odom; the SIF reads the scan and may
-        decide (published now, or ``stop_delay`` later)."""
+        decide (published now, or ``stop_delay`` later); with a generated shield the shield
+        hears the scan and there is no SIF."""
         f, lid = rec.factory, self.lidar.p
         ranges = self.lidar.scan(self.world, s.x, s.y, s.yaw, t)
         scan = f.laser_scan(_ns(t_ms), "base_link", lid.angle_min, lid.angle_max,
@@ -354,6 +355,8 @@ class Simulation:
         st.last_min = min_valid_range(ranges, lid.range_min, lid.range_max)
         st.trace.scan_t.append(t)
         st.trace.scan_min.append(st.last_min)
+        if self.shield is not None:  # (the shield is the Safety System: no SIF beside it)
+            return
         decision = self.safety.on_scan(t, st.last_min, self.odom.v, self.odom.w)
         if decision is not None:
             if st.delay_ms > 0:

@@ -163,3 +163,47 @@ def test_a_corrected_velocity_has_the_decided_speeds_and_the_proposals_direction
         assert abs(pub.linear.x) == d.outputs["linear_speed"], (k, lx, az, d, pub)
         assert abs(pub.angular.z) == d.outputs["angular_speed"], (k, lx, az, d, pub)
         assert pub.linear.x * lx >= 0 and pub.angular.z * az >= 0, (k, lx, az, d, pub)
+
+
+def test_two_outputs_of_one_field_give_the_decided_atoms():
+    """The shipped Safety System reads ``linear.x`` twice: ``linear_speed = abs(x)`` and
+    ``linear_velocity = x``. With an obstacle ahead and the controller creeping on (``x =
+    0.05``, a turn of 0.0006 rad/s), R9 turns ``linear_velocity <= 0`` true while the
+    proposal keeps ``stopped`` false: the numbers decided per variable (0.05 and 0) were no
+    message, and the tick raised ``the message made for /cmd_vel_filtered does not give the
+    decided values`` (the simulator's run stopped). The message now gives every decided
+    atom, its numbers read back into the decision."""
+    import numpy as np
+    from rosbags.typesys import Stores, get_typestore
+
+    reqs = [REQS / "safe_ros.fret", REQS / "shield" / "release.fret"]
+    b = load_bindings(REQS / "shield" / "safe_ros_shield.bindings.toml")
+    shield = build_shield(compile_entries(load_requirements(reqs)),
+                          ["too_close", "scan_stale", "clearance", "obstacle_ahead",
+                           "obstacle_behind"],
+                          ["stopped", "stop_requested", "forwarded_zero", "linear_speed",
+                           "angular_speed", "linear_velocity"], bindings=b, fork=False,
+                          name="safe_ros")
+    store = get_typestore(Stores.ROS2_JAZZY)
+    ms = MessageShield(ShieldRuntime(shield_tables(shield)), b,
+                       {"/cmd_vel_filtered": "/cmd_vel"},
+                       lambda topic: default_message(store, TYPES[topic]))
+    for k in range(1, 30):
+        t = k * PERIOD
+        scan = default_message(store, TYPES["/scan"])
+        scan.range_min, scan.range_max = 0.1, 10.0
+        scan.ranges = np.full(720, 3.0, dtype="float32")
+        scan.ranges[350:370] = 0.4 if k > 3 else 3.0  # (something 0.4 m straight ahead)
+        ms.hear("/scan", scan, t)
+        cmd = default_message(store, TYPES["/cmd_vel"])
+        cmd.linear.x, cmd.angular.z = 0.05, 0.0006
+        ms.hear("/cmd_vel", cmd, t)
+        d, msgs = ms.tick(t)
+        twist = dict(msgs)["/cmd_vel_filtered"]
+        if k > 3:
+            assert twist.linear.x <= 0, (k, d, twist)
+        s = EvalState()
+        s.msgs, s.now, s.times = dict(msgs), t, {m: t for m in dict(msgs)}
+        for v in ("stopped", "linear_velocity", "linear_speed"):
+            got = b.variables[v].evaluate(s)
+            assert got == d.outputs[v], (k, v, got, d)

@@ -154,3 +154,38 @@ def test_a_fault_happens_in_its_share_of_runs():
     with pytest.raises(DistributionError, match="share"):
         parse_distribution("x", {"dist": "uniform", "low": 0, "high": 1, "fault": 1.5}, True,
                            fail)
+
+
+def test_estimate_runs_with_the_shield_of_safety(files, tmp_path, monkeypatch):
+    """``fretc estimate --safety shield:DIR`` (issue 83: the contact probability with the
+    generated Safety System, beside the hand-written SIF): every run is simulated with the
+    shield in DIR in place of the SIF; a folder without a shield is a usage error."""
+    from fretc.shield.build import build_shield
+    from fretc.shield.emit import write_forms
+    from fretc.compiler.build import compile_entries
+    from fretc.fretish.files import load_requirements
+    from fretc.signals.bindings.files import load_bindings
+    from fretc.sim import estimate as est
+
+    reqs = ROOT / "requirements"
+    shield = build_shield(compile_entries(load_requirements([reqs / "safe_ros.fret"])),
+                          ["too_close", "scan_stale", "clearance"],
+                          ["stopped", "stop_requested", "forwarded_zero", "linear_speed",
+                           "angular_speed"], bindings=load_bindings(BINDINGS), fork=False,
+                          name="safe_ros")
+    folder = tmp_path / "shield"
+    write_forms(shield, ["python"], folder, bindings_file=BINDINGS)
+    seen = []
+    real = est.record_scenario
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("shield"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(est, "record_scenario", spy)
+    res = _run(files, tmp_path / "out", "--seed", "3", "--budget", "2", "--test", "cp",
+               "--safety", f"shield:{folder}")
+    assert res.exit_code in (0, 1, 5), res.output
+    assert len(seen) == 2 and all(s is not None and s.path.parent == folder for s in seen)
+    res = _run(files, tmp_path / "out2", "--budget", "2", "--safety", f"shield:{tmp_path}")
+    assert res.exit_code == 2 and "one *_shield.py" in res.output, res.output

@@ -3,7 +3,9 @@
 Safe-ROS requirements keeps R2 and R3 (and R1 on the two whose fault it replaces); on
 ``nominal`` the robot still reaches every inspection point; what R2 alone permits shows on
 ``sif_disabled`` (R5 violated: one stop per approach), and a requirement that keeps the robot
-stopped while too close (R7) keeps R1..R5; ``fretc falsify`` finds no run violating R2."""
+stopped while too close (R7) keeps R1..R5; ``fretc falsify`` finds no run violating R2; the
+shipped Safety System (R2..R6 and ``requirements/shield/release.fret``) has no contact on
+any scenario and finishes every mission the hand-written SIF finishes."""
 
 from __future__ import annotations
 
@@ -88,6 +90,52 @@ def test_falsify_finds_no_run_violating_r2_with_the_shield(tmp_path, shields):
                     safety=f"shield:{shields['safe_ros']}")
     search = falsify(plan, space, 4, 1, tmp_path / "out", targets=["R2"])
     assert len(search.runs) == 4 and not any(r.violated for r in search.runs)
+
+
+SHIPPED = [REQS / "safe_ros.fret", REQS / "shield" / "release.fret"]
+SHIPPED_BINDINGS = REQS / "shield" / "safe_ros_shield.bindings.toml"
+
+
+@pytest.fixture(scope="module")
+def shipped(tmp_path_factory):
+    """The shield of the shipped Safety System's requirements (R2..R6 and the release,
+    R8..R11, with the obstacle's bearing as inputs), as the docs' command makes it."""
+    folder = tmp_path_factory.mktemp("shipped")
+    compiled = compile_entries(load_requirements(SHIPPED))
+    shield = build_shield(compiled, [*INPUTS, "obstacle_ahead", "obstacle_behind"],
+                          [*OUTPUTS, "linear_velocity"],
+                          bindings=load_bindings(SHIPPED_BINDINGS), fork=False,
+                          name="safe_ros")
+    write_forms(shield, ["python"], folder, bindings_file=str(SHIPPED_BINDINGS))
+    return folder
+
+
+@pytest.mark.parametrize("scenario", ["nominal", "unmapped_obstacles", "dynamic_obstacle",
+                                      "sif_disabled", "interceptor_fault", "stop_delay",
+                                      "lidar_dropout"])
+def test_the_shipped_safety_system_keeps_the_robot_safe_and_finishes_what_the_sif_does(
+        tmp_path, shipped, scenario):
+    """Issue 83: the generated Safety System of the shipped requirements, in place of the
+    hand-written SIF and interceptor (which no longer run beside it): no contact on any
+    scenario (the shield of R2..R6 alone drives into the drum of ``unmapped_obstacles`` and
+    ``sif_disabled``), every mission the hand-written SIF completes completed, and the audit
+    of the shielded run finds R1..R6 and the release's R8..R11 kept (bench/shield_scenarios.py
+    measures 20 seeds per scenario)."""
+    log = tmp_path / f"{scenario}.mcap"
+    res = record(scenario, output=log, safety=f"shield:{shipped}")
+    sif = record(scenario, output=None)
+    assert res.contact is None and res.min_clearance > 0.1, (res.outcome, res.min_clearance)
+    if sif.outcome == "completed":
+        assert res.outcome == "completed" and len(res.reached) == 4, res.outcome
+    else:  # (the drum on the route: the SRAS makes no progress, as with the SIF)
+        assert res.outcome.startswith("aborted"), res.outcome
+    got = _verdicts(log)
+    for rid in ("R1", "R2", "R3", "R4", "R5"):
+        assert got[rid] in ("satisfied", "vacuous"), (rid, got)
+    plan = load_plan(AuditConfig(requirements=[str(REQS / "shield" / "release.fret")],
+                                 bindings=[str(SHIPPED_BINDINGS)]))
+    release = {v.requirement: v.verdict for v in audit_log(plan, str(log)).verdicts}
+    assert all(v in ("satisfied", "vacuous") for v in release.values()), release
 
 
 def test_a_folder_without_a_shield_is_refused(tmp_path):

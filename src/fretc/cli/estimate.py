@@ -25,9 +25,9 @@ import os
 
 import click
 
-from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SIMULATOR_RAY_OPTION,
-                               SPACE_OPTION, FiniteRange, FleetError, audit_config, shown,
-                               statistics_options)
+from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SAFETY_OPTION,
+                               SIMULATOR_RAY_OPTION, SPACE_OPTION, FiniteRange, FleetError,
+                               audit_config, shown, statistics_options, with_safety)
 
 __all__ = ["estimate_cmd"]
 
@@ -68,12 +68,13 @@ __all__ = ["estimate_cmd"]
 @click.option("--moves", type=click.IntRange(min=1), default=5, show_default=True,
               help="--rare: Markov chain steps per replaced particle.")
 @SIMULATOR_RAY_OPTION
+@SAFETY_OPTION
 @click.pass_context
 def estimate_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tuple[str, ...],
                  space_path: str, seed: int, budget: int, output: str, test: str, delta: float,
                  alpha: float, beta: float, confidence: float, trial: str, unknown_runs: str,
                  rare: bool, targets: tuple[str, ...], particles: int, kill: int, moves: int,
-                 ray: str | None) -> None:
+                 ray: str | None, safety: str | None) -> None:
     """Judge requirements 'with probability OP p' over the simulator's scenario space:
     sample its distributions with SEED, simulate and audit each run, and stop when every
     probability requirement is decided by the sequential test or the budget ends. A
@@ -101,7 +102,7 @@ def estimate_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tu
         raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "
                                  "campaign would mix with this one's)", param_hint="-o")
     config = audit_config(requirements, bindings, (), None, None, None, 5)
-    space = load_space(space_path)  # SpaceError: the group's handler, exit 2
+    space = with_safety(load_space(space_path), safety)  # SpaceError: exit 2 (the group)
     try:
         plan = load_plan(config)
     except AuditInputError as exc:

@@ -19,7 +19,8 @@ import os
 import click
 
 from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SAFETY_OPTION,
-                               SIMULATOR_RAY_OPTION, SPACE_OPTION, FleetError, shown)
+                               SIMULATOR_RAY_OPTION, SPACE_OPTION, FleetError, shown,
+                               with_safety)
 
 __all__ = ["falsify_cmd"]
 
@@ -75,7 +76,7 @@ def falsify_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tup
                                  "search would mix with this one's)", param_hint="-o")
     config = audit_config(requirements, bindings, (), None, None, None, 5)
     assert isinstance(config, AuditConfig)
-    space = _with_safety(load_space(space_path), safety)
+    space = with_safety(load_space(space_path), safety)
     try:
         plan = load_plan(config)
     except AuditInputError as exc:
@@ -117,18 +118,3 @@ def falsify_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tup
                   if search.interrupted else "not falsified within the budget"))
     ctx.exit(doc["exit_code"])
 
-
-def _with_safety(space, safety: str | None):
-    """``space`` with every run's Safety System ``safety`` (a shield folder), checked now
-    rather than in the first run."""
-    if safety is None:
-        return space
-    from dataclasses import replace
-
-    from fretc.sim.run import shield_of
-
-    try:
-        shield_of(safety)
-    except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="--safety") from None
-    return replace(space, safety=safety)

@@ -31,7 +31,7 @@ __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bri
            "audit_input_options", "live_input_options", "audit_config", "ray_options",
            "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options",
            "names_of", "io_options", "set_bindings_option", "budget_options", "RequirementSet",
-           "requirement_set"]
+           "requirement_set", "with_safety"]
 
 
 class FiniteRange(click.FloatRange):
@@ -112,6 +112,26 @@ SAFETY_OPTION = click.option(
     "--safety", default=None, metavar="shield:DIR",
     help="Every run with the shield fretc shield --emit python -b BINDINGS wrote into DIR in "
          "place of the hand-written SIF and interceptor.")
+def with_safety(space: Any, safety: str | None) -> Any:
+    """``space`` (:class:`fretc.sim.space.Space`) with every run's Safety System ``safety``
+    (``--safety shield:DIR``: a generated shield), checked now rather than in the first run
+    (``fretc falsify``, ``fretc estimate``).
+
+    Raises:
+        click.BadParameter: a value that names no shield folder."""
+    if safety is None:
+        return space
+    from dataclasses import replace
+
+    from fretc.sim.run import shield_of
+
+    try:
+        shield_of(safety)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--safety") from None
+    return replace(space, safety=safety)
+
+
 #: ``--ray [ADDRESS]`` of the simulator's campaigns: the runs simulated and audited on Ray
 SIMULATOR_RAY_OPTION = click.option(
     "--ray", "ray", is_flag=False, flag_value="local", default=None, metavar="[ADDRESS]",
