@@ -2,7 +2,7 @@
 transports), measured in one run.
 
     python bench/bench_ros2.py [--events 1000] [--rates 100 1000 2000 5000] [--seconds 10]
-                               [--parts 1 2]
+                               [--parts 1 2 3]
 
 1. **The shield node's reaction.** The generated ROS 2 node of the Safe-ROS shield with R7
    (``requirements/shield/stay_stopped.fret``: while too close, a stop at once) between a rclpy
@@ -14,13 +14,22 @@ transports), measured in one run.
    ``/gwendolen_control`` and ``/cmd_vel_filtered`` at each rate; ``fretc watch dds://D`` with
    R3 and R4 (100 ms ticks) records what it reads; per rate: messages sent and read (none
    dropped by fretc), and the latency from the message that closed a tick (its DDS source
-   time, the publisher's wall clock) to that tick's verdicts, p50/p99, with the default merge
+   time, the publisher's wall clock) to that tick's verdicts, p50/p99 (the ticks of the first
+   second left out: they include the watch's start-up), with the default merge
    hold (0.1 s, the latency the log-time ordering adds) and with ``--merge-hold 0.01``; each
    both with the merge's watermark (fretc's, :mod:`fretc.live.merge`) and with the hold alone
    (the watermark switched off in this script only), one after the other at each rate, so
    both see the same machine load; and the messages that reached the merge older than one it
    had released (skipped as ``clock_backwards``), by what released that one: the watermark
    (never, if it is safe) or the hold (one too short for the load).
+3. **The limit, and the watch against it.** At each rate, one after the other on the same
+   machine: a plain subscriber of the same middleware (Cyclone DDS's Python binding, one
+   reader per topic with the topics' own IDL types, doing nothing but count what it takes)
+   and ``fretc watch dds://D`` with R3 and R4 (the watermark, the default hold), against the
+   same rclpy publisher. The limit is the highest rate at which the plain subscriber reads
+   99 % of what was sent; the watch keeps up at a rate where it reads 99 % and its p99
+   closing message -> verdict stays under one 100 ms tick. Printed: both rates, their ratio
+   (the goal: at least 0.5), and the machine's load average.
 """
 
 from __future__ import annotations
@@ -197,7 +206,16 @@ def watch_rate(rate: float, seconds: float, hold: float, watermark: bool = True
         w = Watch(plan, WatchOptions(url=f"dds://{domain}", duration=seconds + 5, wait=10,
                                      record=rec, merge_hold=hold))
         ticks: list[float] = []
-        w.on_tick = lambda i, t, dep, closing: ticks.append((time.time_ns() - closing) / 1e6)
+        first: list[int] = []
+
+        def on_tick(i, t, dep, closing) -> None:
+            # the first second's ticks are left out: they include the watch's start-up (the
+            # messages that came while it waited for the advertisements wait for the pass)
+            first[:] = first or [t]
+            if t - first[0] >= 1_000_000_000:
+                ticks.append((time.time_ns() - closing) / 1e6)
+
+        w.on_tick = on_tick
         sync = MergeBuffer.sync if watermark else (lambda self, matched: None)
         overtaken = _Overtaken()
         with ExitStack() as stack:
@@ -215,12 +233,89 @@ def watch_rate(rate: float, seconds: float, hold: float, watermark: bool = True
         return int(out.strip().splitlines()[-1]), read, overtaken.counts, ticks
 
 
+_PLAIN = r"""
+import sys, time
+from dataclasses import dataclass
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.idl import IdlStruct
+from cyclonedds.idl.types import float64
+from cyclonedds.qos import Policy, Qos
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+
+@dataclass
+class Bool_(IdlStruct, typename="std_msgs::msg::dds_::Bool_"):
+    data_: bool
+
+@dataclass
+class Vector3_(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    x_: float64
+    y_: float64
+    z_: float64
+
+@dataclass
+class Twist_(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
+    linear_: Vector3_
+    angular_: Vector3_
+
+domain, seconds = int(sys.argv[1]), float(sys.argv[2])
+dp = DomainParticipant(domain)
+qos = Qos(Policy.Reliability.Reliable(max_blocking_time=10**8), Policy.History.KeepLast(20000))
+readers = [DataReader(dp, Topic(dp, "rt/gwendolen_control", Bool_), qos=qos),
+           DataReader(dp, Topic(dp, "rt/cmd_vel_filtered", Twist_), qos=qos)]
+got, t0 = 0, time.monotonic()
+while time.monotonic() - t0 < seconds:
+    busy = False
+    for r in readers:
+        batch = r.take(4096)
+        got += sum(1 for s in batch if s.sample_info.valid_data)
+        busy = busy or bool(batch)
+    if not busy:
+        time.sleep(0.001)
+print(got)
+"""
+
+
+def plain_rate(rate: float, seconds: float) -> tuple[int, int]:
+    """Part 3's plain subscriber at one rate: (sent, read)."""
+    domain = random.randint(1, 99)
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
+    sub = subprocess.Popen([sys.executable, "-c", _PLAIN, str(domain), str(seconds + 6)],
+                           stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    time.sleep(1.0)  # its readers up before the publisher starts (it waits 2 s more)
+    pub = subprocess.Popen([sys.executable, "-c", _PUBLISHER, str(rate), str(seconds)], env=env,
+                           stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    sent, _ = pub.communicate(timeout=seconds + 60)
+    read, _ = sub.communicate(timeout=seconds + 60)
+    return int(sent.strip().splitlines()[-1]), int(read.strip().splitlines()[-1])
+
+
+def limit_and_watch(rates: list[float], seconds: float) -> None:
+    """Part 3."""
+    limit = kept = 0.0
+    for rate in sorted(rates):
+        sent, read = plain_rate(rate, seconds)
+        wsent, wread, _late, lat = watch_rate(rate, seconds, 0.1, True)
+        p99 = float(np.percentile(lat, 99)) if lat else float("inf")
+        if read >= 0.99 * sent:
+            limit = rate
+        if wread >= 0.99 * wsent and p99 < 100:
+            kept = rate
+        print(f"3. at {rate:g} Hz a topic (2 topics): plain Cyclone DDS subscriber read "
+              f"{read} of {sent}; fretc watch read {wread} of {wsent}, closing message -> "
+              f"verdict {_pct(lat)}", flush=True)
+    load = os.getloadavg()
+    print(f"3. the limit (a plain subscriber reads 99 %): {limit:g} Hz a topic; fretc watch "
+          f"keeps up to {kept:g} Hz a topic; ratio {kept / limit if limit else 0:.2f} "
+          f"(goal >= 0.5); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--events", type=int, default=1000)
     ap.add_argument("--rates", type=float, nargs="+", default=[100, 1000, 2000, 5000])
     ap.add_argument("--seconds", type=float, default=10)
-    ap.add_argument("--parts", type=int, nargs="+", default=[1, 2], choices=[1, 2])
+    ap.add_argument("--parts", type=int, nargs="+", default=[1, 2, 3], choices=[1, 2, 3])
     args = ap.parse_args()
     try:
         import rclpy  # noqa: F401
@@ -229,6 +324,8 @@ def main() -> int:
         return 2
     if 1 in args.parts:
         shield_reaction(args.events)
+    if 3 in args.parts:
+        limit_and_watch(args.rates, args.seconds)
     for hold in (0.1, 0.01) if 2 in args.parts else ():
         for rate in args.rates:
             for watermark in (False, True):
