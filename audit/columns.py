@@ -112,7 +112,8 @@ class ClockPass:
     tick_gaps: list[int] = field(default_factory=list)
     #: the messages of its topics present but not decoded, in words (for reasons)
     lost_words: str = ""
-    #: id of a requirement's AST -> (that AST, the columns, its NaN ticks over them), as
-    #: :mod:`fretc.audit.finalize` computed them (never copied by ``dataclasses.replace``)
-    nan_ticks: dict[int, tuple[Any, dict, np.ndarray]] = field(
+    #: id of a requirement's AST -> (that AST, the columns, the indexes of its NaN ticks over
+    #: them, the ticks), as :mod:`fretc.audit.finalize` computed them (never copied by
+    #: ``dataclasses.replace``)
+    nan_ticks: dict[int, tuple[Any, dict, np.ndarray, int]] = field(
         default_factory=dict, init=False, repr=False, compare=False)

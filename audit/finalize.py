@@ -175,21 +175,23 @@ def unknown_of(r: RequirementPlan, res: ClockPass, nan_unknown: bool) -> np.ndar
             out |= m[:n]
     if nan_unknown and n and r.requirement is not None:  # (judged: parsed)
         try:
-            out |= _nan_ticks(r, res)
+            out[_nan_index(r, res)] = True
         except (EvidenceUnsupported, KeyError, ValueError):
             pass
     return out
 
 
-def _nan_ticks(r: RequirementPlan, res: ClockPass) -> np.ndarray:
-    """:func:`fretc.monitors.judge.nan_ticks` of ``r`` over ``res``, computed once for the
-    pass (its NaN problem, the ticks it reads unknown and its trials all read it). Raises
-    what that raises."""
+def _nan_index(r: RequirementPlan, res: ClockPass) -> np.ndarray:
+    """The ticks (indexes, ``int64``, ascending) of :func:`fretc.monitors.judge.nan_ticks`
+    of ``r`` over ``res``, computed once for the pass (its NaN problem, the ticks it reads
+    unknown and its trials all read it) and kept as indexes: a pass of many requirements
+    keeps a few bytes per NaN tick each, not a byte per tick. Raises what that raises."""
     req, n = r.requirement, len(res.times)
     assert req is not None  # (judged: parsed)
     kept = res.nan_ticks.get(id(req))
-    if kept is None or kept[0] is not req or kept[1] is not res.columns or len(kept[2]) != n:
-        kept = res.nan_ticks[id(req)] = (req, res.columns, nan_ticks(req, res.columns, n))
+    if kept is None or kept[0] is not req or kept[1] is not res.columns or kept[3] != n:
+        kept = res.nan_ticks[id(req)] = (req, res.columns,
+                                         np.flatnonzero(nan_ticks(req, res.columns, n)), n)
     return kept[2]
 
 
@@ -242,7 +244,7 @@ def prepare(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v: Ve
 def _nan_problem(r, res: ClockPass, la) -> None:
     """A ``nan`` data problem in ``la`` for the ticks at which ``r`` compares NaN."""
     try:
-        bad = np.flatnonzero(_nan_ticks(r, res))
+        bad = _nan_index(r, res)
     except (EvidenceUnsupported, KeyError, ValueError):
         return
     if len(bad) == 0:

@@ -251,10 +251,10 @@ def test_a_requirements_nan_ticks_are_found_once_per_pass_and_follow_its_columns
     r1, r4 = (next(r for r in plan.requirements if r.id == i) for i in ("R1", "R4"))
     res = ClockPass(None, np.arange(3), {"v": np.array([1.0, math.nan, 1.0]),
                                          "w": np.array([math.nan, 1.0, 1.0])}, {})
-    assert F._nan_ticks(r1, res).tolist() == [False, True, False]
-    assert F._nan_ticks(r4, res).tolist() == [True, False, False]
+    assert F._nan_index(r1, res).tolist() == [1]
+    assert F._nan_index(r4, res).tolist() == [0]
     res.columns = {"v": np.array([math.nan, 1.0, 1.0]), "w": res.columns["w"]}
-    assert F._nan_ticks(r1, res).tolist() == [True, False, False]
+    assert F._nan_index(r1, res).tolist() == [0]
     copy = dataclasses.replace(res, columns={"v": np.ones(3), "w": np.ones(3)})
-    assert copy.nan_ticks == {} and not F._nan_ticks(r1, copy).any()
-    assert F._nan_ticks(r1, res).tolist() == [True, False, False]
+    assert copy.nan_ticks == {} and F._nan_index(r1, copy).tolist() == []
+    assert F._nan_index(r1, res).tolist() == [0]
