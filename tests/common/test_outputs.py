@@ -294,3 +294,39 @@ def test_shield_writes_no_form_through_a_link_and_refuses_a_linked_package_folde
     got = _fretc([*SHIELD, d])
     assert got.returncode == 0, got.stderr
     _check(tmp_path, d, got, [n for n in names if n not in folders])
+
+
+def test_simulate_writes_no_svg_html_or_json_through_a_link(tmp_path):
+    (tmp_path / "t.csv").write_text("too_close,stopped\n1,0\n0,1\n0,1\n", encoding="utf-8")
+    d, got, names, _folders = _writes_into(
+        tmp_path, lambda out: ["simulate", R1, tmp_path / "t.csv", "-o", out])
+    assert got.returncode in (0, 1, 3), got.stderr
+    assert "simulation.html" in names
+    _check(tmp_path, d, got, names)
+    (d / "s.json").symlink_to(tmp_path / "victim.txt")
+    got = _fretc(["simulate", R1, tmp_path / "t.csv", "--json", d / "s.json"])
+    _check(tmp_path, d, got, ["s.json"])
+
+
+def test_distinguish_writes_no_svg_through_a_link(tmp_path):
+    victim, _ = _victims(tmp_path)
+    svg = tmp_path / "d.svg"
+    svg.symlink_to(victim)
+    got = _fretc(["distinguish", "the sw shall always satisfy p",
+                  "the sw shall eventually satisfy p", "--svg", svg])
+    assert got.returncode == 1, got.stdout + got.stderr
+    assert victim.read_text() == PRECIOUS and not svg.is_symlink() and "<svg" in svg.read_text()
+
+
+def test_export_and_annotate_write_nothing_through_a_link(tmp_path):
+    doc = tmp_path / "audit.json"
+    assert _fretc(["audit", "-r", R1, ROOT / "traces" / "nominal.mcap", "--json", doc,
+                   "--no-progress"]).returncode == 0
+    # (the annotated copy was written to NAME.part first, then renamed: a link there too)
+    d = _planted(tmp_path, ["needs.json", "nominal.mcap", "nominal.mcap.part"], set())
+    got = _fretc(["export", "--from-json", doc, "--needs", d / "needs.json"])
+    assert got.returncode == 0, got.stderr
+    got = _fretc(["report", "-r", R1, "--from-json", doc, "-o", tmp_path / "rep",
+                  "--annotate", d])
+    assert got.returncode == 0, got.stderr
+    _check(tmp_path, d, got, ["needs.json", "nominal.mcap"])
