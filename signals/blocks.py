@@ -32,7 +32,8 @@ from fretc.logs.ros.selective import install as install_selective
 from fretc.logs import CsvSource, LogSource
 from fretc.signals.bindings.spec import MAX_TICKS, grid_end, grid_start, tick_bound_error
 from fretc.signals.windows import message_value, sliding_windows, window_block
-from fretc.signals.clock import HeaderBuffer, Sampling, Tick, check_topics, folded_topics, present_tf
+from fretc.signals.clock import (HeaderBuffer, Sampling, Tick, check_topics, folded_topics,
+                                 present_tf, silence_end)
 from fretc.signals.columns import HeldColumns, Irregular, MessageColumns, SegmentList
 from fretc.signals.groups import GroupSampling, _restrict, csv_clock
 
@@ -138,6 +139,8 @@ class _Group:
         self.sampling = sampling
         self.stream = stream
         self.next_grid: int | None = None
+        #: the log's end, where a clock reading age() ticks to (None: its own last message)
+        self.silence_end = silence_end(sampling.source, sampling.bindings, self.variables)
         #: bytes of columns a tick of this clock takes (time, values, held log times), and
         #: the bytes made so far by every clock of the read (one list, shared)
         self.bytes_per_tick = 8 * (1 + len(self.variables) + len(self.required))
@@ -327,6 +330,8 @@ def _due(c: _Group, final: bool) -> Iterator[TickBlock]:
     if not lasts:
         return
     last = max(lasts)
+    if final and c.period is not None and c.silence_end is not None:
+        last = max(last, c.silence_end)  # (a topic silent to the log's end: stale there)
     while True:
         if c.period is not None:
             if c.next_grid is None:

@@ -18,7 +18,7 @@ from fretc.common.streams import log_topics
 from fretc.signals.bindings.binding import EMPTY_FOLD, Binding, fold
 from fretc.signals.between_ticks import folded_topics, single_topic
 from fretc.signals.bindings.compile import EvalState
-from fretc.signals.bindings.expression import TF_TOPICS, stateful_topics
+from fretc.signals.bindings.expression import TF_TOPICS, FuncCall, stateful_topics, walk
 from fretc.signals.bindings.frames import TfBuffer
 from fretc.signals.bindings.spec import (Bindings, TickSpec, grid_end, grid_start,
                                          tick_bound_error)
@@ -255,11 +255,32 @@ def unsampled_of(s: Sampling, names: list[str], bindings: Bindings | None) -> di
     return {t: n for t, n in sorted(s.unsampled.items()) if t not in folded}
 
 
+def silence_end(source: Any, bindings: Bindings | None, variables: Iterable[Binding]
+                ) -> int | None:
+    """Where a fixed-period clock whose variables read ``age(/topic)`` ends besides its own
+    topics' last message: the log's last log time (ns), when the log states it before it is
+    read (an MCAP summary, a bag's index: the same whichever requirements are audited) and
+    the clock ticks on log time; for a watched run (``source.kind == "watch"``), asked at
+    its end, the last message the watch received. A topic that falls silent before the log
+    ends is then judged stale to the end, as the log shows it (a LiDAR that dies while the
+    recording goes on); ticking only to its own last message, a staleness requirement over
+    that topic alone was satisfied. None otherwise (the clock ends at its topics' last
+    message: a log that states its end only once read whole, a flight log)."""
+    if bindings is None or bindings.time_base != "log" or bindings.tick.period_ns is None:
+        return None
+    if not any(isinstance(n, FuncCall) and n.func == "age" for b in variables
+               for n in walk(b.ast)):
+        return None
+    end = getattr(source, "end_time", None)
+    return int(end) if end is not None else None
+
+
 class Clock:
     """The ticks of one group of variables on the clock of its own topics (module docstring):
     the grid (:func:`grid_start`) starts at or after the first message of ``topics`` (or
     the tick topic's messages), the warm-up waits for every one of ``required``, and the
-    grid ends at or after their last message (:func:`grid_end`).
+    grid ends at or after their last message (:func:`grid_end`), or the log's last one when
+    a variable reads ``age()`` (:func:`silence_end`).
 
     Messages are pushed in non-decreasing time (:meth:`push`); ticks come back one at a
     time (generators: iterate each to its end).
@@ -281,6 +302,9 @@ class Clock:
         self.pending: deque[tuple[int, Any, int, Any, int | None]] = deque()
         self.next_grid: int | None = None
         self.last: int | None = None
+        #: the log's end, where a clock reading age() ticks to (None: its own last message;
+        #: a watched run's is asked at its end)
+        self.silence_end = silence_end(s.source, s.bindings, self.variables)
         self.index = 0
         self.keep_going = keep_going
         self.failed: dict[str, SignalError] = {}
@@ -464,7 +488,10 @@ class Clock:
         """The ticks left at the end of the log (iterate to the end)."""
         if self.last is not None:
             if self.period is not None:  # to the grid tick at or after the last message
-                yield from self._grid_ticks(grid_end(self.last, self.period) + 1)
+                end = (silence_end(self.s.source, self.s.bindings, self.variables)
+                       if self.s.source.kind == "watch" else self.silence_end)
+                last = max(self.last, end or self.last)
+                yield from self._grid_ticks(grid_end(last, self.period) + 1)
             else:
                 while self.pending:
                     tick = self._emit_own(*self.pending.popleft())

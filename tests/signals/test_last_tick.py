@@ -149,7 +149,9 @@ def _fixture_logs() -> list[Path]:
 def test_audit_watch_clock_and_csv_share_the_last_tick(tmp_path, log):
     """Metamorphic: on every shipped run, each Safe-ROS requirement's clock in the audit
     has the ticks of the watch's tick-by-tick clock on the same messages; the last tick is
-    at or after the last message of the clock's topics and less than a period after it."""
+    at or after the last message of the clock's topics and less than a period after it, or,
+    for a clock reading age() (R6), at or after the log's end (its last message, of any
+    topic) and less than a period after that: a topic silent to the end is stale there."""
     plan = load_plan(AuditConfig(requirements=(str(ROOT / "requirements"),)))
     la = audit_log(plan, str(log))
     b = plan.bindings
@@ -164,5 +166,26 @@ def test_audit_watch_clock_and_csv_share_the_last_tick(tmp_path, log):
         assert (ticks[0], ticks[-1], len(ticks)) == (v.first_tick_ns, v.last_tick_ns,
                                                     v.ticks_evaluated), r.id
         last = max(m.log_time for m in src.messages(set(topics)))
+        if any("age(" in b.variables[n].expr for n in r.variables):
+            last = max(m.log_time for m in open_log(str(log)).messages())
         assert 0 <= v.last_tick_ns - last < period, r.id
 
+
+
+def test_a_topic_silent_to_the_end_of_the_log_is_stale_there(tmp_path):
+    """/scan stops at 2.9 s of a 10 s log (/other goes on): a requirement over age(/scan)
+    alone ticks to the log's end and is violated from 3.3 s (age over 0.3 s); it was
+    satisfied, its clock ending at /scan's last message. A requirement over /scan's values
+    alone still ends there (the values are held only while the topic publishes)."""
+    msgs = [("/other", F64, k * 100 * MS + MS, float64(1.0)) for k in range(100)]
+    msgs += [("/scan", F64, k * 100 * MS, float64(1.0)) for k in range(30)]
+    log = write_mcap(tmp_path / "s.mcap", sorted(msgs, key=lambda m: m[2]))
+    _plan(tmp_path, "@tick_period 100 ms\nS: the lidar shall always satisfy !stale\n"
+          "V: the lidar shall always satisfy scan_ok\n",
+          '[tick]\nperiod = "100 ms"\n[variables]\nstale = "age(/scan) > 0.3"\n'
+          'scan_ok = "/scan.data > 0"\n')
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "u.fret"),)))
+    by = {v.requirement: v for v in audit_log(plan, str(log)).verdicts}
+    assert by["S"].verdict == "violated" and by["S"].first_violation.at.tick == 33, by["S"]
+    assert by["S"].last_tick_ns == 10_000 * MS  # the grid tick at or after the log's end (9.901 s)
+    assert by["V"].verdict == "satisfied" and by["V"].last_tick_ns == 2_900 * MS
