@@ -330,3 +330,17 @@ def test_export_and_annotate_write_nothing_through_a_link(tmp_path):
                   "--annotate", d])
     assert got.returncode == 0, got.stderr
     _check(tmp_path, d, got, ["needs.json", "nominal.mcap"])
+
+
+def test_estimate_and_falsify_refuse_a_linked_runs_folder(tmp_path):
+    """``fretc estimate``/``falsify`` keep their runs in OUT/runs (the runner makes it): a link
+    planted there is refused, the folder it points to left as it was."""
+    from fretc.sim.estimate import Runner
+
+    _victim, victim_dir = _victims(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "runs").symlink_to(victim_dir)
+    with pytest.raises(OSError, match="runs"):  # (fretc.common.outputs.OutputError)
+        Runner(None, None, out)
+    assert _state(victim_dir) == {"keep.txt": PRECIOUS}
