@@ -13,7 +13,9 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 #: ARCHITECTURE.md, "R1 from text to verdict": the most moves and data forms R1's way may have
-MAX_MOVES = 12
+#: (13 moves since the cached requirements are decoded by fretc's own JSON decoder, not by
+#: pickle, which ran whatever code the cache folder held)
+MAX_MOVES = 13
 MAX_FORMS = 10
 #: a backstop, not a target (ARCHITECTURE.md, "One job per module"): a module holds one job
 #: and is split by job when it grows; no docstring or comment is ever shortened to fit these
