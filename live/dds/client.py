@@ -46,8 +46,10 @@ from fretc.live.ros2_names import (CLOCK_TOPIC, advertisement, cdr_clock_ns, dds
 
 __all__ = ["DdsClient", "require_cyclonedds", "POLL_SECONDS"]
 
-#: Seconds between two polls of the readers.
-POLL_SECONDS = 0.005
+#: Seconds the reading thread waits at most for a sample or a publication (a DDS WaitSet
+#: wakes it as soon as one of its readers has data): the pace of the checks that need no
+#: data (silent publishers) and of the stop.
+POLL_SECONDS = 0.05
 #: an instance handle as one unsigned 64-bit number (Cyclone DDS's Python binding gives a
 #: reader's matched publications signed and a sample's publication handle unsigned)
 _HANDLE = 2**64 - 1
@@ -119,6 +121,7 @@ class DdsClient:
         self._known_since: dict[str, int] = {}
         self._heard: set[str] = set()
         self._silent_reported: set[str] = set()
+        self._conditions: list[Any] = []
 
     def start(self) -> DdsClient:
         """Join the domain and start reading in a background thread (returns at once)."""
@@ -126,17 +129,36 @@ class DdsClient:
 
         from fretc.live.dds.idl_types import open_participant
 
+        from cyclonedds.core import WaitSet
+
         self._dp = open_participant(self.url.domain, self.config_file)
         self._builtin = BuiltinDataReader(self._dp, BuiltinTopicDcpsPublication)
+        # the reading thread sleeps until a reader has data (a sample, a publication): no
+        # poll period between a sample's arrival and its reading
+        self._waitset = WaitSet(self._dp)
+        self._attach(self._builtin)
         self._merge.start()
         self.events.put(("connected", time.time_ns(), "dds", f"domain {self.url.domain}"))
         self._thread = threading.Thread(target=self._run, daemon=True, name="fretc-dds")
         self._thread.start()
         return self
 
+    def _attach(self, reader) -> None:
+        """Wake the reading thread when ``reader`` holds samples (a ReadCondition on any
+        sample, view and instance state, as :func:`~fretc.live.dds.idl_types.take_raw`
+        takes them)."""
+        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+
+        cond = ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any)
+        self._conditions.append(cond)  # (kept: a condition collected is detached)
+        self._waitset.attach(cond)
+
     def stop(self) -> None:
         """Stop reading and leave the domain (idempotent)."""
         self._stop.set()
+        waitset = getattr(self, "_waitset", None)
+        if waitset is not None:
+            waitset.set_trigger(True)  # (wakes the reading thread at once)
         if self._thread is not None:
             self._thread.join(5)
         self._merge.stop()
@@ -153,8 +175,8 @@ class DdsClient:
                 self.events.put(("protocol", time.time_ns(),
                                  f"DDS: {type(exc).__name__}: {str(exc)[:200]}"))
                 busy = False
-            if not busy:
-                self._stop.wait(POLL_SECONDS)
+            if not busy and not self._stop.is_set():
+                self._waitset.wait(int(POLL_SECONDS * 1e9))
 
     def _discover(self) -> None:
         """Read the built-in publications: new ones of bound topics (and ``/clock``)
@@ -232,6 +254,7 @@ class DdsClient:
             return
         tp: Topic[Any] = Topic(self._dp, dds_topic(topic), cls)
         self._readers[topic] = (DataReader(self._dp, tp, qos=reader_qos(qos, topic)), ros)
+        self._attach(self._readers[topic][0])
         if transient_local(qos, topic):
             self._latched.add(topic)
 
