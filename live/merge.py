@@ -67,6 +67,9 @@ class MergeBuffer:
         self._heap: list[tuple[int, int, float, tuple]] = []
         self._seq = 0
         self._cond = threading.Condition()
+        #: held by whoever takes due events and puts them on the queue (the releasing thread,
+        #: or :meth:`sync` at the watermark), so they go on in log-time order
+        self._order = threading.Lock()
         self._stopped = False
         self._thread: threading.Thread | None = None
         #: (topic, writer) -> the latest log time (ns) it delivered
@@ -106,12 +109,15 @@ class MergeBuffer:
         forgotten), defined only when each writer in ``matched`` has delivered and no
         message came without a writer id; else (and for ``matched`` None: the transport
         cannot tell) the hold alone releases."""
-        with self._cond:
-            ok = matched is not None \
-                and all((t, w) in self._latest for t, ws in matched.items() for w in ws) \
-                and all(w is not None for _, w in self._latest)
-            self._watermark = min(self._latest.values()) if ok and self._latest else None
-            self._cond.notify()
+        with self._order:  # released here at once: no wait for the releasing thread
+            with self._cond:
+                ok = matched is not None \
+                    and all((t, w) in self._latest for t, ws in matched.items() for w in ws) \
+                    and all(w is not None for _, w in self._latest)
+                self._watermark = min(self._latest.values()) if ok and self._latest else None
+                out = self._due() if self._watermark is not None else []
+            for ev in out:
+                self.events.put(ev)
 
     def forget(self, topic: str) -> None:
         """``topic``'s writers are all gone and their messages put: they no longer hold the
@@ -153,10 +159,12 @@ class MergeBuffer:
         with self._cond:
             if wait > 0:
                 self._cond.wait(wait)
-            out = self._due()
-            done = self._stopped and not self._heap
-        for ev in out:
-            self.events.put(ev)
+        with self._order:
+            with self._cond:
+                out = self._due()
+                done = self._stopped and not self._heap
+            for ev in out:
+                self.events.put(ev)
         return done
 
     def _run(self) -> None:
@@ -170,7 +178,8 @@ class MergeBuffer:
             self._cond.notify()
         if self._thread is not None:
             self._thread.join(2)
-        with self._cond:  # what the thread did not release (never started, or stuck)
-            rest = [heapq.heappop(self._heap)[3] for _ in range(len(self._heap))]
-        for ev in rest:
-            self.events.put(ev)
+        with self._order:
+            with self._cond:  # what the thread did not release (never started, or stuck)
+                rest = [heapq.heappop(self._heap)[3] for _ in range(len(self._heap))]
+            for ev in rest:
+                self.events.put(ev)
