@@ -8,7 +8,8 @@ Per scenario and Safety System: how many runs completed the mission, were aborte
 made no progress, or ran out of time) or ended in contact (ground-truth clearance <= 0), the
 least clearance over the runs, and for the shield the ticks it overrode. Then each run the
 hand-written SIF completed and the shield did not (scenario, seed, outcome), and each
-contact. Exit 1 when the shield has a contact or leaves a mission the SIF completes
+contact, and each run in which an assumption of the environment of the shield broke (a
+shield generated with ``--assume``). Exit 1 when the shield has a contact or leaves a mission the SIF completes
 uncompleted, else 0. The runs are those of ``python -m fretc.sim record -s S --seed K
 [--safety shield:DIR]``, in memory.
 """

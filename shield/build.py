@@ -85,6 +85,9 @@ class Shield:
     #: them (:func:`fretc.shield.fallback.fallback_of`); None when no outputs are safe
     #: from every state whatever the inputs
     fallback: dict[str, Any] | None = None
+    #: the assumptions of the environment the games took (:mod:`fretc.shield.plan`), as
+    #: the requirements are carried
+    assumptions: tuple[Requirement, ...] = ()
 
     def weights(self, k: int) -> dict[int, tuple[bool, int]]:
         """Machine ``k``'s preferences as :func:`fretc.shield.machine.correct` takes them:
@@ -156,13 +159,15 @@ def with_margin(compiled: Sequence[Any], margin: int) -> list[Any]:
 def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str], *,
                  bindings: Bindings | None = None, prefer: Sequence[tuple[str, bool]] = (),
                  budget: Budget | None = None, name: str = "shield",
-                 fork: bool = True, fallback: dict[str, Any] | None = None) -> Shield:
+                 fork: bool = True, fallback: dict[str, Any] | None = None,
+                 assumptions: Sequence[Any] = ()) -> Shield:
     """Synthesize the shield of ``compiled`` (:class:`fretc.compiler.build.Compiled`) for the
     FRET variables ``inputs`` (the environment's) and ``outputs`` (the controller's), with
     ``bindings`` relating outputs of one message, ``prefer`` the tie-breaking preferences,
     ``budget`` each game's (``fretc check``'s defaults), ``fork`` the games in a worker
     process (False: in this one, for tests), ``fallback`` the declared outputs of a tick
-    whose inputs cannot be read (:mod:`fretc.shield.fallback`; None: the shield's own).
+    whose inputs cannot be read (:mod:`fretc.shield.fallback`; None: the shield's own),
+    ``assumptions`` the environment's (compiled; the games take them, :mod:`fretc.shield.plan`).
 
     Raises:
         ShieldError: a free-form requirement (no formula), a requirement that cannot be
@@ -174,14 +179,14 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         ShieldUnknown: a component's game past its budget, or comparisons of several
             variables with too many valuations to decide
             (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
-    for c in compiled:  # (before anything reads their formulas)
+    for c in [*compiled, *assumptions]:  # (before anything reads their formulas)
         if c.formalization is None:
             where = f"{c.entry.source}:{c.entry.line}: {c.id}"
             raise ShieldError(f"{where} has no formula ({c.error})" if c.error is not None
                               else f"{where} is free-form text: it has no formula a shield "
                               "could enforce or monitor; leave it out of the shield's files")
     periods: dict[Any, list[str]] = {}
-    for c in compiled:
+    for c in [*compiled, *assumptions]:
         if c.entry.tick_period is not None:
             periods.setdefault(c.entry.tick_period, []).append(
                 f"{c.id} ({c.entry.source}:{c.entry.line})")
@@ -192,7 +197,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
             "file's period; give the files one @tick_period")
     integers = _integer_outputs(compiled, outputs)
     try:
-        p = plan(compiled, inputs, outputs, bindings, integers)
+        p = plan(compiled, inputs, outputs, bindings, integers, assumptions)
     except PredicateBudget as exc:
         raise ShieldUnknown(f"no shield: {exc}") from None
     machines = []
@@ -202,12 +207,15 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     reqs = tuple(Requirement(x.id, x.compiled.entry.text, x.location, to_smv(pt), k)
                  for k, comp in enumerate(p.components)
                  for x, pt in zip(comp.items, enforced_pts(comp.items)))
+    assumed = tuple(Requirement(x.id, x.compiled.entry.text, x.location, to_smv(pt), k)
+                    for k, comp in enumerate(p.components)
+                    for x, pt in zip(comp.assumptions, enforced_pts(comp.assumptions)))
     texts = {a.text for m in machines for a in m.outputs}
     unknown = [t for t, _v in prefer if t not in texts]
     if unknown:
         raise ShieldError("--prefer names " + ", ".join(unknown) + ", not an output atom of "
                           "an enforced requirement (" + ", ".join(sorted(texts)) + ")")
-    read = frozenset(v for c in compiled for v in c.formalization.variables)
+    read = frozenset(v for c in [*compiled, *assumptions] for v in c.formalization.variables)
     unread = [f"{v}: declared an input, read by no requirement (not used)" for v in p.inputs
               if v not in read]
     unread += [f"{v}: declared an output, read by no requirement (passed through unchanged)"
@@ -224,14 +232,15 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         + ([f"integers:{','.join(p.integers)}"] if p.integers else [])
         + [str(m.nodes) for m in machines]
         + [str(m.clusters) for m in machines if m.clusters]
-        + [f"fallback:{fb}"]).encode()).hexdigest()
+        + [f"fallback:{fb}"]
+        + [f"assumes {a.id}:{a.text}" for a in assumed]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
                   dict(p.monitored), tuple(prefer), next(iter(periods), None),
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
                         if len(g.variables) > 1),
-                  _numbers(compiled),
+                  _numbers([*compiled, *assumptions]),
                   read, tuple(p.notes) + tuple(unread) + tuple(fb_notes), digest,
-                  integers=tuple(p.integers), fallback=fb)
+                  integers=tuple(p.integers), fallback=fb, assumptions=assumed)
 
 
 def _declared(compiled: Sequence[Any]) -> list[FretVariable]:
@@ -288,7 +297,7 @@ def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
 def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     """The machine of one component (module docstring)."""
     ans = worker.ask(("call", synthesize, (comp.game_pts, comp.game_inputs, comp.env_inv,
-                                           comp.ctl_inv)))
+                                           comp.ctl_inv, comp.watch)))
     if ans == UNKNOWN:
         why = worker.failures[-1] if worker.failures else "no reason given"
         if why.startswith("RuntimeError:"):  # a defect of the synthesis, not a budget
@@ -311,7 +320,8 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i), tuple(outs),
                    tuple(ans["init"]), tuple(tuple(n) for n in ans["nodes"]), ans["safe"],
                    tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"], ans["ctl_ok"],
-                   tuple(comp.messages), tuple(clusters), ans["stats"], ans["robust"])
+                   tuple(comp.messages), tuple(clusters), ans["stats"], ans["robust"],
+                   tuple(a.id for a in comp.assumptions), tuple(ans["watch"]))
 
 
 def _atom(node: Node) -> Atom:

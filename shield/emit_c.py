@@ -155,6 +155,8 @@ class _CMachine:
     clusters: list[dict[str, Any]]
     #: per output atom, the indices (in the outputs struct's order) of the variables it reads
     atom_vars: list[list[int]]
+    #: the index of the machine's first assumption in the state's ``broken``
+    first_assumption: int = 0
 
     @property
     def n_in(self) -> int:
@@ -184,7 +186,7 @@ class _CMachine:
 
 
 def _machines(shield: Shield) -> list[_CMachine]:
-    out, first = [], 0
+    out, first, first_a = [], 0, 0
     fields = [v for v in shield.outputs if v in shield.read]  # (the outputs struct's)
     for k, t in enumerate(tables(shield)["machines"]):
         numeric = []
@@ -210,8 +212,9 @@ def _machines(shield: Shield) -> list[_CMachine]:
         atom_vars = [sorted(fields.index(x) for x in (_term_variables(c) if op == "pred"
                                                       else {var}) if x in fields)
                      for var, op, c in t["outputs"]]
-        out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars))
+        out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars, first_a))
         first += len(t["requirements"])
+        first_a += len(t["assumptions"])
     return out
 
 
@@ -257,8 +260,11 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
            "outputs": outputs,
            # the runner's CSV header (FRET names: any text, never a printf format)
            "header": "".join(["tick", *(f",{v}" for v, _n in outputs),
-                              ",overridden,reasons,fault\n"]),
+                              ",overridden,reasons,fault",
+                              ",broken" if any(m["assumptions"] for m in t["machines"])
+                              else "", "\n"]),
            "requirements": [r for m in t["machines"] for r in m["requirements"]],
+           "assumptions": [a for m in t["machines"] for a in m["assumptions"]],
            "op_map": _C_OPS, "memo_slots": MEMO_SLOTS,
            "numeric": any(m.numeric_outputs for m in machines),
            "whole": any(v in m.t["integers"] for m in machines for v, _s, _i in m.numeric_outputs),

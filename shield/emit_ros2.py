@@ -22,8 +22,8 @@ The node (:func:`node_source`):
 * each tick publishes the corrected outputs (:class:`fretc.shield.messages.MessageShield`:
   the proposal unchanged, or the fields the bindings' inversion gives the corrected values)
   and ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``: level OK, WARN with the reasons
-  and the changed outputs on an override, ERROR when an input cannot be read, then nothing
-  else is published that tick).
+  and the changed outputs on an override, ERROR when an input or a proposal cannot be read
+  or an assumption of the environment broke: the fallback's messages are then published).
 
 Message types come from the binding file's ``[shield] types`` (or ``[types]``) table (topic ->
 ``pkg/msg/Type``).

@@ -34,12 +34,9 @@ from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.shield.build import Shield
 from fretc.shield.machine import Machine
-from fretc.shield.prove import closed_loop
+from fretc.shield.prove import Loop, buddy_module, closed_loop
 
 __all__ = ["Permission", "permissions", "explain_text"]
-
-Graph = dict[tuple[int, ...], dict[tuple[int, ...], list[tuple[int, ...]]]]
-
 
 class Permission:
     """What requirement ``rid`` leaves the controller: ``wait`` ticks (None: unbounded,
@@ -81,22 +78,42 @@ class Permission:
         return f"{self.rid}: {head}{tail}"
 
 
-def _value(n: Node, letter: dict[str, bool]) -> bool:
-    """A propositional IR formula's truth on a letter (atom name -> bool)."""
+def _bdd(n: Node, var_of: dict[str, int]) -> Any:
+    """A propositional IR formula as a BuDDy BDD over the atoms' variables ``var_of``
+    (atom name -> variable; an atom the machine does not read is false, as it never holds
+    in its letters)."""
+    buddy = buddy_module()
+
     if n.op in ("ap", "cmp"):
-        return letter.get(letter_name(n), False)
+        v = var_of.get(letter_name(n))
+        return buddy.bddfalse if v is None else buddy.bdd_ithvar(v)
     if n.op in ("true", "false"):
-        return n.op == "true"
-    args = [_value(a, letter) for a in n.args]
-    return {"!": lambda: not args[0], "&": lambda: all(args), "|": lambda: any(args),
-            "->": lambda: (not args[0]) or args[1], "<->": lambda: args[0] == args[1],
-            "xor": lambda: args[0] != args[1]}[n.op]()
+        return buddy.bddtrue if n.op == "true" else buddy.bddfalse
+    args = [_bdd(a, var_of) for a in n.args]
+    if n.op == "!":
+        return buddy.bdd_not(args[0])
+    op = {"&": buddy.bdd_and, "|": buddy.bdd_or, "->": buddy.bdd_imp,
+          "<->": buddy.bdd_biimp, "xor": buddy.bdd_xor}[n.op]
+    out = args[0]
+    for a in args[1:]:
+        out = op(out, a)
+    return out
 
 
-def _wait(graph: Graph, m: Machine, c: Node, r: Node) -> int | None:
+def _meets(label: Any, f: Any) -> bool:
+    """Whether some move of ``label`` satisfies ``f`` (both BDDs)."""
+    buddy = buddy_module()
+
+    return bool(buddy.bdd_and(label, f) != buddy.bddfalse)
+
+
+def _wait(loop: Loop, m: Machine, c: Any, r: Any) -> int | None:
     """The longest run of ``c & !r`` ticks from a tick where ``c`` becomes true (module
-    docstring); None when unbounded."""
-    names = [a.name for a in (*m.inputs, *m.outputs)]
+    docstring); None when unbounded. ``c``, ``r``: BDDs over the atoms."""
+    buddy = buddy_module()
+
+    waiting = buddy.bdd_and(c, buddy.bdd_not(r))
+    graph = loop.graph
     memo: dict[tuple[int, ...], int | None] = {}
     active: set[tuple[int, ...]] = set()
 
@@ -107,20 +124,18 @@ def _wait(graph: Graph, m: Machine, c: Node, r: Node) -> int | None:
             return None  # a cycle of c & !r: unbounded
         active.add(s)
         best: int | None = 0
-        for nxt, letters in graph[s].items():
-            for letter in letters:
-                vals = dict(zip(names, map(bool, letter)))
-                if _value(c, vals) and not _value(r, vals):
-                    sub = longest(nxt)
-                    best = None if sub is None or best is None else max(best, 1 + sub)
+        for nxt, label in graph[s].items():
+            if _meets(label, waiting):
+                sub = longest(nxt)
+                best = None if sub is None or best is None else max(best, 1 + sub)
         active.discard(s)
         memo[s] = best
         return best
 
     starts = {tuple(int(b) for b in m.init)}
     for edges in graph.values():
-        for nxt, letters in edges.items():
-            if any(not _value(c, dict(zip(names, map(bool, x)))) for x in letters):
+        for nxt, label in edges.items():
+            if _meets(label, buddy.bdd_not(c)):
                 starts.add(nxt)
     out = 0
     for s in starts:
@@ -131,18 +146,14 @@ def _wait(graph: Graph, m: Machine, c: Node, r: Node) -> int | None:
     return out
 
 
-def _release(graph: Graph, m: Machine, c: Node, r: Node) -> bool:
+def _release(loop: Loop, c: Any, r: Any) -> bool:
     """Whether some tick with ``c & r`` may be followed by one with ``c & !r``."""
-    names = [a.name for a in (*m.inputs, *m.outputs)]
-    after: set[tuple[int, ...]] = set()
-    for _s, edges in graph.items():
-        for nxt, letters in edges.items():
-            if any(_value(c, v) and _value(r, v)
-                   for v in (dict(zip(names, map(bool, x))) for x in letters)):
-                after.add(nxt)
-    return any(_value(c, v) and not _value(r, v)
-               for s in after for letters in graph[s].values()
-               for v in (dict(zip(names, map(bool, x))) for x in letters))
+    buddy = buddy_module()
+
+    held, dropped = buddy.bdd_and(c, r), buddy.bdd_and(c, buddy.bdd_not(r))
+    after = {nxt for edges in loop.graph.values() for nxt, label in edges.items()
+             if _meets(label, held)}
+    return any(_meets(label, dropped) for s in after for label in loop.graph[s].values())
 
 
 def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
@@ -151,7 +162,7 @@ def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
     ex = Expander("pt", ir.TRUE, ir.TRUE)
     out = []
     for m in shield.machines:
-        loop = closed_loop(m)
+        loop = closed_loop(m, assumed=True)  # (the runs that keep the assumptions)
         for rid in m.requirements:
             req = by_id[rid].entry.requirement
             c = ir.TRUE if req.condition.expr is None else ex.bool(req.condition.expr)
@@ -163,9 +174,10 @@ def permissions(shield: Shield, compiled: Sequence[Any]) -> list[Permission]:
             if loop is None:
                 out.append(Permission(rid, to_smv(c), to_smv(r), -1, False))
                 continue
-            graph = loop[0]
-            out.append(Permission(rid, to_smv(c), to_smv(r), _wait(graph, m, c, r),
-                                  _release(graph, m, c, r),
+            var_of = {a.name: v for a, v in zip((*m.inputs, *m.outputs), loop.var)}
+            cb, rb = _bdd(c, var_of), _bdd(r, var_of)
+            out.append(Permission(rid, to_smv(c), to_smv(r), _wait(loop, m, cb, rb),
+                                  _release(loop, cb, rb),
                                   holding=req.condition.kind == "holding"))
     return out
 

@@ -21,7 +21,9 @@ into one node table (:mod:`fretc.shield.synthesis`):
 * ``env_ok``: the input atoms take the truth values of real numbers (the proof's
   environment, :mod:`fretc.shield.prove`);
 * ``robust``: the output valuations ``safe`` from every state of the winning region with
-  every input ``env_ok`` allows (the fallback's, :func:`fretc.shield.build.fallback_of`).
+  every input ``env_ok`` allows (the fallback's, :func:`fretc.shield.fallback.fallback_of`);
+* ``assumed[a]``: assumption ``a`` of the environment has held at every tick so far (the
+  game counts a requirement kept once one has not, :mod:`fretc.shield.plan`).
 
 The rule every form implements (:class:`fretc.shield.runtime.ShieldRuntime`, the one Python
 implementation, written into ``--emit python``'s module; the C form; the tests compare them
@@ -117,8 +119,12 @@ class Machine:
     clusters: tuple[dict[str, Any], ...] = ()
     stats: dict[str, Any] = field(default_factory=dict, compare=False)
     #: the root of the output valuations safe from every winning state whatever the inputs
-    #: (0: none; the fallback's, :func:`fretc.shield.build.fallback_of`)
+    #: (0: none; the fallback's, :func:`fretc.shield.fallback.fallback_of`)
     robust: int = 0
+    #: the assumptions of the environment the game took (ids), and per assumption the root
+    #: of "it has held at every tick so far" (``H A``, :mod:`fretc.shield.plan`)
+    assumptions: tuple[str, ...] = ()
+    assumed: tuple[int, ...] = ()
 
     @property
     def output_variables(self) -> list[str]:

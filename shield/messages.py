@@ -155,6 +155,9 @@ class MessageShield:
         else:
             d = self.runtime.step(inputs, proposal)
             self.last_inputs = inputs
+            if getattr(d, "broken", ()) and not d.outputs:
+                raise ShieldInputError(f"assumption {', '.join(d.broken)} broken and the "
+                                       "shield has no fallback: nothing to publish")
         try:
             fresh = _fault(d)
             msgs = self._messages(d, props, now_ns, proposal, fresh)

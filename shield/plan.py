@@ -11,6 +11,17 @@ the enforced ones into components, and the consistency of the outputs' atoms.
 * **Refused** (input errors, exit 2, :class:`ShieldError`): not a safety property (an
   ``eventually`` without a bound: "give a deadline"), an atom the game cannot take, a variable
   declared neither input nor output.
+* **Assumptions** (``fretc shield --assume FILE``): requirements of the environment, what it
+  can do (Alshiekh et al., "Safe Reinforcement Learning via Shielding", AAAI 2018: the
+  shield's guarantee rests on an abstraction of the plant). Each must be a safety property
+  whose pt formula reads an output only at earlier ticks (under ``Y``: "whenever the robot
+  was commanded ..., at the next timepoint ..."), so that the controller can never be the one
+  to break it. They join the components whose variables they share, and a component's game
+  counts a requirement kept at every tick at which one of its assumptions has been broken:
+  the environment loses a play in which it breaks one (each requirement's pt formula ``R``
+  becomes ``R | !(H A1 & ... & H An)``). A requirement over inputs only is then enforced when
+  an assumption relates one of its variables to an output (Safe-ROS's R5, ``clearance > 0``:
+  the environment's assumptions say how the clearance answers the commands), else monitored.
 
 Components (as ``fretc check``'s realizability: requirements sharing a variable) are joined
 further when the bindings bind their outputs to one topic: the shield corrects such outputs
@@ -86,6 +97,11 @@ class Component:
     names: dict[Node, Node] = field(default_factory=dict)
     game_pts: list[Node] = field(default_factory=list)
     game_inputs: list[str] = field(default_factory=list)
+    #: the assumptions of the environment this component's game takes (module docstring)
+    assumptions: list[CheckItem] = field(default_factory=list)
+    #: per assumption its "held at every tick so far" (``H A``, with the game's atom names),
+    #: whose values the forms report (:mod:`fretc.shield.runtime`)
+    watch: list[Node] = field(default_factory=list)
 
     @property
     def ids(self) -> list[str]:
@@ -109,15 +125,18 @@ class Plan:
 
 
 def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
-         bindings: Bindings | None = None, integers: Sequence[str] = ()) -> Plan:
+         bindings: Bindings | None = None, integers: Sequence[str] = (),
+         assumptions: Sequence[Any] = ()) -> Plan:
     """Sort ``compiled`` (:class:`fretc.compiler.build.Compiled`) into the plan of the module
     docstring, ``inputs``/``outputs`` the FRET variables of the environment / controller,
     ``integers`` the outputs that take whole numbers only (their comparisons' regions those
-    a whole number lies in, :meth:`fretc.check.numeric_abstraction.NumericAbstraction.region`).
+    a whole number lies in, :meth:`fretc.check.numeric_abstraction.NumericAbstraction.region`),
+    ``assumptions`` the environment's (compiled, module docstring).
 
     Raises:
         ShieldError: a requirement that cannot be enforced, a variable both input and
-            output or neither, a requirement that did not formalize."""
+            output or neither, a requirement that did not formalize, an assumption that
+            is not a safety property or reads an output at the tick it is judged."""
     inputs, outputs = list(dict.fromkeys(inputs)), list(dict.fromkeys(outputs))
     both = sorted(set(inputs) & set(outputs))
     if both:
@@ -125,6 +144,10 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
     enforced: list[CheckItem] = []
     monitored: dict[str, str] = {}
     notes: list[str] = []
+    assumed = [_assumption(len(compiled) + k, c, inputs, outputs)
+               for k, c in enumerate(assumptions)]
+    # (the inputs an assumption relates to an output: a requirement over them is enforced)
+    linked = {v for a in assumed if set(a.variables) & set(outputs) for v in a.variables}
     for k, c in enumerate(compiled):
         if c.formalization is None:
             raise ShieldError(f"{_where(c)}: {c.id} has no formalization"
@@ -143,9 +166,11 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
                               "neither input nor output (--inputs/--outputs, or @inputs/"
                               "@outputs in the file): the shield must know who sets each"
                               + (f" ({'; '.join(kinds)})" if kinds else ""))
-        if all(v in inputs for v in item.variables):
+        if all(v in inputs for v in item.variables) and not set(item.variables) & linked:
             monitored[c.id] = ("over inputs only (" + ", ".join(item.variables) + "): the "
-                               "environment's, no output can keep it; monitored, not enforced")
+                               "environment's, no output can keep it; monitored, not enforced"
+                               + ("" if not assumed else " (no assumption relates "
+                                  + ", ".join(item.variables) + " to an output)"))
             continue
         if item.pt is None:
             raise ShieldError(f"{_where(c)}: {c.id} is not a safety property: "
@@ -161,9 +186,64 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         enforced.append(item)
     groups = _message_groups(outputs, bindings)
     whole = sorted(set(integers) & set(outputs))
-    components = [_component(items, inputs, groups, bindings, notes, whole)
-                  for items in _components(enforced, groups)]
+    ids = {a.id for a in assumed}
+    components = []
+    for items in _components(enforced + assumed, groups):
+        reqs = [x for x in items if x.id not in ids]
+        assume = [x for x in items if x.id in ids]
+        if not reqs:
+            notes.extend(f"assumption {a.id} shares no variable with an enforced requirement: "
+                         "not used" for a in assume)
+            continue
+        components.append(_component(reqs, inputs, groups, bindings, notes, whole, assume))
     return Plan(inputs, outputs, components, monitored, notes, whole)
+
+
+def _assumption(index: int, c: Any, inputs: Sequence[str], outputs: Sequence[str]
+                ) -> CheckItem:
+    """An assumption of the environment as the game takes it (module docstring).
+
+    Raises:
+        ShieldError: free-form text, not a safety property, a variable neither input nor
+            output, an atom the game cannot take, or an output read at the tick the
+            assumption is judged (the controller could break it)."""
+    if c.formalization is None:
+        raise ShieldError(f"{_where(c)}: assumption {c.id} has no formalization"
+                          + (f" ({c.error})" if c.error else " (free-form text)"))
+    item = make_item(index, c)
+    undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
+    if undeclared:
+        raise ShieldError(f"{_where(c)}: assumption {c.id} reads {', '.join(undeclared)}, "
+                          "declared neither input nor output")
+    if item.pt is None:
+        raise ShieldError(f"{_where(c)}: assumption {c.id} is not a safety property: "
+                          + _not_safety(c.formalization.key))
+    now = _read_now(item.pt, set(outputs))
+    if now:
+        raise ShieldError(f"{_where(c)}: assumption {c.id} reads the output(s) "
+                          f"{', '.join(sorted(now))} at the tick it is judged, so the "
+                          "controller could break it and win by it: an assumption may read "
+                          "outputs only at earlier ticks ('whenever ... the environment shall "
+                          "at the next timepoint satisfy ...')")
+    for n in ir.walk(item.pt):
+        if preds.is_predicate(n) and (why := preds.refusal(n, inputs)) is not None:
+            raise ShieldError(f"{_where(c)}: assumption {c.id}: {why}")
+    return item
+
+
+def _read_now(n: Node, outputs: set[str], past: bool = False) -> set[str]:
+    """The outputs ``n`` (a pt formula) reads at the current tick: outside every ``Y`` and
+    ``Z`` (``O``, ``H``, ``S`` and ``T`` read the current tick too)."""
+    if n.op in ("Y", "Z"):
+        past = True
+    if not n.args:
+        return set() if past else {v for v in ir.variables(n) if v in outputs}
+    if n.op == "cmp" or n.op == "arith":
+        return set() if past else {v for v in ir.variables(n) if v in outputs}
+    out: set[str] = set()
+    for a in n.args:
+        out |= _read_now(a, outputs, past)
+    return out
 
 
 def _probability_bound(c: Any) -> str | None:
@@ -265,19 +345,21 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
 
 
 def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
-               bindings: Bindings | None, notes: list[str], integers: Sequence[str] = ()
-               ) -> Component:
-    """A :class:`Component` with its invariants (module docstring).
+               bindings: Bindings | None, notes: list[str], integers: Sequence[str] = (),
+               assumptions: Sequence[CheckItem] = ()) -> Component:
+    """A :class:`Component` with its invariants (module docstring), its game taking
+    ``assumptions``.
 
     Raises :class:`fretc.shield.predicates.PredicateBudget` (a cluster too large)."""
     pts = enforced_pts(items)
-    numeric = NumericAbstraction.of(pts)
+    apts = enforced_pts(list(assumptions))
+    numeric = NumericAbstraction.of(pts + apts)
     # (in doubles, as the shield's forms compute: a region with reals and no double in it
     # is no move of either player)
     env_inv = numeric.regions([v for v in numeric.atoms if v in inputs], doubles=True)
     ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True,
                               integers=integers)
-    clusters = preds.clusters(pts, inputs)
+    clusters = preds.clusters(pts + apts, inputs)
     for cl in clusters:
         for values, why in cl.unwitnessed.items():
             cube = " & ".join(to_smv(a) if v else f"!{to_smv(a)}"
@@ -298,6 +380,10 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
         else:
             ctl_inv = ir.and_(ctl_inv, inv)
     game_pts = [preds.substitute(f, names) for f in pts]
+    watch = [ir.H(preds.substitute(f, names)) for f in apts]
+    if watch:  # (a requirement is kept while some assumption has been broken)
+        held = ir.and_all(*watch)
+        game_pts = [ir.or_(f, ir.not_(held)) for f in game_pts]
     try:
         atoms = game_atoms(game_pts)
     except Outside as exc:
@@ -307,7 +393,7 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
                "(FRET's) and false in doubles (a controller's), or the other way round; "
                "write it without them" if consts else str(exc))
         raise ShieldError(f"{', '.join(x.compiled.id for x in items)}: {why}") from None
-    used = {v for x in items for v in x.variables}
+    used = {v for x in [*items, *assumptions] for v in x.variables}
     messages = []
     for g in groups:
         if set(g) & used:
@@ -317,7 +403,7 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
                 [a for a in atoms if _variable(a) in g], bindings, notes, group))
             messages.append(group)
     return Component(items, env_inv, ctl_inv, messages, clusters, names, game_pts,
-                     game_inputs)
+                     game_inputs, list(assumptions), watch)
 
 
 def enforced_pts(items: list[CheckItem]) -> list[Node]:
@@ -349,7 +435,7 @@ def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: lis
         notes.append(f"the valuations of {names} are not related: more than "
                      f"{MAX_GROUP_ATOMS} atoms of one message")
         return ir.TRUE
-    out = ir.TRUE
+    excluded: list[Node] = []
     numeric = {_variable(a) for a in atoms if a.op != "ap"}
     try:
         wanted_of = [_wanted(a, bindings) for a in atoms]
@@ -358,7 +444,7 @@ def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: lis
             got = solve(wanted)[0]
             if got is None:
                 cube = ir.and_all(*(a if v else ir.not_(a) for a, v in zip(atoms, values)))
-                out = ir.and_(out, ir.not_(cube))
+                excluded.append(ir.not_(cube))
                 continue
             fields = {k: v for k, v in got.items() if k[1] != AGE}
             numbers = {}
@@ -373,7 +459,19 @@ def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: lis
                      f"any of them as far as the shield knows): {exc}")
         group.valuations.clear()
         return ir.TRUE
-    return out
+    return _balanced_and(excluded)
+
+
+def _balanced_and(xs: list[Node]) -> Node:
+    """The conjunction of ``xs`` as a balanced tree (a chain of 2^12 cubes is thousands of
+    levels deep: no recursion, the query's pickling to the game's worker included, takes
+    it)."""
+    if not xs:
+        return ir.TRUE
+    if len(xs) == 1:
+        return xs[0]
+    mid = len(xs) // 2
+    return ir.and_(_balanced_and(xs[:mid]), _balanced_and(xs[mid:]))
 
 
 def _number(e: Expr, fields: dict[tuple[str, tuple[str, ...]], Any]) -> float | None:

@@ -14,11 +14,15 @@ the shield never blocks: every reachable state has a safe output for every consi
 The explicit system has at most :data:`MAX_STATES` states and each requirement's bounds at
 most :data:`fretc.check.checker.SPOT_MAX_BOUND` ticks (Spot's translation grows
 exponentially with them); past either the answer is unknown, and says so.
+
+With assumptions of the environment (``fretc shield --assume``, :mod:`fretc.shield.plan`) a
+requirement is proved **under** them: the product is with ``A1 & ... & An & !R`` (each
+assumption's ft_inf), so only the runs of an environment that keeps every assumption count,
+and the report says so.
 """
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,14 +32,12 @@ from fretc.check.smt import max_bound
 from fretc.compiler import ir
 from fretc.compiler.printers import to_spot
 from fretc.shield.build import Shield
-from fretc.shield.machine import Machine, evaluate
+from fretc.shield.machine import Machine
 
-__all__ = ["Proof", "prove_shield", "closed_loop", "MAX_STATES", "MAX_LETTERS"]
+__all__ = ["Proof", "prove_shield", "closed_loop", "Loop", "MAX_STATES", "buddy_module"]
 
 #: the most states of one machine's closed loop that are enumerated
 MAX_STATES = 200_000
-#: the most letters (input and output atoms together: 2^n) enumerated per state
-MAX_LETTERS = 1 << 14
 
 
 @dataclass
@@ -50,6 +52,8 @@ class Proof:
     sizes: list[tuple[str, int, int, int]] = field(default_factory=list)
     blocking: list[str] = field(default_factory=list)
     monitored: dict[str, str] = field(default_factory=dict)
+    #: requirement id -> the assumptions it is proved under (none: any environment)
+    under: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def holds(self) -> bool:
@@ -58,83 +62,153 @@ class Proof:
 
     def text(self) -> str:
         """The terminal report."""
-        lines = ["proof of the closed loop (any environment, any controller, Spot):"]
+        assumed = sorted({a for ids in self.under.values() for a in ids})
+        lines = ["proof of the closed loop (" + ("any environment that keeps the assumptions "
+                                                 + ", ".join(assumed) if assumed
+                                                 else "any environment")
+                 + ", any controller, Spot):"]
         for ids, states, edges, nodes in self.sizes:
             lines.append(f"  {ids}: {states} states, {edges} edges; {nodes} BDD nodes")
         for rid, res in self.results.items():
-            lines.append(f"  {rid}: {res}" + (f" ({self.why[rid]})" if rid in self.why else ""))
+            under = (f" under {', '.join(self.under[rid])}"
+                     if self.under.get(rid) and res == "holds" else "")
+            lines.append(f"  {rid}: {res}{under}"
+                         + (f" ({self.why[rid]})" if rid in self.why else ""))
         for b in self.blocking:
             lines.append(f"  BLOCKS: {b}")
         for rid, why in self.monitored.items():
             lines.append(f"  {rid}: monitored only, not proved ({why})")
-        lines.append("the shield satisfies every enforced requirement" if self.holds
-                     else "NOT PROVED")
+        lines.append(("the shield satisfies every enforced requirement"
+                      + (" while the environment keeps its assumptions" if assumed else ""))
+                     if self.holds else "NOT PROVED")
         return "\n".join(lines)
 
 
-def closed_loop(m: Machine, limit: int = MAX_STATES
-                ) -> tuple[dict[tuple[int, ...], dict[tuple[int, ...], list[tuple[int, ...]]]],
-                           list[str]] | None:
-    """The reachable closed loop of ``m``: state -> next state -> the letters (input atoms
-    then output atoms, 0/1) of its edges; and the blocking states (described). None past
-    ``limit`` states or :data:`MAX_LETTERS` letters."""
-    n_in, n_out = len(m.inputs), len(m.outputs)
-    if 1 << (n_in + n_out) > MAX_LETTERS:
-        return None
-    ins = list(itertools.product((0, 1), repeat=n_in))
-    outs = list(itertools.product((0, 1), repeat=n_out))
+class Loop:
+    """The reachable closed loop of a machine (:func:`closed_loop`): ``graph`` state ->
+    next state -> the edge's label, a BDD (BuDDy's, in Spot's dictionary of ``owner``)
+    over the atoms' variables ``var`` (input atoms, then output atoms); ``blocking`` the
+    states with an input the environment may give and no safe output (described)."""
+
+    def __init__(self, owner: Any, var: list[int], graph: dict[tuple[int, ...], dict[
+            tuple[int, ...], Any]], blocking: list[str]):
+        self.owner, self.var, self.graph, self.blocking = owner, var, graph, blocking
+
+
+def buddy_module() -> Any:
+    """BuDDy's Python module, as Spot loads it (``import buddy`` alone does not find it)."""
+    import spot  # noqa: F401  (Spot puts BuDDy's binding where Python finds it)
+    import buddy
+
+    return buddy
+
+
+def closed_loop(m: Machine, limit: int = MAX_STATES, assumed: bool = False) -> Loop | None:
+    """The reachable closed loop of ``m`` (:class:`Loop`), computed symbolically: each
+    state's edges are the node table's ``safe`` and ``env_ok`` with the state's bits fixed,
+    as a BDD over the atoms, split by the next state's bits (no letter is enumerated).
+    ``assumed``: only the moves with which the machine's assumptions of the environment
+    still hold (the runs the guarantee is about: a run that breaks an assumption's pt
+    formula breaks its ft_inf, :mod:`fretc.shield.plan`); the blocking states are then
+    those with an input that keeps the assumptions and no safe output. None past
+    ``limit`` states."""
+    import spot
+
+    buddy = buddy_module()
+    owner = spot.make_twa_graph(spot.make_bdd_dict())
+    atoms = list(m.inputs) + list(m.outputs)
+    var = [owner.register_ap(a.name) for a in atoms]
+    n_atoms = len(atoms)
+    outs = buddy.bddtrue
+    for v in var[len(m.inputs):]:
+        outs = buddy.bdd_and(outs, buddy.bdd_ithvar(v))
     start = tuple(int(b) for b in m.init)
-    graph: dict[tuple[int, ...], dict[tuple[int, ...], list[tuple[int, ...]]]] = {}
+    graph: dict[tuple[int, ...], dict[tuple[int, ...], Any]] = {}
     todo, blocking = [start], []
     while todo:
-        s = todo.pop()
-        if s in graph:
+        st = todo.pop()
+        if st in graph:
             continue
         if len(graph) >= limit:
             return None
-        edges: dict[tuple[int, ...], list[tuple[int, ...]]] = {}
-        graph[s] = edges
-        for i in ins:
-            if not evaluate(m.nodes, m.env_ok, list(i) + [0] * n_out + list(s)):
-                continue
-            any_safe = False
-            for o in outs:
-                values = list(i + o + s)
-                if evaluate(m.nodes, m.safe, values):
-                    any_safe = True
-                    nxt = tuple(int(evaluate(m.nodes, r, values)) for r in m.next)
-                    edges.setdefault(nxt, []).append(i + o)
-                    if nxt not in graph:
-                        todo.append(nxt)
-            if not any_safe:
-                blocking.append(f"{', '.join(m.requirements)}: state {s}, inputs "
-                                + ", ".join(f"{a.text}={v}" for a, v in zip(m.inputs, i)))
-    return graph, blocking
+        memo: dict[int, Any] = {}
+
+        def fixed(root: int, st: tuple[int, ...] = st, memo: dict[int, Any] = memo) -> Any:
+            return _restricted(m, root, st, var, n_atoms, memo)
+
+        env = fixed(m.env_ok)
+        held = buddy.bddtrue
+        for r in (m.assumed if assumed else ()):
+            held = buddy.bdd_and(held, fixed(r))
+        label = buddy.bdd_and(buddy.bdd_and(fixed(m.safe), env), held)
+        # (an input with which the assumptions hold and no safe output: the shield blocks)
+        stuck = buddy.bdd_and(buddy.bdd_and(env, buddy.bdd_exist(held, outs)),
+                              buddy.bdd_not(buddy.bdd_exist(label, outs)))
+        if stuck != buddy.bddfalse:
+            one = buddy.bdd_satone(stuck)
+            blocking.append(f"{', '.join(m.requirements)}: state {st}, inputs "
+                            + ", ".join(f"{a.text}="
+                                        f"{int(buddy.bdd_and(one, buddy.bdd_ithvar(v)) != buddy.bddfalse)}"
+                                        for a, v in zip(m.inputs, var)))
+        edges: dict[tuple[int, ...], Any] = {}
+        _split(label, [fixed(r) for r in m.next], (), edges)
+        graph[st] = edges
+        todo.extend(nxt for nxt in edges if nxt not in graph)
+    return Loop(owner, var, graph, blocking)
 
 
-def _automaton(m: Machine, graph: dict[tuple[int, ...], dict[tuple[int, ...],
-                                                              list[tuple[int, ...]]]]) -> Any:
+def _restricted(m: Machine, root: int, st: tuple[int, ...], var: list[int], n_atoms: int,
+                memo: dict[int, Any]) -> Any:
+    """The node table's BDD ``root`` with the state bits ``st`` fixed, as a BuDDy BDD over
+    the atoms' variables ``var`` (``memo``: the table's nodes already converted, for this
+    state)."""
+    buddy = buddy_module()
+
+    def rec(n: int) -> Any:
+        if n < 2:
+            return buddy.bddtrue if n == 1 else buddy.bddfalse
+        got = memo.get(n)
+        if got is None:
+            v, lo, hi = m.nodes[n]
+            if v >= n_atoms:
+                got = rec(hi) if st[v - n_atoms] else rec(lo)
+            else:
+                got = buddy.bdd_ite(buddy.bdd_ithvar(var[v]), rec(hi), rec(lo))
+            memo[n] = got
+        return got
+
+    return rec(root)
+
+
+def _split(label: Any, nexts: list[Any], bits: tuple[int, ...],
+           out: dict[tuple[int, ...], Any]) -> None:
+    """The moves ``label`` split by the next state (``nexts``: each bit's BDD): next state
+    -> its moves, into ``out``."""
+    buddy = buddy_module()
+
+    if label == buddy.bddfalse:
+        return
+    if len(bits) == len(nexts):
+        out[bits] = label
+        return
+    f = nexts[len(bits)]
+    _split(buddy.bdd_and(label, buddy.bdd_not(f)), nexts, bits + (0,), out)
+    _split(buddy.bdd_and(label, f), nexts, bits + (1,), out)
+
+
+def _automaton(m: Machine, loop: Loop) -> Any:
     """The closed loop as a Spot automaton (every run accepting) over the atoms' names."""
-    import buddy
     import spot
 
-    aut = spot.make_twa_graph(spot.make_bdd_dict())
-    atoms = list(m.inputs) + list(m.outputs)
-    var = [aut.register_ap(a.name) for a in atoms]
+    aut = spot.make_twa_graph(loop.owner.get_dict())
+    aut.copy_ap_of(loop.owner)
     aut.set_acceptance(0, spot.acc_code.t())
     aut.prop_state_acc(True)
-    index = {s: k for k, s in enumerate(graph)}
+    index = {s: k for k, s in enumerate(loop.graph)}
     aut.new_states(len(index))
     aut.set_init_state(index[tuple(int(b) for b in m.init)])
-    for s, edges in graph.items():
-        for nxt, letters in edges.items():
-            label = buddy.bddfalse
-            for letter in letters:
-                cube = buddy.bddtrue
-                for v, bit in zip(var, letter):
-                    cube = buddy.bdd_and(cube, buddy.bdd_ithvar(v) if bit
-                                         else buddy.bdd_nithvar(v))
-                label = buddy.bdd_or(label, cube)
+    for s, edges in loop.graph.items():
+        for nxt, label in edges.items():
             aut.new_edge(index[s], index[nxt], label)
     return aut
 
@@ -148,26 +222,27 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
     proof = Proof(monitored=dict(shield.monitored))
     for m in shield.machines:
         ids = ", ".join(m.requirements)
-        loop = closed_loop(m)
+        loop = closed_loop(m, assumed=bool(m.assumed))  # (the runs A & !R can have)
         if loop is None:
             for rid in m.requirements:
                 proof.results[rid] = "unknown"
-                proof.why[rid] = (f"the closed loop has more than {MAX_STATES} states or "
-                                  f"2^{len(m.inputs) + len(m.outputs)} letters a state")
+                proof.why[rid] = f"the closed loop has more than {MAX_STATES} states"
             continue
-        graph, blocking = loop
-        proof.blocking += blocking
-        aut = _automaton(m, graph)
+        proof.blocking += loop.blocking
+        aut = _automaton(m, loop)
         proof.sizes.append((ids, aut.num_states(), aut.num_edges(), len(m.nodes)))
+        assumed = [ir.fold_constants(by_id[a].formalization.ft_inf) for a in m.assumptions]
         for rid in m.requirements:
             phi = ir.fold_constants(by_id[rid].formalization.ft_inf)  # (as the game read it)
-            if max_bound([phi]) > SPOT_MAX_BOUND:
+            proof.under[rid] = tuple(m.assumptions)
+            if max_bound([phi, *assumed]) > SPOT_MAX_BOUND:
                 proof.results[rid] = "unknown"
-                proof.why[rid] = (f"a bound of {max_bound([phi])} ticks; Spot is given up "
-                                  f"to {SPOT_MAX_BOUND}")
+                proof.why[rid] = (f"a bound of {max_bound([phi, *assumed])} ticks; Spot is "
+                                  f"given up to {SPOT_MAX_BOUND}")
                 continue
-            neg = spot.translate(spot.formula.Not(spot.formula(to_spot(phi))),
-                                 dict=aut.get_dict())
+            neg = spot.translate(spot.formula.And(
+                [spot.formula(to_spot(a)) for a in assumed]
+                + [spot.formula.Not(spot.formula(to_spot(phi)))]), dict=aut.get_dict())
             run = spot.product(aut, neg).accepting_word()
             if run is None:
                 proof.results[rid] = "holds"

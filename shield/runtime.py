@@ -40,6 +40,13 @@ infinite number (no actuator takes one) cannot be read. Then:
   fallback's value of that variable, then decided as any proposal (the state moves);
   without a fallback its atoms are left to the correction (any value of theirs costs
   nothing). ``Decision.fault`` says which and why; ``overridden`` is true.
+
+**Assumptions of the environment** (``fretc shield --assume``): a machine's ``"assumptions"``
+(ids) and ``"assumed"`` (per assumption the root of "it has held at every tick so far") are
+read after each decision. Once one has not held, the machine's guarantee no longer holds
+(its game counted every requirement kept from then on): ``Decision.broken`` names the broken
+assumptions, and the outputs are the fallback's from that tick on (none without a
+fallback), the state moving as usual.
 """
 
 from __future__ import annotations
@@ -80,6 +87,9 @@ class Decision(NamedTuple):
     #: ..." (``outputs`` the fallback's, the state unchanged), "proposal y: ..." (the
     #: proposal replaced)
     fault: str = ""
+    #: the assumptions of the environment broken so far (module docstring): the shield's
+    #: guarantee no longer holds, ``outputs`` are the fallback's
+    broken: tuple[str, ...] = ()
 
 
 def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
@@ -322,6 +332,8 @@ class _Machine:
         self.atoms_of = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
                          for v in self.variables if v not in clustered}
         self.in_kinds, self.out_kinds = kinds(self.ins), kinds(self.outs)
+        self.assume_ids = tuple(t.get("assumptions", ()))
+        self.assumed = tuple(t.get("assumed", ()))
         #: the output atoms that read each output variable
         self.reading = {v: [j for j, s in enumerate(self.outs)
                             if (v in term_variables(s[2]) if s[1] == "pred" else s[0] == v)]
@@ -388,9 +400,11 @@ class _Machine:
 
     def decide(self, inputs: dict[str, Any], proposed: dict[str, Any],
                unknown: frozenset[str] = frozenset()
-               ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...]]:
+               ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...],
+                          tuple[str, ...]]:
         """This machine's decision for one tick, nothing moved: the corrected outputs
-        (empty when the proposal is kept), reasons, changed atoms and the next state.
+        (empty when the proposal is kept), reasons, changed atoms, the next state and the
+        assumptions broken so far (module docstring).
         ``inputs`` and ``proposed`` hold checked values (:func:`read_value`) of every
         variable the machine reads but the output variables ``unknown`` (proposals that
         could not be read: their atoms are left to the correction and always changed)."""
@@ -401,7 +415,8 @@ class _Machine:
         prop = tuple([f(proposed) for f in self.out_tests])
         safe, nxt = self.move(ins, prop)
         if safe:
-            return (self._whole(proposed, prop) if self.integers else {}), (), (), nxt
+            return ((self._whole(proposed, prop) if self.integers else {}), (), (), nxt,
+                    self._broken(ins, prop))
         key = (self.state, ins, prop)
         got = self.corrections.get(key)
         if got is None:
@@ -417,10 +432,21 @@ class _Machine:
             got = self.corrections[key] = (outs, (reasons if changed else ()), changed,
                                            self._plan(outs, changed))
         outs, reasons, changed, plan = got
-        return self._values(plan, proposed), reasons, changed, self.move(ins, outs)[1]
+        return (self._values(plan, proposed), reasons, changed, self.move(ins, outs)[1],
+                self._broken(ins, outs))
+
+    def _broken(self, ins: tuple[int, ...], outs: tuple[int, ...]) -> tuple[str, ...]:
+        """The assumptions that have not held at every tick up to this one, with these
+        atoms (module docstring)."""
+        if not self.assumed:
+            return ()
+        values = list(ins + outs + self.state)
+        return tuple(a for a, r in zip(self.assume_ids, self.assumed)
+                     if _walk(self.nodes, r, values) != 1)
 
     def _unknown(self, ins: tuple[int, ...], proposed: dict[str, Any], unk: frozenset[int]
-                 ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...]]:
+                 ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...],
+                            tuple[str, ...]]:
         """:meth:`decide` when the output atoms ``unk`` read a proposal that could not be
         read: the safe outputs nearest the rest of the proposal, every atom of ``unk``
         counted changed (its variable's value is never the proposal's); no reason (the
@@ -430,7 +456,8 @@ class _Machine:
         changed = tuple(t for j, (t, p, o) in enumerate(zip(self.texts, prop, outs))
                         if p != o or j in unk)
         plan = self._plan(outs, changed)
-        return self._values(plan, proposed), (), changed, self.move(ins, outs)[1]
+        return (self._values(plan, proposed), (), changed, self.move(ins, outs)[1],
+                self._broken(ins, outs))
 
     def _values(self, plan: tuple[dict[str, Any], list[str], list[tuple[Any, ...]]],
                 proposed: dict[str, Any]) -> dict[str, Any]:
@@ -587,14 +614,20 @@ class ShieldRuntime:
         outputs.update(props)
         reasons: list[str] = []
         changed: list[str] = []
-        for m, (values, why, what, nxt) in zip(self.machines, moves):
+        broken: list[str] = []
+        for m, (values, why, what, nxt, gone) in zip(self.machines, moves):
             m.state = nxt
             outputs.update(values)
             reasons += why
             changed += what
+            broken += gone
             # (a replaced proposal's atoms are changed, whatever their new truth)
             changed += [m.texts[j] for v in replaced for j in m.reading.get(v, ())
                         if m.texts[j] not in what]
+        if broken:  # (the guarantee no longer holds: the fallback, as for unread inputs)
+            outs, moved = self._fallback_outputs(proposed)
+            return Decision(outs, True, tuple(reasons), moved, "; ".join(faults),
+                            tuple(broken))
         return Decision({v: outputs[v] for v in self.outputs if v in outputs},
                         bool(changed) or bool(faults), tuple(reasons), tuple(changed),
                         "; ".join(faults))
@@ -607,6 +640,16 @@ class ShieldRuntime:
         proposal cannot be read either)."""
         if self.fallback is None:
             return Decision({}, True, (), (), why + "; no fallback: no outputs")
+        outputs, changed = self._fallback_outputs(proposed)
+        return Decision(outputs, True, (), changed, why)
+
+    def _fallback_outputs(self, proposed: dict[str, Any]
+                          ) -> tuple[dict[str, Any], tuple[str, ...]]:
+        """The fallback's outputs (none without a fallback; the outputs no machine reads
+        passed through) and the output atoms whose fallback truth is not the proposal's
+        (or whose proposal cannot be read)."""
+        if self.fallback is None:
+            return {}, ()
         outputs = {v: proposed[v] for v in self.outputs
                    if v not in self.output_kinds and v in proposed}
         outputs.update(self.fallback["outputs"])
@@ -622,5 +665,4 @@ class ShieldRuntime:
                 need = term_variables(spec[2]) if spec[1] == "pred" else {spec[0]}
                 if not need <= checked.keys() or int(f(checked)) != bits[j]:
                     changed.append(t)
-        return Decision({v: outputs[v] for v in self.outputs if v in outputs}, True, (),
-                        tuple(changed), why)
+        return {v: outputs[v] for v in self.outputs if v in outputs}, tuple(changed)

@@ -37,15 +37,17 @@ from fretc.compiler.ir import Node
 __all__ = ["synthesize"]
 
 
-def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_inv: Node, *,
-               budget: Budget | None = None) -> dict[str, Any]:
+def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_inv: Node,
+               watch: Sequence[Node] = (), *, budget: Budget | None = None) -> dict[str, Any]:
     """The shield of the pt formulas ``pts`` (one per enforced requirement, in order):
     ``inputs`` the environment's FRET variables, ``env_inv``/``ctl_inv`` the propositional
-    consistency of the input / output atoms (numbers, messages).
+    consistency of the input / output atoms (numbers, messages); ``watch`` sub-formulas of
+    ``pts`` whose values are exported too (the assumptions' ``H A``,
+    :mod:`fretc.shield.plan`).
 
     Returns ``{"realizable": True, "atoms": [(IR atom, is input)], "init": [bool],
     "nodes": [(var, lo, hi)], "safe": int, "next": [int], "keep": [int], "env_ok": int,
-    "ctl_ok": int, "robust": int, "stats": {...}}`` (variables numbered as :mod:`fretc.shield.machine` says) or
+    "ctl_ok": int, "robust": int, "watch": [int], "stats": {...}}`` (variables numbered as :mod:`fretc.shield.machine` says) or
     ``{"realizable": False, "inputs": [letters] | None, "run": [rows], "note": str}``
     (letters and rows: ``{atom name: bool}``, as :func:`fretc.check.safety_game.solve_game`).
 
@@ -84,15 +86,18 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         # the (consistent) inputs (the outputs of a tick whose inputs cannot be read)
         robust = b.bdd_forall(b.bdd_imp(b.bdd_and(b.bdd_not(lose), game.env_ok), safe),
                               b.bdd_and(game.cur_set, game.in_set))
-        bdds = [safe, *nexts, *keeps, game.env_ok, game.ctl_ok, robust]
+        watched = [m.value(w) for w in watch]  # (planned: sub-formulas of the game's pts)
+        bdds = [safe, *nexts, *keeps, game.env_ok, game.ctl_ok, robust, *watched]
         roots = [table.add(f) for f in bdds]
         _self_check(b, varmap, table, bdds, roots)
+        roots, watch_roots = roots[:len(roots) - len(watched)], roots[len(roots) - len(watched):]
         return {"realizable": True,
                 "atoms": [(a, True) for a in ins] + [(a, False) for a in outs],
                 "init": [bool(bit[2]) for bit in m.bits], "nodes": table.nodes,
                 "safe": roots[0], "next": roots[1:1 + len(nexts)],
                 "keep": roots[1 + len(nexts):1 + len(nexts) + len(keeps)],
                 "env_ok": roots[-3], "ctl_ok": roots[-2], "robust": roots[-1],
+                "watch": watch_roots,
                 "stats": {"state_bits": len(m.bits),
                           "winning_region_bdd_nodes": b.bdd_nodecount(b.bdd_not(lose)),
                           "iterations": len(game.layers),

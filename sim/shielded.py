@@ -56,13 +56,16 @@ class ShieldedSafety:
         #: (sim time s, reasons, changed output atoms) of every override
         self.overrides: list[tuple[float, tuple[str, ...], tuple[str, ...]]] = []
         self.ticks = 0
+        #: (sim time s, ids) of each assumption of the environment when it first broke
+        self.broken: list[tuple[float, tuple[str, ...]]] = []
 
     def start(self, factory: Any) -> None:
         """Bind to a recorder's message factory (the messages' types) and reset the shield."""
         self.factory = factory
         self.runtime.reset()
-        self.overrides, self.ticks = [], 0
+        self.overrides, self.ticks, self.broken = [], 0, []
         makers = {"/cmd_vel_filtered": lambda: factory.twist(0.0, 0.0),
+                  "/ground_truth/clearance": lambda: factory.float64(0.0),
                   "/cmd_vel": lambda: factory.twist(0.0, 0.0),
                   "/gwendolen_control": lambda: factory.bool(False)}
 
@@ -89,4 +92,8 @@ class ShieldedSafety:
         self.ticks += 1
         if d.overridden:
             self.overrides.append((t, d.reasons, d.changed))
+        gone = tuple(a for a in getattr(d, "broken", ()) if all(a not in b for _t, b in
+                                                                 self.broken))
+        if gone:
+            self.broken.append((t, gone))
         return msgs

@@ -103,6 +103,8 @@ class RunResult:
     #: each override, and its ticks
     overrides: list = field(default_factory=list)
     shield_ticks: int = 0
+    #: the shield's assumptions of the environment that broke: (t s, ids) when first broken
+    shield_broken: list = field(default_factory=list)
 
 
 def _ns(t_ms: int) -> int:
@@ -251,7 +253,8 @@ class Simulation:
             min_clearance=st.min_clear, contact=st.contact, sif_events=list(self.safety.events),
             trace=st.trace, world=self.world, goals=self.mission.goals,
             overrides=list(self.shield.overrides) if self.shield is not None else [],
-            shield_ticks=self.shield.ticks if self.shield is not None else 0)
+            shield_ticks=self.shield.ticks if self.shield is not None else 0,
+            shield_broken=list(self.shield.broken) if self.shield is not None else [])
 
     def _publish_control(self, rec: Recorder, st: _RunState, t_ms: int, stop) -> None:
         rec.write("/gwendolen_control", _ns(t_ms), rec.factory.bool(stop))
@@ -329,7 +332,10 @@ class Simulation:
         st.min_clear = min(st.min_clear, clr)
         rec.write("/ground_truth/pose", _ns(t_ms),
                   f.pose_stamped(_ns(t_ms), "map", s.x, s.y, s.yaw, "/ground_truth/pose"))
-        rec.write("/ground_truth/clearance", _ns(t_ms), f.float64(clr))
+        clearance = f.float64(clr)
+        rec.write("/ground_truth/clearance", _ns(t_ms), clearance)
+        if self.shield is not None:  # (a shield whose assumptions read the ground truth)
+            self.shield.hear("/ground_truth/clearance", clearance, _ns(t_ms))
         trace.t.append(t)
         trace.x.append(s.x)
         trace.y.append(s.y)

@@ -3,8 +3,8 @@
 ::
 
     fretc shield FILE... [--inputs A,B] [--outputs C,D] [-b BINDINGS] [--prefer LITERALS]
-                 [--fallback OUTPUTS] [--emit python|c|ros2|gwendolen]... [-o DIR] [--prove]
-                 [--explain]
+                 [--assume FILE]... [--fallback OUTPUTS] [--emit python|c|ros2|gwendolen]...
+                 [-o DIR] [--prove] [--explain]
                  [--budget UNITS] [--memory-budget NODES]
 
 Inputs and outputs default to the files' ``@inputs``/``@outputs`` (as ``fretc check``). Exit
@@ -41,6 +41,11 @@ FORMS = ("python", "c", "ros2", "gwendolen")
 @click.option("--prefer", default=None, metavar="LITERALS",
               help="Among corrections changing equally few output atoms, prefer these "
               "values, first first: e.g. 'stopped,!stop_requested'.")
+@click.option("--assume", "assume", multiple=True, type=click.Path(exists=True),
+              metavar="FILE", help="Requirements of the environment (what it can do), taken "
+              "as the games' assumptions: the environment loses a play in which it breaks "
+              "one, a requirement over inputs they relate to outputs is enforced, --prove "
+              "proves under them; the forms report when one breaks (repeatable).")
 @click.option("--fallback", default=None, metavar="OUTPUTS",
               help="The outputs of a tick whose inputs cannot be read (a NaN, a missing "
               "value), which must keep every requirement from every state whatever the "
@@ -64,8 +69,8 @@ FORMS = ("python", "c", "ros2", "gwendolen")
 @budget_options("game")
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
-               bindings_file: str | None, prefer: str | None, fallback: str | None,
-               forms: tuple[str, ...],
+               bindings_file: str | None, prefer: str | None, assume: tuple[str, ...],
+               fallback: str | None, forms: tuple[str, ...],
                out_dir: str | None, prove: bool, explain: bool, name: str | None,
                margin: int, budget: int, memory_budget: int, query_cpu: float) -> None:
     """Synthesize the shield of requirement FILES: each tick it passes the controller's
@@ -83,7 +88,14 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     rs = requirement_set(files, bindings_file)
     as_written, entries = rs.as_written, rs.entries
     compiled = compile_entries(entries)
-    bad = [c for c in compiled if c.error is not None]
+    assumed = compile_entries(requirement_set(assume, bindings_file).entries) if assume else []
+    taken = {c.id for c in compiled}
+    twice = sorted({c.id for c in assumed if c.id in taken})
+    if twice:
+        click.echo(shown(f"error: {', '.join(twice)}: both a requirement and an assumption "
+                         "(--assume): give each one id"), err=True)
+        sys.exit(2)
+    bad = [c for c in [*compiled, *assumed] if c.error is not None]
     for c in bad:
         click.echo(shown(str(c.error)), err=True)
     if bad:
@@ -109,7 +121,8 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         shield = build_shield(with_margin(compiled, margin), ins, outs, bindings=bindings,
                               prefer=parse_preferences(prefer),
                               budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
-                              name=name or Path(files[0]).stem, fallback=declared)
+                              name=name or Path(files[0]).stem, fallback=declared,
+                              assumptions=assumed)
     except ShieldUnknown as exc:
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
@@ -120,11 +133,11 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     if explain:
         from fretc.shield.explain import explain_text
 
-        click.echo(shown(explain_text(shield, compiled)))
+        click.echo(shown(explain_text(shield, [*compiled, *assumed])))
     if prove:
         from fretc.shield.prove import prove_shield
 
-        proof = prove_shield(shield, compiled)
+        proof = prove_shield(shield, [*compiled, *assumed])
         click.echo(shown(proof.text()))
         code = 0 if proof.holds else 1
     if forms:
@@ -159,6 +172,12 @@ def _summary(shield) -> str:
         lines.append(f"  corrected together (one message): {', '.join(g)}")
     for rid, why in shield.monitored.items():
         lines.append(f"  monitored only: {rid}: {why}")
+    if shield.assumptions:
+        lines.append("  under the assumptions of the environment "
+                     + ", ".join(a.id for a in shield.assumptions) + " ("
+                     + ", ".join(dict.fromkeys(a.source.rsplit(":", 1)[0]
+                                               for a in shield.assumptions))
+                     + "): the environment loses a play in which it breaks one")
     if shield.fallback is not None and shield.fallback["outputs"]:
         lines.append("  fallback (a tick whose inputs cannot be read): " + ", ".join(
             (v if x else f"!{v}") if isinstance(x, bool) else f"{v}={x:g}"
