@@ -34,6 +34,7 @@ from fretc.audit.unknown_ticks import judge_three
 from fretc.common.problems import NAN
 from fretc.compiler.ir import walk
 from fretc.monitors.vectorized import supports
+from fretc.monitors.robustness import TINY
 
 if TYPE_CHECKING:
     from fretc.signals.clock import Sampling
@@ -359,13 +360,21 @@ def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v
                 holds: bool) -> None:
     """``v.robustness`` and ``v.robustness_at`` from the judge's robustness ``rob`` (None:
     the pt formula cannot be evaluated over columns; a note says so). A value whose sign
-    disagrees with the verdict is never reported (a note says so instead)."""
+    disagrees with the verdict is never reported, nor a violation's ``-TINY`` (a comparison
+    false at distance 0: ``x != c`` with ``x == c``, :mod:`fretc.monitors.robustness`'s
+    sign convention), which tells no distance (a note says so instead)."""
     if rob is None:
         v.notes.append("robustness unavailable: the pt formula has a future-time function")
         return
     if (rob.value < 0) == holds:
         v.notes.append(f"robustness unavailable: its sign disagrees with the verdict "
                        f"({rob.value!r})")
+        return
+    if rob.value == -TINY:
+        v.notes.append("robustness: none: the violation is decided at distance 0 from its "
+                       "threshold (an `!=` met by equality, a strict comparison met at its "
+                       "threshold, or a comparison with NaN), where a margin tells no "
+                       "distance")
         return
     v.robustness = rob.value + 0.0  # never -0.0: its sign is the verdict's
     # the message that decided the tick: the newest held among the clock's topics

@@ -36,7 +36,7 @@ from fretc.common.problems import BindingError
 from fretc.common.streams import log_topics
 from fretc.live.record import Recorder
 from fretc.signals.bindings.binding import compile_expression
-from fretc.signals.bindings.expression import EntityParam
+from fretc.signals.bindings.expression import TF_TOPICS, EntityParam
 
 __all__ = ["EntityRecording", "entity_topics"]
 
@@ -48,7 +48,7 @@ def entity_topics(plan: Any, indexes: set[int]) -> set[str]:
     (the audit at the end gives its error)."""
     b = plan.bindings
     out: set[str] = {b.tick.topic} if b.tick.topic else set()
-    for name, (key, _matching) in b.entities.items():
+    for name, (key, _matching, _hold) in b.entities.items():
         try:
             out |= log_topics(compile_expression(f"entity_{name}", key,
                                                  source=str(b.source)).topics)
@@ -87,7 +87,10 @@ class EntityRecording:
         """Once the topics were waited for: the topics read that ``source`` did not
         advertise or cannot decode make their requirements ``error`` at the end, as a
         watch's other requirements (a log without them would judge no entity: vacuous)."""
+        tf = set(TF_TOPICS) if set(TF_TOPICS) & set(source.advertised) else set()
         for t in sorted(self.topics):
+            if t in tf and t not in source.advertised:
+                continue  # (tf() reads /tf and /tf_static: one of them is a whole tree)
             if t not in source.advertised:
                 self.unreadable[t] = f"topic {t} is not advertised by {url}"
             elif source.decoders.get(t) is None:

@@ -11,8 +11,9 @@ the messages the watch used on the topics its requirement reads are kept in memo
 the first tick at or after that message (the entity's life, :mod:`fretc.audit.entities.read`),
 so its ticks are those the audit of the run gives it. Past the bound, entities found later have no live events (their final
 verdict is unchanged); so do entities under the header time base (the audit orders by
-header stamps: a later message may come before a tick already stepped), and requirements
-without a generated monitor (``offline``).
+header stamps: a later message may come before a tick already stepped), entities held on
+their own (``hold = "entity"``: a clock of one entity would hold the key topic's newest
+message, another entity's), and requirements without a generated monitor (``offline``).
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ class _Kind:
 
     def __init__(self, r: Any, name: str, bindings: Any) -> None:
         self.r, self.name = r, name
-        key, self.matching = bindings.entities[name]
+        key, self.matching, _hold = bindings.entities[name]
         self.key = compile_expression(f"entity_{name}", key, source=str(bindings.source))
         self.key_topic = next(iter(self.key.topics)) if len(self.key.topics) == 1 else None
         self.seen: set = set()
@@ -105,7 +106,8 @@ class EntityEvents:
             for i, names in entity_of_requirements(plan).items():
                 r = plan.requirements[i] if plan.requirements[i].index == i else next(
                     x for x in plan.requirements if x.index == i)
-                if len(names) == 1 and r.error is None and not r.offline and r.monitor_cls:
+                if (len(names) == 1 and r.error is None and not r.offline and r.monitor_cls
+                        and b.entities[names[0]].hold != "entity"):
                     try:
                         kind = _Kind(r, names[0], b)
                     except BindingError:

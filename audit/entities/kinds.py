@@ -27,7 +27,10 @@ __all__ = ["EntityKind", "EntityTable", "entity_kind", "key_items", "own_binding
 class EntityKind:
     """One ``[entities]`` name: ``key`` its key path, compiled (``binding``) and read from
     ``topic`` (a topic, or a stream); ``stream``: one key per message (each entity a stream
-    of its own messages), else an array of keys per message (the entities present)."""
+    of its own messages), else an array of keys per message (the entities present);
+    ``hold``: what a tick reads of an entity of an array key
+    (:data:`~fretc.signals.bindings.spec.HOLDS`: ``"entity"``, its own newest message that
+    carried it, held to the end of the log)."""
 
     name: str
     key: str
@@ -35,6 +38,12 @@ class EntityKind:
     binding: Binding
     topic: str
     stream: bool
+    hold: str = "message"
+
+    @property
+    def held(self) -> bool:
+        """Each entity of an array key held on its own (``hold = "entity"``)."""
+        return self.hold == "entity" and not self.stream
 
 
 def entity_kind(bindings: Bindings, name: str) -> EntityKind:
@@ -42,13 +51,13 @@ def entity_kind(bindings: Bindings, name: str) -> EntityKind:
 
     Raises:
         BindingError: the key is not a field path of one topic."""
-    key, matching = bindings.entities[name]
+    key, matching, hold = bindings.entities[name]
     b = compile_kept(f"entity_{name}", key, f"{bindings.source} [entities]")
     if len(b.topics) != 1 or not b.fields:
         raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
                            "field path of one topic, e.g. \"/tracks.tracks[:].id\"")
     topic = next(iter(b.topics))
-    return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields))
+    return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields), hold)
 
 
 def key_items(v: Any) -> list:
@@ -67,16 +76,18 @@ def key_items(v: Any) -> list:
 class EntityTable:
     """The entities of one clock as the read meets them: key -> index (first appearance
     order), their first and last message times (ns, the clock's time base), the first error
-    evaluating one, and the present values (array keys: per tick) or the messages' values
-    (one-value keys: per message)."""
+    evaluating one, and the messages of the entities read in their own messages (one-value
+    keys: with their values; array keys held on their own)."""
 
     index: dict[Any, int] = field(default_factory=dict)
     keys: list[Any] = field(default_factory=list)
     first: list[int] = field(default_factory=list)
     last: list[int] = field(default_factory=list)
     errors: dict[int, SignalError] = field(default_factory=dict)
-    #: (entity, tick number or message time, values) in the order met
-    rows: list[tuple[int, int, tuple]] = field(default_factory=list)
+    #: the messages of the entities read in their own messages, in the order met: (entity,
+    #: message time (the clock's time base), its values (one-value keys; () for an array
+    #: key's entities held on their own), log time)
+    rows: list[tuple[int, int, tuple, int]] = field(default_factory=list)
     cut: bool = False  # more entities than the bound met
 
     def see(self, key: Any, t: int, bound: int) -> int | None:

@@ -35,12 +35,12 @@ from fretc.audit.columns import ClockPass
 from fretc.audit.passes import cut_at_damage, lost_in_words, mark_gaps
 from fretc.audit.verdict import NO_EVIDENCE, LogAudit, Ltl3, Verdict
 from fretc.common.problems import FretcInputError
-from fretc.common.streams import log_topics
+from fretc.common.streams import base_topic, log_topics
 from fretc.logs import open_log
 from fretc.monitors.robustness import robustness_of_traces
 from fretc.monitors.vectorized import VectorizeError
 from fretc.signals.bindings import Bindings
-from fretc.signals.bindings.expression import EntityParam
+from fretc.signals.bindings.expression import TF_TOPICS, EntityParam
 
 __all__ = ["MAX_ENTITIES", "DEFAULT_MAX_ENTITIES", "entity_of_requirements", "audit_entities",
            "entity_passes", "summary_verdict", "summary_note"]
@@ -196,8 +196,10 @@ class _Entities:
             why = (f"topic {', '.join(absent)} (the key {b.entities[names[0]][0]} of entity "
                    f"{names[0]}) is not in the log {has}: no entity was looked for")
         else:
-            absent = sorted(t for v in r.variables for t in log_topics(own[v].topics)
-                            if t not in available)
+            tf = set(TF_TOPICS) if set(TF_TOPICS) & set(available) else set()  # (one of
+            # them is enough: a log from before tf2 has no /tf_static)
+            absent = sorted({t for v in r.variables for t in log_topics(own[v].topics)
+                             if t not in available and t not in tf})
             if not absent:
                 return None
             why = f"topic {', '.join(absent)} (bound to {r.id}'s variables) is not in the log {has}"
@@ -296,9 +298,15 @@ class _Judge:
         #: its LTL3 verdict, tick and ticks
         self.robs: dict[int, Any] = {}
         self.ltl3s: dict[int, tuple[str, int | None, int]] = {}
-        self.records: dict[int, list[tuple[int, tuple]]] = {}
-        for i, tm, vals in c.table.rows:
-            self.records.setdefault(i, []).append((tm, vals))
+        #: entity -> its messages (one-value keys; array keys held on their own): (time,
+        #: its values (one-value keys), log time)
+        self.records: dict[int, list[tuple[int, tuple, int]]] = {}
+        for i, tm, vals, lt in c.table.rows:
+            self.records.setdefault(i, []).append((tm, vals, lt))
+        self.held = c.kind.held
+        #: entities of an array key read at no tick of their life (each message that
+        #: carried them superseded before a tick): their values were never read
+        self.unread = self._unread()
         self.bindings = Bindings({**{b.name: b for b in c.variables},
                                   **{b.name: b for b in c.own}},
                                  ents.plan.bindings.tick, ents.plan.bindings.time_base,
@@ -343,6 +351,41 @@ class _Judge:
                        ticks_evaluated=ticks[0], first_tick_ns=ticks[1], last_tick_ns=ticks[2],
                        notes=[*r.notes, seen, BATCH_NOTE], ltl3=batch, **NO_EVIDENCE)
 
+    def _own_log_times(self, i: int, times: np.ndarray, log_times: dict) -> None:
+        """The log time held at each tick of ``times`` on the key's topic, for entity ``i``
+        read in its own messages (one-value keys; held on their own): its newest message's,
+        not the topic's newest (another entity's), so that its evidence names the message
+        that decided it."""
+        rec = self.records.get(i)
+        if not rec:
+            return
+        rt = np.array([r[0] for r in rec], dtype=np.int64)
+        lt = np.array([r[2] for r in rec], dtype=np.int64)
+        k = np.searchsorted(rt, times, side="right") - 1
+        own = np.where(k >= 0, lt[np.maximum(k, 0)], -1)
+        key = base_topic(self.c.kind.topic)  # (the topic, and its streams the variables
+        # read: "PARM"{Name==$param})
+        names = ({t for t in log_times if base_topic(t) == key}
+                 | {t for b in self.c.own for t in b.topics if base_topic(t) == key})
+        for name in names or {key}:
+            log_times[name] = own
+
+    def _unread(self) -> set[int]:
+        """The entities (indexes) of an array key read in the message held at the tick
+        that no tick of their life read (:attr:`unread`): none for one-value keys and
+        entities read at every tick (held on their own, ``tf()``)."""
+        c = self.c
+        rows = self.rows
+        n, m = len(self.times), len(c.table.keys)
+        if c.kind.stream or self.held or rows is None or not m or not n or any(
+                b.uses_tf for b in c.own):
+            return set()
+        i0, i1 = self._ranges(list(range(m)))
+        e, k = rows.entity, rows.tick
+        inside = (k >= i0[e]) & (k <= i1[e])
+        read = np.bincount(e[inside], minlength=m)
+        return set(np.flatnonzero((read == 0) & (i0 < n)).tolist())
+
     def _range(self, i: int) -> tuple[int, int]:
         """Entity ``i``'s ticks ``i0..i1`` (its life; ``i0`` past the end: none)."""
         i0, i1 = self._ranges([i])
@@ -356,8 +399,11 @@ class _Judge:
             self.lives = (np.asarray(self.c.table.first, np.int64),
                           np.asarray(self.c.table.last, np.int64))
         first, last = self.lives[0][at], self.lives[1][at]
-        return (np.searchsorted(self.times, first, side="left").astype(np.int64),
-                np.minimum(np.searchsorted(self.times, last, side="left"), n - 1).astype(np.int64))
+        i0 = np.searchsorted(self.times, first, side="left").astype(np.int64)
+        if self.held:  # (held to the clock's last tick)
+            return i0, np.full(len(at), n - 1, np.int64)
+        return (i0, np.minimum(np.searchsorted(self.times, last, side="left"),
+                               n - 1).astype(np.int64))
 
     def _batch(self) -> dict[int, Verdict]:
         """The entities judged at once (:mod:`fretc.audit.entities.batch`): satisfied or
@@ -367,7 +413,7 @@ class _Judge:
         if trig is None or src.partial or src.lost or inner_gaps(src):
             return {}
         judged = [i for i in range(len(c.table.keys))
-                  if i not in c.table.errors or c.kind.stream]
+                  if (i not in c.table.errors or c.kind.stream) and i not in self.unread]
         n = len(self.times)
         i0s, i1s = self._ranges(judged)
         keep = i0s < n
@@ -438,7 +484,7 @@ class _Judge:
             vals: list[list] = [[] for _ in own]
             for e, i in enumerate(judged):
                 rec = self.records[i]
-                rt = np.array([t for t, _v in rec], dtype=np.int64)
+                rt = np.array([r[0] for r in rec], dtype=np.int64)
                 a, m = int(i0s[e]), int(lengths[e])
                 at = np.maximum(np.searchsorted(rt, self.times[a:a + m], side="right") - 1, 0)
                 for j in range(len(own)):
@@ -464,6 +510,10 @@ class _Judge:
                           if c.s.missing_topics else ""))
             return v
         res = self._pass(i, i0, i1)
+        unread = i in self.unread
+        if unread:  # (its values unknown at every tick: never read)
+            for b in c.own:
+                res.unknown[b.name] = np.ones(len(res.times), np.bool_)
         if ents.keep is not None:
             ents.kept[v.requirement] = ents.keep(r, res)
         v.ticks_evaluated = len(res.times)
@@ -476,7 +526,24 @@ class _Judge:
         if v.error is not None:
             v.verdict = "error"
         v.partial = ents.la.partial and v.error is None
+        if unread:
+            self._unread_said(i, v)
         return v
+
+    def _unread_said(self, i: int, v: Verdict) -> None:
+        """What ``v``, the verdict of entity ``i`` read at no tick (:attr:`unread`), says of
+        it: its reason when unknown, else a note (decided whatever its values)."""
+        c = self.c
+        why = (f"entity {self.name} = {c.table.keys[i]!r} was read at no tick: the messages "
+               f"of {c.kind.topic} that carried it ({c.kind.key}, from log time "
+               f"{c.table.first[i]} to {c.table.last[i]}) were each superseded before a "
+               "tick, and a tick reads the message held; to read each entity in its own "
+               f"newest message, write [entities] {self.name} = {{ key = \"{c.kind.key}\", "
+               "hold = \"entity\" }")
+        if v.verdict == "unknown":
+            v.unknown_reason = why
+        else:
+            v.notes.append(why + f": {v.verdict} whatever its values")
 
     def _pass(self, i: int, i0: int, i1: int) -> ClockPass:
         """Entity ``i``'s clock pass over ticks ``i0..i1`` (the damage's cut and gaps)."""
@@ -486,7 +553,7 @@ class _Judge:
         own = [b.name for b in c.own]
         if c.kind.stream:
             rec = self.records[i]
-            rt = np.array([t for t, _v in rec], dtype=np.int64)
+            rt = np.array([r[0] for r in rec], dtype=np.int64)
             at = np.maximum(np.searchsorted(rt, times, side="right") - 1, 0)
             for j, name in enumerate(own):
                 columns[name] = _column([rec[k][1][j] for k in at.tolist()])
@@ -494,6 +561,8 @@ class _Judge:
             assert self.rows is not None  # (an array key)
             columns.update(self.rows.trace(i, i0, i1))
         log_times = {k: lt[sl] for k, lt in self.log_times.items()}
+        if c.kind.stream or self.held:
+            self._own_log_times(i, times, log_times)
         res = ClockPass(c.s, times, columns, log_times)
         topics = frozenset(t for b in self.bindings.variables.values() for t in b.topics)
         cut_at_damage(res, self.source, self.bindings, topics)

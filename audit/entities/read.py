@@ -23,12 +23,18 @@ entity's trace is its life:
   (a filter keeps no item; a function that needs the item, ``joint()``, is NaN: unknown);
 * a key of one value per message (``"PARM".Name``) makes each entity a stream of its own
   messages (its variables read it through a filter right after the topic,
-  ``"PARM"{Name==$param}.Value``): a tick reads the entity's newest message, as a stream.
+  ``"PARM"{Name==$param}.Value``): a tick reads the entity's newest message, as a stream;
+* an array key whose kind holds each entity on its own (``hold = "entity"``) reads at each
+  tick every entity met so far in its own newest message of the key's topic (the newest
+  that carried it; ``age($car)`` its age), from its first message to the clock's last tick;
+  a per-entity variable that reads ``tf()`` reads every entity met so far at each tick too
+  (each frame's newest transform, the TF buffer's rule).
 
 Memory: per clock, its plain columns (one value per tick) and the absent value of each
 per-entity variable at each tick, plus one entry per (entity, tick it is present at) (array
 keys) or per message of the entity (one-value keys); nothing grows with entities times the
-log's length. Per-entity variables are functions of the held messages: windows and
+log's length, but for entities read at every tick (held on their own, or through ``tf()``):
+one entry per (entity met, tick). Per-entity variables are functions of the held messages: windows and
 aggregations over messages (``mean(x, 2s)``, ``any_of_messages``) of an entity are refused.
 """
 
@@ -57,7 +63,9 @@ from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
 from fretc.signals.bindings.extract import by_entity
 from fretc.signals.bindings.spec import grid_end, grid_start
-from fretc.signals.clock import Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf
+from fretc.signals.bindings.frames import TfBuffer
+from fretc.signals.clock import (Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf,
+                                 silence_end)
 from fretc.signals.columns import Irregular
 from fretc.signals.streams import Streams
 from fretc.signals.tick_windows import with_tick_windows
@@ -91,7 +99,17 @@ class EntityClock(Clock):
                  vectorized: bool = True) -> None:
         super().__init__(s, plain, required, tick, keep_going=True)
         self.kind, self.own, self.param, self.bound = kind, own, param, bound
+        if self.state.tf is None and any(b.uses_tf for b in own):  # tf($car): every
+            self.state.tf = TfBuffer()  # transform, each frame its newest
+        if self.silence_end is None:  # age($car): the clock ticks to the log's end
+            self.silence_end = silence_end(s.source, s.bindings, own)
         self.table = EntityTable()
+        #: every entity met so far is read at each tick (not only those of the held key
+        #: message): held on their own, or read through tf() (each frame in the TF buffer)
+        self.held = kind.held
+        self.every = self.held or any(b.uses_tf for b in own)
+        #: held on their own: entity -> its newest key message (data, time, log time)
+        self.newest: dict[int, tuple[Any, int, int]] = {}
         self.key_state = EvalState()
         self.present: dict[int, list[int]] = {}  # id(held key message) -> its entities
         self.stream_state = EvalState()
@@ -104,8 +122,8 @@ class EntityClock(Clock):
         #: the vectorized path (:mod:`fretc.audit.entities.rows`): the item fields of the
         #: per-entity variables when they are functions of the key's message and the
         #: entity alone (None: each evaluated at each tick, the reference)
-        self.rows_of = (row_fields(own, kind.topic)
-                        if self.static_absent and not kind.stream and vectorized else None)
+        self.rows_of = (row_fields(own, kind.topic) if self.static_absent and not kind.stream
+                        and not self.every and vectorized else None)
         #: vectorized: id of a held key message -> its rows (set by its batch), and the
         #: held messages waiting for their batch ``(message, entities, rows)``
         self.msg_rows: dict[int, HeldRows] = {}
@@ -143,7 +161,7 @@ class EntityClock(Clock):
         if topic in self.fed:
             yield from super().push(topic, t, log_time, data)
         if topic in self.key_topics:
-            self._key_message(topic, t, data)
+            self._key_message(topic, t, log_time, data)
 
     def _lean_push(self, topic: str, t: int, log_time: int, data: Any) -> None:
         """:meth:`push` of a clock of a tick period without plain variables
@@ -175,19 +193,26 @@ class EntityClock(Clock):
                 self.since[topic] = self.since.get(topic, 0) + 1
             self.last = t
         if topic in self.key_topics:
-            self._key_message(topic, t, data)
+            self._key_message(topic, t, log_time, data)
 
     fed: frozenset[str] = frozenset()  # (set by read_entities: the topics the clock holds)
 
-    def _key_message(self, topic: str, t: int, data: Any) -> None:
-        """Record the entities a message of the key's topic carries."""
-        got = self._key_entities(topic, t, data)
+    def _key_message(self, topic: str, t: int, log_time: int, data: Any) -> None:
+        """Record the entities a message of the key's topic carries (at ``t`` on the time
+        base, ``log_time`` its log time, ns)."""
+        got = self._key_entities(topic, t, data, log_time)
+        if self.held:
+            rows = self.table.rows
+            for i in got:
+                self.newest[i] = (data, t, log_time)
+                rows.append((i, t, (), log_time))
         if not self.kind.stream:
             self._held_entities(data, got)
 
-    def _key_entities(self, topic: str, t: int, data: Any) -> list[int]:
-        """The entities (indexes) a message of the key's topic at ``t`` carries, recorded
-        in the table (one-value keys: with the entity's values).
+    def _key_entities(self, topic: str, t: int, data: Any, log_time: int = -1) -> list[int]:
+        """The entities (indexes) a message of the key's topic at ``t`` (log time
+        ``log_time``) carries, recorded in the table (one-value keys: with the entity's
+        values).
 
         Raises:
             SignalError: its keys cannot be read."""
@@ -221,7 +246,7 @@ class EntityClock(Clock):
                     continue
             got.append(i)
             if kind.stream:
-                self._stream_values(i, x, t, data)
+                self._stream_values(i, x, t, data, log_time)
         return got
 
     def _new_keys(self, values: list, found: list, t: int) -> list[int]:
@@ -268,14 +293,15 @@ class EntityClock(Clock):
                               f"message of {kind.topic} at log time {t}: {exc}") from None
         return values
 
-    def _stream_values(self, i: int, key: Any, t: int, data: Any) -> None:
-        """One-value keys: entity ``i``'s variables on its message ``data`` at ``t``."""
+    def _stream_values(self, i: int, key: Any, t: int, data: Any, log_time: int) -> None:
+        """One-value keys: entity ``i``'s variables on its message ``data`` at ``t`` (log
+        time ``log_time``)."""
         st = self.stream_state
         for b in self.own:
             for f in b.fields:
                 st.msgs[f.topic], st.times[f.topic] = data, t
         st.now = t
-        self.table.rows.append((i, t, self._values(st, key, i)))
+        self.table.rows.append((i, t, self._values(st, key, i), log_time))
 
     def _values(self, st: EvalState, key: Any, i: int | None) -> tuple:
         """The per-entity variables with the entity's key ``key`` (NaN where one fails; the
@@ -319,10 +345,39 @@ class EntityClock(Clock):
                     if rows is None:
                         rows = self.msg_rows[id(held)] = self.held_rows(held, got,
                                                                         self.held_items)
+            elif self.every:
+                rows = self._every_row(st)
             else:
                 for i in got:
                     rows.append((i, self._values(st, self.table.keys[i], i)))
         return absent, rows
+
+    def _every_row(self, st: EvalState) -> list:
+        """The rows of every entity met so far (:attr:`every`): held on their own, each
+        read in its newest key message (that message held on the key's topic, ``age($car)``
+        its age); else in the messages held at the tick (``tf()``: its frame's newest
+        transform)."""
+        keys = self.table.keys
+        if not self.held:
+            return [(i, self._values(st, keys[i], i)) for i in range(len(keys))]
+        topic, param, newest = self.kind.topic, self.param, self.newest
+        had = topic in st.msgs
+        msg, tm = st.msgs.get(topic), st.times.get(topic)
+        out = []
+        try:
+            for i in range(len(keys)):
+                data, t, _lt = newest[i]
+                st.msgs[topic], st.times[topic] = data, t
+                param.time = t
+                out.append((i, self._values(st, keys[i], i)))
+        finally:
+            param.time = None
+            if had:
+                st.msgs[topic], st.times[topic] = msg, tm  # type: ignore[assignment]
+            else:
+                st.msgs.pop(topic, None)
+                st.times.pop(topic, None)
+        return out
 
     def held_rows(self, held: Any, got: list[int], items: list | None = None) -> HeldRows:
         """The rows of held key message ``held`` (carrying the entities ``got``, read in

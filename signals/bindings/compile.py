@@ -236,6 +236,8 @@ def _logic3(node: BinOp, left: Evaluator, right: Evaluator, ops: Ops) -> Evaluat
 def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
           consts: dict[str, Any]) -> Evaluator:
     func = node.func
+    if func == "age" and isinstance(node.args[0], Const):
+        return _entity_age(node, node.args[0].value)
     if func == "age":
         topic = node.args[0].topic  # type: ignore[attr-defined]
         if ops.vec:
@@ -271,16 +273,36 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
     return _reduction(node, args[0], ops)
 
 
+def _entity_age(node: FuncCall, param: Any) -> Evaluator:
+    """``age($car)``: the time (s) since the entity's newest message (its
+    :class:`~fretc.signals.bindings.expression.EntityParam`'s ``time``, set where entities
+    are held on their own); tick by tick only."""
+
+    def age(st: Any) -> Any:
+        if isinstance(st, EvalState):
+            t = getattr(param, "time", None)
+            if t is None:
+                raise EvalError(node, f"age({param!r}) is the age of an entity held on its "
+                                "own: its kind in [entities] says hold = \"entity\"")
+            return (st.now - t) / NS_PER_S
+        raise EvalError(node, f"age({param!r}) is evaluated tick by tick only")
+    return age
+
+
 def _tf(node: FuncCall) -> Evaluator:
     """``tf(parent, child).component`` from the transforms held at the tick."""
     parent, child, comp = (a.value for a in node.args)  # type: ignore[attr-defined]
+    # (a frame may be an entity's key, $car: read at evaluation)
 
     def tf(st: Any) -> Any:
         buf = getattr(st, "tf", None)
         if buf is None:
             raise EvalError(node, "tf() is evaluated tick by tick only")
+        p, c = const_value(parent), const_value(child)
+        if not isinstance(p, str) or not isinstance(c, str):
+            raise EvalError(node, f"tf(): a frame name is a string, not {p!r} ({c!r})")
         try:
-            return buf.lookup(parent, child, comp, st.now)
+            return buf.lookup(p, c, comp, st.now)
         except LookupFailed as exc:
             raise EvalError(node, str(exc)) from None
     return tf

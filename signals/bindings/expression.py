@@ -48,11 +48,14 @@ class EntityParam:
     binding serves every entity of a log, the audit setting :attr:`value` to each entity's
     key before evaluating it (:mod:`fretc.audit.entities.read`). Written ``$name``."""
 
-    __slots__ = ("name", "value")
+    __slots__ = ("name", "value", "time")
 
     def __init__(self, name: str) -> None:
         self.name = name
         self.value: object = None
+        #: the time (ns, the bindings' time base) of the entity's newest message, for
+        #: ``age($car)`` (set with :attr:`value` where entities are held on their own)
+        self.time: int | None = None
 
     def __repr__(self) -> str:
         return f"${self.name}"
@@ -428,8 +431,11 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
         return
     if node.func == "age":
         age_arg = node.args[0]
+        if isinstance(age_arg, Const) and isinstance(age_arg.value, EntityParam):
+            return  # age($car): how old the entity's own newest message is (entities held)
         if not isinstance(age_arg, Field) or age_arg.path:
-            raise where.error("age() takes a topic name, e.g. age(/scan)", age_arg.col)
+            raise where.error("age() takes a topic name, e.g. age(/scan), or an entity held "
+                              "on its own, age($car)", age_arg.col)
         topics.add(age_arg.topic)
         return
     for a in node.args:

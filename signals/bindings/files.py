@@ -22,7 +22,7 @@ from fretc.signals.bindings.binding import VARNAME, Binding, compile_expression
 from fretc.signals.bindings.expression import refs
 from fretc.signals.bindings.parse_cache import kept_parses
 from fretc.signals.bindings.paths import topic_name
-from fretc.signals.bindings.spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, LogSelector,
+from fretc.signals.bindings.spec import (DEFAULT_HEADER_LAG_NS, INF_POLICIES, NAN_POLICIES, TIME_BASES, Bindings, EntitySpec, HOLDS, LogSelector,
                    TickSpec)
 
 __all__ = ["parse_bindings", "load_bindings", "MAX_REFERENCE_CHAIN"]
@@ -353,12 +353,15 @@ def _per_entity(pending: dict, entities: dict) -> list[str]:
     return [n for n in pending if n in out]
 
 
-def _entities(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, str | None]]:
+def _entities(table: Any, source: str, loc: _Locations) -> dict[str, EntitySpec]:
     """``[entities] track = "/tracks.tracks[:].id"`` or ``motor = { key =
-    "/diagnostics.status[:].name", matching = "motor*" }``: name -> (key path, glob or None).
+    "/diagnostics.status[:].name", matching = "motor*", hold = "entity" }``: name -> its
+    :class:`~fretc.signals.bindings.spec.EntitySpec` (key path, glob or None, what a tick
+    reads of an entity: :data:`~fretc.signals.bindings.spec.HOLDS`).
 
     Raises:
-        BindingError: not a table, a bad name, a key that is not a string path, a bad glob.
+        BindingError: not a table, a bad name, a key that is not a string path, a bad glob,
+            a ``hold`` not in :data:`~fretc.signals.bindings.spec.HOLDS`; at the entry.
     """
     if table is None:
         return {}
@@ -366,23 +369,30 @@ def _entities(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str, 
         line, col = loc.at("", "entities")
         raise BindingError(source, "entities must be a table: [entities] then track = "
                            "\"/tracks.tracks[:].id\"", line=line, col=col)
-    out: dict[str, tuple[str, str | None]] = {}
+    out: dict[str, EntitySpec] = {}
     for name, value in table.items():
         line, col = loc.at("entities", name)
         if not re.match(r"[A-Za-z_][A-Za-z0-9_]*\Z", name):
             raise BindingError(source, f"[entities] {name!r} is not a name (letters, digits, "
                                "_)", line=line, col=col)
-        key, matching = value, None
+        key, matching, hold = value, None, "message"
         if isinstance(value, dict):
             key, matching = value.get("key"), value.get("matching")
-            extra = set(value) - {"key", "matching"}
+            hold = value.get("hold", "message")
+            extra = set(value) - {"key", "matching", "hold"}
             if extra or not isinstance(matching, (str, type(None))):
                 raise BindingError(source, f"[entities] {name}: key = \"PATH\" and optionally "
-                                   "matching = \"GLOB\"", line=line, col=col)
+                                   "matching = \"GLOB\" and hold = \"entity\"", line=line,
+                                   col=col)
+            if hold not in HOLDS:
+                raise BindingError(source, f"[entities] {name}: hold is one of "
+                                   f"{', '.join(map(repr, HOLDS))}, not {hold!r} (\"entity\": "
+                                   "each entity's newest message that carried it)", line=line,
+                                   col=col)
         if not isinstance(key, str) or not key.strip():
             raise BindingError(source, f"[entities] {name}: the key is a field path in quotes, "
                                "e.g. \"/tracks.tracks[:].id\"", line=line, col=col)
-        out[name] = (key, matching)
+        out[name] = EntitySpec(key, matching, hold)
     return out
 
 

@@ -231,10 +231,12 @@ class _ToExpr(Transformer):
         if str(member) not in TF_COMPONENTS:
             raise self.where.error(f"tf(...) has no component {str(member)!r} (components: "
                                    f"{', '.join(TF_COMPONENTS)})", member.column)
-        if len(args) != 2 or not all(isinstance(a, Const) and isinstance(a.value, str)
+        if len(args) != 2 or not all(isinstance(a, Const) and isinstance(a.value, (str,
+                                                                                 EntityParam))
                                      for a in args):
-            raise self.where.error('tf() takes two frame names in quotes: '
-                                   'tf("map", "base_link").x', name.column)
+            raise self.where.error('tf() takes two frame names, each in quotes or an entity '
+                                   'of [entities]: tf("map", "base_link").x, tf("map", $car).x',
+                                   name.column)
         return FuncCall(name.column, "tf", args + (Const(member.column, str(member)),))
 
 

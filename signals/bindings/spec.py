@@ -4,9 +4,11 @@ time base and which logs it applies to (:class:`LogSelector`).  Read from a bind
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import PurePath
+from typing import NamedTuple
 
 from fretc.common.units import NS_PER_S
 
@@ -16,7 +18,7 @@ from fretc.signals.bindings.expression import EntityParam
 from fretc.signals.bindings.parse_cache import kept_parses
 
 __all__ = ["DEFAULT_HEADER_LAG_NS", "NAN_POLICIES", "TIME_BASES", "TickSpec", "LogSelector",
-           "Bindings", "make_bindings", "grid_start", "grid_end", "MAX_TICKS",
+           "Bindings", "EntitySpec", "HOLDS", "entities_read", "make_bindings", "grid_start", "grid_end", "MAX_TICKS",
            "MAX_COLUMN_BYTES", "tick_bound_error"]
 
 #: The time bases of ``[tick] time``: ``log`` (the log's own time of each message),
@@ -105,6 +107,44 @@ class LogSelector:
         return "; ".join(parts)
 
 
+#: What a tick reads of an entity of an array key (``[entities] car = { key = ..., hold =
+#: ... }``): ``"message"`` (the default) the message of the key's topic held at the tick,
+#: through the filter on the entity (absent when that message does not carry it);
+#: ``"entity"`` the newest message of the key's topic that carried the entity, held from
+#: its first message to the end of the log (each frame of a TF buffer its newest
+#: transform, tf2's rule), its age readable as ``age($car)``.
+HOLDS = ("message", "entity")
+
+
+class EntitySpec(NamedTuple):
+    """One name of ``[entities]``: ``key`` its key path, ``matching`` the glob the key must
+    match (None: every value), ``hold`` what a tick reads of an entity (:data:`HOLDS`)."""
+
+    key: str
+    matching: str | None = None
+    hold: str = "message"
+
+
+_DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
+
+
+def entities_read(per_entity: dict[str, tuple], entities: Iterable[str], name: str,
+                  seen: set[str] | None = None) -> set[str]:
+    """The entities (names of ``entities``) the per-entity variable ``name`` reads, directly
+    (``$track`` in its expression) or through the per-entity variables it refers to
+    (``per_entity``: name -> (expression, ...))."""
+    seen = set() if seen is None else seen
+    if name in seen:
+        return set()
+    seen.add(name)
+    expr = per_entity[name][0]
+    out = set(_DOLLAR.findall(expr)) & set(entities)
+    for other in per_entity:
+        if other != name and re.search(rf"(?<![\w/.$]){re.escape(other)}(?!\w)", expr):
+            out |= entities_read(per_entity, entities, other, seen)
+    return out
+
+
 @dataclass
 class Bindings:
     """A set of variable bindings with a tick and a time base.
@@ -125,9 +165,10 @@ class Bindings:
             log does not carry (as ``--msg-path``; :mod:`fretc.logs.ros.msg_path`).
         constants: ``[constants]``: named durations of the requirements (name -> (amount,
             unit), :mod:`fretc.fretish.constants`), read by the audit before it compiles.
-        entities: ``[entities]``: entity name -> (key path, ``matching`` glob or None): the
-            values of the key in a log are the entities a per-entity requirement is judged
-            for (docs/bindings.md, "One verdict per entity").
+        entities: ``[entities]``: entity name -> its :class:`EntitySpec` (key path,
+            ``matching`` glob or None, ``hold``): the values of the key in a log are the
+            entities a per-entity requirement is judged for (docs/bindings.md, "One verdict
+            per entity").
         per_entity: the variables whose expression reads an entity (``$track``) or such a
             variable, not compiled yet: name -> (expression, line, col, exact), compiled
             per entity by :meth:`for_entity`.
@@ -146,7 +187,7 @@ class Bindings:
     types: dict[str, str] = field(default_factory=dict, compare=False)
     msg_path: tuple[str, ...] = field(default=(), compare=False)
     constants: dict[str, tuple[str, str]] = field(default_factory=dict, compare=False)
-    entities: dict[str, tuple[str, str | None]] = field(default_factory=dict, compare=False)
+    entities: dict[str, EntitySpec] = field(default_factory=dict, compare=False)
     per_entity: dict[str, tuple] = field(default_factory=dict, compare=False)
     path_vars: dict[str, object] = field(default_factory=dict, compare=False)
 
@@ -164,15 +205,18 @@ class Bindings:
         return frozenset(out)
 
     def for_entity(self, values: dict[str, object]) -> Bindings:
-        """A copy whose per-entity variables are compiled with the entities' values
-        (``{"track": 7}``: ``$track`` reads 7), in declaration order, each after the ones it
-        refers to.
+        """A copy whose per-entity variables of the entities ``values`` are compiled with
+        their values (``{"track": 7}``: ``$track`` reads 7), in declaration order, each after
+        the ones it refers to; those that read another entity (a kind of the same
+        ``[entities]`` table not given) are left out: a requirement is judged over its own
+        kind.
 
         Raises:
             BindingError: a per-entity expression that does not compile with these values.
         """
         variables = dict(self.variables)
-        pending = dict(self.per_entity)
+        pending = {n: p for n, p in self.per_entity.items()
+                   if entities_read(self.per_entity, self.entities, n) <= set(values)}
         pvars = {**self.path_vars, **values}
         # (keys read at evaluation, as the audit compiles them once, are kept between runs;
         # the trees of one entity's value, as ``fretc watch`` makes them, are not)
