@@ -23,12 +23,17 @@ def _transform(t: int, child: str, y: float):
                            rotation=Q(x=0.0, y=0.0, z=0.0, w=1.0)))
 
 
-def arena_log(path: Path, ego=EGO_Y, other=OTHER_Y, ego_stops: int | None = None) -> Path:
+def arena_log(path: Path, ego=EGO_Y, other=OTHER_Y, ego_stops: int | None = None,
+              static: bool = False) -> Path:
     """``/tf``: the other car's transform at 0, 50, 100, ... ms, the ego car's at 25, 75,
     ... ms (from 1 s), one transform a message, the other car's last; ``ego_stops``: the ego
-    car's messages end after that many."""
+    car's messages end after that many; ``static``: a ``/tf_static`` message first (the
+    arena's camera in ``map``)."""
     TF = T(ROS2, "tf2_msgs/msg/TFMessage")
     msgs = []
+    if static:
+        msgs.append(("/tf_static", "tf2_msgs/msg/TFMessage", S, TF(transforms=[
+            _transform(S, "mocap_camera", 0.0)])))
     for k in range(len(other)):
         t = S + k * 50 * MS
         msgs.append(("/tf", "tf2_msgs/msg/TFMessage", t, TF(transforms=[

@@ -357,20 +357,22 @@ def test_live_events_per_entity_agree_with_the_final_verdicts(tmp_path, case):
     assert pts and all(e.verdict in ("holds", "violated") for e in pts)
 
 
-@pytest.mark.parametrize("form", ["filter", "held", "tf"])
+@pytest.mark.parametrize("form", ["filter", "held", "tf", "tf_without_static"])
 def test_watch_of_cars_alternating_on_tf_equals_the_audit(tmp_path, form):
     """Two cars whose transforms alternate on /tf (tests/audit/test_entities_held.py),
     served on a Foxglove server and watched: the per-entity verdicts the watch gives at the
     end equal the audit's of the same messages. The filter form: the ego car read at no tick
     (``unknown``, never a silent pass); held on its own or through ``tf("map", $car)``: the
-    ego car violated, C1 violated."""
+    ego car violated, C1 violated; ``tf()`` judged on /tf alone when the server has no
+    /tf_static (after the watch's wait for it)."""
     from _arena import C1, FILTER, HELD, TF, arena_log
 
     (tmp_path / "c.fret").write_text("@tick_period 100 ms\n" + C1, encoding="utf-8")
-    (tmp_path / "c.bindings.toml").write_text({"filter": FILTER, "held": HELD, "tf": TF}[form],
-                                              encoding="utf-8")
+    (tmp_path / "c.bindings.toml").write_text(
+        {"filter": FILTER, "held": HELD, "tf": TF, "tf_without_static": TF}[form],
+        encoding="utf-8")
     plan = load_plan(AuditConfig(requirements=(str(tmp_path / "c.fret"),)))
-    log = arena_log(tmp_path / "arena.mcap")
+    log = arena_log(tmp_path / "arena.mcap", static=form != "tf_without_static")
     _w, la, _done = _watch(plan, log, rate=200.0)
     ref = audit_log(plan, str(log))
     assert [_evidence(v) for v in la.verdicts] == [_evidence(v) for v in ref.verdicts]
