@@ -34,6 +34,13 @@ def peer(role: str, seconds: float, domain: int, out: str = "",
     return p
 
 
+def started(p: subprocess.Popen) -> subprocess.Popen:
+    """Count ``p`` (a process of the test's own: a generated node, a peer in another network
+    namespace) among the peers :func:`kill_peers` ends."""
+    _started.append(p)
+    return p
+
+
 def kill_peers() -> None:
     """Kill every peer still running (the tests' autouse fixture calls it at their end)."""
     while _started:

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from _dds import fresh_domain
+from _ros2 import PEERS, ROOT, fretc_run, kill_peers, peer, ros2_domain, started
 
 pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
                     "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
@@ -39,19 +39,12 @@ pytest.importorskip("cyclonedds", reason="cyclonedds is not installed: pip insta
 
 pytestmark = [pytest.mark.watch, pytest.mark.xdist_group("ros2")]
 
-ROOT = Path(__file__).resolve().parents[2]
-PEERS = str(Path(__file__).with_name("_ros2_peers.py"))
 REQ34 = """@tick_period 100 ms
 R3: whenever stop_requested cmd_vel_interceptor shall immediately satisfy forwarded_zero
 R4: the scout_mini shall always satisfy linear_speed <= 0.5 & angular_speed <= 0.5
 """
 
-
-def _domain() -> int:
-    return fresh_domain(1, 99)
-
-
-_started: list[subprocess.Popen] = []
+_domain, _peer, _fretc = ros2_domain, peer, fretc_run
 
 
 @pytest.fixture(autouse=True)
@@ -59,25 +52,7 @@ def _no_peer_left_behind():
     """A peer still running when its test ends (the test failed or timed out waiting for
     it) is killed: left behind, it would load the machine for the tests after it."""
     yield
-    while _started:
-        p = _started.pop()
-        if p.poll() is None:
-            p.kill()
-            p.wait(30)
-
-
-def _peer(role: str, seconds: float, domain: int, out: str = "",
-          extra_env: dict | None = None) -> subprocess.Popen:
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), **(extra_env or {})}
-    p = subprocess.Popen([sys.executable, PEERS, role, str(seconds), out], env=env,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    _started.append(p)
-    return p
-
-
-def _fretc(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "fretc", *args], capture_output=True,
-                          text=True, timeout=timeout, cwd=ROOT)
+    kill_peers()
 
 
 def _verdicts(doc: dict) -> dict:
@@ -210,7 +185,7 @@ def test_the_shield_node_in_a_real_graph_keeps_r2_and_r3(tmp_path, shielded):
                                  env={**os.environ, "ROS_DOMAIN_ID": str(d),
                                       "PYTHONPATH": str(pkg)},
                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        _started.append(guard)
+        started(guard)
     else:
         guard = _peer("passthrough", 11, d)
     recorder = _peer("record", 10, d, str(rec))
@@ -271,7 +246,7 @@ def test_a_default_rclpy_talker_on_another_host_is_watched(tmp_path, two_hosts):
     talker = subprocess.Popen(["ip", "netns", "exec", a, sys.executable, PEERS, "talker", "7"],
                               env={**os.environ, "ROS_DOMAIN_ID": str(d)},
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    _started.append(talker)
+    started(talker)
     out = tmp_path / "watch.json"
     watch = subprocess.run(["ip", "netns", "exec", b, sys.executable, "-m", "fretc", "watch",
                             f"dds://{d}", "-r", req, "-b", bnd, "--duration", "8", "--json",
